@@ -1,0 +1,13 @@
+"""Controller families. REGISTRY maps the configuration's ``model`` name to its ModelSpec."""
+
+from bridge.protocols.base import ModelSpec
+from bridge.protocols.rotorez import MODELS as _ROTOREZ
+
+REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ}
+
+
+def get_spec(name: str) -> ModelSpec:
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"unknown model {name!r}; known: {', '.join(sorted(REGISTRY))}") from None

@@ -1,0 +1,105 @@
+"""Composition root: settings -> rotators (workers) -> MQTT; signals; ordered shutdown."""
+
+from __future__ import annotations
+
+import logging
+import signal
+import threading
+from collections.abc import Callable
+from functools import partial
+
+from bridge.engine.motion import MotionConfig
+from bridge.engine.port import open_port
+from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.state_store import StateStore
+from bridge.engine.worker import WorkerConfig
+from bridge.mqtt.service import MqttService
+from bridge.mqtt.topics import Topics
+from bridge.settings import RotatorSettings, Settings
+
+log = logging.getLogger(__name__)
+
+
+def worker_config(r: RotatorSettings) -> WorkerConfig:
+    spec = r.spec
+    az_min, az_max = r.effective_az_limits
+    return WorkerConfig(
+        rotator_id=r.id,
+        port=r.port,
+        spec=spec,
+        baud=r.effective_baud,
+        motion=MotionConfig(
+            can_report_position=spec.can_report_position,
+            tolerance_deg=r.tolerance_deg,
+            stall_timeout_s=r.stall_timeout_s,
+            brake_delay_s=r.effective_brake_delay_s,
+            settle_s=r.settle_s,
+            noise_deg=spec.noise_deg,
+            az_wraps=spec.az_wraps,
+            az_span_deg=az_max - az_min,
+            nominal_speed_deg_s=spec.nominal_speed_deg_s,
+            direct_retarget=spec.retarget.value == "direct",
+        ),
+        idle_poll_interval_s=r.idle_poll_interval_s,
+        moving_poll_interval_s=r.moving_poll_interval_s,
+        deadband_deg=r.deadband_deg,
+        silence_timeout_s=r.silence_timeout_s,
+    )
+
+
+class App:
+    def __init__(
+        self, settings: Settings, *, port_opener: Callable[..., object] = open_port
+    ) -> None:
+        self.settings = settings
+        roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
+        self.topics = Topics(settings.mqtt.base_topic, roots)
+        self.mqtt = MqttService(settings.mqtt, self.topics)
+        store = StateStore(settings.state_file)
+        self.rotators: list[Rotator] = []
+        for r in settings.rotators:
+            az_min, az_max = r.effective_az_limits
+            rot = Rotator(
+                worker_config(r),
+                Limits(az_min, az_max, r.spec.el_min_deg, r.spec.el_max_deg),
+                store,
+                on_status=partial(self.mqtt.publish_status, r.id),
+                on_event=partial(self.mqtt.publish_event, r.id),
+                name=r.name,
+                port_opener=port_opener,  # type: ignore[arg-type]
+            )
+            self.mqtt.attach(rot)
+            self.rotators.append(rot)
+
+    def start(self) -> None:
+        self.mqtt.start()
+        for rot in self.rotators:
+            rot.start()
+            self.mqtt.publish_status(rot.id, rot.status)
+
+    def stop(self) -> None:
+        for rot in self.rotators:
+            rot.stop()
+        self.mqtt.stop()
+        log.info("stopped")
+
+
+def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
+    """Run until SIGTERM/SIGINT (or ``stop_event``); exit code 0 on a clean stop."""
+    done = stop_event or threading.Event()
+
+    def _signal(signum: int, _frame: object) -> None:
+        log.info("%s received, shutting down", signal.Signals(signum).name)
+        done.set()
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _signal)
+        signal.signal(signal.SIGINT, _signal)
+    app = App(settings)
+    app.start()
+    try:
+        while not done.wait(1.0):
+            pass
+    finally:
+        app.stop()
+    return 0

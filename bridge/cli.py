@@ -1,0 +1,127 @@
+"""Command line: ``rotor-bridge run|emulate|demo|check-config|ports``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+
+from bridge import __version__
+from bridge.settings import ConfigError, load_settings, masked
+
+EXIT_CONFIG = 2
+
+
+def _setup_logging(level: str) -> None:
+    logging.basicConfig(
+        level=level,
+        format="%(asctime)s %(levelname)-7s %(name)s: %(message)s",
+        stream=sys.stderr,
+    )
+
+
+def _load(args: argparse.Namespace):  # noqa: ANN202
+    try:
+        return load_settings(args.config)
+    except ConfigError as exc:
+        print(f"rotor-bridge: {exc}", file=sys.stderr)
+        raise SystemExit(EXIT_CONFIG) from None
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from bridge.app import run
+
+    settings = _load(args)
+    _setup_logging(args.log_level or settings.log_level)
+    logging.getLogger(__name__).info(
+        "rotor-bridge %s starting with %d rotator(s)", __version__, len(settings.rotators)
+    )
+    return run(settings)
+
+
+def cmd_check_config(args: argparse.Namespace) -> int:
+    settings = _load(args)
+    print(json.dumps(masked(settings), indent=2))
+    return 0
+
+
+def cmd_ports(args: argparse.Namespace) -> int:
+    from serial.tools import list_ports
+
+    by_id: dict[str, str] = {}
+    base = "/dev/serial/by-id"
+    if os.path.isdir(base):
+        for name in sorted(os.listdir(base)):
+            link = os.path.join(base, name)
+            by_id[os.path.realpath(link)] = link
+    ports = sorted(list_ports.comports(), key=lambda p: p.device)
+    if not ports:
+        print("no serial ports found (is the USB adapter plugged in?)")
+        return 0
+    for p in ports:
+        stable = by_id.get(os.path.realpath(p.device))
+        print(p.device)
+        print(f"  use this path: {stable or p.device + '  (no /dev/serial/by-id link)'}")
+        if p.description and p.description != "n/a":
+            print(f"  description:   {p.description}")
+        if p.vid is not None:
+            print(f"  usb id:        {p.vid:04x}:{p.pid:04x} serial {p.serial_number or '-'}")
+    return 0
+
+
+def cmd_emulate(args: argparse.Namespace) -> int:
+    from bridge.emulators import cli as emulate_cli
+
+    _setup_logging(args.log_level or "WARNING")
+    return emulate_cli.run(args)
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from bridge import demo
+
+    _setup_logging(args.log_level or "INFO")
+    return demo.run(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rotor-bridge", description="Antenna rotator controllers on MQTT."
+    )
+    parser.add_argument("--version", action="version", version=f"rotor-bridge {__version__}")
+    parser.add_argument("--log-level", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("run", help="run the bridge service")
+    p.add_argument("-c", "--config", help="TOML file (default: $ROTOR_BRIDGE_CONFIG)")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("check-config", help="validate and print the effective settings")
+    p.add_argument("-c", "--config", help="TOML file (default: $ROTOR_BRIDGE_CONFIG)")
+    p.set_defaults(func=cmd_check_config)
+
+    p = sub.add_parser("ports", help="list serial ports with their stable names")
+    p.set_defaults(func=cmd_ports)
+
+    p = sub.add_parser("emulate", help="an emulated controller on a pseudo-terminal")
+    from bridge.emulators import cli as emulate_cli
+
+    emulate_cli.add_arguments(p)
+    p.set_defaults(func=cmd_emulate)
+
+    p = sub.add_parser("demo", help="emulated rotators bridged to MQTT, no hardware needed")
+    from bridge import demo
+
+    demo.add_arguments(p)
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,98 @@
+"""Pending commands for one rotator: the only hand-off point into its worker thread.
+
+Rules:
+1. A stop pre-empts everything: it is taken first and drops any target that came before it.
+2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts).
+3. Options and the lock are settings: the latest value per name wins, order between names kept.
+4. ``put`` never blocks on the worker; it wakes the worker through a pipe the worker selects on,
+   so a command reaches the wire while the worker waits for serial bytes, never after a timeout.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from dataclasses import dataclass, field
+
+from bridge.model import SetOption, Stop, Target
+
+
+@dataclass
+class Batch:
+    """Everything taken from the mailbox in one go, in the order the worker must apply it."""
+
+    stop: Stop | None = None
+    target: Target | None = None
+    options: list[SetOption] = field(default_factory=list)
+    lock: bool | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def __bool__(self) -> bool:
+        return bool(self.stop or self.target or self.options or self.lock is not None or self.notes)
+
+
+class Mailbox:
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._batch = Batch()
+        self._option_order: dict[str, SetOption] = {}
+        self._rfd, self._wfd = os.pipe()
+        os.set_blocking(self._rfd, False)
+        os.set_blocking(self._wfd, False)
+
+    def fileno(self) -> int:
+        return self._rfd
+
+    def put(self, command: Target | Stop | SetOption) -> None:
+        with self._lock:
+            if isinstance(command, Stop):
+                self._batch.stop = command
+                self._batch.target = None
+            elif isinstance(command, Target):
+                self._batch.target = command
+            else:
+                self._option_order.pop(command.name, None)
+                self._option_order[command.name] = command
+        self._wake()
+
+    def put_lock(self, locked: bool) -> None:
+        with self._lock:
+            self._batch.lock = locked
+            if locked:
+                self._batch.target = None
+        self._wake()
+
+    def put_note(self, message: str) -> None:
+        """A refusal decided outside the worker, so that the status shows it as the last error."""
+        with self._lock:
+            self._batch.notes.append(message)
+        self._wake()
+
+    def take(self) -> Batch:
+        with self._lock:
+            batch, self._batch = self._batch, Batch()
+            batch.options = list(self._option_order.values())
+            self._option_order = {}
+        try:
+            while os.read(self._rfd, 4096):
+                pass
+        except BlockingIOError:
+            pass
+        return batch
+
+    def wake(self) -> None:
+        """Wake the worker without a command (shutdown)."""
+        self._wake()
+
+    def _wake(self) -> None:
+        try:
+            os.write(self._wfd, b"\0")
+        except BlockingIOError:
+            pass  # the pipe is full: the worker is going to wake up anyway
+
+    def close(self) -> None:
+        for fd in (self._rfd, self._wfd):
+            try:
+                os.close(fd)
+            except OSError:
+                pass

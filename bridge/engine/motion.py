@@ -1,0 +1,257 @@
+"""The motion state machine: pure, clock passed in, no I/O.
+
+What it models: an analog rotator seen through periodic bearing readings (Rotor-EZ family), or
+not seen at all (DCU-1). Source: the Idiom Press FAQ ("if the bearing is changing, the rotator is
+probably turning; close to the target and steady for several seconds: arrived; not changing but
+not close: cancelled from the front panel or a hardware failure") and its brake-delay answers.
+
+Rules:
+1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
+   movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
+2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
+   last command, so a rotor that has not started yet is not "still").
+3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no progress for
+   ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
+4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
+   stillness was detected (which is later than the real stop, so the margin is on the safe side).
+   At start-up the machine assumes a brake window may be running.
+5. Movement without a command (front panel) is ``moving`` too.
+6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
+   last the travel time at the nominal speed (the whole range when the start is unknown).
+7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, replace
+
+from bridge.model import MotionState
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    can_report_position: bool = True
+    tolerance_deg: float = 3.0
+    stall_timeout_s: float = 10.0
+    brake_delay_s: float = 5.0
+    settle_s: float = 1.5
+    noise_deg: float = 2.0
+    az_wraps: bool = True
+    az_span_deg: float = 360.0
+    nominal_speed_deg_s: float = 6.0
+    stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
+    direct_retarget: bool = False  # the controller takes new targets while turning (SPID)
+
+
+@dataclass(frozen=True)
+class Motion:
+    state: MotionState = MotionState.OFFLINE
+    position_deg: float | None = None
+    anchor_deg: float | None = None
+    last_move_t: float | None = None
+    still_since_t: float | None = None
+    target_deg: float | None = None
+    target_t: float | None = None
+    best_error_deg: float | None = None
+    progress_t: float | None = None
+    stop_sent_t: float | None = None
+    busy_until_t: float | None = None  # no feedback: when the last move is assumed done
+    assumed_deg: float | None = None  # no feedback: where the last move should have ended
+
+
+class Event(enum.StrEnum):
+    ARRIVED = "arrived"
+    STALLED = "stalled"
+    STOPPED = "stopped"
+
+
+class Plan(enum.StrEnum):
+    SEND = "send"  # write the target now
+    STOP_FIRST = "stop_first"  # the rotor turns: stop it, then wait
+    WAIT = "wait"  # brake delay or a stop in progress: keep the target pending
+
+
+def angle_error(a_deg: float, b_deg: float, wraps: bool) -> float:
+    d = abs(a_deg - b_deg)
+    return min(d, 360.0 - d) if wraps and d > 180.0 else d
+
+
+# -- observations ----------------------------------------------------------------------------
+def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
+    if not cfg.can_report_position:
+        # we cannot know whether it is still turning or braking: assume the worst once
+        worst = cfg.az_span_deg / cfg.nominal_speed_deg_s
+        return Motion(state=MotionState.UNKNOWN, busy_until_t=now + worst)
+    return Motion(state=MotionState.OFFLINE, position_deg=m.position_deg)
+
+
+def link_down(m: Motion) -> Motion:
+    return Motion(state=MotionState.OFFLINE, position_deg=m.position_deg)
+
+
+def reading(m: Motion, cfg: MotionConfig, az_deg: float, now: float) -> tuple[Motion, list[Event]]:
+    if m.anchor_deg is None:
+        # first reading since the link came up: the brake window may still be running
+        m = replace(
+            m,
+            state=MotionState.BRAKING if cfg.brake_delay_s > 0 else MotionState.IDLE,
+            position_deg=az_deg,
+            anchor_deg=az_deg,
+            still_since_t=now,
+        )
+        return tick(m, cfg, now)
+    m = replace(m, position_deg=az_deg)
+    if angle_error(az_deg, m.anchor_deg, cfg.az_wraps) > cfg.noise_deg:
+        m = replace(m, anchor_deg=az_deg, last_move_t=now, still_since_t=None)
+        if m.state is not MotionState.MOVING:
+            m = replace(m, state=MotionState.MOVING)
+    if m.target_deg is not None:
+        err = angle_error(az_deg, m.target_deg, cfg.az_wraps)
+        if m.best_error_deg is None or err < m.best_error_deg - cfg.noise_deg / 2:
+            m = replace(m, best_error_deg=err, progress_t=now)
+    return tick(m, cfg, now)
+
+
+def commanded(m: Motion, cfg: MotionConfig, target_deg: float, now: float) -> Motion:
+    if not cfg.can_report_position:
+        start = m.assumed_deg
+        travel = (
+            cfg.az_span_deg
+            if start is None
+            else angle_error(start, target_deg, False)  # linear travel, no wrap past the stop
+        )
+        # generous: 50 % slower than nominal plus two seconds to get going
+        busy = 1.5 * travel / cfg.nominal_speed_deg_s + 2.0
+        return replace(
+            m,
+            target_deg=target_deg,
+            target_t=now,
+            busy_until_t=now + busy,
+            assumed_deg=target_deg,
+            stop_sent_t=None,
+        )
+    err = None if m.position_deg is None else angle_error(m.position_deg, target_deg, cfg.az_wraps)
+    return replace(
+        m,
+        state=MotionState.MOVING,
+        target_deg=target_deg,
+        target_t=now,
+        best_error_deg=err,
+        progress_t=now,
+        stop_sent_t=None,
+        still_since_t=None,
+    )
+
+
+def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
+    if not cfg.can_report_position:
+        # it may have been turning; from now on it is stopping, then braking
+        return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
+    return replace(m, target_deg=None, best_error_deg=None, stop_sent_t=now)
+
+
+def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
+    """Time-driven transitions: settling, arrival, stall, end of the brake window."""
+    events: list[Event] = []
+    if not cfg.can_report_position:
+        done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
+        if m.target_deg is not None and done_t is not None and now >= done_t + cfg.brake_delay_s:
+            m = replace(m, target_deg=None, target_t=None)
+        return m, events
+    if m.state is MotionState.OFFLINE:
+        return m, events
+    if m.state is MotionState.MOVING:
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
+        still = now - ref >= cfg.settle_s
+        if m.target_deg is not None:
+            err = (
+                None
+                if m.position_deg is None
+                else angle_error(m.position_deg, m.target_deg, cfg.az_wraps)
+            )
+            if still and err is not None and err <= cfg.tolerance_deg:
+                events.append(Event.ARRIVED)
+                m = _at_rest(m, cfg, now, MotionState.BRAKING)
+            elif err is not None and now - (m.progress_t or now) >= cfg.stall_timeout_s:
+                events.append(Event.STALLED)
+                m = _at_rest(m, cfg, now, MotionState.STALLED)
+        elif still:
+            events.append(Event.STOPPED)
+            m = _at_rest(m, cfg, now, MotionState.BRAKING)
+    if m.state is MotionState.BRAKING and m.still_since_t is not None:
+        if now - m.still_since_t >= cfg.brake_delay_s:
+            m = replace(m, state=MotionState.IDLE)
+    return m, events
+
+
+def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
+    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0:
+        state = MotionState.IDLE
+    return replace(
+        m,
+        state=state,
+        still_since_t=now,
+        target_deg=None,
+        target_t=None,
+        best_error_deg=None,
+        progress_t=None,
+        stop_sent_t=None,
+    )
+
+
+# -- decisions -------------------------------------------------------------------------------
+def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
+    """May a new target be written to the controller now?"""
+    if not cfg.can_report_position:
+        if m.stop_sent_t is not None:
+            return Plan.SEND if now - m.stop_sent_t >= cfg.brake_delay_s else Plan.WAIT
+        if m.busy_until_t is not None and now < m.busy_until_t:
+            return Plan.STOP_FIRST
+        if m.busy_until_t is not None and now < m.busy_until_t + cfg.brake_delay_s:
+            return Plan.WAIT
+        return Plan.SEND
+    if cfg.direct_retarget:
+        return Plan.SEND
+    if m.state is MotionState.IDLE:
+        return Plan.SEND
+    if m.state is MotionState.STALLED:
+        rested = m.still_since_t is not None and now - m.still_since_t >= cfg.brake_delay_s
+        return Plan.SEND if rested else Plan.WAIT
+    if m.state is MotionState.MOVING:
+        if m.stop_sent_t is None or now - m.stop_sent_t >= cfg.stop_resend_s:
+            return Plan.STOP_FIRST
+        return Plan.WAIT
+    return Plan.WAIT  # braking (or no reading yet)
+
+
+def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
+    """The next time after ``now`` that ``tick`` or ``plan_target`` could change its answer."""
+    times: list[float] = []
+    if m.state is MotionState.MOVING:
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
+        times.append(ref + cfg.settle_s)
+        if m.progress_t is not None:
+            times.append(m.progress_t + cfg.stall_timeout_s)
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.stop_resend_s)
+    if m.state in (MotionState.BRAKING, MotionState.STALLED) and m.still_since_t is not None:
+        times.append(m.still_since_t + cfg.brake_delay_s)
+    if not cfg.can_report_position:
+        if m.busy_until_t is not None:
+            times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.brake_delay_s)
+    future = [t for t in times if t > now]
+    return min(future) if future else None
+
+
+def publishable_bearing(
+    published_deg: float | None, reading_deg: float, moving: bool, deadband_deg: float, wraps: bool
+) -> float | None:
+    """The bearing to publish after a reading, or None to keep the published one (hysteresis)."""
+    if published_deg is None or moving:
+        return reading_deg if reading_deg != published_deg else None
+    if angle_error(reading_deg, published_deg, wraps) > deadband_deg:
+        return reading_deg
+    return None

@@ -1,0 +1,152 @@
+"""A rotator as the front ends (MQTT, later rotctld) see it: submit commands, read the status.
+
+This is the one place where commands are judged before they reach a worker: the safety lock,
+the configured limits, the model's capabilities and the link state. A refused command raises
+Refused (with a code front ends can map, e.g. to a Hamlib RPRT number) and is reported as an
+error event; it never reaches the mailbox, so it can never move anything.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import serial
+
+from bridge.engine.mailbox import Mailbox
+from bridge.engine.port import open_port
+from bridge.engine.state_store import StateStore
+from bridge.engine.worker import Worker, WorkerConfig
+from bridge.errors import Refused
+from bridge.model import Command, ErrorEvent, RotatorStatus, SetOption, Stop, Target
+from bridge.protocols.base import ModelSpec
+
+
+@dataclass(frozen=True)
+class Limits:
+    az_min_deg: float
+    az_max_deg: float
+    el_min_deg: float = 0.0
+    el_max_deg: float = 0.0
+
+
+class Rotator:
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        limits: Limits,
+        store: StateStore,
+        on_status: Callable[[RotatorStatus], None],
+        on_event: Callable[[ErrorEvent], None],
+        name: str | None = None,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+        port_opener: Callable[..., serial.Serial] = open_port,
+    ) -> None:
+        self.id = cfg.rotator_id
+        self.name = name or cfg.rotator_id
+        self.spec: ModelSpec = cfg.spec
+        self.limits = limits
+        self._store = store
+        self._on_event = on_event
+        self._wall = wall
+        self._locked = store.locked(self.id)
+        self._mailbox = Mailbox()
+        self._worker = Worker(
+            cfg,
+            self._mailbox,
+            on_status,
+            on_event,
+            options=store.options(self.id),
+            locked=self._locked,
+            clock=clock,
+            wall=wall,
+            port_opener=port_opener,
+        )
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self._worker.status
+
+    @property
+    def locked(self) -> bool:
+        return self._locked
+
+    def start(self) -> None:
+        self._worker.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        self._worker.stop(timeout_s)
+        self._mailbox.close()
+
+    def submit(self, command: Command, described: str | None = None) -> None:
+        """Queue a command or raise Refused. Stop is never refused."""
+        try:
+            self._check(command)
+        except Refused as exc:
+            self.report_refusal(exc.message, described or _describe(command))
+            raise
+        if isinstance(command, SetOption):
+            self._store.set_option(self.id, command.name, command.enabled)
+        self._mailbox.put(command)
+
+    def set_lock(self, locked: bool) -> None:
+        self._locked = locked
+        self._store.set_locked(self.id, locked)
+        self._mailbox.put_lock(locked)
+
+    def report_refusal(self, message: str, command: str | None) -> None:
+        """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
+        self._mailbox.put_note(message)
+        self._on_event(ErrorEvent("refused", message, command, self._wall()))
+
+    def _check(self, command: Command) -> None:
+        if isinstance(command, Stop):
+            return
+        if isinstance(command, SetOption):
+            if command.name not in self.spec.options:
+                have = ", ".join(self.spec.options) or "none"
+                raise Refused(
+                    "unsupported",
+                    f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
+                )
+            return
+        assert isinstance(command, Target)
+        if self._locked:
+            raise Refused("locked", "rotator is locked (safety lock ON): motion refused")
+        lim = self.limits
+        if (
+            not math.isfinite(command.az_deg)
+            or not lim.az_min_deg <= command.az_deg <= lim.az_max_deg
+        ):
+            raise Refused(
+                "limits",
+                f"azimuth {command.az_deg:g} outside the limits "
+                f"{lim.az_min_deg:g}..{lim.az_max_deg:g}",
+            )
+        if command.el_deg is not None:
+            if not self.spec.has_elevation:
+                raise Refused("unsupported", f"{self.spec.display_name} has no elevation axis")
+            if (
+                not math.isfinite(command.el_deg)
+                or not lim.el_min_deg <= command.el_deg <= lim.el_max_deg
+            ):
+                raise Refused(
+                    "limits",
+                    f"elevation {command.el_deg:g} outside the limits "
+                    f"{lim.el_min_deg:g}..{lim.el_max_deg:g}",
+                )
+        if not self.status.available:
+            raise Refused("offline", "rotator offline (serial link down or controller silent)")
+
+
+def _describe(command: Command) -> str:
+    if isinstance(command, Target):
+        el = f" {command.el_deg:g}" if command.el_deg is not None else ""
+        return f"target {command.az_deg:g}{el}"
+    if isinstance(command, SetOption):
+        return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
+    return "stop"

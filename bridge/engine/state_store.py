@@ -1,0 +1,72 @@
+"""What must survive a restart of the bridge: each rotator's safety lock and the options the
+user set (the controller forgets them at power-off, so the bridge re-applies them).
+
+A small JSON file, replaced atomically on every change. A missing file means "nothing set";
+an unreadable one is reported and treated as empty, except that a rotator whose lock state
+cannot be read starts locked (safety before convenience).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import tempfile
+import threading
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+
+class StateStore:
+    def __init__(self, path: Path | None) -> None:
+        self._path = path
+        self._lock = threading.Lock()
+        self._data: dict[str, dict[str, object]] = {}
+        self.corrupt = False
+        if path is not None and path.exists():
+            try:
+                loaded = json.loads(path.read_text())
+                if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
+                    raise ValueError("no 'rotators' table")
+                self._data = loaded["rotators"]
+            except (OSError, ValueError) as exc:
+                log.error("state file %s unreadable (%s): every rotator starts locked", path, exc)
+                self.corrupt = True
+
+    def locked(self, rotator_id: str) -> bool:
+        if self.corrupt:
+            return True
+        return bool(self._data.get(rotator_id, {}).get("locked", False))
+
+    def options(self, rotator_id: str) -> dict[str, bool]:
+        raw = self._data.get(rotator_id, {}).get("options", {})
+        if not isinstance(raw, dict):
+            return {}
+        return {str(k): bool(v) for k, v in raw.items()}
+
+    def set_locked(self, rotator_id: str, locked: bool) -> None:
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["locked"] = locked
+            self._save()
+
+    def set_option(self, rotator_id: str, name: str, enabled: bool) -> None:
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            opts = entry.setdefault("options", {})
+            assert isinstance(opts, dict)
+            opts[name] = enabled
+            self._save()
+
+    def _save(self) -> None:
+        if self._path is None:
+            return
+        try:
+            self._path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=self._path.parent, prefix=".state-")
+            with os.fdopen(fd, "w") as f:
+                json.dump({"rotators": self._data}, f, indent=1, sort_keys=True)
+            os.replace(tmp, self._path)
+            self.corrupt = False
+        except OSError as exc:
+            log.error("cannot write state file %s: %s", self._path, exc)

@@ -1,0 +1,471 @@
+"""One thread per rotator: the only code that touches that rotator's serial port.
+
+The loop: open the port (back-off on failure), then select() on the port and the mailbox pipe,
+so a command is written the moment it arrives, also while a poll reply is awaited. Replies go
+through the model's codec into the pure motion state machine; when the status changes it is
+emitted (the second and last hand-off point, ARCHITECTURE.md rule 3).
+
+Rules:
+1. Any serial error closes the port, marks the rotator offline and retries with back-off; the
+   thread never dies of one.
+2. A controller that reports positions is "available" only after a valid reading, and stops
+   being available after ``silence_timeout_s`` without one. A DCU-1 is available while its
+   port is open (it never answers).
+3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
+   controller that cannot report. A query is never sent while another is open.
+4. Targets go to the controller only when ``motion.plan_target`` says so; a target waiting for a
+   brake delay is replaced by newer ones and dropped by a stop, the lock, or the link going down.
+5. A stop is written at once and cancels any frame still waiting in the outbox.
+6. Options are sent only while the rotor is not turning, and re-sent after every (re)connect and
+   after a power-on byte: the controller forgets them at power-off.
+"""
+
+from __future__ import annotations
+
+import logging
+import select
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import serial
+
+from bridge.engine import motion as mo
+from bridge.engine.mailbox import Batch, Mailbox
+from bridge.engine.port import PortError, open_port
+from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target
+from bridge.protocols.base import Codec, JunkReply, ModelSpec, PositionReply, VersionReply
+
+log = logging.getLogger(__name__)
+
+POWER_ON_BYTE = 0xE0
+
+
+@dataclass(frozen=True)
+class WorkerConfig:
+    rotator_id: str
+    port: str
+    spec: ModelSpec
+    baud: int
+    motion: mo.MotionConfig
+    idle_poll_interval_s: float = 1.0
+    moving_poll_interval_s: float = 0.2
+    deadband_deg: float = 2.0
+    silence_timeout_s: float = 3.0
+    reconnect_min_s: float = 0.5
+    reconnect_max_s: float = 10.0
+    junk_report_interval_s: float = 30.0
+
+
+@dataclass
+class _Link:
+    """Per-connection state; a fresh one for every open."""
+
+    port: serial.Serial
+    codec: Codec
+    opened_t: float
+    query_deadline: float | None = None
+    next_poll: float = 0.0
+    last_reply_t: float | None = None
+    answering: bool = False
+    outbox: deque[tuple[float, bytes]] = field(default_factory=deque)
+    options_due: set[str] = field(default_factory=set)
+    silence_reported: bool = False
+
+
+class Worker:
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        mailbox: Mailbox,
+        on_status: Callable[[RotatorStatus], None],
+        on_event: Callable[[ErrorEvent], None],
+        *,
+        options: dict[str, bool] | None = None,
+        locked: bool = False,
+        clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+        port_opener: Callable[[str, ModelSpec, int], serial.Serial] = open_port,
+    ) -> None:
+        self.cfg = cfg
+        self._mailbox = mailbox
+        self._on_status = on_status
+        self._on_event = on_event
+        self._clock = clock
+        self._wall = wall
+        self._open = port_opener
+        self._options: dict[str, bool] = dict(options or {})
+        self._locked = locked
+        self._motion = mo.Motion()
+        self._pending: Target | None = None
+        self._published_deg: float | None = None
+        self._version: str | None = None
+        self._last_error: str | None = None
+        self._last_source: str | None = None
+        self._status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
+        self._stopping = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=f"rotator-{cfg.rotator_id}")
+        self._link: _Link | None = None
+        self._junk_count = 0
+        self._junk_reported_t = -1e18
+
+    # -- public, any thread -----------------------------------------------------------------
+    @property
+    def status(self) -> RotatorStatus:
+        return self._status
+
+    def start(self) -> None:
+        self._emit_status()
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        self._stopping.set()
+        self._mailbox.wake()
+        if self._thread.is_alive():
+            self._thread.join(timeout_s)
+
+    # -- the thread ---------------------------------------------------------------------------
+    def _run(self) -> None:
+        backoff = self.cfg.reconnect_min_s
+        reported: str | None = None
+        while not self._stopping.is_set():
+            try:
+                port = self._open(self.cfg.port, self.cfg.spec, self.cfg.baud)
+            except PortError as exc:
+                if str(exc) != reported:
+                    reported = str(exc)
+                    self._error("serial", str(exc))
+                self._emit_status()
+                self._idle_offline(backoff)
+                backoff = min(backoff * 2, self.cfg.reconnect_max_s)
+                continue
+            log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
+            backoff, reported = self.cfg.reconnect_min_s, None
+            try:
+                self._serve(port)
+            except (serial.SerialException, OSError) as exc:
+                self._error("serial", f"serial link to {self.cfg.port} lost: {exc}")
+            except Exception:  # a bug must not kill the rotator: log it, reconnect
+                log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
+                self._error("internal", "unexpected error in the rotator worker (see the log)")
+            finally:
+                try:
+                    port.close()
+                except Exception:  # closing a yanked port may fail too
+                    pass
+                self._link = None
+                self._motion = mo.link_down(self._motion)
+                self._drop_pending("serial link down")
+                self._emit_status()
+            if not self._stopping.is_set():
+                self._idle_offline(backoff)
+
+    def _idle_offline(self, wait_s: float) -> None:
+        """Wait for the next reconnect attempt, still taking commands from the mailbox."""
+        deadline = self._clock() + wait_s
+        while not self._stopping.is_set():
+            now = self._clock()
+            if now >= deadline:
+                return
+            readable, _, _ = select.select([self._mailbox], [], [], deadline - now)
+            if readable:
+                self._apply(self._mailbox.take(), self._clock())
+                self._emit_status()
+
+    def _serve(self, port: serial.Serial) -> None:
+        spec = self.cfg.spec
+        now = self._clock()
+        link = _Link(port=port, codec=spec.codec_factory(), opened_t=now, next_poll=now)
+        self._link = link
+        self._motion = mo.link_up(self._motion, self.cfg.motion, now)
+        link.answering = not spec.can_report_position
+        if link.answering:
+            link.options_due = set(self._options)
+        version_query = link.codec.encode_version() if spec.has_version else None
+        if version_query:
+            self._write(version_query)
+        self._emit_status()
+        while not self._stopping.is_set():
+            now = self._clock()
+            batch = self._mailbox.take()
+            if batch:
+                self._apply(batch, now)
+            self._flush_outbox(now)
+            self._poll_if_due(now)
+            self._advance(now)
+            self._emit_status()
+            timeout = self._next_wakeup(now) - now
+            readable, _, _ = select.select([port, self._mailbox], [], [], max(0.0, timeout))
+            if port in readable:
+                data = port.read(port.in_waiting or 1)
+                if not data:
+                    raise serial.SerialException("port readable but no data (adapter unplugged?)")
+                self._received(data, self._clock())
+
+    # -- inbound: commands ----------------------------------------------------------------------
+    def _apply(self, batch: Batch, now: float) -> None:
+        for note in batch.notes:
+            self._last_error = note
+        if batch.lock is not None:
+            self._locked = batch.lock
+            if batch.lock:
+                self._drop_pending(None)
+                if self._turning(now):
+                    self._send_stop(now)
+        if batch.stop is not None:
+            self._pending = None
+            self._last_source = batch.stop.source.value
+            if self._link is not None:
+                self._send_stop(now)
+        for opt in batch.options:
+            self._options[opt.name] = opt.enabled
+            if self._link is not None:
+                self._link.options_due.add(opt.name)
+        if batch.target is not None:
+            if self._locked:
+                self._error("refused", "rotator is locked", command=_describe(batch.target))
+            elif self._link is None or not self._link.answering:
+                self._error("refused", "rotator offline", command=_describe(batch.target))
+            else:
+                self._pending = batch.target
+
+    def _turning(self, now: float) -> bool:
+        m = self._motion
+        if self.cfg.spec.can_report_position:
+            return m.state is MotionState.MOVING
+        return m.busy_until_t is not None and now < m.busy_until_t and m.stop_sent_t is None
+
+    def _send_stop(self, now: float) -> None:
+        link = self._link
+        assert link is not None
+        link.outbox.clear()
+        self._write(link.codec.encode_stop())
+        self._motion = mo.stop_sent(self._motion, self.cfg.motion, now)
+
+    def _drop_pending(self, why: str | None) -> None:
+        if self._pending is not None and why:
+            self._error("refused", f"target dropped: {why}", command=_describe(self._pending))
+        self._pending = None
+
+    # -- outbound -------------------------------------------------------------------------------
+    def _write(self, frame: bytes) -> None:
+        assert self._link is not None
+        self._link.port.write(frame)
+        log.debug("%s: -> %r", self.cfg.rotator_id, frame)
+
+    def _flush_outbox(self, now: float) -> None:
+        link = self._link
+        while link is not None and link.outbox and link.outbox[0][0] <= now:
+            self._write(link.outbox.popleft()[1])
+
+    def _poll_if_due(self, now: float) -> None:
+        link = self._link
+        if link is None or not self.cfg.spec.can_report_position:
+            return
+        if link.query_deadline is not None:
+            if now < link.query_deadline:
+                return
+            link.codec.expire_query()
+            link.query_deadline = None
+        self._check_silence(now)
+        if now >= link.next_poll:
+            query = link.codec.encode_query()
+            if query:
+                self._write(query)
+                link.query_deadline = now + self.cfg.spec.reply_timeout_s
+                link.next_poll = now + self._poll_interval()
+
+    def _poll_interval(self) -> float:
+        busy = self._motion.state is MotionState.MOVING or self._pending is not None
+        return self.cfg.moving_poll_interval_s if busy else self.cfg.idle_poll_interval_s
+
+    def _check_silence(self, now: float) -> None:
+        link = self._link
+        assert link is not None
+        timeout_s = self.cfg.silence_timeout_s
+        if link.answering and now - (link.last_reply_t or link.opened_t) >= timeout_s:
+            link.answering = False
+            self._motion = mo.link_down(self._motion)
+            self._error(
+                "serial",
+                f"controller on {self.cfg.port} stopped answering "
+                f"(no valid reply for {timeout_s:g} s)",
+            )
+            self._drop_pending("controller not answering")
+        elif (
+            link.last_reply_t is None
+            and not link.silence_reported
+            and now - link.opened_t >= timeout_s
+        ):
+            link.silence_reported = True
+            self._error("serial", f"controller on {self.cfg.port} does not answer")
+
+    def _advance(self, now: float) -> None:
+        """Time-driven motion, then whatever the pending target and options may do now."""
+        self._motion, events = mo.tick(self._motion, self.cfg.motion, now)
+        self._motion_events(events, now)
+        link = self._link
+        if link is None or not link.answering:
+            return
+        if self._pending is not None:
+            self._try_target(now)
+        if link.options_due and not self._turning(now) and self._pending is None:
+            for name in sorted(link.options_due):
+                self._write(link.codec.encode_option(name, self._options[name]))
+            link.options_due.clear()
+
+    def _try_target(self, now: float) -> None:
+        link = self._link
+        assert link is not None and self._pending is not None
+        target = self._pending
+        wire = link.codec.wire_bearing(target.az_deg)
+        m, mcfg = self._motion, self.cfg.motion
+        if m.target_deg is not None and m.target_deg == wire:
+            self._pending = None  # already on its way there
+            return
+        if (
+            self.cfg.spec.can_report_position
+            and m.state is MotionState.IDLE
+            and m.position_deg is not None
+            and mo.angle_error(m.position_deg, wire, mcfg.az_wraps) <= mcfg.tolerance_deg
+        ):
+            log.info("%s: already within tolerance of %g", self.cfg.rotator_id, wire)
+            self._pending = None
+            return
+        plan = mo.plan_target(m, mcfg, now)
+        if plan is mo.Plan.STOP_FIRST:
+            log.info("%s: turning; stopping before the new target %g", self.cfg.rotator_id, wire)
+            self._send_stop(now)
+        elif plan is mo.Plan.SEND:
+            frames = link.codec.encode_target(target.az_deg, target.el_deg)
+            self._write(frames[0])
+            for i, frame in enumerate(frames[1:], start=1):
+                link.outbox.append((now + i * self.cfg.spec.inter_frame_gap_s, frame))
+            self._motion = mo.commanded(m, mcfg, wire, now)
+            self._last_source = target.source.value
+            self._pending = None
+            link.next_poll = min(link.next_poll, now + self.cfg.moving_poll_interval_s)
+
+    def _next_wakeup(self, now: float) -> float:
+        link = self._link
+        times = [now + 1.0]
+        if link is not None:
+            if link.outbox:
+                times.append(link.outbox[0][0])
+            if self.cfg.spec.can_report_position:
+                times.append(link.query_deadline or link.next_poll)
+        deadline = mo.next_deadline(self._motion, self.cfg.motion, now)
+        if deadline is not None:
+            times.append(deadline)
+        return min(times)
+
+    # -- inbound: bytes -------------------------------------------------------------------------
+    def _received(self, data: bytes, now: float) -> None:
+        link = self._link
+        assert link is not None
+        log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        for reply in link.codec.feed(data):
+            if isinstance(reply, PositionReply):
+                link.query_deadline = None
+                link.last_reply_t = now
+                if not link.answering:
+                    link.answering = True
+                    link.options_due = set(self._options)
+                    log.info("%s: controller answering", self.cfg.rotator_id)
+                self._motion, events = mo.reading(self._motion, self.cfg.motion, reply.az_deg, now)
+                self._motion_events(events, now)
+                self._publishable(reply.az_deg)
+            elif isinstance(reply, VersionReply):
+                if reply.version != self._version:
+                    log.info("%s: controller version %s", self.cfg.rotator_id, reply.version)
+                self._version = reply.version
+            elif isinstance(reply, JunkReply):
+                self._junk(reply, now)
+
+    def _publishable(self, az_deg: float) -> None:
+        moving = self._motion.state is MotionState.MOVING
+        new = mo.publishable_bearing(
+            self._published_deg, az_deg, moving, self.cfg.deadband_deg, self.cfg.motion.az_wraps
+        )
+        if new is not None:
+            self._published_deg = new
+
+    def _junk(self, reply: JunkReply, now: float) -> None:
+        link = self._link
+        assert link is not None
+        if POWER_ON_BYTE in reply.data:
+            log.info("%s: power-on byte seen; options will be re-applied", self.cfg.rotator_id)
+            link.options_due = set(self._options)
+        harmless = reply.data.strip(bytes([POWER_ON_BYTE])) == b"" or b"IDIOM" in reply.data
+        log.log(
+            logging.INFO if harmless else logging.WARNING,
+            "%s: ignored %d junk bytes from the controller: %r",
+            self.cfg.rotator_id,
+            len(reply.data),
+            reply.data[:64],
+        )
+        if harmless:
+            return
+        self._junk_count += 1
+        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
+            self._junk_reported_t = now
+            self._error(
+                "protocol",
+                f"controller sent {len(reply.data)} bytes that are no valid reply "
+                f"({reply.reason}); ignored",
+            )
+
+    def _motion_events(self, events: list[mo.Event], now: float) -> None:
+        for event in events:
+            if event is mo.Event.STALLED:
+                pos = self._motion.position_deg
+                self._error(
+                    "stalled",
+                    f"rotor stalled at {pos:g}° (no progress for "
+                    f"{self.cfg.motion.stall_timeout_s:g} s): brake paddle pressed or rotor stuck",
+                )
+                if self._link is not None:
+                    self._link.outbox.clear()
+                    self._write(self._link.codec.encode_stop())
+            else:
+                log.info(
+                    "%s: %s at %s", self.cfg.rotator_id, event.value, self._motion.position_deg
+                )
+
+    # -- status ---------------------------------------------------------------------------------
+    def _error(self, kind: str, message: str, command: str | None = None) -> None:
+        log.warning("%s: %s%s", self.cfg.rotator_id, message, f" ({command})" if command else "")
+        self._last_error = message
+        self._on_event(ErrorEvent(kind, message, command, self._wall()))
+
+    def _emit_status(self) -> None:
+        link = self._link
+        answering = link is not None and link.answering
+        state = self._motion.state if answering else MotionState.OFFLINE
+        target = self._pending.az_deg if self._pending is not None else self._motion.target_deg
+        if target is not None and self._pending is not None and link is not None:
+            target = link.codec.wire_bearing(target)
+        status = replace(
+            self._status,
+            state=state,
+            bearing_deg=self._published_deg if self.cfg.spec.can_report_position else None,
+            target_az_deg=target,
+            connected=link is not None,
+            available=answering,
+            locked=self._locked,
+            version=self._version,
+            options=dict(self._options),
+            last_error=self._last_error,
+            last_command_source=self._last_source,
+        )
+        if status != self._status:
+            self._status = status
+            self._on_status(status)
+
+
+def _describe(target: Target) -> str:
+    return f"target {target.az_deg:g}" + (
+        f" {target.el_deg:g}" if target.el_deg is not None else ""
+    )

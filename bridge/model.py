@@ -1,0 +1,95 @@
+"""Plain value types shared by every layer: commands, motion states, the status snapshot.
+
+Nothing here does I/O or knows about MQTT or serial ports. Angles are degrees, times are
+seconds (monotonic unless the name says ``_unix``).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+
+class MotionState(enum.StrEnum):
+    """What the rotor is doing, as far as the bridge can tell."""
+
+    IDLE = "idle"  # still, brake set (or no brake), ready for a command
+    MOVING = "moving"  # turning: commanded, or by hand from the front panel
+    BRAKING = "braking"  # just stopped; the controller ignores bearings until its brake delay ends
+    STALLED = "stalled"  # commanded but no progress for the stall timeout while off target
+    UNKNOWN = "unknown"  # link up, but the controller cannot report a position (DCU-1)
+    OFFLINE = "offline"  # serial link down or controller silent
+
+
+class Source(enum.StrEnum):
+    """Who asked for a command (shown in the status snapshot)."""
+
+    MQTT = "mqtt"
+    ROTCTLD = "rotctld"
+    BRIDGE = "bridge"
+
+
+@dataclass(frozen=True)
+class Target:
+    """Go to this bearing. ``el_deg`` is None for azimuth-only requests."""
+
+    az_deg: float
+    el_deg: float | None = None
+    source: Source = Source.MQTT
+
+
+@dataclass(frozen=True)
+class Stop:
+    source: Source = Source.MQTT
+
+
+@dataclass(frozen=True)
+class SetOption:
+    """Switch a controller option (e.g. the Rotor-EZ jam protection) on or off."""
+
+    name: str
+    enabled: bool
+    source: Source = Source.MQTT
+
+
+Command = Target | Stop | SetOption
+
+
+@dataclass(frozen=True)
+class ErrorEvent:
+    """Something the user should hear about: a refused command, a stall, a serial fault."""
+
+    kind: str  # refused | stalled | serial | protocol | config
+    message: str
+    command: str | None = None  # what was refused, as the user sent it
+    time_unix: float = 0.0
+
+    def as_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {"kind": self.kind, "message": self.message}
+        if self.command is not None:
+            out["command"] = self.command
+        out["time"] = self.time_unix
+        return out
+
+
+@dataclass(frozen=True)
+class RotatorStatus:
+    """One complete snapshot of a rotator, as published on ``R/status``."""
+
+    rotator_id: str
+    state: MotionState = MotionState.OFFLINE
+    bearing_deg: float | None = None
+    elevation_deg: float | None = None
+    target_az_deg: float | None = None
+    target_el_deg: float | None = None
+    connected: bool = False  # serial port open
+    available: bool = False  # port open and controller answering (or cannot answer)
+    locked: bool = False
+    version: str | None = None
+    options: dict[str, bool] = field(default_factory=dict)
+    last_error: str | None = None
+    last_command_source: str | None = None
+
+    @property
+    def moving(self) -> bool:
+        return self.state is MotionState.MOVING

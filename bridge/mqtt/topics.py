@@ -1,0 +1,101 @@
+"""Every MQTT topic string of the bridge lives here and nowhere else (ARCHITECTURE.md rule 4).
+
+R = a rotator's topic (the base topic itself when exactly one rotator is configured,
+``<base>/<id>`` otherwise), B = the base topic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+COMMANDS = ("target", "stop", "lock", "option")
+
+
+@dataclass(frozen=True)
+class RotatorTopics:
+    root: str
+
+    # inbound (commands)
+    @property
+    def target(self) -> str:
+        return f"{self.root}/target"
+
+    @property
+    def stop(self) -> str:
+        return f"{self.root}/stop"
+
+    @property
+    def lock(self) -> str:
+        return f"{self.root}/lock"
+
+    def option(self, name: str) -> str:
+        return f"{self.root}/option/{name}"
+
+    @property
+    def option_filter(self) -> str:
+        return f"{self.root}/option/+"
+
+    # outbound
+    @property
+    def bearing(self) -> str:
+        return f"{self.root}/bearing"
+
+    @property
+    def state(self) -> str:
+        return f"{self.root}/state"
+
+    @property
+    def status(self) -> str:
+        return f"{self.root}/status"
+
+    @property
+    def version(self) -> str:
+        return f"{self.root}/version"
+
+    @property
+    def availability(self) -> str:
+        return f"{self.root}/availability"
+
+    @property
+    def error(self) -> str:
+        return f"{self.root}/error"
+
+    @property
+    def lock_state(self) -> str:
+        return f"{self.root}/lock/state"
+
+    def option_state(self, name: str) -> str:
+        return f"{self.root}/option/{name}/state"
+
+
+class Topics:
+    def __init__(self, base: str, roots: dict[str, str]) -> None:
+        self.base = base
+        self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
+
+    @property
+    def bridge_state(self) -> str:
+        return f"{self.base}/bridge/state"
+
+    def rotator(self, rotator_id: str) -> RotatorTopics:
+        return self._rotators[rotator_id]
+
+    def subscriptions(self) -> list[str]:
+        subs: list[str] = []
+        for t in self._rotators.values():
+            subs += [t.target, t.stop, t.lock, t.option_filter]
+        return subs
+
+    def route(self, topic: str) -> tuple[str, str, str | None] | None:
+        """Map an inbound topic to (rotator id, command, argument), or None if it is not ours."""
+        for rid, t in self._rotators.items():
+            if topic == t.target:
+                return rid, "target", None
+            if topic == t.stop:
+                return rid, "stop", None
+            if topic == t.lock:
+                return rid, "lock", None
+            prefix = f"{t.root}/option/"
+            if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
+                return rid, "option", topic[len(prefix) :]
+        return None

@@ -1,0 +1,200 @@
+"""Idiom Press Rotor-EZ (Hy-Gain rotors), RotorCard (Yaesu rotors) and Hy-Gain DCU-1: the codec.
+
+Device: a serial board inside the rotator control box. 4800 baud 8N1, no flow control. Plain
+ASCII commands, case-sensitive, no line ending unless stated; bearings are exactly three digits.
+Sources: Idiom Press "Rotor-EZ Rotator Control Protocol" and its 2003 letter to Hamlib
+(shared/seeds/), the fact sheet shared/protocols/rotor-ez.md (Hamlib 4.5.4 behaviour on the wire).
+
+Frames we send:
+  ``AP1xxx\\r``        set target and execute (Rotor-EZ, RotorCard)
+  ``AP1xxx;`` ``AM1;`` set target, then execute: the only form a DCU-1 takes
+  ``AI1;``             ask the bearing; answer ``;xxx`` (4 bytes, no terminator)
+  ``;``                stop (Rotor-EZ, RotorCard); ``AS1;`` on a DCU-1
+  ``E e J j O o S s``  options on/off (Rotor-EZ only), write-only
+  ``V``                version; the reply text is undocumented, we look for ``V<digits>``
+
+Rules:
+1. Only ``;`` + three ASCII digits in 000..360 is a bearing, and only while a query is open.
+   Everything else (the 0xE0 power-on byte, the ``C2000 IDIOM V1.4S `` banner that follows an
+   invalid command, a torn or foreign frame) is junk and is reported as such.
+2. The banner carries the firmware version; it is reported as a VersionReply whenever seen.
+3. Targets are rounded half up to whole degrees. The Idiom boards take 000..360; the DCU-1 gets
+   360 as 000 (Hamlib does the same "for DCU-1 compatibility"; both are north on a Hy-Gain).
+4. The single letter ``S`` means "unstick on", never stop.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from bridge.protocols.base import (
+    Codec,
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+    VersionReply,
+)
+
+OPTION_LETTERS: dict[str, tuple[bytes, bytes]] = {
+    "endpoint": (b"E", b"e"),
+    "jam": (b"J", b"j"),
+    "overshoot": (b"O", b"o"),
+    "unstick": (b"S", b"s"),
+}
+OPTION_LABELS = {
+    "endpoint": "Endpoint option",
+    "jam": "Jam protection",
+    "overshoot": "Overshoot option",
+    "unstick": "Unstick option",
+}
+
+_VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
+_JUNK_WINDOW = 64  # bytes of recent junk kept to find a version banner torn across reads
+
+
+def _bearing_digits(az_deg: float, *, wrap_360: bool) -> int:
+    value = math.floor(az_deg + 0.5)
+    if not 0 <= value <= 360:
+        raise ValueError(f"bearing {az_deg} outside 0..360")
+    if wrap_360 and value == 360:
+        return 0
+    return value
+
+
+class RotorEzCodec:
+    """Codec for the Rotor-EZ command set. ``dcu1=True`` restricts it to the DCU-1 subset."""
+
+    def __init__(self, *, dcu1: bool = False, options: bool = True) -> None:
+        self._dcu1 = dcu1
+        self._options = options and not dcu1
+        self._buf = bytearray()
+        self._junk_window = bytearray()
+        self._queries_open = 0
+
+    # -- encoding -------------------------------------------------------------------------
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        digits = _bearing_digits(az_deg, wrap_360=self._dcu1)
+        if self._dcu1:
+            return [b"AP1%03d;" % digits, b"AM1;"]
+        return [b"AP1%03d\r" % digits]
+
+    def wire_bearing(self, az_deg: float) -> float:
+        return float(_bearing_digits(az_deg, wrap_360=self._dcu1))
+
+    def encode_stop(self) -> bytes:
+        return b"AS1;" if self._dcu1 else b";"
+
+    def encode_query(self) -> bytes | None:
+        if self._dcu1:
+            return None
+        self._queries_open = 1
+        return b"AI1;"
+
+    def expire_query(self) -> None:
+        self._queries_open = 0
+
+    def encode_version(self) -> bytes | None:
+        return None if self._dcu1 else b"V"
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        if not self._options or name not in OPTION_LETTERS:
+            raise ValueError(f"option {name!r} not supported")
+        on, off = OPTION_LETTERS[name]
+        return on if enabled else off
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        junk = bytearray()
+        buf = self._buf
+        i = 0
+        while i < len(buf):
+            if buf[i] != 0x3B:  # ';'
+                junk.append(buf[i])
+                i += 1
+                continue
+            if len(buf) - i < 4:
+                break  # a frame may be starting: wait for the rest
+            frame = bytes(buf[i : i + 4])
+            digits = frame[1:]
+            if digits.isdigit() and int(digits) <= 360 and self._queries_open:
+                self._flush_junk(junk, out)
+                self._queries_open = 0
+                out.append(PositionReply(float(int(digits))))
+                i += 4
+                continue
+            if digits.isdigit() and int(digits) <= 360:
+                self._flush_junk(junk, out)
+                out.append(JunkReply(frame, "bearing frame without a query"))
+                i += 4
+                continue
+            junk.append(buf[i])  # a lone ';' followed by something else: resync after it
+            i += 1
+        del buf[:i]
+        self._flush_junk(junk, out)
+        return out
+
+    def _flush_junk(self, junk: bytearray, out: list[Reply]) -> None:
+        if not junk:
+            return
+        self._junk_window += junk
+        match = _VERSION_RE.search(self._junk_window)
+        if match:
+            out.append(VersionReply(match.group(1).decode("ascii")))
+            del self._junk_window[: match.end()]
+        del self._junk_window[:-_JUNK_WINDOW]
+        out.append(JunkReply(bytes(junk), "not a reply frame"))
+        junk.clear()
+
+
+def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec:
+    defaults: dict[str, object] = dict(
+        family="rotorez",
+        baud=4800,
+        has_version=True,
+        retarget=RetargetPolicy.STOP_AND_WAIT,
+        az_min_deg=0.0,
+        az_max_deg=360.0,
+        az_wraps=True,
+        reply_timeout_s=0.25,
+        noise_deg=2.0,
+        nominal_speed_deg_s=6.0,
+        option_labels=OPTION_LABELS,
+    )
+    defaults.update(kw)
+    return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)  # type: ignore[arg-type]
+
+
+MODELS: dict[str, ModelSpec] = {
+    "rotorez": _spec(
+        "rotorez",
+        "Rotor-EZ",
+        "Idiom Press",
+        codec_factory=RotorEzCodec,
+        options=tuple(OPTION_LETTERS),
+        brake_delay_s=5.0,
+    ),
+    "rotorcard": _spec(
+        "rotorcard",
+        "RotorCard",
+        "Idiom Press",
+        codec_factory=lambda: RotorEzCodec(options=False),
+        brake_delay_s=0.0,
+    ),
+    "dcu1": _spec(
+        "dcu1",
+        "DCU-1",
+        "Hy-Gain",
+        codec_factory=lambda: RotorEzCodec(dcu1=True),
+        can_report_position=False,
+        has_version=False,
+        brake_delay_s=5.0,
+        inter_frame_gap_s=0.05,
+    ),
+}
+
+_check: type[Codec] = RotorEzCodec  # RotorEzCodec satisfies the Codec protocol

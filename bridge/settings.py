@@ -1,0 +1,319 @@
+"""Configuration: a TOML file, every value overridable from the environment, validated once.
+
+Environment: ``ROTOR_BRIDGE_<FIELD>``, nested with ``__`` (``ROTOR_BRIDGE_MQTT__HOST=broker``).
+Rotators are a list in the file; their fields are overridden by id:
+``ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1``. The file itself is ``--config`` or
+``ROTOR_BRIDGE_CONFIG``. Unknown keys are errors (a typo must not silently do nothing).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import socket
+import stat
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SecretStr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
+
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import ModelSpec
+
+ENV_PREFIX = "ROTOR_BRIDGE_"
+_ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
+_SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
+_TOPIC_BAD = re.compile(r"[+#\x00]")
+
+
+class ConfigError(Exception):
+    """A configuration problem, worded for the user; the CLI prints it and exits with 2."""
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class TlsSettings(_Strict):
+    enabled: bool = False
+    ca_file: Path | None = None
+    cert_file: Path | None = None
+    key_file: Path | None = None
+    insecure: bool = Field(False, description="skip the host name check (self-signed lab brokers)")
+
+    @model_validator(mode="after")
+    def _pair(self) -> TlsSettings:
+        if (self.cert_file is None) != (self.key_file is None):
+            raise ValueError("cert_file and key_file go together")
+        for f in (self.ca_file, self.cert_file, self.key_file):
+            if f is not None and not f.is_file():
+                raise ValueError(f"{f} is not a readable file")
+        return self
+
+
+class MqttSettings(_Strict):
+    host: str = "127.0.0.1"
+    port: int = Field(1883, ge=1, le=65535)
+    username: str | None = None
+    password: SecretStr | None = None
+    password_file: Path | None = None
+    tls: TlsSettings = TlsSettings()
+    client_id: str | None = None
+    keepalive_s: int = Field(30, ge=5, le=3600)
+    base_topic: str = "rotor"
+
+    @field_validator("base_topic")
+    @classmethod
+    def _topic(cls, v: str) -> str:
+        if not v or v.startswith("/") or v.endswith("/") or _TOPIC_BAD.search(v) or "//" in v:
+            raise ValueError(
+                "must be a plain topic like 'rotor' (no wildcards, no leading/trailing '/')"
+            )
+        return v
+
+    @model_validator(mode="after")
+    def _password_file(self) -> MqttSettings:
+        if self.password_file is None:
+            return self
+        if self.password is not None:
+            raise ValueError("set password or password_file, not both")
+        path = self.password_file
+        try:
+            mode = path.stat().st_mode
+            text = path.read_text()
+        except OSError as exc:
+            raise ValueError(f"password_file {path}: {exc.strerror}") from None
+        if mode & (stat.S_IROTH | stat.S_IWOTH):
+            raise ValueError(f"password_file {path} is readable by every user; chmod 600 it")
+        self.password = SecretStr(text.strip("\r\n"))
+        return self
+
+    def effective_client_id(self) -> str:
+        return self.client_id or f"rotor-bridge-{socket.gethostname()}"[:64]
+
+
+class RotatorSettings(_Strict):
+    id: str
+    name: str | None = None
+    model: str
+    port: str
+    baud: int | None = Field(None, gt=0)
+    topic: str | None = None
+    idle_poll_interval_s: float = Field(1.0, gt=0, le=3600)
+    moving_poll_interval_s: float = Field(0.2, gt=0, le=60)
+    tolerance_deg: float = Field(3.0, ge=0, le=45)
+    brake_delay_s: float | None = Field(None, ge=0, le=60)
+    stall_timeout_s: float = Field(10.0, gt=0, le=600)
+    settle_s: float = Field(1.5, gt=0, le=60)
+    deadband_deg: float = Field(2.0, ge=0, le=45)
+    silence_timeout_s: float = Field(3.0, gt=0, le=600)
+    az_min_deg: float | None = None
+    az_max_deg: float | None = None
+
+    @field_validator("id")
+    @classmethod
+    def _id(cls, v: str) -> str:
+        if not _SLUG.match(v) or v == "bridge":
+            raise ValueError(
+                "must be a short slug: lower-case letters, digits, '-' or '_' (and not 'bridge')"
+            )
+        return v
+
+    @field_validator("model")
+    @classmethod
+    def _model(cls, v: str) -> str:
+        if v not in REGISTRY:
+            raise ValueError(f"unknown model {v!r}; known models: {', '.join(sorted(REGISTRY))}")
+        return v
+
+    @field_validator("topic")
+    @classmethod
+    def _topic(cls, v: str | None) -> str | None:
+        if v is not None:
+            MqttSettings._topic(v)  # type: ignore[call-arg]
+        return v
+
+    @model_validator(mode="after")
+    def _limits(self) -> RotatorSettings:
+        spec = self.spec
+        lo = spec.az_min_deg if self.az_min_deg is None else self.az_min_deg
+        hi = spec.az_max_deg if self.az_max_deg is None else self.az_max_deg
+        if not spec.az_min_deg <= lo < hi <= spec.az_max_deg:
+            raise ValueError(
+                f"azimuth limits {lo:g}..{hi:g} must lie inside the {spec.display_name}'s "
+                f"range {spec.az_min_deg:g}..{spec.az_max_deg:g} with min < max"
+            )
+        if self.moving_poll_interval_s > self.idle_poll_interval_s:
+            raise ValueError("moving_poll_interval_s must not exceed idle_poll_interval_s")
+        return self
+
+    @property
+    def spec(self) -> ModelSpec:
+        return REGISTRY[self.model]
+
+    @property
+    def effective_baud(self) -> int:
+        return self.baud or self.spec.baud
+
+    @property
+    def effective_brake_delay_s(self) -> float:
+        return self.spec.brake_delay_s if self.brake_delay_s is None else self.brake_delay_s
+
+    @property
+    def effective_az_limits(self) -> tuple[float, float]:
+        spec = self.spec
+        return (
+            spec.az_min_deg if self.az_min_deg is None else self.az_min_deg,
+            spec.az_max_deg if self.az_max_deg is None else self.az_max_deg,
+        )
+
+
+def _default_state_file() -> Path:
+    base = os.environ.get("STATE_DIRECTORY")  # systemd's StateDirectory=
+    if base:
+        return Path(base.split(":")[0]) / "state.json"
+    return Path.home() / ".local" / "state" / "rotor-bridge" / "state.json"
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(
+        env_prefix=ENV_PREFIX, env_nested_delimiter="__", extra="forbid", case_sensitive=False
+    )
+
+    mqtt: MqttSettings = MqttSettings()
+    rotators: list[RotatorSettings] = Field(min_length=1)
+    log_level: str = "INFO"
+    state_file: Path = Field(default_factory=_default_state_file)
+
+    @field_validator("log_level")
+    @classmethod
+    def _level(cls, v: str) -> str:
+        v = v.upper()
+        if v not in ("DEBUG", "INFO", "WARNING", "ERROR"):
+            raise ValueError("must be DEBUG, INFO, WARNING or ERROR")
+        return v
+
+    @model_validator(mode="after")
+    def _unique(self) -> Settings:
+        seen: dict[str, str] = {}
+        for r in self.rotators:
+            if r.id in seen:
+                raise ValueError(f"rotator id {r.id!r} is used twice")
+            seen[r.id] = r.port
+        ports = [r.port for r in self.rotators]
+        dup = {p for p in ports if ports.count(p) > 1}
+        if dup:
+            raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
+        topics = [self.rotator_topic(r) for r in self.rotators]
+        if len(set(topics)) != len(topics):
+            raise ValueError("two rotators share one topic")
+        return self
+
+    def rotator_topic(self, r: RotatorSettings) -> str:
+        if r.topic:
+            return r.topic
+        base = self.mqtt.base_topic
+        return base if len(self.rotators) == 1 else f"{base}/{r.id}"
+
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        # Rotator overrides by id are merged into the file's list by load_settings; the env source
+        # must not see them, or it would replace the list with a dict.
+        env_vars = getattr(env_settings, "env_vars", None)
+        if isinstance(env_vars, dict):
+            for key in [k for k in env_vars if k.lower().startswith("rotor_bridge_rotators__")]:
+                del env_vars[key]
+        return (env_settings, init_settings)  # environment beats the file
+
+
+def load_settings(
+    path: str | os.PathLike[str] | None, environ: dict[str, str] | None = None
+) -> Settings:
+    """Read, merge and validate; raise ConfigError with one message per problem."""
+    env = os.environ if environ is None else environ
+    path = path or env.get("ROTOR_BRIDGE_CONFIG")
+    data: dict[str, Any] = {}
+    if path:
+        try:
+            with open(path, "rb") as f:
+                data = tomllib.load(f)
+        except FileNotFoundError:
+            raise ConfigError(f"config file {path} not found") from None
+        except OSError as exc:
+            raise ConfigError(f"config file {path}: {exc.strerror}") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"config file {path} is not valid TOML: {exc}") from None
+    _apply_rotator_env(data, env)
+    if "rotators" not in data and not any(
+        k.upper().startswith("ROTOR_BRIDGE_ROTATORS") for k in env
+    ):
+        raise ConfigError(
+            "no rotators configured: pass --config FILE (see config/example.toml) "
+            "or set ROTOR_BRIDGE_CONFIG"
+        )
+    try:
+        return Settings(**data)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, data)) from None
+
+
+def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
+    for key, value in env.items():
+        m = _ROTATOR_ENV.match(key)
+        if not m:
+            continue
+        rid, field = m.group(1).lower(), m.group(2).lower()
+        for r in data.get("rotators", []):
+            if isinstance(r, dict) and str(r.get("id", "")).lower() == rid:
+                r[field] = value
+                break
+        else:
+            raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
+
+
+def format_validation_error(exc: ValidationError, data: dict[str, Any] | None = None) -> str:
+    lines = []
+    for err in exc.errors():
+        loc = []
+        for part in err["loc"]:
+            if isinstance(part, int):
+                loc[-1:] = [f"{loc[-1] if loc else ''}[{part}]"]
+            else:
+                loc.append(str(part))
+        where = ".".join(loc) or "configuration"
+        msg = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            msg = "unknown setting (typo?)"
+        lines.append(f"{where}: {msg}")
+    return "invalid configuration:\n  " + "\n  ".join(lines)
+
+
+def masked(settings: Settings) -> dict[str, Any]:
+    """The effective settings as plain data, secrets replaced, for check-config and logs."""
+    out = settings.model_dump(mode="json")
+    if settings.mqtt.password is not None:
+        out["mqtt"]["password"] = "********"
+    for r, rs in zip(out["rotators"], settings.rotators, strict=True):
+        r["topic"] = settings.rotator_topic(rs)
+        r["baud"] = rs.effective_baud
+        r["brake_delay_s"] = rs.effective_brake_delay_s
+        r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
+    out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
+    return out

@@ -1,0 +1,52 @@
+from __future__ import annotations
+
+import select
+
+from bridge.engine.mailbox import Mailbox
+from bridge.model import SetOption, Stop, Target
+
+
+def test_newest_target_replaces_older_ones() -> None:
+    mb = Mailbox()
+    for az in range(100):
+        mb.put(Target(float(az)))
+    batch = mb.take()
+    assert batch.target == Target(99.0) and batch.stop is None
+    assert not mb.take()
+
+
+def test_stop_drops_targets_that_came_before_it() -> None:
+    mb = Mailbox()
+    mb.put(Target(10.0))
+    mb.put(Stop())
+    batch = mb.take()
+    assert batch.stop == Stop() and batch.target is None
+
+
+def test_target_after_stop_is_kept_and_applied_after_the_stop() -> None:
+    mb = Mailbox()
+    mb.put(Stop())
+    mb.put(Target(40.0))
+    batch = mb.take()
+    assert batch.stop == Stop() and batch.target == Target(40.0)
+
+
+def test_lock_drops_pending_target_and_latest_option_wins() -> None:
+    mb = Mailbox()
+    mb.put(Target(10.0))
+    mb.put(SetOption("jam", True))
+    mb.put(SetOption("endpoint", False))
+    mb.put(SetOption("jam", False))
+    mb.put_lock(True)
+    batch = mb.take()
+    assert batch.target is None and batch.lock is True
+    assert batch.options == [SetOption("endpoint", False), SetOption("jam", False)]
+
+
+def test_put_wakes_a_selecting_worker_and_take_clears_the_wakeup() -> None:
+    mb = Mailbox()
+    assert select.select([mb], [], [], 0)[0] == []
+    mb.put(Target(1.0))
+    assert select.select([mb], [], [], 1)[0] == [mb]
+    mb.take()
+    assert select.select([mb], [], [], 0)[0] == []

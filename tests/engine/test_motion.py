@@ -1,0 +1,150 @@
+"""The motion state machine, driven by a fake clock: no sleeps."""
+
+from __future__ import annotations
+
+from bridge.engine import motion as mo
+from bridge.model import MotionState as S
+
+CFG = mo.MotionConfig(
+    tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5, noise_deg=2
+)
+DCU = mo.MotionConfig(can_report_position=False, brake_delay_s=5, nominal_speed_deg_s=6)
+
+
+def feed(m: mo.Motion, readings: list[tuple[float, float]], cfg: mo.MotionConfig = CFG):
+    events: list[mo.Event] = []
+    for t, az in readings:
+        m, ev = mo.reading(m, cfg, az, t)
+        events += ev
+    return m, events
+
+
+def ready(at: float = 0.0, az: float = 100.0) -> mo.Motion:
+    m = mo.link_up(mo.Motion(), CFG, at)
+    m, _ = mo.reading(m, CFG, az, at)
+    m, _ = mo.tick(m, CFG, at + CFG.brake_delay_s)
+    assert m.state is S.IDLE
+    return m
+
+
+def test_first_reading_assumes_a_brake_window_then_idle() -> None:
+    m = mo.link_up(mo.Motion(), CFG, 0)
+    assert m.state is S.OFFLINE
+    m, _ = mo.reading(m, CFG, 100, 0.0)
+    assert m.state is S.BRAKING
+    assert mo.plan_target(m, CFG, 1.0) is mo.Plan.WAIT
+    m, _ = mo.tick(m, CFG, 4.9)
+    assert m.state is S.BRAKING
+    m, _ = mo.tick(m, CFG, 5.0)
+    assert m.state is S.IDLE and mo.plan_target(m, CFG, 5.0) is mo.Plan.SEND
+
+
+def test_jitter_at_rest_is_not_motion() -> None:
+    m = ready()
+    m, events = feed(m, [(10 + i * 0.25, 100 + (i % 2) * 2) for i in range(40)])
+    assert m.state is S.IDLE and events == []
+
+
+def test_commanded_move_arrives_then_brakes_then_idles() -> None:
+    m = mo.commanded(ready(), CFG, 120, 10.0)
+    assert m.state is S.MOVING and m.target_deg == 120
+    readings = [(10 + i * 0.25, min(100 + 1.5 * i, 121)) for i in range(1, 20)]
+    m, events = feed(m, readings)
+    assert m.state is S.MOVING  # not yet steady
+    m, events = mo.tick(m, CFG, 20.0)
+    assert events == [mo.Event.ARRIVED] and m.state is S.BRAKING and m.target_deg is None
+    assert mo.plan_target(m, CFG, 20.0) is mo.Plan.WAIT
+    m, _ = mo.tick(m, CFG, 25.0)
+    assert m.state is S.IDLE
+
+
+def test_manual_rotation_shows_as_moving() -> None:
+    m = ready()
+    m, _ = feed(m, [(20.0, 103), (20.5, 106), (21.0, 109)])
+    assert m.state is S.MOVING and m.target_deg is None
+    m, events = mo.tick(m, CFG, 22.5)
+    assert events == [mo.Event.STOPPED] and m.state is S.BRAKING
+
+
+def test_no_progress_while_off_target_is_a_stall() -> None:
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    m, events = feed(m, [(10 + i * 0.5, 100 + (i % 2)) for i in range(1, 16)])
+    assert m.state is S.MOVING and events == []
+    m, events = mo.tick(m, CFG, 18.0)
+    assert events == [mo.Event.STALLED] and m.state is S.STALLED and m.target_deg is None
+    assert mo.plan_target(m, CFG, 19.0) is mo.Plan.WAIT  # the controller's brake delay
+    assert mo.plan_target(m, CFG, 23.0) is mo.Plan.SEND
+
+
+def test_retarget_while_turning_is_stop_then_wait_for_stillness_and_brake() -> None:
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    m, _ = feed(m, [(10.5, 103), (11.0, 106)])
+    assert mo.plan_target(m, CFG, 11.0) is mo.Plan.STOP_FIRST
+    m = mo.stop_sent(m, CFG, 11.0)
+    assert mo.plan_target(m, CFG, 11.1) is mo.Plan.WAIT
+    m, events = feed(m, [(11.25, 107), (11.5, 107), (12.0, 108)])
+    assert m.state is S.MOVING  # stopping, not yet steady for settle_s
+    m, events = mo.tick(m, CFG, 12.5)  # 1.5 s after the last movement
+    assert events == [mo.Event.STOPPED] and m.state is S.BRAKING
+    assert mo.plan_target(m, CFG, 17.4) is mo.Plan.WAIT
+    m, _ = mo.tick(m, CFG, 17.5)
+    assert mo.plan_target(m, CFG, 17.5) is mo.Plan.SEND
+
+
+def test_stop_is_resent_if_the_rotor_keeps_turning() -> None:
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    m = mo.stop_sent(m, CFG, 10.5)
+    m, _ = feed(m, [(11.0, 104), (11.5, 108), (12.0, 112), (12.5, 116)])
+    assert mo.plan_target(m, CFG, 12.0) is mo.Plan.WAIT
+    assert mo.plan_target(m, CFG, 12.5) is mo.Plan.STOP_FIRST
+
+
+def test_wrap_at_north_counts_as_near() -> None:
+    assert mo.angle_error(359, 1, wraps=True) == 2
+    assert mo.angle_error(359, 1, wraps=False) == 358
+    m = mo.commanded(ready(az=358), CFG, 0, 10.0)
+    m, _ = feed(m, [(10.5, 359), (11.0, 360)])
+    m, events = mo.tick(m, CFG, 13.0)
+    assert events == [mo.Event.ARRIVED]
+
+
+def test_dcu1_without_feedback_is_unknown_and_assumes_travel_time() -> None:
+    m = mo.link_up(mo.Motion(), DCU, 0.0)
+    assert m.state is S.UNKNOWN
+    # at start it might still be turning: stop first, then the brake delay
+    assert mo.plan_target(m, DCU, 1.0) is mo.Plan.STOP_FIRST
+    m = mo.stop_sent(m, DCU, 1.0)
+    assert mo.plan_target(m, DCU, 5.9) is mo.Plan.WAIT
+    assert mo.plan_target(m, DCU, 6.0) is mo.Plan.SEND
+    m = mo.commanded(m, DCU, 90.0, 6.0)
+    assert m.state is S.UNKNOWN and m.target_deg == 90
+    assert mo.plan_target(m, DCU, 7.0) is mo.Plan.STOP_FIRST
+    # a stop leaves the position unknown: the next move is assumed to take the whole range
+    assert mo.commanded(mo.stop_sent(m, DCU, 7.0), DCU, 120.0, 12.0).busy_until_t == 104.0
+    # once the 90 move is assumed done, 90 -> 120 is 1.5 * 30 / 6 + 2 = 9.5 s of travel
+    assert mo.plan_target(m, DCU, 200.0) is mo.Plan.SEND
+    m = mo.commanded(m, DCU, 120.0, 12.0)
+    assert m.busy_until_t == 12.0 + 9.5
+    assert mo.plan_target(m, DCU, 21.6) is mo.Plan.WAIT  # brake delay after the assumed arrival
+    assert mo.plan_target(m, DCU, 26.5) is mo.Plan.SEND
+    m, _ = mo.tick(m, DCU, 26.5)
+    assert m.target_deg is None
+
+
+def test_deadband_holds_the_published_bearing_at_rest_only() -> None:
+    pb = mo.publishable_bearing
+    assert pb(None, 100, False, 2, True) == 100
+    assert pb(100, 101, False, 2, True) is None
+    assert pb(100, 102, False, 2, True) is None
+    assert pb(100, 103, False, 2, True) == 103
+    assert pb(100, 101, True, 2, True) == 101  # while moving every change counts
+    assert pb(100, 100, True, 2, True) is None
+
+
+def test_next_deadline_is_in_the_future() -> None:
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    assert mo.next_deadline(m, CFG, 10.0) == 11.5
+    m, _ = mo.tick(m, CFG, 30.0)
+    assert m.state is S.STALLED
+    assert mo.next_deadline(m, CFG, 30.0) == 35.0
+    assert mo.next_deadline(m, CFG, 36.0) is None

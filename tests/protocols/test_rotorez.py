@@ -1,0 +1,175 @@
+"""The Rotor-EZ codec: bytes on the wire, and replies fed whole, byte by byte and amid junk."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import JunkReply, PositionReply, VersionReply
+from bridge.protocols.rotorez import RotorEzCodec
+
+
+def feed_whole(codec: RotorEzCodec, data: bytes) -> list:
+    return codec.feed(data)
+
+
+def feed_bytewise(codec: RotorEzCodec, data: bytes) -> list:
+    out = []
+    for i in range(len(data)):
+        out += codec.feed(data[i : i + 1])
+    return out
+
+
+def feed_split(codec: RotorEzCodec, data: bytes) -> list:
+    mid = len(data) // 2
+    return codec.feed(data[:mid]) + codec.feed(data[mid:])
+
+
+FEEDERS = [feed_whole, feed_bytewise, feed_split]
+
+
+def positions(replies: list) -> list[float]:
+    return [r.az_deg for r in replies if isinstance(r, PositionReply)]
+
+
+@pytest.mark.parametrize(
+    ("az", "frame"),
+    [
+        (0, b"AP1000\r"),
+        (9, b"AP1009\r"),
+        (120, b"AP1120\r"),
+        (180.5, b"AP1181\r"),
+        (180.4, b"AP1180\r"),
+        (359.6, b"AP1360\r"),
+        (360, b"AP1360\r"),
+    ],
+)
+def test_rotorez_target_is_set_and_execute_with_three_digits(az: float, frame: bytes) -> None:
+    assert RotorEzCodec().encode_target(az) == [frame]
+
+
+@pytest.mark.parametrize(
+    ("az", "frames"), [(80, [b"AP1080;", b"AM1;"]), (360, [b"AP1000;", b"AM1;"])]
+)
+def test_dcu1_target_is_set_then_execute(az: float, frames: list[bytes]) -> None:
+    assert REGISTRY["dcu1"].codec_factory().encode_target(az) == frames
+
+
+@pytest.mark.parametrize("az", [-0.6, 360.5, 1000])
+def test_target_outside_the_wire_range_is_refused(az: float) -> None:
+    with pytest.raises(ValueError):
+        RotorEzCodec().encode_target(az)
+
+
+def test_stop_query_version_and_option_frames() -> None:
+    ez = REGISTRY["rotorez"].codec_factory()
+    assert ez.encode_stop() == b";"
+    assert ez.encode_query() == b"AI1;"
+    assert ez.encode_version() == b"V"
+    assert [ez.encode_option(n, True) for n in ("endpoint", "jam", "overshoot", "unstick")] == [
+        b"E",
+        b"J",
+        b"O",
+        b"S",
+    ]
+    assert [ez.encode_option(n, False) for n in ("endpoint", "jam", "overshoot", "unstick")] == [
+        b"e",
+        b"j",
+        b"o",
+        b"s",
+    ]
+    dcu = REGISTRY["dcu1"].codec_factory()
+    assert dcu.encode_stop() == b"AS1;"
+    assert dcu.encode_query() is None and dcu.encode_version() is None
+    with pytest.raises(ValueError):
+        dcu.encode_option("jam", True)
+    card = REGISTRY["rotorcard"].codec_factory()
+    with pytest.raises(ValueError):
+        card.encode_option("jam", True)
+
+
+def test_capabilities_are_data() -> None:
+    assert REGISTRY["rotorez"].options == ("endpoint", "jam", "overshoot", "unstick")
+    assert REGISTRY["rotorcard"].options == ()
+    assert REGISTRY["dcu1"].can_report_position is False
+    assert REGISTRY["rotorez"].brake_delay_s == 5 and REGISTRY["rotorcard"].brake_delay_s == 0
+    assert REGISTRY["dcu1"].brake_delay_s == 5
+    assert REGISTRY["rotorez"].baud == 4800
+
+
+@pytest.mark.parametrize("feed", FEEDERS)
+def test_position_reply(feed) -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    assert positions(feed(c, b";123")) == [123.0]
+
+
+@pytest.mark.parametrize("feed", FEEDERS)
+def test_power_on_byte_and_banner_are_junk_and_banner_gives_version(feed) -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    replies = feed(c, b"\xe0C2000 IDIOM V1.4S ;045")
+    assert positions(replies) == [45.0]
+    assert VersionReply("1.4S") in replies
+    junk = b"".join(r.data for r in replies if isinstance(r, JunkReply))
+    assert junk == b"\xe0C2000 IDIOM V1.4S "
+
+
+@pytest.mark.parametrize("feed", FEEDERS)
+def test_360_is_a_bearing_but_361_is_junk(feed) -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    assert positions(feed(c, b";360")) == [360.0]
+    c.encode_query()
+    assert positions(feed(c, b";361")) == []
+
+
+def test_unsolicited_bearing_frame_is_not_a_reading() -> None:
+    c = RotorEzCodec()
+    replies = c.feed(b";123")
+    assert positions(replies) == []
+    assert any(isinstance(r, JunkReply) for r in replies)
+
+
+def test_expired_query_does_not_accept_a_late_frame() -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    c.expire_query()
+    assert positions(c.feed(b";200")) == []
+
+
+def test_torn_frame_waits_for_the_rest() -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    assert c.feed(b";1") == []
+    assert positions(c.feed(b"2")) == []
+    assert positions(c.feed(b"7")) == [127.0]
+
+
+def test_a_broken_frame_resyncs_on_the_next_one() -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    assert positions(c.feed(b";1x;090")) == [90.0]
+
+
+@given(st.binary(max_size=200))
+def test_junk_never_becomes_a_bearing_without_a_frame(data: bytes) -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    for r in c.feed(data):
+        if isinstance(r, PositionReply):
+            # a reading can only come from a ';ddd' frame somewhere in the input
+            assert b";%03d" % int(r.az_deg) in data
+            assert 0 <= r.az_deg <= 360
+
+
+@given(st.binary(max_size=60), st.integers(0, 360), st.binary(max_size=60))
+def test_reply_amid_junk_is_found(prefix: bytes, az: int, suffix: bytes) -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    # junk that ends in ';' + digits could legitimately be read first; keep the prefix frame-free
+    prefix = prefix.replace(b";", b"")
+    got = positions(c.feed(prefix + b";%03d" % az + suffix))
+    assert got[:1] == [float(az)]
