@@ -23,6 +23,7 @@ Rules:
 from __future__ import annotations
 
 import logging
+import re
 import select
 import threading
 import time
@@ -41,6 +42,10 @@ from bridge.protocols.base import Codec, JunkReply, ModelSpec, PositionReply, Ve
 log = logging.getLogger(__name__)
 
 POWER_ON_BYTE = 0xE0
+JUNK_QUIET_S = 0.05
+# what a healthy Rotor-EZ emits besides replies: the power-on byte, the banner after an invalid
+# command (e.g. a stop while idle) and the version text
+_KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?")
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,8 @@ class _Link:
     outbox: deque[tuple[float, bytes]] = field(default_factory=deque)
     options_due: set[str] = field(default_factory=set)
     silence_reported: bool = False
+    junk: bytearray = field(default_factory=bytearray)  # held until the line goes quiet
+    junk_t: float = 0.0
 
 
 class Worker:
@@ -108,7 +115,6 @@ class Worker:
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"rotator-{cfg.rotator_id}")
         self._link: _Link | None = None
-        self._junk_count = 0
         self._junk_reported_t = -1e18
 
     # -- public, any thread -----------------------------------------------------------------
@@ -193,6 +199,8 @@ class Worker:
             if batch:
                 self._apply(batch, now)
             self._flush_outbox(now)
+            if link.junk and now - link.junk_t >= JUNK_QUIET_S:
+                self._report_junk(now)
             self._poll_if_due(now)
             self._advance(now)
             self._emit_status()
@@ -354,6 +362,8 @@ class Worker:
         if link is not None:
             if link.outbox:
                 times.append(link.outbox[0][0])
+            if link.junk:
+                times.append(link.junk_t + JUNK_QUIET_S)
             if self.cfg.spec.can_report_position:
                 times.append(link.query_deadline or link.next_poll)
         deadline = mo.next_deadline(self._motion, self.cfg.motion, now)
@@ -398,23 +408,29 @@ class Worker:
         if POWER_ON_BYTE in reply.data:
             log.info("%s: power-on byte seen; options will be re-applied", self.cfg.rotator_id)
             link.options_due = set(self._options)
-        harmless = reply.data.strip(bytes([POWER_ON_BYTE])) == b"" or b"IDIOM" in reply.data
+        if len(link.junk) < 256:
+            link.junk += reply.data[: 256 - len(link.junk)]
+        link.junk_t = now
+
+    def _report_junk(self, now: float) -> None:
+        """Judge junk once the line is quiet, so a banner paced byte by byte is seen whole."""
+        link = self._link
+        assert link is not None
+        data, link.junk = bytes(link.junk), bytearray()
+        harmless = _KNOWN_JUNK.sub(b"", data) == b""
         log.log(
             logging.INFO if harmless else logging.WARNING,
-            "%s: ignored %d junk bytes from the controller: %r",
+            "%s: ignored %d bytes that are no reply: %r",
             self.cfg.rotator_id,
-            len(reply.data),
-            reply.data[:64],
+            len(data),
+            data[:64],
         )
         if harmless:
             return
-        self._junk_count += 1
         if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
             self._junk_reported_t = now
             self._error(
-                "protocol",
-                f"controller sent {len(reply.data)} bytes that are no valid reply "
-                f"({reply.reason}); ignored",
+                "protocol", f"controller sent {len(data)} bytes that are no valid reply; ignored"
             )
 
     def _motion_events(self, events: list[mo.Event], now: float) -> None:

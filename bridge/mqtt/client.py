@@ -53,6 +53,7 @@ class MqttClient:
         self._lock = threading.Lock()
         self.connected = threading.Event()
         self._last_refusal: str | None = None
+        self._stopping = False
         c = paho.Client(
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
@@ -87,6 +88,7 @@ class MqttClient:
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Publish offline, flush, disconnect."""
+        self._stopping = True
         if self.connected.is_set():
             info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
             try:
@@ -152,7 +154,7 @@ class MqttClient:
     def _on_disconnect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
         was = self.connected.is_set()
         self.connected.clear()
-        if was:
+        if was and not self._stopping:
             log.warning("disconnected from MQTT broker (%s); reconnecting", reason_code)
 
     def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001

@@ -1,0 +1,118 @@
+from __future__ import annotations
+
+import json
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bridge.model import MotionState, RotatorStatus
+from bridge.mqtt import payloads as pl
+
+
+@pytest.mark.parametrize(
+    ("raw", "want"),
+    [
+        (b"123", (123.0, None)),
+        (b" 123.5\n", (123.5, None)),
+        (b"120.0", (120.0, None)),
+        (b"123 30", (123.0, 30.0)),
+        (b"123,30", (123.0, 30.0)),
+        (b'{"azimuth": 123, "elevation": 30}', (123.0, 30.0)),
+        (b'{"azimuth": "45"}', (45.0, None)),
+        (b'{"az": 10.5}', (10.5, None)),
+        (b"-10", (-10.0, None)),
+    ],
+)
+def test_targets_users_send(raw: bytes, want: tuple) -> None:
+    assert pl.parse_target(raw) == want
+
+
+@pytest.mark.parametrize(
+    ("raw", "why"),
+    [
+        (b"", "empty"),
+        (b"   ", "empty"),
+        (b"north", "number"),
+        (b"nan", "number"),
+        (b"inf", "number"),
+        (b"1e999", "finite"),
+        (b'{"azimuth": NaN}', "number"),
+        (b'{"azimuth": Infinity}', "number"),
+        (b"{bad json", "bad JSON"),
+        (b"[1,2]", "number"),
+        (b'{"elevation": 3}', "azimuth"),
+        (b'{"azimuth": 1, "speed": 3}', "unknown key"),
+        (b'{"azimuth": true}', "number"),
+        (b"1 2 3", "azimuth elevation"),
+        (b"\xff\xfe", "UTF-8"),
+        (b"1" * 300, "too large"),
+        (b"0x10", "number"),
+    ],
+)
+def test_bad_targets_are_refused_with_a_reason(raw: bytes, why: str) -> None:
+    with pytest.raises(pl.PayloadError, match=why):
+        pl.parse_target(raw)
+
+
+@given(st.binary(max_size=300))
+def test_any_bytes_parse_or_raise_payload_error(raw: bytes) -> None:
+    try:
+        az, el = pl.parse_target(raw)
+    except pl.PayloadError:
+        return
+    assert az == az and abs(az) != float("inf")
+
+
+@pytest.mark.parametrize("raw", [b"ON", b"on", b"1", b"true", b"TRUE", b" On "])
+def test_switch_on(raw: bytes) -> None:
+    assert pl.parse_switch(raw) is True
+
+
+@pytest.mark.parametrize("raw", [b"OFF", b"off", b"0", b"false", b"False"])
+def test_switch_off(raw: bytes) -> None:
+    assert pl.parse_switch(raw) is False
+
+
+@pytest.mark.parametrize("raw", [b"", b"maybe", b"2", b"yes please"])
+def test_switch_bad(raw: bytes) -> None:
+    with pytest.raises(pl.PayloadError):
+        pl.parse_switch(raw)
+
+
+def test_numbers_are_bare() -> None:
+    assert [pl.number(x) for x in (120.0, 0.0, 123.5, 12.25, 359.999)] == [
+        "120",
+        "0",
+        "123.5",
+        "12.25",
+        "360",
+    ]
+
+
+def test_status_json_has_every_field() -> None:
+    st_ = RotatorStatus(
+        "tower",
+        state=MotionState.MOVING,
+        bearing_deg=100.0,
+        target_az_deg=120.0,
+        connected=True,
+        available=True,
+        version="1.4S",
+        options={"jam": True},
+    )
+    doc = json.loads(pl.status_json(st_, 0.0, has_elevation=False))
+    assert doc == {
+        "bearing": 100.0,
+        "target": 120.0,
+        "state": "moving",
+        "moving": True,
+        "connected": True,
+        "available": True,
+        "locked": False,
+        "version": "1.4S",
+        "options": {"jam": True},
+        "last_error": None,
+        "last_command_source": None,
+        "time": "1970-01-01T00:00:00.000+00:00",
+    }

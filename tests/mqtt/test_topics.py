@@ -1,0 +1,24 @@
+from bridge.mqtt.topics import Topics
+
+
+def test_single_rotator_lives_on_the_base_topic() -> None:
+    t = Topics("rotor", {"tower": "rotor"})
+    r = t.rotator("tower")
+    assert (r.target, r.bearing, r.option_state("jam"), t.bridge_state) == (
+        "rotor/target",
+        "rotor/bearing",
+        "rotor/option/jam/state",
+        "rotor/bridge/state",
+    )
+    assert t.subscriptions() == ["rotor/target", "rotor/stop", "rotor/lock", "rotor/option/+"]
+
+
+def test_routing_inbound_topics() -> None:
+    t = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"})
+    assert t.route("rotor/a/target") == ("a", "target", None)
+    assert t.route("rotor/b/stop") == ("b", "stop", None)
+    assert t.route("rotor/b/option/jam") == ("b", "option", "jam")
+    assert t.route("rotor/b/option/jam/state") is None
+    assert t.route("rotor/b/lock/state") is None
+    assert t.route("rotor/c/target") is None
+    assert t.route("rotor/a/bearing") is None

@@ -1,0 +1,127 @@
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bridge.settings import ConfigError, load_settings, masked
+
+MINIMAL = """
+[mqtt]
+host = "127.0.0.1"
+port = 1883
+base_topic = "rotor"
+
+[[rotators]]
+id = "tower"
+name = "Tower"
+model = "rotorez"
+port = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"
+brake_delay_s = 5
+"""
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "c.toml"
+    p.write_text(text)
+    return p
+
+
+def test_the_issue_minimal_file_works_as_written(tmp_path: Path) -> None:
+    s = load_settings(write(tmp_path, MINIMAL))
+    r = s.rotators[0]
+    assert (r.id, r.model, r.effective_baud, r.effective_brake_delay_s) == (
+        "tower",
+        "rotorez",
+        4800,
+        5,
+    )
+    assert s.rotator_topic(r) == "rotor"
+
+
+def test_model_defaults_and_topics_for_several_rotators(tmp_path: Path) -> None:
+    text = MINIMAL.replace("brake_delay_s = 5\n", "") + (
+        '[[rotators]]\nid = "yagi"\nmodel = "rotorcard"\nport = "/dev/ttyUSB1"\n'
+        '[[rotators]]\nid = "dcu"\nmodel = "dcu1"\nport = "/dev/ttyUSB2"\n'
+    )
+    s = load_settings(write(tmp_path, text))
+    assert [s.rotator_topic(r) for r in s.rotators] == ["rotor/tower", "rotor/yagi", "rotor/dcu"]
+    assert [r.effective_brake_delay_s for r in s.rotators] == [5, 0, 5]
+
+
+def test_environment_overrides_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__HOST", "broker.lan")
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PASSWORD", "hunter2")
+    monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__PORT", "/dev/ttyUSB7")
+    monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__IDLE_POLL_INTERVAL_S", "5")
+    s = load_settings(write(tmp_path, MINIMAL))
+    assert s.mqtt.host == "broker.lan" and s.mqtt.port == 1883
+    assert s.rotators[0].port == "/dev/ttyUSB7" and s.rotators[0].idle_poll_interval_s == 5
+    shown = json.dumps(masked(s))
+    assert "hunter2" not in shown and "********" in shown
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        (('model = "rotorez"', 'model = "yaesu"'), "rotators[0].model"),
+        (("port = 1883", "port = 99999"), "mqtt.port"),
+        (('id = "tower"', 'id = "Tower Rotor"'), "rotators[0].id"),
+        (("brake_delay_s = 5", "brake_delay_s = -1"), "rotators[0].brake_delay_s"),
+        (("brake_delay_s = 5", "brake_delay_s = 5\nbrake_delay = 5"), "rotators[0].brake_delay"),
+        (("brake_delay_s = 5", "az_max_deg = 400"), "rotators[0]"),
+        (('base_topic = "rotor"', 'base_topic = "rotor/#"'), "mqtt.base_topic"),
+    ],
+)
+def test_bad_values_name_the_field(tmp_path: Path, change: tuple[str, str], field: str) -> None:
+    with pytest.raises(ConfigError) as exc:
+        load_settings(write(tmp_path, MINIMAL.replace(*change)))
+    assert f"{field}:" in str(exc.value) or f"{field}." in str(exc.value)
+
+
+def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
+    pw = tmp_path / "pw"
+    pw.write_text("s3cret\n")
+    os.chmod(pw, 0o644)
+    text = MINIMAL.replace(
+        'base_topic = "rotor"', f'base_topic = "rotor"\nusername = "u"\npassword_file = "{pw}"'
+    )
+    with pytest.raises(ConfigError, match="readable by every user"):
+        load_settings(write(tmp_path, text))
+    os.chmod(pw, 0o600)
+    s = load_settings(write(tmp_path, text))
+    assert s.mqtt.password is not None and s.mqtt.password.get_secret_value() == "s3cret"
+    assert "s3cret" not in json.dumps(masked(s))
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
+    return subprocess.run(
+        [sys.executable, "-m", "bridge", *args], capture_output=True, text=True, env=env, timeout=30
+    )
+
+
+def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Path) -> None:
+    text = MINIMAL.replace(
+        'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword = "topsecret"'
+    )
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert doc["mqtt"]["password"] == "********" and "topsecret" not in out.stdout + out.stderr
+    assert doc["rotators"][0]["baud"] == 4800 and doc["rotators"][0]["topic"] == "rotor"
+
+
+def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
+    out = run_cli("run", "-c", str(write(tmp_path, MINIMAL.replace("rotorez", "rotorz"))))
+    assert out.returncode == 2
+    assert "rotators[0].model: unknown model 'rotorz'" in out.stderr
+    assert "Traceback" not in out.stderr
+    out = run_cli("check-config", "-c", str(tmp_path / "missing.toml"))
+    assert out.returncode == 2 and "not found" in out.stderr
+    out = run_cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
+    assert out.returncode == 2 and "not valid TOML" in out.stderr
