@@ -5,23 +5,15 @@ Waiting is always on a condition with a deadline, never a bare sleep.
 
 from __future__ import annotations
 
-import shutil
-import socket
-import subprocess
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
 
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from bridge.mosquitto import Mosquitto, free_port  # noqa: F401  (re-exported for tests)
 
 
 def wait_until(predicate: Callable[[], object], timeout_s: float = 10.0, what: str = "") -> object:
@@ -33,60 +25,6 @@ def wait_until(predicate: Callable[[], object], timeout_s: float = 10.0, what: s
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout_s} s waiting for {what or predicate}")
         time.sleep(0.01)
-
-
-class Mosquitto:
-    """A private mosquitto; ``restart()`` keeps the port, so clients reconnect to it."""
-
-    def __init__(self, workdir: Path, *, extra_conf: str = "", port: int | None = None) -> None:
-        exe = shutil.which("mosquitto") or "/usr/sbin/mosquitto"
-        if not Path(exe).exists():
-            raise RuntimeError("mosquitto not installed: run ./tests/run, it installs it")
-        self.exe = exe
-        self.port = port or free_port()
-        self.workdir = workdir
-        self.conf = workdir / "mosquitto.conf"
-        self.extra_conf = extra_conf
-        self.proc: subprocess.Popen[bytes] | None = None
-        self.log = workdir / "mosquitto.log"
-
-    def start(self) -> Mosquitto:
-        self.conf.write_text(
-            f"listener {self.port} 127.0.0.1\n"
-            "persistence false\n"
-            f"{self.extra_conf or 'allow_anonymous true'}\n"
-        )
-        self.proc = subprocess.Popen(
-            [self.exe, "-c", str(self.conf), "-v"],
-            stdout=open(self.log, "ab"),  # noqa: SIM115
-            stderr=subprocess.STDOUT,
-        )
-        wait_until(self._accepts, 10, f"mosquitto on port {self.port}")
-        return self
-
-    def _accepts(self) -> bool:
-        assert self.proc is not None
-        if self.proc.poll() is not None:
-            raise RuntimeError(f"mosquitto exited: {self.log.read_text()[-2000:]}")
-        try:
-            with socket.create_connection(("127.0.0.1", self.port), timeout=0.2):
-                return True
-        except OSError:
-            return False
-
-    def stop(self) -> None:
-        if self.proc is not None and self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.proc = None
-
-    def restart(self) -> None:
-        self.stop()
-        self.start()
 
 
 @dataclass

@@ -108,6 +108,7 @@ class Worker:
         self._motion = mo.Motion()
         self._pending: Target | None = None
         self._published_deg: float | None = None
+        self._published_dir = 0
         self._version: str | None = None
         self._last_error: str | None = None
         self._last_source: str | None = None
@@ -396,8 +397,13 @@ class Worker:
 
     def _publishable(self, az_deg: float) -> None:
         moving = self._motion.state is MotionState.MOVING
-        new = mo.publishable_bearing(
-            self._published_deg, az_deg, moving, self.cfg.deadband_deg, self.cfg.motion.az_wraps
+        new, self._published_dir = mo.publishable_bearing(
+            self._published_deg,
+            self._published_dir,
+            az_deg,
+            moving,
+            self.cfg.deadband_deg,
+            self.cfg.motion.az_wraps,
         )
         if new is not None:
             self._published_deg = new

@@ -131,14 +131,25 @@ def test_dcu1_without_feedback_is_unknown_and_assumes_travel_time() -> None:
     assert m.target_deg is None
 
 
-def test_deadband_holds_the_published_bearing_at_rest_only() -> None:
+def test_deadband_holds_the_published_bearing_at_rest() -> None:
     pb = mo.publishable_bearing
-    assert pb(None, 100, False, 2, True) == 100
-    assert pb(100, 101, False, 2, True) is None
-    assert pb(100, 102, False, 2, True) is None
-    assert pb(100, 103, False, 2, True) == 103
-    assert pb(100, 101, True, 2, True) == 101  # while moving every change counts
-    assert pb(100, 100, True, 2, True) is None
+    assert pb(None, 0, 100, False, 2, True) == (100, 0)
+    assert pb(100, 0, 101, False, 2, True) == (None, 0)
+    assert pb(100, 0, 102, False, 2, True) == (None, 0)
+    assert pb(100, 0, 103, False, 2, True) == (103, 1)
+    assert pb(1, 0, 359, False, 2, True) == (None, 0)  # 2 degrees across north
+    assert pb(2, 0, 358, False, 2, True) == (358, -1)
+
+
+def test_while_moving_progress_is_published_and_jitter_back_is_not() -> None:
+    pb = mo.publishable_bearing
+    published, direction, shown = 100.0, 0, []
+    for reading in [101, 102, 103, 104, 105, 120, 121, 120, 121, 120, 121]:
+        new, direction = pb(published, direction, reading, True, 2, True)
+        if new is not None:
+            published = new
+            shown.append(new)
+    assert shown == [101, 102, 103, 104, 105, 120, 121]
 
 
 def test_next_deadline_is_in_the_future() -> None:
