@@ -14,7 +14,7 @@ import socket
 import stat
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import (
     BaseModel,
@@ -71,6 +71,12 @@ class MqttSettings(_Strict):
     client_id: str | None = None
     keepalive_s: int = Field(30, ge=5, le=3600)
     base_topic: str = "rotor"
+    protocol: Literal["5", "3.1.1"] = "5"
+
+    @field_validator("protocol", mode="before")
+    @classmethod
+    def _protocol(cls, v: object) -> object:
+        return str(v) if isinstance(v, int | float) and not isinstance(v, bool) else v
 
     @field_validator("base_topic")
     @classmethod

@@ -1,0 +1,74 @@
+"""Device emulators: controller behaviour written from the documents, served on a pty.
+
+What this is: a registry (python-can style) of controller emulators that tests, the demo and
+`rotor-bridge emulate MODEL` start by name. Each entry builds a sans-IO responder (base.Responder);
+`start()` puts it on a pseudo-terminal (pty.EmulatedPort).
+
+Rules:
+1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
+   codec would share its misreadings (ARCHITECTURE.md, rule 5).
+2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
+   (SPID, SatEL) adds entries here and reuses physics.Axis, base.PacedLine and pty.EmulatedPort.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Mapping
+from functools import partial
+from typing import Any
+
+from bridge.emulators.base import LoggedFrame, Responder, RotatorState
+from bridge.emulators.pty import EmulatedPort
+from bridge.emulators.rotorez import RotorEZ
+
+#: model name -> factory(**options, now=...) returning a responder.
+EMULATORS: Mapping[str, Callable[..., Responder]] = {
+    "rotorez": partial(RotorEZ, "rotorez"),
+    "rotorcard": partial(RotorEZ, "rotorcard"),
+    "dcu1": partial(RotorEZ, "dcu1"),
+}
+
+
+def create(model: str, *, now: float = 0.0, **options: Any) -> Responder:
+    """Build the sans-IO responder for `model` (no pty)."""
+    try:
+        factory = EMULATORS[model]
+    except KeyError:
+        known = ", ".join(sorted(EMULATORS))
+        raise ValueError(f"unknown emulator model {model!r}; known: {known}") from None
+    return factory(now=now, **options)
+
+
+def start(
+    model: str,
+    *,
+    link: str | os.PathLike[str] | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    hold_output_until_open: bool = True,
+    on_frame: Callable[[LoggedFrame], None] | None = None,
+    **options: Any,
+) -> EmulatedPort[Any]:
+    """Start `model` on a fresh pty (and at `link`); options go to the controller."""
+    device = create(model, now=clock(), **options)
+    return EmulatedPort(
+        device,
+        link=link,
+        clock=clock,
+        hold_output_until_open=hold_output_until_open,
+        on_frame=on_frame,
+        name=model,
+    )
+
+
+__all__ = [
+    "EMULATORS",
+    "EmulatedPort",
+    "LoggedFrame",
+    "Responder",
+    "RotatorState",
+    "RotorEZ",
+    "create",
+    "start",
+]

@@ -1,8 +1,11 @@
 """The broker connection: the only module that imports paho.
 
 Rules:
-1. paho 2.x, CallbackAPIVersion.VERSION2, MQTT 3.1.1 with a clean session: commands sent while
-   the bridge was away are not replayed to it.
+1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
+   commands sent while the bridge was away are not replayed to it; subscriptions ask for
+   retain-as-published, so a command published with the retain flag is recognised as such even
+   while the bridge is connected (MQTT 3.1.1 clears the flag then). ``protocol = "3.1.1"`` in the
+   configuration is the fallback for brokers without MQTT 5 (clean session, same rules otherwise).
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
    connect, ``offline`` on a clean shutdown.
 3. On every connect: subscribe again and re-publish every retained message we own (the broker may
@@ -20,16 +23,19 @@ from __future__ import annotations
 import logging
 import ssl
 import threading
+from collections import deque
 from collections.abc import Callable
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
 MessageHandler = Callable[[str, bytes, bool], None]
+EVENT_BACKLOG = 50
 
 
 class MqttClient:
@@ -50,15 +56,17 @@ class MqttClient:
         self._handler = on_message
         self._on_connect_hook = on_connect
         self._retained: dict[str, bytes] = {}
+        self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
         self._lock = threading.Lock()
         self.connected = threading.Event()
         self._last_refusal: str | None = None
         self._stopping = False
+        self._v5 = settings.protocol == "5"
         c = paho.Client(
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
-            clean_session=True,
-            protocol=paho.MQTTv311,
+            protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
+            **({} if self._v5 else {"clean_session": True}),
         )
         c.will_set(will_topic, b"offline", qos=1, retain=True)
         if settings.username is not None:
@@ -83,7 +91,10 @@ class MqttClient:
     def start(self) -> None:
         s = self._settings
         log.info("connecting to MQTT broker %s:%d as %s", s.host, s.port, s.effective_client_id())
-        self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
+        if self._v5:
+            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
+        else:
+            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
         self._client.loop_start()
 
     def stop(self, timeout_s: float = 2.0) -> None:
@@ -114,7 +125,8 @@ class MqttClient:
         if self.connected.is_set():
             self._client.publish(topic, payload, qos=1, retain=False)
         else:
-            log.debug("not connected: event on %s dropped", topic)
+            with self._lock:
+                self._backlog.append((topic, payload))
 
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
         """At shutdown: mark these retained topics offline and wait until the broker has them."""
@@ -141,12 +153,20 @@ class MqttClient:
         self._last_refusal = None
         log.info("connected to MQTT broker")
         client.publish(self._will_topic, b"online", qos=1, retain=True)
-        client.subscribe([(topic, 1) for topic in self._subscriptions])
+        if self._v5:
+            opts = SubscribeOptions(qos=1, retainAsPublished=True)
+            client.subscribe([(topic, opts) for topic in self._subscriptions])
+        else:
+            client.subscribe([(topic, 1) for topic in self._subscriptions])
         with self._lock:
             cached = list(self._retained.items())
+            backlog = list(self._backlog)
+            self._backlog.clear()
         for topic, data in cached:
             if topic != self._will_topic:
                 client.publish(topic, data, qos=1, retain=True)
+        for topic, event in backlog:
+            client.publish(topic, event, qos=1, retain=False)
         self.connected.set()
         if self._on_connect_hook is not None:
             self._on_connect_hook()

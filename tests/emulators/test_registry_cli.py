@@ -1,0 +1,111 @@
+"""The emulator registry and `rotor-bridge emulate MODEL` (run as a real process)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import serial
+
+from bridge.emulators import EMULATORS, create, start
+from bridge.emulators.cli import add_arguments, main, run
+from bridge.emulators.rotorez import RotorEZ
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_registry_knows_the_three_rotor_ez_family_models() -> None:
+    assert set(EMULATORS) == {"rotorez", "rotorcard", "dcu1"}
+    for name in EMULATORS:
+        device = create(name)
+        assert isinstance(device, RotorEZ) and device.spec.name == name
+
+
+def test_unknown_model_is_refused_with_the_known_names() -> None:
+    with pytest.raises(ValueError, match="rotorcard"):
+        start("yaesu-gs232")
+
+
+def test_start_passes_options_to_the_controller(tmp_path: Path) -> None:
+    with start("rotorcard", link=str(tmp_path / "rc"), start_az_deg=12, jitter_deg=0) as port:
+        assert port.state().az_deg == 12.0
+        assert port.device.brake_delay_s == 0.0
+
+
+def test_arguments_and_their_defaults() -> None:
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args(["dcu1"])
+    assert (args.model, args.baud, args.speed_deg_s, args.jitter_deg) == ("dcu1", 4800, 6.0, 1)
+    assert args.firmware == "1.4S" and args.brake_delay_s is None and not args.no_power_on_junk
+    with pytest.raises(SystemExit):
+        parser.parse_args(["spid-in-2031"])
+
+
+def test_unusable_link_path_is_an_error_not_a_traceback(capsys: pytest.CaptureFixture[str]) -> None:
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    assert run(parser.parse_args(["rotorez", "--link", "/proc/no/such/dir/rotor"])) == 2
+    assert "emulate:" in capsys.readouterr().err
+
+
+def test_unknown_model_on_the_command_line_exits_2() -> None:
+    with pytest.raises(SystemExit) as exc_info:
+        main(["yaesu"])
+    assert exc_info.value.code == 2
+
+
+def _read_line(proc: subprocess.Popen[str], deadline_s: float) -> str:
+    assert proc.stdout is not None
+    ready, _, _ = select.select([proc.stdout], [], [], max(0.0, deadline_s - time.monotonic()))
+    assert ready, "emulator printed nothing before the deadline"
+    return proc.stdout.readline().rstrip("\n")
+
+
+def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
+    link = tmp_path / "by-id" / "usb-Idiom_Rotor-EZ-if00-port0"
+    argv = [
+        sys.executable,
+        "-m",
+        "bridge.emulators",
+        "rotorez",
+        "--link",
+        str(link),
+        "--start-az-deg",
+        "45",
+        "--jitter-deg",
+        "0",
+        "--firmware",
+        "2.1A",
+        "--no-power-on-junk",
+        "--speed-deg-s",
+        "60",
+        "--brake-delay-s",
+        "0.5",
+    ]
+    proc = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        deadline_s = time.monotonic() + 10.0
+        device_path = _read_line(proc, deadline_s)
+        assert device_path.startswith("/dev/pts/")
+        assert _read_line(proc, deadline_s) == str(link)
+        assert os.path.realpath(link) == device_path
+        with serial.Serial(str(link), 4800, timeout=2.0) as client:
+            client.write(b"AI1;")
+            assert client.read(4) == b";045"
+            client.write(b";")
+            assert client.read(18) == b"C2000 IDIOM V2.1A "
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=10) == 0
+        assert not os.path.lexists(link)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -1,0 +1,103 @@
+"""A rig: a private mosquitto, an emulated controller on a real pty (opened by the bridge through
+a stable link, like /dev/serial/by-id/...), and the bridge itself, all real parts."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge import emulators
+from bridge.app import App
+from bridge.emulators.pty import EmulatedPort
+from bridge.mosquitto import Mosquitto
+from bridge.settings import Settings
+from tests.support import Probe, retained_snapshot
+
+# Timings scaled down so a test takes seconds, with the same ratios as real hardware:
+# the controller's brake delay is still much longer than a poll, a settle window, a reply.
+FAST_ROTOR = {"speed_deg_s": 40.0, "brake_delay_s": 1.5, "jitter_deg": 1}
+FAST_BRIDGE = {
+    "idle_poll_interval_s": 0.3,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 0.6,
+    "stall_timeout_s": 2.5,
+    "silence_timeout_s": 1.0,
+    "brake_delay_s": 1.5,
+}
+
+
+class Rig:
+    def __init__(self, tmp_path: Path, broker: Mosquitto, probe: Probe) -> None:
+        self.tmp = tmp_path
+        self.broker = broker
+        self.probe = probe
+        self.emus: dict[str, EmulatedPort[Any]] = {}
+        self.rotators: list[dict[str, Any]] = []
+        self.app: App | None = None
+        self.base = "rotor"
+
+    def add(
+        self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
+    ) -> EmulatedPort[Any]:
+        link = self.tmp / f"serial-by-id-{rid}"
+        emu_options = {**FAST_ROTOR, **(emu or {})}
+        if model == "rotorcard":
+            emu_options["brake_delay_s"] = 0.0  # Yaesu rotors have no brake
+        port = emulators.start(model, link=str(link), **emu_options)
+        self.emus[rid] = port
+        cfg = {"id": rid, "model": model, "port": str(link), **FAST_BRIDGE}
+        if model == "rotorcard":
+            cfg["brake_delay_s"] = 0
+        cfg.update(bridge)
+        self.rotators.append(cfg)
+        return port
+
+    @property
+    def settings(self) -> Settings:
+        return Settings(
+            mqtt={
+                "host": "127.0.0.1",
+                "port": self.broker.port,
+                "base_topic": self.base,
+                "client_id": f"bridge-under-test-{id(self)}",
+            },
+            rotators=self.rotators,
+            state_file=self.tmp / "state.json",
+        )
+
+    def start(self) -> App:
+        self.app = App(self.settings)
+        self.app.start()
+        return self.app
+
+    def stop(self) -> None:
+        if self.app is not None:
+            self.app.stop()
+            self.app = None
+
+    def topic(self, rid: str, leaf: str) -> str:
+        root = self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
+        return f"{root}/{leaf}"
+
+    def ready(self, rid: str, timeout_s: float = 10.0) -> None:
+        """Online and idle (past the start-up brake window)."""
+        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s)
+        self.probe.wait_value(self.topic(rid, "state"), "idle", timeout_s)
+
+    def retained(self) -> dict[str, bytes]:
+        return retained_snapshot(self.broker.port, f"{self.base}/#")
+
+    def close(self) -> None:
+        self.stop()
+        for emu in self.emus.values():
+            emu.close()
+
+
+@pytest.fixture
+def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
+    r = Rig(tmp_path, broker, probe)
+    yield r
+    r.close()

@@ -1,0 +1,403 @@
+"""Rotor-EZ / RotorCard / DCU-1 end to end: real mosquitto, real pty, real pyserial, the bridge.
+
+Every assertion is something a user would notice: the retained payloads, the error events, the
+bytes the controller received (the emulator's log) and where the rotor really is (its ground
+truth, which the bridge never sees).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+
+from tests.integration.conftest import Rig
+
+BEARING_FRAMES = (
+    "executed",
+    "stored",
+    "ignored: brake delay",
+    "ignored: re-target while turning (stopped)",
+    "ignored: no stored target",
+)
+
+
+def near(a: float, b: float, tol: float = 3.0) -> bool:
+    return abs(a - b) <= tol
+
+
+def test_subscriber_sees_retained_state_after_start(rig: Rig) -> None:
+    rig.add("tower", emu={"start_az_deg": 77, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    snap = rig.retained()
+    assert snap["rotor/bridge/state"] == b"online"
+    assert snap["rotor/availability"] == b"online"
+    assert snap["rotor/state"] == b"idle"
+    assert snap["rotor/bearing"] == b"77"
+    assert snap["rotor/version"] == b"1.4S"
+    assert snap["rotor/lock/state"] == b"OFF"
+    status = json.loads(snap["rotor/status"])
+    assert status["bearing"] == 77 and status["state"] == "idle" and status["connected"] is True
+    assert status["version"] == "1.4S" and status["locked"] is False and "time" in status
+
+
+def test_target_turns_the_rotor_and_state_returns_to_idle(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower")
+    t0 = time.monotonic()
+    rig.probe.publish("rotor/target", "120")
+    rig.probe.wait_value("rotor/state", "moving", after=t0)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=20, after=t0 + 0.01)
+    truth = emu.state()
+    assert near(truth.az_deg, 120) and not truth.is_moving
+    assert near(float(rig.retained()["rotor/bearing"]), 120)
+    assert [f.data for f in emu.frames("executed")] == [b"AP1120\r"]
+    status = json.loads(rig.retained()["rotor/status"])
+    assert status["last_command_source"] == "mqtt" and status["target"] is None
+
+
+def test_retarget_while_turning_ends_at_the_last_target_and_never_hits_the_brake_delay(
+    rig: Rig,
+) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 100})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 110)
+    rig.probe.publish("rotor/target", "40")
+    emu.wait_for(lambda s: not s.is_moving and near(s.az_deg, 40) and not s.in_brake_delay, 30)
+    # the controller was never handed a bearing it would drop: not while turning, not braking
+    outcomes = [f.outcome for f in emu.frames(*BEARING_FRAMES)]
+    assert outcomes == ["executed", "executed"], emu.log()
+    stops = [f for f in emu.frames("stop")]
+    assert len(stops) == 1
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10)
+
+
+def test_slider_burst_only_the_last_target_matters(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    for az in range(10, 100):
+        rig.probe.client.publish("rotor/target", str(az), qos=1)
+    emu.wait_for(lambda s: not s.is_moving and near(s.az_deg, 99) and not s.in_brake_delay, 30)
+    executed = emu.frames(*BEARING_FRAMES)
+    assert executed[-1].data == b"AP1099\r"
+    assert all(f.outcome == "executed" for f in executed)
+    assert len(executed) <= 3, executed  # not 90 frames for 90 slider positions
+
+
+def test_stop_stops_now(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20)
+    rig.probe.publish("rotor/stop", "")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 2)
+    assert stopped.az_deg < 100
+    assert emu.frames("stop")
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert not near(float(rig.retained()["rotor/bearing"]), 300, 100)
+
+
+def test_options_are_sent_remembered_and_reapplied_after_a_power_cycle(rig: Rig) -> None:
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    assert emu.state().options["jam"] is True  # jumper
+    rig.probe.publish("rotor/option/jam", "off")
+    rig.probe.publish("rotor/option/endpoint", "ON")
+    emu.wait_for(lambda s: s.options["jam"] is False and s.options["endpoint"] is True)
+    assert {f.data for f in emu.frames("option")} == {b"j", b"E"}
+    rig.probe.wait_value("rotor/option/jam/state", "OFF")
+    rig.probe.wait_value("rotor/option/endpoint/state", "ON")
+    emu.power_cycle()  # the controller forgets: back to the jumpers
+    emu.wait_for(lambda s: s.options["jam"] is False and s.options["endpoint"] is True, 10)
+
+
+def test_options_the_model_does_not_have_are_refused(rig: Rig) -> None:
+    emu = rig.add("yagi", model="rotorcard")
+    rig.start()
+    rig.ready("yagi")
+    t = time.monotonic()
+    rig.probe.publish("rotor/option/jam", "ON")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert "no option 'jam'" in err["message"] and err["kind"] == "refused"
+    assert emu.frames("option", "invalid") == []
+
+
+def test_lock_refuses_motion_and_survives_a_restart(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 50})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/lock", "ON")
+    rig.probe.wait_value("rotor/lock/state", "ON")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "120")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert "locked" in err["message"] and err["command"] == "target '120'"
+    rig.stop()
+    rig.start()  # a restart of the bridge keeps the lock
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/lock/state", "ON", after=t)
+    rig.probe.wait_value("rotor/availability", "online", after=t)
+    rig.probe.publish("rotor/target", "120")
+    rig.probe.wait_for("rotor/error", lambda m: b"locked" in m.payload, after=t)
+    assert emu.frames(*BEARING_FRAMES) == []
+    rig.probe.publish("rotor/lock", "OFF")
+    rig.probe.wait_value("rotor/lock/state", "OFF", after=t)
+    rig.probe.wait_value("rotor/state", "idle", after=t)
+    rig.probe.publish("rotor/target", "120")
+    emu.wait_for(lambda s: near(s.az_deg, 120) and not s.is_moving, 15)
+
+
+def test_lock_on_stops_a_turning_rotor(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving)
+    rig.probe.publish("rotor/lock", "ON")
+    emu.wait_for(lambda s: not s.is_moving, 3)
+
+
+@pytest.mark.parametrize(
+    "payload",
+    [
+        b"",
+        b"north",
+        b"NaN",
+        b"inf",
+        b"-5",
+        b"361",
+        b"1e9",
+        b"{bad",
+        b'{"azimuth": "x"}',
+        b"\xff\xfe",
+        b"9" * 5000,
+        b"[]",
+        b'{"azimuth": 10, "elevation": 5}',
+    ],
+)
+def test_bad_target_payloads_are_refused_and_move_nothing(rig: Rig, payload: bytes) -> None:
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", payload)
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and err["message"]
+    assert emu.frames(*BEARING_FRAMES) == []
+    # still alive and obedient
+    rig.probe.publish("rotor/target", "30")
+    emu.wait_for(lambda s: near(s.az_deg, 30) and not s.is_moving, 15)
+
+
+def test_retained_commands_are_never_executed(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.probe.publish("rotor/target", "250", retain=True)  # left behind by some flow
+    t = time.monotonic()
+    rig.start()
+    err = rig.probe.wait_for("rotor/error", lambda m: b"retained" in m.payload, after=t)
+    assert json.loads(err.payload)["command"] == "target '250'"
+    rig.ready("tower")
+    # and while running: a retained message published now is refused too
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "180", retain=True)
+    rig.probe.wait_for("rotor/error", lambda m: b"retained" in m.payload, after=t)
+    assert emu.frames(*BEARING_FRAMES) == []
+    assert not emu.state().is_moving
+
+
+def test_broker_restart_without_persistence_gets_retained_state_back(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 33, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.close()
+    rig.broker.restart()  # persistence off: every retained message is gone
+    from tests.support import Probe, wait_until
+
+    probe = Probe(rig.broker.port)
+    rig.probe = probe
+    try:
+        wait_until(lambda: rig.retained().get("rotor/bearing") == b"33", 20, "bearing republished")
+        snap = rig.retained()
+        assert snap["rotor/availability"] == b"online" and snap["rotor/bridge/state"] == b"online"
+        assert snap["rotor/state"] == b"idle" and b"status" not in snap.get("rotor/status", b"")
+        # subscriptions are back: commands work
+        probe.publish("rotor/target", "90")
+        emu.wait_for(lambda s: near(s.az_deg, 90) and not s.is_moving, 15)
+    finally:
+        probe.close()
+
+
+def test_unplugged_adapter_goes_offline_and_comes_back(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 20})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    emu.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    rig.probe.wait_value("rotor/state", "offline", after=t)
+    rig.probe.wait_for("rotor/error", lambda m: b"serial" in m.payload, after=t)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100")  # nothing to send it to: refused, not queued
+    rig.probe.wait_for("rotor/error", lambda m: b"offline" in m.payload, after=t)
+    t = time.monotonic()
+    emu.replug()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert emu.frames(*BEARING_FRAMES) == []  # the refused target never moved it later
+    rig.probe.publish("rotor/target", "100")
+    emu.wait_for(lambda s: near(s.az_deg, 100) and not s.is_moving, 15)
+
+
+def test_unplug_during_motion_drops_nothing_stale(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving)
+    t = time.monotonic()
+    emu.unplug()  # the rotor keeps turning to its target on its own
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 20)
+    t = time.monotonic()
+    emu.replug()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15, after=t)
+    assert near(float(rig.probe.last("rotor/bearing").text), 200)
+    assert len(emu.frames(*BEARING_FRAMES)) == 1
+
+
+def test_junk_on_the_line_never_becomes_a_bearing(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 150, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    for junk in (b"\x00\xff;999", b";12x;", b"garbage\r\n", b";", b"\xe0", b"C2000 IDIOM V1.4S "):
+        emu.inject(junk)
+    rig.probe.wait_for("rotor/error", lambda m: b"protocol" in m.payload, after=t)
+    # a few more polls after the junk
+    n = len(emu.frames("query"))
+    emu.wait_until(
+        lambda d, now: len([f for f in d.log if f.outcome == "query"]), lambda k: k >= n + 3
+    )
+    bearings = {m.text for m in rig.probe.on("rotor/bearing")}
+    assert bearings == {"150"}
+    assert rig.retained()["rotor/availability"] == b"online"
+
+
+def test_silent_controller_goes_offline_and_back(rig: Rig) -> None:
+    emu = rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    emu.set_silent(True)
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    err = rig.probe.wait_for("rotor/error", lambda m: b"answering" in m.payload, after=t)
+    assert json.loads(err.payload)["kind"] == "serial"
+    t = time.monotonic()
+    emu.set_silent(False)
+    rig.probe.wait_value("rotor/availability", "online", after=t)
+
+
+def test_port_held_by_another_program_is_a_clear_error(rig: Rig) -> None:
+    import serial
+
+    emu = rig.add("tower")
+    holder = serial.Serial(emu.link, 4800, exclusive=True)
+    try:
+        t = time.monotonic()
+        rig.start()
+        err = rig.probe.wait_for("rotor/error", lambda m: b"busy" in m.payload, after=t)
+        assert "another program" in json.loads(err.payload)["message"]
+        assert rig.retained()["rotor/availability"] == b"offline"
+    finally:
+        holder.close()
+    rig.ready("tower", timeout_s=20)
+
+
+def test_stalled_rotor_is_reported(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower")
+    emu.jam()
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100")
+    rig.probe.wait_value("rotor/state", "stalled", timeout_s=10, after=t)
+    err = json.loads(
+        rig.probe.wait_for("rotor/error", lambda m: b"stalled" in m.payload, after=t).payload
+    )
+    assert err["kind"] == "stalled"
+
+
+def test_manual_rotation_from_the_front_panel_shows_as_moving(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    emu.manual_rotate(90)
+    rig.probe.wait_value("rotor/state", "moving", after=t)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15, after=t)
+    assert near(float(rig.probe.last("rotor/bearing").text), 90)
+
+
+def test_dcu1_is_driven_without_position_feedback(rig: Rig) -> None:
+    emu = rig.add("dcu", model="dcu1", emu={"start_az_deg": 0})
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online")
+    rig.probe.wait_value("rotor/state", "unknown")
+    rig.probe.publish("rotor/target", "90")
+    emu.wait_for(lambda s: near(s.az_deg, 90) and not s.is_moving, 30)
+    assert emu.frames("query") == []  # a DCU-1 is never polled
+    wire = [f.data for f in emu.log() if f.outcome not in ("stop",)]
+    assert wire[-2:] == [b"AP1090;", b"AM1;"]
+    assert "rotor/bearing" not in rig.retained()
+    assert json.loads(rig.retained()["rotor/status"])["bearing"] is None
+
+
+def test_rotorcard_without_brake_takes_a_new_target_after_stopping(rig: Rig) -> None:
+    emu = rig.add("yagi", model="rotorcard", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("yagi")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20)
+    rig.probe.publish("rotor/target", "10")
+    emu.wait_for(lambda s: near(s.az_deg, 10) and not s.is_moving, 20)
+    assert [f.outcome for f in emu.frames(*BEARING_FRAMES)] == ["executed", "executed"]
+
+
+def test_several_rotators_get_their_own_topics(rig: Rig) -> None:
+    a = rig.add("tower", emu={"start_az_deg": 0})
+    b = rig.add("yagi", model="rotorcard", emu={"start_az_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    rig.ready("yagi")
+    rig.probe.publish("rotor/yagi/target", "45")
+    b.wait_for(lambda s: near(s.az_deg, 45) and not s.is_moving, 15)
+    assert a.frames(*BEARING_FRAMES) == []
+    assert rig.retained()["rotor/bridge/state"] == b"online"
+
+
+def test_mqtt_311_fallback_still_ignores_replayed_retained_commands(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.probe.publish("rotor/target", "250", retain=True)
+    settings = rig.settings.model_copy(
+        update={"mqtt": rig.settings.mqtt.model_copy(update={"protocol": "3.1.1"})}
+    )
+    from bridge.app import App
+
+    t = time.monotonic()
+    rig.app = App(settings)
+    rig.app.start()
+    rig.probe.wait_for("rotor/error", lambda m: b"retained" in m.payload, after=t)
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "", retain=True)  # clear it, as the error says
+    rig.probe.publish("rotor/target", "60")
+    emu.wait_for(lambda s: near(s.az_deg, 60) and not s.is_moving, 15)
+    assert [f.data for f in emu.frames(*BEARING_FRAMES)] == [b"AP1060\r"]
