@@ -125,3 +125,8 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
     assert out.returncode == 2 and "not found" in out.stderr
     out = run_cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
     assert out.returncode == 2 and "not valid TOML" in out.stderr
+
+
+def test_the_example_configuration_is_valid() -> None:
+    s = load_settings(Path(__file__).parent.parent / "config" / "example.toml")
+    assert s.rotators[0].model == "rotorez" and s.mqtt.protocol == "5"

@@ -62,11 +62,20 @@ def test_unknown_model_on_the_command_line_exits_2() -> None:
     assert exc_info.value.code == 2
 
 
-def _read_line(proc: subprocess.Popen[str], deadline_s: float) -> str:
+def _read_lines(proc: subprocess.Popen[bytes], count: int, timeout_s: float) -> list[str]:
+    """The first `count` stdout lines, read from the raw pipe with a deadline."""
     assert proc.stdout is not None
-    ready, _, _ = select.select([proc.stdout], [], [], max(0.0, deadline_s - time.monotonic()))
-    assert ready, "emulator printed nothing before the deadline"
-    return proc.stdout.readline().rstrip("\n")
+    fd = proc.stdout.fileno()
+    deadline_s = time.monotonic() + timeout_s
+    buffer = b""
+    while buffer.count(b"\n") < count:
+        remaining_s = deadline_s - time.monotonic()
+        ready, _, _ = select.select([fd], [], [], max(0.0, remaining_s))
+        assert ready, f"emulator printed only {buffer!r} before the deadline"
+        chunk = os.read(fd, 4096)
+        assert chunk, f"emulator closed stdout after {buffer!r}"
+        buffer += chunk
+    return buffer.decode().splitlines()[:count]
 
 
 def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
@@ -90,12 +99,11 @@ def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
         "--brake-delay-s",
         "0.5",
     ]
-    proc = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE)
     try:
-        deadline_s = time.monotonic() + 10.0
-        device_path = _read_line(proc, deadline_s)
+        device_path, link_line = _read_lines(proc, 2, timeout_s=10.0)
         assert device_path.startswith("/dev/pts/")
-        assert _read_line(proc, deadline_s) == str(link)
+        assert link_line == str(link)
         assert os.path.realpath(link) == device_path
         with serial.Serial(str(link), 4800, timeout=2.0) as client:
             client.write(b"AI1;")

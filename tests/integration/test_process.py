@@ -1,0 +1,100 @@
+"""The real service process: `rotor-bridge run -c FILE`, started, signalled and killed."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from bridge import emulators
+from bridge.mosquitto import Mosquitto, free_port
+from tests.support import Probe, retained_snapshot, wait_until
+
+
+def write_config(tmp: Path, port: int, link: Path) -> Path:
+    cfg = tmp / "bridge.toml"
+    cfg.write_text(
+        f"""
+state_file = "{tmp / "state.json"}"
+[mqtt]
+host = "127.0.0.1"
+port = {port}
+base_topic = "rotor"
+password = "do-not-log-me"
+username = "someone"
+
+[[rotators]]
+id = "tower"
+model = "rotorez"
+port = "{link}"
+brake_delay_s = 1
+idle_poll_interval_s = 0.3
+"""
+    )
+    return cfg
+
+
+def start_bridge(cfg: Path, log: Path) -> subprocess.Popen[bytes]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
+    return subprocess.Popen(
+        [sys.executable, "-m", "bridge", "run", "-c", str(cfg)],
+        stdout=open(log, "wb"),  # noqa: SIM115
+        stderr=subprocess.STDOUT,
+        env=env,
+    )
+
+
+def test_broker_down_at_start_then_up_then_sigterm_is_a_clean_exit(tmp_path: Path) -> None:
+    port = free_port()
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1, jitter_deg=0)
+    proc = start_bridge(write_config(tmp_path, port, tmp_path / "tty"), tmp_path / "bridge.log")
+    broker = Mosquitto(tmp_path / "broker", port=port, extra_conf="allow_anonymous true")
+    try:
+        # the bridge starts before any broker exists and keeps trying
+        emu.wait_for_frame(b"AI1;", "query", timeout_s=10)
+        assert proc.poll() is None
+        broker.start()
+        probe = Probe(port, "rotor/#")
+        probe.wait_value("rotor/bridge/state", "online", timeout_s=40)
+        probe.wait_value("rotor/availability", "online")
+        t = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(10) == 0
+        elapsed = time.monotonic() - t
+        snap = retained_snapshot(port, "rotor/#")
+        assert snap["rotor/bridge/state"] == b"offline"
+        assert snap["rotor/availability"] == b"offline"
+        assert elapsed < 5
+        probe.close()
+        log = (tmp_path / "bridge.log").read_text()
+        assert "do-not-log-me" not in log
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        broker.stop()
+        emu.close()
+
+
+def test_killed_bridge_is_marked_offline_by_its_last_will(tmp_path: Path) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1)
+    proc = start_bridge(write_config(tmp_path, broker.port, tmp_path / "tty"), tmp_path / "log")
+    try:
+        probe = Probe(broker.port, "rotor/#")
+        probe.wait_value("rotor/bridge/state", "online", timeout_s=20)
+        t = time.monotonic()
+        proc.kill()  # no goodbye: only the broker can tell
+        proc.wait(5)
+        probe.wait_value("rotor/bridge/state", "offline", timeout_s=10, after=t)
+        wait_until(
+            lambda: retained_snapshot(broker.port, "rotor/#")["rotor/bridge/state"] == b"offline"
+        )
+        probe.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        broker.stop()
+        emu.close()
