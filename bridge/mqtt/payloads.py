@@ -73,7 +73,7 @@ def parse_target(payload: bytes) -> tuple[float, float | None]:
         az = _number(az_raw, "azimuth")
         return az, None if el_raw is None else _number(el_raw, "elevation")
     parts = [p for p in _SPLIT.split(text) if p]
-    if len(parts) > 2:
+    if not parts or len(parts) > 2:
         raise PayloadError(f"target must be 'azimuth' or 'azimuth elevation', got {text[:40]!r}")
     az = _number(parts[0], "azimuth")
     el = _number(parts[1], "elevation") if len(parts) == 2 else None

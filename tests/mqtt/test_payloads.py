@@ -45,6 +45,8 @@ def test_targets_users_send(raw: bytes, want: tuple) -> None:
         (b'{"azimuth": 1, "speed": 3}', "unknown key"),
         (b'{"azimuth": true}', "number"),
         (b"1 2 3", "azimuth elevation"),
+        (b";", "azimuth elevation"),
+        (b" , ", "azimuth elevation"),
         (b"\xff\xfe", "UTF-8"),
         (b"1" * 300, "too large"),
         (b"0x10", "number"),
