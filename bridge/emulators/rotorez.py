@@ -48,120 +48,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
-from enum import StrEnum
 
 from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
-
-POWER_ON_JUNK = b"\xe0"
-MAX_FRAME_BODY_BYTES = 6  # "AP1xxx" is the longest body; the terminator makes seven bytes
-OPTION_LETTERS: Mapping[int, tuple[str, bool]] = {
-    ord("E"): ("endpoint", True),
-    ord("e"): ("endpoint", False),
-    ord("J"): ("jam", True),
-    ord("j"): ("jam", False),
-    ord("O"): ("overshoot", True),
-    ord("o"): ("overshoot", False),
-    ord("S"): ("unstick", True),
-    ord("s"): ("unstick", False),
-}
-#: Jumper positions at power-on. Undocumented; jam protection on because Idiom calls turning it
-#: off "NOT recommended", the rest off.
-DEFAULT_JUMPERS: Mapping[str, bool] = {
-    "endpoint": False,
-    "jam": True,
-    "overshoot": False,
-    "unstick": False,
-}
-
-
-class Outcome(StrEnum):
-    """What the controller did with a frame (the `outcome` of a LoggedFrame)."""
-
-    EXECUTED = "executed"
-    STORED = "stored"
-    QUERY = "query"
-    STOP = "stop"
-    OPTION = "option"
-    CALIBRATION = "calibration"
-    VERSION = "version"
-    IGNORED_BRAKE_DELAY = "ignored: brake delay"
-    IGNORED_RETARGET = "ignored: re-target while turning (stopped)"
-    IGNORED_NO_TARGET = "ignored: no stored target"
-    INVALID = "invalid"
-
-
-#: Outcomes of frames that carried or triggered a bearing (rule 5).
-BEARING_OUTCOMES: frozenset[str] = frozenset(
-    {
-        Outcome.EXECUTED,
-        Outcome.STORED,
-        Outcome.IGNORED_BRAKE_DELAY,
-        Outcome.IGNORED_RETARGET,
-        Outcome.IGNORED_NO_TARGET,
-    }
+from bridge.emulators.rotorez_models import (
+    BEARING_OUTCOMES,
+    DEFAULT_JUMPERS,
+    MAX_FRAME_BODY_BYTES,
+    MODELS,
+    OPTION_LETTERS,
+    POWER_ON_JUNK,
+    ModelSpec,
+    Outcome,
 )
 
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """What one member of the family understands."""
-
-    name: str
-    title: str
-    transmits: bool
-    has_query: bool
-    executes_on_cr: bool
-    semicolon_stops: bool
-    as1_stops: bool
-    has_options: bool
-    has_calibration: bool
-    has_version: bool
-    brake_delay_s: float
-
-
-MODELS: Mapping[str, ModelSpec] = {
-    "rotorez": ModelSpec(
-        name="rotorez",
-        title="Idiom Press Rotor-EZ (Hy-Gain rotors)",
-        transmits=True,
-        has_query=True,
-        executes_on_cr=True,
-        semicolon_stops=True,
-        as1_stops=False,
-        has_options=True,
-        has_calibration=False,
-        has_version=True,
-        brake_delay_s=5.0,
-    ),
-    "rotorcard": ModelSpec(
-        name="rotorcard",
-        title="Idiom Press RotorCard (Yaesu rotors)",
-        transmits=True,
-        has_query=True,
-        executes_on_cr=True,
-        semicolon_stops=True,
-        as1_stops=False,
-        has_options=False,
-        has_calibration=True,
-        has_version=True,
-        brake_delay_s=0.0,
-    ),
-    "dcu1": ModelSpec(
-        name="dcu1",
-        title="Hy-Gain DCU-1 / DCU-1X",
-        transmits=False,
-        has_query=False,
-        executes_on_cr=False,
-        semicolon_stops=False,
-        as1_stops=True,
-        has_options=False,
-        has_calibration=False,
-        has_version=False,
-        brake_delay_s=5.0,
-    ),
-}
+__all__ = [
+    "BEARING_OUTCOMES",
+    "DEFAULT_JUMPERS",
+    "MODELS",
+    "ModelSpec",
+    "Outcome",
+    "RotorEZ",
+]
 
 
 def _parse_bearing(digits: bytes) -> int | None:

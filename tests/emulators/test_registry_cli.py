@@ -117,3 +117,21 @@ def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_emulators_never_import_the_bridge_codec_engine_or_paho() -> None:
+    """ARCHITECTURE rule 5: an emulator built on our own codec would share its misreadings."""
+    import ast
+
+    forbidden = ("bridge.protocols", "bridge.engine", "bridge.mqtt", "paho")
+    package = REPO / "bridge" / "emulators"
+    offenders = []
+    for module in sorted(package.glob("*.py")):
+        for node in ast.walk(ast.parse(module.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            offenders += [f"{module.name}: {n}" for n in names if n.startswith(forbidden)]
+    assert offenders == []
