@@ -118,29 +118,18 @@ class Rotator:
         if self._locked:
             raise Refused("locked", "rotator is locked (safety lock ON): motion refused")
         lim = self.limits
-        if (
-            not math.isfinite(command.az_deg)
-            or not lim.az_min_deg <= command.az_deg <= lim.az_max_deg
-        ):
-            raise Refused(
-                "limits",
-                f"azimuth {command.az_deg:g} outside the limits "
-                f"{lim.az_min_deg:g}..{lim.az_max_deg:g}",
-            )
+        _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
         if command.el_deg is not None:
             if not self.spec.has_elevation:
                 raise Refused("unsupported", f"{self.spec.display_name} has no elevation axis")
-            if (
-                not math.isfinite(command.el_deg)
-                or not lim.el_min_deg <= command.el_deg <= lim.el_max_deg
-            ):
-                raise Refused(
-                    "limits",
-                    f"elevation {command.el_deg:g} outside the limits "
-                    f"{lim.el_min_deg:g}..{lim.el_max_deg:g}",
-                )
+            _check_axis("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
         if not self.status.available:
             raise Refused("offline", "rotator offline (serial link down or controller silent)")
+
+
+def _check_axis(axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
+    if not math.isfinite(value_deg) or not lo_deg <= value_deg <= hi_deg:
+        raise Refused("limits", f"{axis} {value_deg:g} outside the limits {lo_deg:g}..{hi_deg:g}")
 
 
 def _describe(command: Command) -> str:

@@ -10,32 +10,13 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 import serial
 
-from bridge.emulators import EmulatedPort, start
+from tests.emulators.conftest import PortFactory
 
 BANNER = b"C2000 IDIOM V1.4S "
-PortFactory = Callable[..., EmulatedPort[Any]]
-
-
-@pytest.fixture
-def make_port(tmp_path: Path) -> Iterator[PortFactory]:
-    ports: list[EmulatedPort[Any]] = []
-
-    def factory(model: str = "rotorez", **options: Any) -> EmulatedPort[Any]:
-        options.setdefault("link", str(tmp_path / "by-id" / f"usb-emulated-{model}-{len(ports)}"))
-        options.setdefault("power_on_junk", False)
-        options.setdefault("jitter_deg", 0)
-        port = start(model, **options)
-        ports.append(port)
-        return port
-
-    yield factory
-    for port in ports:
-        port.close()
 
 
 @pytest.fixture

@@ -9,17 +9,17 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from collections.abc import Callable, Iterator
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import pytest
 
-from bridge.emulators import EmulatedPort, start
+from bridge.emulators import EmulatedPort
+from tests.emulators.conftest import PortFactory
 
 pytestmark = pytest.mark.hamlib
 
-PortFactory = Callable[..., EmulatedPort[Any]]
+
 Rotctl = Callable[..., subprocess.CompletedProcess[str]]
 
 
@@ -32,22 +32,6 @@ def rotctl_path() -> str:
             "it is the independent judge of the emulators, so these tests cannot be skipped"
         )
     return path
-
-
-@pytest.fixture
-def make_port(tmp_path: Path) -> Iterator[PortFactory]:
-    ports: list[EmulatedPort[Any]] = []
-
-    def factory(model: str, **options: Any) -> EmulatedPort[Any]:
-        options.setdefault("power_on_junk", False)
-        options.setdefault("jitter_deg", 0)
-        port = start(model, link=str(tmp_path / f"usb-{model}-{len(ports)}"), **options)
-        ports.append(port)
-        return port
-
-    yield factory
-    for port in ports:
-        port.close()
 
 
 @pytest.fixture
