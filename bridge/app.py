@@ -13,6 +13,7 @@ from bridge.engine.port import open_port
 from bridge.engine.rotator import Limits, Rotator
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
+from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
 from bridge.settings import RotatorSettings, Settings
@@ -70,14 +71,53 @@ class App:
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
+        self.discovery: DiscoveryPublisher | None = None
+        if settings.homeassistant.enabled:
+            self.discovery = self._discovery(settings)
+
+    def _discovery(self, settings: Settings) -> DiscoveryPublisher:
+        ha = settings.homeassistant
+        client = self.mqtt.client
+        infos = []
+        for r, rot in zip(settings.rotators, self.rotators, strict=True):
+            infos.append(
+                RotatorInfo(
+                    rotator_id=r.id,
+                    name=r.name or r.id,
+                    spec=r.spec,
+                    topics=self.topics.rotator(r.id),
+                    az_min_deg=rot.limits.az_min_deg,
+                    az_max_deg=rot.limits.az_max_deg,
+                    el_min_deg=rot.limits.el_min_deg,
+                    el_max_deg=rot.limits.el_max_deg,
+                )
+            )
+        publisher = DiscoveryPublisher(
+            prefix=ha.discovery_prefix,
+            status_topic=ha.status_topic,
+            topics=self.topics,
+            rotators=infos,
+            publish_retained=client.publish_retained,
+            clear_retained=client.clear_retained,
+            republish_state=lambda: client.republish_retained(
+                skip_prefix=ha.discovery_prefix + "/"
+            ),
+            birth_delay_s=ha.birth_delay_s,
+        )
+        self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
+        return publisher
 
     def start(self) -> None:
+        if self.discovery is not None:
+            self.discovery.publish_all()  # cached now, sent on connect
         self.mqtt.start()
         for rot in self.rotators:
             rot.start()
             self.mqtt.publish_status(rot.id, rot.status)
 
     def stop(self) -> None:
+        if self.discovery is not None:
+            self.discovery.stop()
         for rot in self.rotators:
             rot.stop()
         self.mqtt.stop()

@@ -108,6 +108,20 @@ class MqttSettings(_Strict):
         return self.client_id or f"rotor-bridge-{socket.gethostname()}"[:64]
 
 
+class HomeAssistantSettings(_Strict):
+    enabled: bool = True
+    discovery_prefix: str = "homeassistant"
+    status_topic: str = "homeassistant/status"
+    birth_delay_s: float = Field(
+        10.0, ge=0, le=300, description="wait after Home Assistant's birth before re-publishing"
+    )
+
+    @field_validator("discovery_prefix", "status_topic")
+    @classmethod
+    def _topic(cls, v: str) -> str:
+        return MqttSettings._topic(v)  # type: ignore[call-arg]
+
+
 class RotatorSettings(_Strict):
     id: str
     name: str | None = None
@@ -197,6 +211,7 @@ class Settings(BaseSettings):
     )
 
     mqtt: MqttSettings = MqttSettings()
+    homeassistant: HomeAssistantSettings = HomeAssistantSettings()
     rotators: list[RotatorSettings] = Field(min_length=1)
     log_level: str = "INFO"
     state_file: Path = Field(default_factory=_default_state_file)
@@ -223,6 +238,11 @@ class Settings(BaseSettings):
         topics = [self.rotator_topic(r) for r in self.rotators]
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")
+        prefix = self.homeassistant.discovery_prefix
+        if self.homeassistant.enabled and (
+            prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
+        ):
+            raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
         return self
 
     def rotator_topic(self, r: RotatorSettings) -> str:

@@ -33,6 +33,7 @@ class Message:
     payload: bytes
     retain: bool
     t: float
+    qos: int = 0
 
     @property
     def text(self) -> str:
@@ -63,7 +64,7 @@ class Probe:
     def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
         with self._cond:
             self.messages.append(
-                Message(msg.topic, bytes(msg.payload), bool(msg.retain), time.monotonic())
+                Message(msg.topic, bytes(msg.payload), bool(msg.retain), time.monotonic(), msg.qos)
             )
             self._cond.notify_all()
 

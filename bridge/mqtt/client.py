@@ -87,6 +87,10 @@ class MqttClient:
         self._client = c
         self._retained[will_topic] = b"online"
 
+    def add_subscriptions(self, topics: list[str]) -> None:
+        """More topic filters (features such as discovery); before ``start()``."""
+        self._subscriptions = [*self._subscriptions, *topics]
+
     # -- lifecycle --------------------------------------------------------------------------
     def start(self) -> None:
         s = self._settings
@@ -120,6 +124,23 @@ class MqttClient:
             self._retained[topic] = data
         if self.connected.is_set():
             self._client.publish(topic, data, qos=1, retain=True)
+
+    def clear_retained(self, topic: str) -> None:
+        """Delete a retained message from the broker (empty retained payload)."""
+        with self._lock:
+            self._retained.pop(topic, None)
+        if self.connected.is_set():
+            self._client.publish(topic, b"", qos=1, retain=True)
+
+    def republish_retained(self, skip_prefix: str | None = None) -> None:
+        """Send the retained messages we own again (Home Assistant came back, for example)."""
+        with self._lock:
+            cached = list(self._retained.items())
+        if not self.connected.is_set():
+            return
+        for topic, data in cached:
+            if skip_prefix is None or not topic.startswith(skip_prefix):
+                self._client.publish(topic, data, qos=1, retain=True)
 
     def publish_event(self, topic: str, payload: str | bytes) -> None:
         if self.connected.is_set():

@@ -50,6 +50,8 @@ class MqttService:
         self.topics = topics
         self._wall = wall
         self._rotators: dict[str, RotatorPort] = {}
+        self._handlers: list[Callable[[str, bytes, bool], bool]] = []
+        self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
         self.client = MqttClient(
             settings,
             will_topic=topics.bridge_state,
@@ -59,6 +61,22 @@ class MqttService:
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
+
+    def add_feature(
+        self,
+        subscriptions: list[str],
+        on_message: Callable[[str, bytes, bool], bool],
+        on_status: Callable[[str, RotatorStatus], None] | None = None,
+    ) -> None:
+        """A feature (e.g. Home Assistant discovery) with topics of its own; before ``start()``.
+
+        ``on_message`` gets every message that is not a rotator command and returns True when
+        it was the feature's; ``on_status`` sees every status a rotator emits.
+        """
+        self.client.add_subscriptions(subscriptions)
+        self._handlers.append(on_message)
+        if on_status is not None:
+            self._status_listeners.append(on_status)
 
     def start(self) -> None:
         self.client.start()
@@ -88,6 +106,8 @@ class MqttService:
                 pub(t.option_state(name), pl.switch(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation))
+        for listener in self._status_listeners:
+            listener(rotator_id, status)
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         t = self.topics.rotator(rotator_id)
@@ -97,6 +117,9 @@ class MqttService:
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         route = self.topics.route(topic)
         if route is None:
+            for handler in self._handlers:
+                if handler(topic, payload, retain):
+                    return
             return
         rotator_id, kind, arg = route
         rot = self._rotators.get(rotator_id)

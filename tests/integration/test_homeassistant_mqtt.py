@@ -1,0 +1,129 @@
+"""Home Assistant discovery through a real broker: what HA would receive, and how it reacts."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from bridge import emulators
+from bridge.mosquitto import Mosquitto
+from tests.ha_rules import validate
+from tests.integration.conftest import Rig
+from tests.integration.test_process import start_bridge, write_config
+from tests.support import Probe, retained_snapshot, wait_until
+
+PREFIX = "homeassistant"
+
+
+def configs(port: int) -> dict[str, dict]:
+    snap = retained_snapshot(port, f"{PREFIX}/#")
+    return {t: json.loads(p) for t, p in snap.items() if t.endswith("/config") and p}
+
+
+def test_discovery_is_retained_valid_and_not_repeated(rig: Rig) -> None:
+    ha = Probe(rig.broker.port, f"{PREFIX}/#")
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower")
+    msgs = configs(rig.broker.port)
+    assert len(msgs) == 14
+    for topic, payload in msgs.items():
+        assert validate(topic, payload) == []
+    # the controller's firmware arrived and became the device's sw_version
+    bearing = msgs[f"{PREFIX}/sensor/rotorbridge_rotor_r_tower/bearing/config"]
+    assert bearing["device"]["sw_version"] == "1.4S"
+    # a move changes states, not discovery: no config is published again
+    seen = {t: len(ha.on(t)) for t in msgs}
+    rig.probe.publish("rotor/target", "60")
+    emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10)
+    assert {t: len(ha.on(t)) for t in msgs} == seen
+    # retained: configs() read them from a fresh subscription; QoS 1 on the way out
+    assert all(m.qos == 1 for t in msgs for m in ha.on(t))
+    ha.close()
+
+
+def test_number_entity_command_turns_the_rotor(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10})
+    rig.start()
+    rig.ready("tower")
+    num = configs(rig.broker.port)[
+        f"{PREFIX}/number/rotorbridge_rotor_r_tower/target_azimuth/config"
+    ]
+    rig.probe.publish(num["command_topic"], "120.0")  # HA's number sends the value as text
+    emu.wait_for(lambda s: abs(s.az_deg - 120) <= 3 and not s.is_moving, 15)
+    stop = configs(rig.broker.port)[f"{PREFIX}/button/rotorbridge_rotor_r_tower/stop/config"]
+    assert stop["command_topic"] == "rotor/stop"
+
+
+def test_home_assistant_birth_brings_the_state_again(rig: Rig) -> None:
+    rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    rig.probe.publish(f"{PREFIX}/status", "online")  # HA's birth message (not retained)
+    for topic in ("rotor/availability", "rotor/state", "rotor/bridge/state", "rotor/status"):
+        rig.probe.wait_for(topic, after=t, timeout_s=20)
+
+
+def test_removed_rotator_entities_are_cleared(rig: Rig) -> None:
+    rig.add("tower")
+    rig.add("yagi", model="rotorcard")
+    rig.start()
+    rig.ready("tower")
+    before = configs(rig.broker.port)
+    assert any("_r_yagi/" in t for t in before)
+    rig.stop()
+    rig.rotators = [r for r in rig.rotators if r["id"] == "tower"]
+    rig.start()
+    wait_until(
+        lambda: not any("_r_yagi/" in t for t in configs(rig.broker.port)),
+        15,
+        "yagi's configs cleared",
+    )
+    after = configs(rig.broker.port)
+    assert any("_r_tower/" in t for t in after)
+
+
+def test_discovery_can_be_turned_off(rig: Rig) -> None:
+    rig.add("tower")
+    from bridge.app import App
+
+    settings = rig.settings.model_copy(
+        update={"homeassistant": rig.settings.homeassistant.model_copy(update={"enabled": False})}
+    )
+    rig.app = App(settings)
+    rig.app.start()
+    rig.ready("tower")
+    assert configs(rig.broker.port) == {}
+
+
+def test_killed_bridge_makes_every_entity_unavailable(tmp_path: Path) -> None:
+    broker = Mosquitto(tmp_path / "broker").start()
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), brake_delay_s=1)
+    proc = start_bridge(write_config(tmp_path, broker.port, tmp_path / "tty"), tmp_path / "log")
+    try:
+        probe = Probe(broker.port, "rotor/#")
+        probe.wait_value("rotor/availability", "online", timeout_s=20)
+        msgs = configs(broker.port)
+        assert msgs
+        proc.kill()
+        proc.wait(5)
+        wait_until(
+            lambda: retained_snapshot(broker.port, "rotor/#")["rotor/bridge/state"] == b"offline",
+            10,
+        )
+        # HA marks an entity unavailable when any of its availability topics says offline
+        # (mode all); every rotator entity lists the bridge state
+        for topic, payload in msgs.items():
+            topics = [a["topic"] for a in payload.get("availability", [])]
+            assert (
+                "rotor/bridge/state" in topics or payload["state_topic"] == "rotor/bridge/state"
+            ), topic
+        probe.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        broker.stop()
+        emu.close()
