@@ -8,5 +8,5 @@ class Refused(Exception):
 
     def __init__(self, code: str, message: str) -> None:
         super().__init__(message)
-        self.code = code  # locked | limits | offline | unsupported
+        self.code = code  # locked | limits | offline | unsupported | invalid
         self.message = message

@@ -31,9 +31,10 @@ class Source(enum.StrEnum):
 
 @dataclass(frozen=True)
 class Target:
-    """Go to this bearing. ``el_deg`` is None for azimuth-only requests."""
+    """Go here. An axis left None keeps its current target (or position): a bare azimuth on an
+    az/el rotator leaves the elevation alone, an elevation-only request the azimuth."""
 
-    az_deg: float
+    az_deg: float | None
     el_deg: float | None = None
     source: Source = Source.MQTT
 
@@ -93,3 +94,13 @@ class RotatorStatus:
     @property
     def moving(self) -> bool:
         return self.state is MotionState.MOVING
+
+
+def describe_command(command: Command) -> str:
+    """How a command is echoed back to the user in an error event."""
+    if isinstance(command, Target):
+        axes = (("az", command.az_deg), ("el", command.el_deg))
+        return "target " + " ".join(f"{axis} {v:g}" for axis, v in axes if v is not None)
+    if isinstance(command, SetOption):
+        return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
+    return "stop"

@@ -58,6 +58,10 @@ class Motion:
     stop_sent_t: float | None = None
     busy_until_t: float | None = None  # no feedback: when the last move is assumed done
     assumed_deg: float | None = None  # no feedback: where the last move should have ended
+    # elevation, for az/el controllers; movement on either axis is movement
+    el_position_deg: float | None = None
+    el_anchor_deg: float | None = None
+    el_target_deg: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -87,10 +91,24 @@ def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
 
 
 def link_down(m: Motion) -> Motion:
-    return Motion(state=MotionState.OFFLINE, position_deg=m.position_deg)
+    return Motion(
+        state=MotionState.OFFLINE, position_deg=m.position_deg, el_position_deg=m.el_position_deg
+    )
 
 
-def reading(m: Motion, cfg: MotionConfig, az_deg: float, now: float) -> tuple[Motion, list[Event]]:
+def target_error(m: Motion, cfg: MotionConfig) -> float | None:
+    """How far the rotor is from its target (the worse axis), or None if unknown."""
+    if m.target_deg is None or m.position_deg is None:
+        return None
+    err = angle_error(m.position_deg, m.target_deg, cfg.az_wraps)
+    if m.el_target_deg is not None and m.el_position_deg is not None:
+        err = max(err, abs(m.el_position_deg - m.el_target_deg))
+    return err
+
+
+def reading(
+    m: Motion, cfg: MotionConfig, az_deg: float, now: float, el_deg: float | None = None
+) -> tuple[Motion, list[Event]]:
     if m.anchor_deg is None:
         # first reading since the link came up: the brake window may still be running
         m = replace(
@@ -98,22 +116,28 @@ def reading(m: Motion, cfg: MotionConfig, az_deg: float, now: float) -> tuple[Mo
             state=MotionState.BRAKING if cfg.brake_delay_s > 0 else MotionState.IDLE,
             position_deg=az_deg,
             anchor_deg=az_deg,
+            el_position_deg=el_deg,
+            el_anchor_deg=el_deg,
             still_since_t=now,
         )
         return tick(m, cfg, now)
-    m = replace(m, position_deg=az_deg)
-    if angle_error(az_deg, m.anchor_deg, cfg.az_wraps) > cfg.noise_deg:
-        m = replace(m, anchor_deg=az_deg, last_move_t=now, still_since_t=None)
+    m = replace(m, position_deg=az_deg, el_position_deg=el_deg)
+    moved = angle_error(az_deg, m.anchor_deg, cfg.az_wraps) > cfg.noise_deg
+    if el_deg is not None and m.el_anchor_deg is not None:
+        moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    if moved:
+        m = replace(m, anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
         if m.state is not MotionState.MOVING:
             m = replace(m, state=MotionState.MOVING)
-    if m.target_deg is not None:
-        err = angle_error(az_deg, m.target_deg, cfg.az_wraps)
-        if m.best_error_deg is None or err < m.best_error_deg - cfg.noise_deg / 2:
-            m = replace(m, best_error_deg=err, progress_t=now)
+    err = target_error(m, cfg)
+    if err is not None and (m.best_error_deg is None or err < m.best_error_deg - cfg.noise_deg / 2):
+        m = replace(m, best_error_deg=err, progress_t=now)
     return tick(m, cfg, now)
 
 
-def commanded(m: Motion, cfg: MotionConfig, target_deg: float, now: float) -> Motion:
+def commanded(
+    m: Motion, cfg: MotionConfig, target_deg: float, now: float, el_target_deg: float | None = None
+) -> Motion:
     if not cfg.can_report_position:
         start = m.assumed_deg
         travel = (
@@ -131,13 +155,12 @@ def commanded(m: Motion, cfg: MotionConfig, target_deg: float, now: float) -> Mo
             assumed_deg=target_deg,
             stop_sent_t=None,
         )
-    err = None if m.position_deg is None else angle_error(m.position_deg, target_deg, cfg.az_wraps)
+    m = replace(m, target_deg=target_deg, el_target_deg=el_target_deg)
     return replace(
         m,
         state=MotionState.MOVING,
-        target_deg=target_deg,
         target_t=now,
-        best_error_deg=err,
+        best_error_deg=target_error(m, cfg),
         progress_t=now,
         stop_sent_t=None,
         still_since_t=None,
@@ -148,7 +171,7 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
     if not cfg.can_report_position:
         # it may have been turning; from now on it is stopping, then braking
         return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
-    return replace(m, target_deg=None, best_error_deg=None, stop_sent_t=now)
+    return replace(m, target_deg=None, el_target_deg=None, best_error_deg=None, stop_sent_t=now)
 
 
 def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
@@ -165,11 +188,7 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
         ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
         still = now - ref >= cfg.settle_s
         if m.target_deg is not None:
-            err = (
-                None
-                if m.position_deg is None
-                else angle_error(m.position_deg, m.target_deg, cfg.az_wraps)
-            )
+            err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
                 events.append(Event.ARRIVED)
                 m = _at_rest(m, cfg, now, MotionState.BRAKING)
@@ -193,6 +212,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         state=state,
         still_since_t=now,
         target_deg=None,
+        el_target_deg=None,
         target_t=None,
         best_error_deg=None,
         progress_t=None,

@@ -20,7 +20,15 @@ from bridge.engine.port import open_port
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import Refused
-from bridge.model import Command, ErrorEvent, RotatorStatus, SetOption, Stop, Target
+from bridge.model import (
+    Command,
+    ErrorEvent,
+    RotatorStatus,
+    SetOption,
+    Stop,
+    Target,
+    describe_command,
+)
 from bridge.protocols.base import ModelSpec
 
 
@@ -87,7 +95,7 @@ class Rotator:
         try:
             self._check(command)
         except Refused as exc:
-            self.report_refusal(exc.message, described or _describe(command))
+            self.report_refusal(exc.message, described or describe_command(command))
             raise
         if isinstance(command, SetOption):
             self._store.set_option(self.id, command.name, command.enabled)
@@ -118,7 +126,10 @@ class Rotator:
         if self._locked:
             raise Refused("locked", "rotator is locked (safety lock ON): motion refused")
         lim = self.limits
-        _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
+        if command.az_deg is None and command.el_deg is None:
+            raise Refused("invalid", "target without azimuth or elevation")
+        if command.az_deg is not None:
+            _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
         if command.el_deg is not None:
             if not self.spec.has_elevation:
                 raise Refused("unsupported", f"{self.spec.display_name} has no elevation axis")
@@ -130,12 +141,3 @@ class Rotator:
 def _check_axis(axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
     if not math.isfinite(value_deg) or not lo_deg <= value_deg <= hi_deg:
         raise Refused("limits", f"{axis} {value_deg:g} outside the limits {lo_deg:g}..{hi_deg:g}")
-
-
-def _describe(command: Command) -> str:
-    if isinstance(command, Target):
-        el = f" {command.el_deg:g}" if command.el_deg is not None else ""
-        return f"target {command.az_deg:g}{el}"
-    if isinstance(command, SetOption):
-        return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
-    return "stop"

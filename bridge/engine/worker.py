@@ -36,7 +36,7 @@ import serial
 from bridge.engine import motion as mo
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.engine.port import PortError, open_port
-from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target
+from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target, describe_command
 from bridge.protocols.base import Codec, JunkReply, ModelSpec, PositionReply, VersionReply
 
 log = logging.getLogger(__name__)
@@ -78,6 +78,7 @@ class _Link:
     outbox: deque[tuple[float, bytes]] = field(default_factory=deque)
     options_due: set[str] = field(default_factory=set)
     silence_reported: bool = False
+    stop_due: bool = False
     junk: bytearray = field(default_factory=bytearray)  # held until the line goes quiet
     junk_t: float = 0.0
 
@@ -109,6 +110,8 @@ class Worker:
         self._pending: Target | None = None
         self._published_deg: float | None = None
         self._published_dir = 0
+        self._published_el_deg: float | None = None
+        self._published_el_dir = 0
         self._version: str | None = None
         self._last_error: str | None = None
         self._last_source: str | None = None
@@ -199,11 +202,13 @@ class Worker:
             batch = self._mailbox.take()
             if batch:
                 self._apply(batch, now)
+            self._expire_reply(now)
+            self._flush_stop(now)
             self._flush_outbox(now)
             if link.junk and now - link.junk_t >= JUNK_QUIET_S:
                 self._report_junk(now)
+            self._advance(now)  # commands go ahead of the next poll
             self._poll_if_due(now)
-            self._advance(now)
             self._emit_status()
             timeout = self._next_wakeup(now) - now
             readable, _, _ = select.select([port, self._mailbox], [], [], max(0.0, timeout))
@@ -234,9 +239,9 @@ class Worker:
                 self._link.options_due.add(opt.name)
         if batch.target is not None:
             if self._locked:
-                self._error("refused", "rotator is locked", command=_describe(batch.target))
+                self._error("refused", "rotator is locked", command=describe_command(batch.target))
             elif self._link is None or not self._link.answering:
-                self._error("refused", "rotator offline", command=_describe(batch.target))
+                self._error("refused", "rotator offline", command=describe_command(batch.target))
             else:
                 self._pending = batch.target
 
@@ -250,40 +255,60 @@ class Worker:
         link = self._link
         assert link is not None
         link.outbox.clear()
+        link.stop_due = True
+        self._flush_stop(now)
+
+    def _flush_stop(self, now: float) -> None:
+        """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
+        link = self._link
+        if link is None or not link.stop_due or not self._line_free():
+            return
+        link.stop_due = False
         self._write(link.codec.encode_stop())
         self._motion = mo.stop_sent(self._motion, self.cfg.motion, now)
 
+    def _line_free(self) -> bool:
+        link = self._link
+        return link is not None and (self.cfg.spec.full_duplex or link.query_deadline is None)
+
     def _drop_pending(self, why: str | None) -> None:
         if self._pending is not None and why:
-            self._error("refused", f"target dropped: {why}", command=_describe(self._pending))
+            self._error(
+                "refused", f"target dropped: {why}", command=describe_command(self._pending)
+            )
         self._pending = None
 
     # -- outbound -------------------------------------------------------------------------------
     def _write(self, frame: bytes) -> None:
-        assert self._link is not None
-        self._link.port.write(frame)
+        link = self._link
+        assert link is not None
+        link.port.write(frame)
         log.debug("%s: -> %r", self.cfg.rotator_id, frame)
+        if link.query_deadline is None and link.codec.awaiting_reply():
+            link.query_deadline = self._clock() + self.cfg.spec.reply_timeout_s
 
     def _flush_outbox(self, now: float) -> None:
         link = self._link
         while link is not None and link.outbox and link.outbox[0][0] <= now:
             self._write(link.outbox.popleft()[1])
 
+    def _expire_reply(self, now: float) -> None:
+        link = self._link
+        if link is not None and link.query_deadline is not None and now >= link.query_deadline:
+            link.codec.expire_query()
+            link.query_deadline = None
+
     def _poll_if_due(self, now: float) -> None:
         link = self._link
         if link is None or not self.cfg.spec.can_report_position:
             return
-        if link.query_deadline is not None:
-            if now < link.query_deadline:
-                return
-            link.codec.expire_query()
-            link.query_deadline = None
+        if link.query_deadline is not None or link.stop_due:
+            return  # one exchange at a time; a stop goes first
         self._check_silence(now)
         if now >= link.next_poll:
             query = link.codec.encode_query()
             if query:
                 self._write(query)
-                link.query_deadline = now + self.cfg.spec.reply_timeout_s
                 link.next_poll = now + self._poll_interval()
 
     def _poll_interval(self) -> float:
@@ -320,7 +345,12 @@ class Worker:
             return
         if self._pending is not None:
             self._try_target(now)
-        if link.options_due and not self._turning(now) and self._pending is None:
+        if (
+            link.options_due
+            and not self._turning(now)
+            and self._pending is None
+            and self._line_free()
+        ):
             for name in sorted(link.options_due):
                 self._write(link.codec.encode_option(name, self._options[name]))
             link.options_due.clear()
@@ -328,34 +358,56 @@ class Worker:
     def _try_target(self, now: float) -> None:
         link = self._link
         assert link is not None and self._pending is not None
-        target = self._pending
-        wire = link.codec.wire_bearing(target.az_deg)
+        if not self._line_free() or link.stop_due:
+            return  # half-duplex line busy with a reply: right after it
         m, mcfg = self._motion, self.cfg.motion
-        if m.target_deg is not None and m.target_deg == wire:
+        az, el = self._resolve(self._pending)
+        if az is None:
+            return  # no reading yet to keep the other axis where it is
+        wire = link.codec.wire_target(az, el)
+        if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
             self._pending = None  # already on its way there
             return
         if (
             self.cfg.spec.can_report_position
             and m.state is MotionState.IDLE
             and m.position_deg is not None
-            and mo.angle_error(m.position_deg, wire, mcfg.az_wraps) <= mcfg.tolerance_deg
+            and mo.angle_error(m.position_deg, wire[0], mcfg.az_wraps) <= mcfg.tolerance_deg
+            and (
+                wire[1] is None
+                or m.el_position_deg is None
+                or abs(m.el_position_deg - wire[1]) <= mcfg.tolerance_deg
+            )
         ):
-            log.info("%s: already within tolerance of %g", self.cfg.rotator_id, wire)
+            log.info("%s: already within tolerance of %s", self.cfg.rotator_id, wire)
             self._pending = None
             return
         plan = mo.plan_target(m, mcfg, now)
         if plan is mo.Plan.STOP_FIRST:
-            log.info("%s: turning; stopping before the new target %g", self.cfg.rotator_id, wire)
+            log.info("%s: turning; stopping before the new target %s", self.cfg.rotator_id, wire)
             self._send_stop(now)
         elif plan is mo.Plan.SEND:
-            frames = link.codec.encode_target(target.az_deg, target.el_deg)
+            frames = link.codec.encode_target(az, el)
             self._write(frames[0])
             for i, frame in enumerate(frames[1:], start=1):
                 link.outbox.append((now + i * self.cfg.spec.inter_frame_gap_s, frame))
-            self._motion = mo.commanded(m, mcfg, wire, now)
-            self._last_source = target.source.value
+            self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
+            self._last_source = self._pending.source.value
             self._pending = None
             link.next_poll = min(link.next_poll, now + self.cfg.moving_poll_interval_s)
+
+    def _resolve(self, target: Target) -> tuple[float | None, float | None]:
+        """Fill the axis a target leaves out with its current target, else its position."""
+        m = self._motion
+        az = target.az_deg
+        if az is None:
+            az = m.target_deg if m.target_deg is not None else m.position_deg
+        el = target.el_deg
+        if self.cfg.spec.has_elevation and el is None:
+            el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
+            if el is None:
+                return None, None
+        return az, el
 
     def _next_wakeup(self, now: float) -> float:
         link = self._link
@@ -379,15 +431,18 @@ class Worker:
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
         for reply in link.codec.feed(data):
             if isinstance(reply, PositionReply):
-                link.query_deadline = None
+                if not link.codec.awaiting_reply():
+                    link.query_deadline = None
                 link.last_reply_t = now
                 if not link.answering:
                     link.answering = True
                     link.options_due = set(self._options)
                     log.info("%s: controller answering", self.cfg.rotator_id)
-                self._motion, events = mo.reading(self._motion, self.cfg.motion, reply.az_deg, now)
+                self._motion, events = mo.reading(
+                    self._motion, self.cfg.motion, reply.az_deg, now, reply.el_deg
+                )
                 self._motion_events(events, now)
-                self._publishable(reply.az_deg)
+                self._publishable(reply.az_deg, reply.el_deg)
             elif isinstance(reply, VersionReply):
                 if reply.version != self._version:
                     log.info("%s: controller version %s", self.cfg.rotator_id, reply.version)
@@ -395,18 +450,20 @@ class Worker:
             elif isinstance(reply, JunkReply):
                 self._junk(reply, now)
 
-    def _publishable(self, az_deg: float) -> None:
+    def _publishable(self, az_deg: float, el_deg: float | None) -> None:
         moving = self._motion.state is MotionState.MOVING
+        band, wraps = self.cfg.deadband_deg, self.cfg.motion.az_wraps
         new, self._published_dir = mo.publishable_bearing(
-            self._published_deg,
-            self._published_dir,
-            az_deg,
-            moving,
-            self.cfg.deadband_deg,
-            self.cfg.motion.az_wraps,
+            self._published_deg, self._published_dir, az_deg, moving, band, wraps
         )
         if new is not None:
             self._published_deg = new
+        if el_deg is not None:
+            new, self._published_el_dir = mo.publishable_bearing(
+                self._published_el_deg, self._published_el_dir, el_deg, moving, band, False
+            )
+            if new is not None:
+                self._published_el_deg = new
 
     def _junk(self, reply: JunkReply, now: float) -> None:
         link = self._link
@@ -466,14 +523,21 @@ class Worker:
         link = self._link
         answering = link is not None and link.answering
         state = self._motion.state if answering else MotionState.OFFLINE
-        target = self._pending.az_deg if self._pending is not None else self._motion.target_deg
-        if target is not None and self._pending is not None and link is not None:
-            target = link.codec.wire_bearing(target)
+        target: tuple[float | None, float | None] = (
+            self._motion.target_deg,
+            self._motion.el_target_deg,
+        )
+        if self._pending is not None and link is not None:
+            az, el = self._resolve(self._pending)
+            target = link.codec.wire_target(az, el) if az is not None else target
+        spec = self.cfg.spec
         status = replace(
             self._status,
             state=state,
-            bearing_deg=self._published_deg if self.cfg.spec.can_report_position else None,
-            target_az_deg=target,
+            bearing_deg=self._published_deg if spec.can_report_position else None,
+            elevation_deg=self._published_el_deg if spec.has_elevation else None,
+            target_az_deg=target[0],
+            target_el_deg=target[1] if spec.has_elevation else None,
             connected=link is not None,
             available=answering,
             locked=self._locked,
@@ -485,9 +549,3 @@ class Worker:
         if status != self._status:
             self._status = status
             self._on_status(status)
-
-
-def _describe(target: Target) -> str:
-    return f"target {target.az_deg:g}" + (
-        f" {target.el_deg:g}" if target.el_deg is not None else ""
-    )

@@ -5,8 +5,9 @@ Rules (ARCHITECTURE.md, rules 1 and 2):
    port, a clock, a thread or a sleep; timing values live on the ModelSpec as data.
 2. ``feed()`` accepts any slicing of the byte stream (whole buffers, one byte at a time, junk
    around the frames) and yields the same replies. Junk is reported, never turned into a reading.
-3. A position reply is only accepted while a query is outstanding (``encode_query`` opens one,
-   ``expire_query`` closes it after the engine's reply timeout); anything else is junk.
+3. A position reply is only accepted while a reply is awaited (a query, or a command the
+   controller answers with its position); ``awaiting_reply`` says so, ``expire_query`` gives up
+   on it after the engine's reply timeout. Anything else is junk.
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 """
@@ -57,8 +58,9 @@ class Codec(Protocol):
     def encode_version(self) -> bytes | None: ...
     def encode_option(self, name: str, enabled: bool) -> bytes: ...
     def feed(self, data: bytes) -> list[Reply]: ...
-    def wire_bearing(self, az_deg: float) -> float:
-        """The bearing the controller will actually be sent for ``az_deg`` (after rounding)."""
+    def awaiting_reply(self) -> bool: ...
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        """The position the controller will actually be sent (after its rounding)."""
         ...
 
 
@@ -88,6 +90,7 @@ class ModelSpec:
     az_wraps: bool = True  # 0 and 360 are the same direction
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
+    full_duplex: bool = True  # may a command be written while a reply is still coming?
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     nominal_speed_deg_s: float = 6.0  # used to estimate travel when there is no feedback
     option_labels: dict[str, str] = field(default_factory=dict)

@@ -81,8 +81,11 @@ class RotorEzCodec:
             return [b"AP1%03d;" % digits, b"AM1;"]
         return [b"AP1%03d\r" % digits]
 
-    def wire_bearing(self, az_deg: float) -> float:
-        return float(_bearing_digits(az_deg, wrap_360=self._dcu1))
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, None]:
+        return float(_bearing_digits(az_deg, wrap_360=self._dcu1)), None
+
+    def awaiting_reply(self) -> bool:
+        return bool(self._queries_open)
 
     def encode_stop(self) -> bytes:
         return b"AS1;" if self._dcu1 else b";"
