@@ -1,0 +1,617 @@
+"""The files under deploy/: the Node-RED example flow, the systemd unit, the udev rule and the
+Docker recipe. They are not Python, so nothing else notices when they drift from the bridge:
+these tests hold them to its topics, its command line and its settings."""
+
+from __future__ import annotations
+
+import json
+import os
+import posixpath
+import re
+import shlex
+import shutil
+import subprocess
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from bridge.cli import EXIT_CONFIG, build_parser
+from bridge.mqtt.topics import Topics
+from bridge.protocols import REGISTRY
+from bridge.settings import load_settings
+
+ROOT = Path(__file__).resolve().parent.parent
+DEPLOY = ROOT / "deploy"
+FLOW = DEPLOY / "node-red" / "rotor-flow.json"
+UNIT = DEPLOY / "systemd" / "rotor-bridge.service"
+SYSUSERS = DEPLOY / "systemd" / "rotor-bridge.sysusers.conf"
+UDEV = DEPLOY / "udev" / "99-rotor-bridge.rules"
+DOCKER = DEPLOY / "docker"
+
+SHIPPED_EXEC = "/opt/rotor-bridge/bin/rotor-bridge"
+SHIPPED_CONFIG = "/etc/rotor-bridge/rotor-bridge.toml"
+
+# ---------------------------------------------------------------------------------------------
+# Node-RED flow
+# ---------------------------------------------------------------------------------------------
+
+CORE_TYPES = frozenset(
+    {
+        "tab",
+        "mqtt in",
+        "mqtt out",
+        "mqtt-broker",
+        "inject",
+        "debug",
+        "function",
+        "change",
+        "switch",
+        "template",
+        "http in",
+        "http response",
+        "websocket in",
+        "websocket out",
+        "websocket-listener",
+        "comment",
+        "json",
+    }
+)
+CONFIG_TYPES = frozenset({"mqtt-broker", "websocket-listener"})
+
+# The single-rotator topics the flow is written for (README: R = "rotor" with one rotator).
+_TOPICS = Topics("rotor", {"tower": "rotor"})
+_R = _TOPICS.rotator("tower")
+_OPTIONS = sorted({name for spec in REGISTRY.values() for name in spec.options})
+DOCUMENTED_TOPICS = frozenset(
+    {
+        _R.target,
+        _R.stop,
+        _R.lock,
+        _R.bearing,
+        _R.state,
+        _R.status,
+        _R.version,
+        _R.availability,
+        _R.error,
+        _R.lock_state,
+        _TOPICS.bridge_state,
+        *(_R.option(name) for name in _OPTIONS),
+        *(_R.option_state(name) for name in _OPTIONS),
+    }
+)
+
+
+@pytest.fixture(scope="module")
+def flow() -> list[dict]:
+    return json.loads(FLOW.read_text(encoding="utf-8"))
+
+
+def _by_id(flow: list[dict]) -> dict[str, dict]:
+    return {n["id"]: n for n in flow}
+
+
+def _of_type(flow: list[dict], node_type: str) -> list[dict]:
+    return [n for n in flow if n["type"] == node_type]
+
+
+def _targets(flow: list[dict], node: dict) -> set[str]:
+    return {t for port in node.get("wires", []) for t in port}
+
+
+def _mqtt_out(flow: list[dict], topic: str) -> dict:
+    found = [n for n in _of_type(flow, "mqtt out") if n["topic"] == topic]
+    assert len(found) == 1, f"expected one mqtt out publishing {topic}, found {len(found)}"
+    return found[0]
+
+
+def test_flow_is_a_flat_array_of_node_objects(flow: list[dict]) -> None:
+    assert isinstance(flow, list) and flow
+    for node in flow:
+        assert isinstance(node, dict), node
+        assert isinstance(node.get("id"), str) and node["id"], node
+        assert isinstance(node.get("type"), str) and node["type"], node
+        assert "nodes" not in node and "flows" not in node, f"nested flow in {node['id']}"
+
+
+def test_flow_node_ids_are_unique(flow: list[dict]) -> None:
+    ids = [n["id"] for n in flow]
+    assert len(ids) == len(set(ids)), sorted({i for i in ids if ids.count(i) > 1})
+
+
+def test_flow_uses_core_node_types_only(flow: list[dict]) -> None:
+    assert {n["type"] for n in flow} <= CORE_TYPES, {n["type"] for n in flow} - CORE_TYPES
+
+
+def test_flow_has_one_tab_holding_every_flow_node(flow: list[dict]) -> None:
+    tabs = _of_type(flow, "tab")
+    assert len(tabs) == 1
+    for node in flow:
+        if node["type"] not in CONFIG_TYPES | {"tab"}:
+            assert node.get("z") == tabs[0]["id"], f"{node['id']} is not on the tab"
+
+
+def test_every_wire_leads_to_an_existing_flow_node(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    for node in flow:
+        if node["type"] in CONFIG_TYPES | {"tab"}:
+            continue
+        wires = node["wires"]
+        assert isinstance(wires, list) and all(isinstance(p, list) for p in wires), node["id"]
+        if node["type"] == "function":
+            assert len(wires) == node["outputs"], f"{node['id']}: one wire list per output"
+        for target in _targets(flow, node):
+            assert target in nodes, f"{node['id']} is wired to missing node {target}"
+            assert nodes[target]["type"] not in CONFIG_TYPES | {"tab"}, (node["id"], target)
+            assert nodes[target]["type"] not in {"mqtt in", "inject", "http in", "websocket in"}
+
+
+def test_config_nodes_have_no_position_wires_or_tab(flow: list[dict]) -> None:
+    configs = [n for n in flow if n["type"] in CONFIG_TYPES]
+    assert {n["type"] for n in configs} == CONFIG_TYPES
+    for node in configs + _of_type(flow, "tab"):
+        for key in ("x", "y", "wires"):
+            assert key not in node, f"{node['type']} {node['id']} has {key}"
+        assert not node.get("z"), f"{node['type']} {node['id']} must be global"
+
+
+def test_nodes_point_at_existing_config_nodes(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    for node in _of_type(flow, "mqtt in") + _of_type(flow, "mqtt out"):
+        assert nodes[node["broker"]]["type"] == "mqtt-broker", node["id"]
+    for node in _of_type(flow, "websocket in") + _of_type(flow, "websocket out"):
+        assert nodes[node["server"]]["type"] == "websocket-listener", node["id"]
+        assert not node.get("client"), node["id"]
+
+
+def test_broker_is_local_and_carries_no_credentials(flow: list[dict]) -> None:
+    (broker,) = _of_type(flow, "mqtt-broker")
+    assert (broker["broker"], str(broker["port"])) == ("localhost", "1883")
+    assert not {"user", "password", "credentials"} & set(broker)
+    assert not any("credentials" in node for node in flow)
+
+
+def test_tab_info_explains_the_single_rotator_topics(flow: list[dict]) -> None:
+    (tab,) = _of_type(flow, "tab")
+    info = tab["info"]
+    assert "`rotor`" in info and "rotor/<id>" in info and "retain" in info
+    assert "/rotor" in info  # where the web page is
+
+
+def test_every_mqtt_topic_is_one_the_bridge_documents(flow: list[dict]) -> None:
+    used = [n["topic"] for n in _of_type(flow, "mqtt in") + _of_type(flow, "mqtt out")]
+    assert used
+    assert set(used) <= DOCUMENTED_TOPICS, set(used) - DOCUMENTED_TOPICS
+
+
+def test_every_mqtt_out_publishes_unretained_to_its_fixed_topic(flow: list[dict]) -> None:
+    outs = _of_type(flow, "mqtt out")
+    assert outs
+    for node in outs:
+        # A fixed topic overrides msg.topic: nothing upstream can redirect a publish. Node-RED
+        # reads retain as a string; "false" forces false whatever msg.retain says.
+        assert node["topic"], f"{node['id']} would publish to msg.topic"
+        assert node["retain"] in ("false", False), f"{node['id']} retains"
+        assert str(node["qos"]) == "1", node["id"]
+
+
+def test_mqtt_subscriptions_are_plain_topics(flow: list[dict]) -> None:
+    ins = _of_type(flow, "mqtt in")
+    for node in ins:
+        assert not set(node["topic"]) & {"+", "#"}, node["id"]
+        assert node["datatype"] in ("utf8", "json", "auto-detect"), node["id"]
+    datatypes = {n["topic"]: n["datatype"] for n in ins}
+    assert datatypes[_R.status] == "json"
+
+
+def test_flow_subscribes_to_bearing_state_and_availability(flow: list[dict]) -> None:
+    topics = {n["topic"] for n in _of_type(flow, "mqtt in")}
+    assert {_R.bearing, _R.state, _R.availability, _R.status, _TOPICS.bridge_state} <= topics
+    nodes = _by_id(flow)
+    for node in _of_type(flow, "mqtt in"):
+        shown = [nodes[t] for t in _targets(flow, node) if nodes[t]["type"] == "debug"]
+        if node["topic"] in (_R.bearing, _R.state, _R.availability):
+            assert shown and shown[0]["tostatus"] is True, f"{node['topic']} has no status"
+
+
+def test_presets_publish_bearings_and_stop_publishes(flow: list[dict]) -> None:
+    target = _mqtt_out(flow, _R.target)
+    stop = _mqtt_out(flow, _R.stop)
+    presets = [n for n in _of_type(flow, "inject") if target["id"] in _targets(flow, n)]
+    values = set()
+    for node in presets:
+        assert node["payloadType"] == "num", node["name"]
+        value = float(node["payload"])
+        assert 0 <= value <= 360, node["name"]
+        assert not node["once"] and not node["repeat"], f"{node['name']} fires by itself"
+        values.add(value)
+    assert values >= {0, 90, 180, 270}
+    stoppers = [n for n in _of_type(flow, "inject") if stop["id"] in _targets(flow, n)]
+    assert stoppers and all(not n["once"] and not n["repeat"] for n in stoppers)
+
+
+def _page_chain(flow: list[dict]) -> tuple[dict, dict, dict]:
+    nodes = _by_id(flow)
+    (http_in,) = _of_type(flow, "http in")
+    (template,) = [nodes[t] for t in _targets(flow, http_in)]
+    (response,) = [nodes[t] for t in _targets(flow, template)]
+    assert (template["type"], response["type"]) == ("template", "http response")
+    return http_in, template, response
+
+
+def test_web_page_is_served_with_gauge_input_presets_and_stop(flow: list[dict]) -> None:
+    http_in, template, _ = _page_chain(flow)
+    assert (http_in["url"], http_in["method"]) == ("/rotor", "get")
+    assert template["syntax"] == "plain" and template["field"] == "payload"
+    page = template["template"]
+    assert page.lstrip().startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    assert "<svg" in page and 'id="needle"' in page
+    assert re.search(r'<input id="az" type="number" min="0" max="360"', page)
+    presets = {int(v) for v in re.findall(r'data-az="(\d+)"', page)}
+    assert presets >= {0, 90, 180, 270} and all(0 <= v <= 360 for v in presets)
+    assert 'id="stop"' in page
+
+
+def test_web_page_finds_the_websocket_listener(flow: list[dict]) -> None:
+    http_in, template, _ = _page_chain(flow)
+    (listener,) = _of_type(flow, "websocket-listener")
+    assert listener["wholemsg"] == "false"
+    # The page opens "ws/rotor" relative to its own directory.
+    assert '"ws/rotor"' in template["template"]
+    page_dir = posixpath.dirname(http_in["url"])
+    assert posixpath.join(page_dir, "ws/rotor") == listener["path"]
+
+
+def test_page_commands_reach_the_target_and_stop_publishers(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    target, stop = _mqtt_out(flow, _R.target), _mqtt_out(flow, _R.stop)
+    (ws_in,) = _of_type(flow, "websocket in")
+    (relay,) = [nodes[t] for t in _targets(flow, ws_in)]
+    assert relay["type"] == "function"
+    reached = _targets(flow, relay)
+    assert {target["id"], stop["id"]} <= reached
+    for node_id in reached - {target["id"], stop["id"]}:
+        assert nodes[node_id]["type"] == "websocket out"  # the reply to that page only
+    code = relay["func"]
+    assert "retain: false" in code and "topic" not in code.replace("msg.topic", "")
+
+
+def test_state_reaches_the_web_page(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    for node in _of_type(flow, "mqtt in"):
+        kinds = {nodes[t]["type"] for t in _targets(flow, node)}
+        assert "function" in kinds, f"{node['topic']} does not reach the page"
+        for t in _targets(flow, node):
+            if nodes[t]["type"] == "function":
+                assert {nodes[x]["type"] for x in _targets(flow, nodes[t])} == {"websocket out"}
+
+
+# ---------------------------------------------------------------------------------------------
+# systemd
+# ---------------------------------------------------------------------------------------------
+
+
+def _unit_settings(text: str) -> dict[str, dict[str, list[str]]]:
+    sections: dict[str, dict[str, list[str]]] = {}
+    current = None
+    for raw in text.splitlines():
+        line = raw.strip()
+        if not line or line.startswith(("#", ";")):
+            continue
+        if line.startswith("["):
+            current = sections.setdefault(line.strip("[]"), {})
+            continue
+        assert current is not None and "=" in line, f"not a setting: {raw!r}"
+        key, value = line.split("=", 1)
+        current.setdefault(key.strip(), []).append(value.strip())
+    return sections
+
+
+@pytest.fixture(scope="module")
+def unit() -> dict[str, dict[str, list[str]]]:
+    return _unit_settings(UNIT.read_text())
+
+
+def _one(unit: dict, section: str, key: str) -> str:
+    values = unit[section].get(key)
+    assert values and len(values) == 1, f"[{section}] {key}= expected once, got {values}"
+    return values[0]
+
+
+def test_unit_runs_the_bridge_with_its_config(unit: dict) -> None:
+    argv = shlex.split(_one(unit, "Service", "ExecStart"))
+    assert argv[0] == SHIPPED_EXEC
+    args = build_parser().parse_args(argv[1:])
+    assert (args.command, args.config) == ("run", SHIPPED_CONFIG)
+
+
+def test_unit_restarts_on_failure_but_not_on_a_config_error(unit: dict) -> None:
+    assert _one(unit, "Service", "Restart") == "on-failure"
+    assert 1 <= float(_one(unit, "Service", "RestartSec")) <= 60
+    assert str(EXIT_CONFIG) in _one(unit, "Service", "RestartPreventExitStatus").split()
+    assert 5 <= float(_one(unit, "Service", "TimeoutStopSec")) <= 60
+
+
+def test_unit_runs_unprivileged_in_dialout(unit: dict) -> None:
+    user = _one(unit, "Service", "User")
+    assert user == "rotor-bridge"
+    assert "dialout" in _one(unit, "Service", "SupplementaryGroups").split()
+    assert not unit["Service"].get("AmbientCapabilities", [""])[0]
+    sysusers = [line.split() for line in SYSUSERS.read_text().splitlines()]
+    sysusers = [f for f in sysusers if f and not f[0].startswith("#")]
+    assert ["u", user] == sysusers[0][:2]
+    assert ["m", user, "dialout"] in sysusers
+
+
+def test_unit_orders_after_the_network(unit: dict) -> None:
+    assert "network-online.target" in _one(unit, "Unit", "After").split()
+    assert "network-online.target" in _one(unit, "Unit", "Wants").split()
+    assert _one(unit, "Install", "WantedBy") == "multi-user.target"
+
+
+def test_unit_state_directory_is_where_the_bridge_keeps_state(
+    unit: dict, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    name = _one(unit, "Service", "StateDirectory")
+    assert name == "rotor-bridge"
+    # systemd exports StateDirectory= as $STATE_DIRECTORY=/var/lib/<name>.
+    monkeypatch.setenv("STATE_DIRECTORY", f"/var/lib/{name}")
+    settings = load_settings(ROOT / "config" / "example.toml", environ={})
+    assert settings.state_file == Path(f"/var/lib/{name}/state.json")
+
+
+def test_unit_is_hardened_without_hiding_serial_ports(unit: dict) -> None:
+    service = unit["Service"]
+    assert _one(unit, "Service", "NoNewPrivileges") == "yes"
+    assert _one(unit, "Service", "ProtectSystem") == "strict"
+    assert _one(unit, "Service", "ProtectHome") == "yes"
+    assert _one(unit, "Service", "PrivateTmp") == "yes"
+    # Each of these would cut off /dev/ttyUSB* (and so /dev/serial/by-id): PrivateDevices hides
+    # real devices; any DeviceAllow, also the one ProtectClock implies, makes the device policy
+    # an allow-list resolved when the service starts, before a late-plugged adapter exists.
+    for key in ("PrivateDevices", "ProtectClock"):
+        assert service.get(key, ["no"]) == ["no"], f"{key}= would block the serial port"
+    assert "DeviceAllow" not in service and "DevicePolicy" not in service
+    assert "InaccessiblePaths" not in service and "TemporaryFileSystem" not in service
+
+
+def _systemd_analyze() -> str:
+    exe = shutil.which("systemd-analyze")
+    assert exe, (
+        "systemd-analyze is not installed; it comes with the Debian package 'systemd' "
+        "(apt-get install systemd)"
+    )
+    return exe
+
+
+def _verify(unit_text: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    # verify insists that ExecStart's program exists: point it at a stand-in executable.
+    fake = tmp_path / "bin" / "rotor-bridge"
+    fake.parent.mkdir()
+    fake.write_text("#!/bin/sh\nexit 0\n")
+    fake.chmod(0o755)
+    assert SHIPPED_EXEC in unit_text
+    path = tmp_path / "rotor-bridge.service"
+    path.write_text(unit_text.replace(SHIPPED_EXEC, str(fake)))
+    env = {k: v for k, v in os.environ.items() if not k.startswith("SYSTEMD_")}
+    return subprocess.run(
+        [_systemd_analyze(), "verify", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        cwd=tmp_path,
+    )
+
+
+def test_unit_passes_systemd_analyze_verify(tmp_path: Path) -> None:
+    proc = _verify(UNIT.read_text(), tmp_path)
+    output = (proc.stdout + proc.stderr).strip()
+    assert proc.returncode == 0 and not output, output
+
+
+def test_systemd_analyze_verify_reports_a_broken_unit(tmp_path: Path) -> None:
+    # The check above relies on verify printing what it dislikes; make sure it does here.
+    broken = UNIT.read_text().replace("Restart=on-failure", "Restart=on-failure\nRestartz=1")
+    proc = _verify(broken, tmp_path)
+    assert "Restartz" in proc.stdout + proc.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# udev
+# ---------------------------------------------------------------------------------------------
+
+_UDEV_TOKEN = re.compile(r'^([A-Z_]+(?:\{[^}]+\})?)(==|!=|\+=|-=|:=|=)"([^"]*)"$')
+_UDEV_MATCH_ONLY = ("SUBSYSTEM", "ATTRS{", "KERNEL", "ACTION", "DRIVERS", "SUBSYSTEMS")
+
+
+def _udev_rules() -> list[dict[str, tuple[str, str]]]:
+    rules = []
+    for line in UDEV.read_text().splitlines():
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        rule: dict[str, tuple[str, str]] = {}
+        for token in (t.strip() for t in line.split(",")):
+            m = _UDEV_TOKEN.match(token)
+            assert m, f"not a udev key=value: {token!r}"
+            key, op, value = m.groups()
+            if key.startswith(_UDEV_MATCH_ONLY):
+                assert op in ("==", "!="), f"{key} is a match key: use =="
+            else:
+                assert op in ("=", "+=", ":="), f"{key}{op}: an assignment needs = or +="
+            rule[key] = (op, value)
+        rules.append(rule)
+    return rules
+
+
+def test_udev_rule_gives_the_adapter_a_stable_name_for_group_dialout() -> None:
+    (rule,) = _udev_rules()
+    assert rule["SUBSYSTEM"] == ("==", "tty")
+    assert rule["ATTRS{idVendor}"] == ("==", "0403")
+    assert rule["ATTRS{idProduct}"] == ("==", "6001")
+    assert rule["ATTRS{serial}"][0] == "=="
+    assert rule["SYMLINK"] == ("+=", "rotor-tower")
+    assert rule["GROUP"] == ("=", "dialout")
+    assert rule["MODE"] == ("=", "0660")
+
+
+def test_udev_rule_explains_how_to_find_the_values() -> None:
+    text = UDEV.read_text()
+    for hint in ("udevadm info -a -n /dev/ttyUSB0", "rotor-bridge ports", "/dev/serial/by-id/"):
+        assert hint in text, hint
+    assert UDEV.name.endswith(".rules")
+
+
+# ---------------------------------------------------------------------------------------------
+# Docker
+# ---------------------------------------------------------------------------------------------
+
+
+def _scalar(text: str) -> str:
+    text = text.strip()
+    if len(text) >= 2 and text[0] == text[-1] and text[0] in "\"'":
+        return text[1:-1]
+    return text
+
+
+def read_block_yaml(text: str) -> object:
+    """The YAML subset compose.yaml is written in: block mappings, block lists of scalars,
+    quoted or plain scalars, comments. Anything else is refused, so the file stays readable
+    by this and by every YAML parser alike."""
+    lines = []
+    for raw in text.splitlines():
+        stripped = raw.split(" #", 1)[0].rstrip() if not raw.lstrip().startswith("#") else ""
+        if stripped:
+            assert "\t" not in raw[: len(raw) - len(raw.lstrip())], "tab indentation"
+            assert not stripped.lstrip().startswith(("{", "[", "&", "*", "|", ">")), raw
+            lines.append((len(stripped) - len(stripped.lstrip()), stripped.strip()))
+
+    def block(i: int, indent: int) -> tuple[object, int]:
+        if lines[i][1].startswith("- "):
+            items = []
+            while i < len(lines) and lines[i][0] == indent and lines[i][1].startswith("- "):
+                items.append(_scalar(lines[i][1][2:]))
+                i += 1
+            return items, i
+        mapping: dict[str, object] = {}
+        while i < len(lines) and lines[i][0] == indent:
+            key, sep, rest = lines[i][1].partition(":")
+            assert sep and (not rest or rest.startswith(" ")), f"not 'key: value': {lines[i]}"
+            assert key not in mapping, f"duplicate key {key}"
+            i += 1
+            if rest.strip():
+                mapping[key] = _scalar(rest)
+            elif i < len(lines) and lines[i][0] > indent:
+                mapping[key], i = block(i, lines[i][0])
+            else:
+                mapping[key] = None
+        return mapping, i
+
+    doc, end = block(0, 0)
+    assert end == len(lines), f"unexpected indentation at {lines[end]}"
+    return doc
+
+
+@pytest.fixture(scope="module")
+def compose() -> dict:
+    doc = read_block_yaml((DOCKER / "compose.yaml").read_text())
+    assert isinstance(doc, dict)
+    return doc
+
+
+@pytest.fixture(scope="module")
+def docker_settings():
+    return load_settings(DOCKER / "rotor-bridge.toml", environ={})
+
+
+def _dockerfile() -> list[tuple[str, str]]:
+    text = (DOCKER / "Dockerfile").read_text().replace("\\\n", " ")
+    out = []
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            word, _, rest = line.strip().partition(" ")
+            out.append((word.upper(), rest.strip()))
+    return out
+
+
+def _instructions(name: str) -> list[str]:
+    return [rest for word, rest in _dockerfile() if word == name]
+
+
+def test_compose_reads_the_same_with_a_yaml_parser(compose: dict) -> None:
+    try:
+        import yaml
+    except ImportError:  # not a dependency; the subset reader above is then the only judge
+        return
+    assert yaml.safe_load((DOCKER / "compose.yaml").read_text()) == compose
+
+
+def test_docker_config_validates_and_points_at_the_compose_services(
+    docker_settings, compose: dict
+) -> None:
+    s = docker_settings
+    assert s.mqtt.host == "mosquitto" and "mosquitto" in compose["services"]
+    conf = (DOCKER / "mosquitto.conf").read_text()
+    assert re.search(rf"^listener {s.mqtt.port}\b", conf, re.M)
+    if s.mqtt.username is None:
+        assert re.search(r"^allow_anonymous true$", conf, re.M)
+    (rotator,) = s.rotators
+    assert isinstance(rotator.port, str) and rotator.port == "/dev/rotor"
+
+
+def test_compose_passes_the_serial_device_to_the_bridge(compose: dict, docker_settings) -> None:
+    bridge = compose["services"]["rotor-bridge"]
+    (device,) = bridge["devices"]
+    host, container = device.split(":")
+    assert host.startswith("/dev/serial/by-id/usb-")
+    assert container == docker_settings.rotators[0].port
+    assert "dialout" in bridge["group_add"]
+    assert bridge["restart"] == "unless-stopped"
+    assert "mosquitto" in bridge["depends_on"]
+
+
+def test_compose_mounts_config_and_state_where_the_image_expects_them(
+    compose: dict, docker_settings
+) -> None:
+    bridge = compose["services"]["rotor-bridge"]
+    mounts = [v.split(":") for v in bridge["volumes"]]
+    config_arg = json.loads(_instructions("CMD")[-1])
+    config_path = build_parser().parse_args(config_arg).config
+    config_mounts = [m for m in mounts if m[1] == config_path]
+    assert config_mounts and (DOCKER / config_mounts[0][0]).resolve() == (
+        DOCKER / "rotor-bridge.toml"
+    )
+    state_dir = str(docker_settings.state_file.parent)
+    state_mounts = [m for m in mounts if m[1] == state_dir]
+    assert state_mounts and state_mounts[0][0] in compose["volumes"]
+    assert f"STATE_DIRECTORY={state_dir}" in _instructions("ENV")
+
+
+def test_compose_builds_from_the_repository_root(compose: dict) -> None:
+    build = compose["services"]["rotor-bridge"]["build"]
+    context = (DOCKER / build["context"]).resolve()
+    assert context == ROOT
+    assert (context / build["dockerfile"]).resolve() == DOCKER / "Dockerfile"
+
+
+def test_compose_runs_mosquitto_with_the_mounted_config(compose: dict) -> None:
+    mosquitto = compose["services"]["mosquitto"]
+    assert mosquitto["image"].startswith("eclipse-mosquitto:")
+    mounts = [v.split(":") for v in mosquitto["volumes"]]
+    assert ["./mosquitto.conf", "/mosquitto/config/mosquitto.conf", "ro"] in mounts
+    assert mosquitto["restart"] == "unless-stopped"
+
+
+def test_dockerfile_installs_the_project_and_runs_unprivileged() -> None:
+    assert _instructions("FROM") == ["python:3.11-slim"]
+    readme = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["readme"]
+    copied = [src for rest in _instructions("COPY") for src in rest.split()[:-1]]
+    assert readme in copied and "pyproject.toml" in copied and "bridge" in copied
+    for src in copied:
+        assert (ROOT / src).exists(), f"COPY {src}: not in the build context"
+    (user,) = _instructions("USER")
+    assert user.split(":")[0] not in ("root", "0")
+    assert any("--groups dialout" in run for run in _instructions("RUN"))
+    assert json.loads(_instructions("ENTRYPOINT")[-1]) == ["rotor-bridge"]
+    args = build_parser().parse_args(json.loads(_instructions("CMD")[-1]))
+    assert args.command == "run"
