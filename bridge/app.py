@@ -16,6 +16,7 @@ from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
+from bridge.rotctld import RotctldServer
 from bridge.settings import RotatorSettings, Settings
 
 log = logging.getLogger(__name__)
@@ -35,7 +36,7 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
             stall_timeout_s=r.stall_timeout_s,
             brake_delay_s=r.effective_brake_delay_s,
             settle_s=r.settle_s,
-            noise_deg=spec.noise_deg,
+            noise_deg=r.effective_noise_deg,
             az_wraps=spec.az_wraps,
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=spec.nominal_speed_deg_s,
@@ -58,11 +59,13 @@ class App:
         self.mqtt = MqttService(settings.mqtt, self.topics)
         store = StateStore(settings.state_file)
         self.rotators: list[Rotator] = []
+        self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         for r in settings.rotators:
             az_min, az_max = r.effective_az_limits
+            el_min, el_max = r.effective_el_limits
             rot = Rotator(
                 worker_config(r),
-                Limits(az_min, az_max, r.spec.el_min_deg, r.spec.el_max_deg),
+                Limits(az_min, az_max, el_min, el_max),
                 store,
                 on_status=partial(self.mqtt.publish_status, r.id),
                 on_event=partial(self.mqtt.publish_event, r.id),
@@ -71,6 +74,9 @@ class App:
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
+            if r.rotctld_port is not None:
+                park = {"park_az_deg": r.park_az_deg, "park_el_deg": r.park_el_deg}
+                self.rotctld.append(RotctldServer(rot, r.rotctld_port, r.rotctld_bind, **park))
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
@@ -114,10 +120,18 @@ class App:
         for rot in self.rotators:
             rot.start()
             self.mqtt.publish_status(rot.id, rot.status)
+        try:
+            for server in self.rotctld:
+                server.start()
+        except OSError:  # e.g. the port is taken: fail the start, leave nothing running
+            self.stop()
+            raise
 
     def stop(self) -> None:
         if self.discovery is not None:
             self.discovery.stop()
+        for server in self.rotctld:
+            server.stop()
         for rot in self.rotators:
             rot.stop()
         self.mqtt.stop()

@@ -136,9 +136,19 @@ class RotatorSettings(_Strict):
     stall_timeout_s: float = Field(10.0, gt=0, le=600)
     settle_s: float = Field(1.5, gt=0, le=60)
     deadband_deg: float = Field(2.0, ge=0, le=45)
+    noise_deg: float | None = Field(
+        None, ge=0, le=20, description="a still rotor's readings wander this much (model default)"
+    )
     silence_timeout_s: float = Field(3.0, gt=0, le=600)
     az_min_deg: float | None = None
     az_max_deg: float | None = None
+    el_min_deg: float | None = None
+    el_max_deg: float | None = None
+    # Hamlib rotctld-compatible TCP port (bridge/rotctld.py); no authentication, hence loopback
+    rotctld_port: int | None = Field(None, ge=1, le=65535)
+    rotctld_bind: str = "127.0.0.1"
+    park_az_deg: float | None = None  # where rotctld's park (K) turns the antenna
+    park_el_deg: float | None = None
 
     @field_validator("id")
     @classmethod
@@ -173,8 +183,29 @@ class RotatorSettings(_Strict):
                 f"azimuth limits {lo:g}..{hi:g} must lie inside the {spec.display_name}'s "
                 f"range {spec.az_min_deg:g}..{spec.az_max_deg:g} with min < max"
             )
+        if self.park_az_deg is not None and not lo <= self.park_az_deg <= hi:
+            raise ValueError(f"park_az_deg {self.park_az_deg:g} is outside {lo:g}..{hi:g}")
+        if self.park_el_deg is not None and (
+            self.park_az_deg is None
+            or not spec.has_elevation
+            or not spec.el_min_deg <= self.park_el_deg <= spec.el_max_deg
+        ):
+            raise ValueError("park_el_deg needs park_az_deg, an elevation axis and its range")
+        if spec.has_elevation:
+            elo, ehi = self.effective_el_limits
+            if not spec.el_min_deg <= elo < ehi <= spec.el_max_deg:
+                raise ValueError(
+                    f"elevation limits {elo:g}..{ehi:g} must lie inside the "
+                    f"{spec.display_name}'s range {spec.el_min_deg:g}..{spec.el_max_deg:g}"
+                )
+        elif self.el_min_deg is not None or self.el_max_deg is not None:
+            raise ValueError(f"the {spec.display_name} has no elevation axis (el_min/max_deg)")
         if self.moving_poll_interval_s > self.idle_poll_interval_s:
             raise ValueError("moving_poll_interval_s must not exceed idle_poll_interval_s")
+        if spec.can_report_position and self.settle_s < 2 * self.moving_poll_interval_s:
+            raise ValueError(
+                "settle_s must be at least two moving poll intervals: stillness needs two readings"
+            )
         return self
 
     @property
@@ -188,6 +219,18 @@ class RotatorSettings(_Strict):
     @property
     def effective_brake_delay_s(self) -> float:
         return self.spec.brake_delay_s if self.brake_delay_s is None else self.brake_delay_s
+
+    @property
+    def effective_noise_deg(self) -> float:
+        return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
+
+    @property
+    def effective_el_limits(self) -> tuple[float, float]:
+        spec = self.spec
+        return (
+            spec.el_min_deg if self.el_min_deg is None else self.el_min_deg,
+            spec.el_max_deg if self.el_max_deg is None else self.el_max_deg,
+        )
 
     @property
     def effective_az_limits(self) -> tuple[float, float]:
@@ -235,6 +278,9 @@ class Settings(BaseSettings):
         dup = {p for p in ports if ports.count(p) > 1}
         if dup:
             raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
+        rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
+        if len(set(rotctld)) != len(rotctld):
+            raise ValueError("two rotators share one rotctld_port")
         topics = [self.rotator_topic(r) for r in self.rotators]
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")
@@ -341,5 +387,7 @@ def masked(settings: Settings) -> dict[str, Any]:
         r["baud"] = rs.effective_baud
         r["brake_delay_s"] = rs.effective_brake_delay_s
         r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
+        if rs.spec.has_elevation:
+            r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
     out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
     return out

@@ -10,11 +10,14 @@ Rules:
    movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
    last command, so a rotor that has not started yet is not "still").
-3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no progress for
+3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
+   (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
+   end stop first moves away from a target across the stop.)
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
    stillness was detected (which is later than the real stop, so the margin is on the safe side).
-   At start-up the machine assumes a brake window may be running.
+   At start-up the machine assumes a brake window may be running, and that the rotor may be
+   turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
 5. Movement without a command (front panel) is ``moving`` too.
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
@@ -53,8 +56,8 @@ class Motion:
     still_since_t: float | None = None
     target_deg: float | None = None
     target_t: float | None = None
-    best_error_deg: float | None = None
-    progress_t: float | None = None
+    progress_t: float | None = None  # last movement while a target is active
+    idle_not_before_t: float | None = None
     stop_sent_t: float | None = None
     busy_until_t: float | None = None  # no feedback: when the last move is assumed done
     assumed_deg: float | None = None  # no feedback: where the last move should have ended
@@ -119,7 +122,10 @@ def reading(
             el_position_deg=el_deg,
             el_anchor_deg=el_deg,
             still_since_t=now,
+            idle_not_before_t=now + cfg.settle_s,
         )
+        if m.state is MotionState.IDLE:
+            m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
     m = replace(m, position_deg=az_deg, el_position_deg=el_deg)
     moved = angle_error(az_deg, m.anchor_deg, cfg.az_wraps) > cfg.noise_deg
@@ -129,9 +135,8 @@ def reading(
         m = replace(m, anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
         if m.state is not MotionState.MOVING:
             m = replace(m, state=MotionState.MOVING)
-    err = target_error(m, cfg)
-    if err is not None and (m.best_error_deg is None or err < m.best_error_deg - cfg.noise_deg / 2):
-        m = replace(m, best_error_deg=err, progress_t=now)
+        if m.target_deg is not None:
+            m = replace(m, progress_t=now)
     return tick(m, cfg, now)
 
 
@@ -155,12 +160,12 @@ def commanded(
             assumed_deg=target_deg,
             stop_sent_t=None,
         )
-    m = replace(m, target_deg=target_deg, el_target_deg=el_target_deg)
     return replace(
         m,
         state=MotionState.MOVING,
+        target_deg=target_deg,
+        el_target_deg=el_target_deg,
         target_t=now,
-        best_error_deg=target_error(m, cfg),
         progress_t=now,
         stop_sent_t=None,
         still_since_t=None,
@@ -171,7 +176,7 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
     if not cfg.can_report_position:
         # it may have been turning; from now on it is stopping, then braking
         return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
-    return replace(m, target_deg=None, el_target_deg=None, best_error_deg=None, stop_sent_t=now)
+    return replace(m, target_deg=None, el_target_deg=None, progress_t=None, stop_sent_t=now)
 
 
 def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
@@ -199,13 +204,13 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
             events.append(Event.STOPPED)
             m = _at_rest(m, cfg, now, MotionState.BRAKING)
     if m.state is MotionState.BRAKING and m.still_since_t is not None:
-        if now - m.still_since_t >= cfg.brake_delay_s:
-            m = replace(m, state=MotionState.IDLE)
+        if now - m.still_since_t >= cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
+            m = replace(m, state=MotionState.IDLE, idle_not_before_t=None)
     return m, events
 
 
 def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
-    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0:
+    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0 and m.idle_not_before_t is None:
         state = MotionState.IDLE
     return replace(
         m,
@@ -214,7 +219,6 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         target_deg=None,
         el_target_deg=None,
         target_t=None,
-        best_error_deg=None,
         progress_t=None,
         stop_sent_t=None,
     )
@@ -257,6 +261,8 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             times.append(m.stop_sent_t + cfg.stop_resend_s)
     if m.state in (MotionState.BRAKING, MotionState.STALLED) and m.still_since_t is not None:
         times.append(m.still_since_t + cfg.brake_delay_s)
+        if m.idle_not_before_t is not None:
+            times.append(m.idle_not_before_t)
     if not cfg.can_report_position:
         if m.busy_until_t is not None:
             times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]

@@ -8,6 +8,7 @@ error event; it never reaches the mailbox, so it can never move anything.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable
@@ -30,6 +31,8 @@ from bridge.model import (
     describe_command,
 )
 from bridge.protocols.base import ModelSpec
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -68,12 +71,27 @@ class Rotator:
             self._mailbox,
             on_status,
             on_event,
-            options=store.options(self.id),
+            options=self._supported_options(store),
             locked=self._locked,
             clock=clock,
             wall=wall,
             port_opener=port_opener,
         )
+
+    def _supported_options(self, store: StateStore) -> dict[str, bool]:
+        """Options remembered for this id that this model has (the id may have been another)."""
+        kept = {}
+        for name, enabled in store.options(self.id).items():
+            if name in self.spec.options:
+                kept[name] = enabled
+            else:
+                log.warning(
+                    "%s: stored option %r ignored: %s has no such option",
+                    self.id,
+                    name,
+                    self.spec.display_name,
+                )
+        return kept
 
     @property
     def status(self) -> RotatorStatus:
@@ -87,8 +105,8 @@ class Rotator:
         self._worker.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
-        self._worker.stop(timeout_s)
-        self._mailbox.close()
+        if self._worker.stop(timeout_s):
+            self._mailbox.close()  # only once nothing can select on it any more
 
     def submit(self, command: Command, described: str | None = None) -> None:
         """Queue a command or raise Refused. Stop is never refused."""
@@ -103,13 +121,22 @@ class Rotator:
 
     def set_lock(self, locked: bool) -> None:
         self._locked = locked
-        self._store.set_locked(self.id, locked)
         self._mailbox.put_lock(locked)
+        if not self._store.set_locked(self.id, locked):
+            self.report(
+                "state",
+                f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
+                "it will not survive a restart (state file not writable)",
+                "lock",
+            )
 
     def report_refusal(self, message: str, command: str | None) -> None:
         """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
+        self.report("refused", message, command)
+
+    def report(self, kind: str, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)
-        self._on_event(ErrorEvent("refused", message, command, self._wall()))
+        self._on_event(ErrorEvent(kind, message, command, self._wall()))
 
     def _check(self, command: Command) -> None:
         if isinstance(command, Stop):

@@ -2,8 +2,9 @@
 user set (the controller forgets them at power-off, so the bridge re-applies them).
 
 A small JSON file, replaced atomically on every change. A missing file means "nothing set";
-an unreadable one is reported and treated as empty, except that a rotator whose lock state
-cannot be read starts locked (safety before convenience).
+an unreadable one is reported and treated as empty, except that every rotator whose lock state
+cannot be read starts locked (safety before convenience) and is written down as locked, so it
+stays locked across restarts until someone unlocks it.
 """
 
 from __future__ import annotations
@@ -35,9 +36,14 @@ class StateStore:
                 self.corrupt = True
 
     def locked(self, rotator_id: str) -> bool:
-        if self.corrupt:
-            return True
-        return bool(self._data.get(rotator_id, {}).get("locked", False))
+        with self._lock:
+            entry = self._data.get(rotator_id, {})
+            if self.corrupt and "locked" not in entry:
+                # written down explicitly, so the next start is locked too until someone unlocks
+                self._data.setdefault(rotator_id, {})["locked"] = True
+                self._save()
+                return True
+            return bool(entry.get("locked", False))
 
     def options(self, rotator_id: str) -> dict[str, bool]:
         raw = self._data.get(rotator_id, {}).get("options", {})
@@ -45,28 +51,30 @@ class StateStore:
             return {}
         return {str(k): bool(v) for k, v in raw.items()}
 
-    def set_locked(self, rotator_id: str, locked: bool) -> None:
+    def set_locked(self, rotator_id: str, locked: bool) -> bool:
+        """Remember the lock; False if it could not be written (it will not survive a restart)."""
         with self._lock:
             self._data.setdefault(rotator_id, {})["locked"] = locked
-            self._save()
+            return self._save()
 
-    def set_option(self, rotator_id: str, name: str, enabled: bool) -> None:
+    def set_option(self, rotator_id: str, name: str, enabled: bool) -> bool:
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
             opts = entry.setdefault("options", {})
             assert isinstance(opts, dict)
             opts[name] = enabled
-            self._save()
+            return self._save()
 
-    def _save(self) -> None:
+    def _save(self) -> bool:
         if self._path is None:
-            return
+            return True
         try:
             self._path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=self._path.parent, prefix=".state-")
             with os.fdopen(fd, "w") as f:
                 json.dump({"rotators": self._data}, f, indent=1, sort_keys=True)
             os.replace(tmp, self._path)
-            self.corrupt = False
+            return True
         except OSError as exc:
             log.error("cannot write state file %s: %s", self._path, exc)
+            return False

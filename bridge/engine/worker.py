@@ -15,9 +15,16 @@ Rules:
    controller that cannot report. A query is never sent while another is open.
 4. Targets go to the controller only when ``motion.plan_target`` says so; a target waiting for a
    brake delay is replaced by newer ones and dropped by a stop, the lock, or the link going down.
-5. A stop is written at once and cancels any frame still waiting in the outbox.
-6. Options are sent only while the rotor is not turning, and re-sent after every (re)connect and
-   after a power-on byte: the controller forgets them at power-off.
+5. A stop is written at once (on a half-duplex line right after the reply in flight) and cancels
+   any frame still waiting in the outbox. A stop is checked: if the rotor is still seen moving
+   ``stop_resend_s`` later, it is sent again, and after three tries an error says so. Lock ON
+   always sends a stop, whatever the bridge believes the rotor is doing.
+6. Options are sent only while the rotor is idle, and re-sent after every (re)connect, after a
+   power-on byte and every ``OPTIONS_REFRESH_S`` while idle: the controller forgets them at
+   power-off, and the letters are idempotent.
+7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
+   younger than one moving poll interval has shown the rotor idle: a front-panel move that began
+   after the last poll must not be cut short.
 """
 
 from __future__ import annotations
@@ -37,12 +44,21 @@ from bridge.engine import motion as mo
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.engine.port import PortError, open_port
 from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target, describe_command
-from bridge.protocols.base import Codec, JunkReply, ModelSpec, PositionReply, VersionReply
+from bridge.protocols.base import (
+    UNTRUSTED,
+    Codec,
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    VersionReply,
+)
 
 log = logging.getLogger(__name__)
 
 POWER_ON_BYTE = 0xE0
 JUNK_QUIET_S = 0.05
+OPTIONS_REFRESH_S = 60.0
+STOP_TRIES_BEFORE_ERROR = 3
 # what a healthy Rotor-EZ emits besides replies: the power-on byte, the banner after an invalid
 # command (e.g. a stop while idle) and the version text
 _KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?")
@@ -79,6 +95,7 @@ class _Link:
     options_due: set[str] = field(default_factory=set)
     silence_reported: bool = False
     stop_due: bool = False
+    options_sent_t: float = 0.0
     junk: bytearray = field(default_factory=bytearray)  # held until the line goes quiet
     junk_t: float = 0.0
 
@@ -120,6 +137,9 @@ class Worker:
         self._thread = threading.Thread(target=self._run, name=f"rotator-{cfg.rotator_id}")
         self._link: _Link | None = None
         self._junk_reported_t = -1e18
+        self._stop_tries = 0
+        self._backoff_s = cfg.reconnect_min_s
+        self._port_error: str | None = None
 
     # -- public, any thread -----------------------------------------------------------------
     @property
@@ -130,47 +150,55 @@ class Worker:
         self._emit_status()
         self._thread.start()
 
-    def stop(self, timeout_s: float = 3.0) -> None:
+    def stop(self, timeout_s: float = 3.0) -> bool:
+        """Stop the thread; True once it has ended."""
         self._stopping.set()
         self._mailbox.wake()
         if self._thread.is_alive():
             self._thread.join(timeout_s)
+        return not self._thread.is_alive()
 
     # -- the thread ---------------------------------------------------------------------------
     def _run(self) -> None:
-        backoff = self.cfg.reconnect_min_s
-        reported: str | None = None
         while not self._stopping.is_set():
             try:
-                port = self._open(self.cfg.port, self.cfg.spec, self.cfg.baud)
-            except PortError as exc:
-                if str(exc) != reported:
-                    reported = str(exc)
-                    self._error("serial", str(exc))
-                self._emit_status()
-                self._idle_offline(backoff)
-                backoff = min(backoff * 2, self.cfg.reconnect_max_s)
-                continue
-            log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
-            backoff, reported = self.cfg.reconnect_min_s, None
+                self._cycle()
+            except Exception:  # a bug (or a failing callback) must not end the thread
+                log.exception("%s: unexpected error in the rotator worker", self.cfg.rotator_id)
+                self._stopping.wait(1.0)
+
+    def _cycle(self) -> None:
+        """One attempt: open the port, serve it until it fails, then wait out the back-off."""
+        try:
+            port = self._open(self.cfg.port, self.cfg.spec, self.cfg.baud)
+        except PortError as exc:
+            if str(exc) != self._port_error:
+                self._port_error = str(exc)
+                self._error("serial", str(exc))
+            self._emit_status()
+            self._idle_offline(self._backoff_s)
+            self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
+            return
+        log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
+        self._backoff_s, self._port_error = self.cfg.reconnect_min_s, None
+        try:
+            self._serve(port)
+        except (serial.SerialException, OSError) as exc:
+            self._error("serial", f"serial link to {self.cfg.port} lost: {exc}")
+        except Exception:  # a bug must not kill the rotator: log it, reconnect
+            log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
+            self._error("internal", "unexpected error in the rotator worker (see the log)")
+        finally:
             try:
-                self._serve(port)
-            except (serial.SerialException, OSError) as exc:
-                self._error("serial", f"serial link to {self.cfg.port} lost: {exc}")
-            except Exception:  # a bug must not kill the rotator: log it, reconnect
-                log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
-                self._error("internal", "unexpected error in the rotator worker (see the log)")
-            finally:
-                try:
-                    port.close()
-                except Exception:  # closing a yanked port may fail too
-                    pass
-                self._link = None
-                self._motion = mo.link_down(self._motion)
-                self._drop_pending("serial link down")
-                self._emit_status()
-            if not self._stopping.is_set():
-                self._idle_offline(backoff)
+                port.close()
+            except Exception:  # closing a yanked port may fail too
+                pass
+            self._link = None
+            self._motion = mo.link_down(self._motion)
+            self._drop_pending("serial link down")
+            self._emit_status()
+        if not self._stopping.is_set():
+            self._idle_offline(self._backoff_s)
 
     def _idle_offline(self, wait_s: float) -> None:
         """Wait for the next reconnect attempt, still taking commands from the mailbox."""
@@ -226,8 +254,8 @@ class Worker:
             self._locked = batch.lock
             if batch.lock:
                 self._drop_pending(None)
-                if self._turning(now):
-                    self._send_stop(now)
+                if self._link is not None:
+                    self._send_stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None:
             self._pending = None
             self._last_source = batch.stop.source.value
@@ -343,17 +371,41 @@ class Worker:
         link = self._link
         if link is None or not link.answering:
             return
+        self._verify_stop(now)
         if self._pending is not None:
             self._try_target(now)
-        if (
-            link.options_due
-            and not self._turning(now)
-            and self._pending is None
-            and self._line_free()
-        ):
+        idle = self._motion.state is MotionState.IDLE
+        if idle and self._options and now - link.options_sent_t >= OPTIONS_REFRESH_S:
+            link.options_due = set(self._options)
+        if link.options_due and idle and self._pending is None and self._line_free():
             for name in sorted(link.options_due):
-                self._write(link.codec.encode_option(name, self._options[name]))
+                try:
+                    frame = link.codec.encode_option(name, self._options[name])
+                except (KeyError, ValueError):
+                    log.warning("%s: option %r not supported; skipped", self.cfg.rotator_id, name)
+                    continue
+                self._write(frame)
             link.options_due.clear()
+            link.options_sent_t = now
+
+    def _verify_stop(self, now: float) -> None:
+        """A stop that did not take (a byte lost to RF, a garbled frame) is sent again."""
+        m = self._motion
+        if m.stop_sent_t is None:
+            self._stop_tries = 0
+            return
+        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
+        late = now - m.stop_sent_t >= self.cfg.motion.stop_resend_s
+        if m.state is MotionState.MOVING and moved_since and late and self._pending is None:
+            self._stop_tries += 1
+            if self._stop_tries == STOP_TRIES_BEFORE_ERROR:
+                self._error(
+                    "stop",
+                    f"rotor still turning after {self._stop_tries} stop commands; "
+                    "stop it at the controller",
+                )
+            log.warning("%s: still turning after a stop; stopping again", self.cfg.rotator_id)
+            self._send_stop(now)
 
     def _try_target(self, now: float) -> None:
         link = self._link
@@ -383,6 +435,9 @@ class Worker:
             self._pending = None
             return
         plan = mo.plan_target(m, mcfg, now)
+        if plan is mo.Plan.SEND and self._needs_fresh_reading(now):
+            link.next_poll = now  # ask first; the target follows the answer
+            return
         if plan is mo.Plan.STOP_FIRST:
             log.info("%s: turning; stopping before the new target %s", self.cfg.rotator_id, wire)
             self._send_stop(now)
@@ -395,6 +450,13 @@ class Worker:
             self._last_source = self._pending.source.value
             self._pending = None
             link.next_poll = min(link.next_poll, now + self.cfg.moving_poll_interval_s)
+
+    def _needs_fresh_reading(self, now: float) -> bool:
+        spec, link = self.cfg.spec, self._link
+        if link is None or not spec.can_report_position or self.cfg.motion.direct_retarget:
+            return False
+        age = now - (link.last_reply_t if link.last_reply_t is not None else -1e18)
+        return age > self.cfg.moving_poll_interval_s
 
     def _resolve(self, target: Target) -> tuple[float | None, float | None]:
         """Fill the axis a target leaves out with its current target, else its position."""
@@ -449,6 +511,9 @@ class Worker:
                 self._version = reply.version
             elif isinstance(reply, JunkReply):
                 self._junk(reply, now)
+                if reply.reason == UNTRUSTED:
+                    link.query_deadline = None
+                    link.next_poll = now  # ask again at once
 
     def _publishable(self, az_deg: float, el_deg: float | None) -> None:
         moving = self._motion.state is MotionState.MOVING

@@ -118,35 +118,36 @@ class MqttClient:
         self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
     ) -> None:
         data = payload.encode() if isinstance(payload, str) else payload
+        # cache, connected check and publish under one lock, so a connect that re-publishes the
+        # cache cannot overtake a newer value with an older one (paho's publish only enqueues)
         with self._lock:
             if only_if_changed and self._retained.get(topic) == data:
                 return
             self._retained[topic] = data
-        if self.connected.is_set():
-            self._client.publish(topic, data, qos=1, retain=True)
+            if self.connected.is_set():
+                self._client.publish(topic, data, qos=1, retain=True)
 
     def clear_retained(self, topic: str) -> None:
         """Delete a retained message from the broker (empty retained payload)."""
         with self._lock:
             self._retained.pop(topic, None)
-        if self.connected.is_set():
-            self._client.publish(topic, b"", qos=1, retain=True)
+            if self.connected.is_set():
+                self._client.publish(topic, b"", qos=1, retain=True)
 
     def republish_retained(self, skip_prefix: str | None = None) -> None:
         """Send the retained messages we own again (Home Assistant came back, for example)."""
         with self._lock:
-            cached = list(self._retained.items())
-        if not self.connected.is_set():
-            return
-        for topic, data in cached:
-            if skip_prefix is None or not topic.startswith(skip_prefix):
-                self._client.publish(topic, data, qos=1, retain=True)
+            if not self.connected.is_set():
+                return
+            for topic, data in self._retained.items():
+                if skip_prefix is None or not topic.startswith(skip_prefix):
+                    self._client.publish(topic, data, qos=1, retain=True)
 
     def publish_event(self, topic: str, payload: str | bytes) -> None:
-        if self.connected.is_set():
-            self._client.publish(topic, payload, qos=1, retain=False)
-        else:
-            with self._lock:
+        with self._lock:
+            if self.connected.is_set():
+                self._client.publish(topic, payload, qos=1, retain=False)
+            else:
                 self._backlog.append((topic, payload))
 
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
@@ -180,15 +181,13 @@ class MqttClient:
         else:
             client.subscribe([(topic, 1) for topic in self._subscriptions])
         with self._lock:
-            cached = list(self._retained.items())
-            backlog = list(self._backlog)
+            for topic, data in self._retained.items():
+                if topic != self._will_topic:
+                    client.publish(topic, data, qos=1, retain=True)
+            for topic, event in self._backlog:
+                client.publish(topic, event, qos=1, retain=False)
             self._backlog.clear()
-        for topic, data in cached:
-            if topic != self._will_topic:
-                client.publish(topic, data, qos=1, retain=True)
-        for topic, event in backlog:
-            client.publish(topic, event, qos=1, retain=False)
-        self.connected.set()
+            self.connected.set()
         if self._on_connect_hook is not None:
             self._on_connect_hook()
 

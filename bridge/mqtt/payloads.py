@@ -80,6 +80,11 @@ def parse_target(payload: bytes) -> tuple[float, float | None]:
     return az, el
 
 
+def parse_number(payload: bytes, what: str) -> float:
+    """One bare number (also as a JSON number)."""
+    return _number(_text(payload), what)
+
+
 def parse_switch(payload: bytes) -> bool:
     text = _text(payload).lower()
     if text in _TRUE:

@@ -5,6 +5,8 @@ It reaches the rotators only through the RotatorPort interface that app.py hands
 Rules:
 1. A command that arrives retained is never executed: it is reported on the error topic. (A
    retained target would turn the rotor again on every restart of the bridge or the broker.)
+   The one exception is stop: stopping never moves anything, and a dashboard button wrongly
+   set to retain must still stop a turning rotor. It is executed and reported.
 2. Bad payloads are refused with an error event naming what was wrong; nothing moves.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
 """
@@ -97,6 +99,8 @@ class MqttService:
         pub = self.client.publish_retained
         if status.bearing_deg is not None:
             pub(t.bearing, pl.number(status.bearing_deg))
+        if status.elevation_deg is not None:
+            pub(t.elevation, pl.number(status.elevation_deg))
         pub(t.state, status.state.value)
         pub(t.availability, "online" if status.available else "offline")
         if status.version:
@@ -126,6 +130,14 @@ class MqttService:
         if rot is None:
             return
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
+        if retain and kind == "stop":
+            rot.submit(Stop(Source.MQTT), what)
+            rot.report_refusal(
+                f"stop on {topic} was published retained: executed (stopping is always safe), "
+                "but clear it with an empty retained message",
+                what,
+            )
+            return
         if retain:
             rot.report_refusal(
                 f"retained command on {topic} ignored: commands must be published without the "
@@ -139,6 +151,8 @@ class MqttService:
             elif kind == "target":
                 az, el = pl.parse_target(payload)
                 rot.submit(Target(az, el, Source.MQTT), what)
+            elif kind == "target_elevation":
+                rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
             elif kind == "lock":
                 rot.set_lock(pl.parse_switch(payload))
             elif kind == "option" and arg is not None:

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-COMMANDS = ("target", "stop", "lock", "option")
-
 
 @dataclass(frozen=True)
 class RotatorTopics:
@@ -19,6 +17,10 @@ class RotatorTopics:
     @property
     def target(self) -> str:
         return f"{self.root}/target"
+
+    @property
+    def target_elevation(self) -> str:
+        return f"{self.root}/target/elevation"
 
     @property
     def stop(self) -> str:
@@ -39,6 +41,10 @@ class RotatorTopics:
     @property
     def bearing(self) -> str:
         return f"{self.root}/bearing"
+
+    @property
+    def elevation(self) -> str:
+        return f"{self.root}/elevation"
 
     @property
     def state(self) -> str:
@@ -83,7 +89,7 @@ class Topics:
     def subscriptions(self) -> list[str]:
         subs: list[str] = []
         for t in self._rotators.values():
-            subs += [t.target, t.stop, t.lock, t.option_filter]
+            subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -91,6 +97,8 @@ class Topics:
         for rid, t in self._rotators.items():
             if topic == t.target:
                 return rid, "target", None
+            if topic == t.target_elevation:
+                return rid, "target_elevation", None
             if topic == t.stop:
                 return rid, "stop", None
             if topic == t.lock:

@@ -41,6 +41,9 @@ class JunkReply:
 
 Reply = PositionReply | VersionReply | JunkReply
 
+# reason of a JunkReply for a frame that looked right but followed line noise: ask again
+UNTRUSTED = "reading after line noise: not trusted"
+
 
 class RetargetPolicy(enum.StrEnum):
     # The controller stops on a new bearing while turning and ignores bearings during its brake

@@ -16,7 +16,10 @@ Frames we send:
 Rules:
 1. Only ``;`` + three ASCII digits in 000..360 is a bearing, and only while a query is open.
    Everything else (the 0xE0 power-on byte, the ``C2000 IDIOM V1.4S `` banner that follows an
-   invalid command, a torn or foreign frame) is junk and is reported as such.
+   invalid command, a torn or foreign frame) is junk and is reported as such. A frame that
+   follows junk the board never sends (anything but the power-on byte and the banner's upper-case
+   letters, digits, spaces and dots) within the same query is not trusted: it is reported as
+   UNTRUSTED junk, so the engine asks again instead of publishing line noise as a bearing.
 2. The banner carries the firmware version; it is reported as a VersionReply whenever seen.
 3. Targets are rounded half up to whole degrees. The Idiom boards take 000..360; the DCU-1 gets
    360 as 000 (Hamlib does the same "for DCU-1 compatibility"; both are north on a Hy-Gain).
@@ -29,6 +32,7 @@ import math
 import re
 
 from bridge.protocols.base import (
+    UNTRUSTED,
     Codec,
     JunkReply,
     ModelSpec,
@@ -52,6 +56,7 @@ OPTION_LABELS = {
 }
 
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
+_BOARD_BYTES = frozenset(b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ")
 _JUNK_WINDOW = 64  # bytes of recent junk kept to find a version banner torn across reads
 
 
@@ -73,6 +78,7 @@ class RotorEzCodec:
         self._buf = bytearray()
         self._junk_window = bytearray()
         self._queries_open = 0
+        self._noisy = False  # bytes the board never sends arrived since the query was opened
 
     # -- encoding -------------------------------------------------------------------------
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
@@ -94,6 +100,7 @@ class RotorEzCodec:
         if self._dcu1:
             return None
         self._queries_open = 1
+        self._noisy = False
         return b"AI1;"
 
     def expire_query(self) -> None:
@@ -127,7 +134,10 @@ class RotorEzCodec:
             if digits.isdigit() and int(digits) <= 360 and self._queries_open:
                 self._flush_junk(junk, out)
                 self._queries_open = 0
-                out.append(PositionReply(float(int(digits))))
+                if self._noisy:
+                    out.append(JunkReply(frame, UNTRUSTED))
+                else:
+                    out.append(PositionReply(float(int(digits))))
                 i += 4
                 continue
             if digits.isdigit() and int(digits) <= 360:
@@ -144,6 +154,8 @@ class RotorEzCodec:
     def _flush_junk(self, junk: bytearray, out: list[Reply]) -> None:
         if not junk:
             return
+        if self._queries_open and any(b not in _BOARD_BYTES for b in junk):
+            self._noisy = True
         self._junk_window += junk
         match = _VERSION_RE.search(self._junk_window)
         if match:

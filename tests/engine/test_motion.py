@@ -159,3 +159,26 @@ def test_next_deadline_is_in_the_future() -> None:
     assert m.state is S.STALLED
     assert mo.next_deadline(m, CFG, 30.0) == 35.0
     assert mo.next_deadline(m, CFG, 36.0) is None
+
+
+def test_the_long_way_round_is_progress_not_a_stall() -> None:
+    # 10 -> 350 on a rotor with its stop at 0/360: it first moves away from 350 across north
+    m = mo.commanded(ready(az=10), CFG, 350, 10.0)
+    readings = [(10 + i * 0.25, 10 + 1.5 * i) for i in range(1, 240)]
+    m, events = feed(m, [(t, az) for t, az in readings if az <= 351])
+    assert mo.Event.STALLED not in events
+    m, events = mo.tick(m, CFG, 70.0)
+    assert mo.Event.ARRIVED in events
+
+
+def test_without_a_brake_the_first_reading_still_waits_for_stillness() -> None:
+    card = mo.MotionConfig(brake_delay_s=0, settle_s=1.5, noise_deg=2)
+    m = mo.link_up(mo.Motion(), card, 0.0)
+    m, _ = mo.reading(m, card, 100, 0.0)
+    assert m.state is S.BRAKING and mo.plan_target(m, card, 0.5) is mo.Plan.WAIT
+    m, _ = mo.reading(m, card, 104, 0.5)  # it was turning when we connected
+    assert m.state is S.MOVING and mo.plan_target(m, card, 0.5) is mo.Plan.STOP_FIRST
+    m2 = mo.link_up(mo.Motion(), card, 0.0)
+    m2, _ = mo.reading(m2, card, 100, 0.0)
+    m2, _ = mo.tick(m2, card, 1.5)
+    assert m2.state is S.IDLE

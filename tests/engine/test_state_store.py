@@ -22,6 +22,15 @@ def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) ->
     path = tmp_path / "state.json"
     path.write_text("{not json")
     s = StateStore(path)
-    assert s.locked("tower") is True  # safety before convenience
-    s.set_locked("tower", False)  # the user unlocks explicitly: the file is rewritten
-    assert StateStore(path).locked("tower") is False
+    assert s.locked("tower") is True and s.locked("yagi") is True  # safety before convenience
+    assert s.set_locked("tower", False) is True  # the user unlocks one explicitly
+    again = StateStore(path)
+    assert again.locked("tower") is False
+    assert again.locked("yagi") is True  # still locked after the restart: nobody unlocked it
+
+
+def test_a_lock_that_cannot_be_saved_says_so(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    s = StateStore(blocker / "state.json")  # its directory cannot be created
+    assert s.set_locked("tower", True) is False

@@ -401,3 +401,78 @@ def test_mqtt_311_fallback_still_ignores_replayed_retained_commands(rig: Rig) ->
     rig.probe.publish("rotor/target", "60")
     emu.wait_for(lambda s: near(s.az_deg, 60) and not s.is_moving, 15)
     assert [f.data for f in emu.frames(*BEARING_FRAMES)] == [b"AP1060\r"]
+
+
+# -- regressions from the independent safety review ------------------------------------------
+def test_a_stop_lost_on_the_line_is_sent_again(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20)
+    emu.inject(b"A", to="device")  # noise: the controller now holds a torn frame, eats the ';'
+    rig.probe.publish("rotor/stop", "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+    assert stopped.az_deg < 250
+    assert len(emu.frames("stop")) >= 1
+
+
+def test_lock_stops_a_rotor_the_bridge_did_not_know_was_turning(rig: Rig) -> None:
+    import serial
+
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    with serial.Serial(emu.link, 4800) as other_program:  # an earlier command, before the bridge
+        other_program.write(b"AP1300\r")
+    emu.wait_for(lambda s: s.is_moving)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online")
+    rig.probe.publish("rotor/lock", "ON")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+    assert stopped.az_deg < 250
+
+
+def test_a_rotorcard_turning_at_start_gets_no_target_until_it_is_still(rig: Rig) -> None:
+    import serial
+
+    emu = rig.add("yagi", model="rotorcard", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    with serial.Serial(emu.link, 4800) as other_program:
+        other_program.write(b"AP1200\r")
+    emu.wait_for(lambda s: s.is_moving)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online")
+    rig.probe.publish("rotor/target", "100")
+    emu.wait_for(lambda s: abs(s.az_deg - 100) <= 3 and not s.is_moving, 30)
+    assert "ignored: re-target while turning (stopped)" not in [f.outcome for f in emu.log()]
+
+
+def test_the_long_way_round_arrives(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 40})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "350")
+    emu.wait_for(lambda s: abs(s.az_deg - 350) <= 3 and not s.is_moving, 20)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t + 0.01)
+    stalls = [m for m in rig.probe.on("rotor/error") if b"stalled" in m.payload]
+    assert stalls == []
+
+
+def test_a_retained_stop_still_stops(rig: Rig) -> None:
+    emu = rig.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    rig.start()
+    rig.ready("tower")
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 20)
+    t = time.monotonic()
+    rig.probe.publish("rotor/stop", "STOP", retain=True)  # a dashboard button set to retain
+    emu.wait_for(lambda s: not s.is_moving, 3)
+    rig.probe.wait_for("rotor/error", lambda m: b"retained" in m.payload, after=t)
+    rig.probe.publish("rotor/stop", "", retain=True)
+
+
+def test_an_option_stored_for_another_model_does_not_break_the_rotator(rig: Rig) -> None:
+    (rig.tmp / "state.json").write_text('{"rotators": {"yagi": {"options": {"jam": false}}}}')
+    rig.add("yagi", model="rotorcard")
+    rig.start()
+    rig.ready("yagi")
+    assert rig.retained()["rotor/availability"] == b"online"

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import JunkReply, PositionReply, VersionReply
+from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
 from bridge.protocols.rotorez import RotorEzCodec
 
 
@@ -148,10 +148,22 @@ def test_torn_frame_waits_for_the_rest() -> None:
     assert positions(c.feed(b"7")) == [127.0]
 
 
-def test_a_broken_frame_resyncs_on_the_next_one() -> None:
+def test_a_frame_after_line_noise_is_not_trusted_and_the_next_query_is() -> None:
     c = RotorEzCodec()
     c.encode_query()
-    assert positions(c.feed(b";1x;090")) == [90.0]
+    replies = c.feed(b"\x13\x7f;193")
+    assert positions(replies) == []
+    assert JunkReply(b";193", UNTRUSTED) in replies
+    c.encode_query()
+    assert positions(c.feed(b";150")) == [150.0]
+    c.encode_query()
+    assert positions(c.feed(b";1x;090")) == []  # a torn frame is noise too
+
+
+def test_the_boards_own_junk_does_not_taint_a_reading() -> None:
+    c = RotorEzCodec()
+    c.encode_query()
+    assert positions(c.feed(b"\xe0C2000 IDIOM V1.4S ;045")) == [45.0]
 
 
 @given(st.binary(max_size=200))
@@ -166,10 +178,12 @@ def test_junk_never_becomes_a_bearing_without_a_frame(data: bytes) -> None:
 
 
 @given(st.binary(max_size=60), st.integers(0, 360), st.binary(max_size=60))
-def test_reply_amid_junk_is_found(prefix: bytes, az: int, suffix: bytes) -> None:
+def test_reply_amid_junk_is_read_only_when_the_junk_is_the_boards_own(
+    prefix: bytes, az: int, suffix: bytes
+) -> None:
     c = RotorEzCodec()
     c.encode_query()
-    # junk that ends in ';' + digits could legitimately be read first; keep the prefix frame-free
-    prefix = prefix.replace(b";", b"")
+    prefix = prefix.replace(b";", b"")  # keep the prefix frame-free
     got = positions(c.feed(prefix + b";%03d" % az + suffix))
-    assert got[:1] == [float(az)]
+    clean = all(b in b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ" for b in prefix)
+    assert got[:1] == ([float(az)] if clean else [])
