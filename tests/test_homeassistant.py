@@ -18,7 +18,17 @@ def build(models: dict[str, str], base: str = "rotor", **kw) -> dict[str, dict]:
     roots = {rid: base if len(models) == 1 else f"{base}/{rid}" for rid in models}
     topics = Topics(base, roots)
     infos = [
-        RotatorInfo(rid, rid.title(), REGISTRY[m], topics.rotator(rid), 0, 360, **kw)
+        RotatorInfo(
+            rid,
+            rid.title(),
+            REGISTRY[m],
+            topics.rotator(rid),
+            REGISTRY[m].az_min_deg,
+            REGISTRY[m].az_max_deg,
+            REGISTRY[m].el_min_deg,
+            REGISTRY[m].el_max_deg,
+            **kw,
+        )
         for rid, m in models.items()
     ]
     return {
@@ -27,7 +37,7 @@ def build(models: dict[str, str], base: str = "rotor", **kw) -> dict[str, dict]:
     }
 
 
-@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "dcu1"])
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01"])
 def test_every_message_passes_home_assistants_rules(model: str) -> None:
     for topic, payload in build({"tower": model}).items():
         assert validate(topic, payload) == []
@@ -180,3 +190,19 @@ def test_home_assistant_birth_schedules_a_state_republish() -> None:
     assert not rec.republished.wait(0.1)
     pub.on_message("homeassistant/status", b"online", False)
     assert rec.republished.wait(5)
+
+
+def test_az_el_models_get_elevation_entities_with_their_limits() -> None:
+    topics = Topics("rotor", {"sat": "rotor"})
+    info = RotatorInfo("sat", "Sat", REGISTRY["rot2prog"], topics.rotator("sat"), -180, 540, 0, 90)
+    msgs = {
+        t: json.loads(p) for t, p in all_configs("ha", Identity("rotor"), topics, [info]).items()
+    }
+    el = msgs["ha/number/rotorbridge_rotor_r_sat/target_elevation/config"]
+    assert (el["min"], el["max"], el["command_topic"]) == (0, 90, "rotor/target/elevation")
+    assert (
+        msgs["ha/sensor/rotorbridge_rotor_r_sat/elevation/config"]["state_topic"]
+        == "rotor/elevation"
+    )
+    az = msgs["ha/number/rotorbridge_rotor_r_sat/target_azimuth/config"]
+    assert (az["min"], az["max"]) == (-180, 540)

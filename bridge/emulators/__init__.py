@@ -22,12 +22,16 @@ from typing import Any
 from bridge.emulators.base import LoggedFrame, Responder, RotatorState
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez import RotorEZ
+from bridge.emulators.spid import Spid
 
 #: model name -> factory(**options, now=...) returning a responder.
 EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "rotorez": partial(RotorEZ, "rotorez"),
     "rotorcard": partial(RotorEZ, "rotorcard"),
     "dcu1": partial(RotorEZ, "dcu1"),
+    "rot2prog": partial(Spid, "rot2prog"),
+    "rot1prog": partial(Spid, "rot1prog"),
+    "md01": partial(Spid, "md01"),
 }
 
 
@@ -69,6 +73,7 @@ __all__ = [
     "Responder",
     "RotatorState",
     "RotorEZ",
+    "Spid",
     "create",
     "start",
 ]

@@ -28,37 +28,62 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--link", metavar="PATH", help="also serve the device at PATH (a symlink, atomically set)"
     )
-    parser.add_argument("--baud", type=int, default=4800, help="line rate that paces replies")
-    parser.add_argument("--speed-deg-s", type=float, default=6.0, help="rotor speed (deg/s)")
-    parser.add_argument("--start-az-deg", type=float, default=0.0, help="initial bearing (deg)")
+    parser.add_argument("--baud", type=int, help="line rate that paces replies (model default)")
+    parser.add_argument(
+        "--speed-deg-s", type=float, help="(azimuth) speed in deg/s (model default)"
+    )
+    parser.add_argument("--el-speed-deg-s", type=float, help="elevation speed (az/el models)")
+    parser.add_argument("--start-az-deg", type=float, help="initial bearing (deg)")
+    parser.add_argument("--start-el-deg", type=float, help="initial elevation (az/el models)")
     parser.add_argument(
         "--brake-delay-s",
         type=float,
-        default=None,
-        help="brake delay after motion (default: model's, 5 s Rotor-EZ/DCU-1, 0 RotorCard)",
+        help="brake delay after motion (Rotor-EZ family; default 5 s Rotor-EZ/DCU-1, 0 RotorCard)",
     )
     parser.add_argument(
-        "--jitter-deg", type=int, default=1, help="stationary reading noise (deg), 0 disables"
+        "--jitter-deg", type=int, help="stationary reading noise (Rotor-EZ family; default 1)"
     )
-    parser.add_argument("--firmware", default="1.4S", help="controller version in its banner")
+    parser.add_argument("--firmware", help="controller version in its banner (Rotor-EZ family)")
     parser.add_argument(
-        "--no-power-on-junk", action="store_true", help="do not emit the 0xE0 power-on byte"
+        "--no-power-on-junk", action="store_true", help="no 0xE0 power-on byte (Rotor-EZ family)"
+    )
+    parser.add_argument(
+        "--resolution", type=int, help="pulses per degree (SPID: 1, 2, 4; MD-01 also 10)"
     )
     parser.add_argument(
         "--log-frames", action="store_true", help="print every received frame on stderr"
     )
 
 
+_ROTOREZ_FAMILY = {"rotorez", "rotorcard", "dcu1"}
+_SPID_FAMILY = {"rot2prog", "rot1prog", "md01"}
+
+
 def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
-    return {
-        "baud": args.baud,
-        "speed_deg_s": args.speed_deg_s,
-        "start_az_deg": args.start_az_deg,
-        "brake_delay_s": args.brake_delay_s,
-        "jitter_deg": args.jitter_deg,
-        "version": args.firmware,
-        "power_on_junk": not args.no_power_on_junk,
-    }
+    """The options this model's emulator takes, from the ones given (the rest stay default)."""
+    opts: dict[str, Any] = {"baud": args.baud, "start_az_deg": args.start_az_deg}
+    if args.model in _ROTOREZ_FAMILY:
+        opts.update(
+            speed_deg_s=args.speed_deg_s,
+            brake_delay_s=args.brake_delay_s,
+            jitter_deg=args.jitter_deg,
+            version=args.firmware,
+            power_on_junk=False if args.no_power_on_junk else None,
+        )
+    elif args.model in _SPID_FAMILY:
+        opts.update(
+            az_speed_deg_s=args.speed_deg_s,
+            el_speed_deg_s=args.el_speed_deg_s,
+            start_el_deg=args.start_el_deg,
+            resolution_ppd=args.resolution,
+        )
+    else:
+        opts.update(
+            az_speed_deg_s=args.speed_deg_s,
+            el_speed_deg_s=args.el_speed_deg_s,
+            start_el_deg=args.start_el_deg,
+        )
+    return {k: v for k, v in opts.items() if v is not None}
 
 
 def _print_frame(frame: LoggedFrame) -> None:

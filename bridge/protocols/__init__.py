@@ -2,8 +2,9 @@
 
 from bridge.protocols.base import ModelSpec
 from bridge.protocols.rotorez import MODELS as _ROTOREZ
+from bridge.protocols.spid import MODELS as _SPID
 
-REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ}
+REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ, **_SPID}
 
 
 def get_spec(name: str) -> ModelSpec:

@@ -20,8 +20,9 @@ def make_port(tmp_path: Path) -> Iterator[PortFactory]:
 
     def factory(model: str = "rotorez", **options: Any) -> EmulatedPort[Any]:
         options.setdefault("link", str(tmp_path / "by-id" / f"usb-emulated-{model}-{len(ports)}"))
-        options.setdefault("power_on_junk", False)
-        options.setdefault("jitter_deg", 0)
+        if model in ("rotorez", "rotorcard", "dcu1"):
+            options.setdefault("power_on_junk", False)
+            options.setdefault("jitter_deg", 0)
         port = start(model, **options)
         ports.append(port)
         return port

@@ -15,17 +15,25 @@ import pytest
 import serial
 
 from bridge.emulators import EMULATORS, create, start
-from bridge.emulators.cli import add_arguments, main, run
+from bridge.emulators.cli import _controller_options, add_arguments, main, run
 from bridge.emulators.rotorez import RotorEZ
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def test_registry_knows_the_three_rotor_ez_family_models() -> None:
-    assert set(EMULATORS) == {"rotorez", "rotorcard", "dcu1"}
-    for name in EMULATORS:
+def test_registry_knows_every_emulated_model() -> None:
+    assert {"rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01"} <= set(EMULATORS)
+    for name in ("rotorez", "rotorcard", "dcu1"):
         device = create(name)
         assert isinstance(device, RotorEZ) and device.spec.name == name
+    for name in ("rot2prog", "rot1prog", "md01"):
+        assert create(name).spec.name == name
+
+
+def test_every_model_has_a_matching_bridge_model() -> None:
+    from bridge.protocols import REGISTRY
+
+    assert set(EMULATORS) <= set(REGISTRY)
 
 
 def test_unknown_model_is_refused_with_the_known_names() -> None:
@@ -43,8 +51,13 @@ def test_arguments_and_their_defaults() -> None:
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     args = parser.parse_args(["dcu1"])
-    assert (args.model, args.baud, args.speed_deg_s, args.jitter_deg) == ("dcu1", 4800, 6.0, 1)
-    assert args.firmware == "1.4S" and args.brake_delay_s is None and not args.no_power_on_junk
+    assert args.model == "dcu1" and not args.no_power_on_junk
+    # unset options stay the model's own defaults
+    assert _controller_options(args) == {}
+    args = parser.parse_args(["dcu1", "--speed-deg-s", "3", "--no-power-on-junk", "--baud", "9600"])
+    assert _controller_options(args) == {"baud": 9600, "speed_deg_s": 3.0, "power_on_junk": False}
+    args = parser.parse_args(["rot2prog", "--speed-deg-s", "2", "--resolution", "4"])
+    assert _controller_options(args) == {"az_speed_deg_s": 2.0, "resolution_ppd": 4}
     with pytest.raises(SystemExit):
         parser.parse_args(["spid-in-2031"])
 

@@ -29,6 +29,17 @@ FAST_BRIDGE = {
 }
 
 
+# SPID: digital encoders (no jitter), no brake, a slow line (600 baud: 0.42 s per exchange)
+FAST_SPID = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0}
+FAST_SPID_BRIDGE = {
+    "idle_poll_interval_s": 0.5,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 1.0,
+    "stall_timeout_s": 4.0,
+    "silence_timeout_s": 2.0,
+}
+
+
 class Rig:
     def __init__(self, tmp_path: Path, broker: Mosquitto, probe: Probe) -> None:
         self.tmp = tmp_path
@@ -43,12 +54,18 @@ class Rig:
         self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
     ) -> EmulatedPort[Any]:
         link = self.tmp / f"serial-by-id-{rid}"
-        emu_options = {**FAST_ROTOR, **(emu or {})}
+        spid = model in ("rot2prog", "rot1prog", "md01")
+        emu_options = {**(FAST_SPID if spid else FAST_ROTOR), **(emu or {})}
         if model == "rotorcard":
             emu_options["brake_delay_s"] = 0.0  # Yaesu rotors have no brake
         port = emulators.start(model, link=str(link), **emu_options)
         self.emus[rid] = port
-        cfg = {"id": rid, "model": model, "port": str(link), **FAST_BRIDGE}
+        cfg = {
+            "id": rid,
+            "model": model,
+            "port": str(link),
+            **(FAST_SPID_BRIDGE if spid else FAST_BRIDGE),
+        }
         if model == "rotorcard":
             cfg["brake_delay_s"] = 0
         cfg.update(bridge)

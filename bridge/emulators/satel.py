@@ -1,0 +1,555 @@
+"""SatEL Az-El controller emulator (VE5FP-compatible, Hamlib model 2101), sans-IO.
+
+What the device is: a microprocessor box driving an azimuth rotor (0..360, break at north) and an
+elevation rotor (0..90) through relays, on RS-232 at 9600 8N1. It keeps a clock and up to 50
+stored time/position points, and moves to them by itself when automatic motion is enabled.
+
+Frame: ASCII, no echo, letters in upper or lower case. Single bytes: `?` identify -> `SatEL`;
+`z` status (the 7-line report below); `g` enable automatic motion; `s` stop the rotors and
+disable automatic motion; `*` reset (= power cycle); `x` clear the memory; `u`/`d`/`r`/`l` jog
+el up/down, az clockwise/counter-clockwise; `c` calibrate (a no-op on the SatEL); `cx` (lower case
+only) setup calibration. Lines ended by CR or LF (an LF right after a CR is swallowed):
+`p<az> <el>` point, e.g. `p100 45`; `t` read the clock; `tYYYY/MM/DD HH:MM:SS` set it;
+`YYYY/MM/DD HH:MM:SS <az> <el>` (it starts with the `2` of the year) store a point. Every line
+the controller prints ends in `line_ending` (CR LF, or LF only). The status report:
+    Motion ENABLED                      (or Motion DISABLED)
+    Mode 0 - azimuth break at NORTH
+    Time: 2001/00/00 00:00:07
+    Azimuth = 000     Absolute = 000
+    Elevation = 000
+    <empty>
+    Number of stored positions: 00
+    <empty>                             (`trailing_blank_lines` of them, 2 by default)
+
+Source documents (written from these, never from bridge/protocols):
+  /work/shared/protocols/satel.md (Hamlib 4.5.4 satel.c notes, verified traffic, checklist),
+  /work/shared/seeds/satel-azel-manual-excerpt.txt and the SatEL Az-EL manual pages 12 and 15
+  (manualshive.com): 50 stored points, excess lost; stored points and `p` do nothing while
+  automatic motion is disabled; `*` = power cycle; the az/el values live in EEPROM.
+Rotor speeds are not documented: by default az 8 deg/s, el 4 deg/s, so that a full slew (45 s,
+22.5 s) fits inside Hamlib's 60 s read timeout, which its author sized to wait out a slew.
+
+Rules:
+1. Sans-IO, like rotorez.py: bytes in through receive(data, now), out through due_output(now),
+   paced at line rate (base.PacedLine) after `processing_delay_s`. `now` never goes back.
+2. A slew is a move started by `p` or by a stored point. While one runs the controller takes
+   only `s` (stop) and `*` (reset), plus the one LF that follows the CR ending its `p` line.
+   Every other byte is logged alone as "misuse: input while slewing" and dropped; with
+   corrupt_on_misuse the first one also wedges the controller (rule 7). Jogs (u/d/r/l) are not
+   slews: they run until told otherwise, so the controller listens during them.
+3. `p` while automatic motion is disabled is ignored (manual). Otherwise both axes slew at their
+   own speeds; when the last one arrives the status report is printed, composed at the exact
+   arrival instant. A `p` to where the rotors already are reports at once. Values beyond the
+   stops are clamped (the controller checks nothing; the rotors end at the stop).
+4. `s` during a `p` slew ends it where the rotors are; the move routine then prints its report
+   (showing Motion DISABLED) unless report_on_stop=False. Moves driven by stored points end
+   silently. A reset ends any slew without a report.
+5. Reset (`*`, power_cycle): rotors stop, automatic motion off, corruption cleared, half-typed
+   line and unsent output dropped, clock back to its power-on reading `2001/00/00 00:00:00`
+   (Hamlib's example), stored points forgotten (assumed RAM; unverified). The position stays
+   (EEPROM). `*` is allowed during a slew: Hamlib uses it as its stop.
+6. Stored points are kept in time order, at most `memory_limit`. When the controller clock
+   reaches one (and no slew runs) it is consumed; if several are due only the latest counts. It
+   moves the rotors only if automatic motion is enabled.
+7. Corruption (corrupt_on_misuse=True, first misuse): the slew halts where it is, no report
+   follows, automatic motion is off and `g`/`p` are ignored ("ignored: corrupted state") until
+   a reset. Stored points are consumed without moving anything.
+8. Positions in reports are rounded half up to whole degrees, three digits; Absolute equals
+   Azimuth (mode 0). Unknown bytes and malformed lines are logged "invalid" and get no reply.
+9. The trailing empty lines leave at line rate too, so a reader that stops after 7 lines and
+   flushes (Hamlib) may find them in front of its next reply: Hamlib 4.5.4 running `P az el p`
+   in one session then reads 0.00 now and then (measured ~1 run in 10). That is the device as
+   documented, kept on purpose; trailing_blank_lines=0 takes the race away.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from enum import StrEnum
+
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.physics import DRIVER_COMMAND, Axis
+
+__all__ = ["MEMORY_LIMIT", "Outcome", "SatEL", "SatelState", "StoredPoint"]
+
+MEMORY_LIMIT = 50  # manual p. 12: "the controller only has the capacity to remember 50 data points"
+MAX_LINE_BYTES = 48  # longest valid line is a stored point, 27 bytes; beyond this it is junk
+DRIVER_EPHEMERIS = "ephemeris"
+DRIVER_JOG = "jog"
+CR, LF = 0x0D, 0x0A
+#: The unset clock reads 2001/00/00 00:00:00; for comparisons it stands for this instant.
+POWER_ON_EPOCH = datetime(2000, 12, 31)
+_TIME = rb"(\d{4})/(\d{2})/(\d{2}) (\d{2}):(\d{2}):(\d{2})"
+_POINT_RE = re.compile(rb"[pP](\d{1,3}) (\d{1,3})")
+_SET_TIME_RE = re.compile(rb"[tT]" + _TIME)
+_STORE_RE = re.compile(_TIME + rb" (\d{1,3}) (\d{1,3})")
+_JOGS = {"u": ("el", 90.0), "d": ("el", 0.0), "r": ("az", 360.0), "l": ("az", 0.0)}
+
+
+class Outcome(StrEnum):
+    """What the controller did with a command (the `outcome` of a LoggedFrame)."""
+
+    IDENTIFY = "identify"
+    STATUS = "status"
+    MOTION_ENABLED = "motion enabled"
+    STOP = "stop"
+    RESET = "reset"
+    SLEW = "slew"
+    JOG = "jog"
+    TIME_READ = "time read"
+    TIME_SET = "time set"
+    MEMORY_CLEARED = "memory cleared"
+    POINT_STORED = "point stored"
+    CALIBRATE = "calibrate: no-op on SatEL"
+    IGNORED_CX = "ignored: cx not emulated"
+    IGNORED_MOTION_DISABLED = "ignored: motion disabled"
+    IGNORED_MEMORY_FULL = "ignored: memory full"
+    IGNORED_CORRUPTED = "ignored: corrupted state"
+    INVALID = "invalid"
+    MISUSE = "misuse: input while slewing"
+
+
+@dataclass(frozen=True)
+class StoredPoint:
+    """One ephemeris point: at controller time `when`, point at az/el (as typed)."""
+
+    when: datetime
+    az_deg: int
+    el_deg: int
+
+
+@dataclass(frozen=True)
+class SatelState(RotatorState):
+    """RotatorState plus what only a SatEL has (`options` repeats the three flags)."""
+
+    motion_enabled: bool = False
+    slewing: bool = False
+    corrupted: bool = False
+    target_el_deg: float | None = None
+    controller_time: str = ""
+    stored_points: tuple[StoredPoint, ...] = ()
+    misuse_count: int = 0
+
+
+@dataclass(frozen=True)
+class _Slew:
+    kind: str  # DRIVER_COMMAND (`p`, reports at the end) or DRIVER_EPHEMERIS (silent)
+    az_deg: float
+    el_deg: float
+
+
+class _ControllerClock:
+    """The controller's own clock: whole seconds counted from a reset or from the last `t`."""
+
+    def __init__(self, now: float) -> None:
+        self._base: datetime | None = None
+        self._origin_s = now
+
+    def reset(self, now: float) -> None:
+        self._base, self._origin_s = None, now
+
+    def set(self, when: datetime, now: float) -> None:
+        self._base, self._origin_s = when, now
+
+    def _elapsed_s(self, now: float) -> int:
+        return max(0, math.floor(now - self._origin_s))
+
+    def read(self, now: float) -> datetime:
+        return (self._base or POWER_ON_EPOCH) + timedelta(seconds=self._elapsed_s(now))
+
+    def text(self, now: float) -> str:
+        if self._base is None:
+            days, rest = divmod(self._elapsed_s(now), 86400)
+            hours, rest = divmod(rest, 3600)
+            return f"2001/00/{days:02d} {hours:02d}:{rest // 60:02d}:{rest % 60:02d}"
+        return self.read(now).strftime("%Y/%m/%d %H:%M:%S")
+
+    def instant_s(self, when: datetime) -> float:
+        """The `now` at which this clock reads `when`."""
+        return self._origin_s + (when - (self._base or POWER_ON_EPOCH)).total_seconds()
+
+
+def _parse_time(groups: Iterable[bytes]) -> datetime | None:
+    try:
+        return datetime(*(int(g) for g in groups))
+    except ValueError:
+        return None
+
+
+def _whole_deg(value_deg: float) -> int:
+    return math.floor(value_deg + 0.5)
+
+
+class SatEL:
+    """One SatEL controller with its two rotors. See the module rules."""
+
+    def __init__(
+        self,
+        *,
+        az_speed_deg_s: float = 8.0,
+        el_speed_deg_s: float = 4.0,
+        start_az_deg: float = 0.0,
+        start_el_deg: float = 0.0,
+        baud: int = 9600,
+        line_ending: bytes = b"\r\n",
+        corrupt_on_misuse: bool = False,
+        report_on_stop: bool = True,
+        trailing_blank_lines: int = 2,
+        memory_limit: int = MEMORY_LIMIT,
+        processing_delay_s: float = 0.002,
+        now: float = 0.0,
+    ) -> None:
+        if line_ending not in (b"\r\n", b"\n"):
+            raise ValueError(f"line_ending must be b'\\r\\n' or b'\\n', got {line_ending!r}")
+        if trailing_blank_lines < 0:
+            raise ValueError(f"trailing_blank_lines must be >= 0, got {trailing_blank_lines}")
+        if memory_limit < 0:
+            raise ValueError(f"memory_limit must be >= 0, got {memory_limit}")
+        self.line_ending: bytes = line_ending
+        self.corrupt_on_misuse: bool = corrupt_on_misuse
+        self.report_on_stop: bool = report_on_stop
+        self.trailing_blank_lines: int = trailing_blank_lines
+        self.memory_limit: int = memory_limit
+        self._az = Axis(
+            start_az_deg, min_deg=0.0, max_deg=360.0, speed_deg_s=az_speed_deg_s, now=now
+        )
+        self._el = Axis(
+            start_el_deg, min_deg=0.0, max_deg=90.0, speed_deg_s=el_speed_deg_s, now=now
+        )
+        self._tx = PacedLine(baud, processing_delay_s=processing_delay_s)
+        self._clock = _ControllerClock(now)
+        self._now_s: float = now
+        self._log: list[LoggedFrame] = []
+        self._events: list[MotionEvent] = []
+        self._line: bytearray | None = None
+        self._swallow_lf = False
+        self._after_c = False
+        self._slew: _Slew | None = None
+        self._motion_enabled = False
+        self._corrupted = False
+        self._memory: list[StoredPoint] = []
+        self._event(now, "power on")
+
+    # -- sans-IO surface ------------------------------------------------------------------------
+
+    def receive(self, data: bytes, now: float) -> None:
+        """Bytes from the host, all arrived at `now`."""
+        now = self._update(now)
+        for value in data:
+            self._feed(value, now)
+
+    def due_output(self, now: float) -> bytes:
+        self._update(now)
+        return self._tx.due(now)
+
+    def next_wakeup(self, now: float) -> float | None:
+        """The next instant something happens by itself (a byte due, a slew end, a point due)."""
+        self._update(now)
+        times = [self._tx.next_due_s(), self._next_internal_s()]
+        pending = [t for t in times if t is not None]
+        return min(pending) if pending else None
+
+    # -- ground truth ---------------------------------------------------------------------------
+
+    def state(self, now: float) -> SatelState:
+        now = self._update(now)
+        az, el, slew = self._az, self._el, self._slew
+        flags = {
+            "motion_enabled": self._motion_enabled,
+            "slewing": slew is not None,
+            "corrupted": self._corrupted,
+        }
+        return SatelState(
+            time_s=now,
+            az_deg=az.position_deg,
+            el_deg=el.position_deg,
+            is_moving=az.is_moving or el.is_moving,
+            is_jammed=az.is_jammed or el.is_jammed,
+            in_brake_delay=False,
+            target_az_deg=slew.az_deg if slew else az.target_deg,
+            target_el_deg=slew.el_deg if slew else el.target_deg,
+            driver=az.driver or el.driver,
+            options=flags,
+            controller_time=self._clock.text(now),
+            stored_points=tuple(self._memory),
+            misuse_count=len(self.frames(Outcome.MISUSE)),
+            **flags,
+        )
+
+    @property
+    def log(self) -> list[LoggedFrame]:
+        return self._log
+
+    @property
+    def events(self) -> list[MotionEvent]:
+        return self._events
+
+    def frames(self, *outcomes: str) -> list[LoggedFrame]:
+        """Logged frames, optionally only those with one of `outcomes`."""
+        wanted = set(outcomes)
+        return [f for f in self._log if not wanted or f.outcome in wanted]
+
+    def misuse_frames(self) -> list[LoggedFrame]:
+        """Bytes that arrived while the controller slewed (a client should send none)."""
+        return self.frames(Outcome.MISUSE)
+
+    # -- front panel and faults -----------------------------------------------------------------
+
+    def power_cycle(self, now: float) -> None:
+        self._reset(self._update(now), "power off")
+
+    def press_brake(self, now: float) -> bool:
+        """No brake on a SatEL: the box's stop acts like `s`. True if something was turning."""
+        now = self._update(now)
+        return self._stop(now, "panel stop")
+
+    def manual_rotate(self, az_deg: float, now: float, *, el_deg: float | None = None) -> None:
+        """Turn the rotors by hand (panel driver); a slew in progress ends as if stopped."""
+        if not 0.0 <= az_deg <= 360.0 or (el_deg is not None and not 0.0 <= el_deg <= 90.0):
+            raise ValueError(f"manual_rotate outside 0..360 / 0..90: {az_deg}, {el_deg}")
+        now = self._update(now)
+        if self._slew is not None:
+            self._end_slew(now, "panel override", report=self.report_on_stop)
+        self._az.manual_move(az_deg, now)
+        if el_deg is not None:
+            self._el.manual_move(el_deg, now)
+        self._event(now, "move", f"panel to {az_deg:g} {el_deg}")
+
+    def jam(self, now: float) -> None:
+        """Both rotors stick: motors may run, positions stay, a slew never ends."""
+        now = self._update(now)
+        self._az.jam(now)
+        self._el.jam(now)
+        self._event(now, "jammed")
+
+    def unjam(self, now: float) -> None:
+        now = self._update(now)
+        self._az.unjam(now)
+        self._el.unjam(now)
+        self._event(now, "unjammed")
+
+    # -- time -----------------------------------------------------------------------------------
+
+    def _next_internal_s(self) -> float | None:
+        """The next slew end, or (when no slew runs) the next stored point due."""
+        slew = self._slew
+        if slew is not None:
+            moving = [axis for axis in (self._az, self._el) if axis.is_moving]
+            arrivals = [axis.arrival_time_s() for axis in moving]
+            if any(t is None for t in arrivals):
+                return None  # jammed: never arrives
+            return max([t for t in arrivals if t is not None], default=self._now_s)
+        if self._memory:
+            return self._clock.instant_s(self._memory[0].when)
+        return None
+
+    def _update(self, now: float) -> float:
+        """Play every internal event up to `now` in time order (rule 1)."""
+        now = max(now, self._now_s)
+        while (due_s := self._next_internal_s()) is not None and due_s <= now:
+            at_s = max(due_s, self._now_s)
+            self._advance_axes(at_s)
+            self._now_s = at_s
+            if self._slew is not None:
+                self._end_slew(at_s, "arrived", report=True)
+            else:
+                self._fire_points(at_s)
+        self._advance_axes(now)
+        self._now_s = now
+        return now
+
+    def _advance_axes(self, now: float) -> None:
+        for name, axis in (("az", self._az), ("el", self._el)):
+            if axis.advance(now) is not None and self._slew is None:
+                self._event(now, "arrived", name)
+
+    def _fire_points(self, now: float) -> None:
+        due = [p for p in self._memory if self._clock.instant_s(p.when) <= now]
+        del self._memory[: len(due)]
+        point = due[-1]
+        if self._motion_enabled:
+            self._start_slew(DRIVER_EPHEMERIS, point.az_deg, point.el_deg, now)
+        else:
+            self._event(now, "point skipped", f"motion disabled: {point}")
+
+    # -- motion ---------------------------------------------------------------------------------
+
+    def _start_slew(self, kind: str, az_deg: float, el_deg: float, now: float) -> None:
+        slew = _Slew(kind, self._az.clamp(az_deg), self._el.clamp(el_deg))
+        self._slew = slew
+        self._az.start_move(slew.az_deg, now, driver=kind)
+        self._el.start_move(slew.el_deg, now, driver=kind)
+        self._event(now, "move", f"{kind} to {slew.az_deg:g} {slew.el_deg:g}")
+        if not (self._az.is_moving or self._el.is_moving):
+            self._end_slew(now, "arrived", report=True)
+
+    def _end_slew(self, now: float, reason: str, *, report: bool) -> None:
+        slew, self._slew = self._slew, None
+        for axis in (self._az, self._el):
+            axis.stop(now)
+        self._event(now, "stopped" if reason != "arrived" else reason, reason)
+        if slew is not None and slew.kind == DRIVER_COMMAND and report:
+            self._send(self._status_block(now), now)
+
+    def _stop(self, now: float, reason: str) -> bool:
+        """`s`: rotors stop (a `p` slew reports, rule 4), automatic motion is disabled."""
+        self._motion_enabled = False
+        if self._slew is not None:
+            self._end_slew(now, reason, report=self.report_on_stop)
+            return True
+        moving = [axis.stop(now) for axis in (self._az, self._el)]
+        if any(moving):
+            self._event(now, "stopped", reason)
+        return any(moving)
+
+    def _reset(self, now: float, reason: str) -> None:
+        if self._slew is not None:
+            self._end_slew(now, reason, report=False)
+        if any([axis.stop(now) for axis in (self._az, self._el)]):
+            self._event(now, "stopped", reason)
+        self._motion_enabled = self._corrupted = False
+        self._line, self._swallow_lf, self._after_c = None, False, False
+        self._tx.clear()
+        self._clock.reset(now)
+        self._memory.clear()
+        self._event(now, "power on")
+
+    # -- input ----------------------------------------------------------------------------------
+
+    def _feed(self, value: int, now: float) -> None:
+        swallow, self._swallow_lf = self._swallow_lf, False
+        after_c, self._after_c = self._after_c, False
+        if swallow and value == LF:
+            return
+        letter = chr(value).lower() if value < 0x80 else ""
+        if self._slew is not None:
+            if letter == "s":
+                self._stop(now, "serial stop")
+                self._record(value, Outcome.STOP, now)
+            elif letter == "*":
+                self._reset(now, "reset")
+                self._record(value, Outcome.RESET, now)
+            else:
+                self._misuse(value, now)
+            return
+        if self._line is not None:
+            if value in (CR, LF):
+                line, self._line = bytes(self._line) + bytes([value]), None
+                self._swallow_lf = value == CR
+                self._dispatch_line(line, now)
+            elif len(self._line) <= MAX_LINE_BYTES:
+                self._line.append(value)
+            return
+        if value in (CR, LF):
+            return
+        if after_c and value == ord("x"):
+            self._log.append(LoggedFrame(now, b"cx", Outcome.IGNORED_CX.value))
+        elif letter in ("p", "t", "2"):
+            self._line = bytearray([value])
+        else:
+            self._single(value, letter, now)
+
+    def _single(self, value: int, letter: str, now: float) -> None:
+        outcome = Outcome.INVALID
+        if letter == "?":
+            self._send_line(b"SatEL", now)
+            outcome = Outcome.IDENTIFY
+        elif letter == "z":
+            self._send(self._status_block(now), now)
+            outcome = Outcome.STATUS
+        elif letter == "g":
+            outcome = Outcome.IGNORED_CORRUPTED if self._corrupted else Outcome.MOTION_ENABLED
+            self._motion_enabled = not self._corrupted
+        elif letter == "s":
+            self._stop(now, "serial stop")
+            outcome = Outcome.STOP
+        elif letter == "*":
+            self._reset(now, "reset")
+            outcome = Outcome.RESET
+        elif letter == "x":
+            self._memory.clear()
+            outcome = Outcome.MEMORY_CLEARED
+        elif letter in _JOGS:
+            axis_name, end_deg = _JOGS[letter]
+            axis = self._az if axis_name == "az" else self._el
+            axis.start_move(end_deg, now, driver=DRIVER_JOG)
+            self._event(now, "move", f"jog {letter}")
+            outcome = Outcome.JOG
+        elif letter == "c":
+            self._after_c = value == ord("c")
+            outcome = Outcome.CALIBRATE
+        self._record(value, outcome, now)
+
+    def _dispatch_line(self, line: bytes, now: float) -> None:
+        body = line[:-1]
+        outcome = Outcome.INVALID
+        if (point := _POINT_RE.fullmatch(body)) is not None:
+            if self._corrupted:
+                outcome = Outcome.IGNORED_CORRUPTED
+            elif not self._motion_enabled:
+                outcome = Outcome.IGNORED_MOTION_DISABLED
+            else:
+                outcome = Outcome.SLEW
+                self._start_slew(DRIVER_COMMAND, int(point[1]), int(point[2]), now)
+        elif body in (b"t", b"T"):
+            self._send_line(self._clock.text(now).encode("ascii"), now)
+            outcome = Outcome.TIME_READ
+        elif (m := _SET_TIME_RE.fullmatch(body)) and (when := _parse_time(m.groups())):
+            self._clock.set(when, now)
+            outcome = Outcome.TIME_SET
+        elif (m := _STORE_RE.fullmatch(body)) and (when := _parse_time(m.groups()[:6])):
+            if len(self._memory) >= self.memory_limit:
+                outcome = Outcome.IGNORED_MEMORY_FULL
+            else:
+                point_in = StoredPoint(when, int(m[7]), int(m[8]))
+                self._memory.append(point_in)
+                self._memory.sort(key=lambda p: p.when)
+                outcome = Outcome.POINT_STORED
+        self._log.append(LoggedFrame(now, line, outcome.value))
+
+    def _misuse(self, value: int, now: float) -> None:
+        self._record(value, Outcome.MISUSE, now)
+        if self.corrupt_on_misuse and not self._corrupted:
+            self._corrupted = True
+            self._motion_enabled = False
+            self._end_slew(now, "corrupted by misuse", report=False)
+
+    # -- output ---------------------------------------------------------------------------------
+
+    def _status_block(self, now: float) -> bytes:
+        az, el = (
+            _whole_deg(self._az.position_deg_at(now)),
+            _whole_deg(self._el.position_deg_at(now)),
+        )
+        lines = [
+            "Motion ENABLED" if self._motion_enabled else "Motion DISABLED",
+            "Mode 0 - azimuth break at NORTH",
+            f"Time: {self._clock.text(now)}",
+            f"Azimuth = {az:03d}     Absolute = {az:03d}",
+            f"Elevation = {el:03d}",
+            "",
+            f"Number of stored positions: {len(self._memory):02d}",
+            *[""] * self.trailing_blank_lines,
+        ]
+        return b"".join(line.encode("ascii") + self.line_ending for line in lines)
+
+    def _send_line(self, text: bytes, now: float) -> None:
+        self._send(text + self.line_ending, now)
+
+    def _send(self, data: bytes, now: float) -> None:
+        self._tx.send(data, now)
+
+    def _record(self, value: int, outcome: Outcome, now: float) -> None:
+        self._log.append(LoggedFrame(now, bytes([value]), outcome.value))
+
+    def _event(self, time_s: float, kind: str, detail: str = "") -> None:
+        el = self._el.position_deg_at(time_s)
+        self._events.append(
+            MotionEvent(
+                time_s, kind, self._az.position_deg_at(time_s), f"{detail} el={el:g}".strip()
+            )
+        )

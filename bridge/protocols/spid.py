@@ -1,0 +1,215 @@
+"""SPID Rot2Prog, Rot1Prog and MD-01/02 (in ROT2 mode) az/el controllers: the codec.
+
+Device: Alfa SPID controllers for az/el rotators (satellite, EME). 8N1, no flow control; Rot2Prog
+600 baud, Rot1Prog 1200, MD-01/02 whatever the controller is set to. Binary frames.
+Sources: shared/protocols/spid.md (Hamlib 4.5.4 spid.c on the wire, the rot2prog PyPI package)
+and shared/seeds/rot2prog-pypi-page.txt.
+
+Frames we send, 13 bytes: ``57 H1 H2 H3 H4 PH V1 V2 V3 V4 PV K 20`` with ASCII digits;
+K = 0x0F stop, 0x1F status, 0x2F set. For stop and status every byte but S, K and END is 0x00.
+Replies, 12 bytes (Rot1Prog: 5): ``57 H1 H2 H3 H4 PH V1 V2 V3 V4 PV 20`` with RAW digits 0..9:
+az = 100*H1 + 10*H2 + H3 + H4/10 - 360, el likewise; PH/PV = pulses per degree (1, 2, 4, 10).
+
+Rules:
+1. Set: pulses = floor(PH * (360 + angle)) as four ASCII digits (Hamlib truncates the same way,
+   so a target snaps down to the controller's grid); Rot1Prog: three digits of 360 + az, then
+   ASCII '0' and six zero bytes. The resolution is learned from status replies; without one,
+   ``encode_target`` refuses (a guessed resolution would point the antenna elsewhere). The
+   engine sends targets only after a reading, so this never bites in practice.
+2. Stop and status are answered with a position frame; a set is answered only by an MD-01.
+   ``awaiting_reply`` says whether a frame is still owed.
+3. A reply frame starts with 0x57, ends with 0x20, carries raw digits (0..9) and a known
+   resolution; anything else is junk and the parser resynchronises on the next 0x57. MD-01 debug
+   lines (``<digits>: text`` CR LF) are skipped whole, never read as a position.
+4. Only frames that answer something we sent become readings.
+"""
+
+from __future__ import annotations
+
+import math
+
+from bridge.protocols.base import (
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+)
+
+START, END = 0x57, 0x20
+K_STOP, K_STATUS, K_SET = 0x0F, 0x1F, 0x2F
+RESOLUTIONS = (1, 2, 4, 10)
+_MAX_DEBUG_LINE = 200
+
+
+def _frame(k: int, body: bytes = bytes(10)) -> bytes:
+    return bytes([START]) + body + bytes([k, END])
+
+
+class SpidCodec:
+    def __init__(self, variant: str = "rot2prog") -> None:
+        if variant not in ("rot2prog", "rot1prog", "md01"):
+            raise ValueError(f"unknown SPID variant {variant!r}")
+        self.variant = variant
+        self._reply_len = 5 if variant == "rot1prog" else 12
+        self.resolution: int | None = None  # pulses per degree, learned from replies
+        self._owed = 0  # replies still owed by the controller
+        self._buf = bytearray()
+
+    # -- encoding -------------------------------------------------------------------------
+    def encode_query(self) -> bytes:
+        self._owed += 1
+        return _frame(K_STATUS)
+
+    def encode_stop(self) -> bytes:
+        self._owed += 1
+        return _frame(K_STOP)
+
+    def encode_version(self) -> None:
+        return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError("SPID controllers have no options")
+
+    def expire_query(self) -> None:
+        self._owed = 0
+
+    def awaiting_reply(self) -> bool:
+        return self._owed > 0
+
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        if self.variant == "rot1prog":
+            return math.floor(360 + az_deg) - 360.0, None
+        ph = self._need_resolution()
+        az = math.floor(ph * (360 + az_deg)) / ph - 360
+        el = None if el_deg is None else math.floor(ph * (360 + el_deg)) / ph - 360
+        return az, el
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        if self.variant == "rot1prog":
+            h = math.floor(360 + az_deg)
+            if not 0 <= h <= 999:
+                raise ValueError(f"azimuth {az_deg} outside the frame's range")
+            body = b"%03d" % h + b"0" + bytes(6)
+            return [_frame(K_SET, body)]
+        ph = self._need_resolution()
+        h = math.floor(ph * (360 + az_deg))
+        v = math.floor(ph * (360 + (el_deg or 0.0)))
+        if not (0 <= h <= 9999 and 0 <= v <= 9999):
+            raise ValueError(f"target {az_deg}/{el_deg} outside the frame's range")
+        body = b"%04d" % h + bytes([ph]) + b"%04d" % v + bytes([ph])
+        if self.variant == "md01":
+            self._owed += 1  # the MD-01 answers a set with its position
+        return [_frame(K_SET, body)]
+
+    def _need_resolution(self) -> int:
+        if self.resolution is None:
+            raise ValueError("controller resolution not known yet (no status reply)")
+        return self.resolution
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        buf = self._buf
+        junk = bytearray()
+        i = 0
+        while i < len(buf):
+            b = buf[i]
+            if b == START:
+                if len(buf) - i < self._reply_len:
+                    break
+                frame = bytes(buf[i : i + self._reply_len])
+                reply = self._decode(frame)
+                if reply is not None:
+                    if junk:
+                        out.append(JunkReply(bytes(junk), "not a reply frame"))
+                        junk.clear()
+                    out.append(reply)
+                    i += self._reply_len
+                    continue
+            elif 0x30 <= b <= 0x39:  # possibly an MD-01 debug line "<digits>: text\r\n"
+                end = buf.find(b"\n", i)
+                colon = buf.find(b":", i, i + 12)
+                if colon == -1 and buf[i:].isdigit() and len(buf) - i < 12:
+                    break  # digits so far: the colon may still come
+                if colon != -1 and buf[i:colon].isdigit():
+                    if end == -1:
+                        if len(buf) - i < _MAX_DEBUG_LINE:
+                            break  # wait for the rest of the line
+                        end = i + _MAX_DEBUG_LINE - 1
+                    if junk:
+                        out.append(JunkReply(bytes(junk), "not a reply frame"))
+                        junk.clear()
+                    out.append(JunkReply(bytes(buf[i : end + 1]), "controller debug line"))
+                    i = end + 1
+                    continue
+            junk.append(b)
+            i += 1
+        del buf[:i]
+        if junk:
+            out.append(JunkReply(bytes(junk), "not a reply frame"))
+        return out
+
+    def _decode(self, frame: bytes) -> Reply | None:
+        if frame[-1] != END:
+            return None
+        if self.variant == "rot1prog":
+            digits = frame[1:4]
+            if any(d > 9 for d in digits):
+                return None
+            az = 100 * digits[0] + 10 * digits[1] + digits[2] - 360
+            return self._answer(frame, float(az), None)
+        h, ph, v, pv = frame[1:5], frame[5], frame[6:10], frame[10]
+        if any(d > 9 for d in h + v) or ph not in RESOLUTIONS or pv not in RESOLUTIONS:
+            return None
+        az = 100 * h[0] + 10 * h[1] + h[2] + h[3] / 10 - 360
+        el = 100 * v[0] + 10 * v[1] + v[2] + v[3] / 10 - 360
+        self.resolution = ph
+        return self._answer(frame, round(az, 1), round(el, 1))
+
+    def _answer(self, frame: bytes, az: float, el: float | None) -> Reply:
+        if self._owed <= 0:
+            return JunkReply(frame, "position frame nobody asked for")
+        self._owed -= 1
+        return PositionReply(az, el)
+
+
+def _spec(name: str, display: str, **kw: object) -> ModelSpec:
+    baud = int(kw.pop("baud"))  # type: ignore[call-overload]
+    frame_s = 25 * 10 / baud  # one exchange: 13-byte command + 12-byte reply
+    defaults: dict[str, object] = dict(
+        family="spid",
+        manufacturer="SPID (Alfa Radio)",
+        baud=baud,
+        has_elevation=True,
+        retarget=RetargetPolicy.DIRECT,
+        az_min_deg=-180.0,
+        az_max_deg=540.0,
+        el_min_deg=-20.0,
+        el_max_deg=210.0,
+        az_wraps=False,
+        full_duplex=False,
+        reply_timeout_s=frame_s + 0.3,
+        noise_deg=0.0,
+        nominal_speed_deg_s=1.0,
+    )
+    defaults.update(kw)
+    return ModelSpec(name=name, display_name=display, **defaults)  # type: ignore[arg-type]
+
+
+MODELS: dict[str, ModelSpec] = {
+    "rot2prog": _spec(
+        "rot2prog", "Rot2Prog", baud=600, codec_factory=lambda: SpidCodec("rot2prog")
+    ),
+    "rot1prog": _spec(
+        "rot1prog",
+        "Rot1Prog",
+        baud=1200,
+        has_elevation=False,
+        el_min_deg=0.0,
+        el_max_deg=0.0,
+        codec_factory=lambda: SpidCodec("rot1prog"),
+    ),
+    "md01": _spec("md01", "MD-01/02", baud=115200, codec_factory=lambda: SpidCodec("md01")),
+}
