@@ -10,13 +10,20 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/option/jam/state",
         "rotor/bridge/state",
     )
-    assert t.subscriptions() == ["rotor/target", "rotor/stop", "rotor/lock", "rotor/option/+"]
+    assert t.subscriptions() == [
+        "rotor/target",
+        "rotor/target/elevation",
+        "rotor/stop",
+        "rotor/lock",
+        "rotor/option/+",
+    ]
 
 
 def test_routing_inbound_topics() -> None:
     t = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"})
     assert t.route("rotor/a/target") == ("a", "target", None)
     assert t.route("rotor/b/stop") == ("b", "stop", None)
+    assert t.route("rotor/b/target/elevation") == ("b", "target_elevation", None)
     assert t.route("rotor/b/option/jam") == ("b", "option", "jam")
     assert t.route("rotor/b/option/jam/state") is None
     assert t.route("rotor/b/lock/state") is None
