@@ -30,23 +30,21 @@ Rules:
 from __future__ import annotations
 
 import logging
-import re
 import select
 import threading
 import time
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import serial
 
 from bridge.engine import motion as mo
+from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.engine.port import PortError, open_port
 from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target, describe_command
 from bridge.protocols.base import (
     UNTRUSTED,
-    Codec,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -56,12 +54,8 @@ from bridge.protocols.base import (
 log = logging.getLogger(__name__)
 
 POWER_ON_BYTE = 0xE0
-JUNK_QUIET_S = 0.05
 OPTIONS_REFRESH_S = 60.0
 STOP_TRIES_BEFORE_ERROR = 3
-# what a healthy Rotor-EZ emits besides replies: the power-on byte, the banner after an invalid
-# command (e.g. a stop while idle) and the version text
-_KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?")
 
 
 @dataclass(frozen=True)
@@ -78,26 +72,6 @@ class WorkerConfig:
     reconnect_min_s: float = 0.5
     reconnect_max_s: float = 10.0
     junk_report_interval_s: float = 30.0
-
-
-@dataclass
-class _Link:
-    """Per-connection state; a fresh one for every open."""
-
-    port: serial.Serial
-    codec: Codec
-    opened_t: float
-    query_deadline: float | None = None
-    next_poll: float = 0.0
-    last_reply_t: float | None = None
-    answering: bool = False
-    outbox: deque[tuple[float, bytes]] = field(default_factory=deque)
-    options_due: set[str] = field(default_factory=set)
-    silence_reported: bool = False
-    stop_due: bool = False
-    options_sent_t: float = 0.0
-    junk: bytearray = field(default_factory=bytearray)  # held until the line goes quiet
-    junk_t: float = 0.0
 
 
 class Worker:
@@ -135,7 +109,7 @@ class Worker:
         self._status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"rotator-{cfg.rotator_id}")
-        self._link: _Link | None = None
+        self._link: Link | None = None
         self._junk_reported_t = -1e18
         self._stop_tries = 0
         self._backoff_s = cfg.reconnect_min_s
@@ -215,26 +189,26 @@ class Worker:
     def _serve(self, port: serial.Serial) -> None:
         spec = self.cfg.spec
         now = self._clock()
-        link = _Link(port=port, codec=spec.codec_factory(), opened_t=now, next_poll=now)
+        link = Link(port, spec.codec_factory(), spec, now, self._clock, self.cfg.rotator_id)
         self._link = link
         self._motion = mo.link_up(self._motion, self.cfg.motion, now)
         link.answering = not spec.can_report_position
         if link.answering:
             link.options_due = set(self._options)
-        version_query = link.codec.encode_version() if spec.has_version else None
-        if version_query:
-            self._write(version_query)
+        for frame in link.codec.encode_connect(self._wall()):
+            link.write(frame)
         self._emit_status()
         while not self._stopping.is_set():
             now = self._clock()
             batch = self._mailbox.take()
             if batch:
                 self._apply(batch, now)
-            self._expire_reply(now)
+            link.expire_reply(now)
             self._flush_stop(now)
-            self._flush_outbox(now)
-            if link.junk and now - link.junk_t >= JUNK_QUIET_S:
-                self._report_junk(now)
+            link.flush_outbox(now)
+            junk = link.quiet_junk(now)
+            if junk is not None:
+                self._report_junk(*junk, now)
             self._advance(now)  # commands go ahead of the next poll
             self._poll_if_due(now)
             self._emit_status()
@@ -289,15 +263,11 @@ class Worker:
     def _flush_stop(self, now: float) -> None:
         """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
         link = self._link
-        if link is None or not link.stop_due or not self._line_free():
+        if link is None or not link.stop_due or not link.free(for_stop=True):
             return
         link.stop_due = False
-        self._write(link.codec.encode_stop())
+        link.write(link.codec.encode_stop())
         self._motion = mo.stop_sent(self._motion, self.cfg.motion, now)
-
-    def _line_free(self) -> bool:
-        link = self._link
-        return link is not None and (self.cfg.spec.full_duplex or link.query_deadline is None)
 
     def _drop_pending(self, why: str | None) -> None:
         if self._pending is not None and why:
@@ -307,37 +277,12 @@ class Worker:
         self._pending = None
 
     # -- outbound -------------------------------------------------------------------------------
-    def _write(self, frame: bytes) -> None:
-        link = self._link
-        assert link is not None
-        link.port.write(frame)
-        log.debug("%s: -> %r", self.cfg.rotator_id, frame)
-        if link.query_deadline is None and link.codec.awaiting_reply():
-            link.query_deadline = self._clock() + self.cfg.spec.reply_timeout_s
-
-    def _flush_outbox(self, now: float) -> None:
-        link = self._link
-        while link is not None and link.outbox and link.outbox[0][0] <= now:
-            self._write(link.outbox.popleft()[1])
-
-    def _expire_reply(self, now: float) -> None:
-        link = self._link
-        if link is not None and link.query_deadline is not None and now >= link.query_deadline:
-            link.codec.expire_query()
-            link.query_deadline = None
-
     def _poll_if_due(self, now: float) -> None:
         link = self._link
         if link is None or not self.cfg.spec.can_report_position:
             return
-        if link.query_deadline is not None or link.stop_due:
-            return  # one exchange at a time; a stop goes first
         self._check_silence(now)
-        if now >= link.next_poll:
-            query = link.codec.encode_query()
-            if query:
-                self._write(query)
-                link.next_poll = now + self._poll_interval()
+        link.poll(now, self._poll_interval())
 
     def _poll_interval(self) -> float:
         busy = self._motion.state is MotionState.MOVING or self._pending is not None
@@ -347,7 +292,7 @@ class Worker:
         link = self._link
         assert link is not None
         timeout_s = self.cfg.silence_timeout_s
-        if link.answering and now - (link.last_reply_t or link.opened_t) >= timeout_s:
+        if link.answering and link.silent_for(now) >= timeout_s:
             link.answering = False
             self._motion = mo.link_down(self._motion)
             self._error(
@@ -377,14 +322,14 @@ class Worker:
         idle = self._motion.state is MotionState.IDLE
         if idle and self._options and now - link.options_sent_t >= OPTIONS_REFRESH_S:
             link.options_due = set(self._options)
-        if link.options_due and idle and self._pending is None and self._line_free():
+        if link.options_due and idle and self._pending is None and link.free():
             for name in sorted(link.options_due):
                 try:
                     frame = link.codec.encode_option(name, self._options[name])
                 except (KeyError, ValueError):
                     log.warning("%s: option %r not supported; skipped", self.cfg.rotator_id, name)
                     continue
-                self._write(frame)
+                link.write(frame)
             link.options_due.clear()
             link.options_sent_t = now
 
@@ -410,7 +355,7 @@ class Worker:
     def _try_target(self, now: float) -> None:
         link = self._link
         assert link is not None and self._pending is not None
-        if not self._line_free() or link.stop_due:
+        if not link.free() or link.stop_due:
             return  # half-duplex line busy with a reply: right after it
         m, mcfg = self._motion, self.cfg.motion
         az, el = self._resolve(self._pending)
@@ -442,10 +387,7 @@ class Worker:
             log.info("%s: turning; stopping before the new target %s", self.cfg.rotator_id, wire)
             self._send_stop(now)
         elif plan is mo.Plan.SEND:
-            frames = link.codec.encode_target(az, el)
-            self._write(frames[0])
-            for i, frame in enumerate(frames[1:], start=1):
-                link.outbox.append((now + i * self.cfg.spec.inter_frame_gap_s, frame))
+            link.send(link.codec.encode_target(az, el), now)
             self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
             self._last_source = self._pending.source.value
             self._pending = None
@@ -475,12 +417,7 @@ class Worker:
         link = self._link
         times = [now + 1.0]
         if link is not None:
-            if link.outbox:
-                times.append(link.outbox[0][0])
-            if link.junk:
-                times.append(link.junk_t + JUNK_QUIET_S)
-            if self.cfg.spec.can_report_position:
-                times.append(link.query_deadline or link.next_poll)
+            times += link.wakeups()
         deadline = mo.next_deadline(self._motion, self.cfg.motion, now)
         if deadline is not None:
             times.append(deadline)
@@ -493,9 +430,7 @@ class Worker:
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
         for reply in link.codec.feed(data):
             if isinstance(reply, PositionReply):
-                if not link.codec.awaiting_reply():
-                    link.query_deadline = None
-                link.last_reply_t = now
+                link.got_reading(now)
                 if not link.answering:
                     link.answering = True
                     link.options_due = set(self._options)
@@ -512,8 +447,7 @@ class Worker:
             elif isinstance(reply, JunkReply):
                 self._junk(reply, now)
                 if reply.reason == UNTRUSTED:
-                    link.query_deadline = None
-                    link.next_poll = now  # ask again at once
+                    link.ask_again(now)
 
     def _publishable(self, az_deg: float, el_deg: float | None) -> None:
         moving = self._motion.state is MotionState.MOVING
@@ -536,16 +470,9 @@ class Worker:
         if POWER_ON_BYTE in reply.data:
             log.info("%s: power-on byte seen; options will be re-applied", self.cfg.rotator_id)
             link.options_due = set(self._options)
-        if len(link.junk) < 256:
-            link.junk += reply.data[: 256 - len(link.junk)]
-        link.junk_t = now
+        link.add_junk(reply.data, now)
 
-    def _report_junk(self, now: float) -> None:
-        """Judge junk once the line is quiet, so a banner paced byte by byte is seen whole."""
-        link = self._link
-        assert link is not None
-        data, link.junk = bytes(link.junk), bytearray()
-        harmless = _KNOWN_JUNK.sub(b"", data) == b""
+    def _report_junk(self, data: bytes, harmless: bool, now: float) -> None:
         log.log(
             logging.INFO if harmless else logging.WARNING,
             "%s: ignored %d bytes that are no reply: %r",
@@ -572,7 +499,7 @@ class Worker:
                 )
                 if self._link is not None:
                     self._link.outbox.clear()
-                    self._write(self._link.codec.encode_stop())
+                    self._link.write(self._link.codec.encode_stop())
             else:
                 log.info(
                     "%s: %s at %s", self.cfg.rotator_id, event.value, self._motion.position_deg

@@ -62,6 +62,18 @@ class Codec(Protocol):
     def encode_option(self, name: str, enabled: bool) -> bytes: ...
     def feed(self, data: bytes) -> list[Reply]: ...
     def awaiting_reply(self) -> bool: ...
+    def reply_timeout_s(self, default_s: float) -> float:
+        """How long the reply now owed may take (a slew report takes the whole slew)."""
+        ...
+
+    def harmless(self, junk: bytes) -> bool:
+        """Is this non-reply text something a healthy controller emits (a banner, a log line)?"""
+        ...
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        """Frames to send right after the port opens (identify, version, clock, enable)."""
+        ...
+
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         """The position the controller will actually be sent (after its rounding)."""
         ...
@@ -94,6 +106,9 @@ class ModelSpec:
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
     full_duplex: bool = True  # may a command be written while a reply is still coming?
+    stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
+    reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
+    nominal_el_speed_deg_s: float = 1.0
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     nominal_speed_deg_s: float = 6.0  # used to estimate travel when there is no feedback
     option_labels: dict[str, str] = field(default_factory=dict)

@@ -56,6 +56,9 @@ OPTION_LABELS = {
 }
 
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
+# what a healthy board emits besides replies: the power-on byte, the banner after an invalid
+# command (a stop while idle) and the version text
+_KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?")
 _BOARD_BYTES = frozenset(b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ")
 _JUNK_WINDOW = 64  # bytes of recent junk kept to find a version banner torn across reads
 
@@ -92,6 +95,15 @@ class RotorEzCodec:
 
     def awaiting_reply(self) -> bool:
         return bool(self._queries_open)
+
+    def reply_timeout_s(self, default_s: float) -> float:
+        return default_s
+
+    def harmless(self, junk: bytes) -> bool:
+        return _KNOWN_JUNK.sub(b"", junk) == b""
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return [] if self._dcu1 else [b"V"]
 
     def encode_stop(self) -> bytes:
         return b"AS1;" if self._dcu1 else b";"

@@ -27,6 +27,7 @@ Rules:
 from __future__ import annotations
 
 import math
+import re
 
 from bridge.protocols.base import (
     JunkReply,
@@ -40,6 +41,7 @@ START, END = 0x57, 0x20
 K_STOP, K_STATUS, K_SET = 0x0F, 0x1F, 0x2F
 RESOLUTIONS = (1, 2, 4, 10)
 _MAX_DEBUG_LINE = 200
+_DEBUG_LINES = re.compile(rb"(\d+:[^\n]*\n)+")
 
 
 def _frame(k: int, body: bytes = bytes(10)) -> bytes:
@@ -76,6 +78,15 @@ class SpidCodec:
 
     def awaiting_reply(self) -> bool:
         return self._owed > 0
+
+    def reply_timeout_s(self, default_s: float) -> float:
+        return default_s
+
+    def harmless(self, junk: bytes) -> bool:
+        return bool(_DEBUG_LINES.fullmatch(junk))
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return []
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
         if self.variant == "rot1prog":
