@@ -90,6 +90,8 @@ class RotatorStatus:
     options: dict[str, bool] = field(default_factory=dict)
     last_error: str | None = None
     last_command_source: str | None = None
+    estimated: bool = False  # bearing/elevation estimated during a slew the controller is silent in
+    controller_time: str | None = None  # the controller's own clock (SatEL)
 
     @property
     def moving(self) -> bool:

@@ -22,6 +22,7 @@ from typing import Any
 from bridge.emulators.base import LoggedFrame, Responder, RotatorState
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez import RotorEZ
+from bridge.emulators.satel import SatEL
 from bridge.emulators.spid import Spid
 
 #: model name -> factory(**options, now=...) returning a responder.
@@ -32,6 +33,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "rot2prog": partial(Spid, "rot2prog"),
     "rot1prog": partial(Spid, "rot1prog"),
     "md01": partial(Spid, "md01"),
+    "satel": SatEL,
 }
 
 
@@ -73,6 +75,7 @@ __all__ = [
     "Responder",
     "RotatorState",
     "RotorEZ",
+    "SatEL",
     "Spid",
     "create",
     "start",

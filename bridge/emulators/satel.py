@@ -317,7 +317,7 @@ class SatEL:
         self._az.manual_move(az_deg, now)
         if el_deg is not None:
             self._el.manual_move(el_deg, now)
-        self._event(now, "move", f"panel to {az_deg:g} {el_deg}")
+        self._event(now, "move", f"panel to az {az_deg:g}, el {el_deg}")
 
     def jam(self, now: float) -> None:
         """Both rotors stick: motors may run, positions stay, a slew never ends."""
@@ -401,10 +401,10 @@ class SatEL:
         if self._slew is not None:
             self._end_slew(now, reason, report=self.report_on_stop)
             return True
-        moving = [axis.stop(now) for axis in (self._az, self._el)]
-        if any(moving):
+        stopped = any([axis.stop(now) for axis in (self._az, self._el)])  # stop both
+        if stopped:
             self._event(now, "stopped", reason)
-        return any(moving)
+        return stopped
 
     def _reset(self, now: float, reason: str) -> None:
         if self._slew is not None:
@@ -426,13 +426,9 @@ class SatEL:
         if swallow and value == LF:
             return
         letter = chr(value).lower() if value < 0x80 else ""
-        if self._slew is not None:
-            if letter == "s":
-                self._stop(now, "serial stop")
-                self._record(value, Outcome.STOP, now)
-            elif letter == "*":
-                self._reset(now, "reset")
-                self._record(value, Outcome.RESET, now)
+        if self._slew is not None:  # rule 2: only a stop or a reset gets through
+            if letter in ("s", "*"):
+                self._single(value, letter, now)
             else:
                 self._misuse(value, now)
             return

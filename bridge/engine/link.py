@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 from collections import deque
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import serial
 
@@ -29,6 +30,35 @@ log = logging.getLogger(__name__)
 
 JUNK_QUIET_S = 0.05
 _JUNK_KEEP = 256
+
+
+@dataclass(frozen=True)
+class Slew:
+    """A move on a controller that is silent until it ends: what we know to estimate it."""
+
+    start_t: float
+    from_az_deg: float | None
+    from_el_deg: float | None
+    to_az_deg: float
+    to_el_deg: float | None
+
+    def estimate(
+        self, now: float, az_speed_deg_s: float, el_speed_deg_s: float
+    ) -> tuple[float | None, float | None]:
+        """Where the rotor should be, in whole degrees, moving at the nominal speeds."""
+        dt = now - self.start_t
+        return (
+            _toward(self.from_az_deg, self.to_az_deg, az_speed_deg_s * dt),
+            _toward(self.from_el_deg, self.to_el_deg, el_speed_deg_s * dt),
+        )
+
+
+def _toward(start: float | None, end: float | None, step: float) -> float | None:
+    if start is None or end is None:
+        return end
+    if abs(end - start) <= step:
+        return end
+    return float(round(start + step * (1 if end > start else -1)))
 
 
 class Link:
@@ -56,6 +86,8 @@ class Link:
         self.options_due: set[str] = set()
         self.options_sent_t = 0.0
         self.outbox: deque[tuple[float, bytes]] = deque()
+        self.slew: Slew | None = None
+        self.enable_due = False
         self._junk = bytearray()
         self._junk_t = 0.0
 
@@ -83,10 +115,13 @@ class Link:
         return for_stop and self.spec.stop_interrupts
 
     # -- replies ------------------------------------------------------------------------------
-    def expire_reply(self, now: float) -> None:
+    def expire_reply(self, now: float) -> bool:
+        """Give up an owed reply whose deadline passed; True if one was given up."""
         if self.reply_deadline is not None and now >= self.reply_deadline:
             self.codec.expire_query()
             self.reply_deadline = None
+            return True
+        return False
 
     def got_reading(self, now: float) -> None:
         if not self.codec.awaiting_reply():

@@ -25,6 +25,11 @@ Rules:
 7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
    younger than one moving poll interval has shown the rotor idle: a front-panel move that began
    after the last poll must not be cut short.
+8. A controller that is silent while it moves (SatEL) is sent nothing but a stop until its
+   after-move report; meanwhile the motion machine is not fed stale data, the published
+   position is an estimate from the nominal speeds (marked ``estimated`` in the status), and a
+   new target stops the slew and is sent once the rotor is still (stop and redirect). A report
+   that says automatic motion is off gets it switched on again.
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from dataclasses import dataclass, replace
 import serial
 
 from bridge.engine import motion as mo
-from bridge.engine.link import Link
+from bridge.engine.link import Link, Slew
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.engine.port import PortError, open_port
 from bridge.model import ErrorEvent, MotionState, RotatorStatus, Target, describe_command
@@ -104,6 +109,7 @@ class Worker:
         self._published_el_deg: float | None = None
         self._published_el_dir = 0
         self._version: str | None = None
+        self._controller_time: str | None = None
         self._last_error: str | None = None
         self._last_source: str | None = None
         self._status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
@@ -203,7 +209,9 @@ class Worker:
             batch = self._mailbox.take()
             if batch:
                 self._apply(batch, now)
-            link.expire_reply(now)
+            if link.expire_reply(now) and link.slew is not None:
+                link.slew = None
+                self._error("serial", "no report after the slew; asking the controller again")
             self._flush_stop(now)
             link.flush_outbox(now)
             junk = link.quiet_junk(now)
@@ -292,6 +300,8 @@ class Worker:
         link = self._link
         assert link is not None
         timeout_s = self.cfg.silence_timeout_s
+        if link.reply_deadline is not None:
+            return  # a reply is owed and may still come (a slew report takes the whole slew)
         if link.answering and link.silent_for(now) >= timeout_s:
             link.answering = False
             self._motion = mo.link_down(self._motion)
@@ -311,11 +321,17 @@ class Worker:
 
     def _advance(self, now: float) -> None:
         """Time-driven motion, then whatever the pending target and options may do now."""
-        self._motion, events = mo.tick(self._motion, self.cfg.motion, now)
-        self._motion_events(events, now)
         link = self._link
+        if link is None or link.slew is None:  # no reports during a slew: nothing to judge
+            self._motion, events = mo.tick(self._motion, self.cfg.motion, now)
+            self._motion_events(events, now)
         if link is None or not link.answering:
             return
+        if link.enable_due and link.slew is None and link.free() and not link.stop_due:
+            enable = link.codec.encode_enable()
+            if enable:
+                link.write(enable)
+            link.enable_due = False
         self._verify_stop(now)
         if self._pending is not None:
             self._try_target(now)
@@ -355,8 +371,8 @@ class Worker:
     def _try_target(self, now: float) -> None:
         link = self._link
         assert link is not None and self._pending is not None
-        if not link.free() or link.stop_due:
-            return  # half-duplex line busy with a reply: right after it
+        if link.stop_due:
+            return  # the stop goes first
         m, mcfg = self._motion, self.cfg.motion
         az, el = self._resolve(self._pending)
         if az is None:
@@ -380,14 +396,19 @@ class Worker:
             self._pending = None
             return
         plan = mo.plan_target(m, mcfg, now)
-        if plan is mo.Plan.SEND and self._needs_fresh_reading(now):
-            link.next_poll = now  # ask first; the target follows the answer
-            return
         if plan is mo.Plan.STOP_FIRST:
             log.info("%s: turning; stopping before the new target %s", self.cfg.rotator_id, wire)
             self._send_stop(now)
-        elif plan is mo.Plan.SEND:
+            return
+        if plan is not mo.Plan.SEND or not link.free():
+            return  # braking, or a half-duplex line with a reply in flight: right after it
+        if self._needs_fresh_reading(now):
+            link.next_poll = now  # ask first; the target follows the answer
+            return
+        if plan is mo.Plan.SEND:
             link.send(link.codec.encode_target(az, el), now)
+            if not self.cfg.spec.reports_while_moving:
+                link.slew = Slew(now, m.position_deg, m.el_position_deg, wire[0], wire[1])
             self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
             self._last_source = self._pending.source.value
             self._pending = None
@@ -418,6 +439,8 @@ class Worker:
         times = [now + 1.0]
         if link is not None:
             times += link.wakeups()
+            if link.slew is not None:
+                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
         deadline = mo.next_deadline(self._motion, self.cfg.motion, now)
         if deadline is not None:
             times.append(deadline)
@@ -431,6 +454,11 @@ class Worker:
         for reply in link.codec.feed(data):
             if isinstance(reply, PositionReply):
                 link.got_reading(now)
+                link.slew = None
+                if reply.motion_enabled is False:
+                    link.enable_due = True
+                if reply.controller_time is not None:
+                    self._controller_time = reply.controller_time
                 if not link.answering:
                     link.answering = True
                     link.options_due = set(self._options)
@@ -523,11 +551,20 @@ class Worker:
             az, el = self._resolve(self._pending)
             target = link.codec.wire_target(az, el) if az is not None else target
         spec = self.cfg.spec
+        bearing, elevation = self._published_deg, self._published_el_deg
+        estimated = link is not None and link.slew is not None
+        if estimated:
+            assert link is not None and link.slew is not None
+            bearing, elevation = link.slew.estimate(
+                self._clock(), spec.nominal_speed_deg_s, spec.nominal_el_speed_deg_s
+            )
         status = replace(
             self._status,
             state=state,
-            bearing_deg=self._published_deg if spec.can_report_position else None,
-            elevation_deg=self._published_el_deg if spec.has_elevation else None,
+            bearing_deg=bearing if spec.can_report_position else None,
+            elevation_deg=elevation if spec.has_elevation else None,
+            estimated=estimated,
+            controller_time=self._controller_time,
             target_az_deg=target[0],
             target_el_deg=target[1] if spec.has_elevation else None,
             connected=link is not None,

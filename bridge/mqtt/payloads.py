@@ -119,6 +119,8 @@ def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) ->
     if has_elevation:
         doc["elevation"] = status.elevation_deg
         doc["target_elevation"] = status.target_el_deg
+    if status.controller_time is not None:
+        doc["controller_time"] = status.controller_time
     doc.update(
         state=status.state.value,
         moving=status.moving,
@@ -129,6 +131,7 @@ def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) ->
         options={k: v for k, v in sorted(status.options.items())},
         last_error=status.last_error,
         last_command_source=status.last_command_source,
+        estimated=status.estimated,
         time=datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds"),
     )
     return json.dumps(doc, separators=(",", ":"))

@@ -2,9 +2,10 @@
 
 from bridge.protocols.base import ModelSpec
 from bridge.protocols.rotorez import MODELS as _ROTOREZ
+from bridge.protocols.satel import MODELS as _SATEL
 from bridge.protocols.spid import MODELS as _SPID
 
-REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ, **_SPID}
+REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ, **_SPID, **_SATEL}
 
 
 def get_spec(name: str) -> ModelSpec:

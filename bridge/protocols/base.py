@@ -24,6 +24,8 @@ from typing import Protocol
 class PositionReply:
     az_deg: float
     el_deg: float | None = None
+    motion_enabled: bool | None = None  # controllers with an automatic-motion switch (SatEL)
+    controller_time: str | None = None  # the controller's own clock, as it prints it
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,10 @@ class Codec(Protocol):
 
     def harmless(self, junk: bytes) -> bool:
         """Is this non-reply text something a healthy controller emits (a banner, a log line)?"""
+        ...
+
+    def encode_enable(self) -> bytes | None:
+        """Switch automatic motion on (SatEL ``g``); None where there is no such switch."""
         ...
 
     def encode_connect(self, now_unix: float) -> list[bytes]:

@@ -102,6 +102,9 @@ class RotorEzCodec:
     def harmless(self, junk: bytes) -> bool:
         return _KNOWN_JUNK.sub(b"", junk) == b""
 
+    def encode_enable(self) -> None:
+        return None
+
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return [] if self._dcu1 else [b"V"]
 

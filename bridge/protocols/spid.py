@@ -85,6 +85,9 @@ class SpidCodec:
     def harmless(self, junk: bytes) -> bool:
         return bool(_DEBUG_LINES.fullmatch(junk))
 
+    def encode_enable(self) -> None:
+        return None
+
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return []
 

@@ -104,9 +104,7 @@ def test_2101_waits_out_the_slew_for_the_after_move_report(
     assert port.state().az_deg == 100.0 and not port.frames("misuse: input while slewing")
 
 
-def test_2101_default_report_is_read_across_sessions(
-    satel_port: SatelPort, rotctl: Rotctl
-) -> None:
+def test_2101_default_report_is_read_across_sessions(satel_port: SatelPort, rotctl: Rotctl) -> None:
     port = satel_port(**FAST)
     assert values(rotctl(port, "P", "200", "30")) == []
     assert values(rotctl(port, "p")) == ["200.00", "30.00"]

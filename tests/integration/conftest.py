@@ -31,6 +31,7 @@ FAST_BRIDGE = {
 
 # SPID: digital encoders (no jitter), no brake, a slow line (600 baud: 0.42 s per exchange)
 FAST_SPID = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0}
+FAST_SATEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0, "corrupt_on_misuse": True}
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -54,8 +55,9 @@ class Rig:
         self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
     ) -> EmulatedPort[Any]:
         link = self.tmp / f"serial-by-id-{rid}"
-        spid = model in ("rot2prog", "rot1prog", "md01")
-        emu_options = {**(FAST_SPID if spid else FAST_ROTOR), **(emu or {})}
+        spid = model in ("rot2prog", "rot1prog", "md01", "satel")
+        fast = FAST_SATEL if model == "satel" else FAST_SPID if spid else FAST_ROTOR
+        emu_options = {**fast, **(emu or {})}
         if model == "rotorcard":
             emu_options["brake_delay_s"] = 0.0  # Yaesu rotors have no brake
         port = emulators.start(model, link=str(link), **emu_options)

@@ -1,0 +1,229 @@
+"""SatEL (VE5FP-compatible) az/el controller: the codec.
+
+Device: a terminal-driven az/el controller. 9600 8N1, no flow control. Single-letter commands,
+no echo, either case; replies are text lines ending in CR LF (or LF). Sources: the SatEL manual's
+Appendix A (shared/seeds/satel-azel-manual-excerpt.txt) and shared/protocols/satel.md (Hamlib
+4.5.4 satel.c on the wire).
+
+Frames we send: ``s`` stop rotors and disable automatic motion; ``?`` identify (-> ``SatEL``);
+``tYYYY/MM/DD HH:MM:SS`` CR LF set the clock; ``g`` enable automatic motion; ``z`` status report;
+``p<az> <el>`` CR LF point (integers, no padding), answered by a status report when the move
+ends. Also ``*`` reset, ``x`` clear memory, ``2YYYY/MM/DD HH:MM:SS az el`` CR LF store a point.
+
+The status report (7 lines): ``Motion ENABLED|DISABLED``, ``Mode ...``, ``Time: ...``,
+``Azimuth = 000     Absolute = 000``, ``Elevation = 000``, an empty line,
+``Number of stored positions: 00`` (plus trailing empty lines).
+
+Rules:
+1. The controller does no input validation and can be put into a bad state by input while it
+   slews: after ``p`` nothing but a stop may be sent until the after-move report has come
+   (ModelSpec: half duplex, ``stop_interrupts``, ``reports_while_moving`` False).
+2. Connecting starts with ``s``, the one input allowed at any time: the bridge may have been
+   restarted in the middle of a slew it knows nothing about. Then identify, set the clock from
+   the host (UTC, so stored ephemeris points line up), enable motion, ask for a report.
+3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
+   line does not parse is junk, not a reading. A report is complete at its stored-positions line.
+4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
+   sent while it is disabled is silently ignored.
+5. Each ``z`` and ``p`` owes one report; ``p``'s may take a whole slew (``SLEW_TIMEOUT_S``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+
+from bridge.protocols.base import (
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+    VersionReply,
+)
+
+SLEW_TIMEOUT_S = 120.0  # a full 360 + 90 slew on a slow rotor, with margin
+_MOTION = re.compile(r"^Motion\s+(ENABLED|DISABLED)\b", re.IGNORECASE)
+_TIME = re.compile(r"^Time:\s*(\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2})")
+_AZ = re.compile(r"^Azimuth\s*=\s*(\d{1,3})\b")
+_EL = re.compile(r"^Elevation\s*=\s*(\d{1,3})\b")
+_STORED = re.compile(r"^Number of stored positions:\s*(\d+)\s*$")
+_BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
+_MAX_LINE = 160
+
+
+class SatelCodec:
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._owed: list[str] = []  # "report" | "slew" | "ident", oldest first
+        self._block: dict[str, str] | None = None
+
+    # -- encoding -------------------------------------------------------------------------
+    def encode_enable(self) -> bytes:
+        return b"g"
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        clock = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(now_unix)).encode()
+        self._owed += ["ident", "report"]
+        return [b"s", b"?", b"t" + clock + b"\r\n", b"g", b"z"]
+
+    def encode_query(self) -> bytes:
+        self._owed.append("report")
+        return b"z"
+
+    def encode_stop(self) -> bytes:
+        return b"s"  # a slew's report, if owed, still comes (shortly)
+
+    def encode_version(self) -> bytes:
+        self._owed.append("ident")
+        return b"?"
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError("the SatEL has no options")
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        az, el = self.wire_target(az_deg, el_deg)
+        assert el is not None
+        self._owed.append("slew")
+        return [b"g", b"p%d %d\r\n" % (az, el)]
+
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        az = math.floor(az_deg + 0.5)
+        el = math.floor((el_deg or 0.0) + 0.5)
+        if not (0 <= az <= 360 and 0 <= el <= 90):
+            raise ValueError(f"target {az_deg}/{el_deg} outside 0..360 / 0..90")
+        return float(az), float(el)
+
+    def encode_reset(self) -> bytes:
+        return b"*"
+
+    def encode_clear_memory(self) -> bytes:
+        return b"x"
+
+    def encode_store_point(self, when_unix: float, az_deg: float, el_deg: float) -> bytes:
+        stamp = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(when_unix)).encode()
+        az, el = self.wire_target(az_deg, el_deg)
+        return b"2" + stamp + b" %d %d\r\n" % (az, el or 0)
+
+    # -- what is owed -------------------------------------------------------------------------
+    def awaiting_reply(self) -> bool:
+        return bool(self._owed)
+
+    def reply_timeout_s(self, default_s: float) -> float:
+        return SLEW_TIMEOUT_S if "slew" in self._owed else default_s
+
+    def slewing(self) -> bool:
+        return "slew" in self._owed
+
+    def expire_query(self) -> None:
+        self._owed.clear()
+        self._block = None
+
+    def harmless(self, junk: bytes) -> bool:
+        return junk.strip(b"\r\n ") == b""
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while True:
+            end = self._buf.find(b"\n")
+            if end == -1:
+                if len(self._buf) > _MAX_LINE:
+                    out.append(JunkReply(bytes(self._buf), "line too long"))
+                    self._buf.clear()
+                break
+            raw = bytes(self._buf[: end + 1])
+            del self._buf[: end + 1]
+            self._line(raw, out)
+        return out
+
+    def _line(self, raw: bytes, out: list[Reply]) -> None:
+        try:
+            line = raw.decode("ascii").strip("\r\n").strip()
+        except UnicodeDecodeError:
+            self._block = None
+            out.append(JunkReply(raw, "not text"))
+            return
+        if m := _MOTION.match(line):
+            self._block = {"motion": m.group(1).upper()}
+            return
+        if self._block is not None:
+            self._block_line(line, raw, out)
+            return
+        if line.lower() == "satel":
+            self._settle("ident")
+            out.append(VersionReply("SatEL"))
+        elif line == "" or _BARE_TIME.match(line):
+            out.append(JunkReply(raw, "blank line or clock echo"))
+        else:
+            out.append(JunkReply(raw, "not a report line"))
+
+    def _block_line(self, line: str, raw: bytes, out: list[Reply]) -> None:
+        block = self._block
+        assert block is not None
+        if m := _TIME.match(line):
+            block["time"] = m.group(1)
+        elif m := _AZ.match(line):
+            block["az"] = m.group(1)
+        elif m := _EL.match(line):
+            block["el"] = m.group(1)
+        elif m := _STORED.match(line):
+            self._block = None
+            if "az" not in block or "el" not in block:
+                out.append(JunkReply(raw, "status report without azimuth or elevation"))
+                return
+            az, el = int(block["az"]), int(block["el"])
+            if az > 360 or el > 90:
+                out.append(JunkReply(raw, "status report out of range"))
+                return
+            self._settle("slew" if "slew" in self._owed else "report")
+            out.append(
+                PositionReply(
+                    float(az),
+                    float(el),
+                    motion_enabled=block["motion"] == "ENABLED",
+                    controller_time=block.get("time"),
+                )
+            )
+        elif line.startswith(("Mode", "Azimuth", "Elevation", "Time")):
+            if line.startswith(("Azimuth", "Elevation")):
+                self._block = None  # a garbled position line spoils the whole report
+                out.append(JunkReply(raw, "unreadable position line"))
+        elif line != "":
+            self._block = None
+            out.append(JunkReply(raw, "unexpected line inside a status report"))
+
+    def _settle(self, kind: str) -> None:
+        if kind in self._owed:
+            self._owed.remove(kind)
+        elif self._owed and kind == "report":
+            self._owed.pop(0)
+
+
+MODELS: dict[str, ModelSpec] = {
+    "satel": ModelSpec(
+        name="satel",
+        display_name="SatEL",
+        manufacturer="SatEL (VE5FP)",
+        family="satel",
+        codec_factory=SatelCodec,
+        baud=9600,
+        has_elevation=True,
+        has_version=True,
+        retarget=RetargetPolicy.STOP_AND_WAIT,
+        az_min_deg=0.0,
+        az_max_deg=360.0,
+        el_min_deg=0.0,
+        el_max_deg=90.0,
+        az_wraps=True,
+        full_duplex=False,
+        stop_interrupts=True,
+        reports_while_moving=False,
+        reply_timeout_s=2.0,
+        noise_deg=1.0,
+        nominal_speed_deg_s=8.0,
+        nominal_el_speed_deg_s=4.0,
+    )
+}
