@@ -1,0 +1,562 @@
+"""The rotctld port, byte for byte: real TCP sockets, the real Rotator, an emulated controller on
+a pty. Expected bytes are those of rotctld 4.5.4 in /work/shared/protocols/hamlib-and-rotctld.md
+section 3 (and, for model 401 and 403, those the real rotctld gives against the same emulator).
+"""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pydantic import ValidationError
+
+from bridge import emulators
+from bridge.app import worker_config
+from bridge.emulators import EmulatedPort
+from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.state_store import StateStore
+from bridge.model import ErrorEvent, MotionState
+from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
+from bridge.settings import RotatorSettings, Settings
+from tests.support import wait_until
+
+FAST_BRIDGE = {
+    "idle_poll_interval_s": 0.3,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 0.6,
+    "stall_timeout_s": 2.5,
+    "silence_timeout_s": 1.0,
+}
+
+
+class Client:
+    """A rotctld client on a real socket; replies are read until exactly the expected length."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+
+    def send(self, data: bytes) -> None:
+        self.sock.sendall(data)
+
+    def read(self, n: int) -> bytes:
+        buf = b""
+        while len(buf) < n:
+            chunk = self.sock.recv(n - len(buf))
+            if not chunk:
+                break
+            buf += chunk
+        return buf
+
+    def ask(self, request: bytes, expected: bytes) -> None:
+        self.send(request)
+        assert self.read(len(expected)) == expected
+
+    def single_recv(self, request: bytes) -> bytes:
+        """What one recv() returns, as Gpredict reads it."""
+        self.send(request)
+        return self.sock.recv(4096)
+
+    def at_eof(self) -> bool:
+        return self.sock.recv(4096) == b""
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+@dataclass
+class Station:
+    emu: EmulatedPort[Any]
+    rotator: Rotator
+    server: RotctldServer
+    events: list[ErrorEvent]
+    clients: list[Client]
+
+    def connect(self) -> Client:
+        client = Client(self.server.port)
+        self.clients.append(client)
+        return client
+
+    def bearing_frames(self) -> list[bytes]:
+        return [f.data for f in self.emu.log() if f.data.startswith((b"AP", b"AM"))]
+
+
+StationFactory = Callable[..., Station]
+
+
+@pytest.fixture
+def station(tmp_path: Path) -> Iterator[StationFactory]:
+    made: list[Station] = []
+
+    def make(
+        model: str = "rotorez",
+        *,
+        start_az_deg: float = 123,
+        park_az_deg: float | None = None,
+        **settings: Any,
+    ) -> Station:
+        link = tmp_path / f"serial-{model}-{len(made)}"
+        emu = emulators.start(
+            model,
+            link=str(link),
+            start_az_deg=start_az_deg,
+            speed_deg_s=40.0,
+            brake_delay_s=0.0 if model == "rotorcard" else 1.5,
+            jitter_deg=0,
+            power_on_junk=False,
+        )
+        cfg = RotatorSettings(
+            id="tower",
+            model=model,
+            port=str(link),
+            brake_delay_s=0 if model == "rotorcard" else 1.5,
+            **{**FAST_BRIDGE, **settings},
+        )
+        events: list[ErrorEvent] = []
+        rotator = Rotator(
+            worker_config(cfg),
+            Limits(*cfg.effective_az_limits),
+            StateStore(tmp_path / f"state-{len(made)}.json"),
+            on_status=lambda status: None,
+            on_event=events.append,
+        )
+        server = RotctldServer(rotator, 0, park_az_deg=park_az_deg)
+        st = Station(emu, rotator, server, events, [])
+        made.append(st)
+        rotator.start()
+        server.start()
+        wait_until(lambda: rotator.status.available, 5, "rotator available")
+        return st
+
+    yield make
+    for st in made:
+        for client in st.clients:
+            client.close()
+        st.server.stop()
+        st.rotator.stop()
+        st.emu.close()
+
+
+# -- the request parser (sans-IO), fed three ways ------------------------------------------------
+
+
+def parse(data: bytes, *, bytewise: bool = False) -> list[Request | object]:
+    parser = RequestParser()
+    if not bytewise:
+        return list(parser.feed(data))
+    out: list[Request | object] = []
+    for i in range(len(data)):
+        out += parser.feed(data[i : i + 1])
+    return out
+
+
+def summary(items: list[Request | object]) -> list[object]:
+    return [
+        (i.command.name, i.args, i.extended, i.sep) if isinstance(i, Request) else i for i in items
+    ]
+
+
+@pytest.mark.parametrize("bytewise", [False, True])
+def test_parser_reads_commands_as_rotctld_does(bytewise: bool) -> None:
+    data = (
+        b"p\r\n"  # CR LF
+        b"P 10,5 20\r"  # CR alone ends a line; comma kept as typed
+        b"+\\set_pos 1 2\n"  # extended, long name
+        b";p\n|_\n,S\n"  # separators
+        b"P 10\n20\n"  # arguments taken from the next line
+        b"Z\\nonsense p\n"  # unknown commands are skipped, what follows still counts
+        b"#P 1 1\n"  # a comment line
+        b"\\dump_state\n1\nq\n"
+    )
+    assert summary(parse(data, bytewise=bytewise)) == [
+        ("get_pos", (), False, "\n"),
+        ("set_pos", ("10,5", "20"), False, "\n"),
+        ("set_pos", ("1", "2"), True, "\n"),
+        ("get_pos", (), True, ";"),
+        ("get_info", (), True, "|"),
+        ("stop", (), True, ","),
+        ("set_pos", ("10", "20"), False, "\n"),
+        ("get_pos", (), False, "\n"),
+        ("dump_state", (), False, "\n"),
+        ("dump_caps", (), False, "\n"),
+        QUIT,
+    ]
+
+
+def test_parser_runs_nothing_that_is_unfinished() -> None:
+    parser = RequestParser()
+    assert parser.feed(b"P 120 0") == []  # the last argument is not terminated yet
+    assert not parser.idle
+    assert summary(parser.feed(b"\n")) == [("set_pos", ("120", "0"), False, "\n")]
+    assert parser.idle
+    assert parser.feed(b"+P 1") == [] and not parser.idle
+
+
+def test_parser_survives_junk_and_drops_an_overlong_argument() -> None:
+    junk = bytes(range(256)).replace(b"q", b"").replace(b"Q", b"")
+    parser = RequestParser()
+    parser.feed(junk + b"\n")  # whatever junk parses into, the stream stays usable
+    parser.feed(b"\n" * 3)
+    assert summary(parser.feed(b"P " + b"9" * 500 + b" 0\np\n")) == [("get_pos", (), False, "\n")]
+
+
+# -- get_pos ------------------------------------------------------------------------------------
+
+
+def test_get_pos_answers_from_status_in_one_send(station: StationFactory) -> None:
+    st = station()
+    c = st.connect()
+    assert c.single_recv(b"p\n") == b"123.00\n0.00\n"
+    assert c.single_recv(b"\\get_pos\r\n") == b"123.00\n0.00\n"
+    assert c.single_recv(b"p\r") == b"123.00\n0.00\n"
+
+
+def test_get_pos_causes_no_serial_traffic(station: StationFactory) -> None:
+    st = station()
+    c = st.connect()
+
+    def queries() -> int:
+        return sum(1 for f in st.emu.log() if f.data.startswith(b"AI1"))
+
+    wait_until(lambda: queries() > 0, 5, "the bridge's own first poll")  # the counter counts
+    before = queries()
+    c.ask(b"p\n" * 200, b"123.00\n0.00\n" * 200)
+    assert queries() - before < 10  # the bridge's own idle polling, not one query per p
+
+
+def test_get_pos_extended_forms(station: StationFactory) -> None:
+    c = station().connect()
+    c.ask(b"+p\n", b"get_pos:\nAzimuth: 123.00\nElevation: 0.00\nRPRT 0\n")
+    c.ask(b";p\n", b"get_pos:;Azimuth: 123.00;Elevation: 0.00;RPRT 0\n")
+    c.ask(b"|p\n", b"get_pos:|Azimuth: 123.00|Elevation: 0.00|RPRT 0\n")
+    c.ask(b",p\n", b"get_pos:,Azimuth: 123.00,Elevation: 0.00,RPRT 0\n")
+    c.ask(b"+\\get_pos\n", b"get_pos:\nAzimuth: 123.00\nElevation: 0.00\nRPRT 0\n")
+
+
+def test_get_pos_on_a_dcu1_is_not_available(station: StationFactory) -> None:
+    c = station("dcu1").connect()
+    c.ask(b"p\n", b"RPRT -11\n")
+    c.ask(b"+p\n", b"get_pos:\nRPRT -11\n")
+    c.ask(b";p\n", b"get_pos:;RPRT -11\n")
+
+
+def test_a_port_that_is_gone_gives_an_io_error_never_the_old_bearing(
+    station: StationFactory,
+) -> None:
+    st = station()
+    c = st.connect()
+    c.ask(b"p\n", b"123.00\n0.00\n")
+    st.emu.unplug()
+    wait_until(lambda: not st.rotator.status.connected, 5, "port closed")
+    c.ask(b"p\n", b"RPRT -6\n")
+    c.ask(b"+p\n", b"get_pos:\nRPRT -6\n")
+    c.ask(b"P 10 0\n", b"RPRT -6\n")
+    c.ask(b"+P 10 0\n", b"set_pos: 10 0\nRPRT -6\n")
+
+
+def test_a_silent_controller_gives_a_timeout(station: StationFactory) -> None:
+    st = station()
+    c = st.connect()
+    st.emu.set_silent(True)
+    wait_until(lambda: not st.rotator.status.available, 5, "controller silent")
+    assert st.rotator.status.connected
+    c.ask(b"p\n", b"RPRT -5\n")
+    c.ask(b";p\n", b"get_pos:;RPRT -5\n")
+    c.ask(b"P 10 0\n", b"RPRT -5\n")
+    assert st.bearing_frames() == []
+
+
+# -- set_pos ------------------------------------------------------------------------------------
+
+
+def test_set_pos_moves_the_rotor_through_the_rotator(station: StationFactory) -> None:
+    st = station("rotorcard")
+    c = st.connect()
+    c.ask(b"P 200 0\n", b"RPRT 0\n")
+    st.emu.wait_for_frame(b"AP1200\r", "executed")
+    wait_until(lambda: st.rotator.status.last_command_source == "rotctld", 5, "source rotctld")
+    c.ask(b"S\n", b"RPRT 0\n")
+    st.emu.wait_for(lambda s: not s.is_moving)
+
+
+def test_set_pos_extended_echoes_the_arguments_as_typed(station: StationFactory) -> None:
+    st = station("rotorcard")
+    c = st.connect()
+    c.ask(b"+P 10,5 0\n", b"set_pos: 10,5 0\nRPRT 0\n")
+    st.emu.wait_for(lambda s: s.target_az_deg is not None and abs(s.target_az_deg - 10.5) <= 0.5)
+    c.ask(b";\\set_pos 20 0\n", b"set_pos: 20 0;RPRT 0\n")
+    c.ask(b",P 30 0\n", b"set_pos: 30 0,RPRT 0\n")
+
+
+def test_set_pos_errors(station: StationFactory) -> None:
+    st = station("rotorez", az_max_deg=350)
+    c = st.connect()
+    c.ask(b"P 999 0\n", b"RPRT -1\n")
+    c.ask(b"+P 999 0\n", b"set_pos: 999 0\nRPRT -1\n")
+    c.ask(b"P 350,5 0\n", b"RPRT -1\n")  # the comma is a decimal point: 350.5 > 350
+    c.ask(b"P 90 10\n", b"RPRT -1\n")  # azimuth-only model: elevation must be 0
+    c.ask(b"P abc 0\n", b"RPRT -1\n")
+    c.ask(b"P nan 0\n", b"RPRT -1\n")
+    c.ask(b"|P 90 x\n", b"set_pos: 90 x|RPRT -1\n")
+    assert st.bearing_frames() == []
+    refused = [(e.kind, e.command) for e in st.events]
+    assert ("refused", "rotctld set_pos 999 0") in refused
+    assert ("refused", "rotctld set_pos 90 10") in refused  # MQTT's error topic hears of it
+
+
+def test_a_locked_rotator_rejects_moves_but_not_stop(station: StationFactory) -> None:
+    st = station(park_az_deg=10)
+    st.rotator.set_lock(True)
+    c = st.connect()
+    c.ask(b"P 100 0\n", b"RPRT -9\n")
+    c.ask(b"+P 100 0\n", b"set_pos: 100 0\nRPRT -9\n")
+    c.ask(b"K\n", b"RPRT -9\n")
+    c.ask(b"S\n", b"RPRT 0\n")
+    assert st.bearing_frames() == []
+    refusal = next(e for e in st.events if e.kind == "refused")
+    assert refusal.command == "rotctld set_pos 100 0" and "locked" in refusal.message
+
+
+# -- stop, park, move, reset, get_status --------------------------------------------------------
+
+
+def test_stop_forms(station: StationFactory) -> None:
+    c = station().connect()
+    c.ask(b"S\n", b"RPRT 0\n")
+    c.ask(b"\\stop\n", b"RPRT 0\n")
+    c.ask(b"+S\n", b"stop:\nRPRT 0\n")
+    c.ask(b";S\n", b"stop:;RPRT 0\n")
+
+
+def test_park_without_a_park_position_is_not_available(station: StationFactory) -> None:
+    c = station().connect()
+    c.ask(b"K\n", b"RPRT -11\n")
+    c.ask(b"+K\n", b"park:\nRPRT -11\n")
+    c.ask(b"\\park\n", b"RPRT -11\n")
+
+
+def test_park_goes_to_the_configured_position(station: StationFactory) -> None:
+    st = station("rotorcard", park_az_deg=30)
+    c = st.connect()
+    c.ask(b"+K\n", b"park:\nRPRT 0\n")
+    st.emu.wait_for_frame(b"AP1030\r", "executed")
+    st.emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 30) < 1, 10)
+
+
+def test_move_reset_set_conf_and_get_status_are_not_available(station: StationFactory) -> None:
+    c = station().connect()
+    c.ask(b"M 2 5\n", b"RPRT -11\n")
+    c.ask(b"+M 8 5\n", b"move: 8 5\nRPRT -11\n")
+    c.ask(b"\\move 2 5\n", b"RPRT -11\n")
+    c.ask(b"M x 5\n", b"RPRT -1\n")
+    c.ask(b"R 1\n", b"RPRT -11\n")
+    c.ask(b"C jam 0\n", b"RPRT -11\n")
+    c.ask(b"s\n", b"RPRT -11\n")
+    c.ask(b"+s\n", b"get_status:\nRPRT -11\n")
+
+
+# -- get_info, dump_state, dump_caps ------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("model", "info"),
+    [("rotorez", b"Rotor-EZ"), ("rotorcard", b"RotorCard"), ("dcu1", b"DCU-1/DCU-1X")],
+)
+def test_get_info(station: StationFactory, model: str, info: bytes) -> None:
+    c = station(model).connect()
+    c.ask(b"_\n", info + b"\n")
+    c.ask(b"\\get_info\n", info + b"\n")
+    c.ask(b"+_\n", b"get_info:\nInfo: " + info + b"\nRPRT 0\n")
+    c.ask(b";_\n", b"get_info:;Info: " + info + b";RPRT 0\n")
+
+
+@pytest.mark.parametrize(("model", "number"), [("rotorez", 401), ("rotorcard", 402), ("dcu1", 403)])
+def test_dump_state_is_what_rotctl_needs_to_open(
+    station: StationFactory, model: str, number: int
+) -> None:
+    c = station(model).connect()
+    c.ask(
+        b"\\dump_state\n",
+        b"1\n%d\nmin_az=0.000000\nmax_az=360.000000\nmin_el=0.000000\nmax_el=0.000000\n"
+        b"south_zero=0\nrot_type=Other\ndone\n" % number,
+    )
+
+
+def test_dump_state_shows_the_configured_limits_and_the_extended_forms(
+    station: StationFactory,
+) -> None:
+    c = station(az_min_deg=10, az_max_deg=350.5).connect()
+    c.ask(
+        b"\\dump_state\n",
+        b"1\n401\nmin_az=10.000000\nmax_az=350.500000\nmin_el=0.000000\nmax_el=0.000000\n"
+        b"south_zero=0\nrot_type=Other\ndone\n",
+    )
+    c.ask(
+        b"+\\dump_state\n",
+        b"dump_state:\nrotctld Protocol Ver: 1\nRotor Model: 401\n"
+        b"Minimum Azimuth: 10.000000\nMaximum Azimuth: 350.500000\n"
+        b"Minimum Elevation: 0.000000\nMaximum Elevation: 0.000000\nSouth Zero: 0\n"
+        b"rot_type=Other\ndone\nRPRT 0\n",
+    )
+    c.ask(
+        b";\\dump_state\n",
+        b"dump_state:;rotctld Protocol Ver: 1;Rotor Model: 401;"
+        b"Minimum Azimuth: 10.000000;Maximum Azimuth: 350.500000;"
+        b"Minimum Elevation: 0.000000;Maximum Elevation: 0.000000;South Zero: 0;"
+        b"rot_type=Other;done;RPRT 0\n",
+    )
+
+
+def test_dump_caps_is_caps_text_then_rprt_0(station: StationFactory) -> None:
+    c = station().connect()
+    caps = (
+        b"Caps dump for model:\t401\nModel name:\t\tRotor-EZ\nMfg name:\t\tIdiom Press\n"
+        b"Backend version:\trotor-bridge\nBackend status:\t\tStable\nRot type:\t\tOther\n"
+        b"Port type:\t\tNetwork link (rotor-bridge)\n"
+        b"Min Azimuth:\t\t0.00\nMax Azimuth:\t\t360.00\n"
+        b"Min Elevation:\t\t0.00\nMax Elevation:\t\t0.00\n"
+        b"Can set Position:\tY\nCan get Position:\tY\nCan Stop:\t\tY\nCan Park:\t\tN\n"
+        b"Can Reset:\t\tN\nCan Move:\t\tN\nCan get Info:\t\tY\nCan get Status:\t\tN\n"
+        b"\nOverall backend warnings: 0\n"
+    )
+    c.ask(b"1\n", caps + b"RPRT 0\n")
+    c.ask(b"\\dump_caps\n", caps + b"RPRT 0\n")
+    c.ask(b"+1\n", b"dump_caps:\n" + caps + b"RPRT 0\n")
+
+
+# -- the stream: unknown commands, quit, clients ------------------------------------------------
+
+
+def test_unknown_commands_get_no_reply_at_all(station: StationFactory) -> None:
+    st = station()
+    c = st.connect()
+    # each reply is the next thing on the socket: nothing came before it
+    c.ask(b"Z\np\n", b"123.00\n0.00\n")
+    c.ask(b"\\nonsense\np\n", b"123.00\n0.00\n")
+    c.ask(b"#P 200 0\n_\n", b"Rotor-EZ\n")
+    assert st.bearing_frames() == [] and st.events == []
+
+
+@pytest.mark.parametrize("quit_cmd", [b"q\n", b"Q\n", b"+q\n"])
+def test_quit_closes_the_connection_without_a_reply(
+    station: StationFactory, quit_cmd: bytes
+) -> None:
+    st = station()
+    c = st.connect()
+    c.ask(b"p\n", b"123.00\n0.00\n")
+    c.send(quit_cmd)
+    assert c.at_eof()
+    wait_until(lambda: st.server.client_count == 0, 5, "client gone")
+
+
+def test_several_clients_at_once_each_with_its_own_half_finished_line(
+    station: StationFactory,
+) -> None:
+    st = station("rotorcard")
+    a, b = st.connect(), st.connect()
+    wait_until(lambda: st.server.client_count == 2, 5, "two clients")
+    a.send(b"P 2")  # half a command on one connection ...
+    b.ask(b"+p\n", b"get_pos:\nAzimuth: 123.00\nElevation: 0.00\nRPRT 0\n")  # ... another works
+    a.ask(b"00 0\n", b"RPRT 0\n")
+    st.emu.wait_for_frame(b"AP1200\r", "executed")
+    b.ask(b"S\n", b"RPRT 0\n")
+
+
+def test_a_client_gone_mid_command_leaves_nothing_behind(station: StationFactory) -> None:
+    st = station("rotorcard")
+    wait_until(lambda: st.rotator.status.state is MotionState.IDLE, 5, "idle")
+    for partial in (b"P 200", b"P 200 0", b"+\\set_pos 200"):
+        c = st.connect()
+        c.send(partial)
+        c.close()
+        wait_until(lambda: st.server.client_count == 0, 5, "client gone")
+    # a complete command afterwards is the only one the controller ever sees
+    st.connect().ask(b"P 60 0\n", b"RPRT 0\n")
+    st.emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 60) < 1, 10)
+    assert st.bearing_frames() == [b"AP1060\r"]
+
+
+def test_stopping_the_server_closes_its_clients_and_frees_the_port(
+    station: StationFactory,
+) -> None:
+    st = station()
+    c = st.connect()
+    c.ask(b"p\n", b"123.00\n0.00\n")
+    port = st.server.port
+    st.server.stop()
+    assert c.at_eof()
+    again = RotctldServer(st.rotator, port)
+    again.start()  # the port is free again at once
+    try:
+        Client(port).ask(b"_\n", b"Rotor-EZ\n")
+    finally:
+        again.stop()
+
+
+def test_a_port_in_use_is_a_clear_error(station: StationFactory) -> None:
+    st = station()
+    other = RotctldServer(st.rotator, st.server.port)
+    with pytest.raises(OSError, match="rotctld for rotator 'tower': cannot listen on 127.0.0.1"):
+        other.start()
+
+
+def test_clients_beyond_the_limit_are_turned_away(station: StationFactory) -> None:
+    st = station()
+    small = RotctldServer(st.rotator, 0, max_clients=1)
+    small.start()
+    try:
+        first = Client(small.port)
+        first.ask(b"_\n", b"Rotor-EZ\n")
+        second = Client(small.port)
+        assert second.at_eof()
+        first.ask(b"_\n", b"Rotor-EZ\n")
+        first.close()
+        second.close()
+    finally:
+        small.stop()
+
+
+# -- configuration ------------------------------------------------------------------------------
+
+
+def rotator_settings(**kw: Any) -> RotatorSettings:
+    return RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", **kw)
+
+
+def test_settings_defaults_keep_rotctld_off_and_on_loopback() -> None:
+    r = rotator_settings()
+    assert (r.rotctld_port, r.rotctld_bind, r.park_az_deg, r.park_el_deg) == (
+        None,
+        "127.0.0.1",
+        None,
+        None,
+    )
+    assert rotator_settings(rotctld_port=4533, park_az_deg=180).rotctld_port == 4533
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"rotctld_port": 0},
+        {"rotctld_port": 65536},
+        {"park_az_deg": 361},
+        {"park_az_deg": 5, "az_min_deg": 10},
+        {"park_az_deg": 5, "park_el_deg": 0},  # an azimuth-only model has no elevation to park
+        {"park_el_deg": 0},
+    ],
+)
+def test_settings_reject_bad_rotctld_values(kw: dict[str, Any]) -> None:
+    with pytest.raises(ValidationError):
+        rotator_settings(**kw)
+
+
+def test_two_rotators_cannot_share_a_rotctld_port() -> None:
+    rotators = [
+        {"id": "a", "model": "rotorez", "port": "/dev/ttyUSB0", "rotctld_port": 4533},
+        {"id": "b", "model": "rotorcard", "port": "/dev/ttyUSB1", "rotctld_port": 4533},
+    ]
+    with pytest.raises(ValidationError, match="share one rotctld_port"):
+        Settings(rotators=rotators)
