@@ -1,0 +1,28 @@
+"""A Hamlib rotctld-compatible TCP port onto one rotator, beside MQTT.
+
+Gpredict, loggers and Hamlib's own network client (``rotctl -m 2``) speak rotctld's text
+protocol. Here they reach the same Rotator as MQTT does: the same mailbox, limits, safety lock
+and status. Source document: /work/shared/protocols/hamlib-and-rotctld.md section 3 (reply
+bytes verified against rotctld 4.5.4).
+
+Rules:
+1. Input is a character stream, as rotctld reads it: a one-character command or ``\\long_name``,
+   optionally prefixed by ``+`` or one punctuation character (extended replies, that character
+   as separator), then whitespace-separated arguments; CR and LF are plain whitespace, so a
+   command still waiting for arguments takes them from the following lines. ``#`` comments out
+   the rest of the line. ``q``/``Q`` closes the connection.
+2. A command runs only once it is complete (its last argument followed by whitespace). What a
+   client leaves unfinished when it disconnects is dropped: it never moves anything.
+3. Unknown commands get no reply at all (rotctld logs them on its own stderr and says nothing).
+4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
+5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
+   currently have is an error code, never the last value seen.
+6. Motion goes through Rotator.submit with Source.ROTCTLD, so the lock, the limits and the link
+   state are judged in one place and MQTT shows the refusal or the move.
+"""
+
+from bridge.rotctld.commands import HAMLIB_MODELS, RotctldCommands
+from bridge.rotctld.parser import QUIT, Request, RequestParser
+from bridge.rotctld.server import RotctldServer
+
+__all__ = ["HAMLIB_MODELS", "QUIT", "Request", "RequestParser", "RotctldCommands", "RotctldServer"]

@@ -1,0 +1,223 @@
+"""rotctld's commands against one Rotator: what each answers, byte for byte (rules 4-6)."""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+from bridge.errors import Refused
+from bridge.model import Source, Stop, Target
+from bridge.rotctld.parser import Request
+
+if TYPE_CHECKING:
+    from bridge.engine.rotator import Rotator
+
+log = logging.getLogger(__name__)
+
+
+# Hamlib error codes (rig.h, enum rig_errcode_e), sent negated as "RPRT -n".
+RIG_OK = 0
+RIG_EINVAL = 1  # invalid parameter: out of range, not a number
+RIG_ETIMEOUT = 5  # the controller does not answer (port open, no valid reply)
+RIG_EIO = 6  # the serial link is down (port closed or gone)
+RIG_EINTERNAL = 7
+RIG_ERJCTED = 9  # command rejected: the bridge's safety lock is ON
+RIG_ENAVAIL = 11  # the model cannot do this
+
+#: bridge model name -> Hamlib rotator model number (shown by \dump_state and dump_caps)
+HAMLIB_MODELS: dict[str, int] = {
+    "rotorez": 401,
+    "rotorcard": 402,
+    "dcu1": 403,
+    "rot2prog": 901,
+    "rot1prog": 902,
+    "md01": 903,
+    "satel": 2101,
+}
+# A model Hamlib does not know is shown as its dummy; `rotctl -m 2` ignores the model line.
+_HAMLIB_FALLBACK_MODEL = 1
+
+#: what Hamlib's backend answers to get_info, where that differs from our display name
+_HAMLIB_INFO: dict[str, str] = {
+    "rotorez": "Rotor-EZ",
+    "rotorcard": "RotorCard",
+    "dcu1": "DCU-1/DCU-1X",
+}
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_INTEGER = re.compile(r"[+-]?\d+")
+
+
+class RotctldCommands:
+    """Executes requests against one rotator and renders rotctld's reply bytes."""
+
+    def __init__(
+        self,
+        rotator: Rotator,
+        *,
+        park_az_deg: float | None = None,
+        park_el_deg: float | None = None,
+    ) -> None:
+        self.rotator = rotator
+        self.park_az_deg = park_az_deg
+        self.park_el_deg = park_el_deg
+        spec = rotator.spec
+        self.hamlib_model = HAMLIB_MODELS.get(spec.name, _HAMLIB_FALLBACK_MODEL)
+        self.info = _HAMLIB_INFO.get(spec.name, spec.display_name)
+        if spec.has_elevation:
+            self.rot_type = "AzEl"
+        elif spec.family == "rotorez":
+            self.rot_type = "Other"  # as Hamlib's rotorez backend reports itself
+        else:
+            self.rot_type = "Az"
+
+    def execute(self, request: Request) -> bytes:
+        handler = getattr(self, "_" + request.command.name)
+        try:
+            code, body = handler(request)
+        except Exception:
+            log.exception("rotctld: %s failed", request.command.name)
+            code, body = -RIG_EINTERNAL, ""
+        return _frame(request, code, body).encode()
+
+    # -- commands: each returns (code, body); body is rendered for the request's protocol ------
+
+    def _get_pos(self, req: Request) -> tuple[int, str]:
+        spec = self.rotator.spec
+        if not spec.can_report_position:
+            return -RIG_ENAVAIL, ""
+        status = self.rotator.status
+        az = status.bearing_deg
+        el = status.elevation_deg if spec.has_elevation else 0.0
+        if not status.available or az is None or el is None:
+            return _link_code(status.connected), ""
+        return RIG_OK, _values(req, [("Azimuth", f"{az:.2f}"), ("Elevation", f"{el:.2f}")])
+
+    def _set_pos(self, req: Request) -> tuple[int, str]:
+        az, el = (_number(a) for a in req.args)
+        if az is None or el is None:
+            return -RIG_EINVAL, ""
+        el_deg = el if self.rotator.spec.has_elevation or el != 0 else None
+        return self._submit_target(az, el_deg, req)
+
+    def _park(self, req: Request) -> tuple[int, str]:
+        if self.park_az_deg is None:
+            return -RIG_ENAVAIL, ""
+        el = self.park_el_deg if self.rotator.spec.has_elevation else None
+        return self._submit_target(self.park_az_deg, el, req)
+
+    def _stop(self, req: Request) -> tuple[int, str]:
+        self.rotator.submit(Stop(Source.ROTCTLD), _describe(req))
+        return RIG_OK, ""
+
+    def _move(self, req: Request) -> tuple[int, str]:
+        if not all(_INTEGER.fullmatch(a) for a in req.args):
+            return -RIG_EINVAL, ""
+        return -RIG_ENAVAIL, ""  # no supported model moves by direction and speed yet
+
+    def _reset(self, req: Request) -> tuple[int, str]:
+        if not _INTEGER.fullmatch(req.args[0]):
+            return -RIG_EINVAL, ""
+        return -RIG_ENAVAIL, ""
+
+    def _set_conf(self, req: Request) -> tuple[int, str]:
+        return -RIG_ENAVAIL, ""
+
+    def _get_status(self, req: Request) -> tuple[int, str]:
+        return -RIG_ENAVAIL, ""
+
+    def _get_info(self, req: Request) -> tuple[int, str]:
+        return RIG_OK, _values(req, [("Info", self.info)])
+
+    def _dump_state(self, req: Request) -> tuple[int, str]:
+        lim = self.rotator.limits
+        lines = [
+            ("rotctld Protocol Ver: 1", "1"),
+            (f"Rotor Model: {self.hamlib_model}", str(self.hamlib_model)),
+            (f"Minimum Azimuth: {lim.az_min_deg:f}", f"min_az={lim.az_min_deg:f}"),
+            (f"Maximum Azimuth: {lim.az_max_deg:f}", f"max_az={lim.az_max_deg:f}"),
+            (f"Minimum Elevation: {lim.el_min_deg:f}", f"min_el={lim.el_min_deg:f}"),
+            (f"Maximum Elevation: {lim.el_max_deg:f}", f"max_el={lim.el_max_deg:f}"),
+            ("South Zero: 0", "south_zero=0"),
+            (f"rot_type={self.rot_type}", f"rot_type={self.rot_type}"),
+            ("done", "done"),
+        ]
+        if req.extended:
+            return RIG_OK, "".join(labelled + req.sep for labelled, _ in lines)
+        return RIG_OK, "".join(terse + "\n" for _, terse in lines)
+
+    def _dump_caps(self, req: Request) -> tuple[int, str]:
+        spec, lim = self.rotator.spec, self.rotator.limits
+
+        def yn(flag: bool) -> str:
+            return "Y" if flag else "N"
+
+        rot_type = {"AzEl": "Az-El", "Az": "Azimuth"}.get(self.rot_type, self.rot_type)  # as -u
+        return RIG_OK, (
+            f"Caps dump for model:\t{self.hamlib_model}\n"
+            f"Model name:\t\t{spec.display_name}\n"
+            f"Mfg name:\t\t{spec.manufacturer}\n"
+            "Backend version:\trotor-bridge\n"
+            "Backend status:\t\tStable\n"
+            f"Rot type:\t\t{rot_type}\n"
+            "Port type:\t\tNetwork link (rotor-bridge)\n"
+            f"Min Azimuth:\t\t{lim.az_min_deg:.2f}\n"
+            f"Max Azimuth:\t\t{lim.az_max_deg:.2f}\n"
+            f"Min Elevation:\t\t{lim.el_min_deg:.2f}\n"
+            f"Max Elevation:\t\t{lim.el_max_deg:.2f}\n"
+            "Can set Position:\tY\n"
+            f"Can get Position:\t{yn(spec.can_report_position)}\n"
+            "Can Stop:\t\tY\n"
+            f"Can Park:\t\t{yn(self.park_az_deg is not None)}\n"
+            "Can Reset:\t\tN\n"
+            "Can Move:\t\tN\n"
+            "Can get Info:\t\tY\n"
+            "Can get Status:\t\tN\n"
+            "\nOverall backend warnings: 0\n"
+        )
+
+    def _submit_target(self, az: float, el: float | None, req: Request) -> tuple[int, str]:
+        try:
+            self.rotator.submit(Target(az, el, Source.ROTCTLD), _describe(req))
+        except Refused as exc:
+            return _refusal_code(exc, self.rotator.status.connected), ""
+        return RIG_OK, ""
+
+
+def _refusal_code(exc: Refused, connected: bool) -> int:
+    if exc.code in ("limits", "unsupported"):  # unsupported: elevation on an az-only model
+        return -RIG_EINVAL
+    if exc.code == "offline":
+        return _link_code(connected)
+    return -RIG_ERJCTED  # locked (and any refusal added later): the bridge said no
+
+
+def _link_code(connected: bool) -> int:
+    # what rotctld itself answers: a vanished port is an I/O error, a silent controller a timeout
+    return -RIG_ETIMEOUT if connected else -RIG_EIO
+
+
+def _number(text: str) -> float | None:
+    text = text.replace(",", ".")  # rotctld accepts a decimal comma ("P 10,5 20")
+    return float(text) if _NUMBER.fullmatch(text) else None
+
+
+def _values(req: Request, pairs: Iterable[tuple[str, str]]) -> str:
+    if req.extended:
+        return "".join(f"{label}: {value}{req.sep}" for label, value in pairs)
+    return "".join(f"{value}\n" for _, value in pairs)
+
+
+def _frame(req: Request, code: int, body: str) -> str:
+    if req.extended:
+        head = req.command.name + ":" + "".join(" " + a for a in req.args) + req.sep
+        return head + (body if code == RIG_OK else "") + f"RPRT {code}\n"
+    if code != RIG_OK:
+        return f"RPRT {code}\n"
+    return body if req.command.returns_values else body + "RPRT 0\n"
+
+
+def _describe(req: Request) -> str:
+    return " ".join(("rotctld", req.command.name, *req.args))

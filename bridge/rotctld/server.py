@@ -1,0 +1,179 @@
+"""The TCP side: one listener per rotator, one thread per client, every reply in one send."""
+
+from __future__ import annotations
+
+import logging
+import os
+import selectors
+import socket
+import threading
+from typing import TYPE_CHECKING
+
+from bridge.rotctld.commands import RotctldCommands
+from bridge.rotctld.parser import Quit, RequestParser
+
+if TYPE_CHECKING:
+    from bridge.engine.rotator import Rotator
+
+log = logging.getLogger(__name__)
+
+
+class RotctldServer:
+    """One TCP listener for one rotator; one thread per client."""
+
+    def __init__(
+        self,
+        rotator: Rotator,
+        port: int,
+        bind: str = "127.0.0.1",
+        *,
+        park_az_deg: float | None = None,
+        park_el_deg: float | None = None,
+        max_clients: int = 16,
+    ) -> None:
+        self.commands = RotctldCommands(rotator, park_az_deg=park_az_deg, park_el_deg=park_el_deg)
+        self.rotator_id = rotator.id
+        self._bind = bind
+        self._requested_port = port
+        self._max_clients = max_clients
+        self._listener: socket.socket | None = None
+        self._wake_r, self._wake_w = -1, -1
+        self._accept_thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._clients: dict[socket.socket, threading.Thread] = {}
+        self._stopping = False
+
+    @property
+    def address(self) -> tuple[str, int]:
+        if self._listener is None:
+            return self._bind, self._requested_port
+        host, port = self._listener.getsockname()[:2]
+        return host, port
+
+    @property
+    def port(self) -> int:
+        return self.address[1]
+
+    @property
+    def client_count(self) -> int:
+        with self._lock:
+            return len(self._clients)
+
+    def start(self) -> None:
+        """Listen (OSError if the address cannot be had) and accept clients in a thread."""
+        host, port = self._bind, self._requested_port
+        try:
+            family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+            self._listener = socket.create_server((host, port), family=family)
+        except OSError as exc:
+            raise OSError(
+                exc.errno,
+                f"rotctld for rotator {self.rotator_id!r}: cannot listen on {host}:{port}: "
+                f"{exc.strerror or exc}",
+            ) from None
+        if host not in ("127.0.0.1", "::1", "localhost"):
+            log.warning(
+                "rotctld for %s listens on %s:%d: rotctld has no authentication, anyone who "
+                "can reach this address can turn the antenna",
+                self.rotator_id,
+                host,
+                self.port,
+            )
+        self._wake_r, self._wake_w = os.pipe()
+        self._stopping = False
+        self._accept_thread = threading.Thread(
+            target=self._accept_loop, name=f"rotctld-{self.rotator_id}", daemon=True
+        )
+        self._accept_thread.start()
+        log.info("rotctld for %s listening on %s:%d", self.rotator_id, *self.address)
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        """Stop listening, close every client; commands already queued stay queued."""
+        if self._listener is None:
+            return
+        with self._lock:
+            self._stopping = True
+            clients = list(self._clients.items())
+        os.write(self._wake_w, b"x")
+        if self._accept_thread is not None:
+            self._accept_thread.join(timeout_s)
+        for conn, _thread in clients:
+            try:
+                conn.shutdown(socket.SHUT_RDWR)  # wakes the client thread's recv()
+            except OSError:
+                pass
+        for _conn, thread in clients:
+            thread.join(timeout_s)
+        self._listener.close()
+        self._listener = None
+        os.close(self._wake_r)
+        os.close(self._wake_w)
+
+    def _accept_loop(self) -> None:
+        listener = self._listener
+        assert listener is not None
+        listener.setblocking(False)  # a client that gave up between select and accept
+        with selectors.DefaultSelector() as sel:
+            sel.register(listener, selectors.EVENT_READ)
+            sel.register(self._wake_r, selectors.EVENT_READ)
+            while True:
+                events = sel.select()
+                if any(key.fileobj == self._wake_r for key, _ in events):
+                    return
+                try:
+                    conn, peer = listener.accept()
+                except BlockingIOError:
+                    continue
+                except OSError as exc:
+                    log.warning("rotctld for %s: accept failed: %s", self.rotator_id, exc)
+                    continue
+                conn.setblocking(True)
+                self._admit(conn, peer)
+
+    def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        with self._lock:
+            if self._stopping or len(self._clients) >= self._max_clients:
+                log.warning(
+                    "rotctld for %s: refusing %s:%d (%d clients connected)",
+                    self.rotator_id,
+                    peer[0],
+                    peer[1],
+                    len(self._clients),
+                )
+                conn.close()
+                return
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            thread = threading.Thread(
+                target=self._serve,
+                args=(conn, peer),
+                name=f"rotctld-{self.rotator_id}-{peer[1]}",
+                daemon=True,
+            )
+            self._clients[conn] = thread
+        thread.start()
+
+    def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        log.info("rotctld for %s: client %s:%d connected", self.rotator_id, peer[0], peer[1])
+        parser = RequestParser()
+        try:
+            while True:
+                data = conn.recv(4096)
+                if not data:
+                    break
+                for item in parser.feed(data):
+                    if isinstance(item, Quit):
+                        return
+                    conn.sendall(self.commands.execute(item))
+        except OSError as exc:
+            log.debug("rotctld for %s: client %s:%d: %s", self.rotator_id, *peer, exc)
+        finally:
+            with self._lock:
+                self._clients.pop(conn, None)
+            conn.close()
+            log.info(
+                "rotctld for %s: client %s:%d gone%s",
+                self.rotator_id,
+                peer[0],
+                peer[1],
+                "" if parser.idle else " (an unfinished command was dropped)",
+            )
