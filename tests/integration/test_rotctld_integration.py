@@ -163,3 +163,31 @@ def test_a_client_gone_mid_line_leaves_nothing_behind(rig: Rig, rotctl_path: str
     assert status(rig)["last_command_source"] == "mqtt"
     bearing = float(rig.retained()["rotor/bearing"])
     assert ok(rotctl(rotctl_path, port, "p")) == f"{bearing:.2f}\n0.00\n"
+
+
+def test_az_el_rotator_through_rotctl(rig: Rig, rotctl_path: str) -> None:
+    port = free_port()
+    emu = rig.add(
+        "sat",
+        model="rot2prog",
+        emu={"start_az_deg": 12.5, "start_el_deg": 34},
+        rotctld_port=port,
+        el_min_deg=0,
+        el_max_deg=90,
+    )
+    rig.start()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+    with connect(port) as sock:
+        ask(sock, b"p\n", b"12.50\n34.00\n")
+        ask(
+            sock,
+            b"\\dump_state\n",
+            b"1\n901\nmin_az=-180.000000\nmax_az=540.000000\nmin_el=0.000000\n"
+            b"max_el=90.000000\nsouth_zero=0\nrot_type=AzEl\ndone\n",
+        )
+    ok(rotctl(rotctl_path, port, "P", "123.5", "45"))
+    emu.wait_for(
+        lambda s: abs(s.az_deg - 123.5) < 0.3 and abs(s.el_deg - 45) < 0.3 and not s.is_moving, 20
+    )
+    with connect(port) as sock:
+        ask(sock, b"P 10 95\n", b"RPRT -1\n")  # beyond the configured elevation limit
