@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,3 +21,15 @@ def probe(broker: Mosquitto) -> Iterator[Probe]:
     p = Probe(broker.port)
     yield p
     p.close()
+
+
+@pytest.fixture(scope="session")
+def rotctl_path() -> str:
+    """Hamlib's rotctl, the independent judge of the emulators and of the rotctld port."""
+    path = shutil.which("rotctl")
+    if path is None:
+        pytest.fail(
+            "Hamlib's rotctl is not installed (Debian: apt-get install libhamlib-utils; "
+            "./tests/run installs it): it is an independent judge, these tests cannot be skipped"
+        )
+    return path

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import serial
 
 from bridge.emulators import EmulatedPort, start
 
@@ -30,3 +31,21 @@ def make_port(tmp_path: Path) -> Iterator[PortFactory]:
     yield factory
     for port in ports:
         port.close()
+
+
+@pytest.fixture
+def clients() -> Iterator[Callable[..., serial.Serial]]:
+    """Real pyserial clients on emulated ports (the baud rate only labels a pty), closed after."""
+    opened: list[serial.Serial] = []
+
+    def open_client(path: str, baud: int = 4800, timeout_s: float = 3.0) -> serial.Serial:
+        client = serial.Serial(path, baud, timeout=timeout_s)
+        opened.append(client)
+        return client
+
+    yield open_client
+    for client in opened:
+        try:
+            client.close()
+        except (serial.SerialException, OSError):
+            pass

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -17,23 +17,6 @@ import serial
 from tests.emulators.conftest import PortFactory
 
 BANNER = b"C2000 IDIOM V1.4S "
-
-
-@pytest.fixture
-def clients() -> Iterator[Callable[[str], serial.Serial]]:
-    opened: list[serial.Serial] = []
-
-    def open_client(path: str) -> serial.Serial:
-        client = serial.Serial(path, 4800, timeout=2.0)
-        opened.append(client)
-        return client
-
-    yield open_client
-    for client in opened:
-        try:
-            client.close()
-        except (serial.SerialException, OSError):
-            pass
 
 
 def test_bearing_query_round_trip_through_the_link(

@@ -7,7 +7,6 @@ judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 from collections.abc import Callable
 from typing import Any
@@ -21,17 +20,6 @@ pytestmark = pytest.mark.hamlib
 
 
 Rotctl = Callable[..., subprocess.CompletedProcess[str]]
-
-
-@pytest.fixture(scope="module")
-def rotctl_path() -> str:
-    path = shutil.which("rotctl")
-    if path is None:
-        pytest.fail(
-            "Hamlib's rotctl is not installed (Debian: apt-get install libhamlib-utils); "
-            "it is the independent judge of the emulators, so these tests cannot be skipped"
-        )
-    return path
 
 
 @pytest.fixture

@@ -12,7 +12,6 @@ runs with trailing_blank_lines=0; the default report is judged across separate s
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 import time
 from collections.abc import Callable, Iterator
@@ -44,17 +43,6 @@ def satel_port(tmp_path: Path) -> Iterator[SatelPort]:
     yield factory
     for port in ports:
         port.close()
-
-
-@pytest.fixture(scope="module")
-def rotctl_path() -> str:
-    path = shutil.which("rotctl")
-    if path is None:
-        pytest.fail(
-            "Hamlib's rotctl is not installed (Debian: apt-get install libhamlib-utils); "
-            "it is the independent judge of the emulators, so these tests cannot be skipped"
-        )
-    return path
 
 
 @pytest.fixture

@@ -36,23 +36,6 @@ def satel_port(tmp_path: Path) -> Iterator[SatelPort]:
         port.close()
 
 
-@pytest.fixture
-def clients() -> Iterator[Callable[[str], serial.Serial]]:
-    opened: list[serial.Serial] = []
-
-    def open_client(path: str) -> serial.Serial:
-        client = serial.Serial(path, 9600, timeout=3.0)
-        opened.append(client)
-        return client
-
-    yield open_client
-    for client in opened:
-        try:
-            client.close()
-        except (serial.SerialException, OSError):
-            pass
-
-
 def read_report(client: serial.Serial) -> list[bytes]:
     """The 7 lines Hamlib reads, plus the two trailing empty lines."""
     lines = [client.readline() for _ in range(9)]

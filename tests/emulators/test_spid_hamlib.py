@@ -7,7 +7,6 @@ failure, never a skip. Ports are built from Spid(...) directly (the registry is 
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 import time
 from collections.abc import Callable, Iterator
@@ -25,17 +24,6 @@ STATUS = bytes.fromhex("57 00 00 00 00 00 00 00 00 00 00 1F 20")
 STOP = bytes.fromhex("57 00 00 00 00 00 00 00 00 00 00 0F 20")
 SpidPortFactory = Callable[..., EmulatedPort[Spid]]
 Rotctl = Callable[..., subprocess.CompletedProcess[str]]
-
-
-@pytest.fixture(scope="module")
-def rotctl_path() -> str:
-    path = shutil.which("rotctl")
-    if path is None:
-        pytest.fail(
-            "Hamlib's rotctl is not installed (Debian: apt-get install libhamlib-utils); "
-            "it is the independent judge of the emulators, so these tests cannot be skipped"
-        )
-    return path
 
 
 @pytest.fixture

@@ -38,23 +38,6 @@ def spid_port(tmp_path: Path) -> Iterator[SpidPortFactory]:
         port.close()
 
 
-@pytest.fixture
-def clients() -> Iterator[Callable[..., serial.Serial]]:
-    opened: list[serial.Serial] = []
-
-    def open_client(path: str, baud: int = 600) -> serial.Serial:
-        client = serial.Serial(path, baud, timeout=2.0)
-        opened.append(client)
-        return client
-
-    yield open_client
-    for client in opened:
-        try:
-            client.close()
-        except (serial.SerialException, OSError):
-            pass
-
-
 def test_status_round_trip_takes_line_time_at_600_baud(
     spid_port: SpidPortFactory, clients: Callable[..., serial.Serial]
 ) -> None:

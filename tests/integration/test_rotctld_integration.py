@@ -7,7 +7,6 @@ rotctl must be installed (libhamlib-utils): a missing judge is a failure, never 
 from __future__ import annotations
 
 import json
-import shutil
 import socket
 import subprocess
 import time
@@ -19,17 +18,6 @@ from tests.integration.conftest import Rig
 from tests.support import free_port, wait_until
 
 pytestmark = pytest.mark.hamlib
-
-
-@pytest.fixture(scope="module")
-def rotctl_path() -> str:
-    path = shutil.which("rotctl")
-    if path is None:
-        pytest.fail(
-            "Hamlib's rotctl is not installed (Debian: apt-get install libhamlib-utils); "
-            "it is the independent judge of the rotctld port, so these tests cannot be skipped"
-        )
-    return path
 
 
 def start(rig: Rig, start_az_deg: float = 10, **bridge: object) -> tuple[int, RotctldServer]:
