@@ -57,6 +57,7 @@ class Mosquitto:
             )
         self.exe = exe
         self.host = host
+        self._auto_port = port is None
         self.port = port or free_port()
         self.workdir = workdir
         self.conf = workdir / "mosquitto.conf"
@@ -65,6 +66,18 @@ class Mosquitto:
         self.proc: subprocess.Popen[bytes] | None = None
 
     def start(self, timeout_s: float = 10.0) -> Mosquitto:
+        for attempt in range(3):
+            try:
+                return self._start(timeout_s)
+            except BrokerError:
+                # a free port can be taken by someone else between finding it and binding it
+                # (parallel test workers); an automatically chosen one is simply chosen again
+                if not self._auto_port or attempt == 2:
+                    raise
+                self.port = free_port()
+        raise AssertionError("unreachable")
+
+    def _start(self, timeout_s: float) -> Mosquitto:
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.conf.write_text(
             f"listener {self.port} {self.host}\n"
@@ -103,5 +116,6 @@ class Mosquitto:
         self.proc = None
 
     def restart(self) -> None:
+        """Same port: clients reconnect to where it was."""
         self.stop()
-        self.start()
+        self._start(10.0)
