@@ -138,6 +138,16 @@ class Rotator:
         self._mailbox.put_note(message)
         self._on_event(ErrorEvent(kind, message, command, self._wall()))
 
+    def _check_rounded(self, axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
+        """A controller that takes whole degrees must not be rounded past a limit."""
+        if self.spec.whole_degrees and not lo_deg <= _rounded(value_deg) <= hi_deg:
+            raise Refused(
+                "limits",
+                f"{axis} {value_deg:g} becomes {_rounded(value_deg):g} on the "
+                f"{self.spec.display_name} (whole degrees), outside the limits "
+                f"{lo_deg:g}..{hi_deg:g}",
+            )
+
     def _check(self, command: Command) -> None:
         if isinstance(command, Stop):
             return
@@ -157,12 +167,18 @@ class Rotator:
             raise Refused("invalid", "target without azimuth or elevation")
         if command.az_deg is not None:
             _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
+            self._check_rounded("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
         if command.el_deg is not None:
             if not self.spec.has_elevation:
                 raise Refused("unsupported", f"{self.spec.display_name} has no elevation axis")
             _check_axis("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
+            self._check_rounded("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
         if not self.status.available:
             raise Refused("offline", "rotator offline (serial link down or controller silent)")
+
+
+def _rounded(value_deg: float) -> float:
+    return float(math.floor(value_deg + 0.5))
 
 
 def _check_axis(axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:

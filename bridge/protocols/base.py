@@ -115,6 +115,8 @@ class ModelSpec:
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
     nominal_el_speed_deg_s: float = 1.0
+    # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)
+    whole_degrees: bool = False
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     nominal_speed_deg_s: float = 6.0  # used to estimate travel when there is no feedback
     option_labels: dict[str, str] = field(default_factory=dict)

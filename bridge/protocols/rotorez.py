@@ -194,6 +194,7 @@ def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec
         noise_deg=2.0,
         nominal_speed_deg_s=6.0,
         option_labels=OPTION_LABELS,
+        whole_degrees=True,
     )
     defaults.update(kw)
     return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)  # type: ignore[arg-type]

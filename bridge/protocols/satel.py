@@ -225,5 +225,6 @@ MODELS: dict[str, ModelSpec] = {
         noise_deg=1.0,
         nominal_speed_deg_s=8.0,
         nominal_el_speed_deg_s=4.0,
+        whole_degrees=True,
     )
 }
