@@ -15,6 +15,11 @@ Rules:
    controller that cannot report. A query is never sent while another is open.
 4. Targets go to the controller only when ``motion.plan_target`` says so; a target waiting for a
    brake delay is replaced by newer ones and dropped by a stop, the lock, or the link going down.
+   Targets that come as a stream (one replaces a still-pending one, or arrives within
+   ``BURST_QUIET_S`` of the last target sent: a dragged slider, a flood) are sent when the
+   stream pauses for ``BURST_QUIET_S``, and at the latest ``STREAM_MAX_WAIT_S`` after the
+   stream's first unsent target (longer for controllers that must stop to re-target), so a
+   continuous stream is followed without flooding the line. A single command is never delayed.
 5. A stop is written at once (on a half-duplex line right after the reply in flight) and cancels
    any frame still waiting in the outbox. A stop is checked: if the rotor is still seen moving
    ``stop_resend_s`` later, it is sent again, and after three tries an error says so. Lock ON
@@ -60,6 +65,8 @@ log = logging.getLogger(__name__)
 
 POWER_ON_BYTE = 0xE0
 OPTIONS_REFRESH_S = 60.0
+BURST_QUIET_S = 0.5
+STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
 STOP_TRIES_BEFORE_ERROR = 3
 
 
@@ -104,6 +111,10 @@ class Worker:
         self._locked = locked
         self._motion = mo.Motion()
         self._pending: Target | None = None
+        self._pending_t = 0.0
+        self._pending_replaced = False  # part of a stream of targets (see rule 4)
+        self._stream_t = 0.0
+        self._last_target_sent_t = -1e18
         self._published_deg: float | None = None
         self._published_dir = 0
         self._published_el_deg: float | None = None
@@ -253,7 +264,12 @@ class Worker:
             elif self._link is None or not self._link.answering:
                 self._error("refused", "rotator offline", command=describe_command(batch.target))
             else:
+                recent = now - self._last_target_sent_t < BURST_QUIET_S
+                if self._pending is None:
+                    self._stream_t = now
+                self._pending_replaced = self._pending is not None or recent
                 self._pending = batch.target
+                self._pending_t = now
 
     def _turning(self, now: float) -> bool:
         m = self._motion
@@ -402,6 +418,8 @@ class Worker:
             return
         if plan is not mo.Plan.SEND or not link.free():
             return  # braking, or a half-duplex line with a reply in flight: right after it
+        if self._stream_wait(now):
+            return  # a stream of targets: wait for it to pause
         if self._needs_fresh_reading(now):
             link.next_poll = now  # ask first; the target follows the answer
             return
@@ -412,7 +430,14 @@ class Worker:
             self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
             self._last_source = self._pending.source.value
             self._pending = None
+            self._last_target_sent_t = now
             link.next_poll = min(link.next_poll, now + self.cfg.moving_poll_interval_s)
+
+    def _stream_wait(self, now: float) -> bool:
+        if not self._pending_replaced:
+            return False
+        max_wait = STREAM_MAX_WAIT_S[self.cfg.spec.retarget.value]
+        return now - self._pending_t < BURST_QUIET_S and now - self._stream_t < max_wait
 
     def _needs_fresh_reading(self, now: float) -> bool:
         spec, link = self.cfg.spec, self._link
@@ -441,6 +466,9 @@ class Worker:
             times += link.wakeups()
             if link.slew is not None:
                 times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+        if self._pending is not None and self._pending_replaced:
+            max_wait = STREAM_MAX_WAIT_S[self.cfg.spec.retarget.value]
+            times.append(min(self._pending_t + BURST_QUIET_S, self._stream_t + max_wait))
         deadline = mo.next_deadline(self._motion, self.cfg.motion, now)
         if deadline is not None:
             times.append(deadline)
@@ -476,6 +504,7 @@ class Worker:
                 self._junk(reply, now)
                 if reply.reason == UNTRUSTED:
                     link.ask_again(now)
+                    link.slew = None  # whatever it was answering is over
 
     def _publishable(self, az_deg: float, el_deg: float | None) -> None:
         moving = self._motion.state is MotionState.MOVING

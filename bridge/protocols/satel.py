@@ -23,6 +23,8 @@ Rules:
    the host (UTC, so stored ephemeris points line up), enable motion, ask for a report.
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
+   Noise before a label is tolerated, noise inside a value spoils the report; a spoiled report
+   that ends a slew still ends it (UNTRUSTED: the engine asks again at once).
 4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
    sent while it is disabled is silently ignored.
 5. Each ``z`` and ``p`` owes one report; ``p``'s may take a whole slew (``SLEW_TIMEOUT_S``).
@@ -35,6 +37,7 @@ import re
 import time
 
 from bridge.protocols.base import (
+    UNTRUSTED,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -44,11 +47,13 @@ from bridge.protocols.base import (
 )
 
 SLEW_TIMEOUT_S = 120.0  # a full 360 + 90 slew on a slow rotor, with margin
-_MOTION = re.compile(r"^Motion\s+(ENABLED|DISABLED)\b", re.IGNORECASE)
-_TIME = re.compile(r"^Time:\s*(\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2})")
-_AZ = re.compile(r"^Azimuth\s*=\s*(\d{1,3})\b")
-_EL = re.compile(r"^Elevation\s*=\s*(\d{1,3})\b")
-_STORED = re.compile(r"^Number of stored positions:\s*(\d+)\s*$")
+# labels are searched anywhere in a line (noise before them is tolerated); a number must be
+# followed by white space or the end of the line, so noise inside a number spoils the line
+_MOTION = re.compile(r"Motion\s+(ENABLED|DISABLED)\s*$", re.IGNORECASE)
+_TIME = re.compile(r"Time:\s*(\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2})\s*$")
+_AZ = re.compile(r"Azimuth\s*=\s*(\d{1,3})(?=\s|$)")
+_EL = re.compile(r"Elevation\s*=\s*(\d{1,3})\s*$")
+_STORED = re.compile(r"Number of stored positions:\s*(\d+)\s*$")
 _BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
 _MAX_LINE = 160
 
@@ -140,19 +145,14 @@ class SatelCodec:
         return out
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
-        try:
-            line = raw.decode("ascii").strip("\r\n").strip()
-        except UnicodeDecodeError:
-            self._block = None
-            out.append(JunkReply(raw, "not text"))
-            return
-        if m := _MOTION.match(line):
+        line = raw.decode("latin-1").strip("\r\n").strip()
+        if m := _MOTION.search(line):
             self._block = {"motion": m.group(1).upper()}
             return
         if self._block is not None:
             self._block_line(line, raw, out)
             return
-        if line.lower() == "satel":
+        if line.lower().endswith("satel"):
             self._settle("ident")
             out.append(VersionReply("SatEL"))
         elif line == "" or _BARE_TIME.match(line):
@@ -163,20 +163,20 @@ class SatelCodec:
     def _block_line(self, line: str, raw: bytes, out: list[Reply]) -> None:
         block = self._block
         assert block is not None
-        if m := _TIME.match(line):
+        if m := _TIME.search(line):
             block["time"] = m.group(1)
-        elif m := _AZ.match(line):
+        elif m := _AZ.search(line):
             block["az"] = m.group(1)
-        elif m := _EL.match(line):
+        elif m := _EL.search(line):
             block["el"] = m.group(1)
-        elif m := _STORED.match(line):
+        elif m := _STORED.search(line):
             self._block = None
             if "az" not in block or "el" not in block:
-                out.append(JunkReply(raw, "status report without azimuth or elevation"))
+                self._spoiled(raw, "status report without azimuth or elevation", out)
                 return
             az, el = int(block["az"]), int(block["el"])
             if az > 360 or el > 90:
-                out.append(JunkReply(raw, "status report out of range"))
+                self._spoiled(raw, "status report out of range", out)
                 return
             self._settle("slew" if "slew" in self._owed else "report")
             out.append(
@@ -187,13 +187,23 @@ class SatelCodec:
                     controller_time=block.get("time"),
                 )
             )
-        elif line.startswith(("Mode", "Azimuth", "Elevation", "Time")):
-            if line.startswith(("Azimuth", "Elevation")):
-                self._block = None  # a garbled position line spoils the whole report
-                out.append(JunkReply(raw, "unreadable position line"))
-        elif line != "":
+        elif "Azimuth" in line or "Elevation" in line:
+            self._block = None  # a garbled position line spoils the whole report
+            self._spoiled(raw, "unreadable position line", out)
+        elif "Mode" in line or "Time" in line or line == "":
+            pass
+        else:
             self._block = None
-            out.append(JunkReply(raw, "unexpected line inside a status report"))
+            self._spoiled(raw, "unexpected line inside a status report", out)
+
+    def _spoiled(self, raw: bytes, why: str, out: list[Reply]) -> None:
+        """A report that cannot be read. If it ended a slew, the slew is over all the same:
+        say so (UNTRUSTED), so the engine asks for a fresh report instead of waiting on."""
+        if "slew" in self._owed:
+            self._owed.remove("slew")
+            out.append(JunkReply(raw, UNTRUSTED))
+        else:
+            out.append(JunkReply(raw, why))
 
     def _settle(self, kind: str) -> None:
         if kind in self._owed:

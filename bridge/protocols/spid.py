@@ -20,7 +20,8 @@ Rules:
    ``awaiting_reply`` says whether a frame is still owed.
 3. A reply frame starts with 0x57, ends with 0x20, carries raw digits (0..9) and a known
    resolution; anything else is junk and the parser resynchronises on the next 0x57. MD-01 debug
-   lines (``<digits>: text`` CR LF) are skipped whole, never read as a position.
+   lines (``<digits>: text`` CR LF) are skipped whole, never read as a position; a line ends at
+   its LF or where a well-formed frame starts, so a torn line costs no reply.
 4. Only frames that answer something we sent become readings.
 """
 
@@ -148,7 +149,12 @@ class SpidCodec:
                 if colon == -1 and buf[i:].isdigit() and len(buf) - i < 12:
                     break  # digits so far: the colon may still come
                 if colon != -1 and buf[i:colon].isdigit():
-                    if end == -1:
+                    # the line ends at its newline, or where a reply frame starts: a line whose
+                    # end was lost must not swallow the replies after it
+                    frame_at = self._frame_start(buf, colon + 1, end)
+                    if frame_at is not None:
+                        end = frame_at - 1
+                    elif end == -1:
                         if len(buf) - i < _MAX_DEBUG_LINE:
                             break  # wait for the rest of the line
                         end = i + _MAX_DEBUG_LINE - 1
@@ -165,18 +171,35 @@ class SpidCodec:
             out.append(JunkReply(bytes(junk), "not a reply frame"))
         return out
 
+    def _frame_start(self, buf: bytearray, start: int, end: int) -> int | None:
+        """Where a well-formed reply frame starts in buf[start:end] (end -1: to the end)."""
+        stop = len(buf) if end == -1 else end
+        j = buf.find(START, start, stop)
+        while j != -1:
+            if len(buf) - j >= self._reply_len and self._well_formed(buf[j : j + self._reply_len]):
+                return j
+            j = buf.find(START, j + 1, stop)
+        return None
+
+    def _well_formed(self, frame: bytes | bytearray) -> bool:
+        if frame[0] != START or frame[-1] != END:
+            return False
+        if self.variant == "rot1prog":
+            return all(d <= 9 for d in frame[1:4])
+        return (
+            all(d <= 9 for d in frame[1:5] + frame[6:10])
+            and frame[5] in RESOLUTIONS
+            and frame[10] in RESOLUTIONS
+        )
+
     def _decode(self, frame: bytes) -> Reply | None:
-        if frame[-1] != END:
+        if not self._well_formed(frame):
             return None
         if self.variant == "rot1prog":
             digits = frame[1:4]
-            if any(d > 9 for d in digits):
-                return None
             az = 100 * digits[0] + 10 * digits[1] + digits[2] - 360
             return self._answer(frame, float(az), None)
-        h, ph, v, pv = frame[1:5], frame[5], frame[6:10], frame[10]
-        if any(d > 9 for d in h + v) or ph not in RESOLUTIONS or pv not in RESOLUTIONS:
-            return None
+        h, ph, v = frame[1:5], frame[5], frame[6:10]
         az = 100 * h[0] + 10 * h[1] + h[2] + h[3] / 10 - 360
         el = 100 * v[0] + 10 * v[1] + v[2] + v[3] / 10 - 360
         self.resolution = ph
