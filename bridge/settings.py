@@ -332,6 +332,10 @@ def load_settings(
             raise ConfigError(f"config file {path}: {exc.strerror}") from None
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"config file {path} is not valid TOML: {exc}") from None
+        except UnicodeDecodeError as exc:
+            raise ConfigError(
+                f"config file {path} is not UTF-8 text (byte {exc.start}): save it as UTF-8"
+            ) from None
     _apply_rotator_env(data, env)
     if "rotators" not in data and not any(
         k.upper().startswith("ROTOR_BRIDGE_ROTATORS") for k in env

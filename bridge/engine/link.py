@@ -29,7 +29,7 @@ from bridge.protocols.base import Codec, ModelSpec
 log = logging.getLogger(__name__)
 
 JUNK_QUIET_S = 0.05
-_JUNK_KEEP = 256
+_JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 
 @dataclass(frozen=True)

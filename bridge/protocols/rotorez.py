@@ -57,8 +57,9 @@ OPTION_LABELS = {
 
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
 # what a healthy board emits besides replies: the power-on byte, the banner after an invalid
-# command (a stop while idle) and the version text
-_KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?")
+# command (a stop while idle) and the version text; and a reply that came after its query was
+# given up (a board busy printing banners answers late)
+_KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?|;\d{3}")
 _BOARD_BYTES = frozenset(b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ")
 _JUNK_WINDOW = 64  # bytes of recent junk kept to find a version banner torn across reads
 
