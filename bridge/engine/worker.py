@@ -466,7 +466,7 @@ class Worker:
             times += link.wakeups()
             if link.slew is not None:
                 times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
-        if self._pending is not None and self._pending_replaced:
+        if self._pending is not None and self._stream_wait(now):
             max_wait = STREAM_MAX_WAIT_S[self.cfg.spec.retarget.value]
             times.append(min(self._pending_t + BURST_QUIET_S, self._stream_t + max_wait))
         deadline = mo.next_deadline(self._motion, self.cfg.motion, now)

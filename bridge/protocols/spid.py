@@ -31,6 +31,7 @@ import math
 import re
 
 from bridge.protocols.base import (
+    UNTRUSTED,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -58,10 +59,12 @@ class SpidCodec:
         self.resolution: int | None = None  # pulses per degree, learned from replies
         self._owed = 0  # replies still owed by the controller
         self._buf = bytearray()
+        self._noisy = False  # junk (not a debug line) arrived while a reply was owed
 
     # -- encoding -------------------------------------------------------------------------
     def encode_query(self) -> bytes:
         self._owed += 1
+        self._noisy = False
         return _frame(K_STATUS)
 
     def encode_stop(self) -> bytes:
@@ -135,11 +138,13 @@ class SpidCodec:
                 if len(buf) - i < self._reply_len:
                     break
                 frame = bytes(buf[i : i + self._reply_len])
-                reply = self._decode(frame)
-                if reply is not None:
+                if self._well_formed(frame):
                     if junk:
+                        self._junk_seen()  # before decoding: this frame is not trusted
                         out.append(JunkReply(bytes(junk), "not a reply frame"))
                         junk.clear()
+                    reply = self._decode(frame)
+                    assert reply is not None
                     out.append(reply)
                     i += self._reply_len
                     continue
@@ -168,8 +173,13 @@ class SpidCodec:
             i += 1
         del buf[:i]
         if junk:
+            self._junk_seen()
             out.append(JunkReply(bytes(junk), "not a reply frame"))
         return out
+
+    def _junk_seen(self) -> None:
+        if self._owed > 0:
+            self._noisy = True
 
     def _frame_start(self, buf: bytearray, start: int, end: int) -> int | None:
         """Where a well-formed reply frame starts in buf[start:end] (end -1: to the end)."""
@@ -209,6 +219,11 @@ class SpidCodec:
         if self._owed <= 0:
             return JunkReply(frame, "position frame nobody asked for")
         self._owed -= 1
+        if self._noisy:
+            # line noise inside this exchange: the frame may be spliced from two (the engine
+            # asks again instead of publishing it)
+            self._noisy = False
+            return JunkReply(frame, UNTRUSTED)
         return PositionReply(az, el)
 
 

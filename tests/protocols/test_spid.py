@@ -126,14 +126,14 @@ def test_malformed_frames_are_junk(bad: bytes) -> None:
 
 
 @given(st.binary(max_size=40), st.binary(max_size=40))
-def test_reply_found_amid_junk_without_frame_starts(prefix: bytes, suffix: bytes) -> None:
+def test_junk_around_a_reply_never_gives_a_wrong_reading(prefix: bytes, suffix: bytes) -> None:
     c = SpidCodec()
     c.encode_query()
-    prefix = prefix.replace(b"W", b"")
     got = [r for r in c.feed(prefix + REPLY_12_5_34 + suffix) if isinstance(r, PositionReply)]
-    # a debug-line lookalike in the prefix may swallow bytes up to a newline; otherwise found
-    if b"\n" not in prefix and b":" not in prefix:
-        assert got[:1] == [PositionReply(12.5, 34.0)]
+    # noise in the exchange makes the reply untrusted (asked again); it never makes up a value
+    assert got in ([], [PositionReply(12.5, 34.0)])
+    if not prefix:
+        assert got == [PositionReply(12.5, 34.0)]
 
 
 def test_spid_specs() -> None:
