@@ -1,0 +1,666 @@
+"""The fault suite's real parts: a broker, emulated controllers on real ptys with a wire tap,
+the bridge (in-process or as its own process), and the ground truth the invariants are judged by.
+
+Ground truth comes from two places the bridge never sees:
+- the emulator's own state (where the rotor really is, which frames it obeyed), and
+- a tap on the controller's transmit line: every byte the controller sent, parsed by the small
+  independent parsers below (not the bridge's codecs), so "a bearing the controller did not
+  report" can be checked exactly. Garbage injected onto the line bypasses the tap: it is line
+  noise, not a report.
+
+The soak runner (tests/soak) uses the same pieces.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge import emulators
+from bridge.app import App
+from bridge.emulators.pty import EmulatedPort
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.emulators.spid_models import MOTION_OUTCOMES
+from bridge.mosquitto import Mosquitto
+from bridge.settings import Settings
+from tests.support import Message, Probe, wait_until
+
+ROOT = Path(__file__).resolve().parents[2]
+
+# -- timings -------------------------------------------------------------------------------------
+# Scaled down like tests/integration (same ratios as real hardware: the brake delay is much
+# longer than a poll, a settle window longer than two polls), a little faster still.
+EMU_FAST: dict[str, dict[str, Any]] = {
+    "rotorez": {"speed_deg_s": 40.0, "brake_delay_s": 0.8, "jitter_deg": 1},
+    "rotorcard": {"speed_deg_s": 40.0, "brake_delay_s": 0.0, "jitter_deg": 1},
+    "dcu1": {"speed_deg_s": 40.0, "brake_delay_s": 0.8},
+    "rot2prog": {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0, "baud": 9600},
+    "rot1prog": {"az_speed_deg_s": 30.0},
+    "md01": {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0},
+    "satel": {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0, "corrupt_on_misuse": True},
+}
+_ANALOG = {
+    "idle_poll_interval_s": 0.25,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 0.4,
+    "stall_timeout_s": 2.5,
+    "silence_timeout_s": 1.0,
+}
+_DIGITAL = {
+    "idle_poll_interval_s": 0.25,
+    "moving_poll_interval_s": 0.1,
+    "settle_s": 0.5,
+    "stall_timeout_s": 4.0,
+    "silence_timeout_s": 1.5,
+}
+BRIDGE_FAST: dict[str, dict[str, Any]] = {
+    "rotorez": {**_ANALOG, "brake_delay_s": 0.8},
+    "rotorcard": {**_ANALOG, "brake_delay_s": 0},
+    "dcu1": {**_ANALOG, "brake_delay_s": 0.8},
+    "rot2prog": {**_DIGITAL, "baud": 9600},
+    "rot1prog": dict(_DIGITAL),
+    "md01": dict(_DIGITAL),
+    # a status report owed is given up after 2 s (SatelCodec): silence needs longer than that
+    "satel": {**_DIGITAL, "silence_timeout_s": 3.0},
+}
+SPID = ("rot2prog", "rot1prog", "md01")
+ROTOREZ_FAMILY = ("rotorez", "rotorcard", "dcu1")
+AZEL = ("rot2prog", "md01", "satel")
+# ground-truth tolerance for "the rotor is there": emulator jitter + the bridge's tolerance
+ARRIVAL_TOL_DEG = {"rotorez": 3.5, "rotorcard": 3.5, "dcu1": 3.5, "satel": 1.5}
+
+
+def arrival_tol(model: str) -> float:
+    return ARRIVAL_TOL_DEG.get(model, 1.0)
+
+
+# -- the wire tap and independent parsers of what a controller reports ---------------------------
+class Tap:
+    """Wraps a sans-IO responder; records every byte the controller transmits, with its time.
+
+    It changes nothing: every call goes to the responder. It is the serial sniffer on the
+    controller's TX line.
+    """
+
+    def __init__(self, device: Any) -> None:
+        self._device = device
+        self._lock = threading.Lock()
+        self._sent = bytearray()
+
+    def due_output(self, now: float) -> bytes:
+        out = self._device.due_output(now)
+        if out:
+            with self._lock:
+                self._sent += out
+        return out
+
+    def sent(self) -> bytes:
+        with self._lock:
+            return bytes(self._sent)
+
+    def sent_since(self, offset: int) -> bytes:
+        with self._lock:
+            return bytes(self._sent[offset:])
+
+    def sent_count(self) -> int:
+        with self._lock:
+            return len(self._sent)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._device, name)
+
+
+_ROTOREZ_REPLY = re.compile(rb";(\d{3})")
+_SATEL_AZ = re.compile(rb"Azimuth = (\d{1,3})")
+_SATEL_EL = re.compile(rb"Elevation = (\d{1,3})")
+
+
+def reported_positions(model: str, wire: bytes) -> tuple[set[float], set[float]]:
+    """(azimuths, elevations) a controller of ``model`` put on the wire, from its own bytes.
+
+    Written from the protocol documents, independently of bridge/protocols.
+    """
+    az: set[float] = set()
+    el: set[float] = set()
+    if model in ("rotorez", "rotorcard", "dcu1"):
+        for m in _ROTOREZ_REPLY.finditer(wire):
+            az.add(float(int(m.group(1)) % 360))
+    elif model == "satel":
+        az = {float(int(m.group(1))) for m in _SATEL_AZ.finditer(wire)}
+        el = {float(int(m.group(1))) for m in _SATEL_EL.finditer(wire)}
+    elif model == "rot1prog":
+        for i in range(len(wire) - 4):
+            f = wire[i : i + 5]
+            if f[0] == 0x57 and f[4] == 0x20 and all(d <= 9 for d in f[1:4]):
+                az.add(float(100 * f[1] + 10 * f[2] + f[3] - 360))
+    else:  # rot2prog, md01: 57 H1 H2 H3 H4 PH V1 V2 V3 V4 PV 20, raw digits, tenths
+        for i in range(len(wire) - 11):
+            f = wire[i : i + 12]
+            if f[0] != 0x57 or f[11] != 0x20 or any(d > 9 for d in f[1:5] + f[6:10]):
+                continue
+            az.add(round(100 * f[1] + 10 * f[2] + f[3] + f[4] / 10 - 360, 1))
+            el.add(round(100 * f[6] + 10 * f[7] + f[8] + f[9] / 10 - 360, 1))
+    return az, el
+
+
+def _in(value: float, values: set[float], wraps: bool) -> bool:
+    if any(abs(value - v) < 1e-6 for v in values):
+        return True
+    return wraps and any(abs((value % 360) - (v % 360)) < 1e-6 for v in values)
+
+
+def start_emulator(model: str, link: Path, **options: Any) -> EmulatedPort[Any]:
+    """An emulated controller on a fresh pty at ``link``, its transmit line tapped."""
+    device = emulators.create(model, now=time.monotonic(), **options)
+    return EmulatedPort(Tap(device), link=str(link), name=model)
+
+
+def tap_of(emu: EmulatedPort[Any]) -> Tap:
+    device = emu.device
+    assert isinstance(device, Tap)
+    return device
+
+
+def bogus_bearings(
+    model: str, emu: EmulatedPort[Any], messages: list[Message], root: str
+) -> list[str]:
+    """Published bearings/elevations the controller never reported (SatEL estimates excepted).
+
+    Checks ``R/bearing`` and ``R/elevation`` (not for the SatEL, whose bearing topic also carries
+    estimates) and the bearing/elevation of every ``R/status`` that is not marked estimated.
+    """
+    az, el = reported_positions(model, tap_of(emu).sent())
+    wraps = model in ("rotorez", "rotorcard", "dcu1", "satel")
+    bad: list[str] = []
+    for m in messages:
+        if m.topic == f"{root}/status":
+            doc = json.loads(m.payload)
+            if doc.get("estimated"):
+                continue
+            if doc.get("bearing") is not None and not _in(float(doc["bearing"]), az, wraps):
+                bad.append(f"status bearing {doc['bearing']}")
+            if doc.get("elevation") is not None and not _in(float(doc["elevation"]), el, False):
+                bad.append(f"status elevation {doc['elevation']}")
+        elif m.topic == f"{root}/bearing" and model != "satel":
+            if not _in(float(m.text), az, wraps):
+                bad.append(f"bearing {m.text}")
+        elif m.topic == f"{root}/elevation" and model != "satel":
+            if not _in(float(m.text), el, False):
+                bad.append(f"elevation {m.text}")
+    return bad
+
+
+def near_deg(a: float, b: float, tol: float, wraps: bool = True) -> bool:
+    d = abs(a - b)
+    if wraps:
+        d %= 360
+        d = min(d, 360 - d)
+    return d <= tol
+
+
+# -- configuration files -------------------------------------------------------------------------
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(v)
+    if isinstance(v, str | Path):
+        return json.dumps(str(v))  # a JSON string is a valid TOML basic string
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"no TOML for {v!r}")
+
+
+def to_toml(doc: dict[str, Any]) -> str:
+    """Enough TOML for the bridge's configuration: scalars, tables, arrays of tables."""
+    lines: list[str] = []
+
+    def table(prefix: str, d: dict[str, Any]) -> None:
+        subs = []
+        for k, v in d.items():
+            if isinstance(v, dict):
+                subs.append((k, v))
+            elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+                subs.append((k, v))
+            else:
+                lines.append(f"{k} = {_toml_value(v)}")
+        for k, v in subs:
+            name = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict):
+                lines.append(f"\n[{name}]")
+                table(name, v)
+            else:
+                for item in v:
+                    lines.append(f"\n[[{name}]]")
+                    table(name, item)
+
+    table("", doc)
+    return "\n".join(lines) + "\n"
+
+
+# -- the rig: broker + tapped emulators + the bridge in-process ----------------------------------
+class Rig:
+    """Like tests/integration's Rig, with tapped emulators and the fault suite's timings."""
+
+    def __init__(self, tmp: Path, broker: Mosquitto, probe: Probe) -> None:
+        self.tmp = tmp
+        self.broker = broker
+        self.probe = probe
+        self.emus: dict[str, EmulatedPort[Any]] = {}
+        self.models: dict[str, str] = {}
+        self.rotators: list[dict[str, Any]] = []
+        self.app: App | None = None
+        self.base = "rotor"
+        self.mqtt_extra: dict[str, Any] = {}
+
+    def add(
+        self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
+    ) -> EmulatedPort[Any]:
+        link = self.tmp / f"serial-by-id-{rid}"
+        port = start_emulator(model, link, **{**EMU_FAST[model], **(emu or {})})
+        self.emus[rid] = port
+        self.models[rid] = model
+        self.rotators.append(
+            {"id": rid, "model": model, "port": str(link), **BRIDGE_FAST[model], **bridge}
+        )
+        return port
+
+    @property
+    def settings(self) -> Settings:
+        return Settings(
+            mqtt={
+                "host": "127.0.0.1",
+                "port": self.broker.port,
+                "base_topic": self.base,
+                "client_id": f"bridge-under-test-{id(self)}",
+                **self.mqtt_extra,
+            },
+            rotators=self.rotators,
+            state_file=self.tmp / "state.json",
+        )
+
+    def start(self) -> App:
+        self.app = App(self.settings)
+        self.app.start()
+        return self.app
+
+    def stop(self) -> None:
+        if self.app is not None:
+            self.app.stop()
+            self.app = None
+
+    def root(self, rid: str) -> str:
+        return self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
+
+    def topic(self, rid: str, leaf: str) -> str:
+        return f"{self.root(rid)}/{leaf}"
+
+    def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
+        """Online and settled (idle; ``unknown`` for a DCU-1, which cannot report)."""
+        settled = "unknown" if self.models[rid] == "dcu1" else "idle"
+        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
+        self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
+
+    def retained(self) -> dict[str, bytes]:
+        return fast_retained(self.broker.port, f"{self.base}/#")
+
+    def status(self, rid: str) -> Any:
+        assert self.app is not None
+        return next(r for r in self.app.rotators if r.id == rid).status
+
+    def bogus(self, rid: str) -> list[str]:
+        return bogus_bearings(self.models[rid], self.emus[rid], self.probe.messages, self.root(rid))
+
+    def arrived(self, rid: str, az: float, el: float | None = None, timeout_s: float = 20) -> None:
+        """Wait until the rotor really is at az (/el) and still (the emulator's ground truth)."""
+        model, emu = self.models[rid], self.emus[rid]
+        tol = arrival_tol(model)
+
+        def there(s: Any) -> bool:
+            if s.is_moving or s.in_brake_delay:
+                return False
+            if not near_deg(s.az_deg, az, tol, model not in SPID):
+                return False
+            return el is None or abs(s.el_deg - el) <= tol
+
+        emu.wait_for(there, timeout_s)
+
+    def close(self) -> None:
+        self.stop()
+        for emu in self.emus.values():
+            emu.close()
+
+
+@pytest.fixture
+def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
+    r = Rig(tmp_path, broker, probe)
+    yield r
+    r.close()
+
+
+# -- invariants against the bridge's own status and the ground truth ----------------------------
+def motion_frames(rig: Rig, rid: str) -> int:
+    """Frames that made (or could have made) the rotor move, as the controller logged them."""
+    model, emu = rig.models[rid], rig.emus[rid]
+    if model in SPID:
+        return len(emu.frames(*MOTION_OUTCOMES))
+    if model == "satel":
+        return len(emu.frames("slew"))
+    return len(emu.frames(*BEARING_OUTCOMES))
+
+
+def send_target(rig: Rig, rid: str, az: float, el: float) -> None:
+    if rig.models[rid] in ("md01", "rot2prog", "satel"):
+        rig.probe.publish(rig.topic(rid, "target"), f"{az:g} {el:g}")
+    else:
+        rig.probe.publish(rig.topic(rid, "target"), f"{az:g}")
+
+
+def retained_matches_bridge(rig: Rig, rid: str, snap: dict[str, bytes]) -> bool:
+    status = rig.status(rid)
+    want = {
+        "availability": b"online" if status.available else b"offline",
+        "state": status.state.value.encode(),
+    }
+    if any(snap.get(rig.topic(rid, k)) != v for k, v in want.items()):
+        return False
+    doc = json.loads(snap.get(rig.topic(rid, "status"), b"{}"))
+    if doc.get("bearing") != status.bearing_deg or doc.get("state") != status.state.value:
+        return False
+    if status.bearing_deg is not None and rig.models[rid] != "satel":
+        return float(snap.get(rig.topic(rid, "bearing"), b"nan")) == status.bearing_deg
+    return True
+
+
+def assert_retained_matches_within_one_poll(rig: Rig, rids: list[str]) -> None:
+    """The broker's retained state equals the bridge's own status within one (idle) poll."""
+    poll_s = max(float(r["idle_poll_interval_s"]) for r in rig.rotators)
+
+    def all_match() -> bool:
+        snap = rig.retained()
+        return all(retained_matches_bridge(rig, rid, snap) for rid in rids)
+
+    wait_until(all_match, poll_s + 0.75, "retained state == the bridge's status")
+
+
+def assert_bridge_matches_truth(rig: Rig, rid: str) -> None:
+    """An idle rotor's published bearing is where the rotor really is."""
+    status, truth = rig.status(rid), rig.emus[rid].state()
+    model = rig.models[rid]
+    assert not truth.is_moving
+    assert status.bearing_deg is not None
+    assert near_deg(status.bearing_deg, truth.az_deg, 2.5, model not in SPID), (status, truth)
+
+
+# -- line noise and replies cut short ----------------------------------------------------------
+BOARD_BYTES = b" .0123456789;\xe0ABCDEFGHIJKLMNOPQRSTUVWXYZ"  # what a Rotor-EZ may transmit
+NOT_ON_A_ROTOREZ_LINE = bytes(b for b in range(256) if b not in BOARD_BYTES)
+NOT_IN_A_SPID_FRAME = bytes(b for b in range(256) if b not in b"W :" and not 0x30 <= b <= 0x39)
+
+
+def line_noise(rng: random.Random, model: str) -> bytes:
+    """Random noise that can be told from a reply: it starts with a byte the controller never
+    sends (Rotor-EZ family), cannot start or end a SPID frame, or is a line of its own (SatEL;
+    noise glued to a report line is test_serial.py::test_noise_byte_during_a_satel_slew_...)."""
+    n = rng.randint(1, 24)
+    if model in ROTOREZ_FAMILY:
+        return bytes([rng.choice(NOT_ON_A_ROTOREZ_LINE)]) + rng.randbytes(n)
+    if model in SPID:
+        return bytes(rng.choice(NOT_IN_A_SPID_FRAME) for _ in range(n))
+    return bytes(rng.choice(b"\x00\x07\xffqwerty=%!?") for _ in range(n)) + b"\r\n"
+
+
+def after_transmission(emu: Any, timeout_s: float = 5.0) -> None:
+    """Wait until the controller has sent something more and its transmitter is idle again."""
+    n = tap_of(emu).sent_count()
+    emu.wait_until(
+        lambda d, now: (d.sent_count(), d._tx.pending()),  # the emulator's UART queue
+        lambda v: v[0] > n and v[1] == 0,
+        timeout_s,
+    )
+
+
+def cut_short(rng: random.Random, model: str, emu: Any) -> bytes:
+    """A reply cut short by a flaky adapter (a value the rotor is not at)."""
+    if model in ROTOREZ_FAMILY:
+        return b";3" if rng.random() < 0.5 else b";33"
+    if model in SPID:
+        # the start of the controller's own last frame (so no splice can make up a value)
+        wire = tap_of(emu).sent()
+        last = wire.rfind(b"\x57", 0, len(wire) - 11)
+        return wire[last : last + rng.randint(1, 11)]
+    return (
+        b"Motion ENABLED\r\nMode 0 - azimuth break at NORTH\r\nTime: 2026/01/01 00:00:00\r\n"
+        b"Azimuth = 333     Absolute = 333\r\n"
+    )
+
+
+# -- the bridge as its own process ---------------------------------------------------------------
+class BridgeProcess:
+    """``python -m bridge run -c FILE``: the real service process, its log kept in a file."""
+
+    def __init__(self, tmp: Path, config: dict[str, Any], *, log_level: str = "DEBUG") -> None:
+        self.tmp = tmp
+        self.config_path = tmp / "bridge.toml"
+        self.config_path.write_text(to_toml(config))
+        self.log_path = tmp / "bridge.log"
+        self.log_level = log_level
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> BridgeProcess:
+        env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
+        env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+        cmd = [sys.executable, "-m", "bridge", "--log-level", self.log_level, "run"]
+        with open(self.log_path, "ab") as log:
+            self.proc = subprocess.Popen(
+                [*cmd, "-c", str(self.config_path)],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=env,
+                cwd=str(ROOT),
+            )
+        return self
+
+    @property
+    def pid(self) -> int:
+        assert self.proc is not None
+        return self.proc.pid
+
+    def alive(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    def log(self) -> str:
+        return self.log_path.read_text(errors="replace") if self.log_path.exists() else ""
+
+    def terminate(self, timeout_s: float = 10.0) -> int:
+        assert self.proc is not None
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        return self.proc.wait(timeout_s)
+
+    def kill(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+    def rss_kib(self) -> int:
+        assert self.proc is not None
+        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+        raise AssertionError("no VmRSS")
+
+
+def run_cli(*args: str, timeout_s: float = 30) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return subprocess.run(
+        [sys.executable, "-m", "bridge", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=str(ROOT),
+        timeout=timeout_s,
+    )
+
+
+# -- a certificate authority, made at test time (never committed) --------------------------------
+class Pki:
+    """A CA, a server certificate for 127.0.0.1 and a client certificate, made with openssl."""
+
+    def __init__(self, directory: Path) -> None:
+        self.dir = directory
+        directory.mkdir(parents=True, exist_ok=True)
+        ec = ["-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes"]
+        self._sh("req", "-x509", *ec, "-keyout", "ca.key", "-out", "ca.crt", "-days", "2",
+                 "-subj", "/CN=rotor-bridge test CA")  # fmt: skip
+        self._sh("req", "-x509", *ec, "-keyout", "rogue-ca.key", "-out", "rogue-ca.crt",
+                 "-days", "2", "-subj", "/CN=some other CA")  # fmt: skip
+        for name, san in (
+            ("server", "subjectAltName=IP:127.0.0.1,DNS:localhost"),
+            ("client", "subjectAltName=DNS:rotor-bridge"),
+        ):
+            self._sh("req", *ec, "-keyout", f"{name}.key", "-out", f"{name}.csr",
+                     "-subj", f"/CN={name}")  # fmt: skip
+            (directory / f"{name}.ext").write_text(san + "\n")
+            self._sh("x509", "-req", "-in", f"{name}.csr", "-CA", "ca.crt", "-CAkey", "ca.key",
+                     "-CAcreateserial", "-out", f"{name}.crt", "-days", "2",
+                     "-extfile", f"{name}.ext")  # fmt: skip
+        for key in directory.glob("*.key"):
+            os.chmod(key, 0o600)
+
+    def _sh(self, *args: str) -> None:
+        subprocess.run(["openssl", *args], cwd=self.dir, check=True, capture_output=True)
+
+    def path(self, name: str) -> Path:
+        return self.dir / name
+
+
+def mosquitto_password_file(path: Path, users: dict[str, str]) -> Path:
+    path.unlink(missing_ok=True)
+    for i, (user, password) in enumerate(users.items()):
+        flags = ["-c"] if i == 0 else []
+        subprocess.run(
+            ["mosquitto_passwd", "-b", *flags, str(path), user, password],
+            check=True,
+            capture_output=True,
+        )
+    return path
+
+
+# -- probes and brokers without Nagle's 40 ms -----------------------------------------------------
+# Small MQTT packets on loopback otherwise wait for a delayed TCP ACK (about 40 ms a round trip);
+# with thousands of round trips that is most of the suite's time. Production is unaffected.
+FAST_BROKER_CONF = "allow_anonymous true\nset_tcp_nodelay true"
+
+
+def _nodelay(client: Any, userdata: Any, sock: Any) -> None:
+    import socket
+
+    with contextlib.suppress(OSError, AttributeError):
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+class FastProbe(Probe):
+    """tests.support.Probe with TCP_NODELAY, several topic filters ("a|b"), and optionally a
+    user name/password and TLS with our client certificate."""
+
+    def __init__(
+        self,
+        port: int,
+        topic_filter: str = "#",
+        *,
+        username: str | None = None,
+        password: str | None = None,
+        pki: Pki | None = None,
+        max_inflight: int = 20,
+    ) -> None:
+        import paho.mqtt.client as paho
+        from paho.mqtt.enums import CallbackAPIVersion
+
+        self.messages = []
+        self._cond = threading.Condition()
+        self._connected = threading.Event()
+        self.filter = topic_filter
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"fast-probe-{id(self)}")
+        if username is not None:
+            c.username_pw_set(username, password)
+        if pki is not None:
+            c.tls_set(
+                ca_certs=str(pki.path("ca.crt")),
+                certfile=str(pki.path("client.crt")),
+                keyfile=str(pki.path("client.key")),
+            )
+        c.on_socket_open = _nodelay
+        c.max_inflight_messages_set(max_inflight)
+        c.on_connect = self._on_connect
+        c.on_message = self._on_message
+        c.reconnect_delay_set(0.1, 0.5)  # type: ignore[arg-type]
+        c.connect_async("127.0.0.1", port, keepalive=10)
+        c.loop_start()
+        self.client = c
+        wait_until(self._connected.is_set, 10, "probe connected")
+
+    def _on_connect(self, client, userdata, flags, rc, props) -> None:  # noqa: ANN001
+        client.subscribe([(f, 1) for f in self.filter.split("|")])
+        self._connected.set()
+
+
+def LoginProbe(  # noqa: N802  (reads like the class it makes)
+    port: int, *, username: str, password: str, pki: Pki | None = None, topic_filter: str = "#"
+) -> FastProbe:
+    return FastProbe(port, topic_filter, username=username, password=password, pki=pki)
+
+
+def fast_retained(port: int, topic_filter: str) -> dict[str, bytes]:
+    """tests.support.retained_snapshot, through a FastProbe."""
+    marker = f"probe-marker/{threading.get_ident()}-{time.monotonic_ns()}"
+    probe = FastProbe(port, f"{topic_filter}|{marker}")
+    try:
+        probe.publish(marker, b"end")
+        probe.wait_for(marker)
+        return {m.topic: m.payload for m in probe.messages if m.retain}
+    finally:
+        probe.close()
+
+
+@pytest.fixture
+def broker(tmp_path: Path) -> Iterator[Mosquitto]:
+    m = Mosquitto(tmp_path, extra_conf=FAST_BROKER_CONF).start()
+    yield m
+    m.stop()
+
+
+@pytest.fixture
+def probe(broker: Mosquitto) -> Iterator[Probe]:
+    p = FastProbe(broker.port)
+    yield p
+    p.close()
+
+
+__all__ = [
+    "BridgeProcess",
+    "Pki",
+    "Rig",
+    "Tap",
+    "bogus_bearings",
+    "mosquitto_password_file",
+    "reported_positions",
+    "run_cli",
+    "start_emulator",
+    "to_toml",
+    "wait_until",
+]

@@ -1,0 +1,137 @@
+"""The broker side under fire: killed (no clean shutdown) and restarted again and again, while
+idle and while the rotors turn, each time without persistence (every retained message lost);
+and the bridge process itself killed while commands keep arriving for it.
+
+Already covered elsewhere (tests/integration): a broker down at start, one clean restart while
+idle, the last will.
+"""
+
+from __future__ import annotations
+
+import time
+
+from bridge import emulators
+from bridge.mosquitto import Mosquitto
+from tests.faults.conftest import (
+    BRIDGE_FAST,
+    EMU_FAST,
+    BridgeProcess,
+    Rig,
+    assert_bridge_matches_truth,
+    assert_retained_matches_within_one_poll,
+    motion_frames,
+    send_target,
+)
+from tests.support import Probe, retained_snapshot, wait_until
+
+
+def polls_answered(emu, k: int, timeout_s: float = 5.0) -> None:  # noqa: ANN001
+    """Wait until the controller has answered ``k`` more polls (the serial side lives on)."""
+    n = len(emu.frames("query", "status"))
+    emu.wait_until(lambda d, now: len(d.frames("query", "status")), lambda m: m >= n + k, timeout_s)
+
+
+SYNC = "are-you-there"
+
+
+def hears_us(rig: Rig, rid: str) -> None:
+    """The bridge is subscribed again: a payload it must refuse comes back as an error."""
+    t = time.monotonic()
+    rig.probe.publish(rig.topic(rid, "target"), SYNC)
+    rig.probe.wait_for(rig.topic(rid, "error"), lambda m: SYNC.encode() in m.payload, after=t)
+
+
+def test_broker_killed_and_restarted_repeatedly_including_during_motion(rig: Rig) -> None:
+    rig.add("ez", "rotorez", emu={"start_az_deg": 10, "speed_deg_s": 80.0})
+    md = {"start_az_deg": 10, "start_el_deg": 5, "az_speed_deg_s": 80.0, "el_speed_deg_s": 40.0}
+    rig.add("md", "md01", emu=md)
+    rig.start()
+    rig.ready("ez")
+    rig.ready("md")
+    rids = ["ez", "md"]
+    # (target or None for an idle kill); after the third kill a new target is sent right after
+    # the recovery, mid-move
+    plan = [None, (250.0, 60.0), (60.0, 20.0)]
+    last = (200.0, 45.0)
+    for i, target in enumerate(plan):
+        if target is not None:
+            sent = {rid: motion_frames(rig, rid) for rid in rids}
+            for rid in rids:
+                send_target(rig, rid, *target)
+            for rid in rids:  # the controller has the new target (a Rotor-EZ stops first)
+                n = sent[rid]
+                wait_until(lambda r=rid, n=n: motion_frames(rig, r) > n, 10, f"{rid} commanded")
+        rig.broker.kill()  # crash: no goodbye, retained messages gone with it
+        for rid in rids:
+            polls_answered(rig.emus[rid], 3)  # the bridge keeps talking to its controllers
+        t = time.monotonic()
+        rig.broker.start()
+        rig.probe.wait_value("rotor/bridge/state", "online", timeout_s=15, after=t)
+        # everything the bridge owns is back on the broker, and right
+        assert_retained_matches_within_one_poll(rig, rids)
+        assert rig.retained()["rotor/bridge/state"] == b"online"
+        if i == 2:
+            # a new target right after the recovery, while still turning: obeyed
+            hears_us(rig, "ez")
+            for rid in rids:
+                send_target(rig, rid, *last)
+    rig.arrived("ez", last[0], timeout_s=25)
+    rig.arrived("md", *last, timeout_s=25)
+    for rid in rids:
+        rig.probe.wait_for(rig.topic(rid, "state"), lambda m: m.text == "idle", timeout_s=10)
+    assert_retained_matches_within_one_poll(rig, rids)
+    for rid in rids:
+        assert_bridge_matches_truth(rig, rid)
+        assert rig.bogus(rid) == [], rid
+    errors = [m.text for rid in rids for m in rig.probe.on(rig.topic(rid, "error"))]
+    refused = [e for e in errors if "refused" in e and SYNC not in e]
+    assert refused == [], refused
+
+
+def test_commands_sent_while_the_bridge_process_was_dead_never_move_the_rotor(
+    tmp_path, broker: Mosquitto, probe: Probe
+) -> None:  # noqa: ANN001
+    emu = emulators.start("rotorez", link=str(tmp_path / "tty"), **EMU_FAST["rotorez"])
+    config = {
+        "state_file": str(tmp_path / "state.json"),
+        "mqtt": {"host": "127.0.0.1", "port": broker.port, "client_id": "tower-bridge"},
+        "rotators": [
+            {
+                "id": "tower",
+                "model": "rotorez",
+                "port": str(tmp_path / "tty"),
+                **BRIDGE_FAST["rotorez"],
+            }
+        ],
+    }
+    bridge = BridgeProcess(tmp_path, config).start()
+    try:
+        probe.wait_value("rotor/state", "idle", timeout_s=20)
+        t = time.monotonic()
+        bridge.kill()  # SIGKILL: the broker publishes its last will
+        probe.wait_value("rotor/bridge/state", "offline", timeout_s=10, after=t)
+        for az in ("100", "200", '{"azimuth": 300}'):  # QoS 1, not retained: queued nowhere
+            probe.publish("rotor/target", az, qos=1)
+        probe.publish("rotor/target", "250", qos=2)
+        t = time.monotonic()
+        bridge = BridgeProcess(tmp_path, config).start()
+        probe.wait_value("rotor/bridge/state", "online", timeout_s=20, after=t)
+        probe.wait_value("rotor/availability", "online", timeout_s=10, after=t)
+        polls_answered(emu, 5)
+        assert motion_frames_of(emu) == 0 and not emu.state().is_moving
+        assert bridge.alive()
+        # and a command sent now is obeyed
+        probe.publish("rotor/target", "90")
+        emu.wait_for(lambda s: abs(s.az_deg - 90) <= 3.5 and not s.is_moving, 15)
+        assert bridge.terminate() == 0
+        snap = retained_snapshot(broker.port, "rotor/#")
+        assert snap["rotor/bridge/state"] == b"offline" and snap["rotor/availability"] == b"offline"
+    finally:
+        bridge.kill()
+        emu.close()
+
+
+def motion_frames_of(emu) -> int:  # noqa: ANN001
+    from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+
+    return len(emu.frames(*BEARING_OUTCOMES))

@@ -1,0 +1,224 @@
+"""Invalid configuration: every bad file or value stops the start with exit code 2 and one
+message naming the field; never a traceback, never the password. The CLI is run in-process for
+the many cases (same code path: ``main`` raises SystemExit(2) or the test sees the exception)
+and as the real process for the exit status itself. Random documents shaped like the real
+schema either load or fail that way, nothing else.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bridge.cli import main
+from bridge.settings import ConfigError, load_settings
+from tests.faults.conftest import run_cli, to_toml
+
+SECRET = "hunter2-do-not-show"
+BASE = """
+[mqtt]
+host = "127.0.0.1"
+port = 1883
+username = "u"
+password = "hunter2-do-not-show"
+
+[[rotators]]
+id = "tower"
+model = "rotorez"
+port = "/dev/ttyUSB0"
+"""
+
+
+def edit(old: str, new: str) -> str:
+    assert old in BASE
+    return BASE.replace(old, new, 1)
+
+
+SPID = '[[rotators]]\nid = "sat"\nmodel = "rot2prog"\nport = "/dev/ttyUSB1"\n'
+CASES: list[tuple[str, str | bytes, str]] = [
+    ("port not a number", edit("port = 1883", 'port = "abc"'), "mqtt.port"),
+    ("port out of range", edit("port = 1883", "port = 70000"), "mqtt.port"),
+    ("keepalive too short", edit("port = 1883", "port = 1883\nkeepalive_s = 1"), "keepalive_s"),
+    ("protocol 4", edit("port = 1883", 'port = 1883\nprotocol = "4"'), "mqtt.protocol"),
+    ("password not text", edit(f'password = "{SECRET}"', "password = 12"), "mqtt.password"),
+    ("typo in a key", edit("port = 1883", "port = 1883\npasword = 'x'"), "mqtt.pasword"),
+    ("no rotators", BASE.split("[[rotators]]")[0], "no rotators configured"),
+    ("empty rotators", BASE.split("[[rotators]]")[0] + "rotators = []\n", "rotators"),
+    ("rotators as a table", edit("[[rotators]]", "[rotators]"), "rotators"),
+    ("rotator without port", edit('port = "/dev/ttyUSB0"\n', ""), "rotators[0].port"),
+    ("unknown model", edit('model = "rotorez"', 'model = "rotorz"'), "rotators[0].model"),
+    ("id bridge", edit('id = "tower"', 'id = "bridge"'), "rotators[0].id"),
+    ("same id twice", BASE + SPID.replace('"sat"', '"tower"'), "used twice"),
+    ("same port twice", BASE + SPID.replace("USB1", "USB0"), "given to two rotators"),
+    ("elevation on rotorez", BASE + "el_max_deg = 90\n", "no elevation axis"),
+    ("az limit beyond range", BASE + "az_max_deg = 400\n", "azimuth limits"),
+    ("nan limit", BASE + "az_min_deg = nan\n", "rotators[0]"),
+    ("settle too short", BASE + "settle_s = 0.1\n", "settle_s"),
+    ("poll order", BASE + "moving_poll_interval_s = 5\n", "moving_poll_interval_s"),
+    ("negative brake", BASE + "brake_delay_s = -1\n", "rotators[0].brake_delay_s"),
+    ("park el without az", BASE.replace("rotorez", "rot2prog") + "park_el_deg = 10\n", "park_el"),
+    ("rotctld twice", BASE + "rotctld_port = 4533\n" + SPID + "rotctld_port = 4533\n", "rotctld"),
+    (
+        "ha prefix = base",
+        BASE + '[homeassistant]\ndiscovery_prefix = "rotor"\n',
+        "discovery_prefix",
+    ),
+    ("topic wildcard", edit("port = 1883", 'port = 1883\nbase_topic = "a/+"'), "mqtt.base_topic"),
+    ("log level", 'log_level = "LOUD"\n' + BASE, "log_level"),
+    ("unknown top-level key", "colour = 'blue'\n" + BASE, "colour"),
+    ("both password kinds", edit("port = 1883", 'port = 1883\npassword_file = "/x"'), "mqtt"),
+    ("password file missing", edit(f'password = "{SECRET}"', 'password_file = "/nope"'), "/nope"),
+    (
+        "tls cert without key",
+        BASE + '[mqtt.tls]\nenabled = true\ncert_file = "/etc/hostname"\n',
+        "go together",
+    ),  # fmt: skip
+    ("tls ca missing", BASE + '[mqtt.tls]\nenabled = true\nca_file = "/nope.crt"\n', "mqtt.tls"),
+    ("not TOML", "[mqtt\nhost = ", "not valid TOML"),
+    ("empty file", "", "no rotators configured"),
+]
+
+
+def run_main(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as exc:
+        main(list(args))
+    out = capsys.readouterr()
+    return int(exc.value.code or 0), out.out, out.err
+
+
+@pytest.mark.parametrize(("why", "text", "field"), CASES, ids=[c[0] for c in CASES])
+def test_a_bad_file_is_exit_2_and_one_message_naming_the_field(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    why: str,
+    text: str | bytes,
+    field: str,
+) -> None:
+    for key in [k for k in os.environ if k.startswith("ROTOR_BRIDGE_")]:
+        monkeypatch.delenv(key)
+    path = tmp_path / "bad.toml"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    for command in ("run", "check-config"):
+        code, out, err = run_main(capsys, command, "-c", str(path))
+        assert code == 2, (why, out, err)
+        assert err.startswith("rotor-bridge: ") and field in err, (why, err)
+        assert "Traceback" not in err and SECRET not in out + err, (why, err)
+        assert out == ""
+
+
+def test_bad_environment_values_name_the_variable(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "good.toml"
+    path.write_text(BASE)
+    monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__GHOST__PORT", "/dev/ttyUSB9")
+    code, _, err = run_main(capsys, "check-config", "-c", str(path))
+    assert code == 2 and "ROTOR_BRIDGE_ROTATORS__GHOST__PORT" in err and "ghost" in err
+    monkeypatch.delenv("ROTOR_BRIDGE_ROTATORS__GHOST__PORT")
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PORT", "eighteen-eighty-three")
+    code, _, err = run_main(capsys, "check-config", "-c", str(path))
+    assert code == 2 and "mqtt.port" in err and SECRET not in err
+
+
+def test_the_real_process_exits_2_without_a_traceback(tmp_path: Path) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(edit("port = 1883", 'port = "abc"'))
+    for command in ("run", "check-config"):
+        out = run_cli(command, "-c", str(path))
+        assert out.returncode == 2, out
+        assert "mqtt.port" in out.stderr and "Traceback" not in out.stderr
+        assert SECRET not in out.stdout + out.stderr
+    out = run_cli("run", "-c", str(tmp_path))  # a directory, not a file
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out
+
+
+def test_a_file_that_is_not_utf8_is_a_config_error_not_a_crash(tmp_path: Path) -> None:
+    """BUG (reported): settings.load_settings catches TOMLDecodeError and OSError, but tomllib
+    raises UnicodeDecodeError for bytes that are not UTF-8. A configuration saved in Latin-1
+    (an editor's default on some systems; a rotator named "Süd") crashes with a traceback and
+    exit status 1, which the systemd unit restarts (it only spares exit code 2): a crash loop."""
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(
+        BASE.replace('id = "tower"', 'id = "tower"\nname = "Mast Süd"').encode("latin-1")
+    )
+    for command in ("run", "check-config"):
+        out = run_cli(command, "-c", str(path))
+        assert "Traceback" not in out.stderr, out.stderr[-600:]
+        assert out.returncode == 2 and "UTF-8" in out.stderr.upper().replace("UTF8", "UTF-8")
+
+
+# -- random documents shaped like the schema ---------------------------------------------------
+SCALARS = st.one_of(
+    st.none(),  # left out
+    st.booleans(),
+    st.integers(-(2**40), 2**40),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=20),
+    st.sampled_from(["rotorez", "rot2prog", "satel", "dcu1", "/dev/null", "/etc/hostname", ""]),
+)
+VALUES = st.one_of(SCALARS, st.lists(SCALARS.filter(lambda v: v is not None), max_size=3))
+ROTATOR_KEYS = [
+    "id", "name", "model", "port", "baud", "topic", "idle_poll_interval_s",
+    "moving_poll_interval_s", "tolerance_deg", "brake_delay_s", "stall_timeout_s", "settle_s",
+    "deadband_deg", "noise_deg", "silence_timeout_s", "az_min_deg", "az_max_deg", "el_min_deg",
+    "el_max_deg", "rotctld_port", "rotctld_bind", "park_az_deg", "park_el_deg", "bogus",
+]  # fmt: skip
+MQTT_KEYS = [
+    "host", "port", "username", "password", "password_file", "client_id", "keepalive_s",
+    "base_topic", "protocol", "bogus",
+]  # fmt: skip
+TLS_KEYS = ["enabled", "ca_file", "cert_file", "key_file", "insecure"]
+
+
+def table(keys: list[str]) -> st.SearchStrategy[dict[str, Any]]:
+    return st.dictionaries(st.sampled_from(keys), VALUES, max_size=len(keys)).map(
+        lambda d: {k: v for k, v in d.items() if v is not None}
+    )
+
+
+def rotator() -> st.SearchStrategy[dict[str, Any]]:
+    base = st.fixed_dictionaries(
+        {
+            "id": st.sampled_from(["tower", "yagi", "Tower", "bridge", "a" * 60]),
+            "model": st.sampled_from(["rotorez", "rotorcard", "dcu1", "rot2prog", "md01", "satel"]),
+            "port": st.sampled_from(["/dev/ttyUSB0", "/dev/ttyUSB1", ""]),
+        }
+    )
+    return st.tuples(base, table(ROTATOR_KEYS)).map(lambda p: {**p[0], **p[1]})
+
+
+DOCUMENTS = st.fixed_dictionaries(
+    {},
+    optional={
+        "mqtt": st.tuples(table(MQTT_KEYS), table(TLS_KEYS)).map(
+            lambda p: {**p[0], **({"tls": p[1]} if p[1] else {})}
+        ),
+        "homeassistant": table(["enabled", "discovery_prefix", "status_topic", "birth_delay_s"]),
+        "rotators": st.lists(rotator(), max_size=3),
+        "log_level": st.sampled_from(["INFO", "debug", "LOUD"]),
+        "state_file": st.sampled_from(["/tmp/x/state.json", ""]),
+    },
+)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(doc=DOCUMENTS)
+def test_any_document_loads_or_is_a_config_error(tmp_path_factory, doc: dict[str, Any]) -> None:  # noqa: ANN001
+    path = tmp_path_factory.mktemp("doc") / "c.toml"
+    try:
+        path.write_text(to_toml(doc))
+    except (TypeError, UnicodeEncodeError):
+        return  # not expressible as TOML text
+    try:
+        load_settings(path, environ={})
+    except ConfigError as exc:
+        text = str(exc)
+        assert text and "Traceback" not in text
+        first = text.splitlines()[0]
+        assert first.startswith(("invalid configuration", "config file", "no rotators")), text

@@ -1,0 +1,284 @@
+"""The serial side under fire: adapters yanked and replugged again and again (idle and while the
+rotor turns, with and without the controller losing power), replies cut short, line noise
+between replies, MD-01 debug lines cut short, noise during a SatEL slew, and the port held by
+another process. Three controller families at once: a Rotor-EZ, an MD-01 and a SatEL.
+
+What a user would notice is asserted: availability and state on the broker, the retained state
+against the bridge's own status (within one poll of every recovery), the bearings published
+against what the controller really sent (the wire tap), and where the rotor really is.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+from tests.faults.conftest import (
+    SPID,
+    Rig,
+    after_transmission,
+    assert_bridge_matches_truth,
+    assert_retained_matches_within_one_poll,
+    cut_short,
+    line_noise,
+    motion_frames,
+    send_target,
+    tap_of,
+    wait_until,
+)
+
+# (model, target, start) for the three families; targets alternate between two bearings
+FAMILIES = {"ez": "rotorez", "md": "md01", "sat": "satel"}
+TARGETS = [(130.0, 40.0), (40.0, 10.0)]
+# quicker rotors than the rig's default: these tests are about the line, not the motion
+QUICK = {
+    "ez": {"start_az_deg": 10, "speed_deg_s": 90.0},
+    "md": {"start_az_deg": 10, "start_el_deg": 5, "az_speed_deg_s": 60.0, "el_speed_deg_s": 30.0},
+    "sat": {"start_az_deg": 10, "start_el_deg": 5, "az_speed_deg_s": 60.0, "el_speed_deg_s": 30.0},
+}
+
+
+# -- unplug / replug -------------------------------------------------------------------------------
+def test_many_unplug_replug_cycles_idle_and_while_turning(rig: Rig) -> None:
+    for rid, model in FAMILIES.items():
+        rig.add(rid, model, emu=QUICK[rid])
+    rig.start()
+    for rid in FAMILIES:
+        rig.ready(rid)
+    # (during motion?, does the controller lose power with the adapter?)
+    cycles = [(False, True), (True, False), (True, True), (False, False)]
+    for i, (moving, power_cycle) in enumerate(cycles):
+        az, el = TARGETS[i % 2]
+        sent = {rid: motion_frames(rig, rid) for rid in FAMILIES}
+        if moving:
+            for rid in FAMILIES:
+                send_target(rig, rid, az, el)
+            for rid, emu in rig.emus.items():
+                n = sent[rid]
+                wait_until(lambda r=rid, n=n: motion_frames(rig, r) > n, 5, f"{rid} commanded")
+                emu.wait_for(lambda s: s.is_moving, 5)
+                sent[rid] += 1
+        t = time.monotonic()
+        for emu in rig.emus.values():
+            emu.unplug()
+        for rid in FAMILIES:
+            rig.probe.wait_value(rig.topic(rid, "availability"), "offline", 5, after=t)
+        t = time.monotonic()
+        for emu in rig.emus.values():
+            emu.replug(power_cycle=power_cycle)
+        for rid in FAMILIES:
+            rig.ready(rid, timeout_s=15, after=t)
+        assert_retained_matches_within_one_poll(rig, list(FAMILIES))
+        for rid in FAMILIES:
+            # nothing stale was sent after the replug: the controller got no new target
+            assert motion_frames(rig, rid) == sent[rid], (i, rid, rig.emus[rid].log()[-6:])
+            assert not rig.emus[rid].state().is_moving
+            assert_bridge_matches_truth(rig, rid)
+        if moving and not power_cycle:
+            # the Rotor-EZ and the MD-01 finished the move on their own while unplugged or after;
+            # the SatEL is stopped on every connect (the bridge cannot know what it is doing)
+            rig.arrived("ez", az)
+            rig.arrived("md", az, el)
+    # and after all that, it still obeys
+    for rid in FAMILIES:
+        send_target(rig, rid, 200, 30)
+    for rid in FAMILIES:
+        rig.arrived(rid, 200, None if rid == "ez" else 30)
+    for rid in FAMILIES:
+        assert rig.bogus(rid) == [], rid
+    assert rig.emus["sat"].device.misuse_frames() == []
+
+
+# -- replies cut short, garbage between replies ---------------------------------------------------
+def test_replies_cut_short_and_garbage_between_replies_never_become_bearings(rig: Rig) -> None:
+    rng = random.Random(7)
+    for rid, model in FAMILIES.items():
+        rig.add(rid, model, emu=QUICK[rid])
+    rig.start()
+    for rid in FAMILIES:
+        rig.ready(rid)
+
+    def inject_after_transmissions(count: int) -> None:
+        def one_rotator(rid: str, model: str, seed: int) -> None:
+            rng, emu = random.Random(seed), rig.emus[rid]
+            for k in range(count):
+                # right after one of the controller's transmissions, whatever the rotor does
+                after_transmission(emu)
+                if model == "satel" and (emu.state().slewing or rig.status(rid).moving):
+                    continue  # see test_noise_byte_during_a_satel_slew_...
+                spid_busy = model in SPID and emu.state().is_moving
+                if k % 2 and not spid_busy:
+                    emu.inject(cut_short(rng, model, emu))
+                else:
+                    emu.inject(line_noise(rng, model))
+
+        with ThreadPoolExecutor(len(FAMILIES)) as pool:
+            jobs = [
+                pool.submit(one_rotator, rid, model, rng.randrange(1 << 30))
+                for rid, model in FAMILIES.items()
+            ]
+            for job in jobs:
+                job.result()
+
+    inject_after_transmissions(4)  # while still
+    az, el = TARGETS[0]
+    t = time.monotonic()
+    for rid in FAMILIES:
+        send_target(rig, rid, az, el)
+    inject_after_transmissions(4)  # while turning
+    for rid in FAMILIES:
+        rig.arrived(rid, az, None if rid == "ez" else el, timeout_s=25)
+    for rid in FAMILIES:
+        rig.probe.wait_value(rig.topic(rid, "state"), "idle", timeout_s=10, after=t)
+    inject_after_transmissions(4)  # still again
+    for rid in FAMILIES:
+        assert rig.bogus(rid) == [], rid
+    snap = rig.retained()
+    for rid in FAMILIES:
+        assert snap[rig.topic(rid, "availability")] == b"online"
+        assert_bridge_matches_truth(rig, rid)
+    assert rig.emus["sat"].device.misuse_frames() == []
+
+
+def test_an_md01_debug_line_cut_short_does_not_take_the_rotator_offline(rig: Rig) -> None:
+    """BUG (reported): the SPID codec skips `<digits>: text` debug lines by waiting for their line
+    end, up to 200 bytes. A debug line whose end was lost (or two bytes of noise such as `7:`, on
+    a Rot2Prog too) makes it swallow the next ~16 replies whole: no readings for seconds, the
+    rotator goes offline. Healthy: the torn line costs at most the reply it touches."""
+    emu = rig.add("md", "md01", emu={"start_az_deg": 77, "start_el_deg": 7})
+    rig.start()
+    rig.ready("md")
+    t = time.monotonic()
+    emu.inject(b"123: encoder chec")  # the MD-01 was printing a debug line; its end was lost
+    n = len(emu.frames("status"))
+    emu.wait_until(lambda d, now: len(d.frames("status")), lambda k: k >= n + 8, 10)
+    # 8 polls later, the link never dropped and the bearing is still the controller's
+    offline = [m for m in rig.probe.on("rotor/availability") if m.t >= t and m.text == "offline"]
+    errors = [m.text for m in rig.probe.on("rotor/error") if m.t >= t]
+    assert offline == [] and not any("answering" in e for e in errors), errors
+    assert rig.bogus("md") == []
+
+
+def test_noise_byte_during_a_satel_slew_does_not_hide_the_end_of_the_move(rig: Rig) -> None:
+    """BUG (reported): the SatEL codec reads a report only if its first line is exactly
+    `Motion ...`. One noise byte on the silent line during a slew is glued to the front of the
+    after-move report, the report is dropped as junk, and the bridge keeps waiting for it for
+    SLEW_TIMEOUT_S (120 s): the rotator shows `moving` with an estimated bearing although it
+    stopped, and a new target is held back all that time."""
+    emu = rig.add("sat", "satel", emu=QUICK["sat"])
+    rig.start()
+    rig.ready("sat")
+    rig.probe.publish("rotor/target", "100 20")
+    emu.wait_for(lambda s: s.slewing and s.az_deg > 40, 10)  # mid-slew: the line is silent
+    emu.inject(b"\xff")  # one byte of noise
+    emu.wait_for(lambda s: not s.is_moving, 15)
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=4, after=t - 0.2)
+    status = json.loads(rig.retained()["rotor/status"])
+    assert (status["bearing"], status["elevation"], status["estimated"]) == (100, 20, False)
+    rig.probe.publish("rotor/target", "50 10")  # and the next target is obeyed
+    rig.arrived("sat", 50, 10, timeout_s=10)
+
+
+# -- the port held by another process -------------------------------------------------------------
+HOLDER = """
+import serial, sys
+port = serial.Serial(sys.argv[1], 4800, exclusive=True)
+print("holding", flush=True)
+sys.stdin.read()
+"""
+
+
+def test_port_held_by_another_process_is_a_clear_error_until_it_lets_go(rig: Rig) -> None:
+    emu = rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(emu.link)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "holding"
+        t = time.monotonic()
+        rig.start()
+        err = rig.probe.wait_for("rotor/error", lambda m: b"busy" in m.payload, after=t)
+        assert "another program" in json.loads(err.payload)["message"]
+        rig.probe.wait_value("rotor/availability", "offline", after=t)
+        # a target meanwhile is refused, not kept for later
+        rig.probe.publish("rotor/target", "100")
+        rig.probe.wait_for("rotor/error", lambda m: b"offline" in m.payload, after=t)
+    finally:
+        holder.kill()  # the other program dies (a crashed rotctld): its lock goes with it
+        holder.wait(5)
+    rig.ready("tower", timeout_s=15)
+    busy = [m for m in rig.probe.on("rotor/error") if b"busy" in m.payload]
+    assert len(busy) == 1  # said once, not on every retry
+    assert motion_frames(rig, "tower") == 0 and not emu.state().is_moving
+    rig.probe.publish("rotor/target", "100")
+    rig.arrived("tower", 100)
+
+
+def test_a_row_of_stops_to_an_idle_rotor_ez_is_no_protocol_error(rig: Rig) -> None:
+    """BUG (reported, minor): a stop (`;`) to an idle Rotor-EZ makes the board print its banner
+    `C2000 IDIOM V1.4S ` (known, harmless). A row of stops (a STOP button pressed repeatedly,
+    a flow repeating it) gives banners back to back; the link keeps at most 256 bytes of junk
+    and then judges the cut-off text, which is no longer a whole banner: a false "controller
+    sent 256 bytes that are no valid reply" on R/error and a WARNING in the log."""
+    emu = rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+    rig.start()
+    rig.ready("tower")
+    t = time.monotonic()
+    for _ in range(16):  # each stop reaches the controller before the next is pressed
+        n = len(emu.frames("invalid"))
+        rig.probe.publish("rotor/stop", "STOP")
+        emu.wait_until(lambda d, now, n=n: len(d.frames("invalid")), lambda k, n=n: k > n, 5)
+    after_transmission(emu)  # the last banner is out
+    n = len(emu.frames("query"))
+    emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + 3, 5)
+    junk = [m.text for m in rig.probe.on("rotor/error") if m.t >= t and b"protocol" in m.payload]
+    assert junk == []
+    assert not emu.state().is_moving
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="OPEN BUG: a lost SatEL after-move report is waited for up to SLEW_TIMEOUT_S (120 s). "
+    "Not fixed yet: asking earlier means polling on a guessed slew time, and a poll during a "
+    "slew is the input the manual forbids. strict: this fails once the bug is fixed.",
+)
+@pytest.mark.parametrize("fault", ["noise in its first line", "line silent while it is sent"])
+def test_a_lost_satel_after_move_report_does_not_stall_the_rotator(rig: Rig, fault: str) -> None:
+    """BUG (reported; found by the soak): the SatEL says nothing while it slews and prints one
+    report when the move ends; the bridge polls nothing meanwhile (only a stop may interrupt a
+    slew). When that report is lost (a noise byte in its first line, `M\\xffotion ENABLED`,
+    so no report block opens; or the line dropping out for a moment while it is sent) the
+    bridge waits SLEW_TIMEOUT_S (120 s) for it: the rotator shows `moving` with an estimated
+    bearing, every new target is held back (a stop is sent every 2 s instead), and no error
+    says why. In the 10-minute soak this lost two commands."""
+    emu = rig.add("sat", "satel", emu=QUICK["sat"])
+    rig.start()
+    rig.ready("sat")
+    rig.probe.publish("rotor/target", "100 20")
+    emu.wait_for(lambda s: s.slewing, 5)
+    emu.wait_until(lambda d, now: d._tx.pending(), lambda k: k == 0, 5)  # the line is silent
+    if fault.startswith("noise"):
+        n = tap_of(emu).sent_count()
+        emu.wait_until(lambda d, now: d.sent_count(), lambda m: m > n, 15)  # the report begins
+        emu.inject(b"\xff")  # ...and a noise byte lands in its first line
+    else:
+        emu.set_silent(True)
+        emu.wait_for(lambda s: not s.slewing, 15)  # the report goes out into nothing
+        emu.wait_until(lambda d, now: d._tx.pending(), lambda k: k == 0, 5)
+        emu.set_silent(False)
+    emu.wait_for(lambda s: not s.is_moving and not s.slewing, 5)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "50 10")  # the next target is obeyed, promptly
+    rig.arrived("sat", 50, 10, timeout_s=8)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=5, after=t)
+    assert rig.bogus("sat") == []
