@@ -343,19 +343,23 @@ class DiscoveryPublisher:
         return [self.status_topic, f"{self.prefix}/+/+/+/config"]
 
     def publish_all(self) -> None:
+        # under the lock: workers call this concurrently (each controller's version arrives on
+        # its own thread), and an older snapshot published last would stay retained
         with self._lock:
             configs = all_configs(
                 self.prefix, self._ident, self._topics, list(self._rotators.values())
             )
             self._current = configs
-        for topic, payload in configs.items():
-            self._publish(topic, payload)  # the client skips what did not change
+            for topic, payload in configs.items():
+                self._publish(topic, payload)  # the client skips what did not change
 
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
-        r = self._rotators.get(rotator_id)
-        if r is not None and status.version and status.version != r.version:
+        with self._lock:
+            r = self._rotators.get(rotator_id)
+            if r is None or not status.version or status.version == r.version:
+                return
             self._rotators[rotator_id] = RotatorInfo(**{**r.__dict__, "version": status.version})
-            self.publish_all()
+        self.publish_all()
 
     def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
         """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
