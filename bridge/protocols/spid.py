@@ -157,6 +157,8 @@ class SpidCodec:
                     # the line ends at its newline, or where a reply frame starts: a line whose
                     # end was lost must not swallow the replies after it
                     frame_at = self._frame_start(buf, colon + 1, end)
+                    if frame_at == -1:
+                        break
                     if frame_at is not None:
                         end = frame_at - 1
                     elif end == -1:
@@ -164,6 +166,7 @@ class SpidCodec:
                             break  # wait for the rest of the line
                         end = i + _MAX_DEBUG_LINE - 1
                     if junk:
+                        self._junk_seen()
                         out.append(JunkReply(bytes(junk), "not a reply frame"))
                         junk.clear()
                     out.append(JunkReply(bytes(buf[i : end + 1]), "controller debug line"))
@@ -182,11 +185,14 @@ class SpidCodec:
             self._noisy = True
 
     def _frame_start(self, buf: bytearray, start: int, end: int) -> int | None:
-        """Where a well-formed reply frame starts in buf[start:end] (end -1: to the end)."""
+        """Where a well-formed reply frame starts in buf[start:end] (end -1: to the end);
+        -1 if one may start there but its bytes have not all arrived."""
         stop = len(buf) if end == -1 else end
         j = buf.find(START, start, stop)
         while j != -1:
-            if len(buf) - j >= self._reply_len and self._well_formed(buf[j : j + self._reply_len]):
+            if len(buf) - j < self._reply_len:
+                return -1  # a frame may be starting here (it may even hold a LF): wait for it
+            if self._well_formed(buf[j : j + self._reply_len]):
                 return j
             j = buf.find(START, j + 1, stop)
         return None
