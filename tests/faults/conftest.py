@@ -30,12 +30,11 @@ from typing import Any
 import pytest
 
 from bridge import emulators
-from bridge.app import App
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.emulators.spid_models import MOTION_OUTCOMES
 from bridge.mosquitto import Mosquitto
-from bridge.settings import Settings
+from tests.integration.conftest import Rig as IntegrationRig
 from tests.support import Message, Probe, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -252,19 +251,12 @@ def to_toml(doc: dict[str, Any]) -> str:
 
 
 # -- the rig: broker + tapped emulators + the bridge in-process ----------------------------------
-class Rig:
-    """Like tests/integration's Rig, with tapped emulators and the fault suite's timings."""
+class Rig(IntegrationRig):
+    """tests/integration's Rig, with tapped emulators and the fault suite's timings."""
 
     def __init__(self, tmp: Path, broker: Mosquitto, probe: Probe) -> None:
-        self.tmp = tmp
-        self.broker = broker
-        self.probe = probe
-        self.emus: dict[str, EmulatedPort[Any]] = {}
+        super().__init__(tmp, broker, probe)
         self.models: dict[str, str] = {}
-        self.rotators: list[dict[str, Any]] = []
-        self.app: App | None = None
-        self.base = "rotor"
-        self.mqtt_extra: dict[str, Any] = {}
 
     def add(
         self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
@@ -277,30 +269,6 @@ class Rig:
             {"id": rid, "model": model, "port": str(link), **BRIDGE_FAST[model], **bridge}
         )
         return port
-
-    @property
-    def settings(self) -> Settings:
-        return Settings(
-            mqtt={
-                "host": "127.0.0.1",
-                "port": self.broker.port,
-                "base_topic": self.base,
-                "client_id": f"bridge-under-test-{id(self)}",
-                **self.mqtt_extra,
-            },
-            rotators=self.rotators,
-            state_file=self.tmp / "state.json",
-        )
-
-    def start(self) -> App:
-        self.app = App(self.settings)
-        self.app.start()
-        return self.app
-
-    def stop(self) -> None:
-        if self.app is not None:
-            self.app.stop()
-            self.app = None
 
     def root(self, rid: str) -> str:
         return self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"

@@ -50,6 +50,7 @@ class Rig:
         self.rotators: list[dict[str, Any]] = []
         self.app: App | None = None
         self.base = "rotor"
+        self.mqtt_extra: dict[str, Any] = {}  # e.g. TLS or credentials
 
     def add(
         self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
@@ -82,6 +83,7 @@ class Rig:
                 "port": self.broker.port,
                 "base_topic": self.base,
                 "client_id": f"bridge-under-test-{id(self)}",
+                **self.mqtt_extra,
             },
             rotators=self.rotators,
             state_file=self.tmp / "state.json",
