@@ -113,7 +113,8 @@ def test_2101_sends_g_before_every_set_and_stops_with_a_reset(
     port = satel_port(trailing_blank_lines=0, **FAST)
     values(rotctl(port, "P", "10", "20", "P", "30", "40", "S"))
     assert [f.data for f in port.frames("motion enabled")] == [b"g", b"g"]  # its motion-flag bug
-    assert outcomes(port)[-1] == "reset"
+    # rotctl exits right after writing its `*`; the byte may still be on its way
+    port.wait_until(lambda d, now: d.frames()[-1].outcome, lambda o: o == "reset", 5)
     state = port.state()
     assert (state.az_deg, state.el_deg) == pytest.approx((30.0, 40.0), abs=1e-6)
     assert state.motion_enabled is False
