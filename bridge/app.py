@@ -25,6 +25,7 @@ log = logging.getLogger(__name__)
 def worker_config(r: RotatorSettings) -> WorkerConfig:
     spec = r.spec
     az_min, az_max = r.effective_az_limits
+    az_speed, el_speed = r.effective_speeds_deg_s
     return WorkerConfig(
         rotator_id=r.id,
         port=r.port,
@@ -39,13 +40,15 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
             noise_deg=r.effective_noise_deg,
             az_wraps=spec.az_wraps,
             az_span_deg=az_max - az_min,
-            nominal_speed_deg_s=spec.nominal_speed_deg_s,
+            nominal_speed_deg_s=az_speed,
             direct_retarget=spec.retarget.value == "direct",
         ),
         idle_poll_interval_s=r.idle_poll_interval_s,
         moving_poll_interval_s=r.moving_poll_interval_s,
         deadband_deg=r.deadband_deg,
         silence_timeout_s=r.silence_timeout_s,
+        az_speed_deg_s=az_speed,
+        el_speed_deg_s=el_speed,
     )
 
 

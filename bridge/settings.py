@@ -140,6 +140,10 @@ class RotatorSettings(_Strict):
         None, ge=0, le=20, description="a still rotor's readings wander this much (model default)"
     )
     silence_timeout_s: float = Field(3.0, gt=0, le=600)
+    az_speed_deg_s: float | None = Field(
+        None, gt=0, le=360, description="how fast the rotor really turns (model default)"
+    )
+    el_speed_deg_s: float | None = Field(None, gt=0, le=360)
     az_min_deg: float | None = None
     az_max_deg: float | None = None
     el_min_deg: float | None = None
@@ -200,6 +204,8 @@ class RotatorSettings(_Strict):
                 )
         elif self.el_min_deg is not None or self.el_max_deg is not None:
             raise ValueError(f"the {spec.display_name} has no elevation axis (el_min/max_deg)")
+        elif self.el_speed_deg_s is not None:
+            raise ValueError(f"the {spec.display_name} has no elevation axis (el_speed_deg_s)")
         if self.moving_poll_interval_s > self.idle_poll_interval_s:
             raise ValueError("moving_poll_interval_s must not exceed idle_poll_interval_s")
         if spec.can_report_position and self.settle_s < 2 * self.moving_poll_interval_s:
@@ -223,6 +229,14 @@ class RotatorSettings(_Strict):
     @property
     def effective_noise_deg(self) -> float:
         return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
+
+    @property
+    def effective_speeds_deg_s(self) -> tuple[float, float]:
+        spec = self.spec
+        return (
+            self.az_speed_deg_s or spec.nominal_speed_deg_s,
+            self.el_speed_deg_s or spec.nominal_el_speed_deg_s,
+        )
 
     @property
     def effective_el_limits(self) -> tuple[float, float]:

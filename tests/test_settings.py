@@ -53,6 +53,22 @@ def test_model_defaults_and_topics_for_several_rotators(tmp_path: Path) -> None:
     assert [r.effective_brake_delay_s for r in s.rotators] == [5, 0, 5]
 
 
+def test_rotor_speeds_default_to_the_model_and_reach_the_engine(tmp_path: Path) -> None:
+    from bridge.app import worker_config
+
+    text = MINIMAL.replace('model = "rotorez"', 'model = "satel"').replace(
+        "brake_delay_s = 5", "az_speed_deg_s = 4.5"
+    )
+    r = load_settings(write(tmp_path, text)).rotators[0]
+    assert r.effective_speeds_deg_s == (4.5, 2.5)  # el: the model's (a G-5500)
+    cfg = worker_config(r)
+    assert (cfg.az_speed_deg_s, cfg.el_speed_deg_s, cfg.motion.nominal_speed_deg_s) == (
+        4.5,
+        2.5,
+        4.5,
+    )
+
+
 def test_environment_overrides_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__HOST", "broker.lan")
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PASSWORD", "hunter2")
@@ -75,6 +91,8 @@ def test_environment_overrides_the_file(tmp_path: Path, monkeypatch: pytest.Monk
         (("brake_delay_s = 5", "brake_delay_s = 5\nbrake_delay = 5"), "rotators[0].brake_delay"),
         (("brake_delay_s = 5", "az_max_deg = 400"), "rotators[0]"),
         (('base_topic = "rotor"', 'base_topic = "rotor/#"'), "mqtt.base_topic"),
+        (("brake_delay_s = 5", "az_speed_deg_s = 0"), "rotators[0].az_speed_deg_s"),
+        (("brake_delay_s = 5", "el_speed_deg_s = 3"), "rotators[0]"),  # no elevation axis
     ],
 )
 def test_bad_values_name_the_field(tmp_path: Path, change: tuple[str, str], field: str) -> None:

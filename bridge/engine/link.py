@@ -6,12 +6,17 @@ needs the worker's attention. What it does not do: decide anything about motion 
 (worker.py) or parse bytes (the model's codec).
 
 Rules:
-1. A reply is owed when the codec says so after a write; its deadline is the codec's reply
-   timeout for what was sent. An owed reply that does not come is given up at its deadline.
-2. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
+1. A reply is owed when the codec says so after a write; its deadline is the model's reply
+   timeout. An owed reply that does not come is given up at its deadline (the worker decides).
+   A slew's report (a controller silent while it moves) is owed until twice the travel time at
+   the rotor's speeds plus SLEW_MARGIN_S; a stop written during the slew brings that deadline
+   forward to one reply time, since the stopped controller reports at once or not at all.
+2. Silence is counted from the last valid reply, or from the end of a wait for a slew's report
+   (a controller that was silent for a whole slew was not "not answering").
+3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
    except a stop on a controller that takes one at any time (``spec.stop_interrupts``).
-3. A poll is sent only when due, when nothing is owed and no stop is waiting.
-4. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
+4. A poll is sent only when due, when nothing is owed and no stop is waiting.
+5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
 """
 
@@ -20,15 +25,18 @@ from __future__ import annotations
 import logging
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import serial
 
+from bridge.model import Source
 from bridge.protocols.base import Codec, ModelSpec
 
 log = logging.getLogger(__name__)
 
 JUNK_QUIET_S = 0.05
+SLEW_TIME_FACTOR = 2.0  # a slew's report is waited for twice the travel time at the set speeds...
+SLEW_MARGIN_S = 5.0  # ...plus this (relays, start-up, the report itself at 9600 baud)
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 
@@ -41,6 +49,17 @@ class Slew:
     from_el_deg: float | None
     to_az_deg: float
     to_el_deg: float | None
+    source: Source = Source.MQTT
+    stopped: bool = False  # a stop went out during the slew
+
+    def travel_s(
+        self, az_speed_deg_s: float, el_speed_deg_s: float, az_span_deg: float, el_span_deg: float
+    ) -> float:
+        """How long the slew takes at these speeds: the slower axis decides. Where the start is
+        unknown, the whole span; the azimuth travels linearly between its stops."""
+        az_travel = _travel(self.from_az_deg, self.to_az_deg, az_span_deg)
+        el_travel = _travel(self.from_el_deg, self.to_el_deg, el_span_deg)
+        return max(az_travel / az_speed_deg_s, el_travel / el_speed_deg_s)
 
     def estimate(
         self, now: float, az_speed_deg_s: float, el_speed_deg_s: float
@@ -51,6 +70,12 @@ class Slew:
             _toward(self.from_az_deg, self.to_az_deg, az_speed_deg_s * dt),
             _toward(self.from_el_deg, self.to_el_deg, el_speed_deg_s * dt),
         )
+
+
+def _travel(start: float | None, end: float | None, span: float) -> float:
+    if end is None:
+        return 0.0
+    return span if start is None else abs(end - start)
 
 
 def _toward(start: float | None, end: float | None, step: float) -> float | None:
@@ -74,7 +99,7 @@ class Link:
         self.port = port
         self.codec = codec
         self.spec = spec
-        self.opened_t = now
+        self.quiet_from_t = now  # silence counts from here when no reply came since
         self._clock = clock
         self._name = name
         self.reply_deadline: float | None = None
@@ -96,8 +121,21 @@ class Link:
         self.port.write(frame)
         log.debug("%s: -> %r", self._name, frame)
         if self.reply_deadline is None and self.codec.awaiting_reply():
-            timeout_s = self.codec.reply_timeout_s(self.spec.reply_timeout_s)
-            self.reply_deadline = self._clock() + timeout_s
+            self.reply_deadline = self._clock() + self.spec.reply_timeout_s
+
+    def write_stop(self, now: float) -> None:
+        """Write the stop. During a slew the report now comes at once, or not at all."""
+        self.outbox.clear()
+        self.write(self.codec.encode_stop())
+        if self.slew is not None:
+            self.slew = replace(self.slew, stopped=True)
+            self.reply_deadline = now + self.spec.reply_timeout_s
+
+    def begin_slew(self, slew: Slew, travel_s: float) -> None:
+        """The target just sent starts a slew expected to take ``travel_s``: its report is owed
+        until twice that, plus SLEW_MARGIN_S."""
+        self.slew = slew
+        self.reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
 
     def send(self, frames: list[bytes], now: float) -> None:
         """The first frame now, the rest spaced by the model's inter-frame gap."""
@@ -115,13 +153,16 @@ class Link:
         return for_stop and self.spec.stop_interrupts
 
     # -- replies ------------------------------------------------------------------------------
-    def expire_reply(self, now: float) -> bool:
-        """Give up an owed reply whose deadline passed; True if one was given up."""
-        if self.reply_deadline is not None and now >= self.reply_deadline:
-            self.codec.expire_query()
-            self.reply_deadline = None
-            return True
-        return False
+    def reply_overdue(self, now: float) -> bool:
+        return self.reply_deadline is not None and now >= self.reply_deadline
+
+    def give_up_reply(self, now: float) -> None:
+        """Stop waiting for the owed reply (and for a slew's report: the slew is over)."""
+        self.codec.expire_query()
+        self.reply_deadline = None
+        if self.slew is not None:
+            self.slew = None
+            self.quiet_from_t = now
 
     def got_reading(self, now: float) -> None:
         if not self.codec.awaiting_reply():
@@ -143,7 +184,8 @@ class Link:
             self.next_poll = now + interval_s
 
     def silent_for(self, now: float) -> float:
-        return now - (self.last_reply_t if self.last_reply_t is not None else self.opened_t)
+        heard = self.last_reply_t if self.last_reply_t is not None else self.quiet_from_t
+        return now - max(heard, self.quiet_from_t)
 
     # -- junk ---------------------------------------------------------------------------------
     def add_junk(self, data: bytes, now: float) -> None:

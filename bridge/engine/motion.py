@@ -99,6 +99,15 @@ def link_down(m: Motion) -> Motion:
     )
 
 
+def track_lost(m: Motion) -> Motion:
+    """Readings were missed (a silent controller's after-move report was lost): whether and
+    where the rotor moved since is unknown, so the next reading is taken like the first one
+    after a connect (rule 4). Until it comes the rotor is braking (it was just stopped)."""
+    return Motion(
+        state=MotionState.BRAKING, position_deg=m.position_deg, el_position_deg=m.el_position_deg
+    )
+
+
 def target_error(m: Motion, cfg: MotionConfig) -> float | None:
     """How far the rotor is from its target (the worse axis), or None if unknown."""
     if m.target_deg is None or m.position_deg is None:
@@ -243,7 +252,11 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
         rested = m.still_since_t is not None and now - m.still_since_t >= cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
     if m.state is MotionState.MOVING:
-        if m.stop_sent_t is None or now - m.stop_sent_t >= cfg.stop_resend_s:
+        if m.stop_sent_t is None:
+            return Plan.STOP_FIRST
+        # a stop went out: send another only if a reading since shows it did not take
+        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
+        if moved_since and now - m.stop_sent_t >= cfg.stop_resend_s:
             return Plan.STOP_FIRST
         return Plan.WAIT
     return Plan.WAIT  # braking (or no reading yet)

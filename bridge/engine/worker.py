@@ -32,9 +32,15 @@ Rules:
    after the last poll must not be cut short.
 8. A controller that is silent while it moves (SatEL) is sent nothing but a stop until its
    after-move report; meanwhile the motion machine is not fed stale data, the published
-   position is an estimate from the nominal speeds (marked ``estimated`` in the status), and a
+   position is an estimate from the rotor's speeds (marked ``estimated`` in the status), and a
    new target stops the slew and is sent once the rotor is still (stop and redirect). A report
    that says automatic motion is off gets it switched on again.
+9. An after-move report that does not come within the slew's bound (link.py rule 1: twice the
+   travel time at the configured speeds, plus a margin) was lost, or the rotor is slower than
+   configured. Either way the bridge does not poll into a slew it cannot see: it sends the stop
+   (the one input allowed during a slew), asks for the position once the stopped controller
+   had its chance to report, and sends the slew's target again, so the rotor still ends where
+   the last accepted command asked. An error says so, naming the speed setting.
 """
 
 from __future__ import annotations
@@ -84,6 +90,8 @@ class WorkerConfig:
     reconnect_min_s: float = 0.5
     reconnect_max_s: float = 10.0
     junk_report_interval_s: float = 30.0
+    az_speed_deg_s: float | None = None  # the rotor's real speeds; None: the model's nominal
+    el_speed_deg_s: float | None = None
 
 
 class Worker:
@@ -131,6 +139,8 @@ class Worker:
         self._stop_tries = 0
         self._backoff_s = cfg.reconnect_min_s
         self._port_error: str | None = None
+        self._az_speed_deg_s = cfg.az_speed_deg_s or cfg.spec.nominal_speed_deg_s
+        self._el_speed_deg_s = cfg.el_speed_deg_s or cfg.spec.nominal_el_speed_deg_s
 
     # -- public, any thread -----------------------------------------------------------------
     @property
@@ -220,9 +230,8 @@ class Worker:
             batch = self._mailbox.take()
             if batch:
                 self._apply(batch, now)
-            if link.expire_reply(now) and link.slew is not None:
-                link.slew = None
-                self._error("serial", "no report after the slew; asking the controller again")
+            if link.reply_overdue(now):
+                self._reply_overdue(link, now)
             self._flush_stop(now)
             link.flush_outbox(now)
             junk = link.quiet_junk(now)
@@ -277,6 +286,27 @@ class Worker:
             return m.state is MotionState.MOVING
         return m.busy_until_t is not None and now < m.busy_until_t and m.stop_sent_t is None
 
+    def _reply_overdue(self, link: Link, now: float) -> None:
+        slew = link.slew
+        if slew is not None and not slew.stopped:  # rule 9
+            self._error(
+                "serial",
+                f"no report from the controller {now - slew.start_t:.0f} s after a move that "
+                f"takes {self._travel_s(slew):.0f} s at {self._az_speed_deg_s:g}/"
+                f"{self._el_speed_deg_s:g} deg/s: stopping it to ask where it is, then going on "
+                "to the target (if the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
+            )
+            if self._pending is None:
+                target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
+                self._pending, self._pending_t, self._stream_t = target, now, now
+                self._pending_replaced = False
+            self._send_stop(now)
+            return
+        link.give_up_reply(now)
+        if slew is not None:
+            self._motion = mo.track_lost(self._motion)
+            self._error("serial", "no report after the stopped slew; asking the controller")
+
     def _send_stop(self, now: float) -> None:
         link = self._link
         assert link is not None
@@ -290,7 +320,7 @@ class Worker:
         if link is None or not link.stop_due or not link.free(for_stop=True):
             return
         link.stop_due = False
-        link.write(link.codec.encode_stop())
+        link.write_stop(now)
         self._motion = mo.stop_sent(self._motion, self.cfg.motion, now)
 
     def _drop_pending(self, why: str | None) -> None:
@@ -330,7 +360,7 @@ class Worker:
         elif (
             link.last_reply_t is None
             and not link.silence_reported
-            and now - link.opened_t >= timeout_s
+            and link.silent_for(now) >= timeout_s
         ):
             link.silence_reported = True
             self._error("serial", f"controller on {self.cfg.port} does not answer")
@@ -426,12 +456,23 @@ class Worker:
         if plan is mo.Plan.SEND:
             link.send(link.codec.encode_target(az, el), now)
             if not self.cfg.spec.reports_while_moving:
-                link.slew = Slew(now, m.position_deg, m.el_position_deg, wire[0], wire[1])
+                source = self._pending.source
+                slew = Slew(now, m.position_deg, m.el_position_deg, wire[0], wire[1], source)
+                link.begin_slew(slew, self._travel_s(slew))
             self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
             self._last_source = self._pending.source.value
             self._pending = None
             self._last_target_sent_t = now
             link.next_poll = min(link.next_poll, now + self.cfg.moving_poll_interval_s)
+
+    def _travel_s(self, slew: Slew) -> float:
+        spec = self.cfg.spec
+        return slew.travel_s(
+            self._az_speed_deg_s,
+            self._el_speed_deg_s,
+            self.cfg.motion.az_span_deg,
+            spec.el_max_deg - spec.el_min_deg,
+        )
 
     def _stream_wait(self, now: float) -> bool:
         if not self._pending_replaced:
@@ -555,8 +596,7 @@ class Worker:
                     f"{self.cfg.motion.stall_timeout_s:g} s): brake paddle pressed or rotor stuck",
                 )
                 if self._link is not None:
-                    self._link.outbox.clear()
-                    self._link.write(self._link.codec.encode_stop())
+                    self._link.write_stop(now)
             else:
                 log.info(
                     "%s: %s at %s", self.cfg.rotator_id, event.value, self._motion.position_deg
@@ -585,7 +625,7 @@ class Worker:
         if estimated:
             assert link is not None and link.slew is not None
             bearing, elevation = link.slew.estimate(
-                self._clock(), spec.nominal_speed_deg_s, spec.nominal_el_speed_deg_s
+                self._clock(), self._az_speed_deg_s, self._el_speed_deg_s
             )
         status = replace(
             self._status,

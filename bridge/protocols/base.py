@@ -64,10 +64,6 @@ class Codec(Protocol):
     def encode_option(self, name: str, enabled: bool) -> bytes: ...
     def feed(self, data: bytes) -> list[Reply]: ...
     def awaiting_reply(self) -> bool: ...
-    def reply_timeout_s(self, default_s: float) -> float:
-        """How long the reply now owed may take (a slew report takes the whole slew)."""
-        ...
-
     def harmless(self, junk: bytes) -> bool:
         """Is this non-reply text something a healthy controller emits (a banner, a log line)?"""
         ...
@@ -118,7 +114,9 @@ class ModelSpec:
     # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)
     whole_degrees: bool = False
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
-    nominal_speed_deg_s: float = 6.0  # used to estimate travel when there is no feedback
+    # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
+    # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
+    nominal_speed_deg_s: float = 6.0
     option_labels: dict[str, str] = field(default_factory=dict)
 
     def frame_time_s(self, nbytes: int) -> float:

@@ -97,9 +97,6 @@ class RotorEzCodec:
     def awaiting_reply(self) -> bool:
         return bool(self._queries_open)
 
-    def reply_timeout_s(self, default_s: float) -> float:
-        return default_s
-
     def harmless(self, junk: bytes) -> bool:
         return _KNOWN_JUNK.sub(b"", junk) == b""
 

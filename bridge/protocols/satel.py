@@ -24,10 +24,17 @@ Rules:
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
    Noise before a label is tolerated, noise inside a value spoils the report; a spoiled report
-   that ends a slew still ends it (UNTRUSTED: the engine asks again at once).
+   that ends a slew still ends it (UNTRUSTED: the engine asks again at once). A report whose
+   first line was lost (noise inside ``Motion``) is recognised by its other lines: it is a
+   report all the same, spoiled, and it ends a slew.
 4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
    sent while it is disabled is silently ignored.
-5. Each ``z`` and ``p`` owes one report; ``p``'s may take a whole slew (``SLEW_TIMEOUT_S``).
+5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
+   take depends on the rotor: the engine's business, engine/link.py).
+6. A readable report ends a slew only if it shows the point's position (within
+   SLEW_END_TOLERANCE_DEG) or a stop went out since the point. Any other report while a slew
+   is owed was on its way before the point (an answer the engine had given up on): junk, and
+   the slew is still owed. Taking it for the end would let the next poll into the slew.
 """
 
 from __future__ import annotations
@@ -46,7 +53,6 @@ from bridge.protocols.base import (
     VersionReply,
 )
 
-SLEW_TIMEOUT_S = 120.0  # a full 360 + 90 slew on a slow rotor, with margin
 # labels are searched anywhere in a line (noise before them is tolerated); a number must be
 # followed by white space or the end of the line, so noise inside a number spoils the line
 _MOTION = re.compile(r"Motion\s+(ENABLED|DISABLED)\s*$", re.IGNORECASE)
@@ -56,6 +62,7 @@ _EL = re.compile(r"Elevation\s*=\s*(\d{1,3})\s*$")
 _STORED = re.compile(r"Number of stored positions:\s*(\d+)\s*$")
 _BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
 _MAX_LINE = 160
+SLEW_END_TOLERANCE_DEG = 5  # relays coast a little past the point (rule 6)
 
 
 class SatelCodec:
@@ -63,6 +70,7 @@ class SatelCodec:
         self._buf = bytearray()
         self._owed: list[str] = []  # "report" | "slew" | "ident", oldest first
         self._block: dict[str, str] | None = None
+        self._point: tuple[int, int] | None = None  # where the owed slew goes; None once stopped
 
     # -- encoding -------------------------------------------------------------------------
     def encode_enable(self) -> bytes:
@@ -78,7 +86,8 @@ class SatelCodec:
         return b"z"
 
     def encode_stop(self) -> bytes:
-        return b"s"  # a slew's report, if owed, still comes (shortly)
+        self._point = None  # the slew's report, if owed, still comes (shortly), from anywhere
+        return b"s"
 
     def encode_version(self) -> bytes:
         self._owed.append("ident")
@@ -91,6 +100,7 @@ class SatelCodec:
         az, el = self.wire_target(az_deg, el_deg)
         assert el is not None
         self._owed.append("slew")
+        self._point = (int(az), int(el))
         return [b"g", b"p%d %d\r\n" % (az, el)]
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
@@ -114,12 +124,6 @@ class SatelCodec:
     # -- what is owed -------------------------------------------------------------------------
     def awaiting_reply(self) -> bool:
         return bool(self._owed)
-
-    def reply_timeout_s(self, default_s: float) -> float:
-        return SLEW_TIMEOUT_S if "slew" in self._owed else default_s
-
-    def slewing(self) -> bool:
-        return "slew" in self._owed
 
     def expire_query(self) -> None:
         self._owed.clear()
@@ -152,7 +156,10 @@ class SatelCodec:
         if self._block is not None:
             self._block_line(line, raw, out)
             return
-        if line.lower().endswith("satel"):
+        if _TIME.search(line) or _AZ.search(line) or _EL.search(line) or _STORED.search(line):
+            self._block = {"motion": "?"}  # a report whose first line was lost (rule 3)
+            self._block_line(line, raw, out)
+        elif line.lower().endswith("satel"):
             self._settle("ident")
             out.append(VersionReply("SatEL"))
         elif line == "" or _BARE_TIME.match(line):
@@ -171,6 +178,9 @@ class SatelCodec:
             block["el"] = m.group(1)
         elif m := _STORED.search(line):
             self._block = None
+            if block["motion"] == "?":
+                self._spoiled(raw, "status report without its motion line", out)
+                return
             if "az" not in block or "el" not in block:
                 self._spoiled(raw, "status report without azimuth or elevation", out)
                 return
@@ -178,7 +188,11 @@ class SatelCodec:
             if az > 360 or el > 90:
                 self._spoiled(raw, "status report out of range", out)
                 return
-            self._settle("slew" if "slew" in self._owed else "report")
+            kind = next((k for k in self._owed if k in ("report", "slew")), "report")
+            if kind == "slew" and not self._ends_slew(az, el):
+                out.append(JunkReply(raw, "status report from before the point (slew goes on)"))
+                return
+            self._settle(kind)
             out.append(
                 PositionReply(
                     float(az),
@@ -195,6 +209,14 @@ class SatelCodec:
         else:
             self._block = None
             self._spoiled(raw, "unexpected line inside a status report", out)
+
+    def _ends_slew(self, az: int, el: int) -> bool:
+        if self._point is None:
+            return True
+        to_az, to_el = self._point
+        return (
+            abs(az - to_az) <= SLEW_END_TOLERANCE_DEG and abs(el - to_el) <= SLEW_END_TOLERANCE_DEG
+        )
 
     def _spoiled(self, raw: bytes, why: str, out: list[Reply]) -> None:
         """A report that cannot be read. If it ended a slew, the slew is over all the same:
@@ -233,8 +255,10 @@ MODELS: dict[str, ModelSpec] = {
         reports_while_moving=False,
         reply_timeout_s=2.0,
         noise_deg=1.0,
-        nominal_speed_deg_s=8.0,
-        nominal_el_speed_deg_s=4.0,
+        # the rotor it usually drives, a Yaesu G-5500: 360 deg in 58-70 s, 180 deg in 67-81 s
+        # (60/50 Hz mains); the published estimate during a slew and its bound come from these
+        nominal_speed_deg_s=6.0,
+        nominal_el_speed_deg_s=2.5,
         whole_degrees=True,
     )
 }

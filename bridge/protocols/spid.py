@@ -83,9 +83,6 @@ class SpidCodec:
     def awaiting_reply(self) -> bool:
         return self._owed > 0
 
-    def reply_timeout_s(self, default_s: float) -> float:
-        return default_s
-
     def harmless(self, junk: bytes) -> bool:
         return bool(_DEBUG_LINES.fullmatch(junk))
 

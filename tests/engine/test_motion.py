@@ -99,6 +99,14 @@ def test_stop_is_resent_if_the_rotor_keeps_turning() -> None:
     assert mo.plan_target(m, CFG, 12.5) is mo.Plan.STOP_FIRST
 
 
+def test_no_second_stop_without_a_reading_that_shows_the_first_did_not_take() -> None:
+    """A controller silent while it moves (SatEL): no reading since the stop is no evidence
+    that the rotor still turns; the target waits for the reading instead of stopping again."""
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    m = mo.stop_sent(m, CFG, 10.5)
+    assert mo.plan_target(m, CFG, 20.0) is mo.Plan.WAIT
+
+
 def test_wrap_at_north_counts_as_near() -> None:
     assert mo.angle_error(359, 1, wraps=True) == 2
     assert mo.angle_error(359, 1, wraps=False) == 358
@@ -182,3 +190,17 @@ def test_without_a_brake_the_first_reading_still_waits_for_stillness() -> None:
     m2, _ = mo.reading(m2, card, 100, 0.0)
     m2, _ = mo.tick(m2, card, 1.5)
     assert m2.state is S.IDLE
+
+
+def test_after_lost_readings_the_next_one_is_taken_like_the_first() -> None:
+    """A lost after-move report: the jump to the next reading is no movement after the stop
+    (no second stop), and the rotor is idle only after settle_s of stillness."""
+    m = mo.stop_sent(mo.commanded(ready(), CFG, 200, 10.0), CFG, 30.0)
+    m = mo.track_lost(m)
+    assert m.state is S.BRAKING and m.target_deg is None and m.stop_sent_t is None
+    m, events = mo.reading(m, CFG, 200, 32.0)
+    assert events == [] and m.state is S.BRAKING
+    assert mo.plan_target(m, CFG, 32.0) is mo.Plan.WAIT
+    m, _ = mo.reading(m, CFG, 200, 33.5)
+    m, _ = mo.tick(m, CFG, 37.0)  # settled, and the brake delay is over
+    assert m.state is S.IDLE and m.position_deg == 200

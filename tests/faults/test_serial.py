@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import pytest
 
@@ -246,25 +247,8 @@ def test_a_row_of_stops_to_an_idle_rotor_ez_is_no_protocol_error(rig: Rig) -> No
     assert not emu.state().is_moving
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="OPEN BUG: a lost SatEL after-move report is waited for up to SLEW_TIMEOUT_S (120 s). "
-    "Not fixed yet: asking earlier means polling on a guessed slew time, and a poll during a "
-    "slew is the input the manual forbids. strict: this fails once the bug is fixed.",
-)
-@pytest.mark.parametrize("fault", ["noise in its first line", "line silent while it is sent"])
-def test_a_lost_satel_after_move_report_does_not_stall_the_rotator(rig: Rig, fault: str) -> None:
-    """BUG (reported; found by the soak): the SatEL says nothing while it slews and prints one
-    report when the move ends; the bridge polls nothing meanwhile (only a stop may interrupt a
-    slew). When that report is lost (a noise byte in its first line, `M\\xffotion ENABLED`,
-    so no report block opens; or the line dropping out for a moment while it is sent) the
-    bridge waits SLEW_TIMEOUT_S (120 s) for it: the rotator shows `moving` with an estimated
-    bearing, every new target is held back (a stop is sent every 2 s instead), and no error
-    says why. In the 10-minute soak this lost two commands."""
-    emu = rig.add("sat", "satel", emu=QUICK["sat"])
-    rig.start()
-    rig.ready("sat")
-    rig.probe.publish("rotor/target", "100 20")
+def lose_the_after_move_report(emu: Any, fault: str) -> None:
+    """Let the slew under way end with its report lost on the line."""
     emu.wait_for(lambda s: s.slewing, 5)
     emu.wait_until(lambda d, now: d._tx.pending(), lambda k: k == 0, 5)  # the line is silent
     if fault.startswith("noise"):
@@ -277,8 +261,114 @@ def test_a_lost_satel_after_move_report_does_not_stall_the_rotator(rig: Rig, fau
         emu.wait_until(lambda d, now: d._tx.pending(), lambda k: k == 0, 5)
         emu.set_silent(False)
     emu.wait_for(lambda s: not s.is_moving and not s.slewing, 5)
+
+
+LOST_REPORT = ["noise in its first line", "line silent while it is sent"]
+# the bridge is told the rotor's real speeds, so it knows how long a slew may take
+SAT_SPEEDS = {"az_speed_deg_s": 60.0, "el_speed_deg_s": 30.0}
+
+
+@pytest.mark.parametrize("fault", LOST_REPORT)
+def test_a_lost_satel_after_move_report_does_not_hold_back_the_next_target(
+    rig: Rig, fault: str
+) -> None:
+    """Found by the soak (it lost two commands): the SatEL says nothing while it slews and prints
+    one report when the move ends. When that report is lost (a noise byte in its first line,
+    `M\\xffotion ENABLED`; or the line dropping out while it is sent) the next target must
+    still be obeyed at once: the new target stops the (supposed) slew, and once the stopped
+    controller has had its moment to report, the bridge asks and goes on."""
+    emu = rig.add("sat", "satel", emu=QUICK["sat"], **SAT_SPEEDS)
+    rig.start()
+    rig.ready("sat")
+    rig.probe.publish("rotor/target", "100 20")
+    lose_the_after_move_report(emu, fault)
     t = time.monotonic()
     rig.probe.publish("rotor/target", "50 10")  # the next target is obeyed, promptly
     rig.arrived("sat", 50, 10, timeout_s=8)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=5, after=t)
+    assert rig.bogus("sat") == []
+    assert emu.device.misuse_frames() == [] and not emu.state().corrupted
+
+
+def test_a_satel_report_missing_its_first_line_still_ends_the_slew(rig: Rig) -> None:
+    """Noise inside the report's first line (`M\\xffotion ENABLED`): the rest of the report
+    still shows that the slew is over. The bridge asks at once (no stop, no long wait) and shows
+    the rotor idle at its target."""
+    emu = rig.add("sat", "satel", emu=QUICK["sat"], **SAT_SPEEDS)
+    rig.start()
+    rig.ready("sat")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")
+    lose_the_after_move_report(emu, LOST_REPORT[0])
+    ended = time.monotonic()
+    idle = rig.probe.wait_for("rotor/status", settled_at(100, 20), timeout_s=10, after=t)
+    assert idle.t - ended < 3  # a poll and the settle window, not the slew's bound
+    assert stops_after_first_slew(emu) == []
+    assert emu.device.misuse_frames() == [] and rig.bogus("sat") == []
+
+
+def test_a_satel_report_lost_whole_is_given_up_after_twice_the_travel_time(rig: Rig) -> None:
+    """The line drops out while the report is sent: nothing on the wire says the slew ended.
+    The bridge waits twice the travel time at the configured speeds plus 5 s (here
+    2 x 1.5 + 5 = 8 s), then stops (the one input allowed during a slew), asks, and shows the
+    rotor idle where it is, with an error that says why and which setting to check."""
+    emu = rig.add("sat", "satel", emu=QUICK["sat"], **SAT_SPEEDS)
+    rig.start()
+    rig.ready("sat")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")
+    lose_the_after_move_report(emu, LOST_REPORT[1])
+    idle = rig.probe.wait_for("rotor/status", settled_at(100, 20), timeout_s=20, after=t)
+    assert idle.t - t >= 8  # not before the slew's bound
+    errors = [m.text for m in rig.probe.on("rotor/error") if m.t >= t]
+    assert any("no report from the controller" in e and "az_speed_deg_s" in e for e in errors)
+    assert len(stops_after_first_slew(emu)) == 1
+    assert [f.data for f in emu.frames("slew")] == [emu.frames("slew")[0].data]  # not re-sent
+    assert emu.device.misuse_frames() == [] and not emu.state().corrupted
+    assert rig.bogus("sat") == []
+
+
+def settled_at(az: float, el: float) -> Any:
+    def ok(m: Any) -> bool:
+        status = json.loads(m.payload)
+        return (
+            status["state"] == "idle"
+            and not status["estimated"]
+            and (
+                status["bearing"],
+                status["elevation"],
+            )
+            == (az, el)
+        )
+
+    return ok
+
+
+def stops_after_first_slew(emu: Any) -> list[Any]:
+    first = emu.frames("slew")[0].time_s
+    return [f for f in emu.frames("stop") if f.time_s > first]
+
+
+def test_a_satel_slower_than_configured_is_stopped_never_polled_and_still_arrives(
+    rig: Rig,
+) -> None:
+    """The configured speeds are wrong (the rotor is 5 times slower): the bridge gives the
+    slew's report up while the rotor still turns. It must not poll into the slew (the manual:
+    input while slewing can wedge the controller; the emulator wedges at the first byte): it
+    stops it, reads where it stopped, and sends the target again, which it then reaches."""
+    emu = rig.add("sat", "satel", emu={**QUICK["sat"], "az_speed_deg_s": 12.0}, **SAT_SPEEDS)
+    rig.start()
+    rig.ready("sat")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "150 20")  # 140 deg: 2.3 s told, 11.7 s real
+    rig.arrived("sat", 150, 20, timeout_s=30)
+    slews = emu.frames("slew")
+    assert len(slews) == 2 and slews[0].data == slews[1].data  # cut short once, sent again
+    stops = stops_after_first_slew(emu)
+    assert len(stops) == 1 and slews[0].time_s < stops[0].time_s < slews[1].time_s
+    assert stops[0].time_s - slews[0].time_s >= 2 * 140 / 60 + 5 - 0.2  # the bound, no sooner
+    assert emu.device.misuse_frames() == [] and not emu.state().corrupted
+    errors = [m.text for m in rig.probe.on("rotor/error") if m.t >= t]
+    assert any("az_speed_deg_s" in e for e in errors)
     rig.probe.wait_value("rotor/state", "idle", timeout_s=5, after=t)
     assert rig.bogus("sat") == []

@@ -7,8 +7,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import JunkReply, PositionReply, VersionReply
-from bridge.protocols.satel import SLEW_TIMEOUT_S, SatelCodec
+from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
+from bridge.protocols.satel import SatelCodec
 
 REPORT = (
     b"Motion ENABLED\r\nMode 0 - azimuth break at NORTH\r\nTime: 2026/11/22 04:10:00\r\n"
@@ -52,6 +52,8 @@ def test_disabled_motion_and_other_widths_are_understood() -> None:
         REPORT.replace(b"Elevation = 045", b"Elevation = 999"),
         REPORT.replace(b"Azimuth = 123     Absolute = 123\r\n", b""),
         REPORT.replace(b"Elevation = 045\r\n", b"Elevation = 045\r\ngarbage line\r\n"),
+        REPORT.replace(b"Motion", b"M\xffotion"),  # its first line lost
+        REPORT.replace(b"Motion ENABLED\r\n", b""),
     ],
 )
 def test_a_spoiled_report_is_junk_not_a_reading(spoiled: bytes) -> None:
@@ -69,17 +71,48 @@ def test_identify_and_connect_sequence() -> None:
     assert not c.awaiting_reply()
 
 
-def test_point_is_preceded_by_enable_and_owes_a_long_report() -> None:
+def test_point_is_preceded_by_enable_and_owes_the_after_move_report() -> None:
     c = SatelCodec()
     assert c.encode_target(100.4, 45.6) == [b"g", b"p100 46\r\n"]
     assert c.encode_target(10, 20)[1] == b"p10 20\r\n"  # not zero-padded, as Hamlib sends
-    assert c.slewing() and c.reply_timeout_s(2.0) == SLEW_TIMEOUT_S
-    c.feed(REPORT)
-    assert c.slewing()  # two points were owed
-    c.feed(REPORT)
-    assert not c.slewing() and c.reply_timeout_s(2.0) == 2.0
+    c.encode_stop()  # the first slew is cut short: its report may show any position
+    assert positions(c.feed(REPORT)) == [READING]
+    assert c.awaiting_reply()  # two points were owed
+    at_point = REPORT.replace(b"Azimuth = 123", b"Azimuth = 012").replace(b"= 045", b"= 020")
+    assert [(r.az_deg, r.el_deg) for r in positions(c.feed(at_point))] == [(12.0, 20.0)]
+    assert not c.awaiting_reply()
     with pytest.raises(ValueError):
         c.encode_target(10, 95)
+
+
+def test_a_report_that_does_not_show_the_point_does_not_end_its_slew() -> None:
+    """A report that was on its way before the point (the answer to a poll the engine gave up
+    on) must not pass for the after-move report: the engine would poll into the slew."""
+    c = SatelCodec()
+    c.encode_target(300, 60)
+    out = c.feed(REPORT)  # 123/45: not where the point goes
+    assert positions(out) == [] and isinstance(out[-1], JunkReply)
+    assert c.awaiting_reply()
+    at_point = REPORT.replace(b"Azimuth = 123", b"Azimuth = 302").replace(b"= 045", b"= 059")
+    assert len(positions(c.feed(at_point))) == 1  # coasting a little past is the end
+    assert not c.awaiting_reply()
+
+
+@pytest.mark.parametrize(
+    "lost_first_line",
+    [REPORT.replace(b"Motion", b"M\xffotion"), REPORT.replace(b"Motion ENABLED\r\n", b"")],
+)
+def test_an_after_move_report_without_its_first_line_still_ends_the_slew(
+    lost_first_line: bytes,
+) -> None:
+    """Noise in the `Motion` line must not hide the end of a slew: the report is recognised by
+    its other lines, spoiled (no reading from it), and the slew is over (UNTRUSTED: ask again)."""
+    c = SatelCodec()
+    c.encode_target(123, 45)
+    out = c.feed(lost_first_line)
+    assert positions(out) == []
+    assert [r.reason for r in out if isinstance(r, JunkReply)].count(UNTRUSTED) == 1
+    assert not c.awaiting_reply()
 
 
 def test_other_frames() -> None:

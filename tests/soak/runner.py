@@ -61,7 +61,8 @@ from tests.faults.conftest import (
 )
 
 # id: (model, emulator options, bridge options). Rotor speeds are faster than real rotators so
-# ten minutes hold many moves; every other timing is the bridge's default.
+# ten minutes hold many moves; the SatEL's are told to the bridge (it bounds a silent slew by
+# them, as a user with a faster rotor would set them); every other timing is the default.
 ROTATORS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "ez": ("rotorez", {"speed_deg_s": 20.0, "brake_delay_s": 2.0, "jitter_deg": 1},
            {"brake_delay_s": 2.0}),
@@ -69,10 +70,12 @@ ROTATORS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "dcu": ("dcu1", {"speed_deg_s": 6.0, "brake_delay_s": 2.0}, {"brake_delay_s": 2.0}),
     "spid": ("rot2prog", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, {}),
     "md": ("md01", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, {}),
-    "sat": ("satel", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, {}),
+    "sat": ("satel", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+            {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}),
 }  # fmt: skip
 AZEL = ("rot2prog", "md01", "satel")
 IDLE_POLL_S = 1.0  # the bridge's default idle poll: "within one poll"
+SATEL_STOP_REPORT_S = 2.0  # after a stop the SatEL reports within its reply time, or never
 RECOVERY_SLACK_S = 1.0  # a fresh retained snapshot is itself a broker round trip or two
 
 
@@ -354,8 +357,9 @@ class Soak:
                 self.violation(f"no recovery 60 s after {self.broker_kind}")
                 self.broker_state = "up"
 
-    def retained_ok(self, rots: list[Rot]) -> tuple[bool, str]:
-        """The broker's retained state (a fresh subscriber's view) against the ground truth."""
+    def retained_ok(self, rots: list[Rot], estimate_ok: bool = True) -> tuple[bool, str]:
+        """The broker's retained state (a fresh subscriber's view) against the ground truth. A
+        SatEL's estimate during a slew passes unless ``estimate_ok`` is False."""
         try:
             snap = fast_retained(self.broker.port, "rotor/#")
         except Exception as exc:  # noqa: BLE001  (broker just restarted: try again)
@@ -372,9 +376,11 @@ class Soak:
                 status = json.loads(snap.get(f"{r}/status", b"{}"))
             except ValueError:
                 return False, f"{rot.rid} status unreadable"
-            if status.get("estimated") or status.get("bearing") is None:
-                if status.get("bearing") is None:
-                    return False, f"{rot.rid} no bearing"
+            if status.get("bearing") is None:
+                return False, f"{rot.rid} no bearing"
+            if status.get("estimated"):
+                if not estimate_ok:
+                    return False, f"{rot.rid} position still estimated"
                 continue
             truth = rot.emu.state()
             tol = 3.5 + (rot.speed * 0.8 if truth.is_moving else 0.0)
@@ -390,7 +396,18 @@ class Soak:
     def fault_kinds(self, rot: Rot) -> list[tuple[str, float]]:
         if rot.model == "dcu1":  # it never transmits: nothing to silence, cut short or garble
             return [("unplug", 3), ("power cycle", 1), ("garbage", 1)]
-        return [("unplug", 3), ("silent", 2), ("garbage", 3), ("cut short", 2), ("power cycle", 1)]
+        kinds = [("unplug", 3), ("silent", 2), ("garbage", 3), ("cut short", 2), ("power cycle", 1)]
+        if rot.model == "satel" and rot.emu.state().slewing:
+            kinds.append(("report lost", 4))  # the SatEL's one after-move report, lost whole
+        return kinds
+
+    def recovery_limit_s(self, rot: Rot, kind: str) -> float:
+        """How long after a fault the retained state may take to match the truth again: one
+        poll, except after a lost SatEL report, which the bridge waits out for its slew's bound
+        (twice the longest travel at the speeds it was told, plus 5 s), then stops and asks."""
+        if kind == "report lost":
+            return 2 * 360 / rot.speed + 5 + SATEL_STOP_REPORT_S + IDLE_POLL_S + RECOVERY_SLACK_S
+        return IDLE_POLL_S + RECOVERY_SLACK_S + 0.5
 
     def rotator_step(self, rot: Rot, now: float, allow_faults: bool) -> None:
         if rot.fault is not None:
@@ -401,18 +418,18 @@ class Soak:
             avail_at = self.monitor.since(f"rotor/{rot.rid}/availability")
             online = self.monitor.value(f"rotor/{rot.rid}/availability") == b"online"
             if online and self.broker_state == "up":
-                ok, why = self.retained_ok([rot])
+                ok, why = self.retained_ok([rot], estimate_ok=kind != "report lost")
                 if ok:
                     took = now - t_end
                     self.recoveries.append((kind, took))
                     came_back = max(avail_at, t_end)
-                    if now - came_back > IDLE_POLL_S + RECOVERY_SLACK_S + 0.5:
+                    if now - came_back > self.recovery_limit_s(rot, kind):
                         self.late_retained += 1
                         self.violation(f"{rot.rid}: retained state late after {kind}: {why}")
                     rot.recovering = None
                     rot.next_fault = now + self.rng.uniform(8, 30)
                     self.log(f"{rot.rid} recovered from {kind} in {took:.2f} s")
-            if rot.recovering is not None and now - t_end > 60:
+            if rot.recovering is not None and now - t_end > 60 + self.recovery_limit_s(rot, kind):
                 self.violation(f"{rot.rid}: no recovery 60 s after {kind}")
                 rot.recovering = None
         elif allow_faults and now >= rot.next_fault and self.broker_state == "up":
@@ -437,6 +454,8 @@ class Soak:
             long = self.rng.random() < 0.5
             fault.t_end = now + (self.rng.uniform(4.5, 8.0) if long else self.rng.uniform(0.3, 2.0))
             rot.emu.set_silent(True)
+        elif kind == "report lost":
+            rot.emu.set_silent(True)  # the line is silent anyway while it slews
         # the link is down for the bridge: what was pending must never be sent afterwards (a
         # silent controller is declared offline silence_timeout_s = 3 s after its last reply)
         if kind == "unplug":
@@ -456,7 +475,14 @@ class Soak:
     def fault_step(self, rot: Rot, now: float) -> None:
         f = rot.fault
         assert f is not None
-        if f.kind in ("unplug", "silent"):
+        if f.kind == "report lost":
+            gone = rot.emu.call(lambda d, now: not d.state(now).slewing and d._tx.pending() == 0)
+            if gone:  # the slew ended and its report went out into nothing
+                rot.emu.set_silent(False)
+                self.end_fault(rot, now)
+                if self.rng.random() < 0.5:
+                    self.target(rot, now)  # a new target while the bridge still waits
+        elif f.kind in ("unplug", "silent"):
             offline = self.monitor.value(f"rotor/{rot.rid}/availability") == b"offline"
             if f.kind == "unplug" and offline and self.bridge_up() and self.rng.random() < 0.02:
                 self.poison(rot, "while offline", now)  # a target meanwhile must be refused
