@@ -183,12 +183,14 @@ class MqttClient:
             return
         self._last_refusal = None
         log.info("connected to MQTT broker")
-        client.publish(self._will_topic, b"online", qos=1, retain=True)
+        # subscribe before saying `online`: the broker handles our packets in order, so a
+        # client that sends a command the moment it sees `online` is already heard
         if self._v5:
             opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
             client.subscribe([(topic, opts) for topic in self._subscriptions])
         else:
             client.subscribe([(topic, COMMAND_QOS) for topic in self._subscriptions])
+        client.publish(self._will_topic, b"online", qos=1, retain=True)
         with self._lock:
             for topic, data in self._retained.items():
                 if topic != self._will_topic:
