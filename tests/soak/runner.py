@@ -217,6 +217,7 @@ class Soak:
         self.recoveries: list[tuple[str, float]] = []
         self.violations: list[str] = []
         self.bogus_list: list[str] = []
+        self.misuse = 0  # frames a slewing SatEL logged as misuse
         self.late_retained = 0
         self.rss: list[tuple[float, int]] = []
         self.rots: dict[str, Rot] = {}
@@ -480,7 +481,7 @@ class Soak:
             if gone:  # the slew ended and its report went out into nothing
                 rot.emu.set_silent(False)
                 self.end_fault(rot, now)
-                if self.rng.random() < 0.5:
+                if self.bridge_up() and self.rng.random() < 0.5:
                     self.target(rot, now)  # a new target while the bridge still waits
         elif f.kind in ("unplug", "silent"):
             offline = self.monitor.value(f"rotor/{rot.rid}/availability") == b"offline"
@@ -672,11 +673,17 @@ class Soak:
             return None
 
     def audit_frames(self) -> None:
-        """Every target the controllers obeyed was accepted, fresh, and not a refused one."""
+        """Every target the controllers obeyed was accepted, fresh, and not a refused one; and
+        a slewing SatEL was sent nothing but a stop (its manual: input while slewing can wedge
+        it; the emulator logs every such byte)."""
         for rot in self.rots.values():
             log = rot.emu.log()
             new, rot.frames_seen = log[rot.frames_seen :], len(log)
             for frame in new:
+                if frame.outcome == "misuse: input while slewing":
+                    self.misuse += 1
+                    self.violation(f"{rot.rid}: {frame.data!r} sent while it was slewing")
+                    continue
                 if rot.model in SPID:
                     motion = frame.outcome in ("set", "set: clamped")
                 elif rot.model == "satel":
@@ -808,6 +815,7 @@ class Soak:
             f"{sum(v for k, v in self.cmds.items() if k.startswith('refusable'))} |",
             f"| ... refused | {self.cmds['refused as they must be']} |",
             f"| **bogus bearings** | **{len(self.bogus_list)}** |",
+            f"| **input to a slewing SatEL other than a stop** | **{self.misuse}** |",
             f"| MQTT messages checked | {self.monitor.count} |",
             f"| bridge RSS start / end / max | {rss_start / 1024:.1f} / {rss_end / 1024:.1f} / "
             f"{rss_max / 1024:.1f} MiB |",
