@@ -26,15 +26,17 @@ Rules:
    Noise before a label is tolerated, noise inside a value spoils the report; a spoiled report
    that ends a slew still ends it (UNTRUSTED: the engine asks again at once). A report whose
    first line was lost (noise inside ``Motion``) is recognised by its other lines: it is a
-   report all the same, spoiled, and it ends a slew.
+   report all the same, spoiled, and it ends a slew (if it shows the point, rule 6).
 4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
    sent while it is disabled is silently ignored.
 5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
    take depends on the rotor: the engine's business, engine/link.py).
-6. A readable report ends a slew only if it shows the point's position (within
-   SLEW_END_TOLERANCE_DEG) or a stop went out since the point. Any other report while a slew
-   is owed was on its way before the point (an answer the engine had given up on): junk, and
-   the slew is still owed. Taking it for the end would let the next poll into the slew.
+6. A report whose position can be read (even one that lost its first line) ends a slew only
+   if it shows the point's position (within SLEW_END_TOLERANCE_DEG, azimuth modulo 360) or a
+   stop went out since the point. Any other report while a slew is owed was on its way before
+   the point (an answer the engine had given up on): junk, and the slew is still owed. Taking
+   it for the end would let the next poll into the slew. (A report whose position cannot be
+   read cannot be checked: it ends the slew, and the engine asks again at once.)
 """
 
 from __future__ import annotations
@@ -178,9 +180,6 @@ class SatelCodec:
             block["el"] = m.group(1)
         elif m := _STORED.search(line):
             self._block = None
-            if block["motion"] == "?":
-                self._spoiled(raw, "status report without its motion line", out)
-                return
             if "az" not in block or "el" not in block:
                 self._spoiled(raw, "status report without azimuth or elevation", out)
                 return
@@ -191,6 +190,9 @@ class SatelCodec:
             kind = next((k for k in self._owed if k in ("report", "slew")), "report")
             if kind == "slew" and not self._ends_slew(az, el):
                 out.append(JunkReply(raw, "status report from before the point (slew goes on)"))
+                return
+            if block["motion"] == "?":
+                self._spoiled(raw, "status report without its motion line", out)
                 return
             self._settle(kind)
             out.append(
@@ -214,9 +216,9 @@ class SatelCodec:
         if self._point is None:
             return True
         to_az, to_el = self._point
-        return (
-            abs(az - to_az) <= SLEW_END_TOLERANCE_DEG and abs(el - to_el) <= SLEW_END_TOLERANCE_DEG
-        )
+        d_az = abs(az - to_az) % 360
+        d_az = min(d_az, 360 - d_az)  # a point at 360 may be reported as 000
+        return d_az <= SLEW_END_TOLERANCE_DEG and abs(el - to_el) <= SLEW_END_TOLERANCE_DEG
 
     def _spoiled(self, raw: bytes, why: str, out: list[Reply]) -> None:
         """A report that cannot be read. If it ended a slew, the slew is over all the same:

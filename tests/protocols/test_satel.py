@@ -115,6 +115,27 @@ def test_an_after_move_report_without_its_first_line_still_ends_the_slew(
     assert not c.awaiting_reply()
 
 
+def test_a_headless_report_that_does_not_show_the_point_does_not_end_its_slew() -> None:
+    """The same check for a report whose first line was lost: its position can still be read,
+    and a stale one must not end the slew either."""
+    c = SatelCodec()
+    c.encode_target(300, 60)
+    out = c.feed(REPORT.replace(b"Motion", b"M\xffotion"))  # 123/45
+    assert positions(out) == [] and UNTRUSTED not in [r.reason for r in out]
+    assert c.awaiting_reply()
+
+
+@pytest.mark.parametrize(
+    ("point", "shown"), [((360, 10), b"000"), ((0, 10), b"360"), ((2, 10), b"358")]
+)
+def test_the_point_is_recognised_across_north(point: tuple[int, int], shown: bytes) -> None:
+    c = SatelCodec()
+    c.encode_target(*point)
+    report = REPORT.replace(b"Azimuth = 123", b"Azimuth = " + shown).replace(b"= 045", b"= 010")
+    assert len(positions(c.feed(report))) == 1
+    assert not c.awaiting_reply()
+
+
 def test_other_frames() -> None:
     c = SatelCodec()
     assert (c.encode_stop(), c.encode_enable(), c.encode_reset(), c.encode_clear_memory()) == (
