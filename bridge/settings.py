@@ -140,10 +140,12 @@ class RotatorSettings(_Strict):
         None, ge=0, le=20, description="a still rotor's readings wander this much (model default)"
     )
     silence_timeout_s: float = Field(3.0, gt=0, le=600)
+    # at least 0.5 deg/s (a whole turn in 12 minutes): the wait for a SatEL's lost after-move
+    # report is twice the travel time at these speeds, and a slip like 0.05 would make it hours
     az_speed_deg_s: float | None = Field(
-        None, gt=0, le=360, description="how fast the rotor really turns (model default)"
+        None, ge=0.5, le=360, description="how fast the rotor really turns (model default)"
     )
-    el_speed_deg_s: float | None = Field(None, gt=0, le=360)
+    el_speed_deg_s: float | None = Field(None, ge=0.5, le=360)
     az_min_deg: float | None = None
     az_max_deg: float | None = None
     el_min_deg: float | None = None

@@ -92,6 +92,7 @@ def test_environment_overrides_the_file(tmp_path: Path, monkeypatch: pytest.Monk
         (("brake_delay_s = 5", "az_max_deg = 400"), "rotators[0]"),
         (('base_topic = "rotor"', 'base_topic = "rotor/#"'), "mqtt.base_topic"),
         (("brake_delay_s = 5", "az_speed_deg_s = 0"), "rotators[0].az_speed_deg_s"),
+        (("brake_delay_s = 5", "az_speed_deg_s = 0.05"), "rotators[0].az_speed_deg_s"),
         (("brake_delay_s = 5", "el_speed_deg_s = 3"), "rotators[0]"),  # no elevation axis
     ],
 )
