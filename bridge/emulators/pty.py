@@ -24,7 +24,9 @@ Rules:
    could never be seen by anyone; with it, the first client after a power-up sees it.
 6. set_silent(True) drops everything the device transmits (its replies are lost); the device
    still hears and obeys, so its log shows what a client sent while it got no answer.
-7. While unplugged the device lives on (a rotor keeps turning when the USB plug is pulled);
+7. set_deaf(True) drops everything the client sends before the device hears it (a byte lost
+   on the way in, a loose TX wire); `deaf_dropped` counts those bytes.
+8. While unplugged the device lives on (a rotor keeps turning when the USB plug is pulled);
    what it transmits meanwhile is lost.
 """
 
@@ -81,6 +83,8 @@ class EmulatedPort(Generic[R]):
         self._slave: int | None = None
         self._path: str = ""
         self._silent = False
+        self._deaf = False
+        self._deaf_dropped = 0
         self._closed = False
         self._client_seen = False
         self._held = bytearray()
@@ -206,6 +210,15 @@ class EmulatedPort(Generic[R]):
         with self.lock:
             self._silent = silent
 
+    def set_deaf(self, deaf: bool) -> None:
+        with self.lock:
+            self._deaf = deaf
+
+    @property
+    def deaf_dropped(self) -> int:
+        with self.lock:
+            return self._deaf_dropped
+
     def inject(self, data: bytes, *, to: Literal["host", "device"] = "host") -> None:
         """Garbage on the line: towards the client ("host") or into the controller ("device")."""
         if to == "host":
@@ -307,6 +320,12 @@ class EmulatedPort(Generic[R]):
         if not packet:
             return
         if packet[0] == _TIOCPKT_DATA:
+            if self._deaf:
+                self._client_arrived()
+                self._deaf_dropped += len(packet) - 1
+                with self._changed:
+                    self._changed.notify_all()
+                return
             self._deliver(packet[1:])
         elif packet[0] & _TIOCPKT_FLUSHREAD:
             self._flushes += 1

@@ -10,7 +10,8 @@ Rules:
    timeout. An owed reply that does not come is given up at its deadline (the worker decides).
    A slew's report (a controller silent while it moves) is owed until twice the travel time at
    the rotor's speeds plus SLEW_MARGIN_S; a stop written during the slew brings that deadline
-   forward to one reply time, since the stopped controller reports at once or not at all.
+   forward to one reply time: a stopped controller reports at once, or the stop was lost, or
+   the slew had already ended (and its report was lost).
 2. Silence is counted from the last valid reply, or from the end of a wait for a slew's report
    (a controller that was silent for a whole slew was not "not answering").
 3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
@@ -50,7 +51,8 @@ class Slew:
     to_az_deg: float
     to_el_deg: float | None
     source: Source = Source.MQTT
-    stopped: bool = False  # a stop went out during the slew
+    stops: int = 0  # stops written during the slew
+    attempt: int = 1  # 2: the same target sent again after its report did not come
 
     def travel_s(
         self, az_speed_deg_s: float, el_speed_deg_s: float, az_span_deg: float, el_span_deg: float
@@ -124,11 +126,12 @@ class Link:
             self.reply_deadline = self._clock() + self.spec.reply_timeout_s
 
     def write_stop(self, now: float) -> None:
-        """Write the stop. During a slew the report now comes at once, or not at all."""
+        """Write the stop. During a slew the report now comes within one reply time, or the
+        stop was lost, or the controller had already stopped (the worker decides)."""
         self.outbox.clear()
         self.write(self.codec.encode_stop())
         if self.slew is not None:
-            self.slew = replace(self.slew, stopped=True)
+            self.slew = replace(self.slew, stops=self.slew.stops + 1)
             self.reply_deadline = now + self.spec.reply_timeout_s
 
     def begin_slew(self, slew: Slew, travel_s: float) -> None:

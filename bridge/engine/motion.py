@@ -108,6 +108,15 @@ def track_lost(m: Motion) -> Motion:
     )
 
 
+def slew_ended(m: Motion, now: float) -> Motion:
+    """A slew the controller was silent through ended without a readable report: the rotor was
+    turning all along where no reading could show it, so the stall clock and the settling
+    count start now. The reading asked for at once decides arrival (or a real stall)."""
+    if m.state is not MotionState.MOVING:
+        return m
+    return replace(m, last_move_t=now, progress_t=now if m.target_deg is not None else None)
+
+
 def target_error(m: Motion, cfg: MotionConfig) -> float | None:
     """How far the rotor is from its target (the worse axis), or None if unknown."""
     if m.target_deg is None or m.position_deg is None:

@@ -40,7 +40,13 @@ Rules:
    configured. Either way the bridge does not poll into a slew it cannot see: it sends the stop
    (the one input allowed during a slew), asks for the position once the stopped controller
    had its chance to report, and sends the slew's target again, so the rotor still ends where
-   the last accepted command asked. An error says so, naming the speed setting.
+   the last accepted command asked. An error says so, naming the speed setting. If the second
+   try's report does not come either (a jammed rotor, a mechanical stop short of the point), the
+   target is given up with an error: a motor is not driven against a jam again and again.
+10. Any stop written during a slew (rule 9, stop and redirect, the user's stop) is followed by
+   the report within one reply time or it is written again, up to SLEW_STOP_TRIES: a stop byte
+   lost on the line must not let the poll that follows into a slew. Only then is the controller
+   asked where it is.
 """
 
 from __future__ import annotations
@@ -74,6 +80,8 @@ OPTIONS_REFRESH_S = 60.0
 BURST_QUIET_S = 0.5
 STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
 STOP_TRIES_BEFORE_ERROR = 3
+SLEW_STOP_TRIES = 3  # stops written to a slewing controller before it is asked where it is
+SLEW_ATTEMPTS = 2  # a target whose report did not come is sent once more, then given up
 
 
 @dataclass(frozen=True)
@@ -119,6 +127,7 @@ class Worker:
         self._locked = locked
         self._motion = mo.Motion()
         self._pending: Target | None = None
+        self._resend: Target | None = None  # rule 9: the target put back after a lost report
         self._pending_t = 0.0
         self._pending_replaced = False  # part of a stream of targets (see rule 4)
         self._stream_t = 0.0
@@ -288,18 +297,39 @@ class Worker:
 
     def _reply_overdue(self, link: Link, now: float) -> None:
         slew = link.slew
-        if slew is not None and not slew.stopped:  # rule 9
-            self._error(
-                "serial",
+        if slew is not None and slew.stops == 0:  # rule 9
+            late = (
                 f"no report from the controller {now - slew.start_t:.0f} s after a move that "
                 f"takes {self._travel_s(slew):.0f} s at {self._az_speed_deg_s:g}/"
-                f"{self._el_speed_deg_s:g} deg/s: stopping it to ask where it is, then going on "
-                "to the target (if the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
+                f"{self._el_speed_deg_s:g} deg/s"
             )
-            if self._pending is None:
-                target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
-                self._pending, self._pending_t, self._stream_t = target, now, now
-                self._pending_replaced = False
+            if slew.attempt >= SLEW_ATTEMPTS:
+                self._error(
+                    "serial",
+                    f"{late}, the second time for this target: stopping it and giving the target "
+                    "up (rotor jammed or held short of the point? if it is that slow, set "
+                    "az_speed_deg_s / el_speed_deg_s)",
+                    command=describe_command(Target(slew.to_az_deg, slew.to_el_deg)),
+                )
+            else:
+                self._error(
+                    "serial",
+                    f"{late}: stopping it to ask where it is, then going on to the target (if "
+                    "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
+                )
+                if self._pending is None:
+                    target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
+                    self._pending, self._pending_t, self._stream_t = target, now, now
+                    self._pending_replaced = False
+                    self._resend = target
+            self._send_stop(now)
+            return
+        if slew is not None and slew.stops < SLEW_STOP_TRIES:  # rule 10
+            log.warning(
+                "%s: no report %g s after a stop during a slew; stopping again before asking",
+                self.cfg.rotator_id,
+                self.cfg.spec.reply_timeout_s,
+            )
             self._send_stop(now)
             return
         link.give_up_reply(now)
@@ -457,8 +487,18 @@ class Worker:
             link.send(link.codec.encode_target(az, el), now)
             if not self.cfg.spec.reports_while_moving:
                 source = self._pending.source
-                slew = Slew(now, m.position_deg, m.el_position_deg, wire[0], wire[1], source)
+                attempt = 2 if self._pending is self._resend else 1
+                slew = Slew(
+                    now,
+                    m.position_deg,
+                    m.el_position_deg,
+                    wire[0],
+                    wire[1],
+                    source,
+                    attempt=attempt,
+                )
                 link.begin_slew(slew, self._travel_s(slew))
+            self._resend = None
             self._motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
             self._last_source = self._pending.source.value
             self._pending = None
@@ -545,7 +585,9 @@ class Worker:
                 self._junk(reply, now)
                 if reply.reason == UNTRUSTED:
                     link.ask_again(now)
-                    link.slew = None  # whatever it was answering is over
+                    if link.slew is not None:  # the slew is over; where it ended, unseen
+                        link.slew = None
+                        self._motion = mo.slew_ended(self._motion, now)
 
     def _publishable(self, az_deg: float, el_deg: float | None) -> None:
         moving = self._motion.state is MotionState.MOVING

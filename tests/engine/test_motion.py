@@ -204,3 +204,23 @@ def test_after_lost_readings_the_next_one_is_taken_like_the_first() -> None:
     m, _ = mo.reading(m, CFG, 200, 33.5)
     m, _ = mo.tick(m, CFG, 37.0)  # settled, and the brake delay is over
     assert m.state is S.IDLE and m.position_deg == 200
+
+
+def test_a_slew_that_ended_unseen_is_no_stall_and_the_next_reading_decides() -> None:
+    """A SatEL slew of 20 s (longer than the stall timeout) ends with a report that cannot be
+    read: without readings during it, that is no stall. The reading asked for at once shows
+    the rotor at the target: arrived after the settle window."""
+    m = mo.commanded(ready(), CFG, 200, 10.0)
+    m = mo.slew_ended(m, 30.0)
+    m, events = mo.tick(m, CFG, 30.0)
+    assert events == [] and m.state is S.MOVING
+    m, events = mo.reading(m, CFG, 200, 30.2)
+    m, events2 = mo.tick(m, CFG, 31.8)
+    assert events + events2 == [mo.Event.ARRIVED]
+    # without the hook the same tick is a stall: the test above is not vacuous
+    _, events = mo.tick(mo.commanded(ready(), CFG, 200, 10.0), CFG, 30.0)
+    assert events == [mo.Event.STALLED]
+    # and a rotor the slew left short of its target stalls only a whole timeout later
+    m = mo.slew_ended(mo.commanded(ready(), CFG, 200, 10.0), 30.0)
+    m, _ = mo.reading(m, CFG, 150, 30.2)
+    assert mo.tick(m, CFG, 38.0)[1] == [] and mo.tick(m, CFG, 38.3)[1] == [mo.Event.STALLED]
