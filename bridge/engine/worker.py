@@ -127,7 +127,8 @@ class Worker:
         self._locked = locked
         self._motion = mo.Motion()
         self._pending: Target | None = None
-        self._resend: Target | None = None  # rule 9: the target put back after a lost report
+        # rule 9: the target put back after a lost report, and which try it will be
+        self._resend: tuple[Target, int] | None = None
         self._pending_t = 0.0
         self._pending_replaced = False  # part of a stream of targets (see rule 4)
         self._stream_t = 0.0
@@ -321,7 +322,7 @@ class Worker:
                     target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
                     self._pending, self._pending_t, self._stream_t = target, now, now
                     self._pending_replaced = False
-                    self._resend = target
+                    self._resend = (target, slew.attempt + 1)
             self._send_stop(now)
             return
         if slew is not None and slew.stops < SLEW_STOP_TRIES:  # rule 10
@@ -487,7 +488,8 @@ class Worker:
             link.send(link.codec.encode_target(az, el), now)
             if not self.cfg.spec.reports_while_moving:
                 source = self._pending.source
-                attempt = 2 if self._pending is self._resend else 1
+                resend = self._resend
+                attempt = resend[1] if resend and resend[0] is self._pending else 1
                 slew = Slew(
                     now,
                     m.position_deg,
