@@ -141,10 +141,12 @@ class Link:
         self.reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
 
     def send(self, frames: list[bytes], now: float) -> None:
-        """The first frame now, the rest spaced by the model's inter-frame gap."""
+        """The first frame now, the rest spaced by the model's inter-frame gap (all now if
+        there is none: a stop that came between them would cancel the second alone)."""
         self.write(frames[0])
         for i, frame in enumerate(frames[1:], start=1):
             self.outbox.append((now + i * self.spec.inter_frame_gap_s, frame))
+        self.flush_outbox(now)
 
     def flush_outbox(self, now: float) -> None:
         while self.outbox and self.outbox[0][0] <= now:
@@ -163,9 +165,16 @@ class Link:
         """Stop waiting for the owed reply (and for a slew's report: the slew is over)."""
         self.codec.expire_query()
         self.reply_deadline = None
-        if self.slew is not None:
-            self.slew = None
-            self.quiet_from_t = now
+        self.end_slew(now)
+
+    def end_slew(self, now: float) -> bool:
+        """The slew (if any) is over without a reading: silence counts from now (rule 2).
+        True if there was one."""
+        if self.slew is None:
+            return False
+        self.slew = None
+        self.quiet_from_t = now
+        return True
 
     def got_reading(self, now: float) -> None:
         if not self.codec.awaiting_reply():

@@ -587,8 +587,7 @@ class Worker:
                 self._junk(reply, now)
                 if reply.reason == UNTRUSTED:
                     link.ask_again(now)
-                    if link.slew is not None:  # the slew is over; where it ended, unseen
-                        link.slew = None
+                    if link.end_slew(now):  # the slew is over; where it ended, unseen
                         self._motion = mo.slew_ended(self._motion, now)
 
     def _publishable(self, az_deg: float, el_deg: float | None) -> None:

@@ -32,7 +32,7 @@ Rules:
 5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
    take depends on the rotor: the engine's business, engine/link.py).
 6. A report whose position can be read (even one that lost its first line) ends a slew only
-   if it shows the point's position (within SLEW_END_TOLERANCE_DEG, azimuth modulo 360) or a
+   if it shows the point's position (within SLEW_END_TOLERANCE_DEG; 000 and 360 are one place) or a
    stop went out since the point. Any other report while a slew is owed was on its way before
    the point (an answer the engine had given up on): junk, and the slew is still owed. Taking
    it for the end would let the next poll into the slew. (A report whose position cannot be
@@ -216,8 +216,9 @@ class SatelCodec:
         if self._point is None:
             return True
         to_az, to_el = self._point
-        d_az = abs(az - to_az) % 360
-        d_az = min(d_az, 360 - d_az)  # a point at 360 may be reported as 000
+        # 000 and 360 are the same place (the north stop); nothing else wraps: 002 is not
+        # near 358, it is a whole turn away
+        d_az = min(abs(a - b) for a in _north(az) for b in _north(to_az))
         return d_az <= SLEW_END_TOLERANCE_DEG and abs(el - to_el) <= SLEW_END_TOLERANCE_DEG
 
     def _spoiled(self, raw: bytes, why: str, out: list[Reply]) -> None:
@@ -234,6 +235,10 @@ class SatelCodec:
             self._owed.remove(kind)
         elif self._owed and kind == "report":
             self._owed.pop(0)
+
+
+def _north(az: int) -> tuple[int, ...]:
+    return (0, 360) if az in (0, 360) else (az,)
 
 
 MODELS: dict[str, ModelSpec] = {

@@ -126,14 +126,23 @@ def test_a_headless_report_that_does_not_show_the_point_does_not_end_its_slew() 
 
 
 @pytest.mark.parametrize(
-    ("point", "shown"), [((360, 10), b"000"), ((0, 10), b"360"), ((2, 10), b"358")]
+    ("point", "shown", "ends"),
+    [
+        ((360, 10), b"000", True),  # the north stop, either way round
+        ((0, 10), b"360", True),
+        ((359, 10), b"000", True),  # coasted onto the stop
+        ((358, 10), b"002", False),  # a whole turn away: an old report
+        ((3, 10), b"358", False),
+    ],
 )
-def test_the_point_is_recognised_across_north(point: tuple[int, int], shown: bytes) -> None:
+def test_000_and_360_are_one_place_and_nothing_else_wraps(
+    point: tuple[int, int], shown: bytes, ends: bool
+) -> None:
     c = SatelCodec()
     c.encode_target(*point)
     report = REPORT.replace(b"Azimuth = 123", b"Azimuth = " + shown).replace(b"= 045", b"= 010")
-    assert len(positions(c.feed(report))) == 1
-    assert not c.awaiting_reply()
+    assert len(positions(c.feed(report))) == (1 if ends else 0)
+    assert c.awaiting_reply() is not ends
 
 
 def test_other_frames() -> None:
