@@ -32,11 +32,11 @@ Rules:
 5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
    take depends on the rotor: the engine's business, engine/link.py).
 6. A report whose position can be read (even one that lost its first line) ends a slew only
-   if it shows the point's position (within SLEW_END_TOLERANCE_DEG; 000 and 360 are one place) or a
-   stop went out since the point. Any other report while a slew is owed was on its way before
-   the point (an answer the engine had given up on): junk, and the slew is still owed. Taking
-   it for the end would let the next poll into the slew. (A report whose position cannot be
-   read cannot be checked: it ends the slew, and the engine asks again at once.)
+   if it shows the point's position (within SLEW_END_TOLERANCE_DEG; 000 and 360 are one
+   place) or a stop went out since the point. Any other report while a slew is owed was on
+   its way before the point (an answer the engine had given up on): junk, and the slew is
+   still owed. Taking it for the end would let the next poll into the slew. (A report whose
+   position cannot be read cannot be checked: it ends the slew, and the engine asks again.)
 """
 
 from __future__ import annotations
