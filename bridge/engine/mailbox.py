@@ -6,6 +6,10 @@ Rules:
 3. Options and the lock are settings: the latest value per name wins, order between names kept.
 4. ``put`` never blocks on the worker; it wakes the worker through a pipe the worker selects on,
    so a command reaches the wire while the worker waits for serial bytes, never after a timeout.
+   ``take`` drains the pipe *before* it takes the batch: a ``put`` that lands between the two
+   then leaves its wake byte in the pipe (one spurious wake-up at worst). Draining after taking
+   would swallow the byte of a command that is not in the batch taken, and that command (a stop)
+   would wait for the next serial byte or timeout.
 """
 
 from __future__ import annotations
@@ -69,15 +73,15 @@ class Mailbox:
         self._wake()
 
     def take(self) -> Batch:
-        with self._lock:
-            batch, self._batch = self._batch, Batch()
-            batch.options = list(self._option_order.values())
-            self._option_order = {}
-        try:
+        try:  # first the wake bytes, then the batch (rule 4)
             while os.read(self._rfd, 4096):
                 pass
         except BlockingIOError:
             pass
+        with self._lock:
+            batch, self._batch = self._batch, Batch()
+            batch.options = list(self._option_order.values())
+            self._option_order = {}
         return batch
 
     def wake(self) -> None:

@@ -50,3 +50,33 @@ def test_put_wakes_a_selecting_worker_and_take_clears_the_wakeup() -> None:
     assert select.select([mb], [], [], 1)[0] == [mb]
     mb.take()
     assert select.select([mb], [], [], 0)[0] == []
+
+
+class _PutOnRelease:
+    """The mailbox's lock, which lets one ``put`` in the moment ``take`` releases it: the
+    critical point where a command can land between taking the batch and draining the pipe."""
+
+    def __init__(self, mb: Mailbox, command: Stop) -> None:
+        self._lock = mb._lock
+        self._mb = mb
+        self._command: Stop | None = command
+
+    def __enter__(self) -> None:
+        self._lock.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.release()
+        command, self._command = self._command, None
+        if command is not None:
+            self._mb.put(command)
+
+
+def test_a_stop_put_while_take_runs_still_wakes_the_worker() -> None:
+    mb = Mailbox()
+    mb.put(Target(10.0))
+    mb._lock = _PutOnRelease(mb, Stop())  # type: ignore[assignment]
+    first = mb.take()
+    assert first.target == Target(10.0) and first.stop is None  # the stop came just after
+    # the worker selects again: the stop must wake it at once, not after a poll's timeout
+    assert select.select([mb], [], [], 0)[0] == [mb]
+    assert mb.take().stop == Stop()
