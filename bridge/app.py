@@ -121,8 +121,7 @@ class App:
             self.discovery.publish_all()  # cached now, sent on connect
         self.mqtt.start()
         for rot in self.rotators:
-            rot.start()
-            self.mqtt.publish_status(rot.id, rot.status)
+            rot.start()  # its worker thread publishes its status, the first one included
         try:
             for server in self.rotctld:
                 server.start()

@@ -47,6 +47,9 @@ Rules:
    the report within one reply time or it is written again, up to SLEW_STOP_TRIES: a stop byte
    lost on the line must not let the poll that follows into a slew. Only then is the controller
    asked where it is.
+11. Listeners (MQTT, rotctld, Home Assistant) are called from this thread only, and a listener
+   that raises is logged once per kind of failure and otherwise ignored (``contained``): a
+   display problem never closes, reopens or delays the line to the controller.
 """
 
 from __future__ import annotations
@@ -57,6 +60,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import serial
 
@@ -74,6 +78,7 @@ from bridge.protocols.base import (
 )
 
 log = logging.getLogger(__name__)
+T = TypeVar("T")
 
 POWER_ON_BYTE = 0xE0
 OPTIONS_REFRESH_S = 60.0
@@ -82,6 +87,21 @@ STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
 STOP_TRIES_BEFORE_ERROR = 3
 SLEW_STOP_TRIES = 3  # stops written to a slewing controller before it is asked where it is
 SLEW_ATTEMPTS = 2  # a target whose report did not come is sent once more, then given up
+
+
+def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
+    """``listener`` with its failures logged (once per exception type) and never raised."""
+    seen: set[type[BaseException]] = set()
+
+    def call(value: T) -> None:
+        try:
+            listener(value)
+        except Exception as exc:
+            if type(exc) not in seen:
+                seen.add(type(exc))
+                log.exception("%s failed (logged once; the rotator goes on)", what)
+
+    return call
 
 
 @dataclass(frozen=True)
@@ -118,8 +138,8 @@ class Worker:
     ) -> None:
         self.cfg = cfg
         self._mailbox = mailbox
-        self._on_status = on_status
-        self._on_event = on_event
+        self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")
+        self._on_event = contained(on_event, f"{cfg.rotator_id}: event listener")
         self._clock = clock
         self._wall = wall
         self._open = port_opener
@@ -158,7 +178,6 @@ class Worker:
         return self._status
 
     def start(self) -> None:
-        self._emit_status()
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> bool:
@@ -171,6 +190,7 @@ class Worker:
 
     # -- the thread ---------------------------------------------------------------------------
     def _run(self) -> None:
+        self._emit_status()  # this thread is the only one that emits (rule 11)
         while not self._stopping.is_set():
             try:
                 self._cycle()

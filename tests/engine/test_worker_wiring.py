@@ -1,0 +1,122 @@
+"""The worker thread's wiring, with real parts: a real pty driven by the emulator, real pyserial.
+
+What is proven here is what no virtual-time scenario can show: that the thread wakes at once for
+a command (the mailbox pipe) and that nothing a listener does reaches the serial line.
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+import serial
+
+from bridge import emulators
+from bridge.app import worker_config
+from bridge.emulators.pty import EmulatedPort
+from bridge.engine.port import open_port
+from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.state_store import StateStore
+from bridge.model import ErrorEvent, RotatorStatus, Stop, Target
+from bridge.protocols.base import ModelSpec
+from bridge.settings import RotatorSettings
+from tests.integration.conftest import FAST_BRIDGE, FAST_ROTOR
+from tests.support import wait_until
+
+
+@pytest.fixture
+def emu(tmp_path: Path) -> Iterator[EmulatedPort]:
+    port = emulators.start("rotorez", link=str(tmp_path / "tty"), **FAST_ROTOR)
+    yield port
+    port.close()
+
+
+class Opens:
+    """Counts how often the worker opens its port."""
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def __call__(self, path: str, spec: ModelSpec, baud: int) -> serial.Serial:
+        self.count += 1
+        return open_port(path, spec, baud)
+
+
+def make_rotator(
+    emu: EmulatedPort, on_status: Callable[[RotatorStatus], None], events: list, opens: Opens
+) -> Rotator:
+    assert emu.link is not None
+    settings = RotatorSettings.model_validate(
+        {"id": "t", "model": "rotorez", "port": emu.link, **FAST_BRIDGE}
+    )
+    cfg = worker_config(settings)
+    return Rotator(
+        cfg, Limits(0, 360), StateStore(None), on_status, events.append, port_opener=opens
+    )
+
+
+def test_a_listener_that_raises_on_every_status_never_touches_the_serial_line(
+    emu: EmulatedPort, caplog: pytest.LogCaptureFixture
+) -> None:
+    calls = []
+
+    def broken_listener(status: RotatorStatus) -> None:
+        calls.append(status)
+        raise RuntimeError("display is broken")
+
+    events: list[ErrorEvent] = []
+    opens = Opens()
+    rot = make_rotator(emu, broken_listener, events, opens)
+    rot.start()
+    try:
+        wait_until(lambda: rot.status.state.value == "idle", 10, "idle")
+        rot.submit(Target(100.0))
+        emu.wait_for(lambda s: abs(s.az_deg - 100) <= 2 and not s.is_moving, timeout_s=15)
+        wait_until(lambda: rot.status.state.value == "idle", 10, "idle after the move")
+        assert rot.status.available
+    finally:
+        rot.stop()
+    assert opens.count == 1  # the port was never closed and reopened
+    assert not [e for e in events if e.kind in ("internal", "serial")]
+    assert len(calls) > 5  # the listener kept being called
+    logged = [r for r in caplog.records if "display is broken" in str(r.exc_info)]
+    assert len(logged) == 1  # logged once per kind, not once per status
+
+
+def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: EmulatedPort) -> None:
+    """300 times a target and then a stop 0-3 ms later: every stop is on the wire quickly (the
+    mailbox wake-up must never be lost, or a stop waits for a poll)."""
+    events: list[ErrorEvent] = []
+    rot = make_rotator(emu, lambda s: None, events, Opens())
+    rot.start()
+    rng = random.Random(13)
+    latencies = []
+    try:
+        wait_until(lambda: rot.status.state.value == "idle", 10, "idle")
+        for _ in range(300):
+            seen = len(emu.frames())
+            rot.submit(Target(float(rng.randint(0, 359))))
+            _spin(rng.uniform(0, 0.003))
+            t_put = time.monotonic()
+            rot.submit(Stop())
+
+            def stop_seen(device, _now: float, seen: int = seen, t: float = t_put):  # noqa: ANN001
+                return [f for f in device.log[seen:] if f.data == b";" and f.time_s >= t]
+
+            frames = emu.wait_until(stop_seen, bool, timeout_s=2.0)
+            latencies.append(frames[0].time_s - t_put)
+    finally:
+        rot.stop()
+    assert len(latencies) == 300
+    assert max(latencies) < 0.150, sorted(latencies)[-5:]
+
+
+def _spin(duration_s: float) -> None:
+    """Hold the thread for a few milliseconds (time.sleep's granularity is too coarse here)."""
+    end = time.monotonic() + duration_s
+    while time.monotonic() < end:
+        threading.Event().wait(0)
