@@ -7,7 +7,12 @@ Rules:
    retained target would turn the rotor again on every restart of the bridge or the broker.)
    The one exception is stop: stopping never moves anything, and a dashboard button wrongly
    set to retain must still stop a turning rotor. It is executed and reported.
-2. Bad payloads are refused with an error event naming what was wrong; nothing moves.
+   An EMPTY retained message is no command: it is how a retained message is deleted (what the
+   refusals themselves tell the user to do), so it is ignored silently, stop included. (With
+   MQTT 3.1.1 the broker clears the retain flag of live messages, so a deletion sent while the
+   bridge is connected arrives as an empty plain message: refused under rule 2, or a stop.)
+2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
+   nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
 """
 
@@ -129,6 +134,8 @@ class MqttService:
         rot = self._rotators.get(rotator_id)
         if rot is None:
             return
+        if retain and not payload:
+            return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
         if retain and kind == "stop":
             rot.submit(Stop(Source.MQTT), what)
