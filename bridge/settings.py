@@ -8,6 +8,7 @@ Rotators are a list in the file; their fields are overridden by id:
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import socket
@@ -20,6 +21,7 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    PrivateAttr,
     SecretStr,
     ValidationError,
     field_validator,
@@ -104,8 +106,27 @@ class MqttSettings(_Strict):
         self.password = SecretStr(text.strip("\r\n"))
         return self
 
+    # the state file of the installation these settings belong to (Settings fills it in)
+    _state_file: str = PrivateAttr(default="")
+
     def effective_client_id(self) -> str:
-        return self.client_id or f"rotor-bridge-{socket.gethostname()}"[:64]
+        """``client_id``, or a default that is unique per installation and stable across restarts.
+
+        The default is "rotor-", up to 10 characters of the host name, "-" and 6 hex digits of a
+        hash of the full host name, the base topic and the state file path: at most 23
+        characters, the length every MQTT 3.1.1 broker must accept, from the characters every
+        broker takes (plus "-"). Two bridges on one host (a second installation, the demo beside
+        the real one) differ in state file or base topic, so they do not take each other's
+        session over; one installation keeps its id. Two hosts sharing one configuration with
+        an explicit client_id still collide: the client reports that (mqtt/client.py rule 7).
+        """
+        if self.client_id:
+            return self.client_id
+        host = socket.gethostname()
+        key = f"{host}\n{self.base_topic}\n{self._state_file}".encode()
+        digest = hashlib.sha256(key).hexdigest()[:6]
+        short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
+        return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"
 
 
 class HomeAssistantSettings(_Strict):
@@ -305,6 +326,11 @@ class Settings(BaseSettings):
             prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
         ):
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
+        return self
+
+    @model_validator(mode="after")
+    def _installation(self) -> Settings:
+        self.mqtt._state_file = str(self.state_file.expanduser().absolute())
         return self
 
     def rotator_topic(self, r: RotatorSettings) -> str:
