@@ -2,7 +2,9 @@
 discovery messages, and the publisher that keeps them current.
 
 Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
-QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses.
+QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
+entities are rows of a data table (ENTITIES), each naming the ModelSpec capability it needs;
+every topic, discovery topics included, comes from bridge.mqtt.topics.
 
 Rules:
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
@@ -27,10 +29,11 @@ import re
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from bridge import __version__
 from bridge.model import MotionState, RotatorStatus
-from bridge.mqtt.topics import RotatorTopics, Topics
+from bridge.mqtt.topics import DiscoveryTopics, RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
@@ -79,24 +82,28 @@ def _entity(
     entity_slug: str,
     name: str | None,
     device: dict[str, object],
-    availability: list[dict[str, str]],
+    availability: list[dict[str, str]] | None,
     **config: object,
-) -> tuple[str, dict[str, object]]:
+) -> tuple[tuple[str, str, str], dict[str, object]]:
+    """((platform, node, object_id), payload); availability None: the entity has none."""
     payload: dict[str, object] = {
         "name": name,
         "unique_id": f"{node}_{object_id}",
         "default_entity_id": f"{platform}.{entity_slug}_{object_id}",
         "device": device,
         "origin": ORIGIN,
-        "availability": availability,
-        "availability_mode": "all",
         "qos": 1,
         **config,
     }
-    return f"{platform}/{node}/{object_id}/config", payload
+    if availability is not None:
+        payload.update(availability=availability, availability_mode="all")
+    return (platform, node, object_id), payload
 
 
-def bridge_configs(ident: Identity, topics: Topics) -> dict[str, dict[str, object]]:
+Configs = dict[tuple[str, str, str], dict[str, object]]
+
+
+def bridge_configs(ident: Identity, topics: Topics) -> Configs:
     """The bridge device and its connection-state entity (no availability of its own)."""
     device = {
         "identifiers": [ident.bridge_node],
@@ -105,28 +112,117 @@ def bridge_configs(ident: Identity, topics: Topics) -> dict[str, dict[str, objec
         "model": "Bridge",
         "sw_version": __version__,
     }
-    topic, payload = _entity(
+    where, payload = _entity(
         "binary_sensor",
         ident.bridge_node,
         "connection",
         ident.bridge_node,
         "Connection state",
         device,
-        [],
+        None,
         state_topic=topics.bridge_state,
         payload_on="online",
         payload_off="offline",
         device_class="connectivity",
         entity_category="diagnostic",
     )
-    del payload["availability"], payload["availability_mode"]
-    return {topic: payload}
+    return {where: payload}
 
 
-def rotator_configs(
-    ident: Identity, topics: Topics, r: RotatorInfo
-) -> dict[str, dict[str, object]]:
-    spec, t = r.spec, r.topics
+# -- the entity table ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Entity:
+    """One entity of a rotator device; ``config`` gives the platform-specific keys."""
+
+    platform: str
+    object_id: str
+    name: str | None
+    config: Callable[[RotatorInfo], dict[str, object]]
+    needs: str | None = None  # a ModelSpec capability (rule 1): without it, no entity
+    bridge_only: bool = False  # rule 2: available while the rotator is unreachable
+
+    def expand(self, spec: ModelSpec) -> list[Entity]:
+        return [self] if self.needs is None or getattr(spec, self.needs) else []
+
+
+@dataclass(frozen=True)
+class EachOption:
+    """One entity per controller option (``spec.options``), labelled by ``spec.option_labels``."""
+
+    platform: str
+    config: Callable[[RotatorInfo, str], dict[str, object]]
+
+    def expand(self, spec: ModelSpec) -> list[Entity]:
+        return [
+            Entity(
+                self.platform,
+                f"option_{name}",
+                spec.option_labels.get(name, name.title()),
+                partial(self.config, option=name),
+            )
+            for name in spec.options
+        ]
+
+
+def _current_or(field: str, fallback: str) -> str:
+    """A template for a target number: the active target, else where the rotor is."""
+    return (
+        f"{{{{ value_json.{field} if value_json.{field} is not none else (value_json.{fallback} "
+        f"if value_json.{fallback} is not none else 'None') }}}}"
+    )
+
+
+DEGREES = {"unit_of_measurement": "°"}
+SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
+TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
+DIAGNOSTIC = {"entity_category": "diagnostic"}
+
+# in the order they are published; every topic comes from RotatorTopics (r.topics)
+ENTITIES: tuple[Entity | EachOption, ...] = (
+    Entity("sensor", "bearing", "Bearing", needs="can_report_position", config=lambda r: {
+        "state_topic": r.topics.bearing, "state_class": "measurement_angle", **DEGREES,
+        "suggested_display_precision": 0, "icon": "mdi:compass"}),
+    Entity("number", "target_azimuth", "Target azimuth", config=lambda r: {
+        "command_topic": r.topics.target, "state_topic": r.topics.status,
+        "value_template": _current_or("target", "bearing"),
+        "min": r.az_min_deg, "max": r.az_max_deg, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+    Entity("sensor", "elevation", "Elevation", needs="has_elevation", config=lambda r: {
+        "state_topic": r.topics.elevation, "state_class": "measurement", **DEGREES,
+        "suggested_display_precision": 1, "icon": "mdi:angle-acute"}),
+    Entity("number", "target_elevation", "Target elevation", needs="has_elevation",
+           config=lambda r: {
+        "command_topic": r.topics.target_elevation, "state_topic": r.topics.status,
+        "value_template": _current_or("target_elevation", "elevation"),
+        "min": r.el_min_deg, "max": r.el_max_deg, **TARGET_BOX}),
+    Entity("button", "stop", "Stop", config=lambda r: {
+        "command_topic": r.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    Entity("sensor", "state", "State", config=lambda r: {
+        "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
+        "icon": "mdi:rotate-3d-variant"}),
+    Entity("binary_sensor", "moving", "Moving", config=lambda r: {
+        "state_topic": r.topics.status, "device_class": "moving",
+        "value_template": "{{ 'ON' if value_json.moving else 'OFF' }}"}),
+    Entity("binary_sensor", "connected", "Controller connected", bridge_only=True,
+           config=lambda r: {
+        "state_topic": r.topics.availability, "payload_on": "online", "payload_off": "offline",
+        "device_class": "connectivity", **DIAGNOSTIC}),
+    Entity("sensor", "version", "Controller version", needs="has_version", config=lambda r: {
+        "state_topic": r.topics.version, **DIAGNOSTIC, "icon": "mdi:chip"}),
+    EachOption("switch", config=lambda r, option: {
+        "command_topic": r.topics.option(option), "state_topic": r.topics.option_state(option),
+        **SWITCH, "entity_category": "config", "icon": "mdi:cog"}),
+    Entity("switch", "lock", "Safety lock", bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.lock, "state_topic": r.topics.lock_state, **SWITCH,
+        "icon": "mdi:lock"}),
+    Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
+        "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
+)  # fmt: skip
+
+
+def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
+    """The entities of one rotator device: the rows of ENTITIES its model can do."""
+    spec = r.spec
     node = ident.rotator_node(r.rotator_id)
     device: dict[str, object] = {
         "identifiers": [node],
@@ -137,156 +233,17 @@ def rotator_configs(
     }
     if r.version:
         device["sw_version"] = r.version
-    both = [{"topic": topics.bridge_state}, {"topic": t.availability}]
+    both = [{"topic": topics.bridge_state}, {"topic": r.topics.availability}]
     bridge_only = [{"topic": topics.bridge_state}]
     slug = r.rotator_id.replace("-", "_")
-    out: dict[str, dict[str, object]] = {}
-
-    def add(platform: str, object_id: str, name: str | None, avail: list, **cfg: object) -> None:
-        topic, payload = _entity(platform, node, object_id, slug, name, device, avail, **cfg)
-        out[topic] = payload
-
-    if spec.can_report_position:
-        add(
-            "sensor",
-            "bearing",
-            "Bearing",
-            both,
-            state_topic=t.bearing,
-            unit_of_measurement="°",
-            state_class="measurement_angle",
-            suggested_display_precision=0,
-            icon="mdi:compass",
-        )
-    # the target number shows the active target, else where the rotor is
-    add(
-        "number",
-        "target_azimuth",
-        "Target azimuth",
-        both,
-        command_topic=t.target,
-        state_topic=t.status,
-        value_template="{{ value_json.target if value_json.target is not none "
-        "else (value_json.bearing if value_json.bearing is not none else 'None') }}",
-        min=r.az_min_deg,
-        max=r.az_max_deg,
-        step=1,
-        mode="box",
-        unit_of_measurement="°",
-        icon="mdi:compass-outline",
-    )
-    if spec.has_elevation:
-        add(
-            "sensor",
-            "elevation",
-            "Elevation",
-            both,
-            state_topic=t.elevation,
-            unit_of_measurement="°",
-            state_class="measurement",
-            suggested_display_precision=1,
-            icon="mdi:angle-acute",
-        )
-        add(
-            "number",
-            "target_elevation",
-            "Target elevation",
-            both,
-            command_topic=f"{t.target}/elevation",
-            state_topic=t.status,
-            value_template="{{ value_json.target_elevation if value_json.target_elevation is "
-            "not none else (value_json.elevation if value_json.elevation is not none "
-            "else 'None') }}",
-            min=r.el_min_deg,
-            max=r.el_max_deg,
-            step=1,
-            mode="box",
-            unit_of_measurement="°",
-        )
-    add(
-        "button",
-        "stop",
-        "Stop",
-        both,
-        command_topic=t.stop,
-        payload_press="STOP",
-        icon="mdi:stop-circle",
-    )
-    add(
-        "sensor",
-        "state",
-        "State",
-        both,
-        state_topic=t.state,
-        device_class="enum",
-        options=STATES,
-        icon="mdi:rotate-3d-variant",
-    )
-    add(
-        "binary_sensor",
-        "moving",
-        "Moving",
-        both,
-        state_topic=t.status,
-        value_template="{{ 'ON' if value_json.moving else 'OFF' }}",
-        device_class="moving",
-    )
-    add(
-        "binary_sensor",
-        "connected",
-        "Controller connected",
-        bridge_only,
-        state_topic=t.availability,
-        payload_on="online",
-        payload_off="offline",
-        device_class="connectivity",
-        entity_category="diagnostic",
-    )
-    if spec.has_version:
-        add(
-            "sensor",
-            "version",
-            "Controller version",
-            both,
-            state_topic=t.version,
-            entity_category="diagnostic",
-            icon="mdi:chip",
-        )
-    for name in spec.options:
-        label = spec.option_labels.get(name, name.title())
-        add(
-            "switch",
-            f"option_{name}",
-            label,
-            both,
-            command_topic=t.option(name),
-            state_topic=t.option_state(name),
-            payload_on="ON",
-            payload_off="OFF",
-            entity_category="config",
-            icon="mdi:cog",
-        )
-    add(
-        "switch",
-        "lock",
-        "Safety lock",
-        bridge_only,
-        command_topic=t.lock,
-        state_topic=t.lock_state,
-        payload_on="ON",
-        payload_off="OFF",
-        icon="mdi:lock",
-    )
-    add(
-        "sensor",
-        "last_error",
-        "Last error",
-        bridge_only,
-        state_topic=t.status,
-        value_template="{{ (value_json.last_error or 'none')[:250] }}",
-        entity_category="diagnostic",
-        icon="mdi:alert-circle-outline",
-    )
+    out: Configs = {}
+    for row in ENTITIES:
+        for e in row.expand(spec):
+            avail = bridge_only if e.bridge_only else both
+            where, payload = _entity(
+                e.platform, node, e.object_id, slug, e.name, device, avail, **e.config(r)
+            )
+            out[where] = payload
     return out
 
 
@@ -297,16 +254,8 @@ def all_configs(
     configs = bridge_configs(ident, topics)
     for r in rotators:
         configs.update(rotator_configs(ident, topics, r))
-    return {f"{prefix}/{topic}": json.dumps(p, sort_keys=True) for topic, p in configs.items()}
-
-
-def parse_config_topic(prefix: str, topic: str) -> tuple[str, str, str] | None:
-    """(platform, node_id, object_id) of a discovery config topic under ``prefix``."""
-    parts = topic.split("/")
-    head = prefix.split("/")
-    if len(parts) != len(head) + 4 or parts[: len(head)] != head or parts[-1] != "config":
-        return None
-    return parts[-4], parts[-3], parts[-2]
+    disc = DiscoveryTopics(prefix)
+    return {disc.config(*where): json.dumps(p, sort_keys=True) for where, p in configs.items()}
 
 
 # -- the publisher -------------------------------------------------------------------------------
@@ -326,6 +275,7 @@ class DiscoveryPublisher:
         birth_delay_s: float = 10.0,
     ) -> None:
         self.prefix = prefix
+        self._disc = DiscoveryTopics(prefix)
         self.status_topic = status_topic
         self._topics = topics
         self._ident = Identity(topics.base)
@@ -340,7 +290,7 @@ class DiscoveryPublisher:
 
     @property
     def subscriptions(self) -> list[str]:
-        return [self.status_topic, f"{self.prefix}/+/+/+/config"]
+        return [self.status_topic, self._disc.config_filter]
 
     def publish_all(self) -> None:
         # under the lock: workers call this concurrently (each controller's version arrives on
@@ -367,7 +317,7 @@ class DiscoveryPublisher:
             if payload.strip().lower() == b"online":
                 self._schedule_republish()
             return True
-        parsed = parse_config_topic(self.prefix, topic)
+        parsed = self._disc.parse_config(topic)
         if parsed is None:
             return False
         _, node, _ = parsed

@@ -74,6 +74,33 @@ class RotatorTopics:
         return f"{self.root}/option/{name}/state"
 
 
+@dataclass(frozen=True)
+class DiscoveryTopics:
+    """Home Assistant MQTT discovery: ``<prefix>/<platform>/<node_id>/<object_id>/config``."""
+
+    prefix: str
+
+    def config(self, platform: str, node_id: str, object_id: str) -> str:
+        return f"{self.prefix}/{platform}/{node_id}/{object_id}/config"
+
+    @property
+    def config_filter(self) -> str:
+        return f"{self.prefix}/+/+/+/config"
+
+    @property
+    def subtree(self) -> str:
+        """What every discovery topic starts with (the prefix and its separator)."""
+        return f"{self.prefix}/"
+
+    def parse_config(self, topic: str) -> tuple[str, str, str] | None:
+        """(platform, node_id, object_id) of a config topic under the prefix, else None."""
+        parts = topic.split("/")
+        head = self.prefix.split("/")
+        if len(parts) != len(head) + 4 or parts[: len(head)] != head or parts[-1] != "config":
+            return None
+        return parts[-4], parts[-3], parts[-2]
+
+
 class Topics:
     def __init__(self, base: str, roots: dict[str, str]) -> None:
         self.base = base

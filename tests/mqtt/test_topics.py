@@ -1,4 +1,4 @@
-from bridge.mqtt.topics import Topics
+from bridge.mqtt.topics import DiscoveryTopics, Topics
 
 
 def test_single_rotator_lives_on_the_base_topic() -> None:
@@ -29,3 +29,19 @@ def test_routing_inbound_topics() -> None:
     assert t.route("rotor/b/lock/state") is None
     assert t.route("rotor/c/target") is None
     assert t.route("rotor/a/bearing") is None
+
+
+def test_discovery_config_topics_round_trip_and_stay_under_their_prefix() -> None:
+    d = DiscoveryTopics("ha/x")
+    topic = d.config("sensor", "rotorbridge_rotor_r_tower", "bearing")
+    assert topic == "ha/x/sensor/rotorbridge_rotor_r_tower/bearing/config"
+    assert d.parse_config(topic) == ("sensor", "rotorbridge_rotor_r_tower", "bearing")
+    assert (d.config_filter, d.subtree) == ("ha/x/+/+/+/config", "ha/x/")
+    for other in (
+        "homeassistant/sensor/node/bearing/config",  # another prefix
+        "ha/x/sensor/node/bearing/state",
+        "ha/x/sensor/node/config",  # too short
+        "ha/x/sensor/a/node/bearing/config",  # too long
+        "ha/sensor/node/bearing/config/x",
+    ):
+        assert d.parse_config(other) is None, other
