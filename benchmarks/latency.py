@@ -8,7 +8,7 @@ What a "command" is: two kinds, because the bridge treats them differently on pu
   exchange in flight). Rotor-EZ/RotorCard `;`, DCU-1 `AS1;`, SPID the 13-byte stop frame (which
   the controller answers with its position), SatEL `s`.
 - Targets, where they are not held by design, each sent as an isolated command: at least
-  worker.BURST_QUIET_S after the previous target went out (the bridge holds a stream of targets
+  targets.BURST_QUIET_S after the previous target went out (the bridge holds a stream of targets
   until it pauses, on purpose). RotorCard `AP1xxx<CR>`, sent once the bridge reports the rotor
   idle (its emulated rotor turns at 1000 deg/s so it settles between samples); Rot2Prog and
   MD-01 the 13-byte set frame (SPID takes a target at any time; each is 1 deg further on).
@@ -83,10 +83,10 @@ def _spid_payload(el: bool) -> Callable[[int], str]:
 
 def isolation_s() -> float:
     """How long after a target was sent the next one counts as a new command, not as part of a
-    stream the bridge holds back on purpose (worker.BURST_QUIET_S, if the bridge has it)."""
-    from bridge.engine import worker
+    stream the bridge holds back on purpose (targets.BURST_QUIET_S)."""
+    from bridge.engine import targets
 
-    return float(getattr(worker, "BURST_QUIET_S", 0.0))
+    return float(targets.BURST_QUIET_S)
 
 
 _EZ_POLL = lambda f: f.data == b"AI1;"  # noqa: E731

@@ -92,6 +92,7 @@ class RotatorStatus:
     last_command_source: str | None = None
     estimated: bool = False  # bearing/elevation estimated during a slew the controller is silent in
     controller_time: str | None = None  # the controller's own clock (SatEL)
+    expected_end_unix: float | None = None  # no feedback (DCU-1): when a commanded move should end
 
     @property
     def moving(self) -> bool:

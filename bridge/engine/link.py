@@ -1,13 +1,14 @@
-"""One open serial connection and its line discipline. Used only by its rotator's worker thread.
+"""One open serial connection's line discipline, sans-IO: frames out, timing in, no port.
 
-What it does: writes frames, keeps the controller's replies in order, decides when the line may
-carry the next frame, polls, holds back junk until the line is quiet, and says when it next
-needs the worker's attention. What it does not do: decide anything about motion or commands
-(worker.py) or parse bytes (the model's codec).
+What it does: queues the frames to write, keeps the controller's replies in order, decides when
+the line may carry the next frame, polls, holds back junk until the line is quiet, and says when
+it next needs attention. What it does not do: decide anything about motion or commands
+(session.py), parse bytes (the model's codec) or touch a port (worker.py writes what ``output``
+hands it).
 
 Rules:
 1. A reply is owed when the codec says so after a write; its deadline is the model's reply
-   timeout. An owed reply that does not come is given up at its deadline (the worker decides).
+   timeout. An owed reply that does not come is given up at its deadline (the session decides).
    A slew's report (a controller silent while it moves) is owed until twice the travel time at
    the rotor's speeds plus SLEW_MARGIN_S; a stop written during the slew brings that deadline
    forward to one reply time: a stopped controller reports at once, or the stop was lost, or
@@ -19,185 +20,172 @@ Rules:
 4. A poll is sent only when due, when nothing is owed and no stop is waiting.
 5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
+6. A stop cancels every frame still waiting for its inter-frame gap.
 """
 
 from __future__ import annotations
 
-import logging
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
-import serial
-
-from bridge.model import Source
+from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 from bridge.protocols.base import Codec, ModelSpec
 
-log = logging.getLogger(__name__)
-
 JUNK_QUIET_S = 0.05
-SLEW_TIME_FACTOR = 2.0  # a slew's report is waited for twice the travel time at the set speeds...
-SLEW_MARGIN_S = 5.0  # ...plus this (relays, start-up, the report itself at 9600 baud)
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
-
-@dataclass(frozen=True)
-class Slew:
-    """A move on a controller that is silent until it ends: what we know to estimate it."""
-
-    start_t: float
-    from_az_deg: float | None
-    from_el_deg: float | None
-    to_az_deg: float
-    to_el_deg: float | None
-    source: Source = Source.MQTT
-    stops: int = 0  # stops written during the slew
-    attempt: int = 1  # 2: the same target sent again after its report did not come
-
-    def travel_s(
-        self, az_speed_deg_s: float, el_speed_deg_s: float, az_span_deg: float, el_span_deg: float
-    ) -> float:
-        """How long the slew takes at these speeds: the slower axis decides. Where the start is
-        unknown, the whole span; the azimuth travels linearly between its stops."""
-        az_travel = _travel(self.from_az_deg, self.to_az_deg, az_span_deg)
-        el_travel = _travel(self.from_el_deg, self.to_el_deg, el_span_deg)
-        return max(az_travel / az_speed_deg_s, el_travel / el_speed_deg_s)
-
-    def estimate(
-        self, now: float, az_speed_deg_s: float, el_speed_deg_s: float
-    ) -> tuple[float | None, float | None]:
-        """Where the rotor should be, in whole degrees, moving at the nominal speeds."""
-        dt = now - self.start_t
-        return (
-            _toward(self.from_az_deg, self.to_az_deg, az_speed_deg_s * dt),
-            _toward(self.from_el_deg, self.to_el_deg, el_speed_deg_s * dt),
-        )
-
-
-def _travel(start: float | None, end: float | None, span: float) -> float:
-    if end is None:
-        return 0.0
-    return span if start is None else abs(end - start)
-
-
-def _toward(start: float | None, end: float | None, step: float) -> float | None:
-    if start is None or end is None:
-        return end
-    if abs(end - start) <= step:
-        return end
-    return float(round(start + step * (1 if end > start else -1)))
+__all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
 
 
 class Link:
-    def __init__(
-        self,
-        port: serial.Serial,
-        codec: Codec,
-        spec: ModelSpec,
-        now: float,
-        clock: Callable[[], float],
-        name: str,
-    ) -> None:
-        self.port = port
+    def __init__(self, codec: Codec, spec: ModelSpec, now: float) -> None:
         self.codec = codec
         self.spec = spec
-        self.quiet_from_t = now  # silence counts from here when no reply came since
-        self._clock = clock
-        self._name = name
-        self.reply_deadline: float | None = None
-        self.next_poll = now
-        self.last_reply_t: float | None = None
-        self.answering = False
-        self.silence_reported = False
-        self.stop_due = False
-        self.options_due: set[str] = set()
-        self.options_sent_t = 0.0
-        self.outbox: deque[tuple[float, bytes]] = deque()
-        self.slew: Slew | None = None
-        self.enable_due = False
+        self._quiet_from_t = now  # silence counts from here when no reply came since
+        self._reply_deadline: float | None = None
+        self._next_poll = now
+        self._last_reply_t: float | None = None
+        self._stop_due = False
+        self._outbox: deque[tuple[float, bytes]] = deque()
+        self._output: list[bytes] = []
+        self._slew: Slew | None = None
         self._junk = bytearray()
         self._junk_t = 0.0
 
+    # -- what the session reads -------------------------------------------------------------
+    @property
+    def slew(self) -> Slew | None:
+        return self._slew
+
+    @property
+    def last_reply_t(self) -> float | None:
+        return self._last_reply_t
+
+    @property
+    def reply_owed(self) -> bool:
+        return self._reply_deadline is not None
+
+    @property
+    def reply_deadline(self) -> float | None:
+        return self._reply_deadline
+
+    @property
+    def stop_due(self) -> bool:
+        return self._stop_due
+
+    @property
+    def frames_waiting(self) -> int:
+        """Frames written later, after the model's inter-frame gap."""
+        return len(self._outbox)
+
+    def output(self) -> list[bytes]:
+        """The frames written since the last call, in order: the worker puts them on the wire."""
+        out, self._output = self._output, []
+        return out
+
     # -- writing ----------------------------------------------------------------------------
-    def write(self, frame: bytes) -> None:
-        self.port.write(frame)
-        log.debug("%s: -> %r", self._name, frame)
-        if self.reply_deadline is None and self.codec.awaiting_reply():
-            self.reply_deadline = self._clock() + self.spec.reply_timeout_s
+    def write(self, frame: bytes, now: float) -> None:
+        self._output.append(frame)
+        if self._reply_deadline is None and self.codec.awaiting_reply():
+            self._reply_deadline = now + self.spec.reply_timeout_s
+
+    def want_stop(self) -> None:
+        """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
+        self._outbox.clear()
+        self._stop_due = True
+
+    def flush_stop(self, now: float) -> bool:
+        """Write the due stop if the line allows it now; True if it was written. During a slew
+        the report now comes within one reply time, or the stop was lost, or the controller had
+        already stopped (the session decides)."""
+        if not self._stop_due or not self.free(for_stop=True):
+            return False
+        self._stop_due = False
+        self.write_stop(now)
+        return True
 
     def write_stop(self, now: float) -> None:
-        """Write the stop. During a slew the report now comes within one reply time, or the
-        stop was lost, or the controller had already stopped (the worker decides)."""
-        self.outbox.clear()
-        self.write(self.codec.encode_stop())
-        if self.slew is not None:
-            self.slew = replace(self.slew, stops=self.slew.stops + 1)
-            self.reply_deadline = now + self.spec.reply_timeout_s
+        """Write a stop now, whatever the line is doing (a stalled motor must not wait)."""
+        self._outbox.clear()
+        self.write(self.codec.encode_stop(), now)
+        if self._slew is not None:
+            self._slew = replace(self._slew, stops=self._slew.stops + 1)
+            self._reply_deadline = now + self.spec.reply_timeout_s
 
     def begin_slew(self, slew: Slew, travel_s: float) -> None:
         """The target just sent starts a slew expected to take ``travel_s``: its report is owed
         until twice that, plus SLEW_MARGIN_S."""
-        self.slew = slew
-        self.reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
+        self._slew = slew
+        self._reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
 
     def send(self, frames: list[bytes], now: float) -> None:
         """The first frame now, the rest spaced by the model's inter-frame gap (all now if
         there is none: a stop that came between them would cancel the second alone)."""
-        self.write(frames[0])
+        self.write(frames[0], now)
         for i, frame in enumerate(frames[1:], start=1):
-            self.outbox.append((now + i * self.spec.inter_frame_gap_s, frame))
+            self._outbox.append((now + i * self.spec.inter_frame_gap_s, frame))
         self.flush_outbox(now)
 
     def flush_outbox(self, now: float) -> None:
-        while self.outbox and self.outbox[0][0] <= now:
-            self.write(self.outbox.popleft()[1])
+        while self._outbox and self._outbox[0][0] <= now:
+            self.write(self._outbox.popleft()[1], now)
 
     def free(self, for_stop: bool = False) -> bool:
-        if self.spec.full_duplex or self.reply_deadline is None:
+        if self.spec.full_duplex or self._reply_deadline is None:
             return True
         return for_stop and self.spec.stop_interrupts
 
     # -- replies ------------------------------------------------------------------------------
     def reply_overdue(self, now: float) -> bool:
-        return self.reply_deadline is not None and now >= self.reply_deadline
+        return self._reply_deadline is not None and now >= self._reply_deadline
 
     def give_up_reply(self, now: float) -> None:
         """Stop waiting for the owed reply (and for a slew's report: the slew is over)."""
         self.codec.expire_query()
-        self.reply_deadline = None
+        self._reply_deadline = None
         self.end_slew(now)
 
     def end_slew(self, now: float) -> bool:
         """The slew (if any) is over without a reading: silence counts from now (rule 2).
         True if there was one."""
-        if self.slew is None:
+        if self._slew is None:
             return False
-        self.slew = None
-        self.quiet_from_t = now
+        self._slew = None
+        self._quiet_from_t = now
         return True
 
     def got_reading(self, now: float) -> None:
+        """A valid position: the slew (if any) is over and the reply is no longer owed."""
         if not self.codec.awaiting_reply():
-            self.reply_deadline = None
-        self.last_reply_t = now
+            self._reply_deadline = None
+        self._last_reply_t = now
+        self._slew = None
 
     def ask_again(self, now: float) -> None:
         """The reply was not usable: close it and poll at once."""
         self.codec.expire_query()
-        self.reply_deadline = None
-        self.next_poll = now
+        self._reply_deadline = None
+        self._next_poll = now
+
+    def poll_now(self, now: float) -> None:
+        """Ask at the next chance (a target waits for a fresh reading)."""
+        self._next_poll = now
+
+    def poll_by(self, t: float) -> None:
+        """The next poll no later than ``t`` (a move just began: follow it closely)."""
+        self._next_poll = min(self._next_poll, t)
 
     def poll(self, now: float, interval_s: float) -> None:
-        if self.reply_deadline is not None or self.stop_due or now < self.next_poll:
+        if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
             return
         query = self.codec.encode_query()
         if query:
-            self.write(query)
-            self.next_poll = now + interval_s
+            self.write(query, now)
+            self._next_poll = now + interval_s
 
     def silent_for(self, now: float) -> float:
-        heard = self.last_reply_t if self.last_reply_t is not None else self.quiet_from_t
-        return now - max(heard, self.quiet_from_t)
+        heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
+        return now - max(heard, self._quiet_from_t)
 
     # -- junk ---------------------------------------------------------------------------------
     def add_junk(self, data: bytes, now: float) -> None:
@@ -215,10 +203,10 @@ class Link:
     # -- scheduling ---------------------------------------------------------------------------
     def wakeups(self) -> list[float]:
         times: list[float] = []
-        if self.outbox:
-            times.append(self.outbox[0][0])
+        if self._outbox:
+            times.append(self._outbox[0][0])
         if self._junk:
             times.append(self._junk_t + JUNK_QUIET_S)
         if self.spec.can_report_position:
-            times.append(self.reply_deadline or self.next_poll)
+            times.append(self._reply_deadline or self._next_poll)
         return times

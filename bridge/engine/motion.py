@@ -243,6 +243,18 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
 
 
 # -- decisions -------------------------------------------------------------------------------
+def within_tolerance(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
+    """Idle and already within tolerance of ``wire`` on both axes: nothing to send."""
+    if m.state is not MotionState.IDLE or m.position_deg is None:
+        return False
+    if angle_error(m.position_deg, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
+        return False
+    el = wire[1]
+    return (
+        el is None or m.el_position_deg is None or abs(m.el_position_deg - el) <= cfg.tolerance_deg
+    )
+
+
 def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     """May a new target be written to the controller now?"""
     if not cfg.can_report_position:

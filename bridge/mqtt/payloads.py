@@ -121,6 +121,8 @@ def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) ->
         doc["target_elevation"] = status.target_el_deg
     if status.controller_time is not None:
         doc["controller_time"] = status.controller_time
+    if status.expected_end_unix is not None:
+        doc["expected_end"] = _iso(status.expected_end_unix)
     doc.update(
         state=status.state.value,
         moving=status.moving,
@@ -132,6 +134,10 @@ def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) ->
         last_error=status.last_error,
         last_command_source=status.last_command_source,
         estimated=status.estimated,
-        time=datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds"),
+        time=_iso(time_unix),
     )
     return json.dumps(doc, separators=(",", ":"))
+
+
+def _iso(time_unix: float) -> str:
+    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")

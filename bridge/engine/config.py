@@ -1,0 +1,26 @@
+"""One rotator's engine settings, resolved once from the configuration (app.py builds them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bridge.engine import motion as mo
+from bridge.protocols.base import ModelSpec
+
+
+@dataclass(frozen=True)
+class WorkerConfig:
+    rotator_id: str
+    port: str
+    spec: ModelSpec
+    baud: int
+    motion: mo.MotionConfig
+    idle_poll_interval_s: float = 1.0
+    moving_poll_interval_s: float = 0.2
+    deadband_deg: float = 2.0
+    silence_timeout_s: float = 3.0
+    reconnect_min_s: float = 0.5
+    reconnect_max_s: float = 10.0
+    junk_report_interval_s: float = 30.0
+    az_speed_deg_s: float | None = None  # the rotor's real speeds; None: the model's nominal
+    el_speed_deg_s: float | None = None

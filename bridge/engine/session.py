@@ -1,0 +1,488 @@
+"""Every decision about one rotator, sans-IO (in the shape of h11's Connection): events in,
+actions out. No port, no thread, no select, no clock: time comes in with every input.
+
+Inputs: ``start``, ``link_up`` / ``link_down`` / ``open_failed``, ``commands`` (a mailbox batch),
+``bytes_received`` (whatever the port had), ``tick`` (nothing happened, but time passed).
+Outputs: a list of actions (``Write`` bytes, ``Publish`` a status, ``Report`` an error event) and
+``next_wakeup``, the time by which ``tick`` must be called if nothing else happens first.
+
+Rules:
+1. The link's state belongs to ``Link`` (line discipline) and the motion machine's to
+   ``motion``; this class decides and keeps the controller's state: answering or not, options
+   owed, motion to re-enable.
+2. A controller that reports positions is "available" only after a valid reading, and stops
+   being available after ``silence_timeout_s`` without one. A DCU-1 is available while its
+   port is open (it never answers).
+3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
+   controller that cannot report. A query is never sent while another is open.
+4. Targets go to the controller only when ``motion.plan_target`` says so (targets.py keeps the
+   pending one and the stream rules); a target waiting for a brake delay is replaced by newer
+   ones and dropped by a stop, the lock, or the link going down.
+5. A stop is written at once (on a half-duplex line right after the reply in flight) and cancels
+   any frame still waiting in the outbox. A stop is checked: if the rotor is still seen moving
+   ``stop_resend_s`` later, it is sent again, and after three tries an error says so. Lock ON
+   always sends a stop, whatever the bridge believes the rotor is doing.
+6. Options are sent only while the rotor is idle, and re-sent after every (re)connect, after a
+   power-on byte and every ``OPTIONS_REFRESH_S`` while idle: the controller forgets them at
+   power-off, and the letters are idempotent.
+7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
+   younger than one moving poll interval has shown the rotor idle: a front-panel move that began
+   after the last poll must not be cut short.
+8. A controller that is silent while it moves (SatEL) is sent nothing but a stop until its
+   after-move report (slewing.py has the rules for a report that does not come); meanwhile the
+   motion machine is not fed stale data, and a new target stops the slew and is sent once the
+   rotor is still (stop and redirect). A report that says automatic motion is off gets it
+   switched on again.
+9. Bytes that complete no reply change nothing: the codec keeps them, and the rest of the rules
+   run only when a reply (or junk) came, a command came, or ``next_wakeup`` passed.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from bridge.engine import motion as mo
+from bridge.engine import slewing
+from bridge.engine import status as st
+from bridge.engine.config import WorkerConfig
+from bridge.engine.link import Link
+from bridge.engine.mailbox import Batch
+from bridge.engine.slew import Slew
+from bridge.engine.targets import Targets
+from bridge.model import MotionState, RotatorStatus, Target, describe_command
+from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
+
+log = logging.getLogger(__name__)
+
+POWER_ON_BYTE = 0xE0
+OPTIONS_REFRESH_S = 60.0
+STOP_TRIES_BEFORE_ERROR = 3
+IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+
+
+@dataclass(frozen=True)
+class Write:
+    data: bytes
+
+
+@dataclass(frozen=True)
+class Publish:
+    status: RotatorStatus
+
+
+@dataclass(frozen=True)
+class Report:
+    kind: str
+    message: str
+    command: str | None = None
+
+
+Action = Write | Publish | Report
+
+
+class RotatorSession:
+    def __init__(
+        self, cfg: WorkerConfig, *, options: dict[str, bool] | None = None, locked: bool = False
+    ) -> None:
+        self.cfg = cfg
+        self.options: dict[str, bool] = dict(options or {})
+        self.locked = locked
+        self.motion = mo.Motion()
+        self.link: Link | None = None
+        self.targets = Targets(cfg)
+        self.answering = False
+        self._silence_reported = False
+        self._options_due: set[str] = set()
+        self._options_sent_t = 0.0
+        self._enable_due = False
+        self._stop_tries = 0
+        self._junk_reported_t = -1e18
+        self._port_error: str | None = None
+        self._wall_offset_s = 0.0
+        self._az = st.Hysteresis()
+        self._el = st.Hysteresis()
+        self.view = st.View()
+        self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
+        self._actions: list[Action] = []
+        self._wakeup = 0.0
+        self.az_speed_deg_s = cfg.az_speed_deg_s or cfg.spec.nominal_speed_deg_s
+        self.el_speed_deg_s = cfg.el_speed_deg_s or cfg.spec.nominal_el_speed_deg_s
+
+    # -- inputs -------------------------------------------------------------------------------
+    def start(self, now: float) -> list[Action]:
+        """The first status, whatever it says (nothing has been published for this rotator)."""
+        self._actions.append(Publish(self.status))
+        return self._step(now)
+
+    def open_failed(self, reason: str, now: float) -> list[Action]:
+        if reason != self._port_error:
+            self._port_error = reason
+            self.error("serial", reason)
+        return self._step(now)
+
+    def link_up(self, now: float, wall_s: float) -> list[Action]:
+        spec = self.cfg.spec
+        self._port_error = None
+        self._wall_offset_s = wall_s - now
+        self.link = Link(spec.codec_factory(), spec, now)
+        self.motion = mo.link_up(self.motion, self.cfg.motion, now)
+        self.answering = not spec.can_report_position
+        self._silence_reported = False
+        self._enable_due = False
+        self._options_sent_t = 0.0
+        self._options_due = set(self.options) if self.answering else set()
+        for frame in self.link.codec.encode_connect(wall_s):
+            self.link.write(frame, now)
+        return self._step(now)
+
+    def link_down(self, reason: str | None, now: float) -> list[Action]:
+        """The port is closed (``reason`` says why; None on shutdown)."""
+        if reason is not None:
+            self.error("serial", reason)
+        self.link = None
+        self.answering = False
+        self.motion = mo.link_down(self.motion)
+        self._drop_pending("serial link down")
+        return self._step(now)
+
+    def commands(self, batch: Batch, now: float) -> list[Action]:
+        link = self.link
+        for note in batch.notes:
+            self.view.last_error = note
+        if batch.lock is not None:
+            self.locked = batch.lock
+            if batch.lock:
+                self._drop_pending(None)
+                if link is not None:
+                    self.stop_now(now)  # whatever we believe: the lock is for tower work
+        if batch.stop is not None:
+            self.targets.clear()
+            self.view.last_source = batch.stop.source.value
+            if link is not None:
+                self.stop_now(now)
+        for opt in batch.options:
+            self.options[opt.name] = opt.enabled
+            if link is not None:
+                self._options_due.add(opt.name)
+        if batch.target is not None:
+            what = describe_command(batch.target)
+            if self.locked:
+                self.error("refused", "rotator is locked", command=what)
+            elif link is None or not self.answering:
+                self.error("refused", "rotator offline", command=what)
+            else:
+                self.targets.put(batch.target, now)
+        return self._step(now)
+
+    def bytes_received(self, data: bytes, now: float) -> list[Action]:
+        link = self.link
+        if link is None:
+            return []
+        log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        replies = link.codec.feed(data)
+        if not replies:
+            return []  # rule 9
+        for reply in replies:
+            if isinstance(reply, PositionReply):
+                self._reading(link, reply, now)
+            elif isinstance(reply, VersionReply):
+                if reply.version != self.view.version:
+                    log.info("%s: controller version %s", self.cfg.rotator_id, reply.version)
+                self.view.version = reply.version
+            elif isinstance(reply, JunkReply):
+                if POWER_ON_BYTE in reply.data:
+                    log.info("%s: power-on byte seen; options will be re-applied", self.name)
+                    self._options_due = set(self.options)
+                link.add_junk(reply.data, now)
+                if reply.reason == UNTRUSTED:
+                    link.ask_again(now)
+                    if link.end_slew(now):  # the slew is over; where it ended, unseen
+                        self.motion = mo.slew_ended(self.motion, now)
+        return self._step(now)
+
+    def tick(self, now: float) -> list[Action]:
+        return self._step(now)
+
+    def next_wakeup(self) -> float:
+        return self._wakeup
+
+    # -- what the parts below share -----------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self.cfg.rotator_id
+
+    def error(self, kind: str, message: str, command: str | None = None) -> None:
+        log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
+        self.view.last_error = message
+        self._actions.append(Report(kind, message, command))
+
+    def stop_now(self, now: float) -> None:
+        assert self.link is not None
+        self.link.want_stop()
+        self._flush_stop(now)
+
+    def _flush_stop(self, now: float) -> None:
+        """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
+        if self.link is not None and self.link.flush_stop(now):
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+
+    def _drop_pending(self, why: str | None) -> None:
+        dropped = self.targets.clear()
+        if dropped is not None and why:
+            self.error("refused", f"target dropped: {why}", command=describe_command(dropped))
+
+    # -- the rules, run after every input ------------------------------------------------------
+    def _step(self, now: float) -> list[Action]:
+        link = self.link
+        if link is not None:
+            if link.reply_overdue(now):
+                slewing.reply_overdue(self, link, now)
+            self._flush_stop(now)
+            link.flush_outbox(now)
+            junk = link.quiet_junk(now)
+            if junk is not None:
+                self._report_junk(*junk, now)
+        self._advance(now)  # commands go ahead of the next poll
+        self._poll_if_due(now)
+        self._emit_status(now)
+        if self.link is not None:
+            self._actions.extend(Write(frame) for frame in self.link.output())
+        self._wakeup = self._next_wakeup(now)
+        actions, self._actions = self._actions, []
+        return actions
+
+    def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
+        link.got_reading(now)
+        if reply.motion_enabled is False:
+            self._enable_due = True
+        if reply.controller_time is not None:
+            self.view.controller_time = reply.controller_time
+        if not self.answering:
+            self.answering = True
+            self._options_due = set(self.options)
+            log.info("%s: controller answering", self.name)
+        self.motion, events = mo.reading(
+            self.motion, self.cfg.motion, reply.az_deg, now, reply.el_deg
+        )
+        self._motion_events(events, now)
+        moving = self.motion.state is MotionState.MOVING
+        band, wraps = self.cfg.deadband_deg, self.cfg.motion.az_wraps
+        self._az.feed(reply.az_deg, moving, band, wraps)
+        if reply.el_deg is not None:
+            self._el.feed(reply.el_deg, moving, band, False)
+
+    def _poll_if_due(self, now: float) -> None:
+        link = self.link
+        if link is None or not self.cfg.spec.can_report_position:
+            return
+        self._check_silence(link, now)
+        busy = self.motion.state is MotionState.MOVING or self.targets.pending is not None
+        cfg = self.cfg
+        link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
+
+    def _check_silence(self, link: Link, now: float) -> None:
+        timeout_s = self.cfg.silence_timeout_s
+        if link.reply_owed:
+            return  # a reply is owed and may still come (a slew report takes the whole slew)
+        if self.answering and link.silent_for(now) >= timeout_s:
+            self.answering = False
+            self.motion = mo.link_down(self.motion)
+            self.error(
+                "serial",
+                f"controller on {self.cfg.port} stopped answering "
+                f"(no valid reply for {timeout_s:g} s)",
+            )
+            self._drop_pending("controller not answering")
+        elif (
+            link.last_reply_t is None
+            and not self._silence_reported
+            and link.silent_for(now) >= timeout_s
+        ):
+            self._silence_reported = True
+            self.error("serial", f"controller on {self.cfg.port} does not answer")
+
+    def _advance(self, now: float) -> None:
+        """Time-driven motion, then whatever the pending target and options may do now."""
+        link = self.link
+        if link is None or link.slew is None:  # no reports during a slew: nothing to judge
+            self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
+            self._motion_events(events, now)
+        if link is None or not self.answering:
+            return
+        if self._enable_due and link.slew is None and link.free() and not link.stop_due:
+            enable = link.codec.encode_enable()
+            if enable:
+                link.write(enable, now)
+            self._enable_due = False
+        self._verify_stop(now)
+        if self.targets.pending is not None:
+            self._try_target(link, now)
+        idle = self.motion.state is MotionState.IDLE
+        if idle and self.options and now - self._options_sent_t >= OPTIONS_REFRESH_S:
+            self._options_due = set(self.options)
+        if self._options_due and idle and self.targets.pending is None and link.free():
+            for name in sorted(self._options_due):
+                try:
+                    frame = link.codec.encode_option(name, self.options[name])
+                except (KeyError, ValueError):
+                    log.warning("%s: option %r not supported; skipped", self.name, name)
+                    continue
+                link.write(frame, now)
+            self._options_due.clear()
+            self._options_sent_t = now
+
+    def _verify_stop(self, now: float) -> None:
+        """A stop that did not take (a byte lost to RF, a garbled frame) is sent again."""
+        m = self.motion
+        if m.stop_sent_t is None:
+            self._stop_tries = 0
+            return
+        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
+        late = now - m.stop_sent_t >= self.cfg.motion.stop_resend_s
+        pending = self.targets.pending is not None
+        if m.state is MotionState.MOVING and moved_since and late and not pending:
+            self._stop_tries += 1
+            if self._stop_tries == STOP_TRIES_BEFORE_ERROR:
+                self.error(
+                    "stop",
+                    f"rotor still turning after {self._stop_tries} stop commands; "
+                    "stop it at the controller",
+                )
+            log.warning("%s: still turning after a stop; stopping again", self.name)
+            self.stop_now(now)
+
+    def _try_target(self, link: Link, now: float) -> None:
+        pending = self.targets.pending
+        assert pending is not None
+        if link.stop_due:
+            return  # the stop goes first
+        m, mcfg = self.motion, self.cfg.motion
+        az, el = self.resolve(pending)
+        if az is None:
+            return  # no reading yet to keep the other axis where it is
+        wire = link.codec.wire_target(az, el)
+        if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
+            self.targets.clear()  # already on its way there
+            return
+        if self.cfg.spec.can_report_position and mo.within_tolerance(m, mcfg, wire):
+            log.info("%s: already within tolerance of %s", self.name, wire)
+            self.targets.clear()
+            return
+        plan = mo.plan_target(m, mcfg, now)
+        if plan is mo.Plan.STOP_FIRST:
+            doing = "turning" if self.cfg.spec.can_report_position else "may still be turning"
+            log.info("%s: %s; stopping before the new target %s", self.name, doing, wire)
+            self.stop_now(now)
+            return
+        if plan is not mo.Plan.SEND or not link.free():
+            return  # braking, or a half-duplex line with a reply in flight: right after it
+        if self.targets.stream_wait(now):
+            return  # a stream of targets: wait for it to pause
+        if self._needs_fresh_reading(link, now):
+            link.poll_now(now)  # ask first; the target follows the answer
+            return
+        link.send(link.codec.encode_target(az, el), now)
+        attempt = self.targets.sent(now)
+        if not self.cfg.spec.reports_while_moving:
+            slew = Slew(
+                now, m.position_deg, m.el_position_deg, wire[0], wire[1], pending.source, 0, attempt
+            )
+            link.begin_slew(slew, slewing.travel_s(self, slew))
+        self.motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
+        self.view.last_source = pending.source.value
+        link.poll_by(now + self.cfg.moving_poll_interval_s)
+
+    def _needs_fresh_reading(self, link: Link, now: float) -> bool:
+        if not self.cfg.spec.can_report_position or self.cfg.motion.direct_retarget:
+            return False
+        age = now - (link.last_reply_t if link.last_reply_t is not None else -1e18)
+        return age > self.cfg.moving_poll_interval_s
+
+    def resolve(self, target: Target) -> tuple[float | None, float | None]:
+        """Fill the axis a target leaves out with its current target, else its position."""
+        m = self.motion
+        az = target.az_deg
+        if az is None:
+            az = m.target_deg if m.target_deg is not None else m.position_deg
+        el = target.el_deg
+        if self.cfg.spec.has_elevation and el is None:
+            el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
+            if el is None:
+                return None, None
+        return az, el
+
+    def _next_wakeup(self, now: float) -> float:
+        link = self.link
+        times = [now + IDLE_WAKEUP_S]
+        if link is not None:
+            times += link.wakeups()
+            if link.slew is not None:
+                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+        wait = self.targets.stream_deadline(now)
+        if wait is not None:
+            times.append(wait)
+        deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
+        if deadline is not None:
+            times.append(deadline)
+        return min(times)
+
+    def _report_junk(self, data: bytes, harmless: bool, now: float) -> None:
+        if harmless:  # a banner after a stop, a blank line: nothing a user acts on
+            log.debug("%s: ignored %d harmless bytes: %r", self.name, len(data), data[:64])
+            return
+        log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
+        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
+            self._junk_reported_t = now
+            self.error(
+                "protocol", f"controller sent {len(data)} bytes that are no valid reply; ignored"
+            )
+
+    def _motion_events(self, events: list[mo.Event], now: float) -> None:
+        for event in events:
+            if event is mo.Event.STALLED:
+                pos = self.motion.position_deg
+                self.error(
+                    "stalled",
+                    f"rotor stalled at {pos:g}° (no progress for "
+                    f"{self.cfg.motion.stall_timeout_s:g} s): brake paddle pressed or rotor stuck",
+                )
+                if self.link is not None:
+                    self.link.write_stop(now)
+            else:
+                log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
+
+    def _emit_status(self, now: float) -> None:
+        link = self.link
+        target: tuple[float | None, float | None] = (
+            self.motion.target_deg,
+            self.motion.el_target_deg,
+        )
+        pending = self.targets.pending
+        if pending is not None and link is not None:
+            az, el = self.resolve(pending)
+            target = link.codec.wire_target(az, el) if az is not None else target
+        estimate = None
+        if link is not None and link.slew is not None:
+            estimate = link.slew.estimate(now, self.az_speed_deg_s, self.el_speed_deg_s)
+        status = st.build(
+            self.status,
+            self.cfg.spec,
+            self.motion,
+            answering=link is not None and self.answering,
+            connected=link is not None,
+            az=self._az,
+            el=self._el,
+            view=self.view,
+            locked=self.locked,
+            options=self.options,
+            target=target,
+            slew_estimate=estimate,
+            now=now,
+            wall_offset_s=self._wall_offset_s,
+        )
+        if st.worth_emitting(status, self.status):
+            self.status = status
+            self._actions.append(Publish(status))
+        else:
+            self.status = status  # keep the clock current for the next one

@@ -1,0 +1,88 @@
+"""A silent controller's slew whose report does not come (SatEL): what the session does then.
+
+Source: protocols/satel.md (no input but a stop while the controller slews; it reports once the
+move is over, also after a stop). See slew.py for what a slew is and how long it may take.
+
+Rules:
+1. A report that does not come within the slew's bound (slew.py rule 2) was lost, or the rotor is
+   slower than configured. Either way the bridge does not poll into a slew it cannot see: it
+   sends the stop (the one input allowed during a slew), asks for the position once the stopped
+   controller had its chance to report, and sends the slew's target again, so the rotor still
+   ends where the last accepted command asked. An error says so, naming the speed setting.
+2. If the second try's report does not come either (a jammed rotor, a mechanical stop short of
+   the point), the target is given up with an error: a motor is not driven against a jam again
+   and again.
+3. Any stop written during a slew (rule 1, stop and redirect, the user's stop) is followed by
+   the report within one reply time or it is written again, up to SLEW_STOP_TRIES: a stop byte
+   lost on the line must not let the poll that follows into a slew. Only then is the controller
+   asked where it is.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from bridge.engine import motion as mo
+from bridge.engine.link import Link
+from bridge.engine.slew import Slew
+from bridge.model import Target, describe_command
+
+if TYPE_CHECKING:
+    from bridge.engine.session import RotatorSession
+
+log = logging.getLogger(__name__)
+
+SLEW_STOP_TRIES = 3  # stops written to a slewing controller before it is asked where it is
+SLEW_ATTEMPTS = 2  # a target whose report did not come is sent once more, then given up
+
+
+def travel_s(session: RotatorSession, slew: Slew) -> float:
+    cfg = session.cfg
+    return slew.travel_s(
+        session.az_speed_deg_s,
+        session.el_speed_deg_s,
+        cfg.motion.az_span_deg,
+        cfg.spec.el_max_deg - cfg.spec.el_min_deg,
+    )
+
+
+def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
+    """The owed reply (or a slew's report) did not come by its deadline."""
+    slew = link.slew
+    if slew is not None and slew.stops == 0:  # rule 1
+        late = (
+            f"no report from the controller {now - slew.start_t:.0f} s after a move that "
+            f"takes {travel_s(session, slew):.0f} s at {session.az_speed_deg_s:g}/"
+            f"{session.el_speed_deg_s:g} deg/s"
+        )
+        if slew.attempt >= SLEW_ATTEMPTS:  # rule 2
+            session.error(
+                "serial",
+                f"{late}, the second time for this target: stopping it and giving the target "
+                "up (rotor jammed or held short of the point? if it is that slow, set "
+                "az_speed_deg_s / el_speed_deg_s)",
+                command=describe_command(Target(slew.to_az_deg, slew.to_el_deg)),
+            )
+        else:
+            session.error(
+                "serial",
+                f"{late}: stopping it to ask where it is, then going on to the target (if "
+                "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
+            )
+            target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
+            session.targets.put_back(target, slew.attempt + 1, now)
+        session.stop_now(now)
+        return
+    if slew is not None and slew.stops < SLEW_STOP_TRIES:  # rule 3
+        log.warning(
+            "%s: no report %g s after a stop during a slew; stopping again before asking",
+            session.name,
+            session.cfg.spec.reply_timeout_s,
+        )
+        session.stop_now(now)
+        return
+    link.give_up_reply(now)
+    if slew is not None:
+        session.motion = mo.track_lost(session.motion)
+        session.error("serial", "no report after the stopped slew; asking the controller")

@@ -1,0 +1,100 @@
+"""What a rotator's status says, and when a new one is worth emitting. Pure, no clock.
+
+Rules:
+1. The published bearing follows readings with hysteresis (motion.publishable_bearing): analog
+   jitter of a still rotor never reaches a dashboard.
+2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
+3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
+   ``estimated`` set, the target and the time it should be over; after that the state is
+   ``unknown`` and the target is cleared. The bridge never shows more than it knows.
+4. A status is emitted when something a user would notice changed. The controller's own clock
+   (SatEL) ticks every second: it rides along in the next status but never causes one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from bridge.engine import motion as mo
+from bridge.model import MotionState, RotatorStatus
+from bridge.protocols.base import ModelSpec
+
+
+@dataclass
+class Hysteresis:
+    """One axis's published value (rule 1)."""
+
+    value: float | None = None
+    direction: int = 0
+
+    def feed(self, reading: float, moving: bool, deadband_deg: float, wraps: bool) -> None:
+        new, self.direction = mo.publishable_bearing(
+            self.value, self.direction, reading, moving, deadband_deg, wraps
+        )
+        if new is not None:
+            self.value = new
+
+
+@dataclass
+class View:
+    """Everything the status shows besides what the motion machine and the link know."""
+
+    version: str | None = None
+    controller_time: str | None = None
+    last_error: str | None = None
+    last_source: str | None = None
+
+
+def build(
+    base: RotatorStatus,
+    spec: ModelSpec,
+    m: mo.Motion,
+    *,
+    answering: bool,
+    connected: bool,
+    az: Hysteresis,
+    el: Hysteresis,
+    view: View,
+    locked: bool,
+    options: dict[str, bool],
+    target: tuple[float | None, float | None],
+    slew_estimate: tuple[float | None, float | None] | None,
+    now: float,
+    wall_offset_s: float,
+) -> RotatorStatus:
+    state = m.state if answering else MotionState.OFFLINE
+    bearing, elevation = az.value, el.value
+    estimated = slew_estimate is not None
+    if slew_estimate is not None:
+        bearing, elevation = slew_estimate
+    expected_end: float | None = None
+    if not spec.can_report_position and answering:  # rule 3
+        moving = m.target_deg is not None and m.stop_sent_t is None
+        if moving and m.busy_until_t is not None and now < m.busy_until_t:
+            state, estimated = MotionState.MOVING, True
+            expected_end = m.busy_until_t + wall_offset_s
+        else:
+            state, target = MotionState.UNKNOWN, (None, None)
+    return replace(
+        base,
+        state=state,
+        bearing_deg=bearing if spec.can_report_position else None,
+        elevation_deg=elevation if spec.has_elevation else None,
+        estimated=estimated,
+        expected_end_unix=expected_end,
+        controller_time=view.controller_time,
+        target_az_deg=target[0],
+        target_el_deg=target[1] if spec.has_elevation else None,
+        connected=connected,
+        available=answering,
+        locked=locked,
+        version=view.version,
+        options=dict(options),
+        last_error=view.last_error,
+        last_command_source=view.last_source,
+    )
+
+
+def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
+    """Rule 4: the controller's clock alone is no change."""
+    return replace(new, controller_time=None) != replace(old, controller_time=None)
