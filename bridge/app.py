@@ -42,6 +42,7 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=az_speed,
             direct_retarget=spec.retarget.value == "direct",
+            poll_margin_s=r.moving_poll_interval_s,
         ),
         idle_poll_interval_s=r.idle_poll_interval_s,
         moving_poll_interval_s=r.moving_poll_interval_s,

@@ -15,7 +15,10 @@ Rules:
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
    end stop first moves away from a target across the stop.)
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
-   stillness was detected (which is later than the real stop, so the margin is on the safe side).
+   rotor stopped: the last observed movement plus one poll interval (``poll_margin_s``: it
+   stopped somewhere before the next reading), and never before a stop command went out. Not
+   from when the stillness was detected: that is ``settle_s`` later and would make every new
+   target after an arrival wait for nothing. A stall counts from its detection (safe side).
    At start-up the machine assumes a brake window may be running, and that the rotor may be
    turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
 5. Movement without a command (front panel) is ``moving`` too.
@@ -45,6 +48,7 @@ class MotionConfig:
     nominal_speed_deg_s: float = 6.0
     stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
     direct_retarget: bool = False  # the controller takes new targets while turning (SPID)
+    poll_margin_s: float = 0.2  # readings while moving come this often (rule 4)
 
 
 @dataclass(frozen=True)
@@ -230,10 +234,14 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
 def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
     if state is MotionState.BRAKING and cfg.brake_delay_s <= 0 and m.idle_not_before_t is None:
         state = MotionState.IDLE
+    stopped_t = now  # rule 4
+    if state is MotionState.BRAKING and m.last_move_t is not None:
+        after = [t for t in (m.stop_sent_t, m.target_t) if t is not None]
+        stopped_t = min(now, max([m.last_move_t + cfg.poll_margin_s, *after]))
     return replace(
         m,
         state=state,
-        still_since_t=now,
+        still_since_t=stopped_t,
         target_deg=None,
         el_target_deg=None,
         target_t=None,

@@ -51,11 +51,29 @@ def test_commanded_move_arrives_then_brakes_then_idles() -> None:
     readings = [(10 + i * 0.25, min(100 + 1.5 * i, 121)) for i in range(1, 20)]
     m, events = feed(m, readings)
     assert m.state is S.MOVING  # not yet steady
-    m, events = mo.tick(m, CFG, 20.0)
+    last_move_t = m.last_move_t
+    assert last_move_t is not None
+    m, events = mo.tick(m, CFG, last_move_t + CFG.settle_s)
     assert events == [mo.Event.ARRIVED] and m.state is S.BRAKING and m.target_deg is None
-    assert mo.plan_target(m, CFG, 20.0) is mo.Plan.WAIT
-    m, _ = mo.tick(m, CFG, 25.0)
+    assert mo.plan_target(m, CFG, last_move_t + CFG.settle_s) is mo.Plan.WAIT
+    # the brake window counts from the last movement (plus one poll), not from the detection
+    stopped_t = last_move_t + CFG.poll_margin_s
+    m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s - 0.01)
+    assert m.state is S.BRAKING
+    m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s)
     assert m.state is S.IDLE
+
+
+def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:
+    """A preset pressed 1.2 s after the arrival: the brake delay runs from the stop itself."""
+    m = mo.commanded(ready(), CFG, 110, 10.0)
+    m, _ = feed(m, [(10.2, 103), (10.4, 106), (10.6, 109), (10.8, 110), (11.0, 110)])
+    m, events = mo.tick(m, CFG, 10.6 + CFG.settle_s)
+    assert events == [mo.Event.ARRIVED]
+    m, _ = mo.tick(m, CFG, 10.6 + CFG.settle_s + 1.2)
+    assert mo.plan_target(m, CFG, 13.3) is mo.Plan.WAIT
+    m, _ = mo.tick(m, CFG, 10.6 + CFG.poll_margin_s + CFG.brake_delay_s)  # 15.8, not 17.1
+    assert mo.plan_target(m, CFG, 15.8) is mo.Plan.SEND
 
 
 def test_manual_rotation_shows_as_moving() -> None:
