@@ -9,7 +9,7 @@ import os
 import sys
 
 from bridge import __version__
-from bridge.settings import ConfigError, load_settings, masked
+from bridge.settings import ConfigError, config_warnings, load_settings, masked
 
 EXIT_CONFIG = 2
 
@@ -26,8 +26,12 @@ def _load(args: argparse.Namespace):  # noqa: ANN202
     try:
         return load_settings(args.config)
     except ConfigError as exc:
-        print(f"rotor-bridge: {exc}", file=sys.stderr)
-        raise SystemExit(EXIT_CONFIG) from None
+        raise _fail(exc) from None
+
+
+def _fail(exc: ConfigError) -> SystemExit:
+    print(f"rotor-bridge: {exc}", file=sys.stderr)
+    return SystemExit(EXIT_CONFIG)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -38,12 +42,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     logging.getLogger(__name__).info(
         "rotor-bridge %s starting with %d rotator(s)", __version__, len(settings.rotators)
     )
-    return run(settings)
+    try:
+        return run(settings)
+    except ConfigError as exc:  # the start failed (a port taken, a directory not writable)
+        raise _fail(exc) from None
 
 
 def cmd_check_config(args: argparse.Namespace) -> int:
     settings = _load(args)
     print(json.dumps(masked(settings), indent=2))
+    for warning in config_warnings(settings):
+        print(f"rotor-bridge: warning: {warning}", file=sys.stderr)
     return 0
 
 
@@ -93,24 +102,51 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--log-level", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("run", help="run the bridge service")
+    p = sub.add_parser(
+        "run",
+        help="run the bridge service",
+        description="Run the bridge: open the serial ports, connect to the MQTT broker, serve "
+        "the rotctld ports, until SIGTERM or Ctrl-C. A configuration or start-up error ends it "
+        "with one message and exit code 2.",
+    )
     p.add_argument("-c", "--config", help="TOML file (default: $ROTOR_BRIDGE_CONFIG)")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("check-config", help="validate and print the effective settings")
+    p = sub.add_parser(
+        "check-config",
+        help="validate and print the effective settings",
+        description="Validate the configuration and print the settings the bridge would use, "
+        "model defaults filled in and secrets masked. Things that are allowed but probably "
+        "wrong are warned about on stderr; exit code 0 when valid, 2 when not.",
+    )
     p.add_argument("-c", "--config", help="TOML file (default: $ROTOR_BRIDGE_CONFIG)")
     p.set_defaults(func=cmd_check_config)
 
-    p = sub.add_parser("ports", help="list serial ports with their stable names")
+    p = sub.add_parser(
+        "ports",
+        help="list serial ports with their stable names",
+        description="List the serial ports with the stable /dev/serial/by-id/ name to put in "
+        "a rotator's port setting (ttyUSB numbers change when adapters are re-plugged).",
+    )
     p.set_defaults(func=cmd_ports)
 
-    p = sub.add_parser("emulate", help="an emulated controller on a pseudo-terminal")
+    p = sub.add_parser(
+        "emulate",
+        help="an emulated controller on a pseudo-terminal",
+        description="Run an emulated rotator controller of MODEL on a pseudo-terminal and print "
+        "its path, for trying the bridge, Hamlib's rotctl or other software without hardware.",
+    )
     from bridge.emulators import cli as emulate_cli
 
     emulate_cli.add_arguments(p)
     p.set_defaults(func=cmd_emulate)
 
-    p = sub.add_parser("demo", help="emulated rotators bridged to MQTT, no hardware needed")
+    p = sub.add_parser(
+        "demo",
+        help="emulated rotators bridged to MQTT, no hardware needed",
+        description="Emulated rotators bridged to MQTT: the broker at --mqtt-host:--mqtt-port is "
+        "used, or a private mosquitto started there; type a bearing, s (stop) or lock on/off.",
+    )
     from bridge import demo
 
     demo.add_arguments(p)

@@ -9,6 +9,7 @@ Rotators are a list in the file; their fields are overridden by id:
 from __future__ import annotations
 
 import hashlib
+import ipaddress
 import os
 import re
 import socket
@@ -295,6 +296,8 @@ class Settings(BaseSettings):
     rotators: list[RotatorSettings] = Field(min_length=1)
     log_level: str = "INFO"
     state_file: Path = Field(default_factory=_default_state_file)
+    # mqtt.password is written in the configuration file itself (check-config warns)
+    _password_in_file: bool = PrivateAttr(default=False)
 
     @field_validator("log_level")
     @classmethod
@@ -387,9 +390,12 @@ def load_settings(
             "or set ROTOR_BRIDGE_CONFIG"
         )
     try:
-        return Settings(**data)
+        settings = Settings(**data)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, data)) from None
+    mqtt = data.get("mqtt")
+    settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
+    return settings
 
 
 def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
@@ -428,12 +434,52 @@ def masked(settings: Settings) -> dict[str, Any]:
     out = settings.model_dump(mode="json")
     if settings.mqtt.password is not None:
         out["mqtt"]["password"] = "********"
+    # every value the bridge will use, model defaults filled in; null only where nothing applies
+    # (no elevation axis, no rotctld port, no park position, no credentials)
     for r, rs in zip(out["rotators"], settings.rotators, strict=True):
+        r["name"] = rs.name or rs.id
         r["topic"] = settings.rotator_topic(rs)
         r["baud"] = rs.effective_baud
         r["brake_delay_s"] = rs.effective_brake_delay_s
+        r["noise_deg"] = rs.effective_noise_deg
+        az_speed, el_speed = rs.effective_speeds_deg_s
+        r["az_speed_deg_s"] = az_speed
         r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
         if rs.spec.has_elevation:
+            r["el_speed_deg_s"] = el_speed
             r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
     out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
     return out
+
+
+def _is_loopback(host: str) -> bool:
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False  # a host name (or "" = every address): reachable from elsewhere, say so
+
+
+def config_warnings(settings: Settings) -> list[str]:
+    """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
+    found = []
+    if settings._password_in_file:
+        found.append(
+            "mqtt.password is written in the configuration file: put it in a file of its own, "
+            "readable only by the service user, and name that in mqtt.password_file"
+        )
+    for i, r in enumerate(settings.rotators):
+        where = f"rotators[{i}]"
+        if not os.path.exists(r.port):
+            found.append(
+                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
+                "lists the serial ports); the bridge keeps trying to open it"
+            )
+        if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
+            found.append(
+                f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
+                f"address: rotctld has no authentication, anyone who can reach port "
+                f"{r.rotctld_port} there can turn the antenna"
+            )
+    return found

@@ -1,9 +1,13 @@
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
 
+import pytest
+
 from bridge import __version__
+from bridge.cli import build_parser, main
 
 
 def cli(*args: str) -> subprocess.CompletedProcess[str]:
@@ -28,3 +32,29 @@ def test_version_and_help() -> None:
 def test_run_without_a_configuration_says_how_to_give_one() -> None:
     out = cli("run")
     assert out.returncode == 2 and "--config" in out.stderr
+
+
+def subcommands() -> dict[str, argparse.ArgumentParser]:
+    actions = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    assert len(actions) == 1
+    return dict(actions[0].choices)
+
+
+def test_every_subcommand_is_listed_in_the_main_help() -> None:
+    helptext = cli("--help").stdout
+    assert set(subcommands()) == {"run", "check-config", "ports", "emulate", "demo"}
+    for name in subcommands():
+        assert name in helptext
+
+
+@pytest.mark.parametrize("name", sorted(subcommands()))
+def test_every_subcommand_help_says_what_it_does(
+    name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    description = subcommands()[name].description
+    assert description and len(description.split()) >= 8, description  # a sentence, not a word
+    with pytest.raises(SystemExit) as exc:
+        main([name, "--help"])
+    assert exc.value.code == 0
+    shown = " ".join(capsys.readouterr().out.split())  # argparse re-wraps the text
+    assert " ".join(description.split()) in shown

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.settings import ConfigError, load_settings, masked
+from bridge.protocols import REGISTRY
+from bridge.settings import ConfigError, config_warnings, load_settings, masked
 
 MINIMAL = """
 [mqtt]
@@ -149,3 +150,135 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
 def test_the_example_configuration_is_valid() -> None:
     s = load_settings(Path(__file__).parent.parent / "config" / "example.toml")
     assert s.rotators[0].model == "rotorez" and s.mqtt.protocol == "5"
+
+
+# -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
+NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg"}  # null: off / unset on purpose
+AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
+
+
+@pytest.mark.parametrize("model", sorted(REGISTRY))
+def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: str) -> None:
+    text = f'[[rotators]]\nid = "tower"\nmodel = "{model}"\nport = "/dev/ttyUSB0"\n'
+    s = load_settings(write(tmp_path, text), environ={})
+    from bridge.app import worker_config
+
+    spec = REGISTRY[model]
+    r = masked(s)["rotators"][0]
+    used = worker_config(s.rotators[0])  # what the bridge runs with
+    expected = {
+        "name": "tower",
+        "topic": "rotor",
+        "baud": spec.baud,
+        "brake_delay_s": spec.brake_delay_s,
+        "noise_deg": spec.noise_deg,
+        "az_speed_deg_s": spec.nominal_speed_deg_s,
+        "az_min_deg": spec.az_min_deg,
+        "az_max_deg": spec.az_max_deg,
+    }
+    assert (used.baud, used.motion.brake_delay_s, used.motion.noise_deg) == (
+        r["baud"],
+        r["brake_delay_s"],
+        r["noise_deg"],
+    )
+    assert (used.idle_poll_interval_s, used.moving_poll_interval_s, used.silence_timeout_s) == (
+        r["idle_poll_interval_s"],
+        r["moving_poll_interval_s"],
+        r["silence_timeout_s"],
+    )
+    assert used.az_speed_deg_s == r["az_speed_deg_s"]
+    if spec.has_elevation:
+        assert used.el_speed_deg_s == r["el_speed_deg_s"]
+        expected |= {
+            "el_speed_deg_s": spec.nominal_el_speed_deg_s,
+            "el_min_deg": spec.el_min_deg,
+            "el_max_deg": spec.el_max_deg,
+        }
+    assert {k: r[k] for k in expected} == expected
+    nulls = {k for k, v in r.items() if v is None}
+    assert nulls == NOT_APPLICABLE | (set() if spec.has_elevation else AZ_ONLY_NULLS)
+    shown = masked(s)
+    assert shown["mqtt"]["client_id"] == s.mqtt.effective_client_id() and shown["state_file"]
+
+
+def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
+    """``rotor-bridge check-config`` as a process: (the printed settings, the warnings)."""
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
+    out = subprocess.run(
+        [sys.executable, "-m", "bridge", "check-config", "-c", str(path)],
+        capture_output=True,
+        text=True,
+        env={**clean, **env},
+        timeout=30,
+    )
+    assert out.returncode == 0, out.stderr  # warnings never fail it
+    lines = out.stderr.splitlines()
+    assert all(line.startswith("rotor-bridge: warning: ") for line in lines), lines
+    return json.loads(out.stdout), [line.removeprefix("rotor-bridge: warning: ") for line in lines]
+
+
+def test_check_config_warns_about_what_is_legal_but_probably_wrong(tmp_path: Path) -> None:
+    missing = tmp_path / "serial" / "by-id" / "usb-gone"
+    text = (
+        '[mqtt]\nusername = "u"\npassword = "inline-S3cret"\n'
+        f'[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "{missing}"\n'
+        'rotctld_port = 4533\nrotctld_bind = "0.0.0.0"\n'
+    )
+    doc, warnings = check_config(write(tmp_path, text))
+    assert doc["mqtt"]["password"] == "********" and doc["rotators"][0]["port"] == str(missing)
+    assert len(warnings) == 3, warnings
+    password, port, bind = warnings
+    assert password.startswith("mqtt.password is written in the configuration file")
+    assert "mqtt.password_file" in password and "inline-S3cret" not in password
+    assert port.startswith(f"rotators[0].port: {missing} does not exist now"), port
+    assert bind.startswith("rotators[0].rotctld_bind: 0.0.0.0 is not a loopback address"), bind
+    assert "4533" in bind and "turn the antenna" in bind
+
+
+def test_check_config_is_quiet_about_a_sound_configuration(tmp_path: Path) -> None:
+    device = tmp_path / "ttyUSB0"  # a path that exists, as a plugged-in adapter's does
+    device.write_text("")
+    pw = tmp_path / "pw"
+    pw.write_text("file-S3cret\n")
+    os.chmod(pw, 0o640)
+    text = (
+        f'[mqtt]\nusername = "u"\npassword_file = "{pw}"\n'
+        f'[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "{device}"\n'
+        'rotctld_port = 4533\nrotctld_bind = "127.0.0.1"\n'
+    )
+    doc, warnings = check_config(write(tmp_path, text))
+    assert warnings == [] and doc["mqtt"]["password"] == "********"
+    # a password from the environment is not written in the file: no warning either
+    text = text.replace(f'password_file = "{pw}"', "")
+    doc, warnings = check_config(write(tmp_path, text), ROTOR_BRIDGE_MQTT__PASSWORD="env-S3cret")
+    assert warnings == [] and doc["mqtt"]["password"] == "********"
+
+
+@pytest.mark.parametrize(
+    ("bind", "warned"),
+    [
+        ("127.0.0.1", False),
+        ("127.0.1.1", False),
+        ("::1", False),
+        ("localhost", False),
+        ("0.0.0.0", True),
+        ("::", True),
+        ("192.168.1.20", True),
+        ("shack-pi.lan", True),
+    ],
+)
+def test_only_a_rotctld_port_off_loopback_is_warned_about(
+    tmp_path: Path, bind: str, warned: bool
+) -> None:
+    text = (
+        f'[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "{tmp_path}"\n'
+        f'rotctld_port = 4533\nrotctld_bind = "{bind}"\n'
+    )
+    s = load_settings(write(tmp_path, text), environ={})
+    assert [w for w in config_warnings(s) if "rotctld_bind" in w] == (
+        [f"rotators[0].rotctld_bind: {bind} is not a loopback address: rotctld has no "
+         "authentication, anyone who can reach port 4533 there can turn the antenna"]
+        if warned else []
+    )  # fmt: skip
+    without_port = text.replace("rotctld_port = 4533\n", "")
+    assert config_warnings(load_settings(write(tmp_path, without_port), environ={})) == []
