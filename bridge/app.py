@@ -17,7 +17,7 @@ from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
 from bridge.rotctld import RotctldServer
-from bridge.settings import RotatorSettings, Settings
+from bridge.settings import ConfigError, RotatorSettings, Settings
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +62,13 @@ class App:
         self.topics = Topics(settings.mqtt.base_topic, roots)
         self.mqtt = MqttService(settings.mqtt, self.topics)
         store = StateStore(settings.state_file)
+        try:
+            store.check_writable()
+        except OSError as exc:
+            where = f" ({exc.filename})" if exc.filename else ""
+            raise ConfigError(
+                f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
+            ) from None
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         for r in settings.rotators:
@@ -118,6 +125,14 @@ class App:
         return publisher
 
     def start(self) -> None:
+        """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
+        try:
+            for server in self.rotctld:
+                server.listen()
+        except OSError as exc:
+            for server in self.rotctld:
+                server.stop()
+            raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
         self.mqtt.start()
@@ -152,7 +167,10 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _signal)
         signal.signal(signal.SIGINT, _signal)
-    app = App(settings)
+    try:
+        app = App(settings)
+    except OSError as exc:  # not foreseen, but a start that cannot work all the same
+        raise ConfigError(f"cannot start: {exc}") from None
     app.start()
     try:
         while not done.wait(1.0):

@@ -13,6 +13,7 @@ import ipaddress
 import os
 import re
 import socket
+import ssl
 import stat
 import tomllib
 from pathlib import Path
@@ -58,10 +59,42 @@ class TlsSettings(_Strict):
     def _pair(self) -> TlsSettings:
         if (self.cert_file is None) != (self.key_file is None):
             raise ValueError("cert_file and key_file go together")
-        for f in (self.ca_file, self.cert_file, self.key_file):
+        for name in ("ca_file", "cert_file", "key_file"):
+            f = getattr(self, name)
             if f is not None and not f.is_file():
-                raise ValueError(f"{f} is not a readable file")
+                raise ValueError(f"{name} {f} is not a readable file")
+            try:
+                if f is not None:
+                    f.open("rb").close()
+            except OSError as exc:
+                raise ValueError(f"{name} {f}: {exc.strerror}") from None
+        # loaded here as the MQTT client will load them, so a bad file is a config error now and
+        # not a traceback at start (paho's tls_set would raise it)
+        context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+        if self.ca_file is not None:
+            try:
+                context.load_verify_locations(cafile=str(self.ca_file))
+            except ssl.SSLError as exc:
+                raise ValueError(
+                    f"ca_file {self.ca_file} holds no PEM certificate ({_ssl_reason(exc)})"
+                ) from None
+        if self.cert_file is not None and self.key_file is not None:
+
+            def no_passphrase() -> bytes:  # else OpenSSL would ask on a terminal there is not
+                raise ValueError(f"key_file {self.key_file} is encrypted: it must not be")
+
+            try:
+                context.load_cert_chain(self.cert_file, self.key_file, password=no_passphrase)
+            except ssl.SSLError as exc:
+                raise ValueError(
+                    f"cert_file {self.cert_file} and key_file {self.key_file} are not a PEM "
+                    f"certificate and its key ({_ssl_reason(exc)})"
+                ) from None
         return self
+
+
+def _ssl_reason(exc: ssl.SSLError) -> str:
+    return exc.reason or str(exc.strerror or exc).split(" (_ssl.c")[0]
 
 
 class MqttSettings(_Strict):
@@ -103,7 +136,10 @@ class MqttSettings(_Strict):
         except OSError as exc:
             raise ValueError(f"password_file {path}: {exc.strerror}") from None
         if mode & (stat.S_IROTH | stat.S_IWOTH):
-            raise ValueError(f"password_file {path} is readable by every user; chmod 600 it")
+            raise ValueError(
+                f"password_file {path} is readable by every user; let only the service user "
+                "read it (chown root:rotor-bridge, chmod 640)"
+            )
         self.password = SecretStr(text.strip("\r\n"))
         return self
 

@@ -35,6 +35,18 @@ class StateStore:
                 log.error("state file %s unreadable (%s): every rotator starts locked", path, exc)
                 self.corrupt = True
 
+    def check_writable(self) -> None:
+        """OSError if the file cannot be written where it is configured. Checked at start: a
+        lock set for tower work that is silently not kept would be gone after a restart."""
+        if self._path is None:
+            return
+        self._path.parent.mkdir(parents=True, exist_ok=True)
+        if self._path.is_dir():
+            raise IsADirectoryError(21, "a directory is in the way", str(self._path))
+        fd, tmp = tempfile.mkstemp(dir=self._path.parent, prefix=".state-")
+        os.close(fd)
+        os.unlink(tmp)
+
     def locked(self, rotator_id: str) -> bool:
         with self._lock:
             entry = self._data.get(rotator_id, {})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import selectors
@@ -16,6 +17,12 @@ if TYPE_CHECKING:
     from bridge.engine.rotator import Rotator
 
 log = logging.getLogger(__name__)
+
+_BIND_HINTS = {
+    errno.EADDRINUSE: " (another rotctld or rotor-bridge? give this rotator another rotctld_port)",
+    errno.EACCES: " (ports below 1024 need privileges: use 4533 or above)",
+    errno.EADDRNOTAVAIL: " (rotctld_bind is not an address of this host)",
+}
 
 
 class RotctldServer:
@@ -59,18 +66,30 @@ class RotctldServer:
         with self._lock:
             return len(self._clients)
 
-    def start(self) -> None:
-        """Listen (OSError if the address cannot be had) and accept clients in a thread."""
+    def listen(self) -> None:
+        """Take the address; OSError whose strerror is one line naming the rotator, the address
+        and the reason if it cannot be had. ``start`` does this too; the app calls it first so
+        that a port in use stops the start before anything else runs."""
+        if self._listener is not None:
+            return
         host, port = self._bind, self._requested_port
         try:
             family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
             self._listener = socket.create_server((host, port), family=family)
         except OSError as exc:
+            # create_server's strerror repeats the address; the plain reason is enough
+            code = exc.errno or 0
+            reason = os.strerror(code) if code > 0 else exc.strerror or str(exc)
             raise OSError(
                 exc.errno,
                 f"rotctld for rotator {self.rotator_id!r}: cannot listen on {host}:{port}: "
-                f"{exc.strerror or exc}",
+                f"{reason}{_BIND_HINTS.get(code, '')}",
             ) from None
+
+    def start(self) -> None:
+        """Listen (OSError if the address cannot be had) and accept clients in a thread."""
+        self.listen()
+        host = self._bind
         if host not in ("127.0.0.1", "::1", "localhost"):
             log.warning(
                 "rotctld for %s listens on %s:%d: rotctld has no authentication, anyone who "
@@ -91,6 +110,10 @@ class RotctldServer:
         """Stop listening, close every client; commands already queued stay queued."""
         if self._listener is None:
             return
+        if self._accept_thread is None:  # listening, never started: nothing else to end
+            self._listener.close()
+            self._listener = None
+            return
         with self._lock:
             self._stopping = True
             clients = list(self._clients.items())
@@ -106,6 +129,7 @@ class RotctldServer:
             thread.join(timeout_s)
         self._listener.close()
         self._listener = None
+        self._accept_thread = None
         os.close(self._wake_r)
         os.close(self._wake_w)
 

@@ -8,6 +8,8 @@ schema either load or fail that way, nothing else.
 from __future__ import annotations
 
 import os
+import socket
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -16,8 +18,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.cli import main
+from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError, load_settings
-from tests.faults.conftest import run_cli, to_toml
+from tests.faults.conftest import Pki, fast_retained, run_cli, to_toml
 
 SECRET = "hunter2-do-not-show"
 BASE = """
@@ -151,6 +154,121 @@ def test_a_file_that_is_not_utf8_is_a_config_error_not_a_crash(tmp_path: Path) -
         out = run_cli(command, "-c", str(path))
         assert "Traceback" not in out.stderr, out.stderr[-600:]
         assert out.returncode == 2 and "UTF-8" in out.stderr.upper().replace("UTF8", "UTF-8")
+
+
+# -- start-up errors: valid settings, but the start cannot work --------------------------------
+# Exit code 2 (the systemd unit does not restart it) and one line saying what and why; nothing
+# started, nothing published.
+def start_up_config(
+    tmp: Path, broker_port: int, state_file: Path | None = None, **rotator: Any
+) -> Path:
+    doc: dict[str, Any] = {
+        "state_file": str(state_file or tmp / "state" / "state.json"),
+        "mqtt": {"host": "127.0.0.1", "port": broker_port, "username": "u", "password": SECRET},
+        "rotators": [{"id": "tower", "model": "rotorez", "port": str(tmp / "tty"), **rotator}],
+    }
+    path = tmp / "bridge.toml"
+    path.write_text(to_toml(doc))
+    return path
+
+
+def the_one_line(out: subprocess.CompletedProcess[str]) -> str:
+    """The process failed with exit code 2 and said why in one line (besides its INFO log)."""
+    assert out.returncode == 2, out
+    assert "Traceback" not in out.stderr and SECRET not in out.stdout + out.stderr, out.stderr
+    lines = out.stderr.splitlines()
+    said = [line for line in lines if line.startswith("rotor-bridge: ")]
+    assert len(said) == 1, out.stderr
+    assert [line for line in lines if line not in said and " INFO " not in line] == [], lines
+    return said[0]
+
+
+def test_a_rotctld_port_taken_by_another_process_is_exit_2_and_one_line(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    holder = socket.create_server(("127.0.0.1", 0))  # the test is the other process
+    port = holder.getsockname()[1]
+    try:
+        out = run_cli("run", "-c", str(start_up_config(tmp_path, broker.port, rotctld_port=port)))
+    finally:
+        holder.close()
+    line = the_one_line(out)
+    assert line.startswith(
+        f"rotor-bridge: rotctld for rotator 'tower': cannot listen on 127.0.0.1:{port}: "
+        "Address already in use"
+    ), line
+    assert fast_retained(broker.port, "#") == {}  # no discovery, no state, no "online"
+
+
+def test_a_rotctld_address_not_on_this_host_is_exit_2_and_one_line(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    config = start_up_config(tmp_path, broker.port, rotctld_port=4533, rotctld_bind="192.0.2.7")
+    line = the_one_line(run_cli("run", "-c", str(config)))
+    assert "rotator 'tower'" in line and "192.0.2.7:4533" in line
+    assert "Cannot assign requested address" in line
+
+
+def test_a_state_file_that_cannot_be_written_is_exit_2_and_one_line(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    # under a regular file: no directory can be made there, not even by root (a read-only
+    # directory would not stop root)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a directory\n")
+    state_file = blocker / "rotor" / "state.json"
+    config = start_up_config(tmp_path, broker.port, state_file=state_file)
+    line = the_one_line(run_cli("run", "-c", str(config)))
+    assert line.startswith(f"rotor-bridge: state_file {state_file} cannot be written: "), line
+    assert "Not a directory" in line
+    assert fast_retained(broker.port, "#") == {}
+    assert blocker.read_text() == "not a directory\n"
+
+
+@pytest.fixture(scope="module")
+def pki(tmp_path_factory: pytest.TempPathFactory) -> Pki:
+    pki = Pki(tmp_path_factory.mktemp("pki"))
+    encrypted = pki.path("encrypted.key")
+    subprocess.run(
+        ["openssl", "pkey", "-in", pki.path("client.key"), "-aes256", "-passout", "pass:x",
+         "-out", encrypted],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    pki.path("junk.pem").write_text("this is no certificate\n")
+    return pki
+
+
+TLS_CASES = [  # (why, file settings, what the message says); DIR is the certificates' directory
+    ("ca not PEM", {"ca_file": "junk.pem"}, "ca_file DIR/junk.pem holds no PEM certificate"),
+    ("ca a directory", {"ca_file": ""}, "ca_file DIR is not a readable file"),
+    ("cert not PEM", {"cert_file": "junk.pem", "key_file": "client.key"}, "cert_file DIR/junk.pem"),
+    ("key not PEM", {"cert_file": "client.crt", "key_file": "junk.pem"}, "key_file DIR/junk.pem"),
+    ("key of another cert", {"cert_file": "client.crt", "key_file": "server.key"}, "and its key"),
+    ("key encrypted", {"cert_file": "client.crt", "key_file": "encrypted.key"}, "is encrypted"),
+]
+
+
+@pytest.mark.parametrize(("why", "files", "said"), TLS_CASES, ids=[c[0] for c in TLS_CASES])
+def test_tls_files_that_cannot_be_used_are_exit_2_and_one_message(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    pki: Pki,
+    why: str,
+    files: dict[str, str],
+    said: str,
+) -> None:
+    """Before they were checked, paho raised these at start: a traceback and exit code 1."""
+    tls = "".join(f"{key} = {str(pki.dir / name)!r}\n" for key, name in files.items())
+    path = tmp_path / "tls.toml"
+    path.write_text(BASE + "[mqtt.tls]\nenabled = true\n" + tls)
+    for command in ("run", "check-config"):
+        code, out, err = run_main(capsys, command, "-c", str(path))
+        assert (code, out) == (2, ""), (why, err)
+        assert err.startswith("rotor-bridge: invalid configuration:\n  mqtt.tls: "), (why, err)
+        assert said.replace("DIR", str(pki.dir)) in err, (why, err)
+        assert SECRET not in err and "Traceback" not in err, (why, err)
+    out = run_cli("run", "-c", str(path))  # the real process too
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
 
 
 # -- random documents shaped like the schema ---------------------------------------------------
