@@ -19,7 +19,7 @@ import pytest
 from bridge.cli import EXIT_CONFIG, build_parser
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
-from bridge.settings import load_settings
+from bridge.settings import ConfigError, load_settings
 
 ROOT = Path(__file__).resolve().parent.parent
 DEPLOY = ROOT / "deploy"
@@ -615,3 +615,121 @@ def test_dockerfile_installs_the_project_and_runs_unprivileged() -> None:
     assert json.loads(_instructions("ENTRYPOINT")[-1]) == ["rotor-bridge"]
     args = build_parser().parse_args(json.loads(_instructions("CMD")[-1]))
     assert args.command == "run"
+
+
+# ---------------------------------------------------------------------------------------------
+# Documentation and licence: they describe this code, and a clone has everything they name
+# ---------------------------------------------------------------------------------------------
+README = ROOT / "README.md"
+EXAMPLE = ROOT / "config" / "example.toml"
+DOCS = [README, *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _section(text: str, heading: str) -> str:
+    start = text.index(f"\n{heading}\n")
+    end = text.find("\n## ", start + len(heading) + 2)
+    return text[start : end if end != -1 else len(text)]
+
+
+def _shell_commands(markdown: str) -> list[list[str]]:
+    """The commands of every ```sh block, continuation lines joined, comments dropped."""
+    commands = []
+    for block in re.findall(r"```sh\n(.*?)```", markdown, re.S):
+        for line in block.replace("\\\n", " ").splitlines():
+            for command in re.split(r"&&|;", line):
+                argv = shlex.split(command, comments=True)
+                if argv:
+                    commands.append(argv)
+    return commands
+
+
+def test_the_licence_file_is_the_mit_licence_pyproject_names() -> None:
+    licence = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["license"]
+    assert licence == {"text": "MIT"}
+    text = (ROOT / "LICENSE").read_text()
+    assert text.splitlines()[:3] == [
+        "MIT License",
+        "",
+        "Copyright (c) 2026 rotor-bridge contributors",
+    ]
+    words = " ".join(text.split())
+    assert "Permission is hereby granted, free of charge, to any person obtaining a copy" in words
+    assert 'THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND' in words
+    assert "[LICENSE](LICENSE)" in README.read_text()
+
+
+@pytest.mark.parametrize("path", [EXAMPLE, DOCKER / "rotor-bridge.toml"], ids=["example", "docker"])
+def test_configuration_files_name_every_model(path: Path) -> None:
+    (comment,) = re.findall(r'^model = "\w+"\s*#(.*)$', path.read_text(), re.M)
+    assert [m.strip() for m in comment.split("|")] == list(REGISTRY), comment
+
+
+def test_the_readme_names_every_model_wherever_it_lists_them(tmp_path: Path) -> None:
+    text = README.read_text()
+    # the error example is what the bridge really prints for a misspelt model
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[rotators]]\nid = "tower"\nmodel = "rotorz"\nport = "/dev/ttyUSB0"\n')
+    with pytest.raises(ConfigError) as exc:
+        load_settings(bad, environ={})
+    assert f"```\nrotor-bridge: {exc.value}\n```" in text
+    # every run of three or more model names in backticks is the whole list
+    name = "|".join(REGISTRY)
+    runs = re.finditer(rf"`(?:{name})`(?:(?:,|, or| or|, and| and)\s+`(?:{name})`)+", text)
+    lists = [set(re.findall(r"`(\w+)`", m.group(0))) for m in runs]
+    lists = [found for found in lists if len(found) >= 3]
+    assert lists and all(found == set(REGISTRY) for found in lists), lists
+
+
+def test_the_password_file_mode_is_one_answer_everywhere(tmp_path: Path) -> None:
+    """The service user must read it, every other user must not: group rotor-bridge, 640."""
+    for path in (README, EXAMPLE, UNIT):
+        text = path.read_text()
+        assert set(re.findall(r"chmod (\d+)", text)) == {"640"}, path
+        assert "chown root:rotor-bridge" in text, path
+    pw = tmp_path / "pw"
+    pw.write_text("S3cret\n")
+    config = tmp_path / "c.toml"
+    config.write_text(
+        f'[mqtt]\nusername = "u"\npassword_file = "{pw}"\n'
+        '[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
+    )
+    os.chmod(pw, 0o644)
+    with pytest.raises(ConfigError) as exc:
+        load_settings(config, environ={})
+    assert "readable by every user" in str(exc.value)
+    assert "chown root:rotor-bridge, chmod 640" in str(exc.value)  # the same answer
+    os.chmod(pw, 0o640)
+    password = load_settings(config, environ={}).mqtt.password
+    assert password is not None and password.get_secret_value() == "S3cret"
+
+
+@pytest.mark.parametrize("heading", ["## Install for real", "### systemd"])
+def test_the_readme_install_commands_work_as_typed(heading: str) -> None:
+    """From the top of a clone; the venv's bin/ is not on PATH, so its programs by full path."""
+    commands = _shell_commands(_section(README.read_text(), heading))
+    assert commands
+    venv = posixpath.dirname(posixpath.dirname(SHIPPED_EXEC))
+    for argv in commands:
+        if argv[0] == "sudo":
+            argv = argv[1:]
+        assert argv[0] not in ("rotor-bridge", "pip", "python", "pip3"), argv
+        if argv[0] == SHIPPED_EXEC:
+            build_parser().parse_args(argv[1:])  # a real subcommand with real options
+        elif argv[0] == f"{venv}/bin/pip":
+            assert argv[1:] == ["install", "."]  # this repository
+        elif argv[0] in ("cp", "install") and not argv[1].startswith("-"):
+            assert (ROOT / argv[1]).exists(), argv
+    assert any(argv[-2:] == ["-c", SHIPPED_CONFIG] for argv in commands)
+
+
+def test_docs_name_only_files_a_clone_has() -> None:
+    for doc in DOCS:
+        text = doc.read_text()
+        assert "../" not in text and "shared/" not in text, doc
+        targets = re.findall(r"\]\(([^)\s]+)\)", text)
+        paths = re.findall(r"`((?:deploy|config|docs|tests|bridge|benchmarks)/[^`\s]*)`", text)
+        for target in [t for t in targets if not re.match(r"[a-z]+:|#", t)] + paths:
+            path = (doc.parent / target).resolve()
+            if not path.exists():
+                path = (ROOT / target).resolve()
+            assert path.exists() and path.is_relative_to(ROOT), (doc.name, target)
