@@ -14,8 +14,9 @@ from bridge.engine.rotator import Limits, Rotator
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
+from bridge.mqtt.client import MqttClient
 from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import Topics
+from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
 
@@ -60,7 +61,14 @@ class App:
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
         self.topics = Topics(settings.mqtt.base_topic, roots)
-        self.mqtt = MqttService(settings.mqtt, self.topics)
+        # the service publishes through the client; the client hands every message to the service
+        self.client = MqttClient(
+            settings.mqtt,
+            will_topic=self.topics.bridge_state,
+            subscriptions=[],  # the service's, added once its features are (end of __init__)
+            on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
+        )
+        self.mqtt = MqttService(self.topics, self.client)
         store = StateStore(settings.state_file)
         try:
             store.check_writable()
@@ -91,10 +99,12 @@ class App:
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
+        self.client.add_subscriptions(self.mqtt.subscriptions())
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant
-        client = self.mqtt.client
+        client = self.client
+        discovery_topics = DiscoveryTopics(ha.discovery_prefix)
         infos = []
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             infos.append(
@@ -116,9 +126,7 @@ class App:
             rotators=infos,
             publish_retained=client.publish_retained,
             clear_retained=client.clear_retained,
-            republish_state=lambda: client.republish_retained(
-                skip_prefix=ha.discovery_prefix + "/"
-            ),
+            republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
             birth_delay_s=ha.birth_delay_s,
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)

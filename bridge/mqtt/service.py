@@ -1,6 +1,9 @@
 """MQTT front end: inbound topics become rotator commands, rotator statuses become topics.
 
-It reaches the rotators only through the RotatorPort interface that app.py hands it.
+It reaches the rotators only through the RotatorPort interface that app.py hands it, and the
+broker only through the Publisher it is given (MqttClient; a recorder in unit tests). Inbound, it
+says what to subscribe to (``subscriptions()``) and takes every message (``on_message``): app.py
+wires both into the client.
 
 Rules:
 1. A command that arrives retained is never executed: it is reported on the error topic. (A
@@ -27,10 +30,8 @@ from typing import Protocol
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.client import MqttClient
 from bridge.mqtt.topics import Topics
 from bridge.protocols.base import ModelSpec
-from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
@@ -46,25 +47,38 @@ class RotatorPort(Protocol):
     def report_refusal(self, message: str, command: str | None) -> None: ...
 
 
+class Publisher(Protocol):
+    """The broker connection as the service uses it (bridge.mqtt.client.MqttClient).
+
+    ``publish_retained`` with ``only_if_changed`` sends nothing when the payload equals the last
+    one for that topic (rule 3). ``publish_offline_now`` marks retained topics ``offline`` and
+    waits until the broker has them (shutdown).
+    """
+
+    def publish_retained(
+        self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
+    ) -> None: ...
+    def publish_event(self, topic: str, payload: str | bytes) -> None: ...
+    def publish_offline_now(self, topics: list[str]) -> None: ...
+    def start(self) -> None: ...
+    def stop(self) -> None: ...
+
+
 class MqttService:
     def __init__(
         self,
-        settings: MqttSettings,
         topics: Topics,
+        publisher: Publisher,
         *,
         wall: Callable[[], float] = time.time,
     ) -> None:
         self.topics = topics
+        self._publisher = publisher
         self._wall = wall
         self._rotators: dict[str, RotatorPort] = {}
+        self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
-        self.client = MqttClient(
-            settings,
-            will_topic=topics.bridge_state,
-            subscriptions=topics.subscriptions(),
-            on_message=self._on_message,
-        )
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
@@ -75,24 +89,29 @@ class MqttService:
         on_message: Callable[[str, bytes, bool], bool],
         on_status: Callable[[str, RotatorStatus], None] | None = None,
     ) -> None:
-        """A feature (e.g. Home Assistant discovery) with topics of its own; before ``start()``.
+        """A feature (e.g. Home Assistant discovery) with topics of its own; before
+        ``subscriptions()`` is handed to the client.
 
         ``on_message`` gets every message that is not a rotator command and returns True when
         it was the feature's; ``on_status`` sees every status a rotator emits.
         """
-        self.client.add_subscriptions(subscriptions)
+        self._feature_subscriptions += subscriptions
         self._handlers.append(on_message)
         if on_status is not None:
             self._status_listeners.append(on_status)
 
+    def subscriptions(self) -> list[str]:
+        """Every topic filter the service wants messages from: commands, then features'."""
+        return [*self.topics.subscriptions(), *self._feature_subscriptions]
+
     def start(self) -> None:
-        self.client.start()
+        self._publisher.start()
 
     def stop(self) -> None:
-        self.client.publish_offline_now(
+        self._publisher.publish_offline_now(
             [self.topics.rotator(rid).availability for rid in self._rotators]
         )
-        self.client.stop()
+        self._publisher.stop()
 
     # -- outbound (worker threads) ----------------------------------------------------------
     def publish_status(self, rotator_id: str, status: RotatorStatus) -> None:
@@ -101,7 +120,7 @@ class MqttService:
             return  # emitted before attach(): the first real status follows
         spec = rot.spec
         t = self.topics.rotator(rotator_id)
-        pub = self.client.publish_retained
+        pub = self._publisher.publish_retained
         if status.bearing_deg is not None:
             pub(t.bearing, pl.number(status.bearing_deg))
         if status.elevation_deg is not None:
@@ -120,10 +139,10 @@ class MqttService:
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         t = self.topics.rotator(rotator_id)
-        self.client.publish_event(t.error, json.dumps(event.as_dict(), separators=(",", ":")))
+        self._publisher.publish_event(t.error, json.dumps(event.as_dict(), separators=(",", ":")))
 
     # -- inbound (paho's thread) ------------------------------------------------------------
-    def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
+    def on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         route = self.topics.route(topic)
         if route is None:
             for handler in self._handlers:

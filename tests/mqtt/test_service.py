@@ -1,0 +1,371 @@
+"""MqttService without a broker: statuses in, what would be published out; messages in, the
+rotator calls they become.
+
+The publisher is a recorder of the Publisher protocol: it keeps what the broker would hold
+retained and the messages that would go out, honouring ``only_if_changed`` as its contract says.
+The rotator is a recorder of RotatorPort calls.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from bridge.errors import Refused
+from bridge.model import ErrorEvent, MotionState, RotatorStatus, SetOption, Source, Stop, Target
+from bridge.mqtt.service import MqttService
+from bridge.mqtt.topics import Topics
+from bridge.protocols import REGISTRY
+
+NOW_UNIX = 1_700_000_000.0
+NOW_ISO = "2023-11-14T22:13:20.000+00:00"
+
+
+class RecordingPublisher:
+    def __init__(self) -> None:
+        self.retained: dict[str, str] = {}  # what the broker would hold
+        self.sent: list[tuple[str, str, bool]] = []  # (topic, payload, retain), in order
+        self.log: list[str] = []  # lifecycle calls
+
+    def publish_retained(
+        self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
+    ) -> None:
+        text = payload.decode() if isinstance(payload, bytes) else payload
+        if only_if_changed and self.retained.get(topic) == text:
+            return
+        self.retained[topic] = text
+        self.sent.append((topic, text, True))
+
+    def publish_event(self, topic: str, payload: str | bytes) -> None:
+        text = payload.decode() if isinstance(payload, bytes) else payload
+        self.sent.append((topic, text, False))
+
+    def publish_offline_now(self, topics: list[str]) -> None:
+        self.log.append("offline " + " ".join(topics))
+        for topic in topics:
+            self.retained[topic] = "offline"
+
+    def start(self) -> None:
+        self.log.append("start")
+
+    def stop(self) -> None:
+        self.log.append("stop")
+
+    def take(self) -> list[tuple[str, str, bool]]:
+        sent, self.sent = self.sent, []
+        return sent
+
+
+class RecordingRotator:
+    def __init__(self, rotator_id: str, model: str, refuse: Refused | None = None) -> None:
+        self.id = rotator_id
+        self.spec = REGISTRY[model]
+        self.calls: list[tuple[object, ...]] = []
+        self._refuse = refuse
+
+    @property
+    def status(self) -> RotatorStatus:
+        return RotatorStatus(self.id)
+
+    def submit(self, command: Target | Stop | SetOption, described: str | None = None) -> None:
+        self.calls.append(("submit", command, described))
+        if self._refuse is not None:
+            raise self._refuse
+
+    def set_lock(self, locked: bool) -> None:
+        self.calls.append(("lock", locked))
+
+    def report_refusal(self, message: str, command: str | None) -> None:
+        self.calls.append(("refused", message, command))
+
+
+def service(
+    models: dict[str, str], **rotator_kw: object
+) -> tuple[MqttService, RecordingPublisher, dict[str, RecordingRotator]]:
+    roots = {rid: "rotor" if len(models) == 1 else f"rotor/{rid}" for rid in models}
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", roots), pub, wall=lambda: NOW_UNIX)
+    rots = {rid: RecordingRotator(rid, m, **rotator_kw) for rid, m in models.items()}  # type: ignore[arg-type]
+    for rot in rots.values():
+        svc.attach(rot)
+    return svc, pub, rots
+
+
+# -- outbound ------------------------------------------------------------------------------------
+def test_an_az_only_status_becomes_its_retained_topics() -> None:
+    svc, pub, _ = service({"tower": "rotorez"})
+    svc.publish_status(
+        "tower",
+        RotatorStatus(
+            "tower",
+            state=MotionState.MOVING,
+            bearing_deg=123.0,
+            target_az_deg=200.0,
+            connected=True,
+            available=True,
+            version="1.4S",
+            options={"jam": True, "endpoint": False, "bogus": True},
+            last_command_source="mqtt",
+        ),
+    )
+    status = (
+        '{"bearing":123.0,"target":200.0,"state":"moving","moving":true,"connected":true,'
+        '"available":true,"locked":false,"version":"1.4S","options":{"bogus":true,'
+        '"endpoint":false,"jam":true},"last_error":null,"last_command_source":"mqtt",'
+        f'"estimated":false,"time":"{NOW_ISO}"}}'
+    )
+    assert pub.take() == [
+        ("rotor/bearing", "123", True),
+        ("rotor/state", "moving", True),
+        ("rotor/availability", "online", True),
+        ("rotor/version", "1.4S", True),
+        ("rotor/option/endpoint/state", "OFF", True),
+        ("rotor/option/jam/state", "ON", True),
+        ("rotor/lock/state", "OFF", True),
+        ("rotor/status", status, True),
+    ]
+
+
+def test_an_az_el_status_adds_elevation_topic_and_fields() -> None:
+    svc, pub, _ = service({"sat": "rot2prog"})
+    svc.publish_status(
+        "sat",
+        RotatorStatus(
+            "sat",
+            state=MotionState.IDLE,
+            bearing_deg=-10.5,
+            elevation_deg=45.25,
+            target_el_deg=45.0,
+            connected=True,
+            available=True,
+            locked=True,
+        ),
+    )
+    assert pub.retained["rotor/bearing"] == "-10.5"
+    assert pub.retained["rotor/elevation"] == "45.25"
+    assert pub.retained["rotor/lock/state"] == "ON"
+    assert "rotor/version" not in pub.retained  # no version known: nothing published
+    doc = json.loads(pub.retained["rotor/status"])
+    assert (doc["elevation"], doc["target_elevation"], doc["locked"]) == (45.25, 45.0, True)
+
+
+def test_a_controller_without_position_publishes_no_bearing() -> None:
+    svc, pub, _ = service({"tower": "dcu1"})
+    svc.publish_status(
+        "tower", RotatorStatus("tower", state=MotionState.UNKNOWN, connected=True, available=True)
+    )
+    assert sorted(pub.retained) == [
+        "rotor/availability",
+        "rotor/lock/state",
+        "rotor/state",
+        "rotor/status",
+    ]
+    assert pub.retained["rotor/state"] == "unknown"
+    doc = json.loads(pub.retained["rotor/status"])
+    assert doc["bearing"] is None and "elevation" not in doc
+
+
+def test_offline_rotator_status() -> None:
+    svc, pub, _ = service({"tower": "rotorez"})
+    svc.publish_status("tower", RotatorStatus("tower"))
+    assert (pub.retained["rotor/state"], pub.retained["rotor/availability"]) == (
+        "offline",
+        "offline",
+    )
+    assert "rotor/bearing" not in pub.retained
+
+
+def test_only_what_changed_is_published_again() -> None:
+    svc, pub, _ = service({"tower": "rotorez"})
+    still = RotatorStatus(
+        "tower", state=MotionState.IDLE, bearing_deg=90.0, available=True, connected=True
+    )
+    svc.publish_status("tower", still)
+    assert len(pub.take()) == 5  # bearing, state, availability, lock, status
+    svc.publish_status("tower", still)
+    assert pub.take() == []
+    svc.publish_status(
+        "tower",
+        RotatorStatus(
+            "tower", state=MotionState.IDLE, bearing_deg=91.0, available=True, connected=True
+        ),
+    )
+    assert [topic for topic, _, _ in pub.take()] == ["rotor/bearing", "rotor/status"]
+
+
+def test_several_rotators_publish_under_their_own_topics_and_listeners_see_statuses() -> None:
+    svc, pub, _ = service({"a": "rotorez", "b": "rotorcard"})
+    seen: list[tuple[str, MotionState]] = []
+    svc.add_feature([], lambda *_: False, lambda rid, st: seen.append((rid, st.state)))
+    svc.publish_status("b", RotatorStatus("b", state=MotionState.IDLE, bearing_deg=5.0))
+    svc.publish_status("nobody", RotatorStatus("nobody", bearing_deg=1.0))  # before attach
+    assert pub.retained["rotor/b/bearing"] == "5"
+    assert not any(t.startswith(("rotor/a/", "rotor/nobody")) for t in pub.retained)
+    assert seen == [("b", MotionState.IDLE)]
+
+
+def test_error_events_go_to_the_error_topic_not_retained() -> None:
+    svc, pub, _ = service({"a": "rotorez", "b": "rotorez"})
+    svc.publish_event("b", ErrorEvent("stalled", "no progress for 10 s", None, NOW_UNIX))
+    svc.publish_event("b", ErrorEvent("refused", "azimuth 400 outside 0..360", "target '400'", 1))
+    stalled = '{"kind":"stalled","message":"no progress for 10 s","time":1700000000.0}'
+    refused = (
+        '{"kind":"refused","message":"azimuth 400 outside 0..360","command":"target \'400\'",'
+        '"time":1}'
+    )
+    assert pub.take() == [("rotor/b/error", stalled, False), ("rotor/b/error", refused, False)]
+    assert pub.retained == {}
+
+
+def test_stop_marks_every_rotator_offline_before_the_connection_closes() -> None:
+    svc, pub, _ = service({"a": "rotorez", "b": "dcu1"})
+    svc.start()
+    svc.stop()
+    assert pub.log == ["start", "offline rotor/a/availability rotor/b/availability", "stop"]
+
+
+# -- inbound -------------------------------------------------------------------------------------
+M = Source.MQTT
+
+
+@pytest.mark.parametrize(
+    ("topic", "payload", "call"),
+    [
+        ("rotor/b/target", b"120", ("submit", Target(120.0, None, M), "target '120'")),
+        ("rotor/b/target", b" 120.5 ", ("submit", Target(120.5, None, M), "target ' 120.5 '")),
+        ("rotor/b/target", b"120 30", ("submit", Target(120.0, 30.0, M), "target '120 30'")),
+        (
+            "rotor/b/target",
+            b'{"azimuth": 10, "elevation": 5}',
+            ("submit", Target(10.0, 5.0, M), 'target \'{"azimuth": 10, "elevation": 5}\''),
+        ),
+        (
+            "rotor/b/target/elevation",
+            b"30",
+            ("submit", Target(None, 30.0, M), "target_elevation '30'"),
+        ),
+        ("rotor/b/stop", b"STOP", ("submit", Stop(M), "stop 'STOP'")),
+        ("rotor/b/stop", b"", ("submit", Stop(M), "stop")),  # a plain stop takes any payload
+        ("rotor/b/lock", b"ON", ("lock", True)),
+        ("rotor/b/lock", b"false", ("lock", False)),
+        ("rotor/b/option/jam", b"on", ("submit", SetOption("jam", True, M), "option jam 'on'")),
+        (
+            "rotor/b/option/unstick",
+            b"0",
+            ("submit", SetOption("unstick", False, M), "option unstick '0'"),
+        ),
+    ],
+)
+def test_each_command_topic_reaches_its_rotator(
+    topic: str, payload: bytes, call: tuple[object, ...]
+) -> None:
+    svc, pub, rots = service({"a": "rot2prog", "b": "rot2prog"})  # the rotator judges the rest
+    svc.on_message(topic, payload, False)
+    assert rots["b"].calls == [call]
+    assert rots["a"].calls == []
+    assert pub.sent == []
+
+
+@pytest.mark.parametrize(
+    ("topic", "payload", "message", "what"),
+    [
+        ("rotor/target", b"north", "azimuth must be a number, got 'north'", "target 'north'"),
+        ("rotor/target", b"", "empty payload", "target"),
+        ("rotor/target", b"1 2 3", "target must be 'azimuth' or 'azimuth elevation', got '1 2 3'",
+         "target '1 2 3'"),
+        ("rotor/target", b'{"az": 1, "x": 2}', "unknown key(s) in target: x",
+         "target '{\"az\": 1, \"x\": 2}'"),
+        ("rotor/target", b"nan", "azimuth must be a number, got 'nan'", "target 'nan'"),
+        ("rotor/target", b"\xff", "payload is not UTF-8 text", "target '\ufffd'"),
+        ("rotor/target/elevation", b"up", "elevation must be a number, got 'up'",
+         "target_elevation 'up'"),
+        ("rotor/lock", b"maybe", "expected ON or OFF, got 'maybe'", "lock 'maybe'"),
+        ("rotor/option/jam", b"2", "expected ON or OFF, got '2'", "option jam '2'"),
+    ],
+)  # fmt: skip
+def test_a_bad_payload_is_refused_and_nothing_moves(
+    topic: str, payload: bytes, message: str, what: str
+) -> None:
+    svc, pub, rots = service({"tower": "rotorez"})
+    svc.on_message(topic, payload, False)
+    assert rots["tower"].calls == [("refused", message, what)]
+
+
+def test_a_command_the_rotator_refuses_is_left_to_it_to_report() -> None:
+    svc, pub, rots = service({"tower": "rotorez"}, refuse=Refused("limits", "outside 0..360"))
+    svc.on_message("rotor/target", b"400", False)  # the rotator judges limits, not the service
+    assert rots["tower"].calls == [("submit", Target(400.0, None, M), "target '400'")]
+    assert pub.sent == []
+
+
+@pytest.mark.parametrize(
+    ("topic", "what"),
+    [
+        ("rotor/target", "target '120'"),
+        ("rotor/target/elevation", "target_elevation '120'"),
+        ("rotor/lock", "lock '120'"),
+        ("rotor/option/jam", "option jam '120'"),
+    ],
+)
+def test_a_retained_command_is_refused_not_executed(topic: str, what: str) -> None:
+    svc, _, rots = service({"tower": "rotorez"})
+    svc.on_message(topic, b"120", True)
+    assert rots["tower"].calls == [
+        (
+            "refused",
+            f"retained command on {topic} ignored: commands must be published without the "
+            "retain flag (clear it with an empty retained message)",
+            what,
+        )
+    ]
+
+
+def test_a_retained_stop_is_executed_and_reported() -> None:
+    svc, _, rots = service({"tower": "rotorez"})
+    svc.on_message("rotor/stop", b"STOP", True)
+    assert rots["tower"].calls == [
+        ("submit", Stop(M), "stop 'STOP'"),
+        (
+            "refused",
+            "stop on rotor/stop was published retained: executed (stopping is always safe), "
+            "but clear it with an empty retained message",
+            "stop 'STOP'",
+        ),
+    ]
+
+
+def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> None:
+    svc, pub, rots = service({"tower": "rotorez"})
+    got: list[tuple[str, str, bytes, bool]] = []
+
+    def feature(name: str, mine: str):  # noqa: ANN202
+        def handle(topic: str, payload: bytes, retain: bool) -> bool:
+            got.append((name, topic, payload, retain))
+            return topic == mine
+
+        return handle
+
+    svc.add_feature(["ha/status"], feature("first", "ha/status"))
+    svc.add_feature(["x/#"], feature("second", "x/y"))
+    assert svc.subscriptions() == [
+        "rotor/target",
+        "rotor/target/elevation",
+        "rotor/stop",
+        "rotor/lock",
+        "rotor/option/+",
+        "ha/status",
+        "x/#",
+    ]
+    svc.on_message("ha/status", b"online", False)
+    svc.on_message("x/y", b"1", True)
+    svc.on_message("rotor/bearing", b"5", True)  # our own state echoed: nobody's command
+    svc.on_message("rotor/target", b"5", False)
+    assert got == [
+        ("first", "ha/status", b"online", False),
+        ("first", "x/y", b"1", True),
+        ("second", "x/y", b"1", True),
+        ("first", "rotor/bearing", b"5", True),
+        ("second", "rotor/bearing", b"5", True),
+    ]
+    assert rots["tower"].calls == [("submit", Target(5.0, None, M), "target '5'")]
