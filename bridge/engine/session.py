@@ -40,11 +40,11 @@ Rules:
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 
 from bridge.engine import motion as mo
 from bridge.engine import slewing
 from bridge.engine import status as st
+from bridge.engine.actions import Action, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
@@ -59,26 +59,6 @@ POWER_ON_BYTE = 0xE0
 OPTIONS_REFRESH_S = 60.0
 STOP_TRIES_BEFORE_ERROR = 3
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
-
-
-@dataclass(frozen=True)
-class Write:
-    data: bytes
-
-
-@dataclass(frozen=True)
-class Publish:
-    status: RotatorStatus
-
-
-@dataclass(frozen=True)
-class Report:
-    kind: str
-    message: str
-    command: str | None = None
-
-
-Action = Write | Publish | Report
 
 
 class RotatorSession:
@@ -99,9 +79,9 @@ class RotatorSession:
         self._stop_tries = 0
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
-        self._wall_offset_s = 0.0
-        self._az = st.Hysteresis()
-        self._el = st.Hysteresis()
+        self.wall_offset_s = 0.0
+        self.az_shown = st.Hysteresis()
+        self.el_shown = st.Hysteresis()
         self.view = st.View()
         self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
         self._actions: list[Action] = []
@@ -124,7 +104,7 @@ class RotatorSession:
     def link_up(self, now: float, wall_s: float) -> list[Action]:
         spec = self.cfg.spec
         self._port_error = None
-        self._wall_offset_s = wall_s - now
+        self.wall_offset_s = wall_s - now
         self.link = Link(spec.codec_factory(), spec, now)
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
@@ -268,9 +248,9 @@ class RotatorSession:
         self._motion_events(events, now)
         moving = self.motion.state is MotionState.MOVING
         band, wraps = self.cfg.deadband_deg, self.cfg.motion.az_wraps
-        self._az.feed(reply.az_deg, moving, band, wraps)
+        self.az_shown.feed(reply.az_deg, moving, band, wraps)
         if reply.el_deg is not None:
-            self._el.feed(reply.el_deg, moving, band, False)
+            self.el_shown.feed(reply.el_deg, moving, band, False)
 
     def _poll_if_due(self, now: float) -> None:
         link = self.link
@@ -453,36 +433,7 @@ class RotatorSession:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
 
     def _emit_status(self, now: float) -> None:
-        link = self.link
-        target: tuple[float | None, float | None] = (
-            self.motion.target_deg,
-            self.motion.el_target_deg,
-        )
-        pending = self.targets.pending
-        if pending is not None and link is not None:
-            az, el = self.resolve(pending)
-            target = link.codec.wire_target(az, el) if az is not None else target
-        estimate = None
-        if link is not None and link.slew is not None:
-            estimate = link.slew.estimate(now, self.az_speed_deg_s, self.el_speed_deg_s)
-        status = st.build(
-            self.status,
-            self.cfg.spec,
-            self.motion,
-            answering=link is not None and self.answering,
-            connected=link is not None,
-            az=self._az,
-            el=self._el,
-            view=self.view,
-            locked=self.locked,
-            options=self.options,
-            target=target,
-            slew_estimate=estimate,
-            now=now,
-            wall_offset_s=self._wall_offset_s,
-        )
+        status = st.current(self, now)
         if st.worth_emitting(status, self.status):
-            self.status = status
             self._actions.append(Publish(status))
-        else:
-            self.status = status  # keep the clock current for the next one
+        self.status = status  # also when only the controller's clock changed (status rule 4)

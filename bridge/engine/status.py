@@ -14,10 +14,14 @@ Rules:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 from bridge.engine import motion as mo
 from bridge.model import MotionState, RotatorStatus
 from bridge.protocols.base import ModelSpec
+
+if TYPE_CHECKING:
+    from bridge.engine.session import RotatorSession
 
 
 @dataclass
@@ -92,6 +96,35 @@ def build(
         options=dict(options),
         last_error=view.last_error,
         last_command_source=view.last_source,
+    )
+
+
+def current(session: RotatorSession, now: float) -> RotatorStatus:
+    """The status of ``session`` as of ``now``."""
+    link, m = session.link, session.motion
+    target: tuple[float | None, float | None] = (m.target_deg, m.el_target_deg)
+    pending = session.targets.pending
+    if pending is not None and link is not None:
+        az, el = session.resolve(pending)
+        target = link.codec.wire_target(az, el) if az is not None else target
+    estimate = None
+    if link is not None and link.slew is not None:
+        estimate = link.slew.estimate(now, session.az_speed_deg_s, session.el_speed_deg_s)
+    return build(
+        session.status,
+        session.cfg.spec,
+        m,
+        answering=link is not None and session.answering,
+        connected=link is not None,
+        az=session.az_shown,
+        el=session.el_shown,
+        view=session.view,
+        locked=session.locked,
+        options=session.options,
+        target=target,
+        slew_estimate=estimate,
+        now=now,
+        wall_offset_s=session.wall_offset_s,
     )
 
 

@@ -27,10 +27,11 @@ from typing import TypeVar
 
 import serial
 
+from bridge.engine.actions import Action, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import PortError, open_port
-from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
+from bridge.engine.session import RotatorSession
 from bridge.model import ErrorEvent, RotatorStatus
 from bridge.protocols.base import ModelSpec
 

@@ -1,0 +1,36 @@
+"""What a rotator session asks its worker to do: the session's only outputs besides its
+``next_wakeup`` (session.py)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bridge.model import RotatorStatus
+
+__all__ = ["Action", "Publish", "Report", "Write"]
+
+
+@dataclass(frozen=True)
+class Write:
+    """Put these bytes on the serial line, now, in order."""
+
+    data: bytes
+
+
+@dataclass(frozen=True)
+class Publish:
+    """Hand this status to the listeners (MQTT, rotctld, Home Assistant)."""
+
+    status: RotatorStatus
+
+
+@dataclass(frozen=True)
+class Report:
+    """Hand an error event to the listeners (the worker stamps it with the wall time)."""
+
+    kind: str
+    message: str
+    command: str | None = None
+
+
+Action = Write | Publish | Report
