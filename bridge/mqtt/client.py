@@ -21,7 +21,22 @@ Rules:
    not block (it drops commands into mailboxes).
 6. paho owns the reconnect loop (connect_async + loop_start, exponential back-off); a refused
    connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
-   reason and retried, never a crash.
+   reason and retried, never a crash. Rule 7 only slows that loop down.
+7. One client id, one connection. A broker that gets a second connection with a client id
+   closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
+   socket), so two processes with one id (two hosts sharing a configuration, a stale container
+   beside a new one) would take each other over in a loop, each reconnect kicking the other.
+   The client logs that ONCE, naming the client id and the likely cause, and backs off instead
+   of fighting: TAKEOVER_FIRST_S, doubling per reconnect up to TAKEOVER_MAX_S (so at most one
+   reconnect a minute), until a connection lasts STABLE_S. Brokers that say nothing (MQTT
+   3.1.1; mosquitto 2.0.11 even with MQTT 5) just drop the connection, so FLAP_COUNT drops in a
+   row, each less than STABLE_S after the connection was accepted and each followed by a
+   connection accepted at the first try (the broker never went away), count as a takeover
+   too; the side that holds the connection longer sees exactly that. A drop after a keepalive
+   timeout or with another reason from the broker is no evidence. (A link that keeps breaking
+   the same way earns the same back-off; the error says "most likely".) The default client id
+   is unique per installation (MqttSettings.effective_client_id): only an explicit one, or a
+   copied state file on a host of the same name, can collide.
 """
 
 from __future__ import annotations
@@ -30,8 +45,10 @@ import logging
 import ssl
 import sys
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
+from typing import Literal
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
@@ -45,6 +62,44 @@ MessageHandler = Callable[[str, bytes, bool], None]
 EVENT_BACKLOG = 50
 COMMAND_QOS = 0
 
+# rule 7
+SESSION_TAKEN_OVER = 0x8E
+CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
+TAKEOVER_FIRST_S = 5
+TAKEOVER_MAX_S = 60
+STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
+FLAP_COUNT = 3
+Ending = Literal["taken over", "dropped", "other"]
+
+
+class TakeoverGuard:
+    """Rule 7's bookkeeping, without paho or a clock: times in, a back-off out."""
+
+    def __init__(self) -> None:
+        self._connected_at: float | None = None
+        self._drops = 0  # dropped connections in a row, the broker reachable throughout
+        self.backoff_s = 0  # 0: no takeover episode, paho's own reconnect delays apply
+        self.reported = False
+
+    def connected(self, now: float) -> None:
+        self._connected_at = now
+
+    def connect_failed(self) -> None:
+        """The broker was unreachable or refused us: the drops before were not a fight."""
+        self._drops = 0
+
+    def disconnected(self, now: float, ending: Ending) -> bool:
+        """Whether this disconnect is part of a takeover episode (``backoff_s`` is then set)."""
+        lasted = now - self._connected_at if self._connected_at is not None else 0.0
+        self._connected_at = None
+        if lasted >= STABLE_S:
+            self._drops, self.backoff_s, self.reported = 0, 0, False
+        self._drops = self._drops + 1 if ending == "dropped" else 0
+        if not (ending == "taken over" or self._drops >= FLAP_COUNT or self.backoff_s):
+            return False
+        self.backoff_s = min(TAKEOVER_MAX_S, self.backoff_s * 2 or TAKEOVER_FIRST_S)
+        return True
+
 
 class MqttClient:
     def __init__(
@@ -57,6 +112,7 @@ class MqttClient:
         on_connect: Callable[[], None] | None = None,
         reconnect_min_s: int = 1,
         reconnect_max_s: int = 30,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self._settings = settings
         self._will_topic = will_topic
@@ -70,6 +126,10 @@ class MqttClient:
         self._last_refusal: str | None = None
         self._stopping = False
         self._v5 = settings.protocol == "5"
+        self._clock = clock
+        self._reconnect_s = (reconnect_min_s, reconnect_max_s)
+        self._guard = TakeoverGuard()
+        self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         c = paho.Client(
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
@@ -176,12 +236,14 @@ class MqttClient:
     # -- paho callbacks (paho's thread) ---------------------------------------------------
     def _on_connect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
         if reason_code.is_failure:
+            self._guard.connect_failed()
             text = str(reason_code)
             if text != self._last_refusal:
                 log.error("MQTT broker refused the connection: %s (retrying)", text)
                 self._last_refusal = text
             return
         self._last_refusal = None
+        self._guard.connected(self._clock())
         log.info("connected to MQTT broker")
         # subscribe before saying `online`: the broker handles our packets in order, so a
         # client that sends a command the moment it sees `online` is already heard
@@ -205,6 +267,7 @@ class MqttClient:
     def _on_connect_fail(self, client, userdata) -> None:  # noqa: ANN001
         # paho calls this inside its `except OSError`: the exception says why
         exc = sys.exc_info()[1]
+        self._guard.connect_failed()
         if isinstance(exc, ssl.SSLError):
             text = f"TLS handshake with the MQTT broker failed: {exc} (check tls.ca_file/cert_file)"
         else:
@@ -216,8 +279,52 @@ class MqttClient:
     def _on_disconnect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
         was = self.connected.is_set()
         self.connected.clear()
-        if was and not self._stopping:
+        if not was or self._stopping:
+            return
+        code = getattr(reason_code, "value", None)
+        from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
+        ending: Ending = "other"
+        if from_server and code == SESSION_TAKEN_OVER:
+            ending = "taken over"
+        elif not from_server and code == CONNECTION_LOST:
+            ending = "dropped"
+        guard = self._guard
+        fight = guard.disconnected(self._clock(), ending)
+        if not fight:
+            if self._slowed:  # a connection lasted: paho's own delays again
+                client.reconnect_delay_set(*self._reconnect_s)
+                self._slowed = False
             log.warning("disconnected from MQTT broker (%s); reconnecting", reason_code)
+            return
+        # paho forgets its back-off on every accepted connection and starts again at the minimum
+        # delay: the minimum is what slows a fight down (rule 7)
+        client.reconnect_delay_set(guard.backoff_s, max(guard.backoff_s, self._reconnect_s[1]))
+        self._slowed = True
+        if guard.reported:
+            log.debug(
+                "MQTT connection closed again (%s); next try in %d s", reason_code, guard.backoff_s
+            )
+            return
+        guard.reported = True
+        cid = self._settings.effective_client_id()
+        if ending == "taken over":
+            what = f"MQTT session taken over: another client connected with client id {cid!r}"
+        else:
+            what = (
+                f"the MQTT broker dropped the connection {FLAP_COUNT} times in a row without a "
+                f"reason, taking new ones at once: most likely another client connects with "
+                f"client id {cid!r}"
+            )
+        log.error(
+            "%s. Two processes with one client id (two hosts sharing one configuration, a stale "
+            "container still running) keep kicking each other off: stop the other one or give "
+            "each its own mqtt.client_id. Backing off: %d s, doubling up to %d s between "
+            "reconnects, until a connection lasts %d s",
+            what,
+            TAKEOVER_FIRST_S,
+            TAKEOVER_MAX_S,
+            STABLE_S,
+        )
 
     def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
         try:

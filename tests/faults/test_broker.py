@@ -8,7 +8,10 @@ idle, the last will.
 
 from __future__ import annotations
 
+import re
 import time
+
+import pytest
 
 from bridge import emulators
 from bridge.mosquitto import Mosquitto
@@ -135,3 +138,73 @@ def motion_frames_of(emu) -> int:  # noqa: ANN001
     from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 
     return len(emu.frames(*BEARING_OUTCOMES))
+
+
+# -- two bridges with one client id (mqtt/client.py rule 7) --------------------------------------
+WINDOW_S = 30.0
+MAX_CONNECTS = 6  # per process in WINDOW_S; fighting at paho's 1 s pace would be about 15
+SHARED_ID = "shared-bridge"
+TAKEOVER_ERROR = re.compile(r" ERROR .*keep kicking each other off")
+CONNECTED = re.compile(r"\bconnected to MQTT broker$", re.MULTILINE)
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_two_bridges_with_one_client_id_say_so_once_and_back_off(
+    tmp_path, broker: Mosquitto, protocol: str
+) -> None:  # noqa: ANN001
+    """Two hosts sharing one configuration: every connection kicks the other bridge off. Each
+    bridge logs that once, naming the client id, and neither spins."""
+    bridges, emus = [], []
+    try:
+        for name in ("a", "b"):
+            home = tmp_path / name
+            home.mkdir()
+            emus.append(emulators.start("rotorez", link=str(home / "tty"), **EMU_FAST["rotorez"]))
+            config = {
+                "state_file": str(home / "state.json"),
+                "mqtt": {
+                    "host": "127.0.0.1",
+                    "port": broker.port,
+                    "client_id": SHARED_ID,
+                    "protocol": protocol,
+                },
+                "rotators": [
+                    {"id": "tower", "model": "rotorez", "port": str(home / "tty")}
+                    | BRIDGE_FAST["rotorez"]
+                ],
+            }
+            bridges.append(BridgeProcess(home, config, log_level="INFO"))
+        start = time.monotonic()
+        for bridge in bridges:
+            bridge.start()
+        wait_until(
+            lambda: all(TAKEOVER_ERROR.search(b.log()) for b in bridges),
+            WINDOW_S - 5,
+            "both bridges to report the takeover",
+        )
+        # a measurement window, not a wait for an event: the rate is what is measured
+        while time.monotonic() < start + WINDOW_S:
+            assert all(b.alive() for b in bridges), [b.log()[-2000:] for b in bridges]
+            time.sleep(0.5)
+        for bridge in bridges:
+            log = bridge.log()
+            errors = [line for line in log.splitlines() if TAKEOVER_ERROR.search(line)]
+            assert len(errors) == 1, errors
+            assert f"client id {SHARED_ID!r}" in errors[0]
+            assert "two hosts sharing one configuration" in errors[0]
+            connects = len(CONNECTED.findall(log))
+            assert 2 <= connects <= MAX_CONNECTS, log[-3000:]
+        # the broker's own count agrees: at most both bridges' bounds together
+        accepted = re.findall(rf"New client connected from \S+ as {SHARED_ID} ", broker_log(broker))
+        assert len(accepted) <= 2 * MAX_CONNECTS, len(accepted)
+        for bridge in bridges:  # backing off does not hold up a clean shutdown
+            assert bridge.terminate() == 0
+    finally:
+        for bridge in bridges:
+            bridge.kill()
+        for emu in emus:
+            emu.close()
+
+
+def broker_log(broker: Mosquitto) -> str:
+    return broker.log.read_text(errors="replace")
