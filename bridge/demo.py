@@ -1,165 +1,291 @@
 """``rotor-bridge demo``: emulated rotators bridged to MQTT, no hardware and no broker needed.
 
 If nothing answers at the MQTT address, a private mosquitto is started there (bridge.mosquitto);
-a broker that answers is used as it is. Everything the console shows and
-sends goes through the broker, exactly as Home Assistant or Node-RED would see it.
+a broker that answers is used as it is. Everything the console shows and sends goes through the
+broker, exactly as Home Assistant or Node-RED would see it.
+
+Rules:
+1. A demo is never mistaken for a real bridge on the same broker, nor for another demo: each run
+   draws a short instance name (4 characters) and takes its own base topic
+   ``rotor-demo-<instance>`` (``--base-topic`` overrides it), its own MQTT client ids
+   (``rotor-demo-<instance>``, the console ``...-ui``: at most 23 characters, which every broker
+   must accept; a real bridge's default has 6 hex digits there) and, from the base topic, its
+   own Home Assistant node ids (``rotorbridge_rotor_demo_<instance>``; a real bridge on ``rotor``
+   owns only ``rotorbridge_rotor`` and ``rotorbridge_rotor_r_*``, so neither clears the other's
+   configs). Device names say "Demo".
+2. Its settings come from its flags alone: a ``ROTOR_BRIDGE_*`` environment written for the real
+   service (its base topic, its client id) must not turn the demo into that service's twin.
+3. Everything it starts (private broker, emulators, bridge, console client) is stopped and its
+   temporary folder removed on every way out: ``--duration-s`` over, ``q`` or ^D typed, ^C,
+   SIGTERM, SIGHUP (terminal closed), a failure during start-up.
+4. When it ends it removes what it left retained on the broker (its state topics and its Home
+   Assistant configs), so runs do not pile up dead devices in Home Assistant. Not so under a
+   ``--base-topic`` the user chose: that may hold someone else's retained state. A base topic
+   on which a bridge is online (``<base>/bridge/state`` retained ``online``) is refused.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import inspect
+import secrets
+import shutil
 import signal
+import string
 import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
-import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion
+from pydantic import ValidationError
+from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
 
 from bridge import emulators
 from bridge.app import App
+from bridge.demo_console import Console
+from bridge.homeassistant import Identity
 from bridge.mosquitto import BrokerError, Mosquitto, answers
-from bridge.settings import Settings
+from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.protocols import REGISTRY
+from bridge.settings import ConfigError, Settings, format_validation_error
+
+MIN_SPEED_DEG_S, MAX_SPEED_DEG_S = 0.5, 360.0  # the settings' range for a rotor's speed
+
+
+def _speed(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not MIN_SPEED_DEG_S <= value <= MAX_SPEED_DEG_S:
+        raise argparse.ArgumentTypeError(
+            f"{value:g} is outside {MIN_SPEED_DEG_S:g}..{MAX_SPEED_DEG_S:g} deg/s"
+        )
+    return value
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mqtt-host", default="127.0.0.1")
     p.add_argument("--mqtt-port", type=int, default=1883)
-    p.add_argument("--base-topic", default="rotor")
+    p.add_argument(
+        "--base-topic", help="base topic (default rotor-demo-<instance>, new for every run)"
+    )
     p.add_argument(
         "--models",
         default="rotorez",
-        help="comma-separated emulated controllers, e.g. rotorez,rotorcard,dcu1 (default rotorez)",
+        help="comma-separated emulated controllers, e.g. rotorez,rotorcard,dcu1 (default "
+        f"rotorez; known: {','.join(emulators.EMULATORS)})",
     )
-    p.add_argument("--speed-deg-s", type=float, default=6.0, help="rotor speed (HAM-IV: ~6)")
+    p.add_argument(
+        "--speed-deg-s", type=_speed, default=6.0, help="rotor speed, both axes (HAM-IV: ~6)"
+    )
     p.add_argument(
         "--no-private-broker",
         action="store_true",
         help="fail instead of starting a private mosquitto when no broker answers",
     )
-    p.add_argument("--duration-s", type=float, help="stop after this long (default: until ^C)")
+    p.add_argument("--duration-s", type=float, help="stop after this long (default: until q/^C)")
 
 
-class Console:
-    """Shows what arrives on the broker and turns typed lines into MQTT commands."""
+def instance_name() -> str:
+    """Four lower-case letters or digits: short to type, 1.7 million to choose from."""
+    return "".join(secrets.choice(string.ascii_lowercase + string.digits) for _ in range(4))
 
-    def __init__(self, host: str, port: int, base: str, roots: dict[str, str]) -> None:
-        self._roots = roots
-        self._last: dict[str, str] = {}
-        self._client = paho.Client(CallbackAPIVersion.VERSION2, client_id="rotor-bridge-demo-ui")
-        self._client.on_connect = lambda c, *_: c.subscribe(f"{base}/#", qos=1)
-        self._client.on_message = self._on_message
-        self._client.connect_async(host, port)
-        self._client.loop_start()
 
-    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
-        leaf = msg.topic.rsplit("/", 1)[-1]
-        if leaf in ("status",):
-            return
-        text = msg.payload.decode("utf-8", "replace")
-        if self._last.get(msg.topic) == text and leaf != "error":
-            return
-        self._last[msg.topic] = text
-        if (
-            leaf in ("bearing", "state", "availability", "version", "error")
-            or "/option/" in msg.topic
-        ):
-            print(f"  {msg.topic} = {text}", flush=True)
+class DemoSettings(Settings):
+    """Settings from the demo's flags only, never from the environment (rule 2)."""
 
-    def command(self, line: str) -> bool:
-        """Handle one typed line; False to quit."""
-        words = line.split()
-        if not words:
-            return True
-        rid = next(iter(self._roots))
-        if words[0] in self._roots and len(words) > 1:
-            rid, words = words[0], words[1:]
-        root = self._roots[rid]
-        head = words[0].lower()
-        if head in ("q", "quit", "exit"):
-            return False
-        if head in ("s", "stop"):
-            self._client.publish(f"{root}/stop", "STOP", qos=1)
-        elif head == "lock" and len(words) == 2:
-            self._client.publish(f"{root}/lock", words[1].upper(), qos=1)
-        elif head in ("endpoint", "jam", "overshoot", "unstick") and len(words) == 2:
-            self._client.publish(f"{root}/option/{head}", words[1].upper(), qos=1)
-        else:
-            self._client.publish(f"{root}/target", " ".join(words), qos=1)
-        return True
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        return (init_settings,)
 
-    def close(self) -> None:
-        self._client.disconnect()
-        self._client.loop_stop()
+
+def demo_settings(
+    args: argparse.Namespace, models: list[str], instance: str, workdir: Path
+) -> DemoSettings:
+    rotators = []
+    for i, model in enumerate(models):
+        rid = model if models.count(model) == 1 else f"{model}{i + 1}"
+        speeds = {"az_speed_deg_s": args.speed_deg_s}
+        if REGISTRY[model].has_elevation:
+            speeds["el_speed_deg_s"] = args.speed_deg_s
+        rotators.append(
+            {
+                "id": rid,
+                "name": f"Demo {model} ({instance})",
+                "model": model,
+                "port": str(workdir / f"tty-{rid}"),
+                **speeds,
+            }
+        )
+    return DemoSettings(
+        mqtt={
+            "host": args.mqtt_host,
+            "port": args.mqtt_port,
+            "base_topic": args.base_topic or f"rotor-demo-{instance}",
+            "client_id": f"rotor-demo-{instance}",
+        },
+        rotators=rotators,
+        state_file=workdir / "state.json",
+    )
+
+
+def emulator_options(model: str, speed_deg_s: float) -> dict[str, float]:
+    """The demo's one speed in the words of this model's emulator (families name it apart)."""
+    params = inspect.signature(emulators.EMULATORS[model]).parameters
+    if "speed_deg_s" in params:
+        return {"speed_deg_s": speed_deg_s}
+    return {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
+
+
+def _on_signals(handler: Callable[[], None]) -> Callable[[], None]:
+    """Route SIGINT/SIGTERM/SIGHUP to `handler`; returns what puts the old handlers back."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = {
+        sig: signal.signal(sig, lambda *_: handler())
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    }
+
+    def restore() -> None:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+    return restore
 
 
 def run(args: argparse.Namespace) -> int:
     models = [m.strip() for m in args.models.split(",") if m.strip()]
     unknown = [m for m in models if m not in emulators.EMULATORS]
-    if unknown:
-        print(f"rotor-bridge demo: no emulator for {', '.join(unknown)}", file=sys.stderr)
+    if unknown or not models:
+        print(
+            f"rotor-bridge demo: no emulator for {', '.join(unknown) or 'nothing'}; "
+            f"known: {', '.join(emulators.EMULATORS)}",
+            file=sys.stderr,
+        )
         return 2
-    workdir = Path(tempfile.mkdtemp(prefix="rotor-bridge-demo-"))
-    broker: Mosquitto | None = None
-    if not answers(args.mqtt_host, args.mqtt_port):
-        if args.no_private_broker:
-            print(f"no MQTT broker at {args.mqtt_host}:{args.mqtt_port}", file=sys.stderr)
-            return 1
-        try:
-            broker = Mosquitto(workdir / "broker", port=args.mqtt_port, host=args.mqtt_host).start()
-        except BrokerError as exc:
-            print(f"rotor-bridge demo: no MQTT broker answers and {exc}", file=sys.stderr)
-            return 1
-        where = f"a private mosquitto on {args.mqtt_host}:{args.mqtt_port}"
-    else:
-        where = f"the MQTT broker already running at {args.mqtt_host}:{args.mqtt_port}"
-    ports = []
-    rotators = []
-    for i, model in enumerate(models):
-        rid = model if models.count(model) == 1 else f"{model}{i + 1}"
-        link = workdir / f"tty-{rid}"
-        ports.append(emulators.start(model, link=str(link), speed_deg_s=args.speed_deg_s))
-        rotators.append({"id": rid, "name": f"Demo {model}", "model": model, "port": str(link)})
-    settings = Settings(
-        mqtt={"host": args.mqtt_host, "port": args.mqtt_port, "base_topic": args.base_topic},
-        rotators=rotators,
-        state_file=workdir / "state.json",
-    )
-    roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
-    app = App(settings)
-    app.start()
-    console = Console(args.mqtt_host, args.mqtt_port, args.base_topic, roots)
-    first = next(iter(roots.values()))
-    hp = f"-h {args.mqtt_host} -p {args.mqtt_port}"
-    print(
-        f"\nrotor-bridge demo: {len(models)} emulated rotator(s) bridged to {where}.\n"
-        f"  watch:   mosquitto_sub {hp} -t '{args.base_topic}/#' -v\n"
-        f"  turn:    mosquitto_pub {hp} -t {first}/target -m 120\n"
-        "  or type here: a bearing (120), 's' to stop, 'lock on|off', 'q' to quit"
-        + (f" (prefix a rotator id: {', '.join(roots)})" if len(roots) > 1 else "")
-        + "\n",
-        flush=True,
-    )
     done = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: done.set())
-    signal.signal(signal.SIGINT, lambda *_: done.set())
-    deadline = None if args.duration_s is None else time.monotonic() + args.duration_s
-    if sys.stdin.isatty() and deadline is None:
-        threading.Thread(target=_read_stdin, args=(console, done), daemon=True).start()
+    restore_signals = _on_signals(done.set)  # ^C during start-up: start, then clean up at once
     try:
-        while not done.wait(0.2):
-            if deadline is not None and time.monotonic() >= deadline:
-                break
+        with contextlib.ExitStack() as stack:  # undone in reverse on every way out (rule 3)
+            workdir = Path(tempfile.mkdtemp(prefix="rotor-bridge-demo-"))
+            stack.callback(shutil.rmtree, workdir, ignore_errors=True)
+            return _run(args, models, workdir, stack, done)
+    except (BrokerError, ConfigError, OSError) as exc:
+        print(f"rotor-bridge demo: could not start: {exc}", file=sys.stderr)
+        return 1
     finally:
-        console.close()
-        app.stop()
-        for port in ports:
-            port.close()
-        if broker is not None:
-            broker.stop()
+        restore_signals()
+
+
+def _run(
+    args: argparse.Namespace,
+    models: list[str],
+    workdir: Path,
+    stack: contextlib.ExitStack,
+    done: threading.Event,
+) -> int:
+    instance = instance_name()
+    try:
+        settings = demo_settings(args, models, instance, workdir)
+    except ValidationError as exc:
+        print(f"rotor-bridge demo: {format_validation_error(exc)}", file=sys.stderr)
+        return 2
+    host, port = args.mqtt_host, args.mqtt_port
+    if answers(host, port):
+        where = f"the MQTT broker already running at {host}:{port}"
+    elif args.no_private_broker:
+        print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
+        return 1
+    else:
+        broker = Mosquitto(workdir / "broker", port=port, host=host)
+        stack.callback(broker.stop)
+        try:
+            broker.start()
+        except BrokerError as exc:
+            raise BrokerError(f"no MQTT broker answers and {exc}") from None
+        where = f"a private mosquitto on {host}:{port}"
+    roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
+    topics = Topics(settings.mqtt.base_topic, roots)
+    ident = Identity(topics.base)
+    discovery = DiscoveryTopics(settings.homeassistant.discovery_prefix)
+    nodes = [ident.bridge_node, *(ident.rotator_node(rid) for rid in roots)]
+    console = Console(
+        host,
+        port,
+        client_id=f"{settings.mqtt.effective_client_id()}-ui",
+        topics=topics,
+        rotator_ids=list(roots),
+        discovery_filters=[discovery.config("+", node, "+") for node in nodes],
+    )
+    # a base topic of its own making is the demo's alone to clean up; one given with --base-topic
+    # may hold someone else's retained state, which is not the demo's to delete
+    stack.callback(console.close, remove_retained=args.base_topic is None)
+    console.sync()
+    if args.base_topic is not None and console.retained(topics.bridge_state) == b"online":
+        print(
+            f"rotor-bridge demo: a bridge is online on base topic {topics.base!r} "
+            f"({topics.bridge_state} is 'online'); choose another --base-topic or none",
+            file=sys.stderr,
+        )
+        return 2
+    for r in settings.rotators:
+        emu = emulators.start(r.model, link=r.port, **emulator_options(r.model, args.speed_deg_s))
+        stack.callback(emu.close)
+    app = App(settings)
+    stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
+    app.start()
+    _print_banner(args, settings, topics, where, instance)
+    deadline = None if args.duration_s is None else time.monotonic() + args.duration_s
+    if sys.stdin.isatty():
+        print(
+            "  Or type here: a bearing (120), 's' to stop, 'help' for more, 'q' to quit\n",
+            flush=True,
+        )
+        threading.Thread(target=_read_stdin, args=(console, done), daemon=True).start()
+    while not done.wait(0.2):
+        if deadline is not None and time.monotonic() >= deadline:
+            break
+    print("rotor-bridge demo: stopping", flush=True)
     return 0
+
+
+def _print_banner(
+    args: argparse.Namespace, settings: Settings, topics: Topics, where: str, instance: str
+) -> None:
+    hp = (
+        ""
+        if (args.mqtt_host, args.mqtt_port) == ("127.0.0.1", 1883)
+        else (f"-h {args.mqtt_host} -p {args.mqtt_port} ")
+    )
+    first = topics.rotator(settings.rotators[0].id)
+    lines = [
+        "",
+        f"rotor-bridge demo {instance}: {len(settings.rotators)} emulated rotator(s) bridged "
+        f"to {where}.",
+        f"  its own topics: {topics.base}/...  (a real bridge's are not touched)",
+    ]
+    if len(settings.rotators) > 1:
+        lines += [f"    {r.id}: {topics.rotator(r.id).root}/..." for r in settings.rotators]
+    lines += [
+        f"  watch: mosquitto_sub {hp}-t '{topics.base}/#' -v",
+        f"  turn:  mosquitto_pub {hp}-t {first.target} -m 120",
+        f"  stop:  mosquitto_pub {hp}-t {first.stop} -m STOP",
+        f'  Home Assistant: the devices "Demo ... ({instance})"'
+        + (", removed again when the demo ends" if args.base_topic is None else ""),
+        "",
+    ]
+    print("\n".join(lines), flush=True)
 
 
 def _read_stdin(console: Console, done: threading.Event) -> None:

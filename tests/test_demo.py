@@ -1,58 +1,56 @@
-"""The README's demo path: `rotor-bridge demo` with no broker running brings up its own, and a
-target published on rotor/target turns the emulated Rotor-EZ."""
+"""The README's demo path: `rotor-bridge demo` with no broker running brings up its own, prints the
+topics of its own (never the real bridge's `rotor`), turns its emulated rotators on a published or
+typed target, and leaves nothing behind (no broker on the port, no temporary folder) however it
+ends."""
 
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
+import signal
 from pathlib import Path
 
-from bridge.mosquitto import free_port
-from tests.support import Probe, retained_snapshot, wait_until
+import pytest
+
+from bridge import demo, emulators
+from bridge.cli import build_parser
+from bridge.homeassistant import Identity
+from bridge.mosquitto import answers, free_port
+from tests.demo_process import DemoProcess
+from tests.support import Probe, retained_snapshot
+
+ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
 
 
-def test_demo_without_a_broker_turns_the_rotor_on_a_published_target(tmp_path: Path) -> None:
+def _left_behind(tmpdir: Path) -> list[str]:
+    return sorted(p.name for p in tmpdir.iterdir())
+
+
+def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
+    tmp_path: Path,
+) -> None:
     port = free_port()
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "bridge",
-            "demo",
-            "--mqtt-port",
-            str(port),
-            "--speed-deg-s",
-            "60",
-            "--duration-s",
-            "60",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL,
-        env=env,
-    )
+    tmpdir = tmp_path / "tmp"
+    proc = DemoProcess(["--mqtt-port", str(port), "--speed-deg-s", "60"], tmpdir, terminal=True)
+    probe = None
     try:
-        wait_until(lambda: _connectable(port), 20, "the demo's broker")
-        probe = Probe(port, "rotor/#")
-        probe.wait_value("rotor/availability", "online", timeout_s=20)
-        probe.wait_value("rotor/state", "idle", timeout_s=20)
-        snap = retained_snapshot(port, "rotor/#")
-        for topic in (
-            "rotor/bearing",
-            "rotor/state",
-            "rotor/status",
-            "rotor/version",
-            "rotor/availability",
-        ):
-            assert topic in snap, topic
-        probe.publish("rotor/target", "120")
-        probe.wait_for("rotor/state", lambda m: m.text == "moving")
-        probe.wait_for("rotor/bearing", lambda m: abs(float(m.text) - 120) <= 3, timeout_s=20)
+        base = proc.base_topic()
+        assert base.startswith("rotor-demo-") and len(base) == len("rotor-demo-") + 4, base
+        proc.wait_line(rf"turn:  mosquitto_pub -h 127\.0\.0\.1 -p {port} -t {base}/target -m 120$")
+        assert "private mosquitto" in proc.output
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/availability", "online", timeout_s=20)
+        probe.wait_value(f"{base}/state", "idle", timeout_s=20)
+        snap = retained_snapshot(port, f"{base}/#")
+        for leaf in ("bearing", "state", "status", "version", "availability"):
+            assert f"{base}/{leaf}" in snap, leaf
+        assert snap[f"{base}/bridge/state"] == b"online"
+
+        # as printed: mosquitto_pub -t <base>/target -m 120
+        probe.publish(f"{base}/target", "120")
+        probe.wait_for(f"{base}/state", lambda m: m.text == "moving")
+        probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 120) <= 3, timeout_s=20)
         msg = probe.wait_for(
-            "rotor/status",
+            f"{base}/status",
             lambda m: (
                 json.loads(m.payload)["state"] == "idle"
                 and json.loads(m.payload)["last_command_source"] == "mqtt"
@@ -60,15 +58,180 @@ def test_demo_without_a_broker_turns_the_rotor_on_a_published_target(tmp_path: P
             timeout_s=20,
         )
         assert abs(json.loads(msg.payload)["bearing"] - 120) <= 3
-        probe.close()
+
+        seen = proc.type("help")
+        for what in (f"-> {base}/target", "s, stop", "lock on|off", "el 30", "q "):
+            proc.wait_line(what.replace("|", r"\|"), start=seen, timeout_s=10)
+        seen = proc.type("nonsense")
+        proc.wait_line(r"unknown command 'nonsense'; type 'help'", start=seen, timeout_s=10)
+
+        proc.type("200")  # a bearing typed into the demo goes over MQTT like any other
+        probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 200) <= 3, timeout_s=20)
+        proc.type("q")
+        assert proc.wait(20) == 0, proc.output
     finally:
-        proc.terminate()
-        out, _ = proc.communicate(timeout=15)
-    assert proc.returncode == 0, out.decode()
-    assert b"private mosquitto" in out
+        if probe is not None:
+            probe.close()
+        proc.close()
+    assert not answers("127.0.0.1", port), "the demo's private broker outlived it"
+    assert _left_behind(tmpdir) == []
 
 
-def _connectable(port: int) -> bool:
-    from bridge.mosquitto import answers
+def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
+    port = free_port()
+    tmpdir = tmp_path / "tmp"
+    proc = DemoProcess(["--mqtt-port", str(port)], tmpdir)
+    try:
+        base = proc.base_topic()
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/availability", "online", timeout_s=20)
+        probe.close()
+        proc.proc.send_signal(signal.SIGINT)
+        assert proc.wait(20) == 0, proc.output
+    finally:
+        proc.close()
+    assert not answers("127.0.0.1", port)
+    assert _left_behind(tmpdir) == []
 
-    return answers("127.0.0.1", port)
+
+def test_every_model_runs_turns_and_ends_cleanly(tmp_path: Path) -> None:
+    """rotor-bridge demo --models rotorez,rotorcard,dcu1,rot2prog,rot1prog,md01,satel"""
+    port = free_port()
+    tmpdir = tmp_path / "tmp"
+    args = ["--models", ",".join(ALL_MODELS), "--mqtt-port", str(port), "--duration-s", "25"]
+    proc = DemoProcess([*args, "--speed-deg-s", "30"], tmpdir)
+    try:
+        base = proc.base_topic()
+        roots = {m: proc.wait_line(rf"^    {m}: (\S+)/\.\.\.$").group(1) for m in ALL_MODELS}
+        assert roots == {m: f"{base}/{m}" for m in ALL_MODELS}
+        probe = Probe(port, f"{base}/#")
+        for root in roots.values():
+            probe.wait_value(f"{root}/availability", "online", timeout_s=20)
+        for root in roots.values():
+            probe.publish(f"{root}/target", "30")
+        for model, root in roots.items():
+            if model == "dcu1":  # reports no position: the estimate follows the command
+                probe.wait_for(
+                    f"{root}/status",
+                    lambda m: (
+                        json.loads(m.payload)["target"] == 30
+                        and json.loads(m.payload)["last_command_source"] == "mqtt"
+                    ),
+                    timeout_s=15,
+                )
+            else:
+                probe.wait_for(
+                    f"{root}/bearing", lambda m: abs(float(m.text) - 30) <= 3, timeout_s=15
+                )
+        probe.close()
+        assert proc.wait(40) == 0, proc.output
+    finally:
+        proc.close()
+    assert "Traceback" not in proc.output, proc.output
+    assert not answers("127.0.0.1", port), "the demo's private broker outlived it"
+    assert _left_behind(tmpdir) == []
+
+
+@pytest.mark.parametrize("failing", ["emulator", "bridge"])
+def test_a_failure_during_start_up_leaves_no_broker_and_no_folder(
+    failing: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    port = free_port()
+    started: list[str] = []
+    closed: list[str] = []
+    real_start = emulators.start
+
+    def start_then_run_out_of_ptys(model: str, **kw: object) -> emulators.EmulatedPort:
+        if started:
+            raise OSError(24, "Too many open files")
+        port = real_start(model, **kw)
+        started.append(model)
+        real_close = port.close
+
+        def close() -> None:
+            closed.append(model)
+            real_close()
+
+        port.close = close  # type: ignore[method-assign]
+        return port
+
+    def bridge_fails(self: object) -> None:
+        assert answers("127.0.0.1", port), "the broker should be up by now"
+        raise RuntimeError("provoked")
+
+    if failing == "emulator":
+        monkeypatch.setattr(emulators, "start", start_then_run_out_of_ptys)
+    else:
+        monkeypatch.setattr(demo.App, "start", bridge_fails)
+    args = build_parser().parse_args(
+        ["demo", "--models", "rotorez,rot2prog", "--mqtt-port", str(port), "--duration-s", "30"]
+    )
+    if failing == "emulator":
+        assert demo.run(args) == 1
+        assert "could not start: [Errno 24] Too many open files" in capsys.readouterr().err
+        assert started == closed == ["rotorez"]
+    else:
+        with pytest.raises(RuntimeError, match="provoked"):
+            demo.run(args)
+    assert not answers("127.0.0.1", port), "the private broker outlived the failed start"
+    assert _left_behind(tmp_path) == []
+
+
+def test_bad_input_is_refused_before_anything_starts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    port = free_port()
+    args = build_parser().parse_args(
+        ["demo", "--models", "rotorez,rotorz", "--mqtt-port", str(port)]
+    )
+    assert demo.run(args) == 2
+    assert "no emulator for rotorz" in capsys.readouterr().err
+    args = build_parser().parse_args(["demo", "--base-topic", "rotor/#", "--mqtt-port", str(port)])
+    assert demo.run(args) == 2
+    assert "base_topic" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        build_parser().parse_args(["demo", "--speed-deg-s", "0.1"])
+    assert exc.value.code == 2
+    assert "0.1 is outside 0.5..360 deg/s" in capsys.readouterr().err
+    assert not answers("127.0.0.1", port)
+    assert _left_behind(tmp_path) == []
+
+
+def test_a_demo_shares_no_client_id_topic_or_home_assistant_node_with_a_bridge_or_another_demo(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # what the real service would take from its environment must not leak into the demo
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__BASE_TOPIC", "rotor")
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__CLIENT_ID", "rotor-bridge-shack")
+    args = build_parser().parse_args(["demo", "--models", "rotorez,satel"])
+    demos = [demo.demo_settings(args, ["rotorez", "satel"], x, tmp_path) for x in ("ab12", "ab1r")]
+    real = Identity("rotor")
+    idents = [real, *(Identity(s.mqtt.base_topic) for s in demos)]
+    nodes = {
+        ident: [ident.bridge_node, *(ident.rotator_node(r) for r in ("rotorez", "satel", "r"))]
+        for ident in idents
+    }
+    for owner in idents:
+        for other in idents:
+            if other is not owner:
+                assert not any(owner.owns(n) for n in nodes[other]), (owner, other)
+    assert [s.mqtt.base_topic for s in demos] == ["rotor-demo-ab12", "rotor-demo-ab1r"]
+    client_ids = [s.mqtt.effective_client_id() for s in demos]
+    assert client_ids == ["rotor-demo-ab12", "rotor-demo-ab1r"]
+    assert all(r.name and r.name.startswith("Demo ") for s in demos for r in s.rotators)
+    names = {demo.instance_name() for _ in range(50)}
+    assert len(names) > 45 and all(len(n) == 4 and n.isalnum() for n in names)
+
+
+def test_each_model_gets_its_speed_in_its_emulators_own_words() -> None:
+    for model in ALL_MODELS:
+        device = emulators.create(model, **demo.emulator_options(model, 30.0))
+        assert device is not None
+    assert demo.emulator_options("rotorez", 30.0) == {"speed_deg_s": 30.0}
+    assert demo.emulator_options("satel", 30.0) == {"az_speed_deg_s": 30.0, "el_speed_deg_s": 30.0}
+    assert demo.emulator_options("rot1prog", 30.0) == {
+        "az_speed_deg_s": 30.0,
+        "el_speed_deg_s": 30.0,
+    }

@@ -1,0 +1,183 @@
+"""The demo's console: an ordinary MQTT client beside the demo's bridge. It prints what the
+bridge publishes, turns typed lines into commands on the same topics any client would use, and at
+the end removes what the demo left retained (bridge.demo, rule 4).
+
+Rules:
+1. It reaches the bridge only through the broker: every typed line becomes one MQTT message on
+   the demo's topics (from bridge.mqtt.topics), nothing is called directly.
+2. It subscribes with retain-as-published (MQTT 5), so it knows which of the demo's topics hold a
+   retained message on the broker, and can clear exactly those.
+3. A line that is not a command is answered with a hint, never published as a target.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.mqtt.topics import Topics
+
+OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
+SHOWN_LEAVES = ("bearing", "elevation", "state", "availability", "version", "error")
+
+
+class Console:
+    """Shows what arrives on the broker, turns typed lines into MQTT commands, and at the end can
+    remove what the demo left retained (rule 4)."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        *,
+        client_id: str,
+        topics: Topics,
+        rotator_ids: list[str],
+        discovery_filters: list[str],
+    ) -> None:
+        self._topics = topics
+        self._ids = rotator_ids
+        self._filters = [f"{topics.base}/#", *discovery_filters]
+        self._sync_topic = f"{topics.base}/console/sync"
+        self._retained: dict[str, bytes] = {}
+        self._last: dict[str, str] = {}
+        self._lock = threading.Lock()
+        self._synced = threading.Event()
+        self.connected = threading.Event()
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
+        c.on_connect = self._on_connect
+        c.on_message = self._on_message
+        c.reconnect_delay_set(1, 5)
+        c.connect_async(host, port, clean_start=True)
+        c.loop_start()
+        self._client = c
+
+    def _on_connect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
+        if reason_code.is_failure:
+            return
+        # retain-as-published: what is retained on the broker arrives marked so even while we
+        # are subscribed, which is how the console knows what to remove at the end
+        opts = SubscribeOptions(qos=1, retainAsPublished=True)
+        client.subscribe([(f, opts) for f in self._filters])
+        self.connected.set()
+
+    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
+        topic = msg.topic
+        if topic == self._sync_topic:
+            self._synced.set()
+            return
+        if msg.retain:
+            with self._lock:
+                if msg.payload:
+                    self._retained[topic] = bytes(msg.payload)
+                else:
+                    self._retained.pop(topic, None)
+        if not topic.startswith(self._topics.base + "/") or not msg.payload:
+            return  # a Home Assistant config (kept track of) or a removal: not shown
+        leaf = topic.rsplit("/", 1)[-1]
+        text = msg.payload.decode("utf-8", "replace")
+        if leaf not in SHOWN_LEAVES or (self._last.get(topic) == text and leaf != "error"):
+            return
+        self._last[topic] = text
+        print(f"  {topic} = {text}", flush=True)
+
+    def publish(self, topic: str, payload: str) -> None:
+        self._client.publish(topic, payload, qos=1)
+
+    def command(self, line: str) -> bool:
+        """Handle one typed line; False to quit."""
+        words = line.split()
+        if not words:
+            return True
+        head = words[0].lower()
+        if head in ("q", "quit", "exit"):
+            return False
+        if head in ("help", "h", "?"):
+            print(self.help_text(), flush=True)
+            return True
+        rid = self._ids[0]
+        if len(self._ids) > 1 and words[0] in self._ids:
+            rid, words = words[0], words[1:]
+            if not words:
+                print(f"  {rid} what? type 'help'", flush=True)
+                return True
+        t = self._topics.rotator(rid)
+        head, rest = words[0].lower(), words[1:]
+        if head in ("s", "stop") and not rest:
+            self.publish(t.stop, "STOP")
+        elif head == "lock" and len(rest) == 1:
+            self.publish(t.lock, rest[0].upper())
+        elif head in OPTIONS and len(rest) == 1:
+            self.publish(t.option(head), rest[0].upper())
+        elif head == "el" and len(rest) == 1:
+            self.publish(t.target_elevation, rest[0])
+        elif _is_number(head) or head.startswith("{"):
+            self.publish(t.target, " ".join(words))
+        else:
+            print(f"  unknown command {line.strip()!r}; type 'help'", flush=True)
+        return True
+
+    def help_text(self) -> str:
+        first = self._topics.rotator(self._ids[0]).root
+        lines = [
+            "  Type (each line becomes an MQTT message, as from any other client):",
+            f"    120            turn to 120 deg              -> {first}/target",
+            "    120 30         azimuth and elevation (SPID, SatEL)",
+            f"    el 30          elevation alone              -> {first}/target/elevation",
+            f"    s, stop        stop now                     -> {first}/stop",
+            f"    lock on|off    safety lock                  -> {first}/lock",
+            f"    jam on|off     Rotor-EZ options ({', '.join(OPTIONS)})",
+        ]
+        if len(self._ids) > 1:
+            lines.append(
+                f"    <id> ...       the same for one rotator (default {self._ids[0]}); ids: "
+                + ", ".join(self._ids)
+            )
+        lines += ["    help           this list", "    q              quit (also ^D, ^C)"]
+        return "\n".join(lines)
+
+    def sync(self, timeout_s: float = 5.0) -> bool:
+        """Wait until everything the broker had for us so far has arrived (a round trip through
+        it: what was published before our marker reaches us before the marker)."""
+        if not self.connected.wait(timeout_s):
+            return False
+        self._synced.clear()
+        self._client.publish(self._sync_topic, b"sync", qos=1)
+        return self._synced.wait(timeout_s)
+
+    def retained(self, topic: str) -> bytes | None:
+        with self._lock:
+            return self._retained.get(topic)
+
+    def remove_retained(self, timeout_s: float = 3.0) -> int:
+        """Clear every retained message seen on the demo's topics; how many there were."""
+        if not self.sync(timeout_s):  # the bridge's last "offline" included
+            return 0
+        with self._lock:
+            topics = sorted(self._retained)
+        infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
+        for info in infos:
+            with contextlib.suppress(RuntimeError, ValueError):
+                info.wait_for_publish(timeout_s)
+        return len(topics)
+
+    def close(self, *, remove_retained: bool = False) -> None:
+        try:
+            if remove_retained:
+                n = self.remove_retained()
+                print(f"rotor-bridge demo: removed its {n} retained messages", flush=True)
+        finally:
+            self._client.disconnect()
+            self._client.loop_stop()
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
