@@ -1,16 +1,27 @@
-"""Rule 7 of bridge/mqtt/client.py in virtual time: two bridges with one client id back off
-instead of fighting; anything else keeps paho's quick reconnects. (Two real processes on a real
-broker: tests/faults/test_broker.py.)"""
+"""Rule 7 of bridge/mqtt/client.py: two bridges with one client id back off instead of
+fighting; anything else keeps paho's quick reconnects. The rule in virtual time, then the MQTT 5
+reason code on a real socket. (Two real processes on a real mosquitto:
+tests/faults/test_broker.py.)"""
 
 from __future__ import annotations
+
+import logging
+import socket
+import threading
+import time
+
+import pytest
 
 from bridge.mqtt.client import (
     FLAP_COUNT,
     STABLE_S,
     TAKEOVER_FIRST_S,
     TAKEOVER_MAX_S,
+    MqttClient,
     TakeoverGuard,
 )
+from bridge.settings import MqttSettings
+from tests.support import wait_until
 
 
 def test_a_takeover_backs_off_doubling_up_to_a_minute() -> None:
@@ -122,3 +133,92 @@ def test_two_bridges_with_one_client_id_make_a_bounded_number_of_connections() -
             assert max(per_window(mine, 120, 600)) <= 1, (v5, a, b)
             # ... and neither gives up: they take turns, one connection each in two minutes
             assert min(per_window(mine, 120, 600, width_s=2 * TAKEOVER_MAX_S + 1)) >= 1, (v5, a, b)
+
+
+# -- the MQTT 5 way, on a real socket ------------------------------------------------------------
+class TakeoverBroker:
+    """Just enough of an MQTT 5 broker to accept every connection and, once the client has
+    subscribed, tell it "session taken over" (DISCONNECT 0x8E), as a broker does when a second
+    client connects with the same id. (The mosquitto these tests run, 2.0.11, only drops the
+    socket: tests/faults/test_broker.py covers that way.)"""
+
+    def __init__(self) -> None:
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = self._server.getsockname()[1]
+        self.accepted: list[float] = []  # when each CONNECT was answered
+        self._thread = threading.Thread(target=self._serve, daemon=True)
+        self._thread.start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                conn, _ = self._server.accept()
+            except OSError:
+                return  # closed
+            with conn:
+                try:
+                    self._session(conn)
+                except OSError:
+                    pass
+
+    def _session(self, conn: socket.socket) -> None:
+        while True:
+            kind = self._packet(conn)
+            if kind is None:
+                return
+            if kind == 0x10:  # CONNECT: accepted, no properties
+                conn.sendall(b"\x20\x03\x00\x00\x00")
+                self.accepted.append(time.monotonic())
+            elif kind == 0x80:  # SUBSCRIBE: the client is settled in; now another one "arrives"
+                conn.sendall(b"\xe0\x02\x8e\x00")
+                return
+
+    @staticmethod
+    def _packet(conn: socket.socket) -> int | None:
+        head = conn.recv(1)
+        if not head:
+            return None
+        length, shift = 0, 0
+        while True:
+            byte = conn.recv(1)
+            if not byte:
+                return None
+            length |= (byte[0] & 0x7F) << shift
+            shift += 7
+            if not byte[0] & 0x80:
+                break
+        while length:
+            chunk = conn.recv(length)
+            if not chunk:
+                return None
+            length -= len(chunk)
+        return head[0] & 0xF0
+
+    def close(self) -> None:
+        self._server.close()
+
+
+def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    broker = TakeoverBroker()
+    settings = MqttSettings(port=broker.port, client_id="tower-bridge", protocol="5")
+    client = MqttClient(
+        settings, will_topic="rotor/bridge/state", subscriptions=["rotor/target"], on_message=print
+    )
+    caplog.set_level(logging.INFO, logger="bridge.mqtt.client")
+    client.start()
+    try:
+        wait_until(lambda: len(broker.accepted) >= 3, 3 * TAKEOVER_FIRST_S + 10, "3 connections")
+    finally:
+        client.stop()
+        broker.close()
+    first, second, third = broker.accepted[:3]
+    # paho alone would be back after 1 s every time
+    assert second - first >= TAKEOVER_FIRST_S - 0.5
+    assert third - second >= 2 * TAKEOVER_FIRST_S - 0.5
+    errors = [r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR]
+    assert len(errors) == 1, errors
+    assert "session taken over" in errors[0] and "'tower-bridge'" in errors[0]
+    warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
+    assert warnings == []  # the error says it all; no warning per kick
