@@ -2,11 +2,23 @@
 
 from __future__ import annotations
 
+import enum
+
+
+class RefusalCode(enum.StrEnum):
+    """Why a command was refused; front ends map it (rotctld: to a Hamlib RPRT number)."""
+
+    LOCKED = "locked"  # the safety lock is ON
+    LIMITS = "limits"  # outside the configured limits (or rounded past them)
+    OFFLINE = "offline"  # serial link down or controller silent
+    UNSUPPORTED = "unsupported"  # the model cannot do it (an option, an elevation axis)
+    INVALID = "invalid"  # not a command at all (a target without an axis)
+
 
 class Refused(Exception):
     """A command judged and refused before it reached a controller; nothing moved."""
 
-    def __init__(self, code: str, message: str) -> None:
+    def __init__(self, code: RefusalCode, message: str) -> None:
         super().__init__(message)
-        self.code = code  # locked | limits | offline | unsupported | invalid
+        self.code = RefusalCode(code)
         self.message = message

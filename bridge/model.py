@@ -56,17 +56,33 @@ class SetOption:
 Command = Target | Stop | SetOption
 
 
+class ErrorKind(enum.StrEnum):
+    """The ``kind`` of an error event (``R/error``). Published API: listed here and in the
+    README, and nothing else can be emitted (ErrorEvent refuses any other)."""
+
+    REFUSED = "refused"  # a command (or payload) judged and not executed: nothing moved
+    STALLED = "stalled"  # a commanded rotor made no progress: the bridge stopped it
+    STOP = "stop"  # the rotor kept turning after repeated stops
+    SERIAL = "serial"  # the port, the line or the controller's answers failed
+    PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
+    STATE = "state"  # the lock could not be saved in the state file
+    INTERNAL = "internal"  # a bug in the bridge (see the log); the rotator reconnects
+
+
 @dataclass(frozen=True)
 class ErrorEvent:
     """Something the user should hear about: a refused command, a stall, a serial fault."""
 
-    kind: str  # refused | stalled | serial | protocol | config
+    kind: ErrorKind  # a plain string is taken if it is one of ErrorKind's values
     message: str
     command: str | None = None  # what was refused, as the user sent it
     time_unix: float = 0.0
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", ErrorKind(self.kind))  # ValueError for any other
+
     def as_dict(self) -> dict[str, object]:
-        out: dict[str, object] = {"kind": self.kind, "message": self.message}
+        out: dict[str, object] = {"kind": self.kind.value, "message": self.message}
         if self.command is not None:
             out["command"] = self.command
         out["time"] = self.time_unix

@@ -1,9 +1,11 @@
-"""A rotator as the front ends (MQTT, later rotctld) see it: submit commands, read the status.
+"""A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
 
-This is the one place where commands are judged before they reach a worker: the safety lock,
-the configured limits, the model's capabilities and the link state. A refused command raises
-Refused (with a code front ends can map, e.g. to a Hamlib RPRT number) and is reported as an
-error event; it never reaches the mailbox, so it can never move anything.
+This is the one judge of commands: every front end submits here, and here alone are the safety
+lock, the configured limits, the model's capabilities and the link state checked against a
+command. A refused command raises Refused (with a RefusalCode front ends map, e.g. to a Hamlib
+RPRT number) and is reported as an error event; it never reaches the mailbox, so it can never
+move anything. The worker judges nothing anew: it only drops an accepted target that the lock
+or a lost link overtook before it could be sent, and reports that as a refusal too.
 """
 
 from __future__ import annotations
@@ -20,10 +22,11 @@ from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import Worker, WorkerConfig
-from bridge.errors import Refused
+from bridge.errors import RefusalCode, Refused
 from bridge.model import (
     Command,
     ErrorEvent,
+    ErrorKind,
     RotatorStatus,
     SetOption,
     Stop,
@@ -124,7 +127,7 @@ class Rotator:
         self._mailbox.put_lock(locked)
         if not self._store.set_locked(self.id, locked):
             self.report(
-                "state",
+                ErrorKind.STATE,
                 f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
                 "it will not survive a restart (state file not writable)",
                 "lock",
@@ -132,9 +135,9 @@ class Rotator:
 
     def report_refusal(self, message: str, command: str | None) -> None:
         """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
-        self.report("refused", message, command)
+        self.report(ErrorKind.REFUSED, message, command)
 
-    def report(self, kind: str, message: str, command: str | None) -> None:
+    def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)
         self._on_event(ErrorEvent(kind, message, command, self._wall()))
 
@@ -142,7 +145,7 @@ class Rotator:
         """A controller that takes whole degrees must not be rounded past a limit."""
         if self.spec.whole_degrees and not lo_deg <= _rounded(value_deg) <= hi_deg:
             raise Refused(
-                "limits",
+                RefusalCode.LIMITS,
                 f"{axis} {value_deg:g} becomes {_rounded(value_deg):g} on the "
                 f"{self.spec.display_name} (whole degrees), outside the limits "
                 f"{lo_deg:g}..{hi_deg:g}",
@@ -155,26 +158,30 @@ class Rotator:
             if command.name not in self.spec.options:
                 have = ", ".join(self.spec.options) or "none"
                 raise Refused(
-                    "unsupported",
+                    RefusalCode.UNSUPPORTED,
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
             return
         assert isinstance(command, Target)
         if self._locked:
-            raise Refused("locked", "rotator is locked (safety lock ON): motion refused")
+            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
         lim = self.limits
         if command.az_deg is None and command.el_deg is None:
-            raise Refused("invalid", "target without azimuth or elevation")
+            raise Refused(RefusalCode.INVALID, "target without azimuth or elevation")
         if command.az_deg is not None:
             _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
             self._check_rounded("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
         if command.el_deg is not None:
             if not self.spec.has_elevation:
-                raise Refused("unsupported", f"{self.spec.display_name} has no elevation axis")
+                raise Refused(
+                    RefusalCode.UNSUPPORTED, f"{self.spec.display_name} has no elevation axis"
+                )
             _check_axis("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
             self._check_rounded("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
         if not self.status.available:
-            raise Refused("offline", "rotator offline (serial link down or controller silent)")
+            raise Refused(
+                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
+            )
 
 
 def _rounded(value_deg: float) -> float:
@@ -183,4 +190,6 @@ def _rounded(value_deg: float) -> float:
 
 def _check_axis(axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
     if not math.isfinite(value_deg) or not lo_deg <= value_deg <= hi_deg:
-        raise Refused("limits", f"{axis} {value_deg:g} outside the limits {lo_deg:g}..{hi_deg:g}")
+        raise Refused(
+            RefusalCode.LIMITS, f"{axis} {value_deg:g} outside the limits {lo_deg:g}..{hi_deg:g}"
+        )
