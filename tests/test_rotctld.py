@@ -1,6 +1,6 @@
 """The rotctld port, byte for byte: real TCP sockets, the real Rotator, an emulated controller on
-a pty. Expected bytes are those of rotctld 4.5.4 in /work/shared/protocols/hamlib-and-rotctld.md
-section 3 (and, for model 401 and 403, those the real rotctld gives against the same emulator).
+a pty. Expected bytes are those rotctld 4.5.4 sends (for models 401 and 403 also checked against
+the real rotctld driving the same emulator).
 """
 
 from __future__ import annotations
@@ -425,6 +425,78 @@ def test_dump_caps_is_caps_text_then_rprt_0(station: StationFactory) -> None:
     c.ask(b"1\n", caps + b"RPRT 0\n")
     c.ask(b"\\dump_caps\n", caps + b"RPRT 0\n")
     c.ask(b"+1\n", b"dump_caps:\n" + caps + b"RPRT 0\n")
+
+
+# Hamlib 4.5.4's own answers for each model: model number and rot_type (dump_state), get_info
+# ("None" where the backend has none; dump_caps then says it cannot), with the model's range
+HAMLIB_FACTS = {
+    "rotorez": (401, b"Other", b"Rotor-EZ"),
+    "rotorcard": (402, b"Other", b"RotorCard"),
+    "dcu1": (403, b"Other", b"DCU-1/DCU-1X"),
+    "rot2prog": (901, b"AzEl", b"None"),
+    "rot1prog": (902, b"Az", b"None"),
+    "md01": (903, b"AzEl", b"None"),
+    "satel": (2101, b"AzEl", b"SatEL rotator"),
+}
+RANGES = {
+    "rot2prog": b"min_az=-180.000000\nmax_az=540.000000\nmin_el=-20.000000\nmax_el=210.000000\n",
+    "rot1prog": b"min_az=-180.000000\nmax_az=540.000000\nmin_el=0.000000\nmax_el=0.000000\n",
+    "md01": b"min_az=-180.000000\nmax_az=540.000000\nmin_el=-20.000000\nmax_el=210.000000\n",
+    "satel": b"min_az=0.000000\nmax_az=360.000000\nmin_el=0.000000\nmax_el=90.000000\n",
+}
+CAPS_ROT_TYPE = {b"Other": b"Other", b"Az": b"Azimuth", b"AzEl": b"Az-El"}
+
+
+@pytest.fixture
+def unstarted(tmp_path: Path) -> Iterator[Callable[[str], Client]]:
+    """A rotctld port onto a rotator of ``model`` whose worker never runs: what rotctld says
+    about the model alone, without a controller."""
+    servers: list[tuple[RotctldServer, Client]] = []
+
+    def make(model: str) -> Client:
+        cfg = RotatorSettings(id="tower", model=model, port=str(tmp_path / "no-such-port"))
+        rotator = Rotator(
+            worker_config(cfg),
+            Limits(*cfg.effective_az_limits, *cfg.effective_el_limits),
+            StateStore(tmp_path / f"state-{model}.json"),
+            on_status=lambda status: None,
+            on_event=lambda event: None,
+        )
+        server = RotctldServer(rotator, 0)
+        server.start()
+        client = Client(server.port)
+        servers.append((server, client))
+        return client
+
+    yield make
+    for server, client in servers:
+        client.close()
+        server.stop()
+
+
+@pytest.mark.parametrize("model", sorted(HAMLIB_FACTS))
+def test_every_model_is_shown_as_hamlib_shows_it(
+    unstarted: Callable[[str], Client], model: str
+) -> None:
+    number, rot_type, info = HAMLIB_FACTS[model]
+    c = unstarted(model)
+    c.ask(b"_\n", info + b"\n")
+    ranges = RANGES.get(
+        model, b"min_az=0.000000\nmax_az=360.000000\nmin_el=0.000000\nmax_el=0.000000\n"
+    )
+    c.ask(
+        b"\\dump_state\n",
+        b"1\n%d\n" % number + ranges + b"south_zero=0\nrot_type=" + rot_type + b"\ndone\n",
+    )
+    c.send(b"1\n")
+    caps = b""
+    while not caps.endswith(b"RPRT 0\n"):
+        chunk = c.sock.recv(4096)
+        assert chunk, caps
+        caps += chunk
+    assert caps.startswith(b"Caps dump for model:\t%d\n" % number)
+    assert b"Rot type:\t\t" + CAPS_ROT_TYPE[rot_type] + b"\n" in caps
+    assert b"Can get Info:\t\t" + (b"N" if info == b"None" else b"Y") + b"\n" in caps
 
 
 # -- the stream: unknown commands, quit, clients ------------------------------------------------

@@ -6,10 +6,3 @@ from bridge.protocols.satel import MODELS as _SATEL
 from bridge.protocols.spid import MODELS as _SPID
 
 REGISTRY: dict[str, ModelSpec] = {**_ROTOREZ, **_SPID, **_SATEL}
-
-
-def get_spec(name: str) -> ModelSpec:
-    try:
-        return REGISTRY[name]
-    except KeyError:
-        raise KeyError(f"unknown model {name!r}; known: {', '.join(sorted(REGISTRY))}") from None

@@ -1,6 +1,6 @@
 """What every controller family provides: a sans-IO codec and a model spec that is pure data.
 
-Rules (ARCHITECTURE.md, rules 1 and 2):
+Rules:
 1. A codec turns typed commands into bytes and bytes into typed replies. It never touches a
    port, a clock, a thread or a sleep; timing values live on the ModelSpec as data.
 2. ``feed()`` accepts any slicing of the byte stream (whole buffers, one byte at a time, junk
@@ -10,11 +10,15 @@ Rules (ARCHITECTURE.md, rules 1 and 2):
    on it after the engine's reply timeout. Anything else is junk.
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
+5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
+   a JunkReason (UNTRUSTED: ask again; POWER_ON: the controller forgot its options), never on
+   the bytes themselves.
 """
 
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -33,18 +37,32 @@ class VersionReply:
     version: str
 
 
+class JunkReason(enum.StrEnum):
+    """Why bytes are no reading. The engine acts on UNTRUSTED and POWER_ON; the rest it logs."""
+
+    NOISE = "noise"  # bytes that form no reply: line garbage, a torn frame, a banner
+    CHATTER = "chatter"  # text a healthy controller prints besides replies (a debug line)
+    UNSOLICITED = "unsolicited"  # a well-formed reply nobody is waiting for (a late answer)
+    SPOILED = "spoiled"  # a reply that cannot be read; nothing was waiting on it
+    # a reply that looked right but came after line noise in the same exchange (or a spoiled
+    # report that ended a slew): not a reading; ask again at once
+    UNTRUSTED = "untrusted"
+    # the controller announced that it was switched on: it has forgotten its options
+    POWER_ON = "power_on"
+
+
 @dataclass(frozen=True)
 class JunkReply:
     """Bytes that are no valid reply (power-on noise, a banner, line garbage)."""
 
     data: bytes
-    reason: str
+    reason: JunkReason
+    detail: str = ""  # the codec's words, for a log line or a test
 
 
 Reply = PositionReply | VersionReply | JunkReply
 
-# reason of a JunkReply for a frame that looked right but followed line noise: ask again
-UNTRUSTED = "reading after line noise: not trusted"
+UNTRUSTED = JunkReason.UNTRUSTED  # the name the engine used before JunkReason existed
 
 
 class RetargetPolicy(enum.StrEnum):
@@ -81,6 +99,21 @@ class Codec(Protocol):
         ...
 
 
+class HamlibRotType(enum.StrEnum):
+    """Hamlib's ``rot_type`` of a model, as its rotctld prints it in ``dump_state``."""
+
+    AZ = "Az"
+    EL = "El"
+    AZEL = "AzEl"
+    OTHER = "Other"  # what Hamlib's rotorez backend calls its Rotor-EZ family
+
+
+# Idle polling takes at most this share of the line (half duplex: of its time), but is never
+# more frequent than MIN_IDLE_POLL_S: a still rotor's bearing need not be fresher than that.
+IDLE_LINE_SHARE = 0.05
+MIN_IDLE_POLL_S = 1.0
+
+
 @dataclass(frozen=True)
 class ModelSpec:
     """Everything the bridge needs to know about one controller model, as data."""
@@ -88,7 +121,6 @@ class ModelSpec:
     name: str  # registry key, used in the configuration
     display_name: str
     manufacturer: str
-    family: str
     codec_factory: Callable[[], Codec]
     baud: int
     bytesize: int = 8
@@ -118,8 +150,35 @@ class ModelSpec:
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
     nominal_speed_deg_s: float = 6.0
     option_labels: dict[str, str] = field(default_factory=dict)
+    # one position poll on the wire: the query frame and the controller's reply to it, in bytes
+    # (0 and 0 for a controller that cannot be asked); the default idle poll interval comes
+    # from these (default_idle_poll_interval_s)
+    query_bytes: int = field(kw_only=True)
+    reply_bytes: int = field(kw_only=True)
+    # what Hamlib knows this model as (rotctld's dump_state, dump_caps and get_info)
+    hamlib_model: int = field(kw_only=True)  # Hamlib's rotator model number (rotctl -m)
+    hamlib_rot_type: HamlibRotType = field(kw_only=True)
+    # get_info's text; None where Hamlib's backend has no get_info (rotctld then says "None")
+    hamlib_info: str | None = field(default=None, kw_only=True)
 
-    def frame_time_s(self, nbytes: int) -> float:
-        """Time the line needs to carry ``nbytes`` (start + data + parity + stop bits)."""
+    def speeds_deg_s(
+        self, az_deg_s: float | None = None, el_deg_s: float | None = None
+    ) -> tuple[float, float]:
+        """The rotor's (azimuth, elevation) speeds: the user's where set, else this model's
+        nominal ones. The one place a speed default comes from."""
+        return (
+            self.nominal_speed_deg_s if az_deg_s is None else az_deg_s,
+            self.nominal_el_speed_deg_s if el_deg_s is None else el_deg_s,
+        )
+
+    def exchange_time_s(self, baud: int | None = None) -> float:
+        """How long one position poll (query and reply) occupies the line at ``baud``
+        (start, data, parity and stop bits of every byte; the model's default rate if None)."""
         bits = 1 + self.bytesize + (0 if self.parity == "N" else 1) + self.stopbits
-        return nbytes * bits / self.baud
+        return (self.query_bytes + self.reply_bytes) * bits / (baud or self.baud)
+
+    def default_idle_poll_interval_s(self, baud: int | None = None) -> float:
+        """The idle poll interval that leaves the line at least 95 % free (IDLE_LINE_SHARE),
+        never below MIN_IDLE_POLL_S; rounded up to a tenth of a second."""
+        interval = self.exchange_time_s(baud) / IDLE_LINE_SHARE
+        return max(MIN_IDLE_POLL_S, math.ceil(interval * 10 - 1e-9) / 10)

@@ -2,8 +2,8 @@
 
 Device: a serial board inside the rotator control box. 4800 baud 8N1, no flow control. Plain
 ASCII commands, case-sensitive, no line ending unless stated; bearings are exactly three digits.
-Sources: Idiom Press "Rotor-EZ Rotator Control Protocol" and its 2003 letter to Hamlib
-(shared/seeds/), the fact sheet shared/protocols/rotor-ez.md (Hamlib 4.5.4 behaviour on the wire).
+Sources: Idiom Press "Rotor-EZ Rotator Control Protocol" and its 2003 letter to Hamlib; Hamlib
+4.5.4's rotorez backend (rotorez.c, README.rotorez) and its traffic on the wire, seen with rotctl.
 
 Frames we send:
   ``AP1xxx\\r``        set target and execute (Rotor-EZ, RotorCard)
@@ -16,7 +16,8 @@ Frames we send:
 Rules:
 1. Only ``;`` + three ASCII digits in 000..360 is a bearing, and only while a query is open.
    Everything else (the 0xE0 power-on byte, the ``C2000 IDIOM V1.4S `` banner that follows an
-   invalid command, a torn or foreign frame) is junk and is reported as such. A frame that
+   invalid command, a torn or foreign frame) is junk and is reported as such; the power-on
+   byte as POWER_ON junk of its own (the board has forgotten its options). A frame that
    follows junk the board never sends (anything but the power-on byte and the banner's upper-case
    letters, digits, spaces and dots) within the same query is not trusted: it is reported as
    UNTRUSTED junk, so the engine asks again instead of publishing line noise as a bearing.
@@ -32,8 +33,9 @@ import math
 import re
 
 from bridge.protocols.base import (
-    UNTRUSTED,
     Codec,
+    HamlibRotType,
+    JunkReason,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -55,6 +57,7 @@ OPTION_LABELS = {
     "unstick": "Unstick option",
 }
 
+POWER_ON_BYTE = 0xE0  # sent once when the board is switched on (Hamlib's README.rotorez)
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
 # what a healthy board emits besides replies: the power-on byte, the banner after an invalid
 # command (a stop while idle) and the version text; and a reply that came after its query was
@@ -136,6 +139,14 @@ class RotorEzCodec:
         buf = self._buf
         i = 0
         while i < len(buf):
+            if buf[i] == POWER_ON_BYTE:
+                self._flush_junk(junk, out)
+                end = i + 1
+                while end < len(buf) and buf[end] == POWER_ON_BYTE:
+                    end += 1
+                out.append(JunkReply(bytes(buf[i:end]), JunkReason.POWER_ON, "power-on byte"))
+                i = end
+                continue
             if buf[i] != 0x3B:  # ';'
                 junk.append(buf[i])
                 i += 1
@@ -148,14 +159,16 @@ class RotorEzCodec:
                 self._flush_junk(junk, out)
                 self._queries_open = 0
                 if self._noisy:
-                    out.append(JunkReply(frame, UNTRUSTED))
+                    out.append(JunkReply(frame, JunkReason.UNTRUSTED))
                 else:
                     out.append(PositionReply(float(int(digits))))
                 i += 4
                 continue
             if digits.isdigit() and int(digits) <= 360:
                 self._flush_junk(junk, out)
-                out.append(JunkReply(frame, "bearing frame without a query"))
+                out.append(
+                    JunkReply(frame, JunkReason.UNSOLICITED, "bearing frame without a query")
+                )
                 i += 4
                 continue
             junk.append(buf[i])  # a lone ';' followed by something else: resync after it
@@ -175,13 +188,12 @@ class RotorEzCodec:
             out.append(VersionReply(match.group(1).decode("ascii")))
             del self._junk_window[: match.end()]
         del self._junk_window[:-_JUNK_WINDOW]
-        out.append(JunkReply(bytes(junk), "not a reply frame"))
+        out.append(JunkReply(bytes(junk), JunkReason.NOISE, "not a reply frame"))
         junk.clear()
 
 
 def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec:
     defaults: dict[str, object] = dict(
-        family="rotorez",
         baud=4800,
         has_version=True,
         retarget=RetargetPolicy.STOP_AND_WAIT,
@@ -193,6 +205,9 @@ def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec
         nominal_speed_deg_s=6.0,
         option_labels=OPTION_LABELS,
         whole_degrees=True,
+        query_bytes=4,  # AI1;
+        reply_bytes=4,  # ;xxx
+        hamlib_rot_type=HamlibRotType.OTHER,
     )
     defaults.update(kw)
     return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)  # type: ignore[arg-type]
@@ -206,6 +221,8 @@ MODELS: dict[str, ModelSpec] = {
         codec_factory=RotorEzCodec,
         options=tuple(OPTION_LETTERS),
         brake_delay_s=5.0,
+        hamlib_model=401,
+        hamlib_info="Rotor-EZ",
     ),
     "rotorcard": _spec(
         "rotorcard",
@@ -213,6 +230,8 @@ MODELS: dict[str, ModelSpec] = {
         "Idiom Press",
         codec_factory=lambda: RotorEzCodec(options=False),
         brake_delay_s=0.0,
+        hamlib_model=402,
+        hamlib_info="RotorCard",
     ),
     "dcu1": _spec(
         "dcu1",
@@ -223,6 +242,10 @@ MODELS: dict[str, ModelSpec] = {
         has_version=False,
         brake_delay_s=5.0,
         inter_frame_gap_s=0.05,
+        query_bytes=0,  # it cannot be asked
+        reply_bytes=0,
+        hamlib_model=403,
+        hamlib_info="DCU-1/DCU-1X",
     ),
 }
 

@@ -1,9 +1,9 @@
 """SatEL (VE5FP-compatible) az/el controller: the codec.
 
 Device: a terminal-driven az/el controller. 9600 8N1, no flow control. Single-letter commands,
-no echo, either case; replies are text lines ending in CR LF (or LF). Sources: the SatEL manual's
-Appendix A (shared/seeds/satel-azel-manual-excerpt.txt) and shared/protocols/satel.md (Hamlib
-4.5.4 satel.c on the wire).
+no echo, either case; replies are text lines ending in CR LF (or LF). Sources: the SatEL Az-EL
+instruction manual, Appendix A ("Running the controller using a terminal"), and Hamlib 4.5.4's
+satel backend (satel.c, its author's notes) and its traffic on the wire, seen with rotctl.
 
 Frames we send: ``s`` stop rotors and disable automatic motion; ``?`` identify (-> ``SatEL``);
 ``tYYYY/MM/DD HH:MM:SS`` CR LF set the clock; ``g`` enable automatic motion; ``z`` status report;
@@ -46,7 +46,8 @@ import re
 import time
 
 from bridge.protocols.base import (
-    UNTRUSTED,
+    HamlibRotType,
+    JunkReason,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -65,6 +66,18 @@ _STORED = re.compile(r"Number of stored positions:\s*(\d+)\s*$")
 _BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
 _MAX_LINE = 160
 SLEW_END_TOLERANCE_DEG = 5  # relays coast a little past the point (rule 6)
+# a status report as the manual and Hamlib show it: the size of the reply to a poll
+_TYPICAL_REPORT = (
+    b"Motion ENABLED\r\n"
+    b"Mode 0 - azimuth break at NORTH\r\n"
+    b"Time: 2001/00/00 00:00:07\r\n"
+    b"Azimuth = 000     Absolute = 000\r\n"
+    b"Elevation = 000\r\n"
+    b"\r\n"
+    b"Number of stored positions: 00\r\n"
+    b"\r\n"
+    b"\r\n"
+)
 
 
 class SatelCodec:
@@ -142,7 +155,7 @@ class SatelCodec:
             end = self._buf.find(b"\n")
             if end == -1:
                 if len(self._buf) > _MAX_LINE:
-                    out.append(JunkReply(bytes(self._buf), "line too long"))
+                    out.append(JunkReply(bytes(self._buf), JunkReason.NOISE, "line too long"))
                     self._buf.clear()
                 break
             raw = bytes(self._buf[: end + 1])
@@ -165,9 +178,9 @@ class SatelCodec:
             self._settle("ident")
             out.append(VersionReply("SatEL"))
         elif line == "" or _BARE_TIME.match(line):
-            out.append(JunkReply(raw, "blank line or clock echo"))
+            out.append(JunkReply(raw, JunkReason.CHATTER, "blank line or clock echo"))
         else:
-            out.append(JunkReply(raw, "not a report line"))
+            out.append(JunkReply(raw, JunkReason.NOISE, "not a report line"))
 
     def _block_line(self, line: str, raw: bytes, out: list[Reply]) -> None:
         block = self._block
@@ -189,7 +202,8 @@ class SatelCodec:
                 return
             kind = next((k for k in self._owed if k in ("report", "slew")), "report")
             if kind == "slew" and not self._ends_slew(az, el):
-                out.append(JunkReply(raw, "status report from before the point (slew goes on)"))
+                why = "status report from before the point (slew goes on)"
+                out.append(JunkReply(raw, JunkReason.UNSOLICITED, why))
                 return
             if block["motion"] == "?":
                 self._spoiled(raw, "status report without its motion line", out)
@@ -226,9 +240,9 @@ class SatelCodec:
         say so (UNTRUSTED), so the engine asks for a fresh report instead of waiting on."""
         if "slew" in self._owed:
             self._owed.remove("slew")
-            out.append(JunkReply(raw, UNTRUSTED))
+            out.append(JunkReply(raw, JunkReason.UNTRUSTED, why))
         else:
-            out.append(JunkReply(raw, why))
+            out.append(JunkReply(raw, JunkReason.SPOILED, why))
 
     def _settle(self, kind: str) -> None:
         if kind in self._owed:
@@ -246,7 +260,6 @@ MODELS: dict[str, ModelSpec] = {
         name="satel",
         display_name="SatEL",
         manufacturer="SatEL (VE5FP)",
-        family="satel",
         codec_factory=SatelCodec,
         baud=9600,
         has_elevation=True,
@@ -267,5 +280,10 @@ MODELS: dict[str, ModelSpec] = {
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=2.5,
         whole_degrees=True,
+        query_bytes=1,  # z
+        reply_bytes=len(_TYPICAL_REPORT),
+        hamlib_model=2101,
+        hamlib_rot_type=HamlibRotType.AZEL,
+        hamlib_info="SatEL rotator",
     )
 }

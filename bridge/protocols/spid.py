@@ -2,8 +2,8 @@
 
 Device: Alfa SPID controllers for az/el rotators (satellite, EME). 8N1, no flow control; Rot2Prog
 600 baud, Rot1Prog 1200, MD-01/02 whatever the controller is set to. Binary frames.
-Sources: shared/protocols/spid.md (Hamlib 4.5.4 spid.c on the wire, the rot2prog PyPI package)
-and shared/seeds/rot2prog-pypi-page.txt.
+Sources: Hamlib 4.5.4's spid backend (spid.c, spid.txt) and its traffic on the wire, seen with
+rotctl; the rot2prog package on PyPI (its frame and resolution tables, its simulator).
 
 Frames we send, 13 bytes: ``57 H1 H2 H3 H4 PH V1 V2 V3 V4 PV K 20`` with ASCII digits;
 K = 0x0F stop, 0x1F status, 0x2F set. For stop and status every byte but S, K and END is 0x00.
@@ -31,7 +31,8 @@ import math
 import re
 
 from bridge.protocols.base import (
-    UNTRUSTED,
+    HamlibRotType,
+    JunkReason,
     JunkReply,
     ModelSpec,
     PositionReply,
@@ -138,7 +139,7 @@ class SpidCodec:
                 if self._well_formed(frame):
                     if junk:
                         self._junk_seen()  # before decoding: this frame is not trusted
-                        out.append(JunkReply(bytes(junk), "not a reply frame"))
+                        out.append(JunkReply(bytes(junk), JunkReason.NOISE, "not a reply frame"))
                         junk.clear()
                     reply = self._decode(frame)
                     assert reply is not None
@@ -164,9 +165,10 @@ class SpidCodec:
                         end = i + _MAX_DEBUG_LINE - 1
                     if junk:
                         self._junk_seen()
-                        out.append(JunkReply(bytes(junk), "not a reply frame"))
+                        out.append(JunkReply(bytes(junk), JunkReason.NOISE, "not a reply frame"))
                         junk.clear()
-                    out.append(JunkReply(bytes(buf[i : end + 1]), "controller debug line"))
+                    line = bytes(buf[i : end + 1])
+                    out.append(JunkReply(line, JunkReason.CHATTER, "controller debug line"))
                     i = end + 1
                     continue
             junk.append(b)
@@ -174,7 +176,7 @@ class SpidCodec:
         del buf[:i]
         if junk:
             self._junk_seen()
-            out.append(JunkReply(bytes(junk), "not a reply frame"))
+            out.append(JunkReply(bytes(junk), JunkReason.NOISE, "not a reply frame"))
         return out
 
     def _junk_seen(self) -> None:
@@ -220,13 +222,13 @@ class SpidCodec:
 
     def _answer(self, frame: bytes, az: float, el: float | None) -> Reply:
         if self._owed <= 0:
-            return JunkReply(frame, "position frame nobody asked for")
+            return JunkReply(frame, JunkReason.UNSOLICITED, "position frame nobody asked for")
         self._owed -= 1
         if self._noisy:
             # line noise inside this exchange: the frame may be spliced from two (the engine
             # asks again instead of publishing it)
             self._noisy = False
-            return JunkReply(frame, UNTRUSTED)
+            return JunkReply(frame, JunkReason.UNTRUSTED)
         return PositionReply(az, el)
 
 
@@ -234,7 +236,6 @@ def _spec(name: str, display: str, **kw: object) -> ModelSpec:
     baud = int(kw.pop("baud"))  # type: ignore[call-overload]
     frame_s = 25 * 10 / baud  # one exchange: 13-byte command + 12-byte reply
     defaults: dict[str, object] = dict(
-        family="spid",
         manufacturer="SPID (Alfa Radio)",
         baud=baud,
         has_elevation=True,
@@ -248,6 +249,10 @@ def _spec(name: str, display: str, **kw: object) -> ModelSpec:
         reply_timeout_s=frame_s + 0.3,
         noise_deg=0.0,
         nominal_speed_deg_s=1.0,
+        query_bytes=13,
+        reply_bytes=12,
+        hamlib_rot_type=HamlibRotType.AZEL,
+        hamlib_info=None,  # Hamlib's spid backend has no get_info
     )
     defaults.update(kw)
     return ModelSpec(name=name, display_name=display, **defaults)  # type: ignore[arg-type]
@@ -255,7 +260,11 @@ def _spec(name: str, display: str, **kw: object) -> ModelSpec:
 
 MODELS: dict[str, ModelSpec] = {
     "rot2prog": _spec(
-        "rot2prog", "Rot2Prog", baud=600, codec_factory=lambda: SpidCodec("rot2prog")
+        "rot2prog",
+        "Rot2Prog",
+        baud=600,
+        codec_factory=lambda: SpidCodec("rot2prog"),
+        hamlib_model=901,
     ),
     "rot1prog": _spec(
         "rot1prog",
@@ -265,6 +274,15 @@ MODELS: dict[str, ModelSpec] = {
         el_min_deg=0.0,
         el_max_deg=0.0,
         codec_factory=lambda: SpidCodec("rot1prog"),
+        reply_bytes=5,
+        hamlib_model=902,
+        hamlib_rot_type=HamlibRotType.AZ,
     ),
-    "md01": _spec("md01", "MD-01/02", baud=115200, codec_factory=lambda: SpidCodec("md01")),
+    "md01": _spec(
+        "md01",
+        "MD-01/02",
+        baud=115200,
+        codec_factory=lambda: SpidCodec("md01"),
+        hamlib_model=903,
+    ),
 }

@@ -2,8 +2,8 @@
 
 Gpredict, loggers and Hamlib's own network client (``rotctl -m 2``) speak rotctld's text
 protocol. Here they reach the same Rotator as MQTT does: the same mailbox, limits, safety lock
-and status. Source document: /work/shared/protocols/hamlib-and-rotctld.md section 3 (reply
-bytes verified against rotctld 4.5.4).
+and status. Source: Hamlib 4.5.4's rotctld (rotctl_parse.c); every reply's bytes were compared
+with what rotctld 4.5.4 itself sends.
 
 Rules:
 1. Input is a character stream, as rotctld reads it: a one-character command or ``\\long_name``,
@@ -21,8 +21,8 @@ Rules:
    state are judged in one place and MQTT shows the refusal or the move.
 """
 
-from bridge.rotctld.commands import HAMLIB_MODELS, RotctldCommands
+from bridge.rotctld.commands import RotctldCommands
 from bridge.rotctld.parser import QUIT, Request, RequestParser
 from bridge.rotctld.server import RotctldServer
 
-__all__ = ["HAMLIB_MODELS", "QUIT", "Request", "RequestParser", "RotctldCommands", "RotctldServer"]
+__all__ = ["QUIT", "Request", "RequestParser", "RotctldCommands", "RotctldServer"]

@@ -7,8 +7,9 @@ import re
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
-from bridge.errors import Refused
+from bridge.errors import RefusalCode, Refused
 from bridge.model import Source, Stop, Target
+from bridge.protocols.base import HamlibRotType
 from bridge.rotctld.parser import Request
 
 if TYPE_CHECKING:
@@ -26,24 +27,12 @@ RIG_EINTERNAL = 7
 RIG_ERJCTED = 9  # command rejected: the bridge's safety lock is ON
 RIG_ENAVAIL = 11  # the model cannot do this
 
-#: bridge model name -> Hamlib rotator model number (shown by \dump_state and dump_caps)
-HAMLIB_MODELS: dict[str, int] = {
-    "rotorez": 401,
-    "rotorcard": 402,
-    "dcu1": 403,
-    "rot2prog": 901,
-    "rot1prog": 902,
-    "md01": 903,
-    "satel": 2101,
-}
-# A model Hamlib does not know is shown as its dummy; `rotctl -m 2` ignores the model line.
-_HAMLIB_FALLBACK_MODEL = 1
-
-#: what Hamlib's backend answers to get_info, where that differs from our display name
-_HAMLIB_INFO: dict[str, str] = {
-    "rotorez": "Rotor-EZ",
-    "rotorcard": "RotorCard",
-    "dcu1": "DCU-1/DCU-1X",
+# how dump_caps spells a rot_type (Hamlib's dumpcaps_rot.c)
+_CAPS_ROT_TYPE = {
+    HamlibRotType.AZ: "Azimuth",
+    HamlibRotType.EL: "Elevation",
+    HamlibRotType.AZEL: "Az-El",
+    HamlibRotType.OTHER: "Other",
 }
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
@@ -63,15 +52,12 @@ class RotctldCommands:
         self.rotator = rotator
         self.park_az_deg = park_az_deg
         self.park_el_deg = park_el_deg
+        # Hamlib's facts about the model are on its spec (protocols/)
         spec = rotator.spec
-        self.hamlib_model = HAMLIB_MODELS.get(spec.name, _HAMLIB_FALLBACK_MODEL)
-        self.info = _HAMLIB_INFO.get(spec.name, spec.display_name)
-        if spec.has_elevation:
-            self.rot_type = "AzEl"
-        elif spec.family == "rotorez":
-            self.rot_type = "Other"  # as Hamlib's rotorez backend reports itself
-        else:
-            self.rot_type = "Az"
+        self.hamlib_model = spec.hamlib_model
+        self.rot_type = spec.hamlib_rot_type
+        # rotctld prints a backend without get_info as "None"
+        self.info = "None" if spec.hamlib_info is None else spec.hamlib_info
 
     def execute(self, request: Request) -> bytes:
         handler = getattr(self, "_" + request.command.name)
@@ -154,7 +140,7 @@ class RotctldCommands:
         def yn(flag: bool) -> str:
             return "Y" if flag else "N"
 
-        rot_type = {"AzEl": "Az-El", "Az": "Azimuth"}.get(self.rot_type, self.rot_type)  # as -u
+        rot_type = _CAPS_ROT_TYPE[self.rot_type]
         return RIG_OK, (
             f"Caps dump for model:\t{self.hamlib_model}\n"
             f"Model name:\t\t{spec.display_name}\n"
@@ -173,7 +159,7 @@ class RotctldCommands:
             f"Can Park:\t\t{yn(self.park_az_deg is not None)}\n"
             "Can Reset:\t\tN\n"
             "Can Move:\t\tN\n"
-            "Can get Info:\t\tY\n"
+            f"Can get Info:\t\t{yn(spec.hamlib_info is not None)}\n"
             "Can get Status:\t\tN\n"
             "\nOverall backend warnings: 0\n"
         )
@@ -187,11 +173,11 @@ class RotctldCommands:
 
 
 def _refusal_code(exc: Refused, connected: bool) -> int:
-    if exc.code in ("limits", "unsupported"):  # unsupported: elevation on an az-only model
+    if exc.code in (RefusalCode.LIMITS, RefusalCode.UNSUPPORTED):  # e.g. elevation on az-only
         return -RIG_EINVAL
-    if exc.code == "offline":
+    if exc.code is RefusalCode.OFFLINE:
         return _link_code(connected)
-    return -RIG_ERJCTED  # locked (and any refusal added later): the bridge said no
+    return -RIG_ERJCTED  # locked, invalid: the bridge said no
 
 
 def _link_code(connected: bool) -> int:

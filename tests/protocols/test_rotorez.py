@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
+from bridge.protocols.base import UNTRUSTED, JunkReason, JunkReply, PositionReply, VersionReply
 from bridge.protocols.rotorez import RotorEzCodec
 
 
@@ -115,6 +115,30 @@ def test_power_on_byte_and_banner_are_junk_and_banner_gives_version(feed) -> Non
     assert VersionReply("1.4S") in replies
     junk = b"".join(r.data for r in replies if isinstance(r, JunkReply))
     assert junk == b"\xe0C2000 IDIOM V1.4S "
+
+
+def power_ons(replies: list) -> list[bytes]:
+    return [r.data for r in replies if isinstance(r, JunkReply) and r.reason is JunkReason.POWER_ON]
+
+
+@pytest.mark.parametrize("feed", FEEDERS)
+def test_the_codec_says_when_the_board_was_switched_on(feed) -> None:
+    """The power-on byte is POWER_ON junk of its own (the engine re-sends the options on it);
+    the banner, line noise and readings around it are not, and it taints no reading."""
+    c = RotorEzCodec()
+    c.encode_query()
+    replies = feed(c, b"\x13\xe0C2000 IDIOM V1.4S ;045")
+    assert power_ons(replies) == [b"\xe0"]
+    assert positions(replies) == []  # the \x13 before it is noise the board never sends
+    c.encode_query()
+    replies = feed(c, b"\xe0;046C2000 IDIOM V1.4S ")
+    assert power_ons(replies) == [b"\xe0"] and positions(replies) == [46.0]
+    c.encode_query()
+    assert power_ons(feed(c, b"C2000 IDIOM V1.4S \x13;047\r")) == []
+
+
+def test_a_run_of_power_on_bytes_is_one_power_on() -> None:
+    assert power_ons(RotorEzCodec().feed(b"\xe0\xe0\xe0")) == [b"\xe0\xe0\xe0"]
 
 
 @pytest.mark.parametrize("feed", FEEDERS)

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import JunkReply, PositionReply
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply
 from bridge.protocols.spid import SpidCodec
 
 REPLY_12_5_34 = bytes.fromhex("57 03 07 02 05 02 03 09 04 00 02 20")
@@ -86,7 +86,9 @@ def test_md01_debug_lines_are_skipped_never_read(how: str) -> None:
     c.encode_query()
     out = feed(c, b"123: motor on\r\n" + REPLY_12_5_34 + b"7: W \x02\r\n", how)
     assert [r for r in out if isinstance(r, PositionReply)] == [PositionReply(12.5, 34.0)]
-    assert all(r.reason == "controller debug line" for r in out if isinstance(r, JunkReply))
+    junk = [r for r in out if isinstance(r, JunkReply)]
+    assert junk and all(r.reason is JunkReason.CHATTER for r in junk)
+    assert all(r.detail == "controller debug line" for r in junk)
 
 
 def test_md01_answers_a_set_rot2prog_does_not() -> None:
