@@ -8,8 +8,9 @@ baud / (10 * exchange bytes) polls/s. Measured: polls/s and the bytes that cross
 rest of each cycle is the controller's turnaround (2 ms in the emulators, an assumption) and the
 bridge's (from the last reply byte to the next query).
 
-Idle: every model on one bridge with the default settings (idle poll 1 s), bytes per second in
-each direction after start-up, as a share of the line's capacity in that direction.
+Idle: every model on one bridge with the default settings (each model's default idle poll,
+derived to take at most 5 % of its line), bytes per second in each direction after start-up, as a
+share of the line's capacity in that direction.
 """
 
 from __future__ import annotations
@@ -181,7 +182,7 @@ def run(scope: Scope, quick: bool, models: set[str] | None = None) -> ItemResult
     idle = idle_traffic(scope, 5.0 if quick else 20.0, idle_models)
     result.data["idle"] = idle
     table = Table(
-        "3b. Idle polling traffic with the defaults (idle poll 1 s), all models on one bridge",
+        "3b. Idle polling traffic with the defaults (model idle polls), all models on one bridge",
         ["model", "baud", "to ctrl B/s", "from ctrl B/s", "% of line (to)", "% of line (from)"],
     )
     for model, r in idle.items():

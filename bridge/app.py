@@ -45,10 +45,10 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
             direct_retarget=spec.retarget.value == "direct",
             poll_margin_s=r.moving_poll_interval_s,
         ),
-        idle_poll_interval_s=r.idle_poll_interval_s,
+        idle_poll_interval_s=r.effective_idle_poll_interval_s,
         moving_poll_interval_s=r.moving_poll_interval_s,
         deadband_deg=r.deadband_deg,
-        silence_timeout_s=r.silence_timeout_s,
+        silence_timeout_s=r.effective_silence_timeout_s,
         az_speed_deg_s=az_speed,
         el_speed_deg_s=el_speed,
     )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import ipaddress
+import math
 import os
 import re
 import socket
@@ -35,6 +36,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
+DEFAULT_SILENCE_TIMEOUT_S = 3.0  # no valid reply this long: offline (unless polls are rarer)
 _ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
 _TOPIC_BAD = re.compile(r"[+#\x00]")
@@ -187,7 +189,8 @@ class RotatorSettings(_Strict):
     port: str
     baud: int | None = Field(None, gt=0)
     topic: str | None = None
-    idle_poll_interval_s: float = Field(1.0, gt=0, le=3600)
+    # None: the model's, from its line rate (ModelSpec.default_idle_poll_interval_s)
+    idle_poll_interval_s: float | None = Field(None, gt=0, le=3600)
     moving_poll_interval_s: float = Field(0.2, gt=0, le=60)
     tolerance_deg: float = Field(3.0, ge=0, le=45)
     brake_delay_s: float | None = Field(None, ge=0, le=60)
@@ -197,7 +200,8 @@ class RotatorSettings(_Strict):
     noise_deg: float | None = Field(
         None, ge=0, le=20, description="a still rotor's readings wander this much (model default)"
     )
-    silence_timeout_s: float = Field(3.0, gt=0, le=600)
+    # None: DEFAULT_SILENCE_TIMEOUT_S, longer where idle polls are rarer (see the property)
+    silence_timeout_s: float | None = Field(None, gt=0, le=600)
     # at least 0.5 deg/s (a whole turn in 12 minutes): the wait for a SatEL's lost after-move
     # report is twice the travel time at these speeds, and a slip like 0.05 would make it hours
     az_speed_deg_s: float | None = Field(
@@ -266,8 +270,18 @@ class RotatorSettings(_Strict):
             raise ValueError(f"the {spec.display_name} has no elevation axis (el_min/max_deg)")
         elif self.el_speed_deg_s is not None:
             raise ValueError(f"the {spec.display_name} has no elevation axis (el_speed_deg_s)")
-        if self.moving_poll_interval_s > self.idle_poll_interval_s:
-            raise ValueError("moving_poll_interval_s must not exceed idle_poll_interval_s")
+        idle_s = self.effective_idle_poll_interval_s
+        if self.moving_poll_interval_s > idle_s:
+            raise ValueError(
+                f"moving_poll_interval_s must not exceed idle_poll_interval_s ({idle_s:g})"
+            )
+        silence_s = self.silence_timeout_s
+        if spec.can_report_position and silence_s is not None and silence_s <= idle_s:
+            raise ValueError(
+                f"silence_timeout_s {silence_s:g} must be longer than the idle poll interval "
+                f"({idle_s:g} s): a controller asked that seldom would be declared offline "
+                "between two polls"
+            )
         if spec.can_report_position and self.settle_s < 2 * self.moving_poll_interval_s:
             raise ValueError(
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
@@ -292,11 +306,24 @@ class RotatorSettings(_Strict):
 
     @property
     def effective_speeds_deg_s(self) -> tuple[float, float]:
-        spec = self.spec
-        return (
-            self.az_speed_deg_s or spec.nominal_speed_deg_s,
-            self.el_speed_deg_s or spec.nominal_el_speed_deg_s,
-        )
+        return self.spec.speeds_deg_s(self.az_speed_deg_s, self.el_speed_deg_s)
+
+    @property
+    def effective_idle_poll_interval_s(self) -> float:
+        """The user's, else the model's at this baud rate: idle polls take at most 5 % of the
+        line (1.0 s on fast lines; Rot2Prog at 600 baud 8.4 s)."""
+        if self.idle_poll_interval_s is not None:
+            return self.idle_poll_interval_s
+        return self.spec.default_idle_poll_interval_s(self.effective_baud)
+
+    @property
+    def effective_silence_timeout_s(self) -> float:
+        """The user's, else DEFAULT_SILENCE_TIMEOUT_S, or two idle polls plus a reply time where
+        polls are rarer than that allows: one lost reply is ridden out, two in a row are not."""
+        if self.silence_timeout_s is not None:
+            return self.silence_timeout_s
+        two_polls = 2 * self.effective_idle_poll_interval_s + self.spec.reply_timeout_s
+        return max(DEFAULT_SILENCE_TIMEOUT_S, math.ceil(two_polls * 10 - 1e-9) / 10)
 
     @property
     def effective_el_limits(self) -> tuple[float, float]:
@@ -477,6 +504,8 @@ def masked(settings: Settings) -> dict[str, Any]:
         r["topic"] = settings.rotator_topic(rs)
         r["baud"] = rs.effective_baud
         r["brake_delay_s"] = rs.effective_brake_delay_s
+        r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
+        r["silence_timeout_s"] = rs.effective_silence_timeout_s
         r["noise_deg"] = rs.effective_noise_deg
         az_speed, el_speed = rs.effective_speeds_deg_s
         r["az_speed_deg_s"] = az_speed

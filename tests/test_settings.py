@@ -282,3 +282,62 @@ def test_only_a_rotctld_port_off_loopback_is_warned_about(
     )  # fmt: skip
     without_port = text.replace("rotctld_port = 4533\n", "")
     assert config_warnings(load_settings(write(tmp_path, without_port), environ={})) == []
+
+
+# -- idle polling and silence: derived from the model's line unless set --------------------------
+@pytest.mark.parametrize("model", sorted(REGISTRY))
+def test_idle_polls_default_to_at_most_5_percent_of_the_line_and_reach_the_engine(
+    tmp_path: Path, model: str
+) -> None:
+    from bridge.app import worker_config
+
+    text = f'[[rotators]]\nid = "tower"\nmodel = "{model}"\nport = "/dev/ttyUSB0"\n'
+    r = load_settings(write(tmp_path, text), environ={}).rotators[0]
+    spec = REGISTRY[model]
+    idle_s = r.effective_idle_poll_interval_s
+    assert idle_s >= 1.0 and spec.exchange_time_s(r.effective_baud) / idle_s <= 0.05
+    silence_s = r.effective_silence_timeout_s
+    assert silence_s >= max(3.0, 2 * idle_s + spec.reply_timeout_s)  # one lost reply is no outage
+    cfg = worker_config(r)
+    assert (cfg.idle_poll_interval_s, cfg.silence_timeout_s) == (idle_s, silence_s)
+
+
+def test_the_slow_lines_poll_rarely_and_wait_longer_before_calling_it_silence(
+    tmp_path: Path,
+) -> None:
+    text = "".join(
+        f'[[rotators]]\nid = "{model}"\nmodel = "{model}"\nport = "/dev/ttyUSB{i}"\n{extra}'
+        for i, (model, extra) in enumerate(
+            [("rot2prog", ""), ("satel", ""), ("rotorez", ""), ("md01", "baud = 600\n")]
+        )
+    )
+    rotators = load_settings(write(tmp_path, text), environ={}).rotators
+    shown = [(r.effective_idle_poll_interval_s, r.effective_silence_timeout_s) for r in rotators]
+    # an MD-01 set to 600 baud polls like a Rot2Prog
+    assert shown == [(8.4, 17.6), (3.5, 9.0), (1.0, 3.0), (8.4, 17.2)]
+
+
+def test_idle_poll_and_silence_set_by_the_user_are_kept(tmp_path: Path) -> None:
+    text = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"') + (
+        "idle_poll_interval_s = 2\nsilence_timeout_s = 4\n"
+    )
+    r = load_settings(write(tmp_path, text), environ={}).rotators[0]
+    assert (r.effective_idle_poll_interval_s, r.effective_silence_timeout_s) == (2, 4)
+    text = MINIMAL + "idle_poll_interval_s = 5\n"
+    r = load_settings(write(tmp_path, text), environ={}).rotators[0]
+    assert r.effective_silence_timeout_s == 10.3  # two 5 s polls and a 0.25 s reply time
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        "silence_timeout_s = 3\n",  # a Rot2Prog is asked every 8.4 s by default
+        "idle_poll_interval_s = 2\nsilence_timeout_s = 2\n",
+    ],
+)
+def test_a_silence_timeout_shorter_than_the_idle_poll_is_refused(
+    tmp_path: Path, extra: str
+) -> None:
+    text = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"') + extra
+    with pytest.raises(ConfigError, match=r"rotators\[0\].*silence_timeout_s .* idle poll"):
+        load_settings(write(tmp_path, text), environ={})

@@ -63,18 +63,21 @@ from tests.faults.conftest import (
 # id: (model, emulator options, bridge options). Rotor speeds are faster than real rotators so
 # ten minutes hold many moves; the SatEL's are told to the bridge (it bounds a silent slew by
 # them, as a user with a faster rotor would set them); every other timing is the default.
+# the slow lines' default idle poll (Rot2Prog 8.4 s, SatEL 3.5 s) and silence timeout are longer;
+# the soak's timing (IDLE_POLL_S, offline 3 s into a silence) is the fast lines' defaults
+_TIMING = {"idle_poll_interval_s": 1.0, "silence_timeout_s": 3.0}
 ROTATORS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "ez": ("rotorez", {"speed_deg_s": 20.0, "brake_delay_s": 2.0, "jitter_deg": 1},
            {"brake_delay_s": 2.0}),
     "card": ("rotorcard", {"speed_deg_s": 20.0, "brake_delay_s": 0.0, "jitter_deg": 1}, {}),
     "dcu": ("dcu1", {"speed_deg_s": 6.0, "brake_delay_s": 2.0}, {"brake_delay_s": 2.0}),
-    "spid": ("rot2prog", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, {}),
+    "spid": ("rot2prog", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, dict(_TIMING)),
     "md": ("md01", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}, {}),
     "sat": ("satel", {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
-            {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0}),
+            {"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, **_TIMING}),
 }  # fmt: skip
 AZEL = ("rot2prog", "md01", "satel")
-IDLE_POLL_S = 1.0  # the bridge's default idle poll: "within one poll"
+IDLE_POLL_S = 1.0  # the idle poll every rotator here has: "within one poll"
 SATEL_STOP_REPORT_S = 2.0  # after a stop the SatEL reports within its reply time, or never
 RECOVERY_SLACK_S = 1.0  # a fresh retained snapshot is itself a broker round trip or two
 
