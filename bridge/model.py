@@ -26,7 +26,6 @@ class Source(enum.StrEnum):
 
     MQTT = "mqtt"
     ROTCTLD = "rotctld"
-    BRIDGE = "bridge"
 
 
 @dataclass(frozen=True)

@@ -212,7 +212,7 @@ class RotatorSettings(_Strict):
     az_max_deg: float | None = None
     el_min_deg: float | None = None
     el_max_deg: float | None = None
-    # Hamlib rotctld-compatible TCP port (bridge/rotctld.py); no authentication, hence loopback
+    # Hamlib rotctld-compatible TCP port (bridge/rotctld/); no authentication, hence loopback
     rotctld_port: int | None = Field(None, ge=1, le=65535)
     rotctld_bind: str = "127.0.0.1"
     park_az_deg: float | None = None  # where rotctld's park (K) turns the antenna

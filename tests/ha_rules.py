@@ -1,5 +1,5 @@
 """Home Assistant's MQTT discovery rules, as the tests check them (from the HA docs for each
-platform and from HA core's validation: ../shared/reference/ha-discovery.md §4-§8)."""
+platform and from HA core's validation of discovery payloads)."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ What this is: a registry (python-can style) of controller emulators that tests, 
 
 Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
-   codec would share its misreadings (ARCHITECTURE.md, rule 5).
+   codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
    (SPID, SatEL) adds entries here and reuses physics.Axis, base.PacedLine and pty.EmulatedPort.
 """

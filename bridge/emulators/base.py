@@ -1,14 +1,14 @@
 """Shared pieces of the device emulators: the responder contract, ground truth, the paced line.
 
 What this is: the seam between a controller emulator (sans-IO, one module per controller
-family: rotorez.py today, SPID and SatEL later) and the pty layer (pty.py) that puts any of them
+family: rotorez.py, spid.py, satel.py) and the pty layer (pty.py) that puts any of them
 on a pseudo-terminal. Nothing here knows a protocol.
 
 Frame: none of its own. A responder takes raw bytes in (`receive`) and hands raw bytes out when
 they have finished "arriving" on the wire (`due_output`).
 
-Source documents: /work/shared/ARCHITECTURE.md (emulators are written from the documents and are
-judged by Hamlib), /work/shared/protocols/hamlib-and-rotctld.md sections 1-2 (how a client
+Source documents: the controllers' own documents (emulators are written from those, never from
+our codecs, and Hamlib's rotctl judges them) and Hamlib 4.5.4 on a socat pty pair (how a client
 drives a fake device on a pty).
 
 Rules:

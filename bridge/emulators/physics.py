@@ -6,9 +6,9 @@ SatEL/SPID families) and decides *when* to move; the axis only knows *how* it mo
 
 Frame: none (no wire here). Angles are degrees, speeds degrees per second, times seconds.
 
-Source documents: /work/shared/protocols/rotor-ez.md and the Idiom Press texts in
-/work/shared/seeds/ (Hy-Gain rotors turn 0..360 against an end stop, so the short way round is
-not always available; a rotator can get stuck; an operator can turn it from the front panel).
+Source documents: the Idiom Press Rotor-EZ texts and Hamlib's rotorez notes (Hy-Gain rotors
+turn 0..360 against an end stop, so the short way round is not always available; a rotator can
+get stuck; an operator can turn it from the front panel).
 
 Rules:
 1. Pure: no clock and no threads. Every method that depends on time takes `now` (seconds).

@@ -7,9 +7,8 @@ the pty file descriptors; the responder itself is plain data guarded by a lock.
 Frame: none; bytes pass through unchanged. The master side runs in packet mode (TIOCPKT) so the
 thread also sees the client's input flushes, which is how an open by pyserial or Hamlib shows up.
 
-Source documents: /work/shared/protocols/hamlib-and-rotctld.md sections 1-2 (socat pty recipe;
-every client flushes pending input when it opens the port), /work/shared/ARCHITECTURE.md
-(the bridge opens ports by stable path, e.g. /dev/serial/by-id/...).
+Source documents: Hamlib 4.5.4 driven over a socat pty pair (every client flushes pending input
+when it opens the port); the bridge opens ports by stable path, e.g. /dev/serial/by-id/...
 
 Rules:
 1. Only the device thread touches the pty descriptors. Calls from other threads (unplug, replug,

@@ -13,10 +13,10 @@ Frame: plain ASCII, case-sensitive, no echo, no CR/LF in replies.
   banner `C2000 IDIOM V1.4S ` (trailing space); `V` prints the same text.
 
 Source documents (the emulator is written from these, never from bridge/protocols):
-  /work/shared/seeds/idiom-press-rotor-ez-protocol.txt (command table, FAQ, analog note),
-  /work/shared/seeds/rotorez-command-reference-email.txt (Idiom's 2003 letter),
-  /work/shared/seeds/hamlib-README.rotorez.txt (0xE0 at power-on, the banner),
-  /work/shared/protocols/rotor-ez.md. Where the FAQ swaps `V` and `AI1;`, the table wins.
+  Idiom Press "Rotor-EZ Rotator Control Protocol" (command table, FAQ, analog note),
+  Idiom Press's 2003 command reference letter to Hamlib,
+  Hamlib's README.rotorez (0xE0 at power-on, the banner),
+  Hamlib 4.5.4's rotorez backend on the wire. Where the FAQ swaps `V` and `AI1;`, the table wins.
 
 Rules:
 1. Sans-IO: bytes in through receive(data, now), bytes out through due_output(now); the caller

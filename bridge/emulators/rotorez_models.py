@@ -6,9 +6,9 @@ never transmits).
 
 Frame: see rotorez.py. This module only names the commands each model accepts.
 
-Source documents: /work/shared/seeds/idiom-press-rotor-ez-protocol.txt (command table: which
-letters exist on which board; brake FAQ), /work/shared/seeds/rotorez-command-reference-email.txt
-(DCU-1 subset), /work/shared/protocols/rotor-ez.md section 1 (Hamlib stops a DCU-1 with AS1;).
+Source documents: Idiom Press "Rotor-EZ Rotator Control Protocol" (command table: which letters
+exist on which board; brake FAQ), Idiom Press's 2003 command reference letter to Hamlib (DCU-1
+subset), Hamlib 4.5.4's rotorez backend (it stops a DCU-1 with AS1;).
 
 Rules:
 1. A model is a ModelSpec: flags only, no code. A command a model lacks is an invalid command.

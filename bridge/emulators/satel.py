@@ -22,10 +22,10 @@ the controller prints ends in `line_ending` (CR LF, or LF only). The status repo
     <empty>                             (`trailing_blank_lines` of them, 2 by default)
 
 Source documents (written from these, never from bridge/protocols):
-  /work/shared/protocols/satel.md (Hamlib 4.5.4 satel.c notes, verified traffic, checklist),
-  /work/shared/seeds/satel-azel-manual-excerpt.txt and the SatEL Az-EL manual pages 12 and 15
-  (manualshive.com): 50 stored points, excess lost; stored points and `p` do nothing while
-  automatic motion is disabled; `*` = power cycle; the az/el values live in EEPROM.
+  Hamlib 4.5.4's satel backend (satel.c and its author's notes, its traffic seen with rotctl),
+  the SatEL Az-EL instruction manual, Appendix A and pages 12 and 15 (manualshive.com): 50
+  stored points, excess lost; stored points and `p` do nothing while automatic motion is
+  disabled; `*` = power cycle; the az/el values live in EEPROM.
 Rotor speeds are not documented: by default az 8 deg/s, el 4 deg/s, so that a full slew (45 s,
 22.5 s) fits inside Hamlib's 60 s read timeout, which its author sized to wait out a slew.
 

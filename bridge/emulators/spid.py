@@ -12,8 +12,8 @@ Rot1Prog, az = 100*H1 + 10*H2 + H3 - 360 with H4 = ASCII '0'. Replies carry RAW 
 degrees + 360 (Rot1Prog, 5 bytes). MD-01 debug lines are `<digits>: <text>\r\n`.
 
 Source documents (the emulator is written from these, never from bridge/protocols):
-  /work/shared/protocols/spid.md (all of it; section 8 is the emulator checklist),
-  /work/shared/seeds/rot2prog-pypi-page.txt (frame tables, resolution table, examples).
+  Hamlib 4.5.4's spid backend (spid.c, spid.txt) and its traffic seen with rotctl,
+  the rot2prog package's PyPI page (frame tables, resolution table, examples).
 
 Rules:
 1. Sans-IO: bytes in through receive(data, now), bytes out through due_output(now); the caller

@@ -8,8 +8,8 @@ debug lines on the control port).
 Frame: see spid.py. This module names the bytes, what each model does with them, and holds the
 two pure frame layouts (position reply out, set command in) so spid.py keeps to behaviour.
 
-Source documents: /work/shared/protocols/spid.md sections 1-4 and 8 (Hamlib 4.5.4 caps and wire
-traces, spid.txt notes), /work/shared/seeds/rot2prog-pypi-page.txt (the resolution table).
+Source documents: Hamlib 4.5.4's spid backend (its caps, spid.txt notes, traffic seen with
+rotctl), the rot2prog package's PyPI page (the resolution table).
 
 Rules:
 1. A model is a ModelSpec: values and flags only, no code. A command byte a model lacks makes the

@@ -133,7 +133,7 @@ def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
 
 
 def test_emulators_never_import_the_bridge_codec_engine_or_paho() -> None:
-    """ARCHITECTURE rule 5: an emulator built on our own codec would share its misreadings."""
+    """An emulator built on our own codec would share its misreadings (emulators/__init__.py)."""
     import ast
 
     forbidden = ("bridge.protocols", "bridge.engine", "bridge.mqtt", "paho")

@@ -1,7 +1,7 @@
 """SPID family on the wire: bytes in -> bytes out, with a fake clock (plain floats).
 
-Every literal frame below is copied from /work/shared/protocols/spid.md or the rot2prog PyPI page;
-the decoder here is the fact sheet's formula, written out again on purpose.
+Every literal frame below is taken from Hamlib 4.5.4's spid traffic or the rot2prog PyPI page;
+the decoder here is their formula, written out again on purpose.
 """
 
 from __future__ import annotations
