@@ -1,0 +1,313 @@
+"""One RotatorSession wired to one device emulator in-process, in virtual time.
+
+What this is: the proof bench of ARCHITECTURE.md rule 10. The session (engine/session.py) and an
+emulator (emulators/, a sans-IO Responder written from the documents, never from our codecs)
+talk through a simulated serial line; a fake clock jumps from one thing that can happen to the
+next, so minutes of rotor time cost milliseconds.
+
+How it drives the session: exactly as engine/worker.py does (``start``, ``link_up``, then
+``commands`` / ``bytes_received`` / ``tick`` when ``next_wakeup`` has passed and nothing else
+acted), and it carries out the actions: ``Write`` bytes go on the line to the device,
+``Publish`` and ``Report`` are recorded with the virtual time they came at.
+
+Rules:
+1. Virtual time only moves forward, to the earliest of: the session's ``next_wakeup``, the
+   device's ``next_wakeup`` (a byte of its output due, an arrival, a brake set), the arrival of
+   the next byte the host wrote, or the end of the run asked for.
+2. The host's bytes are paced like the device's own output: 10 bits a byte at the configured
+   baud rate, one after another (``base.PacedLine``); each byte reaches the device when it has
+   completely arrived. The device's output is already paced by the device.
+3. Faults act on the line, never on either side: a write can be lost or garbled on its way to
+   the device (``drop_writes``, ``garble_writes``, ``set_deaf``, ``to_device``), the device's
+   output on its way to the host (``set_silent``, ``to_host``). Lost writes stay in ``writes``
+   (marked lost): they are what the bridge sent, the device's log is what arrived.
+4. A session that asks to be woken at or before the present, again and again, spins the real
+   worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
+   (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
+   hanging the test.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from bridge import emulators
+from bridge.app import worker_config
+from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
+from bridge.engine.mailbox import Mailbox
+from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
+from bridge.model import MotionState, RotatorStatus, SetOption, Stop, Target
+from bridge.settings import RotatorSettings
+
+WALL_EPOCH_S = 1_750_000_000.0  # the wall clock reads this at virtual time 0
+MAX_STEPS_AT_ONE_INSTANT = 20  # bytes, a tick, a command: a few things may share an instant
+CLOCK_GRAIN_S = 1e-6  # how far a real monotonic clock has moved by the next loop, at least
+SPIN_LIMIT = 1000
+
+
+class BusyLoop(AssertionError):
+    """The session keeps asking to be woken without time passing (rule 4)."""
+
+
+@dataclass(frozen=True)
+class Sent:
+    """One frame the session wrote, and whether the line delivered it (rule 3)."""
+
+    t: float
+    data: bytes
+    lost: bool = False
+
+
+@dataclass
+class _WriteFault:
+    data: bytes
+    replacement: bytes  # b"" drops the write
+    count: int
+
+
+class VirtualRotator:
+    """A rotator under test: the session, its emulated controller, a line and a fake clock."""
+
+    def __init__(
+        self,
+        model: str,
+        *,
+        settings: Mapping[str, Any] | None = None,
+        emulator: Mapping[str, Any] | None = None,
+        options: dict[str, bool] | None = None,
+        locked: bool = False,
+        connect: bool = True,
+        start_s: float = 0.0,
+    ) -> None:
+        self.now = start_s
+        rotator = RotatorSettings.model_validate(
+            {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
+        )
+        self.settings = rotator
+        self.cfg = worker_config(rotator)
+        self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
+        self.session = RotatorSession(self.cfg, options=options, locked=locked)
+        self.mailbox = Mailbox()
+        self.connected = False
+        self.writes: list[Sent] = []
+        self.statuses: list[tuple[float, RotatorStatus]] = []
+        self.events: list[tuple[float, Report]] = []
+        self.to_device: Callable[[bytes, float], bytes] | None = None  # rule 3: custom faults
+        self.to_host: Callable[[bytes, float], bytes] | None = None
+        self.received: list[tuple[float, bytes]] = []  # device output the host got, by chunk
+        self.lost_to_host = 0  # bytes of device output lost on the line
+        self._tx = PacedLine(self.cfg.baud)  # host -> device (rule 2)
+        self._write_faults: list[_WriteFault] = []
+        self._silent = False
+        self._deaf = False
+        self._steps_at_now = 0
+        self._spin_run = 0
+        self.spins: list[float] = []  # when the loop turned with nothing to do (rule 4)
+        self._do(self.session.start(self.now))
+        if connect:
+            self.link_up()
+
+    def close(self) -> None:
+        self.mailbox.close()
+
+    def __enter__(self) -> VirtualRotator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- what a test looks at -----------------------------------------------------------------
+    @property
+    def status(self) -> RotatorStatus:
+        """The last status published."""
+        return self.statuses[-1][1]
+
+    @property
+    def state(self) -> MotionState:
+        return self.status.state
+
+    def truth(self) -> RotatorState:
+        """The emulator's ground truth now (no jitter, no rounding)."""
+        return self.device.state(self.now)
+
+    def frames(self, *outcomes: str, since: float = float("-inf")) -> list[LoggedFrame]:
+        """Frames as the controller understood them (optionally only these outcomes)."""
+        wanted = set(outcomes)
+        return [
+            f for f in self.device.log if f.time_s >= since and (not wanted or f.outcome in wanted)
+        ]
+
+    def sent(self, since: float = float("-inf")) -> list[bytes]:
+        """What the session wrote (lost writes included), in order."""
+        return [w.data for w in self.writes if w.t >= since]
+
+    def errors(self, kind: str | None = None, since: float = float("-inf")) -> list[Report]:
+        return [r for t, r in self.events if t >= since and (kind is None or r.kind == kind)]
+
+    def published(self, since: float = float("-inf")) -> list[RotatorStatus]:
+        return [s for t, s in self.statuses if t >= since]
+
+    # -- commands (through a real mailbox, taken at once as the worker does) -----------------
+    def command(self, *commands: Target | Stop | SetOption) -> None:
+        for c in commands:
+            self.mailbox.put(c)
+        self._take()
+
+    def target(self, az_deg: float | None, el_deg: float | None = None) -> None:
+        self.command(Target(az_deg, el_deg))
+
+    def stop(self) -> None:
+        self.command(Stop())
+
+    def option(self, name: str, enabled: bool) -> None:
+        self.command(SetOption(name, enabled))
+
+    def lock(self, locked: bool) -> None:
+        self.mailbox.put_lock(locked)
+        self._take()
+
+    def _take(self) -> None:
+        batch = self.mailbox.take()
+        if batch:
+            self._do(self.session.commands(batch, self.now))
+
+    # -- the link -------------------------------------------------------------------------------
+    def link_up(self) -> None:
+        self.connected = True
+        self._do(self.session.link_up(self.now, WALL_EPOCH_S + self.now))
+
+    def link_down(self, reason: str | None = "virtual port unplugged") -> None:
+        self.connected = False
+        self._tx.clear()  # whatever was still on its way is lost with the adapter
+        self._do(self.session.link_down(reason, self.now))
+
+    # -- faults (rule 3) ------------------------------------------------------------------------
+    def drop_writes(self, data: bytes, count: int = 1) -> None:
+        """The next ``count`` writes equal to ``data`` are lost on the way to the device."""
+        self._write_faults.append(_WriteFault(data, b"", count))
+
+    def garble_writes(self, data: bytes, replacement: bytes, count: int = 1) -> None:
+        """The next ``count`` writes equal to ``data`` arrive as ``replacement``."""
+        self._write_faults.append(_WriteFault(data, replacement, count))
+
+    def set_silent(self, silent: bool) -> None:
+        """Everything the device transmits is lost (it still hears and obeys)."""
+        self._silent = silent
+
+    def set_deaf(self, deaf: bool) -> None:
+        """Everything the host writes is lost before the device hears it."""
+        self._deaf = deaf
+
+    # -- front panel ----------------------------------------------------------------------------
+    def jam(self) -> None:
+        self.device.jam(self.now)
+
+    def unjam(self) -> None:
+        self.device.unjam(self.now)
+
+    def power_cycle(self) -> None:
+        self.device.power_cycle(self.now)
+
+    def press_brake(self) -> bool:
+        return self.device.press_brake(self.now)
+
+    def manual_rotate(self, az_deg: float) -> None:
+        self.device.manual_rotate(az_deg, self.now)
+
+    # -- time -----------------------------------------------------------------------------------
+    def run_for(self, seconds: float) -> None:
+        end = self.now + seconds
+        while self.now < end:
+            self._step(end)
+
+    def run_until(
+        self, predicate: Callable[[VirtualRotator], object], timeout_s: float, what: str = ""
+    ) -> float:
+        """Run until ``predicate(self)`` holds (checked after every step: between two things
+        that happen, nothing changes); the virtual time it took. AssertionError (with the last
+        status and the ground truth) if it does not within ``timeout_s``."""
+        start, end = self.now, self.now + timeout_s
+        while not predicate(self):
+            if self.now >= end:
+                raise AssertionError(
+                    f"not within {timeout_s:g} s of rotor time: {what or predicate}\n"
+                    f"  t={self.now:.3f} status={self.status}\n  truth={self.truth()}\n"
+                    f"  last writes={self.sent(since=self.now - 5)}"
+                )
+            self._step(end)
+        return self.now - start
+
+    def run_until_state(self, state: MotionState, timeout_s: float) -> float:
+        return self.run_until(lambda h: h.state is state, timeout_s, f"state {state.value}")
+
+    def _step(self, until: float) -> None:
+        times = [until]
+        if self.connected:
+            times.append(self.session.next_wakeup())
+        device_t = self.device.next_wakeup(self.now)
+        if device_t is not None:
+            times.append(device_t)
+        line_t = self._tx.next_due_s()
+        if line_t is not None:
+            times.append(line_t)
+        t = max(self.now, min(times))
+        if t > self.now:
+            self._steps_at_now = self._spin_run = 0
+        else:
+            self._steps_at_now += 1
+        if self._steps_at_now > MAX_STEPS_AT_ONE_INSTANT:
+            t = self.now + CLOCK_GRAIN_S  # rule 4
+            self.spins.append(self.now)
+            self._spin_run += 1
+            self._steps_at_now = 0
+            if self._spin_run > SPIN_LIMIT:
+                raise BusyLoop(
+                    f"no time passes at t={self.now}: session next_wakeup "
+                    f"{self.session.next_wakeup()}, status {self.status}"
+                )
+        self.now = t
+        arrived = self._tx.due(t)
+        if arrived:
+            self.device.receive(arrived, t)
+        out = self.device.due_output(t)
+        if out and self.to_host is not None:
+            out = self.to_host(out, t)
+        if out and (self._silent or not self.connected):
+            self.lost_to_host += len(out)
+            out = b""
+        if self.connected:
+            acted = False
+            if out:
+                self.received.append((t, out))
+                actions = self.session.bytes_received(out, t)
+                acted = bool(actions)
+                self._do(actions)
+            if not acted and t >= self.session.next_wakeup():
+                self._do(self.session.tick(t))
+
+    def _do(self, actions: Iterable[Action]) -> None:
+        for action in actions:
+            if isinstance(action, Write):
+                self._write(action.data)
+            elif isinstance(action, Publish):
+                self.statuses.append((self.now, action.status))
+            elif isinstance(action, Report):
+                self.events.append((self.now, action))
+
+    def _write(self, data: bytes) -> None:
+        assert self.connected, f"the session wrote {data!r} while its link was down"
+        wire = data
+        for fault in self._write_faults:
+            if fault.count > 0 and fault.data == data:
+                fault.count -= 1
+                wire = fault.replacement
+                break
+        if self.to_device is not None:
+            wire = self.to_device(wire, self.now)
+        if self._deaf:
+            wire = b""
+        self.writes.append(Sent(self.now, data, lost=wire != data))
+        if wire:
+            self._tx.send(wire, self.now)
