@@ -1,0 +1,449 @@
+"""A Rotor-EZ in virtual time: the session's rules as the controller and its user see them.
+
+Every scenario runs one RotatorSession against the Rotor-EZ emulator (written from Idiom Press's
+documents) with the bridge's real defaults: 6 deg/s, a five-second brake delay, polls every
+second idle and every 0.2 s while moving. What is asserted is what a user would notice: the
+frames the controller understood (its log and their outcomes), where the rotor really is (the
+emulator's ground truth), the statuses published and the error events.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.rotorez_models import Outcome
+from bridge.model import MotionState
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+QUERY = b"AI1;"
+# what the Rotor-EZ does with a bearing while it turns (stops and drops it) or brakes (drops it)
+DISOBEYED = (Outcome.IGNORED_RETARGET, Outcome.IGNORED_BRAKE_DELAY)
+
+
+def ready(rig: Rig, **kw: object) -> VirtualRotator:
+    """Connected, read, and through the brake window assumed at start-up: idle."""
+    v = rig("rotorez", **kw)
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def commands(v: VirtualRotator, since: float) -> list[tuple[bytes, str]]:
+    """What the controller understood since ``since``, polls left out."""
+    return [(f.data, f.outcome) for f in v.frames(since=since) if f.data != QUERY]
+
+
+def at(v: VirtualRotator, az_deg: float) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return v.state is IDLE and abs(truth.az_deg - az_deg) < 1e-6 and not truth.is_moving
+
+    return there
+
+
+def assert_never_disobeyed(v: VirtualRotator) -> None:
+    """No bearing ever reached the controller while it turned or braked (ARCHITECTURE rule 7)."""
+    assert v.frames(*DISOBEYED) == []
+
+
+def brake_set_times(v: VirtualRotator, after: float) -> list[float]:
+    return [e.time_s for e in v.device.events if e.kind == "brake set" and e.time_s > after]
+
+
+# -- brake delay and re-target while turning (session rule 4, motion rule 4) ------------------
+def test_a_new_target_while_turning_stops_waits_out_the_brake_then_goes(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(180)
+    v.run_for(10)
+    assert v.truth().is_moving and v.state is MOVING
+    t = v.now
+    v.target(90)
+    v.run_until(at(v, 90), 120, "at 90")
+
+    assert commands(v, t) == [(b";", Outcome.STOP), (b"AP1090\r", Outcome.EXECUTED)]
+    stop, go = (f for f in v.frames(since=t) if f.data != QUERY)
+    assert go.time_s >= brake_set_times(v, stop.time_s)[0]  # the controller's brake window
+    assert go.time_s - stop.time_s >= v.cfg.motion.brake_delay_s
+    assert_never_disobeyed(v)
+    assert v.errors() == []
+
+
+def test_a_target_right_after_arrival_waits_for_the_brake_window(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(30)
+    v.run_until_state(MotionState.BRAKING, 30)  # arrival seen; the brake is setting
+    assert v.truth().in_brake_delay
+    t = v.now
+    v.target(60)
+    v.run_until(at(v, 60), 60, "at 60")
+
+    assert commands(v, t) == [(b"AP1060\r", Outcome.EXECUTED)]
+    assert v.frames(Outcome.EXECUTED)[-1].time_s >= brake_set_times(v, t - 10)[0]
+    assert_never_disobeyed(v)
+
+
+# -- stop verified and repeated (session rule 5) ----------------------------------------------
+@pytest.mark.parametrize("fault", ["dropped", "garbled"])
+def test_a_stop_that_did_not_arrive_is_sent_again(rig: Rig, fault: str) -> None:
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    t = v.now
+    if fault == "dropped":
+        v.drop_writes(b";")
+    else:
+        v.garble_writes(b";", b":")  # one bit flipped on the way
+    v.stop()
+    v.run_for(15)
+
+    stops = [w for w in v.writes if w.t >= t and w.data == b";"]
+    assert [w.lost for w in stops] == [True, False]
+    assert stops[1].t - stops[0].t >= v.cfg.motion.stop_resend_s
+    heard = [(b":", Outcome.INVALID)] if fault == "garbled" else []
+    assert commands(v, t) == [*heard, (b";", Outcome.STOP)]  # the second one took
+    assert not v.truth().is_moving and v.truth().az_deg < 100
+    assert v.state is IDLE and v.errors() == []
+
+
+def test_after_three_stops_that_did_not_take_an_error_says_so(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    t = v.now
+    v.drop_writes(b";", count=3)
+    v.stop()
+    v.run_for(20)
+
+    stops = [w for w in v.writes if w.t >= t and w.data == b";"]
+    assert [w.lost for w in stops] == [True, True, True, False]
+    [error] = v.errors()
+    assert error.kind == "stop" and "3 stop commands" in error.message
+    assert commands(v, t) == [(b";", Outcome.STOP)]
+    assert not v.truth().is_moving
+
+
+# -- stall (motion rule 3) --------------------------------------------------------------------
+def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    t = v.now
+    assert v.truth().is_moving  # the motor runs, the rotor does not turn
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+
+    took = v.now - t
+    assert v.cfg.motion.stall_timeout_s <= took <= v.cfg.motion.stall_timeout_s + 1
+    v.run_for(1)
+    assert commands(v, t) == [(b";", Outcome.STOP)]
+    assert not v.truth().is_moving
+    assert v.state is MotionState.STALLED and v.status.target_az_deg is None
+
+    v.unjam()  # freed: a new target is taken once the brake window has passed
+    t = v.now
+    v.target(200)
+    v.run_until(at(v, 200), 120, "at 200 after the stall")
+    assert commands(v, t) == [(b"AP1200\r", Outcome.EXECUTED)]
+    assert_never_disobeyed(v)
+
+
+# -- manual front-panel move (motion rule 5, session rule 7) ----------------------------------
+def test_a_front_panel_move_is_shown_as_moving_without_a_command(rig: Rig) -> None:
+    v = ready(rig)
+    t = v.now
+    v.manual_rotate(100)
+    v.run_until(lambda v: v.state is MOVING, 2, "moving")
+    assert v.status.target_az_deg is None and v.status.last_command_source is None
+    v.run_until(at(v, 100), 60, "idle at 100")
+
+    seen = v.published(since=t)
+    moving = [s.bearing_deg for s in seen if s.state is MOVING]
+    assert moving == sorted(moving) and len(moving) > 10  # the dashboard followed it
+    assert all(s.target_az_deg is None for s in seen)
+    assert abs(v.status.bearing_deg - 100) <= 2
+    assert commands(v, t) == []  # the bridge sent nothing but polls
+
+
+def after_next_poll(v: VirtualRotator) -> float:
+    """Run until an idle poll has been answered; when it was asked."""
+    n = len(v.frames(Outcome.QUERY))
+    v.run_until(lambda v: len(v.frames(Outcome.QUERY)) > n, 2, "a poll")
+    asked = v.frames(Outcome.QUERY)[-1].time_s
+    v.run_for(0.05)  # its answer
+    return asked
+
+
+def test_a_target_during_a_front_panel_move_asks_first_and_does_not_cut_it_blind(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    last_poll = after_next_poll(v)
+    v.run_until(lambda v: v.now >= last_poll + 0.2, 1)
+    v.manual_rotate(100)  # begun after the last poll: the bridge still believes "idle"
+    v.run_for(0.6)
+    assert v.state is IDLE
+    t = v.now
+    v.target(200)
+    v.run_until(at(v, 200), 120, "at 200")
+
+    first, *_ = (f for f in v.frames(since=t))
+    assert first.data == QUERY  # a fresh reading first: it shows the rotor turning
+    assert commands(v, t) == [(b";", Outcome.STOP), (b"AP1200\r", Outcome.EXECUTED)]
+    assert_never_disobeyed(v)
+
+
+def test_a_target_after_a_quiet_spell_waits_for_a_fresh_reading(rig: Rig) -> None:
+    v = ready(rig)
+    last_poll = after_next_poll(v)
+    v.run_until(lambda v: v.now >= last_poll + 0.8, 1)  # the last reading is 0.8 s old
+    t = v.now
+    v.target(40)
+    v.run_until(at(v, 40), 60, "at 40")
+
+    frames = v.frames(since=t)
+    assert frames[0].data == QUERY and frames[1].data == b"AP1040\r"
+    assert frames[1].time_s - t < v.cfg.moving_poll_interval_s  # one exchange, not a poll cycle
+
+
+# -- arrival with analog jitter (motion rule 1, status rule 1) --------------------------------
+def test_a_jittering_reading_arrives_goes_idle_and_the_bearing_does_not_flap(rig: Rig) -> None:
+    v = ready(rig, emulator={"jitter_deg": 2})
+    v.target(123)
+    v.run_until(at(v, 123), 60, "arrived at 123")
+    arrived = v.now
+    bearing = v.status.bearing_deg
+    assert bearing is not None and abs(bearing - 123) <= 2
+    v.run_for(120)
+
+    answers = b"".join(data for t, data in v.received if t > arrived)
+    assert b";123" in answers and b";125" in answers  # the pot wanders; the rotor stands still
+    assert v.published(since=arrived + 1e-9) == []  # nothing new to show, nothing published
+    assert v.state is IDLE and v.status.bearing_deg == bearing
+
+
+# -- streams of targets (targets.py rule 2) ---------------------------------------------------
+def test_a_dragged_slider_reaches_the_wire_as_a_few_targets_and_ends_at_the_last(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    t = v.now
+    for az in range(100, 200):  # 100 targets, 10 ms apart
+        v.target(az)
+        v.run_for(0.01)
+    v.run_until(at(v, 199), 120, "at 199")
+
+    bearings = [f for f in v.frames(since=t) if f.data.startswith(b"AP1")]
+    assert 1 <= len(bearings) <= 3
+    assert bearings[-1].data == b"AP1199\r" and bearings[-1].outcome == Outcome.EXECUTED
+    assert_never_disobeyed(v)
+    assert v.status.target_az_deg is None and v.errors() == []
+
+
+# -- polling (session rule 3) -----------------------------------------------------------------
+def test_polls_are_slow_while_idle_and_fast_while_moving(rig: Rig) -> None:
+    v = ready(rig)
+    t = v.now
+    v.run_for(10)
+    idle = [f.time_s for f in v.frames(Outcome.QUERY, since=t)]
+    v.target(200)
+    v.run_for(0.5)
+    t = v.now
+    v.run_for(10)
+    moving = [f.time_s for f in v.frames(Outcome.QUERY, since=t)]
+
+    def gaps(times: list[float]) -> set[float]:
+        return {round(b - a, 2) for a, b in zip(times, times[1:], strict=False)}
+
+    assert gaps(idle) == {v.cfg.idle_poll_interval_s}
+    assert gaps(moving) == {v.cfg.moving_poll_interval_s}
+
+
+# -- silence, offline, recovery (session rule 2) ----------------------------------------------
+def test_a_silent_controller_goes_offline_and_comes_back_when_it_answers(rig: Rig) -> None:
+    v = rig("rotorez")
+    assert not v.status.available  # nothing read yet
+    v.run_until(lambda v: v.status.available, 1, "available after the first reading")
+    v.run_until_state(IDLE, 10)
+    v.set_silent(True)
+    silent_from = v.now
+    v.run_until(lambda v: not v.status.available, 10, "offline")
+
+    took = v.now - silent_from
+    assert v.cfg.silence_timeout_s - 1 <= took <= v.cfg.silence_timeout_s + 0.5
+    assert v.state is MotionState.OFFLINE and v.status.connected
+    [error] = v.errors()
+    assert error.kind == "serial" and "stopped answering" in error.message
+    v.run_for(10)
+    assert len(v.frames(Outcome.QUERY, since=v.now - 10)) >= 9  # it keeps asking
+
+    v.set_silent(False)
+    back_from = v.now
+    v.run_until(lambda v: v.status.available, 5, "available again")
+    assert v.now - back_from <= v.cfg.idle_poll_interval_s + 0.1
+    v.run_until_state(IDLE, 10)
+    assert len(v.errors()) == 1
+
+
+def test_a_target_while_offline_is_refused_and_nothing_is_sent(rig: Rig) -> None:
+    v = ready(rig)
+    v.set_silent(True)
+    v.run_until(lambda v: not v.status.available, 10, "offline")
+    t = v.now
+    v.target(100)
+    v.run_for(5)
+
+    [refused] = v.errors("refused")
+    assert refused.message == "rotator offline" and refused.command == "target az 100"
+    assert commands(v, t) == []
+
+
+def test_garbled_replies_move_no_bearing_and_are_reported_at_a_measured_rate(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(100)
+    v.run_until(at(v, 100), 60, "at 100")
+    bearing = v.status.bearing_deg
+    t = v.now
+    v.to_host = lambda data, now: data.replace(b"1", b"\xff")  # ";100" arrives as ";\xff00"
+    v.run_for(60)
+
+    assert {s.bearing_deg for s in v.published(since=t)} == {bearing}
+    protocol = v.errors("protocol")
+    assert len(protocol) == 2  # once per junk_report_interval_s (30 s), not once a poll
+    assert protocol[0].message == "controller sent 4 bytes that are no valid reply; ignored"
+    assert [e.message for e in v.errors("serial")] == [
+        "controller on /dev/ttyVIRTUAL stopped answering (no valid reply for 3 s)"
+    ]
+    assert v.state is MotionState.OFFLINE
+
+    v.to_host = None
+    v.run_until_state(IDLE, 10)
+    assert v.status.bearing_deg == bearing
+
+
+# -- options (session rule 6) -----------------------------------------------------------------
+OPTIONS = {"jam": False, "overshoot": True}  # both differ from the board's jumpers
+
+
+def test_options_are_applied_on_connect_and_again_after_a_power_cycle(rig: Rig) -> None:
+    v = ready(rig, options=dict(OPTIONS))
+    v.run_for(1)
+    assert {k: v.truth().options[k] for k in OPTIONS} == OPTIONS
+    assert sorted(commands(v, 0)) == [(b"O", "option"), (b"V", "version"), (b"j", "option")]
+
+    v.power_cycle()  # the board forgets: jam protection back on, overshoot off
+    t = v.now
+    assert v.truth().options["jam"] is True
+    v.run_for(5)
+
+    assert sorted(commands(v, t)) == [(b"O", "option"), (b"j", "option")]
+    assert {k: v.truth().options[k] for k in OPTIONS} == OPTIONS
+    assert v.status.options == OPTIONS and v.errors() == []
+
+
+def test_options_are_refreshed_while_idle(rig: Rig) -> None:
+    v = ready(rig, options={"unstick": True})
+    v.run_for(1)
+    t = v.now
+    v.run_for(130)
+    refreshes = [f.time_s for f in v.frames(since=t) if f.data == b"S"]
+    assert len(refreshes) == 2 and refreshes[1] - refreshes[0] >= 60
+
+
+def test_an_option_set_while_turning_waits_until_the_rotor_rests(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(100)
+    v.run_for(3)
+    t = v.now
+    v.option("unstick", True)
+    v.run_until(at(v, 100), 60)
+    v.run_for(1)
+
+    [letter] = [f for f in v.frames(since=t) if f.data == b"S"]
+    arrived = next(e.time_s for e in v.device.events if e.kind == "arrived")
+    assert letter.time_s > arrived
+    assert v.truth().options["unstick"] is True
+
+
+# -- the lock (session rule 5) ----------------------------------------------------------------
+def test_lock_on_stops_even_an_idle_rotor_and_refuses_targets_lock_off_allows(rig: Rig) -> None:
+    v = ready(rig)
+    t = v.now
+    v.lock(True)
+    assert v.sent(since=t) == [b";"]  # at once, though the bridge believes it idle
+    assert v.status.locked
+    v.run_for(1)
+    v.target(100)
+    v.run_for(5)
+
+    [refused] = v.errors("refused")
+    assert refused.message == "rotator is locked" and refused.command == "target az 100"
+    assert [f.data for f in v.frames(since=t) if f.data != QUERY] == [b";"]
+
+    v.lock(False)
+    v.run_for(0.5)
+    assert not v.status.locked
+    v.target(100)
+    v.run_until(at(v, 100), 60, "at 100 after unlocking")
+
+
+def test_lock_on_stops_a_turning_rotor_and_drops_the_target_waiting_for_the_brake(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    v.target(300)
+    v.run_for(10)
+    v.target(50)  # stop first, then this one after the brake window
+    v.run_for(1)
+    t = v.now
+    v.lock(True)
+    v.run_for(30)
+
+    assert not v.truth().is_moving
+    assert [f.data for f in v.frames(since=t - 1) if f.data != QUERY] == [b";", b";"]
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
+    assert v.status.target_az_deg is None
+
+
+def test_a_stop_drops_the_target_waiting_for_the_brake(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(300)
+    v.run_for(10)
+    t = v.now
+    v.target(50)
+    v.run_for(1)
+    v.stop()
+    v.run_for(30)
+
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
+    assert v.state is IDLE and v.status.target_az_deg is None and v.errors() == []
+
+
+# -- the link (session rules 4 and 6) ---------------------------------------------------------
+def test_a_link_lost_drops_the_waiting_target_and_a_new_link_starts_afresh(rig: Rig) -> None:
+    v = ready(rig, options={"endpoint": True})
+    v.target(300)
+    v.run_for(10)
+    v.target(50)  # waits for stop and brake
+    v.run_for(1)
+    v.link_down("serial link to /dev/ttyVIRTUAL lost: unplugged")
+
+    assert v.status.state is MotionState.OFFLINE and not v.status.connected
+    kinds = [(e.kind, e.message) for e in v.errors()]
+    assert kinds == [
+        ("serial", "serial link to /dev/ttyVIRTUAL lost: unplugged"),
+        ("refused", "target dropped: serial link down"),
+    ]
+    v.run_for(20)
+    v.power_cycle()  # replugged after a power cut: the board forgot its options
+    t = v.now
+    v.link_up()
+    v.run_until_state(IDLE, 30)
+    v.run_for(1)
+
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
+    assert v.truth().options["endpoint"] is True
+    v.target(50)
+    v.run_until(at(v, 50), 60, "at 50 after the reconnect")

@@ -1,0 +1,197 @@
+"""A SatEL in virtual time: a controller that must hear nothing but a stop while it slews.
+
+The SatEL answers nothing while it moves and prints a status report when the move is over
+(protocols/satel.md). Input while it slews can wedge it (the emulator logs every such byte as
+"misuse: input while slewing"), so the session sends only ``s`` then (session rule 8). A report
+that does not come is handled by slewing.py: stop, ask, send the target again; the second time,
+give it up. Its own clock ticks every second and rides along in the status without causing one
+(status.py rule 4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from datetime import datetime
+
+from bridge.emulators.satel import Outcome
+from bridge.engine.slewing import SLEW_STOP_TRIES
+from bridge.model import MotionState
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+
+
+def ready(rig: Rig, **kw: object) -> VirtualRotator:
+    v = rig("satel", **kw)
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def slewing(v: VirtualRotator) -> bool:
+    return v.device.state(v.now).slewing
+
+
+def settled_at(az: float, el: float) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return v.state is IDLE and not truth.is_moving and (truth.az_deg, truth.el_deg) == (az, el)
+
+    return there
+
+
+def slews(v: VirtualRotator) -> list[tuple[float, float]]:
+    """When each slew ran, from the emulator's motion events (start, end)."""
+    spans: list[tuple[float, float]] = []
+    start: float | None = None
+    for e in v.device.events:
+        if e.kind == "move" and e.detail.startswith("command"):
+            start = e.time_s
+        elif e.kind in ("arrived", "stopped") and start is not None:
+            spans.append((start, e.time_s))
+            start = None
+    if start is not None:
+        spans.append((start, float("inf")))
+    return spans
+
+
+def assert_nothing_but_stops_while_slewing(v: VirtualRotator) -> None:
+    assert v.device.misuse_frames() == []
+    for start, end in slews(v):
+        inside = [f.data for f in v.frames() if start < f.time_s < end]
+        assert set(inside) <= {b"s"}, f"input during the slew {start:.2f}..{end:.2f}: {inside}"
+
+
+def points(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    return [f.data for f in v.frames(Outcome.SLEW, since=since)]
+
+
+def test_a_redirect_stops_the_slew_and_sends_the_new_point_once_still(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_for(10)
+    assert slewing(v)
+    s = v.status
+    assert s.state is MOVING and s.estimated and s.bearing_deg is not None
+    t = v.now
+    v.target(50, 20)
+    v.run_until(settled_at(50, 20), 120, "at 50/20")
+
+    assert points(v) == [b"p200 40\r", b"p50 20\r"]
+    after = [f.data for f in v.frames(since=t) if f.data != b"z"]
+    assert after[0] == b"s" and after[-2:] == [b"g", b"p50 20\r"]
+    assert len(slews(v)) == 2
+    assert_nothing_but_stops_while_slewing(v)
+    assert v.errors() == []
+
+
+def test_a_lost_report_of_a_slew_that_arrived_is_ridden_out(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(100, 20)
+    v.run_until(slewing, 5, "slewing")
+    v.set_silent(True)  # the report at the end of this slew is lost on the line
+    v.run_until(lambda v: not slewing(v), 60)
+    v.run_for(0.5)
+    v.set_silent(False)
+    lost_at = v.now
+    v.run_until(settled_at(100, 20), 120, "idle at 100/20")
+    v.run_for(10)
+
+    late, asked = v.errors()
+    assert late.kind == "serial" and late.message.startswith("no report from the controller")
+    assert "az_speed_deg_s" in late.message  # it names the setting to fix a slow rotor
+    assert asked.message == "no report after the stopped slew; asking the controller"
+    # stopped (a SatEL at rest does not report a stop: every try is made), then asked
+    after = [f.data for f in v.frames(since=lost_at)]
+    assert after[: SLEW_STOP_TRIES + 1] == [b"s"] * SLEW_STOP_TRIES + [b"z"]
+    assert points(v) == [b"p100 20\r"]  # it is there: nothing to send again
+    assert all(s.available for s in v.published(since=lost_at))  # never called offline
+    assert_nothing_but_stops_while_slewing(v)
+
+
+# the user set the rotor faster than it is: its slews outlast the wait for their report
+TOO_FAST = {"az_speed_deg_s": 30, "el_speed_deg_s": 15}
+
+
+def test_a_slew_that_outlasts_its_report_bound_is_stopped_asked_and_sent_again(
+    rig: Rig,
+) -> None:
+    v = ready(rig, settings=TOO_FAST)
+    t = v.now
+    v.target(200, 20)
+    v.run_until(settled_at(200, 20), 120, "at 200/20")
+
+    [late] = v.errors()
+    assert late.kind == "serial" and "then going on to the target" in late.message
+    assert points(v) == [b"p200 20\r", b"p200 20\r"]
+    stopped = [e for e in v.device.events if e.kind == "stopped"]
+    assert len(stopped) == 1 and 0 < stopped[0].az_deg < 200  # stopped mid-way, then resumed
+    after = [f.data for f in v.frames(since=t) if f.data not in (b"z", b"g")]
+    assert after == [b"p200 20\r", b"s", b"p200 20\r"]
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_target_whose_report_is_lost_twice_is_given_up(rig: Rig) -> None:
+    v = ready(rig, settings=TOO_FAST)
+    v.target(200, 20)
+    v.run_until(lambda v: len(points(v)) == 2, 120, "sent again")
+    v.set_silent(True)  # and this time the report is lost
+    v.run_until(lambda v: not slewing(v), 60)
+    v.run_for(0.5)
+    v.set_silent(False)
+    v.run_for(60)
+
+    first, second, *rest = v.errors()
+    assert "then going on to the target" in first.message
+    assert second.kind == "serial" and "giving the target up" in second.message
+    assert second.command == "target az 200 el 20"
+    assert [e.kind for e in rest] == ["serial"]  # "no report after the stopped slew; asking"
+    assert points(v) == [b"p200 20\r", b"p200 20\r"]  # not a third time
+    assert v.state is IDLE and v.status.target_az_deg is None
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_jammed_slew_is_tried_twice_then_given_up_and_stopped(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 20)
+    v.run_for(5)
+    v.jam()
+    v.run_for(300)
+
+    first, second = v.errors()
+    assert "then going on to the target" in first.message
+    assert "giving the target up" in second.message
+    assert points(v) == [b"p200 20\r", b"p200 20\r"]
+    assert not v.truth().is_moving  # the motors are not left running against the jam
+    assert_nothing_but_stops_while_slewing(v)
+
+
+def clock(text: str | None) -> datetime:
+    assert text is not None
+    return datetime.strptime(text, "%Y/%m/%d %H:%M:%S")
+
+
+def test_an_idle_satel_whose_clock_ticks_is_not_republished(rig: Rig) -> None:
+    v = ready(rig, settings={"idle_poll_interval_s": 1.0, "silence_timeout_s": 3.0})
+    t = v.now
+    shown = clock(v.status.controller_time)
+    v.run_for(120)
+
+    assert len(v.frames(Outcome.STATUS, since=t)) >= 110  # read every second, a new time each
+    assert v.published(since=t + 1e-9) == []
+    # the clock rides along in the next status a user would notice
+    v.target(10, 10)
+    v.run_for(0.5)
+    assert v.status.state is MOVING
+    assert (clock(v.status.controller_time) - shown).total_seconds() >= 119
+
+
+def test_a_stream_of_targets_ends_at_the_last_without_input_into_a_slew(rig: Rig) -> None:
+    v = ready(rig)
+    for az in range(100, 200):  # 100 targets, 10 ms apart
+        v.target(az, 10)
+        v.run_for(0.01)
+    v.run_until(settled_at(199, 10), 300, "at 199/10")
+
+    assert 1 <= len(points(v)) <= 3 and points(v)[-1] == b"p199 10\r"
+    assert_nothing_but_stops_while_slewing(v)

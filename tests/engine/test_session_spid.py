@@ -1,0 +1,119 @@
+"""A SPID Rot2Prog in virtual time: direct re-targeting and the controller's pulse grid.
+
+The Rot2Prog takes a new set frame at any time and simply heads for it (no brake, no stop
+needed), so the bridge sends a new target straight out (motion.plan_target, ``direct_retarget``).
+Its positions live on a grid of 1/PH degree (PH pulses per degree, learned from its replies);
+a set frame carries floor(PH * (360 + angle)), so a target snaps down to the grid
+(protocols/spid.py rule 1) and the status shows the target the rotor will really get.
+The line is 600 baud and half duplex: one poll exchange takes about 0.4 s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.spid_models import K_SET, K_STATUS, K_STOP, Outcome
+from bridge.model import MotionState
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+
+
+def ready(rig: Rig, ppd: int = 2) -> VirtualRotator:
+    v = rig("rot2prog", emulator={"resolution_ppd": ppd})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def sets(v: VirtualRotator, since: float = float("-inf")) -> list[tuple[int, int]]:
+    """The pulses of every set frame the controller took: (H, V)."""
+    return [
+        (int(f.data[1:5]), int(f.data[6:10]))
+        for f in v.frames(Outcome.SET, since=since)
+        if f.data[11] == K_SET
+    ]
+
+
+def settled_at(az: float, el: float) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is IDLE
+            and not truth.is_moving
+            and truth.az_deg == pytest.approx(az)
+            and truth.el_deg == pytest.approx(el)
+        )
+
+    return there
+
+
+def assert_half_duplex(v: VirtualRotator) -> None:
+    """Nothing was written while a reply was still owed (session rule 3, link rule 3): at
+    every write, all the replies owed by the frames before it had arrived whole."""
+    reply_bytes = v.cfg.spec.reply_bytes
+    owed = 0
+    for w in v.writes:
+        got = sum(len(data) for t, data in v.received if t <= w.t)
+        assert got >= owed * reply_bytes, f"{w.data!r} written at {w.t:.3f} into a reply"
+        owed += w.data[11] in (K_STATUS, K_STOP)
+
+
+def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(100, 30)
+    v.run_for(20)
+    assert v.truth().is_moving and v.state is MOVING
+    t = v.now
+    v.target(10, 5)
+    v.run_until(lambda v: len(sets(v, t)) == 1, 2, "the new set frame")
+
+    took = v.frames(since=t)[-1].time_s - t
+    exchange_s = v.cfg.spec.exchange_time_s(v.cfg.baud)
+    assert took <= exchange_s + 13 * 10 / v.cfg.baud + 0.01  # at most a reply in flight first
+    assert v.truth().is_moving  # never stopped on the way
+    assert {f.data[11] for f in v.frames(since=t)} <= {K_STATUS, K_SET}  # no stop frame
+    v.run_until(settled_at(10, 5), 120, "at 10/5")
+
+    assert not [f for f in v.frames() if f.data[11] == K_STOP]
+    assert not [e for e in v.device.events if e.kind == "stopped"]
+    assert sets(v) == [(2 * 460, 2 * 390), (2 * 370, 2 * 365)]
+    assert_half_duplex(v)
+    assert v.errors() == []
+
+
+def test_targets_snap_down_to_the_pulse_grid_and_the_status_shows_where_it_goes(
+    rig: Rig,
+) -> None:
+    v = ready(rig, ppd=4)
+    t = v.now
+    v.target(10.3, 5.6)  # 4 pulses a degree: 10.25 / 5.5
+    v.run_for(2)
+    assert sets(v, t) == [(1481, 1462)]
+    assert (v.status.target_az_deg, v.status.target_el_deg) == (10.25, 5.5)
+
+    v.target(10.45, 5.7)  # the same grid point: the rotor is already on its way there
+    v.run_until(settled_at(10.25, 5.5), 60, "at 10.25/5.5")
+    assert sets(v, t) == [(1481, 1462)]
+
+    # the controller reports 10.25 as 10.2 (tenths, rounded down): within tolerance, arrived
+    assert (v.status.bearing_deg, v.status.elevation_deg) == (10.2, 5.5)
+    assert v.status.target_az_deg is None
+    v.target(10.3, 5.6)  # already there, as far as the grid allows: nothing to send
+    v.run_for(5)
+    assert sets(v, t) == [(1481, 1462)] and v.errors() == []
+
+
+def test_a_stream_of_targets_is_followed_without_flooding_the_line(rig: Rig) -> None:
+    v = ready(rig)
+    t = v.now
+    for az in range(100, 200):  # 100 targets, 10 ms apart
+        v.target(az, 10)
+        v.run_for(0.01)
+    v.run_until(settled_at(199, 10), 300, "at 199/10")
+
+    assert 1 <= len(sets(v, t)) <= 3
+    assert sets(v, t)[-1] == (2 * (360 + 199), 2 * 370)
+    assert_half_duplex(v)
