@@ -21,6 +21,9 @@ Rules:
 5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
+7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
+   at the line rate (``hold_reads_until``) the worker leaves them in the port and reads them in
+   one go. Only the mailbox (a stop) is watched meanwhile.
 """
 
 from __future__ import annotations
@@ -38,9 +41,12 @@ __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
 
 
 class Link:
-    def __init__(self, codec: Codec, spec: ModelSpec, now: float) -> None:
+    def __init__(self, codec: Codec, spec: ModelSpec, now: float, baud: int) -> None:
         self.codec = codec
         self.spec = spec
+        self._byte_s = 10 / baud  # 8N1
+        self._hold_until = 0.0
+        self._reply_got = 0  # bytes received since the last poll (rule 7)
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -77,6 +83,16 @@ class Link:
     def frames_waiting(self) -> int:
         """Frames written later, after the model's inter-frame gap."""
         return len(self._outbox)
+
+    def hold_reads_until(self) -> float:
+        """Rule 7: bytes arriving before this time can wait in the port."""
+        return self._hold_until if self._reply_deadline is not None else 0.0
+
+    def got_bytes(self, count: int, now: float) -> None:
+        """``count`` bytes came; if a poll's reply is still short, hold reads for the rest."""
+        self._reply_got += count
+        missing = self.spec.reply_bytes - self._reply_got
+        self._hold_until = now + missing * self._byte_s if missing > 0 else 0.0
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -182,6 +198,8 @@ class Link:
         if query:
             self.write(query, now)
             self._next_poll = now + interval_s
+            self._reply_got = 0
+            self._hold_until = now + (len(query) + self.spec.reply_bytes) * self._byte_s
 
     def silent_for(self, now: float) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
@@ -195,7 +213,7 @@ class Link:
 
     def quiet_junk(self, now: float) -> tuple[bytes, bool] | None:
         """Junk held back until the line went quiet, and whether the codec calls it harmless."""
-        if not self._junk or now - self._junk_t < JUNK_QUIET_S:
+        if not self._junk or now < self._junk_t + JUNK_QUIET_S:  # as wakeups() says
             return None
         data, self._junk = bytes(self._junk), bytearray()
         return data, self.codec.harmless(data)

@@ -213,20 +213,20 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
         return m, events
     if m.state is MotionState.MOVING:
         ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
-        still = now - ref >= cfg.settle_s
+        still = now >= ref + cfg.settle_s
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
                 events.append(Event.ARRIVED)
                 m = _at_rest(m, cfg, now, MotionState.BRAKING)
-            elif err is not None and now - (m.progress_t or now) >= cfg.stall_timeout_s:
+            elif err is not None and now >= (m.progress_t or now) + cfg.stall_timeout_s:
                 events.append(Event.STALLED)
                 m = _at_rest(m, cfg, now, MotionState.STALLED)
         elif still:
             events.append(Event.STOPPED)
             m = _at_rest(m, cfg, now, MotionState.BRAKING)
     if m.state is MotionState.BRAKING and m.still_since_t is not None:
-        if now - m.still_since_t >= cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
+        if now >= m.still_since_t + cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
             m = replace(m, state=MotionState.IDLE, idle_not_before_t=None)
     return m, events
 
@@ -267,7 +267,7 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     """May a new target be written to the controller now?"""
     if not cfg.can_report_position:
         if m.stop_sent_t is not None:
-            return Plan.SEND if now - m.stop_sent_t >= cfg.brake_delay_s else Plan.WAIT
+            return Plan.SEND if now >= m.stop_sent_t + cfg.brake_delay_s else Plan.WAIT
         if m.busy_until_t is not None and now < m.busy_until_t:
             return Plan.STOP_FIRST
         if m.busy_until_t is not None and now < m.busy_until_t + cfg.brake_delay_s:
@@ -278,14 +278,14 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     if m.state is MotionState.IDLE:
         return Plan.SEND
     if m.state is MotionState.STALLED:
-        rested = m.still_since_t is not None and now - m.still_since_t >= cfg.brake_delay_s
+        rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
     if m.state is MotionState.MOVING:
         if m.stop_sent_t is None:
             return Plan.STOP_FIRST
         # a stop went out: send another only if a reading since shows it did not take
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
-        if moved_since and now - m.stop_sent_t >= cfg.stop_resend_s:
+        if moved_since and now >= m.stop_sent_t + cfg.stop_resend_s:
             return Plan.STOP_FIRST
         return Plan.WAIT
     return Plan.WAIT  # braking (or no reading yet)

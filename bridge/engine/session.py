@@ -105,7 +105,7 @@ class RotatorSession:
         spec = self.cfg.spec
         self._port_error = None
         self.wall_offset_s = wall_s - now
-        self.link = Link(spec.codec_factory(), spec, now)
+        self.link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -160,6 +160,7 @@ class RotatorSession:
         if link is None:
             return []
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
         if not replies:
             return []  # rule 9
@@ -186,6 +187,10 @@ class RotatorSession:
 
     def next_wakeup(self) -> float:
         return self._wakeup
+
+    def hold_reads_until(self) -> float:
+        """Bytes arriving before this time can wait in the port (link.py rule 7)."""
+        return self.link.hold_reads_until() if self.link is not None else 0.0
 
     # -- what the parts below share -----------------------------------------------------------
     @property

@@ -57,7 +57,8 @@ class Targets:
     def stream_wait(self, now: float) -> bool:
         if not self._replaced:
             return False
-        return now - self._pending_t < BURST_QUIET_S and now - self._stream_t < self._max_wait_s
+        # the same sums as stream_deadline: a wake-up at that time must end the wait
+        return now < self._pending_t + BURST_QUIET_S and now < self._stream_t + self._max_wait_s
 
     def stream_deadline(self, now: float) -> float | None:
         """When a waiting stream's target goes out at the latest (None: not waiting)."""

@@ -10,7 +10,8 @@ Rules:
 1. Any serial error closes the port, tells the session the link is down and retries with
    back-off (``reconnect_min_s`` doubling up to ``reconnect_max_s``); the thread never dies of
    one. Commands are still taken while the port is closed (they are refused with a reason).
-2. Everything the port has is read in one go and handed to the session as one chunk.
+2. Everything the port has is read in one go and handed to the session as one chunk; while the
+   session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched.
 3. Listeners (MQTT, rotctld, Home Assistant) are called from this thread only, and a listener
    that raises is logged once per kind of failure and otherwise ignored (``contained``): a
    display problem never closes, reopens or delays the line to the controller.
@@ -19,6 +20,7 @@ Rules:
 from __future__ import annotations
 
 import logging
+import os
 import select
 import threading
 import time
@@ -39,6 +41,7 @@ __all__ = ["Worker", "WorkerConfig", "contained"]
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
+_READ_MAX = 4096
 
 
 def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
@@ -54,6 +57,17 @@ def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
                 log.exception("%s failed (logged once; the rotator goes on)", what)
 
     return call
+
+
+def _read_all(fd: int) -> bytes:
+    """Everything the port has now (select said it has something)."""
+    try:
+        data = os.read(fd, _READ_MAX)
+    except BlockingIOError:
+        return b""
+    if not data:
+        raise serial.SerialException("port readable but no data (adapter unplugged?)")
+    return data
 
 
 class Worker:
@@ -149,22 +163,24 @@ class Worker:
 
     def _serve(self, port: serial.Serial) -> None:
         session, mailbox = self.session, self._mailbox
+        fd, box = port.fileno(), mailbox.fileno()
         self._do(session.link_up(self._clock(), self._wall()), port)
         while not self._stopping.is_set():
-            timeout = session.next_wakeup() - self._clock()
-            readable, _, _ = select.select([port, mailbox], [], [], max(0.0, timeout))
+            now = self._clock()
+            until, hold = session.next_wakeup(), session.hold_reads_until()
+            watch = [fd, box] if now >= hold else [box]  # rule 2
+            if now < hold:
+                until = min(until, hold)
+            readable, _, _ = select.select(watch, [], [], max(0.0, until - now))
             now = self._clock()
             acted = False
-            if mailbox in readable:
+            if box in readable:
                 batch = mailbox.take()
                 if batch:
                     self._do(session.commands(batch, now), port)
                     acted = True
-            if port in readable:
-                data = port.read(port.in_waiting or 1)
-                if not data:
-                    raise serial.SerialException("port readable but no data (adapter unplugged?)")
-                actions = session.bytes_received(data, now)
+            if fd in readable:
+                actions = session.bytes_received(_read_all(fd), now)
                 acted = acted or bool(actions)
                 self._do(actions, port)
             if not acted and now >= session.next_wakeup():

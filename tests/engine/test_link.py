@@ -28,7 +28,7 @@ def test_travel_time_is_the_slower_axis(
 
 def test_a_slews_report_is_owed_until_its_bound_and_each_stop_brings_it_forward() -> None:
     spec = MODELS["satel"]
-    link = Link(spec.codec_factory(), spec, 100.0)
+    link = Link(spec.codec_factory(), spec, 100.0, spec.baud)
     link.send(link.codec.encode_target(100, 20), 100.0)
     # no gap between `g` and `p`: both go at once, so a stop cannot fall between them and
     # cancel the point alone (the slew would be owed for a point never sent)
