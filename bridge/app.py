@@ -124,7 +124,7 @@ class App:
             status_topic=ha.status_topic,
             topics=self.topics,
             rotators=infos,
-            publish_retained=client.publish_retained,
+            publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
             birth_delay_s=ha.birth_delay_s,

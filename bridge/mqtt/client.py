@@ -37,6 +37,11 @@ Rules:
    the same way earns the same back-off; the error says "most likely".) The default client id
    is unique per installation (MqttSettings.effective_client_id): only an explicit one, or a
    copied state file on a host of the same name, can collide.
+8. Retained state (bearing, state, status, ...) goes out at QoS 0 (STATE_QOS): the newest value
+   supersedes every older one, so an acknowledgement buys nothing, while QoS 1 costs a PUBACK
+   per message (half of the bridge's CPU with 32 rotators turning, measured in benchmarks/) and
+   lets paho re-send an old value it had in flight after a reconnect, over the fresher state
+   re-published from the cache. Discovery configs, online/offline and error events stay QoS 1.
 """
 
 from __future__ import annotations
@@ -61,6 +66,7 @@ log = logging.getLogger(__name__)
 MessageHandler = Callable[[str, bytes, bool], None]
 EVENT_BACKLOG = 50
 COMMAND_QOS = 0
+STATE_QOS = 0  # rule 8
 
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
@@ -119,7 +125,7 @@ class MqttClient:
         self._subscriptions = subscriptions
         self._handler = on_message
         self._on_connect_hook = on_connect
-        self._retained: dict[str, bytes] = {}
+        self._retained: dict[str, tuple[bytes, int]] = {}  # topic -> (payload, QoS)
         self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
         self._lock = threading.Lock()
         self.connected = threading.Event()
@@ -154,7 +160,7 @@ class MqttClient:
         c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
         self._client = c
-        self._retained[will_topic] = b"online"
+        self._retained[will_topic] = (b"online", 1)
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -184,17 +190,23 @@ class MqttClient:
 
     # -- publishing (any thread) ----------------------------------------------------------
     def publish_retained(
-        self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
+        self,
+        topic: str,
+        payload: str | bytes,
+        *,
+        only_if_changed: bool = True,
+        qos: int = STATE_QOS,
     ) -> None:
         data = payload.encode() if isinstance(payload, str) else payload
         # cache, connected check and publish under one lock, so a connect that re-publishes the
         # cache cannot overtake a newer value with an older one (paho's publish only enqueues)
         with self._lock:
-            if only_if_changed and self._retained.get(topic) == data:
+            held = self._retained.get(topic)
+            if only_if_changed and held is not None and held[0] == data:
                 return
-            self._retained[topic] = data
+            self._retained[topic] = (data, qos)
             if self.connected.is_set():
-                self._client.publish(topic, data, qos=1, retain=True)
+                self._client.publish(topic, data, qos=qos, retain=True)
 
     def clear_retained(self, topic: str) -> None:
         """Delete a retained message from the broker (empty retained payload)."""
@@ -208,9 +220,9 @@ class MqttClient:
         with self._lock:
             if not self.connected.is_set():
                 return
-            for topic, data in self._retained.items():
+            for topic, (data, qos) in self._retained.items():
                 if skip_prefix is None or not topic.startswith(skip_prefix):
-                    self._client.publish(topic, data, qos=1, retain=True)
+                    self._client.publish(topic, data, qos=qos, retain=True)
 
     def publish_event(self, topic: str, payload: str | bytes) -> None:
         with self._lock:
@@ -224,7 +236,7 @@ class MqttClient:
         infos = []
         for topic in topics:
             with self._lock:
-                self._retained[topic] = b"offline"
+                self._retained[topic] = (b"offline", 1)
             if self.connected.is_set():
                 infos.append(self._client.publish(topic, b"offline", qos=1, retain=True))
         for info in infos:
@@ -254,9 +266,9 @@ class MqttClient:
             client.subscribe([(topic, COMMAND_QOS) for topic in self._subscriptions])
         client.publish(self._will_topic, b"online", qos=1, retain=True)
         with self._lock:
-            for topic, data in self._retained.items():
+            for topic, (data, qos) in self._retained.items():
                 if topic != self._will_topic:
-                    client.publish(topic, data, qos=1, retain=True)
+                    client.publish(topic, data, qos=qos, retain=True)
             for topic, event in self._backlog:
                 client.publish(topic, event, qos=1, retain=False)
             self._backlog.clear()

@@ -31,6 +31,8 @@ def test_subscriber_sees_retained_state_after_start(rig: Rig) -> None:
     rig.add("tower", emu={"start_az_deg": 77, "jitter_deg": 0})
     rig.start()
     rig.ready("tower")
+    # the status document follows the state topic in the same publication
+    rig.probe.wait_for("rotor/status", lambda m: json.loads(m.payload)["state"] == "idle")
     snap = rig.retained()
     assert snap["rotor/bridge/state"] == b"online"
     assert snap["rotor/availability"] == b"online"
