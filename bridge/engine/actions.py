@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bridge.model import RotatorStatus
+from bridge.model import ErrorKind, RotatorStatus
 
 __all__ = ["Action", "Publish", "Report", "Write"]
 
@@ -28,7 +28,7 @@ class Publish:
 class Report:
     """Hand an error event to the listeners (the worker stamps it with the wall time)."""
 
-    kind: str
+    kind: ErrorKind
     message: str
     command: str | None = None
 

@@ -45,6 +45,9 @@ class Link:
         self.codec = codec
         self.spec = spec
         self._byte_s = 10 / baud  # 8N1
+        # the model's reply timeout is for its default baud: a slower line needs longer
+        slower_s = max(0.0, spec.exchange_time_s(baud) - spec.exchange_time_s())
+        self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
         self._reply_got = 0  # bytes received since the last poll (rule 7)
         self._quiet_from_t = now  # silence counts from here when no reply came since
@@ -103,7 +106,7 @@ class Link:
     def write(self, frame: bytes, now: float) -> None:
         self._output.append(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
-            self._reply_deadline = now + self.spec.reply_timeout_s
+            self._reply_deadline = now + self.reply_timeout_s
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -126,7 +129,7 @@ class Link:
         self.write(self.codec.encode_stop(), now)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
-            self._reply_deadline = now + self.spec.reply_timeout_s
+            self._reply_deadline = now + self.reply_timeout_s
 
     def begin_slew(self, slew: Slew, travel_s: float) -> None:
         """The target just sent starts a slew expected to take ``travel_s``: its report is owed

@@ -50,12 +50,11 @@ from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.slew import Slew
 from bridge.engine.targets import Targets
-from bridge.model import MotionState, RotatorStatus, Target, describe_command
-from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
+from bridge.model import ErrorKind, MotionState, RotatorStatus, Target, describe_command
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
 
 log = logging.getLogger(__name__)
 
-POWER_ON_BYTE = 0xE0
 OPTIONS_REFRESH_S = 60.0
 STOP_TRIES_BEFORE_ERROR = 3
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
@@ -98,7 +97,7 @@ class RotatorSession:
     def open_failed(self, reason: str, now: float) -> list[Action]:
         if reason != self._port_error:
             self._port_error = reason
-            self.error("serial", reason)
+            self.error(ErrorKind.SERIAL, reason)
         return self._step(now)
 
     def link_up(self, now: float, wall_s: float) -> list[Action]:
@@ -116,10 +115,12 @@ class RotatorSession:
             self.link.write(frame, now)
         return self._step(now)
 
-    def link_down(self, reason: str | None, now: float) -> list[Action]:
+    def link_down(
+        self, reason: str | None, now: float, kind: ErrorKind = ErrorKind.SERIAL
+    ) -> list[Action]:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
-            self.error("serial", reason)
+            self.error(kind, reason)
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
@@ -148,9 +149,9 @@ class RotatorSession:
         if batch.target is not None:
             what = describe_command(batch.target)
             if self.locked:
-                self.error("refused", "rotator is locked", command=what)
+                self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
             elif link is None or not self.answering:
-                self.error("refused", "rotator offline", command=what)
+                self.error(ErrorKind.REFUSED, "rotator offline", command=what)
             else:
                 self.targets.put(batch.target, now)
         return self._step(now)
@@ -172,11 +173,11 @@ class RotatorSession:
                     log.info("%s: controller version %s", self.cfg.rotator_id, reply.version)
                 self.view.version = reply.version
             elif isinstance(reply, JunkReply):
-                if POWER_ON_BYTE in reply.data:
+                if reply.reason is JunkReason.POWER_ON:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self._options_due = set(self.options)
                 link.add_junk(reply.data, now)
-                if reply.reason == UNTRUSTED:
+                if reply.reason is JunkReason.UNTRUSTED:
                     link.ask_again(now)
                     if link.end_slew(now):  # the slew is over; where it ended, unseen
                         self.motion = mo.slew_ended(self.motion, now)
@@ -197,7 +198,7 @@ class RotatorSession:
     def name(self) -> str:
         return self.cfg.rotator_id
 
-    def error(self, kind: str, message: str, command: str | None = None) -> None:
+    def error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
         log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
         self.view.last_error = message
         self._actions.append(Report(kind, message, command))
@@ -215,7 +216,9 @@ class RotatorSession:
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
         if dropped is not None and why:
-            self.error("refused", f"target dropped: {why}", command=describe_command(dropped))
+            self.error(
+                ErrorKind.REFUSED, f"target dropped: {why}", command=describe_command(dropped)
+            )
 
     # -- the rules, run after every input ------------------------------------------------------
     def _step(self, now: float) -> list[Action]:
@@ -274,7 +277,7 @@ class RotatorSession:
             self.answering = False
             self.motion = mo.link_down(self.motion)
             self.error(
-                "serial",
+                ErrorKind.SERIAL,
                 f"controller on {self.cfg.port} stopped answering "
                 f"(no valid reply for {timeout_s:g} s)",
             )
@@ -285,7 +288,7 @@ class RotatorSession:
             and link.silent_for(now) >= timeout_s
         ):
             self._silence_reported = True
-            self.error("serial", f"controller on {self.cfg.port} does not answer")
+            self.error(ErrorKind.SERIAL, f"controller on {self.cfg.port} does not answer")
 
     def _advance(self, now: float) -> None:
         """Time-driven motion, then whatever the pending target and options may do now."""
@@ -330,7 +333,7 @@ class RotatorSession:
             self._stop_tries += 1
             if self._stop_tries == STOP_TRIES_BEFORE_ERROR:
                 self.error(
-                    "stop",
+                    ErrorKind.STOP,
                     f"rotor still turning after {self._stop_tries} stop commands; "
                     "stop it at the controller",
                 )
@@ -420,7 +423,8 @@ class RotatorSession:
         if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
             self._junk_reported_t = now
             self.error(
-                "protocol", f"controller sent {len(data)} bytes that are no valid reply; ignored"
+                ErrorKind.PROTOCOL,
+                f"controller sent {len(data)} bytes that are no valid reply; ignored",
             )
 
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
@@ -428,7 +432,7 @@ class RotatorSession:
             if event is mo.Event.STALLED:
                 pos = self.motion.position_deg
                 self.error(
-                    "stalled",
+                    ErrorKind.STALLED,
                     f"rotor stalled at {pos:g}° (no progress for "
                     f"{self.cfg.motion.stall_timeout_s:g} s): brake paddle pressed or rotor stuck",
                 )

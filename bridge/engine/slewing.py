@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 from bridge.engine import motion as mo
 from bridge.engine.link import Link
 from bridge.engine.slew import Slew
-from bridge.model import Target, describe_command
+from bridge.model import ErrorKind, Target, describe_command
 
 if TYPE_CHECKING:
     from bridge.engine.session import RotatorSession
@@ -58,7 +58,7 @@ def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
         )
         if slew.attempt >= SLEW_ATTEMPTS:  # rule 2
             session.error(
-                "serial",
+                ErrorKind.SERIAL,
                 f"{late}, the second time for this target: stopping it and giving the target "
                 "up (rotor jammed or held short of the point? if it is that slow, set "
                 "az_speed_deg_s / el_speed_deg_s)",
@@ -66,7 +66,7 @@ def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
             )
         else:
             session.error(
-                "serial",
+                ErrorKind.SERIAL,
                 f"{late}: stopping it to ask where it is, then going on to the target (if "
                 "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
             )
@@ -78,11 +78,11 @@ def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
         log.warning(
             "%s: no report %g s after a stop during a slew; stopping again before asking",
             session.name,
-            session.cfg.spec.reply_timeout_s,
+            link.reply_timeout_s,
         )
         session.stop_now(now)
         return
     link.give_up_reply(now)
     if slew is not None:
         session.motion = mo.track_lost(session.motion)
-        session.error("serial", "no report after the stopped slew; asking the controller")
+        session.error(ErrorKind.SERIAL, "no report after the stopped slew; asking the controller")

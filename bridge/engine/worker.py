@@ -34,14 +34,13 @@ from bridge.engine.config import WorkerConfig
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import PortError, open_port
 from bridge.engine.session import RotatorSession
-from bridge.model import ErrorEvent, RotatorStatus
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
 from bridge.protocols.base import ModelSpec
 
 __all__ = ["Worker", "WorkerConfig", "contained"]
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
-_READ_MAX = 4096
 
 
 def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
@@ -62,7 +61,7 @@ def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
 def _read_all(fd: int) -> bytes:
     """Everything the port has now (select said it has something)."""
     try:
-        data = os.read(fd, _READ_MAX)
+        data = os.read(fd, 4096)
     except BlockingIOError:
         return b""
     if not data:
@@ -133,7 +132,7 @@ class Worker:
             return
         log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
         self._backoff_s = self.cfg.reconnect_min_s
-        reason: str | None = None
+        reason, kind = None, ErrorKind.SERIAL
         try:
             self._serve(port)
         except (serial.SerialException, OSError) as exc:
@@ -141,12 +140,13 @@ class Worker:
         except Exception:  # a bug must not kill the rotator: log it, reconnect
             log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
             reason = "unexpected error in the rotator worker (see the log)"
+            kind = ErrorKind.INTERNAL
         finally:
             try:
                 port.close()
             except Exception:  # closing a yanked port may fail too
                 pass
-        self._do(self.session.link_down(reason, self._clock()), None)
+        self._do(self.session.link_down(reason, self._clock(), kind), None)
         if not self._stopping.is_set():
             self._idle_offline(self._backoff_s)
 
