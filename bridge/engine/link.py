@@ -23,7 +23,8 @@ Rules:
 6. A stop cancels every frame still waiting for its inter-frame gap.
 7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
    at the line rate (``hold_reads_until``) the worker leaves them in the port and reads them in
-   one go. Only the mailbox (a stop) is watched meanwhile.
+   one go. Only the mailbox (a stop) is watched meanwhile. What is still missing then (a
+   controller that takes its time to answer) is read as it comes.
 """
 
 from __future__ import annotations
@@ -49,7 +50,6 @@ class Link:
         slower_s = max(0.0, spec.exchange_time_s(baud) - spec.exchange_time_s())
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
-        self._reply_got = 0  # bytes received since the last poll (rule 7)
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -91,11 +91,10 @@ class Link:
         """Rule 7: bytes arriving before this time can wait in the port."""
         return self._hold_until if self._reply_deadline is not None else 0.0
 
-    def got_bytes(self, count: int, now: float) -> None:
-        """``count`` bytes came; if a poll's reply is still short, hold reads for the rest."""
-        self._reply_got += count
-        missing = self.spec.reply_bytes - self._reply_got
-        self._hold_until = now + missing * self._byte_s if missing > 0 else 0.0
+    def got_bytes(self) -> None:
+        """Bytes came: the rest of a late reply is read as it comes (a second hold would
+        overshoot a reply that is one byte short by a whole byte time)."""
+        self._hold_until = 0.0
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -201,7 +200,6 @@ class Link:
         if query:
             self.write(query, now)
             self._next_poll = now + interval_s
-            self._reply_got = 0
             self._hold_until = now + (len(query) + self.spec.reply_bytes) * self._byte_s
 
     def silent_for(self, now: float) -> float:

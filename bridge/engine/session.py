@@ -161,7 +161,7 @@ class RotatorSession:
         if link is None:
             return []
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
-        link.got_bytes(len(data), now)
+        link.got_bytes()
         replies = link.codec.feed(data)
         if not replies:
             return []  # rule 9
