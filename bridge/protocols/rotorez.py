@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import re
+from typing import Any
 
 from bridge.protocols.base import (
     Codec,
@@ -192,8 +193,8 @@ class RotorEzCodec:
         junk.clear()
 
 
-def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec:
-    defaults: dict[str, object] = dict(
+def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
+    defaults: dict[str, Any] = dict(
         baud=4800,
         has_version=True,
         retarget=RetargetPolicy.STOP_AND_WAIT,
@@ -210,7 +211,7 @@ def _spec(name: str, display: str, manufacturer: str, **kw: object) -> ModelSpec
         hamlib_rot_type=HamlibRotType.OTHER,
     )
     defaults.update(kw)
-    return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)  # type: ignore[arg-type]
+    return ModelSpec(name=name, display_name=display, manufacturer=manufacturer, **defaults)
 
 
 MODELS: dict[str, ModelSpec] = {

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import re
+from typing import Any
 
 from bridge.protocols.base import (
     HamlibRotType,
@@ -212,8 +213,8 @@ class SpidCodec:
             return None
         if self.variant == "rot1prog":
             digits = frame[1:4]
-            az = 100 * digits[0] + 10 * digits[1] + digits[2] - 360
-            return self._answer(frame, float(az), None)
+            whole_az = 100 * digits[0] + 10 * digits[1] + digits[2] - 360
+            return self._answer(frame, float(whole_az), None)
         h, ph, v = frame[1:5], frame[5], frame[6:10]
         az = 100 * h[0] + 10 * h[1] + h[2] + h[3] / 10 - 360
         el = 100 * v[0] + 10 * v[1] + v[2] + v[3] / 10 - 360
@@ -232,10 +233,10 @@ class SpidCodec:
         return PositionReply(az, el)
 
 
-def _spec(name: str, display: str, **kw: object) -> ModelSpec:
-    baud = int(kw.pop("baud"))  # type: ignore[call-overload]
+def _spec(name: str, display: str, **kw: Any) -> ModelSpec:
+    baud = int(kw.pop("baud"))
     frame_s = 25 * 10 / baud  # one exchange: 13-byte command + 12-byte reply
-    defaults: dict[str, object] = dict(
+    defaults: dict[str, Any] = dict(
         manufacturer="SPID (Alfa Radio)",
         baud=baud,
         has_elevation=True,
@@ -255,7 +256,7 @@ def _spec(name: str, display: str, **kw: object) -> ModelSpec:
         hamlib_info=None,  # Hamlib's spid backend has no get_info
     )
     defaults.update(kw)
-    return ModelSpec(name=name, display_name=display, **defaults)  # type: ignore[arg-type]
+    return ModelSpec(name=name, display_name=display, **defaults)
 
 
 MODELS: dict[str, ModelSpec] = {
