@@ -174,8 +174,10 @@ class _ControllerClock:
 
 
 def _parse_time(groups: Iterable[bytes]) -> datetime | None:
+    """The six groups of _TIME: year, month, day, hour, minute, second."""
     try:
-        return datetime(*(int(g) for g in groups))
+        year, month, day, hour, minute, second = (int(g) for g in groups)
+        return datetime(year, month, day, hour, minute, second)
     except ValueError:
         return None
 
