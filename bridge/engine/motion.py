@@ -149,8 +149,9 @@ def reading(
         if m.state is MotionState.IDLE:
             m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
+    anchor_deg = m.anchor_deg  # not None: the first reading returned above
     m = replace(m, position_deg=az_deg, el_position_deg=el_deg)
-    moved = angle_error(az_deg, m.anchor_deg, cfg.az_wraps) > cfg.noise_deg
+    moved = angle_error(az_deg, anchor_deg, cfg.az_wraps) > cfg.noise_deg
     if el_deg is not None and m.el_anchor_deg is not None:
         moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
     if moved:
