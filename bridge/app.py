@@ -5,11 +5,10 @@ from __future__ import annotations
 import logging
 import signal
 import threading
-from collections.abc import Callable
 from functools import partial
 
 from bridge.engine.motion import MotionConfig
-from bridge.engine.port import open_port
+from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Limits, Rotator
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
@@ -55,9 +54,7 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
 
 
 class App:
-    def __init__(
-        self, settings: Settings, *, port_opener: Callable[..., object] = open_port
-    ) -> None:
+    def __init__(self, settings: Settings, *, port_opener: PortOpener = open_port) -> None:
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
         self.topics = Topics(settings.mqtt.base_topic, roots)
@@ -89,13 +86,19 @@ class App:
                 on_status=partial(self.mqtt.publish_status, r.id),
                 on_event=partial(self.mqtt.publish_event, r.id),
                 name=r.name,
-                port_opener=port_opener,  # type: ignore[arg-type]
+                port_opener=port_opener,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
             if r.rotctld_port is not None:
-                park = {"park_az_deg": r.park_az_deg, "park_el_deg": r.park_el_deg}
-                self.rotctld.append(RotctldServer(rot, r.rotctld_port, r.rotctld_bind, **park))
+                server = RotctldServer(
+                    rot,
+                    r.rotctld_port,
+                    r.rotctld_bind,
+                    park_az_deg=r.park_az_deg,
+                    park_el_deg=r.park_el_deg,
+                )
+                self.rotctld.append(server)
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)

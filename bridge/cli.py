@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
 import sys
 
 from bridge import __version__
-from bridge.settings import ConfigError, config_warnings, load_settings, masked
+from bridge.settings import ConfigError, Settings, config_warnings, load_settings, masked
 
 EXIT_CONFIG = 2
 
@@ -22,7 +21,7 @@ def _setup_logging(level: str) -> None:
     )
 
 
-def _load(args: argparse.Namespace):  # noqa: ANN202
+def _load(args: argparse.Namespace) -> Settings:
     try:
         return load_settings(args.config)
     except ConfigError as exc:
@@ -57,22 +56,15 @@ def cmd_check_config(args: argparse.Namespace) -> int:
 
 
 def cmd_ports(args: argparse.Namespace) -> int:
-    from serial.tools import list_ports
+    from bridge.engine.port import list_serial_ports
 
-    by_id: dict[str, str] = {}
-    base = "/dev/serial/by-id"
-    if os.path.isdir(base):
-        for name in sorted(os.listdir(base)):
-            link = os.path.join(base, name)
-            by_id[os.path.realpath(link)] = link
-    ports = sorted(list_ports.comports(), key=lambda p: p.device)
+    ports = list_serial_ports()
     if not ports:
         print("no serial ports found (is the USB adapter plugged in?)")
         return 0
     for p in ports:
-        stable = by_id.get(os.path.realpath(p.device))
         print(p.device)
-        print(f"  use this path: {stable or p.device + '  (no /dev/serial/by-id link)'}")
+        print(f"  use this path: {p.stable_path or p.device + '  (no /dev/serial/by-id link)'}")
         if p.description and p.description != "n/a":
             print(f"  description:   {p.description}")
         if p.vid is not None:
