@@ -30,6 +30,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
+from typing import Protocol
 
 from bridge import __version__
 from bridge.model import MotionState, RotatorStatus
@@ -105,7 +106,7 @@ Configs = dict[tuple[str, str, str], dict[str, object]]
 
 def bridge_configs(ident: Identity, topics: Topics) -> Configs:
     """The bridge device and its connection-state entity (no availability of its own)."""
-    device = {
+    device: dict[str, object] = {
         "identifiers": [ident.bridge_node],
         "name": f"Rotor bridge ({topics.base})",
         "manufacturer": "rotor-bridge",
@@ -145,12 +146,18 @@ class Entity:
         return [self] if self.needs is None or getattr(spec, self.needs) else []
 
 
+class OptionConfig(Protocol):
+    """An option entity's config: the option is passed by name (EachOption binds it)."""
+
+    def __call__(self, info: RotatorInfo, /, option: str) -> dict[str, object]: ...
+
+
 @dataclass(frozen=True)
 class EachOption:
     """One entity per controller option (``spec.options``), labelled by ``spec.option_labels``."""
 
     platform: str
-    config: Callable[[RotatorInfo, str], dict[str, object]]
+    config: OptionConfig
 
     def expand(self, spec: ModelSpec) -> list[Entity]:
         return [

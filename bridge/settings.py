@@ -179,7 +179,7 @@ class HomeAssistantSettings(_Strict):
     @field_validator("discovery_prefix", "status_topic")
     @classmethod
     def _topic(cls, v: str) -> str:
-        return MqttSettings._topic(v)  # type: ignore[call-arg]
+        return MqttSettings._topic(v)
 
 
 class RotatorSettings(_Strict):
@@ -238,7 +238,7 @@ class RotatorSettings(_Strict):
     @classmethod
     def _topic(cls, v: str | None) -> str | None:
         if v is not None:
-            MqttSettings._topic(v)  # type: ignore[call-arg]
+            MqttSettings._topic(v)
         return v
 
     @model_validator(mode="after")
@@ -478,7 +478,7 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
 def format_validation_error(exc: ValidationError, data: dict[str, Any] | None = None) -> str:
     lines = []
     for err in exc.errors():
-        loc = []
+        loc: list[str] = []
         for part in err["loc"]:
             if isinstance(part, int):
                 loc[-1:] = [f"{loc[-1] if loc else ''}[{part}]"]
