@@ -39,6 +39,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from pydantic import ValidationError
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
@@ -140,8 +141,9 @@ def demo_settings(
     )
 
 
-def emulator_options(model: str, speed_deg_s: float) -> dict[str, float]:
-    """The demo's one speed in the words of this model's emulator (families name it apart)."""
+def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
+    """The demo's one speed in the words of this model's emulator (families name it apart): the
+    keyword arguments for emulators.start, whose options are typed Any."""
     params = inspect.signature(emulators.EMULATORS[model]).parameters
     if "speed_deg_s" in params:
         return {"speed_deg_s": speed_deg_s}

@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from typing import Any
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.topics import Topics
@@ -56,7 +59,14 @@ class Console:
         c.loop_start()
         self._client = c
 
-    def _on_connect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
         if reason_code.is_failure:
             return
         # retain-as-published: what is retained on the broker arrives marked so even while we
@@ -65,7 +75,7 @@ class Console:
         client.subscribe([(f, opts) for f in self._filters])
         self.connected.set()
 
-    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         topic = msg.topic
         if topic == self._sync_topic:
             self._synced.set()
