@@ -53,10 +53,12 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Literal
+from typing import Any, Literal
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.settings import MqttSettings
@@ -140,7 +142,7 @@ class MqttClient:
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
             protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
-            **({} if self._v5 else {"clean_session": True}),
+            clean_session=None if self._v5 else True,  # None: MQTT 5 has clean_start instead
         )
         c.will_set(will_topic, b"offline", qos=1, retain=True)
         if settings.username is not None:
@@ -246,7 +248,14 @@ class MqttClient:
                 pass
 
     # -- paho callbacks (paho's thread) ---------------------------------------------------
-    def _on_connect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
         if reason_code.is_failure:
             self._guard.connect_failed()
             text = str(reason_code)
@@ -276,7 +285,7 @@ class MqttClient:
         if self._on_connect_hook is not None:
             self._on_connect_hook()
 
-    def _on_connect_fail(self, client, userdata) -> None:  # noqa: ANN001
+    def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
         # paho calls this inside its `except OSError`: the exception says why
         exc = sys.exc_info()[1]
         self._guard.connect_failed()
@@ -288,7 +297,14 @@ class MqttClient:
             log.error("%s (retrying with back-off)", text)
             self._last_refusal = text
 
-    def _on_disconnect(self, client, userdata, flags, reason_code, properties) -> None:  # noqa: ANN001
+    def _on_disconnect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.DisconnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
         was = self.connected.is_set()
         self.connected.clear()
         if not was or self._stopping:
@@ -338,7 +354,7 @@ class MqttClient:
             STABLE_S,
         )
 
-    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         try:
             self._handler(msg.topic, bytes(msg.payload), bool(msg.retain))
         except Exception:  # a handler bug must not kill paho's network thread
