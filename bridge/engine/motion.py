@@ -15,10 +15,12 @@ Rules:
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
    end stop first moves away from a target across the stop.)
 4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
-   rotor stopped: the last observed movement plus one poll interval (``poll_margin_s``: it
-   stopped somewhere before the next reading), and never before a stop command went out. Not
-   from when the stillness was detected: that is ``settle_s`` later and would make every new
-   target after an arrival wait for nothing. A stall counts from its detection (safe side).
+   rotor stopped: the last reading that changed at all (a move smaller than ``noise_deg`` is
+   still a move: the rotor creeps up to its stop) plus one poll interval (``poll_margin_s``:
+   it stopped somewhere before the next reading), never before a stop or target went out, plus
+   BRAKE_GUARD_S for the controller's own timer. Not from when the stillness was detected: that
+   is ``settle_s`` later and would make every new target after an arrival wait for nothing. A
+   stall counts from its detection (safe side).
    At start-up the machine assumes a brake window may be running, and that the rotor may be
    turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
 5. Movement without a command (front panel) is ``moving`` too.
@@ -33,6 +35,9 @@ import enum
 from dataclasses import dataclass, replace
 
 from bridge.model import MotionState
+
+
+BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 
 
 @dataclass(frozen=True)
@@ -57,6 +62,7 @@ class Motion:
     position_deg: float | None = None
     anchor_deg: float | None = None
     last_move_t: float | None = None
+    changed_t: float | None = None  # last reading that differed at all from the one before
     still_since_t: float | None = None
     target_deg: float | None = None
     target_t: float | None = None
@@ -150,6 +156,8 @@ def reading(
             m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # not None: the first reading returned above
+    if az_deg != m.position_deg or el_deg != m.el_position_deg:
+        m = replace(m, changed_t=now)
     m = replace(m, position_deg=az_deg, el_position_deg=el_deg)
     moved = angle_error(az_deg, anchor_deg, cfg.az_wraps) > cfg.noise_deg
     if el_deg is not None and m.el_anchor_deg is not None:
@@ -238,7 +246,8 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
     stopped_t = now  # rule 4
     if state is MotionState.BRAKING and m.last_move_t is not None:
         after = [t for t in (m.stop_sent_t, m.target_t) if t is not None]
-        stopped_t = min(now, max([m.last_move_t + cfg.poll_margin_s, *after]))
+        last = max(m.last_move_t, m.changed_t or m.last_move_t)
+        stopped_t = min(now, max([last + cfg.poll_margin_s, *after]) + BRAKE_GUARD_S)
     return replace(
         m,
         state=state,

@@ -327,7 +327,7 @@ class RotatorSession:
             self._stop_tries = 0
             return
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
-        late = now - m.stop_sent_t >= self.cfg.motion.stop_resend_s
+        late = now >= m.stop_sent_t + self.cfg.motion.stop_resend_s  # as next_deadline
         pending = self.targets.pending is not None
         if m.state is MotionState.MOVING and moved_since and late and not pending:
             self._stop_tries += 1

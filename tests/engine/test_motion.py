@@ -56,8 +56,9 @@ def test_commanded_move_arrives_then_brakes_then_idles() -> None:
     m, events = mo.tick(m, CFG, last_move_t + CFG.settle_s)
     assert events == [mo.Event.ARRIVED] and m.state is S.BRAKING and m.target_deg is None
     assert mo.plan_target(m, CFG, last_move_t + CFG.settle_s) is mo.Plan.WAIT
-    # the brake window counts from the last movement (plus one poll), not from the detection
-    stopped_t = last_move_t + CFG.poll_margin_s
+    # the brake window counts from the last change (plus one poll), not from the detection
+    assert m.changed_t is not None
+    stopped_t = max(last_move_t, m.changed_t) + CFG.poll_margin_s + mo.BRAKE_GUARD_S
     m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s - 0.01)
     assert m.state is S.BRAKING
     m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s)
@@ -72,8 +73,12 @@ def test_a_target_after_an_arrival_waits_only_for_the_brake() -> None:
     assert events == [mo.Event.ARRIVED]
     m, _ = mo.tick(m, CFG, 10.6 + CFG.settle_s + 1.2)
     assert mo.plan_target(m, CFG, 13.3) is mo.Plan.WAIT
-    m, _ = mo.tick(m, CFG, 10.6 + CFG.poll_margin_s + CFG.brake_delay_s)  # 15.8, not 17.1
-    assert mo.plan_target(m, CFG, 15.8) is mo.Plan.SEND
+    # the last change (109 -> 110 at 10.8), one poll, the guard: 16.3, not 17.1
+    stopped_t = 10.8 + CFG.poll_margin_s + mo.BRAKE_GUARD_S
+    m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s - 0.01)
+    assert mo.plan_target(m, CFG, stopped_t + CFG.brake_delay_s - 0.01) is mo.Plan.WAIT
+    m, _ = mo.tick(m, CFG, stopped_t + CFG.brake_delay_s)
+    assert mo.plan_target(m, CFG, stopped_t + CFG.brake_delay_s) is mo.Plan.SEND
 
 
 def test_manual_rotation_shows_as_moving() -> None:

@@ -447,3 +447,24 @@ def test_a_link_lost_drops_the_waiting_target_and_a_new_link_starts_afresh(rig: 
     assert v.truth().options["endpoint"] is True
     v.target(50)
     v.run_until(at(v, 50), 60, "at 50 after the reconnect")
+
+
+@pytest.mark.parametrize("speed_deg_s", [6.0, 3.0])
+@pytest.mark.parametrize("first_deg", range(20, 45))
+def test_a_bearing_sent_right_after_an_arrival_is_never_ignored(
+    rig: Rig, speed_deg_s: float, first_deg: int
+) -> None:
+    """The brake window counts from the last reading that changed at all: a rotor creeping less
+    than the noise band up to its stop is still turning (found by review: 12 of these 50 cases
+    had the next bearing land in the controller's brake delay, then a false 'stalled')."""
+    v = rig(
+        "rotorez", settings={"az_speed_deg_s": speed_deg_s}, emulator={"speed_deg_s": speed_deg_s}
+    )
+    v.run_until_state(MotionState.IDLE, 60)
+    v.target(first_deg)
+    v.run_until_state(MotionState.BRAKING, 60)  # the arrival is seen
+    v.target(first_deg + 40)  # the user's next bearing, at once
+    v.run_for(40)
+    assert v.frames(Outcome.IGNORED_BRAKE_DELAY) == []
+    assert v.errors("stalled") == []
+    assert abs(v.truth().az_deg - (first_deg + 40)) <= 3
