@@ -41,7 +41,8 @@ Rules:
    supersedes every older one, so an acknowledgement buys nothing, while QoS 1 costs a PUBACK
    per message (half of the bridge's CPU with 32 rotators turning, measured in benchmarks/) and
    lets paho re-send an old value it had in flight after a reconnect, over the fresher state
-   re-published from the cache. Discovery configs, online/offline and error events stay QoS 1.
+   re-published from the cache. Discovery configs, the bridge's own online/offline (its last
+   will) and error events stay QoS 1; a rotator's availability is state like any other.
 """
 
 from __future__ import annotations
