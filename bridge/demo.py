@@ -21,7 +21,7 @@ Rules:
 4. When it ends it removes what it left retained on the broker (its state topics and its Home
    Assistant configs), so runs do not pile up dead devices in Home Assistant. Not so under a
    ``--base-topic`` the user chose: that may hold someone else's retained state. A base topic
-   on which a bridge is online (``<base>/bridge/state`` retained ``online``) is refused.
+   that a bridge uses (``<base>/bridge/state`` retained, online or offline) is refused.
 """
 
 from __future__ import annotations
@@ -234,10 +234,14 @@ def _run(
     # may hold someone else's retained state, which is not the demo's to delete
     stack.callback(console.close, remove_retained=args.base_topic is None)
     console.sync()
-    if args.base_topic is not None and console.retained(topics.bridge_state) == b"online":
+    # a bridge that uses this base topic, running or stopped, owns its Home Assistant devices:
+    # the demo's discovery would clear them as stale
+    held = console.retained(topics.bridge_state) if args.base_topic is not None else None
+    if held is not None:
         print(
-            f"rotor-bridge demo: a bridge is online on base topic {topics.base!r} "
-            f"({topics.bridge_state} is 'online'); choose another --base-topic or none",
+            f"rotor-bridge demo: base topic {topics.base!r} belongs to a bridge "
+            f"({topics.bridge_state} is {held.decode(errors='replace')!r}); choose another "
+            "--base-topic or none",
             file=sys.stderr,
         )
         return 2

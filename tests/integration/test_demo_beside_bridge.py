@@ -111,7 +111,7 @@ def test_a_demo_told_to_take_a_live_bridges_base_topic_refuses(tmp_path: Path, r
         assert demo.wait(20) == 2, demo.output
     finally:
         demo.close()
-    assert "a bridge is online on base topic 'rotor'" in demo.output
+    assert "base topic 'rotor' belongs to a bridge (rotor/bridge/state is 'online')" in demo.output
     assert [m.text for m in rig.probe.on("rotor/bridge/state")] == ["online"]
     assert [
         m for m in rig.probe.messages if m.topic.startswith("homeassistant/") and not m.payload
@@ -120,3 +120,25 @@ def test_a_demo_told_to_take_a_live_bridges_base_topic_refuses(tmp_path: Path, r
         retained_snapshot(rig.broker.port, "rotor/bridge/state")["rotor/bridge/state"] == b"online"
     )
     assert list((tmp_path / "tmp").iterdir()) == []
+
+
+def test_a_demo_refuses_the_base_topic_of_a_stopped_bridge_too(tmp_path: Path, rig: Rig) -> None:
+    """Stopped for maintenance, the bridge's Home Assistant devices are still its own: a demo on
+    its base topic would clear them as stale (found by review)."""
+    rig.add("tower", "rotorez")
+    rig.start()
+    rig.ready("tower")
+    rig.stop()  # retained rotor/bridge/state is now "offline"; its discovery stays retained
+    rig.probe.wait_value("rotor/bridge/state", "offline")
+    demo = DemoProcess(
+        ["--mqtt-port", str(rig.broker.port), "--base-topic", "rotor", "--duration-s", "20"],
+        tmp_path / "tmp",
+    )
+    try:
+        assert demo.wait(20) == 2, demo.output
+    finally:
+        demo.close()
+    assert "(rotor/bridge/state is 'offline')" in demo.output
+    assert [
+        m for m in rig.probe.messages if m.topic.startswith("homeassistant/") and not m.payload
+    ] == []
