@@ -8,7 +8,8 @@ import logging
 import sys
 
 from bridge import __version__
-from bridge.settings import ConfigError, Settings, config_warnings, load_settings, masked
+from bridge.config_report import config_warnings, masked
+from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
 

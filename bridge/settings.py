@@ -4,18 +4,17 @@ Environment: ``ROTOR_BRIDGE_<FIELD>``, nested with ``__`` (``ROTOR_BRIDGE_MQTT__
 Rotators are a list in the file; their fields are overridden by id:
 ``ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1``. The file itself is ``--config`` or
 ``ROTOR_BRIDGE_CONFIG``. Unknown keys are errors (a typo must not silently do nothing).
+The files settings name are checked in settings_files.py; check-config's report and warnings
+are config_report.py.
 """
 
 from __future__ import annotations
 
 import hashlib
-import ipaddress
 import math
 import os
 import re
 import socket
-import ssl
-import stat
 import tomllib
 from pathlib import Path
 from typing import Any, Literal
@@ -34,6 +33,7 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, Settings
 
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+from bridge.settings_files import check_tls_files, read_password_file
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
 DEFAULT_SILENCE_TIMEOUT_S = 3.0  # no valid reply this long: offline (unless polls are rarer)
@@ -58,45 +58,11 @@ class TlsSettings(_Strict):
     insecure: bool = Field(False, description="skip the host name check (self-signed lab brokers)")
 
     @model_validator(mode="after")
-    def _pair(self) -> TlsSettings:
-        if (self.cert_file is None) != (self.key_file is None):
-            raise ValueError("cert_file and key_file go together")
-        for name in ("ca_file", "cert_file", "key_file"):
-            f = getattr(self, name)
-            if f is not None and not f.is_file():
-                raise ValueError(f"{name} {f} is not a readable file")
-            try:
-                if f is not None:
-                    f.open("rb").close()
-            except OSError as exc:
-                raise ValueError(f"{name} {f}: {exc.strerror}") from None
+    def _files(self) -> TlsSettings:
         # loaded here as the MQTT client will load them, so a bad file is a config error now and
         # not a traceback at start (paho's tls_set would raise it)
-        context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
-        if self.ca_file is not None:
-            try:
-                context.load_verify_locations(cafile=str(self.ca_file))
-            except ssl.SSLError as exc:
-                raise ValueError(
-                    f"ca_file {self.ca_file} holds no PEM certificate ({_ssl_reason(exc)})"
-                ) from None
-        if self.cert_file is not None and self.key_file is not None:
-
-            def no_passphrase() -> bytes:  # else OpenSSL would ask on a terminal there is not
-                raise ValueError(f"key_file {self.key_file} is encrypted: it must not be")
-
-            try:
-                context.load_cert_chain(self.cert_file, self.key_file, password=no_passphrase)
-            except ssl.SSLError as exc:
-                raise ValueError(
-                    f"cert_file {self.cert_file} and key_file {self.key_file} are not a PEM "
-                    f"certificate and its key ({_ssl_reason(exc)})"
-                ) from None
+        check_tls_files(self.ca_file, self.cert_file, self.key_file)
         return self
-
-
-def _ssl_reason(exc: ssl.SSLError) -> str:
-    return exc.reason or str(exc.strerror or exc).split(" (_ssl.c")[0]
 
 
 class MqttSettings(_Strict):
@@ -131,18 +97,7 @@ class MqttSettings(_Strict):
             return self
         if self.password is not None:
             raise ValueError("set password or password_file, not both")
-        path = self.password_file
-        try:
-            mode = path.stat().st_mode
-            text = path.read_text()
-        except OSError as exc:
-            raise ValueError(f"password_file {path}: {exc.strerror}") from None
-        if mode & (stat.S_IROTH | stat.S_IWOTH):
-            raise ValueError(
-                f"password_file {path} is readable by every user; let only the service user "
-                "read it (chown root:rotor-bridge, chmod 640)"
-            )
-        self.password = SecretStr(text.strip("\r\n"))
+        self.password = SecretStr(read_password_file(self.password_file))
         return self
 
     # the state file of the installation these settings belong to (Settings fills it in)
@@ -490,61 +445,3 @@ def format_validation_error(exc: ValidationError, data: dict[str, Any] | None = 
             msg = "unknown setting (typo?)"
         lines.append(f"{where}: {msg}")
     return "invalid configuration:\n  " + "\n  ".join(lines)
-
-
-def masked(settings: Settings) -> dict[str, Any]:
-    """The effective settings as plain data, secrets replaced, for check-config and logs."""
-    out = settings.model_dump(mode="json")
-    if settings.mqtt.password is not None:
-        out["mqtt"]["password"] = "********"
-    # every value the bridge will use, model defaults filled in; null only where nothing applies
-    # (no elevation axis, no rotctld port, no park position, no credentials)
-    for r, rs in zip(out["rotators"], settings.rotators, strict=True):
-        r["name"] = rs.name or rs.id
-        r["topic"] = settings.rotator_topic(rs)
-        r["baud"] = rs.effective_baud
-        r["brake_delay_s"] = rs.effective_brake_delay_s
-        r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
-        r["silence_timeout_s"] = rs.effective_silence_timeout_s
-        r["noise_deg"] = rs.effective_noise_deg
-        az_speed, el_speed = rs.effective_speeds_deg_s
-        r["az_speed_deg_s"] = az_speed
-        r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
-        if rs.spec.has_elevation:
-            r["el_speed_deg_s"] = el_speed
-            r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
-    out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
-    return out
-
-
-def _is_loopback(host: str) -> bool:
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False  # a host name (or "" = every address): reachable from elsewhere, say so
-
-
-def config_warnings(settings: Settings) -> list[str]:
-    """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
-    found = []
-    if settings._password_in_file:
-        found.append(
-            "mqtt.password is written in the configuration file: put it in a file of its own, "
-            "readable only by the service user, and name that in mqtt.password_file"
-        )
-    for i, r in enumerate(settings.rotators):
-        where = f"rotators[{i}]"
-        if not os.path.exists(r.port):
-            found.append(
-                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
-                "lists the serial ports); the bridge keeps trying to open it"
-            )
-        if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
-            found.append(
-                f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
-                f"address: rotctld has no authentication, anyone who can reach port "
-                f"{r.rotctld_port} there can turn the antenna"
-            )
-    return found

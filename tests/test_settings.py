@@ -8,8 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from bridge.config_report import config_warnings, masked
 from bridge.protocols import REGISTRY
-from bridge.settings import ConfigError, config_warnings, load_settings, masked
+from bridge.settings import ConfigError, load_settings
 
 MINIMAL = """
 [mqtt]

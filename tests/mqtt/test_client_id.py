@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.settings import load_settings, masked
+from bridge.config_report import masked
+from bridge.settings import load_settings
 from tests.faults.conftest import run_cli
 
 CONFIG = """

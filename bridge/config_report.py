@@ -1,0 +1,72 @@
+"""What `rotor-bridge check-config` prints about valid settings: the values and the warnings.
+
+Rules:
+1. masked() shows every value the bridge will use, model defaults filled in; null only where
+   nothing applies (no elevation axis, no rotctld port, no park position, no credentials).
+2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from.
+3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import os
+from typing import Any
+
+from bridge.settings import Settings
+
+
+def masked(settings: Settings) -> dict[str, Any]:
+    """The effective settings as plain data, secrets replaced, for check-config and logs."""
+    out = settings.model_dump(mode="json")
+    if settings.mqtt.password is not None:
+        out["mqtt"]["password"] = "********"
+    for r, rs in zip(out["rotators"], settings.rotators, strict=True):
+        r["name"] = rs.name or rs.id
+        r["topic"] = settings.rotator_topic(rs)
+        r["baud"] = rs.effective_baud
+        r["brake_delay_s"] = rs.effective_brake_delay_s
+        r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
+        r["silence_timeout_s"] = rs.effective_silence_timeout_s
+        r["noise_deg"] = rs.effective_noise_deg
+        az_speed, el_speed = rs.effective_speeds_deg_s
+        r["az_speed_deg_s"] = az_speed
+        r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
+        if rs.spec.has_elevation:
+            r["el_speed_deg_s"] = el_speed
+            r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
+    out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
+    return out
+
+
+def _is_loopback(host: str) -> bool:
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False  # a host name (or "" = every address): reachable from elsewhere, say so
+
+
+def config_warnings(settings: Settings) -> list[str]:
+    """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
+    found = []
+    if settings._password_in_file:  # set by load_settings, which saw the file
+        found.append(
+            "mqtt.password is written in the configuration file: put it in a file of its own, "
+            "readable only by the service user, and name that in mqtt.password_file"
+        )
+    for i, r in enumerate(settings.rotators):
+        where = f"rotators[{i}]"
+        if not os.path.exists(r.port):
+            found.append(
+                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
+                "lists the serial ports); the bridge keeps trying to open it"
+            )
+        if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
+            found.append(
+                f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
+                f"address: rotctld has no authentication, anyone who can reach port "
+                f"{r.rotctld_port} there can turn the antenna"
+            )
+    return found
