@@ -5,21 +5,12 @@ elevation rotor (0..90) through relays, on RS-232 at 9600 8N1. It keeps a clock 
 stored time/position points, and moves to them by itself when automatic motion is enabled.
 
 Frame: ASCII, no echo, letters in upper or lower case. Single bytes: `?` identify -> `SatEL`;
-`z` status (the 7-line report below); `g` enable automatic motion; `s` stop the rotors and
-disable automatic motion; `*` reset (= power cycle); `x` clear the memory; `u`/`d`/`r`/`l` jog
-el up/down, az clockwise/counter-clockwise; `c` calibrate (a no-op on the SatEL); `cx` (lower case
-only) setup calibration. Lines ended by CR or LF (an LF right after a CR is swallowed):
-`p<az> <el>` point, e.g. `p100 45`; `t` read the clock; `tYYYY/MM/DD HH:MM:SS` set it;
-`YYYY/MM/DD HH:MM:SS <az> <el>` (it starts with the `2` of the year) store a point. Every line
-the controller prints ends in `line_ending` (CR LF, or LF only). The status report:
-    Motion ENABLED                      (or Motion DISABLED)
-    Mode 0 - azimuth break at NORTH
-    Time: 2001/00/00 00:00:07
-    Azimuth = 000     Absolute = 000
-    Elevation = 000
-    <empty>
-    Number of stored positions: 00
-    <empty>                             (`trailing_blank_lines` of them, 2 by default)
+`z` status (the 7-line report); `g` enable automatic motion; `s` stop the rotors and disable
+automatic motion; `*` reset (= power cycle); `x` clear the memory; `u`/`d`/`r`/`l` jog el
+up/down, az clockwise/counter-clockwise; `c` calibrate (a no-op on the SatEL); `cx` (lower case
+only) setup calibration. Lines (`p` point, `t` clock, a stored point) are ended by CR or LF; an
+LF right after a CR is swallowed. The line forms, the report layout and the controller clock are
+in satel_frames.py (pure), the two rotors and their slew in satel_rotors.py; this module decides.
 
 Source documents (written from these, never from bridge/protocols):
   Hamlib 4.5.4's satel backend (satel.c and its author's notes, its traffic seen with rotctl),
@@ -54,8 +45,8 @@ Rules:
 7. Corruption (corrupt_on_misuse=True, first misuse): the slew halts where it is, no report
    follows, automatic motion is off and `g`/`p` are ignored ("ignored: corrupted state") until
    a reset. Stored points are consumed without moving anything.
-8. Positions in reports are rounded half up to whole degrees, three digits; Absolute equals
-   Azimuth (mode 0). Unknown bytes and malformed lines are logged "invalid" and get no reply.
+8. Unknown bytes and malformed lines (satel_frames.py rule 2) are logged "invalid" and get no
+   reply; a line longer than MAX_LINE_BYTES keeps only its start, and so is malformed.
 9. The trailing empty lines leave at line rate too, so a reader that stops after 7 lines and
    flushes (Hamlib) may find them in front of its next reply: Hamlib 4.5.4 running `P az el p`
    in one session then reads 0.00 now and then (measured ~1 run in 10). That is the device as
@@ -64,62 +55,32 @@ Rules:
 
 from __future__ import annotations
 
-import math
-import re
-from collections.abc import Iterable
 from dataclasses import dataclass
-from datetime import datetime, timedelta
-from enum import StrEnum
 
 from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
-from bridge.emulators.physics import DRIVER_COMMAND, Axis
+from bridge.emulators.physics import DRIVER_COMMAND
+from bridge.emulators.satel_frames import (
+    CR,
+    LF,
+    LINE_LETTERS,
+    MAX_LINE_BYTES,
+    MEMORY_LIMIT,
+    ClockRead,
+    ClockSet,
+    ControllerClock,
+    Outcome,
+    PointLine,
+    StoredPoint,
+    parse_line,
+    status_report,
+)
+from bridge.emulators.satel_rotors import Rotors
 
 __all__ = ["MEMORY_LIMIT", "Outcome", "SatEL", "SatelState", "StoredPoint"]
 
-MEMORY_LIMIT = 50  # manual p. 12: "the controller only has the capacity to remember 50 data points"
-MAX_LINE_BYTES = 48  # longest valid line is a stored point, 27 bytes; beyond this it is junk
 DRIVER_EPHEMERIS = "ephemeris"
 DRIVER_JOG = "jog"
-CR, LF = 0x0D, 0x0A
-#: The unset clock reads 2001/00/00 00:00:00; for comparisons it stands for this instant.
-POWER_ON_EPOCH = datetime(2000, 12, 31)
-_TIME = rb"(\d{4})/(\d{2})/(\d{2}) (\d{2}):(\d{2}):(\d{2})"
-_POINT_RE = re.compile(rb"[pP](\d{1,3}) (\d{1,3})")
-_SET_TIME_RE = re.compile(rb"[tT]" + _TIME)
-_STORE_RE = re.compile(_TIME + rb" (\d{1,3}) (\d{1,3})")
 _JOGS = {"u": ("el", 90.0), "d": ("el", 0.0), "r": ("az", 360.0), "l": ("az", 0.0)}
-
-
-class Outcome(StrEnum):
-    """What the controller did with a command (the `outcome` of a LoggedFrame)."""
-
-    IDENTIFY = "identify"
-    STATUS = "status"
-    MOTION_ENABLED = "motion enabled"
-    STOP = "stop"
-    RESET = "reset"
-    SLEW = "slew"
-    JOG = "jog"
-    TIME_READ = "time read"
-    TIME_SET = "time set"
-    MEMORY_CLEARED = "memory cleared"
-    POINT_STORED = "point stored"
-    CALIBRATE = "calibrate: no-op on SatEL"
-    IGNORED_CX = "ignored: cx not emulated"
-    IGNORED_MOTION_DISABLED = "ignored: motion disabled"
-    IGNORED_MEMORY_FULL = "ignored: memory full"
-    IGNORED_CORRUPTED = "ignored: corrupted state"
-    INVALID = "invalid"
-    MISUSE = "misuse: input while slewing"
-
-
-@dataclass(frozen=True)
-class StoredPoint:
-    """One ephemeris point: at controller time `when`, point at az/el (as typed)."""
-
-    when: datetime
-    az_deg: int
-    el_deg: int
 
 
 @dataclass(frozen=True)
@@ -133,57 +94,6 @@ class SatelState(RotatorState):
     controller_time: str = ""
     stored_points: tuple[StoredPoint, ...] = ()
     misuse_count: int = 0
-
-
-@dataclass(frozen=True)
-class _Slew:
-    kind: str  # DRIVER_COMMAND (`p`, reports at the end) or DRIVER_EPHEMERIS (silent)
-    az_deg: float
-    el_deg: float
-
-
-class _ControllerClock:
-    """The controller's own clock: whole seconds counted from a reset or from the last `t`."""
-
-    def __init__(self, now: float) -> None:
-        self._base: datetime | None = None
-        self._origin_s = now
-
-    def reset(self, now: float) -> None:
-        self._base, self._origin_s = None, now
-
-    def set(self, when: datetime, now: float) -> None:
-        self._base, self._origin_s = when, now
-
-    def _elapsed_s(self, now: float) -> int:
-        return max(0, math.floor(now - self._origin_s))
-
-    def read(self, now: float) -> datetime:
-        return (self._base or POWER_ON_EPOCH) + timedelta(seconds=self._elapsed_s(now))
-
-    def text(self, now: float) -> str:
-        if self._base is None:
-            days, rest = divmod(self._elapsed_s(now), 86400)
-            hours, rest = divmod(rest, 3600)
-            return f"2001/00/{days:02d} {hours:02d}:{rest // 60:02d}:{rest % 60:02d}"
-        return self.read(now).strftime("%Y/%m/%d %H:%M:%S")
-
-    def instant_s(self, when: datetime) -> float:
-        """The `now` at which this clock reads `when`."""
-        return self._origin_s + (when - (self._base or POWER_ON_EPOCH)).total_seconds()
-
-
-def _parse_time(groups: Iterable[bytes]) -> datetime | None:
-    """The six groups of _TIME: year, month, day, hour, minute, second."""
-    try:
-        year, month, day, hour, minute, second = (int(g) for g in groups)
-        return datetime(year, month, day, hour, minute, second)
-    except ValueError:
-        return None
-
-
-def _whole_deg(value_deg: float) -> int:
-    return math.floor(value_deg + 0.5)
 
 
 class SatEL:
@@ -216,21 +126,15 @@ class SatEL:
         self.report_on_stop: bool = report_on_stop
         self.trailing_blank_lines: int = trailing_blank_lines
         self.memory_limit: int = memory_limit
-        self._az = Axis(
-            start_az_deg, min_deg=0.0, max_deg=360.0, speed_deg_s=az_speed_deg_s, now=now
-        )
-        self._el = Axis(
-            start_el_deg, min_deg=0.0, max_deg=90.0, speed_deg_s=el_speed_deg_s, now=now
-        )
+        self._rotors = Rotors(start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s, now)
         self._tx = PacedLine(baud, processing_delay_s=processing_delay_s)
-        self._clock = _ControllerClock(now)
+        self._clock = ControllerClock(now)
         self._now_s: float = now
         self._log: list[LoggedFrame] = []
         self._events: list[MotionEvent] = []
         self._line: bytearray | None = None
         self._swallow_lf = False
         self._after_c = False
-        self._slew: _Slew | None = None
         self._motion_enabled = False
         self._corrupted = False
         self._memory: list[StoredPoint] = []
@@ -259,7 +163,7 @@ class SatEL:
 
     def state(self, now: float) -> SatelState:
         now = self._update(now)
-        az, el, slew = self._az, self._el, self._slew
+        az, el, slew = self._rotors.az, self._rotors.el, self._rotors.slew
         flags = {
             "motion_enabled": self._motion_enabled,
             "slewing": slew is not None,
@@ -314,37 +218,30 @@ class SatEL:
         if not 0.0 <= az_deg <= 360.0 or (el_deg is not None and not 0.0 <= el_deg <= 90.0):
             raise ValueError(f"manual_rotate outside 0..360 / 0..90: {az_deg}, {el_deg}")
         now = self._update(now)
-        if self._slew is not None:
+        if self._rotors.slew is not None:
             self._end_slew(now, "panel override", report=self.report_on_stop)
-        self._az.manual_move(az_deg, now)
+        self._rotors.az.manual_move(az_deg, now)
         if el_deg is not None:
-            self._el.manual_move(el_deg, now)
+            self._rotors.el.manual_move(el_deg, now)
         self._event(now, "move", f"panel to az {az_deg:g}, el {el_deg}")
 
     def jam(self, now: float) -> None:
         """Both rotors stick: motors may run, positions stay, a slew never ends."""
         now = self._update(now)
-        self._az.jam(now)
-        self._el.jam(now)
+        self._rotors.jam(now)
         self._event(now, "jammed")
 
     def unjam(self, now: float) -> None:
         now = self._update(now)
-        self._az.unjam(now)
-        self._el.unjam(now)
+        self._rotors.unjam(now)
         self._event(now, "unjammed")
 
     # -- time -----------------------------------------------------------------------------------
 
     def _next_internal_s(self) -> float | None:
         """The next slew end, or (when no slew runs) the next stored point due."""
-        slew = self._slew
-        if slew is not None:
-            moving = [axis for axis in (self._az, self._el) if axis.is_moving]
-            arrivals = [axis.arrival_time_s() for axis in moving]
-            if any(t is None for t in arrivals):
-                return None  # jammed: never arrives
-            return max([t for t in arrivals if t is not None], default=self._now_s)
+        if self._rotors.slew is not None:
+            return self._rotors.slew_end_s(self._now_s)
         if self._memory:
             return self._clock.instant_s(self._memory[0].when)
         return None
@@ -356,7 +253,7 @@ class SatEL:
             at_s = max(due_s, self._now_s)
             self._advance_axes(at_s)
             self._now_s = at_s
-            if self._slew is not None:
+            if self._rotors.slew is not None:
                 self._end_slew(at_s, "arrived", report=True)
             else:
                 self._fire_points(at_s)
@@ -365,8 +262,8 @@ class SatEL:
         return now
 
     def _advance_axes(self, now: float) -> None:
-        for name, axis in (("az", self._az), ("el", self._el)):
-            if axis.advance(now) is not None and self._slew is None:
+        for name in self._rotors.advance(now):
+            if self._rotors.slew is None:
                 self._event(now, "arrived", name)
 
     def _fire_points(self, now: float) -> None:
@@ -381,18 +278,13 @@ class SatEL:
     # -- motion ---------------------------------------------------------------------------------
 
     def _start_slew(self, kind: str, az_deg: float, el_deg: float, now: float) -> None:
-        slew = _Slew(kind, self._az.clamp(az_deg), self._el.clamp(el_deg))
-        self._slew = slew
-        self._az.start_move(slew.az_deg, now, driver=kind)
-        self._el.start_move(slew.el_deg, now, driver=kind)
+        slew = self._rotors.start_slew(kind, az_deg, el_deg, now)
         self._event(now, "move", f"{kind} to {slew.az_deg:g} {slew.el_deg:g}")
-        if not (self._az.is_moving or self._el.is_moving):
+        if not self._rotors.is_moving:
             self._end_slew(now, "arrived", report=True)
 
     def _end_slew(self, now: float, reason: str, *, report: bool) -> None:
-        slew, self._slew = self._slew, None
-        for axis in (self._az, self._el):
-            axis.stop(now)
+        slew = self._rotors.end_slew(now)
         self._event(now, "stopped" if reason != "arrived" else reason, reason)
         if slew is not None and slew.kind == DRIVER_COMMAND and report:
             self._send(self._status_block(now), now)
@@ -400,18 +292,18 @@ class SatEL:
     def _stop(self, now: float, reason: str) -> bool:
         """`s`: rotors stop (a `p` slew reports, rule 4), automatic motion is disabled."""
         self._motion_enabled = False
-        if self._slew is not None:
+        if self._rotors.slew is not None:
             self._end_slew(now, reason, report=self.report_on_stop)
             return True
-        stopped = any([axis.stop(now) for axis in (self._az, self._el)])  # stop both
+        stopped = self._rotors.stop(now)
         if stopped:
             self._event(now, "stopped", reason)
         return stopped
 
     def _reset(self, now: float, reason: str) -> None:
-        if self._slew is not None:
+        if self._rotors.slew is not None:
             self._end_slew(now, reason, report=False)
-        if any([axis.stop(now) for axis in (self._az, self._el)]):
+        if self._rotors.stop(now):
             self._event(now, "stopped", reason)
         self._motion_enabled = self._corrupted = False
         self._line, self._swallow_lf, self._after_c = None, False, False
@@ -428,7 +320,7 @@ class SatEL:
         if swallow and value == LF:
             return
         letter = chr(value).lower() if value < 0x80 else ""
-        if self._slew is not None:  # rule 2: only a stop or a reset gets through
+        if self._rotors.slew is not None:  # rule 2: only a stop or a reset gets through
             if letter in ("s", "*"):
                 self._single(value, letter, now)
             else:
@@ -446,7 +338,7 @@ class SatEL:
             return
         if after_c and value == ord("x"):
             self._log.append(LoggedFrame(now, b"cx", Outcome.IGNORED_CX.value))
-        elif letter in ("p", "t", "2"):
+        elif letter in LINE_LETTERS:
             self._line = bytearray([value])
         else:
             self._single(value, letter, now)
@@ -473,7 +365,7 @@ class SatEL:
             outcome = Outcome.MEMORY_CLEARED
         elif letter in _JOGS:
             axis_name, end_deg = _JOGS[letter]
-            axis = self._az if axis_name == "az" else self._el
+            axis = self._rotors.az if axis_name == "az" else self._rotors.el
             axis.start_move(end_deg, now, driver=DRIVER_JOG)
             self._event(now, "move", f"jog {letter}")
             outcome = Outcome.JOG
@@ -483,28 +375,27 @@ class SatEL:
         self._record(value, outcome, now)
 
     def _dispatch_line(self, line: bytes, now: float) -> None:
-        body = line[:-1]
+        parsed = parse_line(line[:-1])
         outcome = Outcome.INVALID
-        if (point := _POINT_RE.fullmatch(body)) is not None:
+        if isinstance(parsed, PointLine):
             if self._corrupted:
                 outcome = Outcome.IGNORED_CORRUPTED
             elif not self._motion_enabled:
                 outcome = Outcome.IGNORED_MOTION_DISABLED
             else:
                 outcome = Outcome.SLEW
-                self._start_slew(DRIVER_COMMAND, int(point[1]), int(point[2]), now)
-        elif body in (b"t", b"T"):
+                self._start_slew(DRIVER_COMMAND, parsed.az_deg, parsed.el_deg, now)
+        elif isinstance(parsed, ClockRead):
             self._send_line(self._clock.text(now).encode("ascii"), now)
             outcome = Outcome.TIME_READ
-        elif (m := _SET_TIME_RE.fullmatch(body)) and (when := _parse_time(m.groups())):
-            self._clock.set(when, now)
+        elif isinstance(parsed, ClockSet):
+            self._clock.set(parsed.when, now)
             outcome = Outcome.TIME_SET
-        elif (m := _STORE_RE.fullmatch(body)) and (when := _parse_time(m.groups()[:6])):
+        elif isinstance(parsed, StoredPoint):
             if len(self._memory) >= self.memory_limit:
                 outcome = Outcome.IGNORED_MEMORY_FULL
             else:
-                point_in = StoredPoint(when, int(m[7]), int(m[8]))
-                self._memory.append(point_in)
+                self._memory.append(parsed)
                 self._memory.sort(key=lambda p: p.when)
                 outcome = Outcome.POINT_STORED
         self._log.append(LoggedFrame(now, line, outcome.value))
@@ -519,21 +410,16 @@ class SatEL:
     # -- output ---------------------------------------------------------------------------------
 
     def _status_block(self, now: float) -> bytes:
-        az, el = (
-            _whole_deg(self._az.position_deg_at(now)),
-            _whole_deg(self._el.position_deg_at(now)),
+        az_deg, el_deg = self._rotors.positions_deg_at(now)
+        return status_report(
+            motion_enabled=self._motion_enabled,
+            clock_text=self._clock.text(now),
+            az_deg=az_deg,
+            el_deg=el_deg,
+            stored_points=len(self._memory),
+            trailing_blank_lines=self.trailing_blank_lines,
+            line_ending=self.line_ending,
         )
-        lines = [
-            "Motion ENABLED" if self._motion_enabled else "Motion DISABLED",
-            "Mode 0 - azimuth break at NORTH",
-            f"Time: {self._clock.text(now)}",
-            f"Azimuth = {az:03d}     Absolute = {az:03d}",
-            f"Elevation = {el:03d}",
-            "",
-            f"Number of stored positions: {len(self._memory):02d}",
-            *[""] * self.trailing_blank_lines,
-        ]
-        return b"".join(line.encode("ascii") + self.line_ending for line in lines)
 
     def _send_line(self, text: bytes, now: float) -> None:
         self._send(text + self.line_ending, now)
@@ -545,9 +431,5 @@ class SatEL:
         self._log.append(LoggedFrame(now, bytes([value]), outcome.value))
 
     def _event(self, time_s: float, kind: str, detail: str = "") -> None:
-        el = self._el.position_deg_at(time_s)
-        self._events.append(
-            MotionEvent(
-                time_s, kind, self._az.position_deg_at(time_s), f"{detail} el={el:g}".strip()
-            )
-        )
+        az, el = self._rotors.positions_deg_at(time_s)
+        self._events.append(MotionEvent(time_s, kind, az, f"{detail} el={el:g}".strip()))
