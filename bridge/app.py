@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import logging
 import signal
 import threading
@@ -51,6 +52,13 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
         az_speed_deg_s=az_speed,
         el_speed_deg_s=el_speed,
     )
+
+
+class NotYet(ConfigError):
+    """A start-up failure that may clear by itself (a rotctld address that is not up yet while
+    the network comes up): one line like any, but exit code 1, so systemd tries again."""
+
+    exit_code = 1
 
 
 class App:
@@ -143,6 +151,8 @@ class App:
         except OSError as exc:
             for server in self.rotctld:
                 server.stop()
+            if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
+                raise NotYet(exc.strerror or str(exc)) from None
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect

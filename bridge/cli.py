@@ -31,7 +31,7 @@ def _load(args: argparse.Namespace) -> Settings:
 
 def _fail(exc: ConfigError) -> SystemExit:
     print(f"rotor-bridge: {exc}", file=sys.stderr)
-    return SystemExit(EXIT_CONFIG)
+    return SystemExit(getattr(exc, "exit_code", EXIT_CONFIG))  # app.NotYet: 1, to be retried
 
 
 def cmd_run(args: argparse.Namespace) -> int:

@@ -36,7 +36,6 @@ from dataclasses import dataclass, replace
 
 from bridge.model import MotionState
 
-
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 
 
