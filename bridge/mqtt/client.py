@@ -43,11 +43,22 @@ Rules:
    lets paho re-send an old value it had in flight after a reconnect, over the fresher state
    re-published from the cache. Discovery configs, the bridge's own online/offline (its last
    will) and error events stay QoS 1; a rotator's availability is state like any other.
+9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
+   socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on (mosquitto's
+   default, set_tcp_nodelay false) holds a second small packet until the first is acknowledged,
+   and Linux delays the acknowledgement of a packet we do not answer (a PUBACK for our error
+   event, a command that changes nothing) by 40 ms once we answer others quickly: a stop 0-3 ms
+   behind a refused target reached the controller 44 ms late (p50; benchmarks/latency.py), and
+   behind any target while state went out at QoS 1. The kernel leaves quick-ack mode again as
+   soon as we send, so it is set after every read, not once (a system call per read). Command
+   topics stay QoS 0 (rule 4): our PUBACK would acknowledge a command too, but brings back what
+   rule 4 avoids.
 """
 
 from __future__ import annotations
 
 import logging
+import socket
 import ssl
 import sys
 import threading
@@ -57,7 +68,7 @@ from collections.abc import Callable
 from typing import Any, Literal
 
 import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
@@ -79,6 +90,8 @@ TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "other"]
+
+TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 
 
 class TakeoverGuard:
@@ -110,6 +123,27 @@ class TakeoverGuard:
         return True
 
 
+def acknowledge_now(sock: object) -> None:
+    """Rule 9: have the kernel acknowledge what was read so far now, not after its delayed-ACK
+    timer (and leave its interactive mode until we next send)."""
+    setsockopt = getattr(sock, "setsockopt", None)  # None before the first connect
+    if TCP_QUICKACK is None or setsockopt is None:
+        return
+    try:
+        setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
+    except OSError:  # closed meanwhile: paho notices that on its own
+        pass
+
+
+class _Client(paho.Client):
+    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
+
+    def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
+        rc = super().loop_read(max_packets)
+        acknowledge_now(self.socket())
+        return rc
+
+
 class MqttClient:
     def __init__(
         self,
@@ -139,7 +173,7 @@ class MqttClient:
         self._reconnect_s = (reconnect_min_s, reconnect_max_s)
         self._guard = TakeoverGuard()
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
-        c = paho.Client(
+        c = _Client(
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
             protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
