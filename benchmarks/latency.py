@@ -20,6 +20,19 @@ does not speed up polling); "polling" = both poll intervals 1 ms: the bridge pol
 an exchange is (nearly) always in flight. A random pause after every frame spreads the commands
 over the poll cycle.
 
+Issue 15, a stop right behind another command, to a mosquitto with its default settings (Nagle
+on: it holds a second small packet until the bridge has acknowledged the first, and Linux delays
+the acknowledgement of a packet the bridge does not answer by up to 40 ms); timed from the stop's
+publish. The Rotor-EZ is kept "braking" (a 60 s brake delay after the first stop), so every
+target is held and the stop is the only frame on the line: what is measured is the way from the
+broker to the serial port, not a target frame the stop has to queue behind. "0-3 ms after a
+target": the bridge answers a target with its status (QoS 0) within a few milliseconds, and that
+answer carries the acknowledgement. "0-3 ms after a refused target" (999, out of range): the
+answer is an error event at QoS 1, and the broker's PUBACK for it is the packet the bridge does
+not answer, so the broker's hold lasts until the bridge's delayed ACK unless the bridge
+acknowledges at once (bridge/mqtt/client.py rule 9). While retained state went out at QoS 1,
+every target was answered that way.
+
 Every controller sits behind a paced line (line.PacedRelay): the host's bytes reach it when
 their last bit would have at the line rate, queued behind anything still being sent, and the
 emulators pace their replies. So a latency includes the frame's own transmission (the "line"
@@ -48,12 +61,22 @@ NODELAY = "set_tcp_nodelay true\n"
 
 
 @dataclass(frozen=True)
+class Lead:
+    """Another command published before each measured one (not timed itself)."""
+
+    command: str  # MQTT leaf topic
+    payload: Callable[[int], str]
+    gap_s: tuple[float, float] = (0.0, 0.003)  # from its publish to the next publish
+
+
+@dataclass(frozen=True)
 class Condition:
     name: str
     rotator: dict[str, Any]
     gap_s: tuple[float, float]  # random pause after each frame (and after idle, if awaited)
     broker_conf: str = ""  # extra mosquitto.conf lines (default: mosquitto's own defaults)
     quick: bool = True  # also run with --quick
+    leads: tuple[Lead, ...] = ()  # published in this order before each measured command
 
 
 @dataclass(frozen=True)
@@ -92,6 +115,9 @@ def isolation_s() -> float:
 _EZ_POLL = lambda f: f.data == b"AI1;"  # noqa: E731
 _STATUS_POLL = lambda f: f.outcome == "status"  # noqa: E731
 _SPID_FRAME = bytes(13)
+BRAKING = {"brake_delay_s": 60.0}  # targets held after the first stop: only stops on the line
+AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
+AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
 _SPID_IDLE = {"idle_poll_interval_s": 1.0, "moving_poll_interval_s": 1.0, "settle_s": 2.0}
 
 
@@ -163,7 +189,15 @@ def cases() -> list[Case]:
             b";",
             "stop ;",
             lambda f: f.data == b";",
-            (Condition("idle", {}, gap), Condition("polling", FLAT_OUT, gap)),
+            (
+                Condition("idle", {}, gap),
+                Condition("polling", FLAT_OUT, gap),
+                # issue 15: a stop right behind another command
+                Condition("braking, 0-3 ms after a target", BRAKING, gap, leads=(AFTER_TARGET,)),
+                Condition(
+                    "braking, 0-3 ms after a refused target", BRAKING, gap, leads=(AFTER_REFUSED,)
+                ),
+            ),
             poll=_EZ_POLL,
         ),
         Case(
@@ -240,6 +274,9 @@ def run_bridge_case(
             if pause > 0:
                 time.sleep(pause)
             mark_frames, mark_mqtt = rig.frames.mark(), rig.mqtt.mark()
+            for lead in cond.leads:
+                rig.mqtt.publish(rig.t(lead.command), lead.payload(i))
+                _pause(rng.uniform(*lead.gap_s))
             t0 = time.monotonic()
             rig.mqtt.publish(rig.t(case.command), case.payload(i))
             frame = rig.frames.wait(case.match, mark_frames, 5.0)
@@ -256,6 +293,14 @@ def run_bridge_case(
         elapsed = time.monotonic() - t_first
         polls = sum(1 for f in rig.frames.since(first) if case.poll(f))
     return {"latencies_s": latencies, "polls_per_s": polls / elapsed}
+
+
+def _pause(s: float) -> None:
+    """Milliseconds, kept to the tenth: time.sleep alone may overshoot by more than that."""
+    end = time.monotonic() + s
+    while (left := end - time.monotonic()) > 0:
+        if left > 0.0005:
+            time.sleep(left - 0.0005)
 
 
 # -- the item -----------------------------------------------------------------------------------
@@ -416,7 +461,9 @@ def _notes(rows: dict[str, Any]) -> list[str]:
         "clock), through a line paced at its rate both ways; 'line' = the frame's own "
         "transmission time (the limit); 'beyond' = p99 - line.",
         "percentiles are nearest-rank; polls/s = the bridge's position queries during the run; "
-        "'nodelay broker' = mosquitto with set_tcp_nodelay true (default false).",
+        "'nodelay broker' = mosquitto with set_tcp_nodelay true (default false); '0-3 ms after "
+        "...': each stop published 0-3 ms after another command, timed from the stop's publish, "
+        "the rotor braking (targets held); 'refused': 999, answered by an error at QoS 1.",
         "half-duplex lines (SPID, SatEL): a command waits for the exchange in flight (Rot2Prog: "
         "13 B query 217 ms + 12 B reply 200 ms at 600 baud); full-duplex Rotor-EZ: a stop waits "
         "only for a query still in the UART (AI1; = 8.3 ms).",
@@ -450,6 +497,16 @@ def verdicts(rows: dict[str, Any]) -> list[Verdict]:
                 max(beyond) <= 10.0,
             )
         )
+    for lead in ("a target", "a refused target"):
+        after = rows.get(f"bridge/rotorez/stop/braking, 0-3 ms after {lead}")
+        if after:
+            out.append(
+                Verdict(
+                    f"a stop 0-3 ms after {lead} (mosquitto defaults): p99 within 10 ms",
+                    f"stop p99 {after['p99_ms']:.1f} ms (p50 {after['p50_ms']:.1f} ms)",
+                    after["p99_ms"] <= 10.0,
+                )
+            )
 
     def on_line(r: dict[str, Any]) -> float:
         return float(r["p99_ms"])
