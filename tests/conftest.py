@@ -7,11 +7,18 @@ from pathlib import Path
 import pytest
 
 from tests.support import Mosquitto, Probe
+from tests.support.rig import Rig
 
 
 @pytest.fixture
-def broker(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path).start()
+def broker_conf() -> str:
+    """Extra mosquitto.conf lines for the ``broker`` fixture (a suite's conftest may say others)."""
+    return ""
+
+
+@pytest.fixture
+def broker(tmp_path: Path, broker_conf: str) -> Iterator[Mosquitto]:
+    m = Mosquitto(tmp_path, extra_conf=broker_conf).start()
     yield m
     m.stop()
 
@@ -21,6 +28,12 @@ def probe(broker: Mosquitto) -> Iterator[Probe]:
     p = Probe(broker.port)
     yield p
     p.close()
+
+
+@pytest.fixture
+def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
+    with Rig(tmp_path, broker, probe) as r:
+        yield r
 
 
 @pytest.fixture(scope="session")

@@ -1,36 +1,29 @@
 from __future__ import annotations
 
 import argparse
-import subprocess
-import sys
 
 import pytest
 
 from bridge import __version__
 from bridge.cli import build_parser, main
-
-
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "bridge", *args], capture_output=True, text=True, timeout=30
-    )
+from tests.support import run_cli
 
 
 def test_ports_lists_serial_ports_or_says_there_are_none() -> None:
-    out = cli("ports")
+    out = run_cli("ports")
     assert out.returncode == 0, out.stderr
     assert "use this path:" in out.stdout or "no serial ports found" in out.stdout
 
 
 def test_version_and_help() -> None:
-    assert cli("--version").stdout.strip() == f"rotor-bridge {__version__}"
-    helptext = cli("--help").stdout
+    assert run_cli("--version").stdout.strip() == f"rotor-bridge {__version__}"
+    helptext = run_cli("--help").stdout
     for sub in ("run", "check-config", "ports", "emulate", "demo"):
         assert sub in helptext
 
 
 def test_run_without_a_configuration_says_how_to_give_one() -> None:
-    out = cli("run")
+    out = run_cli("run")
     assert out.returncode == 2 and "--config" in out.stderr
 
 
@@ -41,7 +34,7 @@ def subcommands() -> dict[str, argparse.ArgumentParser]:
 
 
 def test_every_subcommand_is_listed_in_the_main_help() -> None:
-    helptext = cli("--help").stdout
+    helptext = run_cli("--help").stdout
     assert set(subcommands()) == {"run", "check-config", "ports", "emulate", "demo"}
     for name in subcommands():
         assert name in helptext

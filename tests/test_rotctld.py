@@ -22,15 +22,8 @@ from bridge.engine.state_store import StateStore
 from bridge.model import ErrorEvent, MotionState
 from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
 from bridge.settings import RotatorSettings, Settings
-from tests.support import wait_until
-
-FAST_BRIDGE = {
-    "idle_poll_interval_s": 0.3,
-    "moving_poll_interval_s": 0.1,
-    "settle_s": 0.6,
-    "stall_timeout_s": 2.5,
-    "silence_timeout_s": 1.0,
-}
+from tests.support import feed, wait_until
+from tests.support.rig import FAST_POLLING
 
 
 class Client:
@@ -113,7 +106,7 @@ def station(tmp_path: Path) -> Iterator[StationFactory]:
             model=model,
             port=str(link),
             brake_delay_s=0 if model == "rotorcard" else 1.5,
-            **{**FAST_BRIDGE, **settings},
+            **{**FAST_POLLING, **settings},
         )
         events: list[ErrorEvent] = []
         rotator = Rotator(
@@ -144,13 +137,7 @@ def station(tmp_path: Path) -> Iterator[StationFactory]:
 
 
 def parse(data: bytes, *, bytewise: bool = False) -> list[Request | object]:
-    parser = RequestParser()
-    if not bytewise:
-        return list(parser.feed(data))
-    out: list[Request | object] = []
-    for i in range(len(data)):
-        out += parser.feed(data[i : i + 1])
-    return out
+    return feed(RequestParser(), data, "bytewise" if bytewise else "whole")
 
 
 def summary(items: list[Request | object]) -> list[object]:

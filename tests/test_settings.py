@@ -2,8 +2,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -11,6 +9,7 @@ import pytest
 from bridge.config_report import config_warnings, masked
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, load_settings
+from tests.support import run_cli
 
 MINIMAL = """
 [mqtt]
@@ -119,13 +118,6 @@ def test_world_readable_password_file_is_refused(tmp_path: Path) -> None:
     assert "s3cret" not in json.dumps(masked(s))
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-    return subprocess.run(
-        [sys.executable, "-m", "bridge", *args], capture_output=True, text=True, env=env, timeout=30
-    )
-
-
 def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Path) -> None:
     text = MINIMAL.replace(
         'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword = "topsecret"'
@@ -204,14 +196,7 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
 
 def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
     """``rotor-bridge check-config`` as a process: (the printed settings, the warnings)."""
-    clean = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-    out = subprocess.run(
-        [sys.executable, "-m", "bridge", "check-config", "-c", str(path)],
-        capture_output=True,
-        text=True,
-        env={**clean, **env},
-        timeout=30,
-    )
+    out = run_cli("check-config", "-c", str(path), env=env)
     assert out.returncode == 0, out.stderr  # warnings never fail it
     lines = out.stderr.splitlines()
     assert all(line.startswith("rotor-bridge: warning: ") for line in lines), lines

@@ -24,8 +24,8 @@ from bridge.engine.state_store import StateStore
 from bridge.model import ErrorEvent, RotatorStatus, Stop, Target
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
-from tests.integration.conftest import FAST_BRIDGE, FAST_ROTOR
 from tests.support import wait_until
+from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
 
 
 @pytest.fixture

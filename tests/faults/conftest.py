@@ -1,5 +1,6 @@
 """The fault suite's real parts: a broker, emulated controllers on real ptys with a wire tap,
-the bridge (in-process or as its own process), and the ground truth the invariants are judged by.
+the bridge in-process (as its own process: tests.support.BridgeProcess), and the ground truth the
+invariants are judged by.
 
 Ground truth comes from two places the bridge never sees:
 - the emulator's own state (where the rotor really is, which frames it obeyed), and
@@ -13,14 +14,11 @@ The soak runner (tests/soak) uses the same pieces.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import random
 import re
-import signal
 import subprocess
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -34,13 +32,11 @@ from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.emulators.spid_models import MOTION_OUTCOMES
 from bridge.mosquitto import Mosquitto
-from tests.integration.conftest import Rig as IntegrationRig
 from tests.support import Message, Probe, wait_until
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.support.rig import Rig as BaseRig
 
 # -- timings -------------------------------------------------------------------------------------
-# Scaled down like tests/integration (same ratios as real hardware: the brake delay is much
+# Scaled down like tests/support/rig.py (same ratios as real hardware: the brake delay is much
 # longer than a poll, a settle window longer than two polls), a little faster still.
 EMU_FAST: dict[str, dict[str, Any]] = {
     "rotorez": {"speed_deg_s": 40.0, "brake_delay_s": 0.8, "jitter_deg": 1},
@@ -210,53 +206,9 @@ def near_deg(a: float, b: float, tol: float, wraps: bool = True) -> bool:
     return d <= tol
 
 
-# -- configuration files -------------------------------------------------------------------------
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int | float):
-        return repr(v)
-    if isinstance(v, str | Path):
-        return json.dumps(str(v))  # a JSON string is a valid TOML basic string
-    if isinstance(v, list):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    raise TypeError(f"no TOML for {v!r}")
-
-
-def to_toml(doc: dict[str, Any]) -> str:
-    """Enough TOML for the bridge's configuration: scalars, tables, arrays of tables."""
-    lines: list[str] = []
-
-    def table(prefix: str, d: dict[str, Any]) -> None:
-        subs = []
-        for k, v in d.items():
-            if isinstance(v, dict):
-                subs.append((k, v))
-            elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
-                subs.append((k, v))
-            else:
-                lines.append(f"{k} = {_toml_value(v)}")
-        for k, v in subs:
-            name = f"{prefix}.{k}" if prefix else k
-            if isinstance(v, dict):
-                lines.append(f"\n[{name}]")
-                table(name, v)
-            else:
-                for item in v:
-                    lines.append(f"\n[[{name}]]")
-                    table(name, item)
-
-    table("", doc)
-    return "\n".join(lines) + "\n"
-
-
 # -- the rig: broker + tapped emulators + the bridge in-process ----------------------------------
-class Rig(IntegrationRig):
-    """tests/integration's Rig, with tapped emulators and the fault suite's timings."""
-
-    def __init__(self, tmp: Path, broker: Mosquitto, probe: Probe) -> None:
-        super().__init__(tmp, broker, probe)
-        self.models: dict[str, str] = {}
+class Rig(BaseRig):
+    """tests.support's Rig, with tapped emulators and the fault suite's timings."""
 
     def add(
         self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
@@ -269,21 +221,6 @@ class Rig(IntegrationRig):
             {"id": rid, "model": model, "port": str(link), **BRIDGE_FAST[model], **bridge}
         )
         return port
-
-    def root(self, rid: str) -> str:
-        return self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
-
-    def topic(self, rid: str, leaf: str) -> str:
-        return f"{self.root(rid)}/{leaf}"
-
-    def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
-        """Online and settled (idle; ``unknown`` for a DCU-1, which cannot report)."""
-        settled = "unknown" if self.models[rid] == "dcu1" else "idle"
-        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
-        self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
-
-    def retained(self) -> dict[str, bytes]:
-        return fast_retained(self.broker.port, f"{self.base}/#")
 
     def status(self, rid: str) -> Any:
         assert self.app is not None
@@ -306,17 +243,11 @@ class Rig(IntegrationRig):
 
         emu.wait_for(there, timeout_s)
 
-    def close(self) -> None:
-        self.stop()
-        for emu in self.emus.values():
-            emu.close()
-
 
 @pytest.fixture
 def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
-    r = Rig(tmp_path, broker, probe)
-    yield r
-    r.close()
+    with Rig(tmp_path, broker, probe) as r:
+        yield r
 
 
 # -- invariants against the bridge's own status and the ground truth ----------------------------
@@ -416,75 +347,6 @@ def cut_short(rng: random.Random, model: str, emu: Any) -> bytes:
     )
 
 
-# -- the bridge as its own process ---------------------------------------------------------------
-class BridgeProcess:
-    """``python -m bridge run -c FILE``: the real service process, its log kept in a file."""
-
-    def __init__(self, tmp: Path, config: dict[str, Any], *, log_level: str = "DEBUG") -> None:
-        self.tmp = tmp
-        self.config_path = tmp / "bridge.toml"
-        self.config_path.write_text(to_toml(config))
-        self.log_path = tmp / "bridge.log"
-        self.log_level = log_level
-        self.proc: subprocess.Popen[bytes] | None = None
-
-    def start(self) -> BridgeProcess:
-        env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-        env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-        cmd = [sys.executable, "-m", "bridge", "--log-level", self.log_level, "run"]
-        with open(self.log_path, "ab") as log:
-            self.proc = subprocess.Popen(
-                [*cmd, "-c", str(self.config_path)],
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=env,
-                cwd=str(ROOT),
-            )
-        return self
-
-    @property
-    def pid(self) -> int:
-        assert self.proc is not None
-        return self.proc.pid
-
-    def alive(self) -> bool:
-        return self.proc is not None and self.proc.poll() is None
-
-    def log(self) -> str:
-        return self.log_path.read_text(errors="replace") if self.log_path.exists() else ""
-
-    def terminate(self, timeout_s: float = 10.0) -> int:
-        assert self.proc is not None
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-        return self.proc.wait(timeout_s)
-
-    def kill(self) -> None:
-        if self.proc is not None and self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(10)
-
-    def rss_kib(self) -> int:
-        assert self.proc is not None
-        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1])
-        raise AssertionError("no VmRSS")
-
-
-def run_cli(*args: str, timeout_s: float = 30) -> subprocess.CompletedProcess[str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    return subprocess.run(
-        [sys.executable, "-m", "bridge", *args],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=str(ROOT),
-        timeout=timeout_s,
-    )
-
-
 # -- a certificate authority, made at test time (never committed) --------------------------------
 class Pki:
     """A CA, a server certificate for 127.0.0.1 and a client certificate, made with openssl."""
@@ -529,106 +391,27 @@ def mosquitto_password_file(path: Path, users: dict[str, str]) -> Path:
     return path
 
 
-# -- probes and brokers without Nagle's 40 ms -----------------------------------------------------
+# -- a broker without Nagle's 40 ms -------------------------------------------------------------
 # Small MQTT packets on loopback otherwise wait for a delayed TCP ACK (about 40 ms a round trip);
 # with thousands of round trips that is most of the suite's time. Production is unaffected.
+# (tests.support.Probe sets TCP_NODELAY on its side.)
 FAST_BROKER_CONF = "allow_anonymous true\nset_tcp_nodelay true"
 
 
-def _nodelay(client: Any, userdata: Any, sock: Any) -> None:
-    import socket
-
-    with contextlib.suppress(OSError, AttributeError):
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-
-
-class FastProbe(Probe):
-    """tests.support.Probe with TCP_NODELAY, several topic filters ("a|b"), and optionally a
-    user name/password and TLS with our client certificate."""
-
-    def __init__(
-        self,
-        port: int,
-        topic_filter: str = "#",
-        *,
-        username: str | None = None,
-        password: str | None = None,
-        pki: Pki | None = None,
-        max_inflight: int = 20,
-    ) -> None:
-        import paho.mqtt.client as paho
-        from paho.mqtt.enums import CallbackAPIVersion
-
-        self.messages = []
-        self._cond = threading.Condition()
-        self._connected = threading.Event()
-        self.filter = topic_filter
-        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"fast-probe-{id(self)}")
-        if username is not None:
-            c.username_pw_set(username, password)
-        if pki is not None:
-            c.tls_set(
-                ca_certs=str(pki.path("ca.crt")),
-                certfile=str(pki.path("client.crt")),
-                keyfile=str(pki.path("client.key")),
-            )
-        c.on_socket_open = _nodelay
-        c.max_inflight_messages_set(max_inflight)
-        c.on_connect = self._on_connect
-        c.on_message = self._on_message
-        c.reconnect_delay_set(0.1, 0.5)  # type: ignore[arg-type]
-        c.connect_async("127.0.0.1", port, keepalive=10)
-        c.loop_start()
-        self.client = c
-        wait_until(self._connected.is_set, 10, "probe connected")
-
-    def _on_connect(self, client, userdata, flags, rc, props) -> None:  # noqa: ANN001
-        client.subscribe([(f, 1) for f in self.filter.split("|")])
-        self._connected.set()
+@pytest.fixture
+def broker_conf() -> str:
+    return FAST_BROKER_CONF
 
 
 def LoginProbe(  # noqa: N802  (reads like the class it makes)
     port: int, *, username: str, password: str, pki: Pki | None = None, topic_filter: str = "#"
-) -> FastProbe:
-    return FastProbe(port, topic_filter, username=username, password=password, pki=pki)
-
-
-def fast_retained(port: int, topic_filter: str) -> dict[str, bytes]:
-    """tests.support.retained_snapshot, through a FastProbe."""
-    marker = f"probe-marker/{threading.get_ident()}-{time.monotonic_ns()}"
-    probe = FastProbe(port, f"{topic_filter}|{marker}")
-    try:
-        probe.publish(marker, b"end")
-        probe.wait_for(marker)
-        return {m.topic: m.payload for m in probe.messages if m.retain}
-    finally:
-        probe.close()
-
-
-@pytest.fixture
-def broker(tmp_path: Path) -> Iterator[Mosquitto]:
-    m = Mosquitto(tmp_path, extra_conf=FAST_BROKER_CONF).start()
-    yield m
-    m.stop()
-
-
-@pytest.fixture
-def probe(broker: Mosquitto) -> Iterator[Probe]:
-    p = FastProbe(broker.port)
-    yield p
-    p.close()
-
-
-__all__ = [
-    "BridgeProcess",
-    "Pki",
-    "Rig",
-    "Tap",
-    "bogus_bearings",
-    "mosquitto_password_file",
-    "reported_positions",
-    "run_cli",
-    "start_emulator",
-    "to_toml",
-    "wait_until",
-]
+) -> Probe:
+    """A probe that logs in, and with ``pki`` speaks TLS with our client certificate."""
+    tls = None
+    if pki is not None:
+        tls = {
+            "ca_certs": str(pki.path("ca.crt")),
+            "certfile": str(pki.path("client.crt")),
+            "keyfile": str(pki.path("client.key")),
+        }
+    return Probe(port, topic_filter, username=username, password=password, tls=tls)

@@ -18,14 +18,13 @@ from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import (
     BRIDGE_FAST,
     EMU_FAST,
-    BridgeProcess,
     Rig,
     assert_bridge_matches_truth,
     assert_retained_matches_within_one_poll,
     motion_frames,
     send_target,
 )
-from tests.support import Probe, retained_snapshot, wait_until
+from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
 
 
 def polls_answered(emu, k: int, timeout_s: float = 5.0) -> None:  # noqa: ANN001

@@ -18,6 +18,7 @@ from bridge.protocols.base import JunkReply, PositionReply, VersionReply
 from bridge.protocols.rotorez import RotorEzCodec
 from bridge.protocols.satel import SatelCodec
 from bridge.protocols.spid import SpidCodec
+from tests.support import feed
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -71,14 +72,7 @@ def run(codec_factory: Any, script: list[tuple], slicing: str) -> tuple[list, in
         else:
             data = step[1]
             stream += data
-            if slicing == "whole":
-                replies += codec.feed(data)
-            elif slicing == "bytewise":
-                for i in range(len(data)):
-                    replies += codec.feed(data[i : i + 1])
-            else:
-                mid = len(data) // 2
-                replies += codec.feed(data[:mid]) + codec.feed(data[mid:])
+            replies += feed(codec, data, slicing)
     for r in replies:
         assert isinstance(r, PositionReply | VersionReply | JunkReply), r
     return replies, owed, bytes(stream)

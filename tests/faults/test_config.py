@@ -20,7 +20,8 @@ from hypothesis import strategies as st
 from bridge.cli import main
 from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError, load_settings
-from tests.faults.conftest import Pki, fast_retained, run_cli, to_toml
+from tests.faults.conftest import Pki
+from tests.support import retained_snapshot, run_cli, to_toml
 
 SECRET = "hunter2-do-not-show"
 BASE = """
@@ -198,7 +199,7 @@ def test_a_rotctld_port_taken_by_another_process_is_exit_2_and_one_line(
         f"rotor-bridge: rotctld for rotator 'tower': cannot listen on 127.0.0.1:{port}: "
         "Address already in use"
     ), line
-    assert fast_retained(broker.port, "#") == {}  # no discovery, no state, no "online"
+    assert retained_snapshot(broker.port, "#") == {}  # no discovery, no state, no "online"
 
 
 def test_a_rotctld_address_not_on_this_host_is_one_line_and_exit_1_to_be_retried(
@@ -224,7 +225,7 @@ def test_a_state_file_that_cannot_be_written_is_exit_2_and_one_line(
     line = the_one_line(run_cli("run", "-c", str(config)))
     assert line.startswith(f"rotor-bridge: state_file {state_file} cannot be written: "), line
     assert "Not a directory" in line
-    assert fast_retained(broker.port, "#") == {}
+    assert retained_snapshot(broker.port, "#") == {}
     assert blocker.read_text() == "not a directory\n"
 
 

@@ -22,8 +22,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.mosquitto import Mosquitto
-from tests.faults.conftest import FAST_BROKER_CONF, FastProbe, Rig, motion_frames, send_target
-from tests.support import retained_snapshot, wait_until
+from tests.faults.conftest import FAST_BROKER_CONF, Rig, motion_frames, send_target
+from tests.support import Probe, retained_snapshot, wait_until
 
 ROTATORS = {"ez": "rotorez", "spid": "rot2prog", "sat": "satel"}
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
@@ -92,7 +92,7 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
         f"rotor/+/{leaf}"
         for leaf in ("error", "state", "availability", "status", "bearing", "elevation")
     )
-    probe = FastProbe(broker.port, filters + "|rotor/+/lock/state|rotor/+/option/+/state")
+    probe = Probe(broker.port, filters + "|rotor/+/lock/state|rotor/+/option/+/state")
     rig = Rig(tmp, broker, probe)
     try:
         quick = {
@@ -323,7 +323,7 @@ def test_a_burst_of_10000_targets_ends_at_the_last_one_with_few_frames(bench: Be
     rig = bench.rig
     for rid in ("ez", "spid"):
         bench.lock(rid, False)
-    flow = FastProbe(rig.broker.port, "flow/nothing")  # a flow publishing as fast as it can
+    flow = Probe(rig.broker.port, "flow/nothing")  # a flow publishing as fast as it can
     client = flow.client
     t = time.monotonic()
     for i in range(5_000 - 1):  # 10,000 in all, interleaved

@@ -19,15 +19,12 @@ from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import (
     BRIDGE_FAST,
     EMU_FAST,
-    BridgeProcess,
     LoginProbe,
     Pki,
     mosquitto_password_file,
-    run_cli,
     start_emulator,
-    to_toml,
 )
-from tests.support import wait_until
+from tests.support import BridgeProcess, run_cli, to_toml, wait_until
 
 PROBE_USER, PROBE_PASSWORD = "probe", "probe-pass"
 

@@ -32,8 +32,8 @@ from tests.faults.conftest import (
     motion_frames,
     send_target,
     tap_of,
-    wait_until,
 )
+from tests.support import wait_until
 
 # (model, target, start) for the three families; targets alternate between two bearings
 FAMILIES = {"ez": "rotorez", "md": "md01", "sat": "satel"}

@@ -13,8 +13,8 @@ from pathlib import Path
 from bridge.homeassistant import Identity
 from bridge.mqtt.topics import DiscoveryTopics
 from tests.demo_process import DemoProcess
-from tests.integration.conftest import Rig
 from tests.support import Message, retained_snapshot
+from tests.support.rig import Rig
 
 DISCOVERY = DiscoveryTopics("homeassistant")
 

@@ -9,9 +9,9 @@ from pathlib import Path
 from bridge import emulators
 from bridge.mosquitto import Mosquitto
 from tests.ha_rules import validate
-from tests.integration.conftest import Rig
 from tests.integration.test_process import start_bridge, write_config
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.rig import Rig
 
 PREFIX = "homeassistant"
 

@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 from bridge import emulators
 from bridge.mosquitto import Mosquitto, free_port
-from tests.support import Probe, retained_snapshot, wait_until
+from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
 
 
 def write_config(tmp: Path, port: int, link: Path) -> Path:
@@ -38,13 +36,10 @@ idle_poll_interval_s = 0.3
 
 
 def start_bridge(cfg: Path, log: Path) -> subprocess.Popen[bytes]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
-    return subprocess.Popen(
-        [sys.executable, "-m", "bridge", "run", "-c", str(cfg)],
-        stdout=open(log, "wb"),  # noqa: SIM115
-        stderr=subprocess.STDOUT,
-        env=env,
-    )
+    """`rotor-bridge run -c CFG` at the file's own log level, its output in ``log``."""
+    bridge = BridgeProcess(cfg.parent, cfg, log_level=None, log_path=log).start()
+    assert bridge.proc is not None
+    return bridge.proc
 
 
 def test_broker_down_at_start_then_up_then_sigterm_is_a_clean_exit(tmp_path: Path) -> None:

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.conftest import Rig
 from tests.support import wait_until
+from tests.support.rig import Rig
 
 
 @pytest.fixture

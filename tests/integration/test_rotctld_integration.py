@@ -14,8 +14,8 @@ import time
 import pytest
 
 from bridge.rotctld import RotctldServer
-from tests.integration.conftest import Rig
 from tests.support import free_port, wait_until
+from tests.support.rig import Rig
 
 pytestmark = pytest.mark.hamlib
 

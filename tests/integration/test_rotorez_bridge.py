@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from tests.integration.conftest import Rig
+from tests.support.rig import Rig
 
 BEARING_FRAMES = (
     "executed",

@@ -7,7 +7,7 @@ import json
 import time
 from datetime import UTC, datetime
 
-from tests.integration.conftest import Rig
+from tests.support.rig import Rig
 
 
 def ready(rig: Rig) -> None:

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from tests.integration.conftest import Rig
+from tests.support.rig import Rig
 
 AZEL = ["rot2prog", "md01"]
 

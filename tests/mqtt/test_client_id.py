@@ -13,7 +13,7 @@ import pytest
 
 from bridge.config_report import masked
 from bridge.settings import load_settings
-from tests.faults.conftest import run_cli
+from tests.support import run_cli
 
 CONFIG = """
 state_file = "{state}"

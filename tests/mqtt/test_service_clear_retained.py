@@ -1,7 +1,7 @@
 """Deleting a retained command (an empty retained message, as the bridge's own refusals advise)
 is no command: no error event, nothing moves. An empty plain message is still a bad payload.
 
-Real parts: mosquitto, the bridge (App) and an emulated Rotor-EZ on a pty (tests/integration's
+Real parts: mosquitto, the bridge (App) and an emulated Rotor-EZ on a pty (tests/support's
 rig), MQTT 5 (the retain flag of live messages reaches the bridge).
 """
 
@@ -9,22 +9,9 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto
-from tests.integration.conftest import Rig
-from tests.support import Probe
-
-
-@pytest.fixture
-def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
-    r = Rig(tmp_path, broker, probe)
-    yield r
-    r.close()
+from tests.support.rig import Rig
 
 
 def test_an_empty_retained_command_is_a_deletion_not_a_refused_command(rig: Rig) -> None:

@@ -9,25 +9,7 @@ from hypothesis import strategies as st
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import UNTRUSTED, JunkReason, JunkReply, PositionReply, VersionReply
 from bridge.protocols.rotorez import RotorEzCodec
-
-
-def feed_whole(codec: RotorEzCodec, data: bytes) -> list:
-    return codec.feed(data)
-
-
-def feed_bytewise(codec: RotorEzCodec, data: bytes) -> list:
-    out = []
-    for i in range(len(data)):
-        out += codec.feed(data[i : i + 1])
-    return out
-
-
-def feed_split(codec: RotorEzCodec, data: bytes) -> list:
-    mid = len(data) // 2
-    return codec.feed(data[:mid]) + codec.feed(data[mid:])
-
-
-FEEDERS = [feed_whole, feed_bytewise, feed_split]
+from tests.support import HOW, feed
 
 
 def positions(replies: list) -> list[float]:
@@ -99,18 +81,18 @@ def test_capabilities_are_data() -> None:
     assert REGISTRY["rotorez"].baud == 4800
 
 
-@pytest.mark.parametrize("feed", FEEDERS)
-def test_position_reply(feed) -> None:
+@pytest.mark.parametrize("how", HOW)
+def test_position_reply(how: str) -> None:
     c = RotorEzCodec()
     c.encode_query()
-    assert positions(feed(c, b";123")) == [123.0]
+    assert positions(feed(c, b";123", how)) == [123.0]
 
 
-@pytest.mark.parametrize("feed", FEEDERS)
-def test_power_on_byte_and_banner_are_junk_and_banner_gives_version(feed) -> None:
+@pytest.mark.parametrize("how", HOW)
+def test_power_on_byte_and_banner_are_junk_and_banner_gives_version(how: str) -> None:
     c = RotorEzCodec()
     c.encode_query()
-    replies = feed(c, b"\xe0C2000 IDIOM V1.4S ;045")
+    replies = feed(c, b"\xe0C2000 IDIOM V1.4S ;045", how)
     assert positions(replies) == [45.0]
     assert VersionReply("1.4S") in replies
     junk = b"".join(r.data for r in replies if isinstance(r, JunkReply))
@@ -121,33 +103,33 @@ def power_ons(replies: list) -> list[bytes]:
     return [r.data for r in replies if isinstance(r, JunkReply) and r.reason is JunkReason.POWER_ON]
 
 
-@pytest.mark.parametrize("feed", FEEDERS)
-def test_the_codec_says_when_the_board_was_switched_on(feed) -> None:
+@pytest.mark.parametrize("how", HOW)
+def test_the_codec_says_when_the_board_was_switched_on(how: str) -> None:
     """The power-on byte is POWER_ON junk of its own (the engine re-sends the options on it);
     the banner, line noise and readings around it are not, and it taints no reading."""
     c = RotorEzCodec()
     c.encode_query()
-    replies = feed(c, b"\x13\xe0C2000 IDIOM V1.4S ;045")
+    replies = feed(c, b"\x13\xe0C2000 IDIOM V1.4S ;045", how)
     assert power_ons(replies) == [b"\xe0"]
     assert positions(replies) == []  # the \x13 before it is noise the board never sends
     c.encode_query()
-    replies = feed(c, b"\xe0;046C2000 IDIOM V1.4S ")
+    replies = feed(c, b"\xe0;046C2000 IDIOM V1.4S ", how)
     assert power_ons(replies) == [b"\xe0"] and positions(replies) == [46.0]
     c.encode_query()
-    assert power_ons(feed(c, b"C2000 IDIOM V1.4S \x13;047\r")) == []
+    assert power_ons(feed(c, b"C2000 IDIOM V1.4S \x13;047\r", how)) == []
 
 
 def test_a_run_of_power_on_bytes_is_one_power_on() -> None:
     assert power_ons(RotorEzCodec().feed(b"\xe0\xe0\xe0")) == [b"\xe0\xe0\xe0"]
 
 
-@pytest.mark.parametrize("feed", FEEDERS)
-def test_360_is_a_bearing_but_361_is_junk(feed) -> None:
+@pytest.mark.parametrize("how", HOW)
+def test_360_is_a_bearing_but_361_is_junk(how: str) -> None:
     c = RotorEzCodec()
     c.encode_query()
-    assert positions(feed(c, b";360")) == [360.0]
+    assert positions(feed(c, b";360", how)) == [360.0]
     c.encode_query()
-    assert positions(feed(c, b";361")) == []
+    assert positions(feed(c, b";361", how)) == []
 
 
 def test_unsolicited_bearing_frame_is_not_a_reading() -> None:

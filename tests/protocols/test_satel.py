@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import UNTRUSTED, JunkReply, PositionReply, VersionReply
 from bridge.protocols.satel import SatelCodec
+from tests.support import feed
 
 REPORT = (
     b"Motion ENABLED\r\nMode 0 - azimuth break at NORTH\r\nTime: 2026/11/22 04:10:00\r\n"
@@ -28,10 +29,7 @@ def test_report_is_read_by_labels(ending: bytes, how: str) -> None:
     data = REPORT.replace(b"\r\n", ending)
     c = SatelCodec()
     c.encode_query()
-    if how == "whole":
-        out = c.feed(data)
-    else:
-        out = [r for i in range(len(data)) for r in c.feed(data[i : i + 1])]
+    out = feed(c, data, how)
     assert positions(out) == [READING]
     assert not c.awaiting_reply()
     assert all(c.harmless(r.data) for r in out if isinstance(r, JunkReply))

@@ -9,20 +9,9 @@ from hypothesis import strategies as st
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply
 from bridge.protocols.spid import SpidCodec
+from tests.support import HOW, feed
 
 REPLY_12_5_34 = bytes.fromhex("57 03 07 02 05 02 03 09 04 00 02 20")
-
-
-def feed(codec: SpidCodec, data: bytes, how: str) -> list:
-    if how == "whole":
-        return codec.feed(data)
-    if how == "bytewise":
-        return [r for i in range(len(data)) for r in codec.feed(data[i : i + 1])]
-    mid = len(data) // 2
-    return codec.feed(data[:mid]) + codec.feed(data[mid:])
-
-
-HOW = ["whole", "bytewise", "split"]
 
 
 def known(ph: int = 2, variant: str = "rot2prog") -> SpidCodec:

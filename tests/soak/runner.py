@@ -48,17 +48,17 @@ from bridge.mosquitto import Mosquitto, free_port
 from tests.faults.conftest import (
     ROTOREZ_FAMILY,
     SPID,
-    BridgeProcess,
-    FastProbe,
     Tap,
     cut_short,
-    fast_retained,
     line_noise,
     near_deg,
     reported_positions,
     start_emulator,
     tap_of,
 )
+from tests.support import BridgeProcess
+from tests.support import Probe as FastProbe
+from tests.support import retained_snapshot as fast_retained
 
 # id: (model, emulator options, bridge options). Rotor speeds are faster than real rotators so
 # ten minutes hold many moves; the SatEL's are told to the bridge (it bounds a silent slew by

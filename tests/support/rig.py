@@ -1,32 +1,31 @@
-"""A rig: a private mosquitto, an emulated controller on a real pty (opened by the bridge through
-a stable link, like /dev/serial/by-id/...), and the bridge itself, all real parts."""
+"""A rig: a private mosquitto, emulated controllers on real ptys (opened by the bridge through a
+stable link, like /dev/serial/by-id/...), and the bridge itself in-process, all real parts.
+The fault suite's Rig (tests/faults/conftest.py) is this one with tapped emulators."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
+from types import TracebackType
 from typing import Any
-
-import pytest
 
 from bridge import emulators
 from bridge.app import App
 from bridge.emulators.pty import EmulatedPort
 from bridge.mosquitto import Mosquitto
 from bridge.settings import Settings
-from tests.support import Probe, retained_snapshot
+from tests.support.mqtt import Probe, retained_snapshot
 
 # Timings scaled down so a test takes seconds, with the same ratios as real hardware:
 # the controller's brake delay is still much longer than a poll, a settle window, a reply.
 FAST_ROTOR = {"speed_deg_s": 40.0, "brake_delay_s": 1.5, "jitter_deg": 1}
-FAST_BRIDGE = {
+FAST_POLLING = {
     "idle_poll_interval_s": 0.3,
     "moving_poll_interval_s": 0.1,
     "settle_s": 0.6,
     "stall_timeout_s": 2.5,
     "silence_timeout_s": 1.0,
-    "brake_delay_s": 1.5,
 }
+FAST_BRIDGE = {**FAST_POLLING, "brake_delay_s": 1.5}
 
 
 # SPID: digital encoders (no jitter), no brake, a slow line (600 baud: 0.42 s per exchange)
@@ -47,6 +46,7 @@ class Rig:
         self.broker = broker
         self.probe = probe
         self.emus: dict[str, EmulatedPort[Any]] = {}
+        self.models: dict[str, str] = {}
         self.rotators: list[dict[str, Any]] = []
         self.app: App | None = None
         self.base = "rotor"
@@ -63,6 +63,7 @@ class Rig:
             emu_options["brake_delay_s"] = 0.0  # Yaesu rotors have no brake
         port = emulators.start(model, link=str(link), **emu_options)
         self.emus[rid] = port
+        self.models[rid] = model
         cfg = {
             "id": rid,
             "model": model,
@@ -99,14 +100,18 @@ class Rig:
             self.app.stop()
             self.app = None
 
-    def topic(self, rid: str, leaf: str) -> str:
-        root = self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
-        return f"{root}/{leaf}"
+    def root(self, rid: str) -> str:
+        return self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
 
-    def ready(self, rid: str, timeout_s: float = 10.0) -> None:
-        """Online and idle (past the start-up brake window)."""
-        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s)
-        self.probe.wait_value(self.topic(rid, "state"), "idle", timeout_s)
+    def topic(self, rid: str, leaf: str) -> str:
+        return f"{self.root(rid)}/{leaf}"
+
+    def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
+        """Online and settled: idle, past the start-up brake window (``unknown`` for a DCU-1,
+        which cannot report)."""
+        settled = "unknown" if self.models[rid] == "dcu1" else "idle"
+        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
+        self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
 
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")
@@ -116,9 +121,10 @@ class Rig:
         for emu in self.emus.values():
             emu.close()
 
+    def __enter__(self) -> Rig:
+        return self
 
-@pytest.fixture
-def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
-    r = Rig(tmp_path, broker, probe)
-    yield r
-    r.close()
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()

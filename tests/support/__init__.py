@@ -1,0 +1,34 @@
+"""Real parts for tests (and the benchmarks), one copy of each: import them from here.
+
+- waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep
+- mqtt.py: ``Probe``, an MQTT client that records what arrives; ``retained_snapshot``
+- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files
+- codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
+- rig.py: a broker, emulated controllers on real ptys and the bridge in-process (``Rig``);
+  imported from there, as it brings the whole bridge in
+
+A private mosquitto on a free loopback port is ``bridge.mosquitto.Mosquitto`` (the demo's too);
+the pytest fixtures ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
+"""
+
+from bridge.mosquitto import Mosquitto, free_port
+from tests.support.codecs import HOW, feed
+from tests.support.mqtt import Message, Probe, retained_snapshot
+from tests.support.process import ROOT, BridgeProcess, bridge_env, run_cli, to_toml
+from tests.support.waiting import wait_until
+
+__all__ = [
+    "HOW",
+    "ROOT",
+    "BridgeProcess",
+    "Message",
+    "Mosquitto",
+    "Probe",
+    "bridge_env",
+    "feed",
+    "free_port",
+    "retained_snapshot",
+    "run_cli",
+    "to_toml",
+    "wait_until",
+]

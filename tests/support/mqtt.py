@@ -1,0 +1,181 @@
+"""An MQTT probe: a client that records every message under its topic filters, stamped on arrival
+(time.monotonic, the emulators' clock too), and waits on what arrives with a deadline.
+
+Small packets on loopback would otherwise wait for a delayed TCP ACK (about 40 ms a round trip),
+so the probe sets TCP_NODELAY; brokers that must be as quick say ``set_tcp_nodelay true``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion
+
+from tests.support.waiting import wait_until
+
+
+@dataclass
+class Message:
+    topic: str
+    payload: bytes
+    retain: bool
+    t: float
+    qos: int = 0
+
+    @property
+    def text(self) -> str:
+        return self.payload.decode()
+
+
+def _nodelay(client: Any, userdata: Any, sock: Any) -> None:
+    with contextlib.suppress(OSError, AttributeError):
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+class Probe:
+    """Subscribed at QoS 1 to ``topic_filter`` (several: "a|b"; none: ""), again after every
+    reconnect; optionally with a user name/password and TLS (``tls``: paho's tls_set keywords)."""
+
+    #: what a wait that runs out raises (the benchmarks' recorder raises their own error)
+    timeout_error: type[Exception] = AssertionError
+
+    def __init__(
+        self,
+        port: int,
+        topic_filter: str = "#",
+        client_id: str | None = None,
+        *,
+        username: str | None = None,
+        password: str | None = None,
+        tls: dict[str, str] | None = None,
+        max_inflight: int = 20,
+        keepalive_s: int = 10,
+    ) -> None:
+        self.messages: list[Message] = []
+        self._cond = threading.Condition()
+        self._connected = threading.Event()
+        self.filter = topic_filter
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id or f"probe-{id(self)}")
+        if username is not None:
+            c.username_pw_set(username, password)
+        if tls is not None:
+            c.tls_set(**tls)
+        c.on_socket_open = _nodelay
+        c.max_inflight_messages_set(max_inflight)
+        c.on_connect = self._on_connect
+        c.on_message = self._on_message
+        c.reconnect_delay_set(0.1, 0.5)  # type: ignore[arg-type]
+        c.connect_async("127.0.0.1", port, keepalive=keepalive_s)
+        c.loop_start()
+        self.client = c
+        try:
+            wait_until(self._connected.is_set, 10, "probe connected", error=self.timeout_error)
+        except Exception:
+            self.close()
+            raise
+
+    def _on_connect(self, client, userdata, flags, rc, props) -> None:  # noqa: ANN001
+        filters = [(f, 1) for f in self.filter.split("|") if f]
+        if filters:  # none: a client that only publishes
+            client.subscribe(filters)
+        self._connected.set()
+
+    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
+        with self._cond:
+            self.messages.append(
+                Message(msg.topic, bytes(msg.payload), bool(msg.retain), time.monotonic(), msg.qos)
+            )
+            self._cond.notify_all()
+
+    def publish(self, topic: str, payload: str | bytes, retain: bool = False, qos: int = 1) -> None:
+        """Sent, and acknowledged by the broker (QoS 1) before this returns."""
+        info = self.client.publish(topic, payload, qos=qos, retain=retain)
+        info.wait_for_publish(5)
+
+    def mark(self) -> int:
+        """Where the messages received from now on start (``wait(..., start=mark)``)."""
+        with self._cond:
+            return len(self.messages)
+
+    def on(self, topic: str) -> list[Message]:
+        with self._cond:
+            return [m for m in self.messages if m.topic == topic]
+
+    def last(self, topic: str) -> Message | None:
+        with self._cond:
+            return next((m for m in reversed(self.messages) if m.topic == topic), None)
+
+    def wait(
+        self,
+        predicate: Callable[[Message], bool],
+        timeout_s: float = 10.0,
+        what: str = "",
+        start: int = 0,
+        *,
+        failure: Callable[[], str] | None = None,
+    ) -> Message:
+        """The first message (from number ``start`` on) that satisfies ``predicate``; on timeout,
+        ``timeout_error`` with ``failure()`` or a message naming ``what``."""
+        deadline = time.monotonic() + timeout_s
+        with self._cond:
+            i = start
+            while True:
+                while i < len(self.messages):
+                    if predicate(self.messages[i]):
+                        return self.messages[i]
+                    i += 1
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    said = f"timed out after {timeout_s:g} s waiting for {what or predicate}"
+                    raise self.timeout_error(failure() if failure else said)
+                self._cond.wait(left)
+
+    def wait_for(
+        self,
+        topic: str,
+        predicate: Callable[[Message], bool] = lambda m: True,
+        timeout_s: float = 10.0,
+        after: float | None = None,
+    ) -> Message:
+        """The first message on ``topic`` (received after ``after``) that satisfies predicate."""
+
+        def seen() -> str:
+            recent = [(m.topic, m.payload[:80]) for m in self.messages if m.topic == topic]
+            return f"no matching message on {topic} in {timeout_s} s; saw {recent[-10:]}"
+
+        return self.wait(
+            lambda m: m.topic == topic and (after is None or m.t >= after) and predicate(m),
+            timeout_s,
+            failure=seen,
+        )
+
+    def wait_value(
+        self, topic: str, value: str, timeout_s: float = 10.0, after: float | None = None
+    ) -> Message:
+        return self.wait_for(topic, lambda m: m.text == value, timeout_s, after)
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self.client.disconnect()
+        self.client.loop_stop()
+
+
+def retained_snapshot(port: int, topic_filter: str) -> dict[str, bytes]:
+    """What a new subscriber gets as retained messages right now (fresh connection)."""
+    # retained messages are delivered right after SUBACK; a round trip through a topic of our
+    # own, subscribed in the same SUBSCRIBE, marks the end of them
+    marker = f"probe-marker/{threading.get_ident()}-{time.monotonic_ns()}"
+    probe = Probe(port, f"{topic_filter}|{marker}")
+    try:
+        probe.publish(marker, b"end")
+        probe.wait_for(marker)
+        return {m.topic: m.payload for m in probe.messages if m.retain}
+    finally:
+        probe.close()

@@ -1,0 +1,143 @@
+"""The bridge as a user runs it: ``python -m bridge ...`` as its own process, configured by a TOML
+file, in an environment without the caller's ROTOR_BRIDGE_* settings."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def bridge_env(extra: dict[str, str] | None = None) -> dict[str, str]:
+    """This environment, less any ROTOR_BRIDGE_* setting (in any case: the bridge reads them so),
+    with this checkout first on the import path; then ``extra``."""
+    env = {k: v for k, v in os.environ.items() if not k.upper().startswith("ROTOR_BRIDGE_")}
+    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if "PYTHONPATH" in env else "")
+    env.update(extra or {})
+    return env
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(v)
+    if isinstance(v, str | Path):
+        return json.dumps(str(v))  # a JSON string is a valid TOML basic string
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"no TOML for {v!r}")
+
+
+def to_toml(doc: dict[str, Any]) -> str:
+    """Enough TOML for the bridge's configuration: scalars, tables, arrays of tables."""
+    lines: list[str] = []
+
+    def table(prefix: str, d: dict[str, Any]) -> None:
+        subs = []
+        for k, v in d.items():
+            if isinstance(v, dict):
+                subs.append((k, v))
+            elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+                subs.append((k, v))
+            else:
+                lines.append(f"{k} = {_toml_value(v)}")
+        for k, v in subs:
+            name = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict):
+                lines.append(f"\n[{name}]")
+                table(name, v)
+            else:
+                for item in v:
+                    lines.append(f"\n[[{name}]]")
+                    table(name, item)
+
+    table("", doc)
+    return "\n".join(lines) + "\n"
+
+
+def run_cli(
+    *args: str, timeout_s: float = 30, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """``rotor-bridge ARGS`` to its end: exit code, stdout and stderr (text)."""
+    return subprocess.run(
+        [sys.executable, "-m", "bridge", *args],
+        capture_output=True,
+        text=True,
+        env=bridge_env(env),
+        cwd=str(ROOT),
+        timeout=timeout_s,
+    )
+
+
+class BridgeProcess:
+    """``python -m bridge run -c FILE``: the real service process, its log kept in a file.
+
+    ``config`` is written to ``tmp/bridge.toml``, or is the path of a file already written;
+    ``log_level`` None starts it without ``--log-level`` (the file's or the default level).
+    """
+
+    def __init__(
+        self,
+        tmp: Path,
+        config: dict[str, Any] | Path,
+        *,
+        log_level: str | None = "DEBUG",
+        log_path: Path | None = None,
+    ) -> None:
+        self.tmp = tmp
+        if isinstance(config, Path):
+            self.config_path = config
+        else:
+            self.config_path = tmp / "bridge.toml"
+            self.config_path.write_text(to_toml(config))
+        self.log_path = log_path or tmp / "bridge.log"
+        self.log_level = log_level
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> BridgeProcess:
+        level = [] if self.log_level is None else ["--log-level", self.log_level]
+        with open(self.log_path, "ab") as log:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "bridge", *level, "run", "-c", str(self.config_path)],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=bridge_env(),
+                cwd=str(ROOT),
+            )
+        return self
+
+    @property
+    def pid(self) -> int:
+        assert self.proc is not None
+        return self.proc.pid
+
+    def alive(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    def log(self) -> str:
+        return self.log_path.read_text(errors="replace") if self.log_path.exists() else ""
+
+    def terminate(self, timeout_s: float = 10.0) -> int:
+        assert self.proc is not None
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        return self.proc.wait(timeout_s)
+
+    def kill(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+    def rss_kib(self) -> int:
+        assert self.proc is not None
+        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+        raise AssertionError("no VmRSS")
