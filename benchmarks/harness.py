@@ -13,26 +13,33 @@ Rules:
    truth, stamped on time.monotonic, the same clock as ours) or in the emulator host.
 3. Nothing here imports bridge internals except the emulators (and ModelSpec data for frame
    sizes): what is measured is the service as a user runs it.
+4. What the tests have too comes from them (tests.support: waiting with a deadline, the MQTT
+   probe, the bridge's environment and TOML file; bridge.mosquitto: a free port, the mosquitto
+   executable), not a copy of it. `python -m benchmarks` runs from the top of the checkout, so
+   `tests` is importable; the broker here is its own start (rule 1, and no -v log per message).
 """
 
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import os
 import signal
-import socket
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion
+
+from bridge.mosquitto import answers, find_mosquitto, free_port
+from tests.support import Probe, bridge_env, to_toml
+from tests.support import wait_until as _wait_until
 
 REPO = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
@@ -61,8 +68,7 @@ def _die_with_parent() -> None:  # runs in the child between fork and exec
 
 
 def child_env() -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.upper().startswith("ROTOR_BRIDGE_")}
-    env["PYTHONPATH"] = str(REPO) + (os.pathsep + env["PYTHONPATH"] if "PYTHONPATH" in env else "")
+    env = bridge_env()
     env.setdefault("PYTHONUNBUFFERED", "1")
     return env
 
@@ -114,23 +120,8 @@ class Scope(contextlib.ExitStack):
         return proc
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def wait_until(
-    predicate: Callable[[], Any], timeout_s: float, what: str, interval_s: float = 0.01
-) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise BenchError(f"timed out after {timeout_s:g} s waiting for {what}")
-        time.sleep(interval_s)
+#: tests.support's wait_until(predicate, timeout_s, what, interval_s), raising BenchError
+wait_until = functools.partial(_wait_until, error=BenchError)
 
 
 def check_alive(proc: subprocess.Popen[Any], name: str, log: Path | None = None) -> None:
@@ -140,13 +131,6 @@ def check_alive(proc: subprocess.Popen[Any], name: str, log: Path | None = None)
 
 
 # -- broker -------------------------------------------------------------------------------------
-def find_mosquitto() -> str:
-    for path in ("/usr/sbin/mosquitto", "/usr/local/sbin/mosquitto", "/usr/bin/mosquitto"):
-        if os.path.exists(path):
-            return path
-    raise BenchError("mosquitto is not installed (Debian: sudo apt-get install mosquitto)")
-
-
 def start_broker(scope: Scope, extra_conf: str = "") -> int:
     """A private mosquitto with its default limits, on a free loopback port; returns the port."""
     port = free_port()
@@ -154,16 +138,17 @@ def start_broker(scope: Scope, extra_conf: str = "") -> int:
     conf.write_text(
         f"listener {port} 127.0.0.1\npersistence false\nallow_anonymous true\n{extra_conf}"
     )
-    proc = scope.spawn([find_mosquitto(), "-c", str(conf)], log_name="mosquitto.log")
+    exe = find_mosquitto()
+    if exe is None:
+        raise BenchError("mosquitto is not installed (Debian: sudo apt-get install mosquitto)")
+    proc = scope.spawn([exe, "-c", str(conf)], log_name="mosquitto.log")
 
-    def answers() -> bool:
+    def listening() -> bool:
         check_alive(proc, "mosquitto", scope.workdir / "mosquitto.log")
-        with contextlib.suppress(OSError), socket.create_connection(("127.0.0.1", port), 0.2):
-            return True
-        return False
+        return answers("127.0.0.1", port, 0.2)
 
     try:
-        wait_until(answers, 10, "mosquitto to listen")
+        wait_until(listening, 10, "mosquitto to listen")
     except BenchError:
         log = scope.workdir / "mosquitto.log"
         raise BenchError(f"mosquitto did not listen on {port}: {log.read_text()[-500:]}") from None
@@ -171,33 +156,6 @@ def start_broker(scope: Scope, extra_conf: str = "") -> int:
 
 
 # -- the bridge as a service process ------------------------------------------------------------
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int | float):
-        return repr(v)
-    if isinstance(v, str | Path):
-        return '"' + str(v).replace("\\", "\\\\").replace('"', '\\"') + '"'
-    raise TypeError(f"cannot write {v!r} as TOML")
-
-
-def write_config(path: Path, config: dict[str, Any]) -> None:
-    """Top-level scalars, [tables] of scalars, and [[rotators]]: all the bridge's file needs."""
-    lines: list[str] = []
-    for key, value in config.items():
-        if not isinstance(value, dict | list):
-            lines.append(f"{key} = {_toml_value(value)}")
-    for key, value in config.items():
-        if isinstance(value, dict):
-            lines.append(f"\n[{key}]")
-            lines += [f"{k} = {_toml_value(v)}" for k, v in value.items()]
-        elif isinstance(value, list):
-            for item in value:
-                lines.append(f"\n[[{key}]]")
-                lines += [f"{k} = {_toml_value(v)}" for k, v in item.items()]
-    path.write_text("\n".join(lines) + "\n")
-
-
 @dataclass
 class BridgeProcess:
     proc: subprocess.Popen[bytes]
@@ -229,27 +187,19 @@ def start_bridge(
         "rotators": rotators,
     }
     path = scope.workdir / f"{name}.toml"
-    write_config(path, config)
+    path.write_text(to_toml(config))
     t0 = time.monotonic()
     proc = scope.spawn([PYTHON, "-m", "bridge", "run", "-c", str(path)], log_name=f"{name}.log")
     return BridgeProcess(proc, scope.workdir / f"{name}.log", t0)
 
 
 # -- MQTT ---------------------------------------------------------------------------------------
-@dataclass
-class Message:
-    topic: str
-    payload: bytes
-    retain: bool
-    t: float
+class Mqtt(Probe):
+    """The recording client: tests.support's Probe (every message under its filters, stamped on
+    arrival, TCP_NODELAY so its PUBACKs add no Nagle delay of their own), whose waits raise
+    BenchError and whose publish does not wait for the broker."""
 
-    @property
-    def text(self) -> str:
-        return self.payload.decode(errors="replace")
-
-
-class Mqtt:
-    """A recording client: every message under its filters, stamped on arrival (monotonic)."""
+    timeout_error = BenchError
 
     def __init__(
         self,
@@ -259,79 +209,15 @@ class Mqtt:
         name: str = "bench",
         max_inflight: int = 20,
     ) -> None:
-        self.messages: list[Message] = []
-        self._cond = threading.Condition()
-        self._filters = list(filters)
-        self._connected = threading.Event()
-        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"{name}-{os.getpid()}-{id(self)}")
-        c.max_inflight_messages_set(max_inflight)
-        c.on_connect = self._on_connect
-        c.on_message = self._on_message
-        c.connect_async("127.0.0.1", port, keepalive=30)
-        c.loop_start()
-        self.client = c
-        if not self._connected.wait(10):
-            self.close()
-            raise BenchError("benchmark MQTT client could not connect")
-
-    def _on_connect(self, client, userdata, flags, rc, props) -> None:  # noqa: ANN001
-        # The measuring client must not add Nagle delays of its own (its PUBACKs would hold
-        # back the next command until the broker's delayed ACK, up to 40 ms on Linux).
-        sock = client.socket()
-        if sock is not None:
-            with contextlib.suppress(OSError):
-                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        for f in self._filters:
-            client.subscribe(f, qos=1)
-        self._connected.set()
-
-    def _on_message(self, client, userdata, msg) -> None:  # noqa: ANN001
-        m = Message(msg.topic, bytes(msg.payload), bool(msg.retain), time.monotonic())
-        with self._cond:
-            self.messages.append(m)
-            self._cond.notify_all()
-
-    def publish(self, topic: str, payload: str | bytes, qos: int = 1) -> paho.MQTTMessageInfo:
-        return self.client.publish(topic, payload, qos=qos, retain=False)
-
-    def mark(self) -> int:
-        with self._cond:
-            return len(self.messages)
-
-    def on(self, topic: str) -> list[Message]:
-        with self._cond:
-            return [m for m in self.messages if m.topic == topic]
-
-    def last(self, topic: str) -> Message | None:
-        with self._cond:
-            for m in reversed(self.messages):
-                if m.topic == topic:
-                    return m
-        return None
-
-    def wait(
-        self, predicate: Callable[[Message], bool], timeout_s: float, what: str, start: int = 0
-    ) -> Message:
-        deadline = time.monotonic() + timeout_s
-        with self._cond:
-            i = start
-            while True:
-                while i < len(self.messages):
-                    if predicate(self.messages[i]):
-                        return self.messages[i]
-                    i += 1
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise BenchError(f"timed out after {timeout_s:g} s waiting for {what}")
-                self._cond.wait(left)
-
-    def wait_value(self, topic: str, value: str, timeout_s: float, start: int = 0) -> Message:
-        return self.wait(
-            lambda m: m.topic == topic and m.payload == value.encode(),
-            timeout_s,
-            f"{topic} = {value}",
-            start,
+        client_id = f"{name}-{os.getpid()}-{id(self)}"
+        super().__init__(
+            port, "|".join(filters), client_id, max_inflight=max_inflight, keepalive_s=30
         )
+
+    def publish(  # type: ignore[override]
+        self, topic: str, payload: str | bytes, qos: int = 1
+    ) -> paho.MQTTMessageInfo:
+        return self.client.publish(topic, payload, qos=qos, retain=False)
 
     def wait_all(self, topics: Iterable[str], value: str, timeout_s: float) -> None:
         """Until the latest message on each topic carries `value`."""
@@ -341,8 +227,3 @@ class Mqtt:
             return all((m := self.last(t)) is not None and m.text == value for t in wanted)
 
         wait_until(done, timeout_s, f"{len(wanted)} topics = {value}", 0.02)
-
-    def close(self) -> None:
-        with contextlib.suppress(Exception):
-            self.client.disconnect()
-        self.client.loop_stop()
