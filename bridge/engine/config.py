@@ -15,6 +15,8 @@ class WorkerConfig:
     spec: ModelSpec
     baud: int
     motion: mo.MotionConfig
+    az_speed_deg_s: float  # the rotor's real speeds (settings: the model's nominal by default)
+    el_speed_deg_s: float
     idle_poll_interval_s: float = 1.0
     moving_poll_interval_s: float = 0.2
     deadband_deg: float = 2.0
@@ -22,5 +24,3 @@ class WorkerConfig:
     reconnect_min_s: float = 0.5
     reconnect_max_s: float = 10.0
     junk_report_interval_s: float = 30.0
-    az_speed_deg_s: float | None = None  # the rotor's real speeds; None: the model's nominal
-    el_speed_deg_s: float | None = None

@@ -85,8 +85,6 @@ class RotatorSession:
         self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
         self._actions: list[Action] = []
         self._wakeup = 0.0
-        self.az_speed_deg_s = cfg.az_speed_deg_s or cfg.spec.nominal_speed_deg_s
-        self.el_speed_deg_s = cfg.el_speed_deg_s or cfg.spec.nominal_el_speed_deg_s
 
     # -- inputs -------------------------------------------------------------------------------
     def start(self, now: float) -> list[Action]:

@@ -40,8 +40,8 @@ SLEW_ATTEMPTS = 2  # a target whose report did not come is sent once more, then 
 def travel_s(session: RotatorSession, slew: Slew) -> float:
     cfg = session.cfg
     return slew.travel_s(
-        session.az_speed_deg_s,
-        session.el_speed_deg_s,
+        session.cfg.az_speed_deg_s,
+        session.cfg.el_speed_deg_s,
         cfg.motion.az_span_deg,
         cfg.spec.el_max_deg - cfg.spec.el_min_deg,
     )
@@ -53,8 +53,8 @@ def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
     if slew is not None and slew.stops == 0:  # rule 1
         late = (
             f"no report from the controller {now - slew.start_t:.0f} s after a move that "
-            f"takes {travel_s(session, slew):.0f} s at {session.az_speed_deg_s:g}/"
-            f"{session.el_speed_deg_s:g} deg/s"
+            f"takes {travel_s(session, slew):.0f} s at {session.cfg.az_speed_deg_s:g}/"
+            f"{session.cfg.el_speed_deg_s:g} deg/s"
         )
         if slew.attempt >= SLEW_ATTEMPTS:  # rule 2
             session.error(

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 
 from bridge.engine import motion as mo
 from bridge.model import MotionState, RotatorStatus
-from bridge.protocols.base import ModelSpec
 
 if TYPE_CHECKING:
     from bridge.engine.session import RotatorSession
@@ -49,38 +48,32 @@ class View:
     last_source: str | None = None
 
 
-def build(
-    base: RotatorStatus,
-    spec: ModelSpec,
-    m: mo.Motion,
-    *,
-    answering: bool,
-    connected: bool,
-    az: Hysteresis,
-    el: Hysteresis,
-    view: View,
-    locked: bool,
-    options: dict[str, bool],
-    target: tuple[float | None, float | None],
-    slew_estimate: tuple[float | None, float | None] | None,
-    now: float,
-    wall_offset_s: float,
-) -> RotatorStatus:
+def current(session: RotatorSession, now: float) -> RotatorStatus:
+    """The status of ``session`` as of ``now``."""
+    link, m, spec, view = session.link, session.motion, session.cfg.spec, session.view
+    answering = link is not None and session.answering
+    target: tuple[float | None, float | None] = (m.target_deg, m.el_target_deg)
+    pending = session.targets.pending
+    if pending is not None and link is not None:
+        az, el = session.resolve(pending)
+        target = link.codec.wire_target(az, el) if az is not None else target
     state = m.state if answering else MotionState.OFFLINE
-    bearing, elevation = az.value, el.value
-    estimated = slew_estimate is not None
-    if slew_estimate is not None:
-        bearing, elevation = slew_estimate
+    bearing, elevation = session.az_shown.value, session.el_shown.value
+    estimated = False
+    if link is not None and link.slew is not None:  # rule 2
+        cfg = session.cfg
+        bearing, elevation = link.slew.estimate(now, cfg.az_speed_deg_s, cfg.el_speed_deg_s)
+        estimated = True
     expected_end: float | None = None
     if not spec.can_report_position and answering:  # rule 3
         moving = m.target_deg is not None and m.stop_sent_t is None
         if moving and m.busy_until_t is not None and now < m.busy_until_t:
             state, estimated = MotionState.MOVING, True
-            expected_end = m.busy_until_t + wall_offset_s
+            expected_end = m.busy_until_t + session.wall_offset_s
         else:
             state, target = MotionState.UNKNOWN, (None, None)
     return replace(
-        base,
+        session.status,
         state=state,
         bearing_deg=bearing if spec.can_report_position else None,
         elevation_deg=elevation if spec.has_elevation else None,
@@ -89,42 +82,13 @@ def build(
         controller_time=view.controller_time,
         target_az_deg=target[0],
         target_el_deg=target[1] if spec.has_elevation else None,
-        connected=connected,
+        connected=link is not None,
         available=answering,
-        locked=locked,
+        locked=session.locked,
         version=view.version,
-        options=dict(options),
+        options=dict(session.options),
         last_error=view.last_error,
         last_command_source=view.last_source,
-    )
-
-
-def current(session: RotatorSession, now: float) -> RotatorStatus:
-    """The status of ``session`` as of ``now``."""
-    link, m = session.link, session.motion
-    target: tuple[float | None, float | None] = (m.target_deg, m.el_target_deg)
-    pending = session.targets.pending
-    if pending is not None and link is not None:
-        az, el = session.resolve(pending)
-        target = link.codec.wire_target(az, el) if az is not None else target
-    estimate = None
-    if link is not None and link.slew is not None:
-        estimate = link.slew.estimate(now, session.az_speed_deg_s, session.el_speed_deg_s)
-    return build(
-        session.status,
-        session.cfg.spec,
-        m,
-        answering=link is not None and session.answering,
-        connected=link is not None,
-        az=session.az_shown,
-        el=session.el_shown,
-        view=session.view,
-        locked=session.locked,
-        options=session.options,
-        target=target,
-        slew_estimate=estimate,
-        now=now,
-        wall_offset_s=session.wall_offset_s,
     )
 
 
