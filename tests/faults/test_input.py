@@ -340,10 +340,15 @@ def test_a_burst_of_10000_targets_ends_at_the_last_one_with_few_frames(bench: Be
                                "ignored: re-target while turning (stopped)")  # fmt: skip
     assert all(f.outcome == "executed" for f in ez), ez  # never one the controller would drop
     assert ez[-1].data == b"AP1123\r", [f.data for f in ez]
-    # a handful of frames, not 10,000: at most one per stop-and-brake cycle of the burst
-    assert len(ez) <= 2 + burst_s / 1.0, (burst_s, [f.data for f in ez])
+    # a handful of frames, not 10,000: at most one per stop-and-brake cycle (0.8 s brake here).
+    # Timed on the controller's side: the bridge may still be taking the burst in from the broker
+    # after the publisher is done, so the publisher's clock bounds nothing.
+    gaps = [b.time_s - a.time_s for a, b in zip(ez, ez[1:], strict=False)]
+    assert all(g >= 0.8 - 0.05 for g in gaps), (gaps, [f.data for f in ez])
+    assert len(ez) <= 25, (burst_s, [f.data for f in ez])
     spid = rig.emus["spid"].frames("set", "set: clamped")
-    assert len(spid) <= 2 + burst_s / 0.1, (burst_s, len(spid))  # at most one per poll
+    span_s = spid[-1].time_s - spid[0].time_s
+    assert len(spid) <= 2 + span_s / 0.1, (span_s, len(spid))  # at most one per poll
     print(f"burst {burst_s:.2f} s: Rotor-EZ {len(ez)} targets, Rot2Prog {len(spid)} sets")
     for rid in ("ez", "spid"):
         assert rig.bogus(rid) == [], rid
