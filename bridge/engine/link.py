@@ -22,9 +22,11 @@ Rules:
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
 7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
-   at the line rate (``hold_reads_until``) the worker leaves them in the port and reads them in
-   one go. Only the mailbox (a stop) is watched meanwhile. What is still missing then (a
-   controller that takes its time to answer) is read as it comes.
+   at the line rate, plus one byte time for the controller to turn round (``hold_reads_until``),
+   the worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
+   watched meanwhile. If part of the reply is still missing then (a controller that takes its
+   time), the hold starts again for the time the missing bytes take: a late reply costs a
+   wake-up per chunk, not per byte, and is read at most one byte time after its last byte.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ class Link:
         slower_s = max(0.0, spec.exchange_time_s(baud) - spec.exchange_time_s())
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
+        self._hold_bytes = 0  # of the polled reply, not read yet (rule 7)
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -91,10 +94,10 @@ class Link:
         """Rule 7: bytes arriving before this time can wait in the port."""
         return self._hold_until if self._reply_deadline is not None else 0.0
 
-    def got_bytes(self) -> None:
-        """Bytes came: the rest of a late reply is read as it comes (a second hold would
-        overshoot a reply that is one byte short by a whole byte time)."""
-        self._hold_until = 0.0
+    def got_bytes(self, count: int, now: float) -> None:
+        """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
+        self._hold_bytes = max(0, self._hold_bytes - count)
+        self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -106,6 +109,7 @@ class Link:
         self._output.append(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
+            self._hold_bytes = 0  # a poll sets its own (rule 7)
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -200,7 +204,8 @@ class Link:
         if query:
             self.write(query, now)
             self._next_poll = now + interval_s
-            self._hold_until = now + (len(query) + self.spec.reply_bytes) * self._byte_s
+            self._hold_bytes = self.spec.reply_bytes
+            self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
 
     def silent_for(self, now: float) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t

@@ -155,18 +155,19 @@ def reading(
             m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # not None: the first reading returned above
+    changes: dict[str, object] = {}  # one replace() per reading: this runs at every poll
     if az_deg != m.position_deg or el_deg != m.el_position_deg:
-        m = replace(m, changed_t=now)
-    m = replace(m, position_deg=az_deg, el_position_deg=el_deg)
+        changes.update(changed_t=now, position_deg=az_deg, el_position_deg=el_deg)
     moved = angle_error(az_deg, anchor_deg, cfg.az_wraps) > cfg.noise_deg
     if el_deg is not None and m.el_anchor_deg is not None:
         moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
     if moved:
-        m = replace(m, anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
-        if m.state is not MotionState.MOVING:
-            m = replace(m, state=MotionState.MOVING)
+        changes.update(anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
+        changes["state"] = MotionState.MOVING
         if m.target_deg is not None:
-            m = replace(m, progress_t=now)
+            changes["progress_t"] = now
+    if changes:
+        m = replace(m, **changes)  # type: ignore[arg-type]
     return tick(m, cfg, now)
 
 

@@ -159,7 +159,7 @@ class RotatorSession:
         if link is None:
             return []
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
-        link.got_bytes()
+        link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
         if not replies:
             return []  # rule 9

@@ -94,4 +94,6 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
 
 def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
     """Rule 4: the controller's clock alone is no change."""
+    if new.controller_time == old.controller_time:
+        return new != old
     return replace(new, controller_time=None) != replace(old, controller_time=None)

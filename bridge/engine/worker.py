@@ -69,6 +69,16 @@ def _read_all(fd: int) -> bytes:
     return data
 
 
+def _write(port: serial.Serial, data: bytes) -> None:
+    """A frame fits the port's buffer: one write() (pyserial's would select() after it too)."""
+    try:
+        done = os.write(port.fileno(), data)
+    except BlockingIOError:
+        done = 0
+    if done < len(data):
+        port.write(data[done:])  # the rest the way pyserial waits for room
+
+
 class Worker:
     def __init__(
         self,
@@ -172,17 +182,20 @@ class Worker:
             if now < hold:
                 until = min(until, hold)
             readable, _, _ = select.select(watch, [], [], max(0.0, until - now))
-            now = self._clock()
+            held, now = fd not in watch, self._clock()
             acted = False
             if box in readable:
                 batch = mailbox.take()
                 if batch:
                     self._do(session.commands(batch, now), port)
                     acted = True
-            if fd in readable:
-                actions = session.bytes_received(_read_all(fd), now)
-                acted = acted or bool(actions)
-                self._do(actions, port)
+            # a hold that just ended: the reply is due, read without asking select first
+            if fd in readable or (held and not readable and now >= hold):
+                data = _read_all(fd)
+                if data:
+                    actions = session.bytes_received(data, now)
+                    acted = acted or bool(actions)
+                    self._do(actions, port)
             if not acted and now >= session.next_wakeup():
                 self._do(session.tick(now), port)
 
@@ -190,7 +203,7 @@ class Worker:
         for action in actions:
             if isinstance(action, Write):
                 if port is not None:
-                    port.write(action.data)
+                    _write(port, action.data)
                     log.debug("%s: -> %r", self.cfg.rotator_id, action.data)
             elif isinstance(action, Publish):
                 self._on_status(action.status)
