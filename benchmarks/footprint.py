@@ -131,7 +131,7 @@ def run(scope: Scope, quick: bool) -> ItemResult:
                     "window_s": u.window_s,
                 }
     table.notes += [
-        "bridge: one Python process (paho thread + one worker thread per rotator); rotctld: one "
+        "bridge: one Python process (paho thread + one thread for all serial lines); rotctld: one "
         "process per rotator, summed (RSS counts the shared Hamlib/libc pages once per process; "
         "PSS shares them out).",
         "idle: bridge polls each rotor once a second (default), the glue asks rotctld `p` once a "

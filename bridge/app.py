@@ -8,6 +8,7 @@ import signal
 import threading
 from functools import partial
 
+from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Limits, Rotator
@@ -33,16 +34,14 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
         spec=spec,
         baud=r.effective_baud,
         motion=MotionConfig(
-            can_report_position=spec.can_report_position,
+            spec=spec,
             tolerance_deg=r.tolerance_deg,
             stall_timeout_s=r.stall_timeout_s,
             brake_delay_s=r.effective_brake_delay_s,
             settle_s=r.settle_s,
             noise_deg=r.effective_noise_deg,
-            az_wraps=spec.az_wraps,
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=az_speed,
-            direct_retarget=spec.retarget.value == "direct",
             poll_margin_s=r.moving_poll_interval_s,
         ),
         idle_poll_interval_s=r.effective_idle_poll_interval_s,
@@ -82,6 +81,7 @@ class App:
             raise ConfigError(
                 f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
             ) from None
+        self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         for r in settings.rotators:
@@ -95,6 +95,7 @@ class App:
                 on_event=partial(self.mqtt.publish_event, r.id),
                 name=r.name,
                 port_opener=port_opener,
+                lines=self.lines,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
@@ -158,7 +159,7 @@ class App:
             self.discovery.publish_all()  # cached now, sent on connect
         self.mqtt.start()
         for rot in self.rotators:
-            rot.start()  # its worker thread publishes its status, the first one included
+            rot.start()  # the lines thread publishes its status, the first one included
         try:
             for server in self.rotctld:
                 server.start()

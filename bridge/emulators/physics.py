@@ -114,6 +114,8 @@ class Axis:
         self._position_deg = self.position_deg_at(now)
         self._anchor_s = now
         if arrival_s is not None and arrival_s <= now:
+            assert self._target_deg is not None
+            self._position_deg = self._target_deg  # exactly there, whatever the float rounding
             self._target_deg = None
             self._driver = None
             return arrival_s

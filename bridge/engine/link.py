@@ -27,10 +27,16 @@ Rules:
    watched meanwhile. If part of the reply is still missing then (a controller that takes its
    time), the hold starts again for the time the missing bytes take: a late reply costs a
    wake-up per chunk, not per byte, and is read at most one byte time after its last byte.
+8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
+   multiple of the interval at least half an interval away): every rotator polling at the same
+   interval polls at the same instants, so one thread serves a round of them with one wake-up
+   (lines.py rule 1). A poll asked for at once (a new target) is off the grid; the next one is
+   back on it, never less than half an interval later.
 """
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import replace
 
@@ -203,7 +209,7 @@ class Link:
         query = self.codec.encode_query()
         if query:
             self.write(query, now)
-            self._next_poll = now + interval_s
+            self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
             self._hold_bytes = self.spec.reply_bytes
             self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
 

@@ -1,4 +1,4 @@
-"""Pending commands for one rotator: the only hand-off point into its worker thread.
+"""Pending commands for one rotator: the only hand-off point into the lines thread.
 
 Rules:
 1. A stop pre-empts everything: it is taken first and drops any target that came before it.

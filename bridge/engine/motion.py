@@ -35,24 +35,36 @@ import enum
 from dataclasses import dataclass, replace
 
 from bridge.model import MotionState
+from bridge.protocols.base import ModelSpec, RetargetPolicy
 
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 
 
 @dataclass(frozen=True)
 class MotionConfig:
-    can_report_position: bool = True
+    spec: ModelSpec  # the model's capabilities: read from here, never copied (the one place)
     tolerance_deg: float = 3.0
     stall_timeout_s: float = 10.0
     brake_delay_s: float = 5.0
     settle_s: float = 1.5
     noise_deg: float = 2.0
-    az_wraps: bool = True
     az_span_deg: float = 360.0
     nominal_speed_deg_s: float = 6.0
     stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
-    direct_retarget: bool = False  # the controller takes new targets while turning (SPID)
     poll_margin_s: float = 0.2  # readings while moving come this often (rule 4)
+
+    @property
+    def can_report_position(self) -> bool:
+        return self.spec.can_report_position
+
+    @property
+    def az_wraps(self) -> bool:
+        return self.spec.az_wraps
+
+    @property
+    def direct_retarget(self) -> bool:
+        """The controller takes a new target while turning (SPID)."""
+        return self.spec.retarget is RetargetPolicy.DIRECT
 
 
 @dataclass(frozen=True)

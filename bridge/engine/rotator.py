@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import serial
 
+from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
 from bridge.engine.state_store import StateStore
@@ -59,6 +60,7 @@ class Rotator:
         clock: Callable[[], float] = time.monotonic,
         wall: Callable[[], float] = time.time,
         port_opener: Callable[..., serial.Serial] = open_port,
+        lines: Lines | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -76,10 +78,10 @@ class Rotator:
             on_event,
             options=self._supported_options(store),
             locked=self._locked,
-            clock=clock,
             wall=wall,
             port_opener=port_opener,
         )
+        self._lines = lines or Lines(clock)  # the app shares one among all rotators
 
     def _supported_options(self, store: StateStore) -> dict[str, bool]:
         """Options remembered for this id that this model has (the id may have been another)."""
@@ -98,18 +100,18 @@ class Rotator:
 
     @property
     def status(self) -> RotatorStatus:
-        return self._worker.status
+        return self._worker.session.status
 
     @property
     def locked(self) -> bool:
         return self._locked
 
     def start(self) -> None:
-        self._worker.start()
+        self._lines.add(self._worker)
 
     def stop(self, timeout_s: float = 3.0) -> None:
-        if self._worker.stop(timeout_s):
-            self._mailbox.close()  # only once nothing can select on it any more
+        if self._lines.remove(self._worker, timeout_s):
+            self._mailbox.close()  # only once nothing can wait on it any more
 
     def submit(self, command: Command, described: str | None = None) -> None:
         """Queue a command or raise Refused. Stop is never refused."""

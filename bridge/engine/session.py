@@ -380,7 +380,7 @@ class RotatorSession:
         link.poll_by(now + self.cfg.moving_poll_interval_s)
 
     def _needs_fresh_reading(self, link: Link, now: float) -> bool:
-        if not self.cfg.spec.can_report_position or self.cfg.motion.direct_retarget:
+        if not self.cfg.motion.can_report_position or self.cfg.motion.direct_retarget:
             return False
         age = now - (link.last_reply_t if link.last_reply_t is not None else -1e18)
         return age > self.cfg.moving_poll_interval_s

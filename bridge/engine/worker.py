@@ -1,28 +1,28 @@
-"""One thread per rotator: the only code that touches that rotator's serial port. I/O only.
+"""One rotator's serial line: its port, the back-off between attempts to open it, and its session.
+I/O only, and no thread of its own: lines.py runs every worker from one thread.
 
-The loop: open the port (back-off on failure), then select() on the port and the mailbox pipe.
-Whatever happens (bytes, commands, time) goes into the rotator's session (session.py, where
-every decision is made) and the actions it hands back are carried out: bytes written, statuses
-and error events handed to the listeners (the second and last hand-off point, ARCHITECTURE.md
-rule 3).
+The loop (lines.py) asks ``wants(now)`` (what to wait for: the port and the mailbox pipe, until
+when) and calls ``serve(ready, now)``. Whatever happened (bytes, commands, time) goes into the
+rotator's session (session.py, where every decision is made) and the actions it hands back are
+carried out: bytes written, statuses and error events handed to the listeners (the second and
+last hand-off point, ARCHITECTURE.md rule 3).
 
 Rules:
 1. Any serial error closes the port, tells the session the link is down and retries with
-   back-off (``reconnect_min_s`` doubling up to ``reconnect_max_s``); the thread never dies of
+   back-off (``reconnect_min_s`` doubling up to ``reconnect_max_s``); a worker never dies of
    one. Commands are still taken while the port is closed (they are refused with a reason).
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
-   session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched.
-3. Listeners (MQTT, rotctld, Home Assistant) are called from this thread only, and a listener
-   that raises is logged once per kind of failure and otherwise ignored (``contained``): a
-   display problem never closes, reopens or delays the line to the controller.
+   session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
+   and when that hold ends the port is read without waiting to be told it is readable.
+3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and a
+   listener that raises is logged once per kind of failure and otherwise ignored
+   (``contained``): a display problem never closes, reopens or delays the line to the controller.
 """
 
 from __future__ import annotations
 
 import logging
 import os
-import select
-import threading
 import time
 from collections.abc import Callable
 from typing import TypeVar
@@ -58,13 +58,15 @@ def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
     return call
 
 
-def _read_all(fd: int) -> bytes:
-    """Everything the port has now (select said it has something)."""
+def _read_all(fd: int, readable: bool) -> bytes:
+    """Everything the port has now. ``readable``: poll said so (else a reply is due, rule 2).
+    A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after poll said
+    it was readable does that mean the adapter is gone."""
     try:
         data = os.read(fd, 4096)
     except BlockingIOError:
         return b""
-    if not data:
+    if not data and readable:
         raise serial.SerialException("port readable but no data (adapter unplugged?)")
     return data
 
@@ -89,121 +91,105 @@ class Worker:
         *,
         options: dict[str, bool] | None = None,
         locked: bool = False,
-        clock: Callable[[], float] = time.monotonic,
         wall: Callable[[], float] = time.time,
         port_opener: Callable[[str, ModelSpec, int], serial.Serial] = open_port,
     ) -> None:
         self.cfg = cfg
         self.session = RotatorSession(cfg, options=options, locked=locked)
         self._mailbox = mailbox
+        self._box = mailbox.fileno()
         self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")
         self._on_event = contained(on_event, f"{cfg.rotator_id}: event listener")
-        self._clock = clock
         self._wall = wall
         self._open = port_opener
-        self._stopping = threading.Event()
-        self._thread = threading.Thread(target=self._run, name=f"rotator-{cfg.rotator_id}")
         self._backoff_s = cfg.reconnect_min_s
+        self._port: serial.Serial | None = None
+        self._fd = -1
+        self._reopen_at = 0.0
+        self._held = False
 
-    # -- public, any thread -----------------------------------------------------------------
-    @property
-    def status(self) -> RotatorStatus:
-        return self.session.status
+    # -- called by the lines thread only -------------------------------------------------------
+    def begin(self, now: float) -> None:
+        self._do(self.session.start(now))
+        self._reopen_at = now
 
-    def start(self) -> None:
-        self._thread.start()
+    def end(self, now: float) -> None:
+        """Close the port for good (the rotator is stopping)."""
+        if self._port is not None:
+            self._close(None, ErrorKind.SERIAL, now)
 
-    def stop(self, timeout_s: float = 3.0) -> bool:
-        """Stop the thread; True once it has ended."""
-        self._stopping.set()
-        self._mailbox.wake()
-        if self._thread.is_alive():
-            self._thread.join(timeout_s)
-        return not self._thread.is_alive()
+    def wants(self, now: float) -> tuple[list[int], float]:
+        """The descriptors to wait on and the time to be woken at the latest."""
+        if self._port is None:
+            return [self._box], self._reopen_at
+        session = self.session
+        until, hold = session.next_wakeup(), session.hold_reads_until()
+        self._held = now < hold
+        if self._held:  # rule 2
+            return [self._box], min(until, hold)
+        return [self._box, self._fd], until
 
-    # -- the thread ---------------------------------------------------------------------------
-    def _run(self) -> None:
-        self._do(self.session.start(self._clock()), None)
-        while not self._stopping.is_set():
-            try:
-                self._cycle()
-            except Exception:  # a bug must not end the thread
-                log.exception("%s: unexpected error in the rotator worker", self.cfg.rotator_id)
-                self._stopping.wait(1.0)
+    def serve(self, ready: set[int], now: float) -> None:
+        if self._port is None:
+            if self._box in ready:
+                self._do(self.session.commands(self._mailbox.take(), now))
+            if now >= self._reopen_at:
+                self._try_open(now)
+            return
+        try:
+            self._serve(ready, now)
+        except (serial.SerialException, OSError) as exc:
+            self._close(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+        except Exception:  # a bug must not kill the rotator: log it, reconnect
+            log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
+            reason = "unexpected error in the rotator worker (see the log)"
+            self._close(reason, ErrorKind.INTERNAL, now)
 
-    def _cycle(self) -> None:
-        """One attempt: open the port, serve it until it fails, then wait out the back-off."""
+    def _serve(self, ready: set[int], now: float) -> None:
+        session, acted = self.session, False
+        if self._box in ready:
+            batch = self._mailbox.take()
+            if batch:
+                self._do(session.commands(batch, now))
+                acted = True
+        readable = self._fd in ready
+        if readable or (self._held and now >= session.hold_reads_until()):
+            data = _read_all(self._fd, readable)
+            if data:
+                actions = session.bytes_received(data, now)
+                acted = acted or bool(actions)
+                self._do(actions)
+        if not acted and now >= session.next_wakeup():
+            self._do(session.tick(now))
+
+    def _try_open(self, now: float) -> None:
         try:
             port = self._open(self.cfg.port, self.cfg.spec, self.cfg.baud)
         except PortError as exc:
-            self._do(self.session.open_failed(str(exc), self._clock()), None)
-            self._idle_offline(self._backoff_s)
+            self._do(self.session.open_failed(str(exc), now))
+            self._reopen_at = now + self._backoff_s
             self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
             return
         log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
         self._backoff_s = self.cfg.reconnect_min_s
-        reason, kind = None, ErrorKind.SERIAL
+        self._port, self._fd = port, port.fileno()
+        self._do(self.session.link_up(now, self._wall()))
+
+    def _close(self, reason: str | None, kind: ErrorKind, now: float) -> None:
+        port, self._port, self._fd = self._port, None, -1
         try:
-            self._serve(port)
-        except (serial.SerialException, OSError) as exc:
-            reason = f"serial link to {self.cfg.port} lost: {exc}"
-        except Exception:  # a bug must not kill the rotator: log it, reconnect
-            log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
-            reason = "unexpected error in the rotator worker (see the log)"
-            kind = ErrorKind.INTERNAL
-        finally:
-            try:
+            if port is not None:
                 port.close()
-            except Exception:  # closing a yanked port may fail too
-                pass
-        self._do(self.session.link_down(reason, self._clock(), kind), None)
-        if not self._stopping.is_set():
-            self._idle_offline(self._backoff_s)
+        except Exception:  # closing a yanked port may fail too
+            pass
+        self._do(self.session.link_down(reason, now, kind))
+        self._reopen_at = now + self._backoff_s
 
-    def _idle_offline(self, wait_s: float) -> None:
-        """Wait for the next reconnect attempt, still taking commands from the mailbox."""
-        deadline = self._clock() + wait_s
-        while not self._stopping.is_set():
-            now = self._clock()
-            if now >= deadline:
-                return
-            readable, _, _ = select.select([self._mailbox], [], [], deadline - now)
-            if readable:
-                self._do(self.session.commands(self._mailbox.take(), self._clock()), None)
-
-    def _serve(self, port: serial.Serial) -> None:
-        session, mailbox = self.session, self._mailbox
-        fd, box = port.fileno(), mailbox.fileno()
-        self._do(session.link_up(self._clock(), self._wall()), port)
-        while not self._stopping.is_set():
-            now = self._clock()
-            until, hold = session.next_wakeup(), session.hold_reads_until()
-            watch = [fd, box] if now >= hold else [box]  # rule 2
-            if now < hold:
-                until = min(until, hold)
-            readable, _, _ = select.select(watch, [], [], max(0.0, until - now))
-            held, now = fd not in watch, self._clock()
-            acted = False
-            if box in readable:
-                batch = mailbox.take()
-                if batch:
-                    self._do(session.commands(batch, now), port)
-                    acted = True
-            # a hold that just ended: the reply is due, read without asking select first
-            if fd in readable or (held and not readable and now >= hold):
-                data = _read_all(fd)
-                if data:
-                    actions = session.bytes_received(data, now)
-                    acted = acted or bool(actions)
-                    self._do(actions, port)
-            if not acted and now >= session.next_wakeup():
-                self._do(session.tick(now), port)
-
-    def _do(self, actions: list[Action], port: serial.Serial | None) -> None:
+    def _do(self, actions: list[Action]) -> None:
         for action in actions:
             if isinstance(action, Write):
-                if port is not None:
-                    _write(port, action.data)
+                if self._port is not None:
+                    _write(self._port, action.data)
                     log.debug("%s: -> %r", self.cfg.rotator_id, action.data)
             elif isinstance(action, Publish):
                 self._on_status(action.status)

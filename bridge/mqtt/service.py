@@ -113,7 +113,7 @@ class MqttService:
         )
         self._publisher.stop()
 
-    # -- outbound (worker threads) ----------------------------------------------------------
+    # -- outbound (the lines thread) -------------------------------------------------------
     def publish_status(self, rotator_id: str, status: RotatorStatus) -> None:
         rot = self._rotators.get(rotator_id)
         if rot is None:

@@ -7,6 +7,7 @@ import pytest
 
 from bridge.engine.link import Link
 from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
+from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
 
 
@@ -45,3 +46,39 @@ def test_a_slews_report_is_owed_until_its_bound_and_each_stop_brings_it_forward(
     assert b"".join(link.output()) == b"ss"
     link.give_up_reply(124.0)
     assert link.slew is None and link.reply_deadline is None and link.silent_for(124.5) == 0.5
+
+
+# -- rule 7: a poll's reply is read in one go ----------------------------------------------------
+def test_a_polls_reply_is_held_until_it_can_be_whole_then_for_what_is_missing() -> None:
+    spec = ROTOREZ["rotorez"]  # "AI1;" -> ";123": 4 + 4 bytes at 4800 baud, 10 bits a byte
+    byte_s = 10 / 4800
+    link = Link(spec.codec_factory(), spec, 0.0, 4800)
+    link.poll(10.0, 1.0)
+    assert b"".join(link.output()) == b"AI1;"
+    assert link.hold_reads_until() == pytest.approx(10.0 + 9 * byte_s)  # + a byte to turn round
+    link.got_bytes(2, 10.03)  # a slow controller: half of the reply so far
+    assert link.hold_reads_until() == pytest.approx(10.03 + 2 * byte_s)
+    link.got_bytes(2, 10.04)
+    assert link.hold_reads_until() == 0.0  # whole: nothing held any more
+
+
+# -- rule 8: polls on a grid ----------------------------------------------------------------------
+def test_polls_keep_to_a_grid_of_their_interval_so_rotators_poll_together() -> None:
+    spec = ROTOREZ["rotorez"]
+    times = {}
+    for name, start in (("a", 3.1234), ("b", 3.2071)):  # links that came up at odd moments
+        link = Link(spec.codec_factory(), spec, start, 4800)
+        t, polls = start, []
+        while t < 5.0:
+            link.poll(t, 0.2)
+            if link.output():
+                polls.append(t)
+                link.codec.feed(b";123")  # the reply came
+                link.got_reading(t + 0.017)
+            t += 0.0001
+        times[name] = polls
+    a, b = times["a"], times["b"]
+    assert a[0] == 3.1234 and b[0] == 3.2071  # the first at once ...
+    assert a[1] == pytest.approx(3.4, abs=2e-4) and b[1] == pytest.approx(3.4, abs=2e-4)
+    assert a[1:] == pytest.approx(b[1:], abs=2e-4)  # ... then together on the grid
+    assert [y - x for x, y in zip(a[1:], a[2:], strict=False)] == pytest.approx([0.2] * 7, abs=2e-4)

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from bridge.engine import motion as mo
 from bridge.model import MotionState as S
+from bridge.protocols import REGISTRY
 
 CFG = mo.MotionConfig(
-    tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5, noise_deg=2
-)
-DCU = mo.MotionConfig(can_report_position=False, brake_delay_s=5, nominal_speed_deg_s=6)
+    REGISTRY["rotorez"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5,
+    noise_deg=2,
+)  # fmt: skip
+DCU = mo.MotionConfig(REGISTRY["dcu1"], brake_delay_s=5, nominal_speed_deg_s=6)
 
 
 def feed(m: mo.Motion, readings: list[tuple[float, float]], cfg: mo.MotionConfig = CFG):
@@ -203,7 +205,7 @@ def test_the_long_way_round_is_progress_not_a_stall() -> None:
 
 
 def test_without_a_brake_the_first_reading_still_waits_for_stillness() -> None:
-    card = mo.MotionConfig(brake_delay_s=0, settle_s=1.5, noise_deg=2)
+    card = mo.MotionConfig(REGISTRY["rotorcard"], brake_delay_s=0, settle_s=1.5, noise_deg=2)
     m = mo.link_up(mo.Motion(), card, 0.0)
     m, _ = mo.reading(m, card, 100, 0.0)
     assert m.state is S.BRAKING and mo.plan_target(m, card, 0.5) is mo.Plan.WAIT

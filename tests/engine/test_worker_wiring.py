@@ -1,4 +1,5 @@
-"""The worker thread's wiring, with real parts: a real pty driven by the emulator, real pyserial.
+"""The worker's wiring (engine/lines.py + worker.py), with real parts: a real pty driven by the
+emulator, real pyserial.
 
 What is proven here is what no virtual-time scenario can show: that the thread wakes at once for
 a command (the mailbox pipe) and that nothing a listener does reaches the serial line.

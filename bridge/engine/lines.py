@@ -1,0 +1,127 @@
+"""One thread for every rotator's serial line: the only code that touches the ports. I/O only.
+
+Each rotator is a Worker (worker.py: its port, back-off and session). This loop asks every
+worker what it waits for (file descriptors, a deadline), sleeps in one poll() on all of them
+and the loop's own wake pipe, then lets each worker serve what is ready. Sessions decide
+(session.py); workers carry out; this loop only waits.
+
+Rules:
+1. One thread, however many rotators: a poll round of 32 rotators is one wake-up, not 32
+   threads each waking for its own (sessions that poll at the same interval poll at the same
+   instants, link.py rule 8), and the statuses of a round reach the MQTT thread in one burst.
+2. Nothing here blocks but poll(): writes are one short frame to a non-blocking port, reads
+   take what is there, opening a serial port is a few system calls. A worker that raises is
+   logged and its port reopened (worker.py rule 1); the loop itself never ends on an error.
+3. Deadlines are met late, never early: poll() counts whole milliseconds, rounded up.
+4. ``add`` and ``remove`` may be called from any thread; a removed worker's port is closed by
+   this thread before ``remove`` returns, and the thread ends when the last worker is removed.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import select
+import threading
+import time
+from collections.abc import Callable
+
+from bridge.engine.worker import Worker
+
+__all__ = ["Lines"]
+
+log = logging.getLogger(__name__)
+_READY = select.POLLIN | select.POLLPRI | select.POLLERR | select.POLLHUP | select.POLLNVAL
+
+
+class Lines:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._workers: list[Worker] = []
+        self._joining: list[Worker] = []
+        self._leaving: dict[Worker, threading.Event] = {}
+        self._thread: threading.Thread | None = None
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_r, False)
+        os.set_blocking(self._wake_w, False)
+
+    # -- any thread (rule 4) --------------------------------------------------------------------
+    def add(self, worker: Worker) -> None:
+        """Serve ``worker`` from now on (the thread starts with the first one)."""
+        with self._lock:
+            self._joining.append(worker)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="serial-lines")
+                self._thread.start()
+        self._wake()
+
+    def remove(self, worker: Worker, timeout_s: float = 3.0) -> bool:
+        """Stop serving ``worker`` and close its port; True once that is done."""
+        done = threading.Event()
+        with self._lock:
+            if worker in self._joining:
+                self._joining.remove(worker)
+                return True
+            if worker not in self._workers or self._thread is None:
+                return True
+            self._leaving[worker] = done
+        self._wake()
+        return done.wait(timeout_s)
+
+    def _wake(self) -> None:
+        try:
+            os.write(self._wake_w, b"\0")
+        except BlockingIOError:
+            pass  # full: the loop is going to wake up anyway
+
+    # -- the thread -----------------------------------------------------------------------------
+    def _run(self) -> None:
+        while self._membership():
+            try:
+                self._round()
+            except Exception:  # a bug must not end the thread (rule 2)
+                log.exception("unexpected error in the serial loop")
+                time.sleep(0.1)
+
+    def _membership(self) -> bool:
+        """Take in joining workers, let leaving ones go; False when none is left."""
+        with self._lock:
+            joining, self._joining = self._joining, []
+            leaving, self._leaving = self._leaving, {}
+            self._workers.extend(joining)
+            for worker in leaving:
+                self._workers.remove(worker)
+        for worker in joining:
+            worker.begin(self._clock())
+        for worker, done in leaving.items():
+            worker.end(self._clock())
+            done.set()
+        with self._lock:
+            if self._workers or self._joining:
+                return True
+            self._thread = None  # the next add() starts a new one
+            return False
+
+    def _round(self) -> None:
+        now = self._clock()
+        poller = select.poll()
+        poller.register(self._wake_r, select.POLLIN)
+        deadline = math.inf
+        for worker in self._workers:
+            fds, until = worker.wants(now)
+            for fd in fds:
+                poller.register(fd, _READY)
+            deadline = min(deadline, until)
+        wait_ms = None if deadline == math.inf else max(0, math.ceil((deadline - now) * 1000))
+        ready = {fd for fd, _ in poller.poll(wait_ms)}
+        if self._wake_r in ready:
+            try:
+                while os.read(self._wake_r, 4096):
+                    pass
+            except BlockingIOError:
+                pass
+        now = self._clock()
+        for worker in self._workers:
+            worker.serve(ready, now)
