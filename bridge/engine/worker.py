@@ -72,13 +72,14 @@ def _read_all(fd: int, readable: bool) -> bytes:
 
 
 def _write(port: serial.Serial, data: bytes) -> None:
-    """A frame fits the port's buffer: one write() (pyserial's would select() after it too)."""
+    """One write() of a short frame. A port that cannot take it (the line is stuck) is a lost
+    link: waiting for room would hold up every other rotator's line (lines.py rule 2)."""
     try:
         done = os.write(port.fileno(), data)
     except BlockingIOError:
         done = 0
     if done < len(data):
-        port.write(data[done:])  # the rest the way pyserial waits for room
+        raise serial.SerialException("the port takes no more bytes (adapter stuck?)")
 
 
 class Worker:
