@@ -123,6 +123,7 @@ class Rot:
     expectation: Expectation | None = None
     fault: Fault | None = None
     recovering: tuple[str, float] | None = None  # (kind, t_end)
+    why: str = ""  # why the retained state did not match yet while recovering
     last_interrupt_t: float = -1e9  # a fault that may stop the rotor or drop its command
     stale_at: list[float] = field(default_factory=list)  # the link went down at these times
     next_fault: float = 0.0
@@ -229,6 +230,7 @@ class Soak:
         self.broker_next = 0.0
         self.broker_kind = ""
         self.broker_back = 0.0
+        self.broker_why = ""  # why the retained state did not match yet after a broker fault
         self.exit_status: int | None = None
         self.exited_on_its_own = False
         self._vlock = threading.Lock()
@@ -345,21 +347,33 @@ class Soak:
             online_at = self.monitor.since("rotor/bridge/state")
             online = self.monitor.value("rotor/bridge/state") == b"online" and online_at > t_end
             if online:
-                ok, why = self.retained_ok([r for r in self.rots.values() if r.fault is None])
-                if ok:
+                # rotators whose own line is still faulty or recovering are judged by their own
+                # recovery (rotator_step, from when both the line and the broker are back): a
+                # port the bridge reopens after its back-off says nothing about the broker
+                ok, why = self.retained_ok(
+                    [r for r in self.rots.values() if r.fault is None and r.recovering is None]
+                )
+                if not ok:
+                    self.broker_why = why
+                else:
                     took = time.monotonic() - t_end
                     self.recoveries.append((self.broker_kind, took))
-                    if time.monotonic() - online_at > IDLE_POLL_S + RECOVERY_SLACK_S:
+                    late = time.monotonic() - online_at
+                    if late > IDLE_POLL_S + RECOVERY_SLACK_S:
                         self.late_retained += 1
-                        self.violation(f"retained state late after {self.broker_kind}: {why}")
+                        self.violation(
+                            f"retained state late after {self.broker_kind}: matched {late:.1f} s "
+                            f"after the bridge was back (until then: {self.broker_why or '-'})"
+                        )
+                    self.broker_why = ""
                     self.broker_state = "up"
                     self.broker_back = time.monotonic()
                     self.broker_next = time.monotonic() + self.rng.uniform(20, 50)
                     self.log(f"broker recovered in {took:.2f} s")
                     return
             if now - t_end > 60:
-                self.violation(f"no recovery 60 s after {self.broker_kind}")
-                self.broker_state = "up"
+                self.violation(f"no recovery 60 s after {self.broker_kind}: {self.broker_why}")
+                self.broker_state, self.broker_why = "up", ""
 
     def retained_ok(self, rots: list[Rot], estimate_ok: bool = True) -> tuple[bool, str]:
         """The broker's retained state (a fresh subscriber's view) against the ground truth. A
@@ -423,19 +437,25 @@ class Soak:
             online = self.monitor.value(f"rotor/{rot.rid}/availability") == b"online"
             if online and self.broker_state == "up":
                 ok, why = self.retained_ok([rot], estimate_ok=kind != "report lost")
-                if ok:
+                if not ok:
+                    rot.why = why
+                else:
                     took = now - t_end
                     self.recoveries.append((kind, took))
                     came_back = max(avail_at, t_end)
                     if now - came_back > self.recovery_limit_s(rot, kind):
                         self.late_retained += 1
-                        self.violation(f"{rot.rid}: retained state late after {kind}: {why}")
-                    rot.recovering = None
+                        self.violation(
+                            f"{rot.rid}: retained state late after {kind}: matched "
+                            f"{now - came_back:.1f} s after it was back (until then: "
+                            f"{rot.why or '-'})"
+                        )
+                    rot.recovering, rot.why = None, ""
                     rot.next_fault = now + self.rng.uniform(8, 30)
                     self.log(f"{rot.rid} recovered from {kind} in {took:.2f} s")
             if rot.recovering is not None and now - t_end > 60 + self.recovery_limit_s(rot, kind):
-                self.violation(f"{rot.rid}: no recovery 60 s after {kind}")
-                rot.recovering = None
+                self.violation(f"{rot.rid}: no recovery 60 s after {kind}: {rot.why or '-'}")
+                rot.recovering, rot.why = None, ""
         elif allow_faults and now >= rot.next_fault and self.broker_state == "up":
             self.start_fault(rot, now)
         elif self.broker_state == "up" and now >= rot.next_cmd:
