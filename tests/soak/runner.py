@@ -489,8 +489,8 @@ class Soak:
         # the rotor may be stopped or the command dropped: a move is not owed any more
         if kind in ("unplug", "power cycle") or (kind == "silent" and fault.t_end - now > 4):
             rot.last_interrupt_t = now
-        elif kind == "power cycle":
-            rot.emu.power_cycle()
+            if kind == "power cycle":
+                rot.emu.power_cycle()
         else:
             fault.left = self.rng.randint(1, 4)
         rot.fault = fault
