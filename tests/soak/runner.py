@@ -741,7 +741,7 @@ class Soak:
     def final_phase(self) -> None:
         """No new faults: let everything recover, then one last target each, all must arrive."""
         deadline = time.monotonic() + 90
-        while time.monotonic() < deadline:
+        while True:
             now = time.monotonic()
             self.broker_step(now, allow_faults=False)
             for rot in self.rots.values():
@@ -749,11 +749,21 @@ class Soak:
                     self.rotator_step(rot, now, allow_faults=False)
             self.check_expectations(now)
             self.audit_frames()
-            busy = any(
-                r.fault or r.recovering or (r.expectation and r.expectation.outcome is None)
+            busy = [
+                r
                 for r in self.rots.values()
-            )
+                if r.fault or r.recovering or (r.expectation and r.expectation.outcome is None)
+            ]
             if not busy and self.broker_state == "up":
+                break
+            # a command still open is judged by its own deadline (lost or not), never replaced
+            # unjudged by the last target below
+            open_until = max((r.expectation.deadline for r in busy if r.expectation), default=0.0)
+            if now > max(deadline, open_until + 1.0):
+                self.violation(
+                    f"still busy {now - deadline + 90:.0f} s after the last fault: "
+                    f"{', '.join(r.rid for r in busy) or 'the broker'}"
+                )
                 break
             time.sleep(0.05)
         for rot in self.rots.values():
@@ -769,7 +779,15 @@ class Soak:
             time.sleep(0.1)
         self.check_expectations(time.monotonic() + 1e6)  # anything still open now is lost
         self.audit_frames()
+        # the wait above ends the moment the last rotor stands at its target; the bridge sees
+        # that at its next reading, so the retained state may take one poll, as after a
+        # recovery (a Rot2Prog's readings at 600 baud come ~0.4 s apart and ~0.4 s old: 6 deg
+        # behind a rotor turning 10 deg/s is no error, but one that stays behind is)
+        settle_by = time.monotonic() + IDLE_POLL_S + RECOVERY_SLACK_S
         ok, why = self.retained_ok(list(self.rots.values()))
+        while not ok and time.monotonic() < settle_by:
+            time.sleep(0.1)
+            ok, why = self.retained_ok(list(self.rots.values()))
         if not ok:
             self.violation(f"retained state wrong at the end: {why}")
         self.rss.append((time.monotonic() - self.t_start, self.bridge.rss_kib()))
