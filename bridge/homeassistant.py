@@ -300,8 +300,9 @@ class DiscoveryPublisher:
         return [self.status_topic, self._disc.config_filter]
 
     def publish_all(self) -> None:
-        # under the lock: workers call this concurrently (each controller's version arrives on
-        # its own thread), and an older snapshot published last would stay retained
+        # under the lock: the lines thread (a controller's version arrived) and paho's thread
+        # (Home Assistant came back) both call this; an older snapshot published last would
+        # stay retained
         with self._lock:
             configs = all_configs(
                 self.prefix, self._ident, self._topics, list(self._rotators.values())

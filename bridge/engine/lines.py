@@ -10,11 +10,16 @@ Rules:
    threads each waking for its own (sessions that poll at the same interval poll at the same
    instants, link.py rule 8), and the statuses of a round reach the MQTT thread in one burst.
 2. Nothing here blocks but poll(): writes are one short frame to a non-blocking port, reads
-   take what is there, opening a serial port is a few system calls. A worker that raises is
-   logged and its port reopened (worker.py rule 1); the loop itself never ends on an error.
+   take what is there; opening a port and closing a failed one (a wedged USB adapter can take
+   seconds) happen on a short-lived thread of their own (worker.py rule 4). Each worker is
+   called inside its own guard: one that raises is logged (once per kind), its port closed and
+   reopened after its back-off, and every other line goes on; the loop never sleeps for it.
 3. Deadlines are met late, never early: poll() counts whole milliseconds, rounded up.
 4. ``add`` and ``remove`` may be called from any thread; a removed worker's port is closed by
    this thread before ``remove`` returns, and the thread ends when the last worker is removed.
+   A worker is added once: adding it again is a programming error (ValueError).
+5. Commands first: the workers whose mailbox is ready are served before the others in a round,
+   so a stop never waits behind other rotators' replies and status publishing.
 """
 
 from __future__ import annotations
@@ -51,6 +56,8 @@ class Lines:
     def add(self, worker: Worker) -> None:
         """Serve ``worker`` from now on (the thread starts with the first one)."""
         with self._lock:
+            if worker in self._joining or worker in self._workers or worker in self._leaving:
+                raise ValueError(f"{worker.cfg.rotator_id}: already on the lines")
             self._joining.append(worker)
             if self._thread is None or not self._thread.is_alive():
                 self._thread = threading.Thread(target=self._run, name="serial-lines")
@@ -66,7 +73,7 @@ class Lines:
                 return True
             if worker not in self._workers or self._thread is None:
                 return True
-            self._leaving[worker] = done
+            done = self._leaving.setdefault(worker, done)  # a second remove() waits the same
         self._wake()
         return done.wait(timeout_s)
 
@@ -81,7 +88,7 @@ class Lines:
         while self._membership():
             try:
                 self._round()
-            except Exception:  # a bug must not end the thread (rule 2)
+            except Exception:  # a bug here, not in a worker (those are guarded): never a spin
                 log.exception("unexpected error in the serial loop")
                 time.sleep(0.1)
 
@@ -94,9 +101,9 @@ class Lines:
             for worker in leaving:
                 self._workers.remove(worker)
         for worker in joining:
-            worker.begin(self._clock())
+            worker.guarded(worker.begin, self._clock(), self._wake)
         for worker, done in leaving.items():
-            worker.end(self._clock())
+            worker.guarded(worker.end, self._clock())
             done.set()
         with self._lock:
             if self._workers or self._joining:
@@ -110,7 +117,7 @@ class Lines:
         poller.register(self._wake_r, select.POLLIN)
         deadline = math.inf
         for worker in self._workers:
-            fds, until = worker.wants(now)
+            fds, until = worker.wants(now)  # pure arithmetic on the session: nothing to guard
             for fd in fds:
                 poller.register(fd, _READY)
             deadline = min(deadline, until)
@@ -123,5 +130,5 @@ class Lines:
             except BlockingIOError:
                 pass
         now = self._clock()
-        for worker in self._workers:
-            worker.serve(ready, now)
+        for worker in sorted(self._workers, key=lambda w: not w.has_commands(ready)):  # rule 5
+            worker.guarded(worker.serve, now, ready)

@@ -115,7 +115,7 @@ class Link:
         self._output.append(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
-            self._hold_bytes = 0  # a poll sets its own (rule 7)
+            self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""

@@ -4,7 +4,7 @@ Rules:
 1. A stop pre-empts everything: it is taken first and drops any target that came before it.
 2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts).
 3. Options and the lock are settings: the latest value per name wins, order between names kept.
-4. ``put`` never blocks on the worker; it wakes the worker through a pipe the worker selects on,
+4. ``put`` never blocks on the worker; it wakes the worker through a pipe the lines thread polls,
    so a command reaches the wire while the worker waits for serial bytes, never after a timeout.
    ``take`` drains the pipe *before* it takes the batch: a ``put`` that lands between the two
    then leaves its wake byte in the pipe (one spurious wake-up at worst). Draining after taking
@@ -89,14 +89,19 @@ class Mailbox:
         self._wake()
 
     def _wake(self) -> None:
+        if self._wfd < 0:
+            return  # closed: the rotator has stopped
         try:
             os.write(self._wfd, b"\0")
         except BlockingIOError:
             pass  # the pipe is full: the worker is going to wake up anyway
 
     def close(self) -> None:
-        for fd in (self._rfd, self._wfd):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+        """Once nothing waits on it any more; a second close does nothing."""
+        fds, self._rfd, self._wfd = (self._rfd, self._wfd), -1, -1
+        for fd in fds:
+            if fd >= 0:
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import errno
 import os
+import termios
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeAlias
@@ -45,8 +47,7 @@ def open_port(path: str, spec: ModelSpec, baud: int | None = None) -> serial.Ser
             bytesize=spec.bytesize,
             parity=_PARITY[spec.parity],
             stopbits=spec.stopbits,
-            timeout=0,  # the worker selects on the fd and reads what is there
-            write_timeout=2.0,
+            timeout=0,  # the lines thread polls the fd; the worker reads what is there
             xonxoff=False,
             rtscts=False,
             dsrdtr=False,
@@ -56,11 +57,11 @@ def open_port(path: str, spec: ModelSpec, baud: int | None = None) -> serial.Ser
         port.open()
     except serial.SerialException as exc:
         raise PortError(_explain(path, exc)) from None
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, termios.error) as exc:  # termios.error is no OSError
         raise PortError(f"cannot open {path}: {exc}") from None
     try:
         port.reset_input_buffer()
-    except (serial.SerialException, OSError) as exc:
+    except (serial.SerialException, OSError, termios.error) as exc:
         port.close()
         raise PortError(f"cannot flush {path}: {exc}") from None
     return port
@@ -109,3 +110,52 @@ def list_serial_ports() -> list[PortInfo]:
         )
         for p in sorted(list_ports.comports(), key=lambda p: p.device)
     ]
+
+
+def close_quietly(port: serial.Serial) -> None:
+    try:
+        port.close()
+    except Exception:  # closing a yanked port may fail too
+        pass
+
+
+def close_in_background(port: serial.Serial) -> None:
+    """Close a failed port on a thread of its own: a tty with unsent output waits for it to
+    drain (up to 30 s on a USB adapter), and nothing else may wait for that."""
+    threading.Thread(target=close_quietly, args=(port,), name="close port", daemon=True).start()
+
+
+class PendingOpen:
+    """One attempt to open a port, on a thread of its own (a wedged USB adapter can hold open()
+    for seconds); ``wake`` is called when ``result`` (the port, or the exception) is there.
+    Abandoned (the rotator stops meanwhile), a port opened too late is closed at once."""
+
+    def __init__(
+        self, opener: PortOpener, path: str, spec: ModelSpec, baud: int, wake: Callable[[], None]
+    ) -> None:
+        self.result: serial.Serial | Exception | None = None
+        self._lock = threading.Lock()
+        self._abandoned = False
+        args = (opener, path, spec, baud, wake)
+        threading.Thread(target=self._run, args=args, name=f"open {path}", daemon=True).start()
+
+    def _run(
+        self, opener: PortOpener, path: str, spec: ModelSpec, baud: int, wake: Callable[[], None]
+    ) -> None:
+        try:
+            result: serial.Serial | Exception = opener(path, spec, baud)
+        except Exception as exc:
+            result = exc
+        with self._lock:
+            if self._abandoned:
+                if isinstance(result, serial.Serial):
+                    close_quietly(result)
+                return
+            self.result = result
+        wake()
+
+    def abandon(self) -> None:
+        with self._lock:
+            self._abandoned = True
+            if isinstance(self.result, serial.Serial):
+                close_quietly(self.result)

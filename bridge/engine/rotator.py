@@ -82,6 +82,7 @@ class Rotator:
             port_opener=port_opener,
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
+        self._stopped = False
 
     def _supported_options(self, store: StateStore) -> dict[str, bool]:
         """Options remembered for this id that this model has (the id may have been another)."""
@@ -107,9 +108,13 @@ class Rotator:
         return self._locked
 
     def start(self) -> None:
+        """Once: a stopped rotator's mailbox is closed (build a new Rotator instead)."""
+        if self._stopped:
+            raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
         self._lines.add(self._worker)
 
     def stop(self, timeout_s: float = 3.0) -> None:
+        self._stopped = True
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
 

@@ -16,26 +16,37 @@ Rules:
    and when that hold ends the port is read without waiting to be told it is readable.
 3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and a
    listener that raises is logged once per kind of failure and otherwise ignored
-   (``contained``): a display problem never closes, reopens or delays the line to the controller.
+   (``contained``): a display problem never closes or reopens the line to the controller.
+   Listeners must be quick (they only queue for the network): every line waits while one runs.
+4. Opening a port and closing a failed one run on a short-lived thread (port.py PendingOpen,
+   close_in_background): a wedged USB adapter must not hold up the other lines. Meanwhile the
+   rotator is offline and its commands are answered (refused) as when the port is closed.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections.abc import Callable
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import serial
 
 from bridge.engine.actions import Action, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.mailbox import Mailbox
-from bridge.engine.port import PortError, open_port
+from bridge.engine.port import (
+    PendingOpen,
+    PortError,
+    PortOpener,
+    close_in_background,
+    close_quietly,
+    open_port,
+)
 from bridge.engine.session import RotatorSession
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
-from bridge.protocols.base import ModelSpec
 
 __all__ = ["Worker", "WorkerConfig", "contained"]
 
@@ -93,7 +104,7 @@ class Worker:
         options: dict[str, bool] | None = None,
         locked: bool = False,
         wall: Callable[[], float] = time.time,
-        port_opener: Callable[[str, ModelSpec, int], serial.Serial] = open_port,
+        port_opener: PortOpener = open_port,
     ) -> None:
         self.cfg = cfg
         self.session = RotatorSession(cfg, options=options, locked=locked)
@@ -106,23 +117,35 @@ class Worker:
         self._backoff_s = cfg.reconnect_min_s
         self._port: serial.Serial | None = None
         self._fd = -1
+        self._opening: PendingOpen | None = None
+        self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
         self._held = False
+        self._failures: set[type[BaseException]] = set()
 
     # -- called by the lines thread only -------------------------------------------------------
-    def begin(self, now: float) -> None:
+    def begin(self, now: float, wake: Callable[[], None]) -> None:
+        self._wake = wake  # wakes the lines thread when a port opened (rule 4)
         self._do(self.session.start(now))
         self._reopen_at = now
 
     def end(self, now: float) -> None:
-        """Close the port for good (the rotator is stopping)."""
-        if self._port is not None:
-            self._close(None, ErrorKind.SERIAL, now)
+        """Close the port for good (the rotator is stopping): here, so that it is closed when
+        the rotator's stop() returns."""
+        if self._opening is not None:
+            self._opening.abandon()
+        port, self._port = self._port, None
+        if port is not None:
+            close_quietly(port)
+            self._do(self.session.link_down(None, now, ErrorKind.SERIAL))
+
+    def has_commands(self, ready: set[int]) -> bool:
+        return self._box in ready
 
     def wants(self, now: float) -> tuple[list[int], float]:
         """The descriptors to wait on and the time to be woken at the latest."""
         if self._port is None:
-            return [self._box], self._reopen_at
+            return [self._box], math.inf if self._opening else self._reopen_at
         session = self.session
         until, hold = session.next_wakeup(), session.hold_reads_until()
         self._held = now < hold
@@ -130,21 +153,36 @@ class Worker:
             return [self._box], min(until, hold)
         return [self._box, self._fd], until
 
-    def serve(self, ready: set[int], now: float) -> None:
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
+        """``step(now, *args)`` with a bug in it logged (once per kind), the port closed and
+        reopened after the back-off: never raised into the lines thread (lines.py rule 2)."""
+        try:
+            step(now, *args)
+        except Exception as exc:
+            if type(exc) not in self._failures:
+                self._failures.add(type(exc))
+                log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
+            try:
+                reason = "unexpected error in the rotator worker (see the log)"
+                self._lost(reason, ErrorKind.INTERNAL, now)
+            except Exception:
+                self._port, self._fd = None, -1  # at least: no port nobody serves
+
+    def serve(self, now: float, ready: set[int]) -> None:
         if self._port is None:
             if self._box in ready:
                 self._do(self.session.commands(self._mailbox.take(), now))
-            if now >= self._reopen_at:
-                self._try_open(now)
+            if self._opening is not None and self._opening.result is not None:
+                self._opened(self._opening.result, now)
+            elif self._opening is None and now >= self._reopen_at:
+                self._opening = PendingOpen(
+                    self._open, self.cfg.port, self.cfg.spec, self.cfg.baud, self._wake
+                )
             return
         try:
             self._serve(ready, now)
         except (serial.SerialException, OSError) as exc:
-            self._close(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
-        except Exception:  # a bug must not kill the rotator: log it, reconnect
-            log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
-            reason = "unexpected error in the rotator worker (see the log)"
-            self._close(reason, ErrorKind.INTERNAL, now)
+            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
 
     def _serve(self, ready: set[int], now: float) -> None:
         session, acted = self.session, False
@@ -163,28 +201,26 @@ class Worker:
         if not acted and now >= session.next_wakeup():
             self._do(session.tick(now))
 
-    def _try_open(self, now: float) -> None:
-        try:
-            port = self._open(self.cfg.port, self.cfg.spec, self.cfg.baud)
-        except PortError as exc:
-            self._do(self.session.open_failed(str(exc), now))
+    def _opened(self, result: serial.Serial | Exception, now: float) -> None:
+        self._opening = None
+        if isinstance(result, Exception):
+            if not isinstance(result, PortError):
+                log.error("%s: opening %s failed: %r", self.cfg.rotator_id, self.cfg.port, result)
+            self._do(self.session.open_failed(str(result), now))
             self._reopen_at = now + self._backoff_s
             self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
             return
         log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
         self._backoff_s = self.cfg.reconnect_min_s
-        self._port, self._fd = port, port.fileno()
+        self._port, self._fd = result, result.fileno()
         self._do(self.session.link_up(now, self._wall()))
 
-    def _close(self, reason: str | None, kind: ErrorKind, now: float) -> None:
+    def _lost(self, reason: str, kind: ErrorKind, now: float) -> None:
         port, self._port, self._fd = self._port, None, -1
-        try:
-            if port is not None:
-                port.close()
-        except Exception:  # closing a yanked port may fail too
-            pass
-        self._do(self.session.link_down(reason, now, kind))
+        if port is not None:
+            close_in_background(port)  # rule 4
         self._reopen_at = now + self._backoff_s
+        self._do(self.session.link_down(reason, now, kind))
 
     def _do(self, actions: list[Action]) -> None:
         for action in actions:

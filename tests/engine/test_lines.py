@@ -1,0 +1,127 @@
+"""engine/lines.py: one thread serves every rotator's line, and no rotator can hold up another.
+
+Real parts: ptys driven by the emulators, real pyserial; what goes wrong is the port opener of
+one rotator (a bug that raises, an adapter that takes seconds to open), the other's stop must
+still reach its controller at once.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+import serial
+
+from bridge import emulators
+from bridge.app import worker_config
+from bridge.emulators.pty import EmulatedPort
+from bridge.engine.lines import Lines
+from bridge.engine.port import open_port
+from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.state_store import StateStore
+from bridge.errors import Refused
+from bridge.model import ErrorEvent, Stop, Target
+from bridge.protocols.base import ModelSpec
+from bridge.settings import RotatorSettings
+from tests.support import wait_until
+from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
+
+Opener = Callable[[str, ModelSpec, int], serial.Serial]
+
+
+@pytest.fixture
+def emu(tmp_path: Path) -> Iterator[EmulatedPort]:
+    port = emulators.start("rotorez", link=str(tmp_path / "tty"), **FAST_ROTOR)
+    yield port
+    port.close()
+
+
+def rotator(rid: str, port: str, lines: Lines, opener: Opener, events: list) -> Rotator:
+    settings = RotatorSettings.model_validate(
+        {"id": rid, "model": "rotorez", "port": port, **FAST_BRIDGE}
+    )
+    return Rotator(
+        worker_config(settings),
+        Limits(0, 360),
+        StateStore(None),
+        lambda s: None,
+        events.append,
+        port_opener=opener,
+        lines=lines,
+    )
+
+
+def stop_latency_s(emu: EmulatedPort, rot: Rotator) -> float:
+    """A target, then a stop while it turns: how long the stop took to reach the controller."""
+    rot.submit(Target(200.0))
+    emu.wait_for(lambda s: s.is_moving, timeout_s=10)
+    seen = len(emu.frames())
+    t = time.monotonic()
+    rot.submit(Stop())
+
+    def stop_seen(device, _now: float):  # noqa: ANN001
+        return [f for f in device.log[seen:] if f.data == b";"]
+
+    return emu.wait_until(stop_seen, bool, timeout_s=5.0)[0].time_s - t
+
+
+class Counting:
+    """A port opener that does ``what`` and counts its calls."""
+
+    def __init__(self, what: Callable[[], None]) -> None:
+        self.what, self.calls = what, 0
+
+    def __call__(self, path: str, spec: ModelSpec, baud: int) -> serial.Serial:
+        self.calls += 1
+        self.what()
+        raise AssertionError("unreachable")
+
+
+def buggy() -> None:
+    raise RuntimeError("a bug in the opener")
+
+
+@pytest.mark.parametrize("trouble", ["a bug", "a wedged adapter"])
+def test_one_rotators_trouble_never_holds_up_anothers_stop(
+    emu: EmulatedPort, tmp_path: Path, trouble: str
+) -> None:
+    release = threading.Event()
+    what = buggy if trouble == "a bug" else lambda: (release.wait(10), buggy())  # type: ignore[func-returns-value]
+    bad = Counting(what)
+    lines = Lines()
+    events: list[ErrorEvent] = []
+    sick = rotator("sick", str(tmp_path / "nowhere"), lines, bad, events)
+    assert emu.link is not None
+    good = rotator("good", emu.link, lines, open_port, events)
+    sick.start()
+    good.start()
+    try:
+        wait_until(lambda: good.status.state.value == "idle", 10, "the good rotator idle")
+        assert stop_latency_s(emu, good) < 0.15
+        assert stop_latency_s(emu, good) < 0.15
+        assert not sick.status.available
+        with pytest.raises(Refused):
+            sick.submit(Target(10.0))  # offline: refused, as with a missing adapter
+    finally:
+        release.set()
+        sick.stop()
+        good.stop()
+    if trouble == "a bug":
+        assert 1 <= bad.calls <= 6  # retried with back-off, not in a spin
+    else:
+        assert bad.calls == 1  # still in its one open() the whole time
+
+
+def test_a_rotator_is_started_once(emu: EmulatedPort) -> None:
+    assert emu.link is not None
+    lines = Lines()
+    rot = rotator("t", emu.link, lines, open_port, [])
+    rot.start()
+    with pytest.raises(ValueError, match="already on the lines"):
+        rot.start()
+    rot.stop()
+    with pytest.raises(RuntimeError, match="cannot start again"):
+        rot.start()
