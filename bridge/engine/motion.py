@@ -289,7 +289,9 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     """May a new target be written to the controller now?"""
     if not cfg.can_report_position:
         if m.stop_sent_t is not None:
-            return Plan.SEND if now >= m.stop_sent_t + cfg.brake_delay_s else Plan.WAIT
+            # the brake timer starts when the stop has arrived: not a hair before (rule 4)
+            brake_over = now >= m.stop_sent_t + cfg.brake_delay_s + BRAKE_GUARD_S
+            return Plan.SEND if brake_over else Plan.WAIT
         if m.busy_until_t is not None and now < m.busy_until_t:
             return Plan.STOP_FIRST
         if m.busy_until_t is not None and now < m.busy_until_t + cfg.brake_delay_s:

@@ -147,8 +147,8 @@ def test_dcu1_without_feedback_is_unknown_and_assumes_travel_time() -> None:
     # at start it might still be turning: stop first, then the brake delay
     assert mo.plan_target(m, DCU, 1.0) is mo.Plan.STOP_FIRST
     m = mo.stop_sent(m, DCU, 1.0)
-    assert mo.plan_target(m, DCU, 5.9) is mo.Plan.WAIT
-    assert mo.plan_target(m, DCU, 6.0) is mo.Plan.SEND
+    assert mo.plan_target(m, DCU, 6.0) is mo.Plan.WAIT  # the brake timer starts a hair late
+    assert mo.plan_target(m, DCU, 6.0 + mo.BRAKE_GUARD_S) is mo.Plan.SEND
     m = mo.commanded(m, DCU, 90.0, 6.0)
     assert m.state is S.UNKNOWN and m.target_deg == 90
     assert mo.plan_target(m, DCU, 7.0) is mo.Plan.STOP_FIRST
