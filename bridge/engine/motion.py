@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, replace
+from typing import Any
 
 from bridge.model import MotionState
 from bridge.protocols.base import ModelSpec, RetargetPolicy
@@ -167,7 +168,7 @@ def reading(
             m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # not None: the first reading returned above
-    changes: dict[str, object] = {}  # one replace() per reading: this runs at every poll
+    changes: dict[str, Any] = {}  # one replace() per reading: this runs at every poll
     if az_deg != m.position_deg or el_deg != m.el_position_deg:
         changes.update(changed_t=now, position_deg=az_deg, el_position_deg=el_deg)
     moved = angle_error(az_deg, anchor_deg, cfg.az_wraps) > cfg.noise_deg
@@ -179,7 +180,7 @@ def reading(
         if m.target_deg is not None:
             changes["progress_t"] = now
     if changes:
-        m = replace(m, **changes)  # type: ignore[arg-type]
+        m = replace(m, **changes)
     return tick(m, cfg, now)
 
 

@@ -130,20 +130,17 @@ class PendingOpen:
     for seconds); ``wake`` is called when ``result`` (the port, or the exception) is there.
     Abandoned (the rotator stops meanwhile), a port opened too late is closed at once."""
 
-    def __init__(
-        self, opener: PortOpener, path: str, spec: ModelSpec, baud: int, wake: Callable[[], None]
-    ) -> None:
+    def __init__(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
         self.result: serial.Serial | Exception | None = None
         self._lock = threading.Lock()
         self._abandoned = False
-        args = (opener, path, spec, baud, wake)
-        threading.Thread(target=self._run, args=args, name=f"open {path}", daemon=True).start()
+        threading.Thread(
+            target=self._run, args=(attempt, wake), name="open port", daemon=True
+        ).start()
 
-    def _run(
-        self, opener: PortOpener, path: str, spec: ModelSpec, baud: int, wake: Callable[[], None]
-    ) -> None:
+    def _run(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
         try:
-            result: serial.Serial | Exception = opener(path, spec, baud)
+            result: serial.Serial | Exception = attempt()
         except Exception as exc:
             result = exc
         with self._lock:

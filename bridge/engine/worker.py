@@ -30,6 +30,7 @@ import math
 import os
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any, TypeVar
 
 import serial
@@ -175,9 +176,8 @@ class Worker:
             if self._opening is not None and self._opening.result is not None:
                 self._opened(self._opening.result, now)
             elif self._opening is None and now >= self._reopen_at:
-                self._opening = PendingOpen(
-                    self._open, self.cfg.port, self.cfg.spec, self.cfg.baud, self._wake
-                )
+                attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
+                self._opening = PendingOpen(attempt, self._wake)
             return
         try:
             self._serve(ready, now)
