@@ -10,6 +10,8 @@ Rules:
    sleeps: the worker owns back-off.
 5. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
    layer that imports pyserial.
+6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
+   lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
 """
 
 from __future__ import annotations
@@ -156,3 +158,27 @@ class PendingOpen:
             self._abandoned = True
             if isinstance(self.result, serial.Serial):
                 close_quietly(self.result)
+
+
+def read_available(fd: int, readable: bool) -> bytes:
+    """Everything the port has now. ``readable``: poll said so (else a reply is due: worker.py
+    rule 2). A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after
+    poll said it was readable does that mean the adapter is gone."""
+    try:
+        data = os.read(fd, 4096)
+    except BlockingIOError:
+        return b""
+    if not data and readable:
+        raise serial.SerialException("port readable but no data (adapter unplugged?)")
+    return data
+
+
+def write_frame(port: serial.Serial, data: bytes) -> None:
+    """One write() of a short frame. A port that cannot take it (the line is stuck) is a lost
+    link: waiting for room would hold up every other rotator's line (lines.py rule 2)."""
+    try:
+        done = os.write(port.fileno(), data)
+    except BlockingIOError:
+        done = 0
+    if done < len(data):
+        raise serial.SerialException("the port takes no more bytes (adapter stuck?)")

@@ -14,9 +14,9 @@ Rules:
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
    and when that hold ends the port is read without waiting to be told it is readable.
-3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and a
-   listener that raises is logged once per kind of failure and otherwise ignored
-   (``contained``): a display problem never closes or reopens the line to the controller.
+3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and one
+   that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
+   display problem never closes or reopens the line to the controller.
    Listeners must be quick (they only queue for the network): every line waits while one runs.
 4. Opening a port and closing a failed one run on a short-lived thread (port.py PendingOpen,
    close_in_background): a wedged USB adapter must not hold up the other lines. Meanwhile the
@@ -27,16 +27,16 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import time
 from collections.abc import Callable
 from functools import partial
-from typing import Any, TypeVar
+from typing import Any
 
 import serial
 
 from bridge.engine.actions import Action, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
+from bridge.engine.listeners import contained
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import (
     PendingOpen,
@@ -45,53 +45,15 @@ from bridge.engine.port import (
     close_in_background,
     close_quietly,
     open_port,
+    read_available,
+    write_frame,
 )
 from bridge.engine.session import RotatorSession
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
 
-__all__ = ["Worker", "WorkerConfig", "contained"]
+__all__ = ["Worker", "WorkerConfig"]
 
 log = logging.getLogger(__name__)
-T = TypeVar("T")
-
-
-def contained(listener: Callable[[T], None], what: str) -> Callable[[T], None]:
-    """``listener`` with its failures logged (once per exception type) and never raised."""
-    seen: set[type[BaseException]] = set()
-
-    def call(value: T) -> None:
-        try:
-            listener(value)
-        except Exception as exc:
-            if type(exc) not in seen:
-                seen.add(type(exc))
-                log.exception("%s failed (logged once; the rotator goes on)", what)
-
-    return call
-
-
-def _read_all(fd: int, readable: bool) -> bytes:
-    """Everything the port has now. ``readable``: poll said so (else a reply is due, rule 2).
-    A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after poll said
-    it was readable does that mean the adapter is gone."""
-    try:
-        data = os.read(fd, 4096)
-    except BlockingIOError:
-        return b""
-    if not data and readable:
-        raise serial.SerialException("port readable but no data (adapter unplugged?)")
-    return data
-
-
-def _write(port: serial.Serial, data: bytes) -> None:
-    """One write() of a short frame. A port that cannot take it (the line is stuck) is a lost
-    link: waiting for room would hold up every other rotator's line (lines.py rule 2)."""
-    try:
-        done = os.write(port.fileno(), data)
-    except BlockingIOError:
-        done = 0
-    if done < len(data):
-        raise serial.SerialException("the port takes no more bytes (adapter stuck?)")
 
 
 class Worker:
@@ -193,7 +155,7 @@ class Worker:
                 acted = True
         readable = self._fd in ready
         if readable or (self._held and now >= session.hold_reads_until()):
-            data = _read_all(self._fd, readable)
+            data = read_available(self._fd, readable)
             if data:
                 actions = session.bytes_received(data, now)
                 acted = acted or bool(actions)
@@ -226,7 +188,7 @@ class Worker:
         for action in actions:
             if isinstance(action, Write):
                 if self._port is not None:
-                    _write(self._port, action.data)
+                    write_frame(self._port, action.data)
                     log.debug("%s: -> %r", self.cfg.rotator_id, action.data)
             elif isinstance(action, Publish):
                 self._on_status(action.status)
