@@ -11,7 +11,7 @@ from functools import partial
 from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
-from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
@@ -52,6 +52,8 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
         silence_timeout_s=r.effective_silence_timeout_s,
         az_speed_deg_s=az_speed,
         el_speed_deg_s=el_speed,
+        pointing=r.pointing,
+        park_after_idle_s=r.park_after_idle_s,
     )
 
 
@@ -87,28 +89,20 @@ class App:
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         for r in settings.rotators:
-            az_min, az_max = r.effective_az_limits
-            el_min, el_max = r.effective_el_limits
             rot = Rotator(
                 worker_config(r),
-                Limits(az_min, az_max, el_min, el_max),
                 store,
                 on_status=partial(self.mqtt.publish_status, r.id),
                 on_event=partial(self.mqtt.publish_event, r.id),
                 name=r.name,
                 port_opener=port_opener,
                 lines=self.lines,
+                station=settings.station.position,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
             if r.rotctld_port is not None:
-                server = RotctldServer(
-                    rot,
-                    r.rotctld_port,
-                    r.rotctld_bind,
-                    park_az_deg=r.park_az_deg,
-                    park_el_deg=r.park_el_deg,
-                )
+                server = RotctldServer(rot, r.rotctld_port, r.rotctld_bind)
                 self.rotctld.append(server)
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
@@ -122,15 +116,14 @@ class App:
         infos = []
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             infos.append(
-                RotatorInfo(
-                    rotator_id=r.id,
-                    name=r.name or r.id,
-                    spec=r.spec,
-                    topics=self.topics.rotator(r.id),
-                    az_min_deg=rot.limits.az_min_deg,
-                    az_max_deg=rot.limits.az_max_deg,
-                    el_min_deg=rot.limits.el_min_deg,
-                    el_max_deg=rot.limits.el_max_deg,
+                RotatorInfo.of(
+                    r.id,
+                    r.name or r.id,
+                    r.spec,
+                    self.topics.rotator(r.id),
+                    rot.pointing,
+                    has_station=settings.station.position is not None,
+                    nudge_step_deg=r.nudge_step_deg,
                 )
             )
         publisher = DiscoveryPublisher(

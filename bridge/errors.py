@@ -12,6 +12,7 @@ class RefusalCode(enum.StrEnum):
     LIMITS = "limits"  # outside the configured limits (or rounded past them)
     OFFLINE = "offline"  # serial link down or controller silent
     UNSUPPORTED = "unsupported"  # the model cannot do it (an option, an elevation axis)
+    KEEP_OUT = "keep_out"  # the bearing lies in a configured keep-out sector
     INVALID = "invalid"  # not a command at all (a target without an axis)
 
 

@@ -3,17 +3,21 @@ discovery messages, and the publisher that keeps them current.
 
 Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
 QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
-entities are rows of a data table (ENTITIES), each naming the ModelSpec capability it needs;
-every topic, discovery topics included, comes from bridge.mqtt.topics.
+entities are rows of a data table (ENTITIES), each naming what it needs: a ModelSpec capability
+or a configured feature (presets, park, the station); every topic, discovery topics included,
+comes from bridge.mqtt.topics.
 
 Rules:
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
    as ``sw_version``, ``via_device`` the bridge) and one bridge device. An entity exists only if
-   the model can do it: no bearing for a DCU-1, options only where the controller has them.
+   the model can do it: no bearing for a DCU-1, options only where the controller has them; and
+   only where configured: the preset select with presets, park with a park position, the
+   locator, long path and distance with the station's position.
 2. Entities that describe the rotator are available only while both the bridge and the rotator
    are online (``availability_mode: all``). Entities that must work while the rotator is
    unreachable (the safety lock, the connection state, the last error) follow the bridge only.
-3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100.
+3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
+   the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
 4. Configs are published only when they changed. Configs under our node ids that we no longer
    generate (a rotator removed from the configuration) are cleared with an empty retained
    payload when the broker shows them to us.
@@ -28,13 +32,14 @@ import logging
 import re
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Protocol
 
 from bridge import __version__
 from bridge.model import MotionState, RotatorStatus
 from bridge.mqtt.topics import DiscoveryTopics, RotatorTopics, Topics
+from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
@@ -52,11 +57,49 @@ class RotatorInfo:
     name: str
     spec: ModelSpec
     topics: RotatorTopics
-    az_min_deg: float
+    az_min_deg: float  # the range of azimuth targets, true bearings (rule 3)
     az_max_deg: float
     el_min_deg: float = 0.0
     el_max_deg: float = 0.0
     version: str | None = None
+    presets: tuple[str, ...] = ()  # names, in the configuration's order
+    has_park: bool = False
+    has_station: bool = False  # the station's position: targets by locator
+    nudge_step_deg: float = 10.0
+
+    @classmethod
+    def of(
+        cls,
+        rotator_id: str,
+        name: str,
+        spec: ModelSpec,
+        topics: RotatorTopics,
+        pointing: Pointing,
+        *,
+        has_station: bool,
+        nudge_step_deg: float,
+    ) -> RotatorInfo:
+        """From the rotator's pointing (limits, offset, presets, park) and the settings."""
+        az_min, az_max = pointing.target_range()
+        return cls(
+            rotator_id,
+            name,
+            spec,
+            topics,
+            az_min,
+            az_max,
+            pointing.el_min_deg,
+            pointing.el_max_deg,
+            presets=tuple(pointing.presets),
+            has_park=pointing.park is not None,
+            has_station=has_station,
+            nudge_step_deg=nudge_step_deg,
+        )
+
+    def has(self, need: str) -> bool:
+        """An ENTITIES row's need: a field of this info (configured), else a model capability."""
+        where = self if need in self.__dataclass_fields__ else self.spec
+        return bool(getattr(where, need))
 
 
 @dataclass(frozen=True)
@@ -139,11 +182,11 @@ class Entity:
     object_id: str
     name: str | None
     config: Callable[[RotatorInfo], dict[str, object]]
-    needs: str | None = None  # a ModelSpec capability (rule 1): without it, no entity
+    needs: str | None = None  # RotatorInfo.has (rule 1): without it, no entity
     bridge_only: bool = False  # rule 2: available while the rotator is unreachable
 
-    def expand(self, spec: ModelSpec) -> list[Entity]:
-        return [self] if self.needs is None or getattr(spec, self.needs) else []
+    def expand(self, info: RotatorInfo) -> list[Entity]:
+        return [self] if self.needs is None or info.has(self.needs) else []
 
 
 class OptionConfig(Protocol):
@@ -159,7 +202,8 @@ class EachOption:
     platform: str
     config: OptionConfig
 
-    def expand(self, spec: ModelSpec) -> list[Entity]:
+    def expand(self, info: RotatorInfo) -> list[Entity]:
+        spec = info.spec
         return [
             Entity(
                 self.platform,
@@ -179,6 +223,20 @@ def _current_or(field: str, fallback: str) -> str:
     )
 
 
+def _nudge(info: RotatorInfo, sign: str) -> str:
+    """A nudge button's payload: ``+10``, ``-2.5`` (the step without a trailing .0)."""
+    return f"{sign}{info.nudge_step_deg:g}"
+
+
+# a 2, 4, 6 or 8 character Maidenhead locator, either case (as geo.is_locator): Home Assistant
+# checks it with Python's re and its dashboard with an HTML pattern, so no inline flags
+LOCATOR_PATTERN = "^[A-Ra-r]{2}([0-9]{2}([A-Xa-x]{2}([0-9]{2})?)?)?$"
+# the preset select is a menu of places to go: every status shows it with none chosen, because
+# Home Assistant's dashboard sends nothing when the option it shows is picked again
+NO_OPTION = "{{ 'None' }}"
+DISTANCE = (
+    "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
+)
 DEGREES = {"unit_of_measurement": "°"}
 SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
 TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
@@ -203,6 +261,29 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "min": r.el_min_deg, "max": r.el_max_deg, **TARGET_BOX}),
     Entity("button", "stop", "Stop", config=lambda r: {
         "command_topic": r.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    Entity("select", "preset", "Preset", needs="presets", config=lambda r: {
+        "command_topic": r.topics.preset, "options": list(r.presets),
+        "state_topic": r.topics.status, "value_template": NO_OPTION, "icon": "mdi:star"}),
+    Entity("button", "park", "Park", needs="has_park", config=lambda r: {
+        "command_topic": r.topics.park, "payload_press": "PARK", "icon": "mdi:parking"}),
+    Entity("button", "nudge_ccw", "Nudge counter-clockwise", needs="can_report_position",
+           config=lambda r: {
+        "command_topic": r.topics.nudge, "payload_press": _nudge(r, "-"),
+        "icon": "mdi:rotate-left"}),
+    Entity("button", "nudge_cw", "Nudge clockwise", needs="can_report_position",
+           config=lambda r: {
+        "command_topic": r.topics.nudge, "payload_press": _nudge(r, "+"),
+        "icon": "mdi:rotate-right"}),
+    Entity("text", "locator", "Locator", needs="has_station", config=lambda r: {
+        "command_topic": r.topics.target, "mode": "text", "min": 2, "max": 8,
+        "pattern": LOCATOR_PATTERN, "icon": "mdi:map-search"}),
+    Entity("button", "long_path", "Long path", needs="has_station", config=lambda r: {
+        "command_topic": r.topics.target, "payload_press": '{"path": "long"}',
+        "icon": "mdi:earth"}),
+    Entity("sensor", "distance", "Distance", needs="has_station", config=lambda r: {
+        "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
+        "device_class": "distance", "state_class": "measurement",
+        "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),
@@ -228,7 +309,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
 
 
 def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
-    """The entities of one rotator device: the rows of ENTITIES its model can do."""
+    """The entities of one rotator device: the rows of ENTITIES it has what they need for."""
     spec = r.spec
     node = ident.rotator_node(r.rotator_id)
     device: dict[str, object] = {
@@ -245,7 +326,7 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
     slug = r.rotator_id.replace("-", "_")
     out: Configs = {}
     for row in ENTITIES:
-        for e in row.expand(spec):
+        for e in row.expand(r):
             avail = bridge_only if e.bridge_only else both
             where, payload = _entity(
                 e.platform, node, e.object_id, slug, e.name, device, avail, **e.config(r)
@@ -316,7 +397,7 @@ class DiscoveryPublisher:
             r = self._rotators.get(rotator_id)
             if r is None or not status.version or status.version == r.version:
                 return
-            self._rotators[rotator_id] = RotatorInfo(**{**r.__dict__, "version": status.version})
+            self._rotators[rotator_id] = replace(r, version=status.version)
         self.publish_all()
 
     def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:

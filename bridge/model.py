@@ -26,6 +26,20 @@ class Source(enum.StrEnum):
 
     MQTT = "mqtt"
     ROTCTLD = "rotctld"
+    AUTO_PARK = "auto-park"  # park_after_idle_s: the bridge parked it, nobody asked
+
+
+@dataclass(frozen=True)
+class TargetInfo:
+    """Where a target given by locator or coordinates lies (``target_info`` in the status)."""
+
+    latitude_deg: float
+    longitude_deg: float
+    distance_km: float  # the path taken
+    short_path_deg: float
+    long_path_deg: float
+    path: str = "short"  # or "long"
+    locator: str | None = None
 
 
 @dataclass(frozen=True)
@@ -36,6 +50,8 @@ class Target:
     az_deg: float | None
     el_deg: float | None = None
     source: Source = Source.MQTT
+    info: TargetInfo | None = None  # named by locator or coordinates
+    park: bool = False  # the park position: ``parked`` once there
 
 
 @dataclass(frozen=True)
@@ -108,6 +124,11 @@ class RotatorStatus:
     estimated: bool = False  # bearing/elevation estimated during a slew the controller is silent in
     controller_time: str | None = None  # the controller's own clock (SatEL)
     expected_end_unix: float | None = None  # no feedback (DCU-1): when a commanded move should end
+    # bearing_deg and target_az_deg are true bearings (pointing.py); this is the controller's own
+    raw_bearing_deg: float | None = None
+    overlap: str | None = None  # "cw" past 360, "ccw" below 0 (rotors that can pass 360)
+    target_info: TargetInfo | None = None
+    parked: bool = False  # at the park position after a park, until the next move
 
     @property
     def moving(self) -> bool:

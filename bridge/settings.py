@@ -34,6 +34,7 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, Settings
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings_files import check_tls_files, read_password_file
+from bridge.settings_pointing import PointingFields, StationSettings
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
 DEFAULT_SILENCE_TIMEOUT_S = 3.0  # no valid reply this long: offline (unless polls are rarer)
@@ -137,7 +138,7 @@ class HomeAssistantSettings(_Strict):
         return MqttSettings._topic(v)
 
 
-class RotatorSettings(_Strict):
+class RotatorSettings(PointingFields):
     id: str
     name: str | None = None
     model: str
@@ -170,8 +171,8 @@ class RotatorSettings(_Strict):
     # Hamlib rotctld-compatible TCP port (bridge/rotctld/); no authentication, hence loopback
     rotctld_port: int | None = Field(None, ge=1, le=65535)
     rotctld_bind: str = "127.0.0.1"
-    park_az_deg: float | None = None  # where rotctld's park (K) turns the antenna
-    park_el_deg: float | None = None
+    # az_offset_deg, presets, park_az_deg/park_el_deg, park_after_idle_s, keep_out and
+    # nudge_step_deg: settings_pointing.py
 
     @field_validator("id")
     @classmethod
@@ -206,14 +207,6 @@ class RotatorSettings(_Strict):
                 f"azimuth limits {lo:g}..{hi:g} must lie inside the {spec.display_name}'s "
                 f"range {spec.az_min_deg:g}..{spec.az_max_deg:g} with min < max"
             )
-        if self.park_az_deg is not None and not lo <= self.park_az_deg <= hi:
-            raise ValueError(f"park_az_deg {self.park_az_deg:g} is outside {lo:g}..{hi:g}")
-        if self.park_el_deg is not None and (
-            self.park_az_deg is None
-            or not spec.has_elevation
-            or not spec.el_min_deg <= self.park_el_deg <= spec.el_max_deg
-        ):
-            raise ValueError("park_el_deg needs park_az_deg, an elevation axis and its range")
         if spec.has_elevation:
             elo, ehi = self.effective_el_limits
             if not spec.el_min_deg <= elo < ehi <= spec.el_max_deg:
@@ -241,6 +234,7 @@ class RotatorSettings(_Strict):
             raise ValueError(
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
+        self.check_pointing()
         return self
 
     @property
@@ -266,7 +260,7 @@ class RotatorSettings(_Strict):
     @property
     def effective_idle_poll_interval_s(self) -> float:
         """The user's, else the model's at this baud rate: idle polls take at most 5 % of the
-        line (1.0 s on fast lines; Rot2Prog at 600 baud 8.4 s)."""
+        line (1.0 s on fast lines; Rot2Prog at 600 baud 9.3 s)."""
         if self.idle_poll_interval_s is not None:
             return self.idle_poll_interval_s
         return self.spec.default_idle_poll_interval_s(self.effective_baud)
@@ -311,6 +305,7 @@ class Settings(BaseSettings):
 
     mqtt: MqttSettings = MqttSettings()
     homeassistant: HomeAssistantSettings = HomeAssistantSettings()
+    station: StationSettings = StationSettings()  # settings_pointing.py
     rotators: list[RotatorSettings] = Field(min_length=1)
     log_level: str = "INFO"
     state_file: Path = Field(default_factory=_default_state_file)

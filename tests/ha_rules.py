@@ -1,5 +1,11 @@
 """Home Assistant's MQTT discovery rules, as the tests check them (from the HA docs for each
-platform and from HA core's validation of discovery payloads)."""
+platform and from HA core's validation of discovery payloads).
+
+select and text: the "MQTT Select" and "MQTT Text" pages (select.mqtt, text.mqtt) and HA core's
+schemas for them: a select requires command_topic and a list of options; a text requires
+command_topic, its min and max are lengths 0..255 with min <= max (HA's longest state is 255
+characters; equal bounds are allowed since core PR #107738), mode is text or password and
+pattern must be a valid regular expression."""
 
 from __future__ import annotations
 
@@ -58,6 +64,26 @@ PLATFORM_KEYS = {
         "payload_reset",
     },
     "button": {"command_topic", "payload_press", "device_class", "retain"},
+    "select": {
+        "command_topic",
+        "command_template",
+        "options",
+        "state_topic",
+        "value_template",
+        "optimistic",
+        "retain",
+    },
+    "text": {
+        "command_topic",
+        "command_template",
+        "state_topic",
+        "value_template",
+        "min",
+        "max",
+        "mode",
+        "pattern",
+        "retain",
+    },
     "switch": {
         "command_topic",
         "state_topic",
@@ -77,7 +103,10 @@ REQUIRED = {
     "number": {"command_topic"},
     "button": {"command_topic"},
     "switch": {"command_topic"},
+    "select": {"command_topic", "options"},
+    "text": {"command_topic"},
 }
+TEXT_MAX = 255  # HA's longest state (MAX_LENGTH_STATE_STATE)
 BINARY_CLASSES = {
     "battery",
     "cold",
@@ -183,6 +212,21 @@ def validate(topic: str, payload: dict, prefix: str = "homeassistant") -> list[s
             errs.append(f"{topic}: step must be >= 0.001")
         if payload.get("mode", "auto") not in ("auto", "box", "slider"):
             errs.append(f"{topic}: bad mode")
+    if platform == "select":
+        opts = payload.get("options")
+        if not isinstance(opts, list) or not all(isinstance(o, str) for o in opts):
+            errs.append(f"{topic}: select options must be a list of strings")
+    if platform == "text":
+        lo, hi = payload.get("min", 0), payload.get("max", TEXT_MAX)
+        if not (isinstance(lo, int) and isinstance(hi, int) and 0 <= lo <= hi <= TEXT_MAX):
+            errs.append(f"{topic}: text min/max must be lengths with 0 <= min <= max <= 255")
+        if payload.get("mode", "text") not in ("text", "password"):
+            errs.append(f"{topic}: text mode must be text or password")
+        if "pattern" in payload:
+            try:
+                re.compile(payload["pattern"])
+            except (re.error, TypeError):
+                errs.append(f"{topic}: text pattern is not a regular expression")
     if payload.get("retain") is True and platform in WRITABLE:
         errs.append(f"{topic}: command must not be retained")
     return errs

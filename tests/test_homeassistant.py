@@ -2,15 +2,28 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 import threading
 
 import pytest
 
-from bridge.homeassistant import DiscoveryPublisher, Identity, RotatorInfo, all_configs
+from bridge import geo
+from bridge.homeassistant import (
+    ENTITIES,
+    DiscoveryPublisher,
+    Entity,
+    Identity,
+    RotatorInfo,
+    all_configs,
+)
 from bridge.model import RotatorStatus
+from bridge.mqtt.payloads import parse_nudge
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
+from bridge.protocols.base import ModelSpec
+from bridge.settings import RotatorSettings
 from tests.ha_rules import validate
 
 
@@ -51,6 +64,8 @@ def test_rotorez_message_set_is_exact() -> None:
             ("sensor", "bearing"),
             ("number", "target_azimuth"),
             ("button", "stop"),
+            ("button", "nudge_ccw"),
+            ("button", "nudge_cw"),
             ("sensor", "state"),
             ("binary_sensor", "moving"),
             ("binary_sensor", "connected"),
@@ -206,3 +221,160 @@ def test_az_el_models_get_elevation_entities_with_their_limits() -> None:
     )
     az = msgs["ha/number/rotorbridge_rotor_r_sat/target_azimuth/config"]
     assert (az["min"], az["max"]) == (-180, 540)
+
+
+# -- pointing: presets, park, nudge, locator (issue 16) ------------------------------------------
+POINTING = {"select": ["preset"], "button": ["park", "long_path"], "text": ["locator"]}
+POINTING_IDS = {"preset", "park", "locator", "long_path", "distance"}
+
+
+def from_settings(has_station: bool = False, **kw) -> dict[str, dict]:
+    """Discovery for one rotator configured like a user would (settings -> Pointing -> info)."""
+    cfg = RotatorSettings(id="tower", port="/dev/ttyUSB0", **{"model": "rotorez", **kw})
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower",
+        "Tower",
+        cfg.spec,
+        topics.rotator("tower"),
+        cfg.pointing,
+        has_station=has_station,
+        nudge_step_deg=cfg.nudge_step_deg,
+    )
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    return {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}
+
+
+EVERYTHING = {"presets": {"W": 300, "EU": 45, "JA": 330}, "park_az_deg": 0}
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01"])
+def test_pointing_entities_pass_home_assistants_rules(model: str) -> None:
+    cfg = RotatorSettings(id="tower", model=model, port="/dev/null", **EVERYTHING)
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=True, nudge_step_deg=2.5,
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    assert POINTING_IDS <= {t.split("/")[3] for t in msgs}
+    for topic, payload in msgs.items():
+        assert validate(topic, json.loads(payload)) == []
+
+
+def test_a_rotator_without_presets_park_or_station_gets_none_of_them() -> None:
+    ids = {k.split(".")[1] for k in from_settings()}
+    assert not POINTING_IDS & ids
+    assert {"nudge_cw", "nudge_ccw"} <= ids  # a nudge needs nothing configured
+
+
+@pytest.mark.parametrize(
+    ("settings", "station", "wanted"),
+    [
+        ({"presets": {"EU": 45}}, False, {"select.preset"}),
+        ({"park_az_deg": 90}, False, {"button.park"}),
+        ({}, True, {"text.locator", "button.long_path", "sensor.distance"}),
+        (EVERYTHING, True, {"select.preset", "button.park", "text.locator", "button.long_path",
+                            "sensor.distance"}),
+    ],
+)  # fmt: skip
+def test_each_pointing_entity_follows_its_configuration(
+    settings: dict, station: bool, wanted: set[str]
+) -> None:
+    got = {k for k in from_settings(station, **settings) if k.split(".")[1] in POINTING_IDS}
+    assert got == wanted
+
+
+def test_preset_select_offers_the_presets_in_configuration_order() -> None:
+    sel = from_settings(**EVERYTHING)["select.preset"]
+    assert sel["options"] == ["W", "EU", "JA"]
+    assert sel["command_topic"] == "rotor/preset" and "retain" not in sel
+    # a menu of places: its state is always "none chosen", so the same preset can be picked again
+    assert sel["state_topic"] == "rotor/status" and sel["value_template"] == "{{ 'None' }}"
+    assert sel["availability"] == [{"topic": "rotor/bridge/state"}, {"topic": "rotor/availability"}]
+
+
+def test_park_and_nudge_buttons_send_what_the_bridge_takes() -> None:
+    msgs = from_settings(nudge_step_deg=2.5, **EVERYTHING)
+    park = msgs["button.park"]
+    assert (park["command_topic"], park["payload_press"]) == ("rotor/park", "PARK")
+    cw, ccw = msgs["button.nudge_cw"], msgs["button.nudge_ccw"]
+    assert cw["command_topic"] == ccw["command_topic"] == "rotor/nudge"
+    assert (cw["payload_press"], ccw["payload_press"]) == ("+2.5", "-2.5")
+    assert parse_nudge(cw["payload_press"].encode()) == (2.5, None)
+    assert parse_nudge(ccw["payload_press"].encode()) == (-2.5, None)
+    default = from_settings()  # nudge_step_deg 10: no trailing .0
+    assert default["button.nudge_cw"]["payload_press"] == "+10"
+    assert default["button.nudge_ccw"]["payload_press"] == "-10"
+
+
+def test_no_nudge_buttons_without_a_bearing_to_nudge_from() -> None:
+    ids = {k.split(".")[1] for k in from_settings(model="dcu1")}
+    assert "target_azimuth" in ids and not {"nudge_cw", "nudge_ccw"} & ids
+
+
+def test_locator_text_long_path_and_distance_topics() -> None:
+    msgs = from_settings(has_station=True)
+    loc = msgs["text.locator"]
+    assert loc["command_topic"] == "rotor/target" and "state_topic" not in loc
+    assert (loc["mode"], loc["min"], loc["max"]) == ("text", 2, 8)
+    long_path = msgs["button.long_path"]
+    assert long_path["command_topic"] == "rotor/target"
+    assert json.loads(long_path["payload_press"]) == {"path": "long"}
+    dist = msgs["sensor.distance"]
+    assert dist["state_topic"] == "rotor/status"
+    assert (dist["unit_of_measurement"], dist["device_class"], dist["state_class"]) == (
+        "km",
+        "distance",
+        "measurement",
+    )
+    tpl = dist["value_template"]
+    assert "value_json.target_info.distance_km" in tpl and "'None'" in tpl
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["JO", "jo", "JO62", "JO62qm", "jo62QM", "PM95vq12", "AA00aa00", "RR99xx99",
+     "J", "JO6", "JO62q", "JO62qm1", "JO62qm123", "SO62", "JO62qy", "JOAA", "6262", "JO62qm 1",
+     " JO62", "JO62qmab", ""],
+)  # fmt: skip
+def test_locator_pattern_accepts_what_the_bridge_takes_as_a_locator(text: str) -> None:
+    pattern = from_settings(has_station=True)["text.locator"]["pattern"]
+    takes = text == text.strip() and geo.is_locator(text)  # blanks: the dashboard refuses them
+    assert (re.match(pattern, text) is not None) == takes  # Home Assistant checks with re.match
+    assert (re.fullmatch(pattern, text) is not None) == takes  # its dashboard: the whole value
+
+
+def test_target_azimuth_is_the_range_of_true_bearings() -> None:
+    def az(**kw) -> tuple[float, float]:
+        num = from_settings(**kw)["number.target_azimuth"]
+        return num["min"], num["max"]
+
+    assert az() == (0, 360)
+    assert az(az_min_deg=10, az_max_deg=350) == (10, 350)  # no offset: the limits as they are
+    assert az(az_offset_deg=180) == (0, 360)  # a south-centred Rotor-EZ: every bearing
+    assert az(az_offset_deg=180, az_min_deg=10, az_max_deg=350) == (0, 360)
+    # a SPID can pass 360: its limits, shifted by the offset (the overlap names the side)
+    assert az(model="rot2prog", az_offset_deg=10) == (-170, 550)
+    assert az(model="rot2prog", az_offset_deg=10, az_min_deg=0, az_max_deg=450) == (10, 460)
+    assert az(model="rot2prog", az_min_deg=0, az_max_deg=450) == (0, 450)
+
+
+def test_every_need_names_a_rotator_info_field_or_a_model_capability() -> None:
+    names = {f.name for f in dataclasses.fields(RotatorInfo)}
+    names |= {f.name for f in dataclasses.fields(ModelSpec)}
+    needs = {row.needs for row in ENTITIES if isinstance(row, Entity) and row.needs}
+    assert {"presets", "has_park", "has_station", "has_elevation"} <= needs <= names
+
+
+def test_the_rules_catch_what_home_assistant_refuses_in_a_select_or_text() -> None:
+    msgs = from_settings(has_station=True, **EVERYTHING)
+    sel, text = msgs["select.preset"], msgs["text.locator"]
+    node = "homeassistant/{}/rotorbridge_rotor_r_tower/{}/config"
+    assert validate(node.format("select", "preset"), sel) == []
+    assert validate(node.format("text", "locator"), text) == []
+    for bad_select in ({k: v for k, v in sel.items() if k != "options"}, {**sel, "options": "EU"}):
+        assert validate(node.format("select", "preset"), bad_select)
+    for change in ({"max": 256}, {"min": -1}, {"min": 9}, {"mode": "number"}, {"pattern": "(["}):
+        assert validate(node.format("text", "locator"), {**text, **change}), change
+    assert validate(node.format("text", "locator"), {**text, "min": 8}) == []  # min == max is fine

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from bridge import emulators
 from bridge.app import worker_config
 from bridge.emulators import EmulatedPort
-from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.model import ErrorEvent, MotionState
 from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
@@ -106,17 +106,17 @@ def station(tmp_path: Path) -> Iterator[StationFactory]:
             model=model,
             port=str(link),
             brake_delay_s=0 if model == "rotorcard" else 1.5,
+            park_az_deg=park_az_deg,
             **{**FAST_POLLING, **settings},
         )
         events: list[ErrorEvent] = []
         rotator = Rotator(
             worker_config(cfg),
-            Limits(*cfg.effective_az_limits),
             StateStore(tmp_path / f"state-{len(made)}.json"),
             on_status=lambda status: None,
             on_event=events.append,
         )
-        server = RotctldServer(rotator, 0, park_az_deg=park_az_deg)
+        server = RotctldServer(rotator, 0)
         st = Station(emu, rotator, server, events, [])
         made.append(st)
         rotator.start()
@@ -444,7 +444,6 @@ def unstarted(tmp_path: Path) -> Iterator[Callable[[str], Client]]:
         cfg = RotatorSettings(id="tower", model=model, port=str(tmp_path / "no-such-port"))
         rotator = Rotator(
             worker_config(cfg),
-            Limits(*cfg.effective_az_limits, *cfg.effective_el_limits),
             StateStore(tmp_path / f"state-{model}.json"),
             on_status=lambda status: None,
             on_event=lambda event: None,

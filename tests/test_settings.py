@@ -300,7 +300,7 @@ def test_the_slow_lines_poll_rarely_and_wait_longer_before_calling_it_silence(
     rotators = load_settings(write(tmp_path, text), environ={}).rotators
     shown = [(r.effective_idle_poll_interval_s, r.effective_silence_timeout_s) for r in rotators]
     # an MD-01 set to 600 baud polls like a Rot2Prog
-    assert shown == [(8.4, 17.6), (3.5, 9.0), (1.0, 3.0), (8.4, 17.2)]
+    assert shown == [(9.3, 19.4), (3.9, 9.8), (1.0, 3.0), (9.3, 19.0)]
 
 
 def test_idle_poll_and_silence_set_by_the_user_are_kept(tmp_path: Path) -> None:
@@ -317,7 +317,7 @@ def test_idle_poll_and_silence_set_by_the_user_are_kept(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "extra",
     [
-        "silence_timeout_s = 3\n",  # a Rot2Prog is asked every 8.4 s by default
+        "silence_timeout_s = 3\n",  # a Rot2Prog is asked every 9.3 s by default
         "idle_poll_interval_s = 2\nsilence_timeout_s = 2\n",
     ],
 )

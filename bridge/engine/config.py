@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bridge.engine import motion as mo
+from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 
@@ -24,3 +25,15 @@ class WorkerConfig:
     reconnect_min_s: float = 0.5
     reconnect_max_s: float = 10.0
     junk_report_interval_s: float = 30.0
+    pointing: Pointing | None = None  # None: the model's whole range, no offset
+    park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
+
+    def __post_init__(self) -> None:
+        if self.pointing is None:
+            object.__setattr__(self, "pointing", Pointing.of(self.spec))
+
+    @property
+    def aim(self) -> Pointing:
+        """The pointing transform (never None after construction)."""
+        assert self.pointing is not None
+        return self.pointing

@@ -1,17 +1,17 @@
 """A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
 
 This is the one judge of commands: every front end submits here, and here alone are the safety
-lock, the configured limits, the model's capabilities and the link state checked against a
-command. A refused command raises Refused (with a RefusalCode front ends map, e.g. to a Hamlib
-RPRT number) and is reported as an error event; it never reaches the mailbox, so it can never
-move anything. The worker judges nothing anew: it only drops an accepted target that the lock
-or a lost link overtook before it could be sent, and reports that as a refusal too.
+lock, the configured limits and keep-out sectors (pointing.py: targets arrive as true bearings
+and leave as the controller's raw values), the model's capabilities and the link state checked
+against a command. A refused command raises Refused (with a RefusalCode front ends map, e.g.
+to a Hamlib RPRT number) and is reported as an error event; it never reaches the mailbox, so it
+can never move anything. The worker judges nothing anew: it only drops an accepted target that
+the lock or a lost link overtook before it could be sent, and reports that as a refusal too.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -30,10 +30,12 @@ from bridge.model import (
     ErrorKind,
     RotatorStatus,
     SetOption,
+    Source,
     Stop,
     Target,
     describe_command,
 )
+from bridge.pointing import toward
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
@@ -51,7 +53,6 @@ class Rotator:
     def __init__(
         self,
         cfg: WorkerConfig,
-        limits: Limits,
         store: StateStore,
         on_status: Callable[[RotatorStatus], None],
         on_event: Callable[[ErrorEvent], None],
@@ -61,11 +62,13 @@ class Rotator:
         wall: Callable[[], float] = time.time,
         port_opener: Callable[..., serial.Serial] = open_port,
         lines: Lines | None = None,
+        station: tuple[float, float] | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
         self.spec: ModelSpec = cfg.spec
-        self.limits = limits
+        self.pointing = cfg.aim  # limits, offset, keep-out, presets, park: the judge's terms
+        self.station = station  # (latitude, longitude): targets by locator or coordinates
         self._store = store
         self._on_event = on_event
         self._wall = wall
@@ -104,6 +107,12 @@ class Rotator:
         return self._worker.session.status
 
     @property
+    def limits(self) -> Limits:
+        """The mechanical limits (the controller's raw values)."""
+        p = self.pointing
+        return Limits(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
+
+    @property
     def locked(self) -> bool:
         return self._locked
 
@@ -121,13 +130,67 @@ class Rotator:
     def submit(self, command: Command, described: str | None = None) -> None:
         """Queue a command or raise Refused. Stop is never refused."""
         try:
-            self._check(command)
+            judged = self._check(command)
         except Refused as exc:
             self.report_refusal(exc.message, described or describe_command(command))
             raise
         if isinstance(command, SetOption):
             self._store.set_option(self.id, command.name, command.enabled)
-        self._mailbox.put(command)
+        self._mailbox.put(judged)
+
+    # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
+    def go_to_preset(self, name: str, source: Source, described: str) -> None:
+        self._named(lambda: Target(*self.pointing.preset(name), source), described)
+
+    def park(self, source: Source, described: str) -> None:
+        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described)
+
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None:
+        def target() -> Target:
+            az, info = toward(
+                self.station, latitude_deg, longitude_deg, long_path=long_path, locator=locator
+            )
+            return Target(az, None, source, info=info)
+
+        self._named(target, described)
+
+    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+        """The place of the current locator or coordinate target, by the path asked for."""
+        info = self.status.target_info
+        if info is None:
+            message = "no locator or coordinate target to take the other path to"
+            self.report_refusal(message, described)
+            raise Refused(RefusalCode.INVALID, message)
+        self.go_toward(
+            info.latitude_deg,
+            info.longitude_deg,
+            source,
+            described,
+            locator=info.locator,
+            long_path=long_path,
+        )
+
+    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+        self._named(
+            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source), described
+        )
+
+    def _named(self, make: Callable[[], Target], described: str) -> None:
+        try:
+            target = make()
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self.submit(target, described)
 
     def set_lock(self, locked: bool) -> None:
         self._locked = locked
@@ -148,19 +211,10 @@ class Rotator:
         self._mailbox.put_note(message)
         self._on_event(ErrorEvent(kind, message, command, self._wall()))
 
-    def _check_rounded(self, axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
-        """A controller that takes whole degrees must not be rounded past a limit."""
-        if self.spec.whole_degrees and not lo_deg <= _rounded(value_deg) <= hi_deg:
-            raise Refused(
-                RefusalCode.LIMITS,
-                f"{axis} {value_deg:g} becomes {_rounded(value_deg):g} on the "
-                f"{self.spec.display_name} (whole degrees), outside the limits "
-                f"{lo_deg:g}..{hi_deg:g}",
-            )
-
-    def _check(self, command: Command) -> None:
+    def _check(self, command: Command) -> Command:
+        """``command`` as it goes to the controller (targets in raw values), or Refused."""
         if isinstance(command, Stop):
-            return
+            return command
         if isinstance(command, SetOption):
             if command.name not in self.spec.options:
                 have = ", ".join(self.spec.options) or "none"
@@ -168,35 +222,13 @@ class Rotator:
                     RefusalCode.UNSUPPORTED,
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
-            return
-        assert isinstance(command, Target)
+            return command
         if self._locked:
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
-        lim = self.limits
-        if command.az_deg is None and command.el_deg is None:
-            raise Refused(RefusalCode.INVALID, "target without azimuth or elevation")
-        if command.az_deg is not None:
-            _check_axis("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
-            self._check_rounded("azimuth", command.az_deg, lim.az_min_deg, lim.az_max_deg)
-        if command.el_deg is not None:
-            if not self.spec.has_elevation:
-                raise Refused(
-                    RefusalCode.UNSUPPORTED, f"{self.spec.display_name} has no elevation axis"
-                )
-            _check_axis("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
-            self._check_rounded("elevation", command.el_deg, lim.el_min_deg, lim.el_max_deg)
-        if not self.status.available:
+        status = self.status
+        raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
+        if not status.available:
             raise Refused(
                 RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
-
-
-def _rounded(value_deg: float) -> float:
-    return float(math.floor(value_deg + 0.5))
-
-
-def _check_axis(axis: str, value_deg: float, lo_deg: float, hi_deg: float) -> None:
-    if not math.isfinite(value_deg) or not lo_deg <= value_deg <= hi_deg:
-        raise Refused(
-            RefusalCode.LIMITS, f"{axis} {value_deg:g} outside the limits {lo_deg:g}..{hi_deg:g}"
-        )
+        return raw

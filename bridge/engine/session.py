@@ -41,15 +41,15 @@ from __future__ import annotations
 
 import logging
 
+from bridge.engine import autopark, slewing
 from bridge.engine import motion as mo
-from bridge.engine import slewing
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.slew import Slew
-from bridge.engine.targets import Targets
+from bridge.engine.targets import Targets, resolve
 from bridge.model import ErrorKind, MotionState, RotatorStatus, Target, describe_command
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
 
@@ -70,6 +70,7 @@ class RotatorSession:
         self.motion = mo.Motion()
         self.link: Link | None = None
         self.targets = Targets(cfg)
+        self.autopark = autopark.AutoPark(cfg.park_after_idle_s, cfg.aim.park)
         self.answering = False
         self._silence_reported = False
         self._options_due: set[str] = set()
@@ -90,6 +91,7 @@ class RotatorSession:
     def start(self, now: float) -> list[Action]:
         """The first status, whatever it says (nothing has been published for this rotator)."""
         self._actions.append(Publish(self.status))
+        self.autopark.activity(now)
         return self._step(now)
 
     def open_failed(self, reason: str, now: float) -> list[Action]:
@@ -103,6 +105,7 @@ class RotatorSession:
         self._port_error = None
         self.wall_offset_s = wall_s - now
         self.link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
+        self.autopark.activity(now)  # never park the moment a controller comes back
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -135,9 +138,12 @@ class RotatorSession:
                 self._drop_pending(None)
                 if link is not None:
                     self.stop_now(now)  # whatever we believe: the lock is for tower work
+        if batch.stop is not None or batch.target is not None or batch.lock is not None:
+            self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
             self.targets.clear()
             self.view.last_source = batch.stop.source.value
+            self.view.target_info, self.view.park_raw = None, None
             if link is not None:
                 self.stop_now(now)
         for opt in batch.options:
@@ -246,6 +252,7 @@ class RotatorSession:
             self.view.controller_time = reply.controller_time
         if not self.answering:
             self.answering = True
+            self.autopark.activity(now)
             self._options_due = set(self.options)
             log.info("%s: controller answering", self.name)
         self.motion, events = mo.reading(
@@ -302,6 +309,7 @@ class RotatorSession:
                 link.write(enable, now)
             self._enable_due = False
         self._verify_stop(now)
+        autopark.step(self, now)
         if self.targets.pending is not None:
             self._try_target(link, now)
         idle = self.motion.state is MotionState.IDLE
@@ -349,11 +357,11 @@ class RotatorSession:
             return  # no reading yet to keep the other axis where it is
         wire = link.codec.wire_target(az, el)
         if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
-            self.targets.clear()  # already on its way there
+            self._aimed(self.targets.clear(), wire)  # already on its way there
             return
         if self.cfg.spec.can_report_position and mo.within_tolerance(m, mcfg, wire):
             log.info("%s: already within tolerance of %s", self.name, wire)
-            self.targets.clear()
+            self._aimed(self.targets.clear(), wire)
             return
         plan = mo.plan_target(m, mcfg, now)
         if plan is mo.Plan.STOP_FIRST:
@@ -376,8 +384,15 @@ class RotatorSession:
             )
             link.begin_slew(slew, slewing.travel_s(self, slew))
         self.motion = mo.commanded(m, mcfg, wire[0], now, wire[1])
-        self.view.last_source = pending.source.value
+        self._aimed(pending, wire)
         link.poll_by(now + self.cfg.moving_poll_interval_s)
+
+    def _aimed(self, target: Target | None, wire: tuple[float, float | None]) -> None:
+        """What the status says about the target now taken (status.py rule 4)."""
+        if target is not None:
+            self.view.last_source = target.source.value
+            self.view.target_info = target.info
+            self.view.park_raw = wire if target.park else None
 
     def _needs_fresh_reading(self, link: Link, now: float) -> bool:
         if not self.cfg.motion.can_report_position or self.cfg.motion.direct_retarget:
@@ -386,17 +401,7 @@ class RotatorSession:
         return age > self.cfg.moving_poll_interval_s
 
     def resolve(self, target: Target) -> tuple[float | None, float | None]:
-        """Fill the axis a target leaves out with its current target, else its position."""
-        m = self.motion
-        az = target.az_deg
-        if az is None:
-            az = m.target_deg if m.target_deg is not None else m.position_deg
-        el = target.el_deg
-        if self.cfg.spec.has_elevation and el is None:
-            el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
-            if el is None:
-                return None, None
-        return az, el
+        return resolve(target, self.motion, self.cfg.spec.has_elevation)
 
     def _next_wakeup(self, now: float) -> float:
         link = self.link
@@ -405,9 +410,9 @@ class RotatorSession:
             times += link.wakeups()
             if link.slew is not None:
                 times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
-        wait = self.targets.stream_deadline(now)
-        if wait is not None:
-            times.append(wait)
+        for wait in (self.targets.stream_deadline(now), self.autopark.wakeup(now)):
+            if wait is not None:
+                times.append(wait)
         deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
         if deadline is not None:
             times.append(deadline)

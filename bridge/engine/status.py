@@ -7,7 +7,10 @@ Rules:
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
    ``estimated`` set, the target and the time it should be over; after that the state is
    ``unknown`` and the target is cleared. The bridge never shows more than it knows.
-4. A status is emitted when something a user would notice changed. The controller's own clock
+4. Bearings and targets are shown as true bearings (pointing.py), with the controller's raw
+   value beside them (``raw_bearing``, ``overlap``). ``parked`` holds while the rotor is still
+   within tolerance of the park position it was last sent to.
+5. A status is emitted when something a user would notice changed. The controller's own clock
    (SatEL) ticks every second: it rides along in the next status but never causes one.
 """
 
@@ -17,7 +20,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from bridge.engine import motion as mo
-from bridge.model import MotionState, RotatorStatus
+from bridge.model import MotionState, RotatorStatus, TargetInfo
 
 if TYPE_CHECKING:
     from bridge.engine.session import RotatorSession
@@ -46,6 +49,8 @@ class View:
     controller_time: str | None = None
     last_error: str | None = None
     last_source: str | None = None
+    target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates)
+    park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
 
 
 def current(session: RotatorSession, now: float) -> RotatorStatus:
@@ -72,15 +77,21 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
             expected_end = m.busy_until_t + session.wall_offset_s
         else:
             state, target = MotionState.UNKNOWN, (None, None)
+    aim = session.cfg.aim
+    raw = bearing if spec.can_report_position else None
     return replace(
         session.status,
         state=state,
-        bearing_deg=bearing if spec.can_report_position else None,
+        bearing_deg=None if raw is None else aim.true_of(raw),
+        raw_bearing_deg=raw,
+        overlap=aim.overlap(raw),
+        target_info=view.target_info,
+        parked=_parked(session, state),
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,
         controller_time=view.controller_time,
-        target_az_deg=target[0],
+        target_az_deg=None if target[0] is None else aim.true_of(target[0]),
         target_el_deg=target[1] if spec.has_elevation else None,
         connected=link is not None,
         available=answering,
@@ -92,8 +103,17 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
     )
 
 
+def _parked(session: RotatorSession, state: MotionState) -> bool:
+    park = session.view.park_raw
+    if park is None or state in (MotionState.MOVING, MotionState.OFFLINE):
+        return False
+    if not session.cfg.spec.can_report_position:
+        return True  # the estimated move is over
+    return mo.within_tolerance(session.motion, session.cfg.motion, park)
+
+
 def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
-    """Rule 4: the controller's clock alone is no change."""
+    """Rule 5: the controller's clock alone is no change."""
     if new.controller_time == old.controller_time:
         return new != old
     return replace(new, controller_time=None) != replace(old, controller_time=None)

@@ -13,6 +13,7 @@ Rules:
 
 from __future__ import annotations
 
+from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.model import Target
 
@@ -65,3 +66,16 @@ class Targets:
         if self.pending is None or not self.stream_wait(now):
             return None
         return min(self._pending_t + BURST_QUIET_S, self._stream_t + self._max_wait_s)
+
+
+def resolve(target: Target, m: mo.Motion, has_elevation: bool) -> tuple[float | None, float | None]:
+    """Fill the axis a target leaves out with its current target, else its position."""
+    az = target.az_deg
+    if az is None:
+        az = m.target_deg if m.target_deg is not None else m.position_deg
+    el = target.el_deg
+    if has_elevation and el is None:
+        el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
+        if el is None:
+            return None, None
+    return az, el

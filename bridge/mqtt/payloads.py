@@ -1,9 +1,11 @@
 """Inbound payloads parsed, outbound payloads rendered. Pure functions, no paho.
 
 Inbound rules: UTF-8 text at most MAX_COMMAND_BYTES long; numbers are finite decimals; a target
-is a bare azimuth (``123``, ``123.5``), ``az el`` (space or comma), or a JSON object
-``{"azimuth": a, "elevation": e}``; switches are ON/OFF, 1/0, true/false in any case. Anything
-else raises PayloadError with a message meant for the user.
+is a bare azimuth (``123``, ``123.5``), ``az el`` (space or comma), a JSON object
+``{"azimuth": a, "elevation": e}``, or a place: a bare Maidenhead locator (``PM95vq``),
+``{"locator": "PM95vq"}`` or ``{"latitude": 35.7, "longitude": 139.7}``, each with an optional
+``"path": "long"``; switches are ON/OFF, 1/0, true/false in any case. Anything else raises
+PayloadError with a message meant for the user.
 """
 
 from __future__ import annotations
@@ -11,9 +13,11 @@ from __future__ import annotations
 import json
 import math
 import re
+from dataclasses import dataclass
 from datetime import UTC, datetime
 
-from bridge.model import RotatorStatus
+from bridge import geo
+from bridge.model import RotatorStatus, TargetInfo
 
 MAX_COMMAND_BYTES = 256
 _SPLIT = re.compile(r"[\s,;]+")
@@ -53,16 +57,104 @@ def _number(raw: object, what: str) -> float:
     return value
 
 
+@dataclass(frozen=True)
+class Place:
+    """A target named by where it is; the bearing comes from the station (pointing.py)."""
+
+    latitude_deg: float | None  # None (with longitude): the place of the current target
+    longitude_deg: float | None
+    locator: str | None = None
+    long_path: bool = False
+
+
+def _json_object(text: str, what: str) -> dict[str, object]:
+    try:
+        obj = json.loads(text, parse_constant=lambda c: c)  # NaN/Infinity stay strings
+    except json.JSONDecodeError as exc:
+        raise PayloadError(f"bad JSON: {exc.msg}") from None
+    if not isinstance(obj, dict):
+        raise PayloadError(f"JSON {what} must be an object")
+    return obj
+
+
+def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
+    """A target (parse_target) or a place: a locator or coordinates, short or long path."""
+    text = _text(payload)
+    if geo.is_locator(text) or _looks_like_locator(text):
+        return _place(text, None, None, False)  # a bad locator gets the locator's error
+    if not text.startswith("{"):
+        return parse_target(payload)
+    obj = _json_object(text, "target")
+    if not {"locator", "latitude", "longitude", "path"} & set(obj):
+        return parse_target(payload)
+    unknown = set(obj) - {"locator", "latitude", "longitude", "path"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in a place target: {', '.join(sorted(unknown))}")
+    path = obj.get("path", "short")
+    if path not in ("short", "long"):
+        raise PayloadError(f'"path" must be "short" or "long", got {json.dumps(path)[:20]}')
+    locator = obj.get("locator")
+    if locator is not None:
+        if "latitude" in obj or "longitude" in obj:
+            raise PayloadError('give "locator" or "latitude"/"longitude", not both')
+        if not isinstance(locator, str):
+            raise PayloadError('"locator" must be text, e.g. "PM95vq"')
+        return _place(locator.strip(), None, None, path == "long")
+    if set(obj) == {"path"}:  # the current place, the other way round (HA's long path button)
+        return Place(None, None, None, path == "long")
+    if "latitude" not in obj or "longitude" not in obj:
+        raise PayloadError('a place needs "locator", or "latitude" and "longitude"')
+    lat, lon = _number(obj["latitude"], "latitude"), _number(obj["longitude"], "longitude")
+    if not -90 <= lat <= 90 or not -180 <= lon <= 180:
+        raise PayloadError("latitude must be -90..90 and longitude -180..180")
+    return _place(None, lat, lon, path == "long")
+
+
+def _looks_like_locator(text: str) -> bool:
+    """Two letters, then a digit or nothing, and a locator's length (``JZ62``, ``AB``)."""
+    return (
+        len(text) in geo.LOCATOR_LENGTHS
+        and text[:2].isalpha()
+        and (len(text) == 2 or text[2].isdigit())
+    )
+
+
+def _place(locator: str | None, lat: float | None, lon: float | None, long: bool) -> Place:
+    if locator is not None:
+        try:
+            lat, lon = geo.parse_locator(locator)
+        except geo.LocatorError as exc:
+            raise PayloadError(str(exc)) from None
+        locator = locator.upper()[:4] + locator.lower()[4:6] + locator[6:]
+    assert lat is not None and lon is not None
+    return Place(lat, lon, locator, long)
+
+
+def parse_nudge(payload: bytes) -> tuple[float, float | None]:
+    """(azimuth step, elevation step or None): ``+10``, ``-10`` or ``{"azimuth": 5, ...}``."""
+    text = _text(payload)
+    if not text.startswith("{"):
+        return _number(text, "nudge"), None
+    obj = _json_object(text, "nudge")
+    unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
+    if unknown or not obj:
+        raise PayloadError('a nudge is a number, or JSON {"azimuth": 5, "elevation": -2}')
+    az, el = obj.get("azimuth", obj.get("az", 0)), obj.get("elevation", obj.get("el"))
+    return _number(az, "azimuth"), None if el is None else _number(el, "elevation")
+
+
+def parse_name(payload: bytes, what: str) -> str:
+    text = _text(payload)
+    if any(not c.isprintable() for c in text):
+        raise PayloadError(f"{what} must be printable text")
+    return text
+
+
 def parse_target(payload: bytes) -> tuple[float, float | None]:
     """(azimuth, elevation or None). Limits are checked later, in one place (the rotator)."""
     text = _text(payload)
     if text.startswith("{"):
-        try:
-            obj = json.loads(text, parse_constant=lambda c: c)  # NaN/Infinity stay strings
-        except json.JSONDecodeError as exc:
-            raise PayloadError(f"bad JSON: {exc.msg}") from None
-        if not isinstance(obj, dict):
-            raise PayloadError("JSON target must be an object")
+        obj = _json_object(text, "target")
         unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
         if unknown:
             raise PayloadError(f"unknown key(s) in target: {', '.join(sorted(unknown))}")
@@ -111,7 +203,27 @@ def switch(value: bool) -> str:
     return "ON" if value else "OFF"
 
 
-def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) -> str:
+def target_info(info: TargetInfo) -> dict[str, object]:
+    return {
+        "locator": info.locator,
+        "latitude": round(info.latitude_deg, 4),
+        "longitude": round(info.longitude_deg, 4),
+        "distance_km": round(info.distance_km, 1),
+        "short_path_deg": round(info.short_path_deg, 1),
+        "long_path_deg": round(info.long_path_deg, 1),
+        "path": info.path,
+    }
+
+
+def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:
+    """``R/presets``: name -> azimuth, or [azimuth, elevation]."""
+    doc = {n: az if el is None else [az, el] for n, (az, el) in presets.items()}
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def status_json(
+    status: RotatorStatus, time_unix: float, has_elevation: bool, shows_raw: bool = False
+) -> str:
     doc: dict[str, object] = {
         "bearing": status.bearing_deg,
         "target": status.target_az_deg,
@@ -123,6 +235,12 @@ def status_json(status: RotatorStatus, time_unix: float, has_elevation: bool) ->
         doc["controller_time"] = status.controller_time
     if status.expected_end_unix is not None:
         doc["expected_end"] = _iso(status.expected_end_unix)
+    if shows_raw:
+        doc["raw_bearing"] = status.raw_bearing_deg
+        doc["overlap"] = status.overlap
+    if status.target_info is not None:
+        doc["target_info"] = target_info(status.target_info)
+    doc["parked"] = status.parked
     doc.update(
         state=status.state.value,
         moving=status.moving,

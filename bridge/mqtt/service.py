@@ -31,6 +31,7 @@ from bridge.errors import Refused
 from bridge.model import ErrorEvent, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.topics import Topics
+from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
@@ -39,12 +40,27 @@ log = logging.getLogger(__name__)
 class RotatorPort(Protocol):
     id: str
     spec: ModelSpec
+    pointing: Pointing
 
     @property
     def status(self) -> RotatorStatus: ...
     def submit(self, command: Target | Stop | SetOption, described: str | None = None) -> None: ...
     def set_lock(self, locked: bool) -> None: ...
     def report_refusal(self, message: str, command: str | None) -> None: ...
+    def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
+    def park(self, source: Source, described: str) -> None: ...
+    def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
+    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None: ...
 
 
 class Publisher(Protocol):
@@ -82,6 +98,8 @@ class MqttService:
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
+        presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
+        self._publisher.publish_retained(self.topics.rotator(rotator.id).presets, presets)
 
     def add_feature(
         self,
@@ -133,7 +151,8 @@ class MqttService:
             if name in status.options:
                 pub(t.option_state(name), pl.switch(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
-        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation))
+        shows_raw = rot.pointing.shows_raw
+        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         for listener in self._status_listeners:
             listener(rotator_id, status)
 
@@ -175,8 +194,28 @@ class MqttService:
             if kind == "stop":
                 rot.submit(Stop(Source.MQTT), what)
             elif kind == "target":
-                az, el = pl.parse_target(payload)
-                rot.submit(Target(az, el, Source.MQTT), what)
+                aim = pl.parse_aim(payload)
+                if isinstance(aim, pl.Place):
+                    lat, lon = aim.latitude_deg, aim.longitude_deg
+                    if lat is None or lon is None:
+                        rot.take_path(aim.long_path, Source.MQTT, what)
+                        return
+                    rot.go_toward(
+                        lat,
+                        lon,
+                        Source.MQTT,
+                        what,
+                        locator=aim.locator,
+                        long_path=aim.long_path,
+                    )
+                else:
+                    rot.submit(Target(aim[0], aim[1], Source.MQTT), what)
+            elif kind == "preset":
+                rot.go_to_preset(pl.parse_name(payload, "preset"), Source.MQTT, what)
+            elif kind == "park":
+                rot.park(Source.MQTT, what)
+            elif kind == "nudge":
+                rot.nudge(*pl.parse_nudge(payload), Source.MQTT, what)
             elif kind == "target_elevation":
                 rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
             elif kind == "lock":

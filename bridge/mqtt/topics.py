@@ -30,6 +30,18 @@ class RotatorTopics:
     def lock(self) -> str:
         return f"{self.root}/lock"
 
+    @property
+    def preset(self) -> str:
+        return f"{self.root}/preset"
+
+    @property
+    def park(self) -> str:
+        return f"{self.root}/park"
+
+    @property
+    def nudge(self) -> str:
+        return f"{self.root}/nudge"
+
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -65,6 +77,10 @@ class RotatorTopics:
     @property
     def error(self) -> str:
         return f"{self.root}/error"
+
+    @property
+    def presets(self) -> str:
+        return f"{self.root}/presets"
 
     @property
     def lock_state(self) -> str:
@@ -117,6 +133,7 @@ class Topics:
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
+            subs += [t.preset, t.park, t.nudge]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -130,6 +147,9 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
+            for kind in ("preset", "park", "nudge"):
+                if topic == getattr(t, kind):
+                    return rid, kind, None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]

@@ -110,7 +110,7 @@ class HamlibRotType(enum.StrEnum):
 
 # Idle polling takes at most this share of the line (half duplex: of its time), but is never
 # more frequent than MIN_IDLE_POLL_S: a still rotor's bearing need not be fresher than that.
-IDLE_LINE_SHARE = 0.05
+IDLE_LINE_SHARE = 0.045  # at most 5 % of the line, with room for how it is measured
 MIN_IDLE_POLL_S = 1.0
 
 

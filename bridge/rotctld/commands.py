@@ -24,7 +24,7 @@ RIG_EINVAL = 1  # invalid parameter: out of range, not a number
 RIG_ETIMEOUT = 5  # the controller does not answer (port open, no valid reply)
 RIG_EIO = 6  # the serial link is down (port closed or gone)
 RIG_EINTERNAL = 7
-RIG_ERJCTED = 9  # command rejected: the bridge's safety lock is ON
+RIG_ERJCTED = 9  # command rejected: the safety lock is ON, or a keep-out sector
 RIG_ENAVAIL = 11  # the model cannot do this
 
 # how dump_caps spells a rot_type (Hamlib's dumpcaps_rot.c)
@@ -42,16 +42,8 @@ _INTEGER = re.compile(r"[+-]?\d+")
 class RotctldCommands:
     """Executes requests against one rotator and renders rotctld's reply bytes."""
 
-    def __init__(
-        self,
-        rotator: Rotator,
-        *,
-        park_az_deg: float | None = None,
-        park_el_deg: float | None = None,
-    ) -> None:
+    def __init__(self, rotator: Rotator) -> None:
         self.rotator = rotator
-        self.park_az_deg = park_az_deg
-        self.park_el_deg = park_el_deg
         # Hamlib's facts about the model are on its spec (protocols/)
         spec = rotator.spec
         self.hamlib_model = spec.hamlib_model
@@ -89,10 +81,10 @@ class RotctldCommands:
         return self._submit_target(az, el_deg, req)
 
     def _park(self, req: Request) -> tuple[int, str]:
-        if self.park_az_deg is None:
+        park = self.rotator.pointing.park  # the same park as MQTT's and Home Assistant's
+        if park is None:
             return -RIG_ENAVAIL, ""
-        el = self.park_el_deg if self.rotator.spec.has_elevation else None
-        return self._submit_target(self.park_az_deg, el, req)
+        return self._submit_target(park[0], park[1], req, park=True)
 
     def _stop(self, req: Request) -> tuple[int, str]:
         self.rotator.submit(Stop(Source.ROTCTLD), _describe(req))
@@ -118,15 +110,17 @@ class RotctldCommands:
         return RIG_OK, _values(req, [("Info", self.info)])
 
     def _dump_state(self, req: Request) -> tuple[int, str]:
-        lim = self.rotator.limits
+        lim, aim = self.rotator.limits, self.rotator.pointing
+        az_min, az_max = aim.target_range()  # the range of targets in true bearings
+        south = int(aim.offset_deg % 360 == 180)  # Hamlib's one field for an offset
         lines = [
             ("rotctld Protocol Ver: 1", "1"),
             (f"Rotor Model: {self.hamlib_model}", str(self.hamlib_model)),
-            (f"Minimum Azimuth: {lim.az_min_deg:f}", f"min_az={lim.az_min_deg:f}"),
-            (f"Maximum Azimuth: {lim.az_max_deg:f}", f"max_az={lim.az_max_deg:f}"),
+            (f"Minimum Azimuth: {az_min:f}", f"min_az={az_min:f}"),
+            (f"Maximum Azimuth: {az_max:f}", f"max_az={az_max:f}"),
             (f"Minimum Elevation: {lim.el_min_deg:f}", f"min_el={lim.el_min_deg:f}"),
             (f"Maximum Elevation: {lim.el_max_deg:f}", f"max_el={lim.el_max_deg:f}"),
-            ("South Zero: 0", "south_zero=0"),
+            (f"South Zero: {south}", f"south_zero={south}"),
             (f"rot_type={self.rot_type}", f"rot_type={self.rot_type}"),
             ("done", "done"),
         ]
@@ -156,7 +150,7 @@ class RotctldCommands:
             "Can set Position:\tY\n"
             f"Can get Position:\t{yn(spec.can_report_position)}\n"
             "Can Stop:\t\tY\n"
-            f"Can Park:\t\t{yn(self.park_az_deg is not None)}\n"
+            f"Can Park:\t\t{yn(self.rotator.pointing.park is not None)}\n"
             "Can Reset:\t\tN\n"
             "Can Move:\t\tN\n"
             f"Can get Info:\t\t{yn(spec.hamlib_info is not None)}\n"
@@ -164,9 +158,12 @@ class RotctldCommands:
             "\nOverall backend warnings: 0\n"
         )
 
-    def _submit_target(self, az: float, el: float | None, req: Request) -> tuple[int, str]:
+    def _submit_target(
+        self, az: float, el: float | None, req: Request, *, park: bool = False
+    ) -> tuple[int, str]:
+        """``az`` is a true bearing (Gpredict and loggers think in true bearings): pointing.py."""
         try:
-            self.rotator.submit(Target(az, el, Source.ROTCTLD), _describe(req))
+            self.rotator.submit(Target(az, el, Source.ROTCTLD, park=park), _describe(req))
         except Refused as exc:
             return _refusal_code(exc, self.rotator.status.connected), ""
         return RIG_OK, ""

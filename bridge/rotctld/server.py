@@ -34,11 +34,9 @@ class RotctldServer:
         port: int,
         bind: str = "127.0.0.1",
         *,
-        park_az_deg: float | None = None,
-        park_el_deg: float | None = None,
         max_clients: int = 16,
     ) -> None:
-        self.commands = RotctldCommands(rotator, park_az_deg=park_az_deg, park_el_deg=park_el_deg)
+        self.commands = RotctldCommands(rotator)
         self.rotator_id = rotator.id
         self._bind = bind
         self._requested_port = port

@@ -20,7 +20,7 @@ from bridge.app import worker_config
 from bridge.emulators.pty import EmulatedPort
 from bridge.engine.lines import Lines
 from bridge.engine.port import open_port
-from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, Stop, Target
@@ -45,7 +45,6 @@ def rotator(rid: str, port: str, lines: Lines, opener: Opener, events: list) -> 
     )
     return Rotator(
         worker_config(settings),
-        Limits(0, 360),
         StateStore(None),
         lambda s: None,
         events.append,

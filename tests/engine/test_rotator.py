@@ -6,19 +6,17 @@ from __future__ import annotations
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, SetOption, Stop, Target
 from bridge.settings import RotatorSettings
 
-WHOLE_CIRCLE = Limits(0, 360)
 
-
-def rotator(model: str = "rotorez", limits: Limits = WHOLE_CIRCLE) -> tuple[Rotator, list]:
+def rotator(model: str = "rotorez", **settings: object) -> tuple[Rotator, list]:
     events: list[ErrorEvent] = []
-    cfg = worker_config(RotatorSettings(id="t", model=model, port="/dev/null"))
-    return Rotator(cfg, limits, StateStore(None), lambda s: None, events.append), events
+    cfg = worker_config(RotatorSettings(id="t", model=model, port="/dev/null", **settings))
+    return Rotator(cfg, StateStore(None), lambda s: None, events.append), events
 
 
 def code(rot: Rotator, command) -> str:  # noqa: ANN001
@@ -28,7 +26,7 @@ def code(rot: Rotator, command) -> str:  # noqa: ANN001
 
 
 def test_limits_are_judged_on_what_the_controller_will_get() -> None:
-    rot, events = rotator(limits=Limits(0, 350.6))
+    rot, events = rotator(az_max_deg=350.6)
     assert code(rot, Target(350.6)) == "limits"  # a Rotor-EZ would be sent 351
     assert "becomes 351" in events[-1].message
     assert code(rot, Target(350.4)) == "offline"  # within limits; refused only for the link
@@ -49,6 +47,6 @@ def test_capabilities() -> None:
     assert code(rot, SetOption("jam", True)) == "unsupported"
     assert code(rot, Target(10, 20)) == "unsupported"  # no elevation axis
     assert code(rot, Target(None, None)) == "invalid"
-    spid, _ = rotator("rot2prog", Limits(-180, 540, 0, 90))
+    spid, _ = rotator("rot2prog", el_max_deg=90)
     assert code(spid, Target(10, 91)) == "limits"
     assert code(spid, Target(10.3, 89.9)) == "offline"  # SPID rounds down: no rounding past

@@ -20,7 +20,7 @@ from bridge import emulators
 from bridge.app import worker_config
 from bridge.emulators.pty import EmulatedPort
 from bridge.engine.port import open_port
-from bridge.engine.rotator import Limits, Rotator
+from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.model import ErrorEvent, RotatorStatus, Stop, Target
 from bridge.protocols.base import ModelSpec
@@ -55,9 +55,7 @@ def make_rotator(
         {"id": "t", "model": "rotorez", "port": emu.link, **FAST_BRIDGE}
     )
     cfg = worker_config(settings)
-    return Rotator(
-        cfg, Limits(0, 360), StateStore(None), on_status, events.append, port_opener=opens
-    )
+    return Rotator(cfg, StateStore(None), on_status, events.append, port_opener=opens)
 
 
 def test_a_listener_that_raises_on_every_status_never_touches_the_serial_line(

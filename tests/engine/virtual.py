@@ -155,6 +155,10 @@ class VirtualRotator:
             self.mailbox.put(c)
         self._take()
 
+    def aim(self, target: Target) -> None:
+        """``target`` in true bearings, judged and converted as the Rotator does (pointing.py)."""
+        self.command(self.cfg.aim.judge(target, self.session.status.raw_bearing_deg))
+
     def target(self, az_deg: float | None, el_deg: float | None = None) -> None:
         self.command(Target(az_deg, el_deg))
 

@@ -178,7 +178,10 @@ def bogus_bearings(
     estimates) and the bearing/elevation of every ``R/status`` that is not marked estimated.
     """
     az, el = reported_positions(model, tap_of(emu).sent())
-    wraps = model in ("rotorez", "rotorcard", "dcu1", "satel")
+    # R/bearing is a true bearing (0..360, pointing.py); the controller's own value, which on a
+    # SPID may be past 360 or below 0, is the status's raw_bearing
+    wraps = True
+    raw_wraps = model in ("rotorez", "rotorcard", "dcu1", "satel")
     bad: list[str] = []
     for m in messages:
         if m.topic == f"{root}/status":
@@ -187,6 +190,9 @@ def bogus_bearings(
                 continue
             if doc.get("bearing") is not None and not _in(float(doc["bearing"]), az, wraps):
                 bad.append(f"status bearing {doc['bearing']}")
+            raw = doc.get("raw_bearing")
+            if raw is not None and not _in(float(raw), az, raw_wraps):
+                bad.append(f"status raw_bearing {raw}")
             if doc.get("elevation") is not None and not _in(float(doc["elevation"]), el, False):
                 bad.append(f"status elevation {doc['elevation']}")
         elif m.topic == f"{root}/bearing" and model != "satel":
@@ -301,7 +307,10 @@ def assert_bridge_matches_truth(rig: Rig, rid: str) -> None:
     model = rig.models[rid]
     assert not truth.is_moving
     assert status.bearing_deg is not None
-    assert near_deg(status.bearing_deg, truth.az_deg, 2.5, model not in SPID), (status, truth)
+    assert near_deg(status.bearing_deg, truth.az_deg, 2.5), (status, truth)  # a true bearing
+    if model in SPID:  # the controller's own value says which side of the overlap
+        assert status.raw_bearing_deg is not None
+        assert near_deg(status.raw_bearing_deg, truth.az_deg, 2.5, False), (status, truth)
 
 
 # -- line noise and replies cut short ----------------------------------------------------------

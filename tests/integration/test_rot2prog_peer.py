@@ -3,6 +3,7 @@ socat pty pair, exactly as the SPID fact sheet runs Hamlib against it (spid.md s
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import time
@@ -63,14 +64,24 @@ def test_a_target_on_mqtt_becomes_the_simulators_position(rig: Rig, rot2prog_sim
     rig.probe.wait_value("rotor/bearing", "123.5", timeout_s=15, after=t)
     rig.probe.wait_value("rotor/elevation", "45", timeout_s=15, after=t)
     rig.probe.wait_value("rotor/state", "idle", timeout_s=15, after=t)
-    # negative angles snap down to the 0.5 degree grid, as Hamlib does
+    # negative angles (the ccw side, named by a target outside 0..360) snap down to the 0.5
+    # degree grid, as Hamlib does; R/bearing is the true bearing, the status has the raw one
     t = time.monotonic()
     rig.probe.publish("rotor/target", "-10.3 -5")
-    rig.probe.wait_value("rotor/bearing", "-10.5", timeout_s=15, after=t)
+    rig.probe.wait_value("rotor/bearing", "349.5", timeout_s=15, after=t)
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: (
+            (json.loads(m.payload)["raw_bearing"], json.loads(m.payload)["overlap"])
+            == (-10.5, "ccw")
+        ),
+        timeout_s=5,
+        after=t,
+    )
     # elevation alone leaves the azimuth where it is
     t = time.monotonic()
     rig.probe.publish("rotor/target/elevation", "30")
     rig.probe.wait_value("rotor/elevation", "30", timeout_s=15, after=t)
-    assert rig.probe.last("rotor/bearing").text == "-10.5"
+    assert rig.probe.last("rotor/bearing").text == "349.5"
     text = sim_log.read_text()
     assert "Incomplete" not in text and "Invalid" not in text, text[-2000:]

@@ -58,7 +58,7 @@ def test_retarget_while_moving_goes_straight_to_the_new_target(rig: Rig) -> None
     emu = rig.add("sat", model="rot2prog", emu={"start_az_deg": 0, "az_speed_deg_s": 20})
     rig.start()
     ready(rig)
-    rig.probe.publish("rotor/target", "300 0")
+    rig.probe.publish("rotor/target", "150 0")  # clockwise: -210 would be past the -180 stop
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 20, 10)
     rig.probe.publish("rotor/target", "100 10")
     emu.wait_for(
@@ -74,7 +74,7 @@ def test_stop_and_limits(rig: Rig) -> None:
     )
     rig.start()
     ready(rig)
-    rig.probe.publish("rotor/target", "300 0")
+    rig.probe.publish("rotor/target", "150 0")
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 10, 10)
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)

@@ -107,6 +107,7 @@ def test_status_json_has_every_field() -> None:
     assert doc == {
         "bearing": 100.0,
         "target": 120.0,
+        "parked": False,
         "state": "moving",
         "moving": True,
         "connected": True,

@@ -16,6 +16,7 @@ from bridge.errors import Refused
 from bridge.model import ErrorEvent, MotionState, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
+from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 
 NOW_UNIX = 1_700_000_000.0
@@ -61,6 +62,7 @@ class RecordingRotator:
     def __init__(self, rotator_id: str, model: str, refuse: Refused | None = None) -> None:
         self.id = rotator_id
         self.spec = REGISTRY[model]
+        self.pointing = Pointing.of(self.spec, presets={"EU": (45.0, None)})
         self.calls: list[tuple[object, ...]] = []
         self._refuse = refuse
 
@@ -79,6 +81,31 @@ class RecordingRotator:
     def report_refusal(self, message: str, command: str | None) -> None:
         self.calls.append(("refused", message, command))
 
+    def go_to_preset(self, name: str, source: Source, described: str) -> None:
+        self.calls.append(("preset", name, source, described))
+
+    def park(self, source: Source, described: str) -> None:
+        self.calls.append(("park", source, described))
+
+    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+        self.calls.append(("path", long_path, source, described))
+
+    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+        self.calls.append(("nudge", d_az, d_el, source, described))
+
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None:
+        place = (round(latitude_deg, 4), round(longitude_deg, 4), locator, long_path)
+        self.calls.append(("toward", *place, source, described))
+
 
 def service(
     models: dict[str, str], **rotator_kw: object
@@ -89,7 +116,16 @@ def service(
     rots = {rid: RecordingRotator(rid, m, **rotator_kw) for rid, m in models.items()}  # type: ignore[arg-type]
     for rot in rots.values():
         svc.attach(rot)
+    pub.take()  # each rotator's presets (test_attaching_publishes_the_presets...)
+    pub.retained.clear()
     return svc, pub, rots
+
+
+def test_attaching_publishes_the_presets_retained_for_dashboards() -> None:
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, wall=lambda: NOW_UNIX)
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    assert pub.take() == [("rotor/presets", '{"EU":45.0}', True)]
 
 
 # -- outbound ------------------------------------------------------------------------------------
@@ -110,7 +146,7 @@ def test_an_az_only_status_becomes_its_retained_topics() -> None:
         ),
     )
     status = (
-        '{"bearing":123.0,"target":200.0,"state":"moving","moving":true,"connected":true,'
+        '{"bearing":123.0,"target":200.0,"parked":false,"state":"moving","moving":true,"connected":true,'
         '"available":true,"locked":false,"version":"1.4S","options":{"bogus":true,'
         '"endpoint":false,"jam":true},"last_error":null,"last_command_source":"mqtt",'
         f'"estimated":false,"time":"{NOW_ISO}"}}'
@@ -255,8 +291,30 @@ M = Source.MQTT
             b"0",
             ("submit", SetOption("unstick", False, M), "option unstick '0'"),
         ),
+        ("rotor/b/preset", b" EU ", ("preset", "EU", M, "preset ' EU '")),
+        ("rotor/b/park", b"", ("park", M, "park")),  # any payload
+        ("rotor/b/park", b"PRESS", ("park", M, "park 'PRESS'")),
+        ("rotor/b/nudge", b"+10", ("nudge", 10.0, None, M, "nudge '+10'")),
+        ("rotor/b/nudge", b"-2.5", ("nudge", -2.5, None, M, "nudge '-2.5'")),
+        (
+            "rotor/b/nudge",
+            b'{"elevation": -2}',
+            ("nudge", 0.0, -2.0, M, "nudge '{\"elevation\": -2}'"),
+        ),
+        # JO62qm's centre: 52.5208 N 13.375 E; PM95vq: 35.6875 N 139.7917 E
+        ("rotor/b/target", b"PM95vq", ("toward", 35.6875, 139.7917, "PM95vq", False, M,
+                                       "target 'PM95vq'")),
+        ("rotor/b/target", b"pm95VQ", ("toward", 35.6875, 139.7917, "PM95vq", False, M,
+                                       "target 'pm95VQ'")),
+        ("rotor/b/target", b'{"locator": "PM95vq", "path": "long"}',
+         ("toward", 35.6875, 139.7917, "PM95vq", True, M,
+          "target '{\"locator\": \"PM95vq\", \"path\": \"long\"}'")),
+        ("rotor/b/target", b'{"path": "long"}', ("path", True, M, "target '{\"path\": \"long\"}'")),
+        ("rotor/b/target", b'{"latitude": 35.7, "longitude": 139.7}',
+         ("toward", 35.7, 139.7, None, False, M,
+          "target '{\"latitude\": 35.7, \"longitude\": 139.7}'")),
     ],
-)
+)  # fmt: skip
 def test_each_command_topic_reaches_its_rotator(
     topic: str, payload: bytes, call: tuple[object, ...]
 ) -> None:
@@ -282,6 +340,19 @@ def test_each_command_topic_reaches_its_rotator(
          "target_elevation 'up'"),
         ("rotor/lock", b"maybe", "expected ON or OFF, got 'maybe'", "lock 'maybe'"),
         ("rotor/option/jam", b"2", "expected ON or OFF, got '2'", "option jam '2'"),
+        ("rotor/target", b"JZ62", "locator 'JZ62': second character must be a letter A..R, got 'Z'",
+         "target 'JZ62'"),
+        ("rotor/target", b'{"locator": "PM95", "path": "longest"}',
+         '"path" must be "short" or "long", got "longest"',
+         "target '{\"locator\": \"PM95\", \"path\": \"longest\"}'"),
+        ("rotor/target", b'{"latitude": 95, "longitude": 0}',
+         "latitude must be -90..90 and longitude -180..180",
+         "target '{\"latitude\": 95, \"longitude\": 0}'"),
+        ("rotor/target", b'{"locator": "PM95", "latitude": 1}',
+         'give "locator" or "latitude"/"longitude", not both',
+         "target '{\"locator\": \"PM95\", \"latitude\": 1}'"),
+        ("rotor/nudge", b"left", "nudge must be a number, got 'left'", "nudge 'left'"),
+        ("rotor/preset", b"", "empty payload", "preset"),
     ],
 )  # fmt: skip
 def test_a_bad_payload_is_refused_and_nothing_moves(
@@ -354,6 +425,9 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/stop",
         "rotor/lock",
         "rotor/option/+",
+        "rotor/preset",
+        "rotor/park",
+        "rotor/nudge",
         "ha/status",
         "x/#",
     ]

@@ -16,6 +16,9 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/stop",
         "rotor/lock",
         "rotor/option/+",
+        "rotor/preset",
+        "rotor/park",
+        "rotor/nudge",
     ]
 
 
@@ -28,6 +31,12 @@ def test_routing_inbound_topics() -> None:
     assert t.route("rotor/b/option/jam/state") is None
     assert t.route("rotor/b/lock/state") is None
     assert t.route("rotor/c/target") is None
+    assert [t.route(f"rotor/a/{k}") for k in ("preset", "park", "nudge", "presets")] == [
+        ("a", "preset", None),
+        ("a", "park", None),
+        ("a", "nudge", None),
+        None,  # outbound
+    ]
     assert t.route("rotor/a/bearing") is None
 
 

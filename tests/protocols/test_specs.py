@@ -49,7 +49,7 @@ def test_idle_polling_with_the_defaults_takes_at_most_5_percent_of_the_line(mode
         interval_s = spec.default_idle_poll_interval_s(baud)
         line_s = (spec.query_bytes + spec.reply_bytes) * 10 / baud  # 8N1: 10 bits a byte
         assert spec.exchange_time_s(baud) == pytest.approx(line_s)
-        assert line_s / interval_s <= 0.05, (baud, interval_s)
+        assert line_s / interval_s <= 0.045, (baud, interval_s)  # 5 % with room to measure
         assert interval_s >= 1.0  # a still rotor is never polled more often than once a second
 
 
@@ -61,10 +61,10 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "rotorez": 1.0,
         "rotorcard": 1.0,
         "dcu1": 1.0,
-        "rot2prog": 8.4,
-        "rot1prog": 3.0,
+        "rot2prog": 9.3,
+        "rot1prog": 3.4,
         "md01": 1.0,
-        "satel": 3.5,
+        "satel": 3.9,
     }
 
 

@@ -1,0 +1,270 @@
+"""Where the antenna points, in the user's terms: every way of naming a target becomes a true
+bearing, is judged once and converted once to the controller's raw value; readings come back
+through the same transform. Pure: no clock, no I/O.
+
+Rules:
+1. A target's azimuth is a true bearing, 0..360 clockwise from true north. The controller's
+   raw value is the bearing minus ``offset_deg`` (a south-centred scale, a rotor mounted off
+   north); a reading's true bearing is raw + offset, mod 360. Elevation has no offset.
+2. On a rotor that can pass 360 (SPID, mechanically -180..540) every raw value r + k*360
+   inside the limits points the same way: the one nearest the rotor's current raw position is
+   taken (least travel; a move inside the mechanical range never crosses a stop), and without
+   a reading the one nearest the middle of the range. A target outside 0..360 on such a rotor
+   names the side itself: 400 is "40, past north clockwise" (raw = value - offset). A
+   controller whose scale wraps picks its own way round: it gets the value in 0..360 (0, not
+   360, where both are legal).
+3. Keep-out sectors are true bearings, clockwise from the first edge to the second, edges
+   included. A target in one is refused however it was named (number, preset, locator,
+   rotctld). The rotor may sweep through a sector on its way; it never stops there.
+4. Limits are mechanical: checked on the raw value, after rounding on controllers that take
+   whole degrees (never rounded past a limit).
+5. A refusal raises Refused with a message naming the true and the raw value when they differ.
+6. The other ways of naming a target become a true bearing here, before the judge: a preset,
+   the park position, a place (locator or coordinates: the great-circle bearing from the
+   station, short path unless the long one is asked for; geo.py) and a nudge (relative to the
+   target while one is being approached, else to the bearing).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from bridge import geo
+from bridge.errors import RefusalCode, Refused
+from bridge.model import RotatorStatus, Target, TargetInfo
+from bridge.protocols.base import ModelSpec
+
+
+def norm360(deg: float) -> float:
+    """``deg`` folded into [0, 360) (never 360, never -0.0)."""
+    out = deg % 360.0
+    return 0.0 if out >= 360.0 or out == 0.0 else out
+
+
+def in_sector(bearing_deg: float, sector: tuple[float, float]) -> bool:
+    """``bearing_deg`` lies in the sector clockwise from its first edge to its second (rule 3)."""
+    start, end = norm360(sector[0]), norm360(sector[1])
+    b = norm360(bearing_deg)
+    if start <= end:
+        return start <= b <= end
+    return b >= start or b <= end
+
+
+@dataclass(frozen=True)
+class Pointing:
+    """One rotator's transform and judge (app.py builds it from the settings)."""
+
+    model_name: str = "rotator"
+    az_min_deg: float = 0.0  # mechanical (raw) limits
+    az_max_deg: float = 360.0
+    el_min_deg: float = 0.0
+    el_max_deg: float = 0.0
+    has_elevation: bool = False
+    az_wraps: bool = True  # the controller's 0 and 360 are the same direction
+    whole_degrees: bool = False
+    offset_deg: float = 0.0
+    keep_out: tuple[tuple[float, float], ...] = ()
+    presets: dict[str, tuple[float, float | None]] = field(default_factory=dict)
+    park: tuple[float, float | None] | None = None  # true bearing (and elevation)
+
+    @classmethod
+    def of(
+        cls,
+        spec: ModelSpec,
+        az_limits: tuple[float, float] | None = None,
+        el_limits: tuple[float, float] | None = None,
+        *,
+        offset_deg: float = 0.0,
+        keep_out: tuple[tuple[float, float], ...] = (),
+        presets: dict[str, tuple[float, float | None]] | None = None,
+        park: tuple[float, float | None] | None = None,
+    ) -> Pointing:
+        """The model's facts and limits (its whole range unless given), and the user's terms."""
+        az_lo, az_hi = az_limits or (spec.az_min_deg, spec.az_max_deg)
+        el_lo, el_hi = el_limits or (spec.el_min_deg, spec.el_max_deg)
+        return cls(
+            model_name=spec.display_name,
+            az_min_deg=az_lo,
+            az_max_deg=az_hi,
+            el_min_deg=el_lo,
+            el_max_deg=el_hi,
+            has_elevation=spec.has_elevation,
+            az_wraps=spec.az_wraps,
+            whole_degrees=spec.whole_degrees,
+            offset_deg=offset_deg,
+            keep_out=keep_out,
+            presets=dict(presets or {}),
+            park=park,
+        )
+
+    # -- readings (rule 1) ---------------------------------------------------------------------
+    @property
+    def shows_raw(self) -> bool:
+        """Whether the raw value tells the user more than the bearing does."""
+        return self.offset_deg != 0.0 or not self.az_wraps
+
+    def true_of(self, raw_deg: float) -> float:
+        return norm360(raw_deg + self.offset_deg)
+
+    def overlap(self, raw_deg: float | None) -> str | None:
+        """Which way past the scale a rotor that can pass 360 is: "cw" above 360, "ccw" below 0."""
+        if raw_deg is None or self.az_wraps:
+            return None
+        if raw_deg > 360.0:
+            return "cw"
+        if raw_deg < 0.0:
+            return "ccw"
+        return None
+
+    # -- targets (rules 2-5) -------------------------------------------------------------------
+    def target_range(self) -> tuple[float, float]:
+        """The azimuth targets a user may name, in true bearings (rules 1, 2): the limits as
+        they are without an offset; with one, 0..360 on a scale that wraps, else the limits
+        shifted by the offset (a SPID's overlap names the side itself)."""
+        lo, hi = self.az_min_deg, self.az_max_deg
+        if not self.offset_deg:
+            return lo, hi
+        if self.az_wraps:
+            return 0.0, 360.0
+        return lo + self.offset_deg, hi + self.offset_deg
+
+    def keep_out_of(self, bearing_deg: float) -> tuple[float, float] | None:
+        return next((s for s in self.keep_out if in_sector(bearing_deg, s)), None)
+
+    def raw_for(self, az_deg: float, current_raw_deg: float | None) -> float:
+        """The raw azimuth for a target of ``az_deg`` (rules 1, 2, 4); Refused if none is legal."""
+        lo, hi = self.az_min_deg, self.az_max_deg
+        if not math.isfinite(az_deg):
+            raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
+        if not 0.0 <= az_deg <= 360.0:
+            if self.az_wraps:
+                raise Refused(RefusalCode.LIMITS, f"azimuth {az_deg:g} outside 0..360")
+            return self._checked(az_deg, az_deg - self.offset_deg)
+        base = norm360(az_deg - self.offset_deg)
+        legal = [
+            base + k * 360.0
+            for k in range(math.floor((lo - base) / 360.0), math.ceil((hi - base) / 360.0) + 1)
+            if lo <= self._rounded(base + k * 360.0) <= hi
+        ]
+        if not legal:
+            return self._checked(az_deg, base)  # raises, naming the raw value
+        if self.az_wraps:  # the controller picks its own way round: 0 rather than 360
+            return base if base in legal else legal[-1]
+        anchor = (lo + hi) / 2 if current_raw_deg is None else current_raw_deg
+        return min(legal, key=lambda r: (abs(r - anchor), r))
+
+    def judge(self, target: Target, current_raw_deg: float | None) -> Target:
+        """``target`` (true bearings) checked and converted to the controller's raw values."""
+        if target.az_deg is None and target.el_deg is None:
+            raise Refused(RefusalCode.INVALID, "target without azimuth or elevation")
+        raw_az: float | None = None
+        if target.az_deg is not None:
+            sector = self.keep_out_of(target.az_deg) if math.isfinite(target.az_deg) else None
+            if sector is not None:
+                raise Refused(
+                    RefusalCode.KEEP_OUT,
+                    f"azimuth {target.az_deg:g} is in the keep-out sector "
+                    f"{sector[0]:g}..{sector[1]:g}: refused",
+                )
+            raw_az = self.raw_for(target.az_deg, current_raw_deg)
+        if target.el_deg is not None:
+            if not self.has_elevation:
+                raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
+            el, lo, hi = target.el_deg, self.el_min_deg, self.el_max_deg
+            if not math.isfinite(el) or not lo <= el <= hi:
+                raise Refused(
+                    RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
+                )
+            if not lo <= self._rounded(el) <= hi:
+                raise Refused(RefusalCode.LIMITS, self._rounding(f"elevation {el:g}", el, lo, hi))
+        return replace(target, az_deg=raw_az)
+
+    # -- naming a target (rule 6) ------------------------------------------------------------
+    def preset(self, name: str) -> tuple[float, float | None]:
+        if name not in self.presets:
+            have = ", ".join(self.presets) or "none configured"
+            raise Refused(RefusalCode.INVALID, f"no preset {name!r} (presets: {have})")
+        return self.presets[name]
+
+    def parking(self) -> tuple[float, float | None]:
+        if self.park is None:
+            raise Refused(RefusalCode.UNSUPPORTED, "no park position configured (park_az_deg)")
+        return self.park
+
+    def nudged(
+        self, status: RotatorStatus, d_az: float, d_el: float | None
+    ) -> tuple[float | None, float | None]:
+        moving = status.moving and status.target_az_deg is not None
+        az = status.target_az_deg if moving else status.bearing_deg
+        if az is None:
+            raise Refused(RefusalCode.OFFLINE, "no bearing to nudge from yet")
+        new_az: float | None = None
+        raw = status.raw_bearing_deg
+        if d_az and not self.az_wraps and raw is not None:
+            # past 360 a nudge stays on its side: named by a value outside 0..360 (rule 2), so
+            # +10 at raw 535 is refused at the 540 stop rather than taken the other way round
+            if moving and status.bearing_deg is not None:
+                raw += (az - status.bearing_deg + 180.0) % 360.0 - 180.0
+            new_az = raw + self.offset_deg + d_az
+            if 0.0 <= new_az <= 360.0:  # on the scale: the least travel is this side anyway
+                new_az = norm360(new_az)
+        elif d_az:
+            new_az = norm360(az + d_az)
+        el: float | None = None
+        if d_el is not None and d_el != 0.0:
+            base = status.target_el_deg if moving else status.elevation_deg
+            if base is None:
+                raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
+            el = base + d_el
+        return new_az, el
+
+    def _checked(self, az_deg: float, raw_deg: float) -> float:
+        lo, hi = self.az_min_deg, self.az_max_deg
+        shown = f"azimuth {az_deg:g}"
+        if raw_deg != az_deg:
+            shown += f" (controller {raw_deg:g})"
+        if not lo <= raw_deg <= hi:
+            raise Refused(RefusalCode.LIMITS, f"{shown} outside the limits {lo:g}..{hi:g}")
+        if not lo <= self._rounded(raw_deg) <= hi:
+            raise Refused(RefusalCode.LIMITS, self._rounding(shown, raw_deg, lo, hi))
+        return raw_deg
+
+    def _rounded(self, value: float) -> float:
+        return float(math.floor(value + 0.5)) if self.whole_degrees else value
+
+    def _rounding(self, shown: str, value: float, lo: float, hi: float) -> str:
+        return (
+            f"{shown} becomes {self._rounded(value):g} on the {self.model_name} "
+            f"(whole degrees), outside the limits {lo:g}..{hi:g}"
+        )
+
+
+def toward(
+    station: tuple[float, float] | None,
+    latitude_deg: float,
+    longitude_deg: float,
+    *,
+    long_path: bool = False,
+    locator: str | None = None,
+) -> tuple[float, TargetInfo]:
+    """The true bearing from ``station`` to a place, and what the status says about it."""
+    if station is None:
+        raise Refused(
+            RefusalCode.UNSUPPORTED,
+            "a target by locator or coordinates needs the station's position ([station] locator)",
+        )
+    try:
+        path = geo.great_circle(station[0], station[1], latitude_deg, longitude_deg)
+    except ValueError as exc:
+        raise Refused(RefusalCode.INVALID, str(exc)) from None
+    info = TargetInfo(
+        latitude_deg=latitude_deg,
+        longitude_deg=longitude_deg,
+        distance_km=path.long_distance_km if long_path else path.distance_km,
+        short_path_deg=path.short_path_deg,
+        long_path_deg=path.long_path_deg,
+        path="long" if long_path else "short",
+        locator=locator,
+    )
+    return (path.long_path_deg if long_path else path.short_path_deg), info

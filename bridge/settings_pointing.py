@@ -1,0 +1,140 @@
+"""The pointing settings: where the station is, and each rotator's offset, presets, park and
+keep-out sectors (pointing.py). settings.py's models include these; every value is judged here
+once, with the same judge as a live command, so a preset or park position that could never be
+reached is a configuration error naming the field, not a refusal at the worst moment.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from bridge import geo
+from bridge.errors import Refused
+from bridge.model import Target
+from bridge.pointing import Pointing, norm360
+from bridge.protocols.base import ModelSpec
+
+PRESET_NAME_MAX = 32
+Degrees = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class StationSettings(BaseModel):
+    """``[station]``: needed for targets by locator or coordinates."""
+
+    model_config = ConfigDict(extra="forbid")
+    locator: str | None = None
+    latitude_deg: float | None = Field(None, ge=-90, le=90)
+    longitude_deg: float | None = Field(None, ge=-180, le=180)
+
+    @model_validator(mode="after")
+    def _one_way(self) -> StationSettings:
+        coords = (self.latitude_deg, self.longitude_deg)
+        if self.locator is not None:
+            if coords != (None, None):
+                raise ValueError("give locator or latitude_deg/longitude_deg, not both")
+            try:
+                geo.parse_locator(self.locator)
+            except geo.LocatorError as exc:
+                raise ValueError(f"locator: {exc}") from None
+        elif (self.latitude_deg is None) != (self.longitude_deg is None):
+            raise ValueError("latitude_deg and longitude_deg go together")
+        return self
+
+    @property
+    def position(self) -> tuple[float, float] | None:
+        """(latitude, longitude) of the station, or None when not configured."""
+        if self.locator is not None:
+            return geo.parse_locator(self.locator)
+        if self.latitude_deg is None or self.longitude_deg is None:
+            return None
+        return self.latitude_deg, self.longitude_deg
+
+
+class PointingFields(BaseModel):
+    """The pointing part of ``[[rotators]]`` (the rotator's model supplies spec and limits)."""
+
+    model_config = ConfigDict(extra="forbid")
+    # true bearing = controller bearing + offset (a south-centred scale: 180)
+    az_offset_deg: Degrees = Field(0.0, ge=-360, le=360)
+    presets: dict[str, Degrees | list[Degrees]] = Field(default_factory=dict)
+    park_az_deg: Degrees | None = None  # a true bearing: MQTT/HA park, rotctld's K, auto-park
+    park_el_deg: Degrees | None = None
+    park_after_idle_s: float = Field(0.0, ge=0, le=86400)  # 0: never park by itself
+    keep_out: list[tuple[Degrees, Degrees]] = Field(default_factory=list)
+    nudge_step_deg: float = Field(10.0, gt=0, le=180)  # Home Assistant's nudge buttons
+
+    # supplied by the rotator's settings
+    @property
+    def spec(self) -> ModelSpec:
+        raise NotImplementedError
+
+    @property
+    def effective_az_limits(self) -> tuple[float, float]:
+        raise NotImplementedError
+
+    @property
+    def effective_el_limits(self) -> tuple[float, float]:
+        raise NotImplementedError
+
+    @property
+    def pointing(self) -> Pointing:
+        park = None
+        if self.park_az_deg is not None:
+            park = (self.park_az_deg, self.park_el_deg)
+        return Pointing.of(
+            self.spec,
+            self.effective_az_limits,
+            self.effective_el_limits if self.spec.has_elevation else None,
+            offset_deg=self.az_offset_deg,
+            keep_out=tuple(self.keep_out),
+            presets={name: _preset(v) for name, v in self.presets.items()},
+            park=park,
+        )
+
+    def check_pointing(self) -> None:
+        """Every preset and the park position judged as a live target would be (ValueError)."""
+        for i, (start, end) in enumerate(self.keep_out):
+            if not (0 <= start <= 360 and 0 <= end <= 360) or norm360(start) == norm360(end):
+                raise ValueError(
+                    f"keep_out[{i}]: edges are bearings 0..360, clockwise from the first to the "
+                    f"second, and differ (got {start:g}, {end:g})"
+                )
+        for name, value in self.presets.items():
+            if not name.strip() or name != name.strip() or len(name) > PRESET_NAME_MAX:
+                raise ValueError(
+                    f"presets: name {name!r} must be 1..{PRESET_NAME_MAX} characters "
+                    "without leading or trailing spaces"
+                )
+            if isinstance(value, list) and (len(value) != 2 or not self.spec.has_elevation):
+                raise ValueError(
+                    f"presets.{name}: [azimuth, elevation] only on a rotator with elevation; "
+                    "else one number"
+                )
+        pointing = self.pointing
+        if self.park_el_deg is not None and (
+            self.park_az_deg is None or not self.spec.has_elevation
+        ):
+            raise ValueError("park_el_deg needs park_az_deg and an elevation axis")
+        if self.park_after_idle_s > 0 and self.park_az_deg is None:
+            raise ValueError("park_after_idle_s needs park_az_deg (where to park)")
+        if 0 < self.park_after_idle_s < 5:
+            raise ValueError("park_after_idle_s must be 0 (never) or at least 5 s")
+        named = [(f"presets.{n}", az, el) for n, (az, el) in pointing.presets.items()]
+        if pointing.park is not None:
+            named.append(("park_az_deg", *pointing.park))
+        for field, az, el in named:
+            if not math.isfinite(az) or not 0 <= az <= 360 and self.spec.az_wraps:
+                raise ValueError(f"{field}: azimuth {az:g} must be a bearing 0..360")
+            try:
+                pointing.judge(Target(az, el), None)
+            except Refused as exc:
+                raise ValueError(f"{field}: {exc.message}") from None
+
+
+def _preset(value: float | list[float]) -> tuple[float, float | None]:
+    if isinstance(value, list):
+        return value[0], value[1] if len(value) > 1 else None
+    return value, None

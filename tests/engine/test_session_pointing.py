@@ -1,0 +1,147 @@
+"""Pointing in virtual time: offsets, presets, park, keep-out, the SPID overlap and auto-park.
+
+Targets go through the same judge as the Rotator's (``VirtualRotator.aim``: pointing.py), so
+what is asserted is what the controller really received (its log) and what the status shows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.rotorez_models import Outcome
+from bridge.errors import RefusalCode, Refused
+from bridge.model import MotionState, Source, Target
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+QUERY = b"AI1;"
+SOUTH = {"az_offset_deg": 180, "presets": {"JA": 330, "EU": 45}, "park_az_deg": 0}
+
+
+def rotorez(rig: Rig, start_az: float, **settings: object) -> VirtualRotator:
+    v = rig("rotorez", settings=settings, emulator={"start_az_deg": start_az})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def sets(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    return [f.data for f in v.frames(Outcome.EXECUTED, since=since) if f.data != QUERY]
+
+
+def settled(az: float) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return v.state is IDLE and not truth.is_moving and truth.az_deg == pytest.approx(az)
+
+    return there
+
+
+def test_a_south_centred_rotor_shows_and_takes_true_bearings(rig: Rig) -> None:
+    v = rotorez(rig, 10, **SOUTH)
+    assert (v.status.bearing_deg, v.status.raw_bearing_deg) == (190, 10)
+
+    t = v.now
+    v.aim(Target(270))
+    v.run_until(lambda v: v.state is MOVING, 10, "turning")
+    assert v.status.target_az_deg == 270
+    v.run_until(settled(90), 120, "raw 90")
+    assert sets(v, t) == [b"AP1090\r"]
+    # the published bearing follows readings with the hysteresis of status.py rule 1
+    assert v.status.bearing_deg == pytest.approx(270, abs=v.cfg.deadband_deg)
+    assert v.status.raw_bearing_deg == pytest.approx(90, abs=v.cfg.deadband_deg)
+
+
+def test_a_preset_and_the_park_position_are_true_bearings_too(rig: Rig) -> None:
+    v = rotorez(rig, 10, **SOUTH)
+    t = v.now
+    v.aim(Target(*v.cfg.aim.preset("JA")))
+    v.run_until(settled(150), 120, "preset JA at raw 150")
+    assert sets(v, t) == [b"AP1150\r"]
+    assert not v.status.parked
+
+    v.run_for(6)  # past the brake delay
+    t = v.now
+    v.aim(Target(*v.cfg.aim.parking(), park=True))
+    v.run_until(settled(180), 120, "parked at raw 180")
+    assert sets(v, t) == [b"AP1180\r"]
+    assert v.status.parked and v.status.raw_bearing_deg == pytest.approx(180, abs=2)
+    v.manual_rotate(200)  # someone turns it from the front panel: no longer parked
+    v.run_until(lambda v: v.status.state is MOVING, 10, "manual move seen")
+    assert not v.status.parked
+
+
+def test_a_target_in_a_keep_out_sector_is_refused_whatever_names_it(rig: Rig) -> None:
+    v = rotorez(rig, 10, az_offset_deg=180, keep_out=[[200, 220]], presets={"ok": 190})
+    for az in (200, 210, 220, 580 - 360):
+        with pytest.raises(Refused) as refused:
+            v.aim(Target(az))
+        assert refused.value.code is RefusalCode.KEEP_OUT
+    with pytest.raises(Refused):  # a sector across north, clockwise from 350 to 10
+        rotorez(rig, 10, keep_out=[[350, 10]]).aim(Target(0))
+    v.run_for(5)
+    assert sets(v) == []
+
+
+def test_a_spid_takes_the_side_that_needs_the_least_travel_and_says_which_side_it_is_on(
+    rig: Rig,
+) -> None:
+    v = rig("rot2prog", emulator={"start_az_deg": 350})
+    v.run_until_state(IDLE, 30)
+    v.aim(Target(10, 0))  # across north: 20 degrees clockwise to raw 370, not 340 back
+    v.run_until(lambda v: v.state is IDLE and abs(v.truth().az_deg - 370) < 1, 120, "at 370")
+    assert v.status.bearing_deg == pytest.approx(10, abs=1)
+    assert v.status.raw_bearing_deg == pytest.approx(370, abs=1)
+    assert v.status.overlap == "cw"
+
+    v.aim(Target(300, 0))  # from raw 370 the nearest is 300 (70 back), not 660 (out of range)
+    v.run_until(lambda v: v.state is IDLE and abs(v.truth().az_deg - 300) < 1, 120, "at 300")
+    assert v.status.overlap is None
+    v.aim(Target(400, 0))  # outside 0..360: names the side itself
+    v.run_until(lambda v: v.state is IDLE and abs(v.truth().az_deg - 400) < 1, 120, "at 400")
+    assert v.status.bearing_deg == pytest.approx(40, abs=1)
+
+
+def test_auto_park_after_the_quiet_spell_and_never_while_someone_turns_it(rig: Rig) -> None:
+    v = rotorez(rig, 90, park_az_deg=0, park_after_idle_s=30)
+    t = v.now
+    v.aim(Target(120))
+    v.run_until(settled(120), 60, "at 120")
+    arrived = v.now
+    v.run_until(lambda v: v.status.parked, 120, "parked by itself")
+    park = next(f for f in v.frames(since=t) if f.data == b"AP1000\r")
+    assert park.time_s - t >= 30  # 30 s after the last command, not after arrival
+    assert park.time_s - arrived < 30
+    assert v.status.last_command_source == Source.AUTO_PARK.value
+
+    v.manual_rotate(200)  # a hand on the front panel: the spell starts again when it stops
+    v.run_until(lambda v: v.truth().az_deg == pytest.approx(200) and v.state is IDLE, 120, "200")
+    stopped = v.now
+    v.run_until(lambda v: v.status.parked, 120, "parked again")
+    written = next(w.t for w in v.writes if w.data == b"AP1000\r" and w.t > stopped)
+    last_turning = max(t for t, s in v.statuses if s.state is MOVING and t < written)
+    assert written - last_turning >= 30  # the spell counts from the hand's last move
+
+
+def test_a_command_during_the_auto_park_wins(rig: Rig) -> None:
+    v = rotorez(rig, 90, park_az_deg=0, park_after_idle_s=10)
+    v.run_until(lambda v: v.truth().is_moving, 60, "parking")
+    t = v.now
+    v.aim(Target(100))
+    v.run_until(settled(100), 120, "at 100, the park abandoned")
+    after = [f.data for f in v.frames(since=t) if f.data != QUERY]
+    assert after[-2:] == [b";", b"AP1100\r"] and after.count(b"AP1000\r") <= 1
+    assert not v.status.parked
+
+
+def test_no_auto_park_while_locked(rig: Rig) -> None:
+    v = rig(
+        "rotorez",
+        settings={"park_az_deg": 0, "park_after_idle_s": 5},
+        emulator={"start_az_deg": 90},
+        locked=True,
+    )
+    v.run_for(60)
+    assert sets(v) == [] and v.truth().az_deg == pytest.approx(90)

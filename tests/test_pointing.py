@@ -1,0 +1,118 @@
+"""The one transform and judge (bridge/pointing.py): true bearings in, the controller's raw
+values out, and every way of naming a target. Pure: no rotator, no clock."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge import geo
+from bridge.errors import RefusalCode, Refused
+from bridge.model import MotionState, RotatorStatus, Target
+from bridge.pointing import Pointing, in_sector, norm360, toward
+from bridge.protocols import REGISTRY
+
+EZ, SPID = REGISTRY["rotorez"], REGISTRY["rot2prog"]
+
+
+def refused(call, *args) -> RefusalCode:  # noqa: ANN001
+    with pytest.raises(Refused) as exc:
+        call(*args)
+    return exc.value.code
+
+
+def test_the_offset_turns_raw_readings_into_true_bearings_and_back() -> None:
+    south = Pointing.of(EZ, offset_deg=180)
+    assert [south.true_of(r) for r in (10, 180, 359, 360)] == [190, 0, 179, 180]
+    assert south.judge(Target(270), 10).az_deg == 90
+    assert south.judge(Target(0), 10).az_deg == 180
+    assert south.judge(Target(180), 10).az_deg == 0  # 0, not 360: the controller picks its way
+    assert Pointing.of(EZ).judge(Target(359.6), None).az_deg == 359.6  # never -0.4
+    assert south.shows_raw and not Pointing.of(EZ).shows_raw
+    assert Pointing.of(SPID).shows_raw  # it can pass 360: the raw value says which side
+
+
+def test_limits_stay_mechanical_and_refusals_name_both_values() -> None:
+    p = Pointing.of(EZ, (20, 340), offset_deg=180)
+    with pytest.raises(Refused) as exc:
+        p.judge(Target(190), None)  # raw 10
+    assert exc.value.code is RefusalCode.LIMITS
+    assert exc.value.message == "azimuth 190 (controller 10) outside the limits 20..340"
+    assert p.judge(Target(200), None).az_deg == 20
+    assert refused(p.judge, Target(400), None) is RefusalCode.LIMITS  # wrapping: 0..360 only
+    assert refused(p.judge, Target(float("nan")), None) is RefusalCode.LIMITS
+
+
+@pytest.mark.parametrize(
+    ("target", "current", "raw"),
+    [
+        (10, 350, 370),  # across north clockwise: 20 degrees, not 340 back
+        (350, 10, -10),  # from 10 the way back across north is 20 degrees
+        (350, -150, -10),  # on the ccw side already
+        (10, None, 10),  # no reading: the one nearest the middle of -180..540 (180)
+        (200, None, 200),
+        (400, 10, 400),  # outside 0..360 names the side itself
+        (-20, 300, -20),
+    ],
+)
+def test_a_spid_takes_the_least_travel_inside_its_mechanical_range(
+    target: float, current: float | None, raw: float
+) -> None:
+    assert Pointing.of(SPID).raw_for(target, current) == raw
+
+
+def test_a_spid_with_an_offset_and_narrow_limits() -> None:
+    p = Pointing.of(SPID, (-90, 450), offset_deg=90)
+    assert p.raw_for(100, 5) == 10  # true 100 = raw 10
+    assert p.raw_for(80, 5) == -10
+    assert p.raw_for(80, 400) == 350  # 710 would be past the 450 stop
+    assert refused(p.raw_for, 600, 5) is RefusalCode.LIMITS  # raw 510
+
+
+@pytest.mark.parametrize(
+    ("sector", "inside", "outside"),
+    [
+        ((200, 220), [200, 210, 220], [199.9, 220.1, 20]),
+        ((350, 10), [350, 359.9, 0, 360, 10], [349, 11, 180]),  # clockwise across north
+    ],
+)
+def test_keep_out_sectors_run_clockwise_edges_included(
+    sector: tuple[float, float], inside: list[float], outside: list[float]
+) -> None:
+    assert all(in_sector(b, sector) for b in inside)
+    assert not any(in_sector(b, sector) for b in outside)
+    p = Pointing.of(SPID, keep_out=(sector,))
+    for b in inside:
+        assert refused(p.judge, Target(b, 0), None) is RefusalCode.KEEP_OUT
+    assert refused(p.judge, Target(sector[0] + 360, 0), None) is RefusalCode.KEEP_OUT
+
+
+def test_presets_park_and_nudges_become_true_bearings() -> None:
+    p = Pointing.of(SPID, presets={"EU": (45, None), "ISS_AOS": (180, 5)}, park=(0, 0))
+    assert p.preset("ISS_AOS") == (180, 5)
+    assert refused(p.preset, "JA") is RefusalCode.INVALID
+    assert p.parking() == (0, 0)
+    assert refused(Pointing.of(EZ).parking) is RefusalCode.UNSUPPORTED
+
+    still = RotatorStatus("t", MotionState.IDLE, bearing_deg=355, elevation_deg=10)
+    assert p.nudged(still, 10, None) == (5, None)  # across north
+    assert p.nudged(still, -10, 2) == (345, 12)
+    turning = RotatorStatus("t", MotionState.MOVING, bearing_deg=100, target_az_deg=200)
+    assert p.nudged(turning, 10, None) == (210, None)  # from where it is going
+    assert refused(p.nudged, RotatorStatus("t"), 10, None) is RefusalCode.OFFLINE
+    # past 360 a nudge stays on its side (review finding: +10 at 535 went 350 degrees back)
+    overlap = RotatorStatus("t", MotionState.IDLE, bearing_deg=175, raw_bearing_deg=535)
+    assert p.nudged(overlap, -10, None) == (525, None) and p.raw_for(525, 535) == 525
+    assert refused(p.judge, Target(p.nudged(overlap, 10, None)[0], 0), 535) is RefusalCode.LIMITS
+    near = RotatorStatus("t", MotionState.IDLE, bearing_deg=355, raw_bearing_deg=355)
+    assert p.judge(Target(p.nudged(near, 10, None)[0], 0), 355).az_deg == 365
+
+
+def test_a_place_becomes_the_great_circle_bearing_from_the_station() -> None:
+    berlin, tokyo = geo.parse_locator("JO62qm"), geo.parse_locator("PM95vq")
+    az, info = toward(berlin, *tokyo, locator="PM95vq")
+    path = geo.great_circle(*berlin, *tokyo)
+    assert az == path.short_path_deg and info.distance_km == path.distance_km
+    long_az, long_info = toward(berlin, *tokyo, long_path=True)
+    assert long_az == pytest.approx(norm360(az + 180))
+    assert long_info.path == "long" and long_info.distance_km == path.long_distance_km
+    assert refused(toward, None, *tokyo) is RefusalCode.UNSUPPORTED
