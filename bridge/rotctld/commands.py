@@ -66,8 +66,12 @@ class RotctldCommands:
         spec = self.rotator.spec
         if not spec.can_report_position:
             return -RIG_ENAVAIL, ""
-        status = self.rotator.status
+        status, aim = self.rotator.status, self.rotator.pointing
         az = status.bearing_deg
+        if not aim.az_wraps and status.raw_bearing_deg is not None:
+            # past 360 the side counts (a client that sent P 400 reads 400 back, in the range
+            # \dump_state gives): the true bearing unfolded, as P takes it (pointing.py rule 2)
+            az = status.raw_bearing_deg + aim.offset_deg
         el = status.elevation_deg if spec.has_elevation else 0.0
         if not status.available or az is None or el is None:
             return _link_code(status.connected), ""
