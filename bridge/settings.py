@@ -31,6 +31,7 @@ from pydantic import (
 )
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
 
+from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings_files import check_tls_files, read_password_file
@@ -234,12 +235,17 @@ class RotatorSettings(PointingFields):
             raise ValueError(
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
-        self.check_pointing()
+        self.check_pointing(self.pointing)
         return self
 
     @property
     def spec(self) -> ModelSpec:
         return REGISTRY[self.model]
+
+    @property
+    def pointing(self) -> Pointing:
+        """The judge's terms (settings_pointing.py) on this model and limits."""
+        return self.pointing_for(self.spec, self.effective_az_limits, self.effective_el_limits)
 
     @property
     def effective_baud(self) -> int:

@@ -66,36 +66,26 @@ class PointingFields(BaseModel):
     keep_out: list[tuple[Degrees, Degrees]] = Field(default_factory=list)
     nudge_step_deg: float = Field(10.0, gt=0, le=180)  # Home Assistant's nudge buttons
 
-    # supplied by the rotator's settings
-    @property
-    def spec(self) -> ModelSpec:
-        raise NotImplementedError
-
-    @property
-    def effective_az_limits(self) -> tuple[float, float]:
-        raise NotImplementedError
-
-    @property
-    def effective_el_limits(self) -> tuple[float, float]:
-        raise NotImplementedError
-
-    @property
-    def pointing(self) -> Pointing:
+    def pointing_for(
+        self, spec: ModelSpec, az_limits: tuple[float, float], el_limits: tuple[float, float]
+    ) -> Pointing:
+        """These fields as the judge's terms, on ``spec`` with the rotator's effective limits."""
         park = None
         if self.park_az_deg is not None:
             park = (self.park_az_deg, self.park_el_deg)
         return Pointing.of(
-            self.spec,
-            self.effective_az_limits,
-            self.effective_el_limits if self.spec.has_elevation else None,
+            spec,
+            az_limits,
+            el_limits if spec.has_elevation else None,
             offset_deg=self.az_offset_deg,
             keep_out=tuple(self.keep_out),
             presets={name: _preset(v) for name, v in self.presets.items()},
             park=park,
         )
 
-    def check_pointing(self) -> None:
-        """Every preset and the park position judged as a live target would be (ValueError)."""
+    def check_pointing(self, pointing: Pointing) -> None:
+        """Every preset and the park position judged by ``pointing`` (this rotator's, from
+        pointing_for) as a live target would be (ValueError)."""
         for i, (start, end) in enumerate(self.keep_out):
             if not (0 <= start <= 360 and 0 <= end <= 360) or norm360(start) == norm360(end):
                 raise ValueError(
@@ -108,14 +98,13 @@ class PointingFields(BaseModel):
                     f"presets: name {name!r} must be 1..{PRESET_NAME_MAX} characters "
                     "without leading or trailing spaces"
                 )
-            if isinstance(value, list) and (len(value) != 2 or not self.spec.has_elevation):
+            if isinstance(value, list) and (len(value) != 2 or not pointing.has_elevation):
                 raise ValueError(
                     f"presets.{name}: [azimuth, elevation] only on a rotator with elevation; "
                     "else one number"
                 )
-        pointing = self.pointing
         if self.park_el_deg is not None and (
-            self.park_az_deg is None or not self.spec.has_elevation
+            self.park_az_deg is None or not pointing.has_elevation
         ):
             raise ValueError("park_el_deg needs park_az_deg and an elevation axis")
         if self.park_after_idle_s > 0 and self.park_az_deg is None:
@@ -126,7 +115,7 @@ class PointingFields(BaseModel):
         if pointing.park is not None:
             named.append(("park_az_deg", *pointing.park))
         for field, az, el in named:
-            if not math.isfinite(az) or not 0 <= az <= 360 and self.spec.az_wraps:
+            if not math.isfinite(az) or not 0 <= az <= 360 and pointing.az_wraps:
                 raise ValueError(f"{field}: azimuth {az:g} must be a bearing 0..360")
             try:
                 pointing.judge(Target(az, el), None)
