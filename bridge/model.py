@@ -52,6 +52,9 @@ class Target:
     source: Source = Source.MQTT
     info: TargetInfo | None = None  # named by locator or coordinates
     park: bool = False  # the park position: ``parked`` once there
+    # A 0..360 bearing on a rotor that can pass 360 (set by the judge, pointing.py rule 2): the
+    # session picks the side from where the rotor is when it sends, not when the command came.
+    true_az_deg: float | None = None
 
 
 @dataclass(frozen=True)

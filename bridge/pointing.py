@@ -7,9 +7,12 @@ Rules:
    raw value is the bearing minus ``offset_deg`` (a south-centred scale, a rotor mounted off
    north); a reading's true bearing is raw + offset, mod 360. Elevation has no offset.
 2. On a rotor that can pass 360 (SPID, mechanically -180..540) every raw value r + k*360
-   inside the limits points the same way: the one nearest the rotor's current raw position is
-   taken (least travel; a move inside the mechanical range never crosses a stop), and without
-   a reading the one nearest the middle of the range. A target outside 0..360 on such a rotor
+   inside the limits points the same way: the one nearest the rotor's raw position when the
+   target is sent is taken (least travel; a move inside the mechanical range never crosses a
+   stop), and without a reading the one nearest the middle of the range. The judge checks
+   that one exists and marks the target (Target.true_az_deg); the engine picks the side when
+   it sends, from the position it has then (a target that waited, e.g. for a brake, is not
+   sent to the side that was nearest when it came). A target outside 0..360 on such a rotor
    names the side itself: 400 is "40, past north clockwise" (raw = value - offset). A
    controller whose scale wraps picks its own way round: it gets the value in 0..360 (0, not
    360, where both are legal).
@@ -178,7 +181,13 @@ class Pointing:
                 )
             if not lo <= self._rounded(el) <= hi:
                 raise Refused(RefusalCode.LIMITS, self._rounding(f"elevation {el:g}", el, lo, hi))
-        return replace(target, az_deg=raw_az)
+        return replace(target, az_deg=raw_az, true_az_deg=self._side_free(target.az_deg))
+
+    def _side_free(self, az_deg: float | None) -> float | None:
+        """``az_deg`` if the rotor may take it on either side (rule 2), else None."""
+        if az_deg is None or self.az_wraps or not 0.0 <= az_deg <= 360.0:
+            return None
+        return az_deg
 
     # -- naming a target (rule 6) ------------------------------------------------------------
     def preset(self, name: str) -> tuple[float, float | None]:

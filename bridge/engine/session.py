@@ -401,7 +401,7 @@ class RotatorSession:
         return age > self.cfg.moving_poll_interval_s
 
     def resolve(self, target: Target) -> tuple[float | None, float | None]:
-        return resolve(target, self.motion, self.cfg.spec.has_elevation)
+        return resolve(target, self.motion, self.cfg.aim)
 
     def _next_wakeup(self, now: float) -> float:
         link = self.link

@@ -16,6 +16,7 @@ from __future__ import annotations
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.model import Target
+from bridge.pointing import Pointing
 
 BURST_QUIET_S = 0.5
 STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
@@ -68,9 +69,14 @@ class Targets:
         return min(self._pending_t + BURST_QUIET_S, self._stream_t + self._max_wait_s)
 
 
-def resolve(target: Target, m: mo.Motion, has_elevation: bool) -> tuple[float | None, float | None]:
-    """Fill the axis a target leaves out with its current target, else its position."""
+def resolve(target: Target, m: mo.Motion, aim: Pointing) -> tuple[float | None, float | None]:
+    """The raw values to send now: a target whose side is free takes the side nearest to where
+    the rotor is now (pointing.py rule 2); an axis left out keeps its current target, else its
+    position."""
     az = target.az_deg
+    if target.true_az_deg is not None and m.position_deg is not None:
+        az = aim.raw_for(target.true_az_deg, m.position_deg)
+    has_elevation = aim.has_elevation
     if az is None:
         az = m.target_deg if m.target_deg is not None else m.position_deg
     el = target.el_deg

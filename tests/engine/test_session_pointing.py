@@ -145,3 +145,24 @@ def test_no_auto_park_while_locked(rig: Rig) -> None:
     )
     v.run_for(60)
     assert sets(v) == [] and v.truth().az_deg == pytest.approx(90)
+
+
+def test_a_spid_picks_the_side_when_the_target_is_sent_not_when_it_came(rig: Rig) -> None:
+    """A target that waits (here: in a stream) goes to the side nearest the rotor when it is
+    sent: the rotor went on turning while it waited (pointing.py rule 2)."""
+    fast = {"az_speed_deg_s": 60}
+    v = rig("md01", settings=fast, emulator={"start_az_deg": 100, **fast})
+    v.run_until_state(IDLE, 30)
+    v.aim(Target(-170, 0))  # outside 0..360: names the side, counter-clockwise past north
+    v.run_until(lambda v: (v.status.raw_bearing_deg or 100) <= 25, 30, "passing raw 25")
+    v.aim(Target(-160, 0))  # sent at once ...
+    v.run_until(lambda v: (v.status.raw_bearing_deg or 100) <= 13, 5, "passing raw 13")
+    came_at = v.status.raw_bearing_deg
+    assert came_at is not None and came_at > 10  # from here 190 (< 180 away) beats -170
+    v.aim(Target(190, 0))  # ... so this one, so soon after it, waits for the stream to pause
+    v.run_until(lambda v: v.session.targets.pending is None, 5, "the stream's target sent")
+    # by then the rotor had passed 10: -170 is nearer, and it goes on the way it was going
+    assert v.status.target_az_deg == pytest.approx(190)
+    v.run_until(lambda v: v.state is IDLE, 60, "arrived")
+    assert v.truth().az_deg == pytest.approx(-170, abs=1)
+    assert v.status.overlap == "ccw"
