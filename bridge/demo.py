@@ -44,7 +44,7 @@ from typing import Any
 from pydantic import ValidationError
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
 
-from bridge import emulators
+from bridge import emulators, geo
 from bridge.app import App
 from bridge.demo_console import Console
 from bridge.homeassistant import Identity
@@ -68,6 +68,27 @@ def _speed(text: str) -> float:
     return value
 
 
+def _locator(text: str) -> str:
+    try:
+        geo.parse_locator(text)
+    except geo.LocatorError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+# The demo's presets: where a few well-known places lie from its station (the bearings are
+# worked out at start-up, so they stay right for any --locator).
+PRESET_PLACES = {"EU": "JN18eu", "JA": "PM95vq", "VK": "QF56od", "W": "FN30as"}
+
+
+def demo_presets(station: str) -> dict[str, float]:
+    here = geo.parse_locator(station)
+    return {
+        name: round(geo.great_circle(*here, *geo.parse_locator(place)).short_path_deg) % 360
+        for name, place in PRESET_PLACES.items()
+    }
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mqtt-host", default="127.0.0.1")
     p.add_argument("--mqtt-port", type=int, default=1883)
@@ -82,6 +103,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--speed-deg-s", type=_speed, default=6.0, help="rotor speed, both axes (HAM-IV: ~6)"
+    )
+    p.add_argument(
+        "--locator",
+        type=_locator,
+        default="JO62qm",
+        help="the emulated station's Maidenhead locator, for `locator` targets and the presets "
+        "(default JO62qm, Berlin)",
     )
     p.add_argument(
         "--no-private-broker",
@@ -118,8 +146,10 @@ def demo_settings(
     for i, model in enumerate(models):
         rid = model if models.count(model) == 1 else f"{model}{i + 1}"
         speeds = {"az_speed_deg_s": args.speed_deg_s}
+        park: dict[str, float] = {"park_az_deg": 0}
         if REGISTRY[model].has_elevation:
             speeds["el_speed_deg_s"] = args.speed_deg_s
+            park["park_el_deg"] = 0
         rotators.append(
             {
                 "id": rid,
@@ -127,6 +157,8 @@ def demo_settings(
                 "model": model,
                 "port": str(workdir / f"tty-{rid}"),
                 **speeds,
+                "presets": demo_presets(args.locator),
+                **park,
             }
         )
     return DemoSettings(
@@ -137,6 +169,7 @@ def demo_settings(
             "client_id": f"rotor-demo-{instance}",
         },
         rotators=rotators,
+        station={"locator": args.locator},
         state_file=workdir / "state.json",
     )
 

@@ -13,6 +13,7 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import json
 import threading
 from typing import Any
 
@@ -25,7 +26,7 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 from bridge.mqtt.topics import Topics
 
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
-SHOWN_LEAVES = ("bearing", "elevation", "state", "availability", "version", "error")
+SHOWN_LEAVES = ("bearing", "elevation", "state", "availability", "version", "error", "presets")
 
 
 class Console:
@@ -90,10 +91,36 @@ class Console:
             return  # a Home Assistant config (kept track of) or a removal: not shown
         leaf = topic.rsplit("/", 1)[-1]
         text = msg.payload.decode("utf-8", "replace")
+        if leaf == "status":
+            self._show_target_info(topic, text)
+            return
         if leaf not in SHOWN_LEAVES or (self._last.get(topic) == text and leaf != "error"):
             return
         self._last[topic] = text
         print(f"  {topic} = {text}", flush=True)
+
+    def _show_target_info(self, topic: str, text: str) -> None:
+        """A locator target's distance and paths, once each time it changes."""
+        with contextlib.suppress(ValueError, AttributeError, KeyError, TypeError):
+            info = json.loads(text).get("target_info")
+            key = f"{topic}:target_info"
+            if info and json.dumps(info) != self._last.get(key):
+                self._last[key] = json.dumps(info)
+                where = info.get("locator") or f"{info['latitude']:.2f}, {info['longitude']:.2f}"
+                root = topic.rsplit("/", 1)[0]
+                print(
+                    f"  {root}: {where} is {info['distance_km']:,.0f} km away by the "
+                    f"{info['path']} path (short {info['short_path_deg']:g}°, "
+                    f"long {info['long_path_deg']:g}°)",
+                    flush=True,
+                )
+
+    def _presets_text(self) -> str:
+        """The first rotator's preset names, as its retained R/presets lists them."""
+        topic = self._topics.rotator(self._ids[0]).presets
+        with contextlib.suppress(ValueError, AttributeError):
+            return ", ".join(json.loads(self._last.get(topic, "{}"))) or "none"
+        return "see " + topic
 
     def publish(self, topic: str, payload: str) -> None:
         self._client.publish(topic, payload, qos=1)
@@ -125,6 +152,21 @@ class Console:
             self.publish(t.option(head), rest[0].upper())
         elif head == "el" and len(rest) == 1:
             self.publish(t.target_elevation, rest[0])
+        elif head == "preset" and len(rest) == 1:
+            self.publish(t.preset, rest[0])
+        elif head == "park" and not rest:
+            self.publish(t.park, "PARK")
+        elif head == "locator" and len(rest) in (1, 2) and rest[1:] in ([], ["long"], ["short"]):
+            path = rest[1] if len(rest) == 2 else "short"
+            self.publish(t.target, json.dumps({"locator": rest[0], "path": path}))
+        elif head in ("long", "short") and not rest:
+            self.publish(t.target, json.dumps({"path": head}))
+        elif head == "nudge" and len(rest) in (1, 2) and all(map(_is_number, rest)):
+            if len(rest) == 1:
+                self.publish(t.nudge, rest[0])
+            else:
+                axes = dict(zip(("azimuth", "elevation"), map(float, rest), strict=True))
+                self.publish(t.nudge, json.dumps(axes))
         elif _is_number(head) or head.startswith("{"):
             self.publish(t.target, " ".join(words))
         else:
@@ -138,6 +180,12 @@ class Console:
             f"    120            turn to 120 deg              -> {first}/target",
             "    120 30         azimuth and elevation (SPID, SatEL)",
             f"    el 30          elevation alone              -> {first}/target/elevation",
+            f"    preset JA      a configured preset ({self._presets_text()})  -> {first}/preset",
+            f"    park           the park position            -> {first}/park",
+            f"    locator PM95   great-circle bearing from the station; add 'long' for the long "
+            f"path -> {first}/target",
+            "    long, short    the other path to that locator",
+            f"    nudge -10      turn by a few degrees (az/el: nudge 5 -2) -> {first}/nudge",
             f"    s, stop        stop now                     -> {first}/stop",
             f"    lock on|off    safety lock                  -> {first}/lock",
             f"    jam on|off     Rotor-EZ options ({', '.join(OPTIONS)})",

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import json
 import signal
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -75,6 +77,65 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         proc.close()
     assert not answers("127.0.0.1", port), "the demo's private broker outlived it"
     assert _left_behind(tmpdir) == []
+
+
+def test_the_demo_prompt_turns_by_preset_locator_path_nudge_and_park(tmp_path: Path) -> None:
+    port = free_port()
+    args = ["--mqtt-port", str(port), "--speed-deg-s", "360", "--models", "rotorcard"]
+    proc = DemoProcess(args, tmp_path / "tmp", terminal=True)
+    probe = None
+    try:
+        base = proc.base_topic()
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/state", "idle", timeout_s=20)
+        presets = json.loads(probe.wait_for(f"{base}/presets", lambda m: True).payload)
+        assert set(presets) == {"EU", "JA", "VK", "W"}  # bearings from the default JO62qm
+
+        def typed(line: str, pred: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+            """Type ``line``; the first idle status after it that satisfies ``pred``."""
+            assert probe is not None
+            mark = probe.mark()
+            proc.type(line)
+
+            def ok(m: Any) -> bool:
+                if m.topic != f"{base}/status":
+                    return False
+                s = json.loads(m.payload)
+                return bool(s["state"] == "idle" and pred(s))
+
+            return json.loads(probe.wait(ok, 20, f"status after {line!r}", start=mark).payload)
+
+        def near(az: float) -> Callable[[dict[str, Any]], bool]:
+            return lambda s: abs((s["bearing"] - az + 180) % 360 - 180) <= 3
+
+        def going(path: str) -> Callable[[dict[str, Any]], bool]:
+            def there(s: dict[str, Any]) -> bool:
+                info = s.get("target_info") or {}
+                return info.get("path") == path and near(info[f"{path}_path_deg"])(s)
+
+            return there
+
+        seen = proc.type("help")
+        for what in ("preset JA", "park", "locator PM95", "nudge -10", "EU, JA, VK, W"):
+            proc.wait_line(what, start=seen, timeout_s=10)
+
+        typed("preset W", near(presets["W"]))
+        seen = len(proc.lines)
+        info = typed("locator PM95vq", going("short"))["target_info"]
+        assert info["locator"] == "PM95vq" and abs(info["short_path_deg"] - presets["JA"]) < 1
+        proc.wait_line(r"PM95vq is [\d,]+ km away by the short path", start=seen, timeout_s=10)
+        info = typed("long", going("long"))["target_info"]
+        assert abs((info["long_path_deg"] - info["short_path_deg"]) % 360 - 180) < 0.2
+        typed("nudge -10", near(info["long_path_deg"] - 10))
+        assert typed("park", lambda s: s.get("parked") is True)["bearing"] == 0
+        seen = proc.type("preset NOWHERE")  # the bridge refuses it, the console shows why
+        proc.wait_line(r"/error = .*no preset 'NOWHERE'", start=seen, timeout_s=10)
+        proc.type("q")
+        assert proc.wait(20) == 0, proc.output
+    finally:
+        if probe is not None:
+            probe.close()
+        proc.close()
 
 
 def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:

@@ -216,8 +216,13 @@ def target_info(info: TargetInfo) -> dict[str, object]:
 
 
 def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:
-    """``R/presets``: name -> azimuth, or [azimuth, elevation]."""
-    doc = {n: az if el is None else [az, el] for n, (az, el) in presets.items()}
+    """``R/presets``: name -> azimuth, or [azimuth, elevation]; whole degrees without ".0", as
+    the user wrote them in the configuration."""
+
+    def num(x: float) -> float | int:
+        return int(x) if x.is_integer() else x
+
+    doc = {n: num(az) if el is None else [num(az), num(el)] for n, (az, el) in presets.items()}
     return json.dumps(doc, separators=(",", ":"))
 
 

@@ -120,3 +120,9 @@ def test_status_json_has_every_field() -> None:
         "estimated": False,
         "time": "1970-01-01T00:00:00.000+00:00",
     }
+
+
+def test_presets_are_published_as_the_user_wrote_them() -> None:
+    presets = {"EU": (45.0, None), "ISS_AOS": (180.0, 5.5), "W": (299.5, None)}
+    assert pl.presets_json(presets) == '{"EU":45,"ISS_AOS":[180,5.5],"W":299.5}'
+    assert pl.presets_json({}) == "{}"

@@ -125,7 +125,7 @@ def test_attaching_publishes_the_presets_retained_for_dashboards() -> None:
     pub = RecordingPublisher()
     svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, wall=lambda: NOW_UNIX)
     svc.attach(RecordingRotator("tower", "rotorez"))
-    assert pub.take() == [("rotor/presets", '{"EU":45.0}', True)]
+    assert pub.take() == [("rotor/presets", '{"EU":45}', True)]
 
 
 # -- outbound ------------------------------------------------------------------------------------
