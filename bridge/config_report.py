@@ -3,6 +3,8 @@
 Rules:
 1. masked() shows every value the bridge will use, model defaults filled in; null only where
    nothing applies (no elevation axis, no rotctld port, no park position, no credentials).
+   What a value means where that is not plain is shown beside it: the station's position from
+   its locator, the true bearings a rotator takes (its raw limits seen through the offset).
 2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from.
 3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
 """
@@ -15,12 +17,18 @@ from typing import Any
 
 from bridge.settings import Settings
 
+IDENTITY = ("id", "name", "model", "port", "baud", "topic")
+
 
 def masked(settings: Settings) -> dict[str, Any]:
     """The effective settings as plain data, secrets replaced, for check-config and logs."""
     out = settings.model_dump(mode="json")
     if settings.mqtt.password is not None:
         out["mqtt"]["password"] = "********"
+    if settings.station.position is not None:  # what a locator means, to check it on a map
+        lat, lon = settings.station.position
+        out["station"]["position_deg"] = [round(lat, 4), round(lon, 4)]
+    shown = []
     for r, rs in zip(out["rotators"], settings.rotators, strict=True):
         r["name"] = rs.name or rs.id
         r["topic"] = settings.rotator_topic(rs)
@@ -35,6 +43,10 @@ def masked(settings: Settings) -> dict[str, Any]:
         if rs.spec.has_elevation:
             r["el_speed_deg_s"] = el_speed
             r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
+        # the bearings a user may name: the limits (raw) seen through the offset
+        r["az_targets_deg"] = list(rs.pointing.target_range())
+        shown.append({k: r.pop(k) for k in IDENTITY} | r)  # who it is first, then the rest
+    out["rotators"] = shown
     out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
     return out
 

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -145,6 +146,30 @@ def test_the_example_configuration_is_valid() -> None:
     assert s.rotators[0].model == "rotorez" and s.mqtt.protocol == "5"
 
 
+POINTING_KEYS = (
+    "[station]",
+    "locator",
+    "az_offset_deg",
+    "presets",
+    "park_az_deg",
+    "park_after_idle_s",
+    "keep_out",
+    "nudge_step_deg",
+)
+
+
+def test_the_example_pointing_lines_are_valid_as_written(tmp_path: Path) -> None:
+    """Uncommented as a user would, the example's station and pointing lines load as shown."""
+    text = (Path(__file__).parent.parent / "config" / "example.toml").read_text()
+    keys = "|".join(map(re.escape, POINTING_KEYS))
+    on = re.sub(rf"^# ((?:{keys})(?=[ =]|$))", r"\1", text, flags=re.M)
+    s = load_settings(write(tmp_path, on), environ={})
+    r = s.rotators[0]
+    assert s.station.position is not None
+    assert (r.az_offset_deg, r.park_az_deg, r.keep_out) == (180, 0, [(200, 220)])
+    assert r.presets == {"EU": 45, "JA": 330, "W": 300}
+
+
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
 NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg"}  # null: off / unset on purpose
 AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
@@ -192,6 +217,25 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
     assert nulls == NOT_APPLICABLE | (set() if spec.has_elevation else AZ_ONLY_NULLS)
     shown = masked(s)
     assert shown["mqtt"]["client_id"] == s.mqtt.effective_client_id() and shown["state_file"]
+
+
+def test_check_config_shows_what_the_pointing_settings_mean(tmp_path: Path) -> None:
+    text = (
+        '[station]\nlocator = "JO62qm"\n'
+        '[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
+        "az_offset_deg = 180\npresets = { JA = 330 }\npark_az_deg = 0\n"
+        '[[rotators]]\nid = "sky"\nmodel = "rot2prog"\nport = "/dev/ttyUSB1"\n'
+        "az_offset_deg = 90\n"
+    )
+    doc, warnings = check_config(write(tmp_path, text))
+    assert warnings == [] or all("does not exist" in w for w in warnings)
+    lat, lon = doc["station"]["position_deg"]  # the square's centre, to check on a map
+    assert (lat, lon) == (pytest.approx(52.521, abs=1e-3), pytest.approx(13.375, abs=1e-3))
+    tower, sky = doc["rotators"]
+    assert list(tower)[:4] == ["id", "name", "model", "port"]
+    assert (tower["az_offset_deg"], tower["presets"], tower["park_az_deg"]) == (180, {"JA": 330}, 0)
+    assert tower["az_targets_deg"] == [0, 360]  # a scale that wraps: every bearing
+    assert sky["az_targets_deg"] == [-90, 630]  # the SPID's -180..540 seen through +90
 
 
 def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
