@@ -68,6 +68,10 @@ DOCUMENTED_TOPICS = frozenset(
         _R.target,
         _R.stop,
         _R.lock,
+        _R.preset,
+        _R.park,
+        _R.nudge,
+        _R.presets,
         _R.bearing,
         _R.state,
         _R.status,
@@ -202,6 +206,7 @@ def test_mqtt_subscriptions_are_plain_topics(flow: list[dict]) -> None:
         assert node["datatype"] in ("utf8", "json", "auto-detect"), node["id"]
     datatypes = {n["topic"]: n["datatype"] for n in ins}
     assert datatypes[_R.status] == "json"
+    assert datatypes[_R.presets] == "json"
 
 
 def test_flow_subscribes_to_bearing_state_and_availability(flow: list[dict]) -> None:
@@ -230,6 +235,17 @@ def test_presets_publish_bearings_and_stop_publishes(flow: list[dict]) -> None:
     assert stoppers and all(not n["once"] and not n["repeat"] for n in stoppers)
 
 
+def test_editor_injects_park_and_nudge(flow: list[dict]) -> None:
+    park, nudge = _mqtt_out(flow, _R.park), _mqtt_out(flow, _R.nudge)
+    parkers = [n for n in _of_type(flow, "inject") if park["id"] in _targets(flow, n)]
+    nudgers = [n for n in _of_type(flow, "inject") if nudge["id"] in _targets(flow, n)]
+    assert parkers and nudgers
+    assert {n["payload"] for n in nudgers} == {"+10", "-10"}  # R/nudge: signed degrees
+    for node in parkers + nudgers:
+        assert node["payloadType"] == "str", node["name"]
+        assert not node["once"] and not node["repeat"], f"{node['name']} fires by itself"
+
+
 def _page_chain(flow: list[dict]) -> tuple[dict, dict, dict]:
     nodes = _by_id(flow)
     (http_in,) = _of_type(flow, "http in")
@@ -252,6 +268,26 @@ def test_web_page_is_served_with_gauge_input_presets_and_stop(flow: list[dict]) 
     assert 'id="stop"' in page
 
 
+def test_web_page_has_presets_locator_park_and_nudge(flow: list[dict]) -> None:
+    page = _page_chain(flow)[1]["template"]
+    assert '<div id="presets"' in page  # filled from rotor/presets
+    assert re.search(r'<input id="locator" type="text" maxlength="8"', page)
+    assert {"short", "long"} == set(re.findall(r'<option value="(\w+)"', page))
+    assert 'id="park"' in page
+    assert {float(v) for v in re.findall(r'data-nudge="([-+]?\d+)"', page)} == {-10, 10}
+    assert 'id="aim-info"' in page and 'id="parked"' in page  # target_info and parked
+
+
+def test_web_page_never_parses_text_as_html(flow: list[dict]) -> None:
+    # Preset names, error messages and the rest are the user's or the bridge's text: the page
+    # builds nodes and sets textContent; any of these would let a name inject markup.
+    page = _page_chain(flow)[1]["template"]
+    script = page[page.index("<script>") :]
+    for sink in ("innerHTML", "outerHTML", "insertAdjacentHTML", "document.write", "eval("):
+        assert sink not in script, sink
+    assert "textContent" in script and "createElement" in script
+
+
 def test_web_page_finds_the_websocket_listener(flow: list[dict]) -> None:
     http_in, template, _ = _page_chain(flow)
     (listener,) = _of_type(flow, "websocket-listener")
@@ -262,18 +298,103 @@ def test_web_page_finds_the_websocket_listener(flow: list[dict]) -> None:
     assert posixpath.join(page_dir, "ws/rotor") == listener["path"]
 
 
-def test_page_commands_reach_the_target_and_stop_publishers(flow: list[dict]) -> None:
+def _relay(flow: list[dict]) -> dict:
     nodes = _by_id(flow)
-    target, stop = _mqtt_out(flow, _R.target), _mqtt_out(flow, _R.stop)
     (ws_in,) = _of_type(flow, "websocket in")
     (relay,) = [nodes[t] for t in _targets(flow, ws_in)]
     assert relay["type"] == "function"
+    return relay
+
+
+def _relay_outputs(relay: dict) -> dict[str, int]:
+    """The function's table of its outputs by name: const OUT = { target: 0, ... }."""
+    table = re.search(r"const OUT = \{([^}]*)\};", relay["func"])
+    assert table, "the page relay names its outputs in one table"
+    return {name: int(i) for name, i in re.findall(r"(\w+): (\d+)", table.group(1))}
+
+
+def test_page_commands_reach_the_target_and_stop_publishers(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    target, stop = _mqtt_out(flow, _R.target), _mqtt_out(flow, _R.stop)
+    relay = _relay(flow)
     reached = _targets(flow, relay)
     assert {target["id"], stop["id"]} <= reached
-    for node_id in reached - {target["id"], stop["id"]}:
+    publishers = {_mqtt_out(flow, t)["id"] for t in (_R.preset, _R.park, _R.nudge)}
+    for node_id in reached - {target["id"], stop["id"]} - publishers:
         assert nodes[node_id]["type"] == "websocket out"  # the reply to that page only
     code = relay["func"]
     assert "retain: false" in code and "topic" not in code.replace("msg.topic", "")
+
+
+def test_each_page_command_output_leads_to_its_own_publisher(flow: list[dict]) -> None:
+    # A page message cannot pick a topic: each output of the relay is wired to exactly one
+    # node, an mqtt out with a fixed topic named like the output (or the reply to the page).
+    nodes = _by_id(flow)
+    relay = _relay(flow)
+    outputs = _relay_outputs(relay)
+    assert sorted(outputs.values()) == list(range(relay["outputs"]))
+    expected = {
+        name: _mqtt_out(flow, getattr(_R, name))["id"] for name in outputs if name != "reply"
+    }
+    assert set(expected) == {"target", "stop", "preset", "park", "nudge"}
+    for name, index in outputs.items():
+        (wired,) = relay["wires"][index]
+        if name == "reply":
+            assert nodes[wired]["type"] == "websocket out", wired
+        else:
+            assert wired == expected[name], f"output {name} leads to {nodes[wired]['name']}"
+            assert f'publish("{name}", ' in relay["func"], f"nothing is published on {name}"
+    assert 'outputs("reply", ' in relay["func"]
+
+
+def test_every_command_the_page_sends_is_one_the_relay_checks(flow: list[dict]) -> None:
+    page = _page_chain(flow)[1]["template"]
+    sent = set(re.findall(r'\{ cmd: "(\w+)"', page))
+    checked = set(re.findall(r'cmd\.cmd === "(\w+)"', _relay(flow)["func"]))
+    assert sent == {"target", "stop", "hello", "preset", "park", "nudge", "locator"}
+    assert sent == checked, sent ^ checked
+
+
+def test_preset_and_locator_commands_are_validated_by_the_relay(flow: list[dict]) -> None:
+    code = _relay(flow)["func"]
+    # a preset only by a name the bridge listed on R/presets (kept by the page function)
+    assert 'flow.get("rotorPresets")' in code and "names.includes(cmd.name)" in code
+    to_page = [n for n in _of_type(flow, "function") if n["name"] == "to the web page"]
+    assert 'flow.set("rotorPresets", ' in to_page[0]["func"]
+    # a locator loosely (the bridge judges it) and the path, into the JSON R/target takes
+    assert "LOCATOR.test(locator)" in code and 'path !== "short" && path !== "long"' in code
+    assert "JSON.stringify({ locator: locator, path: path })" in code
+    (relay_re,) = re.findall(r"const LOCATOR = /(.+)/;", code)
+    (page_re,) = re.findall(r"var LOCATOR = /(.+)/;", _page_chain(flow)[1]["template"])
+    assert relay_re == page_re  # the page says no only where the flow would drop it
+    loose = re.compile(relay_re)  # same syntax in both; fullmatch as JS's $ (no final \n)
+    for locator in ("JO62qm", "PM95VQ", "pm95vq12", "JO62", "JA", "ZZ00"):  # ZZ: the bridge's
+        assert loose.fullmatch(locator), locator
+    for locator in ("", "J", "JO6", "JO62q", "JO62qm1", "JO62qm123", "62JO", "JO62qm\n"):
+        assert not loose.fullmatch(locator), locator
+
+
+def test_presets_reach_the_web_page(flow: list[dict]) -> None:
+    nodes = _by_id(flow)
+    (presets,) = [n for n in _of_type(flow, "mqtt in") if n["topic"] == _R.presets]
+    (to_page,) = [nodes[t] for t in _targets(flow, presets) if nodes[t]["type"] == "function"]
+    kinds = re.search(r"const KINDS = \[([^\]]*)\]", to_page["func"])
+    assert kinds and '"presets"' in kinds.group(1)
+    page = _page_chain(flow)[1]["template"]
+    assert 'case "presets": onPresets(v)' in page
+
+
+def test_every_subscribed_kind_is_passed_on_and_shown(flow: list[dict]) -> None:
+    (to_page,) = [n for n in _of_type(flow, "function") if n["name"] == "to the web page"]
+    kinds = re.search(r"const KINDS = \[([^\]]*)\]", to_page["func"])
+    assert kinds
+    passed = set(re.findall(r'"(\w+)"', kinds.group(1)))
+    page = _page_chain(flow)[1]["template"]
+    for node in _of_type(flow, "mqtt in"):
+        topic = node["topic"]
+        kind = "bridge" if topic == _TOPICS.bridge_state else topic.rsplit("/", 1)[1]
+        assert kind in passed, f"{topic} never reaches the page"
+        assert f'case "{kind}":' in page, f"the page ignores {topic}"
 
 
 def test_state_reaches_the_web_page(flow: list[dict]) -> None:
