@@ -129,6 +129,7 @@ class RotatorStatus:
     expected_end_unix: float | None = None  # no feedback (DCU-1): when a commanded move should end
     # bearing_deg and target_az_deg are true bearings (pointing.py); this is the controller's own
     raw_bearing_deg: float | None = None
+    raw_target_az_deg: float | None = None  # the controller's own value of target_az_deg
     overlap: str | None = None  # "cw" past 360, "ccw" below 0 (rotors that can pass 360)
     target_info: TargetInfo | None = None
     parked: bool = False  # at the park position after a park, until the next move

@@ -25,7 +25,7 @@ Rules:
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
    station, short path unless the long one is asked for; geo.py) and a nudge (relative to the
-   target while one is being approached, else to the bearing).
+   target while one is being approached, turning or braking, else to the bearing).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 
 from bridge import geo
 from bridge.errors import RefusalCode, Refused
-from bridge.model import RotatorStatus, Target, TargetInfo
+from bridge.model import MotionState, RotatorStatus, Target, TargetInfo
 from bridge.protocols.base import ModelSpec
 
 
@@ -148,7 +148,7 @@ class Pointing:
         legal = [
             base + k * 360.0
             for k in range(math.floor((lo - base) / 360.0), math.ceil((hi - base) / 360.0) + 1)
-            if lo <= self._rounded(base + k * 360.0) <= hi
+            if self._sent_within(base + k * 360.0, lo, hi)
         ]
         if not legal:
             return self._checked(az_deg, base)  # raises, naming the raw value
@@ -167,10 +167,12 @@ class Pointing:
             if sector is not None:
                 raise Refused(
                     RefusalCode.KEEP_OUT,
-                    f"azimuth {target.az_deg:g} is in the keep-out sector "
+                    f"azimuth {target.az_deg:g}{self._folded(target.az_deg)} is in the "
+                    "keep-out sector "
                     f"{sector[0]:g}..{sector[1]:g}: refused",
                 )
             raw_az = self.raw_for(target.az_deg, current_raw_deg)
+            self._check_sent_keep_out(target.az_deg, raw_az)
         if target.el_deg is not None:
             if not self.has_elevation:
                 raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
@@ -179,7 +181,7 @@ class Pointing:
                 raise Refused(
                     RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
                 )
-            if not lo <= self._rounded(el) <= hi:
+            if not self._sent_within(el, lo, hi):
                 raise Refused(RefusalCode.LIMITS, self._rounding(f"elevation {el:g}", el, lo, hi))
         return replace(target, az_deg=raw_az, true_az_deg=self._side_free(target.az_deg))
 
@@ -204,17 +206,22 @@ class Pointing:
     def nudged(
         self, status: RotatorStatus, d_az: float, d_el: float | None
     ) -> tuple[float | None, float | None]:
-        moving = status.moving and status.target_az_deg is not None
+        if not d_az and not d_el:
+            raise Refused(RefusalCode.INVALID, "a nudge of 0 degrees moves nothing")
+        # from the target while the rotor is on its way (turning, or braking before it turns:
+        # a second press of a nudge button adds to the first), else from the bearing
+        going = status.state in (MotionState.MOVING, MotionState.BRAKING)
+        moving = going and status.target_az_deg is not None
         az = status.target_az_deg if moving else status.bearing_deg
         if az is None:
-            raise Refused(RefusalCode.OFFLINE, "no bearing to nudge from yet")
+            raise Refused(
+                RefusalCode.OFFLINE, f"no bearing to nudge from (the {self.model_name} has none)"
+            )
         new_az: float | None = None
-        raw = status.raw_bearing_deg
+        raw = status.raw_target_az_deg if moving else status.raw_bearing_deg
         if d_az and not self.az_wraps and raw is not None:
             # past 360 a nudge stays on its side: named by a value outside 0..360 (rule 2), so
             # +10 at raw 535 is refused at the 540 stop rather than taken the other way round
-            if moving and status.bearing_deg is not None:
-                raw += (az - status.bearing_deg + 180.0) % 360.0 - 180.0
             new_az = raw + self.offset_deg + d_az
             if 0.0 <= new_az <= 360.0:  # on the scale: the least travel is this side anyway
                 new_az = norm360(new_az)
@@ -235,18 +242,52 @@ class Pointing:
             shown += f" (controller {raw_deg:g})"
         if not lo <= raw_deg <= hi:
             raise Refused(RefusalCode.LIMITS, f"{shown} outside the limits {lo:g}..{hi:g}")
-        if not lo <= self._rounded(raw_deg) <= hi:
+        if not self._sent_within(raw_deg, lo, hi):
             raise Refused(RefusalCode.LIMITS, self._rounding(shown, raw_deg, lo, hi))
         return raw_deg
 
-    def _rounded(self, value: float) -> float:
-        return float(math.floor(value + 0.5)) if self.whole_degrees else value
+    def _sent(self, value: float) -> tuple[float, float]:
+        """The lowest and highest value the controller can be sent for ``value`` (rule 4): the
+        Rotor-EZ family and the SatEL round half up to whole degrees; the SPID family cuts down
+        to its resolution, learned only from its replies: one pulse per degree at the coarsest."""
+        if self.whole_degrees:
+            r = float(math.floor(value + 0.5))
+            return r, r
+        if not self.az_wraps:
+            return float(math.floor(value)), value
+        return value, value
+
+    def _sent_within(self, value: float, lo: float, hi: float) -> bool:
+        low, high = self._sent(value)
+        return lo <= low and high <= hi
 
     def _rounding(self, shown: str, value: float, lo: float, hi: float) -> str:
+        low, high = self._sent(value)
+        sent = f"{low:g}" if low == high else f"as low as {low:g}"
         return (
-            f"{shown} becomes {self._rounded(value):g} on the {self.model_name} "
-            f"(whole degrees), outside the limits {lo:g}..{hi:g}"
+            f"{shown} becomes {sent} on the {self.model_name} (its resolution), outside the "
+            f"limits {lo:g}..{hi:g}"
         )
+
+    @staticmethod
+    def _folded(az_deg: float) -> str:
+        """ " (5)" for 365: a target that names a side, as the compass reads it."""
+        return "" if 0.0 <= az_deg <= 360.0 else f" ({norm360(az_deg):g})"
+
+    def _check_sent_keep_out(self, az_deg: float, raw_deg: float) -> None:
+        """Rule 3 for what the controller is really sent: 199.5 goes out as 200 on a Rotor-EZ,
+        10.9 as 10 on a Rot1Prog, which may be a sector's edge."""
+        low, high = self._sent(raw_deg)
+        t1, t2 = low + self.offset_deg, high + self.offset_deg
+        for sector in self.keep_out:
+            start_inside = norm360(sector[0] - t1) <= t2 - t1
+            if in_sector(t1, sector) or in_sector(t2, sector) or start_inside:
+                raise Refused(
+                    RefusalCode.KEEP_OUT,
+                    f"azimuth {az_deg:g} is sent to the {self.model_name} as "
+                    f"{norm360(t1):g}{'' if t1 == t2 else f'..{norm360(t2):g}'} (its resolution), "
+                    f"in the keep-out sector {sector[0]:g}..{sector[1]:g}: refused",
+                )
 
 
 def toward(

@@ -116,3 +116,52 @@ def test_a_place_becomes_the_great_circle_bearing_from_the_station() -> None:
     assert long_az == pytest.approx(norm360(az + 180))
     assert long_info.path == "long" and long_info.distance_km == path.long_distance_km
     assert refused(toward, None, *tokyo) is RefusalCode.UNSUPPORTED
+
+
+def test_keep_out_and_limits_hold_for_what_the_controller_is_really_sent() -> None:
+    """Review finding: 199.5 goes out as 200 on a Rotor-EZ (half up), 10.9 as 10 on a SPID at
+    one pulse per degree (cut down): a sector's edge, which is inside."""
+    ez = Pointing.of(EZ, keep_out=((200, 220),))
+    assert refused(ez.judge, Target(199.5), None) is RefusalCode.KEEP_OUT
+    assert ez.judge(Target(199.4), None).az_deg == 199.4  # goes out as 199
+    shifted = Pointing.of(EZ, offset_deg=0.3, keep_out=((200, 220),))
+    assert refused(shifted.judge, Target(199.9), None) is RefusalCode.KEEP_OUT  # raw 200: 200.3
+    spid = Pointing.of(SPID, keep_out=((0, 10),))
+    with pytest.raises(Refused) as exc:
+        spid.judge(Target(10.9, 0), 100)
+    assert exc.value.code is RefusalCode.KEEP_OUT
+    assert "sent to the" in exc.value.message and "10..10.9" in exc.value.message
+    assert spid.judge(Target(11, 0), 100).az_deg == 11
+    narrow = Pointing.of(SPID, keep_out=((20.2, 20.4),))  # inside one degree's step
+    assert refused(narrow.judge, Target(20.6, 0), 100) is RefusalCode.KEEP_OUT
+    # the lower limit: 10.7 would go out as 10 on a SPID limited to 10.5..
+    assert refused(Pointing.of(SPID, (10.5, 300)).judge, Target(10.7, 0), 100) is (
+        RefusalCode.LIMITS
+    )
+    with pytest.raises(Refused) as exc:
+        Pointing.of(SPID, keep_out=((350, 10),)).judge(Target(365, 0), 100)
+    assert exc.value.message.startswith("azimuth 365 (5) is in the keep-out sector 350..10")
+
+
+def test_nudges_count_from_where_the_rotor_is_going_on_either_side() -> None:
+    p = Pointing.of(SPID)
+    # a second press during the brake delay adds to the first (review finding: 115, not 220)
+    braking = RotatorStatus(
+        "t", MotionState.BRAKING, bearing_deg=105, target_az_deg=210, raw_target_az_deg=210
+    )
+    assert p.nudged(braking, 10, None) == (220, None)
+    # a long move on a SPID: from raw 530 to raw 200, at raw 450 (true 90); +10 is true 210,
+    # not 570 past the stop (review finding)
+    long_move = RotatorStatus(
+        "t",
+        MotionState.MOVING,
+        bearing_deg=90,
+        raw_bearing_deg=450,
+        target_az_deg=200,
+        raw_target_az_deg=200,
+    )
+    assert p.nudged(long_move, 10, None) == (210, None)
+    assert p.judge(Target(210, 0), 450).az_deg == 210  # 570 would be past the 540 stop
+    stalled = RotatorStatus("t", MotionState.STALLED, bearing_deg=105, target_az_deg=210)
+    assert p.nudged(stalled, 10, None) == (115, None)  # stuck: from where it is
+    assert refused(p.nudged, stalled, 0, None) is RefusalCode.INVALID

@@ -92,6 +92,7 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
         expected_end_unix=expected_end,
         controller_time=view.controller_time,
         target_az_deg=None if target[0] is None else aim.true_of(target[0]),
+        raw_target_az_deg=target[0],
         target_el_deg=target[1] if spec.has_elevation else None,
         connected=link is not None,
         available=answering,
