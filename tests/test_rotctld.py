@@ -92,20 +92,21 @@ def station(tmp_path: Path) -> Iterator[StationFactory]:
         **settings: Any,
     ) -> Station:
         link = tmp_path / f"serial-{model}-{len(made)}"
+        spid = model in ("rot2prog", "rot1prog", "md01")
+        faults = {} if spid else {"jitter_deg": 0, "power_on_junk": False}
         emu = emulators.start(
             model,
             link=str(link),
             start_az_deg=start_az_deg,
-            speed_deg_s=40.0,
-            brake_delay_s=0.0 if model == "rotorcard" else 1.5,
-            jitter_deg=0,
-            power_on_junk=False,
+            **({"az_speed_deg_s": 40.0} if spid else {"speed_deg_s": 40.0}),
+            **({} if spid else {"brake_delay_s": 0.0 if model == "rotorcard" else 1.5}),
+            **faults,
         )
         cfg = RotatorSettings(
             id="tower",
             model=model,
             port=str(link),
-            brake_delay_s=0 if model == "rotorcard" else 1.5,
+            brake_delay_s=0 if model in ("rotorcard", "rot2prog", "rot1prog", "md01") else 1.5,
             park_az_deg=park_az_deg,
             **{**FAST_POLLING, **settings},
         )
@@ -618,3 +619,23 @@ def test_two_rotators_cannot_share_a_rotctld_port() -> None:
     ]
     with pytest.raises(ValidationError, match="share one rotctld_port"):
         Settings(rotators=rotators)
+
+
+def test_p_answers_past_360_only_to_a_client_that_named_the_side(station: StationFactory) -> None:
+    """A client that sent P 40 reads 40 even where the bridge took the rotor on to raw 400 (the
+    shorter way from 300); one that sent P 400 reads 400 (the range \\dump_state gives)."""
+    st = station("md01", start_az_deg=300)
+    compass, overlap = st.connect(), st.connect()
+    compass.ask(b"P 40 0\n", b"RPRT 0\n")
+    wait_until(lambda: abs(st.emu.state().az_deg - 400) < 1 and not st.emu.state().is_moving, 20)
+    wait_until(lambda: st.rotator.status.state is MotionState.IDLE, 10, "idle")
+    assert compass.single_recv(b"p\n") == b"40.00\n0.00\n"
+    overlap.ask(b"P 400 0\n", b"RPRT 0\n")
+    assert overlap.single_recv(b"p\n") == b"400.00\n0.00\n"
+    assert compass.single_recv(b"p\n") == b"40.00\n0.00\n"  # each client in its own terms
+
+
+def test_dump_state_never_says_south_zero(station: StationFactory) -> None:
+    c = station("rotorcard", az_offset_deg=180).connect()
+    reply = c.single_recv(b"\\dump_state\n")
+    assert b"min_az=0.000000\nmax_az=360.000000\n" in reply and b"south_zero=0\n" in reply

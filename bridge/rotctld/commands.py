@@ -50,6 +50,9 @@ class RotctldCommands:
         self.rot_type = spec.hamlib_rot_type
         # rotctld prints a backend without get_info as "None"
         self.info = "None" if spec.hamlib_info is None else spec.hamlib_info
+        # this client's last accepted P named the side (outside 0..360, on a rotor that can pass
+        # 360): p then answers past 360 too, else in 0..360 like Hamlib's own backends
+        self.names_side = False
 
     def execute(self, request: Request) -> bytes:
         handler = getattr(self, "_" + request.command.name)
@@ -68,9 +71,10 @@ class RotctldCommands:
             return -RIG_ENAVAIL, ""
         status, aim = self.rotator.status, self.rotator.pointing
         az = status.bearing_deg
-        if not aim.az_wraps and status.raw_bearing_deg is not None:
-            # past 360 the side counts (a client that sent P 400 reads 400 back, in the range
-            # \dump_state gives): the true bearing unfolded, as P takes it (pointing.py rule 2)
+        if self.names_side and not aim.az_wraps and status.raw_bearing_deg is not None:
+            # a client that sent P 400 reads 400 back (in the range \dump_state gives): the true
+            # bearing unfolded, as P takes it (pointing.py rule 2); one that sent P 40 reads 40
+            # even where the bridge took it on to raw 400, the shorter way
             az = status.raw_bearing_deg + aim.offset_deg
         el = status.elevation_deg if spec.has_elevation else 0.0
         if not status.available or az is None or el is None:
@@ -82,7 +86,10 @@ class RotctldCommands:
         if az is None or el is None:
             return -RIG_EINVAL, ""
         el_deg = el if self.rotator.spec.has_elevation or el != 0 else None
-        return self._submit_target(az, el_deg, req)
+        code, body = self._submit_target(az, el_deg, req)
+        if code == RIG_OK:
+            self.names_side = not 0.0 <= az <= 360.0
+        return code, body
 
     def _park(self, req: Request) -> tuple[int, str]:
         park = self.rotator.pointing.park  # the same park as MQTT's and Home Assistant's
@@ -116,7 +123,9 @@ class RotctldCommands:
     def _dump_state(self, req: Request) -> tuple[int, str]:
         lim, aim = self.rotator.limits, self.rotator.pointing
         az_min, az_max = aim.target_range()  # the range of targets in true bearings
-        south = int(aim.offset_deg % 360 == 180)  # Hamlib's one field for an offset
+        # south_zero stays 0 whatever the offset: Hamlib's client adds 180 to every P it sends
+        # and every p it reads when it is 1, and P and p here are true bearings already
+        south = 0
         lines = [
             ("rotctld Protocol Ver: 1", "1"),
             (f"Rotor Model: {self.hamlib_model}", str(self.hamlib_model)),

@@ -36,7 +36,7 @@ class RotctldServer:
         *,
         max_clients: int = 16,
     ) -> None:
-        self.commands = RotctldCommands(rotator)
+        self.rotator = rotator
         self.rotator_id = rotator.id
         self._bind = bind
         self._requested_port = port
@@ -177,6 +177,7 @@ class RotctldServer:
     def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         log.info("rotctld for %s: client %s:%d connected", self.rotator_id, peer[0], peer[1])
         parser = RequestParser()
+        commands = RotctldCommands(self.rotator)  # one per client: p answers in its terms
         try:
             while True:
                 data = conn.recv(4096)
@@ -185,7 +186,7 @@ class RotctldServer:
                 for item in parser.feed(data):
                     if isinstance(item, Quit):
                         return
-                    conn.sendall(self.commands.execute(item))
+                    conn.sendall(commands.execute(item))
         except OSError as exc:
             log.debug("rotctld for %s: client %s:%d: %s", self.rotator_id, *peer, exc)
         finally:

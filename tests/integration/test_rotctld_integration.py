@@ -179,3 +179,16 @@ def test_az_el_rotator_through_rotctl(rig: Rig, rotctl_path: str) -> None:
     )
     with connect(port) as sock:
         ask(sock, b"P 10 95\n", b"RPRT -1\n")  # beyond the configured elevation limit
+
+
+def test_hamlib_with_an_offset_of_180_points_where_it_is_told(rig: Rig, rotctl_path: str) -> None:
+    """Review finding: with south_zero=1 in \\dump_state Hamlib's client adds 180 to every P and
+    p, on top of the bridge's own offset: P 30 turned a south-centred rotor to true 210."""
+    port, _ = start(rig, az_offset_deg=180)  # raw 10 = true 190
+    assert ok(rotctl(rotctl_path, port, "p")) == "190.00\n0.00\n"
+    t0 = time.monotonic()
+    assert ok(rotctl(rotctl_path, port, "P", "30", "0")) == ""
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=20, after=t0 + 0.01)
+    assert bearing_frames(rig) == [b"AP1210\r"]  # raw 210 = true 30
+    assert abs(rig.emus["tower"].state().az_deg - 210) <= 3
+    assert ok(rotctl(rotctl_path, port, "p")).startswith(("29.", "30.", "31."))
