@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from bridge import geo
 from bridge.errors import Refused
@@ -65,6 +65,14 @@ class PointingFields(BaseModel):
     park_after_idle_s: float = Field(0.0, ge=0, le=86400)  # 0: never park by itself
     keep_out: list[tuple[Degrees, Degrees]] = Field(default_factory=list)
     nudge_step_deg: float = Field(10.0, gt=0, le=180)  # Home Assistant's nudge buttons
+
+    @field_validator("az_offset_deg")
+    @classmethod
+    def _one_turn(cls, offset: float) -> float:
+        """-180 and 180 (or 270 and -90) turn the same way; kept in (-180, 180] so one setup has
+        one range of targets on a rotor that can pass 360 (check-config shows the value)."""
+        folded = (offset + 180.0) % 360.0 - 180.0
+        return 180.0 if folded == -180.0 else folded + 0.0  # never -0.0
 
     def pointing_for(
         self, spec: ModelSpec, az_limits: tuple[float, float], el_limits: tuple[float, float]

@@ -9,7 +9,7 @@ import pytest
 
 from bridge.config_report import config_warnings, masked
 from bridge.protocols import REGISTRY
-from bridge.settings import ConfigError, load_settings
+from bridge.settings import ConfigError, RotatorSettings, load_settings
 from tests.support import run_cli
 
 MINIMAL = """
@@ -371,3 +371,12 @@ def test_a_silence_timeout_shorter_than_the_idle_poll_is_refused(
     text = MINIMAL.replace('model = "rotorez"', 'model = "rot2prog"') + extra
     with pytest.raises(ConfigError, match=r"rotators\[0\].*silence_timeout_s .* idle poll"):
         load_settings(write(tmp_path, text), environ={})
+
+
+@pytest.mark.parametrize(
+    ("given", "used"), [(180, 180), (-180, 180), (360, 0), (270, -90), (-90, -90), (-360, 0)]
+)
+def test_an_offset_is_kept_within_one_turn(given: float, used: float) -> None:
+    r = RotatorSettings(id="sky", model="rot2prog", port="/dev/ttyUSB0", az_offset_deg=given)
+    assert r.az_offset_deg == used
+    assert r.pointing.target_range() == ((-180 + used, 540 + used) if used else (-180, 540))
