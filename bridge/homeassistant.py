@@ -231,6 +231,9 @@ def _nudge(info: RotatorInfo, sign: str) -> str:
 # a 2, 4, 6 or 8 character Maidenhead locator, either case (as geo.is_locator): Home Assistant
 # checks it with Python's re and its dashboard with an HTML pattern, so no inline flags
 LOCATOR_PATTERN = "^[A-Ra-r]{2}([0-9]{2}([A-Xa-x]{2}([0-9]{2})?)?)?$"
+# sent as {"locator": ...}: a bare two-letter field on the target topic is refused (it is more
+# often a preset's name sent to the wrong topic); the pattern keeps the JSON well formed
+LOCATOR_TEMPLATE = '{"locator": "{{ value }}"}'
 # the preset select is a menu of places to go: every status shows it with none chosen, because
 # Home Assistant's dashboard sends nothing when the option it shows is picked again
 NO_OPTION = "{{ 'None' }}"
@@ -275,8 +278,8 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "command_topic": r.topics.nudge, "payload_press": _nudge(r, "+"),
         "icon": "mdi:rotate-right"}),
     Entity("text", "locator", "Locator", needs="has_station", config=lambda r: {
-        "command_topic": r.topics.target, "mode": "text", "min": 2, "max": 8,
-        "pattern": LOCATOR_PATTERN, "icon": "mdi:map-search"}),
+        "command_topic": r.topics.target, "command_template": LOCATOR_TEMPLATE, "mode": "text",
+        "min": 2, "max": 8, "pattern": LOCATOR_PATTERN, "icon": "mdi:map-search"}),
     Entity("button", "long_path", "Long path", needs="has_station", config=lambda r: {
         "command_topic": r.topics.target, "payload_press": '{"path": "long"}',
         "icon": "mdi:earth"}),

@@ -373,6 +373,8 @@ def test_the_rules_catch_what_home_assistant_refuses_in_a_select_or_text() -> No
     node = "homeassistant/{}/rotorbridge_rotor_r_tower/{}/config"
     assert validate(node.format("select", "preset"), sel) == []
     assert validate(node.format("text", "locator"), text) == []
+    # sent as JSON: a bare two-letter field on the target topic is refused (payloads.parse_aim)
+    assert text["command_template"] == '{"locator": "{{ value }}"}'
     for bad_select in ({k: v for k, v in sel.items() if k != "options"}, {**sel, "options": "EU"}):
         assert validate(node.format("select", "preset"), bad_select)
     for change in ({"max": 256}, {"min": -1}, {"min": 9}, {"mode": "number"}, {"pattern": "(["}):

@@ -2,7 +2,8 @@
 
 Inbound rules: UTF-8 text at most MAX_COMMAND_BYTES long; numbers are finite decimals; a target
 is a bare azimuth (``123``, ``123.5``), ``az el`` (space or comma), a JSON object
-``{"azimuth": a, "elevation": e}``, or a place: a bare Maidenhead locator (``PM95vq``),
+``{"azimuth": a, "elevation": e}``, or a place: a bare Maidenhead locator of 4, 6 or 8
+characters (``PM95vq``; a two-letter field only in JSON: ``JA`` is more often a preset's name),
 ``{"locator": "PM95vq"}`` or ``{"latitude": 35.7, "longitude": 139.7}``, each with an optional
 ``"path": "long"``; switches are ON/OFF, 1/0, true/false in any case. Anything else raises
 PayloadError with a message meant for the user.
@@ -80,6 +81,11 @@ def _json_object(text: str, what: str) -> dict[str, object]:
 def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
     """A target (parse_target) or a place: a locator or coordinates, short or long path."""
     text = _text(payload)
+    if len(text) == 2 and text.isalpha():  # a preset's name or a word sent to the wrong topic
+        raise PayloadError(
+            f"{text!r} is no bearing; a bare locator has 4, 6 or 8 characters (a field alone: "
+            f'{{"locator": "{text}"}}; a preset goes to the preset topic)'
+        )
     if geo.is_locator(text) or _looks_like_locator(text):
         return _place(text, None, None, False)  # a bad locator gets the locator's error
     if not text.startswith("{"):
@@ -111,7 +117,7 @@ def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
 
 
 def _looks_like_locator(text: str) -> bool:
-    """Two letters, then a digit or nothing, and a locator's length (``JZ62``, ``AB``)."""
+    """Two letters, then a digit, and a locator's length (``JZ62``): a bad locator, no number."""
     return (
         len(text) in geo.LOCATOR_LENGTHS
         and text[:2].isalpha()

@@ -310,6 +310,9 @@ M = Source.MQTT
          ("toward", 35.6875, 139.7917, "PM95vq", True, M,
           "target '{\"locator\": \"PM95vq\", \"path\": \"long\"}'")),
         ("rotor/b/target", b'{"path": "long"}', ("path", True, M, "target '{\"path\": \"long\"}'")),
+        # a field alone only in JSON (Home Assistant's locator box sends it so)
+        ("rotor/b/target", b'{"locator": "JA"}', ("toward", -85.0, 10.0, "JA", False, M,
+                                                 "target '{\"locator\": \"JA\"}'")),
         ("rotor/b/target", b'{"latitude": 35.7, "longitude": 139.7}',
          ("toward", 35.7, 139.7, None, False, M,
           "target '{\"latitude\": 35.7, \"longitude\": 139.7}'")),
@@ -342,6 +345,9 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/option/jam", b"2", "expected ON or OFF, got '2'", "option jam '2'"),
         ("rotor/target", b"JZ62", "locator 'JZ62': second character must be a letter A..R, got 'Z'",
          "target 'JZ62'"),
+        # a bare field is more often a preset's name sent to the wrong topic (cold review)
+        ("rotor/target", b"JA", "'JA' is no bearing; a bare locator has 4, 6 or 8 characters (a "
+         'field alone: {"locator": "JA"}; a preset goes to the preset topic)', "target 'JA'"),
         ("rotor/target", b'{"locator": "PM95", "path": "longest"}',
          '"path" must be "short" or "long", got "longest"',
          "target '{\"locator\": \"PM95\", \"path\": \"longest\"}'"),
@@ -377,6 +383,9 @@ def test_a_command_the_rotator_refuses_is_left_to_it_to_report() -> None:
         ("rotor/target/elevation", "target_elevation '120'"),
         ("rotor/lock", "lock '120'"),
         ("rotor/option/jam", "option jam '120'"),
+        ("rotor/preset", "preset '120'"),
+        ("rotor/park", "park '120'"),  # a retained PARK is the likeliest mistake of all
+        ("rotor/nudge", "nudge '120'"),
     ],
 )
 def test_a_retained_command_is_refused_not_executed(topic: str, what: str) -> None:
