@@ -236,14 +236,18 @@ class Rig(BaseRig):
         return bogus_bearings(self.models[rid], self.emus[rid], self.probe.messages, self.root(rid))
 
     def arrived(self, rid: str, az: float, el: float | None = None, timeout_s: float = 20) -> None:
-        """Wait until the rotor really is at az (/el) and still (the emulator's ground truth)."""
+        """Wait until the rotor really points at az (/el), still (the emulator's truth).
+
+        Azimuth is compared as a direction: a SPID may reach true 200 at raw -160, the side
+        that needs the least travel, which is what the bridge picks when it is already there.
+        """
         model, emu = self.models[rid], self.emus[rid]
         tol = arrival_tol(model)
 
         def there(s: Any) -> bool:
             if s.is_moving or s.in_brake_delay:
                 return False
-            if not near_deg(s.az_deg, az, tol, model not in SPID):
+            if not near_deg(s.az_deg, az, tol):
                 return False
             return el is None or abs(s.el_deg - el) <= tol
 
