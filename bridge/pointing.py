@@ -253,9 +253,15 @@ class Pointing:
         if self.whole_degrees:
             r = float(math.floor(value + 0.5))
             return r, r
-        if not self.az_wraps:
-            return float(math.floor(value)), value
+        if not self.az_wraps:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
+            return float(math.floor(360.0 + value)) - 360.0, value
         return value, value
+
+    def _resolution(self) -> str:
+        """Why ``_sent`` moved a value, for the refusal's message."""
+        if self.whole_degrees:
+            return "it takes whole degrees"
+        return "it may cut to whole degrees, its coarsest resolution"
 
     def _sent_within(self, value: float, lo: float, hi: float) -> bool:
         low, high = self._sent(value)
@@ -265,8 +271,8 @@ class Pointing:
         low, high = self._sent(value)
         sent = f"{low:g}" if low == high else f"as low as {low:g}"
         return (
-            f"{shown} becomes {sent} on the {self.model_name} (its resolution), outside the "
-            f"limits {lo:g}..{hi:g}"
+            f"{shown} becomes {sent} on the {self.model_name} ({self._resolution()}), "
+            f"outside the limits {lo:g}..{hi:g}"
         )
 
     @staticmethod
@@ -285,7 +291,8 @@ class Pointing:
                 raise Refused(
                     RefusalCode.KEEP_OUT,
                     f"azimuth {az_deg:g} is sent to the {self.model_name} as "
-                    f"{norm360(t1):g}{'' if t1 == t2 else f'..{norm360(t2):g}'} (its resolution), "
+                    f"{norm360(t1):g}{'' if t1 == t2 else f'..{norm360(t2):g}'} "
+                    f"({self._resolution()}), "
                     f"in the keep-out sector {sector[0]:g}..{sector[1]:g}: refused",
                 )
 

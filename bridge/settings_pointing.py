@@ -71,8 +71,13 @@ class PointingFields(BaseModel):
     def _one_turn(cls, offset: float) -> float:
         """-180 and 180 (or 270 and -90) turn the same way; kept in (-180, 180] so one setup has
         one range of targets on a rotor that can pass 360 (check-config shows the value)."""
-        folded = (offset + 180.0) % 360.0 - 180.0
-        return 180.0 if folded == -180.0 else folded + 0.0  # never -0.0
+        # whole turns only, added exactly: (offset + 180) % 360 - 180 would turn 0.3 into
+        # 0.30000000000001137 and refuse targets a hair inside a limit
+        while offset > 180.0:
+            offset -= 360.0
+        while offset <= -180.0:
+            offset += 360.0
+        return offset + 0.0  # never -0.0
 
     def pointing_for(
         self, spec: ModelSpec, az_limits: tuple[float, float], el_limits: tuple[float, float]

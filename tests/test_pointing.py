@@ -138,6 +138,11 @@ def test_keep_out_and_limits_hold_for_what_the_controller_is_really_sent() -> No
     assert refused(Pointing.of(SPID, (10.5, 300)).judge, Target(10.7, 0), 100) is (
         RefusalCode.LIMITS
     )
+    # the codec's cut is floor(360 + v) - 360: a hair below 0 goes out as 0, not -1
+    assert Pointing.of(SPID, (-0.5, 300)).judge(Target(-1e-15, 0), 100).az_deg == -1e-15
+    with pytest.raises(Refused) as exc:
+        Pointing.of(SPID, (0.5, 300)).judge(Target(0.7, 0), 100)
+    assert "it may cut to whole degrees, its coarsest resolution" in exc.value.message
     with pytest.raises(Refused) as exc:
         Pointing.of(SPID, keep_out=((350, 10),)).judge(Target(365, 0), 100)
     assert exc.value.message.startswith("azimuth 365 (5) is in the keep-out sector 350..10")

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from bridge.config_report import config_warnings, masked
+from bridge.model import Target
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, RotatorSettings, load_settings
 from tests.support import run_cli
@@ -380,3 +381,24 @@ def test_an_offset_is_kept_within_one_turn(given: float, used: float) -> None:
     r = RotatorSettings(id="sky", model="rot2prog", port="/dev/ttyUSB0", az_offset_deg=given)
     assert r.az_offset_deg == used
     assert r.pointing.target_range() == ((-180 + used, 540 + used) if used else (-180, 540))
+
+
+@pytest.mark.parametrize("offset", [0.3, 90.1, -179.9, 180.0, 12.345])
+def test_an_offset_within_one_turn_is_kept_exactly(offset: float) -> None:
+    """Cold review: folding by arithmetic turned 0.3 into 0.30000000000001137, and a target a
+    hair inside a limit was refused."""
+    r = RotatorSettings(id="sky", model="rot2prog", port="/dev/ttyUSB0", az_offset_deg=offset)
+    assert r.az_offset_deg == offset
+    assert RotatorSettings(
+        id="sky",
+        model="rot2prog",
+        port="/dev/ttyUSB0",
+        az_offset_deg=offset - 360 if offset > 0 else offset + 360,
+    ).az_offset_deg == pytest.approx(offset, abs=1e-12)
+
+
+def test_a_target_at_the_lowest_true_bearing_is_taken_with_a_fractional_offset() -> None:
+    r = RotatorSettings(id="sky", model="rot2prog", port="/dev/ttyUSB0", az_offset_deg=90.1)
+    lo, _ = r.pointing.target_range()
+    assert lo == -89.9
+    assert r.pointing.judge(Target(-89.9, 0), None).az_deg == -180  # raw: the lower stop
