@@ -177,6 +177,9 @@ def bogus_bearings(
     Checks ``R/bearing`` and ``R/elevation`` (not for the SatEL, whose bearing topic also carries
     estimates) and the bearing/elevation of every ``R/status`` that is not marked estimated.
     """
+    # the messages first: each one came from a reply already on the wire, while a rotor still
+    # settling goes on replying and publishing after the snapshot of the wire is taken
+    messages = list(messages)
     az, el = reported_positions(model, tap_of(emu).sent())
     # R/bearing is a true bearing (0..360, pointing.py); the controller's own value, which on a
     # SPID may be past 360 or below 0, is the status's raw_bearing
