@@ -8,11 +8,13 @@ import signal
 import threading
 from functools import partial
 
+from bridge.engine.catalog import TleCatalog
 from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
+from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.mqtt.client import MqttClient
@@ -20,11 +22,13 @@ from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
+from bridge.sky import Sky
 
 log = logging.getLogger(__name__)
 
 
-def worker_config(r: RotatorSettings) -> WorkerConfig:
+def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
+    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked)."""
     spec = r.spec
     az_min, az_max = r.effective_az_limits
     az_speed, el_speed = r.effective_speeds_deg_s
@@ -54,6 +58,12 @@ def worker_config(r: RotatorSettings) -> WorkerConfig:
         el_speed_deg_s=el_speed,
         pointing=r.pointing,
         park_after_idle_s=r.park_after_idle_s,
+        tracking=TrackConfig(
+            sky=sky,
+            min_el_deg=r.track_min_el_deg,
+            step_deg=r.effective_track_step_deg,
+            at_los=r.track_at_los,
+        ),
     )
 
 
@@ -88,9 +98,12 @@ class App:
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
+        position = settings.station.position
+        sky = Sky(*position) if position is not None else None
+        catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
         for r in settings.rotators:
             rot = Rotator(
-                worker_config(r),
+                worker_config(r, sky),
                 store,
                 on_status=partial(self.mqtt.publish_status, r.id),
                 on_event=partial(self.mqtt.publish_event, r.id),
@@ -98,6 +111,7 @@ class App:
                 port_opener=port_opener,
                 lines=self.lines,
                 station=settings.station.position,
+                catalog=catalog,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
@@ -124,6 +138,7 @@ class App:
                     rot.pointing,
                     has_station=settings.station.position is not None,
                     nudge_step_deg=r.nudge_step_deg,
+                    satellites=tuple(self.catalog.names()),
                 )
             )
         publisher = DiscoveryPublisher(

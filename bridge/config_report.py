@@ -37,6 +37,7 @@ def masked(settings: Settings) -> dict[str, Any]:
         r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
         r["silence_timeout_s"] = rs.effective_silence_timeout_s
         r["noise_deg"] = rs.effective_noise_deg
+        r["track_step_deg"] = rs.effective_track_step_deg
         az_speed, el_speed = rs.effective_speeds_deg_s
         r["az_speed_deg_s"] = az_speed
         r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
@@ -67,6 +68,12 @@ def config_warnings(settings: Settings) -> list[str]:
         found.append(
             "mqtt.password is written in the configuration file: put it in a file of its own, "
             "readable only by the service user, and name that in mqtt.password_file"
+        )
+    tle = settings.tracking.tle_file
+    if tle is not None and not os.path.isfile(tle):
+        found.append(
+            f"tracking.tle_file: {tle} does not exist now; satellites can be tracked by name "
+            "once it does (it is read when it changes)"
         )
     for i, r in enumerate(settings.rotators):
         where = f"rotators[{i}]"

@@ -27,6 +27,7 @@ class Source(enum.StrEnum):
     MQTT = "mqtt"
     ROTCTLD = "rotctld"
     AUTO_PARK = "auto-park"  # park_after_idle_s: the bridge parked it, nobody asked
+    TRACKING = "tracking"  # the bridge follows the sun, the moon or a satellite (R/track)
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,23 @@ class TargetInfo:
     long_path_deg: float
     path: str = "short"  # or "long"
     locator: str | None = None
+
+
+@dataclass(frozen=True)
+class TrackingInfo:
+    """What the rotator follows (``tracking`` in the status). Times are unix seconds."""
+
+    body: str  # "sun", "moon" or the satellite's name
+    phase: str  # "waiting" (below the minimum elevation), "tracking", "no pass"
+    azimuth_deg: float | None = None  # the body now, true bearing
+    elevation_deg: float | None = None
+    next_azimuth_deg: float | None = None  # the body in a minute
+    next_elevation_deg: float | None = None
+    aos_unix: float | None = None  # the current or next pass above the minimum elevation
+    los_unix: float | None = None
+    max_elevation_deg: float | None = None
+    aos_azimuth_deg: float | None = None
+    flip: bool = False  # this pass is flown with elevation past 90 and azimuth + 180
 
 
 @dataclass(frozen=True)
@@ -133,6 +151,8 @@ class RotatorStatus:
     overlap: str | None = None  # "cw" past 360, "ccw" below 0 (rotors that can pass 360)
     target_info: TargetInfo | None = None
     parked: bool = False  # at the park position after a park, until the next move
+    tracking: TrackingInfo | None = None
+    tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
 
     @property
     def moving(self) -> bool:

@@ -35,7 +35,7 @@ from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings_files import check_tls_files, read_password_file
-from bridge.settings_pointing import PointingFields, StationSettings
+from bridge.settings_pointing import PointingFields, StationSettings, TrackingSettings
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
 DEFAULT_SILENCE_TIMEOUT_S = 3.0  # no valid reply this long: offline (unless polls are rarer)
@@ -260,6 +260,11 @@ class RotatorSettings(PointingFields):
         return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
 
     @property
+    def effective_track_step_deg(self) -> float:
+        """How far the body moves before tracking sends the next target: the tolerance."""
+        return self.tolerance_deg if self.track_step_deg is None else self.track_step_deg
+
+    @property
     def effective_speeds_deg_s(self) -> tuple[float, float]:
         return self.spec.speeds_deg_s(self.az_speed_deg_s, self.el_speed_deg_s)
 
@@ -312,6 +317,7 @@ class Settings(BaseSettings):
     mqtt: MqttSettings = MqttSettings()
     homeassistant: HomeAssistantSettings = HomeAssistantSettings()
     station: StationSettings = StationSettings()  # settings_pointing.py
+    tracking: TrackingSettings = TrackingSettings()
     rotators: list[RotatorSettings] = Field(min_length=1)
     log_level: str = "INFO"
     state_file: Path = Field(default_factory=_default_state_file)

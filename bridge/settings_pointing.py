@@ -7,7 +7,8 @@ reached is a configuration error naming the field, not a refusal at the worst mo
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from pathlib import Path
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -53,6 +54,14 @@ class StationSettings(BaseModel):
         return self.latitude_deg, self.longitude_deg
 
 
+class TrackingSettings(BaseModel):
+    """``[tracking]``: where satellites' orbital elements come from (never downloaded)."""
+
+    model_config = ConfigDict(extra="forbid")
+    # a TLE file (Celestrak's 3-line form), re-read when it changes; refreshed by the user's cron
+    tle_file: Path | None = None
+
+
 class PointingFields(BaseModel):
     """The pointing part of ``[[rotators]]`` (the rotator's model supplies spec and limits)."""
 
@@ -65,6 +74,10 @@ class PointingFields(BaseModel):
     park_after_idle_s: float = Field(0.0, ge=0, le=86400)  # 0: never park by itself
     keep_out: list[tuple[Degrees, Degrees]] = Field(default_factory=list)
     nudge_step_deg: float = Field(10.0, gt=0, le=180)  # Home Assistant's nudge buttons
+    # tracking (engine/tracking.py): below this elevation the rotator waits for the pass
+    track_min_el_deg: float = Field(0.0, ge=-5, le=80)
+    track_step_deg: float | None = Field(None, gt=0, le=45)  # None: the rotator's tolerance
+    track_at_los: Literal["stay", "park"] = "stay"  # "park" needs park_az_deg
 
     @field_validator("az_offset_deg")
     @classmethod
@@ -120,6 +133,8 @@ class PointingFields(BaseModel):
             self.park_az_deg is None or not pointing.has_elevation
         ):
             raise ValueError("park_el_deg needs park_az_deg and an elevation axis")
+        if self.track_at_los == "park" and self.park_az_deg is None:
+            raise ValueError('track_at_los = "park" needs park_az_deg (where to park)')
         if self.park_after_idle_s > 0 and self.park_az_deg is None:
             raise ValueError("park_after_idle_s needs park_az_deg (where to park)")
         if 0 < self.park_after_idle_s < 5:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bridge.engine import motion as mo
+from bridge.engine.tracking import TrackConfig
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -27,6 +28,7 @@ class WorkerConfig:
     junk_report_interval_s: float = 30.0
     pointing: Pointing | None = None  # None: the model's whole range, no offset
     park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
+    tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
 
     def __post_init__(self) -> None:
         if self.pointing is None:

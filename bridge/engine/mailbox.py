@@ -3,6 +3,8 @@
 Rules:
 1. A stop pre-empts everything: it is taken first and drops any target that came before it.
 2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts).
+   A track command (start or off) replaces a target put before it; a target put after it is
+   kept, and the session lets it end the tracking (the later command wins either way).
 3. Options and the lock are settings: the latest value per name wins, order between names kept.
 4. ``put`` never blocks on the worker; it wakes the worker through a pipe the lines thread polls,
    so a command reaches the wire while the worker waits for serial bytes, never after a timeout.
@@ -18,6 +20,7 @@ import os
 import threading
 from dataclasses import dataclass, field
 
+from bridge.engine.tracking import Track
 from bridge.model import SetOption, Stop, Target
 
 
@@ -30,9 +33,11 @@ class Batch:
     options: list[SetOption] = field(default_factory=list)
     lock: bool | None = None
     notes: list[str] = field(default_factory=list)
+    track: Track | None = None  # applied after the stop and before the target (tracking.py)
 
     def __bool__(self) -> bool:
-        return bool(self.stop or self.target or self.options or self.lock is not None or self.notes)
+        settings = self.options or self.lock is not None or self.notes
+        return bool(self.stop or self.target or settings or self.track)
 
 
 class Mailbox:
@@ -52,6 +57,7 @@ class Mailbox:
             if isinstance(command, Stop):
                 self._batch.stop = command
                 self._batch.target = None
+                self._batch.track = None  # the stop ends tracking anyway
             elif isinstance(command, Target):
                 self._batch.target = command
             else:
@@ -64,6 +70,14 @@ class Mailbox:
             self._batch.lock = locked
             if locked:
                 self._batch.target = None
+                self._batch.track = None
+        self._wake()
+
+    def put_track(self, track: Track) -> None:
+        """Start or end tracking; it replaces a target put before it (the later command wins)."""
+        with self._lock:
+            self._batch.track = track
+            self._batch.target = None
         self._wake()
 
     def put_note(self, message: str) -> None:

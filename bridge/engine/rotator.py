@@ -18,10 +18,12 @@ from dataclasses import dataclass
 
 import serial
 
+from bridge.engine.catalog import CatalogError, TleCatalog
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
 from bridge.engine.state_store import StateStore
+from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
@@ -37,6 +39,7 @@ from bridge.model import (
 )
 from bridge.pointing import toward
 from bridge.protocols.base import ModelSpec
+from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
 
@@ -63,12 +66,16 @@ class Rotator:
         port_opener: Callable[..., serial.Serial] = open_port,
         lines: Lines | None = None,
         station: tuple[float, float] | None = None,
+        catalog: TleCatalog | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
         self.spec: ModelSpec = cfg.spec
         self.pointing = cfg.aim  # limits, offset, keep-out, presets, park: the judge's terms
         self.station = station  # (latitude, longitude): targets by locator or coordinates
+        self.catalog = catalog or TleCatalog(None)  # satellites to track by name
+        self._has_sky = cfg.tracking.sky is not None
+        self.can_track = self._has_sky and cfg.spec.can_report_position
         self._store = store
         self._on_event = on_event
         self._wall = wall
@@ -183,6 +190,56 @@ class Rotator:
         self._named(
             lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source), described
         )
+
+    def track(
+        self,
+        name: str,
+        source: Source,
+        described: str,
+        tle: tuple[str, str, str] | None = None,
+    ) -> None:
+        """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
+        ``off`` ends it (never refused, like a stop). Raise Refused otherwise."""
+        if name.strip().casefold() == "off" and tle is None:
+            self._mailbox.put_track(Track(None, source))
+            return
+        try:
+            body = self._body(name, tle)
+            if self._locked:
+                raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
+            if not self.status.available:
+                raise Refused(
+                    RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
+                )
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self._mailbox.put_track(Track(body, source))
+
+    def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body:
+        if not self._has_sky:
+            raise Refused(
+                RefusalCode.UNSUPPORTED,
+                "tracking needs the station's position ([station] locator, or latitude_deg "
+                "and longitude_deg)",
+            )
+        if not self.spec.can_report_position:
+            raise Refused(
+                RefusalCode.UNSUPPORTED,
+                f"the {self.spec.display_name} cannot report where it points: tracking needs a "
+                "controller that does",
+            )
+        try:
+            if tle is not None:
+                return Body.satellite(*tle)
+            folded = name.strip().casefold()
+            if folded == "sun":
+                return Body.sun()
+            if folded == "moon":
+                return Body.moon()
+            return self.catalog.lookup(name)
+        except (SkyError, CatalogError) as exc:
+            raise Refused(RefusalCode.INVALID, str(exc)) from None
 
     def _named(self, make: Callable[[], Target], described: str) -> None:
         try:

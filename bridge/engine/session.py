@@ -35,13 +35,16 @@ Rules:
    switched on again.
 9. Bytes that complete no reply change nothing: the codec keeps them, and the rest of the rules
    run only when a reply (or junk) came, a command came, or ``next_wakeup`` passed.
+10. Tracking (tracking.py) puts its own targets, judged like any; a stop, the lock, a track
+   command or any other target ends it. Its targets skip the "already within tolerance"
+   check a target gets before it is sent: a track's steps may be finer than the tolerance.
 """
 
 from __future__ import annotations
 
 import logging
 
-from bridge.engine import autopark, slewing
+from bridge.engine import autopark, slewing, tracking
 from bridge.engine import motion as mo
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Publish, Report, Write
@@ -50,7 +53,14 @@ from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.slew import Slew
 from bridge.engine.targets import Targets, resolve
-from bridge.model import ErrorKind, MotionState, RotatorStatus, Target, describe_command
+from bridge.model import (
+    ErrorKind,
+    MotionState,
+    RotatorStatus,
+    Source,
+    Target,
+    describe_command,
+)
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
 
 log = logging.getLogger(__name__)
@@ -71,6 +81,7 @@ class RotatorSession:
         self.link: Link | None = None
         self.targets = Targets(cfg)
         self.autopark = autopark.AutoPark(cfg.park_after_idle_s, cfg.aim.park)
+        self.tracker = tracking.Tracker(cfg.tracking)
         self.answering = False
         self._silence_reported = False
         self._options_due: set[str] = set()
@@ -135,12 +146,14 @@ class RotatorSession:
         if batch.lock is not None:
             self.locked = batch.lock
             if batch.lock:
+                self.tracker.end("lock")
                 self._drop_pending(None)
                 if link is not None:
                     self.stop_now(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
+            self.tracker.end("stop")
             self.targets.clear()
             self.view.last_source = batch.stop.source.value
             self.view.target_info, self.view.park_raw = None, None
@@ -150,8 +163,11 @@ class RotatorSession:
             self.options[opt.name] = opt.enabled
             if link is not None:
                 self._options_due.add(opt.name)
+        if batch.track is not None:
+            self._track(batch.track, now)
         if batch.target is not None:
             what = describe_command(batch.target)
+            self.tracker.end(f"{batch.target.source.value} target")
             if self.locked:
                 self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
             elif link is None or not self.answering:
@@ -159,6 +175,23 @@ class RotatorSession:
             else:
                 self.targets.put(batch.target, now)
         return self._step(now)
+
+    def _track(self, track: tracking.Track, now: float) -> None:
+        if track.body is None:
+            self.tracker.end("off")
+            return
+        what = f"track {track.body.name}"
+        if self.locked:
+            self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
+        elif self.link is None or not self.answering:
+            self.error(ErrorKind.REFUSED, "rotator offline", command=what)
+        else:
+            self.tracker.end("another body")
+            self.targets.clear()
+            self.tracker.start(track.body)
+            self.view.last_source = track.source.value
+            self.view.target_info, self.view.park_raw = None, None
+            log.info("%s: tracking %s", self.name, track.body.name)
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
         link = self.link
@@ -309,6 +342,7 @@ class RotatorSession:
                 link.write(enable, now)
             self._enable_due = False
         self._verify_stop(now)
+        tracking.step(self, now)
         autopark.step(self, now)
         if self.targets.pending is not None:
             self._try_target(link, now)
@@ -359,7 +393,8 @@ class RotatorSession:
         if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
             self._aimed(self.targets.clear(), wire)  # already on its way there
             return
-        if self.cfg.spec.can_report_position and mo.within_tolerance(m, mcfg, wire):
+        small = pending.source is not Source.TRACKING  # a track's steps may be finer
+        if small and self.cfg.spec.can_report_position and mo.within_tolerance(m, mcfg, wire):
             log.info("%s: already within tolerance of %s", self.name, wire)
             self._aimed(self.targets.clear(), wire)
             return
@@ -410,7 +445,8 @@ class RotatorSession:
             times += link.wakeups()
             if link.slew is not None:
                 times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
-        for wait in (self.targets.stream_deadline(now), self.autopark.wakeup(now)):
+        waits = (self.targets.stream_deadline(now), self.autopark.wakeup(now))
+        for wait in (*waits, self.tracker.wakeup(now)):
             if wait is not None:
                 times.append(wait)
         deadline = mo.next_deadline(self.motion, self.cfg.motion, now)

@@ -87,6 +87,8 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
         overlap=aim.overlap(raw),
         target_info=view.target_info,
         parked=_parked(session, state),
+        tracking=session.tracker.info,
+        tracking_ended=session.tracker.ended,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,

@@ -38,8 +38,10 @@ from bridge.app import worker_config
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
+from bridge.engine.tracking import Track
 from bridge.model import MotionState, RotatorStatus, SetOption, Stop, Target
 from bridge.settings import RotatorSettings
+from bridge.sky import Body, Sky
 
 WALL_EPOCH_S = 1_750_000_000.0  # the wall clock reads this at virtual time 0
 MAX_STEPS_AT_ONE_INSTANT = 20  # bytes, a tick, a command: a few things may share an instant
@@ -80,13 +82,16 @@ class VirtualRotator:
         locked: bool = False,
         connect: bool = True,
         start_s: float = 0.0,
+        sky: Sky | None = None,
+        wall_epoch_s: float = WALL_EPOCH_S,
     ) -> None:
         self.now = start_s
+        self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
         rotator = RotatorSettings.model_validate(
             {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
         )
         self.settings = rotator
-        self.cfg = worker_config(rotator)
+        self.cfg = worker_config(rotator, sky)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
         self.session = RotatorSession(self.cfg, options=options, locked=locked)
         self.mailbox = Mailbox()
@@ -172,6 +177,14 @@ class VirtualRotator:
         self.mailbox.put_lock(locked)
         self._take()
 
+    def track(self, body: Body | None) -> None:
+        self.mailbox.put_track(Track(body))
+        self._take()
+
+    def wall(self) -> float:
+        """The wall clock (unix seconds) now."""
+        return self.wall_epoch_s + self.now
+
     def _take(self) -> None:
         batch = self.mailbox.take()
         if batch:
@@ -180,7 +193,7 @@ class VirtualRotator:
     # -- the link -------------------------------------------------------------------------------
     def link_up(self) -> None:
         self.connected = True
-        self._do(self.session.link_up(self.now, WALL_EPOCH_S + self.now))
+        self._do(self.session.link_up(self.now, self.wall_epoch_s + self.now))
 
     def link_down(self, reason: str | None = "virtual port unplugged") -> None:
         self.connected = False

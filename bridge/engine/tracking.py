@@ -1,0 +1,328 @@
+"""Following the sun, the moon or a satellite (``R/track``). Pure: the session gives the time;
+positions and passes come from bridge.sky (computation only).
+
+Rules:
+1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, or any
+   other target (a manual one, rotctld's P, a preset, a nudge, a park); the status says why
+   (``tracking_ended``). Tracking's own targets are put here, not in the mailbox, so they never
+   end it. It goes on from pass to pass until it is ended.
+2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
+   next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
+   when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
+   At the end of a pass it parks (``at_los = "park"``, if a park position is configured) or
+   stays where it is.
+3. During a pass a new target goes out when the body has moved ``step_deg`` on either axis
+   from the last one, and only when the controller may take one: any time on a controller that
+   re-targets while turning (SPID); when the rotor is idle on the others (a Rotor-EZ stops to
+   re-target, a SatEL takes no input while slewing). The target leads the body by half a
+   step, so the rotor straddles it: within half a step either side, plus what the rotor lags.
+4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a pass
+   with elevation 180 - el and azimuth + 180 when that saves more than FLIP_SAVING_DEG of
+   azimuth travel (counted as the judge would pick each raw value, from where the rotor is):
+   a pass across a stop (the north on a 0..360 rotor) then stays clear of it. Decided once
+   per pass, before it starts.
+5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
+   sectors). One it refuses is skipped, reported once per pass, and the rotor holds until the
+   body is back where it may go.
+6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
+7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+from bridge.errors import Refused
+from bridge.model import ErrorKind, MotionState, Source, Target, TrackingInfo
+from bridge.sky import Body, Pass, Sky
+
+if TYPE_CHECKING:
+    from bridge.engine.session import RotatorSession
+
+log = logging.getLogger(__name__)
+
+# the body's track is computed at this spacing (a satellite's; the sun's and the moon's ten
+# times wider) and interpolated, WINDOW samples in one call, a few windows kept
+SAMPLE_S = 1.0
+SLOW_SAMPLE_S = 10.0
+WINDOW = 120
+WINDOWS_KEPT = 4
+PASS_RETRY_S = 60.0  # no pass in sight: look again this often
+PREPOSITION_MARGIN_S = 20.0
+INFO_EVERY_S = 5.0  # the status's tracking block is refreshed this often (and on a target)
+NEXT_S = 60.0  # the status's "next" position: this far ahead
+MAX_LEAD_S = 300.0
+FLIP_SAVING_DEG = 30.0
+FLIP_SAMPLE_S = 10.0
+
+
+@dataclass(frozen=True)
+class Track:
+    """Start following ``body``, or stop (None)."""
+
+    body: Body | None
+    source: Source = Source.MQTT
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    sky: Sky | None = None  # None: no station configured, nothing can be tracked
+    min_el_deg: float = 0.0
+    step_deg: float = 3.0
+    at_los: str = "stay"  # or "park"
+
+
+class Tracker:
+    def __init__(self, cfg: TrackConfig) -> None:
+        self.cfg = cfg
+        self.body: Body | None = None
+        self.ended: str | None = None
+        self.info: TrackingInfo | None = None
+        self._reset()
+
+    def _reset(self) -> None:
+        self._pass: Pass | None = None
+        self._pass_checked = -math.inf
+        self._flip = False
+        self._flip_for: float | None = None  # the AOS the flip was decided for
+        self._windows: dict[int, list[tuple[float, float]]] = {}
+        self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
+        self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
+        self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
+        self._after_pass = False
+        self._refused_for: float | None = None
+        self._info_t = -math.inf
+
+    # -- rule 1 ----------------------------------------------------------------------------
+    def start(self, body: Body) -> None:
+        self._reset()
+        self.body, self.ended, self.info = body, None, TrackingInfo(body.name, "waiting")
+
+    def end(self, why: str) -> bool:
+        """Stop following (``why`` shows as ``tracking_ended``); whether anything was tracked."""
+        if self.body is None:
+            return False
+        log.info("tracking %s ended: %s", self.body.name, why)
+        self.body, self.ended, self.info = None, why, None
+        self._reset()
+        return True
+
+    def wakeup(self, now: float) -> float | None:
+        """Tracking looks at the sky at least once a second."""
+        return now + SAMPLE_S if self.body is not None else None
+
+    # -- the body's track ------------------------------------------------------------------
+    def at(self, utc: float) -> tuple[float, float]:
+        """The body's (azimuth, elevation) at ``utc``, interpolated in a cached window."""
+        assert self.body is not None and self.cfg.sky is not None
+        step = SAMPLE_S if self.body.kind == "satellite" else SLOW_SAMPLE_S
+        span = step * WINDOW
+        index = math.floor(utc / span)
+        track = self._windows.get(index)
+        if track is None:
+            if len(self._windows) >= WINDOWS_KEPT:
+                self._windows.pop(next(iter(self._windows)))  # the oldest
+            times = [index * span + i * step for i in range(WINDOW + 1)]
+            track = self._windows[index] = self.cfg.sky.positions(self.body, times)
+        x = (utc - index * span) / step
+        i = min(int(x), WINDOW - 1)
+        f = x - i
+        (az0, el0), (az1, el1) = track[i], track[i + 1]
+        daz = (az1 - az0 + 180.0) % 360.0 - 180.0
+        return (az0 + f * daz) % 360.0, el0 + f * (el1 - el0)
+
+    def current_pass(self, utc: float) -> Pass | None:
+        p = self._pass
+        if p is not None and utc > p.los_s:
+            self._after_pass, self._pass = True, None
+            p = None
+        if p is None and utc - self._pass_checked >= PASS_RETRY_S:
+            assert self.body is not None and self.cfg.sky is not None
+            self._pass_checked = utc
+            p = self._pass = self.cfg.sky.next_pass(self.body, utc, self.cfg.min_el_deg)
+        return p
+
+
+def step(session: RotatorSession, now: float) -> None:
+    """Run by the session with its other rules, while the controller answers."""
+    tr = session.tracker
+    if tr.body is None or tr.cfg.sky is None:
+        return
+    session.autopark.activity(now)  # rule 7
+    if session.link is None or not session.answering or session.locked:
+        return
+    utc = now + session.wall_offset_s
+    p = tr.current_pass(utc)
+    if p is None:
+        _inform(tr, utc, None, "no pass", now)
+        return
+    if tr._flip_for != p.aos_s:
+        tr._flip_for, tr._flip = p.aos_s, _flip_saves(session, p)
+    if utc < p.aos_s:  # current_pass has moved on past a LOS: utc <= p.los_s
+        _inform(tr, utc, p, "waiting", now)
+        _wait_for(session, p, utc, now)
+    else:
+        _inform(tr, utc, p, "tracking", now)
+        _follow(session, p, utc, now)
+
+
+def _flipped(tr: Tracker, az: float, el: float) -> tuple[float, float]:
+    return ((az + 180.0) % 360.0, 180.0 - el) if tr._flip else (az, el)
+
+
+def _aim(session: RotatorSession, az: float, el: float) -> tuple[float, float | None]:
+    """Rules 4 and 6: what the rotor is sent for a body at (az, el)."""
+    tr = session.tracker
+    az, el = _flipped(tr, az, el)
+    aim = session.cfg.aim
+    if not aim.has_elevation:
+        return az, None
+    lo = max(aim.el_min_deg, tr.cfg.min_el_deg if not tr._flip else -math.inf)
+    hi = min(aim.el_max_deg, 180.0 - tr.cfg.min_el_deg if tr._flip else math.inf)
+    return az, min(max(el, lo), hi)
+
+
+def _put(session: RotatorSession, target: Target, now: float) -> bool:
+    """Rule 5: judged like any target; a refusal is reported once per pass."""
+    tr = session.tracker
+    try:
+        judged = session.cfg.aim.judge(target, session.motion.position_deg)
+    except Refused as exc:
+        aos = tr._pass.aos_s if tr._pass is not None else None
+        if tr._refused_for != aos or aos is None:
+            tr._refused_for = aos
+            assert tr.body is not None
+            session.error(ErrorKind.REFUSED, f"tracking {tr.body.name}: {exc.message}; holding")
+        return False
+    session.targets.put(judged, now)
+    return True
+
+
+def _wait_for(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
+    """Rule 2: after a pass park or stay, then go and wait where the next one rises."""
+    tr = session.tracker
+    if tr._after_pass and tr._parked_after != p.aos_s:
+        tr._parked_after = p.aos_s
+        if tr.cfg.at_los == "park" and session.cfg.aim.park is not None:
+            az, el = session.cfg.aim.park
+            if _put(session, Target(az, el, Source.TRACKING, park=True), now):
+                log.info("%s: pass over; parking until the next one", session.name)
+            return
+    if tr._waited_for == p.aos_s or session.targets.pending is not None:
+        return
+    aos_el = tr.cfg.min_el_deg
+    az, el = _aim(session, p.aos_az_deg, aos_el)
+    if tr._after_pass and utc < p.aos_s - _travel_s(session, az, el) - PREPOSITION_MARGIN_S:
+        return
+    if tr._after_pass and session.motion.state in (MotionState.MOVING, MotionState.BRAKING):
+        return  # a park still on its way: the wait target follows it
+    tr._waited_for = p.aos_s
+    _put(session, Target(az, el, Source.TRACKING), now)
+    tr._last = (az, el)
+
+
+def _follow(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
+    """Rule 3."""
+    tr = session.tracker
+    link = session.link
+    assert link is not None
+    direct = session.cfg.motion.direct_retarget
+    m = session.motion
+    if session.targets.pending is not None or link.slew is not None:
+        return
+    if not direct and m.state is not MotionState.IDLE:
+        return
+    if m.state in (MotionState.BRAKING, MotionState.STALLED):
+        return
+    lead = _half_step_s(tr, utc)
+    az, el = _aim(session, *tr.at(min(utc + lead, p.los_s)))
+    if tr._last is not None and _apart(tr._last, (az, el)) < tr.cfg.step_deg:
+        return
+    if _put(session, Target(az, el, Source.TRACKING), now):
+        tr._last = (az, el)
+
+
+def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:
+    daz = abs((a[0] - b[0] + 180.0) % 360.0 - 180.0)
+    if a[1] is None or b[1] is None:
+        return daz
+    return max(daz, abs(a[1] - b[1]))
+
+
+def _half_step_s(tr: Tracker, utc: float) -> float:
+    """How long the body takes to move half a step (rule 3), from its rate over 10 s."""
+    a, b = tr.at(utc), tr.at(utc + 10.0)
+    rate = _apart(a, b) / 10.0
+    if rate <= 0.0:
+        return MAX_LEAD_S
+    return min(tr.cfg.step_deg / 2.0 / rate, MAX_LEAD_S)
+
+
+def _travel_s(session: RotatorSession, az: float, el: float | None) -> float:
+    """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2)."""
+    cfg, m = session.cfg, session.motion
+    try:
+        raw = cfg.aim.raw_for(az, m.position_deg)
+    except Refused:
+        return 0.0
+    t = 0.0 if m.position_deg is None else abs(raw - m.position_deg) / cfg.az_speed_deg_s
+    if el is not None and m.el_position_deg is not None:
+        t = max(t, abs(el - m.el_position_deg) / cfg.el_speed_deg_s)
+    return t + cfg.spec.brake_delay_s
+
+
+def _flip_saves(session: RotatorSession, p: Pass) -> bool:
+    """Rule 4: whether this pass is flown flipped."""
+    tr, aim = session.tracker, session.cfg.aim
+    if not aim.has_elevation or aim.el_max_deg < 180.0 - tr.cfg.min_el_deg:
+        return False
+    assert tr.body is not None and tr.cfg.sky is not None
+    n = max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1)
+    times = [p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n)]
+    track = tr.cfg.sky.positions(tr.body, times)
+
+    def travel(flip: bool) -> float:
+        raw, total = session.motion.position_deg, 0.0
+        for az, _el in track:
+            want = (az + 180.0) % 360.0 if flip else az
+            try:
+                nxt = aim.raw_for(want, raw)
+            except Refused:
+                return math.inf
+            total += 0.0 if raw is None else abs(nxt - raw)
+            raw = nxt
+        return total
+
+    return travel(True) + FLIP_SAVING_DEG < travel(False)
+
+
+def _inform(tr: Tracker, utc: float, p: Pass | None, phase: str, now: float) -> None:
+    """The status's tracking block, refreshed every INFO_EVERY_S or when the phase changes."""
+    assert tr.body is not None
+    old = tr.info
+    if old is not None and old.phase == phase and now - tr._info_t < INFO_EVERY_S:
+        return
+    tr._info_t = now
+    az, el = tr.at(utc)
+    naz, nel = tr.at(utc + NEXT_S)
+    info = TrackingInfo(
+        tr.body.name,
+        phase,
+        round(az, 1),
+        round(el, 1),
+        round(naz, 1),
+        round(nel, 1),
+        flip=tr._flip,
+    )
+    if p is not None:
+        info = replace(
+            info,
+            aos_unix=round(p.aos_s, 1),
+            los_unix=round(p.los_s, 1),
+            max_elevation_deg=round(p.max_el_deg, 1),
+            aos_azimuth_deg=round(p.aos_az_deg, 1),
+        )
+    tr.info = info

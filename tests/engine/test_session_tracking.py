@@ -1,0 +1,260 @@
+"""Tracking (engine/tracking.py) in virtual time: the session, an emulated controller and a
+fake clock whose wall time is the real one, so the sky is today's. Positions are checked
+against references computed in the test by other means (tests/support/sky.py: a published
+low-precision solar formula, and the sgp4 package with our own frame transforms), never by
+the library the bridge uses."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from bridge.model import MotionState, Source, Target
+from bridge.sky import Body, Sky
+from tests.engine.virtual import VirtualRotator
+from tests.support.sky import sgp4_altaz, sun_altaz, tle_with_pass
+
+
+def sun_up_somewhere(t_unix: float, lo: float = 35.0, hi: float = 60.0) -> tuple[float, float]:
+    """A station where the sun stands between ``lo`` and ``hi`` degrees at ``t_unix``."""
+    for lat in (0.0, 30.0, -30.0, 50.0, -50.0):
+        for lon in range(-180, 180, 5):
+            az, el = sun_altaz(lat, float(lon), t_unix)
+            if lo <= el <= hi and 20.0 <= az <= 340.0:
+                return lat, float(lon)
+    raise AssertionError("the sun is up somewhere")
+
+
+def pointing(az_deg: float, el_deg: float) -> tuple[float, float]:
+    """Where an az/el rotor really points: past 90 of elevation it looks the other way."""
+    if el_deg > 90.0:
+        return (az_deg + 180.0) % 360.0, 180.0 - el_deg
+    return az_deg % 360.0, el_deg
+
+
+def off_deg(a: float, b: float) -> float:
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def test_the_sun_is_followed_within_2_degrees_on_an_md01() -> None:
+    wall = time.time()  # the sky at test time
+    lat, lon = sun_up_somewhere(wall)
+    with VirtualRotator(
+        "md01",
+        sky=Sky(lat, lon),
+        wall_epoch_s=wall,
+        emulator={"az_speed_deg_s": 2.0, "el_speed_deg_s": 1.0},
+        settings={"az_speed_deg_s": 2.0, "el_speed_deg_s": 1.0},
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.sun())
+        assert v.status.tracking is not None and v.status.tracking.body == "sun"
+
+        def on_the_sun(h: VirtualRotator) -> bool:
+            sun = sun_altaz(lat, lon, h.wall())
+            az, el = pointing(h.truth().az_deg, h.truth().el_deg)
+            return off_deg(az, sun[0]) <= 2.0 and abs(el - sun[1]) <= 2.0
+
+        v.run_until(on_the_sun, 400, "the rotor reaches the sun")
+        worst = 0.0
+        end = v.now + 600.0  # ten minutes of rotor time, sampled every second
+        while v.now < end:
+            v.run_for(1.0)
+            sun = sun_altaz(lat, lon, v.wall())
+            az, el = pointing(v.truth().az_deg, v.truth().el_deg)
+            worst = max(worst, off_deg(az, sun[0]), abs(el - sun[1]))
+        assert worst <= 2.0, worst
+        info = v.status.tracking
+        assert info is not None and info.phase == "tracking"
+        assert off_deg(info.azimuth_deg or 0.0, sun_altaz(lat, lon, v.wall())[0]) < 0.5
+        assert v.status.last_command_source == Source.TRACKING.value
+
+
+BERLIN = (52.52, 13.29)  # JO62qm's centre
+
+
+def a_pass_that(across_north: bool) -> tuple[str, str, float, float]:
+    """A synthetic satellite (epoch: today) with a pass over Berlin whose azimuth does (or does
+    not) run across the north: the first fit starting on a half-hour grid from now."""
+    now = time.time()
+    for k in range(48):
+        tle = tle_with_pass(*BERLIN, now + 1800.0 * k, min_max_el_deg=25, max_max_el_deg=60)
+        if crosses_north(tle) == across_north:
+            return tle
+    raise AssertionError("no such pass in a day")
+
+
+def crosses_north(tle: tuple[str, str, float, float]) -> bool:
+    line1, line2, aos, los = tle
+    steps = int(los - aos) // 5
+    track = [sgp4_altaz(line1, line2, *BERLIN, aos + 5.0 * i)[0] for i in range(steps + 1)]
+    return any(abs(b - a) > 180.0 for a, b in zip(track, track[1:], strict=False))
+
+
+@pytest.fixture(scope="module")
+def a_pass() -> tuple[str, str, float, float]:
+    return a_pass_that(across_north=True)  # the harder one: the overlap takes it on a SPID
+
+
+@pytest.fixture(scope="module")
+def a_pass_clear_of_north() -> tuple[str, str, float, float]:
+    return a_pass_that(across_north=False)
+
+
+def fly(
+    model: str, tle: tuple[str, str, float, float], settings: dict[str, object] | None = None
+) -> tuple[VirtualRotator, list[tuple[float, float, float]]]:
+    """Track the pass from 10 minutes before its AOS to 60 s after its LOS; the rotor's
+    pointing error against the independent SGP4 every second of the pass (t, az err, el err)."""
+    line1, line2, aos, los = tle
+    start_wall = aos - 600.0
+    v = VirtualRotator(
+        model,
+        sky=Sky(*BERLIN),
+        wall_epoch_s=start_wall,
+        emulator={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0} if model != "satel" else {},
+        settings={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0, **(settings or {})}
+        if model != "satel"
+        else dict(settings or {}),
+    )
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.track(Body.satellite("TESTSAT", line1, line2))
+    errors: list[tuple[float, float, float]] = []
+    v.run_until(lambda h: h.wall() >= aos, 700, "AOS")
+    while v.wall() < los:
+        v.run_for(1.0)
+        sat_az, sat_el = sgp4_altaz(line1, line2, *BERLIN, v.wall())
+        truth = v.truth()
+        el_now = truth.el_deg if truth.el_deg is not None else sat_el
+        az, el = pointing(truth.az_deg, el_now)
+        errors.append((v.wall(), off_deg(az, sat_az), abs(el - sat_el)))
+    v.run_for(60.0)
+    return v, errors
+
+
+def test_a_satellite_pass_is_prepositioned_followed_within_3_degrees_and_parked(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    line1, line2, aos, los = a_pass
+    v, errors = fly("md01", a_pass, {"park_az_deg": 0, "park_el_deg": 0, "track_at_los": "park"})
+    with v:
+        # pre-positioned: the statuses in the minute before AOS say it waited, still, at AOS
+        before = [s for t, s in v.statuses if aos - 60 <= v.wall_epoch_s + t < aos]
+        phases = {s.tracking.phase if s.tracking else None for s in before}
+        assert before and phases == {"waiting"}, phases
+        aos_az, _ = sgp4_altaz(line1, line2, *BERLIN, aos)
+        last = before[-1]
+        assert last.state is MotionState.IDLE
+        assert off_deg(last.bearing_deg or 0.0, aos_az) <= 3.0, (last.bearing_deg, aos_az)
+        # during the pass, skipping the first seconds (the body rises at the horizon's edge)
+        worst_az = max(e[1] for e in errors)
+        worst_el = max(e[2] for e in errors)
+        assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
+        # parked after LOS
+        v.run_until(lambda h: h.status.parked, 200, "parked after the pass")
+        assert v.status.tracking is not None  # still tracking: waiting for the next pass
+
+
+def test_a_satel_is_never_sent_input_while_it_slews_during_a_pass(
+    a_pass_clear_of_north: tuple[str, str, float, float],
+) -> None:
+    v, errors = fly("satel", a_pass_clear_of_north)
+    with v:
+        assert v.device.misuse_frames() == []
+        # step-wise: never stopped to be redirected (the stop at connect comes before tracking)
+        assert [f for f in v.frames("stop") if f.time_s > 1.0] == []
+        slews = v.frames("slew")
+        assert len(slews) >= 5, slews  # it did follow, a step at a time
+        # step-wise, with the default step (its tolerance, 3) and its speeds: within 6 degrees
+        # (a pass across the north costs a 0..360 rotor whose elevation ends at 90 one unwind)
+        assert max(e[1] for e in errors) <= 6.0 and max(e[2] for e in errors) <= 6.0
+
+
+def test_a_pass_across_the_north_is_flown_flipped_on_a_0_to_360_rotor(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    """Rule 4: with the azimuth limited to 0..360 and elevation to 180, a pass across the
+    north is flown with elevation past 90 and azimuth + 180: no unwind mid-pass."""
+    limits = {"az_min_deg": 0, "az_max_deg": 360, "el_min_deg": 0, "el_max_deg": 180}
+    v, errors = fly("rot2prog", a_pass, limits)
+    with v:
+        assert v.status.tracking is not None and v.status.tracking.flip
+        assert max(e[1] for e in errors) <= 3.0 and max(e[2] for e in errors) <= 3.0
+        sets = v.frames("set", "set: clamped")
+        azimuths = [int(f.data[1:5]) / f.data[5] - 360 for f in sets]
+        travel = sum(abs(b - a) for a, b in zip(azimuths, azimuths[1:], strict=False))
+        assert travel < 200.0, azimuths  # across the sky once, never round the stop
+
+
+def test_a_rotor_ez_follows_the_sun_in_azimuth_without_ever_retargeting_while_turning() -> None:
+    wall = time.time()
+    lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
+    with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.sun())
+        v.run_until(
+            lambda h: off_deg(h.truth().az_deg, sun_altaz(lat, lon, h.wall())[0]) <= 3.0,
+            200,
+            "on the sun's azimuth",
+        )
+        worst = 0.0
+        for _ in range(3600):  # an hour: the sun moves some 10 degrees in azimuth
+            v.run_for(1.0)
+            worst = max(worst, off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]))
+        assert worst <= 3.0, worst
+        executed = v.frames("executed")
+        assert len(executed) >= 2, executed  # it moved on with the sun
+        never = ("ignored: brake delay", "ignored: re-target while turning (stopped)")
+        assert v.frames(*never) == []
+
+
+@pytest.mark.parametrize("how", ["off", "stop", "lock", "manual target"])
+def test_tracking_ends_on_off_stop_lock_and_a_manual_target(how: str) -> None:
+    wall = time.time()
+    lat, lon = sun_up_somewhere(wall)
+    with VirtualRotator("rot2prog", sky=Sky(lat, lon), wall_epoch_s=wall) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(Body.sun())
+        v.run_for(5.0)
+        assert v.status.tracking is not None
+        if how == "off":
+            v.track(None)
+        elif how == "stop":
+            v.stop()
+        elif how == "lock":
+            v.lock(True)
+        else:
+            v.aim(Target(10.0, 10.0))
+        v.run_for(2.0)
+        assert v.status.tracking is None
+        assert v.status.tracking_ended == {"manual target": "mqtt target"}.get(how, how)
+        sent = len(v.sent())
+        v.run_for(120.0)
+        if how != "manual target":  # nothing more is sent but polls
+            frames = v.frames("set", "set: clamped")
+            assert all(f.time_s < v.now - 115 for f in frames), frames
+        assert len(v.sent()) >= sent
+
+
+def test_a_pass_through_a_keep_out_sector_holds_and_says_so_once(
+    a_pass: tuple[str, str, float, float],
+) -> None:
+    line1, line2, aos, los = a_pass
+    mid_az, _ = sgp4_altaz(line1, line2, *BERLIN, (aos + los) / 2)
+    sector = [round(mid_az - 15) % 360, round(mid_az + 15) % 360]
+    v, _errors = fly("rot2prog", a_pass, {"keep_out": [sector]})
+    with v:
+        refusals = [e for e in v.errors("refused") if "tracking TESTSAT" in e.message]
+        assert len(refusals) == 1, refusals
+        assert "keep-out" in refusals[0].message
+        for f in v.frames("set", "set: clamped"):
+            assert not _in_sector(f.data, sector)
+
+
+def _in_sector(frame: bytes, sector: list[int]) -> bool:
+    """A Rot2Prog set frame (W, four ASCII digits of pulses, the pulses per degree, ...)."""
+    az = int(frame[1:5]) / frame[5] - 360
+    start, end = sector
+    a = az % 360
+    return start <= a <= end if start <= end else a >= start or a <= end
