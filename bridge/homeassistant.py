@@ -66,6 +66,7 @@ class RotatorInfo:
     has_park: bool = False
     has_station: bool = False  # the station's position: targets by locator
     nudge_step_deg: float = 10.0
+    track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
 
     @classmethod
     def of(
@@ -78,6 +79,7 @@ class RotatorInfo:
         *,
         has_station: bool,
         nudge_step_deg: float,
+        satellites: tuple[str, ...] = (),
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -94,6 +96,11 @@ class RotatorInfo:
             has_park=pointing.park is not None,
             has_station=has_station,
             nudge_step_deg=nudge_step_deg,
+            track_options=(
+                ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
+                if has_station and spec.can_report_position
+                else ()
+            ),
         )
 
     def has(self, need: str) -> bool:
@@ -240,6 +247,17 @@ NO_OPTION = "{{ 'None' }}"
 DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
+MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
+
+
+def _tracked(field: str) -> str:
+    """A template for a field of the status's tracking block (unknown while not tracking)."""
+    return (
+        f"{{{{ value_json.tracking.{field} if value_json.tracking is defined and "
+        f"value_json.tracking.{field} is defined else 'None' }}}}"
+    )
+
+
 DEGREES = {"unit_of_measurement": "°"}
 SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
 TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
@@ -287,6 +305,22 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
         "device_class": "distance", "state_class": "measurement",
         "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
+    Entity("select", "track", "Track", needs="track_options", config=lambda r: {
+        "command_topic": r.topics.track, "state_topic": r.topics.tracking,
+        "options": list(r.track_options), "icon": "mdi:satellite-variant"}),
+    Entity("sensor", "track_azimuth", "Tracked azimuth", needs="track_options",
+           config=lambda r: {
+        "state_topic": r.topics.status, "value_template": _tracked("azimuth"), **DEGREES,
+        "state_class": "measurement_angle", "suggested_display_precision": 1,
+        "icon": "mdi:compass-rose"}),
+    Entity("sensor", "track_elevation", "Tracked elevation", needs="track_options",
+           config=lambda r: {
+        "state_topic": r.topics.status, "value_template": _tracked("elevation"), **DEGREES,
+        "state_class": "measurement", "suggested_display_precision": 1,
+        "icon": "mdi:angle-acute"}),
+    Entity("sensor", "next_aos", "Next AOS", needs="track_options", config=lambda r: {
+        "state_topic": r.topics.status, "value_template": _tracked("aos"),
+        "device_class": "timestamp", "icon": "mdi:clock-start"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),

@@ -18,9 +18,10 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import RotatorStatus, TargetInfo
+from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
 
 MAX_COMMAND_BYTES = 256
+MAX_NAME_CHARS = 64  # a preset's or a satellite's name
 _SPLIT = re.compile(r"[\s,;]+")
 _NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 _TRUE = {"on", "1", "true"}
@@ -156,6 +157,29 @@ def parse_name(payload: bytes, what: str) -> str:
     return text
 
 
+def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
+    """``R/track``: ``sun``, ``moon``, ``off``, a satellite's name from the TLE file, or JSON
+    ``{"tle": ["NAME", "1 ...", "2 ..."]}`` (the name line may be left out). The elements are
+    checked by the rotator (sky.Body.satellite)."""
+    text = _text(payload)
+    if not text.startswith("{"):
+        if len(text) > MAX_NAME_CHARS or not text.isprintable():
+            raise PayloadError(f"track: a name of at most {MAX_NAME_CHARS} printable characters")
+        return text, None
+    doc = _json_object(text, "track")
+    lines = doc.get("tle")
+    if set(doc) != {"tle"} or not isinstance(lines, list) or len(lines) not in (2, 3):
+        raise PayloadError('track: JSON must be {"tle": ["NAME", "1 ...", "2 ..."]}')
+    if not all(isinstance(line, str) for line in lines):
+        raise PayloadError("track: the TLE lines must be strings")
+    strings = [str(line).strip() for line in lines]
+    if len(strings) == 2:
+        strings.insert(0, "")
+    name, line1, line2 = strings
+    name = name or line1[2:7].strip()  # the catalog number, as a TLE file without names
+    return name, (name, line1, line2)
+
+
 def parse_target(payload: bytes) -> tuple[float, float | None]:
     """(azimuth, elevation or None). Limits are checked later, in one place (the rotator)."""
     text = _text(payload)
@@ -221,6 +245,31 @@ def target_info(info: TargetInfo) -> dict[str, object]:
     }
 
 
+def tracking_json(info: TrackingInfo) -> dict[str, object]:
+    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
+    doc: dict[str, object] = {
+        "body": info.body,
+        "phase": info.phase,
+        "azimuth": info.azimuth_deg,
+        "elevation": info.elevation_deg,
+        "next": {"azimuth": info.next_azimuth_deg, "elevation": info.next_elevation_deg},
+    }
+    if info.aos_unix is not None and info.los_unix is not None:
+        doc.update(
+            aos=_iso(info.aos_unix),
+            los=_iso(info.los_unix),
+            max_elevation=info.max_elevation_deg,
+            aos_azimuth=info.aos_azimuth_deg,
+        )
+    doc["flip"] = info.flip
+    return doc
+
+
+def tracking_state(status: RotatorStatus) -> str:
+    """``R/tracking``: what is followed, or ``off``."""
+    return status.tracking.body if status.tracking is not None else "off"
+
+
 def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:
     """``R/presets``: name -> azimuth, or [azimuth, elevation]; whole degrees without ".0", as
     the user wrote them in the configuration."""
@@ -252,6 +301,10 @@ def status_json(
     if status.target_info is not None:
         doc["target_info"] = target_info(status.target_info)
     doc["parked"] = status.parked
+    if status.tracking is not None:
+        doc["tracking"] = tracking_json(status.tracking)
+    if status.tracking_ended is not None:
+        doc["tracking_ended"] = status.tracking_ended
     doc.update(
         state=status.state.value,
         moving=status.moving,

@@ -41,6 +41,7 @@ class RotatorPort(Protocol):
     id: str
     spec: ModelSpec
     pointing: Pointing
+    can_track: bool  # a station and a controller that reports where it points
 
     @property
     def status(self) -> RotatorStatus: ...
@@ -51,6 +52,13 @@ class RotatorPort(Protocol):
     def park(self, source: Source, described: str) -> None: ...
     def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
     def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
+    def track(
+        self,
+        name: str,
+        source: Source,
+        described: str,
+        tle: tuple[str, str, str] | None = None,
+    ) -> None: ...
     def go_toward(
         self,
         latitude_deg: float,
@@ -151,6 +159,8 @@ class MqttService:
             if name in status.options:
                 pub(t.option_state(name), pl.switch(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
+        if rot.can_track:
+            pub(t.tracking, pl.tracking_state(status))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         for listener in self._status_listeners:
@@ -216,6 +226,9 @@ class MqttService:
                 rot.park(Source.MQTT, what)
             elif kind == "nudge":
                 rot.nudge(*pl.parse_nudge(payload), Source.MQTT, what)
+            elif kind == "track":
+                name, tle = pl.parse_track(payload)
+                rot.track(name, Source.MQTT, what, tle)
             elif kind == "target_elevation":
                 rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
             elif kind == "lock":

@@ -42,6 +42,10 @@ class RotatorTopics:
     def nudge(self) -> str:
         return f"{self.root}/nudge"
 
+    @property
+    def track(self) -> str:
+        return f"{self.root}/track"
+
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -81,6 +85,10 @@ class RotatorTopics:
     @property
     def presets(self) -> str:
         return f"{self.root}/presets"
+
+    @property
+    def tracking(self) -> str:
+        return f"{self.root}/tracking"
 
     @property
     def lock_state(self) -> str:
@@ -133,7 +141,7 @@ class Topics:
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge]
+            subs += [t.preset, t.park, t.nudge, t.track]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -147,7 +155,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge"):
+            for kind in ("preset", "park", "nudge", "track"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             prefix = f"{t.root}/option/"

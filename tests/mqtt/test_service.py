@@ -65,6 +65,7 @@ class RecordingRotator:
         self.pointing = Pointing.of(self.spec, presets={"EU": (45.0, None)})
         self.calls: list[tuple[object, ...]] = []
         self._refuse = refuse
+        self.can_track = False
 
     @property
     def status(self) -> RotatorStatus:
@@ -105,6 +106,15 @@ class RecordingRotator:
     ) -> None:
         place = (round(latitude_deg, 4), round(longitude_deg, 4), locator, long_path)
         self.calls.append(("toward", *place, source, described))
+
+    def track(
+        self,
+        name: str,
+        source: Source,
+        described: str,
+        tle: tuple[str, str, str] | None = None,
+    ) -> None:
+        self.calls.append(("track", name, tle, source, described))
 
 
 def service(
@@ -301,6 +311,14 @@ M = Source.MQTT
             b'{"elevation": -2}',
             ("nudge", 0.0, -2.0, M, "nudge '{\"elevation\": -2}'"),
         ),
+        ("rotor/b/track", b" sun ", ("track", "sun", None, M, "track ' sun '")),
+        ("rotor/b/track", b"ISS (ZARYA)", ("track", "ISS (ZARYA)", None, M,
+                                           "track 'ISS (ZARYA)'")),
+        ("rotor/b/track", b'{"tle": ["X", "1 a", "2 b"]}',
+         ("track", "X", ("X", "1 a", "2 b"), M, "track '{\"tle\": [\"X\", \"1 a\", \"2 b\"]}'")),
+        ("rotor/b/track", b'{"tle": ["1 25544U", "2 25544"]}',
+         ("track", "25544", ("25544", "1 25544U", "2 25544"), M,
+          "track '{\"tle\": [\"1 25544U\", \"2 25544\"]}'")),
         # JO62qm's centre: 52.5208 N 13.375 E; PM95vq: 35.6875 N 139.7917 E
         ("rotor/b/target", b"PM95vq", ("toward", 35.6875, 139.7917, "PM95vq", False, M,
                                        "target 'PM95vq'")),
@@ -358,6 +376,10 @@ def test_each_command_topic_reaches_its_rotator(
          'give "locator" or "latitude"/"longitude", not both',
          "target '{\"locator\": \"PM95\", \"latitude\": 1}'"),
         ("rotor/nudge", b"left", "nudge must be a number, got 'left'", "nudge 'left'"),
+        ("rotor/track", b'{"tle": "x"}', 'track: JSON must be {"tle": ["NAME", "1 ...", "2 ..."]}',
+         "track '{\"tle\": \"x\"}'"),
+        ("rotor/track", b"a\x07b", "track: a name of at most 64 printable characters",
+         "track 'a\\x07b'"),
         ("rotor/preset", b"", "empty payload", "preset"),
     ],
 )  # fmt: skip
@@ -437,6 +459,7 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/preset",
         "rotor/park",
         "rotor/nudge",
+        "rotor/track",
         "ha/status",
         "x/#",
     ]

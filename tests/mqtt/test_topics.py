@@ -19,6 +19,7 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/preset",
         "rotor/park",
         "rotor/nudge",
+        "rotor/track",
     ]
 
 
@@ -31,10 +32,13 @@ def test_routing_inbound_topics() -> None:
     assert t.route("rotor/b/option/jam/state") is None
     assert t.route("rotor/b/lock/state") is None
     assert t.route("rotor/c/target") is None
-    assert [t.route(f"rotor/a/{k}") for k in ("preset", "park", "nudge", "presets")] == [
+    kinds = ("preset", "park", "nudge", "presets", "track", "tracking")
+    assert [t.route(f"rotor/a/{k}") for k in kinds] == [
         ("a", "preset", None),
         ("a", "park", None),
         ("a", "nudge", None),
+        None,  # outbound
+        ("a", "track", None),
         None,  # outbound
     ]
     assert t.route("rotor/a/bearing") is None
