@@ -220,6 +220,10 @@ class RotatorSession:
                         self.motion = mo.slew_ended(self.motion, now)
         return self._step(now)
 
+    def set_wall(self, now: float, wall_s: float) -> None:
+        """The wall clock (unix seconds) at ``now``: tracking reads the sky by it."""
+        self.wall_offset_s = wall_s - now
+
     def tick(self, now: float) -> list[Action]:
         return self._step(now)
 

@@ -148,6 +148,7 @@ class Worker:
 
     def _serve(self, ready: set[int], now: float) -> None:
         session, acted = self.session, False
+        session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking
         if self._box in ready:
             batch = self._mailbox.take()
             if batch:
