@@ -44,7 +44,7 @@ from typing import Any
 from pydantic import ValidationError
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
 
-from bridge import emulators, geo
+from bridge import demo_sky, emulators, geo
 from bridge.app import App
 from bridge.demo_console import Console
 from bridge.homeassistant import Identity
@@ -54,6 +54,7 @@ from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, format_validation_error
 
 MIN_SPEED_DEG_S, MAX_SPEED_DEG_S = 0.5, 360.0  # the settings' range for a rotor's speed
+DEMOSAT_LEAD_S = 900.0  # the demo's satellite is closest this long after the start
 
 
 def _speed(text: str) -> float:
@@ -170,6 +171,7 @@ def demo_settings(
         },
         rotators=rotators,
         station={"locator": args.locator},
+        tracking={"tle_file": workdir / "demo.tle"},  # demo_sky.py writes it before the start
         state_file=workdir / "state.json",
     )
 
@@ -281,10 +283,19 @@ def _run(
     for r in settings.rotators:
         emu = emulators.start(r.model, link=r.port, **emulator_options(r.model, args.speed_deg_s))
         stack.callback(emu.close)
+    position = settings.station.position
+    assert position is not None and settings.tracking.tle_file is not None
+    closest = demo_sky.write_tle_file(settings.tracking.tle_file, *position, DEMOSAT_LEAD_S)
     app = App(settings)
     stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
     app.start()
     _print_banner(args, settings, topics, where, instance)
+    print(
+        f"  A made-up satellite, {demo_sky.NAME}, passes over the station around "
+        f"{time.strftime('%H:%M', time.gmtime(closest))} UTC: type 'track {demo_sky.NAME}' "
+        "(or 'track sun', 'track moon').\n",
+        flush=True,
+    )
     deadline = None if args.duration_s is None else time.monotonic() + args.duration_s
     if sys.stdin.isatty():
         print(

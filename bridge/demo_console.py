@@ -26,7 +26,9 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 from bridge.mqtt.topics import Topics
 
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
-SHOWN_LEAVES = ("bearing", "elevation", "state", "availability", "version", "error", "presets")
+SHOWN_LEAVES = (
+    "bearing", "elevation", "state", "availability", "version", "error", "presets", "tracking"
+)  # fmt: skip
 
 
 class Console:
@@ -93,6 +95,7 @@ class Console:
         text = msg.payload.decode("utf-8", "replace")
         if leaf == "status":
             self._show_target_info(topic, text)
+            self._show_tracking(topic, text)
             return
         if leaf not in SHOWN_LEAVES or (self._last.get(topic) == text and leaf != "error"):
             return
@@ -114,6 +117,36 @@ class Console:
                     f"long {info['long_path_deg']:g}°)",
                     flush=True,
                 )
+
+    def _show_tracking(self, topic: str, text: str) -> None:
+        """What tracking does, once each time its phase or pass changes."""
+        with contextlib.suppress(ValueError, AttributeError, KeyError, TypeError):
+            doc = json.loads(text)
+            info, ended = doc.get("tracking"), doc.get("tracking_ended")
+            key = f"{topic}:tracking"
+            root = topic.rsplit("/", 1)[0]
+            if info is None:
+                if ended and self._last.get(key) != f"ended {ended}":
+                    self._last[key] = f"ended {ended}"
+                    print(f"  {root}: tracking ended ({ended})", flush=True)
+                return
+            shown = f"{info['body']} {info['phase']} {info.get('aos')}"
+            if shown == self._last.get(key):
+                return
+            self._last[key] = shown
+            now = f"now az {info['azimuth']:g} el {info['elevation']:g}"
+            if info["phase"] == "waiting":
+                print(
+                    f"  {root}: {info['body']} is below the horizon ({now}); waiting at "
+                    f"az {info['aos_azimuth']:g} for its rise at {info['aos'][11:19]} UTC",
+                    flush=True,
+                )
+            elif info["phase"] == "tracking":
+                until = f" until {info['los'][11:19]} UTC" if "los" in info else ""
+                flip = ", flipped (elevation past 90)" if info.get("flip") else ""
+                print(f"  {root}: tracking {info['body']} ({now}){until}{flip}", flush=True)
+            else:
+                print(f"  {root}: {info['body']}: no pass in the next two days", flush=True)
 
     def _presets_text(self) -> str:
         """The first rotator's preset names, as its retained R/presets lists them."""
@@ -159,6 +192,8 @@ class Console:
         elif head == "locator" and len(rest) in (1, 2) and rest[1:] in ([], ["long"], ["short"]):
             path = rest[1] if len(rest) == 2 else "short"
             self.publish(t.target, json.dumps({"locator": rest[0], "path": path}))
+        elif head == "track" and rest:
+            self.publish(t.track, " ".join(rest))
         elif head in ("long", "short") and not rest:
             self.publish(t.target, json.dumps({"path": head}))
         elif head == "nudge" and len(rest) in (1, 2) and all(map(_is_number, rest)):
@@ -186,6 +221,7 @@ class Console:
             f"path -> {first}/target",
             "    long, short    the other path to that locator",
             f"    nudge -10      turn by a few degrees (az/el: nudge 5 -2) -> {first}/nudge",
+            f"    track sun      follow the sun, moon, a satellite; 'track off' -> {first}/track",
             f"    s, stop        stop now                     -> {first}/stop",
             f"    lock on|off    safety lock                  -> {first}/lock",
             f"    jam on|off     Rotor-EZ options ({', '.join(OPTIONS)})",

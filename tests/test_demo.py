@@ -296,3 +296,39 @@ def test_each_model_gets_its_speed_in_its_emulators_own_words() -> None:
         "az_speed_deg_s": 30.0,
         "el_speed_deg_s": 30.0,
     }
+
+
+def test_the_demo_tracks_its_own_satellite_from_the_prompt(tmp_path: Path) -> None:
+    port = free_port()
+    args = ["--mqtt-port", str(port), "--speed-deg-s", "360", "--models", "md01"]
+    proc = DemoProcess(args, tmp_path / "tmp", terminal=True)
+    probe = None
+    try:
+        base = proc.base_topic()
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/state", "idle", timeout_s=20)
+        proc.wait_line(r"DEMOSAT, passes over the station around \d\d:\d\d UTC", timeout_s=10)
+        seen = proc.type("track demosat")  # any case, as the TLE file's names
+        probe.wait_value(f"{base}/tracking", "DEMOSAT", timeout_s=10)
+        below = r"DEMOSAT is below the horizon .* waiting at az [\d.]+ for its rise"
+        proc.wait_line(below, start=seen, timeout_s=10)
+
+        def waiting_there(m: Any) -> bool:
+            if m.topic != f"{base}/status":
+                return False
+            s = json.loads(m.payload)
+            info = s.get("tracking") or {}
+            if info.get("phase") != "waiting" or s["state"] != "idle":
+                return False
+            return abs((s["bearing"] - info["aos_azimuth"] + 180) % 360 - 180) <= 1.0
+
+        probe.wait(waiting_there, 20, "waiting where DEMOSAT rises")
+        seen = proc.type("track off")
+        probe.wait_value(f"{base}/tracking", "off", timeout_s=10)
+        proc.wait_line(r"tracking ended \(off\)", start=seen, timeout_s=10)
+        proc.type("q")
+        assert proc.wait(20) == 0, proc.output
+    finally:
+        if probe is not None:
+            probe.close()
+        proc.close()

@@ -81,7 +81,7 @@ class TleCatalog:
             entry = (set_name, line1, line2)
             self._sets[_fold(set_name)] = entry
             self._sets.setdefault(line1[2:7].strip().lstrip("0"), entry)
-        log.info("tle_file %s: %d satellites", self.path, len(sets))
+        log.info("tle_file %s: %d satellite(s)", self.path, len(sets))
 
 
 def _fold(name: str) -> str:
