@@ -36,7 +36,8 @@ def gmst_deg(t_unix: float) -> float:
 def elements(latitude_deg: float, longitude_deg: float, closest_unix: float) -> tuple[str, str]:
     """TLE lines 1 and 2 of a satellite passing the station near ``closest_unix`` (rules 1, 2)."""
     i = math.radians(INCLINATION_DEG)
-    u = math.asin(math.sin(math.radians(latitude_deg)) / math.sin(i))  # argument of latitude
+    # the argument of latitude; nearer a pole than the orbit reaches: its turning point
+    u = math.asin(max(-1.0, min(1.0, math.sin(math.radians(latitude_deg)) / math.sin(i))))
     ra = gmst_deg(closest_unix) + longitude_deg + OFFSET_DEG  # the satellite's right ascension
     node = (ra - math.degrees(math.atan2(math.cos(i) * math.sin(u), math.cos(u)))) % 360.0
     anomaly = math.degrees(u) % 360.0  # circular, perigee at the node: mean = true = u

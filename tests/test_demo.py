@@ -13,12 +13,14 @@ from typing import Any
 
 import pytest
 
-from bridge import demo, emulators
+from bridge import demo, demo_sky, emulators, geo
 from bridge.cli import build_parser
 from bridge.homeassistant import Identity
 from bridge.mosquitto import answers, free_port
+from bridge.sky import parse_tles
 from tests.demo_process import DemoProcess
 from tests.support import Probe, retained_snapshot
+from tests.support.sky import sgp4_altaz
 
 ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
 
@@ -332,3 +334,21 @@ def test_the_demo_tracks_its_own_satellite_from_the_prompt(tmp_path: Path) -> No
         if probe is not None:
             probe.close()
         proc.close()
+
+
+@pytest.mark.parametrize("locator", ["JO62qm", "PM95vq", "QF56", "FN31", "KP03", "RE78", "AA00"])
+def test_the_demo_satellite_passes_over_any_station_when_the_banner_says(locator: str) -> None:
+    """demo_sky.py's elements, checked by the tests' own SGP4 (sgp4 and our frame rotation):
+    a pass peaking between 40 and 70 degrees within a minute of the time given."""
+    lat, lon = geo.parse_locator(locator)
+    closest = 1_795_000_000.0 + 3600 * len(locator)  # any time will do
+    line1, line2 = demo_sky.elements(lat, lon, closest)
+    assert parse_tles(f"{demo_sky.NAME}\n{line1}\n{line2}\n") == ({"DEMOSAT": (line1, line2)}, [])
+    if abs(lat) > 82:  # beyond what a 97.5 degree orbit reaches overhead: still a pass
+        return
+    times = [closest + d for d in range(-600, 601, 5)]
+    els = [sgp4_altaz(line1, line2, lat, lon, t)[1] for t in times]
+    peak = max(range(len(els)), key=els.__getitem__)
+    assert 40.0 <= els[peak] <= 70.0, els[peak]
+    assert abs(times[peak] - closest) <= 60.0
+    assert els[0] < 0.0 and els[-1] < 0.0  # it rises and sets within those 20 minutes
