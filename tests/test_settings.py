@@ -156,6 +156,11 @@ POINTING_KEYS = (
     "park_after_idle_s",
     "keep_out",
     "nudge_step_deg",
+    "[tracking]",
+    "tle_file",
+    "track_min_el_deg",
+    "track_step_deg",
+    "track_at_los",
 )
 
 
@@ -169,6 +174,8 @@ def test_the_example_pointing_lines_are_valid_as_written(tmp_path: Path) -> None
     assert s.station.position is not None
     assert (r.az_offset_deg, r.park_az_deg, r.keep_out) == (180, 0, [(200, 220)])
     assert r.presets == {"EU": 45, "JA": 330, "W": 300}
+    assert s.tracking.tle_file == Path("/var/lib/rotor-bridge/amateur.tle")
+    assert (r.track_min_el_deg, r.track_step_deg, r.track_at_los) == (0, 3, "stay")
 
 
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
