@@ -17,6 +17,7 @@ from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
+from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
@@ -118,6 +119,14 @@ class App:
             if r.rotctld_port is not None:
                 server = RotctldServer(rot, r.rotctld_port, r.rotctld_bind)
                 self.rotctld.append(server)
+        self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
+        for r, rot in zip(settings.rotators, self.rotators, strict=True):
+            if r.pst_udp_port is not None:
+                self.loggers.add_pst(rot, r.pst_udp_port, r.pst_udp_bind)
+            if r.n1mm_rotor_name is not None:
+                self.loggers.add_n1mm(
+                    rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
+                )
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
@@ -159,6 +168,8 @@ class App:
         try:
             for server in self.rotctld:
                 server.listen()
+            if self.loggers:
+                self.loggers.listen()
         except OSError as exc:
             for server in self.rotctld:
                 server.stop()
@@ -173,6 +184,8 @@ class App:
         try:
             for server in self.rotctld:
                 server.start()
+            if self.loggers:
+                self.loggers.start()
         except OSError:  # e.g. the port is taken: fail the start, leave nothing running
             self.stop()
             raise
@@ -182,6 +195,7 @@ class App:
             self.discovery.stop()
         for server in self.rotctld:
             server.stop()
+        self.loggers.stop()
         for rot in self.rotators:
             rot.stop()
         self.mqtt.stop()

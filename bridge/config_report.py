@@ -82,6 +82,16 @@ def config_warnings(settings: Settings) -> list[str]:
                 f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
                 "lists the serial ports); the bridge keeps trying to open it"
             )
+        for key, on, bind in (
+            ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
+            ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
+        ):
+            if on and not _is_loopback(bind):
+                found.append(
+                    f"{where}.{key}: {bind or '(every address)'} is not a loopback address: "
+                    "the loggers' UDP protocols have no authentication, anyone who can reach "
+                    "it can turn the antenna"
+                )
         if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
             found.append(
                 f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "

@@ -28,6 +28,8 @@ class Source(enum.StrEnum):
     ROTCTLD = "rotctld"
     AUTO_PARK = "auto-park"  # park_after_idle_s: the bridge parked it, nobody asked
     TRACKING = "tracking"  # the bridge follows the sun, the moon or a satellite (R/track)
+    PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
+    N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
 
 
 @dataclass(frozen=True)

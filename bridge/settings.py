@@ -35,6 +35,7 @@ from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings_files import check_tls_files, read_password_file
+from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields, StationSettings, TrackingSettings
 
 ENV_PREFIX = "ROTOR_BRIDGE_"
@@ -139,7 +140,7 @@ class HomeAssistantSettings(_Strict):
         return MqttSettings._topic(v)
 
 
-class RotatorSettings(PointingFields):
+class RotatorSettings(PointingFields, LoggerFields):
     id: str
     name: str | None = None
     model: str
@@ -346,6 +347,17 @@ class Settings(BaseSettings):
         rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
         if len(set(rotctld)) != len(rotctld):
             raise ValueError("two rotators share one rotctld_port")
+        pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
+        n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
+        if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
+            raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
+        names = [
+            (r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name)
+            for r in self.rotators
+            if r.n1mm_rotor_name is not None
+        ]
+        if len(set(names)) != len(names):
+            raise ValueError("two rotators have one n1mm_rotor_name on one N1MM port")
         topics = [self.rotator_topic(r) for r in self.rotators]
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")

@@ -179,7 +179,7 @@ def test_the_example_pointing_lines_are_valid_as_written(tmp_path: Path) -> None
 
 
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
-NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg"}  # null: off / unset on purpose
+NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg", "pst_udp_port", "n1mm_rotor_name"}
 AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
 
 

@@ -1,0 +1,162 @@
+"""The loggers' datagrams: PstRotator's ``<PST>`` interface and N1MM's rotor messages, parsed
+and rendered. Pure. Written from ../shared/protocols/logger-udp.md.
+
+Rules:
+1. A datagram is at most MAX_DATAGRAM bytes of ASCII; anything else is Malformed, and so is
+   every datagram that is not wholly understood: a number that is not one (NaN, inf, empty,
+   ``12x``), text outside the tags, a tag left open. Malformed datagrams move nothing.
+2. PST: ``<PST>`` ... ``</PST>``, tags matched in any case, several in one datagram, parsed
+   all before anything is done. A value is a decimal number, optionally followed by the
+   ``.2`` Hamlib 4.6 appends (``120.000000.2``). ``STOP`` wins over everything else in the
+   datagram; then ``PARK``; then the axes present. ``AZ?``/``EL?`` are queries; ``TRACK``,
+   ``MODE?`` and tags nobody documents are ignored (and counted).
+3. PST replies: integer degrees and one CR (``AZ:123\\r``), the form the strictest client
+   (Minos) accepts and every other does.
+4. N1MM: ``<N1MMRotor>`` with ``<rotor>``, ``<goazi>`` (0..360), ``<offset>``,
+   ``<bidirectional>``, ``<freqband>`` in any order and layout; any ``<stop`` element is a stop,
+   the rotor's name then from ``<rotor>`` wherever it is, else the text of ``<stop>``.
+5. N1MM position report: ``name @ heading*10`` as plain text (``Tower @ 650`` is 65.0).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+MAX_DATAGRAM = 2048
+MAX_NAME = 64
+
+_PST = re.compile(rb"^\s*<pst>(?P<body>.*)</pst>\s*$", re.I | re.S)
+_ITEM = re.compile(
+    r"\s*(?:<(?P<tag>[a-z][a-z0-9_]{0,31})>(?P<value>[^<]{0,64})</(?P=tag)>|(?P<query>[a-z]{2,8})\?)\s*",
+    re.I,
+)
+_VALUE = re.compile(r"^\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+))(?:\.\d+)?\s*$")
+_N1MM = re.compile(rb"^\s*<n1mmrotor>(?P<body>.*)</n1mmrotor>\s*$", re.I | re.S)
+
+
+class Malformed(ValueError):
+    """The datagram is not understood; the message says why (for a debug log)."""
+
+
+@dataclass(frozen=True)
+class PstRequest:
+    stop: bool = False
+    park: bool = False
+    azimuth: float | None = None
+    elevation: float | None = None
+    locator: str | None = None
+    queries: tuple[str, ...] = ()  # "AZ", "EL", in the order asked
+    ignored: tuple[str, ...] = ()  # TRACK, MODE and unknown tags
+
+
+@dataclass(frozen=True)
+class N1mmRequest:
+    rotor: str
+    stop: bool = False
+    azimuth: float | None = None
+    offset: float = 0.0
+    bidirectional: bool = False
+
+
+def _text(datagram: bytes, pattern: re.Pattern[bytes], what: str) -> str:
+    if len(datagram) > MAX_DATAGRAM:
+        raise Malformed(f"{len(datagram)} bytes, over {MAX_DATAGRAM}")
+    if not datagram.isascii():
+        raise Malformed("not ASCII")
+    m = pattern.match(datagram)
+    if m is None:
+        raise Malformed(f"not a {what} datagram")
+    return m.group("body").decode("ascii")
+
+
+def _number(text: str, tag: str) -> float:
+    m = _VALUE.match(text)
+    if m is None:
+        raise Malformed(f"{tag}: {text[:20]!r} is not a number")
+    value = float(m.group(1))
+    if not math.isfinite(value):
+        raise Malformed(f"{tag}: not a finite number")
+    return value
+
+
+def parse_pst(datagram: bytes) -> PstRequest:
+    """Rule 2 (Malformed for anything not wholly understood)."""
+    body = _text(datagram, _PST, "<PST>")
+    fields: dict[str, object] = {}
+    queries: list[str] = []
+    ignored: list[str] = []
+    pos = 0
+    while pos < len(body):
+        m = _ITEM.match(body, pos)
+        if m is None or m.end() == pos:
+            raise Malformed(f"cannot read {body[pos : pos + 20]!r}")
+        pos = m.end()
+        if m.group("query") is not None:
+            q = m.group("query").upper()
+            (queries if q in ("AZ", "EL") else ignored).append(q)
+            continue
+        tag, value = m.group("tag").upper(), m.group("value")
+        if tag == "AZIMUTH":
+            fields["azimuth"] = _number(value, tag)
+        elif tag == "ELEVATION":
+            fields["elevation"] = _number(value, tag)
+        elif tag == "STOP":
+            fields["stop"] = True
+        elif tag == "PARK":
+            fields["park"] = value.strip() != "0"
+        elif tag == "QRA":
+            fields["locator"] = value.strip()
+        else:
+            ignored.append(tag)
+    return PstRequest(
+        stop=bool(fields.get("stop", False)),
+        park=bool(fields.get("park", False)),
+        azimuth=_float_or_none(fields.get("azimuth")),
+        elevation=_float_or_none(fields.get("elevation")),
+        locator=str(fields["locator"]) if "locator" in fields else None,
+        queries=tuple(queries),
+        ignored=tuple(ignored),
+    )
+
+
+def _float_or_none(value: object) -> float | None:
+    return value if isinstance(value, float) else None
+
+
+def pst_reply(query: str, degrees: float) -> bytes:
+    """Rule 3: ``AZ:123\\r``."""
+    return f"{query}:{math.floor(degrees + 0.5):d}\r".encode("ascii")
+
+
+_N1MM_TAG = re.compile(r"<(?P<tag>[a-z]+)>(?P<value>[^<]{0,64})</(?P=tag)>", re.I)
+_STOP_WRAP = re.compile(r"</?stop>", re.I)
+
+
+def parse_n1mm(datagram: bytes) -> N1mmRequest:
+    """Rule 4 (Malformed for anything not understood)."""
+    body = _text(datagram, _N1MM, "<N1MMRotor>")
+    rest = _STOP_WRAP.sub("", _N1MM_TAG.sub("", body))
+    if rest.strip():
+        raise Malformed(f"cannot read {rest.strip()[:20]!r}")
+    values = {m.group("tag").lower(): m.group("value").strip() for m in _N1MM_TAG.finditer(body)}
+    stop = "<stop" in body.lower()
+    name = values.get("rotor") or (values.get("stop") if stop else None)
+    if not name or len(name) > MAX_NAME or not name.isprintable():
+        raise Malformed("no rotor name")
+    if stop:
+        return N1mmRequest(name, stop=True)
+    if "goazi" not in values:
+        raise Malformed("neither <goazi> nor <stop>")
+    az = _number(values["goazi"], "goazi")
+    if not 0.0 <= az <= 360.0:
+        raise Malformed(f"goazi {az:g} outside 0..360")
+    offset = _number(values["offset"], "offset") if values.get("offset") else 0.0
+    bidirectional = values.get("bidirectional", "0") not in ("", "0")
+    return N1mmRequest(name, azimuth=az, offset=offset, bidirectional=bidirectional)
+
+
+def n1mm_report(name: str, heading_deg: float) -> bytes:
+    """Rule 5: ``Tower @ 650``."""
+    return f"{name} @ {round((heading_deg % 360.0) * 10) % 3600:d}".encode("ascii")

@@ -1,0 +1,364 @@
+"""The loggers' UDP endpoints: one thread, every socket (a PST port per rotator, an N1MM port
+per address shared by the rotators named on it), the N1MM position reports.
+
+Rules:
+1. Every command goes through the Rotator like MQTT's and rotctld's (Source.PST, Source.N1MM):
+   the lock, limits, keep-out sectors and offsets are judged there, and a refusal is published
+   on ``R/error`` naming the protocol. The sender gets no reply to a command: neither protocol
+   has one.
+2. ``AZ?``/``EL?`` are answered at once from the rotator's status, to the sender's address at
+   the listen port + 1, in integer degrees with a CR. No position, no answer (never a made-up
+   one); an azimuth-only rotator does not answer ``EL?``.
+3. A socket is drained on every wake-up and each datagram parsed on its own: a malformed one
+   (datagrams.py rule 1) is dropped and counted, logged at debug level at most once per
+   JUNK_LOG_S with the count since. Nothing of it reaches the rotator; the serial line is
+   served by another thread and never waits for this one.
+4. An azimuth outside 0..360 (Hamlib's range is -180..450) is folded into 0..360: the rotator's
+   own rules pick the way round. An elevation sent to an azimuth-only rotator is ignored.
+5. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
+   listens on that port. ``bidirectional`` 1 turns to the heading or its reciprocal, whichever
+   is nearer the bearing. A non-zero ``offset`` is logged once and not applied (its meaning is
+   not documented). Position reports go to the configured address: every REPORT_MOVING_S
+   while the rotor turns, every REPORT_IDLE_S otherwise, and once when a move ends.
+"""
+
+from __future__ import annotations
+
+import errno
+import logging
+import os
+import selectors
+import socket
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from bridge import geo
+from bridge.errors import Refused
+from bridge.loggers.datagrams import (
+    MAX_DATAGRAM,
+    Malformed,
+    N1mmRequest,
+    PstRequest,
+    n1mm_report,
+    parse_n1mm,
+    parse_pst,
+    pst_reply,
+)
+from bridge.model import MotionState, Source, Stop, Target
+from bridge.pointing import norm360
+
+if TYPE_CHECKING:
+    from bridge.engine.rotator import Rotator
+
+log = logging.getLogger(__name__)
+
+JUNK_LOG_S = 10.0
+REPORT_MOVING_S = 1.5
+REPORT_IDLE_S = 15.0
+
+_BIND_HINTS = {
+    errno.EADDRINUSE: " (another program, PstRotator or a second bridge, has it)",
+    errno.EACCES: " (ports below 1024 need privileges)",
+    errno.EADDRNOTAVAIL: " (the bind address is not an address of this host)",
+}
+
+
+@dataclass
+class PstEndpoint:
+    rotator: Rotator
+    bind: str
+    port: int
+
+
+@dataclass
+class N1mmEndpoint:
+    """One N1MM address; the rotators that answer to a name on it."""
+
+    bind: str
+    port: int
+    rotators: dict[str, Rotator] = field(default_factory=dict)  # name -> rotator
+
+
+@dataclass
+class N1mmReporter:
+    rotator: Rotator
+    name: str
+    to: tuple[str, int]
+    next_s: float = 0.0
+    was_moving: bool = False
+
+
+@dataclass
+class Counts:
+    """What came in, per protocol (the benchmark and the tests read them)."""
+
+    commands: int = 0
+    queries: int = 0
+    malformed: int = 0
+    ignored: int = 0
+
+
+class LoggerEndpoints:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self.pst: list[PstEndpoint] = []
+        self.n1mm: dict[tuple[str, int], N1mmEndpoint] = {}
+        self._reporters: list[N1mmReporter] = []
+        self.counts = {"pst": Counts(), "n1mm": Counts()}
+        self._sockets: dict[socket.socket, PstEndpoint | N1mmEndpoint] = {}
+        self._sender: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._wake_r, self._wake_w = -1, -1
+        self._junk_logged_s = -JUNK_LOG_S
+        self._junk_since = 0
+        self._offset_warned: set[str] = set()
+
+    # -- configuration --------------------------------------------------------------------
+    def add_pst(self, rotator: Rotator, port: int, bind: str = "127.0.0.1") -> None:
+        self.pst.append(PstEndpoint(rotator, bind, port))
+
+    def add_n1mm(
+        self,
+        rotator: Rotator,
+        name: str,
+        port: int = 12040,
+        bind: str = "127.0.0.1",
+        report_to: tuple[str, int] = ("127.0.0.1", 13010),
+    ) -> None:
+        endpoint = self.n1mm.setdefault((bind, port), N1mmEndpoint(bind, port))
+        endpoint.rotators[name] = rotator
+        self._reporters.append(N1mmReporter(rotator, name, report_to))
+
+    def __bool__(self) -> bool:
+        return bool(self.pst or self.n1mm)
+
+    # -- life -----------------------------------------------------------------------------
+    def listen(self) -> None:
+        """Take every address (OSError naming the endpoint and the reason if one cannot be
+        had, and none kept)."""
+        if self._sockets:
+            return
+        # a PST port has one owner (a PstRotator still running must show as "in use"); N1MM's
+        # advice is to share its port (SO_REUSEADDR), as its loggers and rotor programs do
+        wanted: list[tuple[PstEndpoint | N1mmEndpoint, str, bool]] = [
+            (e, f"PstRotator UDP for rotator {e.rotator.id!r}", False) for e in self.pst
+        ]
+        wanted += [
+            (e, f"N1MM rotor UDP ({', '.join(e.rotators)})", True) for e in self.n1mm.values()
+        ]
+        try:
+            for endpoint, what, shared in wanted:
+                sock = _bound(endpoint.bind, endpoint.port, what, shared)
+                self._sockets[sock] = endpoint
+            self._sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        except OSError:
+            self._close_sockets()
+            raise
+
+    def start(self) -> None:
+        self.listen()
+        for endpoint in self._sockets.values():
+            where = f"{endpoint.bind}:{endpoint.port}"
+            if endpoint.bind not in ("127.0.0.1", "localhost"):
+                log.warning(
+                    "logger UDP port %s is not on loopback: neither PstRotator's nor N1MM's "
+                    "protocol has authentication, anyone who can reach it can turn the antenna",
+                    where,
+                )
+            log.info("logger UDP port %s (%s) listening", where, _kind(endpoint))
+        self._wake_r, self._wake_w = os.pipe()
+        self._thread = threading.Thread(target=self._loop, name="loggers", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        if self._thread is not None:
+            os.write(self._wake_w, b"x")
+            self._thread.join(timeout_s)
+            self._thread = None
+            os.close(self._wake_r)
+            os.close(self._wake_w)
+        self._close_sockets()
+
+    def address(self, endpoint: PstEndpoint | N1mmEndpoint) -> tuple[str, int]:
+        """Where ``endpoint`` really listens (port 0 in tests: the one the system gave)."""
+        for sock, e in self._sockets.items():
+            if e is endpoint:
+                host, port = sock.getsockname()[:2]
+                return host, port
+        return endpoint.bind, endpoint.port
+
+    def _close_sockets(self) -> None:
+        for sock in [*self._sockets, *([self._sender] if self._sender else [])]:
+            sock.close()
+        self._sockets.clear()
+        self._sender = None
+
+    # -- the thread -----------------------------------------------------------------------
+    def _loop(self) -> None:
+        with selectors.DefaultSelector() as sel:
+            for sock in self._sockets:
+                sel.register(sock, selectors.EVENT_READ)
+            sel.register(self._wake_r, selectors.EVENT_READ)
+            while True:
+                now = self._clock()
+                due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
+                events = sel.select(max(0.0, due - now))
+                for key, _mask in events:
+                    if key.fileobj == self._wake_r:
+                        return
+                    assert isinstance(key.fileobj, socket.socket)
+                    self._drain(key.fileobj)
+                self._report(self._clock())
+
+    def _drain(self, sock: socket.socket) -> None:
+        endpoint = self._sockets[sock]
+        port = sock.getsockname()[1]
+        while True:
+            try:
+                data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. ICMP port unreachable from an earlier reply
+                log.debug("logger UDP %d: %s", port, exc)
+                continue
+            try:
+                if isinstance(endpoint, PstEndpoint):
+                    self._pst(endpoint, sock, port, parse_pst(data), peer, data)
+                else:
+                    self._n1mm(endpoint, parse_n1mm(data), data)
+            except Malformed as exc:
+                self._junk(_kind(endpoint), peer, exc)
+
+    def _junk(self, kind: str, peer: tuple[str, int], exc: Malformed) -> None:
+        """Rule 3."""
+        self.counts[kind].malformed += 1
+        self._junk_since += 1
+        now = self._clock()
+        if now - self._junk_logged_s >= JUNK_LOG_S:
+            log.debug(
+                "%s UDP: dropped %d malformed datagram(s), the last from %s: %s",
+                kind,
+                self._junk_since,
+                peer[0],
+                exc,
+            )
+            self._junk_logged_s, self._junk_since = now, 0
+
+    # -- PstRotator -----------------------------------------------------------------------
+    def _pst(
+        self,
+        e: PstEndpoint,
+        sock: socket.socket,
+        port: int,
+        req: PstRequest,
+        peer: tuple[str, int],
+        data: bytes,
+    ) -> None:
+        counts, rot = self.counts["pst"], e.rotator
+        for query in req.queries:  # rule 2, before the command: the position it had
+            status = rot.status
+            value = status.bearing_deg if query == "AZ" else status.elevation_deg
+            counts.queries += 1
+            if status.available and value is not None:
+                try:
+                    sock.sendto(pst_reply(query, value), (peer[0], port + 1))
+                except OSError as exc:
+                    log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
+        counts.ignored += len(req.ignored)
+        described = "pst " + data.decode("ascii").strip()[:120]
+        has_el = rot.spec.has_elevation
+        el = req.elevation if has_el else None
+        try:
+            if req.stop:
+                rot.submit(Stop(Source.PST), described)
+            elif req.park:
+                rot.park(Source.PST, described)
+            elif req.locator is not None:
+                try:
+                    lat, lon = geo.parse_locator(req.locator)
+                except geo.LocatorError as exc:
+                    rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
+                    return
+                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator)
+            elif req.azimuth is not None or el is not None:
+                az = None if req.azimuth is None else norm360(req.azimuth)  # rule 4
+                rot.submit(Target(az, el, Source.PST), described)
+            else:
+                return
+            counts.commands += 1
+        except Refused:
+            pass  # the rotator has published it on R/error
+
+    # -- N1MM -----------------------------------------------------------------------------
+    def _n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes) -> None:
+        counts = self.counts["n1mm"]
+        rot = e.rotators.get(req.rotor)
+        if rot is None and req.rotor == "*" and len(e.rotators) == 1:
+            rot = next(iter(e.rotators.values()))
+        if rot is None:
+            counts.ignored += 1
+            log.debug("N1MM UDP %d: rotor %r is not ours", e.port, req.rotor)
+            return
+        described = "n1mm " + data.decode("ascii").strip()[:160]
+        try:
+            if req.stop:
+                rot.submit(Stop(Source.N1MM), described)
+            else:
+                assert req.azimuth is not None
+                if req.offset and req.rotor not in self._offset_warned:
+                    self._offset_warned.add(req.rotor)
+                    log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
+                az = req.azimuth
+                bearing = rot.status.bearing_deg
+                if req.bidirectional and bearing is not None:
+                    az = min((az, norm360(az + 180.0)), key=lambda a: _apart(a, bearing))
+                rot.submit(Target(norm360(az), None, Source.N1MM), described)
+            counts.commands += 1
+        except Refused:
+            pass
+
+    def _report(self, now: float) -> None:
+        """Rule 5."""
+        for r in self._reporters:
+            status = r.rotator.status
+            moving = status.state is MotionState.MOVING
+            ended = r.was_moving and not moving
+            r.was_moving = moving
+            if now < r.next_s and not ended:
+                continue
+            r.next_s = now + (REPORT_MOVING_S if moving else REPORT_IDLE_S)
+            if status.bearing_deg is None or not status.available or self._sender is None:
+                continue
+            try:
+                self._sender.sendto(n1mm_report(r.name, status.bearing_deg), r.to)
+            except OSError as exc:
+                log.debug("N1MM report to %s:%d: %s", *r.to, exc)
+
+
+def _apart(a: float, b: float) -> float:
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
+    return "pst" if isinstance(endpoint, PstEndpoint) else "n1mm"
+
+
+def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        if shared:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.setblocking(False)
+    except OSError as exc:
+        sock.close()
+        code = exc.errno or 0
+        reason = os.strerror(code) if code > 0 else exc.strerror or str(exc)
+        raise OSError(
+            exc.errno,
+            f"{what}: cannot listen on {host}:{port}: {reason}{_BIND_HINTS.get(code, '')}",
+        ) from None
+    return sock

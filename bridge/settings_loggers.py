@@ -1,0 +1,38 @@
+"""The loggers' UDP endpoints in ``[[rotators]]`` (loggers/): off unless a port or a name is
+given, on loopback unless told otherwise (neither protocol has authentication)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+
+class LoggerFields(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    # PstRotator's UDP interface: commands on this port, replies to the sender at port + 1
+    pst_udp_port: int | None = Field(None, ge=1, le=65534)
+    pst_udp_bind: str = "127.0.0.1"
+    # N1MM Logger+: the "Rotor Description" N1MM gives this rotator's antenna
+    n1mm_rotor_name: str | None = Field(None, min_length=1, max_length=64)
+    n1mm_udp_port: int = Field(12040, ge=1, le=65535)
+    n1mm_udp_bind: str = "127.0.0.1"
+    n1mm_report_to: str = "127.0.0.1:13010"  # where position reports go ("host:port")
+
+    @field_validator("n1mm_rotor_name")
+    @classmethod
+    def _printable(cls, name: str | None) -> str | None:
+        if name is not None and (not name.isprintable() or name != name.strip() or "<" in name):
+            raise ValueError("printable, no leading or trailing blanks, no '<'")
+        return name
+
+    @field_validator("n1mm_report_to")
+    @classmethod
+    def _host_port(cls, text: str) -> str:
+        host, sep, port = text.rpartition(":")
+        if not sep or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+            raise ValueError(f"{text!r} must be host:port, e.g. 127.0.0.1:13010")
+        return text
+
+    @property
+    def n1mm_report_address(self) -> tuple[str, int]:
+        host, _, port = self.n1mm_report_to.rpartition(":")
+        return host, int(port)

@@ -1,0 +1,158 @@
+"""The loggers' datagrams (bridge/loggers/datagrams.py), from the fact sheet's examples
+(../shared/protocols/logger-udp.md): what each client sends, and what must be refused."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bridge.loggers.datagrams import (
+    MAX_DATAGRAM,
+    Malformed,
+    N1mmRequest,
+    PstRequest,
+    n1mm_report,
+    parse_n1mm,
+    parse_pst,
+    pst_reply,
+)
+
+
+@pytest.mark.parametrize(
+    ("datagram", "request_"),
+    [
+        (b"<PST><AZIMUTH>85</AZIMUTH></PST>", PstRequest(azimuth=85.0)),  # manual, Minos, KST
+        (b"<PST><ELEVATION>45.0</ELEVATION></PST>", PstRequest(elevation=45.0)),
+        (b"<PST><AZIMUTH>120.000000.2</AZIMUTH></PST>", PstRequest(azimuth=120.0)),  # Hamlib 4.6
+        (b"<PST><AZIMUTH>123.400002.2</AZIMUTH></PST>", PstRequest(azimuth=123.400002)),
+        (
+            b"<PST><TRACK>0</TRACK><AZIMUTH>123.4</AZIMUTH><ELEVATION>45.6</ELEVATION></PST>",
+            PstRequest(azimuth=123.4, elevation=45.6, ignored=("TRACK",)),  # QLog, horus-gui
+        ),
+        (b"<PST><STOP>1</STOP></PST>", PstRequest(stop=True)),
+        (b"<PST><PARK>1</PARK></PST>", PstRequest(park=True)),
+        (b"<PST><QRA>KN34BJ</QRA></PST>", PstRequest(locator="KN34BJ")),
+        (b"<PST>AZ?</PST>", PstRequest(queries=("AZ",))),
+        (b"<PST>EL?</PST>", PstRequest(queries=("EL",))),
+        (b"<PST>MODE?</PST>", PstRequest(ignored=("MODE",))),
+        (b"<pst><azimuth>-20</azimuth></pst>\r\n", PstRequest(azimuth=-20.0)),  # any case, CRLF
+        (b"<PST> <AZIMUTH>10</AZIMUTH> AZ? </PST>", PstRequest(azimuth=10.0, queries=("AZ",))),
+        (
+            b"<PST><AZIMUTH>10</AZIMUTH><STOP>1</STOP></PST>",  # the stop wins (the server)
+            PstRequest(stop=True, azimuth=10.0),
+        ),
+        (b"<PST><ON>1</ON></PST>", PstRequest(ignored=("ON",))),  # undocumented tags
+    ],
+)
+def test_what_the_pst_clients_send_is_read(datagram: bytes, request_: PstRequest) -> None:
+    assert parse_pst(datagram) == request_
+
+
+@pytest.mark.parametrize(
+    "datagram",
+    [
+        b"<PST><AZIMUTH>nan</AZIMUTH></PST>",
+        b"<PST><AZIMUTH>inf</AZIMUTH></PST>",
+        b"<PST><AZIMUTH></AZIMUTH></PST>",
+        b"<PST><AZIMUTH>12x</AZIMUTH></PST>",
+        b"<PST><AZIMUTH>1e3</AZIMUTH></PST>",
+        b"<PST><AZIMUTH>1.2.3.4</AZIMUTH></PST>",
+        b"<PST><AZIMUTH>85</PST>",  # not closed
+        b"<PST><AZIMUTH>85</ELEVATION></PST>",
+        b"<PST>hello</PST>",
+        b"AZ?",
+        b"<PST>AZ?",
+        b"<N1MMRotor><rotor>T</rotor><goazi>1</goazi></N1MMRotor>",  # the other protocol
+        "<PST><AZIMUTH>85</AZIMUTH></PST>°".encode(),  # not ASCII
+        b"<PST>" + b" " * MAX_DATAGRAM + b"</PST>",
+        b"",
+    ],
+)
+def test_anything_else_is_malformed(datagram: bytes) -> None:
+    with pytest.raises(Malformed):
+        parse_pst(datagram)
+
+
+def test_replies_are_integer_degrees_with_one_cr_as_minos_needs() -> None:
+    assert pst_reply("AZ", 123.4) == b"AZ:123\r"
+    assert pst_reply("AZ", 122.5) == b"AZ:123\r"
+    assert pst_reply("EL", 45.0) == b"EL:45\r"
+
+
+N1MM_SAMPLE = (  # n1kdo's capture, one line, no XML declaration
+    b"<N1MMRotor><rotor>*</rotor><goazi>66.0</goazi><offset>0.0</offset>"
+    b"<bidirectional>0</bidirectional><freqband>28.0</freqband></N1MMRotor>"
+)
+
+
+@pytest.mark.parametrize(
+    ("datagram", "request_"),
+    [
+        (N1MM_SAMPLE, N1mmRequest("*", azimuth=66.0)),
+        (
+            b"<N1MMRotor>\r\n  <rotor>Tower</rotor>\r\n  <goazi>123.4</goazi>\r\n"
+            b"  <offset>0</offset>\r\n  <bidirectional>1</bidirectional>\r\n"
+            b"  <freqband>14</freqband>\r\n</N1MMRotor>",
+            N1mmRequest("Tower", azimuth=123.4, bidirectional=True),  # netrotor's layout
+        ),
+        (
+            b"<N1MMRotor><stop><rotor>YaesuCom9</rotor><freqband>21.0</freqband></stop></N1MMRotor>",
+            N1mmRequest("YaesuCom9", stop=True),
+        ),
+        (b"<N1MMRotor><stop>Tower</stop></N1MMRotor>", N1mmRequest("Tower", stop=True)),
+        (
+            b"<N1MMRotor><rotor>Tower</rotor><stop></stop></N1MMRotor>",
+            N1mmRequest("Tower", stop=True),
+        ),
+        (
+            b"<N1MMRotor><goazi>5</goazi><rotor>Tower</rotor><offset>2.5</offset></N1MMRotor>",
+            N1mmRequest("Tower", azimuth=5.0, offset=2.5),
+        ),
+    ],
+)
+def test_what_n1mm_sends_is_read(datagram: bytes, request_: N1mmRequest) -> None:
+    assert parse_n1mm(datagram) == request_
+
+
+@pytest.mark.parametrize(
+    "datagram",
+    [
+        b"<N1MMRotor><rotor>T</rotor><goazi>361</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor><goazi>-1</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor><goazi>nan</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor></N1MMRotor>",  # neither goazi nor stop
+        b"<N1MMRotor><goazi>10</goazi></N1MMRotor>",  # no name
+        b"<N1MMRotor><rotor>T</rotor><goazi>10</goazi><x></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor><goazi>10</goazi>",
+        b"<PST><AZIMUTH>85</AZIMUTH></PST>",
+    ],
+)
+def test_n1mm_datagrams_not_understood_are_malformed(datagram: bytes) -> None:
+    with pytest.raises(Malformed):
+        parse_n1mm(datagram)
+
+
+def test_the_n1mm_position_report_is_the_heading_times_ten() -> None:
+    assert n1mm_report("rotor on com1", 65.0) == b"rotor on com1 @ 650"
+    assert n1mm_report("Tower", 0.04) == b"Tower @ 0"
+    assert n1mm_report("Tower", 359.96) == b"Tower @ 0"  # 360.0 is north, as 0
+
+
+@given(st.binary(max_size=300))
+def test_random_bytes_are_read_or_malformed_never_anything_else(data: bytes) -> None:
+    for parse in (parse_pst, parse_n1mm):
+        try:
+            parse(data)
+        except Malformed:
+            pass
+
+
+@given(st.text(alphabet="<>/PSTAZIMUTHELVONQRK?0123456789.-+ \r\n", max_size=80))
+def test_tag_soup_is_read_or_malformed_and_numbers_are_finite(text: str) -> None:
+    try:
+        req = parse_pst(f"<PST>{text}</PST>".encode())
+    except Malformed:
+        return
+    for value in (req.azimuth, req.elevation):
+        assert value is None or value == value and abs(value) != float("inf")
