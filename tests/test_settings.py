@@ -161,6 +161,9 @@ POINTING_KEYS = (
     "track_min_el_deg",
     "track_step_deg",
     "track_at_los",
+    "pst_udp_port",
+    "n1mm_rotor_name",
+    "n1mm_report_to",
 )
 
 
@@ -176,6 +179,11 @@ def test_the_example_pointing_lines_are_valid_as_written(tmp_path: Path) -> None
     assert r.presets == {"EU": 45, "JA": 330, "W": 300}
     assert s.tracking.tle_file == Path("/var/lib/rotor-bridge/amateur.tle")
     assert (r.track_min_el_deg, r.track_step_deg, r.track_at_los) == (0, 3, "stay")
+    assert (r.pst_udp_port, r.n1mm_rotor_name, r.n1mm_report_address) == (
+        12000,
+        "Tower",
+        ("127.0.0.1", 13010),
+    )
 
 
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
@@ -410,3 +418,42 @@ def test_a_target_at_the_lowest_true_bearing_is_taken_with_a_fractional_offset()
     lo, _ = r.pointing.target_range()
     assert lo == -89.9
     assert r.pointing.judge(Target(-89.9, 0), None).az_deg == -180  # raw: the lower stop
+
+
+TWO = (
+    '[[rotators]]\nid = "a"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n{a}\n'
+    '[[rotators]]\nid = "b"\nmodel = "rot2prog"\nport = "/dev/ttyUSB1"\n{b}\n'
+)
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "message"),
+    [
+        ("pst_udp_port = 12000", "pst_udp_port = 12000", "share one pst_udp_port"),
+        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "one n1mm_rotor_name on one N1MM"),
+        ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
+        ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
+        ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),
+        ("pst_udp_port = 65535", "", r"rotators\[0\].*pst_udp_port"),  # its reply port is +1
+    ],
+)
+def test_logger_endpoints_that_cannot_work_are_refused_naming_the_field(
+    tmp_path: Path, a: str, b: str, message: str
+) -> None:
+    with pytest.raises(ConfigError, match=message):
+        load_settings(write(tmp_path, TWO.format(a=a, b=b)), environ={})
+
+
+def test_two_rotators_may_share_the_n1mm_port_by_name(tmp_path: Path) -> None:
+    text = TWO.format(a='n1mm_rotor_name = "Tower"', b='n1mm_rotor_name = "Sky"')
+    s = load_settings(write(tmp_path, text), environ={})
+    assert [r.n1mm_udp_port for r in s.rotators] == [12040, 12040]
+
+
+def test_a_logger_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
+    text = TWO.format(a='pst_udp_port = 12000\npst_udp_bind = "0.0.0.0"', b="")
+    _doc, warnings = check_config(write(tmp_path, text))
+    assert any(
+        w.startswith("rotators[0].pst_udp_bind: 0.0.0.0 is not a loopback address")
+        for w in warnings
+    ), warnings
