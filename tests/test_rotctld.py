@@ -639,3 +639,46 @@ def test_dump_state_never_says_south_zero(station: StationFactory) -> None:
     c = station("rotorcard", az_offset_deg=180).connect()
     reply = c.single_recv(b"\\dump_state\n")
     assert b"min_az=0.000000\nmax_az=360.000000\n" in reply and b"south_zero=0\n" in reply
+
+
+# -- hostile neighbours (issue 14, item 1): HTTP is not rotctld ----------------------------------
+BROWSER_GET = (
+    b"GET / HTTP/1.1\r\nHost: 127.0.0.1:4533\r\nUser-Agent: Mozilla/5.0 (X11; Linux x86_64) "
+    b"AppleWebKit/537.36 (KHTML, like Gecko) Chrome/120.0 Safari/537.36\r\nAccept: */*\r\n\r\n"
+)
+FORM_POST = (  # what curl --data-binary sends: the body would be read as a set_pos
+    b"POST / HTTP/1.1\r\nHost: 127.0.0.1\r\nUser-Agent: curl/7.88.1\r\nAccept: */*\r\n"
+    b"Content-Type: text/plain\r\nContent-Length: 9\r\n\r\n\nP 200 0\n"
+)
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        BROWSER_GET,
+        FORM_POST,
+        BROWSER_GET[:5],  # the request line sent in pieces: held until it is complete
+        b"p\nHost: x\n\nK\n",  # a header line later on (a rotctld line is never "Name: ...")
+    ],
+)
+def test_a_connection_speaking_http_is_closed_and_nothing_it_sent_runs(
+    station: StationFactory, request_: bytes
+) -> None:
+    st = station("rotorcard", park_az_deg=30)
+    c = st.connect()
+    if request_ == BROWSER_GET[:5]:
+        c.send(request_)
+        request_ = BROWSER_GET[5:]
+    c.send(request_)
+    while c.sock.recv(4096):  # the bridge closes it (a query before the header was answered)
+        pass
+    other = st.connect()  # the rotor went nowhere: nothing was parked, nothing set
+    other.ask(b"S\n", b"RPRT 0\n")
+    assert st.bearing_frames() == []
+
+
+def test_gpredict_and_hamlib_lines_are_not_taken_for_http(station: StationFactory) -> None:
+    c = station("rot2prog").connect()
+    c.ask(b"P 180.00 45.00\n", b"RPRT 0\n")  # Gpredict
+    c.ask(b"S\n", b"RPRT 0\n")
+    c.ask(b"\\stop\n", b"RPRT 0\n")

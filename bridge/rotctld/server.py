@@ -11,7 +11,7 @@ import threading
 from typing import TYPE_CHECKING
 
 from bridge.rotctld.commands import RotctldCommands
-from bridge.rotctld.parser import Quit, RequestParser
+from bridge.rotctld.parser import HttpGuard, Quit, RequestParser
 
 if TYPE_CHECKING:
     from bridge.engine.rotator import Rotator
@@ -178,11 +178,23 @@ class RotctldServer:
         log.info("rotctld for %s: client %s:%d connected", self.rotator_id, peer[0], peer[1])
         parser = RequestParser()
         commands = RotctldCommands(self.rotator)  # one per client: p answers in its terms
+        guard = HttpGuard()
         try:
             while True:
                 data = conn.recv(4096)
                 if not data:
                     break
+                data = guard.feed(data)
+                if guard.http:
+                    log.warning(
+                        "rotctld for %s: %s:%d sent %s: connection closed, nothing executed "
+                        "(a web page may try to reach rotctld on this host)",
+                        self.rotator_id,
+                        peer[0],
+                        peer[1],
+                        guard.http,
+                    )
+                    return
                 for item in parser.feed(data):
                     if isinstance(item, Quit):
                         return
