@@ -93,6 +93,9 @@ class Rotator:
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self._stopped = False
+        problem = store.problems.get(self.id)
+        if problem is not None:  # the lock is ON for it; the status's last error says why
+            self._mailbox.put_note(problem)
 
     def _supported_options(self, store: StateStore) -> dict[str, bool]:
         """Options remembered for this id that this model has (the id may have been another)."""

@@ -4,7 +4,9 @@ user set (the controller forgets them at power-off, so the bridge re-applies the
 A small JSON file, replaced atomically on every change. A missing file means "nothing set";
 an unreadable one is reported and treated as empty, except that every rotator whose lock state
 cannot be read starts locked (safety before convenience) and is written down as locked, so it
-stays locked across restarts until someone unlocks it.
+stays locked across restarts until someone unlocks it. A malformed entry (not a table, a lock
+that is not true or false, options that are not switches) does the same for its rotator alone,
+and the rotator's status says why (``problems``).
 """
 
 from __future__ import annotations
@@ -25,15 +27,38 @@ class StateStore:
         self._lock = threading.Lock()
         self._data: dict[str, dict[str, object]] = {}
         self.corrupt = False
+        self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
+        self._dirty = False  # a malformed entry was replaced: written down at the first read
         if path is not None and path.exists():
             try:
                 loaded = json.loads(path.read_text())
                 if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
                     raise ValueError("no 'rotators' table")
-                self._data = loaded["rotators"]
+                self._data = {
+                    str(k): self._entry(path, str(k), v) for k, v in loaded["rotators"].items()
+                }
             except (OSError, ValueError) as exc:
                 log.error("state file %s unreadable (%s): every rotator starts locked", path, exc)
                 self.corrupt = True
+
+    def _entry(self, path: Path, rotator_id: str, entry: object) -> dict[str, object]:
+        """One rotator's entry as it must be; one that is not starts that rotator locked."""
+        options = entry.get("options", {}) if isinstance(entry, dict) else None
+        fine = (
+            isinstance(entry, dict)
+            and isinstance(entry.get("locked", False), bool)
+            and isinstance(options, dict)
+            and all(isinstance(v, bool) for v in options.values())
+        )
+        if fine:
+            assert isinstance(entry, dict)
+            return entry
+        shown = json.dumps(entry)[:80]
+        problem = f"state file {path}: entry for {rotator_id!r} is malformed ({shown}): locked"
+        log.error("%s", problem)
+        self.problems[rotator_id] = problem
+        self._dirty = True
+        return {"locked": True}
 
     def check_writable(self) -> None:
         """OSError if the file cannot be written where it is configured. Checked at start: a
@@ -49,6 +74,9 @@ class StateStore:
 
     def locked(self, rotator_id: str) -> bool:
         with self._lock:
+            if self._dirty:  # the replacement of a malformed entry, locked, kept for next time
+                self._dirty = False
+                self._save()
             entry = self._data.get(rotator_id, {})
             if self.corrupt and "locked" not in entry:
                 # written down explicitly, so the next start is locked too until someone unlocks

@@ -3,6 +3,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from bridge.engine.state_store import StateStore
 
 
@@ -34,3 +36,32 @@ def test_a_lock_that_cannot_be_saved_says_so(tmp_path: Path) -> None:
     blocker.write_text("")
     s = StateStore(blocker / "state.json")  # its directory cannot be created
     assert s.set_locked("tower", True) is False
+
+
+@pytest.mark.parametrize(
+    "entry",
+    [
+        "x",
+        None,
+        [],
+        5,
+        {"locked": "yes"},
+        {"locked": 1},
+        {"options": "x"},
+        {"options": {"jam": "on"}},
+    ],
+)
+def test_a_malformed_entry_starts_its_rotator_locked_and_says_why(
+    tmp_path: Path, entry: object
+) -> None:
+    """Issue 14, item 7: {"rotators": {"tower": "x"}} was a traceback and exit 1 at start-up,
+    restarted by systemd every 5 s forever."""
+    path = tmp_path / "state.json"
+    good = {"locked": False, "options": {"jam": True}}
+    path.write_text(json.dumps({"rotators": {"tower": entry, "yagi": good}}))
+    s = StateStore(path)
+    assert s.locked("tower") is True and s.options("tower") == {}
+    assert "entry for 'tower' is malformed" in s.problems["tower"]
+    assert s.locked("yagi") is False and s.options("yagi") == {"jam": True}  # the others as set
+    assert json.loads(path.read_text())["rotators"]["tower"] == {"locked": True}  # kept locked
+    assert StateStore(path).problems == {}  # written down properly: the next start is clean
