@@ -6,20 +6,22 @@ import dataclasses
 import json
 import re
 import threading
+from datetime import datetime
 
 import pytest
 
 from bridge import geo
 from bridge.homeassistant import (
     ENTITIES,
+    MAX_SATELLITES,
     DiscoveryPublisher,
     Entity,
     Identity,
     RotatorInfo,
     all_configs,
 )
-from bridge.model import RotatorStatus
-from bridge.mqtt.payloads import parse_nudge
+from bridge.model import RotatorStatus, TrackingInfo
+from bridge.mqtt.payloads import parse_nudge, status_json, tracking_state
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -380,3 +382,200 @@ def test_the_rules_catch_what_home_assistant_refuses_in_a_select_or_text() -> No
     for change in ({"max": 256}, {"min": -1}, {"min": 9}, {"mode": "number"}, {"pattern": "(["}):
         assert validate(node.format("text", "locator"), {**text, **change}), change
     assert validate(node.format("text", "locator"), {**text, "min": 8}) == []  # min == max is fine
+
+
+# -- tracking: the track select and the tracked body's sensors (issue 17) -------------------------
+TRACKING_IDS = {"select.track", "sensor.track_azimuth", "sensor.track_elevation", "sensor.next_aos"}
+SATELLITES = ("AO-7", "ISS (ZARYA)", "NOAA 19")  # as App passes them: TleCatalog.names(), sorted
+
+
+def tracking_discovery(
+    model: str = "md01", has_station: bool = True, satellites: tuple[str, ...] = SATELLITES
+) -> dict[str, dict]:
+    """Discovery for one rotator, as App builds it (the station, the TLE file's names)."""
+    cfg = RotatorSettings(id="tower", model=model, port="/dev/ttyUSB0")
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=has_station, nudge_step_deg=cfg.nudge_step_deg, satellites=satellites,
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    return {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "rot2prog", "rot1prog", "md01", "satel"])
+def test_tracking_entities_pass_home_assistants_rules(model: str) -> None:
+    msgs = tracking_discovery(model)
+    assert TRACKING_IDS <= set(msgs)
+    for key, payload in msgs.items():
+        platform, obj = key.split(".")
+        topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
+        assert validate(topic, payload) == [], key
+
+
+@pytest.mark.parametrize(
+    ("model", "station", "has_them"),
+    [("md01", True, True), ("rotorez", True, True), ("md01", False, False),
+     ("rotorez", False, False), ("dcu1", True, False), ("dcu1", False, False)],
+)  # fmt: skip
+def test_tracking_entities_need_a_station_and_a_controller_that_reports_where_it_points(
+    model: str, station: bool, has_them: bool
+) -> None:
+    got = set(tracking_discovery(model, station)) & TRACKING_IDS
+    assert got == (TRACKING_IDS if has_them else set())
+
+
+def test_track_select_offers_off_sun_moon_and_the_tle_files_satellites() -> None:
+    msgs = tracking_discovery()
+    sel = msgs["select.track"]
+    assert sel["options"] == ["off", "sun", "moon", "AO-7", "ISS (ZARYA)", "NOAA 19"]
+    assert (sel["command_topic"], sel["state_topic"]) == ("rotor/track", "rotor/tracking")
+    assert "retain" not in sel and "value_template" not in sel  # R/tracking is the option itself
+    assert sel["availability"] == [{"topic": "rotor/bridge/state"}, {"topic": "rotor/availability"}]
+    assert tracking_discovery(satellites=())["select.track"]["options"] == ["off", "sun", "moon"]
+    # what R/tracking says is one of the options, whatever is followed (else HA shows an error)
+    for body in (None, "sun", "moon", "ISS (ZARYA)"):
+        tracking = None if body is None else TrackingInfo(body, "tracking")
+        assert tracking_state(RotatorStatus("tower", tracking=tracking)) in sel["options"]
+
+
+def test_track_select_is_capped_at_max_satellites_of_a_large_tle_file() -> None:
+    names = tuple(f"SAT {i:04d}" for i in range(MAX_SATELLITES + 50))  # a Celestrak-sized file
+    options = tracking_discovery(satellites=names)["select.track"]["options"]
+    assert options == ["off", "sun", "moon", *names[:MAX_SATELLITES]]
+    assert (
+        validate(
+            "homeassistant/select/rotorbridge_rotor_r_tower/track/config",
+            tracking_discovery(satellites=names)["select.track"],
+        )
+        == []
+    )
+
+
+def test_tracked_body_sensors_read_the_status_and_say_what_they_measure() -> None:
+    msgs = tracking_discovery()
+    az, el, aos = (
+        msgs["sensor.track_azimuth"],
+        msgs["sensor.track_elevation"],
+        msgs["sensor.next_aos"],
+    )
+    assert az["state_topic"] == el["state_topic"] == aos["state_topic"] == "rotor/status"
+    assert (az["unit_of_measurement"], az["state_class"]) == ("°", "measurement_angle")
+    assert (el["unit_of_measurement"], el["state_class"]) == ("°", "measurement")
+    assert aos["device_class"] == "timestamp" and "unit_of_measurement" not in aos
+
+
+# Home Assistant renders a value_template with Jinja2 against the JSON payload (value_json).
+# Jinja2 is not among the test dependencies, so the few constructs these templates use are
+# rendered here with Jinja's meaning: a dict's key read as an attribute (a name that is also a
+# dict method would give the method: refused here), ``x is defined`` false only for a missing
+# key (JSON null is defined), an attribute of an undefined value an error, ``a if c else b``
+# as in Python, and output as str() (None renders "None", which HA's MQTT sensor takes as
+# unknown). A template using anything else fails the test rather than being guessed at.
+_TOKENS = re.compile(r"\s*('[^']*'|[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)")
+_WORDS = {"if", "else", "and", "or", "not"}
+
+
+class _Undefined:
+    def __getattr__(self, name: str) -> object:
+        raise AssertionError(f"jinja2.UndefinedError: undefined has no attribute {name!r}")
+
+
+_UNDEFINED = _Undefined()
+
+
+class _Json:
+    def __init__(self, value: dict) -> None:
+        self.value = value
+
+    def __getattr__(self, name: str) -> object:
+        assert not hasattr(dict, name), f"Jinja reads .{name} of a dict as its method"
+        if name not in self.value:
+            return _UNDEFINED
+        found = self.value[name]
+        return _Json(found) if isinstance(found, dict) else found
+
+    def __bool__(self) -> bool:
+        return bool(self.value)
+
+
+def render(template: str, payload: str) -> str:
+    body = re.fullmatch(r"\{\{(.*)\}\}", template)
+    assert body is not None, f"not one {{{{ expression }}}}: {template!r}"
+    rest, tokens = body.group(1).rstrip(), []
+    while rest:
+        m = _TOKENS.match(rest)
+        assert m is not None, f"a construct this renderer does not know: {rest!r}"
+        tokens.append(m.group(1))
+        rest = rest[m.end() :]
+    python = []
+    i = 0
+    while i < len(tokens):
+        tok = tokens[i]
+        if tokens[i + 1 : i + 3] == ["is", "defined"]:
+            assert tok.startswith("value_json"), tok
+            python.append(f"_defined({tok})")
+            i += 3
+            continue
+        assert tok in _WORDS or tok.startswith(("'", "value_json")), tok
+        python.append(tok)
+        i += 1
+    names = {
+        "value_json": _Json(json.loads(payload)),
+        "_defined": lambda v: v is not _UNDEFINED,
+        "__builtins__": {},
+    }
+    value = eval(" ".join(python), names)  # noqa: S307 - tokens checked above, no builtins
+    return "" if value is _UNDEFINED else str(value)
+
+
+def test_the_renderer_follows_jinja_on_what_these_templates_use() -> None:
+    doc = json.dumps({"a": {"b": 1.5, "n": None}, "f": False})
+    assert render("{{ value_json.a.b }}", doc) == "1.5"
+    assert render("{{ value_json.a.n }}", doc) == "None"  # null renders as None
+    assert render("{{ value_json.a.n if value_json.a.n is defined else 'x' }}", doc) == "None"
+    assert render("{{ value_json.a.zz if value_json.a.zz is defined else 'x' }}", doc) == "x"
+    assert render("{{ value_json.zz }}", doc) == ""  # undefined renders empty
+    assert render("{{ 'ON' if value_json.f else 'OFF' }}", doc) == "OFF"
+    with pytest.raises(AssertionError, match="UndefinedError"):
+        render("{{ value_json.zz.b }}", doc)
+    with pytest.raises(AssertionError, match="method"):
+        render("{{ value_json.a.items }}", doc)
+    with pytest.raises(AssertionError, match="does not know"):
+        render("{{ value_json.a | float }}", doc)
+
+
+def _status(tracking: TrackingInfo | None, ended: str | None = None) -> str:
+    status = RotatorStatus("tower", tracking=tracking, tracking_ended=ended)
+    return status_json(status, 1_780_000_000.0, has_elevation=True)
+
+
+def test_tracked_body_templates_render_with_and_without_a_tracking_block() -> None:
+    msgs = tracking_discovery()
+    templates = {
+        k: msgs[f"sensor.{k}"]["value_template"]
+        for k in ("track_azimuth", "track_elevation", "next_aos")
+    }
+    aos_unix = 1_780_000_123.4
+
+    def shown(status: str) -> dict[str, str]:
+        return {k: render(t, status) for k, t in templates.items()}
+
+    in_pass = TrackingInfo(
+        "ISS (ZARYA)", "tracking", 123.4, 45.6, 130.0, 50.1,
+        aos_unix=aos_unix, los_unix=aos_unix + 600, max_elevation_deg=61.2, aos_azimuth_deg=210.0,
+    )  # fmt: skip
+    got = shown(_status(in_pass))
+    assert (got["track_azimuth"], got["track_elevation"]) == ("123.4", "45.6")
+    aos = datetime.fromisoformat(got["next_aos"])  # HA's timestamp sensor: ISO 8601 with a zone
+    assert aos.tzinfo is not None and aos.timestamp() == pytest.approx(aos_unix, abs=0.001)
+    # not tracking (never, or ended): unknown, not 0 and not an error
+    assert shown(_status(None)) == dict.fromkeys(templates, "None")
+    assert shown(_status(None, ended="stop")) == dict.fromkeys(templates, "None")
+    # tracking with no pass in sight: the body's position, no AOS
+    no_pass = TrackingInfo("moon", "no pass", 300.5, -20.0, 300.7, -20.2)
+    assert shown(_status(no_pass)) == {
+        "track_azimuth": "300.5", "track_elevation": "-20.0", "next_aos": "None"
+    }  # fmt: skip
+    # just started: nothing computed yet (the block's positions are null)
+    assert shown(_status(TrackingInfo("sun", "waiting"))) == dict.fromkeys(templates, "None")
