@@ -23,7 +23,8 @@ from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
 MAX_COMMAND_BYTES = 256
 MAX_NAME_CHARS = 64  # a preset's or a satellite's name
 _SPLIT = re.compile(r"[\s,;]+")
-_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+# ASCII digits only: Python's float() also takes "１３３" and "١٤٤"
+_NUMBER = re.compile(r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$")
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 
@@ -146,8 +147,16 @@ def parse_nudge(payload: bytes) -> tuple[float, float | None]:
     unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
     if unknown or not obj:
         raise PayloadError('a nudge is a number, or JSON {"azimuth": 5, "elevation": -2}')
+    _one_name_each(obj)
     az, el = obj.get("azimuth", obj.get("az", 0)), obj.get("elevation", obj.get("el"))
     return _number(az, "azimuth"), None if el is None else _number(el, "elevation")
+
+
+def _one_name_each(obj: dict[str, object]) -> None:
+    """``{"az": 30, "azimuth": 181}`` names one axis twice: which did the sender mean?"""
+    for long, short in (("azimuth", "az"), ("elevation", "el")):
+        if long in obj and short in obj:
+            raise PayloadError(f'give "{long}" or "{short}", not both')
 
 
 def parse_name(payload: bytes, what: str) -> str:
@@ -188,6 +197,7 @@ def parse_target(payload: bytes) -> tuple[float, float | None]:
         unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
         if unknown:
             raise PayloadError(f"unknown key(s) in target: {', '.join(sorted(unknown))}")
+        _one_name_each(obj)
         az_raw = obj.get("azimuth", obj.get("az"))
         el_raw = obj.get("elevation", obj.get("el"))
         if az_raw is None:

@@ -126,3 +126,24 @@ def test_presets_are_published_as_the_user_wrote_them() -> None:
     presets = {"EU": (45.0, None), "ISS_AOS": (180.0, 5.5), "W": (299.5, None)}
     assert pl.presets_json(presets) == '{"EU":45,"ISS_AOS":[180,5.5],"W":299.5}'
     assert pl.presets_json({}) == "{}"
+
+
+@pytest.mark.parametrize(
+    ("parse", "raw", "why"),
+    [
+        (pl.parse_target, "１３３".encode(), "azimuth must be a number"),  # fullwidth digits
+        (pl.parse_target, "١٤٤".encode(), "azimuth must be a number"),  # Arabic-Indic digits
+        (pl.parse_target, "120 ٣٠".encode(), "elevation must be a number"),
+        (pl.parse_target, '{"azimuth": "１３３"}'.encode(), "azimuth must be a number"),
+        (pl.parse_target, b'{"az": 30, "azimuth": 181}', 'give "azimuth" or "az", not both'),
+        (pl.parse_target, b'{"azimuth": 1, "el": 2, "elevation": 3}', '"elevation" or "el"'),
+        (pl.parse_nudge, b'{"az": 5, "azimuth": -5}', 'give "azimuth" or "az", not both'),
+        (pl.parse_nudge, "５".encode(), "nudge must be a number"),
+        (lambda p: pl.parse_number(p, "elevation"), "４５".encode(), "must be a number"),
+    ],
+)
+def test_only_ascii_numbers_and_one_name_per_axis(parse, raw: bytes, why: str) -> None:  # noqa: ANN001
+    """Issue 14, item 12: "１３３" and "١٤٤" were taken as 133 and 144, and
+    {"az": 30, "azimuth": 181} silently went to 181."""
+    with pytest.raises(pl.PayloadError, match=why):
+        parse(raw)
