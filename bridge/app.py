@@ -27,6 +27,8 @@ from bridge.sky import Sky
 
 log = logging.getLogger(__name__)
 
+CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
+
 
 def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
     """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked)."""
@@ -97,6 +99,7 @@ class App:
                 f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
             ) from None
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
+        self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         position = settings.station.position
@@ -117,7 +120,9 @@ class App:
             self.mqtt.attach(rot)
             self.rotators.append(rot)
             if r.rotctld_port is not None:
-                server = RotctldServer(rot, r.rotctld_port, r.rotctld_bind)
+                server = RotctldServer(
+                    rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
+                )
                 self.rotctld.append(server)
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
@@ -163,6 +168,18 @@ class App:
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
         return publisher
 
+    def check_catalog(self) -> None:
+        """The TLE file re-read if it changed; Home Assistant's track select follows it."""
+        if self.discovery is not None:
+            self.discovery.set_satellites(tuple(self.catalog.names()))
+
+    def _watch_catalog(self) -> None:
+        while not self._stopped.wait(CATALOG_CHECK_S):
+            try:
+                self.check_catalog()
+            except Exception:  # a watcher that dies would leave the select stale for good
+                log.exception("checking the TLE file failed")
+
     def start(self) -> None:
         """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
         try:
@@ -181,6 +198,8 @@ class App:
         self.mqtt.start()
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
+        if self.settings.tracking.tle_file is not None and self.discovery is not None:
+            threading.Thread(target=self._watch_catalog, name="tle-file", daemon=True).start()
         try:
             for server in self.rotctld:
                 server.start()
@@ -191,6 +210,7 @@ class App:
             raise
 
     def stop(self) -> None:
+        self._stopped.set()
         if self.discovery is not None:
             self.discovery.stop()
         for server in self.rotctld:

@@ -97,10 +97,14 @@ class RotatorInfo:
             has_station=has_station,
             nudge_step_deg=nudge_step_deg,
             track_options=(
-                ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
-                if has_station and spec.can_report_position
-                else ()
+                track_options(satellites) if has_station and spec.can_report_position else ()
             ),
+        )
+
+    def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
+        """This rotator with the TLE file's names as they are now (if it can track at all)."""
+        return (
+            replace(self, track_options=track_options(satellites)) if self.track_options else self
         )
 
     def has(self, need: str) -> bool:
@@ -248,6 +252,11 @@ DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
 MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
+
+
+def track_options(satellites: tuple[str, ...]) -> tuple[str, ...]:
+    """The track select's options: off, the sun, the moon, the first satellites by name."""
+    return ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
 
 
 def _tracked(field: str) -> str:
@@ -428,6 +437,16 @@ class DiscoveryPublisher:
             self._current = configs
             for topic, payload in configs.items():
                 self._publish(topic, payload)  # the client skips what did not change
+
+    def set_satellites(self, satellites: tuple[str, ...]) -> None:
+        """The TLE file changed: the track select offers what it holds now."""
+        with self._lock:
+            before = dict(self._rotators)
+            self._rotators = {k: r.with_satellites(satellites) for k, r in before.items()}
+            changed = self._rotators != before
+        if changed:
+            log.info("Home Assistant's track select now lists %d satellite(s)", len(satellites))
+            self.publish_all()
 
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
         with self._lock:

@@ -579,3 +579,31 @@ def test_tracked_body_templates_render_with_and_without_a_tracking_block() -> No
     }  # fmt: skip
     # just started: nothing computed yet (the block's positions are null)
     assert shown(_status(TrackingInfo("sun", "waiting"))) == dict.fromkeys(templates, "None")
+
+
+def test_the_track_select_follows_the_tle_file_when_it_changes() -> None:
+    """Review finding: the options were worked out once at start, so a satellite cron added
+    could be tracked but not picked, and R/tracking showed an option HA did not have."""
+    rec = Recorder()
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = dataclasses.replace(
+        RotatorInfo("tower", "Tower", REGISTRY["md01"], topics.rotator("tower"), -180, 540),
+        track_options=("off", "sun", "moon", "ISS (ZARYA)"),
+    )
+    pub = DiscoveryPublisher(
+        prefix="homeassistant",
+        status_topic="homeassistant/status",
+        topics=topics,
+        rotators=[info],
+        publish_retained=lambda t, p: rec.published.append((t, p)),
+        clear_retained=rec.cleared.append,
+        republish_state=rec.republished.set,
+    )
+    pub.publish_all()
+    topic = "homeassistant/select/rotorbridge_rotor_r_tower/track/config"
+    rec.published.clear()
+    pub.set_satellites(("ISS (ZARYA)",))  # unchanged: nothing sent
+    assert rec.published == [] or all(t != topic for t, _ in rec.published)
+    pub.set_satellites(("ISS (ZARYA)", "NOAA 19"))
+    options = [json.loads(p)["options"] for t, p in rec.published if t == topic]
+    assert options == [["off", "sun", "moon", "ISS (ZARYA)", "NOAA 19"]]

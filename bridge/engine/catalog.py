@@ -46,11 +46,12 @@ class TleCatalog:
                 )
             self._refresh()
             key = _fold(name)
-            found = self._sets.get(key.lstrip("0") if key.isdigit() else key)
+            found = self._sets.get(key)  # a name first, even one of digits ("0815")
+            if found is None and key.isdigit():
+                found = self._sets.get(key.lstrip("0"))  # then a catalog number
             if found is None:
-                raise CatalogError(
-                    f"no satellite {name!r} in {self.path} ({len(self._sets)} satellites)"
-                )
+                count = len(set(self._sets.values()))  # each set is there by name and number
+                raise CatalogError(f"no satellite {name!r} in {self.path} ({count} satellites)")
         try:
             return Body.satellite(*found)
         except SkyError as exc:  # parse_tles checked it already; a defect if it happens
@@ -80,7 +81,8 @@ class TleCatalog:
         for set_name, (line1, line2) in sets.items():
             entry = (set_name, line1, line2)
             self._sets[_fold(set_name)] = entry
-            self._sets.setdefault(line1[2:7].strip().lstrip("0"), entry)
+        for entry in list(self._sets.values()):  # catalog numbers, after every name
+            self._sets.setdefault(entry[1][2:7].strip().lstrip("0"), entry)
         log.info("tle_file %s: %d satellite(s)", self.path, len(sets))
 
 

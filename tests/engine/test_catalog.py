@@ -177,3 +177,17 @@ def test_names_are_sorted_and_each_once(tmp_path: Path) -> None:
     catalog = TleCatalog(path)
     assert catalog.names() == ["AO-7", "ISS (ZARYA)", "NOAA 19"]
     assert catalog.lookup("NOAA 19") == Body.satellite("NOAA 19", *NOAA)
+
+
+def test_the_count_is_of_satellites_not_of_lookup_keys(tmp_path: Path) -> None:
+    path = tmp_path / "active.txt"
+    path.write_text(three_line(("ISS (ZARYA)", ISS), ("NOAA 19", NOAA)))
+    with pytest.raises(CatalogError, match=r"\(2 satellites\)"):
+        TleCatalog(path).lookup("HUBBLE")
+
+
+def test_a_name_of_digits_with_a_leading_zero_is_found_by_name(tmp_path: Path) -> None:
+    path = tmp_path / "digits.txt"
+    path.write_text(three_line(("0815", ISS)))
+    assert TleCatalog(path).lookup("0815").name == "0815"
+    assert TleCatalog(path).lookup("25544").name == "0815"  # and by its catalog number
