@@ -173,6 +173,8 @@ class RotatorSettings(PointingFields, LoggerFields):
     # Hamlib rotctld-compatible TCP port (bridge/rotctld/); no authentication, hence loopback
     rotctld_port: int | None = Field(None, ge=1, le=65535)
     rotctld_bind: str = "127.0.0.1"
+    # a rotctld client that sends nothing this long is disconnected (16 idle ones took every slot)
+    rotctld_idle_timeout_s: float = Field(300.0, ge=1, le=86400)
     # az_offset_deg, presets, park_az_deg/park_el_deg, park_after_idle_s, keep_out and
     # nudge_step_deg: settings_pointing.py
 

@@ -682,3 +682,46 @@ def test_gpredict_and_hamlib_lines_are_not_taken_for_http(station: StationFactor
     c.ask(b"P 180.00 45.00\n", b"RPRT 0\n")  # Gpredict
     c.ask(b"S\n", b"RPRT 0\n")
     c.ask(b"\\stop\n", b"RPRT 0\n")
+
+
+def test_idle_clients_are_dropped_and_a_slot_frees_for_gpredict(station: StationFactory) -> None:
+    """Issue 14, item 5: 16 idle (or one-byte-a-second) connections held every slot for ever."""
+    st = station("rotorcard")
+    small = RotctldServer(st.rotator, 0, max_clients=2, idle_timeout_s=0.5, useful_within_s=1.0)
+    small.start()
+    try:
+        silent = Client(small.port)  # sends nothing
+        trickle = Client(small.port)  # sends a byte at a time, never a whole command
+        trickle.send(b"\\")
+        wait_until(lambda: small.client_count == 2, 5, "both connected")
+        turned_away = Client(small.port)
+        assert turned_away.at_eof()  # no slot left
+        trickle.send(b"d")
+        assert silent.at_eof()  # dropped after 0.5 s of silence
+        assert trickle.at_eof()  # dropped: bytes, but no command within 1 s
+        gpredict = Client(small.port)
+        gpredict.ask(b"S\n", b"RPRT 0\n")
+        for c in (silent, trickle, turned_away, gpredict):
+            c.close()
+    finally:
+        small.stop()
+
+
+def test_turned_away_connections_are_logged_once_with_a_count(
+    station: StationFactory, caplog: pytest.LogCaptureFixture
+) -> None:
+    st = station("rotorcard")
+    small = RotctldServer(st.rotator, 0, max_clients=1)
+    small.start()
+    try:
+        kept = Client(small.port)
+        kept.ask(b"S\n", b"RPRT 0\n")
+        for _ in range(50):
+            refused = Client(small.port)
+            assert refused.at_eof()
+            refused.close()
+        lines = [r for r in caplog.records if "turned away" in r.getMessage()]
+        assert len(lines) == 1, [r.getMessage() for r in lines]  # 50 refusals, one line
+        kept.close()
+    finally:
+        small.stop()

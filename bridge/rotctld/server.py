@@ -8,6 +8,8 @@ import os
 import selectors
 import socket
 import threading
+import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from bridge.rotctld.commands import RotctldCommands
@@ -17,6 +19,9 @@ if TYPE_CHECKING:
     from bridge.engine.rotator import Rotator
 
 log = logging.getLogger(__name__)
+
+USEFUL_WITHIN_S = 60.0  # bytes trickling in without a complete command: dropped after this
+REFUSAL_LOG_S = 10.0  # connections turned away are logged at most this often, with a count
 
 _BIND_HINTS = {
     errno.EADDRINUSE: " (another rotctld or rotor-bridge? give this rotator another rotctld_port)",
@@ -35,12 +40,20 @@ class RotctldServer:
         bind: str = "127.0.0.1",
         *,
         max_clients: int = 16,
+        idle_timeout_s: float = 300.0,
+        useful_within_s: float = USEFUL_WITHIN_S,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.rotator = rotator
         self.rotator_id = rotator.id
         self._bind = bind
         self._requested_port = port
         self._max_clients = max_clients
+        self._idle_timeout_s = idle_timeout_s
+        self._useful_within_s = max(useful_within_s, 0.0)
+        self._clock = clock
+        self._refused_logged_s = -REFUSAL_LOG_S
+        self._refused_since = 0
         self._listener: socket.socket | None = None
         self._wake_r, self._wake_w = -1, -1
         self._accept_thread: threading.Thread | None = None
@@ -155,14 +168,20 @@ class RotctldServer:
     def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         with self._lock:
             if self._stopping or len(self._clients) >= self._max_clients:
-                log.warning(
-                    "rotctld for %s: refusing %s:%d (%d clients connected)",
-                    self.rotator_id,
-                    peer[0],
-                    peer[1],
-                    len(self._clients),
-                )
                 conn.close()
+                self._refused_since += 1
+                now = self._clock()
+                if now - self._refused_logged_s >= REFUSAL_LOG_S:  # rule 8: one line, a count
+                    log.warning(
+                        "rotctld for %s: turned away %d connection(s), the last from %s:%d "
+                        "(%d clients connected, the most it takes)",
+                        self.rotator_id,
+                        self._refused_since,
+                        peer[0],
+                        peer[1],
+                        len(self._clients),
+                    )
+                    self._refused_logged_s, self._refused_since = now, 0
                 return
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             thread = threading.Thread(
@@ -179,11 +198,31 @@ class RotctldServer:
         parser = RequestParser()
         commands = RotctldCommands(self.rotator)  # one per client: p answers in its terms
         guard = HttpGuard()
+        last_bytes = last_command = self._clock()
         try:
             while True:
-                data = conn.recv(4096)
+                # rule 8: silent for the idle timeout, or bytes but no command for a while
+                now = self._clock()
+                deadline = min(
+                    last_bytes + self._idle_timeout_s, last_command + self._useful_within_s
+                )
+                if now >= deadline:
+                    log.info(
+                        "rotctld for %s: client %s:%d dropped: %s",
+                        self.rotator_id,
+                        peer[0],
+                        peer[1],
+                        "idle" if now >= last_bytes + self._idle_timeout_s else "no command",
+                    )
+                    return
+                conn.settimeout(deadline - now)
+                try:
+                    data = conn.recv(4096)
+                except TimeoutError:
+                    continue
                 if not data:
                     break
+                last_bytes = self._clock()
                 data = guard.feed(data)
                 if guard.http:
                     log.warning(
@@ -196,6 +235,7 @@ class RotctldServer:
                     )
                     return
                 for item in parser.feed(data):
+                    last_command = last_bytes
                     if isinstance(item, Quit):
                         return
                     conn.sendall(commands.execute(item))
