@@ -4,11 +4,15 @@ Rules:
 1. Ports are opened by path, ideally a stable /dev/serial/by-id/... link, so a replugged adapter
    that comes back as another ttyUSB is found again.
 2. ``exclusive=True``: two programs on one tty silently steal each other's bytes; a held port is
-   a clear "port busy" error instead (pyserial uses flock on POSIX).
+   a clear "port busy" error instead (pyserial uses flock on POSIX). flock binds only programs
+   that ask for it (Hamlib's rotctld does not), so the tty is also set TIOCEXCL: the kernel
+   then refuses every later open() of it (but root's) while the bridge has it.
 3. Junk already waiting (the 0xE0 power-on byte, a banner) is drained right after opening.
 4. Every failure is a PortError with a message a user can act on; nothing here retries or
    sleeps: the worker owns back-off.
-5. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
+5. A port that poll() calls readable but that has no bytes while its device is still there
+   has a second reader (one that opened it first, without a lock): "busy", not "unplugged".
+6. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
    layer that imports pyserial.
 6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
    lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
@@ -17,6 +21,7 @@ Rules:
 from __future__ import annotations
 
 import errno
+import fcntl
 import os
 import termios
 import threading
@@ -63,6 +68,7 @@ def open_port(path: str, spec: ModelSpec, baud: int | None = None) -> serial.Ser
         raise PortError(f"cannot open {path}: {exc}") from None
     try:
         port.reset_input_buffer()
+        fcntl.ioctl(port.fileno(), termios.TIOCEXCL)  # rule 2: no later open() either
     except (serial.SerialException, OSError, termios.error) as exc:
         port.close()
         raise PortError(f"cannot flush {path}: {exc}") from None
@@ -160,15 +166,22 @@ class PendingOpen:
                 close_quietly(self.result)
 
 
-def read_available(fd: int, readable: bool) -> bytes:
+def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
     """Everything the port has now. ``readable``: poll said so (else a reply is due: worker.py
     rule 2). A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after
-    poll said it was readable does that mean the adapter is gone."""
+    poll said it was readable does that mean the adapter is gone, or (rule 5), while the
+    device is still there, that another program took the bytes."""
     try:
         data = os.read(fd, 4096)
     except BlockingIOError:
         return b""
     if not data and readable:
+        if path is not None and os.path.exists(path):
+            raise serial.SerialException(
+                f"{path} is busy: readable but the bytes were gone, while the adapter is "
+                "there: another program reads from this port (Hamlib's rotctld, another "
+                "bridge?); stop it"
+            )
         raise serial.SerialException("port readable but no data (adapter unplugged?)")
     return data
 

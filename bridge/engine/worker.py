@@ -156,7 +156,7 @@ class Worker:
                 acted = True
         readable = self._fd in ready
         if readable or (self._held and now >= session.hold_reads_until()):
-            data = read_available(self._fd, readable)
+            data = read_available(self._fd, readable, self.cfg.port)
             if data:
                 actions = session.bytes_received(data, now)
                 acted = acted or bool(actions)
