@@ -19,9 +19,11 @@ Rules:
    pending one and the stream rules); a target waiting for a brake delay is replaced by newer
    ones and dropped by a stop, the lock, or the link going down.
 5. A stop is written at once (on a half-duplex line right after the reply in flight) and cancels
-   any frame still waiting in the outbox. A stop is checked: if the rotor is still seen moving
-   ``stop_resend_s`` later, it is sent again, and after three tries an error says so. Lock ON
-   always sends a stop, whatever the bridge believes the rotor is doing.
+   any frame still waiting in the outbox. One that comes within the brake window (at least
+   STOP_MERGE_MIN_S) of another, with no target sent and no reading showing the rotor turning
+   since, is merged into it: nothing more goes on the wire. A stop is checked: if the rotor is
+   still seen moving ``stop_resend_s`` later, it is sent again, and after three tries an error
+   says so. Lock ON always sends a stop, whatever the bridge believes the rotor is doing.
 6. Options are sent only while the rotor is idle, and re-sent after every (re)connect, after a
    power-on byte and every ``OPTIONS_REFRESH_S`` while idle: the controller forgets them at
    power-off, and the letters are idempotent.
@@ -67,6 +69,7 @@ log = logging.getLogger(__name__)
 
 OPTIONS_REFRESH_S = 60.0
 STOP_TRIES_BEFORE_ERROR = 3
+STOP_MERGE_MIN_S = 1.0  # stops merge within the brake window, or at least this long
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 
 
@@ -157,7 +160,7 @@ class RotatorSession:
             self.targets.clear()
             self.view.last_source = batch.stop.source.value
             self.view.target_info, self.view.park_raw = None, None
-            if link is not None:
+            if link is not None and not self._stop_merges(now):
                 self.stop_now(now)
         for opt in batch.options:
             self.options[opt.name] = opt.enabled
@@ -243,6 +246,17 @@ class RotatorSession:
         log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
         self.view.last_error = message
         self._actions.append(Report(kind, message, command))
+
+    def _stop_merges(self, now: float) -> bool:
+        """Rule 5: a stop to a rotor that already had one this brake window, and that no reading
+        since shows turning, adds nothing on the wire (a flood of stops to an idle Rotor-EZ had
+        it answer each with its banner, crowding out the readings)."""
+        m, cfg = self.motion, self.cfg.motion
+        if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
+            return False  # a target went out after the last stop: this stop is needed
+        window = max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
+        turning = m.state is MotionState.MOVING
+        return not turning and now - m.stop_sent_t < window
 
     def stop_now(self, now: float) -> None:
         assert self.link is not None

@@ -469,3 +469,37 @@ def test_a_bearing_sent_right_after_an_arrival_is_never_ignored(
     assert v.frames(Outcome.IGNORED_BRAKE_DELAY) == []
     assert v.errors("stalled") == []
     assert abs(v.truth().az_deg - (first_deg + 40)) <= 3
+
+
+# -- a flood of stops (issue 14, item 4) -----------------------------------------------------
+def test_a_flood_of_stops_to_an_idle_rotor_is_one_per_brake_window_and_loses_nothing(
+    rig: Rig,
+) -> None:
+    """1,500 stops at 250/s: each went on the line, the idle Rotor-EZ answered each with its
+    18-byte banner, readings queued behind them, a false 'stalled' followed and the next
+    target ended short. Now: one stop per brake window, and the target after them arrives."""
+    v = ready(rig)
+    start, errors_before = v.now, len(v.events)
+    for _ in range(1500):
+        v.stop()
+        v.run_for(0.004)
+    flood_s = v.now - start
+    stops = [f for f in v.frames(since=start) if f.data == b";"]
+    assert 1 <= len(stops) <= flood_s / 5.0 + 1, len(stops)  # brake_delay_s 5
+    assert all(s.available for s in v.published(since=start))
+    v.target(200)
+    v.run_until(at(v, 200), 120, "at 200 after the flood")
+    assert [e for _t, e in v.events[errors_before:]] == []  # no stall, no error at all
+    assert_never_disobeyed(v)
+
+
+def test_a_stop_while_turning_is_never_merged(rig: Rig) -> None:
+    v = ready(rig)
+    v.stop()  # a stop on record: the next one is inside its window
+    v.run_for(0.5)
+    v.target(300)
+    v.run_until_state(MOVING, 10)
+    t = v.now
+    v.stop()
+    v.run_for(0.2)
+    assert [f.data for f in v.frames(since=t) if f.data == b";"] == [b";"]
