@@ -89,7 +89,9 @@ class App:
             subscriptions=[],  # the service's, added once its features are (end of __init__)
             on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
         )
-        self.mqtt = MqttService(self.topics, self.client)
+        self.mqtt = MqttService(
+            self.topics, self.client, error_events_per_s=settings.mqtt.error_events_per_s
+        )
         store = StateStore(settings.state_file)
         try:
             store.check_writable()

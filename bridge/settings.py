@@ -77,6 +77,8 @@ class MqttSettings(_Strict):
     tls: TlsSettings = TlsSettings()
     client_id: str | None = None
     keepalive_s: int = Field(30, ge=5, le=3600)
+    # R/error per rotator, at most this many a second after a burst of five times as many
+    error_events_per_s: float = Field(10.0, gt=0, le=10000)
     base_topic: str = "rotor"
     protocol: Literal["5", "3.1.1"] = "5"
 

@@ -17,6 +17,10 @@ Rules:
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
    nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
+4. ``R/error`` is rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``, 10 by
+   default, after a burst of five times as many); the next event published says how many were
+   left out. A flood of refusals (200,000 rotctld ``P 999``) neither queues 200,000 QoS 1
+   messages nor delays the state.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ from typing import Protocol
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
@@ -95,10 +100,14 @@ class MqttService:
         publisher: Publisher,
         *,
         wall: Callable[[], float] = time.time,
+        error_events_per_s: float = RATE_PER_S,
     ) -> None:
         self.topics = topics
         self._publisher = publisher
         self._wall = wall
+        self._limiter = EventLimiter(
+            time.monotonic, round(5 * error_events_per_s), error_events_per_s
+        )
         self._rotators: dict[str, RotatorPort] = {}
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
@@ -167,8 +176,16 @@ class MqttService:
             listener(rotator_id, status)
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
+        """Rule 4: rate-limited per rotator; the next one published counts those left out."""
         t = self.topics.rotator(rotator_id)
-        self._publisher.publish_event(t.error, json.dumps(event.as_dict(), separators=(",", ":")))
+        left_out = self._limiter.admit(t.error)
+        if left_out is None:
+            return
+        doc = event.as_dict()
+        if left_out:
+            doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
 
     # -- inbound (paho's thread) ------------------------------------------------------------
     def on_message(self, topic: str, payload: bytes, retain: bool) -> None:

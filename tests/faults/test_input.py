@@ -94,6 +94,7 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
     )
     probe = Probe(broker.port, filters + "|rotor/+/lock/state|rotor/+/option/+/state")
     rig = Rig(tmp, broker, probe)
+    rig.mqtt_extra["error_events_per_s"] = 10000  # every fuzzed refusal shown (limiter aside)
     try:
         quick = {
             "ez": {"start_az_deg": 20, "speed_deg_s": 90.0},

@@ -1,0 +1,52 @@
+"""R/error's rate limit (bridge/mqtt/limiter.py and the service), issue 14 item 6: 200,000
+refused rotctld commands published 200,000 QoS 1 events; round trips rose to 6 s and the
+bridge's memory grew from 42 to 174 MB and stayed."""
+
+from __future__ import annotations
+
+import json
+
+from bridge.model import ErrorEvent, ErrorKind
+from bridge.mqtt.limiter import EventLimiter
+from bridge.mqtt.service import MqttService
+from bridge.mqtt.topics import Topics
+from tests.mqtt.test_service import RecordingPublisher, RecordingRotator
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.t = 0.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def test_a_burst_then_a_steady_rate_and_the_next_one_counts_what_was_left_out() -> None:
+    clock = Clock()
+    lim = EventLimiter(clock, burst=5, rate_per_s=2.0)
+    assert [lim.admit("r/error") for _ in range(8)] == [0, 0, 0, 0, 0, None, None, None]
+    clock.t = 0.5  # one token back
+    assert lim.admit("r/error") == 3
+    assert lim.admit("r/error") is None
+    assert lim.admit("other/error") == 0  # each rotator has its own
+    clock.t = 100.0  # a quiet spell refills to the burst, never beyond
+    assert [lim.admit("r/error") for _ in range(6)] == [1, 0, 0, 0, 0, None]
+
+
+def test_a_flood_of_refusals_publishes_a_bounded_few_and_then_says_how_many() -> None:
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10)
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    pub.take()
+    event = ErrorEvent(ErrorKind.REFUSED, "azimuth 999 outside the limits 0..360", "P 999 0")
+    for _ in range(200_000):
+        svc.publish_event("tower", event)
+    sent = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/error"]
+    assert 50 <= len(sent) <= 60, len(sent)  # the burst (and what refilled meanwhile)
+    assert all("suppressed" not in e for e in sent[:50])
+    svc._limiter._buckets["rotor/error"].tokens = 1.0  # as after a quiet tenth of a second
+    svc.publish_event("tower", event)
+    (last,) = [json.loads(p) for t, p, _r in pub.take()]
+    assert "more error(s) before this not shown" in last["message"]
+    shown = [*sent, last]  # every refusal is accounted for: shown, or counted in the next
+    assert len(shown) + sum(e.get("suppressed", 0) for e in shown) == 200_001
