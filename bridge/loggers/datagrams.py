@@ -131,7 +131,7 @@ def pst_reply(query: str, degrees: float) -> bytes:
 
 
 _N1MM_TAG = re.compile(r"<(?P<tag>[a-z]+)>(?P<value>[^<]{0,64})</(?P=tag)>", re.I)
-_STOP_WRAP = re.compile(r"</?stop>", re.I)
+_STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 
 
 def parse_n1mm(datagram: bytes) -> N1mmRequest:

@@ -101,6 +101,7 @@ N1MM_SAMPLE = (  # n1kdo's capture, one line, no XML declaration
             N1mmRequest("YaesuCom9", stop=True),
         ),
         (b"<N1MMRotor><stop>Tower</stop></N1MMRotor>", N1mmRequest("Tower", stop=True)),
+        (b"<N1MMRotor><rotor>Tower</rotor><stop/></N1MMRotor>", N1mmRequest("Tower", stop=True)),
         (
             b"<N1MMRotor><rotor>Tower</rotor><stop></stop></N1MMRotor>",
             N1mmRequest("Tower", stop=True),
