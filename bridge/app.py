@@ -138,6 +138,7 @@ class App:
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
         self.client.add_subscriptions(self.mqtt.subscriptions())
+        self.client.watch_owned(self.topics.owned())
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant

@@ -53,6 +53,13 @@ Rules:
    soon as we send, so it is set after every read, not once (a system call per read). Command
    topics stay QoS 0 (rule 4): our PUBACK would acknowledge a command too, but brings back what
    rule 4 avoids.
+10. The bridge owns its retained topics (``watch_owned``: state, status, lock and option
+   states, its online/offline): it subscribes to them (MQTT 5: without its own messages) and a
+   value there that it did not publish, from another client, is replaced with its own at once
+   (at most once per FOREIGN_FIX_S per topic) and logged once a minute per topic: a stray
+   retained ``lock/state OFF`` must not tell a dashboard the lock is off while it is on. Under
+   MQTT 3.1.1 the bridge hears its own messages too, in the order sent: one it sent and has
+   not heard back yet is no stranger.
 """
 
 from __future__ import annotations
@@ -93,18 +100,24 @@ Ending = Literal["taken over", "dropped", "other"]
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 
+# rule 10
+FOREIGN_FIX_S = 2.0
+FOREIGN_LOG_S = 60.0
+SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
+ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
+
 
 class TakeoverGuard:
     """Rule 7's bookkeeping, without paho or a clock: times in, a back-off out."""
 
     def __init__(self) -> None:
-        self._connected_at: float | None = None
+        self.connected_at: float | None = None
         self._drops = 0  # dropped connections in a row, the broker reachable throughout
         self.backoff_s = 0  # 0: no takeover episode, paho's own reconnect delays apply
         self.reported = False
 
     def connected(self, now: float) -> None:
-        self._connected_at = now
+        self.connected_at = now
 
     def connect_failed(self) -> None:
         """The broker was unreachable or refused us: the drops before were not a fight."""
@@ -112,8 +125,8 @@ class TakeoverGuard:
 
     def disconnected(self, now: float, ending: Ending) -> bool:
         """Whether this disconnect is part of a takeover episode (``backoff_s`` is then set)."""
-        lasted = now - self._connected_at if self._connected_at is not None else 0.0
-        self._connected_at = None
+        lasted = now - self.connected_at if self.connected_at is not None else 0.0
+        self.connected_at = None
         if lasted >= STABLE_S:
             self._drops, self.backoff_s, self.reported = 0, 0, False
         self._drops = self._drops + 1 if ending == "dropped" else 0
@@ -198,10 +211,19 @@ class MqttClient:
         c.on_message = self._on_message
         self._client = c
         self._retained[will_topic] = (b"online", 1)
+        self._owned: list[str] = []
+        self._echoes: dict[str, deque[bytes]] = {}  # rule 10, MQTT 3.1.1: sent, not heard back
+        self._fixed_at: dict[str, float] = {}
+        self.connected_at = -1e18  # the clock at the last accepted connection
+        self._logged_at: dict[str, float] = {}
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
         self._subscriptions = [*self._subscriptions, *topics]
+
+    def watch_owned(self, filters: list[str]) -> None:
+        """Rule 10: the filters of the retained topics the bridge publishes; before ``start()``."""
+        self._owned = list(filters)
 
     # -- lifecycle --------------------------------------------------------------------------
     def start(self) -> None:
@@ -243,6 +265,7 @@ class MqttClient:
                 return
             self._retained[topic] = (data, qos)
             if self.connected.is_set():
+                self._expect_echo(topic, data)
                 self._client.publish(topic, data, qos=qos, retain=True)
 
     def clear_retained(self, topic: str) -> None:
@@ -259,6 +282,7 @@ class MqttClient:
                 return
             for topic, (data, qos) in self._retained.items():
                 if skip_prefix is None or not topic.startswith(skip_prefix):
+                    self._expect_echo(topic, data)
                     self._client.publish(topic, data, qos=qos, retain=True)
 
     def publish_event(self, topic: str, payload: str | bytes) -> None:
@@ -306,11 +330,19 @@ class MqttClient:
         if self._v5:
             opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
             client.subscribe([(topic, opts) for topic in self._subscriptions])
+            if self._owned:  # rule 10: not our own messages back
+                mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
+                client.subscribe([(topic, mine) for topic in self._owned])
         else:
             client.subscribe([(topic, COMMAND_QOS) for topic in self._subscriptions])
+            if self._owned:
+                client.subscribe([(topic, 0) for topic in self._owned])
         client.publish(self._will_topic, b"online", qos=1, retain=True)
         with self._lock:
+            self.connected_at = self._clock()
+            self._echoes.clear()  # what was in flight before is gone with the old connection
             for topic, (data, qos) in self._retained.items():
+                self._expect_echo(topic, data)
                 if topic != self._will_topic:
                     client.publish(topic, data, qos=qos, retain=True)
             for topic, event in self._backlog:
@@ -391,6 +423,51 @@ class MqttClient:
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         try:
+            if self._owned and self._foreign(msg.topic, bytes(msg.payload)):
+                return
             self._handler(msg.topic, bytes(msg.payload), bool(msg.retain))
         except Exception:  # a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)
+
+    def _foreign(self, topic: str, payload: bytes) -> bool:
+        """Rule 10: True if ``topic`` is one of ours (handled here, whatever its value)."""
+        with self._lock:
+            held = self._retained.get(topic)
+            if held is None or not self._is_owned(topic):
+                return False
+            echoes = self._echoes.get(topic)
+            if echoes and payload in echoes:  # MQTT 3.1.1: ours, coming back in order
+                while echoes.popleft() != payload:
+                    pass
+                return True
+            if payload == held[0]:
+                return True
+            now = self._clock()
+            if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
+                return True
+            self._fixed_at[topic] = now
+            if self.connected.is_set():
+                self._client.publish(topic, held[0], qos=held[1], retain=True)
+            # what the broker held from before we connected (our own last will, a value of a
+            # run that ended) is replaced without a word: only a live stranger is news
+            stale = now - self.connected_at < SETTLE_AFTER_CONNECT_S
+            quiet = not stale and now - self._logged_at.get(topic, -FOREIGN_LOG_S) >= FOREIGN_LOG_S
+            if quiet:
+                self._logged_at[topic] = now
+        if quiet:
+            log.warning(
+                "another client published %r on %s, a topic of the bridge's own: put back %r "
+                "(a second bridge on this base topic, or a flow publishing where it should not?)",
+                payload[:40],
+                topic,
+                held[0][:40],
+            )
+        return True
+
+    def _expect_echo(self, topic: str, data: bytes) -> None:
+        """Rule 10, MQTT 3.1.1 (under the lock): this comes back to us; it is ours."""
+        if not self._v5 and self._owned:
+            self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(data)
+
+    def _is_owned(self, topic: str) -> bool:
+        return any(paho.topic_matches_sub(f, topic) for f in self._owned)

@@ -144,6 +144,15 @@ class Topics:
             subs += [t.preset, t.park, t.nudge, t.track]
         return subs
 
+    def owned(self) -> list[str]:
+        """Filters for the retained topics the bridge publishes (client.py rule 10 watches them
+        for values it did not publish); none overlaps a command filter."""
+        subs = [self.bridge_state]
+        for t in self._rotators.values():
+            subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
+            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking]
+        return subs
+
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
         """Map an inbound topic to (rotator id, command, argument), or None if it is not ours."""
         for rid, t in self._rotators.items():
