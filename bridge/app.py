@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import json
 import logging
 import signal
 import threading
@@ -88,6 +89,7 @@ class App:
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
             on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
+            on_denied=self._denied,
         )
         self.mqtt = MqttService(
             self.topics, self.client, error_events_per_s=settings.mqtt.error_events_per_s
@@ -170,6 +172,16 @@ class App:
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
         return publisher
+
+    def _denied(self, topic: str, problem: str) -> None:
+        """The broker refused a topic (client.py rule 11): the rotator's status says so, and
+        ``B/bridge/info`` lists every such problem."""
+        rid = self.topics.rotator_of(topic)
+        for rot in self.rotators:
+            if rid is None or rot.id == rid:
+                rot.note(problem)
+        info = json.dumps({"problems": self.client.problems}, separators=(",", ":"))
+        self.client.publish_retained(self.topics.bridge_info, info)
 
     def check_catalog(self) -> None:
         """The TLE file re-read if it changed; Home Assistant's track select follows it."""

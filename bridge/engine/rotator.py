@@ -263,6 +263,10 @@ class Rotator:
                 "lock",
             )
 
+    def note(self, message: str) -> None:
+        """Show ``message`` as the status's last error (a problem found outside the rotator)."""
+        self._mailbox.put_note(message)
+
     def report_refusal(self, message: str, command: str | None) -> None:
         """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
         self.report(ErrorKind.REFUSED, message, command)

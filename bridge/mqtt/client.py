@@ -60,6 +60,11 @@ Rules:
    retained ``lock/state OFF`` must not tell a dashboard the lock is off while it is on. Under
    MQTT 3.1.1 the bridge hears its own messages too, in the order sent: one it sent and has
    not heard back yet is no stranger.
+11. What the broker refuses is said: a subscription it denies (SUBACK) or a QoS 1 publish it
+   will not take (PUBACK, MQTT 5; e.g. 0x87 "not authorised" from an ACL) is logged as an error
+   once per topic, naming the topic, kept in ``problems`` and handed to ``on_denied`` (the app
+   shows it in the rotator's status and on ``B/bridge/info``). A denied QoS 0 publish (state)
+   gets no answer from any broker: the bridge cannot see it.
 """
 
 from __future__ import annotations
@@ -103,6 +108,7 @@ TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linu
 # rule 10
 FOREIGN_FIX_S = 2.0
 FOREIGN_LOG_S = 60.0
+MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
 
@@ -166,6 +172,7 @@ class MqttClient:
         subscriptions: list[str],
         on_message: MessageHandler,
         on_connect: Callable[[], None] | None = None,
+        on_denied: Callable[[str, str], None] | None = None,
         reconnect_min_s: int = 1,
         reconnect_max_s: int = 30,
         clock: Callable[[], float] = time.monotonic,
@@ -175,6 +182,7 @@ class MqttClient:
         self._subscriptions = subscriptions
         self._handler = on_message
         self._on_connect_hook = on_connect
+        self._on_denied = on_denied
         self._retained: dict[str, tuple[bytes, int]] = {}  # topic -> (payload, QoS)
         self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
         self._lock = threading.Lock()
@@ -209,7 +217,13 @@ class MqttClient:
         c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
+        c.on_publish = self._on_publish
         self._client = c
+        self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
+        self._pub_topics: dict[int, str] = {}  # a QoS 1 publish's message id -> its topic
+        self._denied: set[str] = set()  # rule 11: each denied topic reported once
+        self.problems: list[str] = []  # rule 11, for the bridge's own diagnostics
         self._retained[will_topic] = (b"online", 1)
         self._owned: list[str] = []
         self._echoes: dict[str, deque[bytes]] = {}  # rule 10, MQTT 3.1.1: sent, not heard back
@@ -266,7 +280,7 @@ class MqttClient:
             self._retained[topic] = (data, qos)
             if self.connected.is_set():
                 self._expect_echo(topic, data)
-                self._client.publish(topic, data, qos=qos, retain=True)
+                self._send(self._client, topic, data, qos, retain=True)
 
     def clear_retained(self, topic: str) -> None:
         """Delete a retained message from the broker (empty retained payload)."""
@@ -283,12 +297,12 @@ class MqttClient:
             for topic, (data, qos) in self._retained.items():
                 if skip_prefix is None or not topic.startswith(skip_prefix):
                     self._expect_echo(topic, data)
-                    self._client.publish(topic, data, qos=qos, retain=True)
+                    self._send(self._client, topic, data, qos, retain=True)
 
     def publish_event(self, topic: str, payload: str | bytes) -> None:
         with self._lock:
             if self.connected.is_set():
-                self._client.publish(topic, payload, qos=1, retain=False)
+                self._send(self._client, topic, payload, 1, retain=False)
             else:
                 self._backlog.append((topic, payload))
 
@@ -329,28 +343,80 @@ class MqttClient:
         # client that sends a command the moment it sees `online` is already heard
         if self._v5:
             opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
-            client.subscribe([(topic, opts) for topic in self._subscriptions])
+            self._subscribe(client, [(topic, opts) for topic in self._subscriptions])
             if self._owned:  # rule 10: not our own messages back
                 mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
-                client.subscribe([(topic, mine) for topic in self._owned])
+                self._subscribe(client, [(topic, mine) for topic in self._owned])
         else:
-            client.subscribe([(topic, COMMAND_QOS) for topic in self._subscriptions])
+            self._subscribe(client, [(topic, COMMAND_QOS) for topic in self._subscriptions])
             if self._owned:
-                client.subscribe([(topic, 0) for topic in self._owned])
-        client.publish(self._will_topic, b"online", qos=1, retain=True)
+                self._subscribe(client, [(topic, 0) for topic in self._owned])
         with self._lock:
+            self._pub_topics.clear()  # acknowledgements of the old connection never come
+            self._send(client, self._will_topic, b"online", 1, retain=True)
             self.connected_at = self._clock()
             self._echoes.clear()  # what was in flight before is gone with the old connection
             for topic, (data, qos) in self._retained.items():
                 self._expect_echo(topic, data)
                 if topic != self._will_topic:
-                    client.publish(topic, data, qos=qos, retain=True)
+                    self._send(client, topic, data, qos, retain=True)
             for topic, event in self._backlog:
-                client.publish(topic, event, qos=1, retain=False)
+                self._send(client, topic, event, 1, retain=False)
             self._backlog.clear()
             self.connected.set()
         if self._on_connect_hook is not None:
             self._on_connect_hook()
+
+    # -- rule 11: what the broker refused ---------------------------------------------------
+    def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> None:
+        if not filters:
+            return
+        _rc, mid = client.subscribe(filters)
+        if mid is not None:
+            self._sub_filters[mid] = [f for f, _opts in filters]
+
+    def _send(
+        self, client: paho.Client, topic: str, data: str | bytes, qos: int, *, retain: bool
+    ) -> None:
+        """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
+        info = client.publish(topic, data, qos=qos, retain=retain)
+        if qos and len(self._pub_topics) < MAX_UNACKED:
+            self._pub_topics[info.mid] = topic
+
+    def _on_subscribe(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_codes: list[ReasonCode],
+        properties: Properties | None,
+    ) -> None:
+        filters = self._sub_filters.pop(mid, [])
+        for topic, code in zip(filters, reason_codes, strict=False):
+            if code.is_failure:
+                self._deny(topic, "subscribe to", str(code))
+
+    def _on_publish(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        topic = self._pub_topics.pop(mid, None)
+        if topic is not None and reason_code.is_failure:
+            self._deny(topic, "publish to", str(reason_code))
+
+    def _deny(self, topic: str, what: str, reason: str) -> None:
+        if topic in self._denied:
+            return
+        self._denied.add(topic)
+        problem = f"the MQTT broker does not let the bridge {what} {topic}: {reason}"
+        self.problems.append(problem)
+        log.error("%s (check the broker's ACL for user %r)", problem, self._settings.username)
+        if self._on_denied is not None:
+            self._on_denied(topic, problem)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
         # paho calls this inside its `except OSError`: the exception says why

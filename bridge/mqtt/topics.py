@@ -134,6 +134,19 @@ class Topics:
     def bridge_state(self) -> str:
         return f"{self.base}/bridge/state"
 
+    @property
+    def bridge_info(self) -> str:
+        return f"{self.base}/bridge/info"
+
+    def rotator_of(self, topic: str) -> str | None:
+        """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
+        best: tuple[int, str] | None = None
+        for rid, t in self._rotators.items():
+            if topic == t.root or topic.startswith(t.root + "/"):
+                if best is None or len(t.root) > best[0]:
+                    best = (len(t.root), rid)
+        return None if best is None else best[1]
+
     def rotator(self, rotator_id: str) -> RotatorTopics:
         return self._rotators[rotator_id]
 

@@ -1,0 +1,81 @@
+"""What the broker refuses is said (mqtt/client.py rule 11; issue 14, item 9): mosquitto
+answered "not authorised" (0x87) to 71 discovery publishes and the bridge logged nothing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.app import App
+from bridge.mosquitto import Mosquitto
+from bridge.mqtt.client import MqttClient
+from bridge.settings import MqttSettings
+from tests.support import Probe
+from tests.support.rig import Rig
+from tests.support.waiting import wait_until
+
+
+def test_denied_publishes_are_reported_once_each_naming_the_topic(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    acl = tmp_path / "acl"
+    acl.write_text("topic readwrite rotor/#\n")  # Home Assistant's prefix is not granted
+    # started as root, mosquitto would become user "mosquitto", who cannot read pytest's tmp
+    conf = f"allow_anonymous true\nacl_file {acl}\nuser root"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf)
+    broker.start()
+    probe = Probe(broker.port, "rotor/#")
+    rig = Rig(tmp_path, broker, probe)
+    try:
+        rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+        rig.app = App(rig.settings)
+        rig.app.start()
+        rig.ready("tower")
+        bearing = "homeassistant/sensor/rotorbridge_rotor_r_tower/bearing/config"
+
+        def denials() -> list[str]:
+            return [r.getMessage() for r in caplog.records if "does not let" in r.getMessage()]
+
+        wait_until(lambda: any(f"publish to {bearing}" in d for d in denials()), 10, "denial")
+        info = probe.wait_for("rotor/bridge/info", lambda m: bearing.encode() in m.payload, 10)
+        assert any(bearing in p for p in json.loads(info.payload)["problems"])
+
+        def status_says_so(m: Any) -> bool:
+            doc = json.loads(m.payload)
+            return "does not let the bridge" in (doc.get("last_error") or "")
+
+        probe.wait_for("rotor/status", status_says_so, 10)  # Home Assistant's last-error sensor
+        rig.app.client.republish_retained()  # the configs once more: no second report
+        rig.probe.publish("rotor/target", "40")  # a round trip through the broker after it
+        rig.probe.wait_value("rotor/state", "moving", 10)
+        assert len(denials()) == len(set(denials()))  # once per topic
+    finally:
+        rig.close()
+        probe.close()
+        broker.stop()
+
+
+def test_a_denied_subscription_is_reported_naming_the_topic(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Brokers that refuse a subscription say so in the SUBACK (mosquitto 2.0.11 does not: it
+    accepts the subscription and delivers nothing, which no client can tell from silence)."""
+    client = MqttClient(
+        MqttSettings(), will_topic="rotor/bridge/state", subscriptions=[], on_message=print
+    )
+    seen: list[tuple[str, str]] = []
+    client._on_denied = lambda topic, problem: seen.append((topic, problem))
+    client._sub_filters[7] = ["rotor/target", "rotor/stop"]
+    granted, refused = (
+        ReasonCode(PacketTypes.SUBACK, "Granted QoS 0"),
+        ReasonCode(PacketTypes.SUBACK, "Not authorized"),
+    )
+    client._on_subscribe(client._client, None, 7, [granted, refused], None)
+    assert [t for t, _p in seen] == ["rotor/stop"]
+    assert "subscribe to rotor/stop: Not authorized" in seen[0][1]
+    assert client.problems == [seen[0][1]]
