@@ -36,6 +36,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import threading
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -52,6 +53,8 @@ from skyfield.nutationlib import iau2000b_radians
 Floats = NDArray[np.float64]
 
 DAY_S = 86400.0
+PASSES_KEPT = 64  # next_pass's answers remembered (a few per body tracked)
+NO_PASS_KEPT_S = 60.0
 KINDS = ("sun", "moon", "satellite")
 _SUN_MOON_STEP_S = 1200.0
 _CHUNK_STEPS = 256  # samples per skyfield call when scanning for passes
@@ -198,6 +201,8 @@ class Sky:
             height_m,
         )
         self._station = wgs84.latlon(latitude_deg, longitude_deg, elevation_m=height_m)
+        self._lock = threading.Lock()  # one Sky serves every rotator of the station
+        self._passes: dict[tuple[Body, float, float], tuple[float, Pass | None]] = {}
 
     def positions(self, body: Body, times_unix: Sequence[float]) -> list[tuple[float, float]]:
         """(azimuth, elevation) at each time (rule 1), in one vectorised call."""
@@ -215,9 +220,32 @@ class Sky:
     def next_pass(
         self, body: Body, t_unix: float, min_el_deg: float = 0.0, within_s: float = 2 * DAY_S
     ) -> Pass | None:
-        """The pass in progress at t_unix, else the next one rising within within_s (rule 6)."""
+        """The pass in progress at t_unix, else the next one rising within within_s (rule 6).
+
+        Remembered per body: asked again at a later time up to that pass's LOS (eight rotators
+        tracking the sun, one station), the answer is the same pass and costs nothing; no pass
+        found is remembered for NO_PASS_KEPT_S."""
         if not within_s > 0 or not math.isfinite(within_s):
             raise SkyError(f"within_s must be a positive number of seconds: {within_s!r}")
+        key = (body, min_el_deg, within_s)
+        with self._lock:
+            kept = self._passes.get(key)
+        if kept is not None:
+            asked, found = kept
+            if found is not None and asked <= t_unix <= found.los_s:
+                return found
+            if found is None and asked <= t_unix < asked + NO_PASS_KEPT_S:
+                return None
+        found = self._find_pass(body, t_unix, min_el_deg, within_s)
+        with self._lock:
+            self._passes[key] = (t_unix, found)
+            while len(self._passes) > PASSES_KEPT:
+                self._passes.pop(next(iter(self._passes)))
+        return found
+
+    def _find_pass(
+        self, body: Body, t_unix: float, min_el_deg: float, within_s: float
+    ) -> Pass | None:
         end = t_unix + within_s
         if self._elevations(body, np.array([t_unix]))[0] > min_el_deg:
             los = next((t for t, up in self._scan(body, t_unix, end, min_el_deg) if not up), None)

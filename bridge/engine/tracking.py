@@ -16,11 +16,12 @@ Rules:
    re-targets while turning (SPID); when the rotor is idle on the others (a Rotor-EZ stops to
    re-target, a SatEL takes no input while slewing). The target leads the body by half a
    step, so the rotor straddles it: within half a step either side, plus what the rotor lags.
-4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a pass
-   with elevation 180 - el and azimuth + 180 when that saves more than FLIP_SAVING_DEG of
-   azimuth travel (counted as the judge would pick each raw value, from where the rotor is):
-   a pass across a stop (the north on a 0..360 rotor) then stays clear of it. Decided once
-   per pass, before it starts.
+4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a
+   satellite's pass with elevation 180 - el and azimuth + 180 when that saves turning time
+   during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
+   (the first from where the rotor is); the saving must exceed FLIP_SAVING_DEG at the azimuth
+   speed. A pass across a
+   stop (the north on a 0..360 rotor) then stays clear of it. Decided once per pass.
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is skipped, reported once per pass, and the rotor holds until the
    body is back where it may go.
@@ -57,6 +58,7 @@ NEXT_S = 60.0  # the status's "next" position: this far ahead
 MAX_LEAD_S = 300.0
 FLIP_SAVING_DEG = 30.0
 FLIP_SAMPLE_S = 10.0
+FLIP_SAMPLES = 120  # at most, over a pass
 
 
 @dataclass(frozen=True)
@@ -275,28 +277,39 @@ def _travel_s(session: RotatorSession, az: float, el: float | None) -> float:
 
 
 def _flip_saves(session: RotatorSession, p: Pass) -> bool:
-    """Rule 4: whether this pass is flown flipped."""
-    tr, aim = session.tracker, session.cfg.aim
+    """Rule 4: whether this pass is flown flipped. Satellites only: the sun and the moon move
+    too slowly across a "pass" of half a day for a flip to be worth its elevation travel."""
+    tr, aim, cfg = session.tracker, session.cfg.aim, session.cfg
     if not aim.has_elevation or aim.el_max_deg < 180.0 - tr.cfg.min_el_deg:
         return False
     assert tr.body is not None and tr.cfg.sky is not None
-    n = max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1)
+    if tr.body.kind != "satellite":
+        return False
+    n = min(FLIP_SAMPLES, max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1))
     times = [p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n)]
     track = tr.cfg.sky.positions(tr.body, times)
 
-    def travel(flip: bool) -> float:
-        raw, total = session.motion.position_deg, 0.0
-        for az, _el in track:
-            want = (az + 180.0) % 360.0 if flip else az
+    def travel_s(flip: bool) -> float:
+        """The time the rotor spends turning during the pass, on its slower axis at each step
+        (both axes at their real speeds): an unwind through a stop shows as a long step. The
+        move to where the pass rises is left out: it is made while waiting for it."""
+        raw: float | None = session.motion.position_deg
+        el: float | None = None
+        total = 0.0
+        for az_b, el_b in track:
+            az_want, el_want = ((az_b + 180.0) % 360.0, 180.0 - el_b) if flip else (az_b, el_b)
             try:
-                nxt = aim.raw_for(want, raw)
+                nxt = aim.raw_for(az_want, raw)
             except Refused:
                 return math.inf
-            total += 0.0 if raw is None else abs(nxt - raw)
-            raw = nxt
+            if el is not None and raw is not None:
+                total += max(
+                    abs(nxt - raw) / cfg.az_speed_deg_s, abs(el_want - el) / cfg.el_speed_deg_s
+                )
+            raw, el = nxt, el_want
         return total
 
-    return travel(True) + FLIP_SAVING_DEG < travel(False)
+    return travel_s(True) + FLIP_SAVING_DEG / cfg.az_speed_deg_s < travel_s(False)
 
 
 def _inform(tr: Tracker, utc: float, p: Pass | None, phase: str, now: float) -> None:
