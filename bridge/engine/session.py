@@ -287,11 +287,13 @@ class RotatorSession:
             if junk is not None:
                 self._report_junk(*junk, now)
         self._advance(now)  # commands go ahead of the next poll
-        self._poll_if_due(now)
+        searched, self.tracker.searched = self.tracker.searched, False
+        if not searched:  # tracking.py rule 8: after a search `now` is stale; poll next step
+            self._poll_if_due(now)
         self._emit_status(now)
         if self.link is not None:
             self._actions.extend(Write(frame) for frame in self.link.output())
-        self._wakeup = self._next_wakeup(now)
+        self._wakeup = now if searched else self._next_wakeup(now)
         actions, self._actions = self._actions, []
         return actions
 
@@ -362,8 +364,8 @@ class RotatorSession:
         self._verify_stop(now)
         tracking.step(self, now)
         autopark.step(self, now)
-        if self.targets.pending is not None:
-            self._try_target(link, now)
+        if self.targets.pending is not None and not self.tracker.searched:
+            self._try_target(link, now)  # (after a search: next step, with a fresh clock)
         idle = self.motion.state is MotionState.IDLE
         if idle and self.options and now - self._options_sent_t >= OPTIONS_REFRESH_S:
             self._options_due = set(self.options)

@@ -27,6 +27,11 @@ Rules:
    body is back where it may go.
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
 7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
+8. Searching for a pass (a tenth of a second or more for the sun) and deciding a flip happen
+   only while no reply is owed, and the session writes nothing more in that step: its clock
+   would be stale by the search's length, and a query written then would look overdue at once
+   (asked twice, the second answer taken for junk). Found once, a pass serves every rotor of
+   the station (sky.py).
 """
 
 from __future__ import annotations
@@ -83,6 +88,7 @@ class Tracker:
         self.body: Body | None = None
         self.ended: str | None = None
         self.info: TrackingInfo | None = None
+        self.searched = False  # rule 8: a search ran in this step (the session polls after it)
         self._reset()
 
     def _reset(self) -> None:
@@ -136,6 +142,11 @@ class Tracker:
         daz = (az1 - az0 + 180.0) % 360.0 - 180.0
         return (az0 + f * daz) % 360.0, el0 + f * (el1 - el0)
 
+    def search_due(self, utc: float) -> bool:
+        """Whether ``current_pass`` would search the sky now (the costly part, rule 8)."""
+        p = self._pass
+        return (p is None or utc > p.los_s) and utc - self._pass_checked >= PASS_RETRY_S
+
     def current_pass(self, utc: float) -> Pass | None:
         p = self._pass
         if p is not None and utc > p.los_s:
@@ -157,11 +168,19 @@ def step(session: RotatorSession, now: float) -> None:
     if session.link is None or not session.answering or session.locked:
         return
     utc = now + session.wall_offset_s
+    owed = session.link.reply_owed
+    if tr.search_due(utc):
+        if owed:
+            return  # rule 8: not while a reply is on its way
+        tr.searched = True
     p = tr.current_pass(utc)
     if p is None:
         _inform(tr, utc, None, "no pass", now)
         return
     if tr._flip_for != p.aos_s:
+        if owed:
+            return
+        tr.searched = True
         tr._flip_for, tr._flip = p.aos_s, _flip_saves(session, p)
     if utc < p.aos_s:  # current_pass has moved on past a LOS: utc <= p.los_s
         _inform(tr, utc, p, "waiting", now)
