@@ -129,6 +129,7 @@ class Lines:
                     pass
             except BlockingIOError:
                 pass
-        now = self._clock()
         for worker in sorted(self._workers, key=lambda w: not w.has_commands(ready)):  # rule 5
-            worker.guarded(worker.serve, now, ready)
+            # the clock read for each: one rotator's long step (a pass search) must not hand the
+            # next a stale time, or a query it writes looks overdue at once and is asked twice
+            worker.guarded(worker.serve, self._clock(), ready)

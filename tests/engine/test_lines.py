@@ -124,3 +124,50 @@ def test_a_rotator_is_started_once(emu: EmulatedPort) -> None:
     rot.stop()
     with pytest.raises(RuntimeError, match="cannot start again"):
         rot.start()
+
+
+class Timed:
+    """A stand-in worker: its serve() takes ``takes_s`` of the clock and notes the time it got."""
+
+    def __init__(self, clock: list[float], takes_s: float, served: threading.Event) -> None:
+        self.clock, self.takes_s, self.served = clock, takes_s, served
+        self.given: list[float] = []
+
+    def wants(self, now: float) -> tuple[list[int], float]:
+        return [], now  # always due: the round runs at once
+
+    def has_commands(self, ready: set[int]) -> bool:
+        return self.takes_s > 0  # the slow one first
+
+    def serve(self, now: float, ready: set[int]) -> None:
+        self.given.append(now)
+        self.clock[0] += self.takes_s
+        if len(self.given) >= 3:
+            self.served.set()
+
+    def guarded(self, fn: Callable[..., object], *args: object) -> None:
+        fn(*args)
+
+    def begin(self, now: float, wake: Callable[[], None]) -> None:
+        pass
+
+    def end(self, now: float) -> None:
+        pass
+
+
+def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
+    """Benchmark finding: one rotator's 1.5 s pass search left the next with a stale clock; a
+    query it wrote then looked overdue at once, was asked twice, the second answer junk."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    slow, quick = Timed(clock, 1.5, threading.Event()), Timed(clock, 0.0, done)
+    lines.add(slow)  # type: ignore[arg-type]
+    lines.add(quick)  # type: ignore[arg-type]
+    try:
+        assert done.wait(5)
+    finally:
+        lines.remove(slow)  # type: ignore[arg-type]
+        lines.remove(quick)  # type: ignore[arg-type]
+    for s_t, q_t in zip(slow.given, quick.given, strict=False):
+        assert q_t == s_t + 1.5  # served after the slow one's step, at the time it was then
