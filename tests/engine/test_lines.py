@@ -129,8 +129,10 @@ def test_a_rotator_is_started_once(emu: EmulatedPort) -> None:
 class Timed:
     """A stand-in worker: its serve() takes ``takes_s`` of the clock and notes the time it got."""
 
-    def __init__(self, clock: list[float], takes_s: float, served: threading.Event) -> None:
-        self.clock, self.takes_s, self.served = clock, takes_s, served
+    def __init__(
+        self, clock: list[float], takes_s: float, served: threading.Event, log: list
+    ) -> None:
+        self.clock, self.takes_s, self.served, self.log = clock, takes_s, served, log
         self.given: list[float] = []
 
     def wants(self, now: float) -> tuple[list[int], float]:
@@ -141,6 +143,7 @@ class Timed:
 
     def serve(self, now: float, ready: set[int]) -> None:
         self.given.append(now)
+        self.log.append((self, now))
         self.clock[0] += self.takes_s
         if len(self.given) >= 3:
             self.served.set()
@@ -161,7 +164,8 @@ def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
     clock = [100.0]
     lines = Lines(lambda: clock[0])
     done = threading.Event()
-    slow, quick = Timed(clock, 1.5, threading.Event()), Timed(clock, 0.0, done)
+    log: list[tuple[Timed, float]] = []  # who was served, at what time, in order
+    slow, quick = Timed(clock, 1.5, threading.Event(), log), Timed(clock, 0.0, done, log)
     lines.add(slow)  # type: ignore[arg-type]
     lines.add(quick)  # type: ignore[arg-type]
     try:
@@ -169,5 +173,9 @@ def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
     finally:
         lines.remove(slow)  # type: ignore[arg-type]
         lines.remove(quick)  # type: ignore[arg-type]
-    for s_t, q_t in zip(slow.given, quick.given, strict=False):
+    after_slow = [
+        (a[1], b[1]) for a, b in zip(log, log[1:], strict=False) if (a[0], b[0]) == (slow, quick)
+    ]
+    assert after_slow
+    for s_t, q_t in after_slow:
         assert q_t == s_t + 1.5  # served after the slow one's step, at the time it was then
