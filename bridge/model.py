@@ -7,7 +7,7 @@ seconds (monotonic unless the name says ``_unix``).
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 
 class MotionState(enum.StrEnum):
@@ -75,6 +75,20 @@ class Target:
     # A 0..360 bearing on a rotor that can pass 360 (set by the judge, pointing.py rule 2): the
     # session picks the side from where the rotor is when it sends, not when the command came.
     true_az_deg: float | None = None
+
+
+def combine(newer: Target, older: Target | None) -> Target:
+    """``newer`` with the axis it leaves out (None) taken from ``older`` still pending: Hamlib
+    4.6's PstRotator client sends ``P 200 30`` as an azimuth and then an elevation datagram,
+    and an MQTT user may send a bare azimuth and then ``R/target/elevation``: one must not
+    replace the other. An axis ``newer`` names wins; so do its source, place and park mark."""
+    if older is None:
+        return newer
+    if newer.az_deg is None and older.az_deg is not None:
+        newer = replace(newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg)
+    if newer.el_deg is None and older.el_deg is not None:
+        newer = replace(newer, el_deg=older.el_deg)
+    return newer
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,9 @@
 
 Rules:
 1. A stop pre-empts everything: it is taken first and drops any target that came before it.
-2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts).
+2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts);
+   an axis the newer one leaves out is kept from the older (model.combine: an azimuth, then an
+   elevation alone, is one target).
    A track command (start or off) replaces a target put before it; a target put after it is
    kept, and the session lets it end the tracking (the later command wins either way).
 3. Options and the lock are settings: the latest value per name wins, order between names kept.
@@ -21,7 +23,7 @@ import threading
 from dataclasses import dataclass, field
 
 from bridge.engine.tracking import Track
-from bridge.model import SetOption, Stop, Target
+from bridge.model import SetOption, Stop, Target, combine
 
 
 @dataclass
@@ -59,7 +61,7 @@ class Mailbox:
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
             elif isinstance(command, Target):
-                self._batch.target = command
+                self._batch.target = combine(command, self._batch.target)
             else:
                 self._option_order.pop(command.name, None)
                 self._option_order[command.name] = command

@@ -1,7 +1,8 @@
 """The target waiting to go to the controller, and the rules for streams of targets. Pure.
 
 Rules:
-1. One target waits at a time; a newer one replaces it (a dragged slider sends dozens).
+1. One target waits at a time; a newer one replaces it (a dragged slider sends dozens),
+   keeping an axis it leaves out from the one it replaces (model.combine).
 2. Targets that come as a stream (one replaces a still-pending one, or arrives within
    BURST_QUIET_S of the last target sent: a dragged slider, a flood) are sent when the stream
    pauses for BURST_QUIET_S, and at the latest STREAM_MAX_WAIT_S after the stream's first unsent
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
-from bridge.model import Target
+from bridge.model import Target, combine
 from bridge.pointing import Pointing
 
 BURST_QUIET_S = 0.5
@@ -37,7 +38,7 @@ class Targets:
         if self.pending is None:
             self._stream_t = now
         self._replaced = self.pending is not None or recent
-        self.pending, self._pending_t, self._attempt = target, now, 1
+        self.pending, self._pending_t, self._attempt = combine(target, self.pending), now, 1
 
     def put_back(self, target: Target, attempt: int, now: float) -> None:
         """Rule 3: send ``target`` again (unless a newer one waits already)."""

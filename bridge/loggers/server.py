@@ -18,8 +18,9 @@ Rules:
 5. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
    listens on that port. ``bidirectional`` 1 turns to the heading or its reciprocal, whichever
    is nearer the bearing. A non-zero ``offset`` is logged once and not applied (its meaning is
-   not documented). Position reports go to the configured address: every REPORT_MOVING_S
-   while the rotor turns, every REPORT_IDLE_S otherwise, and once when a move ends.
+   not documented). Position reports go to the configured address: the heading is looked at
+   every REPORT_MOVING_S and reported when it has moved REPORT_MOVE_DEG since the last report
+   (while the rotor turns, and where it came to rest), else every REPORT_IDLE_S.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ from bridge.loggers.datagrams import (
     parse_pst,
     pst_reply,
 )
-from bridge.model import MotionState, Source, Stop, Target
+from bridge.model import Source, Stop, Target
 from bridge.pointing import norm360
 
 if TYPE_CHECKING:
@@ -58,6 +59,7 @@ log = logging.getLogger(__name__)
 JUNK_LOG_S = 10.0
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
+REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
 
 _BIND_HINTS = {
     errno.EADDRINUSE: " (another program, PstRotator or a second bridge, has it)",
@@ -88,7 +90,7 @@ class N1mmReporter:
     name: str
     to: tuple[str, int]
     next_s: float = 0.0
-    was_moving: bool = False
+    last_deg: float | None = None  # the heading last reported
 
 
 @dataclass
@@ -146,9 +148,7 @@ class LoggerEndpoints:
         wanted: list[tuple[PstEndpoint | N1mmEndpoint, str, bool]] = [
             (e, f"PstRotator UDP for rotator {e.rotator.id!r}", False) for e in self.pst
         ]
-        wanted += [
-            (e, f"N1MM rotor UDP ({', '.join(e.rotators)})", True) for e in self.n1mm.values()
-        ]
+        wanted += [(e, f"N1MM rotor UDP for {_named(e)}", True) for e in self.n1mm.values()]
         try:
             for endpoint, what, shared in wanted:
                 sock = _bound(endpoint.bind, endpoint.port, what, shared)
@@ -205,6 +205,8 @@ class LoggerEndpoints:
             while True:
                 now = self._clock()
                 due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
+                if self._reporters:  # look at the rotors often enough to see a move begin or end
+                    due = min(due, now + REPORT_MOVING_S)
                 events = sel.select(max(0.0, due - now))
                 for key, _mask in events:
                     if key.fileobj == self._wake_r:
@@ -321,21 +323,25 @@ class LoggerEndpoints:
             pass
 
     def _report(self, now: float) -> None:
-        """Rule 5."""
+        """Rule 5 (the loop comes here at least every REPORT_MOVING_S)."""
         for r in self._reporters:
             status = r.rotator.status
-            moving = status.state is MotionState.MOVING
-            ended = r.was_moving and not moving
-            r.was_moving = moving
-            if now < r.next_s and not ended:
+            bearing = status.bearing_deg
+            if bearing is None or not status.available or self._sender is None:
                 continue
-            r.next_s = now + (REPORT_MOVING_S if moving else REPORT_IDLE_S)
-            if status.bearing_deg is None or not status.available or self._sender is None:
+            moved = r.last_deg is None or _apart(bearing, r.last_deg) >= REPORT_MOVE_DEG
+            if now < r.next_s and not moved:
                 continue
+            r.next_s, r.last_deg = now + REPORT_IDLE_S, bearing
             try:
-                self._sender.sendto(n1mm_report(r.name, status.bearing_deg), r.to)
+                self._sender.sendto(n1mm_report(r.name, bearing), r.to)
             except OSError as exc:
                 log.debug("N1MM report to %s:%d: %s", *r.to, exc)
+
+
+def _named(e: N1mmEndpoint) -> str:
+    """``rotator 'tower' (N1MM's "Yagi")``, for every rotator on the endpoint."""
+    return ", ".join(f"rotator {r.id!r} (N1MM's {n!r})" for n, r in e.rotators.items())
 
 
 def _apart(a: float, b: float) -> float:

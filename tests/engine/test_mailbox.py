@@ -80,3 +80,26 @@ def test_a_stop_put_while_take_runs_still_wakes_the_worker() -> None:
     # the worker selects again: the stop must wake it at once, not after a poll's timeout
     assert select.select([mb], [], [], 0)[0] == [mb]
     assert mb.take().stop == Stop()
+
+
+def test_an_axis_left_out_is_kept_from_the_target_it_replaces() -> None:
+    """An azimuth then an elevation alone (Hamlib 4.6's PstRotator client sends P 200 30 as two
+    datagrams; an MQTT user a bare azimuth and then R/target/elevation) is one target: the
+    elevation replaced the azimuth, and the rotor kept its old bearing (4 runs in 12)."""
+    box = Mailbox()
+    try:
+        box.put(Target(200.0, None))
+        box.put(Target(None, 30.0))
+        assert box.take().target == Target(200.0, 30.0)
+        box.put(Target(None, 30.0))
+        box.put(Target(210.0, None))
+        assert box.take().target == Target(210.0, 30.0)
+        box.put(Target(200.0, 10.0))
+        box.put(Target(220.0, 40.0))  # both named: the newer wins whole
+        assert box.take().target == Target(220.0, 40.0)
+        box.put(Target(200.0, None))
+        box.put(Stop())
+        box.put(Target(None, 30.0))  # after a stop nothing older is left to combine with
+        assert box.take().target == Target(None, 30.0)
+    finally:
+        box.close()

@@ -72,6 +72,7 @@ SAT_BRIDGE = {"az_speed_deg_s": 90.0, "el_speed_deg_s": 45.0}
 AFTER_ANSWER_S = 0.1  # a bounded receive after an answer: anything wrong was sent before it
 # N1MM position reports (fact sheet 2): at least every 15 s when idle
 IDLE_REPORT_S = 15.0
+MOVING_REPORT_S = 2.0  # fact sheet 2: every 1-2 s while moving
 
 
 @dataclass
@@ -291,8 +292,8 @@ def test_n1mm_goazi_turns_the_rotor_and_its_heading_is_reported_in_the_documente
     status = bench.settled_at(EZ, target, after=t)
     assert [f.data for f in bench.motion(EZ, t)] == [f"AP1{target:03d}\r".encode()]
     assert status["last_command_source"] == "n1mm"
-    # at least every 15 s when idle (fact sheet 2), at the configured destination
-    final = bench.reports.wait(lambda r: r.heading_deg == target, IDLE_REPORT_S + 3, f"at {target}")
+    # once when the move ends (then at least every 15 s), at the configured destination
+    final = bench.reports.wait(lambda r: r.heading_deg == target, MOVING_REPORT_S + 1, "at rest")
     assert final.raw == f"{YAGI} @ {target * 10}".encode()
     assert all(r.name == YAGI for r in bench.reports.seen)
 
@@ -470,3 +471,42 @@ def test_a_logger_port_another_program_holds_is_a_start_up_error_naming_it(
     assert "\n" not in said
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as again:
         again.bind(("127.0.0.1", other))  # the endpoint that could listen let go of its port
+
+
+# -- found by these tests: an azimuth and an elevation datagram back to back; reports ---------
+def test_hamlibs_azimuth_and_elevation_datagrams_sent_back_to_back_both_apply(
+    bench: Bench,
+) -> None:
+    """Hamlib 4.6's ``P 200 30`` (rot_pstrotator.c): two datagrams, azimuth then elevation,
+    each ``"%f.2"``, one right after the other."""
+    client = bench.pst[SAT]
+    start = bench.at_rest(SAT)
+    az = 200 if angle_between(start.az_deg, 200) > 20 else 300
+    el = 30 if start.el_deg is None or abs(start.el_deg - 30) > 10 else 60
+    t = time.monotonic()
+    client.command(tag("AZIMUTH", hamlib(az)))
+    client.command(tag("ELEVATION", hamlib(el)))
+    bench.settled_at(SAT, az, el, after=t)
+    client.drain()
+    assert client.ask("AZ") == f"AZ:{az}\r".encode()
+    assert client.ask("EL") == f"EL:{el}\r".encode()
+
+
+def test_n1mm_position_reports_come_while_the_rotor_turns_and_when_it_stops(
+    bench: Bench,
+) -> None:
+    start = bench.at_rest(EZ).az_deg
+    target = far_from(start)
+    bench.reports.drain()
+    t = time.monotonic()
+    bench.n1mm.send(n1mm_turn(YAGI, target))
+    lo, hi = sorted((start, target))
+
+    def under_way(r: Any) -> bool:  # a heading the rotor only has while it turns
+        return lo + 10 < r.heading_deg < hi - 10
+
+    travel_s = abs(target - start) / EZ_EMU["speed_deg_s"]
+    bench.reports.wait(under_way, travel_s + MOVING_REPORT_S, "while it turns")
+    bench.settled_at(EZ, target, after=t)
+    final = bench.reports.wait(lambda r: r.heading_deg == target, 3, f"at {target}")
+    assert final.raw == f"{YAGI} @ {target * 10}".encode()
