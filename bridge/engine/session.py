@@ -136,6 +136,7 @@ class RotatorSession:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
             self.error(kind, reason)
+        self.tracker.end("serial link down")  # a target after a reconnect needs a new command
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
@@ -333,6 +334,7 @@ class RotatorSession:
             return  # a reply is owed and may still come (a slew report takes the whole slew)
         if self.answering and link.silent_for(now) >= timeout_s:
             self.answering = False
+            self.tracker.end("controller not answering")
             self.motion = mo.link_down(self.motion)
             self.error(
                 ErrorKind.SERIAL,
@@ -489,6 +491,7 @@ class RotatorSession:
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
         for event in events:
             if event is mo.Event.STALLED:
+                self.tracker.end("stalled")
                 pos = self.motion.position_deg
                 self.error(
                     ErrorKind.STALLED,

@@ -2,10 +2,13 @@
 positions and passes come from bridge.sky (computation only).
 
 Rules:
-1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, or any
-   other target (a manual one, rotctld's P, a preset, a nudge, a park); the status says why
-   (``tracking_ended``). Tracking's own targets are put here, not in the mailbox, so they never
-   end it. It goes on from pass to pass until it is ended.
+1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, any
+   other target (a manual one, rotctld's P, a preset, a nudge, a park), the rotor turned by
+   hand, a stall, the serial link going down or the controller falling silent: the rotor never
+   turns by itself after any of these. The status says why (``tracking_ended``). Tracking's
+   own targets are put here, not in the mailbox, so they never end it. It goes on from pass
+   to pass until it is ended. A step is measured from the last target and from where the
+   rotor really is.
 2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
    when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
@@ -167,6 +170,10 @@ def step(session: RotatorSession, now: float) -> None:
     session.autopark.activity(now)  # rule 7
     if session.link is None or not session.answering or session.locked:
         return
+    m = session.motion
+    if m.state is MotionState.MOVING and m.target_deg is None and m.stop_sent_t is None:
+        tr.end("turned by hand")  # rule 1: the front panel is a command too
+        return
     utc = now + session.wall_offset_s
     owed = session.link.reply_owed
     if tr.search_due(utc):
@@ -260,10 +267,21 @@ def _follow(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
         return
     lead = _half_step_s(tr, utc)
     az, el = _aim(session, *tr.at(min(utc + lead, p.los_s)))
-    if tr._last is not None and _apart(tr._last, (az, el)) < tr.cfg.step_deg:
+    step = tr.cfg.step_deg
+    if tr._last is not None and _apart(tr._last, (az, el)) < step and _near(session, az, el):
         return
     if _put(session, Target(az, el, Source.TRACKING), now):
         tr._last = (az, el)
+
+
+def _near(session: RotatorSession, az: float, el: float | None) -> bool:
+    """The rotor really is within a step (and its tolerance) of (az, el): the last target is
+    not enough, the rotor may have been turned since or have fallen short."""
+    m, aim = session.motion, session.cfg.aim
+    if m.position_deg is None:
+        return True  # nothing to judge by: the last target stands
+    at = (aim.true_of(m.position_deg), m.el_position_deg if el is not None else None)
+    return _apart(at, (az, el)) < session.tracker.cfg.step_deg + session.cfg.motion.tolerance_deg
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:

@@ -183,7 +183,8 @@ def test_a_pass_across_the_north_is_flown_flipped_on_a_0_to_360_rotor(
             s.tracking for _t, s in v.statuses if s.tracking and s.tracking.phase == "tracking"
         ]
         assert during and all(info.flip for info in during)
-        assert max(e[1] for e in errors) <= 3.0 and max(e[2] for e in errors) <= 3.0
+        # half the 3 degree step either side, a Rot2Prog's whole-degree cut and its lag
+        assert max(e[1] for e in errors) <= 3.5 and max(e[2] for e in errors) <= 3.5
         sets = v.frames("set", "set: clamped")
         azimuths = [int(f.data[1:5]) / f.data[5] - 360 for f in sets]
         travel = sum(abs(b - a) for a, b in zip(azimuths, azimuths[1:], strict=False))
@@ -205,7 +206,8 @@ def test_a_rotor_ez_follows_the_sun_in_azimuth_without_ever_retargeting_while_tu
         for _ in range(3600):  # an hour: the sun moves some 10 degrees in azimuth
             v.run_for(1.0)
             worst = max(worst, off_deg(v.truth().az_deg, sun_altaz(lat, lon, v.wall())[0]))
-        assert worst <= 3.0, worst
+        # half the step either side, plus the Rotor-EZ's own tolerance: it may stop 3 short
+        assert worst <= 1.5 + 3.0, worst
         executed = v.frames("executed")
         assert len(executed) >= 2, executed  # it moved on with the sun
         never = ("ignored: brake delay", "ignored: re-target while turning (stopped)")
@@ -292,3 +294,63 @@ def test_eight_rotors_tracking_one_body_from_one_station_share_its_pass() -> Non
     assert all(sky.next_pass(Body.sun(), t + dt) is first for dt in (0.0, 1.0, 60.0))
     assert first is not None
     assert sky.next_pass(Body.sun(), first.los_s + 1.0) is not first  # the next one is new
+
+
+def _tracking_the_sun(model: str = "rot2prog") -> tuple[VirtualRotator, float, float]:
+    wall = time.time()
+    lat, lon = sun_up_somewhere(wall)
+    v = VirtualRotator(
+        model,
+        sky=Sky(lat, lon),
+        wall_epoch_s=wall,
+        emulator={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0},
+        settings={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0},
+    )
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    v.track(Body.sun())
+
+    def on_it(h: VirtualRotator) -> bool:
+        az, el = pointing(h.truth().az_deg, h.truth().el_deg)
+        sun = sun_altaz(lat, lon, h.wall())
+        return not h.truth().is_moving and off_deg(az, sun[0]) < 3 and abs(el - sun[1]) < 3
+
+    v.run_until(on_it, 200, "on the sun")
+    return v, lat, lon
+
+
+def nothing_turns_it_for(v: VirtualRotator, seconds: float) -> None:
+    """No set frame for ``seconds`` (the sun moves a step in about 12 minutes)."""
+    t = v.now
+    v.run_for(seconds)
+    assert v.frames("set", "set: clamped", since=t) == []
+
+
+@pytest.mark.parametrize("how", ["unplugged", "silent", "turned by hand"])
+def test_tracking_ends_for_good_when_the_rotor_is_out_of_the_bridges_hands(how: str) -> None:
+    """Cold review: after an unplug (or a hand on the front panel) tracking went on; the status
+    said 'tracking' while the antenna pointed elsewhere, and minutes later, once the sun had
+    moved a step, the rotor turned back by itself with nobody having asked."""
+    v, _lat, _lon = _tracking_the_sun()
+    with v:
+        truth = v.truth()
+        if how == "unplugged":
+            v.link_down()
+            v.manual_rotate((truth.az_deg + 150.0) % 360.0)
+            v.run_for(200.0)
+            v.link_up()
+        elif how == "silent":
+            v.set_silent(True)
+            v.run_until(lambda h: not h.session.answering, 30, "the controller silent")
+            v.set_silent(False)
+        else:
+            v.manual_rotate((truth.az_deg + 60.0) % 360.0)
+        v.run_until(lambda h: h.status.available and h.status.tracking is None, 60, "ended")
+        want = {
+            "unplugged": {"serial link down"},
+            "silent": {"controller not answering"},
+            # a SPID still holding the last target sees the hand move as no progress: stalled
+            "turned by hand": {"turned by hand", "stalled"},
+        }
+        assert v.status.tracking_ended in want[how]
+        v.run_until(lambda h: not h.truth().is_moving, 120, "still")
+        nothing_turns_it_for(v, 1200.0)
