@@ -222,6 +222,8 @@ class MqttClient:
         self._client = c
         self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
         self._pub_topics: dict[int, str] = {}  # a QoS 1 publish's message id -> its topic
+        self._acked_early: dict[int, ReasonCode] = {}  # acknowledged before its id was noted
+        self._ids_lock = threading.Lock()
         self._denied: set[str] = set()  # rule 11: each denied topic reported once
         self.problems: list[str] = []  # rule 11, for the bridge's own diagnostics
         self._retained[will_topic] = (b"online", 1)
@@ -251,7 +253,9 @@ class MqttClient:
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Publish offline, flush, disconnect."""
-        self._stopping = True
+        self._stopping = True  # rule 10 stands down: our own offline is about to come back
+        with self._lock:
+            self._retained[self._will_topic] = (b"offline", 1)
         if self.connected.is_set():
             info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
             try:
@@ -352,7 +356,10 @@ class MqttClient:
             if self._owned:
                 self._subscribe(client, [(topic, 0) for topic in self._owned])
         with self._lock:
-            self._pub_topics.clear()  # acknowledgements of the old connection never come
+            with self._ids_lock:  # acknowledgements of the old connection never come
+                self._pub_topics.clear()
+                self._acked_early.clear()
+            self._sub_filters.clear()
             self._send(client, self._will_topic, b"online", 1, retain=True)
             self.connected_at = self._clock()
             self._echoes.clear()  # what was in flight before is gone with the old connection
@@ -379,9 +386,17 @@ class MqttClient:
         self, client: paho.Client, topic: str, data: str | bytes, qos: int, *, retain: bool
     ) -> None:
         """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
-        info = client.publish(topic, data, qos=qos, retain=retain)
-        if qos and len(self._pub_topics) < MAX_UNACKED:
-            self._pub_topics[info.mid] = topic
+        info = client.publish(topic, data, qos=qos, retain=retain)  # callers hold self._lock
+        if not qos:
+            return
+        with self._ids_lock:  # never self._lock in paho's callback: paho holds its own there
+            early = self._acked_early.pop(info.mid, None)
+            if early is None and len(self._pub_topics) < MAX_UNACKED:
+                self._pub_topics[info.mid] = topic
+        if early is not None and early.is_failure:  # acknowledged before we noted its id:
+            # reported off this thread, which holds self._lock (the report publishes)
+            args = (topic, "publish to", str(early))
+            threading.Thread(target=self._deny, args=args, daemon=True).start()
 
     def _on_subscribe(
         self,
@@ -404,7 +419,10 @@ class MqttClient:
         reason_code: ReasonCode,
         properties: Properties | None,
     ) -> None:
-        topic = self._pub_topics.pop(mid, None)
+        with self._ids_lock:
+            topic = self._pub_topics.pop(mid, None)
+            if topic is None and len(self._acked_early) < MAX_UNACKED:
+                self._acked_early[mid] = reason_code  # _send has not noted the id yet
         if topic is not None and reason_code.is_failure:
             self._deny(topic, "publish to", str(reason_code))
 
@@ -501,6 +519,8 @@ class MqttClient:
             held = self._retained.get(topic)
             if held is None or not self._is_owned(topic):
                 return False
+            if self._stopping:
+                return True  # shutting down: our offline values are on their way, not news
             echoes = self._echoes.get(topic)
             if echoes and payload in echoes:  # MQTT 3.1.1: ours, coming back in order
                 while echoes.popleft() != payload:
@@ -513,7 +533,8 @@ class MqttClient:
                 return True
             self._fixed_at[topic] = now
             if self.connected.is_set():
-                self._client.publish(topic, held[0], qos=held[1], retain=True)
+                self._expect_echo(topic, held[0])
+                self._send(self._client, topic, held[0], held[1], retain=True)
             # what the broker held from before we connected (our own last will, a value of a
             # run that ended) is replaced without a word: only a live stranger is news
             stale = now - self.connected_at < SETTLE_AFTER_CONNECT_S
@@ -532,7 +553,7 @@ class MqttClient:
 
     def _expect_echo(self, topic: str, data: bytes) -> None:
         """Rule 10, MQTT 3.1.1 (under the lock): this comes back to us; it is ours."""
-        if not self._v5 and self._owned:
+        if not self._v5 and self._owned and self._is_owned(topic):
             self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(data)
 
     def _is_owned(self, topic: str) -> bool:

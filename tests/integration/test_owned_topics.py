@@ -66,3 +66,18 @@ def test_the_bridge_does_not_take_its_own_messages_for_a_strangers_while_it_turn
     emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 300) < 2, 30)
     rig.ready("tower")
     assert [r for r in caplog.records if "another client published" in r.getMessage()] == []
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_clean_shutdown_leaves_the_bridge_offline(rig: Rig, protocol: str) -> None:
+    """Cold review H2: under MQTT 3.1.1 the bridge heard its own 'offline' come back at
+    shutdown, took it for a stranger's and put 'online' back (4 runs in 5): Home Assistant
+    then showed a stopped bridge as available."""
+    rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+    rig.mqtt_extra["protocol"] = protocol
+    rig.start()
+    rig.ready("tower")
+    rig.stop()
+    snap = retained_snapshot(rig.broker.port, "rotor/#")
+    assert snap["rotor/bridge/state"] == b"offline"
+    assert snap["rotor/availability"] == b"offline"
