@@ -707,6 +707,25 @@ def test_idle_clients_are_dropped_and_a_slot_frees_for_gpredict(station: Station
         small.stop()
 
 
+def test_a_quiet_client_keeps_its_slot_until_the_idle_timeout(station: StationFactory) -> None:
+    """Cold review: the 60 s 'no command' limit also ran from the connect, so a client silent
+    (or polling every 61-299 s) was dropped after 60 s whatever rotctld_idle_timeout_s said."""
+    st = station("rotorcard")
+    small = RotctldServer(st.rotator, 0, idle_timeout_s=3.0, useful_within_s=0.5)
+    small.start()
+    try:
+        quiet = Client(small.port)
+        quiet.sock.settimeout(1.5)
+        with pytest.raises(TimeoutError):  # no command for 1.5 s, past the 0.5 s: still there
+            quiet.sock.recv(1)
+        quiet.ask(b"S\n", b"RPRT 0\n")
+        quiet.sock.settimeout(10)
+        assert quiet.at_eof()  # and dropped at the idle timeout
+        quiet.close()
+    finally:
+        small.stop()
+
+
 def test_turned_away_connections_are_logged_once_with_a_count(
     station: StationFactory, caplog: pytest.LogCaptureFixture
 ) -> None:

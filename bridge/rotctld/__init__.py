@@ -25,9 +25,9 @@ Rules:
    the shack PC could otherwise turn the antenna through a loopback port (a ``POST`` body of
    ``P 200 0``; ``KHTML`` in a browser's User-Agent read as park).
 8. A client is disconnected when it sends nothing for ``rotctld_idle_timeout_s`` (300 s), or
-   sends bytes but no complete command for 60 s (one byte a second would hold a slot for
-   ever); connections turned away because every slot is taken are logged once per 10 s, with
-   their count.
+   leaves a command unfinished for 60 s (one byte a second would hold a slot for ever);
+   connections turned away because every slot is taken are logged once per 10 s, with their
+   count.
 """
 
 from bridge.rotctld.commands import RotctldCommands

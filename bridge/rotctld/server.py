@@ -198,14 +198,15 @@ class RotctldServer:
         parser = RequestParser()
         commands = RotctldCommands(self.rotator)  # one per client: p answers in its terms
         guard = HttpGuard()
-        last_bytes = last_command = self._clock()
+        last_bytes = self._clock()
+        pending_since: float | None = None  # the first byte of a command not yet complete
         try:
             while True:
-                # rule 8: silent for the idle timeout, or bytes but no command for a while
+                # rule 8: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
-                deadline = min(
-                    last_bytes + self._idle_timeout_s, last_command + self._useful_within_s
-                )
+                deadline = last_bytes + self._idle_timeout_s
+                if pending_since is not None:
+                    deadline = min(deadline, pending_since + self._useful_within_s)
                 if now >= deadline:
                     log.info(
                         "rotctld for %s: client %s:%d dropped: %s",
@@ -235,10 +236,13 @@ class RotctldServer:
                     )
                     return
                 for item in parser.feed(data):
-                    last_command = last_bytes
                     if isinstance(item, Quit):
                         return
                     conn.sendall(commands.execute(item))
+                if parser.idle:
+                    pending_since = None
+                elif pending_since is None:
+                    pending_since = last_bytes
         except OSError as exc:
             log.debug("rotctld for %s: client %s:%d: %s", self.rotator_id, *peer, exc)
         finally:
