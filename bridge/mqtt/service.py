@@ -17,10 +17,11 @@ Rules:
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
    nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
-4. ``R/error`` is rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``, 10 by
-   default, after a burst of five times as many); the next event published says how many were
-   left out. A flood of refusals (200,000 rotctld ``P 999``) neither queues 200,000 QoS 1
-   messages nor delays the state.
+4. Refusals on ``R/error`` are rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``,
+   10 by default, after a burst of five times as many); the next one published says how many
+   were left out. Every other kind (a stall, a stop that did not take, the serial line) is
+   always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
+   neither queue 200,000 QoS 1 messages nor delay the state.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, RotatorStatus, SetOption, Source, Stop, Target
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.topics import Topics
@@ -178,6 +179,11 @@ class MqttService:
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         """Rule 4: rate-limited per rotator; the next one published counts those left out."""
         t = self.topics.rotator(rotator_id)
+        if event.kind is not ErrorKind.REFUSED:  # a stall, a stop that did not take: always
+            self._publisher.publish_event(
+                t.error, json.dumps(event.as_dict(), separators=(",", ":"))
+            )
+            return
         left_out = self._limiter.admit(t.error)
         if left_out is None:
             return

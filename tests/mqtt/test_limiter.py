@@ -50,3 +50,20 @@ def test_a_flood_of_refusals_publishes_a_bounded_few_and_then_says_how_many() ->
     assert "more error(s) before this not shown" in last["message"]
     shown = [*sent, last]  # every refusal is accounted for: shown, or counted in the next
     assert len(shown) + sum(e.get("suppressed", 0) for e in shown) == 200_001
+
+
+def test_a_flood_of_refusals_never_hides_a_stall_or_a_stop_that_did_not_take() -> None:
+    """Cold review M3: one bucket for every kind; after a refusal flood the error saying the
+    rotor still turns after three stops was dropped and only counted."""
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10)
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    pub.take()
+    refused = ErrorEvent(ErrorKind.REFUSED, "azimuth 999 outside the limits 0..360", "P 999 0")
+    for _ in range(1000):
+        svc.publish_event("tower", refused)
+    pub.take()
+    for kind in (ErrorKind.STOP, ErrorKind.STALLED, ErrorKind.SERIAL):
+        svc.publish_event("tower", ErrorEvent(kind, "it matters", None))
+    kinds = [json.loads(p)["kind"] for t, p, _r in pub.take() if t == "rotor/error"]
+    assert kinds == ["stop", "stalled", "serial"]
