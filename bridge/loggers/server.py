@@ -13,14 +13,16 @@ Rules:
    (datagrams.py rule 1) is dropped and counted, logged at debug level at most once per
    JUNK_LOG_S with the count since. Nothing of it reaches the rotator; the serial line is
    served by another thread and never waits for this one.
-4. An azimuth outside 0..360 (Hamlib's range is -180..450) is folded into 0..360: the rotator's
-   own rules pick the way round. An elevation sent to an azimuth-only rotator is ignored.
+4. An azimuth outside 0..360 but inside Hamlib's -180..450 is folded into 0..360 (the
+   rotator's own rules pick the way round); one beyond that is refused (a mis-scaled value,
+   99999, must not become 279). An elevation sent to an azimuth-only rotator is ignored.
 5. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
-   listens on that port. ``bidirectional`` 1 turns to the heading or its reciprocal, whichever
-   is nearer the bearing. A non-zero ``offset`` is logged once and not applied (its meaning is
-   not documented). Position reports go to the configured address: the heading is looked at
-   every REPORT_MOVING_S and reported when it has moved REPORT_MOVE_DEG since the last report
-   (while the rotor turns, and where it came to rest), else every REPORT_IDLE_S.
+   listens on that port, except a stop, which stops every rotator on it. ``bidirectional`` 1
+   turns to the heading or its reciprocal, whichever is nearer the bearing. A non-zero
+   ``offset`` is logged once and not applied (its meaning is not documented). Position
+   reports go to the configured address: the heading is looked at every REPORT_MOVING_S and
+   reported when it has moved REPORT_MOVE_DEG since the last report (while the rotor turns,
+   and where it came to rest), else every REPORT_IDLE_S.
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 JUNK_LOG_S = 10.0
+AZ_FOLDED = (-180.0, 450.0)  # Hamlib's azimuth range: folded into 0..360; beyond, refused
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
 REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
@@ -285,6 +288,12 @@ class LoggerEndpoints:
                     rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
                     return
                 rot.go_toward(lat, lon, Source.PST, described, locator=req.locator)
+            elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
+                rot.report_refusal(
+                    f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
+                    described,
+                )
+                return
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else norm360(req.azimuth)  # rule 4
                 rot.submit(Target(az, el, Source.PST), described)
@@ -297,6 +306,12 @@ class LoggerEndpoints:
     # -- N1MM -----------------------------------------------------------------------------
     def _n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes) -> None:
         counts = self.counts["n1mm"]
+        described = "n1mm " + data.decode("ascii").strip()[:160]
+        if req.stop and req.rotor == "*":  # a stop is never dropped: every rotor on the port
+            for each in e.rotators.values():
+                each.submit(Stop(Source.N1MM), described)
+            counts.commands += 1
+            return
         rot = e.rotators.get(req.rotor)
         if rot is None and req.rotor == "*" and len(e.rotators) == 1:
             rot = next(iter(e.rotators.values()))
@@ -304,7 +319,6 @@ class LoggerEndpoints:
             counts.ignored += 1
             log.debug("N1MM UDP %d: rotor %r is not ours", e.port, req.rotor)
             return
-        described = "n1mm " + data.decode("ascii").strip()[:160]
         try:
             if req.stop:
                 rot.submit(Stop(Source.N1MM), described)
