@@ -102,13 +102,12 @@ class MqttService:
         *,
         wall: Callable[[], float] = time.time,
         error_events_per_s: float = RATE_PER_S,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.topics = topics
         self._publisher = publisher
         self._wall = wall
-        self._limiter = EventLimiter(
-            time.monotonic, round(5 * error_events_per_s), error_events_per_s
-        )
+        self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._rotators: dict[str, RotatorPort] = {}
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []

@@ -34,17 +34,18 @@ def test_a_burst_then_a_steady_rate_and_the_next_one_counts_what_was_left_out() 
 
 
 def test_a_flood_of_refusals_publishes_a_bounded_few_and_then_says_how_many() -> None:
-    pub = RecordingPublisher()
-    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10)
+    pub, clock = RecordingPublisher(), Clock()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10, clock=clock)
     svc.attach(RecordingRotator("tower", "rotorez"))
     pub.take()
     event = ErrorEvent(ErrorKind.REFUSED, "azimuth 999 outside the limits 0..360", "P 999 0")
-    for _ in range(200_000):
+    for i in range(200_000):  # 18 s of a rotctld client looping P 999, as the attack did
+        clock.t = i * 18.0 / 200_000
         svc.publish_event("tower", event)
     sent = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/error"]
-    assert 50 <= len(sent) <= 60, len(sent)  # the burst (and what refilled meanwhile)
+    assert 50 + 10 * 18 - 1 <= len(sent) <= 50 + 10 * 18 + 1, len(sent)  # burst, then 10/s
     assert all("suppressed" not in e for e in sent[:50])
-    svc._limiter._buckets["rotor/error"].tokens = 1.0  # as after a quiet tenth of a second
+    clock.t += 0.1  # a quiet tenth of a second: one more may go
     svc.publish_event("tower", event)
     (last,) = [json.loads(p) for t, p, _r in pub.take()]
     assert "more error(s) before this not shown" in last["message"]
