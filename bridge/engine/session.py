@@ -136,7 +136,8 @@ class RotatorSession:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
             self.error(kind, reason)
-        self.tracker.end("serial link down")  # a target after a reconnect needs a new command
+        # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
+        self.tracker.end("serial link down" if reason is not None else "bridge stopped")
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
