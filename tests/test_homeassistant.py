@@ -157,9 +157,13 @@ class Recorder:
         self.republished = threading.Event()
 
 
-def publisher(rec: Recorder, birth_delay_s: float = 0.0) -> DiscoveryPublisher:
+def publisher(
+    rec: Recorder, birth_delay_s: float = 0.0, info: RotatorInfo | None = None
+) -> DiscoveryPublisher:
     topics = Topics("rotor", {"tower": "rotor"})
-    info = RotatorInfo("tower", "Tower", REGISTRY["rotorez"], topics.rotator("tower"), 0, 360)
+    info = info or RotatorInfo(
+        "tower", "Tower", REGISTRY["rotorez"], topics.rotator("tower"), 0, 360
+    )
     return DiscoveryPublisher(
         prefix="homeassistant",
         status_topic="homeassistant/status",
@@ -590,15 +594,7 @@ def test_the_track_select_follows_the_tle_file_when_it_changes() -> None:
         RotatorInfo("tower", "Tower", REGISTRY["md01"], topics.rotator("tower"), -180, 540),
         track_options=("off", "sun", "moon", "ISS (ZARYA)"),
     )
-    pub = DiscoveryPublisher(
-        prefix="homeassistant",
-        status_topic="homeassistant/status",
-        topics=topics,
-        rotators=[info],
-        publish_retained=lambda t, p: rec.published.append((t, p)),
-        clear_retained=rec.cleared.append,
-        republish_state=rec.republished.set,
-    )
+    pub = publisher(rec, info=info)
     pub.publish_all()
     topic = "homeassistant/select/rotorbridge_rotor_r_tower/track/config"
     rec.published.clear()
