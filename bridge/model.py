@@ -81,9 +81,10 @@ def combine(newer: Target, older: Target | None) -> Target:
     """``newer`` with the axis it leaves out (None) taken from ``older`` still pending: Hamlib
     4.6's PstRotator client sends ``P 200 30`` as an azimuth and then an elevation datagram,
     and an MQTT user may send a bare azimuth and then ``R/target/elevation``: one must not
-    replace the other. An axis ``newer`` names wins; so do its source, place and park mark."""
-    if older is None:
-        return newer
+    replace the other. An axis ``newer`` names wins; so do its source, place and park mark.
+    Only targets from one source combine, and never with a park."""
+    if older is None or older.source is not newer.source or older.park:
+        return newer  # only a sender's own two halves: never a park or a tracking step
     if newer.az_deg is None and older.az_deg is not None:
         newer = replace(newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg)
     if newer.el_deg is None and older.el_deg is not None:

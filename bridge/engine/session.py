@@ -172,7 +172,8 @@ class RotatorSession:
             self._track(batch.track, now)
         if batch.target is not None:
             what = describe_command(batch.target)
-            self.tracker.end(f"{batch.target.source.value} target")
+            if self.tracker.end(f"{batch.target.source.value} target"):
+                self.drop_tracking_target()  # never combined with the user's target
             if self.locked:
                 self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
             elif link is None or not self.answering:
@@ -181,9 +182,16 @@ class RotatorSession:
                 self.targets.put(batch.target, now)
         return self._step(now)
 
+    def drop_tracking_target(self) -> None:
+        """Tracking has ended: a target of its own still waiting must not go out after it."""
+        pending = self.targets.pending
+        if pending is not None and pending.source is Source.TRACKING:
+            self.targets.clear()
+
     def _track(self, track: tracking.Track, now: float) -> None:
         if track.body is None:
             self.tracker.end("off")
+            self.drop_tracking_target()
             return
         what = f"track {track.body.name}"
         if self.locked:
@@ -493,6 +501,7 @@ class RotatorSession:
         for event in events:
             if event is mo.Event.STALLED:
                 self.tracker.end("stalled")
+                self.drop_tracking_target()
                 pos = self.motion.position_deg
                 self.error(
                     ErrorKind.STALLED,

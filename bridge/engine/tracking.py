@@ -106,6 +106,7 @@ class Tracker:
         self._after_pass = False
         self._refused_for: float | None = None
         self._info_t = -math.inf
+        self._away: float | None = None  # how far the rotor was from the last target, turning
 
     # -- rule 1 ----------------------------------------------------------------------------
     def start(self, body: Body) -> None:
@@ -170,9 +171,9 @@ def step(session: RotatorSession, now: float) -> None:
     session.autopark.activity(now)  # rule 7
     if session.link is None or not session.answering or session.locked:
         return
-    m = session.motion
-    if m.state is MotionState.MOVING and m.target_deg is None and m.stop_sent_t is None:
+    if _turned_by_hand(session):
         tr.end("turned by hand")  # rule 1: the front panel is a command too
+        session.drop_tracking_target()
         return
     utc = now + session.wall_offset_s
     owed = session.link.reply_owed
@@ -272,6 +273,21 @@ def _follow(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
         return
     if _put(session, Target(az, el, Source.TRACKING), now):
         tr._last = (az, el)
+
+
+def _turned_by_hand(session: RotatorSession) -> bool:
+    """Turning with no target and no stop of ours, and already further from the last tracking
+    target than a step and the tolerance: a hand on the front panel, not jitter, coasting or
+    a late start on a small step."""
+    m, tr = session.motion, session.tracker
+    if m.state is not MotionState.MOVING or m.target_deg is not None or m.stop_sent_t is not None:
+        return False
+    if tr._last is None or m.position_deg is None:
+        return True
+    at = session.cfg.aim.true_of(m.position_deg)
+    return (
+        _apart((at, None), (tr._last[0], None)) > tr.cfg.step_deg + session.cfg.motion.tolerance_deg
+    )
 
 
 def _near(session: RotatorSession, az: float, el: float | None) -> bool:

@@ -343,6 +343,7 @@ class MqttClient:
         self._last_refusal = None
         self._guard.connected(self._clock())
         log.info("connected to MQTT broker")
+        self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
         # subscribe before saying `online`: the broker handles our packets in order, so a
         # client that sends a command the moment it sees `online` is already heard
         if self._v5:
@@ -359,7 +360,7 @@ class MqttClient:
             with self._ids_lock:  # acknowledgements of the old connection never come
                 self._pub_topics.clear()
                 self._acked_early.clear()
-            self._sub_filters.clear()
+
             self._send(client, self._will_topic, b"online", 1, retain=True)
             self.connected_at = self._clock()
             self._echoes.clear()  # what was in flight before is gone with the old connection
@@ -393,10 +394,8 @@ class MqttClient:
             early = self._acked_early.pop(info.mid, None)
             if early is None and len(self._pub_topics) < MAX_UNACKED:
                 self._pub_topics[info.mid] = topic
-        if early is not None and early.is_failure:  # acknowledged before we noted its id:
-            # reported off this thread, which holds self._lock (the report publishes)
-            args = (topic, "publish to", str(early))
-            threading.Thread(target=self._deny, args=args, daemon=True).start()
+        if early is not None:  # refused before we noted its id
+            self._deny(topic, "publish to", str(early))
 
     def _on_subscribe(
         self,
@@ -421,20 +420,25 @@ class MqttClient:
     ) -> None:
         with self._ids_lock:
             topic = self._pub_topics.pop(mid, None)
-            if topic is None and len(self._acked_early) < MAX_UNACKED:
+            if topic is None and reason_code.is_failure and len(self._acked_early) < MAX_UNACKED:
                 self._acked_early[mid] = reason_code  # _send has not noted the id yet
+                # (only a refusal: paho calls this for every QoS 0 message too, with success)
         if topic is not None and reason_code.is_failure:
             self._deny(topic, "publish to", str(reason_code))
 
     def _deny(self, topic: str, what: str, reason: str) -> None:
-        if topic in self._denied:
-            return
-        self._denied.add(topic)
-        problem = f"the MQTT broker does not let the bridge {what} {topic}: {reason}"
-        self.problems.append(problem)
+        with self._ids_lock:
+            if topic in self._denied:
+                return
+            self._denied.add(topic)
+            problem = f"the MQTT broker does not let the bridge {what} {topic}: {reason}"
+            self.problems.append(problem)
         log.error("%s (check the broker's ACL for user %r)", problem, self._settings.username)
         if self._on_denied is not None:
-            self._on_denied(topic, problem)
+            # never on paho's thread: it holds paho's own mutex here, and the report publishes
+            # (self._lock, then paho's mutex: another thread may hold them the other way round)
+            args = (topic, problem)
+            threading.Thread(target=self._on_denied, args=args, daemon=True).start()
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
         # paho calls this inside its `except OSError`: the exception says why

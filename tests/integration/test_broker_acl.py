@@ -4,6 +4,7 @@ answered "not authorised" (0x87) to 71 discovery publishes and the bridge logged
 from __future__ import annotations
 
 import json
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -79,3 +80,44 @@ def test_a_denied_subscription_is_reported_naming_the_topic(
     assert [t for t, _p in seen] == ["rotor/stop"]
     assert "subscribe to rotor/stop: Not authorized" in seen[0][1]
     assert client.problems == [seen[0][1]]
+
+
+def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: Path) -> None:
+    """Review finding: paho calls on_publish holding its own mutex; the report published (our
+    lock), while the serial-lines thread held our lock publishing an error event and waited
+    for paho's mutex: both hung for good on the first refused publish, and no stop went out."""
+    acl = tmp_path / "acl"
+    acl.write_text("topic readwrite ok/#\n")
+    conf = f"allow_anonymous true\nacl_file {acl}\nuser root"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf)
+    broker.start()
+    client: MqttClient | None = None
+
+    def denied(topic: str, problem: str) -> None:
+        assert client is not None
+        client.publish_retained("ok/info", problem[:60])
+
+    client = MqttClient(
+        MqttSettings(host="127.0.0.1", port=broker.port),
+        will_topic="ok/online",
+        subscriptions=[],
+        on_message=lambda *a: None,
+        on_denied=denied,
+    )
+    try:
+        client.start()
+        assert client.connected.wait(5)
+        done = threading.Event()
+
+        def lines() -> None:
+            assert client is not None
+            for i in range(5000):
+                client.publish_event(f"no/{i}/error", b"x")  # each one refused
+            done.set()
+
+        threading.Thread(target=lines, daemon=True).start()
+        assert done.wait(30), "the publishing thread hung"
+        wait_until(lambda: len(client.problems) >= 100, 10, "refusals reported")
+    finally:
+        client.stop()
+        broker.stop()
