@@ -45,6 +45,11 @@ def norm360(deg: float) -> float:
     return 0.0 if out >= 360.0 or out == 0.0 else out
 
 
+def angle_between(a_deg: float, b_deg: float) -> float:
+    """The smaller angle between two bearings, 0..180, whatever turns either names."""
+    return abs((a_deg - b_deg + 180.0) % 360.0 - 180.0)
+
+
 def in_sector(bearing_deg: float, sector: tuple[float, float]) -> bool:
     """``bearing_deg`` lies in the sector clockwise from its first edge to its second (rule 3)."""
     start, end = norm360(sector[0]), norm360(sector[1])

@@ -59,7 +59,6 @@ class TleCatalog:
 
     def _refresh(self) -> None:
         """Rule 1 and 2 (under the lock)."""
-        assert self.path is not None or not self._sets
         if self.path is None:
             return
         try:

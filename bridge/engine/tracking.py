@@ -46,6 +46,7 @@ from typing import TYPE_CHECKING
 
 from bridge.errors import Refused
 from bridge.model import ErrorKind, MotionState, Source, Target, TrackingInfo
+from bridge.pointing import angle_between
 from bridge.sky import Body, Pass, Sky
 
 if TYPE_CHECKING:
@@ -301,7 +302,7 @@ def _near(session: RotatorSession, az: float, el: float | None) -> bool:
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:
-    daz = abs((a[0] - b[0] + 180.0) % 360.0 - 180.0)
+    daz = angle_between(a[0], b[0])
     if a[1] is None or b[1] is None:
         return daz
     return max(daz, abs(a[1] - b[1]))

@@ -51,7 +51,7 @@ from bridge.loggers.datagrams import (
     pst_reply,
 )
 from bridge.model import Source, Stop, Target
-from bridge.pointing import norm360
+from bridge.pointing import angle_between, norm360
 
 if TYPE_CHECKING:
     from bridge.engine.rotator import Rotator
@@ -330,7 +330,7 @@ class LoggerEndpoints:
                 az = req.azimuth
                 bearing = rot.status.bearing_deg
                 if req.bidirectional and bearing is not None:
-                    az = min((az, norm360(az + 180.0)), key=lambda a: _apart(a, bearing))
+                    az = min((az, norm360(az + 180.0)), key=lambda a: angle_between(a, bearing))
                 rot.submit(Target(norm360(az), None, Source.N1MM), described)
             counts.commands += 1
         except Refused:
@@ -343,7 +343,7 @@ class LoggerEndpoints:
             bearing = status.bearing_deg
             if bearing is None or not status.available or self._sender is None:
                 continue
-            moved = r.last_deg is None or _apart(bearing, r.last_deg) >= REPORT_MOVE_DEG
+            moved = r.last_deg is None or angle_between(bearing, r.last_deg) >= REPORT_MOVE_DEG
             if now < r.next_s and not moved:
                 continue
             r.next_s, r.last_deg = now + REPORT_IDLE_S, bearing
@@ -356,10 +356,6 @@ class LoggerEndpoints:
 def _named(e: N1mmEndpoint) -> str:
     """``rotator 'tower' (N1MM's "Yagi")``, for every rotator on the endpoint."""
     return ", ".join(f"rotator {r.id!r} (N1MM's {n!r})" for n, r in e.rotators.items())
-
-
-def _apart(a: float, b: float) -> float:
-    return abs((a - b + 180.0) % 360.0 - 180.0)
 
 
 def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
