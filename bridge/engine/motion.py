@@ -23,7 +23,12 @@ Rules:
    stall counts from its detection (safe side).
    At start-up the machine assumes a brake window may be running, and that the rotor may be
    turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
-5. Movement without a command (front panel) is ``moving`` too.
+5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
+   target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
+   target, so a reading further from it than the closest one so far by more than
+   ``tolerance_deg + noise_deg`` is someone else's hand on the front panel): ``turned away``,
+   the target is dropped and nothing is sent (the hand has the rotor). On a wrapping scale the
+   way round the stop may lead away first (rule 3), so there only a stall tells.
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -87,12 +92,14 @@ class Motion:
     el_position_deg: float | None = None
     el_anchor_deg: float | None = None
     el_target_deg: float | None = None
+    closest_err: float | None = None  # rule 5: the least error seen since the target went out
 
 
 class Event(enum.StrEnum):
     ARRIVED = "arrived"
     STALLED = "stalled"
     STOPPED = "stopped"
+    TURNED_AWAY = "turned away"
 
 
 class Plan(enum.StrEnum):
@@ -181,6 +188,22 @@ def reading(
             changes["progress_t"] = now
     if changes:
         m = replace(m, **changes)
+    if m.target_deg is not None and not cfg.az_wraps:
+        err = target_error(m, cfg)
+        if err is not None:
+            if m.closest_err is None or err < m.closest_err:
+                m = replace(m, closest_err=err)
+            elif moved and err > m.closest_err + cfg.tolerance_deg + cfg.noise_deg:
+                m = replace(
+                    m,
+                    target_deg=None,
+                    el_target_deg=None,
+                    target_t=None,
+                    progress_t=None,
+                    closest_err=None,
+                )
+                m, events = tick(m, cfg, now)
+                return m, [Event.TURNED_AWAY, *events]
     return tick(m, cfg, now)
 
 
@@ -213,6 +236,7 @@ def commanded(
         progress_t=now,
         stop_sent_t=None,
         still_since_t=None,
+        closest_err=None,
     )
 
 
@@ -220,7 +244,9 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
     if not cfg.can_report_position:
         # it may have been turning; from now on it is stopping, then braking
         return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
-    return replace(m, target_deg=None, el_target_deg=None, progress_t=None, stop_sent_t=now)
+    return replace(
+        m, target_deg=None, el_target_deg=None, progress_t=None, stop_sent_t=now, closest_err=None
+    )
 
 
 def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
@@ -270,6 +296,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         target_t=None,
         progress_t=None,
         stop_sent_t=None,
+        closest_err=None,
     )
 
 

@@ -510,6 +510,15 @@ class RotatorSession:
                 )
                 if self.link is not None:
                     self.link.write_stop(now)
+            elif event is mo.Event.TURNED_AWAY:
+                self.tracker.end("turned by hand")
+                self.drop_tracking_target()
+                pos = self.motion.position_deg
+                log.warning(
+                    "%s: rotor turned away from its target at %s° (front panel?): target dropped",
+                    self.name,
+                    pos,
+                )
             else:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
 

@@ -7,8 +7,10 @@ Rules:
    hand, a stall, the serial link going down or the controller falling silent: the rotor never
    turns by itself after any of these. The status says why (``tracking_ended``). Tracking's
    own targets are put here, not in the mailbox, so they never end it. It goes on from pass
-   to pass until it is ended. A step is measured from the last target and from where the
-   rotor really is.
+   to pass until it is ended. A step is measured from the last target and, once the rotor
+   has got there (arrived, not still on its way), from where it really is: a rotor that fell
+   short or was turned gets the step again; one turned away while still holding the last step
+   is left to the motion machine's verdict (a stall ends tracking), never pulled back.
 2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
    next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
    when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
@@ -270,8 +272,9 @@ def _follow(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
     lead = _half_step_s(tr, utc)
     az, el = _aim(session, *tr.at(min(utc + lead, p.los_s)))
     step = tr.cfg.step_deg
-    if tr._last is not None and _apart(tr._last, (az, el)) < step and _near(session, az, el):
-        return
+    if tr._last is not None and _apart(tr._last, (az, el)) < step:
+        if m.target_deg is not None or _near(session, az, el):
+            return  # on its way to the last step (its verdict, arrival or stall, decides)
     if _put(session, Target(az, el, Source.TRACKING), now):
         tr._last = (az, el)
 

@@ -249,3 +249,37 @@ def test_a_slew_that_ended_unseen_is_no_stall_and_the_next_reading_decides() -> 
     m = mo.slew_ended(mo.commanded(ready(), CFG, 200, 10.0), 30.0)
     m, _ = mo.reading(m, CFG, 150, 30.2)
     assert mo.tick(m, CFG, 38.0)[1] == [] and mo.tick(m, CFG, 38.3)[1] == [mo.Event.STALLED]
+
+
+SPID = mo.MotionConfig(
+    REGISTRY["rot2prog"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=0, settle_s=1.5,
+    noise_deg=2,
+)  # fmt: skip
+
+
+def test_a_spid_turned_away_from_its_target_is_the_front_panel_and_loses_the_target() -> None:
+    """Rule 5: a SPID heads straight for its raw target, so readings growing away from it are
+    someone else's hand. Before, the target was held until a stall 10 s after the hand let go,
+    and tracking pulled the rotor back in between."""
+    m = mo.link_up(mo.Motion(), SPID, 0)
+    m, _ = mo.reading(m, SPID, 100, 0.0)
+    m, _ = mo.tick(m, SPID, 2.0)
+    m = mo.commanded(m, SPID, 120, 10.0)
+    m, events = feed(m, [(10.5, 106), (11.0, 112), (11.5, 118), (12.0, 119.5)], SPID)
+    assert events == [] and m.target_deg == 120  # on its way: never away
+    m, events = feed(m, [(12.5, 122.5), (13.0, 125.0)], SPID)
+    assert events == [] and m.target_deg == 120  # within tolerance + noise of the closest
+    m, events = feed(m, [(13.5, 127.5)], SPID)
+    assert events == [mo.Event.TURNED_AWAY]
+    assert m.state is S.MOVING and m.target_deg is None  # nothing is sent: the hand has it
+    m, events = feed(m, [(14.0, 130.0), (14.5, 130.0)], SPID)
+    m, events = mo.tick(m, SPID, 16.0)
+    assert events == [mo.Event.STOPPED]
+
+
+def test_on_a_wrapping_scale_a_way_that_leads_away_first_is_not_a_hand() -> None:
+    """Rule 3: a Rotor-EZ at 170 sent to 190 goes round through north, away from 190 first."""
+    m = mo.commanded(ready(az=170), CFG, 190, 10.0)
+    readings = [(10 + i * 0.5, 170 - 6.0 * i) for i in range(1, 20)]
+    m, events = feed(m, readings)
+    assert events == [] and m.target_deg == 190 and m.state is S.MOVING
