@@ -9,6 +9,7 @@ production use anyway.)
 from __future__ import annotations
 
 import shutil
+import signal
 import socket
 import subprocess
 import time
@@ -114,6 +115,16 @@ class Mosquitto:
             self.proc.kill()
             self.proc.wait()
         self.proc = None
+
+    def pause(self) -> None:
+        """Freeze the broker (SIGSTOP): its sockets stay open and the kernel goes on taking
+        bytes for it, but nothing is read, answered or delivered (a stalled broker)."""
+        if self.proc is not None:
+            self.proc.send_signal(signal.SIGSTOP)
+
+    def resume(self) -> None:
+        if self.proc is not None:
+            self.proc.send_signal(signal.SIGCONT)
 
     def restart(self) -> None:
         """Same port: clients reconnect to where it was."""

@@ -65,6 +65,17 @@ Rules:
    once per topic, naming the topic, kept in ``problems`` and handed to ``on_denied`` (the app
    shows it in the rotator's status and on ``B/bridge/info``). A denied QoS 0 publish (state)
    gets no answer from any broker: the bridge cannot see it.
+12. Nothing from before a disconnect lands after the state of the new connection. paho sends
+   the QoS 1 messages it still held (unacknowledged, or queued) only after ``on_connect`` has
+   returned, behind the cache re-published there: a discovery config or an online changed
+   while the broker stalled came back with its older value and stayed. So ``on_connect``
+   takes them from paho: one whose retained topic is in the cache is superseded by the value
+   just sent; the others (events, deletions) are sent again, after the state.
+13. A publish paho does not take (its QoS 1 queue full: at most MAX_QUEUED messages, so a
+   stalled broker cannot grow the bridge's memory without bound; no connection) is not taken
+   for sent: a retained topic is marked dirty and sent again as soon as the broker
+   acknowledges anything (room again) and on every connect; an event waits in the bounded
+   backlog (EVENT_BACKLOG, the oldest dropped first).
 """
 
 from __future__ import annotations
@@ -111,6 +122,7 @@ FOREIGN_LOG_S = 60.0
 MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
+MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
 
 
 class TakeoverGuard:
@@ -213,6 +225,7 @@ class MqttClient:
             )
             c.tls_insecure_set(settings.tls.insecure)
         c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
+        c.max_queued_messages_set(MAX_QUEUED)  # rule 13
         c.on_connect = self._on_connect
         c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
@@ -232,6 +245,9 @@ class MqttClient:
         self._fixed_at: dict[str, float] = {}
         self.connected_at = -1e18  # the clock at the last accepted connection
         self._logged_at: dict[str, float] = {}
+        self._dirty: set[str] = set()  # rule 13: retained topics whose last publish failed
+        self._retry = threading.Event()  # rule 13: set when the broker has room again
+        self.failed_publishes = 0
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -250,10 +266,12 @@ class MqttClient:
         else:
             self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
         self._client.loop_start()
+        threading.Thread(target=self._retry_failed, name="mqtt-retry", daemon=True).start()
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Publish offline, flush, disconnect."""
         self._stopping = True  # rule 10 stands down: our own offline is about to come back
+        self._retry.set()  # ends the retry thread
         with self._lock:
             self._retained[self._will_topic] = (b"offline", 1)
         if self.connected.is_set():
@@ -356,10 +374,12 @@ class MqttClient:
             self._subscribe(client, [(topic, COMMAND_QOS) for topic in self._subscriptions])
             if self._owned:
                 self._subscribe(client, [(topic, 0) for topic in self._owned])
+        held = client.drop_out_messages()  # rule 12: paho would send them after this returns
         with self._lock:
             with self._ids_lock:  # acknowledgements of the old connection never come
                 self._pub_topics.clear()
                 self._acked_early.clear()
+            self._dirty.clear()  # every retained value goes out below
 
             self._send(client, self._will_topic, b"online", 1, retain=True)
             self.connected_at = self._clock()
@@ -368,9 +388,13 @@ class MqttClient:
                 self._expect_echo(topic, data)
                 if topic != self._will_topic:
                     self._send(client, topic, data, qos, retain=True)
-            for topic, event in self._backlog:
-                self._send(client, topic, event, 1, retain=False)
+            backlog = list(self._backlog)
             self._backlog.clear()
+            for topic, event in backlog:
+                self._send(client, topic, event, 1, retain=False)
+            for msg in held:  # rule 12
+                if not (msg.retain and msg.topic in self._retained):
+                    self._send(client, msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
             self.connected.set()
         if self._on_connect_hook is not None:
             self._on_connect_hook()
@@ -388,6 +412,11 @@ class MqttClient:
     ) -> None:
         """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
         info = client.publish(topic, data, qos=qos, retain=retain)  # callers hold self._lock
+        if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS and not (
+            qos and info.rc == MQTTErrorCode.MQTT_ERR_NO_CONN  # paho keeps it for the connect
+        ):
+            self._failed(topic, data, retain, info.rc)
+            return
         if not qos:
             return
         with self._ids_lock:  # never self._lock in paho's callback: paho holds its own there
@@ -425,6 +454,47 @@ class MqttClient:
                 # (only a refusal: paho calls this for every QoS 0 message too, with success)
         if topic is not None and reason_code.is_failure:
             self._deny(topic, "publish to", str(reason_code))
+        if self._dirty or self._backlog:  # rule 13: the broker took one, so there is room again
+            self._retry.set()  # (read without the lock: a stale answer costs one wake-up)
+
+    # -- rule 13: what paho did not take ----------------------------------------------------
+    def _failed(self, topic: str, data: str | bytes, retain: bool, rc: MQTTErrorCode) -> None:
+        """Under self._lock: remember a publish paho refused, for the retry thread."""
+        self.failed_publishes += 1
+        if retain:
+            self._dirty.add(topic)
+        else:
+            self._backlog.append((topic, data))
+        now = self._clock()
+        if now - self._logged_at.get("failed publish", -FOREIGN_LOG_S) >= FOREIGN_LOG_S:
+            self._logged_at["failed publish"] = now
+            log.warning(
+                "publish to %s not taken by the MQTT client (%s): sent again when the broker "
+                "has room (%d failed so far)",
+                topic,
+                paho.error_string(rc),
+                self.failed_publishes,
+            )
+
+    def _retry_failed(self) -> None:
+        """Rule 13's thread: never paho's (it holds paho's mutex in callbacks)."""
+        while True:
+            self._retry.wait()
+            self._retry.clear()
+            if self._stopping:
+                return
+            with self._lock:
+                if not self.connected.is_set():
+                    continue  # the connect sends everything
+                dirty, self._dirty = self._dirty, set()
+                for topic in dirty:
+                    held = self._retained.get(topic)
+                    if held is not None:
+                        self._send(self._client, topic, held[0], held[1], retain=True)
+                backlog = list(self._backlog)
+                self._backlog.clear()
+                for topic, event in backlog:
+                    self._send(self._client, topic, event, 1, retain=False)
 
     def _deny(self, topic: str, what: str, reason: str) -> None:
         with self._ids_lock:

@@ -8,6 +8,7 @@ idle, the last will.
 
 from __future__ import annotations
 
+import json
 import re
 import time
 
@@ -22,6 +23,7 @@ from tests.faults.conftest import (
     assert_bridge_matches_truth,
     assert_retained_matches_within_one_poll,
     motion_frames,
+    retained_matches_bridge,
     send_target,
 )
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
@@ -207,3 +209,39 @@ def test_two_bridges_with_one_client_id_say_so_once_and_back_off(
 
 def broker_log(broker: Mosquitto) -> str:
     return broker.log.read_text(errors="replace")
+
+
+def test_after_a_broker_stall_the_retained_state_is_the_current_one(rig: Rig) -> None:
+    """Issue 14, item 2: the broker frozen (SIGSTOP) while the rotor turned; the bridge gave up
+    on it (keepalive), the rotor arrived meanwhile; after the broker came back, messages from
+    before the stall landed after the fresh state and the broker kept 'bearing 46, moving' for
+    good while the rotor stood at 180. What the bridge owns must be its current state."""
+    rig.mqtt_extra = {"keepalive_s": 5}
+    rig.add("md", "md01", emu={"start_az_deg": 10, "start_el_deg": 5, "az_speed_deg_s": 12.0})
+    rig.start()
+    rig.ready("md")
+    emu = rig.emus["md"]
+    send_target(rig, "md", 180, 45)
+    emu.wait_for(lambda s: s.is_moving, 10)
+    assert rig.app is not None
+    mqtt = rig.app.client
+    rig.broker.pause()
+    try:
+        # the bridge goes on publishing into the frozen broker's socket until it gives up on it
+        wait_until(lambda: not mqtt.connected.is_set(), 20, "the bridge gives up on the broker")
+        rig.arrived("md", 180, 45, timeout_s=30)
+    finally:
+        rig.broker.resume()
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/bridge/state", "online", timeout_s=30, after=t)
+    wait_until(lambda: rig.status("md").state.value == "idle", 10, "idle")
+
+    def current() -> bool:
+        return retained_matches_bridge(rig, "md", rig.retained())
+
+    wait_until(current, 10, "the retained state is the bridge's")
+    hears_us(rig, "md")  # the broker has handled a round trip since: nothing older is on its way
+    snap = rig.retained()
+    assert retained_matches_bridge(rig, "md", snap), snap
+    assert snap["rotor/bridge/state"] == b"online"
+    assert json.loads(snap["rotor/status"])["bearing"] == 180
