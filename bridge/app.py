@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import errno
-import json
 import logging
 import signal
 import threading
@@ -19,6 +18,7 @@ from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
+from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
@@ -84,13 +84,24 @@ class App:
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
         self.topics = Topics(settings.mqtt.base_topic, roots)
         # the service publishes through the client; the client hands every message to the service
+        self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
+        self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
+        self.failed = threading.Event()
         self.client = MqttClient(
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
             on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
             on_denied=self._denied,
+            claim=Claim(
+                self.me,
+                settings.mqtt.base_topic,
+                self.topics.bridge_info,
+                self.topics.bridge_hello,
+            ),
+            on_refused=self._refused,
         )
+        self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
             self.topics, self.client, error_events_per_s=settings.mqtt.error_events_per_s
         )
@@ -180,8 +191,12 @@ class App:
         for rot in self.rotators:
             if rid is None or rot.id == rid:
                 rot.note(problem)
-        info = json.dumps({"problems": self.client.problems}, separators=(",", ":"))
-        self.client.publish_retained(self.topics.bridge_info, info)
+        self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+
+    def _refused(self, message: str) -> None:
+        """Another bridge owns the base topic (mqtt/claim.py): ``run`` stops, exit code 2."""
+        self.failure = message
+        self.failed.set()
 
     def check_catalog(self) -> None:
         """The TLE file re-read if it changed; Home Assistant's track select follows it."""
@@ -254,8 +269,10 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
         raise ConfigError(f"cannot start: {exc}") from None
     app.start()
     try:
-        while not done.wait(1.0):
+        while not done.wait(1.0) and not app.failed.is_set():
             pass
     finally:
         app.stop()
+    if app.failure is not None:
+        raise ConfigError(app.failure)
     return 0

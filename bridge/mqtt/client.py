@@ -76,6 +76,15 @@ Rules:
    for sent: a retained topic is marked dirty and sent again as soon as the broker
    acknowledges anything (room again) and on every connect; an event waits in the bounded
    backlog (EVENT_BACKLOG, the oldest dropped first).
+14. One live bridge per base topic (claim.py): on every connect the client subscribes, then
+   takes its first look before it publishes or deletes anything: it publishes a hello to
+   itself, and the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before the
+   hello comes back are what the broker held. Another live instance there: ``on_refused``
+   (nothing is published, not even offline, and the app exits). Otherwise the state goes out
+   (rule 3), and deletions of retained configs asked for during the look (Home Assistant's
+   stale discovery) are sent if the base topic was this installation's. A look without an
+   answer in LOOK_TIMEOUT_S (an ACL that denies the hello) goes on without it, deleting
+   nothing. While it runs, another instance's info put there is judged by claim rule 4.
 """
 
 from __future__ import annotations
@@ -96,6 +105,7 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
+from bridge.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -123,6 +133,7 @@ MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
 MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
+LOOK_TIMEOUT_S = 5.0  # rule 14
 
 
 class TakeoverGuard:
@@ -185,6 +196,8 @@ class MqttClient:
         on_message: MessageHandler,
         on_connect: Callable[[], None] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
+        claim: Claim | None = None,
+        on_refused: Callable[[str], None] | None = None,
         reconnect_min_s: int = 1,
         reconnect_max_s: int = 30,
         clock: Callable[[], float] = time.monotonic,
@@ -248,6 +261,16 @@ class MqttClient:
         self._dirty: set[str] = set()  # rule 13: retained topics whose last publish failed
         self._retry = threading.Event()  # rule 13: set when the broker has room again
         self.failed_publishes = 0
+        # rule 14
+        self._claim = claim
+        self._on_refused = on_refused
+        self._up = False  # a connection accepted (the first look may still run)
+        self._looks = 0
+        self._looking: int | None = None  # the first look under way: its number
+        self._seen: dict[str, bytes] = {}  # retained info/state seen during the look
+        self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
+        self._pending_clears: list[str] = []
+        self.refused: str | None = None
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -274,7 +297,7 @@ class MqttClient:
         self._retry.set()  # ends the retry thread
         with self._lock:
             self._retained[self._will_topic] = (b"offline", 1)
-        if self.connected.is_set():
+        if self.connected.is_set() and self.refused is None:  # refused: it is another's
             info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
             try:
                 info.wait_for_publish(timeout_s)
@@ -308,8 +331,15 @@ class MqttClient:
         """Delete a retained message from the broker (empty retained payload)."""
         with self._lock:
             self._retained.pop(topic, None)
-            if self.connected.is_set():
-                self._client.publish(topic, b"", qos=1, retain=True)
+            if self._claim is None:
+                if self.connected.is_set():
+                    self._client.publish(topic, b"", qos=1, retain=True)
+                return
+            if self._looking is not None:  # rule 14: held by the broker before we came
+                self._pending_clears.append(topic)
+                return
+        # published while we run: another client's (claim rule 3)
+        log.warning("%s was published by another client: not ours to delete; left alone", topic)
 
     def republish_retained(self, skip_prefix: str | None = None) -> None:
         """Send the retained messages we own again (Home Assistant came back, for example)."""
@@ -331,6 +361,8 @@ class MqttClient:
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
         """At shutdown: mark these retained topics offline and wait until the broker has them."""
         infos = []
+        if self.refused is not None:
+            return  # rule 14: these topics are another bridge's
         for topic in topics:
             with self._lock:
                 self._retained[topic] = (b"offline", 1)
@@ -359,6 +391,7 @@ class MqttClient:
                 self._last_refusal = text
             return
         self._last_refusal = None
+        self._up = True
         self._guard.connected(self._clock())
         log.info("connected to MQTT broker")
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
@@ -379,25 +412,102 @@ class MqttClient:
             with self._ids_lock:  # acknowledgements of the old connection never come
                 self._pub_topics.clear()
                 self._acked_early.clear()
-            self._dirty.clear()  # every retained value goes out below
-
-            self._send(client, self._will_topic, b"online", 1, retain=True)
+            self._held.extend(held)  # a look that never ended leaves its own
             self.connected_at = self._clock()
             self._echoes.clear()  # what was in flight before is gone with the old connection
-            for topic, (data, qos) in self._retained.items():
-                self._expect_echo(topic, data)
-                if topic != self._will_topic:
-                    self._send(client, topic, data, qos, retain=True)
-            backlog = list(self._backlog)
-            self._backlog.clear()
-            for topic, event in backlog:
-                self._send(client, topic, event, 1, retain=False)
-            for msg in held:  # rule 12
-                if not (msg.retain and msg.topic in self._retained):
-                    self._send(client, msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
-            self.connected.set()
+            claim = self._claim
+            if claim is not None:  # rule 14: look first
+                self._looks += 1
+                n = self._looking = self._looks
+                self._seen = {}
+                self._pending_clears = []
+                self._subscribe(client, [(claim.hello_topic, 0)])
+                client.publish(claim.hello_topic, f"{claim.me.id} {n}".encode(), qos=0)
+                timer = threading.Timer(LOOK_TIMEOUT_S, self._look_timed_out, args=(n,))
+                timer.daemon = True
+                timer.start()
+                return
+            self._open(client, clear=False)
         if self._on_connect_hook is not None:
             self._on_connect_hook()
+
+    def _open(self, client: paho.Client, *, clear: bool) -> None:
+        """Under the lock: the state goes out (rules 3 and 12), then ``connected``."""
+        self._dirty.clear()  # every retained value goes out below
+        self._send(client, self._will_topic, b"online", 1, retain=True)
+        for topic, (data, qos) in self._retained.items():
+            self._expect_echo(topic, data)
+            if topic != self._will_topic:
+                self._send(client, topic, data, qos, retain=True)
+        backlog = list(self._backlog)
+        self._backlog.clear()
+        for topic, event in backlog:
+            self._send(client, topic, event, 1, retain=False)
+        held, self._held = self._held, []
+        for msg in held:  # rule 12
+            if not (msg.retain and msg.topic in self._retained):
+                self._send(client, msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
+        clears, self._pending_clears = self._pending_clears, []
+        if clear:
+            for topic in clears:
+                self._send(client, topic, b"", 1, retain=True)
+        elif clears:
+            log.warning(
+                "left alone %d retained config(s) this bridge does not generate, as the base "
+                "topic was not its own (delete them by hand if that bridge is gone for good): %s",
+                len(clears),
+                ", ".join(clears),
+            )
+        self.connected.set()
+
+    # -- rule 14: the first look --------------------------------------------------------------
+    def _end_look(self, n: int, timed_out: bool = False) -> None:
+        claim = self._claim
+        assert claim is not None
+        with self._lock:
+            if self._looking != n or not self._up:
+                return
+            self._looking = None
+            info, state = self._seen.get(claim.info_topic), self._seen.get(self._will_topic)
+            verdict = Verdict.TAKE_OVER if timed_out else first_look(claim.me, info, state)
+            if verdict is Verdict.REFUSE:
+                other = Instance.parse(info or b"")
+                assert other is not None
+                self.refused = refusal(claim.base_topic, other, live_since_look=False)
+                self._stopping = True
+            else:
+                if verdict is Verdict.TAKE_OVER and not timed_out:
+                    other = Instance.parse(info or b"")
+                    log.warning(
+                        "taking over base topic %r from %s, which is offline",
+                        claim.base_topic,
+                        other.described() if other else "another bridge",
+                    )
+                self._open(self._client, clear=verdict is Verdict.OURS)
+        if self.refused is not None:
+            self._refuse()
+        elif self._on_connect_hook is not None:
+            self._on_connect_hook()
+
+    def _look_timed_out(self, n: int) -> None:
+        with self._lock:
+            if self._looking != n:
+                return
+        log.warning(
+            "no answer to the bridge's first look in %g s (does the broker's ACL deny %s?): "
+            "going on without knowing whether another bridge uses this base topic",
+            LOOK_TIMEOUT_S,
+            self._claim.hello_topic if self._claim else "?",
+        )
+        self._end_look(n, timed_out=True)
+
+    def _refuse(self) -> None:
+        """Never on paho's thread: the app stops the client (loop_stop joins paho's thread)."""
+        message = self.refused
+        assert message is not None
+        log.error("%s", message)
+        if self._on_refused is not None:
+            threading.Thread(target=self._on_refused, args=(message,), daemon=True).start()
 
     # -- rule 11: what the broker refused ---------------------------------------------------
     def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> None:
@@ -530,8 +640,11 @@ class MqttClient:
         reason_code: ReasonCode,
         properties: Properties | None,
     ) -> None:
-        was = self.connected.is_set()
+        was = self._up
+        self._up = False
         self.connected.clear()
+        with self._lock:
+            self._looking = None
         if not was or self._stopping:
             return
         code = getattr(reason_code, "value", None)
@@ -581,11 +694,31 @@ class MqttClient:
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         try:
+            if self._claim is not None and self._look_saw(msg.topic, bytes(msg.payload)):
+                return
             if self._owned and self._foreign(msg.topic, bytes(msg.payload)):
                 return
             self._handler(msg.topic, bytes(msg.payload), bool(msg.retain))
         except Exception:  # a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)
+
+    def _look_saw(self, topic: str, payload: bytes) -> bool:
+        """Rule 14: True if the message belongs to the first look (handled here)."""
+        claim = self._claim
+        assert claim is not None
+        if topic == claim.hello_topic:
+            with self._lock:
+                n = self._looking
+            if n is not None and payload == f"{claim.me.id} {n}".encode():
+                self._end_look(n)
+            return True  # another bridge's hello, or one of ours come late
+        if topic not in (claim.info_topic, self._will_topic):
+            return False
+        with self._lock:
+            if self._looking is None:
+                return False
+            self._seen[topic] = payload
+        return True
 
     def _foreign(self, topic: str, payload: bytes) -> bool:
         """Rule 10: True if ``topic`` is one of ours (handled here, whatever its value)."""
@@ -594,7 +727,7 @@ class MqttClient:
             if held is None or not self._is_owned(topic):
                 return False
             if self._stopping:
-                return True  # shutting down: our offline values are on their way, not news
+                return True  # shutting down (or refused): our offline values, or not ours
             echoes = self._echoes.get(topic)
             if echoes and payload in echoes:  # MQTT 3.1.1: ours, coming back in order
                 while echoes.popleft() != payload:
@@ -602,20 +735,16 @@ class MqttClient:
                 return True
             if payload == held[0]:
                 return True
-            now = self._clock()
-            if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
-                return True
-            self._fixed_at[topic] = now
-            if self.connected.is_set():
-                self._expect_echo(topic, held[0])
-                self._send(self._client, topic, held[0], held[1], retain=True)
-            # what the broker held from before we connected (our own last will, a value of a
-            # run that ended) is replaced without a word: only a live stranger is news
-            stale = now - self.connected_at < SETTLE_AFTER_CONNECT_S
-            quiet = not stale and now - self._logged_at.get(topic, -FOREIGN_LOG_S) >= FOREIGN_LOG_S
-            if quiet:
-                self._logged_at[topic] = now
-        if quiet:
+            claim = self._claim
+            if claim is not None and topic == claim.info_topic:
+                other = Instance.parse(payload)  # claim rule 4
+                if other is not None and yields_to(claim.me, other):
+                    self.refused = refusal(claim.base_topic, other, live_since_look=True)
+                    self._stopping = True  # nothing more goes out, nothing is put back
+            quiet = self.refused is None and self._put_back(topic, held)
+        if self.refused is not None:
+            self._refuse()
+        elif quiet:
             log.warning(
                 "another client published %r on %s, a topic of the bridge's own: put back %r "
                 "(a second bridge on this base topic, or a flow publishing where it should not?)",
@@ -623,6 +752,25 @@ class MqttClient:
                 topic,
                 held[0][:40],
             )
+        return True
+
+    def _put_back(self, topic: str, held: tuple[bytes, int]) -> bool:
+        """Rule 10, under the lock: our value again (at most once per FOREIGN_FIX_S); whether
+        to say so in the log."""
+        now = self._clock()
+        if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
+            return False
+        self._fixed_at[topic] = now
+        if self.connected.is_set():
+            self._expect_echo(topic, held[0])
+            self._send(self._client, topic, held[0], held[1], retain=True)
+        # what the broker held from before we connected (our own last will, a value of a
+        # run that ended) is replaced without a word: only a live stranger is news
+        if now - self.connected_at < SETTLE_AFTER_CONNECT_S:
+            return False
+        if now - self._logged_at.get(topic, -FOREIGN_LOG_S) < FOREIGN_LOG_S:
+            return False
+        self._logged_at[topic] = now
         return True
 
     def _expect_echo(self, topic: str, data: bytes) -> None:

@@ -138,6 +138,11 @@ class Topics:
     def bridge_info(self) -> str:
         return f"{self.base}/bridge/info"
 
+    @property
+    def bridge_hello(self) -> str:
+        """Where a bridge's first look goes to come back to it (mqtt/claim.py)."""
+        return f"{self.base}/bridge/hello"
+
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
         best: tuple[int, str] | None = None
@@ -160,7 +165,7 @@ class Topics:
     def owned(self) -> list[str]:
         """Filters for the retained topics the bridge publishes (client.py rule 10 watches them
         for values it did not publish); none overlaps a command filter."""
-        subs = [self.bridge_state]
+        subs = [self.bridge_state, self.bridge_info]
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking]

@@ -1,0 +1,130 @@
+"""One live bridge per base topic (issue 14, item 11). Pure: payloads in, a verdict out; the
+client (client.py rule 14) asks at the right moments.
+
+Two bridges on one base topic (a second host given a copy of the configuration, a test
+instance beside the real one) publish over each other's state, put their own values back
+against each other for ever, and each deletes the other's Home Assistant discovery as stale:
+0 of 26 configs were left.
+
+Rules:
+1. Each bridge says who it is, retained, on ``B/bridge/info``: its instance id (the MQTT
+   client id: unique per installation and stable across its restarts,
+   MqttSettings.effective_client_id), host, process id and start time, with the problems the
+   broker made (client.py rule 11).
+2. First look: on every connect, before it publishes or deletes anything, the bridge reads the
+   retained ``B/bridge/info`` and ``B/bridge/state`` the broker holds. Another instance's
+   info with the state ``online``: that bridge is live, and this one refuses to run (exit code
+   2, naming it). With ``offline`` (its last will, or its clean stop) or no state: it is gone,
+   and this one takes the base topic over. No info, or its own: the base topic is its own.
+   (A bridge that crashed less than 1.5 keepalives ago still looks live: the broker has not
+   sent its will yet. The refusal says so.)
+3. Discovery: configs under the bridge's node ids that it no longer generates (a rotator
+   removed from the configuration) are deleted only when the base topic was its own at the
+   first look, and only those the broker held then: a config published later is another
+   client's, never this bridge's to delete. After a take-over the other instance's configs
+   are left alone and named in the log.
+4. Live: another instance's info arriving while the bridge runs means two bridges passed
+   their first looks at the same moment. The younger one (the later start; an equal start:
+   the greater instance id) yields, exit code 2; the older puts its own info back (client.py
+   rule 10) and goes on.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import os
+import socket
+import time
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Instance:
+    id: str
+    host: str
+    pid: int
+    started_unix: float
+
+    @staticmethod
+    def me(instance_id: str) -> Instance:
+        return Instance(instance_id, socket.gethostname(), os.getpid(), round(time.time(), 3))
+
+    def info(self, problems: list[str]) -> str:
+        """Rule 1: the retained ``B/bridge/info`` payload."""
+        doc = {
+            "instance": self.id,
+            "host": self.host,
+            "pid": self.pid,
+            "started": self.started_unix,
+            "problems": problems,
+        }
+        return json.dumps(doc, separators=(",", ":"))
+
+    @staticmethod
+    def parse(payload: bytes) -> Instance | None:
+        """The instance an info payload names; None for anything else (an older bridge's
+        ``{"problems": [...]}``, junk, an empty deletion)."""
+        try:
+            doc = json.loads(payload)
+        except (ValueError, UnicodeDecodeError):
+            return None
+        if not isinstance(doc, dict):
+            return None
+        iid, host, pid, started = (doc.get(k) for k in ("instance", "host", "pid", "started"))
+        if not isinstance(iid, str) or not iid:
+            return None
+        return Instance(
+            iid,
+            host if isinstance(host, str) else "?",
+            pid if isinstance(pid, int) and not isinstance(pid, bool) else 0,
+            float(started) if isinstance(started, int | float) else 0.0,
+        )
+
+    def described(self) -> str:
+        return f"instance {self.id!r} on host {self.host!r} (pid {self.pid})"
+
+
+class Verdict(enum.Enum):
+    OURS = "ours"  # no bridge before, or this installation itself
+    TAKE_OVER = "take over"  # another instance's, gone
+    REFUSE = "refuse"  # another instance, live
+
+
+def first_look(me: Instance, info: bytes | None, state: bytes | None) -> Verdict:
+    """Rule 2."""
+    other = Instance.parse(info) if info else None
+    if other is None or other.id == me.id:
+        return Verdict.OURS
+    return Verdict.REFUSE if (state or b"").strip() == b"online" else Verdict.TAKE_OVER
+
+
+def yields_to(me: Instance, other: Instance) -> bool:
+    """Rule 4: whether ``me`` is the younger of two live bridges and must go."""
+    if other.id == me.id:
+        return False
+    return (me.started_unix, me.id) > (other.started_unix, other.id)
+
+
+def refusal(base_topic: str, other: Instance, live_since_look: bool) -> str:
+    """The error a refusing bridge exits with."""
+    how = (
+        "started at the same moment and is the older"
+        if live_since_look
+        else "is online (or crashed less than 1.5 keepalives ago: then start again in a minute)"
+    )
+    return (
+        f"another bridge runs on base topic {base_topic!r}: {other.described()} {how}. "
+        f"Two bridges on one base topic overwrite each other's state and Home Assistant "
+        f"discovery: stop the other one, or give this one its own mqtt.base_topic"
+    )
+
+
+@dataclass(frozen=True)
+class Claim:
+    """What the client needs to take its first look (client.py rule 14)."""
+
+    me: Instance
+    base_topic: str
+    info_topic: str
+    hello_topic: str

@@ -1,0 +1,118 @@
+"""Two bridges on one base topic (issue 14, item 11; mqtt/claim.py): before, they deleted each
+other's Home Assistant discovery (0 of 26 configs left) and overwrote each other's state. Real
+parts: mosquitto, two bridges (App) each with an emulated controller, and the CLI's exit code."""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+
+import pytest
+
+from bridge.mosquitto import Mosquitto
+from bridge.mqtt.claim import Instance
+from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.process import run_cli, to_toml
+from tests.support.rig import Rig
+
+PREFIX = "homeassistant"
+
+
+def configs(port: int, node: str) -> dict[str, bytes]:
+    snap = retained_snapshot(port, f"{PREFIX}/#")
+    return {t: p for t, p in snap.items() if f"_r_{node}/" in t and p}
+
+
+def bridge_topics(port: int) -> dict[str, bytes]:
+    return retained_snapshot(port, "rotor/bridge/#")
+
+
+def test_a_second_bridge_on_a_live_base_topic_refuses_and_changes_nothing(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    with Rig(tmp_path / "a", broker, probe) as a, Rig(tmp_path / "b", broker, probe) as b:
+        a.add("tower", emu={"start_az_deg": 20, "jitter_deg": 0})
+        a.start()
+        a.ready("tower")
+        assert a.app is not None
+        ours = configs(broker.port, "tower")
+        assert len(ours) > 10
+        before = {**bridge_topics(broker.port), **retained_snapshot(broker.port, "rotor/bearing")}
+        assert Instance.parse(before["rotor/bridge/info"]) == a.app.me
+        b.add("mast", emu={"start_az_deg": 200, "jitter_deg": 0})  # the same topics: root rotor
+        app = b.start()
+        wait_until(app.failed.is_set, 15, "the second bridge refuses")
+        assert app.failure is not None and a.app.me.id in app.failure
+        b.stop()  # as run() does on a refusal
+        assert configs(broker.port, "tower") == ours  # none deleted
+        assert configs(broker.port, "mast") == {}  # none published
+        after = {**bridge_topics(broker.port), **retained_snapshot(broker.port, "rotor/bearing")}
+        assert after == before  # not its bearing, not even its offline
+        assert not a.app.failed.is_set()
+
+
+def test_a_bridge_takes_over_from_one_that_is_gone_and_leaves_its_discovery_alone(
+    tmp_path: Path, broker: Mosquitto, probe: Probe, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.WARNING)
+    with Rig(tmp_path / "a", broker, probe) as a, Rig(tmp_path / "b", broker, probe) as b:
+        a.add("tower")
+        a.start()
+        a.ready("tower")
+        theirs = configs(broker.port, "tower")
+        a.stop()  # a clean stop: bridge/state offline
+        probe.wait_value("rotor/bridge/state", "offline", 5)
+        b.add("mast")
+        app = b.start()
+        t = time.monotonic()
+        b.ready("mast", after=t - 5)
+        wait_until(lambda: configs(broker.port, "mast"), 10, "the new bridge's discovery")
+        assert Instance.parse(bridge_topics(broker.port)["rotor/bridge/info"]) == app.me
+        assert configs(broker.port, "tower") == theirs  # another installation's: not ours
+        assert not app.failed.is_set()
+        assert any("taking over base topic" in r.getMessage() for r in caplog.records)
+        assert any("left alone" in r.getMessage() for r in caplog.records)
+
+
+def test_of_two_bridges_that_met_while_running_the_younger_yields(rig: Rig) -> None:
+    """Claim rule 4: both passed their first looks at once. Stood in for by an info put there
+    by hand: a younger one is put back, an older one makes this bridge go, silently."""
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    mine = bridge_topics(rig.broker.port)["rotor/bridge/info"]
+    younger = Instance("rotor-other-000001", "elsewhere", 7, app.me.started_unix + 60)
+    rig.probe.publish("rotor/bridge/info", younger.info([]), retain=True)
+    wait_until(lambda: bridge_topics(rig.broker.port)["rotor/bridge/info"] == mine, 5, "put back")
+    assert not app.failed.is_set()
+    older = Instance("rotor-other-000002", "elsewhere", 8, app.me.started_unix - 60)
+    rig.probe.publish("rotor/bridge/info", older.info([]), retain=True)
+    wait_until(app.failed.is_set, 5, "this bridge yields")
+    assert app.failure is not None and "rotor-other-000002" in app.failure
+    rig.stop()
+    left = bridge_topics(rig.broker.port)
+    assert Instance.parse(left["rotor/bridge/info"]) == older  # not put back
+    assert left["rotor/bridge/state"] == b"online"  # the other's, not overwritten with offline
+
+
+def test_the_refusing_bridge_exits_with_code_2_naming_the_other(tmp_path: Path, rig: Rig) -> None:
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    config = tmp_path / "second.toml"
+    emu_link = tmp_path / "no-such-port"
+    config.write_text(
+        to_toml(
+            {
+                "mqtt": {"host": "127.0.0.1", "port": rig.broker.port, "client_id": "second"},
+                "state_file": str(tmp_path / "second-state.json"),
+                "rotators": [{"id": "mast", "model": "rotorez", "port": str(emu_link)}],
+            }
+        )
+    )
+    done = run_cli("run", "-c", str(config), timeout_s=30)
+    assert done.returncode == 2, done.stderr
+    assert app.me.id in done.stderr and "mqtt.base_topic" in done.stderr
+    assert json.loads(bridge_topics(rig.broker.port)["rotor/bridge/info"])["instance"] == app.me.id
