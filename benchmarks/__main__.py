@@ -1,7 +1,7 @@
 """`python -m benchmarks`: run the benchmarks, print one table per item, write results.json.
 
-    python -m benchmarks                      # everything (about 8 minutes on 2 cores)
-    python -m benchmarks --quick              # fewer samples, shorter windows (under 2 minutes)
+    python -m benchmarks                      # everything (about 13 minutes on 2 cores)
+    python -m benchmarks --quick              # fewer samples, shorter windows (about 4 minutes)
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first
@@ -29,7 +29,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from benchmarks import burst, footprint, freshness, latency, line_use, startup
+from benchmarks import burst, footprint, freshness, latency, line_use, startup, target_flood
 from benchmarks.harness import ABORT, Scope
 from benchmarks.line import ALL_LATENESS_S
 from benchmarks.report import ItemResult, percentile
@@ -41,6 +41,7 @@ ITEMS = {
     "footprint": footprint.run,
     "burst": burst.run,
     "startup": startup.run,
+    "target_flood": target_flood.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

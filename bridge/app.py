@@ -20,6 +20,7 @@ from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
+from bridge.mqtt.lane import StopLane
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
@@ -87,12 +88,14 @@ class App:
         self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
+        self._lane_started = False
         self.client = MqttClient(
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
             on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
             on_denied=self._denied,
+            on_connect=self._connected,
             claim=Claim(
                 self.me,
                 settings.mqtt.base_topic,
@@ -151,6 +154,12 @@ class App:
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
         self.client.add_subscriptions(self.mqtt.subscriptions())
+        self.lane = StopLane(
+            settings.mqtt,
+            subscriptions=self.mqtt.stop_lane_subscriptions(),
+            on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
+            on_denied=self._denied,
+        )
         self.client.watch_owned(self.topics.owned())
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
@@ -187,11 +196,21 @@ class App:
     def _denied(self, topic: str, problem: str) -> None:
         """The broker refused a topic (client.py rule 11): the rotator's status says so, and
         ``B/bridge/info`` lists every such problem."""
+        if problem not in self.client.problems:  # the stop lane's (the client's are there)
+            self.client.problems.append(problem)
         rid = self.topics.rotator_of(topic)
         for rot in self.rotators:
             if rid is None or rot.id == rid:
                 rot.note(problem)
         self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+
+    def _connected(self) -> None:
+        """The main connection is up (its first look done): the stop lane connects too, now
+        that the broker is known to take the bridge (a wrong password is refused once, not
+        twice per try)."""
+        if not self._lane_started and not self._stopped.is_set():
+            self._lane_started = True
+            self.lane.start()
 
     def _refused(self, message: str) -> None:
         """Another bridge owns the base topic (mqtt/claim.py): ``run`` stops, exit code 2."""
@@ -225,7 +244,7 @@ class App:
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
-        self.mqtt.start()
+        self.mqtt.start()  # the stop lane follows the first connection (_connected)
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
         if self.settings.tracking.tle_file is not None and self.discovery is not None:
@@ -248,6 +267,7 @@ class App:
         self.loggers.stop()
         for rot in self.rotators:
             rot.stop()
+        self.lane.stop()  # no stop or lock is taken once the rotators are gone
         self.mqtt.stop()
         log.info("stopped")
 

@@ -85,6 +85,10 @@ Rules:
    stale discovery) are sent if the base topic was this installation's. A look without an
    answer in LOOK_TIMEOUT_S (an ACL that denies the hello) goes on without it, deleting
    nothing. While it runs, another instance's info put there is judged by claim rule 4.
+15. paho reads one packet per wake-up of its loop (a select() and its bookkeeping each: at
+   10,000 targets a second that was most of the bridge's CPU and it fell behind); ``loop_read``
+   takes up to READ_BATCH, stopping as soon as the socket has nothing more, so a quiet
+   connection behaves as before and writes wait for at most that many packets' handling.
 """
 
 from __future__ import annotations
@@ -134,6 +138,7 @@ SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a co
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
 MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
 LOOK_TIMEOUT_S = 5.0  # rule 14
+READ_BATCH = 64  # rule 15
 
 
 class TakeoverGuard:
@@ -177,11 +182,39 @@ def acknowledge_now(sock: object) -> None:
         pass
 
 
-class _Client(paho.Client):
-    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
+def authenticate(c: paho.Client, settings: MqttSettings) -> None:
+    """Credentials and TLS from the settings (both connections: this one and lane.py's)."""
+    if settings.username is not None:
+        password = settings.password.get_secret_value() if settings.password else None
+        c.username_pw_set(settings.username, password)
+    if settings.tls.enabled:
+        c.tls_set(
+            ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
+            certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
+            keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
+            cert_reqs=ssl.CERT_REQUIRED,
+        )
+        c.tls_insecure_set(settings.tls.insecure)
+
+
+def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
+    """Rule 7: how a connection ended, as evidence of a takeover."""
+    code = getattr(reason_code, "value", None)
+    from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
+    if from_server and code == SESSION_TAKEN_OVER:
+        return "taken over"
+    if not from_server and code == CONNECTION_LOST:
+        return "dropped"
+    return "other"
+
+
+class Client(paho.Client):
+    """paho's client with rules 9 and 15: ``_loop`` (loop_start's thread) reads through
+    loop_read."""
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        rc = super().loop_read(max_packets)
+        # rule 15: up to READ_BATCH packets per wake-up, until the socket has no more
+        rc = super().loop_read(max(max_packets, READ_BATCH))
         acknowledge_now(self.socket())
         return rc
 
@@ -219,24 +252,14 @@ class MqttClient:
         self._reconnect_s = (reconnect_min_s, reconnect_max_s)
         self._guard = TakeoverGuard()
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
-        c = _Client(
+        c = Client(
             callback_api_version=CallbackAPIVersion.VERSION2,
             client_id=settings.effective_client_id(),
             protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
             clean_session=None if self._v5 else True,  # None: MQTT 5 has clean_start instead
         )
         c.will_set(will_topic, b"offline", qos=1, retain=True)
-        if settings.username is not None:
-            password = settings.password.get_secret_value() if settings.password else None
-            c.username_pw_set(settings.username, password)
-        if settings.tls.enabled:
-            c.tls_set(
-                ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
-                certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
-                keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
-                cert_reqs=ssl.CERT_REQUIRED,
-            )
-            c.tls_insecure_set(settings.tls.insecure)
+        authenticate(c, settings)
         c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
         c.max_queued_messages_set(MAX_QUEUED)  # rule 13
         c.on_connect = self._on_connect
@@ -647,13 +670,7 @@ class MqttClient:
             self._looking = None
         if not was or self._stopping:
             return
-        code = getattr(reason_code, "value", None)
-        from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
-        ending: Ending = "other"
-        if from_server and code == SESSION_TAKEN_OVER:
-            ending = "taken over"
-        elif not from_server and code == CONNECTION_LOST:
-            ending = "dropped"
+        ending = ending_of(flags, reason_code)
         guard = self._guard
         fight = guard.disconnected(self._clock(), ending)
         if not fight:

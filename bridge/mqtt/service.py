@@ -139,6 +139,10 @@ class MqttService:
         """Every topic filter the service wants messages from: commands, then features'."""
         return [*self.topics.subscriptions(), *self._feature_subscriptions]
 
+    def stop_lane_subscriptions(self) -> list[str]:
+        """Stop and lock, for the connection of their own (lane.py); also handled here."""
+        return self.topics.stop_lane()
+
     def start(self) -> None:
         self._publisher.start()
 

@@ -103,3 +103,18 @@ def test_an_axis_left_out_is_kept_from_the_target_it_replaces() -> None:
         assert box.take().target == Target(None, 30.0)
     finally:
         box.close()
+
+
+def test_a_flood_of_puts_costs_one_wake_byte_per_batch() -> None:
+    """Rule 5: 10,000 targets a second wrote 10,000 bytes and woke the lines thread as often."""
+    import os
+
+    box = Mailbox()
+    for i in range(1000):
+        box.put(Target(float(i % 360)))
+    assert os.read(box.fileno(), 4096) == b"\0"  # one byte, not a thousand
+    assert box.take().target == Target(999 % 360)
+    box.put(Stop())
+    ready, _, _ = select.select([box.fileno()], [], [], 0)
+    assert ready  # owed again after the take: the stop wakes the worker
+    box.close()

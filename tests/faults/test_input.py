@@ -51,15 +51,23 @@ class Bench:
         self.junk_reports: list[dict[str, Any]] = []
 
     def errors_after(self, rid: str) -> list[dict[str, Any]]:
-        """Error events of ``rid`` since the last call, up to and including a fresh sentinel."""
+        """Error events of ``rid`` since the last call, up to and including fresh sentinels:
+        one on each connection the bridge takes commands on (stop and lock have their own,
+        mqtt/lane.py), so whatever went before on either has been handled."""
         mark = f"sentinel-{next(self._n)}"
-        topic = self.rig.topic(rid, "target")
-        self.probe.publish(topic, mark)
+        marks = [f"{mark}-{leaf}".encode() for leaf in ("target", "lock")]
+        for leaf in ("target", "lock"):
+            self.probe.publish(self.rig.topic(rid, leaf), f"{mark}-{leaf}")
         err_topic = self.rig.topic(rid, "error")
-        self.probe.wait_for(err_topic, lambda m: mark.encode() in m.payload, timeout_s=5)
+        for m in marks:
+            self.probe.wait_for(err_topic, lambda msg, m=m: m in msg.payload, timeout_s=5)
         msgs = self.probe.on(err_topic)
-        upto = next(i for i, m in enumerate(msgs) if mark.encode() in m.payload)
-        new = [json.loads(m.payload) for m in msgs[self._seen[rid] : upto]]
+        upto = max(i for i, msg in enumerate(msgs) if any(m in msg.payload for m in marks))
+        new = [
+            json.loads(msg.payload)
+            for msg in msgs[self._seen[rid] : upto + 1]
+            if not any(m in msg.payload for m in marks)
+        ]
         self._seen[rid] = upto + 1
         # a row of stops makes an idle Rotor-EZ print its banner again and again; that junk is
         # sometimes misjudged (test_serial.py::test_a_row_of_stops_...): not this test's subject

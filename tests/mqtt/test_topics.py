@@ -13,14 +13,13 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
     assert t.subscriptions() == [
         "rotor/target",
         "rotor/target/elevation",
-        "rotor/stop",
-        "rotor/lock",
         "rotor/option/+",
         "rotor/preset",
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
     ]
+    assert t.stop_lane() == ["rotor/stop", "rotor/lock"]
 
 
 def test_routing_inbound_topics() -> None:

@@ -1,0 +1,175 @@
+"""The stop lane: stop and lock on an MQTT connection of their own (issue 14, item 13).
+
+One connection delivers its messages in order: a stop published behind a flood of targets
+waited until the bridge had read every one of them (100,000 targets in 10 s on 32 rotators:
+stops reached their controllers 0.85 to 3.9 s late). The broker writes what a subscriber gets
+on that subscriber's socket, so a second connection subscribed only to ``R/stop`` and
+``R/lock`` is a lane no target is queued in; its own paho thread reads it, and the message goes
+to the same handler as the main connection's (the service: the same rules for retained stops,
+payloads and the lock).
+
+Rules:
+1. Subscribed to the stop and lock topics only; they are not subscribed on the main connection
+   (each message is handled once). It publishes nothing: no will, no state; the main
+   connection (client.py) is the bridge's presence.
+2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
+   retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
+   quick-ack (client.py rule 9). Client id: ``lane_client_id`` (the main id with ``rstop-``
+   for ``rotor-``, as long; an explicit id gets ``-stop``).
+3. Connection trouble is the main connection's to report (it says the same); the lane logs a
+   refused subscription as an error once (handed to ``on_denied`` like client.py rule 11) and
+   its own disconnects at debug level. Its takeover back-off is client.py rule 7's.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.mqtt.client import (
+    COMMAND_QOS,
+    Client,
+    MessageHandler,
+    TakeoverGuard,
+    authenticate,
+    ending_of,
+)
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+
+def lane_client_id(settings: MqttSettings) -> str:
+    """Rule 2: as short as the main id where that one is generated (23 characters at most)."""
+    main = settings.effective_client_id()
+    if settings.client_id is None and main.startswith("rotor-"):
+        return "rstop-" + main[len("rotor-") :]
+    return main + "-stop"
+
+
+class StopLane:
+    def __init__(
+        self,
+        settings: MqttSettings,
+        *,
+        subscriptions: list[str],
+        on_message: MessageHandler,
+        on_denied: Callable[[str, str], None] | None = None,
+        reconnect_min_s: int = 1,
+        reconnect_max_s: int = 30,
+    ) -> None:
+        self._settings = settings
+        self._subscriptions = subscriptions
+        self._handler = on_message
+        self._on_denied = on_denied
+        self._v5 = settings.protocol == "5"
+        self._guard = TakeoverGuard()
+        self._slowed = False
+        self._reconnect_s = (reconnect_min_s, reconnect_max_s)
+        self._sub_ids: dict[int, list[str]] = {}
+        self._denied: set[str] = set()
+        self.connected = threading.Event()
+        self.client_id = lane_client_id(settings)
+        c = Client(
+            callback_api_version=CallbackAPIVersion.VERSION2,
+            client_id=self.client_id,
+            protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
+            clean_session=None if self._v5 else True,
+        )
+        authenticate(c, settings)
+        c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
+        c.on_connect = self._on_connect
+        c.on_disconnect = self._on_disconnect
+        c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
+        self._client = c
+
+    def start(self) -> None:
+        s = self._settings
+        if self._v5:
+            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
+        else:
+            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
+        self._client.loop_start()
+
+    def stop(self) -> None:
+        self._client.disconnect()
+        self._client.loop_stop()
+
+    # -- paho callbacks (the lane's own paho thread) ----------------------------------------
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        if reason_code.is_failure:
+            self._guard.connect_failed()
+            log.debug("stop lane: connection refused: %s", reason_code)
+            return
+        self._guard.connected(time.monotonic())
+        subs: list[tuple[str, Any]]
+        if self._v5:
+            opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
+            subs = [(topic, opts) for topic in self._subscriptions]
+        else:
+            subs = [(topic, COMMAND_QOS) for topic in self._subscriptions]
+        if subs:
+            _rc, mid = client.subscribe(subs)
+            if mid is not None:
+                self._sub_ids[mid] = [t for t, _ in subs]
+        self.connected.set()
+        log.debug("stop lane connected as %s", self.client_id)
+
+    def _on_subscribe(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_codes: list[ReasonCode],
+        properties: Properties | None,
+    ) -> None:
+        for topic, code in zip(self._sub_ids.pop(mid, []), reason_codes, strict=False):
+            if code.is_failure and topic not in self._denied:
+                self._denied.add(topic)
+                problem = f"the MQTT broker does not let the bridge subscribe to {topic}: {code}"
+                log.error("%s (check the broker's ACL)", problem)
+                if self._on_denied is not None:  # never on paho's thread (client.py rule 11)
+                    threading.Thread(
+                        target=self._on_denied, args=(topic, problem), daemon=True
+                    ).start()
+
+    def _on_disconnect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.DisconnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        self.connected.clear()
+        if self._guard.disconnected(time.monotonic(), ending_of(flags, reason_code)):
+            backoff = self._guard.backoff_s  # client.py rule 7: the main one says why
+            client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))
+            self._slowed = True
+        elif self._slowed:
+            client.reconnect_delay_set(*self._reconnect_s)
+            self._slowed = False
+        log.debug("stop lane disconnected (%s)", reason_code)
+
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
+        try:
+            self._handler(msg.topic, bytes(msg.payload), bool(msg.retain))
+        except Exception:  # a handler bug must not kill paho's network thread
+            log.exception("error handling MQTT message on %s", msg.topic)
