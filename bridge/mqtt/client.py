@@ -85,10 +85,6 @@ Rules:
    stale discovery) are sent if the base topic was this installation's. A look without an
    answer in LOOK_TIMEOUT_S (an ACL that denies the hello) goes on without it, deleting
    nothing. While it runs, another instance's info put there is judged by claim rule 4.
-15. paho reads one packet per wake-up of its loop (a select() and its bookkeeping each: at
-   10,000 targets a second that was most of the bridge's CPU and it fell behind); ``loop_read``
-   takes up to READ_BATCH, stopping as soon as the socket has nothing more, so a quiet
-   connection behaves as before and writes wait for at most that many packets' handling.
 """
 
 from __future__ import annotations
@@ -138,7 +134,6 @@ SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a co
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
 MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
 LOOK_TIMEOUT_S = 5.0  # rule 14
-READ_BATCH = 64  # rule 15
 
 
 class TakeoverGuard:
@@ -209,12 +204,10 @@ def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
 
 
 class Client(paho.Client):
-    """paho's client with rules 9 and 15: ``_loop`` (loop_start's thread) reads through
-    loop_read."""
+    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        # rule 15: up to READ_BATCH packets per wake-up, until the socket has no more
-        rc = super().loop_read(max(max_packets, READ_BATCH))
+        rc = super().loop_read(max_packets)
         acknowledge_now(self.socket())
         return rc
 
