@@ -93,7 +93,9 @@ class App:
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
-            on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
+            on_message=lambda topic, payload, retain: self.mqtt.on_message(
+                topic, payload, retain, gated=self.client.gated
+            ),
             on_denied=self._denied,
             on_connect=self._connected,
             claim=Claim(
@@ -157,7 +159,7 @@ class App:
         self.lane = StopLane(
             settings.mqtt,
             subscriptions=self.mqtt.stop_lane_subscriptions(),
-            on_message=lambda topic, payload, retain: self.mqtt.on_message(topic, payload, retain),
+            on_message=self.mqtt.on_lane_message,
             on_denied=self._denied,
         )
         self.client.watch_owned(self.topics.owned())

@@ -25,10 +25,12 @@ Rules:
    turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
-   target, so a reading further from it than the closest one so far by more than
-   ``tolerance_deg + noise_deg`` is someone else's hand on the front panel): ``turned away``,
-   the target is dropped and nothing is sent (the hand has the rotor). On a wrapping scale the
-   way round the stop may lead away first (rule 3), so there only a stall tells.
+   target): two readings in a row, each further from it than the one before and both more
+   than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG further than the closest one so far,
+   are someone else's hand on the front panel, or a controller driving the wrong way (not one
+   stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
+   dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
+   the way round the stop may lead away first (rule 3), so there only a stall tells.
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -43,6 +45,7 @@ from typing import Any
 from bridge.model import MotionState
 from bridge.protocols.base import ModelSpec, RetargetPolicy
 
+AWAY_MARGIN_DEG = 5.0  # rule 5
 BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
 
 
@@ -93,6 +96,7 @@ class Motion:
     el_anchor_deg: float | None = None
     el_target_deg: float | None = None
     closest_err: float | None = None  # rule 5: the least error seen since the target went out
+    away_err: float | None = None  # rule 5: the last reading's error, if already turned away
 
 
 class Event(enum.StrEnum):
@@ -191,9 +195,17 @@ def reading(
     if m.target_deg is not None and not cfg.az_wraps:
         err = target_error(m, cfg)
         if err is not None:
+            away = m.closest_err is not None and err > (
+                m.closest_err + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+            )
             if m.closest_err is None or err < m.closest_err:
-                m = replace(m, closest_err=err)
-            elif moved and err > m.closest_err + cfg.tolerance_deg + cfg.noise_deg:
+                m = replace(m, closest_err=err, away_err=None)
+            elif not away or not moved:
+                if m.away_err is not None and not away:
+                    m = replace(m, away_err=None)
+            elif m.away_err is None or err <= m.away_err:
+                m = replace(m, away_err=err)  # the first reading away: one more must follow
+            else:
                 m = replace(
                     m,
                     target_deg=None,
@@ -201,6 +213,7 @@ def reading(
                     target_t=None,
                     progress_t=None,
                     closest_err=None,
+                    away_err=None,
                 )
                 m, events = tick(m, cfg, now)
                 return m, [Event.TURNED_AWAY, *events]
@@ -237,6 +250,7 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
+        away_err=None,
     )
 
 
@@ -245,7 +259,13 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         # it may have been turning; from now on it is stopping, then braking
         return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
     return replace(
-        m, target_deg=None, el_target_deg=None, progress_t=None, stop_sent_t=now, closest_err=None
+        m,
+        target_deg=None,
+        el_target_deg=None,
+        progress_t=None,
+        stop_sent_t=now,
+        closest_err=None,
+        away_err=None,
     )
 
 
@@ -297,6 +317,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         progress_t=None,
         stop_sent_t=None,
         closest_err=None,
+        away_err=None,
     )
 
 

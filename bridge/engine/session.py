@@ -92,6 +92,7 @@ class RotatorSession:
         self._enable_due = False
         self._stop_tries = 0
         self._junk_reported_t = -1e18
+        self._stop_at_rest = False  # turned away (motion rule 5): a stop when it is still
         self._port_error: str | None = None
         self.wall_offset_s = 0.0
         self.az_shown = st.Hysteresis()
@@ -513,13 +514,22 @@ class RotatorSession:
             elif event is mo.Event.TURNED_AWAY:
                 self.tracker.end("turned by hand")
                 self.drop_tracking_target()
-                pos = self.motion.position_deg
-                log.warning(
-                    "%s: rotor turned away from its target at %s° (front panel?): target dropped",
-                    self.name,
-                    pos,
+                self._stop_at_rest = True  # a controller driving the wrong way: stop it then
+                self.error(
+                    ErrorKind.STALLED,
+                    f"rotor turned away from its target at {self.motion.position_deg:g}° (the "
+                    "front panel, or a controller driving the wrong way): target dropped, and "
+                    "a stop follows when it comes to rest",
                 )
+            elif event is mo.Event.STOPPED and self._stop_at_rest:
+                self._stop_at_rest = False
+                pos = self.motion.position_deg
+                log.info("%s: at rest at %s after turning away: stop", self.name, pos)
+                if self.link is not None:
+                    self.link.write_stop(now)
             else:
+                if event is mo.Event.ARRIVED:
+                    self._stop_at_rest = False
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
 
     def _emit_status(self, now: float) -> None:

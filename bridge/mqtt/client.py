@@ -287,6 +287,12 @@ class MqttClient:
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
         self._pending_clears: list[str] = []
         self.refused: str | None = None
+        self._took_over = False
+
+    @property
+    def gated(self) -> bool:
+        """Rule 14: the first look runs, or the bridge refused to run: only halts are taken."""
+        return self._looking is not None or self.refused is not None
 
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
@@ -314,6 +320,7 @@ class MqttClient:
         with self._lock:
             self._retained[self._will_topic] = (b"offline", 1)
         if self.connected.is_set() and self.refused is None:  # refused: it is another's
+            self._client.drop_out_messages()  # a full queue would refuse the offline (rule 13)
             info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
             try:
                 info.wait_for_publish(timeout_s)
@@ -455,14 +462,14 @@ class MqttClient:
             self._expect_echo(topic, data)
             if topic != self._will_topic:
                 self._send(client, topic, data, qos, retain=True)
+        held, self._held = self._held, []
+        for msg in held:  # rule 12 (older than the backlog's events)
+            if not (msg.retain and msg.topic in self._retained):
+                self._send(client, msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
         backlog = list(self._backlog)
         self._backlog.clear()
         for topic, event in backlog:
             self._send(client, topic, event, 1, retain=False)
-        held, self._held = self._held, []
-        for msg in held:  # rule 12
-            if not (msg.retain and msg.topic in self._retained):
-                self._send(client, msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
         clears, self._pending_clears = self._pending_clears, []
         if clear:
             for topic in clears:
@@ -481,18 +488,21 @@ class MqttClient:
         claim = self._claim
         assert claim is not None
         with self._lock:
-            if self._looking != n or not self._up:
+            if self._looking != n or not self._up or self._stopping:
                 return
             self._looking = None
             info, state = self._seen.get(claim.info_topic), self._seen.get(self._will_topic)
-            verdict = Verdict.TAKE_OVER if timed_out else first_look(claim.me, info, state)
+            verdict = first_look(claim.me, info, state)  # timed out: on what was seen
+            if verdict is Verdict.OURS and (timed_out or self._took_over):
+                verdict = Verdict.TAKE_OVER  # not known to be ours: delete nothing (claim 3)
             if verdict is Verdict.REFUSE:
                 other = Instance.parse(info or b"")
                 assert other is not None
                 self.refused = refusal(claim.base_topic, other, live_since_look=False)
                 self._stopping = True
             else:
-                if verdict is Verdict.TAKE_OVER and not timed_out:
+                if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
+                    self._took_over = True  # for the life of the process (claim rule 3)
                     other = Instance.parse(info or b"")
                     log.warning(
                         "taking over base topic %r from %s, which is offline",
@@ -511,7 +521,7 @@ class MqttClient:
                 return
         log.warning(
             "no answer to the bridge's first look in %g s (does the broker's ACL deny %s?): "
-            "going on without knowing whether another bridge uses this base topic",
+            "judging by what the broker showed so far, and deleting no stale discovery",
             LOOK_TIMEOUT_S,
             self._claim.hello_topic if self._claim else "?",
         )
@@ -659,8 +669,7 @@ class MqttClient:
         was = self._up
         self._up = False
         self.connected.clear()
-        with self._lock:
-            self._looking = None
+        self._looking = None  # one assignment: no lock (paho may hold its own here)
         if not was or self._stopping:
             return
         ending = ending_of(flags, reason_code)
@@ -751,6 +760,7 @@ class MqttClient:
                 if other is not None and yields_to(claim.me, other):
                     self.refused = refusal(claim.base_topic, other, live_since_look=True)
                     self._stopping = True  # nothing more goes out, nothing is put back
+                    self.connected.clear()  # (every publish checks it, under this lock)
             quiet = self.refused is None and self._put_back(topic, held)
         if self.refused is not None:
             self._refuse()

@@ -9,20 +9,25 @@ to the same handler as the main connection's (the service: the same rules for re
 payloads and the lock).
 
 Rules:
-1. Subscribed to the stop and lock topics only; they are not subscribed on the main connection
-   (each message is handled once). It publishes nothing: no will, no state; the main
+1. Subscribed to the stop and lock topics only (the main connection has them too: each halt is
+   carried out by the first copy, service.py rule 5 and fence.py, so a lane that is down or
+   refused loses no stop, only speed). It publishes nothing: no will, no state; the main
    connection (client.py) is the bridge's presence.
 2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
    retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
    quick-ack (client.py rule 9). Client id: ``lane_client_id`` (the main id with ``rstop-``
-   for ``rotor-``, as long; an explicit id gets ``-stop``).
-3. Connection trouble is the main connection's to report (it says the same); the lane logs a
-   refused subscription as an error once (handed to ``on_denied`` like client.py rule 11) and
-   its own disconnects at debug level. Its takeover back-off is client.py rule 7's.
+   for ``rotor-``, as long; an explicit id gets ``-stop``, shortened with a hash to 23
+   characters if it would be longer).
+3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
+   limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
+   (the bridge's problems, B/bridge/info): stops then take the main connection only. Its own
+   disconnects are logged at debug level (the main connection says the same). Its takeover
+   back-off is client.py rule 7's, counting only connections that were accepted.
 """
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import threading
 import time
@@ -53,7 +58,11 @@ def lane_client_id(settings: MqttSettings) -> str:
     main = settings.effective_client_id()
     if settings.client_id is None and main.startswith("rotor-"):
         return "rstop-" + main[len("rotor-") :]
-    return main + "-stop"
+    lane = main + "-stop"
+    if len(lane) <= 23:
+        return lane
+    digest = hashlib.sha256(main.encode()).hexdigest()[:6]
+    return f"{main[:11]}-{digest}-stop"
 
 
 class StopLane:
@@ -74,9 +83,10 @@ class StopLane:
         self._v5 = settings.protocol == "5"
         self._guard = TakeoverGuard()
         self._slowed = False
+        self._up = False
+        self._reported: set[str] = set()
         self._reconnect_s = (reconnect_min_s, reconnect_max_s)
         self._sub_ids: dict[int, list[str]] = {}
-        self._denied: set[str] = set()
         self.connected = threading.Event()
         self.client_id = lane_client_id(settings)
         c = Client(
@@ -88,6 +98,7 @@ class StopLane:
         authenticate(c, settings)
         c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
         c.on_connect = self._on_connect
+        c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
         c.on_subscribe = self._on_subscribe
@@ -116,8 +127,9 @@ class StopLane:
     ) -> None:
         if reason_code.is_failure:
             self._guard.connect_failed()
-            log.debug("stop lane: connection refused: %s", reason_code)
+            self._report(f"the MQTT broker refused the stop lane's connection: {reason_code}")
             return
+        self._up = True
         self._guard.connected(time.monotonic())
         subs: list[tuple[str, Any]]
         if self._v5:
@@ -141,14 +153,27 @@ class StopLane:
         properties: Properties | None,
     ) -> None:
         for topic, code in zip(self._sub_ids.pop(mid, []), reason_codes, strict=False):
-            if code.is_failure and topic not in self._denied:
-                self._denied.add(topic)
-                problem = f"the MQTT broker does not let the bridge subscribe to {topic}: {code}"
-                log.error("%s (check the broker's ACL)", problem)
-                if self._on_denied is not None:  # never on paho's thread (client.py rule 11)
-                    threading.Thread(
-                        target=self._on_denied, args=(topic, problem), daemon=True
-                    ).start()
+            if code.is_failure:
+                self._report(
+                    f"the MQTT broker does not let the bridge subscribe to {topic}: {code}", topic
+                )
+
+    def _report(self, problem: str, topic: str = "") -> None:
+        """Rule 3: once per problem, an error, handed on (never on paho's thread)."""
+        if problem in self._reported:
+            return
+        self._reported.add(problem)
+        log.error(
+            "%s (stops still come on the main connection, without the lane's speed; check the "
+            "broker's ACL and connection limits for client id %r)",
+            problem,
+            self.client_id,
+        )
+        if self._on_denied is not None:
+            threading.Thread(target=self._on_denied, args=(topic, problem), daemon=True).start()
+
+    def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
+        self._guard.connect_failed()
 
     def _on_disconnect(
         self,
@@ -159,6 +184,10 @@ class StopLane:
         properties: Properties | None,
     ) -> None:
         self.connected.clear()
+        was, self._up = self._up, False
+        if not was:  # closed before it was accepted (a connection limit): no takeover evidence
+            self._report(f"the MQTT broker closed the stop lane's connection: {reason_code}")
+            return
         if self._guard.disconnected(time.monotonic(), ending_of(flags, reason_code)):
             backoff = self._guard.backoff_s  # client.py rule 7: the main one says why
             client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))

@@ -22,12 +22,20 @@ Rules:
    were left out. Every other kind (a stall, a stop that did not take, the serial line) is
    always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
    neither queue 200,000 QoS 1 messages nor delay the state.
+5. Stop and lock come on both connections, the main one and the stop lane (lane.py); fence.py
+   keeps a halt's place in line: the first copy is carried out, the other dropped, and a
+   command that would move the rotor arriving on the main connection after a halt the lane
+   carried out is dropped and reported (it was published before the halt). The lane's
+   retained messages other than a stop, and its lock OFF, are left to the main connection.
+6. While the main connection is gated (its first look runs, or the bridge refused to run:
+   client.py rule 14) only halts are carried out from it.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import threading
 import time
 from collections.abc import Callable
 from typing import Protocol
@@ -35,12 +43,23 @@ from typing import Protocol
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.fence import Fence
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
+
+
+_MOVES = frozenset({"target", "target_elevation", "preset", "park", "nudge", "track"})
+
+
+def _switch_on(payload: bytes) -> bool:
+    try:
+        return pl.parse_switch(payload)
+    except pl.PayloadError:
+        return False
 
 
 class RotatorPort(Protocol):
@@ -112,6 +131,9 @@ class MqttService:
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
+        self._clock = clock
+        self._fence = Fence()  # rule 5
+        self._fence_lock = threading.Lock()  # two connections, two paho threads
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
@@ -197,7 +219,13 @@ class MqttService:
         self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
 
     # -- inbound (paho's thread) ------------------------------------------------------------
-    def on_message(self, topic: str, payload: bytes, retain: bool) -> None:
+    def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
+        """The stop lane's messages (rule 5)."""
+        self.on_message(topic, payload, retain, lane=True)
+
+    def on_message(
+        self, topic: str, payload: bytes, retain: bool, *, lane: bool = False, gated: bool = False
+    ) -> None:
         route = self.topics.route(topic)
         if route is None:
             for handler in self._handlers:
@@ -211,6 +239,20 @@ class MqttService:
         if retain and not payload:
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
+        halt = kind == "stop" or (kind == "lock" and not retain and _switch_on(payload))
+        if lane and (retain and kind != "stop" or kind == "lock" and not halt):
+            return  # rule 5: the main connection's copy comes in order with the targets
+        if gated and not halt and not retain:
+            return  # rule 6 (a retained one is only reported, below)
+        with self._fence_lock:
+            if halt:
+                if not self._fence.halt(rotator_id, kind, lane, self._clock()):
+                    return  # rule 5: the other connection's copy was carried out
+            elif kind in _MOVES and self._fence.holds(rotator_id, self._clock()):
+                rot.report_refusal(
+                    "dropped: a stop (or the lock) published after it has been carried out", what
+                )
+                return
         if retain and kind == "stop":
             rot.submit(Stop(Source.MQTT), what)
             rot.report_refusal(

@@ -156,15 +156,16 @@ class Topics:
         return self._rotators[rotator_id]
 
     def subscriptions(self) -> list[str]:
-        """The command topics of the main connection: all but the stop lane's."""
+        """The command topics of the main connection (stop and lock too: service.py rule 5)."""
         subs: list[str] = []
         for t in self._rotators.values():
-            subs += [t.target, t.target_elevation, t.option_filter]
+            subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track]
         return subs
 
     def stop_lane(self) -> list[str]:
-        """Stop and lock: on a connection of their own (lane.py), behind no flood of targets."""
+        """Stop and lock also on a connection of their own (lane.py), behind no flood of
+        targets."""
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.stop, t.lock]

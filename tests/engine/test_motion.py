@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from bridge.engine import motion as mo
 from bridge.model import MotionState as S
 from bridge.protocols import REGISTRY
@@ -257,24 +259,46 @@ SPID = mo.MotionConfig(
 )  # fmt: skip
 
 
+def spid_moving_to(target: float, tolerance: float = 3) -> mo.Motion:
+    cfg = replace(SPID, tolerance_deg=tolerance)
+    m = mo.link_up(mo.Motion(), cfg, 0)
+    m, _ = mo.reading(m, cfg, 100, 0.0)
+    m, _ = mo.tick(m, cfg, 2.0)
+    return mo.commanded(m, cfg, target, 10.0)
+
+
 def test_a_spid_turned_away_from_its_target_is_the_front_panel_and_loses_the_target() -> None:
     """Rule 5: a SPID heads straight for its raw target, so readings growing away from it are
     someone else's hand. Before, the target was held until a stall 10 s after the hand let go,
     and tracking pulled the rotor back in between."""
-    m = mo.link_up(mo.Motion(), SPID, 0)
-    m, _ = mo.reading(m, SPID, 100, 0.0)
-    m, _ = mo.tick(m, SPID, 2.0)
-    m = mo.commanded(m, SPID, 120, 10.0)
+    m = spid_moving_to(120)
     m, events = feed(m, [(10.5, 106), (11.0, 112), (11.5, 118), (12.0, 119.5)], SPID)
     assert events == [] and m.target_deg == 120  # on its way: never away
-    m, events = feed(m, [(12.5, 122.5), (13.0, 125.0)], SPID)
-    assert events == [] and m.target_deg == 120  # within tolerance + noise of the closest
-    m, events = feed(m, [(13.5, 127.5)], SPID)
+    m, events = feed(m, [(12.5, 122.5), (13.0, 125.0), (13.5, 127.5), (14.0, 131.0)], SPID)
+    assert events == [] and m.target_deg == 120  # within tolerance + noise + margin, or once
+    m, events = feed(m, [(14.5, 133.5)], SPID)
     assert events == [mo.Event.TURNED_AWAY]
     assert m.state is S.MOVING and m.target_deg is None  # nothing is sent: the hand has it
-    m, events = feed(m, [(14.0, 130.0), (14.5, 130.0)], SPID)
-    m, events = mo.tick(m, SPID, 16.0)
+    m, events = feed(m, [(15.0, 135.0), (15.5, 135.0)], SPID)
+    m, events = mo.tick(m, SPID, 17.0)
     assert events == [mo.Event.STOPPED]
+
+
+def test_one_stray_reading_an_overshoot_or_a_reversal_is_no_hand() -> None:
+    """Cold review: a single corrupt reading (SPID frames have no checksum), a 1.5 degree
+    overshoot with a 1 degree tolerance, the few degrees a rotor coasts on when a new target
+    reverses it: each dropped a target the controller was still going to."""
+    m, events = feed(spid_moving_to(150), [(10.5, 101), (11, 103), (11.5, 84), (12, 105)], SPID)
+    assert events == [] and m.target_deg == 150
+    cfg = replace(SPID, tolerance_deg=1)
+    m = spid_moving_to(120, tolerance=1)
+    m, events = feed(m, [(10.5, 110), (11, 119), (11.5, 121.5), (12, 121), (12.5, 120)], cfg)
+    assert mo.Event.TURNED_AWAY not in events
+    m = spid_moving_to(150)  # then reversed to 100 while turning up at speed
+    m, _ = feed(m, [(10.5, 110), (11, 120)], SPID)
+    m = mo.commanded(m, SPID, 100, 11.0)
+    m, events = feed(m, [(11.5, 122), (12, 123), (12.5, 118), (13, 110)], SPID)
+    assert events == [] and m.target_deg == 100
 
 
 def test_on_a_wrapping_scale_a_way_that_leads_away_first_is_not_a_hand() -> None:

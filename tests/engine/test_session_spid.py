@@ -117,3 +117,22 @@ def test_a_stream_of_targets_is_followed_without_flooding_the_line(rig: Rig) -> 
     assert 1 <= len(sets(v, t)) <= 3
     assert sets(v, t)[-1] == (2 * (360 + 199), 2 * 370)
     assert_half_duplex(v)
+
+
+def test_turned_away_from_its_target_is_reported_and_stopped_once_at_rest(rig: Rig) -> None:
+    """Motion rule 5 (cold review): a front-panel turn, or a controller driving the wrong way
+    into its end stop, dropped the target with a log line only, and nothing was ever sent: no
+    error on R/error, no stop for a motor still pushing against its stop."""
+    v = ready(rig)
+    v.target(100)
+    v.run_until(lambda h: h.truth().is_moving and h.truth().az_deg > 20, 30, "turning")
+    t = v.now
+    v.manual_rotate(0.0)  # the panel sends it the other way
+    v.run_until(lambda h: h.errors(since=t), 60, "reported")
+    (report,) = v.errors(since=t)
+    assert "turned away from its target" in report.message
+    assert v.status.target_az_deg is None
+    v.run_until(lambda h: not h.truth().is_moving, 120, "at rest")
+    v.run_until(lambda h: h.frames(Outcome.STOP, since=t), 30, "a stop once at rest")
+    assert len(v.frames(Outcome.STOP, since=t)) == 1
+    assert not [f for f in v.frames(Outcome.SET, since=t)]  # it was never sent back

@@ -453,6 +453,8 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
     assert svc.subscriptions() == [
         "rotor/target",
         "rotor/target/elevation",
+        "rotor/stop",
+        "rotor/lock",
         "rotor/option/+",
         "rotor/preset",
         "rotor/park",

@@ -13,6 +13,8 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
     assert t.subscriptions() == [
         "rotor/target",
         "rotor/target/elevation",
+        "rotor/stop",
+        "rotor/lock",
         "rotor/option/+",
         "rotor/preset",
         "rotor/park",
