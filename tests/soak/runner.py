@@ -731,7 +731,9 @@ class Soak:
                     (t, a, e)
                     for (t, a, e) in rot.accepted
                     if since < t <= frame.time_s + 0.05
-                    and near_deg(a, az, 1.0, rot.model not in SPID)
+                    # as a direction on every model: a SPID reaches true 310 at raw -50 when
+                    # that side needs less travel (pointing.py, the overlap)
+                    and near_deg(a, az, 1.0)
                     and (el is None or e is None or abs(e - el) <= 1.0)
                 ]
                 if not fresh:
