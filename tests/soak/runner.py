@@ -659,7 +659,7 @@ class Soak:
         if s.is_moving or s.in_brake_delay:
             return False
         tol = 3.5 if rot.model in ROTOREZ_FAMILY else 1.0
-        if not near_deg(s.az_deg, e.az, tol, rot.model not in SPID):
+        if not near_deg(s.az_deg, e.az, tol):  # a direction: a SPID's raw -170 is true 190
             return False
         return e.el is None or abs(s.el_deg - e.el) <= tol
 
