@@ -242,8 +242,13 @@ class MqttService:
         halt = kind == "stop" or (kind == "lock" and not retain and _switch_on(payload))
         if lane and (retain and kind != "stop" or kind == "lock" and not halt):
             return  # rule 5: the main connection's copy comes in order with the targets
-        if gated and not halt and not retain:
-            return  # rule 6 (a retained one is only reported, below)
+        if gated and not halt and not retain:  # rule 6 (a retained one is reported below)
+            rot.report_refusal(
+                "not taken: the bridge is still checking that no other bridge runs on its base "
+                "topic (its first look after connecting); send it again",
+                what,
+            )
+            return
         with self._fence_lock:
             if halt:
                 if not self._fence.halt(rotator_id, kind, lane, self._clock()):

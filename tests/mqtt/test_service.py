@@ -475,3 +475,31 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         ("second", "rotor/bearing", b"5", True),
     ]
     assert rots["tower"].calls == [("submit", Target(5.0, None, M), "target '5'")]
+
+
+def test_two_copies_of_a_stop_halt_once_and_a_target_read_between_them_is_dropped() -> None:
+    """Rule 5: stop on the lane and on the main connection; a target published before the stop
+    but read on the main connection after the lane's copy was carried out never runs."""
+    svc, _pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.on_lane_message("rotor/stop", b"", False)
+    svc.on_message("rotor/target", b"300", False)  # published before the stop
+    svc.on_message("rotor/stop", b"", False)  # the main connection's copy
+    svc.on_message("rotor/target", b"250", False)  # published after it
+    svc.on_lane_message("rotor/lock", b"OFF", False)  # never from the lane: in order on main
+    assert [c[0] for c in tower.calls] == ["submit", "refused", "submit"]
+    assert "dropped" in str(tower.calls[1][1])
+    assert isinstance(tower.calls[0][1], Stop) and tower.calls[2][1] == Target(
+        250.0, None, Source.MQTT
+    )
+
+
+def test_while_gated_only_halts_are_taken_and_the_rest_is_reported() -> None:
+    """Rule 6: the first look runs (or the bridge refused to run)."""
+    svc, _pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.on_message("rotor/target", b"300", False, gated=True)
+    svc.on_message("rotor/lock", b"ON", False, gated=True)
+    svc.on_message("rotor/stop", b"", False, gated=True)
+    assert [c[0] for c in tower.calls] == ["refused", "lock", "submit"]
+    assert "first look" in str(tower.calls[0][1])
