@@ -177,8 +177,32 @@ def acknowledge_now(sock: object) -> None:
         pass
 
 
+def new_client(settings: MqttSettings, client_id: str) -> Client:
+    """paho's client as both connections (this one and lane.py's) use it: rule 1's protocol
+    and session, credentials and TLS."""
+    v5 = settings.protocol == "5"
+    c = Client(
+        callback_api_version=CallbackAPIVersion.VERSION2,
+        client_id=client_id,
+        protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
+        clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
+    )
+    authenticate(c, settings)
+    return c
+
+
+def connect(c: paho.Client, settings: MqttSettings) -> None:
+    """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
+    s = settings
+    if s.protocol == "5":
+        c.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
+    else:
+        c.connect_async(s.host, s.port, keepalive=s.keepalive_s)
+    c.loop_start()
+
+
 def authenticate(c: paho.Client, settings: MqttSettings) -> None:
-    """Credentials and TLS from the settings (both connections: this one and lane.py's)."""
+    """Credentials and TLS from the settings."""
     if settings.username is not None:
         password = settings.password.get_secret_value() if settings.password else None
         c.username_pw_set(settings.username, password)
@@ -245,14 +269,8 @@ class MqttClient:
         self._reconnect_s = (reconnect_min_s, reconnect_max_s)
         self._guard = TakeoverGuard()
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
-        c = Client(
-            callback_api_version=CallbackAPIVersion.VERSION2,
-            client_id=settings.effective_client_id(),
-            protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
-            clean_session=None if self._v5 else True,  # None: MQTT 5 has clean_start instead
-        )
+        c = new_client(settings, settings.effective_client_id())
         c.will_set(will_topic, b"offline", qos=1, retain=True)
-        authenticate(c, settings)
         c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
         c.max_queued_messages_set(MAX_QUEUED)  # rule 13
         c.on_connect = self._on_connect
@@ -306,11 +324,7 @@ class MqttClient:
     def start(self) -> None:
         s = self._settings
         log.info("connecting to MQTT broker %s:%d as %s", s.host, s.port, s.effective_client_id())
-        if self._v5:
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
-        else:
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
-        self._client.loop_start()
+        connect(self._client, s)
         threading.Thread(target=self._retry_failed, name="mqtt-retry", daemon=True).start()
 
     def stop(self, timeout_s: float = 2.0) -> None:

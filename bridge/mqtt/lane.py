@@ -35,18 +35,17 @@ from collections.abc import Callable
 from typing import Any
 
 import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.client import (
     COMMAND_QOS,
-    Client,
     MessageHandler,
     TakeoverGuard,
-    authenticate,
+    connect,
     ending_of,
+    new_client,
 )
 from bridge.settings import MqttSettings
 
@@ -89,13 +88,7 @@ class StopLane:
         self._sub_ids: dict[int, list[str]] = {}
         self.connected = threading.Event()
         self.client_id = lane_client_id(settings)
-        c = Client(
-            callback_api_version=CallbackAPIVersion.VERSION2,
-            client_id=self.client_id,
-            protocol=paho.MQTTv5 if self._v5 else paho.MQTTv311,
-            clean_session=None if self._v5 else True,
-        )
-        authenticate(c, settings)
+        c = new_client(settings, self.client_id)
         c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
         c.on_connect = self._on_connect
         c.on_connect_fail = self._on_connect_fail
@@ -105,12 +98,7 @@ class StopLane:
         self._client = c
 
     def start(self) -> None:
-        s = self._settings
-        if self._v5:
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
-        else:
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
-        self._client.loop_start()
+        connect(self._client, self._settings)
 
     def stop(self) -> None:
         self._client.disconnect()
