@@ -262,6 +262,7 @@ class App:
 
     def stop(self) -> None:
         self._stopped.set()
+        self.client.shutting_down()
         if self.discovery is not None:
             self.discovery.stop()
         for server in self.rotctld:
@@ -269,8 +270,8 @@ class App:
         self.loggers.stop()
         for rot in self.rotators:
             rot.stop()
-        self.lane.stop()  # no stop or lock is taken once the rotators are gone
-        self.mqtt.stop()
+        self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
+        self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")
 
 

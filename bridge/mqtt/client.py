@@ -336,10 +336,7 @@ class MqttClient:
         if self.connected.is_set() and self.refused is None:  # refused: it is another's
             self._client.drop_out_messages()  # a full queue would refuse the offline (rule 13)
             info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
-            try:
-                info.wait_for_publish(timeout_s)
-            except (RuntimeError, ValueError):
-                pass
+            self._wait([info], timeout_s)
         self._client.disconnect()
         self._client.loop_stop()
 
@@ -405,11 +402,26 @@ class MqttClient:
                 self._retained[topic] = (b"offline", 1)
             if self.connected.is_set():
                 infos.append(self._client.publish(topic, b"offline", qos=1, retain=True))
+        self._wait(infos, timeout_s)
+
+    def _wait(self, infos: list[paho.MQTTMessageInfo], timeout_s: float) -> None:
+        """Until the broker has them all, ``timeout_s`` at most for all together, and no
+        longer once the connection is gone (their acknowledgements will never come)."""
+        deadline = time.monotonic() + timeout_s
         for info in infos:
-            try:
-                info.wait_for_publish(timeout_s)
-            except (RuntimeError, ValueError):
-                pass
+            while not info.is_published() and self.connected.is_set():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return
+                try:
+                    info.wait_for_publish(min(left, 0.1))
+                except (RuntimeError, ValueError):
+                    break
+
+    def shutting_down(self) -> None:
+        """The bridge is stopping: a broker that goes away now (a Ctrl-C reaches the demo's
+        private broker too) is no news, and is not reconnected to with a warning."""
+        self._stopping = True
 
     # -- paho callbacks (paho's thread) ---------------------------------------------------
     def _on_connect(
@@ -661,6 +673,8 @@ class MqttClient:
             threading.Thread(target=self._on_denied, args=args, daemon=True).start()
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
+        if self._stopping:
+            return
         # paho calls this inside its `except OSError`: the exception says why
         exc = sys.exc_info()[1]
         self._guard.connect_failed()
