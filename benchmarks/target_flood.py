@@ -2,9 +2,8 @@
 the controller within 100 ms (p99) whatever else arrives on the other command topics, and
 memory returns to its level after the flood".
 
-    .venv/bin/python -m benchmarks.target_flood                  # 32 rotators, 25 stops a phase
-    .venv/bin/python -m benchmarks.target_flood --quick          # 8 rotators, 10 stops a phase
-    .venv/bin/python -m benchmarks.target_flood --json flood.json
+    .venv/bin/python -m benchmarks target_flood                  # 32 rotators, 25 stops a phase
+    .venv/bin/python -m benchmarks target_flood --quick          # 8 rotators, 10 stops a phase
 
 The set-up: a private mosquitto (its defaults); one bridge as its own service process with N
 rotators, all Rotor-EZ: the measured one emulated in this process behind a line paced at 4800
@@ -30,25 +29,15 @@ lost).
 
 from __future__ import annotations
 
-import argparse
-import json
 import random
 import select
-import shutil
-import signal
 import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import dataclass
-from datetime import UTC, datetime
-from pathlib import Path
 from typing import Any
 
-if __package__ in (None, ""):  # run as a file: the checkout's top is where benchmarks/ lives
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from benchmarks.harness import (  # noqa: E402
+from benchmarks.harness import (
     ABORT,
     PYTHON,
     BenchError,
@@ -58,11 +47,11 @@ from benchmarks.harness import (  # noqa: E402
     start_bridge,
     start_broker,
 )
-from benchmarks.line import FrameLog  # noqa: E402
-from benchmarks.procfs import RssSampler, cpu_seconds, rss_bytes  # noqa: E402
-from benchmarks.report import ItemResult, Table, Verdict, percentile  # noqa: E402
-from benchmarks.rig import EmuHost, open_line  # noqa: E402
-from tests.support.waiting import wait_until  # noqa: E402
+from benchmarks.line import FrameLog
+from benchmarks.procfs import RssSampler, cpu_seconds, rss_bytes
+from benchmarks.report import ItemResult, Table, Verdict, percentile
+from benchmarks.rig import EmuHost, open_line
+from tests.support.waiting import wait_until
 
 RATE = 10_000
 EMU = {"speed_deg_s": 90.0, "brake_delay_s": 0.5, "jitter_deg": 0, "start_az_deg": 10}
@@ -314,51 +303,7 @@ def run(scope: Scope, quick: bool, samples: int | None = None, rate: float = RAT
     return result
 
 
-def _interrupt(signum: int, _frame: Any) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
-def main(argv: list[str] | None = None) -> int:
-    from benchmarks.__main__ import as_json, environment, preflight, render
-
-    args_in = sys.argv[1:] if argv is None else argv
-    if args_in[:1] == ["--sender"]:
-        return sender_main(int(args_in[1]), float(args_in[2]), args_in[3:])
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.target_flood")
-    ap.add_argument("--quick", action="store_true", help="8 rotators, 10 stops a phase")
-    ap.add_argument("--samples", type=int, help="stops per phase")
-    ap.add_argument("--rate", type=float, default=RATE, help="targets a second (10,000)")
-    ap.add_argument("--json", type=Path, help="also write the results to this file")
-    args = ap.parse_args(args_in)
-    problem = preflight()
-    if problem:
-        print(f"benchmarks: {problem}", file=sys.stderr)
-        return 2
-    signal.signal(signal.SIGTERM, _interrupt)
-    workdir = Path(tempfile.mkdtemp(prefix="rotor-bench-target-flood-"))
-    print(f"rotor-bridge target flood benchmark; work dir {workdir}", flush=True)
-    t0 = time.monotonic()
-    try:
-        with Scope(workdir) as scope:
-            result = run(scope, args.quick, args.samples, args.rate)
-    except KeyboardInterrupt:
-        ABORT.set()
-        print("\ninterrupted; every process started has been stopped", file=sys.stderr)
-        return 130
-    finally:
-        shutil.rmtree(workdir, ignore_errors=True)
-    result.duration_s = time.monotonic() - t0
-    result.finished_at = datetime.now(UTC).isoformat(timespec="seconds")
-    print("\n" + render(result))
-    if args.json:
-        doc = {
-            "command": ("python -m benchmarks.target_flood " + " ".join(args_in)).strip(),
-            "environment": environment(),
-            "items": {"target_flood": as_json(result, args.quick)},
-        }
-        args.json.write_text(json.dumps(doc, indent=1, default=str) + "\n")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # the flood sender's entry (Sender); the item runs in benchmarks
+    if sys.argv[1:2] != ["--sender"]:
+        sys.exit("run it as: python -m benchmarks target_flood [--quick]")
+    sys.exit(sender_main(int(sys.argv[2]), float(sys.argv[3]), sys.argv[4:]))
