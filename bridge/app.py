@@ -98,6 +98,8 @@ class App:
             ),
             on_denied=self._denied,
             on_connect=self._connected,
+            on_new_connection=lambda: self.mqtt.main_connected(),
+            no_replay=self.topics.stops(),
             claim=Claim(
                 self.me,
                 settings.mqtt.base_topic,
@@ -108,7 +110,10 @@ class App:
         )
         self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
-            self.topics, self.client, error_events_per_s=settings.mqtt.error_events_per_s
+            self.topics,
+            self.client,
+            error_events_per_s=settings.mqtt.error_events_per_s,
+            retain_is_live=settings.mqtt.protocol == "5",
         )
         store = StateStore(settings.state_file)
         try:
@@ -161,6 +166,8 @@ class App:
             subscriptions=self.mqtt.stop_lane_subscriptions(),
             on_message=self.mqtt.on_lane_message,
             on_denied=self._denied,
+            on_new_connection=self.mqtt.lane_connected,
+            no_replay=self.mqtt.no_replay_subscriptions(),
         )
         self.client.watch_owned(self.topics.owned())
 
@@ -200,6 +207,8 @@ class App:
         ``B/bridge/info`` lists every such problem."""
         if problem not in self.client.problems:  # the stop lane's (the client's are there)
             self.client.problems.append(problem)
+        if topic == self.topics.bridge_fence:
+            self.mqtt.markers_denied()
         rid = self.topics.rotator_of(topic)
         for rot in self.rotators:
             if rid is None or rot.id == rid:

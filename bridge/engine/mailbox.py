@@ -18,6 +18,14 @@ Rules:
    (a flood of targets cost a system call and a lines-thread round per message, half the
    bridge's CPU at 10,000 a second). ``take`` clears the debt when it swaps the batch, under
    the lock: a ``put`` after that writes a byte again; one before it is in the batch taken.
+6. A hold (mqtt/lastword.py rule 2) comes with the stop or lock ON that starts it, in one put;
+   a release ends the holds up to its marker. A release that clears (the connection that
+   would have caught up was lost) ends every hold and drops a target or track put before it;
+   a target or hold put after it is newer and stays (the session applies it first).
+7. A lock ON leaves its stop in the batch (``lock_on``) even when a lock OFF follows it in the
+   same batch: the lock ON always stops the rotor.
+8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
+   writes into a descriptor number the system has handed to someone else meanwhile.
 """
 
 from __future__ import annotations
@@ -40,10 +48,15 @@ class Batch:
     lock: bool | None = None
     notes: list[str] = field(default_factory=list)
     track: Track | None = None  # applied after the stop and before the target (tracking.py)
+    lock_on: bool = False  # rule 7: a lock ON was put, whatever ``lock`` ends as
+    hold: int | None = None  # rule 6: the newest marker a hold waits for
+    release: int | None = None  # rule 6: holds up to this marker end
+    release_clear: bool = False
 
     def __bool__(self) -> bool:
         settings = self.options or self.lock is not None or self.notes
-        return bool(self.stop or self.target or settings or self.track)
+        fence = self.hold is not None or self.release is not None
+        return bool(self.stop or self.target or settings or self.track or fence)
 
 
 class Mailbox:
@@ -53,18 +66,21 @@ class Mailbox:
         self._option_order: dict[str, SetOption] = {}
         self._rfd, self._wfd = os.pipe()
         self._woken = False  # rule 5: a wake byte is owed for the batch being filled
+        self._fd_lock = threading.Lock()  # rule 8
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
     def fileno(self) -> int:
         return self._rfd
 
-    def put(self, command: Target | Stop | SetOption) -> None:
+    def put(self, command: Target | Stop | SetOption, *, hold: int | None = None) -> None:
+        """``hold``: a stop that holds the rotator until that marker (rule 6)."""
         with self._lock:
             if isinstance(command, Stop):
                 self._batch.stop = command
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
+                self._hold(hold)
             elif isinstance(command, Target):
                 self._batch.target = combine(command, self._batch.target)
             else:
@@ -72,13 +88,32 @@ class Mailbox:
                 self._option_order[command.name] = command
         self._wake_once()
 
-    def put_lock(self, locked: bool) -> None:
+    def put_lock(self, locked: bool, *, hold: int | None = None) -> None:
         with self._lock:
             self._batch.lock = locked
             if locked:
+                self._batch.lock_on = True  # rule 7
                 self._batch.target = None
                 self._batch.track = None
+                self._hold(hold)
         self._wake_once()
+
+    def put_release(self, marker: int, *, clear: bool = False) -> None:
+        """Rule 6: the holds up to ``marker`` end; ``clear``: what waits before it is dropped."""
+        with self._lock:
+            batch = self._batch
+            batch.release = marker if batch.release is None else max(batch.release, marker)
+            if clear:
+                batch.release_clear = True
+                batch.target = None
+                batch.track = None
+                batch.hold = None  # ended with the rest: a hold put after it is newer
+        self._wake_once()
+
+    def _hold(self, marker: int | None) -> None:
+        if marker is not None:
+            held = self._batch.hold
+            self._batch.hold = marker if held is None else max(held, marker)
 
     def put_track(self, track: Track) -> None:
         """Start or end tracking; it replaces a target put before it (the later command wins)."""
@@ -118,19 +153,21 @@ class Mailbox:
             self._wake()
 
     def _wake(self) -> None:
-        if self._wfd < 0:
-            return  # closed: the rotator has stopped
-        try:
-            os.write(self._wfd, b"\0")
-        except BlockingIOError:
-            pass  # the pipe is full: the worker is going to wake up anyway
+        with self._fd_lock:  # rule 8
+            if self._wfd < 0:
+                return  # closed: the rotator has stopped
+            try:
+                os.write(self._wfd, b"\0")
+            except BlockingIOError:
+                pass  # the pipe is full: the worker is going to wake up anyway
 
     def close(self) -> None:
         """Once nothing waits on it any more; a second close does nothing."""
-        fds, self._rfd, self._wfd = (self._rfd, self._wfd), -1, -1
-        for fd in fds:
-            if fd >= 0:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
+        with self._fd_lock:  # rule 8
+            fds, self._rfd, self._wfd = (self._rfd, self._wfd), -1, -1
+            for fd in fds:
+                if fd >= 0:
+                    try:
+                        os.close(fd)
+                    except OSError:
+                        pass

@@ -12,6 +12,7 @@ the lock or a lost link overtook before it could be sent, and reports that as a 
 from __future__ import annotations
 
 import logging
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -80,6 +81,7 @@ class Rotator:
         self._on_event = on_event
         self._wall = wall
         self._locked = store.locked(self.id)
+        self._save_lock = threading.Lock()
         self._mailbox = Mailbox()
         self._worker = Worker(
             cfg,
@@ -137,8 +139,11 @@ class Rotator:
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
 
-    def submit(self, command: Command, described: str | None = None) -> None:
-        """Queue a command or raise Refused. Stop is never refused."""
+    def submit(
+        self, command: Command, described: str | None = None, *, hold: int | None = None
+    ) -> None:
+        """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
+        stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
         try:
             judged = self._check(command)
         except Refused as exc:
@@ -146,7 +151,11 @@ class Rotator:
             raise
         if isinstance(command, SetOption):
             self._store.set_option(self.id, command.name, command.enabled)
-        self._mailbox.put(judged)
+        self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
+
+    def release(self, marker: int, *, clear: bool = False) -> None:
+        """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
+        self._mailbox.put_release(marker, clear=clear)
 
     # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
     def go_to_preset(self, name: str, source: Source, described: str) -> None:
@@ -252,10 +261,21 @@ class Rotator:
             raise
         self.submit(target, described)
 
-    def set_lock(self, locked: bool) -> None:
+    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+        """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
+        (outside its own lock: the state file is written with an fsync)."""
         self._locked = locked
-        self._mailbox.put_lock(locked)
-        if not self._store.set_locked(self.id, locked):
+        self._mailbox.put_lock(locked, hold=hold)
+        if save:
+            self.save_lock()
+
+    def save_lock(self) -> None:
+        """The lock as it is now to the state file: of two threads, the last to save writes
+        the newer word, whichever was set first."""
+        with self._save_lock:
+            locked = self._locked
+            saved = self._store.set_locked(self.id, locked)
+        if not saved:
             self.report(
                 ErrorKind.STATE,
                 f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "

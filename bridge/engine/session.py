@@ -40,6 +40,14 @@ Rules:
 10. Tracking (tracking.py) puts its own targets, judged like any; a stop, the lock, a track
    command or any other target ends it. Its targets skip the "already within tolerance"
    check a target gets before it is sent: a track's steps may be finer than the tolerance.
+11. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening
+   is the first frame written once it is open again (stopping is always safe).
+12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
+   that was taken: a command after it that is carried out clears it.
+13. The last word (mqtt/lastword.py): a stop or lock ON from the stop lane holds the rotator:
+   no target (the user's, tracking's, auto-park's) goes to the controller until the batch
+   that releases it, put by the main connection when it has caught up. A release that clears
+   drops whatever target or tracking waits.
 """
 
 from __future__ import annotations
@@ -94,6 +102,8 @@ class RotatorSession:
         self._junk_reported_t = -1e18
         self._stop_at_rest = False  # turned away (motion rule 5): a stop when it is still
         self._port_error: str | None = None
+        self._stop_owed = False  # rule 11: a stop came while the port was closed
+        self.hold: int | None = None  # rule 13: no target goes out until this marker is back
         self.wall_offset_s = 0.0
         self.az_shown = st.Hysteresis()
         self.el_shown = st.Hysteresis()
@@ -127,6 +137,11 @@ class RotatorSession:
         self._enable_due = False
         self._options_sent_t = 0.0
         self._options_due = set(self.options) if self.answering else set()
+        if self._stop_owed:  # rule 11: before anything else the controller gets
+            self._stop_owed = False
+            log.info("%s: sending the stop that came while the port was closed", self.name)
+            self.link.write_stop(now)
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
         for frame in self.link.codec.encode_connect(wall_s):
             self.link.write(frame, now)
         return self._step(now)
@@ -147,15 +162,16 @@ class RotatorSession:
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
         link = self.link
+        if batch.stop or batch.target or batch.lock is not None or batch.options or batch.track:
+            self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
             self.view.last_error = note
         if batch.lock is not None:
             self.locked = batch.lock
-            if batch.lock:
-                self.tracker.end("lock")
-                self._drop_pending(None)
-                if link is not None:
-                    self.stop_now(now)  # whatever we believe: the lock is for tower work
+        if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
+            self.tracker.end("lock")
+            self._drop_pending(None)
+            self._stop_or_owe(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
@@ -163,8 +179,9 @@ class RotatorSession:
             self.targets.clear()
             self.view.last_source = batch.stop.source.value
             self.view.target_info, self.view.park_raw = None, None
-            if link is not None and not self._stop_merges(now):
-                self.stop_now(now)
+            if link is None or not self._stop_merges(now):
+                self._stop_or_owe(now)
+        self._fence(batch, now)
         for opt in batch.options:
             self.options[opt.name] = opt.enabled
             if link is not None:
@@ -182,6 +199,28 @@ class RotatorSession:
             else:
                 self.targets.put(batch.target, now)
         return self._step(now)
+
+    def _stop_or_owe(self, now: float) -> None:
+        """Rule 11: a stop now, or, while the port is closed, as the first frame it gets."""
+        if self.link is not None:
+            self.stop_now(now)
+        else:
+            self._stop_owed = True
+
+    def _fence(self, batch: Batch, now: float) -> None:
+        """Rule 13: a hold starts with its stop and ends with its marker; one that ends with
+        clearing drops what waited meanwhile (its place in line was lost)."""
+        if batch.release_clear and self.hold is not None:  # (mailbox rule 6: before the rest)
+            self.hold = None
+            why = "a stop or lock overtook it and the MQTT connection that brought it dropped"
+            self._drop_pending(why)
+            if self.tracker.end("a stop or lock came first; send the track command again"):
+                self.drop_tracking_target()
+        if batch.hold is not None:
+            self.hold = batch.hold if self.hold is None else max(self.hold, batch.hold)
+        if batch.release is not None and self.hold is not None and self.hold <= batch.release:
+            self.hold = None
+            log.debug("%s: hold ended", self.name)
 
     def drop_tracking_target(self) -> None:
         """Tracking has ended: a target of its own still waiting must not go out after it."""
@@ -415,8 +454,8 @@ class RotatorSession:
     def _try_target(self, link: Link, now: float) -> None:
         pending = self.targets.pending
         assert pending is not None
-        if link.stop_due:
-            return  # the stop goes first
+        if link.stop_due or self.hold is not None:
+            return  # the stop goes first; a held target waits for its marker (rule 13)
         m, mcfg = self.motion, self.cfg.motion
         az, el = self.resolve(pending)
         if az is None:

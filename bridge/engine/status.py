@@ -49,7 +49,8 @@ class View:
     controller_time: str | None = None
     last_error: str | None = None
     last_source: str | None = None
-    target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates)
+    target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
+    # a target still waiting (a brake delay) shows its own: it is the current one for ``long``
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
 
 
@@ -85,7 +86,7 @@ def current(session: RotatorSession, now: float) -> RotatorStatus:
         bearing_deg=None if raw is None else aim.true_of(raw),
         raw_bearing_deg=raw,
         overlap=aim.overlap(raw),
-        target_info=view.target_info,
+        target_info=pending.info if pending is not None else view.target_info,
         parked=_parked(session, state),
         tracking=session.tracker.info,
         tracking_ended=session.tracker.ended,

@@ -191,6 +191,23 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
     return c
 
 
+def command_filters(
+    filters: list[str], no_replay: frozenset[str], v5: bool
+) -> list[tuple[str, Any]]:
+    """Rules 1 and 4 for both connections: command topics at COMMAND_QOS, MQTT 5 with
+    retain-as-published; the filters in ``no_replay`` (stop: lastword.py rule 6) also ask the
+    broker not to replay their retained message on subscribing (retain handling 2)."""
+    if not v5:
+        return [(topic, COMMAND_QOS) for topic in filters]
+    live = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
+    fresh = SubscribeOptions(
+        qos=COMMAND_QOS,
+        retainAsPublished=True,
+        retainHandling=SubscribeOptions.RETAIN_DO_NOT_SEND,
+    )
+    return [(topic, fresh if topic in no_replay else live) for topic in filters]
+
+
 def connect(c: paho.Client, settings: MqttSettings) -> None:
     """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
     s = settings
@@ -245,6 +262,8 @@ class MqttClient:
         subscriptions: list[str],
         on_message: MessageHandler,
         on_connect: Callable[[], None] | None = None,
+        on_new_connection: Callable[[], None] | None = None,
+        no_replay: list[str] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
         claim: Claim | None = None,
         on_refused: Callable[[str], None] | None = None,
@@ -257,6 +276,8 @@ class MqttClient:
         self._subscriptions = subscriptions
         self._handler = on_message
         self._on_connect_hook = on_connect
+        self._on_new_connection = on_new_connection
+        self._no_replay = frozenset(no_replay or ())
         self._on_denied = on_denied
         self._retained: dict[str, tuple[bytes, int]] = {}  # topic -> (payload, QoS)
         self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
@@ -392,6 +413,18 @@ class MqttClient:
             else:
                 self._backlog.append((topic, payload))
 
+    def publish_marker(self, topic: str, payload: str) -> None:
+        """A message to the bridge itself (lastword.py): QoS 0, now or never (no cache, no
+        backlog: one that cannot go now is void with the connection), during the first look
+        too. paho's publish is thread-safe; the stop lane's thread calls this."""
+        if self._up:
+            self._client.publish(topic, payload.encode(), qos=0)
+
+    @property
+    def up(self) -> bool:
+        """A connection is accepted (its first look may still run)."""
+        return self._up
+
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
         """At shutdown: mark these retained topics offline and wait until the broker has them."""
         infos = []
@@ -443,19 +476,17 @@ class MqttClient:
         self._up = True
         self._guard.connected(self._clock())
         log.info("connected to MQTT broker")
+        if self._on_new_connection is not None:  # before any message of the new connection
+            self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
         # subscribe before saying `online`: the broker handles our packets in order, so a
         # client that sends a command the moment it sees `online` is already heard
-        if self._v5:
-            opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
-            self._subscribe(client, [(topic, opts) for topic in self._subscriptions])
-            if self._owned:  # rule 10: not our own messages back
-                mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
-                self._subscribe(client, [(topic, mine) for topic in self._owned])
-        else:
-            self._subscribe(client, [(topic, COMMAND_QOS) for topic in self._subscriptions])
-            if self._owned:
-                self._subscribe(client, [(topic, 0) for topic in self._owned])
+        self._subscribe(client, command_filters(self._subscriptions, self._no_replay, self._v5))
+        if self._v5 and self._owned:  # rule 10: not our own messages back
+            mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
+            self._subscribe(client, [(topic, mine) for topic in self._owned])
+        elif self._owned:
+            self._subscribe(client, [(topic, 0) for topic in self._owned])
         held = client.drop_out_messages()  # rule 12: paho would send them after this returns
         with self._lock:
             with self._ids_lock:  # acknowledgements of the old connection never come

@@ -9,10 +9,11 @@ to the same handler as the main connection's (the service: the same rules for re
 payloads and the lock).
 
 Rules:
-1. Subscribed to the stop and lock topics only (the main connection has them too: each halt is
-   carried out by the first copy, service.py rule 5 and fence.py, so a lane that is down or
-   refused loses no stop, only speed). It publishes nothing: no will, no state; the main
-   connection (client.py) is the bridge's presence.
+1. Subscribed to the stop and lock topics only (the main connection has them too, and its
+   copies keep the order: lastword.py decides what each copy does, so a lane that is down or
+   refused loses no stop, only speed). The stop topics are subscribed without the broker's
+   replay of a retained stop (lastword.py rule 6). It publishes nothing: no will, no state;
+   the main connection (client.py) is the bridge's presence and carries its markers.
 2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
    retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
    quick-ack (client.py rule 9). Client id: ``lane_client_id`` (the main id with ``rstop-``
@@ -37,12 +38,11 @@ from typing import Any
 import paho.mqtt.client as paho
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
-from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.client import (
-    COMMAND_QOS,
     MessageHandler,
     TakeoverGuard,
+    command_filters,
     connect,
     ending_of,
     new_client,
@@ -72,6 +72,8 @@ class StopLane:
         subscriptions: list[str],
         on_message: MessageHandler,
         on_denied: Callable[[str, str], None] | None = None,
+        on_new_connection: Callable[[], None] | None = None,
+        no_replay: list[str] | None = None,
         reconnect_min_s: int = 1,
         reconnect_max_s: int = 30,
     ) -> None:
@@ -79,6 +81,11 @@ class StopLane:
         self._subscriptions = subscriptions
         self._handler = on_message
         self._on_denied = on_denied
+        self._on_new_connection = on_new_connection
+        self._no_replay = frozenset(no_replay or ())
+        self._ended = False  # stop() was called: start() does nothing any more
+        self._started = False
+        self._start_lock = threading.Lock()
         self._v5 = settings.protocol == "5"
         self._guard = TakeoverGuard()
         self._slowed = False
@@ -98,11 +105,20 @@ class StopLane:
         self._client = c
 
     def start(self) -> None:
-        connect(self._client, self._settings)
+        """Once; never after ``stop()`` (a shutdown under way: the lane stays down)."""
+        with self._start_lock:
+            if self._ended or self._started:
+                return
+            self._started = True
+            connect(self._client, self._settings)
 
     def stop(self) -> None:
-        self._client.disconnect()
-        self._client.loop_stop()
+        with self._start_lock:
+            self._ended = True
+            started = self._started
+        if started:
+            self._client.disconnect()
+            self._client.loop_stop()
 
     # -- paho callbacks (the lane's own paho thread) ----------------------------------------
     def _on_connect(
@@ -119,12 +135,9 @@ class StopLane:
             return
         self._up = True
         self._guard.connected(time.monotonic())
-        subs: list[tuple[str, Any]]
-        if self._v5:
-            opts = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
-            subs = [(topic, opts) for topic in self._subscriptions]
-        else:
-            subs = [(topic, COMMAND_QOS) for topic in self._subscriptions]
+        if self._on_new_connection is not None:  # before any message of the new connection
+            self._on_new_connection()
+        subs = command_filters(self._subscriptions, self._no_replay, self._v5)
         if subs:
             _rc, mid = client.subscribe(subs)
             if mid is not None:

@@ -22,11 +22,11 @@ Rules:
    were left out. Every other kind (a stall, a stop that did not take, the serial line) is
    always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
    neither queue 200,000 QoS 1 messages nor delay the state.
-5. Stop and lock come on both connections, the main one and the stop lane (lane.py); fence.py
-   keeps a halt's place in line: the first copy is carried out, the other dropped, and a
-   command that would move the rotor arriving on the main connection after a halt the lane
-   carried out is dropped and reported (it was published before the halt). The lane's
-   retained messages other than a stop, and its lock OFF, are left to the main connection.
+5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
+   lastword.py decides what each copy does: the main connection's carry out every word in
+   order; the lane's stop or lock ON is carried out at once and holds the rotator's targets
+   until the bridge's marker comes back on the main connection. The decision and the mailbox
+   put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
 """
@@ -43,7 +43,7 @@ from typing import Protocol
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.fence import Fence
+from bridge.mqtt.lastword import RESEND_S, LastWord
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
@@ -70,8 +70,16 @@ class RotatorPort(Protocol):
 
     @property
     def status(self) -> RotatorStatus: ...
-    def submit(self, command: Target | Stop | SetOption, described: str | None = None) -> None: ...
-    def set_lock(self, locked: bool) -> None: ...
+    def submit(
+        self,
+        command: Target | Stop | SetOption,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+    ) -> None: ...
+    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None: ...
+    def save_lock(self) -> None: ...
+    def release(self, marker: int, *, clear: bool = False) -> None: ...
     def report_refusal(self, message: str, command: str | None) -> None: ...
     def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
     def park(self, source: Source, described: str) -> None: ...
@@ -101,14 +109,19 @@ class Publisher(Protocol):
 
     ``publish_retained`` with ``only_if_changed`` sends nothing when the payload equals the last
     one for that topic (rule 3). ``publish_offline_now`` marks retained topics ``offline`` and
-    waits until the broker has them (shutdown).
+    waits until the broker has them (shutdown). ``publish_marker`` sends a message to the
+    bridge itself, at QoS 0, now or never (lastword.py); ``up``: a connection is accepted.
     """
 
     def publish_retained(
         self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
     ) -> None: ...
     def publish_event(self, topic: str, payload: str | bytes) -> None: ...
+    def publish_marker(self, topic: str, payload: str) -> None: ...
     def publish_offline_now(self, topics: list[str]) -> None: ...
+
+    @property
+    def up(self) -> bool: ...
     def start(self) -> None: ...
     def stop(self) -> None: ...
 
@@ -122,9 +135,13 @@ class MqttService:
         wall: Callable[[], float] = time.time,
         error_events_per_s: float = RATE_PER_S,
         clock: Callable[[], float] = time.monotonic,
+        retain_is_live: bool = True,
     ) -> None:
+        """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
+        handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
         self.topics = topics
         self._publisher = publisher
+        self._retain_is_live = retain_is_live
         self._wall = wall
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._rotators: dict[str, RotatorPort] = {}
@@ -132,8 +149,10 @@ class MqttService:
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
         self._clock = clock
-        self._fence = Fence()  # rule 5
-        self._fence_lock = threading.Lock()  # two connections, two paho threads
+        self._word = LastWord()  # rule 5
+        self._word_lock = threading.Lock()  # two connections, two paho threads
+        self._resend_timer: threading.Timer | None = None
+        self._markers_denied = False
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
@@ -164,6 +183,86 @@ class MqttService:
     def stop_lane_subscriptions(self) -> list[str]:
         """Stop and lock, for the connection of their own (lane.py); also handled here."""
         return self.topics.stop_lane()
+
+    def no_replay_subscriptions(self) -> list[str]:
+        """Filters the broker is asked not to replay retained messages of (lastword.py rule 6)."""
+        return self.topics.stops()
+
+    # -- the last word (lastword.py), both connections ------------------------------------------
+    def main_connected(self) -> None:
+        """The main connection is new (before its first message): holds end with clearing."""
+        with self._word_lock:
+            for rid in self._word.main_connected():
+                rot = self._rotators.get(rid)
+                if rot is not None:
+                    rot.release(0, clear=True)
+
+    def lane_connected(self) -> None:
+        with self._word_lock:
+            self._word.lane_connected()
+
+    def markers_denied(self) -> None:
+        """The broker will not let the main connection read the markers (an ACL): no hold
+        could end but by a reconnect, so the lane's halts hold nothing (lastword.py rule 7)."""
+        with self._word_lock:
+            self._markers_denied = True
+        self.main_connected()
+
+    def _main_up(self) -> bool:
+        return self._publisher.up and not self._markers_denied
+
+    def _send_marker(self, n: int) -> None:
+        self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
+        with self._word_lock:
+            if self._resend_timer is not None:
+                return
+            timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
+        timer.daemon = True
+        timer.start()
+
+    def _resend_marker(self) -> None:
+        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
+        with self._word_lock:
+            self._resend_timer = None
+            if not self._word.holding:
+                return
+        self._resend_marker_if_due()
+        with self._word_lock:
+            if self._resend_timer is not None or not self._word.holding:
+                return
+            timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
+        timer.daemon = True
+        timer.start()
+
+    def _resend_marker_if_due(self) -> None:
+        with self._word_lock:
+            n = self._word.resend_due(self._clock())
+        if n is not None:
+            log.info("a marker of the stop lane did not come back; sending another")
+            self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
+
+    def _marker_back(self, payload: bytes) -> None:
+        with self._word_lock:
+            n, released = self._word.marker_back(payload)
+            for rid in released:
+                rot = self._rotators.get(rid)
+                if rot is not None:
+                    rot.release(n)
+
+    def _retained_stop(self, rot: RotatorPort, topic: str, payload: bytes) -> None:
+        """Rule 1 and lastword.py rule 6: carried out when published, once at most when the
+        broker replays it (MQTT 3.1.1; under MQTT 5 the broker does not replay stops)."""
+        replayed = not self._retain_is_live
+        with self._word_lock:
+            if not self._word.retained_stop(topic, payload, replayed):
+                log.debug("%s: retained stop on %s already carried out once", rot.id, topic)
+                return
+            rot.submit(Stop(Source.MQTT), pl.describe("stop", payload))
+        rot.report_refusal(
+            f"stop on {topic} was published retained: executed (stopping is always safe), "
+            "but clear it with an empty retained message",
+            pl.describe("stop", payload),
+        )
 
     def start(self) -> None:
         self._publisher.start()
@@ -218,53 +317,69 @@ class MqttService:
             doc["suppressed"] = left_out
         self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
 
-    # -- inbound (paho's thread) ------------------------------------------------------------
+    # -- inbound (paho's threads) -----------------------------------------------------------
     def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        """The stop lane's messages (rule 5)."""
-        self.on_message(topic, payload, retain, lane=True)
-
-    def on_message(
-        self, topic: str, payload: bytes, retain: bool, *, lane: bool = False, gated: bool = False
-    ) -> None:
+        """The stop lane's messages (rule 5; lastword.py rule 2)."""
         route = self.topics.route(topic)
         if route is None:
+            return
+        rotator_id, kind, _arg = route
+        rot = self._rotators.get(rotator_id)
+        if rot is None or kind not in ("stop", "lock"):
+            return
+        if retain:
+            if kind == "stop" and payload:  # (an empty one deletes it: rule 1)
+                self._retained_stop(rot, topic, payload)
+            return  # a retained lock: the main connection reports it
+        if kind == "lock":
+            try:
+                on = pl.parse_switch(payload)
+            except pl.PayloadError:
+                return  # the main connection reports it
+            if not on:
+                if not self._main_up():  # lastword.py rule 3: the only word there is
+                    rot.set_lock(False)
+                return
+        what = pl.describe(kind, payload)
+        marker: int | None = None
+        with self._word_lock:
+            if self._main_up():
+                marker = self._word.lane_halt(rotator_id, kind, self._clock())
+                if marker is None:
+                    log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
+                    return  # lastword.py rule 4: the echo of the main connection's copy
+            if kind == "stop":
+                rot.submit(Stop(Source.MQTT), what, hold=marker)
+            else:
+                rot.set_lock(True, hold=marker, save=False)
+        if kind == "lock":
+            rot.save_lock()
+        if marker is not None:
+            self._send_marker(marker)
+
+    def on_message(self, topic: str, payload: bytes, retain: bool, *, gated: bool = False) -> None:
+        """The main connection's messages, in the order the broker sent them (rule 5)."""
+        route = self.topics.route(topic)
+        if route is None:
+            if topic == self.topics.bridge_fence:
+                self._marker_back(payload)
+                return
             for handler in self._handlers:
                 if handler(topic, payload, retain):
                     return
             return
+        self._resend_marker_if_due()
         rotator_id, kind, arg = route
         rot = self._rotators.get(rotator_id)
         if rot is None:
             return
         if retain and not payload:
+            with self._word_lock:
+                self._word.retained_stop(topic, payload, True)  # deleted: forgotten
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
-        halt = kind == "stop" or (kind == "lock" and not retain and _switch_on(payload))
-        if lane and (retain and kind != "stop" or kind == "lock" and not halt):
-            return  # rule 5: the main connection's copy comes in order with the targets
-        if gated and not halt and not retain:  # rule 6 (a retained one is reported below)
-            rot.report_refusal(
-                "not taken: the bridge is still checking that no other bridge runs on its base "
-                "topic (its first look after connecting); send it again",
-                what,
-            )
-            return
-        with self._fence_lock:
-            if halt:
-                if not self._fence.halt(rotator_id, kind, lane, self._clock()):
-                    return  # rule 5: the other connection's copy was carried out
-            elif kind in _MOVES and self._fence.holds(rotator_id, self._clock()):
-                rot.report_refusal(
-                    "dropped: a stop (or the lock) published after it has been carried out", what
-                )
-                return
         if retain and kind == "stop":
-            rot.submit(Stop(Source.MQTT), what)
-            rot.report_refusal(
-                f"stop on {topic} was published retained: executed (stopping is always safe), "
-                "but clear it with an empty retained message",
-                what,
-            )
+            self._retained_stop(rot, topic, payload)
             return
         if retain:
             rot.report_refusal(
@@ -273,10 +388,26 @@ class MqttService:
                 what,
             )
             return
+        halt = kind == "stop" or (kind == "lock" and _switch_on(payload))
+        if gated and not halt:  # rule 6
+            rot.report_refusal(
+                "not taken: the bridge is still checking that no other bridge runs on its base "
+                "topic (its first look after connecting); send it again",
+                what,
+            )
+            return
+        if halt:
+            with self._word_lock:  # lastword.py rule 1: carried out in order, noted for rule 4
+                self._word.main_halt(rotator_id, kind, self._clock())
+                if kind == "stop":
+                    rot.submit(Stop(Source.MQTT), what)
+                else:
+                    rot.set_lock(True, save=False)
+            if kind == "lock":
+                rot.save_lock()
+            return
         try:
-            if kind == "stop":
-                rot.submit(Stop(Source.MQTT), what)
-            elif kind == "target":
+            if kind == "target":
                 aim = pl.parse_aim(payload)
                 if isinstance(aim, pl.Place):
                     lat, lon = aim.latitude_deg, aim.longitude_deg

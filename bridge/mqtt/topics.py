@@ -143,6 +143,11 @@ class Topics:
         """Where a bridge's first look goes to come back to it (mqtt/claim.py)."""
         return f"{self.base}/bridge/hello"
 
+    @property
+    def bridge_fence(self) -> str:
+        """Where the bridge's markers go to come back on the main connection (lastword.py)."""
+        return f"{self.base}/bridge/fence"
+
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
         best: tuple[int, str] | None = None
@@ -156,12 +161,18 @@ class Topics:
         return self._rotators[rotator_id]
 
     def subscriptions(self) -> list[str]:
-        """The command topics of the main connection (stop and lock too: service.py rule 5)."""
+        """The command topics of the main connection (stop and lock too: service.py rule 5),
+        and the bridge's own markers (lastword.py rule 2)."""
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track]
-        return subs
+        return [*subs, self.bridge_fence]
+
+    def stops(self) -> list[str]:
+        """The stop topics: subscribed without the broker's replay of a retained message
+        (lastword.py rule 6)."""
+        return [t.stop for t in self._rotators.values()]
 
     def stop_lane(self) -> list[str]:
         """Stop and lock also on a connection of their own (lane.py), behind no flood of

@@ -42,6 +42,11 @@ class RecordingPublisher:
         text = payload.decode() if isinstance(payload, bytes) else payload
         self.sent.append((topic, text, False))
 
+    def publish_marker(self, topic: str, payload: str) -> None:
+        self.sent.append((topic, payload, False))
+
+    up = True
+
     def publish_offline_now(self, topics: list[str]) -> None:
         self.log.append("offline " + " ".join(topics))
         for topic in topics:
@@ -71,13 +76,25 @@ class RecordingRotator:
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
 
-    def submit(self, command: Target | Stop | SetOption, described: str | None = None) -> None:
-        self.calls.append(("submit", command, described))
+    def submit(
+        self,
+        command: Target | Stop | SetOption,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+    ) -> None:
+        self.calls.append(("submit", command, described, *([hold] if hold else [])))
         if self._refuse is not None:
             raise self._refuse
 
-    def set_lock(self, locked: bool) -> None:
-        self.calls.append(("lock", locked))
+    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+        self.calls.append(("lock", locked, *([hold] if hold else [])))
+
+    def save_lock(self) -> None:
+        pass
+
+    def release(self, marker: int, *, clear: bool = False) -> None:
+        self.calls.append(("release", marker, *(["clear"] if clear else [])))
 
     def report_refusal(self, message: str, command: str | None) -> None:
         self.calls.append(("refused", message, command))
@@ -460,6 +477,7 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/bridge/fence",
         "ha/status",
         "x/#",
     ]
@@ -477,21 +495,97 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
     assert rots["tower"].calls == [("submit", Target(5.0, None, M), "target '5'")]
 
 
-def test_two_copies_of_a_stop_halt_once_and_a_target_read_between_them_is_dropped() -> None:
-    """Rule 5: stop on the lane and on the main connection; a target published before the stop
-    but read on the main connection after the lane's copy was carried out never runs."""
-    svc, _pub, rots = service({"tower": "rotorez"})
+def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_one() -> None:
+    """Rule 5 (lastword.py rules 1 and 2): the lane's stop is carried out at once with a hold;
+    the main connection carries out everything in order, its own copy of the stop included;
+    the marker published after the lane's stop ends the hold when the main one reads it."""
+    svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.on_lane_message("rotor/stop", b"", False)
+    (marker,) = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
     svc.on_message("rotor/target", b"300", False)  # published before the stop
     svc.on_message("rotor/stop", b"", False)  # the main connection's copy
     svc.on_message("rotor/target", b"250", False)  # published after it
     svc.on_lane_message("rotor/lock", b"OFF", False)  # never from the lane: in order on main
-    assert [c[0] for c in tower.calls] == ["submit", "refused", "submit"]
-    assert "dropped" in str(tower.calls[1][1])
-    assert isinstance(tower.calls[0][1], Stop) and tower.calls[2][1] == Target(
-        250.0, None, Source.MQTT
-    )
+    svc.on_message("rotor/bridge/fence", b"not-ours 1", False)  # another's marker: nothing
+    svc.on_message(marker[0], marker[1].encode(), False)
+    stop = Stop(Source.MQTT)
+    assert tower.calls == [
+        ("submit", stop, "stop", 1),
+        ("submit", Target(300.0, None, M), "target '300'"),
+        ("submit", stop, "stop"),
+        ("submit", Target(250.0, None, M), "target '250'"),
+        ("release", 1),
+    ]
+
+
+def test_the_lanes_late_copy_of_a_stop_the_main_connection_carried_out_is_its_echo() -> None:
+    """lastword.py rule 4: main read it first; the lane's copy must not stop the target
+    published after the stop (already on its way); the next lane stop is carried out."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.on_message("rotor/stop", b"", False)
+    svc.on_message("rotor/target", b"250", False)
+    svc.on_lane_message("rotor/stop", b"", False)  # the echo
+    svc.on_lane_message("rotor/stop", b"", False)  # a new stop: at once, with a hold
+    stop = Stop(Source.MQTT)
+    assert tower.calls == [
+        ("submit", stop, "stop"),
+        ("submit", Target(250.0, None, M), "target '250'"),
+        ("submit", stop, "stop", 1),
+    ]
+
+
+def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:
+    """lastword.py rule 1: the main connection's words in order are the last word; the lane
+    only adds a lock ON at once."""
+    svc, _pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.on_lane_message("rotor/lock", b"OFF", False)
+    svc.on_lane_message("rotor/lock", b"ON", False)
+    svc.on_message("rotor/lock", b"OFF", False)
+    svc.on_message("rotor/lock", b"ON", False)
+    assert [c for c in tower.calls if c[0] == "lock"][-1] == ("lock", True)
+    tower.calls.clear()
+    svc.on_lane_message("rotor/lock", b"ON", False)
+    svc.on_lane_message("rotor/lock", b"OFF", False)
+    svc.on_message("rotor/lock", b"ON", False)
+    svc.on_message("rotor/lock", b"OFF", False)
+    assert [c for c in tower.calls if c[0] == "lock"] == [
+        ("lock", True, 2),
+        ("lock", True),
+        ("lock", False),
+    ]
+
+
+def test_a_new_main_connection_ends_the_holds_with_clearing() -> None:
+    """lastword.py rule 5: the marker cannot come back on a connection that dropped."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    svc.on_lane_message("rotor/stop", b"", False)
+    svc.main_connected()
+    svc.main_connected()  # nothing held any more
+    assert rots["tower"].calls[1:] == [("release", 0, "clear")]
+
+
+def test_a_replayed_retained_stop_is_carried_out_once() -> None:
+    """lastword.py rule 6, MQTT 3.1.1: a retained stop comes again on every subscription of
+    either connection; a new one (another payload, or after deletion) is carried out."""
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, retain_is_live=False)
+    tower = RecordingRotator("tower", "rotorez")
+    svc.attach(tower)
+    svc.on_lane_message("rotor/stop", b"STOP", True)
+    svc.on_message("rotor/stop", b"STOP", True)
+    svc.on_lane_message("rotor/stop", b"STOP", True)  # the lane reconnected
+    svc.on_message("rotor/stop", b"", True)  # deleted
+    svc.on_message("rotor/stop", b"STOP", True)
+    assert [c[0] for c in tower.calls] == ["submit", "refused", "submit", "refused"]
+    live = MqttService(Topics("rotor", {"tower": "rotor"}), pub)  # MQTT 5: every one is live
+    tower = RecordingRotator("tower", "rotorez")
+    live.attach(tower)
+    live.on_message("rotor/stop", b"STOP", True)
+    live.on_message("rotor/stop", b"STOP", True)
+    assert [c[0] for c in tower.calls] == ["submit", "refused", "submit", "refused"]
 
 
 def test_while_gated_only_halts_are_taken_and_the_rest_is_reported() -> None:

@@ -20,8 +20,10 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/bridge/fence",
     ]
     assert t.stop_lane() == ["rotor/stop", "rotor/lock"]
+    assert t.stops() == ["rotor/stop"]
 
 
 def test_routing_inbound_topics() -> None:

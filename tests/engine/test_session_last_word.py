@@ -1,0 +1,118 @@
+"""The last word in the session (session rules 11-13, mailbox rules 6-7), in virtual time with
+the Rotor-EZ emulator: what the controller understood and where the rotor ends.
+
+The two MQTT connections are stood in for by what they put in the mailbox: the stop lane's
+stop with its hold, the main connection's copies in order, and the release its marker brings
+(mqtt/lastword.py; the real-broker orderings are in tests/integration/test_last_word.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.model import MotionState, Source, Stop, Target, TargetInfo
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE = MotionState.IDLE
+
+
+def ready(rig: Rig, **kw: object) -> VirtualRotator:
+    v = rig("rotorez", **kw)
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def bearings(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    return [f.data for f in v.frames(*BEARING_OUTCOMES, since=since)]
+
+
+def test_a_target_read_after_a_lane_stop_waits_and_the_main_copy_of_the_stop_drops_it(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=1)  # the lane's stop
+    v.mailbox.put(Target(300.0))  # the main connection: published before the stop
+    v._take()
+    v.run_for(8)  # the rotor stopped and braked; the held target did not go out
+    assert bearings(v) == [b"AP1200\r"] and not v.truth().is_moving
+    stopped_at = v.truth().az_deg
+    v.stop()  # the main connection's copy of the stop: drops the target before it
+    v.target(250)  # published after the stop
+    v.run_for(8)
+    assert bearings(v) == [b"AP1200\r"]  # still held: the marker is not back
+    assert v.truth().az_deg == stopped_at
+    v.mailbox.put_release(1)
+    v._take()
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 250) < 4, 120, "at 250")
+    assert bearings(v) == [b"AP1200\r", b"AP1250\r"]
+    assert t < v.now
+
+
+def test_a_hold_ended_by_a_lost_connection_drops_what_waited(rig: Rig) -> None:
+    """Rule 13: the target's place in line is lost; it is reported, never carried out."""
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put(Stop(Source.MQTT), hold=3)
+    v.mailbox.put(Target(300.0))  # its copy of the stop never came: the connection dropped
+    v._take()
+    v.mailbox.put_release(0, clear=True)
+    v.mailbox.put(Target(120.0))  # the new connection's: newer, stays
+    v._take()
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 120) < 4, 120, "at 120")
+    assert bearings(v, since=t) == [b"AP1120\r"]
+    assert any("connection that brought it dropped" in e.message for e in v.errors())
+
+
+def test_a_lock_on_then_off_in_one_batch_still_stops_the_rotor(rig: Rig) -> None:
+    """Mailbox rule 7: the ON's stop is not lost to the OFF that followed it."""
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    stops = len(v.frames("stop"))
+    v.mailbox.put_lock(True)
+    v.mailbox.put_lock(False)
+    v._take()
+    v.run_for(1)
+    assert len(v.frames("stop")) > stops
+    assert not v.truth().is_moving
+    assert v.status.locked is False
+
+
+def test_a_stop_while_the_port_is_closed_is_the_first_frame_once_it_is_open(rig: Rig) -> None:
+    """Rule 11: the rotor turning when the adapter dropped out is stopped when it is back."""
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    v.link_down("unexpected error")
+    v.stop()
+    v.run_for(2)
+    t = v.now
+    v.link_up()
+    v.run_for(0.5)
+    assert v.sent(since=t)[0] == b";"
+    assert v.frames(since=t)[0].outcome == "stop"
+    v.run_for(2)
+    assert not v.truth().is_moving
+
+
+def test_a_waiting_locator_target_is_the_current_one_and_a_success_clears_the_last_error(
+    rig: Rig,
+) -> None:
+    """Tried as a new user: a locator target that waits out the brake shows its place (the
+    console and ``long`` need it), and the last error goes once a command is carried out."""
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning")
+    v.stop()  # the rotor brakes for 5 s: a target now waits
+    v.mailbox.put_note("azimuth 999 out of range")  # a refusal the judge made
+    v._take()
+    assert v.status.last_error == "azimuth 999 out of range"
+    info = TargetInfo(-35.3, 149.1, 16000.0, 120.0, 300.0, locator="QF44")
+    v.command(Target(120.0, None, Source.MQTT, info=info))
+    assert v.status.target_info == info  # waiting out the brake, already the current one
+    assert v.status.last_error is None
