@@ -4,14 +4,7 @@ makes the bridge send to its victim, so one address gets a burst and then a few 
 from __future__ import annotations
 
 from bridge.loggers.limiter import ReplyLimiter
-
-
-class Clock:
-    def __init__(self) -> None:
-        self.t = 100.0
-
-    def __call__(self) -> float:
-        return self.t
+from tests.support.clock import FakeClock as Clock
 
 
 def test_a_burst_then_the_rate_and_the_rest_dropped_and_counted() -> None:

@@ -20,6 +20,7 @@ from bridge.loggers.limiter import REPLY_BURST
 from bridge.loggers.server import PER_WAKEUP
 from bridge.model import RotatorStatus, Source, Stop, Target
 from bridge.protocols import REGISTRY
+from tests.support.clock import FakeClock
 from tests.support.udp_logger import (
     N1MM_STOPS,
     PstClient,
@@ -157,19 +158,11 @@ def test_a_datagram_asking_az_hundreds_of_times_gets_one_reply() -> None:
         ep.stop()
 
 
-class FrozenClock:
-    def __init__(self) -> None:
-        self.now_s = 1000.0
-
-    def __call__(self) -> float:
-        return self.now_s
-
-
 def test_replies_to_one_address_are_rate_limited() -> None:
     """Many one-query datagrams from one address: a burst of replies, the rest dropped and
     counted (the clock stands still, nothing refills)."""
     port, replies = reserve_pst_ports()
-    ep = LoggerEndpoints(clock=FrozenClock())
+    ep = LoggerEndpoints(clock=FakeClock())
     ep.add_pst(Recording("tower"), port)  # type: ignore[arg-type]
     ep.start()
     try:
