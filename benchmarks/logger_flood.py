@@ -27,6 +27,9 @@ Three conditions, in this order, on one bridge:
   busy as with the bridge: the row shows what that load alone does to the measurement (our
   process hosts the emulator, the broker needs a core too), the difference between the two
   rows is the bridge's own.
+Then N1MM stops (the stop datagram of one of N1MM's forms, sent from our process; the latency
+from its sending to ``;``), alone and each behind a burst like the above sent to the PST port
+only: one thread serves both ports, and a stop on one must not wait for a flood on the other.
 The junk (tests.support.udp_logger's datagram forms, broken the ways the fact sheet names:
 oversized, not ASCII, unclosed, NaN/inf/empty/12x numbers, goazi outside 0..360, no rotor,
 random bytes) goes alternately to the PST and the N1MM port, from a sender process of its
@@ -64,7 +67,9 @@ from benchmarks.procfs import cpu_seconds  # noqa: E402
 from benchmarks.report import ItemResult, Table, Verdict, percentile  # noqa: E402
 from benchmarks.rig import Rig, single_rotator  # noqa: E402
 from tests.support.udp_logger import (  # noqa: E402
+    N1MM_STOPS,
     N1mmListener,
+    N1mmSender,
     free_udp_port,
     n1mm_turn,
     pst,
@@ -79,6 +84,9 @@ STOP_FRAME = b";"
 # by a few ms (benchmarks/latency.py, Rotor-EZ "polling")
 SAME_MS = 2.0
 CONTROL = "bursts to another reader (control)"
+N1MM_ALONE = "N1MM stop, no flood"
+N1MM_BEHIND = "N1MM stop, PST bursts"
+N1MM_STOP_MS = 100.0  # behind a PST flood an N1MM stop waited up to 8 s when one port was read dry
 
 
 # -- the junk ------------------------------------------------------------------------------------
@@ -143,9 +151,9 @@ def eater_main() -> int:
 
 def sender_main(pst_port: int, n1mm_port: int, sink_port: int, seed: int) -> int:
     """The flood sender (a process of its own): commands on stdin, one per line:
-    ``paced COUNT RATE``, ``burst COUNT`` and ``burst COUNT sink`` (to the control's reader at
-    ``sink_port`` instead); it prints ``half`` once half the datagrams are out
-    and ``done SENT SECONDS`` at the end."""
+    ``paced COUNT RATE``, ``burst COUNT``, ``burst COUNT sink`` (to the control's reader at
+    ``sink_port`` instead) and ``burst COUNT pst`` (all of it to the PST port); it prints
+    ``half`` once half the datagrams are out and ``done SENT SECONDS`` at the end."""
     rng = random.Random(seed)
     pool = [junk(rng) for _ in range(FLOOD)]
     to = {"pst": ("127.0.0.1", pst_port), "n1mm": ("127.0.0.1", n1mm_port)}
@@ -158,7 +166,10 @@ def sender_main(pst_port: int, n1mm_port: int, sink_port: int, seed: int) -> int
             break
         count = int(words[1])
         rate = float(words[2]) if words[0] == "paced" else 0.0
-        dest = to if words[-1] != "sink" else dict.fromkeys(to, ("127.0.0.1", sink_port))
+        dest = {
+            "sink": dict.fromkeys(to, ("127.0.0.1", sink_port)),
+            "pst": dict.fromkeys(to, to["pst"]),
+        }.get(words[-1], to)
         t0 = time.monotonic()
         for i in range(count):
             kind, data = pool[i % len(pool)]
@@ -250,8 +261,11 @@ class Phase:
     dropped: int = 0
 
 
-def one_stop(rig: Rig, sender: Sender | None = None, burst: str = "") -> float:
-    """Turn far, stop while turning: seconds from R/stop's publish to ``;`` at the controller."""
+def one_stop(
+    rig: Rig, sender: Sender | None = None, burst: str = "", n1mm: N1mmSender | None = None
+) -> float:
+    """Turn far, stop while turning: seconds from R/stop's publish (or the N1MM stop datagram's
+    sending, with ``n1mm``) to ``;`` at the controller."""
     check_abort()
     az = rig.emu.state().az_deg
     target = 350 if az < 180 else 10
@@ -268,7 +282,10 @@ def one_stop(rig: Rig, sender: Sender | None = None, burst: str = "") -> float:
                 raise BenchError("the flood sender did not get half-way")
     mark = rig.frames.mark()
     t0 = time.monotonic()
-    rig.mqtt.publish(rig.t("stop"), "STOP")
+    if n1mm is not None:
+        n1mm.send(N1MM_STOPS["name in stop"]("Yagi"))
+    else:
+        rig.mqtt.publish(rig.t("stop"), "STOP")
     frame = rig.frames.wait(lambda f: f.data == STOP_FRAME, mark, 5)
     if frame is None:
         rig.bridge.check()
@@ -347,6 +364,24 @@ def measure(scope: Scope, n: int) -> dict[str, Any]:
             phase.dropped = dropped[to]
             phases.append(phase)
 
+        # N1MM stops: alone, then each behind a burst to the PST port (one thread serves both
+        # ports: the stop must not wait for the PST port's flood)
+        n1mm = N1mmSender(n1mm_port)
+        rig.scope.callback(n1mm.close)
+        c0, t0 = cpu_seconds(pid), time.monotonic()
+        alone = [one_stop(rig, n1mm=n1mm) for _ in range(n)]
+        phases.append(Phase(N1MM_ALONE, alone, time.monotonic() - t0, cpu_seconds(pid) - c0))
+        d0, c0, t0 = drops(), cpu_seconds(pid), time.monotonic()
+        phase = Phase(N1MM_BEHIND, [], 0.0, 0.0)
+        for _ in range(n):
+            phase.latencies_s.append(one_stop(rig, sender, "pst", n1mm))
+            pst_sent, pst_send_s = sender.done(30)
+            phase.sent += pst_sent
+            phase.send_s += pst_send_s
+        phase.wall_s, phase.cpu_s = time.monotonic() - t0, cpu_seconds(pid) - c0
+        phase.dropped = drops() - d0
+        phases.append(phase)
+
         sender.command("quit")
         targets = [f for f in rig.frames.since(first_frame) if f.data.startswith((b"AP", b"AM"))]
         stops = sum(len(p.latencies_s) for p in phases)
@@ -366,9 +401,10 @@ def _ms(v: float) -> float:
 
 def run(scope: Scope, quick: bool, samples: int | None = None) -> ItemResult:
     n = samples or (15 if quick else 40)
-    result = ItemResult("logger_flood", "Loggers' UDP ports: MQTT stop latency under a junk flood")
+    result = ItemResult("logger_flood", "Loggers' UDP ports: stop latency under a junk flood")
     table = Table(
-        result.title + " (Rotor-EZ, 4800 baud; publish R/stop -> ';' at the controller)",
+        result.title + " (Rotor-EZ, 4800 baud; R/stop's publish, or the N1MM stop datagram's "
+        "sending, -> ';' at the controller)",
         [
             "condition",
             "stops",
@@ -454,6 +490,16 @@ def run(scope: Scope, quick: bool, samples: int | None = None) -> ItemResult:
                 worse <= SAME_MS,
             )
         )
+    r, calm = rows[N1MM_BEHIND], rows[N1MM_ALONE]
+    result.verdicts.append(
+        Verdict(
+            f"a {FLOOD:,}-datagram junk burst at the PST port holds an N1MM stop on the other "
+            f"port by little (p99 under {N1MM_STOP_MS:g} ms)",
+            f"p50 {r['p50_ms']:.2f} / p99 {r['p99_ms']:.2f} ms against "
+            f"{calm['p50_ms']:.2f} / {calm['p99_ms']:.2f} ms with no flood",
+            r["p99_ms"] <= N1MM_STOP_MS,
+        )
+    )
     moved = m["target_frames"] - m["targets_sent"]
     result.verdicts.append(
         Verdict(

@@ -8,13 +8,20 @@ Rules:
 2. PST: ``<PST>`` ... ``</PST>``, tags matched in any case, several in one datagram, parsed
    all before anything is done. A value is a decimal number, optionally followed by the
    ``.2`` Hamlib 4.6 appends (``120.000000.2``). ``STOP`` wins over everything else in the
-   datagram; then ``PARK``; then the axes present. ``AZ?``/``EL?`` are queries; ``TRACK``,
-   ``MODE?`` and tags nobody documents are ignored (and counted).
+   datagram; then ``PARK``; then the axes present. ``AZ?``/``EL?`` are queries, each kind
+   once however often asked (one reply per kind: a datagram must not buy hundreds); ``TRACK``,
+   ``MODE?`` and tags nobody documents are ignored (and counted). Ambiguous is Malformed: one
+   of ``AZIMUTH``, ``ELEVATION``, ``QRA``, ``PARK`` given twice with different values, or an
+   ``AZIMUTH`` beside a ``QRA`` (two bearings); the same value twice says one thing. Beside a
+   ``STOP`` nothing is ambiguous: the stop is never refused, an ambiguous target is dropped.
 3. PST replies: integer degrees and one CR (``AZ:123\\r``), the form the strictest client
    (Minos) accepts and every other does.
 4. N1MM: ``<N1MMRotor>`` with ``<rotor>``, ``<goazi>`` (0..360), ``<offset>``,
    ``<bidirectional>``, ``<freqband>`` in any order and layout; any ``<stop`` element is a stop,
-   the rotor's name then from ``<rotor>`` wherever it is, else the text of ``<stop>``.
+   the rotor's name then from ``<rotor>`` wherever it is, else the text of ``<stop>``. A turn
+   gives ``<rotor>``, ``<goazi>``, ``<offset>``, ``<bidirectional>`` once each (N1MM's one form):
+   a repeated one is ambiguous, Malformed. A stop is never refused: the other names it gives
+   (a second ``<rotor>``, ``<stop>``'s text beside ``<rotor>``) are in ``also``.
 5. N1MM position report: ``name @ heading*10`` as plain text (``Tower @ 650`` is 65.0).
 """
 
@@ -58,6 +65,7 @@ class N1mmRequest:
     azimuth: float | None = None
     offset: float = 0.0
     bidirectional: bool = False
+    also: tuple[str, ...] = ()  # a stop's other names (rule 4)
 
 
 def _text(datagram: bytes, pattern: re.Pattern[bytes], what: str) -> str:
@@ -82,9 +90,10 @@ def _number(text: str, tag: str) -> float:
 
 
 def parse_pst(datagram: bytes) -> PstRequest:
-    """Rule 2 (Malformed for anything not wholly understood)."""
+    """Rule 2 (Malformed for anything not wholly understood, or ambiguous)."""
     body = _text(datagram, _PST, "<PST>")
-    fields: dict[str, object] = {}
+    targets: dict[str, set[float | str | bool]] = {}  # AZIMUTH, ELEVATION, QRA, PARK
+    stop = False
     queries: list[str] = []
     ignored: list[str] = []
     pos = 0
@@ -95,27 +104,32 @@ def parse_pst(datagram: bytes) -> PstRequest:
         pos = m.end()
         if m.group("query") is not None:
             q = m.group("query").upper()
-            (queries if q in ("AZ", "EL") else ignored).append(q)
+            if q not in queries and q not in ignored:  # one answer per kind
+                (queries if q in ("AZ", "EL") else ignored).append(q)
             continue
         tag, value = m.group("tag").upper(), m.group("value")
-        if tag == "AZIMUTH":
-            fields["azimuth"] = _number(value, tag)
-        elif tag == "ELEVATION":
-            fields["elevation"] = _number(value, tag)
-        elif tag == "STOP":
-            fields["stop"] = True
-        elif tag == "PARK":
-            fields["park"] = value.strip() != "0"
+        if tag in ("AZIMUTH", "ELEVATION"):
+            targets.setdefault(tag, set()).add(_number(value, tag))
         elif tag == "QRA":
-            fields["locator"] = value.strip()
+            targets.setdefault(tag, set()).add(value.strip())
+        elif tag == "STOP":
+            stop = True
+        elif tag == "PARK":
+            targets.setdefault(tag, set()).add(value.strip() != "0")
         else:
             ignored.append(tag)
+    ambiguous = [tag for tag, values in targets.items() if len(values) > 1]
+    if "AZIMUTH" in targets and "QRA" in targets:
+        ambiguous.append("AZIMUTH and QRA")
+    if ambiguous and not stop:  # a stop is never refused: what is beside it is moot
+        raise Malformed(f"ambiguous: {', '.join(ambiguous)}")
+    one = {tag: next(iter(values)) for tag, values in targets.items() if tag not in ambiguous}
     return PstRequest(
-        stop=bool(fields.get("stop", False)),
-        park=bool(fields.get("park", False)),
-        azimuth=_float_or_none(fields.get("azimuth")),
-        elevation=_float_or_none(fields.get("elevation")),
-        locator=str(fields["locator"]) if "locator" in fields else None,
+        stop=stop,
+        park=one.get("PARK") is True,
+        azimuth=_float_or_none(one.get("AZIMUTH")),
+        elevation=_float_or_none(one.get("ELEVATION")),
+        locator=str(one["QRA"]) if "QRA" in one else None,
         queries=tuple(queries),
         ignored=tuple(ignored),
     )
@@ -131,22 +145,31 @@ def pst_reply(query: str, degrees: float) -> bytes:
 
 
 _N1MM_TAG = re.compile(r"<(?P<tag>[a-z]+)>(?P<value>[^<]{0,64})</(?P=tag)>", re.I)
+_ONCE = ("rotor", "goazi", "offset", "bidirectional")  # a turn's tags, each given once
 _STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 
 
 def parse_n1mm(datagram: bytes) -> N1mmRequest:
-    """Rule 4 (Malformed for anything not understood)."""
+    """Rule 4 (Malformed for anything not understood, or ambiguous)."""
     body = _text(datagram, _N1MM, "<N1MMRotor>")
     rest = _STOP_WRAP.sub("", _N1MM_TAG.sub("", body))
     if rest.strip():
         raise Malformed(f"cannot read {rest.strip()[:20]!r}")
-    values = {m.group("tag").lower(): m.group("value").strip() for m in _N1MM_TAG.finditer(body)}
+    given: dict[str, list[str]] = {}
+    for m in _N1MM_TAG.finditer(body):
+        given.setdefault(m.group("tag").lower(), []).append(m.group("value").strip())
     stop = "<stop" in body.lower()
-    name = values.get("rotor") or (values.get("stop") if stop else None)
-    if not name or len(name) > MAX_NAME or not name.isprintable():
+    names = list(dict.fromkeys(n for n in given.get("rotor", []) if n))
+    if stop:  # the stop's text is a name when no <rotor> gives one, else perhaps one more
+        names += [n for n in dict.fromkeys(given.get("stop", [])) if n and n not in names]
+    if not names or any(len(n) > MAX_NAME or not n.isprintable() for n in names):
         raise Malformed("no rotor name")
     if stop:
-        return N1mmRequest(name, stop=True)
+        return N1mmRequest(names[0], stop=True, also=tuple(names[1:]))
+    repeated = [t for t in _ONCE if len(given.get(t, [])) > 1]
+    if repeated:
+        raise Malformed(f"ambiguous: <{'>, <'.join(repeated)}> given twice")
+    values = {tag: texts[0] for tag, texts in given.items()}
     if "goazi" not in values:
         raise Malformed("neither <goazi> nor <stop>")
     az = _number(values["goazi"], "goazi")
@@ -154,7 +177,7 @@ def parse_n1mm(datagram: bytes) -> N1mmRequest:
         raise Malformed(f"goazi {az:g} outside 0..360")
     offset = _number(values["offset"], "offset") if values.get("offset") else 0.0
     bidirectional = values.get("bidirectional", "0") not in ("", "0")
-    return N1mmRequest(name, azimuth=az, offset=offset, bidirectional=bidirectional)
+    return N1mmRequest(names[0], azimuth=az, offset=offset, bidirectional=bidirectional)
 
 
 def n1mm_report(name: str, heading_deg: float) -> bytes:

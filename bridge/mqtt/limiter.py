@@ -15,14 +15,15 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from bridge.ratelimit import TokenBucket
+
 BURST = 50
 RATE_PER_S = 10.0
 
 
 @dataclass
 class _Bucket:
-    tokens: float
-    t: float
+    bucket: TokenBucket
     suppressed: int = 0
 
 
@@ -42,12 +43,9 @@ class EventLimiter:
         with self._lock:
             b = self._buckets.get(topic)
             if b is None:
-                b = self._buckets[topic] = _Bucket(float(self._burst), now)
-            b.tokens = min(float(self._burst), b.tokens + (now - b.t) * self._rate)
-            b.t = now
-            if b.tokens < 1.0:
+                b = self._buckets[topic] = _Bucket(TokenBucket.full(self._burst, self._rate, now))
+            if not b.bucket.take(now):
                 b.suppressed += 1
                 return None
-            b.tokens -= 1.0
             left_out, b.suppressed = b.suppressed, 0
             return left_out

@@ -43,6 +43,15 @@ from bridge.loggers.datagrams import (
             PstRequest(stop=True, azimuth=10.0),
         ),
         (b"<PST><ON>1</ON></PST>", PstRequest(ignored=("ON",))),  # undocumented tags
+        (  # the same target twice says one thing
+            b"<PST><AZIMUTH>10</AZIMUTH><AZIMUTH>10.0</AZIMUTH></PST>",
+            PstRequest(azimuth=10.0),
+        ),
+        (  # a stop is never refused: ambiguous targets beside it are dropped
+            b"<PST><AZIMUTH>10</AZIMUTH><STOP>1</STOP><AZIMUTH>200</AZIMUTH></PST>",
+            PstRequest(stop=True),
+        ),
+        (b"<PST>" + b"AZ?" * 677 + b"EL?AZ?</PST>", PstRequest(queries=("AZ", "EL"))),  # one each
     ],
 )
 def test_what_the_pst_clients_send_is_read(datagram: bytes, request_: PstRequest) -> None:
@@ -157,3 +166,42 @@ def test_tag_soup_is_read_or_malformed_and_numbers_are_finite(text: str) -> None
         return
     for value in (req.azimuth, req.elevation):
         assert value is None or value == value and abs(value) != float("inf")
+
+
+@pytest.mark.parametrize(
+    "datagram",
+    [
+        b"<PST><AZIMUTH>10</AZIMUTH><AZIMUTH>200</AZIMUTH></PST>",  # two azimuths
+        b"<PST><ELEVATION>10</ELEVATION><ELEVATION>80</ELEVATION></PST>",
+        b"<PST><AZIMUTH>10</AZIMUTH><QRA>JO62</QRA></PST>",  # a bearing and a locator
+        b"<PST><QRA>JO62</QRA><QRA>KN34</QRA></PST>",
+        b"<PST><AZIMUTH>10</AZIMUTH>AZ?<AZIMUTH>200</AZIMUTH></PST>",  # no answer either
+        # an N1MM turn naming two rotors, or giving one of its tags twice
+        b"<N1MMRotor><rotor>Tower</rotor><rotor>Yagi</rotor><goazi>90</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>Tower</rotor><goazi>10</goazi><goazi>200</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>Tower</rotor><goazi>10</goazi><goazi>10</goazi></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor><goazi>1</goazi><offset>0</offset><offset>5</offset></N1MMRotor>",
+        b"<N1MMRotor><rotor>T</rotor><goazi>1</goazi><bidirectional>0</bidirectional>"
+        b"<bidirectional>1</bidirectional></N1MMRotor>",
+    ],
+)
+def test_a_datagram_saying_two_things_is_ambiguous(datagram: bytes) -> None:
+    parse = parse_pst if datagram.startswith(b"<PST>") else parse_n1mm
+    with pytest.raises(Malformed, match="ambiguous"):
+        parse(datagram)
+
+
+@pytest.mark.parametrize(
+    "datagram",
+    [
+        b"<N1MMRotor><rotor>Tower</rotor><stop>Yagi</stop></N1MMRotor>",
+        b"<N1MMRotor><stop><rotor>Tower</rotor><rotor>Yagi</rotor></stop></N1MMRotor>",
+    ],
+)
+def test_an_n1mm_stop_naming_two_rotors_is_a_stop_for_both(datagram: bytes) -> None:
+    assert parse_n1mm(datagram) == N1mmRequest("Tower", stop=True, also=("Yagi",))
+
+
+def test_an_n1mm_stop_naming_one_rotor_twice_is_that_rotors() -> None:
+    datagram = b"<N1MMRotor><rotor>Tower</rotor><stop>Tower</stop></N1MMRotor>"
+    assert parse_n1mm(datagram) == N1mmRequest("Tower", stop=True)

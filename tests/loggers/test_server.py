@@ -3,13 +3,32 @@
 
 from __future__ import annotations
 
+import contextlib
+import logging
+import os
+import select
 import socket
 import threading
+import time
+from collections.abc import Iterator
 from typing import Any
 
+import pytest
+
 from bridge.loggers import LoggerEndpoints
+from bridge.loggers.limiter import REPLY_BURST
+from bridge.loggers.server import PER_WAKEUP
 from bridge.model import RotatorStatus, Source, Stop, Target
 from bridge.protocols import REGISTRY
+from tests.support.clock import FakeClock
+from tests.support.udp_logger import (
+    N1MM_STOPS,
+    PstClient,
+    pst,
+    reserve_pst_ports,
+    tag,
+    udp_socket,
+)
 from tests.support.waiting import wait_until
 
 
@@ -30,6 +49,10 @@ class Recording:
     def report_refusal(self, message: str, command: str | None) -> None:
         with self._lock:
             self.calls.append(("refused", message))
+
+    def go_toward(self, lat: float, lon: float, *_args: Any, **_kw: Any) -> None:
+        with self._lock:
+            self.calls.append(("toward", lat, lon))
 
 
 def send(port: int, data: bytes) -> None:
@@ -70,3 +93,248 @@ def test_a_pst_azimuth_beyond_hamlibs_range_is_refused_not_folded() -> None:
         assert [c.az_deg for c in tower.calls if isinstance(c, Target)] == [180.0, 90.0]
     finally:
         ep.stop()
+
+
+# -- hardening: each test below failed on the loggers before they served sockets fairly, ----------
+# answered once per query kind, refused ambiguous datagrams and survived their own faults
+
+
+class Faulty(Recording):
+    """A rotator whose submit fails on one azimuth (a bug in a feature behind it)."""
+
+    def __init__(self, rid: str, fails_at_deg: float) -> None:
+        super().__init__(rid)
+        self.fails_at_deg = fails_at_deg
+
+    def submit(self, command: Any, described: str | None = None) -> None:
+        if isinstance(command, Target) and command.az_deg == self.fails_at_deg:
+            raise RuntimeError("a bug behind the rotator")
+        super().submit(command, described)
+
+
+class AzEl(Recording):
+    """An az/el rotator at 10 deg, 20 deg: it answers ``EL?`` too."""
+
+    def __init__(self, rid: str) -> None:
+        super().__init__(rid, "md01")
+
+    @property
+    def status(self) -> RotatorStatus:
+        return RotatorStatus(self.id, available=True, bearing_deg=10.0, elevation_deg=20.0)
+
+
+@contextlib.contextmanager
+def reports_sink() -> Iterator[socket.socket]:
+    """Where the N1MM position reports of a test go (not 13010: it may be somebody's)."""
+    with udp_socket() as sink:
+        yield sink
+
+
+def sink_address(sink: socket.socket) -> tuple[str, int]:
+    host, port = sink.getsockname()[:2]
+    return host, port
+
+
+def test_a_datagram_asking_az_hundreds_of_times_gets_one_reply() -> None:
+    """A spoofed 2 KiB datagram of 679 ``AZ?`` made 679 replies to its victim."""
+    port, replies = reserve_pst_ports()
+    rot = AzEl("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(rot, port)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        with PstClient(port, replies=replies) as client:
+            flood = pst(*["AZ?"] * 679)
+            assert len(flood) <= 2048
+            client.send(flood)
+            client.send(pst("EL?"))  # answered after everything the flood brought
+            got = []
+            while not (got and got[-1].startswith(b"EL:")):
+                reply = client.reply(5)
+                assert reply is not None, f"no EL reply after {got[:3]}..."
+                got.append(reply)
+            assert got == [b"AZ:10\r", b"EL:20\r"]
+    finally:
+        ep.stop()
+
+
+def test_replies_to_one_address_are_rate_limited() -> None:
+    """Many one-query datagrams from one address: a burst of replies, the rest dropped and
+    counted (the clock stands still, nothing refills)."""
+    port, replies = reserve_pst_ports()
+    ep = LoggerEndpoints(clock=FakeClock())
+    ep.add_pst(Recording("tower"), port)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        with PstClient(port, replies=replies) as client:
+            for _ in range(30):
+                client.send(pst("AZ?"))
+            wait_until(lambda: ep.counts["pst"].queries == 30, 5, "30 queries read")
+            got = client.drain()
+            assert got == [b"AZ:10\r"] * REPLY_BURST
+            assert ep.counts["pst"].replies_dropped == 30 - REPLY_BURST
+    finally:
+        ep.stop()
+
+
+def test_a_pst_flood_delays_an_n1mm_stop_by_a_few_datagrams_at_most() -> None:
+    """One socket was drained to empty before the next: a PST flood kept an N1MM STOP waiting
+    behind every datagram of it. The flood is queued before the loggers' thread starts, the
+    stop after it; each flood datagram is a numbered target, so the rotator's commands show
+    how many of them went before the stop."""
+    flood = 150
+    rot = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(rot, port=0)  # type: ignore[arg-type]
+    with reports_sink() as sink:
+        ep.add_n1mm(rot, "Tower", port=0, report_to=sink_address(sink))  # type: ignore[arg-type]
+        ep.listen()  # the ports are ours, nobody reads them yet
+        try:
+            pst_port = ep.address(ep.pst[0])[1]
+            n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+            with udp_socket() as s:
+                for i in range(flood):
+                    s.sendto(pst(tag("AZIMUTH", i)), ("127.0.0.1", pst_port))
+                s.sendto(N1MM_STOPS["name in stop"]("Tower"), ("127.0.0.1", n1mm_port))
+            ep.start()
+            wait_until(lambda: len(rot.calls) == flood + 1, 5, "the flood and the stop handled")
+            stop_at = rot.calls.index(Stop(Source.N1MM))
+            assert stop_at <= PER_WAKEUP, f"the stop came after {stop_at} flood datagrams"
+            targets = [c.az_deg for c in rot.calls if isinstance(c, Target)]
+            assert targets == [float(i) for i in range(flood)]  # in order, none lost
+        finally:
+            ep.stop()
+
+
+AMBIGUOUS_PST = [
+    pst(tag("AZIMUTH", 10), tag("AZIMUTH", 200)),  # two azimuths
+    pst(tag("AZIMUTH", 10), tag("QRA", "JO62")),  # an azimuth and a locator
+    pst(tag("QRA", "JO62"), tag("QRA", "KN34")),
+]
+AMBIGUOUS_N1MM = [
+    b"<N1MMRotor><rotor>Tower</rotor><rotor>Yagi</rotor><goazi>90</goazi></N1MMRotor>",
+    b"<N1MMRotor><rotor>Tower</rotor><goazi>10</goazi><goazi>200</goazi></N1MMRotor>",
+]
+
+
+def test_ambiguous_datagrams_move_nothing() -> None:
+    tower, yagi = Recording("tower"), Recording("yagi")
+    ep = LoggerEndpoints()
+    ep.add_pst(tower, port=0)  # type: ignore[arg-type]
+    with reports_sink() as sink:
+        for rot, name in ((tower, "Tower"), (yagi, "Yagi")):
+            ep.add_n1mm(rot, name, port=0, report_to=sink_address(sink))  # type: ignore[arg-type]
+        ep.start()
+        try:
+            pst_port = ep.address(ep.pst[0])[1]
+            n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+            for datagram in AMBIGUOUS_PST:
+                send(pst_port, datagram)
+            for datagram in AMBIGUOUS_N1MM:
+                send(n1mm_port, datagram)
+            send(pst_port, pst(tag("AZIMUTH", 42)))  # after the others on each socket
+            send(n1mm_port, b"<N1MMRotor><rotor>Yagi</rotor><goazi>43</goazi></N1MMRotor>")
+            wait_until(lambda: tower.calls and yagi.calls, 5, "the good ones")
+            assert tower.calls == [Target(42.0, None, Source.PST)]
+            assert yagi.calls == [Target(43.0, None, Source.N1MM)]
+            assert ep.counts["pst"].malformed == len(AMBIGUOUS_PST)
+            assert ep.counts["n1mm"].malformed == len(AMBIGUOUS_N1MM)
+        finally:
+            ep.stop()
+
+
+def test_an_n1mm_stop_naming_two_rotors_stops_both() -> None:
+    """A stop is never refused: one that names two rotors stops both."""
+    tower, yagi, other = Recording("tower"), Recording("yagi"), Recording("other")
+    ep = LoggerEndpoints()
+    with reports_sink() as sink:
+        for rot, name in ((tower, "Tower"), (yagi, "Yagi"), (other, "Other")):
+            ep.add_n1mm(rot, name, port=0, report_to=sink_address(sink))  # type: ignore[arg-type]
+        ep.start()
+        try:
+            port = ep.address(next(iter(ep.n1mm.values())))[1]
+            send(port, b"<N1MMRotor><rotor>Tower</rotor><stop>Yagi</stop></N1MMRotor>")
+            send(port, b"<N1MMRotor><rotor>Other</rotor><goazi>43</goazi></N1MMRotor>")
+            wait_until(lambda: other.calls, 5, "the turn after the stop")
+            assert tower.calls == [Stop(Source.N1MM)] and yagi.calls == [Stop(Source.N1MM)]
+            assert other.calls == [Target(43.0, None, Source.N1MM)]
+        finally:
+            ep.stop()
+
+
+def test_n1mm_reports_leave_from_the_configured_address() -> None:
+    """The report socket was never bound: the system gave it 0.0.0.0 and a port of its choice,
+    open on every interface. Bound to 127.0.0.2, the reports must come from there."""
+    with reports_sink() as sink:
+        ep = LoggerEndpoints()
+        ep.add_n1mm(Recording("tower"), "Tower", 0, "127.0.0.2", sink_address(sink))  # type: ignore[arg-type]
+        ep.start()
+        try:
+            ready, _, _ = select.select([sink], [], [], 5)
+            assert ready, "no position report"
+            data, peer = sink.recvfrom(4096)
+            assert data == b"Tower @ 100"
+            assert peer[0] == "127.0.0.2"
+        finally:
+            ep.stop()
+
+
+def test_a_fault_behind_one_datagram_is_logged_and_the_next_is_served(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    rot = Faulty("tower", fails_at_deg=13.0)
+    ep = LoggerEndpoints()
+    ep.add_pst(rot, port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        port = ep.address(ep.pst[0])[1]
+        send(port, pst(tag("AZIMUTH", 13)))
+        send(port, pst(tag("AZIMUTH", 14)))
+        wait_until(lambda: rot.calls, 5, "the datagram after the fault")
+        assert rot.calls == [Target(14.0, None, Source.PST)]
+        errors = [r for r in caplog.records if r.levelno >= logging.ERROR]
+        assert len(errors) == 1 and "a bug behind the rotator" in caplog.text
+    finally:
+        ep.stop()
+
+
+def _thread_cpu_s(name: str) -> float:
+    thread = next(t for t in threading.enumerate() if t.name == name)
+    with open(f"/proc/self/task/{thread.native_id}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def test_a_socket_that_went_bad_is_dropped_and_reported_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The PST socket's descriptor is replaced under the loggers (it now names /dev/null, so
+    reading it fails with ENOTSOCK) while its file stays alive with a datagram waiting: the
+    selector keeps saying it is readable. The thread read it again and again, at 100 % of a
+    core, and never served the N1MM port beside it."""
+    rot = Recording("tower")
+    ep = LoggerEndpoints()
+    ep.add_pst(rot, port=0)  # type: ignore[arg-type]
+    with reports_sink() as sink:
+        ep.add_n1mm(rot, "Tower", port=0, report_to=sink_address(sink))  # type: ignore[arg-type]
+        ep.start()
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        pst_fd = next(s.fileno() for s, e in ep._sockets.items() if e is ep.pst[0])
+        keeper = os.dup(pst_fd)  # the socket itself lives on
+        devnull = os.open(os.devnull, os.O_RDONLY)
+        try:
+            os.dup2(devnull, pst_fd)
+            send(pst_port, pst(tag("AZIMUTH", 1)))  # readable from now on
+            send(n1mm_port, N1MM_STOPS["name in stop"]("Tower"))
+            wait_until(lambda: rot.calls, 5, "the N1MM stop")
+            assert rot.calls == [Stop(Source.N1MM)]
+            before = _thread_cpu_s("loggers")
+            time.sleep(0.5)  # a measurement window, not a synchronisation
+            assert _thread_cpu_s("loggers") - before < 0.1, "the loggers' thread spins"
+            said = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+            assert len(said) == 1 and f":{pst_port} (pst) stopped listening" in said[0]
+        finally:
+            ep.stop()
+            os.close(keeper)
+            os.close(devnull)
