@@ -12,8 +12,10 @@ sphere amateur-radio locator tools commonly use; WGS84 ellipsoid distances diffe
 bearing is the initial great-circle bearing, degrees clockwise from true north, in [0, 360) (360
 never appears). The long path leaves at the short bearing + 180 and covers the rest of the
 circumference. Where no direction exists (the same point, or antipodal points, where every
-direction is a great circle) the bearing is 0. Latitudes must be finite and within -90..90,
-longitudes within -180..180, else ValueError naming the field.
+direction is a great circle) the bearing is 0 and ``Path.has_direction`` is False: a caller
+that turns an antenna refuses such a target rather than point it at 0 (pointing.py rule 7).
+Latitudes must be finite and within -90..90, longitudes within -180..180, else ValueError naming
+the field.
 
 Sources: ARRL, "About grid locators and grid squares" (field, square, subsquare sizes); Ed
 Williams, "Aviation Formulary" (course and distance on the sphere); the distance is the atan2 form
@@ -57,6 +59,7 @@ class Path:
     long_path_deg: float
     distance_km: float  # along the short path
     long_distance_km: float
+    has_direction: bool = True  # False at the same point and at the antipode (bearings 0, 180)
 
 
 def is_locator(text: str) -> bool:
@@ -120,13 +123,15 @@ def great_circle(lat1: float, lon1: float, lat2: float, lon2: float) -> Path:
     cosine = math.sin(phi1) * math.sin(phi2) + math.cos(phi1) * math.cos(phi2) * math.cos(dlon)
     sine = math.hypot(east, north)
     angle = math.atan2(sine, cosine)  # accurate at every distance, unlike acos or asin alone
-    short = 0.0 if sine < _NO_DIRECTION else _bearing(math.degrees(math.atan2(east, north)))
+    has_direction = sine >= _NO_DIRECTION
+    short = _bearing(math.degrees(math.atan2(east, north))) if has_direction else 0.0
     distance = EARTH_RADIUS_KM * angle
     return Path(
         short_path_deg=short,
         long_path_deg=_bearing(short + 180.0),
         distance_km=distance,
         long_distance_km=2.0 * math.pi * EARTH_RADIUS_KM - distance,
+        has_direction=has_direction,
     )
 
 

@@ -20,7 +20,9 @@ Rules:
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
 4. Configs are published only when they changed. Configs under our node ids that we no longer
    generate (a rotator removed from the configuration) are cleared with an empty retained
-   payload when the broker shows them to us.
+   payload when the broker shows them to us; the client says what it did (or, for a config
+   another client publishes while the bridge runs, that it left it alone), a flood of them in a
+   few lines (mqtt/client.py rule 15).
 5. On Home Assistant's birth message the retained state is published again after a delay, so
    Home Assistant, which ignores state that arrives before it has processed discovery, gets it.
 """
@@ -471,8 +473,7 @@ class DiscoveryPublisher:
         with self._lock:
             stale = topic not in self._current
         if stale:
-            log.info("clearing stale Home Assistant config %s", topic)
-            self._clear(topic)
+            self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
         return True
 
     def _schedule_republish(self) -> None:

@@ -26,6 +26,11 @@ Rules:
    the park position, a place (locator or coordinates: the great-circle bearing from the
    station, short path unless the long one is asked for; geo.py) and a nudge (relative to the
    target while one is being approached, turning or braking, else to the bearing).
+7. A place without a direction from the station is refused: the station's own position (no
+   bearing at all) and its antipode, where every direction is a great circle of the same
+   length (a locator's centre has one: JO62qm's is AD67ql). Anything short of these has a
+   bearing and is taken, even close to the antipode, where the bearing swings with the
+   station's exact position: that is the great circle from the position configured.
 """
 
 from __future__ import annotations
@@ -320,6 +325,16 @@ def toward(
         path = geo.great_circle(station[0], station[1], latitude_deg, longitude_deg)
     except ValueError as exc:
         raise Refused(RefusalCode.INVALID, str(exc)) from None
+    if not path.has_direction:  # rule 7
+        place = locator or f"{latitude_deg:g}, {longitude_deg:g}"
+        if path.distance_km < path.long_distance_km:
+            why = "the station's own position: it has no bearing (distance 0)"
+        else:
+            why = (
+                "the station's antipode: every bearing is a great circle to it, "
+                f"{path.distance_km:.0f} km either way; name a bearing instead"
+            )
+        raise Refused(RefusalCode.INVALID, f"{place} is {why}")
     info = TargetInfo(
         latitude_deg=latitude_deg,
         longitude_deg=longitude_deg,

@@ -411,6 +411,7 @@ def test_the_same_point_is_bearing_zero_and_no_distance() -> None:
     path = great_circle(52.52, 13.375, 52.52, 13.375)
     assert isinstance(path, Path)
     assert (path.short_path_deg, path.long_path_deg, path.distance_km) == (0.0, 180.0, 0.0)
+    assert not path.has_direction  # the 0 is no bearing: pointing.py refuses such a target
     assert path.long_distance_km == pytest.approx(CIRCUMFERENCE_KM)
     # 180 E and 180 W are one meridian
     path = great_circle(10.0, 180.0, 10.0, -180.0)
@@ -422,6 +423,7 @@ def test_antipodal_points_get_bearing_zero_and_half_the_circumference() -> None:
         other = (-lat, lon - 180.0 if lon > 0 else lon + 180.0)
         path = great_circle(lat, lon, *other)
         assert path.short_path_deg == 0.0 and path.long_path_deg == 180.0
+        assert not path.has_direction
         assert path.distance_km == pytest.approx(CIRCUMFERENCE_KM / 2)
         assert path.long_distance_km == pytest.approx(CIRCUMFERENCE_KM / 2)
 
@@ -435,7 +437,7 @@ def test_nearly_antipodal_points_still_have_a_direction() -> None:
     assert path.long_distance_km == pytest.approx(CIRCUMFERENCE_KM * 180.5 / 360)
     # a hundredth of a degree short of the antipode, across the pole
     path = great_circle(45.0, 0.0, -44.99, 180.0)
-    assert path.short_path_deg == pytest.approx(0.0, abs=1e-9)
+    assert path.short_path_deg == pytest.approx(0.0, abs=1e-9) and path.has_direction
     assert path.distance_km == pytest.approx(CIRCUMFERENCE_KM * 179.99 / 360)
 
 

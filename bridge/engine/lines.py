@@ -15,8 +15,11 @@ Rules:
    called inside its own guard: one that raises is logged (once per kind), its port closed and
    reopened after its back-off, and every other line goes on; the loop never sleeps for it.
 3. Deadlines are met late, never early: poll() counts whole milliseconds, rounded up.
-4. ``add`` and ``remove`` may be called from any thread; a removed worker's port is closed by
-   this thread before ``remove`` returns, and the thread ends when the last worker is removed.
+4. ``add`` and ``remove`` may be called from any thread; the thread ends when the last worker
+   is removed. A removed worker's port is closed on a thread of its own (worker.py rule 4; a
+   wedged adapter's close can take 30 s and must not hold up the other lines), and ``remove``
+   waits for it: when it returns the port is closed, or, if closing it outlasts the time given
+   to ``remove``, still being closed (a warning says so); either way nothing serves it any more.
    A worker is added once: adding it again is a programming error (ValueError).
 5. Commands first: the workers whose mailbox is ready are served before the others in a round,
    so a stop never waits behind other rotators' replies and status publishing.
@@ -65,7 +68,9 @@ class Lines:
         self._wake()
 
     def remove(self, worker: Worker, timeout_s: float = 3.0) -> bool:
-        """Stop serving ``worker`` and close its port; True once that is done."""
+        """Stop serving ``worker`` and close its port; True once it is served no more, its port
+        closed or being closed (rule 4)."""
+        deadline = time.monotonic() + timeout_s
         done = threading.Event()
         with self._lock:
             if worker in self._joining:
@@ -75,7 +80,16 @@ class Lines:
                 return True
             done = self._leaving.setdefault(worker, done)  # a second remove() waits the same
         self._wake()
-        return done.wait(timeout_s)
+        if not done.wait(timeout_s):
+            return False
+        if not worker.wait_closed(max(0.0, deadline - time.monotonic())):
+            log.warning(
+                "%s: %s is still closing after %g s (a wedged adapter?); it closes on its own",
+                worker.cfg.rotator_id,
+                worker.cfg.port,
+                timeout_s,
+            )
+        return True
 
     def _wake(self) -> None:
         try:

@@ -127,10 +127,13 @@ def close_quietly(port: serial.Serial) -> None:
         pass
 
 
-def close_in_background(port: serial.Serial) -> None:
-    """Close a failed port on a thread of its own: a tty with unsent output waits for it to
-    drain (up to 30 s on a USB adapter), and nothing else may wait for that."""
-    threading.Thread(target=close_quietly, args=(port,), name="close port", daemon=True).start()
+def close_in_background(port: serial.Serial) -> threading.Thread:
+    """Close a port on a thread of its own, returned to be waited for where waiting is fine: a
+    tty with unsent output waits for it to drain (up to 30 s on a USB adapter), and the lines
+    thread may not wait for that."""
+    closing = threading.Thread(target=close_quietly, args=(port,), name="close port", daemon=True)
+    closing.start()
+    return closing
 
 
 class PendingOpen:
@@ -159,11 +162,14 @@ class PendingOpen:
             self.result = result
         wake()
 
-    def abandon(self) -> None:
+    def abandon(self) -> threading.Thread | None:
+        """Give the attempt up; a port it already opened is closed in the background (the
+        thread closing it is returned)."""
         with self._lock:
             self._abandoned = True
             if isinstance(self.result, serial.Serial):
-                close_quietly(self.result)
+                return close_in_background(self.result)
+        return None
 
 
 def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:

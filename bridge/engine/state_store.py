@@ -1,24 +1,75 @@
 """What must survive a restart of the bridge: each rotator's safety lock and the options the
 user set (the controller forgets them at power-off, so the bridge re-applies them).
 
-A small JSON file, replaced atomically on every change. A missing file means "nothing set";
-an unreadable one is reported and treated as empty, except that every rotator whose lock state
-cannot be read starts locked (safety before convenience) and is written down as locked, so it
-stays locked across restarts until someone unlocks it. A malformed entry (not a table, a lock
-that is not true or false, options that are not switches) does the same for its rotator alone,
-and the rotator's status says why (``problems``).
+Rules:
+1. A small JSON file, replaced atomically on every change: written in full to a temporary file
+   beside it, fsynced, renamed over it (and the directory fsynced). A write that fails leaves
+   no temporary file behind and the old file as it was.
+2. A missing file means "nothing set"; an unreadable one is reported and treated as empty,
+   except that every rotator whose lock state cannot be read starts locked (safety before
+   convenience) and is written down as locked, so it stays locked across restarts until someone
+   unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
+   are not switches) does the same for its rotator alone, and the rotator's status says why
+   (``problems``).
+3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
+   content it holds is written as in rule 1, so a full disk or a quota is found at the start,
+   not when a lock set for tower work is silently not kept. An unreadable file is not replaced
+   by that write (it keeps the next start locked too): the content is written beside it and
+   removed.
+4. Anything at the path that is not a regular file (a FIFO, a device, a socket, a directory)
+   is never opened for reading, which could wait for ever (a FIFO without a writer) or touch
+   hardware (a serial device), and never replaced: ``check_writable`` refuses it by its kind.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import logging
 import os
+import stat
 import tempfile
 import threading
 from pathlib import Path
 
 log = logging.getLogger(__name__)
+
+_KINDS = (
+    (stat.S_ISDIR, "directory"),
+    (stat.S_ISFIFO, "FIFO"),
+    (stat.S_ISCHR, "character device"),
+    (stat.S_ISBLK, "block device"),
+    (stat.S_ISSOCK, "socket"),
+)
+
+
+def _not_regular(mode: int) -> str | None:
+    """What a file of ``mode`` is, if it is not a regular file (rule 4)."""
+    if stat.S_ISREG(mode):
+        return None
+    return next((kind for is_kind, kind in _KINDS if is_kind(mode)), "special file")
+
+
+def _kind_at(path: Path) -> str | None:
+    """What is at ``path`` (symbolic links followed) if it exists and is not a regular file."""
+    try:
+        return _not_regular(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return None
+
+
+def _read(path: Path) -> str:
+    """The file's text; OSError naming its kind if it is not a regular file (rule 4), also if
+    one was put there since it was looked at (O_NONBLOCK: opening a FIFO does not wait)."""
+    kind = _kind_at(path)
+    if kind is None:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as f:
+            kind = _not_regular(os.fstat(fd).st_mode)
+            if kind is None:
+                return f.read().decode()
+    raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
 
 
 class StateStore:
@@ -29,9 +80,14 @@ class StateStore:
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
         self._dirty = False  # a malformed entry was replaced: written down at the first read
+        self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
         if path is not None and path.exists():
+            self._kind = _kind_at(path)
+            if self._kind is not None:
+                self.corrupt = True  # nothing read: every rotator locked, should it be used
+                return
             try:
-                loaded = json.loads(path.read_text())
+                loaded = json.loads(_read(path))
                 if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
                     raise ValueError("no 'rotators' table")
                 self._data = {
@@ -61,16 +117,16 @@ class StateStore:
         return {"locked": True}
 
     def check_writable(self) -> None:
-        """OSError if the file cannot be written where it is configured. Checked at start: a
-        lock set for tower work that is silently not kept would be gone after a restart."""
+        """OSError if the file cannot be written where it is configured (rules 3, 4)."""
         if self._path is None:
             return
+        kind = _kind_at(self._path) or self._kind
+        if kind is not None:
+            raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
         self._path.parent.mkdir(parents=True, exist_ok=True)
-        if self._path.is_dir():
-            raise IsADirectoryError(21, "a directory is in the way", str(self._path))
-        fd, tmp = tempfile.mkstemp(dir=self._path.parent, prefix=".state-")
-        os.close(fd)
-        os.unlink(tmp)
+        with self._lock:
+            self._write(self._path, put_in_place=not self.corrupt)
+            self._dirty = self._dirty and self.corrupt  # malformed entries now written locked
 
     def locked(self, rotator_id: str) -> bool:
         with self._lock:
@@ -110,11 +166,40 @@ class StateStore:
             return True
         try:
             self._path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=self._path.parent, prefix=".state-")
-            with os.fdopen(fd, "w") as f:
-                json.dump({"rotators": self._data}, f, indent=1, sort_keys=True)
-            os.replace(tmp, self._path)
+            self._write(self._path)
             return True
         except OSError as exc:
             log.error("cannot write state file %s: %s", self._path, exc)
             return False
+
+    def _write(self, path: Path, *, put_in_place: bool = True) -> None:
+        """The content, in full and on the disk, then renamed over ``path`` (rule 1); without
+        ``put_in_place`` it is removed instead (rule 3). OSError if any step fails."""
+        content = json.dumps({"rotators": self._data}, indent=1, sort_keys=True).encode()
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".state-")
+        renamed = False
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(content)
+                f.flush()
+                os.fsync(f.fileno())
+            if put_in_place:
+                os.replace(tmp, path)
+                renamed = True
+        finally:
+            if not renamed:
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
+        if renamed:
+            _sync_directory(path.parent)
+
+
+def _sync_directory(directory: Path) -> None:
+    """The rename on the disk too; where a file system cannot sync a directory, the file's own
+    sync has to do (the rename happened: nothing to report)."""
+    with contextlib.suppress(OSError):
+        fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

@@ -18,15 +18,18 @@ Rules:
    that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
    display problem never closes or reopens the line to the controller.
    Listeners must be quick (they only queue for the network): every line waits while one runs.
-4. Opening a port and closing a failed one run on a short-lived thread (port.py PendingOpen,
-   close_in_background): a wedged USB adapter must not hold up the other lines. Meanwhile the
-   rotator is offline and its commands are answered (refused) as when the port is closed.
+4. Opening a port and closing one (failed, or for good when the rotator stops) run on a
+   short-lived thread (port.py PendingOpen, close_in_background): a wedged USB adapter must
+   not hold up the other lines. Meanwhile the rotator is offline and its commands are answered
+   (refused) as when the port is closed. ``wait_closed`` waits for those closes, on any thread
+   but the lines thread (lines.py rule 4: a stopped rotator's port is closed or being closed).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable
 from functools import partial
@@ -43,7 +46,6 @@ from bridge.engine.port import (
     PortError,
     PortOpener,
     close_in_background,
-    close_quietly,
     open_port,
     read_available,
     write_frame,
@@ -81,6 +83,7 @@ class Worker:
         self._port: serial.Serial | None = None
         self._fd = -1
         self._opening: PendingOpen | None = None
+        self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
         self._held = False
@@ -93,14 +96,28 @@ class Worker:
         self._reopen_at = now
 
     def end(self, now: float) -> None:
-        """Close the port for good (the rotator is stopping): here, so that it is closed when
-        the rotator's stop() returns."""
+        """Close the port for good (the rotator is stopping), in the background (rule 4): the
+        rotator's stop() waits for that with ``wait_closed``, off this thread."""
         if self._opening is not None:
-            self._opening.abandon()
-        port, self._port = self._port, None
+            self._closes(self._opening.abandon())
+            self._opening = None
+        port, self._port, self._fd = self._port, None, -1
         if port is not None:
-            close_quietly(port)
+            self._closes(close_in_background(port))
             self._do(self.session.link_down(None, now, ErrorKind.SERIAL))
+
+    def wait_closed(self, timeout_s: float) -> bool:
+        """Whether every port this worker closed is closed, waiting up to ``timeout_s`` for it.
+        Not on the lines thread (rule 4); after ``end`` it is the only one touching the list."""
+        deadline = time.monotonic() + timeout_s
+        for closing in self._closing:
+            closing.join(max(0.0, deadline - time.monotonic()))
+        return not any(closing.is_alive() for closing in self._closing)
+
+    def _closes(self, closing: threading.Thread | None) -> None:
+        self._closing = [c for c in self._closing if c.is_alive()]
+        if closing is not None:
+            self._closing.append(closing)
 
     def has_commands(self, ready: set[int]) -> bool:
         return self._box in ready
@@ -181,7 +198,7 @@ class Worker:
     def _lost(self, reason: str, kind: ErrorKind, now: float) -> None:
         port, self._port, self._fd = self._port, None, -1
         if port is not None:
-            close_in_background(port)  # rule 4
+            self._closes(close_in_background(port))  # rule 4
         self._reopen_at = now + self._backoff_s
         self._do(self.session.link_down(reason, now, kind))
 

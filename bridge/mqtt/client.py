@@ -85,6 +85,10 @@ Rules:
    stale discovery) are sent if the base topic was this installation's. A look without an
    answer in LOOK_TIMEOUT_S (an ACL that denies the hello) goes on without it, deleting
    nothing. While it runs, another instance's info put there is judged by claim rule 4.
+15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
+   (thousands of configs published under the bridge's node ids) is a few lines: a few at
+   once, then one a minute (FOREIGN_LOG_S) for each of "cleared" and "left alone", the next
+   line saying how many were not logged; a look's deletions are one line, naming ten at most.
 """
 
 from __future__ import annotations
@@ -106,6 +110,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
+from bridge.mqtt.limiter import EventLimiter
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -129,6 +134,8 @@ TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linu
 # rule 10
 FOREIGN_FIX_S = 2.0
 FOREIGN_LOG_S = 60.0
+CLEARS_SAID_AT_ONCE = 3  # rule 15
+CLEARS_NAMED = 10  # rule 15: topics named in one line
 MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
 ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
@@ -313,6 +320,7 @@ class MqttClient:
         self._fixed_at: dict[str, float] = {}
         self.connected_at = -1e18  # the clock at the last accepted connection
         self._logged_at: dict[str, float] = {}
+        self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
         self._dirty: set[str] = set()  # rule 13: retained topics whose last publish failed
         self._retry = threading.Event()  # rule 13: set when the broker has room again
         self.failed_publishes = 0
@@ -383,18 +391,30 @@ class MqttClient:
                 self._send(self._client, topic, data, qos, retain=True)
 
     def clear_retained(self, topic: str) -> None:
-        """Delete a retained message from the broker (empty retained payload)."""
+        """Delete a retained config from the broker (empty retained payload); said (rule 15)."""
         with self._lock:
             self._retained.pop(topic, None)
             if self._claim is None:
                 if self.connected.is_set():
                     self._client.publish(topic, b"", qos=1, retain=True)
-                return
-            if self._looking is not None:  # rule 14: held by the broker before we came
+                cleared = True
+            elif self._looking is not None:  # rule 14: held by the broker before we came
                 self._pending_clears.append(topic)
                 return
-        # published while we run: another client's (claim rule 3)
-        log.warning("%s was published by another client: not ours to delete; left alone", topic)
+            else:  # published while we run: another client's (claim rule 3)
+                cleared = False
+        left_out = self._clears_said.admit("cleared" if cleared else "left alone")
+        if left_out is None:
+            return
+        more = f" ({left_out} more like it not logged)" if left_out else ""
+        if cleared:
+            log.info("cleared %s, a retained config this bridge no longer makes%s", topic, more)
+        else:
+            log.warning(
+                "%s was published by another client: not ours to delete; left alone%s",
+                topic,
+                more,
+            )
 
     def republish_retained(self, skip_prefix: str | None = None) -> None:
         """Send the retained messages we own again (Home Assistant came back, for example)."""
@@ -531,12 +551,18 @@ class MqttClient:
         if clear:
             for topic in clears:
                 self._send(client, topic, b"", 1, retain=True)
+        if clear and clears:
+            log.info(
+                "cleared %d retained config(s) this bridge no longer makes: %s",
+                len(clears),
+                _some(clears),
+            )
         elif clears:
             log.warning(
                 "left alone %d retained config(s) this bridge does not generate, as the base "
                 "topic was not its own (delete them by hand if that bridge is gone for good): %s",
                 len(clears),
-                ", ".join(clears),
+                _some(clears),
             )
         self.connected.set()
 
@@ -859,3 +885,10 @@ class MqttClient:
 
     def _is_owned(self, topic: str) -> bool:
         return any(paho.topic_matches_sub(f, topic) for f in self._owned)
+
+
+def _some(topics: list[str]) -> str:
+    """Rule 15: at most CLEARS_NAMED topics, and how many more."""
+    named = ", ".join(topics[:CLEARS_NAMED])
+    rest = len(topics) - CLEARS_NAMED
+    return f"{named} and {rest} more" if rest > 0 else named

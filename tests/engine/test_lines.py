@@ -7,6 +7,7 @@ still reach its controller at once.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -114,6 +115,47 @@ def test_one_rotators_trouble_never_holds_up_anothers_stop(
         assert bad.calls == 1  # still in its one open() the whole time
 
 
+def test_a_port_that_will_not_close_holds_up_neither_another_line_nor_the_stop(
+    emu: EmulatedPort, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A wedged USB adapter's close() waits for its output to drain (up to 30 s): stopping that
+    rotator froze every other line, as its port was closed on the lines thread."""
+    wedged = emulators.start("rotorez", link=str(tmp_path / "wedged"), **FAST_ROTOR)
+    release = threading.Event()
+    opened: dict[str, serial.Serial] = {}
+
+    def recording(path: str, spec: ModelSpec, baud: int) -> serial.Serial:
+        port = opened[path] = open_port(path, spec, baud)
+        if path == wedged.link:
+            close = port.close
+            port.close = lambda: (release.wait(10), close())  # type: ignore[method-assign]
+        return port
+
+    lines = Lines()
+    assert emu.link is not None and wedged.link is not None
+    sick = rotator("sick", wedged.link, lines, recording, [])
+    good = rotator("good", emu.link, lines, recording, [])
+    sick.start()
+    good.start()
+    try:
+        for rot in (sick, good):
+            wait_until(lambda r=rot: r.status.state.value == "idle", 10, f"{rot.id} idle")
+        t = time.monotonic()
+        with caplog.at_level(logging.WARNING, logger="bridge.engine.lines"):
+            sick.stop(timeout_s=0.5)
+        assert time.monotonic() - t < 1.0
+        assert f"sick: {wedged.link} is still closing after 0.5 s" in caplog.text
+        assert opened[wedged.link].is_open  # being closed, on a thread of its own
+        assert stop_latency_s(emu, good) < 0.15  # meanwhile the other line is served
+        good.stop()
+        assert not opened[emu.link].is_open  # a port that closes is closed when stop returns
+    finally:
+        release.set()
+        good.stop()
+        wedged.close()
+    wait_until(lambda: not opened[wedged.link].is_open, 5, "the wedged port closed in the end")
+
+
 def test_a_rotator_is_started_once(emu: EmulatedPort) -> None:
     assert emu.link is not None
     lines = Lines()
@@ -156,6 +198,9 @@ class Timed:
 
     def end(self, now: float) -> None:
         pass
+
+    def wait_closed(self, timeout_s: float) -> bool:
+        return True
 
 
 def test_each_line_is_served_with_the_time_it_is_served_at() -> None:

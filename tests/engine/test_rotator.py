@@ -9,14 +9,18 @@ from bridge.app import worker_config
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, SetOption, Stop, Target
+from bridge.geo import parse_locator, to_locator
+from bridge.model import ErrorEvent, SetOption, Source, Stop, Target
 from bridge.settings import RotatorSettings
 
 
-def rotator(model: str = "rotorez", **settings: object) -> tuple[Rotator, list]:
+def rotator(
+    model: str = "rotorez", station: tuple[float, float] | None = None, **settings: object
+) -> tuple[Rotator, list]:
     events: list[ErrorEvent] = []
     cfg = worker_config(RotatorSettings(id="t", model=model, port="/dev/null", **settings))
-    return Rotator(cfg, StateStore(None), lambda s: None, events.append), events
+    rot = Rotator(cfg, StateStore(None), lambda s: None, events.append, station=station)
+    return rot, events
 
 
 def code(rot: Rotator, command) -> str:  # noqa: ANN001
@@ -50,3 +54,32 @@ def test_capabilities() -> None:
     spid, _ = rotator("rot2prog", el_max_deg=90)
     assert code(spid, Target(10, 91)) == "limits"
     assert code(spid, Target(10.3, 89.9)) == "offline"  # SPID rounds down: no rounding past
+
+
+def test_the_station_itself_and_its_antipode_are_refused_as_targets_with_a_reason() -> None:
+    """Neither has a bearing of its own: the station's own locator used to turn the antenna to
+    north (0), and so did the antipode, where every direction is as short as any other."""
+    home = parse_locator("JO62qm")
+    rot, events = rotator(station=home)
+    with pytest.raises(Refused) as exc:
+        rot.go_toward(*home, Source.MQTT, "locator JO62qm", locator="JO62qm")
+    assert exc.value.code == "invalid"
+    assert events[-1].kind == "refused"
+    assert "JO62qm is the station's own position" in events[-1].message
+    assert "no bearing" in events[-1].message
+    # the same place typed as coordinates, by either path
+    with pytest.raises(Refused):
+        rot.go_toward(*home, Source.MQTT, "coordinates", long_path=True)
+    assert "the station's own position" in events[-1].message
+    # the antipode of a locator's centre is another locator's centre
+    antipode = (-home[0], home[1] - 180.0)
+    assert to_locator(*antipode) == "AD67QL"
+    with pytest.raises(Refused) as exc:
+        rot.go_toward(*parse_locator("AD67ql"), Source.MQTT, "locator AD67ql", locator="AD67ql")
+    assert exc.value.code == "invalid"
+    assert "AD67ql is the station's antipode" in events[-1].message
+    assert "every bearing" in events[-1].message
+    # a neighbouring square still has a bearing: judged further on (no link here: offline)
+    with pytest.raises(Refused) as exc:
+        rot.go_toward(*parse_locator("JO62qn"), Source.MQTT, "locator JO62qn", locator="JO62qn")
+    assert exc.value.code == "offline"

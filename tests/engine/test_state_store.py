@@ -1,6 +1,8 @@
 from __future__ import annotations
 
+import errno
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -65,3 +67,37 @@ def test_a_malformed_entry_starts_its_rotator_locked_and_says_why(
     assert s.locked("yagi") is False and s.options("yagi") == {"jam": True}  # the others as set
     assert json.loads(path.read_text())["rotators"]["tower"] == {"locked": True}  # kept locked
     assert StateStore(path).problems == {}  # written down properly: the next start is clean
+
+
+def test_the_start_writes_the_real_content_but_never_over_an_unreadable_file(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "state.json"
+    StateStore(path).check_writable()
+    assert json.loads(path.read_text()) == {"rotators": {}}  # the file as every change writes it
+    StateStore(path).set_locked("tower", True)
+    StateStore(path).check_writable()
+    assert json.loads(path.read_text())["rotators"]["tower"]["locked"] is True  # kept as it was
+    path.write_text("{not json")
+    StateStore(path).check_writable()  # the directory takes a file; the one there stays
+    assert path.read_text() == "{not json" and StateStore(path).locked("tower") is True
+    assert [p.name for p in tmp_path.iterdir()] == ["state.json"]
+
+
+def test_a_write_that_fails_keeps_the_old_file_and_leaves_no_temporary_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "state.json"
+    s = StateStore(path)
+    s.set_locked("tower", True)
+
+    def disk_gone(fd: int) -> None:
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(os, "fsync", disk_gone)
+    assert s.set_locked("tower", False) is False
+    with pytest.raises(OSError, match="Input/output error"):
+        s.check_writable()
+    assert [p.name for p in tmp_path.iterdir()] == ["state.json"]
+    monkeypatch.undo()
+    assert StateStore(path).locked("tower") is True

@@ -8,8 +8,10 @@ schema either load or fail that way, nothing else.
 from __future__ import annotations
 
 import os
+import resource
 import socket
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +24,7 @@ from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError, load_settings
 from tests.faults.conftest import Pki
 from tests.support import retained_snapshot, run_cli, to_toml
+from tests.support.process import bridge_env
 
 SECRET = "hunter2-do-not-show"
 BASE = """
@@ -227,6 +230,54 @@ def test_a_state_file_that_cannot_be_written_is_exit_2_and_one_line(
     assert "Not a directory" in line
     assert retained_snapshot(broker.port, "#") == {}
     assert blocker.read_text() == "not a directory\n"
+
+
+def test_a_state_file_whose_content_cannot_be_written_is_exit_2_and_leaves_nothing(
+    tmp_path: Path, broker: Mosquitto
+) -> None:
+    """A full disk lets an empty file be made but not written: the start writes the real content
+    (as every later change does), so the failure is found here, not at the first lock."""
+    state_file = tmp_path / "state" / "state.json"
+    config = start_up_config(tmp_path, broker.port, state_file=state_file)
+
+    def no_file_may_grow() -> None:  # as on a full disk: EFBIG here, ENOSPC there
+        resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0))
+
+    out = subprocess.run(
+        [sys.executable, "-m", "bridge", "run", "-c", str(config)],
+        capture_output=True,
+        text=True,
+        env=bridge_env({"PYTHONDONTWRITEBYTECODE": "1"}),
+        timeout=10,
+        preexec_fn=no_file_may_grow,
+    )
+    line = the_one_line(out)
+    assert line == f"rotor-bridge: state_file {state_file} cannot be written: File too large"
+    assert list(state_file.parent.iterdir()) == []  # no temporary file left behind
+    assert retained_snapshot(broker.port, "#") == {}
+
+
+@pytest.mark.parametrize("kind", ["FIFO", "directory"])
+def test_a_state_file_that_is_no_regular_file_is_exit_2_naming_it_at_once(
+    tmp_path: Path, broker: Mosquitto, kind: str
+) -> None:
+    """A FIFO at the state file's path held the start forever (reading it waits for a writer),
+    and a file written over it would have replaced it: /dev/null by mistake, as root."""
+    state_file = tmp_path / "state" / "state.json"
+    state_file.parent.mkdir()
+    if kind == "FIFO":
+        os.mkfifo(state_file)
+    else:
+        state_file.mkdir()
+    config = start_up_config(tmp_path, broker.port, state_file=state_file)
+    line = the_one_line(run_cli("run", "-c", str(config), timeout_s=10))
+    assert line == (
+        f"rotor-bridge: state_file {state_file} cannot be written: "
+        f"it is a {kind}, not a regular file"
+    )
+    assert list(state_file.parent.iterdir()) == [state_file]  # nothing written beside it
+    assert state_file.is_fifo() if kind == "FIFO" else state_file.is_dir()  # nor over it
+    assert retained_snapshot(broker.port, "#") == {}
 
 
 @pytest.fixture(scope="module")

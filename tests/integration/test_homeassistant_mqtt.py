@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import json
+import logging
 import time
 from pathlib import Path
 
+import pytest
+
 from bridge import emulators
 from bridge.mosquitto import Mosquitto
+from bridge.mqtt import client as mqtt_client
 from tests.ha_rules import validate
 from tests.integration.test_process import start_bridge, write_config
 from tests.support import Probe, retained_snapshot, wait_until
@@ -84,6 +88,42 @@ def test_removed_rotator_entities_are_cleared(rig: Rig) -> None:
     )
     after = configs(rig.broker.port)
     assert any("_r_tower/" in t for t in after)
+
+
+def test_a_flood_of_foreign_configs_under_the_bridges_node_ids_is_a_few_log_lines(
+    rig: Rig, caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A client publishing thousands of configs under the bridge's node ids (hostile, or a
+    flow gone wrong) wrote two log lines for each: "clearing stale ..." and "... left alone"."""
+    monkeypatch.setattr(mqtt_client, "FOREIGN_LOG_S", 1.0)  # the minute between summaries
+    rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    client = rig.app.client if rig.app is not None else None
+    assert client is not None
+    wait_until(lambda: time.monotonic() - client.connected_at > 1.0, 5, "the first look done")
+    node = f"{PREFIX}/sensor/rotorbridge_rotor_r_tower"
+    flood = 3000
+    hostile = Probe(rig.broker.port, "", max_inflight=1000)
+    caplog.set_level(logging.INFO)
+    caplog.clear()
+    try:
+        for i in range(flood):  # QoS 0 throughout: the broker keeps their order to the bridge
+            hostile.client.publish(f"{node}/junk{i}/config", b'{"name": "x"}', qos=0)
+        hostile.client.publish(f"{PREFIX}/status", b"online", qos=0)  # then a marker
+        wait_until(lambda: "Home Assistant came online" in caplog.text, 20, "the flood taken")
+        said = [r for r in caplog.records if "junk" in r.getMessage()]
+        assert 1 <= len(said) <= 5, [r.getMessage() for r in said]
+        assert "left alone" in said[0].getMessage()
+        # a minute later (here: a second) the next one says how many were not logged
+        time.sleep(1.1)
+        hostile.publish(f"{node}/late/config", b'{"name": "x"}')
+        line = wait_until(
+            lambda: next((r for r in caplog.records if "/late/" in r.getMessage()), None), 5
+        ).getMessage()
+        assert f"{flood - len(said)} more like it not logged" in line, line
+    finally:
+        hostile.close()
 
 
 def test_discovery_can_be_turned_off(rig: Rig) -> None:
