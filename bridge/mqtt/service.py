@@ -213,8 +213,12 @@ class MqttService:
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
+        self._arm_resend()
+
+    def _arm_resend(self) -> None:
+        """One timer at most looks again in RESEND_S while a hold is out."""
         with self._word_lock:
-            if self._resend_timer is not None:
+            if self._resend_timer is not None or not self._word.holding:
                 return
             timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
         timer.daemon = True
@@ -224,15 +228,8 @@ class MqttService:
         """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
         with self._word_lock:
             self._resend_timer = None
-            if not self._word.holding:
-                return
         self._resend_marker_if_due()
-        with self._word_lock:
-            if self._resend_timer is not None or not self._word.holding:
-                return
-            timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
-        timer.daemon = True
-        timer.start()
+        self._arm_resend()
 
     def _resend_marker_if_due(self) -> None:
         with self._word_lock:

@@ -16,6 +16,7 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
@@ -102,25 +103,42 @@ def test_lock_on_then_off_behind_a_backlog_ends_unlocked_and_the_next_target_is_
     assert sent[-1] == b"AP1250\r", sent
 
 
+def stop_behind_a_held_target(rig: Rig, app: App, emu: object) -> None:
+    """The rotor turns to 200; the main connection is held on a target of 300 published next;
+    a stop published after that reaches the controller on the lane meanwhile."""
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)  # type: ignore[attr-defined]
+    with main_held_at(app, "rotor/target", b"300") as held:
+        rig.probe.publish("rotor/target", "300")
+        wait_until(held.is_set, 10, "the main connection is held on 300")
+        stops = len(emu.frames("stop"))  # type: ignore[attr-defined]
+        rig.probe.publish("rotor/stop", "")
+        emu.wait_until(  # type: ignore[attr-defined]
+            lambda d, now: len(d.frames("stop")), lambda n: n > stops, 10
+        )
+
+
 def test_a_target_published_before_a_lane_stop_never_runs_after_it(rig: Rig) -> None:
     emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
     app = rig.start()
     rig.ready("tower")
-    rig.probe.publish("rotor/target", "200")
-    emu.wait_for(lambda s: s.is_moving, 10)
-    with main_held_at(app, "rotor/target", b"300") as held:
-        rig.probe.publish("rotor/target", "300")
-        wait_until(held.is_set, 10, "the main connection is held on 300")
-        stops = len(emu.frames("stop"))
-        rig.probe.publish("rotor/stop", "")
-        emu.wait_until(lambda d, now: len(d.frames("stop")), lambda n: n > stops, 10)
-        emu.wait_for(lambda s: not s.is_moving, 10)
+    stop_behind_a_held_target(rig, app, emu)
+    emu.wait_for(lambda s: not s.is_moving, 10)
     marker_back(rig, app)
     stopped = emu.state().az_deg
     assert not emu.state().is_moving and emu.state().az_deg == stopped
     assert not [d for d in bearings(emu) if b"300" in d]  # never went out
     rig.probe.publish("rotor/target", "250")  # and the next one is obeyed
     emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 250) <= 3, 30)
+
+
+def tower(rig: Rig, speed_deg_s: float = 20.0) -> tuple[Any, App]:
+    """An emulated Rotor-EZ at 10 degrees, bridged, settled, the stop lane up."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": speed_deg_s})
+    app = rig.start()
+    rig.ready("tower")
+    wait_until(app.lane.connected.is_set, 10, "the lane is up")
+    return emu, app
 
 
 def kick_the_lane(app: App) -> None:
@@ -134,23 +152,11 @@ def kick_the_lane(app: App) -> None:
 def test_a_stop_the_lane_missed_does_not_make_the_next_one_wait_behind_the_backlog(
     rig: Rig,
 ) -> None:
-    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
-    app = rig.start()
-    rig.ready("tower")
-    wait_until(app.lane.connected.is_set, 10, "the lane is up")
+    emu, app = tower(rig)
     kick_the_lane(app)
     rig.probe.publish("rotor/stop", "")  # only the main connection has this one
     wait_until(app.lane.connected.is_set, 15, "the lane is back")
-    rig.probe.publish("rotor/target", "200")
-    emu.wait_for(lambda s: s.is_moving, 10)
-    with main_held_at(app, "rotor/target", b"300") as held:
-        rig.probe.publish("rotor/target", "300")
-        wait_until(held.is_set, 10, "the main connection is held")
-        stops = len(emu.frames("stop"))
-        rig.probe.publish("rotor/stop", "")
-        # on the lane, while the main connection still reads nothing
-        emu.wait_until(lambda d, now: len(d.frames("stop")), lambda n: n > stops, 10)
-        assert held.is_set()
+    stop_behind_a_held_target(rig, app, emu)
     marker_back(rig, app)
     assert not [d for d in bearings(emu) if b"300" in d]
 
@@ -158,10 +164,7 @@ def test_a_stop_the_lane_missed_does_not_make_the_next_one_wait_behind_the_backl
 def test_a_retained_stop_does_not_stop_the_rotor_again_when_the_lane_reconnects(
     rig: Rig,
 ) -> None:
-    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 10.0})
-    app = rig.start()
-    rig.ready("tower")
-    wait_until(app.lane.connected.is_set, 10, "the lane is up")
+    emu, app = tower(rig, speed_deg_s=10.0)
     t = time.monotonic()
     rig.probe.publish("rotor/stop", "STOP", retain=True)  # a dashboard button set to retain
     rig.probe.wait_for("rotor/error", lambda m: b"retained" in m.payload, 10, after=t)
