@@ -13,6 +13,7 @@ from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
+from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
@@ -125,6 +126,7 @@ class App:
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
+        self.sky = SkyWorker()  # one thread computes the sky for all (engine/skywork.py)
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky),
@@ -136,6 +138,7 @@ class App:
                 lines=self.lines,
                 station=settings.station.position,
                 catalog=catalog,
+                sky=self.sky,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)

@@ -29,6 +29,10 @@ Rules:
 7. Passes are found by sampling elevation (a satellite ~90 times per orbit, the sun and the moon
    every 20 minutes), refining each sign change, and refining each sampled extremum near min_el,
    so a pass (or a dip) shorter than a sampling step is still found.
+8. What cannot be computed raises SkyError, whose ``reason`` is what a user reads when tracking
+   ends for it: "satellite orbit decayed" (SGP4's own error code says which), "date beyond the
+   ephemeris (2053)". Computing takes from a millisecond to a second: the engine asks its sky
+   worker (engine/skywork.py), never the thread that serves the serial lines.
 """
 
 from __future__ import annotations
@@ -60,10 +64,16 @@ _SUN_MOON_STEP_S = 1200.0
 _CHUNK_STEPS = 256  # samples per skyfield call when scanning for passes
 _SECTIONS = 64  # points per bracket when refining a crossing or an extremum
 _DONE_S = 2.0  # brackets this narrow are finished by interpolation
+_UNIX_JD = 2440587.5  # the Julian date of 1970-01-01 00:00 UTC
+EPHEMERIS_END_S = 2643580800.0  # 2053-10-09 00:00 UTC: DE421 ends the day before
 
 
 class SkyError(ValueError):
-    pass
+    """Input the sky cannot answer for; ``reason`` says it in a few words (rule 8)."""
+
+    def __init__(self, message: str, reason: str | None = None) -> None:
+        super().__init__(message)
+        self.reason = reason or message
 
 
 @dataclass(frozen=True)
@@ -181,6 +191,16 @@ def _ephemeris() -> tuple[Any, Any, Any, Any]:
     return load.timescale(builtin=True), kernel["earth"], kernel["sun"], kernel["moon"]
 
 
+def _no_position(body: Body, tle: tuple[str, str], t_unix: float) -> SkyError:
+    """Rule 8: why SGP4 has no position at ``t_unix`` (its own error code says)."""
+    days, second = divmod(t_unix, DAY_S)
+    error, _, _ = Satrec.twoline2rv(*tle).sgp4(_UNIX_JD + days, second / DAY_S)
+    decayed = error in (0, 6)  # 6: "mrt is less than 1.0", the satellite has decayed
+    what = "the orbit decayed" if decayed else SGP4_ERRORS.get(error, f"error {error}")
+    reason = "satellite orbit decayed" if decayed else f"satellite elements unusable: {what}"
+    return SkyError(f"{body.name}: SGP4 has no position at {t_unix:.0f} ({what})", reason)
+
+
 @functools.lru_cache(maxsize=256)
 def _satellite(line1: str, line2: str) -> Any:
     return EarthSatellite(line1, line2, None, _ephemeris()[0])
@@ -209,9 +229,9 @@ class Sky:
         if len(times_unix) == 0:
             return []
         az, el = self._altaz(body, np.asarray(times_unix, dtype=np.float64))
-        if body.kind == "satellite" and np.isnan(el).any():
+        if body.tle is not None and np.isnan(el).any():
             at = float(np.asarray(times_unix)[np.isnan(el)][0])
-            raise SkyError(f"{body.name}: SGP4 has no position at {at:.0f} (the orbit decayed?)")
+            raise _no_position(body, body.tle, at)
         return list(zip(az.tolist(), el.tolist(), strict=True))
 
     def position(self, body: Body, t_unix: float) -> tuple[float, float]:
@@ -276,7 +296,13 @@ class Sky:
                 target = sun if body.kind == "sun" else moon
                 place = (earth + self._station).at(t).observe(target).apparent()
         except EphemerisRangeError as e:
-            raise SkyError(f"{body.name}: a time outside the ephemeris (DE421, 1900..2053)") from e
+            late = float(t_unix.max()) > EPHEMERIS_END_S
+            reason = "date beyond the ephemeris (2053)"
+            if not late:
+                reason = "date before the ephemeris (1899)"
+            raise SkyError(
+                f"{body.name}: a time outside the ephemeris (DE421, 1899-07-29..2053-10-08)", reason
+            ) from e
         alt, az, _ = place.altaz()
         el_deg: Floats = alt.degrees
         az_deg: Floats = az.degrees % 360.0

@@ -15,6 +15,11 @@ from bridge.sky import Body, Sky
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, tle_with_pass
 
+# The sky of these tests is fixed: positions, passes and the sun's speed across it are those at
+# these instants, so a run at any time of day judges the same sky (the rotor-EZ test failed at
+# two times of day in sixty, when the sun at the chosen station barely moved in azimuth).
+SUN_EPOCH = 1_781_000_000.0  # 2026-06-09 10:13 UTC
+
 
 def sun_up_somewhere(t_unix: float, lo: float = 35.0, hi: float = 60.0) -> tuple[float, float]:
     """A station where the sun stands between ``lo`` and ``hi`` degrees at ``t_unix``."""
