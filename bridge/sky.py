@@ -192,13 +192,16 @@ def _ephemeris() -> tuple[Any, Any, Any, Any]:
 
 
 def _no_position(body: Body, tle: tuple[str, str], t_unix: float) -> SkyError:
-    """Rule 8: why SGP4 has no position at ``t_unix`` (its own error code says)."""
+    """Rule 8: SGP4 has no position at ``t_unix``. The elements propagated at their epoch
+    (rule 5), so an error later means drag has brought the orbit down in the model: SGP4's own
+    code (6, or an eccentricity driven out of range) goes in the message."""
     days, second = divmod(t_unix, DAY_S)
     error, _, _ = Satrec.twoline2rv(*tle).sgp4(_UNIX_JD + days, second / DAY_S)
-    decayed = error in (0, 6)  # 6: "mrt is less than 1.0", the satellite has decayed
-    what = "the orbit decayed" if decayed else SGP4_ERRORS.get(error, f"error {error}")
-    reason = "satellite orbit decayed" if decayed else f"satellite elements unusable: {what}"
-    return SkyError(f"{body.name}: SGP4 has no position at {t_unix:.0f} ({what})", reason)
+    what = SGP4_ERRORS.get(error, f"error {error}")
+    return SkyError(
+        f"{body.name}: SGP4 has no position at {t_unix:.0f} (the orbit decayed: {what})",
+        "satellite orbit decayed",
+    )
 
 
 @functools.lru_cache(maxsize=256)
