@@ -21,6 +21,8 @@ Rules:
    Anything else is SkyError naming the line and what is wrong. A TLE file (parse_tles) is
    3-line sets (a name line, Space-Track's "0 " prefix dropped) or bare 2-line sets (named by
    their catalog number); blank lines and CRLF are fine; a bad set is reported and skipped.
+   A satellite named "off", "sun" or "moon" (any case) is called "satellite off" and so on:
+   ``R/tracking`` saying "off" or "sun" must mean that.
 6. A pass is an interval with the body above min_el. next_pass gives the one in progress at t
    (its aos_s <= t: the rise found looking back at most within_s, else t itself) or else the first
    that rises within within_s. A body that does not set within within_s of t (midnight sun, a GEO
@@ -60,6 +62,7 @@ DAY_S = 86400.0
 PASSES_KEPT = 64  # next_pass's answers remembered (a few per body tracked)
 NO_PASS_KEPT_S = 60.0
 KINDS = ("sun", "moon", "satellite")
+RESERVED = ("off", "sun", "moon")  # what R/track and R/tracking mean by these (rule 5)
 _SUN_MOON_STEP_S = 1200.0
 _CHUNK_STEPS = 256  # samples per skyfield call when scanning for passes
 _SECTIONS = 64  # points per bracket when refining a crossing or an extremum
@@ -90,6 +93,10 @@ class Body:
         if self.tle is not None:
             if not self.name:
                 raise SkyError("a satellite needs a name")
+            if self.name.casefold() in RESERVED:
+                raise SkyError(
+                    f"a satellite cannot be called {self.name!r}: Body.satellite names it"
+                )
             problem = _tle_problem(*self.tle)
             if problem is not None:
                 raise SkyError(f"{self.name}: TLE line {problem[0]}: {problem[1]}")
@@ -104,7 +111,11 @@ class Body:
 
     @staticmethod
     def satellite(name: str, line1: str, line2: str) -> Body:
-        return Body("satellite", name.strip(), (line1.rstrip(), line2.rstrip()))
+        """A satellite called "off", "sun" or "moon" is "satellite off" etc. (rule 5)."""
+        name = name.strip()
+        if name.casefold() in RESERVED:
+            name = f"satellite {name}"
+        return Body("satellite", name, (line1.rstrip(), line2.rstrip()))
 
 
 def _checksum(line: str) -> int:

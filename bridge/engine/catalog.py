@@ -10,8 +10,8 @@ Rules:
    change; bad element sets in it are skipped with one warning per read, counting them and
    naming the first (sky.parse_tles).
 3. Names are matched ignoring case and surrounding blanks; the catalog number works too.
-4. A file larger than MAX_FILE_BYTES is not read (a TLE file of every satellite in orbit is
-   about 3 MB): it counts as a file that cannot be read, and a lookup is refused naming the
+4. A file larger than MAX_FILE_BYTES is not read (a TLE file of every active satellite is
+   about 2 MB): it counts as a file that cannot be read, and a lookup is refused naming the
    file and the limit.
 """
 

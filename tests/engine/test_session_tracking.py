@@ -11,9 +11,10 @@ import time
 import pytest
 
 from bridge.model import MotionState, Source, Target
-from bridge.sky import Body, Sky
+from bridge.mqtt.payloads import tracking_state
+from bridge.sky import Body, Sky, SkyError
 from tests.engine.virtual import VirtualRotator
-from tests.support.sky import sgp4_altaz, sun_altaz, tle_with_pass
+from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass
 
 # The sky of these tests is fixed: positions, passes and the sun's speed across it are those at
 # these instants, so a run at any time of day judges the same sky (the rotor-EZ test failed at
@@ -361,3 +362,21 @@ def test_tracking_ends_for_good_when_the_rotor_is_out_of_the_bridges_hands(
         assert v.status.tracking_ended in want[how]
         v.run_until(lambda h: not h.truth().is_moving, 120, "still")
         nothing_turns_it_for(v, 1200.0)
+
+
+@pytest.mark.parametrize("name", ["off", "SUN", " moon "])
+def test_a_satellite_named_off_sun_or_moon_is_called_satellite_so_and_so(name: str) -> None:
+    """Review: a JSON TLE named "off" showed as R/tracking "off" while the rotor tracked it."""
+    line1, line2 = synthetic_tle(
+        name, SUN_EPOCH, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    body = Body.satellite(name, line1, line2)
+    assert body.name == f"satellite {name.strip()}"
+    with VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=SUN_EPOCH) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(body)
+        v.run_for(2.0)
+        assert v.status.tracking is not None
+        assert tracking_state(v.status) == f"satellite {name.strip()}"
+    with pytest.raises(SkyError, match="cannot be called"):
+        Body("satellite", name.strip(), (line1, line2))
