@@ -6,6 +6,8 @@ import errno
 import logging
 import signal
 import threading
+import time
+from collections.abc import Callable
 from functools import partial
 
 from bridge.engine.catalog import TleCatalog
@@ -81,7 +83,15 @@ class NotYet(ConfigError):
 
 
 class App:
-    def __init__(self, settings: Settings, *, port_opener: PortOpener = open_port) -> None:
+    def __init__(
+        self,
+        settings: Settings,
+        *,
+        port_opener: PortOpener = open_port,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        """``wall``: the wall clock (unix seconds) of the statuses, events and the sky; tests
+        give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
         self.topics = Topics(settings.mqtt.base_topic, roots)
@@ -109,7 +119,10 @@ class App:
         )
         self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
-            self.topics, self.client, error_events_per_s=settings.mqtt.error_events_per_s
+            self.topics,
+            self.client,
+            wall=wall,
+            error_events_per_s=settings.mqtt.error_events_per_s,
         )
         store = StateStore(settings.state_file)
         try:
@@ -135,6 +148,7 @@ class App:
                 on_event=partial(self.mqtt.publish_event, r.id),
                 name=r.name,
                 port_opener=port_opener,
+                wall=wall,
                 lines=self.lines,
                 station=settings.station.position,
                 catalog=catalog,
