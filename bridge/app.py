@@ -5,6 +5,7 @@ from __future__ import annotations
 import errno
 import logging
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -32,6 +33,7 @@ from bridge.sky import Sky
 
 log = logging.getLogger(__name__)
 
+GIL_SWITCH_S = 0.0005
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 
 
@@ -250,6 +252,9 @@ class App:
 
     def start(self) -> None:
         """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
+        # the sky worker computes in Python for up to a second; a thread waking for a stop waits
+        # for the interpreter lock up to this long, each time it takes it (5 ms by default)
+        sys.setswitchinterval(GIL_SWITCH_S)
         try:
             for server in self.rotctld:
                 server.listen()
