@@ -29,7 +29,16 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from benchmarks import burst, footprint, freshness, latency, line_use, startup, target_flood
+from benchmarks import (
+    burst,
+    footprint,
+    freshness,
+    latency,
+    line_use,
+    sky_stops,
+    startup,
+    target_flood,
+)
 from benchmarks.harness import ABORT, Scope
 from benchmarks.line import ALL_LATENESS_S
 from benchmarks.report import ItemResult, percentile
@@ -42,6 +51,7 @@ ITEMS = {
     "burst": burst.run,
     "startup": startup.run,
     "target_flood": target_flood.run,
+    "sky_stops": sky_stops.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

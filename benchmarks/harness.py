@@ -178,12 +178,15 @@ def start_bridge(
     homeassistant: bool = True,
     log_level: str = "INFO",
     name: str = "bridge",
+    sections: dict[str, Any] | None = None,
 ) -> BridgeProcess:
+    """``sections``: more of the configuration file (e.g. ``station``, ``tracking``)."""
     config = {
         "log_level": log_level,
         "state_file": str(scope.workdir / f"{name}-state.json"),
         "mqtt": {"port": broker_port, "client_id": f"bench-{name}-{os.getpid()}"},
         "homeassistant": {"enabled": homeassistant},
+        **(sections or {}),
         "rotators": rotators,
     }
     path = scope.workdir / f"{name}.toml"

@@ -63,17 +63,16 @@ if __package__ in (None, ""):  # run as a file: the checkout's top is where benc
 from benchmarks.harness import (  # noqa: E402
     ABORT,
     BenchError,
-    BridgeProcess,
     Mqtt,
     Scope,
     check_abort,
+    start_bridge,
     start_broker,
 )
 from benchmarks.line import FrameLog  # noqa: E402
 from benchmarks.procfs import cpu_seconds, rss_bytes  # noqa: E402
 from benchmarks.report import ItemResult, Table, Verdict, percentile  # noqa: E402
 from benchmarks.rig import open_line  # noqa: E402
-from tests.support import to_toml  # noqa: E402
 from tests.support.sky import (  # noqa: E402
     sgp4_altaz,
     sgp4_altaz_array,
@@ -281,27 +280,6 @@ class LinesWatch:
         return 1000.0 * percentile(gaps, 50) if gaps else math.nan
 
 
-def start_bridge(
-    scope: Scope, broker_port: int, station: tuple[float, float], rotators: list[dict[str, Any]]
-) -> BridgeProcess:
-    """harness.start_bridge's service process, with a [station]."""
-    config = {
-        "log_level": "INFO",
-        "state_file": str(scope.workdir / "bridge-state.json"),
-        "mqtt": {"port": broker_port, "client_id": f"bench-tracking-{os.getpid()}"},
-        "homeassistant": {"enabled": True},
-        "station": {"latitude_deg": station[0], "longitude_deg": station[1]},
-        "rotators": rotators,
-    }
-    path = scope.workdir / "bridge.toml"
-    path.write_text(to_toml(config))
-    t0 = time.monotonic()
-    proc = scope.spawn(
-        [sys.executable, "-m", "bridge", "run", "-c", str(path)], log_name="bridge.log"
-    )
-    return BridgeProcess(proc, scope.workdir / "bridge.log", t0)
-
-
 @dataclass
 class Rotor:
     rid: str
@@ -331,7 +309,8 @@ def run_scenario(parent: Scope, key: str, seconds: float, idle_s: float) -> dict
         mqtt = Mqtt(port, [f"rotor/+/{leaf}" for leaf in leaves], name=f"rec-{key}")
         scope.callback(mqtt.close)
         station = STATIONS[key](time.time())
-        bridge = start_bridge(scope, port, station, settings)
+        sections = {"station": {"latitude_deg": station[0], "longitude_deg": station[1]}}
+        bridge = start_bridge(scope, port, settings, sections=sections)
         try:
             mqtt.wait_all([f"rotor/{r.rid}/availability" for r in rotors], "online", 60)
             mqtt.wait_all([f"rotor/{r.rid}/state" for r in rotors], "idle", 60)

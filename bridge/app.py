@@ -5,7 +5,10 @@ from __future__ import annotations
 import errno
 import logging
 import signal
+import sys
 import threading
+import time
+from collections.abc import Callable
 from functools import partial
 
 from bridge.engine.catalog import TleCatalog
@@ -13,6 +16,7 @@ from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
+from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
@@ -29,6 +33,7 @@ from bridge.sky import Sky
 
 log = logging.getLogger(__name__)
 
+GIL_SWITCH_S = 0.0005
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 
 
@@ -80,7 +85,15 @@ class NotYet(ConfigError):
 
 
 class App:
-    def __init__(self, settings: Settings, *, port_opener: PortOpener = open_port) -> None:
+    def __init__(
+        self,
+        settings: Settings,
+        *,
+        port_opener: PortOpener = open_port,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        """``wall``: the wall clock (unix seconds) of the statuses, events and the sky; tests
+        give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
         self.topics = Topics(settings.mqtt.base_topic, roots)
@@ -112,6 +125,7 @@ class App:
         self.mqtt = MqttService(
             self.topics,
             self.client,
+            wall=wall,
             error_events_per_s=settings.mqtt.error_events_per_s,
             retain_is_live=settings.mqtt.protocol == "5",
         )
@@ -130,6 +144,7 @@ class App:
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
+        self.sky = SkyWorker()  # one thread computes the sky for all (engine/skywork.py)
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky),
@@ -138,9 +153,11 @@ class App:
                 on_event=partial(self.mqtt.publish_event, r.id),
                 name=r.name,
                 port_opener=port_opener,
+                wall=wall,
                 lines=self.lines,
                 station=settings.station.position,
                 catalog=catalog,
+                sky=self.sky,
             )
             self.mqtt.attach(rot)
             self.rotators.append(rot)
@@ -242,6 +259,9 @@ class App:
 
     def start(self) -> None:
         """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
+        # the sky worker computes in Python for up to a second; a thread waking for a stop waits
+        # for the interpreter lock up to this long, each time it takes it (5 ms by default)
+        sys.setswitchinterval(GIL_SWITCH_S)
         try:
             for server in self.rotctld:
                 server.listen()

@@ -119,7 +119,7 @@ class ErrorKind(enum.StrEnum):
     SERIAL = "serial"  # the port, the line or the controller's answers failed
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
     STATE = "state"  # the lock could not be saved in the state file
-    INTERNAL = "internal"  # a bug in the bridge (see the log); the rotator reconnects
+    INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
 
 
 @dataclass(frozen=True)

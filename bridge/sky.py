@@ -21,6 +21,8 @@ Rules:
    Anything else is SkyError naming the line and what is wrong. A TLE file (parse_tles) is
    3-line sets (a name line, Space-Track's "0 " prefix dropped) or bare 2-line sets (named by
    their catalog number); blank lines and CRLF are fine; a bad set is reported and skipped.
+   A satellite named "off", "sun" or "moon" (any case) is called "satellite off" and so on:
+   ``R/tracking`` saying "off" or "sun" must mean that.
 6. A pass is an interval with the body above min_el. next_pass gives the one in progress at t
    (its aos_s <= t: the rise found looking back at most within_s, else t itself) or else the first
    that rises within within_s. A body that does not set within within_s of t (midnight sun, a GEO
@@ -29,6 +31,10 @@ Rules:
 7. Passes are found by sampling elevation (a satellite ~90 times per orbit, the sun and the moon
    every 20 minutes), refining each sign change, and refining each sampled extremum near min_el,
    so a pass (or a dip) shorter than a sampling step is still found.
+8. What cannot be computed raises SkyError, whose ``reason`` is what a user reads when tracking
+   ends for it: "satellite orbit decayed" (SGP4's own error code says which), "date beyond the
+   ephemeris (2053)". Computing takes from a millisecond to a second: the engine asks its sky
+   worker (engine/skywork.py), never the thread that serves the serial lines.
 """
 
 from __future__ import annotations
@@ -56,14 +62,21 @@ DAY_S = 86400.0
 PASSES_KEPT = 64  # next_pass's answers remembered (a few per body tracked)
 NO_PASS_KEPT_S = 60.0
 KINDS = ("sun", "moon", "satellite")
+RESERVED = ("off", "sun", "moon")  # what R/track and R/tracking mean by these (rule 5)
 _SUN_MOON_STEP_S = 1200.0
 _CHUNK_STEPS = 256  # samples per skyfield call when scanning for passes
 _SECTIONS = 64  # points per bracket when refining a crossing or an extremum
 _DONE_S = 2.0  # brackets this narrow are finished by interpolation
+_UNIX_JD = 2440587.5  # the Julian date of 1970-01-01 00:00 UTC
+EPHEMERIS_END_S = 2643580800.0  # 2053-10-09 00:00 UTC: DE421 ends the day before
 
 
 class SkyError(ValueError):
-    pass
+    """Input the sky cannot answer for; ``reason`` says it in a few words (rule 8)."""
+
+    def __init__(self, message: str, reason: str | None = None) -> None:
+        super().__init__(message)
+        self.reason = reason or message
 
 
 @dataclass(frozen=True)
@@ -80,6 +93,10 @@ class Body:
         if self.tle is not None:
             if not self.name:
                 raise SkyError("a satellite needs a name")
+            if self.name.casefold() in RESERVED:
+                raise SkyError(
+                    f"a satellite cannot be called {self.name!r}: Body.satellite names it"
+                )
             problem = _tle_problem(*self.tle)
             if problem is not None:
                 raise SkyError(f"{self.name}: TLE line {problem[0]}: {problem[1]}")
@@ -94,7 +111,11 @@ class Body:
 
     @staticmethod
     def satellite(name: str, line1: str, line2: str) -> Body:
-        return Body("satellite", name.strip(), (line1.rstrip(), line2.rstrip()))
+        """A satellite called "off", "sun" or "moon" is "satellite off" etc. (rule 5)."""
+        name = name.strip()
+        if name.casefold() in RESERVED:
+            name = f"satellite {name}"
+        return Body("satellite", name, (line1.rstrip(), line2.rstrip()))
 
 
 def _checksum(line: str) -> int:
@@ -181,6 +202,19 @@ def _ephemeris() -> tuple[Any, Any, Any, Any]:
     return load.timescale(builtin=True), kernel["earth"], kernel["sun"], kernel["moon"]
 
 
+def _no_position(body: Body, tle: tuple[str, str], t_unix: float) -> SkyError:
+    """Rule 8: SGP4 has no position at ``t_unix``. The elements propagated at their epoch
+    (rule 5), so an error later means drag has brought the orbit down in the model: SGP4's own
+    code (6, or an eccentricity driven out of range) goes in the message."""
+    days, second = divmod(t_unix, DAY_S)
+    error, _, _ = Satrec.twoline2rv(*tle).sgp4(_UNIX_JD + days, second / DAY_S)
+    what = SGP4_ERRORS.get(error, f"error {error}")
+    return SkyError(
+        f"{body.name}: SGP4 has no position at {t_unix:.0f} (the orbit decayed: {what})",
+        "satellite orbit decayed",
+    )
+
+
 @functools.lru_cache(maxsize=256)
 def _satellite(line1: str, line2: str) -> Any:
     return EarthSatellite(line1, line2, None, _ephemeris()[0])
@@ -209,9 +243,9 @@ class Sky:
         if len(times_unix) == 0:
             return []
         az, el = self._altaz(body, np.asarray(times_unix, dtype=np.float64))
-        if body.kind == "satellite" and np.isnan(el).any():
+        if body.tle is not None and np.isnan(el).any():
             at = float(np.asarray(times_unix)[np.isnan(el)][0])
-            raise SkyError(f"{body.name}: SGP4 has no position at {at:.0f} (the orbit decayed?)")
+            raise _no_position(body, body.tle, at)
         return list(zip(az.tolist(), el.tolist(), strict=True))
 
     def position(self, body: Body, t_unix: float) -> tuple[float, float]:
@@ -276,7 +310,13 @@ class Sky:
                 target = sun if body.kind == "sun" else moon
                 place = (earth + self._station).at(t).observe(target).apparent()
         except EphemerisRangeError as e:
-            raise SkyError(f"{body.name}: a time outside the ephemeris (DE421, 1900..2053)") from e
+            late = float(t_unix.max()) > EPHEMERIS_END_S
+            reason = "date beyond the ephemeris (2053)"
+            if not late:
+                reason = "date before the ephemeris (1899)"
+            raise SkyError(
+                f"{body.name}: a time outside the ephemeris (DE421, 1899-07-29..2053-10-08)", reason
+            ) from e
         alt, az, _ = place.altaz()
         el_deg: Floats = alt.degrees
         az_deg: Floats = az.degrees % 360.0

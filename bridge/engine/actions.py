@@ -5,9 +5,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bridge.engine.skywork import Question
 from bridge.model import ErrorKind, RotatorStatus
 
-__all__ = ["Action", "Publish", "Report", "Write"]
+__all__ = ["Action", "Ask", "Publish", "Report", "Write"]
 
 
 @dataclass(frozen=True)
@@ -33,4 +34,13 @@ class Report:
     command: str | None = None
 
 
-Action = Write | Publish | Report
+@dataclass(frozen=True)
+class Ask:
+    """Hand ``question`` to the sky worker; its answer goes back to the session with
+    ``generation`` (``RotatorSession.sky_answer``, tracking.py rule 8)."""
+
+    generation: int
+    question: Question
+
+
+Action = Write | Publish | Report | Ask

@@ -3,9 +3,16 @@
 Rules:
 1. The file is read when a name is looked up and it changed since the last read (its size or
    modification time): a cron job refreshing it needs no restart. Nothing is ever downloaded.
+   Reading and parsing are slow (a large file takes seconds): lookups run on the sky worker
+   (skywork.py) and the names for Home Assistant on the app's own thread, never on paho's or
+   the serial lines' thread (ARCHITECTURE.md rule 12). Only ``check_configured`` is instant.
 2. A file that cannot be read keeps the satellites last read from it, and says so once per
-   change; a bad element set in it is skipped with a warning naming its line (sky.parse_tles).
+   change; bad element sets in it are skipped with one warning per read, counting them and
+   naming the first (sky.parse_tles).
 3. Names are matched ignoring case and surrounding blanks; the catalog number works too.
+4. A file larger than MAX_FILE_BYTES is not read (a TLE file of every active satellite is
+   about 2 MB): it counts as a file that cannot be read, and a lookup is refused naming the
+   file and the limit.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ from bridge.sky import Body, SkyError, parse_tles
 
 log = logging.getLogger(__name__)
 
+MAX_FILE_BYTES = 4 * 1024 * 1024  # rule 4
+
 
 class CatalogError(ValueError):
     """No such satellite, or no file: the message says which."""
@@ -30,21 +39,28 @@ class TleCatalog:
         self._lock = threading.Lock()  # looked up from paho's thread and rotctld's
         self._seen: tuple[int, int] | None = None
         self._sets: dict[str, tuple[str, str, str]] = {}  # folded name -> (name, line1, line2)
+        self._too_large: str | None = None  # rule 4: why the file was not read
 
     def names(self) -> list[str]:
         with self._lock:
             self._refresh()
             return sorted({name for name, _l1, _l2 in self._sets.values()})
 
+    def check_configured(self, name: str) -> None:
+        """CatalogError if there is no file to look ``name`` up in (reads nothing: rule 1)."""
+        if self.path is None:
+            raise CatalogError(
+                f"no satellite {name!r}: no tle_file is configured ([tracking] tle_file); "
+                'send the elements as {"tle": ["NAME", "1 ...", "2 ..."]}'
+            )
+
     def lookup(self, name: str) -> Body:
-        """The satellite called ``name`` (CatalogError if there is none)."""
+        """The satellite called ``name`` (CatalogError if there is none). Slow: rule 1."""
+        self.check_configured(name)
         with self._lock:
-            if self.path is None:
-                raise CatalogError(
-                    f"no satellite {name!r}: no tle_file is configured ([tracking] tle_file); "
-                    'send the elements as {"tle": ["NAME", "1 ...", "2 ..."]}'
-                )
             self._refresh()
+            if self._too_large is not None and not self._sets:
+                raise CatalogError(f"no satellite {name!r}: {self._too_large}")
             key = _fold(name)
             found = self._sets.get(key)  # a name first, even one of digits ("0815")
             if found is None and key.isdigit():
@@ -66,16 +82,31 @@ class TleCatalog:
             seen = (st.st_size, st.st_mtime_ns)
             if seen == self._seen:
                 return
-            text = self.path.read_text(encoding="ascii", errors="replace")
+            if st.st_size > MAX_FILE_BYTES:  # rule 4
+                self._seen = seen
+                self._too_large = (
+                    f"tle_file {self.path} is {st.st_size} bytes, over the limit of "
+                    f"{MAX_FILE_BYTES // (1024 * 1024)} MiB: not read"
+                )
+                log.warning("%s", self._too_large)
+                return
+            with open(self.path, encoding="ascii", errors="replace") as f:
+                text = f.read(MAX_FILE_BYTES + 1)  # grown since the stat: still bounded
         except OSError as exc:
             if self._seen != (-1, -1):
                 log.warning("tle_file %s cannot be read: %s", self.path, exc.strerror or exc)
                 self._seen = (-1, -1)
             return
-        self._seen = seen
+        self._seen, self._too_large = seen, None
         sets, problems = parse_tles(text)
-        for problem in problems:
-            log.warning("tle_file %s: %s", self.path, problem)
+        if problems:  # rule 2: one warning per read, not one per bad line
+            log.warning(
+                "tle_file %s: %d bad entr%s skipped (the first: %s)",
+                self.path,
+                len(problems),
+                "y" if len(problems) == 1 else "ies",
+                problems[0],
+            )
         self._sets = {}
         for set_name, (line1, line2) in sets.items():
             entry = (set_name, line1, line2)

@@ -144,6 +144,6 @@ class Lines:
             except BlockingIOError:
                 pass
         for worker in sorted(self._workers, key=lambda w: not w.has_commands(ready)):  # rule 5
-            # the clock read for each: one rotator's long step (a pass search) must not hand the
-            # next a stale time, or a query it writes looks overdue at once and is asked twice
+            # the clock read for each: a slow step (a burst of statuses to the listeners) must
+            # not hand the next a stale time, or a query it writes looks overdue at once
             worker.guarded(worker.serve, self._clock(), ready)

@@ -23,6 +23,7 @@ from bridge.engine.catalog import CatalogError, TleCatalog
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
+from bridge.engine.skywork import LookupQuestion, SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
@@ -68,6 +69,7 @@ class Rotator:
         lines: Lines | None = None,
         station: tuple[float, float] | None = None,
         catalog: TleCatalog | None = None,
+        sky: SkyWorker | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -92,6 +94,7 @@ class Rotator:
             locked=self._locked,
             wall=wall,
             port_opener=port_opener,
+            sky=sky,  # the app shares one among all rotators (skywork.py)
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self._stopped = False
@@ -211,7 +214,9 @@ class Rotator:
         tle: tuple[str, str, str] | None = None,
     ) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
-        ``off`` ends it (never refused, like a stop). Raise Refused otherwise."""
+        ``off`` ends it (never refused, like a stop). Raise Refused otherwise. A name is looked
+        up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
+        refused by the session, as an error event."""
         if name.strip().casefold() == "off" and tle is None:
             self._mailbox.put_track(Track(None, source))
             return
@@ -226,9 +231,14 @@ class Rotator:
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
-        self._mailbox.put_track(Track(body, source))
+        if body is None:
+            lookup = LookupQuestion(self.catalog, name)
+            self._mailbox.put_track(Track(None, source, lookup, described))
+            return
+        self._mailbox.put_track(Track(body, source, None, described))
 
-    def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body:
+    def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
+        """The body to track, or None for a satellite to look up in the TLE file."""
         if not self._has_sky:
             raise Refused(
                 RefusalCode.UNSUPPORTED,
@@ -249,7 +259,8 @@ class Rotator:
                 return Body.sun()
             if folded == "moon":
                 return Body.moon()
-            return self.catalog.lookup(name)
+            self.catalog.check_configured(name)
+            return None
         except (SkyError, CatalogError) as exc:
             raise Refused(RefusalCode.INVALID, str(exc)) from None
 

@@ -2,9 +2,11 @@
 actions out. No port, no thread, no select, no clock: time comes in with every input.
 
 Inputs: ``start``, ``link_up`` / ``link_down`` / ``open_failed``, ``commands`` (a mailbox batch),
-``bytes_received`` (whatever the port had), ``tick`` (nothing happened, but time passed).
-Outputs: a list of actions (``Write`` bytes, ``Publish`` a status, ``Report`` an error event) and
-``next_wakeup``, the time by which ``tick`` must be called if nothing else happens first.
+``bytes_received`` (whatever the port had), ``sky_answer`` (the sky worker's answer to an ``Ask``),
+``tick`` (nothing happened, but time passed).
+Outputs: a list of actions (``Write`` bytes, ``Publish`` a status, ``Report`` an error event,
+``Ask`` the sky worker) and ``next_wakeup``, the time by which ``tick`` must be called if nothing
+else happens first.
 
 Rules:
 1. The link's state belongs to ``Link`` (line discipline) and the motion machine's to
@@ -40,6 +42,7 @@ Rules:
 10. Tracking (tracking.py) puts its own targets, judged like any; a stop, the lock, a track
    command or any other target ends it. Its targets skip the "already within tolerance"
    check a target gets before it is sent: a track's steps may be finer than the tolerance.
+   What it needs of the sky goes out as ``Ask`` actions and comes back through ``sky_answer``.
 11. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening
    is the first frame written once it is open again (stopping is always safe).
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
@@ -48,19 +51,25 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
+14. A part that raises (tracking, auto-park) is a bug contained here: it is reset (tracking
+   ends, "internal error"), an error event of kind internal names it, and the link, the
+   stops and every other rule go on (a feature's failure never takes a link down, and never
+   costs a stop).
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 from bridge.engine import autopark, slewing, tracking
 from bridge.engine import motion as mo
 from bridge.engine import status as st
-from bridge.engine.actions import Action, Publish, Report, Write
+from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
+from bridge.engine.skywork import Answer
 from bridge.engine.slew import Slew
 from bridge.engine.targets import Targets, resolve
 from bridge.model import (
@@ -72,6 +81,7 @@ from bridge.model import (
     describe_command,
 )
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
+from bridge.sky import Body
 
 log = logging.getLogger(__name__)
 
@@ -229,15 +239,18 @@ class RotatorSession:
             self.targets.clear()
 
     def _track(self, track: tracking.Track, now: float) -> None:
-        if track.body is None:
+        if track.body is None and track.lookup is None:
             self.tracker.end("off")
             self.drop_tracking_target()
             return
-        what = f"track {track.body.name}"
+        name = track.body.name if track.body is not None else track.lookup and track.lookup.name
+        what = track.described or f"track {name}"
         if self.locked:
             self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
         elif self.link is None or not self.answering:
             self.error(ErrorKind.REFUSED, "rotator offline", command=what)
+        elif track.body is None:
+            self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
         else:
             self.tracker.end("another body")
             self.targets.clear()
@@ -272,6 +285,29 @@ class RotatorSession:
                     if link.end_slew(now):  # the slew is over; where it ended, unseen
                         self.motion = mo.slew_ended(self.motion, now)
         return self._step(now)
+
+    def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
+        """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
+        if generation == self.tracker.generation:
+            self._part("tracking", lambda: self._answered(answer, now), now)
+        return self._step(now)
+
+    def _answered(self, answer: Answer, now: float) -> None:
+        lookup = self.tracker.lookup
+        if lookup is not None and answer.question == lookup.lookup:
+            self.tracker.lookup = None
+            body = answer.value
+            if answer.failure is not None or not isinstance(body, Body):
+                refusal = answer.failure or "no such satellite"
+                self.error(ErrorKind.REFUSED, refusal, lookup.described)
+            else:
+                self._track(tracking.Track(body, lookup.source, None, lookup.described), now)
+            return
+        ends = self.tracker.answered(answer)
+        if ends is not None:
+            log.warning("%s: tracking ends: %s", self.name, ends)
+            self.tracker.end(ends)
+            self.drop_tracking_target()
 
     def set_wall(self, now: float, wall_s: float) -> None:
         """The wall clock (unix seconds) at ``now``: tracking reads the sky by it."""
@@ -337,15 +373,30 @@ class RotatorSession:
             if junk is not None:
                 self._report_junk(*junk, now)
         self._advance(now)  # commands go ahead of the next poll
-        searched, self.tracker.searched = self.tracker.searched, False
-        if not searched:  # tracking.py rule 8: after a search `now` is stale; poll next step
-            self._poll_if_due(now)
+        self._poll_if_due(now)
         self._emit_status(now)
         if self.link is not None:
             self._actions.extend(Write(frame) for frame in self.link.output())
-        self._wakeup = now if searched else self._next_wakeup(now)
+        tr = self.tracker
+        self._actions.extend(Ask(tr.generation, q) for q in tr.asks)
+        tr.asks.clear()
+        self._wakeup = self._next_wakeup(now)
         actions, self._actions = self._actions, []
         return actions
+
+    def _part(self, name: str, run: Callable[[], None], now: float) -> None:
+        """Rule 11: a part that raises is reset and reported; nothing else stops."""
+        try:
+            run()
+        except Exception:
+            log.exception("%s: %s failed", self.name, name)
+            if name == "tracking":
+                self.tracker.end("internal error")
+                self.drop_tracking_target()
+            else:
+                self.autopark = autopark.AutoPark(self.cfg.park_after_idle_s, self.cfg.aim.park)
+                self.autopark.activity(now)
+            self.error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -413,10 +464,10 @@ class RotatorSession:
                 link.write(enable, now)
             self._enable_due = False
         self._verify_stop(now)
-        tracking.step(self, now)
-        autopark.step(self, now)
-        if self.targets.pending is not None and not self.tracker.searched:
-            self._try_target(link, now)  # (after a search: next step, with a fresh clock)
+        self._part("tracking", lambda: tracking.step(self, now), now)  # rule 11
+        self._part("auto-park", lambda: autopark.step(self, now), now)
+        if self.targets.pending is not None:
+            self._try_target(link, now)
         idle = self.motion.state is MotionState.IDLE
         if idle and self.options and now - self._options_sent_t >= OPTIONS_REFRESH_S:
             self._options_due = set(self.options)

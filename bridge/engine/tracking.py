@@ -1,5 +1,5 @@
 """Following the sun, the moon or a satellite (``R/track``). Pure: the session gives the time;
-positions and passes come from bridge.sky (computation only).
+positions and passes are answers of the sky worker (skywork.py, rule 8).
 
 Rules:
 1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, any
@@ -32,11 +32,14 @@ Rules:
    body is back where it may go.
 6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
 7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
-8. Searching for a pass (a tenth of a second or more for the sun) and deciding a flip happen
-   only while no reply is owed, and the session writes nothing more in that step: its clock
-   would be stale by the search's length, and a query written then would look overdue at once
-   (asked twice, the second answer taken for junk). Found once, a pass serves every rotor of
-   the station (sky.py).
+8. Nothing of the sky is computed here (ARCHITECTURE.md rule 12): pass searches, windows of
+   the body's track, a pass's samples for the flip and TLE file look-ups are questions
+   (skywork.py) the session hands to the sky worker, and their answers come back as inputs.
+   Until an answer is in, tracking waits: no target from it, the status's block as it was.
+   Each start or end of tracking is a new generation: an answer asked for before it is
+   dropped (a stop or ``off`` meanwhile is never undone by a late answer). An answer that says
+   the sky cannot be computed (an orbit decayed, a date beyond the ephemeris) ends tracking
+   with that reason. A look-up leaves what is tracked alone until its answer names a body.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+from bridge.engine.skywork import Answer, LookupQuestion, PassQuestion, PositionsQuestion, Question
 from bridge.errors import Refused
 from bridge.model import ErrorKind, MotionState, Source, Target, TrackingInfo
 from bridge.pointing import angle_between
@@ -74,10 +78,13 @@ FLIP_SAMPLES = 120  # at most, over a pass
 
 @dataclass(frozen=True)
 class Track:
-    """Start following ``body``, or stop (None)."""
+    """Start following ``body``; or look the satellite ``lookup`` up in the TLE file first (the
+    file is read by the sky worker: rule 8); or stop (neither)."""
 
     body: Body | None
     source: Source = Source.MQTT
+    lookup: LookupQuestion | None = None
+    described: str | None = None  # the command as the user gave it (a refusal names it)
 
 
 @dataclass(frozen=True)
@@ -94,14 +101,20 @@ class Tracker:
         self.body: Body | None = None
         self.ended: str | None = None
         self.info: TrackingInfo | None = None
-        self.searched = False  # rule 8: a search ran in this step (the session polls after it)
+        self.generation = 0  # rule 8: an answer asked for before a start or an end is stale
+        self.asks: list[Question] = []  # rule 8: questions for the sky worker, not yet sent
+        self.lookup: Track | None = None  # a look-up under way (the body tracked goes on)
         self._reset()
 
     def _reset(self) -> None:
+        self.generation += 1
+        self.lookup = None
+        self._asked: set[Question] = set()  # sent, no answer yet
         self._pass: Pass | None = None
         self._pass_checked = -math.inf
         self._flip = False
         self._flip_for: float | None = None  # the AOS the flip was decided for
+        self._flip_track: dict[PositionsQuestion, list[tuple[float, float]]] = {}
         self._windows: dict[int, list[tuple[float, float]]] = {}
         self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
         self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
@@ -117,31 +130,83 @@ class Tracker:
         self.body, self.ended, self.info = body, None, TrackingInfo(body.name, "waiting")
 
     def end(self, why: str) -> bool:
-        """Stop following (``why`` shows as ``tracking_ended``); whether anything was tracked."""
+        """Stop following (``why`` shows as ``tracking_ended``); whether anything was tracked.
+        A look-up under way is dropped too (its answer comes too late)."""
         if self.body is None:
+            self.lookup = None
+            self.generation += 1
             return False
         log.info("tracking %s ended: %s", self.body.name, why)
         self.body, self.ended, self.info = None, why, None
         self._reset()
         return True
 
+    def look_up(self, track: Track) -> None:
+        """Rule 8: ask the sky worker for the satellite by name; whatever is tracked goes on
+        until the answer (an unknown name changes nothing)."""
+        assert track.lookup is not None
+        self.lookup = track
+        self.asks.append(track.lookup)
+
     def wakeup(self, now: float) -> float | None:
         """Tracking looks at the sky at least once a second."""
         return now + SAMPLE_S if self.body is not None else None
 
+    # -- rule 8: questions and answers -------------------------------------------------------
+    def _ask(self, question: Question) -> None:
+        if question not in self._asked:
+            self._asked.add(question)
+            self.asks.append(question)
+
+    def answered(self, answer: Answer) -> str | None:
+        """Take an answer of this generation in; why tracking must end, if it must."""
+        q = answer.question
+        self._asked.discard(q)
+        if isinstance(q, LookupQuestion) or self.body is None:
+            return None
+        if answer.failure is not None:
+            return answer.failure
+        if isinstance(q, PassQuestion):
+            self._pass_checked = q.utc
+            self._pass = answer.value if isinstance(answer.value, Pass) else None
+        elif isinstance(q, PositionsQuestion) and isinstance(answer.value, list):
+            index = self._window_index(q)
+            if index is not None:
+                if len(self._windows) >= WINDOWS_KEPT:
+                    self._windows.pop(min(self._windows))  # the oldest
+                self._windows[index] = answer.value
+            else:
+                self._flip_track = {q: answer.value}
+        return None
+
     # -- the body's track ------------------------------------------------------------------
-    def at(self, utc: float) -> tuple[float, float]:
-        """The body's (azimuth, elevation) at ``utc``, interpolated in a cached window."""
+    def _step_s(self) -> float:
+        assert self.body is not None
+        return SAMPLE_S if self.body.kind == "satellite" else SLOW_SAMPLE_S
+
+    def _window(self, index: int) -> PositionsQuestion:
         assert self.body is not None and self.cfg.sky is not None
-        step = SAMPLE_S if self.body.kind == "satellite" else SLOW_SAMPLE_S
+        step = self._step_s()
+        times = tuple(index * step * WINDOW + i * step for i in range(WINDOW + 1))
+        return PositionsQuestion(self.cfg.sky, self.body, times)
+
+    def _window_index(self, q: PositionsQuestion) -> int | None:
+        span = self._step_s() * WINDOW
+        index = math.floor(q.times[0] / span)
+        return index if q == self._window(index) else None
+
+    def at(self, utc: float) -> tuple[float, float] | None:
+        """The body's (azimuth, elevation) at ``utc``, interpolated in a window of its track;
+        None while the window is being computed (asked for here, with the one after it)."""
+        step = self._step_s()
         span = step * WINDOW
         index = math.floor(utc / span)
         track = self._windows.get(index)
+        if index + 1 not in self._windows:
+            self._ask(self._window(index + 1))  # ready before it is needed
         if track is None:
-            if len(self._windows) >= WINDOWS_KEPT:
-                self._windows.pop(next(iter(self._windows)))  # the oldest
-            times = [index * span + i * step for i in range(WINDOW + 1)]
-            track = self._windows[index] = self.cfg.sky.positions(self.body, times)
+            self._ask(self._window(index))
+            return None
         x = (utc - index * span) / step
         i = min(int(x), WINDOW - 1)
         f = x - i
@@ -149,21 +214,34 @@ class Tracker:
         daz = (az1 - az0 + 180.0) % 360.0 - 180.0
         return (az0 + f * daz) % 360.0, el0 + f * (el1 - el0)
 
-    def search_due(self, utc: float) -> bool:
-        """Whether ``current_pass`` would search the sky now (the costly part, rule 8)."""
-        p = self._pass
-        return (p is None or utc > p.los_s) and utc - self._pass_checked >= PASS_RETRY_S
-
-    def current_pass(self, utc: float) -> Pass | None:
+    def searching(self, utc: float) -> bool:
+        """Whether the pass now or next must be found first (asked for here, rule 8): tracking
+        waits for the answer. Afterwards ``pass_now`` is it (None: none in sight)."""
         p = self._pass
         if p is not None and utc > p.los_s:
             self._after_pass, self._pass = True, None
-            p = None
-        if p is None and utc - self._pass_checked >= PASS_RETRY_S:
+        if self._pass is not None or utc - self._pass_checked < PASS_RETRY_S:
+            return False
+        if not any(isinstance(q, PassQuestion) for q in self._asked):
             assert self.body is not None and self.cfg.sky is not None
-            self._pass_checked = utc
-            p = self._pass = self.cfg.sky.next_pass(self.body, utc, self.cfg.min_el_deg)
-        return p
+            self._ask(PassQuestion(self.cfg.sky, self.body, utc, self.cfg.min_el_deg))
+        return True
+
+    @property
+    def pass_now(self) -> Pass | None:
+        return self._pass
+
+    def flip_track(self, p: Pass) -> list[tuple[float, float]] | None:
+        """The body's track over the pass, sampled for the flip decision (rule 4); None while
+        it is being computed."""
+        assert self.body is not None and self.cfg.sky is not None
+        n = min(FLIP_SAMPLES, max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1))
+        times = tuple(p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n))
+        q = PositionsQuestion(self.cfg.sky, self.body, times)
+        track = self._flip_track.get(q)
+        if track is None:
+            self._ask(q)
+        return track
 
 
 def step(session: RotatorSession, now: float) -> None:
@@ -179,20 +257,17 @@ def step(session: RotatorSession, now: float) -> None:
         session.drop_tracking_target()
         return
     utc = now + session.wall_offset_s
-    owed = session.link.reply_owed
-    if tr.search_due(utc):
-        if owed:
-            return  # rule 8: not while a reply is on its way
-        tr.searched = True
-    p = tr.current_pass(utc)
+    if tr.searching(utc):
+        return  # rule 8: searched on the sky worker; the answer comes as an input
+    p = tr.pass_now
     if p is None:
         _inform(tr, utc, None, "no pass", now)
         return
     if tr._flip_for != p.aos_s:
-        if owed:
-            return
-        tr.searched = True
-        tr._flip_for, tr._flip = p.aos_s, _flip_saves(session, p)
+        flip = _flip_saves(session, p)
+        if flip is None:
+            return  # rule 8: the pass's track is being computed
+        tr._flip_for, tr._flip = p.aos_s, flip
     if utc < p.aos_s:  # current_pass has moved on past a LOS: utc <= p.los_s
         _inform(tr, utc, p, "waiting", now)
         _wait_for(session, p, utc, now)
@@ -270,7 +345,10 @@ def _follow(session: RotatorSession, p: Pass, utc: float, now: float) -> None:
     if m.state in (MotionState.BRAKING, MotionState.STALLED):
         return
     lead = _half_step_s(tr, utc)
-    az, el = _aim(session, *tr.at(min(utc + lead, p.los_s)))
+    body = tr.at(min(utc + lead, p.los_s)) if lead is not None else None
+    if body is None:
+        return  # rule 8: that part of the track is being computed
+    az, el = _aim(session, *body)
     step = tr.cfg.step_deg
     if tr._last is not None and _apart(tr._last, (az, el)) < step:
         if m.target_deg is not None or _near(session, az, el):
@@ -311,9 +389,12 @@ def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> floa
     return max(daz, abs(a[1] - b[1]))
 
 
-def _half_step_s(tr: Tracker, utc: float) -> float:
-    """How long the body takes to move half a step (rule 3), from its rate over 10 s."""
+def _half_step_s(tr: Tracker, utc: float) -> float | None:
+    """How long the body takes to move half a step (rule 3), from its rate over 10 s; None
+    while its track is being computed."""
     a, b = tr.at(utc), tr.at(utc + 10.0)
+    if a is None or b is None:
+        return None
     rate = _apart(a, b) / 10.0
     if rate <= 0.0:
         return MAX_LEAD_S
@@ -333,18 +414,19 @@ def _travel_s(session: RotatorSession, az: float, el: float | None) -> float:
     return t + cfg.spec.brake_delay_s
 
 
-def _flip_saves(session: RotatorSession, p: Pass) -> bool:
-    """Rule 4: whether this pass is flown flipped. Satellites only: the sun and the moon move
-    too slowly across a "pass" of half a day for a flip to be worth its elevation travel."""
+def _flip_saves(session: RotatorSession, p: Pass) -> bool | None:
+    """Rule 4: whether this pass is flown flipped (None: its track is being computed, rule 8).
+    Satellites only: the sun and the moon move too slowly across a "pass" of half a day for a
+    flip to be worth its elevation travel."""
     tr, aim, cfg = session.tracker, session.cfg.aim, session.cfg
     if not aim.has_elevation or aim.el_max_deg < 180.0 - tr.cfg.min_el_deg:
         return False
-    assert tr.body is not None and tr.cfg.sky is not None
+    assert tr.body is not None
     if tr.body.kind != "satellite":
         return False
-    n = min(FLIP_SAMPLES, max(2, int((p.los_s - p.aos_s) / FLIP_SAMPLE_S) + 1))
-    times = [p.aos_s + (p.los_s - p.aos_s) * i / (n - 1) for i in range(n)]
-    track = tr.cfg.sky.positions(tr.body, times)
+    track = tr.flip_track(p)
+    if track is None:
+        return None
 
     def travel_s(flip: bool) -> float:
         """The time the rotor spends turning during the pass, on its slower axis at each step
@@ -375,9 +457,11 @@ def _inform(tr: Tracker, utc: float, p: Pass | None, phase: str, now: float) -> 
     old = tr.info
     if old is not None and old.phase == phase and now - tr._info_t < INFO_EVERY_S:
         return
+    here, then = tr.at(utc), tr.at(utc + NEXT_S)
+    if here is None or then is None:
+        return  # rule 8: shown once its track is computed
     tr._info_t = now
-    az, el = tr.at(utc)
-    naz, nel = tr.at(utc + NEXT_S)
+    (az, el), (naz, nel) = here, then
     info = TrackingInfo(
         tr.body.name,
         phase,

@@ -23,6 +23,9 @@ Rules:
    not hold up the other lines. Meanwhile the rotator is offline and its commands are answered
    (refused) as when the port is closed. ``wait_closed`` waits for those closes, on any thread
    but the lines thread (lines.py rule 4: a stopped rotator's port is closed or being closed).
+5. The session's questions about the sky (``Ask``) go to the sky worker (skywork.py); each
+   answer is queued here by that thread, which then wakes the lines thread through the mailbox
+   pipe, and is handed to the session on the lines thread after the mailbox's commands.
 """
 
 from __future__ import annotations
@@ -31,13 +34,14 @@ import logging
 import math
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from functools import partial
 from typing import Any
 
 import serial
 
-from bridge.engine.actions import Action, Publish, Report, Write
+from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.listeners import contained
 from bridge.engine.mailbox import Mailbox
@@ -51,6 +55,7 @@ from bridge.engine.port import (
     write_frame,
 )
 from bridge.engine.session import RotatorSession
+from bridge.engine.skywork import Answer, SkyWorker
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
 
 __all__ = ["Worker", "WorkerConfig"]
@@ -70,8 +75,11 @@ class Worker:
         locked: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
+        sky: SkyWorker | None = None,
     ) -> None:
         self.cfg = cfg
+        self._sky = sky or SkyWorker()
+        self._answers: deque[tuple[int, Answer]] = deque()  # rule 5: filled by the sky thread
         self.session = RotatorSession(cfg, options=options, locked=locked)
         self._mailbox = mailbox
         self._box = mailbox.fileno()
@@ -152,6 +160,7 @@ class Worker:
         if self._port is None:
             if self._box in ready:
                 self._do(self.session.commands(self._mailbox.take(), now))
+                self._take_answers(now)
             if self._opening is not None and self._opening.result is not None:
                 self._opened(self._opening.result, now)
             elif self._opening is None and now >= self._reopen_at:
@@ -171,6 +180,7 @@ class Worker:
             if batch:
                 self._do(session.commands(batch, now))
                 acted = True
+            acted = self._take_answers(now) or acted
         readable = self._fd in ready
         if readable or (self._held and now >= session.hold_reads_until()):
             data = read_available(self._fd, readable, self.cfg.port)
@@ -202,6 +212,20 @@ class Worker:
         self._reopen_at = now + self._backoff_s
         self._do(self.session.link_down(reason, now, kind))
 
+    def _take_answers(self, now: float) -> bool:
+        """Rule 5 (after the mailbox's take, which drained the wake bytes of these answers)."""
+        acted = False
+        while self._answers:
+            generation, answer = self._answers.popleft()
+            self._do(self.session.sky_answer(generation, answer, now))
+            acted = True
+        return acted
+
+    def _answered(self, generation: int, answer: Answer) -> None:
+        """On the sky worker's thread: queue, and wake the lines thread."""
+        self._answers.append((generation, answer))
+        self._mailbox.wake()
+
     def _do(self, actions: list[Action]) -> None:
         for action in actions:
             if isinstance(action, Write):
@@ -213,3 +237,5 @@ class Worker:
             elif isinstance(action, Report):
                 event = ErrorEvent(action.kind, action.message, action.command, self._wall())
                 self._on_event(event)
+            elif isinstance(action, Ask):
+                self._sky.ask(action.question, partial(self._answered, action.generation))

@@ -7,12 +7,19 @@ from __future__ import annotations
 
 import logging
 import os
+import threading
 from pathlib import Path
 
 import pytest
 
-from bridge.engine.catalog import CatalogError, TleCatalog
-from bridge.sky import Body
+from bridge.engine import catalog as catalog_module
+from bridge.engine.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
+from bridge.engine.rotator import Rotator
+from bridge.engine.skywork import LookupQuestion
+from bridge.engine.state_store import StateStore
+from bridge.model import ErrorKind, Source
+from bridge.sky import Body, Sky
+from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle
 
 EPOCH = 1767225600.0  # 2026-01-01 00:00 UTC: a fixed epoch, so every run reads the same lines
@@ -191,3 +198,75 @@ def test_a_name_of_digits_with_a_leading_zero_is_found_by_name(tmp_path: Path) -
     path.write_text(three_line(("0815", ISS)))
     assert TleCatalog(path).lookup("0815").name == "0815"
     assert TleCatalog(path).lookup("25544").name == "0815"  # and by its catalog number
+
+
+# -- a large or broken file (review: a 210 MB garbage file held paho's thread 35.9 s) ---------
+def garbage(lines: int) -> str:
+    """Lines that look like TLE lines but pair with nothing: every one is a problem."""
+    return "".join(f"1 {n:05d}U garbage line {n}\n" for n in range(lines))
+
+
+def test_bad_lines_are_counted_in_one_warning_per_read(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    path = tmp_path / "broken.txt"
+    path.write_text(garbage(5000) + three_line(("ISS (ZARYA)", ISS)))
+    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+        catalog = TleCatalog(path)
+        assert catalog.lookup("ISS (ZARYA)") == Body.satellite("ISS (ZARYA)", *ISS)
+        assert catalog.names() == ["ISS (ZARYA)"]  # read once: no second warning
+    said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(said) == 1, said[:3]
+    assert "5000 bad entries skipped" in said[0] and str(path) in said[0], said
+    assert "line 1:" in said[0]  # the first, to start looking
+
+
+def test_a_file_over_the_limit_is_not_read_and_a_lookup_says_why(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "huge.txt"
+    with path.open("w") as f:
+        f.truncate(MAX_FILE_BYTES + 1)  # sparse: 4 MiB and a byte of nothing
+    parsed: list[int] = []
+    monkeypatch.setattr(catalog_module, "parse_tles", lambda text: parsed.append(1) or ({}, []))
+    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+        catalog = TleCatalog(path)
+        for _ in range(3):
+            with pytest.raises(CatalogError) as err:
+                catalog.lookup("ISS")
+            assert str(path) in str(err.value) and "4 MiB" in str(err.value), err.value
+    assert parsed == []  # never read
+    said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(said) == 1 and "4 MiB" in said[0], said
+
+
+def test_track_by_name_returns_before_the_file_is_read_and_is_refused_later(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """R/track on paho's thread only queues the name: the sky worker reads the file."""
+    path = tmp_path / "garbage.txt"
+    path.write_text(garbage(20000))
+    readers: list[str] = []
+    real_parse = catalog_module.parse_tles
+
+    def parse(text: str) -> tuple[dict[str, tuple[str, str]], list[str]]:
+        readers.append(threading.current_thread().name)
+        return real_parse(text)
+
+    monkeypatch.setattr(catalog_module, "parse_tles", parse)
+    with VirtualRotator("md01", sky=Sky(52.52, 13.29)) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        rot = Rotator(v.cfg, StateStore(None), lambda s: None, lambda e: None)
+        # the rotator's front half (what paho's thread runs) on the bench's session and mailbox
+        rot._mailbox, rot._worker.session = v.mailbox, v.session
+        rot.catalog = TleCatalog(path)
+        rot.track("ISS", Source.MQTT, "track 'ISS'")
+        assert readers == []  # returned: nothing read on the calling thread
+        v._take()  # the lines thread takes the command: the look-up goes to the sky worker
+        questions = [a.question for _t, a in v.asked]
+        assert [type(q) for q in questions] == [LookupQuestion], questions
+        v.run_for(1.0)
+    assert readers == [threading.current_thread().name]  # the bench plays the sky worker
+    refused = v.errors(ErrorKind.REFUSED)
+    assert len(refused) == 1 and refused[0].command == "track 'ISS'", refused
+    assert f"no satellite 'ISS' in {path} (0 satellites)" == refused[0].message

@@ -1,19 +1,25 @@
 """Tracking (engine/tracking.py) in virtual time: the session, an emulated controller and a
-fake clock whose wall time is the real one, so the sky is today's. Positions are checked
+fake clock whose wall time starts at a fixed instant (SUN_EPOCH, SAT_EPOCH): every run, at any
+time of day, judges the same sky. Positions are checked
 against references computed in the test by other means (tests/support/sky.py: a published
 low-precision solar formula, and the sgp4 package with our own frame transforms), never by
 the library the bridge uses."""
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from bridge.model import MotionState, Source, Target
-from bridge.sky import Body, Sky
+from bridge.mqtt.payloads import tracking_state
+from bridge.sky import Body, Sky, SkyError
 from tests.engine.virtual import VirtualRotator
-from tests.support.sky import sgp4_altaz, sun_altaz, tle_with_pass
+from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass
+
+# The sky of these tests is fixed: positions, passes and the sun's speed across it are those at
+# these instants, so a run at any time of day judges the same sky (the rotor-EZ test failed at
+# two times of day in sixty, when the sun at the chosen station barely moved in azimuth).
+SUN_EPOCH = 1_781_000_000.0  # 2026-06-09 10:13 UTC
+SAT_EPOCH = 1_781_020_000.0  # the synthetic satellites' epoch, and their passes' search start
 
 
 def sun_up_somewhere(t_unix: float, lo: float = 35.0, hi: float = 60.0) -> tuple[float, float]:
@@ -38,7 +44,7 @@ def off_deg(a: float, b: float) -> float:
 
 
 def test_the_sun_is_followed_within_2_degrees_on_an_md01() -> None:
-    wall = time.time()  # the sky at test time
+    wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall)
     with VirtualRotator(
         "md01",
@@ -75,9 +81,9 @@ BERLIN = (52.52, 13.29)  # JO62qm's centre
 
 
 def a_pass_that(across_north: bool) -> tuple[str, str, float, float]:
-    """A synthetic satellite (epoch: today) with a pass over Berlin whose azimuth does (or does
-    not) run across the north: the first fit starting on a half-hour grid from now."""
-    now = time.time()
+    """A synthetic satellite (epoch: SAT_EPOCH) with a pass over Berlin whose azimuth does (or
+    does not) run across the north: the first fit starting on a half-hour grid from then."""
+    now = SAT_EPOCH
     for k in range(48):
         tle = tle_with_pass(*BERLIN, now + 1800.0 * k, min_max_el_deg=25, max_max_el_deg=60)
         if crosses_north(tle) == across_north:
@@ -192,7 +198,7 @@ def test_a_pass_across_the_north_is_flown_flipped_on_a_0_to_360_rotor(
 
 
 def test_a_rotor_ez_follows_the_sun_in_azimuth_without_ever_retargeting_while_turning() -> None:
-    wall = time.time()
+    wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall, 20.0, 50.0)
     with VirtualRotator("rotorez", sky=Sky(lat, lon), wall_epoch_s=wall) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
@@ -216,7 +222,7 @@ def test_a_rotor_ez_follows_the_sun_in_azimuth_without_ever_retargeting_while_tu
 
 @pytest.mark.parametrize("how", ["off", "stop", "lock", "manual target"])
 def test_tracking_ends_on_off_stop_lock_and_a_manual_target(how: str) -> None:
-    wall = time.time()
+    wall = SUN_EPOCH
     lat, lon = sun_up_somewhere(wall)
     with VirtualRotator("rot2prog", sky=Sky(lat, lon), wall_epoch_s=wall) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
@@ -269,7 +275,7 @@ def test_eight_rotors_tracking_one_body_from_one_station_share_its_pass() -> Non
     """Benchmark finding: each of 8 rotors starting to track the sun searched its pass again
     (70-95 ms each, on the thread that serves every serial line)."""
     sky = Sky(*BERLIN)
-    t = time.time()
+    t = SUN_EPOCH
     first = sky.next_pass(Body.sun(), t)
     assert all(sky.next_pass(Body.sun(), t + dt) is first for dt in (0.0, 1.0, 60.0))
     assert first is not None
@@ -279,7 +285,7 @@ def test_eight_rotors_tracking_one_body_from_one_station_share_its_pass() -> Non
 def _tracking_the_sun(
     model: str = "rot2prog", wall: float | None = None
 ) -> tuple[VirtualRotator, float, float]:
-    wall = time.time() if wall is None else wall
+    wall = SUN_EPOCH if wall is None else wall
     lat, lon = sun_up_somewhere(wall)
     v = VirtualRotator(
         model,
@@ -356,3 +362,21 @@ def test_tracking_ends_for_good_when_the_rotor_is_out_of_the_bridges_hands(
         assert v.status.tracking_ended in want[how]
         v.run_until(lambda h: not h.truth().is_moving, 120, "still")
         nothing_turns_it_for(v, 1200.0)
+
+
+@pytest.mark.parametrize("name", ["off", "SUN", " moon "])
+def test_a_satellite_named_off_sun_or_moon_is_called_satellite_so_and_so(name: str) -> None:
+    """Review: a JSON TLE named "off" showed as R/tracking "off" while the rotor tracked it."""
+    line1, line2 = synthetic_tle(
+        name, SUN_EPOCH, inclination_deg=97.5, raan_deg=0.0, mean_anomaly_deg=0.0
+    )
+    body = Body.satellite(name, line1, line2)
+    assert body.name == f"satellite {name.strip()}"
+    with VirtualRotator("md01", sky=Sky(*BERLIN), wall_epoch_s=SUN_EPOCH) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.track(body)
+        v.run_for(2.0)
+        assert v.status.tracking is not None
+        assert tracking_state(v.status) == f"satellite {name.strip()}"
+    with pytest.raises(SkyError, match="cannot be called"):
+        Body("satellite", name.strip(), (line1, line2))

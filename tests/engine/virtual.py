@@ -25,6 +25,10 @@ Rules:
    worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
    (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
    hanging the test.
+5. The sky worker is played here: an ``Ask`` is answered by the same computation
+   (``skywork.answer``, or ``answer_sky`` if a test replaces it), handed back ``sky_delay_s``
+   of virtual time later (0: at the same instant, as an input of its own), as the real worker
+   hands it to the session. Every question asked is kept in ``asked``.
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ from typing import Any
 from bridge import emulators
 from bridge.app import worker_config
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
+from bridge.engine import skywork
+from bridge.engine.actions import Ask
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
 from bridge.engine.tracking import Track
@@ -84,6 +90,7 @@ class VirtualRotator:
         start_s: float = 0.0,
         sky: Sky | None = None,
         wall_epoch_s: float = WALL_EPOCH_S,
+        sky_delay_s: float = 0.0,
     ) -> None:
         self.now = start_s
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
@@ -110,6 +117,10 @@ class VirtualRotator:
         self._steps_at_now = 0
         self._spin_run = 0
         self.spins: list[float] = []  # when the loop turned with nothing to do (rule 4)
+        self.sky_delay_s = sky_delay_s  # rule 5
+        self.answer_sky: Callable[[skywork.Question], skywork.Answer] = skywork.answer
+        self.asked: list[tuple[float, Ask]] = []
+        self._answers: list[tuple[float, int, skywork.Answer]] = []
         self._do(self.session.start(self.now))
         if connect:
             self.link_up()
@@ -269,6 +280,7 @@ class VirtualRotator:
         line_t = self._tx.next_due_s()
         if line_t is not None:
             times.append(line_t)
+        times += [due for due, _gen, _answer in self._answers]
         t = max(self.now, min(times))
         if t > self.now:
             self._steps_at_now = self._spin_run = 0
@@ -294,12 +306,16 @@ class VirtualRotator:
         if out and (self._silent or not self.connected):
             self.lost_to_host += len(out)
             out = b""
+        acted = False
+        while self._answers and self._answers[0][0] <= t:  # rule 5
+            _due, generation, answer = self._answers.pop(0)
+            self._do(self.session.sky_answer(generation, answer, t))
+            acted = True
         if self.connected:
-            acted = False
             if out:
                 self.received.append((t, out))
                 actions = self.session.bytes_received(out, t)
-                acted = bool(actions)
+                acted = acted or bool(actions)
                 self._do(actions)
             if not acted and t >= self.session.next_wakeup():
                 self._do(self.session.tick(t))
@@ -312,6 +328,10 @@ class VirtualRotator:
                 self.statuses.append((self.now, action.status))
             elif isinstance(action, Report):
                 self.events.append((self.now, action))
+            elif isinstance(action, Ask):
+                self.asked.append((self.now, action))
+                answer = self.answer_sky(action.question)
+                self._answers.append((self.now + self.sky_delay_s, action.generation, answer))
 
     def _write(self, data: bytes) -> None:
         assert self.connected, f"the session wrote {data!r} while its link was down"

@@ -8,6 +8,10 @@ What is asserted is what a user sees: where the rotor really is (the emulator's 
 the retained payloads and the error messages. Positions are judged against references written
 in the tests (tests/support/sky.py: the Almanac's low-precision sun, sgp4 with our own frame
 rotations), never against the library the bridge uses.
+
+The bridge runs on a wall clock of the test's own (``Wall``: a fixed instant when the test
+starts, going on at the real rate), and the references are asked at that clock's times: the
+sky is the same at any time of day the suite runs.
 """
 
 from __future__ import annotations
@@ -22,7 +26,14 @@ import numpy as np
 
 from bridge.app import App
 from bridge.settings_pointing import StationSettings, TrackingSettings
-from tests.engine.test_session_tracking import BERLIN, off_deg, pointing, sun_up_somewhere
+from tests.engine.test_session_tracking import (
+    BERLIN,
+    SAT_EPOCH,
+    SUN_EPOCH,
+    off_deg,
+    pointing,
+    sun_up_somewhere,
+)
 from tests.integration.test_rotctld_integration import ask, connect
 from tests.support import free_port
 from tests.support.mqtt import Message, retained_snapshot
@@ -37,13 +48,32 @@ QUICK_BRIDGE = {"az_speed_deg_s": 120.0, "el_speed_deg_s": 120.0, "settle_s": 0.
 ISS_NAME = "ISS (ZARYA)"
 
 
-def start(rig: Rig, station: tuple[float, float] | None, tle_file: Path | None = None) -> App:
+class Wall:
+    """A wall clock that reads ``epoch`` when made and goes on at the real rate."""
+
+    def __init__(self, epoch: float) -> None:
+        self.epoch, self._t0 = epoch, time.monotonic()
+
+    def __call__(self) -> float:
+        return self.epoch + time.monotonic() - self._t0
+
+
+SUN_STATION = sun_up_somewhere(SUN_EPOCH)
+
+
+def start(
+    rig: Rig,
+    station: tuple[float, float] | None,
+    tle_file: Path | None = None,
+    wall: Wall | None = None,
+) -> App:
     """The App on the rig's settings with ``[station]`` and ``[tracking] tle_file`` (the Rig
-    has neither), every rotator ready (online and settled)."""
+    has neither), every rotator ready (online and settled), on ``wall`` (a new one at
+    SUN_EPOCH by default)."""
     update: dict[str, Any] = {"tracking": TrackingSettings(tle_file=tle_file)}
     if station is not None:
         update["station"] = StationSettings(latitude_deg=station[0], longitude_deg=station[1])
-    rig.app = App(rig.settings.model_copy(update=update))
+    rig.app = App(rig.settings.model_copy(update=update), wall=wall or Wall(SUN_EPOCH))
     rig.app.start()
     for r in rig.rotators:
         rig.ready(r["id"])
@@ -63,11 +93,11 @@ def error_after(rig: Rig, rid: str, t: float) -> dict[str, Any]:
     return doc(rig.probe.wait_for(rig.topic(rid, "error"), after=t))
 
 
-def on_the_sun(station: tuple[float, float]) -> Any:
+def on_the_sun(station: tuple[float, float], wall: Wall) -> Any:
     """A predicate on the emulator's state: at rest within 2 deg of the sun on both axes."""
 
     def there(s: Any) -> bool:
-        sun_az, sun_el = sun_altaz(*station, time.time())
+        sun_az, sun_el = sun_altaz(*station, wall())
         az, el = pointing(s.az_deg, s.el_deg)
         return not s.is_moving and off_deg(az, sun_az) <= 2.0 and abs(el - sun_el) <= 2.0
 
@@ -101,9 +131,9 @@ def unix(iso: str) -> float:
 
 # -- the sun on an MD-01, and every way tracking ends -------------------------------------------
 def test_track_sun_turns_an_md01_to_the_sun_and_the_status_says_so(rig: Rig) -> None:
-    station = sun_up_somewhere(time.time())
+    station, wall = SUN_STATION, Wall(SUN_EPOCH)
     emu = rig.add("dish", model="md01", emu={**QUICK_EMU, "start_az_deg": 0}, **QUICK_BRIDGE)
-    start(rig, station)
+    start(rig, station, wall=wall)
     snap = rig.retained()
     assert snap["rotor/tracking"] == b"off"  # a rotator that can track says so from the start
     assert "tracking" not in json.loads(snap["rotor/status"])
@@ -111,7 +141,7 @@ def test_track_sun_turns_an_md01_to_the_sun_and_the_status_says_so(rig: Rig) -> 
     t = time.monotonic()
     rig.probe.publish("rotor/track", "sun")
     rig.probe.wait_value("rotor/tracking", "sun", after=t)
-    truth = emu.wait_for(on_the_sun(station), 15)  # at rest within 2 deg of the reference
+    truth = emu.wait_for(on_the_sun(station, wall), 15)  # at rest within 2 deg of the reference
     assert emu.frames("set: clamped") == []  # never sent past a stop
 
     status = status_after(
@@ -135,10 +165,10 @@ def test_track_sun_turns_an_md01_to_the_sun_and_the_status_says_so(rig: Rig) -> 
 
 
 def test_off_stop_lock_a_manual_target_and_a_rotctld_p_each_end_tracking(rig: Rig) -> None:
-    station = sun_up_somewhere(time.time())
+    station, wall = SUN_STATION, Wall(SUN_EPOCH)
     port = free_port()
     emu = rig.add("dish", model="md01", emu=QUICK_EMU, rotctld_port=port, **QUICK_BRIDGE)
-    start(rig, station)
+    start(rig, station, wall=wall)
 
     def track_sun() -> None:
         t = time.monotonic()
@@ -181,7 +211,7 @@ def test_off_stop_lock_a_manual_target_and_a_rotctld_p_each_end_tracking(rig: Ri
     rig.probe.wait_value("rotor/lock/state", "OFF", after=t)
 
     track_sun()
-    emu.wait_for(on_the_sun(station), 15)
+    emu.wait_for(on_the_sun(station, wall), 15)
     t = time.monotonic()
     rig.probe.publish("rotor/target", "10 10")
     ended(t, "mqtt target")
@@ -203,7 +233,7 @@ def test_off_stop_lock_a_manual_target_and_a_rotctld_p_each_end_tracking(rig: Ri
 
 
 def test_a_retained_track_is_refused_and_never_followed(rig: Rig) -> None:
-    station = sun_up_somewhere(time.time())
+    station = SUN_STATION
     emu = rig.add("dish", model="md01", emu={**QUICK_EMU, "start_az_deg": 0}, **QUICK_BRIDGE)
     # left retained on the broker (a dashboard button set to retain): every restart of the
     # bridge or the broker would start tracking again, turning the rotor unasked
@@ -225,10 +255,9 @@ def test_a_retained_track_is_refused_and_never_followed(rig: Rig) -> None:
 
 
 # -- satellites: the TLE file, JSON elements ----------------------------------------------------
-def a_pass_ahead(lead_s: float = 60.0) -> tuple[str, str, float, float]:
+def a_pass_ahead(now: float, lead_s: float = 60.0) -> tuple[str, str, float, float]:
     """A synthetic satellite (epoch: now) whose first pass over Berlin rises at least lead_s
     from now, and that is not up before it: the bridge starts out waiting for that pass."""
-    now = time.time()
     for k in range(20):
         line1, line2, aos, los = tle_with_pass(*BERLIN, now + lead_s + 300.0 * k)
         before = np.arange(now, aos - 1.0, 5.0)
@@ -241,11 +270,12 @@ def a_pass_ahead(lead_s: float = 60.0) -> tuple[str, str, float, float]:
 def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_changes(
     rig: Rig, tmp_path: Path
 ) -> None:
-    line1, line2, aos, los = a_pass_ahead()
+    wall = Wall(SAT_EPOCH)
+    line1, line2, aos, los = a_pass_ahead(wall())
     tle_file = tmp_path / "active.txt"
     tle_file.write_text(f"{ISS_NAME}\n{line1}\n{line2}\n")
     emu = rig.add("dish", model="md01", emu=QUICK_EMU, **QUICK_BRIDGE)
-    start(rig, BERLIN, tle_file)
+    start(rig, BERLIN, tle_file, wall=wall)
     # Home Assistant's track select offers the file's satellites
     ha = retained_snapshot(rig.broker.port, "homeassistant/#")
     select = json.loads(ha["homeassistant/select/rotorbridge_rotor_r_dish/track/config"])
@@ -273,7 +303,7 @@ def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_change
         ),
         15,
     )
-    assert time.time() < aos, "the rotor got to the AOS azimuth only after AOS"
+    assert wall() < aos, "the rotor got to the AOS azimuth only after AOS"
 
     # an unknown name: refused, naming the file (and nothing changes)
     t = time.monotonic()
@@ -285,7 +315,7 @@ def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_change
 
     # cron refreshes the file with one more satellite: taken by name without a restart
     noaa1, noaa2 = synthetic_tle(
-        "NOAA 19", time.time(), inclination_deg=99.0, raan_deg=40.0, mean_anomaly_deg=0.0,
+        "NOAA 19", wall(), inclination_deg=99.0, raan_deg=40.0, mean_anomaly_deg=0.0,
         catalog=33591,
     )  # fmt: skip
     tle_file.write_text(f"{ISS_NAME}\n{line1}\n{line2}\nNOAA 19\n{noaa1}\n{noaa2}\n")
@@ -297,7 +327,7 @@ def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_change
 
     # the elements themselves, as JSON: no file needed
     test1, test2 = synthetic_tle(
-        "TESTSAT", time.time(), inclination_deg=97.5, raan_deg=200.0, mean_anomaly_deg=90.0,
+        "TESTSAT", wall(), inclination_deg=97.5, raan_deg=200.0, mean_anomaly_deg=90.0,
         catalog=99998,
     )  # fmt: skip
     t = time.monotonic()
@@ -320,7 +350,7 @@ def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_change
 def test_a_dcu1_cannot_track(rig: Rig) -> None:
     rig.add("dish", model="md01", emu=QUICK_EMU, **QUICK_BRIDGE)
     rig.add("wire", model="dcu1")
-    start(rig, sun_up_somewhere(time.time()))
+    start(rig, SUN_STATION)
     snap = rig.retained()
     assert snap["rotor/dish/tracking"] == b"off"
     assert "rotor/wire/tracking" not in snap  # nothing offered that it cannot do
