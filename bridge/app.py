@@ -111,8 +111,9 @@ class App:
             ),
             on_denied=self._denied,
             on_connect=self._connected,
-            on_new_connection=lambda: self.mqtt.main_connected(),
-            no_replay=self.topics.stops(),
+            on_new_connection=lambda: self.mqtt.main_gone(),
+            on_connection_lost=lambda: self.mqtt.main_gone(),
+            no_replay=self.topics.stop_lane(),
             claim=Claim(
                 self.me,
                 settings.mqtt.base_topic,
@@ -128,6 +129,7 @@ class App:
             wall=wall,
             error_events_per_s=settings.mqtt.error_events_per_s,
             retain_is_live=settings.mqtt.protocol == "5",
+            on_problem=lambda topic, problem: self._denied(topic, problem),
         )
         store = StateStore(settings.state_file)
         try:
@@ -226,6 +228,8 @@ class App:
             self.client.problems.append(problem)
         if topic == self.topics.bridge_fence:
             self.mqtt.markers_denied()
+        elif topic == self.topics.bridge_fence_lane:
+            self.mqtt.lane_markers_denied()
         rid = self.topics.rotator_of(topic)
         for rot in self.rotators:
             if rid is None or rot.id == rid:

@@ -43,8 +43,10 @@ Rules:
    command or any other target ends it. Its targets skip the "already within tolerance"
    check a target gets before it is sent: a track's steps may be finer than the tolerance.
    What it needs of the sky goes out as ``Ask`` actions and comes back through ``sky_answer``.
-11. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening
-   is the first frame written once it is open again (stopping is always safe).
+11. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
+   one still waiting for the line when the port failed, or one written less than
+   STOP_UNSURE_S before it failed, is the first frame written once it is open again
+   (stopping is always safe).
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
    that was taken: a command after it that is carried out clears it.
 13. The last word (mqtt/lastword.py): a stop or lock ON from the stop lane holds the rotator:
@@ -88,6 +90,7 @@ log = logging.getLogger(__name__)
 OPTIONS_REFRESH_S = 60.0
 STOP_TRIES_BEFORE_ERROR = 3
 STOP_MERGE_MIN_S = 1.0  # stops merge within the brake window, or at least this long
+STOP_UNSURE_S = 1.0  # rule 11: a stop written this recently when the port failed is sent again
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 
 
@@ -162,6 +165,7 @@ class RotatorSession:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
             self.error(kind, reason)
+            self._stop_owed = self._stop_owed or self._stop_unsure(now)  # rule 11
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         self.tracker.end("serial link down" if reason is not None else "bridge stopped")
         self.link = None
@@ -217,12 +221,23 @@ class RotatorSession:
         else:
             self._stop_owed = True
 
+    def _stop_unsure(self, now: float) -> bool:
+        """Rule 11: a stop still waiting for the line, or written so recently (a failed write
+        closes the port too) that the controller may never have had it."""
+        link, sent = self.link, self.motion.stop_sent_t
+        return (link is not None and link.stop_due) or (
+            sent is not None and now - sent < STOP_UNSURE_S
+        )
+
     def _fence(self, batch: Batch, now: float) -> None:
         """Rule 13: a hold starts with its stop and ends with its marker; one that ends with
         clearing drops what waited meanwhile (its place in line was lost)."""
         if batch.release_clear and self.hold is not None:  # (mailbox rule 6: before the rest)
             self.hold = None
-            why = "a stop or lock overtook it and the MQTT connection that brought it dropped"
+            why = (
+                "a stop or lock from the stop lane came before it, and the MQTT connection that "
+                "would have told which was published first dropped; send it again"
+            )
             self._drop_pending(why)
             if self.tracker.end("a stop or lock came first; send the track command again"):
                 self.drop_tracking_target()
@@ -490,7 +505,7 @@ class RotatorSession:
             return
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
         late = now >= m.stop_sent_t + self.cfg.motion.stop_resend_s  # as next_deadline
-        pending = self.targets.pending is not None
+        pending = self.targets.pending is not None and self.hold is None  # (held: not going)
         if m.state is MotionState.MOVING and moved_since and late and not pending:
             self._stop_tries += 1
             if self._stop_tries == STOP_TRIES_BEFORE_ERROR:

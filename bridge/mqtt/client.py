@@ -270,6 +270,7 @@ class MqttClient:
         on_message: MessageHandler,
         on_connect: Callable[[], None] | None = None,
         on_new_connection: Callable[[], None] | None = None,
+        on_connection_lost: Callable[[], None] | None = None,
         no_replay: list[str] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
         claim: Claim | None = None,
@@ -284,6 +285,9 @@ class MqttClient:
         self._handler = on_message
         self._on_connect_hook = on_connect
         self._on_new_connection = on_new_connection
+        self._on_connection_lost = on_connection_lost
+        self._command_mid: int | None = None
+        self._subscribed = False
         self._no_replay = frozenset(no_replay or ())
         self._on_denied = on_denied
         self._retained: dict[str, tuple[bytes, int]] = {}  # topic -> (payload, QoS)
@@ -442,8 +446,9 @@ class MqttClient:
 
     @property
     def up(self) -> bool:
-        """A connection is accepted (its first look may still run)."""
-        return self._up
+        """A connection is accepted and its command topics subscribed (its first look may
+        still run): from now on a command published reaches this connection."""
+        return self._up and self._subscribed
 
     def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
         """At shutdown: mark these retained topics offline and wait until the broker has them."""
@@ -496,12 +501,15 @@ class MqttClient:
         self._up = True
         self._guard.connected(self._clock())
         log.info("connected to MQTT broker")
+        self._subscribed = False  # until the SUBACK of the command topics (``up``)
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
         # subscribe before saying `online`: the broker handles our packets in order, so a
         # client that sends a command the moment it sees `online` is already heard
-        self._subscribe(client, command_filters(self._subscriptions, self._no_replay, self._v5))
+        self._command_mid = self._subscribe(
+            client, command_filters(self._subscriptions, self._no_replay, self._v5)
+        )
         if self._v5 and self._owned:  # rule 10: not our own messages back
             mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
             self._subscribe(client, [(topic, mine) for topic in self._owned])
@@ -619,12 +627,13 @@ class MqttClient:
             threading.Thread(target=self._on_refused, args=(message,), daemon=True).start()
 
     # -- rule 11: what the broker refused ---------------------------------------------------
-    def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> None:
+    def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> int | None:
         if not filters:
-            return
+            return None
         _rc, mid = client.subscribe(filters)
         if mid is not None:
             self._sub_filters[mid] = [f for f, _opts in filters]
+        return mid
 
     def _send(
         self, client: paho.Client, topic: str, data: str | bytes, qos: int, *, retain: bool
@@ -654,6 +663,8 @@ class MqttClient:
         properties: Properties | None,
     ) -> None:
         filters = self._sub_filters.pop(mid, [])
+        if mid == self._command_mid:
+            self._subscribed = True  # (``up``: the commands reach us from now on)
         for topic, code in zip(filters, reason_codes, strict=False):
             if code.is_failure:
                 self._deny(topic, "subscribe to", str(code))
@@ -752,9 +763,11 @@ class MqttClient:
         properties: Properties | None,
     ) -> None:
         was = self._up
-        self._up = False
+        self._up = self._subscribed = False
         self.connected.clear()
         self._looking = None  # one assignment: no lock (paho may hold its own here)
+        if was and self._on_connection_lost is not None:  # nothing more of it will come
+            self._on_connection_lost()
         if not was or self._stopping:
             return
         ending = ending_of(flags, reason_code)

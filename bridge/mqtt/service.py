@@ -62,6 +62,13 @@ def _switch_on(payload: bytes) -> bool:
         return False
 
 
+def _switch_off(payload: bytes) -> bool:
+    try:
+        return not pl.parse_switch(payload)
+    except pl.PayloadError:
+        return False
+
+
 class RotatorPort(Protocol):
     id: str
     spec: ModelSpec
@@ -136,12 +143,14 @@ class MqttService:
         error_events_per_s: float = RATE_PER_S,
         clock: Callable[[], float] = time.monotonic,
         retain_is_live: bool = True,
+        on_problem: Callable[[str, str], None] | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
         self.topics = topics
         self._publisher = publisher
         self._retain_is_live = retain_is_live
+        self._on_problem = on_problem  # (topic, problem): a broker problem the bridge reports
         self._wall = wall
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._rotators: dict[str, RotatorPort] = {}
@@ -181,18 +190,20 @@ class MqttService:
         return [*self.topics.subscriptions(), *self._feature_subscriptions]
 
     def stop_lane_subscriptions(self) -> list[str]:
-        """Stop and lock, for the connection of their own (lane.py); also handled here."""
-        return self.topics.stop_lane()
+        """Stop and lock, for the connection of their own (lane.py), also handled here; and the
+        lane's own markers (lastword.py rule 4)."""
+        return [*self.topics.stop_lane(), self.topics.bridge_fence_lane]
 
     def no_replay_subscriptions(self) -> list[str]:
         """Filters the broker is asked not to replay retained messages of (lastword.py rule 6)."""
-        return self.topics.stops()
+        return self.topics.stop_lane()
 
     # -- the last word (lastword.py), both connections ------------------------------------------
-    def main_connected(self) -> None:
-        """The main connection is new (before its first message): holds end with clearing."""
+    def main_gone(self) -> None:
+        """The main connection dropped, or is new (before its first message): holds end with
+        clearing (lastword.py rule 5)."""
         with self._word_lock:
-            for rid in self._word.main_connected():
+            for rid in self._word.main_gone():
                 rot = self._rotators.get(rid)
                 if rot is not None:
                     rot.release(0, clear=True)
@@ -202,14 +213,27 @@ class MqttService:
             self._word.lane_connected()
 
     def markers_denied(self) -> None:
-        """The broker will not let the main connection read the markers (an ACL): no hold
-        could end but by a reconnect, so the lane's halts hold nothing (lastword.py rule 7)."""
+        """The main connection cannot read the markers: the lane's halts hold nothing
+        (lastword.py rule 7)."""
         with self._word_lock:
             self._markers_denied = True
-        self.main_connected()
+        self.main_gone()
 
-    def _main_up(self) -> bool:
+    def lane_markers_denied(self) -> None:
+        """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
+        with self._word_lock:
+            self._word.echoes = False
+
+    def _holds_possible(self) -> bool:
         return self._publisher.up and not self._markers_denied
+
+    def _carry(self, rot: RotatorPort, kind: str, what: str, hold: int | None = None) -> None:
+        """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
+        and the put are one step)."""
+        if kind == "stop":
+            rot.submit(Stop(Source.MQTT), what, hold=hold)
+        else:
+            rot.set_lock(True, hold=hold, save=False)
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
@@ -234,9 +258,21 @@ class MqttService:
     def _resend_marker_if_due(self) -> None:
         with self._word_lock:
             n = self._word.resend_due(self._clock())
-        if n is not None:
-            log.info("a marker of the stop lane did not come back; sending another")
-            self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
+        if n is None:
+            return
+        if n < 0:  # lastword.py rule 5: the broker drops them
+            problem = (
+                f"the bridge's own markers on {self.topics.bridge_fence} do not come back "
+                "(does the broker's ACL deny that topic?): a stop from the stop lane can no "
+                "longer hold back a target published before it"
+            )
+            log.error("%s", problem)
+            self.markers_denied()
+            if self._on_problem is not None:
+                self._on_problem(self.topics.bridge_fence, problem)
+            return
+        log.info("a marker of the stop lane did not come back; sending another")
+        self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
 
     def _marker_back(self, payload: bytes) -> None:
         with self._word_lock:
@@ -246,19 +282,28 @@ class MqttService:
                 if rot is not None:
                     rot.release(n)
 
-    def _retained_stop(self, rot: RotatorPort, topic: str, payload: bytes) -> None:
-        """Rule 1 and lastword.py rule 6: carried out when published, once at most when the
-        broker replays it (MQTT 3.1.1; under MQTT 5 the broker does not replay stops)."""
-        replayed = not self._retain_is_live
+    def on_lane_marker(self, payload: bytes) -> None:
+        """The lane read its marker (lastword.py rule 4)."""
         with self._word_lock:
-            if not self._word.retained_stop(topic, payload, replayed):
-                log.debug("%s: retained stop on %s already carried out once", rot.id, topic)
+            self._word.lane_marker_back(payload)
+
+    def _replayed_halt(self, rot: RotatorPort, topic: str, kind: str, payload: bytes) -> None:
+        """lastword.py rule 6 under MQTT 3.1.1: a replayed retained stop or lock ON, once."""
+        what = pl.describe(kind, payload)
+        with self._word_lock:
+            if not self._word.retained_halt(topic, payload, replayed=True):
+                log.debug("%s: retained %s on %s already carried out once", rot.id, kind, topic)
                 return
-            rot.submit(Stop(Source.MQTT), pl.describe("stop", payload))
+            self._carry(rot, kind, what)
+        if kind == "lock":
+            rot.save_lock()
+        self._report_retained_halt(rot, topic, kind, what)
+
+    def _report_retained_halt(self, rot: RotatorPort, topic: str, kind: str, what: str) -> None:
         rot.report_refusal(
-            f"stop on {topic} was published retained: executed (stopping is always safe), "
+            f"{kind} on {topic} was published retained: executed (stopping is always safe), "
             "but clear it with an empty retained message",
-            pl.describe("stop", payload),
+            what,
         )
 
     def start(self) -> None:
@@ -316,42 +361,39 @@ class MqttService:
 
     # -- inbound (paho's threads) -----------------------------------------------------------
     def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        """The stop lane's messages (rule 5; lastword.py rule 2)."""
+        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6)."""
+        if topic == self.topics.bridge_fence_lane:
+            self.on_lane_marker(payload)
+            return
         route = self.topics.route(topic)
-        if route is None:
+        if route is None or (retain and not payload):
             return
         rotator_id, kind, _arg = route
         rot = self._rotators.get(rotator_id)
         if rot is None or kind not in ("stop", "lock"):
             return
-        if retain:
-            if kind == "stop" and payload:  # (an empty one deletes it: rule 1)
-                self._retained_stop(rot, topic, payload)
-            return  # a retained lock: the main connection reports it
-        if kind == "lock":
-            try:
-                on = pl.parse_switch(payload)
-            except pl.PayloadError:
-                return  # the main connection reports it
-            if not on:
-                if not self._main_up():  # lastword.py rule 3: the only word there is
-                    rot.set_lock(False)
-                return
+        if kind == "lock" and not _switch_on(payload):
+            if retain or not _switch_off(payload):
+                return  # the main connection refuses or reports it
+            with self._word_lock:  # lastword.py rule 3: the only word while it is down
+                if self._publisher.up:
+                    return
+                rot.set_lock(False, save=False)
+            rot.save_lock()
+            return
+        if retain and not self._retain_is_live:
+            self._replayed_halt(rot, topic, kind, payload)
+            return
         what = pl.describe(kind, payload)
-        marker: int | None = None
         with self._word_lock:
-            if self._main_up():
-                marker = self._word.lane_halt(rotator_id, kind, self._clock())
-                if marker is None:
-                    log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
-                    return  # lastword.py rule 4: the echo of the main connection's copy
-            if kind == "stop":
-                rot.submit(Stop(Source.MQTT), what, hold=marker)
-            else:
-                rot.set_lock(True, hold=marker, save=False)
+            marker = self._word.lane_halt(rotator_id, kind, self._clock(), self._holds_possible())
+            if marker is None:
+                log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
+                return  # lastword.py rule 4: the echo of the main connection's copy
+            self._carry(rot, kind, what, hold=marker or None)
         if kind == "lock":
             rot.save_lock()
-        if marker is not None:
+        if marker:
             self._send_marker(marker)
 
     def on_message(self, topic: str, payload: bytes, retain: bool, *, gated: bool = False) -> None:
@@ -372,20 +414,20 @@ class MqttService:
             return
         if retain and not payload:
             with self._word_lock:
-                self._word.retained_stop(topic, payload, True)  # deleted: forgotten
+                self._word.retained_halt(topic, payload, replayed=True)  # deleted: forgotten
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
-        if retain and kind == "stop":
-            self._retained_stop(rot, topic, payload)
+        halt = kind == "stop" or (kind == "lock" and _switch_on(payload))
+        if retain and halt and not self._retain_is_live:
+            self._replayed_halt(rot, topic, kind, payload)
             return
-        if retain:
+        if retain and not halt:
             rot.report_refusal(
                 f"retained command on {topic} ignored: commands must be published without the "
                 "retain flag (clear it with an empty retained message)",
                 what,
             )
             return
-        halt = kind == "stop" or (kind == "lock" and _switch_on(payload))
         if gated and not halt:  # rule 6
             rot.report_refusal(
                 "not taken: the bridge is still checking that no other bridge runs on its base "
@@ -395,13 +437,28 @@ class MqttService:
             return
         if halt:
             with self._word_lock:  # lastword.py rule 1: carried out in order, noted for rule 4
-                self._word.main_halt(rotator_id, kind, self._clock())
-                if kind == "stop":
-                    rot.submit(Stop(Source.MQTT), what)
-                else:
-                    rot.set_lock(True, save=False)
+                lane_marker = self._word.main_halt(rotator_id, kind)
+                self._carry(rot, kind, what)
             if kind == "lock":
                 rot.save_lock()
+            if lane_marker is not None:
+                marker = self._word.marker(lane_marker)
+                self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
+            if retain:  # published retained, live (MQTT 5): carried out, and reported
+                self._report_retained_halt(rot, topic, kind, what)
+            return
+        if kind == "lock":
+            try:
+                pl.parse_switch(payload)
+            except pl.PayloadError as exc:
+                rot.report_refusal(str(exc), what)
+                return
+            with self._word_lock:
+                if not self._word.main_lock_off(rotator_id):  # lastword.py rule 8
+                    log.info("%s: lock OFF published before a lock ON: the ON stands", rotator_id)
+                    return
+                rot.set_lock(False, save=False)
+            rot.save_lock()
             return
         try:
             if kind == "target":
@@ -432,8 +489,6 @@ class MqttService:
                 rot.track(name, Source.MQTT, what, tle)
             elif kind == "target_elevation":
                 rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
-            elif kind == "lock":
-                rot.set_lock(pl.parse_switch(payload))
             elif kind == "option" and arg is not None:
                 rot.submit(SetOption(arg, pl.parse_switch(payload), Source.MQTT), what)
         except pl.PayloadError as exc:

@@ -148,6 +148,11 @@ class Topics:
         """Where the bridge's markers go to come back on the main connection (lastword.py)."""
         return f"{self.base}/bridge/fence"
 
+    @property
+    def bridge_fence_lane(self) -> str:
+        """The markers the stop lane reads (lastword.py rule 4)."""
+        return f"{self.base}/bridge/fence/lane"
+
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
         best: tuple[int, str] | None = None
@@ -169,14 +174,10 @@ class Topics:
             subs += [t.preset, t.park, t.nudge, t.track]
         return [*subs, self.bridge_fence]
 
-    def stops(self) -> list[str]:
-        """The stop topics: subscribed without the broker's replay of a retained message
-        (lastword.py rule 6)."""
-        return [t.stop for t in self._rotators.values()]
-
     def stop_lane(self) -> list[str]:
         """Stop and lock also on a connection of their own (lane.py), behind no flood of
-        targets."""
+        targets; subscribed on both without the broker's replay of a retained message
+        (lastword.py rule 6)."""
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.stop, t.lock]

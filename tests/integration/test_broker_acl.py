@@ -16,6 +16,7 @@ from bridge.app import App
 from bridge.mosquitto import Mosquitto
 from bridge.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
+from tests.integration.test_last_word import main_held_at
 from tests.support import Probe
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until
@@ -120,4 +121,38 @@ def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: P
         wait_until(lambda: len(client.problems) >= 100, 10, "refusals reported")
     finally:
         client.stop()
+        broker.stop()
+
+
+def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> None:
+    """lastword.py rule 5: mosquitto grants the subscription to B/bridge/fence and drops the
+    bridge's markers without a word; the rotor must not stay held for as long as the main
+    connection lasts: the hold ends (with clearing) after a few resends, and B/bridge/info
+    says why. The next target turns it."""
+    acl = tmp_path / "acl"
+    acl.write_text("topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n")
+    conf = f"allow_anonymous true\nacl_file {acl}\nuser root"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf)
+    broker.start()
+    probe = Probe(broker.port, "rotor/#")
+    rig = Rig(tmp_path, broker, probe)
+    try:
+        emu = rig.add("tower", "rotorez", emu={"start_az_deg": 20, "speed_deg_s": 20.0})
+        app = rig.start()
+        rig.ready("tower")
+        wait_until(app.lane.connected.is_set, 10, "the lane is up")
+        with main_held_at(app, "rotor/target", b"60") as held:
+            probe.publish("rotor/target", "60")
+            wait_until(held.is_set, 10, "the main connection is held")
+            probe.publish("rotor/stop", "")
+            wait_until(lambda: app.mqtt._word.holding, 10, "the lane's stop holds")
+        probe.wait_for(
+            "rotor/bridge/info", lambda m: b"do not come back" in m.payload, 20
+        )  # (about GIVE_UP x RESEND_S)
+        assert not app.mqtt._word.holding
+        probe.publish("rotor/target", "200")
+        emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 200) <= 3, 30)
+    finally:
+        rig.close()
+        probe.close()
         broker.stop()

@@ -360,7 +360,7 @@ def test_each_command_topic_reaches_its_rotator(
     svc.on_message(topic, payload, False)
     assert rots["b"].calls == [call]
     assert rots["a"].calls == []
-    assert pub.sent == []
+    assert [m for m in pub.sent if "/bridge/fence" not in m[0]] == []  # (markers: lastword)
 
 
 @pytest.mark.parametrize(
@@ -521,19 +521,35 @@ def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_o
 
 def test_the_lanes_late_copy_of_a_stop_the_main_connection_carried_out_is_its_echo() -> None:
     """lastword.py rule 4: main read it first; the lane's copy must not stop the target
-    published after the stop (already on its way); the next lane stop is carried out."""
+    published after the stop (already on its way). The lane marker, once back, ends the
+    note: the next lane stop is carried out at once."""
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.on_message("rotor/stop", b"", False)
+    (lane_marker,) = [m for m in pub.take() if m[0] == "rotor/bridge/fence/lane"]
     svc.on_message("rotor/target", b"250", False)
     svc.on_lane_message("rotor/stop", b"", False)  # the echo
-    svc.on_lane_message("rotor/stop", b"", False)  # a new stop: at once, with a hold
+    svc.on_message("rotor/stop", b"", False)  # one the lane missed (it was down) ...
+    (lane_marker,) = [m for m in pub.take() if m[0] == "rotor/bridge/fence/lane"]
+    svc.on_lane_message(lane_marker[0], lane_marker[1].encode(), False)
+    svc.on_lane_message("rotor/stop", b"", False)  # ... so this one is new
     stop = Stop(Source.MQTT)
     assert tower.calls == [
         ("submit", stop, "stop"),
         ("submit", Target(250.0, None, M), "target '250'"),
+        ("submit", stop, "stop"),
         ("submit", stop, "stop", 1),
     ]
+
+
+def test_a_lock_off_read_while_the_lanes_on_waits_for_its_copy_is_older() -> None:
+    """lastword.py rule 8: the ON stands even if the main connection drops before its copy."""
+    svc, _pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    svc.on_lane_message("rotor/lock", b"ON", False)
+    svc.on_message("rotor/lock", b"OFF", False)  # published before the ON
+    svc.main_gone()
+    assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 1)]
 
 
 def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:
@@ -543,9 +559,9 @@ def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:
     tower = rots["tower"]
     svc.on_lane_message("rotor/lock", b"OFF", False)
     svc.on_lane_message("rotor/lock", b"ON", False)
-    svc.on_message("rotor/lock", b"OFF", False)
+    svc.on_message("rotor/lock", b"OFF", False)  # older than the lane's ON: not carried out
     svc.on_message("rotor/lock", b"ON", False)
-    assert [c for c in tower.calls if c[0] == "lock"][-1] == ("lock", True)
+    assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 1), ("lock", True)]
     tower.calls.clear()
     svc.on_lane_message("rotor/lock", b"ON", False)
     svc.on_lane_message("rotor/lock", b"OFF", False)
@@ -562,8 +578,8 @@ def test_a_new_main_connection_ends_the_holds_with_clearing() -> None:
     """lastword.py rule 5: the marker cannot come back on a connection that dropped."""
     svc, pub, rots = service({"tower": "rotorez"})
     svc.on_lane_message("rotor/stop", b"", False)
-    svc.main_connected()
-    svc.main_connected()  # nothing held any more
+    svc.main_gone()  # dropped
+    svc.main_gone()  # and back: nothing held any more
     assert rots["tower"].calls[1:] == [("release", 0, "clear")]
 
 

@@ -23,7 +23,7 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/bridge/fence",
     ]
     assert t.stop_lane() == ["rotor/stop", "rotor/lock"]
-    assert t.stops() == ["rotor/stop"]
+    assert t.bridge_fence_lane == "rotor/bridge/fence/lane"
 
 
 def test_routing_inbound_topics() -> None:
