@@ -22,7 +22,9 @@ Rules:
    to ``remove``, still being closed (a warning says so); either way nothing serves it any more.
    A worker is added once: adding it again is a programming error (ValueError).
 5. Commands first: the workers whose mailbox is ready are served before the others in a round,
-   so a stop never waits behind other rotators' replies and status publishing.
+   and a worker with a stop (or lock ON) waiting is served next, even one that came while the
+   round was under way: a stop never waits behind other rotators' replies, sky answers and
+   status publishing, only behind the one worker being served when it came.
 """
 
 from __future__ import annotations
@@ -143,7 +145,16 @@ class Lines:
                     pass
             except BlockingIOError:
                 pass
-        for worker in sorted(self._workers, key=lambda w: not w.has_commands(ready)):  # rule 5
+        waiting = sorted(self._workers, key=lambda w: not w.has_commands(ready))  # rule 5
+        while waiting:
+            # rule 5: a stop that came while this round served others goes next
+            worker, urgent = waiting[0], set()
+            for other in waiting:
+                urgent = other.urgent()
+                if urgent:
+                    worker = other
+                    break
+            waiting.remove(worker)
             # the clock read for each: a slow step (a burst of statuses to the listeners) must
             # not hand the next a stale time, or a query it writes looks overdue at once
-            worker.guarded(worker.serve, self._clock(), ready)
+            worker.guarded(worker.serve, self._clock(), ready | urgent)

@@ -73,6 +73,12 @@ class Mailbox:
     def fileno(self) -> int:
         return self._rfd
 
+    @property
+    def urgent(self) -> bool:
+        """A stop or lock ON waits (read without the lock: a hint for the lines thread)."""
+        batch = self._batch
+        return batch.stop is not None or batch.lock_on
+
     def put(self, command: Target | Stop | SetOption, *, hold: int | None = None) -> None:
         """``hold``: a stop that holds the rotator until that marker (rule 6)."""
         with self._lock:

@@ -130,6 +130,11 @@ class Worker:
     def has_commands(self, ready: set[int]) -> bool:
         return self._box in ready
 
+    def urgent(self) -> set[int]:
+        """The mailbox's descriptor when a stop or lock ON waits in it (lines.py rule 5), else
+        nothing: read without the mailbox's lock, a hint for the order of a round."""
+        return {self._box} if self._mailbox.urgent else set()
+
     def wants(self, now: float) -> tuple[list[int], float]:
         """The descriptors to wait on and the time to be woken at the latest."""
         if self._port is None:
