@@ -131,7 +131,7 @@ class App:
             retain_is_live=settings.mqtt.protocol == "5",
             on_problem=lambda topic, problem: self._denied(topic, problem),
         )
-        store = StateStore(settings.state_file)
+        store = self.store = StateStore(settings.state_file)
         try:
             store.check_writable()
         except OSError as exc:
@@ -303,6 +303,7 @@ class App:
         self.loggers.stop()
         for rot in self.rotators:
             rot.stop()
+        self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")

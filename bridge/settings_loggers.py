@@ -3,7 +3,9 @@ given, on loopback unless told otherwise (neither protocol has authentication)."
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+import ipaddress
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
 class LoggerFields(BaseModel):
@@ -32,7 +34,34 @@ class LoggerFields(BaseModel):
             raise ValueError(f"{text!r} must be host:port, e.g. 127.0.0.1:13010")
         return text
 
+    @model_validator(mode="after")
+    def _reports_can_leave(self) -> LoggerFields:
+        """Reports go out from the N1MM port's own socket (loggers/server.py rule 6): one bound
+        to loopback cannot reach another machine, and N1MM's rotor display would never move."""
+        host = self.n1mm_report_address[0]
+        if (
+            self.n1mm_rotor_name is not None
+            and _loopback(self.n1mm_udp_bind)
+            and not _loopback(host)
+        ):
+            raise ValueError(
+                f"n1mm_report_to {self.n1mm_report_to!r} is another machine, but n1mm_udp_bind "
+                f"{self.n1mm_udp_bind!r} is loopback: position reports leave from the N1MM "
+                "port's address and could not reach it; set n1mm_udp_bind to this machine's "
+                "address on that network (or 0.0.0.0)"
+            )
+        return self
+
     @property
     def n1mm_report_address(self) -> tuple[str, int]:
         host, _, port = self.n1mm_report_to.rpartition(":")
         return host, int(port)
+
+
+def _loopback(host: str) -> bool:
+    if host.strip("[]").casefold() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False  # a host name: another machine, as far as can be told here

@@ -457,3 +457,14 @@ def test_a_logger_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
         w.startswith("rotators[0].pst_udp_bind: 0.0.0.0 is not a loopback address")
         for w in warnings
     ), warnings
+
+
+def test_n1mm_reports_to_another_machine_need_a_bind_that_can_reach_it(tmp_path: Path) -> None:
+    """Reports leave from the N1MM port's own socket (loggers/server.py rule 6): one bound to
+    loopback cannot reach another PC, and N1MM's rotor display would never move."""
+    base = 'n1mm_rotor_name = "Tower"\nn1mm_report_to = "192.168.1.20:13010"\n'
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL + base), environ={})
+    assert "n1mm_udp_bind" in str(err.value) and "n1mm_report_to" in str(err.value)
+    ok = load_settings(write(tmp_path, MINIMAL + base + 'n1mm_udp_bind = "0.0.0.0"\n'), environ={})
+    assert ok.rotators[0].n1mm_report_address == ("192.168.1.20", 13010)

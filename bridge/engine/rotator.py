@@ -153,7 +153,8 @@ class Rotator:
             self.report_refusal(exc.message, described or describe_command(command))
             raise
         if isinstance(command, SetOption):
-            self._store.set_option(self.id, command.name, command.enabled)
+            name, enabled = command.name, command.enabled
+            self._store.later(lambda: self._save_option(name, enabled))  # state_store rule 5
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
@@ -280,9 +281,21 @@ class Rotator:
         if save:
             self.save_lock()
 
+    def _save_option(self, name: str, enabled: bool) -> None:
+        if not self._store.set_option(self.id, name, enabled):
+            self.report(
+                ErrorKind.STATE,
+                f"option {name} is in effect but could not be saved: it will not survive a "
+                "restart (state file not writable)",
+                name,
+            )
+
     def save_lock(self) -> None:
-        """The lock as it is now to the state file: of two threads, the last to save writes
-        the newer word, whichever was set first."""
+        """The lock to the state file, on its writer thread (state_store.py rule 5): each save
+        writes the lock as it is when it runs, so the last one writes the newest word."""
+        self._store.later(self._save_lock_now)
+
+    def _save_lock_now(self) -> None:
         with self._save_lock:
             locked = self._locked
             saved = self._store.set_locked(self.id, locked)

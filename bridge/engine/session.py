@@ -400,7 +400,7 @@ class RotatorSession:
         return actions
 
     def _part(self, name: str, run: Callable[[], None], now: float) -> None:
-        """Rule 11: a part that raises is reset and reported; nothing else stops."""
+        """Rule 14: a part that raises is reset and reported; nothing else stops."""
         try:
             run()
         except Exception:
@@ -479,7 +479,7 @@ class RotatorSession:
                 link.write(enable, now)
             self._enable_due = False
         self._verify_stop(now)
-        self._part("tracking", lambda: tracking.step(self, now), now)  # rule 11
+        self._part("tracking", lambda: tracking.step(self, now), now)  # rule 14
         self._part("auto-park", lambda: autopark.step(self, now), now)
         if self.targets.pending is not None:
             self._try_target(link, now)

@@ -128,7 +128,12 @@ class SkyWorker:
                         return
                 continue
             try:
-                deliver(self._answer(question))
+                found = self._answer(question)
+            except Exception:  # rule 2: a question is always answered, or tracking waits
+                log.exception("computing %s failed", type(question).__name__)
+                found = Answer(question, failure="internal error computing the sky (see the log)")
+            try:
+                deliver(found)
             except Exception:  # a callback that raises must not end the thread
                 log.exception("delivering a sky answer failed")
 

@@ -90,8 +90,17 @@ def _number(text: str, tag: str) -> float:
 
 
 def parse_pst(datagram: bytes) -> PstRequest:
-    """Rule 2 (Malformed for anything not wholly understood, or ambiguous)."""
+    """Rule 2 (Malformed for anything not wholly understood, or ambiguous; a stop never)."""
     body = _text(datagram, _PST, "<PST>")
+    try:
+        return _pst(body)
+    except Malformed:
+        if "<STOP>" in body.upper():  # never refused: what is beside it is moot
+            return PstRequest(stop=True)
+        raise
+
+
+def _pst(body: str) -> PstRequest:
     targets: dict[str, set[float | str | bool]] = {}  # AZIMUTH, ELEVATION, QRA, PARK
     stop = False
     queries: list[str] = []
@@ -152,16 +161,17 @@ _STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 def parse_n1mm(datagram: bytes) -> N1mmRequest:
     """Rule 4 (Malformed for anything not understood, or ambiguous)."""
     body = _text(datagram, _N1MM, "<N1MMRotor>")
+    stop = "<stop" in body.lower()
     rest = _STOP_WRAP.sub("", _N1MM_TAG.sub("", body))
-    if rest.strip():
+    if rest.strip() and not stop:  # (beside a stop, what cannot be read is moot)
         raise Malformed(f"cannot read {rest.strip()[:20]!r}")
     given: dict[str, list[str]] = {}
     for m in _N1MM_TAG.finditer(body):
         given.setdefault(m.group("tag").lower(), []).append(m.group("value").strip())
-    stop = "<stop" in body.lower()
     names = list(dict.fromkeys(n for n in given.get("rotor", []) if n))
     if stop:  # the stop's text is a name when no <rotor> gives one, else perhaps one more
         names += [n for n in dict.fromkeys(given.get("stop", [])) if n and n not in names]
+        names = [n for n in names if len(n) <= MAX_NAME and n.isprintable()]  # the others'
     if not names or any(len(n) > MAX_NAME or not n.isprintable() for n in names):
         raise Malformed("no rotor name")
     if stop:

@@ -8,7 +8,8 @@ Rules:
    stays well inside it.
 2. At most MAX_SOURCES addresses are remembered; a new one beyond that makes the least
    recently used one forgotten (it starts full again if it comes back). A flood of spoofed
-   addresses costs a bounded table, and replies never outnumber the datagrams that asked.
+   addresses costs a bounded table, and a datagram gets at most one reply per kind of query
+   (AZ?, EL?: datagrams.py), so replies never outnumber the queries that asked.
 """
 
 from __future__ import annotations

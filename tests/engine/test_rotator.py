@@ -83,3 +83,30 @@ def test_the_station_itself_and_its_antipode_are_refused_as_targets_with_a_reaso
     with pytest.raises(Refused) as exc:
         rot.go_toward(*parse_locator("JO62qn"), Source.MQTT, "locator JO62qn", locator="JO62qn")
     assert exc.value.code == "offline"
+
+
+def test_the_lock_and_options_are_saved_off_the_callers_thread(tmp_path) -> None:  # noqa: ANN001
+    """state_store.py rule 5: an MQTT callback that sets the lock returns before the fsync
+    (tens of milliseconds on an SD card, with the next stop on that connection behind it);
+    the file has the last word once the writer is done."""
+    import threading
+
+    store = StateStore(tmp_path / "state.json")
+    release = threading.Event()
+    write = store._write
+    waited_out: list[bool] = []  # a write that waited its 5 s: the caller was held all along
+
+    def slow_write(*args, **kwargs) -> None:  # noqa: ANN002, ANN003
+        waited_out.append(not release.wait(5))
+        write(*args, **kwargs)
+
+    store._write = slow_write  # type: ignore[method-assign]
+    cfg = worker_config(RotatorSettings(id="t", model="rotorez", port="/dev/null"))
+    rot = Rotator(cfg, store, lambda s: None, lambda e: None)
+    rot.set_lock(True)  # returns while the write waits
+    rot.set_lock(False)
+    rot.set_lock(True)
+    release.set()
+    store.flush()
+    assert not any(waited_out)
+    assert StateStore(tmp_path / "state.json").locked("t") is True

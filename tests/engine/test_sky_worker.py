@@ -16,6 +16,7 @@ from bridge.model import ErrorKind
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
+from tests.support.sky import synthetic_tle
 
 
 class GuardedSky(Sky):
@@ -125,3 +126,38 @@ def test_a_sky_that_cannot_be_computed_is_answered_with_the_reason_never_raised(
         assert v.status.tracking is None
         assert v.status.tracking_ended == "date beyond the ephemeris (2053)"
         assert not v.errors(ErrorKind.INTERNAL)
+
+
+def test_a_slow_satellite_is_tracked_with_a_few_questions_a_minute() -> None:
+    """Cold review: a geostationary satellite's lead reaches 300 s, so one step needs five
+    windows of its track; with four kept, each answer dropped one the next step needed and the
+    session and the sky worker passed two windows back and forth without end."""
+    epoch = 1_781_020_000.0
+    line1, line2 = synthetic_tle(
+        "GEO",
+        epoch,
+        inclination_deg=0.05,
+        raan_deg=0,
+        mean_anomaly_deg=0,
+        mean_motion_rev_day=1.00273791,
+    )
+    body = Body.satellite("QO", line1, line2)
+    asked: list[Question] = []
+
+    def answer(q: Question) -> Answer:
+        asked.append(q)
+        return skywork.answer(q)
+
+    with VirtualRotator(
+        "md01",
+        sky=Sky(50.0, -160.0),
+        wall_epoch_s=epoch,
+        emulator={"az_speed_deg_s": 2.0, "el_speed_deg_s": 1.0},
+        settings={"az_speed_deg_s": 2.0, "el_speed_deg_s": 1.0},
+    ) as v:
+        v.answer_sky = answer
+        v.run_until(lambda h: h.status.available, 10, "up")
+        v.track(body)
+        v.run_for(240.0)
+        assert v.status.tracking is not None
+        assert len(asked) < 30, len(asked)

@@ -77,6 +77,7 @@ def test_lock_off_then_on_behind_a_backlog_ends_locked(rig: Rig) -> None:
     wait_until(lambda: not app.mqtt._word.holding, 10, "the main connection caught up")
     assert app.rotators[0].status.locked
     rig.probe.wait_value("rotor/lock/state", "ON", 10)
+    app.store.flush()  # (saved on the state file's own thread)
     state = json.loads((rig.tmp / "state.json").read_text())
     assert state["rotators"]["tower"]["locked"] is True, state
     assert bearings(emu) == []  # not one of the slider's targets went out, ever

@@ -205,3 +205,23 @@ def test_an_n1mm_stop_naming_two_rotors_is_a_stop_for_both(datagram: bytes) -> N
 def test_an_n1mm_stop_naming_one_rotor_twice_is_that_rotors() -> None:
     datagram = b"<N1MMRotor><rotor>Tower</rotor><stop>Tower</stop></N1MMRotor>"
     assert parse_n1mm(datagram) == N1mmRequest("Tower", stop=True)
+
+
+@pytest.mark.parametrize(
+    ("datagram", "wanted"),
+    [
+        (b"<PST><STOP>1</STOP><AZIMUTH>12x</AZIMUTH></PST>", PstRequest(stop=True)),
+        (b"<PST><STOP>1</STOP>junk<AZIMUTH>5</PST>", PstRequest(stop=True)),
+    ],
+)
+def test_a_pst_stop_beside_what_cannot_be_read_is_still_a_stop(
+    datagram: bytes, wanted: PstRequest
+) -> None:
+    """A stop is never refused (the bridge's last word): the rest of the datagram is moot."""
+    assert parse_pst(datagram) == wanted
+
+
+def test_an_n1mm_stop_beside_a_name_too_long_or_junk_stops_the_rotor_it_names() -> None:
+    long = b"x" * 80
+    datagram = b"<N1MMRotor><stop><rotor>Tower</rotor><rotor>" + long + b"</rotor></stop>?"
+    assert parse_n1mm(datagram + b"</N1MMRotor>") == N1mmRequest("Tower", stop=True)
