@@ -25,13 +25,12 @@ Rules:
 from __future__ import annotations
 
 import logging
-import queue
-import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.ondemand import OnDemandThread
 from bridge.sky import Body, Pass, Sky, SkyError
 
 log = logging.getLogger(__name__)
@@ -105,37 +104,19 @@ class SkyWorker:
 
     def __init__(self, compute: Callable[[Question], Answer] = answer) -> None:
         self._compute = compute
-        self._queue: queue.SimpleQueue[tuple[Question, Deliver]] = queue.SimpleQueue()
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
+        self._thread = OnDemandThread("sky", IDLE_EXIT_S)
         self._kept: OrderedDict[PositionsQuestion, Answer] = OrderedDict()
 
     def ask(self, question: Question, deliver: Deliver) -> None:
-        self._queue.put((question, deliver))
-        with self._lock:
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, name="sky", daemon=True)
-                self._thread.start()
+        self._thread.put(lambda: self._run(question, deliver))
 
-    def _run(self) -> None:
-        while True:
-            try:
-                question, deliver = self._queue.get(timeout=IDLE_EXIT_S)
-            except queue.Empty:
-                with self._lock:
-                    if self._queue.empty():
-                        self._thread = None
-                        return
-                continue
-            try:
-                found = self._answer(question)
-            except Exception:  # rule 2: a question is always answered, or tracking waits
-                log.exception("computing %s failed", type(question).__name__)
-                found = Answer(question, failure="internal error computing the sky (see the log)")
-            try:
-                deliver(found)
-            except Exception:  # a callback that raises must not end the thread
-                log.exception("delivering a sky answer failed")
+    def _run(self, question: Question, deliver: Deliver) -> None:
+        try:
+            found = self._answer(question)
+        except Exception:  # rule 2: a question is always answered, or tracking waits
+            log.exception("computing %s failed", type(question).__name__)
+            found = Answer(question, failure="internal error computing the sky (see the log)")
+        deliver(found)  # (one that raises is logged by the thread, which goes on)
 
     def _answer(self, question: Question) -> Answer:
         if not isinstance(question, PositionsQuestion):

@@ -31,12 +31,13 @@ import errno
 import json
 import logging
 import os
-import queue
 import stat
 import tempfile
 import threading
 from collections.abc import Callable
 from pathlib import Path
+
+from bridge.engine.ondemand import OnDemandThread
 
 log = logging.getLogger(__name__)
 
@@ -81,9 +82,7 @@ class StateStore:
     def __init__(self, path: Path | None) -> None:
         self._path = path
         self._lock = threading.Lock()
-        self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()  # rule 5
-        self._jobs_lock = threading.Lock()
-        self._writer: threading.Thread | None = None
+        self._writer = OnDemandThread("state")  # rule 5
         self._data: dict[str, dict[str, object]] = {}
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
@@ -156,33 +155,14 @@ class StateStore:
         return {str(k): bool(v) for k, v in raw.items()}
 
     def later(self, job: Callable[[], None]) -> None:
-        """Rule 5: ``job`` on the writer thread (started with the first job)."""
-        with self._jobs_lock:
-            self._jobs.put(job)
-            if self._writer is None:
-                self._writer = threading.Thread(target=self._write_jobs, name="state", daemon=True)
-                self._writer.start()
+        """Rule 5: ``job`` on the writer thread."""
+        self._writer.put(job)
 
     def flush(self, timeout_s: float = 5.0) -> None:
         """Rule 5: the jobs asked so far are done (or ``timeout_s`` passed)."""
         done = threading.Event()
         self.later(done.set)
         done.wait(timeout_s)
-
-    def _write_jobs(self) -> None:
-        while True:
-            try:
-                job = self._jobs.get(timeout=30.0)
-            except queue.Empty:
-                with self._jobs_lock:
-                    if self._jobs.empty():
-                        self._writer = None
-                        return
-                continue
-            try:
-                job()
-            except Exception:  # the thread must not die of one
-                log.exception("saving the state failed")
 
     def set_locked(self, rotator_id: str, locked: bool) -> bool:
         """Remember the lock; False if it could not be written (it will not survive a restart)."""

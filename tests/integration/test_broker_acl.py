@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -25,15 +27,8 @@ from tests.support.waiting import wait_until
 def test_denied_publishes_are_reported_once_each_naming_the_topic(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    acl = tmp_path / "acl"
-    acl.write_text("topic readwrite rotor/#\n")  # Home Assistant's prefix is not granted
-    # started as root, mosquitto would become user "mosquitto", who cannot read pytest's tmp
-    conf = f"allow_anonymous true\nacl_file {acl}\nuser root"
-    broker = Mosquitto(tmp_path / "broker", extra_conf=conf)
-    broker.start()
-    probe = Probe(broker.port, "rotor/#")
-    rig = Rig(tmp_path, broker, probe)
-    try:
+    # Home Assistant's prefix is not granted
+    with acl_rig(tmp_path, "topic readwrite rotor/#\n") as (rig, probe):
         rig.add("tower", "rotorez", emu={"start_az_deg": 20})
         rig.app = App(rig.settings)
         rig.app.start()
@@ -56,10 +51,6 @@ def test_denied_publishes_are_reported_once_each_naming_the_topic(
         rig.probe.publish("rotor/target", "40")  # a round trip through the broker after it
         rig.probe.wait_value("rotor/state", "moving", 10)
         assert len(denials()) == len(set(denials()))  # once per topic
-    finally:
-        rig.close()
-        probe.close()
-        broker.stop()
 
 
 def test_a_denied_subscription_is_reported_naming_the_topic(
@@ -124,19 +115,32 @@ def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: P
         broker.stop()
 
 
-def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> None:
-    """lastword.py rule 5: mosquitto grants the subscription to B/bridge/fence and drops the
-    bridge's markers without a word; the rotor must not stay held for as long as the main
-    connection lasts: the hold ends (with clearing) after a few resends, and B/bridge/info
-    says why. The next target turns it."""
+@contextmanager
+def acl_rig(tmp_path: Path, acl_text: str) -> Iterator[tuple[Rig, Probe]]:
+    """A rig on a mosquitto of its own with ``acl_text`` as its ACL file."""
     acl = tmp_path / "acl"
-    acl.write_text("topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n")
+    acl.write_text(acl_text)
+    # started as root, mosquitto would become user "mosquitto", who cannot read pytest's tmp
     conf = f"allow_anonymous true\nacl_file {acl}\nuser root"
     broker = Mosquitto(tmp_path / "broker", extra_conf=conf)
     broker.start()
     probe = Probe(broker.port, "rotor/#")
     rig = Rig(tmp_path, broker, probe)
     try:
+        yield rig, probe
+    finally:
+        rig.close()
+        probe.close()
+        broker.stop()
+
+
+def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> None:
+    """lastword.py rule 5: mosquitto grants the subscription to B/bridge/fence and drops the
+    bridge's markers without a word; the rotor must not stay held for as long as the main
+    connection lasts: the hold ends (with clearing) after a few resends, and B/bridge/info
+    says why. The next target turns it."""
+    acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
+    with acl_rig(tmp_path, acl) as (rig, probe):
         emu = rig.add("tower", "rotorez", emu={"start_az_deg": 20, "speed_deg_s": 20.0})
         app = rig.start()
         rig.ready("tower")
@@ -152,7 +156,3 @@ def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> 
         assert not app.mqtt._word.holding
         probe.publish("rotor/target", "200")
         emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 200) <= 3, 30)
-    finally:
-        rig.close()
-        probe.close()
-        broker.stop()

@@ -1,0 +1,50 @@
+"""A thread that runs jobs in the order given, started by the first one and ended after a
+quiet spell: the sky worker's and the state file's writer (skywork.py, state_store.py).
+
+Rules:
+1. ``put`` never blocks and may be called from any thread; jobs run one at a time, in order.
+2. A job that raises is logged; the thread goes on with the next.
+3. The thread ends after ``idle_s`` without a job and starts again with the next ``put``: no
+   job is ever left in the queue with no thread to run it (the check and the end are one step
+   under the lock ``put`` takes).
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from collections.abc import Callable
+
+log = logging.getLogger(__name__)
+
+
+class OnDemandThread:
+    def __init__(self, name: str, idle_s: float = 30.0) -> None:
+        self._name = name
+        self._idle_s = idle_s
+        self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+
+    def put(self, job: Callable[[], None]) -> None:
+        self._jobs.put(job)
+        with self._lock:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
+                self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            try:
+                job = self._jobs.get(timeout=self._idle_s)
+            except queue.Empty:
+                with self._lock:  # rule 3
+                    if self._jobs.empty():
+                        self._thread = None
+                        return
+                continue
+            try:
+                job()
+            except Exception:  # rule 2
+                log.exception("%s: a job failed", self._name)
