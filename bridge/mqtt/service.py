@@ -23,10 +23,10 @@ Rules:
    always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
    neither queue 200,000 QoS 1 messages nor delay the state.
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
-   lastword.py decides what each copy does: the main connection's carry out every word in
-   order; the lane's stop or lock ON is carried out at once and holds the rotator's targets
-   until the bridge's marker comes back on the main connection. The decision and the mailbox
-   put it lets through are one step, under one lock.
+   lastword.py decides what each copy does (halts.py carries it out): the main connection's
+   carry out every word in order; the lane's stop or lock ON is carried out at once and holds
+   the rotator's targets until the bridge's marker comes back on the main connection. The
+   decision and the mailbox put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
 """
@@ -35,102 +35,18 @@ from __future__ import annotations
 
 import json
 import logging
-import threading
 import time
 from collections.abc import Callable
-from typing import Protocol
 
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Stop, Target
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Target
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.lastword import RESEND_S, LastWord
+from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
+from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
-from bridge.pointing import Pointing
-from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
-
-
-_MOVES = frozenset({"target", "target_elevation", "preset", "park", "nudge", "track"})
-
-
-def _switch_on(payload: bytes) -> bool:
-    try:
-        return pl.parse_switch(payload)
-    except pl.PayloadError:
-        return False
-
-
-def _switch_off(payload: bytes) -> bool:
-    try:
-        return not pl.parse_switch(payload)
-    except pl.PayloadError:
-        return False
-
-
-class RotatorPort(Protocol):
-    id: str
-    spec: ModelSpec
-    pointing: Pointing
-    can_track: bool  # a station and a controller that reports where it points
-
-    @property
-    def status(self) -> RotatorStatus: ...
-    def submit(
-        self,
-        command: Target | Stop | SetOption,
-        described: str | None = None,
-        *,
-        hold: int | None = None,
-    ) -> None: ...
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None: ...
-    def save_lock(self) -> None: ...
-    def release(self, marker: int, *, clear: bool = False) -> None: ...
-    def report_refusal(self, message: str, command: str | None) -> None: ...
-    def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
-    def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
-    def track(
-        self,
-        name: str,
-        source: Source,
-        described: str,
-        tle: tuple[str, str, str] | None = None,
-    ) -> None: ...
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-    ) -> None: ...
-
-
-class Publisher(Protocol):
-    """The broker connection as the service uses it (bridge.mqtt.client.MqttClient).
-
-    ``publish_retained`` with ``only_if_changed`` sends nothing when the payload equals the last
-    one for that topic (rule 3). ``publish_offline_now`` marks retained topics ``offline`` and
-    waits until the broker has them (shutdown). ``publish_marker`` sends a message to the
-    bridge itself, at QoS 0, now or never (lastword.py); ``up``: a connection is accepted.
-    """
-
-    def publish_retained(
-        self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
-    ) -> None: ...
-    def publish_event(self, topic: str, payload: str | bytes) -> None: ...
-    def publish_marker(self, topic: str, payload: str) -> None: ...
-    def publish_offline_now(self, topics: list[str]) -> None: ...
-
-    @property
-    def up(self) -> bool: ...
-    def start(self) -> None: ...
-    def stop(self) -> None: ...
 
 
 class MqttService:
@@ -149,8 +65,6 @@ class MqttService:
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
         self.topics = topics
         self._publisher = publisher
-        self._retain_is_live = retain_is_live
-        self._on_problem = on_problem  # (topic, problem): a broker problem the bridge reports
         self._wall = wall
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
         self._rotators: dict[str, RotatorPort] = {}
@@ -158,10 +72,15 @@ class MqttService:
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
         self._clock = clock
-        self._word = LastWord()  # rule 5
-        self._word_lock = threading.Lock()  # two connections, two paho threads
-        self._resend_timer: threading.Timer | None = None
-        self._markers_denied = False
+        self._halts = Halts(  # rule 5
+            topics,
+            publisher,
+            self._rotators,
+            clock,
+            retain_is_live=retain_is_live,
+            on_problem=on_problem,
+        )
+        self._word = self._halts.word
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
@@ -198,113 +117,19 @@ class MqttService:
         """Filters the broker is asked not to replay retained messages of (lastword.py rule 6)."""
         return self.topics.stop_lane()
 
-    # -- the last word (lastword.py), both connections ------------------------------------------
+    # -- the last word (halts.py), both connections --------------------------------------------
     def main_gone(self) -> None:
-        """The main connection dropped, or is new (before its first message): holds end with
-        clearing (lastword.py rule 5)."""
-        with self._word_lock:
-            for rid in self._word.main_gone():
-                rot = self._rotators.get(rid)
-                if rot is not None:
-                    rot.release(0, clear=True)
+        """The main connection dropped, or is new (before its first message)."""
+        self._halts.main_gone()
 
     def lane_connected(self) -> None:
-        with self._word_lock:
-            self._word.lane_connected()
+        self._halts.lane_connected()
 
     def markers_denied(self) -> None:
-        """The main connection cannot read the markers: the lane's halts hold nothing
-        (lastword.py rule 7)."""
-        with self._word_lock:
-            self._markers_denied = True
-        self.main_gone()
+        self._halts.markers_denied()
 
     def lane_markers_denied(self) -> None:
-        """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
-        with self._word_lock:
-            self._word.echoes = False
-
-    def _holds_possible(self) -> bool:
-        return self._publisher.up and not self._markers_denied
-
-    def _carry(self, rot: RotatorPort, kind: str, what: str, hold: int | None = None) -> None:
-        """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
-        and the put are one step)."""
-        if kind == "stop":
-            rot.submit(Stop(Source.MQTT), what, hold=hold)
-        else:
-            rot.set_lock(True, hold=hold, save=False)
-
-    def _send_marker(self, n: int) -> None:
-        self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
-        self._arm_resend()
-
-    def _arm_resend(self) -> None:
-        """One timer at most looks again in RESEND_S while a hold is out."""
-        with self._word_lock:
-            if self._resend_timer is not None or not self._word.holding:
-                return
-            timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
-        timer.daemon = True
-        timer.start()
-
-    def _resend_marker(self) -> None:
-        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
-        with self._word_lock:
-            self._resend_timer = None
-        self._resend_marker_if_due()
-        self._arm_resend()
-
-    def _resend_marker_if_due(self) -> None:
-        with self._word_lock:
-            n = self._word.resend_due(self._clock())
-        if n is None:
-            return
-        if n < 0:  # lastword.py rule 5: the broker drops them
-            problem = (
-                f"the bridge's own markers on {self.topics.bridge_fence} do not come back "
-                "(does the broker's ACL deny that topic?): a stop from the stop lane can no "
-                "longer hold back a target published before it"
-            )
-            log.error("%s", problem)
-            self.markers_denied()
-            if self._on_problem is not None:
-                self._on_problem(self.topics.bridge_fence, problem)
-            return
-        log.info("a marker of the stop lane did not come back; sending another")
-        self._publisher.publish_marker(self.topics.bridge_fence, self._word.marker(n))
-
-    def _marker_back(self, payload: bytes) -> None:
-        with self._word_lock:
-            n, released = self._word.marker_back(payload)
-            for rid in released:
-                rot = self._rotators.get(rid)
-                if rot is not None:
-                    rot.release(n)
-
-    def on_lane_marker(self, payload: bytes) -> None:
-        """The lane read its marker (lastword.py rule 4)."""
-        with self._word_lock:
-            self._word.lane_marker_back(payload)
-
-    def _replayed_halt(self, rot: RotatorPort, topic: str, kind: str, payload: bytes) -> None:
-        """lastword.py rule 6 under MQTT 3.1.1: a replayed retained stop or lock ON, once."""
-        what = pl.describe(kind, payload)
-        with self._word_lock:
-            if not self._word.retained_halt(topic, payload, replayed=True):
-                log.debug("%s: retained %s on %s already carried out once", rot.id, kind, topic)
-                return
-            self._carry(rot, kind, what)
-        if kind == "lock":
-            rot.save_lock()
-        self._report_retained_halt(rot, topic, kind, what)
-
-    def _report_retained_halt(self, rot: RotatorPort, topic: str, kind: str, what: str) -> None:
-        rot.report_refusal(
-            f"{kind} on {topic} was published retained: executed (stopping is always safe), "
-            "but clear it with an empty retained message",
-            what,
-        )
+        self._halts.lane_markers_denied()
 
     def start(self) -> None:
         self._publisher.start()
@@ -361,65 +186,32 @@ class MqttService:
 
     # -- inbound (paho's threads) -----------------------------------------------------------
     def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6)."""
-        if topic == self.topics.bridge_fence_lane:
-            self.on_lane_marker(payload)
-            return
-        route = self.topics.route(topic)
-        if route is None or (retain and not payload):
-            return
-        rotator_id, kind, _arg = route
-        rot = self._rotators.get(rotator_id)
-        if rot is None or kind not in ("stop", "lock"):
-            return
-        if kind == "lock" and not _switch_on(payload):
-            if retain or not _switch_off(payload):
-                return  # the main connection refuses or reports it
-            with self._word_lock:  # lastword.py rule 3: the only word while it is down
-                if self._publisher.up:
-                    return
-                rot.set_lock(False, save=False)
-            rot.save_lock()
-            return
-        if retain and not self._retain_is_live:
-            self._replayed_halt(rot, topic, kind, payload)
-            return
-        what = pl.describe(kind, payload)
-        with self._word_lock:
-            marker = self._word.lane_halt(rotator_id, kind, self._clock(), self._holds_possible())
-            if marker is None:
-                log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
-                return  # lastword.py rule 4: the echo of the main connection's copy
-            self._carry(rot, kind, what, hold=marker or None)
-        if kind == "lock":
-            rot.save_lock()
-        if marker:
-            self._send_marker(marker)
+        """The stop lane's messages (rule 5: halts.py)."""
+        self._halts.on_lane(topic, payload, retain)
 
     def on_message(self, topic: str, payload: bytes, retain: bool, *, gated: bool = False) -> None:
         """The main connection's messages, in the order the broker sent them (rule 5)."""
         route = self.topics.route(topic)
         if route is None:
             if topic == self.topics.bridge_fence:
-                self._marker_back(payload)
+                self._halts.marker_back(payload)
                 return
             for handler in self._handlers:
                 if handler(topic, payload, retain):
                     return
             return
-        self._resend_marker_if_due()
+        self._halts.resend_if_due()
         rotator_id, kind, arg = route
         rot = self._rotators.get(rotator_id)
         if rot is None:
             return
         if retain and not payload:
-            with self._word_lock:
-                self._word.retained_halt(topic, payload, replayed=True)  # deleted: forgotten
+            self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
-        halt = kind == "stop" or (kind == "lock" and _switch_on(payload))
-        if retain and halt and not self._retain_is_live:
-            self._replayed_halt(rot, topic, kind, payload)
+        halt = kind == "stop" or (kind == "lock" and switch_on(payload))
+        if retain and halt and not self._halts.retain_is_live:
+            self._halts.replayed_halt(rot, topic, kind, payload)
             return
         if retain and not halt:
             rot.report_refusal(
@@ -436,16 +228,7 @@ class MqttService:
             )
             return
         if halt:
-            with self._word_lock:  # lastword.py rule 1: carried out in order, noted for rule 4
-                lane_marker = self._word.main_halt(rotator_id, kind)
-                self._carry(rot, kind, what)
-            if kind == "lock":
-                rot.save_lock()
-            if lane_marker is not None:
-                marker = self._word.marker(lane_marker)
-                self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
-            if retain:  # published retained, live (MQTT 5): carried out, and reported
-                self._report_retained_halt(rot, topic, kind, what)
+            self._halts.main_halt(rot, topic, kind, what, retain)
             return
         if kind == "lock":
             try:
@@ -453,12 +236,7 @@ class MqttService:
             except pl.PayloadError as exc:
                 rot.report_refusal(str(exc), what)
                 return
-            with self._word_lock:
-                if not self._word.main_lock_off(rotator_id):  # lastword.py rule 8
-                    log.info("%s: lock OFF published before a lock ON: the ON stands", rotator_id)
-                    return
-                rot.set_lock(False, save=False)
-            rot.save_lock()
+            self._halts.main_lock_off(rot)
             return
         try:
             if kind == "target":
