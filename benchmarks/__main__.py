@@ -31,6 +31,7 @@ from typing import Any
 
 from benchmarks import (
     burst,
+    exchange_cpu,
     footprint,
     freshness,
     latency,
@@ -52,6 +53,7 @@ ITEMS = {
     "startup": startup.run,
     "target_flood": target_flood.run,
     "sky_stops": sky_stops.run,
+    "exchange_cpu": exchange_cpu.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 
