@@ -29,8 +29,9 @@ MODEL = "rotorez"
 COUNT = 16
 POLL = b"AI1;"
 TARGET_MS = 0.2
-#: slow enough that every rotor is still turning at the end of the last window (6 deg/s default)
-SPEED_DEG_S = 2.0
+#: every rotor still turns at the end of the last window (0 -> 350 deg: 87 s; 6 deg/s default),
+#: and fast enough that every poll sees it move (at 2 deg/s some polls saw no change)
+SPEED_DEG_S = 4.0
 
 
 class WriteCounter:
@@ -70,7 +71,7 @@ def measure(scope: Scope, windows: int, window_s: float) -> dict[str, Any]:
         rig.mqtt.wait_all(topics, "idle", 60)  # past the brake window assumed at start-up
         counters = [WriteCounter(line.emu) for line in rig.lines.values()]
         for line in rig.lines.values():
-            line.emu.manual_rotate(359.0)
+            line.emu.manual_rotate(350.0)
         rig.mqtt.wait_all(topics, "moving", 30)
         time.sleep(1.0)  # polling at the moving rate
         pid = rig.bridge.pid
