@@ -26,6 +26,10 @@ Rules:
 5. The session's questions about the sky (``Ask``) go to the sky worker (skywork.py); each
    answer is queued here by that thread, which then wakes the lines thread through the mailbox
    pipe, and is handed to the session on the lines thread after the mailbox's commands.
+6. What a worker with an open port waits for (``wants``) changes only when it is served: the
+   session is touched by nothing else, and what other threads bring (commands, sky answers)
+   comes through the mailbox, whose descriptor is always watched. So it is worked out once
+   after each step and kept until the next; a port being opened is asked about every time.
 """
 
 from __future__ import annotations
@@ -61,6 +65,7 @@ from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
 __all__ = ["Worker", "WorkerConfig"]
 
 log = logging.getLogger(__name__)
+_NOTHING: frozenset[int] = frozenset()
 
 
 class Worker:
@@ -95,6 +100,8 @@ class Worker:
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
         self._held = False
+        self._wanted: tuple[list[int], float] | None = None  # rule 6
+        self._urgent = frozenset({self._box})
         self._failures: set[type[BaseException]] = set()
 
     # -- called by the lines thread only -------------------------------------------------------
@@ -130,25 +137,32 @@ class Worker:
     def has_commands(self, ready: set[int]) -> bool:
         return self._box in ready
 
-    def urgent(self) -> set[int]:
+    def urgent(self) -> frozenset[int]:
         """The mailbox's descriptor when a stop or lock ON waits in it (lines.py rule 5), else
         nothing: read without the mailbox's lock, a hint for the order of a round."""
-        return {self._box} if self._mailbox.urgent else set()
+        return self._urgent if self._mailbox.urgent else _NOTHING
 
     def wants(self, now: float) -> tuple[list[int], float]:
-        """The descriptors to wait on and the time to be woken at the latest."""
+        """The descriptors to wait on and the time to be woken at the latest (rule 6)."""
+        if self._wanted is not None:
+            return self._wanted
         if self._port is None:
-            return [self._box], math.inf if self._opening else self._reopen_at
+            if self._opening is None:
+                return [self._box], self._reopen_at
+            return [self._box], math.inf if self._opening.result is None else now  # it is there
         session = self.session
         until, hold = session.next_wakeup(), session.hold_reads_until()
         self._held = now < hold
         if self._held:  # rule 2
-            return [self._box], min(until, hold)
-        return [self._box, self._fd], until
+            self._wanted = [self._box], min(until, hold)
+        else:
+            self._wanted = [self._box, self._fd], until
+        return self._wanted
 
     def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
         """``step(now, *args)`` with a bug in it logged (once per kind), the port closed and
         reopened after the back-off: never raised into the lines thread (lines.py rule 2)."""
+        self._wanted = None  # rule 6: what it waits for is asked anew after every step
         try:
             step(now, *args)
         except Exception as exc:

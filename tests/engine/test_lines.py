@@ -274,3 +274,25 @@ def test_a_stop_that_comes_during_a_round_is_served_next() -> None:
             lines.remove(w)  # type: ignore[arg-type]
     k = flagged[0]  # first's turn; before rule 5 the round went on with second
     assert [w for w, _ in log[k : k + 2]] == [first, stopped]
+
+
+def test_a_round_serves_only_the_lines_with_something_to_do() -> None:
+    """Rule 6: a line that waits for nothing ready and whose time has not come is not called."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+
+    class Waiting(Timed):
+        def wants(self, now: float) -> tuple[list[int], float]:
+            return [], now + 3600.0  # nothing to do for an hour
+
+    busy, waiting = Timed(clock, 0.0, done, log), Waiting(clock, 0.0, threading.Event(), log)
+    lines.add(waiting)  # type: ignore[arg-type]
+    lines.add(busy)  # type: ignore[arg-type]
+    try:
+        assert done.wait(5)
+    finally:
+        lines.remove(busy)  # type: ignore[arg-type]
+        lines.remove(waiting)  # type: ignore[arg-type]
+    assert len(busy.given) >= 3 and waiting.given == []
