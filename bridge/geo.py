@@ -42,7 +42,6 @@ _LEVELS = (
 )
 _CELLS_PER_DEG_LON = 120
 _CELLS_PER_DEG_LAT = 240
-_CELLS = 43200  # finest cells around the world, and from pole to pole
 _ORDINALS = ("first", "second", "third", "fourth", "fifth", "sixth", "seventh", "eighth")
 _LOCATOR = re.compile(r"[A-R]{2}([0-9]{2}([A-X]{2}([0-9]{2})?)?)?", re.ASCII | re.IGNORECASE)
 # sine of the angle between the points below which no direction exists (about 6 micrometres)
@@ -90,22 +89,6 @@ def parse_locator(text: str) -> tuple[float, float]:
             y += alphabet.index(char.upper()) * size
     half = _LEVELS[len(code) // 2 - 1][2] / 2
     return -90.0 + (y + half) / _CELLS_PER_DEG_LAT, -180.0 + (x + half) / _CELLS_PER_DEG_LON
-
-
-def to_locator(lat: float, lon: float, chars: int = 6) -> str:
-    """The locator (upper case) of the area holding (lat, lon); 180 E counts as 180 W, and the
-    North Pole belongs to the northernmost row."""
-    _check(lat, "latitude", 90.0)
-    _check(lon, "longitude", 180.0)
-    if chars not in LOCATOR_LENGTHS:
-        raise ValueError(f"a locator has 2, 4, 6 or 8 characters, not {chars}")
-    x = math.floor((lon + 180.0) * _CELLS_PER_DEG_LON) % _CELLS
-    y = min(math.floor((lat + 90.0) * _CELLS_PER_DEG_LAT), _CELLS - 1)
-    out: list[str] = []
-    for alphabet, _, size in _LEVELS[: chars // 2]:
-        out.append(alphabet[x // size % len(alphabet)])
-        out.append(alphabet[y // size % len(alphabet)])
-    return "".join(out)
 
 
 def great_circle(lat1: float, lon1: float, lat2: float, lon2: float) -> Path:

@@ -15,7 +15,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.geo import LocatorError, Path, great_circle, is_locator, parse_locator, to_locator
+from bridge.geo import LocatorError, Path, great_circle, is_locator, parse_locator
+from tests.support.locator import to_locator
 
 CIRCUMFERENCE_KM = 2 * math.pi * 6371.0
 US_SURVEY_MILE_KM = 6336 / 3937  # US survey foot = 1200/3937 m; a mile is 5280 feet

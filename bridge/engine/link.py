@@ -93,17 +93,8 @@ class Link:
         return self._reply_deadline is not None
 
     @property
-    def reply_deadline(self) -> float | None:
-        return self._reply_deadline
-
-    @property
     def stop_due(self) -> bool:
         return self._stop_due
-
-    @property
-    def frames_waiting(self) -> int:
-        """Frames written later, after the model's inter-frame gap."""
-        return len(self._outbox)
 
     def hold_reads_until(self) -> float:
         """Rule 7: bytes arriving before this time can wait in the port."""

@@ -125,17 +125,6 @@ class SatelCodec:
             raise ValueError(f"target {az_deg}/{el_deg} outside 0..360 / 0..90")
         return float(az), float(el)
 
-    def encode_reset(self) -> bytes:
-        return b"*"
-
-    def encode_clear_memory(self) -> bytes:
-        return b"x"
-
-    def encode_store_point(self, when_unix: float, az_deg: float, el_deg: float) -> bytes:
-        stamp = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(when_unix)).encode()
-        az, el = self.wire_target(az_deg, el_deg)
-        return b"2" + stamp + b" %d %d\r\n" % (az, el or 0)
-
     # -- what is owed -------------------------------------------------------------------------
     def awaiting_reply(self) -> bool:
         return bool(self._owed)

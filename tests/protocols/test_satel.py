@@ -145,13 +145,7 @@ def test_000_and_360_are_one_place_and_nothing_else_wraps(
 
 def test_other_frames() -> None:
     c = SatelCodec()
-    assert (c.encode_stop(), c.encode_enable(), c.encode_reset(), c.encode_clear_memory()) == (
-        b"s",
-        b"g",
-        b"*",
-        b"x",
-    )
-    assert c.encode_store_point(0.0, 40, 60) == b"21970/01/01 00:00:00 40 60\r\n"
+    assert (c.encode_stop(), c.encode_enable()) == (b"s", b"g")
 
 
 @given(st.binary(max_size=300))
