@@ -28,6 +28,10 @@ Rules:
 6. A round serves only the workers with something to do: a descriptor of theirs is ready, the
    time they asked to be woken at has come, or a stop waits (rule 5). The others are not
    called: with 16 rotators polled on one grid, most rounds concern a few of them.
+7. Times that come within GATHER_S after the first one are met with it, at most GATHER_S
+   late: the replies of one poll round come whole over a few milliseconds (each controller
+   and adapter takes its own time), and are read in one wake-up, not one each. A descriptor
+   that becomes ready (a stop in a mailbox) still ends the wait at once.
 """
 
 from __future__ import annotations
@@ -47,6 +51,7 @@ __all__ = ["Lines"]
 
 log = logging.getLogger(__name__)
 _NOTHING: AbstractSet[int] = frozenset()
+GATHER_S = 0.002  # rule 7
 _READY = select.POLLIN | select.POLLPRI | select.POLLERR | select.POLLHUP | select.POLLNVAL
 
 
@@ -144,6 +149,8 @@ class Lines:
                 poller.register(fd, _READY)
             deadline = min(deadline, until)
             wanted.append((worker, fds, until))
+        if deadline != math.inf:  # rule 7: the times that come soon after it come with it
+            deadline = max(u for _, _, u in wanted if u <= deadline + GATHER_S)
         wait_ms = None if deadline == math.inf else max(0, math.ceil((deadline - now) * 1000))
         ready = {fd for fd, _ in poller.poll(wait_ms)}
         if self._wake_r in ready:

@@ -296,3 +296,35 @@ def test_a_round_serves_only_the_lines_with_something_to_do() -> None:
         lines.remove(busy)  # type: ignore[arg-type]
         lines.remove(waiting)  # type: ignore[arg-type]
     assert len(busy.given) >= 3 and waiting.given == []
+
+
+def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
+    """Rule 7: of two lines due 1 ms apart, the first is served with the second, not at
+    its own time (rule 3: neither is served early)."""
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+
+    class At(Timed):
+        def __init__(self, due_s: float) -> None:
+            super().__init__([0.0], 0.0, done, log)
+            self.due_s = due_s
+
+        def wants(self, now: float) -> tuple[list[int], float]:
+            return [], self.due_s if not self.given else now + 3600.0
+
+        def serve(self, now: float, ready: set[int]) -> None:
+            self.given.append(now)
+            if first.given and second.given:
+                done.set()
+
+    start_s = time.monotonic()
+    first, second = At(start_s + 0.05), At(start_s + 0.051)
+    lines = Lines(time.monotonic)
+    for w in (first, second):
+        lines.add(w)  # type: ignore[arg-type]
+    try:
+        assert done.wait(5)
+    finally:
+        for w in (first, second):
+            lines.remove(w)  # type: ignore[arg-type]
+    assert first.given[0] >= second.due_s and second.given[0] >= second.due_s
