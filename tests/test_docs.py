@@ -5,6 +5,7 @@ README stays short enough to read."""
 from __future__ import annotations
 
 import inspect
+import os
 import re
 from pathlib import Path
 
@@ -77,6 +78,18 @@ def test_the_readme_stays_short() -> None:
     assert size <= README_MAX_BYTES, (
         f"README.md is {size} bytes, over {README_MAX_BYTES}: move the detail into docs/"
     )
+
+
+def test_the_readme_starts_with_the_two_commands_and_both_run() -> None:
+    """The demo and the test suite, as a newcomer types them from the top of a clone."""
+    text = README.read_text()
+    start = text.index("## Try it")
+    (block,) = re.findall(r"```sh\n(.*?)```", text[start : text.index("\n## ", start + 1)], re.S)
+    commands = [line.split("#")[0].strip() for line in block.splitlines()]
+    assert commands == ["./demo", "./tests/run"]
+    for command in commands:
+        path = ROOT / command
+        assert path.is_file() and os.access(path, os.X_OK), command
 
 
 @pytest.mark.parametrize("doc", DOCS, ids=lambda d: d.relative_to(ROOT).as_posix())
