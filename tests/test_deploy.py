@@ -1046,7 +1046,8 @@ def test_docs_name_only_files_a_clone_has() -> None:
         assert "../" not in text and "shared/" not in text, doc
         targets = re.findall(r"\]\(([^)\s]+)\)", text)
         paths = re.findall(r"`((?:deploy|config|docs|tests|bridge|benchmarks)/[^`\s]*)`", text)
-        for target in [t for t in targets if not re.match(r"[a-z]+:|#", t)] + paths:
+        files = [t.partition("#")[0] for t in targets if not re.match(r"[a-z]+:|#", t)]
+        for target in files + paths:  # anchors: tests/test_docs.py
             path = (doc.parent / target).resolve()
             if not path.exists():
                 path = (ROOT / target).resolve()
