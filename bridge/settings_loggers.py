@@ -10,14 +10,49 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 class LoggerFields(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    # PstRotator's UDP interface: commands on this port, replies to the sender at port + 1
-    pst_udp_port: int | None = Field(None, ge=1, le=65534)
-    pst_udp_bind: str = "127.0.0.1"
-    # N1MM Logger+: the "Rotor Description" N1MM gives this rotator's antenna
-    n1mm_rotor_name: str | None = Field(None, min_length=1, max_length=64)
-    n1mm_udp_port: int = Field(12040, ge=1, le=65535)
-    n1mm_udp_bind: str = "127.0.0.1"
-    n1mm_report_to: str = "127.0.0.1:13010"  # where position reports go ("host:port")
+    pst_udp_port: int | None = Field(
+        None,
+        ge=1,
+        le=65534,
+        description="PstRotator's UDP interface for this rotator (Log4OM, DXLog, QLog, Hamlib "
+        "4.6): commands on this port, replies to the sender's address at port + 1",
+        examples=[12000],
+        json_schema_extra={"unset": "off"},
+    )
+    pst_udp_bind: str = Field(
+        "127.0.0.1",
+        description="the address pst_udp_port listens on; the protocol has no authentication "
+        "(check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    n1mm_rotor_name: str | None = Field(
+        None,
+        min_length=1,
+        max_length=64,
+        description="N1MM Logger+'s Rotor Description of this rotator's antenna: turns N1MM's "
+        "rotor commands on for it",
+        examples=["Tower"],
+        json_schema_extra={"unset": "off"},
+    )
+    n1mm_udp_port: int = Field(
+        12040,
+        ge=1,
+        le=65535,
+        description="the UDP port N1MM sends rotor commands to; rotators share it by name",
+        examples=[12041],
+    )
+    n1mm_udp_bind: str = Field(
+        "127.0.0.1",
+        description="the address n1mm_udp_port listens on (and position reports leave from); "
+        "no authentication (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    n1mm_report_to: str = Field(
+        "127.0.0.1:13010",
+        description="where position reports for N1MM go, host:port; another machine needs an "
+        "n1mm_udp_bind that can reach it",
+        examples=["192.168.1.20:13010"],
+    )
 
     @field_validator("n1mm_rotor_name")
     @classmethod
