@@ -124,11 +124,20 @@ def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Pa
     text = MINIMAL.replace(
         'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword = "topsecret"'
     )
-    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    path = write(tmp_path, text)
+    out = run_cli("check-config", "--full", "-c", str(path))
     assert out.returncode == 0, out.stderr
-    doc = json.loads(out.stdout)
+    doc = full_values(out.stdout)
     assert doc["mqtt"]["password"] == "********" and "topsecret" not in out.stdout + out.stderr
     assert doc["rotators"][0]["baud"] == 4800 and doc["rotators"][0]["topic"] == "rotor"
+    assert out.stdout.splitlines()[-1] == f"config OK: {path}"
+
+
+def full_values(stdout: str) -> dict:
+    """The JSON document ``check-config --full`` prints between the summary and the last line."""
+    lines = stdout.splitlines()
+    start, end = lines.index("{"), len(lines) - lines[::-1].index("}")
+    return json.loads("\n".join(lines[start:end]))
 
 
 def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
@@ -256,12 +265,12 @@ def test_check_config_shows_what_the_pointing_settings_mean(tmp_path: Path) -> N
 
 
 def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
-    """``rotor-bridge check-config`` as a process: (the printed settings, the warnings)."""
-    out = run_cli("check-config", "-c", str(path), env=env)
+    """``rotor-bridge check-config --full`` as a process: (the printed settings, the warnings)."""
+    out = run_cli("check-config", "--full", "-c", str(path), env=env)
     assert out.returncode == 0, out.stderr  # warnings never fail it
-    lines = out.stderr.splitlines()
-    assert all(line.startswith("rotor-bridge: warning: ") for line in lines), lines
-    return json.loads(out.stdout), [line.removeprefix("rotor-bridge: warning: ") for line in lines]
+    assert out.stderr == "" and out.stdout.splitlines()[-1] == f"config OK: {path}"
+    warned = [line for line in out.stdout.splitlines() if line.startswith("warning: ")]
+    return full_values(out.stdout), [line.removeprefix("warning: ") for line in warned]
 
 
 def test_check_config_warns_about_what_is_legal_but_probably_wrong(tmp_path: Path) -> None:
