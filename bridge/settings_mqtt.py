@@ -51,7 +51,7 @@ class TlsSettings(_Strict):
     broker asks for one. Every file is checked while the configuration loads."""
 
     enabled: bool = Field(
-        False, description="connect with TLS (the broker's TLS port, usually 8883)"
+        False, description="connect with TLS (the broker's TLS port, usually 8883)", examples=[True]
     )
     ca_file: Path | None = Field(
         None,
@@ -77,6 +77,7 @@ class TlsSettings(_Strict):
         False,
         description="skip the check that the broker's certificate names its host (self-signed "
         "lab brokers only)",
+        examples=[True],
     )
 
     @model_validator(mode="after")
@@ -215,15 +216,15 @@ class HomeAssistantSettings(_Strict):
     status_topic: str = Field(
         "homeassistant/status",
         description="where Home Assistant announces its start (its birth message); the bridge "
-        "then sends discovery and state again",
+        "then publishes its state again",
         examples=["ha/status"],
     )
     birth_delay_s: float = Field(
         10.0,
         ge=0,
         le=300,
-        description="wait this long after Home Assistant's birth message before re-publishing "
-        "(it subscribes a moment after announcing itself)",
+        description="wait this long after Home Assistant's birth message before publishing the "
+        "state again (state that arrives before Home Assistant has read discovery is ignored)",
         examples=[5],
     )
 
