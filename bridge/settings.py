@@ -236,7 +236,7 @@ def settings_from(
     try:
         settings = Settings(**data)
     except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, data)) from None
+        raise ConfigError(format_validation_error(exc, data, env)) from None
     mqtt = data.get("mqtt")
     settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
     return settings
@@ -256,8 +256,11 @@ def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
             raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
 
 
-def format_validation_error(exc: ValidationError, data: dict[str, Any] | None = None) -> str:
-    """One line per problem, each naming the key as the file spells it (rule 2)."""
+def format_validation_error(
+    exc: ValidationError, data: dict[str, Any] | None = None, environ: Any = None
+) -> str:
+    """One line per problem, each naming the key as the file spells it (rule 2), and the
+    environment variable where one set the value."""
     lines = []
     suggested: set[str] = set()
     for err in exc.errors():
@@ -276,10 +279,27 @@ def format_validation_error(exc: ValidationError, data: dict[str, Any] | None = 
                 suggested.add(nearest)
             continue
         msg = err["msg"].removeprefix("Value error, ")
-        lines.append(f"{where}: {msg}")
+        if err["type"] == "missing":
+            msg = "missing: it has no default"
+            if where == "rotators":
+                msg += "; add a [[rotators]] table with id, model and port"
+        variable = _variable(err["loc"], data, environ or {})
+        lines.append(f"{where} (from {variable}): {msg}" if variable else f"{where}: {msg}")
     # a misspelt table also leaves the real one missing: the suggestion says it all
-    lines = [ln for ln in lines if not any(ln == f"{s}: Field required" for s in suggested)]
+    lines = [ln for ln in lines if not any(ln.startswith(f"{s}: missing") for s in suggested)]
     return "invalid configuration:\n  " + "\n  ".join(lines)
+
+
+def _variable(loc: tuple[int | str, ...], data: dict[str, Any] | None, env: Any) -> str | None:
+    """The environment variable that set the value at ``loc``, if one did."""
+    parts = [str(p) for p in loc]
+    if len(loc) >= 3 and loc[0] == "rotators" and isinstance(loc[1], int):
+        rotator = _value_at(data, loc[:2])
+        if not isinstance(rotator, dict) or "id" not in rotator:
+            return None
+        parts = ["rotators", str(rotator["id"]), *parts[2:]]
+    wanted = (ENV_PREFIX + "__".join(parts)).upper()
+    return next((k for k in env if k.upper() == wanted), None)
 
 
 def _unknown(names: list[str], where: str, value: object) -> tuple[str, str | None]:
