@@ -61,7 +61,8 @@ The smallest useful file: one rotator, and the broker (the default is this host)
 ```toml
 {MINIMAL}```
 
-Every key below can be set from the environment instead, which beats the file:
+A key with a plain value (text, a number, true or false) can be set from the environment
+instead, which beats the file:
 `ROTOR_BRIDGE_` and the key, tables joined with `__` (`ROTOR_BRIDGE_MQTT__HOST=broker.lan`);
 a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`).
 `config/example.toml` is a commented starting point with the keys most people change.
@@ -160,11 +161,14 @@ def _key(model: type[BaseModel], name: str, env: str) -> str:
     else:
         default = f"`{toml_value(field.default)}`"
     example = field.examples[0] if field.examples else field.default
-    return (
+    text = (
         f"- **`{name}`**: {_sentence(field.description)}  \n"
-        f"  Default: {default}. Example: `{name} = {toml_value(example)}`.  \n"
-        f"  Environment: `{env}`\n"
+        f"  Default: {default}. Example: `{name} = {toml_value(example)}`."
     )
+    plain = getattr(field.annotation, "__origin__", None) not in (list, dict)
+    if plain and env != f"{ENV_PREFIX}ROTATORS__<ID>__ID":  # a rotator is found by its id
+        text += f"  \n  Environment: `{env}`"
+    return text + "\n"
 
 
 def _model_table() -> str:

@@ -1,5 +1,13 @@
-"""The loggers' UDP endpoints in ``[[rotators]]`` (loggers/): off unless a port or a name is
-given, on loopback unless told otherwise (neither protocol has authentication)."""
+"""The loggers' UDP endpoints in ``[[rotators]]`` (loggers/): PstRotator's and N1MM's.
+
+Rules:
+1. Off unless a port (PstRotator) or a rotor name (N1MM) is given; on loopback unless told
+   otherwise: neither protocol has authentication (check-config warns off loopback).
+2. An endpoint that could never work is a configuration error naming the key: a PstRotator port
+   whose reply port (+ 1) does not exist, N1MM reports to another machine from a socket bound
+   to loopback.
+3. Every key carries its meaning (``description``) for docs/configuration.md.
+"""
 
 from __future__ import annotations
 
