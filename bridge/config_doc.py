@@ -88,7 +88,7 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         {n for n in PointingFields.model_fields if not n.startswith("track_")},
     ),
     (
-        "Tracking",
+        "Tracking (per rotator)",
         "Following the sun, the moon or a satellite (needs [station]).",
         {n for n in PointingFields.model_fields if n.startswith("track_")},
     ),

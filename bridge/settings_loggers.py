@@ -23,7 +23,8 @@ class LoggerFields(BaseModel):
         ge=1,
         le=65534,
         description="PstRotator's UDP interface for this rotator (Log4OM, DXLog, QLog, Hamlib "
-        "4.6): commands on this port, replies to the sender's address at port + 1",
+        "4.6): commands come to this port; replies go to the sender's host at this port + 1 "
+        "(12001 for 12000), whichever port the sender sent from",
         examples=[12000],
         json_schema_extra={"unset": "off"},
     )
