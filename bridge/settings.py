@@ -318,6 +318,13 @@ def _unknown(names: list[str], where: str, value: object) -> tuple[str, str | No
         if nearest is not None:
             full = f"{prefix}.{nearest}" if prefix else nearest
             line += f": did you mean {_table(full, _shape(model, nearest))}?"
+        elif model is not None:
+            tables = [
+                _table(f"{prefix}.{n}" if prefix else n, _shape(model, n))
+                for n, f in model.model_fields.items()
+                if _model_in(f.annotation) is not None
+            ]
+            line += f" (the tables here: {', '.join(tables)})" if tables else ""
         return line, nearest
     line = f"{where}: unknown key"
     if nearest is not None:

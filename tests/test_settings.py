@@ -473,6 +473,7 @@ def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) 
         (("brake_delay_s", "brake_delay"), "rotators[0].brake_delay: unknown key: did you mean "),
         (("host =", "hots ="), "mqtt.hots: unknown key: did you mean host?"),
         (("[mqtt]", "colour = 1\n[mqtt]"), "colour: unknown key (typo?)"),
+        (("[mqtt]", "[radio]"), "unknown table [radio] (the tables here: [mqtt], [homeass"),
     ],
 )
 def test_an_unknown_table_or_key_names_the_nearest_known_one(
