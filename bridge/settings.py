@@ -8,8 +8,9 @@ Rotators are a list in the file; their fields are overridden by id:
 Where the parts are: the broker's tables in settings_mqtt.py, a rotator's in
 settings_rotator.py (its pointing and loggers' keys in settings_pointing.py and
 settings_loggers.py), the engine values derived for keys left out in settings_defaults.py, the
-files settings name in settings_files.py; check-config's report is config_report.py and
-docs/configuration.md is written from these models by config_doc.py.
+files settings name in settings_files.py, the wording of errors in settings_errors.py.
+check-config's report is config_report.py; docs/configuration.md is written from these models
+by config_doc.py.
 
 Rules:
 1. Unknown keys and tables are errors (a typo must not silently do nothing), with the nearest
@@ -22,15 +23,13 @@ Rules:
 
 from __future__ import annotations
 
-import difflib
 import os
 import re
 import tomllib
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any
 
 from pydantic import (
-    BaseModel,
     Field,
     PrivateAttr,
     ValidationError,
@@ -39,6 +38,7 @@ from pydantic import (
 )
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
 
+from bridge import settings_errors
 from bridge.settings_defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings_pointing import StationSettings, TrackingSettings
@@ -260,122 +260,5 @@ def format_validation_error(
     exc: ValidationError, data: dict[str, Any] | None = None, environ: Any = None
 ) -> str:
     """One line per problem, each naming the key as the file spells it (rule 2), and the
-    environment variable where one set the value."""
-    lines = []
-    suggested: set[str] = set()
-    for err in exc.errors():
-        names = [str(p) for p in err["loc"] if not isinstance(p, int)]
-        loc: list[str] = []
-        for part in err["loc"]:
-            if isinstance(part, int):
-                loc[-1:] = [f"{loc[-1] if loc else ''}[{part}]"]
-            else:
-                loc.append(str(part))
-        where = ".".join(loc) or "configuration"
-        if err["type"] == "extra_forbidden":
-            line, nearest = _unknown(names, where, _value_at(data, err["loc"]))
-            lines.append(line)
-            if nearest is not None and len(names) == 1:
-                suggested.add(nearest)
-            continue
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "missing":
-            msg = "missing: it has no default"
-            if where == "rotators":
-                msg += "; add a [[rotators]] table with id, model and port"
-        variable = _variable(err["loc"], data, environ or {})
-        lines.append(f"{where} (from {variable}): {msg}" if variable else f"{where}: {msg}")
-    # a misspelt table also leaves the real one missing: the suggestion says it all
-    lines = [ln for ln in lines if not any(ln.startswith(f"{s}: missing") for s in suggested)]
-    return "invalid configuration:\n  " + "\n  ".join(lines)
-
-
-def _variable(loc: tuple[int | str, ...], data: dict[str, Any] | None, env: Any) -> str | None:
-    """The environment variable that set the value at ``loc``, if one did."""
-    parts = [str(p) for p in loc]
-    if len(loc) >= 3 and loc[0] == "rotators" and isinstance(loc[1], int):
-        rotator = _value_at(data, loc[:2])
-        if not isinstance(rotator, dict) or "id" not in rotator:
-            return None
-        parts = ["rotators", str(rotator["id"]), *parts[2:]]
-    wanted = (ENV_PREFIX + "__".join(parts)).upper()
-    return next((k for k in env if k.upper() == wanted), None)
-
-
-def _unknown(names: list[str], where: str, value: object) -> tuple[str, str | None]:
-    """The line for an unknown key or table, with the nearest known name in the same place."""
-    model = _model_at(names[:-1])
-    known = list(model.model_fields) if model is not None else []
-    close = difflib.get_close_matches(names[-1].lower(), known, n=1, cutoff=0.6)
-    nearest = close[0] if close else None
-    prefix = ".".join(names[:-1])
-    is_table = isinstance(value, dict) or (
-        isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
-    )
-    if is_table:
-        shown = _table(where, value)
-        line = f"unknown table {shown}"
-        if nearest is not None:
-            full = f"{prefix}.{nearest}" if prefix else nearest
-            line += f": did you mean {_table(full, _shape(model, nearest))}?"
-        elif model is not None:
-            tables = [
-                _table(f"{prefix}.{n}" if prefix else n, _shape(model, n))
-                for n, f in model.model_fields.items()
-                if _model_in(f.annotation) is not None
-            ]
-            line += f" (the tables here: {', '.join(tables)})" if tables else ""
-        return line, nearest
-    line = f"{where}: unknown key"
-    if nearest is not None:
-        line += f": did you mean {nearest}?"
-    elif known:
-        line += " (typo?)"
-    return line, nearest
-
-
-def _table(name: str, value: object) -> str:
-    return f"[[{name}]]" if isinstance(value, list) else f"[{name}]"
-
-
-def _shape(model: type[BaseModel] | None, name: str) -> object:
-    """A value shaped like the field ``name`` of ``model``: a list for an array of tables."""
-    field = model.model_fields.get(name) if model is not None else None
-    origin = getattr(field.annotation, "__origin__", None) if field is not None else None
-    return [] if origin is list else {}
-
-
-def _model_at(names: list[str]) -> type[BaseModel] | None:
-    """The settings model whose keys are those at ``names`` (None: not a table of ours)."""
-    model: type[BaseModel] = Settings
-    for name in names:
-        field = model.model_fields.get(name)
-        if field is None:
-            return None
-        inner = _model_in(field.annotation)
-        if inner is None:
-            return None
-        model = inner
-    return model
-
-
-def _model_in(annotation: object) -> type[BaseModel] | None:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in get_args(annotation):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
-
-
-def _value_at(data: dict[str, Any] | None, loc: tuple[int | str, ...]) -> object:
-    value: object = data
-    for part in loc:
-        if isinstance(value, dict) and part in value:
-            value = value[part]
-        elif isinstance(value, list) and isinstance(part, int) and part < len(value):
-            value = value[part]
-        else:
-            return None
-    return value
+    environment variable where one set the value (settings_errors.py)."""
+    return settings_errors.describe(exc, Settings, ENV_PREFIX, data, environ)
