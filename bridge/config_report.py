@@ -16,11 +16,11 @@ Rules:
 
 from __future__ import annotations
 
-import ipaddress
 import os
 from typing import Any
 
 from bridge.settings import RotatorSettings, Settings
+from bridge.settings_loggers import is_loopback
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
@@ -66,15 +66,6 @@ def masked(settings: Settings) -> dict[str, Any]:
     return out
 
 
-def _is_loopback(host: str) -> bool:
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False  # a host name (or "" = every address): reachable from elsewhere, say so
-
-
 def config_warnings(settings: Settings) -> list[str]:
     """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
     found = []
@@ -100,13 +91,13 @@ def config_warnings(settings: Settings) -> list[str]:
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
             ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
         ):
-            if on and not _is_loopback(bind):
+            if on and not is_loopback(bind):
                 found.append(
                     f"{where}.{key}: {bind or '(every address)'} is not a loopback address: "
                     "the loggers' UDP protocols have no authentication, anyone who can reach "
                     "it can turn the antenna"
                 )
-        if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
+        if r.rotctld_port is not None and not is_loopback(r.rotctld_bind):
             found.append(
                 f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
                 f"address: rotctld has no authentication, anyone who can reach port "

@@ -85,8 +85,8 @@ class LoggerFields(BaseModel):
         host = self.n1mm_report_address[0]
         if (
             self.n1mm_rotor_name is not None
-            and _loopback(self.n1mm_udp_bind)
-            and not _loopback(host)
+            and is_loopback(self.n1mm_udp_bind)
+            and not is_loopback(host)
         ):
             raise ValueError(
                 f"n1mm_report_to {self.n1mm_report_to!r} is another machine, but n1mm_udp_bind "
@@ -102,7 +102,9 @@ class LoggerFields(BaseModel):
         return host, int(port)
 
 
-def _loopback(host: str) -> bool:
+def is_loopback(host: str) -> bool:
+    """Only this machine can reach ``host`` ("" = every address, a name: another machine as far
+    as can be told here)."""
     if host.strip("[]").casefold() == "localhost":
         return True
     try:
