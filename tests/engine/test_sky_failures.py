@@ -154,10 +154,10 @@ def test_the_status_says_why_tracking_ended(
 def test_a_part_that_raises_is_reset_and_reported_and_stops_still_go_out(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    def broken(_session: object, _now: float) -> None:
+    def broken(_part: object, _scene: object) -> None:
         raise RuntimeError("a bug in auto-park")
 
-    monkeypatch.setattr(autopark, "step", broken)
+    monkeypatch.setattr(autopark.AutoPark, "step", broken)
     with VirtualRotator("md01", emulator={"az_speed_deg_s": 5.0}) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         internal = v.errors(ErrorKind.INTERNAL)
