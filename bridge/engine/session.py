@@ -8,42 +8,35 @@ Outputs: a list of actions (``Write`` bytes, ``Publish`` a status, ``Report`` an
 ``Ask`` the sky worker) and ``next_wakeup``, the time by which ``tick`` must be called if nothing
 else happens first.
 
-The session owns the link, the motion and the controller's state (answering, the hold); its
-parts own theirs and decide (docs/architecture.md, "parts decide and return"): tracking.py,
-autopark.py, slewing.py, stops.py, options.py, targets.py (the pending target) and status.py.
-They see a read-only view (parts.Scene, status.Seen) and return what they propose; the session
-applies it. None of them imports this module. ``_step`` runs them in one order, after every
-input: a reply overdue (slewing), a due stop, the motion machine's clock, an enable owed, the
-stop check, tracking, auto-park, the pending target, options, the poll, the status.
+The session owns the commands' state (the lock, the hold, the last error) and its parts, each
+with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
+through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
+tracking (tracking.py), auto-park (autopark.py), the pending target (targets.py, sending.py)
+and the status view (status.py). They see what they need (a read-only ``parts.Scene``,
+``status.Seen``, the time) and hand back what they propose (a ``parts.Proposal``, the
+controller's notes); the session applies it. None of them imports this module. ``_step`` runs
+them in one order after every input: the line's own work (an overdue reply, a due stop), the
+motion machine's clock, the stop check, tracking, auto-park, the pending target, options,
+the poll, the status.
 
 Rules:
-1. The link's state belongs to ``Link`` (line discipline) and the motion machine's to
-   ``motion``; this class decides and keeps the controller's state: answering or not, options
-   owed, motion to re-enable.
-2. A controller that reports positions is "available" only after a valid reading, and stops
-   being available after ``silence_timeout_s`` without one. A DCU-1 is available while its
-   port is open (it never answers).
-3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
-   controller that cannot report. A query is never sent while another is open.
-4. Targets go to the controller only when ``motion.plan_target`` says so (targets.py keeps the
-   pending one and the stream rules); a target waiting for a brake delay is replaced by newer
-   ones and dropped by a stop, the lock, or the link going down.
+1. The controller's state (answering, options owed, motion to re-enable) is controller.py's.
+2. Available or not: controller.py rule 2.
+3. Polling: controller.py rule 3.
+4. Targets go to the controller only when sending.py says so (targets.py keeps the pending
+   one and the stream rules); a target waiting for a brake delay is replaced by newer ones
+   and dropped by a stop, the lock, or the link going down.
 5. Stops: written at once, merged, checked and sent again as stops.py rules 1-2 say.
 6. Options: options.py.
-7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
-   younger than one moving poll interval has shown the rotor idle: a front-panel move that began
-   after the last poll must not be cut short.
-8. A controller that is silent while it moves (SatEL) is sent nothing but a stop until its
-   after-move report (slewing.py has the rules for a report that does not come); meanwhile the
-   motion machine is not fed stale data, and a new target stops the slew and is sent once the
-   rotor is still (stop and redirect). A report that says automatic motion is off gets it
-   switched on again.
-9. Bytes that complete no reply change nothing: the codec keeps them, and the rest of the rules
-   run only when a reply (or junk) came, a command came, or ``next_wakeup`` passed.
+7. A controller that stops on re-target (Rotor-EZ): sending.py rule 4.
+8. A controller silent while it moves (SatEL) is sent nothing but a stop until its after-move
+   report (controller.py rule 4, slewing.py); a new target stops the slew and is sent once the
+   rotor is still (stop and redirect).
+9. Bytes that complete no reply change nothing: the rest of the rules run only when a reply
+   (or junk) came, a command came, or ``next_wakeup`` passed.
 10. Tracking (tracking.py) proposes its own targets, judged like any; a stop, the lock, a track
-   command or any other target ends it. Its targets skip the "already within tolerance"
-   check a target gets before it is sent: a track's steps may be finer than the tolerance.
-   What it needs of the sky goes out as ``Ask`` actions and comes back through ``sky_answer``.
+   command or any other target ends it. What it needs of the sky goes out as ``Ask`` actions
+   and comes back through ``sky_answer``.
 11. A stop is never lost (stops.py rule 3): one owed is the first frame once the port is open.
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
    that was taken: a command after it that is carried out clears it.
@@ -63,24 +56,20 @@ import logging
 from collections.abc import Callable
 from typing import TypeVar
 
-from bridge.engine import motion as mo
-from bridge.engine import slewing
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
+from bridge.engine.controller import Controller, Drop, Ends, Retry
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
-from bridge.engine.options import Options
 from bridge.engine.parts import Proposal, Scene
 from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import Answer
-from bridge.engine.slew import Slew
-from bridge.engine.stops import Stops
+from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Targets, resolve
 from bridge.engine.tracking import Track, Tracker
-from bridge.model import ErrorKind, MotionState, RotatorStatus, Source, Target, describe_command
-from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
+from bridge.model import ErrorKind, RotatorStatus, Source, Target, describe_command
 from bridge.sky import Body
 
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
@@ -97,22 +86,14 @@ class RotatorSession:
     ) -> None:
         self.cfg = cfg
         self.locked = locked
-        self.motion = mo.Motion()
-        self.link: Link | None = None
-        self.targets = Targets(cfg)
-        self.autopark = AutoPark(cfg)
-        self.tracker = Tracker(cfg)
-        self.stops = Stops()
-        self.options = Options(options)
-        self.answering = False
-        self.hold: int | None = None  # rule 13: no target goes out until this marker is back
+        self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
-        self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
+        self.controller = Controller(cfg, options)
+        self.targets = Targets(cfg)
+        self.tracker = Tracker(cfg)
+        self.autopark = AutoPark(cfg)
         self.view = st.View()
         self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
-        self._silence_reported = False
-        self._junk_reported_t = -1e18
-        self._port_error: str | None = None
         self._actions: list[Action] = []
         self._wakeup = 0.0
 
@@ -128,28 +109,13 @@ class RotatorSession:
         return self._step(now)
 
     def open_failed(self, reason: str, now: float) -> list[Action]:
-        if reason != self._port_error:
-            self._port_error = reason
-            self.error(ErrorKind.SERIAL, reason)
+        self.controller.open_failed(reason)
         return self._step(now)
 
     def link_up(self, now: float, wall_s: float) -> list[Action]:
-        spec = self.cfg.spec
-        self._port_error = None
         self.wall_offset_s = wall_s - now
-        self.link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         self.autopark.activity(now)  # never park the moment a controller comes back
-        self.motion = mo.link_up(self.motion, self.cfg.motion, now)
-        self.answering = not spec.can_report_position
-        self._silence_reported = False
-        self.options.connected(self.answering)
-        if self.stops.owed:  # rule 11: before anything else the controller gets
-            self.stops.owed = False
-            log.info("%s: sending the stop that came while the port was closed", self.name)
-            self.link.write_stop(now)
-            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-        for frame in self.link.codec.encode_connect(wall_s):
-            self.link.write(frame, now)
+        self.controller.connect(now, wall_s)
         return self._step(now)
 
     def link_down(
@@ -158,18 +124,14 @@ class RotatorSession:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
             self.error(kind, reason)
-            stop_due = self.link is not None and self.link.stop_due
-            self.stops.owed = self.stops.owed or self.stops.unsure(stop_due, self.motion, now)
+        self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         self.tracker.end("serial link down" if reason is not None else "bridge stopped")
-        self.link = None
-        self.answering = False
-        self.motion = mo.link_down(self.motion)
         self._drop_pending("serial link down")
         return self._step(now)
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
-        link = self.link
+        ctl = self.controller
         if batch.stop or batch.target or batch.lock is not None or batch.options or batch.track:
             self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
@@ -179,57 +141,37 @@ class RotatorSession:
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
             self.tracker.end("lock")
             self._drop_pending(None)
-            self._stop_or_owe(now)  # whatever we believe: the lock is for tower work
+            ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
             self.tracker.end("stop")
             self.targets.clear()
             self._taken(batch.stop.source.value)
-            if link is None or not self.stops.merges(self.motion, self.cfg.motion, now):
-                self._stop_or_owe(now)
+            ctl.stop(now, merge=True)
         self._fence(batch)
         for opt in batch.options:
-            self.options.set(opt.name, opt.enabled, link is not None)
+            ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
         if batch.track is not None:
             self._track(batch.track)
         if batch.target is not None:
             what = describe_command(batch.target)
             if self.tracker.end(f"{batch.target.source.value} target"):
                 self.drop_tracking_target()  # never combined with the user's target
-            if self.locked:
-                self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
-            elif link is None or not self.answering:
-                self.error(ErrorKind.REFUSED, "rotator offline", command=what)
+            refused = self._refused()
+            if refused is not None:
+                self.error(ErrorKind.REFUSED, refused, command=what)
             else:
                 self.targets.put(batch.target, now)
         return self._step(now)
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
-        link = self.link
-        if link is None:
-            return []
-        log.debug("%s: <- %r", self.cfg.rotator_id, data)
-        link.got_bytes(len(data), now)
-        replies = link.codec.feed(data)
-        if not replies:
+        was_answering = self.controller.answering
+        if not self.controller.feed(data, now):
             return []  # rule 9
-        for reply in replies:
-            if isinstance(reply, PositionReply):
-                self._reading(link, reply, now)
-            elif isinstance(reply, VersionReply):
-                if reply.version != self.view.version:
-                    log.info("%s: controller version %s", self.cfg.rotator_id, reply.version)
-                self.view.version = reply.version
-            elif isinstance(reply, JunkReply):
-                if reply.reason is JunkReason.POWER_ON:
-                    log.info("%s: power-on byte seen; options will be re-applied", self.name)
-                    self.options.all_due()
-                link.add_junk(reply.data, now)
-                if reply.reason is JunkReason.UNTRUSTED:
-                    link.ask_again(now)
-                    if link.end_slew(now):  # the slew is over; where it ended, unseen
-                        self.motion = mo.slew_ended(self.motion, now)
+        if self.controller.answering and not was_answering:
+            self.autopark.activity(now)  # autopark.py rule 1
+        self._heed(now)
         return self._step(now)
 
     def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
@@ -250,33 +192,24 @@ class RotatorSession:
 
     def hold_reads_until(self) -> float:
         """Bytes arriving before this time can wait in the port (link.py rule 7)."""
-        return self.link.hold_reads_until() if self.link is not None else 0.0
+        link = self.controller.link
+        return link.hold_reads_until() if link is not None else 0.0
 
     # -- commands, applied ----------------------------------------------------------------------
-    def _stop_or_owe(self, now: float) -> None:
-        """Rule 11: a stop now, or, while the port is closed, as the first frame it gets."""
-        if self.link is not None:
-            self._stop_now(now)
-        else:
-            self.stops.owed = True
+    def _refused(self) -> str | None:
+        """Why a target or a track command cannot be taken now, if it cannot."""
+        if self.locked:
+            return "rotator is locked"
+        if self.controller.link is None or not self.controller.answering:
+            return "rotator offline"
+        return None
 
     def _fence(self, batch: Batch) -> None:
-        """Rule 13: a hold starts with its stop and ends with its marker; one that ends with
-        clearing drops what waited meanwhile (its place in line was lost)."""
-        if batch.release_clear and self.hold is not None:  # (mailbox rule 6: before the rest)
-            self.hold = None
-            why = (
-                "a stop or lock from the stop lane came before it, and the MQTT connection that "
-                "would have told which was published first dropped; send it again"
-            )
-            self._drop_pending(why)
+        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
+        if self.fence.apply(batch):
+            self._drop_pending(CLEARED)
             if self.tracker.end("a stop or lock came first; send the track command again"):
                 self.drop_tracking_target()
-        if batch.hold is not None:
-            self.hold = batch.hold if self.hold is None else max(self.hold, batch.hold)
-        if batch.release is not None and self.hold is not None and self.hold <= batch.release:
-            self.hold = None
-            log.debug("%s: hold ended", self.name)
 
     def _track(self, track: Track) -> None:
         if track.body is None and track.lookup is None:
@@ -284,11 +217,9 @@ class RotatorSession:
             self.drop_tracking_target()
             return
         name = track.body.name if track.body is not None else track.lookup and track.lookup.name
-        what = track.described or f"track {name}"
-        if self.locked:
-            self.error(ErrorKind.REFUSED, "rotator is locked", command=what)
-        elif self.link is None or not self.answering:
-            self.error(ErrorKind.REFUSED, "rotator offline", command=what)
+        refused = self._refused()
+        if refused is not None:
+            self.error(ErrorKind.REFUSED, refused, command=track.described or f"track {name}")
         elif track.body is None:
             self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
         else:
@@ -329,105 +260,62 @@ class RotatorSession:
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
         if dropped is not None and why:
-            self.error(
-                ErrorKind.REFUSED, f"target dropped: {why}", command=describe_command(dropped)
-            )
+            what = describe_command(dropped)
+            self.error(ErrorKind.REFUSED, f"target dropped: {why}", command=what)
 
     def error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
         log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
         self.view.last_error = message
         self._actions.append(Report(kind, message, command))
 
-    def _report(self, report: Report | None) -> None:
-        if report is not None:
-            self.error(report.kind, report.message, report.command)
-
-    def _stop_now(self, now: float) -> None:
-        assert self.link is not None
-        self.link.want_stop()
-        self._flush_stop(now)
-
-    def _flush_stop(self, now: float) -> None:
-        """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
-        if self.link is not None and self.link.flush_stop(now):
-            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+    def _heed(self, now: float) -> None:
+        """What the controller noted, applied in the order it came."""
+        for note in self.controller.take_notes():
+            if isinstance(note, Report):
+                self.error(note.kind, note.message, note.command)
+            elif isinstance(note, Ends):
+                self.tracker.end(note.reason)
+                self.drop_tracking_target()
+            elif isinstance(note, Drop):
+                self._drop_pending(note.why)
+            elif isinstance(note, Retry):
+                self.targets.put_back(note.target, note.attempt, now)
 
     # -- the rules, run after every input, in this order ---------------------------------------
     def _step(self, now: float) -> list[Action]:
-        link = self.link
-        if link is not None:
-            if link.reply_overdue(now):
-                self._overdue(link, now)  # slewing.py
-            self._flush_stop(now)
-            link.flush_outbox(now)
-            junk = link.quiet_junk(now)
-            if junk is not None:
-                self._report_junk(*junk, now)
-        self._advance(now)  # commands go ahead of the next poll
-        self._poll_if_due(now)
+        ctl = self.controller
+        ctl.line_work(now)  # an overdue reply (slewing.py), a due stop, the outbox, junk
+        ctl.tick(now)  # the motion machine's clock, an enable owed
+        self._heed(now)
+        if ctl.link is not None and ctl.answering:
+            ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
+            self._heed(now)
+            self._part("tracking", self.tracker.step, now)  # rule 14
+            self._part("auto-park", self.autopark.step, now)
+            if self.targets.pending is not None:
+                self._try_target(ctl.link, now)
+            ctl.send_options(now, self.targets.pending is not None)
+        ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
+        self._heed(now)
         self._emit_status(now)
-        if self.link is not None:
-            self._actions.extend(Write(frame) for frame in self.link.output())
+        if ctl.link is not None:
+            self._actions.extend(Write(frame) for frame in ctl.link.output())
         generation = self.tracker.generation
         self._actions.extend(Ask(generation, q) for q in self.tracker.take_asks())
         self._wakeup = self._next_wakeup(now)
         actions, self._actions = self._actions, []
         return actions
 
-    def _overdue(self, link: Link, now: float) -> None:
-        todo = slewing.overdue(self.cfg, link.slew, link.reply_timeout_s, now)
-        self._report(todo.error)
-        if todo.retry is not None:
-            self.targets.put_back(todo.retry, todo.attempt, now)
-        if todo.stop:
-            self._stop_now(now)
-            return
-        link.give_up_reply(now)
-        if todo.track_lost:
-            self.motion = mo.track_lost(self.motion, self.cfg.motion)
-
-    def _advance(self, now: float) -> None:
-        """Time-driven motion, then what the parts, the pending target and options do now."""
-        link = self.link
-        if link is None or link.slew is None:  # no reports during a slew: nothing to judge
-            self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
-            self._motion_events(events, now)
-        if link is None or not self.answering:
-            return
-        if self.options.enable_due and link.slew is None and link.free() and not link.stop_due:
-            enable = link.codec.encode_enable()
-            if enable:
-                link.write(enable, now)
-            self.options.enable_due = False
-        going = self.targets.pending is not None and self.hold is None  # (held: not going)
-        again, error = self.stops.check(self.motion, self.cfg.motion, now, going)
-        self._report(error)
-        if again:
-            log.warning("%s: still turning after a stop; stopping again", self.name)
-            self._stop_now(now)
-        self._part("tracking", self.tracker.step, now)  # rule 14
-        self._part("auto-park", self.autopark.step, now)
-        if self.targets.pending is not None:
-            self._try_target(link, now)
-        idle = self.motion.state is MotionState.IDLE
-        free = self.targets.pending is None and link.free()
-        for name, enabled in self.options.take(idle, free, now):
-            try:
-                frame = link.codec.encode_option(name, enabled)
-            except (KeyError, ValueError):
-                log.warning("%s: option %r not supported; skipped", self.name, name)
-                continue
-            link.write(frame, now)
-
     def _part(self, name: str, step: Callable[[Scene], Proposal], now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""
+        link = self.controller.link
         scene = Scene(
             now=now,
-            motion=self.motion,
+            motion=self.controller.motion,
             pending=self.targets.pending,
             locked=self.locked,
             parked=self.status.parked,
-            slewing=self.link is not None and self.link.slew is not None,
+            slewing=link is not None and link.slew is not None,
             wall_offset_s=self.wall_offset_s,
         )
         proposal = self._guarded(name, lambda: step(scene), now)
@@ -435,7 +323,8 @@ class RotatorSession:
             return
         if proposal.busy:
             self.autopark.activity(now)  # autopark.py rule 1 (tracking.py rule 7)
-        self._report(proposal.error)
+        if proposal.error is not None:
+            self.error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
             self.drop_tracking_target()
         if proposal.target is not None:
@@ -457,27 +346,18 @@ class RotatorSession:
             return None
 
     def _try_target(self, link: Link, now: float) -> None:
-        todo = decide(self.cfg, link, self.motion, self.targets, self.hold is not None, now)
+        ctl, pending = self.controller, self.targets.pending
+        assert pending is not None
+        todo = decide(self.cfg, link, ctl.motion, self.targets, self.fence.held, now)
         if todo.go is Go.DONE:
             self._aimed(self.targets.clear(), todo.wire)
         elif todo.go is Go.STOP_FIRST:
-            self._stop_now(now)
+            ctl.stop(now)
         elif todo.go is Go.ASK_FIRST:
             link.poll_now(now)  # ask first; the target follows the answer
         elif todo.go is Go.SEND:
-            pending, m = self.targets.pending, self.motion
-            link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
-            attempt = self.targets.sent(now)
-            assert pending is not None
-            az, el = todo.wire
-            if not self.cfg.spec.reports_while_moving:
-                slew = Slew(
-                    now, m.position_deg, m.el_position_deg, az, el, pending.source, 0, attempt
-                )
-                link.begin_slew(slew, slewing.travel_s(self.cfg, slew))
-            self.motion = mo.commanded(m, self.cfg.motion, az, now, el)
+            ctl.send(todo, pending, self.targets.sent(now), now)
             self._aimed(pending, todo.wire)
-            link.poll_by(now + self.cfg.moving_poll_interval_s)
 
     def _aimed(self, target: Target | None, wire: tuple[float, float | None]) -> None:
         """What the status says about the target now taken (status.py rule 4)."""
@@ -486,89 +366,24 @@ class RotatorSession:
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
 
-    def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
-        link.got_reading(now)
-        if reply.motion_enabled is False:
-            self.options.enable_due = True
-        if reply.controller_time is not None:
-            self.view.controller_time = reply.controller_time
-        if not self.answering:
-            self.answering = True
-            self.autopark.activity(now)
-            self.options.all_due()
-            log.info("%s: controller answering", self.name)
-        self.motion, events = mo.reading(
-            self.motion, self.cfg.motion, reply.az_deg, now, reply.el_deg
-        )
-        self._motion_events(events, now)
-        moving = self.motion.state is MotionState.MOVING
-        band, wraps = self.cfg.deadband_deg, self.cfg.motion.az_wraps
-        self.az_shown.feed(reply.az_deg, moving, band, wraps)
-        if reply.el_deg is not None:
-            self.el_shown.feed(reply.el_deg, moving, band, False)
-
-    def _motion_events(self, events: list[mo.Event], now: float) -> None:
-        for event in events:
-            verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
-            if verdict.ends_tracking is not None:
-                self.tracker.end(verdict.ends_tracking)
-                self.drop_tracking_target()
-            self._report(verdict.error)
-            if verdict.error is None:
-                log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
-            if verdict.stop and self.link is not None:
-                self.link.write_stop(now)
-
-    def _poll_if_due(self, now: float) -> None:
-        """Rules 2 and 3."""
-        link, cfg = self.link, self.cfg
-        if link is None or not cfg.spec.can_report_position:
-            return
-        timeout_s = cfg.silence_timeout_s
-        silent = not link.reply_owed and link.silent_for(now) >= timeout_s  # (a slew's report
-        if silent and self.answering:  # takes the whole slew: a reply owed may still come)
-            self.answering = False
-            self.tracker.end("controller not answering")
-            self.motion = mo.link_down(self.motion)
-            self.error(
-                ErrorKind.SERIAL,
-                f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)",
-            )
-            self._drop_pending("controller not answering")
-        elif silent and link.last_reply_t is None and not self._silence_reported:
-            self._silence_reported = True
-            self.error(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer")
-        busy = self.motion.state is MotionState.MOVING or self.targets.pending is not None
-        link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
-
-    def _report_junk(self, data: bytes, harmless: bool, now: float) -> None:
-        if harmless:  # a banner after a stop, a blank line: nothing a user acts on
-            log.debug("%s: ignored %d harmless bytes: %r", self.name, len(data), data[:64])
-            return
-        log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
-        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
-            self._junk_reported_t = now
-            self.error(
-                ErrorKind.PROTOCOL,
-                f"controller sent {len(data)} bytes that are no valid reply; ignored",
-            )
-
     def _emit_status(self, now: float) -> None:
-        link, pending = self.link, self.targets.pending
-        wire = None
+        ctl, pending = self.controller, self.targets.pending
+        link, wire = ctl.link, None
         if pending is not None and link is not None:
-            az, el = resolve(pending, self.motion, self.cfg.aim)
+            az, el = resolve(pending, ctl.motion, self.cfg.aim)
             wire = link.codec.wire_target(az, el) if az is not None else None
         seen = st.Seen(
             previous=self.status,
             view=self.view,
-            motion=self.motion,
+            version=ctl.version,
+            controller_time=ctl.controller_time,
+            motion=ctl.motion,
             connected=link is not None,
-            answering=link is not None and self.answering,
+            answering=link is not None and ctl.answering,
             locked=self.locked,
-            options=self.options.values,
-            bearing_deg=self.az_shown.value,
-            elevation_deg=self.el_shown.value,
+            options=ctl.options.values,
+            bearing_deg=ctl.az_shown.value,
+            elevation_deg=ctl.el_shown.value,
             slew=link.slew if link is not None else None,
             pending=pending,
             pending_wire=wire,
@@ -582,13 +397,7 @@ class RotatorSession:
         self.status = status  # also when only the controller's clock changed (status rule 4)
 
     def _next_wakeup(self, now: float) -> float:
-        link = self.link
-        times = [now + IDLE_WAKEUP_S]
-        if link is not None:
-            times += link.wakeups()
-            if link.slew is not None:
-                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+        times = [now + IDLE_WAKEUP_S, *self.controller.wakeups(now)]
         waits = [self.targets.stream_deadline(now), self.autopark.wakeup(now)]
-        waits += [self.tracker.wakeup(now), mo.next_deadline(self.motion, self.cfg.motion, now)]
-        times += [t for t in waits if t is not None]
+        times += [t for t in (*waits, self.tracker.wakeup(now)) if t is not None]
         return min(times)

@@ -45,8 +45,6 @@ class Hysteresis:
 class View:
     """Everything the status shows besides what the motion machine and the link know."""
 
-    version: str | None = None
-    controller_time: str | None = None
     last_error: str | None = None
     last_source: str | None = None
     target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
@@ -60,6 +58,8 @@ class Seen:
 
     previous: RotatorStatus
     view: View
+    version: str | None  # the controller's, as it says
+    controller_time: str | None  # its own clock (SatEL)
     motion: mo.Motion
     connected: bool
     answering: bool  # connected, and the controller answers (or cannot: DCU-1)
@@ -112,14 +112,14 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,
-        controller_time=view.controller_time,
+        controller_time=seen.controller_time,
         target_az_deg=None if target[0] is None else aim.true_of(target[0]),
         raw_target_az_deg=target[0],
         target_el_deg=target[1] if spec.has_elevation else None,
         connected=seen.connected,
         available=answering,
         locked=seen.locked,
-        version=view.version,
+        version=seen.version,
         options=dict(seen.options),
         last_error=view.last_error,
         last_command_source=view.last_source,

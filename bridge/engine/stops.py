@@ -17,6 +17,10 @@ Rules:
    (stopping is always safe).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
    is stopped once it comes to rest. Either ends tracking.
+5. The last word's fence (mqtt/lastword.py): a stop or lock ON from the stop lane comes with a
+   hold; no target goes out while one is held, until a release reaches its marker. A release
+   that clears (the connection that would have caught up was lost) ends every hold, and what
+   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from dataclasses import dataclass
 
 from bridge.engine import motion as mo
 from bridge.engine.actions import Report
+from bridge.engine.mailbox import Batch
 from bridge.model import ErrorKind, MotionState
 
 log = logging.getLogger(__name__)
@@ -33,6 +38,10 @@ log = logging.getLogger(__name__)
 STOP_TRIES_BEFORE_ERROR = 3
 STOP_MERGE_MIN_S = 1.0  # rule 1: stops merge within the brake window, or at least this long
 STOP_UNSURE_S = 1.0  # rule 3: a stop written this recently when the port failed is sent again
+CLEARED = (
+    "a stop or lock from the stop lane came before it, and the MQTT connection that would have "
+    "told which was published first dropped; send it again"
+)
 
 
 @dataclass(frozen=True)
@@ -109,3 +118,27 @@ class Stops:
         if event is mo.Event.ARRIVED:
             self._at_rest = False
         return Verdict()
+
+
+class Fence:
+    """Rule 5: the newest marker a hold waits for."""
+
+    def __init__(self) -> None:
+        self._hold: int | None = None
+
+    @property
+    def held(self) -> bool:
+        return self._hold is not None
+
+    def apply(self, batch: Batch) -> bool:
+        """Take a batch's hold and release in; whether a held fence was cleared (what waited
+        is then dropped: CLEARED says why)."""
+        cleared = batch.release_clear and self._hold is not None  # (before the rest)
+        if cleared:
+            self._hold = None
+        if batch.hold is not None:
+            self._hold = batch.hold if self._hold is None else max(self._hold, batch.hold)
+        if batch.release is not None and self._hold is not None and self._hold <= batch.release:
+            self._hold = None
+            log.debug("hold ended")
+        return cleared

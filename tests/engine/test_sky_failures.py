@@ -148,7 +148,7 @@ def test_the_status_says_why_tracking_ended(
         assert v.status.tracking is None, what
         assert v.status.tracking_ended == reason
         assert v.errors(ErrorKind.INTERNAL) == []
-        assert v.session.link is not None
+        assert v.session.controller.link is not None
 
 
 def test_a_part_that_raises_is_reset_and_reported_and_stops_still_go_out(
@@ -169,4 +169,4 @@ def test_a_part_that_raises_is_reset_and_reported_and_stops_still_go_out(
         v.run_for(2.0)
         assert v.frames("stop", since=t), "the stop reached the controller"
         assert not v.truth().is_moving
-        assert v.session.link is not None
+        assert v.session.controller.link is not None
