@@ -395,37 +395,3 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             times.append(m.stop_sent_t + cfg.brake_delay_s)
     future = [t for t in times if t > now]
     return min(future) if future else None
-
-
-def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
-    d = to_deg - from_deg
-    if wraps and abs(d) > 180.0:
-        d -= 360.0 if d > 0 else -360.0
-    return d
-
-
-def publishable_bearing(
-    published_deg: float | None,
-    direction: int,
-    reading_deg: float,
-    moving: bool,
-    deadband_deg: float,
-    wraps: bool,
-) -> tuple[float | None, int]:
-    """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
-
-    At rest only a change beyond the deadband is published. While moving, every step in the
-    direction of travel is published (dashboards stay fresh), but a step back inside the
-    deadband is analog jitter and is not.
-    """
-    if published_deg is None:
-        return reading_deg, 0
-    delta = signed_delta(reading_deg, published_deg, wraps)
-    if delta == 0:
-        return None, direction
-    step = 1 if delta > 0 else -1
-    if abs(delta) > deadband_deg or (moving and step == direction):
-        return reading_deg, step
-    if moving and direction == 0:
-        return reading_deg, step
-    return None, direction

@@ -20,15 +20,13 @@ motion machine's clock, the stop check, tracking, auto-park, the pending target,
 the poll, the status.
 
 Rules:
-1. The controller's state (answering, options owed, motion to re-enable) is controller.py's.
-2. Available or not: controller.py rule 2.
-3. Polling: controller.py rule 3.
+1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
+   available, and its polls: controller.py rules 1-3.
 4. Targets go to the controller only when sending.py says so (targets.py keeps the pending
    one and the stream rules); a target waiting for a brake delay is replaced by newer ones
    and dropped by a stop, the lock, or the link going down.
 5. Stops: written at once, merged, checked and sent again as stops.py rules 1-2 say.
-6. Options: options.py.
-7. A controller that stops on re-target (Rotor-EZ): sending.py rule 4.
+6.-7. Options: options.py. A controller that stops on re-target (Rotor-EZ): sending.py rule 4.
 8. A controller silent while it moves (SatEL) is sent nothing but a stop until its after-move
    report (controller.py rule 4, slewing.py); a new target stops the slew and is sent once the
    rotor is still (stop and redirect).

@@ -3,7 +3,7 @@ session hands ``current`` what it knows (``Seen``, a read-only view) and publish
 returns.
 
 Rules:
-1. The published bearing follows readings with hysteresis (motion.publishable_bearing): analog
+1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
    jitter of a still rotor never reaches a dashboard.
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
@@ -34,7 +34,7 @@ class Hysteresis:
     direction: int = 0
 
     def feed(self, reading: float, moving: bool, deadband_deg: float, wraps: bool) -> None:
-        new, self.direction = mo.publishable_bearing(
+        new, self.direction = publishable_bearing(
             self.value, self.direction, reading, moving, deadband_deg, wraps
         )
         if new is not None:
@@ -140,3 +140,37 @@ def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
     if new.controller_time == old.controller_time:
         return new != old
     return replace(new, controller_time=None) != replace(old, controller_time=None)
+
+
+def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
+    d = to_deg - from_deg
+    if wraps and abs(d) > 180.0:
+        d -= 360.0 if d > 0 else -360.0
+    return d
+
+
+def publishable_bearing(
+    published_deg: float | None,
+    direction: int,
+    reading_deg: float,
+    moving: bool,
+    deadband_deg: float,
+    wraps: bool,
+) -> tuple[float | None, int]:
+    """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
+
+    At rest only a change beyond the deadband is published. While moving, every step in the
+    direction of travel is published (dashboards stay fresh), but a step back inside the
+    deadband is analog jitter and is not.
+    """
+    if published_deg is None:
+        return reading_deg, 0
+    delta = signed_delta(reading_deg, published_deg, wraps)
+    if delta == 0:
+        return None, direction
+    step = 1 if delta > 0 else -1
+    if abs(delta) > deadband_deg or (moving and step == direction):
+        return reading_deg, step
+    if moving and direction == 0:
+        return reading_deg, step
+    return None, direction

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from bridge.engine import motion as mo
+from bridge.engine.status import publishable_bearing
 from bridge.model import MotionState as S
 from bridge.protocols import REGISTRY
 
@@ -167,7 +168,7 @@ def test_dcu1_without_feedback_is_unknown_and_assumes_travel_time() -> None:
 
 
 def test_deadband_holds_the_published_bearing_at_rest() -> None:
-    pb = mo.publishable_bearing
+    pb = publishable_bearing
     assert pb(None, 0, 100, False, 2, True) == (100, 0)
     assert pb(100, 0, 101, False, 2, True) == (None, 0)
     assert pb(100, 0, 102, False, 2, True) == (None, 0)
@@ -177,7 +178,7 @@ def test_deadband_holds_the_published_bearing_at_rest() -> None:
 
 
 def test_while_moving_progress_is_published_and_jitter_back_is_not() -> None:
-    pb = mo.publishable_bearing
+    pb = publishable_bearing
     published, direction, shown = 100.0, 0, []
     for reading in [101, 102, 103, 104, 105, 120, 121, 120, 121, 120, 121]:
         new, direction = pb(published, direction, reading, True, 2, True)
