@@ -51,7 +51,7 @@ def settled_at(az: float, el: float) -> Callable[[VirtualRotator], bool]:
 
 
 def assert_half_duplex(v: VirtualRotator) -> None:
-    """Nothing was written while a reply was still owed (session rule 3, link rule 3): at
+    """Nothing was written while a reply was still owed (controller.py rule 3, link rule 3): at
     every write, all the replies owed by the frames before it had arrived whole."""
     reply_bytes = v.cfg.spec.reply_bytes
     owed = 0

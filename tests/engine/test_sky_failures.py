@@ -1,5 +1,6 @@
 """A sky that cannot be computed, and a part of the session that raises, never take the serial
-link down (session.py rule 11, tracking.py rule 8, ARCHITECTURE.md rules 8 and 11).
+link down (session.py rules 11 and 14, tracking.py rule 8; docs/architecture.md: a feature's
+failure is contained, and a stop is never lost).
 
 Found in review: a JSON TLE whose orbit has decayed, or a clock past the ephemeris's end
 (DE421 ends in 2053), raised inside the rotator's step; the worker called it an unexpected
