@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import TypeVar
 
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
@@ -73,7 +72,6 @@ from bridge.sky import Body
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
 
 log = logging.getLogger(__name__)
-T = TypeVar("T")
 
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 
@@ -306,16 +304,10 @@ class RotatorSession:
 
     def _part(self, name: str, step: Callable[[Scene], Proposal], now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""
-        link = self.controller.link
-        scene = Scene(
-            now=now,
-            motion=self.controller.motion,
-            pending=self.targets.pending,
-            locked=self.locked,
-            parked=self.status.parked,
-            slewing=link is not None and link.slew is not None,
-            wall_offset_s=self.wall_offset_s,
-        )
+        link, motion, pending = self.controller.link, self.controller.motion, self.targets.pending
+        slewing = link is not None and link.slew is not None
+        parked, offset_s = self.status.parked, self.wall_offset_s
+        scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
         proposal = self._guarded(name, lambda: step(scene), now)
         if proposal is None:
             return
@@ -328,7 +320,9 @@ class RotatorSession:
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
-    def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
+    def _guarded(
+        self, name: str, run: Callable[[], Proposal | None], now: float
+    ) -> Proposal | None:
         """Rule 14: a part that raises is reset and reported; nothing else stops."""
         try:
             return run()
