@@ -81,7 +81,7 @@ class Controller:
         self._silence_reported = False
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
-        self._notes: list[Note] = []
+        self.notes: list[Note] = []  # for the session, in order (``take_notes``)
 
     @property
     def name(self) -> str:
@@ -89,14 +89,14 @@ class Controller:
 
     def take_notes(self) -> list[Note]:
         """What happened since the last call that the session must act on, in order."""
-        notes, self._notes = self._notes, []
+        notes, self.notes = self.notes, []
         return notes
 
     # -- the port ----------------------------------------------------------------------------
     def open_failed(self, reason: str) -> None:
         if reason != self._port_error:  # once per reason
             self._port_error = reason
-            self._notes.append(Report(ErrorKind.SERIAL, reason))
+            self.notes.append(Report(ErrorKind.SERIAL, reason))
 
     def connect(self, now: float, wall_s: float) -> None:
         spec = self.cfg.spec
@@ -142,7 +142,7 @@ class Controller:
         """stops.py rule 2: a stop that did not take is sent again."""
         again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
         if error is not None:
-            self._notes.append(error)
+            self.notes.append(error)
         if again:
             log.warning("%s: still turning after a stop; stopping again", self.name)
             self.stop(now)
@@ -153,7 +153,7 @@ class Controller:
         link = self.link
         if link is None:
             return False
-        log.debug("%s: <- %r", self.name, data)
+        log.debug("%s: <- %r", self.cfg.rotator_id, data)
         link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
         for reply in replies:
@@ -196,9 +196,9 @@ class Controller:
         for event in events:
             verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
             if verdict.ends_tracking is not None:
-                self._notes.append(Ends(verdict.ends_tracking))
+                self.notes.append(Ends(verdict.ends_tracking))
             if verdict.error is not None:
-                self._notes.append(verdict.error)
+                self.notes.append(verdict.error)
             else:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
             if verdict.stop and self.link is not None:
@@ -213,9 +213,9 @@ class Controller:
         if link.reply_overdue(now):
             todo = slewing.overdue(self.cfg, link.slew, link.reply_timeout_s, now)
             if todo.error is not None:
-                self._notes.append(todo.error)
+                self.notes.append(todo.error)
             if todo.retry is not None:
-                self._notes.append(Retry(todo.retry, todo.attempt))
+                self.notes.append(Retry(todo.retry, todo.attempt))
             if todo.stop:
                 self.stop(now)
             else:
@@ -278,12 +278,12 @@ class Controller:
         if silent and self.answering:  # takes the whole slew: a reply owed may still come)
             self.answering, busy = False, False  # (the waiting target is dropped)
             self.motion = mo.link_down(self.motion)
-            self._notes.append(Ends("controller not answering"))
+            self.notes.append(Ends("controller not answering"))
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
-            self._notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
+            self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
         elif silent and link.last_reply_t is None and not self._silence_reported:
             self._silence_reported = True
-            self._notes.append(
+            self.notes.append(
                 Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer")
             )
         busy = busy or self.motion.state is MotionState.MOVING
@@ -298,7 +298,7 @@ class Controller:
         if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
             self._junk_reported_t = now
             why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
-            self._notes.append(Report(ErrorKind.PROTOCOL, why))
+            self.notes.append(Report(ErrorKind.PROTOCOL, why))
 
     def wakeups(self, now: float) -> list[float]:
         """When the line or the motion machine needs the session next."""

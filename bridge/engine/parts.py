@@ -10,15 +10,15 @@ Rules:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from bridge.engine import motion as mo
 from bridge.engine.actions import Report
 from bridge.model import Target
 
 
-@dataclass(frozen=True)
-class Scene:
-    """The session as a part may see it at ``now``."""
+class Scene(NamedTuple):
+    """The session as a part may see it at ``now`` (a tuple: read-only, cheap at every step)."""
 
     now: float
     motion: mo.Motion

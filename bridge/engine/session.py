@@ -282,17 +282,21 @@ class RotatorSession:
         ctl = self.controller
         ctl.line_work(now)  # an overdue reply (slewing.py), a due stop, the outbox, junk
         ctl.tick(now)  # the motion machine's clock, an enable owed
-        self._heed(now)
+        if ctl.notes:
+            self._heed(now)
         if ctl.link is not None and ctl.answering:
             ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
-            self._heed(now)
-            self._part("tracking", self.tracker.step, now)  # rule 14
+            if ctl.notes:
+                self._heed(now)
+            if self.tracker.body is not None:  # (nothing tracked: nothing to ask)
+                self._part("tracking", self.tracker.step, now)  # rule 14
             self._part("auto-park", self.autopark.step, now)
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
-        self._heed(now)
+        if ctl.notes:
+            self._heed(now)
         self._emit_status(now)
         if ctl.link is not None:
             self._actions.extend(Write(frame) for frame in ctl.link.output())

@@ -19,6 +19,7 @@ Rules:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
@@ -52,9 +53,9 @@ class View:
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
 
 
-@dataclass(frozen=True)
-class Seen:
-    """What the session knows at one moment, as the status needs it."""
+class Seen(NamedTuple):
+    """What the session knows at one moment, as the status needs it (a tuple: read-only, and
+    cheap to build at every step)."""
 
     previous: RotatorStatus
     view: View
