@@ -283,9 +283,7 @@ class Controller:
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
         elif silent and link.last_reply_t is None and not self._silence_reported:
             self._silence_reported = True
-            self.notes.append(
-                Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer")
-            )
+            self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
         busy = busy or self.motion.state is MotionState.MOVING
         link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
 
