@@ -119,7 +119,7 @@ class RotatorSession:
     ) -> list[Action]:
         """The port is closed (``reason`` says why; None on shutdown)."""
         if reason is not None:
-            self.error(kind, reason)
+            self._error(kind, reason)
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         self.tracker.end("serial link down" if reason is not None else "bridge stopped")
@@ -153,10 +153,10 @@ class RotatorSession:
         if batch.target is not None:
             what = describe_command(batch.target)
             if self.tracker.end(f"{batch.target.source.value} target"):
-                self.drop_tracking_target()  # never combined with the user's target
+                self._drop_tracking_target()  # never combined with the user's target
             refused = self._refused()
             if refused is not None:
-                self.error(ErrorKind.REFUSED, refused, command=what)
+                self._error(ErrorKind.REFUSED, refused, command=what)
             else:
                 self.targets.put(batch.target, now)
         return self._step(now)
@@ -205,17 +205,17 @@ class RotatorSession:
         if self.fence.apply(batch):
             self._drop_pending(CLEARED)
             if self.tracker.end("a stop or lock came first; send the track command again"):
-                self.drop_tracking_target()
+                self._drop_tracking_target()
 
     def _track(self, track: Track) -> None:
         if track.body is None and track.lookup is None:
             self.tracker.end("off")
-            self.drop_tracking_target()
+            self._drop_tracking_target()
             return
         name = track.body.name if track.body is not None else track.lookup and track.lookup.name
         refused = self._refused()
         if refused is not None:
-            self.error(ErrorKind.REFUSED, refused, command=track.described or f"track {name}")
+            self._error(ErrorKind.REFUSED, refused, command=track.described or f"track {name}")
         elif track.body is None:
             self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
         else:
@@ -232,7 +232,7 @@ class RotatorSession:
             body = answer.value
             if answer.failure is not None or not isinstance(body, Body):
                 refusal = answer.failure or "no such satellite"
-                self.error(ErrorKind.REFUSED, refusal, lookup.described)
+                self._error(ErrorKind.REFUSED, refusal, lookup.described)
             else:
                 self._track(Track(body, lookup.source, None, lookup.described))
             return
@@ -240,14 +240,14 @@ class RotatorSession:
         if ends is not None:
             log.warning("%s: tracking ends: %s", self.name, ends)
             self.tracker.end(ends)
-            self.drop_tracking_target()
+            self._drop_tracking_target()
 
     def _taken(self, source: str) -> None:
         """A stop or a new track: the status names its source and no target of before."""
         self.view.last_source = source
         self.view.target_info, self.view.park_raw = None, None
 
-    def drop_tracking_target(self) -> None:
+    def _drop_tracking_target(self) -> None:
         """Tracking has ended: a target of its own still waiting must not go out after it."""
         pending = self.targets.pending
         if pending is not None and pending.source is Source.TRACKING:
@@ -257,9 +257,9 @@ class RotatorSession:
         dropped = self.targets.clear()
         if dropped is not None and why:
             what = describe_command(dropped)
-            self.error(ErrorKind.REFUSED, f"target dropped: {why}", command=what)
+            self._error(ErrorKind.REFUSED, f"target dropped: {why}", command=what)
 
-    def error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
+    def _error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
         log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
         self.view.last_error = message
         self._actions.append(Report(kind, message, command))
@@ -268,10 +268,10 @@ class RotatorSession:
         """What the controller noted, applied in the order it came."""
         for note in self.controller.take_notes():
             if isinstance(note, Report):
-                self.error(note.kind, note.message, note.command)
+                self._error(note.kind, note.message, note.command)
             elif isinstance(note, Ends):
                 self.tracker.end(note.reason)
-                self.drop_tracking_target()
+                self._drop_tracking_target()
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
@@ -318,9 +318,9 @@ class RotatorSession:
         if proposal.busy:
             self.autopark.activity(now)  # autopark.py rule 1 (tracking.py rule 7)
         if proposal.error is not None:
-            self.error(proposal.error.kind, proposal.error.message, proposal.error.command)
+            self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
-            self.drop_tracking_target()
+            self._drop_tracking_target()
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
@@ -334,11 +334,11 @@ class RotatorSession:
             log.exception("%s: %s failed", self.name, name)
             if name == "tracking":
                 self.tracker.end("internal error")
-                self.drop_tracking_target()
+                self._drop_tracking_target()
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)
-            self.error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
+            self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
             return None
 
     def _try_target(self, link: Link, now: float) -> None:
