@@ -12,14 +12,17 @@ from bridge.engine import motion as mo
 from bridge.engine import slewing
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
+from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.options import OPTIONS_REFRESH_S, Options
 from bridge.engine.parts import NOTHING, Scene
+from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import PassQuestion
 from bridge.engine.slew import Slew
 from bridge.engine.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
+from bridge.engine.targets import Targets
 from bridge.engine.tracking import Tracker
-from bridge.model import ErrorKind, MotionState, Source, Stop
+from bridge.model import ErrorKind, MotionState, Source, Stop, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 
@@ -169,3 +172,35 @@ def test_options_go_out_when_idle_and_free_and_again_after_the_refresh() -> None
         ("a", True),
         ("b", True),
     ]
+
+
+# -- the pending target's way to the wire --------------------------------------------------------
+def line(cfg: WorkerConfig, reading_t: float | None = None) -> Link:
+    link = Link(cfg.spec.codec_factory(), cfg.spec, 0.0, cfg.baud)
+    if reading_t is not None:
+        link.got_reading(reading_t)
+    return link
+
+
+def pending(cfg: WorkerConfig, az_deg: float, now: float = 10.0) -> Targets:
+    targets = Targets(cfg)
+    targets.put(Target(az_deg), now)
+    return targets
+
+
+def test_a_target_goes_out_only_when_nothing_comes_first() -> None:
+    cfg = rig()  # Rotor-EZ: stops to re-target, so it asks for a fresh reading first
+    idle = replace(IDLE_AT_90, still_since_t=0.0)
+    assert decide(cfg, line(cfg, 9.9), idle, pending(cfg, 200), False, 10.0).go is Go.SEND
+    assert decide(cfg, line(cfg, 9.9), idle, pending(cfg, 200), True, 10.0).go is Go.WAIT  # held
+    assert decide(cfg, line(cfg, 1.0), idle, pending(cfg, 200), False, 10.0).go is Go.ASK_FIRST
+    turning = replace(idle, state=MotionState.MOVING)
+    assert decide(cfg, line(cfg, 9.9), turning, pending(cfg, 200), False, 10.0).go is Go.STOP_FIRST
+    braking = replace(idle, state=MotionState.BRAKING)
+    assert decide(cfg, line(cfg, 9.9), braking, pending(cfg, 200), False, 10.0).go is Go.WAIT
+
+
+def test_a_target_the_rotor_is_already_at_is_done_without_a_frame() -> None:
+    cfg = rig()
+    done = decide(cfg, line(cfg, 9.9), IDLE_AT_90, pending(cfg, 91), False, 10.0)
+    assert done.go is Go.DONE and done.wire == (91.0, None)
