@@ -313,7 +313,8 @@ def _run(
             "  Or type here: a bearing (120), 's' to stop, 'help' for more, 'q' to quit\n",
             flush=True,
         )
-        screen.start()  # on a terminal: from here one status line, log lines above it
+    screen.start()  # on a terminal: from here one status line, log lines above it
+    if sys.stdin.isatty():
         threading.Thread(target=_read_stdin, args=(screen, console, done), daemon=True).start()
     while not done.wait(0.2):
         if deadline is not None and time.monotonic() >= deadline:

@@ -6,12 +6,13 @@ the bridge's own log) is printed above it. A bearing that changes every degree s
 away what the user types.
 
 Rules:
-1. Live only when stdin and stdout are both terminals (``for_terminal``). Elsewhere (a pipe, a
-   file, the tests) every log line is printed as it comes and the status line is never drawn:
-   what a test reads is what a user piping the demo reads.
-2. Live, stdin is in cbreak mode (no echo and no line editing by the kernel: the screen echoes
-   and edits the typed line itself; ^C stays a signal), put back by ``close`` on every way out.
-   The logging handlers that wrote to the terminal write above the status line until then.
+1. Live only when stdout is a terminal (``for_terminal``). Elsewhere (a pipe, a file, the tests)
+   every log line is printed as it comes and the status line is never drawn: what a test reads
+   is what a user piping the demo reads.
+2. Live with a terminal as stdin too, stdin is in cbreak mode (no echo and no line editing by
+   the kernel: the screen echoes and edits the typed line itself; ^C stays a signal), put back by
+   ``close`` on every way out. The logging handlers that wrote to the terminal write above the
+   status line until then.
 3. The status line is cut to the terminal's width: a carriage return and an erase always clear
    all of it (a wrapped line could not be).
 4. One lock around every write: the MQTT thread, the input thread and logging all print.
@@ -49,8 +50,8 @@ class Screen:
 
     @classmethod
     def for_terminal(cls) -> Screen:
-        """Live when stdin and stdout are terminals (rule 1)."""
-        return cls(live=sys.stdin.isatty() and sys.stdout.isatty())
+        """Live when stdout is a terminal (rule 1)."""
+        return cls(live=sys.stdout.isatty())
 
     # -- output -------------------------------------------------------------------------------
     def log(self, text: str, *, quiet: bool = False) -> None:
@@ -89,7 +90,7 @@ class Screen:
 
     def _draw(self) -> None:
         width = shutil.get_terminal_size((80, 24)).columns - 1
-        prompt = f" > {self._typed}"
+        prompt = f" > {self._typed}" if self._saved_tty is not None else ""  # typing here?
         head = self.status_text()[: max(0, width - len(prompt))]
         self._out.write(CLEAR_LINE + (head + prompt)[-width:])
         self._out.flush()
@@ -100,9 +101,10 @@ class Screen:
         logging above the status line (rule 2)."""
         if not self.live or self._started:
             return
-        fd = sys.stdin.fileno()
-        self._saved_tty = termios.tcgetattr(fd)
-        tty.setcbreak(fd)
+        if sys.stdin.isatty():
+            fd = sys.stdin.fileno()
+            self._saved_tty = termios.tcgetattr(fd)
+            tty.setcbreak(fd)
         for handler in logging.getLogger().handlers:
             if isinstance(handler, logging.StreamHandler) and handler.stream in (
                 sys.stderr,
@@ -133,7 +135,7 @@ class Screen:
     # -- input --------------------------------------------------------------------------------
     def read_lines(self, handle: Callable[[str], bool]) -> None:
         """Hand every typed line to ``handle`` until it returns False or input ends (^D)."""
-        if not self._drawing():
+        if self._saved_tty is None:  # the kernel edits the line and echoes it
             for line in sys.stdin:
                 if not handle(line):
                     return
