@@ -1,47 +1,41 @@
 """The main broker connection: the bridge's presence (online/offline, its last will), the
-retained state it owns and re-publishes, its events, and the first look of every connect. paho's
-client is built, connected and judged for takeovers by connection.py (shared with the stop lane,
-lane.py); the owned-topic judge is owned.py; what becomes of a publish is delivery.py; the
-verdicts of the first look are claim.py's.
+retained state it owns and re-publishes, its events, and the first look of every connect.
+connection.py builds, connects and subscribes paho's client (for the stop lane too, lane.py);
+owned.py judges the bridge's own topics; delivery.py follows each publish; look.py keeps the
+first look's books and claim.py gives its verdicts.
 
-The bridge's MQTT rules, numbered once for all of mqtt/ (code and docs cite "client.py rule N");
-each is written out in full in the module that keeps it:
-1. Protocol, clean start, retain-as-published: connection.py.
+The bridge's MQTT rules, numbered once for all of mqtt/ (code and docs cite "client.py rule N"),
+each written out in the module that keeps it:
+- connection.py: 1 protocol, clean start, retain-as-published; 4 commands at QoS 0; 5 short
+  callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one connection
+  (the takeover back-off); 9 TCP quick-ack after every read.
+- owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
+- delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
+- look.py: 14 one live bridge per base topic, the first look (here: the look is started,
+  only halts are taken while it runs, ``gated``); 15 deletions said in a few lines.
+- here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
-   connect, ``offline`` on a clean shutdown: here.
+   connect, ``offline`` on a clean shutdown.
 3. On every connect: subscribe again and re-publish every retained message we own (the broker
    may have restarted without persistence and lost them). Retained messages are kept in a
-   cache; while disconnected they only update the cache, events wait in delivery.py's bounded
-   backlog (rule 13): here.
-4. Command topics at QoS 0; 5. short callbacks; 6. paho's reconnect loop (a refused or failed
-   connection is logged here, once per reason); 7. one client id, one connection (the takeover
-   back-off; said here once an episode); 9. TCP quick-ack: connection.py.
+   cache; while disconnected they only update the cache; events wait (rule 13).
 8. Retained state goes out at QoS 0 (STATE_QOS): the newest value supersedes every older one,
    so an acknowledgement buys nothing, while QoS 1 costs a PUBACK per message (half of the
    bridge's CPU with 32 rotators turning, benchmarks/) and lets paho re-send an old value over
    the fresher state re-published from the cache. Discovery configs, the bridge's
-   online/offline and error events stay QoS 1; a rotator's availability is state: here.
-10. The bridge's retained topics are its own: owned.py judges; here they are subscribed (MQTT
-   5: no-local) and our value is put back.
-11. What the broker refuses is said; 13. what paho does not take is sent again: delivery.py.
+   online/offline and error events stay QoS 1; a rotator's availability is state.
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
    stayed). So ``on_connect`` takes them from paho: one whose retained topic is in the cache
-   is superseded by the value just sent; the others (events, deletions) go again, after the
-   state: here.
-14. One live bridge per base topic, the first look of every connect (``B/bridge/hello``, not
-   retained): look.py, with claim.py's verdicts; here the look is started, nothing but halts
-   is taken while it runs (``gated``), and the state goes out when it ends.
-15. Deleting a retained config (``clear_retained``) is said in the log, a flood of them in a
-   few lines: look.py.
+   is superseded by the value just sent; the others (events, deletions) go again, after it.
 
 Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
 cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
-calls back holding its own mutex, and a thread that publishes holds ``_lock`` and then waits for
-paho's: so a callback that needs ``_lock`` takes nothing of paho's under it that another thread
-takes first, and what would (reports, the refusal) is handed to a thread of its own
-(docs/architecture.md, MQTT threads). delivery.py keeps its own lock for message ids.
+calls back holding its own mutex, and a thread that publishes holds ``_lock``, then waits for
+paho's: so ``on_publish`` never takes ``_lock`` (delivery.py has a lock of its own), and what a
+callback hands on that publishes (a denied topic, the refusal) goes on a thread of its own
+(docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -53,7 +47,6 @@ from collections.abc import Callable
 
 import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
-from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.claim import Claim
 from bridge.mqtt.connection import Connection, MessageHandler
@@ -265,12 +258,7 @@ class MqttClient(Connection):
     def _opened(self, client: paho.Client) -> None:
         """Commands subscribed before ``online`` (the broker handles our packets in order: a
         client that sends a command the moment it sees ``online`` is already heard)."""
-        owned = self._owned.filters
-        if self._v5 and owned:  # rule 10: not our own messages back
-            mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
-            self._subscribe(client, [(topic, mine) for topic in owned])
-        elif owned:
-            self._subscribe(client, [(topic, 0) for topic in owned])
+        self._subscribe(client, self._owned.subscriptions())  # rule 10
         held = client.drop_out_messages()  # rule 12: paho would send them after this returns
         with self._lock:
             self._delivery.new_connection()
@@ -356,12 +344,7 @@ class MqttClient(Connection):
         with self._lock:
             if look.looking != n:
                 return
-        log.warning(
-            "no answer to the bridge's first look in %g s (does the broker's ACL deny %s?): "
-            "judging by what the broker showed so far, and deleting no stale discovery",
-            LOOK_TIMEOUT_S,
-            look.claim.hello_topic,
-        )
+        look.say_timed_out(LOOK_TIMEOUT_S)
         self._end_look(n, timed_out=True)
 
     def _refuse(self) -> None:

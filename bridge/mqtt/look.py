@@ -111,6 +111,14 @@ class FirstLook:
             )
         return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears)
 
+    def say_timed_out(self, timeout_s: float) -> None:
+        log.warning(
+            "no answer to the bridge's first look in %g s (does the broker's ACL deny %s?): "
+            "judging by what the broker showed so far, and deleting no stale discovery",
+            timeout_s,
+            self.claim.hello_topic,
+        )
+
     def live_info(self, payload: bytes) -> str | None:
         """Claim rule 4: the error to exit with, if another live bridge's info means this one
         must go."""

@@ -1,6 +1,6 @@
 """The owned-topic judge: whether a retained value heard on one of the bridge's own topics is
 its own, and when to put its own back and say so. Pure: a clock in, decisions out; no paho
-connection, no lock (the client asks under its own lock, client.py).
+client, no lock (the client asks under its own lock, client.py).
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 10. The bridge owns its retained topics (``watch``: state, status, lock and option states, its
@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from paho.mqtt.client import topic_matches_sub  # a pure function of two strings
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 FOREIGN_FIX_S = 2.0
 FOREIGN_LOG_S = 60.0
@@ -50,6 +51,14 @@ class OwnedTopics:
 
     def watch(self, filters: list[str]) -> None:
         self.filters = list(filters)
+
+    def subscriptions(self) -> list[tuple[str, int | SubscribeOptions]]:
+        """What to subscribe to on every connect: MQTT 5 without our own messages back
+        (no-local); MQTT 3.1.1 hears them, and ``ours`` knows them."""
+        if self._hears_own:
+            return [(f, 0) for f in self.filters]
+        mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
+        return [(f, mine) for f in self.filters]
 
     def owns(self, topic: str) -> bool:
         return any(topic_matches_sub(f, topic) for f in self.filters)

@@ -99,3 +99,11 @@ def test_mqtt_5_keeps_no_echoes_and_unowned_topics_none_either() -> None:
     v311, _ = judge(hears_own=True)
     v311.sent("rotor/target", b"10")
     assert not v311.ours("rotor/target", b"10", held=b"")
+
+
+def test_mqtt_5_subscribes_without_its_own_messages_and_3_1_1_hears_them() -> None:
+    v5, _ = judge(hears_own=False)
+    (topic, options), _option = v5.subscriptions()
+    assert topic == STATE and not isinstance(options, int) and options.noLocal
+    v311, _ = judge(hears_own=True)
+    assert v311.subscriptions() == [(STATE, 0), ("rotor/option/+/state", 0)]
