@@ -44,12 +44,13 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from typing import Unpack
 
 import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.mqtt.claim import Claim
-from bridge.mqtt.connection import Connection, MessageHandler
+from bridge.mqtt.connection import Connection, MessageHandler, Options
 from bridge.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
 from bridge.mqtt.limiter import EventLimiter
 from bridge.mqtt.look import CLEARS_SAID_AT_ONCE, FirstLook, Outcome, say_clear, say_clears
@@ -72,26 +73,20 @@ class MqttClient(Connection):
         subscriptions: list[str],
         on_message: MessageHandler,
         on_connect: Callable[[], None] | None = None,
-        on_new_connection: Callable[[], None] | None = None,
         on_connection_lost: Callable[[], None] | None = None,
-        no_replay: list[str] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
         claim: Claim | None = None,
         on_refused: Callable[[str], None] | None = None,
-        reconnect_min_s: int = 1,
-        reconnect_max_s: int = 30,
         clock: Callable[[], float] = time.monotonic,
+        **options: Unpack[Options],
     ) -> None:
         super().__init__(
             settings,
             settings.effective_client_id(),
             subscriptions=subscriptions,
             on_message=on_message,
-            on_new_connection=on_new_connection,
-            no_replay=no_replay,
-            reconnect_min_s=reconnect_min_s,
-            reconnect_max_s=reconnect_max_s,
             clock=clock,
+            **options,
         )
         self._will_topic = will_topic
         self._on_connect_hook = on_connect

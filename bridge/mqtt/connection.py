@@ -58,7 +58,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, Literal
+from typing import Any, Literal, TypedDict, Unpack
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
@@ -205,6 +205,15 @@ def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
     return "other"
 
 
+class Options(TypedDict, total=False):
+    """What both connections take alike, as keywords of their constructors."""
+
+    on_new_connection: Callable[[], None] | None  # before any message of a new connection
+    no_replay: list[str] | None  # command filters whose retained message is not replayed
+    reconnect_min_s: int  # paho's reconnect back-off (rule 6)
+    reconnect_max_s: int
+
+
 class Connection:
     """A paho client and what both connections do with it. Subclasses say what the rest means
     through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
@@ -216,18 +225,18 @@ class Connection:
         *,
         subscriptions: list[str],
         on_message: MessageHandler,
-        on_new_connection: Callable[[], None] | None,
-        no_replay: list[str] | None,
-        reconnect_min_s: int,
-        reconnect_max_s: int,
         clock: Callable[[], float] = time.monotonic,
+        **options: Unpack[Options],
     ) -> None:
+        reconnect_min_s = options.get("reconnect_min_s", 1)
+        reconnect_max_s = options.get("reconnect_max_s", 30)
+        no_replay = options.get("no_replay")
         self._settings = settings
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
         self._no_replay = frozenset(no_replay or ())
         self._handler = on_message
-        self._on_new_connection = on_new_connection
+        self._on_new_connection = options.get("on_new_connection")
         self._clock = clock
         self._reconnect_s = (reconnect_min_s, reconnect_max_s)
         self._guard = TakeoverGuard()

@@ -34,11 +34,12 @@ import hashlib
 import logging
 import threading
 from collections.abc import Callable
+from typing import Unpack
 
 import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.mqtt.connection import Connection, Ending, MessageHandler
+from bridge.mqtt.connection import Connection, Ending, MessageHandler, Options
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -64,21 +65,11 @@ class StopLane(Connection):
         subscriptions: list[str],
         on_message: MessageHandler,
         on_denied: Callable[[str, str], None] | None = None,
-        on_new_connection: Callable[[], None] | None = None,
-        no_replay: list[str] | None = None,
-        reconnect_min_s: int = 1,
-        reconnect_max_s: int = 30,
+        **options: Unpack[Options],
     ) -> None:
         self.client_id = lane_client_id(settings)
         super().__init__(
-            settings,
-            self.client_id,
-            subscriptions=subscriptions,
-            on_message=on_message,
-            on_new_connection=on_new_connection,
-            no_replay=no_replay,
-            reconnect_min_s=reconnect_min_s,
-            reconnect_max_s=reconnect_max_s,
+            settings, self.client_id, subscriptions=subscriptions, on_message=on_message, **options
         )
         self._on_denied = on_denied
         self._stopped = False  # stop() was called: start() does nothing any more
