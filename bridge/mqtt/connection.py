@@ -228,17 +228,14 @@ class Connection:
         clock: Callable[[], float] = time.monotonic,
         **options: Unpack[Options],
     ) -> None:
-        reconnect_min_s = options.get("reconnect_min_s", 1)
-        reconnect_max_s = options.get("reconnect_max_s", 30)
-        no_replay = options.get("no_replay")
         self._settings = settings
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
-        self._no_replay = frozenset(no_replay or ())
+        self._no_replay = frozenset(options.get("no_replay") or ())
         self._handler = on_message
         self._on_new_connection = options.get("on_new_connection")
         self._clock = clock
-        self._reconnect_s = (reconnect_min_s, reconnect_max_s)
+        self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
         self._guard = TakeoverGuard()
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
@@ -249,7 +246,7 @@ class Connection:
         self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
         self.connected = threading.Event()
         c = new_client(settings, client_id)
-        c.reconnect_delay_set(reconnect_min_s, reconnect_max_s)
+        c.reconnect_delay_set(*self._reconnect_s)
         c.on_connect = self._on_connect
         c.on_connect_fail = self._on_connect_fail
         c.on_disconnect = self._on_disconnect
@@ -260,10 +257,8 @@ class Connection:
     def _connect(self) -> None:
         """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
         s = self._settings
-        if s.protocol == "5":
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=True)
-        else:
-            self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s)
+        fresh = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean session
+        self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh)
         self._client.loop_start()
 
     def _disconnect(self) -> None:
