@@ -6,7 +6,7 @@ and the backlog of events, and runs the thread that retries them.
 Locks: the client's lock is held around ``send``, ``take_*`` and ``hold_event`` (one order of
 publishes); ``_ids_lock`` alone guards the message ids, because paho calls ``on_publish`` holding
 its own mutex and a thread that publishes holds the client's lock and then waits for paho's: the
-client's lock taken in ``on_publish`` would deadlock (docs/architecture.md, MQTT threads).
+client's lock taken in ``on_publish`` would deadlock (docs/architecture.md).
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py) or a
