@@ -45,7 +45,8 @@ def at(v: VirtualRotator, az_deg: float) -> Callable[[VirtualRotator], bool]:
 
 
 def assert_never_disobeyed(v: VirtualRotator) -> None:
-    """No bearing ever reached the controller while it turned or braked (ARCHITECTURE rule 7)."""
+    """No bearing ever reached the controller while it turned or braked (docs/architecture.md
+    rule 7)."""
     assert v.frames(*DISOBEYED) == []
 
 
