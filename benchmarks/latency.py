@@ -479,7 +479,9 @@ def _notes(rows: dict[str, Any]) -> list[str]:
         "percentiles are nearest-rank; polls/s = the bridge's position queries during the run; "
         "'nodelay broker' = mosquitto with set_tcp_nodelay true (default false); '0-3 ms after "
         "...': each stop published 0-3 ms after another command, timed from the stop's publish, "
-        "the rotor braking (targets held); 'refused': 999, answered by an error at QoS 1.",
+        "the target going out first (7 B); 'refused': 999, answered by an error at QoS 1; "
+        "stops to a rotor at rest come a second apart (a stop that adds nothing to the one "
+        "before is not written).",
         "half-duplex lines (SPID, SatEL): a command waits for the exchange in flight (Rot2Prog: "
         "13 B query 217 ms + 12 B reply 200 ms at 600 baud); full-duplex Rotor-EZ: a stop waits "
         "only for a query still in the UART (AI1; = 8.3 ms).",
