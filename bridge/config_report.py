@@ -143,11 +143,24 @@ def summary(settings: Settings) -> list[str]:
     return lines
 
 
+def _bearings(r: RotatorSettings) -> str:
+    """The true bearings a rotator takes, as a user would say them: on a scale that wraps, an
+    offset turns limits narrower than a circle into a gap anywhere on it (limits 20..340 with
+    offset 180 refuse 160..200, not the ends of 0..360)."""
+    p = r.pointing
+    lo, hi = p.target_range()
+    gap = 360.0 - (p.az_max_deg - p.az_min_deg)
+    if not (p.az_wraps and p.offset_deg and gap > 0.0):
+        return f"{lo:g}..{hi:g}"
+    start = (p.az_max_deg + p.offset_deg) % 360.0
+    end = (p.az_min_deg + p.offset_deg) % 360.0
+    return f"0..360 except {start:g}..{end:g}"
+
+
 def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     found = "found" if os.path.exists(r.port) else "NOT FOUND"
     name = f"{r.id} ({r.name})" if r.name and r.name != r.id else r.id
-    lo, hi = r.pointing.target_range()
-    on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {lo:g}..{hi:g}"]
+    on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
     if r.rotctld_port is not None:
         on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
     if r.pst_udp_port is not None:

@@ -464,6 +464,17 @@ def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) 
     assert lines[-1] == f"config OK: {path}"
 
 
+def test_check_config_names_the_gap_an_offset_puts_in_narrowed_limits(tmp_path: Path) -> None:
+    # limits 20..340 on a scale that wraps, offset 180: true 160..200 is refused, not 0 or 360
+    text = (
+        f'[[rotators]]\nid = "hf"\nmodel = "rotorez"\nport = "{tmp_path / "tty"}"\n'
+        "az_offset_deg = 180\naz_min_deg = 20\naz_max_deg = 340\n"
+    )
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 0, out.stderr
+    assert "takes bearings 0..360 except 160..200" in out.stdout, out.stdout
+
+
 @pytest.mark.parametrize(
     ("change", "said"),
     [
