@@ -53,3 +53,19 @@ def test_a_tracking_target_dropped_when_the_controller_falls_silent_is_reported(
     assert [e.message for e in dropped] == ["target dropped: controller not answering"]
     assert dropped[0].command is not None and dropped[0].command.startswith("target az")
     assert v.status.last_error == "target dropped: controller not answering"
+
+
+def test_tracking_waits_out_the_settle_time_on_a_rotor_without_a_brake(rig: Rig) -> None:
+    """Tracking sends nothing while the rotor may still be turning at start-up (motion rule 4):
+    an MD-01 has no brake, so it is shown idle meanwhile (motion.settling), yet tracking's
+    first target still goes out only settle_s after the first reading, as it did while such a
+    rotor was shown braking."""
+    v = rig("md01", sky=Sky(0.0, 60.0), wall_epoch_s=SUN_EPOCH, emulator={"start_az_deg": 100})
+    v.run_until(lambda h: h.status.available, 10, "the first reading")
+    first_reading_t = v.now
+    v.track(Body.sun())
+    v.run_until(lambda h: h.status.target_az_deg is not None, 10, "tracking's first target")
+    codec = v.cfg.spec.codec_factory()
+    query = codec.encode_query()
+    targets = [w.t for w in v.writes if w.t >= first_reading_t and w.data != query]
+    assert targets and min(targets) >= first_reading_t + v.cfg.motion.settle_s - 1e-9
