@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 import math
 
+from bridge.engine import motion as mo
 from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
@@ -62,7 +63,8 @@ class AutoPark:
         deadline = self.deadline()
         if deadline is None or now < deadline or self._park is None:
             return NOTHING
-        ready = m.state is MotionState.IDLE and scene.pending is None  # rule 2
+        settled = m.state is MotionState.IDLE and not mo.settling(m)  # (no brake: motion rule 4)
+        ready = settled and scene.pending is None  # rule 2
         if not ready or scene.locked or scene.parked:
             return NOTHING
         self._since = now  # rule 3

@@ -247,7 +247,7 @@ class Controller:
         link = self.link
         if link is None or not self.answering:
             return
-        idle = self.motion.state is MotionState.IDLE
+        idle = self.motion.state is MotionState.IDLE and not mo.settling(self.motion)
         for name, enabled in self.options.take(idle, not target_waits and link.free(), now):
             try:
                 frame = link.codec.encode_option(name, enabled)
@@ -278,9 +278,11 @@ class Controller:
         if silent and self.answering:  # takes the whole slew: a reply owed may still come)
             self.answering, busy = False, False  # (the waiting target is dropped)
             self.motion = mo.link_down(self.motion)
-            self.notes.append(Ends("controller not answering"))
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
+            # the drop before tracking's end: a target of tracking's own is reported dropped
+            # too (Ends would drop it silently first)
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
+            self.notes.append(Ends("controller not answering"))
         elif silent and link.last_reply_t is None and not self._silence_reported:
             self._silence_reported = True
             self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))

@@ -2,8 +2,9 @@
 switch a SatEL report may ask for: what is owed to the controller, and when. Pure.
 
 Rules:
-1. Options are sent only while the rotor is idle, no target waits and the line is free, and
-   re-sent after every (re)connect, after a power-on byte and every OPTIONS_REFRESH_S while
+1. Options are sent only while the rotor is idle (and settled: a rotor without a brake is idle
+   while ``motion.settling``, and may still be turning), no target waits and the line is free,
+   and re-sent after every (re)connect, after a power-on byte and every OPTIONS_REFRESH_S while
    idle: the controller forgets them at power-off, and the letters are idempotent.
 2. A report that says automatic motion is off owes an enable, sent once the line is free and
    no slew or stop is under way.

@@ -51,6 +51,7 @@ import logging
 import math
 from dataclasses import dataclass, replace
 
+from bridge.engine import motion as mo
 from bridge.engine.actions import Report
 from bridge.engine.config import TrackConfig as TrackConfig  # re-exported: app.py builds it
 from bridge.engine.config import WorkerConfig
@@ -220,7 +221,10 @@ class Tracker:
         margin_s = self._travel_s(scene, az, el) + PREPOSITION_MARGIN_S
         if sky.after_pass and utc < p.aos_s - margin_s:
             return Proposal(busy=True)
-        if sky.after_pass and scene.motion.state in (MotionState.MOVING, MotionState.BRAKING):
+        m = scene.motion
+        if sky.after_pass and (
+            m.state in (MotionState.MOVING, MotionState.BRAKING) or mo.settling(m)
+        ):
             return Proposal(busy=True)  # a park still on its way: the wait target follows it
         self._waited_for = p.aos_s
         self._last = (az, el)
@@ -234,8 +238,8 @@ class Tracker:
             return waiting
         if not self._rig.motion.direct_retarget and m.state is not MotionState.IDLE:
             return waiting
-        if m.state in (MotionState.BRAKING, MotionState.STALLED):
-            return waiting
+        if m.state in (MotionState.BRAKING, MotionState.STALLED) or mo.settling(m):
+            return waiting  # (settling: no brake, but maybe still turning, motion.py rule 4)
         lead = self._half_step_s(sky, utc)
         body = sky.at(min(utc + lead, p.los_s)) if lead is not None else None
         if body is None:

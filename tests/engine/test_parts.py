@@ -51,6 +51,7 @@ def test_auto_park_proposes_the_park_after_a_quiet_spell_and_only_when_free() ->
         {"locked": True},
         {"parked": True},
         {"motion": replace(IDLE_AT_90, state=MotionState.BRAKING)},
+        {"motion": replace(IDLE_AT_90, idle_not_before_t=61.5)},  # no brake, settling
     ):
         assert park.step(scene(61.0, **busy)) is NOTHING, busy
     proposal = park.step(scene(61.0))
