@@ -1,5 +1,6 @@
 """The benchmarks' own plumbing: processes that are always cleaned up, a private broker, the bridge
-as a real service process, an MQTT recorder, rotctld, /proc readings, statistics and tables.
+as a real service process (tests.support's BridgeProcess, started through a Scope), an MQTT
+recorder.
 
 Rules:
 1. Every process a benchmark starts goes through a Scope (spawn), which ends it in reverse order
@@ -11,12 +12,14 @@ Rules:
 2. The bridge under test runs as its own process (`python -m bridge run -c FILE`), so its CPU,
    memory and GIL are its own; emulators run in this process (their frame log is the ground
    truth, stamped on time.monotonic, the same clock as ours) or in the emulator host.
-3. Nothing here imports bridge internals except the emulators (and ModelSpec data for frame
-   sizes): what is measured is the service as a user runs it.
+3. Nothing here runs bridge code except the emulators (and ModelSpec data for frame sizes;
+   tests.support's rig brings in the bridge's modules for its in-process mode, unused here):
+   what is measured is the service as a user runs it.
 4. What the tests have too comes from them (tests.support: waiting with a deadline, the MQTT
-   probe, the bridge's environment and TOML file; bridge.mosquitto: a free port, the mosquitto
-   executable), not a copy of it. `python -m benchmarks` runs from the top of the checkout, so
-   `tests` is importable; the broker here is its own start (rule 1, and no -v log per message).
+   probe, the bridge's process, environment and configuration, the rig; bridge.mosquitto: a free
+   port, the mosquitto executable), not a copy of it. `python -m benchmarks` runs from the top of
+   the checkout, so `tests` is importable; the broker here is its own start (rule 1, and no -v
+   log per message).
 """
 
 from __future__ import annotations
@@ -29,17 +32,16 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import paho.mqtt.client as paho
 
 from bridge.mosquitto import answers, find_mosquitto, free_port
-from tests.support import Probe, bridge_env, to_toml
+from tests.support import BridgeProcess, Probe, bridge_env
 from tests.support import wait_until as _wait_until
+from tests.support.process import bridge_config
 
 REPO = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
@@ -119,6 +121,10 @@ class Scope(contextlib.ExitStack):
         self.processes.append(proc)
         return proc
 
+    def spawner(self, argv: list[str], log: Path) -> subprocess.Popen[bytes]:
+        """``spawn`` as tests.support's BridgeProcess and Rig call it (``log`` in this scope)."""
+        return self.spawn(argv, log_name=str(log.relative_to(self.workdir)))
+
 
 #: tests.support's wait_until(predicate, timeout_s, what, interval_s), raising BenchError
 wait_until = functools.partial(_wait_until, error=BenchError)
@@ -156,20 +162,6 @@ def start_broker(scope: Scope, extra_conf: str = "") -> int:
 
 
 # -- the bridge as a service process ------------------------------------------------------------
-@dataclass
-class BridgeProcess:
-    proc: subprocess.Popen[bytes]
-    log: Path
-    started_t: float
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
-
-    def check(self) -> None:
-        check_alive(self.proc, "the bridge", self.log)
-
-
 def start_bridge(
     scope: Scope,
     broker_port: int,
@@ -180,20 +172,20 @@ def start_bridge(
     name: str = "bridge",
     sections: dict[str, Any] | None = None,
 ) -> BridgeProcess:
-    """``sections``: more of the configuration file (e.g. ``station``, ``tracking``)."""
-    config = {
-        "log_level": log_level,
-        "state_file": str(scope.workdir / f"{name}-state.json"),
-        "mqtt": {"port": broker_port, "client_id": f"bench-{name}-{os.getpid()}"},
-        "homeassistant": {"enabled": homeassistant},
-        **(sections or {}),
-        "rotators": rotators,
-    }
-    path = scope.workdir / f"{name}.toml"
-    path.write_text(to_toml(config))
-    t0 = time.monotonic()
-    proc = scope.spawn([PYTHON, "-m", "bridge", "run", "-c", str(path)], log_name=f"{name}.log")
-    return BridgeProcess(proc, scope.workdir / f"{name}.log", t0)
+    """tests.support's BridgeProcess, started through ``scope`` (rule 1), its ``check`` raising
+    BenchError. ``sections``: more of the configuration file (e.g. ``station``, ``tracking``)."""
+    config = bridge_config(
+        scope.workdir,
+        broker_port,
+        rotators,
+        client_id=f"bench-{name}-{os.getpid()}",
+        sections={"homeassistant": {"enabled": homeassistant}, **(sections or {})},
+        state_name=f"{name}-state.json",
+    )
+    bridge = BridgeProcess(
+        scope.workdir, config, log_level=log_level, name=name, spawn=scope.spawner, error=BenchError
+    )
+    return bridge.start()
 
 
 # -- MQTT ---------------------------------------------------------------------------------------

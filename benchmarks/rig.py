@@ -1,6 +1,8 @@
-"""One measured set-up: a private broker, an emulated controller in this process (frames logged on
-our clock), the bridge as its own service process on that emulator's pty, and a recording MQTT
-client. Leaving the `with` block stops the bridge, the emulator, the client and the broker.
+"""One measured set-up: tests.support's Rig with the real timings, a private broker, emulated
+controllers in this process (frames logged on our clock) behind paced lines, the bridge as its
+own service process on them, and a recording MQTT client. Leaving the `with` block stops the
+bridge, the emulators, the client and the broker. Also the emulator host (EmuHost), for
+controllers in a process of their own.
 """
 
 from __future__ import annotations
@@ -14,21 +16,30 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.harness import (
-    PYTHON,
-    BenchError,
-    BridgeProcess,
-    Mqtt,
-    Scope,
-    start_bridge,
-    start_broker,
-)
+from benchmarks.harness import PYTHON, BenchError, Mqtt, Scope, start_broker
 from benchmarks.line import ByteCounter, FrameLog, PacedRelay
 from bridge import emulators
 from bridge.emulators import EmulatedPort
 from bridge.protocols import REGISTRY
+from tests.support.rig import REAL_TIMINGS, Line, OpenLine, Rig
 
-TOPIC = "rotor"  # the topic of a bridge with one rotator
+__all__ = [
+    "TOPIC",
+    "EmuHost",
+    "Line",
+    "MultiRig",
+    "Rig",
+    "baud_of",
+    "many_rotators",
+    "measured_rig",
+    "open_line",
+    "single_rotator",
+]
+
+TOPIC = "rotor"  # the base topic (a bridge with one rotator publishes right under it)
+
+#: the benchmarks' name for a rig with several rotators: the same Rig (``t(id, leaf)``)
+MultiRig = Rig
 
 
 def baud_of(model: str, emu_opts: dict[str, Any] | None = None) -> int:
@@ -58,24 +69,68 @@ def open_line(
     return emu, relay, link
 
 
-@dataclass
-class Rig:
-    scope: Scope
-    model: str
-    emu: EmulatedPort[Any]
-    frames: FrameLog
-    mqtt: Mqtt
-    bridge: BridgeProcess
-    broker_port: int
-    counter: ByteCounter | None
-    relay: PacedRelay | None
-    topic: str = TOPIC
+def measured_line(*, paced: bool = True, count_bytes: bool = True) -> OpenLine:
+    """The rig's ``open_line`` for a measurement: the controller's frames logged, its bytes
+    counted (if asked), behind a paced relay (if asked)."""
 
-    def t(self, leaf: str) -> str:
-        return f"{self.topic}/{leaf}"
+    def open_(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Line:
+        assert isinstance(rig.scope, Scope)
+        frames = FrameLog()
+        emu, relay, path = open_line(rig.scope, model, frames, options, paced, name=f"tty-{rid}")
+        counter = ByteCounter(emu) if count_bytes else None
+        return Line(rid, model, emu, path, frames, counter, relay)
+
+    return open_
+
+
+@dataclass(frozen=True)
+class _Broker:
+    port: int
 
 
 @contextlib.contextmanager
+def measured_rig(
+    parent: Scope,
+    name: str,
+    specs: list[tuple[str, str, dict[str, Any], dict[str, Any]]],
+    *,
+    homeassistant: bool = True,
+    wait_online_s: float = 30.0,
+    broker_conf: str = "",
+    paced: bool = True,
+    count_bytes: bool = True,
+) -> Iterator[Rig]:
+    """specs: (id, model, emulator options, rotator settings) for each rotator of one bridge,
+    which must be online within ``wait_online_s`` and still running at the end."""
+    with Scope(parent.workdir / name) as scope:
+        broker = _Broker(start_broker(scope, broker_conf))
+        mqtt = Mqtt(broker.port, [f"{TOPIC}/#"], name=f"rec-{name}")
+        scope.callback(mqtt.close)
+        line = measured_line(paced=paced, count_bytes=count_bytes)
+        rig = Rig(
+            scope.workdir,
+            broker,
+            mqtt,
+            timings=REAL_TIMINGS,
+            open_line=line,
+            scope=scope,
+            spawn=scope.spawner,
+        )
+        rig.base = TOPIC
+        for rid, model, emu_opts, rot_opts in specs:
+            rig.add(rid, model, emu_opts, **rot_opts)
+        rig.sections["homeassistant"] = {"enabled": homeassistant}
+        bridge = rig.start_process(log_level="INFO", error=BenchError)
+        online = [rig.t(rid, "availability") for rid in rig.lines]
+        try:
+            mqtt.wait_all(online, "online", wait_online_s)
+        except Exception:
+            bridge.check()
+            raise
+        yield rig
+        bridge.check()  # it must have survived the measurement
+
+
 def single_rotator(
     parent: Scope,
     name: str,
@@ -88,80 +143,30 @@ def single_rotator(
     wait_online_s: float = 30.0,
     broker_conf: str = "",
     paced: bool = True,
-) -> Iterator[Rig]:
-    with Scope(parent.workdir / name) as scope:
-        broker_port = start_broker(scope, broker_conf)
-        mqtt = Mqtt(broker_port, [f"{TOPIC}/#"], name=f"rec-{name}")
-        scope.callback(mqtt.close)
-        frames = FrameLog()
-        emu, relay, link = open_line(scope, model, frames, emu_opts, paced)
-        counter = ByteCounter(emu) if count_bytes else None
-        rot = {"id": "r", "model": model, "port": str(link), **(rotator or {})}
-        bridge = start_bridge(scope, broker_port, [rot], homeassistant=homeassistant)
-        rig = Rig(scope, model, emu, frames, mqtt, bridge, broker_port, counter, relay)
-        try:
-            mqtt.wait_value(rig.t("availability"), "online", wait_online_s)
-        except Exception:
-            bridge.check()
-            raise
-        yield rig
-        bridge.check()  # it must have survived the measurement
+) -> contextlib.AbstractContextManager[Rig]:
+    """A rig with one rotator, id ``r``: ``rig.emu``, ``rig.frames``, ``rig.t(leaf)``."""
+    return measured_rig(
+        parent,
+        name,
+        [("r", model, emu_opts or {}, rotator or {})],
+        homeassistant=homeassistant,
+        wait_online_s=wait_online_s,
+        broker_conf=broker_conf,
+        paced=paced,
+        count_bytes=count_bytes,
+    )
 
 
-@dataclass
-class Line:
-    """One emulated controller behind its paced line, in this process."""
-
-    id: str
-    model: str
-    emu: EmulatedPort[Any]
-    frames: FrameLog
-    counter: ByteCounter
-    relay: PacedRelay | None
-    path: Path
-
-
-@dataclass
-class MultiRig:
-    scope: Scope
-    lines: dict[str, Line]
-    mqtt: Mqtt
-    bridge: BridgeProcess
-    broker_port: int
-
-    def t(self, rid: str, leaf: str) -> str:
-        return f"{TOPIC}/{rid}/{leaf}"
-
-
-@contextlib.contextmanager
 def many_rotators(
     parent: Scope,
     name: str,
     specs: list[tuple[str, str, dict[str, Any], dict[str, Any]]],
     *,
     wait_online_s: float = 30.0,
-) -> Iterator[MultiRig]:
-    """specs: (id, model, emulator options, rotator settings) for each rotator of one bridge."""
-    with Scope(parent.workdir / name) as scope:
-        broker_port = start_broker(scope)
-        mqtt = Mqtt(broker_port, [f"{TOPIC}/#"], name=f"rec-{name}")
-        scope.callback(mqtt.close)
-        lines: dict[str, Line] = {}
-        rotators = []
-        for rid, model, emu_opts, rot_opts in specs:
-            frames = FrameLog()
-            emu, relay, path = open_line(scope, model, frames, emu_opts, name=f"tty-{rid}")
-            lines[rid] = Line(rid, model, emu, frames, ByteCounter(emu), relay, path)
-            rotators.append({"id": rid, "model": model, "port": str(path), **rot_opts})
-        bridge = start_bridge(scope, broker_port, rotators)
-        rig = MultiRig(scope, lines, mqtt, bridge, broker_port)
-        try:
-            mqtt.wait_all([rig.t(rid, "availability") for rid in lines], "online", wait_online_s)
-        except Exception:
-            bridge.check()
-            raise
-        yield rig
-        bridge.check()
+) -> contextlib.AbstractContextManager[Rig]:
+    """A rig with several rotators, each line's bytes counted: ``rig.lines``, ``rig.t(rid, leaf)``
+    (also ``rig.topic``)."""
+    return measured_rig(parent, name, specs, wait_online_s=wait_online_s)
 
 
 class EmuHost:

@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 
 from bridge import __version__
-from bridge.config_report import config_warnings, masked
+from bridge.config_report import config_warnings, masked, summary
 from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
@@ -49,10 +50,20 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_check_config(args: argparse.Namespace) -> int:
+    """A summary, the warnings, every value with --full, and the line that says it is good
+    (config_report.py); a file that is not good is one message on stderr and exit 2."""
     settings = _load(args)
-    print(json.dumps(masked(settings), indent=2))
-    for warning in config_warnings(settings):
-        print(f"rotor-bridge: warning: {warning}", file=sys.stderr)
+    for line in summary(settings):
+        print(line)
+    warnings = config_warnings(settings)
+    for warning in warnings:
+        print(f"warning: {warning}")
+    if args.full:
+        print("every value (model defaults filled in):")
+        print(json.dumps(masked(settings), indent=2))
+    path = args.config or os.environ.get("ROTOR_BRIDGE_CONFIG")
+    source = os.path.abspath(path) if path else "(the environment)"
+    print(f"config OK: {source}")
     return 0
 
 
@@ -107,12 +118,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser(
         "check-config",
-        help="validate and print the effective settings",
-        description="Validate the configuration and print the settings the bridge would use, "
-        "model defaults filled in and secrets masked. Things that are allowed but probably "
-        "wrong are warned about on stderr; exit code 0 when valid, 2 when not.",
+        help="validate the configuration and summarise it",
+        description="Validate the configuration and summarise it: each rotator's model and "
+        "whether its port is there, the broker, and what is on. Things that are allowed but "
+        "probably wrong are warned about in the same output; --full adds every value the "
+        "bridge would use, model defaults filled in, secrets masked. Exit code 0, with a last "
+        "line 'config OK: FILE', when valid; 2 and one message on stderr when not.",
     )
     p.add_argument("-c", "--config", help="TOML file (default: $ROTOR_BRIDGE_CONFIG)")
+    p.add_argument("--full", action="store_true", help="print every value as well")
     p.set_defaults(func=cmd_check_config)
 
     p = sub.add_parser(

@@ -1,23 +1,37 @@
-"""What `rotor-bridge check-config` prints about valid settings: the values and the warnings.
+"""What `rotor-bridge check-config` prints about valid settings: a summary, the warnings and
+(``--full``) every value.
 
 Rules:
 1. masked() shows every value the bridge will use, model defaults filled in; null only where
    nothing applies (no elevation axis, no rotctld port, no park position, no credentials).
-   What a value means where that is not plain is shown beside it: the station's position from
-   its locator, the true bearings a rotator takes (its raw limits seen through the offset).
-2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from.
+   What a value means where that is not plain is shown beside it (SHOWN: the station's position
+   from its locator, the true bearings a rotator takes); docs/configuration.md lists these too.
+2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from, and
+   the summary only says whether there is one.
 3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
+4. The summary says what a user checks first: each rotator's model and whether its port is
+   there, the broker, and what is on (Home Assistant, rotctld and loggers' ports, the station,
+   tracking). Looking at a port never opens it.
 """
 
 from __future__ import annotations
 
-import ipaddress
 import os
 from typing import Any
 
-from bridge.settings import Settings
+from bridge.settings import RotatorSettings, Settings
+from bridge.settings_loggers import is_loopback
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
+# what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
+SHOWN = {
+    "mqtt.client_id": "the client id in use: the one set, or the default made for this "
+    "installation",
+    "station.position_deg": "[latitude, longitude] of the station, from its locator (the "
+    "square's centre) or its coordinates: to check on a map",
+    "rotators.az_targets_deg": "[lowest, highest] true bearing this rotator takes as a target: "
+    "its azimuth limits seen through az_offset_deg (0..360 on a scale that wraps)",
+}
 
 
 def masked(settings: Settings) -> dict[str, Any]:
@@ -52,15 +66,6 @@ def masked(settings: Settings) -> dict[str, Any]:
     return out
 
 
-def _is_loopback(host: str) -> bool:
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False  # a host name (or "" = every address): reachable from elsewhere, say so
-
-
 def config_warnings(settings: Settings) -> list[str]:
     """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
     found = []
@@ -86,16 +91,85 @@ def config_warnings(settings: Settings) -> list[str]:
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
             ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
         ):
-            if on and not _is_loopback(bind):
+            if on and not is_loopback(bind):
                 found.append(
                     f"{where}.{key}: {bind or '(every address)'} is not a loopback address: "
                     "the loggers' UDP protocols have no authentication, anyone who can reach "
                     "it can turn the antenna"
                 )
-        if r.rotctld_port is not None and not _is_loopback(r.rotctld_bind):
+        if r.rotctld_port is not None and not is_loopback(r.rotctld_bind):
             found.append(
                 f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
                 f"address: rotctld has no authentication, anyone who can reach port "
                 f"{r.rotctld_port} there can turn the antenna"
             )
     return found
+
+
+def summary(settings: Settings) -> list[str]:
+    """The lines check-config prints first (rule 4)."""
+    lines = ["rotators:"]
+    for r in settings.rotators:
+        lines += [f"  {line}" for line in _rotator(settings, r)]
+    m = settings.mqtt
+    login = "no login"
+    if m.username is not None:
+        login = f"user {m.username}, " + ("a password" if m.password is not None else "no password")
+    tls = "TLS" if m.tls.enabled else "no TLS"
+    lines.append(
+        f"broker: {m.host}:{m.port}, MQTT {m.protocol}, {tls}, {login}, "
+        f"client id {m.effective_client_id()}"
+    )
+    ha = settings.homeassistant
+    lines.append(
+        f"home assistant: on (discovery prefix {ha.discovery_prefix})" if ha.enabled else
+        "home assistant: off"
+    )  # fmt: skip
+    st = settings.station
+    if st.position is None:
+        lines.append("station: not set (targets by locator and tracking need it)")
+    else:
+        lat, lon = st.position
+        where = f"locator {st.locator}, " if st.locator is not None else ""
+        lines.append(f"station: {where}latitude {lat:.4f}, longitude {lon:.4f}")
+    tle = settings.tracking.tle_file
+    sky = "the sun and the moon" if st.position is not None else "nothing (no station)"
+    if tle is None:
+        lines.append(f"tracking: {sky}; no TLE file, so no satellites")
+    else:
+        there = "found" if os.path.isfile(tle) else "NOT FOUND"
+        lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
+    lines.append(f"state file: {settings.state_file}")
+    return lines
+
+
+def _bearings(r: RotatorSettings) -> str:
+    """The true bearings a rotator takes, as a user would say them: on a scale that wraps, an
+    offset turns limits narrower than a circle into a gap anywhere on it (limits 20..340 with
+    offset 180 refuse 160..200, not the ends of 0..360)."""
+    p = r.pointing
+    lo, hi = p.target_range()
+    gap = 360.0 - (p.az_max_deg - p.az_min_deg)
+    if not (p.az_wraps and p.offset_deg and gap > 0.0):
+        return f"{lo:g}..{hi:g}"
+    start = (p.az_max_deg + p.offset_deg) % 360.0
+    end = (p.az_min_deg + p.offset_deg) % 360.0
+    return f"0..360 except {start:g}..{end:g}"
+
+
+def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
+    found = "found" if os.path.exists(r.port) else "NOT FOUND"
+    name = f"{r.id} ({r.name})" if r.name and r.name != r.id else r.id
+    on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
+    if r.rotctld_port is not None:
+        on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
+    if r.pst_udp_port is not None:
+        on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
+    if r.n1mm_rotor_name is not None:
+        on.append(f"N1MM {r.n1mm_rotor_name!r} on {r.n1mm_udp_bind}:{r.n1mm_udp_port}")
+    if r.park_az_deg is not None:
+        on.append(f"parks at {r.park_az_deg:g}")
+    return [
+        f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), {r.effective_baud} baud",
+        "  " + "; ".join(on),
+    ]

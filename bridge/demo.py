@@ -47,6 +47,7 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
 from bridge import demo_sky, emulators, geo
 from bridge.app import App
 from bridge.demo_console import Console
+from bridge.demo_screen import Screen
 from bridge.homeassistant import Identity
 from bridge.mosquitto import BrokerError, Mosquitto, answers
 from bridge.mqtt.topics import DiscoveryTopics, Topics
@@ -54,7 +55,7 @@ from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, format_validation_error
 
 MIN_SPEED_DEG_S, MAX_SPEED_DEG_S = 0.5, 360.0  # the settings' range for a rotor's speed
-DEMOSAT_LEAD_S = 900.0  # the demo's satellite is closest this long after the start
+DEMOSAT_RISES_IN_S = 40.0  # the demo's satellite rises this long after the start (default)
 
 
 def _speed(text: str) -> float:
@@ -118,6 +119,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="fail instead of starting a private mosquitto when no broker answers",
     )
     p.add_argument("--duration-s", type=float, help="stop after this long (default: until q/^C)")
+    p.add_argument(
+        "--satellite-rises-in-s",
+        type=float,
+        default=DEMOSAT_RISES_IN_S,
+        help=f"when the made-up satellite {demo_sky.NAME} rises over the station, in seconds "
+        f"from the start (default {DEMOSAT_RISES_IN_S:g})",
+    )
 
 
 def instance_name() -> str:
@@ -257,6 +265,8 @@ def _run(
     ident = Identity(topics.base)
     discovery = DiscoveryTopics(settings.homeassistant.discovery_prefix)
     nodes = [ident.bridge_node, *(ident.rotator_node(rid) for rid in roots)]
+    screen = Screen.for_terminal()
+    stack.callback(screen.close)  # the terminal as it was, whatever happens next
     console = Console(
         host,
         port,
@@ -264,6 +274,7 @@ def _run(
         topics=topics,
         rotator_ids=list(roots),
         discovery_filters=[discovery.config("+", node, "+") for node in nodes],
+        screen=screen,
     )
     # a base topic of its own making is the demo's alone to clean up; one given with --base-topic
     # may hold someone else's retained state, which is not the demo's to delete
@@ -285,15 +296,15 @@ def _run(
         stack.callback(emu.close)
     position = settings.station.position
     assert position is not None and settings.tracking.tle_file is not None
-    closest = demo_sky.write_tle_file(settings.tracking.tle_file, *position, DEMOSAT_LEAD_S)
+    rise = demo_sky.write_tle_file(settings.tracking.tle_file, *position, args.satellite_rises_in_s)
     app = App(settings)
     stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
     app.start()
     _print_banner(args, settings, topics, where, instance)
     print(
-        f"  A made-up satellite, {demo_sky.NAME}, passes over the station around "
-        f"{time.strftime('%H:%M', time.gmtime(closest))} UTC: type 'track {demo_sky.NAME}' "
-        "(or 'track sun', 'track moon').\n",
+        f"  A made-up satellite, {demo_sky.NAME}, rises over the station around "
+        f"{time.strftime('%H:%M:%S', time.gmtime(rise))} UTC (in {args.satellite_rises_in_s:g} s):"
+        f" type 'track {demo_sky.NAME}' (or 'track sun', 'track moon').\n",
         flush=True,
     )
     deadline = None if args.duration_s is None else time.monotonic() + args.duration_s
@@ -302,11 +313,13 @@ def _run(
             "  Or type here: a bearing (120), 's' to stop, 'help' for more, 'q' to quit\n",
             flush=True,
         )
-        threading.Thread(target=_read_stdin, args=(console, done), daemon=True).start()
+    screen.start()  # on a terminal: from here one status line, log lines above it
+    if sys.stdin.isatty():
+        threading.Thread(target=_read_stdin, args=(screen, console, done), daemon=True).start()
     while not done.wait(0.2):
         if deadline is not None and time.monotonic() >= deadline:
             break
-    print("rotor-bridge demo: stopping", flush=True)
+    screen.log("rotor-bridge demo: stopping")
     return 0
 
 
@@ -338,8 +351,6 @@ def _print_banner(
     print("\n".join(lines), flush=True)
 
 
-def _read_stdin(console: Console, done: threading.Event) -> None:
-    for line in sys.stdin:
-        if not console.command(line):
-            break
+def _read_stdin(screen: Screen, console: Console, done: threading.Event) -> None:
+    screen.read_lines(console.command)
     done.set()

@@ -8,6 +8,10 @@ Rules:
 2. It subscribes with retain-as-published (MQTT 5), so it knows which of the demo's topics hold a
    retained message on the broker, and can clear exactly those.
 3. A line that is not a command is answered with a hint, never published as a target.
+4. What it prints goes through a Screen (bridge/demo_screen.py): on a terminal the bearing,
+   elevation and state of every rotator stay on one status line, redrawn in place, and
+   everything else is a log line printed above it; elsewhere (a pipe, a file, a test) every
+   change is a line of its own, ``  <topic> = <value>``.
 """
 
 from __future__ import annotations
@@ -23,12 +27,14 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
+from bridge.demo_screen import Screen
 from bridge.mqtt.topics import Topics
 
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
 SHOWN_LEAVES = (
     "bearing", "elevation", "state", "availability", "version", "error", "presets", "tracking"
 )  # fmt: skip
+STATUS_LEAVES = ("bearing", "elevation", "state")  # on a terminal: the status line (rule 4)
 
 
 class Console:
@@ -44,9 +50,12 @@ class Console:
         topics: Topics,
         rotator_ids: list[str],
         discovery_filters: list[str],
+        screen: Screen | None = None,
     ) -> None:
+        self.screen = screen or Screen()
         self._topics = topics
         self._ids = rotator_ids
+        self._roots = {topics.rotator(rid).root for rid in rotator_ids}
         self._filters = [f"{topics.base}/#", *discovery_filters]
         self._sync_topic = f"{topics.base}/console/sync"
         self._retained: dict[str, bytes] = {}
@@ -100,7 +109,11 @@ class Console:
         if leaf not in SHOWN_LEAVES or (self._last.get(topic) == text and leaf != "error"):
             return
         self._last[topic] = text
-        print(f"  {topic} = {text}", flush=True)
+        root = topic.rsplit("/", 1)[0]
+        on_status = leaf in STATUS_LEAVES and root in self._roots
+        if on_status:
+            self.screen.status(root, leaf, text)
+        self.screen.log(f"  {topic} = {text}", quiet=on_status and leaf != "state")
 
     def _show_target_info(self, topic: str, text: str) -> None:
         """A locator target's distance and paths, once each time it changes."""
@@ -111,11 +124,10 @@ class Console:
                 self._last[key] = json.dumps(info)
                 where = info.get("locator") or f"{info['latitude']:.2f}, {info['longitude']:.2f}"
                 root = topic.rsplit("/", 1)[0]
-                print(
+                self.screen.log(
                     f"  {root}: {where} is {info['distance_km']:,.0f} km away by the "
                     f"{info['path']} path (short {info['short_path_deg']:g}°, "
-                    f"long {info['long_path_deg']:g}°)",
-                    flush=True,
+                    f"long {info['long_path_deg']:g}°)"
                 )
 
     def _show_tracking(self, topic: str, text: str) -> None:
@@ -128,7 +140,7 @@ class Console:
             if info is None:
                 if ended and self._last.get(key) != f"ended {ended}":
                     self._last[key] = f"ended {ended}"
-                    print(f"  {root}: tracking ended ({ended})", flush=True)
+                    self.screen.log(f"  {root}: tracking ended ({ended})")
                 return
             shown = f"{info['body']} {info['phase']} {info.get('aos')}"
             if shown == self._last.get(key):
@@ -136,17 +148,16 @@ class Console:
             self._last[key] = shown
             now = f"now az {info['azimuth']:g} el {info['elevation']:g}"
             if info["phase"] == "waiting":
-                print(
+                self.screen.log(
                     f"  {root}: {info['body']} is below the horizon ({now}); waiting at "
-                    f"az {info['aos_azimuth']:g} for its rise at {info['aos'][11:19]} UTC",
-                    flush=True,
+                    f"az {info['aos_azimuth']:g} for its rise at {info['aos'][11:19]} UTC"
                 )
             elif info["phase"] == "tracking":
                 until = f" until {info['los'][11:19]} UTC" if "los" in info else ""
                 flip = ", flipped (elevation past 90)" if info.get("flip") else ""
-                print(f"  {root}: tracking {info['body']} ({now}){until}{flip}", flush=True)
+                self.screen.log(f"  {root}: tracking {info['body']} ({now}){until}{flip}")
             else:
-                print(f"  {root}: {info['body']}: no pass in the next two days", flush=True)
+                self.screen.log(f"  {root}: {info['body']}: no pass in the next two days")
 
     def _presets_text(self) -> str:
         """The first rotator's preset names, as its retained R/presets lists them."""
@@ -167,13 +178,13 @@ class Console:
         if head in ("q", "quit", "exit"):
             return False
         if head in ("help", "h", "?"):
-            print(self.help_text(), flush=True)
+            self.screen.log(self.help_text())
             return True
         rid = self._ids[0]
         if len(self._ids) > 1 and words[0] in self._ids:
             rid, words = words[0], words[1:]
             if not words:
-                print(f"  {rid} what? type 'help'", flush=True)
+                self.screen.log(f"  {rid} what? type 'help'")
                 return True
         t = self._topics.rotator(rid)
         head, rest = words[0].lower(), words[1:]
@@ -205,7 +216,7 @@ class Console:
         elif _is_number(head) or head.startswith("{"):
             self.publish(t.target, " ".join(words))
         else:
-            print(f"  unknown command {line.strip()!r}; type 'help'", flush=True)
+            self.screen.log(f"  unknown command {line.strip()!r}; type 'help'")
         return True
 
     def help_text(self) -> str:
@@ -263,7 +274,7 @@ class Console:
         try:
             if remove_retained:
                 n = self.remove_retained()
-                print(f"rotor-bridge demo: removed its {n} retained messages", flush=True)
+                self.screen.log(f"rotor-bridge demo: removed its {n} retained messages")
         finally:
             self._client.disconnect()
             self._client.loop_stop()

@@ -1,5 +1,6 @@
 """The demo's satellite: orbital elements made up at start-up so that a pass over the demo's
-station begins a few minutes later, whatever the time of day. No network, as everywhere.
+station begins when the demo says (by default within a minute), whatever the time of day. No
+network, as everywhere.
 
 Rules:
 1. A circular low orbit (15.5 revolutions a day, about 400 km up), inclined 97.5 degrees so it
@@ -11,6 +12,10 @@ Rules:
    moves the pass by far less than its size.
 3. The element set is a valid TLE (checksums, columns), written as a Celestrak-style 3-line
    file for ``[tracking] tle_file``.
+4. It rises about ``half_pass_s`` before it is closest: on a sphere, the arc along the track
+   from the horizon to the point nearest the station (its ground track OFFSET_DEG of longitude
+   away), at the orbit's angular rate. What this ignores (the Earth turning under the pass,
+   refraction) moves the rise by seconds, not minutes.
 """
 
 from __future__ import annotations
@@ -21,6 +26,8 @@ import time
 from pathlib import Path
 
 MEAN_MOTION_REV_DAY = 15.5
+EARTH_RADIUS_KM = 6378.137
+MU_KM3_S2 = 398600.4418  # the Earth's gravitational parameter
 INCLINATION_DEG = 97.5
 OFFSET_DEG = 4.0
 CATALOG = 99990  # not a real object's number
@@ -44,12 +51,25 @@ def elements(latitude_deg: float, longitude_deg: float, closest_unix: float) -> 
     return _line1(closest_unix), _line2(node, anomaly)
 
 
-def write_tle_file(path: Path, latitude_deg: float, longitude_deg: float, lead_s: float) -> float:
-    """The demo's TLE file at ``path``; the time its satellite is closest (``lead_s`` from now)."""
-    closest = time.time() + lead_s
-    line1, line2 = elements(latitude_deg, longitude_deg, closest)
+def half_pass_s(latitude_deg: float) -> float:
+    """From its rise to its closest approach, seconds (rule 4)."""
+    period_s = 86400.0 / MEAN_MOTION_REV_DAY
+    orbit_km = (MU_KM3_S2 * (period_s / (2 * math.pi)) ** 2) ** (1 / 3)
+    horizon = math.acos(EARTH_RADIUS_KM / orbit_km)  # arc from the station to its horizon
+    across = math.radians(OFFSET_DEG) * math.cos(math.radians(latitude_deg))
+    along = math.acos(min(1.0, math.cos(horizon) / math.cos(across)))
+    return along / (2 * math.pi) * period_s
+
+
+def write_tle_file(
+    path: Path, latitude_deg: float, longitude_deg: float, rises_in_s: float
+) -> float:
+    """The demo's TLE file at ``path``, its satellite rising ``rises_in_s`` from now; returns
+    the time it rises (Unix seconds)."""
+    rise = time.time() + rises_in_s
+    line1, line2 = elements(latitude_deg, longitude_deg, rise + half_pass_s(latitude_deg))
     path.write_text(f"{NAME}\n{line1}\n{line2}\n", encoding="ascii")
-    return closest
+    return rise
 
 
 def _line1(epoch_unix: float) -> str:

@@ -17,7 +17,9 @@ class MotionState(enum.StrEnum):
     MOVING = "moving"  # turning: commanded, or by hand from the front panel
     BRAKING = "braking"  # just stopped; the controller ignores bearings until its brake delay ends
     STALLED = "stalled"  # commanded but no progress for the stall timeout while off target
-    UNKNOWN = "unknown"  # link up, but the controller cannot report a position (DCU-1)
+    # link up, but the bridge cannot tell: a controller that cannot report a position (DCU-1),
+    # or a silent one whose report after a move was lost (SatEL), until its next reading
+    UNKNOWN = "unknown"
     OFFLINE = "offline"  # serial link down or controller silent
 
 

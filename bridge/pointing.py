@@ -218,9 +218,10 @@ class Pointing:
     ) -> tuple[float | None, float | None]:
         if not d_az and not d_el:
             raise Refused(RefusalCode.INVALID, "a nudge of 0 degrees moves nothing")
-        # from the target while the rotor is on its way (turning, or braking before it turns:
-        # a second press of a nudge button adds to the first), else from the bearing
-        going = status.state in (MotionState.MOVING, MotionState.BRAKING)
+        # from the target while the rotor is on its way (turning, braking before it turns, or
+        # idle with a target still waiting to go out, as a rotor with no brake is while it
+        # settles: a second press of a nudge button adds to the first), else from the bearing
+        going = status.state in (MotionState.MOVING, MotionState.BRAKING, MotionState.IDLE)
         moving = going and status.target_az_deg is not None
         az = status.target_az_deg if moving else status.bearing_deg
         if az is None:

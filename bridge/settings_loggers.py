@@ -1,5 +1,13 @@
-"""The loggers' UDP endpoints in ``[[rotators]]`` (loggers/): off unless a port or a name is
-given, on loopback unless told otherwise (neither protocol has authentication)."""
+"""The loggers' UDP endpoints in ``[[rotators]]`` (loggers/): PstRotator's and N1MM's.
+
+Rules:
+1. Off unless a port (PstRotator) or a rotor name (N1MM) is given; on loopback unless told
+   otherwise: neither protocol has authentication (check-config warns off loopback).
+2. An endpoint that could never work is a configuration error naming the key: a PstRotator port
+   whose reply port (+ 1) does not exist, N1MM reports to another machine from a socket bound
+   to loopback.
+3. Every key carries its meaning (``description``) for docs/configuration.md.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +18,50 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 class LoggerFields(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    # PstRotator's UDP interface: commands on this port, replies to the sender at port + 1
-    pst_udp_port: int | None = Field(None, ge=1, le=65534)
-    pst_udp_bind: str = "127.0.0.1"
-    # N1MM Logger+: the "Rotor Description" N1MM gives this rotator's antenna
-    n1mm_rotor_name: str | None = Field(None, min_length=1, max_length=64)
-    n1mm_udp_port: int = Field(12040, ge=1, le=65535)
-    n1mm_udp_bind: str = "127.0.0.1"
-    n1mm_report_to: str = "127.0.0.1:13010"  # where position reports go ("host:port")
+    pst_udp_port: int | None = Field(
+        None,
+        ge=1,
+        le=65534,
+        description="PstRotator's UDP interface for this rotator (Log4OM, DXLog, QLog, Hamlib "
+        "4.6): commands come to this port; replies go to the sender's host at this port + 1 "
+        "(12001 for 12000), whichever port the sender sent from",
+        examples=[12000],
+        json_schema_extra={"unset": "off"},
+    )
+    pst_udp_bind: str = Field(
+        "127.0.0.1",
+        description="the address pst_udp_port listens on; the protocol has no authentication "
+        "(check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    n1mm_rotor_name: str | None = Field(
+        None,
+        min_length=1,
+        max_length=64,
+        description="N1MM Logger+'s Rotor Description of this rotator's antenna: turns N1MM's "
+        "rotor commands on for it",
+        examples=["Tower"],
+        json_schema_extra={"unset": "off"},
+    )
+    n1mm_udp_port: int = Field(
+        12040,
+        ge=1,
+        le=65535,
+        description="the UDP port N1MM sends rotor commands to; rotators share it by name",
+        examples=[12041],
+    )
+    n1mm_udp_bind: str = Field(
+        "127.0.0.1",
+        description="the address n1mm_udp_port listens on (and position reports leave from); "
+        "no authentication (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    n1mm_report_to: str = Field(
+        "127.0.0.1:13010",
+        description="where position reports for N1MM go, host:port; another machine needs an "
+        "n1mm_udp_bind that can reach it",
+        examples=["192.168.1.20:13010"],
+    )
 
     @field_validator("n1mm_rotor_name")
     @classmethod
@@ -41,8 +85,8 @@ class LoggerFields(BaseModel):
         host = self.n1mm_report_address[0]
         if (
             self.n1mm_rotor_name is not None
-            and _loopback(self.n1mm_udp_bind)
-            and not _loopback(host)
+            and is_loopback(self.n1mm_udp_bind)
+            and not is_loopback(host)
         ):
             raise ValueError(
                 f"n1mm_report_to {self.n1mm_report_to!r} is another machine, but n1mm_udp_bind "
@@ -58,7 +102,9 @@ class LoggerFields(BaseModel):
         return host, int(port)
 
 
-def _loopback(host: str) -> bool:
+def is_loopback(host: str) -> bool:
+    """Only this machine can reach ``host`` ("" = every address, a name: another machine as far
+    as can be told here)."""
     if host.strip("[]").casefold() == "localhost":
         return True
     try:

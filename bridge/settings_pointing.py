@@ -23,12 +23,33 @@ Degrees = Annotated[float, Field(allow_inf_nan=False)]
 
 
 class StationSettings(BaseModel):
-    """``[station]``: needed for targets by locator or coordinates."""
+    """``[station]``: where the antenna is; needed for targets by locator or coordinates and
+    for tracking."""
 
     model_config = ConfigDict(extra="forbid")
-    locator: str | None = None
-    latitude_deg: float | None = Field(None, ge=-90, le=90)
-    longitude_deg: float | None = Field(None, ge=-180, le=180)
+    locator: str | None = Field(
+        None,
+        description="the station's Maidenhead locator (2, 4, 6 or 8 characters); or "
+        "latitude_deg and longitude_deg, not both. check-config shows where it puts you.",
+        examples=["JO62qm"],
+        json_schema_extra={"unset": "no station: targets by locator or sky object are refused"},
+    )
+    latitude_deg: float | None = Field(
+        None,
+        ge=-90,
+        le=90,
+        description="the station's latitude, north positive (with longitude_deg)",
+        examples=[52.52],
+        json_schema_extra={"unset": "see locator"},
+    )
+    longitude_deg: float | None = Field(
+        None,
+        ge=-180,
+        le=180,
+        description="the station's longitude, east positive (with latitude_deg)",
+        examples=[13.40],
+        json_schema_extra={"unset": "see locator"},
+    )
 
     @model_validator(mode="after")
     def _one_way(self) -> StationSettings:
@@ -55,29 +76,96 @@ class StationSettings(BaseModel):
 
 
 class TrackingSettings(BaseModel):
-    """``[tracking]``: where satellites' orbital elements come from (never downloaded)."""
+    """``[tracking]``: where satellites' orbital elements come from (never downloaded). Each
+    rotator's tracking keys are in ``[[rotators]]``."""
 
     model_config = ConfigDict(extra="forbid")
-    # a TLE file (Celestrak's 3-line form), re-read when it changes; refreshed by the user's cron
-    tle_file: Path | None = None
+    tle_file: Path | None = Field(
+        None,
+        description="a TLE file (Celestrak's 3-line form) naming the satellites that can be "
+        "tracked; re-read when it changes, so refresh it with cron. The sun and the moon need "
+        "no file.",
+        examples=["/var/lib/rotor-bridge/amateur.tle"],
+        json_schema_extra={"unset": "satellites cannot be tracked (the sun and the moon can)"},
+    )
 
 
 class PointingFields(BaseModel):
     """The pointing part of ``[[rotators]]`` (the rotator's model supplies spec and limits)."""
 
     model_config = ConfigDict(extra="forbid")
-    # true bearing = controller bearing + offset (a south-centred scale: 180)
-    az_offset_deg: Degrees = Field(0.0, ge=-360, le=360)
-    presets: dict[str, Degrees | list[Degrees]] = Field(default_factory=dict)
-    park_az_deg: Degrees | None = None  # a true bearing: MQTT/HA park, rotctld's K, auto-park
-    park_el_deg: Degrees | None = None
-    park_after_idle_s: float = Field(0.0, ge=0, le=86400)  # 0: never park by itself
-    keep_out: list[tuple[Degrees, Degrees]] = Field(default_factory=list)
-    nudge_step_deg: float = Field(10.0, gt=0, le=180)  # Home Assistant's nudge buttons
-    # tracking (engine/tracking.py): below this elevation the rotator waits for the pass
-    track_min_el_deg: float = Field(0.0, ge=-5, le=80)
-    track_step_deg: float | None = Field(None, gt=0, le=45)  # None: the rotator's tolerance
-    track_at_los: Literal["stay", "park"] = "stay"  # "park" needs park_az_deg
+    az_offset_deg: Degrees = Field(
+        0.0,
+        ge=-360,
+        le=360,
+        description="true bearing = the controller's bearing + this (a south-centred scale: "
+        "180; a rotor mounted off north). Presets, park, keep-out and targets are true "
+        "bearings; az_min_deg/az_max_deg stay on the controller's scale.",
+        examples=[180],
+    )
+    presets: dict[str, Degrees | list[Degrees]] = Field(
+        default_factory=dict,
+        description="named true bearings for R/preset and Home Assistant's select; on az/el "
+        "models [azimuth, elevation]",
+        examples=[{"EU": 45, "JA": 330}],
+        json_schema_extra={"unset": "no presets"},
+    )
+    park_az_deg: Degrees | None = Field(
+        None,
+        description="where to park, a true bearing: R/park, Home Assistant's button, rotctld's "
+        "K, park_after_idle_s and track_at_los",
+        examples=[0],
+        json_schema_extra={"unset": "park is refused"},
+    )
+    park_el_deg: Degrees | None = Field(
+        None,
+        description="the parking elevation (az/el models only; needs park_az_deg)",
+        examples=[90],
+        json_schema_extra={"unset": "the elevation is left as it is"},
+    )
+    park_after_idle_s: float = Field(
+        0.0,
+        ge=0,
+        le=86400,
+        description="park after this long without a command: 0 never, else at least 5 "
+        "(needs park_az_deg)",
+        examples=[1800],
+    )
+    keep_out: list[tuple[Degrees, Degrees]] = Field(
+        default_factory=list,
+        description="sectors never to point into, each [first, second] true bearing, clockwise "
+        "from the first edge to the second",
+        examples=[[[200, 220]]],
+        json_schema_extra={"unset": "no sectors"},
+    )
+    nudge_step_deg: float = Field(
+        10.0,
+        gt=0,
+        le=180,
+        description="Home Assistant's nudge buttons turn this far",
+        examples=[5],
+    )
+    track_min_el_deg: float = Field(
+        0.0,
+        ge=-5,
+        le=80,
+        description="tracking (R/track, needs [station]): below this elevation the rotator "
+        "waits where the next pass rises",
+        examples=[5],
+    )
+    track_step_deg: float | None = Field(
+        None,
+        gt=0,
+        le=45,
+        description="tracking sends a new target when the body has moved this far",
+        examples=[2],
+        json_schema_extra={"unset": "tolerance_deg"},
+    )
+    track_at_los: Literal["stay", "park"] = Field(
+        "stay",
+        description='at the end of a pass: "stay", or "park" (needs park_az_deg)',
+        examples=["park"],
+    )
 
     @field_validator("az_offset_deg")
     @classmethod

@@ -1,12 +1,16 @@
 """`rotor-bridge demo` as a user runs it: a subprocess whose printed lines the test reads (the
-topics to use are whatever it prints), optionally with a terminal as its stdin to type into."""
+topics to use are whatever it prints), optionally with a terminal as its stdin to type into, or
+(``screen``) a terminal as both its stdin and its stdout, as in a terminal window."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
+import struct
 import subprocess
 import sys
+import termios
 import threading
 import time
 from pathlib import Path
@@ -21,30 +25,70 @@ class DemoProcess:
         tmpdir: Path,
         *,
         terminal: bool = False,
+        screen: bool = False,
         env: dict[str, str] | None = None,
     ) -> None:
         """Start it with TMPDIR=`tmpdir` (so what it leaves behind can be seen) and, when
-        `terminal`, a pseudo-terminal as stdin (it reads typed lines only from a terminal)."""
+        `terminal`, a pseudo-terminal as stdin (it reads typed lines only from a terminal); when
+        `screen`, as stdout too (``screen_text``: every character it wrote there)."""
         tmpdir.mkdir(parents=True, exist_ok=True)
         environ = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
         environ.update(env or {}, TMPDIR=str(tmpdir))
         self._master: int | None = None
         stdin: int = subprocess.DEVNULL
-        if terminal:
+        if terminal or screen:
             self._master, stdin = os.openpty()
+            fcntl.ioctl(stdin, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
         self.lines: list[str] = []
+        self.screen_text = ""
         self._cond = threading.Condition()
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "bridge", "demo", *args],
             stdin=stdin,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
+            stdout=stdin if screen else subprocess.PIPE,
+            stderr=stdin if screen else subprocess.STDOUT,
             env=environ,
         )
-        if terminal:
-            os.close(stdin)
-        self._reader = threading.Thread(target=self._read, daemon=True)
+        if self._master is not None:
+            self.tty = stdin  # the terminal's own side, kept open: its settings can be read
+        self._reader = threading.Thread(target=self._read_screen if screen else self._read)
+        self._reader.daemon = True
         self._reader.start()
+
+    def _read_screen(self) -> None:
+        assert self._master is not None
+        while True:
+            try:
+                chunk = os.read(self._master, 4096)
+            except OSError:  # the terminal's other side is gone
+                chunk = b""
+            with self._cond:
+                if not chunk:
+                    self._cond.notify_all()
+                    return
+                self.screen_text += chunk.decode("utf-8", "replace")
+                self.lines = self.screen_text.replace("\r\n", "\n").split("\n")
+                self._cond.notify_all()
+
+    def wait_screen(self, pattern: str, timeout_s: float = 20.0, start: int = 0) -> re.Match[str]:
+        """The first match of `pattern` in what was written to the terminal (from `start`)."""
+        rx = re.compile(pattern)
+        deadline = time.monotonic() + timeout_s
+        with self._cond:
+            while (m := rx.search(self.screen_text, start)) is None:
+                left = deadline - time.monotonic()
+                if left <= 0 or self.proc.poll() is not None:
+                    raise AssertionError(f"never on screen {pattern!r}:\n{self.screen_text!r}")
+                self._cond.wait(min(left, 0.5))
+            return m
+
+    def keys(self, text: str) -> int:
+        """Type `text` without an Enter; how much was on the screen before (for wait_screen)."""
+        assert self._master is not None, "started without a terminal"
+        with self._cond:
+            seen = len(self.screen_text)
+        os.write(self._master, text.encode())
+        return seen
 
     def _read(self) -> None:
         assert self.proc.stdout is not None
@@ -102,4 +146,5 @@ class DemoProcess:
                 self.proc.wait()
         if self._master is not None:
             os.close(self._master)
+            os.close(self.tty)
             self._master = None

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import signal
+import termios
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -303,13 +304,14 @@ def test_each_model_gets_its_speed_in_its_emulators_own_words() -> None:
 def test_the_demo_tracks_its_own_satellite_from_the_prompt(tmp_path: Path) -> None:
     port = free_port()
     args = ["--mqtt-port", str(port), "--speed-deg-s", "360", "--models", "md01"]
+    args += ["--satellite-rises-in-s", "300"]  # still below the horizon while the test looks
     proc = DemoProcess(args, tmp_path / "tmp", terminal=True)
     probe = None
     try:
         base = proc.base_topic()
         probe = Probe(port, f"{base}/#")
         probe.wait_value(f"{base}/state", "idle", timeout_s=20)
-        proc.wait_line(r"DEMOSAT, passes over the station around \d\d:\d\d UTC", timeout_s=10)
+        proc.wait_line(r"DEMOSAT, rises over the station around [\d:]{8} UTC \(in 300 s\)", 10)
         seen = proc.type("track demosat")  # any case, as the TLE file's names
         probe.wait_value(f"{base}/tracking", "DEMOSAT", timeout_s=10)
         below = r"DEMOSAT is below the horizon .* waiting at az [\d.]+ for its rise"
@@ -353,3 +355,44 @@ def test_the_demo_satellite_passes_over_any_station_when_the_banner_says(locator
     assert 40.0 <= els[peak] <= 70.0, els[peak]
     assert abs(times[peak] - closest) <= 60.0
     assert els[0] < 0.0 and els[-1] < 0.0  # it rises and sets within those 20 minutes
+    rise = next(t for t, el in zip(times, els, strict=True) if el > 0.0)
+    assert abs(rise - (closest - demo_sky.half_pass_s(lat))) <= 30.0  # when the demo says
+
+
+def test_by_default_the_demo_satellite_rises_within_a_minute_of_the_start() -> None:
+    args = build_parser().parse_args(["demo"])
+    assert 0 < args.satellite_rises_in_s <= 60
+
+
+def test_on_a_terminal_the_bearing_stays_on_one_status_line_below_what_is_typed(
+    tmp_path: Path,
+) -> None:
+    """In a terminal window: a bearing changing every degree redraws one status line in place
+    (carriage return, erase) instead of scrolling away the line being typed; answers and state
+    changes are lines of their own above it; the terminal is as it was after the demo."""
+    port = free_port()
+    args = ["--mqtt-port", str(port), "--speed-deg-s", "60"]
+    proc = DemoProcess(args, tmp_path / "tmp", screen=True)
+    before = termios.tcgetattr(proc.tty)
+    try:
+        base = proc.base_topic()
+        proc.wait_screen(rf"\r\x1b\[K{base} az \d+ idle > ", timeout_s=30)
+        seen = proc.keys("12")  # half typed: still there after each redraw of the status line
+        proc.wait_screen(rf"\r\x1b\[K{base} az \d+ idle > 12", start=seen)
+        seen = proc.keys("0\r")
+        proc.wait_screen(r"\r\x1b\[K> 120\r\n", start=seen)
+        proc.wait_screen(rf"{base}/state = moving\r\n", start=seen)
+        turning = proc.wait_screen(rf"{base} az 1[01]\d moving > ", start=seen)
+        proc.wait_screen(rf"{base} az 1[12]\d idle > ", start=turning.end(), timeout_s=30)
+        seen = proc.keys("nonsense\r")
+        proc.wait_screen(r"unknown command 'nonsense'; type 'help'\r\n", start=seen)
+        typed = proc.keys("30")
+        proc.wait_screen(rf"{base} az \d+ idle > 30$", start=typed)
+        assert f"{base}/bearing = " not in proc.screen_text  # no line per degree
+        proc.keys("\x15q\r")  # ^U: the half-typed line forgotten, then quit
+        assert proc.wait(20) == 0, proc.screen_text
+    finally:
+        after = termios.tcgetattr(proc.tty)
+        proc.close()
+    assert after[3] & termios.ECHO and after[3] & termios.ICANON  # echo and lines back on
+    assert after == before

@@ -21,7 +21,7 @@ from bridge.model import TrackingInfo
 from bridge.mqtt import payloads
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
-from bridge.settings import ConfigError, load_settings
+from bridge.settings import ConfigError, Settings, load_settings
 
 ROOT = Path(__file__).resolve().parent.parent
 DEPLOY = ROOT / "deploy"
@@ -864,16 +864,70 @@ def test_compose_reads_the_same_with_a_yaml_parser(compose: dict) -> None:
     assert yaml.safe_load((DOCKER / "compose.yaml").read_text()) == compose
 
 
-def test_docker_config_validates_and_points_at_the_compose_services(
-    docker_settings, compose: dict
+def interpolate(value: str, env: dict[str, str]) -> str:
+    """Compose's ${VAR}, ${VAR:-default} and ${VAR:?error} in ``value``, from ``env``."""
+
+    def one(m: re.Match[str]) -> str:
+        name, op, arg = m.group(1), m.group(2), m.group(3)
+        if env.get(name):
+            return env[name]
+        if op == ":?":
+            raise ValueError(f"{name}: {arg}")
+        return arg if op == ":-" else ""
+
+    return re.sub(r"\$\{(\w+)(?:(:-|:\?)([^}]*))?\}", one, value)
+
+
+def bridge_environment(compose: dict, **shell: str) -> dict[str, str]:
+    """The bridge container's environment as compose makes it from ``shell``."""
+    env = compose["services"]["rotor-bridge"]["environment"]
+    return {key: interpolate(value, shell) for key, value in env.items()}
+
+
+def settings_in_container(env: dict[str, str], monkeypatch: pytest.MonkeyPatch) -> Settings:
+    """rotor-bridge.toml read as the bridge reads it in the container, with ``env`` set."""
+    for key, value in env.items():
+        monkeypatch.setenv(key, value)
+    return load_settings(DOCKER / "rotor-bridge.toml", environ=env)
+
+
+def test_compose_runs_the_bridge_alone_against_the_broker_the_user_names(
+    compose: dict, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    s = docker_settings
-    assert s.mqtt.host == "mosquitto" and "mosquitto" in compose["services"]
+    services = compose["services"]
+    assert "profiles" not in services["rotor-bridge"]
+    default = [name for name, svc in services.items() if "profiles" not in svc]
+    assert default == ["rotor-bridge"]  # no broker of its own unless asked for
+    assert "depends_on" not in services["rotor-bridge"]  # it retries until the broker answers
+    with pytest.raises(ValueError, match="MQTT_HOST"):  # compose refuses to start without it
+        bridge_environment(compose)
+    env = bridge_environment(compose, MQTT_HOST="192.168.1.10")
+    s = settings_in_container(env, monkeypatch)
+    assert (s.mqtt.host, s.mqtt.port) == ("192.168.1.10", 1883)
+    env = bridge_environment(compose, MQTT_HOST="ha.lan", MQTT_PORT="1884")
+    s = settings_in_container(env, monkeypatch)
+    assert (s.mqtt.host, s.mqtt.port) == ("ha.lan", 1884)
+
+
+def test_the_private_broker_profile_runs_mosquitto_where_the_bridge_looks(
+    compose: dict, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    mosquitto = compose["services"]["mosquitto"]
+    assert mosquitto["profiles"] == ["private-broker"]
+    env = bridge_environment(compose, MQTT_HOST="mosquitto")  # as compose.yaml's comment says
+    s = settings_in_container(env, monkeypatch)
+    assert s.mqtt.host in compose["services"]
     conf = (DOCKER / "mosquitto.conf").read_text()
     assert re.search(rf"^listener {s.mqtt.port}\b", conf, re.M)
     if s.mqtt.username is None:
         assert re.search(r"^allow_anonymous true$", conf, re.M)
-    (rotator,) = s.rotators
+    assert "MQTT_HOST=mosquitto docker compose --profile private-broker up" in " ".join(
+        (DOCKER / "compose.yaml").read_text().split()
+    )
+
+
+def test_docker_config_validates_without_the_environment(docker_settings) -> None:
+    (rotator,) = docker_settings.rotators
     assert isinstance(rotator.port, str) and rotator.port == "/dev/rotor"
 
 
@@ -885,7 +939,6 @@ def test_compose_passes_the_serial_device_to_the_bridge(compose: dict, docker_se
     assert container == docker_settings.rotators[0].port
     assert "dialout" in bridge["group_add"]
     assert bridge["restart"] == "unless-stopped"
-    assert "mosquitto" in bridge["depends_on"]
 
 
 def test_compose_mounts_config_and_state_where_the_image_expects_them(
@@ -921,7 +974,8 @@ def test_compose_runs_mosquitto_with_the_mounted_config(compose: dict) -> None:
 
 
 def test_dockerfile_installs_the_project_and_runs_unprivileged() -> None:
-    assert _instructions("FROM") == ["python:3.11-slim"]
+    assert _instructions("FROM") == ["${PYTHON_IMAGE}"]
+    assert "PYTHON_IMAGE=python:3.11-slim-bookworm" in _instructions("ARG")
     readme = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["readme"]
     copied = [src for rest in _instructions("COPY") for src in rest.split()[:-1]]
     assert readme in copied and "pyproject.toml" in copied and "bridge" in copied
@@ -933,6 +987,19 @@ def test_dockerfile_installs_the_project_and_runs_unprivileged() -> None:
     assert json.loads(_instructions("ENTRYPOINT")[-1]) == ["rotor-bridge"]
     args = build_parser().parse_args(json.loads(_instructions("CMD")[-1]))
     assert args.command == "run"
+
+
+def test_dockerfile_says_where_32_bit_arm_gets_numpy() -> None:
+    """PyPI has no numpy wheels for linux/arm/v7: piwheels' (built for Raspberry Pi OS Bookworm,
+    the image's Debian, and its Python 3.11), with the OpenBLAS they link."""
+    args = _instructions("ARG")
+    assert "TARGETARCH" in args and "ARM32_INDEX_URL=https://www.piwheels.org/simple" in args
+    runs = " ".join(_instructions("RUN"))
+    assert '[ "$TARGETARCH" = "arm" ]' in runs and "libopenblas0" in runs
+    assert 'PIP_EXTRA_INDEX_URL="$ARM32_INDEX_URL" PIP_PREFER_BINARY=1' in runs
+    python = re.search(r"python:(\d+\.\d+)-slim-(\w+)", " ".join(args))
+    assert python is not None and python.groups() == ("3.11", "bookworm")
+    assert "linux/arm/v7" in (DOCKER / "Dockerfile").read_text()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1046,7 +1113,8 @@ def test_docs_name_only_files_a_clone_has() -> None:
         assert "../" not in text and "shared/" not in text, doc
         targets = re.findall(r"\]\(([^)\s]+)\)", text)
         paths = re.findall(r"`((?:deploy|config|docs|tests|bridge|benchmarks)/[^`\s]*)`", text)
-        for target in [t for t in targets if not re.match(r"[a-z]+:|#", t)] + paths:
+        files = [t.partition("#")[0] for t in targets if not re.match(r"[a-z]+:|#", t)]
+        for target in files + paths:  # anchors: tests/test_docs.py
             path = (doc.parent / target).resolve()
             if not path.exists():
                 path = (ROOT / target).resolve()

@@ -167,6 +167,13 @@ def test_nudges_count_from_where_the_rotor_is_going_on_either_side() -> None:
     )
     assert p.nudged(long_move, 10, None) == (210, None)
     assert p.judge(Target(210, 0), 450).az_deg == 210  # 570 would be past the 540 stop
+    # a rotor with no brake is idle while it settles, its target still waiting: the same
+    settling = RotatorStatus(
+        "t", MotionState.IDLE, bearing_deg=105, target_az_deg=210, raw_target_az_deg=210
+    )
+    assert p.nudged(settling, 10, None) == (220, None)
+    at_rest = RotatorStatus("t", MotionState.IDLE, bearing_deg=105, raw_bearing_deg=105)
+    assert p.nudged(at_rest, 10, None) == (115, None)
     stalled = RotatorStatus("t", MotionState.STALLED, bearing_deg=105, target_az_deg=210)
     assert p.nudged(stalled, 10, None) == (115, None)  # stuck: from where it is
     assert refused(p.nudged, stalled, 0, None) is RefusalCode.INVALID

@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from pathlib import Path
 
 import pytest
@@ -124,11 +123,20 @@ def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Pa
     text = MINIMAL.replace(
         'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword = "topsecret"'
     )
-    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    path = write(tmp_path, text)
+    out = run_cli("check-config", "--full", "-c", str(path))
     assert out.returncode == 0, out.stderr
-    doc = json.loads(out.stdout)
+    doc = full_values(out.stdout)
     assert doc["mqtt"]["password"] == "********" and "topsecret" not in out.stdout + out.stderr
     assert doc["rotators"][0]["baud"] == 4800 and doc["rotators"][0]["topic"] == "rotor"
+    assert out.stdout.splitlines()[-1] == f"config OK: {path}"
+
+
+def full_values(stdout: str) -> dict:
+    """The JSON document ``check-config --full`` prints between the summary and the last line."""
+    lines = stdout.splitlines()
+    start, end = lines.index("{"), len(lines) - lines[::-1].index("}")
+    return json.loads("\n".join(lines[start:end]))
 
 
 def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
@@ -140,50 +148,6 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
     assert out.returncode == 2 and "not found" in out.stderr
     out = run_cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
     assert out.returncode == 2 and "not valid TOML" in out.stderr
-
-
-def test_the_example_configuration_is_valid() -> None:
-    s = load_settings(Path(__file__).parent.parent / "config" / "example.toml")
-    assert s.rotators[0].model == "rotorez" and s.mqtt.protocol == "5"
-
-
-POINTING_KEYS = (
-    "[station]",
-    "locator",
-    "az_offset_deg",
-    "presets",
-    "park_az_deg",
-    "park_after_idle_s",
-    "keep_out",
-    "nudge_step_deg",
-    "[tracking]",
-    "tle_file",
-    "track_min_el_deg",
-    "track_step_deg",
-    "track_at_los",
-    "pst_udp_port",
-    "n1mm_rotor_name",
-    "n1mm_report_to",
-)
-
-
-def test_the_example_pointing_lines_are_valid_as_written(tmp_path: Path) -> None:
-    """Uncommented as a user would, the example's station and pointing lines load as shown."""
-    text = (Path(__file__).parent.parent / "config" / "example.toml").read_text()
-    keys = "|".join(map(re.escape, POINTING_KEYS))
-    on = re.sub(rf"^# ((?:{keys})(?=[ =]|$))", r"\1", text, flags=re.M)
-    s = load_settings(write(tmp_path, on), environ={})
-    r = s.rotators[0]
-    assert s.station.position is not None
-    assert (r.az_offset_deg, r.park_az_deg, r.keep_out) == (180, 0, [(200, 220)])
-    assert r.presets == {"EU": 45, "JA": 330, "W": 300}
-    assert s.tracking.tle_file == Path("/var/lib/rotor-bridge/amateur.tle")
-    assert (r.track_min_el_deg, r.track_step_deg, r.track_at_los) == (0, 3, "stay")
-    assert (r.pst_udp_port, r.n1mm_rotor_name, r.n1mm_report_address) == (
-        12000,
-        "Tower",
-        ("127.0.0.1", 13010),
-    )
 
 
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------
@@ -256,12 +220,12 @@ def test_check_config_shows_what_the_pointing_settings_mean(tmp_path: Path) -> N
 
 
 def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
-    """``rotor-bridge check-config`` as a process: (the printed settings, the warnings)."""
-    out = run_cli("check-config", "-c", str(path), env=env)
+    """``rotor-bridge check-config --full`` as a process: (the printed settings, the warnings)."""
+    out = run_cli("check-config", "--full", "-c", str(path), env=env)
     assert out.returncode == 0, out.stderr  # warnings never fail it
-    lines = out.stderr.splitlines()
-    assert all(line.startswith("rotor-bridge: warning: ") for line in lines), lines
-    return json.loads(out.stdout), [line.removeprefix("rotor-bridge: warning: ") for line in lines]
+    assert out.stderr == "" and out.stdout.splitlines()[-1] == f"config OK: {path}"
+    warned = [line for line in out.stdout.splitlines() if line.startswith("warning: ")]
+    return full_values(out.stdout), [line.removeprefix("warning: ") for line in warned]
 
 
 def test_check_config_warns_about_what_is_legal_but_probably_wrong(tmp_path: Path) -> None:
@@ -468,3 +432,74 @@ def test_n1mm_reports_to_another_machine_need_a_bind_that_can_reach_it(tmp_path:
     assert "n1mm_udp_bind" in str(err.value) and "n1mm_report_to" in str(err.value)
     ok = load_settings(write(tmp_path, MINIMAL + base + 'n1mm_udp_bind = "0.0.0.0"\n'), environ={})
     assert ok.rotators[0].n1mm_report_address == ("192.168.1.20", 13010)
+
+
+# -- check-config's summary: what a user checks first -------------------------------------------
+def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) -> None:
+    device = tmp_path / "ttyUSB0"
+    device.write_text("")
+    missing = tmp_path / "ttyUSB9"
+    text = (
+        '[mqtt]\nhost = "broker.lan"\nusername = "u"\npassword = "sum-S3cret"\n'
+        '[station]\nlocator = "JO62qm"\n'
+        f'[[rotators]]\nid = "tower"\nname = "Tower"\nmodel = "rotorez"\nport = "{device}"\n'
+        'rotctld_port = 4533\npst_udp_port = 12000\nn1mm_rotor_name = "Tower"\n'
+        f'[[rotators]]\nid = "sky"\nmodel = "rot2prog"\nport = "{missing}"\naz_offset_deg = 90\n'
+    )
+    path = write(tmp_path, text)
+    out = run_cli("check-config", "-c", str(path))
+    assert out.returncode == 0 and out.stderr == "", out.stderr
+    lines = out.stdout.splitlines()
+    said = "\n".join(lines)
+    assert f"tower (Tower): Rotor-EZ (rotorez) on {device} (found)" in said
+    assert f"sky: Rot2Prog (rot2prog) on {missing} (NOT FOUND)" in said
+    assert "rotctld on 127.0.0.1:4533" in said and "PstRotator UDP on 127.0.0.1:12000" in said
+    assert "N1MM 'Tower' on 127.0.0.1:12040" in said and "takes bearings -90..630" in said
+    assert "broker: broker.lan:1883, MQTT 5, no TLS, user u, a password" in said
+    assert "home assistant: on (discovery prefix homeassistant)" in said
+    assert "station: locator JO62qm, latitude 52.5208, longitude 13.3750" in said
+    assert "tracking: the sun and the moon; no TLE file" in said
+    assert any(line.startswith(f"warning: rotators[1].port: {missing}") for line in lines)
+    assert "sum-S3cret" not in said and "{" not in said  # every value only with --full
+    assert lines[-1] == f"config OK: {path}"
+
+
+def test_check_config_names_the_gap_an_offset_puts_in_narrowed_limits(tmp_path: Path) -> None:
+    # limits 20..340 on a scale that wraps, offset 180: true 160..200 is refused, not 0 or 360
+    text = (
+        f'[[rotators]]\nid = "hf"\nmodel = "rotorez"\nport = "{tmp_path / "tty"}"\n'
+        "az_offset_deg = 180\naz_min_deg = 20\naz_max_deg = 340\n"
+    )
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 0, out.stderr
+    assert "takes bearings 0..360 except 160..200" in out.stdout, out.stdout
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        (("[[rotators]]", "[[rotator]]"), "unknown table [[rotator]]: did you mean [[rotators]]?"),
+        (("[[rotators]]", "[rotator]"), "unknown table [rotator]: did you mean [[rotators]]?"),
+        (("[mqtt]", "[mqt]"), "unknown table [mqt]: did you mean [mqtt]?"),
+        (("brake_delay_s", "brake_delay"), "rotators[0].brake_delay: unknown key: did you mean "),
+        (("host =", "hots ="), "mqtt.hots: unknown key: did you mean host?"),
+        (("[mqtt]", "colour = 1\n[mqtt]"), "colour: unknown key (typo?)"),
+        (("[mqtt]", "[radio]"), "unknown table [radio] (the tables here: [mqtt], [homeass"),
+    ],
+)
+def test_an_unknown_table_or_key_names_the_nearest_known_one(
+    tmp_path: Path, change: tuple[str, str], said: str
+) -> None:
+    text = MINIMAL.replace(*change)
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 2 and out.stdout == "", out
+    assert said in out.stderr, out.stderr
+    assert "no rotators configured" not in out.stderr and "Field required" not in out.stderr
+
+
+def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: Path) -> None:
+    path = write(tmp_path, '[mqtt]\nhost = "broker.lan"\n')
+    with pytest.raises(ConfigError) as exc:
+        load_settings(path, environ={})
+    assert str(exc.value).startswith(f"no rotators configured in {path}: add a [[rotators]]")
+    assert "--config" not in str(exc.value)

@@ -1,6 +1,6 @@
 """The sun, the moon and satellites seen from the station, judged by independent computations
 (tests/support/sky.py: the Astronomical Almanac's low-precision formulas, the sgp4 package with our
-own frame rotations), never by skyfield, which bridge/sky.py uses.
+own frame rotations), never by skyfield, which bridge/sky/ uses.
 
 What a user would notice: the antenna pointing off the body (a sun noise measurement wants
 0.1 deg, a satellite beam a few degrees), a rotor pre-positioned at the wrong AOS time or
@@ -235,6 +235,35 @@ def test_min_elevation_and_a_pass_shorter_than_the_sampling_step(leo) -> None:
     # just over it: not this pass (a later one, higher, or none in the window)
     over = sky.next_pass(sat, T0 + 3600, min_el_deg=top.max_el_deg + 0.02)
     assert over is None or over.aos_s > los
+
+
+def test_an_eccentric_orbit_whose_passes_last_most_of_a_revolution() -> None:
+    """A Molniya-like orbit (12 h, e 0.7): passes of 8 to 11 hours with gaps of two or three.
+    From every start the pass is the one a scan every 5 s finds, never one missed."""
+    line1, line2 = synthetic_tle(
+        "HEO",
+        T0,
+        inclination_deg=97.5,
+        raan_deg=37.1398,
+        mean_anomaly_deg=142.581,
+        mean_motion_rev_day=2.006,
+        eccentricity=0.7,
+        arg_perigee_deg=270.0,
+    )
+    sat = Body.satellite("HEO", line1, line2)
+    times = np.arange(T0, T0 + 4 * DAY, 5.0)
+    up = sgp4_altaz_array(line1, line2, *BERLIN, times)[1] > 0
+    change = np.flatnonzero(up[1:] != up[:-1])  # a crossing between times[i] and times[i + 1]
+    rises, sets = change[up[change + 1]], change[~up[change + 1]]
+    for k in range(12):
+        start = T0 + DAY + k * 7200.0 + 17.0
+        i = int(np.searchsorted(times, start)) - 1
+        rise = rises[rises < i][-1] if up[i] else rises[rises >= i][0]
+        sets_after = sets[sets > rise][0]
+        p = Sky(*BERLIN).next_pass(sat, start)
+        assert p is not None
+        assert times[rise] - 1 <= p.aos_s <= times[rise + 1] + 1, k
+        assert times[sets_after] - 1 <= p.los_s <= times[sets_after + 1] + 1, k
 
 
 def test_geostationary_satellite_always_up_or_never() -> None:

@@ -1,4 +1,6 @@
-"""Parking by itself after a quiet spell (``park_after_idle_s``; a windy remote site). Pure.
+"""Parking by itself after a quiet spell (``park_after_idle_s``; a windy remote site). Pure: it
+owns the quiet spell; each step gets a read-only ``Scene`` (parts.py) and returns a ``Proposal``
+(the park target, or the error of a park the judge refuses) that the session applies.
 
 Rules:
 1. The quiet spell counts from the last command (a target, a stop or the lock switched either
@@ -16,20 +18,22 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING
 
+from bridge.engine import motion as mo
+from bridge.engine.actions import Report
+from bridge.engine.config import WorkerConfig
+from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.errors import Refused
 from bridge.model import ErrorKind, MotionState, Source, Target
-
-if TYPE_CHECKING:
-    from bridge.engine.session import RotatorSession
 
 log = logging.getLogger(__name__)
 
 
 class AutoPark:
-    def __init__(self, after_s: float, park: tuple[float, float | None] | None) -> None:
-        self._after_s = after_s if park is not None else 0.0
+    def __init__(self, rig: WorkerConfig) -> None:
+        park = rig.aim.park
+        self._rig = rig
+        self._after_s = rig.park_after_idle_s if park is not None else 0.0
         self._park = park
         self._since = -math.inf
 
@@ -50,28 +54,26 @@ class AutoPark:
         deadline = self.deadline()
         return deadline if deadline is not None and deadline > now else None
 
-    def due(self, now: float, ready: bool) -> Target | None:
-        """The park target, if the spell is over and ``ready`` (rule 2); restarts the spell."""
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        m, now = scene.motion, scene.now
+        if m.state is MotionState.MOVING:
+            self.activity(now)  # rule 1: someone is turning it
+            return NOTHING
         deadline = self.deadline()
-        if deadline is None or now < deadline or not ready or self._park is None:
-            return None
+        if deadline is None or now < deadline or self._park is None:
+            return NOTHING
+        settled = m.state is MotionState.IDLE and not mo.settling(m)  # (no brake: motion rule 4)
+        ready = settled and scene.pending is None  # rule 2
+        if not ready or scene.locked or scene.parked:
+            return NOTHING
         self._since = now  # rule 3
-        return Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
-
-
-def step(session: RotatorSession, now: float) -> None:
-    """Run by the session with its other rules, while the controller answers."""
-    m = session.motion
-    if m.state is MotionState.MOVING:
-        session.autopark.activity(now)  # rule 1: someone is turning it
-        return
-    free = m.state is MotionState.IDLE and session.targets.pending is None
-    park = session.autopark.due(now, free and not session.locked and not session.status.parked)
-    if park is None:
-        return
-    try:
-        session.targets.put(session.cfg.aim.judge(park, m.position_deg), now)
-    except Refused as exc:
-        session.error(ErrorKind.REFUSED, f"auto-park refused: {exc.message}", "park")
-        return
-    log.info("%s: parking (no command for %g s)", session.name, session.cfg.park_after_idle_s)
+        park = Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
+        try:
+            judged = self._rig.aim.judge(park, m.position_deg)
+        except Refused as exc:
+            return Proposal(
+                error=Report(ErrorKind.REFUSED, f"auto-park refused: {exc.message}", "park")
+            )
+        log.info("%s: parking (no command for %g s)", self._rig.rotator_id, self._after_s)
+        return Proposal(target=judged)

@@ -5,7 +5,7 @@ Rules:
    modification time): a cron job refreshing it needs no restart. Nothing is ever downloaded.
    Reading and parsing are slow (a large file takes seconds): lookups run on the sky worker
    (skywork.py) and the names for Home Assistant on the app's own thread, never on paho's or
-   the serial lines' thread (ARCHITECTURE.md rule 12). Only ``check_configured`` is instant.
+   the serial lines' thread (docs/architecture.md rule 12). Only ``check_configured`` is instant.
 2. A file that cannot be read keeps the satellites last read from it, and says so once per
    change; bad element sets in it are skipped with one warning per read, counting them and
    naming the first (sky.parse_tles).

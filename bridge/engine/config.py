@@ -1,13 +1,24 @@
-"""One rotator's engine settings, resolved once from the configuration (app.py builds them)."""
+"""One rotator's engine settings, resolved once from the configuration (app.py builds them).
+Frozen data, imported by every part of the engine and importing none of them."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from bridge.engine import motion as mo
-from bridge.engine.tracking import TrackConfig
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
+from bridge.sky import Sky
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    """What tracking (tracking.py) needs of the station and the settings."""
+
+    sky: Sky | None = None  # None: no station configured, nothing can be tracked
+    min_el_deg: float = 0.0
+    step_deg: float = 3.0
+    at_los: str = "stay"  # or "park"
 
 
 @dataclass(frozen=True)

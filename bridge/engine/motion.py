@@ -22,7 +22,10 @@ Rules:
    is ``settle_s`` later and would make every new target after an arrival wait for nothing. A
    stall counts from its detection (safe side).
    At start-up the machine assumes a brake window may be running, and that the rotor may be
-   turning: ``idle`` needs ``settle_s`` of stillness after the first reading even without a brake.
+   turning: no target goes out before ``settle_s`` of stillness after the first reading. Without
+   a brake (``brake_delay_s`` 0: SPID, SatEL, RotorCard) the rotor is never ``braking``: it is
+   ``idle`` from the first still reading (a turning one shows ``moving`` at the next), and that
+   wait is kept apart (``settling``).
 5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
    target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
    target): two readings in a row, each further from it than the one before and both more
@@ -132,13 +135,13 @@ def link_down(m: Motion) -> Motion:
     )
 
 
-def track_lost(m: Motion) -> Motion:
+def track_lost(m: Motion, cfg: MotionConfig) -> Motion:
     """Readings were missed (a silent controller's after-move report was lost): whether and
     where the rotor moved since is unknown, so the next reading is taken like the first one
-    after a connect (rule 4). Until it comes the rotor is braking (it was just stopped)."""
-    return Motion(
-        state=MotionState.BRAKING, position_deg=m.position_deg, el_position_deg=m.el_position_deg
-    )
+    after a connect (rule 4). Until it comes the rotor is braking (it was just stopped), or,
+    without a brake, in a state the bridge cannot tell."""
+    state = MotionState.BRAKING if cfg.brake_delay_s > 0 else MotionState.UNKNOWN
+    return Motion(state=state, position_deg=m.position_deg, el_position_deg=m.el_position_deg)
 
 
 def slew_ended(m: Motion, now: float) -> Motion:
@@ -175,8 +178,6 @@ def reading(
             still_since_t=now,
             idle_not_before_t=now + cfg.settle_s,
         )
-        if m.state is MotionState.IDLE:
-            m = replace(m, state=MotionState.BRAKING)
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # not None: the first reading returned above
     changes: dict[str, Any] = {}  # one replace() per reading: this runs at every poll
@@ -296,12 +297,21 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
     if m.state is MotionState.BRAKING and m.still_since_t is not None:
         if now >= m.still_since_t + cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
             m = replace(m, state=MotionState.IDLE, idle_not_before_t=None)
+    elif m.state is MotionState.IDLE and m.idle_not_before_t is not None:
+        if now >= m.idle_not_before_t:
+            m = replace(m, idle_not_before_t=None)  # rule 4: settled
     return m, events
 
 
+def settling(m: Motion) -> bool:
+    """Idle with no brake, but not yet still for ``settle_s`` since the first reading (rule 4):
+    no target goes out yet."""
+    return m.state is MotionState.IDLE and m.idle_not_before_t is not None
+
+
 def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
-    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0 and m.idle_not_before_t is None:
-        state = MotionState.IDLE
+    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0:
+        state = MotionState.IDLE  # rule 4: no brake, never braking (``settling`` may still hold)
     stopped_t = now  # rule 4
     if state is MotionState.BRAKING and m.last_move_t is not None:
         after = [t for t in (m.stop_sent_t, m.target_t) if t is not None]
@@ -324,7 +334,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
 # -- decisions -------------------------------------------------------------------------------
 def within_tolerance(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
     """Idle and already within tolerance of ``wire`` on both axes: nothing to send."""
-    if m.state is not MotionState.IDLE or m.position_deg is None:
+    if m.state is not MotionState.IDLE or m.position_deg is None or settling(m):
         return False
     if angle_error(m.position_deg, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
         return False
@@ -349,7 +359,7 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     if cfg.direct_retarget:
         return Plan.SEND
     if m.state is MotionState.IDLE:
-        return Plan.SEND
+        return Plan.WAIT if settling(m) else Plan.SEND
     if m.state is MotionState.STALLED:
         rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
@@ -376,8 +386,8 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             times.append(m.stop_sent_t + cfg.stop_resend_s)
     if m.state in (MotionState.BRAKING, MotionState.STALLED) and m.still_since_t is not None:
         times.append(m.still_since_t + cfg.brake_delay_s)
-        if m.idle_not_before_t is not None:
-            times.append(m.idle_not_before_t)
+    if m.idle_not_before_t is not None:
+        times.append(m.idle_not_before_t)
     if not cfg.can_report_position:
         if m.busy_until_t is not None:
             times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
@@ -385,37 +395,3 @@ def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
             times.append(m.stop_sent_t + cfg.brake_delay_s)
     future = [t for t in times if t > now]
     return min(future) if future else None
-
-
-def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
-    d = to_deg - from_deg
-    if wraps and abs(d) > 180.0:
-        d -= 360.0 if d > 0 else -360.0
-    return d
-
-
-def publishable_bearing(
-    published_deg: float | None,
-    direction: int,
-    reading_deg: float,
-    moving: bool,
-    deadband_deg: float,
-    wraps: bool,
-) -> tuple[float | None, int]:
-    """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
-
-    At rest only a change beyond the deadband is published. While moving, every step in the
-    direction of travel is published (dashboards stay fresh), but a step back inside the
-    deadband is analog jitter and is not.
-    """
-    if published_deg is None:
-        return reading_deg, 0
-    delta = signed_delta(reading_deg, published_deg, wraps)
-    if delta == 0:
-        return None, direction
-    step = 1 if delta > 0 else -1
-    if abs(delta) > deadband_deg or (moving and step == direction):
-        return reading_deg, step
-    if moving and direction == 0:
-        return reading_deg, step
-    return None, direction

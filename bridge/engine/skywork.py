@@ -1,6 +1,6 @@
-"""The sky worker: the one thread beside the lines thread that computes the sky (ARCHITECTURE.md
-rule 12). Pass searches, position windows and TLE file look-ups take from a millisecond to a
-second; the lines thread writes every stop, so none of them runs there.
+"""The sky worker: the one thread beside the lines thread that computes the sky
+(docs/architecture.md rule 12). Pass searches, position windows and TLE file look-ups take
+from a millisecond to a second; the lines thread writes every stop, so none of them runs there.
 
 A session asks by returning an ``Ask`` action (a question and its tracking generation); the
 worker (worker.py) hands the question here with a callback, and the answer comes back to the

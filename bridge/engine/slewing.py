@@ -1,4 +1,6 @@
 """A silent controller's slew whose report does not come (SatEL): what the session does then.
+Pure: ``overdue`` gets the slew and the time and returns what to do (``Overdue``); the session
+carries it out.
 
 Source: protocols/satel.md (no input but a stop while the controller slews; it reports once the
 move is over, also after a stop). See slew.py for what a slew is and how long it may take.
@@ -21,15 +23,12 @@ Rules:
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
-from bridge.engine import motion as mo
-from bridge.engine.link import Link
+from bridge.engine.actions import Report
+from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
 from bridge.model import ErrorKind, Target, describe_command
-
-if TYPE_CHECKING:
-    from bridge.engine.session import RotatorSession
 
 log = logging.getLogger(__name__)
 
@@ -37,52 +36,56 @@ SLEW_STOP_TRIES = 3  # stops written to a slewing controller before it is asked 
 SLEW_ATTEMPTS = 2  # a target whose report did not come is sent once more, then given up
 
 
-def travel_s(session: RotatorSession, slew: Slew) -> float:
-    cfg = session.cfg
+@dataclass(frozen=True)
+class Overdue:
+    """What the session does about a reply that did not come by its deadline."""
+
+    stop: bool  # write a stop (rules 1 and 3); otherwise stop waiting for the reply
+    error: Report | None = None
+    retry: Target | None = None  # put back as the pending target, try ``attempt`` (rule 1)
+    attempt: int = 1
+    track_lost: bool = False  # the slew's readings are lost (motion.track_lost)
+
+
+def travel_s(rig: WorkerConfig, slew: Slew) -> float:
+    spec = rig.spec
+    span_el_deg = spec.el_max_deg - spec.el_min_deg
     return slew.travel_s(
-        session.cfg.az_speed_deg_s,
-        session.cfg.el_speed_deg_s,
-        cfg.motion.az_span_deg,
-        cfg.spec.el_max_deg - cfg.spec.el_min_deg,
+        rig.az_speed_deg_s, rig.el_speed_deg_s, rig.motion.az_span_deg, span_el_deg
     )
 
 
-def reply_overdue(session: RotatorSession, link: Link, now: float) -> None:
+def overdue(rig: WorkerConfig, slew: Slew | None, reply_timeout_s: float, now: float) -> Overdue:
     """The owed reply (or a slew's report) did not come by its deadline."""
-    slew = link.slew
     if slew is not None and slew.stops == 0:  # rule 1
         late = (
             f"no report from the controller {now - slew.start_t:.0f} s after a move that "
-            f"takes {travel_s(session, slew):.0f} s at {session.cfg.az_speed_deg_s:g}/"
-            f"{session.cfg.el_speed_deg_s:g} deg/s"
+            f"takes {travel_s(rig, slew):.0f} s at {rig.az_speed_deg_s:g}/"
+            f"{rig.el_speed_deg_s:g} deg/s"
         )
         if slew.attempt >= SLEW_ATTEMPTS:  # rule 2
-            session.error(
-                ErrorKind.SERIAL,
+            given_up = (
                 f"{late}, the second time for this target: stopping it and giving the target "
                 "up (rotor jammed or held short of the point? if it is that slow, set "
-                "az_speed_deg_s / el_speed_deg_s)",
-                command=describe_command(Target(slew.to_az_deg, slew.to_el_deg)),
+                "az_speed_deg_s / el_speed_deg_s)"
             )
-        else:
-            session.error(
-                ErrorKind.SERIAL,
-                f"{late}: stopping it to ask where it is, then going on to the target (if "
-                "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)",
-            )
-            target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
-            session.targets.put_back(target, slew.attempt + 1, now)
-        session.stop_now(now)
-        return
+            command = describe_command(Target(slew.to_az_deg, slew.to_el_deg))
+            return Overdue(stop=True, error=Report(ErrorKind.SERIAL, given_up, command))
+        again = (
+            f"{late}: stopping it to ask where it is, then going on to the target (if "
+            "the rotor is that slow, set az_speed_deg_s / el_speed_deg_s)"
+        )
+        target = Target(slew.to_az_deg, slew.to_el_deg, slew.source)
+        error = Report(ErrorKind.SERIAL, again)
+        return Overdue(stop=True, error=error, retry=target, attempt=slew.attempt + 1)
     if slew is not None and slew.stops < SLEW_STOP_TRIES:  # rule 3
         log.warning(
             "%s: no report %g s after a stop during a slew; stopping again before asking",
-            session.name,
-            link.reply_timeout_s,
+            rig.rotator_id,
+            reply_timeout_s,
         )
-        session.stop_now(now)
-        return
-    link.give_up_reply(now)
-    if slew is not None:
-        session.motion = mo.track_lost(session.motion)
-        session.error(ErrorKind.SERIAL, "no report after the stopped slew; asking the controller")
+        return Overdue(stop=True)
+    if slew is None:
+        return Overdue(stop=False)
+    lost = "no report after the stopped slew; asking the controller"
+    return Overdue(stop=False, error=Report(ErrorKind.SERIAL, lost), track_lost=True)

@@ -1,7 +1,9 @@
-"""What a rotator's status says, and when a new one is worth emitting. Pure, no clock.
+"""What a rotator's status says, and when a new one is worth emitting. Pure, no clock: the
+session hands ``current`` what it knows (``Seen``, a read-only view) and publishes what it
+returns.
 
 Rules:
-1. The published bearing follows readings with hysteresis (motion.publishable_bearing): analog
+1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
    jitter of a still rotor never reaches a dashboard.
 2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
 3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
@@ -17,13 +19,12 @@ Rules:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import NamedTuple
 
 from bridge.engine import motion as mo
-from bridge.model import MotionState, RotatorStatus, TargetInfo
-
-if TYPE_CHECKING:
-    from bridge.engine.session import RotatorSession
+from bridge.engine.config import WorkerConfig
+from bridge.engine.slew import Slew
+from bridge.model import MotionState, RotatorStatus, Target, TargetInfo, TrackingInfo
 
 
 @dataclass
@@ -34,7 +35,7 @@ class Hysteresis:
     direction: int = 0
 
     def feed(self, reading: float, moving: bool, deadband_deg: float, wraps: bool) -> None:
-        new, self.direction = mo.publishable_bearing(
+        new, self.direction = publishable_bearing(
             self.value, self.direction, reading, moving, deadband_deg, wraps
         )
         if new is not None:
@@ -45,8 +46,6 @@ class Hysteresis:
 class View:
     """Everything the status shows besides what the motion machine and the link know."""
 
-    version: str | None = None
-    controller_time: str | None = None
     last_error: str | None = None
     last_source: str | None = None
     target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
@@ -54,66 +53,87 @@ class View:
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
 
 
-def current(session: RotatorSession, now: float) -> RotatorStatus:
-    """The status of ``session`` as of ``now``."""
-    link, m, spec, view = session.link, session.motion, session.cfg.spec, session.view
-    answering = link is not None and session.answering
+class Seen(NamedTuple):
+    """What the session knows at one moment, as the status needs it (a tuple: read-only, and
+    cheap to build at every step)."""
+
+    previous: RotatorStatus
+    view: View
+    version: str | None  # the controller's, as it says
+    controller_time: str | None  # its own clock (SatEL)
+    motion: mo.Motion
+    connected: bool
+    answering: bool  # connected, and the controller answers (or cannot: DCU-1)
+    locked: bool
+    options: dict[str, bool]
+    bearing_deg: float | None  # the published readings (rule 1), raw
+    elevation_deg: float | None
+    slew: Slew | None
+    pending: Target | None  # the target waiting to go out...
+    pending_wire: tuple[float | None, float | None] | None  # ...and its raw values, if known
+    wall_offset_s: float
+    tracking: TrackingInfo | None
+    tracking_ended: str | None
+
+
+def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
+    """The status as of ``now``."""
+    m, spec, view = seen.motion, rig.spec, seen.view
+    answering = seen.answering
     target: tuple[float | None, float | None] = (m.target_deg, m.el_target_deg)
-    pending = session.targets.pending
-    if pending is not None and link is not None:
-        az, el = session.resolve(pending)
-        target = link.codec.wire_target(az, el) if az is not None else target
+    if seen.pending_wire is not None:
+        target = seen.pending_wire
     state = m.state if answering else MotionState.OFFLINE
-    bearing, elevation = session.az_shown.value, session.el_shown.value
+    bearing, elevation = seen.bearing_deg, seen.elevation_deg
     estimated = False
-    if link is not None and link.slew is not None:  # rule 2
-        cfg = session.cfg
-        bearing, elevation = link.slew.estimate(now, cfg.az_speed_deg_s, cfg.el_speed_deg_s)
+    if seen.slew is not None:  # rule 2
+        bearing, elevation = seen.slew.estimate(now, rig.az_speed_deg_s, rig.el_speed_deg_s)
         estimated = True
     expected_end: float | None = None
     if not spec.can_report_position and answering:  # rule 3
         moving = m.target_deg is not None and m.stop_sent_t is None
         if moving and m.busy_until_t is not None and now < m.busy_until_t:
             state, estimated = MotionState.MOVING, True
-            expected_end = m.busy_until_t + session.wall_offset_s
+            expected_end = m.busy_until_t + seen.wall_offset_s
         else:
             state, target = MotionState.UNKNOWN, (None, None)
-    aim = session.cfg.aim
+    aim = rig.aim
     raw = bearing if spec.can_report_position else None
+    pending = seen.pending
     return replace(
-        session.status,
+        seen.previous,
         state=state,
         bearing_deg=None if raw is None else aim.true_of(raw),
         raw_bearing_deg=raw,
         overlap=aim.overlap(raw),
         target_info=pending.info if pending is not None else view.target_info,
-        parked=_parked(session, state),
-        tracking=session.tracker.info,
-        tracking_ended=session.tracker.ended,
+        parked=_parked(rig, seen, state),
+        tracking=seen.tracking,
+        tracking_ended=seen.tracking_ended,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,
-        controller_time=view.controller_time,
+        controller_time=seen.controller_time,
         target_az_deg=None if target[0] is None else aim.true_of(target[0]),
         raw_target_az_deg=target[0],
         target_el_deg=target[1] if spec.has_elevation else None,
-        connected=link is not None,
+        connected=seen.connected,
         available=answering,
-        locked=session.locked,
-        version=view.version,
-        options=dict(session.options),
+        locked=seen.locked,
+        version=seen.version,
+        options=dict(seen.options),
         last_error=view.last_error,
         last_command_source=view.last_source,
     )
 
 
-def _parked(session: RotatorSession, state: MotionState) -> bool:
-    park = session.view.park_raw
+def _parked(rig: WorkerConfig, seen: Seen, state: MotionState) -> bool:
+    park = seen.view.park_raw
     if park is None or state in (MotionState.MOVING, MotionState.OFFLINE):
         return False
-    if not session.cfg.spec.can_report_position:
+    if not rig.spec.can_report_position:
         return True  # the estimated move is over
-    return mo.within_tolerance(session.motion, session.cfg.motion, park)
+    return mo.within_tolerance(seen.motion, rig.motion, park)
 
 
 def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
@@ -121,3 +141,37 @@ def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
     if new.controller_time == old.controller_time:
         return new != old
     return replace(new, controller_time=None) != replace(old, controller_time=None)
+
+
+def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
+    d = to_deg - from_deg
+    if wraps and abs(d) > 180.0:
+        d -= 360.0 if d > 0 else -360.0
+    return d
+
+
+def publishable_bearing(
+    published_deg: float | None,
+    direction: int,
+    reading_deg: float,
+    moving: bool,
+    deadband_deg: float,
+    wraps: bool,
+) -> tuple[float | None, int]:
+    """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
+
+    At rest only a change beyond the deadband is published. While moving, every step in the
+    direction of travel is published (dashboards stay fresh), but a step back inside the
+    deadband is analog jitter and is not.
+    """
+    if published_deg is None:
+        return reading_deg, 0
+    delta = signed_delta(reading_deg, published_deg, wraps)
+    if delta == 0:
+        return None, direction
+    step = 1 if delta > 0 else -1
+    if abs(delta) > deadband_deg or (moving and step == direction):
+        return reading_deg, step
+    if moving and direction == 0:
+        return reading_deg, step
+    return None, direction

@@ -5,7 +5,7 @@ The loop (lines.py) asks ``wants(now)`` (what to wait for: the port and the mail
 when) and calls ``serve(ready, now)``. Whatever happened (bytes, commands, time) goes into the
 rotator's session (session.py, where every decision is made) and the actions it hands back are
 carried out: bytes written, statuses and error events handed to the listeners (the second and
-last hand-off point, ARCHITECTURE.md rule 3).
+last hand-off point, docs/architecture.md rule 3).
 
 Rules:
 1. Any serial error closes the port, tells the session the link is down and retries with

@@ -21,7 +21,11 @@ Rules:
    10 by default, after a burst of five times as many); the next one published says how many
    were left out. Every other kind (a stall, a stop that did not take, the serial line) is
    always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
-   neither queue 200,000 QoS 1 messages nor delay the state.
+   neither queue 200,000 QoS 1 messages nor delay the state. Each refusal published is also
+   logged at INFO, one line naming the rotator, the command and the reason (an operator
+   reading the log sees why nothing moved): the same limit, so a flood is as few lines as
+   events; what the sender wrote is shown escaped on one line and cut short (LOGGED_CHARS), so
+   no payload can forge or flood a log line.
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
@@ -183,6 +187,12 @@ class MqttService:
             doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
             doc["suppressed"] = left_out
         self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
+        log.info(  # rule 4: the same line for whoever reads the log (journalctl -f)
+            "%s: refused %s: %s",
+            rotator_id,
+            _one_line(event.command or "input"),
+            _one_line(str(doc["message"])),
+        )
 
     # -- inbound (paho's threads) -----------------------------------------------------------
     def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
@@ -273,3 +283,13 @@ class MqttService:
             rot.report_refusal(str(exc), what)
         except Refused:
             pass  # the rotator has reported it
+
+
+LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line
+
+
+def _one_line(text: str) -> str:
+    """Rule 4: what is not printable escaped (no payload starts a log line of its own), cut
+    short."""
+    shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return shown if len(shown) <= LOGGED_CHARS else shown[: LOGGED_CHARS - 3] + "..."

@@ -1,7 +1,21 @@
-"""Every MQTT topic string of the bridge lives here and nowhere else (ARCHITECTURE.md rule 4).
+"""Every MQTT topic string of the bridge lives here and nowhere else (docs/architecture.md,
+rule 4).
 
 R = a rotator's topic (the base topic itself when exactly one rotator is configured,
 ``<base>/<id>`` otherwise), B = the base topic.
+
+Two topics under ``B/bridge/`` are the bridge's messages to itself, not for other clients:
+- ``B/bridge/hello``: the first look (mqtt/look.py, client.py rule 14). On every connect,
+  before it publishes anything else, the bridge publishes ``<instance id> <n>`` there (its MQTT
+  client id and the number of the look in this run), QoS 0, NOT retained, and waits for it to
+  come back: the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before it are
+  what the broker held. So a client watching ``B/#`` while the bridge (re)connects sees it as
+  the bridge's first message; one that subscribes later never does (nothing of it stays on the
+  broker). Other clients ignore it; a hello that is not the bridge's own look ends nothing. The
+  broker's ACL must let the bridge publish and subscribe there: without it every connect
+  waits LOOK_TIMEOUT_S (5 s) and deletes no stale discovery.
+- ``B/bridge/fence`` and ``B/bridge/fence/lane``: the markers of the last word
+  (mqtt/lastword.py), QoS 0, not retained, seen only while stops and locks come in.
 """
 
 from __future__ import annotations
@@ -140,7 +154,8 @@ class Topics:
 
     @property
     def bridge_hello(self) -> str:
-        """Where a bridge's first look goes to come back to it (mqtt/claim.py)."""
+        """Where a bridge's first look goes to come back to it (QoS 0, not retained: see the
+        module's docstring; mqtt/look.py)."""
         return f"{self.base}/bridge/hello"
 
     @property

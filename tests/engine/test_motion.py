@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from bridge.engine import motion as mo
+from bridge.engine.status import publishable_bearing
 from bridge.model import MotionState as S
 from bridge.protocols import REGISTRY
 
@@ -167,7 +168,7 @@ def test_dcu1_without_feedback_is_unknown_and_assumes_travel_time() -> None:
 
 
 def test_deadband_holds_the_published_bearing_at_rest() -> None:
-    pb = mo.publishable_bearing
+    pb = publishable_bearing
     assert pb(None, 0, 100, False, 2, True) == (100, 0)
     assert pb(100, 0, 101, False, 2, True) == (None, 0)
     assert pb(100, 0, 102, False, 2, True) == (None, 0)
@@ -177,7 +178,7 @@ def test_deadband_holds_the_published_bearing_at_rest() -> None:
 
 
 def test_while_moving_progress_is_published_and_jitter_back_is_not() -> None:
-    pb = mo.publishable_bearing
+    pb = publishable_bearing
     published, direction, shown = 100.0, 0, []
     for reading in [101, 102, 103, 104, 105, 120, 121, 120, 121, 120, 121]:
         new, direction = pb(published, direction, reading, True, 2, True)
@@ -207,23 +208,27 @@ def test_the_long_way_round_is_progress_not_a_stall() -> None:
 
 
 def test_without_a_brake_the_first_reading_still_waits_for_stillness() -> None:
+    """No brake, never braking (rule 4): idle at once, but settling: no target yet."""
     card = mo.MotionConfig(REGISTRY["rotorcard"], brake_delay_s=0, settle_s=1.5, noise_deg=2)
     m = mo.link_up(mo.Motion(), card, 0.0)
     m, _ = mo.reading(m, card, 100, 0.0)
-    assert m.state is S.BRAKING and mo.plan_target(m, card, 0.5) is mo.Plan.WAIT
+    assert m.state is S.IDLE and mo.settling(m)
+    assert mo.plan_target(m, card, 0.5) is mo.Plan.WAIT
     m, _ = mo.reading(m, card, 104, 0.5)  # it was turning when we connected
     assert m.state is S.MOVING and mo.plan_target(m, card, 0.5) is mo.Plan.STOP_FIRST
     m2 = mo.link_up(mo.Motion(), card, 0.0)
     m2, _ = mo.reading(m2, card, 100, 0.0)
+    assert mo.next_deadline(m2, card, 0.0) == 1.5
     m2, _ = mo.tick(m2, card, 1.5)
-    assert m2.state is S.IDLE
+    assert m2.state is S.IDLE and not mo.settling(m2)
+    assert mo.plan_target(m2, card, 1.5) is mo.Plan.SEND
 
 
 def test_after_lost_readings_the_next_one_is_taken_like_the_first() -> None:
     """A lost after-move report: the jump to the next reading is no movement after the stop
     (no second stop), and the rotor is idle only after settle_s of stillness."""
     m = mo.stop_sent(mo.commanded(ready(), CFG, 200, 10.0), CFG, 30.0)
-    m = mo.track_lost(m)
+    m = mo.track_lost(m, CFG)
     assert m.state is S.BRAKING and m.target_deg is None and m.stop_sent_t is None
     m, events = mo.reading(m, CFG, 200, 32.0)
     assert events == [] and m.state is S.BRAKING

@@ -142,10 +142,14 @@ def test_a_stop_waiting_for_a_half_duplex_line_is_sent_first_when_the_port_is_ba
     v.target(200, 10)
     v.run_until(lambda h: h.truth().is_moving, 20, "turning")
     v.run_until(
-        lambda h: h.session.link is not None and h.session.link.reply_owed, 5, "a reply owed"
+        lambda h: h.session.controller.link is not None and h.session.controller.link.reply_owed,
+        5,
+        "a reply owed",
     )
     v.stop()
-    assert v.session.link is not None and v.session.link.stop_due  # not written yet
+    assert (
+        v.session.controller.link is not None and v.session.controller.link.stop_due
+    )  # not written yet
     v.link_down("USB adapter reset")
     v.run_for(1)
     t = v.now

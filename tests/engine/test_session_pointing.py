@@ -153,6 +153,7 @@ def test_a_spid_picks_the_side_when_the_target_is_sent_not_when_it_came(rig: Rig
     fast = {"az_speed_deg_s": 60}
     v = rig("md01", settings=fast, emulator={"start_az_deg": 100, **fast})
     v.run_until_state(IDLE, 30)
+    v.run_for(1.5)  # at rest: the readings below (12 degrees apart) fall where this needs them
     v.aim(Target(-170, 0))  # outside 0..360: names the side, counter-clockwise past north
     v.run_until(lambda v: (v.status.raw_bearing_deg or 100) <= 25, 30, "passing raw 25")
     v.aim(Target(-160, 0))  # sent at once ...

@@ -45,7 +45,8 @@ def at(v: VirtualRotator, az_deg: float) -> Callable[[VirtualRotator], bool]:
 
 
 def assert_never_disobeyed(v: VirtualRotator) -> None:
-    """No bearing ever reached the controller while it turned or braked (ARCHITECTURE rule 7)."""
+    """No bearing ever reached the controller while it turned or braked (docs/architecture.md
+    rule 7)."""
     assert v.frames(*DISOBEYED) == []
 
 
@@ -53,7 +54,7 @@ def brake_set_times(v: VirtualRotator, after: float) -> list[float]:
     return [e.time_s for e in v.device.events if e.kind == "brake set" and e.time_s > after]
 
 
-# -- brake delay and re-target while turning (session rule 4, motion rule 4) ------------------
+# -- brake delay and re-target while turning (sending.py rule 1, motion rule 4) ---------------
 def test_a_new_target_while_turning_stops_waits_out_the_brake_then_goes(rig: Rig) -> None:
     v = ready(rig)
     v.target(180)
@@ -85,7 +86,7 @@ def test_a_target_right_after_arrival_waits_for_the_brake_window(rig: Rig) -> No
     assert_never_disobeyed(v)
 
 
-# -- stop verified and repeated (session rule 5) ----------------------------------------------
+# -- stop verified and repeated (stops.py rule 2) ---------------------------------------------
 @pytest.mark.parametrize("fault", ["dropped", "garbled"])
 def test_a_stop_that_did_not_arrive_is_sent_again(rig: Rig, fault: str) -> None:
     v = ready(rig)
@@ -151,7 +152,7 @@ def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
     assert_never_disobeyed(v)
 
 
-# -- manual front-panel move (motion rule 5, session rule 7) ----------------------------------
+# -- manual front-panel move (motion rule 5, sending.py rule 4) -------------------------------
 def test_a_front_panel_move_is_shown_as_moving_without_a_command(rig: Rig) -> None:
     v = ready(rig)
     t = v.now
@@ -243,7 +244,7 @@ def test_a_dragged_slider_reaches_the_wire_as_a_few_targets_and_ends_at_the_last
     assert v.status.target_az_deg is None and v.errors() == []
 
 
-# -- polling (session rule 3) -----------------------------------------------------------------
+# -- polling (controller.py rule 3) -----------------------------------------------------------
 def test_polls_are_slow_while_idle_and_fast_while_moving(rig: Rig) -> None:
     v = ready(rig)
     t = v.now
@@ -262,7 +263,7 @@ def test_polls_are_slow_while_idle_and_fast_while_moving(rig: Rig) -> None:
     assert gaps(moving) == {v.cfg.moving_poll_interval_s}
 
 
-# -- silence, offline, recovery (session rule 2) ----------------------------------------------
+# -- silence, offline, recovery (controller.py rule 2) ----------------------------------------
 def test_a_silent_controller_goes_offline_and_comes_back_when_it_answers(rig: Rig) -> None:
     v = rig("rotorez")
     assert not v.status.available  # nothing read yet
@@ -324,7 +325,7 @@ def test_garbled_replies_move_no_bearing_and_are_reported_at_a_measured_rate(rig
     assert v.status.bearing_deg == bearing
 
 
-# -- options (session rule 6) -----------------------------------------------------------------
+# -- options (options.py rule 1) --------------------------------------------------------------
 OPTIONS = {"jam": False, "overshoot": True}  # both differ from the board's jumpers
 
 
@@ -368,7 +369,7 @@ def test_an_option_set_while_turning_waits_until_the_rotor_rests(rig: Rig) -> No
     assert v.truth().options["unstick"] is True
 
 
-# -- the lock (session rule 5) ----------------------------------------------------------------
+# -- the lock (stops.py rule 2) ---------------------------------------------------------------
 def test_lock_on_stops_even_an_idle_rotor_and_refuses_targets_lock_off_allows(rig: Rig) -> None:
     v = ready(rig)
     t = v.now
@@ -422,7 +423,7 @@ def test_a_stop_drops_the_target_waiting_for_the_brake(rig: Rig) -> None:
     assert v.state is IDLE and v.status.target_az_deg is None and v.errors() == []
 
 
-# -- the link (session rules 4 and 6) ---------------------------------------------------------
+# -- the link (session rule 4, options.py rule 1) ---------------------------------------------
 def test_a_link_lost_drops_the_waiting_target_and_a_new_link_starts_afresh(rig: Rig) -> None:
     v = ready(rig, options={"endpoint": True})
     v.target(300)

@@ -51,7 +51,7 @@ def settled_at(az: float, el: float) -> Callable[[VirtualRotator], bool]:
 
 
 def assert_half_duplex(v: VirtualRotator) -> None:
-    """Nothing was written while a reply was still owed (session rule 3, link rule 3): at
+    """Nothing was written while a reply was still owed (controller.py rule 3, link rule 3): at
     every write, all the replies owed by the frames before it had arrived whole."""
     reply_bytes = v.cfg.spec.reply_bytes
     owed = 0
@@ -136,3 +136,25 @@ def test_turned_away_from_its_target_is_reported_and_stopped_once_at_rest(rig: R
     v.run_until(lambda h: h.frames(Outcome.STOP, since=t), 30, "a stop once at rest")
     assert len(v.frames(Outcome.STOP, since=t)) == 1
     assert not [f for f in v.frames(Outcome.SET, since=t)]  # it was never sent back
+
+
+def _states(v: VirtualRotator) -> list[MotionState]:
+    """The published states in order, each change once."""
+    out: list[MotionState] = []
+    for _t, status in v.statuses:
+        if not out or status.state is not out[-1]:
+            out.append(status.state)
+    return out
+
+
+@pytest.mark.parametrize("model", ["md01", "rot2prog"])
+def test_a_controller_without_a_brake_is_never_shown_braking(rig: Rig, model: str) -> None:
+    """An idle MD-01 at start goes offline -> idle, and a move ends idle again: it has no brake
+    (motion rule 4), so ``braking`` would be untrue."""
+    v = rig(model, emulator={"start_az_deg": 100})
+    v.run_for(10)
+    assert _states(v) == [MotionState.OFFLINE, IDLE]
+    v.target(150)
+    v.run_until(lambda h: h.state is IDLE and h.truth().az_deg > 140, 60, "arrived")
+    v.run_for(5)
+    assert _states(v) == [MotionState.OFFLINE, IDLE, MOVING, IDLE]

@@ -348,7 +348,7 @@ def test_tracking_ends_for_good_when_the_rotor_is_out_of_the_bridges_hands(
             v.link_up()
         elif how == "silent":
             v.set_silent(True)
-            v.run_until(lambda h: not h.session.answering, 30, "the controller silent")
+            v.run_until(lambda h: not h.session.controller.answering, 30, "the controller silent")
             v.set_silent(False)
         else:
             v.manual_rotate((truth.az_deg + 60.0) % 360.0)

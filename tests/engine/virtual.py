@@ -1,9 +1,9 @@
 """One RotatorSession wired to one device emulator in-process, in virtual time.
 
-What this is: the proof bench of ARCHITECTURE.md rule 10. The session (engine/session.py) and an
-emulator (emulators/, a sans-IO Responder written from the documents, never from our codecs)
-talk through a simulated serial line; a fake clock jumps from one thing that can happen to the
-next, so minutes of rotor time cost milliseconds.
+What this is: the proof bench of docs/architecture.md ("decisions are proven in virtual time").
+The session (engine/session.py) and an emulator (emulators/, a sans-IO Responder written from
+the documents, never from our codecs) talk through a simulated serial line; a fake clock jumps
+from one thing that can happen to the next, so minutes of rotor time cost milliseconds.
 
 How it drives the session: exactly as engine/worker.py does (``start``, ``link_up``, then
 ``commands`` / ``bytes_received`` / ``tick`` when ``next_wakeup`` has passed and nothing else

@@ -1,13 +1,12 @@
-"""The fault suite's real parts: a broker, emulated controllers on real ptys with a wire tap,
-the bridge in-process (as its own process: tests.support.BridgeProcess), and the ground truth the
-invariants are judged by.
+"""The fault suite's real parts: tests.support's Rig (a broker, emulated controllers on real ptys
+with a wire tap, the bridge in-process; as its own process: tests.support.BridgeProcess) with the
+fault suite's timings, and the ground truth the invariants are judged by.
 
 Ground truth comes from two places the bridge never sees:
 - the emulator's own state (where the rotor really is, which frames it obeyed), and
-- a tap on the controller's transmit line: every byte the controller sent, parsed by the small
-  independent parsers below (not the bridge's codecs), so "a bearing the controller did not
-  report" can be checked exactly. Garbage injected onto the line bypasses the tap: it is line
-  noise, not a report.
+- a tap on the controller's transmit line (tests/support/tap.py): every byte the controller sent,
+  parsed by small independent parsers (not the bridge's codecs), so "a bearing the controller
+  did not report" can be checked exactly.
 
 The soak runner (tests/soak) uses the same pieces.
 """
@@ -17,27 +16,51 @@ from __future__ import annotations
 import json
 import os
 import random
-import re
 import subprocess
-import threading
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from bridge import emulators
-from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.emulators.spid_models import MOTION_OUTCOMES
 from bridge.mosquitto import Mosquitto
-from tests.support import Message, Probe, wait_until
-from tests.support.rig import Rig as BaseRig
+from tests.support import Probe, wait_until
+from tests.support.rig import ARRIVAL_TOL_DEG, Rig, Timings, arrival_tol
+from tests.support.tap import (
+    Tap,
+    bogus_bearings,
+    near_deg,
+    reported_positions,
+    start_emulator,
+    tap_of,
+)
+
+__all__ = [  # what the suite's tests and the soak import from here
+    "ARRIVAL_TOL_DEG",
+    "AZEL",
+    "FAST_BROKER_CONF",
+    "ROTOREZ_FAMILY",
+    "SPID",
+    "LoginProbe",
+    "Pki",
+    "Rig",
+    "Tap",
+    "arrival_tol",
+    "bogus_bearings",
+    "cut_short",
+    "fault_rig",
+    "line_noise",
+    "near_deg",
+    "reported_positions",
+    "start_emulator",
+    "tap_of",
+]
 
 # -- timings -------------------------------------------------------------------------------------
-# Scaled down like tests/support/rig.py (same ratios as real hardware: the brake delay is much
-# longer than a poll, a settle window longer than two polls), a little faster still.
+# Scaled down like tests/support/rig.py's TEST_TIMINGS (same ratios as real hardware: the brake
+# delay is much longer than a poll, a settle window longer than two polls), a little faster still.
 EMU_FAST: dict[str, dict[str, Any]] = {
     "rotorez": {"speed_deg_s": 40.0, "brake_delay_s": 0.8, "jitter_deg": 1},
     "rotorcard": {"speed_deg_s": 40.0, "brake_delay_s": 0.0, "jitter_deg": 1},
@@ -74,192 +97,17 @@ BRIDGE_FAST: dict[str, dict[str, Any]] = {
 SPID = ("rot2prog", "rot1prog", "md01")
 ROTOREZ_FAMILY = ("rotorez", "rotorcard", "dcu1")
 AZEL = ("rot2prog", "md01", "satel")
-# ground-truth tolerance for "the rotor is there": emulator jitter + the bridge's tolerance
-ARRIVAL_TOL_DEG = {"rotorez": 3.5, "rotorcard": 3.5, "dcu1": 3.5, "satel": 1.5}
+# -- the rig: tests.support's, with tapped emulators and the fault suite's timings ---------------
+FAULT_TIMINGS = Timings(emulator=EMU_FAST, bridge=BRIDGE_FAST)
 
 
-def arrival_tol(model: str) -> float:
-    return ARRIVAL_TOL_DEG.get(model, 1.0)
-
-
-# -- the wire tap and independent parsers of what a controller reports ---------------------------
-class Tap:
-    """Wraps a sans-IO responder; records every byte the controller transmits, with its time.
-
-    It changes nothing: every call goes to the responder. It is the serial sniffer on the
-    controller's TX line.
-    """
-
-    def __init__(self, device: Any) -> None:
-        self._device = device
-        self._lock = threading.Lock()
-        self._sent = bytearray()
-
-    def due_output(self, now: float) -> bytes:
-        out = self._device.due_output(now)
-        if out:
-            with self._lock:
-                self._sent += out
-        return out
-
-    def sent(self) -> bytes:
-        with self._lock:
-            return bytes(self._sent)
-
-    def sent_since(self, offset: int) -> bytes:
-        with self._lock:
-            return bytes(self._sent[offset:])
-
-    def sent_count(self) -> int:
-        with self._lock:
-            return len(self._sent)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._device, name)
-
-
-_ROTOREZ_REPLY = re.compile(rb";(\d{3})")
-_SATEL_AZ = re.compile(rb"Azimuth = (\d{1,3})")
-_SATEL_EL = re.compile(rb"Elevation = (\d{1,3})")
-
-
-def reported_positions(model: str, wire: bytes) -> tuple[set[float], set[float]]:
-    """(azimuths, elevations) a controller of ``model`` put on the wire, from its own bytes.
-
-    Written from the protocol documents, independently of bridge/protocols.
-    """
-    az: set[float] = set()
-    el: set[float] = set()
-    if model in ("rotorez", "rotorcard", "dcu1"):
-        for m in _ROTOREZ_REPLY.finditer(wire):
-            az.add(float(int(m.group(1)) % 360))
-    elif model == "satel":
-        az = {float(int(m.group(1))) for m in _SATEL_AZ.finditer(wire)}
-        el = {float(int(m.group(1))) for m in _SATEL_EL.finditer(wire)}
-    elif model == "rot1prog":
-        for i in range(len(wire) - 4):
-            f = wire[i : i + 5]
-            if f[0] == 0x57 and f[4] == 0x20 and all(d <= 9 for d in f[1:4]):
-                az.add(float(100 * f[1] + 10 * f[2] + f[3] - 360))
-    else:  # rot2prog, md01: 57 H1 H2 H3 H4 PH V1 V2 V3 V4 PV 20, raw digits, tenths
-        for i in range(len(wire) - 11):
-            f = wire[i : i + 12]
-            if f[0] != 0x57 or f[11] != 0x20 or any(d > 9 for d in f[1:5] + f[6:10]):
-                continue
-            az.add(round(100 * f[1] + 10 * f[2] + f[3] + f[4] / 10 - 360, 1))
-            el.add(round(100 * f[6] + 10 * f[7] + f[8] + f[9] / 10 - 360, 1))
-    return az, el
-
-
-def _in(value: float, values: set[float], wraps: bool) -> bool:
-    if any(abs(value - v) < 1e-6 for v in values):
-        return True
-    return wraps and any(abs((value % 360) - (v % 360)) < 1e-6 for v in values)
-
-
-def start_emulator(model: str, link: Path, **options: Any) -> EmulatedPort[Any]:
-    """An emulated controller on a fresh pty at ``link``, its transmit line tapped."""
-    device = emulators.create(model, now=time.monotonic(), **options)
-    return EmulatedPort(Tap(device), link=str(link), name=model)
-
-
-def tap_of(emu: EmulatedPort[Any]) -> Tap:
-    device = emu.device
-    assert isinstance(device, Tap)
-    return device
-
-
-def bogus_bearings(
-    model: str, emu: EmulatedPort[Any], messages: list[Message], root: str
-) -> list[str]:
-    """Published bearings/elevations the controller never reported (SatEL estimates excepted).
-
-    Checks ``R/bearing`` and ``R/elevation`` (not for the SatEL, whose bearing topic also carries
-    estimates) and the bearing/elevation of every ``R/status`` that is not marked estimated.
-    """
-    # the messages first: each one came from a reply already on the wire, while a rotor still
-    # settling goes on replying and publishing after the snapshot of the wire is taken
-    messages = list(messages)
-    az, el = reported_positions(model, tap_of(emu).sent())
-    # R/bearing is a true bearing (0..360, pointing.py); the controller's own value, which on a
-    # SPID may be past 360 or below 0, is the status's raw_bearing
-    wraps = True
-    raw_wraps = model in ("rotorez", "rotorcard", "dcu1", "satel")
-    bad: list[str] = []
-    for m in messages:
-        if m.topic == f"{root}/status":
-            doc = json.loads(m.payload)
-            if doc.get("estimated"):
-                continue
-            if doc.get("bearing") is not None and not _in(float(doc["bearing"]), az, wraps):
-                bad.append(f"status bearing {doc['bearing']}")
-            raw = doc.get("raw_bearing")
-            if raw is not None and not _in(float(raw), az, raw_wraps):
-                bad.append(f"status raw_bearing {raw}")
-            if doc.get("elevation") is not None and not _in(float(doc["elevation"]), el, False):
-                bad.append(f"status elevation {doc['elevation']}")
-        elif m.topic == f"{root}/bearing" and model != "satel":
-            if not _in(float(m.text), az, wraps):
-                bad.append(f"bearing {m.text}")
-        elif m.topic == f"{root}/elevation" and model != "satel":
-            if not _in(float(m.text), el, False):
-                bad.append(f"elevation {m.text}")
-    return bad
-
-
-def near_deg(a: float, b: float, tol: float, wraps: bool = True) -> bool:
-    d = abs(a - b)
-    if wraps:
-        d %= 360
-        d = min(d, 360 - d)
-    return d <= tol
-
-
-# -- the rig: broker + tapped emulators + the bridge in-process ----------------------------------
-class Rig(BaseRig):
-    """tests.support's Rig, with tapped emulators and the fault suite's timings."""
-
-    def add(
-        self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
-    ) -> EmulatedPort[Any]:
-        link = self.tmp / f"serial-by-id-{rid}"
-        port = start_emulator(model, link, **{**EMU_FAST[model], **(emu or {})})
-        self.emus[rid] = port
-        self.models[rid] = model
-        self.rotators.append(
-            {"id": rid, "model": model, "port": str(link), **BRIDGE_FAST[model], **bridge}
-        )
-        return port
-
-    def status(self, rid: str) -> Any:
-        assert self.app is not None
-        return next(r for r in self.app.rotators if r.id == rid).status
-
-    def bogus(self, rid: str) -> list[str]:
-        return bogus_bearings(self.models[rid], self.emus[rid], self.probe.messages, self.root(rid))
-
-    def arrived(self, rid: str, az: float, el: float | None = None, timeout_s: float = 20) -> None:
-        """Wait until the rotor really points at az (/el), still (the emulator's truth).
-
-        Azimuth is compared as a direction: a SPID may reach true 200 at raw -160, the side
-        that needs the least travel, which is what the bridge picks when it is already there.
-        """
-        model, emu = self.models[rid], self.emus[rid]
-        tol = arrival_tol(model)
-
-        def there(s: Any) -> bool:
-            if s.is_moving or s.in_brake_delay:
-                return False
-            if not near_deg(s.az_deg, az, tol):
-                return False
-            return el is None or abs(s.el_deg - el) <= tol
-
-        emu.wait_for(there, timeout_s)
+def fault_rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Rig:
+    return Rig(tmp_path, broker, probe, timings=FAULT_TIMINGS, tapped=True)
 
 
 @pytest.fixture
 def rig(tmp_path: Path, broker: Mosquitto, probe: Probe) -> Iterator[Rig]:
-    with Rig(tmp_path, broker, probe) as r:
+    with fault_rig(tmp_path, broker, probe) as r:
         yield r
 
 

@@ -86,6 +86,9 @@ CASES: list[tuple[str, str | bytes, str]] = [
         "go together",
     ),  # fmt: skip
     ("tls ca missing", BASE + '[mqtt.tls]\nenabled = true\nca_file = "/nope.crt"\n', "mqtt.tls"),
+    ("rotator singular", edit("[[rotators]]", "[[rotator]]"), "did you mean [[rotators]]?"),
+    ("typo in a table", edit("[mqtt]", "[mqtt_]"), "unknown table [mqtt_]: did you mean [mqtt]?"),
+    ("missing key", edit('model = "rotorez"\n', ""), "rotators[0].model: missing"),
     ("not TOML", "[mqtt\nhost = ", "not valid TOML"),
     ("empty file", "", "no rotators configured"),
 ]
@@ -130,7 +133,10 @@ def test_bad_environment_values_name_the_variable(
     monkeypatch.delenv("ROTOR_BRIDGE_ROTATORS__GHOST__PORT")
     monkeypatch.setenv("ROTOR_BRIDGE_MQTT__PORT", "eighteen-eighty-three")
     code, _, err = run_main(capsys, "check-config", "-c", str(path))
-    assert code == 2 and "mqtt.port" in err and SECRET not in err
+    assert code == 2 and "mqtt.port (from ROTOR_BRIDGE_MQTT__PORT): " in err and SECRET not in err
+    monkeypatch.setenv("ROTOR_BRIDGE_ROTATORS__TOWER__TOLERANCE_DEG", "-3")
+    code, _, err = run_main(capsys, "check-config", "-c", str(path))
+    assert code == 2 and "rotators[0].tolerance_deg (from ROTOR_BRIDGE_ROTATORS__TOWER__" in err
 
 
 def test_the_real_process_exits_2_without_a_traceback(tmp_path: Path) -> None:

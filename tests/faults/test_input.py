@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.mosquitto import Mosquitto
-from tests.faults.conftest import FAST_BROKER_CONF, Rig, motion_frames, send_target
+from tests.faults.conftest import FAST_BROKER_CONF, Rig, fault_rig, motion_frames, send_target
 from tests.support import Probe, retained_snapshot, wait_until
 
 ROTATORS = {"ez": "rotorez", "spid": "rot2prog", "sat": "satel"}
@@ -101,7 +101,7 @@ def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
         for leaf in ("error", "state", "availability", "status", "bearing", "elevation")
     )
     probe = Probe(broker.port, filters + "|rotor/+/lock/state|rotor/+/option/+/state")
-    rig = Rig(tmp, broker, probe)
+    rig = fault_rig(tmp, broker, probe)
     rig.mqtt_extra["error_events_per_s"] = 10000  # every fuzzed refusal shown (limiter aside)
     try:
         quick = {

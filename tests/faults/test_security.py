@@ -136,10 +136,11 @@ def test_tls_with_client_certificate_and_password_file_and_the_password_never_sh
         probe.wait_value("rotor/state", "idle", timeout_s=10)
         probe.publish("rotor/target", "90")  # commands flow over TLS too
         emu.wait_for(lambda s: abs(s.az_deg - 90) <= 3.5 and not s.is_moving, 15)
-        shown = run_cli("check-config", "-c", str(bridge.config_path))
+        shown = run_cli("check-config", "--full", "-c", str(bridge.config_path))
         assert shown.returncode == 0, shown.stderr
         assert secret not in shown.stdout + shown.stderr
-        doc = json.loads(shown.stdout)
+        lines = shown.stdout.splitlines()  # every value: the JSON after the summary
+        doc = json.loads("\n".join(lines[lines.index("{") : lines.index("}") + 1]))
         assert doc["mqtt"]["password"] == "********" and doc["mqtt"]["tls"]["enabled"] is True
         t = time.monotonic()
         assert bridge.terminate() == 0

@@ -38,9 +38,11 @@ def client_id(path: Path) -> str:
 
 
 def shown_by_check_config(path: Path) -> str:
-    done = run_cli("check-config", "-c", str(path))
+    done = run_cli("check-config", "--full", "-c", str(path))
     assert done.returncode == 0, done.stderr
-    return str(json.loads(done.stdout)["mqtt"]["client_id"])
+    lines = done.stdout.splitlines()  # every value: the JSON between the summary and "config OK"
+    full = lines[lines.index("{") : lines.index("}") + 1]
+    return str(json.loads("\n".join(full))["mqtt"]["client_id"])
 
 
 def test_one_installation_keeps_its_id_across_restarts(tmp_path: Path) -> None:

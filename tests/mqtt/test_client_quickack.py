@@ -1,4 +1,5 @@
-"""Rule 9 of bridge/mqtt/client.py: after every read from the broker the client sets TCP_QUICKACK
+"""MQTT rule 9 (bridge/mqtt/connection.py):
+after every read from the broker the client sets TCP_QUICKACK
 on its socket, so the kernel acknowledges a command at once instead of after its delayed-ACK
 timer (which a mosquitto with Nagle on waits for before it sends the next command, a STOP
 perhaps). The mechanism, on the real socket paho reads from, against a real mosquitto; what it

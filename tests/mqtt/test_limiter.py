@@ -5,6 +5,9 @@ bridge's memory grew from 42 to 174 MB and stayed."""
 from __future__ import annotations
 
 import json
+import logging
+
+import pytest
 
 from bridge.model import ErrorEvent, ErrorKind
 from bridge.mqtt.limiter import EventLimiter
@@ -68,3 +71,43 @@ def test_a_flood_of_refusals_never_hides_a_stall_or_a_stop_that_did_not_take() -
         svc.publish_event("tower", ErrorEvent(kind, "it matters", None))
     kinds = [json.loads(p)["kind"] for t, p, _r in pub.take() if t == "rotor/error"]
     assert kinds == ["stop", "stalled", "serial"]
+
+
+def test_each_refusal_published_is_one_info_line_and_a_flood_as_few(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """An operator reading the log sees why nothing moved: one line per refusal on R/error,
+    under the same limit, the next line counting what was left out."""
+    pub, clock = RecordingPublisher(), Clock()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10, clock=clock)
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    pub.take()
+    caplog.set_level(logging.INFO, logger="bridge.mqtt.service")
+    event = ErrorEvent(ErrorKind.REFUSED, "azimuth 999 outside the limits 0..360", "P 999 0")
+    for _ in range(1000):  # at one instant: the burst goes, the rest is counted
+        svc.publish_event("tower", event)
+    clock.t = 1.0  # ten more may go
+    svc.publish_event("tower", event)
+    sent = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/error"]
+    lines = [r.getMessage() for r in caplog.records if r.levelno == logging.INFO]
+    assert len(lines) == len(sent) == 51
+    assert lines[0] == "tower: refused P 999 0: azimuth 999 outside the limits 0..360"
+    assert lines[-1] == (
+        "tower: refused P 999 0: azimuth 999 outside the limits 0..360 "
+        "(950 more error(s) before this not shown)"
+    )
+
+
+def test_a_refusal_in_the_log_is_one_line_however_the_payload_was_written(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub)
+    svc.attach(RecordingRotator("tower", "rotorez"))
+    caplog.set_level(logging.INFO, logger="bridge.mqtt.service")
+    forged = "target '1'\nINFO bridge: all is well" + "x" * 500
+    svc.publish_event("tower", ErrorEvent(ErrorKind.REFUSED, "not a number", forged))
+    svc.publish_event("tower", ErrorEvent(ErrorKind.STALLED, "no progress for 10 s", None))
+    (line,) = [r.getMessage() for r in caplog.records if r.levelno == logging.INFO]
+    assert "\n" not in line and "target '1'\\nINFO bridge" in line
+    assert line.endswith("...: not a number") and len(line) < 300

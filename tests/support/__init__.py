@@ -2,10 +2,14 @@
 
 - waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep
 - mqtt.py: ``Probe``, an MQTT client that records what arrives; ``retained_snapshot``
-- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files
+- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files;
+  the one BridgeProcess of the tests, the fault suite, the soak and the benchmarks
 - codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
-- rig.py: a broker, emulated controllers on real ptys and the bridge in-process (``Rig``);
-  imported from there, as it brings the whole bridge in
+- rig.py: a broker, emulated controllers on real ptys and the bridge, in-process or as its own
+  process (``Rig``): the one rig of the tests, the fault suite (tapped, faster) and the
+  benchmarks (real timings, paced lines); imported from there, as it brings the whole bridge in
+- tap.py: the serial sniffer on a controller's transmit line and independent parsers of what
+  it reports (the ground truth of "a bearing the controller never reported")
 
 A private mosquitto on a free loopback port is ``bridge.mosquitto.Mosquitto`` (the demo's too);
 the pytest fixtures ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.

@@ -1,5 +1,6 @@
 """The bridge as a user runs it: ``python -m bridge ...`` as its own process, configured by a TOML
-file, in an environment without the caller's ROTOR_BRIDGE_* settings."""
+file, in an environment without the caller's ROTOR_BRIDGE_* settings. The one ``BridgeProcess``
+of the tests, the fault suite, the soak and the benchmarks (which start it through their Scope)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import os
 import signal
 import subprocess
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -76,11 +79,50 @@ def run_cli(
     )
 
 
+def bridge_config(
+    tmp: Path,
+    broker_port: int,
+    rotators: list[dict[str, Any]],
+    *,
+    client_id: str,
+    base_topic: str = "rotor",
+    mqtt: dict[str, Any] | None = None,
+    sections: dict[str, Any] | None = None,
+    state_name: str = "state.json",
+) -> dict[str, Any]:
+    """A configuration (as the TOML file's tables) for a bridge on a loopback broker."""
+    return {
+        "state_file": tmp / state_name,
+        "mqtt": {
+            "host": "127.0.0.1",
+            "port": broker_port,
+            "base_topic": base_topic,
+            "client_id": client_id,
+            **(mqtt or {}),
+        },
+        **(sections or {}),
+        "rotators": rotators,
+    }
+
+
+#: starts ``argv`` with its output in the file at the path given; returns the process
+Spawn = Callable[[list[str], Path], "subprocess.Popen[bytes]"]
+
+
+def _spawn(argv: list[str], log_path: Path) -> subprocess.Popen[bytes]:
+    with open(log_path, "ab") as log:
+        return subprocess.Popen(
+            argv, stdout=log, stderr=subprocess.STDOUT, env=bridge_env(), cwd=str(ROOT)
+        )
+
+
 class BridgeProcess:
     """``python -m bridge run -c FILE``: the real service process, its log kept in a file.
 
-    ``config`` is written to ``tmp/bridge.toml``, or is the path of a file already written;
+    ``config`` is written to ``tmp/<name>.toml``, or is the path of a file already written;
     ``log_level`` None starts it without ``--log-level`` (the file's or the default level).
+    ``spawn`` starts the process (the benchmarks' Scope, which always ends it); ``error`` is what
+    ``check`` raises when the process has ended.
     """
 
     def __init__(
@@ -90,27 +132,28 @@ class BridgeProcess:
         *,
         log_level: str | None = "DEBUG",
         log_path: Path | None = None,
+        name: str = "bridge",
+        spawn: Spawn = _spawn,
+        error: type[Exception] = AssertionError,
     ) -> None:
         self.tmp = tmp
         if isinstance(config, Path):
             self.config_path = config
         else:
-            self.config_path = tmp / "bridge.toml"
+            self.config_path = tmp / f"{name}.toml"
             self.config_path.write_text(to_toml(config))
-        self.log_path = log_path or tmp / "bridge.log"
+        self.log_path = log_path or tmp / f"{name}.log"
         self.log_level = log_level
+        self.spawn = spawn
+        self.error = error
         self.proc: subprocess.Popen[bytes] | None = None
+        self.started_t = 0.0  # time.monotonic() when it was started
 
     def start(self) -> BridgeProcess:
         level = [] if self.log_level is None else ["--log-level", self.log_level]
-        with open(self.log_path, "ab") as log:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-m", "bridge", *level, "run", "-c", str(self.config_path)],
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                env=bridge_env(),
-                cwd=str(ROOT),
-            )
+        argv = [sys.executable, "-m", "bridge", *level, "run", "-c", str(self.config_path)]
+        self.started_t = time.monotonic()
+        self.proc = self.spawn(argv, self.log_path)
         return self
 
     @property
@@ -120,6 +163,12 @@ class BridgeProcess:
 
     def alive(self) -> bool:
         return self.proc is not None and self.proc.poll() is None
+
+    def check(self) -> None:
+        """Raise ``error`` (with the end of the log) if the process has ended."""
+        if not self.alive():
+            status = None if self.proc is None else self.proc.returncode
+            raise self.error(f"the bridge exited with status {status}\n{self.log()[-1500:]}")
 
     def log(self) -> str:
         return self.log_path.read_text(errors="replace") if self.log_path.exists() else ""

@@ -1,19 +1,43 @@
-"""A rig: a private mosquitto, emulated controllers on real ptys (opened by the bridge through a
-stable link, like /dev/serial/by-id/...), and the bridge itself in-process, all real parts.
-The fault suite's Rig (tests/faults/conftest.py) is this one with tapped emulators."""
+"""The rig, one for the tests, the fault suite and the benchmarks: a broker, emulated controllers
+on real ptys (opened by the bridge through a stable link, like /dev/serial/by-id/...), an MQTT
+probe, and the bridge itself, in-process (``start``) or as its own service process
+(``start_process``), all real parts.
+
+What differs between its users is configuration, not code:
+- ``timings``: the emulators' and the bridge's options for each model (``TEST_TIMINGS`` scaled
+  down so a test takes seconds; the fault suite's faster still; ``REAL_TIMINGS``, the defaults,
+  for the benchmarks);
+- ``open_line``: how a controller is put on a line (the default: an emulator at
+  ``tmp/serial-by-id-<id>``, its transmit line tapped with ``tapped=True``; the benchmarks' adds
+  a frame log, a byte counter and a paced relay);
+- ``scope``: what closes everything it opened (its own, or the benchmarks' Scope), and ``spawn``:
+  how the service process is started.
+
+Rules:
+1. ``close()`` (or leaving the ``with`` block) stops the bridge first, then closes what the scope
+   holds, in reverse order: the emulators, and whatever a caller put there.
+2. A rig with one rotator publishes under the base topic, with several under ``base/<id>``
+   (``topic``); ``t(leaf)`` is the one rotator's topic, ``t(id, leaf)`` any rotator's.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import Any, Protocol
 
 from bridge import emulators
 from bridge.app import App
 from bridge.emulators.pty import EmulatedPort
-from bridge.mosquitto import Mosquitto
 from bridge.settings import Settings
 from tests.support.mqtt import Probe, retained_snapshot
+from tests.support.process import BridgeProcess, Spawn, bridge_config
+from tests.support.process import _spawn as _default_spawn
+from tests.support.tap import bogus_bearings, near_deg, start_emulator
 
 # Timings scaled down so a test takes seconds, with the same ratios as real hardware:
 # the controller's brake delay is still much longer than a poll, a settle window, a reply.
@@ -27,7 +51,6 @@ FAST_POLLING = {
 }
 FAST_BRIDGE = {**FAST_POLLING, "brake_delay_s": 1.5}
 
-
 # SPID: digital encoders (no jitter), no brake, a slow line (600 baud: 0.42 s per exchange)
 FAST_SPID = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0}
 FAST_SATEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0, "corrupt_on_misuse": True}
@@ -39,73 +62,226 @@ FAST_SPID_BRIDGE = {
     "silence_timeout_s": 2.0,
 }
 
+# ground-truth tolerance for "the rotor is there": emulator jitter + the bridge's tolerance
+ARRIVAL_TOL_DEG = {"rotorez": 3.5, "rotorcard": 3.5, "dcu1": 3.5, "satel": 1.5}
+
+
+def arrival_tol(model: str) -> float:
+    return ARRIVAL_TOL_DEG.get(model, 1.0)
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Options for each model: ``emulator`` to the emulated controller, ``bridge`` to the
+    rotator's configuration (a model not named gets none: its defaults)."""
+
+    emulator: Mapping[str, Mapping[str, Any]]
+    bridge: Mapping[str, Mapping[str, Any]]
+
+
+_NO_BRAKE = {"brake_delay_s": 0.0}  # Yaesu rotors have no brake
+TEST_TIMINGS = Timings(
+    emulator={
+        "rotorez": FAST_ROTOR,
+        "dcu1": FAST_ROTOR,
+        "rotorcard": {**FAST_ROTOR, **_NO_BRAKE},
+        "rot2prog": FAST_SPID,
+        "rot1prog": FAST_SPID,
+        "md01": FAST_SPID,
+        "satel": FAST_SATEL,
+    },
+    bridge={
+        "rotorez": FAST_BRIDGE,
+        "dcu1": FAST_BRIDGE,
+        "rotorcard": {**FAST_BRIDGE, "brake_delay_s": 0},
+        "rot2prog": FAST_SPID_BRIDGE,
+        "rot1prog": FAST_SPID_BRIDGE,
+        "md01": FAST_SPID_BRIDGE,
+        "satel": FAST_SPID_BRIDGE,
+    },
+)
+REAL_TIMINGS = Timings(emulator={}, bridge={})
+
+
+class Broker(Protocol):
+    """What the rig needs of a broker: ``bridge.mosquitto.Mosquitto``, or the benchmarks'."""
+
+    port: int
+
+
+@dataclass
+class Line:
+    """One emulated controller and the path the bridge opens for it; the benchmarks' lines also
+    keep the controller's frame log, a byte counter and the paced relay in front of it."""
+
+    id: str
+    model: str
+    emu: EmulatedPort[Any]
+    path: Path
+    frames: Any = None
+    counter: Any = None
+    relay: Any = None
+
+
+#: (rig, rotator id, model, emulator options) -> the line, its closing put on ``rig.scope``
+OpenLine = Callable[["Rig", str, str, dict[str, Any]], Line]
+
+
+def emulator_line(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Line:
+    """An emulator on a fresh pty at ``tmp/serial-by-id-<id>`` (tapped if the rig says so)."""
+    link = rig.tmp / f"serial-by-id-{rid}"
+    if rig.tapped:
+        emu = start_emulator(model, link, **options)
+    else:
+        emu = emulators.start(model, link=str(link), **options)
+    rig.scope.callback(emu.close)
+    return Line(rid, model, emu, link)
+
 
 class Rig:
-    def __init__(self, tmp_path: Path, broker: Mosquitto, probe: Probe) -> None:
+    def __init__(
+        self,
+        tmp_path: Path,
+        broker: Broker,
+        probe: Probe,
+        *,
+        timings: Timings = TEST_TIMINGS,
+        tapped: bool = False,
+        open_line: OpenLine = emulator_line,
+        scope: contextlib.ExitStack | None = None,
+        spawn: Spawn = _default_spawn,
+    ) -> None:
         self.tmp = tmp_path
         self.broker = broker
         self.probe = probe
-        self.emus: dict[str, EmulatedPort[Any]] = {}
-        self.models: dict[str, str] = {}
+        self.timings = timings
+        self.tapped = tapped
+        self.open_line = open_line
+        self.scope = scope if scope is not None else contextlib.ExitStack()
+        self.spawn = spawn
+        self.lines: dict[str, Line] = {}
         self.rotators: list[dict[str, Any]] = []
         self.app: App | None = None
+        self.bridge: BridgeProcess | None = None
         self.base = "rotor"
         self.mqtt_extra: dict[str, Any] = {}  # e.g. TLS or credentials
+        self.sections: dict[str, Any] = {}  # more of the configuration (homeassistant, station)
 
     def add(
-        self, rid: str, model: str = "rotorez", emu: dict | None = None, **bridge: Any
+        self, rid: str, model: str = "rotorez", emu: dict[str, Any] | None = None, **bridge: Any
     ) -> EmulatedPort[Any]:
-        link = self.tmp / f"serial-by-id-{rid}"
-        spid = model in ("rot2prog", "rot1prog", "md01", "satel")
-        fast = FAST_SATEL if model == "satel" else FAST_SPID if spid else FAST_ROTOR
-        emu_options = {**fast, **(emu or {})}
-        if model == "rotorcard":
-            emu_options["brake_delay_s"] = 0.0  # Yaesu rotors have no brake
-        port = emulators.start(model, link=str(link), **emu_options)
-        self.emus[rid] = port
-        self.models[rid] = model
-        cfg = {
-            "id": rid,
-            "model": model,
-            "port": str(link),
-            **(FAST_SPID_BRIDGE if spid else FAST_BRIDGE),
-        }
-        if model == "rotorcard":
-            cfg["brake_delay_s"] = 0
-        cfg.update(bridge)
-        self.rotators.append(cfg)
-        return port
+        """A controller of ``model`` on its line, and a rotator of the bridge on it: ``emu``
+        options to the controller, ``bridge`` to the rotator (over the rig's timings)."""
+        options = {**self.timings.emulator.get(model, {}), **(emu or {})}
+        line = self.open_line(self, rid, model, options)
+        self.lines[rid] = line
+        self.rotators.append(
+            {
+                "id": rid,
+                "model": model,
+                "port": str(line.path),
+                **self.timings.bridge.get(model, {}),
+                **bridge,
+            }
+        )
+        return line.emu
+
+    @property
+    def emus(self) -> dict[str, EmulatedPort[Any]]:
+        return {rid: line.emu for rid, line in self.lines.items()}
+
+    @property
+    def models(self) -> dict[str, str]:
+        return {rid: line.model for rid, line in self.lines.items()}
+
+    def config(self) -> dict[str, Any]:
+        """The bridge's configuration, as the tables of its TOML file."""
+        return bridge_config(
+            self.tmp,
+            self.broker.port,
+            self.rotators,
+            client_id=f"bridge-under-test-{os.getpid()}-{id(self)}",
+            base_topic=self.base,
+            mqtt=self.mqtt_extra,
+            sections=self.sections,
+        )
 
     @property
     def settings(self) -> Settings:
-        return Settings(
-            mqtt={
-                "host": "127.0.0.1",
-                "port": self.broker.port,
-                "base_topic": self.base,
-                "client_id": f"bridge-under-test-{id(self)}",
-                **self.mqtt_extra,
-            },
-            rotators=self.rotators,
-            state_file=self.tmp / "state.json",
-        )
+        return Settings(**self.config())
 
     def start(self) -> App:
+        """The bridge in this process."""
         self.app = App(self.settings)
         self.app.start()
         return self.app
+
+    def start_process(
+        self, *, log_level: str | None = "DEBUG", error: type[Exception] = AssertionError
+    ) -> BridgeProcess:
+        """The bridge as its own service process (``python -m bridge run -c FILE``)."""
+        self.bridge = BridgeProcess(
+            self.tmp, self.config(), log_level=log_level, spawn=self.spawn, error=error
+        ).start()
+        return self.bridge
 
     def stop(self) -> None:
         if self.app is not None:
             self.app.stop()
             self.app = None
+        if self.bridge is not None:
+            if self.bridge.alive():
+                self.bridge.terminate()
+            self.bridge = None
 
+    # -- topics -----------------------------------------------------------------------------
     def root(self, rid: str) -> str:
         return self.base if len(self.rotators) == 1 else f"{self.base}/{rid}"
 
     def topic(self, rid: str, leaf: str) -> str:
         return f"{self.root(rid)}/{leaf}"
 
+    def t(self, *where: str) -> str:
+        """``t(leaf)``: the one rotator's topic; ``t(id, leaf)``: that rotator's."""
+        rid, leaf = (self.line.id, where[0]) if len(where) == 1 else where
+        return self.topic(rid, leaf)
+
+    # -- the one rotator of a rig that has one ----------------------------------------------
+    @property
+    def line(self) -> Line:
+        assert len(self.lines) == 1, f"the rig has {len(self.lines)} rotators, not one"
+        return next(iter(self.lines.values()))
+
+    @property
+    def emu(self) -> EmulatedPort[Any]:
+        return self.line.emu
+
+    @property
+    def model(self) -> str:
+        return self.line.model
+
+    @property
+    def frames(self) -> Any:
+        return self.line.frames
+
+    @property
+    def counter(self) -> Any:
+        return self.line.counter
+
+    @property
+    def relay(self) -> Any:
+        return self.line.relay
+
+    @property
+    def mqtt(self) -> Probe:
+        """The probe, by the benchmarks' name for it."""
+        return self.probe
+
+    @property
+    def broker_port(self) -> int:
+        return self.broker.port
+
+    # -- what a test waits for and judges ---------------------------------------------------
     def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
         """Online and settled: idle, past the start-up brake window (``unknown`` for a DCU-1,
         which cannot report)."""
@@ -116,10 +292,37 @@ class Rig:
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")
 
+    def status(self, rid: str) -> Any:
+        """The in-process bridge's own status of rotator ``rid``."""
+        assert self.app is not None
+        return next(r for r in self.app.rotators if r.id == rid).status
+
+    def arrived(self, rid: str, az: float, el: float | None = None, timeout_s: float = 20) -> None:
+        """Wait until the rotor really points at az (/el), still (the emulator's truth).
+
+        Azimuth is compared as a direction: a SPID may reach true 200 at raw -160, the side
+        that needs the least travel, which is what the bridge picks when it is already there.
+        """
+        model, emu = self.models[rid], self.emus[rid]
+        tol = arrival_tol(model)
+
+        def there(s: Any) -> bool:
+            if s.is_moving or s.in_brake_delay:
+                return False
+            if not near_deg(s.az_deg, az, tol):
+                return False
+            return el is None or abs(s.el_deg - el) <= tol
+
+        emu.wait_for(there, timeout_s)
+
+    def bogus(self, rid: str) -> list[str]:
+        """Bearings the bridge published that the controller never reported (a tapped rig)."""
+        return bogus_bearings(self.models[rid], self.emus[rid], self.probe.messages, self.root(rid))
+
+    # -- the end ----------------------------------------------------------------------------
     def close(self) -> None:
         self.stop()
-        for emu in self.emus.values():
-            emu.close()
+        self.scope.close()
 
     def __enter__(self) -> Rig:
         return self

@@ -1,4 +1,4 @@
-"""Independent judges for bridge/sky.py, written here from published formulas and never from
+"""Independent judges for bridge/sky/, written here from published formulas and never from
 skyfield: the sun and the moon by the Astronomical Almanac's low-precision formulas, a satellite
 by the sgp4 package alone with our own frame rotations. Plus synthetic TLEs for the tests.
 

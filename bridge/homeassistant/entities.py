@@ -1,5 +1,6 @@
-"""Home Assistant MQTT discovery: pure builders from settings and model capabilities to
-discovery messages, and the publisher that keeps them current.
+"""Home Assistant MQTT discovery, the entity table: pure data and the builders that turn the
+settings and the model's capabilities into discovery messages. No thread, no lock, no clock:
+publisher.py keeps them current on the broker.
 
 Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
 QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
@@ -7,7 +8,7 @@ entities are rows of a data table (ENTITIES), each naming what it needs: a Model
 or a configured feature (presets, park, the station); every topic, discovery topics included,
 comes from bridge.mqtt.topics.
 
-Rules:
+Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
    as ``sw_version``, ``via_device`` the bridge) and one bridge device. An entity exists only if
    the model can do it: no bearing for a DCU-1, options only where the controller has them; and
@@ -18,33 +19,22 @@ Rules:
    unreachable (the safety lock, the connection state, the last error) follow the bridge only.
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
-4. Configs are published only when they changed. Configs under our node ids that we no longer
-   generate (a rotator removed from the configuration) are cleared with an empty retained
-   payload when the broker shows them to us; the client says what it did (or, for a config
-   another client publishes while the bridge runs, that it left it alone), a flood of them in a
-   few lines (mqtt/client.py rule 15).
-5. On Home Assistant's birth message the retained state is published again after a delay, so
-   Home Assistant, which ignores state that arrives before it has processed discovery, gets it.
 """
 
 from __future__ import annotations
 
 import json
-import logging
 import re
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Protocol
 
 from bridge import __version__
-from bridge.model import MotionState, RotatorStatus
+from bridge.model import MotionState
 from bridge.mqtt.topics import DiscoveryTopics, RotatorTopics, Topics
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-
-log = logging.getLogger(__name__)
 
 ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
 STATES = [s.value for s in MotionState]
@@ -392,100 +382,3 @@ def all_configs(
         configs.update(rotator_configs(ident, topics, r))
     disc = DiscoveryTopics(prefix)
     return {disc.config(*where): json.dumps(p, sort_keys=True) for where, p in configs.items()}
-
-
-# -- the publisher -------------------------------------------------------------------------------
-class DiscoveryPublisher:
-    """Keeps the discovery messages current on the broker (see the module rules)."""
-
-    def __init__(
-        self,
-        *,
-        prefix: str,
-        status_topic: str,
-        topics: Topics,
-        rotators: list[RotatorInfo],
-        publish_retained: Callable[[str, str], None],
-        clear_retained: Callable[[str], None],
-        republish_state: Callable[[], None],
-        birth_delay_s: float = 10.0,
-    ) -> None:
-        self.prefix = prefix
-        self._disc = DiscoveryTopics(prefix)
-        self.status_topic = status_topic
-        self._topics = topics
-        self._ident = Identity(topics.base)
-        self._rotators = {r.rotator_id: r for r in rotators}
-        self._publish = publish_retained
-        self._clear = clear_retained
-        self._republish_state = republish_state
-        self._birth_delay_s = birth_delay_s
-        self._lock = threading.Lock()
-        self._timer: threading.Timer | None = None
-        self._current: dict[str, str] = {}
-
-    @property
-    def subscriptions(self) -> list[str]:
-        return [self.status_topic, self._disc.config_filter]
-
-    def publish_all(self) -> None:
-        # under the lock: the lines thread (a controller's version arrived) and paho's thread
-        # (Home Assistant came back) both call this; an older snapshot published last would
-        # stay retained
-        with self._lock:
-            configs = all_configs(
-                self.prefix, self._ident, self._topics, list(self._rotators.values())
-            )
-            self._current = configs
-            for topic, payload in configs.items():
-                self._publish(topic, payload)  # the client skips what did not change
-
-    def set_satellites(self, satellites: tuple[str, ...]) -> None:
-        """The TLE file changed: the track select offers what it holds now."""
-        with self._lock:
-            before = dict(self._rotators)
-            self._rotators = {k: r.with_satellites(satellites) for k, r in before.items()}
-            changed = self._rotators != before
-        if changed:
-            log.info("Home Assistant's track select now lists %d satellite(s)", len(satellites))
-            self.publish_all()
-
-    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
-        with self._lock:
-            r = self._rotators.get(rotator_id)
-            if r is None or not status.version or status.version == r.version:
-                return
-            self._rotators[rotator_id] = replace(r, version=status.version)
-        self.publish_all()
-
-    def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
-        """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
-        if topic == self.status_topic:
-            if payload.strip().lower() == b"online":
-                self._schedule_republish()
-            return True
-        parsed = self._disc.parse_config(topic)
-        if parsed is None:
-            return False
-        _, node, _ = parsed
-        if not self._ident.owns(node) or not payload:
-            return True
-        with self._lock:
-            stale = topic not in self._current
-        if stale:
-            self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
-        return True
-
-    def _schedule_republish(self) -> None:
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()
-            self._timer = threading.Timer(self._birth_delay_s, self._republish_state)
-            self._timer.daemon = True
-            self._timer.start()
-        log.info("Home Assistant came online; state follows in %g s", self._birth_delay_s)
-
-    def stop(self) -> None:
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()

@@ -1,0 +1,311 @@
+"""One controller as the bridge knows it through its line: the link (link.py, the line
+discipline), the motion machine fed by its readings (motion.py), whether it answers, what it is
+owed (a stop, options, an enable: stops.py, options.py) and its polls. Sans-IO like the session
+that owns it: the session calls it with the time, and it hands back, as ``notes``, what the
+session must act on (an error event, tracking to end, the pending target to drop or to put
+back); it never touches the session's targets, tracking or auto-park.
+
+Rules:
+1. The link's state belongs to ``Link`` and the motion machine's to ``motion``; this class
+   keeps the controller's: answering or not, options owed, motion to re-enable, the bearings
+   shown (status.py rule 1).
+2. A controller that reports positions is "available" only after a valid reading, and stops
+   being available after ``silence_timeout_s`` without one (tracking ends, a waiting target is
+   dropped). A DCU-1 is available while its port is open (it never answers).
+3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
+   controller that cannot report. A query is never sent while another is open.
+4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
+   report that says automatic motion is off gets it switched on again (slewing.py has the
+   rules for a report that does not come).
+5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so).
+6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from bridge.engine import motion as mo
+from bridge.engine import slewing
+from bridge.engine import status as st
+from bridge.engine.actions import Report
+from bridge.engine.config import WorkerConfig
+from bridge.engine.link import Link
+from bridge.engine.options import Options
+from bridge.engine.sending import Sending
+from bridge.engine.slew import Slew
+from bridge.engine.stops import Stops
+from bridge.model import ErrorKind, MotionState, Target
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Ends:
+    """Tracking ends for ``reason``, and a target of its own still waiting is dropped."""
+
+    reason: str
+
+
+@dataclass(frozen=True)
+class Drop:
+    """The waiting target is dropped, with an error that says ``why``."""
+
+    why: str
+
+
+@dataclass(frozen=True)
+class Retry:
+    """Put ``target`` back as the waiting one, try ``attempt`` (slewing.py rule 1)."""
+
+    target: Target
+    attempt: int
+
+
+Note = Report | Ends | Drop | Retry
+
+
+class Controller:
+    def __init__(self, cfg: WorkerConfig, options: dict[str, bool] | None) -> None:
+        self.cfg = cfg
+        self.link: Link | None = None
+        self.motion = mo.Motion()
+        self.answering = False
+        self.options = Options(options)
+        self.stops = Stops()
+        self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
+        self.version: str | None = None
+        self.controller_time: str | None = None  # its own clock (SatEL)
+        self._silence_reported = False
+        self._junk_reported_t = -1e18
+        self._port_error: str | None = None
+        self.notes: list[Note] = []  # for the session, in order (``take_notes``)
+
+    @property
+    def name(self) -> str:
+        return self.cfg.rotator_id
+
+    def take_notes(self) -> list[Note]:
+        """What happened since the last call that the session must act on, in order."""
+        notes, self.notes = self.notes, []
+        return notes
+
+    # -- the port ----------------------------------------------------------------------------
+    def open_failed(self, reason: str) -> None:
+        if reason != self._port_error:  # once per reason
+            self._port_error = reason
+            self.notes.append(Report(ErrorKind.SERIAL, reason))
+
+    def connect(self, now: float, wall_s: float) -> None:
+        spec = self.cfg.spec
+        self._port_error = None
+        self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
+        self.motion = mo.link_up(self.motion, self.cfg.motion, now)
+        self.answering = not spec.can_report_position
+        self._silence_reported = False
+        self.options.connected(self.answering)
+        if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
+            self.stops.owed = False
+            log.info("%s: sending the stop that came while the port was closed", self.name)
+            link.write_stop(now)
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        for frame in link.codec.encode_connect(wall_s):
+            link.write(frame, now)
+
+    def disconnect(self, failed: bool, now: float) -> None:
+        """The port is closed (``failed``: not on purpose)."""
+        if failed:
+            stop_due = self.link is not None and self.link.stop_due
+            self.stops.owed = self.stops.owed or self.stops.unsure(stop_due, self.motion, now)
+        self.link = None
+        self.answering = False
+        self.motion = mo.link_down(self.motion)
+
+    # -- stops ---------------------------------------------------------------------------------
+    def stop(self, now: float, merge: bool = False) -> None:
+        """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
+        is closed, as the first frame it gets (stops.py rule 3)."""
+        if self.link is None:
+            self.stops.owed = True
+        elif not merge or not self.stops.merges(self.motion, self.cfg.motion, now):
+            self.link.want_stop()
+            self.flush_stop(now)
+
+    def flush_stop(self, now: float) -> None:
+        """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
+        if self.link is not None and self.link.flush_stop(now):
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+
+    def check_stop(self, now: float, target_going: bool) -> None:
+        """stops.py rule 2: a stop that did not take is sent again."""
+        again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
+        if error is not None:
+            self.notes.append(error)
+        if again:
+            log.warning("%s: still turning after a stop; stopping again", self.name)
+            self.stop(now)
+
+    # -- what comes in ---------------------------------------------------------------------------
+    def feed(self, data: bytes, now: float) -> bool:
+        """Bytes from the port; whether they completed a reply (rule 5)."""
+        link = self.link
+        if link is None:
+            return False
+        log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        link.got_bytes(len(data), now)
+        replies = link.codec.feed(data)
+        for reply in replies:
+            if isinstance(reply, PositionReply):
+                self._reading(link, reply, now)
+            elif isinstance(reply, VersionReply):
+                if reply.version != self.version:
+                    log.info("%s: controller version %s", self.name, reply.version)
+                self.version = reply.version
+            elif isinstance(reply, JunkReply):
+                if reply.reason is JunkReason.POWER_ON:
+                    log.info("%s: power-on byte seen; options will be re-applied", self.name)
+                    self.options.all_due()
+                link.add_junk(reply.data, now)
+                if reply.reason is JunkReason.UNTRUSTED:
+                    link.ask_again(now)
+                    if link.end_slew(now):  # the slew is over; where it ended, unseen
+                        self.motion = mo.slew_ended(self.motion, now)
+        return bool(replies)
+
+    def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
+        link.got_reading(now)
+        if reply.motion_enabled is False:
+            self.options.enable_due = True  # rule 4
+        if reply.controller_time is not None:
+            self.controller_time = reply.controller_time
+        if not self.answering:
+            self.answering = True
+            self.options.all_due()
+            log.info("%s: controller answering", self.name)
+        cfg = self.cfg
+        self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        self._motion_events(events, now)
+        moving = self.motion.state is MotionState.MOVING
+        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
+        if reply.el_deg is not None:
+            self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
+
+    def _motion_events(self, events: list[mo.Event], now: float) -> None:
+        for event in events:
+            verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
+            if verdict.ends_tracking is not None:
+                self.notes.append(Ends(verdict.ends_tracking))
+            if verdict.error is not None:
+                self.notes.append(verdict.error)
+            else:
+                log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
+            if verdict.stop and self.link is not None:
+                self.link.write_stop(now)
+
+    # -- the line's own work, run by the session's step ------------------------------------------
+    def line_work(self, now: float) -> None:
+        """An overdue reply (slewing.py), a due stop, the outbox, junk gone quiet."""
+        link = self.link
+        if link is None:
+            return
+        if link.reply_overdue(now):
+            todo = slewing.overdue(self.cfg, link.slew, link.reply_timeout_s, now)
+            if todo.error is not None:
+                self.notes.append(todo.error)
+            if todo.retry is not None:
+                self.notes.append(Retry(todo.retry, todo.attempt))
+            if todo.stop:
+                self.stop(now)
+            else:
+                link.give_up_reply(now)
+                if todo.track_lost:
+                    self.motion = mo.track_lost(self.motion, self.cfg.motion)
+        self.flush_stop(now)
+        link.flush_outbox(now)
+        junk = link.quiet_junk(now)
+        if junk is not None:
+            self._junk(*junk, now)
+
+    def tick(self, now: float) -> None:
+        """The motion machine's clock (rule 4: not during a slew), and an enable owed."""
+        link = self.link
+        if link is None or link.slew is None:
+            self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
+            self._motion_events(events, now)
+        if link is None or not self.answering:
+            return
+        if self.options.enable_due and link.slew is None and link.free() and not link.stop_due:
+            enable = link.codec.encode_enable()
+            if enable:
+                link.write(enable, now)
+            self.options.enable_due = False
+
+    def send_options(self, now: float, target_waits: bool) -> None:
+        """options.py rule 1."""
+        link = self.link
+        if link is None or not self.answering:
+            return
+        idle = self.motion.state is MotionState.IDLE and not mo.settling(self.motion)
+        for name, enabled in self.options.take(idle, not target_waits and link.free(), now):
+            try:
+                frame = link.codec.encode_option(name, enabled)
+            except (KeyError, ValueError):
+                log.warning("%s: option %r not supported; skipped", self.name, name)
+                continue
+            link.write(frame, now)
+
+    def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
+        """Write ``target`` as ``todo`` says (sending.py), try ``attempt``."""
+        link, m, cfg = self.link, self.motion, self.cfg
+        assert link is not None
+        link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
+        az, el = todo.wire
+        if not cfg.spec.reports_while_moving:
+            slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
+            link.begin_slew(slew, slewing.travel_s(cfg, slew))
+        self.motion = mo.commanded(m, cfg.motion, az, now, el)
+        link.poll_by(now + cfg.moving_poll_interval_s)
+
+    def poll(self, now: float, busy: bool) -> None:
+        """Rules 2 and 3 (``busy``: a target waits)."""
+        link, cfg = self.link, self.cfg
+        if link is None or not cfg.spec.can_report_position:
+            return
+        timeout_s = cfg.silence_timeout_s
+        silent = not link.reply_owed and link.silent_for(now) >= timeout_s  # (a slew's report
+        if silent and self.answering:  # takes the whole slew: a reply owed may still come)
+            self.answering, busy = False, False  # (the waiting target is dropped)
+            self.motion = mo.link_down(self.motion)
+            why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
+            # the drop before tracking's end: a target of tracking's own is reported dropped
+            # too (Ends would drop it silently first)
+            self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
+            self.notes.append(Ends("controller not answering"))
+        elif silent and link.last_reply_t is None and not self._silence_reported:
+            self._silence_reported = True
+            self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
+        busy = busy or self.motion.state is MotionState.MOVING
+        link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
+
+    def _junk(self, data: bytes, harmless: bool, now: float) -> None:
+        """Rule 6."""
+        if harmless:  # a banner after a stop, a blank line: nothing a user acts on
+            log.debug("%s: ignored %d harmless bytes: %r", self.name, len(data), data[:64])
+            return
+        log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
+        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
+            self._junk_reported_t = now
+            why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
+            self.notes.append(Report(ErrorKind.PROTOCOL, why))
+
+    def wakeups(self, now: float) -> list[float]:
+        """When the line or the motion machine needs the session next."""
+        times: list[float] = []
+        if self.link is not None:
+            times += self.link.wakeups()
+            if self.link.slew is not None:
+                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+        deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
+        return times if deadline is None else [*times, deadline]

@@ -1,0 +1,24 @@
+"""Home Assistant MQTT discovery: the entity table (entities.py: pure data and builders) and
+the publisher that keeps it current on the broker (publisher.py: a timer, a lock)."""
+
+from bridge.homeassistant.entities import (
+    ENTITIES,
+    MAX_SATELLITES,
+    Entity,
+    Identity,
+    RotatorInfo,
+    all_configs,
+    track_options,
+)
+from bridge.homeassistant.publisher import DiscoveryPublisher
+
+__all__ = [
+    "ENTITIES",
+    "MAX_SATELLITES",
+    "DiscoveryPublisher",
+    "Entity",
+    "Identity",
+    "RotatorInfo",
+    "all_configs",
+    "track_options",
+]

@@ -1,0 +1,126 @@
+"""Home Assistant MQTT discovery, the publisher: keeps the entity table's messages
+(entities.py) current on the broker, as the rotators' versions and the TLE file change, and
+sends the state again when Home Assistant comes back. The only part of homeassistant/ with a
+thread (a timer) and a lock.
+
+Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
+4. Configs are published only when they changed. Configs under our node ids that we no longer
+   generate (a rotator removed from the configuration) are cleared with an empty retained
+   payload when the broker shows them to us; the client says what it did (or, for a config
+   another client publishes while the bridge runs, that it left it alone), a flood of them in a
+   few lines (mqtt/client.py rule 15).
+5. On Home Assistant's birth message the retained state is published again after a delay, so
+   Home Assistant, which ignores state that arrives before it has processed discovery, gets it.
+
+Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
+(a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
+watcher (the TLE file changed) all publish, and an older snapshot published last would stay
+retained.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import replace
+
+from bridge.homeassistant.entities import Identity, RotatorInfo, all_configs
+from bridge.model import RotatorStatus
+from bridge.mqtt.topics import DiscoveryTopics, Topics
+
+log = logging.getLogger(__name__)
+
+
+class DiscoveryPublisher:
+    """Keeps the discovery messages current on the broker (see the module rules)."""
+
+    def __init__(
+        self,
+        *,
+        prefix: str,
+        status_topic: str,
+        topics: Topics,
+        rotators: list[RotatorInfo],
+        publish_retained: Callable[[str, str], None],
+        clear_retained: Callable[[str], None],
+        republish_state: Callable[[], None],
+        birth_delay_s: float = 10.0,
+    ) -> None:
+        self.prefix = prefix
+        self._disc = DiscoveryTopics(prefix)
+        self.status_topic = status_topic
+        self._topics = topics
+        self._ident = Identity(topics.base)
+        self._rotators = {r.rotator_id: r for r in rotators}
+        self._publish = publish_retained
+        self._clear = clear_retained
+        self._republish_state = republish_state
+        self._birth_delay_s = birth_delay_s
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._current: dict[str, str] = {}
+
+    @property
+    def subscriptions(self) -> list[str]:
+        return [self.status_topic, self._disc.config_filter]
+
+    def publish_all(self) -> None:
+        # under the lock (see Lock): an older snapshot published last would stay retained
+        with self._lock:
+            configs = all_configs(
+                self.prefix, self._ident, self._topics, list(self._rotators.values())
+            )
+            self._current = configs
+            for topic, payload in configs.items():
+                self._publish(topic, payload)  # the client skips what did not change
+
+    def set_satellites(self, satellites: tuple[str, ...]) -> None:
+        """The TLE file changed: the track select offers what it holds now."""
+        with self._lock:
+            before = dict(self._rotators)
+            self._rotators = {k: r.with_satellites(satellites) for k, r in before.items()}
+            changed = self._rotators != before
+        if changed:
+            log.info("Home Assistant's track select now lists %d satellite(s)", len(satellites))
+            self.publish_all()
+
+    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        with self._lock:
+            r = self._rotators.get(rotator_id)
+            if r is None or not status.version or status.version == r.version:
+                return
+            self._rotators[rotator_id] = replace(r, version=status.version)
+        self.publish_all()
+
+    def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
+        """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
+        if topic == self.status_topic:
+            if payload.strip().lower() == b"online":
+                self._schedule_republish()
+            return True
+        parsed = self._disc.parse_config(topic)
+        if parsed is None:
+            return False
+        _, node, _ = parsed
+        if not self._ident.owns(node) or not payload:
+            return True
+        with self._lock:
+            stale = topic not in self._current
+        if stale:
+            self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
+        return True
+
+    def _schedule_republish(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(self._birth_delay_s, self._republish_state)
+            self._timer.daemon = True
+            self._timer.start()
+        log.info("Home Assistant came online; state follows in %g s", self._birth_delay_s)
+
+    def stop(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()

@@ -1,0 +1,405 @@
+"""One connection to the broker, as both of the bridge's use it: the main one (client.py) and
+the stop lane (lane.py). It builds paho's client (protocol, session, credentials, TLS), connects
+it, subscribes the command topics on every connect, notes which subscriptions the broker denies,
+hands every message on, and slows down a fight over the client id. What a connection means
+beyond that (the bridge's presence, its retained state; or a lane for stops) is the subclass's.
+
+Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
+1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
+   commands sent while the bridge was away are not replayed to it; subscriptions ask for
+   retain-as-published, so a command published with the retain flag is recognised as such even
+   while the bridge is connected (MQTT 3.1.1 clears the flag then). ``protocol = "3.1.1"`` in the
+   configuration is the fallback for brokers without MQTT 5 (clean session, same rules otherwise).
+4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
+   buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
+   subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
+   being dropped"), which in a flood of targets loses the final target, or a STOP. At QoS 0 a
+   connected subscriber gets everything, in order. (Measured: tests/faults, 10,000-target burst.)
+5. Callbacks run on paho's thread and stay short: they hand messages to the handler, which must
+   not block (it drops commands into mailboxes); a handler that raises is logged, and paho's
+   thread goes on.
+6. paho owns the reconnect loop (connect_async + loop_start, exponential back-off); a refused
+   connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
+   reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
+   never a crash. Rule 7 only slows that loop down.
+7. One client id, one connection. A broker that gets a second connection with a client id
+   closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
+   socket), so two processes with one id (two hosts sharing a configuration, a stale container
+   beside a new one) would take each other over in a loop, each reconnect kicking the other.
+   The main connection logs that ONCE, naming the client id and the likely cause, and both
+   back off instead of fighting: TAKEOVER_FIRST_S, doubling per reconnect up to TAKEOVER_MAX_S
+   (so at most one reconnect a minute), until a connection lasts STABLE_S. Brokers that say
+   nothing (MQTT 3.1.1; mosquitto 2.0.11 even with MQTT 5) just drop the connection, so
+   FLAP_COUNT drops in a row, each less than STABLE_S after the connection was accepted and
+   each followed by a connection accepted at the first try (the broker never went away), count
+   as a takeover too; the side that holds the connection longer sees exactly that. A drop after
+   a keepalive timeout or with another reason from the broker is no evidence. (A link that
+   keeps breaking the same way earns the same back-off; the error says "most likely".) The
+   default client id is unique per installation (MqttSettings.effective_client_id): only an
+   explicit one, or a copied state file on a host of the same name, can collide.
+9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
+   socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on
+   (mosquitto's default, set_tcp_nodelay false) holds a second small packet until the first is
+   acknowledged, and Linux delays the acknowledgement of a packet we do not answer (a PUBACK for
+   our error event, a command that changes nothing) by 40 ms once we answer others quickly: a
+   stop 0-3 ms behind a refused target reached the controller 44 ms late (p50;
+   benchmarks/latency.py), and behind any target while state went out at QoS 1. The kernel
+   leaves quick-ack mode again as soon as we send, so it is set after every read, not once (a
+   system call per read). Command topics stay QoS 0 (rule 4): our PUBACK would acknowledge a
+   command too, but brings back what rule 4 avoids.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+import ssl
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any, Literal, TypedDict, Unpack
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+MessageHandler = Callable[[str, bytes, bool], None]
+COMMAND_QOS = 0  # rule 4
+
+# rule 7
+SESSION_TAKEN_OVER = 0x8E
+CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
+TAKEOVER_FIRST_S = 5
+TAKEOVER_MAX_S = 60
+STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
+FLAP_COUNT = 3
+Ending = Literal["taken over", "dropped", "other"]
+
+TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
+
+
+class TakeoverGuard:
+    """Rule 7's bookkeeping, without paho or a clock: times in, a back-off out."""
+
+    def __init__(self) -> None:
+        self.connected_at: float | None = None
+        self._drops = 0  # dropped connections in a row, the broker reachable throughout
+        self.backoff_s = 0  # 0: no takeover episode, paho's own reconnect delays apply
+        self.reported = False
+
+    def connected(self, now: float) -> None:
+        self.connected_at = now
+
+    def connect_failed(self) -> None:
+        """The broker was unreachable or refused us: the drops before were not a fight."""
+        self._drops = 0
+
+    def disconnected(self, now: float, ending: Ending) -> bool:
+        """Whether this disconnect is part of a takeover episode (``backoff_s`` is then set)."""
+        lasted = now - self.connected_at if self.connected_at is not None else 0.0
+        self.connected_at = None
+        if lasted >= STABLE_S:
+            self._drops, self.backoff_s, self.reported = 0, 0, False
+        self._drops = self._drops + 1 if ending == "dropped" else 0
+        if not (ending == "taken over" or self._drops >= FLAP_COUNT or self.backoff_s):
+            return False
+        self.backoff_s = min(TAKEOVER_MAX_S, self.backoff_s * 2 or TAKEOVER_FIRST_S)
+        return True
+
+
+def takeover_message(client_id: str, ending: Ending) -> str:
+    """Rule 7: what the main connection says, once an episode."""
+    if ending == "taken over":
+        what = f"MQTT session taken over: another client connected with client id {client_id!r}"
+    else:
+        what = (
+            f"the MQTT broker dropped the connection {FLAP_COUNT} times in a row without a "
+            f"reason, taking new ones at once: most likely another client connects with "
+            f"client id {client_id!r}"
+        )
+    return (
+        f"{what}. Two processes with one client id (two hosts sharing one configuration, a "
+        f"stale container still running) keep kicking each other off: stop the other one or "
+        f"give each its own mqtt.client_id. Backing off: {TAKEOVER_FIRST_S} s, doubling up to "
+        f"{TAKEOVER_MAX_S} s between reconnects, until a connection lasts {STABLE_S} s"
+    )
+
+
+def acknowledge_now(sock: object) -> None:
+    """Rule 9: have the kernel acknowledge what was read so far now, not after its delayed-ACK
+    timer (and leave its interactive mode until we next send)."""
+    setsockopt = getattr(sock, "setsockopt", None)  # None before the first connect
+    if TCP_QUICKACK is None or setsockopt is None:
+        return
+    try:
+        setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
+    except OSError:  # closed meanwhile: paho notices that on its own
+        pass
+
+
+class Client(paho.Client):
+    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
+
+    def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
+        rc = super().loop_read(max_packets)
+        acknowledge_now(self.socket())
+        return rc
+
+
+def new_client(settings: MqttSettings, client_id: str) -> Client:
+    """paho's client as both connections use it: rule 1's protocol and session, credentials
+    and TLS."""
+    v5 = settings.protocol == "5"
+    c = Client(
+        callback_api_version=CallbackAPIVersion.VERSION2,
+        client_id=client_id,
+        protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
+        clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
+    )
+    if settings.username is not None:
+        password = settings.password.get_secret_value() if settings.password else None
+        c.username_pw_set(settings.username, password)
+    if settings.tls.enabled:
+        c.tls_set(
+            ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
+            certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
+            keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
+            cert_reqs=ssl.CERT_REQUIRED,
+        )
+        c.tls_insecure_set(settings.tls.insecure)
+    return c
+
+
+def command_filters(
+    filters: list[str], no_replay: frozenset[str], v5: bool
+) -> list[tuple[str, Any]]:
+    """Rules 1 and 4: command topics at COMMAND_QOS, MQTT 5 with retain-as-published; the
+    filters in ``no_replay`` (stop: lastword.py rule 6) also ask the broker not to replay their
+    retained message on subscribing (retain handling 2)."""
+    if not v5:
+        return [(topic, COMMAND_QOS) for topic in filters]
+    live = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
+    fresh = SubscribeOptions(
+        qos=COMMAND_QOS,
+        retainAsPublished=True,
+        retainHandling=SubscribeOptions.RETAIN_DO_NOT_SEND,
+    )
+    return [(topic, fresh if topic in no_replay else live) for topic in filters]
+
+
+def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
+    """Rule 7: how a connection ended, as evidence of a takeover."""
+    code = getattr(reason_code, "value", None)
+    from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
+    if from_server and code == SESSION_TAKEN_OVER:
+        return "taken over"
+    if not from_server and code == CONNECTION_LOST:
+        return "dropped"
+    return "other"
+
+
+class Options(TypedDict, total=False):
+    """What both connections take alike, as keywords of their constructors."""
+
+    on_new_connection: Callable[[], None] | None  # before any message of a new connection
+    no_replay: list[str] | None  # command filters whose retained message is not replayed
+    reconnect_min_s: int  # paho's reconnect back-off (rule 6)
+    reconnect_max_s: int
+
+
+class Connection:
+    """A paho client and what both connections do with it. Subclasses say what the rest means
+    through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        client_id: str,
+        *,
+        subscriptions: list[str],
+        on_message: MessageHandler,
+        clock: Callable[[], float] = time.monotonic,
+        **options: Unpack[Options],
+    ) -> None:
+        self._settings = settings
+        self._v5 = settings.protocol == "5"
+        self._subscriptions = subscriptions
+        self._no_replay = frozenset(options.get("no_replay") or ())
+        self._handler = on_message
+        self._on_new_connection = options.get("on_new_connection")
+        self._clock = clock
+        self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
+        self._guard = TakeoverGuard()
+        self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
+        self._up = False  # a connection accepted
+        self._subscribed = False  # ... and the SUBACK of its command topics came
+        self._command_mid: int | None = None
+        self._stopping = False  # a shutdown under way: a broker going away is no news
+        self._last_refusal: str | None = None  # rule 6: each reason said once in a row
+        self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
+        self.connected = threading.Event()
+        c = new_client(settings, client_id)
+        c.reconnect_delay_set(*self._reconnect_s)
+        c.on_connect = self._on_connect
+        c.on_connect_fail = self._on_connect_fail
+        c.on_disconnect = self._on_disconnect
+        c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
+        self._client = c
+
+    def _connect(self) -> None:
+        """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
+        s = self._settings
+        fresh = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean session
+        self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh)
+        self._client.loop_start()
+
+    def _disconnect(self) -> None:
+        self._client.disconnect()
+        self._client.loop_stop()  # joins paho's thread: never call this on it
+
+    def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> int | None:
+        """SUBSCRIBE, its filters kept by message id to name what the SUBACK denies."""
+        if not filters:
+            return None
+        _rc, mid = client.subscribe(filters)
+        if mid is not None:
+            self._sub_filters[mid] = [f for f, _opts in filters]
+        return mid
+
+    # -- hooks: by default what the main connection (client.py) says of rules 6 and 7 --------
+    def _refused(self, reason: str) -> None:
+        """The broker refused the connection (CONNACK failure)."""
+        if reason != self._last_refusal:
+            log.error("MQTT broker refused the connection: %s (retrying)", reason)
+            self._last_refusal = reason
+
+    def _failed(self) -> None:
+        """The connection could not be made (inside paho's ``except OSError``)."""
+        if self._stopping:
+            return
+        exc = sys.exc_info()[1]  # paho calls back inside its `except OSError`: it says why
+        if isinstance(exc, ssl.SSLError):
+            text = f"TLS handshake with the MQTT broker failed: {exc} (check tls.ca_file/cert_file)"
+        else:
+            text = f"cannot connect to the MQTT broker: {exc or 'unknown error'}"
+        if text != self._last_refusal:
+            log.error("%s (retrying with back-off)", text)
+            self._last_refusal = text
+
+    def _accepted(self) -> None:
+        """A connection is accepted; nothing of it has been handed on yet."""
+        self._last_refusal = None
+        log.info("connected to MQTT broker")
+
+    def _opened(self, client: paho.Client) -> None:
+        """The command topics are subscribed (the SUBACK may be on its way)."""
+
+    def _denied(self, topic: str, reason: str) -> None:
+        """The broker denied a subscription to ``topic``."""
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        """The connection is gone; whether to judge its end as takeover evidence (rule 7)."""
+        return was_up
+
+    def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
+        """After rule 7's judgement: ``fight``, a takeover episode (the back-off is set)."""
+        if not fight:
+            log.warning("disconnected from MQTT broker (%s); reconnecting", reason_code)
+        elif self._guard.reported:
+            log.debug(
+                "MQTT connection closed again (%s); next try in %d s",
+                reason_code,
+                self._guard.backoff_s,
+            )
+        else:  # once an episode
+            self._guard.reported = True
+            log.error("%s", takeover_message(self._settings.effective_client_id(), ending))
+
+    def _intercepted(self, topic: str, payload: bytes) -> bool:
+        """Whether a message is the connection's own business, not the handler's."""
+        return False
+
+    # -- paho callbacks (paho's thread) ---------------------------------------------------
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        if reason_code.is_failure:
+            self._guard.connect_failed()
+            self._refused(str(reason_code))
+            return
+        self._up = True
+        self._guard.connected(self._clock())
+        self._subscribed = False  # until the SUBACK of the command topics
+        self._accepted()
+        if self._on_new_connection is not None:  # before any message of the new connection
+            self._on_new_connection()
+        self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
+        self._command_mid = self._subscribe(
+            client, command_filters(self._subscriptions, self._no_replay, self._v5)
+        )
+        self._opened(client)
+
+    def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
+        self._guard.connect_failed()
+        self._failed()
+
+    def _on_subscribe(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_codes: list[ReasonCode],
+        properties: Properties | None,
+    ) -> None:
+        filters = self._sub_filters.pop(mid, [])
+        if mid == self._command_mid:
+            self._subscribed = True  # the commands reach us from now on
+        for topic, code in zip(filters, reason_codes, strict=False):
+            if code.is_failure:
+                self._denied(topic, str(code))
+
+    def _on_disconnect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.DisconnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        was, self._up, self._subscribed = self._up, False, False
+        self.connected.clear()
+        if not self._closed(was, reason_code):
+            return
+        ending = ending_of(flags, reason_code)
+        fight = self._guard.disconnected(self._clock(), ending)
+        if fight:
+            # paho forgets its back-off on every accepted connection and starts again at the
+            # minimum delay: the minimum is what slows a fight down (rule 7)
+            backoff = self._guard.backoff_s
+            client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))
+            self._slowed = True
+        elif self._slowed:  # a connection lasted: paho's own delays again
+            client.reconnect_delay_set(*self._reconnect_s)
+            self._slowed = False
+        self._ended(reason_code, ending, fight)
+
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
+        try:
+            payload = bytes(msg.payload)
+            if not self._intercepted(msg.topic, payload):
+                self._handler(msg.topic, payload, bool(msg.retain))
+        except Exception:  # rule 5: a handler bug must not kill paho's network thread
+            log.exception("error handling MQTT message on %s", msg.topic)

@@ -1,0 +1,99 @@
+"""The owned-topic judge: whether a retained value heard on one of the bridge's own topics is
+its own, and when to put its own back and say so. Pure: a clock in, decisions out; no paho
+client, no lock (the client asks under its own lock, client.py).
+
+Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
+10. The bridge owns its retained topics (``watch``: state, status, lock and option states, its
+   online/offline): it subscribes to them (MQTT 5: without its own messages) and a value there
+   that it did not publish, from another client, is replaced with its own at once (at most once
+   per FOREIGN_FIX_S per topic, ``put_back``) and logged once a minute (FOREIGN_LOG_S) per
+   topic: a stray retained ``lock/state OFF`` must not tell a dashboard the lock is off while
+   it is on. What the broker held from before the connection (our own last will, a value of a
+   run that ended) arrives within SETTLE_AFTER_CONNECT_S of it and is put back without a word:
+   only a live stranger is news. Under MQTT 3.1.1 the bridge hears its own messages too, in the
+   order sent: one it sent and has not heard back yet (``sent``) is no stranger.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from paho.mqtt.client import topic_matches_sub  # a pure function of two strings
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+FOREIGN_FIX_S = 2.0
+FOREIGN_LOG_S = 60.0
+SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
+ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
+
+
+@dataclass(frozen=True)
+class PutBack:
+    """What to do about a stranger's value: ``send`` our own again now; ``say`` so in the log."""
+
+    send: bool
+    say: bool
+
+
+class OwnedTopics:
+    def __init__(self, clock: Callable[[], float], *, hears_own: bool) -> None:
+        """``hears_own``: the broker sends the bridge its own messages back (MQTT 3.1.1; MQTT 5
+        subscribes with no-local)."""
+        self._clock = clock
+        self._hears_own = hears_own
+        self.filters: list[str] = []
+        self._echoes: dict[str, deque[bytes]] = {}  # sent, not heard back (hears_own)
+        self._fixed_at: dict[str, float] = {}
+        self._logged_at: dict[str, float] = {}
+        self.connected_at = -1e18  # the clock at the last accepted connection
+
+    def watch(self, filters: list[str]) -> None:
+        self.filters = list(filters)
+
+    def subscriptions(self) -> list[tuple[str, int | SubscribeOptions]]:
+        """What to subscribe to on every connect: MQTT 5 without our own messages back
+        (no-local); MQTT 3.1.1 hears them, and ``ours`` knows them."""
+        if self._hears_own:
+            return [(f, 0) for f in self.filters]
+        mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
+        return [(f, mine) for f in self.filters]
+
+    def owns(self, topic: str) -> bool:
+        return any(topic_matches_sub(f, topic) for f in self.filters)
+
+    def connected(self) -> None:
+        """A new connection: what was in flight before is gone with the old one."""
+        self.connected_at = self._clock()
+        self._echoes.clear()
+
+    def sent(self, topic: str, data: bytes) -> None:
+        """The bridge published ``data`` on ``topic``: when it comes back, it is ours."""
+        if self._hears_own and self.filters and self.owns(topic):
+            self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(data)
+
+    def ours(self, topic: str, payload: bytes, held: bytes) -> bool:
+        """Whether ``payload`` heard on an owned ``topic`` is the bridge's: an echo of one it
+        sent (the older ones before it are gone: the broker keeps the order), or the value it
+        holds."""
+        echoes = self._echoes.get(topic)
+        if echoes and payload in echoes:
+            while echoes.popleft() != payload:
+                pass
+            return True
+        return payload == held
+
+    def put_back(self, topic: str) -> PutBack:
+        """A stranger's value on ``topic``: ours again at most once per FOREIGN_FIX_S, said at
+        most once per FOREIGN_LOG_S, and not at all just after a connect."""
+        now = self._clock()
+        if now - self._fixed_at.get(topic, -FOREIGN_FIX_S) < FOREIGN_FIX_S:
+            return PutBack(send=False, say=False)
+        self._fixed_at[topic] = now
+        if now - self.connected_at < SETTLE_AFTER_CONNECT_S:
+            return PutBack(send=True, say=False)
+        if now - self._logged_at.get(topic, -FOREIGN_LOG_S) < FOREIGN_LOG_S:
+            return PutBack(send=True, say=False)
+        self._logged_at[topic] = now
+        return PutBack(send=True, say=True)

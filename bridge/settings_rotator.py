@@ -1,0 +1,327 @@
+"""One ``[[rotators]]`` table: which controller, on which port, how it is polled and judged.
+
+The keys for pointing (offset, presets, park, keep-out, tracking) are in settings_pointing.py,
+the loggers' UDP endpoints in settings_loggers.py; this model includes both. What the engine
+uses for a key left out is settings_defaults.py's to say; the ``effective_*`` properties here
+ask it.
+
+Rules:
+1. Every key carries its meaning (``description``); a key whose default is the model's says so
+   with ``unset`` (docs/configuration.md is generated from these, bridge/config_doc.py).
+2. Limits, poll intervals and the silence timeout are judged together against the model, so a
+   rotator that could not work is a configuration error naming the key.
+3. The port is a name, never opened here: loading a configuration touches no hardware
+   (check-config reports a port that does not exist as a warning).
+"""
+
+from __future__ import annotations
+
+import re
+
+from pydantic import Field, field_validator, model_validator
+
+from bridge import settings_defaults as defaults
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import ModelSpec
+from bridge.settings_loggers import LoggerFields
+from bridge.settings_mqtt import check_topic
+from bridge.settings_pointing import PointingFields
+
+_SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
+MODEL_DEFAULT = "the model's (see the model table)"
+
+
+class RotatorSettings(PointingFields, LoggerFields):
+    """``[[rotators]]``: one table per rotator controller (at least one)."""
+
+    id: str = Field(
+        description="a short name for topics and environment overrides: lower-case letters, "
+        "digits, '-' and '_' (not 'bridge')",
+        examples=["tower"],
+    )
+    name: str | None = Field(
+        None,
+        description="the name shown in dashboards and Home Assistant",
+        examples=["Tower"],
+        json_schema_extra={"unset": "the id"},
+    )
+    model: str = Field(
+        description="the controller: " + ", ".join(sorted(REGISTRY)) + " (see the model table)",
+        examples=["rotorez"],
+    )
+    port: str = Field(
+        description="the serial port; a /dev/serial/by-id/ name survives re-plugging "
+        "(`rotor-bridge ports` lists them). It need not exist when the bridge starts: the "
+        "bridge keeps trying to open it.",
+        examples=["/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"],
+    )
+    baud: int | None = Field(
+        None,
+        gt=0,
+        description="the serial line's rate, as set on the controller",
+        examples=[9600],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    topic: str | None = Field(
+        None,
+        description="this rotator's topic root",
+        examples=["shack/tower"],
+        json_schema_extra={"unset": "mqtt.base_topic with one rotator, else <base_topic>/<id>"},
+    )
+    idle_poll_interval_s: float | None = Field(
+        None,
+        gt=0,
+        le=3600,
+        description="how often a still rotor is asked where it points; the model's default "
+        "leaves the line at least 95 % free and is at least 1 s",
+        examples=[2.0],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    moving_poll_interval_s: float = Field(
+        0.2,
+        gt=0,
+        le=60,
+        description="how often a turning rotor is asked; not longer than idle_poll_interval_s",
+        examples=[0.5],
+    )
+    tolerance_deg: float = Field(
+        3.0,
+        ge=0,
+        le=45,
+        description="arrived when this close to the target and steady",
+        examples=[1.0],
+    )
+    brake_delay_s: float | None = Field(
+        None,
+        ge=0,
+        le=60,
+        description="the controller's brake delay: no new target is sent until it has passed "
+        "(Rotor-EZ and DCU-1: a jumper, 5 s by default)",
+        examples=[5],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    stall_timeout_s: float = Field(
+        10.0,
+        gt=0,
+        le=600,
+        description='no progress this long while off target: the rotator is "stalled"',
+        examples=[20],
+    )
+    settle_s: float = Field(
+        1.5,
+        gt=0,
+        le=60,
+        description="steady this long means stopped; at least two moving poll intervals",
+        examples=[2.0],
+    )
+    deadband_deg: float = Field(
+        2.0,
+        ge=0,
+        le=45,
+        description="a still rotor's readings that change less than this are not published",
+        examples=[1.0],
+    )
+    noise_deg: float | None = Field(
+        None,
+        ge=0,
+        le=20,
+        description="a still rotor's readings wander this much and are not movement; raise it "
+        'if a dirty potentiometer keeps a still rotor "moving"',
+        examples=[2.0],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    silence_timeout_s: float | None = Field(
+        None,
+        gt=0,
+        le=600,
+        description="no valid reply this long: the rotator is offline. Longer than the idle "
+        "poll interval; by default 3 s, or two idle polls and a reply time where that is longer",
+        examples=[5],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    # at least 0.5 deg/s (a whole turn in 12 minutes): the wait for a SatEL's lost after-move
+    # report is twice the travel time at these speeds, and a slip like 0.05 would make it hours
+    az_speed_deg_s: float | None = Field(
+        None,
+        ge=0.5,
+        le=360,
+        description="how fast the rotor really turns in azimuth, 0.5 to 360: the DCU-1 "
+        "estimates travel from it, the SatEL bounds its silent slews by it",
+        examples=[4.5],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    el_speed_deg_s: float | None = Field(
+        None,
+        ge=0.5,
+        le=360,
+        description="the same in elevation (az/el models only)",
+        examples=[2.5],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    az_min_deg: float | None = Field(
+        None,
+        description="the lowest azimuth the bridge accepts, on the controller's scale; only "
+        "narrows the model's range",
+        examples=[0],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    az_max_deg: float | None = Field(
+        None,
+        description="the highest azimuth the bridge accepts, on the controller's scale",
+        examples=[350],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    el_min_deg: float | None = Field(
+        None,
+        description="the lowest elevation accepted (az/el models only)",
+        examples=[0],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    el_max_deg: float | None = Field(
+        None,
+        description="the highest elevation accepted (az/el models only)",
+        examples=[90],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+    rotctld_port: int | None = Field(
+        None,
+        ge=1,
+        le=65535,
+        description="a Hamlib rotctld-compatible TCP port for this rotator (Gpredict, loggers, "
+        "`rotctl -m 2 -r 127.0.0.1:4533`); one port per rotator",
+        examples=[4533],
+        json_schema_extra={"unset": "no rotctld listener"},
+    )
+    rotctld_bind: str = Field(
+        "127.0.0.1",
+        description="the address the rotctld port listens on. rotctld has no authentication: "
+        "anyone who can reach it can turn the antenna (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    rotctld_idle_timeout_s: float = Field(
+        300.0,
+        ge=1,
+        le=86400,
+        description="a rotctld client that sends nothing this long is disconnected",
+        examples=[3600],
+    )
+
+    @field_validator("id")
+    @classmethod
+    def _id(cls, v: str) -> str:
+        if not _SLUG.match(v) or v == "bridge":
+            raise ValueError(
+                "must be a short slug: lower-case letters, digits, '-' or '_' (and not 'bridge')"
+            )
+        return v
+
+    @field_validator("model")
+    @classmethod
+    def _model(cls, v: str) -> str:
+        if v not in REGISTRY:
+            raise ValueError(f"unknown model {v!r}; known models: {', '.join(sorted(REGISTRY))}")
+        return v
+
+    @field_validator("topic")
+    @classmethod
+    def _topic(cls, v: str | None) -> str | None:
+        return None if v is None else check_topic(v)
+
+    @model_validator(mode="after")
+    def _limits(self) -> RotatorSettings:
+        spec = self.spec
+        lo, hi = self.effective_az_limits
+        if not spec.az_min_deg <= lo < hi <= spec.az_max_deg:
+            raise ValueError(
+                f"azimuth limits {lo:g}..{hi:g} must lie inside the {spec.display_name}'s "
+                f"range {spec.az_min_deg:g}..{spec.az_max_deg:g} with min < max"
+            )
+        if spec.has_elevation:
+            elo, ehi = self.effective_el_limits
+            if not spec.el_min_deg <= elo < ehi <= spec.el_max_deg:
+                raise ValueError(
+                    f"elevation limits {elo:g}..{ehi:g} must lie inside the "
+                    f"{spec.display_name}'s range {spec.el_min_deg:g}..{spec.el_max_deg:g}"
+                )
+        elif self.el_min_deg is not None or self.el_max_deg is not None:
+            raise ValueError(f"the {spec.display_name} has no elevation axis (el_min/max_deg)")
+        elif self.el_speed_deg_s is not None:
+            raise ValueError(f"the {spec.display_name} has no elevation axis (el_speed_deg_s)")
+        idle_s = self.effective_idle_poll_interval_s
+        if self.moving_poll_interval_s > idle_s:
+            raise ValueError(
+                f"moving_poll_interval_s must not exceed idle_poll_interval_s ({idle_s:g})"
+            )
+        silence_s = self.silence_timeout_s
+        if spec.can_report_position and silence_s is not None and silence_s <= idle_s:
+            raise ValueError(
+                f"silence_timeout_s {silence_s:g} must be longer than the idle poll interval "
+                f"({idle_s:g} s): a controller asked that seldom would be declared offline "
+                "between two polls"
+            )
+        if spec.can_report_position and self.settle_s < 2 * self.moving_poll_interval_s:
+            raise ValueError(
+                "settle_s must be at least two moving poll intervals: stillness needs two readings"
+            )
+        self.check_pointing(self.pointing)
+        return self
+
+    @property
+    def spec(self) -> ModelSpec:
+        return REGISTRY[self.model]
+
+    @property
+    def pointing(self) -> Pointing:
+        """The judge's terms (settings_pointing.py) on this model and limits."""
+        return self.pointing_for(self.spec, self.effective_az_limits, self.effective_el_limits)
+
+    # -- what the engine uses: the user's value, else the default (settings_defaults.py) -------
+    @property
+    def effective_baud(self) -> int:
+        return self.baud or self.spec.baud
+
+    @property
+    def effective_brake_delay_s(self) -> float:
+        return self.spec.brake_delay_s if self.brake_delay_s is None else self.brake_delay_s
+
+    @property
+    def effective_noise_deg(self) -> float:
+        return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
+
+    @property
+    def effective_track_step_deg(self) -> float:
+        """How far the body moves before tracking sends the next target: the tolerance."""
+        return self.tolerance_deg if self.track_step_deg is None else self.track_step_deg
+
+    @property
+    def effective_speeds_deg_s(self) -> tuple[float, float]:
+        return self.spec.speeds_deg_s(self.az_speed_deg_s, self.el_speed_deg_s)
+
+    @property
+    def effective_idle_poll_interval_s(self) -> float:
+        if self.idle_poll_interval_s is not None:
+            return self.idle_poll_interval_s
+        return defaults.idle_poll_interval_s(self.spec, self.effective_baud)
+
+    @property
+    def effective_silence_timeout_s(self) -> float:
+        if self.silence_timeout_s is not None:
+            return self.silence_timeout_s
+        return defaults.silence_timeout_s(self.spec, self.effective_idle_poll_interval_s)
+
+    @property
+    def effective_el_limits(self) -> tuple[float, float]:
+        spec = self.spec
+        return (
+            spec.el_min_deg if self.el_min_deg is None else self.el_min_deg,
+            spec.el_max_deg if self.el_max_deg is None else self.el_max_deg,
+        )
+
+    @property
+    def effective_az_limits(self) -> tuple[float, float]:
+        spec = self.spec
+        return (
+            spec.az_min_deg if self.az_min_deg is None else self.az_min_deg,
+            spec.az_max_deg if self.az_max_deg is None else self.az_max_deg,
+        )

@@ -1,0 +1,135 @@
+"""What the sky is asked about: the sun, the moon, or a satellite given by its TLE; and the TLE
+files satellites are read from. Pure: no clock, no I/O, no astronomy (positions.py, passes.py).
+
+Rules:
+1. A TLE is two lines of 69 characters (trailing blanks dropped), starting "1 " and "2 ", each
+   ending in its checksum (sgp4's own: the sum of its digits, a minus sign counting 1, modulo
+   10), with one catalog number on both lines, and elements that sgp4 accepts and propagates at
+   their epoch. Anything else is SkyError naming the line and what is wrong.
+2. A TLE file (parse_tles) is 3-line sets (a name line, Space-Track's "0 " prefix dropped) or
+   bare 2-line sets (named by their catalog number); blank lines and CRLF are fine; a bad set is
+   reported, naming its line, and skipped; a name seen again is reported and the later set used.
+3. A satellite named "off", "sun" or "moon" (any case) is called "satellite off" and so on:
+   ``R/tracking`` saying "off" or "sun" must mean that.
+4. What cannot be computed raises SkyError, whose ``reason`` is what a user reads when tracking
+   ends for it ("satellite orbit decayed", "date beyond the ephemeris (2053)").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sgp4.api import SGP4_ERRORS, Satrec
+from sgp4.io import compute_checksum
+
+KINDS = ("sun", "moon", "satellite")
+RESERVED = ("off", "sun", "moon")  # what R/track and R/tracking mean by these (rule 3)
+
+
+class SkyError(ValueError):
+    """Input the sky cannot answer for; ``reason`` says it in a few words (rule 4)."""
+
+    def __init__(self, message: str, reason: str | None = None) -> None:
+        super().__init__(message)
+        self.reason = reason or message
+
+
+@dataclass(frozen=True)
+class Body:
+    kind: str  # "sun" | "moon" | "satellite"
+    name: str  # "sun", "moon", or the satellite's name (TLE line 0, stripped)
+    tle: tuple[str, str] | None = None  # satellites: line 1, line 2
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise SkyError(f"unknown body kind {self.kind!r}: one of {', '.join(KINDS)}")
+        if (self.kind == "satellite") != (self.tle is not None):
+            raise SkyError(f"{self.name!r}: a satellite has a TLE, the sun and the moon none")
+        if self.tle is not None:
+            if not self.name:
+                raise SkyError("a satellite needs a name")
+            if self.name.casefold() in RESERVED:
+                raise SkyError(
+                    f"a satellite cannot be called {self.name!r}: Body.satellite names it"
+                )
+            problem = _tle_problem(*self.tle)
+            if problem is not None:
+                raise SkyError(f"{self.name}: TLE line {problem[0]}: {problem[1]}")
+
+    @staticmethod
+    def sun() -> Body:
+        return Body("sun", "sun")
+
+    @staticmethod
+    def moon() -> Body:
+        return Body("moon", "moon")
+
+    @staticmethod
+    def satellite(name: str, line1: str, line2: str) -> Body:
+        """A satellite called "off", "sun" or "moon" is "satellite off" etc. (rule 3)."""
+        name = name.strip()
+        if name.casefold() in RESERVED:
+            name = f"satellite {name}"
+        return Body("satellite", name, (line1.rstrip(), line2.rstrip()))
+
+
+def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
+    """(which line, what is wrong) with a TLE, or None when sgp4 can use it (rule 1)."""
+    for number, line in ((1, line1), (2, line2)):
+        if len(line) != 69:
+            return number, f"has {len(line)} characters, a TLE line has 69"
+        if not line.startswith(f"{number} "):
+            return number, f"must start with '{number} ', got {line[:2]!r}"
+        tally = int(compute_checksum(line))
+        if not line[68].isdigit() or int(line[68]) != tally:
+            return number, f"checksum is {line[68]!r}, the line sums to {tally}"
+    if line1[2:7] != line2[2:7]:
+        return 2, f"catalog number {line2[2:7]!r} is not line 1's {line1[2:7]!r}"
+    try:
+        sat = Satrec.twoline2rv(line1, line2)
+    except (ValueError, IndexError) as e:
+        return 1, f"sgp4 cannot read the elements: {e}"
+    error, _, _ = sat.sgp4(sat.jdsatepoch, sat.jdsatepochF)
+    if error:
+        return 2, f"sgp4 cannot propagate the elements: {SGP4_ERRORS[error]}"
+    return None
+
+
+def parse_tles(text: str) -> tuple[dict[str, tuple[str, str]], list[str]]:
+    """The sets in a TLE file by name, and one problem per bad set, naming its line (rule 2)."""
+    lines = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1) if line.strip()]
+    sets: dict[str, tuple[str, str]] = {}
+    first_line: dict[str, int] = {}
+    problems: list[str] = []
+    name: tuple[int, str] | None = None
+    i = 0
+    while i < len(lines):
+        number, line = lines[i]
+        i += 1
+        if line.startswith("1 ") and i < len(lines) and lines[i][1].startswith("2 "):
+            start, title = name if name is not None else (number, line[2:7].strip())
+            name, line2 = None, lines[i][1]
+            problem = _tle_problem(line, line2)
+            if problem is not None:
+                at = number if problem[0] == 1 else lines[i][0]
+                problems.append(f"line {at}: {title}: {problem[1]}")
+            else:
+                if title in sets:
+                    first = first_line[title]
+                    problems.append(f"line {start}: {title!r} again (first at line {first}): used")
+                first_line.setdefault(title, start)
+                sets[title] = (line, line2)
+            i += 1
+        elif line.startswith(("1 ", "2 ")):
+            problems.append(
+                f"line {number}: a TLE line {line[0]} without its line "
+                f"{'2' if line[0] == '1' else '1'}"
+            )
+            name = None
+        else:
+            if name is not None:
+                problems.append(f"line {name[0]}: {name[1]!r} is not followed by a TLE")
+            name = (number, line[2:].strip() if line.startswith("0 ") else line)
+    if name is not None:
+        problems.append(f"line {name[0]}: {name[1]!r} is not followed by a TLE")
+    return sets, problems

@@ -1,0 +1,207 @@
+"""The session's parts on their own, as pure objects: each gets a read-only view and the time
+and returns what it proposes (docs/architecture.md, "parts decide and return"). The scenarios
+in virtual time (test_session_*.py) prove them wired into the session."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from bridge.app import worker_config
+from bridge.engine import motion as mo
+from bridge.engine import slewing
+from bridge.engine.autopark import AutoPark
+from bridge.engine.config import WorkerConfig
+from bridge.engine.link import Link
+from bridge.engine.mailbox import Batch
+from bridge.engine.options import OPTIONS_REFRESH_S, Options
+from bridge.engine.parts import NOTHING, Scene
+from bridge.engine.sending import Go, decide
+from bridge.engine.skywork import PassQuestion
+from bridge.engine.slew import Slew
+from bridge.engine.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
+from bridge.engine.targets import Targets
+from bridge.engine.tracking import Tracker
+from bridge.model import ErrorKind, MotionState, Source, Stop, Target
+from bridge.settings import RotatorSettings
+from bridge.sky import Body, Sky
+
+IDLE_AT_90 = mo.Motion(state=MotionState.IDLE, position_deg=90.0, anchor_deg=90.0)
+
+
+def rig(model: str = "rotorez", sky: Sky | None = None, **settings: Any) -> WorkerConfig:
+    rotator = RotatorSettings.model_validate(
+        {"id": "p", "model": model, "port": "/dev/null", **settings}
+    )
+    return worker_config(rotator, sky)
+
+
+def scene(now: float, motion: mo.Motion = IDLE_AT_90, **kw: Any) -> Scene:
+    seen: dict[str, Any] = dict(pending=None, locked=False, parked=False, slewing=False)
+    return Scene(now=now, motion=motion, wall_offset_s=1_750_000_000.0, **{**seen, **kw})
+
+
+# -- auto-park -------------------------------------------------------------------------------
+def test_auto_park_proposes_the_park_after_a_quiet_spell_and_only_when_free() -> None:
+    park = AutoPark(rig(park_az_deg=0, park_after_idle_s=60))
+    park.activity(0.0)
+    assert park.step(scene(59.0)) is NOTHING
+    assert park.wakeup(59.0) == 60.0
+    for busy in (
+        {"locked": True},
+        {"parked": True},
+        {"motion": replace(IDLE_AT_90, state=MotionState.BRAKING)},
+        {"motion": replace(IDLE_AT_90, idle_not_before_t=61.5)},  # no brake, settling
+    ):
+        assert park.step(scene(61.0, **busy)) is NOTHING, busy
+    proposal = park.step(scene(61.0))
+    assert proposal.target is not None and proposal.target.park
+    assert proposal.target.source is Source.AUTO_PARK and proposal.error is None
+    assert park.step(scene(62.0)) is NOTHING  # rule 3: the park itself is activity
+
+
+def test_a_rotor_seen_turning_starts_the_quiet_spell_again() -> None:
+    park = AutoPark(rig(park_az_deg=0, park_after_idle_s=60))
+    park.activity(0.0)
+    turning = replace(IDLE_AT_90, state=MotionState.MOVING)
+    assert park.step(scene(50.0, motion=turning)) is NOTHING
+    assert park.step(scene(61.0)) is NOTHING
+    assert park.step(scene(110.0)).target is not None
+
+
+def test_without_a_quiet_spell_set_auto_park_never_proposes() -> None:
+    park = AutoPark(rig(park_az_deg=0))
+    park.activity(0.0)
+    assert park.step(scene(1e6)) is NOTHING and park.wakeup(0.0) is None
+
+
+# -- tracking ----------------------------------------------------------------------------------
+def test_tracking_asks_the_sky_and_proposes_nothing_until_the_answer() -> None:
+    tracker = Tracker(rig("md01", sky=Sky(52.52, 13.29)))
+    assert tracker.step(scene(0.0)) is NOTHING  # nothing tracked
+    tracker.start(Body.sun())
+    proposal = tracker.step(scene(0.0))
+    assert proposal.target is None and proposal.busy  # tracking.py rules 7 and 8
+    asks = tracker.take_asks()
+    assert [type(q) for q in asks] == [PassQuestion] and tracker.take_asks() == []
+    assert tracker.step(scene(1.0)).target is None and tracker.take_asks() == []  # asked once
+    generation = tracker.generation
+    assert tracker.end("stop") and tracker.ended == "stop"
+    assert tracker.generation > generation  # the answer to come is stale
+
+
+def test_tracking_under_the_lock_is_activity_and_nothing_else() -> None:
+    tracker = Tracker(rig("md01", sky=Sky(52.52, 13.29)))
+    tracker.start(Body.sun())
+    proposal = tracker.step(scene(0.0, locked=True))
+    assert proposal.busy and proposal.target is None and tracker.take_asks() == []
+
+
+# -- slew recovery -----------------------------------------------------------------------------
+def slew(stops: int = 0, attempt: int = 1) -> Slew:
+    return Slew(0.0, 10.0, 0.0, 200.0, 30.0, Source.MQTT, stops, attempt)
+
+
+def test_a_lost_slew_report_is_stopped_and_its_target_tried_once_more() -> None:
+    cfg = rig("satel")
+    first = slewing.overdue(cfg, slew(), 1.0, 120.0)
+    assert first.stop and first.retry is not None and first.attempt == 2
+    assert first.error is not None and first.error.kind is ErrorKind.SERIAL
+    second = slewing.overdue(cfg, slew(attempt=2), 1.0, 120.0)
+    assert second.stop and second.retry is None and second.error is not None  # given up
+
+
+def test_a_stop_during_a_slew_is_repeated_then_the_controller_is_asked() -> None:
+    cfg = rig("satel")
+    assert slewing.overdue(cfg, slew(stops=1), 1.0, 5.0) == slewing.Overdue(stop=True)
+    last = slewing.overdue(cfg, slew(stops=slewing.SLEW_STOP_TRIES), 1.0, 5.0)
+    assert not last.stop and last.track_lost and last.error is not None
+    assert slewing.overdue(cfg, None, 1.0, 5.0) == slewing.Overdue(stop=False)
+
+
+# -- stops -------------------------------------------------------------------------------------
+def test_a_second_stop_in_the_brake_window_adds_nothing_unless_a_target_went_out() -> None:
+    cfg, stops = rig().motion, Stops()
+    stopped = replace(IDLE_AT_90, state=MotionState.BRAKING, stop_sent_t=10.0)
+    assert stops.merges(stopped, cfg, 11.0)
+    assert not stops.merges(stopped, cfg, 10.0 + max(cfg.brake_delay_s, 1.0))
+    assert not stops.merges(replace(stopped, target_deg=200.0), cfg, 11.0)
+    assert not stops.merges(replace(stopped, state=MotionState.MOVING), cfg, 11.0)
+
+
+def test_a_stop_that_did_not_take_is_sent_again_and_the_last_try_says_so() -> None:
+    cfg, stops = rig().motion, Stops()
+    turning = replace(IDLE_AT_90, state=MotionState.MOVING, stop_sent_t=10.0, last_move_t=11.0)
+    assert stops.check(turning, cfg, 10.5, False) == (False, None)  # not late yet
+    assert stops.check(turning, cfg, 20.0, True) == (False, None)  # a target stops it anyway
+    tries = [stops.check(turning, cfg, 20.0, False) for _ in range(STOP_TRIES_BEFORE_ERROR)]
+    assert all(again for again, _ in tries)
+    assert [e is None for _, e in tries] == [True] * (STOP_TRIES_BEFORE_ERROR - 1) + [False]
+
+
+def test_a_rotor_turned_away_is_stopped_once_at_rest() -> None:
+    cfg, stops = rig().motion, Stops()
+    away = stops.verdict(mo.Event.TURNED_AWAY, IDLE_AT_90, cfg)
+    assert not away.stop and away.ends_tracking and away.error is not None
+    assert stops.verdict(mo.Event.STOPPED, IDLE_AT_90, cfg).stop
+    assert not stops.verdict(mo.Event.STOPPED, IDLE_AT_90, cfg).stop  # once
+    stalled = stops.verdict(mo.Event.STALLED, IDLE_AT_90, cfg)
+    assert stalled.stop and stalled.error is not None and stalled.error.kind is ErrorKind.STALLED
+
+
+def test_the_fence_holds_until_its_marker_and_a_clearing_release_says_so() -> None:
+    fence = Fence()
+    assert not fence.apply(Batch(stop=Stop(), hold=3)) and fence.held
+    assert not fence.apply(Batch(release=2)) and fence.held
+    assert not fence.apply(Batch(release=3)) and not fence.held
+    fence.apply(Batch(hold=4))
+    assert fence.apply(Batch(release_clear=True)) and not fence.held
+    assert not fence.apply(Batch(release_clear=True))  # nothing was held
+
+
+# -- options -----------------------------------------------------------------------------------
+def test_options_go_out_when_idle_and_free_and_again_after_the_refresh() -> None:
+    options = Options({"b": True, "a": False})
+    options.connected(answering=True)
+    assert options.take(idle=False, free=True, now=0.0) == []
+    assert options.take(idle=True, free=False, now=0.0) == []
+    assert options.take(idle=True, free=True, now=1.0) == [("a", False), ("b", True)]
+    assert options.take(idle=True, free=True, now=2.0) == []
+    options.set("a", True, connected=True)
+    assert options.take(idle=True, free=True, now=3.0) == [("a", True)]
+    assert options.take(idle=True, free=True, now=3.0 + OPTIONS_REFRESH_S) == [
+        ("a", True),
+        ("b", True),
+    ]
+
+
+# -- the pending target's way to the wire --------------------------------------------------------
+def line(cfg: WorkerConfig, reading_t: float | None = None) -> Link:
+    link = Link(cfg.spec.codec_factory(), cfg.spec, 0.0, cfg.baud)
+    if reading_t is not None:
+        link.got_reading(reading_t)
+    return link
+
+
+def pending(cfg: WorkerConfig, az_deg: float, now: float = 10.0) -> Targets:
+    targets = Targets(cfg)
+    targets.put(Target(az_deg), now)
+    return targets
+
+
+def test_a_target_goes_out_only_when_nothing_comes_first() -> None:
+    cfg = rig()  # Rotor-EZ: stops to re-target, so it asks for a fresh reading first
+    idle = replace(IDLE_AT_90, still_since_t=0.0)
+    assert decide(cfg, line(cfg, 9.9), idle, pending(cfg, 200), False, 10.0).go is Go.SEND
+    assert decide(cfg, line(cfg, 9.9), idle, pending(cfg, 200), True, 10.0).go is Go.WAIT  # held
+    assert decide(cfg, line(cfg, 1.0), idle, pending(cfg, 200), False, 10.0).go is Go.ASK_FIRST
+    turning = replace(idle, state=MotionState.MOVING)
+    assert decide(cfg, line(cfg, 9.9), turning, pending(cfg, 200), False, 10.0).go is Go.STOP_FIRST
+    braking = replace(idle, state=MotionState.BRAKING)
+    assert decide(cfg, line(cfg, 9.9), braking, pending(cfg, 200), False, 10.0).go is Go.WAIT
+
+
+def test_a_target_the_rotor_is_already_at_is_done_without_a_frame() -> None:
+    cfg = rig()
+    done = decide(cfg, line(cfg, 9.9), IDLE_AT_90, pending(cfg, 91), False, 10.0)
+    assert done.go is Go.DONE and done.wire == (91.0, None)

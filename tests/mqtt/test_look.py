@@ -1,0 +1,78 @@
+"""The first look's books (bridge/mqtt/look.py, MQTT rule 14), without a broker: what a look
+saw decides whether stale discovery is deleted, left alone, or the bridge refuses to run."""
+
+from __future__ import annotations
+
+from bridge.mqtt.claim import Claim, Instance
+from bridge.mqtt.look import FirstLook
+
+ME = Instance("rotor-me", "shack", 100, 1000.0)
+OTHER = Instance("rotor-other", "attic", 200, 900.0)
+INFO, STATE, HELLO = "t/bridge/info", "t/bridge/state", "t/bridge/hello"
+STALE = "homeassistant/sensor/rotorbridge_t_r_gone/bearing/config"
+
+
+def look() -> FirstLook:
+    return FirstLook(Claim(ME, "t", INFO, HELLO), STATE)
+
+
+def test_its_own_hello_ends_the_look_and_no_other() -> None:
+    lk = look()
+    hello = lk.begin()
+    assert hello == b"rotor-me 1"
+    assert lk.ended_by(b"rotor-other 1") is None  # another bridge's look
+    assert lk.ended_by(b"rotor-me 0") is None  # one of an earlier look, come late
+    assert lk.ended_by(hello) == 1
+
+
+def test_a_base_topic_of_its_own_deletes_what_the_broker_held() -> None:
+    lk = look()
+    lk.begin()
+    assert lk.saw(INFO, ME.info([]).encode()) and lk.saw(STATE, b"offline")
+    assert lk.defer_clear(STALE)
+    outcome = lk.end(timed_out=False)
+    assert (outcome.refused, outcome.clear, outcome.clears) == (None, True, [STALE])
+    assert not lk.defer_clear(STALE)  # the look is over: the client judges it now
+
+
+def test_another_live_bridge_is_a_refusal_naming_it() -> None:
+    lk = look()
+    lk.begin()
+    lk.saw(INFO, OTHER.info([]).encode())
+    lk.saw(STATE, b"online")
+    outcome = lk.end(timed_out=False)
+    assert outcome.refused is not None and "rotor-other" in outcome.refused
+    assert outcome.clears == []
+
+
+def test_after_taking_over_or_a_look_that_timed_out_nothing_is_deleted() -> None:
+    lk = look()
+    lk.begin()
+    lk.saw(INFO, OTHER.info([]).encode())
+    lk.saw(STATE, b"offline")  # gone: taken over
+    lk.defer_clear(STALE)
+    taken = lk.end(timed_out=False)
+    assert (taken.refused, taken.clear, taken.clears) == (None, False, [STALE])
+    lk.begin()  # a reconnect: the base topic looks like ours now, but was not at first
+    lk.saw(INFO, ME.info([]).encode())
+    lk.defer_clear(STALE)
+    assert not lk.end(timed_out=False).clear
+    blind = look()
+    blind.begin()
+    blind.defer_clear(STALE)
+    assert not blind.end(timed_out=True).clear  # nothing known: delete nothing
+
+
+def test_only_info_and_state_belong_to_the_look_and_only_while_it_runs() -> None:
+    lk = look()
+    assert not lk.saw(INFO, b"{}")  # no look under way
+    lk.begin()
+    assert not lk.saw("t/bearing", b"10")
+
+
+def test_a_younger_live_bridge_yields_to_an_older_one() -> None:
+    lk = look()
+    assert lk.live_info(OTHER.info([]).encode()) is not None  # OTHER started earlier
+    younger = Instance("rotor-young", "attic", 300, 2000.0)
+    assert lk.live_info(younger.info([]).encode()) is None
+    assert lk.live_info(ME.info([]).encode()) is None

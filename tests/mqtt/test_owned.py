@@ -1,0 +1,109 @@
+"""The owned-topic judge (bridge/mqtt/owned.py, MQTT rule 10) in virtual time: which values on
+the bridge's own topics are its own, when its value is put back, and when that is said."""
+
+from __future__ import annotations
+
+from bridge.mqtt.owned import (
+    FOREIGN_FIX_S,
+    FOREIGN_LOG_S,
+    SETTLE_AFTER_CONNECT_S,
+    OwnedTopics,
+)
+
+STATE = "rotor/state"
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def judge(hears_own: bool = False) -> tuple[OwnedTopics, Clock]:
+    clock = Clock()
+    owned = OwnedTopics(clock, hears_own=hears_own)
+    owned.watch(["rotor/state", "rotor/option/+/state"])
+    owned.connected()
+    return owned, clock
+
+
+def test_the_filters_say_which_topics_are_owned() -> None:
+    owned, _ = judge()
+    assert owned.owns(STATE) and owned.owns("rotor/option/brake/state")
+    assert not owned.owns("rotor/target") and not owned.owns("other/state")
+
+
+def test_the_value_the_bridge_holds_is_its_own_and_another_is_a_strangers() -> None:
+    owned, _ = judge()
+    assert owned.ours(STATE, b"idle", held=b"idle")
+    assert not owned.ours(STATE, b"turning", held=b"idle")
+
+
+def test_a_stranger_just_after_a_connect_is_put_back_without_a_word() -> None:
+    """What the broker held from before (our own last will) is no news."""
+    owned, clock = judge()
+    clock.now += SETTLE_AFTER_CONNECT_S / 2
+    fix = owned.put_back(STATE)
+    assert fix.send and not fix.say
+
+
+def test_a_live_stranger_is_put_back_at_most_every_fix_interval_and_said_once_a_minute() -> None:
+    owned, clock = judge()
+    clock.now += SETTLE_AFTER_CONNECT_S + 1
+    first = owned.put_back(STATE)
+    assert first.send and first.say
+    clock.now += FOREIGN_FIX_S / 2
+    soon = owned.put_back(STATE)
+    assert not soon.send and not soon.say  # a fight with a flow is not a flood from us
+    clock.now += FOREIGN_FIX_S
+    again = owned.put_back(STATE)
+    assert again.send and not again.say  # put back, but the log heard it this minute
+    clock.now += FOREIGN_LOG_S
+    later = owned.put_back(STATE)
+    assert later.send and later.say
+
+
+def test_each_topic_has_its_own_intervals() -> None:
+    owned, clock = judge()
+    clock.now += SETTLE_AFTER_CONNECT_S + 1
+    assert owned.put_back(STATE).say
+    assert owned.put_back("rotor/option/brake/state").say
+
+
+def test_under_mqtt_3_1_1_what_the_bridge_sent_comes_back_as_its_own_in_order() -> None:
+    """A value it sent before the newest one is no stranger while it is on its way back; once
+    the newer one came back, the older one heard again is another client's."""
+    owned, _ = judge(hears_own=True)
+    owned.sent(STATE, b"turning")
+    owned.sent(STATE, b"idle")
+    assert owned.ours(STATE, b"turning", held=b"idle")
+    assert owned.ours(STATE, b"idle", held=b"idle")
+    assert not owned.ours(STATE, b"turning", held=b"idle")
+
+
+def test_a_new_connection_forgets_what_was_in_flight() -> None:
+    owned, clock = judge(hears_own=True)
+    owned.sent(STATE, b"turning")
+    clock.now += 5
+    owned.connected()
+    assert owned.connected_at == clock.now
+    assert not owned.ours(STATE, b"turning", held=b"idle")
+
+
+def test_mqtt_5_keeps_no_echoes_and_unowned_topics_none_either() -> None:
+    v5, _ = judge(hears_own=False)
+    v5.sent(STATE, b"turning")
+    assert not v5.ours(STATE, b"turning", held=b"idle")
+    v311, _ = judge(hears_own=True)
+    v311.sent("rotor/target", b"10")
+    assert not v311.ours("rotor/target", b"10", held=b"")
+
+
+def test_mqtt_5_subscribes_without_its_own_messages_and_3_1_1_hears_them() -> None:
+    v5, _ = judge(hears_own=False)
+    (topic, options), _option = v5.subscriptions()
+    assert topic == STATE and not isinstance(options, int) and options.noLocal
+    v311, _ = judge(hears_own=True)
+    assert v311.subscriptions() == [(STATE, 0), ("rotor/option/+/state", 0)]

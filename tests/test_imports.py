@@ -1,0 +1,61 @@
+"""No import circle anywhere in bridge/, TYPE_CHECKING imports included (docs/architecture.md,
+"dependencies point down"). import-linter's acyclic_siblings contract (pyproject.toml) keeps it
+so in the static checks; this test says the same in the suite and names the circle it finds."""
+
+from __future__ import annotations
+
+import grimp
+
+
+def find_cycle(graph: grimp.ImportGraph, package: str) -> list[str] | None:
+    """One import circle among the modules of ``package`` (first module repeated at the end),
+    or None."""
+    modules = sorted(m for m in graph.modules if m == package or m.startswith(package + "."))
+    done: set[str] = set()
+    for root in modules:
+        if root in done:
+            continue
+        path: list[str] = []
+        on_path: set[str] = set()
+        stack: list[tuple[str, list[str]]] = [(root, _imports(graph, root, package))]
+        path.append(root)
+        on_path.add(root)
+        while stack:
+            module, todo = stack[-1]
+            if not todo:
+                stack.pop()
+                path.pop()
+                on_path.discard(module)
+                done.add(module)
+                continue
+            nxt = todo.pop()
+            if nxt in on_path:
+                return [*path[path.index(nxt) :], nxt]
+            if nxt not in done:
+                stack.append((nxt, _imports(graph, nxt, package)))
+                path.append(nxt)
+                on_path.add(nxt)
+    return None
+
+
+def _imports(graph: grimp.ImportGraph, module: str, package: str) -> list[str]:
+    found = graph.find_modules_directly_imported_by(module)
+    return sorted((m for m in found if m.startswith(package + ".")), reverse=True)
+
+
+def test_bridge_has_no_import_circle() -> None:
+    graph = grimp.build_graph("bridge", cache_dir=None)  # TYPE_CHECKING imports included
+    cycle = find_cycle(graph, "bridge")
+    assert cycle is None, "import circle: " + " -> ".join(cycle or [])
+
+
+def test_the_guard_finds_and_names_a_circle() -> None:
+    graph = grimp.ImportGraph()
+    for name in ("p", "p.a", "p.b", "p.c", "p.d"):
+        graph.add_module(name)
+    graph.add_import(importer="p.a", imported="p.b")
+    graph.add_import(importer="p.b", imported="p.c")
+    graph.add_import(importer="p.d", imported="p.c")
+    assert find_cycle(graph, "p") is None
+    graph.add_import(importer="p.c", imported="p.a")  # as a TYPE_CHECKING import would
+    assert find_cycle(graph, "p") == ["p.a", "p.b", "p.c", "p.a"]
