@@ -8,8 +8,8 @@ Frame: ASCII, no echo, letters in upper or lower case. Single bytes: `?` identif
 `z` status (the 7-line report); `g` enable automatic motion; `s` stop the rotors and disable
 automatic motion; `*` reset (= power cycle); `x` clear the memory; `u`/`d`/`r`/`l` jog el
 up/down, az clockwise/counter-clockwise; `c` calibrate (a no-op on the SatEL); `cx` (lower case
-only) setup calibration. Lines (`p` point, `t` clock, a stored point) are ended by CR or LF; an
-LF right after a CR is swallowed. The line forms, the report layout and the controller clock are
+only) setup calibration. Lines (`p` point, `t` clock, a stored point) are ended by CR or LF. How
+bytes become commands and lines, the line forms, the report layout and the controller clock are
 in satel_frames.py (pure), the two rotors and their slew in satel_rotors.py; this module decides.
 
 Source documents (written from these, never from bridge/protocols):
@@ -45,8 +45,8 @@ Rules:
 7. Corruption (corrupt_on_misuse=True, first misuse): the slew halts where it is, no report
    follows, automatic motion is off and `g`/`p` are ignored ("ignored: corrupted state") until
    a reset. Stored points are consumed without moving anything.
-8. Unknown bytes and malformed lines (satel_frames.py rule 2) are logged "invalid" and get no
-   reply; a line longer than MAX_LINE_BYTES keeps only its start, and so is malformed.
+8. Unknown bytes and malformed lines (satel_frames.py rules 2 and 6) are logged "invalid" and
+   get no reply.
 9. The trailing empty lines leave at line rate too, so a reader that stops after 7 lines and
    flushes (Hamlib) may find them in front of its next reply: Hamlib 4.5.4 running `P az el p`
    in one session then reads 0.00 now and then (measured ~1 run in 10). That is the device as
@@ -55,22 +55,19 @@ Rules:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine
 from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.satel_frames import (
-    CR,
-    LF,
-    LINE_LETTERS,
-    MAX_LINE_BYTES,
     MEMORY_LIMIT,
     ClockRead,
     ClockSet,
     ControllerClock,
+    Framer,
     Outcome,
     PointLine,
+    SatelState,
     StoredPoint,
+    Token,
     parse_line,
     status_report,
 )
@@ -81,19 +78,6 @@ __all__ = ["MEMORY_LIMIT", "Outcome", "SatEL", "SatelState", "StoredPoint"]
 DRIVER_EPHEMERIS = "ephemeris"
 DRIVER_JOG = "jog"
 _JOGS = {"u": ("el", 90.0), "d": ("el", 0.0), "r": ("az", 360.0), "l": ("az", 0.0)}
-
-
-@dataclass(frozen=True)
-class SatelState(RotatorState):
-    """RotatorState plus what only a SatEL has (`options` repeats the three flags)."""
-
-    motion_enabled: bool = False
-    slewing: bool = False
-    corrupted: bool = False
-    target_el_deg: float | None = None
-    controller_time: str = ""
-    stored_points: tuple[StoredPoint, ...] = ()
-    misuse_count: int = 0
 
 
 class SatEL:
@@ -132,9 +116,7 @@ class SatEL:
         self._now_s: float = now
         self._log: list[LoggedFrame] = []
         self._events: list[MotionEvent] = []
-        self._line: bytearray | None = None
-        self._swallow_lf = False
-        self._after_c = False
+        self._framer = Framer()
         self._motion_enabled = False
         self._corrupted = False
         self._memory: list[StoredPoint] = []
@@ -306,7 +288,7 @@ class SatEL:
         if self._rotors.stop(now):
             self._event(now, "stopped", reason)
         self._motion_enabled = self._corrupted = False
-        self._line, self._swallow_lf, self._after_c = None, False, False
+        self._framer.reset()
         self._tx.clear()
         self._clock.reset(now)
         self._memory.clear()
@@ -315,33 +297,15 @@ class SatEL:
     # -- input ----------------------------------------------------------------------------------
 
     def _feed(self, value: int, now: float) -> None:
-        swallow, self._swallow_lf = self._swallow_lf, False
-        after_c, self._after_c = self._after_c, False
-        if swallow and value == LF:
-            return
-        letter = chr(value).lower() if value < 0x80 else ""
-        if self._rotors.slew is not None:  # rule 2: only a stop or a reset gets through
-            if letter in ("s", "*"):
-                self._single(value, letter, now)
-            else:
-                self._misuse(value, now)
-            return
-        if self._line is not None:
-            if value in (CR, LF):
-                line, self._line = bytes(self._line) + bytes([value]), None
-                self._swallow_lf = value == CR
-                self._dispatch_line(line, now)
-            elif len(self._line) <= MAX_LINE_BYTES:
-                self._line.append(value)
-            return
-        if value in (CR, LF):
-            return
-        if after_c and value == ord("x"):
-            self._log.append(LoggedFrame(now, b"cx", Outcome.IGNORED_CX.value))
-        elif letter in LINE_LETTERS:
-            self._line = bytearray([value])
-        else:
-            self._single(value, letter, now)
+        token, data = self._framer.take(value, self._rotors.slew is not None)
+        if token is Token.SINGLE:
+            self._single(value, chr(value).lower() if value < 0x80 else "", now)
+        elif token is Token.LINE:
+            self._dispatch_line(data, now)
+        elif token is Token.MISUSE:  # rule 2: only a stop or a reset gets through a slew
+            self._misuse(value, now)
+        elif token is Token.CX:
+            self._log.append(LoggedFrame(now, data, Outcome.IGNORED_CX.value))
 
     def _single(self, value: int, letter: str, now: float) -> None:
         outcome = Outcome.INVALID
@@ -370,7 +334,6 @@ class SatEL:
             self._event(now, "move", f"jog {letter}")
             outcome = Outcome.JOG
         elif letter == "c":
-            self._after_c = value == ord("c")
             outcome = Outcome.CALIBRATE
         self._record(value, outcome, now)
 

@@ -33,6 +33,11 @@ Rules:
    compared with stored points it stands for POWER_ON_EPOCH.
 5. Outcome strings are part of the emulator's public ground truth: tests of the bridge match on
    them, so they change only together with those tests.
+6. Framer splits the byte stream: a line starts with one of LINE_LETTERS and ends at CR or LF
+   (an LF right after the CR that ended a line is swallowed, also while slewing); any other
+   byte is a command alone; while a slew runs only `s` and `*` are commands, every other byte
+   is misuse; `x` right after a lower-case `c` is the setup calibration `cx`; a line longer
+   than MAX_LINE_BYTES keeps only its start.
 """
 
 from __future__ import annotations
@@ -44,6 +49,8 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from enum import StrEnum
 
+from bridge.emulators.base import RotatorState
+
 MEMORY_LIMIT = 50  # manual p. 12: "the controller only has the capacity to remember 50 data points"
 MAX_LINE_BYTES = 48  # longest valid line is a stored point, 27 bytes; beyond this it is junk
 LINE_LETTERS = ("p", "t", "2")  # a byte that starts a line (lower-cased), not a command alone
@@ -54,6 +61,67 @@ _TIME = rb"(\d{4})/(\d{2})/(\d{2}) (\d{2}):(\d{2}):(\d{2})"
 _POINT_RE = re.compile(rb"[pP](\d{1,3}) (\d{1,3})")
 _SET_TIME_RE = re.compile(rb"[tT]" + _TIME)
 _STORE_RE = re.compile(_TIME + rb" (\d{1,3}) (\d{1,3})")
+
+
+class Token(StrEnum):
+    """What one byte from the host amounts to (rule 6)."""
+
+    NOTHING = "nothing"  # part of a line, or a line ending with no line
+    SINGLE = "single"  # a command alone
+    LINE = "line"  # a whole line, its ending included
+    MISUSE = "misuse"  # input while slewing
+    CX = "cx"  # the setup calibration
+
+
+class Framer:
+    """The host's bytes into commands and lines (rule 6). Reset with the controller."""
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        self._line: bytearray | None = None
+        self._swallow_lf = False
+        self._after_c = False
+
+    def take(self, value: int, slewing: bool) -> tuple[Token, bytes]:
+        swallow, self._swallow_lf = self._swallow_lf, False
+        after_c, self._after_c = self._after_c, False
+        if swallow and value == LF:
+            return Token.NOTHING, b""
+        letter = chr(value).lower() if value < 0x80 else ""
+        if slewing:
+            return (Token.SINGLE if letter in ("s", "*") else Token.MISUSE), bytes([value])
+        if self._line is not None:
+            if value in (CR, LF):
+                line, self._line = bytes(self._line) + bytes([value]), None
+                self._swallow_lf = value == CR
+                return Token.LINE, line
+            if len(self._line) <= MAX_LINE_BYTES:
+                self._line.append(value)
+            return Token.NOTHING, b""
+        if value in (CR, LF):
+            return Token.NOTHING, b""
+        if after_c and value == ord("x"):
+            return Token.CX, b"cx"
+        if letter in LINE_LETTERS:
+            self._line = bytearray([value])
+            return Token.NOTHING, b""
+        self._after_c = value == ord("c")  # only a lower-case c starts the setup calibration
+        return Token.SINGLE, bytes([value])
+
+
+@dataclass(frozen=True)
+class SatelState(RotatorState):
+    """RotatorState plus what only a SatEL has (`options` repeats the three flags)."""
+
+    motion_enabled: bool = False
+    slewing: bool = False
+    corrupted: bool = False
+    target_el_deg: float | None = None
+    controller_time: str = ""
+    stored_points: tuple[StoredPoint, ...] = ()
+    misuse_count: int = 0
 
 
 class Outcome(StrEnum):
