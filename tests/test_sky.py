@@ -143,6 +143,30 @@ def test_polar_night_has_no_pass_and_midnight_sun_one_whole_window() -> None:
     assert p.aos_az_deg == pytest.approx(sun_altaz(78.22, 15.65, t)[0], abs=0.1)
 
 
+def test_at_the_poles_the_sun_and_the_moon_rise_and_set_by_their_declination() -> None:
+    """Near a pole a body rises once its declination lifts it over the horizon, not as the sky
+    turns: the almanac's hour-angle search found neither the sun's rise nor its set at the
+    equinoxes, nor the moon's at the South Pole (Amundsen-Scott), and said no pass or a body
+    up for days instead."""
+    north, south = Sky(90.0, 0.0), Sky(-90.0, 0.0)
+    t = unix(2026, 3, 20)
+    p = north.next_pass(Body.sun(), t)
+    assert p is not None, "the sun rises at the North Pole on 20 March 2026"
+    rise = sun_crossing(90.0, 0.0, t, t + 2 * DAY)
+    assert abs(p.aos_s - rise) < 3600  # the formula's 0.01 deg is 40 minutes of it here
+    t = unix(2026, 9, 22)
+    p = north.next_pass(Body.sun(), t)
+    assert p is not None and p.aos_s <= t
+    sets = sun_crossing(90.0, 0.0, t, t + 2 * DAY)
+    assert abs(p.los_s - sets) < 3600, "the sun sets at the North Pole on 22 September 2026"
+    t = unix(2026, 1, 7, 4, 48)
+    p = south.next_pass(Body.moon(), t)
+    assert p is not None, "the moon rises at the South Pole on 8 January 2026"
+    times = np.arange(t, t + 2 * DAY, 60.0)
+    up = next(u for u in times if moon_altaz(-90.0, 0.0, u)[1] > 0)
+    assert abs(p.aos_s - up) < 3600
+
+
 def test_moon_rises_and_sets_where_the_almanac_has_it_on_the_horizon() -> None:
     sky = Sky(*BERLIN)
     t = T0

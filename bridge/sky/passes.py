@@ -20,8 +20,12 @@ Rules:
    ``find_discrete`` over whether the satellite is up are added, sampled about 90 times an
    orbit and more densely the faster perigee sweeps the sky (dense_step_s), one orbit at a
    time. The sun and the moon are found in one call over the whole span (the almanac's search
-   is geometric). A search that finds a rise goes on with what it found around it: the set and
-   the top of that pass most often come with it.
+   is geometric: it turns the sky at the body's declination of the moment). Beyond
+   POLAR_LAT_DEG of latitude that fails, as a body there rises and sets by its declination,
+   not by the sky turning (the moon at 88.5 deg, the sun at the pole's equinoxes were not
+   found at all): there their rises and sets are find_discrete's crossings, sampled every
+   POLAR_STEP_S (the elevation changes slowly there). A search that finds a rise goes on with
+   what it found around it: the set and the top of that pass most often come with it.
 3. A satellite whose orbit decays in the span is searched only where SGP4 has a position
    (positions.py rule 5); with none at t there is no pass.
 4. The top of a pass (max_s, max_el_deg) is its highest culmination (satellite) or meridian
@@ -42,6 +46,7 @@ from skyfield.searchlib import find_discrete
 
 from bridge.sky.bodies import Body
 from bridge.sky.positions import (
+    DAY_S,
     alive,
     altaz,
     ephemeris,
@@ -56,6 +61,8 @@ CHUNK_ORBITS = 4  # rule 2
 CHUNK_MIN_S = 6 * 3600.0
 RISE, TOP, SET = 0, 1, 2  # find_events' own numbering
 ECCENTRIC = 0.1  # rule 2
+POLAR_LAT_DEG = 85.0  # rule 2: nearer a pole, the almanac's rises and sets are not searched
+POLAR_STEP_S = 300.0
 _SAME_S = 5.0  # a rise (a set) found by both searches this close together is one
 
 
@@ -149,11 +156,29 @@ def _events(
         observer, target = earth + station, sun if body.kind == "sun" else moon
         if want == TOP:
             found = [(u, TOP) for u in to_unix(almanac.find_transits(observer, target, t0, t1))]
+        elif abs(station.latitude.degrees) > POLAR_LAT_DEG:
+            found = _polar_crossings(observer, target, (t0, t1), min_el, want)
         else:
             search = almanac.find_risings if want == RISE else almanac.find_settings
             t, real = search(observer, target, t0, t1, horizon_degrees=min_el)
             found = [(u, want) for u, ok in zip(to_unix(t), real, strict=True) if ok]
     return sorted(e for e in found if lo <= e[0] <= hi)
+
+
+def _polar_crossings(
+    observer: Any, target: Any, span: tuple[Any, Any], min_el: float, want: int
+) -> Events:
+    """Rule 2: the sun's or the moon's rises (or sets) near a pole, as find_discrete's
+    crossings of min_el."""
+
+    def up(t: Any) -> Any:
+        t._nutation_angles_radians = iau2000b_radians(t)  # positions.py rule 2
+        return observer.at(t).observe(target).apparent().altaz()[0].degrees > min_el
+
+    up.step_days = POLAR_STEP_S / DAY_S  # type: ignore[attr-defined]
+    crossings, now_up = find_discrete(*span, up)
+    rising = want == RISE
+    return [(u, want) for u, r in zip(to_unix(crossings), now_up, strict=True) if r == rising]
 
 
 def _satellite_events(
