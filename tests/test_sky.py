@@ -242,6 +242,26 @@ def test_a_pass_in_progress_has_its_aos_in_the_past(leo) -> None:
     assert after is not None and after.aos_s > los + 1  # the next one, not this one again
 
 
+def test_a_pass_asked_for_just_after_its_rise_is_that_pass(leo) -> None:
+    """skyfield's search gives a rise up to half a second after the moment the elevation
+    crosses 0: asked in between, the satellite is already up, and the rise found looking back
+    was the previous orbit's, a pass spanning the time below the horizon."""
+    station, line1, line2, _, _ = leo
+    sat = Body.satellite("TESTSAT", line1, line2)
+    sky = Sky(*station)
+    for p0 in (sky.next_pass(sat, T0 + 3600), sky.next_pass(sat, T0 + 3 * 3600)):
+        assert p0 is not None
+        lo, hi = p0.aos_s - 5, p0.aos_s + 5  # the elevation's own crossing, to 1 ms
+        while hi - lo > 0.001:
+            mid = (lo + hi) / 2
+            lo, hi = (lo, mid) if sky.position(sat, mid)[1] > 0 else (mid, hi)
+        now = hi
+        p = Sky(*station).next_pass(sat, now)
+        assert p is not None and p.aos_s <= now
+        assert now - p.aos_s < 1, f"the rise {now - p.aos_s:.0f} s before, an orbit ago"
+        assert abs(p.los_s - p0.los_s) < 1
+
+
 def test_min_elevation_and_a_pass_shorter_than_the_sampling_step(leo) -> None:
     station, line1, line2, aos, los = leo
     sat = Body.satellite("TESTSAT", line1, line2)

@@ -64,6 +64,7 @@ ECCENTRIC = 0.1  # rule 2
 POLAR_LAT_DEG = 85.0  # rule 2: nearer a pole, the almanac's rises and sets are not searched
 POLAR_STEP_S = 300.0
 _SAME_S = 5.0  # a rise (a set) found by both searches this close together is one
+_REFINED_S = 1.0  # rule 1: how far a rise found may lie from the crossing
 
 
 @dataclass(frozen=True)
@@ -87,8 +88,11 @@ def find_pass(
         los, _ = _first(station, body, t_unix, end, min_el_deg, SET)
         if los is None:
             return _pass(station, body, t_unix, end)
-        aos, _ = _first(station, body, t_unix, t_unix - within_s, min_el_deg, RISE)
-        return _pass(station, body, t_unix if aos is None else aos, los)
+        # the search's rise can come up to half a second after the elevation crossed (rule 1):
+        # looking back from t, one of those is this pass's, not the previous orbit's
+        back = min(t_unix + _REFINED_S, los)
+        aos, _ = _first(station, body, back, t_unix - within_s, min_el_deg, RISE)
+        return _pass(station, body, t_unix if aos is None else min(aos, t_unix), los)
     aos, seen = _first(station, body, t_unix, end, min_el_deg, RISE)
     if aos is None:
         return None
