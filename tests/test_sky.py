@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sgp4.api import Satrec
 
 from bridge.sky import Body, Sky, SkyError, parse_tles
 from tests.support.sky import (
@@ -341,6 +342,39 @@ def test_a_decayed_orbit_has_no_position_and_no_pass() -> None:
     with pytest.raises(SkyError, match="LOW: SGP4 has no position"):
         sky.positions(sat, [T0 + 400 * DAY])
     assert sky.next_pass(sat, T0 + 400 * DAY) is None
+
+
+def test_a_pass_the_orbit_decays_in_ends_there() -> None:
+    """SGP4 stops having a position in the middle of a pass (drag, or a TLE left to age): the
+    pass ends then, its rise and top are found though the decay cuts the search short, and
+    every time of it has a position (tracking samples the whole pass)."""
+    line1, line2 = synthetic_tle(
+        "DECAY", T0, inclination_deg=51.6, raan_deg=10.0, mean_anomaly_deg=0.0,
+        mean_motion_rev_day=16.2, bstar=0.5,
+    )  # fmt: skip
+    sat = Body.satellite("DECAY", line1, line2)
+    orbit = Satrec.twoline2rv(line1, line2)
+    good, bad = T0, T0 + 60 * DAY  # the last moment SGP4 has a position
+    while bad - good > 0.01:
+        mid = (good + bad) / 2
+        days, second = divmod(mid, DAY)
+        failed = orbit.sgp4(2440587.5 + days, second / DAY)[0] != 0
+        good, bad = (good, mid) if failed else (mid, bad)
+    decay = good
+    grid = [(lat, lon) for lat in range(-60, 61, 2) for lon in range(-180, 180, 2)]
+    station = max(grid, key=lambda p: sgp4_altaz(line1, line2, *p, decay - 1)[1])
+    now = decay - 60  # over that station: in a pass the decay ends
+    times = np.arange(now - 900, decay, 0.5)
+    el = sgp4_altaz_array(line1, line2, *station, times)[1]
+    rise = times[np.flatnonzero(el <= 0)[-1] + 1]
+    assert el[-1] > 0 and rise < now  # up from before now until the decay
+    p = Sky(*station).next_pass(sat, now)
+    assert p is not None
+    assert abs(p.los_s - decay) < 2, "the pass ends when the orbit does"
+    assert abs(p.aos_s - rise) < 2
+    grid_s = np.linspace(p.aos_s, p.los_s, 200)  # every time of it has a position
+    tops = [e for _, e in Sky(*station).positions(sat, list(grid_s))]
+    assert p.max_el_deg >= max(tops) - 0.1 and p.max_el_deg > 20
 
 
 # ---- bad input ---------------------------------------------------------------------------------
