@@ -41,8 +41,11 @@ def describe(
             else:
                 loc.append(str(part))
         where = ".".join(loc) or "configuration"
+        variable = _variable(env_prefix, err["loc"], data, environ or {})
         if err["type"] == "extra_forbidden":
             line, nearest = _unknown(root, names, where, _value_at(data, err["loc"]))
+            if variable:  # not in the file: say where it came from (rule 1)
+                line = line.replace(f"{where}:", f"{where} (from {variable}):", 1)
             lines.append(line)
             if nearest is not None and len(names) == 1:
                 suggested.add(nearest)
@@ -52,7 +55,6 @@ def describe(
             msg = "missing: it has no default"
             if where == "rotators":
                 msg += "; add a [[rotators]] table with id, model and port"
-        variable = _variable(env_prefix, err["loc"], data, environ or {})
         lines.append(f"{where} (from {variable}): {msg}" if variable else f"{where}: {msg}")
     # a misspelt table also leaves the real one missing (rule 2)
     lines = [ln for ln in lines if not any(ln.startswith(f"{s}: missing") for s in suggested)]

@@ -503,3 +503,22 @@ def test_a_file_without_rotators_says_what_to_add_not_to_pass_config(tmp_path: P
         load_settings(path, environ={})
     assert str(exc.value).startswith(f"no rotators configured in {path}: add a [[rotators]]")
     assert "--config" not in str(exc.value)
+
+
+def test_an_unknown_key_set_in_the_environment_names_its_variable(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The file has no such key: without the variable's name the user looks for it in vain."""
+    monkeypatch.setenv("ROTOR_BRIDGE_MQTT__HOTS", "broker.lan")
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL))
+    assert "mqtt.hots (from ROTOR_BRIDGE_MQTT__HOTS): unknown key: did you mean host?" in str(
+        err.value
+    )
+    monkeypatch.delenv("ROTOR_BRIDGE_MQTT__HOTS")
+    environ = {"ROTOR_BRIDGE_ROTATORS__TOWER__BAUDRATE": "9600"}
+    with pytest.raises(ConfigError) as err:
+        load_settings(write(tmp_path, MINIMAL), environ)
+    assert "rotators[0].baudrate (from ROTOR_BRIDGE_ROTATORS__TOWER__BAUDRATE): unknown key" in str(
+        err.value
+    )

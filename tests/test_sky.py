@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sgp4.api import Satrec
 
 from bridge.sky import Body, Sky, SkyError, parse_tles
 from tests.support.sky import (
@@ -143,6 +144,30 @@ def test_polar_night_has_no_pass_and_midnight_sun_one_whole_window() -> None:
     assert p.aos_az_deg == pytest.approx(sun_altaz(78.22, 15.65, t)[0], abs=0.1)
 
 
+def test_at_the_poles_the_sun_and_the_moon_rise_and_set_by_their_declination() -> None:
+    """Near a pole a body rises once its declination lifts it over the horizon, not as the sky
+    turns: the almanac's hour-angle search found neither the sun's rise nor its set at the
+    equinoxes, nor the moon's at the South Pole (Amundsen-Scott), and said no pass or a body
+    up for days instead."""
+    north, south = Sky(90.0, 0.0), Sky(-90.0, 0.0)
+    t = unix(2026, 3, 20)
+    p = north.next_pass(Body.sun(), t)
+    assert p is not None, "the sun rises at the North Pole on 20 March 2026"
+    rise = sun_crossing(90.0, 0.0, t, t + 2 * DAY)
+    assert abs(p.aos_s - rise) < 3600  # the formula's 0.01 deg is 40 minutes of it here
+    t = unix(2026, 9, 22)
+    p = north.next_pass(Body.sun(), t)
+    assert p is not None and p.aos_s <= t
+    sets = sun_crossing(90.0, 0.0, t, t + 2 * DAY)
+    assert abs(p.los_s - sets) < 3600, "the sun sets at the North Pole on 22 September 2026"
+    t = unix(2026, 1, 7, 4, 48)
+    p = south.next_pass(Body.moon(), t)
+    assert p is not None, "the moon rises at the South Pole on 8 January 2026"
+    times = np.arange(t, t + 2 * DAY, 60.0)
+    up = next(u for u in times if moon_altaz(-90.0, 0.0, u)[1] > 0)
+    assert abs(p.aos_s - up) < 3600
+
+
 def test_moon_rises_and_sets_where_the_almanac_has_it_on_the_horizon() -> None:
     sky = Sky(*BERLIN)
     t = T0
@@ -216,6 +241,26 @@ def test_a_pass_in_progress_has_its_aos_in_the_past(leo) -> None:
     assert p is not None and abs(p.aos_s - aos) < 1 and abs(p.los_s - los) < 1 and p.aos_s < now
     after = sky.next_pass(sat, los + 1)
     assert after is not None and after.aos_s > los + 1  # the next one, not this one again
+
+
+def test_a_pass_asked_for_just_after_its_rise_is_that_pass(leo) -> None:
+    """skyfield's search gives a rise up to half a second after the moment the elevation
+    crosses 0: asked in between, the satellite is already up, and the rise found looking back
+    was the previous orbit's, a pass spanning the time below the horizon."""
+    station, line1, line2, _, _ = leo
+    sat = Body.satellite("TESTSAT", line1, line2)
+    sky = Sky(*station)
+    for p0 in (sky.next_pass(sat, T0 + 3600), sky.next_pass(sat, T0 + 3 * 3600)):
+        assert p0 is not None
+        lo, hi = p0.aos_s - 5, p0.aos_s + 5  # the elevation's own crossing, to 1 ms
+        while hi - lo > 0.001:
+            mid = (lo + hi) / 2
+            lo, hi = (lo, mid) if sky.position(sat, mid)[1] > 0 else (mid, hi)
+        now = hi
+        p = Sky(*station).next_pass(sat, now)
+        assert p is not None and p.aos_s <= now
+        assert now - p.aos_s < 1, f"the rise {now - p.aos_s:.0f} s before, an orbit ago"
+        assert abs(p.los_s - p0.los_s) < 1
 
 
 def test_min_elevation_and_a_pass_shorter_than_the_sampling_step(leo) -> None:
@@ -297,6 +342,39 @@ def test_a_decayed_orbit_has_no_position_and_no_pass() -> None:
     with pytest.raises(SkyError, match="LOW: SGP4 has no position"):
         sky.positions(sat, [T0 + 400 * DAY])
     assert sky.next_pass(sat, T0 + 400 * DAY) is None
+
+
+def test_a_pass_the_orbit_decays_in_ends_there() -> None:
+    """SGP4 stops having a position in the middle of a pass (drag, or a TLE left to age): the
+    pass ends then, its rise and top are found though the decay cuts the search short, and
+    every time of it has a position (tracking samples the whole pass)."""
+    line1, line2 = synthetic_tle(
+        "DECAY", T0, inclination_deg=51.6, raan_deg=10.0, mean_anomaly_deg=0.0,
+        mean_motion_rev_day=16.2, bstar=0.5,
+    )  # fmt: skip
+    sat = Body.satellite("DECAY", line1, line2)
+    orbit = Satrec.twoline2rv(line1, line2)
+    good, bad = T0, T0 + 60 * DAY  # the last moment SGP4 has a position
+    while bad - good > 0.01:
+        mid = (good + bad) / 2
+        days, second = divmod(mid, DAY)
+        failed = orbit.sgp4(2440587.5 + days, second / DAY)[0] != 0
+        good, bad = (good, mid) if failed else (mid, bad)
+    decay = good
+    grid = [(lat, lon) for lat in range(-60, 61, 2) for lon in range(-180, 180, 2)]
+    station = max(grid, key=lambda p: sgp4_altaz(line1, line2, *p, decay - 1)[1])
+    now = decay - 60  # over that station: in a pass the decay ends
+    times = np.arange(now - 900, decay, 0.5)
+    el = sgp4_altaz_array(line1, line2, *station, times)[1]
+    rise = times[np.flatnonzero(el <= 0)[-1] + 1]
+    assert el[-1] > 0 and rise < now  # up from before now until the decay
+    p = Sky(*station).next_pass(sat, now)
+    assert p is not None
+    assert abs(p.los_s - decay) < 2, "the pass ends when the orbit does"
+    assert abs(p.aos_s - rise) < 2
+    grid_s = np.linspace(p.aos_s, p.los_s, 200)  # every time of it has a position
+    tops = [e for _, e in Sky(*station).positions(sat, list(grid_s))]
+    assert p.max_el_deg >= max(tops) - 0.1 and p.max_el_deg > 20
 
 
 # ---- bad input ---------------------------------------------------------------------------------

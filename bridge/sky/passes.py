@@ -20,12 +20,19 @@ Rules:
    ``find_discrete`` over whether the satellite is up are added, sampled about 90 times an
    orbit and more densely the faster perigee sweeps the sky (dense_step_s), one orbit at a
    time. The sun and the moon are found in one call over the whole span (the almanac's search
-   is geometric). A search that finds a rise goes on with what it found around it: the set and
-   the top of that pass most often come with it.
+   is geometric: it turns the sky at the body's declination of the moment). Beyond
+   POLAR_LAT_DEG of latitude that fails, as a body there rises and sets by its declination,
+   not by the sky turning (the moon at 88.5 deg, the sun at the pole's equinoxes were not
+   found at all): there their rises and sets are find_discrete's crossings, sampled every
+   POLAR_STEP_S (the elevation changes slowly there). A search that finds a rise goes on with
+   what it found around it: the set and the top of that pass most often come with it.
 3. A satellite whose orbit decays in the span is searched only where SGP4 has a position
-   (positions.py rule 5); with none at t there is no pass.
+   (positions.py rule 5); with none at t there is no pass. A pass still up when the orbit
+   decays ends there, and a span cut by the decay (which may cut off the top find_events
+   brackets a rise or a set by) has find_discrete's crossings added, as in rule 2.
 4. The top of a pass (max_s, max_el_deg) is its highest culmination (satellite) or meridian
-   transit (sun, moon) inside it, or one of its ends when the pass is cut before its top. The
+   transit (sun, moon) inside it, or one of its ends when the pass is cut before its top
+   (or a sample across it, where the search missed the top: rule 3). The
    moon's declination moves while it crosses the meridian: its true top can be minutes from
    the transit (20 at 78 deg latitude), its elevation a few hundredths of a degree higher.
 """
@@ -42,6 +49,7 @@ from skyfield.searchlib import find_discrete
 
 from bridge.sky.bodies import Body
 from bridge.sky.positions import (
+    DAY_S,
     alive,
     altaz,
     ephemeris,
@@ -56,7 +64,11 @@ CHUNK_ORBITS = 4  # rule 2
 CHUNK_MIN_S = 6 * 3600.0
 RISE, TOP, SET = 0, 1, 2  # find_events' own numbering
 ECCENTRIC = 0.1  # rule 2
+POLAR_LAT_DEG = 85.0  # rule 2: nearer a pole, the almanac's rises and sets are not searched
+POLAR_STEP_S = 300.0
 _SAME_S = 5.0  # a rise (a set) found by both searches this close together is one
+_REFINED_S = 1.0  # rule 1: how far a rise found may lie from the crossing
+_TOP_SAMPLES = 65  # rule 4: besides the culminations found
 
 
 @dataclass(frozen=True)
@@ -78,10 +90,14 @@ def find_pass(
         return None  # rule 3
     if altaz(station, body, np.array([t_unix]))[1][0] > min_el_deg:
         los, _ = _first(station, body, t_unix, end, min_el_deg, SET)
+        los = _decays(body, t_unix, end) if los is None else los
         if los is None:
             return _pass(station, body, t_unix, end)
-        aos, _ = _first(station, body, t_unix, t_unix - within_s, min_el_deg, RISE)
-        return _pass(station, body, t_unix if aos is None else aos, los)
+        # the search's rise can come up to half a second after the elevation crossed (rule 1):
+        # looking back from t, one of those is this pass's, not the previous orbit's
+        back = min(t_unix + _REFINED_S, los)
+        aos, _ = _first(station, body, back, t_unix - within_s, min_el_deg, RISE)
+        return _pass(station, body, t_unix if aos is None else min(aos, t_unix), los)
     aos, seen = _first(station, body, t_unix, end, min_el_deg, RISE)
     if aos is None:
         return None
@@ -90,10 +106,18 @@ def find_pass(
     los = next((t for t, k in seen if k == SET and aos < t <= cut), None)
     if los is None:
         los, _ = _first(station, body, aos, cut, min_el_deg, SET)
+        los = _decays(body, aos, cut) if los is None else los
     elif body.tle is not None:
         tops = [t for t, k in seen if k == TOP and aos < t < los]
         return _pass(station, body, aos, los, tops)
     return _pass(station, body, aos, cut if los is None else los)
+
+
+def _decays(body: Body, start: float, stop: float) -> float | None:
+    """Rule 3: when a satellite up from ``start`` stops having a position before ``stop``
+    (the pass ends there), if it does."""
+    span = alive(body, start, stop)
+    return span[1] if span is not None and span[1] < stop else None
 
 
 Events = list[tuple[float, int]]  # (unix time, RISE | TOP | SET), in time order
@@ -149,11 +173,29 @@ def _events(
         observer, target = earth + station, sun if body.kind == "sun" else moon
         if want == TOP:
             found = [(u, TOP) for u in to_unix(almanac.find_transits(observer, target, t0, t1))]
+        elif abs(station.latitude.degrees) > POLAR_LAT_DEG:
+            found = _polar_crossings(observer, target, (t0, t1), min_el, want)
         else:
             search = almanac.find_risings if want == RISE else almanac.find_settings
             t, real = search(observer, target, t0, t1, horizon_degrees=min_el)
             found = [(u, want) for u, ok in zip(to_unix(t), real, strict=True) if ok]
     return sorted(e for e in found if lo <= e[0] <= hi)
+
+
+def _polar_crossings(
+    observer: Any, target: Any, span: tuple[Any, Any], min_el: float, want: int
+) -> Events:
+    """Rule 2: the sun's or the moon's rises (or sets) near a pole, as find_discrete's
+    crossings of min_el."""
+
+    def up(t: Any) -> Any:
+        t._nutation_angles_radians = iau2000b_radians(t)  # positions.py rule 2
+        return observer.at(t).observe(target).apparent().altaz()[0].degrees > min_el
+
+    up.step_days = POLAR_STEP_S / DAY_S  # type: ignore[attr-defined]
+    crossings, now_up = find_discrete(*span, up)
+    rising = want == RISE
+    return [(u, want) for u, r in zip(to_unix(crossings), now_up, strict=True) if r == rising]
 
 
 def _satellite_events(
@@ -171,7 +213,9 @@ def _satellite_events(
     t0, t1 = to_time(np.array(wide))
     t, kinds = sat.find_events(station, t0, t1, altitude_degrees=min_el)
     found = list(zip(to_unix(t), (int(k) for k in kinds), strict=True))
-    if want == TOP or not _dense(body):
+    orbit = period_s(body)  # an end cut by a decay (rule 3) may cut off the top find_events needs
+    cut = span[0] - wide[0] < orbit - 1.0 or wide[1] - span[1] < orbit - 1.0
+    if want == TOP or not (_dense(body) or cut):
         return found
     at = (sat - station).at
 
@@ -208,7 +252,8 @@ def _pass(
     if tops is None:
         events = _events(station, body, (aos, los), (aos, los), -90.0, TOP)
         tops = [t for t, k in events if k == TOP and aos < t < los]
-    times = np.array([aos, los, *tops])
+    # and samples across it: a search cut short (rule 3) can miss the top it ends near
+    times = np.array([aos, los, *tops, *np.linspace(aos, los, _TOP_SAMPLES)])
     az, el = altaz(station, body, times)
     k = int(np.argmax(np.nan_to_num(el, nan=-180.0)))
     return Pass(
