@@ -22,15 +22,11 @@ Rules:
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
 7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
-   at the line rate, plus the controller's time to turn round (``hold_reads_until``), the
-   worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
+   at the line rate, plus one byte time for the controller to turn round (``hold_reads_until``),
+   the worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
    watched meanwhile. If part of the reply is still missing then (a controller that takes its
    time), the hold starts again for the time the missing bytes take: a late reply costs a
    wake-up per chunk, not per byte, and is read at most one byte time after its last byte.
-   The time to turn round is learnt: one byte time at first and never less; after a reply
-   that needed a second hold, the time it took to come whole (at most TURN_MAX_BYTES byte
-   times); after one read whole at once, an eighth of a byte time less. A controller that
-   always answers a little late is read once per reply, no later than its second hold ended.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -48,10 +44,9 @@ from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 from bridge.protocols.base import Codec, ModelSpec
 
 JUNK_QUIET_S = 0.05
-TURN_MAX_BYTES = 8  # rule 7: the longest time to turn round learnt, in byte times
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
-__all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "TURN_MAX_BYTES", "Link", "Slew"]
+__all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
 
 
 class Link:
@@ -64,10 +59,6 @@ class Link:
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
         self._hold_bytes = 0  # of the polled reply, not read yet (rule 7)
-        self._turn_s = self._byte_s  # the controller's time to turn round, learnt (rule 7)
-        self._asked_t = 0.0  # when the polled reply's query was written
-        self._asked_line_s = 0.0  # and how long query and reply take on the line
-        self._held_again = False  # the polled reply was not whole when its hold ended
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -101,22 +92,9 @@ class Link:
         return self._hold_until if self._reply_deadline is not None else 0.0
 
     def got_bytes(self, count: int, now: float) -> None:
-        """``count`` bytes were read: hold again for what the polled reply still lacks, or,
-        whole, learn from how long it took (rule 7)."""
-        if not self._hold_bytes:
-            self._hold_until = 0.0
-            return
+        """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
         self._hold_bytes = max(0, self._hold_bytes - count)
-        if self._hold_bytes:
-            self._held_again = True
-            self._hold_until = now + self._hold_bytes * self._byte_s
-            return
-        self._hold_until = 0.0
-        if self._held_again:
-            took_s = now - self._asked_t - self._asked_line_s
-            self._turn_s = min(TURN_MAX_BYTES * self._byte_s, max(self._byte_s, took_s))
-        else:
-            self._turn_s = max(self._byte_s, self._turn_s - self._byte_s / 8)
+        self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -224,9 +202,7 @@ class Link:
             self.write(query, now)
             self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
             self._hold_bytes = self.spec.reply_bytes
-            self._asked_t, self._held_again = now, False
-            self._asked_line_s = (len(query) + self._hold_bytes) * self._byte_s
-            self._hold_until = now + self._asked_line_s + self._turn_s
+            self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
 
     def silent_for(self, now: float) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.engine.link import TURN_MAX_BYTES, Link
+from bridge.engine.link import Link
 from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
@@ -63,41 +63,6 @@ def test_a_polls_reply_is_held_until_it_can_be_whole_then_for_what_is_missing() 
     assert link.hold_reads_until() == pytest.approx(10.03 + 2 * byte_s)
     link.got_bytes(2, 10.04)
     assert link.hold_reads_until() == 0.0  # whole: nothing held any more
-
-
-def test_the_time_a_controller_takes_to_turn_round_is_learnt_from_its_late_replies() -> None:
-    spec = ROTOREZ["rotorez"]
-    byte_s = 10 / 4800
-    line_s = 8 * byte_s  # "AI1;" and ";123"
-    link = Link(spec.codec_factory(), spec, 0.0, 4800)
-
-    def poll(t: float) -> float:
-        """Poll at ``t``; how long after it the reply is held."""
-        link.poll(t, 1.0)
-        link.output()
-        return link.hold_reads_until() - t
-
-    assert poll(10.0) == pytest.approx(line_s + byte_s)
-    link.got_bytes(3, 10.0 + line_s + byte_s)  # not whole when the hold ended
-    link.got_bytes(1, 10.0 + line_s + 3 * byte_s)  # whole 3 byte times after the line time
-    link.codec.feed(b";123")
-    link.got_reading(10.03)
-    assert poll(11.0) == pytest.approx(line_s + 3 * byte_s)  # held that long from the start
-    link.got_bytes(4, 11.0 + line_s + 3 * byte_s)  # whole at once: a little shorter next time
-    link.codec.feed(b";123")
-    link.got_reading(11.03)
-    assert poll(12.0) == pytest.approx(line_s + 3 * byte_s - byte_s / 8)
-    for t in range(13, 40):  # always whole at once: back to one byte time, never less
-        link.got_bytes(4, link.hold_reads_until())
-        link.codec.feed(b";123")
-        link.got_reading(t - 0.5)
-        held_s = poll(t)
-    assert held_s == pytest.approx(line_s + byte_s)
-    link.got_bytes(1, 40.0 + line_s + byte_s)  # a controller that takes its time
-    link.got_bytes(3, 40.5)
-    link.codec.feed(b";123")
-    link.got_reading(40.5)
-    assert poll(41.0) == pytest.approx(line_s + TURN_MAX_BYTES * byte_s)  # learnt, within bounds
 
 
 # -- rule 8: polls on a grid ----------------------------------------------------------------------
