@@ -100,8 +100,8 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
     aim = rig.aim
     raw = bearing if spec.can_report_position else None
     pending = seen.pending
-    return replace(
-        seen.previous,
+    return RotatorStatus(  # every field: cheaper than dataclasses.replace over them all
+        rotator_id=seen.previous.rotator_id,
         state=state,
         bearing_deg=None if raw is None else aim.true_of(raw),
         raw_bearing_deg=raw,
