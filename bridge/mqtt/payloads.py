@@ -25,6 +25,8 @@ MAX_NAME_CHARS = 64  # a preset's or a satellite's name
 _SPLIT = re.compile(r"[\s,;]+")
 # ASCII digits only: Python's float() also takes "１３３" and "١٤٤"
 _NUMBER = re.compile(r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$")
+#: json.dumps(doc, separators=(",", ":")), the encoder made once (dumps makes one each call)
+_COMPACT = json.JSONEncoder(separators=(",", ":"))
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 
@@ -328,7 +330,7 @@ def status_json(
         estimated=status.estimated,
         time=_iso(time_unix),
     )
-    return json.dumps(doc, separators=(",", ":"))
+    return _COMPACT.encode(doc)
 
 
 _second: tuple[float, str] = (math.nan, "")  # the last whole second rendered, and its text
