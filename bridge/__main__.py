@@ -1,3 +1,5 @@
+"""`python -m bridge`: the command line (cli.py)."""
+
 import sys
 
 from bridge.cli import main
