@@ -333,22 +333,5 @@ def status_json(
     return _COMPACT.encode(doc)
 
 
-_second: tuple[float, str] = (math.nan, "")  # the last whole second rendered, and its text
-
-
 def _iso(time_unix: float) -> str:
-    """``datetime.fromtimestamp(t, UTC).isoformat(timespec="milliseconds")``, the same text,
-    with the date and time of day rendered once per second (a status goes out every reading):
-    the microseconds rounded half to even as datetime does, then cut to milliseconds."""
-    global _second
-    frac, whole = math.modf(time_unix)
-    micro = round(frac * 1e6)
-    if micro >= 1_000_000:
-        whole, micro = whole + 1.0, micro - 1_000_000
-    elif micro < 0:  # before 1970
-        whole, micro = whole - 1.0, micro + 1_000_000
-    held = _second  # one read: another thread may replace it (a tuple, never half-written)
-    if held[0] != whole:
-        held = (whole, datetime.fromtimestamp(whole, UTC).isoformat(timespec="seconds")[:-6])
-        _second = held
-    return f"{held[1]}.{micro // 1000:03d}+00:00"
+    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")

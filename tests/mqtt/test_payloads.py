@@ -1,7 +1,6 @@
 from __future__ import annotations
 
 import json
-from datetime import UTC, datetime
 
 import pytest
 from hypothesis import given
@@ -148,25 +147,3 @@ def test_only_ascii_numbers_and_one_name_per_axis(parse, raw: bytes, why: str) -
     {"az": 30, "azimuth": 181} silently went to 181."""
     with pytest.raises(pl.PayloadError, match=why):
         parse(raw)
-
-
-def _datetime_iso(time_unix: float) -> str:
-    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
-
-
-@given(st.floats(min_value=-1e9, max_value=4e9, allow_nan=False))
-def test_status_time_is_the_same_text_as_datetime_renders(time_unix: float) -> None:
-    """The status's ``time`` (rendered once per second, then the milliseconds) reads exactly as
-    datetime's isoformat, whatever second came before."""
-    assert pl._iso(time_unix) == _datetime_iso(time_unix)
-    assert pl._iso(time_unix + 0.25) == _datetime_iso(time_unix + 0.25)
-
-
-@pytest.mark.parametrize(
-    "time_unix",
-    [1795000000.9999995, 1795000000.9999994, 1795000001.0000005, 1795000001.9995, 0.0, -0.0000005],
-)
-def test_status_time_rounds_as_datetime_at_the_edges_of_a_second(time_unix: float) -> None:
-    pl._iso(time_unix - 1.0)  # another second held first
-    assert pl._iso(time_unix) == _datetime_iso(time_unix)
-    assert pl._iso(time_unix) == _datetime_iso(time_unix)  # and the same second held
