@@ -63,8 +63,7 @@ class AutoPark:
         deadline = self.deadline()
         if deadline is None or now < deadline or self._park is None:
             return NOTHING
-        settled = m.state is MotionState.IDLE and not mo.settling(m)  # (no brake: motion rule 4)
-        ready = settled and scene.pending is None  # rule 2
+        ready = mo.at_rest(m) and scene.pending is None  # rule 2 (no brake: motion rule 4)
         if not ready or scene.locked or scene.parked:
             return NOTHING
         self._since = now  # rule 3

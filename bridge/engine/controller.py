@@ -247,8 +247,9 @@ class Controller:
         link = self.link
         if link is None or not self.answering:
             return
-        idle = self.motion.state is MotionState.IDLE and not mo.settling(self.motion)
-        for name, enabled in self.options.take(idle, not target_waits and link.free(), now):
+        for name, enabled in self.options.take(
+            mo.at_rest(self.motion), not target_waits and link.free(), now
+        ):
             try:
                 frame = link.codec.encode_option(name, enabled)
             except (KeyError, ValueError):

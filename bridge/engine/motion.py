@@ -309,6 +309,11 @@ def settling(m: Motion) -> bool:
     return m.state is MotionState.IDLE and m.idle_not_before_t is not None
 
 
+def at_rest(m: Motion) -> bool:
+    """Idle and settled (rule 4): ready for a target, an option, a park."""
+    return m.state is MotionState.IDLE and m.idle_not_before_t is None
+
+
 def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
     if state is MotionState.BRAKING and cfg.brake_delay_s <= 0:
         state = MotionState.IDLE  # rule 4: no brake, never braking (``settling`` may still hold)
@@ -334,7 +339,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
 # -- decisions -------------------------------------------------------------------------------
 def within_tolerance(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
     """Idle and already within tolerance of ``wire`` on both axes: nothing to send."""
-    if m.state is not MotionState.IDLE or m.position_deg is None or settling(m):
+    if not at_rest(m) or m.position_deg is None:
         return False
     if angle_error(m.position_deg, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
         return False
@@ -359,7 +364,7 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
     if cfg.direct_retarget:
         return Plan.SEND
     if m.state is MotionState.IDLE:
-        return Plan.WAIT if settling(m) else Plan.SEND
+        return Plan.SEND if at_rest(m) else Plan.WAIT
     if m.state is MotionState.STALLED:
         rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
         return Plan.SEND if rested else Plan.WAIT
