@@ -14,6 +14,8 @@ never appears). The long path leaves at the short bearing + 180 and covers the r
 circumference. Where no direction exists (the same point, or antipodal points, where every
 direction is a great circle) the bearing is 0 and ``Path.has_direction`` is False: a caller
 that turns an antenna refuses such a target rather than point it at 0 (pointing.py rule 7).
+``destination`` is the other way round: the point a bearing and a distance lead to (at a pole,
+"north" is the starting meridian continued beyond the pole, as great_circle sees it).
 Latitudes must be finite and within -90..90, longitudes within -180..180, else ValueError naming
 the field.
 
@@ -93,10 +95,10 @@ def parse_locator(text: str) -> tuple[float, float]:
 
 def great_circle(lat1: float, lon1: float, lat2: float, lon2: float) -> Path:
     """Bearings and distances from point 1 to point 2 along the great circle, both ways round."""
-    _check(lat1, "lat1", 90.0)
-    _check(lon1, "lon1", 180.0)
-    _check(lat2, "lat2", 90.0)
-    _check(lon2, "lon2", 180.0)
+    check_range(lat1, "lat1", 90.0)
+    check_range(lon1, "lon1", 180.0)
+    check_range(lat2, "lat2", 90.0)
+    check_range(lon2, "lon2", 180.0)
     phi1, phi2 = math.radians(lat1), math.radians(lat2)
     dlon = math.radians(lon2 - lon1)  # any multiple of 360 deg too much is harmless here
     # point 2 seen from point 1: east and north components of the tangent direction, whose
@@ -118,12 +120,34 @@ def great_circle(lat1: float, lon1: float, lat2: float, lon2: float) -> Path:
     )
 
 
+def destination(
+    lat: float, lon: float, bearing_deg: float, distance_km: float
+) -> tuple[float, float]:
+    """(lat, lon) reached from (lat, lon) along the great circle at ``bearing_deg`` after
+    ``distance_km``. With 3-D unit vectors, so the poles need no special case: the point is
+    cos(angle) * here + sin(angle) * (the unit tangent towards the bearing)."""
+    check_range(lat, "lat", 90.0)
+    check_range(lon, "lon", 180.0)
+    phi, lam = math.radians(lat), math.radians(lon)
+    theta, angle = math.radians(bearing_deg), distance_km / EARTH_RADIUS_KM
+    here = (math.cos(phi) * math.cos(lam), math.cos(phi) * math.sin(lam), math.sin(phi))
+    east = (-math.sin(lam), math.cos(lam), 0.0)
+    north = (-math.sin(phi) * math.cos(lam), -math.sin(phi) * math.sin(lam), math.cos(phi))
+    c, s = math.cos(angle), math.sin(angle)
+    px, py, pz = (
+        c * h + s * (math.cos(theta) * n + math.sin(theta) * e)
+        for h, n, e in zip(here, north, east, strict=True)
+    )
+    return math.degrees(math.atan2(pz, math.hypot(px, py))), math.degrees(math.atan2(py, px))
+
+
 def _bearing(degrees: float) -> float:
     value = degrees % 360.0
     # -1e-17 % 360.0 rounds to 360.0; -0.0 becomes 0.0
     return 0.0 if value == 0.0 or value >= 360.0 else value
 
 
-def _check(value: float, name: str, limit: float) -> None:
+def check_range(value: float, name: str, limit: float) -> None:
+    """ValueError naming ``name`` unless ``value`` is finite and within -limit..limit."""
     if not math.isfinite(value) or not -limit <= value <= limit:
         raise ValueError(f"{name} must be a number from {-limit:g} to {limit:g}, got {value!r}")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from bridge.geo import EARTH_RADIUS_KM, great_circle
+from bridge.geo import EARTH_RADIUS_KM, check_range, destination, great_circle
 
 Point = tuple[float, float]  # (latitude_deg, longitude_deg)
 Station = Point
@@ -41,8 +41,8 @@ def project(station: Station, lat: float, lon: float) -> tuple[float, float]:
 def unproject(station: Station, x: float, y: float) -> tuple[float, float, float, float]:
     """(lat_deg, lon_deg, bearing_deg, distance_km) of the map point (x, y) (rule 4)."""
     lat0, lon0 = station
-    _check(lat0, "station latitude", 90.0)
-    _check(lon0, "station longitude", 180.0)
+    check_range(lat0, "station latitude", 90.0)
+    check_range(lon0, "station longitude", 180.0)
     if not (math.isfinite(x) and math.isfinite(y)):
         raise ValueError(f"map point ({x}, {y}) is not a finite point")
     radius = math.hypot(x, y)
@@ -52,27 +52,5 @@ def unproject(station: Station, x: float, y: float) -> tuple[float, float, float
     bearing_deg = math.degrees(math.atan2(x, y)) % 360.0 if radius > 0.0 else 0.0
     if bearing_deg >= 360.0:  # a tiny negative angle rounds up to 360
         bearing_deg = 0.0
-    lat, lon = _destination(lat0, lon0, bearing_deg, radius * math.pi)
+    lat, lon = destination(lat0, lon0, bearing_deg, radius * RIM_KM)
     return lat, lon, bearing_deg, radius * RIM_KM
-
-
-def _destination(lat0: float, lon0: float, bearing_deg: float, angle_rad: float) -> Point:
-    """The point reached from (lat0, lon0) along the bearing through the angle at the centre of
-    the Earth. With 3-D unit vectors, so the poles need no special case: the point is
-    cos(angle) * here + sin(angle) * (the unit tangent towards the bearing)."""
-    phi, lam = math.radians(lat0), math.radians(lon0)
-    theta = math.radians(bearing_deg)
-    here = (math.cos(phi) * math.cos(lam), math.cos(phi) * math.sin(lam), math.sin(phi))
-    east = (-math.sin(lam), math.cos(lam), 0.0)
-    north = (-math.sin(phi) * math.cos(lam), -math.sin(phi) * math.sin(lam), math.cos(phi))
-    c, s = math.cos(angle_rad), math.sin(angle_rad)
-    px, py, pz = (
-        c * h + s * (math.cos(theta) * n + math.sin(theta) * e)
-        for h, n, e in zip(here, north, east, strict=True)
-    )
-    return math.degrees(math.atan2(pz, math.hypot(px, py))), math.degrees(math.atan2(py, px))
-
-
-def _check(value: float, name: str, limit: float) -> None:
-    if not math.isfinite(value) or not -limit <= value <= limit:
-        raise ValueError(f"{name} must be a number within -{limit:g}..{limit:g}, got {value!r}")
