@@ -25,6 +25,8 @@ import math
 import time
 from pathlib import Path
 
+from sgp4.io import compute_checksum
+
 MEAN_MOTION_REV_DAY = 15.5
 EARTH_RADIUS_KM = 6378.137
 MU_KM3_S2 = 398600.4418  # the Earth's gravitational parameter
@@ -80,7 +82,7 @@ def _line1(epoch_unix: float) -> str:
     body = (
         f"1 {CATALOG:05d}U {yy:02d}001A   {yy:02d}{day:012.8f}  .00000000  00000+0  00000+0 0  999"
     )
-    return body + str(_checksum(body))
+    return body + str(compute_checksum(body))
 
 
 def _line2(node_deg: float, anomaly_deg: float) -> str:
@@ -88,8 +90,4 @@ def _line2(node_deg: float, anomaly_deg: float) -> str:
         f"2 {CATALOG:05d} {INCLINATION_DEG:8.4f} {node_deg:8.4f} 0001000 {0.0:8.4f} "
         f"{anomaly_deg:8.4f} {MEAN_MOTION_REV_DAY:11.8f}    1"
     )
-    return body + str(_checksum(body))
-
-
-def _checksum(line: str) -> int:
-    return sum(int(c) if c.isdigit() else 1 if c == "-" else 0 for c in line) % 10
+    return body + str(compute_checksum(body))
