@@ -25,7 +25,7 @@ from typing import Any
 from benchmarks.harness import Scope
 from benchmarks.procfs import cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
-from benchmarks.rig import MultiRig, many_rotators
+from benchmarks.rig import Rig, many_rotators
 
 MODEL = "rotorez"
 COUNT = 16
@@ -66,7 +66,7 @@ def thread_seconds(pid: int) -> dict[str, float]:
     return out
 
 
-def _polls_between(rig: MultiRig, t0: float, t1: float) -> int:
+def _polls_between(rig: Rig, t0: float, t1: float) -> int:
     return sum(
         1
         for line in rig.lines.values()

@@ -27,7 +27,6 @@ __all__ = [
     "TOPIC",
     "EmuHost",
     "Line",
-    "MultiRig",
     "Rig",
     "baud_of",
     "many_rotators",
@@ -37,9 +36,6 @@ __all__ = [
 ]
 
 TOPIC = "rotor"  # the base topic (a bridge with one rotator publishes right under it)
-
-#: the benchmarks' name for a rig with several rotators: the same Rig (``t(id, leaf)``)
-MultiRig = Rig
 
 
 def baud_of(model: str, emu_opts: dict[str, Any] | None = None) -> int:

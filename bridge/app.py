@@ -12,13 +12,13 @@ from collections.abc import Callable
 from functools import partial
 
 from bridge.engine.catalog import TleCatalog
+from bridge.engine.config import TrackConfig
 from bridge.engine.lines import Lines
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.engine.tracking import TrackConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints

@@ -53,7 +53,6 @@ from dataclasses import dataclass, replace
 
 from bridge.engine import motion as mo
 from bridge.engine.actions import Report
-from bridge.engine.config import TrackConfig as TrackConfig  # re-exported: app.py builds it
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.engine.skytrack import SkyTrack
