@@ -10,39 +10,19 @@ Rules:
    line of the configuration error); nothing is changed when one is raised.
 3. Secrets never appear in a message: the password is returned, never quoted; a key is never
    decrypted (an encrypted key is an error, or OpenSSL would ask on a terminal there is not).
-4. Only inside ``files_unread()`` are the files left alone (the password read as empty): for
-   checking the documentation's examples, whose files are on the reader's machine. The bridge
-   and check-config always read them.
 """
 
 from __future__ import annotations
 
 import ssl
 import stat
-from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
 from pathlib import Path
-
-_READ_FILES: ContextVar[bool] = ContextVar("read_files", default=True)
-
-
-@contextmanager
-def files_unread() -> Iterator[None]:
-    """Settings loaded inside this block do not open the files they name (rule 4)."""
-    token = _READ_FILES.set(False)
-    try:
-        yield
-    finally:
-        _READ_FILES.reset(token)
 
 
 def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path | None) -> None:
     """Raise ValueError unless the files exist, can be read and load as the MQTT client will."""
     if (cert_file is None) != (key_file is None):
         raise ValueError("cert_file and key_file go together")
-    if not _READ_FILES.get():
-        return
     for name, f in (("ca_file", ca_file), ("cert_file", cert_file), ("key_file", key_file)):
         if f is not None and not f.is_file():
             raise ValueError(f"{name} {f} is not a readable file")
@@ -79,8 +59,6 @@ def _ssl_reason(exc: ssl.SSLError) -> str:
 
 def read_password_file(path: Path) -> str:
     """The password in `path`; ValueError if it cannot be read or every user may read it."""
-    if not _READ_FILES.get():
-        return ""
     try:
         mode = path.stat().st_mode
         text = path.read_text()

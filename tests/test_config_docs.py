@@ -4,21 +4,26 @@ config/example.toml and every TOML example in the docs load through the real set
 Convention for the docs' examples: a ```toml block with a ``[[rotators]]`` table is a whole
 file; a ```toml block without one is merged on top of BASE (one Rotor-EZ); a block fenced
 otherwise (```toml-fragment, ```ini ...) is not loaded. Files the examples name (TLS, password)
-are on the reader's machine: they are not opened (settings_files.py rule 4); serial ports never
-are while loading.
+are on the reader's machine: they are not opened (files_unread); serial ports never are while
+loading.
 """
 
 from __future__ import annotations
 
+import contextlib
 import re
 import subprocess
 import sys
 import tomllib
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
+from unittest import mock
 
 import pytest
 from pydantic import BaseModel
 
+from bridge import settings_mqtt
 from bridge.config_doc import COMMAND, render
 from bridge.settings import (
     ConfigError,
@@ -31,12 +36,30 @@ from bridge.settings import (
     TrackingSettings,
     settings_from,
 )
-from bridge.settings_files import files_unread
 from tests.support import ROOT
 
 DOC = ROOT / "docs" / "configuration.md"
 EXAMPLE = ROOT / "config" / "example.toml"
 BASE = '[[rotators]]\nid = "hf"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
+
+
+@contextlib.contextmanager
+def files_unread() -> Iterator[None]:
+    """The documentation's examples name files on the reader's machine (certificates, a password
+    file): loaded without opening them, the pairing of cert_file and key_file still judged."""
+    real = settings_mqtt.check_tls_files
+
+    def pairing_only(ca: Path | None, cert: Path | None, key: Path | None) -> None:
+        if (cert is None) != (key is None):
+            real(ca, cert, key)  # raises on the pairing before it opens anything
+
+    with (
+        mock.patch.object(settings_mqtt, "check_tls_files", pairing_only),
+        mock.patch.object(settings_mqtt, "read_password_file", lambda path: ""),
+    ):
+        yield
+
+
 FENCE = re.compile(r"^```(\S*)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
 
 
