@@ -1,5 +1,5 @@
 """``[web]`` and ``beamwidth_deg``: the console's settings as a user writes them, loaded through
-the real loader from TOML files."""
+the real loader from TOML files, and what check-config says about them."""
 
 from __future__ import annotations
 
@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.config_report import masked
+from bridge.config_report import config_warnings, masked
 from bridge.settings import ConfigError, Settings, load_settings
+from tests.support import run_cli
 
 ROTATOR = '[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
 PASSWORD = "correct horse battery"
@@ -183,3 +184,31 @@ def test_the_beamwidth_defaults_to_60_and_is_an_angle(tmp_path: Path) -> None:
         path.write_text(ROTATOR + f"beamwidth_deg = {bad}\n")
         with pytest.raises(ConfigError, match=r"rotators\[0\]\.beamwidth_deg"):
             load_settings(path, environ={})
+
+
+# -- check-config -------------------------------------------------------------------------------
+def test_check_config_says_whether_the_console_is_on_and_where(tmp_path: Path) -> None:
+    path = tmp_path / "c.toml"
+    path.write_text(ROTATOR)
+    out = run_cli("check-config", "-c", str(path))
+    assert out.returncode == 0 and "web console: off" in out.stdout.splitlines(), out
+
+    path.write_text("[web]\nenabled = true\n" + ROTATOR)
+    out = run_cli("check-config", "-c", str(path))
+    assert "web console: http://127.0.0.1:8754/, no password" in out.stdout.splitlines(), out
+    assert "web.bind" not in out.stdout  # loopback: nothing to warn about
+
+    secret = password_file(tmp_path, PASSWORD + "\n")
+    path.write_text(f'[web]\nenabled = true\nbind = "::"\npassword_file = "{secret}"\n' + ROTATOR)
+    out = run_cli("check-config", "--full", "-c", str(path))
+    assert out.returncode == 0, out.stderr
+    assert "web console: http://[::]:8754/, a password" in out.stdout.splitlines()
+    assert PASSWORD not in out.stdout + out.stderr
+    assert "warning: web.bind: :: is not a loopback address" in out.stdout
+
+
+def test_a_console_beyond_loopback_is_warned_about_even_with_a_password(tmp_path: Path) -> None:
+    secret = password_file(tmp_path, PASSWORD)
+    s = load(tmp_path, f'[web]\nenabled = true\nbind = "0.0.0.0"\npassword_file = "{secret}"\n')
+    (warning,) = [w for w in config_warnings(s) if w.startswith("web.")]
+    assert warning.startswith("web.bind: 0.0.0.0 is not a loopback address") and "HTTPS" in warning
