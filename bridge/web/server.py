@@ -85,6 +85,7 @@ class WebConsole:
         *,
         password: str | None,
         frame_ancestors: list[str],
+        host_names: list[str] | None = None,
         station: tuple[float, float] | None,
         locator: str | None,
         satellites: Callable[[], list[str]],
@@ -92,6 +93,7 @@ class WebConsole:
     ) -> None:
         self.bind, self.port = bind, port
         self._password = password
+        self._host_names = tuple(host_names or ())
         self._tokens = auth.Tokens(auth.key_for(password))
         self._logins = auth.LoginLimiter()
         self._station, self._locator = station, locator
@@ -205,10 +207,10 @@ class WebConsole:
 
     def _refusal(self, request: web.Request) -> str | None:
         host = request.headers.get("Host")
-        if self._password is None and not auth.host_is_local_name(host):
+        if self._password is None and not auth.host_is_local_name(host, self._host_names):
             return (
-                f"this console answers to 127.0.0.1, [::1] or localhost only, not {host!r}: "
-                "without web.password_file a page from another name could drive it"
+                f"this console answers to IP addresses, localhost and web.host_names only, not "
+                f"{host!r}: without web.password_file a page from another name could drive it"
             )
         if request.method in ("GET", "HEAD"):
             return None
