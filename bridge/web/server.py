@@ -50,6 +50,7 @@ from bridge.web.feed import Feed, Shape
 log = logging.getLogger(__name__)
 
 PING_S = 10.0
+MAX_PAGES = 100  # open event streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
 _TYPES = {
     ".html": "text/html",
@@ -312,6 +313,8 @@ class WebConsole:
     async def _events(self, request: web.Request) -> web.StreamResponse:
         if not self._token_ok(request):
             return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        if self.feed.pages >= MAX_PAGES:  # each holds a connection: a flood is not served
+            return _json({"error": f"{MAX_PAGES} pages are open already"}, 503)
         response = web.StreamResponse(
             headers={
                 "Content-Type": "text/event-stream",
