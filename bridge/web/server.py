@@ -133,17 +133,21 @@ class WebConsole:
         return f"http://{f'[{host}]' if ':' in host else host}:{self.port}/"
 
     def listen(self) -> None:
-        """Bind the port (OSError if it cannot be had) and serve on a thread of its own."""
+        """Bind the port (OSError if it cannot be had) and serve on a thread of its own. The
+        loop runs on that thread from the start: the caller's thread may have a loop of its own
+        running (a script, a test driving a browser)."""
         loop = self._loop = asyncio.new_event_loop()
-        try:
-            loop.run_until_complete(self._start())
-        except BaseException:
-            loop.close()
-            self._loop = None
-            raise
-        self._running = True
         self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
         self._thread.start()
+        try:
+            asyncio.run_coroutine_threadsafe(self._start(), loop).result(timeout=30.0)
+        except BaseException:
+            loop.call_soon_threadsafe(loop.stop)
+            self._thread.join(timeout=5.0)
+            loop.close()
+            self._loop = self._thread = None
+            raise
+        self._running = True
         log.info("web console on %s", self.url)
 
     async def _start(self) -> None:
