@@ -1,13 +1,9 @@
-// The operator console: the session token, the live stream, the controls, the status panel.
+// The operator console: what the bridge says, drawn (map, panel, sky), and what the user asks, sent.
 //
 // Rules:
-// 1. Every URL is relative (the page runs behind a path prefix and in an iframe); every api/
-//    request but hello/session/login carries X-Rotor-Token. A 401 drops the token: without a
-//    password a new one is fetched at once, with one the login form is shown.
-// 2. The stream is api/events read with fetch and a stream reader (an EventSource cannot send
-//    the header). When it ends, fails, or is silent for 25 s, the page says so at once
-//    (body.offline) and reconnects: every 1 s, then backing off to 5 s; a reconnect reads
-//    api/config again and redraws, since the bridge may have restarted with another config.
+// 1. The link (token, login, stream, reconnecting) is live.js's; this module draws what it
+//    brings and sends what the user asks. Every URL is relative.
+// 2. A lost link greys the page at once (body.offline) and says so in #connection.
 // 3. A status only updates text and attributes (the map is not rebuilt), and records the
 //    latency from the bridge's t to the render in window.rotorConsole.latencies_ms (the last
 //    10000) for the benchmark.
@@ -16,12 +12,10 @@
 // 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
 //    same rotator within 2 s is one refusal, shown once.
 
-import { MapView, norm360 } from './map.js';
+import { MapView, RIM_KM, norm360 } from './map.js';
 import { SkyView } from './sky.js';
+import { authHeaders, connect, dropToken, getToken, postJSON, session } from './live.js';
 
-const TOKEN_KEY = 'rotor-bridge-token';
-const SILENCE_MS = 25000;
-const RETRY_MS = [1000, 1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000];
 const LATENCIES_MAX = 10000;
 const SAME_REFUSAL_MS = 2000;
 
@@ -30,8 +24,6 @@ const metrics = { latencies_ms: [] };
 window.rotorConsole = metrics;
 
 const app = {
-  token: sessionStorage.getItem(TOKEN_KEY),
-  password: false,
   config: null,
   rotators: new Map(),
   status: new Map(),
@@ -40,7 +32,6 @@ const app = {
   landKey: null,
   land: null,
   lastShown: null,
-  online: false,
 };
 
 const map = new MapView($('map'));
@@ -53,185 +44,10 @@ const fmtTime = (iso) => {
   const d = new Date(iso);
   return Number.isNaN(d.getTime()) ? '' : d.toLocaleTimeString([], { hour: '2-digit', minute: '2-digit', hour12: false });
 };
-const delay = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 const isTextBox = (el) =>
   el instanceof HTMLElement &&
   (el.isContentEditable || el.tagName === 'TEXTAREA' ||
     (el.tagName === 'INPUT' && !['button', 'checkbox', 'radio', 'submit', 'reset', 'range', 'color'].includes(el.type)));
-
-// ---- the token (rule 1) -------------------------------------------------------------------
-function dropToken() {
-  app.token = null;
-  sessionStorage.removeItem(TOKEN_KEY);
-}
-
-let tokenPending = null;
-function getToken() {
-  if (app.token) return Promise.resolve(app.token);
-  if (!tokenPending) tokenPending = newToken().finally(() => { tokenPending = null; });
-  return tokenPending;
-}
-
-async function newToken() {
-  const hello = await (await fetch('api/hello', { cache: 'no-store' })).json();
-  app.password = Boolean(hello.password);
-  const token = app.password ? await askPassword() : await sessionToken();
-  app.token = token;
-  sessionStorage.setItem(TOKEN_KEY, token);
-  return token;
-}
-
-async function sessionToken() {
-  const res = await postJSON('api/session', {});
-  if (!res.ok) throw new Error(`api/session: HTTP ${res.status}`);
-  return (await res.json()).token;
-}
-
-let loginWaiters = [];
-function askPassword() {
-  document.body.classList.add('login-needed');
-  $('login').hidden = false;
-  $('connection').textContent = 'log in to control the rotators';
-  $('password').focus();
-  return new Promise((resolve) => loginWaiters.push(resolve));
-}
-
-$('login').addEventListener('submit', async (e) => {
-  e.preventDefault();
-  const error = $('login-error');
-  error.textContent = '';
-  let res;
-  try {
-    res = await postJSON('api/login', { password: $('password').value });
-  } catch {
-    error.textContent = 'the bridge is not reachable';
-    return;
-  }
-  const body = await res.json().catch(() => ({}));
-  if (!res.ok) {
-    error.textContent = body.error || `HTTP ${res.status}`;
-    if (res.status === 429 && body.retry_after_s) holdLogin(body.retry_after_s);
-    return;
-  }
-  $('password').value = '';
-  $('login').hidden = true;
-  document.body.classList.remove('login-needed');
-  const waiters = loginWaiters;
-  loginWaiters = [];
-  waiters.forEach((resolve) => resolve(body.token));
-});
-
-function holdLogin(seconds) {
-  const go = $('login-go');
-  go.disabled = true;
-  setTimeout(() => { go.disabled = false; }, seconds * 1000);
-}
-
-function postJSON(url, body, headers = {}) {
-  return fetch(url, {
-    method: 'POST',
-    cache: 'no-store',
-    headers: { 'Content-Type': 'application/json', ...headers },
-    body: JSON.stringify(body),
-  });
-}
-
-const authHeaders = () => ({ 'X-Rotor-Token': app.token || '' });
-
-// ---- the stream (rule 2) ------------------------------------------------------------------
-function setOnline(online, why) {
-  app.online = online;
-  document.body.classList.toggle('offline', !online);
-  document.body.classList.remove('starting');
-  $('connection').textContent = online ? 'live' : why;
-  $('connection').classList.toggle('lost', !online);
-}
-
-async function connectLoop() {
-  let attempt = 0;
-  let quickRetry = true; // one 401 in a row retries at once with a new token
-  for (;;) {
-    try {
-      await getToken();
-      const cfg = await fetch('api/config', { cache: 'no-store', headers: authHeaders() });
-      if (cfg.status === 401) {
-        dropToken();
-        if (quickRetry) { quickRetry = false; continue; }
-      }
-      if (!cfg.ok) throw new Error(`api/config: HTTP ${cfg.status}`);
-      await applyConfig(await cfg.json());
-      const abort = new AbortController();
-      const res = await fetch('api/events', { cache: 'no-store', headers: authHeaders(), signal: abort.signal });
-      if (res.status === 401) {
-        dropToken();
-        if (quickRetry) { quickRetry = false; continue; }
-      }
-      if (!res.ok || !res.body) throw new Error(`api/events: HTTP ${res.status}`);
-      quickRetry = true;
-      attempt = 0;
-      setOnline(true);
-      await readEvents(res.body, abort);
-    } catch (err) {
-      if (!app.config) console.warn(err);
-    }
-    setOnline(false, app.config ? 'connection lost \u2014 reconnecting' : 'bridge not reachable \u2014 retrying');
-    await delay(RETRY_MS[Math.min(attempt++, RETRY_MS.length - 1)]);
-  }
-}
-
-async function readEvents(body, abort) {
-  const reader = body.getReader();
-  const decoder = new TextDecoder();
-  let watchdog = 0;
-  const kick = () => {
-    clearTimeout(watchdog);
-    watchdog = setTimeout(() => abort.abort(), SILENCE_MS);
-  };
-  let buffer = '';
-  let type = '';
-  let data = [];
-  kick();
-  try {
-    for (;;) {
-      const { value, done } = await reader.read();
-      if (done) return;
-      kick();
-      buffer += decoder.decode(value, { stream: true });
-      let nl;
-      while ((nl = buffer.indexOf('\n')) >= 0) {
-        let line = buffer.slice(0, nl);
-        buffer = buffer.slice(nl + 1);
-        if (line.endsWith('\r')) line = line.slice(0, -1);
-        if (line === '') {
-          if (data.length) dispatch(type || 'message', data.join('\n'));
-          type = '';
-          data = [];
-        } else if (line[0] !== ':') {
-          const colon = line.indexOf(':');
-          const field = colon < 0 ? line : line.slice(0, colon);
-          let v = colon < 0 ? '' : line.slice(colon + 1);
-          if (v[0] === ' ') v = v.slice(1);
-          if (field === 'event') type = v;
-          else if (field === 'data') data.push(v);
-        }
-      }
-    }
-  } finally {
-    clearTimeout(watchdog);
-    abort.abort();
-  }
-}
-
-function dispatch(type, text) {
-  let doc;
-  try {
-    doc = JSON.parse(text);
-  } catch {
-    return;
-  }
-  if (type === 'status') onStatus(doc);
-  else if (type === 'error') onErrorEvent(doc);
-}
 
 // ---- the configuration ------------------------------------------------------------------
 async function applyConfig(config) {
@@ -248,6 +64,7 @@ async function applyConfig(config) {
   }
   map.setStation(config.station, app.land);
   $('no-station').hidden = Boolean(config.station);
+  document.body.classList.toggle('dial-mode', !config.station);
   $('locator-form').hidden = !config.station;
   buildTabs(config.rotators);
   const wanted = decodeURIComponent(location.hash.slice(1));
@@ -502,7 +319,7 @@ async function send(body, id = app.selected) {
     }
     if (res.status === 401 && attempt === 0) {
       dropToken();
-      if (app.password) {
+      if (session.password) {
         showMessage(id, 'the session ended: log in again (nothing was sent)', 'error');
         getToken();
         return false;
@@ -571,16 +388,26 @@ function describe(p, long) {
   const ns = p.lat >= 0 ? 'N' : 'S';
   const ew = p.lon >= 0 ? 'E' : 'W';
   const place = `${Math.abs(p.lat).toFixed(2)}\u00B0${ns} ${Math.abs(p.lon).toFixed(2)}\u00B0${ew}`;
-  if (long) return `${fmtDeg(norm360(p.bearing + 180))} \u00B7 ${fmtKm(40030.2 - p.distance_km)} long path \u00B7 ${place}`;
+  if (long) return `${fmtDeg(norm360(p.bearing + 180))} \u00B7 ${fmtKm(2 * RIM_KM - p.distance_km)} long path \u00B7 ${place}`;
   return `${fmtDeg(p.bearing)} \u00B7 ${fmtKm(p.distance_km)} \u00B7 ${place}`;
+}
+
+function short(p, long) {
+  const b = fmtDeg(long ? norm360(p.bearing + 180) : p.bearing);
+  if (p.distance_km === undefined) return b;
+  return `${b} ${fmtKm(long ? 2 * RIM_KM - p.distance_km : p.distance_km)}`;
 }
 
 $('map').addEventListener('pointermove', (e) => {
   const p = map.pick(e);
-  if (!p || p.r > 1.1) return;
+  if (!p || p.r > 1.1 || e.pointerType === 'touch') return map.hover(null);
   pointer.textContent = describe(p, e.shiftKey);
+  map.hover(p, e.shiftKey && p.distance_km !== undefined, short(p, e.shiftKey));
 });
-$('map').addEventListener('pointerleave', () => { pointer.textContent = pointerNote; });
+$('map').addEventListener('pointerleave', () => {
+  pointer.textContent = pointerNote;
+  map.hover(null);
+});
 $('map').addEventListener('click', (e) => {
   const p = map.pick(e);
   if (!p || p.r > 1.1 || !app.selected) return;
@@ -595,4 +422,17 @@ $('map').addEventListener('click', (e) => {
   }
 });
 
-connectLoop();
+connect({
+  onConfig: applyConfig,
+  onEvent: (type, doc) => {
+    if (type === 'status') onStatus(doc);
+    else if (type === 'error') onErrorEvent(doc);
+  },
+  onOnline: (online, configured) => {
+    document.body.classList.toggle('offline', !online);
+    document.body.classList.remove('starting');
+    const why = configured ? 'connection lost \u2014 reconnecting' : 'bridge not reachable \u2014 retrying';
+    $('connection').textContent = online ? 'live' : why;
+    $('connection').className = online ? 'connection' : 'connection lost';
+  },
+});

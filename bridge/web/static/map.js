@@ -84,13 +84,12 @@ const CARDINAL = { 0: 'N', 90: 'E', 180: 'S', 270: 'W' };
 const BODY_GLYPH = { sun: '\u2600', moon: '\u263E' };
 
 /** The bearing ring with its ticks and labels, on any polar SVG (the map and the sky plot). */
-export function drawRing(parent, labels = true) {
+export function drawRing(parent, labels = 'all') {
   svg('circle', { class: 'rim', r: 1 }, parent);
   let ticks = '';
   for (let b = 0; b < 360; b += 10) ticks += `M${pt(b, 1)}L${pt(b, b % 30 ? 1.025 : 1.045)}`;
   svg('path', { class: 'tick', d: ticks }, parent);
-  if (!labels) return;
-  for (let b = 0; b < 360; b += 30) {
+  for (let b = 0; b < 360; b += labels === 'all' ? 30 : 90) {
     const [x, y] = polar(b, 1.072);
     label(CARDINAL[b] || String(b), { class: b % 90 ? 'ring-label' : 'ring-label cardinal', x: f(x), y: f(y) }, parent);
   }
@@ -126,6 +125,8 @@ export class MapView {
     svg('circle', { class: 'body-dot', r: 0.035 }, this.bodyMark);
     this.bodyGlyph = label('', { class: 'body-glyph', y: 0.002 }, this.bodyMark);
     this.bodyName = label('', { class: 'body-name', y: 0.075 }, this.bodyMark);
+    this.hoverPath = svg('path', { class: 'hover-path off' }, root);
+    this.hoverLabel = label('', { class: 'hover-label off' }, root);
     this.clickMark = svg('circle', { class: 'click-mark off', r: 0.022 }, root);
     svg('circle', { class: 'station', r: 0.014 }, root);
   }
@@ -261,6 +262,22 @@ export class MapView {
       [out.lat, out.lon] = destination(this.station.latitude_deg, this.station.longitude_deg, bearing, out.distance_km);
     }
     return out;
+  }
+
+  /** The path to the point under the pointer and what it is, beside the pointer; null hides. */
+  hover(p, long, text) {
+    show(this.hoverPath, Boolean(p)); show(this.hoverLabel, Boolean(p));
+    if (!p) return;
+    const r = Math.min(p.r, 1);
+    const [x, y] = polar(p.bearing, r);
+    this.hoverPath.setAttribute('d', long
+      ? `M0 0L${pt(p.bearing + 180, 1)}M${pt(p.bearing, 1)}L${f(x)} ${f(y)}`
+      : `M0 0L${f(x)} ${f(y)}`);
+    const left = p.x > 0.35;
+    this.hoverLabel.textContent = text;
+    this.hoverLabel.setAttribute('x', f(p.x + (left ? -0.04 : 0.04)));
+    this.hoverLabel.setAttribute('y', f(Math.max(-1.06, Math.min(1.06, p.y - 0.045))));
+    this.hoverLabel.setAttribute('text-anchor', left ? 'end' : 'start');
   }
 
   markClick(p) {

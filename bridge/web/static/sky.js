@@ -24,7 +24,7 @@ export class SkyView {
     let spokes = '';
     for (let b = 0; b < 360; b += 45) spokes += `M0 0L${polar(b, 1).map(f).join(' ')}`;
     svg('path', { class: 'sky-grid', d: spokes }, root);
-    drawRing(root);
+    drawRing(root, 'cardinal');
     for (const el of [30, 60]) {
       const t = svg('text', { class: 'sky-el-label', x: 0.01, y: f(-radius(el) + 0.05) }, root);
       t.textContent = `${el}\u00B0`;
@@ -56,8 +56,10 @@ export class SkyView {
     }
     if (tracking.el < 0) return;
     const p = polar(tracking.az, radius(tracking.el)).map(f).join(',');
-    if (trail.points[trail.points.length - 1] !== p) trail.points.push(p);
+    if (trail.points[trail.points.length - 1] === p) return;
+    trail.points.push(p);
     if (trail.points.length > TRAIL_MAX) trail.points.splice(0, trail.points.length - TRAIL_MAX);
+    trail.version = (trail.version || 0) + 1;
   }
 
   update(id, st, tracking) {
@@ -75,9 +77,13 @@ export class SkyView {
     put(this.body, tracking && tracking.az, tracking && tracking.el);
     put(this.next, tracking && tracking.nextAz, tracking && tracking.nextEl);
     const aos = tracking ? tracking.aosAz : null;
-    show(this.aos, typeof aos === 'number' && !(tracking.el >= 0));
+    show(this.aos, typeof aos === 'number');
     if (typeof aos === 'number') this.aos.setAttribute('transform', `rotate(${aos})`);
-    const trail = this.trails.get(id);
-    this.trail.setAttribute('points', trail && tracking && trail.body === tracking.body ? trail.points.join(' ') : '');
+    const trail = tracking ? this.trails.get(id) : null;
+    const key = trail && trail.body === tracking.body ? `${id}:${trail.body}:${trail.version}` : '';
+    if (key !== this.trailKey) {
+      this.trailKey = key;
+      this.trail.setAttribute('points', key ? trail.points.join(' ') : '');
+    }
   }
 }
