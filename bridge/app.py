@@ -10,10 +10,12 @@ import threading
 import time
 from collections.abc import Callable
 from functools import partial
+from typing import Any
 
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import TrackConfig
 from bridge.engine.lines import Lines
+from bridge.engine.listeners import contained
 from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
@@ -30,6 +32,8 @@ from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.sky import Sky
+from bridge.web.server import WebConsole
+from bridge.web.view import RotatorFacts
 
 log = logging.getLogger(__name__)
 
@@ -147,12 +151,25 @@ class App:
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
         self.sky = SkyWorker()  # one thread computes the sky for all (engine/skywork.py)
+        self.web: WebConsole | None = None  # the operator console ([web])
+        if settings.web.enabled:
+            password = settings.web.password
+            self.web = WebConsole(
+                settings.web.bind,
+                settings.web.port,
+                password=password.get_secret_value() if password is not None else None,
+                frame_ancestors=list(settings.web.frame_ancestors),
+                station=position,
+                locator=settings.station.locator,
+                satellites=catalog.names,
+                wall=wall,
+            )
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky),
                 store,
-                on_status=partial(self.mqtt.publish_status, r.id),
-                on_event=partial(self.mqtt.publish_event, r.id),
+                on_status=self._listeners(r.id, "on_status"),
+                on_event=self._listeners(r.id, "on_event"),
                 name=r.name,
                 port_opener=port_opener,
                 wall=wall,
@@ -162,6 +179,8 @@ class App:
                 sky=self.sky,
             )
             self.mqtt.attach(rot)
+            if self.web is not None:
+                self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)
             if r.rotctld_port is not None:
                 server = RotctldServer(
@@ -189,6 +208,24 @@ class App:
             no_replay=self.mqtt.no_replay_subscriptions(),
         )
         self.client.watch_owned(self.topics.owned())
+
+    def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
+        """MQTT's listener and the console's, each contained (a failing console never costs
+        MQTT a status, nor the other way round)."""
+        mqtt = self.mqtt.publish_status if which == "on_status" else self.mqtt.publish_event
+        if self.web is None:
+            return partial(mqtt, rotator_id)
+        web = self.web.on_status if which == "on_status" else self.web.on_event
+        both = [
+            contained(partial(mqtt, rotator_id), f"{rotator_id}: MQTT {which}"),
+            contained(partial(web, rotator_id), f"{rotator_id}: web console {which}"),
+        ]
+
+        def call(value: Any) -> None:
+            for listener in both:
+                listener(value)
+
+        return call
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant
@@ -271,9 +308,12 @@ class App:
                 server.listen()
             if self.loggers:
                 self.loggers.listen()
+            if self.web is not None:
+                self.web.listen()
         except OSError as exc:
             for server in self.rotctld:
                 server.stop()
+            self.loggers.stop()
             if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
                 raise NotYet(exc.strerror or str(exc)) from None
             raise ConfigError(exc.strerror or str(exc)) from None
@@ -301,6 +341,8 @@ class App:
         for server in self.rotctld:
             server.stop()
         self.loggers.stop()
+        if self.web is not None:
+            self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)

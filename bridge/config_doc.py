@@ -31,6 +31,7 @@ from bridge.settings import (
     StationSettings,
     TlsSettings,
     TrackingSettings,
+    WebSettings,
 )
 from bridge.settings_defaults import model_defaults
 from bridge.settings_loggers import LoggerFields
@@ -112,6 +113,7 @@ def render() -> str:
         ("[homeassistant]", HomeAssistantSettings, f"{ENV_PREFIX}HOMEASSISTANT__"),
         ("[station]", StationSettings, f"{ENV_PREFIX}STATION__"),
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
+        ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]

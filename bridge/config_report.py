@@ -7,11 +7,12 @@ Rules:
    What a value means where that is not plain is shown beside it (SHOWN: the station's position
    from its locator, the true bearings a rotator takes); docs/configuration.md lists these too.
 2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from, and
-   the summary only says whether there is one.
+   the summary only says whether there is one; the console's password is no field, so it is
+   not in the values at all.
 3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
 4. The summary says what a user checks first: each rotator's model and whether its port is
-   there, the broker, and what is on (Home Assistant, rotctld and loggers' ports, the station,
-   tracking). Looking at a port never opens it.
+   there, the broker, and what is on (Home Assistant, the web console, rotctld and loggers'
+   ports, the station, tracking). Looking at a port never opens it.
 """
 
 from __future__ import annotations
@@ -103,6 +104,13 @@ def config_warnings(settings: Settings) -> list[str]:
                 f"address: rotctld has no authentication, anyone who can reach port "
                 f"{r.rotctld_port} there can turn the antenna"
             )
+    web = settings.web
+    if web.enabled and not is_loopback(web.bind):
+        found.append(
+            f"web.bind: {web.bind or '(every address)'} is not a loopback address: the console "
+            "speaks plain HTTP, so its password and every command cross the network "
+            "unencrypted; keep it on 127.0.0.1 behind a reverse proxy that speaks HTTPS"
+        )
     return found
 
 
@@ -125,6 +133,7 @@ def summary(settings: Settings) -> list[str]:
         f"home assistant: on (discovery prefix {ha.discovery_prefix})" if ha.enabled else
         "home assistant: off"
     )  # fmt: skip
+    lines.append(_web(settings))
     st = settings.station
     if st.position is None:
         lines.append("station: not set (targets by locator and tracking need it)")
@@ -141,6 +150,18 @@ def summary(settings: Settings) -> list[str]:
         lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
     lines.append(f"state file: {settings.state_file}")
     return lines
+
+
+def _web(settings: Settings) -> str:
+    """Where to open the console, and whether it asks for a password (never which: rule 2)."""
+    w = settings.web
+    if not w.enabled:
+        return "web console: off"
+    host = w.bind or "0.0.0.0"
+    if ":" in host and not host.startswith("["):
+        host = f"[{host}]"  # an IPv6 address in a URL
+    asks = "a password" if w.password is not None else "no password"
+    return f"web console: http://{host}:{w.port}/, {asks}"
 
 
 def _bearings(r: RotatorSettings) -> str:

@@ -32,6 +32,7 @@ import inspect
 import secrets
 import shutil
 import signal
+import socket
 import string
 import sys
 import tempfile
@@ -118,6 +119,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="fail instead of starting a private mosquitto when no broker answers",
     )
+    p.add_argument(
+        "--web-port",
+        type=int,
+        default=8754,
+        help="the operator console's port on 127.0.0.1 (default 8754; another free one if that "
+        "is taken; 0: no console)",
+    )
     p.add_argument("--duration-s", type=float, help="stop after this long (default: until q/^C)")
     p.add_argument(
         "--satellite-rises-in-s",
@@ -181,7 +189,22 @@ def demo_settings(
         station={"locator": args.locator},
         tracking={"tle_file": workdir / "demo.tle"},  # demo_sky.py writes it before the start
         state_file=workdir / "state.json",
+        web={"enabled": args.web_port != 0, "port": _free_port(args.web_port) or 8754},
     )
+
+
+def _free_port(wanted: int) -> int:
+    """``wanted`` if nothing listens there on loopback, else one the system picks (two demos
+    at once each get a console)."""
+    if wanted == 0:
+        return 0
+    with socket.socket() as probe:
+        try:
+            probe.bind(("127.0.0.1", wanted))
+        except OSError:
+            probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
 
 
 def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
@@ -300,7 +323,7 @@ def _run(
     app = App(settings)
     stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
     app.start()
-    _print_banner(args, settings, topics, where, instance)
+    _print_banner(args, settings, topics, where, instance, app.web.url if app.web else None)
     print(
         f"  A made-up satellite, {demo_sky.NAME}, rises over the station around "
         f"{time.strftime('%H:%M:%S', time.gmtime(rise))} UTC (in {args.satellite_rises_in_s:g} s):"
@@ -324,7 +347,12 @@ def _run(
 
 
 def _print_banner(
-    args: argparse.Namespace, settings: Settings, topics: Topics, where: str, instance: str
+    args: argparse.Namespace,
+    settings: Settings,
+    topics: Topics,
+    where: str,
+    instance: str,
+    app_url: str | None,
 ) -> None:
     hp = (
         ""
@@ -344,6 +372,7 @@ def _print_banner(
         f"  watch: mosquitto_sub {hp}-t '{topics.base}/#' -v",
         f"  turn:  mosquitto_pub {hp}-t {first.target} -m 120",
         f"  stop:  mosquitto_pub {hp}-t {first.stop} -m STOP",
+        *([f"  console: {app_url}  (the beam on a map, in any browser)"] if app_url else []),
         f'  Home Assistant: the devices "Demo ... ({instance})"'
         + (", removed again when the demo ends" if args.base_topic is None else ""),
         "",

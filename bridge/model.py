@@ -32,6 +32,7 @@ class Source(enum.StrEnum):
     TRACKING = "tracking"  # the bridge follows the sun, the moon or a satellite (R/track)
     PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
     N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
+    WEB = "web"  # the operator console (web/)
 
 
 @dataclass(frozen=True)

@@ -7,8 +7,9 @@ Rotators are a list in the file; their fields are overridden by id:
 
 Where the parts are: the broker's tables in settings_mqtt.py, a rotator's in
 settings_rotator.py (its pointing and loggers' keys in settings_pointing.py and
-settings_loggers.py), the engine values derived for keys left out in settings_defaults.py, the
-files settings name in settings_files.py, the wording of errors in settings_errors.py.
+settings_loggers.py), the console's in settings_web.py, the engine values derived for keys
+left out in settings_defaults.py, the files settings name in settings_files.py, the wording of
+errors in settings_errors.py.
 check-config's report is config_report.py; docs/configuration.md is written from these models
 by config_doc.py.
 
@@ -43,6 +44,7 @@ from bridge.settings_defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings_pointing import StationSettings, TrackingSettings
 from bridge.settings_rotator import RotatorSettings
+from bridge.settings_web import WebSettings
 
 __all__ = [
     "DEFAULT_SILENCE_TIMEOUT_S",
@@ -55,6 +57,7 @@ __all__ = [
     "StationSettings",
     "TlsSettings",
     "TrackingSettings",
+    "WebSettings",
     "format_validation_error",
     "load_settings",
 ]
@@ -91,6 +94,7 @@ class Settings(BaseSettings):
     tracking: TrackingSettings = Field(
         default_factory=TrackingSettings, description="the [tracking] table"
     )
+    web: WebSettings = Field(default_factory=WebSettings, description="the [web] table")
     rotators: list[RotatorSettings] = Field(
         min_length=1, description="the [[rotators]] tables, one per rotator"
     )
@@ -133,6 +137,12 @@ class Settings(BaseSettings):
         rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
         if len(set(rotctld)) != len(rotctld):
             raise ValueError("two rotators share one rotctld_port")
+        for i, r in enumerate(self.rotators):  # both TCP: the second listener could not start
+            if self.web.enabled and r.rotctld_port == self.web.port:
+                raise ValueError(
+                    f"web.port {self.web.port} is also rotators[{i}].rotctld_port: give the "
+                    "console another port"
+                )
         pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:

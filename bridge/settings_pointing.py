@@ -1,7 +1,8 @@
 """The pointing settings: where the station is, and each rotator's offset, presets, park and
-keep-out sectors (pointing.py). settings.py's models include these; every value is judged here
-once, with the same judge as a live command, so a preset or park position that could never be
-reached is a configuration error naming the field, not a refusal at the worst moment.
+keep-out sectors (pointing.py) and its beamwidth (drawn by the console, judged by nothing).
+settings.py's models include these; every value is judged here once, with the same judge as a
+live command, so a preset or park position that could never be reached is a configuration
+error naming the field, not a refusal at the worst moment.
 """
 
 from __future__ import annotations
@@ -144,6 +145,14 @@ class PointingFields(BaseModel):
         le=180,
         description="Home Assistant's nudge buttons turn this far",
         examples=[5],
+    )
+    beamwidth_deg: float = Field(
+        60.0,
+        gt=0,
+        le=360,
+        description="the antenna's beamwidth (half-power, full angle), drawn as the wedge "
+        "around the beam on the console's map; nothing else uses it",
+        examples=[30],
     )
     track_min_el_deg: float = Field(
         0.0,

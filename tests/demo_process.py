@@ -15,6 +15,8 @@ import threading
 import time
 from pathlib import Path
 
+from bridge.mosquitto import free_port
+
 BASE_LINE = re.compile(r"watch: mosquitto_sub (?:-h \S+ -p \d+ )?-t '([^']+)/#' -v")
 
 
@@ -43,7 +45,9 @@ class DemoProcess:
         self.screen_text = ""
         self._cond = threading.Condition()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "bridge", "demo", *args],
+            # a console port of its own: demos started at once by parallel tests would race for
+            # the default one (a user's second demo finds it taken and takes another)
+            [sys.executable, "-m", "bridge", "demo", *_web_port(args), *args],
             stdin=stdin,
             stdout=stdin if screen else subprocess.PIPE,
             stderr=stdin if screen else subprocess.STDOUT,
@@ -148,3 +152,9 @@ class DemoProcess:
             os.close(self._master)
             os.close(self.tty)
             self._master = None
+
+
+def _web_port(args: tuple[str, ...] | list[str]) -> list[str]:
+    if any(a.startswith("--web-port") for a in args) or "--help" in args:
+        return []
+    return ["--web-port", str(free_port())]

@@ -23,7 +23,7 @@ from unittest import mock
 import pytest
 from pydantic import BaseModel
 
-from bridge import settings_mqtt
+from bridge import settings_mqtt, settings_web
 from bridge.config_doc import COMMAND, render
 from bridge.settings import (
     ConfigError,
@@ -34,6 +34,7 @@ from bridge.settings import (
     StationSettings,
     TlsSettings,
     TrackingSettings,
+    WebSettings,
     settings_from,
 )
 from tests.support import ROOT
@@ -56,6 +57,7 @@ def files_unread() -> Iterator[None]:
     with (
         mock.patch.object(settings_mqtt, "check_tls_files", pairing_only),
         mock.patch.object(settings_mqtt, "read_password_file", lambda path: ""),
+        mock.patch.object(settings_web, "read_password_file", lambda path: "long enough"),
     ):
         yield
 
@@ -136,6 +138,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("homeassistant",), HomeAssistantSettings),
     (("station",), StationSettings),
     (("tracking",), TrackingSettings),
+    (("web",), WebSettings),
     (("rotators",), RotatorSettings),
 ]
 

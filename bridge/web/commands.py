@@ -1,0 +1,202 @@
+"""The console's commands: a JSON body in, a call on the rotator's judge out.
+
+Rules:
+1. ``parse`` is pure: a JSON object in, a ``WebCommand`` out, or BadCommand naming the field.
+   Numbers are finite; text is bounded; unknown keys are refused (a typo must not be dropped
+   silently on a machine that turns an antenna).
+2. ``carry_out`` hands the command to the same judge every front end uses (engine/rotator.py):
+   limits, keep-out sectors, the lock, the offset, the link. A refusal raises Refused, and the
+   judge has already reported it on R/error; a bad body is reported there by the server.
+3. Stop and lock ON are never refused (docs/architecture.md rule 11): they go straight into the
+   mailbox, which takes a stop first. Tracking ``off`` likewise.
+4. Every command carries ``Source.WEB``, so the status says the console sent it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+from bridge import geo
+from bridge.engine.rotator import Rotator
+from bridge.model import Source, Stop, Target
+
+MAX_BODY_BYTES = 4096
+
+
+class BadCommand(ValueError):
+    """Not a command the console sends: the message names what is wrong."""
+
+
+@dataclass(frozen=True)
+class WebCommand:
+    command: str
+    az_deg: float | None = None
+    el_deg: float | None = None
+    latitude_deg: float | None = None
+    longitude_deg: float | None = None
+    locator: str | None = None
+    long_path: bool = False
+    name: str | None = None  # a preset's, or the body to track
+    on: bool = False  # lock
+
+    def described(self) -> str:
+        """How an error event echoes it ("console: target az 120")."""
+        parts = [self.command]
+        for label, value in (("az", self.az_deg), ("el", self.el_deg)):
+            if value is not None:
+                parts.append(f"{label} {value:g}")
+        if self.locator is not None:
+            parts.append(self.locator)
+        elif self.latitude_deg is not None and self.longitude_deg is not None:
+            parts.append(f"{self.latitude_deg:.4f},{self.longitude_deg:.4f}")
+        if self.command in ("toward", "path"):
+            parts.append("long path" if self.long_path else "short path")
+        if self.name is not None:
+            parts.append(self.name)
+        if self.command == "lock":
+            parts.append("ON" if self.on else "OFF")
+        return "console: " + " ".join(parts)
+
+
+_KEYS: dict[str, frozenset[str]] = {
+    "stop": frozenset(),
+    "target": frozenset({"az", "el"}),
+    "toward": frozenset({"latitude_deg", "longitude_deg", "locator", "long_path"}),
+    "path": frozenset({"long_path"}),
+    "preset": frozenset({"name"}),
+    "park": frozenset(),
+    "nudge": frozenset({"d_az", "d_el"}),
+    "track": frozenset({"body"}),
+    "lock": frozenset({"on"}),
+}
+
+
+def parse(body: bytes) -> WebCommand:
+    """Rule 1."""
+    if len(body) > MAX_BODY_BYTES:
+        raise BadCommand(f"a command is at most {MAX_BODY_BYTES} bytes")
+    try:
+        doc = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
+    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
+        raise BadCommand(f"not a JSON command: {exc}") from None
+    if not isinstance(doc, dict):
+        raise BadCommand('a command is a JSON object such as {"command": "stop"}')
+    kind = doc.pop("command", None)
+    if kind not in _KEYS:
+        raise BadCommand(f"unknown command {str(kind)[:40]!r}; one of: {', '.join(_KEYS)}")
+    unknown = set(doc) - _KEYS[kind]
+    if unknown:
+        raise BadCommand(f"unknown key(s) for {kind}: {', '.join(sorted(unknown)[:5])}")
+    if kind == "target":
+        return WebCommand(kind, az_deg=_number(doc, "az"), el_deg=_number(doc, "el", None))
+    if kind == "toward":
+        return _toward(doc)
+    if kind == "path":
+        return WebCommand(kind, long_path=_flag(doc, "long_path"))
+    if kind == "preset":
+        return WebCommand(kind, name=_text(doc, "name"))
+    if kind == "nudge":
+        d_az, d_el = _number(doc, "d_az", 0.0), _number(doc, "d_el", None)
+        assert d_az is not None
+        return WebCommand(kind, az_deg=d_az, el_deg=d_el)
+    if kind == "track":
+        return WebCommand(kind, name=_text(doc, "body"))
+    if kind == "lock":
+        return WebCommand(kind, on=_flag(doc, "on", required=True))
+    return WebCommand(kind)  # stop, park
+
+
+def _toward(doc: dict[str, object]) -> WebCommand:
+    long_path = _flag(doc, "long_path")
+    if "locator" in doc:
+        if "latitude_deg" in doc or "longitude_deg" in doc:
+            raise BadCommand('give "locator" or "latitude_deg"/"longitude_deg", not both')
+        text = _text(doc, "locator").strip()
+        try:
+            lat, lon = geo.parse_locator(text)
+        except geo.LocatorError as exc:
+            raise BadCommand(str(exc)) from None
+        locator = text.upper()[:4] + text.lower()[4:6] + text[6:]
+        return WebCommand(
+            "toward", latitude_deg=lat, longitude_deg=lon, locator=locator, long_path=long_path
+        )
+    lat_or_none, lon_or_none = _number(doc, "latitude_deg"), _number(doc, "longitude_deg")
+    assert lat_or_none is not None and lon_or_none is not None
+    lat, lon = lat_or_none, lon_or_none
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise BadCommand("latitude_deg must be -90..90 and longitude_deg -180..180")
+    return WebCommand("toward", latitude_deg=lat, longitude_deg=lon, long_path=long_path)
+
+
+_REQUIRED = object()
+
+
+def _number(doc: dict[str, object], key: str, default: object = _REQUIRED) -> float | None:
+    value = doc.get(key, default)
+    if value is _REQUIRED:
+        raise BadCommand(f'"{key}" is missing')
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise BadCommand(f'"{key}" must be a finite number')
+    return float(value)
+
+
+def _flag(doc: dict[str, object], key: str, *, required: bool = False) -> bool:
+    value = doc.get(key, _REQUIRED if required else False)
+    if value is _REQUIRED:
+        raise BadCommand(f'"{key}" is missing')
+    if not isinstance(value, bool):
+        raise BadCommand(f'"{key}" must be true or false')
+    return value
+
+
+def _text(doc: dict[str, object], key: str) -> str:
+    value = doc.get(key)
+    if not isinstance(value, str) or not value.strip() or len(value) > 80:
+        raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
+    if not value.isprintable():
+        raise BadCommand(f'"{key}" must be printable text')
+    return value
+
+
+def _no_constant(name: str) -> object:
+    raise ValueError(f"{name} is not a number here")
+
+
+def carry_out(rot: Rotator, cmd: WebCommand) -> None:
+    """Rule 2: raises Refused (already reported) when the judge says no."""
+    what = cmd.described()
+    src = Source.WEB
+    match cmd.command:
+        case "stop":
+            rot.submit(Stop(src), what)
+        case "lock":
+            rot.set_lock(cmd.on)
+        case "target":
+            rot.submit(Target(cmd.az_deg, cmd.el_deg, src), what)
+        case "toward":
+            assert cmd.latitude_deg is not None and cmd.longitude_deg is not None
+            rot.go_toward(
+                cmd.latitude_deg,
+                cmd.longitude_deg,
+                src,
+                what,
+                locator=cmd.locator,
+                long_path=cmd.long_path,
+            )
+        case "path":
+            rot.take_path(cmd.long_path, src, what)
+        case "preset":
+            assert cmd.name is not None
+            rot.go_to_preset(cmd.name, src, what)
+        case "park":
+            rot.park(src, what)
+        case "nudge":
+            assert cmd.az_deg is not None
+            rot.nudge(cmd.az_deg, cmd.el_deg, src, what)
+        case "track":
+            assert cmd.name is not None
+            rot.track(cmd.name, src, what)

@@ -1,0 +1,103 @@
+"""The console's live feed: the newest status of each rotator and the error events, to every open
+page. Runs on the console's event loop; the serial-lines thread only queues into it.
+
+Rules:
+1. ``status`` and ``event`` are called on the event loop (server.py hands them over with
+   ``call_soon_threadsafe``: the lines thread never waits for a page, docs/architecture.md rule 3).
+2. A status is rendered once, as the R/status document (mqtt/payloads.py), whatever the number of
+   pages; each page then gets the newest per rotator. A page that reads slowly skips statuses in
+   between, never falls behind: what waits for it is one status per rotator and the last
+   EVENTS_KEPT events, whatever it costs the others.
+3. A page that joins gets the newest status of every rotator first, then changes.
+4. ``close`` ends every page's stream (the bridge is stopping): the page sees the bridge go.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from bridge.model import ErrorEvent, RotatorStatus
+from bridge.mqtt.payloads import status_json
+
+EVENTS_KEPT = 20
+
+
+@dataclass(frozen=True)
+class Shape:
+    """How a rotator's R/status document is rendered (payloads.status_json's switches)."""
+
+    has_elevation: bool
+    shows_raw: bool
+
+
+@dataclass(eq=False)  # a set of pages: each is itself, not its contents
+class Page:
+    """One open event stream."""
+
+    statuses: dict[str, str] = field(default_factory=dict)  # rotator -> SSE chunk not yet sent
+    events: deque[str] = field(default_factory=lambda: deque(maxlen=EVENTS_KEPT))
+    wake: asyncio.Event = field(default_factory=asyncio.Event)
+    closed: bool = False
+
+    def take(self) -> Iterator[str]:
+        """What is owed, statuses first (rule 2), and nothing owed after."""
+        self.wake.clear()
+        statuses, self.statuses = self.statuses, {}
+        yield from statuses.values()
+        while self.events:
+            yield self.events.popleft()
+
+
+class Feed:
+    def __init__(self, shapes: dict[str, Shape]) -> None:
+        self._shapes = shapes
+        self._newest: dict[str, str] = {}
+        self._pages: set[Page] = set()
+        self.closed = False
+
+    @property
+    def pages(self) -> int:
+        return len(self._pages)
+
+    def join(self) -> Page:
+        page = Page(statuses=dict(self._newest))  # rule 3
+        page.wake.set()
+        if self.closed:
+            page.closed = True
+        self._pages.add(page)
+        return page
+
+    def leave(self, page: Page) -> None:
+        self._pages.discard(page)
+
+    def status(self, rotator_id: str, status: RotatorStatus, t_wall: float) -> None:
+        shape = self._shapes[rotator_id]
+        doc = status_json(status, t_wall, shape.has_elevation, shape.shows_raw)
+        head = f'{{"rotator":{json.dumps(rotator_id)},"t":{t_wall:.4f},"status":'
+        chunk = _chunk("status", f"{head}{doc}}}")
+        self._newest[rotator_id] = chunk
+        for page in self._pages:
+            page.statuses[rotator_id] = chunk
+            page.wake.set()
+
+    def event(self, rotator_id: str, event: ErrorEvent) -> None:
+        doc = {"rotator": rotator_id, **event.as_dict()}
+        chunk = _chunk("error", json.dumps(doc, separators=(",", ":")))
+        for page in self._pages:
+            page.events.append(chunk)
+            page.wake.set()
+
+    def close(self) -> None:
+        """Rule 4."""
+        self.closed = True
+        for page in self._pages:
+            page.closed = True
+            page.wake.set()
+
+
+def _chunk(name: str, data: str) -> str:
+    return f"event: {name}\ndata: {data}\n\n"

@@ -1,0 +1,365 @@
+"""The operator console over HTTP: the page, its token, the live feed and the commands (aiohttp
+on a thread of its own; the contract the page keeps is docs/console.md).
+
+Why aiohttp: one event loop on one thread serves every open page's stream and every command
+(a page costs a coroutine, not a thread), the streams and the POSTs need nothing beyond it, and
+the rest of the bridge stays threads and queues: the serial-lines thread hands statuses over
+with ``call_soon_threadsafe`` and never waits for a page.
+
+Rules:
+1. Every URL is relative to the page (``api/events``, never ``/api/events``): the console
+   works behind a reverse proxy under a path prefix and inside a Home Assistant card.
+2. The safety rules of auth.py hold for every request: the host check (no password), the
+   Origin of every POST, the token of every ``api/`` call but ``hello``, ``session`` and
+   ``login``; commands are POSTs only (a GET is 405 and moves nothing). A command without a
+   token is 403, one with a bad or expired token 401 (the page fetches a new one).
+3. Every answer carries a strict Content-Security-Policy (scripts and styles from this origin
+   only, no inline script), ``nosniff`` and no referrer; who may frame the page is the
+   ``frame_ancestors`` setting (only the console itself by default: a hostile page must not
+   frame it and steer clicks onto the map).
+4. A command is judged by the rotator's judge (commands.py); the answer says what the judge
+   said (409 with the refusal's code), and the refusal reaches every page as an error event
+   too, as it reaches R/error.
+5. Slow work (projecting the coastlines, reading the TLE file's names) runs on the loop's
+   executor, never on the loop: a STOP posted meanwhile is carried out at once
+   (docs/architecture.md rule 12).
+6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gzip
+import json
+import logging
+import threading
+import time
+from collections.abc import Awaitable, Callable
+from importlib import resources
+
+from aiohttp import web
+
+from bridge import __version__
+from bridge.engine.rotator import Rotator
+from bridge.errors import Refused
+from bridge.model import ErrorEvent, RotatorStatus
+from bridge.web import auth, view
+from bridge.web.commands import BadCommand, carry_out, parse
+from bridge.web.feed import Feed, Shape
+
+log = logging.getLogger(__name__)
+
+PING_S = 10.0
+TOKEN_HEADER = "X-Rotor-Token"
+_TYPES = {
+    ".html": "text/html",
+    ".js": "text/javascript",
+    ".css": "text/css",
+    ".svg": "image/svg+xml",
+}
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def _static_files() -> dict[str, tuple[bytes, bytes, str]]:
+    """The page's files: name -> (bytes, gzipped, content type)."""
+    files = {}
+    folder = resources.files("bridge.web").joinpath("static")
+    if folder.is_dir():
+        for item in folder.iterdir():
+            kind = _TYPES.get("." + item.name.rpartition(".")[2])
+            if item.is_file() and kind is not None:
+                data = item.read_bytes()
+                files[item.name] = (data, gzip.compress(data, mtime=0), f"{kind}; charset=utf-8")
+    return files
+
+
+def _json(doc: object, status: int = 200) -> web.Response:
+    return web.json_response(doc, status=status, headers={"Cache-Control": "no-store"})
+
+
+class WebConsole:
+    def __init__(
+        self,
+        bind: str,
+        port: int,
+        *,
+        password: str | None,
+        frame_ancestors: list[str],
+        station: tuple[float, float] | None,
+        locator: str | None,
+        satellites: Callable[[], list[str]],
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        self.bind, self.port = bind, port
+        self._password = password
+        self._tokens = auth.Tokens(auth.key_for(password))
+        self._logins = auth.LoginLimiter()
+        self._station, self._locator = station, locator
+        self._satellites = satellites
+        self._wall = wall
+        self._rotators: dict[str, Rotator] = {}
+        self._facts: dict[str, view.RotatorFacts] = {}
+        self._shapes: dict[str, Shape] = {}
+        self.feed = Feed(self._shapes)
+        self._files = _static_files()
+        self._land: asyncio.Future[bytes] | None = None
+        ancestors = " ".join(["'self'", *frame_ancestors])
+        self._headers = {
+            "Content-Security-Policy": "default-src 'self'; script-src 'self'; style-src 'self'; "
+            "img-src 'self' data:; connect-src 'self'; base-uri 'none'; form-action 'self'; "
+            f"frame-ancestors {ancestors}",
+            "X-Content-Type-Options": "nosniff",
+            "Referrer-Policy": "no-referrer",
+        }
+        if not frame_ancestors:
+            self._headers["X-Frame-Options"] = "SAMEORIGIN"
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._runner: web.AppRunner | None = None
+        self._thread: threading.Thread | None = None
+        self._running = False
+
+    # -- wiring (the main thread) ------------------------------------------------------------
+    def attach(self, rot: Rotator, facts: view.RotatorFacts) -> None:
+        self._rotators[rot.id] = rot
+        self._facts[rot.id] = facts
+        self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
+
+    @property
+    def url(self) -> str:
+        host = self.bind if self.bind not in ("", "0.0.0.0", "::") else "127.0.0.1"
+        return f"http://{f'[{host}]' if ':' in host else host}:{self.port}/"
+
+    def listen(self) -> None:
+        """Bind the port (OSError if it cannot be had) and serve on a thread of its own."""
+        loop = self._loop = asyncio.new_event_loop()
+        try:
+            loop.run_until_complete(self._start())
+        except BaseException:
+            loop.close()
+            self._loop = None
+            raise
+        self._running = True
+        self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
+        self._thread.start()
+        log.info("web console on %s", self.url)
+
+    async def _start(self) -> None:
+        app = web.Application(middlewares=[self._guard], client_max_size=16 * 1024)
+        app.router.add_get("/", self._index)
+        app.router.add_get("/api/hello", self._hello)
+        app.router.add_post("/api/session", self._session)
+        app.router.add_post("/api/login", self._login)
+        app.router.add_get("/api/config", self._config)
+        app.router.add_get("/api/land", self._land_data)
+        app.router.add_get("/api/events", self._events)
+        app.router.add_post("/api/rotators/{rid}/command", self._command)
+        app.router.add_get("/{name}", self._file)
+        # the streams end themselves at stop (feed.close): nothing is worth waiting long for
+        runner = self._runner = web.AppRunner(app, access_log=None, shutdown_timeout=1.0)
+        await runner.setup()
+        await web.TCPSite(runner, self.bind or None, self.port).start()
+
+    def stop(self) -> None:
+        """Rule 6."""
+        loop, self._running = self._loop, False
+        if loop is None or self._thread is None:
+            return
+        done = asyncio.run_coroutine_threadsafe(self._shutdown(), loop)
+        try:
+            done.result(timeout=5.0)
+        except Exception:
+            log.exception("the web console did not stop cleanly")
+        loop.call_soon_threadsafe(loop.stop)
+        self._thread.join(timeout=5.0)
+        if not self._thread.is_alive():
+            loop.close()
+
+    async def _shutdown(self) -> None:
+        self.feed.close()
+        if self._runner is not None:
+            await self._runner.cleanup()
+
+    # -- the engine's listeners (the serial-lines thread: rule 1 of feed.py) ----------------
+    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        if self._running and self._loop is not None:
+            t = self._wall()
+            self._loop.call_soon_threadsafe(self.feed.status, rotator_id, status, t)
+
+    def on_event(self, rotator_id: str, event: ErrorEvent) -> None:
+        if self._running and self._loop is not None:
+            self._loop.call_soon_threadsafe(self.feed.event, rotator_id, event)
+
+    # -- every request (rules 2, 3) ----------------------------------------------------------
+    @web.middleware
+    async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        refusal = self._refusal(request)
+        if refusal is not None:
+            response: web.StreamResponse = _json({"error": refusal}, 403)
+        else:
+            try:
+                response = await handler(request)
+            except web.HTTPException as exc:
+                response = _json({"error": exc.reason}, exc.status)
+        response.headers.update(self._headers)
+        return response
+
+    def _refusal(self, request: web.Request) -> str | None:
+        host = request.headers.get("Host")
+        if self._password is None and not auth.host_is_local_name(host):
+            return (
+                f"this console answers to 127.0.0.1, [::1] or localhost only, not {host!r}: "
+                "without web.password_file a page from another name could drive it"
+            )
+        if request.method in ("GET", "HEAD"):
+            return None
+        if not auth.origin_allowed(
+            request.headers.get("Origin"), host, request.headers.get("X-Forwarded-Host")
+        ):
+            return "a request from another site's page is refused"
+        if request.content_type != "application/json":
+            return "commands are JSON (Content-Type: application/json)"
+        return None
+
+    def _token_ok(self, request: web.Request) -> bool:
+        return self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall())
+
+    # -- the page ----------------------------------------------------------------------------
+    async def _index(self, request: web.Request) -> web.StreamResponse:
+        return self._serve(request, "index.html")
+
+    async def _file(self, request: web.Request) -> web.StreamResponse:
+        return self._serve(request, request.match_info["name"])
+
+    def _serve(self, request: web.Request, name: str) -> web.StreamResponse:
+        found = self._files.get(name)
+        if found is None:
+            raise web.HTTPNotFound(reason=f"no {name}")
+        plain, packed, kind = found
+        zipped = "gzip" in request.headers.get("Accept-Encoding", "")
+        response = web.Response(body=packed if zipped else plain)
+        response.headers["Content-Type"] = kind
+        response.headers["Cache-Control"] = "no-cache"
+        response.headers["Vary"] = "Accept-Encoding"
+        if zipped:
+            response.headers["Content-Encoding"] = "gzip"
+        return response
+
+    # -- tokens --------------------------------------------------------------------------------
+    async def _hello(self, request: web.Request) -> web.StreamResponse:
+        return _json({"password": self._password is not None, "version": __version__})
+
+    async def _session(self, request: web.Request) -> web.StreamResponse:
+        if self._password is not None:
+            return _json({"error": "this console asks for a password (api/login)"}, 403)
+        return _json({"token": self._tokens.issue(self._wall())})
+
+    async def _login(self, request: web.Request) -> web.StreamResponse:
+        if self._password is None:
+            return _json({"token": self._tokens.issue(self._wall())})
+        wait_s = self._logins.allow(request.remote or "?", time.monotonic())
+        if wait_s is not None:
+            message = f"too many failed logins; try again in {wait_s:.0f} s"
+            return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
+        try:
+            given = (await request.json()).get("password")
+        except (ValueError, AttributeError):
+            given = None
+        if not isinstance(given, str) or not auth.password_matches(given, self._password):
+            log.warning("web console: a wrong password from %s", request.remote)
+            return _json({"error": "wrong password"}, 401)
+        return _json({"token": self._tokens.issue(self._wall())})
+
+    # -- what the page reads -----------------------------------------------------------------
+    async def _config(self, request: web.Request) -> web.StreamResponse:
+        if not self._token_ok(request):
+            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        loop = asyncio.get_running_loop()
+        try:  # rule 5: the TLE file is read here
+            satellites = await loop.run_in_executor(None, self._satellites)
+        except Exception:
+            log.exception("web console: the TLE file's names could not be read")
+            satellites = []
+        doc = {
+            "version": __version__,
+            "station": view.station_doc(self._station, self._locator),
+            "rotators": [
+                view.rotator_doc(rot, self._facts[rid], satellites)
+                for rid, rot in self._rotators.items()
+            ],
+        }
+        return _json(doc)
+
+    async def _land_data(self, request: web.Request) -> web.StreamResponse:
+        if not self._token_ok(request):
+            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        station = self._station
+        if station is None:
+            return _json({"error": "no [station]: the console shows a dial without a map"}, 404)
+        if self._land is None:  # rule 5: projected once, on the executor
+            loop = asyncio.get_running_loop()
+            self._land = loop.run_in_executor(None, _land_gzip, station)
+        packed = await asyncio.shield(self._land)
+        zipped = "gzip" in request.headers.get("Accept-Encoding", "")
+        response = web.Response(body=packed if zipped else gzip.decompress(packed))
+        response.headers["Content-Type"] = "application/json"
+        if zipped:
+            response.headers["Content-Encoding"] = "gzip"
+        response.headers["Cache-Control"] = "no-cache"
+        return response
+
+    async def _events(self, request: web.Request) -> web.StreamResponse:
+        if not self._token_ok(request):
+            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        response = web.StreamResponse(
+            headers={
+                "Content-Type": "text/event-stream",
+                "Cache-Control": "no-store",
+                "X-Accel-Buffering": "no",  # nginx: pass each event on at once
+                **self._headers,
+            }
+        )
+        await response.prepare(request)
+        page = self.feed.join()
+        try:
+            await response.write(b": hello\n\n")
+            while not page.closed:
+                try:
+                    await asyncio.wait_for(page.wake.wait(), PING_S)
+                except TimeoutError:
+                    await response.write(b": ping\n\n")
+                    continue
+                chunks = "".join(page.take())
+                if chunks:
+                    await response.write(chunks.encode())
+        except (ConnectionError, asyncio.CancelledError):
+            pass
+        finally:
+            self.feed.leave(page)
+        return response
+
+    # -- commands (rule 4) -------------------------------------------------------------------
+    async def _command(self, request: web.Request) -> web.StreamResponse:
+        token = request.headers.get(TOKEN_HEADER)
+        if token is None:
+            return _json({"error": f"a command needs the page's token ({TOKEN_HEADER})"}, 403)
+        if not self._tokens.valid(token, self._wall()):
+            return _json({"error": "the token is not valid (any more): reload"}, 401)
+        rot = self._rotators.get(request.match_info["rid"])
+        if rot is None:
+            return _json({"error": "no such rotator"}, 404)
+        body = await request.read()
+        try:
+            cmd = parse(body)
+        except BadCommand as exc:
+            rot.report_refusal(str(exc), "console: " + body[:80].decode("utf-8", "replace"))
+            return _json({"error": str(exc), "code": "invalid"}, 400)
+        try:
+            carry_out(rot, cmd)
+        except Refused as exc:
+            return _json({"error": str(exc), "code": exc.code.value}, 409)
+        return _json({"ok": True})
+
+
+def _land_gzip(station: tuple[float, float]) -> bytes:
+    doc = view.land_doc(station, view.land_rings())
+    return gzip.compress(json.dumps(doc, separators=(",", ":")).encode(), mtime=0)

@@ -1,0 +1,103 @@
+"""A plain HTTP client of the operator console (bridge/web/), as a script would use it: the
+token, the commands, the live feed. The standard library only."""
+
+from __future__ import annotations
+
+import http.client
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from bridge.mosquitto import free_port
+
+
+def web_section(port: int | None = None, **more: Any) -> dict[str, Any]:
+    """The ``[web]`` table of a rig's configuration: on, loopback, a free port."""
+    return {"enabled": True, "bind": "127.0.0.1", "port": port or free_port(), **more}
+
+
+@dataclass
+class Answer:
+    status: int
+    doc: Any
+    headers: dict[str, str]
+
+
+class ConsoleClient:
+    def __init__(self, port: int, host: str = "127.0.0.1") -> None:
+        self.port = port
+        self.host = host
+        self.token: str | None = None
+
+    def request(
+        self,
+        method: str,
+        path: str,
+        body: bytes | None = None,
+        headers: dict[str, str] | None = None,
+    ) -> Answer:
+        conn = http.client.HTTPConnection(self.host, self.port, timeout=10)
+        try:
+            conn.request(method, path, body=body, headers=headers or {})
+            resp = conn.getresponse()
+            raw = resp.read()
+            kind = resp.getheader("Content-Type", "")
+            doc = json.loads(raw) if kind.startswith("application/json") else raw
+            return Answer(resp.status, doc, {k.lower(): v for k, v in resp.getheaders()})
+        finally:
+            conn.close()
+
+    def session(self) -> str:
+        answer = self.post("/api/session", {}, token=False)
+        assert answer.status == 200, answer
+        self.token = answer.doc["token"]
+        return str(self.token)
+
+    def post(
+        self, path: str, doc: Any, *, token: bool = True, headers: dict[str, str] | None = None
+    ) -> Answer:
+        sent = {"Content-Type": "application/json", "Origin": f"http://{self.host}:{self.port}"}
+        if token and self.token is not None:
+            sent["X-Rotor-Token"] = self.token
+        sent.update(headers or {})
+        return self.request("POST", path, json.dumps(doc).encode(), sent)
+
+    def get(self, path: str) -> Answer:
+        headers = {"X-Rotor-Token": self.token} if self.token else {}
+        return self.request("GET", path, headers=headers)
+
+    def command(self, rotator: str, **doc: Any) -> Answer:
+        return self.post(f"/api/rotators/{rotator}/command", doc)
+
+
+class EventStream:
+    """``api/events``, read event by event."""
+
+    def __init__(self, client: ConsoleClient, timeout_s: float = 10.0) -> None:
+        self.conn = http.client.HTTPConnection(client.host, client.port, timeout=timeout_s)
+        self.conn.request("GET", "/api/events", headers={"X-Rotor-Token": client.token or ""})
+        self.resp = self.conn.getresponse()
+        assert self.resp.status == 200, self.resp.status
+
+    def next(self) -> tuple[str, Any]:
+        """The next event (name, data), comments skipped; TimeoutError if none comes."""
+        name, data = "message", []
+        while True:
+            line = self.resp.readline()
+            if not line:
+                raise EOFError("the stream ended")
+            text = line.decode().rstrip("\n")
+            if not text:
+                if data:
+                    return name, json.loads("\n".join(data))
+                continue
+            if text.startswith(":"):
+                continue
+            field, _, value = text.partition(": ")
+            if field == "event":
+                name = value
+            elif field == "data":
+                data.append(value)
+
+    def close(self) -> None:
+        self.conn.close()

@@ -1,0 +1,65 @@
+"""The console's command bodies (web/commands.py): what parses, and what is refused by name."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.web.commands import BadCommand, WebCommand, parse
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        (b'{"command":"stop"}', WebCommand("stop")),
+        (b'{"command":"target","az":120.5}', WebCommand("target", az_deg=120.5)),
+        (b'{"command":"target","az":10,"el":30}', WebCommand("target", az_deg=10, el_deg=30)),
+        (
+            b'{"command":"toward","latitude_deg":40.7,"longitude_deg":-74,"long_path":true}',
+            WebCommand("toward", latitude_deg=40.7, longitude_deg=-74.0, long_path=True),
+        ),
+        (b'{"command":"path","long_path":true}', WebCommand("path", long_path=True)),
+        (b'{"command":"preset","name":"EU"}', WebCommand("preset", name="EU")),
+        (b'{"command":"park"}', WebCommand("park")),
+        (b'{"command":"nudge","d_az":-5}', WebCommand("nudge", az_deg=-5.0)),
+        (b'{"command":"track","body":"moon"}', WebCommand("track", name="moon")),
+        (b'{"command":"lock","on":true}', WebCommand("lock", on=True)),
+    ],
+)
+def test_commands_parse(body: bytes, expected: WebCommand) -> None:
+    assert parse(body) == expected
+
+
+def test_a_locator_is_checked_and_written_as_locators_are() -> None:
+    cmd = parse(b'{"command":"toward","locator":"fn31PR"}')
+    assert cmd.locator == "FN31pr"
+    assert cmd.latitude_deg == pytest.approx(41.7, abs=0.1)
+    assert cmd.described() == "console: toward FN31pr short path"
+
+
+@pytest.mark.parametrize(
+    ("body", "says"),
+    [
+        (b"", "not a JSON command"),
+        (b"\xff", "not a JSON command"),
+        (b"[1]", "JSON object"),
+        (b'{"command":"fly"}', "unknown command"),
+        (b'{"command":"target"}', '"az" is missing'),
+        (b'{"command":"target","az":"120"}', "finite number"),
+        (b'{"command":"target","az":NaN}', "not a number"),
+        (b'{"command":"target","az":1e999}', "finite number"),
+        (b'{"command":"target","az":true}', "finite number"),
+        (b'{"command":"target","az":1,"azz":2}', "unknown key(s) for target: azz"),
+        (b'{"command":"lock"}', '"on" is missing'),
+        (b'{"command":"lock","on":"yes"}', "true or false"),
+        (b'{"command":"toward","locator":"ZZ99"}', "ZZ99"),
+        (b'{"command":"toward","locator":"JO62","latitude_deg":1}', "not both"),
+        (b'{"command":"toward","latitude_deg":91,"longitude_deg":0}', "-90..90"),
+        (b'{"command":"preset","name":""}', "1 to 80"),
+        (b'{"command":"preset","name":"a\\u0000b"}', "printable"),
+        (b'{"command":"stop","pad":"' + b"x" * 5000 + b'"}', "at most"),
+    ],
+)
+def test_bad_bodies_are_refused_by_name(body: bytes, says: str) -> None:
+    with pytest.raises(BadCommand, match=None) as caught:
+        parse(body)
+    assert says in str(caught.value)

@@ -1,0 +1,131 @@
+"""The console's server against a real bridge (emulated controller on a pty, real mosquitto):
+commands through the one judge, the live feed, and requests another site forges, which move
+nothing."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.rig import Rig
+
+
+@pytest.fixture
+def console(rig: Rig) -> Iterator[tuple[Rig, ConsoleClient]]:
+    rig.sections["station"] = {"locator": "JO62qm"}
+    web = rig.sections["web"] = web_section()
+    rig.add("hf", keep_out=[[300, 320]], presets={"EU": 100})
+    rig.start()
+    rig.ready("hf")
+    client = ConsoleClient(web["port"])
+    client.session()
+    yield rig, client
+
+
+def _status_until(stream: EventStream, rotator: str, what: Any) -> dict[str, Any]:
+    while True:
+        name, data = stream.next()
+        if name == "status" and data["rotator"] == rotator and what(data["status"]):
+            return dict(data["status"])
+
+
+def test_a_console_command_turns_the_rotator_and_the_feed_follows_it(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    rig, client = console
+    stream = EventStream(client)
+    try:
+        first = _status_until(stream, "hf", lambda s: True)  # the newest, at once
+        assert first["available"] is True
+        assert client.command("hf", command="target", az=200).doc == {"ok": True}
+        _status_until(stream, "hf", lambda s: s["state"] == "moving")
+        there = _status_until(
+            stream, "hf", lambda s: s["state"] == "idle" and abs(s["bearing"] - 200) <= 3.5
+        )
+        assert there["last_command_source"] == "web"
+    finally:
+        stream.close()
+    rig.arrived("hf", 200)
+
+
+def test_a_refusal_is_answered_and_reaches_the_feed_and_r_error(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    rig, client = console
+    stream = EventStream(client)
+    try:
+        answer = client.command("hf", command="target", az=310)
+        assert answer.status == 409 and answer.doc["code"] == "keep_out"
+        while (event := stream.next())[0] != "error":
+            pass
+        assert event[1]["rotator"] == "hf" and "keep-out" in event[1]["message"]
+        assert event[1]["command"] == "console: target az 310"
+    finally:
+        stream.close()
+    assert rig.mqtt.wait_for(rig.t("error")).payload  # the same refusal on R/error
+    bad = client.command("hf", command="target", az="north")
+    assert bad.status == 400 and "finite number" in bad.doc["error"]
+    assert rig.retained().get(rig.t("target")) is None
+
+
+def test_lock_from_the_console_refuses_motion_and_stop_is_never_refused(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    rig, client = console
+    assert client.command("hf", command="lock", on=True).status == 200
+    rig.mqtt.wait_for(rig.t("lock/state"), lambda m: m.payload == b"ON")
+    refused = client.command("hf", command="preset", name="EU")
+    assert refused.status == 409 and refused.doc["code"] == "locked"
+    assert client.command("hf", command="stop").doc == {"ok": True}
+    assert client.command("hf", command="lock", on=False).status == 200
+    rig.mqtt.wait_for(rig.t("lock/state"), lambda m: m.payload == b"OFF")
+    assert rig.emu.frames(*BEARING_OUTCOMES) == []
+
+
+def test_forged_requests_are_refused_and_move_nothing(console: tuple[Rig, ConsoleClient]) -> None:
+    rig, client = console
+    url = "/api/rotators/hf/command"
+    body = b'{"command":"target","az":200}'
+    json_type = {"Content-Type": "application/json"}
+    mine = {**json_type, "Origin": f"http://127.0.0.1:{client.port}"}
+    token = {"X-Rotor-Token": client.token or ""}
+    # a GET never moves anything
+    assert client.request("GET", url + "?command=target&az=200", headers=token).status == 405
+    # a replayed request without the page's token
+    assert client.request("POST", url, body, mine).status == 403
+    # another site's page, token or not (a plain form post, a fetch)
+    evil = {"Origin": "http://evil.example"}
+    form = {"Content-Type": "application/x-www-form-urlencoded", **evil}
+    assert client.request("POST", url, b"command=target&az=200", form).status == 403
+    assert client.request("POST", url, body, {**json_type, **evil, **token}).status == 403
+    # text/plain, the one body type a form can send without a preflight
+    assert client.request("POST", url, body, {"Content-Type": "text/plain", **token}).status == 403
+    # a token the bridge never issued, or one of another bridge
+    assert client.request("POST", url, body, {**mine, "X-Rotor-Token": "1.2.3"}).status == 401
+    # a host name pointed at 127.0.0.1 (DNS rebinding) cannot even get a token
+    rebind = {**json_type, "Host": f"evil.example:{client.port}"}
+    assert client.request("POST", "/api/session", b"{}", rebind).status == 403
+    assert rig.emu.frames(*BEARING_OUTCOMES) == []
+    # the page's own request does
+    assert client.request("POST", url, body, {**mine, **token}).status == 200
+    rig.arrived("hf", 200)
+
+
+def test_the_page_and_its_data_carry_the_safety_headers(console: tuple[Rig, ConsoleClient]) -> None:
+    _rig, client = console
+    hello = client.get("/api/hello")
+    assert hello.status == 200 and hello.doc["password"] is False
+    csp = hello.headers["content-security-policy"]
+    assert "script-src 'self'" in csp and "frame-ancestors 'self'" in csp
+    assert hello.headers["x-content-type-options"] == "nosniff"
+    config = client.get("/api/config").doc
+    (hf,) = config["rotators"]
+    assert hf["keep_out_deg"] == [[300.0, 320.0]] and hf["presets"] == {"EU": [100.0, None]}
+    assert hf["beamwidth_deg"] == 60 and config["station"]["locator"] == "JO62qm"
+    land = client.get("/api/land")
+    assert land.status == 200 and len(land.doc["rings"]) > 100
+    assert ConsoleClient(client.port).get("/api/config").status == 401  # no token
