@@ -149,6 +149,7 @@ export class MapView {
         svg('path', { class: closed ? 'land closed' : 'land', d: closed ? d + 'Z' : d }, g);
       });
     }
+    if (station.locator) label(station.locator, { class: 'station-label', x: 0, y: 0.05 }, this.gridLayer);
     for (let km = 5000; km < RIM_KM - 2000; km += 5000) {
       const r = km / RIM_KM;
       svg('circle', { class: 'dist-ring', r: f(r) }, this.gridLayer);
