@@ -210,14 +210,30 @@ function onStatus(doc) {
   }
 }
 
+// a status rewrites only what changed: an unchanged text or attribute costs no style work
+const put = (id, text) => {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+};
+const mark = (el, name, value) => {
+  if (el.getAttribute(name) !== value) el.setAttribute(name, value);
+};
+const flag = (el, name, on) => {
+  if (el.classList.contains(name) !== on) el.classList.toggle(name, on);
+};
+const hide = (id, hidden) => {
+  const el = $(id);
+  if (el.hidden !== hidden) el.hidden = hidden;
+};
+
 function renderStatus(id, st, tracking = trackingOf(st)) {
   const cfg = app.rotators.get(id);
-  $('bearing').textContent = fmtDeg(st.bearing);
-  if (cfg.has_elevation) $('elevation').textContent = `el ${fmtDeg(st.elevation)}`;
+  put('bearing', fmtDeg(st.bearing));
+  if (cfg.has_elevation) put('elevation', `el ${fmtDeg(st.elevation)}`);
   const state = st.state || 'unknown';
-  $('state').textContent = st.estimated ? `${state} (estimate)` : state;
-  $('state').dataset.state = state;
-  document.body.dataset.state = state;
+  put('state', st.estimated ? `${state} (estimate)` : state);
+  mark($('state'), 'data-state', state);
+  mark(document.body, 'data-state', state);
   let target = '\u2014';
   if (typeof st.target === 'number') {
     target = fmtDeg(st.target);
@@ -228,32 +244,36 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     const where = info.locator || `${round1(info.latitude ?? info.latitude_deg)}, ${round1(info.longitude ?? info.longitude_deg)}`;
     target += ` \u00B7 ${where} \u00B7 ${fmtKm(info.distance_km || 0)} ${info.path || 'short'} path`;
   }
-  $('target').textContent = target;
-  $('source').textContent = st.last_command_source || '\u2014';
+  put('target', target);
+  put('source', st.last_command_source || '\u2014');
   const locked = Boolean(st.locked);
-  $('lock').setAttribute('aria-pressed', String(locked));
-  $('lock').textContent = locked ? 'Lock ON' : 'Lock OFF';
-  document.body.classList.toggle('locked', locked);
-  document.body.classList.toggle('rotor-down', st.available === false);
-  $('path-row').hidden = !info;
+  mark($('lock'), 'aria-pressed', String(locked));
+  put('lock', locked ? 'Lock ON' : 'Lock OFF');
+  flag(document.body, 'locked', locked);
+  flag(document.body, 'rotor-down', st.available === false);
+  hide('path-row', !info);
   if (info) {
-    $('path-long').setAttribute('aria-pressed', String(info.path === 'long'));
-    $('path-short').setAttribute('aria-pressed', String(info.path !== 'long'));
-    $('path-short').textContent = `Short ${fmtDeg(info.short_path_deg)}`;
-    $('path-long').textContent = `Long ${fmtDeg(info.long_path_deg)}`;
+    mark($('path-long'), 'aria-pressed', String(info.path === 'long'));
+    mark($('path-short'), 'aria-pressed', String(info.path !== 'long'));
+    put('path-short', `Short ${fmtDeg(info.short_path_deg)}`);
+    put('path-long', `Long ${fmtDeg(info.long_path_deg)}`);
   }
   const body = tracking ? tracking.body : 'off';
-  if (![...$('track').options].some((o) => o.value === body)) {
-    $('track').add(new Option(body, body)); // a satellite the TLE file no longer names
+  const select = $('track');
+  if (select.value !== body) {
+    if (![...select.options].some((o) => o.value === body)) {
+      select.add(new Option(body, body)); // a satellite the TLE file no longer names
+    }
+    select.value = body;
   }
-  $('track').value = body;
-  $('tracking-label').hidden = $('tracking-info').hidden = !tracking;
+  hide('tracking-label', !tracking);
+  hide('tracking-info', !tracking);
   if (tracking) {
     let text = `${tracking.body} \u00B7 ${tracking.phase || ''}`;
     if (typeof tracking.az === 'number') text += ` \u00B7 az ${fmtDeg(tracking.az)} el ${fmtDeg(tracking.el)}`;
     if (tracking.aos) text += ` \u00B7 AOS ${fmtTime(tracking.aos)} LOS ${fmtTime(tracking.los)}`;
     if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
-    $('tracking-info').textContent = text;
+    put('tracking-info', text);
   }
   renderBadges(st, tracking);
   map.update(st, tracking);

@@ -80,6 +80,10 @@ function label(text, attrs, parent) {
 }
 
 const show = (node, on) => node.classList.toggle('off', !on);
+const set = (node, name, value) => {
+  const text = String(value);
+  if (node.getAttribute(name) !== text) node.setAttribute(name, text);
+};
 const CARDINAL = { 0: 'N', 90: 'E', 180: 'S', 270: 'W' };
 const BODY_GLYPH = { sun: '\u2600', moon: '\u263E' };
 
@@ -193,36 +197,38 @@ export class MapView {
     show(this.beam, known); show(this.wedge, known); show(this.beamTip, known);
     if (known) {
       const [x, y] = polar(b, 1);
-      this.beam.setAttribute('x2', f(x)); this.beam.setAttribute('y2', f(y));
-      this.beam.setAttribute('data-bearing', b);
-      this.beamTip.setAttribute('cx', f(x)); this.beamTip.setAttribute('cy', f(y));
+      set(this.beam, 'x2', f(x)); set(this.beam, 'y2', f(y));
+      set(this.beam, 'data-bearing', b);
+      set(this.beamTip, 'cx', f(x)); set(this.beamTip, 'cy', f(y));
       const w = (cfg.beamwidth_deg || 60) / 2;
-      this.wedge.setAttribute('d', sectorPath(b - w, b + w));
+      set(this.wedge, 'd', sectorPath(b - w, b + w));
     }
     const t = st.target;
     const turning = st.state === 'moving' || st.state === 'braking';
     const away = typeof t === 'number' && (!known || Math.abs(norm360(t - b + 180) - 180) > 1.5);
     show(this.targetMark, typeof t === 'number' && (turning || away));
     if (typeof t === 'number') {
-      this.targetMark.setAttribute('transform', `rotate(${norm360(t)})`);
-      this.targetMark.setAttribute('data-bearing', t);
+      set(this.targetMark, 'transform', `rotate(${norm360(t)})`);
+      set(this.targetMark, 'data-bearing', t);
     }
     this.updatePoint(st.target_info);
     const az = tracking ? tracking.az : null;
     show(this.bodyMark, typeof az === 'number');
     if (typeof az === 'number') {
       const [x, y] = polar(az, 0.93);
-      this.bodyMark.setAttribute('transform', `translate(${f(x)} ${f(y)})`);
-      this.bodyMark.setAttribute('data-body', tracking.body);
-      this.bodyMark.setAttribute('data-bearing', az);
+      set(this.bodyMark, 'transform', `translate(${f(x)} ${f(y)})`);
+      set(this.bodyMark, 'data-body', tracking.body);
+      set(this.bodyMark, 'data-bearing', az);
       this.bodyMark.classList.toggle('below', typeof tracking.el === 'number' && tracking.el < 0);
       const kind = tracking.body === 'sun' || tracking.body === 'moon' ? tracking.body : 'satellite';
-      this.bodyMark.setAttribute('data-kind', kind);
-      this.bodyGlyph.textContent = BODY_GLYPH[kind] || '\u2726';
-      this.bodyName.textContent = tracking.body;
+      set(this.bodyMark, 'data-kind', kind);
+      if (this.bodyName.textContent !== tracking.body) {
+        this.bodyGlyph.textContent = BODY_GLYPH[kind] || '\u2726';
+        this.bodyName.textContent = tracking.body;
+      }
       const [nx, ny] = polar(az, -0.085); // the name on the centre's side, clear of the ring
-      this.bodyName.setAttribute('x', f(nx));
-      this.bodyName.setAttribute('y', f(ny));
+      set(this.bodyName, 'x', f(nx));
+      set(this.bodyName, 'y', f(ny));
     }
   }
 
@@ -239,18 +245,18 @@ export class MapView {
     const r = Math.min(gc.distance_km / RIM_KM, 1);
     const [x, y] = polar(gc.bearing, r);
     const long = info.path === 'long';
-    this.gcPath.setAttribute('d', long
+    set(this.gcPath, 'd', long
       ? `M0 0L${pt(gc.bearing + 180, 1)}M${pt(gc.bearing, 1)}L${f(x)} ${f(y)}`
       : `M0 0L${f(x)} ${f(y)}`);
     this.gcPath.classList.toggle('long', long);
-    this.gcPath.setAttribute('data-path', long ? 'long' : 'short');
-    this.targetPoint.setAttribute('cx', f(x)); this.targetPoint.setAttribute('cy', f(y));
+    set(this.gcPath, 'data-path', long ? 'long' : 'short');
+    set(this.targetPoint, 'cx', f(x)); set(this.targetPoint, 'cy', f(y));
     const km = typeof info.distance_km === 'number' ? info.distance_km : long ? 2 * RIM_KM - gc.distance_km : gc.distance_km;
     this.gcLabel.textContent = `${info.locator ? info.locator + ' ' : ''}${Math.round(km)} km${long ? ' long' : ''}`;
     const right = x < 0.45;
-    this.gcLabel.setAttribute('x', f(x + (right ? 0.035 : -0.035)));
-    this.gcLabel.setAttribute('y', f(y - 0.03));
-    this.gcLabel.setAttribute('text-anchor', right ? 'start' : 'end');
+    set(this.gcLabel, 'x', f(x + (right ? 0.035 : -0.035)));
+    set(this.gcLabel, 'y', f(y - 0.03));
+    set(this.gcLabel, 'text-anchor', right ? 'start' : 'end');
   }
 
   /** The map point under a pointer event: bearing, radius, and with a station the place. */

@@ -68,8 +68,8 @@ export class SkyView {
       show(node, on);
       if (!on) return;
       const [x, y] = polar(az, radius(Math.min(el, 90)));
-      node.setAttribute('cx', f(x));
-      node.setAttribute('cy', f(y));
+      if (node.getAttribute('cx') !== f(x)) node.setAttribute('cx', f(x));
+      if (node.getAttribute('cy') !== f(y)) node.setAttribute('cy', f(y));
     };
     put(this.antenna, st.bearing, st.elevation);
     const moving = st.state === 'moving' || st.state === 'braking';
