@@ -85,6 +85,8 @@ const set = (node, name, value) => {
   if (node.getAttribute(name) !== text) node.setAttribute(name, text);
 };
 const CARDINAL = { 0: 'N', 90: 'E', 180: 'S', 270: 'W' };
+const PRESET_GAP_DEG = 14; // labels closer than this on one ring would overlap
+const PRESET_LANES = 3;
 const BODY_GLYPH = { sun: '\u2600', moon: '\u263E' };
 
 /** The bearing ring with its ticks and labels, on any polar SVG (the map and the sky plot). */
@@ -158,7 +160,7 @@ export class MapView {
       const r = km / RIM_KM;
       svg('circle', { class: 'dist-ring', r: f(r) }, this.gridLayer);
       const [x, y] = polar(180, r);
-      label(`${km / 1000}k km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
+      label(`${km} km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
     }
   }
 
@@ -179,11 +181,18 @@ export class MapView {
       svg('path', { d: 'M0 -1L-0.032 -0.95L0.032 -0.95Z' }, g);
       label('P', { x: 0, y: -0.905, transform: `rotate(${-cfg.park[0]} 0 -0.905)` }, g);
     }
-    for (const [name, [az]] of Object.entries(cfg.presets || {})) {
-      const g = svg('g', { class: 'preset', 'data-preset': name, 'data-bearing': az, tabindex: -1 }, this.fixedLayer);
-      svg('path', { class: 'preset-hit', d: sectorPath(az - 2.5, az + 2.5, 1.05, 0.86) }, g);
-      svg('line', { class: 'preset-tick', x1: polar(az, 0.9)[0], y1: polar(az, 0.9)[1], x2: polar(az, 1.045)[0], y2: polar(az, 1.045)[1] }, g);
-      const [x, y] = polar(az, 0.85);
+    const lanes = []; // the bearing of the last label in each ring of labels, inward
+    const presets = Object.entries(cfg.presets || {}).sort((a, b) => norm360(a[1][0]) - norm360(b[1][0]));
+    for (const [name, [az]] of presets) {
+      // a label too close to the last one in its ring moves one ring inward
+      let lane = lanes.findIndex((last) => Math.abs(norm360(az - last + 180) - 180) >= PRESET_GAP_DEG);
+      if (lane < 0) lane = Math.min(lanes.length, PRESET_LANES - 1);
+      lanes[lane] = az;
+      const inner = 0.85 - lane * 0.075;
+      const g = svg('g', { class: 'preset', 'data-preset': name, 'data-bearing': az }, this.fixedLayer);
+      svg('path', { class: 'preset-hit', d: sectorPath(az - 2.5, az + 2.5, 1.05, inner - 0.04) }, g);
+      svg('path', { class: 'preset-tick', d: `M${pt(az, inner + 0.045)}L${pt(az, 1.045)}` }, g);
+      const [x, y] = polar(az, inner);
       label(name, { x: f(x), y: f(y) }, g);
       g.addEventListener('click', (e) => { e.stopPropagation(); onPreset(name); });
     }
