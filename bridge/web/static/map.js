@@ -79,6 +79,7 @@ function label(text, attrs, parent) {
   return node;
 }
 
+const tip = (node, text) => { svg('title', {}, node).textContent = text; };
 const show = (node, on) => node.classList.toggle('off', !on);
 const set = (node, name, value) => {
   const text = String(value);
@@ -170,10 +171,12 @@ export class MapView {
     this.sectorLayer.replaceChildren();
     this.fixedLayer.replaceChildren();
     for (const [from, to] of cfg.unreachable_deg || []) {
-      svg('path', { class: 'unreachable', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      const p = svg('path', { class: 'unreachable', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      tip(p, `beyond the rotator's limits: ${from}\u00B0\u2013${to}\u00B0`);
     }
     for (const [from, to] of cfg.keep_out_deg || []) {
-      svg('path', { class: 'keepout', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      const p = svg('path', { class: 'keepout', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      tip(p, `keep-out sector ${from}\u00B0\u2013${to}\u00B0: targets here are refused`);
       svg('path', { class: 'keepout-band', d: sectorPath(from, to, 1.045, 1) }, this.sectorLayer);
     }
     if (cfg.park) {
@@ -190,6 +193,7 @@ export class MapView {
       lanes[lane] = az;
       const inner = 0.85 - lane * 0.075;
       const g = svg('g', { class: 'preset', 'data-preset': name, 'data-bearing': az }, this.fixedLayer);
+      tip(g, `preset ${name}: ${az}\u00B0 (click to turn there)`);
       svg('path', { class: 'preset-hit', d: sectorPath(az - 2.5, az + 2.5, 1.05, inner - 0.04) }, g);
       svg('path', { class: 'preset-tick', d: `M${pt(az, inner + 0.045)}L${pt(az, 1.045)}` }, g);
       const [x, y] = polar(az, inner);
