@@ -231,6 +231,9 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
   put('bearing', fmtDeg(st.bearing));
   if (cfg.has_elevation) put('elevation', `el ${fmtDeg(st.elevation)}`);
   const state = st.state || 'unknown';
+  // the same at a glance in the map's corner, for a phone or a card where the panel is below
+  put('corner-bearing', cfg.has_elevation ? `${fmtDeg(st.bearing)} ${fmtDeg(st.elevation)}` : fmtDeg(st.bearing));
+  put('corner-state', state);
   put('state', st.estimated ? `${state} (estimate)` : state);
   mark($('state'), 'data-state', state);
   mark(document.body, 'data-state', state);
