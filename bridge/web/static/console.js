@@ -32,6 +32,7 @@ const app = {
   landKey: null,
   land: null,
   lastShown: null,
+  tabs: new Map(), // rotator id -> its tab button
 };
 
 const map = new MapView($('map'));
@@ -48,6 +49,22 @@ const isTextBox = (el) =>
   el instanceof HTMLElement &&
   (el.isContentEditable || el.tagName === 'TEXTAREA' ||
     (el.tagName === 'INPUT' && !['button', 'checkbox', 'radio', 'submit', 'reset', 'range', 'color'].includes(el.type)));
+
+// a status rewrites only what changed: an unchanged text or attribute costs no style work
+const put = (id, text) => {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+};
+const mark = (el, name, value) => {
+  if (el.getAttribute(name) !== value) el.setAttribute(name, value);
+};
+const flag = (el, name, on) => {
+  if (el.classList.contains(name) !== on) el.classList.toggle(name, on);
+};
+const hide = (id, hidden) => {
+  const el = $(id);
+  if (el.hidden !== hidden) el.hidden = hidden;
+};
 
 // ---- the configuration ------------------------------------------------------------------
 async function applyConfig(config) {
@@ -82,6 +99,7 @@ async function applyConfig(config) {
 function buildTabs(rotators) {
   const tabs = $('tabs');
   tabs.replaceChildren();
+  app.tabs.clear();
   tabs.hidden = rotators.length < 2;
   document.body.classList.toggle('multi', rotators.length > 1);
   for (const r of rotators) {
@@ -97,17 +115,19 @@ function buildTabs(rotators) {
     b.append(name, bearing);
     b.addEventListener('click', () => selectRotator(r.id));
     tabs.appendChild(b);
+    app.tabs.set(r.id, b);
     const st = app.status.get(r.id);
     if (st) updateTab(r.id, st);
   }
 }
 
 function updateTab(id, st) {
-  const tab = document.querySelector(`.tab[data-rotator="${CSS.escape(id)}"]`);
+  const tab = app.tabs.get(id);
   if (!tab) return;
-  tab.lastChild.textContent = fmtDeg(st.bearing);
-  tab.dataset.state = st.state || '';
-  tab.classList.toggle('locked', Boolean(st.locked));
+  const bearing = fmtDeg(st.bearing);
+  if (tab.lastChild.textContent !== bearing) tab.lastChild.textContent = bearing;
+  mark(tab, 'data-state', st.state || '');
+  flag(tab, 'locked', Boolean(st.locked));
 }
 
 function selectRotator(id) {
@@ -210,22 +230,6 @@ function onStatus(doc) {
   }
 }
 
-// a status rewrites only what changed: an unchanged text or attribute costs no style work
-const put = (id, text) => {
-  const el = $(id);
-  if (el.textContent !== text) el.textContent = text;
-};
-const mark = (el, name, value) => {
-  if (el.getAttribute(name) !== value) el.setAttribute(name, value);
-};
-const flag = (el, name, on) => {
-  if (el.classList.contains(name) !== on) el.classList.toggle(name, on);
-};
-const hide = (id, hidden) => {
-  const el = $(id);
-  if (el.hidden !== hidden) el.hidden = hidden;
-};
-
 function renderStatus(id, st, tracking = trackingOf(st)) {
   const cfg = app.rotators.get(id);
   put('bearing', fmtDeg(st.bearing));
@@ -310,7 +314,7 @@ function showMessage(id, text, kind) {
   const msg = { text, kind, time: new Date() };
   app.messages.set(id, msg);
   if (id === app.selected) renderMessage(msg);
-  else document.querySelector(`.tab[data-rotator="${CSS.escape(id)}"]`)?.classList.add('has-message');
+  else app.tabs.get(id)?.classList.add('has-message');
 }
 
 function renderMessage(msg) {
@@ -323,7 +327,7 @@ function renderMessage(msg) {
   const when = document.createElement('time');
   when.textContent = msg.time.toLocaleTimeString([], { hour12: false });
   el.replaceChildren(when, ` ${msg.text}`);
-  document.querySelector(`.tab[data-rotator="${CSS.escape(app.selected)}"]`)?.classList.remove('has-message');
+  app.tabs.get(app.selected)?.classList.remove('has-message');
 }
 
 function clearMessage(id) {
