@@ -1,0 +1,478 @@
+// The operator console: what the bridge says, drawn (map, panel, sky), and what the user asks, sent.
+//
+// Rules:
+// 1. The link (token, login, stream, reconnecting) is live.js's; this module draws what it
+//    brings and sends what the user asks. Every URL is relative.
+// 2. A lost link greys the page at once (body.offline) and says so in #connection.
+// 3. A status only updates text and attributes (the map is not rebuilt), and records the
+//    latency from the bridge's t to the render in window.rotorConsole.latencies_ms (the last
+//    10000) for the benchmark.
+// 4. STOP is the #stop button, Escape anywhere, and Space anywhere outside a text box. Space
+//    never activates the focused button: whoever presses Space to stop must not park.
+// 5. A refusal (409/400 to a POST, or an error event) goes to #message; the same text for the
+//    same rotator within 2 s is one refusal, shown once.
+
+import { MapView, RIM_KM, norm360 } from './map.js';
+import { SkyView } from './sky.js';
+import { authHeaders, connect, dropToken, getToken, postJSON, session } from './live.js';
+
+const LATENCIES_MAX = 10000;
+const SAME_REFUSAL_MS = 2000;
+
+const $ = (id) => document.getElementById(id);
+const metrics = { latencies_ms: [] };
+window.rotorConsole = metrics;
+
+const app = {
+  config: null,
+  rotators: new Map(),
+  status: new Map(),
+  messages: new Map(),
+  selected: null,
+  landKey: null,
+  land: null,
+  lastShown: null,
+  tabs: new Map(), // rotator id -> its tab button
+};
+
+const map = new MapView($('map'));
+const sky = new SkyView($('sky'), (az, el) => send({ command: 'target', az: round1(az), el: round1(el) }));
+
+const round1 = (v) => Math.round(v * 10) / 10;
+const fmtDeg = (v) => (typeof v === 'number' && Number.isFinite(v) ? `${round1(v)}\u00B0` : '\u2014');
+const fmtKm = (v) => `${Math.round(v).toLocaleString('en-US')} km`;
+const fmtTime = (iso) => {
+  const d = new Date(iso);
+  return Number.isNaN(d.getTime()) ? '' : d.toLocaleTimeString([], { hour: '2-digit', minute: '2-digit', hour12: false });
+};
+const isTextBox = (el) =>
+  el instanceof HTMLElement &&
+  (el.isContentEditable || el.tagName === 'TEXTAREA' ||
+    (el.tagName === 'INPUT' && !['button', 'checkbox', 'radio', 'submit', 'reset', 'range', 'color'].includes(el.type)));
+
+// a status rewrites only what changed: an unchanged text or attribute costs no style work
+const put = (id, text) => {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+};
+const mark = (el, name, value) => {
+  if (el.getAttribute(name) !== value) el.setAttribute(name, value);
+};
+const flag = (el, name, on) => {
+  if (el.classList.contains(name) !== on) el.classList.toggle(name, on);
+};
+const hide = (id, hidden) => {
+  const el = $(id);
+  if (el.hidden !== hidden) el.hidden = hidden;
+};
+
+// ---- the configuration ------------------------------------------------------------------
+async function applyConfig(config) {
+  app.config = config;
+  app.rotators = new Map(config.rotators.map((r) => [r.id, r]));
+  const key = config.station ? JSON.stringify(config.station) : null;
+  if (key !== app.landKey) {
+    app.land = null;
+    if (key) {
+      try {
+        const res = await fetch('api/land', { headers: authHeaders(), signal: AbortSignal.timeout(30000) });
+        if (res.ok) app.land = await res.json();
+      } catch (err) {
+        console.warn('no coastlines this time:', err); // the map works without them
+      }
+    }
+    if (app.land || !key) app.landKey = key; // else try again on the next connect
+  }
+  map.setStation(config.station, app.land);
+  $('no-station').hidden = Boolean(config.station);
+  document.body.classList.toggle('dial-mode', !config.station);
+  $('locator-form').hidden = !config.station;
+  buildTabs(config.rotators);
+  let wanted = '';
+  try {
+    wanted = decodeURIComponent(location.hash.slice(1));
+  } catch { /* a hash that is no rotator's id */ }
+  const id = app.rotators.has(app.selected) ? app.selected : app.rotators.has(wanted) ? wanted : config.rotators[0]?.id;
+  if (id) selectRotator(id);
+}
+
+function buildTabs(rotators) {
+  const tabs = $('tabs');
+  tabs.replaceChildren();
+  app.tabs.clear();
+  tabs.hidden = rotators.length < 2;
+  document.body.classList.toggle('multi', rotators.length > 1);
+  for (const r of rotators) {
+    const b = document.createElement('button');
+    b.type = 'button';
+    b.className = 'tab';
+    b.dataset.rotator = r.id;
+    b.setAttribute('role', 'tab');
+    const name = document.createElement('span');
+    name.textContent = r.name || r.id;
+    const bearing = document.createElement('span');
+    bearing.className = 'tab-bearing';
+    b.append(name, bearing);
+    b.addEventListener('click', () => selectRotator(r.id));
+    tabs.appendChild(b);
+    app.tabs.set(r.id, b);
+    const st = app.status.get(r.id);
+    if (st) updateTab(r.id, st);
+  }
+}
+
+function updateTab(id, st) {
+  const tab = app.tabs.get(id);
+  if (!tab) return;
+  const bearing = fmtDeg(st.bearing);
+  if (tab.lastChild.textContent !== bearing) tab.lastChild.textContent = bearing;
+  mark(tab, 'data-state', st.state || '');
+  flag(tab, 'locked', Boolean(st.locked));
+}
+
+function selectRotator(id) {
+  const cfg = app.rotators.get(id);
+  if (!cfg) return;
+  app.selected = id;
+  if (app.rotators.size > 1 && location.hash.slice(1) !== id) history.replaceState(null, '', `#${encodeURIComponent(id)}`);
+  for (const tab of document.querySelectorAll('.tab')) tab.setAttribute('aria-selected', String(tab.dataset.rotator === id));
+  $('title').textContent = cfg.name || cfg.id;
+  $('model').textContent = cfg.model || '';
+  map.setRotator(cfg, (name) => send({ command: 'preset', name }));
+  buildPresets(cfg);
+  $('park').hidden = !cfg.park;
+  const step = cfg.nudge_step_deg || 5;
+  $('nudge-ccw').textContent = `\u27F2 \u2212${step}\u00B0`;
+  $('nudge-cw').textContent = `+${step}\u00B0 \u27F3`;
+  $('nudge-up').hidden = $('nudge-down').hidden = !cfg.has_elevation;
+  $('nudge-up').textContent = `el +${step}\u00B0`;
+  $('nudge-down').textContent = `el \u2212${step}\u00B0`;
+  $('elevation').hidden = !cfg.has_elevation;
+  $('sky-box').hidden = !cfg.has_elevation;
+  $('track-row').hidden = !cfg.can_track;
+  buildTrackOptions(cfg);
+  document.body.classList.toggle('azel', Boolean(cfg.has_elevation));
+  const msg = app.messages.get(id);
+  renderMessage(msg);
+  renderStatus(id, app.status.get(id) || { bearing: null, target: null, state: 'unknown' });
+}
+
+function buildPresets(cfg) {
+  const box = $('presets');
+  box.replaceChildren();
+  for (const [name, [az, el]] of Object.entries(cfg.presets || {})) {
+    const b = document.createElement('button');
+    b.type = 'button';
+    b.className = 'preset-button';
+    b.dataset.preset = name;
+    const label = document.createElement('span');
+    label.textContent = name;
+    const where = document.createElement('small');
+    where.textContent = el == null ? fmtDeg(az) : `${fmtDeg(az)} / ${fmtDeg(el)}`;
+    b.append(label, where);
+    b.addEventListener('click', () => send({ command: 'preset', name }));
+    box.appendChild(b);
+  }
+}
+
+function buildTrackOptions(cfg) {
+  const select = $('track');
+  select.replaceChildren();
+  const add = (value, text, parent = select) => {
+    const o = document.createElement('option');
+    o.value = value;
+    o.textContent = text;
+    parent.appendChild(o);
+  };
+  add('off', 'off');
+  add('sun', 'Sun');
+  add('moon', 'Moon');
+  if ((cfg.satellites || []).length) {
+    const group = document.createElement('optgroup');
+    group.label = 'Satellites';
+    for (const name of cfg.satellites) add(name, name, group);
+    select.appendChild(group);
+  }
+}
+
+// ---- status (rule 3) --------------------------------------------------------------------
+function trackingOf(st) {
+  const t = st.tracking;
+  if (!t) return null;
+  const next = t.next || {};
+  return {
+    body: t.body,
+    phase: t.phase,
+    az: t.azimuth ?? t.azimuth_deg ?? null,
+    el: t.elevation ?? t.elevation_deg ?? null,
+    nextAz: next.azimuth ?? t.next_azimuth_deg ?? null,
+    nextEl: next.elevation ?? t.next_elevation_deg ?? null,
+    aosAz: t.aos_azimuth ?? t.aos_azimuth_deg ?? null,
+    maxEl: t.max_elevation ?? t.max_elevation_deg ?? null,
+    aos: t.aos,
+    los: t.los,
+  };
+}
+
+function onStatus(doc) {
+  const id = doc.rotator;
+  const st = doc.status;
+  if (!st || !app.rotators.has(id)) return;
+  app.status.set(id, st);
+  const tracking = trackingOf(st);
+  sky.record(id, tracking);
+  updateTab(id, st);
+  if (id === app.selected) renderStatus(id, st, tracking);
+  if (typeof doc.t === 'number') {
+    const list = metrics.latencies_ms;
+    list.push(performance.timeOrigin + performance.now() - doc.t * 1000);
+    if (list.length > LATENCIES_MAX) list.splice(0, list.length - LATENCIES_MAX);
+  }
+}
+
+function renderStatus(id, st, tracking = trackingOf(st)) {
+  const cfg = app.rotators.get(id);
+  put('bearing', fmtDeg(st.bearing));
+  if (cfg.has_elevation) put('elevation', `el ${fmtDeg(st.elevation)}`);
+  const state = st.state || 'unknown';
+  // the same at a glance in the map's corner, for a phone or a card where the panel is below
+  put('corner-bearing', cfg.has_elevation ? `${fmtDeg(st.bearing)} ${fmtDeg(st.elevation)}` : fmtDeg(st.bearing));
+  put('corner-state', state);
+  put('state', st.estimated ? `${state} (estimate)` : state);
+  mark($('state'), 'data-state', state);
+  mark(document.body, 'data-state', state);
+  let target = '\u2014';
+  if (typeof st.target === 'number') {
+    target = fmtDeg(st.target);
+    if (typeof st.target_elevation === 'number') target += ` / el ${fmtDeg(st.target_elevation)}`;
+  }
+  const info = st.target_info;
+  if (info) {
+    const where = info.locator || `${round1(info.latitude ?? info.latitude_deg)}, ${round1(info.longitude ?? info.longitude_deg)}`;
+    target += ` \u00B7 ${where} \u00B7 ${fmtKm(info.distance_km || 0)} ${info.path || 'short'} path`;
+  }
+  put('target', target);
+  put('source', st.last_command_source || '\u2014');
+  const locked = Boolean(st.locked);
+  mark($('lock'), 'aria-pressed', String(locked));
+  put('lock', locked ? 'Lock ON' : 'Lock OFF');
+  flag(document.body, 'locked', locked);
+  flag(document.body, 'rotor-down', st.available === false);
+  hide('path-row', !info);
+  if (info) {
+    mark($('path-long'), 'aria-pressed', String(info.path === 'long'));
+    mark($('path-short'), 'aria-pressed', String(info.path !== 'long'));
+    put('path-short', `Short ${fmtDeg(info.short_path_deg)}`);
+    put('path-long', `Long ${fmtDeg(info.long_path_deg)}`);
+  }
+  const body = tracking ? tracking.body : 'off';
+  const select = $('track');
+  if (select.value !== body) {
+    if (![...select.options].some((o) => o.value === body)) {
+      select.add(new Option(body, body)); // a satellite the TLE file no longer names
+    }
+    select.value = body;
+  }
+  hide('tracking-label', !tracking);
+  hide('tracking-info', !tracking);
+  if (tracking) {
+    let text = `${tracking.body} \u00B7 ${tracking.phase || ''}`;
+    if (typeof tracking.az === 'number') text += ` \u00B7 az ${fmtDeg(tracking.az)} el ${fmtDeg(tracking.el)}`;
+    if (tracking.aos) text += ` \u00B7 AOS ${fmtTime(tracking.aos)} LOS ${fmtTime(tracking.los)}`;
+    if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
+    put('tracking-info', text);
+  }
+  renderBadges(st, tracking);
+  map.update(st, tracking);
+  if (cfg.has_elevation) sky.update(id, st, tracking);
+}
+
+let badgeKey = '';
+function renderBadges(st, tracking) {
+  const badges = [];
+  if (st.available === false) badges.push(['down', 'ROTATOR OFFLINE']);
+  if (st.locked) badges.push(['locked', 'LOCKED']);
+  if (st.parked) badges.push(['parked', 'PARKED']);
+  if (tracking) badges.push(['tracking', `TRACKING ${tracking.body.toUpperCase()}`]);
+  const key = badges.map((b) => b[1]).join('|');
+  if (key === badgeKey) return;
+  badgeKey = key;
+  $('badges').replaceChildren(...badges.map(([cls, text]) => {
+    const s = document.createElement('span');
+    s.className = `badge ${cls}`;
+    s.textContent = text;
+    return s;
+  }));
+}
+
+// ---- messages (rule 5) ------------------------------------------------------------------
+function showMessage(id, text, kind) {
+  const now = performance.now();
+  const last = app.lastShown;
+  if (last && last.id === id && last.text === text && now - last.at < SAME_REFUSAL_MS) return;
+  app.lastShown = { id, text, at: now };
+  const msg = { text, kind, time: new Date() };
+  app.messages.set(id, msg);
+  if (id === app.selected) renderMessage(msg);
+  else app.tabs.get(id)?.classList.add('has-message');
+}
+
+function renderMessage(msg) {
+  const el = $('message');
+  el.className = `message ${msg ? msg.kind : ''}`;
+  if (!msg) {
+    el.textContent = '';
+    return;
+  }
+  const when = document.createElement('time');
+  when.textContent = msg.time.toLocaleTimeString([], { hour12: false });
+  el.replaceChildren(when, ` ${msg.text}`);
+  app.tabs.get(app.selected)?.classList.remove('has-message');
+}
+
+function clearMessage(id) {
+  app.messages.delete(id);
+  if (id === app.selected) renderMessage(null);
+}
+
+function onErrorEvent(doc) {
+  if (!doc || !doc.rotator) return;
+  const text = doc.kind === 'refused' || !doc.kind ? doc.message : `${doc.kind}: ${doc.message}`;
+  showMessage(doc.rotator, text, doc.kind === 'refused' ? 'refusal' : 'error');
+}
+
+// ---- commands ---------------------------------------------------------------------------
+async function send(body, id = app.selected) {
+  if (!id) return false;
+  const url = `api/rotators/${encodeURIComponent(id)}/command`;
+  for (let attempt = 0; attempt < 2; attempt++) {
+    let res;
+    try {
+      res = await postJSON(url, body, authHeaders());
+    } catch {
+      showMessage(id, 'the bridge is not reachable: nothing was sent', 'error');
+      return false;
+    }
+    if (res.ok) {
+      clearMessage(id);
+      return true;
+    }
+    if (res.status === 401 && attempt === 0) {
+      dropToken();
+      if (session.password) {
+        showMessage(id, 'the session ended: log in again (nothing was sent)', 'error');
+        getToken();
+        return false;
+      }
+      try {
+        await getToken();
+      } catch {
+        break;
+      }
+      continue;
+    }
+    const answer = await res.json().catch(() => ({}));
+    showMessage(id, answer.error || `refused (HTTP ${res.status})`, 'refusal');
+    if (body.command === 'track') renderStatus(id, app.status.get(id) || {});
+    return false;
+  }
+  showMessage(id, 'no session: nothing was sent', 'error');
+  return false;
+}
+
+const stop = () => send({ command: 'stop' });
+
+$('stop').addEventListener('click', stop);
+$('park').addEventListener('click', () => send({ command: 'park' }));
+$('lock').addEventListener('click', () => send({ command: 'lock', on: $('lock').getAttribute('aria-pressed') !== 'true' }));
+const step = () => app.rotators.get(app.selected)?.nudge_step_deg || 5;
+$('nudge-ccw').addEventListener('click', () => send({ command: 'nudge', d_az: -step(), d_el: 0 }));
+$('nudge-cw').addEventListener('click', () => send({ command: 'nudge', d_az: step(), d_el: 0 }));
+$('nudge-down').addEventListener('click', () => send({ command: 'nudge', d_az: 0, d_el: -step() }));
+$('nudge-up').addEventListener('click', () => send({ command: 'nudge', d_az: 0, d_el: step() }));
+$('path-long').addEventListener('click', () => send({ command: 'path', long_path: true }));
+$('path-short').addEventListener('click', () => send({ command: 'path', long_path: false }));
+$('track').addEventListener('change', (e) => send({ command: 'track', body: e.target.value }));
+$('locator-form').addEventListener('submit', (e) => {
+  e.preventDefault();
+  const locator = $('locator').value.replace(/\s+/g, '');
+  if (locator) send({ command: 'toward', locator, long_path: false });
+});
+
+// rule 4: capture phase, before any focused control sees the key
+window.addEventListener('keydown', (e) => {
+  if (e.key === 'Escape') {
+    if (!e.repeat) stop();
+  } else if ((e.key === ' ' || e.code === 'Space') && !isTextBox(e.target)) {
+    e.preventDefault();
+    e.stopPropagation();
+    if (!e.repeat) stop();
+  }
+}, true);
+window.addEventListener('keyup', (e) => {
+  if ((e.key === ' ' || e.code === 'Space') && !isTextBox(e.target)) {
+    e.preventDefault();
+    e.stopPropagation();
+  }
+}, true);
+
+// ---- the map: hover says where, a click turns there --------------------------------------
+const pointer = $('pointer');
+let pointerNote = pointer.textContent;
+
+function describe(p, long) {
+  if (p.distance_km === undefined) {
+    const b = long ? norm360(p.bearing + 180) : p.bearing;
+    return `${fmtDeg(b)}${app.config && app.config.station ? ' (bearing ring)' : ''}`;
+  }
+  const ns = p.lat >= 0 ? 'N' : 'S';
+  const ew = p.lon >= 0 ? 'E' : 'W';
+  const place = `${Math.abs(p.lat).toFixed(2)}\u00B0${ns} ${Math.abs(p.lon).toFixed(2)}\u00B0${ew}`;
+  if (long) return `${fmtDeg(norm360(p.bearing + 180))} \u00B7 ${fmtKm(2 * RIM_KM - p.distance_km)} long path \u00B7 ${place}`;
+  return `${fmtDeg(p.bearing)} \u00B7 ${fmtKm(p.distance_km)} \u00B7 ${place}`;
+}
+
+function short(p, long) {
+  const b = fmtDeg(long ? norm360(p.bearing + 180) : p.bearing);
+  if (p.distance_km === undefined) return b;
+  return `${b} ${fmtKm(long ? 2 * RIM_KM - p.distance_km : p.distance_km)}`;
+}
+
+$('map').addEventListener('pointermove', (e) => {
+  const p = map.pick(e);
+  if (!p || p.r > 1.1 || e.pointerType === 'touch') return map.hover(null);
+  pointer.textContent = describe(p, e.shiftKey);
+  map.hover(p, e.shiftKey && p.distance_km !== undefined, short(p, e.shiftKey));
+});
+$('map').addEventListener('pointerleave', () => {
+  pointer.textContent = pointerNote;
+  map.hover(null);
+});
+$('map').addEventListener('click', (e) => {
+  const p = map.pick(e);
+  if (!p || p.r > 1.1 || !app.selected) return;
+  const long = e.shiftKey;
+  map.markClick(p);
+  pointerNote = `sent: ${describe(p, long)}`;
+  pointer.textContent = pointerNote;
+  if (p.distance_km !== undefined && p.r > 1e-6) {
+    send({ command: 'toward', latitude_deg: +p.lat.toFixed(5), longitude_deg: +p.lon.toFixed(5), long_path: long });
+  } else {
+    send({ command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) });
+  }
+});
+
+connect({
+  onConfig: applyConfig,
+  onEvent: (type, doc) => {
+    if (type === 'status') onStatus(doc);
+    else if (type === 'error') onErrorEvent(doc);
+  },
+  onOnline: (online, configured) => {
+    document.body.classList.toggle('offline', !online);
+    document.body.classList.remove('starting');
+    const why = configured ? 'connection lost \u2014 reconnecting' : 'bridge not reachable \u2014 retrying';
+    $('connection').textContent = online ? 'live' : why;
+    $('connection').className = online ? 'connection' : 'connection lost';
+  },
+});

@@ -1,0 +1,195 @@
+// The link to the bridge: the session token, the login form, and the live event stream.
+//
+// Rules:
+// 1. Every URL is relative (the page runs behind a path prefix and in an iframe); every api/
+//    request but hello/session/login carries X-Rotor-Token. A 401 drops the token: without a
+//    password a new one is fetched at once, with one the login form is shown.
+// 2. The stream is api/events read with fetch and a stream reader (an EventSource cannot send
+//    the header). When it ends, fails, or is silent for 25 s, the page is told at once
+//    (onOnline(false)) and it reconnects: every 1 s, then backing off to 5 s; each connect
+//    reads api/config first (onConfig), since the bridge may have restarted with another one.
+
+const TOKEN_KEY = 'rotor-bridge-token';
+const SILENCE_MS = 25000;
+const ASK_MS = 15000; // a request the bridge has not answered by then is lost
+const RETRY_MS = [1000, 1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000];
+const $ = (id) => document.getElementById(id);
+const delay = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+// sessionStorage may be refused in a third-party iframe: the token then lives in this page only
+const store = {
+  get: () => { try { return sessionStorage.getItem(TOKEN_KEY); } catch { return null; } },
+  set: (v) => { try { sessionStorage.setItem(TOKEN_KEY, v); } catch { /* this page only */ } },
+  drop: () => { try { sessionStorage.removeItem(TOKEN_KEY); } catch { /* this page only */ } },
+};
+
+export const session = { token: store.get(), password: false };
+
+export function dropToken() {
+  session.token = null;
+  store.drop();
+}
+
+let tokenPending = null;
+export function getToken() {
+  if (session.token) return Promise.resolve(session.token);
+  if (!tokenPending) tokenPending = newToken().finally(() => { tokenPending = null; });
+  return tokenPending;
+}
+
+async function newToken() {
+  const hello = await (await fetch('api/hello', { cache: 'no-store', signal: AbortSignal.timeout(ASK_MS) })).json();
+  session.password = Boolean(hello.password);
+  const token = session.password ? await askPassword() : await sessionToken();
+  session.token = token;
+  store.set(token);
+  return token;
+}
+
+async function sessionToken() {
+  const res = await postJSON('api/session', {});
+  if (!res.ok) throw new Error(`api/session: HTTP ${res.status}`);
+  return (await res.json()).token;
+}
+
+let loginWaiters = [];
+function askPassword() {
+  document.body.classList.add('login-needed');
+  $('login').hidden = false;
+  $('connection').textContent = 'log in to control the rotators';
+  $('connection').className = 'connection login';
+  $('password').focus();
+  return new Promise((resolve) => loginWaiters.push(resolve));
+}
+
+$('login').addEventListener('submit', async (e) => {
+  e.preventDefault();
+  const error = $('login-error');
+  error.textContent = '';
+  let res;
+  try {
+    res = await postJSON('api/login', { password: $('password').value });
+  } catch {
+    error.textContent = 'the bridge is not reachable';
+    return;
+  }
+  const body = await res.json().catch(() => ({}));
+  if (!res.ok) {
+    error.textContent = body.error || `HTTP ${res.status}`;
+    if (res.status === 429 && body.retry_after_s) holdLogin(body.retry_after_s);
+    return;
+  }
+  $('password').value = '';
+  $('login').hidden = true;
+  document.body.classList.remove('login-needed');
+  const waiters = loginWaiters;
+  loginWaiters = [];
+  waiters.forEach((resolve) => resolve(body.token));
+});
+
+function holdLogin(seconds) {
+  const go = $('login-go');
+  go.disabled = true;
+  setTimeout(() => { go.disabled = false; }, seconds * 1000);
+}
+
+export function postJSON(url, body, headers = {}) {
+  return fetch(url, {
+    method: 'POST',
+    cache: 'no-store',
+    headers: { 'Content-Type': 'application/json', ...headers },
+    body: JSON.stringify(body),
+  });
+}
+
+export const authHeaders = () => ({ 'X-Rotor-Token': session.token || '' });
+
+/** Connect, and stay connected, forever (rule 2). */
+export async function connect({ onConfig, onEvent, onOnline }) {
+  let configured = false;
+  let attempt = 0;
+  let quickRetry = true; // one 401 in a row retries at once with a new token
+  for (;;) {
+    try {
+      await getToken();
+      const cfg = await fetch('api/config', { cache: 'no-store', headers: authHeaders(), signal: AbortSignal.timeout(ASK_MS) });
+      if (cfg.status === 401) {
+        dropToken();
+        if (quickRetry) { quickRetry = false; continue; }
+      }
+      if (!cfg.ok) throw new Error(`api/config: HTTP ${cfg.status}`);
+      await onConfig(await cfg.json());
+      configured = true;
+      const abort = new AbortController();
+      const unanswered = setTimeout(() => abort.abort(), ASK_MS);
+      const res = await fetch('api/events', { cache: 'no-store', headers: authHeaders(), signal: abort.signal });
+      clearTimeout(unanswered);
+      if (res.status === 401) {
+        dropToken();
+        if (quickRetry) { quickRetry = false; continue; }
+      }
+      if (!res.ok || !res.body) throw new Error(`api/events: HTTP ${res.status}`);
+      quickRetry = true;
+      attempt = 0;
+      onOnline(true);
+      await readEvents(res.body, abort, onEvent);
+    } catch (err) {
+      if (!configured) console.warn(err);
+    }
+    onOnline(false, configured);
+    await delay(RETRY_MS[Math.min(attempt++, RETRY_MS.length - 1)]);
+  }
+}
+
+async function readEvents(body, abort, onEvent) {
+  const reader = body.getReader();
+  const decoder = new TextDecoder();
+  let watchdog = 0;
+  const kick = () => {
+    clearTimeout(watchdog);
+    watchdog = setTimeout(() => abort.abort(), SILENCE_MS);
+  };
+  let buffer = '';
+  let type = '';
+  let data = [];
+  kick();
+  try {
+    for (;;) {
+      const { value, done } = await reader.read();
+      if (done) return;
+      kick();
+      buffer += decoder.decode(value, { stream: true });
+      let nl;
+      while ((nl = buffer.indexOf('\n')) >= 0) {
+        let line = buffer.slice(0, nl);
+        buffer = buffer.slice(nl + 1);
+        if (line.endsWith('\r')) line = line.slice(0, -1);
+        if (line === '') {
+          if (data.length) dispatch(onEvent, type || 'message', data.join('\n'));
+          type = '';
+          data = [];
+        } else if (line[0] !== ':') {
+          const colon = line.indexOf(':');
+          const field = colon < 0 ? line : line.slice(0, colon);
+          let v = colon < 0 ? '' : line.slice(colon + 1);
+          if (v[0] === ' ') v = v.slice(1);
+          if (field === 'event') type = v;
+          else if (field === 'data') data.push(v);
+        }
+      }
+    }
+  } finally {
+    clearTimeout(watchdog);
+    abort.abort();
+  }
+}
+
+function dispatch(onEvent, type, text) {
+  let doc;
+  try {
+    doc = JSON.parse(text);
+  } catch {
+    return; // not ours to judge: the next event is independent
+  }
+  onEvent(type, doc);
+}
