@@ -73,7 +73,10 @@ def test_901_reads_the_fact_sheet_position(spid_port: SpidPortFactory, rotctl: R
 
 
 def test_901_set_position_moves_the_rotor(spid_port: SpidPortFactory, rotctl: Rotctl) -> None:
-    port = spid_port("rot2prog", az_speed_deg_s=500.0, el_speed_deg_s=500.0)
+    # fast enough to be there before rotctl's next frame even on a loaded machine: the set and
+    # the read below go in one rotctl run, 134 degrees apart (27 ms at this speed, a 13-byte
+    # frame at 600 baud takes 217 ms)
+    port = spid_port("rot2prog", az_speed_deg_s=5000.0, el_speed_deg_s=5000.0)
     assert values(rotctl(901, port, 600, "P", "123.5", "45")) == []
     port.wait_for(lambda s: not s.is_moving and (s.az_deg, s.el_deg) == (123.5, 45.0))
     assert wire(port) == [  # auto-sensed resolution first, then the set (spid.md section 7)
