@@ -21,7 +21,9 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
 5. Without a password the console only listens on loopback (settings_web.py) and takes only
    requests addressed to an IP literal, ``localhost`` or a name the user listed (``host_names``,
    a reverse proxy's): a web page whose own host name has been pointed at 127.0.0.1 (DNS
-   rebinding) would otherwise be "this host" and could fetch a token.
+   rebinding) would otherwise be "this host" and could fetch a token. Behind a proxy the name
+   asked for is the ``X-Forwarded-Host`` it passes on, checked the same way (a name pointed at
+   the proxy is the same attack).
 """
 
 from __future__ import annotations

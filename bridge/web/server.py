@@ -212,16 +212,18 @@ class WebConsole:
 
     def _refusal(self, request: web.Request) -> str | None:
         host = request.headers.get("Host")
-        if self._password is None and not auth.host_is_local_name(host, self._host_names):
-            return (
-                f"this console answers to IP addresses, localhost and web.host_names only, not "
-                f"{host!r}: without web.password_file a page from another name could drive it"
-            )
+        forwarded = request.headers.get("X-Forwarded-Host")
+        if self._password is None:  # auth.py rule 5: the name asked for, through a proxy too
+            for name in (host, *([forwarded.split(",")[0]] if forwarded else [])):
+                if not auth.host_is_local_name(name, self._host_names):
+                    return (
+                        f"this console answers to IP addresses, localhost and web.host_names "
+                        f"only, not {name!r}: without web.password_file a page from another "
+                        "name could drive it"
+                    )
         if request.method in ("GET", "HEAD"):
             return None
-        if not auth.origin_allowed(
-            request.headers.get("Origin"), host, request.headers.get("X-Forwarded-Host")
-        ):
+        if not auth.origin_allowed(request.headers.get("Origin"), host, forwarded):
             return "a request from another site's page is refused"
         if request.content_type != "application/json":
             return "commands are JSON (Content-Type: application/json)"

@@ -145,3 +145,25 @@ def test_pages_beyond_the_limit_are_refused_not_queued(
     finally:
         for stream in streams:
             stream.close()
+
+
+def test_a_name_pointed_at_a_proxy_is_refused_without_a_password(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """DNS rebinding through a reverse proxy: the proxy asks for 127.0.0.1, and passes the name
+    the browser used on in X-Forwarded-Host, which is the one that counts."""
+    rig, client = console
+    via = {
+        "Content-Type": "application/json",
+        "Host": f"127.0.0.1:{client.port}",
+        "X-Forwarded-Host": "evil.example",
+        "Origin": "http://evil.example",
+    }
+    assert client.request("POST", "/api/session", b"{}", via).status == 403
+    url, body = "/api/rotators/hf/command", b'{"command":"target","az":200}'
+    token = {"X-Rotor-Token": client.token or ""}
+    assert client.request("POST", url, body, {**via, **token}).status == 403
+    # the proxy reached by its address is served
+    lan = {**via, "X-Forwarded-Host": "192.168.1.10:8080", "Origin": "http://192.168.1.10:8080"}
+    assert client.request("POST", "/api/session", b"{}", lan).status == 200
+    assert rig.emu.frames(*BEARING_OUTCOMES) == []
