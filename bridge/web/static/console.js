@@ -57,17 +57,24 @@ async function applyConfig(config) {
   if (key !== app.landKey) {
     app.land = null;
     if (key) {
-      const res = await fetch('api/land', { headers: authHeaders() });
-      if (res.ok) app.land = await res.json();
+      try {
+        const res = await fetch('api/land', { headers: authHeaders(), signal: AbortSignal.timeout(30000) });
+        if (res.ok) app.land = await res.json();
+      } catch (err) {
+        console.warn('no coastlines this time:', err); // the map works without them
+      }
     }
-    app.landKey = key;
+    if (app.land || !key) app.landKey = key; // else try again on the next connect
   }
   map.setStation(config.station, app.land);
   $('no-station').hidden = Boolean(config.station);
   document.body.classList.toggle('dial-mode', !config.station);
   $('locator-form').hidden = !config.station;
   buildTabs(config.rotators);
-  const wanted = decodeURIComponent(location.hash.slice(1));
+  let wanted = '';
+  try {
+    wanted = decodeURIComponent(location.hash.slice(1));
+  } catch { /* a hash that is no rotator's id */ }
   const id = app.rotators.has(app.selected) ? app.selected : app.rotators.has(wanted) ? wanted : config.rotators[0]?.id;
   if (id) selectRotator(id);
 }
@@ -232,8 +239,14 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
   if (info) {
     $('path-long').setAttribute('aria-pressed', String(info.path === 'long'));
     $('path-short').setAttribute('aria-pressed', String(info.path !== 'long'));
+    $('path-short').textContent = `Short ${fmtDeg(info.short_path_deg)}`;
+    $('path-long').textContent = `Long ${fmtDeg(info.long_path_deg)}`;
   }
-  $('track').value = tracking ? tracking.body : 'off';
+  const body = tracking ? tracking.body : 'off';
+  if (![...$('track').options].some((o) => o.value === body)) {
+    $('track').add(new Option(body, body)); // a satellite the TLE file no longer names
+  }
+  $('track').value = body;
   $('tracking-label').hidden = $('tracking-info').hidden = !tracking;
   if (tracking) {
     let text = `${tracking.body} \u00B7 ${tracking.phase || ''}`;

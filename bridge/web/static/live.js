@@ -11,15 +11,23 @@
 
 const TOKEN_KEY = 'rotor-bridge-token';
 const SILENCE_MS = 25000;
+const ASK_MS = 15000; // a request the bridge has not answered by then is lost
 const RETRY_MS = [1000, 1000, 1000, 1000, 1000, 2000, 3000, 4000, 5000];
 const $ = (id) => document.getElementById(id);
 const delay = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-export const session = { token: sessionStorage.getItem(TOKEN_KEY), password: false };
+// sessionStorage may be refused in a third-party iframe: the token then lives in this page only
+const store = {
+  get: () => { try { return sessionStorage.getItem(TOKEN_KEY); } catch { return null; } },
+  set: (v) => { try { sessionStorage.setItem(TOKEN_KEY, v); } catch { /* this page only */ } },
+  drop: () => { try { sessionStorage.removeItem(TOKEN_KEY); } catch { /* this page only */ } },
+};
+
+export const session = { token: store.get(), password: false };
 
 export function dropToken() {
   session.token = null;
-  sessionStorage.removeItem(TOKEN_KEY);
+  store.drop();
 }
 
 let tokenPending = null;
@@ -30,11 +38,11 @@ export function getToken() {
 }
 
 async function newToken() {
-  const hello = await (await fetch('api/hello', { cache: 'no-store' })).json();
+  const hello = await (await fetch('api/hello', { cache: 'no-store', signal: AbortSignal.timeout(ASK_MS) })).json();
   session.password = Boolean(hello.password);
   const token = session.password ? await askPassword() : await sessionToken();
   session.token = token;
-  sessionStorage.setItem(TOKEN_KEY, token);
+  store.set(token);
   return token;
 }
 
@@ -104,7 +112,7 @@ export async function connect({ onConfig, onEvent, onOnline }) {
   for (;;) {
     try {
       await getToken();
-      const cfg = await fetch('api/config', { cache: 'no-store', headers: authHeaders() });
+      const cfg = await fetch('api/config', { cache: 'no-store', headers: authHeaders(), signal: AbortSignal.timeout(ASK_MS) });
       if (cfg.status === 401) {
         dropToken();
         if (quickRetry) { quickRetry = false; continue; }
@@ -113,7 +121,9 @@ export async function connect({ onConfig, onEvent, onOnline }) {
       await onConfig(await cfg.json());
       configured = true;
       const abort = new AbortController();
+      const unanswered = setTimeout(() => abort.abort(), ASK_MS);
       const res = await fetch('api/events', { cache: 'no-store', headers: authHeaders(), signal: abort.signal });
+      clearTimeout(unanswered);
       if (res.status === 401) {
         dropToken();
         if (quickRetry) { quickRetry = false; continue; }

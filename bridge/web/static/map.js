@@ -124,7 +124,7 @@ export class MapView {
     this.bodyMark = svg('g', { class: 'body-mark off' }, root);
     svg('circle', { class: 'body-dot', r: 0.035 }, this.bodyMark);
     this.bodyGlyph = label('', { class: 'body-glyph', y: 0.002 }, this.bodyMark);
-    this.bodyName = label('', { class: 'body-name', y: 0.075 }, this.bodyMark);
+    this.bodyName = label('', { class: 'body-name' }, this.bodyMark);
     this.hoverPath = svg('path', { class: 'hover-path off' }, root);
     this.hoverLabel = label('', { class: 'hover-label off' }, root);
     this.clickMark = svg('circle', { class: 'click-mark off', r: 0.022 }, root);
@@ -219,6 +219,9 @@ export class MapView {
       this.bodyMark.setAttribute('data-kind', kind);
       this.bodyGlyph.textContent = BODY_GLYPH[kind] || '\u2726';
       this.bodyName.textContent = tracking.body;
+      const [nx, ny] = polar(az, -0.085); // the name on the centre's side, clear of the ring
+      this.bodyName.setAttribute('x', f(nx));
+      this.bodyName.setAttribute('y', f(ny));
     }
   }
 
