@@ -8,7 +8,9 @@ address as its Origin, by IP or by a name, is accepted and turns the rotor (the 
 that address from X-Forwarded-Host, and is addressed as 127.0.0.1 itself), while one from
 another site's page is refused and moves nothing; the event stream reaches the page at once, not
 when a proxy buffer fills; and in Chromium the page served through the proxy connects, shows
-the bearing and turns the rotor with a click on the map.
+the bearing and turns the rotor with a click on the map. Framed as Home Assistant's Webpage card
+frames it (its sandbox), from a dashboard of another origin, the console shows and obeys only
+where ``frame_ancestors`` allows it.
 """
 
 from __future__ import annotations
@@ -66,9 +68,11 @@ class Proxy:
 
     fence = ""
 
-    def __init__(self, folder: Path, bridge_port: int) -> None:
+    def __init__(self, folder: Path, bridge_port: int, port: int | None = None) -> None:
         self.folder = folder
-        self.port = free_port()
+        self.port = port or free_port()
+        self.hosts = ["127.0.0.1"]  # the addresses it listens on
+        self.also = ""  # more of its server's configuration
         folder.mkdir()
         self.block = documented(self.fence).replace(DOCUMENTED_BRIDGE, f"127.0.0.1:{bridge_port}")
         self.log = folder / "stderr.log"
@@ -112,13 +116,14 @@ class Nginx(Proxy):
             f"    {kind}_temp_path {self.folder / kind};\n"
             for kind in ("client_body", "proxy", "fastcgi", "uwsgi", "scgi")
         )
-        conf = self.folder / "proxy.conf"
+        listen = "".join(f"        listen {host}:{self.port};\n" for host in self.hosts)
+        conf = self.folder / "nginx.conf"
         conf.write_text(
             f"{user}worker_processes 1;\nevents {{ worker_connections 64; }}\n"
             f"http {{\n    access_log off;\n{temp}"
-            f"    server {{\n        listen 127.0.0.1:{self.port};\n{self.block}    }}\n}}\n"
+            f"    server {{\n{listen}{self.also}{self.block}    }}\n}}\n"
         )
-        pid = self.folder / "proxy.pid"
+        pid = self.folder / "nginx.pid"
         return [
             *(installed("nginx"), "-e", "stderr", "-p", str(self.folder), "-c", str(conf)),
             *("-g", f"daemon off; pid {pid}; error_log stderr;"),
@@ -189,6 +194,16 @@ def _names(text: str) -> set[str]:
     """The files a page or module names: src/href attributes and module imports."""
     found = re.findall(r"""(?:src|href)="([^"]+)"|from\s+'([^']+)'""", text)
     return {a or b for a, b in found if not (a or b).startswith("data:")}
+
+
+def _click_bearing(map_: sync_api.Locator, page: sync_api.Page, bearing_deg: float) -> None:
+    """A click on the map halfway out at ``bearing_deg`` (north up, clockwise)."""
+    box = map_.bounding_box()
+    assert box is not None
+    radius = min(box["width"], box["height"]) / 2 * 0.5
+    x = box["x"] + box["width"] / 2 + radius * math.sin(math.radians(bearing_deg))
+    y = box["y"] + box["height"] / 2 - radius * math.cos(math.radians(bearing_deg))
+    page.mouse.click(x, y)
 
 
 def test_the_page_and_every_file_it_names_load_under_the_prefix(
@@ -267,13 +282,59 @@ def test_the_page_through_the_proxy_connects_and_a_click_turns_the_rotor(
             page.goto(proxy.origin + PREFIX)
             bearing = page.locator("#bearing")
             sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=10_000)
-            box = page.locator("#map").bounding_box()
-            assert box is not None
-            radius = min(box["width"], box["height"]) / 2 * 0.5
-            x = box["x"] + box["width"] / 2 + radius * math.sin(math.radians(90))
-            y = box["y"] + box["height"] / 2 - radius * math.cos(math.radians(90))
-            page.mouse.click(x, y)
+            _click_bearing(page.locator("#map"), page, 90)
             rig.arrived("hf", 90)
             sync_api.expect(bearing).to_have_text(re.compile(r"^(8[6-9]|9[0-4])"))
         finally:
             browser.close()
+
+
+# what Home Assistant's Webpage card puts on its frame (its frontend, hui-iframe-card)
+HA_SANDBOX = (
+    "allow-forms allow-modals allow-popups allow-pointer-lock allow-same-origin allow-scripts"
+)
+
+
+def test_in_a_webpage_card_the_console_works_where_frame_ancestors_allow_it(
+    rig: Rig, tmp_path: Path
+) -> None:
+    """Home Assistant's Webpage card: a dashboard of another origin frames the proxied console.
+    The dashboard named in frame_ancestors shows it and drives it; another one gets nothing."""
+    port = free_port()
+    dashboard, stranger = f"http://127.0.0.2:{port}", f"http://127.0.0.3:{port}"
+    rig.sections["station"] = {"locator": "JO62qm"}
+    web = rig.sections["web"] = web_section(frame_ancestors=[dashboard])
+    rig.add("hf")
+    rig.start()
+    rig.ready("hf")
+    www = tmp_path / "www"
+    www.mkdir()
+    console = f"http://127.0.0.1:{port}{PREFIX}"
+    (www / "card.html").write_text(
+        f'<!doctype html><title>dashboard</title><iframe src="{console}" sandbox="{HA_SANDBOX}" '
+        'width="1000" height="700"></iframe>'
+    )
+    nginx = Nginx(tmp_path / "proxy", web["port"], port)
+    nginx.hosts = ["127.0.0.1", "127.0.0.2", "127.0.0.3"]
+    nginx.also = f"        location = /card.html {{ root {www}; }}\n"
+    nginx.start()
+    try:
+        with sync_api.sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path="/usr/bin/chromium")
+            try:
+                page = browser.new_page(viewport={"width": 1100, "height": 800})
+                page.goto(stranger + "/card.html")
+                sync_api.expect(page.locator("iframe")).to_be_attached()
+                frame = page.frame_locator("iframe")
+                page.wait_for_load_state("load")
+                assert frame.locator("#bearing").count() == 0  # refused: the frame is empty
+                page.goto(dashboard + "/card.html")
+                frame = page.frame_locator("iframe")
+                bearing = frame.locator("#bearing")
+                sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=10_000)
+                _click_bearing(frame.locator("#map"), page, 90)
+                rig.arrived("hf", 90)
+            finally:
+                browser.close()
+    finally:
+        nginx.stop()
