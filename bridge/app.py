@@ -159,6 +159,7 @@ class App:
                 settings.web.port,
                 password=password.get_secret_value() if password is not None else None,
                 frame_ancestors=list(settings.web.frame_ancestors),
+                host_names=list(settings.web.host_names),
                 station=position,
                 locator=settings.station.locator,
                 satellites=catalog.names,

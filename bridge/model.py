@@ -63,6 +63,8 @@ class TrackingInfo:
     max_elevation_deg: float | None = None
     aos_azimuth_deg: float | None = None
     flip: bool = False  # this pass is flown with elevation past 90 and azimuth + 180
+    # the body's predicted (azimuth, elevation) over that pass, AOS to LOS, once computed
+    pass_track: tuple[tuple[float, float], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ Rules:
    is ``password`` (a SecretStr, not a field: no dump, report or document shows it).
 3. frame_ancestors are origins and nothing else: the server writes them into its
    Content-Security-Policy header, so a path, a space or a ';' there is refused here.
+   host_names are names alone (no scheme, port or path), compared in lower case.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
@@ -40,6 +41,10 @@ _ORIGIN = re.compile(
     r"|\[[0-9A-Fa-f:.]+\])"
     r"(?::(?P<port>[0-9]{1,5}))?",
     re.ASCII,
+)
+
+_NAME = re.compile(
+    r"[A-Za-z0-9](?:[A-Za-z0-9-]*[A-Za-z0-9])?(?:\.[A-Za-z0-9](?:[A-Za-z0-9-]*[A-Za-z0-9])?)*"
 )
 
 
@@ -84,6 +89,15 @@ class WebSettings(BaseModel):
         examples=[["http://homeassistant.local:8123"]],
         json_schema_extra={"unset": "only the console's own pages"},
     )
+    host_names: list[str] = Field(
+        default_factory=list,
+        description="without a password the console answers only to requests addressed to an "
+        "IP address or localhost (a web page whose own name was pointed at this machine must "
+        "not drive it); behind a reverse proxy that passes its own host name on (Caddy does), "
+        "name it here",
+        examples=[["shack.example.org"]],
+        json_schema_extra={"unset": "IP addresses and localhost only"},
+    )
     _password: SecretStr | None = PrivateAttr(default=None)
 
     @property
@@ -118,6 +132,17 @@ class WebSettings(BaseModel):
                 )
             out.append(origin)
         return out
+
+    @field_validator("host_names")
+    @classmethod
+    def _names(cls, values: list[str]) -> list[str]:
+        for value in values:
+            if _NAME.fullmatch(value) is None:
+                raise ValueError(
+                    f"{value!r} is not a host name: write the name alone, without scheme, port "
+                    "or path, e.g. 'shack.example.org'"
+                )
+        return [v.casefold() for v in values]
 
     @model_validator(mode="after")
     def _password_and_reach(self) -> WebSettings:

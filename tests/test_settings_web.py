@@ -212,3 +212,10 @@ def test_a_console_beyond_loopback_is_warned_about_even_with_a_password(tmp_path
     s = load(tmp_path, f'[web]\nenabled = true\nbind = "0.0.0.0"\npassword_file = "{secret}"\n')
     (warning,) = [w for w in config_warnings(s) if w.startswith("web.")]
     assert warning.startswith("web.bind: 0.0.0.0 is not a loopback address") and "HTTPS" in warning
+
+
+def test_host_names_are_names_alone(tmp_path: Path) -> None:
+    ok = load(tmp_path, '[web]\nenabled = true\nhost_names = ["Shack.Example.org"]\n')
+    assert ok.web.host_names == ["shack.example.org"]
+    said = refused(tmp_path, '[web]\nhost_names = ["https://shack.example.org/"]\n')
+    assert "web.host_names" in said and "not a host name" in said

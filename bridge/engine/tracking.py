@@ -66,6 +66,7 @@ log = logging.getLogger(__name__)
 
 SAMPLE_S = 1.0  # tracking looks at the sky at least this often
 PREPOSITION_MARGIN_S = 20.0
+PASS_TRACK_POINTS = 40  # the pass as the status shows it (_thinned)
 INFO_EVERY_S = 5.0  # the status's tracking block is refreshed this often (and on a target)
 NEXT_S = 60.0  # the status's "next" position: this far ahead
 MAX_LEAD_S = 300.0
@@ -355,8 +356,20 @@ class Tracker:
                 los_unix=round(p.los_s, 1),
                 max_elevation_deg=round(p.max_el_deg, 1),
                 aos_azimuth_deg=round(p.aos_az_deg, 1),
+                pass_track=_thinned(sky.flip_track(p)),
             )
         self.info = info
+
+
+def _thinned(track: list[tuple[float, float]] | None) -> tuple[tuple[float, float], ...]:
+    """The pass's track for the status (a sky plot draws it): at most PASS_TRACK_POINTS, the
+    first and the last among them, to a tenth of a degree; nothing while it is computed."""
+    if not track:
+        return ()
+    n = len(track)
+    step = max(1, math.ceil((n - 1) / (PASS_TRACK_POINTS - 1)))
+    picked = [*track[: n - 1 : step], track[-1]]
+    return tuple((round(az % 360.0, 1), round(el, 1)) for az, el in picked)
 
 
 def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:

@@ -273,6 +273,8 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
             max_elevation=info.max_elevation_deg,
             aos_azimuth=info.aos_azimuth_deg,
         )
+    if info.pass_track:
+        doc["pass_track"] = [list(point) for point in info.pass_track]
     doc["flip"] = info.flip
     return doc
 

@@ -19,8 +19,9 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
    reverse proxy sets) is refused: another site's page, even one holding a token. A request
    without ``Origin`` is not a browser's and needs the token like any.
 5. Without a password the console only listens on loopback (settings_web.py) and takes only
-   requests addressed to an IP literal or ``localhost``: a web page whose own host name has been
-   pointed at 127.0.0.1 (DNS rebinding) would otherwise be "this host" and could fetch a token.
+   requests addressed to an IP literal, ``localhost`` or a name the user listed (``host_names``,
+   a reverse proxy's): a web page whose own host name has been pointed at 127.0.0.1 (DNS
+   rebinding) would otherwise be "this host" and could fetch a token.
 """
 
 from __future__ import annotations
@@ -135,8 +136,8 @@ def origin_allowed(origin: str | None, host: str | None, forwarded_host: str | N
     return _netloc(parts.netloc) in mine
 
 
-def host_is_local_name(host: str | None) -> bool:
-    """Rule 5: an IP literal or localhost (with any port)."""
+def host_is_local_name(host: str | None, names: tuple[str, ...] = ()) -> bool:
+    """Rule 5: an IP literal, localhost or one of ``names`` (lower case), with any port."""
     if not host:
         return False
     name = host.strip()
@@ -145,7 +146,7 @@ def host_is_local_name(host: str | None) -> bool:
     elif name.count(":") == 1:
         name = name.rsplit(":", 1)[0]
     name = name.casefold()
-    if name == "localhost" or name.endswith(".localhost"):
+    if name == "localhost" or name.endswith(".localhost") or name in names:
         return True
     try:
         ipaddress.ip_address(name)

@@ -50,6 +50,7 @@ from bridge.web.feed import Feed, Shape
 log = logging.getLogger(__name__)
 
 PING_S = 10.0
+MAX_PAGES = 100  # open event streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
 _TYPES = {
     ".html": "text/html",
@@ -85,6 +86,7 @@ class WebConsole:
         *,
         password: str | None,
         frame_ancestors: list[str],
+        host_names: list[str] | None = None,
         station: tuple[float, float] | None,
         locator: str | None,
         satellites: Callable[[], list[str]],
@@ -92,6 +94,7 @@ class WebConsole:
     ) -> None:
         self.bind, self.port = bind, port
         self._password = password
+        self._host_names = tuple(host_names or ())
         self._tokens = auth.Tokens(auth.key_for(password))
         self._logins = auth.LoginLimiter()
         self._station, self._locator = station, locator
@@ -205,10 +208,10 @@ class WebConsole:
 
     def _refusal(self, request: web.Request) -> str | None:
         host = request.headers.get("Host")
-        if self._password is None and not auth.host_is_local_name(host):
+        if self._password is None and not auth.host_is_local_name(host, self._host_names):
             return (
-                f"this console answers to 127.0.0.1, [::1] or localhost only, not {host!r}: "
-                "without web.password_file a page from another name could drive it"
+                f"this console answers to IP addresses, localhost and web.host_names only, not "
+                f"{host!r}: without web.password_file a page from another name could drive it"
             )
         if request.method in ("GET", "HEAD"):
             return None
@@ -310,6 +313,8 @@ class WebConsole:
     async def _events(self, request: web.Request) -> web.StreamResponse:
         if not self._token_ok(request):
             return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        if self.feed.pages >= MAX_PAGES:  # each holds a connection: a flood is not served
+            return _json({"error": f"{MAX_PAGES} pages are open already"}, 503)
         response = web.StreamResponse(
             headers={
                 "Content-Type": "text/event-stream",

@@ -294,6 +294,13 @@ def test_satellites_by_name_from_the_tle_file_which_is_read_again_when_it_change
     during = np.arange(aos, los, 1.0)
     max_el = float(sgp4_altaz_array(line1, line2, *BERLIN, during)[1].max())
     assert abs(block["max_elevation"] - max_el) <= 0.5, (block, max_el)
+    # the pass's predicted track, for a sky plot: from where it rises to where it sets
+    track = status_after(rig, "dish", t, lambda s: "pass_track" in s.get("tracking", {}))
+    points = track["tracking"]["pass_track"]
+    los_az, _ = sgp4_altaz(line1, line2, *BERLIN, los)
+    assert 2 <= len(points) <= 40, points
+    assert off_deg(points[0][0], aos_az) <= 1.0 and off_deg(points[-1][0], los_az) <= 1.0
+    assert abs(max(el for _az, el in points) - max_el) <= 2.0, (points, max_el)
     # waiting where the pass rises, at the minimum elevation (0), before AOS
     emu.wait_for(
         lambda s: (

@@ -89,3 +89,8 @@ def test_origin(origin: str | None, host: str, forwarded: str | None, ok: bool) 
 )
 def test_host_names_without_a_password(host: str | None, ok: bool) -> None:
     assert auth.host_is_local_name(host) is ok
+
+
+def test_a_name_the_user_listed_is_taken() -> None:
+    assert auth.host_is_local_name("shack.example.org:443", ("shack.example.org",))
+    assert not auth.host_is_local_name("evil.example", ("shack.example.org",))

@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.web import server
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
 
@@ -129,3 +130,18 @@ def test_the_page_and_its_data_carry_the_safety_headers(console: tuple[Rig, Cons
     land = client.get("/api/land")
     assert land.status == 200 and len(land.doc["rings"]) > 100
     assert ConsoleClient(client.port).get("/api/config").status == 401  # no token
+
+
+def test_pages_beyond_the_limit_are_refused_not_queued(
+    console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _rig, client = console
+    monkeypatch.setattr(server, "MAX_PAGES", 2)
+    streams = [EventStream(client), EventStream(client)]
+    try:
+        for stream in streams:
+            assert stream.next()[0] == "status"  # each is served (and counted)
+        assert client.get("/api/events").status == 503
+    finally:
+        for stream in streams:
+            stream.close()

@@ -32,6 +32,7 @@ const app = {
   landKey: null,
   land: null,
   lastShown: null,
+  tabs: new Map(), // rotator id -> its tab button
 };
 
 const map = new MapView($('map'));
@@ -48,6 +49,22 @@ const isTextBox = (el) =>
   el instanceof HTMLElement &&
   (el.isContentEditable || el.tagName === 'TEXTAREA' ||
     (el.tagName === 'INPUT' && !['button', 'checkbox', 'radio', 'submit', 'reset', 'range', 'color'].includes(el.type)));
+
+// a status rewrites only what changed: an unchanged text or attribute costs no style work
+const put = (id, text) => {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+};
+const mark = (el, name, value) => {
+  if (el.getAttribute(name) !== value) el.setAttribute(name, value);
+};
+const flag = (el, name, on) => {
+  if (el.classList.contains(name) !== on) el.classList.toggle(name, on);
+};
+const hide = (id, hidden) => {
+  const el = $(id);
+  if (el.hidden !== hidden) el.hidden = hidden;
+};
 
 // ---- the configuration ------------------------------------------------------------------
 async function applyConfig(config) {
@@ -82,6 +99,7 @@ async function applyConfig(config) {
 function buildTabs(rotators) {
   const tabs = $('tabs');
   tabs.replaceChildren();
+  app.tabs.clear();
   tabs.hidden = rotators.length < 2;
   document.body.classList.toggle('multi', rotators.length > 1);
   for (const r of rotators) {
@@ -97,17 +115,19 @@ function buildTabs(rotators) {
     b.append(name, bearing);
     b.addEventListener('click', () => selectRotator(r.id));
     tabs.appendChild(b);
+    app.tabs.set(r.id, b);
     const st = app.status.get(r.id);
     if (st) updateTab(r.id, st);
   }
 }
 
 function updateTab(id, st) {
-  const tab = document.querySelector(`.tab[data-rotator="${CSS.escape(id)}"]`);
+  const tab = app.tabs.get(id);
   if (!tab) return;
-  tab.lastChild.textContent = fmtDeg(st.bearing);
-  tab.dataset.state = st.state || '';
-  tab.classList.toggle('locked', Boolean(st.locked));
+  const bearing = fmtDeg(st.bearing);
+  if (tab.lastChild.textContent !== bearing) tab.lastChild.textContent = bearing;
+  mark(tab, 'data-state', st.state || '');
+  flag(tab, 'locked', Boolean(st.locked));
 }
 
 function selectRotator(id) {
@@ -212,12 +232,15 @@ function onStatus(doc) {
 
 function renderStatus(id, st, tracking = trackingOf(st)) {
   const cfg = app.rotators.get(id);
-  $('bearing').textContent = fmtDeg(st.bearing);
-  if (cfg.has_elevation) $('elevation').textContent = `el ${fmtDeg(st.elevation)}`;
+  put('bearing', fmtDeg(st.bearing));
+  if (cfg.has_elevation) put('elevation', `el ${fmtDeg(st.elevation)}`);
   const state = st.state || 'unknown';
-  $('state').textContent = st.estimated ? `${state} (estimate)` : state;
-  $('state').dataset.state = state;
-  document.body.dataset.state = state;
+  // the same at a glance in the map's corner, for a phone or a card where the panel is below
+  put('corner-bearing', cfg.has_elevation ? `${fmtDeg(st.bearing)} ${fmtDeg(st.elevation)}` : fmtDeg(st.bearing));
+  put('corner-state', state);
+  put('state', st.estimated ? `${state} (estimate)` : state);
+  mark($('state'), 'data-state', state);
+  mark(document.body, 'data-state', state);
   let target = '\u2014';
   if (typeof st.target === 'number') {
     target = fmtDeg(st.target);
@@ -228,32 +251,36 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     const where = info.locator || `${round1(info.latitude ?? info.latitude_deg)}, ${round1(info.longitude ?? info.longitude_deg)}`;
     target += ` \u00B7 ${where} \u00B7 ${fmtKm(info.distance_km || 0)} ${info.path || 'short'} path`;
   }
-  $('target').textContent = target;
-  $('source').textContent = st.last_command_source || '\u2014';
+  put('target', target);
+  put('source', st.last_command_source || '\u2014');
   const locked = Boolean(st.locked);
-  $('lock').setAttribute('aria-pressed', String(locked));
-  $('lock').textContent = locked ? 'Lock ON' : 'Lock OFF';
-  document.body.classList.toggle('locked', locked);
-  document.body.classList.toggle('rotor-down', st.available === false);
-  $('path-row').hidden = !info;
+  mark($('lock'), 'aria-pressed', String(locked));
+  put('lock', locked ? 'Lock ON' : 'Lock OFF');
+  flag(document.body, 'locked', locked);
+  flag(document.body, 'rotor-down', st.available === false);
+  hide('path-row', !info);
   if (info) {
-    $('path-long').setAttribute('aria-pressed', String(info.path === 'long'));
-    $('path-short').setAttribute('aria-pressed', String(info.path !== 'long'));
-    $('path-short').textContent = `Short ${fmtDeg(info.short_path_deg)}`;
-    $('path-long').textContent = `Long ${fmtDeg(info.long_path_deg)}`;
+    mark($('path-long'), 'aria-pressed', String(info.path === 'long'));
+    mark($('path-short'), 'aria-pressed', String(info.path !== 'long'));
+    put('path-short', `Short ${fmtDeg(info.short_path_deg)}`);
+    put('path-long', `Long ${fmtDeg(info.long_path_deg)}`);
   }
   const body = tracking ? tracking.body : 'off';
-  if (![...$('track').options].some((o) => o.value === body)) {
-    $('track').add(new Option(body, body)); // a satellite the TLE file no longer names
+  const select = $('track');
+  if (select.value !== body) {
+    if (![...select.options].some((o) => o.value === body)) {
+      select.add(new Option(body, body)); // a satellite the TLE file no longer names
+    }
+    select.value = body;
   }
-  $('track').value = body;
-  $('tracking-label').hidden = $('tracking-info').hidden = !tracking;
+  hide('tracking-label', !tracking);
+  hide('tracking-info', !tracking);
   if (tracking) {
     let text = `${tracking.body} \u00B7 ${tracking.phase || ''}`;
     if (typeof tracking.az === 'number') text += ` \u00B7 az ${fmtDeg(tracking.az)} el ${fmtDeg(tracking.el)}`;
     if (tracking.aos) text += ` \u00B7 AOS ${fmtTime(tracking.aos)} LOS ${fmtTime(tracking.los)}`;
     if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
-    $('tracking-info').textContent = text;
+    put('tracking-info', text);
   }
   renderBadges(st, tracking);
   map.update(st, tracking);
@@ -287,7 +314,7 @@ function showMessage(id, text, kind) {
   const msg = { text, kind, time: new Date() };
   app.messages.set(id, msg);
   if (id === app.selected) renderMessage(msg);
-  else document.querySelector(`.tab[data-rotator="${CSS.escape(id)}"]`)?.classList.add('has-message');
+  else app.tabs.get(id)?.classList.add('has-message');
 }
 
 function renderMessage(msg) {
@@ -300,7 +327,7 @@ function renderMessage(msg) {
   const when = document.createElement('time');
   when.textContent = msg.time.toLocaleTimeString([], { hour12: false });
   el.replaceChildren(when, ` ${msg.text}`);
-  document.querySelector(`.tab[data-rotator="${CSS.escape(app.selected)}"]`)?.classList.remove('has-message');
+  app.tabs.get(app.selected)?.classList.remove('has-message');
 }
 
 function clearMessage(id) {

@@ -79,8 +79,15 @@ function label(text, attrs, parent) {
   return node;
 }
 
+const tip = (node, text) => { svg('title', {}, node).textContent = text; };
 const show = (node, on) => node.classList.toggle('off', !on);
+const set = (node, name, value) => {
+  const text = String(value);
+  if (node.getAttribute(name) !== text) node.setAttribute(name, text);
+};
 const CARDINAL = { 0: 'N', 90: 'E', 180: 'S', 270: 'W' };
+const PRESET_GAP_DEG = 14; // labels closer than this on one ring would overlap
+const PRESET_LANES = 3;
 const BODY_GLYPH = { sun: '\u2600', moon: '\u263E' };
 
 /** The bearing ring with its ticks and labels, on any polar SVG (the map and the sky plot). */
@@ -149,11 +156,12 @@ export class MapView {
         svg('path', { class: closed ? 'land closed' : 'land', d: closed ? d + 'Z' : d }, g);
       });
     }
+    if (station.locator) label(station.locator, { class: 'station-label', x: 0, y: 0.05 }, this.gridLayer);
     for (let km = 5000; km < RIM_KM - 2000; km += 5000) {
       const r = km / RIM_KM;
       svg('circle', { class: 'dist-ring', r: f(r) }, this.gridLayer);
       const [x, y] = polar(180, r);
-      label(`${km / 1000}k km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
+      label(`${km} km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
     }
   }
 
@@ -163,10 +171,12 @@ export class MapView {
     this.sectorLayer.replaceChildren();
     this.fixedLayer.replaceChildren();
     for (const [from, to] of cfg.unreachable_deg || []) {
-      svg('path', { class: 'unreachable', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      const p = svg('path', { class: 'unreachable', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      tip(p, `beyond the rotator's limits: ${from}\u00B0\u2013${to}\u00B0`);
     }
     for (const [from, to] of cfg.keep_out_deg || []) {
-      svg('path', { class: 'keepout', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      const p = svg('path', { class: 'keepout', d: sectorPath(from, to), 'data-from': from, 'data-to': to }, this.sectorLayer);
+      tip(p, `keep-out sector ${from}\u00B0\u2013${to}\u00B0: targets here are refused`);
       svg('path', { class: 'keepout-band', d: sectorPath(from, to, 1.045, 1) }, this.sectorLayer);
     }
     if (cfg.park) {
@@ -174,11 +184,19 @@ export class MapView {
       svg('path', { d: 'M0 -1L-0.032 -0.95L0.032 -0.95Z' }, g);
       label('P', { x: 0, y: -0.905, transform: `rotate(${-cfg.park[0]} 0 -0.905)` }, g);
     }
-    for (const [name, [az]] of Object.entries(cfg.presets || {})) {
-      const g = svg('g', { class: 'preset', 'data-preset': name, 'data-bearing': az, tabindex: -1 }, this.fixedLayer);
-      svg('path', { class: 'preset-hit', d: sectorPath(az - 2.5, az + 2.5, 1.05, 0.86) }, g);
-      svg('line', { class: 'preset-tick', x1: polar(az, 0.9)[0], y1: polar(az, 0.9)[1], x2: polar(az, 1.045)[0], y2: polar(az, 1.045)[1] }, g);
-      const [x, y] = polar(az, 0.85);
+    const lanes = []; // the bearing of the last label in each ring of labels, inward
+    const presets = Object.entries(cfg.presets || {}).sort((a, b) => norm360(a[1][0]) - norm360(b[1][0]));
+    for (const [name, [az]] of presets) {
+      // a label too close to the last one in its ring moves one ring inward
+      let lane = lanes.findIndex((last) => Math.abs(norm360(az - last + 180) - 180) >= PRESET_GAP_DEG);
+      if (lane < 0) lane = Math.min(lanes.length, PRESET_LANES - 1);
+      lanes[lane] = az;
+      const inner = 0.85 - lane * 0.075;
+      const g = svg('g', { class: 'preset', 'data-preset': name, 'data-bearing': az }, this.fixedLayer);
+      tip(g, `preset ${name}: ${az}\u00B0 (click to turn there)`);
+      svg('path', { class: 'preset-hit', d: sectorPath(az - 2.5, az + 2.5, 1.05, inner - 0.04) }, g);
+      svg('path', { class: 'preset-tick', d: `M${pt(az, inner + 0.045)}L${pt(az, 1.045)}` }, g);
+      const [x, y] = polar(az, inner);
       label(name, { x: f(x), y: f(y) }, g);
       g.addEventListener('click', (e) => { e.stopPropagation(); onPreset(name); });
     }
@@ -192,36 +210,38 @@ export class MapView {
     show(this.beam, known); show(this.wedge, known); show(this.beamTip, known);
     if (known) {
       const [x, y] = polar(b, 1);
-      this.beam.setAttribute('x2', f(x)); this.beam.setAttribute('y2', f(y));
-      this.beam.setAttribute('data-bearing', b);
-      this.beamTip.setAttribute('cx', f(x)); this.beamTip.setAttribute('cy', f(y));
+      set(this.beam, 'x2', f(x)); set(this.beam, 'y2', f(y));
+      set(this.beam, 'data-bearing', b);
+      set(this.beamTip, 'cx', f(x)); set(this.beamTip, 'cy', f(y));
       const w = (cfg.beamwidth_deg || 60) / 2;
-      this.wedge.setAttribute('d', sectorPath(b - w, b + w));
+      set(this.wedge, 'd', sectorPath(b - w, b + w));
     }
     const t = st.target;
     const turning = st.state === 'moving' || st.state === 'braking';
     const away = typeof t === 'number' && (!known || Math.abs(norm360(t - b + 180) - 180) > 1.5);
     show(this.targetMark, typeof t === 'number' && (turning || away));
     if (typeof t === 'number') {
-      this.targetMark.setAttribute('transform', `rotate(${norm360(t)})`);
-      this.targetMark.setAttribute('data-bearing', t);
+      set(this.targetMark, 'transform', `rotate(${norm360(t)})`);
+      set(this.targetMark, 'data-bearing', t);
     }
     this.updatePoint(st.target_info);
     const az = tracking ? tracking.az : null;
     show(this.bodyMark, typeof az === 'number');
     if (typeof az === 'number') {
       const [x, y] = polar(az, 0.93);
-      this.bodyMark.setAttribute('transform', `translate(${f(x)} ${f(y)})`);
-      this.bodyMark.setAttribute('data-body', tracking.body);
-      this.bodyMark.setAttribute('data-bearing', az);
+      set(this.bodyMark, 'transform', `translate(${f(x)} ${f(y)})`);
+      set(this.bodyMark, 'data-body', tracking.body);
+      set(this.bodyMark, 'data-bearing', az);
       this.bodyMark.classList.toggle('below', typeof tracking.el === 'number' && tracking.el < 0);
       const kind = tracking.body === 'sun' || tracking.body === 'moon' ? tracking.body : 'satellite';
-      this.bodyMark.setAttribute('data-kind', kind);
-      this.bodyGlyph.textContent = BODY_GLYPH[kind] || '\u2726';
-      this.bodyName.textContent = tracking.body;
+      set(this.bodyMark, 'data-kind', kind);
+      if (this.bodyName.textContent !== tracking.body) {
+        this.bodyGlyph.textContent = BODY_GLYPH[kind] || '\u2726';
+        this.bodyName.textContent = tracking.body;
+      }
       const [nx, ny] = polar(az, -0.085); // the name on the centre's side, clear of the ring
-      this.bodyName.setAttribute('x', f(nx));
-      this.bodyName.setAttribute('y', f(ny));
+      set(this.bodyName, 'x', f(nx));
+      set(this.bodyName, 'y', f(ny));
     }
   }
 
@@ -238,18 +258,18 @@ export class MapView {
     const r = Math.min(gc.distance_km / RIM_KM, 1);
     const [x, y] = polar(gc.bearing, r);
     const long = info.path === 'long';
-    this.gcPath.setAttribute('d', long
+    set(this.gcPath, 'd', long
       ? `M0 0L${pt(gc.bearing + 180, 1)}M${pt(gc.bearing, 1)}L${f(x)} ${f(y)}`
       : `M0 0L${f(x)} ${f(y)}`);
     this.gcPath.classList.toggle('long', long);
-    this.gcPath.setAttribute('data-path', long ? 'long' : 'short');
-    this.targetPoint.setAttribute('cx', f(x)); this.targetPoint.setAttribute('cy', f(y));
+    set(this.gcPath, 'data-path', long ? 'long' : 'short');
+    set(this.targetPoint, 'cx', f(x)); set(this.targetPoint, 'cy', f(y));
     const km = typeof info.distance_km === 'number' ? info.distance_km : long ? 2 * RIM_KM - gc.distance_km : gc.distance_km;
     this.gcLabel.textContent = `${info.locator ? info.locator + ' ' : ''}${Math.round(km)} km${long ? ' long' : ''}`;
     const right = x < 0.45;
-    this.gcLabel.setAttribute('x', f(x + (right ? 0.035 : -0.035)));
-    this.gcLabel.setAttribute('y', f(y - 0.03));
-    this.gcLabel.setAttribute('text-anchor', right ? 'start' : 'end');
+    set(this.gcLabel, 'x', f(x + (right ? 0.035 : -0.035)));
+    set(this.gcLabel, 'y', f(y - 0.03));
+    set(this.gcLabel, 'text-anchor', right ? 'start' : 'end');
   }
 
   /** The map point under a pointer event: bearing, radius, and with a station the place. */

@@ -33,8 +33,8 @@ export class SkyView {
     this.aos = svg('path', { class: 'sky-aos off', d: 'M0 -1L-0.05 -1.09L0.05 -1.09Z' }, root);
     this.next = svg('circle', { class: 'sky-next off', r: 0.03 }, root);
     this.body = svg('circle', { class: 'sky-body off', r: 0.045 }, root);
-    this.antenna = svg('circle', { class: 'sky-antenna off', r: 0.04 }, root);
-    this.targetMark = svg('circle', { class: 'sky-target off', r: 0.05 }, root);
+    this.antenna = svg('circle', { class: 'sky-antenna off', r: 0.06 }, root);
+    this.targetMark = svg('circle', { class: 'sky-target off', r: 0.085 }, root);
     root.addEventListener('click', (e) => {
       const m = root.getScreenCTM();
       if (!m) return;
@@ -68,8 +68,8 @@ export class SkyView {
       show(node, on);
       if (!on) return;
       const [x, y] = polar(az, radius(Math.min(el, 90)));
-      node.setAttribute('cx', f(x));
-      node.setAttribute('cy', f(y));
+      if (node.getAttribute('cx') !== f(x)) node.setAttribute('cx', f(x));
+      if (node.getAttribute('cy') !== f(y)) node.setAttribute('cy', f(y));
     };
     put(this.antenna, st.bearing, st.elevation);
     const moving = st.state === 'moving' || st.state === 'braking';
