@@ -40,6 +40,10 @@ DOC = ROOT / "docs" / "console.md"
 PREFIX = "/rotor/"
 DOCUMENTED_BRIDGE = "127.0.0.1:8754"  # the bridge's default port, as the doc says
 FIRST_EVENT_S = 3.0  # well inside the bridge's 10 s ping: only an unbuffered stream is this quick
+# what Home Assistant's Webpage card puts on its frame (its frontend, hui-iframe-card)
+HA_SANDBOX = (
+    "allow-forms allow-modals allow-popups allow-pointer-lock allow-same-origin allow-scripts"
+)
 
 
 def documented(fence: str) -> str:
@@ -287,12 +291,6 @@ def test_the_page_through_the_proxy_connects_and_a_click_turns_the_rotor(
             sync_api.expect(bearing).to_have_text(re.compile(r"^(8[6-9]|9[0-4])"))
         finally:
             browser.close()
-
-
-# what Home Assistant's Webpage card puts on its frame (its frontend, hui-iframe-card)
-HA_SANDBOX = (
-    "allow-forms allow-modals allow-popups allow-pointer-lock allow-same-origin allow-scripts"
-)
 
 
 def test_in_a_webpage_card_the_console_works_where_frame_ancestors_allow_it(
