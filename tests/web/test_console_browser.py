@@ -1,15 +1,18 @@
 """The operator console as an operator uses it, in Debian's Chromium against a real bridge: a
 click on the map turns the rotor there, STOP (button, Escape, Space) stops it mid-turn, the lock
 and a keep-out sector refuse a click and the page says why, presets and a locator's path are
-drawn, and the page shows the bridge going away and coming back. What is judged is what the user
-would notice: where the emulated rotor ends up, and the text and marks on the page."""
+drawn, the page shows the bridge going away and coming back; without a station the map is a dial
+that says what [station] adds, and with a password the page asks for it. What is judged is what
+the user would notice: where the emulated rotor ends up, and the text and marks on the page."""
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import time
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -17,7 +20,8 @@ from playwright.sync_api import Browser, Page, Request, expect
 
 from bridge import geo
 from bridge.web.projection import RIM_KM
-from tests.support.rig import arrival_tol
+from tests.support.console import web_section
+from tests.support.rig import Rig, arrival_tol
 from tests.web.conftest import (
     KEEP_OUT,
     PRESETS,
@@ -196,3 +200,51 @@ def test_the_page_shows_the_bridge_going_away_and_coming_back(
     click_map(page, target)
     rig.arrived("hf", target)
     wait_page_bearing(page, target, TOL)
+
+
+def test_without_a_station_the_map_is_a_dial_that_says_what_a_station_adds(
+    rig: Rig, browser: Browser
+) -> None:
+    web = rig.sections["web"] = web_section()
+    rig.add("hf", "rotorez", emu={"start_az_deg": 100})
+    rig.start_process()  # its own process: Playwright's sync API holds this thread's event loop
+    rig.ready("hf", timeout_s=20)
+    page = open_console(browser, f"http://127.0.0.1:{web['port']}/")
+    try:
+        expect(page.locator("#no-station")).to_be_visible()
+        expect(page.locator("#no-station")).to_contain_text("[station]")
+        expect(page.locator("#map .land")).to_have_count(0)
+        expect(page.locator("#locator")).to_be_hidden()
+        click_map(page, 200.0, radius=0.7)  # a dial: the click's angle is the bearing
+        rig.arrived("hf", 200.0)
+        wait_page_bearing(page, 200.0, TOL)
+    finally:
+        page.context.close()
+
+
+def test_with_a_password_the_page_asks_for_it_and_says_when_it_is_wrong(
+    rig: Rig, browser: Browser, tmp_path: Path
+) -> None:
+    secret = tmp_path / "web-password"
+    secret.write_text("correct horse battery\n")
+    os.chmod(secret, 0o600)
+    web = rig.sections["web"] = web_section(password_file=str(secret))
+    rig.add("hf", "rotorez")
+    rig.start_process()
+    rig.ready("hf", timeout_s=20)
+    page = browser.new_context().new_page()
+    try:
+        page.goto(f"http://127.0.0.1:{web['port']}/")
+        expect(page.locator("#login")).to_be_visible()
+        expect(page.locator("#stop")).to_be_hidden()  # nothing to press before the login
+        page.fill("#password", "wrong horse battery")
+        page.press("#password", "Enter")
+        expect(page.locator("#login-error")).to_have_text("wrong password")
+        page.fill("#password", "correct horse battery")
+        page.click("#login-go")
+        expect(page.locator("#login")).to_be_hidden()
+        expect(page.locator("#connection")).to_have_text("live")
+        expect(page.locator("#bearing")).to_have_text(re.compile(r"\d"))
+        expect(page.locator("#stop")).to_be_visible()
+    finally:
+        page.context.close()
