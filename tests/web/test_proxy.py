@@ -152,7 +152,9 @@ def proxied(
     request: pytest.FixtureRequest, rig: Rig, tmp_path: Path
 ) -> Iterator[tuple[Rig, Proxy]]:
     rig.sections["station"] = {"locator": "JO62qm"}
-    web = rig.sections["web"] = web_section()
+    # the proxy's name, as a user behind one names it (without a password the bridge answers
+    # only to addresses and the names listed)
+    web = rig.sections["web"] = web_section(host_names=["rotor.example.org"])
     rig.add("hf")
     rig.start()
     rig.ready("hf")
@@ -256,6 +258,11 @@ def test_a_command_from_the_proxys_page_turns_the_rotor_and_another_sites_is_ref
     answer = client.request("POST", PREFIX + "api/rotators/hf/command", body, headers)
     assert answer.status == 200, answer
     rig.arrived("hf", 150)
+    # a name the user never listed, pointed at the proxy (DNS rebinding): refused
+    rebound = "evil.example:" + str(proxy.port)
+    headers.update({"Host": rebound, "Origin": f"http://{rebound}"})
+    answer = client.request("POST", PREFIX + "api/rotators/hf/command", body, headers)
+    assert answer.status == 403, answer
 
 
 def test_the_event_stream_comes_through_at_once(proxied: tuple[Rig, Proxy]) -> None:
