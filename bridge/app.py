@@ -32,6 +32,7 @@ from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.sky import Sky
+from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
 
@@ -160,6 +161,9 @@ class App:
                 password=password.get_secret_value() if password is not None else None,
                 frame_ancestors=list(settings.web.frame_ancestors),
                 host_names=list(settings.web.host_names),
+                secret=installation_secret(settings.state_file.with_name("console-secret"))
+                if password is not None
+                else b"",
                 station=position,
                 locator=settings.station.locator,
                 satellites=catalog.names,

@@ -9,12 +9,16 @@ it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
 2. A token is ``<issued, hex>.<nonce>.<mac>``, the MAC an HMAC-SHA256 of the first two parts
    under the console's key. It is good for TOKEN_LIFETIME_S after it was issued and checked in
    constant time. Without a password the key is random per process (a restarted bridge hands
-   out new tokens; the page asks again by itself); with one it is derived from the password
-   (PBKDF2, so a token seen on the wire is slow to guess the password from), so tokens outlive
-   a restart and die with a changed password.
-3. A password is compared in constant time (digests of equal length). Logins are rate-limited
-   per client address and overall; a refused try is answered without looking at the password,
-   so a flood learns nothing.
+   out new tokens; the page asks again by itself); with one it is derived from the password and
+   this installation's own random secret (PBKDF2, so a token seen on the wire is slow to guess
+   the password from, and another bridge with the same password takes none of these tokens),
+   so tokens outlive a restart and die with a changed password. A token past its life is still
+   genuine: it carries a STOP or a lock ON (docs/architecture.md rule 11), nothing else.
+3. A password is compared in constant time (digests of equal length). Failed logins are
+   limited per client address (an IPv6 address by its /64, which one client has plenty of); a
+   client over its limit is answered without the password being looked at, so a flood learns
+   nothing, and a right password from another address is never held back by it. A login that
+   succeeds costs nothing (each new tab logs in).
 4. A POST whose ``Origin`` is not this host (the ``Host`` header, or the ``X-Forwarded-Host`` a
    reverse proxy sets) is refused: another site's page, even one holding a token. A request
    without ``Origin`` is not a browser's and needs the token like any.
@@ -40,19 +44,17 @@ from bridge.ratelimit import TokenBucket
 
 TOKEN_LIFETIME_S = 7 * 24 * 3600.0
 PBKDF2_ROUNDS = 100_000
-LOGIN_BURST_PER_CLIENT = 5  # rule 3: then one try per LOGIN_EVERY_S per address
+LOGIN_BURST_PER_CLIENT = 5  # rule 3: failed tries, then one per LOGIN_EVERY_S per address
 LOGIN_EVERY_S = 30.0
-LOGIN_BURST_ALL = 20  # every address together: then one per LOGIN_ALL_EVERY_S
-LOGIN_ALL_EVERY_S = 5.0
 CLIENTS_KEPT = 4096
 
 
-def key_for(password: str | None) -> bytes:
-    """Rule 2: the key tokens are signed with."""
+def key_for(password: str | None, secret: bytes = b"") -> bytes:
+    """Rule 2: the key tokens are signed with (``secret``: this installation's own)."""
     if password is None:
         return secrets.token_bytes(32)
     return hashlib.pbkdf2_hmac(
-        "sha256", password.encode(), b"rotor-bridge console tokens", PBKDF2_ROUNDS
+        "sha256", password.encode(), b"rotor-bridge console tokens" + secret, PBKDF2_ROUNDS
     )
 
 
@@ -65,17 +67,26 @@ class Tokens:
         return f"{body}.{self._mac(body)}"
 
     def valid(self, token: str | None, now_s: float) -> bool:
+        issued = self.issued(token)
+        return issued is not None and issued - 60.0 <= now_s < issued + TOKEN_LIFETIME_S
+
+    def expires(self, token: str | None) -> float | None:
+        issued = self.issued(token)
+        return None if issued is None else issued + TOKEN_LIFETIME_S
+
+    def issued(self, token: str | None) -> float | None:
+        """When a genuine token (this key's) was issued, whether or not it has expired; None
+        for anything else (rule 2)."""
         if not token or len(token) > 200:
-            return False
+            return None
         body, _, mac = token.rpartition(".")
         issued_hex, _, nonce = body.partition(".")
         if not nonce or not hmac.compare_digest(mac.encode(), self._mac(body).encode()):
-            return False
+            return None
         try:
-            issued = int(issued_hex, 16)
+            return float(int(issued_hex, 16))
         except ValueError:
-            return False
-        return issued - 60.0 <= now_s < issued + TOKEN_LIFETIME_S
+            return None
 
     def _mac(self, body: str) -> str:
         return hmac.new(self.key, body.encode(), hashlib.sha256).hexdigest()
@@ -90,26 +101,41 @@ def password_matches(given: str, password: str) -> bool:
 
 @dataclass
 class LoginLimiter:
-    """Rule 3: ``allow`` spends a try for ``client`` (an address) or says how long to wait."""
+    """Rule 3: ``wait`` says whether ``client`` (an address) may try now; ``failed`` spends."""
 
     _clients: OrderedDict[str, TokenBucket] = field(default_factory=OrderedDict)
-    _all: TokenBucket | None = None
 
-    def allow(self, client: str, now_s: float) -> float | None:
+    def wait(self, client: str, now_s: float) -> float | None:
         """None: the try may go ahead; else the seconds until one may."""
-        if self._all is None:
-            self._all = TokenBucket.full(LOGIN_BURST_ALL, 1.0 / LOGIN_ALL_EVERY_S, now_s)
-        bucket = self._clients.pop(client, None)
+        bucket = self._clients.get(_client_key(client))
+        if bucket is None:
+            return None
+        bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
+        bucket.t = now_s
+        return None if bucket.tokens >= 1.0 else _wait(bucket)
+
+    def failed(self, client: str, now_s: float) -> None:
+        key = _client_key(client)
+        bucket = self._clients.pop(key, None)
         if bucket is None:
             bucket = TokenBucket.full(LOGIN_BURST_PER_CLIENT, 1.0 / LOGIN_EVERY_S, now_s)
-        self._clients[client] = bucket  # most recent last
+        self._clients[key] = bucket  # most recent last
         while len(self._clients) > CLIENTS_KEPT:
             self._clients.popitem(last=False)
-        if not bucket.take(now_s):
-            return _wait(bucket)
-        if not self._all.take(now_s):
-            return _wait(self._all)
-        return None
+        bucket.take(now_s)
+
+
+def _client_key(client: str) -> str:
+    """An IPv6 address counts by its /64 (one client has all of it), any other as it is."""
+    try:
+        address = ipaddress.ip_address(client)
+    except ValueError:
+        return client
+    if isinstance(address, ipaddress.IPv6Address):
+        if address.ipv4_mapped is not None:
+            return str(address.ipv4_mapped)
+        return str(ipaddress.ip_network(f"{address}/64", strict=False))
+    return str(address)
 
 
 def _wait(bucket: TokenBucket) -> float:
@@ -143,8 +169,11 @@ def host_is_local_name(host: str | None, names: tuple[str, ...] = ()) -> bool:
     if not host:
         return False
     name = host.strip()
-    if name.startswith("["):  # [::1]:8754
-        name = name[1 : name.find("]")] if "]" in name else name
+    if name.startswith("["):  # [::1] or [::1]:8754, and nothing else after the bracket
+        inside, bracket, rest = name[1:].partition("]")
+        if not bracket or not (rest == "" or (rest[:1] == ":" and rest[1:].isdigit())):
+            return False
+        name = inside
     elif name.count(":") == 1:
         name = name.rsplit(":", 1)[0]
     name = name.casefold()

@@ -10,19 +10,29 @@ Rules:
 3. Stop and lock ON are never refused (docs/architecture.md rule 11): they go straight into the
    mailbox, which takes a stop first. Tracking ``off`` likewise.
 4. Every command carries ``Source.WEB``, so the status says the console sent it.
+5. A STOP or a lock ON is the last word over everything sent before it (docs/architecture.md
+   rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
+   stale, a command that reached the bridge before a STOP or lock ON that was carried out
+   while it was still arriving (its body held up on the way), and a command a page numbered
+   (``page`` and ``seq``, which the console's page sends) before a STOP or lock ON the same
+   page sent after it, however late it comes. A stop, a lock ON and tracking off are never
+   stale.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+import unicodedata
+from collections import OrderedDict
+from dataclasses import dataclass, replace
 
 from bridge import geo
 from bridge.engine.rotator import Rotator
 from bridge.model import Source, Stop, Target
 
 MAX_BODY_BYTES = 4096
+PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
 
 
 class BadCommand(ValueError):
@@ -40,6 +50,14 @@ class WebCommand:
     long_path: bool = False
     name: str | None = None  # a preset's, or the body to track
     on: bool = False  # lock
+    page: str | None = None  # rule 5: the page that sent it, and its number there
+    seq: int | None = None
+
+    def halts(self) -> bool:
+        """Stop, lock ON, tracking off: never refused, never stale (rules 3, 5)."""
+        if self.command == "track":
+            return (self.name or "").strip().casefold() == "off"
+        return self.command == "stop" or (self.command == "lock" and self.on)
 
     def described(self) -> str:
         """How an error event echoes it ("console: target az 120")."""
@@ -79,16 +97,29 @@ def parse(body: bytes) -> WebCommand:
         raise BadCommand(f"a command is at most {MAX_BODY_BYTES} bytes")
     try:
         doc = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
-        raise BadCommand(f"not a JSON command: {exc}") from None
+    except RecursionError:
+        raise BadCommand("not a JSON command: nested too deep") from None
+    except ValueError as exc:  # not UTF-8, not JSON, a number too long to read
+        raise BadCommand(f"not a JSON command: {str(exc)[:120]}") from None
     if not isinstance(doc, dict):
         raise BadCommand('a command is a JSON object such as {"command": "stop"}')
     kind = doc.pop("command", None)
-    if kind not in _KEYS:
+    if not isinstance(kind, str) or kind not in _KEYS:
         raise BadCommand(f"unknown command {str(kind)[:40]!r}; one of: {', '.join(_KEYS)}")
+    page, seq = doc.pop("page", None), doc.pop("seq", None)
     unknown = set(doc) - _KEYS[kind]
     if unknown:
         raise BadCommand(f"unknown key(s) for {kind}: {', '.join(sorted(unknown)[:5])}")
+    if (page is None) != (seq is None):
+        raise BadCommand('"page" and "seq" come together')
+    if page is not None and (not isinstance(page, str) or not 1 <= len(page) <= 40):
+        raise BadCommand('"page" must be text (1 to 40 characters)')
+    if seq is not None and (isinstance(seq, bool) or not isinstance(seq, int) or seq < 0):
+        raise BadCommand('"seq" must be a whole number, 0 or more')
+    return replace(_parsed(kind, doc), page=page, seq=seq)
+
+
+def _parsed(kind: str, doc: dict[str, object]) -> WebCommand:
     if kind == "target":
         return WebCommand(kind, az_deg=_number(doc, "az"), el_deg=_number(doc, "el", None))
     if kind == "toward":
@@ -139,9 +170,15 @@ def _number(doc: dict[str, object], key: str, default: object = _REQUIRED) -> fl
         raise BadCommand(f'"{key}" is missing')
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise BadCommand(f'"{key}" must be a finite number')
-    return float(value)
+    try:
+        number = float(value)  # an integer too big for a float raises here
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise BadCommand(f'"{key}" must be a finite number')
+    return number
 
 
 def _flag(doc: dict[str, object], key: str, *, required: bool = False) -> bool:
@@ -157,9 +194,37 @@ def _text(doc: dict[str, object], key: str) -> str:
     value = doc.get(key)
     if not isinstance(value, str) or not value.strip() or len(value) > 80:
         raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
-    if not value.isprintable():
-        raise BadCommand(f'"{key}" must be printable text')
+    if any(unicodedata.category(c) == "Cc" for c in value):  # as the settings take names
+        raise BadCommand(f'"{key}" must be text without control characters')
     return value
+
+
+class Order:
+    """Rule 5, for one console (the server's event loop alone calls it)."""
+
+    def __init__(self) -> None:
+        self._halted_at: dict[str, float] = {}  # rotator -> when its last halt was carried out
+        self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
+
+    def stale(self, rotator_id: str, cmd: WebCommand, started: float) -> str | None:
+        """Why ``cmd`` (its request begun at ``started``, monotonic) is not carried out."""
+        if cmd.halts():
+            return None
+        late = started < self._halted_at.get(rotator_id, -math.inf)
+        if not late and cmd.page is not None and cmd.seq is not None:
+            last = self._halt_seq.get((cmd.page, rotator_id))
+            late = last is not None and cmd.seq < last
+        if late:
+            return "sent before a STOP or lock ON that came first: not carried out"
+        return None
+
+    def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
+        self._halted_at[rotator_id] = now
+        if cmd.page is not None and cmd.seq is not None:
+            key = (cmd.page, rotator_id)
+            self._halt_seq[key] = max(cmd.seq, self._halt_seq.pop(key, cmd.seq))
+            while len(self._halt_seq) > PAGES_KEPT:
+                self._halt_seq.popitem(last=False)
 
 
 def _no_constant(name: str) -> object:

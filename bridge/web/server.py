@@ -35,7 +35,6 @@ import logging
 import threading
 import time
 from collections.abc import Awaitable, Callable
-from importlib import resources
 
 from aiohttp import web
 
@@ -44,34 +43,18 @@ from bridge.engine.rotator import Rotator
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, RotatorStatus
 from bridge.web import auth, view
-from bridge.web.commands import BadCommand, carry_out, parse
+from bridge.web.commands import BadCommand, Order, carry_out, parse
+from bridge.web.connections import Connections
 from bridge.web.feed import Feed, Shape
+from bridge.web.files import static_files
 
 log = logging.getLogger(__name__)
 
 PING_S = 10.0
+BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
 MAX_PAGES = 100  # open event streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
-_TYPES = {
-    ".html": "text/html",
-    ".js": "text/javascript",
-    ".css": "text/css",
-    ".svg": "image/svg+xml",
-}
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
-
-
-def _static_files() -> dict[str, tuple[bytes, bytes, str]]:
-    """The page's files: name -> (bytes, gzipped, content type)."""
-    files = {}
-    folder = resources.files("bridge.web").joinpath("static")
-    if folder.is_dir():
-        for item in folder.iterdir():
-            kind = _TYPES.get("." + item.name.rpartition(".")[2])
-            if item.is_file() and kind is not None:
-                data = item.read_bytes()
-                files[item.name] = (data, gzip.compress(data, mtime=0), f"{kind}; charset=utf-8")
-    return files
 
 
 def _json(doc: object, status: int = 200) -> web.Response:
@@ -87,6 +70,7 @@ class WebConsole:
         password: str | None,
         frame_ancestors: list[str],
         host_names: list[str] | None = None,
+        secret: bytes = b"",
         station: tuple[float, float] | None,
         locator: str | None,
         satellites: Callable[[], list[str]],
@@ -95,7 +79,7 @@ class WebConsole:
         self.bind, self.port = bind, port
         self._password = password
         self._host_names = tuple(host_names or ())
-        self._tokens = auth.Tokens(auth.key_for(password))
+        self._tokens = auth.Tokens(auth.key_for(password, secret))
         self._logins = auth.LoginLimiter()
         self._station, self._locator = station, locator
         self._satellites = satellites
@@ -104,7 +88,7 @@ class WebConsole:
         self._facts: dict[str, view.RotatorFacts] = {}
         self._shapes: dict[str, Shape] = {}
         self.feed = Feed(self._shapes)
-        self._files = _static_files()
+        self._files = static_files()
         self._land: asyncio.Future[bytes] | None = None
         ancestors = " ".join(["'self'", *frame_ancestors])
         self._headers = {
@@ -118,6 +102,11 @@ class WebConsole:
             self._headers["X-Frame-Options"] = "SAMEORIGIN"
         self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
+        self._conns = Connections(lambda: None)
+        self._listener: asyncio.Server | None = None
+        self._sweeper: asyncio.Task[None] | None = None
+        self._order = Order()
+        self._started: dict[int, float] = {}  # requests being served (by id): when they began
         self._thread: threading.Thread | None = None
         self._running = False
 
@@ -164,7 +153,15 @@ class WebConsole:
         # the streams end themselves at stop (feed.close): nothing is worth waiting long for
         runner = self._runner = web.AppRunner(app, access_log=None, shutdown_timeout=1.0)
         await runner.setup()
-        await web.TCPSite(runner, self.bind or None, self.port).start()
+        # served through Connections (connections.py), not a TCPSite: what is held is counted
+        server = runner.server
+        assert server is not None  # set up above
+        self._conns = Connections(server)
+        loop = asyncio.get_running_loop()
+        self._listener = await loop.create_server(
+            self._conns.protocol, self.bind or None, self.port, reuse_address=True
+        )
+        self._sweeper = loop.create_task(self._conns.sweeping())
 
     def stop(self) -> None:
         """Rule 6."""
@@ -183,6 +180,10 @@ class WebConsole:
 
     async def _shutdown(self) -> None:
         self.feed.close()
+        if self._sweeper is not None:
+            self._sweeper.cancel()
+        if self._listener is not None:
+            self._listener.close()
         if self._runner is not None:
             await self._runner.cleanup()
 
@@ -203,10 +204,15 @@ class WebConsole:
         if refusal is not None:
             response: web.StreamResponse = _json({"error": refusal}, 403)
         else:
+            self._started[id(request)] = time.monotonic()  # commands.py rule 5
+            self._conns.started(request.transport)
             try:
                 response = await handler(request)
             except web.HTTPException as exc:
                 response = _json({"error": exc.reason}, exc.status)
+            finally:
+                self._conns.finished(request.transport)
+                del self._started[id(request)]
         response.headers.update(self._headers)
         return response
 
@@ -265,16 +271,19 @@ class WebConsole:
     async def _login(self, request: web.Request) -> web.StreamResponse:
         if self._password is None:
             return _json({"token": self._tokens.issue(self._wall())})
-        wait_s = self._logins.allow(request.remote or "?", time.monotonic())
+        client, now = request.remote or "?", time.monotonic()
+        wait_s = self._logins.wait(client, now)
         if wait_s is not None:
             message = f"too many failed logins; try again in {wait_s:.0f} s"
             return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
         try:
-            given = (await request.json()).get("password")
-        except (ValueError, AttributeError):
-            given = None
+            doc = await request.json()
+        except (ValueError, RecursionError):
+            doc = None
+        given = doc.get("password") if isinstance(doc, dict) else None
         if not isinstance(given, str) or not auth.password_matches(given, self._password):
-            log.warning("web console: a wrong password from %s", request.remote)
+            self._logins.failed(client, now)
+            log.warning("web console: a wrong password from %s", client)
             return _json({"error": "wrong password"}, 401)
         return _json({"token": self._tokens.issue(self._wall())})
 
@@ -331,11 +340,17 @@ class WebConsole:
         )
         await response.prepare(request)
         page = self.feed.join()
+        # the stream ends with its token: the page then asks for a new one (a login) while
+        # nothing is urgent, rather than when its STOP is answered 401 (auth.py rule 2)
+        expires = self._tokens.expires(request.headers.get(TOKEN_HEADER)) or 0.0
         try:
             await response.write(b": hello\n\n")
             while not page.closed:
+                left_s = expires - self._wall()
+                if left_s <= 0:
+                    break
                 try:
-                    await asyncio.wait_for(page.wake.wait(), PING_S)
+                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
                 except TimeoutError:
                     await response.write(b": ping\n\n")
                     continue
@@ -353,21 +368,33 @@ class WebConsole:
         token = request.headers.get(TOKEN_HEADER)
         if token is None:
             return _json({"error": f"a command needs the page's token ({TOKEN_HEADER})"}, 403)
-        if not self._tokens.valid(token, self._wall()):
+        if self._tokens.issued(token) is None:
             return _json({"error": "the token is not valid (any more): reload"}, 401)
         rot = self._rotators.get(request.match_info["rid"])
         if rot is None:
             return _json({"error": "no such rotator"}, 404)
-        body = await request.read()
+        try:
+            body = await asyncio.wait_for(request.read(), BODY_S)
+        except TimeoutError:
+            return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
         try:
             cmd = parse(body)
         except BadCommand as exc:
             rot.report_refusal(str(exc), "console: " + body[:80].decode("utf-8", "replace"))
             return _json({"error": str(exc), "code": "invalid"}, 400)
+        halt = cmd.halts()
+        if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
+            return _json({"error": "the token has expired: log in again"}, 401)
+        stale = self._order.stale(rot.id, cmd, self._started[id(request)])
+        if stale is not None:
+            rot.report_refusal(stale, cmd.described())
+            return _json({"error": stale, "code": "stale"}, 409)
         try:
             carry_out(rot, cmd)
         except Refused as exc:
             return _json({"error": str(exc), "code": exc.code.value}, 409)
+        if halt:
+            self._order.halted(rot.id, cmd, time.monotonic())
         return _json({"ok": True})
 
 

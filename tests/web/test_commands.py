@@ -55,7 +55,10 @@ def test_a_locator_is_checked_and_written_as_locators_are() -> None:
         (b'{"command":"toward","locator":"JO62","latitude_deg":1}', "not both"),
         (b'{"command":"toward","latitude_deg":91,"longitude_deg":0}', "-90..90"),
         (b'{"command":"preset","name":""}', "1 to 80"),
-        (b'{"command":"preset","name":"a\\u0000b"}', "printable"),
+        (b'{"command":"preset","name":"a\\u0000b"}', "control characters"),
+        (b'{"command":[]}', "unknown command"),
+        (b"[" * 3000, "nested too deep"),
+        (b'{"command":"target","az":' + b"9" * 400 + b"}", "finite number"),
         (b'{"command":"stop","pad":"' + b"x" * 5000 + b'"}', "at most"),
     ],
 )
