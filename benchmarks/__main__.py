@@ -31,6 +31,7 @@ from typing import Any
 
 from benchmarks import (
     burst,
+    console,
     exchange_cpu,
     footprint,
     freshness,
@@ -54,6 +55,7 @@ ITEMS = {
     "target_flood": target_flood.run,
     "sky_stops": sky_stops.run,
     "exchange_cpu": exchange_cpu.run,
+    "console": console.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 
