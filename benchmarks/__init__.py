@@ -1,9 +1,9 @@
 """Measured performance of rotor-bridge, side by side with the line rate and Hamlib's rotctld.
 
 `python -m benchmarks` runs everything (see __main__.py); not part of the test run. Modules:
-one per item (latency, freshness, line_use, footprint, burst, startup), the plumbing they share
-(harness: processes, broker, bridge service, MQTT recorder; line: a serial line paced at its real
-rate; rig: a measured set-up; emuhost: a process hosting many emulated controllers; hamlib:
-rotctld; procfs: CPU and memory of another process; report: statistics and tables), and
+one per item (latency, freshness, line_use, footprint, burst, startup, console), the plumbing
+they share (harness: processes, broker, bridge service, MQTT recorder; line: a serial line paced
+at its real rate; rig: a measured set-up; emuhost: a process hosting many emulated controllers;
+hamlib: rotctld; procfs: CPU and memory of another process; report: statistics and tables), and
 satel_redirect, a stand-alone scenario.
 """

@@ -1,7 +1,7 @@
 """`python -m benchmarks`: run the benchmarks, print one table per item, write results.json.
 
-    python -m benchmarks                      # everything (about 13 minutes on 2 cores)
-    python -m benchmarks --quick              # fewer samples, shorter windows (about 4 minutes)
+    python -m benchmarks                      # everything (about 16 minutes on 2 cores)
+    python -m benchmarks --quick              # fewer samples, shorter windows (about 6 minutes)
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first
@@ -31,6 +31,7 @@ from typing import Any
 
 from benchmarks import (
     burst,
+    console,
     exchange_cpu,
     footprint,
     freshness,
@@ -54,6 +55,7 @@ ITEMS = {
     "target_flood": target_flood.run,
     "sky_stops": sky_stops.run,
     "exchange_cpu": exchange_cpu.run,
+    "console": console.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 
