@@ -2,10 +2,11 @@
 page. Runs on the console's event loop; the serial-lines thread only queues into it.
 
 Rules:
-1. ``status`` and ``event`` are called on the event loop (server.py hands them over with
+1. ``status`` and ``event`` are called on the event loop (live.py hands them over with
    ``call_soon_threadsafe``: the lines thread never waits for a page, docs/architecture.md rule 3).
 2. A status is rendered once, as the R/status document (mqtt/payloads.py), whatever the number of
-   pages; each page then gets the newest per rotator. A page that reads slowly skips statuses in
+   pages (and not at all while none is open: live.py keeps the newest for the next to join);
+   each page then gets the newest per rotator. A page that reads slowly skips statuses in
    between, never falls behind: what waits for it is one status per rotator and the last
    EVENTS_KEPT events, whatever it costs the others.
 3. A page that joins gets the newest status of every rotator first, then changes.
@@ -24,6 +25,7 @@ from bridge.model import ErrorEvent, RotatorStatus
 from bridge.mqtt.payloads import status_json
 
 EVENTS_KEPT = 20
+Message = tuple[str, str]  # (event name, its JSON), written out per transport (sse, websocket)
 
 
 @dataclass(frozen=True)
@@ -38,12 +40,12 @@ class Shape:
 class Page:
     """One open event stream."""
 
-    statuses: dict[str, str] = field(default_factory=dict)  # rotator -> SSE chunk not yet sent
-    events: deque[str] = field(default_factory=lambda: deque(maxlen=EVENTS_KEPT))
+    statuses: dict[str, Message] = field(default_factory=dict)  # rotator -> not yet sent
+    events: deque[Message] = field(default_factory=lambda: deque(maxlen=EVENTS_KEPT))
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     closed: bool = False
 
-    def take(self) -> Iterator[str]:
+    def take(self) -> Iterator[Message]:
         """What is owed, statuses first (rule 2), and nothing owed after."""
         self.wake.clear()
         statuses, self.statuses = self.statuses, {}
@@ -55,7 +57,8 @@ class Page:
 class Feed:
     def __init__(self, shapes: dict[str, Shape]) -> None:
         self._shapes = shapes
-        self._newest: dict[str, str] = {}
+        self._newest: dict[str, Message] = {}
+        self.rendered: dict[str, float] = {}  # rotator -> the time of the status rendered last
         self._pages: set[Page] = set()
         self.closed = False
 
@@ -78,15 +81,16 @@ class Feed:
         shape = self._shapes[rotator_id]
         doc = status_json(status, t_wall, shape.has_elevation, shape.shows_raw)
         head = f'{{"rotator":{json.dumps(rotator_id)},"t":{t_wall:.4f},"status":'
-        chunk = _chunk("status", f"{head}{doc}}}")
+        chunk = ("status", f"{head}{doc}}}")
         self._newest[rotator_id] = chunk
+        self.rendered[rotator_id] = t_wall
         for page in self._pages:
             page.statuses[rotator_id] = chunk
             page.wake.set()
 
     def event(self, rotator_id: str, event: ErrorEvent) -> None:
         doc = {"rotator": rotator_id, **event.as_dict()}
-        chunk = _chunk("error", json.dumps(doc, separators=(",", ":")))
+        chunk = ("error", json.dumps(doc, separators=(",", ":")))
         for page in self._pages:
             page.events.append(chunk)
             page.wake.set()
@@ -99,5 +103,13 @@ class Feed:
             page.wake.set()
 
 
-def _chunk(name: str, data: str) -> str:
+def sse(message: Message) -> str:
+    """``message`` on an event stream (``api/events``)."""
+    name, data = message
     return f"event: {name}\ndata: {data}\n\n"
+
+
+def websocket(message: Message) -> str:
+    """``message`` on the page's WebSocket (``api/live``): one JSON text each."""
+    name, data = message
+    return f'{{"event":"{name}","data":{data}}}'

@@ -47,13 +47,11 @@ from bridge.web.commands import BadCommand, Order, carry_out, parse
 from bridge.web.connections import Connections
 from bridge.web.feed import Feed, Shape
 from bridge.web.files import static_files
+from bridge.web.live import TOKEN_HEADER, Live
 
 log = logging.getLogger(__name__)
 
-PING_S = 10.0
 BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
-MAX_PAGES = 100  # open event streams; more are refused (503), not queued
-TOKEN_HEADER = "X-Rotor-Token"
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
@@ -87,7 +85,6 @@ class WebConsole:
         self._rotators: dict[str, Rotator] = {}
         self._facts: dict[str, view.RotatorFacts] = {}
         self._shapes: dict[str, Shape] = {}
-        self.feed = Feed(self._shapes)
         self._files = static_files()
         self._land: asyncio.Future[bytes] | None = None
         ancestors = " ".join(["'self'", *frame_ancestors])
@@ -100,6 +97,7 @@ class WebConsole:
         }
         if not frame_ancestors:
             self._headers["X-Frame-Options"] = "SAMEORIGIN"
+        self.live = Live(Feed(self._shapes), self._tokens, wall, self._headers)
         self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
         self._conns = Connections(lambda: None)
@@ -147,7 +145,8 @@ class WebConsole:
         app.router.add_post("/api/login", self._login)
         app.router.add_get("/api/config", self._config)
         app.router.add_get("/api/land", self._land_data)
-        app.router.add_get("/api/events", self._events)
+        app.router.add_get("/api/events", self._tokened(self.live.events))
+        app.router.add_get("/api/live", self.live.websocket)
         app.router.add_post("/api/rotators/{rid}/command", self._command)
         app.router.add_get("/{name}", self._file)
         # the streams end themselves at stop (feed.close): nothing is worth waiting long for
@@ -179,7 +178,7 @@ class WebConsole:
             loop.close()
 
     async def _shutdown(self) -> None:
-        self.feed.close()
+        self.live.feed.close()
         if self._sweeper is not None:
             self._sweeper.cancel()
         if self._listener is not None:
@@ -188,14 +187,12 @@ class WebConsole:
             await self._runner.cleanup()
 
     # -- the engine's listeners (the serial-lines thread: rule 1 of feed.py) ----------------
+    # -- the engine's listeners (the serial-lines thread: live.py rule 1) --------------------
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
-        if self._running and self._loop is not None:
-            t = self._wall()
-            self._loop.call_soon_threadsafe(self.feed.status, rotator_id, status, t)
+        self.live.on_status(rotator_id, status, self._loop if self._running else None)
 
     def on_event(self, rotator_id: str, event: ErrorEvent) -> None:
-        if self._running and self._loop is not None:
-            self._loop.call_soon_threadsafe(self.feed.event, rotator_id, event)
+        self.live.on_event(rotator_id, event, self._loop if self._running else None)
 
     # -- every request (rules 2, 3) ----------------------------------------------------------
     @web.middleware
@@ -227,13 +224,23 @@ class WebConsole:
                         f"only, not {name!r}: without web.password_file a page from another "
                         "name could drive it"
                     )
-        if request.method in ("GET", "HEAD"):
-            return None
+        if request.method in ("GET", "HEAD") and request.headers.get("Upgrade") is None:
+            return None  # a WebSocket's opening GET is checked as a POST is (its Origin)
         if not auth.origin_allowed(request.headers.get("Origin"), host, forwarded):
             return "a request from another site's page is refused"
+        if request.method == "GET":
+            return None
         if request.content_type != "application/json":
             return "commands are JSON (Content-Type: application/json)"
         return None
+
+    def _tokened(self, handler: Handler) -> Handler:
+        async def checked(request: web.Request) -> web.StreamResponse:
+            if not self._token_ok(request):
+                return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+            return await handler(request)
+
+        return checked
 
     def _token_ok(self, request: web.Request) -> bool:
         return self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall())
@@ -323,44 +330,6 @@ class WebConsole:
         if zipped:
             response.headers["Content-Encoding"] = "gzip"
         response.headers["Cache-Control"] = "no-cache"
-        return response
-
-    async def _events(self, request: web.Request) -> web.StreamResponse:
-        if not self._token_ok(request):
-            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
-        if self.feed.pages >= MAX_PAGES:  # each holds a connection: a flood is not served
-            return _json({"error": f"{MAX_PAGES} pages are open already"}, 503)
-        response = web.StreamResponse(
-            headers={
-                "Content-Type": "text/event-stream",
-                "Cache-Control": "no-store",
-                "X-Accel-Buffering": "no",  # nginx: pass each event on at once
-                **self._headers,
-            }
-        )
-        await response.prepare(request)
-        page = self.feed.join()
-        # the stream ends with its token: the page then asks for a new one (a login) while
-        # nothing is urgent, rather than when its STOP is answered 401 (auth.py rule 2)
-        expires = self._tokens.expires(request.headers.get(TOKEN_HEADER)) or 0.0
-        try:
-            await response.write(b": hello\n\n")
-            while not page.closed:
-                left_s = expires - self._wall()
-                if left_s <= 0:
-                    break
-                try:
-                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
-                except TimeoutError:
-                    await response.write(b": ping\n\n")
-                    continue
-                chunks = "".join(page.take())
-                if chunks:
-                    await response.write(chunks.encode())
-        except (ConnectionError, asyncio.CancelledError):
-            pass
-        finally:
-            self.feed.leave(page)
         return response
 
     # -- commands (rule 4) -------------------------------------------------------------------

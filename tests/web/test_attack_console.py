@@ -524,10 +524,10 @@ def test_the_page_limit_holds_for_streams_opened_at_once(
     """Held (a guard): _events checks ``feed.pages >= MAX_PAGES`` before ``response.prepare``
     and joins the feed after it; should prepare ever yield to the loop there, a burst of
     streams would all pass the check."""
-    from bridge.web import server
+    from bridge.web import live
 
     _rig, client = console
-    monkeypatch.setattr(server, "MAX_PAGES", 2)
+    monkeypatch.setattr(live, "MAX_PAGES", 2)
     barrier = threading.Barrier(12)
     served: list[int] = []
     streams: list[EventStream] = []

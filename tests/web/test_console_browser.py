@@ -110,6 +110,30 @@ def test_stop_stops_a_turning_rotator_far_from_its_target(
     assert [c["command"] for c in sent] == ["toward", "stop"]  # Space never parked
 
 
+def test_stop_reaches_the_bridge_with_eight_tabs_open_in_one_browser(
+    console_bridge: ConsoleBridge, browser: Browser
+) -> None:
+    """A browser keeps six HTTP connections per host: a feed that held one per tab left a
+    sixth tab's STOP waiting for ever. The feed is a WebSocket, counted apart."""
+    rig = console_bridge.rig
+    context = browser.new_context(viewport={"width": 900, "height": 700})
+    try:
+        pages = [context.new_page() for _ in range(8)]
+        for page in pages:
+            page.goto(console_bridge.url)
+        for page in pages:
+            expect(page.locator("#connection")).to_have_text("live", timeout=15_000)
+        start = rig.emu.state().az_deg
+        target = _farthest(start)
+        assert console_bridge.client().command("hf", command="target", az=target).status == 200
+        rig.emu.wait_for(lambda s: s.is_moving and angle_apart(s.az_deg, start) > 15.0, 10)
+        pages[-1].click("#stop")
+        stopped = rig.emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 10)
+        assert angle_apart(stopped.az_deg, target) > 30.0, stopped
+    finally:
+        context.close()
+
+
 def test_stop_stays_on_screen_on_a_phone(console_bridge: ConsoleBridge, browser: Browser) -> None:
     page = open_console(browser, console_bridge.url, width=390, height=700)
     try:

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.web import server
+from bridge.web import live
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
 
@@ -136,7 +136,7 @@ def test_pages_beyond_the_limit_are_refused_not_queued(
     console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     _rig, client = console
-    monkeypatch.setattr(server, "MAX_PAGES", 2)
+    monkeypatch.setattr(live, "MAX_PAGES", 2)
     streams = [EventStream(client), EventStream(client)]
     try:
         for stream in streams:

@@ -7,7 +7,7 @@ import json
 import math
 
 from bridge.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus
-from bridge.web.feed import EVENTS_KEPT, Feed, Shape
+from bridge.web.feed import EVENTS_KEPT, Feed, Shape, sse, websocket
 from bridge.web.view import SCALE, land_doc, land_rings
 
 BERLIN = (52.5, 13.4)
@@ -48,14 +48,16 @@ def test_a_page_gets_the_newest_status_of_each_rotator_and_every_event_kept() ->
         feed.status("hf", _status(10.0), 1.0)
         page = feed.join()
         assert page.wake.is_set()  # joined: the newest first
-        first = list(page.take())
+        first = [sse(m) for m in page.take()]
         assert len(first) == 1 and '"bearing":10' in first[0] and first[0].startswith("event: ")
         for b in range(20, 100, 10):  # a slow page: only the newest is owed
             feed.status("hf", _status(float(b)), 2.0)
         feed.status("vhf", _status(5.0), 2.0)
         for i in range(EVENTS_KEPT + 5):
             feed.event("hf", ErrorEvent(ErrorKind.REFUSED, f"no {i}", "target 1", 3.0))
-        chunks = list(page.take())
+        taken = list(page.take())
+        chunks = [sse(m) for m in taken]
+        assert json.loads(websocket(taken[0]))["data"]["status"]["bearing"] == 90
         statuses = [c for c in chunks if c.startswith("event: status")]
         errors = [c for c in chunks if c.startswith("event: error")]
         assert len(statuses) == 2 and '"bearing":90' in statuses[0]

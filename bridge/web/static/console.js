@@ -342,8 +342,14 @@ function onErrorEvent(doc) {
 }
 
 // ---- commands ---------------------------------------------------------------------------
-async function send(body, id = app.selected) {
+// Each command is numbered in this page's order: the bridge carries out nothing this page
+// numbered before a STOP or lock ON it already carried out, whichever arrives first.
+const PAGE_ID = Array.from(crypto.getRandomValues(new Uint8Array(8)), (b) => b.toString(16).padStart(2, '0')).join('');
+let sequence = 0;
+
+async function send(command, id = app.selected) {
   if (!id) return false;
+  const body = { ...command, page: PAGE_ID, seq: ++sequence };
   const url = `api/rotators/${encodeURIComponent(id)}/command`;
   for (let attempt = 0; attempt < 2; attempt++) {
     let res;

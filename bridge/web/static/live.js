@@ -4,10 +4,12 @@
 // 1. Every URL is relative (the page runs behind a path prefix and in an iframe); every api/
 //    request but hello/session/login carries X-Rotor-Token. A 401 drops the token: without a
 //    password a new one is fetched at once, with one the login form is shown.
-// 2. The stream is api/events read with fetch and a stream reader (an EventSource cannot send
-//    the header). When it ends, fails, or is silent for 25 s, the page is told at once
-//    (onOnline(false)) and it reconnects: every 1 s, then backing off to 5 s; each connect
-//    reads api/config first (onConfig), since the bridge may have restarted with another one.
+// 2. The live feed is api/live, a WebSocket (a browser keeps a few HTTP connections per host,
+//    six over HTTP/1.1: an event stream per tab held one each, and six tabs left none for a
+//    STOP; WebSockets are counted apart), its token the first message. When it closes, fails,
+//    or is silent for 25 s, the page is told at once (onOnline(false)) and it reconnects: every
+//    1 s, then backing off to 5 s; each connect reads api/config first (onConfig), since the
+//    bridge may have restarted with another one.
 
 const TOKEN_KEY = 'rotor-bridge-token';
 const SILENCE_MS = 25000;
@@ -120,19 +122,15 @@ export async function connect({ onConfig, onEvent, onOnline }) {
       if (!cfg.ok) throw new Error(`api/config: HTTP ${cfg.status}`);
       await onConfig(await cfg.json());
       configured = true;
-      const abort = new AbortController();
-      const unanswered = setTimeout(() => abort.abort(), ASK_MS);
-      const res = await fetch('api/events', { cache: 'no-store', headers: authHeaders(), signal: abort.signal });
-      clearTimeout(unanswered);
-      if (res.status === 401) {
-        dropToken();
+      const ended = await readLive(onEvent, () => {
+        quickRetry = true;
+        attempt = 0;
+        onOnline(true);
+      });
+      if (ended === 4401) {
+        dropToken(); // the token's life ended, or the bridge restarted: ask for a new one
         if (quickRetry) { quickRetry = false; continue; }
       }
-      if (!res.ok || !res.body) throw new Error(`api/events: HTTP ${res.status}`);
-      quickRetry = true;
-      attempt = 0;
-      onOnline(true);
-      await readEvents(res.body, abort, onEvent);
     } catch (err) {
       if (!configured) console.warn(err);
     }
@@ -141,55 +139,34 @@ export async function connect({ onConfig, onEvent, onOnline }) {
   }
 }
 
-async function readEvents(body, abort, onEvent) {
-  const reader = body.getReader();
-  const decoder = new TextDecoder();
-  let watchdog = 0;
-  const kick = () => {
-    clearTimeout(watchdog);
-    watchdog = setTimeout(() => abort.abort(), SILENCE_MS);
-  };
-  let buffer = '';
-  let type = '';
-  let data = [];
-  kick();
-  try {
-    for (;;) {
-      const { value, done } = await reader.read();
-      if (done) return;
-      kick();
-      buffer += decoder.decode(value, { stream: true });
-      let nl;
-      while ((nl = buffer.indexOf('\n')) >= 0) {
-        let line = buffer.slice(0, nl);
-        buffer = buffer.slice(nl + 1);
-        if (line.endsWith('\r')) line = line.slice(0, -1);
-        if (line === '') {
-          if (data.length) dispatch(onEvent, type || 'message', data.join('\n'));
-          type = '';
-          data = [];
-        } else if (line[0] !== ':') {
-          const colon = line.indexOf(':');
-          const field = colon < 0 ? line : line.slice(0, colon);
-          let v = colon < 0 ? '' : line.slice(colon + 1);
-          if (v[0] === ' ') v = v.slice(1);
-          if (field === 'event') type = v;
-          else if (field === 'data') data.push(v);
-        }
+/** api/live until it ends; resolves with the close code. The token is the first message
+ *  (a WebSocket cannot carry a header); "hello" says the bridge took it (then onOpen). */
+function readLive(onEvent, onOpen) {
+  return new Promise((resolve) => {
+    const url = new URL('api/live', location.href);
+    url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
+    const ws = new WebSocket(url);
+    let watchdog = 0;
+    const kick = (ms) => {
+      clearTimeout(watchdog);
+      watchdog = setTimeout(() => ws.close(), ms);
+    };
+    kick(ASK_MS); // an opening the bridge never answers is lost
+    ws.onopen = () => ws.send(JSON.stringify({ token: session.token || '' }));
+    ws.onmessage = (m) => {
+      kick(SILENCE_MS);
+      let doc;
+      try {
+        doc = JSON.parse(m.data);
+      } catch {
+        return; // not ours to judge: the next message is independent
       }
-    }
-  } finally {
-    clearTimeout(watchdog);
-    abort.abort();
-  }
-}
-
-function dispatch(onEvent, type, text) {
-  let doc;
-  try {
-    doc = JSON.parse(text);
-  } catch {
-    return; // not ours to judge: the next event is independent
-  }
-  onEvent(type, doc);
+      if (doc.event === 'hello') onOpen();
+      else if (doc.event !== 'ping') onEvent(doc.event, doc.data);
+    };
+    ws.onclose = (e) => {
+      clearTimeout(watchdog);
+      resolve(e.code);
+    };
+  });
 }

@@ -1,0 +1,150 @@
+"""The console's live side: the newest status of each rotator from the serial-lines thread, and
+the two ways a page reads them: ``api/live`` (a WebSocket: the page's own) and ``api/events`` (an
+event stream: scripts, curl). Both carry the same messages (feed.py).
+
+Rules:
+1. ``on_status`` and ``on_event`` run on the serial-lines thread and only keep the newest or
+   hand it to the event loop (``call_soon_threadsafe``), and that only while a page is open: a
+   console nobody looks at costs the lines thread a dict write per status.
+2. A page that joins gets every rotator's newest first (``join``), then changes.
+3. A stream ends when its token's life does (the page then asks for a new one while nothing is
+   urgent, rather than when its STOP is answered 401), and when the bridge stops.
+4. The WebSocket's token is its first message (a browser cannot give a WebSocket a header); its
+   Origin was checked with the opening request (server.py).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections.abc import Callable
+
+from aiohttp import WSMsgType, web
+
+from bridge.model import ErrorEvent, RotatorStatus
+from bridge.web.auth import Tokens
+from bridge.web.feed import Feed, Page, sse, websocket
+
+PING_S = 10.0
+BODY_S = 10.0  # the WebSocket's first message comes within this
+MAX_PAGES = 100  # open streams; more are refused (503), not queued
+TOKEN_HEADER = "X-Rotor-Token"
+
+
+class Live:
+    def __init__(
+        self, feed: Feed, tokens: Tokens, wall: Callable[[], float], headers: dict[str, str]
+    ) -> None:
+        self.feed, self._tokens, self._wall = feed, tokens, wall
+        self._headers = headers  # the console's safety headers (server.py rule 3)
+        self._newest: dict[str, tuple[RotatorStatus, float]] = {}  # written by the lines thread
+
+    def on_status(
+        self, rotator_id: str, status: RotatorStatus, loop: asyncio.AbstractEventLoop | None
+    ) -> None:
+        """The newest is kept; it is handed over (and rendered) only while a page is open: a
+        page that joins takes what it missed from ``_newest`` (``_join``)."""
+        t = self._wall()
+        self._newest[rotator_id] = (status, t)
+        if loop is not None and self.feed.pages:
+            loop.call_soon_threadsafe(self.feed.status, rotator_id, status, t)
+
+    def on_event(
+        self, rotator_id: str, event: ErrorEvent, loop: asyncio.AbstractEventLoop | None
+    ) -> None:
+        if loop is not None and self.feed.pages:
+            loop.call_soon_threadsafe(self.feed.event, rotator_id, event)
+
+    async def events(self, request: web.Request) -> web.StreamResponse:
+        """``api/events``, an event stream (scripts; the caller checked its token)."""
+        if self.feed.pages >= MAX_PAGES:  # each holds a connection: a flood is not served
+            return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
+        response = web.StreamResponse(
+            headers={
+                "Content-Type": "text/event-stream",
+                "Cache-Control": "no-store",
+                "X-Accel-Buffering": "no",  # nginx: pass each event on at once
+                **self._headers,
+            }
+        )
+        await response.prepare(request)
+        page = self.join()
+        # the stream ends with its token: the page then asks for a new one (a login) while
+        # nothing is urgent, rather than when its STOP is answered 401 (auth.py rule 2)
+        expires = self._tokens.expires(request.headers.get(TOKEN_HEADER)) or 0.0
+        try:
+            await response.write(b": hello\n\n")
+            while not page.closed:
+                left_s = expires - self._wall()
+                if left_s <= 0:
+                    break
+                try:
+                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
+                except TimeoutError:
+                    await response.write(b": ping\n\n")
+                    continue
+                chunks = "".join(sse(m) for m in page.take())
+                if chunks:
+                    await response.write(chunks.encode())
+        except (ConnectionError, asyncio.CancelledError):
+            pass
+        finally:
+            self.feed.leave(page)
+        return response
+
+    def join(self) -> Page:
+        """A page joins, then takes every newest status not rendered yet (the lines thread
+        hands statuses over only while a page is open: on_status)."""
+        page = self.feed.join()
+        for rid, (status, t) in list(self._newest.items()):
+            if self.feed.rendered.get(rid) != t:
+                self.feed.status(rid, status, t)
+        return page
+
+    async def websocket(self, request: web.Request) -> web.StreamResponse:
+        """The page's feed: a WebSocket (a browser's own connections to a host are few, six
+        over HTTP/1.1, and a page's event stream held one of them: six tabs left none for a
+        STOP). The token comes as the first message; then the same messages as api/events."""
+        if self.feed.pages >= MAX_PAGES:
+            return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
+        ws = web.WebSocketResponse(max_msg_size=4096)
+        await ws.prepare(request)
+        try:
+            first = await asyncio.wait_for(ws.receive(), BODY_S)
+            token = json.loads(first.data).get("token") if first.type == WSMsgType.TEXT else None
+        except (TimeoutError, ValueError, AttributeError, RecursionError, TypeError):
+            token = None
+        if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
+            await ws.close(code=4401, message=b"no valid token")
+            return ws
+        expires = self._tokens.expires(token) or 0.0
+        page = self.join()
+        reader = asyncio.get_running_loop().create_task(_drain(ws, page))
+        try:
+            await ws.send_str('{"event":"hello"}')
+            while not page.closed:
+                left_s = expires - self._wall()
+                if left_s <= 0:
+                    break
+                try:
+                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
+                except TimeoutError:
+                    await ws.send_str('{"event":"ping"}')
+                    continue
+                for message in page.take():
+                    await ws.send_str(websocket(message))
+        except (ConnectionError, asyncio.CancelledError):
+            pass
+        finally:
+            self.feed.leave(page)
+            reader.cancel()
+            await ws.close(code=1001 if page.closed else 4401)  # 4401: the token's life ended
+        return ws
+
+
+async def _drain(ws: web.WebSocketResponse, page: Page) -> None:
+    """Read what the page sends (nothing is expected) so that its close is seen at once."""
+    async for _message in ws:
+        pass
+    page.closed = True
+    page.wake.set()
