@@ -4,9 +4,13 @@ nothing."""
 
 from __future__ import annotations
 
+import asyncio
+import http.client
+import json
 from collections.abc import Iterator
 from typing import Any
 
+import aiohttp
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
@@ -167,3 +171,51 @@ def test_a_name_pointed_at_a_proxy_is_refused_without_a_password(
     lan = {**via, "X-Forwarded-Host": "192.168.1.10:8080", "Origin": "http://192.168.1.10:8080"}
     assert client.request("POST", "/api/session", b"{}", lan).status == 200
     assert rig.emu.frames(*BEARING_OUTCOMES) == []
+
+
+def test_another_sites_page_cannot_open_the_live_feed(console: tuple[Rig, ConsoleClient]) -> None:
+    """A WebSocket is not held back by a preflight: its opening request's Origin is checked as
+    a POST's is (another site's page would otherwise read every status with a token it got)."""
+    _rig, client = console
+    upgrade = {
+        "Upgrade": "websocket",
+        "Connection": "Upgrade",
+        "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ==",
+        "Sec-WebSocket-Version": "13",
+    }
+    evil = client.request("GET", "/api/live", headers={**upgrade, "Origin": "http://evil.example"})
+    assert evil.status == 403
+    mine = {**upgrade, "Origin": f"http://127.0.0.1:{client.port}"}
+    conn = http.client.HTTPConnection("127.0.0.1", client.port, timeout=10)
+    try:
+        conn.request("GET", "/api/live", headers=mine)
+        assert conn.getresponse().status == 101  # switching protocols: the page's own
+    finally:
+        conn.close()
+
+
+def test_the_live_feed_takes_the_token_first_then_brings_every_status(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    _rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+    origin = {"Origin": f"http://127.0.0.1:{client.port}"}
+
+    async def read(token: str) -> tuple[int | None, list[dict[str, Any]]]:
+        got: list[dict[str, Any]] = []
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(url, headers=origin) as ws:
+                await ws.send_str(json.dumps({"token": token}))
+                while len(got) < 2:
+                    message = await ws.receive(timeout=10)
+                    if message.type != aiohttp.WSMsgType.TEXT:
+                        break
+                    got.append(json.loads(message.data))
+                return ws.close_code, got
+
+    code, got = asyncio.run(read("1.2.3"))
+    assert code == 4401 and got == []  # not the page's token: closed, nothing told
+    code, got = asyncio.run(read(client.token or ""))
+    assert got[0] == {"event": "hello"}
+    assert got[1]["event"] == "status" and got[1]["data"]["rotator"] == "hf"
+    assert got[1]["data"]["status"]["available"] is True
