@@ -356,6 +356,10 @@ async function send(command, id = app.selected) {
     try {
       res = await postJSON(url, body, authHeaders());
     } catch {
+      // a STOP or lock ON is sent once more at once: the connection it went on may have been
+      // closing just then (the bridge closes idle ones), and carrying either out twice is safe
+      const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
+      if (halts && attempt === 0) continue;
       showMessage(id, 'the bridge is not reachable: nothing was sent', 'error');
       return false;
     }
