@@ -11,12 +11,14 @@ Rules:
    EVENTS_KEPT events, whatever it costs the others.
 3. A page that joins gets the newest status of every rotator first, then changes.
 4. ``close`` ends every page's stream (the bridge is stopping): the page sees the bridge go.
+5. ``tick`` owes every page a sign of life and ends the streams whose token has run out.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import math
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -43,7 +45,10 @@ class Page:
     statuses: dict[str, Message] = field(default_factory=dict)  # rotator -> not yet sent
     events: deque[Message] = field(default_factory=lambda: deque(maxlen=EVENTS_KEPT))
     wake: asyncio.Event = field(default_factory=asyncio.Event)
-    closed: bool = False
+    closed: bool = False  # the page went, or the bridge is stopping
+    expires: float = math.inf  # its token's end (wall clock): the stream ends then
+    expired: bool = False
+    ping: bool = False  # owed a sign of life (``tick``)
 
     def take(self) -> Iterator[Message]:
         """What is owed, statuses first (rule 2), and nothing owed after."""
@@ -73,6 +78,14 @@ class Feed:
             page.closed = True
         self._pages.add(page)
         return page
+
+    def tick(self, now_wall: float) -> None:
+        """Every PING_S (live.py): each page is owed a sign of life, and one whose token has
+        run out is ended (rule 5). One timer for all pages, not one per page and wake."""
+        for page in self._pages:
+            page.expired = page.expired or now_wall >= page.expires
+            page.ping = True
+            page.wake.set()
 
     def leave(self, page: Page) -> None:
         self._pages.discard(page)

@@ -68,21 +68,13 @@ class Live:
             }
         )
         await response.prepare(request)
-        page = self.join()
-        # the stream ends with its token: the page then asks for a new one (a login) while
-        # nothing is urgent, rather than when its STOP is answered 401 (auth.py rule 2)
-        expires = self._tokens.expires(request.headers.get(TOKEN_HEADER)) or 0.0
+        page = self.join(request.headers.get(TOKEN_HEADER))
         try:
             await response.write(b": hello\n\n")
-            while not page.closed:
-                left_s = expires - self._wall()
-                if left_s <= 0:
-                    break
-                try:
-                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
-                except TimeoutError:
+            while await _next(page):
+                if page.ping:
+                    page.ping = False
                     await response.write(b": ping\n\n")
-                    continue
                 chunks = "".join(sse(m) for m in page.take())
                 if chunks:
                     await response.write(chunks.encode())
@@ -92,10 +84,12 @@ class Live:
             self.feed.leave(page)
         return response
 
-    def join(self) -> Page:
+    def join(self, token: str | None) -> Page:
         """A page joins, then takes every newest status not rendered yet (the lines thread
-        hands statuses over only while a page is open: on_status)."""
+        hands statuses over only while a page is open: on_status); it ends with its token
+        (rule 3)."""
         page = self.feed.join()
+        page.expires = self._tokens.expires(token) or 0.0
         for rid, (status, t) in list(self._newest.items()):
             if self.feed.rendered.get(rid) != t:
                 self.feed.status(rid, status, t)
@@ -117,29 +111,36 @@ class Live:
         if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
             await ws.close(code=4401, message=b"no valid token")
             return ws
-        expires = self._tokens.expires(token) or 0.0
-        page = self.join()
+        page = self.join(token)
         reader = asyncio.get_running_loop().create_task(_drain(ws, page))
         try:
             await ws.send_str('{"event":"hello"}')
-            while not page.closed:
-                left_s = expires - self._wall()
-                if left_s <= 0:
-                    break
-                try:
-                    await asyncio.wait_for(page.wake.wait(), min(PING_S, left_s))
-                except TimeoutError:
+            while await _next(page):
+                messages = list(page.take())
+                if page.ping:
+                    page.ping = False
                     await ws.send_str('{"event":"ping"}')
-                    continue
-                for message in page.take():
+                for message in messages:
                     await ws.send_str(websocket(message))
         except (ConnectionError, asyncio.CancelledError):
             pass
         finally:
             self.feed.leave(page)
             reader.cancel()
-            await ws.close(code=1001 if page.closed else 4401)  # 4401: the token's life ended
+            await ws.close(code=4401 if page.expired else 1001)  # 4401: the token's life ended
         return ws
+
+    async def ticking(self) -> None:
+        """One timer for every page (feed.py rule 5)."""
+        while True:
+            await asyncio.sleep(PING_S)
+            self.feed.tick(self._wall())
+
+
+async def _next(page: Page) -> bool:
+    """Wait until something is owed to the page; False when its stream ends."""
+    await page.wake.wait()
+    return not (page.closed or page.expired)
 
 
 async def _drain(ws: web.WebSocketResponse, page: Page) -> None:

@@ -103,6 +103,7 @@ class WebConsole:
         self._conns = Connections(lambda: None)
         self._listener: asyncio.Server | None = None
         self._sweeper: asyncio.Task[None] | None = None
+        self._ticker: asyncio.Task[None] | None = None
         self._order = Order()
         self._started: dict[int, float] = {}  # requests being served (by id): when they began
         self._thread: threading.Thread | None = None
@@ -161,6 +162,7 @@ class WebConsole:
             self._conns.protocol, self.bind or None, self.port, reuse_address=True
         )
         self._sweeper = loop.create_task(self._conns.sweeping())
+        self._ticker = loop.create_task(self.live.ticking())
 
     def stop(self) -> None:
         """Rule 6."""
@@ -179,8 +181,9 @@ class WebConsole:
 
     async def _shutdown(self) -> None:
         self.live.feed.close()
-        if self._sweeper is not None:
-            self._sweeper.cancel()
+        for task in (self._sweeper, self._ticker):
+            if task is not None:
+                task.cancel()
         if self._listener is not None:
             self._listener.close()
         if self._runner is not None:
