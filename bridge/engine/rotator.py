@@ -12,6 +12,7 @@ the lock or a lost link overtook before it could be sent, and reports that as a 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -98,6 +99,10 @@ class Rotator:
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self._stopped = False
+        # when a STOP or lock ON was last put in the mailbox (monotonic), from any front end: a
+        # front end whose commands can overtake each other (the console) refuses one that was
+        # under way before it (web/commands.py rule 5)
+        self.last_halt_s = -math.inf
         problem = store.problems.get(self.id)
         if problem is not None:  # the lock is ON for it; the status's last error says why
             self._mailbox.put_note(problem)
@@ -155,6 +160,8 @@ class Rotator:
         if isinstance(command, SetOption):
             name, enabled = command.name, command.enabled
             self._store.later(lambda: self._save_option(name, enabled))  # state_store rule 5
+        if isinstance(command, Stop):
+            self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
@@ -277,6 +284,8 @@ class Rotator:
         """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
         (outside its own lock: the state file is written with an fsync)."""
         self._locked = locked
+        if locked:
+            self.last_halt_s = time.monotonic()
         self._mailbox.put_lock(locked, hold=hold)
         if save:
             self.save_lock()

@@ -107,7 +107,7 @@ class LoginLimiter:
 
     def wait(self, client: str, now_s: float) -> float | None:
         """None: the try may go ahead; else the seconds until one may."""
-        bucket = self._clients.get(_client_key(client))
+        bucket = self._clients.get(client_key(client))
         if bucket is None:
             return None
         bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
@@ -115,7 +115,7 @@ class LoginLimiter:
         return None if bucket.tokens >= 1.0 else _wait(bucket)
 
     def failed(self, client: str, now_s: float) -> None:
-        key = _client_key(client)
+        key = client_key(client)
         bucket = self._clients.pop(key, None)
         if bucket is None:
             bucket = TokenBucket.full(LOGIN_BURST_PER_CLIENT, 1.0 / LOGIN_EVERY_S, now_s)
@@ -125,7 +125,7 @@ class LoginLimiter:
         bucket.take(now_s)
 
 
-def _client_key(client: str) -> str:
+def client_key(client: str) -> str:
     """An IPv6 address counts by its /64 (one client has all of it), any other as it is."""
     try:
         address = ipaddress.ip_address(client)

@@ -12,11 +12,12 @@ Rules:
 4. Every command carries ``Source.WEB``, so the status says the console sent it.
 5. A STOP or a lock ON is the last word over everything sent before it (docs/architecture.md
    rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
-   stale, a command that reached the bridge before a STOP or lock ON that was carried out
-   while it was still arriving (its body held up on the way), and a command a page numbered
-   (``page`` and ``seq``, which the console's page sends) before a STOP or lock ON the same
-   page sent after it, however late it comes. A stop, a lock ON and tracking off are never
-   stale.
+   stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
+   rotctld, the console) was carried out while it was still arriving (its body held up on the
+   way), and a command a page numbered (``page`` and ``seq``, which the console's page sends)
+   before a STOP or lock ON the same page sent after it, however late it comes; but not one
+   the same page numbered after its own STOP, the latest there is, that merely overtook it. A
+   stop, a lock ON and tracking off are never stale.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from bridge.model import Source, Stop, Target
 
 MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
+STALE = "sent before a STOP or lock ON that came first: not carried out"
 
 
 class BadCommand(ValueError):
@@ -203,23 +205,35 @@ class Order:
     """Rule 5, for one console (the server's event loop alone calls it)."""
 
     def __init__(self) -> None:
-        self._halted_at: dict[str, float] = {}  # rotator -> when its last halt was carried out
+        # rotator -> the console's last halt: when it was carried out, the page and its number
+        self._last: dict[str, tuple[float, str | None, int | None]] = {}
         self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
 
-    def stale(self, rotator_id: str, cmd: WebCommand, started: float) -> str | None:
-        """Why ``cmd`` (its request begun at ``started``, monotonic) is not carried out."""
+    def stale(
+        self, rotator_id: str, cmd: WebCommand, started: float, halted_s: float = -math.inf
+    ) -> str | None:
+        """Why ``cmd`` (its request begun at ``started``) is not carried out; ``halted_s``:
+        when the rotator last carried out a STOP or lock ON from any interface (all times
+        monotonic)."""
         if cmd.halts():
             return None
-        late = started < self._halted_at.get(rotator_id, -math.inf)
-        if not late and cmd.page is not None and cmd.seq is not None:
-            last = self._halt_seq.get((cmd.page, rotator_id))
-            late = last is not None and cmd.seq < last
-        if late:
-            return "sent before a STOP or lock ON that came first: not carried out"
+        numbered = cmd.page is not None and cmd.seq is not None
+        if numbered:
+            last_seq = self._halt_seq.get((str(cmd.page), rotator_id))
+            if last_seq is not None and cmd.seq is not None and cmd.seq < last_seq:
+                return STALE
+        at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
+        latest = max(at, halted_s)
+        if started < latest:
+            # the page's own halt, numbered before this command and the latest there is: the
+            # page sent this after it, whichever arrived first
+            own = numbered and page == cmd.page and seq is not None and at >= halted_s
+            if not (own and cmd.seq is not None and seq is not None and cmd.seq > seq):
+                return STALE
         return None
 
     def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
-        self._halted_at[rotator_id] = now
+        self._last[rotator_id] = (now, cmd.page, cmd.seq)
         if cmd.page is not None and cmd.seq is not None:
             key = (cmd.page, rotator_id)
             self._halt_seq[key] = max(cmd.seq, self._halt_seq.pop(key, cmd.seq))

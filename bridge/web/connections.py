@@ -6,8 +6,12 @@ descriptors cannot reconnect to its broker or reopen a serial port: anyone who c
 console's port could cut every interface off, STOP included. So:
 
 Rules:
-1. At most MAX_CONNECTIONS are held, and MAX_PER_ADDRESS from one address; one more is closed
-   as it is accepted, before it is read.
+1. At most MAX_CONNECTIONS are held, and MAX_PER_ADDRESS from one address (an IPv6 address by
+   its /64, as auth.py counts logins). A connection beyond either makes room by closing the
+   oldest one that has not shown a token yet (``trust``): a flood of silent sockets, or of
+   WebSockets that never send their token, cannot keep the operator's STOP out, since the
+   STOP's connection shows its token at once and the flood's never do. Only when every held
+   one has shown a token is the newcomer closed instead.
 2. A connection that is not serving a request (none arrived yet, or its last one answered) is
    closed IDLE_S after that: a client that dribbles a request's head, or keeps a socket open
    and silent, holds it no longer. A request being served (an event stream, a command) is never
@@ -23,6 +27,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from bridge.web.auth import client_key
+
 MAX_CONNECTIONS = 256
 MAX_PER_ADDRESS = 64
 IDLE_S = 15.0
@@ -34,6 +40,7 @@ class _Held:
     address: str
     since: float  # when it connected or last finished a request
     busy: int = 0  # requests being served
+    trusted: bool = False  # a request on it showed a valid token (rule 1)
 
 
 class _Refused(asyncio.Protocol):
@@ -82,8 +89,9 @@ class Connections:
         return len(self._held) + self._pending
 
     def protocol(self) -> asyncio.Protocol:
-        """The protocol factory the listening socket is served with (rule 1)."""
-        if len(self) >= MAX_CONNECTIONS:
+        """The protocol factory the listening socket is served with (rule 1: a burst of
+        accepts beyond twice the limit is closed at once, the rest judged when connected)."""
+        if len(self) >= 2 * MAX_CONNECTIONS:
             return _Refused()
         self._pending += 1
         return _Counted(self, self._factory())
@@ -91,12 +99,29 @@ class Connections:
     def made(self, proto: _Counted, transport: asyncio.BaseTransport) -> None:
         self._pending = max(0, self._pending - 1)
         peer = transport.get_extra_info("peername")
-        address = str(peer[0]) if isinstance(peer, tuple) and peer else "?"
-        if sum(1 for h in self._held.values() if h.address == address) >= MAX_PER_ADDRESS:
-            transport.close()  # connection_lost follows and finds nothing held
-            return
+        address = client_key(str(peer[0])) if isinstance(peer, tuple) and peer else "?"
+        same = [t for t, h in self._held.items() if h.address == address]
+        for crowd, limit in ((same, MAX_PER_ADDRESS), (list(self._held), MAX_CONNECTIONS - 1)):
+            if len(crowd) >= limit and not self._make_room(crowd):
+                transport.close()  # connection_lost follows and finds nothing held
+                return
         self._held[transport] = _Held(address, self._clock())
         self._made[proto] = transport
+
+    def _make_room(self, crowd: list[asyncio.BaseTransport]) -> bool:
+        """Rule 1: close the oldest of ``crowd`` that has shown no token; False if none."""
+        untrusted = [t for t in crowd if t in self._held and not self._held[t].trusted]
+        if not untrusted:
+            return False
+        oldest = min(untrusted, key=lambda t: self._held[t].since)
+        del self._held[oldest]
+        oldest.close()
+        return True
+
+    def trust(self, transport: asyncio.BaseTransport | None) -> None:
+        held = self._held.get(transport) if transport is not None else None
+        if held is not None:
+            held.trusted = True
 
     def lost(self, proto: _Counted) -> None:
         transport = self._made.pop(proto, None)

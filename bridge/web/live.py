@@ -9,8 +9,12 @@ Rules:
 2. A page that joins gets every rotator's newest first (``join``), then changes.
 3. A stream ends when its token's life does (the page then asks for a new one while nothing is
    urgent, rather than when its STOP is answered 401), and when the bridge stops.
-4. The WebSocket's token is its first message (a browser cannot give a WebSocket a header); its
-   Origin was checked with the opening request (server.py).
+4. The WebSocket's token is its first message (a browser cannot give a WebSocket a header),
+   within TOKEN_WAIT_S; its Origin was checked with the opening request (server.py). Until the
+   token is in it counts as a page (MAX_PAGES) and shows no token (connections.py rule 1).
+5. A page sends its STOP and lock ON over its WebSocket as well as by POST: when a flood holds
+   every connection a new POST could take, the socket the page already has still carries them.
+   Nothing else is taken over it.
 """
 
 from __future__ import annotations
@@ -26,17 +30,27 @@ from bridge.web.auth import Tokens
 from bridge.web.feed import Feed, Page, sse, websocket
 
 PING_S = 10.0
-BODY_S = 10.0  # the WebSocket's first message comes within this
+TOKEN_WAIT_S = 3.0  # the WebSocket's token (its first message) comes within this
 MAX_PAGES = 100  # open streams; more are refused (503), not queued
 TOKEN_HEADER = "X-Rotor-Token"
 
 
 class Live:
     def __init__(
-        self, feed: Feed, tokens: Tokens, wall: Callable[[], float], headers: dict[str, str]
+        self,
+        feed: Feed,
+        tokens: Tokens,
+        wall: Callable[[], float],
+        headers: dict[str, str],
+        *,
+        trust: Callable[[asyncio.BaseTransport | None], None],
+        halt: Callable[[str, bytes], None],
     ) -> None:
         self.feed, self._tokens, self._wall = feed, tokens, wall
         self._headers = headers  # the console's safety headers (server.py rule 3)
+        self._trust = trust  # connections.py rule 1
+        self._halt = halt  # a STOP or lock ON that came over the WebSocket (rule 5)
+        self._opening = 0  # WebSockets upgraded, their token not in yet (they count as pages)
         self._newest: dict[str, tuple[RotatorStatus, float]] = {}  # written by the lines thread
 
     def on_status(
@@ -99,20 +113,24 @@ class Live:
         """The page's feed: a WebSocket (a browser's own connections to a host are few, six
         over HTTP/1.1, and a page's event stream held one of them: six tabs left none for a
         STOP). The token comes as the first message; then the same messages as api/events."""
-        if self.feed.pages >= MAX_PAGES:
+        if self.feed.pages + self._opening >= MAX_PAGES:
             return web.json_response({"error": f"{MAX_PAGES} pages are open already"}, status=503)
         ws = web.WebSocketResponse(max_msg_size=4096)
-        await ws.prepare(request)
+        self._opening += 1
         try:
-            first = await asyncio.wait_for(ws.receive(), BODY_S)
+            await ws.prepare(request)
+            first = await asyncio.wait_for(ws.receive(), TOKEN_WAIT_S)
             token = json.loads(first.data).get("token") if first.type == WSMsgType.TEXT else None
         except (TimeoutError, ValueError, AttributeError, RecursionError, TypeError):
             token = None
+        finally:
+            self._opening -= 1
         if not isinstance(token, str) or not self._tokens.valid(token, self._wall()):
             await ws.close(code=4401, message=b"no valid token")
             return ws
+        self._trust(request.transport)
         page = self.join(token)
-        reader = asyncio.get_running_loop().create_task(_drain(ws, page))
+        reader = asyncio.get_running_loop().create_task(self._read(ws, page))
         try:
             await ws.send_str('{"event":"hello"}')
             while await _next(page):
@@ -130,6 +148,24 @@ class Live:
             await ws.close(code=4401 if page.expired else 1001)  # 4401: the token's life ended
         return ws
 
+    async def _read(self, ws: web.WebSocketResponse, page: Page) -> None:
+        """What the page sends: a STOP or a lock ON, sent here as well as by POST (rule 5);
+        anything else is ignored. Its close is seen at once."""
+        async for message in ws:
+            if message.type == WSMsgType.TEXT:
+                self._halt_from(message.data)
+        page.closed = True
+        page.wake.set()
+
+    def _halt_from(self, text: str) -> None:
+        try:
+            doc = json.loads(text)
+        except (ValueError, RecursionError):
+            return
+        rid = doc.pop("rotator", None) if isinstance(doc, dict) else None
+        if isinstance(rid, str):
+            self._halt(rid, json.dumps(doc).encode())
+
     async def ticking(self) -> None:
         """One timer for every page (feed.py rule 5)."""
         while True:
@@ -141,11 +177,3 @@ async def _next(page: Page) -> bool:
     """Wait until something is owed to the page; False when its stream ends."""
     await page.wake.wait()
     return not (page.closed or page.expired)
-
-
-async def _drain(ws: web.WebSocketResponse, page: Page) -> None:
-    """Read what the page sends (nothing is expected) so that its close is seen at once."""
-    async for _message in ws:
-        pass
-    page.closed = True
-    page.wake.set()

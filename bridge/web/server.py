@@ -97,7 +97,14 @@ class WebConsole:
         }
         if not frame_ancestors:
             self._headers["X-Frame-Options"] = "SAMEORIGIN"
-        self.live = Live(Feed(self._shapes), self._tokens, wall, self._headers)
+        self.live = Live(
+            Feed(self._shapes),
+            self._tokens,
+            wall,
+            self._headers,
+            trust=lambda transport: self._conns.trust(transport),
+            halt=self._halt,
+        )
         self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
         self._conns = Connections(lambda: None)
@@ -246,7 +253,10 @@ class WebConsole:
         return checked
 
     def _token_ok(self, request: web.Request) -> bool:
-        return self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall())
+        if not self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall()):
+            return False
+        self._conns.trust(request.transport)  # connections.py rule 1
+        return True
 
     # -- the page ----------------------------------------------------------------------------
     async def _index(self, request: web.Request) -> web.StreamResponse:
@@ -336,12 +346,25 @@ class WebConsole:
         return response
 
     # -- commands (rule 4) -------------------------------------------------------------------
+    def _halt(self, rotator_id: str, body: bytes) -> None:
+        """A STOP or lock ON over a page's WebSocket (live.py rule 5); nothing else."""
+        rot = self._rotators.get(rotator_id)
+        try:
+            cmd = parse(body)
+        except BadCommand:
+            return
+        if rot is None or not cmd.halts():
+            return
+        carry_out(rot, cmd)  # never refused (commands.py rule 3)
+        self._order.halted(rot.id, cmd, time.monotonic())
+
     async def _command(self, request: web.Request) -> web.StreamResponse:
         token = request.headers.get(TOKEN_HEADER)
         if token is None:
             return _json({"error": f"a command needs the page's token ({TOKEN_HEADER})"}, 403)
         if self._tokens.issued(token) is None:
             return _json({"error": "the token is not valid (any more): reload"}, 401)
+        self._conns.trust(request.transport)  # connections.py rule 1
         rot = self._rotators.get(request.match_info["rid"])
         if rot is None:
             return _json({"error": "no such rotator"}, 404)
@@ -357,7 +380,7 @@ class WebConsole:
         halt = cmd.halts()
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
-        stale = self._order.stale(rot.id, cmd, self._started[id(request)])
+        stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         if stale is not None:
             rot.report_refusal(stale, cmd.described())
             return _json({"error": stale, "code": "stale"}, 409)

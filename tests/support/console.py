@@ -3,12 +3,17 @@ token, the commands, the live feed. The standard library only."""
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import http.client
 import json
+from collections.abc import Coroutine
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 from bridge.mosquitto import free_port
+
+T = TypeVar("T")
 
 
 def web_section(port: int | None = None, **more: Any) -> dict[str, Any]:
@@ -101,3 +106,10 @@ class EventStream:
 
     def close(self) -> None:
         self.conn.close()
+
+
+def run_async(coro: Coroutine[Any, Any, T]) -> T:
+    """``asyncio.run(coro)`` on a thread of its own: a module that also drives a browser
+    through Playwright's sync API has an event loop running on the test's thread."""
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, coro).result()

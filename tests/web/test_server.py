@@ -4,7 +4,6 @@ nothing."""
 
 from __future__ import annotations
 
-import asyncio
 import http.client
 import json
 from collections.abc import Iterator
@@ -15,7 +14,7 @@ import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.web import live
-from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.console import ConsoleClient, EventStream, run_async, web_section
 from tests.support.rig import Rig
 
 
@@ -213,9 +212,9 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
                     got.append(json.loads(message.data))
                 return ws.close_code, got
 
-    code, got = asyncio.run(read("1.2.3"))
+    code, got = run_async(read("1.2.3"))
     assert code == 4401 and got == []  # not the page's token: closed, nothing told
-    code, got = asyncio.run(read(client.token or ""))
+    code, got = run_async(read(client.token or ""))
     assert got[0] == {"event": "hello"}
     assert got[1]["event"] == "status" and got[1]["data"]["rotator"] == "hf"
     assert got[1]["data"]["status"]["available"] is True

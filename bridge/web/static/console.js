@@ -14,7 +14,7 @@
 
 import { MapView, RIM_KM, norm360 } from './map.js';
 import { SkyView } from './sky.js';
-import { authHeaders, connect, dropToken, getToken, postJSON, session } from './live.js';
+import { authHeaders, connect, dropToken, getToken, postJSON, sendLive, session } from './live.js';
 
 const LATENCIES_MAX = 10000;
 const SAME_REFUSAL_MS = 2000;
@@ -350,15 +350,16 @@ let sequence = 0;
 async function send(command, id = app.selected) {
   if (!id) return false;
   const body = { ...command, page: PAGE_ID, seq: ++sequence };
+  const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
+  if (halts) sendLive({ ...body, rotator: id }); // and by POST: two ways, either will do
   const url = `api/rotators/${encodeURIComponent(id)}/command`;
   for (let attempt = 0; attempt < 2; attempt++) {
     let res;
     try {
-      res = await postJSON(url, body, authHeaders());
+      res = await postJSON(url, body, authHeaders(halts));
     } catch {
       // a STOP or lock ON is sent once more at once: the connection it went on may have been
       // closing just then (the bridge closes idle ones), and carrying either out twice is safe
-      const halts = body.command === 'stop' || (body.command === 'lock' && body.on);
       if (halts && attempt === 0) continue;
       showMessage(id, 'the bridge is not reachable: nothing was sent', 'error');
       return false;
@@ -407,6 +408,7 @@ $('locator-form').addEventListener('submit', (e) => {
   e.preventDefault();
   const locator = $('locator').value.replace(/\s+/g, '');
   if (locator) send({ command: 'toward', locator, long_path: false });
+  $('locator').blur(); // the rotor may be turning now: Space must stop it, not type a blank
 });
 
 // rule 4: capture phase, before any focused control sees the key

@@ -28,8 +28,21 @@ const store = {
 export const session = { token: store.get(), password: false };
 
 export function dropToken() {
+  // kept for a STOP or lock ON only: the bridge still takes those with a token whose life has
+  // ended (a page left open for days must be able to stop the rotor before anyone logs in)
+  session.lastToken = session.token || session.lastToken;
   session.token = null;
   store.drop();
+}
+
+let openSocket = null; // the live feed's WebSocket once the bridge said hello
+
+/** A STOP or lock ON over the live feed too (the bridge takes nothing else there): when a
+ *  flood holds every connection a POST could take, the socket the page has still carries it. */
+export function sendLive(doc) {
+  if (!openSocket || openSocket.readyState !== WebSocket.OPEN) return false;
+  openSocket.send(JSON.stringify(doc));
+  return true;
 }
 
 let tokenPending = null;
@@ -104,7 +117,9 @@ export function postJSON(url, body, headers = {}) {
   });
 }
 
-export const authHeaders = () => ({ 'X-Rotor-Token': session.token || '' });
+export const authHeaders = (halts = false) => ({
+  'X-Rotor-Token': session.token || (halts ? session.lastToken : '') || '',
+});
 
 /** Connect, and stay connected, forever (rule 2). */
 export async function connect({ onConfig, onEvent, onOnline }) {
@@ -161,10 +176,14 @@ function readLive(onEvent, onOpen) {
       } catch {
         return; // not ours to judge: the next message is independent
       }
-      if (doc.event === 'hello') onOpen();
+      if (doc.event === 'hello') {
+        openSocket = ws;
+        onOpen();
+      }
       else if (doc.event !== 'ping') onEvent(doc.event, doc.data);
     };
     ws.onclose = (e) => {
+      if (openSocket === ws) openSocket = null;
       clearTimeout(watchdog);
       resolve(e.code);
     };
