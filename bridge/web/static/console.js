@@ -211,6 +211,7 @@ function trackingOf(st) {
     maxEl: t.max_elevation ?? t.max_elevation_deg ?? null,
     aos: t.aos,
     los: t.los,
+    pass: Array.isArray(t.pass_track) ? t.pass_track : [],
   };
 }
 

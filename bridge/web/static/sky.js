@@ -6,6 +6,8 @@
 // 2. The trail is every body position seen since the page opened, per rotator, for the body
 //    tracked now (a new body starts a new trail), bounded so a long session stays cheap.
 // 3. A click sends a target at the clicked azimuth and elevation (the caller's onPick).
+// 4. The pass ahead, as the bridge predicts it (tracking.pass_track: AOS to LOS), is drawn
+//    dashed under the trail, above the horizon only.
 
 import { drawRing, polar, svg, norm360 } from './map.js';
 
@@ -29,6 +31,7 @@ export class SkyView {
       const t = svg('text', { class: 'sky-el-label', x: 0.01, y: f(-radius(el) + 0.05) }, root);
       t.textContent = `${el}\u00B0`;
     }
+    this.pass = svg('polyline', { class: 'sky-pass' }, root);
     this.trail = svg('polyline', { class: 'sky-trail' }, root);
     this.aos = svg('path', { class: 'sky-aos off', d: 'M0 -1L-0.05 -1.09L0.05 -1.09Z' }, root);
     this.next = svg('circle', { class: 'sky-next off', r: 0.03 }, root);
@@ -79,6 +82,13 @@ export class SkyView {
     const aos = tracking ? tracking.aosAz : null;
     show(this.aos, typeof aos === 'number');
     if (typeof aos === 'number') this.aos.setAttribute('transform', `rotate(${aos})`);
+    const pass = tracking && tracking.pass.length ? tracking.pass : [];
+    const passKey = `${id}:${pass.length}:${pass.length ? pass[0].join() + pass[pass.length - 1].join() : ''}`;
+    if (passKey !== this.passKey) {
+      this.passKey = passKey;
+      const above = pass.filter(([, el]) => el >= 0);
+      this.pass.setAttribute('points', above.map(([az, el]) => polar(az, radius(Math.min(el, 90))).map(f).join(',')).join(' '));
+    }
     const trail = tracking ? this.trails.get(id) : null;
     const key = trail && trail.body === tracking.body ? `${id}:${trail.body}:${trail.version}` : '';
     if (key !== this.trailKey) {
