@@ -161,7 +161,7 @@ export class MapView {
       const r = km / RIM_KM;
       svg('circle', { class: 'dist-ring', r: f(r) }, this.gridLayer);
       const [x, y] = polar(180, r);
-      label(`${km} km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
+      label(`${km.toLocaleString('en-US')} km`, { class: 'dist-label', x: f(x + 0.012), y: f(y - 0.012) }, this.gridLayer);
     }
   }
 
@@ -265,7 +265,7 @@ export class MapView {
     set(this.gcPath, 'data-path', long ? 'long' : 'short');
     set(this.targetPoint, 'cx', f(x)); set(this.targetPoint, 'cy', f(y));
     const km = typeof info.distance_km === 'number' ? info.distance_km : long ? 2 * RIM_KM - gc.distance_km : gc.distance_km;
-    this.gcLabel.textContent = `${info.locator ? info.locator + ' ' : ''}${Math.round(km)} km${long ? ' long' : ''}`;
+    this.gcLabel.textContent = `${info.locator ? info.locator + ' ' : ''}${Math.round(km).toLocaleString('en-US')} km${long ? ' long' : ''}`;
     const right = x < 0.45;
     set(this.gcLabel, 'x', f(x + (right ? 0.035 : -0.035)));
     set(this.gcLabel, 'y', f(y - 0.03));
