@@ -466,13 +466,16 @@ $('map').addEventListener('click', (e) => {
   if (!p || p.r > 1.1 || !app.selected) return;
   const long = e.shiftKey;
   map.markClick(p);
-  pointerNote = `sent: ${describe(p, long)}`;
+  const said = describe(p, long);
+  pointerNote = `sending: ${said}`;
   pointer.textContent = pointerNote;
-  if (p.distance_km !== undefined && p.r > 1e-6) {
-    send({ command: 'toward', latitude_deg: +p.lat.toFixed(5), longitude_deg: +p.lon.toFixed(5), long_path: long });
-  } else {
-    send({ command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) });
-  }
+  const sent = p.distance_km !== undefined && p.r > 1e-6
+    ? send({ command: 'toward', latitude_deg: +p.lat.toFixed(5), longitude_deg: +p.lon.toFixed(5), long_path: long })
+    : send({ command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) });
+  sent.then((ok) => {
+    pointerNote = `${ok ? 'sent' : 'refused'}: ${said}`;
+    pointer.textContent = pointerNote;
+  });
 });
 
 connect({
