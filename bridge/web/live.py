@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 from collections.abc import Callable
 
 from aiohttp import WSMsgType, web
@@ -28,6 +29,8 @@ from aiohttp import WSMsgType, web
 from bridge.model import ErrorEvent, RotatorStatus
 from bridge.web.auth import Tokens
 from bridge.web.feed import Feed, Page, sse, websocket
+
+log = logging.getLogger(__name__)
 
 PING_S = 10.0
 TOKEN_WAIT_S = 3.0  # the WebSocket's token (its first message) comes within this
@@ -57,7 +60,7 @@ class Live:
         self, rotator_id: str, status: RotatorStatus, loop: asyncio.AbstractEventLoop | None
     ) -> None:
         """The newest is kept; it is handed over (and rendered) only while a page is open: a
-        page that joins takes what it missed from ``_newest`` (``_join``)."""
+        page that joins takes what it missed from ``_newest`` (``join``)."""
         t = self._wall()
         self._newest[rotator_id] = (status, t)
         if loop is not None and self.feed.pages:
@@ -164,7 +167,10 @@ class Live:
             return
         rid = doc.pop("rotator", None) if isinstance(doc, dict) else None
         if isinstance(rid, str):
-            self._halt(rid, json.dumps(doc).encode())
+            try:
+                self._halt(rid, json.dumps(doc).encode())
+            except Exception:  # the page's socket goes on: its POST carries the same STOP
+                log.exception("web console: a STOP over the live feed failed")
 
     async def ticking(self) -> None:
         """One timer for every page (feed.py rule 5)."""
