@@ -11,6 +11,7 @@ import json
 import socket
 import subprocess
 import time
+from pathlib import Path
 
 import pytest
 
@@ -34,8 +35,10 @@ def start(rig: Rig, model: str = "rotorez", start_az_deg: float = 10, **bridge: 
     return port
 
 
-def rotctl(path: str, hamlib_model: str, port: int, *commands: str) -> str:
-    argv = ["timeout", "20", path, "-m", hamlib_model, "-r", f"127.0.0.1:{port}", *commands]
+def rotctl(path: str, hamlib_model: str, port: int | str, *commands: str) -> str:
+    """rotctl on the TCP port (a number) or a serial device (a path)."""
+    where = f"127.0.0.1:{port}" if isinstance(port, int) else port
+    argv = ["timeout", "20", path, "-m", hamlib_model, "-r", where, *commands]
     done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
@@ -167,3 +170,24 @@ def test_http_is_refused_and_nothing_runs(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
     assert ask(port, b"POST / HTTP/1.1\r\nHost: x\r\n\r\nM120\r") == b""
     assert bearing_frames(rig) == []
+
+
+def test_a_program_that_wants_a_serial_port_reaches_it_through_socat(
+    rig: Rig, rotctl_path: str, tmp_path: Path
+) -> None:
+    port = start(rig, start_az_deg=10)
+    link = tmp_path / "rotor-gs232"
+    socat = subprocess.Popen(
+        ["socat", f"pty,link={link},raw,echo=0", f"tcp:127.0.0.1:{port}"],
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        wait_until(link.exists, 5, "socat's pty")
+        rotctl(rotctl_path, GS232, str(link), "P", "90", "0")
+        rig.arrived("tower", 90)
+        wait_until(lambda: settled(rig, 90, 0), 10, "the bridge's status at 90")
+        az = float(rotctl(rotctl_path, GS232, str(link), "p").split()[0])
+        assert abs(az - 90) <= 1
+    finally:
+        socat.terminate()
+        socat.wait(5)
