@@ -191,3 +191,44 @@ def test_a_program_that_wants_a_serial_port_reaches_it_through_socat(
     finally:
         socat.terminate()
         socat.wait(5)
+
+
+def test_every_gs232_command_byte_for_byte(rig: Rig) -> None:
+    port = start(rig, start_az_deg=50)
+    assert ask(port, b"C\r") == b"AZ=050\r\n"
+    assert ask(port, b"B\r") == b"EL=000\r\n"  # an azimuth-only rotator: elevation 0
+    assert ask(port, b"C2\r\n") == b"AZ=050  EL=000\r\n"
+    for nothing_to_do in (b"X4\r", b"L\r", b"R\r", b"U\r", b"D\r", b"H\r", b"M1200\r", b"Mnan\r"):
+        assert ask(port, nothing_to_do) == b"?>\r\n", nothing_to_do
+    assert ask(port, b"W120 030\r") == b"?>\r\n"  # no elevation axis to take 30
+    assert ask(port, b"A\r") == b"" and ask(port, b"E\r") == b""  # stops, answered with nothing
+    assert bearing_frames(rig) == []
+    assert ask(port, b"M060\r") == b""
+    rig.arrived("tower", 60)
+
+
+def test_every_easycomm_command_byte_for_byte(rig: Rig) -> None:
+    port = start(rig, start_az_deg=50) + 1
+    assert ask(port, b"AZ EL\n") == b"AZ50.0 EL0.0\n"
+    assert ask(port, b"EL\r") == b"EL0.0\n"
+    assert ask(port, b"VE\n") == b"VErotor-bridge\n"
+    assert ask(port, b"ML\n") == b"ALML not available\n"
+    assert ask(port, b"RESET\n") == b"ALRESET not available\n"
+    assert ask(port, b"PARK\n") == b"ALrefused unsupported\n"  # no park position configured
+    assert ask(port, b"AZnan EL0.0\n") == b"ALinvalid AZnan\n"
+    assert ask(port, b"AZ99999 EL0\n") == b"ALinvalid AZ99999\n"
+    assert ask(port, b"UP145800000 FM DN435000000 FM\n") == b""  # a radio's words: ignored
+    assert ask(port, b"SA SE AZ100\n") == b""  # a line that stops does nothing else
+    assert bearing_frames(rig) == []
+    assert ask(port, b"AZ70.0 EL0.0 AZ EL\n") == b"AZ50.0 EL0.0\n"  # read before it turns
+    rig.arrived("tower", 70)
+
+
+def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str) -> None:
+    port = start(rig, start_az_deg=50)
+    rig.emus["tower"].close()
+    rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
+    for hamlib_model, where in ((GS232, port), (EASYCOMM, port + 1)):
+        argv = ["timeout", "20", rotctl_path, "-m", hamlib_model, "-r", f"127.0.0.1:{where}", "p"]
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+        assert done.returncode != 0 and "get_pos: error" in done.stdout, done
