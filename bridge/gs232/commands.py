@@ -40,9 +40,9 @@ def _position(rotator: Rotator) -> tuple[float, float] | None:
     return az, el
 
 
-def _degrees(value: float) -> str:
-    whole = round(value)
-    return f"{whole + 360 if whole < 0 else whole:03d}"
+def _azimuth(az_deg: float) -> str:
+    whole = round(az_deg)
+    return f"{whole + 360 if whole < 0 else whole:03d}"  # a GS-232 azimuth is never negative
 
 
 class Gs232Session:
@@ -75,7 +75,7 @@ class Gs232Session:
             where = _position(self.rotator)
             if where is None:
                 return GS232_ERROR
-            az_text, el_text = _degrees(where[0]), _degrees(where[1])
+            az_text, el_text = _azimuth(where[0]), f"{round(where[1]):03d}"
             reply = {
                 Gs232Kind.READ_AZ: f"AZ={az_text}",
                 Gs232Kind.READ_EL: f"EL={el_text}",

@@ -44,21 +44,29 @@ def rotctl(path: str, hamlib_model: str, port: int | str, *commands: str) -> str
     return done.stdout
 
 
-def ask(port: int, request: bytes, reply_lines: int = 1) -> bytes:
-    """One request on a fresh connection; the reply up to its last LF (b"" if none in 0.5 s)."""
+def ask(port: int, request: bytes, expected: bytes, sentinel: tuple[bytes, bytes]) -> None:
+    """``request`` on a fresh connection answers ``expected`` and nothing else: a ``sentinel``
+    question follows it, and its known answer must come right after (no reply is proven by
+    the order of the replies, not by waiting)."""
+    question, answer = sentinel
     with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
-        sock.sendall(request)
+        sock.sendall(request + question)
+        want = len(expected) + len(answer)
         buf = b""
-        sock.settimeout(0.5)
-        try:
-            while buf.count(b"\n") < reply_lines:
-                chunk = sock.recv(256)
-                if not chunk:
-                    break
-                buf += chunk
-        except TimeoutError:
-            pass
-        return buf
+        while len(buf) < want:
+            chunk = sock.recv(want - len(buf))
+            if not chunk:
+                break
+            buf += chunk
+    assert buf == expected + answer
+
+
+def gs232_ask(port: int, request: bytes, expected: bytes) -> None:
+    ask(port, request, expected, (b"VE\r", b"?>\r\n"))  # no GS-232 command: the error prompt
+
+
+def easycomm_ask(port: int, request: bytes, expected: bytes) -> None:
+    ask(port, request, expected, (b"VE\n", b"VErotor-bridge\n"))
 
 
 def settled(rig: Rig, az: float, el: float) -> bool:
@@ -133,13 +141,16 @@ def test_a_locked_rotator_answers_the_error_and_does_not_move(
     assert err["kind"] == "refused" and "locked" in err["message"]
     if hamlib_model == GS232:
         assert err["command"] == "gs232 W120 000"
-        assert ask(port, b"M120\r") == b"?>\r\n"
-        assert ask(port, b"C2\r") == b"AZ=050  EL=000\r\n"  # reading is still allowed
+        gs232_ask(port, b"M120\r", b"?>\r\n")
+        gs232_ask(port, b"C2\r", b"AZ=050  EL=000\r\n")  # reading is still allowed
     else:
         assert err["command"] == "easycomm AZ120.0 EL0.0"
-        assert ask(port, b"AZ120.0\n") == b"ALrefused locked\n"
-        assert ask(port, b"AZ EL\n") == b"AZ50.0 EL0.0\n"
-    assert ask(port - (hamlib_model == EASYCOMM), b"S\r") == b""  # a stop is never refused
+        easycomm_ask(port, b"AZ120.0\n", b"ALrefused locked\n")
+        easycomm_ask(port, b"AZ EL\n", b"AZ50.0 EL0.0\n")
+    if hamlib_model == GS232:  # a stop is never refused
+        gs232_ask(port, b"S\r", b"")
+    else:
+        easycomm_ask(port, b"SA SE\n", b"")
     assert bearing_frames(rig) == []
     assert rig.emus["tower"].state().is_moving is False
     az = float(rotctl(rotctl_path, hamlib_model, port, "p").split()[0])
@@ -149,10 +160,10 @@ def test_a_locked_rotator_answers_the_error_and_does_not_move(
 def test_a_keep_out_target_is_refused(rig: Rig, rotctl_path: str) -> None:
     port = start(rig, start_az_deg=100, keep_out=[[200, 220]])
     t = time.monotonic()
-    assert ask(port, b"W210 000\r") == b"?>\r\n"
+    gs232_ask(port, b"W210 000\r", b"?>\r\n")
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
     assert err["kind"] == "refused" and err["command"] == "gs232 W210 000"
-    assert ask(port + 1, b"AZ210.0 EL0.0\n") == b"ALrefused keep_out\n"
+    easycomm_ask(port + 1, b"AZ210.0 EL0.0\n", b"ALrefused keep_out\n")
     rotctl(rotctl_path, GS232, port, "P", "210", "0")  # Hamlib reads no reply: nothing moves
     assert bearing_frames(rig) == []
     assert rig.emus["tower"].state().is_moving is False
@@ -162,13 +173,15 @@ def test_an_unknown_position_is_an_error_never_a_number(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
     rig.emus["tower"].close()  # the controller is gone: the bridge no longer knows
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
-    assert ask(port, b"C2\r") == b"?>\r\n"
-    assert ask(port + 1, b"AZ EL\n") == b"ALposition unknown\n"
+    gs232_ask(port, b"C2\r", b"?>\r\n")
+    easycomm_ask(port + 1, b"AZ EL\n", b"ALposition unknown\n")
 
 
 def test_http_is_refused_and_nothing_runs(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
-    assert ask(port, b"POST / HTTP/1.1\r\nHost: x\r\n\r\nM120\r") == b""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.sendall(b"POST / HTTP/1.1\r\nHost: x\r\n\r\nM120\r")
+        assert sock.recv(64) == b""  # closed, nothing answered
     assert bearing_frames(rig) == []
 
 
@@ -195,32 +208,32 @@ def test_a_program_that_wants_a_serial_port_reaches_it_through_socat(
 
 def test_every_gs232_command_byte_for_byte(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
-    assert ask(port, b"C\r") == b"AZ=050\r\n"
-    assert ask(port, b"B\r") == b"EL=000\r\n"  # an azimuth-only rotator: elevation 0
-    assert ask(port, b"C2\r\n") == b"AZ=050  EL=000\r\n"
+    gs232_ask(port, b"C\r", b"AZ=050\r\n")
+    gs232_ask(port, b"B\r", b"EL=000\r\n")  # an azimuth-only rotator: elevation 0
+    gs232_ask(port, b"C2\r\n", b"AZ=050  EL=000\r\n")
     for nothing_to_do in (b"X4\r", b"L\r", b"R\r", b"U\r", b"D\r", b"H\r", b"M1200\r", b"Mnan\r"):
-        assert ask(port, nothing_to_do) == b"?>\r\n", nothing_to_do
-    assert ask(port, b"W120 030\r") == b"?>\r\n"  # no elevation axis to take 30
-    assert ask(port, b"A\r") == b"" and ask(port, b"E\r") == b""  # stops, answered with nothing
+        gs232_ask(port, nothing_to_do, b"?>\r\n")
+    gs232_ask(port, b"W120 030\r", b"?>\r\n")  # no elevation axis to take 30
+    gs232_ask(port, b"A\rE\r", b"")  # stops, answered with nothing
     assert bearing_frames(rig) == []
-    assert ask(port, b"M060\r") == b""
+    gs232_ask(port, b"M060\r", b"")
     rig.arrived("tower", 60)
 
 
 def test_every_easycomm_command_byte_for_byte(rig: Rig) -> None:
     port = start(rig, start_az_deg=50) + 1
-    assert ask(port, b"AZ EL\n") == b"AZ50.0 EL0.0\n"
-    assert ask(port, b"EL\r") == b"EL0.0\n"
-    assert ask(port, b"VE\n") == b"VErotor-bridge\n"
-    assert ask(port, b"ML\n") == b"ALML not available\n"
-    assert ask(port, b"RESET\n") == b"ALRESET not available\n"
-    assert ask(port, b"PARK\n") == b"ALrefused unsupported\n"  # no park position configured
-    assert ask(port, b"AZnan EL0.0\n") == b"ALinvalid AZnan\n"
-    assert ask(port, b"AZ99999 EL0\n") == b"ALinvalid AZ99999\n"
-    assert ask(port, b"UP145800000 FM DN435000000 FM\n") == b""  # a radio's words: ignored
-    assert ask(port, b"SA SE AZ100\n") == b""  # a line that stops does nothing else
+    easycomm_ask(port, b"AZ EL\n", b"AZ50.0 EL0.0\n")
+    easycomm_ask(port, b"EL\r", b"EL0.0\n")
+    easycomm_ask(port, b"VE\n", b"VErotor-bridge\n")
+    easycomm_ask(port, b"ML\n", b"ALML not available\n")
+    easycomm_ask(port, b"RESET\n", b"ALRESET not available\n")
+    easycomm_ask(port, b"PARK\n", b"ALrefused unsupported\n")  # no park position configured
+    easycomm_ask(port, b"AZnan EL0.0\n", b"ALinvalid AZnan\n")
+    easycomm_ask(port, b"AZ99999 EL0\n", b"ALinvalid AZ99999\n")
+    easycomm_ask(port, b"UP145800000 FM DN435000000 FM\n", b"")  # a radio's words: ignored
+    easycomm_ask(port, b"SA SE AZ100\n", b"")  # a line that stops does nothing else
     assert bearing_frames(rig) == []
-    assert ask(port, b"AZ70.0 EL0.0 AZ EL\n") == b"AZ50.0 EL0.0\n"  # read before it turns
+    easycomm_ask(port, b"AZ70.0 EL0.0 AZ EL\n", b"AZ50.0 EL0.0\n")  # read before it turns
     rig.arrived("tower", 70)
 
 
