@@ -22,6 +22,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
+from bridge.gs232 import easycomm_server, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
@@ -32,6 +33,7 @@ from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.sky import Sky
+from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
@@ -148,6 +150,7 @@ class App:
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
+        self.emulations: list[LineServer] = []  # GS-232 and Easycomm ports (gs232/)
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
@@ -192,6 +195,10 @@ class App:
                     rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
                 )
                 self.rotctld.append(server)
+            if r.gs232_port is not None:
+                self.emulations.append(gs232_server(rot, r.gs232_port, r.gs232_bind))
+            if r.easycomm_port is not None:
+                self.emulations.append(easycomm_server(rot, r.easycomm_port, r.easycomm_bind))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:
@@ -309,14 +316,14 @@ class App:
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)
         try:
-            for server in self.rotctld:
+            for server in self._text_ports():
                 server.listen()
             if self.loggers:
                 self.loggers.listen()
             if self.web is not None:
                 self.web.listen()
         except OSError as exc:
-            for server in self.rotctld:
+            for server in self._text_ports():
                 server.stop()
             self.loggers.stop()
             if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
@@ -330,7 +337,7 @@ class App:
         if self.settings.tracking.tle_file is not None and self.discovery is not None:
             threading.Thread(target=self._watch_catalog, name="tle-file", daemon=True).start()
         try:
-            for server in self.rotctld:
+            for server in self._text_ports():
                 server.start()
             if self.loggers:
                 self.loggers.start()
@@ -338,12 +345,16 @@ class App:
             self.stop()
             raise
 
+    def _text_ports(self) -> list[LineServer]:
+        """rotctld's, GS-232's and Easycomm's TCP ports: listened on, started, stopped alike."""
+        return [*self.rotctld, *self.emulations]
+
     def stop(self) -> None:
         self._stopped.set()
         self.client.shutting_down()
         if self.discovery is not None:
             self.discovery.stop()
-        for server in self.rotctld:
+        for server in self._text_ports():
             server.stop()
         self.loggers.stop()
         if self.web is not None:

@@ -104,6 +104,16 @@ def config_warnings(settings: Settings) -> list[str]:
                 f"address: rotctld has no authentication, anyone who can reach port "
                 f"{r.rotctld_port} there can turn the antenna"
             )
+        for label, port, bind in (
+            ("gs232", r.gs232_port, r.gs232_bind),
+            ("easycomm", r.easycomm_port, r.easycomm_bind),
+        ):
+            if port is not None and not is_loopback(bind):
+                found.append(
+                    f"{where}.{label}_bind: {bind or '(every address)'} is not a loopback "
+                    f"address: {label} has no authentication, anyone who can reach port {port} "
+                    "there can turn the antenna"
+                )
     web = settings.web
     if web.enabled and not is_loopback(web.bind):
         found.append(
@@ -184,6 +194,10 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
     if r.rotctld_port is not None:
         on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
+    if r.gs232_port is not None:
+        on.append(f"GS-232B on {r.gs232_bind}:{r.gs232_port}")
+    if r.easycomm_port is not None:
+        on.append(f"Easycomm II on {r.easycomm_bind}:{r.easycomm_port}")
     if r.pst_udp_port is not None:
         on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
     if r.n1mm_rotor_name is not None:

@@ -33,6 +33,8 @@ class Source(enum.StrEnum):
     PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
     N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
     WEB = "web"  # the operator console (web/)
+    GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
+    EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
 
 
 @dataclass(frozen=True)

@@ -143,6 +143,17 @@ class Settings(BaseSettings):
                     f"web.port {self.web.port} is also rotators[{i}].rotctld_port: give the "
                     "console another port"
                 )
+        # a GS-232 or Easycomm port is no other TCP listener's (the second could not start) and
+        # no PstRotator port (one number, one program to point at it)
+        taken = [("web.port", self.web.port)] if self.web.enabled else []
+        keys = ("rotctld_port", "pst_udp_port", "gs232_port", "easycomm_port")
+        taken += [
+            (f"rotators[{i}].{k}", getattr(r, k)) for i, r in enumerate(self.rotators) for k in keys
+        ]
+        for name, port in taken:
+            clash = [other for other, p in taken if p == port and other != name]
+            if port is not None and name.endswith(("gs232_port", "easycomm_port")) and clash:
+                raise ValueError(f"{name} {port} is also {clash[0]}: give it another port")
         pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:

@@ -206,6 +206,36 @@ class RotatorSettings(PointingFields, LoggerFields):
         description="a rotctld client that sends nothing this long is disconnected",
         examples=[3600],
     )
+    gs232_port: int | None = Field(
+        None,
+        ge=1,
+        le=65535,
+        description="a TCP port speaking Yaesu GS-232B for this rotator (programs that drive a "
+        "GS-232 controller, `rotctl -m 603 -r 127.0.0.1:4535`); one port per rotator",
+        examples=[4535],
+        json_schema_extra={"unset": "no GS-232 listener"},
+    )
+    gs232_bind: str = Field(
+        "127.0.0.1",
+        description="the address the GS-232 port listens on. It has no authentication: anyone "
+        "who can reach it can turn the antenna (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    easycomm_port: int | None = Field(
+        None,
+        ge=1,
+        le=65535,
+        description="a TCP port speaking Easycomm II for this rotator (`rotctl -m 202 -r "
+        "127.0.0.1:4536`); one port per rotator",
+        examples=[4536],
+        json_schema_extra={"unset": "no Easycomm listener"},
+    )
+    easycomm_bind: str = Field(
+        "127.0.0.1",
+        description="the address the Easycomm port listens on. It has no authentication: "
+        "anyone who can reach it can turn the antenna (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
 
     @field_validator("id")
     @classmethod

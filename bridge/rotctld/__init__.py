@@ -19,15 +19,13 @@ Rules:
    currently have is an error code, never the last value seen.
 6. Motion goes through Rotator.submit with Source.ROTCTLD, so the lock, the limits and the link
    state are judged in one place and MQTT shows the refusal or the move.
-7. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs: its
-   first line is held until complete and may not be an HTTP request line, and no line may be
-   an HTTP header (``Host: ...``). rotctld parses any bytes as commands, so a web page open on
-   the shack PC could otherwise turn the antenna through a loopback port (a ``POST`` body of
-   ``P 200 0``; ``KHTML`` in a browser's User-Agent read as park).
+7. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs
+   (tcplines.py rule 2): rotctld parses any bytes as commands, so a web page open on the shack
+   PC could otherwise turn the antenna through a loopback port (a ``POST`` body of ``P 200 0``;
+   ``KHTML`` in a browser's User-Agent read as park).
 8. A client is disconnected when it sends nothing for ``rotctld_idle_timeout_s`` (300 s), or
-   leaves a command unfinished for 60 s (one byte a second would hold a slot for ever);
-   connections turned away because every slot is taken are logged once per 10 s, with their
-   count.
+   leaves a command unfinished for 60 s (tcplines.py rule 3). The sockets and threads are the
+   shared line server's (tcplines.py); this package owns what the bytes mean.
 """
 
 from bridge.rotctld.commands import RotctldCommands

@@ -4,7 +4,6 @@ See the package docstring for the rules (1-3)."""
 from __future__ import annotations
 
 import logging
-import re
 import string
 from dataclasses import dataclass
 
@@ -163,38 +162,3 @@ class RequestParser:
         request = Request(self._command, tuple(self._args), self._extended, self._sep)
         self._clear()
         return request
-
-
-_REQUEST_LINE = re.compile(rb"^[A-Za-z]{3,10} \S* ?HTTP/\d(\.\d)?\s*$")
-_HEADER = re.compile(rb"^[A-Za-z][A-Za-z0-9-]{1,40}:[ \t]")
-HTTP_FIRST_LINE_MAX = 8192
-
-
-class HttpGuard:
-    """Package rule 7: what a client sends is held until its first line is complete; a
-    connection whose first line is an HTTP request line, or that sends a header line
-    (``Host: ...``) at any point, is HTTP and nothing of it may run (a web page cross-talking to
-    a loopback port: ``KHTML`` in a User-Agent would park the rotor). ``feed`` returns the bytes
-    the parser may have now; ``http`` names what was seen."""
-
-    def __init__(self) -> None:
-        self.http: str | None = None
-        self._head: bytes | None = b""  # the first line while it is incomplete; None after
-        self._line = b""  # the current line's start, for the header check
-
-    def feed(self, data: bytes) -> bytes:
-        if self._head is not None:
-            self._head += data
-            if b"\n" not in self._head and len(self._head) < HTTP_FIRST_LINE_MAX:
-                return b""
-            data, self._head = self._head, None
-            if _REQUEST_LINE.match(data.split(b"\n", 1)[0].rstrip(b"\r")):
-                self.http = "an HTTP request line"
-                return b""
-        lines = (self._line + data).split(b"\n")
-        self._line = lines[-1][-64:]  # enough of a partial line to see "Name: " at its start
-        for line in lines:
-            if _HEADER.match(line):
-                self.http = f"an HTTP header ({line.split(b':')[0].decode('ascii', 'replace')})"
-                return b""
-        return data

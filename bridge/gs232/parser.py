@@ -1,0 +1,149 @@
+"""GS-232B and Easycomm II input, sans-IO: bytes in, complete lines out, each line read into a
+typed request. See the package docstring for the protocol facts and rules 1-3."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from enum import Enum
+
+MAX_LINE = 80  # no command of either protocol is near this long: a longer line is junk
+
+
+class LineSplitter:
+    """Lines end at CR or LF (Hamlib's GS-232B sends CR, its Easycomm LF); empty lines are
+    dropped. An overlong line comes out as ``None`` once it ends: junk, never a command."""
+
+    def __init__(self) -> None:
+        self._buf: list[str] = []
+        self._overlong = False
+
+    @property
+    def idle(self) -> bool:
+        """True when no line is half received."""
+        return not self._buf and not self._overlong
+
+    def feed(self, data: bytes) -> list[str | None]:
+        out: list[str | None] = []
+        for ch in data.decode("latin-1"):
+            if ch in "\r\n":
+                if self._overlong:
+                    out.append(None)
+                elif self._buf and "".join(self._buf).strip():
+                    out.append("".join(self._buf).strip())
+                self._buf, self._overlong = [], False
+            elif self._overlong:
+                continue
+            elif len(self._buf) >= MAX_LINE:
+                self._buf, self._overlong = [], True
+            else:
+                self._buf.append(ch)
+        return out
+
+
+# -- GS-232B ---------------------------------------------------------------------------------
+
+
+class Gs232Kind(Enum):
+    READ_AZ = "C"
+    READ_EL = "B"
+    READ_AZEL = "C2"
+    GOTO_AZ = "M"
+    GOTO_AZEL = "W"
+    STOP = "S"
+    STOP_AZ = "A"
+    STOP_EL = "E"
+    UNKNOWN = "?"  # anything else: answered with the error prompt
+
+
+@dataclass(frozen=True)
+class Gs232Request:
+    kind: Gs232Kind
+    az_deg: int | None = None
+    el_deg: int | None = None
+
+
+_FIXED = {
+    "C": Gs232Kind.READ_AZ,
+    "B": Gs232Kind.READ_EL,
+    "C2": Gs232Kind.READ_AZEL,
+    "S": Gs232Kind.STOP,
+    "A": Gs232Kind.STOP_AZ,
+    "E": Gs232Kind.STOP_EL,
+}
+_GOTO_AZ = re.compile(r"M(\d{1,3})")
+_GOTO_AZEL = re.compile(r"W(\d{1,3}) +(\d{1,3})")
+
+
+def parse_gs232(line: str | None) -> Gs232Request:
+    """One line (from LineSplitter) as a GS-232B request; whatever is not one is UNKNOWN."""
+    if line is None:
+        return Gs232Request(Gs232Kind.UNKNOWN)
+    if line in _FIXED:
+        return Gs232Request(_FIXED[line])
+    if m := _GOTO_AZ.fullmatch(line):
+        return Gs232Request(Gs232Kind.GOTO_AZ, int(m[1]))
+    if m := _GOTO_AZEL.fullmatch(line):
+        return Gs232Request(Gs232Kind.GOTO_AZEL, int(m[1]), int(m[2]))
+    return Gs232Request(Gs232Kind.UNKNOWN)
+
+
+# -- Easycomm II -----------------------------------------------------------------------------
+
+UNSUPPORTED_WORDS = frozenset({"ML", "MR", "MU", "MD", "RESET"})
+_NUMBER = re.compile(r"[+-]?(?:\d{1,4}(?:\.\d*)?|\.\d+)")
+
+
+@dataclass(frozen=True)
+class EasycommRequest:
+    """What one line asks. ``queries`` keeps the order of ``AZ``/``EL``/``VE`` as asked (the
+    reply echoes them in that order); ``invalid`` names a malformed word (nothing runs then)."""
+
+    queries: tuple[str, ...] = ()
+    az_deg: float | None = None
+    el_deg: float | None = None
+    stop: bool = False
+    park: bool = False
+    unsupported: tuple[str, ...] = ()
+    invalid: str | None = None
+    ignored: tuple[str, ...] = field(default=())
+
+
+def parse_easycomm(line: str | None) -> EasycommRequest:
+    """One line (from LineSplitter): its words, separated by spaces."""
+    if line is None:
+        return EasycommRequest(invalid="an overlong line")
+    queries: list[str] = []
+    unsupported: list[str] = []
+    ignored: list[str] = []
+    az: float | None = None
+    el: float | None = None
+    stop = park = False
+    for word in line.split():
+        head, value = word[:2].upper(), word[2:]
+        if word.upper() in ("PARK", "RESET"):
+            if word.upper() == "PARK":
+                park = True
+            else:
+                unsupported.append("RESET")
+        elif head in ("AZ", "EL") and value == "":
+            queries.append(head)
+        elif head in ("AZ", "EL"):
+            if not _NUMBER.fullmatch(value):
+                return EasycommRequest(invalid=word[:16])
+            if head == "AZ":
+                az = float(value)
+            else:
+                el = float(value)
+        elif head in ("SA", "SE") and value == "":
+            stop = True
+        elif head == "VE" and value == "":
+            queries.append("VE")
+        elif head in UNSUPPORTED_WORDS:
+            unsupported.append(head)
+        else:
+            # a radio's words (UP, DN, DM, ...) and the mode words that follow them
+            ignored.append(word[:16])
+    return EasycommRequest(
+        tuple(queries), az, el, stop, park, tuple(unsupported), None, tuple(ignored)
+    )

@@ -1,0 +1,71 @@
+"""gs232_port and easycomm_port in the configuration: unique among the TCP listeners and the
+PstRotator ports, warned about off loopback, and shown by check-config."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bridge.config_report import config_warnings
+from bridge.settings import ConfigError, load_settings
+from tests.support import run_cli
+
+
+def write(tmp_path: Path, rotators: list[str], extra: str = "") -> Path:
+    text = extra + "".join(
+        f'[[rotators]]\nid = "r{i}"\nmodel = "rotorez"\nport = "{tmp_path}/tty{i}"\n{keys}\n'
+        for i, keys in enumerate(rotators)
+    )
+    for i in range(len(rotators)):
+        (tmp_path / f"tty{i}").write_text("")  # a port that exists: no warning about it
+    path = tmp_path / "config.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("rotators", "extra", "said"),
+    [
+        (["gs232_port = 4533\nrotctld_port = 4533"], "", "rotators[0].gs232_port 4533 is also "),
+        (["easycomm_port = 4536", "gs232_port = 4536"], "", "rotators[0].easycomm_port 4536"),
+        (["rotctld_port = 4535", "gs232_port = 4535"], "", "rotators[1].gs232_port 4535 is al"),
+        (["gs232_port = 12000\npst_udp_port = 12000"], "", "is also rotators[0].pst_udp_port"),
+        (["easycomm_port = 8080"], "[web]\nenabled = true\nport = 8080\n", "is also web.port"),
+    ],
+)
+def test_a_port_given_twice_is_refused(
+    tmp_path: Path, rotators: list[str], extra: str, said: str
+) -> None:
+    with pytest.raises(ConfigError) as caught:
+        load_settings(write(tmp_path, rotators, extra), environ={})
+    assert said in str(caught.value)
+
+
+def test_distinct_ports_load(tmp_path: Path) -> None:
+    keys = ["rotctld_port = 4533\ngs232_port = 4535\neasycomm_port = 4536", "gs232_port = 4537"]
+    s = load_settings(write(tmp_path, keys), environ={})
+    assert [(r.gs232_port, r.easycomm_port) for r in s.rotators] == [(4535, 4536), (4537, None)]
+    assert s.rotators[0].gs232_bind == s.rotators[0].easycomm_bind == "127.0.0.1"
+    assert config_warnings(s) == []
+
+
+def test_a_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
+    keys = 'gs232_port = 4535\ngs232_bind = "0.0.0.0"\neasycomm_port = 4536\neasycomm_bind = "::"'
+    warnings = config_warnings(load_settings(write(tmp_path, [keys]), environ={}))
+    assert warnings == [
+        "rotators[0].gs232_bind: 0.0.0.0 is not a loopback address: gs232 has no "
+        "authentication, anyone who can reach port 4535 there can turn the antenna",
+        "rotators[0].easycomm_bind: :: is not a loopback address: easycomm has no "
+        "authentication, anyone who can reach port 4536 there can turn the antenna",
+    ]
+
+
+def test_check_config_lists_them(tmp_path: Path) -> None:
+    path = write(tmp_path, ["rotctld_port = 4533\ngs232_port = 4535\neasycomm_port = 4536"])
+    out = run_cli("check-config", "-c", str(path))
+    assert out.returncode == 0, out.stderr
+    assert (
+        "rotctld on 127.0.0.1:4533; GS-232B on 127.0.0.1:4535; Easycomm II on 127.0.0.1:4536"
+        in out.stdout
+    )
