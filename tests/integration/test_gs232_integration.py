@@ -23,16 +23,27 @@ pytestmark = pytest.mark.hamlib
 GS232, EASYCOMM = "603", "202"
 
 
+_EASYCOMM_PORTS: dict[int, int] = {}  # rig -> its Easycomm port
+
+
 def start(rig: Rig, model: str = "rotorez", start_az_deg: float = 10, **bridge: object) -> int:
-    """The bridge on one emulated controller; returns the GS-232 port (Easycomm is port + 1)."""
+    """The bridge on one emulated controller; returns its GS-232 port (easycomm_port: the other)."""
     port = free_port()
+    easycomm = free_port()
+    while easycomm == port:  # two ports free when asked (port + 1 may not be)
+        easycomm = free_port()
+    _EASYCOMM_PORTS[id(rig)] = easycomm
     emu: dict[str, object] = {"start_az_deg": start_az_deg}
     if model == "rotorez":
         emu["jitter_deg"] = 0
-    rig.add("tower", model, emu=emu, gs232_port=port, easycomm_port=port + 1, **bridge)
+    rig.add("tower", model, emu=emu, gs232_port=port, easycomm_port=easycomm, **bridge)
     rig.start()
     rig.ready("tower")
     return port
+
+
+def easycomm_port(rig: Rig) -> int:
+    return _EASYCOMM_PORTS[id(rig)]
 
 
 def rotctl(path: str, hamlib_model: str, port: int | str, *commands: str) -> str:
@@ -89,7 +100,8 @@ def bearing_frames(rig: Rig) -> list[bytes]:
 def test_rotctl_sets_a_position_and_reads_it_back(
     rig: Rig, rotctl_path: str, hamlib_model: str
 ) -> None:
-    port = start(rig) + (hamlib_model == EASYCOMM)
+    port = start(rig)
+    port = easycomm_port(rig) if hamlib_model == EASYCOMM else port
     rotctl(rotctl_path, hamlib_model, port, "P", "120", "0")
     rig.arrived("tower", 120)
     wait_until(lambda: settled(rig, 120, 0), 10, "the bridge's status at 120")
@@ -107,10 +119,10 @@ def test_rotctl_drives_azimuth_and_elevation_of_an_az_el_rotator(
     port = start(rig, "rot2prog")
     rotctl(rotctl_path, GS232, port, "P", "200", "30")
     rig.arrived("tower", 200, 30)
-    rotctl(rotctl_path, EASYCOMM, port + 1, "P", "150.5", "20.5")
+    rotctl(rotctl_path, EASYCOMM, easycomm_port(rig), "P", "150.5", "20.5")
     rig.arrived("tower", 150.5, 20.5)
     wait_until(lambda: settled(rig, 150.5, 20.5), 10, "the bridge's status at 150.5/20.5")
-    az, el = (float(v) for v in rotctl(rotctl_path, EASYCOMM, port + 1, "p").split())
+    az, el = (float(v) for v in rotctl(rotctl_path, EASYCOMM, easycomm_port(rig), "p").split())
     assert abs(az - 150.5) <= 1 and abs(el - 20.5) <= 1
     az, el = (float(v) for v in rotctl(rotctl_path, GS232, port, "p").split())
     assert abs(az - 150.5) <= 1 and abs(el - 20.5) <= 1  # GS-232 reads whole degrees
@@ -118,7 +130,8 @@ def test_rotctl_drives_azimuth_and_elevation_of_an_az_el_rotator(
 
 @pytest.mark.parametrize("hamlib_model", [GS232, EASYCOMM])
 def test_rotctl_stop_stops_a_turning_rotor(rig: Rig, rotctl_path: str, hamlib_model: str) -> None:
-    port = start(rig, start_az_deg=0) + (hamlib_model == EASYCOMM)
+    port = start(rig, start_az_deg=0)
+    port = easycomm_port(rig) if hamlib_model == EASYCOMM else port
     emu = rig.emus["tower"]
     rotctl(rotctl_path, hamlib_model, port, "P", "300", "0")
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 40)
@@ -131,7 +144,8 @@ def test_rotctl_stop_stops_a_turning_rotor(rig: Rig, rotctl_path: str, hamlib_mo
 def test_a_locked_rotator_answers_the_error_and_does_not_move(
     rig: Rig, rotctl_path: str, hamlib_model: str
 ) -> None:
-    port = start(rig, start_az_deg=50) + (hamlib_model == EASYCOMM)
+    port = start(rig, start_az_deg=50)
+    port = easycomm_port(rig) if hamlib_model == EASYCOMM else port
     rig.probe.publish("rotor/lock", "ON")
     rig.probe.wait_value("rotor/lock/state", "ON")
     t = time.monotonic()
@@ -163,7 +177,7 @@ def test_a_keep_out_target_is_refused(rig: Rig, rotctl_path: str) -> None:
     gs232_ask(port, b"W210 000\r", b"?>\r\n")
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
     assert err["kind"] == "refused" and err["command"] == "gs232 W210 000"
-    easycomm_ask(port + 1, b"AZ210.0 EL0.0\n", b"ALrefused keep_out\n")
+    easycomm_ask(easycomm_port(rig), b"AZ210.0 EL0.0\n", b"ALrefused keep_out\n")
     rotctl(rotctl_path, GS232, port, "P", "210", "0")  # Hamlib reads no reply: nothing moves
     assert bearing_frames(rig) == []
     assert rig.emus["tower"].state().is_moving is False
@@ -174,7 +188,7 @@ def test_an_unknown_position_is_an_error_never_a_number(rig: Rig) -> None:
     rig.emus["tower"].close()  # the controller is gone: the bridge no longer knows
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
     gs232_ask(port, b"C2\r", b"?>\r\n")
-    easycomm_ask(port + 1, b"AZ EL\n", b"ALposition unknown\n")
+    easycomm_ask(easycomm_port(rig), b"AZ EL\n", b"ALposition unknown\n")
 
 
 def test_http_is_refused_and_nothing_runs(rig: Rig) -> None:
@@ -221,7 +235,8 @@ def test_every_gs232_command_byte_for_byte(rig: Rig) -> None:
 
 
 def test_every_easycomm_command_byte_for_byte(rig: Rig) -> None:
-    port = start(rig, start_az_deg=50) + 1
+    start(rig, start_az_deg=50)
+    port = easycomm_port(rig)
     easycomm_ask(port, b"AZ EL\n", b"AZ50.0 EL0.0\n")
     easycomm_ask(port, b"EL\r", b"EL0.0\n")
     easycomm_ask(port, b"VE\n", b"VErotor-bridge\n")
@@ -241,7 +256,7 @@ def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str
     port = start(rig, start_az_deg=50)
     rig.emus["tower"].close()
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
-    for hamlib_model, where in ((GS232, port), (EASYCOMM, port + 1)):
+    for hamlib_model, where in ((GS232, port), (EASYCOMM, easycomm_port(rig))):
         argv = ["timeout", "20", rotctl_path, "-m", hamlib_model, "-r", f"127.0.0.1:{where}", "p"]
         done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
         assert done.returncode != 0 and "get_pos: error" in done.stdout, done
