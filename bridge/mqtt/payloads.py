@@ -19,6 +19,8 @@ from datetime import UTC, datetime
 
 from bridge import geo
 from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.pointing import Pointing
+from bridge.protocols.base import ModelSpec
 
 MAX_COMMAND_BYTES = 256
 MAX_NAME_CHARS = 64  # a preset's or a satellite's name
@@ -282,6 +284,28 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
 def tracking_state(status: RotatorStatus) -> str:
     """``R/tracking``: what is followed, or ``off``."""
     return status.tracking.body if status.tracking is not None else "off"
+
+
+def info_json(name: str, spec: ModelSpec, pointing: Pointing, can_track: bool) -> str:
+    """``R/info``: what a rotator is and may do, for a client far from the station (limits,
+    sectors, presets, capabilities as the station's configuration has them; true bearings)."""
+    lo, hi = pointing.target_range()
+    doc = {
+        "name": name,
+        "model": spec.name,
+        "model_name": spec.display_name,
+        "has_elevation": spec.has_elevation,
+        "can_report_position": spec.can_report_position,
+        "can_track": can_track,
+        "azimuth_range": [lo, hi],
+        "elevation_range": [pointing.el_min_deg, pointing.el_max_deg]
+        if spec.has_elevation
+        else None,
+        "keep_out": [list(sector) for sector in pointing.keep_out],
+        "park": list(pointing.park) if pointing.park is not None else None,
+        "options": sorted(spec.options),
+    }
+    return json.dumps(doc, separators=(",", ":"))
 
 
 def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:

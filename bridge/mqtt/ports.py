@@ -11,6 +11,7 @@ from bridge.protocols.base import ModelSpec
 
 class RotatorPort(Protocol):
     id: str
+    name: str  # as dashboards show it
     spec: ModelSpec
     pointing: Pointing
     can_track: bool  # a station and a controller that reports where it points

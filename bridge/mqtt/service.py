@@ -88,8 +88,11 @@ class MqttService:
 
     def attach(self, rotator: RotatorPort) -> None:
         self._rotators[rotator.id] = rotator
+        t = self.topics.rotator(rotator.id)
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
-        self._publisher.publish_retained(self.topics.rotator(rotator.id).presets, presets)
+        self._publisher.publish_retained(t.presets, presets)
+        info = pl.info_json(rotator.name, rotator.spec, rotator.pointing, rotator.can_track)
+        self._publisher.publish_retained(t.info, info)  # for clients far from the station
 
     def add_feature(
         self,

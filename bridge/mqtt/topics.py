@@ -101,6 +101,10 @@ class RotatorTopics:
         return f"{self.root}/presets"
 
     @property
+    def info(self) -> str:
+        return f"{self.root}/info"
+
+    @property
     def tracking(self) -> str:
         return f"{self.root}/tracking"
 
@@ -204,7 +208,7 @@ class Topics:
         subs = [self.bridge_state, self.bridge_info]
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
-            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking]
+            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:

@@ -151,6 +151,8 @@ def test_a_south_centred_rotor_reads_and_takes_true_bearings(rig: Rig) -> None:
     status = json.loads(snap["rotor/status"])
     assert (status["bearing"], status["raw_bearing"], status["overlap"]) == (190, 10, None)
     assert json.loads(snap["rotor/presets"]) == {"JA": 330, "EU": 45}
+    info = json.loads(snap["rotor/info"])  # for a client far from the station: true bearings
+    assert (info["model"], info["azimuth_range"], info["park"]) == ("rotorez", [0, 360], [0, None])
 
     frames, status = turn(rig, "rotor/target", "270", 90)
     assert frames == [b"AP1090\r"]  # store and go (CR), in the controller's own scale

@@ -66,6 +66,7 @@ class RecordingPublisher:
 class RecordingRotator:
     def __init__(self, rotator_id: str, model: str, refuse: Refused | None = None) -> None:
         self.id = rotator_id
+        self.name = rotator_id.title()
         self.spec = REGISTRY[model]
         self.pointing = Pointing.of(self.spec, presets={"EU": (45.0, None)})
         self.calls: list[tuple[object, ...]] = []
@@ -148,11 +149,26 @@ def service(
     return svc, pub, rots
 
 
-def test_attaching_publishes_the_presets_retained_for_dashboards() -> None:
+def test_attaching_publishes_the_presets_and_what_the_rotator_is_retained() -> None:
     pub = RecordingPublisher()
     svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, wall=lambda: NOW_UNIX)
     svc.attach(RecordingRotator("tower", "rotorez"))
-    assert pub.take() == [("rotor/presets", '{"EU":45}', True)]
+    (presets, info) = pub.take()
+    assert presets == ("rotor/presets", '{"EU":45}', True)
+    assert info[0] == "rotor/info" and info[2] is True
+    assert json.loads(info[1]) == {
+        "name": "Tower",
+        "model": "rotorez",
+        "model_name": REGISTRY["rotorez"].display_name,
+        "has_elevation": False,
+        "can_report_position": True,
+        "can_track": False,
+        "azimuth_range": [0.0, 360.0],
+        "elevation_range": None,
+        "keep_out": [],
+        "park": None,
+        "options": sorted(REGISTRY["rotorez"].options),
+    }
 
 
 # -- outbound ------------------------------------------------------------------------------------
