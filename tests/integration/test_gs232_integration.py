@@ -185,8 +185,10 @@ def test_a_keep_out_target_is_refused(rig: Rig, rotctl_path: str) -> None:
 
 def test_an_unknown_position_is_an_error_never_a_number(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
+    t = time.monotonic()
     rig.emus["tower"].close()  # the controller is gone: the bridge no longer knows
-    rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
+    # offline from now on (the probe also saw the offline of the start, before ready)
+    rig.probe.wait_value("rotor/availability", "offline", timeout_s=20, after=t)
     gs232_ask(port, b"C2\r", b"?>\r\n")
     easycomm_ask(easycomm_port(rig), b"AZ EL\n", b"ALposition unknown\n")
 
@@ -254,8 +256,9 @@ def test_every_easycomm_command_byte_for_byte(rig: Rig) -> None:
 
 def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str) -> None:
     port = start(rig, start_az_deg=50)
+    t = time.monotonic()
     rig.emus["tower"].close()
-    rig.probe.wait_value("rotor/availability", "offline", timeout_s=20)
+    rig.probe.wait_value("rotor/availability", "offline", timeout_s=20, after=t)
     for hamlib_model, where in ((GS232, port), (EASYCOMM, easycomm_port(rig))):
         argv = ["timeout", "20", rotctl_path, "-m", hamlib_model, "-r", f"127.0.0.1:{where}", "p"]
         done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
