@@ -45,8 +45,12 @@ def _azimuth(az_deg: float) -> str:
     return f"{whole + 360 if whole < 0 else whole:03d}"  # a GS-232 azimuth is never negative
 
 
-class Gs232Session:
-    """One GS-232B client (tcplines.LineSession)."""
+class _Session:
+    """One client's lines (tcplines.LineSession): each answered in turn, a failure contained
+    (rule 8 of the house: answered with the protocol's error, logged)."""
+
+    name = ""
+    failed_reply = b""
 
     def __init__(self, rotator: Rotator) -> None:
         self.rotator = rotator
@@ -60,11 +64,23 @@ class Gs232Session:
         out = []
         for line in self._lines.feed(data):
             try:
-                out.append(self.execute(line, parse_gs232(line)))
-            except Exception:  # rule 8 of the house: contained, answered, logged
-                log.exception("gs232 for %s: %r failed", self.rotator.id, line)
-                out.append(GS232_ERROR)
+                out.append(self.answer(line))
+            except Exception:
+                log.exception("%s for %s: %r failed", self.name, self.rotator.id, line)
+                out.append(self.failed_reply)
         return out
+
+    def answer(self, line: str | None) -> bytes:
+        raise NotImplementedError
+
+
+class Gs232Session(_Session):
+    """One GS-232B client."""
+
+    name, failed_reply = "gs232", GS232_ERROR
+
+    def answer(self, line: str | None) -> bytes:
+        return self.execute(line, parse_gs232(line))
 
     def execute(self, line: str | None, req: Gs232Request) -> bytes:
         described = f"gs232 {line}"
@@ -95,26 +111,13 @@ class Gs232Session:
         return GS232_ERROR
 
 
-class EasycommSession:
-    """One Easycomm II client (tcplines.LineSession)."""
+class EasycommSession(_Session):
+    """One Easycomm II client."""
 
-    def __init__(self, rotator: Rotator) -> None:
-        self.rotator = rotator
-        self._lines = LineSplitter()
+    name, failed_reply = "easycomm", b"ALinternal error\n"
 
-    @property
-    def idle(self) -> bool:
-        return self._lines.idle
-
-    def feed(self, data: bytes) -> list[bytes]:
-        out = []
-        for line in self._lines.feed(data):
-            try:
-                out.append(self.execute(line, parse_easycomm(line)))
-            except Exception:
-                log.exception("easycomm for %s: %r failed", self.rotator.id, line)
-                out.append(b"ALinternal error\n")
-        return out
+    def answer(self, line: str | None) -> bytes:
+        return self.execute(line, parse_easycomm(line))
 
     def execute(self, line: str | None, req: EasycommRequest) -> bytes:
         described = f"easycomm {line}"
