@@ -4,11 +4,15 @@ retained topics and carried out by publishing on its command topics.
 
 Rules:
 1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
-   while it is current: the remote connected, ``B/bridge/state`` not ``offline`` and
-   ``R/availability`` not ``offline``. Otherwise the rotator reads as unavailable (rotctld
-   answers an error code), never as the last number seen. The station publishes a status when
-   something changes, not on a clock, so its ``time`` says nothing about staleness: the
-   bridge's last will and the availability topic do.
+   while it is current: the remote connected, ``B/bridge/state`` and ``R/availability`` both
+   received as ``online`` on this connection (positive word, whatever order they come in).
+   Otherwise the rotator reads as unavailable (rotctld answers an error code), never as the
+   last number seen. The station publishes a status when
+   something changes, not on a clock, so the ``time`` of a still rotor's status says nothing
+   about staleness: the bridge's last will and the availability topic do. A MOVING rotor's
+   bearing changes with every poll, so a ``moving`` status older than ``moving_max_age_s``
+   means the station went quiet mid-move (its last will comes only after 1.5 keepalives): it
+   reads as unavailable too. A clock of the operator's that is ahead errs the safe way.
 2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
    Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
    The remote judges a target against these facts (a target out of range or in a keep-out
@@ -24,6 +28,8 @@ from __future__ import annotations
 
 import json
 import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Protocol
@@ -124,6 +130,10 @@ class StationView:
                 self._topics.pop(topic, None)
             self._lock.notify_all()
 
+    def clear(self) -> None:
+        with self._lock:
+            self._topics.clear()
+
     def get(self, topic: str) -> bytes | None:
         with self._lock:
             return self._topics.get(topic)
@@ -151,6 +161,8 @@ class RemoteRotator:
         link: Sender,
         operator: str,
         expiry_s: int,
+        moving_max_age_s: float = 10.0,
+        wall: Callable[[], float] = time.time,
     ) -> None:
         self.id = rotator_id
         self.root = root
@@ -162,6 +174,8 @@ class RemoteRotator:
         self._link = link
         self._operator = operator
         self._expiry_s = expiry_s
+        self._moving_max_age_s = moving_max_age_s
+        self._wall = wall
 
     @property
     def limits(self) -> Limits:
@@ -174,8 +188,8 @@ class RemoteRotator:
         view = self._view
         return (
             self._link.up
-            and view.get(f"{self._base}/bridge/state") != b"offline"
-            and view.get(f"{self.root}/availability") != b"offline"
+            and view.get(f"{self._base}/bridge/state") == b"online"
+            and view.get(f"{self.root}/availability") == b"online"
         )
 
     @property
@@ -184,9 +198,14 @@ class RemoteRotator:
         if raw is None or not self.current:
             return RotatorStatus(self.id, connected=self._link.up)
         try:
-            return parse_status(self.id, raw)
+            status = parse_status(self.id, raw)
         except (ValueError, TypeError):
             return RotatorStatus(self.id, connected=self._link.up)
+        if status.state is MotionState.MOVING:
+            at = status_time(raw)
+            if at is None or self._wall() - at.timestamp() > self._moving_max_age_s:
+                return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
+        return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
         """Rule 3."""

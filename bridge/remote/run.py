@@ -10,6 +10,9 @@ Rules:
    rotator takes ``B``, and is told the ids when the station has several.
 3. One line per endpoint goes to stdout at start:
    ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533``.
+4. The station's topics read before a connection drops are forgotten when it does: the next
+   connection's retained messages are the station's word again (the rotator's description,
+   read at start, is kept).
 """
 
 from __future__ import annotations
@@ -61,7 +64,9 @@ class Remote:
         filters = [f"{base}/bridge/state", f"{base}/info", f"{base}/+/info"]
         filters += [f"{base}/{leaf}" for leaf in ("status", "availability")]
         filters += [f"{base}/+/{leaf}" for leaf in ("status", "availability")]
-        self.link = RemoteLink(s.mqtt, s.client_id(), filters, self._on_message)
+        self.link = RemoteLink(
+            s.mqtt, s.client_id(), filters, self._on_message, on_change=self._on_link
+        )
         self.link.start()
         try:
             lines = []
@@ -89,6 +94,11 @@ class Remote:
         if self.link is not None:
             self.link.stop()
             self.link = None
+
+    def _on_link(self) -> None:
+        """Rule 4: what the broker held before a drop is not kept across it."""
+        if self.link is not None and not self.link.up:
+            self.view.clear()
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload)
@@ -128,7 +138,15 @@ class Remote:
         rid = ep.rotator or info.name
         assert self.link is not None
         return RemoteRotator(
-            rid, root, base, info, self.view, self.link, s.operator, s.command_expiry_s
+            rid,
+            root,
+            base,
+            info,
+            self.view,
+            self.link,
+            s.operator,
+            s.command_expiry_s,
+            s.moving_max_age_s,
         )
 
     def _missing(self, ep: Endpoint, own: str | None) -> str:

@@ -52,6 +52,13 @@ class RemoteSettings(_Strict):
     command_expiry_s: int = Field(
         5, ge=1, le=60, description="a command not delivered within this many seconds is dropped"
     )
+    moving_max_age_s: float = Field(
+        10.0,
+        gt=0,
+        le=600,
+        description="a moving rotator's status older than this reads as unknown: the station "
+        "went quiet mid-move",
+    )
     info_wait_s: float = Field(
         10.0, gt=0, le=120, description="how long to wait for the station's rotators at start"
     )

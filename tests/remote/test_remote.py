@@ -10,7 +10,9 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +24,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
-from tests.support import wait_until
+from tests.support import Probe, wait_until
 from tests.support.rig import Rig
 
 pytestmark = pytest.mark.hamlib
@@ -218,3 +220,48 @@ def test_a_configuration_error_names_the_key(tmp_path: Path) -> None:
     done = subprocess.run(argv, capture_output=True, text=True, timeout=30, check=False)
     assert done.returncode == 2
     assert "endpoints[0].rotctld_prot: unknown key: did you mean rotctld_port?" in done.stderr
+
+
+def iso(t_unix: float) -> str:
+    return datetime.fromtimestamp(t_unix, UTC).isoformat(timespec="milliseconds")
+
+
+def test_a_moving_status_older_than_the_limit_reads_as_an_error(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
+    old it is (the station publishes on change), a moving one's only while it is fresh."""
+    info = (
+        '{"name":"tower","model":"rotorez","model_name":"Rotor-EZ","has_elevation":false,'
+        '"can_report_position":true,"can_track":false,"azimuth_range":[0,360],'
+        '"elevation_range":null,"keep_out":[],"park":null,"options":[]}'
+    )
+    probe.publish("rotor/info", info, retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+
+    def status(state: str, age_s: float) -> str:
+        return (
+            f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
+            f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
+            '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
+            f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
+        )
+
+    port = free_port()
+    r = Remote(settings(broker, port, moving_max_age_s=10))  # type: ignore[arg-type]
+    r.start()
+    try:
+        for state, age_s, reply in [
+            ("idle", 3600, b"42.00\n0.00\n"),
+            ("moving", 1, b"42.00\n0.00\n"),
+            ("moving", 11, b"RPRT -5\n"),
+        ]:
+            payload = status(state, age_s).encode()
+            probe.publish("rotor/status", payload, retain=True)
+            wait_until(
+                lambda p=payload: r.view.get("rotor/status") == p, 5, "the status at the remote"
+            )
+            assert ask(port, b"p\n") == reply, (state, age_s)
+    finally:
+        r.stop()
