@@ -136,6 +136,12 @@ class Remote:
         except (ValueError, KeyError, TypeError, IndexError) as exc:
             raise StartError(f"{root}/info is not the station's description: {exc}") from None
         rid = ep.rotator or info.name
+        if root == base and ep.rotator is not None and ep.rotator != info.name:
+            log.warning(
+                "the station has one rotator, %r: endpoints.rotator %r is taken to be it",
+                info.name,
+                ep.rotator,
+            )
         assert self.link is not None
         return RemoteRotator(
             rid,
