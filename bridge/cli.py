@@ -98,6 +98,22 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return demo.run(args)
 
 
+def cmd_remote(args: argparse.Namespace) -> int:
+    from bridge.remote.run import run
+    from bridge.remote.settings import load_remote_settings
+
+    try:
+        settings = load_remote_settings(args.config)
+    except ConfigError as exc:
+        raise _fail(exc) from None
+    _setup_logging(args.log_level or "INFO")
+    try:
+        return run(settings)
+    except (ConfigError, OSError) as exc:  # no such rotator, no broker, a port taken
+        print(f"rotor-bridge remote: {exc}", file=sys.stderr)
+        raise SystemExit(EXIT_CONFIG) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rotor-bridge", description="Antenna rotator controllers on MQTT."
@@ -158,6 +174,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo.add_arguments(p)
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser(
+        "remote",
+        help="the station's rotators on this computer, through its MQTT broker",
+        description="On the operator's computer: connect to the station's MQTT broker, learn "
+        "the rotators named in the file from the station, and offer each on a local rotctld "
+        "port, until SIGTERM or Ctrl-C. Commands are never queued while the broker is away.",
+    )
+    p.add_argument("-c", "--config", required=True, help="the remote's TOML file")
+    p.set_defaults(func=cmd_remote)
     return parser
 
 

@@ -35,7 +35,7 @@ def subcommands() -> dict[str, argparse.ArgumentParser]:
 
 def test_every_subcommand_is_listed_in_the_main_help() -> None:
     helptext = run_cli("--help").stdout
-    assert set(subcommands()) == {"run", "check-config", "ports", "emulate", "demo"}
+    assert set(subcommands()) == {"run", "check-config", "ports", "emulate", "demo", "remote"}
     for name in subcommands():
         assert name in helptext
 

@@ -98,7 +98,10 @@ class RotctldCommands:
         return self._submit_target(park[0], park[1], req, park=True)
 
     def _stop(self, req: Request) -> tuple[int, str]:
-        self.rotator.submit(Stop(Source.ROTCTLD), _describe(req))
+        try:
+            self.rotator.submit(Stop(Source.ROTCTLD), _describe(req))
+        except Refused as exc:  # the station's own never refuses a stop; the remote's (remote/)
+            return _refusal_code(exc, self.rotator.status.connected), ""  # can't deliver one
         return RIG_OK, ""
 
     def _move(self, req: Request) -> tuple[int, str]:

@@ -1,0 +1,106 @@
+"""The remote's one connection to the station's broker (``rotor-bridge remote``): it reads the
+station's retained state and publishes commands that are never late.
+
+It is the bridge's Connection (connection.py: protocol, TLS, credentials, reconnects, one log
+line per reason) with other topics and one more duty: sending a command.
+
+Rules:
+1. MQTT 5 only (the remote's settings refuse 3.1.1): a command must carry an expiry.
+2. A command is published at QoS 1, never retained, with a message expiry interval of a few
+   seconds (a command stuck in a broker queue dies there) and the operator as the user
+   property ``operator``.
+3. Never late: while the connection is not up, ``send`` raises Refused(OFFLINE) at once and
+   nothing is queued. paho keeps an unacknowledged QoS 1 message and sends it again on the
+   next connection (its ``_messages_reconnect_reset_out``), which would move the antenna
+   minutes after the operator asked; so when the connection drops, every command not yet
+   acknowledged is dropped from paho's queue, under the same lock ``send`` holds. The remote
+   publishes nothing else at QoS 1, so the whole queue is commands.
+4. The state topics are subscribed with the connection's command options (QoS 0): the newest
+   retained value is what counts, and it comes again after every reconnect.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+
+from paho.mqtt.enums import MQTTErrorCode
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.errors import RefusalCode, Refused
+from bridge.mqtt.connection import Connection, MessageHandler
+from bridge.settings_mqtt import MqttSettings
+
+log = logging.getLogger(__name__)
+
+COMMAND_QOS = 1  # rule 2
+
+
+class RemoteLink(Connection):
+    """Subscribes ``filters``; hands every message to ``on_message`` (paho's thread);
+    ``on_change`` is called whenever the connection comes up or goes down."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        client_id: str,
+        filters: list[str],
+        on_message: MessageHandler,
+        on_change: Callable[[], None] = lambda: None,
+    ) -> None:
+        super().__init__(
+            settings, client_id, subscriptions=filters, on_message=on_message, reconnect_max_s=10
+        )
+        self._send_lock = threading.Lock()
+        self._on_change = on_change
+
+    @property
+    def up(self) -> bool:
+        return self.connected.is_set()
+
+    def start(self) -> None:
+        self._connect()
+
+    def stop(self) -> None:
+        self._stopping = True
+        self._disconnect()
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        """Rules 2 and 3: published now, or Refused(OFFLINE) and nothing sent, ever."""
+        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
+        props.MessageExpiryInterval = expiry_s
+        props.UserProperty = ("operator", operator)
+        with self._send_lock:
+            if not self.up:
+                raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+            info = self._client.publish(
+                topic, payload, qos=COMMAND_QOS, retain=False, properties=props
+            )
+            if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
+                self._forget_unsent()  # paho kept it for the next connection: rule 3
+                raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+
+    def _forget_unsent(self) -> None:
+        """Rule 3: paho's queue of unacknowledged messages emptied (caller holds _send_lock)."""
+        c = self._client
+        with c._out_message_mutex:
+            dropped = len(c._out_messages)
+            c._out_messages.clear()
+        if dropped:
+            log.warning(
+                "%d command(s) not acknowledged by the broker dropped, never resent", dropped
+            )
+
+    # -- Connection's hooks (paho's thread) --------------------------------------------------
+    def _opened(self, client: object) -> None:
+        self.connected.set()
+        self._on_change()
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        with self._send_lock:  # a send under way finishes first, then its message goes too
+            self._forget_unsent()
+        self._on_change()
+        return super()._closed(was_up, reason_code)

@@ -1,0 +1,17 @@
+"""``rotor-bridge remote``: the station's rotators on the operator's own computer, through the
+station's MQTT broker, as local ports that programs already speak (Hamlib's rotctld for now).
+
+The parts: settings.py (the remote's file), rotator.py (a station rotator in the shape rotctld's
+commands use, from the station's retained topics), run.py (start-up and the servers), and the
+broker connection in mqtt/remote.py (paho stays in mqtt/).
+
+Rules:
+1. Never late: a command goes out only while connected, with an MQTT 5 expiry, and is never
+   queued for a later connection (mqtt/remote.py rules 2 and 3).
+2. Never stale: a reading is shown only while the station says it is current
+   (rotator.py rule 1); otherwise the client gets an error code.
+3. The station decides: limits, models and capabilities come from its ``R/info``, and its
+   judge has the last word on every command (rotator.py rule 2).
+4. Loopback by default: an endpoint listens on 127.0.0.1 unless its bind says otherwise (the
+   line server warns about any other address).
+"""

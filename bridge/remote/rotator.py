@@ -1,0 +1,225 @@
+"""One station rotator as the remote sees it: what rotctld's commands ask of a Rotator
+(``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``), answered from the station's
+retained topics and carried out by publishing on its command topics.
+
+Rules:
+1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
+   while it is current: the remote connected, ``B/bridge/state`` and ``R/availability`` both
+   received as ``online`` on this connection (positive word, whatever order they come in).
+   Otherwise the rotator reads as unavailable (rotctld answers an error code), never as the
+   last number seen. The station publishes a status when
+   something changes, not on a clock, so the ``time`` of a still rotor's status says nothing
+   about staleness: the bridge's last will and the availability topic do. A MOVING rotor's
+   bearing changes with every poll, so a ``moving`` status older than ``moving_max_age_s``
+   means the station went quiet mid-move (its last will comes only after 1.5 keepalives): it
+   reads as unavailable too. A clock of the operator's that is ahead errs the safe way.
+2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
+   Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
+   The remote judges a target against these facts (a target out of range or in a keep-out
+   sector gets its error code at once), but the station's judge is the one that counts: what
+   it refuses (the lock, say) is on ``R/error``, while the client got RPRT 0 once the command
+   was on its way.
+3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
+   link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
+   OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any, Protocol
+
+from bridge.engine.rotator import Limits
+from bridge.errors import RefusalCode, Refused
+from bridge.model import Command, MotionState, RotatorStatus, Stop, Target
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import ModelSpec
+
+
+class Sender(Protocol):
+    @property
+    def up(self) -> bool: ...
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None: ...
+
+
+class InfoError(ValueError):
+    """The station's R/info cannot be used (a model this version does not know)."""
+
+
+@dataclass(frozen=True)
+class Info:
+    """The station's ``R/info``, parsed."""
+
+    name: str
+    spec: ModelSpec
+    pointing: Pointing
+
+    @classmethod
+    def parse(cls, payload: bytes) -> Info:
+        doc = json.loads(payload)
+        model = str(doc["model"])
+        spec = REGISTRY.get(model)
+        if spec is None:
+            raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
+        az_lo, az_hi = (float(v) for v in doc["azimuth_range"])
+        el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
+        park = doc.get("park")
+        # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
+        aim = Pointing.of(
+            spec,
+            (az_lo, az_hi),
+            (float(el[0]), float(el[1])),
+            keep_out=tuple((float(a), float(b)) for a, b in doc.get("keep_out") or ()),
+            park=(float(park[0]), None if park[1] is None else float(park[1])) if park else None,
+        )
+        return cls(str(doc.get("name") or model), spec, aim)
+
+
+def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
+    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: the parts a reading needs."""
+    doc: dict[str, Any] = json.loads(payload)
+
+    def num(key: str) -> float | None:
+        v = doc.get(key)
+        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
+    return RotatorStatus(
+        rotator_id,
+        state=MotionState(doc.get("state", "offline")),
+        bearing_deg=num("bearing"),
+        elevation_deg=num("elevation"),
+        target_az_deg=num("target"),
+        target_el_deg=num("target_elevation"),
+        connected=bool(doc.get("connected")),
+        available=bool(doc.get("available")),
+        locked=bool(doc.get("locked")),
+        version=doc.get("version"),
+        last_error=doc.get("last_error"),
+        last_command_source=doc.get("last_command_source"),
+        estimated=bool(doc.get("estimated")),
+        parked=bool(doc.get("parked")),
+    )
+
+
+def status_time(payload: bytes) -> datetime | None:
+    try:
+        return datetime.fromisoformat(json.loads(payload)["time"])
+    except (ValueError, KeyError, TypeError):
+        return None
+
+
+class StationView:
+    """The retained topics the remote reads, newest first; written on paho's thread."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Condition()
+        self._topics: dict[str, bytes] = {}
+
+    def put(self, topic: str, payload: bytes) -> None:
+        with self._lock:
+            if payload:
+                self._topics[topic] = payload
+            else:  # an empty retained message deletes the topic
+                self._topics.pop(topic, None)
+            self._lock.notify_all()
+
+    def clear(self) -> None:
+        with self._lock:
+            self._topics.clear()
+
+    def get(self, topic: str) -> bytes | None:
+        with self._lock:
+            return self._topics.get(topic)
+
+    def topics(self) -> list[str]:
+        with self._lock:
+            return list(self._topics)
+
+    def wait(self, timeout_s: float) -> None:
+        """Until the next message or ``timeout_s``."""
+        with self._lock:
+            self._lock.wait(timeout_s)
+
+
+class RemoteRotator:
+    """Rule 1-3: one station rotator at topic root ``root`` (``B`` or ``B/<id>``)."""
+
+    def __init__(
+        self,
+        rotator_id: str,
+        root: str,
+        base: str,
+        info: Info,
+        view: StationView,
+        link: Sender,
+        operator: str,
+        expiry_s: int,
+        moving_max_age_s: float = 10.0,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        self.id = rotator_id
+        self.root = root
+        self.name = info.name
+        self.spec = info.spec
+        self.pointing = info.pointing
+        self._base = base
+        self._view = view
+        self._link = link
+        self._operator = operator
+        self._expiry_s = expiry_s
+        self._moving_max_age_s = moving_max_age_s
+        self._wall = wall
+
+    @property
+    def limits(self) -> Limits:
+        p = self.pointing
+        return Limits(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
+
+    @property
+    def current(self) -> bool:
+        """Rule 1: whether the retained status may be shown."""
+        view = self._view
+        return (
+            self._link.up
+            and view.get(f"{self._base}/bridge/state") == b"online"
+            and view.get(f"{self.root}/availability") == b"online"
+        )
+
+    @property
+    def status(self) -> RotatorStatus:
+        raw = self._view.get(f"{self.root}/status")
+        if raw is None or not self.current:
+            return RotatorStatus(self.id, connected=self._link.up)
+        try:
+            status = parse_status(self.id, raw)
+        except (ValueError, TypeError):
+            return RotatorStatus(self.id, connected=self._link.up)
+        if status.state is MotionState.MOVING:
+            at = status_time(raw)
+            if at is None or self._wall() - at.timestamp() > self._moving_max_age_s:
+                return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
+        return status
+
+    def submit(self, command: Command, described: str | None = None) -> None:
+        """Rule 3."""
+        if isinstance(command, Stop):
+            self._link.send(f"{self.root}/stop", "stop", self._operator, self._expiry_s)
+            return
+        if not isinstance(command, Target) or command.az_deg is None:
+            raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
+        self.pointing.judge(command, None)  # early word for the client; the station judges again
+        if command.park:  # the station's park position, so that it shows "parked"
+            self._link.send(f"{self.root}/park", "park", self._operator, self._expiry_s)
+            return
+        doc: dict[str, float] = {"azimuth": command.az_deg}
+        if command.el_deg is not None:
+            doc["elevation"] = command.el_deg
+        payload = json.dumps(doc, separators=(",", ":"))
+        self._link.send(f"{self.root}/target", payload, self._operator, self._expiry_s)

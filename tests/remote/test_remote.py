@@ -1,0 +1,269 @@
+"""``rotor-bridge remote`` with real parts: a mosquitto, the bridge on an emulated Rotor-EZ, the
+remote in this process on a free port, and Hamlib's ``rotctl -m 2`` as its client (the judge).
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import paho.mqtt.client as paho
+import pytest
+from paho.mqtt.enums import CallbackAPIVersion
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.mosquitto import Mosquitto, free_port
+from bridge.remote.run import Remote, StartError
+from bridge.remote.settings import RemoteSettings
+from tests.support import Probe, wait_until
+from tests.support.rig import Rig
+
+pytestmark = pytest.mark.hamlib
+
+OPERATOR = "DL1ABC"
+
+
+class Probe5:
+    """An MQTT 5 subscriber to the command topics: sees the properties a command carries."""
+
+    def __init__(self, port: int, topics: str) -> None:
+        self.seen: list[tuple[str, bytes, Any]] = []
+        self._lock = threading.Lock()
+        self._subscribed = threading.Event()
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id="probe5", protocol=paho.MQTTv5)
+        c.on_connect = lambda cl, ud, fl, rc, pr: cl.subscribe(topics)
+        c.on_subscribe = lambda *a: self._subscribed.set()
+        c.on_message = self._on_message
+        c.connect("127.0.0.1", port)
+        c.loop_start()
+        self.client = c
+        assert self._subscribed.wait(10), "probe5 subscribed"
+
+    def _on_message(self, client: Any, userdata: Any, msg: paho.MQTTMessage) -> None:
+        with self._lock:
+            self.seen.append((msg.topic, bytes(msg.payload), msg.properties))
+
+    def on(self, topic: str) -> list[tuple[str, bytes, Any]]:
+        with self._lock:
+            return [m for m in self.seen if m[0] == topic]
+
+    def close(self) -> None:
+        self.client.loop_stop()
+        self.client.disconnect()
+
+
+def settings(broker: Mosquitto, port: int, **extra: Any) -> RemoteSettings:
+    return RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        **extra,
+    )
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def remote(station: Rig) -> Iterator[tuple[Remote, int, list[str]]]:
+    port = free_port()
+    r = Remote(settings(station.broker, port))  # type: ignore[arg-type]
+    lines = r.start()
+    yield r, port, lines
+    r.stop()
+
+
+def rotctl(path: str, port: int, *commands: str) -> str:
+    argv = ["timeout", "20", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+    assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
+    return done.stdout
+
+
+def ask(port: int, line: bytes) -> bytes:
+    """One rotctld request on a fresh connection; its reply (one line: an RPRT, or ``p``'s two)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.sendall(line)
+        buf = b""
+        while not buf.endswith(b"\n") or (line.startswith(b"p") and buf.count(b"\n") < 2):
+            chunk = sock.recv(100)
+            if not chunk:
+                break
+            buf += chunk
+            if buf.startswith(b"RPRT"):
+                break
+    return buf
+
+
+def test_rotctl_turns_the_station_rotator_and_reads_it_back(
+    station: Rig, remote: tuple[Remote, int, list[str]], rotctl_path: str
+) -> None:
+    r, port, lines = remote
+    assert lines == [
+        f"{OPERATOR} -> 127.0.0.1: tower (rotorez, 0..360) on rotctld 127.0.0.1:{port}"
+    ]
+    probe5 = Probe5(station.broker.port, "rotor/target")
+    try:
+        rotctl(rotctl_path, port, "P", "120", "0")
+        station.arrived("tower", 120)
+        wait_until(lambda: station.status("tower").state == "idle", 10, "the bridge idle")
+        wait_until(lambda: probe5.on("rotor/target"), 5, "the command seen on the broker")
+        (_, payload, props) = probe5.on("rotor/target")[0]
+        assert payload == b'{"azimuth":120.0}'
+        assert 0 < props.MessageExpiryInterval <= 5
+        assert ("operator", OPERATOR) in props.UserProperty
+        wait_until(lambda: r.rotators[0].status.bearing_deg == station.status("tower").bearing_deg)
+        az, el = rotctl(rotctl_path, port, "p").split()
+        assert abs(float(az) - 120) <= 3.5 and float(el) == 0
+    finally:
+        probe5.close()
+
+
+def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
+    station: Rig, remote: tuple[Remote, int, list[str]]
+) -> None:
+    r, port, _ = remote
+    emu = station.emus["tower"]
+    link = r.link
+    assert link is not None
+    moves = len(emu.frames(*BEARING_OUTCOMES))
+    # a command the broker never acknowledges (frozen, then gone): paho would send it again on
+    # the next connection (mqtt/remote.py rule 3)
+    station.broker.pause()
+    assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
+    station.broker.kill()
+    wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+    asked = time.monotonic()
+    assert ask(port, b"P 200 0\n") == b"RPRT -6\n"  # refused at once: not queued
+    assert time.monotonic() - asked < 1.0  # no wait for a broker that is not there
+    assert ask(port, b"S\n") == b"RPRT -6\n"  # a stop too: it cannot be delivered
+    assert ask(port, b"p\n") == b"RPRT -6\n"  # no stale number
+    log_from = station.broker.log.stat().st_size
+    station.broker.restart()
+    wait_until(lambda: link.up, 30, "the remote back on the broker")
+    station.ready("tower", 30)
+    # a marker behind anything the remote might have resent, on its one ordered connection
+    assert ask(port, b"S\n") == b"RPRT 0\n"
+    received = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
+
+    def published() -> list[bytes]:
+        with open(station.broker.log, "rb") as f:
+            f.seek(log_from)
+            return received.findall(f.read())
+
+    wait_until(lambda: b"stop" in published(), 10, "the marker stop at the broker")
+    assert published() == [b"stop"]
+    assert len(emu.frames(*BEARING_OUTCOMES)) == moves
+
+
+def test_a_reading_is_an_error_once_the_station_is_gone(
+    station: Rig, remote: tuple[Remote, int, list[str]]
+) -> None:
+    r, port, _ = remote
+    assert ask(port, b"p\n").count(b"\n") == 2
+    station.stop()  # the bridge says offline on its way out
+    wait_until(lambda: ask(port, b"p\n") == b"RPRT -5\n", 10, "p refused without the bridge")
+
+
+def test_a_rotator_the_station_does_not_have_is_a_start_error(station: Rig) -> None:
+    s = settings(station.broker, free_port(), info_wait_s=1.0)  # type: ignore[arg-type]
+    s.mqtt.base_topic = "elsewhere"
+    with pytest.raises(StartError, match=r"elsewhere/tower/info within 1 s.*base_topic"):
+        Remote(s).start()
+
+
+def test_the_command_line_prints_the_endpoints_and_stops_on_sigterm(
+    station: Rig, tmp_path: Path
+) -> None:
+    port = free_port()
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\n[mqtt]\nport = {station.broker.port}\n'
+        f"[[endpoints]]\nrotctld_port = {port}\n"
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert (
+            line
+            == f"{OPERATOR} -> 127.0.0.1: tower (rotorez, 0..360) on rotctld 127.0.0.1:{port}\n"
+        )
+        assert ask(port, b"p\n").count(b"\n") == 2
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(10) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_a_configuration_error_names_the_key(tmp_path: Path) -> None:
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        'operator = "DL1ABC"\n[mqtt]\nprotocol = "3.1.1"\n[[endpoints]]\nrotctld_prot = 4533\n'
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=30, check=False)
+    assert done.returncode == 2
+    assert "endpoints[0].rotctld_prot: unknown key: did you mean rotctld_port?" in done.stderr
+
+
+def iso(t_unix: float) -> str:
+    return datetime.fromtimestamp(t_unix, UTC).isoformat(timespec="milliseconds")
+
+
+def test_a_moving_status_older_than_the_limit_reads_as_an_error(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
+    old it is (the station publishes on change), a moving one's only while it is fresh."""
+    info = (
+        '{"name":"tower","model":"rotorez","model_name":"Rotor-EZ","has_elevation":false,'
+        '"can_report_position":true,"can_track":false,"azimuth_range":[0,360],'
+        '"elevation_range":null,"keep_out":[],"park":null,"options":[]}'
+    )
+    probe.publish("rotor/info", info, retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+
+    def status(state: str, age_s: float) -> str:
+        return (
+            f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
+            f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
+            '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
+            f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
+        )
+
+    port = free_port()
+    r = Remote(settings(broker, port, moving_max_age_s=10))  # type: ignore[arg-type]
+    r.start()
+    try:
+        for state, age_s, reply in [
+            ("idle", 3600, b"42.00\n0.00\n"),
+            ("moving", 1, b"42.00\n0.00\n"),
+            ("moving", 11, b"RPRT -5\n"),
+        ]:
+            payload = status(state, age_s).encode()
+            probe.publish("rotor/status", payload, retain=True)
+            wait_until(
+                lambda p=payload: r.view.get("rotor/status") == p, 5, "the status at the remote"
+            )
+            assert ask(port, b"p\n") == reply, (state, age_s)
+    finally:
+        r.stop()
