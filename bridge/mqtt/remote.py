@@ -85,10 +85,7 @@ class RemoteLink(Connection):
 
     def _forget_unsent(self) -> None:
         """Rule 3: paho's queue of unacknowledged messages emptied (caller holds _send_lock)."""
-        c = self._client
-        with c._out_message_mutex:
-            dropped = len(c._out_messages)
-            c._out_messages.clear()
+        dropped = len(self._client.drop_out_messages())  # paho 2.2's own, as client.py uses
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
