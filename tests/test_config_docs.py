@@ -21,10 +21,11 @@ from typing import Any
 from unittest import mock
 
 import pytest
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 from bridge import settings_mqtt, settings_web
 from bridge.config_doc import COMMAND, render
+from bridge.remote.settings import RemoteSettings
 from bridge.settings import (
     ConfigError,
     HomeAssistantSettings,
@@ -233,6 +234,13 @@ def test_every_toml_example_in_the_docs_loads(where: str, block: str) -> None:
         doc = tomllib.loads(block)
     except tomllib.TOMLDecodeError as exc:
         pytest.fail(f"{where}: not TOML ({exc}); fence it as ```toml-fragment if it is a part")
+    if "endpoints" in doc:  # a remote.toml (docs/remote.md): the remote's own settings
+        try:
+            with files_unread():
+                RemoteSettings(**doc)
+        except ValidationError as exc:
+            pytest.fail(f"{where}: not a remote.toml the remote takes: {exc}")
+        return
     if "rotators" not in doc:
         doc = merge(tomllib.loads(BASE), doc)
     try:
