@@ -23,7 +23,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from types import FrameType
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING
 
 from bridge.mqtt.remote import RemoteLink
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
@@ -32,7 +32,7 @@ from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
+    pass
 
 log = logging.getLogger(__name__)
 
@@ -72,7 +72,7 @@ class Remote:
             lines = []
             for ep in s.endpoints:
                 rot = self._find(ep)
-                server = RotctldServer(cast("Rotator", rot), ep.rotctld_port, ep.rotctld_bind)
+                server = RotctldServer(rot, ep.rotctld_port, ep.rotctld_bind)
                 server.start()  # OSError naming the address and the setting
                 self.rotators.append(rot)
                 self.servers.append(server)

@@ -5,14 +5,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
-from bridge.rotctld.commands import RotctldCommands
+from bridge.rotctld.commands import Rotator, RotctldCommands
 from bridge.rotctld.parser import Quit, RequestParser
 from bridge.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
-
-if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
 
 
 class RotctldSession:
