@@ -318,24 +318,19 @@ def test_a_wrong_password_is_401_and_the_body_games_do_not_500(
 
 
 # -- safety: STOP and lock never wait behind slow work --------------------------------------
-def _timed(call: Any) -> float:
-    t0 = time.perf_counter()
-    call()
-    return time.perf_counter() - t0
-
-
 def test_stop_and_lock_do_not_wait_behind_a_slow_tle_file_or_the_land(
     console: tuple[Rig, ConsoleClient],
 ) -> None:
-    """Held (measured): ten api/config reads stuck on a TLE file that takes 3 s (more than the
-    default executor's workers) and the first api/land projection meanwhile; STOP and lock ON
-    answer within 150 ms each."""
+    """Held: ten api/config reads stuck on a TLE file that does not answer (more than the
+    default executor's workers) and the first api/land projection meanwhile; STOP, lock ON and
+    tracking off are answered and carried out while they are still stuck (proven by order: the
+    file is let go only after)."""
     rig, client = console
     assert rig.app is not None and rig.app.web is not None
     gate = threading.Event()
 
     def slow_names() -> list[str]:
-        gate.wait(3.0)
+        gate.wait(30.0)  # a guard: the test lets it go
         return []
 
     rig.app.web._satellites = slow_names  # noqa: SLF001  (the TLE file on a hung disk)
@@ -346,15 +341,16 @@ def test_stop_and_lock_do_not_wait_behind_a_slow_tle_file_or_the_land(
     try:
         assert client.command("hf", command="target", az=200).status == 200
         rig.mqtt.wait_for(rig.t("status"), lambda m: b'"moving"' in m.payload)
-        took_stop = _timed(lambda: client.command("hf", command="stop"))
-        took_lock = _timed(lambda: client.command("hf", command="lock", on=True))
-        took_off = _timed(lambda: client.command("hf", command="track", body="off"))
+        assert client.command("hf", command="stop").status == 200
+        assert client.command("hf", command="lock", on=True).status == 200
+        assert client.command("hf", command="track", body="off").status == 200
+        rig.emu.wait_for(lambda s: not s.is_moving, 10)
+        rig.mqtt.wait_for(rig.t("lock/state"), lambda m: m.payload == b"ON")
+        assert not gate.is_set() and any(r.is_alive() for r in readers)  # still stuck
     finally:
         gate.set()
         for r in readers:
             r.join(10)
-    assert max(took_stop, took_lock, took_off) < 0.15, (took_stop, took_lock, took_off)
-    rig.mqtt.wait_for(rig.t("lock/state"), lambda m: m.payload == b"ON")
     assert client.command("hf", command="target", az=100).status == 409
 
 
@@ -378,7 +374,7 @@ def test_the_feed_ends_promptly_when_the_bridge_stops(console: tuple[Rig, Consol
     silent = socket.create_connection(("127.0.0.1", client.port))  # a stream that never reads
     head = f"GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Rotor-Token: {client.token}\r\n"
     silent.sendall(head.encode() + b"\r\n")
-    took = _timed(rig.stop)
+    rig.stop()
     try:
         with pytest.raises((EOFError, ConnectionError)):
             while True:
@@ -386,7 +382,6 @@ def test_the_feed_ends_promptly_when_the_bridge_stops(console: tuple[Rig, Consol
     finally:
         stream.close()
         silent.close()
-    assert took < 3.0, took
 
 
 def test_a_status_pushed_is_the_r_status_document(console: tuple[Rig, ConsoleClient]) -> None:
