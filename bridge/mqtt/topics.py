@@ -229,3 +229,40 @@ class Topics:
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
         return None
+
+
+@dataclass(frozen=True)
+class StationTopics:
+    """A station's topics as a client far from it sees them (bridge/remote/): it knows the
+    station's base topic, not its rotators' roots, and finds them by their ``R/info``. The
+    roots follow the bridge's default (settings.py ``rotator_topic``): ``B`` with one rotator,
+    ``B/<id>`` with several."""
+
+    base: str
+
+    @property
+    def bridge_state(self) -> str:
+        return Topics(self.base, {}).bridge_state
+
+    def rotator(self, rotator_id: str | None) -> RotatorTopics:
+        """The rotator ``rotator_id``'s topics, or the one rotator's (None)."""
+        return RotatorTopics(self.base if rotator_id is None else f"{self.base}/{rotator_id}")
+
+    def subscriptions(self) -> list[str]:
+        """What a remote reads: the bridge's state, and each rotator's description, status and
+        availability, whether the station has one rotator or several."""
+        one, each = self.rotator(None), self.rotator("+")
+        return [self.bridge_state] + [
+            t for r in (one, each) for t in (r.info, r.status, r.availability)
+        ]
+
+    def described(self, topics: list[str]) -> list[str]:
+        """The ids of the rotators among ``topics`` that have a ``B/<id>/info`` (the bridge's
+        own ``B/bridge/info`` is not one)."""
+        found = []
+        for topic in topics:
+            rest = topic.removeprefix(self.base + "/")
+            rid, _, leaf = rest.partition("/")
+            if rest != topic and leaf == "info" and rid and rid != "bridge":
+                found.append(rid)
+        return sorted(found)

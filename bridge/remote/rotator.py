@@ -37,6 +37,7 @@ from typing import Any, Protocol
 from bridge.engine.rotator import Limits
 from bridge.errors import RefusalCode, Refused
 from bridge.model import Command, MotionState, RotatorStatus, Stop, Target
+from bridge.mqtt.topics import RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -149,13 +150,13 @@ class StationView:
 
 
 class RemoteRotator:
-    """Rule 1-3: one station rotator at topic root ``root`` (``B`` or ``B/<id>``)."""
+    """Rule 1-3: one station rotator, its topics under ``B`` or ``B/<id>`` (``topics``)."""
 
     def __init__(
         self,
         rotator_id: str,
-        root: str,
-        base: str,
+        topics: RotatorTopics,
+        bridge_state: str,
         info: Info,
         view: StationView,
         link: Sender,
@@ -165,11 +166,11 @@ class RemoteRotator:
         wall: Callable[[], float] = time.time,
     ) -> None:
         self.id = rotator_id
-        self.root = root
+        self.topics = topics
         self.name = info.name
         self.spec = info.spec
         self.pointing = info.pointing
-        self._base = base
+        self._bridge_state = bridge_state
         self._view = view
         self._link = link
         self._operator = operator
@@ -188,13 +189,13 @@ class RemoteRotator:
         view = self._view
         return (
             self._link.up
-            and view.get(f"{self._base}/bridge/state") == b"online"
-            and view.get(f"{self.root}/availability") == b"online"
+            and view.get(self._bridge_state) == b"online"
+            and view.get(self.topics.availability) == b"online"
         )
 
     @property
     def status(self) -> RotatorStatus:
-        raw = self._view.get(f"{self.root}/status")
+        raw = self._view.get(self.topics.status)
         if raw is None or not self.current:
             return RotatorStatus(self.id, connected=self._link.up)
         try:
@@ -210,16 +211,16 @@ class RemoteRotator:
     def submit(self, command: Command, described: str | None = None) -> None:
         """Rule 3."""
         if isinstance(command, Stop):
-            self._link.send(f"{self.root}/stop", "stop", self._operator, self._expiry_s)
+            self._link.send(self.topics.stop, "stop", self._operator, self._expiry_s)
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
-            self._link.send(f"{self.root}/park", "park", self._operator, self._expiry_s)
+            self._link.send(self.topics.park, "park", self._operator, self._expiry_s)
             return
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
         payload = json.dumps(doc, separators=(",", ":"))
-        self._link.send(f"{self.root}/target", payload, self._operator, self._expiry_s)
+        self._link.send(self.topics.target, payload, self._operator, self._expiry_s)

@@ -26,6 +26,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from bridge.mqtt.remote import RemoteLink
+from bridge.mqtt.topics import RotatorTopics, StationTopics
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.rotctld import RotctldServer
@@ -57,15 +58,19 @@ class Remote:
     servers: list[RotctldServer] = field(default_factory=list)
     link: RemoteLink | None = None
 
+    @property
+    def station(self) -> StationTopics:
+        return StationTopics(self.settings.mqtt.base_topic)
+
     def start(self) -> list[str]:
         """Connect, find the rotators, listen; the start-up lines (rule 3). StartError."""
         s = self.settings
-        base = s.mqtt.base_topic
-        filters = [f"{base}/bridge/state", f"{base}/info", f"{base}/+/info"]
-        filters += [f"{base}/{leaf}" for leaf in ("status", "availability")]
-        filters += [f"{base}/+/{leaf}" for leaf in ("status", "availability")]
         self.link = RemoteLink(
-            s.mqtt, s.client_id(), filters, self._on_message, on_change=self._on_link
+            s.mqtt,
+            s.client_id(),
+            self.station.subscriptions(),
+            self._on_message,
+            on_change=self._on_link,
         )
         self.link.start()
         try:
@@ -106,37 +111,37 @@ class Remote:
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""
         s, view = self.settings, self.view
-        base = s.mqtt.base_topic
-        own = f"{base}/{ep.rotator}" if ep.rotator else None
+        own = self.station.rotator(ep.rotator) if ep.rotator else None
+        one = self.station.rotator(None)
         deadline = time.monotonic() + s.info_wait_s
         single_seen: float | None = None
         while True:
             now = time.monotonic()
-            root = None
-            if own is not None and view.get(f"{own}/info") is not None:
-                root = own
-            elif view.get(f"{base}/info") is not None:
+            topics = None
+            if own is not None and view.get(own.info) is not None:
+                topics = own
+            elif view.get(one.info) is not None:
                 single_seen = single_seen or now
                 if own is None or now - single_seen >= ONE_ROTATOR_GRACE_S:
-                    root = base
-            if root is not None:
-                return self._rotator(ep, root)
+                    topics = one
+            if topics is not None:
+                return self._rotator(ep, topics)
             if now >= deadline:
                 raise StartError(self._missing(ep, own))
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
 
-    def _rotator(self, ep: Endpoint, root: str) -> RemoteRotator:
+    def _rotator(self, ep: Endpoint, topics: RotatorTopics) -> RemoteRotator:
         s = self.settings
-        base = s.mqtt.base_topic
-        raw = self.view.get(f"{root}/info") or b""
+        raw = self.view.get(topics.info) or b""
         try:
             info = Info.parse(raw)
         except InfoError as exc:
-            raise StartError(f"{root}/info: {exc}") from None
+            raise StartError(f"{topics.info}: {exc}") from None
         except (ValueError, KeyError, TypeError, IndexError) as exc:
-            raise StartError(f"{root}/info is not the station's description: {exc}") from None
+            raise StartError(f"{topics.info} is not the station's description: {exc}") from None
         rid = ep.rotator or info.name
-        if root == base and ep.rotator is not None and ep.rotator != info.name:
+        one = topics == self.station.rotator(None)
+        if one and ep.rotator is not None and ep.rotator != info.name:
             log.warning(
                 "the station has one rotator, %r: endpoints.rotator %r is taken to be it",
                 info.name,
@@ -145,8 +150,8 @@ class Remote:
         assert self.link is not None
         return RemoteRotator(
             rid,
-            root,
-            base,
+            topics,
+            self.station.bridge_state,
             info,
             self.view,
             self.link,
@@ -155,23 +160,14 @@ class Remote:
             s.moving_max_age_s,
         )
 
-    def _missing(self, ep: Endpoint, own: str | None) -> str:
+    def _missing(self, ep: Endpoint, own: RotatorTopics | None) -> str:
         s = self.settings
-        base = s.mqtt.base_topic
         where = f"{s.mqtt.host}:{s.mqtt.port}"
         assert self.link is not None
         if not self.link.up:
             return f"cannot reach the station's broker at {where} (see the log above for why)"
-        depth = base.count("/") + 2  # B/<id>/info; B/bridge/info is the bridge's own
-        ids = sorted(
-            t.split("/")[-2]
-            for t in self.view.topics()
-            if t.startswith(base + "/")
-            and t.endswith("/info")
-            and t.count("/") == depth
-            and t != f"{base}/bridge/info"
-        )
-        looked = f"{own}/info" if own else f"{base}/info"
+        ids = self.station.described(list(self.view.topics()))
+        looked = (own or self.station.rotator(None)).info
         hint = (
             f"; the station has rotators {', '.join(ids)}: name one in endpoints.rotator"
             if ids
