@@ -5,6 +5,7 @@ them are the shared line server (tcplines.py)."""
 from __future__ import annotations
 
 import logging
+from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING
 
 from bridge.errors import Refused
@@ -45,7 +46,7 @@ def _azimuth(az_deg: float) -> str:
     return f"{whole + 360 if whole < 0 else whole:03d}"  # a GS-232 azimuth is never negative
 
 
-class _Session:
+class _Session(ABC):
     """One client's lines (tcplines.LineSession): each answered in turn, a failure contained
     (rule 8 of the house: answered with the protocol's error, logged)."""
 
@@ -70,8 +71,9 @@ class _Session:
                 out.append(self.failed_reply)
         return out
 
+    @abstractmethod
     def answer(self, line: str | None) -> bytes:
-        raise NotImplementedError
+        """The protocol's reply to one line (b"" for none)."""
 
 
 class Gs232Session(_Session):

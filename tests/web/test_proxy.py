@@ -22,6 +22,7 @@ import os
 import re
 import shutil
 import subprocess
+from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -67,7 +68,7 @@ def installed(name: str) -> str:
     return found
 
 
-class Proxy:
+class Proxy(ABC):
     """A reverse proxy on a free loopback port, run as the user running the tests, everything
     it writes in ``folder``; the bridge's ``/rotor/`` block as docs/console.md gives it."""
 
@@ -83,8 +84,9 @@ class Proxy:
         self.log = folder / "stderr.log"
         self.process: subprocess.Popen[bytes] | None = None
 
+    @abstractmethod
     def command(self) -> list[str]:
-        raise NotImplementedError
+        """The proxy's command line, its configuration written into ``folder``."""
 
     def start(self) -> Proxy:
         env = {**os.environ, "XDG_CONFIG_HOME": str(self.folder), "XDG_DATA_HOME": str(self.folder)}
