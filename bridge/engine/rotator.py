@@ -40,7 +40,7 @@ from bridge.model import (
     Target,
     describe_command,
 )
-from bridge.pointing import toward
+from bridge.pointing import Pointing, toward
 from bridge.protocols.base import ModelSpec
 from bridge.sky import Body, SkyError
 
@@ -53,6 +53,11 @@ class Limits:
     az_max_deg: float
     el_min_deg: float = 0.0
     el_max_deg: float = 0.0
+
+    @classmethod
+    def of(cls, p: Pointing) -> Limits:
+        """The mechanical limits of a rotator's terms (the controller's raw values)."""
+        return cls(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
 
 
 class Rotator:
@@ -129,8 +134,7 @@ class Rotator:
     @property
     def limits(self) -> Limits:
         """The mechanical limits (the controller's raw values)."""
-        p = self.pointing
-        return Limits(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
+        return Limits.of(self.pointing)
 
     @property
     def locked(self) -> bool:

@@ -180,8 +180,7 @@ class RemoteRotator:
 
     @property
     def limits(self) -> Limits:
-        p = self.pointing
-        return Limits(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
+        return Limits.of(self.pointing)
 
     @property
     def current(self) -> bool:
