@@ -201,13 +201,9 @@ def test_a_click_the_page_numbered_after_its_stop_is_not_refused_as_sent_before_
     page = "tab-a"
     body = json.dumps({"command": "target", "az": 200, "page": page, "seq": 2}).encode()
     click = socket.create_connection(("127.0.0.1", client.port))
-    head = (
-        f"POST {URL} HTTP/1.1\r\nHost: 127.0.0.1:{client.port}\r\n"
-        f"Origin: http://127.0.0.1:{client.port}\r\nContent-Type: application/json\r\n"
-        f"X-Rotor-Token: {client.token}\r\nContent-Length: {len(body)}\r\n\r\n"
-    )
+    head = client.command_head("hf", body)
     try:
-        click.sendall(head.encode() + body[:10])  # the click's request has begun
+        click.sendall(head + body[:10])  # the click's request has begun
         assert client.command("hf", command="stop", page=page, seq=1).status == 200
         click.sendall(body[10:])
         answer = click.recv(4096)
@@ -354,16 +350,12 @@ def test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop
     rig, client = console
     body = b'{"command":"target","az":200}'
     delayed = socket.create_connection(("127.0.0.1", client.port))
-    head = (
-        f"POST {URL} HTTP/1.1\r\nHost: 127.0.0.1:{client.port}\r\n"
-        f"Origin: http://127.0.0.1:{client.port}\r\nContent-Type: application/json\r\n"
-        f"X-Rotor-Token: {client.token}\r\nContent-Length: {len(body)}\r\n\r\n"
-    )
+    head = client.command_head("hf", body)
     t = time.monotonic()
     rig.mqtt.publish(rig.t("target"), "100")  # turning, by MQTT
     rig.mqtt.wait_for(rig.t("status"), lambda m: json.loads(m.payload)["moving"], 5.0, t)
     try:
-        delayed.sendall(head.encode() + body[:10])  # the click: begun, not all there yet
+        delayed.sendall(head + body[:10])  # the click: begun, not all there yet
         t = time.monotonic()
         rig.mqtt.publish(rig.t("stop"), "STOP")
         rig.mqtt.wait_for(

@@ -610,13 +610,9 @@ def test_a_target_sent_before_stop_but_delayed_on_the_way_does_not_turn_the_roto
     rig, client = console
     body = b'{"command":"target","az":200}'
     delayed = socket.create_connection(("127.0.0.1", client.port))
-    head = (
-        f"POST {URL} HTTP/1.1\r\nHost: 127.0.0.1:{client.port}\r\n"
-        f"Origin: http://127.0.0.1:{client.port}\r\nContent-Type: application/json\r\n"
-        f"X-Rotor-Token: {client.token}\r\nContent-Length: {len(body)}\r\n\r\n"
-    )
+    head = client.command_head("hf", body)
     try:
-        delayed.sendall(head.encode() + body[:10])  # the click: sent, not all there yet
+        delayed.sendall(head + body[:10])  # the click: sent, not all there yet
         assert client.command("hf", command="stop").status == 200  # then STOP
         t = time.monotonic()
         delayed.sendall(body[10:])  # the click's last bytes arrive
