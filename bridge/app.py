@@ -28,6 +28,7 @@ from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.lane import StopLane
+from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
@@ -186,7 +187,16 @@ class App:
                 catalog=catalog,
                 sky=self.sky,
             )
-            self.mqtt.attach(rot)
+            self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
+                rot,
+                ConsoleFacts(
+                    position,
+                    settings.station.locator,
+                    r.beamwidth_deg,
+                    r.nudge_step_deg,
+                    tuple(catalog.names()) if rot.can_track else (),
+                ),
+            )
             if self.web is not None:
                 self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)

@@ -29,8 +29,8 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
-from bridge.engine.rotator import Rotator
 from bridge.model import Source, Stop, Target
+from bridge.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
@@ -245,7 +245,7 @@ def _no_constant(name: str) -> object:
     raise ValueError(f"{name} is not a number here")
 
 
-def carry_out(rot: Rotator, cmd: WebCommand) -> None:
+def carry_out(rot: ConsoleRotator, cmd: WebCommand) -> None:
     """Rule 2: raises Refused (already reported) when the judge says no."""
     what = cmd.described()
     src = Source.WEB
