@@ -5,6 +5,7 @@ told, where the station's rotor ends up, what the live feed says, the answer to 
 
 from __future__ import annotations
 
+import socket
 from collections.abc import Iterator
 from typing import Any
 
@@ -12,7 +13,7 @@ import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import free_port
-from bridge.remote.run import Remote
+from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
@@ -172,3 +173,14 @@ def test_broker_away_the_page_is_told_offline_and_nothing_moves_when_it_is_back(
 def test_a_console_beyond_loopback_without_a_password_is_refused(station: Rig) -> None:
     with pytest.raises(ValueError, match=r"web.password_file"):
         remote_settings(station, free_port(), bind="0.0.0.0")
+
+
+def test_a_console_port_already_taken_is_a_start_error_naming_it(station: Rig) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        r = Remote(remote_settings(station, port))
+        with pytest.raises(StartError, match=rf"web.port {port}: the console cannot listen"):
+            r.start()
+        assert r.link is None and not r.servers  # nothing left running
