@@ -173,6 +173,7 @@ class App:
                 satellites=catalog.names,
                 wall=wall,
             )
+        satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky),
@@ -194,7 +195,7 @@ class App:
                     settings.station.locator,
                     r.beamwidth_deg,
                     r.nudge_step_deg,
-                    tuple(catalog.names()) if rot.can_track else (),
+                    satellites if rot.can_track else (),
                 ),
             )
             if self.web is not None:

@@ -7,8 +7,10 @@ Rules:
    ``R/target`` as JSON, a place too; ``R/stop``, ``R/lock``, ``R/preset``, ``R/park``,
    ``R/nudge``, ``R/track``) through the remote's link: QoS 1, an expiry, the operator
    (mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at once,
-   STOP and lock ON included (they cannot be delivered); while it is up, STOP, lock ON and
-   tracking off are sent whatever the remote thinks of the station.
+   STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
+   tracking off are sent whatever the remote thinks of the station. A command that moves is
+   refused with OFFLINE at once too while the station is not current (rotator.py rule 1: its
+   bridge or the rotator offline), as the station's judge would refuse it.
 2. The station's judge has the last word: what it refuses comes back on ``R/error`` and reaches
    every page as an error event. What the remote refuses itself (offline, a target outside the
    station's ranges) is reported to the pages alone: the station never heard of it.
@@ -35,7 +37,15 @@ from dataclasses import dataclass, replace
 from typing import Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, ErrorEvent, ErrorKind, RotatorStatus, Source, describe_command
+from bridge.model import (
+    Command,
+    ErrorEvent,
+    ErrorKind,
+    RotatorStatus,
+    Source,
+    Stop,
+    describe_command,
+)
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 from bridge.remote.rotator import RemoteRotator, StationView
@@ -43,6 +53,7 @@ from bridge.remote.rotator import RemoteRotator, StationView
 log = logging.getLogger(__name__)
 
 TICK_S = 1.0  # rule 4
+OFFLINE = "the station's rotator is offline (its bridge or its controller): nothing sent"
 
 
 @dataclass(frozen=True)
@@ -158,13 +169,15 @@ class RemoteConsoleRotator:
     # -- commands (rule 1) ---------------------------------------------------------------------
     def submit(self, command: Command, described: str | None = None) -> None:
         try:
+            if not isinstance(command, Stop) and self.remote.link_up and not self.remote.current:
+                raise Refused(RefusalCode.OFFLINE, OFFLINE)
             self.remote.submit(command, described)
         except Refused as exc:
             self.report_refusal(exc.message, described or describe_command(command))
             raise
 
     def set_lock(self, locked: bool) -> None:
-        self._send(self.remote.topics.lock, "ON" if locked else "OFF", "lock")
+        self._send(self.remote.topics.lock, "ON" if locked else "OFF", "lock", moves=False)
         if locked:
             self.remote.last_halt_s = time.monotonic()
 
@@ -201,11 +214,12 @@ class RemoteConsoleRotator:
         self._send(self.remote.topics.nudge, json.dumps(doc, separators=(",", ":")), described)
 
     def track(self, name: str, source: Source, described: str) -> None:
-        if not self.can_track and name.strip().casefold() != "off":
+        if not self.can_track and name.strip().casefold() != "off":  # rule 5
             message = "the station's rotator cannot track (its R/info says so)"
             self.report_refusal(message, described)
             raise Refused(RefusalCode.UNSUPPORTED, message)
-        self._send(self.remote.topics.track, name, described)
+        off = name.strip().casefold() == "off"
+        self._send(self.remote.topics.track, name, described, moves=not off)
 
     def report_refusal(self, message: str, command: str | None) -> None:
         """Rule 2: to the pages alone."""
@@ -213,8 +227,11 @@ class RemoteConsoleRotator:
             event = ErrorEvent(ErrorKind.REFUSED, message, command, self._wall())
             self.pages.on_event(self.id, event)
 
-    def _send(self, topic: str, payload: str, described: str) -> None:
+    def _send(self, topic: str, payload: str, described: str, *, moves: bool = True) -> None:
+        """Rule 1; ``moves``: refused while the station is not current."""
         try:
+            if moves and self.remote.link_up and not self.remote.current:
+                raise Refused(RefusalCode.OFFLINE, OFFLINE)
             self.remote.publish(topic, payload)
         except Refused as exc:
             self.report_refusal(exc.message, described)

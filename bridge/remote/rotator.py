@@ -256,6 +256,10 @@ class RemoteRotator:
         return Limits.of(self.pointing)
 
     @property
+    def link_up(self) -> bool:
+        return self._link.up
+
+    @property
     def current(self) -> bool:
         """Rule 1: whether the retained status may be shown."""
         view = self._view

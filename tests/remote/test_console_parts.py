@@ -75,6 +75,8 @@ def rig(
     view, link, pages = StationView(), Link(), Pages()
     payload = info_payload(station=(52.5, 13.3), locator="JO62qm", satellites=("ISS",))
     view.put(T.info, payload)
+    view.put("rotor/bridge/state", b"online")
+    view.put(T.availability, b"online")
     clock = wall or FakeClock(1_000_000.0)
     remote = RemoteRotator(
         "tower", T, "rotor/bridge/state", Info.parse(payload), view, link, "DL1ABC", 5, wall=clock
@@ -148,6 +150,30 @@ def test_offline_every_command_is_refused_at_once_and_the_pages_hear_it() -> Non
     assert not link.sent
     assert [e.kind for e in pages.events] == [ErrorKind.REFUSED] * 3
     assert pages.events[0].command == "console: stop"
+
+
+def test_with_the_station_offline_what_moves_is_refused_and_stop_and_lock_go_out() -> None:
+    rot, link, pages, view = rig()
+    view.put(T.availability, b"offline")
+    for doc in (
+        {"command": "target", "az": 120},
+        {"command": "preset", "name": "EU"},
+        {"command": "nudge", "d_az": 5},
+        {"command": "track", "body": "sun"},
+    ):
+        with pytest.raises(Refused) as refused:
+            run(rot, **doc)
+        assert refused.value.code is RefusalCode.OFFLINE
+        assert "offline" in refused.value.message
+    assert not link.sent and len(pages.events) == 4
+    for doc in (
+        {"command": "stop"},
+        {"command": "lock", "on": True},
+        {"command": "lock", "on": False},
+        {"command": "track", "body": "off"},
+    ):
+        run(rot, **doc)
+    assert [topic for topic, _ in link.sent] == [T.stop, T.lock, T.lock, T.track]
 
 
 def test_a_target_outside_the_station_range_is_refused_here_and_nothing_sent() -> None:

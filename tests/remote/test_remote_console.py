@@ -184,3 +184,15 @@ def test_a_console_port_already_taken_is_a_start_error_naming_it(station: Rig) -
         with pytest.raises(StartError, match=rf"web.port {port}: the console cannot listen"):
             r.start()
         assert r.link is None and not r.servers  # nothing left running
+
+
+def test_with_the_station_bridge_gone_a_turn_is_refused_at_once(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    r, client, _ = remote
+    station.stop()  # the bridge says offline on its way out
+    wait_until(lambda: not r.rotators[0].current, 10, "the remote sees the station go")
+    answer = client.command("tower", command="target", az=250)
+    assert answer.status == 409 and answer.doc["code"] == "offline", answer
+    assert "station's rotator is offline" in answer.doc["error"]
+    assert client.command("tower", command="stop").status == 200  # a stop still goes out
