@@ -95,10 +95,13 @@ def parse_presets(payload: bytes | None) -> dict[str, tuple[float, float | None]
         return {}
     out: dict[str, tuple[float, float | None]] = {}
     for name, value in doc.items() if isinstance(doc, dict) else ():
-        if isinstance(value, int | float) and not isinstance(value, bool):
-            out[str(name)] = (float(value), None)
-        elif isinstance(value, list) and len(value) == 2:
-            out[str(name)] = (float(value[0]), float(value[1]))
+        try:
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                out[str(name)] = (float(value), None)
+            elif isinstance(value, list) and len(value) == 2:
+                out[str(name)] = (float(value[0]), float(value[1]))
+        except (TypeError, ValueError):
+            continue
     return out
 
 
@@ -177,7 +180,8 @@ class RemoteConsoleRotator:
             raise
 
     def set_lock(self, locked: bool) -> None:
-        self._send(self.remote.topics.lock, "ON" if locked else "OFF", "lock", moves=False)
+        word = "ON" if locked else "OFF"
+        self._send(self.remote.topics.lock, word, f"console: lock {word}", moves=False)
         if locked:
             self.remote.last_halt_s = time.monotonic()
 

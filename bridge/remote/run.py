@@ -107,6 +107,7 @@ class Remote:
     def stop(self) -> None:
         if self.feed is not None:
             self.feed.stop()
+            self.feed = None
         if self.console is not None:
             self.console.stop()  # each page sees the remote go (web/server.py rule 6)
             self.console = None
@@ -121,13 +122,15 @@ class Remote:
         """Rule 4: what the broker held before a drop is not kept across it."""
         if self.link is not None and not self.link.up:
             self.view.clear()
-        if self.feed is not None:
-            self.feed.refresh()  # the pages see the station go (console.py rule 3)
+        feed = self.feed  # read once: stop() may clear it meanwhile (paho's thread)
+        if feed is not None:
+            feed.refresh()  # the pages see the station go (console.py rule 3)
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload)
-        if self.feed is not None:
-            self.feed.on_message(topic, payload)
+        feed = self.feed
+        if feed is not None:
+            feed.on_message(topic, payload)
 
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""

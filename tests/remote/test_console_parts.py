@@ -213,6 +213,7 @@ def test_the_station_description_and_presets_read_back() -> None:
     view.put(T.presets, pl.presets_json({"EU": (45.0, None), "SAT": (180.0, 5.0)}).encode())
     assert rot.pointing.presets == {"EU": (45.0, None), "SAT": (180.0, 5.0)}
     assert parse_presets(b"not json") == {}
+    assert parse_presets(b'{"A": [null, 5], "B": "x", "C": 10}') == {"C": (10.0, None)}
 
 
 def test_a_status_reads_back_as_the_station_rendered_it() -> None:
