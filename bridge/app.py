@@ -28,6 +28,7 @@ from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.lane import StopLane
+from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.rotctld import RotctldServer
@@ -172,6 +173,7 @@ class App:
                 satellites=catalog.names,
                 wall=wall,
             )
+        satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky),
@@ -186,7 +188,16 @@ class App:
                 catalog=catalog,
                 sky=self.sky,
             )
-            self.mqtt.attach(rot)
+            self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
+                rot,
+                ConsoleFacts(
+                    position,
+                    settings.station.locator,
+                    r.beamwidth_deg,
+                    r.nudge_step_deg,
+                    satellites if rot.can_track else (),
+                ),
+            )
             if self.web is not None:
                 self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)

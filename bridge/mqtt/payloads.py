@@ -286,9 +286,28 @@ def tracking_state(status: RotatorStatus) -> str:
     return status.tracking.body if status.tracking is not None else "off"
 
 
-def info_json(name: str, spec: ModelSpec, pointing: Pointing, can_track: bool) -> str:
+@dataclass(frozen=True)
+class ConsoleFacts:
+    """What a console far from the station draws beyond the judge's terms (``R/info``'s
+    ``station``, ``beamwidth``, ``nudge_step``, ``satellites``)."""
+
+    station: tuple[float, float] | None = None  # latitude, longitude (degrees)
+    locator: str | None = None
+    beamwidth_deg: float = 60.0
+    nudge_step_deg: float = 5.0
+    satellites: tuple[str, ...] = ()  # the TLE file's names when the bridge started
+
+
+def info_json(
+    name: str,
+    spec: ModelSpec,
+    pointing: Pointing,
+    can_track: bool,
+    console: ConsoleFacts | None = None,
+) -> str:
     """``R/info``: what a rotator is and may do, for a client far from the station (limits,
-    sectors, presets, capabilities as the station's configuration has them; true bearings)."""
+    sectors, presets, capabilities as the station's configuration has them; true bearings);
+    with ``console``, what a console there draws too."""
     lo, hi = pointing.target_range()
     doc = {
         "name": name,
@@ -305,6 +324,16 @@ def info_json(name: str, spec: ModelSpec, pointing: Pointing, can_track: bool) -
         "park": list(pointing.park) if pointing.park is not None else None,
         "options": sorted(spec.options),
     }
+    if console is not None:
+        where = console.station
+        doc["station"] = (
+            {"latitude": where[0], "longitude": where[1], "locator": console.locator}
+            if where is not None
+            else None
+        )
+        doc["beamwidth"] = console.beamwidth_deg
+        doc["nudge_step"] = console.nudge_step_deg
+        doc["satellites"] = list(console.satellites)
     return json.dumps(doc, separators=(",", ":"))
 
 

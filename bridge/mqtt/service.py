@@ -86,12 +86,15 @@ class MqttService:
         )
         self._word = self._halts.word
 
-    def attach(self, rotator: RotatorPort) -> None:
+    def attach(self, rotator: RotatorPort, console: pl.ConsoleFacts | None = None) -> None:
+        """``console``: what a console far from the station draws, in ``R/info`` too."""
         self._rotators[rotator.id] = rotator
         t = self.topics.rotator(rotator.id)
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
-        info = pl.info_json(rotator.name, rotator.spec, rotator.pointing, rotator.can_track)
+        info = pl.info_json(
+            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console
+        )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 
     def add_feature(

@@ -249,11 +249,12 @@ class StationTopics:
         return RotatorTopics(self.base if rotator_id is None else f"{self.base}/{rotator_id}")
 
     def subscriptions(self) -> list[str]:
-        """What a remote reads: the bridge's state, and each rotator's description, status and
-        availability, whether the station has one rotator or several."""
+        """What a remote reads: the bridge's state, and each rotator's description, status,
+        availability, presets and error events, whether the station has one rotator or
+        several."""
         one, each = self.rotator(None), self.rotator("+")
         return [self.bridge_state] + [
-            t for r in (one, each) for t in (r.info, r.status, r.availability)
+            t for r in (one, each) for t in (r.info, r.status, r.availability, r.presets, r.error)
         ]
 
     def described(self, topics: list[str]) -> list[str]:

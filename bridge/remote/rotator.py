@@ -27,6 +27,7 @@ Rules:
 from __future__ import annotations
 
 import json
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -36,7 +37,15 @@ from typing import Any, Protocol
 
 from bridge.engine.rotator import Limits
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, MotionState, RotatorStatus, Stop, Target
+from bridge.model import (
+    Command,
+    MotionState,
+    RotatorStatus,
+    Stop,
+    Target,
+    TargetInfo,
+    TrackingInfo,
+)
 from bridge.mqtt.topics import RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
@@ -83,13 +92,68 @@ class Info:
         return cls(str(doc.get("name") or model), spec, aim)
 
 
+def _num(doc: dict[str, Any], key: str) -> float | None:
+    v = doc.get(key)
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
+
+def _unix(text: object) -> float | None:
+    try:
+        return datetime.fromisoformat(str(text)).timestamp() if text is not None else None
+    except ValueError:
+        return None
+
+
+def _target_info(doc: object) -> TargetInfo | None:
+    if not isinstance(doc, dict):
+        return None
+    lat, lon = _num(doc, "latitude"), _num(doc, "longitude")
+    short, long = _num(doc, "short_path_deg"), _num(doc, "long_path_deg")
+    if lat is None or lon is None or short is None or long is None:
+        return None
+    locator = doc.get("locator")
+    return TargetInfo(
+        lat,
+        lon,
+        _num(doc, "distance_km") or 0.0,
+        short,
+        long,
+        "long" if doc.get("path") == "long" else "short",
+        locator if isinstance(locator, str) else None,
+    )
+
+
+def _tracking(doc: object) -> TrackingInfo | None:
+    if not isinstance(doc, dict) or not isinstance(doc.get("body"), str):
+        return None
+    nxt_or = doc.get("next")
+    nxt: dict[str, Any] = nxt_or if isinstance(nxt_or, dict) else {}
+    track = doc.get("pass_track") or []
+    return TrackingInfo(
+        doc["body"],
+        str(doc.get("phase", "")),
+        _num(doc, "azimuth"),
+        _num(doc, "elevation"),
+        _num(nxt, "azimuth"),
+        _num(nxt, "elevation"),
+        _unix(doc.get("aos")),
+        _unix(doc.get("los")),
+        _num(doc, "max_elevation"),
+        _num(doc, "aos_azimuth"),
+        bool(doc.get("flip")),
+        tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
+    )
+
+
 def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
-    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: the parts a reading needs."""
+    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
+    the console draws (the place targeted, the body tracked)."""
     doc: dict[str, Any] = json.loads(payload)
 
     def num(key: str) -> float | None:
-        v = doc.get(key)
-        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+        return _num(doc, key)
+
+    options = doc.get("options")
 
     return RotatorStatus(
         rotator_id,
@@ -106,6 +170,14 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
         last_command_source=doc.get("last_command_source"),
         estimated=bool(doc.get("estimated")),
         parked=bool(doc.get("parked")),
+        options={str(k): bool(v) for k, v in options.items()} if isinstance(options, dict) else {},
+        controller_time=doc.get("controller_time"),
+        expected_end_unix=_unix(doc.get("expected_end")),
+        raw_bearing_deg=num("raw_bearing"),
+        overlap=doc.get("overlap"),
+        target_info=_target_info(doc.get("target_info")),
+        tracking=_tracking(doc.get("tracking")),
+        tracking_ended=doc.get("tracking_ended"),
     )
 
 
@@ -177,10 +249,15 @@ class RemoteRotator:
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
+        self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
 
     @property
     def limits(self) -> Limits:
         return Limits.of(self.pointing)
+
+    @property
+    def link_up(self) -> bool:
+        return self._link.up
 
     @property
     def current(self) -> bool:
@@ -210,16 +287,20 @@ class RemoteRotator:
     def submit(self, command: Command, described: str | None = None) -> None:
         """Rule 3."""
         if isinstance(command, Stop):
-            self._link.send(self.topics.stop, "stop", self._operator, self._expiry_s)
+            self.publish(self.topics.stop, "stop")
+            self.last_halt_s = time.monotonic()
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
-            self._link.send(self.topics.park, "park", self._operator, self._expiry_s)
+            self.publish(self.topics.park, "park")
             return
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
-        payload = json.dumps(doc, separators=(",", ":"))
-        self._link.send(self.topics.target, payload, self._operator, self._expiry_s)
+        self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
+
+    def publish(self, topic: str, payload: str) -> None:
+        """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
+        self._link.send(topic, payload, self._operator, self._expiry_s)

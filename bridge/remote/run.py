@@ -13,11 +13,16 @@ Rules:
 4. The station's topics read before a connection drops are forgotten when it does: the next
    connection's retained messages are the station's word again (the rotator's description,
    read at start, is kept).
+5. With ``[web]`` enabled, the console (remote/console.py) shows every rotator the station
+   described by the time the endpoints' rotators were found, and its line names its URL:
+   ``DL1ABC -> host: console for tower on http://127.0.0.1:8754/``. Its block is
+   ``_start_console``; it stops first.
 """
 
 from __future__ import annotations
 
 import logging
+import secrets
 import signal
 import threading
 import time
@@ -27,10 +32,13 @@ from typing import TYPE_CHECKING
 
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import RotatorTopics, StationTopics
+from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
+from bridge.web.server import WebConsole
+from bridge.web.view import RotatorFacts
 
 if TYPE_CHECKING:
     pass
@@ -57,6 +65,8 @@ class Remote:
     rotators: list[RemoteRotator] = field(default_factory=list)
     servers: list[RotctldServer] = field(default_factory=list)
     link: RemoteLink | None = None
+    console: WebConsole | None = None  # rule 5
+    feed: ConsoleFeed | None = None
 
     @property
     def station(self) -> StationTopics:
@@ -87,12 +97,20 @@ class Remote:
                     f"{s.operator} -> {s.mqtt.host}: {rot.id} ({spec.name}, {_g(lo)}..{_g(hi)}) "
                     f"on rotctld {host}:{port}"
                 )
+            if s.web.enabled:
+                lines.append(self._start_console())
             return lines
         except BaseException:
             self.stop()
             raise
 
     def stop(self) -> None:
+        if self.feed is not None:
+            self.feed.stop()
+            self.feed = None
+        if self.console is not None:
+            self.console.stop()  # each page sees the remote go (web/server.py rule 6)
+            self.console = None
         for server in self.servers:
             server.stop()
         self.servers.clear()
@@ -104,9 +122,15 @@ class Remote:
         """Rule 4: what the broker held before a drop is not kept across it."""
         if self.link is not None and not self.link.up:
             self.view.clear()
+        feed = self.feed  # read once: stop() may clear it meanwhile (paho's thread)
+        if feed is not None:
+            feed.refresh()  # the pages see the station go (console.py rule 3)
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload)
+        feed = self.feed
+        if feed is not None:
+            feed.on_message(topic, payload)
 
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""
@@ -147,6 +171,71 @@ class Remote:
                 info.name,
                 ep.rotator,
             )
+        assert self.link is not None
+        return RemoteRotator(
+            rid,
+            topics,
+            self.station.bridge_state,
+            info,
+            self.view,
+            self.link,
+            s.operator,
+            s.command_expiry_s,
+            s.moving_max_age_s,
+        )
+
+    # -- the console (rule 5; remote/console.py) --------------------------------------------
+    def _start_console(self) -> str:
+        s = self.settings
+        rotators = list(self.rotators)
+        known = {rot.topics for rot in rotators}
+        for rid in self.station.described(self.view.topics()):
+            topics = self.station.rotator(rid)
+            if topics not in known:
+                more = self._described(rid, topics)
+                if more is not None:
+                    rotators.append(more)
+        shown = [
+            RemoteConsoleRotator(rot, drawn_of(self.view.get(rot.topics.info)), self.view)
+            for rot in rotators
+        ]
+        first = shown[0].drawn
+        password = s.web.password
+        console = WebConsole(
+            s.web.bind,
+            s.web.port,
+            password=password.get_secret_value() if password is not None else None,
+            frame_ancestors=list(s.web.frame_ancestors),
+            host_names=list(s.web.host_names),
+            secret=secrets.token_bytes(32),  # logins end with the remote's run
+            station=first.station,
+            locator=first.locator,
+            satellites=lambda: sorted({n for r in shown for n in r.drawn.satellites}),
+        )
+        for rot in shown:
+            console.attach(rot, RotatorFacts(rot.drawn.beamwidth_deg, rot.drawn.nudge_step_deg))
+            rot.pages = console
+        self.feed = ConsoleFeed(shown, console)
+        try:
+            console.listen()
+        except OSError as exc:
+            raise StartError(
+                f"web.port {s.web.port}: the console cannot listen on "
+                f"{s.web.bind or '*'}:{s.web.port}: {exc.strerror or exc}"
+            ) from None
+        self.console = console
+        self.feed.start()
+        names = ", ".join(rot.id for rot in shown)
+        return f"{s.operator} -> {s.mqtt.host}: console for {names} on {console.url}"
+
+    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
+        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+        s = self.settings
+        try:
+            info = Info.parse(self.view.get(topics.info) or b"")
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
+            return None
         assert self.link is not None
         return RemoteRotator(
             rid,

@@ -7,6 +7,8 @@ Rules:
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
    take one address.
 3. A problem is a ConfigError naming the key as the file spells it, one line each.
+4. ``[web]`` is the bridge's own table (WebSettings), with its refusal of a console beyond
+   loopback without a password.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from bridge.settings import ConfigError, read_toml
 from bridge.settings_errors import describe
 from bridge.settings_mqtt import MqttSettings
+from bridge.settings_web import WebSettings
 
 ENV_PREFIX = "ROTOR_REMOTE_"  # no variables are read; describe() wants a prefix to name
 
@@ -63,6 +66,11 @@ class RemoteSettings(_Strict):
         10.0, gt=0, le=120, description="how long to wait for the station's rotators at start"
     )
     endpoints: list[Endpoint] = Field(min_length=1)
+    web: WebSettings = Field(
+        default_factory=WebSettings,
+        description="the operator console, served here for the station's rotators: the "
+        "bridge's own [web] table (loopback unless password_file is set)",
+    )
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:
