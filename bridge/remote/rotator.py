@@ -1,5 +1,6 @@
-"""One station rotator as the remote sees it: what rotctld's commands ask of a Rotator
-(``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``), answered from the station's
+"""One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
+ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
+``go_toward``, ``report_refusal``), answered from the station's
 retained topics and carried out by publishing on its command topics.
 
 Rules:
@@ -22,11 +23,19 @@ Rules:
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
    OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
+   endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
+   position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
+   ``R/target``: the station knows where it is, the remote does not.
+5. A refusal here (not connected, out of range, no park) is logged, at most once per
+   REFUSAL_LOG_S with the count since, and raised; the station's own refusals are on its
+   ``R/error``, not the remote's to publish.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -36,11 +45,15 @@ from typing import Any, Protocol
 
 from bridge.engine.rotator import Limits
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, MotionState, RotatorStatus, Stop, Target
+from bridge.model import Command, MotionState, RotatorStatus, Source, Stop, Target
 from bridge.mqtt.topics import RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+
+log = logging.getLogger(__name__)
+
+REFUSAL_LOG_S = 10.0  # rule 5
 
 
 class Sender(Protocol):
@@ -164,6 +177,7 @@ class RemoteRotator:
         expiry_s: int,
         moving_max_age_s: float = 10.0,
         wall: Callable[[], float] = time.time,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.id = rotator_id
         self.topics = topics
@@ -177,6 +191,10 @@ class RemoteRotator:
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
+        self._clock = clock
+        self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
+        self._refusals = 0
+        self._refusal_logged_s = -REFUSAL_LOG_S
 
     @property
     def limits(self) -> Limits:
@@ -208,7 +226,14 @@ class RemoteRotator:
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
-        """Rule 3."""
+        """Rules 3 and 5."""
+        try:
+            self._submit(command)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def _submit(self, command: Command) -> None:
         if isinstance(command, Stop):
             self._link.send(self.topics.stop, "stop", self._operator, self._expiry_s)
             return
@@ -221,5 +246,52 @@ class RemoteRotator:
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
+        self._send_target(doc)
+
+    def _send_target(self, doc: dict[str, Any]) -> None:
         payload = json.dumps(doc, separators=(",", ":"))
         self._link.send(self.topics.target, payload, self._operator, self._expiry_s)
+
+    def park(self, source: Source, described: str) -> None:
+        """Rule 4: Refused when the station has no park position."""
+        try:
+            where = self.pointing.parking()
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self.submit(Target(*where, source, park=True), described)
+
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None:
+        """Rule 4: the place, for the station to turn into its bearing."""
+        place: dict[str, Any] = (
+            {"locator": locator}
+            if locator is not None
+            else {"latitude": latitude_deg, "longitude": longitude_deg}
+        )
+        if long_path:
+            place["path"] = "long"
+        try:
+            self._send_target(place)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def report_refusal(self, message: str, command: str | None) -> None:
+        """Rule 5: logged here, rarely."""
+        with self._refusals_lock:
+            self._refusals += 1
+            now = self._clock()
+            if now - self._refusal_logged_s < REFUSAL_LOG_S:
+                return
+            count, self._refusals, self._refusal_logged_s = self._refusals, 0, now
+        more = f" ({count - 1} more since)" if count > 1 else ""
+        log.warning("%s: %s refused: %s%s", self.id, command or "a command", message, more)
