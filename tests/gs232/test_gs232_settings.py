@@ -63,7 +63,7 @@ def test_a_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
 
 def test_check_config_lists_them(tmp_path: Path) -> None:
     path = write(tmp_path, ["rotctld_port = 4533\ngs232_port = 4535\neasycomm_port = 4536"])
-    out = run_cli("check-config", "-c", str(path)).stdout
+    out = run_cli("check-config", "-c", str(path))
     assert out.returncode == 0, out.stderr
     assert (
         "rotctld on 127.0.0.1:4533; GS-232B on 127.0.0.1:4535; Easycomm II on 127.0.0.1:4536"
