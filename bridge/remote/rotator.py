@@ -28,7 +28,8 @@ Rules:
    position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
    ``R/target``: the station knows where it is, the remote does not.
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
-   REFUSAL_LOG_S with the count since, and raised; the station's own refusals are on its
+   REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
+   seconds), and raised; the station's own refusals are on its
    ``R/error``, not the remote's to publish.
 """
 
@@ -193,8 +194,7 @@ class RemoteRotator:
         self._wall = wall
         self._clock = clock
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
-        self._refusals = 0
-        self._refusal_logged_s = -REFUSAL_LOG_S
+        self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
     @property
     def limits(self) -> Limits:
@@ -286,12 +286,14 @@ class RemoteRotator:
             raise
 
     def report_refusal(self, message: str, command: str | None) -> None:
-        """Rule 5: logged here, rarely."""
+        """Rule 5: logged here, rarely (per front end: the first word of ``command``)."""
+        kind = (command or "").split(" ", 1)[0]
         with self._refusals_lock:
-            self._refusals += 1
+            count, logged_s = self._refusals.get(kind, (0, -REFUSAL_LOG_S))
             now = self._clock()
-            if now - self._refusal_logged_s < REFUSAL_LOG_S:
+            if now - logged_s < REFUSAL_LOG_S:
+                self._refusals[kind] = (count + 1, logged_s)
                 return
-            count, self._refusals, self._refusal_logged_s = self._refusals, 0, now
-        more = f" ({count - 1} more since)" if count > 1 else ""
+            self._refusals[kind] = (0, now)
+        more = f" ({count} more since)" if count else ""
         log.warning("%s: %s refused: %s%s", self.id, command or "a command", message, more)
