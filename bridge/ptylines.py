@@ -25,14 +25,22 @@ Rules:
 5. A reply nobody reads (no client, or one that does not read) is dropped once the pty's
    buffer is full, counted in ``replies_dropped`` and logged at most once per DROP_LOG_S:
    the server never blocks on a write.
+6. What a client left unread is not the next one's: the pty keeps it (rule 3 holds the slave
+   open), and a client that does not flush its input on open would read it first (Hamlib's
+   GS-232B reads a reply up to its CR and leaves the LF). So what is still unread STALE_S
+   after the last reply was written is discarded (counted in ``stale_dropped``): a client
+   that asked reads its reply well within that.
 """
 
 from __future__ import annotations
 
 import errno
+import fcntl
 import logging
 import os
 import select
+import struct
+import termios
 import threading
 import time
 import tty
@@ -44,6 +52,7 @@ log = logging.getLogger(__name__)
 USEFUL_WITHIN_S = 60.0  # rule 4: an unfinished command is dropped after this
 EIO_RETRY_S = 0.2  # rule 3
 DROP_LOG_S = 10.0  # rule 5
+STALE_S = 2.0  # rule 6
 _READ_CHUNK = 4096
 
 
@@ -70,6 +79,7 @@ class PtyLineServer:
         label: str,
         key: str,
         useful_within_s: float = USEFUL_WITHIN_S,
+        stale_s: float = STALE_S,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.rotator_id = rotator_id
@@ -78,6 +88,7 @@ class PtyLineServer:
         self._key = key
         self._session = session
         self._useful_within_s = useful_within_s
+        self._stale_s = stale_s
         self._clock = clock
         self._master = -1
         self._slave = -1  # our own: rule 3
@@ -86,6 +97,8 @@ class PtyLineServer:
         self._thread: threading.Thread | None = None
         self.wakeups = 0  # select() returns, for the tests (rule 3: no spinning)
         self.replies_dropped = 0
+        self.stale_dropped = 0  # bytes (rule 6)
+        self._written_s: float | None = None  # when the last reply was written (rule 6)
         self._dropped_logged_s = -DROP_LOG_S
 
     @property
@@ -159,16 +172,25 @@ class PtyLineServer:
         session = self._session()
         pending_since: float | None = None
         while True:
-            timeout = None
+            deadlines = []
             if pending_since is not None:
-                timeout = max(0.0, pending_since + self._useful_within_s - self._clock())
+                deadlines.append(pending_since + self._useful_within_s)
+            if self._written_s is not None:
+                deadlines.append(self._written_s + self._stale_s)
+            timeout = max(0.0, min(deadlines) - self._clock()) if deadlines else None
             ready, _, _ = select.select([self._master, self._wake_r], [], [], timeout)
             self.wakeups += 1
             if self._wake_r in ready:
                 return
-            if not ready:  # rule 4: a command left unfinished
-                log.info("%s for %s: an unfinished command dropped", self.label, self.rotator_id)
-                session, pending_since = self._session(), None
+            if not ready:
+                now = self._clock()
+                if self._written_s is not None and now >= self._written_s + self._stale_s:
+                    self._discard_unread()
+                if pending_since is not None and now >= pending_since + self._useful_within_s:
+                    log.info(
+                        "%s for %s: an unfinished command dropped", self.label, self.rotator_id
+                    )
+                    session, pending_since = self._session(), None  # rule 4
                 continue
             try:
                 data = os.read(self._master, _READ_CHUNK)
@@ -192,8 +214,17 @@ class PtyLineServer:
             elif pending_since is None:
                 pending_since = self._clock()
 
+    def _discard_unread(self) -> None:
+        """Rule 6."""
+        self._written_s = None
+        unread = struct.unpack("i", fcntl.ioctl(self._slave, termios.FIONREAD, b"\0" * 4))[0]
+        if unread:
+            termios.tcflush(self._slave, termios.TCIFLUSH)
+            self.stale_dropped += unread
+
     def _write(self, reply: bytes) -> None:
         """Rule 5: all of it, or what is left dropped."""
+        self._written_s = self._clock()  # rule 6
         view = memoryview(reply)
         while view:
             try:
