@@ -19,7 +19,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
-from tests.integration.test_gs232_integration import EASYCOMM, GS232, rotctl
+from tests.integration.test_gs232_integration import EASYCOMM, GS232, gs232_ask, rotctl
 from tests.remote.test_remote import OPERATOR
 from tests.support import wait_until
 from tests.support.rig import Rig
@@ -79,21 +79,6 @@ def endpoints(station: Rig, tmp_path: Path) -> Iterator[Endpoints]:
     e.stop()
 
 
-def gs232(port: int, request: bytes) -> bytes:
-    """``request`` on a fresh TCP connection, then a known question: what came before its
-    answer (no reply is proven by the order of the replies, not by waiting)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
-        sock.sendall(request + b"VE\r")  # no GS-232 command: answered by the error prompt
-        buf = b""
-        while not buf.endswith(b"?>\r\n"):
-            chunk = sock.recv(100)
-            if not chunk:
-                break
-            buf += chunk
-    assert buf.endswith(b"?>\r\n"), buf
-    return buf[: -len(b"?>\r\n")]
-
-
 def remote_sees(e: Endpoints, station: Rig) -> bool:
     """The remote's view of the bearing is the station's."""
     return e.remote.rotators[0].status.bearing_deg == station.status("tower").bearing_deg
@@ -151,8 +136,8 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     moves = len(emu.frames(*BEARING_OUTCOMES))
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
-    assert gs232(e.gs232_port, b"W250 000\r") == b"?>\r\n"  # refused, not queued
-    assert gs232(e.gs232_port, b"C2\r") == b"?>\r\n"  # no stale number
+    gs232_ask(e.gs232_port, b"W250 000\r", b"?>\r\n")  # refused, not queued
+    gs232_ask(e.gs232_port, b"C2\r", b"?>\r\n")  # no stale number
     with caplog.at_level(logging.WARNING, logger="bridge.remote.rotator"):
         with e.pst() as client:
             client.command(tag("AZIMUTH", 300))
@@ -167,7 +152,7 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     station.broker.restart()
     wait_until(lambda: link.up, 30, "the remote back on the broker")
     station.ready("tower", 30)
-    assert gs232(e.gs232_port, b"S\r") == b""  # a marker behind anything sent again
+    gs232_ask(e.gs232_port, b"S\r", b"")  # a marker behind anything sent again
     received = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
 
     def published() -> list[bytes]:
