@@ -9,7 +9,10 @@ from __future__ import annotations
 import logging
 import os
 import re
+import signal
 import socket
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -181,3 +184,29 @@ def test_a_pty_path_held_by_a_file_is_a_start_error_and_nothing_stays(
     assert path.read_text() == ""
     with socket.socket() as sock:  # the rotctld port was let go
         sock.bind(("127.0.0.1", port))
+
+
+def test_the_command_line_serves_a_pty_and_removes_its_link_on_sigterm(
+    station: Rig, tmp_path: Path, rotctl_path: str
+) -> None:
+    link = tmp_path / "rotor-gs232"
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\n[mqtt]\nport = {station.broker.port}\n'
+        f'[[endpoints]]\ngs232_pty = "{link}"\n'
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert line == f"{OPERATOR} -> 127.0.0.1: tower (rotorez, 0..360) on gs232 {link}\n"
+        az, _ = rotctl(rotctl_path, GS232, str(link), "p").split()
+        assert abs(float(az) - 10) <= 1
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(10) == 0
+        assert not os.path.lexists(link)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
