@@ -22,7 +22,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
-from bridge.gs232 import easycomm_server, gs232_server
+from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
@@ -31,6 +31,7 @@ from bridge.mqtt.lane import StopLane
 from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.ptylines import PtyLineServer
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.sky import Sky
@@ -151,7 +152,7 @@ class App:
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
-        self.emulations: list[LineServer] = []  # GS-232 and Easycomm ports (gs232/)
+        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
@@ -210,6 +211,10 @@ class App:
                 self.emulations.append(gs232_server(rot, r.gs232_port, r.gs232_bind))
             if r.easycomm_port is not None:
                 self.emulations.append(easycomm_server(rot, r.easycomm_port, r.easycomm_bind))
+            if r.gs232_pty is not None:
+                self.emulations.append(gs232_pty(rot, r.gs232_pty))
+            if r.easycomm_pty is not None:
+                self.emulations.append(easycomm_pty(rot, r.easycomm_pty))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:
@@ -356,8 +361,9 @@ class App:
             self.stop()
             raise
 
-    def _text_ports(self) -> list[LineServer]:
-        """rotctld's, GS-232's and Easycomm's TCP ports: listened on, started, stopped alike."""
+    def _text_ports(self) -> list[LineServer | PtyLineServer]:
+        """rotctld's, GS-232's and Easycomm's TCP ports and ptys: listened on (a pty linked),
+        started, stopped alike."""
         return [*self.rotctld, *self.emulations]
 
     def stop(self) -> None:

@@ -198,6 +198,10 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
         on.append(f"GS-232B on {r.gs232_bind}:{r.gs232_port}")
     if r.easycomm_port is not None:
         on.append(f"Easycomm II on {r.easycomm_bind}:{r.easycomm_port}")
+    if r.gs232_pty is not None:
+        on.append(f"GS-232B on a pty at {r.gs232_pty}")
+    if r.easycomm_pty is not None:
+        on.append(f"Easycomm II on a pty at {r.easycomm_pty}")
     if r.pst_udp_port is not None:
         on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
     if r.n1mm_rotor_name is not None:

@@ -236,6 +236,23 @@ class RotatorSettings(PointingFields, LoggerFields):
         "anyone who can reach it can turn the antenna (check-config warns off loopback)",
         examples=["0.0.0.0"],
     )
+    gs232_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="Yaesu GS-232B on a pseudo-terminal, for programs that want a serial port "
+        "(`rotctl -m 603 -r /tmp/rotor-gs232`): the path of a link to it, made at start and "
+        "removed at the end; anything but a link already there is refused",
+        examples=["/tmp/rotor-gs232"],
+        json_schema_extra={"unset": "no GS-232 pty"},
+    )
+    easycomm_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="Easycomm II on a pseudo-terminal (`rotctl -m 202 -r /tmp/rotor-easycomm`), "
+        "linked at this path like gs232_pty",
+        examples=["/tmp/rotor-easycomm"],
+        json_schema_extra={"unset": "no Easycomm pty"},
+    )
 
     @field_validator("id")
     @classmethod

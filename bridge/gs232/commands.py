@@ -1,12 +1,15 @@
 """GS-232B and Easycomm II sessions onto one Rotator: each client's lines judged by
 Rotator.submit and answered in the protocol's bytes (package rules 4-7); the servers that carry
-them are the shared line server (tcplines.py)."""
+them are the shared line server (tcplines.py) and the pty server (ptylines.py).
+
+The Rotator is a Protocol: the bridge's own (engine/rotator.py) or the remote's, which stands
+for the station's (remote/rotator.py), as rotctld's commands take either."""
 
 from __future__ import annotations
 
 import logging
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from bridge.errors import Refused
 from bridge.gs232.parser import (
@@ -17,11 +20,26 @@ from bridge.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.model import Source, Stop, Target
+from bridge.model import RotatorStatus, Source, Stop, Target
+from bridge.ptylines import PtyLineServer
 from bridge.tcplines import LineServer
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
+    from bridge.protocols.base import ModelSpec
+
+
+class Rotator(Protocol):
+    """What the GS-232 and Easycomm sessions use of a rotator."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def spec(self) -> ModelSpec: ...
+    @property
+    def status(self) -> RotatorStatus: ...
+    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
+    def park(self, source: Source, described: str) -> None: ...
+
 
 log = logging.getLogger(__name__)
 
@@ -186,4 +204,18 @@ def easycomm_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> Lin
         label="easycomm",
         key="easycomm",
         idle_timeout_s=IDLE_TIMEOUT_S,
+    )
+
+
+def gs232_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The GS-232B pty of one rotator, linked at ``path``."""
+    return PtyLineServer(
+        rotator.id, path, lambda: Gs232Session(rotator), label="gs232", key="gs232"
+    )
+
+
+def easycomm_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The Easycomm II pty of one rotator, linked at ``path``."""
+    return PtyLineServer(
+        rotator.id, path, lambda: EasycommSession(rotator), label="easycomm", key="easycomm"
     )

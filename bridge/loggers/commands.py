@@ -30,17 +30,43 @@ import math
 import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from bridge import geo
 from bridge.errors import Refused
 from bridge.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
 from bridge.loggers.limiter import ReplyLimiter
-from bridge.model import Source, Stop, Target
+from bridge.model import RotatorStatus, Source, Stop, Target
 from bridge.pointing import angle_between, norm360
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
+    from bridge.protocols.base import ModelSpec
+
+
+class Rotator(Protocol):
+    """What the loggers' datagrams use of a rotator: the bridge's own (engine/rotator.py) or the
+    remote's, which stands for the station's (remote/rotator.py)."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def spec(self) -> ModelSpec: ...
+    @property
+    def status(self) -> RotatorStatus: ...
+    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
+    def park(self, source: Source, described: str) -> None: ...
+    def report_refusal(self, message: str, command: str | None) -> None: ...
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None: ...
+
 
 log = logging.getLogger(__name__)
 

@@ -1,9 +1,10 @@
 """``rotor-bridge remote``: the station's rotators on the operator's own computer, through the
-station's MQTT broker, as local ports that programs already speak (Hamlib's rotctld for now).
+station's MQTT broker, as local ports that programs already speak (rotctld, GS-232B and
+Easycomm II on TCP or a pty, PstRotator UDP).
 
-The parts: settings.py (the remote's file), rotator.py (a station rotator in the shape rotctld's
-commands use, from the station's retained topics), run.py (start-up and the servers), and the
-broker connection in mqtt/remote.py (paho stays in mqtt/).
+The parts: settings.py (the remote's file), rotator.py (a station rotator in the shape rotctld's,
+GS-232's and the loggers' commands use, from the station's retained topics), run.py (start-up
+and the servers), and the broker connection in mqtt/remote.py (paho stays in mqtt/).
 
 Rules:
 1. Never late: a command goes out only while connected, with an MQTT 5 expiry, and is never

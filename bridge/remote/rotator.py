@@ -1,5 +1,6 @@
-"""One station rotator as the remote sees it: what rotctld's commands ask of a Rotator
-(``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``), answered from the station's
+"""One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
+ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
+``go_toward``, ``report_refusal``), answered from the station's
 retained topics and carried out by publishing on its command topics.
 
 Rules:
@@ -22,11 +23,20 @@ Rules:
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
    OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
+   endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
+   position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
+   ``R/target``: the station knows where it is, the remote does not.
+5. A refusal here (not connected, out of range, no park) is logged, at most once per
+   REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
+   seconds), and raised; the station's own refusals are on its
+   ``R/error``, not the remote's to publish.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
 import threading
 import time
@@ -41,6 +51,7 @@ from bridge.model import (
     Command,
     MotionState,
     RotatorStatus,
+    Source,
     Stop,
     Target,
     TargetInfo,
@@ -50,6 +61,10 @@ from bridge.mqtt.topics import RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+
+log = logging.getLogger(__name__)
+
+REFUSAL_LOG_S = 10.0  # rule 5
 
 
 class Sender(Protocol):
@@ -236,6 +251,7 @@ class RemoteRotator:
         expiry_s: int,
         moving_max_age_s: float = 10.0,
         wall: Callable[[], float] = time.time,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.id = rotator_id
         self.topics = topics
@@ -250,6 +266,9 @@ class RemoteRotator:
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
         self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
+        self._clock = clock
+        self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
+        self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
     @property
     def limits(self) -> Limits:
@@ -285,7 +304,14 @@ class RemoteRotator:
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
-        """Rule 3."""
+        """Rules 3 and 5."""
+        try:
+            self._submit(command)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def _submit(self, command: Command) -> None:
         if isinstance(command, Stop):
             self.publish(self.topics.stop, "stop")
             self.last_halt_s = time.monotonic()
@@ -299,8 +325,57 @@ class RemoteRotator:
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
+        self._send_target(doc)
+
+    def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
         self._link.send(topic, payload, self._operator, self._expiry_s)
+
+    def park(self, source: Source, described: str) -> None:
+        """Rule 4: Refused when the station has no park position."""
+        try:
+            where = self.pointing.parking()
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self.submit(Target(*where, source, park=True), described)
+
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None:
+        """Rule 4: the place, for the station to turn into its bearing."""
+        place: dict[str, Any] = (
+            {"locator": locator}
+            if locator is not None
+            else {"latitude": latitude_deg, "longitude": longitude_deg}
+        )
+        if long_path:
+            place["path"] = "long"
+        try:
+            self._send_target(place)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def report_refusal(self, message: str, command: str | None) -> None:
+        """Rule 5: logged here, rarely (per front end: the first word of ``command``)."""
+        kind = (command or "").split(" ", 1)[0]
+        with self._refusals_lock:
+            count, logged_s = self._refusals.get(kind, (0, -REFUSAL_LOG_S))
+            now = self._clock()
+            if now - logged_s < REFUSAL_LOG_S:
+                self._refusals[kind] = (count + 1, logged_s)
+                return
+            self._refusals[kind] = (0, now)
+        more = f" ({count} more since)" if count else ""
+        log.warning("%s: %s refused: %s%s", self.id, command or "a command", message, more)

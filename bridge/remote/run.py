@@ -8,12 +8,16 @@ Rules:
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several.
-3. One line per endpoint goes to stdout at start:
-   ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533``.
+3. One line per endpoint goes to stdout at start, naming everything it serves:
+   ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533, gs232 /tmp/rotor-gs232,
+   pst udp 127.0.0.1:12000``.
 4. The station's topics read before a connection drops are forgotten when it does: the next
    connection's retained messages are the station's word again (the rotator's description,
    read at start, is kept).
-5. With ``[web]`` enabled, the console (remote/console.py) shows every rotator the station
+5. Every endpoint's address is taken (TCP ports, the PST UDP ports, the ptys' links) before
+   any is served; one that cannot be had is a start-up error naming it, and nothing is left
+   listening or linked.
+6. With ``[web]`` enabled, the console (remote/console.py) shows every rotator the station
    described by the time the endpoints' rotators were found, and its line names its URL:
    ``DL1ABC -> host: console for tower on http://127.0.0.1:8754/``. Its block is
    ``_start_console``; it stops first.
@@ -28,8 +32,10 @@ import threading
 import time
 from dataclasses import dataclass, field
 from types import FrameType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
+from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
+from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import RotatorTopics, StationTopics
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of
@@ -48,6 +54,14 @@ log = logging.getLogger(__name__)
 ONE_ROTATOR_GRACE_S = 0.5  # rule 2: B/X/info may come just after B/info in one burst
 
 
+class Served(Protocol):
+    """A line server (tcplines.py, ptylines.py): its address taken, then served, then ended."""
+
+    def listen(self) -> None: ...
+    def start(self) -> None: ...
+    def stop(self, timeout_s: float = 3.0) -> None: ...
+
+
 class StartError(ConfigError):
     """The remote cannot start (no broker, no such rotator); the CLI prints it, exit code 2."""
 
@@ -63,9 +77,10 @@ class Remote:
     settings: RemoteSettings
     view: StationView = field(default_factory=StationView)
     rotators: list[RemoteRotator] = field(default_factory=list)
-    servers: list[RotctldServer] = field(default_factory=list)
+    servers: list[Served] = field(default_factory=list)
+    loggers: LoggerEndpoints = field(default_factory=LoggerEndpoints)  # the PST UDP ports
     link: RemoteLink | None = None
-    console: WebConsole | None = None  # rule 5
+    console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
 
     @property
@@ -87,22 +102,50 @@ class Remote:
             lines = []
             for ep in s.endpoints:
                 rot = self._find(ep)
-                server = RotctldServer(rot, ep.rotctld_port, ep.rotctld_bind)
-                server.start()  # OSError naming the address and the setting
                 self.rotators.append(rot)
-                self.servers.append(server)
                 spec, (lo, hi) = rot.spec, rot.pointing.target_range()
-                host, port = server.address
                 lines.append(
                     f"{s.operator} -> {s.mqtt.host}: {rot.id} ({spec.name}, {_g(lo)}..{_g(hi)}) "
-                    f"on rotctld {host}:{port}"
+                    f"on {', '.join(self._endpoints(ep, rot))}"
                 )
+            try:  # rule 5
+                for server in self.servers:
+                    server.listen()
+                if self.loggers:
+                    self.loggers.listen()
+            except OSError as exc:
+                raise StartError(exc.strerror or str(exc)) from None
             if s.web.enabled:
                 lines.append(self._start_console())
+            for server in self.servers:
+                server.start()
+            if self.loggers:
+                self.loggers.start()
             return lines
         except BaseException:
             self.stop()
             raise
+
+    def _endpoints(self, ep: Endpoint, rot: RemoteRotator) -> list[str]:
+        """The endpoint's servers added (not yet listening); what each is, for rule 3."""
+        said = []
+        for offer in ep.offers():
+            where = str(offer.where)
+            if offer.key == "rotctld_port":
+                self.servers.append(RotctldServer(rot, int(offer.where), offer.bind))
+            elif offer.key == "gs232_port":
+                self.servers.append(gs232_server(rot, int(offer.where), offer.bind))
+            elif offer.key == "easycomm_port":
+                self.servers.append(easycomm_server(rot, int(offer.where), offer.bind))
+            elif offer.key == "pst_udp_port":
+                self.loggers.add_pst(rot, int(offer.where), offer.bind)
+            elif offer.key == "gs232_pty":
+                self.servers.append(gs232_pty(rot, where))
+            elif offer.key == "easycomm_pty":
+                self.servers.append(easycomm_pty(rot, where))
+            name = offer.key.rsplit("_", 1)[0].replace("_", " ")  # gs232, pst udp, ...
+            said.append(f"{name} {offer.bind}:{where}" if offer.bind else f"{name} {where}")
+        return said
 
     def stop(self) -> None:
         if self.feed is not None:
@@ -114,6 +157,7 @@ class Remote:
         for server in self.servers:
             server.stop()
         self.servers.clear()
+        self.loggers.stop()
         if self.link is not None:
             self.link.stop()
             self.link = None
@@ -184,7 +228,7 @@ class Remote:
             s.moving_max_age_s,
         )
 
-    # -- the console (rule 5; remote/console.py) --------------------------------------------
+    # -- the console (rule 6; remote/console.py) --------------------------------------------
     def _start_console(self) -> str:
         s = self.settings
         rotators = list(self.rotators)
