@@ -173,8 +173,7 @@ def test_the_operator_cannot_forge_the_station_state(secure: Secure, station: Ri
     # what a newcomer gets is still the station's own word
     fresh = secure.login(STATION_USER, "rotor/#")
     try:
-        wait_until(lambda: fresh.last("rotor/status") is not None, 10, "the retained status")
-        wait_until(lambda: fresh.last("rotor/info") is not None, 10, "the retained info")
+        wait_until(lambda: all(fresh.last(t) for t in forged), 10, "the retained topics")
         retained = {m.topic: m.payload for m in fresh.messages if m.retain}
     finally:
         fresh.close()
