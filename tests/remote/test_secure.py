@@ -1,8 +1,9 @@
 """``rotor-bridge remote`` the way it is deployed: the station's mosquitto with a TLS listener
 (certificates of our own authority, made here with openssl), a password file (mosquitto_passwd)
-and the access list docs/deployment.md prints (read from there, so the two cannot drift); the
-station's bridge on an emulated Rotor-EZ logs in as the station user, the remote as the
-operator. Hamlib's ``rotctl -m 2`` is the remote's client (the judge).
+and an access list, configured as docs/deployment.md prints it (its mosquitto.conf and ACL
+blocks are read from there, so they cannot drift); the station's bridge on an emulated Rotor-EZ
+logs in as the station user, the remote as the operator. Hamlib's ``rotctl -m 2`` is the
+remote's client (the judge).
 """
 
 from __future__ import annotations
@@ -37,13 +38,28 @@ STATION_USER, OPERATOR_USER = "station", "dl1abc"
 PASSWORDS = {STATION_USER: "station-S3cret", OPERATOR_USER: "operator-S3cret"}
 
 
-def documented_acl() -> str:
-    """The access list as docs/deployment.md prints it."""
-    found = re.search(
-        r"```text\n(# /etc/mosquitto/rotor\.acl\n.*?)```", DEPLOYMENT.read_text(), re.S
-    )
-    assert found, "docs/deployment.md has no ```text block starting '# /etc/mosquitto/rotor.acl'"
+def documented(first_line: str) -> str:
+    """The fenced block of docs/deployment.md that starts with ``first_line``."""
+    found = re.search(rf"```\w*\n({re.escape(first_line)}\n.*?)```", DEPLOYMENT.read_text(), re.S)
+    assert found, f"docs/deployment.md has no fenced block starting {first_line!r}"
     return found.group(1)
+
+
+def documented_acl() -> str:
+    return documented("# /etc/mosquitto/rotor.acl")
+
+
+def documented_broker_conf(files: dict[str, Path]) -> str:
+    """The broker's configuration as docs/deployment.md prints it, on this test's files; its
+    listener is the test's own (Mosquitto writes it: a free port on loopback)."""
+    conf = documented("# /etc/mosquitto/conf.d/rotor.conf")
+    assert "\nlistener 8883\n" in conf
+    conf = conf.replace("\nlistener 8883\n", "\n")
+    for documented_path, path in files.items():
+        assert documented_path in conf, documented_path
+        conf = conf.replace(documented_path, str(path))
+    assert "/etc/" not in conf.replace("# /etc/mosquitto/conf.d/rotor.conf", ""), conf
+    return conf
 
 
 @dataclass
@@ -87,12 +103,14 @@ def secure(tmp_path: Path) -> Iterator[Secure]:
     passwd = mosquitto_password_file(tmp_path / "passwd", PASSWORDS)
     acl = tmp_path / "rotor.acl"
     acl.write_text(documented_acl())
-    conf = (
-        "user root\n"  # read the files in the test's private temp dir (no effect unless root)
-        f"certfile {pki.path('server.crt')}\nkeyfile {pki.path('server.key')}\n"
-        f"allow_anonymous false\npassword_file {passwd}\nacl_file {acl}\n"
-        "set_tcp_nodelay true\n"
-    )
+    files = {
+        "/etc/mosquitto/certs/station.crt": pki.path("server.crt"),
+        "/etc/mosquitto/certs/station.key": pki.path("server.key"),
+        "/etc/mosquitto/passwd": passwd,
+        "/etc/mosquitto/rotor.acl": acl,
+    }
+    # user root: read the files in the test's private temp dir (no effect unless root)
+    conf = "user root\nset_tcp_nodelay true\n" + documented_broker_conf(files)
     broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
     yield Secure(broker, pki, tmp_path)
     broker.stop()
