@@ -108,8 +108,13 @@ class RemoteLink(Connection):
             super()._refused(reason)
             return
         login = reason in LOGIN_REFUSED
-        hint = ": check mqtt.username and mqtt.password_file" if login else ""
-        self.failure = f"the broker refused the login ({reason}){hint}"
+        if login:
+            self.failure = (
+                f"the broker refused the login ({reason}): check mqtt.username and "
+                "mqtt.password_file"
+            )
+        else:
+            self.failure = f"the broker refused the connection ({reason})"
         self.fatal = login
         log.debug("%s", self.failure)
 
