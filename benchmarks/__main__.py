@@ -37,6 +37,7 @@ from benchmarks import (
     freshness,
     latency,
     line_use,
+    remote,
     sky_stops,
     startup,
     target_flood,
@@ -56,6 +57,7 @@ ITEMS = {
     "sky_stops": sky_stops.run,
     "exchange_cpu": exchange_cpu.run,
     "console": console.run,
+    "remote": remote.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

@@ -5,6 +5,8 @@ Rules:
 1. Nothing is served before the station has described every endpoint's rotator (``R/info``):
    a rotator that does not show within ``info_wait_s`` is a start-up error that names the topic
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
+   A refused login or a failed TLS handshake ends the start at once, in one line that says
+   which (mqtt/remote.py rule 5).
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several.
@@ -194,7 +196,7 @@ class Remote:
                     topics = one
             if topics is not None:
                 return self._rotator(ep, topics)
-            if now >= deadline:
+            if now >= deadline or (self.link is not None and self.link.fatal):
                 raise StartError(self._missing(ep, own))
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
 
@@ -297,8 +299,10 @@ class Remote:
         s = self.settings
         where = f"{s.mqtt.host}:{s.mqtt.port}"
         assert self.link is not None
-        if not self.link.up:
-            return f"cannot reach the station's broker at {where} (see the log above for why)"
+        if not self.link.up:  # mqtt/remote.py rule 5: why, in this one line
+            return (
+                f"cannot reach the station's broker at {where}: {self.link.failure or 'no answer'}"
+            )
         ids = self.station.described(list(self.view.topics()))
         looked = (own or self.station.rotator(None)).info
         hint = (
