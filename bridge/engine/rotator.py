@@ -16,7 +16,6 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import serial
 
@@ -40,24 +39,11 @@ from bridge.model import (
     Target,
     describe_command,
 )
-from bridge.pointing import Pointing, toward
+from bridge.pointing import Limits, toward
 from bridge.protocols.base import ModelSpec
 from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Limits:
-    az_min_deg: float
-    az_max_deg: float
-    el_min_deg: float = 0.0
-    el_max_deg: float = 0.0
-
-    @classmethod
-    def of(cls, p: Pointing) -> Limits:
-        """The mechanical limits of a rotator's terms (the controller's raw values)."""
-        return cls(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
 
 
 class Rotator:

@@ -42,6 +42,8 @@ Rules:
 7. The sockets, threads, idle timeout and HTTP refusal are the shared line server's
    (tcplines.py), the pty, its link and its thread the pty server's (ptylines.py); this
    package owns what the bytes mean.
+8. The pty server is imported only when a pty is asked for: it needs a POSIX system, and the
+   remote, which imports this package, also runs where there is none (a TCP port only).
 """
 
 from bridge.gs232.commands import (

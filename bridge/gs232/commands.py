@@ -21,11 +21,11 @@ from bridge.gs232.parser import (
     parse_gs232,
 )
 from bridge.model import RotatorStatus, Source, Stop, Target
-from bridge.ptylines import PtyLineServer
 from bridge.tcplines import LineServer
 
 if TYPE_CHECKING:
     from bridge.protocols.base import ModelSpec
+    from bridge.ptylines import PtyLineServer
 
 
 class Rotator(Protocol):
@@ -209,6 +209,8 @@ def easycomm_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> Lin
 
 def gs232_pty(rotator: Rotator, path: str) -> PtyLineServer:
     """The GS-232B pty of one rotator, linked at ``path``."""
+    from bridge.ptylines import PtyLineServer  # package rule 8
+
     return PtyLineServer(
         rotator.id, path, lambda: Gs232Session(rotator), label="gs232", key="gs232"
     )
@@ -216,6 +218,8 @@ def gs232_pty(rotator: Rotator, path: str) -> PtyLineServer:
 
 def easycomm_pty(rotator: Rotator, path: str) -> PtyLineServer:
     """The Easycomm II pty of one rotator, linked at ``path``."""
+    from bridge.ptylines import PtyLineServer  # package rule 8
+
     return PtyLineServer(
         rotator.id, path, lambda: EasycommSession(rotator), label="easycomm", key="easycomm"
     )

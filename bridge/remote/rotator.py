@@ -45,7 +45,6 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Protocol
 
-from bridge.engine.rotator import Limits
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
     Command,
@@ -58,7 +57,7 @@ from bridge.model import (
     TrackingInfo,
 )
 from bridge.mqtt.topics import RotatorTopics
-from bridge.pointing import Pointing
+from bridge.pointing import Limits, Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 

@@ -13,8 +13,7 @@ from bridge.protocols.base import HamlibRotType, ModelSpec
 from bridge.rotctld.parser import Request
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Limits
-    from bridge.pointing import Pointing
+    from bridge.pointing import Limits, Pointing
 
 
 class Rotator(Protocol):
