@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from bridge.errors import RefusalCode, Refused
+from bridge.gs232 import EasycommSession, Gs232Session
 from bridge.model import Source, Stop, Target
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
@@ -91,4 +92,24 @@ def test_refusals_are_logged_rarely_per_front_end_with_a_count(
         "tower: gs232 W120 000 refused: not connected to the station's broker",
         "tower: pst <STOP> refused: not connected to the station's broker",
         "tower: gs232 W122 000 refused: not connected to the station's broker (2 more since)",
+    ]
+
+
+def test_a_stop_the_broker_cannot_take_is_answered_as_a_refusal_on_gs232_and_easycomm(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The GS-232 and Easycomm sessions (gs232/ rule 6) on the remote with its link down: the
+    client hears the refusal in its protocol, and the log says it once, without a traceback."""
+    clock, link = FakeClock(), Link(up=False)
+    rot = rotator(link, clock)
+    with caplog.at_level(logging.WARNING):
+        assert Gs232Session(rot).feed(b"S\r") == [b"?>\r\n"]
+        assert EasycommSession(rot).feed(b"SA SE \n") == [b"ALrefused offline\n"]
+    assert link.sent == []
+    assert [(r.name, r.getMessage()) for r in caplog.records] == [
+        ("bridge.remote.rotator", "tower: gs232 S refused: not connected to the station's broker"),
+        (
+            "bridge.remote.rotator",
+            "tower: easycomm SA SE refused: not connected to the station's broker",
+        ),
     ]
