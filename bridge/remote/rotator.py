@@ -265,8 +265,8 @@ class RemoteRotator:
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
-        self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
-        self._clock = clock
+        self.last_halt_s = -math.inf  # the last stop or lock ON sent (web/port.py rule 2)
+        self._clock = clock  # monotonic: last_halt_s, and how often a refusal is logged
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
         self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
@@ -314,7 +314,7 @@ class RemoteRotator:
     def _submit(self, command: Command) -> None:
         if isinstance(command, Stop):
             self.publish(self.topics.stop, "stop")
-            self.last_halt_s = time.monotonic()
+            self.halted()
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
@@ -329,6 +329,10 @@ class RemoteRotator:
 
     def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
+
+    def halted(self) -> None:
+        """A stop or a lock ON has gone out: ``last_halt_s`` is now (web/port.py rule 2)."""
+        self.last_halt_s = self._clock()
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
