@@ -226,11 +226,17 @@ def iso(t_unix: float) -> str:
     return datetime.fromtimestamp(t_unix, UTC).isoformat(timespec="milliseconds")
 
 
-def test_a_moving_status_older_than_the_limit_reads_as_an_error(
-    broker: Mosquitto, probe: Probe
-) -> None:
-    """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
-    old it is (the station publishes on change), a moving one's only while it is fresh."""
+def stand_in_status(state: str, age_s: float) -> str:
+    return (
+        f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
+        f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
+        '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
+        f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
+    )
+
+
+def stand_in_station(probe: Probe) -> None:
+    """A station's retained topics, no bridge: one Rotor-EZ under ``rotor``, online."""
     info = (
         '{"name":"tower","model":"rotorez","model_name":"Rotor-EZ","has_elevation":false,'
         '"can_report_position":true,"can_track":false,"azimuth_range":[0,360],'
@@ -240,14 +246,14 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
     probe.publish("rotor/bridge/state", "online", retain=True)
     probe.publish("rotor/availability", "online", retain=True)
 
-    def status(state: str, age_s: float) -> str:
-        return (
-            f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
-            f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
-            '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
-            f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
-        )
 
+def test_a_moving_status_older_than_the_limit_reads_as_an_error(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A stand-in station: a still rotor's status counts however old it is (the station
+    publishes on change), a moving one's only while it is fresh."""
+    stand_in_station(probe)
+    status = stand_in_status
     port = free_port()
     r = Remote(settings(broker, port, moving_max_age_s=10))  # type: ignore[arg-type]
     r.start()
@@ -263,5 +269,29 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
                 lambda p=payload: r.view.get("rotor/status") == p, 5, "the status at the remote"
             )
             assert ask(port, b"p\n") == reply, (state, age_s)
+    finally:
+        r.stop()
+
+
+def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """remote/run.py rule 4: the broker comes back without the station's retained topics (no
+    persistence, the stand-in station does not publish them again); the remote must not take
+    the station for online on what it read before the drop."""
+    stand_in_station(probe)
+    probe.publish("rotor/status", stand_in_status("idle", 0), retain=True)
+    port = free_port()
+    r = Remote(settings(broker, port))  # type: ignore[arg-type]
+    r.start()
+    try:
+        link = r.link
+        assert link is not None
+        wait_until(lambda: ask(port, b"p\n") == b"42.00\n0.00\n", 5, "the station's bearing")
+        broker.kill()
+        wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+        broker.restart()
+        wait_until(lambda: link.up, 30, "the remote back on the broker")
+        assert ask(port, b"p\n") == b"RPRT -5\n"  # connected, but no word from the station
     finally:
         r.stop()
