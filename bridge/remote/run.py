@@ -32,7 +32,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from types import FrameType
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.loggers import LoggerEndpoints
@@ -45,9 +45,6 @@ from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
-
-if TYPE_CHECKING:
-    pass
 
 log = logging.getLogger(__name__)
 
