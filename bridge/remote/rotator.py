@@ -196,6 +196,22 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     )
 
 
+def place_json(
+    latitude_deg: float, longitude_deg: float, locator: str | None, long_path: bool
+) -> str:
+    """A place on ``R/target`` (docs/mqtt.md), for the station to turn into its bearing: the
+    locator when there is one, else the coordinates; the path only when long (short is the
+    station's default)."""
+    place: dict[str, Any] = (
+        {"locator": locator}
+        if locator is not None
+        else {"latitude": latitude_deg, "longitude": longitude_deg}
+    )
+    if long_path:
+        place["path"] = "long"
+    return json.dumps(place, separators=(",", ":"))
+
+
 def status_time(payload: bytes) -> datetime | None:
     try:
         return datetime.fromisoformat(json.loads(payload)["time"])
@@ -325,9 +341,6 @@ class RemoteRotator:
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
-        self._send_target(doc)
-
-    def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
 
     def halted(self) -> None:
@@ -358,15 +371,10 @@ class RemoteRotator:
         long_path: bool = False,
     ) -> None:
         """Rule 4: the place, for the station to turn into its bearing."""
-        place: dict[str, Any] = (
-            {"locator": locator}
-            if locator is not None
-            else {"latitude": latitude_deg, "longitude": longitude_deg}
-        )
-        if long_path:
-            place["path"] = "long"
         try:
-            self._send_target(place)
+            self.publish(
+                self.topics.target, place_json(latitude_deg, longitude_deg, locator, long_path)
+            )
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
