@@ -17,7 +17,6 @@ from bridge.model import (
     MotionState,
     RotatorStatus,
     Source,
-    Stop,
     Target,
     TargetInfo,
     TrackingInfo,
@@ -70,7 +69,7 @@ def info_payload(**console: object) -> bytes:
 
 
 def rig(
-    wall: FakeClock | None = None, mono: FakeClock | None = None
+    wall: FakeClock | None = None,
 ) -> tuple[RemoteConsoleRotator, Link, Pages, StationView]:
     view, link, pages = StationView(), Link(), Pages()
     payload = info_payload(station=(52.5, 13.3), locator="JO62qm", satellites=("ISS",))
@@ -79,16 +78,7 @@ def rig(
     view.put(T.availability, b"online")
     clock = wall or FakeClock(1_000_000.0)
     remote = RemoteRotator(
-        "tower",
-        T,
-        "rotor/bridge/state",
-        Info.parse(payload),
-        view,
-        link,
-        "DL1ABC",
-        5,
-        wall=clock,
-        clock=mono or FakeClock(),
+        "tower", T, "rotor/bridge/state", Info.parse(payload), view, link, "DL1ABC", 5, wall=clock
     )
     rot = RemoteConsoleRotator(remote, Drawn.parse(payload), view, wall=clock)
     rot.pages = pages
@@ -190,18 +180,6 @@ def test_a_target_outside_the_station_range_is_refused_here_and_nothing_sent() -
     with pytest.raises(Refused):
         run(rot, command="target", az=400)
     assert not link.sent and len(pages.events) == 1
-
-
-def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
-    mono = FakeClock(100.0)
-    rot, _, _, _ = rig(mono=mono)
-    rot.submit(Stop(Source.WEB))
-    assert rot.last_halt_s == 100.0
-    mono.t = 200.0
-    rot.set_lock(False)  # lock OFF halts nothing
-    assert rot.last_halt_s == 100.0
-    rot.set_lock(True)
-    assert rot.last_halt_s == 200.0
 
 
 def test_a_station_that_cannot_track_is_not_asked_but_off_goes_out() -> None:

@@ -226,17 +226,11 @@ def iso(t_unix: float) -> str:
     return datetime.fromtimestamp(t_unix, UTC).isoformat(timespec="milliseconds")
 
 
-def stand_in_status(state: str, age_s: float) -> str:
-    return (
-        f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
-        f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
-        '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
-        f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
-    )
-
-
-def stand_in_station(probe: Probe) -> None:
-    """A station's retained topics, no bridge: one Rotor-EZ under ``rotor``, online."""
+def test_a_moving_status_older_than_the_limit_reads_as_an_error(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
+    old it is (the station publishes on change), a moving one's only while it is fresh."""
     info = (
         '{"name":"tower","model":"rotorez","model_name":"Rotor-EZ","has_elevation":false,'
         '"can_report_position":true,"can_track":false,"azimuth_range":[0,360],'
@@ -246,14 +240,14 @@ def stand_in_station(probe: Probe) -> None:
     probe.publish("rotor/bridge/state", "online", retain=True)
     probe.publish("rotor/availability", "online", retain=True)
 
+    def status(state: str, age_s: float) -> str:
+        return (
+            f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
+            f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
+            '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
+            f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
+        )
 
-def test_a_moving_status_older_than_the_limit_reads_as_an_error(
-    broker: Mosquitto, probe: Probe
-) -> None:
-    """A stand-in station: a still rotor's status counts however old it is (the station
-    publishes on change), a moving one's only while it is fresh."""
-    stand_in_station(probe)
-    status = stand_in_status
     port = free_port()
     r = Remote(settings(broker, port, moving_max_age_s=10))  # type: ignore[arg-type]
     r.start()
@@ -276,11 +270,16 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
 def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
     broker: Mosquitto, probe: Probe
 ) -> None:
-    """remote/run.py rule 4: the broker comes back without the station's retained topics (no
-    persistence, the stand-in station does not publish them again); the remote must not take
-    the station for online on what it read before the drop."""
-    stand_in_station(probe)
-    probe.publish("rotor/status", stand_in_status("idle", 0), retain=True)
+    """remote/run.py rule 4, on a stand-in station (its retained topics, no bridge): the broker
+    comes back without them (no persistence, nobody publishes them again), and the remote must
+    not take the station for online on what it read before the drop."""
+    for topic, payload in (
+        ("rotor/info", '{"name":"tower","model":"rotorez","azimuth_range":[0,360]}'),
+        ("rotor/bridge/state", "online"),
+        ("rotor/availability", "online"),
+        ("rotor/status", '{"bearing":42.0,"state":"idle","connected":true,"available":true}'),
+    ):
+        probe.publish(topic, payload, retain=True)
     port = free_port()
     r = Remote(settings(broker, port))  # type: ignore[arg-type]
     r.start()

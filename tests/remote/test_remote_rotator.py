@@ -13,6 +13,7 @@ from bridge.errors import RefusalCode, Refused
 from bridge.gs232 import EasycommSession, Gs232Session
 from bridge.model import Source, Stop, Target
 from bridge.mqtt.topics import StationTopics
+from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
 from tests.support.clock import FakeClock
 
@@ -113,3 +114,18 @@ def test_a_stop_the_broker_cannot_take_is_answered_as_a_refusal_on_gs232_and_eas
             "tower: easycomm SA SE refused: not connected to the station's broker",
         ),
     ]
+
+
+def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
+    """web/port.py rule 2, for the console on the remote: what the console's order of commands
+    (web/commands.py rule 5) measures a command against, on the remote's monotonic clock."""
+    mono = FakeClock(100.0)
+    remote = rotator(Link(), mono)
+    console = RemoteConsoleRotator(remote, Drawn(), StationView())
+    console.submit(Stop(Source.WEB))
+    assert console.last_halt_s == 100.0
+    mono.t = 200.0
+    console.set_lock(False)  # lock OFF halts nothing
+    assert console.last_halt_s == 100.0
+    console.set_lock(True)
+    assert console.last_halt_s == 200.0
