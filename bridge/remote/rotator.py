@@ -67,6 +67,22 @@ log = logging.getLogger(__name__)
 REFUSAL_LOG_S = 10.0  # rule 5
 
 
+def place_json(
+    latitude_deg: float, longitude_deg: float, locator: str | None, long_path: bool
+) -> str:
+    """A place on ``R/target`` (docs/mqtt.md), for the station to turn into its bearing: the
+    locator when there is one, else the coordinates; the path only when long (short is the
+    station's default)."""
+    place: dict[str, Any] = (
+        {"locator": locator}
+        if locator is not None
+        else {"latitude": latitude_deg, "longitude": longitude_deg}
+    )
+    if long_path:
+        place["path"] = "long"
+    return json.dumps(place, separators=(",", ":"))
+
+
 class Sender(Protocol):
     @property
     def up(self) -> bool: ...
@@ -196,22 +212,6 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     )
 
 
-def place_json(
-    latitude_deg: float, longitude_deg: float, locator: str | None, long_path: bool
-) -> str:
-    """A place on ``R/target`` (docs/mqtt.md), for the station to turn into its bearing: the
-    locator when there is one, else the coordinates; the path only when long (short is the
-    station's default)."""
-    place: dict[str, Any] = (
-        {"locator": locator}
-        if locator is not None
-        else {"latitude": latitude_deg, "longitude": longitude_deg}
-    )
-    if long_path:
-        place["path"] = "long"
-    return json.dumps(place, separators=(",", ":"))
-
-
 def status_time(payload: bytes) -> datetime | None:
     try:
         return datetime.fromisoformat(json.loads(payload)["time"])
@@ -281,8 +281,8 @@ class RemoteRotator:
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
-        self.last_halt_s = -math.inf  # the last stop or lock ON sent (web/port.py rule 2)
-        self._clock = clock  # monotonic: last_halt_s, and how often a refusal is logged
+        self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
+        self._clock = clock
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
         self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
