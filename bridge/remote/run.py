@@ -136,6 +136,14 @@ class Remote:
                 self.servers.append(easycomm_server(rot, int(offer.where), offer.bind))
             elif offer.key == "pst_udp_port":
                 self.loggers.add_pst(rot, int(offer.where), offer.bind)
+                if offer.bind not in ("127.0.0.1", "::1", "localhost"):  # as tcplines.py warns
+                    log.warning(
+                        "PstRotator UDP for %s listens on %s:%s: it has no authentication, "
+                        "anyone who can reach this address can turn the antenna",
+                        rot.id,
+                        offer.bind,
+                        where,
+                    )
             elif offer.key == "gs232_pty":
                 self.servers.append(gs232_pty(rot, where))
             elif offer.key == "easycomm_pty":
