@@ -48,7 +48,7 @@ from bridge.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-from bridge.remote.rotator import RemoteRotator, StationView, place_json
+from bridge.remote.rotator import RemoteRotator, StationView
 
 log = logging.getLogger(__name__)
 
@@ -195,8 +195,13 @@ class RemoteConsoleRotator:
         locator: str | None = None,
         long_path: bool = False,
     ) -> None:
-        place = place_json(latitude_deg, longitude_deg, locator, long_path)
-        self._send(self.remote.topics.target, place, described)
+        place: dict[str, object] = (
+            {"locator": locator}
+            if locator is not None
+            else {"latitude": latitude_deg, "longitude": longitude_deg}
+        )
+        place["path"] = "long" if long_path else "short"
+        self._send(self.remote.topics.target, json.dumps(place, separators=(",", ":")), described)
 
     def take_path(self, long_path: bool, source: Source, described: str) -> None:
         path = json.dumps({"path": "long" if long_path else "short"}, separators=(",", ":"))

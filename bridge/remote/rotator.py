@@ -67,22 +67,6 @@ log = logging.getLogger(__name__)
 REFUSAL_LOG_S = 10.0  # rule 5
 
 
-def place_json(
-    latitude_deg: float, longitude_deg: float, locator: str | None, long_path: bool
-) -> str:
-    """A place on ``R/target`` (docs/mqtt.md), for the station to turn into its bearing: the
-    locator when there is one, else the coordinates; the path only when long (short is the
-    station's default)."""
-    place: dict[str, Any] = (
-        {"locator": locator}
-        if locator is not None
-        else {"latitude": latitude_deg, "longitude": longitude_deg}
-    )
-    if long_path:
-        place["path"] = "long"
-    return json.dumps(place, separators=(",", ":"))
-
-
 class Sender(Protocol):
     @property
     def up(self) -> bool: ...
@@ -341,6 +325,9 @@ class RemoteRotator:
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
+        self._send_target(doc)
+
+    def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
 
     def halted(self) -> None:
@@ -371,10 +358,15 @@ class RemoteRotator:
         long_path: bool = False,
     ) -> None:
         """Rule 4: the place, for the station to turn into its bearing."""
+        place: dict[str, Any] = (
+            {"locator": locator}
+            if locator is not None
+            else {"latitude": latitude_deg, "longitude": longitude_deg}
+        )
+        if long_path:
+            place["path"] = "long"
         try:
-            self.publish(
-                self.topics.target, place_json(latitude_deg, longitude_deg, locator, long_path)
-            )
+            self._send_target(place)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
