@@ -179,10 +179,8 @@ def build_parser() -> argparse.ArgumentParser:
         "remote",
         help="the station's rotators on this computer, through its MQTT broker",
         description="On the operator's computer: connect to the station's MQTT broker, learn "
-        "the rotators named in the file from the station, and offer each on the local "
-        "endpoints the file asks for (rotctld, GS-232B and Easycomm II on TCP or a "
-        "pseudo-terminal, PstRotator UDP) and, with [web], the console, until SIGTERM or "
-        "Ctrl-C. Commands are never queued while the broker is away.",
+        "the rotators named in the file from the station, and offer each on a local rotctld "
+        "port, until SIGTERM or Ctrl-C. Commands are never queued while the broker is away.",
     )
     p.add_argument("-c", "--config", required=True, help="the remote's TOML file")
     p.set_defaults(func=cmd_remote)
