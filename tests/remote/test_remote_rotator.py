@@ -129,3 +129,22 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
     assert console.last_halt_s == 100.0
     console.set_lock(True)
     assert console.last_halt_s == 200.0
+
+
+def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
+    """docs/remote.md: the station's target topic takes an azimuth always; Easycomm's ``EL30``
+    alone cannot be said there."""
+    station, link = StationTopics("rotor"), Link()
+    azel = Info.parse(
+        b'{"name":"dish","model":"rot2prog","azimuth_range":[0,360],"elevation_range":[0,90]}'
+    )
+    view = StationView()  # the station there (online), as a move needs
+    view.put(station.bridge_state, b"online")
+    view.put(station.rotator("dish").availability, b"online")
+    rot = RemoteRotator(
+        "dish", station.rotator("dish"), station.bridge_state, azel, view, link, "X", 5
+    )
+    assert EasycommSession(rot).feed(b"EL30.0\n") == [b"ALrefused unsupported\n"]
+    assert link.sent == []
+    assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]
+    assert link.sent == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]
