@@ -9,10 +9,8 @@ module owns the pty, its link and its thread.
 Rules:
 1. ``listen`` opens the pty pair (raw: no echo, no line editing, no CR/LF translation) and links
    the slave's name at the path: a symlink already there (a leftover from a crash) is
-   replaced in one step (os.replace), with a warning when what it led to is still there
-   (another program serving the same path loses it); anything else there is refused,
-   untouched, with an OSError naming the front end, the rotator, the path and the setting to
-   change.
+   replaced in one step (os.replace), anything else there is refused, untouched, with an
+   OSError naming the front end, the rotator, the path and the setting to change.
 2. ``stop`` removes the link only while it still points at this pty (another program's link
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
@@ -128,22 +126,12 @@ class PtyLineServer:
             name = os.ttyname(slave)
             temp = f"{self.path}.{os.getpid()}.tmp"
             try:
-                replaced = os.readlink(self.path) if os.path.islink(self.path) else None
                 if os.path.lexists(temp):
                     os.unlink(temp)
                 os.symlink(name, temp)
                 os.replace(temp, self.path)  # a leftover link goes in the same step
             except OSError as exc:
                 raise self._error(exc.errno or errno.EIO, exc.strerror or str(exc)) from None
-            if replaced is not None and os.path.exists(replaced):
-                log.warning(
-                    "%s for %s: the link at %s led to %s, which is still there (another "
-                    "program serving this path?): it leads to this pty now",
-                    self.label,
-                    self.rotator_id,
-                    self.path,
-                    replaced,
-                )
         except BaseException:
             os.close(master)
             os.close(slave)
