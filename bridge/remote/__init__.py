@@ -13,6 +13,7 @@ Rules:
    (rotator.py rule 1); otherwise the client gets an error code.
 3. The station decides: limits, models and capabilities come from its ``R/info``, and its
    judge has the last word on every command (rotator.py rule 2).
-4. Loopback by default: an endpoint listens on 127.0.0.1 unless its bind says otherwise (the
-   line server warns about any other address).
+4. Loopback by default: an endpoint listens on 127.0.0.1 unless its bind says otherwise; any
+   other address is warned about in the log (the TCP ports by tcplines.py, the PstRotator
+   UDP port by run.py).
 """

@@ -183,7 +183,7 @@ class RemoteConsoleRotator:
         word = "ON" if locked else "OFF"
         self._send(self.remote.topics.lock, word, f"console: lock {word}", moves=False)
         if locked:
-            self.remote.last_halt_s = time.monotonic()
+            self.remote.halted()
 
     def go_toward(
         self,

@@ -313,7 +313,7 @@ class RemoteRotator:
     def _submit(self, command: Command) -> None:
         if isinstance(command, Stop):
             self.publish(self.topics.stop, "stop")
-            self.last_halt_s = time.monotonic()
+            self.halted()
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
@@ -328,6 +328,10 @@ class RemoteRotator:
 
     def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
+
+    def halted(self) -> None:
+        """A stop or a lock ON has gone out: ``last_halt_s`` is now (web/port.py rule 2)."""
+        self.last_halt_s = self._clock()
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""

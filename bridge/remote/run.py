@@ -34,7 +34,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from types import FrameType
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.loggers import LoggerEndpoints
@@ -47,9 +47,6 @@ from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
-
-if TYPE_CHECKING:
-    pass
 
 log = logging.getLogger(__name__)
 
@@ -141,6 +138,14 @@ class Remote:
                 self.servers.append(easycomm_server(rot, int(offer.where), offer.bind))
             elif offer.key == "pst_udp_port":
                 self.loggers.add_pst(rot, int(offer.where), offer.bind)
+                if offer.bind not in ("127.0.0.1", "::1", "localhost"):  # as tcplines.py warns
+                    log.warning(
+                        "PstRotator UDP for %s listens on %s:%s: it has no authentication, "
+                        "anyone who can reach this address can turn the antenna",
+                        rot.id,
+                        offer.bind,
+                        where,
+                    )
             elif offer.key == "gs232_pty":
                 self.servers.append(gs232_pty(rot, where))
             elif offer.key == "easycomm_pty":

@@ -5,8 +5,9 @@ against this and nothing else.
 Rules:
 1. Every command goes to the rotator's judge, which raises Refused (and reports it where the
    rotator's refusals go) or takes it; the console never decides a refusal itself.
-2. ``last_halt_s`` is when the rotator last carried out (or sent on) a STOP or lock ON, from any
-   interface, on the monotonic clock (commands.py rule 5).
+2. ``last_halt_s`` is when the rotator last carried out (or sent on) a STOP or lock ON, on the
+   monotonic clock (commands.py rule 5): from any interface on the station; on the remote,
+   from any of the remote's own (a STOP given at the station is not seen there).
 3. ``report_refusal`` shows a refusal the console found itself (a bad body, a stale command)
    where the rotator's own refusals go.
 """

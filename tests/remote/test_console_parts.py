@@ -17,7 +17,6 @@ from bridge.model import (
     MotionState,
     RotatorStatus,
     Source,
-    Stop,
     Target,
     TargetInfo,
     TrackingInfo,
@@ -181,18 +180,6 @@ def test_a_target_outside_the_station_range_is_refused_here_and_nothing_sent() -
     with pytest.raises(Refused):
         run(rot, command="target", az=400)
     assert not link.sent and len(pages.events) == 1
-
-
-def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
-    rot, _, _, _ = rig()
-    before = rot.last_halt_s
-    rot.submit(Stop(Source.WEB))
-    after_stop = rot.last_halt_s
-    assert after_stop > before
-    rot.set_lock(False)
-    assert rot.last_halt_s == after_stop
-    rot.set_lock(True)
-    assert rot.last_halt_s >= after_stop
 
 
 def test_a_station_that_cannot_track_is_not_asked_but_off_goes_out() -> None:

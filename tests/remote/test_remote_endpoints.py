@@ -210,3 +210,27 @@ def test_the_command_line_serves_a_pty_and_removes_its_link_on_sigterm(
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_a_pst_port_beyond_loopback_is_warned_about(
+    station: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """remote/__init__.py rule 4, as the TCP ports (tcplines.py) have it: no login on UDP."""
+    port, replies = reserve_pst_ports()
+    remote = Remote(
+        RemoteSettings(
+            operator=OPERATOR,
+            mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
+            endpoints=[{"rotator": "tower", "pst_udp_port": port, "pst_udp_bind": "0.0.0.0"}],
+        )
+    )
+    try:
+        with caplog.at_level(logging.WARNING, logger="bridge.remote.run"):
+            remote.start()
+    finally:
+        remote.stop()
+        replies.close()
+    assert (
+        f"PstRotator UDP for tower listens on 0.0.0.0:{port}: it has no authentication, anyone "
+        "who can reach this address can turn the antenna"
+    ) in caplog.messages

@@ -10,8 +10,10 @@ from dataclasses import dataclass, field
 import pytest
 
 from bridge.errors import RefusalCode, Refused
+from bridge.gs232 import EasycommSession, Gs232Session
 from bridge.model import Source, Stop, Target
 from bridge.mqtt.topics import StationTopics
+from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
 from tests.support.clock import FakeClock
 
@@ -92,3 +94,57 @@ def test_refusals_are_logged_rarely_per_front_end_with_a_count(
         "tower: pst <STOP> refused: not connected to the station's broker",
         "tower: gs232 W122 000 refused: not connected to the station's broker (2 more since)",
     ]
+
+
+def test_a_stop_the_broker_cannot_take_is_answered_as_a_refusal_on_gs232_and_easycomm(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The GS-232 and Easycomm sessions (gs232/ rule 6) on the remote with its link down: the
+    client hears the refusal in its protocol, and the log says it once, without a traceback."""
+    clock, link = FakeClock(), Link(up=False)
+    rot = rotator(link, clock)
+    with caplog.at_level(logging.WARNING):
+        assert Gs232Session(rot).feed(b"S\r") == [b"?>\r\n"]
+        assert EasycommSession(rot).feed(b"SA SE \n") == [b"ALrefused offline\n"]
+    assert link.sent == []
+    assert [(r.name, r.getMessage()) for r in caplog.records] == [
+        ("bridge.remote.rotator", "tower: gs232 S refused: not connected to the station's broker"),
+        (
+            "bridge.remote.rotator",
+            "tower: easycomm SA SE refused: not connected to the station's broker",
+        ),
+    ]
+
+
+def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
+    """web/port.py rule 2, for the console on the remote: what the console's order of commands
+    (web/commands.py rule 5) measures a command against, on the remote's monotonic clock."""
+    mono = FakeClock(100.0)
+    remote = rotator(Link(), mono)
+    console = RemoteConsoleRotator(remote, Drawn(), StationView())
+    console.submit(Stop(Source.WEB))
+    assert console.last_halt_s == 100.0
+    mono.t = 200.0
+    console.set_lock(False)  # lock OFF halts nothing
+    assert console.last_halt_s == 100.0
+    console.set_lock(True)
+    assert console.last_halt_s == 200.0
+
+
+def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
+    """docs/remote.md: the station's target topic takes an azimuth always; Easycomm's ``EL30``
+    alone cannot be said there."""
+    station, link = StationTopics("rotor"), Link()
+    azel = Info.parse(
+        b'{"name":"dish","model":"rot2prog","azimuth_range":[0,360],"elevation_range":[0,90]}'
+    )
+    view = StationView()  # the station there (online), as a move needs
+    view.put(station.bridge_state, b"online")
+    view.put(station.rotator("dish").availability, b"online")
+    rot = RemoteRotator(
+        "dish", station.rotator("dish"), station.bridge_state, azel, view, link, "X", 5
+    )
+    assert EasycommSession(rot).feed(b"EL30.0\n") == [b"ALrefused unsupported\n"]
+    assert link.sent == []
+    assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]
+    assert link.sent == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]
