@@ -33,6 +33,7 @@ from bridge.model import (
     Command,
     ErrorEvent,
     ErrorKind,
+    RotatorHealth,
     RotatorStatus,
     SetOption,
     Source,
@@ -91,13 +92,16 @@ class Rotator:
         self._locked = store.locked(self.id)
         self._save_lock = threading.Lock()
         self._mailbox = Mailbox()
+        self._health_kept: RotatorHealth | None = None
+        self._on_status = on_status
         self._worker = Worker(
             cfg,
             self._mailbox,
-            on_status,
+            self._status,
             on_event,
             options=self._supported_options(store),
             locked=self._locked,
+            health=store.health(self.id),
             wall=wall,
             port_opener=port_opener,
             sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -126,6 +130,24 @@ class Rotator:
                     self.spec.display_name,
                 )
         return kept
+
+    def _status(self, status: RotatorStatus) -> None:
+        """Every status to the listeners; rotor health's memory, new after a move, to the
+        state file on its writer thread (state_store.py rule 5: never beside a stop)."""
+        health = status.health
+        if health is not None and health is not self._health_kept:
+            first, self._health_kept = self._health_kept is None, health
+            if health.measured and not first:
+                self._store.later(lambda: self._save_health(health))
+        self._on_status(status)
+
+    def _save_health(self, health: RotatorHealth) -> None:
+        self._store.set_health(self.id, health.memory)  # a failure is logged there: health
+        # is no safety matter, the next move tries again
+
+    def reset_health(self) -> None:
+        """A new health baseline (after a repair); it moves nothing, so it is never refused."""
+        self._mailbox.put_health_reset()
 
     @property
     def status(self) -> RotatorStatus:
