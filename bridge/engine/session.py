@@ -98,7 +98,7 @@ class RotatorSession:
         self.autopark = AutoPark(cfg)
         self.health = Health(cfg, health)
         self.view = st.View()
-        self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
+        self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
         self._actions: list[Action] = []
         self._wakeup = 0.0
 

@@ -263,9 +263,8 @@ def _health_sensor(oid: str, name: str, field: str, unit: str, kind: str, needs:
     """Rotor health (R/health): long-term statistics keep the trend; kept while offline too."""
     return Entity("sensor", oid, name, needs=needs, bridge_only=True, config=lambda r: {
         "state_topic": r.topics.health, "unit_of_measurement": unit, "state_class": kind,
-        "value_template": f"{{{{ value_json.{field} if value_json.{field} is not none else "
-        "'None' }}", **({"device_class": "duration"} if unit == "s" else {}),
-        **DIAGNOSTIC})  # fmt: skip
+        "value_template": f"{{{{ value_json.{field} }}}}",  # null: None, unknown to HA
+        **({"device_class": "duration"} if unit == "s" else {}), **DIAGNOSTIC})  # fmt: skip
 
 
 HEALTH_NUMBERS = (  # object id, name, R/health field, unit, state class, what it needs
@@ -372,8 +371,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
            bridge_only=True, config=lambda r: {
         "state_topic": r.topics.health, "device_class": "problem",
         "value_template": "{{ 'ON' if value_json.warnings else 'OFF' }}",
-        "json_attributes_topic": r.topics.health,
-        "json_attributes_template": "{{ {'warnings': value_json.warnings} | tojson }}"}),
+        "json_attributes_topic": r.topics.health}),  # the warnings, the numbers, the baseline
     Entity("button", "health_reset", "Reset rotor health", needs="can_report_position",
            bridge_only=True, config=lambda r: {
         "command_topic": r.topics.health_reset, "payload_press": "RESET", **DIAGNOSTIC,
