@@ -35,6 +35,7 @@ from benchmarks import (
     exchange_cpu,
     footprint,
     freshness,
+    health,
     latency,
     line_use,
     sky_stops,
@@ -56,6 +57,7 @@ ITEMS = {
     "sky_stops": sky_stops.run,
     "exchange_cpu": exchange_cpu.run,
     "console": console.run,
+    "health": health.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 
