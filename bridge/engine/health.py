@@ -17,8 +17,9 @@ Rules:
    MIN_SPAN_S and MIN_SPAN_DEG of steady readings gives no speed. Its direction is the way it
    turned: clockwise (raw azimuth growing) or counter-clockwise; up or down in elevation.
 3. The start delay is from the command to the first reading that differs from where the rotor
-   stood, taken once the motion machine has seen the move; a move without a command (the
-   front panel) has none. The coast is what the rotor turned after the bridge's stop: from
+   stood, for a move from rest whose turning the polls saw; a move without a command (the
+   front panel), a new target taken while turning and a controller silent while it turns
+   (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
    came to rest.
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
@@ -56,6 +57,7 @@ class _Move:
     target_el: float | None = None
     first_change_t: float | None = None
     stop_t: float | None = None
+    from_rest: bool = True  # not a new target taken while turning (rule 3: no start delay)
 
 
 class Health:
@@ -96,7 +98,7 @@ class Health:
             if move is not None and retarget and move.target_t is not None:
                 self._move = None
                 ended = self._ended(move, m)  # rule 1: a new target while turning
-                self._start(m)
+                self._start(m, from_rest=False)
                 return ended
             if move is None:
                 self._start(m)
@@ -110,10 +112,10 @@ class Health:
             return None  # rule 1
         return self._ended(move, m)
 
-    def _start(self, m: mo.Motion) -> None:
+    def _start(self, m: mo.Motion, *, from_rest: bool = True) -> None:
         if m.position_deg is None:
             return
-        move = _Move(m.target_t, m.position_deg, m.el_position_deg)
+        move = _Move(m.target_t, m.position_deg, m.el_position_deg, from_rest=from_rest)
         move.target_az, move.target_el = m.target_deg, m.el_target_deg
         move.readings.append((m.target_t or m.changed_t or 0.0, m.position_deg, m.el_position_deg))
         if m.target_t is None:  # the front panel: it has moved already (rule 3: no delay)
@@ -144,8 +146,10 @@ class Health:
                     values[f"{axis}_coast"] = coast
         stalled = m.state is MotionState.STALLED
         turned = move.first_change_t is not None
-        if move.target_t is not None and turned and move.first_change_t is not None:
-            values["delay"] = max(0.0, move.first_change_t - move.target_t)
+        if move.target_t is not None and move.from_rest and move.first_change_t is not None:
+            seen_turning = sum(1 for r in move.readings if r[0] > move.first_change_t) >= 2
+            if seen_turning:  # not a silent slew's report at its end (SatEL)
+                values["delay"] = max(0.0, move.first_change_t - move.target_t)
         errors: list[float | None] = [None, None]
         if not stalled and move.stop_t is None and m.position_deg is not None:
             if move.target_az is not None:

@@ -245,3 +245,29 @@ def test_the_memory_survives_json_and_a_bad_one_starts_afresh(
     broken = {**kept, "moves": "many"}
     assert Judge(cfg.health, False, broken).report().moves == 0
     assert "unreadable" in caplog.text
+
+
+def test_an_az_el_rotor_is_measured_on_each_axis(rig: Rig) -> None:
+    speeds = {"az_speed_deg_s": 12.0, "el_speed_deg_s": 6.0}
+    v = rig("rot2prog", emulator={"resolution_ppd": 1, **speeds})
+    v.run_until_state(MotionState.IDLE, 30)
+    for n in range(1, 7):
+        v.target(300 if n % 2 else 20, 80 if n % 2 else 5)
+        v.run_until(lambda h, n=n: _health(h).moves >= n and h.state is MotionState.IDLE, 300)
+    health = _health(v)
+    assert health.el is not None
+    assert health.az.speed_up_deg_s is not None and health.az.speed_down_deg_s is not None
+    assert health.el.speed_up_deg_s is not None and health.el.speed_down_deg_s is not None
+    assert health.el.odometer_deg == pytest.approx(6 * 75, rel=0.05)
+    assert health.az.speed_up_deg_s == pytest.approx(12.0, rel=0.1)
+    assert health.el.speed_down_deg_s == pytest.approx(6.0, rel=0.1)
+    assert health.warnings == ()
+
+
+def test_a_silent_slew_gives_no_start_delay(rig: Rig) -> None:
+    v = rig("satel")
+    v.run_until(lambda h: h.state is MotionState.IDLE, 60)
+    v.target(200, 30)
+    v.run_until(lambda h: _health(h).moves == 1 and h.state is MotionState.IDLE, 300)
+    health = _health(v)
+    assert health.start_delay_s is None and health.az.odometer_deg > 0
