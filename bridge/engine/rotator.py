@@ -46,6 +46,7 @@ from bridge.protocols.base import ModelSpec
 from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
+HEALTH_SAVE_S = 60.0  # rotor health to the state file at most this often (_status)
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,8 @@ class Rotator:
         self._save_lock = threading.Lock()
         self._mailbox = Mailbox()
         self._health_kept: RotatorHealth | None = None
+        self._health_unsaved: RotatorHealth | None = None
+        self._health_saved_s = -math.inf
         self._on_status = on_status
         self._worker = Worker(
             cfg,
@@ -133,13 +136,23 @@ class Rotator:
 
     def _status(self, status: RotatorStatus) -> None:
         """Every status to the listeners; rotor health's memory, new after a move, to the
-        state file on its writer thread (state_store.py rule 5: never beside a stop)."""
+        state file on its writer thread (state_store.py rule 5: never beside a stop), at most
+        every HEALTH_SAVE_S (a rotor tracking in small steps would write it every few seconds
+        to an SD card), and the last one when the rotator stops."""
         health = status.health
         if health is not None and health is not self._health_kept:
             first, self._health_kept = self._health_kept is None, health
             if health.measured and not first:
-                self._store.later(lambda: self._save_health(health))
+                self._health_unsaved = health
+                if time.monotonic() >= self._health_saved_s + HEALTH_SAVE_S:
+                    self._save_health_later()
         self._on_status(status)
+
+    def _save_health_later(self) -> None:
+        health, self._health_unsaved = self._health_unsaved, None
+        if health is not None:
+            self._health_saved_s = time.monotonic()
+            self._store.later(lambda: self._save_health(health))
 
     def _save_health(self, health: RotatorHealth) -> None:
         self._store.set_health(self.id, health.memory)  # a failure is logged there: health
@@ -172,6 +185,7 @@ class Rotator:
         self._stopped = True
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
+        self._save_health_later()  # what the last moves taught (app.py flushes the store)
 
     def submit(
         self, command: Command, described: str | None = None, *, hold: int | None = None
