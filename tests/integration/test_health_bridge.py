@@ -41,11 +41,11 @@ def test_health_reports_real_speeds_keeps_them_across_a_restart_and_feeds_ha(rig
     rig.ready("tower")
     speed = _true_speed(rig)
     for n in range(1, 7):  # three moves each way: the recent median needs three
-        health = _move(rig, 340 if n % 2 else 20, n)
+        health = _move(rig, 200 if n % 2 else 20, n)
     assert health["speed_cw_deg_s"] == pytest.approx(speed, rel=0.1)
     assert health["speed_ccw_deg_s"] == pytest.approx(speed, rel=0.1)
     assert health["moves"] == 6 and health["stalls"] == 0 and health["warnings"] == []
-    assert health["odometer_deg"] == pytest.approx(6 * 320, rel=0.05)
+    assert health["odometer_deg"] == pytest.approx(6 * 180, rel=0.05)
     assert health["start_delay_s"] is not None and health["start_delay_s"] < 1.0
     assert health["baseline"]["from"] == "learning"
 
@@ -80,7 +80,7 @@ def test_health_reports_real_speeds_keeps_them_across_a_restart_and_feeds_ha(rig
     back = json.loads(back.payload)
     assert back["moves"] == 6 and back["odometer_deg"] == health["odometer_deg"]
     assert back["speed_cw_deg_s"] == health["speed_cw_deg_s"]
-    after = _move(rig, 340, 7)
+    after = _move(rig, 200, 7)
     assert after["moves"] == 7
     assert after["speed_cw_deg_s"] == pytest.approx(speed, rel=0.1)
 
@@ -90,7 +90,7 @@ def test_a_retained_reset_is_refused_and_a_live_one_starts_a_new_baseline(rig: R
     rig.start()
     rig.ready("tower")
     for n in range(1, 4):
-        health = _move(rig, 340 if n % 2 else 20, n)
+        health = _move(rig, 200 if n % 2 else 20, n)
     assert health["baseline"]["from"] == "learned"
     t0 = time.monotonic()
     rig.probe.publish(rig.t("health/reset"), "RESET", retain=True)
