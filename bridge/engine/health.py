@@ -71,6 +71,7 @@ class Health:
         self._move: _Move | None = None
         self._changed_t: float | None = None
         self._stop_t: float | None = None
+        self._seen: mo.Motion | None = None  # the motion last looked at
 
     def reset(self) -> RotatorHealth | None:
         """A new baseline (health_judge.py rule 5); the new report."""
@@ -82,8 +83,9 @@ class Health:
 
     def step(self, m: mo.Motion, now: float) -> RotatorHealth | None:
         """Run by the session after every input; a new report when a move has ended."""
-        if not self._measured:
-            return None
+        if m is self._seen or not self._measured:
+            return None  # rule 6: the motion is a new object whenever anything in it changed
+        self._seen = m
         move = self._move
         if m.changed_t is not None and m.changed_t != self._changed_t:
             self._changed_t = m.changed_t
