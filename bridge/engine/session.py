@@ -42,8 +42,9 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
-14. A part that raises (tracking, auto-park) is a bug contained here: it is reset (tracking
-   ends, "internal error"), an error event of kind internal names it, and the link, the
+14. A part that raises (tracking, auto-park, health) is a bug contained here: it is reset
+   (tracking ends, "internal error"; health starts again from its last report's memory), an
+   error event of kind internal names it, and the link, the
    stops and every other rule go on (a feature's failure never takes a link down, and never
    costs a stop).
 """

@@ -271,3 +271,18 @@ def test_a_silent_slew_gives_no_start_delay(rig: Rig) -> None:
     v.run_until(lambda h: _health(h).moves == 1 and h.state is MotionState.IDLE, 300)
     health = _health(v)
     assert health.start_delay_s is None and health.az.odometer_deg > 0
+
+
+def test_health_failing_is_contained_and_the_rotor_goes_on(rig: Rig) -> None:
+    v = _settled(rig)
+    health = _move(v, 200)
+
+    def broken(m: object, now: float) -> None:
+        raise RuntimeError("a bug in health")
+
+    v.session.health.step = broken  # type: ignore[assignment,method-assign]
+    v.target(60)
+    v.run_until(lambda h: h.errors("internal"), 10, "the bug reported")
+    assert "health failed" in v.errors("internal")[0].message
+    v.run_until(lambda h: abs(h.truth().az_deg - 60) <= 3 and h.state is MotionState.IDLE, 120)
+    assert _health(v).moves >= health.moves  # rebuilt from what it had kept
