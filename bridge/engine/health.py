@@ -26,7 +26,9 @@ Rules:
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
    position (DCU-1) has a report that says so and never another.
-6. Cheap at every step: a few comparisons, a reading appended while the rotor turns.
+6. Cheap at every step: a motion already seen costs one comparison, a new one a few more and
+   a reading appended while the rotor turns (at most MAX_READINGS a move: a rotor "turning"
+   for hours, a noisy potentiometer, does not grow without end; its first hour is measured).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from bridge.model import MotionState, RotatorHealth
 STEADY = (0.2, 0.8)  # rule 2
 MIN_SPAN_S = 1.0
 MIN_SPAN_DEG = 5.0
+MAX_READINGS = 20_000  # rule 6: over an hour of readings at 0.2 s
 _GONE = (MotionState.OFFLINE, MotionState.UNKNOWN)
 
 
@@ -65,7 +68,6 @@ class Health:
         self._measured = cfg.spec.can_report_position
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
-        self._cfg = cfg.health
         self._judge = Judge(cfg.health, self._has_el, memory)
         self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
         self._move: _Move | None = None
@@ -125,7 +127,8 @@ class Health:
         self._move = move
 
     def _reading(self, move: _Move, m: mo.Motion, t: float, az: float) -> None:
-        move.readings.append((t, az, m.el_position_deg))
+        if len(move.readings) < MAX_READINGS:  # rule 6
+            move.readings.append((t, az, m.el_position_deg))
         if move.first_change_t is None and (
             az != move.from_az or m.el_position_deg != move.from_el
         ):
