@@ -8,12 +8,16 @@ Rules:
    with fewer than MIN_VALUES values by then is learned from the moves after, until it has
    them. Speeds set in the settings (``az_speed_deg_s``, ``el_speed_deg_s``) are the speed
    baseline, both ways, from the start.
-2. A warning judges the median of the last WINDOW moves (the last WINDOW stops for the coast),
-   with at least MIN_VALUES values, never one move: a gust or one noisy reading never warns.
+2. A warning judges the median of each metric's last WINDOW values (a speed: the last WINDOW
+   moves that way; the coast: the last WINDOW stops), with at least MIN_VALUES of them, never
+   one move: a gust or one noisy reading never warns. Per metric, not "the metric's values
+   among the last moves": a rotor turned mostly one way would leave three values at times for
+   the other, and a median of three is not steady enough to judge by.
    A speed more than ``speed_drop_pct`` below its baseline warns; so do the two directions of
-   an axis parting by more than that from how far apart they were at the baseline, a start
-   delay or a coast grown by more than that (and by more than DELAY_FLOOR_S, COAST_FLOOR_DEG:
-   a small value doubling is no news).
+   an axis more than that apart (and by half of it more than at the baseline: a rotor that
+   always turned one way faster is no news), a start delay or a coast grown by more than that
+   (and by more than DELAY_FLOOR_S, COAST_FLOOR_DEG: a small value doubling is no news).
+   With moves varying by +-10 % at random, no median strays 20 % from another: no warning.
 3. Stalls warn when they repeat at one azimuth: STALL_REPEATS of the last STALL_MEMORY within
    STALL_NEAR_DEG of each other. Single stalls scattered round the circle do not.
 4. A warning names what changed and by how much, in words a user reads on a dashboard.
@@ -35,7 +39,7 @@ from bridge.model import AxisHealth, RotatorHealth
 
 log = logging.getLogger(__name__)
 
-WINDOW = 10  # rule 2
+WINDOW = 7  # rule 2: a drop one way shows within 8 moves turned both ways in turn
 MIN_VALUES = 3
 DELAY_FLOOR_S = 0.5
 COAST_FLOOR_DEG = 2.0
@@ -108,8 +112,7 @@ class Judge:
         self.baseline: dict[str, float | None] = dict.fromkeys(METRICS)
         self.learned = 0  # moves learned from since the baseline started
         self.learning: dict[str, list[float]] = {k: [] for k in METRICS}
-        self.recent: list[dict[str, float]] = []  # the last WINDOW moves' values
-        self.coasts: dict[str, list[float]] = {k: [] for k in COASTS}  # the last WINDOW stops
+        self.recent: dict[str, list[float]] = {k: [] for k in METRICS}  # the last WINDOW each
         self.stall_at: list[float] = []
         self.from_settings = False
         for axis, speed in (("az", self._cfg.az_speed_deg_s), ("el", self._cfg.el_speed_deg_s)):
@@ -135,8 +138,8 @@ class Judge:
             coast = move.values.get(key)
             if coast is not None:
                 self.last_coast[i] = coast
-                self.coasts[key] = [*self.coasts[key], coast][-WINDOW:]
-        self.recent = [*self.recent, move.values][-WINDOW:]
+        for key, value in move.values.items():
+            self.recent[key] = [*self.recent[key], value][-WINDOW:]
         self._learn(move)
 
     def _learn(self, move: Move) -> None:
@@ -154,21 +157,20 @@ class Judge:
 
     # -- what the recent moves say ------------------------------------------------------------
     def recent_median(self, key: str) -> float | None:
-        if key in COASTS:
-            return _median(self.coasts[key])
-        return _median([v[key] for v in self.recent if key in v])
+        return _median(self.recent[key])
 
     def warnings(self) -> list[str]:
         """Rules 2-4."""
         out: list[str] = []
         pct = self._cfg.speed_drop_pct
-        over = f"over the last {WINDOW} moves"
+        over = f"over the last {WINDOW} moves each way"
         for key in SPEEDS:
             now, base = self.recent_median(key), self.baseline[key]
             if now is not None and base and now < base * (1 - pct / 100):
                 drop = 100 * (base - now) / base
                 out.append(
-                    f"{NAMES[key]} {now:.1f} °/s, {drop:.0f} % below its baseline {base:.1f} {over}"
+                    f"{NAMES[key]} {now:.1f} °/s, {drop:.0f} % below its baseline {base:.1f} "
+                    f"over its last {len(self.recent[key])} moves"
                 )
         for axis in ("az", "el"):
             out += self._apart(axis, pct, over)
@@ -176,14 +178,14 @@ class Judge:
         if delay is not None and base is not None and _grown(delay, base, pct, DELAY_FLOOR_S):
             out.append(
                 f"start delay {delay:.1f} s, {delay - base:.1f} s longer than its baseline "
-                f"{base:.1f} {over}"
+                f"{base:.1f} over the last {len(self.recent['delay'])} moves"
             )
         for key in COASTS:
             coast, base = self.recent_median(key), self.baseline[key]
             if coast is not None and base is not None and _grown(coast, base, pct, COAST_FLOOR_DEG):
                 out.append(
                     f"{NAMES[key]} {coast:.1f}°, {coast - base:.1f}° more than its baseline "
-                    f"{base:.1f} over the last {len(self.coasts[key])} stops"
+                    f"{base:.1f} over the last {len(self.recent[key])} stops"
                 )
         return out + self._stall_warnings()
 
@@ -192,13 +194,13 @@ class Judge:
         b_up, b_down = self.baseline[f"{axis}_up"], self.baseline[f"{axis}_down"]
         if not (up and down and b_up and b_down):
             return []
-        now_pct = 100 * (up - down) / max(up, down)
-        base_pct = 100 * (b_up - b_down) / max(b_up, b_down)
-        if abs(now_pct - base_pct) <= pct:
+        now_pct = 100 * abs(up - down) / max(up, down)
+        base_pct = 100 * abs(b_up - b_down) / max(b_up, b_down)
+        if now_pct <= max(pct, base_pct + pct / 2):  # rule 2: a rotor that always was lopsided
             return []
         return [
             f"{NAMES[axis + '_up']} {up:.1f} °/s and {NAMES[axis + '_down']} {down:.1f} °/s, "
-            f"{abs(now_pct):.0f} % apart (at the baseline {abs(base_pct):.0f} %) {over}"
+            f"{now_pct:.0f} % apart ({base_pct:.0f} % at the baseline) {over}"
         ]
 
     def _stall_warnings(self) -> list[str]:
@@ -266,8 +268,7 @@ class Judge:
             "from_settings": self.from_settings,
             "learned": self.learned,
             "learning": {k: list(v) for k, v in self.learning.items() if v},
-            "recent": [dict(v) for v in self.recent],
-            "coasts": {k: list(v) for k, v in self.coasts.items()},
+            "recent": {k: list(v) for k, v in self.recent.items() if v},
             "stall_at": list(self.stall_at),
         }
 
@@ -282,14 +283,11 @@ class Judge:
         self.last_error = _maybe_floats(memory["last_error_deg"])
         if len(self.odometer_deg) != 2 or len(self.last_coast) != 2 or len(self.last_error) != 2:
             raise ValueError("not two axes")
-        baseline, learning, coasts = memory["baseline"], memory["learning"], memory["coasts"]
-        recent = memory["recent"]
-        if not all(isinstance(t, dict) for t in (baseline, learning, coasts)):
-            raise ValueError("baseline, learning or coasts is not a table")
+        baseline, learning, recent = memory["baseline"], memory["learning"], memory["recent"]
+        if not all(isinstance(t, dict) for t in (baseline, learning, recent)):
+            raise ValueError("baseline, learning or recent is not a table")
         assert isinstance(baseline, dict) and isinstance(learning, dict)
-        assert isinstance(coasts, dict)
-        if not isinstance(recent, list) or not all(isinstance(v, dict) for v in recent):
-            raise ValueError("recent is not a list of tables")
+        assert isinstance(recent, dict)
         kept = {k: _maybe_floats([baseline.get(k)])[0] for k in METRICS}
         if self.from_settings:  # the speeds set in the settings win over those learned
             kept.update({k: v for k, v in self.baseline.items() if v is not None})
@@ -298,9 +296,7 @@ class Judge:
         self.baseline = kept
         self.learned = _count(memory["learned"])
         self.learning = {k: _floats(learning.get(k, [])) for k in METRICS}
-        self.coasts = {k: _floats(coasts.get(k, []))[-WINDOW:] for k in COASTS}
-        self.recent = [{k: _floats([v[k]])[0] for k in METRICS if k in v} for v in recent]
-        self.recent = self.recent[-WINDOW:]
+        self.recent = {k: _floats(recent.get(k, []))[-WINDOW:] for k in METRICS}
         self.stall_at = _floats(memory["stall_at"])[-STALL_MEMORY:]
 
 

@@ -76,7 +76,7 @@ def test_speed_drop_one_way_warns_within_ten_moves_and_names_it(rig: Rig) -> Non
     assert warned_at is not None, "no warning within 10 moves"
     first = health.warnings[0]
     shape = (
-        r"counter-clockwise 4\.\d °/s, [23]\d % below its baseline [56]\.\d over the last 10 moves"
+        r"counter-clockwise 4\.\d °/s, [23]\d % below its baseline [56]\.\d over its last 7 moves"
     )
     assert re.fullmatch(shape, first), first
     assert not any(w.startswith("clockwise") and "below" in w for w in health.warnings)

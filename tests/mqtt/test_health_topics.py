@@ -20,7 +20,7 @@ HEALTH = RotatorHealth(
     stalls=1,
     stall_azimuths_deg=(127.0,),
     motor_on_s=4520.33,
-    warnings=("counter-clockwise 4.1 °/s, 27 % below its baseline 5.6 over the last 10 moves",),
+    warnings=("counter-clockwise 4.1 °/s, 27 % below its baseline 5.6 over its last 7 moves",),
 )
 
 
