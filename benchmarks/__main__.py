@@ -35,6 +35,7 @@ from benchmarks import (
     exchange_cpu,
     footprint,
     freshness,
+    health,
     latency,
     line_use,
     remote,
@@ -58,6 +59,7 @@ ITEMS = {
     "exchange_cpu": exchange_cpu.run,
     "console": console.run,
     "remote": remote.run,
+    "health": health.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

@@ -13,7 +13,7 @@ from functools import partial
 from typing import Any
 
 from bridge.engine.catalog import TleCatalog
-from bridge.engine.config import TrackConfig
+from bridge.engine.config import HealthConfig, TrackConfig
 from bridge.engine.lines import Lines
 from bridge.engine.listeners import contained
 from bridge.engine.motion import MotionConfig
@@ -77,6 +77,12 @@ def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
         el_speed_deg_s=el_speed,
         pointing=r.pointing,
         park_after_idle_s=r.park_after_idle_s,
+        health=HealthConfig(
+            baseline_moves=r.health_baseline_moves,
+            speed_drop_pct=r.health_speed_drop_pct,
+            az_speed_deg_s=r.az_speed_deg_s,
+            el_speed_deg_s=r.el_speed_deg_s,
+        ),
         tracking=TrackConfig(
             sky=sky,
             min_el_deg=r.track_min_el_deg,

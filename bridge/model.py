@@ -150,6 +150,41 @@ class ErrorEvent:
 
 
 @dataclass(frozen=True)
+class AxisHealth:
+    """One axis of ``RotatorHealth``: "up" is clockwise in azimuth, up in elevation."""
+
+    speed_up_deg_s: float | None = None  # the median of the recent moves that way
+    speed_down_deg_s: float | None = None
+    baseline_up_deg_s: float | None = None  # what they are judged against
+    baseline_down_deg_s: float | None = None
+    coast_deg: float | None = None  # turned after the last stop
+    baseline_coast_deg: float | None = None
+    arrival_error_deg: float | None = None  # of the last move that arrived
+    odometer_deg: float = 0.0  # every degree turned, ever
+
+
+@dataclass(frozen=True)
+class RotatorHealth:
+    """How the rotor really turns, measured from its own readings (engine/health.py); published
+    on ``R/health`` after each move. ``measured`` False: the controller reports no position."""
+
+    measured: bool = True
+    az: AxisHealth = AxisHealth()
+    el: AxisHealth | None = None  # az/el rotators
+    start_delay_s: float | None = None  # command to the first reading that moved (recent median)
+    baseline_start_delay_s: float | None = None
+    baseline_from: str = "learning"  # "learned" (the first moves), "settings", "learning"
+    baseline_moves_left: int = 0  # still to learn from
+    moves: int = 0
+    stalls: int = 0
+    stall_azimuths_deg: tuple[float, ...] = ()  # the recent stalls, raw
+    motor_on_s: float = 0.0
+    warnings: tuple[str, ...] = ()
+    # what the state file keeps (engine/health_judge.py); never compared
+    memory: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
 class RotatorStatus:
     """One complete snapshot of a rotator, as published on ``R/status``."""
 
@@ -177,6 +212,7 @@ class RotatorStatus:
     parked: bool = False  # at the park position after a park, until the next move
     tracking: TrackingInfo | None = None
     tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
+    health: RotatorHealth | None = None  # how the rotor turns (engine/health.py)
 
     @property
     def moving(self) -> bool:

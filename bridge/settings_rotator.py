@@ -253,6 +253,24 @@ class RotatorSettings(PointingFields, LoggerFields):
         examples=["/tmp/rotor-easycomm"],
         json_schema_extra={"unset": "no Easycomm pty"},
     )
+    health_baseline_moves: int = Field(
+        20,
+        ge=3,
+        le=1000,
+        description="rotor health learns how the rotor turns from this many moves (its "
+        "baseline; again after a health reset); az_speed_deg_s, where given, is the speed "
+        "baseline from the start",
+        examples=[30],
+    )
+    health_speed_drop_pct: float = Field(
+        20.0,
+        ge=5,
+        le=90,
+        description="rotor health warns when the recent moves differ from the baseline by "
+        "more than this: a speed that much lower, the two directions that much further apart, "
+        "a start delay or a coast that much longer",
+        examples=[25],
+    )
 
     @field_validator("id")
     @classmethod

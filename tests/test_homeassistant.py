@@ -78,6 +78,16 @@ def test_rotorez_message_set_is_exact() -> None:
             ("switch", "option_unstick"),
             ("switch", "lock"),
             ("sensor", "last_error"),
+            ("sensor", "speed_cw"),
+            ("sensor", "speed_ccw"),
+            ("sensor", "start_delay"),
+            ("sensor", "coast"),
+            ("sensor", "odometer"),
+            ("sensor", "moves"),
+            ("sensor", "stalls"),
+            ("sensor", "motor_on"),
+            ("binary_sensor", "health_problem"),
+            ("button", "health_reset"),
         ]
     }
     want.add("homeassistant/binary_sensor/rotorbridge_rotor/connection/config")

@@ -22,6 +22,16 @@ class TrackConfig:
 
 
 @dataclass(frozen=True)
+class HealthConfig:
+    """What rotor health (health.py) is judged by."""
+
+    baseline_moves: int = 20  # the baseline is learned from this many moves
+    speed_drop_pct: float = 20.0  # a warning beyond this change
+    az_speed_deg_s: float | None = None  # set by hand: the speed baseline, both ways
+    el_speed_deg_s: float | None = None
+
+
+@dataclass(frozen=True)
 class WorkerConfig:
     rotator_id: str
     port: str
@@ -40,6 +50,7 @@ class WorkerConfig:
     pointing: Pointing | None = None  # None: the model's whole range, no offset
     park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
     tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
+    health: HealthConfig = HealthConfig()
 
     def __post_init__(self) -> None:
         if self.pointing is None:

@@ -52,9 +52,10 @@ class Batch:
     hold: int | None = None  # rule 6: the newest marker a hold waits for
     release: int | None = None  # rule 6: holds up to this marker end
     release_clear: bool = False
+    health_reset: bool = False  # a new health baseline (health.py)
 
     def __bool__(self) -> bool:
-        settings = self.options or self.lock is not None or self.notes
+        settings = self.options or self.lock is not None or self.notes or self.health_reset
         fence = self.hold is not None or self.release is not None
         return bool(self.stop or self.target or settings or self.track or fence)
 
@@ -132,6 +133,12 @@ class Mailbox:
         """A refusal decided outside the worker, so that the status shows it as the last error."""
         with self._lock:
             self._batch.notes.append(message)
+        self._wake_once()
+
+    def put_health_reset(self) -> None:
+        """Start a new health baseline (a setting: it moves nothing)."""
+        with self._lock:
+            self._batch.health_reset = True
         self._wake_once()
 
     def take(self) -> Batch:

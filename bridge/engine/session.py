@@ -11,13 +11,13 @@ else happens first.
 The session owns the commands' state (the lock, the hold, the last error) and its parts, each
 with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
 through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
-tracking (tracking.py), auto-park (autopark.py), the pending target (targets.py, sending.py)
-and the status view (status.py). They see what they need (a read-only ``parts.Scene``,
-``status.Seen``, the time) and hand back what they propose (a ``parts.Proposal``, the
-controller's notes); the session applies it. None of them imports this module. ``_step`` runs
-them in one order after every input: the line's own work (an overdue reply, a due stop), the
-motion machine's clock, the stop check, tracking, auto-park, the pending target, options,
-the poll, the status.
+tracking (tracking.py), auto-park (autopark.py), the pending target (targets.py, sending.py),
+rotor health (health.py) and the status view (status.py). They see what they need (a
+read-only ``parts.Scene``, ``status.Seen``, the motion, the time) and hand back what they
+propose (a ``parts.Proposal``, the controller's notes, a health report); the session applies
+it. None of them imports this module. ``_step`` runs them in one order after every input:
+the line's own work (an overdue reply, a due stop), the motion machine's clock, the stop
+check, tracking, auto-park, the pending target, options, the poll, health, the status.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -42,8 +42,9 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
-14. A part that raises (tracking, auto-park) is a bug contained here: it is reset (tracking
-   ends, "internal error"), an error event of kind internal names it, and the link, the
+14. A part that raises (tracking, auto-park, health) is a bug contained here: it is reset
+   (tracking ends, "internal error"; health starts again from its last report's memory), an
+   error event of kind internal names it, and the link, the
    stops and every other rule go on (a feature's failure never takes a link down, and never
    costs a stop).
 """
@@ -52,12 +53,14 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import TypeVar
 
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.controller import Controller, Drop, Ends, Retry
+from bridge.engine.health import Health
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.parts import Proposal, Scene
@@ -73,12 +76,18 @@ __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
 
 log = logging.getLogger(__name__)
 
+T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 
 
 class RotatorSession:
     def __init__(
-        self, cfg: WorkerConfig, *, options: dict[str, bool] | None = None, locked: bool = False
+        self,
+        cfg: WorkerConfig,
+        *,
+        options: dict[str, bool] | None = None,
+        locked: bool = False,
+        health: dict[str, object] | None = None,  # what the state file kept (health.py)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -88,8 +97,9 @@ class RotatorSession:
         self.targets = Targets(cfg)
         self.tracker = Tracker(cfg)
         self.autopark = AutoPark(cfg)
+        self.health = Health(cfg, health)
         self.view = st.View()
-        self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
+        self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
         self._actions: list[Action] = []
         self._wakeup = 0.0
 
@@ -146,6 +156,8 @@ class RotatorSession:
             self._taken(batch.stop.source.value)
             ctl.stop(now, merge=True)
         self._fence(batch)
+        if batch.health_reset:
+            self._guarded("health", self.health.reset, now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
         if batch.track is not None:
@@ -297,6 +309,7 @@ class RotatorSession:
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
+        self._guarded("health", lambda: self.health.step(ctl.motion, now), now)  # in the status
         self._emit_status(now)
         if ctl.link is not None:
             self._actions.extend(Write(frame) for frame in ctl.link.output())
@@ -324,9 +337,7 @@ class RotatorSession:
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
-    def _guarded(
-        self, name: str, run: Callable[[], Proposal | None], now: float
-    ) -> Proposal | None:
+    def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported; nothing else stops."""
         try:
             return run()
@@ -335,6 +346,8 @@ class RotatorSession:
             if name == "tracking":
                 self.tracker.end("internal error")
                 self._drop_tracking_target()
+            elif name == "health":
+                self.health = Health(self.cfg, self.health.report.memory)
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)
@@ -386,6 +399,7 @@ class RotatorSession:
             wall_offset_s=self.wall_offset_s,
             tracking=self.tracker.info,
             tracking_ended=self.tracker.ended,
+            health=self.health.report,
         )
         status = st.current(self.cfg, seen, now)
         if st.worth_emitting(status, self.status):

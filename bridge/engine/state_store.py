@@ -1,5 +1,6 @@
 """What must survive a restart of the bridge: each rotator's safety lock and the options the
-user set (the controller forgets them at power-off, so the bridge re-applies them).
+user set (the controller forgets them at power-off, so the bridge re-applies them), and what
+rotor health (engine/health.py) has learned of the rotor.
 
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
@@ -153,6 +154,17 @@ class StateStore:
         if not isinstance(raw, dict):
             return {}
         return {str(k): bool(v) for k, v in raw.items()}
+
+    def health(self, rotator_id: str) -> dict[str, object] | None:
+        """What rotor health kept (health_judge.py reads it, rule 6), if anything."""
+        raw = self._data.get(rotator_id, {}).get("health")
+        return raw if isinstance(raw, dict) else None
+
+    def set_health(self, rotator_id: str, memory: dict[str, object]) -> bool:
+        """Rotor health's memory, on the writer thread (rule 5) after each move."""
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["health"] = memory
+            return self._save()
 
     def later(self, job: Callable[[], None]) -> None:
         """Rule 5: ``job`` on the writer thread."""

@@ -24,7 +24,14 @@ from typing import NamedTuple
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
-from bridge.model import MotionState, RotatorStatus, Target, TargetInfo, TrackingInfo
+from bridge.model import (
+    MotionState,
+    RotatorHealth,
+    RotatorStatus,
+    Target,
+    TargetInfo,
+    TrackingInfo,
+)
 
 
 @dataclass
@@ -74,6 +81,7 @@ class Seen(NamedTuple):
     wall_offset_s: float
     tracking: TrackingInfo | None
     tracking_ended: str | None
+    health: RotatorHealth | None = None  # health.py: a new one after each move
 
 
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
@@ -110,6 +118,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         parked=_parked(rig, seen, state),
         tracking=seen.tracking,
         tracking_ended=seen.tracking_ended,
+        health=seen.health,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,

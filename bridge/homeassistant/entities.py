@@ -259,6 +259,29 @@ def _tracked(field: str) -> str:
     )
 
 
+def _health_sensor(oid: str, name: str, field: str, unit: str, kind: str, needs: str) -> Entity:
+    """Rotor health (R/health): long-term statistics keep the trend; kept while offline too."""
+    return Entity("sensor", oid, name, needs=needs, bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.health, "unit_of_measurement": unit, "state_class": kind,
+        "value_template": f"{{{{ value_json.{field} }}}}",  # null: None, unknown to HA
+        **({"device_class": "duration"} if unit == "s" else {}), **DIAGNOSTIC})  # fmt: skip
+
+
+HEALTH_NUMBERS = (  # object id, name, R/health field, unit, state class, what it needs
+    ("speed_cw", "Speed clockwise", "speed_cw_deg_s", "°/s", "measurement", "can_report_position"),
+    ("speed_ccw", "Speed counter-clockwise", "speed_ccw_deg_s", "°/s", "measurement",
+     "can_report_position"),
+    ("speed_up", "Speed up", "speed_up_deg_s", "°/s", "measurement", "has_elevation"),
+    ("speed_down", "Speed down", "speed_down_deg_s", "°/s", "measurement", "has_elevation"),
+    ("start_delay", "Start delay", "start_delay_s", "s", "measurement", "can_report_position"),
+    ("coast", "Coast after a stop", "coast_deg", "°", "measurement", "can_report_position"),
+    ("odometer", "Odometer", "odometer_deg", "°", "total_increasing", "can_report_position"),
+    ("moves", "Moves", "moves", "moves", "total_increasing", "can_report_position"),
+    ("stalls", "Stalls", "stalls", "stalls", "total_increasing", "can_report_position"),
+    ("motor_on", "Motor-on time", "motor_on_s", "s", "total_increasing", "can_report_position"),
+)  # fmt: skip
+
+
 DEGREES = {"unit_of_measurement": "°"}
 SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
 TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
@@ -343,6 +366,16 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
         "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
+    *(_health_sensor(*row) for row in HEALTH_NUMBERS),  # rotor health (engine/health.py)
+    Entity("binary_sensor", "health_problem", "Rotor health", needs="can_report_position",
+           bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.health, "device_class": "problem",
+        "value_template": "{{ 'ON' if value_json.warnings else 'OFF' }}",
+        "json_attributes_topic": r.topics.health}),  # the warnings, the numbers, the baseline
+    Entity("button", "health_reset", "Reset rotor health", needs="can_report_position",
+           bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.health_reset, "payload_press": "RESET", **DIAGNOSTIC,
+        "icon": "mdi:restart"}),
 )  # fmt: skip
 
 

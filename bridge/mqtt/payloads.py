@@ -19,6 +19,7 @@ from datetime import UTC, datetime
 
 from bridge import geo
 from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -385,7 +386,10 @@ def status_json(
         estimated=status.estimated,
         time=_iso(time_unix),
     )
-    return _COMPACT.encode(doc)
+    text = _COMPACT.encode(doc)
+    if status.health is None:
+        return text
+    return f'{text[:-1]},"health":{health_json(status.health)}}}'  # rendered once per move
 
 
 def _iso(time_unix: float) -> str:

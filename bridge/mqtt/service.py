@@ -43,9 +43,18 @@ import time
 from collections.abc import Callable
 
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Target
+from bridge.model import (
+    ErrorEvent,
+    ErrorKind,
+    RotatorHealth,
+    RotatorStatus,
+    SetOption,
+    Source,
+    Target,
+)
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.halts import Halts, switch_on
+from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
@@ -75,6 +84,7 @@ class MqttService:
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
+        self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
         self._clock = clock
         self._halts = Halts(  # rule 5
             topics,
@@ -172,6 +182,9 @@ class MqttService:
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
             pub(t.tracking, pl.tracking_state(status))
+        if status.health is not None and status.health is not self._health.get(rotator_id):
+            self._health[rotator_id] = status.health  # a new one after each move only
+            pub(t.health, health_json(status.health))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         for listener in self._status_listeners:
@@ -276,6 +289,8 @@ class MqttService:
                 rot.go_to_preset(pl.parse_name(payload, "preset"), Source.MQTT, what)
             elif kind == "park":
                 rot.park(Source.MQTT, what)
+            elif kind == "health_reset":
+                rot.reset_health()
             elif kind == "nudge":
                 rot.nudge(*pl.parse_nudge(payload), Source.MQTT, what)
             elif kind == "track":

@@ -64,6 +64,10 @@ class RotatorTopics:
         return f"{self.root}/option/{name}"
 
     @property
+    def health_reset(self) -> str:
+        return f"{self.root}/health/reset"
+
+    @property
     def option_filter(self) -> str:
         return f"{self.root}/option/+"
 
@@ -114,6 +118,10 @@ class RotatorTopics:
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
+
+    @property
+    def health(self) -> str:
+        return f"{self.root}/health"
 
 
 @dataclass(frozen=True)
@@ -191,6 +199,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track]
+            subs.append(t.health_reset)
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -209,6 +218,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
+            subs.append(t.health)
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -222,7 +232,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track"):
+            for kind in ("preset", "park", "nudge", "track", "health_reset"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             prefix = f"{t.root}/option/"

@@ -493,6 +493,7 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/health/reset",
         "rotor/bridge/fence",
         "ha/status",
         "x/#",
