@@ -35,7 +35,7 @@ import threading
 from dataclasses import dataclass, field
 
 from bridge.engine.tracking import Track
-from bridge.model import SetOption, Stop, Target, combine
+from bridge.model import Control, SetOption, Stop, Target, combine
 
 
 @dataclass
@@ -52,9 +52,11 @@ class Batch:
     hold: int | None = None  # rule 6: the newest marker a hold waits for
     release: int | None = None  # rule 6: holds up to this marker end
     release_clear: bool = False
+    control: Control | None = None  # the control lease as the judge has it now...
+    control_set: bool = False  # ...when it changed (engine/lease.py)
 
     def __bool__(self) -> bool:
-        settings = self.options or self.lock is not None or self.notes
+        settings = self.options or self.lock is not None or self.notes or self.control_set
         fence = self.hold is not None or self.release is not None
         return bool(self.stop or self.target or settings or self.track or fence)
 
@@ -132,6 +134,12 @@ class Mailbox:
         """A refusal decided outside the worker, so that the status shows it as the last error."""
         with self._lock:
             self._batch.notes.append(message)
+        self._wake_once()
+
+    def put_control(self, control: Control | None) -> None:
+        """The control lease changed (the status shows its holder)."""
+        with self._lock:
+            self._batch.control, self._batch.control_set = control, True
         self._wake_once()
 
     def take(self) -> Batch:

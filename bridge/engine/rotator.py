@@ -7,6 +7,9 @@ against a command. A refused command raises Refused (with a RefusalCode front en
 to a Hamlib RPRT number) and is reported as an error event; it never reaches the mailbox, so it
 can never move anything. The worker judges nothing anew: it only drops an accepted target that
 the lock or a lost link overtook before it could be sent, and reports that as a refusal too.
+Each command carries who sent it (``origin``): the control lease (operators.py) refuses a target
+or track start from anyone but its holder, never a stop, lock or tracking OFF (docs/architecture.md
+rule 11); every command judged here, executed or refused, is an audit event.
 """
 
 from __future__ import annotations
@@ -16,13 +19,14 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import serial
 
 from bridge.engine.catalog import CatalogError, TleCatalog
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
+from bridge.engine.operators import EXECUTED, Operators
 from bridge.engine.port import open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
 from bridge.engine.state_store import StateStore
@@ -30,9 +34,11 @@ from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
+    AuditEvent,
     Command,
     ErrorEvent,
     ErrorKind,
+    Origin,
     RotatorStatus,
     SetOption,
     Source,
@@ -76,6 +82,7 @@ class Rotator:
         station: tuple[float, float] | None = None,
         catalog: TleCatalog | None = None,
         sky: SkyWorker | None = None,
+        on_audit: Callable[[AuditEvent], None] | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -103,6 +110,15 @@ class Rotator:
             sky=sky,  # the app shares one among all rotators (skywork.py)
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
+        self.operators = Operators(
+            self.id,
+            store,
+            self._mailbox,
+            wall=wall,
+            bearing=lambda: self.status.bearing_deg,
+            report=self.report,
+            on_audit=on_audit,
+        )
         self._stopped = False
         # when a STOP or lock ON was last put in the mailbox (monotonic), from any front end: a
         # front end whose commands can overtake each other (the console) refuses one that was
@@ -145,9 +161,11 @@ class Rotator:
         if self._stopped:
             raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
         self._lines.add(self._worker)
+        self.operators.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
         self._stopped = True
+        self.operators.stop()
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
 
@@ -156,10 +174,13 @@ class Rotator:
     ) -> None:
         """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
         stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
+        origin = command.origin or Origin(command.source)
+        what = described or describe_command(command)
         try:
             judged = self._check(command)
         except Refused as exc:
-            self.report_refusal(exc.message, described or describe_command(command))
+            self.report_refusal(exc.message, what)
+            self.operators.audit(origin, what, f"refused: {exc.message}")
             raise
         if isinstance(command, SetOption):
             name, enabled = command.name, command.enabled
@@ -167,17 +188,28 @@ class Rotator:
         if isinstance(command, Stop):
             self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
+        self.operators.audit(origin, what, EXECUTED)  # operators.py rule 3: after the put
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
 
-    # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
-    def go_to_preset(self, name: str, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.preset(name), source), described)
+    # -- the control lease (operators.py) ---------------------------------------------------
+    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None:
+        """Take (or renew) the control lease; Refused (reported, audited) if refused."""
+        self.operators.claim(operator, minutes, origin, described)
 
-    def park(self, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described)
+    def release_control(self, origin: Origin, described: str) -> None:
+        self.operators.release(origin, described)  # anyone may (lease.py rule 4)
+
+    # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
+        self._named(lambda: Target(*self.pointing.preset(name), source), described, origin)
+
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described, origin)
 
     def go_toward(
         self,
@@ -188,6 +220,7 @@ class Rotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None:
         def target() -> Target:
             az, info = toward(
@@ -195,14 +228,17 @@ class Rotator:
             )
             return Target(az, None, source, info=info)
 
-        self._named(target, described)
+        self._named(target, described, origin)
 
-    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         """The place of the current locator or coordinate target, by the path asked for."""
         info = self.status.target_info
         if info is None:
             message = "no locator or coordinate target to take the other path to"
             self.report_refusal(message, described)
+            self.operators.audit(origin or Origin(source), described, f"refused: {message}")
             raise Refused(RefusalCode.INVALID, message)
         self.go_toward(
             info.latitude_deg,
@@ -211,11 +247,22 @@ class Rotator:
             described,
             locator=info.locator,
             long_path=long_path,
+            origin=origin,
         )
 
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None:
         self._named(
-            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source), described
+            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source),
+            described,
+            origin,
         )
 
     def track(
@@ -224,30 +271,40 @@ class Rotator:
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
         ``off`` ends it (never refused, like a stop). Raise Refused otherwise. A name is looked
         up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
-        refused by the session, as an error event."""
+        refused by the session, as an error event. Tracking started by the lease's holder goes
+        on (its targets are the bridge's own, never judged by the lease)."""
+        who = origin or Origin(source)
         if name.strip().casefold() == "off" and tle is None:
-            self._mailbox.put_track(Track(None, source))
+            self._mailbox.put_track(Track(None, source, origin=origin))
+            self.operators.audit(who, described, EXECUTED)
             return
         try:
             body = self._body(name, tle)
             if self._locked:
                 raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
+            leased = self.operators.refusal(who.who)
+            if leased is not None:
+                raise Refused(RefusalCode.LEASED, leased)
             if not self.status.available:
                 raise Refused(
                     RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
                 )
         except Refused as exc:
             self.report_refusal(exc.message, described)
+            self.operators.audit(who, described, f"refused: {exc.message}")
             raise
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
-            self._mailbox.put_track(Track(None, source, lookup, described))
-            return
-        self._mailbox.put_track(Track(body, source, None, described))
+            self._mailbox.put_track(Track(None, source, lookup, described, origin))
+        else:
+            self._mailbox.put_track(Track(body, source, None, described, origin))
+        self.operators.audit(who, described, EXECUTED)
 
     def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
         """The body to track, or None for a satellite to look up in the TLE file."""
@@ -264,35 +321,37 @@ class Rotator:
                 "controller that does",
             )
         try:
-            if tle is not None:
-                return Body.satellite(*tle)
-            folded = name.strip().casefold()
-            if folded == "sun":
-                return Body.sun()
-            if folded == "moon":
-                return Body.moon()
-            self.catalog.check_configured(name)
-            return None
+            return self.catalog.body(name, tle)
         except (SkyError, CatalogError) as exc:
             raise Refused(RefusalCode.INVALID, str(exc)) from None
 
-    def _named(self, make: Callable[[], Target], described: str) -> None:
+    def _named(self, make: Callable[[], Target], described: str, origin: Origin | None) -> None:
         try:
             target = make()
         except Refused as exc:
             self.report_refusal(exc.message, described)
+            self.operators.audit(origin or Origin(Source.MQTT), described, f"refused: {exc}")
             raise
-        self.submit(target, described)
+        self.submit(target if origin is None else replace(target, origin=origin), described)
 
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+    ) -> None:
         """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
-        (outside its own lock: the state file is written with an fsync)."""
+        (outside its own lock: the state file is written with an fsync). Never refused."""
         self._locked = locked
         if locked:
             self.last_halt_s = time.monotonic()
         self._mailbox.put_lock(locked, hold=hold)
         if save:
             self.save_lock()
+        what = f"lock {'ON' if locked else 'OFF'}"
+        self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
     def _save_option(self, name: str, enabled: bool) -> None:
         if not self._store.set_option(self.id, name, enabled):
@@ -346,6 +405,10 @@ class Rotator:
             return command
         if self._locked:
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        who = command.origin.who if command.origin is not None else command.source.value
+        leased = self.operators.refusal(who)
+        if leased is not None:
+            raise Refused(RefusalCode.LEASED, leased)
         status = self.status
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
