@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import Control, RotatorStatus, TargetInfo, TrackingInfo
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -120,6 +120,29 @@ def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
     if not -90 <= lat <= 90 or not -180 <= lon <= 180:
         raise PayloadError("latitude must be -90..90 and longitude -180..180")
     return _place(None, lat, lon, path == "long")
+
+
+def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
+    """``R/control/claim``: ``{"operator": "DL1ABC", "minutes": 30}`` -> (operator, minutes),
+    judged by the lease (engine/lease.py rule 1). Without ``operator`` in it, the message's
+    own (the MQTT 5 user property) claims."""
+    obj = _json_object(_text(payload), "claim")
+    unknown = set(obj) - {"operator", "minutes"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in a claim: {', '.join(sorted(unknown))}")
+    if "minutes" not in obj:
+        raise PayloadError('a claim needs "minutes", e.g. {"operator": "DL1ABC", "minutes": 30}')
+    who = obj.get("operator", operator)
+    if who is None:
+        raise PayloadError('a claim needs "operator", e.g. {"operator": "DL1ABC", "minutes": 30}')
+    return who, obj["minutes"]
+
+
+def control_json(control: Control | None) -> str:
+    """``R/control`` (retained): who holds the control lease and until when, or nobody."""
+    if control is None:
+        return _COMPACT.encode({"holder": None, "until": None})
+    return _COMPACT.encode({"holder": control.operator, "until": _iso(control.until_unix)})
 
 
 def _looks_like_locator(text: str) -> bool:
@@ -353,6 +376,10 @@ def status_json(
         options={k: v for k, v in sorted(status.options.items())},
         last_error=status.last_error,
         last_command_source=status.last_command_source,
+        last_operator=status.last_operator,
+        control=None
+        if status.control is None
+        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
         estimated=status.estimated,
         time=_iso(time_unix),
     )

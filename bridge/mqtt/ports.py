@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import RotatorStatus, SetOption, Source, Stop, Target
+from bridge.model import Origin, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -25,21 +25,44 @@ class RotatorPort(Protocol):
         *,
         hold: int | None = None,
     ) -> None: ...
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None: ...
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+    ) -> None: ...
     def save_lock(self) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
     def report_refusal(self, message: str, command: str | None) -> None: ...
-    def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
-    def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None: ...
     def track(
         self,
         name: str,
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None: ...
+    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None: ...
+    def release_control(self, origin: Origin, described: str) -> None: ...
     def go_toward(
         self,
         latitude_deg: float,
@@ -49,6 +72,7 @@ class RotatorPort(Protocol):
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None: ...
 
 

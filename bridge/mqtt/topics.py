@@ -115,6 +115,25 @@ class RotatorTopics:
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
 
+    # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
+    @property
+    def control(self) -> str:
+        """Retained: who holds the control lease, and until when."""
+        return f"{self.root}/control"
+
+    @property
+    def control_claim(self) -> str:
+        return f"{self.root}/control/claim"
+
+    @property
+    def control_release(self) -> str:
+        return f"{self.root}/control/release"
+
+    @property
+    def audit(self) -> str:
+        """Not retained: every command judged, executed or refused."""
+        return f"{self.root}/audit"
+
 
 @dataclass(frozen=True)
 class DiscoveryTopics:
@@ -191,6 +210,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track]
+            subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -209,6 +229,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
+            subs += [t.control]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -225,6 +246,8 @@ class Topics:
             for kind in ("preset", "park", "nudge", "track"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
+            if topic in (t.control_claim, t.control_release):
+                return rid, "claim" if topic == t.control_claim else "release", None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
