@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Callable
+from typing import Protocol
 
 from bridge.engine.lease import Lease, LeaseError
 from bridge.engine.mailbox import Mailbox
@@ -30,6 +31,18 @@ from bridge.model import AuditEvent, Control, ErrorKind, Origin
 log = logging.getLogger(__name__)
 
 EXECUTED = "executed"
+
+
+class Timer(Protocol):
+    def cancel(self) -> None: ...
+
+
+def thread_timer(delay_s: float, fire: Callable[[], None]) -> Timer:
+    """Rule 2's timer: a daemon thread that calls ``fire`` after ``delay_s``."""
+    timer = threading.Timer(delay_s, fire)
+    timer.daemon = True
+    timer.start()
+    return timer
 
 
 class Operators:
@@ -43,6 +56,7 @@ class Operators:
         bearing: Callable[[], float | None],
         report: Callable[[ErrorKind, str, str | None], None],
         on_audit: Callable[[AuditEvent], None] | None = None,
+        timer: Callable[[float, Callable[[], None]], Timer] = thread_timer,
     ) -> None:
         self._id = rotator_id
         self._store = store
@@ -53,7 +67,8 @@ class Operators:
         self._on_audit = on_audit
         self._lease = Lease(store.lease(rotator_id))  # state_store.py rule 6
         self._lock = threading.Lock()
-        self._timer: threading.Timer | None = None
+        self._start_timer = timer
+        self._timer: Timer | None = None
         self._stopped = False
 
     def start(self) -> None:
@@ -125,11 +140,7 @@ class Operators:
             self._timer = None
         if held is None or self._stopped:
             return
-        timer = self._timer = threading.Timer(
-            max(0.0, held.until_unix - self._wall()), self._expire
-        )
-        timer.daemon = True
-        timer.start()
+        self._timer = self._start_timer(max(0.0, held.until_unix - self._wall()), self._expire)
 
     def _expire(self) -> None:
         with self._lock:
