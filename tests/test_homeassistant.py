@@ -78,6 +78,9 @@ def test_rotorez_message_set_is_exact() -> None:
             ("switch", "option_unstick"),
             ("switch", "lock"),
             ("sensor", "last_error"),
+            ("sensor", "control"),
+            ("button", "release_control"),
+            ("sensor", "last_operator"),
         ]
     }
     want.add("homeassistant/binary_sensor/rotorbridge_rotor/connection/config")

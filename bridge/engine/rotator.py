@@ -170,7 +170,12 @@ class Rotator:
             self._mailbox.close()  # only once nothing can wait on it any more
 
     def submit(
-        self, command: Command, described: str | None = None, *, hold: int | None = None
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+        echo: bool = False,
     ) -> None:
         """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
         stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
@@ -188,19 +193,12 @@ class Rotator:
         if isinstance(command, Stop):
             self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
-        self.operators.audit(origin, what, EXECUTED)  # operators.py rule 3: after the put
+        if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
+            self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
-
-    # -- the control lease (operators.py) ---------------------------------------------------
-    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None:
-        """Take (or renew) the control lease; Refused (reported, audited) if refused."""
-        self.operators.claim(operator, minutes, origin, described)
-
-    def release_control(self, origin: Origin, described: str) -> None:
-        self.operators.release(origin, described)  # anyone may (lease.py rule 4)
 
     # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
     def go_to_preset(
@@ -341,6 +339,7 @@ class Rotator:
         hold: int | None = None,
         save: bool = True,
         origin: Origin | None = None,
+        echo: bool = False,
     ) -> None:
         """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
         (outside its own lock: the state file is written with an fsync). Never refused."""
@@ -350,8 +349,9 @@ class Rotator:
         self._mailbox.put_lock(locked, hold=hold)
         if save:
             self.save_lock()
-        what = f"lock {'ON' if locked else 'OFF'}"
-        self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
+        if not echo:
+            what = f"lock {'ON' if locked else 'OFF'}"
+            self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
     def _save_option(self, name: str, enabled: bool) -> None:
         if not self._store.set_option(self.id, name, enabled):

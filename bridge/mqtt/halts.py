@@ -90,13 +90,15 @@ class Halts:
         what: str,
         hold: int | None = None,
         origin: Origin | None = None,
+        echo: bool = False,
     ) -> None:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
-        and the put are one step). ``origin``: who sent it (the audit trail)."""
+        and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
+        copy of one the lane carried out (the audit trail has it once)."""
         if kind == "stop":
-            rot.submit(Stop(Source.MQTT, origin), what, hold=hold)
+            rot.submit(Stop(Source.MQTT, origin), what, hold=hold, echo=echo)
         else:
-            rot.set_lock(True, hold=hold, save=False, origin=origin)
+            rot.set_lock(True, hold=hold, save=False, origin=origin, echo=echo)
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
@@ -219,8 +221,9 @@ class Halts:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
         with self._lock:
+            echo = self.word.lane_came_first(rot.id, kind)
             lane_marker = self.word.main_halt(rot.id, kind)
-            self.carry(rot, kind, what, origin=origin)
+            self.carry(rot, kind, what, origin=origin, echo=echo)
         if kind == "lock":
             rot.save_lock()
         if lane_marker is not None:

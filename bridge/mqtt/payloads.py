@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import Control, RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import Control, RotatorStatus, TargetInfo, TrackingInfo, valid_operator
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -136,6 +136,17 @@ def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
     if who is None:
         raise PayloadError('a claim needs "operator", e.g. {"operator": "DL1ABC", "minutes": 30}')
     return who, obj["minutes"]
+
+
+def parse_release(payload: bytes) -> str | None:
+    """``R/control/release`` takes any payload; a JSON object's ``operator`` names who released
+    it when the message has no user property (Home Assistant's button sends one). None: no
+    name, or not a valid one (model.valid_operator)."""
+    try:
+        obj = json.loads(payload.decode("utf-8")) if payload.strip().startswith(b"{") else None
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
 
 
 def control_json(control: Control | None) -> str:

@@ -9,12 +9,24 @@ from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 
+class LeasePort(Protocol):
+    """A rotator's control lease (engine/operators.py): claim or release, Refused if not."""
+
+    def claim(
+        self, operator: object, minutes: object, origin: Origin, described: str
+    ) -> object: ...
+    def release(self, origin: Origin, described: str) -> object: ...
+
+
 class RotatorPort(Protocol):
     id: str
     name: str  # as dashboards show it
     spec: ModelSpec
     pointing: Pointing
     can_track: bool  # a station and a controller that reports where it points
+
+    @property
+    def operators(self) -> LeasePort: ...
 
     @property
     def status(self) -> RotatorStatus: ...
@@ -24,6 +36,7 @@ class RotatorPort(Protocol):
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
     ) -> None: ...
     def set_lock(
         self,
@@ -32,6 +45,7 @@ class RotatorPort(Protocol):
         hold: int | None = None,
         save: bool = True,
         origin: Origin | None = None,
+        echo: bool = False,
     ) -> None: ...
     def save_lock(self) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
@@ -61,8 +75,7 @@ class RotatorPort(Protocol):
         *,
         origin: Origin | None = None,
     ) -> None: ...
-    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None: ...
-    def release_control(self, origin: Origin, described: str) -> None: ...
+
     def go_toward(
         self,
         latitude_deg: float,

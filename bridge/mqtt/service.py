@@ -321,9 +321,10 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock; PayloadError or Refused."""
         if kind == "claim":
-            rot.claim(*pl.parse_claim(payload, by.operator), by, what)
+            rot.operators.claim(*pl.parse_claim(payload, by.operator), by, what)
         elif kind == "release":
-            rot.release_control(by, what)
+            named = pl.parse_release(payload) if by.operator is None else None
+            rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
         else:
             self._motion(rot, kind, arg, payload, what, by)
 

@@ -76,7 +76,7 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
 ) -> None:
     clock = Clock()
     rot, audit, events = rotator(tmp_path, clock)
-    rot.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
     clock.now += 300
     assert refused(lambda: rot.submit(Target(120, origin=OTHER), "target 120")) == "leased"
     assert events[-1].message == (
@@ -118,12 +118,12 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
 def test_a_claim_while_held_is_refused_and_anyone_may_release(tmp_path: Path) -> None:
     clock = Clock()
     rot, audit, events = rotator(tmp_path, clock)
-    rot.claim("DL1ABC", 30, HOLDER, "claim")
-    assert refused(lambda: rot.claim("G4XYZ", 10, OTHER, "claim")) == "invalid"
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    assert refused(lambda: rot.operators.claim("G4XYZ", 10, OTHER, "claim")) == "invalid"
     assert "DL1ABC holds the rotator until 14:43 UTC (30 min left)" in events[-1].message
-    assert refused(lambda: rot.claim("G4XYZ", 0, OTHER, "claim")) == "invalid"
+    assert refused(lambda: rot.operators.claim("G4XYZ", 0, OTHER, "claim")) == "invalid"
     assert rot.operators.holder == Control("DL1ABC", T0 + 1800)
-    rot.release_control(OTHER, "release")  # the station owner's button, say
+    rot.operators.release(OTHER, "release")  # the station owner's button, say
     assert rot.operators.holder is None
     assert refused(lambda: rot.submit(Target(10, origin=OTHER))) == "offline"  # free
     assert [a.result.split(":")[0] for a in audit] == [
@@ -138,7 +138,7 @@ def test_a_claim_while_held_is_refused_and_anyone_may_release(tmp_path: Path) ->
 def test_the_lease_survives_a_restart(tmp_path: Path) -> None:
     clock = Clock()
     rot, _, _ = rotator(tmp_path, clock)
-    rot.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
     rot.operators.stop()
     rot._store.flush()  # the save runs on the store's writer thread
     kept = json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]["lease"]

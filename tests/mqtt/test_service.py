@@ -115,9 +115,6 @@ class RecordingRotator:
     def save_lock(self) -> None:
         pass
 
-    def release(self, marker: int, *, clear: bool = False) -> None:
-        self.calls.append(("release", marker, *(["clear"] if clear else [])))
-
     def report_refusal(self, message: str, command: str | None) -> None:
         self.calls.append(("refused", message, command))
 
@@ -149,13 +146,21 @@ class RecordingRotator:
         self.calls.append(("nudge", d_az, d_el, source, described))
         self.origins.append(origin)
 
+    @property
+    def operators(self) -> RecordingRotator:
+        return self  # the control lease's claim and release, recorded like the rest
+
     def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None:
         self.calls.append(("claim", operator, minutes, described))
         self.origins.append(origin)
 
-    def release_control(self, origin: Origin, described: str) -> None:
-        self.calls.append(("release_control", described))
-        self.origins.append(origin)
+    def release(self, *args: object, **kw: object) -> None:  # noqa: D102
+        if args and isinstance(args[0], Origin):  # the control lease's
+            self.calls.append(("release_control", args[1]))
+            self.origins.append(args[0])
+            return
+        marker, clear = args[0], bool(kw.get("clear"))
+        self.calls.append(("release", marker, *(["clear"] if clear else [])))
 
     def go_toward(
         self,
