@@ -174,3 +174,28 @@ def test_the_lease_refuses_others_lets_stops_through_and_everything_is_audited(
         assert events[6]["bearing_before"] == pytest.approx(10, abs=1)
     assert [m.retain for m in probe.on("rotor/audit")] == [False] * len(want)
     pst.close()
+
+
+def test_a_full_disk_under_the_audit_file_is_reported_once_and_costs_nothing(rig: Rig) -> None:
+    audit_path = rig.tmp / "audit.jsonl"
+    audit_path.symlink_to("/dev/full")  # every write: ENOSPC, as on a full disk
+    rig.sections["audit_file"] = str(audit_path)
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    for az in ("40", "80"):
+        probe.publish("rotor/target", az)
+        emu.wait_for(lambda s, az=az: abs(s.az_deg - float(az)) <= 3 and not s.is_moving, 20)
+    problem = probe.wait_for("rotor/error", lambda m: json.loads(m.text)["kind"] == "audit")
+    assert "No space left on device" in json.loads(problem.text)["message"]
+    assert [json.loads(m.text)["kind"] for m in probe.on("rotor/error")] == ["audit"]  # once
+    assert len(probe.on("rotor/audit")) == 2  # R/audit goes on
+    # space again: the next line is written, without a restart
+    audit_path.unlink()
+    probe.publish("rotor/stop", "STOP")
+    assert app.audit is not None
+    wait_until(lambda: len(probe.on("rotor/audit")) == 3, 10, "the stop audited")
+    app.audit.flush()
+    (line,) = audit_path.read_text().splitlines()
+    assert json.loads(line)["command"] == "stop 'STOP'"
