@@ -94,6 +94,7 @@ class RecordingRotator:
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
     ) -> None:
         shown = replace(command, origin=None)  # who sent it: in ``origins``
         self.calls.append(("submit", shown, described, *([hold] if hold else [])))
@@ -108,6 +109,7 @@ class RecordingRotator:
         hold: int | None = None,
         save: bool = True,
         origin: Origin | None = None,
+        echo: bool = False,
     ) -> None:
         self.calls.append(("lock", locked, *([hold] if hold else [])))
         self.origins.append(origin)
