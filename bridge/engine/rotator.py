@@ -184,8 +184,7 @@ class Rotator:
         try:
             judged = self._check(command)
         except Refused as exc:
-            self.report_refusal(exc.message, what)
-            self.operators.audit(origin, what, f"refused: {exc.message}")
+            self.report_refusal(exc.message, what, origin=origin)
             raise
         if isinstance(command, SetOption):
             name, enabled = command.name, command.enabled
@@ -235,8 +234,7 @@ class Rotator:
         info = self.status.target_info
         if info is None:
             message = "no locator or coordinate target to take the other path to"
-            self.report_refusal(message, described)
-            self.operators.audit(origin or Origin(source), described, f"refused: {message}")
+            self.report_refusal(message, described, origin=origin or Origin(source))
             raise Refused(RefusalCode.INVALID, message)
         self.go_toward(
             info.latitude_deg,
@@ -294,8 +292,7 @@ class Rotator:
                     RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
                 )
         except Refused as exc:
-            self.report_refusal(exc.message, described)
-            self.operators.audit(who, described, f"refused: {exc.message}")
+            self.report_refusal(exc.message, described, origin=who)
             raise
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
@@ -327,8 +324,7 @@ class Rotator:
         try:
             target = make()
         except Refused as exc:
-            self.report_refusal(exc.message, described)
-            self.operators.audit(origin or Origin(Source.MQTT), described, f"refused: {exc}")
+            self.report_refusal(exc.message, described, origin=origin or Origin(Source.MQTT))
             raise
         self.submit(target if origin is None else replace(target, origin=origin), described)
 
@@ -383,9 +379,14 @@ class Rotator:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
         self._mailbox.put_note(message)
 
-    def report_refusal(self, message: str, command: str | None) -> None:
-        """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
+        """Publish a refusal (also for input that never became a command, e.g. a bad payload);
+        with ``origin`` (who sent it) it is in the audit trail too."""
         self.report(ErrorKind.REFUSED, message, command)
+        if origin is not None:
+            self.operators.audit(origin, command or "input", f"refused: {message}")
 
     def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)

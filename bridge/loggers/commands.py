@@ -144,13 +144,15 @@ class Commands:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
-                    rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
+                    why = f"pst: locator {req.locator!r}: {exc}"
+                    rot.report_refusal(why, described, origin=by)
                     return
                 rot.go_toward(lat, lon, Source.PST, described, locator=req.locator, origin=by)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
                     described,
+                    origin=by,
                 )
                 return
             elif req.azimuth is not None or el is not None:

@@ -279,6 +279,7 @@ class MqttService:
             self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
+        origin = self.origin(operator)
         halt = kind == "stop" or (kind == "lock" and switch_on(payload))
         if retain and halt and not self._halts.retain_is_live:
             self._halts.replayed_halt(rot, topic, kind, payload)
@@ -288,6 +289,7 @@ class MqttService:
                 f"retained command on {topic} ignored: commands must be published without the "
                 "retain flag (clear it with an empty retained message)",
                 what,
+                origin=origin,
             )
             return
         if gated and not halt:  # rule 6
@@ -295,9 +297,9 @@ class MqttService:
                 "not taken: the bridge is still checking that no other bridge runs on its base "
                 "topic (its first look after connecting); send it again",
                 what,
+                origin=origin,
             )
             return
-        origin = self.origin(operator)
         if halt:
             self._halts.main_halt(rot, topic, kind, what, retain, origin)
             return
@@ -305,14 +307,14 @@ class MqttService:
             try:
                 pl.parse_switch(payload)
             except pl.PayloadError as exc:
-                rot.report_refusal(str(exc), what)
+                rot.report_refusal(str(exc), what, origin=origin)
                 return
             self._halts.main_lock_off(rot, origin)
             return
         try:
             self._command(rot, kind, arg, payload, what, origin)
         except pl.PayloadError as exc:
-            rot.report_refusal(str(exc), what)
+            rot.report_refusal(str(exc), what, origin=origin)
         except Refused:
             pass  # the rotator has reported it
 

@@ -177,3 +177,15 @@ def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None
     store.flush()
     assert "lease" not in json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]
     mailbox.close()
+
+
+def test_input_refused_before_it_became_a_command_is_audited_when_its_sender_is_known(
+    tmp_path: Path,
+) -> None:
+    rot, audit, events = rotator(tmp_path, Clock())
+    rot.report_refusal("bad payload", "target 'north'", origin=OTHER)  # e.g. a bad payload
+    rot.report_refusal("bad payload", "target 'north'")  # nobody known: R/error only
+    assert [e.message for e in events] == ["bad payload", "bad payload"]
+    assert [(a.origin.who, a.command, a.result) for a in audit] == [
+        ("G4XYZ", "target 'north'", "refused: bad payload")
+    ]

@@ -49,7 +49,7 @@ class Recording:
             self.peers.append(command.origin.peer if command.origin is not None else None)
             self.calls.append(replace(command, origin=None))  # who sent it: in ``peers``
 
-    def report_refusal(self, message: str, command: str | None) -> None:
+    def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:
         with self._lock:
             self.calls.append(("refused", message))
 

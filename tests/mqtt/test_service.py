@@ -117,7 +117,9 @@ class RecordingRotator:
     def save_lock(self) -> None:
         pass
 
-    def report_refusal(self, message: str, command: str | None) -> None:
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
         self.calls.append(("refused", message, command))
 
     def go_to_preset(
