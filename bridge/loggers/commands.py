@@ -132,27 +132,27 @@ class Commands:
                 log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
         counts.ignored += len(req.ignored)
         described = "pst " + data.decode("ascii").strip()[:120]
-        by = Origin(Source.PST, None, peer[0])  # who sent it (the audit trail, the lease)
+        # who sent it (the audit trail, the lease): on the commands themselves, which every
+        # rotator these endpoints serve takes (the bridge's and the remote's)
+        by = Origin(Source.PST, None, peer[0])
         has_el = rot.spec.has_elevation
         el = req.elevation if has_el else None
         try:
             if req.stop:
                 rot.submit(Stop(Source.PST, by), described)
             elif req.park:
-                rot.park(Source.PST, described, origin=by)
+                rot.park(Source.PST, described)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
-                    why = f"pst: locator {req.locator!r}: {exc}"
-                    rot.report_refusal(why, described, origin=by)
+                    rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
                     return
-                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator, origin=by)
+                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
                     described,
-                    origin=by,
                 )
                 return
             elif req.azimuth is not None or el is not None:

@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 from bridge import geo
 from bridge.engine.rotator import Rotator
-from bridge.model import Origin, Source, Stop, Target
+from bridge.model import Source, Stop, Target
 
 MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
@@ -253,7 +253,7 @@ def carry_out(rot: Rotator, cmd: WebCommand) -> None:
         case "stop":
             rot.submit(Stop(src), what)
         case "lock":
-            rot.set_lock(cmd.on, origin=Origin(src))  # the audit trail: the console
+            rot.set_lock(cmd.on)
         case "target":
             rot.submit(Target(cmd.az_deg, cmd.el_deg, src), what)
         case "toward":
