@@ -12,7 +12,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from bridge.engine.audit import AuditFile
+from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import TrackConfig
 from bridge.engine.lines import Lines
@@ -26,7 +26,6 @@ from bridge.engine.worker import WorkerConfig
 from bridge.gs232 import easycomm_server, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
-from bridge.model import AuditEvent, ErrorKind
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.lane import StopLane
@@ -149,12 +148,10 @@ class App:
                 f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
             ) from None
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
-        self.audit: AuditFile | None = None  # every command judged (engine/audit.py)
-        if settings.audit_file is not None:
-            path, most = settings.audit_file.expanduser(), settings.audit_max_bytes
-            self.audit = AuditFile(path, most, on_problem=self._audit_failed)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
+        audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
+        self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         self.emulations: list[LineServer] = []  # GS-232 and Easycomm ports (gs232/)
         position = settings.station.position
@@ -191,7 +188,7 @@ class App:
                 station=settings.station.position,
                 catalog=catalog,
                 sky=self.sky,
-                on_audit=partial(self._audited, r.id),
+                on_audit=self.audit.of(r.id),
             )
             self.mqtt.attach(rot)
             if self.web is not None:
@@ -245,18 +242,6 @@ class App:
                 listener(value)
 
         return call
-
-    def _audited(self, rotator_id: str, event: AuditEvent) -> None:
-        """One command judged: to the audit file's queue and R/audit (both only queue)."""
-        if self.audit is not None:
-            self.audit.put(event)
-        self.mqtt.publish_audit(rotator_id, event)
-
-    def _audit_failed(self, problem: str | None) -> None:
-        """The audit file cannot be written (once, until it can again): on every R/error."""
-        for rot in self.rotators:
-            if problem is not None:
-                rot.report(ErrorKind.AUDIT, problem, None)
 
     def _discovery(self, settings: Settings) -> DiscoveryPublisher:
         ha = settings.homeassistant
@@ -350,8 +335,7 @@ class App:
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
-        if self.audit is not None:
-            self.audit.start()
+        self.audit.start()
         self.mqtt.start()  # the stop lane follows the first connection (_connected)
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
@@ -383,8 +367,7 @@ class App:
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)
-        if self.audit is not None:
-            self.audit.stop()  # what is queued is written (audit.py rule 4)
+        self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")

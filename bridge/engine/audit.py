@@ -14,6 +14,9 @@ Rules:
    again; then that is said once too. The file is opened anew for every batch, so a path that
    becomes writable again (space freed, directory made) is used without a restart.
 4. ``stop`` writes what is queued, then ends the thread.
+5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
+   publisher (``R/audit``); both only queue. A file that fails is reported (rule 3) on every
+   rotator's error topic, kind ``audit``.
 """
 
 from __future__ import annotations
@@ -23,10 +26,12 @@ import logging
 import os
 import queue
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
+from typing import Protocol
 
-from bridge.model import AuditEvent
+from bridge.model import AuditEvent, ErrorKind
 
 log = logging.getLogger(__name__)
 
@@ -169,3 +174,51 @@ class AuditFile:
             if older.exists():
                 older.replace(self.path.with_name(f"{self.path.name}.{n + 1}"))
         self.path.replace(self.path.with_name(f"{self.path.name}.1"))
+
+
+class Reporter(Protocol):
+    def report(self, kind: ErrorKind, message: str, command: str | None) -> None: ...
+
+
+class AuditTrail:
+    """Rule 5: where every rotator's audit events go."""
+
+    def __init__(
+        self,
+        path: Path | None,
+        max_bytes: int,
+        publish: Callable[[str, AuditEvent], None],
+        rotators: Sequence[Reporter],
+    ) -> None:
+        """``publish(rotator_id, event)``; ``rotators``: those told when the file fails (the
+        app's list, filled after this)."""
+        self._publish = publish
+        self._rotators = rotators
+        self.file: AuditFile | None = None
+        if path is not None:
+            self.file = AuditFile(path.expanduser(), max_bytes, on_problem=self._failed)
+
+    def _failed(self, problem: str | None) -> None:
+        for rot in self._rotators if problem is not None else ():  # None: it works again
+            rot.report(ErrorKind.AUDIT, problem or "", None)
+
+    def of(self, rotator_id: str) -> Callable[[AuditEvent], None]:
+        """The ``on_audit`` of one rotator (engine/operators.py)."""
+        return partial(self._audited, rotator_id)
+
+    def _audited(self, rotator_id: str, event: AuditEvent) -> None:
+        if self.file is not None:
+            self.file.put(event)
+        self._publish(rotator_id, event)
+
+    def start(self) -> None:
+        if self.file is not None:
+            self.file.start()
+
+    def stop(self) -> None:
+        if self.file is not None:
+            self.file.stop()
+
+    def flush(self, timeout_s: float = 5.0) -> None:
+        if self.file is not None:
+            self.file.flush(timeout_s)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import Control, RotatorStatus, TargetInfo, TrackingInfo, valid_operator
+from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -120,40 +120,6 @@ def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
     if not -90 <= lat <= 90 or not -180 <= lon <= 180:
         raise PayloadError("latitude must be -90..90 and longitude -180..180")
     return _place(None, lat, lon, path == "long")
-
-
-def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
-    """``R/control/claim``: ``{"operator": "DL1ABC", "minutes": 30}`` -> (operator, minutes),
-    judged by the lease (engine/lease.py rule 1). Without ``operator`` in it, the message's
-    own (the MQTT 5 user property) claims."""
-    obj = _json_object(_text(payload), "claim")
-    unknown = set(obj) - {"operator", "minutes"}
-    if unknown:
-        raise PayloadError(f"unknown key(s) in a claim: {', '.join(sorted(unknown))}")
-    if "minutes" not in obj:
-        raise PayloadError('a claim needs "minutes", e.g. {"operator": "DL1ABC", "minutes": 30}')
-    who = obj.get("operator", operator)
-    if who is None:
-        raise PayloadError('a claim needs "operator", e.g. {"operator": "DL1ABC", "minutes": 30}')
-    return who, obj["minutes"]
-
-
-def parse_release(payload: bytes) -> str | None:
-    """``R/control/release`` takes any payload; a JSON object's ``operator`` names who released
-    it when the message has no user property (Home Assistant's button sends one). None: no
-    name, or not a valid one (model.valid_operator)."""
-    try:
-        obj = json.loads(payload.decode("utf-8")) if payload.strip().startswith(b"{") else None
-    except (UnicodeDecodeError, json.JSONDecodeError):
-        return None
-    return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
-
-
-def control_json(control: Control | None) -> str:
-    """``R/control`` (retained): who holds the control lease and until when, or nobody."""
-    if control is None:
-        return _COMPACT.encode({"holder": None, "until": None})
-    return _COMPACT.encode({"holder": control.operator, "until": _iso(control.until_unix)})
 
 
 def _looks_like_locator(text: str) -> bool:

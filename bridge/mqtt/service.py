@@ -61,6 +61,7 @@ from bridge.model import (
     Target,
     valid_operator,
 )
+from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
@@ -192,7 +193,7 @@ class MqttService:
             pub(t.tracking, pl.tracking_state(status))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
-        pub(t.control, pl.control_json(status.control))
+        pub(t.control, control.control_json(status.control))
         for listener in self._status_listeners:
             listener(rotator_id, status)
 
@@ -323,9 +324,9 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock; PayloadError or Refused."""
         if kind == "claim":
-            rot.operators.claim(*pl.parse_claim(payload, by.operator), by, what)
+            rot.operators.claim(*control.parse_claim(payload, by.operator), by, what)
         elif kind == "release":
-            named = pl.parse_release(payload) if by.operator is None else None
+            named = control.parse_release(payload) if by.operator is None else None
             rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
         else:
             self._motion(rot, kind, arg, payload, what, by)

@@ -75,7 +75,7 @@ def test_operators_claim_and_release_and_cannot_fake_the_lease(
     rig, logins = station
     dl1abc, g4xyz = logins["dl1abc"], logins["g4xyz"]
     dl1abc.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
-    g4xyz.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    held = g4xyz.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
     # the bridge's retained record is the station user's: an operator's write is dropped
     g4xyz.publish("rotor/control", '{"holder": "G4XYZ", "until": null}', retain=True)
     g4xyz.publish("rotor/target", "200")  # refused: a round trip through the bridge after it
@@ -91,6 +91,7 @@ def test_operators_claim_and_release_and_cannot_fake_the_lease(
         fresh.close()
     # anyone of them may release it (coordination, not security)
     g4xyz.publish("rotor/control/release", "")
-    dl1abc.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] is None)
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    dl1abc.wait_for("rotor/control", free, after=held.t)  # (free at the start too)
     g4xyz.publish("rotor/target", "60")
     rig.emus["tower"].wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)

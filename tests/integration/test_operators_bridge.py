@@ -134,13 +134,15 @@ def test_the_lease_refuses_others_lets_stops_through_and_everything_is_audited(
     probe.publish(stop_button["command_topic"], stop_button["payload_press"])
     audited(9)
     other.publish("rotor/lock", "ON")
-    probe.wait_value("rotor/lock/state", "ON")
+    on = probe.wait_value("rotor/lock/state", "ON")
     holder.publish("rotor/lock", "OFF")
-    probe.wait_value("rotor/lock/state", "OFF")
+    probe.wait_value("rotor/lock/state", "OFF", after=on.t)  # (OFF at the start too)
+    audited(11)
 
     # Home Assistant's release button frees it; then anyone may turn it
     probe.publish(release_button["command_topic"], release_button["payload_press"])
-    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] is None)
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    probe.wait_for("rotor/control", free, after=held.t)  # (free at the start too)
     other.publish("rotor/target", "60")
     emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)
     probe.wait_for("rotor/status", lambda m: json.loads(m.text)["last_operator"] == "G4XYZ")
@@ -216,13 +218,15 @@ def test_a_lease_kept_across_a_restart_holds_and_then_ends_by_itself(
     rig.start()
     rig.ready("tower")
     probe = rig.probe
-    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
     other.publish("rotor/target", "200")
     probe.wait_for("rotor/error", lambda m: "DL1ABC holds the rotator until" in m.text)
     # nobody does anything: the lease ends at its time (this wait is what is under test)
-    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] is None, 15)
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    probe.wait_for("rotor/control", free, 15, after=held.t)
     assert time.time() >= ends_unix
-    status = probe.wait_for("rotor/status", lambda m: json.loads(m.text)["control"] is None)
+    ended = lambda m: json.loads(m.text)["control"] is None  # noqa: E731
+    status = probe.wait_for("rotor/status", ended, after=held.t)
     assert json.loads(status.text)["control"] is None
     other.publish("rotor/target", "60")
     emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)
