@@ -24,6 +24,7 @@ from dataclasses import replace
 import serial
 
 from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.health_memory import HealthMemory
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.operators import EXECUTED, Operators
@@ -39,7 +40,6 @@ from bridge.model import (
     ErrorEvent,
     ErrorKind,
     Origin,
-    RotatorHealth,
     RotatorStatus,
     SetOption,
     Source,
@@ -52,7 +52,6 @@ from bridge.protocols.base import ModelSpec
 from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
-HEALTH_SAVE_S = 60.0  # rotor health to the state file at most this often (_status)
 
 
 class Rotator:
@@ -87,9 +86,7 @@ class Rotator:
         self._locked = store.locked(self.id)
         self._save_lock = threading.Lock()
         self._mailbox = Mailbox()
-        self._health_kept: RotatorHealth | None = None
-        self._health_unsaved: RotatorHealth | None = None
-        self._health_saved_s = -math.inf
+        self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
         self._worker = Worker(
             cfg,
@@ -138,28 +135,9 @@ class Rotator:
         return kept
 
     def _status(self, status: RotatorStatus) -> None:
-        """Every status to the listeners; rotor health's memory, new after a move, to the
-        state file on its writer thread (state_store.py rule 5: never beside a stop), at most
-        every HEALTH_SAVE_S (a rotor tracking in small steps would write it every few seconds
-        to an SD card), and the last one when the rotator stops."""
-        health = status.health
-        if health is not None and health is not self._health_kept:
-            first, self._health_kept = self._health_kept is None, health
-            if health.measured and not first:
-                self._health_unsaved = health
-                if time.monotonic() >= self._health_saved_s + HEALTH_SAVE_S:
-                    self._save_health_later()
+        """Every status to the listeners, once rotor health's memory had a look at it."""
+        self._health.seen(status.health)
         self._on_status(status)
-
-    def _save_health_later(self) -> None:
-        health, self._health_unsaved = self._health_unsaved, None
-        if health is not None:
-            self._health_saved_s = time.monotonic()
-            self._store.later(lambda: self._save_health(health))
-
-    def _save_health(self, health: RotatorHealth) -> None:
-        self._store.set_health(self.id, health.memory)  # a failure is logged there: health
-        # is no safety matter, the next move tries again
 
     def reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""
@@ -190,7 +168,7 @@ class Rotator:
         self.operators.stop()
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
-        self._save_health_later()  # what the last moves taught (app.py flushes the store)
+        self._health.flush()  # what the last moves taught (app.py flushes the store)
 
     def submit(
         self,
