@@ -148,6 +148,7 @@ class Mailbox:
         """Start a new health baseline (a setting: it moves nothing)."""
         with self._lock:
             self._batch.health_reset = True
+        self._wake_once()
 
     def put_control(self, control: Control | None) -> None:
         """The control lease changed (the status shows its holder)."""
