@@ -108,8 +108,16 @@ class Info:
 
 
 def _num(doc: dict[str, Any], key: str) -> float | None:
+    """A number, or None: JSON as Python reads it has NaN, Infinity and 1e400 (inf) too, which
+    no reading may show (a forged status: rule 1)."""
     v = doc.get(key)
-    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+    if not isinstance(v, int | float) or isinstance(v, bool):
+        return None
+    try:
+        n = float(v)
+    except OverflowError:  # an integer past a float's range
+        return None
+    return n if math.isfinite(n) else None
 
 
 def _unix(text: object) -> float | None:
@@ -163,7 +171,9 @@ def _tracking(doc: object) -> TrackingInfo | None:
 def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
     the console draws (the place targeted, the body tracked)."""
-    doc: dict[str, Any] = json.loads(payload)
+    doc = json.loads(payload)
+    if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
+        raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
 
     def num(key: str) -> float | None:
         return _num(doc, key)
