@@ -13,10 +13,15 @@ Rules:
    nothing is queued. paho keeps an unacknowledged QoS 1 message and sends it again on the
    next connection (its ``_messages_reconnect_reset_out``), which would move the antenna
    minutes after the operator asked; so when the connection drops, every command not yet
-   acknowledged is dropped from paho's queue, under the same lock ``send`` holds. The remote
-   publishes nothing else at QoS 1, so the whole queue is commands.
+   acknowledged is dropped from paho's queue, under the same lock ``send`` holds (but see
+   rule 5). The remote publishes nothing else at QoS 1, so the whole queue is commands.
 4. The state topics are subscribed with the connection's command options (QoS 0): the newest
    retained value is what counts, and it comes again after every reconnect.
+5. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
+   unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
+   client was told went out is kept when the rest are dropped, and sent again, with a fresh
+   expiry, first thing on the next connection, before any other command can be sent. One
+   refused at once (``send`` raised) is not: its client knows it did not go.
 """
 
 from __future__ import annotations
@@ -50,12 +55,15 @@ class RemoteLink(Connection):
         filters: list[str],
         on_message: MessageHandler,
         on_change: Callable[[], None] = lambda: None,
+        last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
     ) -> None:
         super().__init__(
             settings, client_id, subscriptions=filters, on_message=on_message, reconnect_max_s=10
         )
         self._send_lock = threading.Lock()
         self._on_change = on_change
+        self._last_word = last_word  # rule 5
+        self._held: list[tuple[str, bytes, Properties]] = []  # rule 5: for the next connection
 
     @property
     def up(self) -> bool:
@@ -80,20 +88,41 @@ class RemoteLink(Connection):
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )
             if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
-                self._forget_unsent()  # paho kept it for the next connection: rule 3
+                self._forget_unsent(refused_mid=info.mid)  # paho kept it for later: rule 3
                 raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
 
-    def _forget_unsent(self) -> None:
-        """Rule 3: paho's queue of unacknowledged messages emptied (caller holds _send_lock)."""
-        dropped = len(self._client.drop_out_messages())  # paho 2.2's own, as client.py uses
+    def _forget_unsent(self, refused_mid: int | None = None) -> None:
+        """Rules 3 and 5: paho's queue of unacknowledged messages emptied, the last words among
+        them held for the next connection (caller holds _send_lock)."""
+        dropped = 0
+        for m in self._client.drop_out_messages():  # paho 2.2's own, as client.py uses
+            payload, props = bytes(m.payload), m.properties  # send gave it its properties
+            if m.mid != refused_mid and props is not None and self._last_word(m.topic, payload):
+                self._held.append((m.topic, payload, props))
+                log.warning(
+                    "%s: not acknowledged by the broker before the connection dropped: it may "
+                    "not have reached the station; sent again on the next connection",
+                    m.topic,
+                )
+            else:
+                dropped += 1
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
             )
 
+    def _resend_held(self) -> None:
+        """Rule 5, on the new connection before ``send`` may run (caller holds _send_lock)."""
+        held, self._held = self._held, []
+        for topic, payload, props in held:
+            log.warning("%s sent again (not acknowledged on the last connection)", topic)
+            self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
+
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _opened(self, client: object) -> None:
-        self.connected.set()
+        with self._send_lock:  # rule 5: the held last words first
+            self._resend_held()
+            self.connected.set()
         self._on_change()
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:

@@ -82,6 +82,8 @@ class Remote:
     link: RemoteLink | None = None
     console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
+    _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
+    _locks: set[str] = field(default_factory=set)
 
     @property
     def station(self) -> StationTopics:
@@ -96,6 +98,7 @@ class Remote:
             self.station.subscriptions(),
             self._on_message,
             on_change=self._on_link,
+            last_word=self._last_word,
         )
         self.link.start()
         try:
@@ -170,6 +173,11 @@ class Remote:
         if feed is not None:
             feed.refresh()  # the pages see the station go (console.py rule 3)
 
+    def _last_word(self, topic: str, payload: bytes) -> bool:
+        """A stop or lock ON to one of the station's rotators (mqtt/remote.py rule 5); paho's
+        thread or a front end's, with the send lock held."""
+        return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
+
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload)
         feed = self.feed
@@ -216,6 +224,8 @@ class Remote:
                 ep.rotator,
             )
         assert self.link is not None
+        self._stops.add(topics.stop)
+        self._locks.add(topics.lock)
         return RemoteRotator(
             rid,
             topics,
@@ -281,6 +291,8 @@ class Remote:
             log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
             return None
         assert self.link is not None
+        self._stops.add(topics.stop)
+        self._locks.add(topics.lock)
         return RemoteRotator(
             rid,
             topics,

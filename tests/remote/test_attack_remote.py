@@ -6,15 +6,25 @@ station's bridge on an emulator (tests/support/rig.py)."""
 
 from __future__ import annotations
 
+import re
+import socket
+from collections.abc import Iterator
+from typing import Any
+
 import pytest
 
 from bridge.errors import RefusalCode, Refused
 from bridge.gs232.commands import EasycommSession, Gs232Session
 from bridge.model import RotatorStatus
+from bridge.mosquitto import free_port
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import Info, RemoteRotator, StationView
+from bridge.remote.run import Remote
+from bridge.remote.settings import RemoteSettings
 from bridge.rotctld.server import RotctldSession
+from tests.support import wait_until
+from tests.support.rig import Rig
 
 STATION = StationTopics("rotor")
 INFO = (
@@ -103,3 +113,76 @@ def test_one_rotators_forged_status_does_not_freeze_the_consoles_other_rotators(
     feed.on_message(good.topics.status, idle_status("123.0"))
     assert [s.bearing_deg for s in pages.statuses["b"]] == [123.0]
     assert not pages.statuses["a"][-1].available
+
+
+# -- the broker dropping at the worst moment ---------------------------------------------------
+OPERATOR = "DL1ABC"
+RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
+
+
+def remote_settings(broker_port: int, port: int, **extra: Any) -> RemoteSettings:
+    return RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker_port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        **extra,
+    )
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
+    port = free_port()
+    r = Remote(remote_settings(station.broker.port, port))
+    r.start()
+    yield r, port
+    r.stop()
+
+
+def ask(port: int, line: bytes) -> bytes:
+    """One rotctld request on a fresh connection; its first reply line."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.sendall(line)
+        buf = b""
+        while not buf.endswith(b"\n"):
+            chunk = sock.recv(100)
+            if not chunk:
+                break
+            buf += chunk
+    return buf
+
+
+def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
+    station: Rig, remote: tuple[Remote, int]
+) -> None:
+    """The broker stalls, then dies, between a stop's publish and its acknowledgement: the
+    client was told RPRT 0, and the stop sat unacknowledged in paho's queue. The remote dropped
+    it with the targets (never late), so the operator's STOP never reached the station
+    (docs/architecture.md rule 11: a stop is never lost; a stop moves nothing, rule 7). The
+    target before it must still never be sent again."""
+    r, port = remote
+    link = r.link
+    assert link is not None
+    station.broker.pause()
+    assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
+    assert ask(port, b"S\n") == b"RPRT 0\n"
+    station.broker.kill()
+    wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+    log_from = station.broker.log.stat().st_size
+    station.broker.restart()
+    wait_until(lambda: link.up, 30, "the remote back on the broker")
+
+    def published() -> list[bytes]:
+        with open(station.broker.log, "rb") as f:
+            f.seek(log_from)
+            return RECEIVED.findall(f.read())
+
+    wait_until(lambda: b"stop" in published(), 10, "the unacknowledged stop sent again")
+    assert published() == [b"stop"]  # the target is not
