@@ -323,6 +323,10 @@ class Connection:
             self._guard.reported = True
             log.error("%s", takeover_message(self._settings.effective_client_id(), ending))
 
+    def _filters(self) -> list[tuple[str, Any]]:
+        """The subscriptions with their options (rules 1 and 4)."""
+        return command_filters(self._subscriptions, self._no_replay, self._v5)
+
     def _intercepted(self, topic: str, payload: bytes) -> bool:
         """Whether a message is the connection's own business, not the handler's."""
         return False
@@ -347,9 +351,7 @@ class Connection:
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
-        self._command_mid = self._subscribe(
-            client, command_filters(self._subscriptions, self._no_replay, self._v5)
-        )
+        self._command_mid = self._subscribe(client, self._filters())
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:

@@ -15,8 +15,11 @@ Rules:
    minutes after the operator asked; so when the connection drops, every command not yet
    acknowledged is dropped from paho's queue, under the same lock ``send`` holds (but see
    rule 5). The remote publishes nothing else at QoS 1, so the whole queue is commands.
-4. The state topics are subscribed with the connection's command options (QoS 0): the newest
-   retained value is what counts, and it comes again after every reconnect.
+4. The state topics are subscribed at QoS 0: the newest retained value is what counts, and it
+   comes again after every reconnect. Unlike the bridge's command topics they do not ask for
+   retain-as-published, so the retain flag the handler gets says "replayed from the broker's
+   store on subscribing" (an old value, of unknown age) and a message the station publishes
+   while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
 5. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
    unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
    client was told went out is kept when the rest are dropped, and sent again, with a fresh
@@ -29,11 +32,13 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Callable
+from typing import Any
 
 from paho.mqtt.enums import MQTTErrorCode
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.errors import RefusalCode, Refused
 from bridge.mqtt.connection import Connection, MessageHandler
@@ -119,6 +124,11 @@ class RemoteLink(Connection):
             self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
+    def _filters(self) -> list[tuple[str, Any]]:
+        """Rule 4: retain-as-published off (the retain flag then means replayed)."""
+        state = SubscribeOptions(qos=0, retainAsPublished=False)
+        return [(topic, state) for topic in self._subscriptions]
+
     def _opened(self, client: object) -> None:
         with self._send_lock:  # rule 5: the held last words first
             self._resend_held()

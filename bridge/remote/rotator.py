@@ -8,12 +8,15 @@ Rules:
    while it is current: the remote connected, ``B/bridge/state`` and ``R/availability`` both
    received as ``online`` on this connection (positive word, whatever order they come in).
    Otherwise the rotator reads as unavailable (rotctld answers an error code), never as the
-   last number seen. The station publishes a status when
-   something changes, not on a clock, so the ``time`` of a still rotor's status says nothing
-   about staleness: the bridge's last will and the availability topic do. A MOVING rotor's
-   bearing changes with every poll, so a ``moving`` status older than ``moving_max_age_s``
-   means the station went quiet mid-move (its last will comes only after 1.5 keepalives): it
-   reads as unavailable too. A clock of the operator's that is ahead errs the safe way.
+   last number seen. The station publishes a status when something changes, not on a clock,
+   so the age of a still rotor's status says nothing about staleness: the bridge's last will
+   and the availability topic do. A MOVING rotor's bearing changes with every poll, so a
+   ``moving`` status counts only while one came from the station, as it published it, within
+   ``moving_max_age_s`` on the remote's own clock: older, the station went quiet mid-move (its
+   last will comes only after 1.5 keepalives); replayed from the broker's store (the retain
+   flag, mqtt/remote.py rule 4), it is of unknown age until the next one. The status's
+   ``time`` is not used: it is the station's clock, and a station clock behind the operator's
+   made every move read as unknown, one ahead kept a dead move current.
 2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
    Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
    The remote judges a target against these facts (a target out of range or in a keep-out
@@ -206,31 +209,36 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     )
 
 
-def status_time(payload: bytes) -> datetime | None:
-    try:
-        return datetime.fromisoformat(json.loads(payload)["time"])
-    except (ValueError, KeyError, TypeError):
-        return None
-
-
 class StationView:
-    """The retained topics the remote reads, newest first; written on paho's thread."""
+    """The retained topics the remote reads, newest first; written on paho's thread. Each value
+    keeps when it came (``clock``) and whether the broker replayed it from its store."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._lock = threading.Condition()
         self._topics: dict[str, bytes] = {}
+        self._came: dict[str, tuple[float, bool]] = {}  # topic -> (when, replayed)
+        self._clock = clock
 
-    def put(self, topic: str, payload: bytes) -> None:
+    def put(self, topic: str, payload: bytes, replayed: bool = False) -> None:
         with self._lock:
             if payload:
                 self._topics[topic] = payload
+                self._came[topic] = (self._clock(), replayed)
             else:  # an empty retained message deletes the topic
                 self._topics.pop(topic, None)
+                self._came.pop(topic, None)
             self._lock.notify_all()
 
     def clear(self) -> None:
         with self._lock:
             self._topics.clear()
+            self._came.clear()
+
+    def live_within(self, topic: str, max_age_s: float) -> bool:
+        """Whether ``topic``'s value came as published (not replayed) within ``max_age_s``."""
+        with self._lock:
+            came = self._came.get(topic)
+            return came is not None and not came[1] and self._clock() - came[0] <= max_age_s
 
     def get(self, topic: str) -> bytes | None:
         with self._lock:
@@ -260,7 +268,6 @@ class RemoteRotator:
         operator: str,
         expiry_s: int,
         moving_max_age_s: float = 10.0,
-        wall: Callable[[], float] = time.time,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.id = rotator_id
@@ -274,7 +281,6 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
-        self._wall = wall
         self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
         self._clock = clock
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -307,10 +313,10 @@ class RemoteRotator:
             status = parse_status(self.id, raw)
         except (ValueError, TypeError):
             return RotatorStatus(self.id, connected=self._link.up)
-        if status.state is MotionState.MOVING:
-            at = status_time(raw)
-            if at is None or self._wall() - at.timestamp() > self._moving_max_age_s:
-                return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
+        if status.state is MotionState.MOVING and not self._view.live_within(
+            self.topics.status, self._moving_max_age_s
+        ):
+            return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:

@@ -179,7 +179,7 @@ class Remote:
         return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        self.view.put(topic, payload)
+        self.view.put(topic, payload, replayed=retain)
         feed = self.feed
         if feed is not None:
             feed.on_message(topic, payload)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import socket
 from collections.abc import Iterator
+from datetime import UTC, datetime
 from typing import Any
 
 import pytest
@@ -24,6 +25,7 @@ from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
+from tests.support.clock import FakeClock
 from tests.support.rig import Rig
 
 STATION = StationTopics("rotor")
@@ -186,3 +188,59 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
 
     wait_until(lambda: b"stop" in published(), 10, "the unacknowledged stop sent again")
     assert published() == [b"stop"]  # the target is not
+
+
+# -- clock skew between the operator and the station -------------------------------------------
+def moving_status(station_time: str) -> bytes:
+    return (
+        b'{"bearing":77.0,"state":"moving","connected":true,"available":true,"locked":false,'
+        b'"time":"' + station_time.encode() + b'"}'
+    )
+
+
+def skewed(offset_s: float, clock: FakeClock) -> str:
+    """The station's clock, ``offset_s`` off the operator's (whose wall time is ``clock``)."""
+    return datetime.fromtimestamp(clock() + offset_s, UTC).isoformat(timespec="milliseconds")
+
+
+@pytest.mark.parametrize("station_behind_s", [30.0, 600.0])
+def test_a_station_clock_behind_the_operators_does_not_blank_every_move(
+    station_behind_s: float,
+) -> None:
+    """A station without a real-time clock (a Raspberry Pi) can be a minute off. Its moving
+    statuses, arriving as it publishes them, are current: the remote read them as "gone quiet"
+    because their ``time`` was older than moving_max_age_s on the operator's clock, so every
+    rotctld ``p`` during every move was an error."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(-station_behind_s, clock)))
+    assert rot.status.bearing_deg == 77.0
+    assert RotctldSession(rot).feed(b"p\n") == [b"77.00\n0.00\n"]  # type: ignore[arg-type]
+
+
+def test_a_station_clock_ahead_does_not_keep_a_dead_move_current() -> None:
+    """The station went quiet mid-move (a crash; its last will comes 1.5 keepalives later): its
+    last moving status must turn unknown after moving_max_age_s, however far ahead the station's
+    clock is. It stayed current for the whole skew (an hour here)."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(3600, clock)))
+    assert rot.status.bearing_deg == 77.0
+    clock.t += 11  # nothing since: the station quiet for more than moving_max_age_s (10)
+    assert rot.status.bearing_deg is None
+    assert RotctldSession(rot).feed(b"p\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
+
+
+def test_a_moving_status_replayed_from_the_brokers_store_is_unknown_until_a_live_one() -> None:
+    """On (re)connecting, the broker replays the station's retained status, however old; its own
+    ``time`` (the station's clock) cannot say how old on ours. Unknown until the station's next
+    status, which a moving station sends within a poll."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(0, clock)), replayed=True)
+    assert rot.status.bearing_deg is None
+    view.put(rot.topics.status, moving_status(skewed(0, clock)))
+    assert rot.status.bearing_deg == 77.0
