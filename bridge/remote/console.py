@@ -48,12 +48,12 @@ from bridge.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-from bridge.remote.rotator import RemoteRotator, StationView
+from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView
 
 log = logging.getLogger(__name__)
 
 TICK_S = 1.0  # rule 4
-OFFLINE = "the station's rotator is offline (its bridge or its controller): nothing sent"
+OFFLINE = STATION_AWAY
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,10 @@ Rules:
    was on its way.
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
-   OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+   OFFLINE at once; a stop is refused only then, because it cannot be delivered. A command that
+   moves (a target, park, a place) is refused with OFFLINE at once too while the station is
+   not current (rule 1: its bridge or the rotator offline), as the station's own rotctld
+   refuses it for a rotator offline: nobody would take it.
 4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
    endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
    position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
@@ -68,6 +71,7 @@ from bridge.protocols.base import ModelSpec
 log = logging.getLogger(__name__)
 
 REFUSAL_LOG_S = 10.0  # rule 5
+STATION_AWAY = "the station's rotator is offline (its bridge or its controller): nothing sent"
 
 
 class Sender(Protocol):
@@ -334,6 +338,7 @@ class RemoteRotator:
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
+        self._station_there()
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
             self.publish(self.topics.park, "park")
@@ -342,6 +347,12 @@ class RemoteRotator:
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
         self._send_target(doc)
+
+    def _station_there(self) -> None:
+        """Rule 3: a move is refused at once while the station is not current (the link down
+        is the link's own refusal)."""
+        if self._link.up and not self.current:
+            raise Refused(RefusalCode.OFFLINE, STATION_AWAY)
 
     def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
@@ -378,6 +389,7 @@ class RemoteRotator:
         if long_path:
             place["path"] = "long"
         try:
+            self._station_there()
             self._send_target(place)
         except Refused as exc:
             self.report_refusal(exc.message, described)
