@@ -229,6 +229,7 @@ class Connection:
         **options: Unpack[Options],
     ) -> None:
         self._settings = settings
+        self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
@@ -321,7 +322,7 @@ class Connection:
             )
         else:  # once an episode
             self._guard.reported = True
-            log.error("%s", takeover_message(self._settings.effective_client_id(), ending))
+            log.error("%s", takeover_message(self._client_id, ending))
 
     def _filters(self) -> list[tuple[str, Any]]:
         """The subscriptions with their options (rules 1 and 4)."""

@@ -163,12 +163,17 @@ class RemoteSettings(_Strict):
         return self
 
     def client_id(self) -> str:
-        """``mqtt.client_id``, or one per operator and host that no bridge uses ("remote-")."""
+        """``mqtt.client_id``, or one per operator, host and what the file serves, that no
+        bridge uses ("remote-"): two remotes of one operator on one host (one per rotator, a
+        console beside a rotctld port) would otherwise take each other's connection over for
+        ever (mqtt/connection.py rule 7); one file keeps its id across restarts."""
         if self.mqtt.client_id:
             return self.mqtt.client_id
-        key = f"{socket.gethostname()}\n{self.mqtt.base_topic}\n{self.operator}".encode()
+        served = [(e.rotator, e.offers()) for e in self.endpoints]
+        web = self.web.port if self.web.enabled else None
+        key = f"{socket.gethostname()}\n{self.mqtt.base_topic}\n{self.operator}\n{served}\n{web}"
         short = re.sub(r"[^a-z0-9]", "", self.operator.lower())[:8]
-        return f"remote-{short}-{hashlib.sha256(key).hexdigest()[:6]}"
+        return f"remote-{short}-{hashlib.sha256(key.encode()).hexdigest()[:6]}"
 
 
 def load_remote_settings(path: str) -> RemoteSettings:

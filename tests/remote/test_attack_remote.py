@@ -6,6 +6,7 @@ station's bridge on an emulator (tests/support/rig.py)."""
 
 from __future__ import annotations
 
+import logging
 import re
 import socket
 from collections.abc import Iterator
@@ -13,11 +14,14 @@ from datetime import UTC, datetime
 from typing import Any
 
 import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.errors import RefusalCode, Refused
 from bridge.gs232.commands import EasycommSession, Gs232Session
 from bridge.model import RotatorStatus
 from bridge.mosquitto import free_port
+from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import Info, RemoteRotator, StationView
@@ -244,3 +248,55 @@ def test_a_moving_status_replayed_from_the_brokers_store_is_unknown_until_a_live
     assert rot.status.bearing_deg is None
     view.put(rot.topics.status, moving_status(skewed(0, clock)))
     assert rot.status.bearing_deg == 77.0
+
+
+# -- the station away while the broker is there ------------------------------------------------
+@pytest.mark.parametrize(
+    ("gone", "word"),
+    [("bridge", b"offline"), ("rotator", b"offline"), ("rotator", b"")],
+    ids=["the station's bridge offline", "its rotator offline", "its rotator never described"],
+)
+def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_goes(
+    gone: str, word: bytes
+) -> None:
+    """The broker is there, the station's bridge (or its controller) is not. The remote's
+    console refused a move then; rotctld, GS-232, Easycomm and PstRotator said RPRT 0 / nothing
+    and published a target nobody would take, as the station's own rotctld does not (it answers
+    RPRT -5 for a rotator offline). A stop still goes (never refused)."""
+    view, link = StationView(), Link()
+    rot = station_rotator(view, "tower", link)
+    view.put(STATION.bridge_state if gone == "bridge" else rot.topics.availability, word)
+    assert RotctldSession(rot).feed(b"P 120 0\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
+    assert Gs232Session(rot).feed(b"M120\r") == [b"?>\r\n"]  # type: ignore[arg-type]
+    assert EasycommSession(rot).feed(b"AZ120.0\n") == [b"ALrefused offline\n"]  # type: ignore[arg-type]
+    assert link.sent == []
+    assert RotctldSession(rot).feed(b"S\n") == [b"RPRT 0\n"]  # type: ignore[arg-type]
+    assert link.sent == [(rot.topics.stop, "stop")]
+
+
+# -- two remotes on one host -------------------------------------------------------------------
+def test_two_remotes_of_one_operator_on_one_host_get_their_own_client_ids() -> None:
+    """One remote per rotator, each with its own file (or a console-only one beside a rotctld
+    one): with the default client id they had one id, and a broker closes the first connection
+    of an id when the second comes (MQTT 5 session takeover), so both flapped for ever, every
+    command refused while down."""
+    one = remote_settings(1883, 4533)
+    other = RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": 1883, "base_topic": "rotor"},
+        endpoints=[{"rotator": "mast", "gs232_pty": "/tmp/rotor-mast"}],
+    )
+    assert one.client_id() != other.client_id()
+    assert one.client_id() == remote_settings(1883, 4533).client_id()  # stable across restarts
+
+
+def test_a_takeover_names_the_client_id_the_remote_uses(caplog: pytest.LogCaptureFixture) -> None:
+    """The takeover error tells the user which client id two processes share: it named the
+    bridge's default id (rotor-...), not the remote's (remote-...), sending the user to look
+    for a bridge."""
+    s = remote_settings(1883, 4533)
+    link = RemoteLink(s.mqtt, s.client_id(), [], lambda topic, payload, retain: None)
+    with caplog.at_level(logging.ERROR, logger="bridge.mqtt.connection"):
+        link._ended(ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True)
+    (said,) = [r.getMessage() for r in caplog.records]
+    assert f"client id {s.client_id()!r}" in said
