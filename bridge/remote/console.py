@@ -295,6 +295,6 @@ def drawn_of(payload: bytes | None) -> Drawn:
     """``R/info``'s console fields, or the defaults when it has none that can be read."""
     try:
         return Drawn.parse(payload or b"{}")
-    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError, OverflowError) as exc:
         log.warning("the station's description has console fields that cannot be read: %s", exc)
         return Drawn()

@@ -100,18 +100,32 @@ class Info:
         spec = REGISTRY.get(model)
         if spec is None:
             raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
-        az_lo, az_hi = (float(v) for v in doc["azimuth_range"])
+        az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
         el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
         park = doc.get("park")
         # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
         aim = Pointing.of(
             spec,
             (az_lo, az_hi),
-            (float(el[0]), float(el[1])),
-            keep_out=tuple((float(a), float(b)) for a, b in doc.get("keep_out") or ()),
-            park=(float(park[0]), None if park[1] is None else float(park[1])) if park else None,
+            (_finite(el[0]), _finite(el[1])),
+            keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
+            park=(_finite(park[0]), None if park[1] is None else _finite(park[1]))
+            if park
+            else None,
         )
         return cls(str(doc.get("name") or model), spec, aim)
+
+
+def _finite(value: object) -> float:
+    """A number of the station's description; ValueError for NaN and infinities (which
+    Python's json reads), on which every judgement would raise instead of refusing."""
+    try:
+        n = float(value)  # type: ignore[arg-type]  # TypeError for what is no number: caller's
+    except OverflowError:  # an integer past a float's range
+        n = math.inf
+    if not math.isfinite(n):
+        raise ValueError(f"{value!r} is not a finite number")
+    return n
 
 
 def _num(doc: dict[str, Any], key: str) -> float | None:

@@ -23,9 +23,9 @@ from bridge.model import RotatorStatus
 from bridge.mosquitto import free_port
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import StationTopics
-from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator
+from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator, drawn_of
 from bridge.remote.rotator import Info, RemoteRotator, StationView
-from bridge.remote.run import Remote
+from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
@@ -300,3 +300,36 @@ def test_a_takeover_names_the_client_id_the_remote_uses(caplog: pytest.LogCaptur
         link._ended(ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True)
     (said,) = [r.getMessage() for r in caplog.records]
     assert f"client id {s.client_id()!r}" in said
+
+
+# -- an absurd description of the station ------------------------------------------------------
+ABSURD_INFOS = [
+    pytest.param(b'"azimuth_range":[NaN,NaN]', id="NaN azimuth range"),
+    pytest.param(b'"azimuth_range":[0,1e400]', id="an infinite azimuth range"),
+    pytest.param(b'"azimuth_range":[0,1' + b"0" * 400 + b"]", id="an integer past a float"),
+    pytest.param(b'"azimuth_range":[0,360],"elevation_range":[NaN,90]', id="NaN elevation"),
+    pytest.param(b'"azimuth_range":[0,360],"keep_out":[[NaN,Infinity]]', id="NaN keep-out"),
+    pytest.param(b'"azimuth_range":[0,360],"park":[NaN,null]', id="NaN park"),
+]
+
+
+@pytest.mark.parametrize("fields", ABSURD_INFOS)
+def test_an_absurd_retained_description_is_a_start_error_not_a_traceback_per_command(
+    broker: Any, probe: Any, fields: bytes
+) -> None:
+    """A retained R/info with numbers that are not numbers: the remote started ("tower
+    (rotorez, nan..nan)") and every P then raised inside the judge (a ValueError, not a
+    refusal): a traceback in the log and RPRT -7 for each of Gpredict's targets. It is not the
+    station's description: a one-line start error naming the topic."""
+    probe.publish("rotor/info", b'{"name":"tower","model":"rotorez",' + fields + b"}", retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+    r = Remote(remote_settings(broker.port, free_port(), info_wait_s=5))
+    with pytest.raises(StartError, match=r"^rotor/info is not the station's description: "):
+        r.start()
+
+
+def test_a_description_with_console_fields_past_a_float_leaves_the_console_its_defaults() -> None:
+    """[web] on: a beamwidth of 400 digits raised OverflowError (not a ValueError) out of the
+    remote's start, a traceback instead of the console with its defaults."""
+    assert drawn_of(b'{"beamwidth":1' + b"0" * 400 + b"}") == Drawn()
