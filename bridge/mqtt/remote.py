@@ -139,4 +139,6 @@ class RemoteLink(Connection):
         with self._send_lock:  # a send under way finishes first, then its message goes too
             self._forget_unsent()
         self._on_change()
+        if self._stopping:  # our own goodbye: no "reconnecting", no takeover evidence
+            return False
         return super()._closed(was_up, reason_code)

@@ -333,3 +333,23 @@ def test_a_description_with_console_fields_past_a_float_leaves_the_console_its_d
     """[web] on: a beamwidth of 400 digits raised OverflowError (not a ValueError) out of the
     remote's start, a traceback instead of the console with its defaults."""
     assert drawn_of(b'{"beamwidth":1' + b"0" * 400 + b"}") == Drawn()
+
+
+def stand_in_station(probe: Any) -> None:
+    """The station's retained description and presence, without a bridge."""
+    probe.publish("rotor/info", INFO, retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+
+
+def test_the_remote_stopping_does_not_say_it_reconnects(
+    broker: Any, probe: Any, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Ctrl-C: the remote's last log line was the warning "disconnected from MQTT broker
+    (Normal disconnection); reconnecting", as if the broker had gone."""
+    stand_in_station(probe)
+    r = Remote(remote_settings(broker.port, free_port()))
+    r.start()
+    with caplog.at_level(logging.INFO, logger="bridge"):
+        r.stop()
+    assert not [rec.getMessage() for rec in caplog.records if "reconnecting" in rec.getMessage()]
