@@ -30,6 +30,11 @@ Rules:
    GS-232B reads a reply up to its CR and leaves the LF). So what is still unread STALE_S
    after the last reply was written is discarded (counted in ``stale_dropped``): a client
    that asked reads its reply well within that.
+7. The pty never echoes: a client may turn the tty's ECHO on (a program opening the port in
+   cooked mode, ``stty sane``), and a pty echoes what its master writes back to the master, so
+   the server would read its own replies as commands and answer them for ever. A serial line
+   has no echo towards the computer: before each reply, ECHO and ECHONL found on are turned
+   off again (logged once a server), the client's other settings left as they are.
 """
 
 from __future__ import annotations
@@ -100,6 +105,7 @@ class PtyLineServer:
         self.stale_dropped = 0  # bytes (rule 6)
         self._written_s: float | None = None  # when the last reply was written (rule 6)
         self._dropped_logged_s = -DROP_LOG_S
+        self._echo_said = False  # rule 7
 
     @property
     def address(self) -> str:
@@ -222,8 +228,26 @@ class PtyLineServer:
             termios.tcflush(self._slave, termios.TCIFLUSH)
             self.stale_dropped += unread
 
+    def _no_echo(self) -> None:
+        """Rule 7."""
+        attrs = termios.tcgetattr(self._slave)
+        echo = termios.ECHO | termios.ECHONL
+        if attrs[3] & echo:
+            attrs[3] &= ~echo
+            termios.tcsetattr(self._slave, termios.TCSANOW, attrs)
+            if not self._echo_said:
+                self._echo_said = True
+                log.warning(
+                    "%s for %s: a client turned echo on at %s (it would echo the replies back "
+                    "as commands): turned off again",
+                    self.label,
+                    self.rotator_id,
+                    self.path,
+                )
+
     def _write(self, reply: bytes) -> None:
-        """Rule 5: all of it, or what is left dropped."""
+        """Rule 5: all of it, or what is left dropped; rule 7 first."""
+        self._no_echo()
         self._written_s = self._clock()  # rule 6
         view = memoryview(reply)
         while view:
