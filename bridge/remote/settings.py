@@ -6,7 +6,7 @@ Rules:
    is the station's. MQTT 5 only: every command carries an expiry (mqtt/remote.py rule 1).
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
    take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
-   client hears its replies on port + 1), a pty's path.
+   client hears its replies on port + 1), a pty's path; nor the console's web.port.
 3. A problem is a ConfigError naming the key as the file spells it, one line each.
 4. An endpoint offers one thing at least (rotctld, GS-232 or Easycomm on TCP or a pty,
    PstRotator UDP); every bind is loopback unless set.
@@ -160,6 +160,9 @@ class RemoteSettings(_Strict):
                             f"{name} {where} clashes with {taken[claim]}: give it another {what}"
                         )
                 taken[(transport, where)] = name
+        if self.web.enabled and ("tcp", self.web.port) in taken:  # rule 2: the console too
+            clash = taken[("tcp", self.web.port)]
+            raise ValueError(f"web.port {self.web.port} clashes with {clash}: give it another port")
         return self
 
     def client_id(self) -> str:

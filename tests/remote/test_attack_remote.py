@@ -353,3 +353,15 @@ def test_the_remote_stopping_does_not_say_it_reconnects(
     with caplog.at_level(logging.INFO, logger="bridge"):
         r.stop()
     assert not [rec.getMessage() for rec in caplog.records if "reconnecting" in rec.getMessage()]
+
+
+def test_the_console_on_an_endpoints_port_is_a_configuration_error() -> None:
+    """[web] on the port an endpoint takes: the file was accepted, and the start then failed with
+    "Address already in use", sending the user to look for another program."""
+    with pytest.raises(ValueError, match=r"web.port 4533 clashes with endpoints\[0\].gs232_port"):
+        RemoteSettings(
+            operator=OPERATOR,
+            mqtt={"host": "127.0.0.1"},
+            endpoints=[{"gs232_port": 4533}],
+            web={"enabled": True, "port": 4533},
+        )
