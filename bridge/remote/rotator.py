@@ -117,28 +117,25 @@ class Info:
 
 
 def _finite(value: object) -> float:
-    """A number of the station's description; ValueError for NaN and infinities (which
-    Python's json reads), on which every judgement would raise instead of refusing."""
+    """A number of R/info; ValueError for NaN and infinities: the judge would raise on them."""
     try:
         n = float(value)  # type: ignore[arg-type]  # TypeError for what is no number: caller's
     except OverflowError:  # an integer past a float's range
         n = math.inf
     if not math.isfinite(n):
-        raise ValueError(f"{value!r} is not a finite number")
+        raise ValueError(f"{value!r:.20} is not a finite number")
     return n
 
 
 def _num(doc: dict[str, Any], key: str) -> float | None:
-    """A number, or None: JSON as Python reads it has NaN, Infinity and 1e400 (inf) too, which
-    no reading may show (a forged status: rule 1)."""
+    """A number, or None (Python's json reads NaN, Infinity, 1e400: never shown, rule 1)."""
     v = doc.get(key)
     if not isinstance(v, int | float) or isinstance(v, bool):
         return None
     try:
-        n = float(v)
-    except OverflowError:  # an integer past a float's range
+        return _finite(v)
+    except ValueError:
         return None
-    return n if math.isfinite(n) else None
 
 
 def _unix(text: object) -> float | None:
