@@ -263,12 +263,13 @@ class ConsoleFeed:
         if self._ticker is not None:
             self._ticker.join(timeout=5.0)
 
-    def on_message(self, topic: str, payload: bytes) -> None:
-        """paho's thread (rule 4)."""
+    def on_message(self, topic: str, payload: bytes, replayed: bool = False) -> None:
+        """paho's thread (rule 4). An error event the broker replays from its store is old news
+        (the station never retains one): not shown."""
         for rot in self._rotators:
             t = rot.remote.topics
             if topic == t.error:
-                event = parse_event(payload)
+                event = None if replayed else parse_event(payload)
                 if event is not None:
                     self._pages.on_event(rot.id, event)
                 return

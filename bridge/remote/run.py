@@ -182,7 +182,7 @@ class Remote:
         self.view.put(topic, payload, replayed=retain)
         feed = self.feed
         if feed is not None:
-            feed.on_message(topic, payload)
+            feed.on_message(topic, payload, retain)
 
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""

@@ -365,3 +365,18 @@ def test_the_console_on_an_endpoints_port_is_a_configuration_error() -> None:
             endpoints=[{"gs232_port": 4533}],
             web={"enabled": True, "port": 4533},
         )
+
+
+def test_an_error_event_the_broker_replays_is_not_shown_as_new() -> None:
+    """R/error is never retained by the station; one retained there (forged, or an old tool's)
+    came to every page as a fresh error on every reconnect of the remote."""
+    view, pages = StationView(), Pages()
+    rot = station_rotator(view, "tower")
+    events: list[object] = []
+    pages.on_event = lambda rid, event: events.append(event)  # type: ignore[method-assign]
+    feed = ConsoleFeed([RemoteConsoleRotator(rot, Drawn(), view)], pages)
+    event = b'{"kind":"refused","message":"rotator is locked","command":null,"time":5.0}'
+    feed.on_message(rot.topics.error, event, replayed=True)
+    assert events == []
+    feed.on_message(rot.topics.error, event)
+    assert len(events) == 1
