@@ -10,7 +10,11 @@ Rules:
 1. ``listen`` opens the pty pair (raw: no echo, no line editing, no CR/LF translation) and links
    the slave's name at the path: a symlink already there (a leftover from a crash) is
    replaced in one step (os.replace), anything else there is refused, untouched, with an
-   OSError naming the front end, the rotator, the path and the setting to change.
+   OSError naming the front end, the rotator, the path and the setting to change. A link a
+   live server serves is no leftover: each server claims its path for as long as it lives (a
+   Linux abstract socket named after the path, which dies with its process, so a crash leaves
+   no claim), and a path claimed already is refused (EADDRINUSE). Where there are no abstract
+   sockets (macOS) a link there is replaced as before.
 2. ``stop`` removes the link only while it still points at this pty (another program's link
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
@@ -41,9 +45,11 @@ from __future__ import annotations
 
 import errno
 import fcntl
+import hashlib
 import logging
 import os
 import select
+import socket
 import struct
 import termios
 import threading
@@ -106,6 +112,7 @@ class PtyLineServer:
         self._written_s: float | None = None  # when the last reply was written (rule 6)
         self._dropped_logged_s = -DROP_LOG_S
         self._echo_said = False  # rule 7
+        self._claim: socket.socket | None = None  # rule 1
 
     @property
     def address(self) -> str:
@@ -125,6 +132,7 @@ class PtyLineServer:
             return
         if os.path.lexists(self.path) and not os.path.islink(self.path):
             raise self._error(errno.EEXIST, "something that is not a link is there")
+        self._claim = self._claimed()
         master, slave = os.openpty()
         try:
             tty.setraw(slave)
@@ -141,8 +149,29 @@ class PtyLineServer:
         except BaseException:
             os.close(master)
             os.close(slave)
+            self._unclaim()
             raise
         self._master, self._slave, self.slave_name = master, slave, name
+
+    def _claimed(self) -> socket.socket | None:
+        """Rule 1: this path claimed for this server's life; OSError if another holds it."""
+        key = hashlib.sha256(self.path.encode()).hexdigest()[:32]
+        claim = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        try:
+            claim.bind(f"\0rotor-bridge-pty-{key}")
+        except OSError as exc:
+            claim.close()
+            if exc.errno == errno.EADDRINUSE:
+                raise self._error(
+                    errno.EADDRINUSE, "another program serves a pty there (a second rotor-bridge?)"
+                ) from None
+            return None  # no abstract sockets here: no claim, as before
+        return claim
+
+    def _unclaim(self) -> None:
+        if self._claim is not None:
+            self._claim.close()
+            self._claim = None
 
     def start(self) -> None:
         """Link (OSError as ``listen``) and serve in a thread."""
@@ -172,6 +201,7 @@ class PtyLineServer:
         os.close(self._master)
         os.close(self._slave)
         self._master = self._slave = -1
+        self._unclaim()
 
     # -- the thread -------------------------------------------------------------------------
     def _serve(self) -> None:
