@@ -105,7 +105,10 @@ class Gs232Session(_Session):
     def execute(self, line: str | None, req: Gs232Request) -> bytes:
         described = f"gs232 {line}"
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
-            self.rotator.submit(Stop(Source.GS232), described)
+            try:
+                self.rotator.submit(Stop(Source.GS232), described)
+            except Refused:  # the remote's, when it cannot deliver a stop: an answer
+                return GS232_ERROR
             return b""
         if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
             where = _position(self.rotator)
@@ -145,7 +148,10 @@ class EasycommSession(_Session):
         if req.invalid is not None:
             return f"ALinvalid {req.invalid}\n".encode("latin-1")
         if req.stop:  # a line that stops does nothing else
-            self.rotator.submit(Stop(Source.EASYCOMM), described)
+            try:
+                self.rotator.submit(Stop(Source.EASYCOMM), described)
+            except Refused as exc:  # the remote's, when it cannot deliver a stop
+                alarms.append(f"refused {exc.code.value}")
         elif req.park:
             try:
                 self.rotator.park(Source.EASYCOMM, described)
