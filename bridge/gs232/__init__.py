@@ -38,7 +38,8 @@ Rules:
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
    Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one).
 6. A stop is never refused; ``A`` (azimuth) and ``E`` (elevation) stop the whole rotator, more
-   than asked but never less. A line that stops does nothing else.
+   than asked but never less. A line that stops does nothing else. On the remote a stop that
+   cannot be delivered (remote/rotator.py rule 3) is answered as a refused move is.
 7. The sockets, threads, idle timeout and HTTP refusal are the shared line server's
    (tcplines.py), the pty, its link and its thread the pty server's (ptylines.py); this
    package owns what the bytes mean.
