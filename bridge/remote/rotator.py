@@ -1,7 +1,7 @@
 """One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
 ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
-``go_toward``, ``report_refusal``), answered from the station's
-retained topics and carried out by publishing on its command topics.
+``go_toward``, ``report_refusal``), answered from the station's retained topics and carried out
+by publishing on its command topics.
 
 Rules:
 1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
@@ -14,9 +14,8 @@ Rules:
    ``moving`` status counts only while one came from the station, as it published it, within
    ``moving_max_age_s`` on the remote's own clock: older, the station went quiet mid-move (its
    last will comes only after 1.5 keepalives); replayed from the broker's store (the retain
-   flag, mqtt/remote.py rule 4), it is of unknown age until the next one. The status's
-   ``time`` is not used: it is the station's clock, and a station clock behind the operator's
-   made every move read as unknown, one ahead kept a dead move current.
+   flag, mqtt/remote.py rule 4), it is of unknown age until the next one. Its ``time`` is the
+   station's clock, which need not agree with ours: not used.
 2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
    Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
    The remote judges a target against these facts (a target out of range or in a keep-out
@@ -25,18 +24,18 @@ Rules:
    was on its way.
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
-   OFFLINE at once; a stop is refused only then, because it cannot be delivered. A command that
-   moves (a target, park, a place) is refused with OFFLINE at once too while the station is
-   not current (rule 1: its bridge or the rotator offline), as the station's own rotctld
-   refuses it for a rotator offline: nobody would take it.
+   OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
+   once too while the station is not current (rule 1: its bridge or the rotator offline), as
+   the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
+   refused only while the link is down: the station's bridge may be offline on its main
+   connection and still take a stop on its stop lane (mqtt/lane.py).
 4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
    endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
    position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
    ``R/target``: the station knows where it is, the remote does not.
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
    REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
-   seconds), and raised; the station's own refusals are on its
-   ``R/error``, not the remote's to publish.
+   seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
 """
 
 from __future__ import annotations
@@ -102,16 +101,15 @@ class Info:
             raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
         az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
         el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
-        park = doc.get("park")
+        park = doc.get("park") or None
+        at = (_finite(park[0]), None if park[1] is None else _finite(park[1])) if park else None
         # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
         aim = Pointing.of(
             spec,
             (az_lo, az_hi),
             (_finite(el[0]), _finite(el[1])),
             keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
-            park=(_finite(park[0]), None if park[1] is None else _finite(park[1]))
-            if park
-            else None,
+            park=at,
         )
         return cls(str(doc.get("name") or model), spec, aim)
 
@@ -263,8 +261,7 @@ class StationView:
         with self._lock:
             return list(self._topics)
 
-    def wait(self, timeout_s: float) -> None:
-        """Until the next message or ``timeout_s``."""
+    def wait(self, timeout_s: float) -> None:  # until the next message or timeout_s
         with self._lock:
             self._lock.wait(timeout_s)
 
@@ -360,8 +357,7 @@ class RemoteRotator:
         self._send_target(doc)
 
     def _station_there(self) -> None:
-        """Rule 3: a move is refused at once while the station is not current (the link down
-        is the link's own refusal)."""
+        """Rule 3: no move while the station is not current (the link down: the link's word)."""
         if self._link.up and not self.current:
             raise Refused(RefusalCode.OFFLINE, STATION_AWAY)
 
