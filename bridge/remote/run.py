@@ -5,6 +5,7 @@ Rules:
 1. Nothing is served before the station has described every endpoint's rotator (``R/info``):
    a rotator that does not show within ``info_wait_s`` is a start-up error that names the topic
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
+   SIGINT or SIGTERM meanwhile (``stopping``) ends the wait at once, as a start error.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several.
@@ -82,6 +83,7 @@ class Remote:
     link: RemoteLink | None = None
     console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
+    stopping: threading.Event = field(default_factory=threading.Event)  # rule 1: SIGTERM
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _locks: set[str] = field(default_factory=set)
 
@@ -202,6 +204,8 @@ class Remote:
                     topics = one
             if topics is not None:
                 return self._rotator(ep, topics)
+            if self.stopping.is_set():
+                raise StartError("stopped before the station's rotators were found")
             if now >= deadline:
                 raise StartError(self._missing(ep, own))
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
@@ -325,14 +329,14 @@ class Remote:
 
 def run(settings: RemoteSettings) -> int:
     """Serve until SIGINT or SIGTERM; StartError when it cannot start."""
-    stopping = threading.Event()
+    remote = Remote(settings)
+    stopping = remote.stopping  # the start's wait for the station ends with it too (rule 1)
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
         stopping.set()
 
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
-    remote = Remote(settings)
     for line in remote.start():
         print(line, flush=True)
     try:

@@ -8,9 +8,13 @@ from __future__ import annotations
 
 import logging
 import re
+import signal
 import socket
+import subprocess
+import sys
 from collections.abc import Iterator
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -396,3 +400,33 @@ def test_a_gs232_or_easycomm_stop_refused_offline_is_an_answer_not_a_traceback(
         assert Gs232Session(rot).feed(b"S\r") == [b"?>\r\n"]  # type: ignore[arg-type]
         assert EasycommSession(rot).feed(b"SA SE\n") == [b"ALrefused offline\n"]  # type: ignore[arg-type]
     assert not [r for r in caplog.records if r.exc_info]
+
+
+# -- start-up with the station absent ----------------------------------------------------------
+def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
+    broker: Any, tmp_path: Path
+) -> None:
+    """No station on the broker and info_wait_s = 120: SIGTERM (or Ctrl-C) only set a flag the
+    remote looked at after the start, so it sat out the whole wait (two minutes) before
+    leaving. It stops waiting, exits 2 and says why."""
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\ninfo_wait_s = 120\n[mqtt]\nport = {broker.port}\n'
+        f"[[endpoints]]\nrotctld_port = {free_port()}\n"
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_until(
+            lambda: re.search(rb"New client connected .* as remote-", broker.log.read_bytes()),
+            20,
+            "the remote on the broker, waiting for the station",
+        )
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)  # far below info_wait_s: it did not sit it out
+        assert proc.returncode == 2
+        assert "stopped before the station's rotators were found" in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
