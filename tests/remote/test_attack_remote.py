@@ -183,6 +183,8 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     station.broker.pause()
     assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
     assert ask(port, b"S\n") == b"RPRT 0\n"
+    tower = r.rotators[0]
+    tower.publish(tower.topics.lock, "ON")  # as the console's lock ON does (remote/console.py)
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
     log_from = station.broker.log.stat().st_size
@@ -194,8 +196,8 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
             f.seek(log_from)
             return RECEIVED.findall(f.read())
 
-    wait_until(lambda: b"stop" in published(), 10, "the unacknowledged stop sent again")
-    assert published() == [b"stop"]  # the target is not
+    wait_until(lambda: len(published()) >= 2, 10, "the unacknowledged stop and lock sent again")
+    assert published() == [b"stop", b"lock"]  # in their order; the target is not
 
 
 # -- clock skew between the operator and the station -------------------------------------------
