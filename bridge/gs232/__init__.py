@@ -37,9 +37,10 @@ Rules:
 5. Targets go through Rotator.submit with Source.GS232 / Source.EASYCOMM: the lock, the limits,
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
    Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one).
-6. A stop is never refused; ``A`` (azimuth) and ``E`` (elevation) stop the whole rotator, more
-   than asked but never less. A line that stops does nothing else. On the remote a stop that
-   cannot be delivered (remote/rotator.py rule 3) is answered as a refused move is.
+6. A stop is never refused by the bridge; ``A`` (azimuth) and ``E`` (elevation) stop the whole
+   rotator, more than asked but never less. A line that stops does nothing else. On the remote
+   (remote/rotator.py) a stop that cannot be delivered (its broker away) is answered as a
+   refusal is: ``?>``, ``ALrefused offline``.
 7. The sockets, threads, idle timeout and HTTP refusal are the shared line server's
    (tcplines.py), the pty, its link and its thread the pty server's (ptylines.py); this
    package owns what the bytes mean.

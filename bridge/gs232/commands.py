@@ -107,7 +107,7 @@ class Gs232Session(_Session):
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
             try:
                 self.rotator.submit(Stop(Source.GS232), described)
-            except Refused:  # the remote's, when it cannot deliver a stop: an answer
+            except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return GS232_ERROR
             return b""
         if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
@@ -150,7 +150,7 @@ class EasycommSession(_Session):
         if req.stop:  # a line that stops does nothing else
             try:
                 self.rotator.submit(Stop(Source.EASYCOMM), described)
-            except Refused as exc:  # the remote's, when it cannot deliver a stop
+            except Refused as exc:  # the remote's, its broker away (package rule 6)
                 alarms.append(f"refused {exc.code.value}")
         elif req.park:
             try:
