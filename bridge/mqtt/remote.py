@@ -14,13 +14,13 @@ Rules:
    next connection (its ``_messages_reconnect_reset_out``), which would move the antenna
    minutes after the operator asked; so when the connection drops, every command not yet
    acknowledged is dropped from paho's queue, under the same lock ``send`` holds (but see
-   rule 5). The remote publishes nothing else at QoS 1, so the whole queue is commands.
+   rule 6). The remote publishes nothing else at QoS 1, so the whole queue is commands.
 4. The state topics are subscribed at QoS 0: the newest retained value is what counts, and it
    comes again after every reconnect. Unlike the bridge's command topics they do not ask for
    retain-as-published, so the retain flag the handler gets says "replayed from the broker's
    store on subscribing" (an old value, of unknown age) and a message the station publishes
    while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
-5. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
+6. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
    unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
    client was told went out is kept when the rest are dropped, and sent again, with a fresh
    expiry, first thing on the next connection, before any other command can be sent. One
@@ -67,8 +67,8 @@ class RemoteLink(Connection):
         )
         self._send_lock = threading.Lock()
         self._on_change = on_change
-        self._last_word = last_word  # rule 5
-        self._held: list[tuple[str, bytes, Properties]] = []  # rule 5: for the next connection
+        self._last_word = last_word  # rule 6
+        self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
 
     @property
     def up(self) -> bool:
@@ -97,7 +97,7 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
 
     def _forget_unsent(self, refused_mid: int | None = None) -> None:
-        """Rules 3 and 5: paho's queue of unacknowledged messages emptied, the last words among
+        """Rules 3 and 6: paho's queue of unacknowledged messages emptied, the last words among
         them held for the next connection (caller holds _send_lock)."""
         dropped = 0
         for m in self._client.drop_out_messages():  # paho 2.2's own, as client.py uses
@@ -117,7 +117,7 @@ class RemoteLink(Connection):
             )
 
     def _resend_held(self) -> None:
-        """Rule 5, on the new connection before ``send`` may run (caller holds _send_lock)."""
+        """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock)."""
         held, self._held = self._held, []
         for topic, payload, props in held:
             log.warning("%s sent again (not acknowledged on the last connection)", topic)
@@ -130,7 +130,7 @@ class RemoteLink(Connection):
         return [(topic, state) for topic in self._subscriptions]
 
     def _opened(self, client: object) -> None:
-        with self._send_lock:  # rule 5: the held last words first
+        with self._send_lock:  # rule 6: the held last words first
             self._resend_held()
             self.connected.set()
         self._on_change()

@@ -176,7 +176,7 @@ class Remote:
             feed.refresh()  # the pages see the station go (console.py rule 3)
 
     def _last_word(self, topic: str, payload: bytes) -> bool:
-        """A stop or lock ON to one of the station's rotators (mqtt/remote.py rule 5); paho's
+        """A stop or lock ON to one of the station's rotators (mqtt/remote.py rule 6); paho's
         thread or a front end's, with the send lock held."""
         return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
 
