@@ -10,7 +10,9 @@ Rules:
    SIGINT or SIGTERM meanwhile (``stopping``) ends the wait at once, as a start error.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
-   rotator takes ``B``, and is told the ids when the station has several.
+   rotator takes ``B``, and is told the ids when the station has several, also when ``B/info``
+   is there beside them (one or the other left from an earlier configuration: nothing clears
+   a retained description).
 3. One line per endpoint goes to stdout at start, naming everything it serves:
    ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533, gs232 /tmp/rotor-gs232,
    pst udp 127.0.0.1:12000``.
@@ -207,8 +209,15 @@ class Remote:
                 topics = own
             elif view.get(one.info) is not None:
                 single_seen = single_seen or now
-                if own is None or now - single_seen >= ONE_ROTATOR_GRACE_S:
+                if now - single_seen >= ONE_ROTATOR_GRACE_S:
                     topics = one
+            ids = self.station.described(view.topics())
+            if topics == one and own is None and ids:  # rule 2: one of them is a leftover
+                raise StartError(
+                    f"the station has rotators {', '.join(sorted(ids))} and one more on "
+                    f"{one.info} (some left from an earlier configuration?): name one in "
+                    "endpoints.rotator"
+                )
             if topics is not None:
                 return self._rotator(ep, topics)
             if self.stopping.is_set():

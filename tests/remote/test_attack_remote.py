@@ -432,3 +432,26 @@ def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_an_old_one_rotator_description_beside_the_stations_rotators_is_no_choice(
+    broker: Any, probe: Any
+) -> None:
+    """A station that had one rotator (retained under rotor/) now has two (rotor/tower/,
+    rotor/mast/): nothing clears the old retained rotor/info, status and availability. An
+    endpoint without ``rotator`` took the old one: a stale bearing, or RPRT -5 for ever, and
+    targets published where no bridge listens, without a word of why. It is a start error that
+    names the rotators."""
+    probe.publish("rotor/info", INFO, retain=True)  # left from the one-rotator days
+    probe.publish("rotor/availability", "online", retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    for rid in ("tower", "mast"):
+        probe.publish(f"rotor/{rid}/info", INFO.replace(b"tower", rid.encode()), retain=True)
+    s = RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotctld_port": free_port()}],
+        info_wait_s=5,
+    )
+    with pytest.raises(StartError, match=r"rotators mast, tower.*name one in endpoints.rotator"):
+        Remote(s).start()
