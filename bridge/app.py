@@ -12,6 +12,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import HealthConfig, TrackConfig
 from bridge.engine.lines import Lines
@@ -121,8 +122,8 @@ class App:
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
-            on_message=lambda topic, payload, retain: self.mqtt.on_message(
-                topic, payload, retain, gated=self.client.gated
+            on_message=lambda topic, payload, retain, operator: self.mqtt.on_message(
+                topic, payload, retain, operator, gated=self.client.gated
             ),
             on_denied=self._denied,
             on_connect=self._connected,
@@ -157,6 +158,8 @@ class App:
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
+        audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
+        self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
         position = settings.station.position
@@ -194,6 +197,7 @@ class App:
                 station=settings.station.position,
                 catalog=catalog,
                 sky=self.sky,
+                on_audit=self.audit.of(r.id),
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,
@@ -353,6 +357,7 @@ class App:
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
+        self.audit.start()
         self.mqtt.start()  # the stop lane follows the first connection (_connected)
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
@@ -385,6 +390,7 @@ class App:
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)
+        self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")

@@ -243,6 +243,8 @@ NO_OPTION = "{{ 'None' }}"
 DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
+# the release button names Home Assistant as who released (it sends no MQTT 5 user property)
+RELEASE_PAYLOAD = '{"operator": "homeassistant"}'
 MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
 
 
@@ -376,6 +378,17 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
            bridge_only=True, config=lambda r: {
         "command_topic": r.topics.health_reset, "payload_press": "RESET", **DIAGNOSTIC,
         "icon": "mdi:restart"}),
+    # who is turning it: the control lease's holder (its end as an attribute), its release
+    # (anyone may: the station owner's button), and who sent the last command
+    Entity("sensor", "control", "Control", bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.control, "json_attributes_topic": r.topics.control,
+        "value_template": "{{ value_json.holder or 'free' }}", "icon": "mdi:account-lock"}),
+    Entity("button", "release_control", "Release control", bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.control_release, "payload_press": RELEASE_PAYLOAD,
+        "icon": "mdi:lock-open-variant"}),
+    Entity("sensor", "last_operator", "Last operator", config=lambda r: {
+        "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:account-arrow-right",
+        "value_template": "{{ value_json.last_operator or 'none' }}"}),
 )  # fmt: skip
 
 

@@ -48,7 +48,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.errors import RefusalCode, Refused
-from bridge.mqtt.connection import Connection, MessageHandler
+from bridge.mqtt.connection import Connection
 from bridge.settings_mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -66,12 +66,15 @@ class RemoteLink(Connection):
         settings: MqttSettings,
         client_id: str,
         filters: list[str],
-        on_message: MessageHandler,
+        on_message: Callable[[str, bytes, bool], None],
         on_change: Callable[[], None] = lambda: None,
         last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
     ) -> None:
+        def handle(topic: str, payload: bytes, retain: bool, _operator: str | None) -> None:
+            on_message(topic, payload, retain)  # a station's state carries no operator
+
         super().__init__(
-            settings, client_id, subscriptions=filters, on_message=on_message, reconnect_max_s=10
+            settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
         )
         self._send_lock = threading.Lock()
         self._on_change = on_change
