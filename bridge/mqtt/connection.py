@@ -337,8 +337,7 @@ class Connection:
             self._guard.reported = True
             log.error("%s", takeover_message(self._client_id, ending))
 
-    def _filters(self) -> list[tuple[str, Any]]:
-        """The subscriptions with their options (rules 1 and 4)."""
+    def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
         return command_filters(self._subscriptions, self._no_replay, self._v5)
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
