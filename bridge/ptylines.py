@@ -39,6 +39,10 @@ Rules:
    the server would read its own replies as commands and answer them for ever. A serial line
    has no echo towards the computer: before each reply, ECHO and ECHONL found on are turned
    off again (logged once a server), the client's other settings left as they are.
+8. Nothing ends the thread but ``stop`` (docs/architecture.md rule 8): a fault in a session or
+   in the loop itself (an ioctl that fails, a bug) is logged with its traceback at most once
+   per FAULT_LOG_S, and the server goes on with a fresh session after EIO_RETRY_S; the link
+   stays served.
 """
 
 from __future__ import annotations
@@ -47,6 +51,7 @@ import errno
 import fcntl
 import hashlib
 import logging
+import math
 import os
 import select
 import socket
@@ -64,6 +69,7 @@ USEFUL_WITHIN_S = 60.0  # rule 4: an unfinished command is dropped after this
 EIO_RETRY_S = 0.2  # rule 3
 DROP_LOG_S = 10.0  # rule 5
 STALE_S = 2.0  # rule 6
+FAULT_LOG_S = 60.0  # rule 8
 _READ_CHUNK = 4096
 
 
@@ -107,6 +113,7 @@ class PtyLineServer:
         self._wake_r, self._wake_w = -1, -1
         self._thread: threading.Thread | None = None
         self.wakeups = 0  # select() returns, for the tests (rule 3: no spinning)
+        self.faults = 0  # rule 8
         self.replies_dropped = 0
         self.stale_dropped = 0  # bytes (rule 6)
         self._written_s: float | None = None  # when the last reply was written (rule 6)
@@ -205,6 +212,22 @@ class PtyLineServer:
 
     # -- the thread -------------------------------------------------------------------------
     def _serve(self) -> None:
+        """Rule 8: the loop, again after a fault, until ``stop``."""
+        logged_s = -math.inf
+        while True:
+            try:
+                self._serve_until_stopped()
+                return
+            except ZeroDivisionError:
+                now = self._clock()
+                if now - logged_s >= FAULT_LOG_S:
+                    logged_s = now
+                    log.exception("%s for %s failed; serving on", self.label, self.rotator_id)
+                self.faults += 1
+            if select.select([self._wake_r], [], [], EIO_RETRY_S)[0]:
+                return
+
+    def _serve_until_stopped(self) -> None:
         session = self._session()
         pending_since: float | None = None
         while True:
