@@ -227,7 +227,6 @@ class Remote:
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
 
     def _rotator(self, ep: Endpoint, topics: RotatorTopics) -> RemoteRotator:
-        s = self.settings
         raw = self.view.get(topics.info) or b""
         try:
             info = Info.parse(raw)
@@ -243,20 +242,7 @@ class Remote:
                 info.name,
                 ep.rotator,
             )
-        assert self.link is not None
-        self._stops.add(topics.stop)
-        self._locks.add(topics.lock)
-        return RemoteRotator(
-            rid,
-            topics,
-            self.station.bridge_state,
-            info,
-            self.view,
-            self.link,
-            s.operator,
-            s.command_expiry_s,
-            s.moving_max_age_s,
-        )
+        return self._remote_rotator(rid, topics, info)
 
     # -- the console (rule 6; remote/console.py) --------------------------------------------
     def _start_console(self) -> str:
@@ -302,14 +288,10 @@ class Remote:
         names = ", ".join(rot.id for rot in shown)
         return f"{s.operator} -> {s.mqtt.host}: console for {names} on {console.url}"
 
-    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
-        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+    def _remote_rotator(self, rid: str, topics: RotatorTopics, info: Info) -> RemoteRotator:
+        """One station rotator on this remote's link; its stop and lock topics are the ones
+        a dropped connection must not lose (mqtt/remote.py rule 6)."""
         s = self.settings
-        try:
-            info = Info.parse(self.view.get(topics.info) or b"")
-        except (ValueError, KeyError, TypeError, IndexError) as exc:
-            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
-            return None
         assert self.link is not None
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
@@ -324,6 +306,15 @@ class Remote:
             s.command_expiry_s,
             s.moving_max_age_s,
         )
+
+    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
+        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+        try:
+            info = Info.parse(self.view.get(topics.info) or b"")
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
+            return None
+        return self._remote_rotator(rid, topics, info)
 
     def _missing(self, ep: Endpoint, own: RotatorTopics | None) -> str:
         s = self.settings
