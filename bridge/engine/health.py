@@ -16,8 +16,10 @@ Rules:
    up to speed) nor the end (braking, coasting, a slow approach) counts; a move too short for
    MIN_SPAN_S and MIN_SPAN_DEG of steady readings gives no speed. Its direction is the way it
    turned: clockwise (raw azimuth growing) or counter-clockwise; up or down in elevation.
-3. The start delay is from the command to the first reading that differs from where the rotor
-   stood, for a move from rest whose turning the polls saw; a move without a command (the
+3. The start delay is from the command to when the rotor left where it stood: the first
+   reading beyond the motion machine's noise band from there (a still potentiometer's jitter is
+   no start), set back by the way it had gone at the move's steady speed; for a move from rest
+   whose turning the polls saw (and that left the band); a move without a command (the
    front panel), a new target taken while turning and a controller silent while it turns
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
@@ -68,6 +70,7 @@ class Health:
         self._measured = cfg.spec.can_report_position
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
+        self._noise_deg = cfg.motion.noise_deg  # rule 3
         self._judge = Judge(cfg.health, self._has_el, memory)
         self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
         self._move: _Move | None = None
@@ -153,8 +156,9 @@ class Health:
         turned = move.first_change_t is not None
         if move.target_t is not None and move.from_rest and move.first_change_t is not None:
             seen_turning = sum(1 for r in move.readings if r[0] > move.first_change_t) >= 2
-            if seen_turning:  # not a silent slew's report at its end (SatEL)
-                values["delay"] = max(0.0, move.first_change_t - move.target_t)
+            left_t = _left_t(times, axes, values, self._noise_deg)
+            if seen_turning and left_t is not None:  # not a silent slew's report (SatEL)
+                values["delay"] = max(0.0, left_t - move.target_t)
         errors: list[float | None] = [None, None]
         if not stalled and move.stop_t is None and m.position_deg is not None:
             if move.target_az is not None:
@@ -225,3 +229,17 @@ def _coast(times: list[float], path: list[float], stop_t: float) -> float | None
     at_stop = path[j] + speed * (stop_t - times[j])
     way = 1.0 if speed >= 0 else -1.0
     return max(0.0, (path[-1] - at_stop) * way)
+
+
+def _left_t(
+    times: list[float], axes: list[tuple[str, list[float]]], speeds: dict[str, float], noise: float
+) -> float | None:
+    """Rule 3: when the rotor left where it stood (the first reading beyond the noise band on
+    either axis, set back by the way it had gone at the move's speed, where measured)."""
+    for k, t in enumerate(times):
+        for axis, path in axes:
+            gone = path[k] - path[0]
+            if abs(gone) > noise:
+                speed = speeds.get(f"{axis}_{'up' if gone > 0 else 'down'}")
+                return t - abs(gone) / speed if speed else t
+    return None

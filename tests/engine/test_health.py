@@ -286,3 +286,34 @@ def test_health_failing_is_contained_and_the_rotor_goes_on(rig: Rig) -> None:
     assert "health failed" in v.errors("internal")[0].message
     v.run_until(lambda h: abs(h.truth().az_deg - 60) <= 3 and h.state is MotionState.IDLE, 120)
     assert _health(v).moves >= health.moves  # rebuilt from what it had kept
+
+
+# -- hostile readings, a hostile memory (review) ----------------------------------------------
+class JitterBench(Bench):
+    """A still potentiometer that reads alternately its value and one degree more (the Rotor-EZ
+    emulator's jitter, emulators/rotorez.py rule 8; the Rotor-EZ's noise band is 2 degrees),
+    and a motor that starts 1.5 s after the command (a brake releasing)."""
+
+    START_S = 1.5
+
+    def __init__(self, speed: Callable[[int, bool], float]) -> None:
+        super().__init__(speed)
+        self.phase = 0
+
+    def _poll(self) -> None:
+        self.now += self.POLL_S
+        reading = float(round(self.axis.position_deg_at(self.now)))
+        target = self.axis.target_deg
+        if target is None or self.axis.position_deg_at(self.now) == target:  # still: jitter
+            reading += self.phase
+            self.phase ^= 1
+        self.m, _events = mo.reading(self.m, self.mcfg, reading, self.now)
+        self._feed()
+
+
+def test_a_jittering_potentiometer_is_no_start_of_the_motor() -> None:
+    bench = JitterBench(lambda n, up: 6.0)
+    for n in range(6):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    delay = bench.reports[-1].start_delay_s
+    assert delay == pytest.approx(JitterBench.START_S, abs=JitterBench.POLL_S), delay
