@@ -23,7 +23,8 @@ Rules:
    front panel), a new target taken while turning and a controller silent while it turns
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
-   came to rest.
+   came to rest. The arrival error is of a move that came to rest by itself: not one stopped,
+   stalled or ended by a new target while turning (it arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -160,7 +161,8 @@ class Health:
             if seen_turning and left_t is not None:  # not a silent slew's report (SatEL)
                 values["delay"] = max(0.0, left_t - move.target_t)
         errors: list[float | None] = [None, None]
-        if not stalled and move.stop_t is None and m.position_deg is not None:
+        at_rest = m.state is not MotionState.MOVING  # rule 3: not ended by a new target
+        if at_rest and not stalled and move.stop_t is None and m.position_deg is not None:
             if move.target_az is not None:
                 errors[0] = mo.angle_error(m.position_deg, move.target_az, self._wraps)
             if move.target_el is not None and m.el_position_deg is not None:

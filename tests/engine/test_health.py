@@ -317,3 +317,13 @@ def test_a_jittering_potentiometer_is_no_start_of_the_motor() -> None:
         bench.move(n, 300 if n % 2 == 0 else 30)
     delay = bench.reports[-1].start_delay_s
     assert delay == pytest.approx(JitterBench.START_S, abs=JitterBench.POLL_S), delay
+
+
+def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
+    v = rig("rot2prog", emulator={"resolution_ppd": 1})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.target(100)
+    v.run_until(lambda h: h.truth().az_deg > 50, 120)
+    v.target(20)  # SPID takes it while turning: the first move ends half way, not arrived
+    v.run_until(lambda h: _health(h).moves >= 1, 60)
+    assert _health(v).az.arrival_error_deg is None
