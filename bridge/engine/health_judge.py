@@ -24,12 +24,15 @@ Rules:
 5. A reset starts a new baseline and forgets the recent moves and stalls; the totals (moves,
    stalls, odometer, motor-on time) go on: they only ever grow.
 6. A memory that cannot be read (another version, a hand edit) is logged and replaced by a
-   fresh one: health is never a reason not to start.
+   fresh one: health is never a reason not to start. A number that is no finite float (an
+   integer too large for one, NaN, Infinity, which Python's JSON reads) is unreadable: it
+   would otherwise reach ``R/health`` as ``Infinity``, which no JSON parser takes.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -81,7 +84,13 @@ def _floats(raw: object) -> list[float]:
         isinstance(v, int | float) and not isinstance(v, bool) for v in raw
     ):
         raise ValueError("not a list of numbers")
-    return [float(v) for v in raw]
+    try:
+        out = [float(v) for v in raw]
+    except OverflowError:
+        raise ValueError("a number too large") from None
+    if not all(math.isfinite(v) for v in out):  # rule 6
+        raise ValueError("a number that is not finite")
+    return out
 
 
 class Judge:

@@ -23,6 +23,7 @@ from bridge.engine import motion as mo
 from bridge.engine.health import Health
 from bridge.engine.health_judge import Judge
 from bridge.model import MotionState, RotatorHealth
+from bridge.mqtt.health_payload import health_json
 from bridge.settings import RotatorSettings
 from tests.engine.virtual import VirtualRotator
 
@@ -327,3 +328,20 @@ def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
     v.target(20)  # SPID takes it while turning: the first move ends half way, not arrived
     v.run_until(lambda h: _health(h).moves >= 1, 60)
     assert _health(v).az.arrival_error_deg is None
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [{"motor_on_s": 10**400}, {"odometer_deg": [float("inf"), 0.0]}, {"stall_at": [float("nan")]}],
+)
+def test_an_absurd_memory_starts_afresh(bad: dict[str, object]) -> None:
+    bench = Bench(lambda n, up: 6.0)
+    for n in range(3):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    kept = json.loads(json.dumps(bench.reports[-1].memory))
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    report = Health(cfg, {**kept, **bad}).report  # health is never a reason not to start
+    assert report.moves == 0
+    json.loads(health_json(report), parse_constant=lambda c: pytest.fail(f"{c} in R/health"))
