@@ -72,7 +72,7 @@ class Health:
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
         self._noise_deg = cfg.motion.noise_deg  # rule 3
-        self._judge = Judge(cfg.health, self._has_el, memory)
+        self._judge = Judge(cfg.health, self._has_el, memory, wraps=self._wraps)
         self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
         self._move: _Move | None = None
         self._changed_t: float | None = None

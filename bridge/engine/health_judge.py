@@ -19,7 +19,9 @@ Rules:
    (and by more than DELAY_FLOOR_S, COAST_FLOOR_DEG: a small value doubling is no news).
    With moves varying by +-10 % at random, no median strays 20 % from another: no warning.
 3. Stalls warn when they repeat at one azimuth: STALL_REPEATS of the last STALL_MEMORY within
-   STALL_NEAR_DEG of each other. Single stalls scattered round the circle do not.
+   STALL_NEAR_DEG of each other (on a scale that wraps, 359 and 1 are 2 apart; on one that
+   goes past 360, 370 is another place than 10). Single stalls scattered round the circle do
+   not.
 4. A warning names what changed and by how much, in words a user reads on a dashboard.
 5. A reset starts a new baseline and forgets the recent moves and stalls; the totals (moves,
    stalls, odometer, motor-on time) go on: they only ever grow.
@@ -95,10 +97,16 @@ def _floats(raw: object) -> list[float]:
 
 class Judge:
     def __init__(
-        self, cfg: HealthConfig, has_elevation: bool, memory: Mapping[str, object] | None = None
+        self,
+        cfg: HealthConfig,
+        has_elevation: bool,
+        memory: Mapping[str, object] | None = None,
+        *,
+        wraps: bool = False,  # the azimuth scale wraps at 360 (rule 3)
     ) -> None:
         self._cfg = cfg
         self._el = has_elevation
+        self._wraps = wraps
         self._fresh()
         if memory:
             try:
@@ -218,17 +226,22 @@ class Judge:
         left = list(self.stall_at)
         while left:
             here = left[0]
-            near = [a for a in left if _apart_deg(a, here) <= STALL_NEAR_DEG]
+            near = [a for a in left if self._apart_deg(a, here) <= STALL_NEAR_DEG]
             if len(near) >= STALL_REPEATS:
-                where = statistics.median(near)
+                where = here if self._wraps else statistics.median(near)  # no median across 0
                 out.append(
                     f"{len(near)} stalls near {where:.0f}° (within {STALL_NEAR_DEG:g}°) among the "
                     f"last {len(self.stall_at)}: something holds the rotor there"
                 )
-                left = [a for a in left if _apart_deg(a, where) > STALL_NEAR_DEG]
+                left = [a for a in left if self._apart_deg(a, where) > STALL_NEAR_DEG]
             else:
                 left = left[1:]
         return out
+
+    def _apart_deg(self, a: float, b: float) -> float:
+        """Rule 3: raw azimuths, on a scale that wraps or not."""
+        d = abs(a - b)
+        return min(d, 360.0 - d) if self._wraps and d > 180.0 else d
 
     # -- what it tells and keeps ----------------------------------------------------------------
     def report(self) -> RotatorHealth:
@@ -323,8 +336,3 @@ def _maybe_floats(raw: object) -> list[float | None]:
 
 def _grown(now: float, base: float, pct: float, floor: float) -> bool:
     return now > base * (1 + pct / 100) and now > base + floor
-
-
-def _apart_deg(a: float, b: float) -> float:
-    """Raw azimuths: a rotor that passes 360 stalls at 370 in another place than at 10."""
-    return abs(a - b)

@@ -21,7 +21,7 @@ from bridge.app import worker_config
 from bridge.emulators.physics import Axis
 from bridge.engine import motion as mo
 from bridge.engine.health import Health
-from bridge.engine.health_judge import Judge
+from bridge.engine.health_judge import Judge, Move
 from bridge.model import MotionState, RotatorHealth
 from bridge.mqtt.health_payload import health_json
 from bridge.settings import RotatorSettings
@@ -328,6 +328,16 @@ def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
     v.target(20)  # SPID takes it while turning: the first move ends half way, not arrived
     v.run_until(lambda h: _health(h).moves >= 1, 60)
     assert _health(v).az.arrival_error_deg is None
+
+
+def test_stalls_repeated_either_side_of_north_on_a_wrapping_scale_warn() -> None:
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    judge = Judge(cfg.health, False, wraps=True)
+    for at_deg in (358.0, 1.0, 359.0):
+        judge.add(Move(stalled_at_deg=at_deg))
+    assert [w for w in judge.warnings() if w.startswith("3 stalls near")], judge.warnings()
 
 
 @pytest.mark.parametrize(
