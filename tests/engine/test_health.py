@@ -286,7 +286,10 @@ def test_health_failing_is_contained_and_the_rotor_goes_on(rig: Rig) -> None:
     v.run_until(lambda h: h.errors("internal"), 10, "the bug reported")
     assert "health failed" in v.errors("internal")[0].message
     v.run_until(lambda h: abs(h.truth().az_deg - 60) <= 3 and h.state is MotionState.IDLE, 120)
-    assert _health(v).moves >= health.moves  # rebuilt from what it had kept
+    v.run_until(lambda h: _health(h).moves > health.moves, 30, "the move counted")
+    after = _health(v)  # rebuilt once from what it had kept: the totals go on
+    assert after.moves == health.moves + 1 and after.az.odometer_deg > health.az.odometer_deg
+    assert len(v.errors("internal")) == 1
 
 
 # -- hostile readings, a hostile memory (review) ----------------------------------------------
@@ -328,6 +331,32 @@ def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
     v.target(20)  # SPID takes it while turning: the first move ends half way, not arrived
     v.run_until(lambda h: _health(h).moves >= 1, 60)
     assert _health(v).az.arrival_error_deg is None
+
+
+def test_the_two_directions_apart_warn_and_clear_after_a_recovery_or_a_reset() -> None:
+    bench = Bench(lambda n, up: 6.0 * (0.75 if 20 <= n < 30 and not up else 1.0))
+    for n in range(30):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    warnings = bench.reports[-1].warnings
+    assert any(
+        re.fullmatch(
+            r"clockwise 6\.0 °/s and counter-clockwise 4\.5 °/s, 25 % apart \(0 % at the "
+            r"baseline\) over the last 7 moves each way",
+            w,
+        )
+        for w in warnings
+    ), warnings
+    # 25 moves of 270 degrees at 6 deg/s, 5 at 4.5, each started 0.3 s after its command
+    assert bench.reports[-1].motor_on_s == pytest.approx(25 * 45 + 5 * 60 + 30 * 0.3, rel=0.02)
+    for n in range(30, 44):  # mended: seven moves each way at full speed again
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert bench.reports[-1].warnings == ()
+    bench.speed = lambda n, up: 6.0 * (0.75 if not up else 1.0)
+    for n in range(44, 60):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert bench.reports[-1].warnings != ()
+    assert bench.health.reset() is not None  # after a repair: a new baseline, no warning
+    assert bench.health.report.warnings == ()
 
 
 def test_stalls_repeated_either_side_of_north_on_a_wrapping_scale_warn() -> None:
