@@ -290,6 +290,8 @@ class MqttService:
             elif kind == "park":
                 rot.park(Source.MQTT, what)
             elif kind == "health_reset":
+                if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+                    raise pl.PayloadError("empty payload: a health reset needs one (RESET)")
                 rot.reset_health()
             elif kind == "nudge":
                 rot.nudge(*pl.parse_nudge(payload), Source.MQTT, what)
