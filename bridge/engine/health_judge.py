@@ -7,7 +7,7 @@ Rules:
    of the values seen over the first ``baseline_moves`` moves (after a reset too); a metric
    with fewer than MIN_VALUES values by then is learned from the moves after, until it has
    them. Speeds set in the settings (``az_speed_deg_s``, ``el_speed_deg_s``) are the speed
-   baseline, both ways, from the start.
+   baseline, both ways, from the start; taken out of the settings, the speeds are learned.
 2. A warning judges the median of each metric's last WINDOW values (a speed: the last WINDOW
    moves that way; the coast: the last WINDOW stops), with at least MIN_VALUES of them, never
    one move: a gust or one noisy reading never warns. Per metric, not "the metric's values
@@ -311,10 +311,9 @@ class Judge:
         assert isinstance(baseline, dict) and isinstance(learning, dict)
         assert isinstance(recent, dict)
         kept = {k: _maybe_floats([baseline.get(k)])[0] for k in METRICS}
-        if self.from_settings:  # the speeds set in the settings win over those learned
-            kept.update({k: v for k, v in self.baseline.items() if v is not None})
-        else:
-            self.from_settings = memory["from_settings"] is True
+        if memory["from_settings"] is True:  # rule 1: the speeds set then, not kept if no
+            kept.update(dict.fromkeys(SPEEDS))  # longer set: learned from the moves after
+        kept.update({k: v for k, v in self.baseline.items() if v is not None})  # set now: win
         self.baseline = kept
         self.learned = _count(memory["learned"])
         self.learning = {k: _floats(learning.get(k, [])) for k in METRICS}

@@ -14,12 +14,14 @@ import json
 import random
 import re
 from collections.abc import Callable
+from dataclasses import replace
 
 import pytest
 
 from bridge.app import worker_config
 from bridge.emulators.physics import Axis
 from bridge.engine import motion as mo
+from bridge.engine.config import HealthConfig
 from bridge.engine.health import Health
 from bridge.engine.health_judge import Judge, Move
 from bridge.model import MotionState, RotatorHealth
@@ -173,6 +175,7 @@ class Bench:
         cfg = worker_config(
             RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
         )
+        self.cfg = cfg
         self.mcfg = cfg.motion
         self.health = Health(cfg)
         self.axis = Axis(20.0, speed_deg_s=6.0)
@@ -384,3 +387,17 @@ def test_an_absurd_memory_starts_afresh(bad: dict[str, object]) -> None:
     report = Health(cfg, {**kept, **bad}).report  # health is never a reason not to start
     assert report.moves == 0
     json.loads(health_json(report), parse_constant=lambda c: pytest.fail(f"{c} in R/health"))
+
+
+def test_a_speed_no_longer_set_by_hand_is_learned_again() -> None:
+    bench = Bench(lambda n, up: 6.0)
+    bench.health = Health(replace(bench.cfg, health=HealthConfig(az_speed_deg_s=8.0)))
+    for n in range(3):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    kept = json.loads(json.dumps(bench.reports[-1].memory))
+    assert bench.reports[-1].baseline_from == "settings"
+    report = Judge(HealthConfig(), False, kept).report()  # az_speed_deg_s taken out
+    assert report.baseline_from != "settings" and report.az.baseline_up_deg_s is None
+    assert report.moves == 3
+    again = Judge(HealthConfig(az_speed_deg_s=7.0), False, kept).report()  # or changed
+    assert (again.baseline_from, again.az.baseline_down_deg_s) == ("settings", 7.0)
