@@ -32,6 +32,9 @@ Rules:
 6. Cheap at every step: a motion already seen costs one comparison, a new one a few more and
    a reading appended while the rotor turns (at most MAX_READINGS a move: a rotor "turning"
    for hours, a noisy potentiometer, does not grow without end; its first hour is measured).
+7. A part that cannot even be rebuilt from its memory (a bug in the judgement itself: session.py
+   rule 14) is built ``off_at`` its last report: it measures no more and that report stays,
+   so it cannot fail again at every move and take the link down with it.
 """
 
 from __future__ import annotations
@@ -67,13 +70,22 @@ class _Move:
 
 
 class Health:
-    def __init__(self, cfg: WorkerConfig, memory: Mapping[str, object] | None = None) -> None:
-        self._measured = cfg.spec.can_report_position
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        memory: Mapping[str, object] | None = None,
+        *,
+        off_at: RotatorHealth | None = None,  # rule 7: measures no more; this report stays
+    ) -> None:
+        self._measured = cfg.spec.can_report_position and off_at is None
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
         self._noise_deg = cfg.motion.noise_deg  # rule 3
         self._judge = Judge(cfg.health, self._has_el, memory, wraps=self._wraps)
-        self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
+        if off_at is not None:
+            self.report = off_at
+        else:
+            self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
         self._move: _Move | None = None
         self._changed_t: float | None = None
         self._stop_t: float | None = None

@@ -401,3 +401,23 @@ def test_a_speed_no_longer_set_by_hand_is_learned_again() -> None:
     assert report.moves == 3
     again = Judge(HealthConfig(az_speed_deg_s=7.0), False, kept).report()  # or changed
     assert (again.baseline_from, again.az.baseline_down_deg_s) == ("settings", 7.0)
+
+
+def test_a_judgement_that_always_fails_turns_health_off_not_the_link(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    v = _settled(rig)
+    kept = _move(v, 200)
+
+    def broken(self: Judge) -> RotatorHealth:
+        raise ZeroDivisionError("a bug in the judgement")
+
+    monkeypatch.setattr(Judge, "report", broken)  # the rebuild from memory fails the same way
+    for az_deg in (60.0, 250.0):
+        v.target(az_deg)
+        v.run_until(
+            lambda h, a=az_deg: abs(h.truth().az_deg - a) <= 3 and h.state is MotionState.IDLE,
+            120,
+        )
+    assert len(v.errors("internal")) == 1 and v.status.connected
+    assert _health(v) == kept  # the last report stays; health measures no more
