@@ -12,16 +12,14 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
-from bridge.engine.config import HealthConfig, TrackConfig
 from bridge.engine.lines import Lines
 from bridge.engine.listeners import contained
-from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.engine.worker import WorkerConfig
 from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
@@ -33,63 +31,18 @@ from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.ptylines import PtyLineServer
 from bridge.rotctld import RotctldServer
-from bridge.settings import ConfigError, RotatorSettings, Settings
+from bridge.settings import ConfigError, Settings
 from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
+from bridge.wiring import worker_config
 
 log = logging.getLogger(__name__)
 
 GIL_SWITCH_S = 0.0005
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
-
-
-def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
-    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked)."""
-    spec = r.spec
-    az_min, az_max = r.effective_az_limits
-    az_speed, el_speed = r.effective_speeds_deg_s
-    return WorkerConfig(
-        rotator_id=r.id,
-        port=r.port,
-        spec=spec,
-        baud=r.effective_baud,
-        motion=MotionConfig(
-            spec=spec,
-            tolerance_deg=r.tolerance_deg,
-            stall_timeout_s=r.stall_timeout_s,
-            brake_delay_s=r.effective_brake_delay_s,
-            settle_s=r.settle_s,
-            noise_deg=r.effective_noise_deg,
-            az_span_deg=az_max - az_min,
-            nominal_speed_deg_s=az_speed,
-            # readings while moving come at most 1.5 intervals apart (link.py rule 8), each an
-            # exchange long: the rotor may have stopped that long before the last change showed
-            poll_margin_s=1.5 * r.moving_poll_interval_s + spec.exchange_time_s(r.effective_baud),
-        ),
-        idle_poll_interval_s=r.effective_idle_poll_interval_s,
-        moving_poll_interval_s=r.moving_poll_interval_s,
-        deadband_deg=r.deadband_deg,
-        silence_timeout_s=r.effective_silence_timeout_s,
-        az_speed_deg_s=az_speed,
-        el_speed_deg_s=el_speed,
-        pointing=r.pointing,
-        park_after_idle_s=r.park_after_idle_s,
-        health=HealthConfig(
-            baseline_moves=r.health_baseline_moves,
-            speed_drop_pct=r.health_speed_drop_pct,
-            az_speed_deg_s=r.az_speed_deg_s,
-            el_speed_deg_s=r.el_speed_deg_s,
-        ),
-        tracking=TrackConfig(
-            sky=sky,
-            min_el_deg=r.track_min_el_deg,
-            step_deg=r.effective_track_step_deg,
-            at_los=r.track_at_los,
-        ),
-    )
 
 
 class NotYet(ConfigError):
@@ -121,8 +74,8 @@ class App:
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
-            on_message=lambda topic, payload, retain: self.mqtt.on_message(
-                topic, payload, retain, gated=self.client.gated
+            on_message=lambda topic, payload, retain, operator: self.mqtt.on_message(
+                topic, payload, retain, operator, gated=self.client.gated
             ),
             on_denied=self._denied,
             on_connect=self._connected,
@@ -157,6 +110,8 @@ class App:
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
+        audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
+        self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
         self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
         position = settings.station.position
@@ -194,6 +149,7 @@ class App:
                 station=settings.station.position,
                 catalog=catalog,
                 sky=self.sky,
+                on_audit=self.audit.of(r.id),
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,
@@ -353,6 +309,7 @@ class App:
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
+        self.audit.start()
         self.mqtt.start()  # the stop lane follows the first connection (_connected)
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
@@ -385,6 +342,7 @@ class App:
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)
+        self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")

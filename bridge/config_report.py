@@ -159,6 +159,9 @@ def summary(settings: Settings) -> list[str]:
         there = "found" if os.path.isfile(tle) else "NOT FOUND"
         lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
     lines.append(f"state file: {settings.state_file}")
+    if settings.audit_file is not None:
+        most = settings.audit_max_bytes
+        lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
     return lines
 
 

@@ -37,6 +37,70 @@ class Source(enum.StrEnum):
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
 
 
+OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
+
+
+def valid_operator(text: object) -> str | None:
+    """``text`` as an operator's name (short printable text, spaces at the ends dropped), or
+    None if it is not one."""
+    if not isinstance(text, str):
+        return None
+    name = text.strip()
+    if not name or len(name) > OPERATOR_CHARS or not name.isprintable():
+        return None
+    return name
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Who sent a command and how (the audit log, ``last_operator``, the control lease).
+
+    ``operator`` is what the sender said it is (the MQTT 5 user property ``operator``); without
+    it the interface and the peer stand for the operator (``rotctld 192.168.1.20``)."""
+
+    interface: Source
+    operator: str | None = None
+    peer: str | None = None  # the peer's address (TCP, UDP), when the interface knows it
+
+    @property
+    def who(self) -> str:
+        if self.operator:
+            return self.operator
+        return f"{self.interface.value} {self.peer}" if self.peer else self.interface.value
+
+
+@dataclass(frozen=True)
+class Control:
+    """The control lease: ``operator`` holds the rotator until ``until_unix`` (engine/lease.py)."""
+
+    operator: str
+    until_unix: float
+
+
+@dataclass(frozen=True)
+class AuditEvent:
+    """One command judged, executed or refused (the audit file and ``R/audit``)."""
+
+    time_unix: float
+    rotator: str
+    origin: Origin
+    command: str  # as the user sent it
+    result: str  # "executed" or "refused: <why>"
+    bearing_before: float | None
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "time": self.time_unix,
+            "rotator": self.rotator,
+            "operator": self.origin.who,
+            "interface": self.origin.interface.value,
+            "peer": self.origin.peer,
+            "command": self.command,
+            "result": self.result,
+            "bearing_before": self.bearing_before,
+        }
+
+
 @dataclass(frozen=True)
 class TargetInfo:
     """Where a target given by locator or coordinates lies (``target_info`` in the status)."""
@@ -82,6 +146,7 @@ class Target:
     # A 0..360 bearing on a rotor that can pass 360 (set by the judge, pointing.py rule 2): the
     # session picks the side from where the rotor is when it sends, not when the command came.
     true_az_deg: float | None = None
+    origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
 
 
 def combine(newer: Target, older: Target | None) -> Target:
@@ -102,6 +167,7 @@ def combine(newer: Target, older: Target | None) -> Target:
 @dataclass(frozen=True)
 class Stop:
     source: Source = Source.MQTT
+    origin: Origin | None = None
 
 
 @dataclass(frozen=True)
@@ -111,6 +177,7 @@ class SetOption:
     name: str
     enabled: bool
     source: Source = Source.MQTT
+    origin: Origin | None = None
 
 
 Command = Target | Stop | SetOption
@@ -127,6 +194,7 @@ class ErrorKind(enum.StrEnum):
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
     STATE = "state"  # the lock could not be saved in the state file
     INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
+    AUDIT = "audit"  # the audit file could not be written (the bridge goes on without it)
 
 
 @dataclass(frozen=True)
@@ -213,6 +281,8 @@ class RotatorStatus:
     tracking: TrackingInfo | None = None
     tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
     health: RotatorHealth | None = None  # how the rotor turns (engine/health.py)
+    last_operator: str | None = None  # who sent the command of last_command_source (Origin.who)
+    control: Control | None = None  # the control lease's holder, if it is held
 
     @property
     def moving(self) -> bool:

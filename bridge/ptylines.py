@@ -10,7 +10,11 @@ Rules:
 1. ``listen`` opens the pty pair (raw: no echo, no line editing, no CR/LF translation) and links
    the slave's name at the path: a symlink already there (a leftover from a crash) is
    replaced in one step (os.replace), anything else there is refused, untouched, with an
-   OSError naming the front end, the rotator, the path and the setting to change.
+   OSError naming the front end, the rotator, the path and the setting to change. A link a
+   live server serves is no leftover: each server claims its path for as long as it lives (a
+   Linux abstract socket named after the path, which dies with its process, so a crash leaves
+   no claim), and a path claimed already is refused (EADDRINUSE). Where there are no abstract
+   sockets (macOS) a link there is replaced as before.
 2. ``stop`` removes the link only while it still points at this pty (another program's link
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
@@ -30,15 +34,22 @@ Rules:
    GS-232B reads a reply up to its CR and leaves the LF). So what is still unread STALE_S
    after the last reply was written is discarded (counted in ``stale_dropped``): a client
    that asked reads its reply well within that.
+7. The pty never echoes: a client may turn the tty's ECHO on (a program opening the port in
+   cooked mode, ``stty sane``), and a pty echoes what its master writes back to the master, so
+   the server would read its own replies as commands and answer them for ever. A serial line
+   has no echo towards the computer: before each reply, ECHO and ECHONL found on are turned
+   off again (logged once a server), the client's other settings left as they are.
 """
 
 from __future__ import annotations
 
 import errno
 import fcntl
+import hashlib
 import logging
 import os
 import select
+import socket
 import struct
 import termios
 import threading
@@ -100,6 +111,8 @@ class PtyLineServer:
         self.stale_dropped = 0  # bytes (rule 6)
         self._written_s: float | None = None  # when the last reply was written (rule 6)
         self._dropped_logged_s = -DROP_LOG_S
+        self._echo_said = False  # rule 7
+        self._claim: socket.socket | None = None  # rule 1
 
     @property
     def address(self) -> str:
@@ -119,6 +132,7 @@ class PtyLineServer:
             return
         if os.path.lexists(self.path) and not os.path.islink(self.path):
             raise self._error(errno.EEXIST, "something that is not a link is there")
+        self._claim = self._claimed()
         master, slave = os.openpty()
         try:
             tty.setraw(slave)
@@ -135,8 +149,29 @@ class PtyLineServer:
         except BaseException:
             os.close(master)
             os.close(slave)
+            self._unclaim()
             raise
         self._master, self._slave, self.slave_name = master, slave, name
+
+    def _claimed(self) -> socket.socket | None:
+        """Rule 1: this path claimed for this server's life; OSError if another holds it."""
+        key = hashlib.sha256(self.path.encode()).hexdigest()[:32]
+        claim = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        try:
+            claim.bind(f"\0rotor-bridge-pty-{key}")
+        except OSError as exc:
+            claim.close()
+            if exc.errno == errno.EADDRINUSE:
+                raise self._error(
+                    errno.EADDRINUSE, "another program serves a pty there (a second rotor-bridge?)"
+                ) from None
+            return None  # no abstract sockets here: no claim, as before
+        return claim
+
+    def _unclaim(self) -> None:
+        if self._claim is not None:
+            self._claim.close()
+            self._claim = None
 
     def start(self) -> None:
         """Link (OSError as ``listen``) and serve in a thread."""
@@ -166,6 +201,7 @@ class PtyLineServer:
         os.close(self._master)
         os.close(self._slave)
         self._master = self._slave = -1
+        self._unclaim()
 
     # -- the thread -------------------------------------------------------------------------
     def _serve(self) -> None:
@@ -222,8 +258,26 @@ class PtyLineServer:
             termios.tcflush(self._slave, termios.TCIFLUSH)
             self.stale_dropped += unread
 
+    def _no_echo(self) -> None:
+        """Rule 7."""
+        attrs = termios.tcgetattr(self._slave)
+        echo = termios.ECHO | termios.ECHONL
+        if attrs[3] & echo:
+            attrs[3] &= ~echo
+            termios.tcsetattr(self._slave, termios.TCSANOW, attrs)
+            if not self._echo_said:
+                self._echo_said = True
+                log.warning(
+                    "%s for %s: a client turned echo on at %s (it would echo the replies back "
+                    "as commands): turned off again",
+                    self.label,
+                    self.rotator_id,
+                    self.path,
+                )
+
     def _write(self, reply: bytes) -> None:
-        """Rule 5: all of it, or what is left dropped."""
+        """Rule 5: all of it, or what is left dropped; rule 7 first."""
+        self._no_echo()
         self._written_s = self._clock()  # rule 6
         view = memoryview(reply)
         while view:

@@ -112,6 +112,18 @@ class Settings(BaseSettings):
             "~/.local/state/rotor-bridge/state.json"
         },
     )
+    audit_file: Path | None = Field(
+        None,
+        description="the audit log: one JSON line per command executed or refused, from every "
+        "interface (who, how, what, the result); rotated by size",
+        examples=["/var/log/rotor-bridge/audit.jsonl"],
+        json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
+    )
+    audit_max_bytes: int = Field(
+        1_000_000,
+        ge=10_000,
+        description="the audit file's size at which it is renamed to .1 (three old files kept)",
+    )
     # mqtt.password is written in the configuration file itself (check-config warns)
     _password_in_file: bool = PrivateAttr(default=False)
 

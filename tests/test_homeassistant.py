@@ -88,6 +88,9 @@ def test_rotorez_message_set_is_exact() -> None:
             ("sensor", "motor_on"),
             ("binary_sensor", "health_problem"),
             ("button", "health_reset"),
+            ("sensor", "control"),
+            ("button", "release_control"),
+            ("sensor", "last_operator"),
         ]
     }
     want.add("homeassistant/binary_sensor/rotorbridge_rotor/connection/config")

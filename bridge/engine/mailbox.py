@@ -35,7 +35,7 @@ import threading
 from dataclasses import dataclass, field
 
 from bridge.engine.tracking import Track
-from bridge.model import SetOption, Stop, Target, combine
+from bridge.model import Control, SetOption, Stop, Target, combine
 
 
 @dataclass
@@ -54,8 +54,17 @@ class Batch:
     release_clear: bool = False
     health_reset: bool = False  # a new health baseline (health.py)
 
+    control: Control | None = None  # the control lease as the judge has it now...
+    control_set: bool = False  # ...when it changed (engine/lease.py)
+
     def __bool__(self) -> bool:
-        settings = self.options or self.lock is not None or self.notes or self.health_reset
+        settings = (
+            self.options
+            or self.lock is not None
+            or self.notes
+            or self.health_reset
+            or self.control_set
+        )
         fence = self.hold is not None or self.release is not None
         return bool(self.stop or self.target or settings or self.track or fence)
 
@@ -139,6 +148,12 @@ class Mailbox:
         """Start a new health baseline (a setting: it moves nothing)."""
         with self._lock:
             self._batch.health_reset = True
+        self._wake_once()
+
+    def put_control(self, control: Control | None) -> None:
+        """The control lease changed (the status shows its holder)."""
+        with self._lock:
+            self._batch.control, self._batch.control_set = control, True
         self._wake_once()
 
     def take(self) -> Batch:

@@ -7,6 +7,9 @@ against a command. A refused command raises Refused (with a RefusalCode front en
 to a Hamlib RPRT number) and is reported as an error event; it never reaches the mailbox, so it
 can never move anything. The worker judges nothing anew: it only drops an accepted target that
 the lock or a lost link overtook before it could be sent, and reports that as a refusal too.
+Each command carries who sent it (``origin``): the control lease (operators.py) refuses a target
+or track start from anyone but its holder, never a stop, lock or tracking OFF (docs/architecture.md
+rule 11); every command judged here, executed or refused, is an audit event.
 """
 
 from __future__ import annotations
@@ -16,12 +19,15 @@ import math
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import serial
 
 from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.health_memory import HealthMemory
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
+from bridge.engine.operators import EXECUTED, Operators
 from bridge.engine.port import open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
 from bridge.engine.state_store import StateStore
@@ -29,10 +35,11 @@ from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
+    AuditEvent,
     Command,
     ErrorEvent,
     ErrorKind,
-    RotatorHealth,
+    Origin,
     RotatorStatus,
     SetOption,
     Source,
@@ -45,7 +52,6 @@ from bridge.protocols.base import ModelSpec
 from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
-HEALTH_SAVE_S = 60.0  # rotor health to the state file at most this often (_status)
 
 
 class Rotator:
@@ -64,6 +70,7 @@ class Rotator:
         station: tuple[float, float] | None = None,
         catalog: TleCatalog | None = None,
         sky: SkyWorker | None = None,
+        on_audit: Callable[[AuditEvent], None] | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -79,9 +86,7 @@ class Rotator:
         self._locked = store.locked(self.id)
         self._save_lock = threading.Lock()
         self._mailbox = Mailbox()
-        self._health_kept: RotatorHealth | None = None
-        self._health_unsaved: RotatorHealth | None = None
-        self._health_saved_s = -math.inf
+        self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
         self._worker = Worker(
             cfg,
@@ -96,6 +101,15 @@ class Rotator:
             sky=sky,  # the app shares one among all rotators (skywork.py)
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
+        self.operators = Operators(
+            self.id,
+            store,
+            self._mailbox,
+            wall=wall,
+            bearing=lambda: self.status.bearing_deg,
+            report=self.report,
+            on_audit=on_audit,
+        )
         self._stopped = False
         # when a STOP or lock ON was last put in the mailbox (monotonic), from any front end: a
         # front end whose commands can overtake each other (the console) refuses one that was
@@ -121,28 +135,9 @@ class Rotator:
         return kept
 
     def _status(self, status: RotatorStatus) -> None:
-        """Every status to the listeners; rotor health's memory, new after a move, to the
-        state file on its writer thread (state_store.py rule 5: never beside a stop), at most
-        every HEALTH_SAVE_S (a rotor tracking in small steps would write it every few seconds
-        to an SD card), and the last one when the rotator stops."""
-        health = status.health
-        if health is not None and health is not self._health_kept:
-            first, self._health_kept = self._health_kept is None, health
-            if health.measured and not first:
-                self._health_unsaved = health
-                if time.monotonic() >= self._health_saved_s + HEALTH_SAVE_S:
-                    self._save_health_later()
+        """Every status to the listeners, once rotor health's memory had a look at it."""
+        self._health.seen(status.health)
         self._on_status(status)
-
-    def _save_health_later(self) -> None:
-        health, self._health_unsaved = self._health_unsaved, None
-        if health is not None:
-            self._health_saved_s = time.monotonic()
-            self._store.later(lambda: self._save_health(health))
-
-    def _save_health(self, health: RotatorHealth) -> None:
-        self._store.set_health(self.id, health.memory)  # a failure is logged there: health
-        # is no safety matter, the next move tries again
 
     def reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""
@@ -166,22 +161,31 @@ class Rotator:
         if self._stopped:
             raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
         self._lines.add(self._worker)
+        self.operators.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
         self._stopped = True
+        self.operators.stop()
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
-        self._save_health_later()  # what the last moves taught (app.py flushes the store)
+        self._health.flush()  # what the last moves taught (app.py flushes the store)
 
     def submit(
-        self, command: Command, described: str | None = None, *, hold: int | None = None
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+        echo: bool = False,
     ) -> None:
         """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
         stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
+        origin = command.origin or Origin(command.source)
+        what = described or describe_command(command)
         try:
             judged = self._check(command)
         except Refused as exc:
-            self.report_refusal(exc.message, described or describe_command(command))
+            self.report_refusal(exc.message, what, origin=origin)
             raise
         if isinstance(command, SetOption):
             name, enabled = command.name, command.enabled
@@ -189,17 +193,21 @@ class Rotator:
         if isinstance(command, Stop):
             self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
+        if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
+            self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
 
     # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
-    def go_to_preset(self, name: str, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.preset(name), source), described)
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
+        self._named(lambda: Target(*self.pointing.preset(name), source), described, origin)
 
-    def park(self, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described)
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described, origin)
 
     def go_toward(
         self,
@@ -210,6 +218,7 @@ class Rotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None:
         def target() -> Target:
             az, info = toward(
@@ -217,14 +226,16 @@ class Rotator:
             )
             return Target(az, None, source, info=info)
 
-        self._named(target, described)
+        self._named(target, described, origin)
 
-    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         """The place of the current locator or coordinate target, by the path asked for."""
         info = self.status.target_info
         if info is None:
             message = "no locator or coordinate target to take the other path to"
-            self.report_refusal(message, described)
+            self.report_refusal(message, described, origin=origin or Origin(source))
             raise Refused(RefusalCode.INVALID, message)
         self.go_toward(
             info.latitude_deg,
@@ -233,11 +244,22 @@ class Rotator:
             described,
             locator=info.locator,
             long_path=long_path,
+            origin=origin,
         )
 
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None:
         self._named(
-            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source), described
+            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source),
+            described,
+            origin,
         )
 
     def track(
@@ -246,30 +268,39 @@ class Rotator:
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
         ``off`` ends it (never refused, like a stop). Raise Refused otherwise. A name is looked
         up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
-        refused by the session, as an error event."""
+        refused by the session, as an error event. Tracking started by the lease's holder goes
+        on (its targets are the bridge's own, never judged by the lease)."""
+        who = origin or Origin(source)
         if name.strip().casefold() == "off" and tle is None:
-            self._mailbox.put_track(Track(None, source))
+            self._mailbox.put_track(Track(None, source, origin=origin))
+            self.operators.audit(who, described, EXECUTED)
             return
         try:
             body = self._body(name, tle)
             if self._locked:
                 raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
+            leased = self.operators.refusal(who.who)
+            if leased is not None:
+                raise Refused(RefusalCode.LEASED, leased)
             if not self.status.available:
                 raise Refused(
                     RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
                 )
         except Refused as exc:
-            self.report_refusal(exc.message, described)
+            self.report_refusal(exc.message, described, origin=who)
             raise
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
-            self._mailbox.put_track(Track(None, source, lookup, described))
-            return
-        self._mailbox.put_track(Track(body, source, None, described))
+            self._mailbox.put_track(Track(None, source, lookup, described, origin))
+        else:
+            self._mailbox.put_track(Track(body, source, None, described, origin))
+        self.operators.audit(who, described, EXECUTED)
 
     def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
         """The body to track, or None for a satellite to look up in the TLE file."""
@@ -286,35 +317,38 @@ class Rotator:
                 "controller that does",
             )
         try:
-            if tle is not None:
-                return Body.satellite(*tle)
-            folded = name.strip().casefold()
-            if folded == "sun":
-                return Body.sun()
-            if folded == "moon":
-                return Body.moon()
-            self.catalog.check_configured(name)
-            return None
+            return self.catalog.body(name, tle)
         except (SkyError, CatalogError) as exc:
             raise Refused(RefusalCode.INVALID, str(exc)) from None
 
-    def _named(self, make: Callable[[], Target], described: str) -> None:
+    def _named(self, make: Callable[[], Target], described: str, origin: Origin | None) -> None:
         try:
             target = make()
         except Refused as exc:
-            self.report_refusal(exc.message, described)
+            self.report_refusal(exc.message, described, origin=origin or Origin(Source.MQTT))
             raise
-        self.submit(target, described)
+        self.submit(target if origin is None else replace(target, origin=origin), described)
 
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None:
         """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
-        (outside its own lock: the state file is written with an fsync)."""
+        (outside its own lock: the state file is written with an fsync). Never refused."""
         self._locked = locked
         if locked:
             self.last_halt_s = time.monotonic()
         self._mailbox.put_lock(locked, hold=hold)
         if save:
             self.save_lock()
+        if not echo:
+            what = f"lock {'ON' if locked else 'OFF'}"
+            self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
     def _save_option(self, name: str, enabled: bool) -> None:
         if not self._store.set_option(self.id, name, enabled):
@@ -346,9 +380,14 @@ class Rotator:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
         self._mailbox.put_note(message)
 
-    def report_refusal(self, message: str, command: str | None) -> None:
-        """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
+        """Publish a refusal (also for input that never became a command, e.g. a bad payload);
+        with ``origin`` (who sent it) it is in the audit trail too."""
         self.report(ErrorKind.REFUSED, message, command)
+        if origin is not None:
+            self.operators.audit(origin, command or "input", f"refused: {message}")
 
     def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)
@@ -368,6 +407,10 @@ class Rotator:
             return command
         if self._locked:
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        who = command.origin.who if command.origin is not None else command.source.value
+        leased = self.operators.refusal(who)
+        if leased is not None:
+            raise Refused(RefusalCode.LEASED, leased)
         status = self.status
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:

@@ -70,7 +70,7 @@ from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Targets, resolve
 from bridge.engine.tracking import Track, Tracker
-from bridge.model import ErrorKind, RotatorStatus, Source, Target, describe_command
+from bridge.model import ErrorKind, Origin, RotatorStatus, Source, Target, describe_command
 from bridge.sky import Body
 
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
@@ -143,6 +143,8 @@ class RotatorSession:
             self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
             self.view.last_error = note
+        if batch.control_set:
+            self.view.control = batch.control
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
@@ -154,7 +156,7 @@ class RotatorSession:
         if batch.stop is not None:
             self.tracker.end("stop")
             self.targets.clear()
-            self._taken(batch.stop.source.value)
+            self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
         self._fence(batch)
         if batch.health_reset:
@@ -235,7 +237,7 @@ class RotatorSession:
             self.tracker.end("another body")
             self.targets.clear()
             self.tracker.start(track.body)
-            self._taken(track.source.value)
+            self._taken(track.source.value, track.origin)
             log.info("%s: tracking %s", self.name, track.body.name)
 
     def _answered(self, answer: Answer) -> None:
@@ -247,7 +249,7 @@ class RotatorSession:
                 refusal = answer.failure or "no such satellite"
                 self._error(ErrorKind.REFUSED, refusal, lookup.described)
             else:
-                self._track(Track(body, lookup.source, None, lookup.described))
+                self._track(Track(body, lookup.source, None, lookup.described, lookup.origin))
             return
         ends = self.tracker.answered(answer)
         if ends is not None:
@@ -255,9 +257,10 @@ class RotatorSession:
             self.tracker.end(ends)
             self._drop_tracking_target()
 
-    def _taken(self, source: str) -> None:
+    def _taken(self, source: str, origin: Origin | None) -> None:
         """A stop or a new track: the status names its source and no target of before."""
         self.view.last_source = source
+        self.view.last_operator = origin.who if origin is not None else None
         self.view.target_info, self.view.park_raw = None, None
 
     def _drop_tracking_target(self) -> None:
@@ -376,6 +379,10 @@ class RotatorSession:
         """What the status says about the target now taken (status.py rule 4)."""
         if target is not None:
             self.view.last_source = target.source.value
+            if target.origin is not None:
+                self.view.last_operator = target.origin.who
+            elif target.source is not Source.TRACKING:  # tracking's: who started it stays
+                self.view.last_operator = None
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
 

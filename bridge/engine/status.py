@@ -25,6 +25,7 @@ from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
 from bridge.model import (
+    Control,
     MotionState,
     RotatorHealth,
     RotatorStatus,
@@ -58,6 +59,8 @@ class View:
     target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
     # a target still waiting (a brake delay) shows its own: it is the current one for ``long``
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
+    last_operator: str | None = None  # who sent the command of last_source (model.Origin)
+    control: Control | None = None  # the control lease's holder (engine/lease.py)
 
 
 class Seen(NamedTuple):
@@ -133,6 +136,8 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         options=dict(seen.options),
         last_error=view.last_error,
         last_command_source=view.last_source,
+        last_operator=view.last_operator,
+        control=view.control,
     )
 
 

@@ -250,7 +250,7 @@ class LoggerEndpoints:
                     port = self._addresses[sock][1]
                     self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
                 else:
-                    self._commands.n1mm(endpoint, parse_n1mm(data), data)
+                    self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
             except Malformed as exc:
                 self._junk(_kind(endpoint), peer, exc)
             except Exception as exc:

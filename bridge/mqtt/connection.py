@@ -70,8 +70,21 @@ from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
-MessageHandler = Callable[[str, bytes, bool], None]
+# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it)
+MessageHandler = Callable[[str, bytes, bool, str | None], None]
 COMMAND_QOS = 0  # rule 4
+
+
+def operator_of(msg: paho.MQTTMessage) -> str | None:
+    """The user property ``operator`` of an MQTT 5 message, as sent (the service judges it);
+    None without one (and always under MQTT 3.1.1, which has no properties)."""
+    props = getattr(msg, "properties", None)
+    pairs = getattr(props, "UserProperty", None) or []
+    for key, value in pairs:
+        if key == "operator":
+            return str(value)
+    return None
+
 
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
@@ -229,6 +242,7 @@ class Connection:
         **options: Unpack[Options],
     ) -> None:
         self._settings = settings
+        self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
@@ -321,7 +335,10 @@ class Connection:
             )
         else:  # once an episode
             self._guard.reported = True
-            log.error("%s", takeover_message(self._settings.effective_client_id(), ending))
+            log.error("%s", takeover_message(self._client_id, ending))
+
+    def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
+        return command_filters(self._subscriptions, self._no_replay, self._v5)
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
         """Whether a message is the connection's own business, not the handler's."""
@@ -347,9 +364,7 @@ class Connection:
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
-        self._command_mid = self._subscribe(
-            client, command_filters(self._subscriptions, self._no_replay, self._v5)
-        )
+        self._command_mid = self._subscribe(client, self._filters())
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
@@ -400,6 +415,6 @@ class Connection:
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):
-                self._handler(msg.topic, payload, bool(msg.retain))
+                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg))
         except Exception:  # rule 5: a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)

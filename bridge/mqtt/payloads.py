@@ -383,6 +383,10 @@ def status_json(
         options={k: v for k, v in sorted(status.options.items())},
         last_error=status.last_error,
         last_command_source=status.last_command_source,
+        last_operator=status.last_operator,
+        control=None
+        if status.control is None
+        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
         estimated=status.estimated,
         time=_iso(time_unix),
     )

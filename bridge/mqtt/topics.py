@@ -123,6 +123,25 @@ class RotatorTopics:
     def health(self) -> str:
         return f"{self.root}/health"
 
+    # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
+    @property
+    def control(self) -> str:
+        """Retained: who holds the control lease, and until when."""
+        return f"{self.root}/control"
+
+    @property
+    def control_claim(self) -> str:
+        return f"{self.root}/control/claim"
+
+    @property
+    def control_release(self) -> str:
+        return f"{self.root}/control/release"
+
+    @property
+    def audit(self) -> str:
+        """Not retained: every command judged, executed or refused."""
+        return f"{self.root}/audit"
+
 
 @dataclass(frozen=True)
 class DiscoveryTopics:
@@ -200,6 +219,7 @@ class Topics:
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track]
             subs.append(t.health_reset)
+            subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -219,6 +239,7 @@ class Topics:
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
             subs.append(t.health)
+            subs += [t.control]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -235,6 +256,8 @@ class Topics:
             for kind in ("preset", "park", "nudge", "track", "health_reset"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
+            if topic in (t.control_claim, t.control_release):
+                return rid, "claim" if topic == t.control_claim else "release", None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]

@@ -253,7 +253,13 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     target += ` \u00B7 ${where} \u00B7 ${fmtKm(info.distance_km || 0)} ${info.path || 'short'} path`;
   }
   put('target', target);
-  put('source', st.last_command_source || '\u2014');
+  const who = st.last_operator && st.last_operator !== st.last_command_source ? ` \u00B7 ${st.last_operator}` : '';
+  put('source', st.last_command_source ? `${st.last_command_source}${who}` : '\u2014');
+  // the control lease: who holds the rotator, and until when (UTC, as the refusals say it)
+  const control = st.control;
+  hide('control-label', !control);
+  hide('control', !control);
+  if (control) put('control', `${control.holder} until ${String(control.until).slice(11, 16)} UTC`);
   const locked = Boolean(st.locked);
   mark($('lock'), 'aria-pressed', String(locked));
   put('lock', locked ? 'Lock ON' : 'Lock OFF');
