@@ -32,9 +32,10 @@ Rules:
 6. Cheap at every step: a motion already seen costs one comparison, a new one a few more and
    a reading appended while the rotor turns (at most MAX_READINGS a move: a rotor "turning"
    for hours, a noisy potentiometer, does not grow without end; its first hour is measured).
-7. A part that cannot even be rebuilt from its memory (a bug in the judgement itself: session.py
-   rule 14) is built ``off_at`` its last report: it measures no more and that report stays,
-   so it cannot fail again at every move and take the link down with it.
+7. A part that failed is ``rebuilt`` from its last memory (session.py rule 14); if even that
+   fails (a bug in the judgement itself) it is built ``off_at`` its last report: it measures
+   no more and that report stays, so it cannot fail again at every move and take the link
+   down with it.
 """
 
 from __future__ import annotations
@@ -90,6 +91,13 @@ class Health:
         self._changed_t: float | None = None
         self._stop_t: float | None = None
         self._seen: mo.Motion | None = None  # the motion last looked at
+
+    def rebuilt(self, cfg: WorkerConfig) -> Health:
+        """Rule 7: a new part from this one's last memory, or off at its last report."""
+        try:
+            return Health(cfg, self.report.memory)
+        except Exception:  # the judgement itself fails
+            return Health(cfg, off_at=self.report)
 
     def reset(self) -> RotatorHealth | None:
         """A new baseline (health_judge.py rule 5); the new report."""
