@@ -432,3 +432,13 @@ def test_a_judgement_that_always_fails_turns_health_off_not_the_link(
         )
     assert len(v.errors("internal")) == 1 and v.status.connected
     assert _health(v) == kept  # the last report stays; health measures no more
+
+
+def test_one_slow_move_never_warns_even_against_a_speed_set_by_hand() -> None:
+    """The baseline set in the settings is there from the first move (and after a reset):
+    still a warning needs several moves that way, never one."""
+    bench = Bench(lambda n, up: 6.0 * (0.5 if n == 1 else 1.0))
+    bench.health = Health(replace(bench.cfg, health=HealthConfig(az_speed_deg_s=6.0)))
+    for n in range(4):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+        assert bench.reports[-1].warnings == (), n
