@@ -36,6 +36,9 @@ Rules:
    fails (a bug in the judgement itself) it is built ``off_at`` its last report: it measures
    no more and that report stays, so it cannot fail again at every move and take the link
    down with it.
+8. The odometer and the motor-on time leave out a still potentiometer's jitter (a degree
+   either way at every poll while it waits to start and while it settles): only steps beyond
+   the noise band count, and the motor is on until the last of them.
 """
 
 from __future__ import annotations
@@ -161,13 +164,15 @@ class Health:
     def _ended(self, move: _Move, m: mo.Motion) -> RotatorHealth | None:
         values: dict[str, float] = {}
         travel = [0.0, 0.0]
+        last_moved_t = move.readings[0][0]
         az = self._unwrapped([r[1] for r in move.readings])
         axes: list[tuple[str, list[float]]] = [("az", az)]
         if self._has_el and all(r[2] is not None for r in move.readings):
             axes.append(("el", [r[2] for r in move.readings if r[2] is not None]))
         times = [r[0] for r in move.readings]
         for i, (axis, path) in enumerate(axes):
-            travel[i] = sum(abs(b - a) for a, b in zip(path, path[1:], strict=False))
+            travel[i], moved_t = _travel(times, path, self._noise_deg)
+            last_moved_t = max(last_moved_t, moved_t)
             self._speed(axis, times, path, move.stop_t, values)
             if move.stop_t is not None:
                 coast = _coast(times, path, move.stop_t)
@@ -194,7 +199,7 @@ class Health:
             values=values,
             travel_deg=(travel[0], travel[1]),
             arrival_error_deg=(errors[0], errors[1]),
-            motor_on_s=max(0.0, times[-1] - start_t) if turned else 0.0,
+            motor_on_s=max(0.0, last_moved_t - start_t) if turned else 0.0,
             stalled_at_deg=m.position_deg if stalled else None,
         )
         self._judge.add(done)
@@ -237,6 +242,17 @@ class Health:
         span_s, span_deg = times[b] - times[a], abs(path[b] - path[a])
         if span_s >= MIN_SPAN_S and span_deg >= MIN_SPAN_DEG:
             values[f"{axis}_{'up' if total > 0 else 'down'}"] = span_deg / span_s
+
+
+def _travel(times: list[float], path: list[float], noise: float) -> tuple[float, float]:
+    """Rule 8: the degrees turned and when the last turning was seen, a still potentiometer's
+    jitter left out (steps within the noise band of where it last turned from count only
+    once they add up beyond it; what is left at the end counts too)."""
+    anchor, total, moved_t = path[0], 0.0, times[0]
+    for t, a in zip(times, path, strict=True):
+        if abs(a - anchor) > noise:
+            total, anchor, moved_t = total + abs(a - anchor), a, t
+    return total + abs(path[-1] - anchor), moved_t
 
 
 def _coast(times: list[float], path: list[float], stop_t: float) -> float | None:

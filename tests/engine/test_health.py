@@ -326,6 +326,17 @@ def test_a_jittering_potentiometer_is_no_start_of_the_motor() -> None:
     assert delay == pytest.approx(JitterBench.START_S, abs=JitterBench.POLL_S), delay
 
 
+def test_a_jittering_potentiometer_turns_no_odometer_and_no_motor() -> None:
+    bench = JitterBench(lambda n, up: 6.0)
+    for n in range(6):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    health = bench.reports[-1]
+    assert health.az.odometer_deg == pytest.approx(280 + 5 * 270, abs=6)  # a degree a move
+    # each move its 1.5 s start and its degrees at 6 deg/s, not the jitter while it settles
+    turning_s = (280 + 5 * 270) / 6.0 + 6 * JitterBench.START_S
+    assert health.motor_on_s == pytest.approx(turning_s, abs=6 * JitterBench.POLL_S)
+
+
 def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
     v = rig("rot2prog", emulator={"resolution_ppd": 1})
     v.run_until_state(MotionState.IDLE, 30)
@@ -421,3 +432,13 @@ def test_a_judgement_that_always_fails_turns_health_off_not_the_link(
         )
     assert len(v.errors("internal")) == 1 and v.status.connected
     assert _health(v) == kept  # the last report stays; health measures no more
+
+
+def test_one_slow_move_never_warns_even_against_a_speed_set_by_hand() -> None:
+    """The baseline set in the settings is there from the first move (and after a reset):
+    still a warning needs several moves that way, never one."""
+    bench = Bench(lambda n, up: 6.0 * (0.5 if n == 1 else 1.0))
+    bench.health = Health(replace(bench.cfg, health=HealthConfig(az_speed_deg_s=6.0)))
+    for n in range(4):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+        assert bench.reports[-1].warnings == (), n
