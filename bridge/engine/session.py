@@ -43,10 +43,9 @@ Rules:
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
 14. A part that raises (tracking, auto-park, health) is a bug contained here: it is reset
-   (tracking ends, "internal error"; health starts again from its last report's memory), an
-   error event of kind internal names it, and the link, the
-   stops and every other rule go on (a feature's failure never takes a link down, and never
-   costs a stop).
+   (tracking ends, "internal error"; health starts again from its last memory, or stops
+   measuring), an error event of kind internal names it, and the link, the stops and every
+   other rule go on (a feature's failure never takes a link down, and never costs a stop).
 """
 
 from __future__ import annotations
@@ -350,7 +349,7 @@ class RotatorSession:
                 self.tracker.end("internal error")
                 self._drop_tracking_target()
             elif name == "health":
-                self.health = Health(self.cfg, self.health.report.memory)
+                self.health = self.health.rebuilt(self.cfg)  # health.py rule 7
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)

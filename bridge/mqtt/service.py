@@ -338,6 +338,8 @@ class MqttService:
             named = control.parse_release(payload) if by.operator is None else None
             rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
         elif kind == "health_reset":
+            if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+                raise pl.PayloadError("empty payload: a health reset needs one (RESET)")
             rot.reset_health()  # moves nothing: no lease to ask
         else:
             self._motion(rot, kind, arg, payload, what, by)
