@@ -339,7 +339,7 @@ class MqttService:
             rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
         elif kind == "health_reset":
             if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
-                raise pl.PayloadError("empty payload: a health reset needs one (RESET)")
+                raise pl.PayloadError("empty payload")
             rot.reset_health()  # moves nothing: no lease to ask
         else:
             self._motion(rot, kind, arg, payload, what, by)
@@ -348,6 +348,8 @@ class MqttService:
         self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
     ) -> None:
         """A target, a preset, park, nudge, track, an option: from ``by``."""
+        if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+            raise pl.PayloadError("empty payload")
         src = Source.MQTT
         if kind == "target":
             aim = pl.parse_aim(payload)
