@@ -7,7 +7,9 @@ seconds (monotonic unless the name says ``_unix``).
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field, replace
+from datetime import UTC, datetime
 
 
 class MotionState(enum.StrEnum):
@@ -75,6 +77,12 @@ class Control:
 
     operator: str
     until_unix: float
+
+    def held_text(self, now_unix: float) -> str:
+        """``DL1ABC holds the rotator until 14:30 UTC (25 min left)``."""
+        end = datetime.fromtimestamp(self.until_unix, UTC).strftime("%H:%M")
+        left = max(1, math.ceil((self.until_unix - now_unix) / 60.0))
+        return f"{self.operator} holds the rotator until {end} UTC ({left} min left)"
 
 
 @dataclass(frozen=True)

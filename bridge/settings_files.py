@@ -66,7 +66,7 @@ def read_password_file(path: Path) -> str:
         raise ValueError(f"password_file {path}: {exc.strerror}") from None
     if mode & (stat.S_IROTH | stat.S_IWOTH):
         raise ValueError(
-            f"password_file {path} is readable by every user; let only the service user "
-            "read it (chown root:rotor-bridge, chmod 640)"
+            f"password_file {path} is readable by every user; let only the user that runs "
+            "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
         )
     return text.strip("\r\n")

@@ -21,7 +21,6 @@ Rules:
 from __future__ import annotations
 
 import math
-from datetime import UTC, datetime
 
 from bridge.model import OPERATOR_CHARS, Control, valid_operator
 
@@ -37,9 +36,7 @@ class LeaseError(ValueError):
 
 def held_text(control: Control, now_unix: float) -> str:
     """``DL1ABC holds the rotator until 14:30 UTC (25 min left)``."""
-    end = datetime.fromtimestamp(control.until_unix, UTC).strftime("%H:%M")
-    left = max(1, math.ceil((control.until_unix - now_unix) / 60.0))
-    return f"{control.operator} holds the rotator until {end} UTC ({left} min left)"
+    return control.held_text(now_unix)
 
 
 class Lease:

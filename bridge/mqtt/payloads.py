@@ -305,12 +305,14 @@ def info_json(
     pointing: Pointing,
     can_track: bool,
     console: ConsoleFacts | None = None,
+    rotator_id: str | None = None,
 ) -> str:
     """``R/info``: what a rotator is and may do, for a client far from the station (limits,
     sectors, presets, capabilities as the station's configuration has them; true bearings);
     with ``console``, what a console there draws too."""
     lo, hi = pointing.target_range()
-    doc = {
+    doc: dict[str, object] = {
+        "id": rotator_id,
         "name": name,
         "model": spec.name,
         "model_name": spec.display_name,

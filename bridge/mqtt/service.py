@@ -118,7 +118,7 @@ class MqttService:
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
         info = pl.info_json(
-            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console
+            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console, rotator.id
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 

@@ -287,7 +287,9 @@ class StationTopics:
         several."""
         one, each = self.rotator(None), self.rotator("+")
         return [self.bridge_state] + [
-            t for r in (one, each) for t in (r.info, r.status, r.availability, r.presets, r.error)
+            t
+            for r in (one, each)
+            for t in (r.info, r.status, r.availability, r.presets, r.error, r.control)
         ]
 
     def described(self, topics: list[str]) -> list[str]:

@@ -36,6 +36,10 @@ Rules:
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
    REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
    seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
+6. A move is refused at once (LEASED: rotctld answers ``RPRT -9``) while the station's retained
+   ``R/control`` says another operator holds the control lease, in the words the station
+   would use; the station judges it again (a lease that ended a moment ago, a clock that
+   differs): this only spares the client a silent refusal on the station's ``R/error``.
 """
 
 from __future__ import annotations
@@ -46,25 +50,15 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from datetime import datetime
 from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import (
-    Command,
-    MotionState,
-    RotatorStatus,
-    Source,
-    Stop,
-    Target,
-    TargetInfo,
-    TrackingInfo,
-)
+from bridge.model import Command, MotionState, RotatorStatus, Source, Stop, Target
 from bridge.mqtt.topics import RotatorTopics
-from bridge.pointing import Limits, Pointing
-from bridge.protocols import REGISTRY
-from bridge.protocols.base import ModelSpec
+from bridge.pointing import Limits
+from bridge.remote.readings import Info, InfoError, parse_control, parse_status
+
+__all__ = ["Info", "InfoError", "RemoteRotator", "StationView", "parse_status"]
 
 log = logging.getLogger(__name__)
 
@@ -77,148 +71,6 @@ class Sender(Protocol):
     def up(self) -> bool: ...
 
     def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None: ...
-
-
-class InfoError(ValueError):
-    """The station's R/info cannot be used (a model this version does not know)."""
-
-
-@dataclass(frozen=True)
-class Info:
-    """The station's ``R/info``, parsed."""
-
-    name: str
-    spec: ModelSpec
-    pointing: Pointing
-
-    @classmethod
-    def parse(cls, payload: bytes) -> Info:
-        doc = json.loads(payload)
-        model = str(doc["model"])
-        spec = REGISTRY.get(model)
-        if spec is None:
-            raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
-        az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
-        el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
-        park = doc.get("park") or None
-        at = (_finite(park[0]), None if park[1] is None else _finite(park[1])) if park else None
-        # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
-        aim = Pointing.of(
-            spec,
-            (az_lo, az_hi),
-            (_finite(el[0]), _finite(el[1])),
-            keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
-            park=at,
-        )
-        return cls(str(doc.get("name") or model), spec, aim)
-
-
-def _finite(value: object) -> float:
-    """A number of R/info; ValueError for NaN and infinities: the judge would raise on them."""
-    try:
-        n = float(value)  # type: ignore[arg-type]  # TypeError for what is no number: caller's
-    except OverflowError:  # an integer past a float's range
-        n = math.inf
-    if not math.isfinite(n):
-        raise ValueError(f"{value!r:.20} is not a finite number")
-    return n
-
-
-def _num(doc: dict[str, Any], key: str) -> float | None:
-    """A number, or None (Python's json reads NaN, Infinity, 1e400: never shown, rule 1)."""
-    v = doc.get(key)
-    if not isinstance(v, int | float) or isinstance(v, bool):
-        return None
-    try:
-        return _finite(v)
-    except ValueError:
-        return None
-
-
-def _unix(text: object) -> float | None:
-    try:
-        return datetime.fromisoformat(str(text)).timestamp() if text is not None else None
-    except ValueError:
-        return None
-
-
-def _target_info(doc: object) -> TargetInfo | None:
-    if not isinstance(doc, dict):
-        return None
-    lat, lon = _num(doc, "latitude"), _num(doc, "longitude")
-    short, long = _num(doc, "short_path_deg"), _num(doc, "long_path_deg")
-    if lat is None or lon is None or short is None or long is None:
-        return None
-    locator = doc.get("locator")
-    return TargetInfo(
-        lat,
-        lon,
-        _num(doc, "distance_km") or 0.0,
-        short,
-        long,
-        "long" if doc.get("path") == "long" else "short",
-        locator if isinstance(locator, str) else None,
-    )
-
-
-def _tracking(doc: object) -> TrackingInfo | None:
-    if not isinstance(doc, dict) or not isinstance(doc.get("body"), str):
-        return None
-    nxt_or = doc.get("next")
-    nxt: dict[str, Any] = nxt_or if isinstance(nxt_or, dict) else {}
-    track = doc.get("pass_track") or []
-    return TrackingInfo(
-        doc["body"],
-        str(doc.get("phase", "")),
-        _num(doc, "azimuth"),
-        _num(doc, "elevation"),
-        _num(nxt, "azimuth"),
-        _num(nxt, "elevation"),
-        _unix(doc.get("aos")),
-        _unix(doc.get("los")),
-        _num(doc, "max_elevation"),
-        _num(doc, "aos_azimuth"),
-        bool(doc.get("flip")),
-        tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
-    )
-
-
-def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
-    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
-    the console draws (the place targeted, the body tracked)."""
-    doc = json.loads(payload)
-    if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
-        raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
-
-    def num(key: str) -> float | None:
-        return _num(doc, key)
-
-    options = doc.get("options")
-
-    return RotatorStatus(
-        rotator_id,
-        state=MotionState(doc.get("state", "offline")),
-        bearing_deg=num("bearing"),
-        elevation_deg=num("elevation"),
-        target_az_deg=num("target"),
-        target_el_deg=num("target_elevation"),
-        connected=bool(doc.get("connected")),
-        available=bool(doc.get("available")),
-        locked=bool(doc.get("locked")),
-        version=doc.get("version"),
-        last_error=doc.get("last_error"),
-        last_command_source=doc.get("last_command_source"),
-        estimated=bool(doc.get("estimated")),
-        parked=bool(doc.get("parked")),
-        options={str(k): bool(v) for k, v in options.items()} if isinstance(options, dict) else {},
-        controller_time=doc.get("controller_time"),
-        expected_end_unix=_unix(doc.get("expected_end")),
-        raw_bearing_deg=num("raw_bearing"),
-        overlap=doc.get("overlap"),
-        target_info=_target_info(doc.get("target_info")),
-        tracking=_tracking(doc.get("tracking")),
-        tracking_ended=doc.get("tracking_ended"),
-    )
 
 
 class StationView:
@@ -280,6 +132,7 @@ class RemoteRotator:
         expiry_s: int,
         moving_max_age_s: float = 10.0,
         clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,  # rule 6: a lease's end is wall-clock time
     ) -> None:
         self.id = rotator_id
         self.topics = topics
@@ -294,6 +147,7 @@ class RemoteRotator:
         self._moving_max_age_s = moving_max_age_s
         self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
         self._clock = clock
+        self._wall = wall
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
         self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
@@ -356,9 +210,15 @@ class RemoteRotator:
         self._send_target(doc)
 
     def _station_there(self) -> None:
-        """Rule 3: no move while the station is not current (the link down: the link's word)."""
+        """Rule 3: no move while the station is not current (the link down: the link's word);
+        rule 6: nor while another operator holds the station's control lease."""
         if self._link.up and not self.current:
             raise Refused(RefusalCode.OFFLINE, STATION_AWAY)
+        held = parse_control(self._view.get(self.topics.control))
+        now = self._wall()
+        if held is not None and held.operator != self._operator and now < held.until_unix:
+            text = held.held_text(now)
+            raise Refused(RefusalCode.LEASED, f"{text}: only they may turn it (control lease)")
 
     def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))

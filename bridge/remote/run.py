@@ -26,6 +26,9 @@ Rules:
    described by the time the endpoints' rotators were found, and its line names its URL:
    ``DL1ABC -> host: console for tower on http://127.0.0.1:8754/``. Its block is
    ``_start_console``; it stops first.
+7. What the station refuses is logged here too, as it comes on a rotator's ``R/error`` (not
+   replayed from the broker's store): a rotctld, GS-232 or PstRotator client was told its
+   command went, and the operator reads here why nothing turned.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import RotatorTopics, StationTopics
-from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of
+from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.rotctld import RotctldServer
@@ -86,6 +89,7 @@ class Remote:
     feed: ConsoleFeed | None = None
     stopping: threading.Event = field(default_factory=threading.Event)  # rule 1: SIGTERM
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
+    _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
     _locks: set[str] = field(default_factory=set)
 
     @property
@@ -191,6 +195,11 @@ class Remote:
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload, replayed=retain)
+        said = self._errors.get(topic)
+        if said is not None and not retain:  # rule 7
+            event = parse_event(payload)
+            if event is not None:
+                log.warning("%s: the station says: %s (%s)", said, event.message, event.command)
         feed = self.feed
         if feed is not None:
             feed.on_message(topic, payload, retain)
@@ -234,12 +243,12 @@ class Remote:
             raise StartError(f"{topics.info}: {exc}") from None
         except (ValueError, KeyError, TypeError, IndexError) as exc:
             raise StartError(f"{topics.info} is not the station's description: {exc}") from None
-        rid = ep.rotator or info.name
+        rid = ep.rotator or info.rotator_id or info.name
         one = topics == self.station.rotator(None)
-        if one and ep.rotator is not None and ep.rotator != info.name:
+        if one and ep.rotator is not None and ep.rotator != (info.rotator_id or ep.rotator):
             log.warning(
                 "the station has one rotator, %r: endpoints.rotator %r is taken to be it",
-                info.name,
+                info.rotator_id,
                 ep.rotator,
             )
         return self._remote_rotator(rid, topics, info)
@@ -295,6 +304,7 @@ class Remote:
         assert self.link is not None
         self._stops.add(topics.stop)
         self._locks.add(topics.lock)
+        self._errors[topics.error] = rid
         return RemoteRotator(
             rid,
             topics,

@@ -216,6 +216,7 @@ def test_attaching_publishes_the_presets_and_what_the_rotator_is_retained() -> N
     assert presets == ("rotor/presets", '{"EU":45}', True)
     assert info[0] == "rotor/info" and info[2] is True
     assert json.loads(info[1]) == {
+        "id": "tower",
         "name": "Tower",
         "model": "rotorez",
         "model_name": REGISTRY["rotorez"].display_name,

@@ -297,3 +297,31 @@ def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
         assert ask(port, b"p\n") == b"RPRT -5\n"  # connected, but no word from the station
     finally:
         r.stop()
+
+
+def test_another_operators_lease_is_refused_at_once_and_the_stations_refusals_are_logged(
+    station: Rig, remote: tuple[Remote, int, list[str]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """remote/rotator.py rule 6 and run.py rule 7: what the station would refuse in silence
+    (its R/error), the client hears at once or the operator reads in the remote's log."""
+    r, port, _ = remote
+    emu = station.emus["tower"]
+    moves = len(emu.frames(*BEARING_OUTCOMES))
+    other = paho.Client(CallbackAPIVersion.VERSION2, client_id="g4xyz", protocol=paho.MQTTv5)
+    other.connect("127.0.0.1", station.broker.port)
+    other.loop_start()
+    try:
+        other.publish("rotor/control/claim", '{"operator": "G4XYZ", "minutes": 5}', qos=1)
+        wait_until(lambda: b"G4XYZ" in (r.view.get("rotor/control") or b""), 10, "the lease")
+        assert ask(port, b"P 100 0\n") == b"RPRT -9\n"  # rejected, as the station's rotctld
+        assert ask(port, b"S\n") == b"RPRT 0\n"  # a stop from anyone
+        other.publish("rotor/control/release", '{"operator": "G4XYZ"}', qos=1)
+        wait_until(lambda: b'"holder":null' in (r.view.get("rotor/control") or b""), 10, "free")
+        other.publish("rotor/lock", "ON", qos=1)
+        wait_until(lambda: station.status("tower").locked, 10, "the station locked")
+        assert ask(port, b"P 100 0\n") == b"RPRT 0\n"  # on its way: the station judges it
+        wait_until(lambda: "the station says: rotator is locked" in caplog.text, 10, "logged")
+    finally:
+        other.loop_stop()
+        other.disconnect()
+    assert len(emu.frames(*BEARING_OUTCOMES)) == moves

@@ -151,3 +151,31 @@ def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
     assert link.sent == []
     assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]
     assert link.sent == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]
+
+
+def test_another_operators_lease_refuses_a_move_at_once_in_the_stations_words() -> None:
+    """Rule 6: the station's retained R/control says who holds it; the remote spares its client
+    the silent refusal (rotctld would answer RPRT 0 and nothing would turn)."""
+    link = Link()
+    rot = rotator(link, FakeClock())
+    wall = 1_800_000_000.0
+    rot._wall = lambda: wall  # the operator's clock
+    control = rot.topics.control
+    rot._view.put(control, b'{"holder":"G4XYZ","until":"2027-01-15T08:30:00.000+00:00"}')
+    with pytest.raises(Refused) as caught:
+        rot.submit(Target(120.0, None, Source.ROTCTLD), "rotctld P 120")
+    assert caught.value.code is RefusalCode.LEASED
+    assert str(caught.value).startswith("G4XYZ holds the rotator until 08:30 UTC")
+    rot.submit(Stop(Source.ROTCTLD), "rotctld S")  # a stop is never refused
+    assert link.sent == [("rotor/tower/stop", "stop")]
+    rot._view.put(control, b'{"holder":"DL1ABC","until":"2027-01-15T08:30:00.000+00:00"}')
+    rot.submit(Target(120.0, None, Source.ROTCTLD), "rotctld P 120")  # our own lease
+    rot._view.put(control, b'{"holder":"G4XYZ","until":"2020-01-01T00:00:00.000+00:00"}')
+    rot.submit(Target(130.0, None, Source.ROTCTLD), "rotctld P 130")  # ended: the station judges
+    rot._view.put(control, b'{"holder":null,"until":null}')
+    rot.submit(Target(140.0, None, Source.ROTCTLD), "rotctld P 140")
+    assert [p for t, p in link.sent if t == "rotor/tower/target"] == [
+        '{"azimuth":120.0}',
+        '{"azimuth":130.0}',
+        '{"azimuth":140.0}',
+    ]

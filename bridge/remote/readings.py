@@ -1,0 +1,179 @@
+"""The station's retained payloads read back (``R/info``, ``R/status``): the other side of
+mqtt/payloads.py, for the remote (docs/mqtt.md says what each field means).
+
+Rules:
+1. Anyone the broker's ACL lets publish there can put anything there: a payload that is not
+   what the station writes (not an object, a number that is not finite or too large, a model
+   this version does not know) raises ValueError (InfoError for R/info), never more, and a
+   field that is absent or of the wrong kind reads as unknown.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from bridge.model import Control, MotionState, RotatorStatus, TargetInfo, TrackingInfo
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import ModelSpec
+
+
+class InfoError(ValueError):
+    """The station's R/info cannot be used (a model this version does not know)."""
+
+
+@dataclass(frozen=True)
+class Info:
+    """The station's ``R/info``, parsed."""
+
+    name: str
+    spec: ModelSpec
+    pointing: Pointing
+    rotator_id: str | None = None  # the station's id (a station older than this: None)
+
+    @classmethod
+    def parse(cls, payload: bytes) -> Info:
+        doc = json.loads(payload)
+        model = str(doc["model"])
+        spec = REGISTRY.get(model)
+        if spec is None:
+            raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
+        az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
+        el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
+        park = doc.get("park") or None
+        at = (_finite(park[0]), None if park[1] is None else _finite(park[1])) if park else None
+        # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
+        aim = Pointing.of(
+            spec,
+            (az_lo, az_hi),
+            (_finite(el[0]), _finite(el[1])),
+            keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
+            park=at,
+        )
+        rid = doc.get("id")
+        return cls(str(doc.get("name") or model), spec, aim, rid if isinstance(rid, str) else None)
+
+
+def _finite(value: object) -> float:
+    """A number of R/info; ValueError for NaN and infinities: the judge would raise on them."""
+    try:
+        n = float(value)  # type: ignore[arg-type]  # TypeError for what is no number: caller's
+    except OverflowError:  # an integer past a float's range
+        n = math.inf
+    if not math.isfinite(n):
+        raise ValueError(f"{value!r:.20} is not a finite number")
+    return n
+
+
+def _num(doc: dict[str, Any], key: str) -> float | None:
+    """A number, or None (Python's json reads NaN, Infinity, 1e400: never shown, rule 1)."""
+    v = doc.get(key)
+    if not isinstance(v, int | float) or isinstance(v, bool):
+        return None
+    try:
+        return _finite(v)
+    except ValueError:
+        return None
+
+
+def _unix(text: object) -> float | None:
+    try:
+        return datetime.fromisoformat(str(text)).timestamp() if text is not None else None
+    except ValueError:
+        return None
+
+
+def _target_info(doc: object) -> TargetInfo | None:
+    if not isinstance(doc, dict):
+        return None
+    lat, lon = _num(doc, "latitude"), _num(doc, "longitude")
+    short, long = _num(doc, "short_path_deg"), _num(doc, "long_path_deg")
+    if lat is None or lon is None or short is None or long is None:
+        return None
+    locator = doc.get("locator")
+    return TargetInfo(
+        lat,
+        lon,
+        _num(doc, "distance_km") or 0.0,
+        short,
+        long,
+        "long" if doc.get("path") == "long" else "short",
+        locator if isinstance(locator, str) else None,
+    )
+
+
+def _tracking(doc: object) -> TrackingInfo | None:
+    if not isinstance(doc, dict) or not isinstance(doc.get("body"), str):
+        return None
+    nxt_or = doc.get("next")
+    nxt: dict[str, Any] = nxt_or if isinstance(nxt_or, dict) else {}
+    track = doc.get("pass_track") or []
+    return TrackingInfo(
+        doc["body"],
+        str(doc.get("phase", "")),
+        _num(doc, "azimuth"),
+        _num(doc, "elevation"),
+        _num(nxt, "azimuth"),
+        _num(nxt, "elevation"),
+        _unix(doc.get("aos")),
+        _unix(doc.get("los")),
+        _num(doc, "max_elevation"),
+        _num(doc, "aos_azimuth"),
+        bool(doc.get("flip")),
+        tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
+    )
+
+
+def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
+    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
+    the console draws (the place targeted, the body tracked)."""
+    doc = json.loads(payload)
+    if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
+        raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
+
+    def num(key: str) -> float | None:
+        return _num(doc, key)
+
+    options = doc.get("options")
+
+    return RotatorStatus(
+        rotator_id,
+        state=MotionState(doc.get("state", "offline")),
+        bearing_deg=num("bearing"),
+        elevation_deg=num("elevation"),
+        target_az_deg=num("target"),
+        target_el_deg=num("target_elevation"),
+        connected=bool(doc.get("connected")),
+        available=bool(doc.get("available")),
+        locked=bool(doc.get("locked")),
+        version=doc.get("version"),
+        last_error=doc.get("last_error"),
+        last_command_source=doc.get("last_command_source"),
+        estimated=bool(doc.get("estimated")),
+        parked=bool(doc.get("parked")),
+        options={str(k): bool(v) for k, v in options.items()} if isinstance(options, dict) else {},
+        controller_time=doc.get("controller_time"),
+        expected_end_unix=_unix(doc.get("expected_end")),
+        raw_bearing_deg=num("raw_bearing"),
+        overlap=doc.get("overlap"),
+        target_info=_target_info(doc.get("target_info")),
+        tracking=_tracking(doc.get("tracking")),
+        tracking_ended=doc.get("tracking_ended"),
+    )
+
+
+def parse_control(payload: bytes | None) -> Control | None:
+    """``R/control`` (mqtt/control.py): who holds the control lease, or None (free, or not a
+    payload the station writes: the station judges every command again anyway)."""
+    try:
+        doc = json.loads(payload or b"null")
+    except ValueError:
+        return None
+    if not isinstance(doc, dict) or not isinstance(doc.get("holder"), str):
+        return None
+    until = _unix(doc.get("until"))
+    return Control(doc["holder"], until) if until is not None else None
