@@ -54,6 +54,7 @@ from bridge.errors import RefusalCode, Refused
 from bridge.model import (
     Command,
     MotionState,
+    Origin,
     RotatorStatus,
     Source,
     Stop,
@@ -194,7 +195,6 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
         return _num(doc, key)
 
     options = doc.get("options")
-
     return RotatorStatus(
         rotator_id,
         state=MotionState(doc.get("state", "offline")),
@@ -371,8 +371,8 @@ class RemoteRotator:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
         self._link.send(topic, payload, self._operator, self._expiry_s)
 
-    def park(self, source: Source, described: str) -> None:
-        """Rule 4: Refused when the station has no park position."""
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        """Rule 4: Refused without a park position. ``origin``: not sent (the operator is)."""
         try:
             where = self.pointing.parking()
         except Refused as exc:
@@ -389,6 +389,7 @@ class RemoteRotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,  # not sent: the remote's operator is (rule 3)
     ) -> None:
         """Rule 4: the place, for the station to turn into its bearing."""
         place: dict[str, Any] = (
