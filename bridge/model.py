@@ -37,6 +37,7 @@ class Source(enum.StrEnum):
     WEB = "web"  # the operator console (web/)
     GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
+    LEASE = "lease"  # the control lease itself: its end, in the audit trail (engine/operators.py)
 
 
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")

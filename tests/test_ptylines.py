@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from bridge.gs232 import Gs232Session, gs232_pty
-from bridge.model import MotionState, RotatorStatus, Source, Stop, Target
+from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.ptylines import PtyLineServer
 from tests.support import wait_until
@@ -38,7 +38,7 @@ class StandIn:
     def submit(self, command: Target | Stop, described: str | None = None) -> None:
         self.submitted.append(command)
 
-    def park(self, source: Source, described: str) -> None:
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
         raise AssertionError("GS-232 has no park")
 
 
@@ -91,7 +91,9 @@ def test_a_client_on_the_link_reads_and_turns(
     try:
         assert c.ask(b"C2\r") == b"AZ=042  EL=000\r\n"
         assert c.ask(b"W120 000\r\rC\r") == b"AZ=042\r\n"  # W answers nothing
-        assert rot.submitted == [Target(120, None, Source.GS232)]
+        assert rot.submitted == [
+            Target(120, None, Source.GS232, origin=Origin(Source.GS232))
+        ]  # no peer
     finally:
         c.close()
 

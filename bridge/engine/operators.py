@@ -6,8 +6,9 @@ Rules:
    goes to the status through the mailbox (the status shows the holder), and to the state file
    through the store's writer thread (state_store.py rule 5): no fsync on a front end's thread.
 2. A lease ends by itself: a timer (daemon, one at a time) fires at its end, so that the status
-   and ``R/control`` say it is free without anyone asking. A timer that fires early (the wall
-   clock was set back) arms itself again.
+   and ``R/control`` say it is free without anyone asking, and the audit trail has it (its
+   operator the holder, interface ``lease``). A timer that fires early (the wall clock was set
+   back) arms itself again.
 3. Every command judged, executed or refused, from every interface, is one audit event handed
    to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
    listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
@@ -26,7 +27,7 @@ from bridge.engine.lease import Lease, LeaseError
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
 from bridge.errors import RefusalCode, Refused
-from bridge.model import AuditEvent, Control, ErrorKind, Origin
+from bridge.model import AuditEvent, Control, ErrorKind, Origin, Source
 
 log = logging.getLogger(__name__)
 
@@ -152,6 +153,7 @@ class Operators:
             self._timer = None
         log.info("%s: the control lease of %s has ended", self._id, ended.operator)
         self._changed(None)
+        self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
 
     # -- the trail (rule 3) ------------------------------------------------------------------
     def audit(self, origin: Origin, command: str, result: str) -> None:

@@ -36,7 +36,9 @@ Rules:
    does not currently have is an error, never the last value seen.
 5. Targets go through Rotator.submit with Source.GS232 / Source.EASYCOMM: the lock, the limits,
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
-   Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one).
+   Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one). Every
+   command carries who sent it (model.Origin, for the audit trail and the control lease): the
+   TCP client's address; a pty has none.
 6. A stop is never refused by the bridge; ``A`` (azimuth) and ``E`` (elevation) stop the whole
    rotator, more than asked but never less. A line that stops does nothing else. On the remote
    (remote/rotator.py) a stop that cannot be delivered (its broker away) is answered as a

@@ -3,7 +3,9 @@ Rotator.submit and answered in the protocol's bytes (package rules 4-7); the ser
 them are the shared line server (tcplines.py) and the pty server (ptylines.py).
 
 The Rotator is a Protocol: the bridge's own (engine/rotator.py) or the remote's, which stands
-for the station's (remote/rotator.py), as rotctld's commands take either."""
+for the station's (remote/rotator.py), as rotctld's commands take either. Every command carries
+who sent it (``Origin``: the audit trail, the control lease): on a TCP port the client's address
+(``gs232 192.168.1.20``); a pty has no peer, so its commands are the interface's alone."""
 
 from __future__ import annotations
 
@@ -20,7 +22,7 @@ from bridge.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.model import RotatorStatus, Source, Stop, Target
+from bridge.model import Origin, RotatorStatus, Source, Stop, Target
 from bridge.tcplines import LineServer
 
 if TYPE_CHECKING:
@@ -38,7 +40,7 @@ class Rotator(Protocol):
     @property
     def status(self) -> RotatorStatus: ...
     def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
 
 
 log = logging.getLogger(__name__)
@@ -70,9 +72,11 @@ class _Session(ABC):
 
     name = ""
     failed_reply = b""
+    source = Source.GS232
 
-    def __init__(self, rotator: Rotator) -> None:
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
         self.rotator = rotator
+        self.origin = Origin(self.source, None, peer)  # peer: the TCP client's address
         self._lines = LineSplitter()
 
     @property
@@ -106,7 +110,7 @@ class Gs232Session(_Session):
         described = f"gs232 {line}"
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
             try:
-                self.rotator.submit(Stop(Source.GS232), described)
+                self.rotator.submit(Stop(Source.GS232, self.origin), described)
             except Refused:  # the remote's, its broker away (package rule 6): reported there
                 return GS232_ERROR
             return b""
@@ -126,7 +130,8 @@ class Gs232Session(_Session):
             if el == 0 and not self.rotator.spec.has_elevation:
                 el = None  # Hamlib sends W with elevation 000 to an azimuth-only rotator
             try:
-                self.rotator.submit(Target(req.az_deg, el, Source.GS232), described)
+                target = Target(req.az_deg, el, Source.GS232, origin=self.origin)
+                self.rotator.submit(target, described)
             except Refused:
                 return GS232_ERROR  # Rotator.submit has reported it on R/error
             return b""
@@ -137,7 +142,7 @@ class Gs232Session(_Session):
 class EasycommSession(_Session):
     """One Easycomm II client."""
 
-    name, failed_reply = "easycomm", b"ALinternal error\n"
+    name, failed_reply, source = "easycomm", b"ALinternal error\n", Source.EASYCOMM
 
     def answer(self, line: str | None) -> bytes:
         return self.execute(line, parse_easycomm(line))
@@ -149,12 +154,12 @@ class EasycommSession(_Session):
             return f"ALinvalid {req.invalid}\n".encode("latin-1")
         if req.stop:  # a line that stops does nothing else
             try:
-                self.rotator.submit(Stop(Source.EASYCOMM), described)
+                self.rotator.submit(Stop(Source.EASYCOMM, self.origin), described)
             except Refused as exc:  # the remote's, its broker away (package rule 6)
                 alarms.append(f"refused {exc.code.value}")
         elif req.park:
             try:
-                self.rotator.park(Source.EASYCOMM, described)
+                self.rotator.park(Source.EASYCOMM, described, origin=self.origin)
             except Refused as exc:
                 alarms.append(f"refused {exc.code.value}")
         elif req.az_deg is not None or req.el_deg is not None:
@@ -162,7 +167,8 @@ class EasycommSession(_Session):
             if el == 0 and not self.rotator.spec.has_elevation:
                 el = None  # Hamlib sends EL0.0 to an azimuth-only rotator
             try:
-                self.rotator.submit(Target(req.az_deg, el, Source.EASYCOMM), described)
+                target = Target(req.az_deg, el, Source.EASYCOMM, origin=self.origin)
+                self.rotator.submit(target, described)
             except Refused as exc:
                 alarms.append(f"refused {exc.code.value}")
         alarms += [f"{word} not available" for word in req.unsupported]
@@ -195,6 +201,7 @@ def gs232_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> LineSe
         bind,
         lambda: Gs232Session(rotator),
         label="gs232",
+        peer_session=lambda peer: Gs232Session(rotator, peer),
         key="gs232",
         idle_timeout_s=IDLE_TIMEOUT_S,
     )
@@ -208,6 +215,7 @@ def easycomm_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> Lin
         bind,
         lambda: EasycommSession(rotator),
         label="easycomm",
+        peer_session=lambda peer: EasycommSession(rotator, peer),
         key="easycomm",
         idle_timeout_s=IDLE_TIMEOUT_S,
     )

@@ -54,7 +54,7 @@ class Rotator(Protocol):
     @property
     def status(self) -> RotatorStatus: ...
     def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
     def report_refusal(self, message: str, command: str | None) -> None: ...
     def go_toward(
         self,
@@ -65,6 +65,7 @@ class Rotator(Protocol):
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None: ...
 
 
@@ -167,14 +168,14 @@ class Commands:
             if req.stop:
                 rot.submit(Stop(Source.PST, by), described)
             elif req.park:
-                rot.park(Source.PST, described)
+                rot.park(Source.PST, described, origin=by)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
                     rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
                     return
-                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator)
+                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator, origin=by)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",

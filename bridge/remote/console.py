@@ -24,6 +24,8 @@ Rules:
 5. What the console draws beyond the judge's terms (the station's position, the beamwidth, the
    nudge step, the satellites) is the station's ``R/info``; the presets are its ``R/presets``,
    read at each use (they may come after the description).
+6. Who sent a command (``origin``, web/port.py rule 4) is taken and not sent: the station hears
+   the remote's operator (mqtt/remote.py), the one name it knows this console by.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from bridge.model import (
     Command,
     ErrorEvent,
     ErrorKind,
+    Origin,
     RotatorStatus,
     Source,
     Stop,
@@ -179,7 +182,7 @@ class RemoteConsoleRotator:
             self.report_refusal(exc.message, described or describe_command(command))
             raise
 
-    def set_lock(self, locked: bool) -> None:
+    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None:
         word = "ON" if locked else "OFF"
         self._send(self.remote.topics.lock, word, f"console: lock {word}", moves=False)
         if locked:
@@ -194,6 +197,7 @@ class RemoteConsoleRotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None:
         place: dict[str, object] = (
             {"locator": locator}
@@ -203,21 +207,35 @@ class RemoteConsoleRotator:
         place["path"] = "long" if long_path else "short"
         self._send(self.remote.topics.target, json.dumps(place, separators=(",", ":")), described)
 
-    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         path = json.dumps({"path": "long" if long_path else "short"}, separators=(",", ":"))
         self._send(self.remote.topics.target, path, described)
 
-    def go_to_preset(self, name: str, source: Source, described: str) -> None:
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         self._send(self.remote.topics.preset, name, described)
 
-    def park(self, source: Source, described: str) -> None:
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
         self._send(self.remote.topics.park, "park", described)
 
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None:
         doc = {"azimuth": d_az} if d_el is None else {"azimuth": d_az, "elevation": d_el}
         self._send(self.remote.topics.nudge, json.dumps(doc, separators=(",", ":")), described)
 
-    def track(self, name: str, source: Source, described: str) -> None:
+    def track(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         if not self.can_track and name.strip().casefold() != "off":  # rule 5
             message = "the station's rotator cannot track (its R/info says so)"
             self.report_refusal(message, described)
@@ -225,7 +243,9 @@ class RemoteConsoleRotator:
         off = name.strip().casefold() == "off"
         self._send(self.remote.topics.track, name, described, moves=not off)
 
-    def report_refusal(self, message: str, command: str | None) -> None:
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
         """Rule 2: to the pages alone."""
         if self.pages is not None:
             event = ErrorEvent(ErrorKind.REFUSED, message, command, self._wall())

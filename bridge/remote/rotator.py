@@ -53,7 +53,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, MotionState, RotatorStatus, Source, Stop, Target
+from bridge.model import Command, MotionState, Origin, RotatorStatus, Source, Stop, Target
 from bridge.mqtt.topics import RotatorTopics
 from bridge.pointing import Limits
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
@@ -231,8 +231,8 @@ class RemoteRotator:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
         self._link.send(topic, payload, self._operator, self._expiry_s)
 
-    def park(self, source: Source, described: str) -> None:
-        """Rule 4: Refused when the station has no park position."""
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        """Rule 4: Refused without a park position. ``origin``: not sent (the operator is)."""
         try:
             where = self.pointing.parking()
         except Refused as exc:
@@ -249,6 +249,7 @@ class RemoteRotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,  # not sent: the remote's operator is (rule 3)
     ) -> None:
         """Rule 4: the place, for the station to turn into its bearing."""
         place: dict[str, Any] = (

@@ -13,7 +13,8 @@ Rules:
    mailbox, which takes a stop first. Tracking ``off`` likewise. On the remote they are refused
    only while they cannot be delivered (the broker out of reach), and the answer says so.
 4. Every command carries ``Source.WEB``, so the status says the console sent it (from the
-   remote the station's status says ``mqtt``: it came over its broker).
+   remote the station's status says ``mqtt``: it came over its broker), and who sent it
+   (``Origin``: ``web`` and the browser's address, as the server saw it: port.py rule 4).
 5. A STOP or a lock ON is the last word over everything sent before it (docs/architecture.md
    rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
    stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
@@ -33,7 +34,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
-from bridge.model import Source, Stop, Target
+from bridge.model import Origin, Source, Stop, Target
 from bridge.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
@@ -249,17 +250,19 @@ def _no_constant(name: str) -> object:
     raise ValueError(f"{name} is not a number here")
 
 
-def carry_out(rot: ConsoleRotator, cmd: WebCommand) -> None:
-    """Rule 2: raises Refused (already reported) when the judge says no."""
+def carry_out(rot: ConsoleRotator, cmd: WebCommand, peer: str | None = None) -> None:
+    """Rule 2: raises Refused (already reported) when the judge says no; ``peer``: the
+    browser's address (rule 4)."""
     what = cmd.described()
     src = Source.WEB
+    by = Origin(src, None, peer)
     match cmd.command:
         case "stop":
-            rot.submit(Stop(src), what)
+            rot.submit(Stop(src, by), what)
         case "lock":
-            rot.set_lock(cmd.on)
+            rot.set_lock(cmd.on, origin=by)
         case "target":
-            rot.submit(Target(cmd.az_deg, cmd.el_deg, src), what)
+            rot.submit(Target(cmd.az_deg, cmd.el_deg, src, origin=by), what)
         case "toward":
             assert cmd.latitude_deg is not None and cmd.longitude_deg is not None
             rot.go_toward(
@@ -269,17 +272,18 @@ def carry_out(rot: ConsoleRotator, cmd: WebCommand) -> None:
                 what,
                 locator=cmd.locator,
                 long_path=cmd.long_path,
+                origin=by,
             )
         case "path":
-            rot.take_path(cmd.long_path, src, what)
+            rot.take_path(cmd.long_path, src, what, origin=by)
         case "preset":
             assert cmd.name is not None
-            rot.go_to_preset(cmd.name, src, what)
+            rot.go_to_preset(cmd.name, src, what, origin=by)
         case "park":
-            rot.park(src, what)
+            rot.park(src, what, origin=by)
         case "nudge":
             assert cmd.az_deg is not None
-            rot.nudge(cmd.az_deg, cmd.el_deg, src, what)
+            rot.nudge(cmd.az_deg, cmd.el_deg, src, what, origin=by)
         case "track":
             assert cmd.name is not None
-            rot.track(cmd.name, src, what)
+            rot.track(cmd.name, src, what, origin=by)

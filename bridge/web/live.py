@@ -47,12 +47,13 @@ class Live:
         headers: dict[str, str],
         *,
         trust: Callable[[asyncio.BaseTransport | None], None],
-        halt: Callable[[str, bytes], None],
+        halt: Callable[[str, bytes, str | None], None],
     ) -> None:
         self.feed, self._tokens, self._wall = feed, tokens, wall
         self._headers = headers  # the console's safety headers (server.py rule 3)
         self._trust = trust  # connections.py rule 1
-        self._halt = halt  # a STOP or lock ON that came over the WebSocket (rule 5)
+        # a STOP or lock ON that came over the WebSocket (rule 5), with the page's address
+        self._halt = halt
         self._opening = 0  # WebSockets upgraded, their token not in yet (they count as pages)
         self._newest: dict[str, tuple[RotatorStatus, float]] = {}  # written by the lines thread
 
@@ -133,7 +134,7 @@ class Live:
             return ws
         self._trust(request.transport)
         page = self.join(token)
-        reader = asyncio.get_running_loop().create_task(self._read(ws, page))
+        reader = asyncio.get_running_loop().create_task(self._read(ws, page, request.remote))
         try:
             await ws.send_str('{"event":"hello"}')
             while await _next(page):
@@ -151,16 +152,16 @@ class Live:
             await ws.close(code=4401 if page.expired else 1001)  # 4401: the token's life ended
         return ws
 
-    async def _read(self, ws: web.WebSocketResponse, page: Page) -> None:
+    async def _read(self, ws: web.WebSocketResponse, page: Page, peer: str | None) -> None:
         """What the page sends: a STOP or a lock ON, sent here as well as by POST (rule 5);
         anything else is ignored. Its close is seen at once."""
         async for message in ws:
             if message.type == WSMsgType.TEXT:
-                self._halt_from(message.data)
+                self._halt_from(message.data, peer)
         page.closed = True
         page.wake.set()
 
-    def _halt_from(self, text: str) -> None:
+    def _halt_from(self, text: str, peer: str | None) -> None:
         try:
             doc = json.loads(text)
         except (ValueError, RecursionError):
@@ -168,7 +169,7 @@ class Live:
         rid = doc.pop("rotator", None) if isinstance(doc, dict) else None
         if isinstance(rid, str):
             try:
-                self._halt(rid, json.dumps(doc).encode())
+                self._halt(rid, json.dumps(doc).encode(), peer)
             except Exception:  # the page's socket goes on: its POST carries the same STOP
                 log.exception("web console: a STOP over the live feed failed")
 

@@ -10,13 +10,16 @@ Rules:
    from any of the remote's own (a STOP given at the station is not seen there).
 3. ``report_refusal`` shows a refusal the console found itself (a bad body, a stale command)
    where the rotator's own refusals go.
+4. Every command carries who sent it (``origin``: ``web`` and the browser's address, the audit
+   trail and the control lease judge by it); the remote's rotator takes it and sends its own
+   operator instead (remote/console.py).
 """
 
 from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import Command, Source
+from bridge.model import Command, Origin, Source
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -36,7 +39,7 @@ class ConsoleRotator(Protocol):
     def last_halt_s(self) -> float: ...
 
     def submit(self, command: Command, described: str | None = None) -> None: ...
-    def set_lock(self, locked: bool) -> None: ...
+    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None: ...
     def go_toward(
         self,
         latitude_deg: float,
@@ -46,10 +49,27 @@ class ConsoleRotator(Protocol):
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None: ...
-    def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
-    def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
-    def track(self, name: str, source: Source, described: str) -> None: ...
-    def report_refusal(self, message: str, command: str | None) -> None: ...
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None: ...
+    def track(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None: ...

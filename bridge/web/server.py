@@ -19,7 +19,9 @@ Rules:
    frame it and steer clicks onto the map).
 4. A command is judged by the rotator's judge (commands.py); the answer says what the judge
    said (409 with the refusal's code), and the refusal reaches every page as an error event
-   too, as it reaches R/error.
+   too, as it reaches R/error. Who sent it is ``web`` and the connection's address (aiohttp's
+   ``request.remote``, as the login's limit counts it): behind a reverse proxy, the proxy's,
+   since no ``X-Forwarded-For`` is believed (anyone can write one).
 5. Slow work (projecting the coastlines, reading the TLE file's names) runs on the loop's
    executor, never on the loop: a STOP posted meanwhile is carried out at once
    (docs/architecture.md rule 12).
@@ -40,7 +42,7 @@ from aiohttp import web
 
 from bridge import __version__
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, RotatorStatus
+from bridge.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.web import auth, view
 from bridge.web.commands import BadCommand, Order, carry_out, parse
 from bridge.web.connections import Connections
@@ -346,7 +348,7 @@ class WebConsole:
         return response
 
     # -- commands (rule 4) -------------------------------------------------------------------
-    def _halt(self, rotator_id: str, body: bytes) -> None:
+    def _halt(self, rotator_id: str, body: bytes, peer: str | None = None) -> None:
         """A STOP or lock ON over a page's WebSocket (live.py rule 5); nothing else."""
         rot = self._rotators.get(rotator_id)
         try:
@@ -356,7 +358,7 @@ class WebConsole:
         if rot is None or not cmd.halts():
             return
         try:
-            carry_out(rot, cmd)  # never refused by a judge (commands.py rule 3)
+            carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             return
         self._order.halted(rot.id, cmd, time.monotonic())
@@ -375,20 +377,22 @@ class WebConsole:
             body = await asyncio.wait_for(request.read(), BODY_S)
         except TimeoutError:
             return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
+        by = Origin(Source.WEB, None, request.remote)  # rule 4
         try:
             cmd = parse(body)
         except BadCommand as exc:
-            rot.report_refusal(str(exc), "console: " + body[:80].decode("utf-8", "replace"))
+            said = "console: " + body[:80].decode("utf-8", "replace")
+            rot.report_refusal(str(exc), said, origin=by)
             return _json({"error": str(exc), "code": "invalid"}, 400)
         halt = cmd.halts()
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         if stale is not None:
-            rot.report_refusal(stale, cmd.described())
+            rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
         try:
-            carry_out(rot, cmd)
+            carry_out(rot, cmd, request.remote)
         except Refused as exc:
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:

@@ -27,6 +27,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from tests.support import free_port, wait_until
+from tests.support.console import ConsoleClient, web_section
 from tests.support.mqtt import retained_snapshot
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, reserve_pst_ports, tag
@@ -228,5 +229,84 @@ def test_a_lease_kept_across_a_restart_holds_and_then_ends_by_itself(
     ended = lambda m: json.loads(m.text)["control"] is None  # noqa: E731
     status = probe.wait_for("rotor/status", ended, after=held.t)
     assert json.loads(status.text)["control"] is None
+    # its end is in the audit trail, the holder named (R/audit; the file has what it has)
+    expired = probe.wait_for("rotor/audit", lambda m: "control expired" in m.text)
+    doc = json.loads(expired.text)
+    assert (doc["operator"], doc["interface"], doc["peer"]) == ("DL1ABC", "lease", None)
     other.publish("rotor/target", "60")
     emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)
+
+
+def line(port: int, sent: bytes) -> bytes:
+    """One line to a GS-232 or Easycomm port, and its answer (up to the line's end)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(sent)
+        got = b""
+        while not got.endswith(b"\n"):
+            got += s.recv(100)
+        return got
+
+
+def test_every_other_interface_names_its_peer_in_the_audit_trail(
+    rig: Rig, operators: tuple[Operator, Operator]
+) -> None:
+    """GS-232 and Easycomm on TCP, the console (its targets and its lock), PST's park and
+    locator: each command refused by the lease or carried out carries its interface and the
+    sender's address, and the lease claimed by one names no one else."""
+    holder, _ = operators
+    gs232_port, easycomm_port, web = free_port(), free_port(), web_section()
+    pst_port, pst_replies = reserve_pst_ports()
+    rig.sections["web"] = web
+    rig.sections["station"] = {"locator": "JO62qm"}
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, gs232_port=gs232_port,
+                  easycomm_port=easycomm_port, pst_udp_port=pst_port, park_az_deg=0)  # fmt: skip
+    rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    pst = PstClient(pst_port, replies=pst_replies)
+    console = ConsoleClient(web["port"])
+    console.session()
+
+    def audited(n: int) -> None:  # one at a time: the audit trail's order is the test's
+        wait_until(lambda: len(probe.on("rotor/audit")) >= n, 10, f"audit event {n}")
+
+    holder.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    audited(1)
+    assert line(gs232_port, b"M200\r") == b"?>\r\n"  # refused: the GS-232 error prompt
+    audited(2)
+    assert line(easycomm_port, b"AZ200.0\n").startswith(b"ALrefused")
+    audited(3)
+    assert line(easycomm_port, b"PARK\n").startswith(b"ALrefused")
+    audited(4)
+    assert console.command("tower", command="target", az=200).status == 409
+    audited(5)
+    pst.command(tag("PARK", 1))
+    audited(6)
+    pst.command(tag("QRA", "JN58td"))
+    audited(7)
+    assert console.command("tower", command="lock", on=True).status == 200  # never refused
+    audited(8)
+    assert console.command("tower", command="lock", on=False).status == 200
+    audited(9)
+    assert emu.state().az_deg == pytest.approx(10, abs=1) and not emu.state().is_moving
+
+    local = "127.0.0.1"
+    want = [
+        ("DL1ABC", "mqtt", None, "executed"),  # the claim
+        (f"gs232 {local}", "gs232", local, "refused"),
+        (f"easycomm {local}", "easycomm", local, "refused"),
+        (f"easycomm {local}", "easycomm", local, "refused"),  # park
+        (f"web {local}", "web", local, "refused"),
+        (f"pst {local}", "pst", local, "refused"),  # park
+        (f"pst {local}", "pst", local, "refused"),  # locator
+        (f"web {local}", "web", local, "executed"),  # lock ON
+        (f"web {local}", "web", local, "executed"),  # lock OFF
+    ]
+    events = [json.loads(m.text) for m in probe.on("rotor/audit")]
+    got = [(e["operator"], e["interface"], e["peer"], e["result"].split(":")[0]) for e in events]
+    assert got == want
+    assert all(
+        "DL1ABC holds the rotator" in e["result"] for e in events if e["result"] != "executed"
+    )
+    assert [e["command"] for e in events[7:]] == ["lock ON", "lock OFF"]
+    pst.close()

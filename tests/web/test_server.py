@@ -218,3 +218,34 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
     assert got[0] == {"event": "hello"}
     assert got[1]["event"] == "status" and got[1]["data"]["rotator"] == "hf"
     assert got[1]["data"]["status"]["available"] is True
+
+
+def test_a_stop_over_the_live_feed_and_a_bad_body_are_audited_with_the_browsers_address(
+    console: tuple[Rig, ConsoleClient],
+) -> None:
+    """Who sent it: ``web`` and the connection's address, for what the page sends over its
+    WebSocket (a STOP) and for a body the console refuses itself (server.py rule 4)."""
+    rig, client = console
+    url = f"http://127.0.0.1:{client.port}/api/live"
+    origin = {"Origin": f"http://127.0.0.1:{client.port}"}
+
+    async def stop() -> None:
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(url, headers=origin) as ws:
+                await ws.send_str(json.dumps({"token": client.token}))
+                await ws.receive(timeout=10)  # hello: the token is in
+                await ws.send_str(json.dumps({"rotator": "hf", "command": "stop"}))
+                await ws.receive(timeout=10)  # (a status) the stop was read before the close
+
+    run_async(stop())
+    stop_audited = lambda m: json.loads(m.text)["command"] == "console: stop"  # noqa: E731
+    stopped = rig.probe.wait_for("rotor/audit", stop_audited)
+    assert client.command("hf", command="target", azimuth=200).status == 400  # "az" it is
+    bad = rig.probe.wait_for("rotor/audit", lambda m: "refused" in m.text, after=stopped.t)
+    for message in (stopped, bad):
+        doc = json.loads(message.text)
+        assert (doc["operator"], doc["interface"], doc["peer"]) == (
+            "web 127.0.0.1",
+            "web",
+            "127.0.0.1",
+        )
