@@ -218,7 +218,7 @@ class PtyLineServer:
             try:
                 self._serve_until_stopped()
                 return
-            except ZeroDivisionError:
+            except Exception:
                 now = self._clock()
                 if now - logged_s >= FAULT_LOG_S:
                     logged_s = now

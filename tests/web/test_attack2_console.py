@@ -27,6 +27,7 @@ import aiohttp
 import pytest
 from playwright.sync_api import Browser, expect
 
+from tests.support import wait_until
 from tests.support.console import ConsoleClient, run_async, web_section
 from tests.support.rig import Rig
 
@@ -356,6 +357,10 @@ def test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop
     rig.mqtt.wait_for(rig.t("status"), lambda m: json.loads(m.payload)["moving"], 5.0, t)
     try:
         delayed.sendall(head + body[:10])  # the click: begun, not all there yet
+        # begun at the console before the STOP (its bytes sent is not yet its request read)
+        assert rig.app is not None and rig.app.web is not None
+        web = rig.app.web
+        wait_until(lambda: web._started, 5, "the click's request begun at the console")
         t = time.monotonic()
         rig.mqtt.publish(rig.t("stop"), "STOP")
         rig.mqtt.wait_for(
