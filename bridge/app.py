@@ -9,11 +9,12 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
 from bridge.engine.catalog import TleCatalog
-from bridge.engine.config import TrackConfig
+from bridge.engine.config import FollowConfig, TrackConfig
 from bridge.engine.lines import Lines
 from bridge.engine.listeners import contained
 from bridge.engine.motion import MotionConfig
@@ -37,6 +38,7 @@ from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
+from bridge.wsjtx import WsjtxListener
 
 log = logging.getLogger(__name__)
 
@@ -44,8 +46,11 @@ GIL_SWITCH_S = 0.0005
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 
 
-def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
-    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked)."""
+def worker_config(
+    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
+) -> WorkerConfig:
+    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked);
+    ``follow``: the station and whether WSJT-X is heard (its hold_while_tx is ``r``'s)."""
     spec = r.spec
     az_min, az_max = r.effective_az_limits
     az_speed, el_speed = r.effective_speeds_deg_s
@@ -81,6 +86,7 @@ def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
             step_deg=r.effective_track_step_deg,
             at_los=r.track_at_los,
         ),
+        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
     )
 
 
@@ -172,9 +178,10 @@ class App:
                 satellites=catalog.names,
                 wall=wall,
             )
+        follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
         for r in settings.rotators:
             rot = Rotator(
-                worker_config(r, sky),
+                worker_config(r, sky, follow),
                 store,
                 on_status=self._listeners(r.id, "on_status"),
                 on_event=self._listeners(r.id, "on_event"),
@@ -207,6 +214,9 @@ class App:
                 self.loggers.add_n1mm(
                     rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
                 )
+        wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
+        self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
+        self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
@@ -255,6 +265,7 @@ class App:
                     has_station=settings.station.position is not None,
                     nudge_step_deg=r.nudge_step_deg,
                     satellites=tuple(self.catalog.names()),
+                    can_follow=rot.can_follow,
                 )
             )
         publisher = DiscoveryPublisher(
@@ -320,12 +331,15 @@ class App:
                 server.listen()
             if self.loggers:
                 self.loggers.listen()
+            if self.settings.wsjtx.enabled:
+                self.wsjtx.listen()
             if self.web is not None:
                 self.web.listen()
         except OSError as exc:
             for server in self._text_ports():
                 server.stop()
             self.loggers.stop()
+            self.wsjtx.stop()
             if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
                 raise NotYet(exc.strerror or str(exc)) from None
             raise ConfigError(exc.strerror or str(exc)) from None
@@ -341,6 +355,8 @@ class App:
                 server.start()
             if self.loggers:
                 self.loggers.start()
+            if self.settings.wsjtx.enabled:
+                self.wsjtx.start()
         except OSError:  # e.g. the port is taken: fail the start, leave nothing running
             self.stop()
             raise
@@ -357,6 +373,7 @@ class App:
         for server in self._text_ports():
             server.stop()
         self.loggers.stop()
+        self.wsjtx.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
         for rot in self.rotators:

@@ -35,6 +35,7 @@ class Source(enum.StrEnum):
     WEB = "web"  # the operator console (web/)
     GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
+    WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,20 @@ class TrackingInfo:
     flip: bool = False  # this pass is flown with elevation past 90 and azimuth + 180
     # the body's predicted (azimuth, elevation) over that pass, AOS to LOS, once computed
     pass_track: tuple[tuple[float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class FollowingInfo:
+    """Whom the rotator follows (``following`` in the status): the QSO partner a program
+    (WSJT-X, JTDX) names, and where it was last turned for them."""
+
+    source: str  # "wsjtx"
+    path: str = "short"  # or "long"
+    call: str | None = None  # the DX call and grid last heard with a grid
+    grid: str | None = None
+    bearing_deg: float | None = None  # the true bearing turned to for ``grid``
+    distance_km: float | None = None  # along the path taken
+    held: bool = False  # a new grid waits for the transmission to end (follow_hold_while_tx)
 
 
 @dataclass(frozen=True)
@@ -177,6 +192,8 @@ class RotatorStatus:
     parked: bool = False  # at the park position after a park, until the next move
     tracking: TrackingInfo | None = None
     tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
+    following: FollowingInfo | None = None  # R/follow (engine/follow.py)
+    following_ended: str | None = None  # why following last ended, until it starts again
 
     @property
     def moving(self) -> bool:

@@ -22,6 +22,15 @@ class TrackConfig:
 
 
 @dataclass(frozen=True)
+class FollowConfig:
+    """What following a QSO partner (follow.py) needs of the station and the settings."""
+
+    station: tuple[float, float] | None = None  # (latitude, longitude); None: cannot follow
+    hold_while_tx: bool = True  # a new partner's bearing waits for the transmission to end
+    wsjtx: bool = False  # the [wsjtx] listener runs: there is something to follow
+
+
+@dataclass(frozen=True)
 class WorkerConfig:
     rotator_id: str
     port: str
@@ -40,6 +49,7 @@ class WorkerConfig:
     pointing: Pointing | None = None  # None: the model's whole range, no offset
     park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
     tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
+    follow: FollowConfig = FollowConfig()  # follow.py
 
     def __post_init__(self) -> None:
         if self.pointing is None:

@@ -26,6 +26,10 @@ Rules:
    same batch: the lock ON always stops the rotor.
 8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
    writes into a descriptor number the system has handed to someone else meanwhile.
+9. A follow command (on or off) is a command like a track command (rule 2): on, it replaces a
+   target or track command put before it, and one put after it replaces it; a stop or lock ON
+   drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
+   dropped by anything (follow.py rule 4 decides whether it is fresh).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ import os
 import threading
 from dataclasses import dataclass, field
 
+from bridge.engine.follow import Follow, Heard
 from bridge.engine.tracking import Track
 from bridge.model import SetOption, Stop, Target, combine
 
@@ -52,11 +57,14 @@ class Batch:
     hold: int | None = None  # rule 6: the newest marker a hold waits for
     release: int | None = None  # rule 6: holds up to this marker end
     release_clear: bool = False
+    follow: Follow | None = None  # rule 9: applied after the track command
+    heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
 
     def __bool__(self) -> bool:
         settings = self.options or self.lock is not None or self.notes
         fence = self.hold is not None or self.release is not None
-        return bool(self.stop or self.target or settings or self.track or fence)
+        feeds = self.follow is not None or self.heard is not None
+        return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
 
 class Mailbox:
@@ -86,6 +94,7 @@ class Mailbox:
                 self._batch.stop = command
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
+                self._batch.follow = None  # and following (rule 9)
                 self._hold(hold)
             elif isinstance(command, Target):
                 self._batch.target = combine(command, self._batch.target)
@@ -101,6 +110,7 @@ class Mailbox:
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None
                 self._batch.track = None
+                self._batch.follow = None
                 self._hold(hold)
         self._wake_once()
 
@@ -113,6 +123,7 @@ class Mailbox:
                 batch.release_clear = True
                 batch.target = None
                 batch.track = None
+                batch.follow = None
                 batch.hold = None  # ended with the rest: a hold put after it is newer
         self._wake_once()
 
@@ -126,6 +137,22 @@ class Mailbox:
         with self._lock:
             self._batch.track = track
             self._batch.target = None
+            self._batch.follow = None  # rule 9: the later command wins
+        self._wake_once()
+
+    def put_follow(self, follow: Follow) -> None:
+        """Rule 9: start or end following; it replaces a target or track put before it."""
+        with self._lock:
+            self._batch.follow = follow
+            if follow.on:  # following off ends nothing else
+                self._batch.target = None
+                self._batch.track = None
+        self._wake_once()
+
+    def put_heard(self, heard: Heard) -> None:
+        """Rule 9: what WSJT-X said; the newest wins."""
+        with self._lock:
+            self._batch.heard = heard
         self._wake_once()
 
     def put_note(self, message: str) -> None:

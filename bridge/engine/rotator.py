@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import serial
 
 from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.follow import Follow, Heard
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
@@ -85,6 +86,7 @@ class Rotator:
         self.catalog = catalog or TleCatalog(None)  # satellites to track by name
         self._has_sky = cfg.tracking.sky is not None
         self.can_track = self._has_sky and cfg.spec.can_report_position
+        self._follow = cfg.follow  # follow.py: the station, the [wsjtx] listener
         self._store = store
         self._on_event = on_event
         self._wall = wall
@@ -248,6 +250,44 @@ class Rotator:
             self._mailbox.put_track(Track(None, source, lookup, described))
             return
         self._mailbox.put_track(Track(body, source, None, described))
+
+    @property
+    def can_follow(self) -> bool:
+        """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
+        return self._follow.wsjtx and self._follow.station is not None
+
+    def follow(self, on: bool, source: Source, described: str, *, long_path: bool = False) -> None:
+        """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
+        stop). Raise Refused otherwise."""
+        if not on:
+            self._mailbox.put_follow(Follow(False, source=source, described=described))
+            return
+        try:
+            if not self._follow.wsjtx:
+                raise Refused(
+                    RefusalCode.UNSUPPORTED,
+                    "following WSJT-X needs its messages: [wsjtx] enabled = true",
+                )
+            if self._follow.station is None:
+                raise Refused(
+                    RefusalCode.UNSUPPORTED,
+                    "following WSJT-X needs the station's position ([station] locator, or "
+                    "latitude_deg and longitude_deg): bearings are from there",
+                )
+            if self._locked:
+                raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
+            if not self.status.available:
+                raise Refused(
+                    RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
+                )
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self._mailbox.put_follow(Follow(True, long_path, source, described))
+
+    def heard(self, heard: Heard) -> None:
+        """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
+        self._mailbox.put_heard(heard)
 
     def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
         """The body to track, or None for a satellite to look up in the TLE file."""

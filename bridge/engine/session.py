@@ -11,13 +11,13 @@ else happens first.
 The session owns the commands' state (the lock, the hold, the last error) and its parts, each
 with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
 through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
-tracking (tracking.py), auto-park (autopark.py), the pending target (targets.py, sending.py)
-and the status view (status.py). They see what they need (a read-only ``parts.Scene``,
-``status.Seen``, the time) and hand back what they propose (a ``parts.Proposal``, the
-controller's notes); the session applies it. None of them imports this module. ``_step`` runs
-them in one order after every input: the line's own work (an overdue reply, a due stop), the
-motion machine's clock, the stop check, tracking, auto-park, the pending target, options,
-the poll, the status.
+tracking (tracking.py), following (follow.py), auto-park (autopark.py), the pending target
+(targets.py, sending.py) and the status view (status.py). They see what they need (a read-only
+``parts.Scene``, ``status.Seen``, the time) and hand back what they propose (a
+``parts.Proposal``, the controller's notes); the session applies it. None of them imports this
+module. ``_step`` runs them in one order after every input: the line's own work (an overdue
+reply, a due stop), the motion machine's clock, the stop check, tracking, following, auto-park,
+the pending target, options, the poll, the status.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -42,10 +42,12 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
-14. A part that raises (tracking, auto-park) is a bug contained here: it is reset (tracking
-   ends, "internal error"), an error event of kind internal names it, and the link, the
-   stops and every other rule go on (a feature's failure never takes a link down, and never
-   costs a stop).
+14. A part that raises (tracking, following, auto-park) is a bug contained here: it is reset
+   (tracking ends, "internal error"), an error event of kind internal names it, and the link,
+   the stops and every other rule go on (a feature's failure never takes a link down, and
+   never costs a stop).
+15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
+   WSJT-X says comes in with the commands, and is no command itself (rule 12).
 """
 
 from __future__ import annotations
@@ -58,13 +60,14 @@ from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.controller import Controller, Drop, Ends, Retry
+from bridge.engine.follow import Follow, Follower
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.parts import Proposal, Scene
 from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
-from bridge.engine.targets import Targets, resolve
+from bridge.engine.targets import Targets
 from bridge.engine.tracking import Track, Tracker
 from bridge.model import ErrorKind, RotatorStatus, Source, Target, describe_command
 from bridge.sky import Body
@@ -87,6 +90,7 @@ class RotatorSession:
         self.controller = Controller(cfg, options)
         self.targets = Targets(cfg)
         self.tracker = Tracker(cfg)
+        self.follower = Follower(cfg)
         self.autopark = AutoPark(cfg)
         self.view = st.View()
         self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
@@ -122,7 +126,9 @@ class RotatorSession:
             self._error(kind, reason)
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
-        self.tracker.end("serial link down" if reason is not None else "bridge stopped")
+        why = "serial link down" if reason is not None else "bridge stopped"
+        self.tracker.end(why)
+        self.follower.end(why)  # (what waits is reported dropped: next line)
         self._drop_pending("serial link down")
         return self._step(now)
 
@@ -130,18 +136,22 @@ class RotatorSession:
         ctl = self.controller
         if batch.stop or batch.target or batch.lock is not None or batch.options or batch.track:
             self.view.last_error = None  # rule 12: until this batch refuses something again
+        if batch.follow is not None:
+            self.view.last_error = None
         for note in batch.notes:
             self.view.last_error = note
+        if batch.heard is not None:
+            self.follower.heard(batch.heard, now)  # rule 15
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
-            self.tracker.end("lock")
+            self._end_features("lock")
             self._drop_pending(None)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
-            self.tracker.end("stop")
+            self._end_features("stop")
             self.targets.clear()
             self._taken(batch.stop.source.value)
             ctl.stop(now, merge=True)
@@ -150,10 +160,11 @@ class RotatorSession:
             ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
         if batch.track is not None:
             self._track(batch.track)
+        if batch.follow is not None:
+            self._follow(batch.follow, now)
         if batch.target is not None:
             what = describe_command(batch.target)
-            if self.tracker.end(f"{batch.target.source.value} target"):
-                self._drop_tracking_target()  # never combined with the user's target
+            self._end_features(f"{batch.target.source.value} target")  # never combined
             refused = self._refused()
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
@@ -204,8 +215,7 @@ class RotatorSession:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
         if self.fence.apply(batch):
             self._drop_pending(CLEARED)
-            if self.tracker.end("a stop or lock came first; send the track command again"):
-                self._drop_tracking_target()
+            self._end_features("a stop or lock came first; send the {} command again")
 
     def _track(self, track: Track) -> None:
         if track.body is None and track.lookup is None:
@@ -220,10 +230,24 @@ class RotatorSession:
             self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
         else:
             self.tracker.end("another body")
+            self.follower.end(f"tracking {track.body.name}")
             self.targets.clear()
             self.tracker.start(track.body)
             self._taken(track.source.value)
             log.info("%s: tracking %s", self.name, track.body.name)
+
+    def _follow(self, follow: Follow, now: float) -> None:
+        if not follow.on:
+            self._end_features("off", tracking=False)
+            return
+        refused = self._refused()
+        if refused is not None:
+            self._error(ErrorKind.REFUSED, refused, command=follow.described or "follow")
+            return
+        self.tracker.end("following")
+        self.targets.clear()
+        self.follower.start(follow, now)
+        self._taken(follow.source.value)
 
     def _answered(self, answer: Answer) -> None:
         lookup = self.tracker.lookup
@@ -247,11 +271,18 @@ class RotatorSession:
         self.view.last_source = source
         self.view.target_info, self.view.park_raw = None, None
 
-    def _drop_tracking_target(self) -> None:
-        """Tracking has ended: a target of its own still waiting must not go out after it."""
+    def _drop_tracking_target(self, source: Source = Source.TRACKING) -> None:
+        """Tracking (following) has ended: a target of its own waiting must not go out after."""
         pending = self.targets.pending
-        if pending is not None and pending.source is Source.TRACKING:
+        if pending is not None and pending.source is source:
             self.targets.clear()
+
+    def _end_features(self, why: str, *, tracking: bool = True) -> None:
+        """Tracking and following end (rules 10, 15); ``{}`` in ``why``: the command's name."""
+        if tracking and self.tracker.end(why.replace("{}", "track")):
+            self._drop_tracking_target()
+        if self.follower.end(why.replace("{}", "follow")):
+            self._drop_tracking_target(Source.WSJTX)
 
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
@@ -270,8 +301,7 @@ class RotatorSession:
             if isinstance(note, Report):
                 self._error(note.kind, note.message, note.command)
             elif isinstance(note, Ends):
-                self.tracker.end(note.reason)
-                self._drop_tracking_target()
+                self._end_features(note.reason)
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
@@ -290,6 +320,8 @@ class RotatorSession:
                 self._heed(now)
             if self.tracker.body is not None:  # (nothing tracked: nothing to ask)
                 self._part("tracking", self.tracker.step, now)  # rule 14
+            if self.follower.on:
+                self._part("following", self.follower.step, now)
             self._part("auto-park", self.autopark.step, now)
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
@@ -332,9 +364,8 @@ class RotatorSession:
             return run()
         except Exception:
             log.exception("%s: %s failed", self.name, name)
-            if name == "tracking":
-                self.tracker.end("internal error")
-                self._drop_tracking_target()
+            if name in ("tracking", "following"):
+                self._end_features("internal error", tracking=name == "tracking")
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)
@@ -363,30 +394,10 @@ class RotatorSession:
             self.view.park_raw = wire if target.park else None
 
     def _emit_status(self, now: float) -> None:
-        ctl, pending = self.controller, self.targets.pending
-        link, wire = ctl.link, None
-        if pending is not None and link is not None:
-            az, el = resolve(pending, ctl.motion, self.cfg.aim)
-            wire = link.codec.wire_target(az, el) if az is not None else None
-        seen = st.Seen(
-            previous=self.status,
-            view=self.view,
-            version=ctl.version,
-            controller_time=ctl.controller_time,
-            motion=ctl.motion,
-            connected=link is not None,
-            answering=link is not None and ctl.answering,
-            locked=self.locked,
-            options=ctl.options.values,
-            bearing_deg=ctl.az_shown.value,
-            elevation_deg=ctl.el_shown.value,
-            slew=link.slew if link is not None else None,
-            pending=pending,
-            pending_wire=wire,
-            wall_offset_s=self.wall_offset_s,
-            tracking=self.tracker.info,
-            tracking_ended=self.tracker.ended,
-        )
+        tracker, follower, pending = self.tracker, self.follower, self.targets.pending
+        shown = st.Features(tracker.info, tracker.ended, follower.info, follower.ended)
+        previous, wall_offset_s = self.status, self.wall_offset_s
+        seen = self.controller.seen(previous, self.view, pending, self.locked, wall_offset_s, shown)
         status = st.current(self.cfg, seen, now)
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))

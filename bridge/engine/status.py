@@ -24,7 +24,14 @@ from typing import NamedTuple
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
-from bridge.model import MotionState, RotatorStatus, Target, TargetInfo, TrackingInfo
+from bridge.model import (
+    FollowingInfo,
+    MotionState,
+    RotatorStatus,
+    Target,
+    TargetInfo,
+    TrackingInfo,
+)
 
 
 @dataclass
@@ -53,6 +60,15 @@ class View:
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
 
 
+class Features(NamedTuple):
+    """What the features that propose targets show (tracking.py, follow.py)."""
+
+    tracking: TrackingInfo | None = None
+    tracking_ended: str | None = None
+    following: FollowingInfo | None = None
+    following_ended: str | None = None
+
+
 class Seen(NamedTuple):
     """What the session knows at one moment, as the status needs it (a tuple: read-only, and
     cheap to build at every step)."""
@@ -72,8 +88,7 @@ class Seen(NamedTuple):
     pending: Target | None  # the target waiting to go out...
     pending_wire: tuple[float | None, float | None] | None  # ...and its raw values, if known
     wall_offset_s: float
-    tracking: TrackingInfo | None
-    tracking_ended: str | None
+    features: Features
 
 
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
@@ -108,8 +123,10 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         overlap=aim.overlap(raw),
         target_info=pending.info if pending is not None else view.target_info,
         parked=_parked(rig, seen, state),
-        tracking=seen.tracking,
-        tracking_ended=seen.tracking_ended,
+        tracking=seen.features.tracking,
+        tracking_ended=seen.features.tracking_ended,
+        following=seen.features.following,
+        following_ended=seen.features.following_ended,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,

@@ -59,6 +59,7 @@ class RotatorInfo:
     has_station: bool = False  # the station's position: targets by locator
     nudge_step_deg: float = 10.0
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
+    can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
 
     @classmethod
     def of(
@@ -72,6 +73,7 @@ class RotatorInfo:
         has_station: bool,
         nudge_step_deg: float,
         satellites: tuple[str, ...] = (),
+        can_follow: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -91,6 +93,7 @@ class RotatorInfo:
             track_options=(
                 track_options(satellites) if has_station and spec.can_report_position else ()
             ),
+            can_follow=can_follow,
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
@@ -322,6 +325,14 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "next_aos", "Next AOS", needs="track_options", config=lambda r: {
         "state_topic": r.topics.status, "value_template": _tracked("aos"),
         "device_class": "timestamp", "icon": "mdi:clock-start"}),
+    Entity("switch", "follow", "Follow WSJT-X", needs="can_follow", config=lambda r: {
+        "command_topic": r.topics.follow, "state_topic": r.topics.follow_state,
+        "payload_on": "wsjtx", "payload_off": "off", "state_on": "wsjtx", "state_off": "off",
+        "icon": "mdi:account-arrow-right"}),
+    Entity("sensor", "followed", "Followed station", needs="can_follow", config=lambda r: {
+        "state_topic": r.topics.status, "icon": "mdi:account-voice",
+        "value_template": "{{ value_json.following.call if value_json.following is defined "
+                          "and value_json.following.call else 'None' }}"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),

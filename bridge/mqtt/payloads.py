@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import FollowingInfo, RotatorStatus, TargetInfo, TrackingInfo
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -193,6 +193,26 @@ def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
     return name, (name, line1, line2)
 
 
+FOLLOW_SOURCES = ("wsjtx",)  # what R/follow can follow (engine/follow.py)
+
+
+def parse_follow(payload: bytes) -> tuple[bool, bool]:
+    """``R/follow``: ``wsjtx`` or ``off``, or JSON ``{"source": "wsjtx", "path": "long"}``;
+    (on, long path)."""
+    text = _text(payload)
+    doc = _json_object(text, "follow") if text.startswith("{") else {"source": text}
+    unknown = set(doc) - {"source", "path"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in follow: {', '.join(sorted(unknown))}")
+    source, path = doc.get("source"), doc.get("path", "short")
+    if not isinstance(source, str) or source.strip().lower() not in (*FOLLOW_SOURCES, "off"):
+        shown = source[:20] if isinstance(source, str) else json.dumps(source)
+        raise PayloadError(f"follow: expected wsjtx or off, got {shown!r}")
+    if path not in ("short", "long"):
+        raise PayloadError(f'follow: "path" must be "short" or "long", got {json.dumps(path)}')
+    return source.strip().lower() != "off", path == "long"
+
+
 def parse_target(payload: bytes) -> tuple[float, float | None]:
     """(azimuth, elevation or None). Limits are checked later, in one place (the rotator)."""
     text = _text(payload)
@@ -281,6 +301,24 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
     return doc
 
 
+def following_json(info: FollowingInfo) -> dict[str, object]:
+    """The status's ``following`` block: whom WSJT-X names, and where the rotor was turned."""
+    return {
+        "source": info.source,
+        "path": info.path,
+        "call": info.call,
+        "grid": info.grid,
+        "bearing": None if info.bearing_deg is None else round(info.bearing_deg, 1),
+        "distance_km": None if info.distance_km is None else round(info.distance_km, 1),
+        "held": info.held,
+    }
+
+
+def follow_state(status: RotatorStatus) -> str:
+    """``R/follow/state``: what is followed (``wsjtx``), or ``off``."""
+    return status.following.source if status.following is not None else "off"
+
+
 def tracking_state(status: RotatorStatus) -> str:
     """``R/tracking``: what is followed, or ``off``."""
     return status.tracking.body if status.tracking is not None else "off"
@@ -343,6 +381,10 @@ def status_json(
         doc["tracking"] = tracking_json(status.tracking)
     if status.tracking_ended is not None:
         doc["tracking_ended"] = status.tracking_ended
+    if status.following is not None:
+        doc["following"] = following_json(status.following)
+    if status.following_ended is not None:
+        doc["following_ended"] = status.following_ended
     doc.update(
         state=status.state.value,
         moving=status.moving,

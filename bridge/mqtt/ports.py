@@ -18,6 +18,11 @@ class RotatorPort(Protocol):
 
     @property
     def status(self) -> RotatorStatus: ...
+    @property
+    def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (engine/follow.py)
+    def follow(
+        self, on: bool, source: Source, described: str, *, long_path: bool = False
+    ) -> None: ...
     def submit(
         self,
         command: Target | Stop | SetOption,

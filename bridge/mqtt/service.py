@@ -169,6 +169,8 @@ class MqttService:
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
             pub(t.tracking, pl.tracking_state(status))
+        if rot.can_follow:
+            pub(t.follow_state, pl.follow_state(status))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         for listener in self._status_listeners:
@@ -278,6 +280,9 @@ class MqttService:
             elif kind == "track":
                 name, tle = pl.parse_track(payload)
                 rot.track(name, Source.MQTT, what, tle)
+            elif kind == "follow":
+                on, long_path = pl.parse_follow(payload)
+                rot.follow(on, Source.MQTT, what, long_path=long_path)
             elif kind == "target_elevation":
                 rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
             elif kind == "option" and arg is not None:

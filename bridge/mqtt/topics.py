@@ -60,6 +60,10 @@ class RotatorTopics:
     def track(self) -> str:
         return f"{self.root}/track"
 
+    @property
+    def follow(self) -> str:
+        return f"{self.root}/follow"
+
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -111,6 +115,10 @@ class RotatorTopics:
     @property
     def lock_state(self) -> str:
         return f"{self.root}/lock/state"
+
+    @property
+    def follow_state(self) -> str:
+        return f"{self.root}/follow/state"
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
@@ -190,7 +198,7 @@ class Topics:
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge, t.track]
+            subs += [t.preset, t.park, t.nudge, t.track, t.follow]
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -209,6 +217,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
+            subs += [t.follow_state]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -222,7 +231,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track"):
+            for kind in ("preset", "park", "nudge", "track", "follow"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             prefix = f"{t.root}/option/"

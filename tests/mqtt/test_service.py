@@ -72,10 +72,14 @@ class RecordingRotator:
         self.calls: list[tuple[object, ...]] = []
         self._refuse = refuse
         self.can_track = False
+        self.can_follow = False
 
     @property
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
+
+    def follow(self, on: bool, source: Source, described: str, *, long_path: bool = False) -> None:
+        self.calls.append(("follow", on, long_path, source, described))
 
     def submit(
         self,
@@ -493,6 +497,7 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/follow",
         "rotor/bridge/fence",
         "ha/status",
         "x/#",

@@ -20,6 +20,7 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/follow",
         "rotor/bridge/fence",
     ]
     assert t.stop_lane() == ["rotor/stop", "rotor/lock"]
