@@ -32,6 +32,7 @@ from bridge.settings import (
     TlsSettings,
     TrackingSettings,
     WebSettings,
+    WsjtxSettings,
 )
 from bridge.settings_defaults import model_defaults
 from bridge.settings_loggers import LoggerFields
@@ -114,6 +115,7 @@ def render() -> str:
         ("[station]", StationSettings, f"{ENV_PREFIX}STATION__"),
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
         ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
+        ("[wsjtx]", WsjtxSettings, f"{ENV_PREFIX}WSJTX__"),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]

@@ -36,6 +36,7 @@ from bridge.settings import (
     TlsSettings,
     TrackingSettings,
     WebSettings,
+    WsjtxSettings,
     settings_from,
 )
 from tests.support import ROOT
@@ -140,6 +141,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("station",), StationSettings),
     (("tracking",), TrackingSettings),
     (("web",), WebSettings),
+    (("wsjtx",), WsjtxSettings),
     (("rotators",), RotatorSettings),
 ]
 

@@ -206,8 +206,8 @@ def parse_follow(payload: bytes) -> tuple[bool, bool]:
         raise PayloadError(f"unknown key(s) in follow: {', '.join(sorted(unknown))}")
     source, path = doc.get("source"), doc.get("path", "short")
     if not isinstance(source, str) or source.strip().lower() not in (*FOLLOW_SOURCES, "off"):
-        shown = source[:20] if isinstance(source, str) else json.dumps(source)
-        raise PayloadError(f"follow: expected wsjtx or off, got {shown!r}")
+        shown = repr(source[:20]) if isinstance(source, str) else json.dumps(source)
+        raise PayloadError(f"follow: expected wsjtx or off, got {shown}")
     if path not in ("short", "long"):
         raise PayloadError(f'follow: "path" must be "short" or "long", got {json.dumps(path)}')
     return source.strip().lower() != "off", path == "long"

@@ -115,6 +115,11 @@ def test_a_dx_grid_turns_the_rotor_the_same_grid_does_not_tx_holds_and_off_ends(
     rig.arrived("tower", bearing_to(SYDNEY), timeout_s=30)
     assert angle_between(emu.state().az_deg, bearing_to(SYDNEY)) <= 1.0
     assert len(emu.frames("set")) == sets + 1
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: (json.loads(m.payload).get("following") or {}).get("grid") == SYDNEY,
+        10,
+    )
     assert status_doc(rig)["following"]["held"] is False
 
     # follow off: a new grid moves nothing
@@ -139,11 +144,15 @@ def test_any_other_command_ends_following_and_a_long_path_is_asked_in_json(
     long_path = (bearing_to(TOKYO) + 180.0) % 360.0
     rig.arrived("tower", long_path, timeout_s=30)
     assert angle_between(rig.emu.state().az_deg, long_path) <= 1.0
-    assert status_doc(rig)["following"]["path"] == "long"
+    rig.probe.wait_for(
+        "rotor/status",
+        lambda m: (json.loads(m.payload).get("following") or {}).get("path") == "long",
+        10,
+    )
 
-    rig.probe.publish("rotor/target", "90")  # a manual target ends it, like tracking
+    rig.probe.publish("rotor/target", "200")  # a manual target ends it, like tracking
     rig.probe.wait_value("rotor/follow/state", "off", 10)
-    rig.arrived("tower", 90.0, timeout_s=30)
+    rig.arrived("tower", 200.0, timeout_s=30)
     rig.probe.wait_for(
         "rotor/status", lambda m: json.loads(m.payload).get("following_ended") == "mqtt target", 10
     )
@@ -186,4 +195,19 @@ def test_a_retained_follow_never_switches_it_on_and_malformed_datagrams_change_n
     heard_by_follow_part(app, Heard("", "", False, "WSJT-X"))
     assert listener.counts.malformed - before == len(junk)
     assert rig.emu.frames("set") == []  # nothing moved the rotor
-    assert status_doc(rig)["following"]["grid"] is None
+    shown = rig.probe.wait_for("rotor/status", lambda m: "following" in json.loads(m.payload), 10)
+    assert json.loads(shown.payload)["following"]["grid"] is None  # nothing turned to
+
+
+def test_without_the_station_following_is_refused_saying_what_it_needs(rig: Rig) -> None:
+    rig.add("tower", "md01")
+    rig.sections = {"wsjtx": {"enabled": True, "port": free_udp_port()}}
+    rig.start()
+    rig.ready("tower")
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/follow", "wsjtx")
+    error = rig.probe.wait(lambda m: m.topic == "rotor/error", 10, "the refusal", mark)
+    doc = json.loads(error.payload)
+    assert doc["kind"] == "refused" and "[station] locator" in doc["message"]
+    assert doc["command"] == "follow 'wsjtx'"
+    assert "rotor/follow/state" not in rig.retained()  # nothing to follow: no switch either
