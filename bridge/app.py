@@ -9,20 +9,17 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import replace
 from functools import partial
 from typing import Any
 
 from bridge.engine.catalog import TleCatalog
-from bridge.engine.config import FollowConfig, TrackConfig
+from bridge.engine.config import FollowConfig
 from bridge.engine.lines import Lines
 from bridge.engine.listeners import contained
-from bridge.engine.motion import MotionConfig
 from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.engine.worker import WorkerConfig
 from bridge.gs232 import easycomm_server, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
@@ -31,63 +28,23 @@ from bridge.mqtt.client import MqttClient
 from bridge.mqtt.lane import StopLane
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.mqtt.wind import wind_feed
 from bridge.rotctld import RotctldServer
-from bridge.settings import ConfigError, RotatorSettings, Settings
+from bridge.settings import ConfigError, Settings
 from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
+from bridge.worker_settings import worker_config
 from bridge.wsjtx import WsjtxListener
+
+__all__ = ["App", "NotYet", "run", "worker_config"]
 
 log = logging.getLogger(__name__)
 
 GIL_SWITCH_S = 0.0005
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
-
-
-def worker_config(
-    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
-) -> WorkerConfig:
-    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked);
-    ``follow``: the station and whether WSJT-X is heard (its hold_while_tx is ``r``'s)."""
-    spec = r.spec
-    az_min, az_max = r.effective_az_limits
-    az_speed, el_speed = r.effective_speeds_deg_s
-    return WorkerConfig(
-        rotator_id=r.id,
-        port=r.port,
-        spec=spec,
-        baud=r.effective_baud,
-        motion=MotionConfig(
-            spec=spec,
-            tolerance_deg=r.tolerance_deg,
-            stall_timeout_s=r.stall_timeout_s,
-            brake_delay_s=r.effective_brake_delay_s,
-            settle_s=r.settle_s,
-            noise_deg=r.effective_noise_deg,
-            az_span_deg=az_max - az_min,
-            nominal_speed_deg_s=az_speed,
-            # readings while moving come at most 1.5 intervals apart (link.py rule 8), each an
-            # exchange long: the rotor may have stopped that long before the last change showed
-            poll_margin_s=1.5 * r.moving_poll_interval_s + spec.exchange_time_s(r.effective_baud),
-        ),
-        idle_poll_interval_s=r.effective_idle_poll_interval_s,
-        moving_poll_interval_s=r.moving_poll_interval_s,
-        deadband_deg=r.deadband_deg,
-        silence_timeout_s=r.effective_silence_timeout_s,
-        az_speed_deg_s=az_speed,
-        el_speed_deg_s=el_speed,
-        pointing=r.pointing,
-        park_after_idle_s=r.park_after_idle_s,
-        tracking=TrackConfig(
-            sky=sky,
-            min_el_deg=r.track_min_el_deg,
-            step_deg=r.effective_track_step_deg,
-            at_los=r.track_at_los,
-        ),
-        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
-    )
 
 
 class NotYet(ConfigError):
@@ -217,6 +174,10 @@ class App:
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
+        pairs = zip(settings.rotators, self.rotators, strict=True)
+        self.mqtt.add_feature(
+            *wind_feed([(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if r.wind_topic])
+        )
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)

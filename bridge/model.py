@@ -36,6 +36,7 @@ class Source(enum.StrEnum):
     GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
     WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
+    WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,16 @@ class FollowingInfo:
     bearing_deg: float | None = None  # the true bearing turned to for ``grid``
     distance_km: float | None = None  # along the path taken
     held: bool = False  # a new grid waits for the transmission to end (follow_hold_while_tx)
+
+
+@dataclass(frozen=True)
+class WindInfo:
+    """The wind as the rotator sees it (``wind`` in the status), speeds in km/h."""
+
+    speed_kmh: float | None = None  # the last reading (None: none yet)
+    storm: bool = False  # parked for the storm: motion is refused
+    calm_since_unix: float | None = None  # in a storm: below the release level since then
+    silent: bool = False  # no reading for wind_silent_min: the state is kept
 
 
 @dataclass(frozen=True)
@@ -142,6 +153,7 @@ class ErrorKind(enum.StrEnum):
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
     STATE = "state"  # the lock could not be saved in the state file
     INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
+    WIND = "wind"  # the wind topic fell silent or sent no number: the state it had is kept
 
 
 @dataclass(frozen=True)
@@ -194,6 +206,7 @@ class RotatorStatus:
     tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
     following: FollowingInfo | None = None  # R/follow (engine/follow.py)
     following_ended: str | None = None  # why following last ended, until it starts again
+    wind: WindInfo | None = None  # with a wind_topic (engine/wind.py)
 
     @property
     def moving(self) -> bool:

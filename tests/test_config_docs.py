@@ -130,6 +130,7 @@ COMPANIONS: dict[str, dict[str, Any]] = {
     "park_el_deg": {"park_az_deg": 0},
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},
+    "wind_topic": {"wind_park_above": 60, "park_az_deg": 0},
 }
 
 

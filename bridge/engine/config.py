@@ -31,6 +31,18 @@ class FollowConfig:
 
 
 @dataclass(frozen=True)
+class WindConfig:
+    """What the wind-aware park (wind.py) needs of the settings; speeds in km/h."""
+
+    park_above_kmh: float
+    release_below_kmh: float
+    hold_s: float
+    park: tuple[float, float | None]  # (azimuth, elevation) true: where to face the storm
+    silent_s: float
+    topic: str = ""  # named in what is reported
+
+
+@dataclass(frozen=True)
 class WorkerConfig:
     rotator_id: str
     port: str
@@ -50,6 +62,7 @@ class WorkerConfig:
     park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
     tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
     follow: FollowConfig = FollowConfig()  # follow.py
+    wind: WindConfig | None = None  # wind.py; None: no wind_topic
 
     def __post_init__(self) -> None:
         if self.pointing is None:

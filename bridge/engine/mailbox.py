@@ -29,7 +29,8 @@ Rules:
 9. A follow command (on or off) is a command like a track command (rule 2): on, it replaces a
    target or track command put before it, and one put after it replaces it; a stop or lock ON
    drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
-   dropped by anything (follow.py rule 4 decides whether it is fresh).
+   dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
+   (``put_wind``: the highest since the last take, so that no gust is lost).
 """
 
 from __future__ import annotations
@@ -59,11 +60,12 @@ class Batch:
     release_clear: bool = False
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
+    wind: float | None = None  # rule 9: the newest wind reading (km/h)
 
     def __bool__(self) -> bool:
         settings = self.options or self.lock is not None or self.notes
         fence = self.hold is not None or self.release is not None
-        feeds = self.follow is not None or self.heard is not None
+        feeds = self.follow is not None or self.heard is not None or self.wind is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
 
@@ -159,6 +161,13 @@ class Mailbox:
         """A refusal decided outside the worker, so that the status shows it as the last error."""
         with self._lock:
             self._batch.notes.append(message)
+        self._wake_once()
+
+    def put_wind(self, speed_kmh: float) -> None:
+        """Rule 9: a wind reading."""
+        with self._lock:
+            held = self._batch.wind  # the highest of a batch: no gust is lost (wind.py)
+            self._batch.wind = speed_kmh if held is None else max(held, speed_kmh)
         self._wake_once()
 
     def take(self) -> Batch:

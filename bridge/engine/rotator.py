@@ -285,6 +285,10 @@ class Rotator:
             raise
         self._mailbox.put_follow(Follow(True, long_path, source, described))
 
+    def wind(self, speed_kmh: float) -> None:
+        """A wind reading (MQTT's thread): an input for the wind park (engine/wind.py)."""
+        self._mailbox.put_wind(speed_kmh)
+
     def heard(self, heard: Heard) -> None:
         """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
         self._mailbox.put_heard(heard)
@@ -387,6 +391,10 @@ class Rotator:
         if self._locked:
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
         status = self.status
+        if status.wind is not None and status.wind.storm:  # engine/wind.py rule 1
+            speed = status.wind.speed_kmh
+            why = f"wind {speed:.0f} km/h: " if speed is not None else ""
+            raise Refused(RefusalCode.LOCKED, f"{why}parked for the storm: motion refused")
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
             raise Refused(

@@ -11,13 +11,13 @@ else happens first.
 The session owns the commands' state (the lock, the hold, the last error) and its parts, each
 with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
 through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
-tracking (tracking.py), following (follow.py), auto-park (autopark.py), the pending target
-(targets.py, sending.py) and the status view (status.py). They see what they need (a read-only
-``parts.Scene``, ``status.Seen``, the time) and hand back what they propose (a
-``parts.Proposal``, the controller's notes); the session applies it. None of them imports this
-module. ``_step`` runs them in one order after every input: the line's own work (an overdue
-reply, a due stop), the motion machine's clock, the stop check, tracking, following, auto-park,
-the pending target, options, the poll, the status.
+tracking (tracking.py), following (follow.py), the wind park (wind.py), auto-park
+(autopark.py), the pending target (targets.py, sending.py) and the status view (status.py).
+They see what they need (a read-only ``parts.Scene``, ``status.Seen``, the time) and hand back
+what they propose (a ``parts.Proposal``, the controller's notes); the session applies it. None
+of them imports this module. ``_step`` runs them in one order after every input: the line's own
+work (an overdue reply, a due stop), the motion machine's clock, the stop check, tracking,
+following, the wind, auto-park, the pending target, options, the poll, the status.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -47,7 +47,8 @@ Rules:
    the stops and every other rule go on (a feature's failure never takes a link down, and
    never costs a stop).
 15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
-   WSJT-X says comes in with the commands, and is no command itself (rule 12).
+   WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
+   reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
 """
 
 from __future__ import annotations
@@ -69,6 +70,7 @@ from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Targets
 from bridge.engine.tracking import Track, Tracker
+from bridge.engine.wind import WindPark
 from bridge.model import ErrorKind, RotatorStatus, Source, Target, describe_command
 from bridge.sky import Body
 
@@ -92,6 +94,7 @@ class RotatorSession:
         self.tracker = Tracker(cfg)
         self.follower = Follower(cfg)
         self.autopark = AutoPark(cfg)
+        self.wind = WindPark(cfg)
         self.view = st.View()
         self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
         self._actions: list[Action] = []
@@ -134,14 +137,17 @@ class RotatorSession:
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
         ctl = self.controller
-        if batch.stop or batch.target or batch.lock is not None or batch.options or batch.track:
+        commanded = batch.stop or batch.target or batch.options or batch.track or batch.follow
+        if commanded or batch.lock is not None:
             self.view.last_error = None  # rule 12: until this batch refuses something again
-        if batch.follow is not None:
-            self.view.last_error = None
         for note in batch.notes:
             self.view.last_error = note
         if batch.heard is not None:
             self.follower.heard(batch.heard, now)  # rule 15
+        if batch.wind is not None:
+            self.wind.reading(batch.wind, now)  # wind.py: no command either
+        if batch.stop is not None or batch.lock_on:
+            self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
@@ -209,7 +215,7 @@ class RotatorSession:
             return "rotator is locked"
         if self.controller.link is None or not self.controller.answering:
             return "rotator offline"
-        return None
+        return self.wind.refusal()  # wind.py rule 1
 
     def _fence(self, batch: Batch) -> None:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
@@ -220,7 +226,7 @@ class RotatorSession:
     def _track(self, track: Track) -> None:
         if track.body is None and track.lookup is None:
             self.tracker.end("off")
-            self._drop_tracking_target()
+            self.targets.clear_from(Source.TRACKING)
             return
         name = track.body.name if track.body is not None else track.lookup and track.lookup.name
         refused = self._refused()
@@ -264,25 +270,19 @@ class RotatorSession:
         if ends is not None:
             log.warning("%s: tracking ends: %s", self.name, ends)
             self.tracker.end(ends)
-            self._drop_tracking_target()
+            self.targets.clear_from(Source.TRACKING)
 
     def _taken(self, source: str) -> None:
         """A stop or a new track: the status names its source and no target of before."""
         self.view.last_source = source
         self.view.target_info, self.view.park_raw = None, None
 
-    def _drop_tracking_target(self, source: Source = Source.TRACKING) -> None:
-        """Tracking (following) has ended: a target of its own waiting must not go out after."""
-        pending = self.targets.pending
-        if pending is not None and pending.source is source:
-            self.targets.clear()
-
     def _end_features(self, why: str, *, tracking: bool = True) -> None:
         """Tracking and following end (rules 10, 15); ``{}`` in ``why``: the command's name."""
         if tracking and self.tracker.end(why.replace("{}", "track")):
-            self._drop_tracking_target()
+            self.targets.clear_from(Source.TRACKING)
         if self.follower.end(why.replace("{}", "follow")):
-            self._drop_tracking_target(Source.WSJTX)
+            self.targets.clear_from(Source.WSJTX)
 
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
@@ -322,7 +322,9 @@ class RotatorSession:
                 self._part("tracking", self.tracker.step, now)  # rule 14
             if self.follower.on:
                 self._part("following", self.follower.step, now)
-            self._part("auto-park", self.autopark.step, now)
+            self._part("wind", self.wind.step, now)
+            if not self.wind.storm:  # (the wind's park is the park then)
+                self._part("auto-park", self.autopark.step, now)
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
@@ -352,7 +354,8 @@ class RotatorSession:
         if proposal.error is not None:
             self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
-            self._drop_tracking_target()
+            self._end_features(proposal.ended)  # (tracking may have ended itself)
+            self.targets.clear_from(Source.TRACKING)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
@@ -366,6 +369,8 @@ class RotatorSession:
             log.exception("%s: %s failed", self.name, name)
             if name in ("tracking", "following"):
                 self._end_features("internal error", tracking=name == "tracking")
+            elif name == "wind":  # a storm it was in goes on: refusing is the safe side
+                self.wind = WindPark(self.cfg, storm=self.wind.storm)
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)
@@ -394,10 +399,11 @@ class RotatorSession:
             self.view.park_raw = wire if target.park else None
 
     def _emit_status(self, now: float) -> None:
-        tracker, follower, pending = self.tracker, self.follower, self.targets.pending
-        shown = st.Features(tracker.info, tracker.ended, follower.info, follower.ended)
-        previous, wall_offset_s = self.status, self.wall_offset_s
-        seen = self.controller.seen(previous, self.view, pending, self.locked, wall_offset_s, shown)
+        tracker, follower, wind = self.tracker, self.follower, self.wind
+        shown = st.Features(tracker.info, tracker.ended, follower.info, follower.ended, wind.info)
+        seen = self.controller.seen(
+            self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
+        )
         status = st.current(self.cfg, seen, now)
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
@@ -405,6 +411,10 @@ class RotatorSession:
 
     def _next_wakeup(self, now: float) -> float:
         times = [now + IDLE_WAKEUP_S, *self.controller.wakeups(now)]
-        waits = [self.targets.stream_deadline(now), self.autopark.wakeup(now)]
+        waits = [
+            self.targets.stream_deadline(now),
+            self.autopark.wakeup(now),
+            self.wind.wakeup(now),
+        ]
         times += [t for t in (*waits, self.tracker.wakeup(now)) if t is not None]
         return min(times)

@@ -31,6 +31,7 @@ from bridge.model import (
     Target,
     TargetInfo,
     TrackingInfo,
+    WindInfo,
 )
 
 
@@ -67,6 +68,7 @@ class Features(NamedTuple):
     tracking_ended: str | None = None
     following: FollowingInfo | None = None
     following_ended: str | None = None
+    wind: WindInfo | None = None
 
 
 class Seen(NamedTuple):
@@ -127,6 +129,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         tracking_ended=seen.features.tracking_ended,
         following=seen.features.following,
         following_ended=seen.features.following_ended,
+        wind=seen.features.wind,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import FollowingInfo, RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import FollowingInfo, RotatorStatus, TargetInfo, TrackingInfo, WindInfo
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -314,6 +314,17 @@ def following_json(info: FollowingInfo) -> dict[str, object]:
     }
 
 
+def wind_json(info: WindInfo) -> dict[str, object]:
+    """The status's ``wind`` block (engine/wind.py)."""
+    calm = info.calm_since_unix
+    return {
+        "speed_kmh": info.speed_kmh,
+        "storm": info.storm,
+        "calm_since": None if calm is None else _iso(calm),
+        "silent": info.silent,
+    }
+
+
 def follow_state(status: RotatorStatus) -> str:
     """``R/follow/state``: what is followed (``wsjtx``), or ``off``."""
     return status.following.source if status.following is not None else "off"
@@ -385,6 +396,8 @@ def status_json(
         doc["following"] = following_json(status.following)
     if status.following_ended is not None:
         doc["following_ended"] = status.following_ended
+    if status.wind is not None:
+        doc["wind"] = wind_json(status.wind)
     doc.update(
         state=status.state.value,
         moving=status.moving,
