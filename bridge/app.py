@@ -227,6 +227,7 @@ class App:
                     nudge_step_deg=r.nudge_step_deg,
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
+                    has_wind=r.wind_topic is not None,
                 )
             )
         publisher = DiscoveryPublisher(

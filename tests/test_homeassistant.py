@@ -643,3 +643,21 @@ def test_the_follow_switch_is_there_only_when_wsjtx_can_be_followed_and_passes_t
         platform, obj = key.split(".")
         topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
         assert validate(topic, msgs[key]) == [], key
+
+
+def test_the_wind_entities_are_there_only_with_a_wind_topic_and_pass_the_rules() -> None:
+    cfg = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    topics = Topics("rotor", {"tower": "rotor"})
+    for has_wind in (False, True):
+        info = RotatorInfo.of(
+            "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+            has_station=False, nudge_step_deg=cfg.nudge_step_deg, has_wind=has_wind,
+        )  # fmt: skip
+        msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+        found = {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}
+        wind = {"sensor.wind", "binary_sensor.storm"}
+        assert (wind <= set(found)) is has_wind
+        for key in wind & set(found):
+            platform, obj = key.split(".")
+            topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
+            assert validate(topic, found[key]) == [], key

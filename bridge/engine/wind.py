@@ -64,6 +64,8 @@ class WindPark:
     def reading(self, kmh: float, now: float) -> None:
         """Rules 1, 2 and 4: a reading, in km/h."""
         cfg = self._cfg
+        if not self.on:
+            return
         self._speed, self._last_t, self._silent = kmh, now, False
         if kmh > cfg.park_above_kmh:
             self._calm_since = None

@@ -60,6 +60,7 @@ class RotatorInfo:
     nudge_step_deg: float = 10.0
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
     can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
+    has_wind: bool = False  # a wind_topic (engine/wind.py)
 
     @classmethod
     def of(
@@ -74,6 +75,7 @@ class RotatorInfo:
         nudge_step_deg: float,
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
+        has_wind: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -94,6 +96,7 @@ class RotatorInfo:
                 track_options(satellites) if has_station and spec.can_report_position else ()
             ),
             can_follow=can_follow,
+            has_wind=has_wind,
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
@@ -333,6 +336,16 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "state_topic": r.topics.status, "icon": "mdi:account-voice",
         "value_template": "{{ value_json.following.call if value_json.following is defined "
                           "and value_json.following.call else 'None' }}"}),
+    Entity("sensor", "wind", "Wind", needs="has_wind", config=lambda r: {
+        "state_topic": r.topics.status, "unit_of_measurement": "km/h",
+        "device_class": "wind_speed", "state_class": "measurement",
+        "value_template": "{{ value_json.wind.speed_kmh if value_json.wind is defined and "
+                          "value_json.wind.speed_kmh is not none else 'None' }}"}),
+    Entity("binary_sensor", "storm", "Parked for the storm", needs="has_wind",
+           config=lambda r: {
+        "state_topic": r.topics.status, "icon": "mdi:weather-windy",
+        "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm "
+                          "else 'OFF' }}"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),
