@@ -93,6 +93,7 @@ class WindInfo:
     storm: bool = False  # parked for the storm: motion is refused
     calm_since_unix: float | None = None  # in a storm: below the release level since then
     silent: bool = False  # no reading for wind_silent_min: the state is kept
+    refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
 
 
 @dataclass(frozen=True)

@@ -391,10 +391,8 @@ class Rotator:
         if self._locked:
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
         status = self.status
-        if status.wind is not None and status.wind.storm:  # engine/wind.py rule 1
-            speed = status.wind.speed_kmh
-            why = f"wind {speed:.0f} km/h: " if speed is not None else ""
-            raise Refused(RefusalCode.LOCKED, f"{why}parked for the storm: motion refused")
+        if status.wind is not None and status.wind.refusal:  # engine/wind.py rule 1
+            raise Refused(RefusalCode.LOCKED, status.wind.refusal)
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
             raise Refused(

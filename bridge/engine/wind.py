@@ -59,6 +59,7 @@ class WindPark:
             storm=self.storm,
             calm_since_unix=None if calm is None else calm + self._wall_offset_s,
             silent=self._silent,
+            refusal=self.refusal(),
         )
 
     def reading(self, kmh: float, now: float) -> None:

@@ -69,7 +69,7 @@ def test_a_storm_parks_refuses_motion_stop_works_and_calm_releases_after_the_hol
     mark = rig.probe.mark()
     rig.probe.publish("rotor/target", "200")
     refusal = error_after(rig, mark, "refused")
-    assert refusal["message"] == "wind 90 km/h: parked for the storm: motion refused"
+    assert refusal["message"] == "wind 90 km/h above 72: parked for the storm"
     rig.probe.publish("rotor/stop", "STOP")  # the stop always works
     rig.probe.wait_for(
         "rotor/status", lambda m: json.loads(m.payload)["last_command_source"] == "mqtt", 10
@@ -95,8 +95,9 @@ def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None
     assert wind_of(rig, lambda w: w.get("silent"))["storm"] is True
     mark = rig.probe.mark()
     rig.probe.publish("rotor/target", "200")
-    assert error_after(rig, mark, "refused")["message"].endswith(
-        "parked for the storm: motion refused"
+    assert (
+        error_after(rig, mark, "refused")["message"]
+        == "wind 108 km/h above 72: parked for the storm"
     )
 
 
