@@ -112,6 +112,8 @@ class Follower:
             return NOTHING
         grid = grid_of(heard.grid)
         if grid is None or grid == self._aimed:  # rule 2
+            if info.held:  # the grid held for is gone: nothing waits any more
+                self.info = replace(info, held=False)
             return Proposal(busy=True)  # rule 6
         if heard.transmitting and self._rig.follow.hold_while_tx:  # rule 3
             self.info = replace(info, held=True)

@@ -104,6 +104,18 @@ def test_a_new_grid_while_transmitting_waits_for_the_transmission_to_end() -> No
     assert proposal.target is not None and part.info is not None and not part.info.held
 
 
+def test_a_held_grid_that_goes_away_holds_nothing_any_more() -> None:
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False), 1.0)
+    assert part.step(at(1.0)).target is not None
+    part.heard(Heard("VK2XYZ", "QF56", True), 2.0)
+    part.step(at(2.0))
+    assert part.info is not None and part.info.held
+    part.heard(Heard("JA1ABC", "PM95", True), 3.0)  # back to the partner turned to
+    assert part.step(at(3.0)).target is None
+    assert part.info is not None and not part.info.held
+
+
 def test_without_hold_while_tx_a_transmitting_status_turns_it_at_once() -> None:
     part = following(rig(follow_hold_while_tx=False))  # the rotator's key
     part.heard(Heard("VK2XYZ", "QF56", True), 1.0)
