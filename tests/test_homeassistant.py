@@ -21,13 +21,8 @@ from bridge.homeassistant import (
     all_configs,
 )
 from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
-from bridge.mqtt.payloads import (
-    follow_state,
-    parse_follow,
-    parse_nudge,
-    status_json,
-    tracking_state,
-)
+from bridge.mqtt.feature_payloads import follow_state
+from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json, tracking_state
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import FollowingInfo, RotatorStatus, TargetInfo, TrackingInfo, WindInfo
+from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.mqtt.feature_payloads import following_json, wind_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -299,35 +300,6 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
         doc["pass_track"] = [list(point) for point in info.pass_track]
     doc["flip"] = info.flip
     return doc
-
-
-def following_json(info: FollowingInfo) -> dict[str, object]:
-    """The status's ``following`` block: whom WSJT-X names, and where the rotor was turned."""
-    return {
-        "source": info.source,
-        "path": info.path,
-        "call": info.call,
-        "grid": info.grid,
-        "bearing": None if info.bearing_deg is None else round(info.bearing_deg, 1),
-        "distance_km": None if info.distance_km is None else round(info.distance_km, 1),
-        "held": info.held,
-    }
-
-
-def wind_json(info: WindInfo) -> dict[str, object]:
-    """The status's ``wind`` block (engine/wind.py)."""
-    calm = info.calm_since_unix
-    return {
-        "speed_kmh": info.speed_kmh,
-        "storm": info.storm,
-        "calm_since": None if calm is None else _iso(calm),
-        "silent": info.silent,
-    }
-
-
-def follow_state(status: RotatorStatus) -> str:
-    """``R/follow/state``: what is followed (``wsjtx``), or ``off``."""
-    return status.following.source if status.following is not None else "off"
 
 
 def tracking_state(status: RotatorStatus) -> str:

@@ -45,6 +45,7 @@ from collections.abc import Callable
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Target
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.feature_payloads import follow_state
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
@@ -170,7 +171,7 @@ class MqttService:
         if rot.can_track:
             pub(t.tracking, pl.tracking_state(status))
         if rot.can_follow:
-            pub(t.follow_state, pl.follow_state(status))
+            pub(t.follow_state, follow_state(status))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         for listener in self._status_listeners:
