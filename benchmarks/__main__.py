@@ -35,8 +35,10 @@ from benchmarks import (
     exchange_cpu,
     footprint,
     freshness,
+    health,
     latency,
     line_use,
+    remote,
     sky_stops,
     startup,
     target_flood,
@@ -56,6 +58,8 @@ ITEMS = {
     "sky_stops": sky_stops.run,
     "exchange_cpu": exchange_cpu.run,
     "console": console.run,
+    "remote": remote.run,
+    "health": health.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import FollowConfig
 from bridge.engine.lines import Lines
@@ -20,15 +21,17 @@ from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.gs232 import easycomm_server, gs232_server
+from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.lane import StopLane
+from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 from bridge.mqtt.wind import wind_feed
+from bridge.ptylines import PtyLineServer
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, Settings
 from bridge.sky import Sky
@@ -36,7 +39,7 @@ from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
-from bridge.worker_settings import worker_config
+from bridge.wiring import worker_config
 from bridge.wsjtx import WsjtxListener
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
@@ -76,8 +79,8 @@ class App:
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
-            on_message=lambda topic, payload, retain: self.mqtt.on_message(
-                topic, payload, retain, gated=self.client.gated
+            on_message=lambda topic, payload, retain, operator: self.mqtt.on_message(
+                topic, payload, retain, operator, gated=self.client.gated
             ),
             on_denied=self._denied,
             on_connect=self._connected,
@@ -112,8 +115,10 @@ class App:
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
+        audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
+        self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
-        self.emulations: list[LineServer] = []  # GS-232 and Easycomm ports (gs232/)
+        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
@@ -135,6 +140,7 @@ class App:
                 satellites=catalog.names,
                 wall=wall,
             )
+        satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
         follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
         for r in settings.rotators:
             rot = Rotator(
@@ -149,8 +155,18 @@ class App:
                 station=settings.station.position,
                 catalog=catalog,
                 sky=self.sky,
+                on_audit=self.audit.of(r.id),
             )
-            self.mqtt.attach(rot)
+            self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
+                rot,
+                ConsoleFacts(
+                    position,
+                    settings.station.locator,
+                    r.beamwidth_deg,
+                    r.nudge_step_deg,
+                    satellites if rot.can_track else (),
+                ),
+            )
             if self.web is not None:
                 self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)
@@ -163,6 +179,10 @@ class App:
                 self.emulations.append(gs232_server(rot, r.gs232_port, r.gs232_bind))
             if r.easycomm_port is not None:
                 self.emulations.append(easycomm_server(rot, r.easycomm_port, r.easycomm_bind))
+            if r.gs232_pty is not None:
+                self.emulations.append(gs232_pty(rot, r.gs232_pty))
+            if r.easycomm_pty is not None:
+                self.emulations.append(easycomm_pty(rot, r.easycomm_pty))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:
@@ -307,6 +327,7 @@ class App:
             raise ConfigError(exc.strerror or str(exc)) from None
         if self.discovery is not None:
             self.discovery.publish_all()  # cached now, sent on connect
+        self.audit.start()
         self.mqtt.start()  # the stop lane follows the first connection (_connected)
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
@@ -323,8 +344,9 @@ class App:
             self.stop()
             raise
 
-    def _text_ports(self) -> list[LineServer]:
-        """rotctld's, GS-232's and Easycomm's TCP ports: listened on, started, stopped alike."""
+    def _text_ports(self) -> list[LineServer | PtyLineServer]:
+        """rotctld's, GS-232's and Easycomm's TCP ports and ptys: listened on (a pty linked),
+        started, stopped alike."""
         return [*self.rotctld, *self.emulations]
 
     def stop(self) -> None:
@@ -341,6 +363,7 @@ class App:
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)
+        self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
         log.info("stopped")

@@ -153,34 +153,39 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_ports)
 
-    p = sub.add_parser(
-        "emulate",
-        help="an emulated controller on a pseudo-terminal",
-        description="Run an emulated rotator controller of MODEL on a pseudo-terminal and print "
-        "its path, for trying the bridge, Hamlib's rotctl or other software without hardware.",
-    )
-    from bridge.emulators import cli as emulate_cli
+    try:  # pseudo-terminals need a POSIX system; the remote (below) runs without one
+        from bridge import demo
+        from bridge.emulators import cli as emulate_cli
+    except ImportError:
+        pass  # Windows: no emulate and no demo
+    else:
+        p = sub.add_parser(
+            "emulate",
+            help="an emulated controller on a pseudo-terminal",
+            description="Run an emulated rotator controller of MODEL on a pseudo-terminal and "
+            "print its path, for trying the bridge, Hamlib's rotctl or other software without "
+            "hardware.",
+        )
+        emulate_cli.add_arguments(p)
+        p.set_defaults(func=cmd_emulate)
 
-    emulate_cli.add_arguments(p)
-    p.set_defaults(func=cmd_emulate)
-
-    p = sub.add_parser(
-        "demo",
-        help="emulated rotators bridged to MQTT, no hardware needed",
-        description="Emulated rotators bridged to MQTT: the broker at --mqtt-host:--mqtt-port is "
-        "used, or a private mosquitto started there; type a bearing, s (stop) or lock on/off.",
-    )
-    from bridge import demo
-
-    demo.add_arguments(p)
-    p.set_defaults(func=cmd_demo)
+        p = sub.add_parser(
+            "demo",
+            help="emulated rotators bridged to MQTT, no hardware needed",
+            description="Emulated rotators bridged to MQTT: the broker at --mqtt-host:"
+            "--mqtt-port is used, or a private mosquitto started there; type a bearing, s "
+            "(stop) or lock on/off.",
+        )
+        demo.add_arguments(p)
+        p.set_defaults(func=cmd_demo)
 
     p = sub.add_parser(
         "remote",
         help="the station's rotators on this computer, through its MQTT broker",
         description="On the operator's computer: connect to the station's MQTT broker, learn "
-        "the rotators named in the file from the station, and offer each on a local rotctld "
-        "port, until SIGTERM or Ctrl-C. Commands are never queued while the broker is away.",
+        "the rotators named in the file from the station, and offer each on the local "
+        "endpoints the file asks for (rotctld, GS-232, Easycomm, PstRotator UDP, the console), "
+        "until SIGTERM or Ctrl-C. Commands are never queued while the broker is away.",
     )
     p.add_argument("-c", "--config", required=True, help="the remote's TOML file")
     p.set_defaults(func=cmd_remote)

@@ -162,6 +162,9 @@ def summary(settings: Settings) -> list[str]:
     where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"
     lines.append(f"wsjtx: listening on {where}" if wsjtx.enabled else "wsjtx: off")
     lines.append(f"state file: {settings.state_file}")
+    if settings.audit_file is not None:
+        most = settings.audit_max_bytes
+        lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
     return lines
 
 
@@ -201,6 +204,10 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
         on.append(f"GS-232B on {r.gs232_bind}:{r.gs232_port}")
     if r.easycomm_port is not None:
         on.append(f"Easycomm II on {r.easycomm_bind}:{r.easycomm_port}")
+    if r.gs232_pty is not None:
+        on.append(f"GS-232B on a pty at {r.gs232_pty}")
+    if r.easycomm_pty is not None:
+        on.append(f"Easycomm II on a pty at {r.easycomm_pty}")
     if r.pst_udp_port is not None:
         on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
     if r.n1mm_rotor_name is not None:

@@ -14,6 +14,7 @@ class RefusalCode(enum.StrEnum):
     UNSUPPORTED = "unsupported"  # the model cannot do it (an option, an elevation axis)
     KEEP_OUT = "keep_out"  # the bearing lies in a configured keep-out sector
     INVALID = "invalid"  # not a command at all (a target without an axis)
+    LEASED = "leased"  # another operator holds the control lease (engine/lease.py)
 
 
 class Refused(Exception):

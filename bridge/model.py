@@ -39,6 +39,70 @@ class Source(enum.StrEnum):
     WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)
 
 
+OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
+
+
+def valid_operator(text: object) -> str | None:
+    """``text`` as an operator's name (short printable text, spaces at the ends dropped), or
+    None if it is not one."""
+    if not isinstance(text, str):
+        return None
+    name = text.strip()
+    if not name or len(name) > OPERATOR_CHARS or not name.isprintable():
+        return None
+    return name
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Who sent a command and how (the audit log, ``last_operator``, the control lease).
+
+    ``operator`` is what the sender said it is (the MQTT 5 user property ``operator``); without
+    it the interface and the peer stand for the operator (``rotctld 192.168.1.20``)."""
+
+    interface: Source
+    operator: str | None = None
+    peer: str | None = None  # the peer's address (TCP, UDP), when the interface knows it
+
+    @property
+    def who(self) -> str:
+        if self.operator:
+            return self.operator
+        return f"{self.interface.value} {self.peer}" if self.peer else self.interface.value
+
+
+@dataclass(frozen=True)
+class Control:
+    """The control lease: ``operator`` holds the rotator until ``until_unix`` (engine/lease.py)."""
+
+    operator: str
+    until_unix: float
+
+
+@dataclass(frozen=True)
+class AuditEvent:
+    """One command judged, executed or refused (the audit file and ``R/audit``)."""
+
+    time_unix: float
+    rotator: str
+    origin: Origin
+    command: str  # as the user sent it
+    result: str  # "executed" or "refused: <why>"
+    bearing_before: float | None
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "time": self.time_unix,
+            "rotator": self.rotator,
+            "operator": self.origin.who,
+            "interface": self.origin.interface.value,
+            "peer": self.origin.peer,
+            "command": self.command,
+            "result": self.result,
+            "bearing_before": self.bearing_before,
+        }
+
+
 @dataclass(frozen=True)
 class TargetInfo:
     """Where a target given by locator or coordinates lies (``target_info`` in the status)."""
@@ -109,6 +173,7 @@ class Target:
     # A 0..360 bearing on a rotor that can pass 360 (set by the judge, pointing.py rule 2): the
     # session picks the side from where the rotor is when it sends, not when the command came.
     true_az_deg: float | None = None
+    origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
 
 
 def combine(newer: Target, older: Target | None) -> Target:
@@ -129,6 +194,7 @@ def combine(newer: Target, older: Target | None) -> Target:
 @dataclass(frozen=True)
 class Stop:
     source: Source = Source.MQTT
+    origin: Origin | None = None
 
 
 @dataclass(frozen=True)
@@ -138,6 +204,7 @@ class SetOption:
     name: str
     enabled: bool
     source: Source = Source.MQTT
+    origin: Origin | None = None
 
 
 Command = Target | Stop | SetOption
@@ -155,6 +222,7 @@ class ErrorKind(enum.StrEnum):
     STATE = "state"  # the lock could not be saved in the state file
     INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
     WIND = "wind"  # the wind topic fell silent or sent no number: the state it had is kept
+    AUDIT = "audit"  # the audit file could not be written (the bridge goes on without it)
 
 
 @dataclass(frozen=True)
@@ -175,6 +243,41 @@ class ErrorEvent:
             out["command"] = self.command
         out["time"] = self.time_unix
         return out
+
+
+@dataclass(frozen=True)
+class AxisHealth:
+    """One axis of ``RotatorHealth``: "up" is clockwise in azimuth, up in elevation."""
+
+    speed_up_deg_s: float | None = None  # the median of the recent moves that way
+    speed_down_deg_s: float | None = None
+    baseline_up_deg_s: float | None = None  # what they are judged against
+    baseline_down_deg_s: float | None = None
+    coast_deg: float | None = None  # turned after the last stop
+    baseline_coast_deg: float | None = None
+    arrival_error_deg: float | None = None  # of the last move that arrived
+    odometer_deg: float = 0.0  # every degree turned, ever
+
+
+@dataclass(frozen=True)
+class RotatorHealth:
+    """How the rotor really turns, measured from its own readings (engine/health.py); published
+    on ``R/health`` after each move. ``measured`` False: the controller reports no position."""
+
+    measured: bool = True
+    az: AxisHealth = AxisHealth()
+    el: AxisHealth | None = None  # az/el rotators
+    start_delay_s: float | None = None  # command to the first reading that moved (recent median)
+    baseline_start_delay_s: float | None = None
+    baseline_from: str = "learning"  # "learned" (the first moves), "settings", "learning"
+    baseline_moves_left: int = 0  # still to learn from
+    moves: int = 0
+    stalls: int = 0
+    stall_azimuths_deg: tuple[float, ...] = ()  # the recent stalls, raw
+    motor_on_s: float = 0.0
+    warnings: tuple[str, ...] = ()
+    # what the state file keeps (engine/health_judge.py); never compared
+    memory: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -208,6 +311,9 @@ class RotatorStatus:
     following: FollowingInfo | None = None  # R/follow (engine/follow.py)
     following_ended: str | None = None  # why following last ended, until it starts again
     wind: WindInfo | None = None  # with a wind_topic (engine/wind.py)
+    health: RotatorHealth | None = None  # how the rotor turns (engine/health.py)
+    last_operator: str | None = None  # who sent the command of last_command_source (Origin.who)
+    control: Control | None = None  # the control lease's holder, if it is held
 
     @property
     def moving(self) -> bool:

@@ -346,3 +346,20 @@ def toward(
         locator=locator,
     )
     return (path.long_path_deg if long_path else path.short_path_deg), info
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The mechanical limits (the controller's raw values), as rotctld's ``dump_state`` gives
+    them; here rather than beside the engine's Rotator so that the remote, which has no serial
+    line, needs nothing of the engine."""
+
+    az_min_deg: float
+    az_max_deg: float
+    el_min_deg: float = 0.0
+    el_max_deg: float = 0.0
+
+    @classmethod
+    def of(cls, p: Pointing) -> Limits:
+        """The mechanical limits of a rotator's terms."""
+        return cls(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)

@@ -115,6 +115,18 @@ class Settings(BaseSettings):
             "~/.local/state/rotor-bridge/state.json"
         },
     )
+    audit_file: Path | None = Field(
+        None,
+        description="the audit log: one JSON line per command executed or refused, from every "
+        "interface (who, how, what, the result); rotated by size",
+        examples=["/var/log/rotor-bridge/audit.jsonl"],
+        json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
+    )
+    audit_max_bytes: int = Field(
+        1_000_000,
+        ge=10_000,
+        description="the audit file's size at which it is renamed to .1 (three old files kept)",
+    )
     # mqtt.password is written in the configuration file itself (check-config warns)
     _password_in_file: bool = PrivateAttr(default=False)
 
@@ -157,6 +169,16 @@ class Settings(BaseSettings):
             clash = [other for other, p in taken if p == port and other != name]
             if port is not None and name.endswith(("gs232_port", "easycomm_port")) and clash:
                 raise ValueError(f"{name} {port} is also {clash[0]}: give it another port")
+        ptys = [
+            (os.path.abspath(os.path.expanduser(path)), f"rotators[{i}].{k}")
+            for i, r in enumerate(self.rotators)
+            for k in ("gs232_pty", "easycomm_pty")
+            if (path := getattr(r, k)) is not None
+        ]
+        for n, (path, name) in enumerate(ptys):  # one link, one pty
+            clash = [other for p, other in ptys[:n] if p == path]
+            if clash:
+                raise ValueError(f"{name} {path} is also {clash[0]}: give it another path")
         pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:

@@ -237,6 +237,41 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
         "anyone who can reach it can turn the antenna (check-config warns off loopback)",
         examples=["0.0.0.0"],
     )
+    gs232_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="Yaesu GS-232B on a pseudo-terminal, for programs that want a serial port "
+        "(`rotctl -m 603 -r /tmp/rotor-gs232`): the path of a link to it, made at start and "
+        "removed at the end; anything but a link already there is refused",
+        examples=["/tmp/rotor-gs232"],
+        json_schema_extra={"unset": "no GS-232 pty"},
+    )
+    easycomm_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="Easycomm II on a pseudo-terminal (`rotctl -m 202 -r /tmp/rotor-easycomm`), "
+        "linked at this path like gs232_pty",
+        examples=["/tmp/rotor-easycomm"],
+        json_schema_extra={"unset": "no Easycomm pty"},
+    )
+    health_baseline_moves: int = Field(
+        20,
+        ge=3,
+        le=1000,
+        description="rotor health learns how the rotor turns from this many moves (its "
+        "baseline; again after a health reset); az_speed_deg_s, where given, is the speed "
+        "baseline from the start",
+        examples=[30],
+    )
+    health_speed_drop_pct: float = Field(
+        20.0,
+        ge=5,
+        le=90,
+        description="rotor health warns when the recent moves differ from the baseline by "
+        "more than this: a speed that much lower, the two directions that much further apart, "
+        "a start delay or a coast that much longer",
+        examples=[25],
+    )
 
     @field_validator("id")
     @classmethod

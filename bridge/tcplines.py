@@ -80,7 +80,11 @@ class LineServer:
         idle_timeout_s: float = 300.0,
         useful_within_s: float = USEFUL_WITHIN_S,
         clock: Callable[[], float] = time.monotonic,
+        peer_session: Callable[[str], LineSession] | None = None,
     ) -> None:
+        """``peer_session``, if given, makes each client's session knowing its address (who
+        sent a command: model.Origin) instead of ``session``."""
+        self._peer_session = peer_session
         self.rotator_id = rotator_id
         self.label = label
         self._key = key
@@ -236,7 +240,7 @@ class LineServer:
     def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         who = f"{self.label} for {self.rotator_id}: client {peer[0]}:{peer[1]}"
         log.info("%s connected", who)
-        session = self._session()
+        session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         guard = HttpGuard()
         last_bytes = self._clock()
         pending_since: float | None = None  # the first byte of a command not yet complete

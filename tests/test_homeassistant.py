@@ -21,8 +21,8 @@ from bridge.homeassistant import (
     all_configs,
 )
 from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
-from bridge.mqtt.feature_payloads import follow_state
-from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json, tracking_state
+from bridge.mqtt.feature_payloads import follow_state, tracking_state
+from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -79,6 +79,19 @@ def test_rotorez_message_set_is_exact() -> None:
             ("switch", "option_unstick"),
             ("switch", "lock"),
             ("sensor", "last_error"),
+            ("sensor", "speed_cw"),
+            ("sensor", "speed_ccw"),
+            ("sensor", "start_delay"),
+            ("sensor", "coast"),
+            ("sensor", "odometer"),
+            ("sensor", "moves"),
+            ("sensor", "stalls"),
+            ("sensor", "motor_on"),
+            ("binary_sensor", "health_problem"),
+            ("button", "health_reset"),
+            ("sensor", "control"),
+            ("button", "release_control"),
+            ("sensor", "last_operator"),
         ]
     }
     want.add("homeassistant/binary_sensor/rotorbridge_rotor/connection/config")

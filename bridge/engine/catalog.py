@@ -46,6 +46,17 @@ class TleCatalog:
             self._refresh()
             return sorted({name for name, _l1, _l2 in self._sets.values()})
 
+    def body(self, name: str, tle: tuple[str, str, str] | None = None) -> Body | None:
+        """The body ``name`` (or ``tle``) means: the sun, the moon, that element set; None for
+        a satellite to look up in the file (on the sky worker). SkyError or CatalogError."""
+        if tle is not None:
+            return Body.satellite(*tle)
+        folded = name.strip().casefold()
+        if folded in ("sun", "moon"):
+            return Body.sun() if folded == "sun" else Body.moon()
+        self.check_configured(name)
+        return None
+
     def check_configured(self, name: str) -> None:
         """CatalogError if there is no file to look ``name`` up in (reads nothing: rule 1)."""
         if self.path is None:

@@ -43,6 +43,16 @@ class WindConfig:
 
 
 @dataclass(frozen=True)
+class HealthConfig:
+    """What rotor health (health.py) is judged by."""
+
+    baseline_moves: int = 20  # the baseline is learned from this many moves
+    speed_drop_pct: float = 20.0  # a warning beyond this change
+    az_speed_deg_s: float | None = None  # set by hand: the speed baseline, both ways
+    el_speed_deg_s: float | None = None
+
+
+@dataclass(frozen=True)
 class WorkerConfig:
     rotator_id: str
     port: str
@@ -63,6 +73,7 @@ class WorkerConfig:
     tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
     follow: FollowConfig = FollowConfig()  # follow.py
     wind: WindConfig | None = None  # wind.py; None: no wind_topic
+    health: HealthConfig = HealthConfig()
 
     def __post_init__(self) -> None:
         if self.pointing is None:

@@ -25,6 +25,10 @@ Rules:
 5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
    sectors). One it refuses is reported once for that grid and not tried again.
 6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
+7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
+   and ``last_operator``), with the operator who switched following on if they named
+   themselves. Like tracking's, they are the bridge's own: the control lease judged who
+   switched it on (rotator.py), not each grid WSJT-X names.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.errors import Refused
-from bridge.model import ErrorKind, FollowingInfo, Source, Target
+from bridge.model import ErrorKind, FollowingInfo, Origin, Source, Target
 from bridge.pointing import toward
 
 log = logging.getLogger(__name__)
@@ -64,6 +68,7 @@ class Follow:
     long_path: bool = False
     source: Source = Source.MQTT  # who asked
     described: str | None = None  # the command as the user gave it (a refusal names it)
+    origin: Origin | None = None  # who asked (the status's last_operator)
 
 
 def grid_of(text: str) -> str | None:
@@ -80,6 +85,7 @@ class Follower:
         self._heard: Heard | None = None
         self._heard_t = -math.inf
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
+        self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
 
     @property
     def on(self) -> bool:
@@ -89,6 +95,8 @@ class Follower:
         """Rule 1; rule 4: only a fresh status turns the rotor at once."""
         self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
         self.ended, self._aimed = None, None
+        starter = follow.origin.operator if follow.origin is not None else None
+        self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
             self._heard = None
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
@@ -126,7 +134,8 @@ class Follower:
                 self._rig.follow.station, lat, lon, long_path=info.path == "long", locator=grid
             )
             judged = self._rig.aim.judge(
-                Target(az, None, Source.WSJTX, info=place), scene.motion.position_deg
+                Target(az, None, Source.WSJTX, info=place, origin=self._origin),
+                scene.motion.position_deg,
             )
         except (Refused, ValueError) as exc:  # rule 5
             why = exc.message if isinstance(exc, Refused) else str(exc)

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 from bridge.engine.follow import Follow, Heard
 from bridge.engine.tracking import Track
-from bridge.model import SetOption, Stop, Target, combine
+from bridge.model import Control, SetOption, Stop, Target, combine
 
 
 @dataclass
@@ -61,9 +61,19 @@ class Batch:
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
+    health_reset: bool = False  # a new health baseline (health.py)
+
+    control: Control | None = None  # the control lease as the judge has it now...
+    control_set: bool = False  # ...when it changed (engine/lease.py)
 
     def __bool__(self) -> bool:
-        settings = self.options or self.lock is not None or self.notes
+        settings = (
+            self.options
+            or self.lock is not None
+            or self.notes
+            or self.health_reset
+            or self.control_set
+        )
         fence = self.hold is not None or self.release is not None
         feeds = self.follow is not None or self.heard is not None or self.wind is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
@@ -168,6 +178,18 @@ class Mailbox:
         with self._lock:
             held = self._batch.wind  # the highest of a batch: no gust is lost (wind.py)
             self._batch.wind = speed_kmh if held is None else max(held, speed_kmh)
+        self._wake_once()
+
+    def put_health_reset(self) -> None:
+        """Start a new health baseline (a setting: it moves nothing)."""
+        with self._lock:
+            self._batch.health_reset = True
+        self._wake_once()
+
+    def put_control(self, control: Control | None) -> None:
+        """The control lease changed (the status shows its holder)."""
+        with self._lock:
+            self._batch.control, self._batch.control_set = control, True
         self._wake_once()
 
     def take(self) -> Batch:

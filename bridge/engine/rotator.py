@@ -1,39 +1,51 @@
 """A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
 
 This is the one judge of commands: every front end submits here, and here alone are the safety
-lock, the configured limits and keep-out sectors (pointing.py: targets arrive as true bearings
-and leave as the controller's raw values), the model's capabilities and the link state checked
-against a command. A refused command raises Refused (with a RefusalCode front ends map, e.g.
-to a Hamlib RPRT number) and is reported as an error event; it never reaches the mailbox, so it
-can never move anything. The worker judges nothing anew: it only drops an accepted target that
-the lock or a lost link overtook before it could be sent, and reports that as a refusal too.
+lock, the wind park, the configured limits and keep-out sectors (pointing.py: targets arrive as
+true bearings and leave as the controller's raw values), the model's capabilities and the link
+state checked against a command. A refused command raises Refused (with a RefusalCode front
+ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never reaches the
+mailbox, so it can never move anything. The worker judges nothing anew: it only drops an
+accepted target that the lock or a lost link overtook before it could be sent, and reports that
+as a refusal too. Motion is judged in one order: the lock, the wind (safety), the control lease
+(coordination), the pointing judge, the link (``_check``). Each command carries who sent it
+(``origin``): the lease (operators.py) refuses a target, a track or follow start from anyone but
+its holder; nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule
+11); every command judged here, executed or refused, is an audit event. The bridge's own moves
+(auto-park, the wind park, tracking's and following's targets) are the session's, never judged
+by the lease.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import replace
 
 import serial
 
-from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.catalog import TleCatalog
 from bridge.engine.follow import Follow, Heard
+from bridge.engine.health_memory import HealthMemory
+from bridge.engine.kept import Kept
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
+from bridge.engine.operators import EXECUTED, Operators
 from bridge.engine.port import open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
+from bridge.engine.starts import body_to_track, check_can_follow
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
+    AuditEvent,
     Command,
     ErrorEvent,
     ErrorKind,
+    Origin,
     RotatorStatus,
     SetOption,
     Source,
@@ -41,24 +53,10 @@ from bridge.model import (
     Target,
     describe_command,
 )
-from bridge.pointing import Pointing, toward
+from bridge.pointing import Limits, toward
 from bridge.protocols.base import ModelSpec
-from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Limits:
-    az_min_deg: float
-    az_max_deg: float
-    el_min_deg: float = 0.0
-    el_max_deg: float = 0.0
-
-    @classmethod
-    def of(cls, p: Pointing) -> Limits:
-        """The mechanical limits of a rotator's terms (the controller's raw values)."""
-        return cls(p.az_min_deg, p.az_max_deg, p.el_min_deg, p.el_max_deg)
 
 
 class Rotator:
@@ -77,6 +75,7 @@ class Rotator:
         station: tuple[float, float] | None = None,
         catalog: TleCatalog | None = None,
         sky: SkyWorker | None = None,
+        on_audit: Callable[[AuditEvent], None] | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -91,20 +90,34 @@ class Rotator:
         self._on_event = on_event
         self._wall = wall
         self._locked = store.locked(self.id)
-        self._save_lock = threading.Lock()
+        self._kept = Kept(
+            store, self.id, self.spec, locked=lambda: self._locked, report=self.report
+        )
         self._mailbox = Mailbox()
+        self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
+        self._on_status = on_status
         self._worker = Worker(
             cfg,
             self._mailbox,
-            on_status,
+            self._status,
             on_event,
-            options=self._supported_options(store),
+            options=self._kept.options(),
             locked=self._locked,
+            health=store.health(self.id),
             wall=wall,
             port_opener=port_opener,
             sky=sky,  # the app shares one among all rotators (skywork.py)
         )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
+        self.operators = Operators(
+            self.id,
+            store,
+            self._mailbox,
+            wall=wall,
+            bearing=lambda: self.status.bearing_deg,
+            report=self.report,
+            on_audit=on_audit,
+        )
         self._stopped = False
         # when a STOP or lock ON was last put in the mailbox (monotonic), from any front end: a
         # front end whose commands can overtake each other (the console) refuses one that was
@@ -114,20 +127,14 @@ class Rotator:
         if problem is not None:  # the lock is ON for it; the status's last error says why
             self._mailbox.put_note(problem)
 
-    def _supported_options(self, store: StateStore) -> dict[str, bool]:
-        """Options remembered for this id that this model has (the id may have been another)."""
-        kept = {}
-        for name, enabled in store.options(self.id).items():
-            if name in self.spec.options:
-                kept[name] = enabled
-            else:
-                log.warning(
-                    "%s: stored option %r ignored: %s has no such option",
-                    self.id,
-                    name,
-                    self.spec.display_name,
-                )
-        return kept
+    def _status(self, status: RotatorStatus) -> None:
+        """Every status to the listeners, once rotor health's memory had a look at it."""
+        self._health.seen(status.health)
+        self._on_status(status)
+
+    def reset_health(self) -> None:
+        """A new health baseline (after a repair); it moves nothing, so it is never refused."""
+        self._mailbox.put_health_reset()
 
     @property
     def status(self) -> RotatorStatus:
@@ -147,39 +154,52 @@ class Rotator:
         if self._stopped:
             raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
         self._lines.add(self._worker)
+        self.operators.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
         self._stopped = True
+        self.operators.stop()
         if self._lines.remove(self._worker, timeout_s):
             self._mailbox.close()  # only once nothing can wait on it any more
+        self._health.flush()  # what the last moves taught (app.py flushes the store)
 
     def submit(
-        self, command: Command, described: str | None = None, *, hold: int | None = None
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+        echo: bool = False,
     ) -> None:
         """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
         stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
+        origin = command.origin or Origin(command.source)
+        what = described or describe_command(command)
         try:
             judged = self._check(command)
         except Refused as exc:
-            self.report_refusal(exc.message, described or describe_command(command))
+            self.report_refusal(exc.message, what, origin=origin)
             raise
         if isinstance(command, SetOption):
-            name, enabled = command.name, command.enabled
-            self._store.later(lambda: self._save_option(name, enabled))  # state_store rule 5
+            self._kept.save_option(command.name, command.enabled)  # kept.py
         if isinstance(command, Stop):
             self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
+        if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
+            self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
 
     # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
-    def go_to_preset(self, name: str, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.preset(name), source), described)
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
+        self._named(lambda: Target(*self.pointing.preset(name), source), described, origin)
 
-    def park(self, source: Source, described: str) -> None:
-        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described)
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described, origin)
 
     def go_toward(
         self,
@@ -190,6 +210,7 @@ class Rotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None:
         def target() -> Target:
             az, info = toward(
@@ -197,14 +218,16 @@ class Rotator:
             )
             return Target(az, None, source, info=info)
 
-        self._named(target, described)
+        self._named(target, described, origin)
 
-    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         """The place of the current locator or coordinate target, by the path asked for."""
         info = self.status.target_info
         if info is None:
             message = "no locator or coordinate target to take the other path to"
-            self.report_refusal(message, described)
+            self.report_refusal(message, described, origin=origin or Origin(source))
             raise Refused(RefusalCode.INVALID, message)
         self.go_toward(
             info.latitude_deg,
@@ -213,11 +236,22 @@ class Rotator:
             described,
             locator=info.locator,
             long_path=long_path,
+            origin=origin,
         )
 
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None:
         self._named(
-            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source), described
+            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source),
+            described,
+            origin,
         )
 
     def track(
@@ -226,64 +260,59 @@ class Rotator:
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
         ``off`` ends it (never refused, like a stop). Raise Refused otherwise. A name is looked
         up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
-        refused by the session, as an error event."""
+        refused by the session, as an error event. Tracking started by the lease's holder goes
+        on (its targets are the bridge's own, never judged by the lease)."""
+        who = origin or Origin(source)
         if name.strip().casefold() == "off" and tle is None:
-            self._mailbox.put_track(Track(None, source))
+            self._mailbox.put_track(Track(None, source, origin=origin))
+            self.operators.audit(who, described, EXECUTED)
             return
         try:
-            body = self._body(name, tle)
-            if self._locked:
-                raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
-            if not self.status.available:
-                raise Refused(
-                    RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
-                )
+            body = body_to_track(self.catalog, self.spec, self._has_sky, name, tle)
+            self._check_start(who)
         except Refused as exc:
-            self.report_refusal(exc.message, described)
+            self.report_refusal(exc.message, described, origin=who)
             raise
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
-            self._mailbox.put_track(Track(None, source, lookup, described))
-            return
-        self._mailbox.put_track(Track(body, source, None, described))
+            self._mailbox.put_track(Track(None, source, lookup, described, origin))
+        else:
+            self._mailbox.put_track(Track(body, source, None, described, origin))
+        self.operators.audit(who, described, EXECUTED)
 
     @property
     def can_follow(self) -> bool:
         """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
         return self._follow.wsjtx and self._follow.station is not None
 
-    def follow(self, on: bool, source: Source, described: str, *, long_path: bool = False) -> None:
+    def follow(
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
+    ) -> None:
         """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
-        stop). Raise Refused otherwise."""
-        if not on:
-            self._mailbox.put_follow(Follow(False, source=source, described=described))
-            return
-        try:
-            if not self._follow.wsjtx:
-                raise Refused(
-                    RefusalCode.UNSUPPORTED,
-                    "following WSJT-X needs its messages: [wsjtx] enabled = true",
-                )
-            if self._follow.station is None:
-                raise Refused(
-                    RefusalCode.UNSUPPORTED,
-                    "following WSJT-X needs the station's position ([station] locator, or "
-                    "latitude_deg and longitude_deg): bearings are from there",
-                )
-            if self._locked:
-                raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
-            if not self.status.available:
-                raise Refused(
-                    RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
-                )
-        except Refused as exc:
-            self.report_refusal(exc.message, described)
-            raise
-        self._mailbox.put_follow(Follow(True, long_path, source, described))
+        stop). Raise Refused otherwise: judged like a track start (the lease included); what
+        the holder started goes on, its targets are the bridge's own (``wsjtx``)."""
+        who = origin or Origin(source)
+        if on:
+            try:
+                check_can_follow(self._follow)
+                self._check_start(who)
+            except Refused as exc:
+                self.report_refusal(exc.message, described, origin=who)
+                raise
+        self._mailbox.put_follow(Follow(on, long_path, source, described, origin))
+        self.operators.audit(who, described, EXECUTED)
 
     def wind(self, speed_kmh: float) -> None:
         """A wind reading (MQTT's thread): an input for the wind park (engine/wind.py)."""
@@ -293,84 +322,59 @@ class Rotator:
         """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
         self._mailbox.put_heard(heard)
 
-    def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
-        """The body to track, or None for a satellite to look up in the TLE file."""
-        if not self._has_sky:
+    def _check_start(self, who: Origin) -> None:
+        """A track or follow start: the judge's order (``_check``), with no target to judge."""
+        self._check_motion(who.who)
+        if not self.status.available:
             raise Refused(
-                RefusalCode.UNSUPPORTED,
-                "tracking needs the station's position ([station] locator, or latitude_deg "
-                "and longitude_deg)",
+                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
-        if not self.spec.can_report_position:
-            raise Refused(
-                RefusalCode.UNSUPPORTED,
-                f"the {self.spec.display_name} cannot report where it points: tracking needs a "
-                "controller that does",
-            )
-        try:
-            if tle is not None:
-                return Body.satellite(*tle)
-            folded = name.strip().casefold()
-            if folded == "sun":
-                return Body.sun()
-            if folded == "moon":
-                return Body.moon()
-            self.catalog.check_configured(name)
-            return None
-        except (SkyError, CatalogError) as exc:
-            raise Refused(RefusalCode.INVALID, str(exc)) from None
 
-    def _named(self, make: Callable[[], Target], described: str) -> None:
+    def _named(self, make: Callable[[], Target], described: str, origin: Origin | None) -> None:
         try:
             target = make()
         except Refused as exc:
-            self.report_refusal(exc.message, described)
+            self.report_refusal(exc.message, described, origin=origin or Origin(Source.MQTT))
             raise
-        self.submit(target, described)
+        self.submit(target if origin is None else replace(target, origin=origin), described)
 
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None:
         """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
-        (outside its own lock: the state file is written with an fsync)."""
+        (outside its own lock: the state file is written with an fsync). Never refused."""
         self._locked = locked
         if locked:
             self.last_halt_s = time.monotonic()
         self._mailbox.put_lock(locked, hold=hold)
         if save:
             self.save_lock()
-
-    def _save_option(self, name: str, enabled: bool) -> None:
-        if not self._store.set_option(self.id, name, enabled):
-            self.report(
-                ErrorKind.STATE,
-                f"option {name} is in effect but could not be saved: it will not survive a "
-                "restart (state file not writable)",
-                name,
-            )
+        if not echo:
+            what = f"lock {'ON' if locked else 'OFF'}"
+            self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
     def save_lock(self) -> None:
-        """The lock to the state file, on its writer thread (state_store.py rule 5): each save
-        writes the lock as it is when it runs, so the last one writes the newest word."""
-        self._store.later(self._save_lock_now)
-
-    def _save_lock_now(self) -> None:
-        with self._save_lock:
-            locked = self._locked
-            saved = self._store.set_locked(self.id, locked)
-        if not saved:
-            self.report(
-                ErrorKind.STATE,
-                f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
-                "it will not survive a restart (state file not writable)",
-                "lock",
-            )
+        """The lock to the state file, on its writer thread (kept.py rule 2)."""
+        self._kept.save_lock()
 
     def note(self, message: str) -> None:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
         self._mailbox.put_note(message)
 
-    def report_refusal(self, message: str, command: str | None) -> None:
-        """Publish a refusal (also for input that never became a command, e.g. a bad payload)."""
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
+        """Publish a refusal (also for input that never became a command, e.g. a bad payload);
+        with ``origin`` (who sent it) it is in the audit trail too."""
         self.report(ErrorKind.REFUSED, message, command)
+        if origin is not None:
+            self.operators.audit(origin, command or "input", f"refused: {message}")
 
     def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
         self._mailbox.put_note(message)
@@ -388,14 +392,26 @@ class Rotator:
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
             return command
-        if self._locked:
-            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        self._check_motion(
+            command.origin.who if command.origin is not None else command.source.value
+        )
         status = self.status
-        if status.wind is not None and status.wind.refusal:  # engine/wind.py rule 1
-            raise Refused(RefusalCode.LOCKED, status.wind.refusal)
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
             raise Refused(
                 RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
         return raw
+
+    def _check_motion(self, who: str) -> None:
+        """Refused for motion now, in this order (docs/architecture.md rule 11; never asked
+        for a stop or lock): the lock, then the wind (safety), then the lease (coordination);
+        the pointing judge and the link come after, in ``_check``."""
+        if self._locked:
+            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        wind = self.status.wind
+        if wind is not None and wind.refusal:  # engine/wind.py rule 1
+            raise Refused(RefusalCode.LOCKED, wind.refusal)
+        leased = self.operators.refusal(who)
+        if leased is not None:
+            raise Refused(RefusalCode.LEASED, leased)

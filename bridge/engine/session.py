@@ -11,13 +11,15 @@ else happens first.
 The session owns the commands' state (the lock, the hold, the last error) and its parts, each
 with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
 through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
-tracking (tracking.py), following (follow.py), the wind park (wind.py), auto-park
-(autopark.py), the pending target (targets.py, sending.py) and the status view (status.py).
-They see what they need (a read-only ``parts.Scene``, ``status.Seen``, the time) and hand back
-what they propose (a ``parts.Proposal``, the controller's notes); the session applies it. None
-of them imports this module. ``_step`` runs them in one order after every input: the line's own
-work (an overdue reply, a due stop), the motion machine's clock, the stop check, tracking,
-following, the wind, auto-park, the pending target, options, the poll, the status.
+tracking (tracking.py) and following (follow.py) as their commands start and end them
+(feature_commands.py), the wind park (wind.py), auto-park (autopark.py), the pending target
+(targets.py, sending.py), rotor health (health.py) and the status view (status.py). They see
+what they need (a read-only ``parts.Scene``, ``status.Seen``, the motion, the time) and hand
+back what they propose (a ``parts.Proposal``, the controller's notes, a health report, what a
+command did); the session applies it. None of them imports this module. ``_step`` runs them in
+one order after every input: the line's own work (an overdue reply, a due stop), the motion
+machine's clock, the stop check, tracking, following, the wind, auto-park, the pending target,
+options, the poll, health, the status.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -42,26 +44,30 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
-14. A part that raises (tracking, following, auto-park) is a bug contained here: it is reset
-   (tracking ends, "internal error"), an error event of kind internal names it, and the link,
-   the stops and every other rule go on (a feature's failure never takes a link down, and
-   never costs a stop).
+14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
+   here: it is reset (tracking ends, "internal error"; the wind keeps its storm; health starts
+   again from its last report's memory), an error event of kind internal names it, and the
+   link, the stops and every other rule go on (a feature's failure never takes a link down,
+   and never costs a stop).
 15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
    WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
-   reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
+   reading (wind.py): a storm ends tracking and following, parks, and refuses motion. The
+   wind's park, like auto-park, is the bridge's own move: the control lease never judges it.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import TypeVar
 
 from bridge.engine import status as st
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.controller import Controller, Drop, Ends, Retry
-from bridge.engine.follow import Follow, Follower
+from bridge.engine.feature_commands import Done, FeatureCommands
+from bridge.engine.health import Health
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.parts import Proposal, Scene
@@ -69,21 +75,25 @@ from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Targets
-from bridge.engine.tracking import Track, Tracker
 from bridge.engine.wind import WindPark
-from bridge.model import ErrorKind, RotatorStatus, Source, Target, describe_command
-from bridge.sky import Body
+from bridge.model import ErrorKind, Origin, RotatorStatus, Source, Target, describe_command
 
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
 
 log = logging.getLogger(__name__)
 
+T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
 
 
 class RotatorSession:
     def __init__(
-        self, cfg: WorkerConfig, *, options: dict[str, bool] | None = None, locked: bool = False
+        self,
+        cfg: WorkerConfig,
+        *,
+        options: dict[str, bool] | None = None,
+        locked: bool = False,
+        health: dict[str, object] | None = None,  # what the state file kept (health.py)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -91,12 +101,13 @@ class RotatorSession:
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
         self.targets = Targets(cfg)
-        self.tracker = Tracker(cfg)
-        self.follower = Follower(cfg)
+        self.features = FeatureCommands(cfg, self.targets)  # tracking and following
+        self.tracker, self.follower = self.features.tracker, self.features.follower
         self.autopark = AutoPark(cfg)
         self.wind = WindPark(cfg)
+        self.health = Health(cfg, health)
         self.view = st.View()
-        self.status = RotatorStatus(rotator_id=cfg.rotator_id, locked=locked)
+        self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
         self._actions: list[Action] = []
         self._wakeup = 0.0
 
@@ -130,8 +141,7 @@ class RotatorSession:
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         why = "serial link down" if reason is not None else "bridge stopped"
-        self.tracker.end(why)
-        self.follower.end(why)  # (what waits is reported dropped: next line)
+        self.features.end(why)  # (what waits is reported dropped: next line)
         self._drop_pending("serial link down")
         return self._step(now)
 
@@ -148,29 +158,33 @@ class RotatorSession:
             self.wind.reading(batch.wind, now)  # wind.py: no command either
         if batch.stop is not None or batch.lock_on:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
+        if batch.control_set:
+            self.view.control = batch.control
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
-            self._end_features("lock")
+            self.features.end("lock")
             self._drop_pending(None)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
-            self._end_features("stop")
+            self.features.end("stop")
             self.targets.clear()
-            self._taken(batch.stop.source.value)
+            self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
         self._fence(batch)
+        if batch.health_reset:
+            self._guarded("health", self.health.reset, now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
         if batch.track is not None:
-            self._track(batch.track)
+            self._apply(self.features.track(batch.track, self._refused()))
         if batch.follow is not None:
-            self._follow(batch.follow, now)
+            self._apply(self.features.follow(batch.follow, self._refused(), now))
         if batch.target is not None:
             what = describe_command(batch.target)
-            self._end_features(f"{batch.target.source.value} target")  # never combined
+            self.features.end(f"{batch.target.source.value} target")  # never combined
             refused = self._refused()
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
@@ -190,7 +204,11 @@ class RotatorSession:
     def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
         if generation == self.tracker.generation:
-            self._guarded("tracking", lambda: self._answered(answer), now)
+            answered = self._guarded(
+                "tracking", lambda: self.features.answered(answer, self._refused()), now
+            )
+            if answered is not None:
+                self._apply(answered)
         return self._step(now)
 
     def set_wall(self, now: float, wall_s: float) -> None:
@@ -221,68 +239,20 @@ class RotatorSession:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
         if self.fence.apply(batch):
             self._drop_pending(CLEARED)
-            self._end_features("a stop or lock came first; send the {} command again")
+            self.features.end("a stop or lock came first; send the {} command again")
 
-    def _track(self, track: Track) -> None:
-        if track.body is None and track.lookup is None:
-            self.tracker.end("off")
-            self.targets.clear_from(Source.TRACKING)
-            return
-        name = track.body.name if track.body is not None else track.lookup and track.lookup.name
-        refused = self._refused()
-        if refused is not None:
-            self._error(ErrorKind.REFUSED, refused, command=track.described or f"track {name}")
-        elif track.body is None:
-            self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
-        else:
-            self.tracker.end("another body")
-            self.follower.end(f"tracking {track.body.name}")
-            self.targets.clear()
-            self.tracker.start(track.body)
-            self._taken(track.source.value)
-            log.info("%s: tracking %s", self.name, track.body.name)
+    def _apply(self, done: Done) -> None:
+        """What a tracking or following command did (feature_commands.py), shown."""
+        if done.error is not None:
+            self._error(done.error.kind, done.error.message, done.error.command)
+        if done.taken is not None:
+            self._taken(*done.taken)
 
-    def _follow(self, follow: Follow, now: float) -> None:
-        if not follow.on:
-            self._end_features("off", tracking=False)
-            return
-        refused = self._refused()
-        if refused is not None:
-            self._error(ErrorKind.REFUSED, refused, command=follow.described or "follow")
-            return
-        self.tracker.end("following")
-        self.targets.clear()
-        self.follower.start(follow, now)
-        self._taken(follow.source.value)
-
-    def _answered(self, answer: Answer) -> None:
-        lookup = self.tracker.lookup
-        if lookup is not None and answer.question == lookup.lookup:
-            self.tracker.lookup = None
-            body = answer.value
-            if answer.failure is not None or not isinstance(body, Body):
-                refusal = answer.failure or "no such satellite"
-                self._error(ErrorKind.REFUSED, refusal, lookup.described)
-            else:
-                self._track(Track(body, lookup.source, None, lookup.described))
-            return
-        ends = self.tracker.answered(answer)
-        if ends is not None:
-            log.warning("%s: tracking ends: %s", self.name, ends)
-            self.tracker.end(ends)
-            self.targets.clear_from(Source.TRACKING)
-
-    def _taken(self, source: str) -> None:
+    def _taken(self, source: str, origin: Origin | None) -> None:
         """A stop or a new track: the status names its source and no target of before."""
         self.view.last_source = source
+        self.view.last_operator = origin.who if origin is not None else None
         self.view.target_info, self.view.park_raw = None, None
-
-    def _end_features(self, why: str, *, tracking: bool = True) -> None:
-        """Tracking and following end (rules 10, 15); ``{}`` in ``why``: the command's name."""
-        if tracking and self.tracker.end(why.replace("{}", "track")):
-            self.targets.clear_from(Source.TRACKING)
-        if self.follower.end(why.replace("{}", "follow")):
-            self.targets.clear_from(Source.WSJTX)
 
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
@@ -301,7 +271,7 @@ class RotatorSession:
             if isinstance(note, Report):
                 self._error(note.kind, note.message, note.command)
             elif isinstance(note, Ends):
-                self._end_features(note.reason)
+                self.features.end(note.reason)
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
@@ -331,6 +301,7 @@ class RotatorSession:
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
+        self._guarded("health", lambda: self.health.step(ctl.motion, now), now)  # in the status
         self._emit_status(now)
         if ctl.link is not None:
             self._actions.extend(Write(frame) for frame in ctl.link.output())
@@ -354,23 +325,23 @@ class RotatorSession:
         if proposal.error is not None:
             self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
-            self._end_features(proposal.ended)  # (tracking may have ended itself)
+            self.features.end(proposal.ended)  # (tracking may have ended itself)
             self.targets.clear_from(Source.TRACKING)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
-    def _guarded(
-        self, name: str, run: Callable[[], Proposal | None], now: float
-    ) -> Proposal | None:
+    def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
         """Rule 14: a part that raises is reset and reported; nothing else stops."""
         try:
             return run()
         except Exception:
             log.exception("%s: %s failed", self.name, name)
             if name in ("tracking", "following"):
-                self._end_features("internal error", tracking=name == "tracking")
+                self.features.end("internal error", tracking=name == "tracking")
             elif name == "wind":  # a storm it was in goes on: refusing is the safe side
                 self.wind = WindPark(self.cfg, storm=self.wind.storm)
+            elif name == "health":
+                self.health = Health(self.cfg, self.health.report.memory)
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)
@@ -395,12 +366,18 @@ class RotatorSession:
         """What the status says about the target now taken (status.py rule 4)."""
         if target is not None:
             self.view.last_source = target.source.value
+            if target.origin is not None:  # following's: wsjtx (follow.py rule 7)
+                self.view.last_operator = target.origin.who
+            elif target.source is not Source.TRACKING:  # tracking's: who started it stays
+                self.view.last_operator = None  # the bridge's own (auto-park, the wind)
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
 
     def _emit_status(self, now: float) -> None:
-        tracker, follower, wind = self.tracker, self.follower, self.wind
-        shown = st.Features(tracker.info, tracker.ended, follower.info, follower.ended, wind.info)
+        tracker, follower, wind, health = self.tracker, self.follower, self.wind, self.health
+        shown = st.Features(
+            tracker.info, tracker.ended, follower.info, follower.ended, wind.info, health.report
+        )
         seen = self.controller.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )

@@ -1,5 +1,6 @@
-"""What must survive a restart of the bridge: each rotator's safety lock and the options the
-user set (the controller forgets them at power-off, so the bridge re-applies them).
+"""What must survive a restart of the bridge: each rotator's safety lock, the options the
+user set (the controller forgets them at power-off, so the bridge re-applies them), what rotor
+health (engine/health.py) has learned of the rotor, and the control lease (engine/lease.py).
 
 Rules:
 1. A small JSON file, replaced atomically on every change: written in full to a temporary file
@@ -22,6 +23,8 @@ Rules:
 5. ``later`` runs a save on the store's own writer thread, in the order asked: a lock or an
    option set from an MQTT callback must not hold that connection (and a stop behind it) for
    an fsync, tens of milliseconds on an SD card. ``flush`` waits for what was asked so far.
+6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
+   that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from bridge.engine.ondemand import OnDemandThread
+from bridge.model import Control
 
 log = logging.getLogger(__name__)
 
@@ -153,6 +157,40 @@ class StateStore:
         if not isinstance(raw, dict):
             return {}
         return {str(k): bool(v) for k, v in raw.items()}
+
+    def health(self, rotator_id: str) -> dict[str, object] | None:
+        """What rotor health kept (health_judge.py reads it, rule 6), if anything."""
+        raw = self._data.get(rotator_id, {}).get("health")
+        return raw if isinstance(raw, dict) else None
+
+    def set_health(self, rotator_id: str, memory: dict[str, object]) -> bool:
+        """Rotor health's memory, on the writer thread (rule 5) after each move."""
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["health"] = memory
+            return self._save()
+
+    def lease(self, rotator_id: str) -> Control | None:
+        """Rule 6: the control lease kept for the rotator, if any."""
+        raw = self._data.get(rotator_id, {}).get("lease")
+        if raw is None:
+            return None
+        if isinstance(raw, dict):
+            operator, until = raw.get("operator"), raw.get("until")
+            if isinstance(operator, str) and isinstance(until, (int, float)):
+                if not isinstance(until, bool):
+                    return Control(operator, float(until))
+        log.warning("state file: lease for %r is malformed (%s): ignored", rotator_id, raw)
+        return None
+
+    def set_lease(self, rotator_id: str, held: Control | None) -> bool:
+        """Rule 6: remember the lease (None: free); False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if held is None:
+                entry.pop("lease", None)
+            else:
+                entry["lease"] = {"operator": held.operator, "until": held.until_unix}
+            return self._save()
 
     def later(self, job: Callable[[], None]) -> None:
         """Rule 5: ``job`` on the writer thread."""

@@ -25,8 +25,10 @@ from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
 from bridge.model import (
+    Control,
     FollowingInfo,
     MotionState,
+    RotatorHealth,
     RotatorStatus,
     Target,
     TargetInfo,
@@ -59,16 +61,19 @@ class View:
     target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
     # a target still waiting (a brake delay) shows its own: it is the current one for ``long``
     park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
+    last_operator: str | None = None  # who sent the command of last_source (model.Origin)
+    control: Control | None = None  # the control lease's holder (engine/lease.py)
 
 
 class Features(NamedTuple):
-    """What the features that propose targets show (tracking.py, follow.py)."""
+    """What the session's parts show (tracking.py, follow.py, wind.py, health.py)."""
 
     tracking: TrackingInfo | None = None
     tracking_ended: str | None = None
     following: FollowingInfo | None = None
     following_ended: str | None = None
     wind: WindInfo | None = None
+    health: RotatorHealth | None = None  # health.py: a new one after each move
 
 
 class Seen(NamedTuple):
@@ -130,6 +135,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         following=seen.features.following,
         following_ended=seen.features.following_ended,
         wind=seen.features.wind,
+        health=seen.features.health,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,
@@ -144,6 +150,8 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         options=dict(seen.options),
         last_error=view.last_error,
         last_command_source=view.last_source,
+        last_operator=view.last_operator,
+        control=view.control,
     )
 
 

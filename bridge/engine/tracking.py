@@ -58,7 +58,7 @@ from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.engine.skytrack import SkyTrack
 from bridge.engine.skywork import Answer, LookupQuestion, Question
 from bridge.errors import Refused
-from bridge.model import ErrorKind, MotionState, Source, Target, TrackingInfo
+from bridge.model import ErrorKind, MotionState, Origin, Source, Target, TrackingInfo
 from bridge.pointing import angle_between
 from bridge.sky import Body, Pass
 
@@ -82,6 +82,7 @@ class Track:
     source: Source = Source.MQTT
     lookup: LookupQuestion | None = None
     described: str | None = None  # the command as the user gave it (a refusal names it)
+    origin: Origin | None = None  # who asked (the status's last_operator)
 
 
 class Tracker:

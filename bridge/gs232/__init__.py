@@ -1,6 +1,7 @@
-"""Yaesu GS-232B and Easycomm II on TCP ports onto one rotator, beside rotctld: for programs that
-drive a rotator controller over a serial line (PstRotator, loggers, satellite trackers, Hamlib's
-``rotctl -m 603`` and ``-m 202``). Every move goes through the same judge as MQTT and rotctld.
+"""Yaesu GS-232B and Easycomm II on TCP ports and pseudo-terminals onto one rotator, beside
+rotctld: for programs that drive a rotator controller over a serial line (PstRotator, loggers,
+satellite trackers, Hamlib's ``rotctl -m 603`` and ``-m 202``). Every move goes through the
+same judge as MQTT and rotctld.
 
 Protocol facts relied on, from Hamlib 4.5.4's backends (rotators/gs232a/gs232b.c,
 rotators/easycomm/easycomm.c, rotators/easycomm/easycomm.txt), which are the judge in the tests:
@@ -36,12 +37,33 @@ Rules:
 5. Targets go through Rotator.submit with Source.GS232 / Source.EASYCOMM: the lock, the limits,
    keep-out sectors and the link are judged there and a refusal is published on ``R/error``.
    Elevation 0 to an azimuth-only rotator is no elevation (Hamlib always sends one).
-6. A stop is never refused; ``A`` (azimuth) and ``E`` (elevation) stop the whole rotator, more
-   than asked but never less. A line that stops does nothing else.
+6. A stop is never refused by the bridge; ``A`` (azimuth) and ``E`` (elevation) stop the whole
+   rotator, more than asked but never less. A line that stops does nothing else. On the remote
+   (remote/rotator.py) a stop that cannot be delivered (its broker away) is answered as a
+   refusal is: ``?>``, ``ALrefused offline``.
 7. The sockets, threads, idle timeout and HTTP refusal are the shared line server's
-   (tcplines.py); this package owns what the bytes mean.
+   (tcplines.py), the pty, its link and its thread the pty server's (ptylines.py); this
+   package owns what the bytes mean.
+8. The pty server is imported only when a pty is asked for: it needs a POSIX system, and the
+   remote, which imports this package, also runs where there is none (a TCP port only).
 """
 
-from bridge.gs232.commands import EasycommSession, Gs232Session, easycomm_server, gs232_server
+from bridge.gs232.commands import (
+    EasycommSession,
+    Gs232Session,
+    Rotator,
+    easycomm_pty,
+    easycomm_server,
+    gs232_pty,
+    gs232_server,
+)
 
-__all__ = ["EasycommSession", "Gs232Session", "easycomm_server", "gs232_server"]
+__all__ = [
+    "EasycommSession",
+    "Gs232Session",
+    "Rotator",
+    "easycomm_pty",
+    "easycomm_server",
+    "gs232_pty",
+    "gs232_server",
+]

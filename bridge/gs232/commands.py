@@ -1,12 +1,15 @@
 """GS-232B and Easycomm II sessions onto one Rotator: each client's lines judged by
 Rotator.submit and answered in the protocol's bytes (package rules 4-7); the servers that carry
-them are the shared line server (tcplines.py)."""
+them are the shared line server (tcplines.py) and the pty server (ptylines.py).
+
+The Rotator is a Protocol: the bridge's own (engine/rotator.py) or the remote's, which stands
+for the station's (remote/rotator.py), as rotctld's commands take either."""
 
 from __future__ import annotations
 
 import logging
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from bridge.errors import Refused
 from bridge.gs232.parser import (
@@ -17,11 +20,26 @@ from bridge.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.model import Source, Stop, Target
+from bridge.model import RotatorStatus, Source, Stop, Target
 from bridge.tcplines import LineServer
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
+    from bridge.protocols.base import ModelSpec
+    from bridge.ptylines import PtyLineServer
+
+
+class Rotator(Protocol):
+    """What the GS-232 and Easycomm sessions use of a rotator."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def spec(self) -> ModelSpec: ...
+    @property
+    def status(self) -> RotatorStatus: ...
+    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
+    def park(self, source: Source, described: str) -> None: ...
+
 
 log = logging.getLogger(__name__)
 
@@ -87,7 +105,10 @@ class Gs232Session(_Session):
     def execute(self, line: str | None, req: Gs232Request) -> bytes:
         described = f"gs232 {line}"
         if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
-            self.rotator.submit(Stop(Source.GS232), described)
+            try:
+                self.rotator.submit(Stop(Source.GS232), described)
+            except Refused:  # the remote's, its broker away (package rule 6): reported there
+                return GS232_ERROR
             return b""
         if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
             where = _position(self.rotator)
@@ -127,7 +148,10 @@ class EasycommSession(_Session):
         if req.invalid is not None:
             return f"ALinvalid {req.invalid}\n".encode("latin-1")
         if req.stop:  # a line that stops does nothing else
-            self.rotator.submit(Stop(Source.EASYCOMM), described)
+            try:
+                self.rotator.submit(Stop(Source.EASYCOMM), described)
+            except Refused as exc:  # the remote's, its broker away (package rule 6)
+                alarms.append(f"refused {exc.code.value}")
         elif req.park:
             try:
                 self.rotator.park(Source.EASYCOMM, described)
@@ -186,4 +210,22 @@ def easycomm_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> Lin
         label="easycomm",
         key="easycomm",
         idle_timeout_s=IDLE_TIMEOUT_S,
+    )
+
+
+def gs232_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The GS-232B pty of one rotator, linked at ``path``."""
+    from bridge.ptylines import PtyLineServer  # package rule 8
+
+    return PtyLineServer(
+        rotator.id, path, lambda: Gs232Session(rotator), label="gs232", key="gs232"
+    )
+
+
+def easycomm_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The Easycomm II pty of one rotator, linked at ``path``."""
+    from bridge.ptylines import PtyLineServer  # package rule 8
+
+    return PtyLineServer(
+        rotator.id, path, lambda: EasycommSession(rotator), label="easycomm", key="easycomm"
     )

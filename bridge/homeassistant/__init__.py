@@ -1,15 +1,9 @@
-"""Home Assistant MQTT discovery: the entity table (entities.py: pure data and builders) and
-the publisher that keeps it current on the broker (publisher.py: a timer, a lock)."""
+"""Home Assistant MQTT discovery: what it knows of the rotators (info.py), the entity table
+(entities.py: pure data and builders) and the publisher that keeps it current on the broker
+(publisher.py: a timer, a lock)."""
 
-from bridge.homeassistant.entities import (
-    ENTITIES,
-    MAX_SATELLITES,
-    Entity,
-    Identity,
-    RotatorInfo,
-    all_configs,
-    track_options,
-)
+from bridge.homeassistant.entities import ENTITIES, Entity, all_configs
+from bridge.homeassistant.info import MAX_SATELLITES, Identity, RotatorInfo, track_options
 from bridge.homeassistant.publisher import DiscoveryPublisher
 
 __all__ = [

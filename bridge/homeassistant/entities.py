@@ -24,108 +24,18 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import partial
 from typing import Protocol
 
 from bridge import __version__
+from bridge.homeassistant.info import Identity, RotatorInfo
 from bridge.model import MotionState
-from bridge.mqtt.topics import DiscoveryTopics, RotatorTopics, Topics
-from bridge.pointing import Pointing
-from bridge.protocols.base import ModelSpec
+from bridge.mqtt.topics import DiscoveryTopics, Topics
 
 ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
 STATES = [s.value for s in MotionState]
-_UNSAFE = re.compile(r"[^a-zA-Z0-9_-]")
-
-
-@dataclass(frozen=True)
-class RotatorInfo:
-    """What discovery needs to know about one rotator."""
-
-    rotator_id: str
-    name: str
-    spec: ModelSpec
-    topics: RotatorTopics
-    az_min_deg: float  # the range of azimuth targets, true bearings (rule 3)
-    az_max_deg: float
-    el_min_deg: float = 0.0
-    el_max_deg: float = 0.0
-    version: str | None = None
-    presets: tuple[str, ...] = ()  # names, in the configuration's order
-    has_park: bool = False
-    has_station: bool = False  # the station's position: targets by locator
-    nudge_step_deg: float = 10.0
-    track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
-    can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
-    has_wind: bool = False  # a wind_topic (engine/wind.py)
-
-    @classmethod
-    def of(
-        cls,
-        rotator_id: str,
-        name: str,
-        spec: ModelSpec,
-        topics: RotatorTopics,
-        pointing: Pointing,
-        *,
-        has_station: bool,
-        nudge_step_deg: float,
-        satellites: tuple[str, ...] = (),
-        can_follow: bool = False,
-        has_wind: bool = False,
-    ) -> RotatorInfo:
-        """From the rotator's pointing (limits, offset, presets, park) and the settings."""
-        az_min, az_max = pointing.target_range()
-        return cls(
-            rotator_id,
-            name,
-            spec,
-            topics,
-            az_min,
-            az_max,
-            pointing.el_min_deg,
-            pointing.el_max_deg,
-            presets=tuple(pointing.presets),
-            has_park=pointing.park is not None,
-            has_station=has_station,
-            nudge_step_deg=nudge_step_deg,
-            track_options=(
-                track_options(satellites) if has_station and spec.can_report_position else ()
-            ),
-            can_follow=can_follow,
-            has_wind=has_wind,
-        )
-
-    def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
-        """This rotator with the TLE file's names as they are now (if it can track at all)."""
-        return (
-            replace(self, track_options=track_options(satellites)) if self.track_options else self
-        )
-
-    def has(self, need: str) -> bool:
-        """An ENTITIES row's need: a field of this info (configured), else a model capability."""
-        where = self if need in self.__dataclass_fields__ else self.spec
-        return bool(getattr(where, need))
-
-
-@dataclass(frozen=True)
-class Identity:
-    """Ids derived from the base topic, so two bridges on one broker do not collide."""
-
-    base_topic: str
-
-    @property
-    def bridge_node(self) -> str:
-        return "rotorbridge_" + _UNSAFE.sub("_", self.base_topic)
-
-    def rotator_node(self, rotator_id: str) -> str:
-        return f"{self.bridge_node}_r_{rotator_id}"
-
-    def owns(self, node_id: str) -> bool:
-        return node_id == self.bridge_node or node_id.startswith(self.bridge_node + "_r_")
 
 
 def _entity(
@@ -249,12 +159,8 @@ NO_OPTION = "{{ 'None' }}"
 DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
-MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
-
-
-def track_options(satellites: tuple[str, ...]) -> tuple[str, ...]:
-    """The track select's options: off, the sun, the moon, the first satellites by name."""
-    return ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
+# the release button names Home Assistant as who released (it sends no MQTT 5 user property)
+RELEASE_PAYLOAD = '{"operator": "homeassistant"}'
 
 
 def _tracked(field: str) -> str:
@@ -263,6 +169,29 @@ def _tracked(field: str) -> str:
         f"{{{{ value_json.tracking.{field} if value_json.tracking is defined and "
         f"value_json.tracking.{field} is defined else 'None' }}}}"
     )
+
+
+def _health_sensor(oid: str, name: str, field: str, unit: str, kind: str, needs: str) -> Entity:
+    """Rotor health (R/health): long-term statistics keep the trend; kept while offline too."""
+    return Entity("sensor", oid, name, needs=needs, bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.health, "unit_of_measurement": unit, "state_class": kind,
+        "value_template": f"{{{{ value_json.{field} }}}}",  # null: None, unknown to HA
+        **({"device_class": "duration"} if unit == "s" else {}), **DIAGNOSTIC})  # fmt: skip
+
+
+HEALTH_NUMBERS = (  # object id, name, R/health field, unit, state class, what it needs
+    ("speed_cw", "Speed clockwise", "speed_cw_deg_s", "°/s", "measurement", "can_report_position"),
+    ("speed_ccw", "Speed counter-clockwise", "speed_ccw_deg_s", "°/s", "measurement",
+     "can_report_position"),
+    ("speed_up", "Speed up", "speed_up_deg_s", "°/s", "measurement", "has_elevation"),
+    ("speed_down", "Speed down", "speed_down_deg_s", "°/s", "measurement", "has_elevation"),
+    ("start_delay", "Start delay", "start_delay_s", "s", "measurement", "can_report_position"),
+    ("coast", "Coast after a stop", "coast_deg", "°", "measurement", "can_report_position"),
+    ("odometer", "Odometer", "odometer_deg", "°", "total_increasing", "can_report_position"),
+    ("moves", "Moves", "moves", "moves", "total_increasing", "can_report_position"),
+    ("stalls", "Stalls", "stalls", "stalls", "total_increasing", "can_report_position"),
+    ("motor_on", "Motor-on time", "motor_on_s", "s", "total_increasing", "can_report_position"),
+)  # fmt: skip
 
 
 DEGREES = {"unit_of_measurement": "°"}
@@ -367,6 +296,27 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
         "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
+    *(_health_sensor(*row) for row in HEALTH_NUMBERS),  # rotor health (engine/health.py)
+    Entity("binary_sensor", "health_problem", "Rotor health", needs="can_report_position",
+           bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.health, "device_class": "problem",
+        "value_template": "{{ 'ON' if value_json.warnings else 'OFF' }}",
+        "json_attributes_topic": r.topics.health}),  # the warnings, the numbers, the baseline
+    Entity("button", "health_reset", "Reset rotor health", needs="can_report_position",
+           bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.health_reset, "payload_press": "RESET", **DIAGNOSTIC,
+        "icon": "mdi:restart"}),
+    # who is turning it: the control lease's holder (its end as an attribute), its release
+    # (anyone may: the station owner's button), and who sent the last command
+    Entity("sensor", "control", "Control", bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.control, "json_attributes_topic": r.topics.control,
+        "value_template": "{{ value_json.holder or 'free' }}", "icon": "mdi:account-lock"}),
+    Entity("button", "release_control", "Release control", bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.control_release, "payload_press": RELEASE_PAYLOAD,
+        "icon": "mdi:lock-open-variant"}),
+    Entity("sensor", "last_operator", "Last operator", config=lambda r: {
+        "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:account-arrow-right",
+        "value_template": "{{ value_json.last_operator or 'none' }}"}),
 )  # fmt: skip
 
 

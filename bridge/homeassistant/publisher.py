@@ -25,7 +25,8 @@ import threading
 from collections.abc import Callable
 from dataclasses import replace
 
-from bridge.homeassistant.entities import Identity, RotatorInfo, all_configs
+from bridge.homeassistant.entities import all_configs
+from bridge.homeassistant.info import Identity, RotatorInfo
 from bridge.model import RotatorStatus
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 

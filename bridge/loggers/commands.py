@@ -30,17 +30,43 @@ import math
 import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from bridge import geo
 from bridge.errors import Refused
 from bridge.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
 from bridge.loggers.limiter import ReplyLimiter
-from bridge.model import Source, Stop, Target
+from bridge.model import Origin, RotatorStatus, Source, Stop, Target
 from bridge.pointing import angle_between, norm360
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
+    from bridge.protocols.base import ModelSpec
+
+
+class Rotator(Protocol):
+    """What the loggers' datagrams use of a rotator: the bridge's own (engine/rotator.py) or the
+    remote's, which stands for the station's (remote/rotator.py)."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def spec(self) -> ModelSpec: ...
+    @property
+    def status(self) -> RotatorStatus: ...
+    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
+    def park(self, source: Source, described: str) -> None: ...
+    def report_refusal(self, message: str, command: str | None) -> None: ...
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None: ...
+
 
 log = logging.getLogger(__name__)
 
@@ -132,11 +158,14 @@ class Commands:
                 log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
         counts.ignored += len(req.ignored)
         described = "pst " + data.decode("ascii").strip()[:120]
+        # who sent it (the audit trail, the lease): on the commands themselves, which every
+        # rotator these endpoints serve takes (the bridge's and the remote's)
+        by = Origin(Source.PST, None, peer[0])
         has_el = rot.spec.has_elevation
         el = req.elevation if has_el else None
         try:
             if req.stop:
-                rot.submit(Stop(Source.PST), described)
+                rot.submit(Stop(Source.PST, by), described)
             elif req.park:
                 rot.park(Source.PST, described)
             elif req.locator is not None:
@@ -154,7 +183,7 @@ class Commands:
                 return
             elif req.azimuth is not None or el is not None:
                 az = None if req.azimuth is None else norm360(req.azimuth)  # rule 3
-                rot.submit(Target(az, el, Source.PST), described)
+                rot.submit(Target(az, el, Source.PST, origin=by), described)
             else:
                 return
             counts.commands += 1
@@ -174,15 +203,16 @@ class Commands:
             )
 
     # -- N1MM -----------------------------------------------------------------------------
-    def n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes) -> None:
-        """Rules 1 and 4."""
+    def n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes, peer: str | None = None) -> None:
+        """Rules 1 and 4 (``peer``: the sender's address)."""
+        by = Origin(Source.N1MM, None, peer)
         counts = self.counts["n1mm"]
         described = "n1mm " + data.decode("ascii").strip()[:160]
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
             stopped = [r for n, r in e.rotators.items() if n in names or "*" in names]
             if stopped:
-                self._stop_each(stopped, described)
+                self._stop_each(stopped, described, by)
                 counts.commands += 1
                 return
         rot = e.rotators.get(req.rotor)
@@ -201,15 +231,17 @@ class Commands:
         if req.bidirectional and bearing is not None:
             az = min((az, norm360(az + 180.0)), key=lambda a: angle_between(a, bearing))
         try:
-            rot.submit(Target(norm360(az), None, Source.N1MM), described)
+            rot.submit(Target(norm360(az), None, Source.N1MM, origin=by), described)
             counts.commands += 1
         except Refused:
             pass
 
-    def _stop_each(self, rotators: Iterable[Rotator], described: str) -> None:
+    def _stop_each(
+        self, rotators: Iterable[Rotator], described: str, by: Origin | None = None
+    ) -> None:
         """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
         for rot in rotators:
             try:
-                rot.submit(Stop(Source.N1MM), described)
+                rot.submit(Stop(Source.N1MM, by), described)
             except Exception as exc:
                 self._fault(f"the N1MM stop of rotator {rot.id!r}", exc)

@@ -34,7 +34,6 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from bridge.loggers.commands import (
     JUNK_LOG_S,
@@ -42,12 +41,10 @@ from bridge.loggers.commands import (
     N1mmEndpoint,
     PstEndpoint,
     Rarely,
+    Rotator,
 )
 from bridge.loggers.datagrams import MAX_DATAGRAM, Malformed, n1mm_report, parse_n1mm, parse_pst
 from bridge.pointing import angle_between
-
-if TYPE_CHECKING:
-    from bridge.engine.rotator import Rotator
 
 log = logging.getLogger(__name__)
 
@@ -253,7 +250,7 @@ class LoggerEndpoints:
                     port = self._addresses[sock][1]
                     self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
                 else:
-                    self._commands.n1mm(endpoint, parse_n1mm(data), data)
+                    self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
             except Malformed as exc:
                 self._junk(_kind(endpoint), peer, exc)
             except Exception as exc:

@@ -70,8 +70,21 @@ from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
-MessageHandler = Callable[[str, bytes, bool], None]
+# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it)
+MessageHandler = Callable[[str, bytes, bool, str | None], None]
 COMMAND_QOS = 0  # rule 4
+
+
+def operator_of(msg: paho.MQTTMessage) -> str | None:
+    """The user property ``operator`` of an MQTT 5 message, as sent (the service judges it);
+    None without one (and always under MQTT 3.1.1, which has no properties)."""
+    props = getattr(msg, "properties", None)
+    pairs = getattr(props, "UserProperty", None) or []
+    for key, value in pairs:
+        if key == "operator":
+            return str(value)
+    return None
+
 
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
@@ -400,6 +413,6 @@ class Connection:
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):
-                self._handler(msg.topic, payload, bool(msg.retain))
+                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg))
         except Exception:  # rule 5: a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)

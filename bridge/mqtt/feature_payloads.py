@@ -1,13 +1,41 @@
-"""The status's blocks of the features that propose targets, rendered: following WSJT-X
-(``following``, ``R/follow/state``: engine/follow.py) and the wind park (``wind``:
-engine/wind.py). Pure, beside payloads.py, which puts them into ``R/status``.
+"""The status's blocks of the features that propose targets, rendered: tracking
+(``tracking``, ``R/tracking``: engine/tracking.py), following WSJT-X (``following``,
+``R/follow/state``: engine/follow.py) and the wind park (``wind``: engine/wind.py). Pure,
+beside payloads.py, which puts them into ``R/status``.
 """
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
 
-from bridge.model import FollowingInfo, RotatorStatus, WindInfo
+from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo, WindInfo
+
+
+def tracking_json(info: TrackingInfo) -> dict[str, object]:
+    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
+    doc: dict[str, object] = {
+        "body": info.body,
+        "phase": info.phase,
+        "azimuth": info.azimuth_deg,
+        "elevation": info.elevation_deg,
+        "next": {"azimuth": info.next_azimuth_deg, "elevation": info.next_elevation_deg},
+    }
+    if info.aos_unix is not None and info.los_unix is not None:
+        doc.update(
+            aos=_iso(info.aos_unix),
+            los=_iso(info.los_unix),
+            max_elevation=info.max_elevation_deg,
+            aos_azimuth=info.aos_azimuth_deg,
+        )
+    if info.pass_track:
+        doc["pass_track"] = [list(point) for point in info.pass_track]
+    doc["flip"] = info.flip
+    return doc
+
+
+def tracking_state(status: RotatorStatus) -> str:
+    """``R/tracking``: what is followed, or ``off``."""
+    return status.tracking.body if status.tracking is not None else "off"
 
 
 def following_json(info: FollowingInfo) -> dict[str, object]:

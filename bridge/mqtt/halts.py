@@ -10,7 +10,7 @@ import logging
 import threading
 from collections.abc import Callable
 
-from bridge.model import Source, Stop
+from bridge.model import Origin, Source, Stop
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.lastword import RESEND_S, LastWord
 from bridge.mqtt.ports import Publisher, RotatorPort
@@ -83,13 +83,22 @@ class Halts:
     def _holds_possible(self) -> bool:
         return self._publisher.up and not self._markers_denied
 
-    def carry(self, rot: RotatorPort, kind: str, what: str, hold: int | None = None) -> None:
+    def carry(
+        self,
+        rot: RotatorPort,
+        kind: str,
+        what: str,
+        hold: int | None = None,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
-        and the put are one step)."""
+        and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
+        copy of one the lane carried out (the audit trail has it once)."""
         if kind == "stop":
-            rot.submit(Stop(Source.MQTT), what, hold=hold)
+            rot.submit(Stop(Source.MQTT, origin), what, hold=hold, echo=echo)
         else:
-            rot.set_lock(True, hold=hold, save=False)
+            rot.set_lock(True, hold=hold, save=False, origin=origin, echo=echo)
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
@@ -162,7 +171,9 @@ class Halts:
             what,
         )
 
-    def on_lane(self, topic: str, payload: bytes, retain: bool) -> None:
+    def on_lane(
+        self, topic: str, payload: bytes, retain: bool, origin: Origin | None = None
+    ) -> None:
         """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6)."""
         if topic == self.topics.bridge_fence_lane:
             self.on_lane_marker(payload)
@@ -180,7 +191,7 @@ class Halts:
             with self._lock:  # lastword.py rule 3: the only word while it is down
                 if self._publisher.up:
                     return
-                rot.set_lock(False, save=False)
+                rot.set_lock(False, save=False, origin=origin)
             rot.save_lock()
             return
         if retain and not self.retain_is_live:
@@ -192,18 +203,27 @@ class Halts:
             if marker is None:
                 log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
                 return  # lastword.py rule 4: the echo of the main connection's copy
-            self.carry(rot, kind, what, hold=marker or None)
+            self.carry(rot, kind, what, hold=marker or None, origin=origin)
         if kind == "lock":
             rot.save_lock()
         if marker:
             self._send_marker(marker)
 
-    def main_halt(self, rot: RotatorPort, topic: str, kind: str, what: str, retain: bool) -> None:
+    def main_halt(
+        self,
+        rot: RotatorPort,
+        topic: str,
+        kind: str,
+        what: str,
+        retain: bool,
+        origin: Origin | None = None,
+    ) -> None:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
         with self._lock:
+            echo = self.word.lane_came_first(rot.id, kind)
             lane_marker = self.word.main_halt(rot.id, kind)
-            self.carry(rot, kind, what)
+            self.carry(rot, kind, what, origin=origin, echo=echo)
         if kind == "lock":
             rot.save_lock()
         if lane_marker is not None:
@@ -212,13 +232,13 @@ class Halts:
         if retain:  # published retained, live (MQTT 5): carried out, and reported
             self.report_retained_halt(rot, topic, kind, what)
 
-    def main_lock_off(self, rot: RotatorPort) -> None:
+    def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
         with self._lock:
             if not self.word.main_lock_off(rot.id):
                 log.info("%s: lock OFF published before a lock ON: the ON stands", rot.id)
                 return
-            rot.set_lock(False, save=False)
+            rot.set_lock(False, save=False, origin=origin)
         rot.save_lock()
 
     def retained_deleted(self, topic: str) -> None:

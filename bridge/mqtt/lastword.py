@@ -128,6 +128,11 @@ class LastWord:
         self._echoes.setdefault(key, deque()).append(self._lane_next)
         return self._lane_next
 
+    def lane_came_first(self, rotator_id: str, kind: str) -> bool:
+        """Whether a halt the main connection reads now is one the lane has carried out already
+        (rule 2: carried out again all the same; the audit trail counts it once)."""
+        return bool(self._lane_waiting.get((rotator_id, kind)))
+
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""
         return not self._lane_waiting.get((rotator_id, "lock"))

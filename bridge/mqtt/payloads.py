@@ -18,8 +18,9 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
-from bridge.mqtt.feature_payloads import following_json, wind_json
+from bridge.model import RotatorStatus, TargetInfo
+from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
+from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -280,36 +281,28 @@ def target_info(info: TargetInfo) -> dict[str, object]:
     }
 
 
-def tracking_json(info: TrackingInfo) -> dict[str, object]:
-    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
-    doc: dict[str, object] = {
-        "body": info.body,
-        "phase": info.phase,
-        "azimuth": info.azimuth_deg,
-        "elevation": info.elevation_deg,
-        "next": {"azimuth": info.next_azimuth_deg, "elevation": info.next_elevation_deg},
-    }
-    if info.aos_unix is not None and info.los_unix is not None:
-        doc.update(
-            aos=_iso(info.aos_unix),
-            los=_iso(info.los_unix),
-            max_elevation=info.max_elevation_deg,
-            aos_azimuth=info.aos_azimuth_deg,
-        )
-    if info.pass_track:
-        doc["pass_track"] = [list(point) for point in info.pass_track]
-    doc["flip"] = info.flip
-    return doc
+@dataclass(frozen=True)
+class ConsoleFacts:
+    """What a console far from the station draws beyond the judge's terms (``R/info``'s
+    ``station``, ``beamwidth``, ``nudge_step``, ``satellites``)."""
+
+    station: tuple[float, float] | None = None  # latitude, longitude (degrees)
+    locator: str | None = None
+    beamwidth_deg: float = 60.0
+    nudge_step_deg: float = 5.0
+    satellites: tuple[str, ...] = ()  # the TLE file's names when the bridge started
 
 
-def tracking_state(status: RotatorStatus) -> str:
-    """``R/tracking``: what is followed, or ``off``."""
-    return status.tracking.body if status.tracking is not None else "off"
-
-
-def info_json(name: str, spec: ModelSpec, pointing: Pointing, can_track: bool) -> str:
+def info_json(
+    name: str,
+    spec: ModelSpec,
+    pointing: Pointing,
+    can_track: bool,
+    console: ConsoleFacts | None = None,
+) -> str:
     """``R/info``: what a rotator is and may do, for a client far from the station (limits,
-    sectors, presets, capabilities as the station's configuration has them; true bearings)."""
+    sectors, presets, capabilities as the station's configuration has them; true bearings);
+    with ``console``, what a console there draws too."""
     lo, hi = pointing.target_range()
     doc = {
         "name": name,
@@ -326,6 +319,16 @@ def info_json(name: str, spec: ModelSpec, pointing: Pointing, can_track: bool) -
         "park": list(pointing.park) if pointing.park is not None else None,
         "options": sorted(spec.options),
     }
+    if console is not None:
+        where = console.station
+        doc["station"] = (
+            {"latitude": where[0], "longitude": where[1], "locator": console.locator}
+            if where is not None
+            else None
+        )
+        doc["beamwidth"] = console.beamwidth_deg
+        doc["nudge_step"] = console.nudge_step_deg
+        doc["satellites"] = list(console.satellites)
     return json.dumps(doc, separators=(",", ":"))
 
 
@@ -380,10 +383,17 @@ def status_json(
         options={k: v for k, v in sorted(status.options.items())},
         last_error=status.last_error,
         last_command_source=status.last_command_source,
+        last_operator=status.last_operator,
+        control=None
+        if status.control is None
+        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
         estimated=status.estimated,
         time=_iso(time_unix),
     )
-    return _COMPACT.encode(doc)
+    text = _COMPACT.encode(doc)
+    if status.health is None:
+        return text
+    return f'{text[:-1]},"health":{health_json(status.health)}}}'  # rendered once per move
 
 
 def _iso(time_unix: float) -> str:

@@ -4,9 +4,18 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import RotatorStatus, SetOption, Source, Stop, Target
+from bridge.model import Origin, RotatorStatus, SetOption, Source, Stop, Target
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
+
+
+class LeasePort(Protocol):
+    """A rotator's control lease (engine/operators.py): claim or release, Refused if not."""
+
+    def claim(
+        self, operator: object, minutes: object, origin: Origin, described: str
+    ) -> object: ...
+    def release(self, origin: Origin, described: str) -> object: ...
 
 
 class RotatorPort(Protocol):
@@ -17,11 +26,20 @@ class RotatorPort(Protocol):
     can_track: bool  # a station and a controller that reports where it points
 
     @property
+    def operators(self) -> LeasePort: ...
+
+    @property
     def status(self) -> RotatorStatus: ...
     @property
     def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (engine/follow.py)
     def follow(
-        self, on: bool, source: Source, described: str, *, long_path: bool = False
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None: ...
     def submit(
         self,
@@ -29,22 +47,49 @@ class RotatorPort(Protocol):
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
     ) -> None: ...
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None: ...
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None: ...
     def save_lock(self) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
-    def report_refusal(self, message: str, command: str | None) -> None: ...
-    def go_to_preset(self, name: str, source: Source, described: str) -> None: ...
-    def park(self, source: Source, described: str) -> None: ...
-    def take_path(self, long_path: bool, source: Source, described: str) -> None: ...
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None: ...
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None: ...
+    def reset_health(self) -> None: ...
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None: ...
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None: ...
     def track(
         self,
         name: str,
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None: ...
+
     def go_toward(
         self,
         latitude_deg: float,
@@ -54,6 +99,7 @@ class RotatorPort(Protocol):
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None: ...
 
 

@@ -17,11 +17,18 @@ Rules:
    publishes nothing else at QoS 1, so the whole queue is commands.
 4. The state topics are subscribed with the connection's command options (QoS 0): the newest
    retained value is what counts, and it comes again after every reconnect.
+5. Until the first connection is accepted, a refusal or a failed attempt is not logged (the
+   start-up error says it, once, in one line: ``failure``); a refused login or a TLS handshake
+   that fails is ``fatal``, for the start to end at once, since trying again cannot mend it.
+   Once the remote has been connected, both are logged and retried as the bridge does
+   (connection.py rule 6).
 """
 
 from __future__ import annotations
 
 import logging
+import ssl
+import sys
 import threading
 from collections.abc import Callable
 
@@ -31,12 +38,13 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.errors import RefusalCode, Refused
-from bridge.mqtt.connection import Connection, MessageHandler
+from bridge.mqtt.connection import Connection
 from bridge.settings_mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
 
 COMMAND_QOS = 1  # rule 2
+LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
 
 
 class RemoteLink(Connection):
@@ -48,14 +56,20 @@ class RemoteLink(Connection):
         settings: MqttSettings,
         client_id: str,
         filters: list[str],
-        on_message: MessageHandler,
+        on_message: Callable[[str, bytes, bool], None],
         on_change: Callable[[], None] = lambda: None,
     ) -> None:
+        def handle(topic: str, payload: bytes, retain: bool, _operator: str | None) -> None:
+            on_message(topic, payload, retain)  # a station's state carries no operator
+
         super().__init__(
-            settings, client_id, subscriptions=filters, on_message=on_message, reconnect_max_s=10
+            settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
         )
         self._send_lock = threading.Lock()
         self._on_change = on_change
+        self._ever_up = False
+        self.failure: str | None = None  # rule 5: why the last attempt failed, said in one line
+        self.fatal = False  # rule 5: ... and trying again will not mend it
 
     @property
     def up(self) -> bool:
@@ -92,7 +106,41 @@ class RemoteLink(Connection):
             )
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
+    def _refused(self, reason: str) -> None:
+        if self._ever_up:
+            super()._refused(reason)
+            return
+        login = reason in LOGIN_REFUSED
+        if login:
+            self.failure = (
+                f"the broker refused the login ({reason}): check mqtt.username and "
+                "mqtt.password_file"
+            )
+        else:
+            self.failure = f"the broker refused the connection ({reason})"
+        self.fatal = login
+        log.debug("%s", self.failure)
+
+    def _failed(self) -> None:
+        if self._ever_up or self._stopping:
+            super()._failed()
+            return
+        exc = sys.exc_info()[1]  # paho calls back inside its `except OSError`: it says why
+        if isinstance(exc, ssl.SSLError):
+            # "[SSL: CERTIFICATE_VERIFY_FAILED] certificate verify failed: ... (_ssl.c:1006)"
+            why = str(exc).split("] ", 1)[-1].split(" (_ssl.c")[0]
+            self.failure = (
+                f"TLS handshake failed: {why}: check mqtt.tls.ca_file (the authority that "
+                "signed the broker's certificate) and mqtt.host (the name it was issued for)"
+            )
+            self.fatal = True
+        else:
+            self.failure = str(exc or "no answer")
+        log.debug("%s", self.failure)
+
     def _opened(self, client: object) -> None:
+        self._ever_up = True
+        self.failure, self.fatal = None, False
         self.connected.set()
         self._on_change()
 

@@ -33,6 +33,13 @@ Rules:
    decision and the mailbox put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
+7. Who sent a command: the MQTT 5 user property ``operator`` when it is short printable text
+   (model.valid_operator); one that is not is ignored (the command goes on as from ``mqtt``)
+   and logged, once at WARNING, then at DEBUG. ``R/control/claim`` and ``R/control/release``
+   are commands like any (never retained, never while gated); ``R/control`` follows the status.
+8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
+   refusals (rule 4: a flood of commands must not flood the broker); the next one published
+   says how many were left out. The audit file has them all.
 """
 
 from __future__ import annotations
@@ -43,10 +50,23 @@ import time
 from collections.abc import Callable
 
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SetOption, Source, Target
+from bridge.model import (
+    AuditEvent,
+    ErrorEvent,
+    ErrorKind,
+    Origin,
+    RotatorHealth,
+    RotatorStatus,
+    SetOption,
+    Source,
+    Target,
+    valid_operator,
+)
+from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.feature_payloads import follow_state
+from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.halts import Halts, switch_on
+from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
@@ -72,10 +92,15 @@ class MqttService:
         self._publisher = publisher
         self._wall = wall
         self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
+        self._audit_limiter = EventLimiter(
+            clock, round(5 * error_events_per_s), error_events_per_s
+        )  # rule 8
+        self._bad_operator_said = False  # rule 7
         self._rotators: dict[str, RotatorPort] = {}
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
+        self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
         self._clock = clock
         self._halts = Halts(  # rule 5
             topics,
@@ -87,12 +112,15 @@ class MqttService:
         )
         self._word = self._halts.word
 
-    def attach(self, rotator: RotatorPort) -> None:
+    def attach(self, rotator: RotatorPort, console: pl.ConsoleFacts | None = None) -> None:
+        """``console``: what a console far from the station draws, in ``R/info`` too."""
         self._rotators[rotator.id] = rotator
         t = self.topics.rotator(rotator.id)
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
-        info = pl.info_json(rotator.name, rotator.spec, rotator.pointing, rotator.can_track)
+        info = pl.info_json(
+            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console
+        )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
 
     def add_feature(
@@ -169,11 +197,15 @@ class MqttService:
                 pub(t.option_state(name), pl.switch(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
-            pub(t.tracking, pl.tracking_state(status))
+            pub(t.tracking, tracking_state(status))
         if rot.can_follow:
             pub(t.follow_state, follow_state(status))
+        if status.health is not None and status.health is not self._health.get(rotator_id):
+            self._health[rotator_id] = status.health  # a new one after each move only
+            pub(t.health, health_json(status.health))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
+        pub(t.control, control.control_json(status.control))
         for listener in self._status_listeners:
             listener(rotator_id, status)
 
@@ -200,12 +232,47 @@ class MqttService:
             _one_line(str(doc["message"])),
         )
 
-    # -- inbound (paho's threads) -----------------------------------------------------------
-    def on_lane_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        """The stop lane's messages (rule 5: halts.py)."""
-        self._halts.on_lane(topic, payload, retain)
+    def publish_audit(self, rotator_id: str, event: AuditEvent) -> None:
+        """Rule 8: ``R/audit``, rate-limited per rotator."""
+        if rotator_id not in self._rotators:
+            return
+        t = self.topics.rotator(rotator_id)
+        left_out = self._audit_limiter.admit(t.audit)
+        if left_out is None:
+            return
+        doc = event.as_dict()
+        if left_out:
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(t.audit, json.dumps(doc, separators=(",", ":")))
 
-    def on_message(self, topic: str, payload: bytes, retain: bool, *, gated: bool = False) -> None:
+    # -- inbound (paho's threads) -----------------------------------------------------------
+    def origin(self, operator: str | None) -> Origin:
+        """Rule 7: who sent a message, from its user property ``operator`` (None: none)."""
+        if operator is None:
+            return Origin(Source.MQTT)
+        name = valid_operator(operator)
+        if name is None:
+            level = logging.DEBUG if self._bad_operator_said else logging.WARNING
+            self._bad_operator_said = True
+            log.log(level, "operator %r ignored: not 1 to 32 printable characters", operator[:40])
+            return Origin(Source.MQTT)
+        return Origin(Source.MQTT, name)
+
+    def on_lane_message(
+        self, topic: str, payload: bytes, retain: bool, operator: str | None = None
+    ) -> None:
+        """The stop lane's messages (rule 5: halts.py)."""
+        self._halts.on_lane(topic, payload, retain, self.origin(operator))
+
+    def on_message(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        *,
+        gated: bool = False,
+    ) -> None:
         """The main connection's messages, in the order the broker sent them (rule 5)."""
         route = self.topics.route(topic)
         if route is None:
@@ -225,6 +292,7 @@ class MqttService:
             self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
+        origin = self.origin(operator)
         halt = kind == "stop" or (kind == "lock" and switch_on(payload))
         if retain and halt and not self._halts.retain_is_live:
             self._halts.replayed_halt(rot, topic, kind, payload)
@@ -234,6 +302,7 @@ class MqttService:
                 f"retained command on {topic} ignored: commands must be published without the "
                 "retain flag (clear it with an empty retained message)",
                 what,
+                origin=origin,
             )
             return
         if gated and not halt:  # rule 6
@@ -241,57 +310,75 @@ class MqttService:
                 "not taken: the bridge is still checking that no other bridge runs on its base "
                 "topic (its first look after connecting); send it again",
                 what,
+                origin=origin,
             )
             return
         if halt:
-            self._halts.main_halt(rot, topic, kind, what, retain)
+            self._halts.main_halt(rot, topic, kind, what, retain, origin)
             return
         if kind == "lock":
             try:
                 pl.parse_switch(payload)
             except pl.PayloadError as exc:
-                rot.report_refusal(str(exc), what)
+                rot.report_refusal(str(exc), what, origin=origin)
                 return
-            self._halts.main_lock_off(rot)
+            self._halts.main_lock_off(rot, origin)
             return
         try:
-            if kind == "target":
-                aim = pl.parse_aim(payload)
-                if isinstance(aim, pl.Place):
-                    lat, lon = aim.latitude_deg, aim.longitude_deg
-                    if lat is None or lon is None:
-                        rot.take_path(aim.long_path, Source.MQTT, what)
-                        return
-                    rot.go_toward(
-                        lat,
-                        lon,
-                        Source.MQTT,
-                        what,
-                        locator=aim.locator,
-                        long_path=aim.long_path,
-                    )
-                else:
-                    rot.submit(Target(aim[0], aim[1], Source.MQTT), what)
-            elif kind == "preset":
-                rot.go_to_preset(pl.parse_name(payload, "preset"), Source.MQTT, what)
-            elif kind == "park":
-                rot.park(Source.MQTT, what)
-            elif kind == "nudge":
-                rot.nudge(*pl.parse_nudge(payload), Source.MQTT, what)
-            elif kind == "track":
-                name, tle = pl.parse_track(payload)
-                rot.track(name, Source.MQTT, what, tle)
-            elif kind == "follow":
-                on, long_path = pl.parse_follow(payload)
-                rot.follow(on, Source.MQTT, what, long_path=long_path)
-            elif kind == "target_elevation":
-                rot.submit(Target(None, pl.parse_number(payload, "elevation"), Source.MQTT), what)
-            elif kind == "option" and arg is not None:
-                rot.submit(SetOption(arg, pl.parse_switch(payload), Source.MQTT), what)
+            self._command(rot, kind, arg, payload, what, origin)
         except pl.PayloadError as exc:
-            rot.report_refusal(str(exc), what)
+            rot.report_refusal(str(exc), what, origin=origin)
         except Refused:
             pass  # the rotator has reported it
+
+    def _command(
+        self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
+    ) -> None:
+        """Everything but stop and lock; PayloadError or Refused."""
+        if kind == "claim":
+            rot.operators.claim(*control.parse_claim(payload, by.operator), by, what)
+        elif kind == "release":
+            named = control.parse_release(payload) if by.operator is None else None
+            rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
+        elif kind == "health_reset":
+            rot.reset_health()  # moves nothing: no lease to ask
+        else:
+            self._motion(rot, kind, arg, payload, what, by)
+
+    def _motion(
+        self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
+    ) -> None:
+        """A target, a preset, park, nudge, track, follow, an option: from ``by``."""
+        src = Source.MQTT
+        if kind == "target":
+            aim = pl.parse_aim(payload)
+            if isinstance(aim, pl.Place):
+                lat, lon = aim.latitude_deg, aim.longitude_deg
+                if lat is None or lon is None:
+                    rot.take_path(aim.long_path, src, what, origin=by)
+                    return
+                rot.go_toward(
+                    lat, lon, src, what, locator=aim.locator, long_path=aim.long_path, origin=by
+                )
+            else:
+                rot.submit(Target(aim[0], aim[1], src, origin=by), what)
+        elif kind == "preset":
+            rot.go_to_preset(pl.parse_name(payload, "preset"), src, what, origin=by)
+        elif kind == "park":
+            rot.park(src, what, origin=by)
+        elif kind == "nudge":
+            rot.nudge(*pl.parse_nudge(payload), src, what, origin=by)
+        elif kind == "track":
+            name, tle = pl.parse_track(payload)
+            rot.track(name, src, what, tle, origin=by)
+        elif kind == "follow":
+            on, long_path = pl.parse_follow(payload)
+            rot.follow(on, src, what, long_path=long_path, origin=by)
+        elif kind == "target_elevation":
+            el = pl.parse_number(payload, "elevation")
+            rot.submit(Target(None, el, src, origin=by), what)
+        elif kind == "option" and arg is not None:
+            rot.submit(SetOption(arg, pl.parse_switch(payload), src, origin=by), what)
 
 
 LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line

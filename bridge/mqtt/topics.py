@@ -68,6 +68,10 @@ class RotatorTopics:
         return f"{self.root}/option/{name}"
 
     @property
+    def health_reset(self) -> str:
+        return f"{self.root}/health/reset"
+
+    @property
     def option_filter(self) -> str:
         return f"{self.root}/option/+"
 
@@ -122,6 +126,29 @@ class RotatorTopics:
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
+
+    @property
+    def health(self) -> str:
+        return f"{self.root}/health"
+
+    # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
+    @property
+    def control(self) -> str:
+        """Retained: who holds the control lease, and until when."""
+        return f"{self.root}/control"
+
+    @property
+    def control_claim(self) -> str:
+        return f"{self.root}/control/claim"
+
+    @property
+    def control_release(self) -> str:
+        return f"{self.root}/control/release"
+
+    @property
+    def audit(self) -> str:
+        """Not retained: every command judged, executed or refused."""
+        return f"{self.root}/audit"
 
 
 @dataclass(frozen=True)
@@ -199,6 +226,8 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track, t.follow]
+            subs.append(t.health_reset)
+            subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -218,6 +247,8 @@ class Topics:
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
             subs += [t.follow_state]
+            subs.append(t.health)
+            subs += [t.control]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
@@ -231,9 +262,11 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track", "follow"):
+            for kind in ("preset", "park", "nudge", "track", "follow", "health_reset"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
+            if topic in (t.control_claim, t.control_release):
+                return rid, "claim" if topic == t.control_claim else "release", None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
@@ -258,11 +291,12 @@ class StationTopics:
         return RotatorTopics(self.base if rotator_id is None else f"{self.base}/{rotator_id}")
 
     def subscriptions(self) -> list[str]:
-        """What a remote reads: the bridge's state, and each rotator's description, status and
-        availability, whether the station has one rotator or several."""
+        """What a remote reads: the bridge's state, and each rotator's description, status,
+        availability, presets and error events, whether the station has one rotator or
+        several."""
         one, each = self.rotator(None), self.rotator("+")
         return [self.bridge_state] + [
-            t for r in (one, each) for t in (r.info, r.status, r.availability)
+            t for r in (one, each) for t in (r.info, r.status, r.availability, r.presets, r.error)
         ]
 
     def described(self, topics: list[str]) -> list[str]:

@@ -1,5 +1,6 @@
-"""One station rotator as the remote sees it: what rotctld's commands ask of a Rotator
-(``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``), answered from the station's
+"""One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
+ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
+``go_toward``, ``report_refusal``), answered from the station's
 retained topics and carried out by publishing on its command topics.
 
 Rules:
@@ -22,11 +23,21 @@ Rules:
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
    OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
+   endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
+   position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
+   ``R/target``: the station knows where it is, the remote does not.
+5. A refusal here (not connected, out of range, no park) is logged, at most once per
+   REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
+   seconds), and raised; the station's own refusals are on its
+   ``R/error``, not the remote's to publish.
 """
 
 from __future__ import annotations
 
 import json
+import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -34,13 +45,25 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Protocol
 
-from bridge.engine.rotator import Limits
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, MotionState, RotatorStatus, Stop, Target
+from bridge.model import (
+    Command,
+    MotionState,
+    RotatorStatus,
+    Source,
+    Stop,
+    Target,
+    TargetInfo,
+    TrackingInfo,
+)
 from bridge.mqtt.topics import RotatorTopics
-from bridge.pointing import Pointing
+from bridge.pointing import Limits, Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+
+log = logging.getLogger(__name__)
+
+REFUSAL_LOG_S = 10.0  # rule 5
 
 
 class Sender(Protocol):
@@ -83,13 +106,68 @@ class Info:
         return cls(str(doc.get("name") or model), spec, aim)
 
 
+def _num(doc: dict[str, Any], key: str) -> float | None:
+    v = doc.get(key)
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
+
+def _unix(text: object) -> float | None:
+    try:
+        return datetime.fromisoformat(str(text)).timestamp() if text is not None else None
+    except ValueError:
+        return None
+
+
+def _target_info(doc: object) -> TargetInfo | None:
+    if not isinstance(doc, dict):
+        return None
+    lat, lon = _num(doc, "latitude"), _num(doc, "longitude")
+    short, long = _num(doc, "short_path_deg"), _num(doc, "long_path_deg")
+    if lat is None or lon is None or short is None or long is None:
+        return None
+    locator = doc.get("locator")
+    return TargetInfo(
+        lat,
+        lon,
+        _num(doc, "distance_km") or 0.0,
+        short,
+        long,
+        "long" if doc.get("path") == "long" else "short",
+        locator if isinstance(locator, str) else None,
+    )
+
+
+def _tracking(doc: object) -> TrackingInfo | None:
+    if not isinstance(doc, dict) or not isinstance(doc.get("body"), str):
+        return None
+    nxt_or = doc.get("next")
+    nxt: dict[str, Any] = nxt_or if isinstance(nxt_or, dict) else {}
+    track = doc.get("pass_track") or []
+    return TrackingInfo(
+        doc["body"],
+        str(doc.get("phase", "")),
+        _num(doc, "azimuth"),
+        _num(doc, "elevation"),
+        _num(nxt, "azimuth"),
+        _num(nxt, "elevation"),
+        _unix(doc.get("aos")),
+        _unix(doc.get("los")),
+        _num(doc, "max_elevation"),
+        _num(doc, "aos_azimuth"),
+        bool(doc.get("flip")),
+        tuple((float(a), float(e)) for a, e in track if isinstance(track, list)),
+    )
+
+
 def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
-    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: the parts a reading needs."""
+    """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
+    the console draws (the place targeted, the body tracked)."""
     doc: dict[str, Any] = json.loads(payload)
 
     def num(key: str) -> float | None:
-        v = doc.get(key)
-        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+        return _num(doc, key)
+
+    options = doc.get("options")
 
     return RotatorStatus(
         rotator_id,
@@ -106,6 +184,14 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
         last_command_source=doc.get("last_command_source"),
         estimated=bool(doc.get("estimated")),
         parked=bool(doc.get("parked")),
+        options={str(k): bool(v) for k, v in options.items()} if isinstance(options, dict) else {},
+        controller_time=doc.get("controller_time"),
+        expected_end_unix=_unix(doc.get("expected_end")),
+        raw_bearing_deg=num("raw_bearing"),
+        overlap=doc.get("overlap"),
+        target_info=_target_info(doc.get("target_info")),
+        tracking=_tracking(doc.get("tracking")),
+        tracking_ended=doc.get("tracking_ended"),
     )
 
 
@@ -164,6 +250,7 @@ class RemoteRotator:
         expiry_s: int,
         moving_max_age_s: float = 10.0,
         wall: Callable[[], float] = time.time,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.id = rotator_id
         self.topics = topics
@@ -177,10 +264,18 @@ class RemoteRotator:
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
         self._wall = wall
+        self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
+        self._clock = clock
+        self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
+        self._refusals: dict[str, tuple[int, float]] = {}  # front end -> (not logged, when)
 
     @property
     def limits(self) -> Limits:
         return Limits.of(self.pointing)
+
+    @property
+    def link_up(self) -> bool:
+        return self._link.up
 
     @property
     def current(self) -> bool:
@@ -208,18 +303,82 @@ class RemoteRotator:
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
-        """Rule 3."""
+        """Rules 3 and 5."""
+        try:
+            self._submit(command)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def _submit(self, command: Command) -> None:
         if isinstance(command, Stop):
-            self._link.send(self.topics.stop, "stop", self._operator, self._expiry_s)
+            self.publish(self.topics.stop, "stop")
+            self.halted()
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
-            self._link.send(self.topics.park, "park", self._operator, self._expiry_s)
+            self.publish(self.topics.park, "park")
             return
         doc: dict[str, float] = {"azimuth": command.az_deg}
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
-        payload = json.dumps(doc, separators=(",", ":"))
-        self._link.send(self.topics.target, payload, self._operator, self._expiry_s)
+        self._send_target(doc)
+
+    def _send_target(self, doc: dict[str, Any]) -> None:
+        self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
+
+    def halted(self) -> None:
+        """A stop or a lock ON has gone out: ``last_halt_s`` is now (web/port.py rule 2)."""
+        self.last_halt_s = self._clock()
+
+    def publish(self, topic: str, payload: str) -> None:
+        """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
+        self._link.send(topic, payload, self._operator, self._expiry_s)
+
+    def park(self, source: Source, described: str) -> None:
+        """Rule 4: Refused when the station has no park position."""
+        try:
+            where = self.pointing.parking()
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+        self.submit(Target(*where, source, park=True), described)
+
+    def go_toward(
+        self,
+        latitude_deg: float,
+        longitude_deg: float,
+        source: Source,
+        described: str,
+        *,
+        locator: str | None = None,
+        long_path: bool = False,
+    ) -> None:
+        """Rule 4: the place, for the station to turn into its bearing."""
+        place: dict[str, Any] = (
+            {"locator": locator}
+            if locator is not None
+            else {"latitude": latitude_deg, "longitude": longitude_deg}
+        )
+        if long_path:
+            place["path"] = "long"
+        try:
+            self._send_target(place)
+        except Refused as exc:
+            self.report_refusal(exc.message, described)
+            raise
+
+    def report_refusal(self, message: str, command: str | None) -> None:
+        """Rule 5: logged here, rarely (per front end: the first word of ``command``)."""
+        kind = (command or "").split(" ", 1)[0]
+        with self._refusals_lock:
+            count, logged_s = self._refusals.get(kind, (0, -REFUSAL_LOG_S))
+            now = self._clock()
+            if now - logged_s < REFUSAL_LOG_S:
+                self._refusals[kind] = (count + 1, logged_s)
+                return
+            self._refusals[kind] = (0, now)
+        more = f" ({count} more since)" if count else ""
+        log.warning("%s: %s refused: %s%s", self.id, command or "a command", message, more)

@@ -5,39 +5,60 @@ Rules:
 1. Nothing is served before the station has described every endpoint's rotator (``R/info``):
    a rotator that does not show within ``info_wait_s`` is a start-up error that names the topic
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
+   A refused login or a failed TLS handshake ends the start at once, in one line that says
+   which (mqtt/remote.py rule 5).
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several.
-3. One line per endpoint goes to stdout at start:
-   ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533``.
+3. One line per endpoint goes to stdout at start, naming everything it serves:
+   ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533, gs232 /tmp/rotor-gs232,
+   pst udp 127.0.0.1:12000``.
 4. The station's topics read before a connection drops are forgotten when it does: the next
    connection's retained messages are the station's word again (the rotator's description,
    read at start, is kept).
+5. Every endpoint's address is taken (TCP ports, the PST UDP ports, the ptys' links) before
+   any is served; one that cannot be had is a start-up error naming it, and nothing is left
+   listening or linked.
+6. With ``[web]`` enabled, the console (remote/console.py) shows every rotator the station
+   described by the time the endpoints' rotators were found, and its line names its URL:
+   ``DL1ABC -> host: console for tower on http://127.0.0.1:8754/``. Its block is
+   ``_start_console``; it stops first.
 """
 
 from __future__ import annotations
 
 import logging
+import secrets
 import signal
 import threading
 import time
 from dataclasses import dataclass, field
 from types import FrameType
-from typing import TYPE_CHECKING
+from typing import Protocol
 
+from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
+from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import RotatorTopics, StationTopics
+from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
-
-if TYPE_CHECKING:
-    pass
+from bridge.web.server import WebConsole
+from bridge.web.view import RotatorFacts
 
 log = logging.getLogger(__name__)
 
 ONE_ROTATOR_GRACE_S = 0.5  # rule 2: B/X/info may come just after B/info in one burst
+
+
+class Served(Protocol):
+    """A line server (tcplines.py, ptylines.py): its address taken, then served, then ended."""
+
+    def listen(self) -> None: ...
+    def start(self) -> None: ...
+    def stop(self, timeout_s: float = 3.0) -> None: ...
 
 
 class StartError(ConfigError):
@@ -55,8 +76,11 @@ class Remote:
     settings: RemoteSettings
     view: StationView = field(default_factory=StationView)
     rotators: list[RemoteRotator] = field(default_factory=list)
-    servers: list[RotctldServer] = field(default_factory=list)
+    servers: list[Served] = field(default_factory=list)
+    loggers: LoggerEndpoints = field(default_factory=LoggerEndpoints)  # the PST UDP ports
     link: RemoteLink | None = None
+    console: WebConsole | None = None  # rule 6
+    feed: ConsoleFeed | None = None
 
     @property
     def station(self) -> StationTopics:
@@ -77,25 +101,70 @@ class Remote:
             lines = []
             for ep in s.endpoints:
                 rot = self._find(ep)
-                server = RotctldServer(rot, ep.rotctld_port, ep.rotctld_bind)
-                server.start()  # OSError naming the address and the setting
                 self.rotators.append(rot)
-                self.servers.append(server)
                 spec, (lo, hi) = rot.spec, rot.pointing.target_range()
-                host, port = server.address
                 lines.append(
                     f"{s.operator} -> {s.mqtt.host}: {rot.id} ({spec.name}, {_g(lo)}..{_g(hi)}) "
-                    f"on rotctld {host}:{port}"
+                    f"on {', '.join(self._endpoints(ep, rot))}"
                 )
+            try:  # rule 5
+                for server in self.servers:
+                    server.listen()
+                if self.loggers:
+                    self.loggers.listen()
+            except OSError as exc:
+                raise StartError(exc.strerror or str(exc)) from None
+            if s.web.enabled:
+                lines.append(self._start_console())
+            for server in self.servers:
+                server.start()
+            if self.loggers:
+                self.loggers.start()
             return lines
         except BaseException:
             self.stop()
             raise
 
+    def _endpoints(self, ep: Endpoint, rot: RemoteRotator) -> list[str]:
+        """The endpoint's servers added (not yet listening); what each is, for rule 3."""
+        said = []
+        for offer in ep.offers():
+            where = str(offer.where)
+            if offer.key == "rotctld_port":
+                self.servers.append(RotctldServer(rot, int(offer.where), offer.bind))
+            elif offer.key == "gs232_port":
+                self.servers.append(gs232_server(rot, int(offer.where), offer.bind))
+            elif offer.key == "easycomm_port":
+                self.servers.append(easycomm_server(rot, int(offer.where), offer.bind))
+            elif offer.key == "pst_udp_port":
+                self.loggers.add_pst(rot, int(offer.where), offer.bind)
+                if offer.bind not in ("127.0.0.1", "::1", "localhost"):  # as tcplines.py warns
+                    log.warning(
+                        "PstRotator UDP for %s listens on %s:%s: it has no authentication, "
+                        "anyone who can reach this address can turn the antenna",
+                        rot.id,
+                        offer.bind,
+                        where,
+                    )
+            elif offer.key == "gs232_pty":
+                self.servers.append(gs232_pty(rot, where))
+            elif offer.key == "easycomm_pty":
+                self.servers.append(easycomm_pty(rot, where))
+            name = offer.key.rsplit("_", 1)[0].replace("_", " ")  # gs232, pst udp, ...
+            said.append(f"{name} {offer.bind}:{where}" if offer.bind else f"{name} {where}")
+        return said
+
     def stop(self) -> None:
+        if self.feed is not None:
+            self.feed.stop()
+            self.feed = None
+        if self.console is not None:
+            self.console.stop()  # each page sees the remote go (web/server.py rule 6)
+            self.console = None
         for server in self.servers:
             server.stop()
         self.servers.clear()
+        self.loggers.stop()
         if self.link is not None:
             self.link.stop()
             self.link = None
@@ -104,9 +173,15 @@ class Remote:
         """Rule 4: what the broker held before a drop is not kept across it."""
         if self.link is not None and not self.link.up:
             self.view.clear()
+        feed = self.feed  # read once: stop() may clear it meanwhile (paho's thread)
+        if feed is not None:
+            feed.refresh()  # the pages see the station go (console.py rule 3)
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
         self.view.put(topic, payload)
+        feed = self.feed
+        if feed is not None:
+            feed.on_message(topic, payload)
 
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""
@@ -126,7 +201,7 @@ class Remote:
                     topics = one
             if topics is not None:
                 return self._rotator(ep, topics)
-            if now >= deadline:
+            if now >= deadline or (self.link is not None and self.link.fatal):
                 raise StartError(self._missing(ep, own))
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
 
@@ -160,12 +235,79 @@ class Remote:
             s.moving_max_age_s,
         )
 
+    # -- the console (rule 6; remote/console.py) --------------------------------------------
+    def _start_console(self) -> str:
+        s = self.settings
+        rotators = list(self.rotators)
+        known = {rot.topics for rot in rotators}
+        for rid in self.station.described(self.view.topics()):
+            topics = self.station.rotator(rid)
+            if topics not in known:
+                more = self._described(rid, topics)
+                if more is not None:
+                    rotators.append(more)
+        shown = [
+            RemoteConsoleRotator(rot, drawn_of(self.view.get(rot.topics.info)), self.view)
+            for rot in rotators
+        ]
+        first = shown[0].drawn
+        password = s.web.password
+        console = WebConsole(
+            s.web.bind,
+            s.web.port,
+            password=password.get_secret_value() if password is not None else None,
+            frame_ancestors=list(s.web.frame_ancestors),
+            host_names=list(s.web.host_names),
+            secret=secrets.token_bytes(32),  # logins end with the remote's run
+            station=first.station,
+            locator=first.locator,
+            satellites=lambda: sorted({n for r in shown for n in r.drawn.satellites}),
+        )
+        for rot in shown:
+            console.attach(rot, RotatorFacts(rot.drawn.beamwidth_deg, rot.drawn.nudge_step_deg))
+            rot.pages = console
+        self.feed = ConsoleFeed(shown, console)
+        try:
+            console.listen()
+        except OSError as exc:
+            raise StartError(
+                f"web.port {s.web.port}: the console cannot listen on "
+                f"{s.web.bind or '*'}:{s.web.port}: {exc.strerror or exc}"
+            ) from None
+        self.console = console
+        self.feed.start()
+        names = ", ".join(rot.id for rot in shown)
+        return f"{s.operator} -> {s.mqtt.host}: console for {names} on {console.url}"
+
+    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
+        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+        s = self.settings
+        try:
+            info = Info.parse(self.view.get(topics.info) or b"")
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
+            return None
+        assert self.link is not None
+        return RemoteRotator(
+            rid,
+            topics,
+            self.station.bridge_state,
+            info,
+            self.view,
+            self.link,
+            s.operator,
+            s.command_expiry_s,
+            s.moving_max_age_s,
+        )
+
     def _missing(self, ep: Endpoint, own: RotatorTopics | None) -> str:
         s = self.settings
         where = f"{s.mqtt.host}:{s.mqtt.port}"
         assert self.link is not None
-        if not self.link.up:
-            return f"cannot reach the station's broker at {where} (see the log above for why)"
+        if not self.link.up:  # mqtt/remote.py rule 5: why, in this one line
+            return (
+                f"cannot reach the station's broker at {where}: {self.link.failure or 'no answer'}"
+            )
         ids = self.station.described(list(self.view.topics()))
         looked = (own or self.station.rotator(None)).info
         hint = (

@@ -5,22 +5,29 @@ Rules:
 1. ``[mqtt]`` is the bridge's own table (MqttSettings: TLS, password_file, ...); ``base_topic``
    is the station's. MQTT 5 only: every command carries an expiry (mqtt/remote.py rule 1).
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
-   take one address.
+   take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
+   client hears its replies on port + 1), a pty's path.
 3. A problem is a ConfigError naming the key as the file spells it, one line each.
+4. An endpoint offers one thing at least (rotctld, GS-232 or Easycomm on TCP or a pty,
+   PstRotator UDP); every bind is loopback unless set.
+5. ``[web]`` is the bridge's own table (WebSettings), with its refusal of a console beyond
+   loopback without a password.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 import socket
-from typing import Any
+from typing import Any, NamedTuple
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from bridge.settings import ConfigError, read_toml
 from bridge.settings_errors import describe
 from bridge.settings_mqtt import MqttSettings
+from bridge.settings_web import WebSettings
 
 ENV_PREFIX = "ROTOR_REMOTE_"  # no variables are read; describe() wants a prefix to name
 
@@ -29,16 +36,73 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+_BIND = "127.0.0.1"
+# an endpoint's offers: (the key, its bind key or None for a path, the transport)
+OFFERS = (
+    ("rotctld_port", "rotctld_bind", "tcp"),
+    ("gs232_port", "gs232_bind", "tcp"),
+    ("easycomm_port", "easycomm_bind", "tcp"),
+    ("pst_udp_port", "pst_udp_bind", "udp"),
+    ("gs232_pty", None, "pty"),
+    ("easycomm_pty", None, "pty"),
+)
+
+
+class Offer(NamedTuple):
+    key: str  # rotctld_port, gs232_pty, ...
+    transport: str  # tcp, udp, pty
+    where: int | str  # the port, or the pty's path
+    bind: str  # "" for a pty
+
+
+def _port(what: str) -> Any:
+    return Field(None, ge=1, le=65535, description=what)
+
+
+def _bind(what: str) -> Any:
+    return Field(_BIND, description=f"the address the {what} listens on")
+
+
+def _pty(what: str) -> Any:
+    return Field(
+        None,
+        min_length=1,
+        description=f"{what} on a pseudo-terminal: the path of a link to it, made at start and "
+        "removed at the end (anything but a link already there is refused)",
+    )
+
+
 class Endpoint(_Strict):
-    """``[[endpoints]]``: local ports onto one of the station's rotators."""
+    """``[[endpoints]]``: local ports onto one of the station's rotators (rule 4: one at least)."""
 
     rotator: str | None = Field(
         None,
         min_length=1,
         description="the station's rotator id; may be left out when the station has one",
     )
-    rotctld_port: int = Field(ge=1, le=65535, description="a Hamlib rotctld port (rotctl -m 2)")
-    rotctld_bind: str = Field("127.0.0.1", description="the address it listens on")
+    rotctld_port: int | None = _port("a Hamlib rotctld port (rotctl -m 2)")
+    rotctld_bind: str = _bind("rotctld port")
+    gs232_port: int | None = _port("a Yaesu GS-232B TCP port (rotctl -m 603 -r 127.0.0.1:PORT)")
+    gs232_bind: str = _bind("GS-232 port")
+    gs232_pty: str | None = _pty("Yaesu GS-232B (rotctl -m 603 -r PATH)")
+    easycomm_port: int | None = _port("an Easycomm II TCP port (rotctl -m 202)")
+    easycomm_bind: str = _bind("Easycomm port")
+    easycomm_pty: str | None = _pty("Easycomm II")
+    pst_udp_port: int | None = _port(
+        "a PstRotator-style UDP port (replies go to the sender's port + 1)"
+    )
+    pst_udp_bind: str = _bind("PstRotator UDP port")
+
+    def offers(self) -> list[Offer]:
+        """What it offers, in OFFERS' order."""
+        out = []
+        for key, bind_key, transport in OFFERS:
+            value = getattr(self, key)
+            if value is not None:
+                out.append(
+                    Offer(key, transport, value, getattr(self, bind_key) if bind_key else "")
+                )
+        return out
 
 
 class RemoteSettings(_Strict):
@@ -63,6 +127,11 @@ class RemoteSettings(_Strict):
         10.0, gt=0, le=120, description="how long to wait for the station's rotators at start"
     )
     endpoints: list[Endpoint] = Field(min_length=1)
+    web: WebSettings = Field(
+        default_factory=WebSettings,
+        description="the operator console, served here for the station's rotators: the "
+        "bridge's own [web] table (loopback unless password_file is set)",
+    )
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:
@@ -70,9 +139,27 @@ class RemoteSettings(_Strict):
             raise ValueError('mqtt.protocol must be "5": commands carry a message expiry')
         if len(self.endpoints) > 1 and any(e.rotator is None for e in self.endpoints):
             raise ValueError("with several [[endpoints]], each names its rotator")
-        binds = [(e.rotctld_bind, e.rotctld_port) for e in self.endpoints]
-        if len(set(binds)) != len(binds):
-            raise ValueError("two [[endpoints]] have one rotctld_bind and rotctld_port")
+        taken: dict[tuple[str, str | int], str] = {}  # (transport, port or path) -> its key
+        for i, e in enumerate(self.endpoints):
+            offers = e.offers()
+            if not offers:
+                who = f" (rotator {e.rotator!r})" if e.rotator else ""
+                keys = ", ".join(key for key, _, _ in OFFERS)
+                raise ValueError(f"endpoints[{i}]{who} offers nothing: give it one of {keys}")
+            for key, transport, where, _ in offers:
+                name = f"endpoints[{i}].{key}"
+                if transport == "pty":
+                    where = os.path.abspath(os.path.expanduser(str(where)))
+                claims = [(transport, where)]
+                if transport == "udp":  # a PST client listens on port + 1 for the replies
+                    claims += [(transport, int(where) + 1), (transport, int(where) - 1)]
+                for claim in claims:
+                    if claim in taken:
+                        what = "path" if transport == "pty" else "port"
+                        raise ValueError(
+                            f"{name} {where} clashes with {taken[claim]}: give it another {what}"
+                        )
+                taken[(transport, where)] = name
         return self
 
     def client_id(self) -> str:

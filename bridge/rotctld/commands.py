@@ -8,13 +8,12 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import RotatorStatus, Source, Stop, Target
+from bridge.model import Origin, RotatorStatus, Source, Stop, Target
 from bridge.protocols.base import HamlibRotType, ModelSpec
 from bridge.rotctld.parser import Request
 
 if TYPE_CHECKING:
-    from bridge.engine.rotator import Limits
-    from bridge.pointing import Pointing
+    from bridge.pointing import Limits, Pointing
 
 
 class Rotator(Protocol):
@@ -61,8 +60,9 @@ _INTEGER = re.compile(r"[+-]?\d+")
 class RotctldCommands:
     """Executes requests against one rotator and renders rotctld's reply bytes."""
 
-    def __init__(self, rotator: Rotator) -> None:
+    def __init__(self, rotator: Rotator, origin: Origin | None = None) -> None:
         self.rotator = rotator
+        self._origin = origin  # who this client is (the audit trail, the control lease)
         # Hamlib's facts about the model are on its spec (protocols/)
         spec = rotator.spec
         self.hamlib_model = spec.hamlib_model
@@ -118,7 +118,7 @@ class RotctldCommands:
 
     def _stop(self, req: Request) -> tuple[int, str]:
         try:
-            self.rotator.submit(Stop(Source.ROTCTLD), _describe(req))
+            self.rotator.submit(Stop(Source.ROTCTLD, self._origin), _describe(req))
         except Refused as exc:  # the station's own never refuses a stop; the remote's (remote/)
             return _refusal_code(exc, self.rotator.status.connected), ""  # can't deliver one
         return RIG_OK, ""
@@ -198,7 +198,8 @@ class RotctldCommands:
     ) -> tuple[int, str]:
         """``az`` is a true bearing (Gpredict and loggers think in true bearings): pointing.py."""
         try:
-            self.rotator.submit(Target(az, el, Source.ROTCTLD, park=park), _describe(req))
+            target = Target(az, el, Source.ROTCTLD, park=park, origin=self._origin)
+            self.rotator.submit(target, _describe(req))
         except Refused as exc:
             return _refusal_code(exc, self.rotator.status.connected), ""
         return RIG_OK, ""

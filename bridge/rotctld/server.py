@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from bridge.model import Origin, Source
 from bridge.rotctld.commands import Rotator, RotctldCommands
 from bridge.rotctld.parser import Quit, RequestParser
 from bridge.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
@@ -14,9 +15,9 @@ from bridge.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
 class RotctldSession:
     """One client: its parser and its commands (tcplines.LineSession)."""
 
-    def __init__(self, rotator: Rotator) -> None:
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
         self._parser = RequestParser()
-        self._commands = RotctldCommands(rotator)
+        self._commands = RotctldCommands(rotator, Origin(Source.ROTCTLD, None, peer))
 
     @property
     def idle(self) -> bool:
@@ -57,5 +58,6 @@ class RotctldServer(LineServer):
             idle_timeout_s=idle_timeout_s,
             useful_within_s=useful_within_s,
             clock=clock,
+            peer_session=lambda peer: RotctldSession(rotator, peer),
         )
         self.rotator = rotator

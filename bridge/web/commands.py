@@ -6,10 +6,14 @@ Rules:
    silently on a machine that turns an antenna).
 2. ``carry_out`` hands the command to the same judge every front end uses (engine/rotator.py):
    limits, keep-out sectors, the lock, the offset, the link. A refusal raises Refused, and the
-   judge has already reported it on R/error; a bad body is reported there by the server.
+   judge has already reported it on R/error; a bad body is reported there by the server. On
+   the remote (remote/console.py) the rotator is the station's far away (web/port.py): the
+   command is published on the station's topic and the station's judge has the last word.
 3. Stop and lock ON are never refused (docs/architecture.md rule 11): they go straight into the
-   mailbox, which takes a stop first. Tracking ``off`` likewise.
-4. Every command carries ``Source.WEB``, so the status says the console sent it.
+   mailbox, which takes a stop first. Tracking ``off`` likewise. On the remote they are refused
+   only while they cannot be delivered (the broker out of reach), and the answer says so.
+4. Every command carries ``Source.WEB``, so the status says the console sent it (from the
+   remote the station's status says ``mqtt``: it came over its broker).
 5. A STOP or a lock ON is the last word over everything sent before it (docs/architecture.md
    rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
    stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
@@ -29,8 +33,8 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
-from bridge.engine.rotator import Rotator
 from bridge.model import Source, Stop, Target
+from bridge.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
 PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
@@ -245,7 +249,7 @@ def _no_constant(name: str) -> object:
     raise ValueError(f"{name} is not a number here")
 
 
-def carry_out(rot: Rotator, cmd: WebCommand) -> None:
+def carry_out(rot: ConsoleRotator, cmd: WebCommand) -> None:
     """Rule 2: raises Refused (already reported) when the judge says no."""
     what = cmd.described()
     src = Source.WEB

@@ -39,7 +39,6 @@ from collections.abc import Awaitable, Callable
 from aiohttp import web
 
 from bridge import __version__
-from bridge.engine.rotator import Rotator
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, RotatorStatus
 from bridge.web import auth, view
@@ -48,6 +47,7 @@ from bridge.web.connections import Connections
 from bridge.web.feed import Feed, Shape
 from bridge.web.files import static_files
 from bridge.web.live import TOKEN_HEADER, Live
+from bridge.web.port import ConsoleRotator
 
 log = logging.getLogger(__name__)
 
@@ -82,7 +82,7 @@ class WebConsole:
         self._station, self._locator = station, locator
         self._satellites = satellites
         self._wall = wall
-        self._rotators: dict[str, Rotator] = {}
+        self._rotators: dict[str, ConsoleRotator] = {}
         self._facts: dict[str, view.RotatorFacts] = {}
         self._shapes: dict[str, Shape] = {}
         self._files = static_files()
@@ -117,7 +117,7 @@ class WebConsole:
         self._running = False
 
     # -- wiring (the main thread) ------------------------------------------------------------
-    def attach(self, rot: Rotator, facts: view.RotatorFacts) -> None:
+    def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
         self._rotators[rot.id] = rot
         self._facts[rot.id] = facts
         self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
@@ -355,7 +355,10 @@ class WebConsole:
             return
         if rot is None or not cmd.halts():
             return
-        carry_out(rot, cmd)  # never refused (commands.py rule 3)
+        try:
+            carry_out(rot, cmd)  # never refused by a judge (commands.py rule 3)
+        except Refused:  # a rotator far away, its broker out of reach: its POST says so
+            return
         self._order.halted(rot.id, cmd, time.monotonic())
 
     async def _command(self, request: web.Request) -> web.StreamResponse:

@@ -21,8 +21,8 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 
-from bridge.engine.rotator import Rotator
 from bridge.pointing import norm360
+from bridge.web.port import ConsoleRotator
 from bridge.web.projection import project
 
 SCALE = 1000  # map units per unit of the disc's radius
@@ -37,7 +37,9 @@ class RotatorFacts:
     nudge_step_deg: float = 5.0
 
 
-def rotator_doc(rot: Rotator, facts: RotatorFacts, satellites: list[str]) -> dict[str, object]:
+def rotator_doc(
+    rot: ConsoleRotator, facts: RotatorFacts, satellites: list[str]
+) -> dict[str, object]:
     p = rot.pointing
     spec = rot.spec
     unreachable: list[list[float]] = []

@@ -12,7 +12,7 @@ from bridge.engine.wind import WindPark
 from bridge.model import ErrorKind, MotionState, Source, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
-from bridge.worker_settings import worker_config
+from bridge.wiring import worker_config
 from tests.engine.test_parts import rig, scene
 from tests.engine.virtual import VirtualRotator
 

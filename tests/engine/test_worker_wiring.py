@@ -47,12 +47,29 @@ class Opens:
         return open_port(path, spec, baud)
 
 
+# Polls this far apart that only the mailbox's wake-up can bring a stop out within STOP_WAIT_S:
+# a lost wake-up would leave it for the next poll, seconds later, and the wait would fail.
+SLOW_POLLS = {
+    "idle_poll_interval_s": 1.5,
+    "moving_poll_interval_s": 1.5,
+    "settle_s": 3.0,
+    "stall_timeout_s": 60.0,
+    "silence_timeout_s": 30.0,
+}
+STOP_WAIT_S = 0.5  # a guard well inside one poll interval, not a latency bound
+FINAL_TRIALS = 5
+
+
 def make_rotator(
-    emu: EmulatedPort, on_status: Callable[[RotatorStatus], None], events: list, opens: Opens
+    emu: EmulatedPort,
+    on_status: Callable[[RotatorStatus], None],
+    events: list,
+    opens: Opens,
+    polls: dict[str, float] | None = None,
 ) -> Rotator:
     assert emu.link is not None
     settings = RotatorSettings.model_validate(
-        {"id": "t", "model": "rotorez", "port": emu.link, **FAST_BRIDGE}
+        {"id": "t", "model": "rotorez", "port": emu.link, **FAST_BRIDGE, **(polls or {})}
     )
     cfg = worker_config(settings)
     return Rotator(cfg, StateStore(None), on_status, events.append, port_opener=opens)
@@ -88,15 +105,17 @@ def test_a_listener_that_raises_on_every_status_never_touches_the_serial_line(
 
 def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: EmulatedPort) -> None:
     """300 times a target and then a stop 0-3 ms later: every stop behind a target that went
-    out is on the wire quickly (the mailbox wake-up must never be lost, or a stop waits for a
-    poll); a target the stop caught before it went out needs none (stops merge, issue 14)."""
+    out is on the wire before the next poll could have carried it (the mailbox wake-up must
+    never be lost, or a stop waits for a poll); a target the stop caught before it went out
+    needs none (stops merge). Polls are SLOW_POLLS apart, so the proof is the order, not a
+    measured latency."""
     events: list[ErrorEvent] = []
-    rot = make_rotator(emu, lambda s: None, events, Opens())
+    rot = make_rotator(emu, lambda s: None, events, Opens(), SLOW_POLLS)
     rot.start()
     rng = random.Random(13)
-    latencies = []
+    stops = 0
     try:
-        wait_until(lambda: rot.status.state.value == "idle", 10, "idle")
+        wait_until(lambda: rot.status.state.value == "idle", 20, "idle")
         for _ in range(300):
             seen = len(emu.frames())
             rot.submit(Target(float(rng.randint(0, 359))))
@@ -112,26 +131,34 @@ def test_a_stop_right_behind_a_target_reaches_the_controller_at_once(emu: Emulat
                     return stops  # the target went out: its stop must follow
                 return [None] if rot.status.target_az_deg is None else []  # caught in time
 
-            frames = emu.wait_until(settled, bool, timeout_s=2.0)
-            if frames[0] is not None:
-                latencies.append(frames[0].time_s - t_put)
-        # once more with the target surely out first: on a loaded machine every stop above may
-        # have caught its target in the mailbox, and the test must prove something all the same
-        wait_until(lambda: rot.status.state.value == "idle", 10, "idle")
-        seen = len(emu.frames())
-        rot.submit(Target(180.0 if emu.state().az_deg < 90 else 0.0))
-        emu.wait_until(lambda d, _now: any(f.data.startswith(b"AP1") for f in d.log[seen:]), bool)
-        t_put = time.monotonic()
-        rot.submit(Stop())
-        stop = emu.wait_until(
-            lambda d, _now: [f for f in d.log[seen:] if f.data == b";" and f.time_s >= t_put],
-            bool,
-            timeout_s=2.0,
-        )
-        latencies.append(stop[0].time_s - t_put)
+            frames = emu.wait_until(settled, bool, timeout_s=STOP_WAIT_S)
+            stops += frames[0] is not None
+        # then FINAL_TRIALS more with the target surely out first: on a loaded machine every
+        # stop above may have caught its target in the mailbox. A lost wake-up leaves a stop for
+        # the next poll, anywhere in the SLOW_POLLS interval, so each trial catches it with a
+        # chance of 2/3 and all of them miss it one time in 240 (the rotor comes to rest
+        # before each: a target is not sent while it may still turn)
+        for _ in range(FINAL_TRIALS):
+            wait_until(lambda: rot.status.state.value == "idle", 20, "idle")
+            seen = len(emu.frames())
+            rot.submit(Target(180.0 if emu.state().az_deg < 90 else 0.0))
+            emu.wait_until(
+                lambda d, _now, seen=seen: any(f.data.startswith(b"AP1") for f in d.log[seen:]),
+                bool,
+            )
+            t_put = time.monotonic()
+            rot.submit(Stop())
+            emu.wait_until(
+                lambda d, _now, seen=seen, t=t_put: [
+                    f for f in d.log[seen:] if f.data == b";" and f.time_s >= t
+                ],
+                bool,
+                timeout_s=STOP_WAIT_S,
+            )
+            stops += 1
     finally:
         rot.stop()
-    assert max(latencies) < 0.150, sorted(latencies)[-5:]
+    assert stops >= FINAL_TRIALS
     assert not emu.state().is_moving
 
 

@@ -69,3 +69,21 @@ def test_check_config_lists_them(tmp_path: Path) -> None:
         "rotctld on 127.0.0.1:4533; GS-232B on 127.0.0.1:4535; Easycomm II on 127.0.0.1:4536"
         in out.stdout
     )
+
+
+@pytest.mark.parametrize(
+    ("rotators", "said"),
+    [
+        (['gs232_pty = "/tmp/x"\neasycomm_pty = "/tmp/x"'], "rotators[0].easycomm_pty /tmp/x is"),
+        (['gs232_pty = "/tmp/x"', 'gs232_pty = "/tmp/../tmp/x"'], "also rotators[0].gs232_pty"),
+    ],
+)
+def test_a_pty_path_given_twice_is_refused(tmp_path: Path, rotators: list[str], said: str) -> None:
+    with pytest.raises(ConfigError, match=said.replace(".", r"\.").replace("[", r"\[")):
+        load_settings(write(tmp_path, rotators), environ={})
+
+
+def test_check_config_shows_the_ptys(tmp_path: Path) -> None:
+    path = write(tmp_path, ['gs232_pty = "/tmp/rotor-gs232"\neasycomm_pty = "/tmp/rotor-ec"'])
+    out = run_cli("check-config", "-c", str(path)).stdout
+    assert "GS-232B on a pty at /tmp/rotor-gs232; Easycomm II on a pty at /tmp/rotor-ec" in out

@@ -31,7 +31,9 @@ def test_discovery_is_retained_valid_and_not_repeated(rig: Rig) -> None:
     rig.start()
     rig.ready("tower")
     msgs = configs(rig.broker.port)
-    assert len(msgs) == 16  # with the nudge buttons (a rotor that reports its bearing)
+    assert (
+        len(msgs) == 29
+    )  # with the nudge buttons, rotor health (it reports its bearing) and control
     for topic, payload in msgs.items():
         assert validate(topic, payload) == []
     # the controller's firmware arrived and became the device's sw_version

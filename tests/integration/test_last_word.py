@@ -31,11 +31,11 @@ def main_held_at(app: App, topic: str, payload: bytes) -> Iterator[threading.Eve
     release, held = threading.Event(), threading.Event()
     handle = app.client._handler  # the main connection's hand-off (client.py rule 5)
 
-    def stuck(t: str, p: bytes, retain: bool) -> None:
+    def stuck(t: str, p: bytes, retain: bool, operator: str | None) -> None:
         if t == topic and p == payload and not held.is_set():
             held.set()
             release.wait(30)
-        handle(t, p, retain)
+        handle(t, p, retain, operator)
 
     app.client._handler = stuck
     try:

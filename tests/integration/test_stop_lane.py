@@ -24,11 +24,11 @@ def test_a_stop_and_the_lock_get_through_while_the_targets_connection_is_stuck(r
     held = threading.Event()
     handle = app.mqtt.on_message
 
-    def stuck(topic: str, payload: bytes, retain: bool) -> None:
+    def stuck(topic: str, payload: bytes, retain: bool, operator: str | None) -> None:
         if topic == "rotor/target" and payload == b"300":
             held.set()
             release.wait(30)  # the main connection reads nothing more meanwhile
-        handle(topic, payload, retain)
+        handle(topic, payload, retain, operator)
 
     app.client._handler = stuck  # the main connection's hand-off (client.py rule 5)
     try:

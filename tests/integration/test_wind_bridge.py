@@ -108,3 +108,37 @@ def test_an_unreadable_wind_payload_changes_nothing(rig: Rig) -> None:
     rig.probe.publish(TOPIC, "1")
     wind_of(rig, lambda w: w.get("speed_kmh") == 3.6)
     assert rig.emu.frames("set") == [] and not rig.status("tower").wind.storm  # type: ignore[union-attr]
+
+
+def test_the_storms_park_turns_the_rotor_while_a_lease_is_held_and_the_wind_refuses_first(
+    rig: Rig,
+) -> None:
+    start(rig)
+    claim = json.dumps({"operator": "DL1ABC", "minutes": 30})
+    rig.probe.publish("rotor/control/claim", claim)
+    rig.probe.wait_for("rotor/control", lambda m: json.loads(m.payload)["holder"] == "DL1ABC")
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: the bridge's own move, the lease never judges it
+    rig.arrived("tower", 90.0, timeout_s=30)
+    msg = rig.probe.wait(
+        lambda m: m.topic == "rotor/status" and json.loads(m.payload)["parked"], 10, "parked", mark
+    )
+    status = json.loads(msg.payload)
+    assert status["last_command_source"] == "wind" and status["last_operator"] is None
+    assert status["control"]["holder"] == "DL1ABC"  # still held
+    # a target from someone else than the holder: the wind (safety) is said, not the lease
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    assert error_after(rig, mark, "refused")["message"] == (
+        "wind 90 km/h above 72: parked for the storm"
+    )
+    audit = rig.probe.wait(
+        lambda m: m.topic == "rotor/audit" and "target" in json.loads(m.payload)["command"],
+        10,
+        "the refusal audited",
+        mark,
+    )
+    assert (
+        json.loads(audit.payload)["result"]
+        == "refused: wind 90 km/h above 72: parked for the storm"
+    )

@@ -11,6 +11,7 @@ import socket
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 from typing import Any
 
 import pytest
@@ -36,6 +37,7 @@ class Recording:
     def __init__(self, rid: str, model: str = "rotorez") -> None:
         self.id, self.spec = rid, REGISTRY[model]
         self.calls: list[Any] = []
+        self.peers: list[str | None] = []  # the address each command came from
         self._lock = threading.Lock()
 
     @property
@@ -44,9 +46,10 @@ class Recording:
 
     def submit(self, command: Any, described: str | None = None) -> None:
         with self._lock:
-            self.calls.append(command)
+            self.peers.append(command.origin.peer if command.origin is not None else None)
+            self.calls.append(replace(command, origin=None))  # who sent it: in ``peers``
 
-    def report_refusal(self, message: str, command: str | None) -> None:
+    def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:
         with self._lock:
             self.calls.append(("refused", message))
 

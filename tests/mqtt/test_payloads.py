@@ -117,6 +117,8 @@ def test_status_json_has_every_field() -> None:
         "options": {"jam": True},
         "last_error": None,
         "last_command_source": None,
+        "last_operator": None,
+        "control": None,
         "estimated": False,
         "time": "1970-01-01T00:00:00.000+00:00",
     }

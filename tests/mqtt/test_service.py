@@ -9,11 +9,21 @@ The rotator is a recorder of RotatorPort calls.
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
 from bridge.errors import Refused
-from bridge.model import ErrorEvent, MotionState, RotatorStatus, SetOption, Source, Stop, Target
+from bridge.model import (
+    ErrorEvent,
+    MotionState,
+    Origin,
+    RotatorStatus,
+    SetOption,
+    Source,
+    Stop,
+    Target,
+)
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
@@ -70,6 +80,7 @@ class RecordingRotator:
         self.spec = REGISTRY[model]
         self.pointing = Pointing.of(self.spec, presets={"EU": (45.0, None)})
         self.calls: list[tuple[object, ...]] = []
+        self.origins: list[Origin | None] = []  # who sent each command that names one
         self._refuse = refuse
         self.can_track = False
         self.can_follow = False
@@ -78,8 +89,17 @@ class RecordingRotator:
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
 
-    def follow(self, on: bool, source: Source, described: str, *, long_path: bool = False) -> None:
+    def follow(
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
+    ) -> None:
         self.calls.append(("follow", on, long_path, source, described))
+        self.origins.append(origin)
 
     def submit(
         self,
@@ -87,34 +107,77 @@ class RecordingRotator:
         described: str | None = None,
         *,
         hold: int | None = None,
+        echo: bool = False,
     ) -> None:
-        self.calls.append(("submit", command, described, *([hold] if hold else [])))
+        shown = replace(command, origin=None)  # who sent it: in ``origins``
+        self.calls.append(("submit", shown, described, *([hold] if hold else [])))
+        self.origins.append(command.origin)
         if self._refuse is not None:
             raise self._refuse
 
-    def set_lock(self, locked: bool, *, hold: int | None = None, save: bool = True) -> None:
+    def set_lock(
+        self,
+        locked: bool,
+        *,
+        hold: int | None = None,
+        save: bool = True,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None:
         self.calls.append(("lock", locked, *([hold] if hold else [])))
+        self.origins.append(origin)
 
     def save_lock(self) -> None:
         pass
 
-    def release(self, marker: int, *, clear: bool = False) -> None:
-        self.calls.append(("release", marker, *(["clear"] if clear else [])))
-
-    def report_refusal(self, message: str, command: str | None) -> None:
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
         self.calls.append(("refused", message, command))
 
-    def go_to_preset(self, name: str, source: Source, described: str) -> None:
+    def go_to_preset(
+        self, name: str, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         self.calls.append(("preset", name, source, described))
+        self.origins.append(origin)
 
-    def park(self, source: Source, described: str) -> None:
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
         self.calls.append(("park", source, described))
+        self.origins.append(origin)
 
-    def take_path(self, long_path: bool, source: Source, described: str) -> None:
+    def take_path(
+        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
+    ) -> None:
         self.calls.append(("path", long_path, source, described))
+        self.origins.append(origin)
 
-    def nudge(self, d_az: float, d_el: float | None, source: Source, described: str) -> None:
+    def nudge(
+        self,
+        d_az: float,
+        d_el: float | None,
+        source: Source,
+        described: str,
+        *,
+        origin: Origin | None = None,
+    ) -> None:
         self.calls.append(("nudge", d_az, d_el, source, described))
+        self.origins.append(origin)
+
+    @property
+    def operators(self) -> RecordingRotator:
+        return self  # the control lease's claim and release, recorded like the rest
+
+    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None:
+        self.calls.append(("claim", operator, minutes, described))
+        self.origins.append(origin)
+
+    def release(self, *args: object, **kw: object) -> None:  # noqa: D102
+        if args and isinstance(args[0], Origin):  # the control lease's
+            self.calls.append(("release_control", args[1]))
+            self.origins.append(args[0])
+            return
+        marker, clear = args[0], bool(kw.get("clear"))
+        self.calls.append(("release", marker, *(["clear"] if clear else [])))
 
     def go_toward(
         self,
@@ -125,9 +188,11 @@ class RecordingRotator:
         *,
         locator: str | None = None,
         long_path: bool = False,
+        origin: Origin | None = None,
     ) -> None:
         place = (round(latitude_deg, 4), round(longitude_deg, 4), locator, long_path)
         self.calls.append(("toward", *place, source, described))
+        self.origins.append(origin)
 
     def track(
         self,
@@ -135,8 +200,11 @@ class RecordingRotator:
         source: Source,
         described: str,
         tle: tuple[str, str, str] | None = None,
+        *,
+        origin: Origin | None = None,
     ) -> None:
         self.calls.append(("track", name, tle, source, described))
+        self.origins.append(origin)
 
 
 def service(
@@ -196,6 +264,7 @@ def test_an_az_only_status_becomes_its_retained_topics() -> None:
         '{"bearing":123.0,"target":200.0,"parked":false,"state":"moving","moving":true,"connected":true,'
         '"available":true,"locked":false,"version":"1.4S","options":{"bogus":true,'
         '"endpoint":false,"jam":true},"last_error":null,"last_command_source":"mqtt",'
+        '"last_operator":null,"control":null,'
         f'"estimated":false,"time":"{NOW_ISO}"}}'
     )
     assert pub.take() == [
@@ -207,6 +276,7 @@ def test_an_az_only_status_becomes_its_retained_topics() -> None:
         ("rotor/option/jam/state", "ON", True),
         ("rotor/lock/state", "OFF", True),
         ("rotor/status", status, True),
+        ("rotor/control", '{"holder":null,"until":null}', True),
     ]
 
 
@@ -240,6 +310,7 @@ def test_a_controller_without_position_publishes_no_bearing() -> None:
     )
     assert sorted(pub.retained) == [
         "rotor/availability",
+        "rotor/control",
         "rotor/lock/state",
         "rotor/state",
         "rotor/status",
@@ -265,7 +336,7 @@ def test_only_what_changed_is_published_again() -> None:
         "tower", state=MotionState.IDLE, bearing_deg=90.0, available=True, connected=True
     )
     svc.publish_status("tower", still)
-    assert len(pub.take()) == 5  # bearing, state, availability, lock, status
+    assert len(pub.take()) == 6  # bearing, state, availability, lock, status, control
     svc.publish_status("tower", still)
     assert pub.take() == []
     svc.publish_status(
@@ -513,6 +584,9 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/nudge",
         "rotor/track",
         "rotor/follow",
+        "rotor/health/reset",
+        "rotor/control/claim",
+        "rotor/control/release",
         "rotor/bridge/fence",
         "ha/status",
         "x/#",

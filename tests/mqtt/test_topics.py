@@ -21,6 +21,9 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/nudge",
         "rotor/track",
         "rotor/follow",
+        "rotor/health/reset",
+        "rotor/control/claim",
+        "rotor/control/release",
         "rotor/bridge/fence",
     ]
     assert t.stop_lane() == ["rotor/stop", "rotor/lock"]

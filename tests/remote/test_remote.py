@@ -265,3 +265,32 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
             assert ask(port, b"p\n") == reply, (state, age_s)
     finally:
         r.stop()
+
+
+def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """remote/run.py rule 4, on a stand-in station (its retained topics, no bridge): the broker
+    comes back without them (no persistence, nobody publishes them again), and the remote must
+    not take the station for online on what it read before the drop."""
+    for topic, payload in (
+        ("rotor/info", '{"name":"tower","model":"rotorez","azimuth_range":[0,360]}'),
+        ("rotor/bridge/state", "online"),
+        ("rotor/availability", "online"),
+        ("rotor/status", '{"bearing":42.0,"state":"idle","connected":true,"available":true}'),
+    ):
+        probe.publish(topic, payload, retain=True)
+    port = free_port()
+    r = Remote(settings(broker, port))  # type: ignore[arg-type]
+    r.start()
+    try:
+        link = r.link
+        assert link is not None
+        wait_until(lambda: ask(port, b"p\n") == b"42.00\n0.00\n", 5, "the station's bearing")
+        broker.kill()
+        wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+        broker.restart()
+        wait_until(lambda: link.up, 30, "the remote back on the broker")
+        assert ask(port, b"p\n") == b"RPRT -5\n"  # connected, but no word from the station
+    finally:
+        r.stop()

@@ -253,7 +253,13 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     target += ` \u00B7 ${where} \u00B7 ${fmtKm(info.distance_km || 0)} ${info.path || 'short'} path`;
   }
   put('target', target);
-  put('source', st.last_command_source || '\u2014');
+  const who = st.last_operator && st.last_operator !== st.last_command_source ? ` \u00B7 ${st.last_operator}` : '';
+  put('source', st.last_command_source ? `${st.last_command_source}${who}` : '\u2014');
+  // the control lease: who holds the rotator, and until when (UTC, as the refusals say it)
+  const control = st.control;
+  hide('control-label', !control);
+  hide('control', !control);
+  if (control) put('control', `${control.holder} until ${String(control.until).slice(11, 16)} UTC`);
   const locked = Boolean(st.locked);
   mark($('lock'), 'aria-pressed', String(locked));
   put('lock', locked ? 'Lock ON' : 'Lock OFF');
@@ -283,9 +289,27 @@ function renderStatus(id, st, tracking = trackingOf(st)) {
     if (typeof tracking.maxEl === 'number') text += ` max ${fmtDeg(tracking.maxEl)}`;
     put('tracking-info', text);
   }
+  renderHealth(st.health);
   renderBadges(st, tracking);
   map.update(st, tracking);
   if (cfg.has_elevation) sky.update(id, st, tracking);
+}
+
+// rotor health (R/health, in the status): speeds each way, start delay, moves, and the warnings
+function renderHealth(h) {
+  const shown = Boolean(h && h.measured);
+  hide('health-label', !shown);
+  hide('health-info', !shown);
+  if (!shown) return;
+  const speed = (v) => (typeof v === 'number' ? `${round1(v)}°/s` : '—');
+  let text = `cw ${speed(h.speed_cw_deg_s)} · ccw ${speed(h.speed_ccw_deg_s)}`;
+  if (typeof h.start_delay_s === 'number') text += ` · start ${round1(h.start_delay_s)} s`;
+  text += ` · ${h.moves} moves, ${h.stalls} stalls`;
+  if (h.baseline && h.baseline.from === 'learning') text += ` · learning (${h.baseline.moves_to_learn} to go)`;
+  const warnings = h.warnings || [];
+  if (warnings.length) text += ` — ${warnings.join('; ')}`;
+  put('health-info', text);
+  flag($('health-info'), 'warn', warnings.length > 0);
 }
 
 let badgeKey = '';

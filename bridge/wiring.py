@@ -1,6 +1,8 @@
-"""A rotator's settings as its engine runs with them (engine/config.py): the speeds, limits,
-timings and the judge's terms resolved once, tracking's, following's and the wind park's
-terms. Pure: settings in, frozen engine configuration out.
+"""A rotator's settings turned into the engine's configuration (engine/worker.py WorkerConfig):
+the one place where the user's keys meet the engine's terms, for the app and for the tests that
+build a rotator of their own: the speeds, limits, timings and the judge's terms resolved once,
+health's, tracking's, following's and the wind park's terms. Pure: settings in, frozen engine
+configuration out.
 
 Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
@@ -12,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from bridge.engine.config import FollowConfig, TrackConfig, WindConfig
+from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.settings import RotatorSettings
@@ -53,6 +55,12 @@ def worker_config(
         el_speed_deg_s=el_speed,
         pointing=r.pointing,
         park_after_idle_s=r.park_after_idle_s,
+        health=HealthConfig(
+            baseline_moves=r.health_baseline_moves,
+            speed_drop_pct=r.health_speed_drop_pct,
+            az_speed_deg_s=r.az_speed_deg_s,
+            el_speed_deg_s=r.el_speed_deg_s,
+        ),
         tracking=TrackConfig(
             sky=sky,
             min_el_deg=r.track_min_el_deg,

@@ -1,0 +1,87 @@
+"""The control lease: one operator holds a rotator for a while, and motion from anyone else is
+refused. Pure: no clock, no thread, no I/O; the time (unix seconds, the wall clock: the lease
+is shown in UTC and kept across a restart) comes in with every call. Rotator (engine/rotator.py)
+keeps one per rotator, judges with it and carries out what it returns.
+
+Rules:
+1. A claim names an operator and a number of minutes, MIN_MINUTES to MAX_MINUTES; anything else
+   is refused with a message saying what was wrong, and changes nothing.
+2. A claim while another operator holds the lease is refused naming the holder and the time it
+   ends; the holder's own claim renews it (from now, for the minutes asked).
+3. The lease ends by itself at ``until``: from then on ``holder`` is None, with no call needed
+   (``expired`` tells the caller once, so it can say so).
+4. Anyone may release it: the lease is coordination between operators who can all publish
+   commands, not security (the broker's ACLs are); the station owner's release button must work
+   whoever holds it. The audit log says who released it.
+5. ``refusal`` is the judge's question: a motion command from ``who`` while another holds the
+   lease gets the message to refuse it with; the holder's and anyone's while free get None.
+   Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11).
+"""
+
+from __future__ import annotations
+
+import math
+from datetime import UTC, datetime
+
+from bridge.model import OPERATOR_CHARS, Control, valid_operator
+
+__all__ = ["Lease", "LeaseError", "held_text", "valid_operator"]
+
+MIN_MINUTES = 1.0
+MAX_MINUTES = 24 * 60.0
+
+
+class LeaseError(ValueError):
+    """A claim refused (rules 1, 2): nothing changed."""
+
+
+def held_text(control: Control, now_unix: float) -> str:
+    """``DL1ABC holds the rotator until 14:30 UTC (25 min left)``."""
+    end = datetime.fromtimestamp(control.until_unix, UTC).strftime("%H:%M")
+    left = max(1, math.ceil((control.until_unix - now_unix) / 60.0))
+    return f"{control.operator} holds the rotator until {end} UTC ({left} min left)"
+
+
+class Lease:
+    def __init__(self, held: Control | None = None) -> None:
+        self._held = held
+
+    def holder(self, now_unix: float) -> Control | None:
+        """Rule 3: who holds it now (None once it has ended)."""
+        held = self._held
+        return held if held is not None and now_unix < held.until_unix else None
+
+    def expired(self, now_unix: float) -> Control | None:
+        """Rule 3: the lease that has ended by itself since the last call, once."""
+        held = self._held
+        if held is not None and now_unix >= held.until_unix:
+            self._held = None
+            return held
+        return None
+
+    def claim(self, operator: object, minutes: object, now_unix: float) -> Control:
+        """Rules 1, 2: the new lease, or LeaseError saying why not."""
+        name = valid_operator(operator)
+        if name is None:
+            raise LeaseError(f"operator must be text of 1 to {OPERATOR_CHARS} printable characters")
+        if isinstance(minutes, bool) or not isinstance(minutes, (int, float)):
+            raise LeaseError("minutes must be a number")
+        if not math.isfinite(minutes) or not MIN_MINUTES <= minutes <= MAX_MINUTES:
+            raise LeaseError(f"minutes must be from {MIN_MINUTES:g} to {MAX_MINUTES:g}")
+        held = self.holder(now_unix)
+        if held is not None and held.operator != name:
+            raise LeaseError(f"not claimed: {held_text(held, now_unix)}")
+        self._held = Control(name, now_unix + 60.0 * float(minutes))
+        return self._held
+
+    def release(self, now_unix: float) -> Control | None:
+        """Rule 4: the lease released (None if it was free)."""
+        held, self._held = self.holder(now_unix), None
+        return held
+
+    def refusal(self, who: str, now_unix: float) -> str | None:
+        """Rule 5: why a motion command from ``who`` is refused, or None."""
+        held = self.holder(now_unix)
+        if held is None or held.operator == who:
+            return None
+        return f"{held_text(held, now_unix)}: only they may turn it (control lease)"

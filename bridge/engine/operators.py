@@ -1,0 +1,164 @@
+"""Who is turning a rotator: its control lease as the judge keeps it (the pure lease is
+lease.py) and the audit trail of every command judged. Rotator (rotator.py) owns one.
+
+Rules:
+1. The lease is judged on the front ends' threads (the judge's), under one lock; what changed
+   goes to the status through the mailbox (the status shows the holder), and to the state file
+   through the store's writer thread (state_store.py rule 5): no fsync on a front end's thread.
+2. A lease ends by itself: a timer (daemon, one at a time) fires at its end, so that the status
+   and ``R/control`` say it is free without anyone asking. A timer that fires early (the wall
+   clock was set back) arms itself again.
+3. Every command judged, executed or refused, from every interface, is one audit event handed
+   to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
+   listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
+   never costs a command, and a stop is put in the mailbox before its event is made.
+4. Claims and releases are commands too: audited, refused ones reported on ``R/error``.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from typing import Protocol
+
+from bridge.engine.lease import Lease, LeaseError
+from bridge.engine.mailbox import Mailbox
+from bridge.engine.state_store import StateStore
+from bridge.errors import RefusalCode, Refused
+from bridge.model import AuditEvent, Control, ErrorKind, Origin
+
+log = logging.getLogger(__name__)
+
+EXECUTED = "executed"
+
+
+class Timer(Protocol):
+    def cancel(self) -> None: ...
+
+
+def thread_timer(delay_s: float, fire: Callable[[], None]) -> Timer:
+    """Rule 2's timer: a daemon thread that calls ``fire`` after ``delay_s``."""
+    timer = threading.Timer(delay_s, fire)
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
+class Operators:
+    def __init__(
+        self,
+        rotator_id: str,
+        store: StateStore,
+        mailbox: Mailbox,
+        *,
+        wall: Callable[[], float],
+        bearing: Callable[[], float | None],
+        report: Callable[[ErrorKind, str, str | None], None],
+        on_audit: Callable[[AuditEvent], None] | None = None,
+        timer: Callable[[float, Callable[[], None]], Timer] = thread_timer,
+    ) -> None:
+        self._id = rotator_id
+        self._store = store
+        self._mailbox = mailbox
+        self._wall = wall
+        self._bearing = bearing
+        self._report = report
+        self._on_audit = on_audit
+        self._lease = Lease(store.lease(rotator_id))  # state_store.py rule 6
+        self._lock = threading.Lock()
+        self._start_timer = timer
+        self._timer: Timer | None = None
+        self._stopped = False
+
+    def start(self) -> None:
+        """The lease kept across a restart shows in the status, and ends by itself."""
+        with self._lock:
+            held = self._lease.holder(self._wall())
+            self._arm(held)
+        if held is not None:
+            self._mailbox.put_control(held)
+
+    def stop(self) -> None:
+        with self._lock:
+            self._stopped = True
+            self._arm(None)
+
+    @property
+    def holder(self) -> Control | None:
+        return self._lease.holder(self._wall())
+
+    def refusal(self, who: str) -> str | None:
+        """lease.py rule 5: why a motion command from ``who`` is refused, or None."""
+        return self._lease.refusal(who, self._wall())
+
+    # -- claims and releases (rule 4) -----------------------------------------------------
+    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> Control:
+        """Raise Refused (reported and audited) if the claim is refused."""
+        try:
+            with self._lock:
+                held = self._lease.claim(operator, minutes, self._wall())
+                self._arm(held)
+        except LeaseError as exc:
+            self._report(ErrorKind.REFUSED, str(exc), described)
+            self.audit(origin, described, f"refused: {exc}")
+            raise Refused(RefusalCode.INVALID, str(exc)) from None
+        log.info("%s: %s holds the control lease (%s)", self._id, held.operator, origin.who)
+        self._changed(held)
+        self.audit(origin, described, EXECUTED)
+        return held
+
+    def release(self, origin: Origin, described: str) -> Control | None:
+        """Anyone may (lease.py rule 4); releasing a free lease changes nothing."""
+        with self._lock:
+            held = self._lease.release(self._wall())
+            self._arm(None)
+        if held is not None:
+            log.info("%s: %s released the control lease", self._id, origin.who)
+            self._changed(None)
+        self.audit(origin, described, EXECUTED if held is not None else f"{EXECUTED} (was free)")
+        return held
+
+    def _changed(self, held: Control | None) -> None:
+        self._mailbox.put_control(held)
+        self._store.later(lambda: self._save(held))
+
+    def _save(self, held: Control | None) -> None:
+        if not self._store.set_lease(self._id, held):
+            self._report(
+                ErrorKind.STATE,
+                "the control lease is in effect but could not be saved: it will not survive a "
+                "restart (state file not writable)",
+                "control",
+            )
+
+    # -- its end (rule 2) --------------------------------------------------------------------
+    def _arm(self, held: Control | None) -> None:
+        """Under the lock: the one timer for the lease's end (None: no timer)."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if held is None or self._stopped:
+            return
+        self._timer = self._start_timer(max(0.0, held.until_unix - self._wall()), self._expire)
+
+    def _expire(self) -> None:
+        with self._lock:
+            now = self._wall()
+            ended = self._lease.expired(now)
+            if ended is None:
+                self._arm(self._lease.holder(now))  # early (rule 2), or already released
+                return
+            self._timer = None
+        log.info("%s: the control lease of %s has ended", self._id, ended.operator)
+        self._changed(None)
+
+    # -- the trail (rule 3) ------------------------------------------------------------------
+    def audit(self, origin: Origin, command: str, result: str) -> None:
+        if self._on_audit is None:
+            return
+        try:
+            event = AuditEvent(self._wall(), self._id, origin, command, result, self._bearing())
+            self._on_audit(event)
+        except Exception:
+            log.exception("%s: audit listener failed", self._id)

@@ -1,0 +1,67 @@
+"""The payloads of who is turning it (pure, tested on their own: docs/architecture.md rule 4):
+a claim of the control lease, a release, ``R/control``. What a claim's operator and minutes
+may be is the lease's to judge (engine/lease.py rule 1); here only the JSON's shape.
+
+Rules:
+1. A claim is a JSON object with ``minutes`` and, unless the message carries the MQTT 5 user
+   property ``operator``, an ``operator``; any other key, or anything that is not such an
+   object, is a PayloadError naming what was wrong (refused on ``R/error``, nothing changes).
+2. A release takes any payload; a JSON object's valid ``operator`` names who released it when
+   the message has no user property (Home Assistant's button sends one).
+3. ``R/control`` says who holds the lease and until when (ISO 8601, UTC), or nobody.
+"""
+
+from __future__ import annotations
+
+import json
+from datetime import UTC, datetime
+
+from bridge.model import Control, valid_operator
+from bridge.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError
+
+EXAMPLE = '{"operator": "DL1ABC", "minutes": 30}'
+
+
+def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
+    """Rule 1: (operator, minutes) as sent; the message's own operator when it names none."""
+    if len(payload) > MAX_COMMAND_BYTES:
+        raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")
+    try:
+        obj = json.loads(payload.decode("utf-8"), parse_constant=lambda c: c)  # NaN: a string
+    except UnicodeDecodeError:
+        raise PayloadError("payload is not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        raise PayloadError(f"bad JSON: {exc.msg}; a claim is {EXAMPLE}") from None
+    if not isinstance(obj, dict):
+        raise PayloadError(f"a claim must be a JSON object, e.g. {EXAMPLE}")
+    unknown = set(obj) - {"operator", "minutes"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in a claim: {', '.join(sorted(unknown))}")
+    if "minutes" not in obj:
+        raise PayloadError(f'a claim needs "minutes", e.g. {EXAMPLE}')
+    who = obj.get("operator", operator)
+    if who is None:
+        raise PayloadError(f'a claim needs "operator", e.g. {EXAMPLE}')
+    return who, obj["minutes"]
+
+
+def parse_release(payload: bytes) -> str | None:
+    """Rule 2: who the payload says released it, or None."""
+    try:
+        obj = json.loads(payload.decode("utf-8")) if payload.strip().startswith(b"{") else None
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
+
+
+def control_json(control: Control | None) -> str:
+    """Rule 3: ``R/control`` (retained)."""
+    if control is None:
+        return json.dumps({"holder": None, "until": None}, separators=(",", ":"))
+    doc = {"holder": control.operator, "until": control_time(control)}
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def control_time(control: Control) -> str:
+    """When the lease ends, as ``R/control`` and ``R/status`` say it."""
+    return datetime.fromtimestamp(control.until_unix, UTC).isoformat(timespec="milliseconds")

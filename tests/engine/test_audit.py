@@ -1,0 +1,103 @@
+"""The audit file on a real file system: lines, rotation by size, a full disk (/dev/full gives
+ENOSPC on every write), and coming back when the path is writable again."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from bridge.engine.audit import AuditFile
+from bridge.model import AuditEvent, Origin, Source
+
+
+def event(n: int, result: str = "executed") -> AuditEvent:
+    origin = Origin(Source.ROTCTLD, None, "192.168.1.20")
+    return AuditEvent(1_790_000_000.0 + n, "rotor", origin, f"P {n} 0", result, 90.0)
+
+
+def lines(path: Path) -> list[dict[str, object]]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_every_event_is_one_json_line(tmp_path: Path) -> None:
+    audit = AuditFile(tmp_path / "audit.jsonl", 1_000_000)
+    audit.start()
+    try:
+        audit.put(event(1))
+        audit.put(event(2, "refused: DL1ABC holds the rotator until 14:43 UTC (25 min left)"))
+        audit.flush()
+    finally:
+        audit.stop()
+    first, second = lines(tmp_path / "audit.jsonl")
+    assert first == {
+        "time": 1_790_000_001.0,
+        "rotator": "rotor",
+        "operator": "rotctld 192.168.1.20",
+        "interface": "rotctld",
+        "peer": "192.168.1.20",
+        "command": "P 1 0",
+        "result": "executed",
+        "bearing_before": 90.0,
+    }
+    assert str(second["result"]).startswith("refused: DL1ABC holds")
+
+
+def test_the_file_rotates_by_size_and_keeps_a_few(tmp_path: Path) -> None:
+    path = tmp_path / "audit.jsonl"
+    one = len(json.dumps(event(10).as_dict(), separators=(",", ":"))) + 1
+    audit = AuditFile(path, max_bytes=3 * one, keep=2)
+    audit.start()
+    try:
+        for n in range(10, 20):  # ten lines, three to a file
+            audit.put(event(n))
+        audit.flush()
+    finally:
+        audit.stop()
+    kept = sorted(p.name for p in tmp_path.iterdir())
+    assert kept == ["audit.jsonl", "audit.jsonl.1", "audit.jsonl.2"]  # the oldest went
+    assert [d["command"] for d in lines(path)] == ["P 19 0"]
+    assert [d["command"] for d in lines(tmp_path / "audit.jsonl.1")] == [
+        "P 16 0",
+        "P 17 0",
+        "P 18 0",
+    ]
+    assert [d["command"] for d in lines(tmp_path / "audit.jsonl.2")][0] == "P 13 0"
+    assert all(p.stat().st_size <= 3 * one for p in tmp_path.iterdir())
+
+
+def test_a_full_disk_is_reported_once_never_fatal_and_recovers(tmp_path: Path) -> None:
+    path = tmp_path / "audit.jsonl"
+    os.symlink("/dev/full", path)  # every write: ENOSPC
+    said: list[str | None] = []
+    audit = AuditFile(path, 1_000_000, on_problem=said.append)
+    audit.start()
+    try:
+        for n in range(3):
+            audit.put(event(n))
+            audit.flush()
+        assert len(said) == 1 and said[0] is not None
+        assert "No space left on device" in said[0] and str(path) in said[0]
+        assert audit.lines_lost == 3 and audit.lines_written == 0
+        path.unlink()  # space again: a plain file at the path
+        audit.put(event(7))
+        audit.flush()
+        assert said[1:] == [None]  # said once that it works again
+        assert [d["command"] for d in lines(path)] == ["P 7 0"]
+    finally:
+        audit.stop()
+
+
+def test_a_full_queue_drops_and_counts_but_never_blocks(tmp_path: Path) -> None:
+    path = tmp_path / "audit.jsonl"
+    audit = AuditFile(path, 1_000_000, queue_lines=2)  # not started: nothing drains it
+    for n in range(5):
+        audit.put(event(n))  # returns at once, whatever the queue holds
+    assert audit.lines_lost == 3
+    audit.start()
+    audit.put(event(9))
+    audit.flush()
+    audit.stop()
+    written = lines(path)
+    assert [d["command"] for d in written] == ["P 0 0", "P 1 0", "P 9 0"]
+    assert written[0]["dropped"] == 3  # the next line written says how many were left out

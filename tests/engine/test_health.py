@@ -1,0 +1,288 @@
+"""Rotor health (engine/health.py, health_judge.py) in virtual time.
+
+The session runs against the Rotor-EZ emulator (tests/engine/virtual.py) for what a user would
+see: a rotor slowing down one way warns and names the direction, a stall repeated at one
+azimuth warns, scattered ones do not, a reset starts a new baseline, a DCU-1 says it measures
+nothing. The thousand-move run with random variation drives the part itself: the emulators'
+physics (emulators/physics.py) read every poll interval through the motion machine
+(motion.py), as the session feeds it, a thousand moves in a second or two instead of a minute.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import re
+from collections.abc import Callable
+
+import pytest
+
+from bridge.app import worker_config
+from bridge.emulators.physics import Axis
+from bridge.engine import motion as mo
+from bridge.engine.health import Health
+from bridge.engine.health_judge import Judge
+from bridge.model import MotionState, RotatorHealth
+from bridge.settings import RotatorSettings
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+
+
+def _set_speed(v: VirtualRotator, speed_deg_s: float) -> None:
+    """The emulated rotor turns at this speed from now on (a motor capacitor ageing, a dry
+    bearing): its physics axis's speed."""
+    v.device._axis.speed_deg_s = speed_deg_s  # type: ignore[attr-defined]
+
+
+def _health(v: VirtualRotator) -> RotatorHealth:
+    health = v.status.health
+    assert health is not None
+    return health
+
+
+def _move(v: VirtualRotator, az_deg: float) -> RotatorHealth:
+    moves = _health(v).moves
+    v.target(az_deg)
+    v.run_until(
+        lambda h: h.state is MotionState.IDLE and _health(h).moves > moves, 300, f"move to {az_deg}"
+    )
+    return _health(v)
+
+
+def _settled(rig: Rig, **kw: object) -> VirtualRotator:
+    v = rig("rotorez", emulator={"start_az_deg": 20.0}, **kw)
+    v.run_until_state(MotionState.IDLE, 30)
+    return v
+
+
+def test_speed_drop_one_way_warns_within_ten_moves_and_names_it(rig: Rig) -> None:
+    v = _settled(rig)
+    rng = random.Random(29)
+    for i in range(20):  # the baseline: 6 deg/s both ways, +-5 %
+        _set_speed(v, 6.0 * rng.uniform(0.95, 1.05))
+        health = _move(v, 300 if i % 2 == 0 else 30)
+        assert health.warnings == ()
+    assert health.baseline_from == "learned"
+    assert health.az.baseline_down_deg_s == pytest.approx(6.0, rel=0.1)
+    warned_at = None
+    for i in range(10):  # counter-clockwise now 30 % slower
+        going_ccw = v.truth().az_deg > 180
+        _set_speed(v, 6.0 * (0.7 if going_ccw else 1.0))
+        health = _move(v, 30 if going_ccw else 300)
+        if health.warnings:
+            warned_at = i + 1
+            break
+    assert warned_at is not None, "no warning within 10 moves"
+    first = health.warnings[0]
+    shape = (
+        r"counter-clockwise 4\.\d °/s, [23]\d % below its baseline [56]\.\d over its last 7 moves"
+    )
+    assert re.fullmatch(shape, first), first
+    assert not any(w.startswith("clockwise") and "below" in w for w in health.warnings)
+    assert health.az.speed_down_deg_s == pytest.approx(4.2, rel=0.1)
+    assert health.az.speed_up_deg_s == pytest.approx(6.0, rel=0.1)
+
+
+def _jam_at(v: VirtualRotator, target_deg: float, at_deg: float) -> None:
+    """Send the rotor toward ``target_deg``; it sticks at ``at_deg`` (ice, a caught cable)."""
+    stalls = _health(v).stalls
+    v.target(target_deg)
+    up = target_deg > v.truth().az_deg
+    v.run_until(lambda h: (h.truth().az_deg >= at_deg) == up, 120, f"reach {at_deg}")
+    v.jam()
+    v.run_until(lambda h: _health(h).stalls > stalls, 60, "stall")
+    v.unjam()  # the next target waits for the brake delay in the session (sending.py)
+
+
+def test_a_stall_repeated_at_one_azimuth_warns(rig: Rig) -> None:
+    v = _settled(rig)
+    for _ in range(3):
+        _jam_at(v, 200, 120)
+        assert _move(v, 30).stalls >= 1
+    health = _health(v)
+    assert health.stalls == 3
+    assert [w for w in health.warnings if "stalls near 12" in w], health.warnings
+
+
+def test_scattered_single_stalls_do_not_warn(rig: Rig) -> None:
+    v = _settled(rig)
+    for at_deg in (60, 170, 280):
+        _jam_at(v, 330, at_deg)
+        _move(v, 30)
+    health = _health(v)
+    assert health.stalls == 3
+    assert health.warnings == ()
+    assert len(health.stall_azimuths_deg) == 3
+
+
+def test_reset_starts_a_new_baseline_and_keeps_the_totals(rig: Rig) -> None:
+    v = _settled(rig, settings={"health_baseline_moves": 3})
+    for i in range(4):
+        health = _move(v, 300 if i % 2 == 0 else 30)
+    assert health.baseline_from == "learned"
+    odometer = health.az.odometer_deg
+    assert odometer == pytest.approx(4 * 270, rel=0.05)
+    v.mailbox.put_health_reset()
+    v.command()  # the batch taken, as the worker does
+    health = _health(v)
+    assert health.baseline_from == "learning" and health.baseline_moves_left == 3
+    assert health.az.baseline_up_deg_s is None
+    assert (health.moves, health.az.odometer_deg) == (4, odometer)
+
+
+def test_set_speed_is_the_baseline_from_the_start(rig: Rig) -> None:
+    v = _settled(rig, settings={"az_speed_deg_s": 8.0})
+    health = _move(v, 300)
+    assert health.baseline_from == "settings"
+    assert (health.az.baseline_up_deg_s, health.az.baseline_down_deg_s) == (8.0, 8.0)
+
+
+def test_start_delay_arrival_and_coast_are_measured(rig: Rig) -> None:
+    v = _settled(rig)
+    health = _move(v, 200)
+    assert health.moves == 1 and health.az.arrival_error_deg is not None
+    assert health.az.arrival_error_deg <= 3.0
+    assert _health(v).az.coast_deg is None
+    v.target(30)
+    v.run_until(lambda h: h.truth().az_deg < 120, 60)
+    v.stop()
+    v.run_until(lambda h: _health(h).moves == 2, 60)
+    assert _health(v).az.coast_deg is not None and _health(v).az.coast_deg < 3.0
+
+
+def test_a_controller_without_readings_says_it_measures_nothing(rig: Rig) -> None:
+    v = rig("dcu1")
+    v.target(100)
+    v.run_for(60)
+    health = _health(v)
+    assert health.measured is False and health.moves == 0
+
+
+# -- the part alone: a thousand moves -------------------------------------------------------
+class Bench:
+    """The part as the session feeds it: an emulated axis read every poll interval (whole
+    degrees, as a Rotor-EZ reports) through the motion machine; a command when it is at rest,
+    the motor starting START_S later."""
+
+    POLL_S = 0.25
+    START_S = 0.3
+
+    def __init__(self, speed: Callable[[int, bool], float]) -> None:
+        cfg = worker_config(
+            RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+        )
+        self.mcfg = cfg.motion
+        self.health = Health(cfg)
+        self.axis = Axis(20.0, speed_deg_s=6.0)
+        self.speed = speed
+        self.now = 0.0
+        self.m = mo.link_up(mo.Motion(), self.mcfg, 0.0)
+        self.reports: list[RotatorHealth] = []
+
+    def move(self, n: int, target_deg: float) -> None:
+        while not mo.at_rest(self.m):
+            self._poll()
+        self.m = mo.commanded(self.m, self.mcfg, target_deg, self.now)
+        self._feed()
+        self.axis.advance(self.now)  # the last move's arrival, committed
+        going_up = target_deg > self.axis.position_deg
+        self.axis.speed_deg_s = self.speed(n, going_up)
+        start_t = self.now + self.START_S
+        while self.now + self.POLL_S < start_t:
+            self._poll()
+        self.axis.start_move(target_deg, start_t)
+        moves, give_up_t = len(self.reports), self.now + 600
+        while len(self.reports) == moves:
+            assert self.now < give_up_t, f"move {n} to {target_deg} never ended"
+            self._poll()
+
+    def _poll(self) -> None:
+        self.now += self.POLL_S
+        reading = float(round(self.axis.position_deg_at(self.now)))
+        self.m, _events = mo.reading(self.m, self.mcfg, reading, self.now)
+        self._feed()
+
+    def _feed(self) -> None:
+        report = self.health.step(self.m, self.now)
+        if report is not None:
+            self.reports.append(report)
+
+
+def test_ten_percent_random_variation_over_a_thousand_moves_never_warns() -> None:
+    rng = random.Random(1000)
+    bench = Bench(lambda n, up: 6.0 * rng.uniform(0.9, 1.1))
+    for n in range(1000):
+        here = bench.axis.position_deg_at(bench.now)
+        bench.move(n, rng.choice([a for a in range(10, 351, 5) if abs(a - here) >= 30]))
+        assert bench.reports[-1].warnings == (), (n, bench.reports[-1])
+    last = bench.reports[-1]
+    assert last.moves == 1000 and last.baseline_from == "learned"
+    assert last.az.speed_up_deg_s == pytest.approx(6.0, rel=0.1)
+    assert last.start_delay_s == pytest.approx(Bench.START_S, abs=Bench.POLL_S)
+
+
+def test_the_part_warns_on_a_drop_too() -> None:
+    bench = Bench(lambda n, up: 6.0 * (0.7 if n >= 20 and up else 1.0))
+    for n in range(30):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert bench.reports[-1].warnings[0].startswith("clockwise 4.")
+
+
+def test_the_memory_survives_json_and_a_bad_one_starts_afresh(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    bench = Bench(lambda n, up: 6.0)
+    for n in range(25):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    report = bench.reports[-1]
+    kept = json.loads(json.dumps(report.memory))
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    again = Judge(cfg.health, False, kept).report()
+    assert again == report
+    broken = {**kept, "moves": "many"}
+    assert Judge(cfg.health, False, broken).report().moves == 0
+    assert "unreadable" in caplog.text
+
+
+def test_an_az_el_rotor_is_measured_on_each_axis(rig: Rig) -> None:
+    speeds = {"az_speed_deg_s": 12.0, "el_speed_deg_s": 6.0}
+    v = rig("rot2prog", emulator={"resolution_ppd": 1, **speeds})
+    v.run_until_state(MotionState.IDLE, 30)
+    for n in range(1, 7):
+        v.target(300 if n % 2 else 20, 80 if n % 2 else 5)
+        v.run_until(lambda h, n=n: _health(h).moves >= n and h.state is MotionState.IDLE, 300)
+    health = _health(v)
+    assert health.el is not None
+    assert health.az.speed_up_deg_s is not None and health.az.speed_down_deg_s is not None
+    assert health.el.speed_up_deg_s is not None and health.el.speed_down_deg_s is not None
+    assert health.el.odometer_deg == pytest.approx(6 * 75, rel=0.05)
+    assert health.az.speed_up_deg_s == pytest.approx(12.0, rel=0.1)
+    assert health.el.speed_down_deg_s == pytest.approx(6.0, rel=0.1)
+    assert health.warnings == ()
+
+
+def test_a_silent_slew_gives_no_start_delay(rig: Rig) -> None:
+    v = rig("satel")
+    v.run_until(lambda h: h.state is MotionState.IDLE, 60)
+    v.target(200, 30)
+    v.run_until(lambda h: _health(h).moves == 1 and h.state is MotionState.IDLE, 300)
+    health = _health(v)
+    assert health.start_delay_s is None and health.az.odometer_deg > 0
+
+
+def test_health_failing_is_contained_and_the_rotor_goes_on(rig: Rig) -> None:
+    v = _settled(rig)
+    health = _move(v, 200)
+
+    def broken(m: object, now: float) -> None:
+        raise RuntimeError("a bug in health")
+
+    v.session.health.step = broken  # type: ignore[assignment,method-assign]
+    v.target(60)
+    v.run_until(lambda h: h.errors("internal"), 10, "the bug reported")
+    assert "health failed" in v.errors("internal")[0].message
+    v.run_until(lambda h: abs(h.truth().az_deg - 60) <= 3 and h.state is MotionState.IDLE, 120)
+    assert _health(v).moves >= health.moves  # rebuilt from what it had kept

@@ -1,0 +1,91 @@
+"""The control lease, in virtual time: the clock is a number handed in."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.engine.lease import Lease, LeaseError, held_text, valid_operator
+from bridge.model import Control
+
+T0 = 1_790_000_000.0  # 2026-09-21 14:13:20 UTC (any fixed time: nothing reads the real clock)
+
+
+def test_a_claim_holds_it_until_it_ends_by_itself() -> None:
+    lease = Lease()
+    held = lease.claim("DL1ABC", 30, T0)
+    assert held == Control("DL1ABC", T0 + 1800)
+    assert lease.holder(T0 + 1799) == held
+    assert lease.expired(T0 + 1799) is None
+    assert lease.holder(T0 + 1800) is None  # rule 3: nobody had to call anything
+    assert lease.expired(T0 + 1800) == held  # said once...
+    assert lease.expired(T0 + 1801) is None  # ...and not again
+
+
+def test_another_operator_is_refused_naming_the_holder_and_the_end() -> None:
+    lease = Lease()
+    lease.claim("DL1ABC", 30, T0)
+    why = lease.refusal("G4XYZ", T0 + 300)
+    assert why == (
+        "DL1ABC holds the rotator until 14:43 UTC (25 min left): only they may turn it "
+        "(control lease)"
+    )
+    assert lease.refusal("rotctld 192.168.1.20", T0) is not None
+    assert lease.refusal("DL1ABC", T0 + 300) is None
+    assert lease.refusal("G4XYZ", T0 + 1800) is None  # ended
+
+
+def test_a_claim_while_held_by_another_is_refused_and_changes_nothing() -> None:
+    lease = Lease()
+    held = lease.claim("DL1ABC", 30, T0)
+    with pytest.raises(LeaseError, match="DL1ABC holds the rotator until 14:43 UTC"):
+        lease.claim("G4XYZ", 10, T0 + 60)
+    assert lease.holder(T0 + 60) == held
+    renewed = lease.claim("DL1ABC", 5, T0 + 60)  # the holder renews, from now
+    assert renewed.until_unix == T0 + 60 + 300
+    assert lease.claim("G4XYZ", 10, T0 + 360).operator == "G4XYZ"  # once it has ended
+
+
+@pytest.mark.parametrize(
+    ("operator", "minutes", "why"),
+    [
+        ("", 30, "operator"),
+        ("x" * 33, 30, "operator"),
+        ("DL1\nABC", 30, "operator"),
+        (None, 30, "operator"),
+        (5, 30, "operator"),
+        ("DL1ABC", 0, "minutes"),
+        ("DL1ABC", 0.5, "minutes"),
+        ("DL1ABC", 1441, "minutes"),
+        ("DL1ABC", "30", "minutes"),
+        ("DL1ABC", True, "minutes"),
+        ("DL1ABC", float("nan"), "minutes"),
+        ("DL1ABC", float("inf"), "minutes"),
+    ],
+)
+def test_a_bad_claim_is_refused_and_changes_nothing(
+    operator: object, minutes: object, why: str
+) -> None:
+    lease = Lease(Control("G4XYZ", T0 + 600))
+    with pytest.raises(LeaseError, match=why):
+        lease.claim(operator, minutes, T0)
+    assert lease.holder(T0) == Control("G4XYZ", T0 + 600)
+
+
+def test_anyone_may_release_it() -> None:
+    lease = Lease(Control("DL1ABC", T0 + 600))  # as the state file kept it
+    assert lease.release(T0) == Control("DL1ABC", T0 + 600)
+    assert lease.holder(T0) is None and lease.refusal("G4XYZ", T0) is None
+    assert lease.release(T0) is None  # free already
+
+
+def test_operator_names() -> None:
+    assert valid_operator("  DL1ABC ") == "DL1ABC"
+    assert valid_operator("Anna at the club") == "Anna at the club"
+    assert valid_operator("\x1b[2J") is None
+    assert valid_operator("   ") is None
+
+
+def test_the_minutes_left_round_up() -> None:
+    held = Control("DL1ABC", T0 + 61)
+    assert held_text(held, T0) == "DL1ABC holds the rotator until 14:14 UTC (2 min left)"
+    assert held_text(held, T0 + 60) == "DL1ABC holds the rotator until 14:14 UTC (1 min left)"

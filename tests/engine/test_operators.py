@@ -1,0 +1,191 @@
+"""The control lease as the judge applies it, and the audit trail of every command judged; in
+virtual time (a wall clock that is a number, a timer that fires when the test says). No port is
+opened: the rotator is offline, so a target the lease lets through is refused for the link."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from bridge.app import worker_config
+from bridge.engine.mailbox import Mailbox
+from bridge.engine.operators import Operators
+from bridge.engine.rotator import Rotator
+from bridge.engine.state_store import StateStore
+from bridge.errors import Refused
+from bridge.model import AuditEvent, Control, ErrorEvent, Origin, Source, Stop, Target
+from bridge.settings import RotatorSettings
+
+T0 = 1_790_000_000.0  # 14:13:20 UTC
+HOLDER = Origin(Source.MQTT, "DL1ABC")
+OTHER = Origin(Source.MQTT, "G4XYZ")
+ROTCTLD = Origin(Source.ROTCTLD, None, "192.168.1.20")
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = T0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class Timers:
+    """Timers that fire when the test says (virtual time)."""
+
+    def __init__(self) -> None:
+        self.armed: list[tuple[float, Callable[[], None], list[bool]]] = []
+
+    def __call__(self, delay_s: float, fire: Callable[[], None]) -> Timers.One:
+        one = Timers.One()
+        self.armed.append((delay_s, fire, one.cancelled))
+        return one
+
+    class One:
+        def __init__(self) -> None:
+            self.cancelled = [False]
+
+        def cancel(self) -> None:
+            self.cancelled[0] = True
+
+    def live(self) -> list[tuple[float, Callable[[], None]]]:
+        return [(d, f) for d, f, c in self.armed if not c[0]]
+
+
+def rotator(tmp_path: Path, clock: Clock) -> tuple[Rotator, list[AuditEvent], list[ErrorEvent]]:
+    audit: list[AuditEvent] = []
+    events: list[ErrorEvent] = []
+    settings = RotatorSettings(id="t", model="rotorez", port="/dev/null", park_az_deg=0)
+    cfg = worker_config(settings)
+    store = StateStore(tmp_path / "state.json")
+    rot = Rotator(cfg, store, lambda s: None, events.append, wall=clock, on_audit=audit.append)
+    return rot, audit, events
+
+
+def refused(run: Callable[[], None]) -> str:
+    with pytest.raises(Refused) as exc:
+        run()
+    return str(exc.value.code)
+
+
+def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end(
+    tmp_path: Path,
+) -> None:
+    clock = Clock()
+    rot, audit, events = rotator(tmp_path, clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    clock.now += 300
+    assert refused(lambda: rot.submit(Target(120, origin=OTHER), "target 120")) == "leased"
+    assert events[-1].message == (
+        "DL1ABC holds the rotator until 14:43 UTC (25 min left): only they may turn it "
+        "(control lease)"
+    )
+    assert refused(lambda: rot.submit(Target(120, source=Source.ROTCTLD, origin=ROTCTLD))) == (
+        "leased"
+    )
+    assert refused(lambda: rot.park(Source.PST, "pst park", origin=OTHER)) == "leased"
+    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=OTHER)) in (
+        "leased",
+        "unsupported",  # no station here: tracking is refused before the lease is asked
+    )
+    # the holder's target passes the lease (and is refused only for the link: offline here)
+    assert refused(lambda: rot.submit(Target(120, origin=HOLDER), "target 120")) == "offline"
+    # a stop, a lock ON, tracking OFF: never refused, whoever sends them
+    rot.submit(Stop(Source.MQTT, OTHER), "stop")
+    rot.set_lock(True, origin=OTHER)
+    rot.set_lock(False, origin=OTHER)
+    rot.track("off", Source.MQTT, "track off", origin=OTHER)
+    rows = [(a.origin.who, a.command, a.result.split(":")[0]) for a in audit]
+    assert rows == [
+        ("DL1ABC", "claim", "executed"),
+        ("G4XYZ", "target 120", "refused"),
+        ("rotctld 192.168.1.20", "target az 120", "refused"),
+        ("G4XYZ", "pst park", "refused"),
+        ("G4XYZ", "track sun", "refused"),
+        ("DL1ABC", "target 120", "refused"),  # offline
+        ("G4XYZ", "stop", "executed"),
+        ("G4XYZ", "lock ON", "executed"),
+        ("G4XYZ", "lock OFF", "executed"),
+        ("G4XYZ", "track off", "executed"),
+    ]
+    assert audit[1].result.startswith("refused: DL1ABC holds the rotator until 14:43 UTC")
+    assert audit[2].origin.interface is Source.ROTCTLD and audit[2].origin.peer == "192.168.1.20"
+
+
+def test_a_claim_while_held_is_refused_and_anyone_may_release(tmp_path: Path) -> None:
+    clock = Clock()
+    rot, audit, events = rotator(tmp_path, clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    assert refused(lambda: rot.operators.claim("G4XYZ", 10, OTHER, "claim")) == "invalid"
+    assert "DL1ABC holds the rotator until 14:43 UTC (30 min left)" in events[-1].message
+    assert refused(lambda: rot.operators.claim("G4XYZ", 0, OTHER, "claim")) == "invalid"
+    assert rot.operators.holder == Control("DL1ABC", T0 + 1800)
+    rot.operators.release(OTHER, "release")  # the station owner's button, say
+    assert rot.operators.holder is None
+    assert refused(lambda: rot.submit(Target(10, origin=OTHER))) == "offline"  # free
+    assert [a.result.split(":")[0] for a in audit] == [
+        "executed",
+        "refused",
+        "refused",
+        "executed",
+        "refused",
+    ]
+
+
+def test_the_lease_survives_a_restart(tmp_path: Path) -> None:
+    clock = Clock()
+    rot, _, _ = rotator(tmp_path, clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.operators.stop()
+    rot._store.flush()  # the save runs on the store's writer thread
+    kept = json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]["lease"]
+    assert kept == {"operator": "DL1ABC", "until": T0 + 1800}
+    again, _, _ = rotator(tmp_path, clock)
+    assert again.operators.holder == Control("DL1ABC", T0 + 1800)
+    assert refused(lambda: again.submit(Target(10, origin=OTHER))) == "leased"
+
+
+def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None:
+    clock, timers, mailbox = Clock(), Timers(), Mailbox()
+    store = StateStore(tmp_path / "state.json")
+    ops = Operators(
+        "t",
+        store,
+        mailbox,
+        wall=clock,
+        bearing=lambda: None,
+        report=lambda *a: None,
+        timer=timers,
+    )
+    ops.claim("DL1ABC", 2, HOLDER, "claim")
+    assert mailbox.take().control == Control("DL1ABC", T0 + 120)
+    [(delay_s, fire)] = timers.live()
+    assert delay_s == 120
+    clock.now += 119.5  # the wall clock was set forward a little less than the timer ran
+    fire()  # early: nothing ends, a new timer for the rest
+    assert ops.holder is not None and not mailbox.take()
+    [(rest_s, fire)] = timers.live()[-1:]
+    assert rest_s == pytest.approx(0.5)
+    clock.now += 0.5
+    fire()
+    batch = mailbox.take()
+    assert batch.control_set and batch.control is None  # the status says: free
+    assert ops.holder is None and ops.refusal("G4XYZ") is None
+    store.flush()
+    assert "lease" not in json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]
+    mailbox.close()
+
+
+def test_input_refused_before_it_became_a_command_is_audited_when_its_sender_is_known(
+    tmp_path: Path,
+) -> None:
+    rot, audit, events = rotator(tmp_path, Clock())
+    rot.report_refusal("bad payload", "target 'north'", origin=OTHER)  # e.g. a bad payload
+    rot.report_refusal("bad payload", "target 'north'")  # nobody known: R/error only
+    assert [e.message for e in events] == ["bad payload", "bad payload"]
+    assert [(a.origin.who, a.command, a.result) for a in audit] == [
+        ("G4XYZ", "target 'north'", "refused: bad payload")
+    ]

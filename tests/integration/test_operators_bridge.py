@@ -1,0 +1,232 @@
+"""Who is turning it, end to end: a real mosquitto, the emulated Rotor-EZ on a pty, the App with
+its rotctld and PST ports and Home Assistant's discovery; MQTT 5 clients that name their
+operator in the user property ``operator``, as the remote companion does.
+
+With the control lease held by one operator, every other interface's target is refused naming
+the holder and the time the lease ends, the holder's turns the rotor, anyone's stop and lock ON
+work; Home Assistant's release button frees it; the audit file and ``R/audit`` have every one
+of these, with operator, interface and peer. A lease kept in the state file holds after a
+restart and ends by itself (claims are a minute at least: that one is written to end in
+seconds); its rules are proven in virtual time in tests/engine/test_operators.py. The audit
+file survives a full disk.
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import time
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from typing import Any
+
+import paho.mqtt.client as paho
+import pytest
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+
+from tests.support import free_port, wait_until
+from tests.support.mqtt import retained_snapshot
+from tests.support.rig import Rig
+from tests.support.udp_logger import PstClient, reserve_pst_ports, tag
+
+PREFIX = "homeassistant"
+NODE = f"{PREFIX}/{{}}/rotorbridge_rotor_r_tower/{{}}/config"
+
+
+class Operator:
+    """An MQTT 5 client whose every publish carries the user property ``operator``."""
+
+    def __init__(self, port: int, name: str) -> None:
+        self.name = name
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"op-{name}", protocol=paho.MQTTv5)
+        c.connect("127.0.0.1", port)
+        c.loop_start()
+        self.client = c
+
+    def publish(self, topic: str, payload: str) -> None:
+        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+        props.UserProperty = ("operator", self.name)
+        self.client.publish(topic, payload, qos=1, properties=props).wait_for_publish(5)
+
+    def close(self) -> None:
+        self.client.loop_stop()
+        self.client.disconnect()
+
+
+@pytest.fixture
+def operators(rig: Rig) -> Iterator[tuple[Operator, Operator]]:
+    holder, other = Operator(rig.broker.port, "DL1ABC"), Operator(rig.broker.port, "G4XYZ")
+    yield holder, other
+    holder.close()
+    other.close()
+
+
+def rotctld(port: int, line: bytes) -> bytes:
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(line)
+        return s.recv(100)
+
+
+def ha_configs(rig: Rig) -> dict[str, dict[str, Any]]:
+    snap = retained_snapshot(rig.broker.port, f"{PREFIX}/#")
+    return {t: json.loads(p) for t, p in snap.items() if t.endswith("/config") and p}
+
+
+def test_the_lease_refuses_others_lets_stops_through_and_everything_is_audited(
+    rig: Rig, operators: tuple[Operator, Operator]
+) -> None:
+    holder, other = operators
+    rot_port, (pst_port, pst_replies) = free_port(), reserve_pst_ports()
+    audit_path = rig.tmp / "audit.jsonl"
+    rig.sections["audit_file"] = str(audit_path)
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, rotctld_port=rot_port,
+                  pst_udp_port=pst_port)  # fmt: skip
+    app = rig.start()
+    rig.ready("tower")
+    pst = PstClient(pst_port, replies=pst_replies)
+    probe = rig.probe
+    ha = ha_configs(rig)
+    control_sensor = ha[NODE.format("sensor", "control")]
+    release_button = ha[NODE.format("button", "release_control")]
+    stop_button = ha[NODE.format("button", "stop")]
+    number = ha[NODE.format("number", "target_azimuth")]
+    assert control_sensor["state_topic"] == "rotor/control"
+
+    # DL1ABC claims the rotator for 30 minutes: R/control (retained) says so
+    holder.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    until = datetime.fromisoformat(json.loads(held.text)["until"])
+    ends = f"DL1ABC holds the rotator until {until.astimezone(UTC):%H:%M} UTC"
+
+    # everyone else's target is refused, naming the holder and the end: MQTT (operator G4XYZ),
+    # rotctld P (Hamlib's RPRT -9: rejected), PST, Home Assistant's number
+    def refused(n: int) -> None:  # one at a time: the audit trail's order is the test's
+        wait_until(lambda: len(probe.on("rotor/error")) >= n, 10, f"refusal {n}")
+
+    def audited(n: int) -> None:  # the same, for commands sent by different clients
+        wait_until(lambda: len(probe.on("rotor/audit")) >= n, 10, f"audit event {n}")
+
+    other.publish("rotor/target", "200")
+    refused(1)
+    assert rotctld(rot_port, b"P 200 0\n") == b"RPRT -9\n"
+    refused(2)
+    pst.command(tag("AZIMUTH", 200))
+    refused(3)
+    probe.publish(number["command_topic"], "200.0")  # as Home Assistant sends it
+    refused(4)
+    refusals = [json.loads(m.text) for m in probe.on("rotor/error")]
+    assert all(ends in r["message"] and "min left" in r["message"] for r in refusals)
+    assert emu.state().az_deg == pytest.approx(10, abs=1) and not emu.state().is_moving
+    # the other operator's claim is refused too, naming the holder
+    other.publish("rotor/control/claim", json.dumps({"operator": "G4XYZ", "minutes": 5}))
+    probe.wait_for("rotor/error", lambda m: "not claimed: " + ends in m.text)
+
+    # the holder's target turns it; anyone's stop stops it (STOP is never refused)
+    holder.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    other.publish("rotor/stop", "STOP")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert emu.state().az_deg < 290
+    audited(8)
+    # Home Assistant's stop button and anyone's lock ON work too
+    probe.publish(stop_button["command_topic"], stop_button["payload_press"])
+    audited(9)
+    other.publish("rotor/lock", "ON")
+    on = probe.wait_value("rotor/lock/state", "ON")
+    holder.publish("rotor/lock", "OFF")
+    probe.wait_value("rotor/lock/state", "OFF", after=on.t)  # (OFF at the start too)
+    audited(11)
+
+    # Home Assistant's release button frees it; then anyone may turn it
+    probe.publish(release_button["command_topic"], release_button["payload_press"])
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    probe.wait_for("rotor/control", free, after=held.t)  # (free at the start too)
+    other.publish("rotor/target", "60")
+    emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)
+    probe.wait_for("rotor/status", lambda m: json.loads(m.text)["last_operator"] == "G4XYZ")
+
+    # the audit file and R/audit: every one of these, with operator, interface and peer
+    want = [
+        ("DL1ABC", "mqtt", None, "executed"),  # the claim
+        ("G4XYZ", "mqtt", None, "refused"),  # target 200
+        ("rotctld 127.0.0.1", "rotctld", "127.0.0.1", "refused"),
+        ("pst 127.0.0.1", "pst", "127.0.0.1", "refused"),
+        ("mqtt", "mqtt", None, "refused"),  # Home Assistant's number: no operator it can send
+        ("G4XYZ", "mqtt", None, "refused"),  # the claim
+        ("DL1ABC", "mqtt", None, "executed"),  # target 300
+        ("G4XYZ", "mqtt", None, "executed"),  # stop
+        ("mqtt", "mqtt", None, "executed"),  # Home Assistant's stop button
+        ("G4XYZ", "mqtt", None, "executed"),  # lock ON
+        ("DL1ABC", "mqtt", None, "executed"),  # lock OFF
+        ("homeassistant", "mqtt", None, "executed"),  # the release button
+        ("G4XYZ", "mqtt", None, "executed"),  # target 60
+    ]
+    wait_until(lambda: len(probe.on("rotor/audit")) >= len(want), 10, "R/audit")
+    published = [json.loads(m.text) for m in probe.on("rotor/audit")]
+    assert app.audit is not None
+    app.audit.flush()
+    filed = [json.loads(line) for line in audit_path.read_text().splitlines()]
+    for events in (published, filed):
+        got = [
+            (e["operator"], e["interface"], e["peer"], e["result"].split(":")[0]) for e in events
+        ]
+        assert got == want
+        assert all(e["rotator"] == "tower" and "time" in e for e in events)
+        assert events[2]["result"].startswith("refused: " + ends)
+        assert events[2]["command"] == "P 200 0" or "200" in events[2]["command"]
+        assert events[6]["bearing_before"] == pytest.approx(10, abs=1)
+    assert [m.retain for m in probe.on("rotor/audit")] == [False] * len(want)
+    pst.close()
+
+
+def test_a_full_disk_under_the_audit_file_is_reported_once_and_costs_nothing(rig: Rig) -> None:
+    audit_path = rig.tmp / "audit.jsonl"
+    audit_path.symlink_to("/dev/full")  # every write: ENOSPC, as on a full disk
+    rig.sections["audit_file"] = str(audit_path)
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    app = rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    for az in ("40", "80"):
+        probe.publish("rotor/target", az)
+        emu.wait_for(lambda s, az=az: abs(s.az_deg - float(az)) <= 3 and not s.is_moving, 20)
+    problem = probe.wait_for("rotor/error", lambda m: json.loads(m.text)["kind"] == "audit")
+    assert "No space left on device" in json.loads(problem.text)["message"]
+    assert [json.loads(m.text)["kind"] for m in probe.on("rotor/error")] == ["audit"]  # once
+    assert len(probe.on("rotor/audit")) == 2  # R/audit goes on
+    # space again: the next line is written, without a restart
+    audit_path.unlink()
+    probe.publish("rotor/stop", "STOP")
+    assert app.audit is not None
+    wait_until(lambda: len(probe.on("rotor/audit")) == 3, 10, "the stop audited")
+    app.audit.flush()
+    (line,) = audit_path.read_text().splitlines()
+    assert json.loads(line)["command"] == "stop 'STOP'"
+
+
+def test_a_lease_kept_across_a_restart_holds_and_then_ends_by_itself(
+    rig: Rig, operators: tuple[Operator, Operator]
+) -> None:
+    _, other = operators
+    # the state file a bridge left behind, with a lease that ends a few seconds from now
+    ends_unix = time.time() + 4
+    lease = {"operator": "DL1ABC", "until": ends_unix}
+    (rig.tmp / "state.json").write_text(json.dumps({"rotators": {"tower": {"lease": lease}}}))
+    emu = rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    other.publish("rotor/target", "200")
+    probe.wait_for("rotor/error", lambda m: "DL1ABC holds the rotator until" in m.text)
+    # nobody does anything: the lease ends at its time (this wait is what is under test)
+    free = lambda m: json.loads(m.text)["holder"] is None  # noqa: E731
+    probe.wait_for("rotor/control", free, 15, after=held.t)
+    assert time.time() >= ends_unix
+    ended = lambda m: json.loads(m.text)["control"] is None  # noqa: E731
+    status = probe.wait_for("rotor/status", ended, after=held.t)
+    assert json.loads(status.text)["control"] is None
+    other.publish("rotor/target", "60")
+    emu.wait_for(lambda s: abs(s.az_deg - 60) <= 3 and not s.is_moving, 20)

@@ -1,0 +1,51 @@
+"""The control lease's payloads, pure (mqtt/control.py)."""
+
+from __future__ import annotations
+
+import pytest
+
+from bridge.model import Control
+from bridge.mqtt.control import control_json, parse_claim, parse_release
+from bridge.mqtt.payloads import PayloadError
+
+
+def test_a_claim_names_an_operator_and_minutes_or_takes_the_messages_operator() -> None:
+    assert parse_claim(b'{"operator": "DL1ABC", "minutes": 30}', None) == ("DL1ABC", 30)
+    assert parse_claim(b'{"minutes": 5}', "G4XYZ") == ("G4XYZ", 5)
+    assert parse_claim(b'{"operator": "DL1ABC", "minutes": 5}', "G4XYZ") == ("DL1ABC", 5)
+    assert parse_claim(b'{"operator": "DL1ABC", "minutes": NaN}', None) == ("DL1ABC", "NaN")
+
+
+@pytest.mark.parametrize(
+    ("payload", "why"),
+    [
+        (b"{not json", "bad JSON"),
+        (b"30", "must be a JSON object"),
+        (b'["DL1ABC", 30]', "must be a JSON object"),
+        (b'{"operator": "DL1ABC"}', 'needs "minutes"'),
+        (b'{"minutes": 30}', 'needs "operator"'),
+        (
+            b'{"operator": "DL1ABC", "minutes": 30, "force": true}',
+            r"unknown key\(s\) in a claim: force",
+        ),
+        (b"\xff\xfe", "not UTF-8"),
+        (b"{" + b" " * 300 + b"}", "too large"),
+    ],
+)
+def test_a_claim_not_understood_says_what_was_wrong(payload: bytes, why: str) -> None:
+    with pytest.raises(PayloadError, match=why):
+        parse_claim(payload, None)
+
+
+def test_a_release_may_name_who_released_it() -> None:
+    assert parse_release(b'{"operator": "homeassistant"}') == "homeassistant"
+    assert parse_release(b"") is None
+    assert parse_release(b"RELEASE") is None
+    assert parse_release(b'{"operator": "\\u001b[2J"}') is None  # not printable: nobody
+    assert parse_release(b"{broken") is None
+
+
+def test_r_control_says_who_and_until_when_or_nobody() -> None:
+    held = Control("DL1ABC", 1_790_000_000.0)
+    assert control_json(held) == '{"holder":"DL1ABC","until":"2026-09-21T14:13:20.000+00:00"}'
+    assert control_json(None) == '{"holder":null,"until":null}'

@@ -1,0 +1,198 @@
+"""The console on the remote (``[web]`` in remote.toml) with real parts: a mosquitto, the station's
+bridge on an emulated Rotor-EZ, the remote in this process with its console on a free port, and
+the console's plain HTTP client. What is judged is what an operator notices: what the page is
+told, where the station's rotor ends up, what the live feed says, the answer to a command."""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.mosquitto import free_port
+from bridge.remote.run import Remote, StartError
+from bridge.remote.settings import RemoteSettings
+from tests.support import wait_until
+from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.rig import Rig, arrival_tol
+
+OPERATOR = "DL1ABC"
+LOCATOR = "JO62qm"
+PRESETS = {"EU": 45, "W6": 320}
+TOL = arrival_tol("rotorez")
+
+
+def remote_settings(rig: Rig, web_port: int, **web: Any) -> RemoteSettings:
+    return RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": rig.broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": free_port()}],
+        web=web_section(web_port, **web),
+    )
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.sections["station"] = {"locator": LOCATOR}
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0}, presets=PRESETS, beamwidth_deg=40)
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def remote(station: Rig) -> Iterator[tuple[Remote, ConsoleClient, list[str]]]:
+    port = free_port()
+    r = Remote(remote_settings(station, port))
+    lines = r.start()
+    client = ConsoleClient(port)
+    client.session()
+    yield r, client, lines
+    r.stop()
+
+
+def statuses(stream: EventStream) -> Iterator[dict[str, Any]]:
+    while True:
+        name, data = stream.next()
+        if name == "status":
+            yield data["status"]
+
+
+def test_the_page_is_told_the_station_and_its_rotator(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    r, client, lines = remote
+    assert lines[-1] == f"{OPERATOR} -> 127.0.0.1: console for tower on {client_url(client)}"
+    config = client.get("/api/config")
+    assert config.status == 200
+    st = config.doc["station"]
+    assert st["locator"] == LOCATOR
+    assert abs(st["latitude_deg"] - 52.52) < 0.1 and abs(st["longitude_deg"] - 13.29) < 0.1
+    (rot,) = config.doc["rotators"]
+    assert rot["id"] == "tower" and rot["model"] == "Rotor-EZ"
+    assert rot["beamwidth_deg"] == 40
+    assert rot["presets"] == {"EU": [45, None], "W6": [320, None]}
+    assert rot["az_range_deg"] == [0, 360]
+    assert client.get("/api/land").status == 200  # the map, centred on the station
+
+
+def client_url(client: ConsoleClient) -> str:
+    return f"http://127.0.0.1:{client.port}/"
+
+
+def test_a_target_from_the_page_turns_the_station_rotor_and_the_feed_shows_it(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    _, client, _ = remote
+    stream = EventStream(client)
+    try:
+        first = next(statuses(stream))
+        assert first["available"] and abs(first["bearing"] - 10) <= TOL
+        answer = client.command("tower", command="target", az=120)
+        assert answer.status == 200, answer
+        station.arrived("tower", 120)
+        for status in statuses(stream):
+            if status["state"] == "idle" and abs(status["bearing"] - 120) <= TOL:
+                break
+        assert status["last_command_source"] == "mqtt"  # the station heard it over its broker
+    finally:
+        stream.close()
+
+
+def test_a_preset_then_stop_from_the_page(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    _, client, _ = remote
+    assert client.command("tower", command="preset", name="W6").status == 200
+    wait_until(lambda: station.emus["tower"].state().is_moving, 10, "the rotor turning")
+    assert client.command("tower", command="stop").status == 200
+    wait_until(lambda: station.status("tower").state.value == "idle", 15, "stopped")
+    az = station.emus["tower"].state().az_deg
+    assert abs(az - 320) > 20  # stopped on the way, long before W6
+
+
+def test_a_lock_from_the_page_holds_and_the_station_refusal_reaches_the_page(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    _, client, _ = remote
+    stream = EventStream(client)
+    try:
+        assert client.command("tower", command="lock", on=True).status == 200
+        for status in statuses(stream):
+            if status["locked"]:
+                break
+        assert client.command("tower", command="target", az=200).status == 200  # sent on
+        while True:  # the station's judge said no, on R/error: the page hears it
+            name, data = stream.next()
+            if name == "error":
+                break
+        assert data["rotator"] == "tower" and "lock" in data["message"]
+    finally:
+        stream.close()
+        client.command("tower", command="lock", on=False)
+
+
+def test_broker_away_the_page_is_told_offline_and_nothing_moves_when_it_is_back(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    r, client, _ = remote
+    emu = station.emus["tower"]
+    link = r.link
+    assert link is not None
+    stream = EventStream(client)
+    try:
+        moves = len(emu.frames(*BEARING_OUTCOMES))
+        station.broker.kill()
+        wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+        for status in statuses(stream):  # no stale bearing: the rotator greys out
+            if not status["available"]:
+                break
+        assert status["bearing"] is None
+        answer = client.command("tower", command="target", az=250)
+        assert answer.status == 409 and answer.doc["code"] == "offline", answer
+        assert "not connected" in answer.doc["error"]
+        assert client.command("tower", command="preset", name="EU").status == 409
+        station.broker.restart()
+        wait_until(lambda: link.up, 30, "the remote back on the broker")
+        station.ready("tower", 30)
+        for status in statuses(stream):  # the station's word again, from its retained topics
+            if status["available"]:
+                break
+        assert abs(status["bearing"] - 10) <= TOL
+        assert client.command("tower", command="stop").status == 200  # a marker behind all
+        wait_until(lambda: station.status("tower").last_command_source == "mqtt", 10, "stop")
+        assert len(emu.frames(*BEARING_OUTCOMES)) == moves
+        assert abs(emu.state().az_deg - 10) <= TOL
+    finally:
+        stream.close()
+
+
+def test_a_console_beyond_loopback_without_a_password_is_refused(station: Rig) -> None:
+    with pytest.raises(ValueError, match=r"web.password_file"):
+        remote_settings(station, free_port(), bind="0.0.0.0")
+
+
+def test_a_console_port_already_taken_is_a_start_error_naming_it(station: Rig) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        r = Remote(remote_settings(station, port))
+        with pytest.raises(StartError, match=rf"web.port {port}: the console cannot listen"):
+            r.start()
+        assert r.link is None and not r.servers  # nothing left running
+
+
+def test_with_the_station_bridge_gone_a_turn_is_refused_at_once(
+    station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
+) -> None:
+    r, client, _ = remote
+    station.stop()  # the bridge says offline on its way out
+    wait_until(lambda: not r.rotators[0].current, 10, "the remote sees the station go")
+    answer = client.command("tower", command="target", az=250)
+    assert answer.status == 409 and answer.doc["code"] == "offline", answer
+    assert "station's rotator is offline" in answer.doc["error"]
+    assert client.command("tower", command="stop").status == 200  # a stop still goes out

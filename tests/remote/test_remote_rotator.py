@@ -1,0 +1,150 @@
+"""The remote's rotator as the GS-232, Easycomm and PstRotator endpoints use it (remote/rotator.py
+rules 4 and 5), on a stand-in link and a fake clock: what it publishes, what it refuses and how
+often it says so."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import pytest
+
+from bridge.errors import RefusalCode, Refused
+from bridge.gs232 import EasycommSession, Gs232Session
+from bridge.model import Source, Stop, Target
+from bridge.mqtt.topics import StationTopics
+from bridge.remote.console import Drawn, RemoteConsoleRotator
+from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
+from tests.support.clock import FakeClock
+
+
+@dataclass
+class Link:
+    up: bool = True
+    sent: list[tuple[str, str]] = field(default_factory=list)
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        if not self.up:
+            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        self.sent.append((topic, payload))
+
+
+def info(park: str = "null") -> Info:
+    return Info.parse(
+        b'{"name":"tower","model":"rotorez","azimuth_range":[0,360],"elevation_range":null,'
+        b'"keep_out":[],"park":' + park.encode() + b',"options":[]}'
+    )
+
+
+def rotator(link: Link, clock: FakeClock, park: str = "null") -> RemoteRotator:
+    station = StationTopics("rotor")
+    return RemoteRotator(
+        "tower",
+        station.rotator("tower"),
+        station.bridge_state,
+        info(park),
+        StationView(),
+        link,
+        "DL1ABC",
+        5,
+        clock=clock,
+    )
+
+
+def test_park_and_a_place_go_to_the_station_which_knows_where_it_is() -> None:
+    link = Link()
+    rot = rotator(link, FakeClock(), park="[180, null]")
+    rot.park(Source.EASYCOMM, "easycomm PARK")
+    rot.go_toward(35.7, 139.7, Source.PST, "pst", locator="PM95vq")
+    rot.go_toward(35.7, 139.7, Source.PST, "pst", long_path=True)
+    assert link.sent == [
+        ("rotor/tower/park", "park"),
+        ("rotor/tower/target", '{"locator":"PM95vq"}'),
+        ("rotor/tower/target", '{"latitude":35.7,"longitude":139.7,"path":"long"}'),
+    ]
+
+
+def test_park_without_a_park_position_is_refused_and_sends_nothing() -> None:
+    link = Link()
+    with pytest.raises(Refused) as caught:
+        rotator(link, FakeClock()).park(Source.PST, "pst <PARK>")
+    assert caught.value.code is RefusalCode.UNSUPPORTED and link.sent == []
+
+
+def test_refusals_are_logged_rarely_per_front_end_with_a_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    clock, link = FakeClock(), Link(up=False)
+    rot = rotator(link, clock)
+    with caplog.at_level(logging.WARNING, logger="bridge.remote.rotator"):
+        for described, command in (
+            ("gs232 W120 000", Target(120, None)),
+            ("gs232 W121 000", Target(121, None)),
+            ("pst <STOP>", Stop(Source.PST)),
+            ("gs232 S", Stop(Source.GS232)),
+        ):
+            with pytest.raises(Refused):
+                rot.submit(command, described)
+        clock.t += REFUSAL_LOG_S
+        with pytest.raises(Refused):
+            rot.submit(Target(122, None), "gs232 W122 000")
+    said = [r.getMessage() for r in caplog.records]
+    assert said == [
+        "tower: gs232 W120 000 refused: not connected to the station's broker",
+        "tower: pst <STOP> refused: not connected to the station's broker",
+        "tower: gs232 W122 000 refused: not connected to the station's broker (2 more since)",
+    ]
+
+
+def test_a_stop_the_broker_cannot_take_is_answered_as_a_refusal_on_gs232_and_easycomm(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The GS-232 and Easycomm sessions (gs232/ rule 6) on the remote with its link down: the
+    client hears the refusal in its protocol, and the log says it once, without a traceback."""
+    clock, link = FakeClock(), Link(up=False)
+    rot = rotator(link, clock)
+    with caplog.at_level(logging.WARNING):
+        assert Gs232Session(rot).feed(b"S\r") == [b"?>\r\n"]
+        assert EasycommSession(rot).feed(b"SA SE \n") == [b"ALrefused offline\n"]
+    assert link.sent == []
+    assert [(r.name, r.getMessage()) for r in caplog.records] == [
+        ("bridge.remote.rotator", "tower: gs232 S refused: not connected to the station's broker"),
+        (
+            "bridge.remote.rotator",
+            "tower: easycomm SA SE refused: not connected to the station's broker",
+        ),
+    ]
+
+
+def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
+    """web/port.py rule 2, for the console on the remote: what the console's order of commands
+    (web/commands.py rule 5) measures a command against, on the remote's monotonic clock."""
+    mono = FakeClock(100.0)
+    remote = rotator(Link(), mono)
+    console = RemoteConsoleRotator(remote, Drawn(), StationView())
+    console.submit(Stop(Source.WEB))
+    assert console.last_halt_s == 100.0
+    mono.t = 200.0
+    console.set_lock(False)  # lock OFF halts nothing
+    assert console.last_halt_s == 100.0
+    console.set_lock(True)
+    assert console.last_halt_s == 200.0
+
+
+def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
+    """docs/remote.md: the station's target topic takes an azimuth always; Easycomm's ``EL30``
+    alone cannot be said there."""
+    station, link = StationTopics("rotor"), Link()
+    azel = Info.parse(
+        b'{"name":"dish","model":"rot2prog","azimuth_range":[0,360],"elevation_range":[0,90]}'
+    )
+    view = StationView()  # the station there (online), as a move needs
+    view.put(station.bridge_state, b"online")
+    view.put(station.rotator("dish").availability, b"online")
+    rot = RemoteRotator(
+        "dish", station.rotator("dish"), station.bridge_state, azel, view, link, "X", 5
+    )
+    assert EasycommSession(rot).feed(b"EL30.0\n") == [b"ALrefused unsupported\n"]
+    assert link.sent == []
+    assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]
+    assert link.sent == [("rotor/dish/target", '{"azimuth":30.0,"elevation":10.0}')]

@@ -1,0 +1,74 @@
+"""The remote's ``[[endpoints]]`` (remote/settings.py rules 2-4): what each offers, loopback
+binds unless set, and a problem named by the key as the file spells it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bridge.remote.settings import load_remote_settings
+from bridge.settings import ConfigError
+
+HEAD = 'operator = "DL1ABC"\n[mqtt]\nhost = "station.example.org"\n'
+
+
+def load(tmp_path: Path, *endpoints: str) -> object:
+    path = tmp_path / "remote.toml"
+    path.write_text(HEAD + "".join(f"[[endpoints]]\n{e}\n" for e in endpoints))
+    return load_remote_settings(str(path))
+
+
+def test_every_kind_of_endpoint_binds_loopback_unless_set(tmp_path: Path) -> None:
+    s = load(
+        tmp_path,
+        'rotator = "tower"\ngs232_port = 4534\ngs232_pty = "/tmp/rotor-gs232"\n'
+        'pst_udp_port = 12000\neasycomm_port = 4536\neasycomm_bind = "0.0.0.0"',
+    )
+    (ep,) = s.endpoints  # type: ignore[attr-defined]
+    assert ep.rotctld_port is None
+    assert [(o.key, o.transport, o.where, o.bind) for o in ep.offers()] == [
+        ("gs232_port", "tcp", 4534, "127.0.0.1"),
+        ("easycomm_port", "tcp", 4536, "0.0.0.0"),
+        ("pst_udp_port", "udp", 12000, "127.0.0.1"),
+        ("gs232_pty", "pty", "/tmp/rotor-gs232", ""),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("endpoints", "said"),
+    [
+        (
+            ['rotator = "tower"'],
+            "endpoints[0] (rotator 'tower') offers nothing: give it one of rotctld_port, ",
+        ),
+        (
+            ['rotator = "a"\nrotctld_port = 4533', 'rotator = "b"\ngs232_port = 4533'],
+            "endpoints[1].gs232_port 4533 clashes with endpoints[0].rotctld_port: give it "
+            "another port",
+        ),
+        (
+            ['rotator = "a"\nrotctld_port = 4533\neasycomm_port = 4533\neasycomm_bind = "::1"'],
+            "endpoints[0].easycomm_port 4533 clashes with endpoints[0].rotctld_port",
+        ),
+        (
+            ['rotator = "a"\npst_udp_port = 12000', 'rotator = "b"\npst_udp_port = 12001'],
+            "endpoints[1].pst_udp_port 12001 clashes with endpoints[0].pst_udp_port",
+        ),
+        (
+            [
+                'rotator = "a"\ngs232_pty = "/tmp/x"',
+                'rotator = "b"\neasycomm_pty = "/tmp/../tmp/x"',
+            ],
+            "endpoints[1].easycomm_pty /tmp/x clashes with endpoints[0].gs232_pty: give it "
+            "another path",
+        ),
+        (["gs232_prt = 4534"], "endpoints[0].gs232_prt: unknown key: did you mean gs232_port?"),
+        (["pst_udp_port = 70000"], "endpoints[0].pst_udp_port"),
+        (['gs232_pty = ""'], "endpoints[0].gs232_pty"),
+    ],
+)
+def test_a_problem_names_the_endpoint(tmp_path: Path, endpoints: list[str], said: str) -> None:
+    with pytest.raises(ConfigError) as caught:
+        load(tmp_path, *endpoints)
+    assert said in str(caught.value)

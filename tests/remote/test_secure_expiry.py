@@ -1,0 +1,159 @@
+"""A command whose expiry passes in a broker queue never moves the rotor.
+
+The station's bridge keeps no session (clean start: mqtt/connection.py rule 1), so nothing waits
+for it in the station's broker. The queue a command really waits in is a relay's: a broker on
+the operator's side, bridged to the station's (mosquitto's ``connection`` bridge, MQTT 5,
+``topic rotor/# out 1``), whose link to the station is down while the command waits. The link
+here goes through a gate this test opens when it wants: shut, it takes each connection and
+closes it at once, so the relay keeps its queue; open, it forwards bytes both ways.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import paho.mqtt.client as paho
+import pytest
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.mosquitto import Mosquitto
+from tests.support import wait_until
+from tests.support.rig import Rig
+
+
+class Gate:
+    """A TCP gate on a loopback port in front of ``target``: shut until ``open()``."""
+
+    def __init__(self, target: int) -> None:
+        self.target = target
+        self.opened = threading.Event()
+        self.turned_away = 0  # connections closed while shut
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self._server.getsockname()[1])
+        self._socks: list[socket.socket] = []
+        self._closing = False
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def open(self) -> None:
+        self.opened.set()
+
+    def _accept(self) -> None:
+        while not self._closing:
+            try:
+                conn, _ = self._server.accept()
+            except OSError:
+                return
+            if not self.opened.is_set():
+                self.turned_away += 1
+                conn.close()
+                continue
+            upstream = socket.create_connection(("127.0.0.1", self.target))
+            self._socks += [conn, upstream]
+            for a, b in ((conn, upstream), (upstream, conn)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    @staticmethod
+    def _pipe(src: socket.socket, dst: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+    def close(self) -> None:
+        self._closing = True
+        self._server.close()
+        for s in self._socks:
+            with contextlib.suppress(OSError):
+                s.close()
+
+
+def relay_conf(gate: Gate) -> str:
+    """The operator's broker, bridged to the station's through the gate."""
+    return (
+        "allow_anonymous true\n"
+        "connection station\n"
+        f"address 127.0.0.1:{gate.port}\n"
+        "bridge_protocol_version mqttv50\n"
+        "cleansession false\n"  # the relay keeps what is for the station while the link is down
+        "restart_timeout 1\n"  # tries the link again every second
+        "try_private false\n"
+        "topic rotor/# out 1\n"
+    )
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def relay(tmp_path: Path, station: Rig) -> Iterator[tuple[Mosquitto, Gate]]:
+    gate = Gate(station.broker.port)
+    broker = Mosquitto(tmp_path / "relay", extra_conf=relay_conf(gate)).start()
+    yield broker, gate
+    broker.stop()
+    gate.close()
+
+
+def publish(port: int, topic: str, payload: str, expiry_s: int | None) -> None:
+    """QoS 1, acknowledged by the broker at ``port`` before this returns; MQTT 5, with a message
+    expiry interval when ``expiry_s`` is given."""
+    c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"op-{topic}", protocol=paho.MQTTv5)
+    c.connect("127.0.0.1", port)
+    c.loop_start()
+    try:
+        props: Any = None
+        if expiry_s is not None:
+            props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]
+            props.MessageExpiryInterval = expiry_s
+        c.publish(topic, payload, qos=1, properties=props).wait_for_publish(5)
+    finally:
+        c.disconnect()
+        c.loop_stop()
+
+
+@pytest.mark.parametrize(
+    ("expiry_s", "moves"),
+    [(1, False), (60, True)],
+    ids=["expired in the queue: never moves", "control, still alive: moves"],
+)
+def test_a_command_whose_expiry_passes_in_a_relay_queue_never_moves_the_rotor(
+    station: Rig, relay: tuple[Mosquitto, Gate], expiry_s: int, moves: bool
+) -> None:
+    broker, gate = relay
+    emu = station.emus["tower"]
+    frames = len(emu.frames(*BEARING_OUTCOMES))
+    wait_until(lambda: gate.turned_away >= 1, 10, "the relay trying its link")
+    publish(broker.port, "rotor/target", "60", expiry_s)
+    # The thing under test is time passing in the queue: a real wait past a 1 s expiry (and
+    # well inside the control's 60 s); the link stays shut all along.
+    expired = threading.Event()
+    expired.wait(2.5)
+    # a marker without expiry, behind the target in the same queue (FIFO): when it reaches the
+    # station's broker, the target would have been before it
+    publish(broker.port, "rotor/relay/marker", "m", None)
+    start = station.probe.mark()
+    gate.open()
+    station.probe.wait(lambda m: m.topic == "rotor/relay/marker", 15, "the marker", start)
+    targets = [m for m in station.probe.messages[start:] if m.topic == "rotor/target"]
+    if moves:
+        assert [m.payload for m in targets] == [b"60"]
+        station.arrived("tower", 60)
+    else:
+        assert targets == []
+        # what the bridge would do with one: nothing moved, no command source recorded
+        assert len(emu.frames(*BEARING_OUTCOMES)) == frames
+        assert abs(emu.state().az_deg - 10) <= 1
+        assert station.status("tower").last_command_source is None

@@ -1,0 +1,234 @@
+"""The pty line server (ptylines.py) on real pseudo-terminals, with the GS-232B session onto a
+stand-in rotator: what a serial client opening the link sees, byte for byte."""
+
+from __future__ import annotations
+
+import errno
+import os
+import select
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from bridge.gs232 import Gs232Session, gs232_pty
+from bridge.model import MotionState, RotatorStatus, Source, Stop, Target
+from bridge.protocols import REGISTRY
+from bridge.ptylines import PtyLineServer
+from tests.support import wait_until
+
+
+@dataclass
+class StandIn:
+    """What the GS-232 session uses of a rotator; records what it is asked to do."""
+
+    id: str = "tower"
+    spec = REGISTRY["rotorez"]
+    bearing_deg: float = 42.0
+    submitted: list[Target | Stop] = field(default_factory=list)
+
+    @property
+    def status(self) -> RotatorStatus:
+        return RotatorStatus(
+            self.id, MotionState.IDLE, self.bearing_deg, connected=True, available=True
+        )
+
+    def submit(self, command: Target | Stop, described: str | None = None) -> None:
+        self.submitted.append(command)
+
+    def park(self, source: Source, described: str) -> None:
+        raise AssertionError("GS-232 has no park")
+
+
+class Client:
+    """A serial client on the link: opens it as a program opens a port."""
+
+    def __init__(self, path: str) -> None:
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+
+    def ask(self, data: bytes, reply_ends: bytes = b"\n", timeout_s: float = 5.0) -> bytes:
+        os.write(self.fd, data)
+        return self.read(reply_ends, timeout_s)
+
+    def read(self, reply_ends: bytes = b"\n", timeout_s: float = 5.0) -> bytes:
+        buf = b""
+        deadline = time.monotonic() + timeout_s
+        while not buf.endswith(reply_ends):
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self.fd], [], [], left)[0]:
+                break
+            buf += os.read(self.fd, 4096)
+        return buf
+
+    def drain(self) -> bytes:
+        buf = b""
+        while select.select([self.fd], [], [], 0)[0]:
+            buf += os.read(self.fd, 4096)
+        return buf
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+
+@pytest.fixture
+def served(tmp_path: Path) -> Iterator[tuple[PtyLineServer, StandIn, str]]:
+    rot = StandIn()
+    path = str(tmp_path / "rotor-gs232")
+    server = gs232_pty(rot, path)
+    server.start()
+    yield server, rot, path
+    server.stop()
+
+
+def test_a_client_on_the_link_reads_and_turns(
+    served: tuple[PtyLineServer, StandIn, str],
+) -> None:
+    server, rot, path = served
+    assert os.readlink(path) == server.slave_name
+    c = Client(path)
+    try:
+        assert c.ask(b"C2\r") == b"AZ=042  EL=000\r\n"
+        assert c.ask(b"W120 000\r\rC\r") == b"AZ=042\r\n"  # W answers nothing
+        assert rot.submitted == [Target(120, None, Source.GS232)]
+    finally:
+        c.close()
+
+
+def test_a_client_that_closes_and_opens_again_is_served_and_nothing_spins(
+    served: tuple[PtyLineServer, StandIn, str],
+) -> None:
+    server, _, path = served
+    for _ in range(3):
+        c = Client(path)
+        assert c.ask(b"C\r") == b"AZ=042\r\n"
+        c.close()
+    before = server.wakeups
+    # the wait is the thing under test: nobody has the slave open, and the thread must sleep
+    time.sleep(0.5)
+    assert server.wakeups - before <= 1  # at most the one that discards unread bytes (rule 6)
+    c = Client(path)
+    try:
+        assert c.ask(b"C\r") == b"AZ=042\r\n"
+    finally:
+        c.close()
+
+
+def test_junk_gets_the_error_prompt_and_the_next_line_is_served(
+    served: tuple[PtyLineServer, StandIn, str],
+) -> None:
+    _, rot, path = served
+    c = Client(path)
+    try:
+        assert c.ask(b"GET / HTTP/1.1\r") == b"?>\r\n"
+        assert c.ask(b"\xff\x00" * 100 + b"\r") == b"?>\r\n"  # overlong, not ASCII
+        assert c.ask(b"W1234 000\r") == b"?>\r\n"  # not a command (four digits)
+        assert c.ask(b"C\r") == b"AZ=042\r\n"
+        assert rot.submitted == []
+    finally:
+        c.close()
+
+
+def test_a_half_line_of_a_vanished_client_is_dropped(tmp_path: Path) -> None:
+    rot = StandIn()
+    path = str(tmp_path / "gs")
+    server = PtyLineServer(
+        "tower",
+        path,
+        lambda: Gs232Session(rot),
+        label="gs232",
+        key="gs232",
+        useful_within_s=0.2,
+    )
+    server.start()
+    try:
+        c = Client(path)
+        os.write(c.fd, b"W12")
+        c.close()
+        # the wait is the thing under test: the unfinished command's time passing
+        wait_until(lambda: server.wakeups >= 2, 5, "the unfinished command dropped")
+        c = Client(path)
+        assert c.ask(b"C\r") == b"AZ=042\r\n"  # not "W12C": the old half line is gone
+        c.close()
+        assert rot.submitted == []
+    finally:
+        server.stop()
+
+
+def test_replies_nobody_reads_are_dropped_without_blocking(
+    served: tuple[PtyLineServer, StandIn, str],
+) -> None:
+    server, _, path = served
+    c = Client(path)
+    try:
+        for _ in range(2000):  # 16 bytes a reply: more than the pty holds
+            try:
+                os.write(c.fd, b"C2\r")
+            except BlockingIOError:
+                select.select([], [c.fd], [], 1)
+        wait_until(lambda: server.replies_dropped > 0, 10, "a reply dropped")
+        wait_until(lambda: not c.drain(), 10, "the replies read")
+        assert c.ask(b"C\r") == b"AZ=042\r\n"
+    finally:
+        c.close()
+
+
+def test_a_file_that_is_not_a_link_is_refused_and_left_alone(tmp_path: Path) -> None:
+    path = tmp_path / "ttyS9"
+    path.write_text("mine")
+    server = gs232_pty(StandIn(), str(path))
+    with pytest.raises(OSError) as caught:
+        server.start()
+    assert caught.value.errno == errno.EEXIST
+    assert str(path) in str(caught.value.strerror) and "gs232_pty" in str(caught.value.strerror)
+    assert path.read_text() == "mine"
+
+
+def test_a_leftover_link_is_replaced_and_the_link_goes_at_stop(tmp_path: Path) -> None:
+    path = tmp_path / "rotor-gs232"
+    path.symlink_to("/dev/pts/nonesuch")
+    server = gs232_pty(StandIn(), str(path))
+    server.start()
+    assert os.readlink(path) == server.slave_name
+    server.stop()
+    assert not os.path.lexists(path)
+
+
+def test_a_link_someone_else_put_there_is_left_at_stop(tmp_path: Path) -> None:
+    path = tmp_path / "rotor-gs232"
+    server = gs232_pty(StandIn(), str(path))
+    server.start()
+    os.unlink(path)
+    path.symlink_to("/dev/null")
+    server.stop()
+    assert os.readlink(path) == "/dev/null"
+
+
+def test_a_missing_directory_names_the_path(tmp_path: Path) -> None:
+    path = tmp_path / "nonesuch" / "rotor-gs232"
+    with pytest.raises(OSError, match=r"gs232 for rotator 'tower': cannot link a pty at .*"):
+        gs232_pty(StandIn(), str(path)).start()
+
+
+def test_what_a_client_left_unread_is_not_the_next_ones(tmp_path: Path) -> None:
+    """Hamlib's GS-232B reads a reply up to its CR and leaves the LF (rule 6)."""
+    rot = StandIn()
+    path = str(tmp_path / "gs")
+    server = PtyLineServer(
+        "tower", path, lambda: Gs232Session(rot), label="gs232", key="gs232", stale_s=0.3
+    )
+    server.start()
+    try:
+        c = Client(path)
+        os.write(c.fd, b"C\r")
+        assert select.select([c.fd], [], [], 5)[0]
+        assert os.read(c.fd, 7) == b"AZ=042\r"  # the LF left unread
+        c.close()
+        # the wait is the thing under test: the unread byte's time passing
+        wait_until(lambda: server.stale_dropped == 1, 5, "the LF discarded")
+        c = Client(path)  # opens without flushing its input
+        assert c.ask(b"C\r") == b"AZ=042\r\n"  # not "\n" first
+        c.close()
+    finally:
+        server.stop()
