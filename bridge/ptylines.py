@@ -10,7 +10,11 @@ Rules:
 1. ``listen`` opens the pty pair (raw: no echo, no line editing, no CR/LF translation) and links
    the slave's name at the path: a symlink already there (a leftover from a crash) is
    replaced in one step (os.replace), anything else there is refused, untouched, with an
-   OSError naming the front end, the rotator, the path and the setting to change.
+   OSError naming the front end, the rotator, the path and the setting to change. A link a
+   live server serves is no leftover: each server claims its path for as long as it lives (a
+   Linux abstract socket named after the path, which dies with its process, so a crash leaves
+   no claim), and a path claimed already is refused (EADDRINUSE). Where there are no abstract
+   sockets (macOS) a link there is replaced as before.
 2. ``stop`` removes the link only while it still points at this pty (another program's link
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
@@ -30,15 +34,27 @@ Rules:
    GS-232B reads a reply up to its CR and leaves the LF). So what is still unread STALE_S
    after the last reply was written is discarded (counted in ``stale_dropped``): a client
    that asked reads its reply well within that.
+7. The pty never echoes: a client may turn the tty's ECHO on (a program opening the port in
+   cooked mode, ``stty sane``), and a pty echoes what its master writes back to the master, so
+   the server would read its own replies as commands and answer them for ever. A serial line
+   has no echo towards the computer: before each reply, ECHO and ECHONL found on are turned
+   off again (logged once a server), the client's other settings left as they are.
+8. Nothing ends the thread but ``stop`` (docs/architecture.md rule 8): a fault in a session or
+   in the loop itself (an ioctl that fails, a bug) is logged with its traceback at most once
+   per FAULT_LOG_S, and the server goes on with a fresh session after EIO_RETRY_S; the link
+   stays served.
 """
 
 from __future__ import annotations
 
 import errno
 import fcntl
+import hashlib
 import logging
+import math
 import os
 import select
+import socket
 import struct
 import termios
 import threading
@@ -53,6 +69,7 @@ USEFUL_WITHIN_S = 60.0  # rule 4: an unfinished command is dropped after this
 EIO_RETRY_S = 0.2  # rule 3
 DROP_LOG_S = 10.0  # rule 5
 STALE_S = 2.0  # rule 6
+FAULT_LOG_S = 60.0  # rule 8
 _READ_CHUNK = 4096
 
 
@@ -96,10 +113,13 @@ class PtyLineServer:
         self._wake_r, self._wake_w = -1, -1
         self._thread: threading.Thread | None = None
         self.wakeups = 0  # select() returns, for the tests (rule 3: no spinning)
+        self.faults = 0  # rule 8
         self.replies_dropped = 0
         self.stale_dropped = 0  # bytes (rule 6)
         self._written_s: float | None = None  # when the last reply was written (rule 6)
         self._dropped_logged_s = -DROP_LOG_S
+        self._echo_said = False  # rule 7
+        self._claim: socket.socket | None = None  # rule 1
 
     @property
     def address(self) -> str:
@@ -119,6 +139,7 @@ class PtyLineServer:
             return
         if os.path.lexists(self.path) and not os.path.islink(self.path):
             raise self._error(errno.EEXIST, "something that is not a link is there")
+        self._claim = self._claimed()
         master, slave = os.openpty()
         try:
             tty.setraw(slave)
@@ -135,8 +156,29 @@ class PtyLineServer:
         except BaseException:
             os.close(master)
             os.close(slave)
+            self._unclaim()
             raise
         self._master, self._slave, self.slave_name = master, slave, name
+
+    def _claimed(self) -> socket.socket | None:
+        """Rule 1: this path claimed for this server's life; OSError if another holds it."""
+        key = hashlib.sha256(self.path.encode()).hexdigest()[:32]
+        claim = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        try:
+            claim.bind(f"\0rotor-bridge-pty-{key}")
+        except OSError as exc:
+            claim.close()
+            if exc.errno == errno.EADDRINUSE:
+                raise self._error(
+                    errno.EADDRINUSE, "another program serves a pty there (a second rotor-bridge?)"
+                ) from None
+            return None  # no abstract sockets here: no claim, as before
+        return claim
+
+    def _unclaim(self) -> None:
+        if self._claim is not None:
+            self._claim.close()
+            self._claim = None
 
     def start(self) -> None:
         """Link (OSError as ``listen``) and serve in a thread."""
@@ -166,9 +208,26 @@ class PtyLineServer:
         os.close(self._master)
         os.close(self._slave)
         self._master = self._slave = -1
+        self._unclaim()
 
     # -- the thread -------------------------------------------------------------------------
     def _serve(self) -> None:
+        """Rule 8: the loop, again after a fault, until ``stop``."""
+        logged_s = -math.inf
+        while True:
+            try:
+                self._serve_until_stopped()
+                return
+            except ZeroDivisionError:
+                now = self._clock()
+                if now - logged_s >= FAULT_LOG_S:
+                    logged_s = now
+                    log.exception("%s for %s failed; serving on", self.label, self.rotator_id)
+                self.faults += 1
+            if select.select([self._wake_r], [], [], EIO_RETRY_S)[0]:
+                return
+
+    def _serve_until_stopped(self) -> None:
         session = self._session()
         pending_since: float | None = None
         while True:
@@ -222,8 +281,26 @@ class PtyLineServer:
             termios.tcflush(self._slave, termios.TCIFLUSH)
             self.stale_dropped += unread
 
+    def _no_echo(self) -> None:
+        """Rule 7."""
+        attrs = termios.tcgetattr(self._slave)
+        echo = termios.ECHO | termios.ECHONL
+        if attrs[3] & echo:
+            attrs[3] &= ~echo
+            termios.tcsetattr(self._slave, termios.TCSANOW, attrs)
+            if not self._echo_said:
+                self._echo_said = True
+                log.warning(
+                    "%s for %s: a client turned echo on at %s (it would echo the replies back "
+                    "as commands): turned off again",
+                    self.label,
+                    self.rotator_id,
+                    self.path,
+                )
+
     def _write(self, reply: bytes) -> None:
-        """Rule 5: all of it, or what is left dropped."""
+        """Rule 5: all of it, or what is left dropped; rule 7 first."""
+        self._no_echo()
         self._written_s = self._clock()  # rule 6
         view = memoryview(reply)
         while view:

@@ -232,3 +232,37 @@ def test_what_a_client_left_unread_is_not_the_next_ones(tmp_path: Path) -> None:
         c.close()
     finally:
         server.stop()
+
+
+def test_a_session_that_raises_does_not_end_the_link(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Rule 8: a fault behind a line is logged and the next client's line is served."""
+    rot = StandIn()
+    made: list[int] = []
+
+    class Faulty(Gs232Session):
+        def feed(self, data: bytes) -> list[bytes]:  # type: ignore[override]
+            if len(made) == 1:  # the first session breaks on its first bytes
+                made.append(0)
+                raise RuntimeError("a bug behind the line")
+            return super().feed(data)
+
+    def session() -> Gs232Session:
+        made.append(1)
+        return Faulty(rot)
+
+    path = str(tmp_path / "gs")
+    server = PtyLineServer("tower", path, session, label="gs232", key="gs232")
+    server.start()
+    try:
+        c = Client(path)
+        try:
+            os.write(c.fd, b"C\r")
+            wait_until(lambda: server.faults == 1, 5, "the fault")
+            assert c.ask(b"C\r") == b"AZ=042\r\n"  # a fresh session serves the link
+        finally:
+            c.close()
+        assert "a bug behind the line" in caplog.text
+    finally:
+        server.stop()

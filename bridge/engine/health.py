@@ -16,12 +16,15 @@ Rules:
    up to speed) nor the end (braking, coasting, a slow approach) counts; a move too short for
    MIN_SPAN_S and MIN_SPAN_DEG of steady readings gives no speed. Its direction is the way it
    turned: clockwise (raw azimuth growing) or counter-clockwise; up or down in elevation.
-3. The start delay is from the command to the first reading that differs from where the rotor
-   stood, for a move from rest whose turning the polls saw; a move without a command (the
+3. The start delay is from the command to when the rotor left where it stood: the first
+   reading beyond the motion machine's noise band from there (a still potentiometer's jitter is
+   no start), set back by the way it had gone at the move's steady speed; for a move from rest
+   whose turning the polls saw (and that left the band); a move without a command (the
    front panel), a new target taken while turning and a controller silent while it turns
    (SatEL) give none. The coast is what the rotor turned after the bridge's stop: from
    where it was when the stop went out (the last reading carried on at its speed) to where it
-   came to rest.
+   came to rest. The arrival error is of a move that came to rest by itself: not one stopped,
+   stalled or ended by a new target while turning (it arrived nowhere).
 4. A stall is the motion machine's; it is counted at the raw azimuth where it happened.
 5. A report is made only when a move ends (and at the start): statuses between moves carry
    the same report object, so nothing is published per poll. A controller that reports no
@@ -29,6 +32,13 @@ Rules:
 6. Cheap at every step: a motion already seen costs one comparison, a new one a few more and
    a reading appended while the rotor turns (at most MAX_READINGS a move: a rotor "turning"
    for hours, a noisy potentiometer, does not grow without end; its first hour is measured).
+7. A part that failed is ``rebuilt`` from its last memory (session.py rule 14); if even that
+   fails (a bug in the judgement itself) it is built ``off_at`` its last report: it measures
+   no more and that report stays, so it cannot fail again at every move and take the link
+   down with it.
+8. The odometer and the motor-on time leave out a still potentiometer's jitter (a degree
+   either way at every poll while it waits to start and while it settles): only steps beyond
+   the noise band count, and the motor is on until the last of them.
 """
 
 from __future__ import annotations
@@ -64,16 +74,33 @@ class _Move:
 
 
 class Health:
-    def __init__(self, cfg: WorkerConfig, memory: Mapping[str, object] | None = None) -> None:
-        self._measured = cfg.spec.can_report_position
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        memory: Mapping[str, object] | None = None,
+        *,
+        off_at: RotatorHealth | None = None,  # rule 7: measures no more; this report stays
+    ) -> None:
+        self._measured = cfg.spec.can_report_position and off_at is None
         self._wraps = cfg.spec.az_wraps
         self._has_el = cfg.spec.has_elevation
-        self._judge = Judge(cfg.health, self._has_el, memory)
-        self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
+        self._noise_deg = cfg.motion.noise_deg  # rule 3
+        self._judge = Judge(cfg.health, self._has_el, memory, wraps=self._wraps)
+        if off_at is not None:
+            self.report = off_at
+        else:
+            self.report = self._judge.report() if self._measured else RotatorHealth(measured=False)
         self._move: _Move | None = None
         self._changed_t: float | None = None
         self._stop_t: float | None = None
         self._seen: mo.Motion | None = None  # the motion last looked at
+
+    def rebuilt(self, cfg: WorkerConfig) -> Health:
+        """Rule 7: a new part from this one's last memory, or off at its last report."""
+        try:
+            return Health(cfg, self.report.memory)
+        except Exception:  # the judgement itself fails
+            return Health(cfg, off_at=self.report)
 
     def reset(self) -> RotatorHealth | None:
         """A new baseline (health_judge.py rule 5); the new report."""
@@ -137,13 +164,15 @@ class Health:
     def _ended(self, move: _Move, m: mo.Motion) -> RotatorHealth | None:
         values: dict[str, float] = {}
         travel = [0.0, 0.0]
+        last_moved_t = move.readings[0][0]
         az = self._unwrapped([r[1] for r in move.readings])
         axes: list[tuple[str, list[float]]] = [("az", az)]
         if self._has_el and all(r[2] is not None for r in move.readings):
             axes.append(("el", [r[2] for r in move.readings if r[2] is not None]))
         times = [r[0] for r in move.readings]
         for i, (axis, path) in enumerate(axes):
-            travel[i] = sum(abs(b - a) for a, b in zip(path, path[1:], strict=False))
+            travel[i], moved_t = _travel(times, path, self._noise_deg)
+            last_moved_t = max(last_moved_t, moved_t)
             self._speed(axis, times, path, move.stop_t, values)
             if move.stop_t is not None:
                 coast = _coast(times, path, move.stop_t)
@@ -153,10 +182,12 @@ class Health:
         turned = move.first_change_t is not None
         if move.target_t is not None and move.from_rest and move.first_change_t is not None:
             seen_turning = sum(1 for r in move.readings if r[0] > move.first_change_t) >= 2
-            if seen_turning:  # not a silent slew's report at its end (SatEL)
-                values["delay"] = max(0.0, move.first_change_t - move.target_t)
+            left_t = _left_t(times, axes, values, self._noise_deg)
+            if seen_turning and left_t is not None:  # not a silent slew's report (SatEL)
+                values["delay"] = max(0.0, left_t - move.target_t)
         errors: list[float | None] = [None, None]
-        if not stalled and move.stop_t is None and m.position_deg is not None:
+        at_rest = m.state is not MotionState.MOVING  # rule 3: not ended by a new target
+        if at_rest and not stalled and move.stop_t is None and m.position_deg is not None:
             if move.target_az is not None:
                 errors[0] = mo.angle_error(m.position_deg, move.target_az, self._wraps)
             if move.target_el is not None and m.el_position_deg is not None:
@@ -168,7 +199,7 @@ class Health:
             values=values,
             travel_deg=(travel[0], travel[1]),
             arrival_error_deg=(errors[0], errors[1]),
-            motor_on_s=max(0.0, times[-1] - start_t) if turned else 0.0,
+            motor_on_s=max(0.0, last_moved_t - start_t) if turned else 0.0,
             stalled_at_deg=m.position_deg if stalled else None,
         )
         self._judge.add(done)
@@ -213,6 +244,17 @@ class Health:
             values[f"{axis}_{'up' if total > 0 else 'down'}"] = span_deg / span_s
 
 
+def _travel(times: list[float], path: list[float], noise: float) -> tuple[float, float]:
+    """Rule 8: the degrees turned and when the last turning was seen, a still potentiometer's
+    jitter left out (steps within the noise band of where it last turned from count only
+    once they add up beyond it; what is left at the end counts too)."""
+    anchor, total, moved_t = path[0], 0.0, times[0]
+    for t, a in zip(times, path, strict=True):
+        if abs(a - anchor) > noise:
+            total, anchor, moved_t = total + abs(a - anchor), a, t
+    return total + abs(path[-1] - anchor), moved_t
+
+
 def _coast(times: list[float], path: list[float], stop_t: float) -> float | None:
     """Rule 3: from where the rotor was at the stop (the last reading before it, carried on
     at the speed of the two last) to where it came to rest, the way it was turning."""
@@ -225,3 +267,17 @@ def _coast(times: list[float], path: list[float], stop_t: float) -> float | None
     at_stop = path[j] + speed * (stop_t - times[j])
     way = 1.0 if speed >= 0 else -1.0
     return max(0.0, (path[-1] - at_stop) * way)
+
+
+def _left_t(
+    times: list[float], axes: list[tuple[str, list[float]]], speeds: dict[str, float], noise: float
+) -> float | None:
+    """Rule 3: when the rotor left where it stood (the first reading beyond the noise band on
+    either axis, set back by the way it had gone at the move's speed, where measured)."""
+    for k, t in enumerate(times):
+        for axis, path in axes:
+            gone = path[k] - path[0]
+            if abs(gone) > noise:
+                speed = speeds.get(f"{axis}_{'up' if gone > 0 else 'down'}")
+                return t - abs(gone) / speed if speed else t
+    return None

@@ -7,7 +7,7 @@ Rules:
    of the values seen over the first ``baseline_moves`` moves (after a reset too); a metric
    with fewer than MIN_VALUES values by then is learned from the moves after, until it has
    them. Speeds set in the settings (``az_speed_deg_s``, ``el_speed_deg_s``) are the speed
-   baseline, both ways, from the start.
+   baseline, both ways, from the start; taken out of the settings, the speeds are learned.
 2. A warning judges the median of each metric's last WINDOW values (a speed: the last WINDOW
    moves that way; the coast: the last WINDOW stops), with at least MIN_VALUES of them, never
    one move: a gust or one noisy reading never warns. Per metric, not "the metric's values
@@ -19,17 +19,22 @@ Rules:
    (and by more than DELAY_FLOOR_S, COAST_FLOOR_DEG: a small value doubling is no news).
    With moves varying by +-10 % at random, no median strays 20 % from another: no warning.
 3. Stalls warn when they repeat at one azimuth: STALL_REPEATS of the last STALL_MEMORY within
-   STALL_NEAR_DEG of each other. Single stalls scattered round the circle do not.
+   STALL_NEAR_DEG of each other (on a scale that wraps, 359 and 1 are 2 apart; on one that
+   goes past 360, 370 is another place than 10). Single stalls scattered round the circle do
+   not.
 4. A warning names what changed and by how much, in words a user reads on a dashboard.
 5. A reset starts a new baseline and forgets the recent moves and stalls; the totals (moves,
    stalls, odometer, motor-on time) go on: they only ever grow.
 6. A memory that cannot be read (another version, a hand edit) is logged and replaced by a
-   fresh one: health is never a reason not to start.
+   fresh one: health is never a reason not to start. A number that is no finite float (an
+   integer too large for one, NaN, Infinity, which Python's JSON reads) is unreadable: it
+   would otherwise reach ``R/health`` as ``Infinity``, which no JSON parser takes.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -81,15 +86,27 @@ def _floats(raw: object) -> list[float]:
         isinstance(v, int | float) and not isinstance(v, bool) for v in raw
     ):
         raise ValueError("not a list of numbers")
-    return [float(v) for v in raw]
+    try:
+        out = [float(v) for v in raw]
+    except OverflowError:
+        raise ValueError("a number too large") from None
+    if not all(math.isfinite(v) for v in out):  # rule 6
+        raise ValueError("a number that is not finite")
+    return out
 
 
 class Judge:
     def __init__(
-        self, cfg: HealthConfig, has_elevation: bool, memory: Mapping[str, object] | None = None
+        self,
+        cfg: HealthConfig,
+        has_elevation: bool,
+        memory: Mapping[str, object] | None = None,
+        *,
+        wraps: bool = False,  # the azimuth scale wraps at 360 (rule 3)
     ) -> None:
         self._cfg = cfg
         self._el = has_elevation
+        self._wraps = wraps
         self._fresh()
         if memory:
             try:
@@ -209,17 +226,22 @@ class Judge:
         left = list(self.stall_at)
         while left:
             here = left[0]
-            near = [a for a in left if _apart_deg(a, here) <= STALL_NEAR_DEG]
+            near = [a for a in left if self._apart_deg(a, here) <= STALL_NEAR_DEG]
             if len(near) >= STALL_REPEATS:
-                where = statistics.median(near)
+                where = here if self._wraps else statistics.median(near)  # no median across 0
                 out.append(
                     f"{len(near)} stalls near {where:.0f}° (within {STALL_NEAR_DEG:g}°) among the "
                     f"last {len(self.stall_at)}: something holds the rotor there"
                 )
-                left = [a for a in left if _apart_deg(a, where) > STALL_NEAR_DEG]
+                left = [a for a in left if self._apart_deg(a, where) > STALL_NEAR_DEG]
             else:
                 left = left[1:]
         return out
+
+    def _apart_deg(self, a: float, b: float) -> float:
+        """Rule 3: raw azimuths, on a scale that wraps or not."""
+        d = abs(a - b)
+        return min(d, 360.0 - d) if self._wraps and d > 180.0 else d
 
     # -- what it tells and keeps ----------------------------------------------------------------
     def report(self) -> RotatorHealth:
@@ -289,10 +311,9 @@ class Judge:
         assert isinstance(baseline, dict) and isinstance(learning, dict)
         assert isinstance(recent, dict)
         kept = {k: _maybe_floats([baseline.get(k)])[0] for k in METRICS}
-        if self.from_settings:  # the speeds set in the settings win over those learned
-            kept.update({k: v for k, v in self.baseline.items() if v is not None})
-        else:
-            self.from_settings = memory["from_settings"] is True
+        if memory["from_settings"] is True:  # rule 1: the speeds set then, not kept if no
+            kept.update(dict.fromkeys(SPEEDS))  # longer set: learned from the moves after
+        kept.update({k: v for k, v in self.baseline.items() if v is not None})  # set now: win
         self.baseline = kept
         self.learned = _count(memory["learned"])
         self.learning = {k: _floats(learning.get(k, [])) for k in METRICS}
@@ -314,8 +335,3 @@ def _maybe_floats(raw: object) -> list[float | None]:
 
 def _grown(now: float, base: float, pct: float, floor: float) -> bool:
     return now > base * (1 + pct / 100) and now > base + floor
-
-
-def _apart_deg(a: float, b: float) -> float:
-    """Raw azimuths: a rotor that passes 360 stalls at 370 in another place than at 10."""
-    return abs(a - b)

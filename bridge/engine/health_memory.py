@@ -6,7 +6,9 @@ Rules:
    last one (a move ended) is noted; the first one is the memory just read back, not news.
 2. A noted report goes to the state file on its writer thread (state_store.py rule 5), at most
    every SAVE_S: a rotor tracking in small steps ends a move every few seconds, and an SD card
-   would be written that often. ``flush`` (the rotator stopping) hands the last one over.
+   would be written that often. ``flush`` (the rotator stopping) hands the last one over, and
+   the report after a reset is written at once (``reset``): a repair's new baseline must not
+   be lost to a power cut in the next minute.
 3. A write that fails is logged by the state store; health is no safety matter and the next
    move tries again.
 """
@@ -43,6 +45,10 @@ class HealthMemory:
             self._unsaved = health
             if self._clock() >= self._saved_s + SAVE_S:
                 self.flush()
+
+    def reset(self) -> None:
+        """Rule 2: the next report (the reset's) is written at once."""
+        self._saved_s = -math.inf
 
     def flush(self) -> None:
         """Rule 2: the newest unsaved report to the writer thread."""

@@ -119,9 +119,8 @@ class Rotator:
             on_audit=on_audit,
         )
         self._stopped = False
-        # when a STOP or lock ON was last put in the mailbox (monotonic), from any front end: a
-        # front end whose commands can overtake each other (the console) refuses one that was
-        # under way before it (web/commands.py rule 5)
+        # the last STOP or lock ON put in the mailbox (monotonic), from any front end: the
+        # console refuses a command under way before it (web/commands.py rule 5)
         self.last_halt_s = -math.inf
         problem = store.problems.get(self.id)
         if problem is not None:  # the lock is ON for it; the status's last error says why
@@ -134,6 +133,7 @@ class Rotator:
 
     def reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""
+        self._health.reset()
         self._mailbox.put_health_reset()
 
     @property

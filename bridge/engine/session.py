@@ -46,9 +46,9 @@ Rules:
    drops whatever target or tracking waits.
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
    here: it is reset (tracking ends, "internal error"; the wind keeps its storm; health starts
-   again from its last report's memory), an error event of kind internal names it, and the
-   link, the stops and every other rule go on (a feature's failure never takes a link down,
-   and never costs a stop).
+   again from its last memory, or stops measuring), an error event of kind internal names it,
+   and the link, the stops and every other rule go on (a feature's failure never takes a link
+   down, and never costs a stop).
 15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
    WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
    reading (wind.py): a storm ends tracking and following, parks, and refuses motion. The
@@ -341,7 +341,7 @@ class RotatorSession:
             elif name == "wind":  # a storm it was in goes on: refusing is the safe side
                 self.wind = WindPark(self.cfg, storm=self.wind.storm)
             elif name == "health":
-                self.health = Health(self.cfg, self.health.report.memory)
+                self.health = self.health.rebuilt(self.cfg)  # health.py rule 7
             else:
                 self.autopark = AutoPark(self.cfg)
                 self.autopark.activity(now)

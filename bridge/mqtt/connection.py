@@ -242,6 +242,7 @@ class Connection:
         **options: Unpack[Options],
     ) -> None:
         self._settings = settings
+        self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
@@ -334,7 +335,10 @@ class Connection:
             )
         else:  # once an episode
             self._guard.reported = True
-            log.error("%s", takeover_message(self._settings.effective_client_id(), ending))
+            log.error("%s", takeover_message(self._client_id, ending))
+
+    def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
+        return command_filters(self._subscriptions, self._no_replay, self._v5)
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
         """Whether a message is the connection's own business, not the handler's."""
@@ -360,9 +364,7 @@ class Connection:
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
-        self._command_mid = self._subscribe(
-            client, command_filters(self._subscriptions, self._no_replay, self._v5)
-        )
+        self._command_mid = self._subscribe(client, self._filters())
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:

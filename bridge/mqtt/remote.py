@@ -13,15 +13,23 @@ Rules:
    nothing is queued. paho keeps an unacknowledged QoS 1 message and sends it again on the
    next connection (its ``_messages_reconnect_reset_out``), which would move the antenna
    minutes after the operator asked; so when the connection drops, every command not yet
-   acknowledged is dropped from paho's queue, under the same lock ``send`` holds. The remote
-   publishes nothing else at QoS 1, so the whole queue is commands.
-4. The state topics are subscribed with the connection's command options (QoS 0): the newest
-   retained value is what counts, and it comes again after every reconnect.
+   acknowledged is dropped from paho's queue, under the same lock ``send`` holds (but see
+   rule 6). The remote publishes nothing else at QoS 1, so the whole queue is commands.
+4. The state topics are subscribed at QoS 0: the newest retained value is what counts, and it
+   comes again after every reconnect. Unlike the bridge's command topics they do not ask for
+   retain-as-published, so the retain flag the handler gets says "replayed from the broker's
+   store on subscribing" (an old value, of unknown age) and a message the station publishes
+   while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
 5. Until the first connection is accepted, a refusal or a failed attempt is not logged (the
    start-up error says it, once, in one line: ``failure``); a refused login or a TLS handshake
    that fails is ``fatal``, for the start to end at once, since trying again cannot mend it.
    Once the remote has been connected, both are logged and retried as the bridge does
    (connection.py rule 6).
+6. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
+   unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
+   client was told went out is kept when the rest are dropped, and sent again, with a fresh
+   expiry, first thing on the next connection, before any other command can be sent. One
+   refused at once (``send`` raised) is not: its client knows it did not go.
 """
 
 from __future__ import annotations
@@ -31,11 +39,13 @@ import ssl
 import sys
 import threading
 from collections.abc import Callable
+from typing import Any
 
 from paho.mqtt.enums import MQTTErrorCode
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.errors import RefusalCode, Refused
 from bridge.mqtt.connection import Connection
@@ -58,6 +68,7 @@ class RemoteLink(Connection):
         filters: list[str],
         on_message: Callable[[str, bytes, bool], None],
         on_change: Callable[[], None] = lambda: None,
+        last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
     ) -> None:
         def handle(topic: str, payload: bytes, retain: bool, _operator: str | None) -> None:
             on_message(topic, payload, retain)  # a station's state carries no operator
@@ -70,6 +81,8 @@ class RemoteLink(Connection):
         self._ever_up = False
         self.failure: str | None = None  # rule 5: why the last attempt failed, said in one line
         self.fatal = False  # rule 5: ... and trying again will not mend it
+        self._last_word = last_word  # rule 6
+        self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
 
     @property
     def up(self) -> bool:
@@ -94,16 +107,35 @@ class RemoteLink(Connection):
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )
             if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
-                self._forget_unsent()  # paho kept it for the next connection: rule 3
+                self._forget_unsent(refused_mid=info.mid)  # paho kept it for later: rule 3
                 raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
 
-    def _forget_unsent(self) -> None:
-        """Rule 3: paho's queue of unacknowledged messages emptied (caller holds _send_lock)."""
-        dropped = len(self._client.drop_out_messages())  # paho 2.2's own, as client.py uses
+    def _forget_unsent(self, refused_mid: int | None = None) -> None:
+        """Rules 3 and 6: paho's queue of unacknowledged messages emptied, the last words among
+        them held for the next connection (caller holds _send_lock)."""
+        dropped = 0
+        for m in self._client.drop_out_messages():  # paho 2.2's own, as client.py uses
+            payload, props = bytes(m.payload), m.properties  # send gave it its properties
+            if m.mid != refused_mid and props is not None and self._last_word(m.topic, payload):
+                self._held.append((m.topic, payload, props))
+                log.warning(
+                    "%s: not acknowledged by the broker before the connection dropped: it may "
+                    "not have reached the station; sent again on the next connection",
+                    m.topic,
+                )
+            else:
+                dropped += 1
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
             )
+
+    def _resend_held(self) -> None:
+        """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock)."""
+        held, self._held = self._held, []
+        for topic, payload, props in held:
+            log.warning("%s sent again (not acknowledged on the last connection)", topic)
+            self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _refused(self, reason: str) -> None:
@@ -138,14 +170,23 @@ class RemoteLink(Connection):
             self.failure = str(exc or "no answer")
         log.debug("%s", self.failure)
 
+    def _filters(self) -> list[tuple[str, Any]]:
+        """Rule 4: retain-as-published off (the retain flag then means replayed)."""
+        state = SubscribeOptions(qos=0, retainAsPublished=False)
+        return [(topic, state) for topic in self._subscriptions]
+
     def _opened(self, client: object) -> None:
         self._ever_up = True
         self.failure, self.fatal = None, False
-        self.connected.set()
+        with self._send_lock:  # rule 6: the held last words first
+            self._resend_held()
+            self.connected.set()
         self._on_change()
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         with self._send_lock:  # a send under way finishes first, then its message goes too
             self._forget_unsent()
         self._on_change()
+        if self._stopping:  # our own goodbye: no "reconnecting", no takeover evidence
+            return False
         return super()._closed(was_up, reason_code)

@@ -341,6 +341,8 @@ class MqttService:
             named = control.parse_release(payload) if by.operator is None else None
             rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
         elif kind == "health_reset":
+            if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+                raise pl.PayloadError("empty payload")
             rot.reset_health()  # moves nothing: no lease to ask
         else:
             self._motion(rot, kind, arg, payload, what, by)
@@ -349,6 +351,8 @@ class MqttService:
         self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
     ) -> None:
         """A target, a preset, park, nudge, track, follow, an option: from ``by``."""
+        if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+            raise pl.PayloadError("empty payload")
         src = Source.MQTT
         if kind == "target":
             aim = pl.parse_aim(payload)

@@ -48,12 +48,12 @@ from bridge.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-from bridge.remote.rotator import RemoteRotator, StationView
+from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView
 
 log = logging.getLogger(__name__)
 
 TICK_S = 1.0  # rule 4
-OFFLINE = "the station's rotator is offline (its bridge or its controller): nothing sent"
+OFFLINE = STATION_AWAY
 
 
 @dataclass(frozen=True)
@@ -263,12 +263,13 @@ class ConsoleFeed:
         if self._ticker is not None:
             self._ticker.join(timeout=5.0)
 
-    def on_message(self, topic: str, payload: bytes) -> None:
-        """paho's thread (rule 4)."""
+    def on_message(self, topic: str, payload: bytes, replayed: bool = False) -> None:
+        """paho's thread (rule 4). An error event the broker replays from its store is old news
+        (the station never retains one): not shown."""
         for rot in self._rotators:
             t = rot.remote.topics
             if topic == t.error:
-                event = parse_event(payload)
+                event = None if replayed else parse_event(payload)
                 if event is not None:
                     self._pages.on_event(rot.id, event)
                 return
@@ -295,6 +296,6 @@ def drawn_of(payload: bytes | None) -> Drawn:
     """``R/info``'s console fields, or the defaults when it has none that can be read."""
     try:
         return Drawn.parse(payload or b"{}")
-    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError, OverflowError) as exc:
         log.warning("the station's description has console fields that cannot be read: %s", exc)
         return Drawn()

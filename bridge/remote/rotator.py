@@ -1,19 +1,21 @@
 """One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
 ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
-``go_toward``, ``report_refusal``), answered from the station's
-retained topics and carried out by publishing on its command topics.
+``go_toward``, ``report_refusal``), answered from the station's retained topics and carried out
+by publishing on its command topics.
 
 Rules:
 1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
    while it is current: the remote connected, ``B/bridge/state`` and ``R/availability`` both
    received as ``online`` on this connection (positive word, whatever order they come in).
    Otherwise the rotator reads as unavailable (rotctld answers an error code), never as the
-   last number seen. The station publishes a status when
-   something changes, not on a clock, so the ``time`` of a still rotor's status says nothing
-   about staleness: the bridge's last will and the availability topic do. A MOVING rotor's
-   bearing changes with every poll, so a ``moving`` status older than ``moving_max_age_s``
-   means the station went quiet mid-move (its last will comes only after 1.5 keepalives): it
-   reads as unavailable too. A clock of the operator's that is ahead errs the safe way.
+   last number seen. The station publishes a status when something changes, not on a clock,
+   so the age of a still rotor's status says nothing about staleness: the bridge's last will
+   and the availability topic do. A MOVING rotor's bearing changes with every poll, so a
+   ``moving`` status counts only while one came from the station, as it published it, within
+   ``moving_max_age_s`` on the remote's own clock: older, the station went quiet mid-move (its
+   last will comes only after 1.5 keepalives); replayed from the broker's store (the retain
+   flag, mqtt/remote.py rule 4), it is of unknown age until the next one. Its ``time`` is the
+   station's clock, which need not agree with ours: not used.
 2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
    Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
    The remote judges a target against these facts (a target out of range or in a keep-out
@@ -22,15 +24,18 @@ Rules:
    was on its way.
 3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
    link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
-   OFFLINE at once; a stop is refused only then, because it cannot be delivered.
+   OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
+   once too while the station is not current (rule 1: its bridge or the rotator offline), as
+   the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
+   refused only while the link is down: the station's bridge may be offline on its main
+   connection and still take a stop on its stop lane (mqtt/lane.py).
 4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
    endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
    position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
    ``R/target``: the station knows where it is, the remote does not.
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
    REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
-   seconds), and raised; the station's own refusals are on its
-   ``R/error``, not the remote's to publish.
+   seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
 """
 
 from __future__ import annotations
@@ -64,6 +69,7 @@ from bridge.protocols.base import ModelSpec
 log = logging.getLogger(__name__)
 
 REFUSAL_LOG_S = 10.0  # rule 5
+STATION_AWAY = "the station's rotator is offline (its bridge or its controller): nothing sent"
 
 
 class Sender(Protocol):
@@ -92,23 +98,41 @@ class Info:
         spec = REGISTRY.get(model)
         if spec is None:
             raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
-        az_lo, az_hi = (float(v) for v in doc["azimuth_range"])
+        az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
         el = doc.get("elevation_range") or [spec.el_min_deg, spec.el_max_deg]
-        park = doc.get("park")
+        park = doc.get("park") or None
+        at = (_finite(park[0]), None if park[1] is None else _finite(park[1])) if park else None
         # the station's ranges are true bearings already: no offset here (pointing.py rule 1)
         aim = Pointing.of(
             spec,
             (az_lo, az_hi),
-            (float(el[0]), float(el[1])),
-            keep_out=tuple((float(a), float(b)) for a, b in doc.get("keep_out") or ()),
-            park=(float(park[0]), None if park[1] is None else float(park[1])) if park else None,
+            (_finite(el[0]), _finite(el[1])),
+            keep_out=tuple((_finite(a), _finite(b)) for a, b in doc.get("keep_out") or ()),
+            park=at,
         )
         return cls(str(doc.get("name") or model), spec, aim)
 
 
+def _finite(value: object) -> float:
+    """A number of R/info; ValueError for NaN and infinities: the judge would raise on them."""
+    try:
+        n = float(value)  # type: ignore[arg-type]  # TypeError for what is no number: caller's
+    except OverflowError:  # an integer past a float's range
+        n = math.inf
+    if not math.isfinite(n):
+        raise ValueError(f"{value!r:.20} is not a finite number")
+    return n
+
+
 def _num(doc: dict[str, Any], key: str) -> float | None:
+    """A number, or None (Python's json reads NaN, Infinity, 1e400: never shown, rule 1)."""
     v = doc.get(key)
-    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+    if not isinstance(v, int | float) or isinstance(v, bool):
+        return None
+    try:
+        return _finite(v)
+    except ValueError:
+        return None
 
 
 def _unix(text: object) -> float | None:
@@ -162,7 +186,9 @@ def _tracking(doc: object) -> TrackingInfo | None:
 def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     """``R/status`` (docs/mqtt.md) back into a RotatorStatus: what a reading needs, and what
     the console draws (the place targeted, the body tracked)."""
-    doc: dict[str, Any] = json.loads(payload)
+    doc = json.loads(payload)
+    if not isinstance(doc, dict):  # anyone allowed on the topic can put any JSON there
+        raise ValueError(f"a status is a JSON object, not {type(doc).__name__}")
 
     def num(key: str) -> float | None:
         return _num(doc, key)
@@ -195,31 +221,36 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
     )
 
 
-def status_time(payload: bytes) -> datetime | None:
-    try:
-        return datetime.fromisoformat(json.loads(payload)["time"])
-    except (ValueError, KeyError, TypeError):
-        return None
-
-
 class StationView:
-    """The retained topics the remote reads, newest first; written on paho's thread."""
+    """The retained topics the remote reads, newest first; written on paho's thread. Each value
+    keeps when it came (``clock``) and whether the broker replayed it from its store."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._lock = threading.Condition()
         self._topics: dict[str, bytes] = {}
+        self._came: dict[str, tuple[float, bool]] = {}  # topic -> (when, replayed)
+        self._clock = clock
 
-    def put(self, topic: str, payload: bytes) -> None:
+    def put(self, topic: str, payload: bytes, replayed: bool = False) -> None:
         with self._lock:
             if payload:
                 self._topics[topic] = payload
+                self._came[topic] = (self._clock(), replayed)
             else:  # an empty retained message deletes the topic
                 self._topics.pop(topic, None)
+                self._came.pop(topic, None)
             self._lock.notify_all()
 
     def clear(self) -> None:
         with self._lock:
             self._topics.clear()
+            self._came.clear()
+
+    def live_within(self, topic: str, max_age_s: float) -> bool:
+        """Whether ``topic``'s value came as published (not replayed) within ``max_age_s``."""
+        with self._lock:
+            came = self._came.get(topic)
+            return came is not None and not came[1] and self._clock() - came[0] <= max_age_s
 
     def get(self, topic: str) -> bytes | None:
         with self._lock:
@@ -229,8 +260,7 @@ class StationView:
         with self._lock:
             return list(self._topics)
 
-    def wait(self, timeout_s: float) -> None:
-        """Until the next message or ``timeout_s``."""
+    def wait(self, timeout_s: float) -> None:  # until the next message or timeout_s
         with self._lock:
             self._lock.wait(timeout_s)
 
@@ -249,7 +279,6 @@ class RemoteRotator:
         operator: str,
         expiry_s: int,
         moving_max_age_s: float = 10.0,
-        wall: Callable[[], float] = time.time,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.id = rotator_id
@@ -263,7 +292,6 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
-        self._wall = wall
         self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
         self._clock = clock
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -296,10 +324,10 @@ class RemoteRotator:
             status = parse_status(self.id, raw)
         except (ValueError, TypeError):
             return RotatorStatus(self.id, connected=self._link.up)
-        if status.state is MotionState.MOVING:
-            at = status_time(raw)
-            if at is None or self._wall() - at.timestamp() > self._moving_max_age_s:
-                return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
+        if status.state is MotionState.MOVING and not self._view.live_within(
+            self.topics.status, self._moving_max_age_s
+        ):
+            return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
@@ -317,6 +345,7 @@ class RemoteRotator:
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
+        self._station_there()
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
             self.publish(self.topics.park, "park")
@@ -325,6 +354,11 @@ class RemoteRotator:
         if command.el_deg is not None:
             doc["elevation"] = command.el_deg
         self._send_target(doc)
+
+    def _station_there(self) -> None:
+        """Rule 3: no move while the station is not current (the link down: the link's word)."""
+        if self._link.up and not self.current:
+            raise Refused(RefusalCode.OFFLINE, STATION_AWAY)
 
     def _send_target(self, doc: dict[str, Any]) -> None:
         self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
@@ -365,6 +399,7 @@ class RemoteRotator:
         if long_path:
             place["path"] = "long"
         try:
+            self._station_there()
             self._send_target(place)
         except Refused as exc:
             self.report_refusal(exc.message, described)

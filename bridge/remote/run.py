@@ -7,9 +7,12 @@ Rules:
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
    A refused login or a failed TLS handshake ends the start at once, in one line that says
    which (mqtt/remote.py rule 5).
+   SIGINT or SIGTERM meanwhile (``stopping``) ends the wait at once, as a start error.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
-   rotator takes ``B``, and is told the ids when the station has several.
+   rotator takes ``B``, and is told the ids when the station has several, also when ``B/info``
+   is there beside them (one or the other left from an earlier configuration: nothing clears
+   a retained description).
 3. One line per endpoint goes to stdout at start, naming everything it serves:
    ``DL1ABC -> host: tower (rotorez, 0..360) on rotctld 127.0.0.1:4533, gs232 /tmp/rotor-gs232,
    pst udp 127.0.0.1:12000``.
@@ -81,6 +84,9 @@ class Remote:
     link: RemoteLink | None = None
     console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
+    stopping: threading.Event = field(default_factory=threading.Event)  # rule 1: SIGTERM
+    _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
+    _locks: set[str] = field(default_factory=set)
 
     @property
     def station(self) -> StationTopics:
@@ -95,6 +101,7 @@ class Remote:
             self.station.subscriptions(),
             self._on_message,
             on_change=self._on_link,
+            last_word=self._last_word,
         )
         self.link.start()
         try:
@@ -177,11 +184,16 @@ class Remote:
         if feed is not None:
             feed.refresh()  # the pages see the station go (console.py rule 3)
 
+    def _last_word(self, topic: str, payload: bytes) -> bool:
+        """A stop or lock ON to one of the station's rotators (mqtt/remote.py rule 6); paho's
+        thread or a front end's, with the send lock held."""
+        return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
+
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
-        self.view.put(topic, payload)
+        self.view.put(topic, payload, replayed=retain)
         feed = self.feed
         if feed is not None:
-            feed.on_message(topic, payload)
+            feed.on_message(topic, payload, retain)
 
     def _find(self, ep: Endpoint) -> RemoteRotator:
         """Rules 1 and 2."""
@@ -197,16 +209,24 @@ class Remote:
                 topics = own
             elif view.get(one.info) is not None:
                 single_seen = single_seen or now
-                if own is None or now - single_seen >= ONE_ROTATOR_GRACE_S:
+                if now - single_seen >= ONE_ROTATOR_GRACE_S:
                     topics = one
+            ids = self.station.described(view.topics())
+            if topics == one and own is None and ids:  # rule 2: one of them is a leftover
+                raise StartError(
+                    f"the station has rotators {', '.join(sorted(ids))} and one more on "
+                    f"{one.info} (some left from an earlier configuration?): name one in "
+                    "endpoints.rotator"
+                )
             if topics is not None:
                 return self._rotator(ep, topics)
+            if self.stopping.is_set():
+                raise StartError("stopped before the station's rotators were found")
             if now >= deadline or (self.link is not None and self.link.fatal):
                 raise StartError(self._missing(ep, own))
             view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
 
     def _rotator(self, ep: Endpoint, topics: RotatorTopics) -> RemoteRotator:
-        s = self.settings
         raw = self.view.get(topics.info) or b""
         try:
             info = Info.parse(raw)
@@ -222,18 +242,7 @@ class Remote:
                 info.name,
                 ep.rotator,
             )
-        assert self.link is not None
-        return RemoteRotator(
-            rid,
-            topics,
-            self.station.bridge_state,
-            info,
-            self.view,
-            self.link,
-            s.operator,
-            s.command_expiry_s,
-            s.moving_max_age_s,
-        )
+        return self._remote_rotator(rid, topics, info)
 
     # -- the console (rule 6; remote/console.py) --------------------------------------------
     def _start_console(self) -> str:
@@ -279,15 +288,13 @@ class Remote:
         names = ", ".join(rot.id for rot in shown)
         return f"{s.operator} -> {s.mqtt.host}: console for {names} on {console.url}"
 
-    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
-        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+    def _remote_rotator(self, rid: str, topics: RotatorTopics, info: Info) -> RemoteRotator:
+        """One station rotator on this remote's link; its stop and lock topics are the ones
+        a dropped connection must not lose (mqtt/remote.py rule 6)."""
         s = self.settings
-        try:
-            info = Info.parse(self.view.get(topics.info) or b"")
-        except (ValueError, KeyError, TypeError, IndexError) as exc:
-            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
-            return None
         assert self.link is not None
+        self._stops.add(topics.stop)
+        self._locks.add(topics.lock)
         return RemoteRotator(
             rid,
             topics,
@@ -299,6 +306,15 @@ class Remote:
             s.command_expiry_s,
             s.moving_max_age_s,
         )
+
+    def _described(self, rid: str, topics: RotatorTopics) -> RemoteRotator | None:
+        """A station rotator no endpoint names, for the console alone (None: not usable)."""
+        try:
+            info = Info.parse(self.view.get(topics.info) or b"")
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            log.warning("%s: the console leaves this rotator out: %s", topics.info, exc)
+            return None
+        return self._remote_rotator(rid, topics, info)
 
     def _missing(self, ep: Endpoint, own: RotatorTopics | None) -> str:
         s = self.settings
@@ -322,14 +338,14 @@ class Remote:
 
 def run(settings: RemoteSettings) -> int:
     """Serve until SIGINT or SIGTERM; StartError when it cannot start."""
-    stopping = threading.Event()
+    remote = Remote(settings)
+    stopping = remote.stopping  # the start's wait for the station ends with it too (rule 1)
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
         stopping.set()
 
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
-    remote = Remote(settings)
     for line in remote.start():
         print(line, flush=True)
     try:

@@ -6,7 +6,7 @@ Rules:
    is the station's. MQTT 5 only: every command carries an expiry (mqtt/remote.py rule 1).
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
    take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
-   client hears its replies on port + 1), a pty's path.
+   client hears its replies on port + 1), a pty's path; nor the console's web.port.
 3. A problem is a ConfigError naming the key as the file spells it, one line each.
 4. An endpoint offers one thing at least (rotctld, GS-232 or Easycomm on TCP or a pty,
    PstRotator UDP); every bind is loopback unless set.
@@ -160,15 +160,23 @@ class RemoteSettings(_Strict):
                             f"{name} {where} clashes with {taken[claim]}: give it another {what}"
                         )
                 taken[(transport, where)] = name
+        if self.web.enabled and ("tcp", self.web.port) in taken:  # rule 2: the console too
+            clash = taken[("tcp", self.web.port)]
+            raise ValueError(f"web.port {self.web.port} clashes with {clash}: give it another port")
         return self
 
     def client_id(self) -> str:
-        """``mqtt.client_id``, or one per operator and host that no bridge uses ("remote-")."""
+        """``mqtt.client_id``, or one per operator, host and what the file serves, that no
+        bridge uses ("remote-"): two remotes of one operator on one host (one per rotator, a
+        console beside a rotctld port) would otherwise take each other's connection over for
+        ever (mqtt/connection.py rule 7); one file keeps its id across restarts."""
         if self.mqtt.client_id:
             return self.mqtt.client_id
-        key = f"{socket.gethostname()}\n{self.mqtt.base_topic}\n{self.operator}".encode()
+        served = [(e.rotator, e.offers()) for e in self.endpoints]
+        web = self.web.port if self.web.enabled else None
+        key = f"{socket.gethostname()}\n{self.mqtt.base_topic}\n{self.operator}\n{served}\n{web}"
         short = re.sub(r"[^a-z0-9]", "", self.operator.lower())[:8]
-        return f"remote-{short}-{hashlib.sha256(key).hexdigest()[:6]}"
+        return f"remote-{short}-{hashlib.sha256(key.encode()).hexdigest()[:6]}"
 
 
 def load_remote_settings(path: str) -> RemoteSettings:

@@ -14,15 +14,18 @@ import json
 import random
 import re
 from collections.abc import Callable
+from dataclasses import replace
 
 import pytest
 
 from bridge.app import worker_config
 from bridge.emulators.physics import Axis
 from bridge.engine import motion as mo
+from bridge.engine.config import HealthConfig
 from bridge.engine.health import Health
-from bridge.engine.health_judge import Judge
+from bridge.engine.health_judge import Judge, Move
 from bridge.model import MotionState, RotatorHealth
+from bridge.mqtt.health_payload import health_json
 from bridge.settings import RotatorSettings
 from tests.engine.virtual import VirtualRotator
 
@@ -172,6 +175,7 @@ class Bench:
         cfg = worker_config(
             RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
         )
+        self.cfg = cfg
         self.mcfg = cfg.motion
         self.health = Health(cfg)
         self.axis = Axis(20.0, speed_deg_s=6.0)
@@ -285,4 +289,156 @@ def test_health_failing_is_contained_and_the_rotor_goes_on(rig: Rig) -> None:
     v.run_until(lambda h: h.errors("internal"), 10, "the bug reported")
     assert "health failed" in v.errors("internal")[0].message
     v.run_until(lambda h: abs(h.truth().az_deg - 60) <= 3 and h.state is MotionState.IDLE, 120)
-    assert _health(v).moves >= health.moves  # rebuilt from what it had kept
+    v.run_until(lambda h: _health(h).moves > health.moves, 30, "the move counted")
+    after = _health(v)  # rebuilt once from what it had kept: the totals go on
+    assert after.moves == health.moves + 1 and after.az.odometer_deg > health.az.odometer_deg
+    assert len(v.errors("internal")) == 1
+
+
+# -- hostile readings, a hostile memory (review) ----------------------------------------------
+class JitterBench(Bench):
+    """A still potentiometer that reads alternately its value and one degree more (the Rotor-EZ
+    emulator's jitter, emulators/rotorez.py rule 8; the Rotor-EZ's noise band is 2 degrees),
+    and a motor that starts 1.5 s after the command (a brake releasing)."""
+
+    START_S = 1.5
+
+    def __init__(self, speed: Callable[[int, bool], float]) -> None:
+        super().__init__(speed)
+        self.phase = 0
+
+    def _poll(self) -> None:
+        self.now += self.POLL_S
+        reading = float(round(self.axis.position_deg_at(self.now)))
+        target = self.axis.target_deg
+        if target is None or self.axis.position_deg_at(self.now) == target:  # still: jitter
+            reading += self.phase
+            self.phase ^= 1
+        self.m, _events = mo.reading(self.m, self.mcfg, reading, self.now)
+        self._feed()
+
+
+def test_a_jittering_potentiometer_is_no_start_of_the_motor() -> None:
+    bench = JitterBench(lambda n, up: 6.0)
+    for n in range(6):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    delay = bench.reports[-1].start_delay_s
+    assert delay == pytest.approx(JitterBench.START_S, abs=JitterBench.POLL_S), delay
+
+
+def test_a_jittering_potentiometer_turns_no_odometer_and_no_motor() -> None:
+    bench = JitterBench(lambda n, up: 6.0)
+    for n in range(6):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    health = bench.reports[-1]
+    assert health.az.odometer_deg == pytest.approx(280 + 5 * 270, abs=6)  # a degree a move
+    # each move its 1.5 s start and its degrees at 6 deg/s, not the jitter while it settles
+    turning_s = (280 + 5 * 270) / 6.0 + 6 * JitterBench.START_S
+    assert health.motor_on_s == pytest.approx(turning_s, abs=6 * JitterBench.POLL_S)
+
+
+def test_a_new_target_while_turning_is_no_arrival(rig: Rig) -> None:
+    v = rig("rot2prog", emulator={"resolution_ppd": 1})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.target(100)
+    v.run_until(lambda h: h.truth().az_deg > 50, 120)
+    v.target(20)  # SPID takes it while turning: the first move ends half way, not arrived
+    v.run_until(lambda h: _health(h).moves >= 1, 60)
+    assert _health(v).az.arrival_error_deg is None
+
+
+def test_the_two_directions_apart_warn_and_clear_after_a_recovery_or_a_reset() -> None:
+    bench = Bench(lambda n, up: 6.0 * (0.75 if 20 <= n < 30 and not up else 1.0))
+    for n in range(30):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    warnings = bench.reports[-1].warnings
+    assert any(
+        re.fullmatch(
+            r"clockwise 6\.0 °/s and counter-clockwise 4\.5 °/s, 25 % apart \(0 % at the "
+            r"baseline\) over the last 7 moves each way",
+            w,
+        )
+        for w in warnings
+    ), warnings
+    # 25 moves of 270 degrees at 6 deg/s, 5 at 4.5, each started 0.3 s after its command
+    assert bench.reports[-1].motor_on_s == pytest.approx(25 * 45 + 5 * 60 + 30 * 0.3, rel=0.02)
+    for n in range(30, 44):  # mended: seven moves each way at full speed again
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert bench.reports[-1].warnings == ()
+    bench.speed = lambda n, up: 6.0 * (0.75 if not up else 1.0)
+    for n in range(44, 60):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    assert bench.reports[-1].warnings != ()
+    assert bench.health.reset() is not None  # after a repair: a new baseline, no warning
+    assert bench.health.report.warnings == ()
+
+
+def test_stalls_repeated_either_side_of_north_on_a_wrapping_scale_warn() -> None:
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    judge = Judge(cfg.health, False, wraps=True)
+    for at_deg in (358.0, 1.0, 359.0):
+        judge.add(Move(stalled_at_deg=at_deg))
+    assert [w for w in judge.warnings() if w.startswith("3 stalls near")], judge.warnings()
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [{"motor_on_s": 10**400}, {"odometer_deg": [float("inf"), 0.0]}, {"stall_at": [float("nan")]}],
+)
+def test_an_absurd_memory_starts_afresh(bad: dict[str, object]) -> None:
+    bench = Bench(lambda n, up: 6.0)
+    for n in range(3):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    kept = json.loads(json.dumps(bench.reports[-1].memory))
+    cfg = worker_config(
+        RotatorSettings.model_validate({"id": "b", "model": "rotorez", "port": "/dev/x"})
+    )
+    report = Health(cfg, {**kept, **bad}).report  # health is never a reason not to start
+    assert report.moves == 0
+    json.loads(health_json(report), parse_constant=lambda c: pytest.fail(f"{c} in R/health"))
+
+
+def test_a_speed_no_longer_set_by_hand_is_learned_again() -> None:
+    bench = Bench(lambda n, up: 6.0)
+    bench.health = Health(replace(bench.cfg, health=HealthConfig(az_speed_deg_s=8.0)))
+    for n in range(3):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+    kept = json.loads(json.dumps(bench.reports[-1].memory))
+    assert bench.reports[-1].baseline_from == "settings"
+    report = Judge(HealthConfig(), False, kept).report()  # az_speed_deg_s taken out
+    assert report.baseline_from != "settings" and report.az.baseline_up_deg_s is None
+    assert report.moves == 3
+    again = Judge(HealthConfig(az_speed_deg_s=7.0), False, kept).report()  # or changed
+    assert (again.baseline_from, again.az.baseline_down_deg_s) == ("settings", 7.0)
+
+
+def test_a_judgement_that_always_fails_turns_health_off_not_the_link(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    v = _settled(rig)
+    kept = _move(v, 200)
+
+    def broken(self: Judge) -> RotatorHealth:
+        raise ZeroDivisionError("a bug in the judgement")
+
+    monkeypatch.setattr(Judge, "report", broken)  # the rebuild from memory fails the same way
+    for az_deg in (60.0, 250.0):
+        v.target(az_deg)
+        v.run_until(
+            lambda h, a=az_deg: abs(h.truth().az_deg - a) <= 3 and h.state is MotionState.IDLE,
+            120,
+        )
+    assert len(v.errors("internal")) == 1 and v.status.connected
+    assert _health(v) == kept  # the last report stays; health measures no more
+
+
+def test_one_slow_move_never_warns_even_against_a_speed_set_by_hand() -> None:
+    """The baseline set in the settings is there from the first move (and after a reset):
+    still a warning needs several moves that way, never one."""
+    bench = Bench(lambda n, up: 6.0 * (0.5 if n == 1 else 1.0))
+    bench.health = Health(replace(bench.cfg, health=HealthConfig(az_speed_deg_s=6.0)))
+    for n in range(4):
+        bench.move(n, 300 if n % 2 == 0 else 30)
+        assert bench.reports[-1].warnings == (), n

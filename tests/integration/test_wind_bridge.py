@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from tests.support import wait_until
 from tests.support.rig import Rig
 
 TOPIC = "weather/station/wind"
@@ -74,7 +75,9 @@ def test_a_storm_parks_refuses_motion_stop_works_and_calm_releases_after_the_hol
     rig.probe.wait_for(
         "rotor/status", lambda m: json.loads(m.payload)["last_command_source"] == "mqtt", 10
     )
-    assert len(rig.emu.frames("set")) == sets and rig.emu.frames("stop")
+    # the status is published before the stop's frame is written: wait for the frame itself
+    wait_until(lambda: bool(rig.emu.frames("stop")), 10, "the stop on the wire")
+    assert len(rig.emu.frames("set")) == sets
 
     mark = rig.probe.mark()
     rig.probe.publish(TOPIC, "3")  # calm: released only after the hold

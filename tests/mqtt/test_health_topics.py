@@ -73,3 +73,14 @@ def test_reset_is_a_command_and_never_taken_retained() -> None:
     assert rot.calls[0][0] == "refused" and "retained" in str(rot.calls[0][1])
     svc.on_message("rotor/health/reset", b"RESET", retain=False)
     assert rot.calls[-1] == ("reset_health",)
+
+
+def test_an_empty_reset_is_refused_not_taken() -> None:
+    """MQTT 3.1.1: deleting a retained R/health/reset while the bridge is connected reaches it
+    as an empty plain message (service.py rule 1); it must not throw away what was learned."""
+    svc, _pub, _rots = service({"tower": "rotorez"})
+    rot = Resettable("tower", "rotorez")
+    svc.attach(rot)
+    svc.on_message("rotor/health/reset", b"", retain=False)
+    assert rot.calls and rot.calls[0][0] == "refused" and "empty" in str(rot.calls[0][1])
+    assert ("reset_health",) not in rot.calls

@@ -71,14 +71,14 @@ def info_payload(**console: object) -> bytes:
 def rig(
     wall: FakeClock | None = None,
 ) -> tuple[RemoteConsoleRotator, Link, Pages, StationView]:
-    view, link, pages = StationView(), Link(), Pages()
+    clock = wall or FakeClock(1_000_000.0)
+    view, link, pages = StationView(clock), Link(), Pages()
     payload = info_payload(station=(52.5, 13.3), locator="JO62qm", satellites=("ISS",))
     view.put(T.info, payload)
     view.put("rotor/bridge/state", b"online")
     view.put(T.availability, b"online")
-    clock = wall or FakeClock(1_000_000.0)
     remote = RemoteRotator(
-        "tower", T, "rotor/bridge/state", Info.parse(payload), view, link, "DL1ABC", 5, wall=clock
+        "tower", T, "rotor/bridge/state", Info.parse(payload), view, link, "DL1ABC", 5
     )
     rot = RemoteConsoleRotator(remote, Drawn.parse(payload), view, wall=clock)
     rot.pages = pages
@@ -242,7 +242,7 @@ def test_the_pages_see_a_status_once_and_unavailable_when_the_station_is_not_cur
     feed.on_message(T.status, raw)
     feed.on_message(T.status, raw)  # the same again: nothing new for the pages
     assert [s.bearing_deg for s in pages.statuses] == [None, 42.0]
-    wall.t += 11  # a moving status gone quiet: the ticker's refresh greys it
+    wall.t += 11  # a moving status gone quiet (the remote's clock): the ticker greys it
     feed.refresh()
     assert pages.statuses[-1].bearing_deg is None and not pages.statuses[-1].available
     wall.t -= 11

@@ -230,7 +230,9 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
     broker: Mosquitto, probe: Probe
 ) -> None:
     """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
-    old it is (the station publishes on change), a moving one's only while it is fresh."""
+    old it is (the station publishes on change), a moving one's only while it is fresh on the
+    remote's own clock: one the broker replays on subscribing is of unknown age, one that came
+    as published counts for moving_max_age_s whatever the station's clock says."""
     info = (
         '{"name":"tower","model":"rotorez","model_name":"Rotor-EZ","has_elevation":false,'
         '"can_report_position":true,"can_track":false,"azimuth_range":[0,360],'
@@ -240,29 +242,30 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
     probe.publish("rotor/bridge/state", "online", retain=True)
     probe.publish("rotor/availability", "online", retain=True)
 
-    def status(state: str, age_s: float) -> str:
+    def status(state: str, age_s: float) -> bytes:
         return (
             f'{{"bearing":42.0,"target":null,"parked":false,"state":"{state}",'
             f'"moving":{"true" if state == "moving" else "false"},"connected":true,'
             '"available":true,"locked":false,"version":"1.4S","options":{},"last_error":null,'
             f'"last_command_source":null,"estimated":false,"time":"{iso(time.time() - age_s)}"}}'
-        )
+        ).encode()
 
+    probe.publish("rotor/status", status("moving", 0), retain=True)  # replayed to the remote
     port = free_port()
-    r = Remote(settings(broker, port, moving_max_age_s=10))  # type: ignore[arg-type]
+    r = Remote(settings(broker, port, moving_max_age_s=1))  # type: ignore[arg-type]
     r.start()
     try:
-        for state, age_s, reply in [
-            ("idle", 3600, b"42.00\n0.00\n"),
-            ("moving", 1, b"42.00\n0.00\n"),
-            ("moving", 11, b"RPRT -5\n"),
-        ]:
-            payload = status(state, age_s).encode()
+        wait_until(lambda: r.view.get("rotor/status") is not None, 5, "the replayed status")
+        assert ask(port, b"p\n") == b"RPRT -5\n"
+        for state, age_s in [("idle", 3600), ("moving", 3600)]:  # a station clock an hour slow
+            payload = status(state, age_s)
             probe.publish("rotor/status", payload, retain=True)
             wait_until(
                 lambda p=payload: r.view.get("rotor/status") == p, 5, "the status at the remote"
             )
-            assert ask(port, b"p\n") == reply, (state, age_s)
+            assert ask(port, b"p\n") == b"42.00\n0.00\n", (state, age_s)
+        # nothing more from the station: moving_max_age_s (1 s) passing is what is tested
+        wait_until(lambda: ask(port, b"p\n") == b"RPRT -5\n", 10, "the move gone quiet")
     finally:
         r.stop()
 

@@ -38,12 +38,15 @@ def info(park: str = "null") -> Info:
 
 def rotator(link: Link, clock: FakeClock, park: str = "null") -> RemoteRotator:
     station = StationTopics("rotor")
+    view = StationView()  # the station there: its bridge and the rotator online
+    view.put(station.bridge_state, b"online")
+    view.put(station.rotator("tower").availability, b"online")
     return RemoteRotator(
         "tower",
         station.rotator("tower"),
         station.bridge_state,
         info(park),
-        StationView(),
+        view,
         link,
         "DL1ABC",
         5,

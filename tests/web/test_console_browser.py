@@ -76,6 +76,11 @@ def test_a_click_on_the_map_turns_the_rotator_to_that_bearing(
     wait_page_bearing(page, target, TOL)
     expect(page.locator("#state")).to_have_text("idle", timeout=10_000)
     expect(page.locator("#map .beam")).to_be_visible()
+    # rotor health counted the move: its line shows the numbers, unmarked while all is well
+    health = page.locator("#health-info")
+    expect(health).to_have_text(re.compile(r"^cw .+ · ccw .+ · [1-9]\d* moves, \d+ stalls"))
+    expect(page.locator("#health-label")).to_be_visible()
+    expect(health).not_to_have_class(re.compile(r"\bwarn\b"))
 
 
 @pytest.mark.parametrize("how", ["button", "escape", "space on a focused park button"])

@@ -1,0 +1,457 @@
+"""Attacks on ``rotor-bridge remote``: what a hostile client on the station's broker, an unlucky
+network or an unlucky user can do to it, and what the operator's programs then see.
+
+The pure parts run in virtual time on a stand-in link; the wiring on a real mosquitto with the
+station's bridge on an emulator (tests/support/rig.py)."""
+
+from __future__ import annotations
+
+import logging
+import re
+import signal
+import socket
+import subprocess
+import sys
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.errors import RefusalCode, Refused
+from bridge.gs232.commands import EasycommSession, Gs232Session
+from bridge.model import RotatorStatus
+from bridge.mosquitto import free_port
+from bridge.mqtt.remote import RemoteLink
+from bridge.mqtt.topics import StationTopics
+from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator, drawn_of
+from bridge.remote.rotator import Info, RemoteRotator, StationView
+from bridge.remote.run import Remote, StartError
+from bridge.remote.settings import RemoteSettings
+from bridge.rotctld.server import RotctldSession
+from tests.support import wait_until
+from tests.support.clock import FakeClock
+from tests.support.rig import Rig
+
+STATION = StationTopics("rotor")
+INFO = (
+    b'{"name":"tower","model":"rotorez","azimuth_range":[0,360],"elevation_range":null,'
+    b'"keep_out":[],"park":null,"options":[]}'
+)
+
+
+class Link:
+    def __init__(self) -> None:
+        self.up = True
+        self.sent: list[tuple[str, str]] = []
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        if not self.up:
+            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        self.sent.append((topic, payload))
+
+
+class Pages:
+    def __init__(self) -> None:
+        self.statuses: dict[str, list[RotatorStatus]] = {}
+
+    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        self.statuses.setdefault(rotator_id, []).append(status)
+
+    def on_event(self, rotator_id: str, event: object) -> None:
+        pass
+
+
+def station_rotator(view: StationView, rid: str, link: Link | None = None) -> RemoteRotator:
+    topics = STATION.rotator(rid)
+    view.put(STATION.bridge_state, b"online")
+    view.put(topics.availability, b"online")
+    return RemoteRotator(
+        rid, topics, STATION.bridge_state, Info.parse(INFO), view, link or Link(), "DL1ABC", 5
+    )
+
+
+def idle_status(bearing: str) -> bytes:
+    return (
+        b'{"bearing":' + bearing.encode() + b',"state":"idle","connected":true,"available":true,'
+        b'"locked":false,"time":"2026-01-01T00:00:00+00:00"}'
+    )
+
+
+# -- forged statuses on the broker -------------------------------------------------------------
+HOSTILE_STATUSES = [
+    pytest.param(b"[1, 2]", id="a JSON list"),
+    pytest.param(b'"online"', id="a JSON string"),
+    pytest.param(b"42", id="a JSON number"),
+    pytest.param(idle_status("NaN"), id="a NaN bearing"),
+    pytest.param(idle_status("Infinity"), id="an infinite bearing"),
+    pytest.param(idle_status("1e400"), id="a bearing past a float"),
+]
+
+
+@pytest.mark.parametrize("payload", HOSTILE_STATUSES)
+def test_a_forged_status_is_no_reading_and_no_crash(payload: bytes) -> None:
+    """Anyone who may publish on the station's status topic can put any bytes there, retained.
+    The remote's clients get "no position" (rotctld's error code, GS-232's ``?>``, Easycomm's
+    error), never a number that is not one, and nothing raises: Gpredict polls ``p`` every
+    second, each failure would be a traceback in the log."""
+    view = StationView()
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, payload)
+    status = rot.status  # raised AttributeError for a list, a string, a number
+    assert status.bearing_deg is None
+    assert RotctldSession(rot).feed(b"p\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
+    assert Gs232Session(rot).feed(b"C2\r") == [b"?>\r\n"]  # type: ignore[arg-type]
+    assert EasycommSession(rot).feed(b"AZ\n") == [b"ALposition unknown\n"]  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("payload", HOSTILE_STATUSES[:3])
+def test_one_rotators_forged_status_does_not_freeze_the_consoles_other_rotators(
+    payload: bytes,
+) -> None:
+    """The console's feed shows every rotator: a junk status on one must not stop the others'
+    statuses reaching the pages (it stopped at the first that raised, on every message)."""
+    view, pages = StationView(), Pages()
+    junk, good = station_rotator(view, "a"), station_rotator(view, "b")
+    shown = [RemoteConsoleRotator(r, Drawn(), view) for r in (junk, good)]
+    feed = ConsoleFeed(shown, pages)
+    view.put(junk.topics.status, payload)
+    view.put(good.topics.status, idle_status("123.0"))
+    feed.on_message(good.topics.status, idle_status("123.0"))
+    assert [s.bearing_deg for s in pages.statuses["b"]] == [123.0]
+    assert not pages.statuses["a"][-1].available
+
+
+# -- the broker dropping at the worst moment ---------------------------------------------------
+OPERATOR = "DL1ABC"
+RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
+
+
+def remote_settings(broker_port: int, port: int, **extra: Any) -> RemoteSettings:
+    return RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker_port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        **extra,
+    )
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
+    port = free_port()
+    r = Remote(remote_settings(station.broker.port, port))
+    r.start()
+    yield r, port
+    r.stop()
+
+
+def ask(port: int, line: bytes) -> bytes:
+    """One rotctld request on a fresh connection; its first reply line."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.sendall(line)
+        buf = b""
+        while not buf.endswith(b"\n"):
+            chunk = sock.recv(100)
+            if not chunk:
+                break
+            buf += chunk
+    return buf
+
+
+def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
+    station: Rig, remote: tuple[Remote, int]
+) -> None:
+    """The broker stalls, then dies, between a stop's publish and its acknowledgement: the
+    client was told RPRT 0, and the stop sat unacknowledged in paho's queue. The remote dropped
+    it with the targets (never late), so the operator's STOP never reached the station
+    (docs/architecture.md rule 11: a stop is never lost; a stop moves nothing, rule 7). The
+    target before it must still never be sent again."""
+    r, port = remote
+    link = r.link
+    assert link is not None
+    station.broker.pause()
+    assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
+    assert ask(port, b"S\n") == b"RPRT 0\n"
+    tower = r.rotators[0]
+    tower.publish(tower.topics.lock, "ON")  # as the console's lock ON does (remote/console.py)
+    station.broker.kill()
+    wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
+    log_from = station.broker.log.stat().st_size
+    station.broker.restart()
+    wait_until(lambda: link.up, 30, "the remote back on the broker")
+
+    def published() -> list[bytes]:
+        with open(station.broker.log, "rb") as f:
+            f.seek(log_from)
+            return RECEIVED.findall(f.read())
+
+    wait_until(lambda: len(published()) >= 2, 10, "the unacknowledged stop and lock sent again")
+    assert published() == [b"stop", b"lock"]  # in their order; the target is not
+
+
+# -- clock skew between the operator and the station -------------------------------------------
+def moving_status(station_time: str) -> bytes:
+    return (
+        b'{"bearing":77.0,"state":"moving","connected":true,"available":true,"locked":false,'
+        b'"time":"' + station_time.encode() + b'"}'
+    )
+
+
+def skewed(offset_s: float, clock: FakeClock) -> str:
+    """The station's clock, ``offset_s`` off the operator's (whose wall time is ``clock``)."""
+    return datetime.fromtimestamp(clock() + offset_s, UTC).isoformat(timespec="milliseconds")
+
+
+@pytest.mark.parametrize("station_behind_s", [30.0, 600.0])
+def test_a_station_clock_behind_the_operators_does_not_blank_every_move(
+    station_behind_s: float,
+) -> None:
+    """A station without a real-time clock (a Raspberry Pi) can be a minute off. Its moving
+    statuses, arriving as it publishes them, are current: the remote read them as "gone quiet"
+    because their ``time`` was older than moving_max_age_s on the operator's clock, so every
+    rotctld ``p`` during every move was an error."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(-station_behind_s, clock)))
+    assert rot.status.bearing_deg == 77.0
+    assert RotctldSession(rot).feed(b"p\n") == [b"77.00\n0.00\n"]  # type: ignore[arg-type]
+
+
+def test_a_station_clock_ahead_does_not_keep_a_dead_move_current() -> None:
+    """The station went quiet mid-move (a crash; its last will comes 1.5 keepalives later): its
+    last moving status must turn unknown after moving_max_age_s, however far ahead the station's
+    clock is. It stayed current for the whole skew (an hour here)."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(3600, clock)))
+    assert rot.status.bearing_deg == 77.0
+    clock.t += 11  # nothing since: the station quiet for more than moving_max_age_s (10)
+    assert rot.status.bearing_deg is None
+    assert RotctldSession(rot).feed(b"p\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
+
+
+def test_a_moving_status_replayed_from_the_brokers_store_is_unknown_until_a_live_one() -> None:
+    """On (re)connecting, the broker replays the station's retained status, however old; its own
+    ``time`` (the station's clock) cannot say how old on ours. Unknown until the station's next
+    status, which a moving station sends within a poll."""
+    clock = FakeClock(1_700_000_000.0)
+    view = StationView(clock)
+    rot = station_rotator(view, "tower")
+    view.put(rot.topics.status, moving_status(skewed(0, clock)), replayed=True)
+    assert rot.status.bearing_deg is None
+    view.put(rot.topics.status, moving_status(skewed(0, clock)))
+    assert rot.status.bearing_deg == 77.0
+
+
+# -- the station away while the broker is there ------------------------------------------------
+@pytest.mark.parametrize(
+    ("gone", "word"),
+    [("bridge", b"offline"), ("rotator", b"offline"), ("rotator", b"")],
+    ids=["the station's bridge offline", "its rotator offline", "its rotator never described"],
+)
+def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_goes(
+    gone: str, word: bytes
+) -> None:
+    """The broker is there, the station's bridge (or its controller) is not. The remote's
+    console refused a move then; rotctld, GS-232, Easycomm and PstRotator said RPRT 0 / nothing
+    and published a target nobody would take, as the station's own rotctld does not (it answers
+    RPRT -5 for a rotator offline). A stop still goes: the station's bridge takes it, and with
+    the bridge's main connection gone its stop lane may still (mqtt/lane.py)."""
+    view, link = StationView(), Link()
+    rot = station_rotator(view, "tower", link)
+    view.put(STATION.bridge_state if gone == "bridge" else rot.topics.availability, word)
+    assert RotctldSession(rot).feed(b"P 120 0\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
+    assert Gs232Session(rot).feed(b"M120\r") == [b"?>\r\n"]  # type: ignore[arg-type]
+    assert EasycommSession(rot).feed(b"AZ120.0\n") == [b"ALrefused offline\n"]  # type: ignore[arg-type]
+    assert link.sent == []
+    assert RotctldSession(rot).feed(b"S\n") == [b"RPRT 0\n"]  # type: ignore[arg-type]
+    assert link.sent == [(rot.topics.stop, "stop")]
+
+
+# -- two remotes on one host -------------------------------------------------------------------
+def test_two_remotes_of_one_operator_on_one_host_get_their_own_client_ids() -> None:
+    """One remote per rotator, each with its own file (or a console-only one beside a rotctld
+    one): with the default client id they had one id, and a broker closes the first connection
+    of an id when the second comes (MQTT 5 session takeover), so both flapped for ever, every
+    command refused while down."""
+    one = remote_settings(1883, 4533)
+    other = RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": 1883, "base_topic": "rotor"},
+        endpoints=[{"rotator": "mast", "gs232_pty": "/tmp/rotor-mast"}],
+    )
+    assert one.client_id() != other.client_id()
+    assert one.client_id() == remote_settings(1883, 4533).client_id()  # stable across restarts
+
+
+def test_a_takeover_names_the_client_id_the_remote_uses(caplog: pytest.LogCaptureFixture) -> None:
+    """The takeover error tells the user which client id two processes share: it named the
+    bridge's default id (rotor-...), not the remote's (remote-...), sending the user to look
+    for a bridge."""
+    s = remote_settings(1883, 4533)
+    link = RemoteLink(s.mqtt, s.client_id(), [], lambda topic, payload, retain: None)
+    with caplog.at_level(logging.ERROR, logger="bridge.mqtt.connection"):
+        link._ended(ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True)
+    (said,) = [r.getMessage() for r in caplog.records]
+    assert f"client id {s.client_id()!r}" in said
+
+
+# -- an absurd description of the station ------------------------------------------------------
+ABSURD_INFOS = [
+    pytest.param(b'"azimuth_range":[NaN,NaN]', id="NaN azimuth range"),
+    pytest.param(b'"azimuth_range":[0,1e400]', id="an infinite azimuth range"),
+    pytest.param(b'"azimuth_range":[0,1' + b"0" * 400 + b"]", id="an integer past a float"),
+    pytest.param(b'"azimuth_range":[0,360],"elevation_range":[NaN,90]', id="NaN elevation"),
+    pytest.param(b'"azimuth_range":[0,360],"keep_out":[[NaN,Infinity]]', id="NaN keep-out"),
+    pytest.param(b'"azimuth_range":[0,360],"park":[NaN,null]', id="NaN park"),
+]
+
+
+@pytest.mark.parametrize("fields", ABSURD_INFOS)
+def test_an_absurd_retained_description_is_a_start_error_not_a_traceback_per_command(
+    broker: Any, probe: Any, fields: bytes
+) -> None:
+    """A retained R/info with numbers that are not numbers: the remote started ("tower
+    (rotorez, nan..nan)") and every P then raised inside the judge (a ValueError, not a
+    refusal): a traceback in the log and RPRT -7 for each of Gpredict's targets. It is not the
+    station's description: a one-line start error naming the topic."""
+    probe.publish("rotor/info", b'{"name":"tower","model":"rotorez",' + fields + b"}", retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+    r = Remote(remote_settings(broker.port, free_port(), info_wait_s=5))
+    with pytest.raises(StartError, match=r"^rotor/info is not the station's description: "):
+        r.start()
+
+
+def test_a_description_with_console_fields_past_a_float_leaves_the_console_its_defaults() -> None:
+    """[web] on: a beamwidth of 400 digits raised OverflowError (not a ValueError) out of the
+    remote's start, a traceback instead of the console with its defaults."""
+    assert drawn_of(b'{"beamwidth":1' + b"0" * 400 + b"}") == Drawn()
+
+
+def stand_in_station(probe: Any) -> None:
+    """The station's retained description and presence, without a bridge."""
+    probe.publish("rotor/info", INFO, retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    probe.publish("rotor/availability", "online", retain=True)
+
+
+def test_the_remote_stopping_does_not_say_it_reconnects(
+    broker: Any, probe: Any, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Ctrl-C: the remote's last log line was the warning "disconnected from MQTT broker
+    (Normal disconnection); reconnecting", as if the broker had gone."""
+    stand_in_station(probe)
+    r = Remote(remote_settings(broker.port, free_port()))
+    r.start()
+    with caplog.at_level(logging.INFO, logger="bridge"):
+        r.stop()
+    assert not [rec.getMessage() for rec in caplog.records if "reconnecting" in rec.getMessage()]
+
+
+def test_the_console_on_an_endpoints_port_is_a_configuration_error() -> None:
+    """[web] on the port an endpoint takes: the file was accepted, and the start then failed with
+    "Address already in use", sending the user to look for another program."""
+    with pytest.raises(ValueError, match=r"web.port 4533 clashes with endpoints\[0\].gs232_port"):
+        RemoteSettings(
+            operator=OPERATOR,
+            mqtt={"host": "127.0.0.1"},
+            endpoints=[{"gs232_port": 4533}],
+            web={"enabled": True, "port": 4533},
+        )
+
+
+def test_an_error_event_the_broker_replays_is_not_shown_as_new() -> None:
+    """R/error is never retained by the station; one retained there (forged, or an old tool's)
+    came to every page as a fresh error on every reconnect of the remote."""
+    view, pages = StationView(), Pages()
+    rot = station_rotator(view, "tower")
+    events: list[object] = []
+    pages.on_event = lambda rid, event: events.append(event)  # type: ignore[method-assign]
+    feed = ConsoleFeed([RemoteConsoleRotator(rot, Drawn(), view)], pages)
+    event = b'{"kind":"refused","message":"rotator is locked","command":null,"time":5.0}'
+    feed.on_message(rot.topics.error, event, replayed=True)
+    assert events == []
+    feed.on_message(rot.topics.error, event)
+    assert len(events) == 1
+
+
+def test_a_gs232_or_easycomm_stop_refused_offline_is_an_answer_not_a_traceback(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The remote's link down: a stop is refused (it cannot be delivered). GS-232 ``S`` and
+    Easycomm ``SA SE`` let that refusal escape as a failure: a traceback in the log for each
+    (PstRotator under Wine sends stops on a timer), where a move's refusal is an answer."""
+    view, link = StationView(), Link()
+    rot = station_rotator(view, "tower", link)
+    link.up = False
+    with caplog.at_level(logging.WARNING):
+        assert Gs232Session(rot).feed(b"S\r") == [b"?>\r\n"]  # type: ignore[arg-type]
+        assert EasycommSession(rot).feed(b"SA SE\n") == [b"ALrefused offline\n"]  # type: ignore[arg-type]
+    assert not [r for r in caplog.records if r.exc_info]
+
+
+# -- start-up with the station absent ----------------------------------------------------------
+def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
+    broker: Any, tmp_path: Path
+) -> None:
+    """No station on the broker and info_wait_s = 120: SIGTERM (or Ctrl-C) only set a flag the
+    remote looked at after the start, so it sat out the whole wait (two minutes) before
+    leaving. It stops waiting, exits 2 and says why."""
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\ninfo_wait_s = 120\n[mqtt]\nport = {broker.port}\n'
+        f"[[endpoints]]\nrotctld_port = {free_port()}\n"
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_until(
+            lambda: re.search(rb"New client connected .* as remote-", broker.log.read_bytes()),
+            20,
+            "the remote on the broker, waiting for the station",
+        )
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)  # far below info_wait_s: it did not sit it out
+        assert proc.returncode == 2
+        assert "stopped before the station's rotators were found" in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_an_old_one_rotator_description_beside_the_stations_rotators_is_no_choice(
+    broker: Any, probe: Any
+) -> None:
+    """A station that had one rotator (retained under rotor/) now has two (rotor/tower/,
+    rotor/mast/): nothing clears the old retained rotor/info, status and availability. An
+    endpoint without ``rotator`` took the old one: a stale bearing, or RPRT -5 for ever, and
+    targets published where no bridge listens, without a word of why. It is a start error that
+    names the rotators."""
+    probe.publish("rotor/info", INFO, retain=True)  # left from the one-rotator days
+    probe.publish("rotor/availability", "online", retain=True)
+    probe.publish("rotor/bridge/state", "online", retain=True)
+    for rid in ("tower", "mast"):
+        probe.publish(f"rotor/{rid}/info", INFO.replace(b"tower", rid.encode()), retain=True)
+    s = RemoteSettings(
+        operator=OPERATOR,
+        mqtt={"host": "127.0.0.1", "port": broker.port, "base_topic": "rotor"},
+        endpoints=[{"rotctld_port": free_port()}],
+        info_wait_s=5,
+    )
+    with pytest.raises(StartError, match=r"rotators mast, tower.*name one in endpoints.rotator"):
+        Remote(s).start()

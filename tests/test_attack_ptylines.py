@@ -1,0 +1,80 @@
+"""Attacks on the pty line server (ptylines.py): what an unlucky client's terminal settings do,
+on real pseudo-terminals with the GS-232B session onto a stand-in rotator."""
+
+from __future__ import annotations
+
+import errno
+import os
+import termios
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.gs232 import gs232_pty
+from bridge.ptylines import PtyLineServer
+from tests.test_ptylines import Client, StandIn
+
+
+@pytest.fixture
+def served(tmp_path: Path) -> Iterator[tuple[PtyLineServer, str]]:
+    path = str(tmp_path / "rotor-gs232")
+    server = gs232_pty(StandIn(), path)
+    server.start()
+    yield server, path
+    server.stop()
+
+
+def test_a_client_that_turns_echo_on_does_not_start_a_loop_of_replies(
+    served: tuple[PtyLineServer, str],
+) -> None:
+    """A program that opens the port in cooked mode (or ``stty -F /tmp/rotor-gs232 sane``) turns
+    the tty's ECHO on. A pty echoes what its master writes back to the master: the server read
+    its own reply "AZ=042" as a command, answered "?>", read that, ... tens of thousands of
+    replies a second, for ever while anyone reads, and the client's next answer lost in them.
+    A serial line has no echo towards the computer: the server keeps it off."""
+    _, path = served
+    client = Client(path)
+    try:
+        attrs = termios.tcgetattr(client.fd)
+        attrs[3] |= termios.ECHO | termios.ICANON  # what `stty sane` sets among the rest
+        termios.tcsetattr(client.fd, termios.TCSANOW, attrs)
+        assert client.ask(b"C\r") == b"AZ=042\r\n"
+        assert client.ask(b"C\r", reply_ends=b"AZ=042\r\n") == b"AZ=042\r\n"
+    finally:
+        client.close()
+
+
+def test_a_second_server_does_not_steal_a_link_another_one_serves(tmp_path: Path) -> None:
+    """The remote (or the bridge) started twice with one pty path: a link already there was
+    taken for a crash's leftover and replaced, so the second silently took the first one's
+    clients, and on stopping removed the link while the first still served. A link a live
+    server holds is refused, naming the path; once that server is gone it is taken."""
+    path = str(tmp_path / "rotor-gs232")
+    first, second = gs232_pty(StandIn(), path), gs232_pty(StandIn(), path)
+    first.start()
+    try:
+        with pytest.raises(OSError, match=r"another program serves a pty there") as caught:
+            second.listen()
+        assert caught.value.errno == errno.EADDRINUSE
+        assert os.readlink(path) == first.slave_name
+    finally:
+        first.stop()
+    second.start()  # the path free again
+    try:
+        assert os.readlink(path) == second.slave_name
+    finally:
+        second.stop()
+
+
+def test_a_leftover_link_of_a_server_that_died_is_still_replaced(tmp_path: Path) -> None:
+    """The claim dies with its process: a crash's link (to a pty since closed, or one its
+    number now names for someone else) is replaced as before."""
+    path = tmp_path / "rotor-gs232"
+    path.symlink_to("/dev/pts/0")
+    server = gs232_pty(StandIn(), str(path))
+    server.start()
+    try:
+        assert os.readlink(path) == server.slave_name
+    finally:
+        server.stop()
