@@ -14,6 +14,7 @@ from typing import Any
 
 from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
+from bridge.engine.config import FollowConfig
 from bridge.engine.lines import Lines
 from bridge.engine.listeners import contained
 from bridge.engine.port import PortOpener, open_port
@@ -29,6 +30,7 @@ from bridge.mqtt.lane import StopLane
 from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.mqtt.wind import wind_feed
 from bridge.ptylines import PtyLineServer
 from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError, Settings
@@ -38,6 +40,9 @@ from bridge.web.files import installation_secret
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
 from bridge.wiring import worker_config
+from bridge.wsjtx import WsjtxListener
+
+__all__ = ["App", "NotYet", "run", "worker_config"]
 
 log = logging.getLogger(__name__)
 
@@ -136,9 +141,10 @@ class App:
                 wall=wall,
             )
         satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
+        follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
         for r in settings.rotators:
             rot = Rotator(
-                worker_config(r, sky),
+                worker_config(r, sky, follow),
                 store,
                 on_status=self._listeners(r.id, "on_status"),
                 on_event=self._listeners(r.id, "on_event"),
@@ -185,6 +191,13 @@ class App:
                 self.loggers.add_n1mm(
                     rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
                 )
+        wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
+        self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
+        self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
+        pairs = zip(settings.rotators, self.rotators, strict=True)
+        self.mqtt.add_feature(
+            *wind_feed([(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if r.wind_topic])
+        )
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
@@ -233,6 +246,8 @@ class App:
                     has_station=settings.station.position is not None,
                     nudge_step_deg=r.nudge_step_deg,
                     satellites=tuple(self.catalog.names()),
+                    can_follow=rot.can_follow,
+                    has_wind=r.wind_topic is not None,
                 )
             )
         publisher = DiscoveryPublisher(
@@ -298,12 +313,15 @@ class App:
                 server.listen()
             if self.loggers:
                 self.loggers.listen()
+            if self.settings.wsjtx.enabled:
+                self.wsjtx.listen()
             if self.web is not None:
                 self.web.listen()
         except OSError as exc:
             for server in self._text_ports():
                 server.stop()
             self.loggers.stop()
+            self.wsjtx.stop()
             if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
                 raise NotYet(exc.strerror or str(exc)) from None
             raise ConfigError(exc.strerror or str(exc)) from None
@@ -320,6 +338,8 @@ class App:
                 server.start()
             if self.loggers:
                 self.loggers.start()
+            if self.settings.wsjtx.enabled:
+                self.wsjtx.start()
         except OSError:  # e.g. the port is taken: fail the start, leave nothing running
             self.stop()
             raise
@@ -337,6 +357,7 @@ class App:
         for server in self._text_ports():
             server.stop()
         self.loggers.stop()
+        self.wsjtx.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
         for rot in self.rotators:

@@ -32,10 +32,12 @@ from bridge.settings import (
     TlsSettings,
     TrackingSettings,
     WebSettings,
+    WsjtxSettings,
 )
 from bridge.settings_defaults import model_defaults
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields
+from bridge.settings_wind import WindFields
 
 COMMAND = "scripts/gen-config-doc"
 MINIMAL = """[mqtt]
@@ -76,7 +78,8 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         "Which controller, on which port, and how it is polled and judged.",
         {n for n in RotatorSettings.model_fields if not n.startswith("rotctld_")}
         - set(PointingFields.model_fields)
-        - set(LoggerFields.model_fields),
+        - set(LoggerFields.model_fields)
+        - set(WindFields.model_fields),
     ),
     (
         "rotctld",
@@ -86,12 +89,22 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
     (
         "Pointing",
         "True bearings: the offset, presets, park and keep-out sectors.",
-        {n for n in PointingFields.model_fields if not n.startswith("track_")},
+        {n for n in PointingFields.model_fields if not n.startswith(("track_", "follow_"))},
     ),
     (
         "Tracking (per rotator)",
         "Following the sun, the moon or a satellite (needs [station]).",
         {n for n in PointingFields.model_fields if n.startswith("track_")},
+    ),
+    (
+        "Following WSJT-X (per rotator)",
+        "Turning to the station WSJT-X or JTDX is working (needs [wsjtx] and [station]).",
+        {n for n in PointingFields.model_fields if n.startswith("follow_")},
+    ),
+    (
+        "Wind (per rotator)",
+        "Parking for a storm, from a wind speed published on MQTT.",
+        set(WindFields.model_fields),
     ),
     (
         "Loggers",
@@ -114,6 +127,7 @@ def render() -> str:
         ("[station]", StationSettings, f"{ENV_PREFIX}STATION__"),
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
         ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
+        ("[wsjtx]", WsjtxSettings, f"{ENV_PREFIX}WSJTX__"),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]

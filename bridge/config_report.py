@@ -158,6 +158,9 @@ def summary(settings: Settings) -> list[str]:
     else:
         there = "found" if os.path.isfile(tle) else "NOT FOUND"
         lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
+    wsjtx = settings.wsjtx
+    where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"
+    lines.append(f"wsjtx: listening on {where}" if wsjtx.enabled else "wsjtx: off")
     lines.append(f"state file: {settings.state_file}")
     if settings.audit_file is not None:
         most = settings.audit_max_bytes
@@ -211,6 +214,9 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
         on.append(f"N1MM {r.n1mm_rotor_name!r} on {r.n1mm_udp_bind}:{r.n1mm_udp_port}")
     if r.park_az_deg is not None:
         on.append(f"parks at {r.park_az_deg:g}")
+    if r.wind_topic is not None:
+        unit = r.wind_unit
+        on.append(f"parks for the wind above {r.wind_park_above:g} {unit} on {r.wind_topic}")
     return [
         f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), {r.effective_baud} baud",
         "  " + "; ".join(on),

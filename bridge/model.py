@@ -38,6 +38,8 @@ class Source(enum.StrEnum):
     GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
     LEASE = "lease"  # the control lease itself: its end, in the audit trail (engine/operators.py)
+    WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
+    WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)
 
 
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
@@ -143,6 +145,31 @@ class TrackingInfo:
 
 
 @dataclass(frozen=True)
+class FollowingInfo:
+    """Whom the rotator follows (``following`` in the status): the QSO partner a program
+    (WSJT-X, JTDX) names, and where it was last turned for them."""
+
+    source: str  # "wsjtx"
+    path: str = "short"  # or "long"
+    call: str | None = None  # the DX call and grid last heard with a grid
+    grid: str | None = None
+    bearing_deg: float | None = None  # the true bearing turned to for ``grid``
+    distance_km: float | None = None  # along the path taken
+    held: bool = False  # a new grid waits for the transmission to end (follow_hold_while_tx)
+
+
+@dataclass(frozen=True)
+class WindInfo:
+    """The wind as the rotator sees it (``wind`` in the status), speeds in km/h."""
+
+    speed_kmh: float | None = None  # the last reading (None: none yet)
+    storm: bool = False  # parked for the storm: motion is refused
+    calm_since_unix: float | None = None  # in a storm: below the release level since then
+    silent: bool = False  # no reading for wind_silent_min: the state is kept
+    refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
+
+
+@dataclass(frozen=True)
 class Target:
     """Go here. An axis left None keeps its current target (or position): a bare azimuth on an
     az/el rotator leaves the elevation alone, an elevation-only request the azimuth."""
@@ -203,6 +230,7 @@ class ErrorKind(enum.StrEnum):
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
     STATE = "state"  # the lock could not be saved in the state file
     INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
+    WIND = "wind"  # the wind topic fell silent or sent no number: the state it had is kept
     AUDIT = "audit"  # the audit file could not be written (the bridge goes on without it)
 
 
@@ -289,6 +317,9 @@ class RotatorStatus:
     parked: bool = False  # at the park position after a park, until the next move
     tracking: TrackingInfo | None = None
     tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
+    following: FollowingInfo | None = None  # R/follow (engine/follow.py)
+    following_ended: str | None = None  # why following last ended, until it starts again
+    wind: WindInfo | None = None  # with a wind_topic (engine/wind.py)
     health: RotatorHealth | None = None  # how the rotor turns (engine/health.py)
     last_operator: str | None = None  # who sent the command of last_command_source (Origin.who)
     control: Control | None = None  # the control lease's holder, if it is held

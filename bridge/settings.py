@@ -45,6 +45,7 @@ from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSetting
 from bridge.settings_pointing import StationSettings, TrackingSettings
 from bridge.settings_rotator import RotatorSettings
 from bridge.settings_web import WebSettings
+from bridge.settings_wsjtx import WsjtxSettings
 
 __all__ = [
     "DEFAULT_SILENCE_TIMEOUT_S",
@@ -58,6 +59,7 @@ __all__ = [
     "TlsSettings",
     "TrackingSettings",
     "WebSettings",
+    "WsjtxSettings",
     "format_validation_error",
     "load_settings",
 ]
@@ -95,6 +97,7 @@ class Settings(BaseSettings):
         default_factory=TrackingSettings, description="the [tracking] table"
     )
     web: WebSettings = Field(default_factory=WebSettings, description="the [web] table")
+    wsjtx: WsjtxSettings = Field(default_factory=WsjtxSettings, description="the [wsjtx] table")
     rotators: list[RotatorSettings] = Field(
         min_length=1, description="the [[rotators]] tables, one per rotator"
     )

@@ -175,6 +175,13 @@ class PointingFields(BaseModel):
         description='at the end of a pass: "stay", or "park" (needs park_az_deg)',
         examples=["park"],
     )
+    follow_hold_while_tx: bool = Field(
+        True,
+        description="following WSJT-X (R/follow): a new station's bearing waits until the "
+        "transmission ends (a beam turning while transmitting is hard on some amplifiers and "
+        "feed lines)",
+        examples=[False],
+    )
 
     @field_validator("az_offset_deg")
     @classmethod

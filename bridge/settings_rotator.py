@@ -27,12 +27,13 @@ from bridge.protocols.base import ModelSpec
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_mqtt import check_topic
 from bridge.settings_pointing import PointingFields
+from bridge.settings_wind import WindFields
 
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
-class RotatorSettings(PointingFields, LoggerFields):
+class RotatorSettings(PointingFields, LoggerFields, WindFields):
     """``[[rotators]]``: one table per rotator controller (at least one)."""
 
     id: str = Field(

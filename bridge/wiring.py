@@ -1,18 +1,31 @@
 """A rotator's settings turned into the engine's configuration (engine/worker.py WorkerConfig):
 the one place where the user's keys meet the engine's terms, for the app and for the tests that
-build a rotator of their own."""
+build a rotator of their own: the speeds, limits, timings and the judge's terms resolved once,
+health's, tracking's, following's and the wind park's terms. Pure: settings in, frozen engine
+configuration out.
+
+Rules:
+1. Every value the engine uses comes from here: a key left out gets the default
+   settings_defaults.py derives for the model (check-config shows the same values).
+2. Wind speeds are km/h from here on, whatever the rotator's ``wind_unit``.
+"""
 
 from __future__ import annotations
 
-from bridge.engine.config import HealthConfig, TrackConfig
+from dataclasses import replace
+
+from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.settings import RotatorSettings
 from bridge.sky import Sky
 
 
-def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
-    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked)."""
+def worker_config(
+    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
+) -> WorkerConfig:
+    """``r``'s engine settings; ``sky`` is the station's (None: nothing can be tracked);
+    ``follow``: the station and whether WSJT-X is heard (its hold_while_tx is ``r``'s)."""
     spec = r.spec
     az_min, az_max = r.effective_az_limits
     az_speed, el_speed = r.effective_speeds_deg_s
@@ -54,4 +67,18 @@ def worker_config(r: RotatorSettings, sky: Sky | None = None) -> WorkerConfig:
             step_deg=r.effective_track_step_deg,
             at_los=r.track_at_los,
         ),
+        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
+        wind=wind_config(r),
     )
+
+
+def wind_config(r: RotatorSettings) -> WindConfig | None:
+    """The wind park's terms in km/h (settings_wind.py), or None without a wind_topic."""
+    above = r.wind_kmh(r.wind_park_above)
+    if r.wind_topic is None or above is None:
+        return None
+    park_az = r.wind_park_az_deg if r.wind_park_az_deg is not None else r.park_az_deg
+    assert park_az is not None  # settings_wind.py rule 1
+    release = r.wind_kmh(r.wind_release_below) or above
+    hold_s, silent_s = r.wind_hold_min * 60.0, r.wind_silent_min * 60.0
+    return WindConfig(above, release, hold_s, (park_az, r.park_el_deg), silent_s, r.wind_topic)

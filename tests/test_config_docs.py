@@ -36,6 +36,7 @@ from bridge.settings import (
     TlsSettings,
     TrackingSettings,
     WebSettings,
+    WsjtxSettings,
     settings_from,
 )
 from tests.support import ROOT
@@ -129,6 +130,7 @@ COMPANIONS: dict[str, dict[str, Any]] = {
     "park_el_deg": {"park_az_deg": 0},
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},
+    "wind_topic": {"wind_park_above": 60, "park_az_deg": 0},
 }
 
 
@@ -140,6 +142,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("station",), StationSettings),
     (("tracking",), TrackingSettings),
     (("web",), WebSettings),
+    (("wsjtx",), WsjtxSettings),
     (("rotators",), RotatorSettings),
 ]
 

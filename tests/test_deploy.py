@@ -18,7 +18,7 @@ import pytest
 
 from bridge.cli import EXIT_CONFIG, build_parser
 from bridge.model import TrackingInfo
-from bridge.mqtt import payloads
+from bridge.mqtt import feature_payloads, payloads
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, load_settings
@@ -301,7 +301,7 @@ def test_web_page_starts_and_ends_tracking_and_shows_it(flow: list[dict]) -> Non
     # the status's tracking block as the bridge writes it (every key, a pass included) and
     # tracking_ended: the page reads each of them
     info = TrackingInfo("ISS", "waiting", 1.0, 2.0, 3.0, 4.0, 1e9, 1e9 + 600, 50.0, 180.0, True)
-    keys = set(payloads.tracking_json(info)) - {"next"}  # where the body is in a minute
+    keys = set(feature_payloads.tracking_json(info)) - {"next"}  # where the body is in a minute
     assert keys >= {"body", "phase", "azimuth", "elevation", "aos", "los", "flip"}
     for key in keys:
         assert f"t.{key}" in page, f"the page ignores tracking.{key}"

@@ -20,8 +20,9 @@ from bridge.homeassistant import (
     RotatorInfo,
     all_configs,
 )
-from bridge.model import RotatorStatus, TrackingInfo
-from bridge.mqtt.payloads import parse_nudge, status_json, tracking_state
+from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
+from bridge.mqtt.feature_payloads import follow_state, tracking_state
+from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -616,3 +617,55 @@ def test_the_track_select_follows_the_tle_file_when_it_changes() -> None:
     pub.set_satellites(("ISS (ZARYA)", "NOAA 19"))
     options = [json.loads(p)["options"] for t, p in rec.published if t == topic]
     assert options == [["off", "sun", "moon", "ISS (ZARYA)", "NOAA 19"]]
+
+
+# -- following WSJT-X (engine/follow.py) ---------------------------------------------------------
+def follow_discovery(can_follow: bool) -> dict[str, dict]:
+    cfg = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=True, nudge_step_deg=cfg.nudge_step_deg, can_follow=can_follow,
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    return {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}
+
+
+def test_the_follow_switch_is_there_only_when_wsjtx_can_be_followed_and_passes_the_rules() -> None:
+    assert {"switch.follow", "sensor.followed"}.isdisjoint(follow_discovery(False))
+    msgs = follow_discovery(True)
+    switch = msgs["switch.follow"]
+    assert (switch["command_topic"], switch["state_topic"]) == (
+        "rotor/follow",
+        "rotor/follow/state",
+    )
+    # what R/follow/state says is the switch's on or off, and its on is what R/follow takes
+    assert (switch["payload_on"], switch["state_on"]) == ("wsjtx", "wsjtx")
+    assert (switch["payload_off"], switch["state_off"]) == ("off", "off")
+    for following in (None, FollowingInfo("wsjtx")):
+        state = follow_state(RotatorStatus("tower", following=following))
+        assert state in (switch["state_on"], switch["state_off"])
+    assert parse_follow(switch["payload_on"].encode()) == (True, False)
+    assert parse_follow(switch["payload_off"].encode()) == (False, False)
+    for key in ("switch.follow", "sensor.followed"):
+        platform, obj = key.split(".")
+        topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
+        assert validate(topic, msgs[key]) == [], key
+
+
+def test_the_wind_entities_are_there_only_with_a_wind_topic_and_pass_the_rules() -> None:
+    cfg = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    topics = Topics("rotor", {"tower": "rotor"})
+    for has_wind in (False, True):
+        info = RotatorInfo.of(
+            "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+            has_station=False, nudge_step_deg=cfg.nudge_step_deg, has_wind=has_wind,
+        )  # fmt: skip
+        msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+        found = {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}
+        wind = {"sensor.wind", "binary_sensor.storm"}
+        assert (wind <= set(found)) is has_wind
+        for key in wind & set(found):
+            platform, obj = key.split(".")
+            topic = f"homeassistant/{platform}/rotorbridge_rotor_r_tower/{obj}/config"
+            assert validate(topic, found[key]) == [], key

@@ -22,6 +22,27 @@ class TrackConfig:
 
 
 @dataclass(frozen=True)
+class FollowConfig:
+    """What following a QSO partner (follow.py) needs of the station and the settings."""
+
+    station: tuple[float, float] | None = None  # (latitude, longitude); None: cannot follow
+    hold_while_tx: bool = True  # a new partner's bearing waits for the transmission to end
+    wsjtx: bool = False  # the [wsjtx] listener runs: there is something to follow
+
+
+@dataclass(frozen=True)
+class WindConfig:
+    """What the wind-aware park (wind.py) needs of the settings; speeds in km/h."""
+
+    park_above_kmh: float
+    release_below_kmh: float
+    hold_s: float
+    park: tuple[float, float | None]  # (azimuth, elevation) true: where to face the storm
+    silent_s: float
+    topic: str = ""  # named in what is reported
+
+
+@dataclass(frozen=True)
 class HealthConfig:
     """What rotor health (health.py) is judged by."""
 
@@ -50,6 +71,8 @@ class WorkerConfig:
     pointing: Pointing | None = None  # None: the model's whole range, no offset
     park_after_idle_s: float = 0.0  # 0: never park by itself (autopark.py)
     tracking: TrackConfig = TrackConfig()  # the sky is None without a station (tracking.py)
+    follow: FollowConfig = FollowConfig()  # follow.py
+    wind: WindConfig | None = None  # wind.py; None: no wind_topic
     health: HealthConfig = HealthConfig()
 
     def __post_init__(self) -> None:

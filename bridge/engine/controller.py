@@ -36,7 +36,8 @@ from bridge.engine.options import Options
 from bridge.engine.sending import Sending
 from bridge.engine.slew import Slew
 from bridge.engine.stops import Stops
-from bridge.model import ErrorKind, MotionState, Target
+from bridge.engine.targets import resolve
+from bridge.model import ErrorKind, MotionState, RotatorStatus, Target
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
 
 log = logging.getLogger(__name__)
@@ -86,6 +87,39 @@ class Controller:
     @property
     def name(self) -> str:
         return self.cfg.rotator_id
+
+    def seen(
+        self,
+        previous: RotatorStatus,
+        view: st.View,
+        pending: Target | None,
+        locked: bool,
+        wall_offset_s: float,
+        features: st.Features,
+    ) -> st.Seen:
+        """What the status view needs (status.py), the controller's part from here."""
+        link, wire = self.link, None
+        if pending is not None and link is not None:
+            az, el = resolve(pending, self.motion, self.cfg.aim)
+            wire = link.codec.wire_target(az, el) if az is not None else None
+        return st.Seen(
+            previous=previous,
+            view=view,
+            version=self.version,
+            controller_time=self.controller_time,
+            motion=self.motion,
+            connected=link is not None,
+            answering=link is not None and self.answering,
+            locked=locked,
+            options=self.options.values,
+            bearing_deg=self.az_shown.value,
+            elevation_deg=self.el_shown.value,
+            slew=link.slew if link is not None else None,
+            pending=pending,
+            pending_wire=wire,
+            wall_offset_s=wall_offset_s,
+            features=features,
+        )
 
     def take_notes(self) -> list[Note]:
         """What happened since the last call that the session must act on, in order."""

@@ -26,6 +26,11 @@ Rules:
    same batch: the lock ON always stops the rotor.
 8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
    writes into a descriptor number the system has handed to someone else meanwhile.
+9. A follow command (on or off) is a command like a track command (rule 2): on, it replaces a
+   target or track command put before it, and one put after it replaces it; a stop or lock ON
+   drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
+   dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
+   (``put_wind``: the highest since the last take, so that no gust is lost).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ import os
 import threading
 from dataclasses import dataclass, field
 
+from bridge.engine.follow import Follow, Heard
 from bridge.engine.tracking import Track
 from bridge.model import Control, SetOption, Stop, Target, combine
 
@@ -52,6 +58,9 @@ class Batch:
     hold: int | None = None  # rule 6: the newest marker a hold waits for
     release: int | None = None  # rule 6: holds up to this marker end
     release_clear: bool = False
+    follow: Follow | None = None  # rule 9: applied after the track command
+    heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
+    wind: float | None = None  # rule 9: the newest wind reading (km/h)
     health_reset: bool = False  # a new health baseline (health.py)
 
     control: Control | None = None  # the control lease as the judge has it now...
@@ -66,7 +75,8 @@ class Batch:
             or self.control_set
         )
         fence = self.hold is not None or self.release is not None
-        return bool(self.stop or self.target or settings or self.track or fence)
+        feeds = self.follow is not None or self.heard is not None or self.wind is not None
+        return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
 
 class Mailbox:
@@ -96,6 +106,7 @@ class Mailbox:
                 self._batch.stop = command
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
+                self._batch.follow = None  # and following (rule 9)
                 self._hold(hold)
             elif isinstance(command, Target):
                 self._batch.target = combine(command, self._batch.target)
@@ -111,6 +122,7 @@ class Mailbox:
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None
                 self._batch.track = None
+                self._batch.follow = None
                 self._hold(hold)
         self._wake_once()
 
@@ -123,6 +135,7 @@ class Mailbox:
                 batch.release_clear = True
                 batch.target = None
                 batch.track = None
+                batch.follow = None
                 batch.hold = None  # ended with the rest: a hold put after it is newer
         self._wake_once()
 
@@ -136,12 +149,35 @@ class Mailbox:
         with self._lock:
             self._batch.track = track
             self._batch.target = None
+            self._batch.follow = None  # rule 9: the later command wins
+        self._wake_once()
+
+    def put_follow(self, follow: Follow) -> None:
+        """Rule 9: start or end following; it replaces a target or track put before it."""
+        with self._lock:
+            self._batch.follow = follow
+            if follow.on:  # following off ends nothing else
+                self._batch.target = None
+                self._batch.track = None
+        self._wake_once()
+
+    def put_heard(self, heard: Heard) -> None:
+        """Rule 9: what WSJT-X said; the newest wins."""
+        with self._lock:
+            self._batch.heard = heard
         self._wake_once()
 
     def put_note(self, message: str) -> None:
         """A refusal decided outside the worker, so that the status shows it as the last error."""
         with self._lock:
             self._batch.notes.append(message)
+        self._wake_once()
+
+    def put_wind(self, speed_kmh: float) -> None:
+        """Rule 9: a wind reading."""
+        with self._lock:
+            held = self._batch.wind  # the highest of a batch: no gust is lost (wind.py)
+            self._batch.wind = speed_kmh if held is None else max(held, speed_kmh)
         self._wake_once()
 
     def put_health_reset(self) -> None:

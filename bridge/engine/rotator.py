@@ -1,35 +1,41 @@
 """A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
 
 This is the one judge of commands: every front end submits here, and here alone are the safety
-lock, the configured limits and keep-out sectors (pointing.py: targets arrive as true bearings
-and leave as the controller's raw values), the model's capabilities and the link state checked
-against a command. A refused command raises Refused (with a RefusalCode front ends map, e.g.
-to a Hamlib RPRT number) and is reported as an error event; it never reaches the mailbox, so it
-can never move anything. The worker judges nothing anew: it only drops an accepted target that
-the lock or a lost link overtook before it could be sent, and reports that as a refusal too.
-Each command carries who sent it (``origin``): the control lease (operators.py) refuses a target
-or track start from anyone but its holder, never a stop, lock or tracking OFF (docs/architecture.md
-rule 11); every command judged here, executed or refused, is an audit event.
+lock, the wind park, the configured limits and keep-out sectors (pointing.py: targets arrive as
+true bearings and leave as the controller's raw values), the model's capabilities and the link
+state checked against a command. A refused command raises Refused (with a RefusalCode front
+ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never reaches the
+mailbox, so it can never move anything. The worker judges nothing anew: it only drops an
+accepted target that the lock or a lost link overtook before it could be sent, and reports that
+as a refusal too. Motion is judged in one order: the lock, the wind (safety), the control lease
+(coordination), the pointing judge, the link (``_check``). Each command carries who sent it
+(``origin``): the lease (operators.py) refuses a target, a track or follow start from anyone but
+its holder; nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule
+11); every command judged here, executed or refused, is an audit event. The bridge's own moves
+(auto-park, the wind park, tracking's and following's targets) are the session's, never judged
+by the lease.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
 
 import serial
 
-from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.catalog import TleCatalog
+from bridge.engine.follow import Follow, Heard
 from bridge.engine.health_memory import HealthMemory
+from bridge.engine.kept import Kept
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.operators import EXECUTED, Operators
 from bridge.engine.port import open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
+from bridge.engine.starts import body_to_track, check_can_follow
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import Track
 from bridge.engine.worker import Worker, WorkerConfig
@@ -49,7 +55,6 @@ from bridge.model import (
 )
 from bridge.pointing import Limits, toward
 from bridge.protocols.base import ModelSpec
-from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
 
@@ -80,11 +85,14 @@ class Rotator:
         self.catalog = catalog or TleCatalog(None)  # satellites to track by name
         self._has_sky = cfg.tracking.sky is not None
         self.can_track = self._has_sky and cfg.spec.can_report_position
+        self._follow = cfg.follow  # follow.py: the station, the [wsjtx] listener
         self._store = store
         self._on_event = on_event
         self._wall = wall
         self._locked = store.locked(self.id)
-        self._save_lock = threading.Lock()
+        self._kept = Kept(
+            store, self.id, self.spec, locked=lambda: self._locked, report=self.report
+        )
         self._mailbox = Mailbox()
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
@@ -93,7 +101,7 @@ class Rotator:
             self._mailbox,
             self._status,
             on_event,
-            options=self._supported_options(store),
+            options=self._kept.options(),
             locked=self._locked,
             health=store.health(self.id),
             wall=wall,
@@ -117,21 +125,6 @@ class Rotator:
         problem = store.problems.get(self.id)
         if problem is not None:  # the lock is ON for it; the status's last error says why
             self._mailbox.put_note(problem)
-
-    def _supported_options(self, store: StateStore) -> dict[str, bool]:
-        """Options remembered for this id that this model has (the id may have been another)."""
-        kept = {}
-        for name, enabled in store.options(self.id).items():
-            if name in self.spec.options:
-                kept[name] = enabled
-            else:
-                log.warning(
-                    "%s: stored option %r ignored: %s has no such option",
-                    self.id,
-                    name,
-                    self.spec.display_name,
-                )
-        return kept
 
     def _status(self, status: RotatorStatus) -> None:
         """Every status to the listeners, once rotor health's memory had a look at it."""
@@ -188,8 +181,7 @@ class Rotator:
             self.report_refusal(exc.message, what, origin=origin)
             raise
         if isinstance(command, SetOption):
-            name, enabled = command.name, command.enabled
-            self._store.later(lambda: self._save_option(name, enabled))  # state_store rule 5
+            self._kept.save_option(command.name, command.enabled)  # kept.py
         if isinstance(command, Stop):
             self.last_halt_s = time.monotonic()
         self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
@@ -282,16 +274,8 @@ class Rotator:
             self.operators.audit(who, described, EXECUTED)
             return
         try:
-            body = self._body(name, tle)
-            if self._locked:
-                raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON)")
-            leased = self.operators.refusal(who.who)
-            if leased is not None:
-                raise Refused(RefusalCode.LEASED, leased)
-            if not self.status.available:
-                raise Refused(
-                    RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
-                )
+            body = body_to_track(self.catalog, self.spec, self._has_sky, name, tle)
+            self._check_start(who)
         except Refused as exc:
             self.report_refusal(exc.message, described, origin=who)
             raise
@@ -302,24 +286,49 @@ class Rotator:
             self._mailbox.put_track(Track(body, source, None, described, origin))
         self.operators.audit(who, described, EXECUTED)
 
-    def _body(self, name: str, tle: tuple[str, str, str] | None) -> Body | None:
-        """The body to track, or None for a satellite to look up in the TLE file."""
-        if not self._has_sky:
+    @property
+    def can_follow(self) -> bool:
+        """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
+        return self._follow.wsjtx and self._follow.station is not None
+
+    def follow(
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
+    ) -> None:
+        """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
+        stop). Raise Refused otherwise: judged like a track start (the lease included); what
+        the holder started goes on, its targets are the bridge's own (``wsjtx``)."""
+        who = origin or Origin(source)
+        if on:
+            try:
+                check_can_follow(self._follow)
+                self._check_start(who)
+            except Refused as exc:
+                self.report_refusal(exc.message, described, origin=who)
+                raise
+        self._mailbox.put_follow(Follow(on, long_path, source, described, origin))
+        self.operators.audit(who, described, EXECUTED)
+
+    def wind(self, speed_kmh: float) -> None:
+        """A wind reading (MQTT's thread): an input for the wind park (engine/wind.py)."""
+        self._mailbox.put_wind(speed_kmh)
+
+    def heard(self, heard: Heard) -> None:
+        """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
+        self._mailbox.put_heard(heard)
+
+    def _check_start(self, who: Origin) -> None:
+        """A track or follow start: the judge's order (``_check``), with no target to judge."""
+        self._check_motion(who.who)
+        if not self.status.available:
             raise Refused(
-                RefusalCode.UNSUPPORTED,
-                "tracking needs the station's position ([station] locator, or latitude_deg "
-                "and longitude_deg)",
+                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
-        if not self.spec.can_report_position:
-            raise Refused(
-                RefusalCode.UNSUPPORTED,
-                f"the {self.spec.display_name} cannot report where it points: tracking needs a "
-                "controller that does",
-            )
-        try:
-            return self.catalog.body(name, tle)
-        except (SkyError, CatalogError) as exc:
-            raise Refused(RefusalCode.INVALID, str(exc)) from None
 
     def _named(self, make: Callable[[], Target], described: str, origin: Origin | None) -> None:
         try:
@@ -350,31 +359,9 @@ class Rotator:
             what = f"lock {'ON' if locked else 'OFF'}"
             self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
-    def _save_option(self, name: str, enabled: bool) -> None:
-        if not self._store.set_option(self.id, name, enabled):
-            self.report(
-                ErrorKind.STATE,
-                f"option {name} is in effect but could not be saved: it will not survive a "
-                "restart (state file not writable)",
-                name,
-            )
-
     def save_lock(self) -> None:
-        """The lock to the state file, on its writer thread (state_store.py rule 5): each save
-        writes the lock as it is when it runs, so the last one writes the newest word."""
-        self._store.later(self._save_lock_now)
-
-    def _save_lock_now(self) -> None:
-        with self._save_lock:
-            locked = self._locked
-            saved = self._store.set_locked(self.id, locked)
-        if not saved:
-            self.report(
-                ErrorKind.STATE,
-                f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
-                "it will not survive a restart (state file not writable)",
-                "lock",
-            )
+        """The lock to the state file, on its writer thread (kept.py rule 2)."""
+        self._kept.save_lock()
 
     def note(self, message: str) -> None:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
@@ -405,12 +392,9 @@ class Rotator:
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
             return command
-        if self._locked:
-            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
-        who = command.origin.who if command.origin is not None else command.source.value
-        leased = self.operators.refusal(who)
-        if leased is not None:
-            raise Refused(RefusalCode.LEASED, leased)
+        self._check_motion(
+            command.origin.who if command.origin is not None else command.source.value
+        )
         status = self.status
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
@@ -418,3 +402,16 @@ class Rotator:
                 RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
         return raw
+
+    def _check_motion(self, who: str) -> None:
+        """Refused for motion now, in this order (docs/architecture.md rule 11; never asked
+        for a stop or lock): the lock, then the wind (safety), then the lease (coordination);
+        the pointing judge and the link come after, in ``_check``."""
+        if self._locked:
+            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        wind = self.status.wind
+        if wind is not None and wind.refusal:  # engine/wind.py rule 1
+            raise Refused(RefusalCode.LOCKED, wind.refusal)
+        leased = self.operators.refusal(who)
+        if leased is not None:
+            raise Refused(RefusalCode.LEASED, leased)

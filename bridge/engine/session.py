@@ -11,13 +11,15 @@ else happens first.
 The session owns the commands' state (the lock, the hold, the last error) and its parts, each
 with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
 through its line (controller.py, with link.py, motion.py, stops.py, options.py, slewing.py),
-tracking (tracking.py), auto-park (autopark.py), the pending target (targets.py, sending.py),
-rotor health (health.py) and the status view (status.py). They see what they need (a
-read-only ``parts.Scene``, ``status.Seen``, the motion, the time) and hand back what they
-propose (a ``parts.Proposal``, the controller's notes, a health report); the session applies
-it. None of them imports this module. ``_step`` runs them in one order after every input:
-the line's own work (an overdue reply, a due stop), the motion machine's clock, the stop
-check, tracking, auto-park, the pending target, options, the poll, health, the status.
+tracking (tracking.py) and following (follow.py) as their commands start and end them
+(feature_commands.py), the wind park (wind.py), auto-park (autopark.py), the pending target
+(targets.py, sending.py), rotor health (health.py) and the status view (status.py). They see
+what they need (a read-only ``parts.Scene``, ``status.Seen``, the motion, the time) and hand
+back what they propose (a ``parts.Proposal``, the controller's notes, a health report, what a
+command did); the session applies it. None of them imports this module. ``_step`` runs them in
+one order after every input: the line's own work (an overdue reply, a due stop), the motion
+machine's clock, the stop check, tracking, following, the wind, auto-park, the pending target,
+options, the poll, health, the status.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -42,10 +44,15 @@ Rules:
    no target (the user's, tracking's, auto-park's) goes to the controller until the batch
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
-14. A part that raises (tracking, auto-park, health) is a bug contained here: it is reset
-   (tracking ends, "internal error"; health starts again from its last memory, or stops
-   measuring), an error event of kind internal names it, and the link, the stops and every
-   other rule go on (a feature's failure never takes a link down, and never costs a stop).
+14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
+   here: it is reset (tracking ends, "internal error"; the wind keeps its storm; health starts
+   again from its last memory, or stops measuring), an error event of kind internal names it,
+   and the link, the stops and every other rule go on (a feature's failure never takes a link
+   down, and never costs a stop).
+15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
+   WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
+   reading (wind.py): a storm ends tracking and following, parks, and refuses motion. The
+   wind's park, like auto-park, is the bridge's own move: the control lease never judges it.
 """
 
 from __future__ import annotations
@@ -59,6 +66,7 @@ from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.controller import Controller, Drop, Ends, Retry
+from bridge.engine.feature_commands import Done, FeatureCommands
 from bridge.engine.health import Health
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
@@ -66,10 +74,9 @@ from bridge.engine.parts import Proposal, Scene
 from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
-from bridge.engine.targets import Targets, resolve
-from bridge.engine.tracking import Track, Tracker
+from bridge.engine.targets import Targets
+from bridge.engine.wind import WindPark
 from bridge.model import ErrorKind, Origin, RotatorStatus, Source, Target, describe_command
-from bridge.sky import Body
 
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
 
@@ -94,8 +101,10 @@ class RotatorSession:
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
         self.targets = Targets(cfg)
-        self.tracker = Tracker(cfg)
+        self.features = FeatureCommands(cfg, self.targets)  # tracking and following
+        self.tracker, self.follower = self.features.tracker, self.features.follower
         self.autopark = AutoPark(cfg)
+        self.wind = WindPark(cfg)
         self.health = Health(cfg, health)
         self.view = st.View()
         self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
@@ -131,28 +140,36 @@ class RotatorSession:
             self._error(kind, reason)
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
-        self.tracker.end("serial link down" if reason is not None else "bridge stopped")
+        why = "serial link down" if reason is not None else "bridge stopped"
+        self.features.end(why)  # (what waits is reported dropped: next line)
         self._drop_pending("serial link down")
         return self._step(now)
 
     def commands(self, batch: Batch, now: float) -> list[Action]:
         ctl = self.controller
-        if batch.stop or batch.target or batch.lock is not None or batch.options or batch.track:
+        commanded = batch.stop or batch.target or batch.options or batch.track or batch.follow
+        if commanded or batch.lock is not None:
             self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
             self.view.last_error = note
+        if batch.heard is not None:
+            self.follower.heard(batch.heard, now)  # rule 15
+        if batch.wind is not None:
+            self.wind.reading(batch.wind, now)  # wind.py: no command either
+        if batch.stop is not None or batch.lock_on:
+            self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.control_set:
             self.view.control = batch.control
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
-            self.tracker.end("lock")
+            self.features.end("lock")
             self._drop_pending(None)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
         if batch.stop is not None:
-            self.tracker.end("stop")
+            self.features.end("stop")
             self.targets.clear()
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
@@ -162,11 +179,12 @@ class RotatorSession:
         for opt in batch.options:
             ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
         if batch.track is not None:
-            self._track(batch.track)
+            self._apply(self.features.track(batch.track, self._refused()))
+        if batch.follow is not None:
+            self._apply(self.features.follow(batch.follow, self._refused(), now))
         if batch.target is not None:
             what = describe_command(batch.target)
-            if self.tracker.end(f"{batch.target.source.value} target"):
-                self._drop_tracking_target()  # never combined with the user's target
+            self.features.end(f"{batch.target.source.value} target")  # never combined
             refused = self._refused()
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
@@ -186,7 +204,11 @@ class RotatorSession:
     def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
         if generation == self.tracker.generation:
-            self._guarded("tracking", lambda: self._answered(answer), now)
+            answered = self._guarded(
+                "tracking", lambda: self.features.answered(answer, self._refused()), now
+            )
+            if answered is not None:
+                self._apply(answered)
         return self._step(now)
 
     def set_wall(self, now: float, wall_s: float) -> None:
@@ -211,61 +233,26 @@ class RotatorSession:
             return "rotator is locked"
         if self.controller.link is None or not self.controller.answering:
             return "rotator offline"
-        return None
+        return self.wind.refusal()  # wind.py rule 1
 
     def _fence(self, batch: Batch) -> None:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
         if self.fence.apply(batch):
             self._drop_pending(CLEARED)
-            if self.tracker.end("a stop or lock came first; send the track command again"):
-                self._drop_tracking_target()
+            self.features.end("a stop or lock came first; send the {} command again")
 
-    def _track(self, track: Track) -> None:
-        if track.body is None and track.lookup is None:
-            self.tracker.end("off")
-            self._drop_tracking_target()
-            return
-        name = track.body.name if track.body is not None else track.lookup and track.lookup.name
-        refused = self._refused()
-        if refused is not None:
-            self._error(ErrorKind.REFUSED, refused, command=track.described or f"track {name}")
-        elif track.body is None:
-            self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
-        else:
-            self.tracker.end("another body")
-            self.targets.clear()
-            self.tracker.start(track.body)
-            self._taken(track.source.value, track.origin)
-            log.info("%s: tracking %s", self.name, track.body.name)
-
-    def _answered(self, answer: Answer) -> None:
-        lookup = self.tracker.lookup
-        if lookup is not None and answer.question == lookup.lookup:
-            self.tracker.lookup = None
-            body = answer.value
-            if answer.failure is not None or not isinstance(body, Body):
-                refusal = answer.failure or "no such satellite"
-                self._error(ErrorKind.REFUSED, refusal, lookup.described)
-            else:
-                self._track(Track(body, lookup.source, None, lookup.described, lookup.origin))
-            return
-        ends = self.tracker.answered(answer)
-        if ends is not None:
-            log.warning("%s: tracking ends: %s", self.name, ends)
-            self.tracker.end(ends)
-            self._drop_tracking_target()
+    def _apply(self, done: Done) -> None:
+        """What a tracking or following command did (feature_commands.py), shown."""
+        if done.error is not None:
+            self._error(done.error.kind, done.error.message, done.error.command)
+        if done.taken is not None:
+            self._taken(*done.taken)
 
     def _taken(self, source: str, origin: Origin | None) -> None:
         """A stop or a new track: the status names its source and no target of before."""
         self.view.last_source = source
         self.view.last_operator = origin.who if origin is not None else None
         self.view.target_info, self.view.park_raw = None, None
-
-    def _drop_tracking_target(self) -> None:
-        """Tracking has ended: a target of its own still waiting must not go out after it."""
-        pending = self.targets.pending
-        if pending is not None and pending.source is Source.TRACKING:
-            self.targets.clear()
 
     def _drop_pending(self, why: str | None) -> None:
         dropped = self.targets.clear()
@@ -284,8 +271,7 @@ class RotatorSession:
             if isinstance(note, Report):
                 self._error(note.kind, note.message, note.command)
             elif isinstance(note, Ends):
-                self.tracker.end(note.reason)
-                self._drop_tracking_target()
+                self.features.end(note.reason)
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
@@ -304,7 +290,11 @@ class RotatorSession:
                 self._heed(now)
             if self.tracker.body is not None:  # (nothing tracked: nothing to ask)
                 self._part("tracking", self.tracker.step, now)  # rule 14
-            self._part("auto-park", self.autopark.step, now)
+            if self.follower.on:
+                self._part("following", self.follower.step, now)
+            self._part("wind", self.wind.step, now)
+            if not self.wind.storm:  # (the wind's park is the park then)
+                self._part("auto-park", self.autopark.step, now)
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
@@ -335,7 +325,8 @@ class RotatorSession:
         if proposal.error is not None:
             self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
-            self._drop_tracking_target()
+            self.features.end(proposal.ended)  # (tracking may have ended itself)
+            self.targets.clear_from(Source.TRACKING)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
@@ -345,9 +336,10 @@ class RotatorSession:
             return run()
         except Exception:
             log.exception("%s: %s failed", self.name, name)
-            if name == "tracking":
-                self.tracker.end("internal error")
-                self._drop_tracking_target()
+            if name in ("tracking", "following"):
+                self.features.end("internal error", tracking=name == "tracking")
+            elif name == "wind":  # a storm it was in goes on: refusing is the safe side
+                self.wind = WindPark(self.cfg, storm=self.wind.storm)
             elif name == "health":
                 self.health = self.health.rebuilt(self.cfg)  # health.py rule 7
             else:
@@ -374,38 +366,20 @@ class RotatorSession:
         """What the status says about the target now taken (status.py rule 4)."""
         if target is not None:
             self.view.last_source = target.source.value
-            if target.origin is not None:
+            if target.origin is not None:  # following's: wsjtx (follow.py rule 7)
                 self.view.last_operator = target.origin.who
             elif target.source is not Source.TRACKING:  # tracking's: who started it stays
-                self.view.last_operator = None
+                self.view.last_operator = None  # the bridge's own (auto-park, the wind)
             self.view.target_info = target.info
             self.view.park_raw = wire if target.park else None
 
     def _emit_status(self, now: float) -> None:
-        ctl, pending = self.controller, self.targets.pending
-        link, wire = ctl.link, None
-        if pending is not None and link is not None:
-            az, el = resolve(pending, ctl.motion, self.cfg.aim)
-            wire = link.codec.wire_target(az, el) if az is not None else None
-        seen = st.Seen(
-            previous=self.status,
-            view=self.view,
-            version=ctl.version,
-            controller_time=ctl.controller_time,
-            motion=ctl.motion,
-            connected=link is not None,
-            answering=link is not None and ctl.answering,
-            locked=self.locked,
-            options=ctl.options.values,
-            bearing_deg=ctl.az_shown.value,
-            elevation_deg=ctl.el_shown.value,
-            slew=link.slew if link is not None else None,
-            pending=pending,
-            pending_wire=wire,
-            wall_offset_s=self.wall_offset_s,
-            tracking=self.tracker.info,
-            tracking_ended=self.tracker.ended,
-            health=self.health.report,
+        tracker, follower, wind, health = self.tracker, self.follower, self.wind, self.health
+        shown = st.Features(
+            tracker.info, tracker.ended, follower.info, follower.ended, wind.info, health.report
+        )
+        seen = self.controller.seen(
+            self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )
         status = st.current(self.cfg, seen, now)
         if st.worth_emitting(status, self.status):
@@ -414,6 +388,10 @@ class RotatorSession:
 
     def _next_wakeup(self, now: float) -> float:
         times = [now + IDLE_WAKEUP_S, *self.controller.wakeups(now)]
-        waits = [self.targets.stream_deadline(now), self.autopark.wakeup(now)]
+        waits = [
+            self.targets.stream_deadline(now),
+            self.autopark.wakeup(now),
+            self.wind.wakeup(now),
+        ]
         times += [t for t in (*waits, self.tracker.wakeup(now)) if t is not None]
         return min(times)

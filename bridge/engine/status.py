@@ -26,12 +26,14 @@ from bridge.engine.config import WorkerConfig
 from bridge.engine.slew import Slew
 from bridge.model import (
     Control,
+    FollowingInfo,
     MotionState,
     RotatorHealth,
     RotatorStatus,
     Target,
     TargetInfo,
     TrackingInfo,
+    WindInfo,
 )
 
 
@@ -63,6 +65,17 @@ class View:
     control: Control | None = None  # the control lease's holder (engine/lease.py)
 
 
+class Features(NamedTuple):
+    """What the session's parts show (tracking.py, follow.py, wind.py, health.py)."""
+
+    tracking: TrackingInfo | None = None
+    tracking_ended: str | None = None
+    following: FollowingInfo | None = None
+    following_ended: str | None = None
+    wind: WindInfo | None = None
+    health: RotatorHealth | None = None  # health.py: a new one after each move
+
+
 class Seen(NamedTuple):
     """What the session knows at one moment, as the status needs it (a tuple: read-only, and
     cheap to build at every step)."""
@@ -82,9 +95,7 @@ class Seen(NamedTuple):
     pending: Target | None  # the target waiting to go out...
     pending_wire: tuple[float | None, float | None] | None  # ...and its raw values, if known
     wall_offset_s: float
-    tracking: TrackingInfo | None
-    tracking_ended: str | None
-    health: RotatorHealth | None = None  # health.py: a new one after each move
+    features: Features
 
 
 def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
@@ -119,9 +130,12 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         overlap=aim.overlap(raw),
         target_info=pending.info if pending is not None else view.target_info,
         parked=_parked(rig, seen, state),
-        tracking=seen.tracking,
-        tracking_ended=seen.tracking_ended,
-        health=seen.health,
+        tracking=seen.features.tracking,
+        tracking_ended=seen.features.tracking_ended,
+        following=seen.features.following,
+        following_ended=seen.features.following_ended,
+        wind=seen.features.wind,
+        health=seen.features.health,
         elevation_deg=elevation if spec.has_elevation else None,
         estimated=estimated,
         expected_end_unix=expected_end,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from bridge.engine import motion as mo
 from bridge.engine.config import WorkerConfig
-from bridge.model import Target, combine
+from bridge.model import Source, Target, combine
 from bridge.pointing import Pointing
 
 BURST_QUIET_S = 0.5
@@ -50,6 +50,12 @@ class Targets:
         """Drop the waiting target (a stop, the lock, the link down); the one dropped."""
         dropped, self.pending = self.pending, None
         return dropped
+
+    def clear_from(self, source: Source) -> None:
+        """Drop the waiting target if ``source`` put it (a feature that has ended: a target of
+        its own must not go out after it)."""
+        if self.pending is not None and self.pending.source is source:
+            self.clear()
 
     def sent(self, now: float) -> int:
         """The waiting target went to the controller; which try it was."""

@@ -38,6 +38,8 @@ class RotatorInfo:
     has_station: bool = False  # the station's position: targets by locator
     nudge_step_deg: float = 10.0
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
+    can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
+    has_wind: bool = False  # a wind_topic (engine/wind.py)
 
     @classmethod
     def of(
@@ -51,6 +53,8 @@ class RotatorInfo:
         has_station: bool,
         nudge_step_deg: float,
         satellites: tuple[str, ...] = (),
+        can_follow: bool = False,
+        has_wind: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -70,6 +74,8 @@ class RotatorInfo:
             track_options=(
                 track_options(satellites) if has_station and spec.can_report_position else ()
             ),
+            can_follow=can_follow,
+            has_wind=has_wind,
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.model import RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import RotatorStatus, TargetInfo
+from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
 from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
@@ -194,6 +195,26 @@ def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
     return name, (name, line1, line2)
 
 
+FOLLOW_SOURCES = ("wsjtx",)  # what R/follow can follow (engine/follow.py)
+
+
+def parse_follow(payload: bytes) -> tuple[bool, bool]:
+    """``R/follow``: ``wsjtx`` or ``off``, or JSON ``{"source": "wsjtx", "path": "long"}``;
+    (on, long path)."""
+    text = _text(payload)
+    doc = _json_object(text, "follow") if text.startswith("{") else {"source": text}
+    unknown = set(doc) - {"source", "path"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in follow: {', '.join(sorted(unknown))}")
+    source, path = doc.get("source"), doc.get("path", "short")
+    if not isinstance(source, str) or source.strip().lower() not in (*FOLLOW_SOURCES, "off"):
+        shown = repr(source[:20]) if isinstance(source, str) else json.dumps(source)
+        raise PayloadError(f"follow: expected wsjtx or off, got {shown}")
+    if path not in ("short", "long"):
+        raise PayloadError(f'follow: "path" must be "short" or "long", got {json.dumps(path)}')
+    return source.strip().lower() != "off", path == "long"
+
+
 def parse_target(payload: bytes) -> tuple[float, float | None]:
     """(azimuth, elevation or None). Limits are checked later, in one place (the rotator)."""
     text = _text(payload)
@@ -258,33 +279,6 @@ def target_info(info: TargetInfo) -> dict[str, object]:
         "long_path_deg": round(info.long_path_deg, 1),
         "path": info.path,
     }
-
-
-def tracking_json(info: TrackingInfo) -> dict[str, object]:
-    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
-    doc: dict[str, object] = {
-        "body": info.body,
-        "phase": info.phase,
-        "azimuth": info.azimuth_deg,
-        "elevation": info.elevation_deg,
-        "next": {"azimuth": info.next_azimuth_deg, "elevation": info.next_elevation_deg},
-    }
-    if info.aos_unix is not None and info.los_unix is not None:
-        doc.update(
-            aos=_iso(info.aos_unix),
-            los=_iso(info.los_unix),
-            max_elevation=info.max_elevation_deg,
-            aos_azimuth=info.aos_azimuth_deg,
-        )
-    if info.pass_track:
-        doc["pass_track"] = [list(point) for point in info.pass_track]
-    doc["flip"] = info.flip
-    return doc
-
-
-def tracking_state(status: RotatorStatus) -> str:
-    """``R/tracking``: what is followed, or ``off``."""
-    return status.tracking.body if status.tracking is not None else "off"
 
 
 @dataclass(frozen=True)
@@ -375,6 +369,12 @@ def status_json(
         doc["tracking"] = tracking_json(status.tracking)
     if status.tracking_ended is not None:
         doc["tracking_ended"] = status.tracking_ended
+    if status.following is not None:
+        doc["following"] = following_json(status.following)
+    if status.following_ended is not None:
+        doc["following_ended"] = status.following_ended
+    if status.wind is not None:
+        doc["wind"] = wind_json(status.wind)
     doc.update(
         state=status.state.value,
         moving=status.moving,

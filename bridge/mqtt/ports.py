@@ -30,6 +30,17 @@ class RotatorPort(Protocol):
 
     @property
     def status(self) -> RotatorStatus: ...
+    @property
+    def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (engine/follow.py)
+    def follow(
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
+    ) -> None: ...
     def submit(
         self,
         command: Target | Stop | SetOption,

@@ -64,6 +64,7 @@ from bridge.model import (
 )
 from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
@@ -196,7 +197,9 @@ class MqttService:
                 pub(t.option_state(name), pl.switch(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
-            pub(t.tracking, pl.tracking_state(status))
+            pub(t.tracking, tracking_state(status))
+        if rot.can_follow:
+            pub(t.follow_state, follow_state(status))
         if status.health is not None and status.health is not self._health.get(rotator_id):
             self._health[rotator_id] = status.health  # a new one after each move only
             pub(t.health, health_json(status.health))
@@ -347,7 +350,7 @@ class MqttService:
     def _motion(
         self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
     ) -> None:
-        """A target, a preset, park, nudge, track, an option: from ``by``."""
+        """A target, a preset, park, nudge, track, follow, an option: from ``by``."""
         if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
             raise pl.PayloadError("empty payload")
         src = Source.MQTT
@@ -372,6 +375,9 @@ class MqttService:
         elif kind == "track":
             name, tle = pl.parse_track(payload)
             rot.track(name, src, what, tle, origin=by)
+        elif kind == "follow":
+            on, long_path = pl.parse_follow(payload)
+            rot.follow(on, src, what, long_path=long_path, origin=by)
         elif kind == "target_elevation":
             el = pl.parse_number(payload, "elevation")
             rot.submit(Target(None, el, src, origin=by), what)

@@ -60,6 +60,10 @@ class RotatorTopics:
     def track(self) -> str:
         return f"{self.root}/track"
 
+    @property
+    def follow(self) -> str:
+        return f"{self.root}/follow"
+
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -115,6 +119,10 @@ class RotatorTopics:
     @property
     def lock_state(self) -> str:
         return f"{self.root}/lock/state"
+
+    @property
+    def follow_state(self) -> str:
+        return f"{self.root}/follow/state"
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
@@ -217,7 +225,7 @@ class Topics:
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge, t.track]
+            subs += [t.preset, t.park, t.nudge, t.track, t.follow]
             subs.append(t.health_reset)
             subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
@@ -238,6 +246,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
+            subs += [t.follow_state]
             subs.append(t.health)
             subs += [t.control]
         return subs
@@ -253,7 +262,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track", "health_reset"):
+            for kind in ("preset", "park", "nudge", "track", "follow", "health_reset"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             if topic in (t.control_claim, t.control_release):

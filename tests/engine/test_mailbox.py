@@ -123,6 +123,7 @@ def test_a_flood_of_puts_costs_one_wake_byte_per_batch() -> None:
 def test_every_kind_of_put_wakes_the_worker() -> None:
     """A put that leaves no wake byte waits for the next serial byte or poll: each kind of
     input, however harmless, must wake the lines thread (rule 4)."""
+    from bridge.engine.follow import Follow, Heard
     from bridge.engine.tracking import Track
     from bridge.model import Control
 
@@ -134,6 +135,9 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put_note": lambda mb: mb.put_note("x"),
         "put_health_reset": lambda mb: mb.put_health_reset(),
         "put_control": lambda mb: mb.put_control(Control("DL1ABC", 0.0)),
+        "put_follow": lambda mb: mb.put_follow(Follow(True)),
+        "put_heard": lambda mb: mb.put_heard(Heard("JA1ABC", "PM95", False)),
+        "put_wind": lambda mb: mb.put_wind(80.0),
     }
     named = {n for n in dir(Mailbox) if n == "put" or n.startswith("put_")}
     assert named == set(puts), "a new kind of put: add it here"

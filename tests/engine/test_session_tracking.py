@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.model import MotionState, Source, Target
-from bridge.mqtt.payloads import tracking_state
+from bridge.mqtt.feature_payloads import tracking_state
 from bridge.sky import Body, Sky, SkyError
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass

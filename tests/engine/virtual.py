@@ -42,6 +42,8 @@ from bridge.app import worker_config
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
 from bridge.engine import skywork
 from bridge.engine.actions import Ask
+from bridge.engine.config import FollowConfig
+from bridge.engine.follow import Follow, Heard
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
 from bridge.engine.tracking import Track
@@ -91,6 +93,7 @@ class VirtualRotator:
         sky: Sky | None = None,
         wall_epoch_s: float = WALL_EPOCH_S,
         sky_delay_s: float = 0.0,
+        follow: FollowConfig | None = None,
     ) -> None:
         self.now = start_s
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
@@ -98,7 +101,7 @@ class VirtualRotator:
             {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
         )
         self.settings = rotator
-        self.cfg = worker_config(rotator, sky)
+        self.cfg = worker_config(rotator, sky, follow)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
         self.session = RotatorSession(self.cfg, options=options, locked=locked)
         self.mailbox = Mailbox()
@@ -190,6 +193,15 @@ class VirtualRotator:
 
     def track(self, body: Body | None) -> None:
         self.mailbox.put_track(Track(body))
+        self._take()
+
+    def follow(self, on: bool, *, long_path: bool = False) -> None:
+        self.mailbox.put_follow(Follow(on, long_path))
+        self._take()
+
+    def heard(self, call: str, grid: str, transmitting: bool = False) -> None:
+        """What WSJT-X says, as the listener hands it on (wsjtx/server.py)."""
+        self.mailbox.put_heard(Heard(call, grid, transmitting))
         self._take()
 
     def wall(self) -> float:

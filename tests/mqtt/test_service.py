@@ -83,10 +83,23 @@ class RecordingRotator:
         self.origins: list[Origin | None] = []  # who sent each command that names one
         self._refuse = refuse
         self.can_track = False
+        self.can_follow = False
 
     @property
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
+
+    def follow(
+        self,
+        on: bool,
+        source: Source,
+        described: str,
+        *,
+        long_path: bool = False,
+        origin: Origin | None = None,
+    ) -> None:
+        self.calls.append(("follow", on, long_path, source, described))
+        self.origins.append(origin)
 
     def submit(
         self,
@@ -407,6 +420,11 @@ M = Source.MQTT
             ("nudge", 0.0, -2.0, M, "nudge '{\"elevation\": -2}'"),
         ),
         ("rotor/b/track", b" sun ", ("track", "sun", None, M, "track ' sun '")),
+        ("rotor/b/follow", b"wsjtx", ("follow", True, False, M, "follow 'wsjtx'")),
+        ("rotor/b/follow", b" WSJTX ", ("follow", True, False, M, "follow ' WSJTX '")),
+        ("rotor/b/follow", b"off", ("follow", False, False, M, "follow 'off'")),
+        ("rotor/b/follow", b'{"source": "wsjtx", "path": "long"}',
+         ("follow", True, True, M, "follow '{\"source\": \"wsjtx\", \"path\": \"long\"}'")),
         ("rotor/b/track", b"ISS (ZARYA)", ("track", "ISS (ZARYA)", None, M,
                                            "track 'ISS (ZARYA)'")),
         ("rotor/b/track", b'{"tle": ["X", "1 a", "2 b"]}',
@@ -476,6 +494,16 @@ def test_each_command_topic_reaches_its_rotator(
         ("rotor/track", b"a\x07b", "track: a name of at most 64 printable characters",
          "track 'a\\x07b'"),
         ("rotor/preset", b"", "empty payload", "preset"),
+        ("rotor/follow", b"on", "follow: expected wsjtx or off, got 'on'", "follow 'on'"),
+        ("rotor/follow", b'{"source": "wsjtx", "path": 1}',
+         'follow: "path" must be "short" or "long", got 1',
+         "follow '{\"source\": \"wsjtx\", \"path\": 1}'"),
+        ("rotor/follow", b'{"source": "jtalert"}',
+         "follow: expected wsjtx or off, got 'jtalert'", "follow '{\"source\": \"jtalert\"}'"),
+        ("rotor/follow", b'{"path": "long"}', "follow: expected wsjtx or off, got null",
+         "follow '{\"path\": \"long\"}'"),
+        ("rotor/follow", b'{"source": "wsjtx", "band": 20}', "unknown key(s) in follow: band",
+         "follow '{\"source\": \"wsjtx\", \"band\": 20}'"),
         # a retained park deleted under MQTT 3.1.1 arrives as an empty plain message: no park
         ("rotor/park", b"", "empty payload", "park"),
     ],
@@ -557,6 +585,7 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/follow",
         "rotor/health/reset",
         "rotor/control/claim",
         "rotor/control/release",

@@ -20,6 +20,7 @@ def test_single_rotator_lives_on_the_base_topic() -> None:
         "rotor/park",
         "rotor/nudge",
         "rotor/track",
+        "rotor/follow",
         "rotor/health/reset",
         "rotor/control/claim",
         "rotor/control/release",

@@ -1,0 +1,106 @@
+"""Tracking and following as commands start and end them (session.py rules 10 and 15): the
+track and follow commands, the sky worker's answer to a satellite's name, and the end that
+every other command brings. It owns the tracker (tracking.py) and the follower (follow.py)
+and drops a target of theirs still waiting (targets.py) when they end; what the status and the
+error events must say it returns as a ``Done`` that the session applies. It never imports the
+session.
+
+Rules:
+1. A start the session refuses (``refused``: the lock, the link, the wind) is an error and
+   changes nothing. A start taken ends the other feature and any waiting target (one feature
+   turns the rotor at a time), and the status names who started it (``Done.taken``).
+2. ``off`` ends its own feature only; ``end`` (a stop, the lock, another target, a stall, the
+   link, a cleared hold) ends both unless told otherwise. A target of a feature that ended
+   never goes out after it.
+3. A satellite's name answered by the sky worker starts tracking as the command would have,
+   judged when the answer comes (tracking.py rule 8).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from bridge.engine.actions import Report
+from bridge.engine.config import WorkerConfig
+from bridge.engine.follow import Follow, Follower
+from bridge.engine.skywork import Answer
+from bridge.engine.targets import Targets
+from bridge.engine.tracking import Track, Tracker
+from bridge.model import ErrorKind, Origin, Source
+from bridge.sky import Body
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Done:
+    """What a command did that the session must show: an error, or who started a feature."""
+
+    error: Report | None = None
+    taken: tuple[str, Origin | None] | None = None  # (source, origin) of a feature started
+
+
+DONE = Done()
+
+
+class FeatureCommands:
+    def __init__(self, cfg: WorkerConfig, targets: Targets) -> None:
+        self.name = cfg.rotator_id
+        self.targets = targets
+        self.tracker = Tracker(cfg)
+        self.follower = Follower(cfg)
+
+    def track(self, track: Track, refused: str | None) -> Done:
+        if track.body is None and track.lookup is None:
+            self.tracker.end("off")  # rule 2
+            self.targets.clear_from(Source.TRACKING)
+            return DONE
+        name = track.body.name if track.body is not None else track.lookup and track.lookup.name
+        if refused is not None:
+            return Done(Report(ErrorKind.REFUSED, refused, track.described or f"track {name}"))
+        if track.body is None:
+            self.tracker.look_up(track)  # tracking.py rule 8: the answer comes as an input
+            return DONE
+        self.tracker.end("another body")
+        self.follower.end(f"tracking {track.body.name}")
+        self.targets.clear()
+        self.tracker.start(track.body)
+        log.info("%s: tracking %s", self.name, track.body.name)
+        return Done(taken=(track.source.value, track.origin))
+
+    def follow(self, follow: Follow, refused: str | None, now: float) -> Done:
+        if not follow.on:
+            self.end("off", tracking=False)  # rule 2
+            return DONE
+        if refused is not None:
+            return Done(Report(ErrorKind.REFUSED, refused, follow.described or "follow"))
+        self.tracker.end("following")
+        self.targets.clear()
+        self.follower.start(follow, now)
+        return Done(taken=(follow.source.value, follow.origin))
+
+    def answered(self, answer: Answer, refused: str | None) -> Done:
+        """The sky worker's answer: a satellite's name looked up (rule 3), or tracking's sky."""
+        lookup = self.tracker.lookup
+        if lookup is not None and answer.question == lookup.lookup:
+            self.tracker.lookup = None
+            body = answer.value
+            if answer.failure is not None or not isinstance(body, Body):
+                refusal = answer.failure or "no such satellite"
+                return Done(Report(ErrorKind.REFUSED, refusal, lookup.described))
+            track = Track(body, lookup.source, None, lookup.described, lookup.origin)
+            return self.track(track, refused)
+        ends = self.tracker.answered(answer)
+        if ends is not None:
+            log.warning("%s: tracking ends: %s", self.name, ends)
+            self.tracker.end(ends)
+            self.targets.clear_from(Source.TRACKING)
+        return DONE
+
+    def end(self, why: str, *, tracking: bool = True) -> None:
+        """Tracking and following end (rule 2); ``{}`` in ``why``: the command's name."""
+        if tracking and self.tracker.end(why.replace("{}", "track")):
+            self.targets.clear_from(Source.TRACKING)
+        if self.follower.end(why.replace("{}", "follow")):
+            self.targets.clear_from(Source.WSJTX)

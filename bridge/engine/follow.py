@@ -1,0 +1,149 @@
+"""Following the QSO partner (``R/follow``): the rotator turns to the great-circle bearing of
+the station WSJT-X or JTDX names as its DX call and grid. Pure: the follower owns whether it
+follows, what it last heard and the grid it last turned to; each step gets a read-only
+``Scene`` (parts.py) and returns a ``Proposal`` the session applies. What WSJT-X says comes in
+as ``Heard`` inputs (wsjtx/server.py reads the datagrams on a thread of its own).
+
+Rules:
+1. Following is off until a Follow command switches it on, and ends on ``R/follow off``, a
+   stop, the lock, a track command, any other target (a manual one, rotctld's P, a preset, a
+   nudge, a park), a stall, the serial link going down or the controller falling silent: the
+   rotor never turns by itself after any of these. The status says why
+   (``following_ended``). Its own targets are put by the session, not through the mailbox,
+   so they never end it.
+2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
+   from the station (the long path if asked). The same grid again moves nothing (the
+   deadband), whatever else the program's status says; so does a status without a grid, or
+   with one that is no Maidenhead locator.
+3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
+   the program transmits waits, shown as ``held``, until a status says the transmission has
+   ended; then the newest grid is turned to.
+4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
+   on every change and at least at every decoding period): the rotor turns to the partner of
+   the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
+   rule 7).
+5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
+   sectors). One it refuses is reported once for that grid and not tried again.
+6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
+7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
+   and ``last_operator``), with the operator who switched following on if they named
+   themselves. Like tracking's, they are the bridge's own: the control lease judged who
+   switched it on (rotator.py), not each grid WSJT-X names.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+from bridge import geo
+from bridge.engine.actions import Report
+from bridge.engine.config import WorkerConfig
+from bridge.engine.parts import NOTHING, Proposal, Scene
+from bridge.errors import Refused
+from bridge.model import ErrorKind, FollowingInfo, Origin, Source, Target
+from bridge.pointing import toward
+
+log = logging.getLogger(__name__)
+
+FRESH_S = 30.0  # rule 4
+
+
+@dataclass(frozen=True)
+class Heard:
+    """What the program says of the QSO under way (WSJT-X's Status message)."""
+
+    call: str
+    grid: str
+    transmitting: bool
+    instance: str = ""  # the program's Id (``WSJT-X``, ``JTDX``)
+
+
+@dataclass(frozen=True)
+class Follow:
+    """Start following the partner WSJT-X names (``on``), or stop."""
+
+    on: bool
+    long_path: bool = False
+    source: Source = Source.MQTT  # who asked
+    described: str | None = None  # the command as the user gave it (a refusal names it)
+    origin: Origin | None = None  # who asked (the status's last_operator)
+
+
+def grid_of(text: str) -> str | None:
+    """A Maidenhead locator as WSJT-X writes it (``FN31``, ``fn31pr``), upper case, or None."""
+    grid = text.strip().upper()
+    return grid if grid and geo.is_locator(grid) else None
+
+
+class Follower:
+    def __init__(self, rig: WorkerConfig) -> None:
+        self._rig = rig
+        self.info: FollowingInfo | None = None  # None: not following
+        self.ended: str | None = None
+        self._heard: Heard | None = None
+        self._heard_t = -math.inf
+        self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
+        self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
+
+    @property
+    def on(self) -> bool:
+        return self.info is not None
+
+    def start(self, follow: Follow, now: float) -> None:
+        """Rule 1; rule 4: only a fresh status turns the rotor at once."""
+        self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
+        self.ended, self._aimed = None, None
+        starter = follow.origin.operator if follow.origin is not None else None
+        self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
+        if now - self._heard_t > FRESH_S:
+            self._heard = None
+        log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
+
+    def end(self, why: str) -> bool:
+        """Stop following (``why`` shows as ``following_ended``); whether it was on."""
+        if self.info is None:
+            return False
+        log.info("%s: following ended: %s", self._rig.rotator_id, why)
+        self.info, self.ended, self._aimed = None, why, None
+        return True
+
+    def heard(self, heard: Heard, now: float) -> None:
+        """The newest status (kept while off too: rule 4)."""
+        self._heard, self._heard_t = heard, now
+
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        info, heard = self.info, self._heard
+        if info is None or heard is None:
+            return NOTHING
+        grid = grid_of(heard.grid)
+        if grid is None or grid == self._aimed:  # rule 2
+            if info.held:  # the grid held for is gone: nothing waits any more
+                self.info = replace(info, held=False)
+            return Proposal(busy=True)  # rule 6
+        if heard.transmitting and self._rig.follow.hold_while_tx:  # rule 3
+            self.info = replace(info, held=True)
+            return Proposal(busy=True)
+        self._aimed = grid
+        call = heard.call.strip() or None
+        try:
+            lat, lon = geo.parse_locator(grid)
+            az, place = toward(
+                self._rig.follow.station, lat, lon, long_path=info.path == "long", locator=grid
+            )
+            judged = self._rig.aim.judge(
+                Target(az, None, Source.WSJTX, info=place, origin=self._origin),
+                scene.motion.position_deg,
+            )
+        except (Refused, ValueError) as exc:  # rule 5
+            why = exc.message if isinstance(exc, Refused) else str(exc)
+            self.info = replace(info, call=call, grid=grid, bearing_deg=None, held=False)
+            what = f"follow {call or '?'} {grid}"
+            return Proposal(error=Report(ErrorKind.REFUSED, f"following: {why}", what), busy=True)
+        self.info = replace(
+            info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False
+        )
+        log.info("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call, grid, az)
+        return Proposal(target=judged, busy=True)

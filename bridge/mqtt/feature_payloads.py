@@ -1,0 +1,71 @@
+"""The status's blocks of the features that propose targets, rendered: tracking
+(``tracking``, ``R/tracking``: engine/tracking.py), following WSJT-X (``following``,
+``R/follow/state``: engine/follow.py) and the wind park (``wind``: engine/wind.py). Pure,
+beside payloads.py, which puts them into ``R/status``.
+"""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+
+from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo, WindInfo
+
+
+def tracking_json(info: TrackingInfo) -> dict[str, object]:
+    """The status's ``tracking`` block: the body now and in a minute, and its pass."""
+    doc: dict[str, object] = {
+        "body": info.body,
+        "phase": info.phase,
+        "azimuth": info.azimuth_deg,
+        "elevation": info.elevation_deg,
+        "next": {"azimuth": info.next_azimuth_deg, "elevation": info.next_elevation_deg},
+    }
+    if info.aos_unix is not None and info.los_unix is not None:
+        doc.update(
+            aos=_iso(info.aos_unix),
+            los=_iso(info.los_unix),
+            max_elevation=info.max_elevation_deg,
+            aos_azimuth=info.aos_azimuth_deg,
+        )
+    if info.pass_track:
+        doc["pass_track"] = [list(point) for point in info.pass_track]
+    doc["flip"] = info.flip
+    return doc
+
+
+def tracking_state(status: RotatorStatus) -> str:
+    """``R/tracking``: what is followed, or ``off``."""
+    return status.tracking.body if status.tracking is not None else "off"
+
+
+def following_json(info: FollowingInfo) -> dict[str, object]:
+    """The status's ``following`` block: whom WSJT-X names, and where the rotor was turned."""
+    return {
+        "source": info.source,
+        "path": info.path,
+        "call": info.call,
+        "grid": info.grid,
+        "bearing": None if info.bearing_deg is None else round(info.bearing_deg, 1),
+        "distance_km": None if info.distance_km is None else round(info.distance_km, 1),
+        "held": info.held,
+    }
+
+
+def wind_json(info: WindInfo) -> dict[str, object]:
+    """The status's ``wind`` block (engine/wind.py)."""
+    calm = info.calm_since_unix
+    return {
+        "speed_kmh": info.speed_kmh,
+        "storm": info.storm,
+        "calm_since": None if calm is None else _iso(calm),
+        "silent": info.silent,
+    }
+
+
+def follow_state(status: RotatorStatus) -> str:
+    """``R/follow/state``: what is followed (``wsjtx``), or ``off``."""
+    return status.following.source if status.following is not None else "off"
+
+
+def _iso(time_unix: float) -> str:
+    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")

@@ -1,0 +1,57 @@
+"""The wind topics: each rotator's ``wind_topic`` read into wind readings for the engine (its
+wind park, engine/wind.py, decides). Its topics are the user's, named in the configuration.
+
+Rules:
+1. A reading is a bare number (``12.5``, as Home Assistant's statestream and most weather
+   stations publish), in the rotator's ``wind_unit``; it reaches the rotator in km/h.
+2. A retained reading is taken: it is the last known wind, a state and not a command (a high
+   one parks the rotor; a reading never moves it anywhere else).
+3. A payload that is no reading (text, a negative or non-finite number) is dropped and logged
+   at most once per BAD_LOG_S per topic; the wind park's silence report (wind.py rule 4)
+   tells the user when nothing readable comes at all.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+
+from bridge.mqtt.payloads import PayloadError, parse_number
+
+log = logging.getLogger(__name__)
+
+BAD_LOG_S = 60.0
+KMH_PER_MS = 3.6
+
+Handler = Callable[[str, bytes, bool], bool]
+
+
+def wind_feed(
+    entries: list[tuple[str, str, Callable[[float], None]]],
+    clock: Callable[[], float] = time.monotonic,
+) -> tuple[list[str], Handler]:
+    """(the topics to subscribe, the handler of their messages) for ``(topic, unit, to)``
+    entries: ``to`` gets each reading in km/h."""
+    logged: dict[str, float] = {}
+
+    def on_message(topic: str, payload: bytes, retain: bool) -> bool:
+        mine = [(unit, to) for t, unit, to in entries if t == topic]
+        if not mine:
+            return False
+        try:
+            value = parse_number(payload, "wind speed")
+            if value < 0 or not math.isfinite(value):
+                raise PayloadError("wind speed must be 0 or more")
+        except PayloadError as exc:
+            now = clock()
+            if now - logged.get(topic, -math.inf) >= BAD_LOG_S:
+                logged[topic] = now
+                log.warning("wind topic %s: reading dropped: %s", topic, exc)
+            return True
+        for unit, to in mine:  # rule 1
+            to(value * KMH_PER_MS if unit == "m/s" else value)
+        return True
+
+    return sorted({t for t, _, _ in entries}), on_message

@@ -1,0 +1,284 @@
+"""Following the QSO partner (engine/follow.py): the part on its own, on read-only scenes and
+a fake time; then wired into the session in virtual time against an emulated controller
+(tests/engine/virtual.py). Bearings are checked against the vector great circle of
+tests/integration/test_pointing_bridge.py, not the bridge's geo.py."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from bridge.app import worker_config
+from bridge.engine import follow as fo
+from bridge.engine.config import FollowConfig, WorkerConfig
+from bridge.engine.follow import Follow, Follower, Heard
+from bridge.engine.parts import NOTHING, Scene
+from bridge.model import ErrorKind, MotionState, Source
+from bridge.settings import RotatorSettings
+from bridge.sky import Body, Sky
+from tests.engine.test_parts import scene
+from tests.engine.virtual import VirtualRotator
+from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
+
+BERLIN = locator_centre("JO62QM")
+STATION = FollowConfig(BERLIN, wsjtx=True)
+
+
+def centre(grid: str) -> tuple[float, float]:
+    """The centre of a 4- or 6-character locator (a 4-character square is 2 x 1 degrees)."""
+    if len(grid) == 6:
+        return locator_centre(grid)
+    up = grid.upper()
+    lon = -180 + (ord(up[0]) - ord("A")) * 20 + int(up[2]) * 2 + 1.0
+    lat = -90 + (ord(up[1]) - ord("A")) * 10 + int(up[3]) + 0.5
+    return lat, lon
+
+
+def bearing(grid: str, long_path: bool = False) -> float:
+    b = reference_path(BERLIN, centre(grid))[0]
+    return (b + 180.0) % 360.0 if long_path else b
+
+
+def rig(follow: FollowConfig = STATION, **settings: Any) -> WorkerConfig:
+    rotator = RotatorSettings.model_validate(
+        {"id": "p", "model": "md01", "port": "/dev/null", **settings}
+    )
+    return worker_config(rotator, None, follow)
+
+
+def following(cfg: WorkerConfig, long_path: bool = False, now: float = 0.0) -> Follower:
+    part = Follower(cfg)
+    part.start(Follow(True, long_path), now)
+    return part
+
+
+def at(now: float) -> Scene:
+    return scene(now)
+
+
+# -- the part ---------------------------------------------------------------------------------
+def test_off_it_proposes_nothing_whatever_it_hears() -> None:
+    part = Follower(rig())
+    part.heard(Heard("JA1ABC", "PM95", False), 0.0)
+    assert part.step(at(0.0)) is NOTHING and not part.on
+
+
+def test_a_new_grid_is_turned_to_and_the_same_grid_never_again() -> None:
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False), 1.0)
+    first = part.step(at(1.0))
+    assert first.target is not None and first.target.source is Source.WSJTX and first.busy
+    assert first.target.az_deg is not None
+    assert angle_between(first.target.az_deg, bearing("PM95")) < 0.1
+    info = part.info
+    assert info is not None and (info.call, info.grid, info.path) == ("JA1ABC", "PM95", "short")
+    assert info.bearing_deg is not None and angle_between(info.bearing_deg, bearing("PM95")) < 0.1
+    assert info.distance_km == pytest.approx(reference_path(BERLIN, centre("PM95"))[1], rel=0.01)
+    for later, heard in enumerate(
+        [
+            Heard("JA1ABC", "PM95", False),
+            Heard("JA1ABC", " pm95 ", False),  # the same square, however written
+            Heard("JA1XYZ", "PM95", False),  # another call in the same square: no new bearing
+            Heard("JA1ABC", "", False),  # no grid
+            Heard("JA1ABC", "XX99", False),  # no locator
+        ]
+    ):
+        part.heard(heard, 2.0 + later)
+        proposal = part.step(at(2.0 + later))
+        assert proposal.target is None and proposal.error is None, heard
+    part.heard(Heard("JA1ABC", "PM95vq", False), 9.0)  # a finer square is a new grid
+    finer = part.step(at(9.0))
+    assert finer.target is not None and finer.target.az_deg is not None
+    assert angle_between(finer.target.az_deg, bearing("PM95VQ")) < 0.1
+
+
+def test_a_new_grid_while_transmitting_waits_for_the_transmission_to_end() -> None:
+    part = following(rig())
+    part.heard(Heard("VK2XYZ", "QF56", True), 1.0)
+    for now in (1.0, 5.0, 14.0):
+        assert part.step(at(now)).target is None
+    assert part.info is not None and part.info.held
+    part.heard(Heard("VK2XYZ", "QF56", False), 15.0)
+    proposal = part.step(at(15.0))
+    assert proposal.target is not None and part.info is not None and not part.info.held
+
+
+def test_a_held_grid_that_goes_away_holds_nothing_any_more() -> None:
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False), 1.0)
+    assert part.step(at(1.0)).target is not None
+    part.heard(Heard("VK2XYZ", "QF56", True), 2.0)
+    part.step(at(2.0))
+    assert part.info is not None and part.info.held
+    part.heard(Heard("JA1ABC", "PM95", True), 3.0)  # back to the partner turned to
+    assert part.step(at(3.0)).target is None
+    assert part.info is not None and not part.info.held
+
+
+def test_without_hold_while_tx_a_transmitting_status_turns_it_at_once() -> None:
+    part = following(rig(follow_hold_while_tx=False))  # the rotator's key
+    part.heard(Heard("VK2XYZ", "QF56", True), 1.0)
+    assert part.step(at(1.0)).target is not None
+
+
+def test_the_long_path_is_the_other_way() -> None:
+    part = following(rig(), long_path=True)
+    part.heard(Heard("W1AW", "FN31", False), 1.0)
+    proposal = part.step(at(1.0))
+    assert proposal.target is not None and proposal.target.az_deg is not None
+    assert angle_between(proposal.target.az_deg, bearing("FN31", long_path=True)) < 0.1
+    assert part.info is not None and part.info.path == "long"
+
+
+def test_switching_on_takes_a_fresh_status_and_never_a_stale_one() -> None:
+    fresh = Follower(rig())
+    fresh.heard(Heard("JA1ABC", "PM95", False), 0.0)
+    fresh.start(Follow(True), fo.FRESH_S - 1.0)
+    assert fresh.step(at(fo.FRESH_S - 1.0)).target is not None
+    stale = Follower(rig())
+    stale.heard(Heard("JA1ABC", "PM95", False), 0.0)
+    stale.start(Follow(True), fo.FRESH_S + 1.0)
+    assert stale.step(at(fo.FRESH_S + 1.0)).target is None
+
+
+def test_a_grid_the_judge_refuses_is_reported_once_and_not_tried_again() -> None:
+    east = bearing("PM95")
+    part = following(rig(keep_out=[[east - 10.0, east + 10.0]]))
+    part.heard(Heard("JA1ABC", "PM95", False), 1.0)
+    refused = part.step(at(1.0))
+    assert refused.target is None and refused.error is not None
+    assert refused.error.kind is ErrorKind.REFUSED and "keep-out" in refused.error.message
+    assert refused.error.command == "follow JA1ABC PM95"
+    part.heard(Heard("JA1ABC", "PM95", False), 2.0)
+    assert part.step(at(2.0)).error is None
+    part.heard(Heard("W1AW", "FN31", False), 3.0)
+    assert part.step(at(3.0)).target is not None
+
+
+def test_ending_says_why_and_whether_it_was_on() -> None:
+    part = following(rig())
+    assert part.end("stop") and part.ended == "stop" and part.info is None
+    assert not part.end("stop again")
+    part.start(Follow(True), 10.0)
+    assert part.ended is None and part.on
+
+
+# -- in the session, in virtual time ------------------------------------------------------------
+def spid(**settings: Any) -> VirtualRotator:
+    v = VirtualRotator(
+        "md01",
+        settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, **settings},
+        emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        follow=STATION,
+    )
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    return v
+
+
+def sets(v: VirtualRotator) -> int:
+    return len(v.frames("set"))
+
+
+def test_the_session_turns_the_rotor_to_the_partner_and_a_stop_ends_it() -> None:
+    with spid() as v:
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 1, 60, "there")
+        assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+        assert v.status.last_command_source == "wsjtx"
+        assert v.status.following is not None and v.status.following.grid == "PM95"
+        n = sets(v)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(30.0)
+        assert sets(v) == n  # the same grid moves nothing
+        v.stop()
+        assert v.status.following is None and v.status.following_ended == "stop"
+        v.heard("W1AW", "FN31")
+        v.run_for(30.0)
+        assert sets(v) == n and not v.truth().is_moving
+
+
+ENDED = {  # what the status says ended following
+    "target": "mqtt target",
+    "lock": "lock",
+    "track": "tracking sun",
+    "off": "off",
+    "link": "serial link down",
+}
+
+
+@pytest.mark.parametrize("how", list(ENDED))
+def test_anything_else_ends_following_and_the_rotor_never_turns_by_itself_after(how: str) -> None:
+    with VirtualRotator(
+        "md01",
+        settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        follow=STATION,
+        sky=Sky(*BERLIN),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 1, 60, "there")
+        if how == "target":
+            v.target(200.0)
+        elif how == "lock":
+            v.lock(True)
+        elif how == "track":
+            v.track(Body.sun())
+        elif how == "off":
+            v.follow(False)
+        else:
+            v.link_down()
+            v.run_for(5.0)
+            v.link_up()
+        v.run_for(2.0)
+        assert v.status.following is None
+        assert v.status.following_ended == ENDED[how]
+        if how == "track":
+            v.track(None)
+        v.run_until(lambda h: not h.truth().is_moving, 60, "still")
+        n = sets(v)
+        v.heard("W1AW", "FN31")
+        v.run_for(60.0)
+        assert sets(v) == n
+
+
+def test_follow_on_while_locked_is_refused_and_nothing_moves() -> None:
+    with spid() as v:
+        v.lock(True)
+        v.follow(True)
+        assert v.status.following is None
+        assert v.errors("refused")[-1].message == "rotator is locked"
+        v.heard("JA1ABC", "PM95")
+        v.run_for(30.0)
+        assert sets(v) == 0
+
+
+def test_a_follow_part_that_raises_is_reset_and_reported_and_the_link_goes_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    with spid() as v:
+        v.follow(True)
+
+        def broken(self: Follower, scene: Scene) -> None:
+            raise RuntimeError("a bug")
+
+        monkeypatch.setattr(Follower, "step", broken)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(2.0)
+        assert v.status.following is None and v.status.following_ended == "internal error"
+        assert [e.kind for e in v.errors("internal")] == [ErrorKind.INTERNAL]
+        v.target(90.0)
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 80, 60, "90")
+
+
+def test_following_is_activity_auto_park_waits() -> None:
+    with spid(park_az_deg=0, park_after_idle_s=30) as v:
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(300.0)
+        assert not v.status.parked and angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+        v.follow(False)
+        v.run_until(lambda h: h.status.parked, 120, "parked once following is off")

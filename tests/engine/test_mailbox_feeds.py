@@ -1,0 +1,61 @@
+"""The mailbox's rule 9 (engine/mailbox.py): follow commands are commands like a track command;
+what WSJT-X says and the wind are inputs, never dropped, the newest (the highest wind) kept."""
+
+from __future__ import annotations
+
+from bridge.engine.follow import Follow, Heard
+from bridge.engine.mailbox import Mailbox
+from bridge.engine.tracking import Track
+from bridge.model import Stop, Target
+
+
+def test_follow_on_replaces_a_target_or_track_before_it_and_a_later_one_wins() -> None:
+    box = Mailbox()
+    try:
+        box.put(Target(100.0))
+        box.put_track(Track(None))
+        box.put_follow(Follow(True))
+        batch = box.take()
+        assert batch.follow == Follow(True) and batch.target is None and batch.track is None
+        box.put_follow(Follow(True))
+        box.put(Target(50.0))  # later: kept, and the session lets it end following
+        box.put_track(Track(None))  # later still: the follow command is dropped
+        batch = box.take()
+        assert batch.follow is None and batch.track is not None
+        box.put(Target(50.0))
+        box.put_follow(Follow(False))  # off ends nothing else
+        batch = box.take()
+        assert batch.target == Target(50.0) and batch.follow == Follow(False)
+    finally:
+        box.close()
+
+
+def test_a_stop_or_lock_drops_a_follow_command_but_never_an_input() -> None:
+    box = Mailbox()
+    try:
+        box.put_follow(Follow(True))
+        box.put_heard(Heard("JA1ABC", "PM95", False))
+        box.put_wind(70.0)
+        box.put(Stop())
+        batch = box.take()
+        assert batch.follow is None and batch.stop is not None
+        assert batch.heard == Heard("JA1ABC", "PM95", False) and batch.wind == 70.0
+        box.put_follow(Follow(True))
+        box.put_lock(True)
+        assert box.take().follow is None
+    finally:
+        box.close()
+
+
+def test_the_newest_status_and_the_highest_wind_of_a_batch_are_kept() -> None:
+    box = Mailbox()
+    try:
+        box.put_heard(Heard("A", "FN31", True))
+        box.put_heard(Heard("A", "FN31", False))
+        for kmh in (20.0, 95.0, 30.0):
+            box.put_wind(kmh)
+        batch = box.take()
+        assert batch.heard == Heard("A", "FN31", False) and batch.wind == 95.0  # no gust lost
+        assert bool(batch) and not box.take()
+    finally:
+        box.close()

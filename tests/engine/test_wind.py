@@ -1,0 +1,207 @@
+"""The wind-aware park (engine/wind.py): the part on its own, on read-only scenes and a fake
+time; then wired into the session in virtual time against an emulated controller."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from bridge.engine.parts import NOTHING
+from bridge.engine.wind import WindPark
+from bridge.model import ErrorKind, MotionState, Source, Target
+from bridge.settings import RotatorSettings
+from bridge.sky import Body, Sky
+from bridge.wiring import worker_config
+from tests.engine.test_parts import rig, scene
+from tests.engine.virtual import VirtualRotator
+
+WIND = {
+    "wind_topic": "weather/wind",
+    "wind_park_above": 60,
+    "wind_release_below": 40,
+    "wind_hold_min": 10,
+    "wind_silent_min": 15,
+    "park_az_deg": 0,
+    "wind_park_az_deg": 90,
+}
+
+
+def park(**settings: Any) -> WindPark:
+    return WindPark(rig("md01", **{**WIND, **settings}))
+
+
+def test_without_a_wind_topic_it_does_nothing() -> None:
+    part = WindPark(rig("md01"))
+    part.reading(200.0, 0.0)
+    assert part.step(scene(0.0)) is NOTHING and part.refusal() is None and part.info is None
+    assert part.wakeup(0.0) is None
+
+
+def test_a_storm_parks_once_ends_tracking_and_refuses_motion_with_the_reason() -> None:
+    part = park()
+    part.reading(30.0, 0.0)
+    assert part.step(scene(0.0)) is NOTHING and part.refusal() is None
+    part.reading(72.0, 5.0)
+    proposal = part.step(scene(5.0))
+    assert proposal.target is not None and proposal.target.source is Source.WIND
+    assert proposal.target.park and proposal.target.az_deg == 90.0  # wind_park_az_deg
+    assert proposal.ended == "wind 72 km/h above 60"  # tracking and following end with it
+    assert part.refusal() == "wind 72 km/h above 60: parked for the storm"
+    assert part.step(scene(6.0)).target is None  # once per storm
+    info = part.info
+    assert info is not None and info.storm and info.speed_kmh == 72.0
+
+
+def test_the_storm_ends_only_after_the_hold_below_the_release_level() -> None:
+    part = park()
+    part.reading(70.0, 0.0)
+    part.step(scene(0.0))
+    part.reading(50.0, 10.0)  # below the park level, above the release: still a storm
+    assert part.step(scene(700.0)).target is None and part.storm
+    part.reading(30.0, 700.0)  # calm from here
+    assert part.wakeup(700.0) == 700.0 + 600.0
+    part.step(scene(1000.0))
+    part.reading(45.0, 1000.0)  # a gust at the release level: the hold starts again
+    part.reading(20.0, 1100.0)
+    part.step(scene(1650.0))
+    assert part.storm  # 550 s of calm, not 600
+    part.step(scene(1700.0))
+    assert not part.storm and part.refusal() is None
+
+
+def test_a_stop_or_the_lock_stops_the_park_and_it_is_not_tried_again_in_this_storm() -> None:
+    part = park()
+    part.reading(80.0, 0.0)
+    part.halted()  # a stop came with the reading
+    assert part.step(scene(0.0)).target is None
+    assert part.refusal() is not None  # motion is refused all the same
+    locked = park()
+    locked.reading(80.0, 0.0)
+    assert locked.step(scene(0.0, locked=True)).target is None  # the lock first
+    assert locked.step(scene(1.0)).target is not None  # then unlocked: the park is still owed
+
+
+def test_a_silent_topic_is_reported_once_and_keeps_the_storm() -> None:
+    part = park()
+    part.reading(80.0, 0.0)
+    part.step(scene(0.0))
+    assert part.wakeup(0.0) == 900.0
+    silent = part.step(scene(900.0))
+    assert silent.error is not None and silent.error.kind is ErrorKind.WIND
+    assert "weather/wind" in silent.error.message and "parked for the storm" in silent.error.message
+    assert part.step(scene(5000.0)) is NOTHING  # once
+    assert part.storm and part.info is not None and part.info.silent  # never released by it
+    part.reading(10.0, 5000.0)
+    assert part.info is not None and not part.info.silent
+
+
+def test_before_any_reading_silence_counts_from_the_start() -> None:
+    part = park()
+    assert part.step(scene(100.0)) is NOTHING
+    reported = part.step(scene(1000.0))
+    assert reported.error is not None and "no storm" in reported.error.message
+
+
+def test_m_s_thresholds_are_converted() -> None:
+    settings = {**WIND, "wind_unit": "m/s", "wind_park_above": 20, "wind_release_below": 10}
+    cfg = worker_config(RotatorSettings(id="w", model="md01", port="/x", **settings))
+    assert cfg.wind is not None
+    assert (cfg.wind.park_above_kmh, cfg.wind.release_below_kmh) == (72.0, 36.0)
+
+
+def test_the_park_refused_by_the_judge_is_reported_and_motion_stays_refused() -> None:
+    part = park(keep_out=[[80, 100]])
+    part.reading(80.0, 0.0)
+    proposal = part.step(scene(0.0))
+    assert proposal.target is None and proposal.error is not None
+    assert proposal.error.message.startswith("wind park refused")
+    assert part.refusal() is not None
+
+
+# -- in the session, in virtual time ------------------------------------------------------------
+def windy(**settings: Any) -> VirtualRotator:
+    v = VirtualRotator(
+        "md01",
+        settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, **WIND, **settings},
+        emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, "start_az_deg": 200},
+        sky=Sky(52.5, 13.4),
+    )
+    v.run_until(lambda h: h.status.available, 10, "the controller answers")
+    return v
+
+
+def wind(v: VirtualRotator, kmh: float) -> None:
+    v.mailbox.put_wind(kmh)
+    v._take()
+
+
+def test_the_storm_parks_the_rotor_refuses_targets_and_stop_and_lock_still_work() -> None:
+    with windy() as v:
+        wind(v, 30.0)
+        v.track(Body.sun())
+        wind(v, 75.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        assert abs(v.truth().az_deg - 90.0) <= 0.5
+        assert v.status.tracking is None and v.status.tracking_ended == "wind 75 km/h above 60"
+        assert v.status.wind is not None and v.status.wind.storm
+        assert v.status.last_command_source == "wind"
+        v.target(200.0)
+        assert v.errors("refused")[-1].message == "wind 75 km/h above 60: parked for the storm"
+        v.run_for(30.0)
+        assert abs(v.truth().az_deg - 90.0) <= 0.5  # nothing moved
+        v.lock(True)  # the lock always works
+        assert v.status.locked
+        v.lock(False)
+        v.stop()  # and the stop
+        assert v.status.last_command_source == "mqtt"
+
+
+def test_a_stop_during_the_storms_park_stops_it_and_it_is_not_tried_again() -> None:
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.truth().is_moving, 10, "the park starts")
+        v.stop()
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "stopped")
+        where = v.truth().az_deg
+        assert abs(where - 90.0) > 5.0
+        v.run_for(120.0)
+        assert abs(v.truth().az_deg - where) <= 0.5  # the stop holds
+        assert v.status.wind is not None and v.status.wind.storm  # motion still refused
+
+
+def test_after_the_hold_the_storm_is_over_and_targets_are_taken_again() -> None:
+    with windy(wind_hold_min=1) as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked")
+        wind(v, 10.0)
+        v.run_for(50.0)
+        v.target(150.0)
+        assert v.errors("refused")[-1].message.endswith("parked for the storm")
+        v.run_for(15.0)  # the minute of calm is over
+        assert v.status.wind is not None and not v.status.wind.storm
+        v.target(150.0)
+        v.run_until(lambda h: abs(h.truth().az_deg - 150.0) <= 0.5, 60, "150")
+
+
+def test_auto_park_leaves_the_storms_park_alone() -> None:
+    with windy(park_after_idle_s=30) as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        v.run_for(600.0)
+        assert abs(v.truth().az_deg - 90.0) <= 0.5  # not turned to park_az_deg 0
+
+
+def test_a_wind_part_that_raises_keeps_the_storm(monkeypatch: pytest.MonkeyPatch) -> None:
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.status.parked, 60, "parked")
+
+        def broken(self: WindPark, scene: object) -> None:
+            raise RuntimeError("a bug")
+
+        monkeypatch.setattr(WindPark, "step", broken)
+        v.run_for(2.0)
+        assert v.errors("internal")  # each step, as long as the bug is there
+        v.command(Target(200.0))
+        assert v.errors("refused")[-1].message.endswith("parked for the storm")

@@ -1,0 +1,147 @@
+"""The wind-aware park end to end: wind readings published on a real mosquitto (as a weather
+station or Home Assistant's statestream would), one running bridge (the App in-process) and an
+emulated MD-01 on a real pty. Asserted: where the rotor really is (the emulator's truth), the
+frames it received, and what the bridge publishes (R/status, R/error)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from tests.support import wait_until
+from tests.support.rig import Rig
+
+TOPIC = "weather/station/wind"
+
+
+def start(rig: Rig, **wind: Any) -> None:
+    rig.add(
+        "tower",
+        "md01",
+        emu={"start_az_deg": 120},  # 30 degrees from the storm's park: quick
+        wind_topic=TOPIC,
+        wind_unit="m/s",
+        wind_park_above=20,  # 72 km/h
+        wind_release_below=10,
+        wind_park_az_deg=90,
+        **wind,
+    )
+    rig.start()
+    rig.ready("tower")
+
+
+def error_after(rig: Rig, mark: int, kind: str) -> dict[str, Any]:
+    msg = rig.probe.wait(
+        lambda m: m.topic == "rotor/error" and json.loads(m.payload)["kind"] == kind,
+        10,
+        f"an error of kind {kind}",
+        mark,
+    )
+    doc: dict[str, Any] = json.loads(msg.payload)
+    return doc
+
+
+def wind_of(rig: Rig, predicate: Any, start: int = 0) -> dict[str, Any]:
+    """The wind block of the first status from message ``start`` on that satisfies it."""
+    msg = rig.probe.wait(
+        lambda m: m.topic == "rotor/status" and predicate(json.loads(m.payload).get("wind") or {}),
+        10,
+        "the wind in the status",
+        start,
+    )
+    doc: dict[str, Any] = json.loads(msg.payload)["wind"]
+    return doc
+
+
+def test_a_storm_parks_refuses_motion_stop_works_and_calm_releases_after_the_hold(
+    rig: Rig,
+) -> None:
+    start(rig, wind_hold_min=0.05)  # 3 s of calm (the hold, waited for below, is under test)
+    rig.probe.publish(TOPIC, "5.0")
+    wind_of(rig, lambda w: w.get("speed_kmh") == 18.0)  # m/s read as km/h
+
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: a storm
+    rig.arrived("tower", 90.0, timeout_s=30)
+    storm = wind_of(rig, lambda w: w.get("storm"))
+    assert storm["speed_kmh"] == 90.0
+    rig.probe.wait_for("rotor/status", lambda m: json.loads(m.payload)["parked"], 10)
+
+    sets = len(rig.emu.frames("set"))
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    refusal = error_after(rig, mark, "refused")
+    assert refusal["message"] == "wind 90 km/h above 72: parked for the storm"
+    rig.probe.publish("rotor/stop", "STOP")  # the stop always works
+    rig.probe.wait_for(
+        "rotor/status", lambda m: json.loads(m.payload)["last_command_source"] == "mqtt", 10
+    )
+    # the status is published before the stop's frame is written: wait for the frame itself
+    wait_until(lambda: bool(rig.emu.frames("stop")), 10, "the stop on the wire")
+    assert len(rig.emu.frames("set")) == sets
+
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "3")  # calm: released only after the hold
+    calm = wind_of(rig, lambda w: w.get("storm") and w.get("calm_since"), mark)
+    assert calm["speed_kmh"] == 10.8
+    wind_of(rig, lambda w: w.get("storm") is False, mark)
+    rig.probe.publish("rotor/target", "150")
+    rig.arrived("tower", 150.0, timeout_s=30)
+
+
+def test_a_silent_wind_topic_is_reported_and_the_storm_goes_on(rig: Rig) -> None:
+    start(rig, wind_silent_min=0.05)  # 3 s without a reading (the silence is under test)
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "30")
+    rig.arrived("tower", 90.0, timeout_s=30)
+    silent = error_after(rig, mark, "wind")
+    assert TOPIC in silent["message"] and "parked for the storm" in silent["message"]
+    assert wind_of(rig, lambda w: w.get("silent"))["storm"] is True
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    assert (
+        error_after(rig, mark, "refused")["message"]
+        == "wind 108 km/h above 72: parked for the storm"
+    )
+
+
+def test_an_unreadable_wind_payload_changes_nothing(rig: Rig) -> None:
+    start(rig)
+    for junk in ("calm", "-3", "nan", '{"speed": 30}', ""):
+        rig.probe.publish(TOPIC, junk)
+    rig.probe.publish(TOPIC, "1")
+    wind_of(rig, lambda w: w.get("speed_kmh") == 3.6)
+    assert rig.emu.frames("set") == [] and not rig.status("tower").wind.storm  # type: ignore[union-attr]
+
+
+def test_the_storms_park_turns_the_rotor_while_a_lease_is_held_and_the_wind_refuses_first(
+    rig: Rig,
+) -> None:
+    start(rig)
+    claim = json.dumps({"operator": "DL1ABC", "minutes": 30})
+    rig.probe.publish("rotor/control/claim", claim)
+    rig.probe.wait_for("rotor/control", lambda m: json.loads(m.payload)["holder"] == "DL1ABC")
+    mark = rig.probe.mark()
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: the bridge's own move, the lease never judges it
+    rig.arrived("tower", 90.0, timeout_s=30)
+    msg = rig.probe.wait(
+        lambda m: m.topic == "rotor/status" and json.loads(m.payload)["parked"], 10, "parked", mark
+    )
+    status = json.loads(msg.payload)
+    assert status["last_command_source"] == "wind" and status["last_operator"] is None
+    assert status["control"]["holder"] == "DL1ABC"  # still held
+    # a target from someone else than the holder: the wind (safety) is said, not the lease
+    mark = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    assert error_after(rig, mark, "refused")["message"] == (
+        "wind 90 km/h above 72: parked for the storm"
+    )
+    audit = rig.probe.wait(
+        lambda m: m.topic == "rotor/audit" and "target" in json.loads(m.payload)["command"],
+        10,
+        "the refusal audited",
+        mark,
+    )
+    assert (
+        json.loads(audit.payload)["result"]
+        == "refused: wind 90 km/h above 72: parked for the storm"
+    )
