@@ -16,6 +16,9 @@ Rules:
 5. ``refusal`` is the judge's question: a motion command from ``who`` while another holds the
    lease gets the message to refuse it with; the holder's and anyone's while free get None.
    Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11).
+6. A lease kept across a restart (the state file) is taken only if a claim could have made it:
+   an operator's name, and at most MAX_MINUTES left. One that is not (a hand-edited or damaged
+   file, a date no clock can show, the wall clock set far back) is ignored: ``restorable``.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ from datetime import UTC, datetime
 
 from bridge.model import OPERATOR_CHARS, Control, valid_operator
 
-__all__ = ["Lease", "LeaseError", "held_text", "valid_operator"]
+__all__ = ["Lease", "LeaseError", "held_text", "restorable", "valid_operator"]
 
 MIN_MINUTES = 1.0
 MAX_MINUTES = 24 * 60.0
@@ -40,6 +43,14 @@ def held_text(control: Control, now_unix: float) -> str:
     end = datetime.fromtimestamp(control.until_unix, UTC).strftime("%H:%M")
     left = max(1, math.ceil((control.until_unix - now_unix) / 60.0))
     return f"{control.operator} holds the rotator until {end} UTC ({left} min left)"
+
+
+def restorable(held: Control | None, now_unix: float) -> Control | None:
+    """Rule 6: the kept lease ``held`` if a claim could have made it, else None."""
+    if held is None or valid_operator(held.operator) != held.operator:
+        return None
+    left_s = held.until_unix - now_unix
+    return held if math.isfinite(left_s) and left_s <= 60.0 * MAX_MINUTES else None
 
 
 class Lease:
