@@ -6,7 +6,8 @@ Rules:
    a full queue drops the line and counts it (said in the next line written, ``dropped``). A
    stop, a paho callback or the lines thread never wait for a disk (docs/architecture.md
    rule 12).
-2. Lines are appended and flushed one by one (no fsync: a trail, not the state file). Before a
+2. One event is one line of JSON, whatever text it carries (``audit_line``). Lines are
+   appended and flushed one by one (no fsync: a trail, not the state file). Before a
    line that would take the file past ``max_bytes`` the file is rotated: ``audit.jsonl`` becomes
    ``audit.jsonl.1``, that one ``.2``, up to ``keep`` old files; the oldest is deleted.
 3. A write that fails (a full disk, a removed directory, no permission) is never fatal: the
@@ -40,9 +41,13 @@ KEEP_FILES = 3  # rule 2: old files kept beside the current one
 _STOP = object()
 
 
-def audit_line(event: AuditEvent) -> str:
-    """The event as one JSON line (the audit file's and ``R/audit``'s payload)."""
-    return json.dumps(event.as_dict(), separators=(",", ":"), ensure_ascii=False)
+_LINE_BREAKS = str.maketrans({"\x85": "\\u0085", "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+
+def audit_line(doc: dict[str, object]) -> str:
+    """An event as one JSON line (rule 2): besides what JSON escapes, the characters other
+    readers break lines at (str.splitlines, editors) are escaped too."""
+    return json.dumps(doc, separators=(",", ":"), ensure_ascii=False).translate(_LINE_BREAKS)
 
 
 class AuditFile:
@@ -118,7 +123,7 @@ class AuditFile:
             doc = event.as_dict()
             if self._dropped:  # rule 1 (read and reset here only: a count, not a promise)
                 doc["dropped"], self._dropped = self._dropped, 0
-            lines.append(json.dumps(doc, separators=(",", ":"), ensure_ascii=False) + "\n")
+            lines.append(audit_line(doc) + "\n")
         try:
             self._append(lines)
         except OSError as exc:

@@ -101,3 +101,25 @@ def test_a_full_queue_drops_and_counts_but_never_blocks(tmp_path: Path) -> None:
     written = lines(path)
     assert [d["command"] for d in written] == ["P 0 0", "P 1 0", "P 9 0"]
     assert written[0]["dropped"] == 3  # the next line written says how many were left out
+
+
+def test_whatever_a_sender_wrote_each_event_stays_one_line_of_json(tmp_path: Path) -> None:
+    """Text from the wire reaches a line (a refusal quotes a claim's unknown keys): newlines,
+    JSON, and the characters str.splitlines and editors also break at (U+0085, U+2028,
+    U+2029) are escaped, so any reader sees one JSON object per line."""
+    path = tmp_path / "audit.jsonl"
+    audit = AuditFile(path, 1_000_000)
+    audit.start()
+    nasty = 'a\nb\r\x85c\u2028d\u2029e"}\n{"forged": true} Jörg'
+    sent = [
+        AuditEvent(1.0, "rotor", Origin(Source.MQTT, "DL1ABC"), nasty, "refused: " + nasty, None),
+        event(1),
+    ]
+    for one in sent:
+        audit.put(one)
+    audit.flush()
+    audit.stop()
+    written = lines(path)
+    assert len(written) == 2
+    assert written[0]["command"] == nasty and written[0]["result"] == "refused: " + nasty
+    assert "Jörg" in path.read_text()  # names stay readable, not \\u escapes
