@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 from pathlib import Path
 
-from bridge.engine.audit import AuditFile
+from bridge.engine.audit import QUEUE_LINES, AuditFile, AuditTrail
 from bridge.model import AuditEvent, Origin, Source
 
 
@@ -123,3 +124,47 @@ def test_whatever_a_sender_wrote_each_event_stays_one_line_of_json(tmp_path: Pat
     assert len(written) == 2
     assert written[0]["command"] == nasty and written[0]["result"] == "refused: " + nasty
     assert "Jörg" in path.read_text()  # names stay readable, not \\u escapes
+
+
+def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -> None:
+    """Rule 1, docs/architecture.md rule 12: a front end's thread (paho's, the lines thread
+    after a stop) hands events to the trail while the writer hangs on the disk (an NFS mount
+    gone, a dying SD card): each hand-in returns, more than the queue holds are dropped and
+    counted, R/audit still gets them all (its own limiter decides)."""
+    published: list[AuditEvent] = []
+    trail = AuditTrail(tmp_path / "audit.jsonl", 1_000_000, lambda _r, e: published.append(e), [])
+    assert trail.file is not None
+    disk = threading.Event()
+    real_append = trail.file._append
+
+    in_writer = threading.Event()
+
+    def stuck(batch: list[str]) -> None:
+        in_writer.set()
+        disk.wait()  # the hang under test, ended by the test itself below
+        real_append(batch)
+
+    trail.file._append = stuck  # type: ignore[method-assign]
+    trail.start()
+    trail.file.put(event(-1))  # straight to the queue: only the writer handles it
+    assert in_writer.wait(60)  # the writer hangs on its first line
+    handed_in = threading.Event()
+    sent = QUEUE_LINES + 50
+
+    def front_end() -> None:
+        audited = trail.of("rotor")
+        for n in range(sent):
+            audited(event(n))
+        handed_in.set()
+
+    worker = threading.Thread(target=front_end, daemon=True)
+    worker.start()
+    try:
+        assert handed_in.wait(60), "handing in an audit event waited for the disk"
+        assert len(published) == sent
+    finally:
+        disk.set()
+        worker.join()
+        trail.stop()
+    assert trail.file.lines_lost == 50  # the queue ran full: dropped, not waited for...
+    assert trail.file.lines_written == 1 + QUEUE_LINES  # ...and the rest written after
