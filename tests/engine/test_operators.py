@@ -18,6 +18,7 @@ from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
 from bridge.model import AuditEvent, Control, ErrorEvent, Origin, Source, Stop, Target
 from bridge.settings import RotatorSettings
+from bridge.sky import Sky
 
 T0 = 1_790_000_000.0  # 14:13:20 UTC
 HOLDER = Origin(Source.MQTT, "DL1ABC")
@@ -226,3 +227,20 @@ def test_a_kept_lease_with_the_clock_set_back_ends_within_a_claims_longest(
     clock.now -= 3 * 86400
     again, _, _ = rotator(tmp_path, clock)
     assert again.operators.holder is None
+
+
+def test_tracking_is_a_motion_command_the_lease_judges(tmp_path: Path) -> None:
+    """lease.py rule 5: another operator's ``track sun`` is refused for the lease (the earlier
+    test's rotator has no station, so its tracking is refused before the lease is asked)."""
+    clock = Clock()
+    events: list[ErrorEvent] = []
+    settings = RotatorSettings(id="t", model="md01", port="/dev/null", park_az_deg=0)
+    store = StateStore(tmp_path / "state.json")
+    cfg = worker_config(settings, Sky(52.52, 13.29))
+    rot = Rotator(cfg, store, lambda s: None, events.append, wall=clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=OTHER)) == "leased"
+    assert events[-1].message.startswith("DL1ABC holds the rotator")
+    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=HOLDER)) == (
+        "offline"  # the holder's passes the lease (no controller here)
+    )
