@@ -26,6 +26,7 @@ import json
 import logging
 import os
 import queue
+import stat
 import threading
 from collections.abc import Callable, Sequence
 from functools import partial
@@ -149,7 +150,7 @@ class AuditFile:
             for line in lines:
                 data = line.encode()
                 if out is None:
-                    size = self.path.stat().st_size if self.path.exists() else 0
+                    size = self._size()
                     if size and size + len(data) > self._max_bytes:
                         self._rotate()
                         size = 0
@@ -165,6 +166,15 @@ class AuditFile:
         finally:
             if out is not None:
                 out.close()
+
+    def _size(self) -> int:
+        """The current file's size: 0 for none, and for what is not a regular file (a directory
+        there is never rotated away; /dev/full is written to, and fails: rule 3)."""
+        try:
+            st = self.path.stat()
+        except FileNotFoundError:
+            return 0
+        return st.st_size if stat.S_ISREG(st.st_mode) else 0
 
     def _rotate(self) -> None:
         """Rule 2: the current file becomes .1, .1 becomes .2, ...; the oldest goes."""

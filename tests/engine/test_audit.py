@@ -168,3 +168,21 @@ def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -
         trail.stop()
     assert trail.file.lines_lost == 50  # the queue ran full: dropped, not waited for...
     assert trail.file.lines_written == 1 + QUEUE_LINES  # ...and the rest written after
+
+
+def test_a_directory_at_the_path_is_reported_and_left_where_it_is(tmp_path: Path) -> None:
+    """Rule 3: ``audit_file`` naming a directory (``/var/log/rotor-bridge`` without the file's
+    name) is a write that fails, reported; the directory is not rotated away as if it were
+    an old audit file because its size looked big enough."""
+    path = tmp_path / "logs"
+    path.mkdir()
+    (path / "kept.txt").write_text("the user's own file\n")
+    said: list[str | None] = []
+    audit = AuditFile(path, 100, on_problem=said.append)
+    audit.start()
+    audit.put(event(1))
+    audit.flush()
+    audit.stop()
+    assert len(said) == 1 and said[0] is not None and str(path) in said[0]
+    assert path.is_dir() and (path / "kept.txt").read_text() == "the user's own file\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["logs"]
