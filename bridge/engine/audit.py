@@ -14,7 +14,8 @@ Rules:
    line is dropped, and the failure is reported once (``on_problem``) until a write succeeds
    again; then that is said once too. The file is opened anew for every batch, so a path that
    becomes writable again (space freed, directory made) is used without a restart.
-4. ``stop`` writes what is queued, then ends the thread.
+4. ``stop`` writes what is queued, then ends the thread; it waits no longer than its timeout
+   (a writer hung on its disk must not hang the bridge's shutdown).
 5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
    publisher (``R/audit``); both only queue. A file that fails is reported (rule 3) on every
    rotator's error topic, kind ``audit``.
@@ -80,7 +81,11 @@ class AuditFile:
         """Rule 4."""
         if not self._thread.is_alive():
             return
-        self._queue.put(_STOP)  # blocks only if full, at shutdown: the writer is draining it
+        try:  # full: the writer drains it, unless it hangs on its disk (then give up)
+            self._queue.put(_STOP, timeout=timeout_s)
+        except queue.Full:
+            log.error("audit file %s: the writer does not answer; lines may be lost", self.path)
+            return
         self._thread.join(timeout_s)
 
     def put(self, event: AuditEvent) -> None:

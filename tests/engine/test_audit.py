@@ -186,3 +186,31 @@ def test_a_directory_at_the_path_is_reported_and_left_where_it_is(tmp_path: Path
     assert len(said) == 1 and said[0] is not None and str(path) in said[0]
     assert path.is_dir() and (path / "kept.txt").read_text() == "the user's own file\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["logs"]
+
+
+def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
+    tmp_path: Path,
+) -> None:
+    """Rule 4: ``stop`` writes what is queued, but a writer hung on its disk (an NFS mount
+    gone) with the queue full must not hang the bridge's shutdown: it waits ``timeout_s``."""
+    audit = AuditFile(tmp_path / "audit.jsonl", 1_000_000, queue_lines=2)
+    disk, in_writer = threading.Event(), threading.Event()
+
+    def stuck(batch: list[str]) -> None:
+        in_writer.set()
+        disk.wait()  # the hang under test, ended by the test itself below
+
+    audit._append = stuck  # type: ignore[method-assign]
+    audit.start()
+    audit.put(event(0))
+    assert in_writer.wait(60)
+    audit.put(event(1))
+    audit.put(event(2))  # the queue is full now
+    stopped = threading.Event()
+    stopper = threading.Thread(target=lambda: (audit.stop(0.5), stopped.set()), daemon=True)
+    stopper.start()
+    try:
+        assert stopped.wait(60), "stop waited for a disk that never answers"
+    finally:
+        disk.set()
+        stopper.join()
