@@ -6,14 +6,16 @@ Rules:
    a full queue drops the line and counts it (said in the next line written, ``dropped``). A
    stop, a paho callback or the lines thread never wait for a disk (docs/architecture.md
    rule 12).
-2. Lines are appended and flushed one by one (no fsync: a trail, not the state file). Before a
+2. One event is one line of JSON, whatever text it carries (``audit_line``). Lines are
+   appended and flushed one by one (no fsync: a trail, not the state file). Before a
    line that would take the file past ``max_bytes`` the file is rotated: ``audit.jsonl`` becomes
    ``audit.jsonl.1``, that one ``.2``, up to ``keep`` old files; the oldest is deleted.
 3. A write that fails (a full disk, a removed directory, no permission) is never fatal: the
    line is dropped, and the failure is reported once (``on_problem``) until a write succeeds
    again; then that is said once too. The file is opened anew for every batch, so a path that
    becomes writable again (space freed, directory made) is used without a restart.
-4. ``stop`` writes what is queued, then ends the thread.
+4. ``stop`` writes what is queued, then ends the thread; it waits no longer than its timeout
+   (a writer hung on its disk must not hang the bridge's shutdown).
 5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
    publisher (``R/audit``); both only queue. A file that fails is reported (rule 3) on every
    rotator's error topic, kind ``audit``.
@@ -25,6 +27,7 @@ import json
 import logging
 import os
 import queue
+import stat
 import threading
 from collections.abc import Callable, Sequence
 from functools import partial
@@ -40,9 +43,13 @@ KEEP_FILES = 3  # rule 2: old files kept beside the current one
 _STOP = object()
 
 
-def audit_line(event: AuditEvent) -> str:
-    """The event as one JSON line (the audit file's and ``R/audit``'s payload)."""
-    return json.dumps(event.as_dict(), separators=(",", ":"), ensure_ascii=False)
+_LINE_BREAKS = str.maketrans({"\x85": "\\u0085", "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+
+def audit_line(doc: dict[str, object]) -> str:
+    """An event as one JSON line (rule 2): besides what JSON escapes, the characters other
+    readers break lines at (str.splitlines, editors) are escaped too."""
+    return json.dumps(doc, separators=(",", ":"), ensure_ascii=False).translate(_LINE_BREAKS)
 
 
 class AuditFile:
@@ -74,7 +81,11 @@ class AuditFile:
         """Rule 4."""
         if not self._thread.is_alive():
             return
-        self._queue.put(_STOP)  # blocks only if full, at shutdown: the writer is draining it
+        try:  # full: the writer drains it, unless it hangs on its disk (then give up)
+            self._queue.put(_STOP, timeout=timeout_s)
+        except queue.Full:
+            log.error("audit file %s: the writer does not answer; lines may be lost", self.path)
+            return
         self._thread.join(timeout_s)
 
     def put(self, event: AuditEvent) -> None:
@@ -118,7 +129,7 @@ class AuditFile:
             doc = event.as_dict()
             if self._dropped:  # rule 1 (read and reset here only: a count, not a promise)
                 doc["dropped"], self._dropped = self._dropped, 0
-            lines.append(json.dumps(doc, separators=(",", ":"), ensure_ascii=False) + "\n")
+            lines.append(audit_line(doc) + "\n")
         try:
             self._append(lines)
         except OSError as exc:
@@ -144,7 +155,7 @@ class AuditFile:
             for line in lines:
                 data = line.encode()
                 if out is None:
-                    size = self.path.stat().st_size if self.path.exists() else 0
+                    size = self._size()
                     if size and size + len(data) > self._max_bytes:
                         self._rotate()
                         size = 0
@@ -160,6 +171,15 @@ class AuditFile:
         finally:
             if out is not None:
                 out.close()
+
+    def _size(self) -> int:
+        """The current file's size: 0 for none, and for what is not a regular file (a directory
+        there is never rotated away; /dev/full is written to, and fails: rule 3)."""
+        try:
+            st = self.path.stat()
+        except FileNotFoundError:
+            return 0
+        return st.st_size if stat.S_ISREG(st.st_mode) else 0
 
     def _rotate(self) -> None:
         """Rule 2: the current file becomes .1, .1 becomes .2, ...; the oldest goes."""

@@ -9,13 +9,17 @@ Rules:
 2. A claim while another operator holds the lease is refused naming the holder and the time it
    ends; the holder's own claim renews it (from now, for the minutes asked).
 3. The lease ends by itself at ``until``: from then on ``holder`` is None, with no call needed
-   (``expired`` tells the caller once, so it can say so).
+   (``expired`` tells the caller once, so it can say so). It has ended too when more than
+   MAX_MINUTES are left: the wall clock was set back, and must not stretch it (rule 1).
 4. Anyone may release it: the lease is coordination between operators who can all publish
    commands, not security (the broker's ACLs are); the station owner's release button must work
    whoever holds it. The audit log says who released it.
 5. ``refusal`` is the judge's question: a motion command from ``who`` while another holds the
    lease gets the message to refuse it with; the holder's and anyone's while free get None.
    Stop, lock ON and tracking OFF never ask (docs/architecture.md rule 11).
+6. A lease kept across a restart (the state file) is taken only if a claim could have made it:
+   an operator's name, and at most MAX_MINUTES left. One that is not (a hand-edited or damaged
+   file, a date no clock can show, the wall clock set far back) is ignored: ``restorable``.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import math
 
 from bridge.model import OPERATOR_CHARS, Control, valid_operator
 
-__all__ = ["Lease", "LeaseError", "held_text", "valid_operator"]
+__all__ = ["Lease", "LeaseError", "held_text", "restorable", "valid_operator"]
 
 MIN_MINUTES = 1.0
 MAX_MINUTES = 24 * 60.0
@@ -39,6 +43,19 @@ def held_text(control: Control, now_unix: float) -> str:
     return control.held_text(now_unix)
 
 
+def _ended(held: Control, now_unix: float) -> bool:
+    """Rule 3: at its end, or the clock set back past a claim's longest."""
+    return not 0.0 < held.until_unix - now_unix <= 60.0 * MAX_MINUTES
+
+
+def restorable(held: Control | None, now_unix: float) -> Control | None:
+    """Rule 6: the kept lease ``held`` if a claim could have made it, else None."""
+    if held is None or valid_operator(held.operator) != held.operator:
+        return None
+    left_s = held.until_unix - now_unix
+    return held if math.isfinite(left_s) and left_s <= 60.0 * MAX_MINUTES else None
+
+
 class Lease:
     def __init__(self, held: Control | None = None) -> None:
         self._held = held
@@ -46,12 +63,12 @@ class Lease:
     def holder(self, now_unix: float) -> Control | None:
         """Rule 3: who holds it now (None once it has ended)."""
         held = self._held
-        return held if held is not None and now_unix < held.until_unix else None
+        return held if held is not None and not _ended(held, now_unix) else None
 
     def expired(self, now_unix: float) -> Control | None:
         """Rule 3: the lease that has ended by itself since the last call, once."""
         held = self._held
-        if held is not None and now_unix >= held.until_unix:
+        if held is not None and _ended(held, now_unix):
             self._held = None
             return held
         return None

@@ -23,7 +23,7 @@ import threading
 from collections.abc import Callable
 from typing import Protocol
 
-from bridge.engine.lease import Lease, LeaseError
+from bridge.engine.lease import Lease, LeaseError, restorable
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
 from bridge.errors import RefusalCode, Refused
@@ -66,7 +66,11 @@ class Operators:
         self._bearing = bearing
         self._report = report
         self._on_audit = on_audit
-        self._lease = Lease(store.lease(rotator_id))  # state_store.py rule 6
+        kept = store.lease(rotator_id)  # state_store.py rule 6
+        if kept is not None and restorable(kept, wall()) is None:  # lease.py rule 6
+            log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
+            kept = None
+        self._lease = Lease(kept)
         self._lock = threading.Lock()
         self._start_timer = timer
         self._timer: Timer | None = None

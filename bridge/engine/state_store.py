@@ -177,7 +177,7 @@ class StateStore:
         if isinstance(raw, dict):
             operator, until = raw.get("operator"), raw.get("until")
             if isinstance(operator, str) and isinstance(until, (int, float)):
-                if not isinstance(until, bool):
+                if not isinstance(until, bool) and abs(until) < 1e300:  # float() can't fail
                     return Control(operator, float(until))
         log.warning("state file: lease for %r is malformed (%s): ignored", rotator_id, raw)
         return None

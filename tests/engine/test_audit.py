@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 from pathlib import Path
 
-from bridge.engine.audit import AuditFile
+from bridge.engine.audit import QUEUE_LINES, AuditFile, AuditTrail
 from bridge.model import AuditEvent, Origin, Source
 
 
@@ -101,3 +102,115 @@ def test_a_full_queue_drops_and_counts_but_never_blocks(tmp_path: Path) -> None:
     written = lines(path)
     assert [d["command"] for d in written] == ["P 0 0", "P 1 0", "P 9 0"]
     assert written[0]["dropped"] == 3  # the next line written says how many were left out
+
+
+def test_whatever_a_sender_wrote_each_event_stays_one_line_of_json(tmp_path: Path) -> None:
+    """Text from the wire reaches a line (a refusal quotes a claim's unknown keys): newlines,
+    JSON, and the characters str.splitlines and editors also break at (U+0085, U+2028,
+    U+2029) are escaped, so any reader sees one JSON object per line."""
+    path = tmp_path / "audit.jsonl"
+    audit = AuditFile(path, 1_000_000)
+    audit.start()
+    nasty = 'a\nb\r\x85c\u2028d\u2029e"}\n{"forged": true} Jörg'
+    sent = [
+        AuditEvent(1.0, "rotor", Origin(Source.MQTT, "DL1ABC"), nasty, "refused: " + nasty, None),
+        event(1),
+    ]
+    for one in sent:
+        audit.put(one)
+    audit.flush()
+    audit.stop()
+    written = lines(path)
+    assert len(written) == 2
+    assert written[0]["command"] == nasty and written[0]["result"] == "refused: " + nasty
+    assert "Jörg" in path.read_text()  # names stay readable, not \\u escapes
+
+
+def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -> None:
+    """Rule 1, docs/architecture.md rule 12: a front end's thread (paho's, the lines thread
+    after a stop) hands events to the trail while the writer hangs on the disk (an NFS mount
+    gone, a dying SD card): each hand-in returns, more than the queue holds are dropped and
+    counted, R/audit still gets them all (its own limiter decides)."""
+    published: list[AuditEvent] = []
+    trail = AuditTrail(tmp_path / "audit.jsonl", 1_000_000, lambda _r, e: published.append(e), [])
+    assert trail.file is not None
+    disk = threading.Event()
+    real_append = trail.file._append
+
+    in_writer = threading.Event()
+
+    def stuck(batch: list[str]) -> None:
+        in_writer.set()
+        disk.wait()  # the hang under test, ended by the test itself below
+        real_append(batch)
+
+    trail.file._append = stuck  # type: ignore[method-assign]
+    trail.start()
+    trail.file.put(event(-1))  # straight to the queue: only the writer handles it
+    assert in_writer.wait(60)  # the writer hangs on its first line
+    handed_in = threading.Event()
+    sent = QUEUE_LINES + 50
+
+    def front_end() -> None:
+        audited = trail.of("rotor")
+        for n in range(sent):
+            audited(event(n))
+        handed_in.set()
+
+    worker = threading.Thread(target=front_end, daemon=True)
+    worker.start()
+    try:
+        assert handed_in.wait(60), "handing in an audit event waited for the disk"
+        assert len(published) == sent
+    finally:
+        disk.set()
+        worker.join()
+        trail.stop()
+    assert trail.file.lines_lost == 50  # the queue ran full: dropped, not waited for...
+    assert trail.file.lines_written == 1 + QUEUE_LINES  # ...and the rest written after
+
+
+def test_a_directory_at_the_path_is_reported_and_left_where_it_is(tmp_path: Path) -> None:
+    """Rule 3: ``audit_file`` naming a directory (``/var/log/rotor-bridge`` without the file's
+    name) is a write that fails, reported; the directory is not rotated away as if it were
+    an old audit file because its size looked big enough."""
+    path = tmp_path / "logs"
+    path.mkdir()
+    (path / "kept.txt").write_text("the user's own file\n")
+    said: list[str | None] = []
+    audit = AuditFile(path, 100, on_problem=said.append)
+    audit.start()
+    audit.put(event(1))
+    audit.flush()
+    audit.stop()
+    assert len(said) == 1 and said[0] is not None and str(path) in said[0]
+    assert path.is_dir() and (path / "kept.txt").read_text() == "the user's own file\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["logs"]
+
+
+def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
+    tmp_path: Path,
+) -> None:
+    """Rule 4: ``stop`` writes what is queued, but a writer hung on its disk (an NFS mount
+    gone) with the queue full must not hang the bridge's shutdown: it waits ``timeout_s``."""
+    audit = AuditFile(tmp_path / "audit.jsonl", 1_000_000, queue_lines=2)
+    disk, in_writer = threading.Event(), threading.Event()
+
+    def stuck(batch: list[str]) -> None:
+        in_writer.set()
+        disk.wait()  # the hang under test, ended by the test itself below
+
+    audit._append = stuck  # type: ignore[method-assign]
+    audit.start()
+    audit.put(event(0))
+    assert in_writer.wait(60)
+    audit.put(event(1))
+    audit.put(event(2))  # the queue is full now
+    stopped = threading.Event()
+    stopper = threading.Thread(target=lambda: (audit.stop(0.5), stopped.set()), daemon=True)
+    stopper.start()
+    try:
+        assert stopped.wait(60), "stop waited for a disk that never answers"
+    finally:
+        disk.set()
+        stopper.join()

@@ -89,3 +89,16 @@ def test_the_minutes_left_round_up() -> None:
     held = Control("DL1ABC", T0 + 61)
     assert held_text(held, T0) == "DL1ABC holds the rotator until 14:14 UTC (2 min left)"
     assert held_text(held, T0 + 60) == "DL1ABC holds the rotator until 14:14 UTC (1 min left)"
+
+
+def test_the_wall_clock_set_far_back_ends_the_lease_rather_than_stretch_it() -> None:
+    """Rule 3: the lease is on the wall clock; set back a year (a bad NTP step, a hand-set
+    date) it would otherwise hold the rotator for a year and 30 minutes. More than a claim
+    may ask left (rule 1) means the clock moved: the lease has ended."""
+    lease = Lease()
+    held = lease.claim("DL1ABC", 30, T0)
+    assert lease.holder(T0 - 3600) == held  # an hour back: 90 min left, still a lease
+    back = T0 - 365 * 86400
+    assert lease.holder(back) is None and lease.refusal("G4XYZ", back) is None
+    assert lease.expired(back) == held  # said once, so the status says it is free
+    assert lease.claim("G4XYZ", 10, back).operator == "G4XYZ"

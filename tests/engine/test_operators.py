@@ -18,6 +18,7 @@ from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
 from bridge.model import AuditEvent, Control, ErrorEvent, Origin, Source, Stop, Target
 from bridge.settings import RotatorSettings
+from bridge.sky import Sky
 
 T0 = 1_790_000_000.0  # 14:13:20 UTC
 HOLDER = Origin(Source.MQTT, "DL1ABC")
@@ -189,3 +190,57 @@ def test_input_refused_before_it_became_a_command_is_audited_when_its_sender_is_
     assert [(a.origin.who, a.command, a.result) for a in audit] == [
         ("G4XYZ", "target 'north'", "refused: bad payload")
     ]
+
+
+@pytest.mark.parametrize(
+    "kept",
+    [
+        '{"operator": "DL1ABC", "until": 1e20}',  # past what a date can say
+        '{"operator": "DL1ABC", "until": Infinity}',
+        '{"operator": "DL1ABC", "until": 1' + "0" * 400 + "}",  # an int no float holds
+        '{"operator": "DL1ABC", "until": 4070908800}',  # 2099: more than a claim can ask
+        '{"operator": "DL1\\nABC", "until": 1790000600}',  # not an operator's name
+        '{"operator": "", "until": 1790000600}',
+    ],
+)
+def test_a_kept_lease_no_claim_could_have_made_is_ignored(tmp_path: Path, kept: str) -> None:
+    """state_store.py rule 6, lease.py rule 6: a hand-edited or damaged state file neither
+    holds the rotator for years nor makes every command fail (a date out of range)."""
+    (tmp_path / "state.json").write_text('{"rotators": {"t": {"lease": ' + kept + "}}}")
+    clock = Clock()
+    rot, _, events = rotator(tmp_path, clock)
+    assert rot.operators.holder is None
+    assert refused(lambda: rot.submit(Target(10, origin=OTHER))) == "offline"  # not leased
+    assert "holds the rotator" not in events[-1].message
+
+
+def test_a_kept_lease_with_the_clock_set_back_ends_within_a_claims_longest(
+    tmp_path: Path,
+) -> None:
+    """A lease kept across a restart while the wall clock went back (a Raspberry Pi boots
+    with the time it shut down at): it has at most MAX_MINUTES left."""
+    clock = Clock()
+    rot, _, _ = rotator(tmp_path, clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.operators.stop()
+    rot._store.flush()
+    clock.now -= 3 * 86400
+    again, _, _ = rotator(tmp_path, clock)
+    assert again.operators.holder is None
+
+
+def test_tracking_is_a_motion_command_the_lease_judges(tmp_path: Path) -> None:
+    """lease.py rule 5: another operator's ``track sun`` is refused for the lease (the earlier
+    test's rotator has no station, so its tracking is refused before the lease is asked)."""
+    clock = Clock()
+    events: list[ErrorEvent] = []
+    settings = RotatorSettings(id="t", model="md01", port="/dev/null", park_az_deg=0)
+    store = StateStore(tmp_path / "state.json")
+    cfg = worker_config(settings, Sky(52.52, 13.29))
+    rot = Rotator(cfg, store, lambda s: None, events.append, wall=clock)
+    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=OTHER)) == "leased"
+    assert events[-1].message.startswith("DL1ABC holds the rotator")
+    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=HOLDER)) == (
+        "offline"  # the holder's passes the lease (no controller here)
+    )
