@@ -9,7 +9,17 @@ import pytest
 
 from bridge.model import ErrorEvent, ErrorKind
 
-PUBLISHED_KINDS = {"refused", "stalled", "stop", "serial", "protocol", "state", "internal", "audit", "wind"}
+PUBLISHED_KINDS = {
+    "refused",
+    "stalled",
+    "stop",
+    "serial",
+    "protocol",
+    "state",
+    "internal",
+    "audit",
+    "wind",
+}
 
 
 def test_the_error_kinds_are_exactly_the_published_ones() -> None:

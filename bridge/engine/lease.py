@@ -5,7 +5,9 @@ keeps one per rotator, judges with it and carries out what it returns.
 
 Rules:
 1. A claim names an operator and a number of minutes, MIN_MINUTES to MAX_MINUTES; anything else
-   is refused with a message saying what was wrong, and changes nothing.
+   is refused with a message saying what was wrong, and changes nothing. An interface's name
+   (``mqtt``, ``rotctld 127.0.0.1``) is no operator's: it stands for everyone who sends
+   without a name there, Home Assistant among them, and the lease would be theirs.
 2. A claim while another operator holds the lease is refused naming the holder and the time it
    ends; the holder's own claim renews it (from now, for the minutes asked).
 3. The lease ends by itself at ``until``: from then on ``holder`` is None, with no call needed
@@ -26,12 +28,13 @@ from __future__ import annotations
 
 import math
 
-from bridge.model import OPERATOR_CHARS, Control, valid_operator
+from bridge.model import OPERATOR_CHARS, Control, Source, valid_operator
 
 __all__ = ["Lease", "LeaseError", "held_text", "restorable", "valid_operator"]
 
 MIN_MINUTES = 1.0
 MAX_MINUTES = 24 * 60.0
+INTERFACES = frozenset(source.value for source in Source)  # rule 1: never an operator's name
 
 
 class LeaseError(ValueError):
@@ -78,6 +81,11 @@ class Lease:
         name = valid_operator(operator)
         if name is None:
             raise LeaseError(f"operator must be text of 1 to {OPERATOR_CHARS} printable characters")
+        if name.split(" ", 1)[0].casefold() in INTERFACES:  # rule 1
+            raise LeaseError(
+                f"{name!r} is how the bridge names an interface, not an operator: claim the "
+                "lease with your call sign"
+            )
         if isinstance(minutes, bool) or not isinstance(minutes, (int, float)):
             raise LeaseError("minutes must be a number")
         if not math.isfinite(minutes) or not MIN_MINUTES <= minutes <= MAX_MINUTES:

@@ -102,3 +102,13 @@ def test_the_wall_clock_set_far_back_ends_the_lease_rather_than_stretch_it() -> 
     assert lease.holder(back) is None and lease.refusal("G4XYZ", back) is None
     assert lease.expired(back) == held  # said once, so the status says it is free
     assert lease.claim("G4XYZ", 10, back).operator == "G4XYZ"
+
+
+@pytest.mark.parametrize("name", ["mqtt", "MQTT", "rotctld 127.0.0.1", "web 10.0.0.2", "pst"])
+def test_an_interfaces_name_cannot_claim_the_lease(name: str) -> None:
+    """Rule 1: 'mqtt' would make every nameless MQTT client, Home Assistant too, the holder."""
+    lease = Lease()
+    with pytest.raises(LeaseError, match="names an interface"):
+        lease.claim(name, 30, 1_000.0)
+    assert lease.holder(1_000.0) is None
+    lease.claim("DL1ABC", 30, 1_000.0)  # a call sign is a name
