@@ -4,7 +4,6 @@ remote in this process on a free port, and Hamlib's ``rotctl -m 2`` as its clien
 
 from __future__ import annotations
 
-import re
 import signal
 import socket
 import subprocess
@@ -25,6 +24,7 @@ from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
+from tests.support.remote import remote_published
 from tests.support.rig import Rig
 
 pytestmark = pytest.mark.hamlib
@@ -156,15 +156,8 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     station.ready("tower", 30)
     # a marker behind anything the remote might have resent, on its one ordered connection
     assert ask(port, b"S\n") == b"RPRT 0\n"
-    received = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
-
-    def published() -> list[bytes]:
-        with open(station.broker.log, "rb") as f:
-            f.seek(log_from)
-            return received.findall(f.read())
-
-    wait_until(lambda: b"stop" in published(), 10, "the marker stop at the broker")
-    assert published() == [b"stop"]
+    wait_until(lambda: b"stop" in remote_published(station.broker, log_from), 10, "the marker stop")
+    assert remote_published(station.broker, log_from) == [b"stop"]
     assert len(emu.frames(*BEARING_OUTCOMES)) == moves
 
 

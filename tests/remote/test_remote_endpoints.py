@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import logging
 import os
-import re
 import signal
 import socket
 import subprocess
@@ -25,6 +24,7 @@ from bridge.remote.settings import RemoteSettings
 from tests.integration.test_gs232_integration import EASYCOMM, GS232, gs232_ask, rotctl
 from tests.remote.test_remote import OPERATOR
 from tests.support import wait_until
+from tests.support.remote import remote_published
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, minos_reply, reserve_pst_ports, tag
 
@@ -156,15 +156,8 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     wait_until(lambda: link.up, 30, "the remote back on the broker")
     station.ready("tower", 30)
     gs232_ask(e.gs232_port, b"S\r", b"")  # a marker behind anything sent again
-    received = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
-
-    def published() -> list[bytes]:
-        with open(station.broker.log, "rb") as f:
-            f.seek(log_from)
-            return received.findall(f.read())
-
-    wait_until(lambda: b"stop" in published(), 10, "the marker stop at the broker")
-    assert published() == [b"stop"]
+    wait_until(lambda: b"stop" in remote_published(station.broker, log_from), 10, "the marker stop")
+    assert remote_published(station.broker, log_from) == [b"stop"]
     assert len(emu.frames(*BEARING_OUTCOMES)) == moves
 
 
