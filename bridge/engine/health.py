@@ -30,8 +30,13 @@ Rules:
    the same report object, so nothing is published per poll. A controller that reports no
    position (DCU-1) has a report that says so and never another.
 6. Cheap at every step: a motion already seen costs one comparison, a new one a few more and
-   a reading appended while the rotor turns (at most MAX_READINGS a move: a rotor "turning"
-   for hours, a noisy potentiometer, does not grow without end; its first hour is measured).
+   a reading appended while the rotor turns. A move keeps MAX_READINGS at most, so that its
+   end is measured in well under a millisecond on the lines thread (house rule 12) however
+   long it turned (a SPID tracking a pass for minutes, a noisy potentiometer "turning" for
+   hours): once full, every other one of its older readings is dropped, the newest
+   KEEP_RECENT kept whole (the stop and the coast are measured there). What is measured
+   between two readings (a speed between band edges, a start set back at the move's speed)
+   holds on the sparser readings.
 7. A part that failed is ``rebuilt`` from its last memory (session.py rule 14); if even that
    fails (a bug in the judgement itself) it is built ``off_at`` its last report: it measures
    no more and that report stays, so it cannot fail again at every move and take the link
@@ -54,7 +59,8 @@ from bridge.model import MotionState, RotatorHealth
 STEADY = (0.2, 0.8)  # rule 2
 MIN_SPAN_S = 1.0
 MIN_SPAN_DEG = 5.0
-MAX_READINGS = 20_000  # rule 6: over an hour of readings at 0.2 s
+MAX_READINGS = 1_200  # rule 6: four minutes of readings at 0.2 s before thinning
+KEEP_RECENT = 200  # rule 6
 _GONE = (MotionState.OFFLINE, MotionState.UNKNOWN)
 
 
@@ -154,8 +160,10 @@ class Health:
         self._move = move
 
     def _reading(self, move: _Move, m: mo.Motion, t: float, az: float) -> None:
-        if len(move.readings) < MAX_READINGS:  # rule 6
-            move.readings.append((t, az, m.el_position_deg))
+        readings = move.readings
+        readings.append((t, az, m.el_position_deg))
+        if len(readings) >= MAX_READINGS:  # rule 6: the older part thinned, the first kept
+            readings[:-KEEP_RECENT] = readings[:-KEEP_RECENT:2]
         if move.first_change_t is None and (
             az != move.from_az or m.el_position_deg != move.from_el
         ):

@@ -22,7 +22,7 @@ from bridge.app import worker_config
 from bridge.emulators.physics import Axis
 from bridge.engine import motion as mo
 from bridge.engine.config import HealthConfig
-from bridge.engine.health import Health
+from bridge.engine.health import MAX_READINGS, Health
 from bridge.engine.health_judge import Judge, Move
 from bridge.model import MotionState, RotatorHealth
 from bridge.mqtt.health_payload import health_json
@@ -442,3 +442,36 @@ def test_one_slow_move_never_warns_even_against_a_speed_set_by_hand() -> None:
     for n in range(4):
         bench.move(n, 300 if n % 2 == 0 else 30)
         assert bench.reports[-1].warnings == (), n
+
+
+class FineBench(Bench):
+    """A controller that reads a tenth of a degree (an MD-01 at 10 pulses a degree): every poll
+    of a turning rotor is a new reading, and a long move has thousands."""
+
+    def __init__(self, speed: Callable[[int, bool], float]) -> None:
+        super().__init__(speed)
+        self.most = 0
+
+    def _poll(self) -> None:
+        self.now += self.POLL_S
+        reading = round(self.axis.position_deg_at(self.now), 1)
+        self.m, _events = mo.reading(self.m, self.mcfg, reading, self.now)
+        self._feed()
+        move = self.health._move
+        self.most = max(self.most, len(move.readings) if move is not None else 0)
+
+
+def test_a_long_move_keeps_few_readings_and_is_measured_all_the_same() -> None:
+    """Rule 6: 2,500 readings in one move (slow, and read finely); the part keeps at most
+    MAX_READINGS, so the move's end is measured in bounded time on the lines thread, and its
+    speed and start are those of the whole move."""
+    bench = FineBench(lambda n, up: 0.6 if up else 6.0)
+    for n in range(3):  # the report's speed is a median of three moves at least
+        bench.move(2 * n, 340.0)  # 320 degrees at 0.6 deg/s: 533 s, a reading every 0.25 s
+        bench.move(2 * n + 1, 20.0)  # back, quickly
+    assert MAX_READINGS < 2_000 < 533 / Bench.POLL_S
+    assert 0 < bench.most <= MAX_READINGS
+    report = bench.reports[-1]
+    assert report.moves >= 6
+    assert report.az.speed_up_deg_s == pytest.approx(0.6, rel=0.02)
+    assert report.start_delay_s == pytest.approx(Bench.START_S, abs=Bench.POLL_S)
