@@ -29,6 +29,10 @@ Rules:
    and ``last_operator``), with the operator who switched following on if they named
    themselves. Like tracking's, they are the bridge's own: the control lease judged who
    switched it on (rotator.py), not each grid WSJT-X names.
+8. It follows one program: the instance (WSJT-X's Id) of the first status heard since it was
+   switched on, the fresh one it started with included. Statuses of any other instance (a
+   second WSJT-X on another band, another station's in the same multicast group) are ignored
+   while it follows, or the rotor would swing between two partners at every decoding period.
 """
 
 from __future__ import annotations
@@ -86,6 +90,8 @@ class Follower:
         self._heard_t = -math.inf
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
         self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
+        self._instance: str | None = None  # rule 8: the program followed
+        self._ignored: set[str] = set()  # rule 8: the others, logged once each
 
     @property
     def on(self) -> bool:
@@ -99,6 +105,8 @@ class Follower:
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
             self._heard = None
+        self._instance = self._heard.instance if self._heard is not None else None  # rule 8
+        self._ignored = set()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
     def end(self, why: str) -> bool:
@@ -110,7 +118,21 @@ class Follower:
         return True
 
     def heard(self, heard: Heard, now: float) -> None:
-        """The newest status (kept while off too: rule 4)."""
+        """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
+        if self.info is not None:
+            if self._instance is None:
+                self._instance = heard.instance
+            elif heard.instance != self._instance:
+                if heard.instance not in self._ignored:
+                    self._ignored.add(heard.instance)
+                    log.warning(
+                        "%s: following %r: the status of %r is ignored (switch following off "
+                        "and on to follow the program heard first then)",
+                        self._rig.rotator_id,
+                        self._instance,
+                        heard.instance,
+                    )
+                return
         self._heard, self._heard_t = heard, now
 
     def step(self, scene: Scene) -> Proposal:

@@ -156,6 +156,30 @@ def test_a_grid_the_judge_refuses_is_reported_once_and_not_tried_again() -> None
     assert part.step(at(3.0)).target is not None
 
 
+def test_a_second_program_on_the_port_never_swings_the_rotor_between_two_partners() -> None:
+    """Two WSJT-X instances (two bands, --rig-name) or a second station's WSJT-X in the same
+    multicast group each send their status at every decoding period: following takes the
+    instance it heard first and ignores the other, or the rotor would turn between the two
+    partners twice a minute."""
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), 1.0)
+    assert part.step(at(1.0)).target is not None
+    for now in (2.0, 4.0, 6.0):  # the other instance's QSO, then the first one's again
+        part.heard(Heard("W1AW", "FN31", False, "WSJT-X - 6m"), now)
+        assert part.step(at(now)).target is None
+        part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), now + 1.0)
+        assert part.step(at(now + 1.0)).target is None
+    assert part.info is not None and part.info.grid == "PM95"
+    part.heard(Heard("VK2XYZ", "QF56", False, "WSJT-X - 20m"), 8.0)  # its next partner
+    assert part.step(at(8.0)).target is not None
+    part.end("off")  # switched on again, it takes whichever it hears first then
+    part.heard(Heard("W1AW", "FN31", False, "WSJT-X - 6m"), 9.0)
+    part.start(Follow(True), 9.5)
+    assert part.step(at(9.5)).target is not None
+    part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), 10.0)
+    assert part.step(at(10.0)).target is None
+
+
 def test_ending_says_why_and_whether_it_was_on() -> None:
     part = following(rig())
     assert part.end("stop") and part.ended == "stop" and part.info is None
