@@ -180,6 +180,22 @@ def test_a_second_program_on_the_port_never_swings_the_rotor_between_two_partner
     assert part.step(at(10.0)).target is None
 
 
+def test_the_stations_own_grid_and_its_antipode_have_no_bearing_and_are_reported_once() -> None:
+    """JO62QM is the station's own subsquare (distance 0); AD67QL is its antipode's (every
+    bearing a great circle to it): neither turns the rotor nor breaks following."""
+    part = following(rig())
+    for now, grid in ((1.0, "JO62QM"), (2.0, "AD67QL")):
+        part.heard(Heard("XX1XX", grid, False), now)
+        proposal = part.step(at(now))
+        assert proposal.target is None and proposal.error is not None, grid
+        assert proposal.error.kind is ErrorKind.REFUSED and "bearing" in proposal.error.message
+        part.heard(Heard("XX1XX", grid, False), now + 0.5)
+        assert part.step(at(now + 0.5)).error is None  # once
+    assert part.on
+    part.heard(Heard("JA1ABC", "PM95", False), 3.0)
+    assert part.step(at(3.0)).target is not None
+
+
 def test_ending_says_why_and_whether_it_was_on() -> None:
     part = following(rig())
     assert part.end("stop") and part.ended == "stop" and part.info is None
