@@ -17,7 +17,9 @@ Rules:
    with one that is no Maidenhead locator.
 3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
    the program transmits waits, shown as ``held``, until a status says the transmission has
-   ended; then the newest grid is turned to.
+   ended; then the newest grid is turned to. A transmission that begins while its own turn is
+   under way (the usual case: the grid is named a second before the transmit period) stops
+   the turn (``Proposal.halt``), and the grid is turned to again once it has ended.
 4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
    on every change and at least at every decoding period): the rotor turns to the partner of
    the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
@@ -46,7 +48,7 @@ from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.errors import Refused
-from bridge.model import ErrorKind, FollowingInfo, Origin, Source, Target
+from bridge.model import ErrorKind, FollowingInfo, MotionState, Origin, Source, Target
 from bridge.pointing import toward
 
 log = logging.getLogger(__name__)
@@ -135,17 +137,27 @@ class Follower:
                 return
         self._heard, self._heard_t = heard, now
 
+    def _turning(self, scene: Scene) -> bool:
+        """Its own turn is under way: while it follows, anything else that moves ends it."""
+        own = scene.pending is not None and scene.pending.source is Source.WSJTX
+        return self._aimed is not None and (own or scene.motion.state is MotionState.MOVING)
+
     def step(self, scene: Scene) -> Proposal:
         """Run by the session with its other rules, while the controller answers."""
         info, heard = self.info, self._heard
         if info is None or heard is None:
             return NOTHING
         grid = grid_of(heard.grid)
+        holding = heard.transmitting and self._rig.follow.hold_while_tx
+        if holding and self._turning(scene):  # rule 3: the turn under way stops
+            self._aimed = None  # turned to again after the transmission
+            self.info = replace(info, held=True)
+            return Proposal(halt=True, busy=True)
         if grid is None or grid == self._aimed:  # rule 2
             if info.held:  # the grid held for is gone: nothing waits any more
                 self.info = replace(info, held=False)
             return Proposal(busy=True)  # rule 6
-        if heard.transmitting and self._rig.follow.hold_while_tx:  # rule 3
+        if holding:  # rule 3
             self.info = replace(info, held=True)
             return Proposal(busy=True)
         self._aimed = grid

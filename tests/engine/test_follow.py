@@ -285,6 +285,28 @@ def test_anything_else_ends_following_and_the_rotor_never_turns_by_itself_after(
         assert sets(v) == n
 
 
+def test_a_transmission_beginning_during_the_turn_holds_the_rotor_until_it_ends() -> None:
+    """The usual FT8 case: a double-click on a CQ near the end of a receive period names the
+    grid (not yet transmitting), and the transmission starts a second later, long before the
+    turn is over. With follow_hold_while_tx the beam does not turn while it transmits: the turn
+    stops, and goes on to the same grid once the transmission has ended."""
+    with spid() as v:
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(1.5)
+        v.heard("JA1ABC", "PM95", True)  # the transmission starts
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the turn stopped")
+        where = v.truth().az_deg
+        assert angle_between(where, bearing("PM95")) > 5  # stopped on the way
+        assert v.status.following is not None and v.status.following.held
+        v.run_for(11.0)  # the rest of the 12.6 s transmission
+        assert abs(v.truth().az_deg - where) <= 0.5  # still while it transmits
+        v.heard("JA1ABC", "PM95", False)  # it has ended
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > where + 1, 60, "")
+        assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+        assert v.status.following is not None and not v.status.following.held
+
+
 def test_follow_on_while_locked_is_refused_and_nothing_moves() -> None:
     with spid() as v:
         v.lock(True)
