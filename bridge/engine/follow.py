@@ -17,7 +17,9 @@ Rules:
    with one that is no Maidenhead locator.
 3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
    the program transmits waits, shown as ``held``, until a status says the transmission has
-   ended; then the newest grid is turned to.
+   ended; then the newest grid is turned to. A transmission that begins while its own turn is
+   under way (the usual case: the grid is named a second before the transmit period) stops
+   the turn (``Proposal.halt``), and the grid is turned to again once it has ended.
 4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
    on every change and at least at every decoding period): the rotor turns to the partner of
    the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
@@ -29,6 +31,10 @@ Rules:
    and ``last_operator``), with the operator who switched following on if they named
    themselves. Like tracking's, they are the bridge's own: the control lease judged who
    switched it on (rotator.py), not each grid WSJT-X names.
+8. It follows one program: the instance (WSJT-X's Id) of the first status heard since it was
+   switched on, the fresh one it started with included. Statuses of any other instance (a
+   second WSJT-X on another band, another station's in the same multicast group) are ignored
+   while it follows, or the rotor would swing between two partners at every decoding period.
 """
 
 from __future__ import annotations
@@ -42,7 +48,7 @@ from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
 from bridge.errors import Refused
-from bridge.model import ErrorKind, FollowingInfo, Origin, Source, Target
+from bridge.model import ErrorKind, FollowingInfo, MotionState, Origin, Source, Target
 from bridge.pointing import toward
 
 log = logging.getLogger(__name__)
@@ -86,6 +92,8 @@ class Follower:
         self._heard_t = -math.inf
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
         self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
+        self._instance: str | None = None  # rule 8: the program followed
+        self._ignored: set[str] = set()  # rule 8: the others, logged once each
 
     @property
     def on(self) -> bool:
@@ -99,6 +107,8 @@ class Follower:
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
             self._heard = None
+        self._instance = self._heard.instance if self._heard is not None else None  # rule 8
+        self._ignored = set()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
     def end(self, why: str) -> bool:
@@ -110,8 +120,27 @@ class Follower:
         return True
 
     def heard(self, heard: Heard, now: float) -> None:
-        """The newest status (kept while off too: rule 4)."""
+        """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
+        if self.info is not None:
+            if self._instance is None:
+                self._instance = heard.instance
+            elif heard.instance != self._instance:
+                if heard.instance not in self._ignored:
+                    self._ignored.add(heard.instance)
+                    log.warning(
+                        "%s: following %r: the status of %r is ignored (switch following off "
+                        "and on to follow the program heard first then)",
+                        self._rig.rotator_id,
+                        self._instance,
+                        heard.instance,
+                    )
+                return
         self._heard, self._heard_t = heard, now
+
+    def _turning(self, scene: Scene) -> bool:
+        """Its own turn is under way: while it follows, anything else that moves ends it."""
+        own = scene.pending is not None and scene.pending.source is Source.WSJTX
+        return self._aimed is not None and (own or scene.motion.state is MotionState.MOVING)
 
     def step(self, scene: Scene) -> Proposal:
         """Run by the session with its other rules, while the controller answers."""
@@ -119,11 +148,16 @@ class Follower:
         if info is None or heard is None:
             return NOTHING
         grid = grid_of(heard.grid)
+        holding = heard.transmitting and self._rig.follow.hold_while_tx
+        if holding and self._turning(scene):  # rule 3: the turn under way stops
+            self._aimed = None  # turned to again after the transmission
+            self.info = replace(info, held=True)
+            return Proposal(halt=True, busy=True)
         if grid is None or grid == self._aimed:  # rule 2
             if info.held:  # the grid held for is gone: nothing waits any more
                 self.info = replace(info, held=False)
             return Proposal(busy=True)  # rule 6
-        if heard.transmitting and self._rig.follow.hold_while_tx:  # rule 3
+        if holding:  # rule 3
             self.info = replace(info, held=True)
             return Proposal(busy=True)
         self._aimed = grid

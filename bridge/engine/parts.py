@@ -37,6 +37,7 @@ class Proposal:
     error: Report | None = None  # hand this error event out
     ended: str | None = None  # tracking ended for this reason: drop a target of its own
     busy: bool = False  # activity: auto-park's quiet spell starts again (autopark.py rule 1)
+    halt: bool = False  # stop the turn under way (following: a transmission began, follow.py)
 
 
 NOTHING = Proposal()

@@ -51,7 +51,8 @@ Rules:
    down, and never costs a stop).
 15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
    WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
-   reading (wind.py): a storm ends tracking and following, parks, and refuses motion. The
+   reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
+   Following may also stop its own turn (a transmission began: follow.py rule 3). The
    wind's park, like auto-park, is the bridge's own move: the control lease never judges it.
 """
 
@@ -327,6 +328,9 @@ class RotatorSession:
         if proposal.ended is not None:
             self.features.end(proposal.ended)  # (tracking may have ended itself)
             self.targets.clear_from(Source.TRACKING)
+        if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
+            self.targets.clear_from(Source.WSJTX)
+            self.controller.stop(now)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 

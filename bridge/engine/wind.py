@@ -11,6 +11,10 @@ Rules:
 2. The storm is over once the readings have stayed below ``wind_release_below`` for
    ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
    readings end a storm: nothing else does, not a restart of the wind station, not silence.
+   So the hold ends with a reading that comes at least ``wind_hold_min`` after the calm began,
+   never by the clock alone, and a gap of ``wind_silent_min`` between readings starts the calm
+   again from the reading after it (a station that fell silent after one calm reading says
+   nothing of the wind since).
 3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
    storm stops the park under way, and the park is not tried again until the next storm;
    motion stays refused meanwhile.
@@ -67,6 +71,7 @@ class WindPark:
         cfg = self._cfg
         if not self.on:
             return
+        gap = self._last_t is None or now - self._last_t >= cfg.silent_s  # rule 2
         self._speed, self._last_t, self._silent = kmh, now, False
         if kmh > cfg.park_above_kmh:
             self._calm_since = None
@@ -75,7 +80,7 @@ class WindPark:
                 self._why = f"wind {kmh:.0f} km/h above {cfg.park_above_kmh:g}"
                 log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
         elif self.storm and kmh < cfg.release_below_kmh:
-            if self._calm_since is None:
+            if self._calm_since is None or gap:
                 self._calm_since = now
         else:
             self._calm_since = None  # rule 2: the hold starts again
@@ -89,10 +94,8 @@ class WindPark:
         return f"{self._why}: parked for the storm" if self.storm else None
 
     def wakeup(self, now: float) -> float | None:
-        """When the hold ends or the silence is due, whichever comes first and lies ahead."""
+        """When the silence is due, if it lies ahead (the hold ends with a reading: rule 2)."""
         times = []
-        if self.storm and self._calm_since is not None:
-            times.append(self._calm_since + self._cfg.hold_s)
         quiet_from = self._last_t if self._last_t is not None else self._since_t
         if quiet_from is not None and not self._silent and self.on:
             times.append(quiet_from + self._cfg.silent_s)
@@ -117,7 +120,8 @@ class WindPark:
                 f"no wind reading on {cfg.topic} for {cfg.silent_s / 60:g} min: keeping the "
                 f"state it had ({kept})",
             )
-        if self.storm and self._calm_since is not None and now - self._calm_since >= cfg.hold_s:
+        calm, last = self._calm_since, self._last_t
+        if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if not (self.storm and self._park_owed) or scene.locked:

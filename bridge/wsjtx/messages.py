@@ -6,9 +6,12 @@ description, read for facts; none of its code is used):
 
 - One message per UDP datagram, big-endian, written with Qt's QDataStream (schema 2: Qt 5.2,
   schema 3: Qt 5.4; both encode every field below the same way).
-- Header: ``quint32`` magic 0xADBCCBDA; ``quint32`` schema number (WSJT-X 2.x sends 3; 2 is
-  still accepted; 1 is broken Qt 5.0 and never sent); ``quint32`` message type; ``utf8`` Id
-  (the instance's unique key, e.g. ``WSJT-X`` or ``WSJT-X - IC-7300``).
+- Header: ``quint32`` magic 0xADBCCBDA; ``quint32`` schema number; ``quint32`` message type;
+  ``utf8`` Id (the instance's unique key, e.g. ``WSJT-X`` or ``WSJT-X - IC-7300``). The schema
+  is negotiated (MessageClient.cpp): WSJT-X 2.x starts with 2 and moves up to 3 only once a
+  server's reply names 3. The bridge never replies, so WSJT-X sends it 2, or 3 when another
+  program in the same multicast group (GridTracker, JTAlert) has answered; 1 is broken Qt 5.0
+  and never sent. WSJT-X also never sends a message identical to the one before it.
 - QDataStream encodings: ``quint32`` 4 bytes, ``quint64`` 8 bytes, ``quint8`` 1 byte, ``bool``
   one byte (0 false, anything else true). ``utf8`` is a QByteArray: a ``quint32`` length, then
   that many bytes of UTF-8, no terminator; length 0xFFFFFFFF is a null string (read here as

@@ -156,6 +156,46 @@ def test_a_grid_the_judge_refuses_is_reported_once_and_not_tried_again() -> None
     assert part.step(at(3.0)).target is not None
 
 
+def test_a_second_program_on_the_port_never_swings_the_rotor_between_two_partners() -> None:
+    """Two WSJT-X instances (two bands, --rig-name) or a second station's WSJT-X in the same
+    multicast group each send their status at every decoding period: following takes the
+    instance it heard first and ignores the other, or the rotor would turn between the two
+    partners twice a minute."""
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), 1.0)
+    assert part.step(at(1.0)).target is not None
+    for now in (2.0, 4.0, 6.0):  # the other instance's QSO, then the first one's again
+        part.heard(Heard("W1AW", "FN31", False, "WSJT-X - 6m"), now)
+        assert part.step(at(now)).target is None
+        part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), now + 1.0)
+        assert part.step(at(now + 1.0)).target is None
+    assert part.info is not None and part.info.grid == "PM95"
+    part.heard(Heard("VK2XYZ", "QF56", False, "WSJT-X - 20m"), 8.0)  # its next partner
+    assert part.step(at(8.0)).target is not None
+    part.end("off")  # switched on again, it takes whichever it hears first then
+    part.heard(Heard("W1AW", "FN31", False, "WSJT-X - 6m"), 9.0)
+    part.start(Follow(True), 9.5)
+    assert part.step(at(9.5)).target is not None
+    part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X - 20m"), 10.0)
+    assert part.step(at(10.0)).target is None
+
+
+def test_the_stations_own_grid_and_its_antipode_have_no_bearing_and_are_reported_once() -> None:
+    """JO62QM is the station's own subsquare (distance 0); AD67QL is its antipode's (every
+    bearing a great circle to it): neither turns the rotor nor breaks following."""
+    part = following(rig())
+    for now, grid in ((1.0, "JO62QM"), (2.0, "AD67QL")):
+        part.heard(Heard("XX1XX", grid, False), now)
+        proposal = part.step(at(now))
+        assert proposal.target is None and proposal.error is not None, grid
+        assert proposal.error.kind is ErrorKind.REFUSED and "bearing" in proposal.error.message
+        part.heard(Heard("XX1XX", grid, False), now + 0.5)
+        assert part.step(at(now + 0.5)).error is None  # once
+    assert part.on
+    part.heard(Heard("JA1ABC", "PM95", False), 3.0)
+    assert part.step(at(3.0)).target is not None
+
+
 def test_ending_says_why_and_whether_it_was_on() -> None:
     part = following(rig())
     assert part.end("stop") and part.ended == "stop" and part.info is None
@@ -243,6 +283,28 @@ def test_anything_else_ends_following_and_the_rotor_never_turns_by_itself_after(
         v.heard("W1AW", "FN31")
         v.run_for(60.0)
         assert sets(v) == n
+
+
+def test_a_transmission_beginning_during_the_turn_holds_the_rotor_until_it_ends() -> None:
+    """The usual FT8 case: a double-click on a CQ near the end of a receive period names the
+    grid (not yet transmitting), and the transmission starts a second later, long before the
+    turn is over. With follow_hold_while_tx the beam does not turn while it transmits: the turn
+    stops, and goes on to the same grid once the transmission has ended."""
+    with spid() as v:
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(1.5)
+        v.heard("JA1ABC", "PM95", True)  # the transmission starts
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "the turn stopped")
+        where = v.truth().az_deg
+        assert angle_between(where, bearing("PM95")) > 5  # stopped on the way
+        assert v.status.following is not None and v.status.following.held
+        v.run_for(11.0)  # the rest of the 12.6 s transmission
+        assert abs(v.truth().az_deg - where) <= 0.5  # still while it transmits
+        v.heard("JA1ABC", "PM95", False)  # it has ended
+        v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > where + 1, 60, "")
+        assert angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
+        assert v.status.following is not None and not v.status.following.held
 
 
 def test_follow_on_while_locked_is_refused_and_nothing_moves() -> None:

@@ -60,12 +60,16 @@ def test_the_storm_ends_only_after_the_hold_below_the_release_level() -> None:
     part.reading(50.0, 10.0)  # below the park level, above the release: still a storm
     assert part.step(scene(700.0)).target is None and part.storm
     part.reading(30.0, 700.0)  # calm from here
-    assert part.wakeup(700.0) == 700.0 + 600.0
+    assert part.wakeup(700.0) == 700.0 + 900.0  # the silence: the hold ends with a reading
     part.step(scene(1000.0))
     part.reading(45.0, 1000.0)  # a gust at the release level: the hold starts again
     part.reading(20.0, 1100.0)
+    part.reading(25.0, 1650.0)
     part.step(scene(1650.0))
     assert part.storm  # 550 s of calm, not 600
+    part.step(scene(1700.0))
+    assert part.storm  # 600 s passed, but no reading says the wind stayed calm
+    part.reading(22.0, 1700.0)
     part.step(scene(1700.0))
     assert not part.storm and part.refusal() is None
 
@@ -94,6 +98,28 @@ def test_a_silent_topic_is_reported_once_and_keeps_the_storm() -> None:
     assert part.storm and part.info is not None and part.info.silent  # never released by it
     part.reading(10.0, 5000.0)
     assert part.info is not None and not part.info.silent
+
+
+def test_a_topic_silent_during_the_calm_never_ends_the_storm() -> None:
+    """One calm reading and then nothing (the weather station lost its power in the storm):
+    no reading says the wind stayed calm, so the hold is never over by the clock alone; after
+    the silence the calm starts again from the next reading."""
+    part = park()
+    part.reading(80.0, 0.0)
+    part.step(scene(0.0))
+    part.reading(20.0, 100.0)  # calm, then the station goes quiet
+    for now in (700.0, 1000.0, 5000.0):  # the hold (600 s) and the silence (900 s) pass
+        part.step(scene(now))
+        assert part.storm and part.refusal() is not None, now
+    part.reading(15.0, 5000.0)  # back: the calm counts from here, not from 100 s
+    part.step(scene(5000.0))
+    assert part.storm
+    part.reading(10.0, 5300.0)
+    part.step(scene(5300.0))
+    assert part.storm  # 300 s of readings, not 600
+    part.reading(12.0, 5600.0)
+    part.step(scene(5600.0))
+    assert not part.storm and part.refusal() is None
 
 
 def test_before_any_reading_silence_counts_from_the_start() -> None:
@@ -178,7 +204,9 @@ def test_after_the_hold_the_storm_is_over_and_targets_are_taken_again() -> None:
         v.run_for(50.0)
         v.target(150.0)
         assert v.errors("refused")[-1].message.endswith("parked for the storm")
-        v.run_for(15.0)  # the minute of calm is over
+        v.run_for(15.0)  # the minute of calm is over...
+        assert v.status.wind is not None and v.status.wind.storm
+        wind(v, 12.0)  # ...and a reading says so
         assert v.status.wind is not None and not v.status.wind.storm
         v.target(150.0)
         v.run_until(lambda h: abs(h.truth().az_deg - 150.0) <= 0.5, 60, "150")

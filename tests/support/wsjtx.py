@@ -10,7 +10,7 @@ import struct
 from dataclasses import dataclass
 
 MAGIC = 0xADBCCBDA
-SCHEMA = 3  # QDataStream Qt 5.4, what WSJT-X 2.x sends
+SCHEMA = 3  # QDataStream Qt 5.4: what WSJT-X 2.x sends once a server answered with 3 (else 2)
 HEARTBEAT, STATUS, QSO_LOGGED = 0, 1, 5
 NOT_APPLICABLE = 0xFFFFFFFF  # a quint32 field that does not apply (frequency tolerance, T/R)
 
