@@ -104,6 +104,7 @@ class Rotator:
             options=self._kept.options(),
             locked=self._locked,
             health=store.health(self.id),
+            storm=self._kept.storm,  # kept.py rule 4
             wall=wall,
             port_opener=port_opener,
             sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -129,6 +130,7 @@ class Rotator:
     def _status(self, status: RotatorStatus) -> None:
         """Every status to the listeners, once rotor health's memory had a look at it."""
         self._health.seen(status.health)
+        self._kept.seen_wind(status.wind)
         self._on_status(status)
 
     def reset_health(self) -> None:

@@ -95,6 +95,7 @@ class RotatorSession:
         options: dict[str, bool] | None = None,
         locked: bool = False,
         health: dict[str, object] | None = None,  # what the state file kept (health.py)
+        storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -105,7 +106,7 @@ class RotatorSession:
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower
         self.autopark = AutoPark(cfg)
-        self.wind = WindPark(cfg)
+        self.wind = WindPark(cfg, storm=storm and cfg.wind is not None)
         self.health = Health(cfg, health)
         self.view = st.View()
         self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)

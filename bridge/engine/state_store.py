@@ -202,6 +202,21 @@ class StateStore:
         self.later(done.set)
         done.wait(timeout_s)
 
+    def storm(self, rotator_id: str) -> bool:
+        """Whether the rotator was parked for a storm (engine/wind.py) when last written."""
+        with self._lock:
+            return self._data.get(rotator_id, {}).get("storm") is True
+
+    def set_storm(self, rotator_id: str, storm: bool) -> bool:
+        """Remember a storm begun or ended; False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if storm:
+                entry["storm"] = True
+            else:
+                entry.pop("storm", None)
+            return self._save()
+
     def set_locked(self, rotator_id: str, locked: bool) -> bool:
         """Remember the lock; False if it could not be written (it will not survive a restart)."""
         with self._lock:

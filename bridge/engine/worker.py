@@ -79,6 +79,7 @@ class Worker:
         options: dict[str, bool] | None = None,
         locked: bool = False,
         health: dict[str, object] | None = None,
+        storm: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -86,7 +87,9 @@ class Worker:
         self.cfg = cfg
         self._sky = sky or SkyWorker()
         self._answers: deque[tuple[int, Answer]] = deque()  # rule 5: filled by the sky thread
-        self.session = RotatorSession(cfg, options=options, locked=locked, health=health)
+        self.session = RotatorSession(
+            cfg, options=options, locked=locked, health=health, storm=storm
+        )
         self._mailbox = mailbox
         self._box = mailbox.fileno()
         self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")

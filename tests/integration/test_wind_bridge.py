@@ -6,6 +6,7 @@ frames it received, and what the bridge publishes (R/status, R/error)."""
 from __future__ import annotations
 
 import json
+import time
 from typing import Any
 
 from tests.support import wait_until
@@ -153,3 +154,30 @@ def test_the_storms_park_turns_the_rotor_while_a_lease_is_held_and_the_wind_refu
         json.loads(audit.payload)["result"]
         == "refused: wind 90 km/h above 72: parked for the storm"
     )
+
+
+def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
+    """kept.py rule 4: only readings end a storm (wind.py rule 2), not a restart. A reading
+    between the two levels after the restart (50 km/h; park above 72, release below 36) ends
+    nothing: the rotor stays parked and motion refused."""
+    start(rig, wind_hold_min=1)
+    rig.probe.publish(TOPIC, "25")  # 90 km/h, not retained: after the restart no reading says it
+    rig.arrived("tower", 90.0, timeout_s=30)
+    wind_of(rig, lambda w: w.get("storm"))
+    wait_until(
+        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get("storm"),
+        10,
+        "the storm in the state file",
+    )
+    rig.stop()
+    mark, t_restart = rig.probe.mark(), time.monotonic()
+    rig.start()
+    rig.ready("tower", after=t_restart)
+    assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
+    rig.probe.publish(TOPIC, "14")  # 50 km/h: neither a storm nor a calm
+    wind_of(rig, lambda w: 45 < (w.get("speed_kmh") or 0) < 55, mark)
+    sets = len(rig.emu.frames("set"))
+    before = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")
+    assert "parked for the storm" in error_after(rig, before, "refused")["message"]
+    assert len(rig.emu.frames("set")) == sets
