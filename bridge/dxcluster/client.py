@@ -59,6 +59,7 @@ class Counts:
     other_lines: int = 0  # greetings, announcements, junk, bytes that are not UTF-8
     long_lines: int = 0
     failures: int = 0
+    quiet_reads: int = 0  # reads that timed out (TICK_S without a byte): a quiet node
 
 
 @dataclass(frozen=True)
@@ -153,6 +154,7 @@ class DxCluster:
                 try:
                     data = sock.recv(4096)
                 except TimeoutError:
+                    self.counts.quiet_reads += 1
                     if not logged_in and self.clock() > deadline:
                         raise TimeoutError(f"no login prompt in {LOGIN_WAIT_S:g} s") from None
                     self._tick()
