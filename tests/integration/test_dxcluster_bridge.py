@@ -107,7 +107,7 @@ def bearing_to(where: tuple[float, float]) -> float:
 
 
 def test_spots_reach_b_spots_the_client_reconnects_and_a_call_turns_the_rotor(
-    cluster_rig: tuple[Rig, App, FakeCluster, threading.Event],
+    cluster_rig: Running,
 ) -> None:
     rig, app, cluster, prompt_may_go = cluster_rig
     dx = app.dxcluster
