@@ -42,10 +42,11 @@ FIRST = [  # the first session, after the login
 ]
 
 
+Running = tuple[Rig, App, FakeCluster, threading.Event]
+
+
 @pytest.fixture
-def cluster_rig(
-    rig: Rig, tmp_path: Path
-) -> Iterator[tuple[Rig, App, FakeCluster, threading.Event]]:
+def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
     prompt_may_go = threading.Event()
     waited: list[bool] = []
 
