@@ -93,6 +93,7 @@ class DxClusterSettings(BaseModel):
         default_factory=list,
         description="only spots on these bands (" + ", ".join(BANDS_KHZ) + "); empty: all",
         examples=[["20m", "15m", "10m"]],
+        json_schema_extra={"unset": "every band"},
     )
 
     @field_validator("login")
