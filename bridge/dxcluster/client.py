@@ -149,6 +149,7 @@ class DxCluster:
         logged_in = False
         deadline = self.clock() + LOGIN_WAIT_S
         try:
+            _keepalive(sock)
             sock.settimeout(TICK_S)
             while not self._stop.is_set():
                 try:
@@ -267,3 +268,13 @@ class DxCluster:
             long_path=aim.long_path,
             origin=aim.origin,
         )
+
+
+def _keepalive(sock: socket.socket) -> None:
+    """Rule 2: a node that vanished without a word (a router's reboot) is noticed in about two
+    minutes, not the system's two hours: a quiet node is normal, so no read timeout says it."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    for name, value in (("TCP_KEEPIDLE", 60), ("TCP_KEEPINTVL", 20), ("TCP_KEEPCNT", 3)):
+        option = getattr(socket, name, None)
+        if option is not None:
+            sock.setsockopt(socket.IPPROTO_TCP, option, value)

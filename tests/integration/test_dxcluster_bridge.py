@@ -92,13 +92,16 @@ def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
         assert not cluster.errors, cluster.errors
 
 
-def spots(rig: Rig, calls: set[str]) -> list[dict[str, Any]]:
-    """The B/spots published once it lists ``calls``."""
-    msg = rig.probe.wait_for(
-        "rotor/spots",
-        lambda m: calls <= {s["call"] for s in json.loads(m.payload)["spots"]},
-        20,
-    )
+def spots(rig: Rig, calls: set[str], newest_ja_khz: float = 14030.0) -> list[dict[str, Any]]:
+    """B/spots once it lists ``calls`` and JA1ABC's newest spot (the node's last line of the
+    first session: however TCP cut the lines, all of them have been read by then)."""
+
+    def done(payload: bytes) -> bool:
+        listed = {s["call"]: s for s in json.loads(payload)["spots"]}
+        ja = listed.get("JA1ABC")
+        return calls <= set(listed) and ja is not None and ja["frequency_khz"] == newest_ja_khz
+
+    msg = rig.probe.wait_for("rotor/spots", lambda m: done(m.payload), 20)
     spots_: list[dict[str, Any]] = json.loads(msg.payload)["spots"]
     return spots_
 
