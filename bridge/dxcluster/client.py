@@ -12,8 +12,11 @@ Rules:
    since; a fault behind a line (a bug) likewise, with its traceback: the thread goes on
    (house rule 8). Nothing ends it but stop().
 3. ``B/spots`` is published (retained) when the kept spots change: a new spot, or one aged
-   out (checked every TICK_S). ``on_calls`` (Home Assistant's select) gets the calls of the
-   newest spots when they changed, at most once per CALLS_EVERY_S (the first at once).
+   out (checked every TICK_S); at most once per PUBLISH_EVERY_S (a busy node with skimmers
+   sends several spots a second, and the list is up to tens of kilobytes), the newest list
+   at the latest PUBLISH_EVERY_S + TICK_S after its spot. ``on_calls`` (Home Assistant's
+   select) gets the calls of the newest spots when they changed, at most once per
+   CALLS_EVERY_S (the first at once).
 4. ``aim`` only queues (paho's thread returns at once; a full queue is a refusal). The aim
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (``go_toward``: limits, keep-out, lock, lease), with the source
@@ -46,6 +49,7 @@ TICK_S = 1.0  # how often a quiet session looks at the spots' ages and at stop()
 MAX_BACKOFF_S = 60.0
 LOG_EVERY_S = 60.0
 CALLS_EVERY_S = 60.0
+PUBLISH_EVERY_S = 1.0
 AIM_QUEUE = 16
 _PROMPTS = (b"login:", b"your call", b"callsign:")
 
@@ -59,6 +63,7 @@ class Counts:
     other_lines: int = 0  # greetings, announcements, junk, bytes that are not UTF-8
     long_lines: int = 0
     failures: int = 0
+    faults: int = 0  # a bug behind a line, a publish that raised: logged, the session goes on
     quiet_reads: int = 0  # reads that timed out (TICK_S without a byte): a quiet node
 
 
@@ -92,6 +97,7 @@ class DxCluster:
         self._logged_s = -math.inf
         self._since = 0
         self._published: str | None = None
+        self._published_s = -math.inf
         self._calls: tuple[str, ...] | None = None
         self._calls_s = -math.inf
 
@@ -177,7 +183,11 @@ class DxCluster:
                     log.info("DX cluster: logged in to %s:%d", self.host, self.port)
                     continue  # the prompt's own line is no spot
                 for line in complete:
-                    self._line(line)
+                    try:
+                        self._line(line)
+                    except Exception as exc:  # rule 2: a bug behind one line
+                        self.counts.faults += 1
+                        self._rarely(exc)
                 self._tick()
         finally:
             with self._sock_lock:
@@ -196,10 +206,16 @@ class DxCluster:
     def _tick(self) -> None:
         """Rule 3: the aged spots dropped; B/spots and the select's calls when they changed."""
         self.book.prune()
-        self._publish()
+        now = self.clock()
+        if now - self._published_s >= PUBLISH_EVERY_S:
+            try:
+                if self._publish():
+                    self._published_s = now
+            except Exception as exc:  # rule 2: the broker's side fails alone
+                self.counts.faults += 1
+                self._rarely(exc)
         if self.on_calls is None:
             return
-        now = self.clock()
         calls = self.book.calls()
         if calls != self._calls and now - self._calls_s >= CALLS_EVERY_S:
             self._calls, self._calls_s = calls, now
@@ -208,11 +224,14 @@ class DxCluster:
             except Exception as exc:  # rule 2: Home Assistant's part fails alone
                 self._rarely(exc)
 
-    def _publish(self) -> None:
+    def _publish(self) -> bool:
+        """B/spots if the list changed; whether it was published."""
         payload = self.book.as_json()
-        if payload != self._published:
-            self._published = payload
-            self.publish(payload)
+        if payload == self._published:
+            return False
+        self._published = payload
+        self.publish(payload)
+        return True
 
     def _rarely(self, exc: BaseException) -> None:
         self._since += 1
