@@ -1,18 +1,23 @@
 """The DX cluster client alone (no broker, no rotator), against the fake node on loopback: a
 node that never prompts is left after LOGIN_WAIT_S (its clock is the test's) and tried again; a
-node that cannot be reached is tried again; stop() ends both threads."""
+node that cannot be reached is tried again; stop() ends both threads. And its aim thread,
+against a recording rotator: the newest spot's place, else the entity, else a refusal."""
 
 from __future__ import annotations
 
 import json
 import socket
+import threading
 from collections.abc import Iterator
 
 import pytest
 
+from bridge import geo
 from bridge.dxcluster.book import Book
 from bridge.dxcluster.client import LOGIN_WAIT_S, DxCluster
 from bridge.dxcluster.cty import parse_dat
+from bridge.dxcluster.spots import Spot
+from bridge.model import Origin, Source
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import wait_until
 from tests.support.cluster import FakeCluster, Session
@@ -87,3 +92,41 @@ def test_a_node_that_cannot_be_reached_is_tried_again_and_stop_ends_it(
     dx.stop()
     assert not any(t.is_alive() for t in threads)
     assert dx.counts.connects == 0
+
+
+class Asked:
+    """The two calls the aim thread makes of a rotator, recorded."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[object, ...]] = []
+
+    def go_toward(
+        self, lat: float, lon: float, source: Source, described: str, **kw: object
+    ) -> None:
+        self.calls.append(("go", lat, lon, source, described, kw["long_path"], kw["origin"]))
+
+    def report_refusal(self, message: str, command: str | None, *, origin: Origin) -> None:
+        self.calls.append(("refused", message, command, origin))
+
+
+def test_the_aim_thread_turns_to_the_newest_spot_else_the_entity_else_refuses(
+    published: list[str],
+) -> None:
+    dx = client(9, published)  # never started as a telnet client: the book is filled here
+    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+    rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
+    thread = threading.Thread(target=dx._aim_loop, daemon=True)
+    thread.start()
+    for call, long_path in (("JA1ABC", False), ("VK3ABC", True), ("QQ1ABC", False)):
+        dx.aim(rot, call, long_path, f"target {call}", who)  # type: ignore[arg-type]
+    wait_until(lambda: len(rot.calls) == 3, 10, "three answers")
+    lat, lon = geo.parse_locator("PM95VQ")
+    assert rot.calls == [
+        ("go", lat, lon, Source.DXCLUSTER, "target JA1ABC", False, who),  # the spot's locator
+        ("go", -23.70, 132.33, Source.DXCLUSTER, "target VK3ABC", True, who),  # the entity
+        ("refused", "QQ1ABC: not spotted and in no entity of the cty file", "target QQ1ABC", who),
+    ]
+    dx._stop.set()
+    dx._aims.put(None)
+    thread.join(5)
+    assert not thread.is_alive()
