@@ -6,11 +6,13 @@ Rules:
 1. Off unless ``[dxcluster] enabled``. Connect, wait for the login prompt (``login:``, or a
    line asking for "your call"; at most LOGIN_WAIT_S, a slow node is waited for), send the
    call sign and CRLF, then read lines (spots.py) until the node closes or fails.
-2. On any failure (refused, dropped, no prompt in time, a read timeout) it connects again
-   after a back-off: ``backoff_s`` (1 s) doubling to MAX_BACKOFF_S (60 s); a session that
-   logged in resets it. Failures are logged at most once per LOG_EVERY_S, with how many
-   since; a fault behind a line (a bug) likewise, with its traceback: the thread goes on
-   (house rule 8). Nothing ends it but stop().
+2. On any failure (refused, dropped, no prompt in time, a dead peer found by TCP keepalive)
+   it connects again after a back-off: ``backoff_s`` (1 s) doubling to MAX_BACKOFF_S (60 s);
+   a session that logged in and then brought a spot or lasted MAX_BACKOFF_S resets it (a node
+   that refuses the call sign after the prompt and hangs up is not tried every second).
+   Failures are logged at most once per LOG_EVERY_S, with how many since; a fault behind a
+   line (a bug) likewise, with its traceback: the session goes on (house rule 8). Nothing
+   ends the thread but stop() (which waits for a connect under way at most 5 s).
 3. ``B/spots`` is published (retained) when the kept spots change: a new spot, or one aged
    out (checked every TICK_S); at most once per PUBLISH_EVERY_S (a busy node with skimmers
    sends several spots a second, and the list is up to tens of kilobytes), the newest list
@@ -130,26 +132,27 @@ class DxCluster:
     def _run(self) -> None:
         delay = self.backoff_s
         while not self._stop.is_set():
-            logged_in = False
+            began_s, spots, connects = self.clock(), self.counts.spots, self.counts.connects
             try:
-                logged_in = self._session()
+                self._session()
             except Exception as exc:  # rule 2: refused, dropped, timed out, or a bug
                 if not self._stop.is_set():
                     self.counts.failures += 1
                     self._rarely(exc)
-            if logged_in:
+            lasted = self.clock() - began_s >= MAX_BACKOFF_S or self.counts.spots > spots
+            if self.counts.connects > connects and lasted:
                 delay = self.backoff_s
             if self._stop.wait(delay):
                 break
             delay = min(delay * 2, MAX_BACKOFF_S)
 
-    def _session(self) -> bool:
-        """One connection, to its end (an exception says why). True if it logged in."""
+    def _session(self) -> None:
+        """One connection, to its end (an exception says why)."""
         sock = socket.create_connection((self.host, self.port), timeout=CONNECT_TIMEOUT_S)
         with self._sock_lock:
             if self._stop.is_set():
                 sock.close()
-                return False
+                return
             self._sock = sock
         lines = Lines()
         logged_in = False
@@ -168,7 +171,7 @@ class DxCluster:
                     continue
                 if not data:
                     if self._stop.is_set():
-                        return logged_in
+                        return
                     raise ConnectionError("the node closed the connection")
                 before = lines.long_lines
                 complete = lines.feed(data)
@@ -193,7 +196,6 @@ class DxCluster:
             with self._sock_lock:
                 self._sock = None
             sock.close()
-        return logged_in
 
     def _line(self, line: bytes) -> None:
         spot = parse_spot(line)
