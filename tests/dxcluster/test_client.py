@@ -130,3 +130,33 @@ def test_the_aim_thread_turns_to_the_newest_spot_else_the_entity_else_refuses(
     dx._aims.put(None)
     thread.join(5)
     assert not thread.is_alive()
+
+
+class Waits(threading.Event):
+    """The client's stop event, its back-off waits recorded and not waited (virtual time):
+    set after ``n`` of them."""
+
+    def __init__(self, n: int) -> None:
+        super().__init__()
+        self.n = n
+        self.waited: list[float] = []
+
+    def wait(self, timeout: float | None = None) -> bool:
+        if timeout is not None:
+            self.waited.append(timeout)
+            if len(self.waited) >= self.n:
+                self.set()
+        return self.is_set()
+
+
+def test_the_back_off_doubles_from_one_second_to_a_minute(published: list[str]) -> None:
+    with socket.socket() as probe:  # a port with nothing listening on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    dx = client(port, published)
+    dx.backoff_s = 1.0
+    waits = Waits(9)
+    dx._stop = waits
+    dx._run()  # on this thread: it returns when the event is set
+    assert waits.waited == [1, 2, 4, 8, 16, 32, 60, 60, 60]
+    assert dx.counts.failures == 9
