@@ -12,6 +12,8 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from bridge.dxcluster import CtyError, DxCluster
+from bridge.dxcluster.setup import dxcluster
 from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import FollowConfig
@@ -194,6 +196,14 @@ class App:
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
+        self.dxcluster: DxCluster | None = None  # spots on B/spots, R/target {"call": ...}
+        if settings.dxcluster.enabled:
+            publish = partial(self.client.publish_retained, self.topics.spots)
+            try:
+                self.dxcluster = dxcluster(settings.dxcluster, position, publish, wall=wall)
+            except CtyError as exc:
+                raise ConfigError(str(exc)) from None
+            self.mqtt.aim_calls_with(self.dxcluster.aim)
         pairs = zip(settings.rotators, self.rotators, strict=True)
         self.mqtt.add_feature(
             *wind_feed([(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if r.wind_topic])
@@ -248,6 +258,7 @@ class App:
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
                     has_wind=r.wind_topic is not None,
+                    dxcluster=self.dxcluster is not None,
                 )
             )
         publisher = DiscoveryPublisher(
@@ -261,6 +272,8 @@ class App:
             birth_delay_s=ha.birth_delay_s,
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
+        if self.dxcluster is not None:
+            self.dxcluster.on_calls = publisher.set_spot_calls
         return publisher
 
     def _denied(self, topic: str, problem: str) -> None:
@@ -340,6 +353,8 @@ class App:
                 self.loggers.start()
             if self.settings.wsjtx.enabled:
                 self.wsjtx.start()
+            if self.dxcluster is not None:
+                self.dxcluster.start()
         except OSError:  # e.g. the port is taken: fail the start, leave nothing running
             self.stop()
             raise
@@ -358,6 +373,8 @@ class App:
             server.stop()
         self.loggers.stop()
         self.wsjtx.stop()
+        if self.dxcluster is not None:
+            self.dxcluster.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
         for rot in self.rotators:

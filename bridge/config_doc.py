@@ -24,6 +24,7 @@ from bridge.config_report import SHOWN
 from bridge.protocols import REGISTRY
 from bridge.settings import (
     ENV_PREFIX,
+    DxClusterSettings,
     HomeAssistantSettings,
     MqttSettings,
     RotatorSettings,
@@ -128,6 +129,7 @@ def render() -> str:
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
         ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
         ("[wsjtx]", WsjtxSettings, f"{ENV_PREFIX}WSJTX__"),
+        ("[dxcluster]", DxClusterSettings, f"{ENV_PREFIX}DXCLUSTER__"),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]

@@ -161,6 +161,12 @@ def summary(settings: Settings) -> list[str]:
     wsjtx = settings.wsjtx
     where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"
     lines.append(f"wsjtx: listening on {where}" if wsjtx.enabled else "wsjtx: off")
+    dx = settings.dxcluster
+    if dx.enabled:
+        there = "found" if dx.cty_file is not None and os.path.isfile(dx.cty_file) else "NOT FOUND"
+        lines.append(f"dxcluster: {dx.host}:{dx.port} as {dx.login}, {dx.cty_file} ({there})")
+    else:
+        lines.append("dxcluster: off")
     lines.append(f"state file: {settings.state_file}")
     if settings.audit_file is not None:
         most = settings.audit_max_bytes

@@ -40,6 +40,7 @@ class Source(enum.StrEnum):
     LEASE = "lease"  # the control lease itself: its end, in the audit trail (engine/operators.py)
     WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
     WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)
+    DXCLUSTER = "dxcluster"  # turned to a spotted call (R/target {"call": ...}, dxcluster/)
 
 
 OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")

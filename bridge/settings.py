@@ -41,6 +41,7 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, Settings
 
 from bridge import settings_errors
 from bridge.settings_defaults import DEFAULT_SILENCE_TIMEOUT_S
+from bridge.settings_dxcluster import DxClusterSettings
 from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings_pointing import StationSettings, TrackingSettings
 from bridge.settings_rotator import RotatorSettings
@@ -60,6 +61,7 @@ __all__ = [
     "TrackingSettings",
     "WebSettings",
     "WsjtxSettings",
+    "DxClusterSettings",
     "format_validation_error",
     "load_settings",
 ]
@@ -98,6 +100,9 @@ class Settings(BaseSettings):
     )
     web: WebSettings = Field(default_factory=WebSettings, description="the [web] table")
     wsjtx: WsjtxSettings = Field(default_factory=WsjtxSettings, description="the [wsjtx] table")
+    dxcluster: DxClusterSettings = Field(
+        default_factory=DxClusterSettings, description="the [dxcluster] table"
+    )
     rotators: list[RotatorSettings] = Field(
         min_length=1, description="the [[rotators]] tables, one per rotator"
     )

@@ -28,6 +28,7 @@ from bridge.config_doc import COMMAND, render
 from bridge.remote.settings import RemoteSettings
 from bridge.settings import (
     ConfigError,
+    DxClusterSettings,
     HomeAssistantSettings,
     MqttSettings,
     RotatorSettings,
@@ -131,6 +132,7 @@ COMPANIONS: dict[str, dict[str, Any]] = {
     "park_after_idle_s": {"park_az_deg": 0},
     "track_at_los": {"park_az_deg": 0},
     "wind_topic": {"wind_park_above": 60, "park_az_deg": 0},
+    "dxcluster.enabled": {"host": "dxc.example.org", "login": "G4ABC", "cty_file": "cty.dat"},
 }
 
 
@@ -143,6 +145,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("tracking",), TrackingSettings),
     (("web",), WebSettings),
     (("wsjtx",), WsjtxSettings),
+    (("dxcluster",), DxClusterSettings),
     (("rotators",), RotatorSettings),
 ]
 
@@ -156,7 +159,8 @@ def example_documents() -> list[tuple[str, dict[str, Any]]]:
             if is_table(field.annotation):
                 continue  # documented key by key
             value = field.examples[0] if field.examples else field.default
-            keys = {name: value, **COMPANIONS.get(name, {})}
+            dotted = ".".join((*place, name))
+            keys = {name: value, **COMPANIONS.get(dotted, COMPANIONS.get(name, {}))}
             doc: dict[str, Any] = {"rotators": [{"id": "hf", "model": "md01", "port": "/x"}]}
             target = doc["rotators"][0] if place == ("rotators",) else doc
             for part in place if place != ("rotators",) else ():

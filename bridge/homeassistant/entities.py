@@ -153,6 +153,8 @@ LOCATOR_PATTERN = "^[A-Ra-r]{2}([0-9]{2}([A-Xa-x]{2}([0-9]{2})?)?)?$"
 # sent as {"locator": ...}: a bare two-letter field on the target topic is refused (it is more
 # often a preset's name sent to the wrong topic); the pattern keeps the JSON well formed
 LOCATOR_TEMPLATE = '{"locator": "{{ value }}"}'
+# the spot select sends the call it shows to the target topic (dxcluster/client.py turns to it)
+CALL_TEMPLATE = '{"call": "{{ value }}"}'
 # the preset select is a menu of places to go: every status shows it with none chosen, because
 # Home Assistant's dashboard sends nothing when the option it shows is picked again
 NO_OPTION = "{{ 'None' }}"
@@ -244,6 +246,10 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("select", "track", "Track", needs="track_options", config=lambda r: {
         "command_topic": r.topics.track, "state_topic": r.topics.tracking,
         "options": list(r.track_options), "icon": "mdi:satellite-variant"}),
+    Entity("select", "spot", "Turn to spot", needs="spot_options", config=lambda r: {
+        "command_topic": r.topics.target, "command_template": CALL_TEMPLATE,
+        "options": list(r.spot_options), "state_topic": r.topics.status,
+        "value_template": NO_OPTION, "icon": "mdi:account-voice"}),
     Entity("sensor", "track_azimuth", "Tracked azimuth", needs="track_options",
            config=lambda r: {
         "state_topic": r.topics.status, "value_template": _tracked("azimuth"), **DEGREES,

@@ -13,11 +13,18 @@ from bridge.protocols.base import ModelSpec
 
 _UNSAFE = re.compile(r"[^a-zA-Z0-9_-]")
 MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
+MAX_SPOTS = 20  # in the spot select: the calls of the newest DX cluster spots
+NO_SPOTS = "no spots yet"  # the spot select's one option before the first spot (HA needs one)
 
 
 def track_options(satellites: tuple[str, ...]) -> tuple[str, ...]:
     """The track select's options: off, the sun, the moon, the first satellites by name."""
     return ("off", "sun", "moon", *satellites[:MAX_SATELLITES])
+
+
+def spot_options(calls: tuple[str, ...]) -> tuple[str, ...]:
+    """The spot select's options: the newest spots' calls, at most MAX_SPOTS, never none."""
+    return calls[:MAX_SPOTS] or (NO_SPOTS,)
 
 
 @dataclass(frozen=True)
@@ -40,6 +47,7 @@ class RotatorInfo:
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
     can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
     has_wind: bool = False  # a wind_topic (engine/wind.py)
+    spot_options: tuple[str, ...] = ()  # [dxcluster] and a station: the newest spots' calls
 
     @classmethod
     def of(
@@ -55,6 +63,7 @@ class RotatorInfo:
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
         has_wind: bool = False,
+        dxcluster: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -76,6 +85,7 @@ class RotatorInfo:
             ),
             can_follow=can_follow,
             has_wind=has_wind,
+            spot_options=spot_options(()) if dxcluster and has_station else (),
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:
@@ -83,6 +93,10 @@ class RotatorInfo:
         return (
             replace(self, track_options=track_options(satellites)) if self.track_options else self
         )
+
+    def with_spot_calls(self, calls: tuple[str, ...]) -> RotatorInfo:
+        """This rotator with the newest spots' calls (if it has the spot select at all)."""
+        return replace(self, spot_options=spot_options(calls)) if self.spot_options else self
 
     def has(self, need: str) -> bool:
         """An ENTITIES row's need: a field of this info (configured), else a model capability."""

@@ -86,6 +86,16 @@ class DiscoveryPublisher:
             log.info("Home Assistant's track select now lists %d satellite(s)", len(satellites))
             self.publish_all()
 
+    def set_spot_calls(self, calls: tuple[str, ...]) -> None:
+        """The newest DX cluster spots changed (dxcluster/client.py, at most once a minute):
+        the spot select offers their calls."""
+        with self._lock:
+            before = dict(self._rotators)
+            self._rotators = {k: r.with_spot_calls(calls) for k, r in before.items()}
+            changed = self._rotators != before
+        if changed:
+            self.publish_all()
+
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
         with self._lock:
             r = self._rotators.get(rotator_id)

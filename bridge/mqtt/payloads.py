@@ -19,6 +19,7 @@ from datetime import UTC, datetime
 
 from bridge import geo
 from bridge.model import RotatorStatus, TargetInfo
+from bridge.mqtt.call_payload import Called, CallError, parse_called
 from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
 from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
@@ -86,8 +87,9 @@ def _json_object(text: str, what: str) -> dict[str, object]:
     return obj
 
 
-def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
-    """A target (parse_target) or a place: a locator or coordinates, short or long path."""
+def parse_aim(payload: bytes) -> tuple[float, float | None] | Place | Called:
+    """A target (parse_target), a place (a locator or coordinates), or a call (call_payload.py),
+    short or long path."""
     text = _text(payload)
     if len(text) == 2 and text.isalpha():  # a preset's name or a word sent to the wrong topic
         raise PayloadError(
@@ -99,6 +101,11 @@ def parse_aim(payload: bytes) -> tuple[float, float | None] | Place:
     if not text.startswith("{"):
         return parse_target(payload)
     obj = _json_object(text, "target")
+    if "call" in obj:
+        try:
+            return parse_called(obj)
+        except CallError as exc:
+            raise PayloadError(str(exc)) from None
     if not {"locator", "latitude", "longitude", "path"} & set(obj):
         return parse_target(payload)
     unknown = set(obj) - {"locator", "latitude", "longitude", "path"}

@@ -64,6 +64,7 @@ from bridge.model import (
 )
 from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.call_payload import Called
 from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.health_payload import health_json
@@ -72,6 +73,9 @@ from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
 
 log = logging.getLogger(__name__)
+
+# (the rotator, the call, long path?, the command as described, who asked)
+CallAimer = Callable[[RotatorPort, str, bool, str, Origin], None]
 
 
 class MqttService:
@@ -111,6 +115,12 @@ class MqttService:
             on_problem=on_problem,
         )
         self._word = self._halts.word
+        self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
+
+    def aim_calls_with(self, aimer: CallAimer) -> None:
+        """Targets by call sign go to ``aimer`` (dxcluster/client.py: it looks the call up on
+        a thread of its own and asks the rotator's judge); without one they are refused."""
+        self._by_call = aimer
 
     def attach(self, rotator: RotatorPort, console: pl.ConsoleFacts | None = None) -> None:
         """``console``: what a console far from the station draws, in ``R/info`` too."""
@@ -356,7 +366,11 @@ class MqttService:
         src = Source.MQTT
         if kind == "target":
             aim = pl.parse_aim(payload)
-            if isinstance(aim, pl.Place):
+            if isinstance(aim, Called):
+                if self._by_call is None:
+                    raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
+                self._by_call(rot, aim.call, aim.long_path, what, by)
+            elif isinstance(aim, pl.Place):
                 lat, lon = aim.latitude_deg, aim.longitude_deg
                 if lat is None or lon is None:
                     rot.take_path(aim.long_path, src, what, origin=by)

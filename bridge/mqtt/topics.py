@@ -207,6 +207,11 @@ class Topics:
         """The markers the stop lane reads (lastword.py rule 4)."""
         return f"{self.base}/bridge/fence/lane"
 
+    @property
+    def spots(self) -> str:
+        """The DX cluster's newest spots, retained (dxcluster/client.py)."""
+        return f"{self.base}/spots"
+
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
         best: tuple[int, str] | None = None

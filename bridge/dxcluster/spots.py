@@ -1,0 +1,115 @@
+"""DX cluster lines, sans-IO: bytes in, ``Spot`` values out (the client is client.py).
+
+A cluster node (DX Spider, AR-Cluster, CC Cluster) sends its users text lines; a spot is one of
+them, ``DX de SPOTTER:  FREQ_KHZ  CALL  comment  HHMMZ`` (the comment may be empty, the time
+may carry a locator after it: ``1234Z JO01``).
+
+Rules:
+1. Sans-IO (house rule 1): ``Lines.feed`` takes any bytes, whole or byte by byte, and returns
+   the complete lines; nothing here reads a socket or a clock.
+2. A line longer than MAX_LINE_BYTES is dropped whole and counted (``long_lines``): what came
+   of it so far and the rest up to its end of line are thrown away, so a node that never sends
+   a line end costs at most that much memory.
+3. ``parse_spot`` returns a Spot or None; a spot may follow other text on its line (a prompt
+   the node left without a line end); what is not a spot (a greeting, a prompt, an
+   announcement, junk, bytes that are not UTF-8) is None, never an exception. The client
+   counts what it drops.
+4. A spot's call and spotter are upper case letters, digits and ``/`` (3 to 20 characters);
+   its frequency 1 kHz to 300 GHz; its time ``HHMM`` with HH < 24 and MM < 60.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+MAX_LINE_BYTES = 512  # rule 2: a spot line is under 100 characters
+_SPOT = re.compile(
+    r"DX de (?P<spotter>[A-Z0-9/#-]{3,24}):?\s+(?P<freq>\d{1,9}(?:\.\d{1,3})?)\s+"
+    r"(?P<call>[A-Z0-9/]{3,20})\s+(?P<comment>.*?)\s*(?P<time>\d{4})Z(?:\s+\S+)?\s*",
+    re.ASCII | re.IGNORECASE,
+)
+_CALL = re.compile(
+    r"[A-Z0-9/]*[0-9][A-Z0-9/]*[A-Z][A-Z0-9/]*|[A-Z0-9/]*[A-Z][A-Z0-9/]*[0-9][A-Z0-9/]*"
+)
+
+
+@dataclass(frozen=True)
+class Spot:
+    call: str  # upper case, as spotted (``JA1ABC/P``)
+    freq_khz: float
+    spotter: str  # upper case, a skimmer's ``-#`` kept
+    time: str  # ``HHMM`` UTC, as the node said it
+    comment: str
+
+
+def parse_spot(line: bytes | str) -> Spot | None:
+    """Rule 3: one line (without its line end) as a Spot, or None."""
+    if isinstance(line, bytes):
+        try:
+            text = line.decode("utf-8")
+        except UnicodeDecodeError:
+            return None
+    else:
+        text = line
+    start = text.find("DX de ")  # after a prompt or junk too
+    if start < 0:
+        return None
+    text = text[start:].strip("\r\n\x07 ")
+    if not text.isprintable():
+        return None
+    m = _SPOT.fullmatch(text)
+    if m is None:
+        return None
+    call = m["call"].upper()
+    spotter = m["spotter"].upper()
+    hhmm = m["time"]
+    freq_khz = float(m["freq"])
+    if not _CALL.fullmatch(call) or int(hhmm[:2]) > 23 or int(hhmm[2:]) > 59:
+        return None
+    if not 1.0 <= freq_khz <= 300e6:
+        return None
+    return Spot(call, freq_khz, spotter, hhmm, m["comment"].strip())
+
+
+class Lines:
+    """Rule 1 and 2: bytes in, whole lines out (``\\n`` ends one; ``\\r`` is dropped)."""
+
+    def __init__(self, max_bytes: int = MAX_LINE_BYTES) -> None:
+        self._max = max_bytes
+        self._buffer = bytearray()
+        self._skipping = False  # the rest of a long line
+        self.long_lines = 0
+
+    def reset(self) -> None:
+        """A new connection: what was half a line is gone."""
+        self._buffer.clear()
+        self._skipping = False
+
+    def feed(self, data: bytes) -> list[bytes]:
+        out: list[bytes] = []
+        start = 0
+        while start < len(data):
+            end = data.find(b"\n", start)
+            piece = data[start:] if end < 0 else data[start:end]
+            if not self._skipping:
+                room = self._max - len(self._buffer)
+                if len(piece) > room:
+                    self.long_lines += 1
+                    self._buffer.clear()
+                    self._skipping = True
+                else:
+                    self._buffer += piece
+            if end < 0:
+                break
+            if not self._skipping:
+                out.append(bytes(self._buffer).replace(b"\r", b""))
+            self._buffer.clear()
+            self._skipping = False
+            start = end + 1
+        return out
+
+    @property
+    def pending(self) -> bytes:
+        """What came after the last line end (a prompt has none: ``login: ``)."""
+        return bytes(self._buffer)

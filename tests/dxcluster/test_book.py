@@ -1,0 +1,95 @@
+"""The spots kept (book.py), in virtual time: the position (a locator in the comment first, the
+cty entity else), the band filter, the newest max_spots, the age limit, the JSON."""
+
+from __future__ import annotations
+
+import json
+
+from bridge.dxcluster.book import MAX_CALLS, Book, locator_in
+from bridge.dxcluster.cty import parse_dat
+from bridge.dxcluster.spots import Spot
+from tests.dxcluster.cty_sample import CTY_DAT
+from tests.integration.test_pointing_bridge import locator_centre, reference_path
+from tests.support.clock import FakeClock
+
+STATION = "JO62QM"
+
+
+def spot(call: str, freq_khz: float = 14025.0, comment: str = "") -> Spot:
+    return Spot(call, freq_khz, "G4ABC", "1234", comment)
+
+
+def book(clock: FakeClock, **kw: object) -> Book:
+    station = locator_centre(STATION)
+    return Book(parse_dat(CTY_DAT), station, clock=clock, wall=lambda: 0.0, **kw)  # type: ignore[arg-type]
+
+
+def test_locators_in_comments() -> None:
+    assert locator_in("FT8 -12 dB FN31pr") == "FN31PR"
+    assert locator_in("JO01<>FN31 tnx") == "FN31"  # the one after >: the DX's
+    assert locator_in("JO01<ES>FN31") == "FN31"
+    assert locator_in("FT8 RR73 JN58") == "JN58"  # RR73 is a sign-off
+    assert locator_in("RR73") is None
+    assert locator_in("cq up 2 FT8 +03") is None
+    assert locator_in("AB12CD34X") is None  # too long: no locator
+    assert locator_in("tnx io91") == "IO91"
+
+
+def test_positions_bearings_and_the_json() -> None:
+    clock = FakeClock()
+    b = book(clock)
+    assert b.add(spot("JA1ABC"))
+    assert b.add(spot("W1XYZ", 50313.0, "FT8 JO01<>FN31pr"))
+    assert b.add(spot("QQ1ABC"))  # in no entity: kept, without a position
+    doc = json.loads(b.as_json())["spots"]
+    assert [s["call"] for s in doc] == ["QQ1ABC", "W1XYZ", "JA1ABC"]  # newest first
+    assert doc[0]["position"] is None and "bearing_deg" not in doc[0]
+    w1, ja = doc[1], doc[2]
+    assert (w1["position"], w1["locator"], w1["band"]) == ("locator", "FN31PR", "6m")
+    assert (ja["position"], ja["entity"], ja["band"]) == ("cty", "Japan", "20m")
+    assert ja["longitude"] == 138.38  # east: cty.dat's west-positive sign converted
+    for s, where in ((w1, locator_centre("FN31PR")), (ja, (36.40, 138.38))):
+        want, km = reference_path(locator_centre(STATION), where)
+        assert abs((s["bearing_deg"] - want + 180) % 360 - 180) <= 0.1
+        assert abs((s["long_path_deg"] - want - 180 + 180) % 360 - 180) <= 0.1
+        assert abs(s["distance_km"] - km) <= 0.01 * km
+    assert ja["time"] == "1234Z" and ja["heard"] == "1970-01-01T00:00:00Z"
+    assert ja["frequency_khz"] == 14025.0 and ja["spotter"] == "G4ABC"
+
+
+def test_without_a_station_there_is_no_bearing() -> None:
+    b = Book(parse_dat(CTY_DAT), None)
+    b.add(spot("JA1ABC"))
+    (only,) = json.loads(b.as_json())["spots"]
+    assert only["position"] == "cty" and "bearing_deg" not in only
+
+
+def test_bands_count_and_age() -> None:
+    clock = FakeClock()
+    b = book(clock, bands=("20m", "40m"), max_spots=3, max_age_s=600.0)
+    assert not b.add(spot("JA1ABC", 144300.0))  # 2m: not asked for
+    assert not b.add(spot("JA1ABC", 12345.0))  # no band
+    for i, call in enumerate(["JA1AAA", "JA1BBB", "JA1CCC", "JA1DDD"]):
+        clock.t += 60.0
+        b.add(spot(call, 7000.0 + i))
+    assert b.calls() == ("JA1DDD", "JA1CCC", "JA1BBB")  # the newest three
+    b.add(spot("JA1CCC", 7030.0))  # again on the same band: it replaces the older one
+    assert b.calls() == ("JA1CCC", "JA1DDD", "JA1BBB")
+    b.add(spot("JA1CCC", 14030.0))  # on another band: both kept
+    assert b.calls() == ("JA1CCC", "JA1DDD")
+    newest = b.newest("ja1ccc")
+    assert newest is not None and newest.spot.freq_khz == 14030.0
+    assert not b.prune()
+    clock.t += 600.0 - 1  # the three kept were heard 599 s ago: young enough
+    assert not b.prune() and len(b.calls()) == 2
+    clock.t += 2.0
+    assert b.prune()
+    assert b.calls() == () and b.newest("JA1CCC") is None
+    assert json.loads(b.as_json()) == {"spots": []}
+
+
+def test_the_calls_are_bounded() -> None:
+    b = book(FakeClock(), max_spots=200)
+    for i in range(MAX_CALLS + 10):
+        b.add(spot(f"JA1A{i:02d}"))
+    assert len(b.calls()) == MAX_CALLS

@@ -1,0 +1,162 @@
+"""The DX cluster client alone (no broker, no rotator), against the fake node on loopback: a
+node that never prompts is left after LOGIN_WAIT_S (its clock is the test's) and tried again; a
+node that cannot be reached is tried again; stop() ends both threads. And its aim thread,
+against a recording rotator: the newest spot's place, else the entity, else a refusal."""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+from collections.abc import Iterator
+
+import pytest
+
+from bridge import geo
+from bridge.dxcluster.book import Book
+from bridge.dxcluster.client import LOGIN_WAIT_S, DxCluster
+from bridge.dxcluster.cty import parse_dat
+from bridge.dxcluster.spots import Spot
+from bridge.model import Origin, Source
+from tests.dxcluster.cty_sample import CTY_DAT
+from tests.support import wait_until
+from tests.support.cluster import FakeCluster, Session
+
+SPOT = b"DX de EA5WU:     14025.0  JA1ABC       cq up 2                        1829Z\r\n"
+
+
+class JumpingClock:
+    """Each reading LOGIN_WAIT_S later than the one before: the first quiet read is already
+    past the prompt's deadline (virtual time for the wait; the socket's read is real)."""
+
+    def __init__(self) -> None:
+        self.t = 0.0
+
+    def __call__(self) -> float:
+        self.t += LOGIN_WAIT_S
+        return self.t
+
+
+@pytest.fixture
+def published() -> Iterator[list[str]]:
+    yield []
+
+
+def client(port: int, published: list[str], clock: JumpingClock | None = None) -> DxCluster:
+    book = Book(parse_dat(CTY_DAT), (52.5, 13.4))
+    dx = DxCluster("127.0.0.1", port, "G4ABC", book, published.append, backoff_s=0.01)
+    if clock is not None:
+        dx.clock = clock
+    return dx
+
+
+def test_no_prompt_in_time_is_a_failure_and_the_client_tries_again(
+    published: list[str],
+) -> None:
+    def silent(s: Session) -> None:  # never prompts; waits until the client hangs up
+        s.conn.settimeout(30)
+        while s.conn.recv(1024):
+            pass
+
+    def prompt(s: Session) -> None:
+        s.send(b"login: ")
+        cluster.logins.append(s.read_line())
+        s.send(SPOT)
+        cluster.done.wait(30)
+
+    cluster = FakeCluster([silent, prompt])
+    dx = client(cluster.port, published, JumpingClock())
+    dx.start()
+    try:
+        wait_until(lambda: any("JA1ABC" in p for p in published), 20, "the spot published")
+        assert cluster.logins == [b"G4ABC"]
+        assert (dx.counts.failures, dx.counts.connects) == (1, 1)
+        assert json.loads(published[0]) == {"spots": []}  # the run before's spots cleared
+    finally:
+        dx.stop()
+        cluster.close()
+    assert not cluster.errors, cluster.errors
+
+
+def test_a_node_that_cannot_be_reached_is_tried_again_and_stop_ends_it(
+    published: list[str],
+) -> None:
+    with socket.socket() as probe:  # a port with nothing listening on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    dx = client(port, published)
+    dx.start()
+    wait_until(lambda: dx.counts.failures >= 3, 20, "three refused connections")
+    threads = list(dx._threads)
+    assert len(threads) == 2
+    dx.stop()
+    assert not any(t.is_alive() for t in threads)
+    assert dx.counts.connects == 0
+
+
+class Asked:
+    """The two calls the aim thread makes of a rotator, recorded."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[object, ...]] = []
+
+    def go_toward(
+        self, lat: float, lon: float, source: Source, described: str, **kw: object
+    ) -> None:
+        self.calls.append(("go", lat, lon, source, described, kw["long_path"], kw["origin"]))
+
+    def report_refusal(self, message: str, command: str | None, *, origin: Origin) -> None:
+        self.calls.append(("refused", message, command, origin))
+
+
+def test_the_aim_thread_turns_to_the_newest_spot_else_the_entity_else_refuses(
+    published: list[str],
+) -> None:
+    dx = client(9, published)  # never started as a telnet client: the book is filled here
+    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+    rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
+    thread = threading.Thread(target=dx._aim_loop, daemon=True)
+    thread.start()
+    for call, long_path in (("JA1ABC", False), ("VK3ABC", True), ("QQ1ABC", False)):
+        dx.aim(rot, call, long_path, f"target {call}", who)  # type: ignore[arg-type]
+    wait_until(lambda: len(rot.calls) == 3, 10, "three answers")
+    lat, lon = geo.parse_locator("PM95VQ")
+    assert rot.calls == [
+        ("go", lat, lon, Source.DXCLUSTER, "target JA1ABC", False, who),  # the spot's locator
+        ("go", -23.70, 132.33, Source.DXCLUSTER, "target VK3ABC", True, who),  # the entity
+        ("refused", "QQ1ABC: not spotted and in no entity of the cty file", "target QQ1ABC", who),
+    ]
+    dx._stop.set()
+    dx._aims.put(None)
+    thread.join(5)
+    assert not thread.is_alive()
+
+
+class Waits(threading.Event):
+    """The client's stop event, its back-off waits recorded and not waited (virtual time):
+    set after ``n`` of them."""
+
+    def __init__(self, n: int) -> None:
+        super().__init__()
+        self.n = n
+        self.waited: list[float] = []
+
+    def wait(self, timeout: float | None = None) -> bool:
+        if timeout is not None:
+            self.waited.append(timeout)
+            if len(self.waited) >= self.n:
+                self.set()
+        return self.is_set()
+
+
+def test_the_back_off_doubles_from_one_second_to_a_minute(published: list[str]) -> None:
+    with socket.socket() as probe:  # a port with nothing listening on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    dx = client(port, published)
+    dx.backoff_s = 1.0
+    waits = Waits(9)
+    dx._stop = waits
+    dx._run()  # on this thread: it returns when the event is set
+    assert waits.waited == [1, 2, 4, 8, 16, 32, 60, 60, 60]
+    assert dx.counts.failures == 9

@@ -1,0 +1,73 @@
+"""AD1C's country files parsed (a small file written in their formats): the longitude's sign,
+the prefix overrides, exact calls, and how a call with a portable part is looked up."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bridge.dxcluster.cty import Cty, CtyError, load, parse_csv, parse_dat
+from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
+
+
+@pytest.fixture(params=["dat", "csv"])
+def cty(request: pytest.FixtureRequest) -> Cty:
+    return parse_dat(CTY_DAT) if request.param == "dat" else parse_csv(CTY_CSV)
+
+
+def test_longitudes_become_east_positive(cty: Cty) -> None:
+    japan = cty.lookup("JA1ABC")
+    assert japan is not None
+    assert (japan.name, japan.continent, japan.prefix) == ("Japan", "AS", "JA")
+    assert (japan.latitude_deg, japan.longitude_deg) == (36.40, 138.38)  # east of Greenwich
+    usa = cty.lookup("W2XYZ")
+    assert usa is not None and usa.longitude_deg == -91.67  # west
+    assert cty.lookup("F5ABC").longitude_deg == 2.00  # type: ignore[union-attr]
+
+
+def test_the_longest_prefix_wins_and_exact_calls_come_first(cty: Cty) -> None:
+    assert cty.lookup("JR7AAA").name == "Japan"  # type: ignore[union-attr]
+    assert cty.lookup("2E0ABC").name == "England"  # type: ignore[union-attr]
+    assert cty.lookup("M0ABC").name == "England"  # type: ignore[union-attr]
+    exact = cty.lookup("VK9XX")
+    assert exact is not None
+    assert (exact.cq_zone, exact.itu_zone, exact.continent) == (29, 54, "AS")
+    assert (exact.latitude_deg, exact.longitude_deg) == (-10.50, 105.70)  # the override's sign
+    assert cty.lookup("VK9XY").cq_zone == 30  # type: ignore[union-attr]  # not the exact call
+    assert cty.lookup("jA1xyz/jd1").latitude_deg == 27.10  # type: ignore[union-attr]
+    assert cty.lookup("W1AW/KH6").name == "United States"  # type: ignore[union-attr]
+    assert cty.lookup("QQ1ABC") is None
+
+
+def test_portable_forms(cty: Cty) -> None:
+    assert cty.lookup("JA1ABC/P").name == "Japan"  # type: ignore[union-attr]
+    assert cty.lookup("JA1ABC/QRP").name == "Japan"  # type: ignore[union-attr]
+    assert cty.lookup("G4ABC/M").name == "England"  # type: ignore[union-attr]
+    assert cty.lookup("G4ABC/7").name == "England"  # type: ignore[union-attr]
+    assert cty.lookup("F/G4ABC").name == "France"  # type: ignore[union-attr]  # the prefix
+    assert cty.lookup("G4ABC/F").name == "France"  # type: ignore[union-attr]
+    assert cty.lookup("F/G4ABC/P").name == "France"  # type: ignore[union-attr]
+    assert cty.lookup("G4ABC/MM") is None  # maritime mobile: no entity
+    assert cty.lookup("/") is None
+    assert cty.lookup("") is None
+
+
+def test_odd_lines_are_skipped_and_counted() -> None:
+    cty = parse_dat("garbage without colons\n" + CTY_DAT + "  stray,prefixes;\n")
+    assert cty.lookup("JA1ABC") is not None
+    assert cty.skipped == 2
+    csv = parse_csv("JA,Japan,339,AS,x,45,36.40,-138.38,-9.0,JA;\n" + CTY_CSV)
+    assert csv.skipped == 1 and csv.lookup("JA1ABC") is not None
+
+
+def test_load_tells_the_formats_apart_and_names_a_bad_file(tmp_path: Path) -> None:
+    (tmp_path / "cty.dat").write_text(CTY_DAT)
+    (tmp_path / "cty.csv").write_text(CTY_CSV)
+    for name in ("cty.dat", "cty.csv"):
+        assert load(tmp_path / name).lookup("VK2ABC").name == "Australia"  # type: ignore[union-attr]
+    with pytest.raises(CtyError, match="missing.dat cannot be read"):
+        load(tmp_path / "missing.dat")
+    (tmp_path / "empty.dat").write_bytes(b"\xff\xfe nothing here\n")
+    with pytest.raises(CtyError, match="empty.dat: no entity"):
+        load(tmp_path / "empty.dat")
