@@ -79,7 +79,8 @@ def test_operators_claim_and_release_and_cannot_fake_the_lease(
     # the bridge's retained record is the station user's: an operator's write is dropped
     g4xyz.publish("rotor/control", '{"holder": "G4XYZ", "until": null}', retain=True)
     g4xyz.publish("rotor/target", "200")  # refused: a round trip through the bridge after it
-    g4xyz.wait_for("rotor/error", lambda m: "DL1ABC holds the rotator" in m.text)
+    for login in (g4xyz, dl1abc, rig.probe):  # each has what the broker sent before the error
+        login.wait_for("rotor/error", lambda m: "DL1ABC holds the rotator" in m.text)
     assert holder(g4xyz) == "DL1ABC" and holder(rig.probe) == "DL1ABC"
     forged = [m for m in dl1abc.on("rotor/control") if b"G4XYZ" in m.payload]
     assert forged == []  # the broker dropped it: nobody ever saw it
