@@ -16,9 +16,10 @@ Rules:
 3. ``B/spots`` is published (retained) when the kept spots change: a new spot, or one aged
    out (checked every TICK_S); at most once per PUBLISH_EVERY_S (a busy node with skimmers
    sends several spots a second, and the list is up to tens of kilobytes), the newest list
-   at the latest PUBLISH_EVERY_S + TICK_S after its spot. ``on_calls`` (Home Assistant's
-   select) gets the calls of the newest spots when they changed, at most once per
-   CALLS_EVERY_S (the first at once).
+   at the latest PUBLISH_EVERY_S + TICK_S after its spot; while the node is down, after each
+   attempt to connect (the aged spots leave within a back-off and a connect timeout).
+   ``on_calls`` (Home Assistant's select) gets the calls of the newest spots when they
+   changed, at most once per CALLS_EVERY_S (the first at once).
 4. ``aim`` only queues (paho's thread returns at once; a full queue is a refusal). The aim
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (``go_toward``: limits, keep-out, lock, lease), with the source
@@ -142,6 +143,11 @@ class DxCluster:
             lasted = self.clock() - began_s >= MAX_BACKOFF_S or self.counts.spots > spots
             if self.counts.connects > connects and lasted:
                 delay = self.backoff_s
+            try:
+                self._tick()  # rule 3: spots age out while the node is down too (book rule 2)
+            except Exception as exc:  # rule 2: a bug here must not end the thread
+                self.counts.faults += 1
+                self._rarely(exc)
             if self._stop.wait(delay):
                 break
             delay = min(delay * 2, MAX_BACKOFF_S)
