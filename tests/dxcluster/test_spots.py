@@ -109,3 +109,13 @@ def test_reset_forgets_half_a_line() -> None:
     lines.feed(b"DX de half")
     lines.reset()
     assert lines.feed(SPOTS[0][0] + b"\n") == [SPOTS[0][0]]
+
+
+def test_a_spot_whose_comment_is_latin_1_is_kept() -> None:
+    """Nodes relay their users' comments as typed: a Spanish or German operator's ``ñ`` or
+    ``ä`` arrives as one Latin-1 byte, not UTF-8. The spot (call, frequency, time) is sound and
+    must not be lost for one letter of its comment."""
+    line = "DX de EA5WU:     14025.0  JA1ABC       señor grüß                     1829Z"
+    spot = parse_spot(line.encode("latin-1"))
+    assert spot is not None
+    assert (spot.call, spot.freq_khz, spot.comment) == ("JA1ABC", 14025.0, "señor grüß")
