@@ -5,7 +5,9 @@
 Rules:
 1. Off unless ``[dxcluster] enabled``. Connect, wait for the login prompt (``login:``, or a
    line asking for "your call"; at most LOGIN_WAIT_S, a slow node is waited for), send the
-   call sign and CRLF, then read lines (spots.py) until the node closes or fails.
+   call sign and CRLF, then read lines (spots.py) until the node closes or fails. The wait
+   for the prompt ends at LOGIN_WAIT_S whether the node is silent or talks without asking
+   (unless what it sends unasked are spots).
 2. On any failure (refused, dropped, no prompt in time, a dead peer found by TCP keepalive)
    it connects again after a back-off: ``backoff_s`` (1 s) doubling to MAX_BACKOFF_S (60 s);
    a session that logged in and then brought a spot or lasted MAX_BACKOFF_S resets it (a node
@@ -161,7 +163,7 @@ class DxCluster:
                 return
             self._sock = sock
         lines = Lines()
-        logged_in = False
+        logged_in, spots = False, self.counts.spots
         deadline = self.clock() + LOGIN_WAIT_S
         try:
             _keepalive(sock)
@@ -171,7 +173,7 @@ class DxCluster:
                     data = sock.recv(4096)
                 except TimeoutError:
                     self.counts.quiet_reads += 1
-                    if not logged_in and self.clock() > deadline:
+                    if not logged_in and self.counts.spots == spots and self.clock() > deadline:
                         raise TimeoutError(f"no login prompt in {LOGIN_WAIT_S:g} s") from None
                     self._tick()
                     continue
@@ -191,6 +193,9 @@ class DxCluster:
                     self.counts.connects += 1
                     log.info("DX cluster: logged in to %s:%d", self.host, self.port)
                     continue  # the prompt's own line is no spot
+                quiet = self.counts.spots == spots  # a node that sends spots unasked is kept
+                if not logged_in and quiet and self.clock() > deadline:  # rule 1: it talks and
+                    raise TimeoutError(f"no login prompt in {LOGIN_WAIT_S:g} s")  # never asks
                 for line in complete:
                     try:
                         self._line(line)

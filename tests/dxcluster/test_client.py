@@ -78,6 +78,37 @@ def test_no_prompt_in_time_is_a_failure_and_the_client_tries_again(
     assert not cluster.errors, cluster.errors
 
 
+def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -> None:
+    """A node that keeps sending (a banner, junk, a byte at a time) and never asks for the
+    call sign never leaves the client a quiet second: the prompt's deadline must hold anyway,
+    or the client sits on it for ever, with no spot and nothing in the log."""
+
+    def chatty(s: Session) -> None:  # a byte every 0.1 s (the behaviour under test) until hung up
+        try:
+            while not cluster.done.wait(0.1):
+                s.send(b".")
+        except OSError:
+            pass
+
+    def prompt(s: Session) -> None:
+        s.send(b"login: ")
+        cluster.logins.append(s.read_line())
+        s.send(SPOT)
+        cluster.done.wait(30)
+
+    cluster = FakeCluster([chatty, prompt])
+    dx = client(cluster.port, published, JumpingClock())
+    dx.start()
+    try:
+        wait_until(lambda: any("JA1ABC" in p for p in published), 20, "the spot published")
+        assert cluster.logins == [b"G4ABC"]
+        assert (dx.counts.failures, dx.counts.connects) == (1, 1)
+    finally:
+        dx.stop()
+        cluster.close()
+    assert not cluster.errors, cluster.errors
+
+
 def test_a_node_that_cannot_be_reached_is_tried_again_and_stop_ends_it(
     published: list[str],
 ) -> None:
