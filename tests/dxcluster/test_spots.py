@@ -29,11 +29,13 @@ JUNK = [
     b"To ALL de G4ABC: hello",
     b"WWV de W0MU <18>:   SFI=70, A=5, K=1, No Storms -> No Storms",
     b"DX de EA5WU:     14025.0  JA1ABC       cq                             2561Z",  # 25:61
+    b"DX de EA5WU:     14025.0  JA1ABC       cq                             2459Z",  # hour 24
+    b"DX de EA5WU:     14025.0  JA1ABC       cq                             1860Z",  # minute 60
     b"DX de EA5WU:     14025.0  JA1ABC       cq",  # no time
     b"DX de EA5WU:     abc  JA1ABC       cq   1829Z",
     b"DX de EA5WU:     14025.0  ABCDEF       cq   1829Z",  # no digit: no call
     b"DX de EA5WU:     0.0  JA1ABC       cq   1829Z",
-    b"DX de EA5WU:     14025.0  JA1\xffABC  cq   1829Z",  # not UTF-8
+    b"DX de EA5WU:     14025.0  JA1\xffABC  cq   1829Z",  # not UTF-8 (Latin-1: no call)
     b"DX de EA5WU:     14025.0  JA1ABC  c\x00q   1829Z",  # not printable
     "DX de EA5WU:  14025.0  JA1ÄBC  cq  1829Z".encode(),
     bytes(range(256)),
