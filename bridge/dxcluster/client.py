@@ -145,6 +145,8 @@ class DxCluster:
             lasted = self.clock() - began_s >= MAX_BACKOFF_S or self.counts.spots > spots
             if self.counts.connects > connects and lasted:
                 delay = self.backoff_s
+            if self._stop.is_set():
+                break  # nothing published once stopping (the MQTT side is going too)
             try:
                 self._tick()  # rule 3: spots age out while the node is down too (book rule 2)
             except Exception as exc:  # rule 2: a bug here must not end the thread
