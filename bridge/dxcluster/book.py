@@ -11,7 +11,8 @@ Rules:
    node's odd ``HHMM`` never ages a spot). The newest spot of a call replaces an older one
    of the same call on the same band.
 3. Bearings and distances are geo.great_circle's from [station] (the same function the
-   pointing judge uses); without a station they are null.
+   pointing judge uses); without a station they are null, and so are the bearings of a
+   place with no direction (the station's own, its antipode).
 4. Thread-safe: the client's thread adds and prunes, the aim thread reads (one lock, held
    for dictionary work only: the cty lookup is done before taking it).
 """
@@ -161,7 +162,8 @@ class Book:
             doc["entity"] = p.entity
         if self.station is not None:
             path = geo.great_circle(*self.station, p.latitude_deg, p.longitude_deg)
-            doc["bearing_deg"] = round(path.short_path_deg, 1)
-            doc["long_path_deg"] = round(path.long_path_deg, 1)
+            turn = path.has_direction  # rule 3: at the station or its antipode, no bearing
+            doc["bearing_deg"] = round(path.short_path_deg, 1) if turn else None
+            doc["long_path_deg"] = round(path.long_path_deg, 1) if turn else None
             doc["distance_km"] = round(path.distance_km)
         return doc

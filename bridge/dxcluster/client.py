@@ -5,7 +5,9 @@
 Rules:
 1. Off unless ``[dxcluster] enabled``. Connect, wait for the login prompt (``login:``, or a
    line asking for "your call"; at most LOGIN_WAIT_S, a slow node is waited for), send the
-   call sign and CRLF, then read lines (spots.py) until the node closes or fails.
+   call sign and CRLF, then read lines (spots.py) until the node closes or fails. The wait
+   for the prompt ends at LOGIN_WAIT_S whether the node is silent or talks without asking
+   (unless what it sends unasked are spots).
 2. On any failure (refused, dropped, no prompt in time, a dead peer found by TCP keepalive)
    it connects again after a back-off: ``backoff_s`` (1 s) doubling to MAX_BACKOFF_S (60 s);
    a session that logged in and then brought a spot or lasted MAX_BACKOFF_S resets it (a node
@@ -16,9 +18,10 @@ Rules:
 3. ``B/spots`` is published (retained) when the kept spots change: a new spot, or one aged
    out (checked every TICK_S); at most once per PUBLISH_EVERY_S (a busy node with skimmers
    sends several spots a second, and the list is up to tens of kilobytes), the newest list
-   at the latest PUBLISH_EVERY_S + TICK_S after its spot. ``on_calls`` (Home Assistant's
-   select) gets the calls of the newest spots when they changed, at most once per
-   CALLS_EVERY_S (the first at once).
+   at the latest PUBLISH_EVERY_S + TICK_S after its spot; while the node is down, after each
+   attempt to connect (the aged spots leave within a back-off and a connect timeout).
+   ``on_calls`` (Home Assistant's select) gets the calls of the newest spots when they
+   changed, at most once per CALLS_EVERY_S (the first at once).
 4. ``aim`` only queues (paho's thread returns at once; a full queue is a refusal). The aim
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (``go_toward``: limits, keep-out, lock, lease), with the source
@@ -142,6 +145,13 @@ class DxCluster:
             lasted = self.clock() - began_s >= MAX_BACKOFF_S or self.counts.spots > spots
             if self.counts.connects > connects and lasted:
                 delay = self.backoff_s
+            if self._stop.is_set():
+                break  # nothing published once stopping (the MQTT side is going too)
+            try:
+                self._tick()  # rule 3: spots age out while the node is down too (book rule 2)
+            except Exception as exc:  # rule 2: a bug here must not end the thread
+                self.counts.faults += 1
+                self._rarely(exc)
             if self._stop.wait(delay):
                 break
             delay = min(delay * 2, MAX_BACKOFF_S)
@@ -155,7 +165,7 @@ class DxCluster:
                 return
             self._sock = sock
         lines = Lines()
-        logged_in = False
+        logged_in, spots = False, self.counts.spots
         deadline = self.clock() + LOGIN_WAIT_S
         try:
             _keepalive(sock)
@@ -165,7 +175,7 @@ class DxCluster:
                     data = sock.recv(4096)
                 except TimeoutError:
                     self.counts.quiet_reads += 1
-                    if not logged_in and self.clock() > deadline:
+                    if not logged_in and self.counts.spots == spots and self.clock() > deadline:
                         raise TimeoutError(f"no login prompt in {LOGIN_WAIT_S:g} s") from None
                     self._tick()
                     continue
@@ -185,6 +195,9 @@ class DxCluster:
                     self.counts.connects += 1
                     log.info("DX cluster: logged in to %s:%d", self.host, self.port)
                     continue  # the prompt's own line is no spot
+                quiet = self.counts.spots == spots  # a node that sends spots unasked is kept
+                if not logged_in and quiet and self.clock() > deadline:  # rule 1: it talks and
+                    raise TimeoutError(f"no login prompt in {LOGIN_WAIT_S:g} s")  # never asks
                 for line in complete:
                     try:
                         self._line(line)

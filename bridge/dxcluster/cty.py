@@ -11,8 +11,10 @@ Rules:
    continent; ``~tz~`` is read past. ``=CALL`` is an exact call, matched before any prefix.
 3. ``lookup``: an exact call first, then the longest prefix of the call. What is looked up:
    upper case; a portable suffix (``/P``, ``/M``, ``/QRP``, ``/QRPP``, ``/A``, a lone digit) is
-   dropped; ``/MM`` and ``/AM`` (maritime and aeronautical mobile) are in no entity (None); of
-   two parts left (``F/G4ABC``, ``G4ABC/F``) the shorter one is the prefix that names the
+   dropped, and so are ``/LH`` and ``/LGT`` (a lighthouse), ``/R`` (a rover) and ``/B`` (a
+   beacon), which say what a station is, not where (read as prefixes: Norway, Russia, China);
+   ``/MM`` and ``/AM`` (maritime and aeronautical mobile) are in no entity (None); of two
+   parts left (``F/G4ABC``, ``G4ABC/F``) the shorter one is the prefix that names the
    entity (equal lengths: the first).
 4. A file that cannot be read or holds no entity raises CtyError naming the file and line;
    an odd line inside a good file is skipped and counted (``skipped``): AD1C's files are
@@ -27,7 +29,7 @@ from pathlib import Path
 
 _OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
 _PLAIN = re.compile(r"=?[A-Z0-9/]+")
-_DROPPED = frozenset({"P", "M", "QRP", "QRPP", "A"})
+_DROPPED = frozenset({"P", "M", "QRP", "QRPP", "A", "LH", "LGT", "R", "B"})  # rule 3
 _NOWHERE = frozenset({"MM", "AM"})
 
 

@@ -12,8 +12,9 @@ Rules:
    a line end costs at most that much memory.
 3. ``parse_spot`` returns a Spot or None; a spot may follow other text on its line (a prompt
    the node left without a line end); what is not a spot (a greeting, a prompt, an
-   announcement, junk, bytes that are not UTF-8) is None, never an exception. The client
-   counts what it drops.
+   announcement, junk) is None, never an exception. The client counts what it drops. Bytes
+   that are not UTF-8 are read as Latin-1 (a comment typed on an old node); the call, spotter
+   and frequency are ASCII whatever the decoding.
 4. A spot's call and spotter are upper case letters, digits and ``/`` (3 to 20 characters);
    its frequency 1 kHz to 300 GHz; its time ``HHMM`` with HH < 24 and MM < 60.
 """
@@ -48,8 +49,8 @@ def parse_spot(line: bytes | str) -> Spot | None:
     if isinstance(line, bytes):
         try:
             text = line.decode("utf-8")
-        except UnicodeDecodeError:
-            return None
+        except UnicodeDecodeError:  # a user's comment typed in Latin-1 (``ñ``): every byte is one
+            text = line.decode("latin-1")
     else:
         text = line
     start = text.find("DX de ")  # after a prompt or junk too

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from bridge import geo
 from bridge.dxcluster.book import MAX_CALLS, Book, locator_in
 from bridge.dxcluster.cty import parse_dat
 from bridge.dxcluster.spots import Spot
@@ -93,3 +94,20 @@ def test_the_calls_are_bounded() -> None:
     for i in range(MAX_CALLS + 10):
         b.add(spot(f"JA1A{i:02d}"))
     assert len(b.calls()) == MAX_CALLS
+
+
+def test_a_spot_with_no_direction_has_no_bearing() -> None:
+    """At the station's own place, or at its antipode, every bearing is as good as another
+    (geo: ``has_direction`` False): B/spots said ``0.0`` as if due north, and a dashboard
+    showed it as one; null, as without a station."""
+    here = geo.parse_locator("JO62QM")
+    there = (-here[0], here[1] - 180.0)  # the antipode
+    book = Book(None, here)
+    book.add(Spot("DL1ABC", 14025.0, "EA5WU", "1829", "JO62QM"))
+    book.add(Spot("ZL1ABC", 7025.0, "EA5WU", "1830", "RE78"))
+    spots = {s["call"]: s for s in json.loads(book.as_json())["spots"]}
+    assert spots["DL1ABC"]["bearing_deg"] is None
+    assert spots["DL1ABC"]["distance_km"] == 0
+    book = Book(None, there)
+    book.add(Spot("DL1ABC", 14025.0, "EA5WU", "1829", "JO62QM"))
+    assert json.loads(book.as_json())["spots"][0]["bearing_deg"] is None

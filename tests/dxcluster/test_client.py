@@ -78,6 +78,37 @@ def test_no_prompt_in_time_is_a_failure_and_the_client_tries_again(
     assert not cluster.errors, cluster.errors
 
 
+def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -> None:
+    """A node that keeps sending (a banner, junk, a byte at a time) and never asks for the
+    call sign never leaves the client a quiet second: the prompt's deadline must hold anyway,
+    or the client sits on it for ever, with no spot and nothing in the log."""
+
+    def chatty(s: Session) -> None:  # a byte every 0.1 s (the behaviour under test) until hung up
+        try:
+            while not cluster.done.wait(0.1):
+                s.send(b".")
+        except OSError:
+            pass
+
+    def prompt(s: Session) -> None:
+        s.send(b"login: ")
+        cluster.logins.append(s.read_line())
+        s.send(SPOT)
+        cluster.done.wait(30)
+
+    cluster = FakeCluster([chatty, prompt])
+    dx = client(cluster.port, published, JumpingClock())
+    dx.start()
+    try:
+        wait_until(lambda: any("JA1ABC" in p for p in published), 20, "the spot published")
+        assert cluster.logins == [b"G4ABC"]
+        assert (dx.counts.failures, dx.counts.connects) == (1, 1)
+    finally:
+        dx.stop()
+        cluster.close()
+    assert not cluster.errors, cluster.errors
+
+
 def test_a_node_that_cannot_be_reached_is_tried_again_and_stop_ends_it(
     published: list[str],
 ) -> None:
@@ -160,3 +191,24 @@ def test_the_back_off_doubles_from_one_second_to_a_minute(published: list[str]) 
     dx._run()  # on this thread: it returns when the event is set
     assert waits.waited == [1, 2, 4, 8, 16, 32, 60, 60, 60]
     assert dx.counts.failures == 9
+
+
+def test_spots_age_out_of_b_spots_while_the_node_cannot_be_reached(
+    published: list[str],
+) -> None:
+    """Book rule 2 (none older than max_age_s) holds while the node is down: the pruning
+    and B/spots must not wait for a session that never comes (a node down for hours left
+    its last spots retained on B/spots, and a call target used them)."""
+    with socket.socket() as probe:  # a port with nothing listening on it
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    now = [0.0]
+    book = Book(parse_dat(CTY_DAT), (52.5, 13.4), max_age_s=1800.0, clock=lambda: now[0])
+    book.add(Spot("JA1ABC", 14025.0, "EA5WU", "1829", "cq"))
+    dx = DxCluster("127.0.0.1", port, "G4ABC", book, published.append, backoff_s=1.0)
+    dx._publish()  # the spot on B/spots, as a session before the node went down left it
+    now[0] = 3 * 3600.0  # three hours later, the node still down
+    dx._stop = Waits(3)
+    dx._run()  # on this thread: three refused connections, their waits not waited
+    assert json.loads(published[-1]) == {"spots": []}
+    assert book.newest("JA1ABC") is None

@@ -71,3 +71,24 @@ def test_load_tells_the_formats_apart_and_names_a_bad_file(tmp_path: Path) -> No
     (tmp_path / "empty.dat").write_bytes(b"\xff\xfe nothing here\n")
     with pytest.raises(CtyError, match="empty.dat: no entity"):
         load(tmp_path / "empty.dat")
+
+
+def test_lighthouse_rover_and_beacon_suffixes_name_no_entity() -> None:
+    """``/LH`` and ``/LGT`` (a lighthouse activation), ``/R`` (a VHF contest rover) and ``/B``
+    (a beacon) say what the station is, not where: read as the shorter part they were
+    prefixes of Norway (LH), Russia (R) and China (B), and the rotor turned there."""
+    cty = parse_dat(
+        CTY_DAT
+        + "Norway:                   14:  18:  EU:   61.00:   -9.00:    -1.0:  LA:\n"
+        + "    LA,LB,LC,LD,LE,LF,LG,LH,LI,LJ,LK,LL,LM,LN;\n"
+        + "European Russia:          16:  29:  EU:   53.65:  -41.37:    -4.0:  UA:\n"
+        + "    R,U,UA;\n"
+        + "China:                    24:  44:  AS:   36.00:  -102.00:   -8.0:  BY:\n"
+        + "    B,BY;\n"
+    )
+    assert cty.lookup("G4ABC/LH").name == "England"  # type: ignore[union-attr]
+    assert cty.lookup("G4ABC/LGT").name == "England"  # type: ignore[union-attr]
+    assert cty.lookup("W1ABC/R").name == "United States"  # type: ignore[union-attr]
+    assert cty.lookup("W1ABC/B").name == "United States"  # type: ignore[union-attr]
+    assert cty.lookup("LA1ABC").name == "Norway"  # type: ignore[union-attr]  # still prefixes
+    assert cty.lookup("R1ABC").name == "European Russia"  # type: ignore[union-attr]

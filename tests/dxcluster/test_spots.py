@@ -29,11 +29,13 @@ JUNK = [
     b"To ALL de G4ABC: hello",
     b"WWV de W0MU <18>:   SFI=70, A=5, K=1, No Storms -> No Storms",
     b"DX de EA5WU:     14025.0  JA1ABC       cq                             2561Z",  # 25:61
+    b"DX de EA5WU:     14025.0  JA1ABC       cq                             2459Z",  # hour 24
+    b"DX de EA5WU:     14025.0  JA1ABC       cq                             1860Z",  # minute 60
     b"DX de EA5WU:     14025.0  JA1ABC       cq",  # no time
     b"DX de EA5WU:     abc  JA1ABC       cq   1829Z",
     b"DX de EA5WU:     14025.0  ABCDEF       cq   1829Z",  # no digit: no call
     b"DX de EA5WU:     0.0  JA1ABC       cq   1829Z",
-    b"DX de EA5WU:     14025.0  JA1\xffABC  cq   1829Z",  # not UTF-8
+    b"DX de EA5WU:     14025.0  JA1\xffABC  cq   1829Z",  # not UTF-8 (Latin-1: no call)
     b"DX de EA5WU:     14025.0  JA1ABC  c\x00q   1829Z",  # not printable
     "DX de EA5WU:  14025.0  JA1ÄBC  cq  1829Z".encode(),
     bytes(range(256)),
@@ -109,3 +111,13 @@ def test_reset_forgets_half_a_line() -> None:
     lines.feed(b"DX de half")
     lines.reset()
     assert lines.feed(SPOTS[0][0] + b"\n") == [SPOTS[0][0]]
+
+
+def test_a_spot_whose_comment_is_latin_1_is_kept() -> None:
+    """Nodes relay their users' comments as typed: a Spanish or German operator's ``ñ`` or
+    ``ä`` arrives as one Latin-1 byte, not UTF-8. The spot (call, frequency, time) is sound and
+    must not be lost for one letter of its comment."""
+    line = "DX de EA5WU:     14025.0  JA1ABC       señor grüß                     1829Z"
+    spot = parse_spot(line.encode("latin-1"))
+    assert spot is not None
+    assert (spot.call, spot.freq_khz, spot.comment) == ("JA1ABC", 14025.0, "señor grüß")
