@@ -26,7 +26,9 @@ Rules:
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (``go_toward``: limits, keep-out, lock, lease), with the source
    ``dxcluster`` and the asker's origin kept for the audit. An unknown call, or no station,
-   is a refusal on ``R/error``.
+   is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked (the
+   rotator's ``last_halt_s``) overtakes it: the call is refused, never turned to after the
+   stop (docs/architecture.md rule 11).
 """
 
 from __future__ import annotations
@@ -79,6 +81,7 @@ class _Aim:
     long_path: bool
     described: str
     origin: Origin
+    asked_s: float  # rule 4: when it was asked (monotonic, as the rotator's last_halt_s)
 
 
 @dataclass
@@ -266,7 +269,8 @@ class DxCluster:
     ) -> None:
         """From paho's thread: queued for the aim thread; a full queue is refused at once."""
         try:
-            self._aims.put_nowait(_Aim(rotator, call, long_path, described, origin))
+            aim = _Aim(rotator, call, long_path, described, origin, time.monotonic())
+            self._aims.put_nowait(aim)
         except queue.Full:
             rotator.report_refusal(
                 "too many calls asked at once: send it again", described, origin=origin
@@ -285,6 +289,13 @@ class DxCluster:
                 self._rarely(exc)
 
     def _turn(self, aim: _Aim) -> None:
+        if aim.rotator.last_halt_s >= aim.asked_s:  # rule 4
+            aim.rotator.report_refusal(
+                f"{aim.call}: a stop came after it was asked: not turned",
+                aim.described,
+                origin=aim.origin,
+            )
+            return
         kept = self.book.newest(aim.call)
         place = kept.place if kept is not None else self.book.entity_place(aim.call)
         if place is None:

@@ -24,6 +24,7 @@ class RotatorPort(Protocol):
     spec: ModelSpec
     pointing: Pointing
     can_track: bool  # a station and a controller that reports where it points
+    last_halt_s: float  # when a STOP or lock ON was last put in (monotonic; engine/rotator.py)
 
     @property
     def operators(self) -> LeasePort: ...

@@ -6,8 +6,10 @@ against a recording rotator: the newest spot's place, else the entity, else a re
 from __future__ import annotations
 
 import json
+import math
 import socket
 import threading
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -130,6 +132,7 @@ class Asked:
 
     def __init__(self) -> None:
         self.calls: list[tuple[object, ...]] = []
+        self.last_halt_s = -math.inf
 
     def go_toward(
         self, lat: float, lon: float, source: Source, described: str, **kw: object
@@ -212,3 +215,16 @@ def test_spots_age_out_of_b_spots_while_the_node_cannot_be_reached(
     dx._run()  # on this thread: three refused connections, their waits not waited
     assert json.loads(published[-1]) == {"spots": []}
     assert book.newest("JA1ABC") is None
+
+
+def test_a_stop_after_the_call_was_asked_overtakes_it(published: list[str]) -> None:
+    """Rule 4: a call queued before a STOP is never turned to after it."""
+    dx = client(9, published)
+    dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+    rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
+    dx.aim(rot, "JA1ABC", False, "target JA1ABC", who)  # type: ignore[arg-type]
+    rot.last_halt_s = time.monotonic()  # the STOP, before the aim thread took the call
+    dx._turn(dx._aims.get_nowait())  # type: ignore[arg-type]
+    assert rot.calls == [
+        ("refused", "JA1ABC: a stop came after it was asked: not turned", "target JA1ABC", who)
+    ]
