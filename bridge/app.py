@@ -39,6 +39,7 @@ from bridge.settings import ConfigError, Settings
 from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
+from bridge.web.live import with_console
 from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
 from bridge.wiring import worker_config
@@ -198,7 +199,9 @@ class App:
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
         self.dxcluster: DxCluster | None = None  # spots on B/spots, R/target {"call": ...}
         if settings.dxcluster.enabled:
-            publish = partial(self.client.publish_retained, self.topics.spots)
+            to_mqtt = partial(self.client.publish_retained, self.topics.spots)
+            web = self.web  # its map shows the spots too (web/live.py rule 6)
+            publish = to_mqtt if web is None else with_console(to_mqtt, web.on_spots)
             try:
                 self.dxcluster = dxcluster(settings.dxcluster, position, publish, wall=wall)
             except CtyError as exc:

@@ -12,6 +12,8 @@ Rules:
 3. A page that joins gets the newest status of every rotator first, then changes.
 4. ``close`` ends every page's stream (the bridge is stopping): the page sees the bridge go.
 5. ``tick`` owes every page a sign of life and ends the streams whose token has run out.
+6. ``spots`` is the DX cluster's list (``B/spots``' document, dxcluster/book.py) as it is: one
+   newest kept, a page owed at most the newest (after the statuses), a page that joins gets it.
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ class Page:
     """One open event stream."""
 
     statuses: dict[str, Message] = field(default_factory=dict)  # rotator -> not yet sent
+    spots: Message | None = None  # the newest spot list not yet sent (rule 6)
     events: deque[Message] = field(default_factory=lambda: deque(maxlen=EVENTS_KEPT))
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     closed: bool = False  # the page went, or the bridge is stopping
@@ -55,6 +58,9 @@ class Page:
         self.wake.clear()
         statuses, self.statuses = self.statuses, {}
         yield from statuses.values()
+        spots, self.spots = self.spots, None
+        if spots is not None:
+            yield spots
         while self.events:
             yield self.events.popleft()
 
@@ -63,6 +69,7 @@ class Feed:
     def __init__(self, shapes: dict[str, Shape]) -> None:
         self._shapes = shapes
         self._newest: dict[str, Message] = {}
+        self.newest_spots: str | None = None  # rule 6: B/spots' document
         self.rendered: dict[str, float] = {}  # rotator -> the time of the status rendered last
         self._pages: set[Page] = set()
         self.closed = False
@@ -72,7 +79,9 @@ class Feed:
         return len(self._pages)
 
     def join(self) -> Page:
-        page = Page(statuses=dict(self._newest))  # rule 3
+        page = Page(statuses=dict(self._newest))  # rules 3, 6
+        if self.newest_spots is not None:
+            page.spots = ("spots", self.newest_spots)
         page.wake.set()
         if self.closed:
             page.closed = True
@@ -99,6 +108,13 @@ class Feed:
         self.rendered[rotator_id] = t_wall
         for page in self._pages:
             page.statuses[rotator_id] = chunk
+            page.wake.set()
+
+    def spots(self, doc: str) -> None:
+        """Rule 6."""
+        self.newest_spots = doc
+        for page in self._pages:
+            page.spots = ("spots", doc)
             page.wake.set()
 
     def event(self, rotator_id: str, event: ErrorEvent) -> None:

@@ -15,6 +15,9 @@ Rules:
 5. A page sends its STOP and lock ON over its WebSocket as well as by POST: when a flood holds
    every connection a new POST could take, the socket the page already has still carries them.
    Nothing else is taken over it.
+6. ``on_spots`` runs on the DX cluster's thread (the spot list as ``B/spots`` carries it): it
+   keeps the newest and hands it to the event loop while a page is open, as rule 1; a page that
+   joins gets it (feed.py rule 6). ``with_console`` puts it beside the MQTT publish, contained.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from collections.abc import Callable
 
 from aiohttp import WSMsgType, web
 
+from bridge.engine.listeners import contained
 from bridge.model import ErrorEvent, RotatorStatus
 from bridge.web.auth import Tokens
 from bridge.web.feed import Feed, Page, sse, websocket
@@ -56,6 +60,7 @@ class Live:
         self._halt = halt
         self._opening = 0  # WebSockets upgraded, their token not in yet (they count as pages)
         self._newest: dict[str, tuple[RotatorStatus, float]] = {}  # written by the lines thread
+        self._spots: str | None = None  # written by the DX cluster's thread (rule 6)
 
     def on_status(
         self, rotator_id: str, status: RotatorStatus, loop: asyncio.AbstractEventLoop | None
@@ -72,6 +77,12 @@ class Live:
     ) -> None:
         if loop is not None and self.feed.pages:
             loop.call_soon_threadsafe(self.feed.event, rotator_id, event)
+
+    def on_spots(self, doc: str, loop: asyncio.AbstractEventLoop | None) -> None:
+        """Rule 6."""
+        self._spots = doc
+        if loop is not None and self.feed.pages:
+            loop.call_soon_threadsafe(self.feed.spots, doc)
 
     async def events(self, request: web.Request) -> web.StreamResponse:
         """``api/events``, an event stream (scripts; the caller checked its token)."""
@@ -111,6 +122,9 @@ class Live:
         for rid, (status, t) in list(self._newest.items()):
             if self.feed.rendered.get(rid) != t:
                 self.feed.status(rid, status, t)
+        spots = self._spots
+        if spots is not None and spots is not self.feed.newest_spots:  # rule 6
+            self.feed.spots(spots)
         return page
 
     async def websocket(self, request: web.Request) -> web.StreamResponse:
@@ -184,3 +198,17 @@ async def _next(page: Page) -> bool:
     """Wait until something is owed to the page; False when its stream ends."""
     await page.wake.wait()
     return not (page.closed or page.expired)
+
+
+def with_console(
+    publish: Callable[[str], None], on_spots: Callable[[str], None]
+) -> Callable[[str], None]:
+    """``B/spots``' publish with the console's map given each list first (rule 6): a failing
+    console never costs MQTT its spots (docs/architecture.md rule 8)."""
+    console = contained(on_spots, "web console: spots")
+
+    def both(doc: str) -> None:
+        console(doc)
+        publish(doc)
+
+    return both

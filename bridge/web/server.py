@@ -198,13 +198,16 @@ class WebConsole:
         if self._runner is not None:
             await self._runner.cleanup()
 
-    # -- the engine's listeners (the serial-lines thread: rule 1 of feed.py) ----------------
     # -- the engine's listeners (the serial-lines thread: live.py rule 1) --------------------
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
         self.live.on_status(rotator_id, status, self._loop if self._running else None)
 
     def on_event(self, rotator_id: str, event: ErrorEvent) -> None:
         self.live.on_event(rotator_id, event, self._loop if self._running else None)
+
+    def on_spots(self, doc: str) -> None:
+        """The DX cluster's spot list (``B/spots``' document), from its thread (live.py rule 6)."""
+        self.live.on_spots(doc, self._loop if self._running else None)
 
     # -- every request (rules 2, 3) ----------------------------------------------------------
     @web.middleware

@@ -69,3 +69,21 @@ def test_a_page_gets_the_newest_status_of_each_rotator_and_every_event_kept() ->
         assert page.closed and page.wake.is_set()
 
     asyncio.run(run())
+
+
+def test_a_page_gets_the_newest_spot_list_after_the_statuses_and_one_joining_gets_it() -> None:
+    async def run() -> None:
+        feed = Feed({"hf": Shape(False, False)})
+        page = feed.join()
+        assert list(page.take()) == []  # nothing yet: no spots message either
+        feed.status("hf", _status(10.0), 1.0)
+        for call in ("JA1ABC", "W1XYZ", "VK2XYZ"):  # a slow page: only the newest list
+            feed.spots(json.dumps({"spots": [{"call": call}]}))
+        taken = [json.loads(websocket(m)) for m in page.take()]
+        assert [m["event"] for m in taken] == ["status", "spots"]
+        assert taken[1]["data"] == {"spots": [{"call": "VK2XYZ"}]}
+        later = feed.join()
+        names = [name for name, _ in later.take()]
+        assert names == ["status", "spots"]
+
+    asyncio.run(run())

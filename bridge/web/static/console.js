@@ -490,23 +490,35 @@ $('map').addEventListener('click', (e) => {
   if (!p || p.r > 1.1 || !app.selected) return;
   const long = e.shiftKey;
   map.markClick(p);
-  const said = describe(p, long);
+  aim(p.distance_km !== undefined && p.r > 1e-6
+    ? { command: 'toward', latitude_deg: +p.lat.toFixed(5), longitude_deg: +p.lon.toFixed(5), long_path: long }
+    : { command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) }, describe(p, long));
+});
+
+/** A command from the map (a click on it or on a spot), what it was said beside the map. */
+function aim(command, said) {
   pointerNote = `sending: ${said}`;
   pointer.textContent = pointerNote;
-  const sent = p.distance_km !== undefined && p.r > 1e-6
-    ? send({ command: 'toward', latitude_deg: +p.lat.toFixed(5), longitude_deg: +p.lon.toFixed(5), long_path: long })
-    : send({ command: 'target', az: round1(long ? norm360(p.bearing + 180) : p.bearing) });
-  sent.then((ok) => {
+  send(command).then((ok) => {
     pointerNote = `${ok ? 'sent' : 'refused'}: ${said}`;
     pointer.textContent = pointerNote;
   });
-});
+}
+
+/** A click on a DX cluster spot turns toward its place, as a click on the map does. */
+function aimAtSpot(s, long) {
+  if (!app.selected || typeof s.latitude !== 'number' || typeof s.longitude !== 'number') return;
+  const b = long ? s.long_path_deg : s.bearing_deg;
+  const said = `${s.call} ${fmtDeg(b)}${long ? ' long path' : ''}`;
+  aim({ command: 'toward', latitude_deg: s.latitude, longitude_deg: s.longitude, long_path: long }, said);
+}
 
 connect({
   onConfig: applyConfig,
   onEvent: (type, doc) => {
     if (type === 'status') onStatus(doc);
     else if (type === 'error') onErrorEvent(doc);
+    else if (type === 'spots') map.setSpots(doc.spots, aimAtSpot);
   },
   onOnline: (online, configured) => {
     document.body.classList.toggle('offline', !online);

@@ -9,6 +9,9 @@
 //    rotator's fixed marks (sectors, presets, park) once per tab switch; a status only moves
 //    attributes (update), so a status costs no rebuild.
 // 3. Without a station the map is a dial: no land, no distance rings, the same ring.
+// 4. DX cluster spots (the feed's `spots`, B/spots' document) are dots labelled with the call at
+//    their short-path bearing and distance as the bridge worked them out; a spot without them
+//    (no station, no position) or beyond the rim is not drawn. Each list replaces the last.
 
 export const EARTH_RADIUS_KM = 6371.0;
 export const RIM_KM = Math.PI * EARTH_RADIUS_KM;
@@ -132,6 +135,7 @@ export class MapView {
     svg('circle', { class: 'body-dot', r: 0.035 }, this.bodyMark);
     this.bodyGlyph = label('', { class: 'body-glyph', y: 0.002 }, this.bodyMark);
     this.bodyName = label('', { class: 'body-name' }, this.bodyMark);
+    this.spotLayer = svg('g', { class: 'spots' }, root);
     this.hoverPath = svg('path', { class: 'hover-path off' }, root);
     this.hoverLabel = label('', { class: 'hover-label off' }, root);
     this.clickMark = svg('circle', { class: 'click-mark off', r: 0.022 }, root);
@@ -270,6 +274,24 @@ export class MapView {
     set(this.gcLabel, 'x', f(x + (right ? 0.035 : -0.035)));
     set(this.gcLabel, 'y', f(y - 0.03));
     set(this.gcLabel, 'text-anchor', right ? 'start' : 'end');
+  }
+
+  /** The DX cluster's spots (rule 4); onSpot(spot, shiftKey) on a click on one. */
+  setSpots(spots, onSpot) {
+    this.spotLayer.replaceChildren();
+    for (const s of Array.isArray(spots) ? spots : []) {
+      const b = s.bearing_deg, km = s.distance_km;
+      if (typeof b !== 'number' || typeof km !== 'number' || km > RIM_KM) continue;
+      const [x, y] = polar(b, km / RIM_KM);
+      const g = svg('g', { class: 'spot', 'data-call': s.call, 'data-bearing': b, transform: `translate(${f(x)} ${f(y)})` }, this.spotLayer);
+      const where = s.locator || s.entity || '';
+      tip(g, `${s.call} ${s.frequency_khz} kHz ${s.time || ''} de ${s.spotter}${where ? ' \u00B7 ' + where : ''}` +
+        ` \u00B7 ${Math.round(b)}\u00B0 ${Math.round(km).toLocaleString('en-US')} km (click to turn there, shift: long path)`);
+      svg('circle', { class: 'spot-hit', r: 0.03 }, g); // a finger's worth round the dot
+      label(s.call, { class: 'spot-call', x: 0.022, y: 0 }, g);
+      svg('circle', { class: 'spot-dot', r: 0.012 }, g); // over the label: Chrome's text hit box is wide
+      g.addEventListener('click', (e) => { e.stopPropagation(); onSpot(s, e.shiftKey); });
+    }
   }
 
   /** The map point under a pointer event: bearing, radius, and with a station the place. */
