@@ -51,7 +51,7 @@ from bridge.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView
+from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView, place_doc
 
 log = logging.getLogger(__name__)
 
@@ -199,11 +199,7 @@ class RemoteConsoleRotator:
         long_path: bool = False,
         origin: Origin | None = None,
     ) -> None:
-        place: dict[str, object] = (
-            {"locator": locator}
-            if locator is not None
-            else {"latitude": latitude_deg, "longitude": longitude_deg}
-        )
+        place = place_doc(latitude_deg, longitude_deg, locator)
         place["path"] = "long" if long_path else "short"
         self._send(self.remote.topics.target, json.dumps(place, separators=(",", ":")), described)
 

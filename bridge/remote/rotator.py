@@ -73,6 +73,14 @@ class Sender(Protocol):
     def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None: ...
 
 
+def place_doc(latitude_deg: float, longitude_deg: float, locator: str | None) -> dict[str, Any]:
+    """A place as the station's ``R/target`` takes it (docs/mqtt.md): the locator when there is
+    one (the station reads it as the user typed it), else the coordinates."""
+    if locator is not None:
+        return {"locator": locator}
+    return {"latitude": latitude_deg, "longitude": longitude_deg}
+
+
 class StationView:
     """The retained topics the remote reads, newest first; written on paho's thread. Each value
     keeps when it came (``clock``) and whether the broker replayed it from its store."""
@@ -252,11 +260,7 @@ class RemoteRotator:
         origin: Origin | None = None,  # not sent: the remote's operator is (rule 3)
     ) -> None:
         """Rule 4: the place, for the station to turn into its bearing."""
-        place: dict[str, Any] = (
-            {"locator": locator}
-            if locator is not None
-            else {"latitude": latitude_deg, "longitude": longitude_deg}
-        )
+        place = place_doc(latitude_deg, longitude_deg, locator)
         if long_path:
             place["path"] = "long"
         try:
