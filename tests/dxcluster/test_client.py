@@ -10,7 +10,7 @@ import math
 import socket
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -60,24 +60,32 @@ def test_no_prompt_in_time_is_a_failure_and_the_client_tries_again(
         while s.conn.recv(1024):
             pass
 
+    cluster = _failing_then_prompting(silent, published)
+    assert json.loads(published[0]) == {"spots": []}  # the run before's spots cleared
+    assert not cluster.errors, cluster.errors
+
+
+def _failing_then_prompting(first: Callable[[Session], None], published: list[str]) -> FakeCluster:
+    """A node whose first session is ``first`` (it never prompts) and whose second prompts and
+    sends SPOT: the client gives the first up once, logs in to the second, and publishes."""
+
     def prompt(s: Session) -> None:
         s.send(b"login: ")
         cluster.logins.append(s.read_line())
         s.send(SPOT)
         cluster.done.wait(30)
 
-    cluster = FakeCluster([silent, prompt])
+    cluster = FakeCluster([first, prompt])
     dx = client(cluster.port, published, JumpingClock())
     dx.start()
     try:
         wait_until(lambda: any("JA1ABC" in p for p in published), 20, "the spot published")
         assert cluster.logins == [b"G4ABC"]
         assert (dx.counts.failures, dx.counts.connects) == (1, 1)
-        assert json.loads(published[0]) == {"spots": []}  # the run before's spots cleared
     finally:
         dx.stop()
         cluster.close()
-    assert not cluster.errors, cluster.errors
+    return cluster
 
 
 def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -> None:
@@ -85,29 +93,19 @@ def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -
     call sign never leaves the client a quiet second: the prompt's deadline must hold anyway,
     or the client sits on it for ever, with no spot and nothing in the log."""
 
+    done = threading.Event()
+
     def chatty(s: Session) -> None:  # a byte every 0.1 s (the behaviour under test) until hung up
         try:
-            while not cluster.done.wait(0.1):
+            while not done.wait(0.1):
                 s.send(b".")
         except OSError:
             pass
 
-    def prompt(s: Session) -> None:
-        s.send(b"login: ")
-        cluster.logins.append(s.read_line())
-        s.send(SPOT)
-        cluster.done.wait(30)
-
-    cluster = FakeCluster([chatty, prompt])
-    dx = client(cluster.port, published, JumpingClock())
-    dx.start()
     try:
-        wait_until(lambda: any("JA1ABC" in p for p in published), 20, "the spot published")
-        assert cluster.logins == [b"G4ABC"]
-        assert (dx.counts.failures, dx.counts.connects) == (1, 1)
+        cluster = _failing_then_prompting(chatty, published)
     finally:
-        dx.stop()
-        cluster.close()
+        done.set()
     assert not cluster.errors, cluster.errors
 
 
