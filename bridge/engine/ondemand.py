@@ -7,6 +7,9 @@ Rules:
 3. The thread ends after ``idle_s`` without a job and starts again with the next ``put``: no
    job is ever left in the queue with no thread to run it (the check and the end are one step
    under the lock ``put`` takes).
+4. ``queue`` puts a job in line without starting the thread, for a caller under a lock of its
+   own (starting a thread waits until it runs, milliseconds on a busy machine); it calls
+   ``wake`` once it has let go, and rule 3 holds again from then on.
 """
 
 from __future__ import annotations
@@ -28,9 +31,17 @@ class OnDemandThread:
         self._thread: threading.Thread | None = None
 
     def put(self, job: Callable[[], None]) -> None:
+        self.queue(job)
+        self.wake()
+
+    def queue(self, job: Callable[[], None]) -> None:
+        """Rule 4: in line, in order; ``wake`` starts the thread if none runs."""
         self._jobs.put(job)
+
+    def wake(self) -> None:
+        """Rule 4: a thread for the jobs in line, if none runs (nothing in line: none)."""
         with self._lock:
-            if self._thread is None:
+            if self._thread is None and not self._jobs.empty():
                 self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
                 self._thread.start()
 

@@ -23,6 +23,8 @@ Rules:
 5. ``later`` runs a save on the store's own writer thread, in the order asked: a lock or an
    option set from an MQTT callback must not hold that connection (and a stop behind it) for
    an fsync, tens of milliseconds on an SD card. ``flush`` waits for what was asked so far.
+   ``queue`` is ``later`` for a rotator's owner step (kept.py rule 5): the save is in line, in
+   the order of the decisions, before the step lets go; ``wake`` then starts the writer.
 6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
    that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
 """
@@ -195,6 +197,15 @@ class StateStore:
     def later(self, job: Callable[[], None]) -> None:
         """Rule 5: ``job`` on the writer thread."""
         self._writer.put(job)
+
+    def queue(self, job: Callable[[], None]) -> None:
+        """Rule 5: ``job`` in line for the writer thread, which ``wake`` starts (ondemand.py
+        rule 4)."""
+        self._writer.queue(job)
+
+    def wake(self) -> None:
+        """Rule 5: the writer thread for what was queued, if it is not running."""
+        self._writer.wake()
 
     def flush(self, timeout_s: float = 5.0) -> None:
         """Rule 5: the jobs asked so far are done (or ``timeout_s`` passed)."""
