@@ -1,18 +1,31 @@
 """What a rotator keeps in the state file of its own settings: the options its model has, the
-safety lock, and a storm it is parked for. Rotator (rotator.py) owns one; the state file is
-written on its writer thread (state_store.py rule 5), never on a front end's nor the lines
-thread's.
+safety lock, and a storm it is parked for; and the one owner of its safety state (``Owner``).
+Rotator (rotator.py) owns one of each; the state file is written on its writer thread
+(state_store.py rule 5), never on a front end's nor the lines thread's.
 
 Rules:
 1. An option remembered for this id that this model does not have (the id may have been
    another model's) is logged and left out.
-2. Each save of the lock writes the lock as it is when the save runs, so the last one writes
-   the newest word, whatever order the front ends asked in.
+2. ``locked`` is the lock: the judge asks it, and nothing else keeps a copy that could differ
+   (the session's comes from the mailbox, in the same step). Each lock word queues a save of
+   the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
+   last word is the last written, whatever order the front ends asked in.
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
    every status on the lines thread and hands a storm begun or ended to the writer; the next
-   start begins in the storm (parked again, motion refused) until readings end it.
+   start begins in the storm (parked again, motion refused) until readings end it. The wind
+   park has one owner, the session on the lines thread: it alone decides a storm, the judge
+   reads the session's status, and the save is queued on that same thread in the order the
+   storms came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
+5. ``Owner`` is one rotator's safety step (docs/architecture.md rule 14): a lock word, a
+   claim, a release or the end of the control lease, and an option, are decided, put in the
+   mailbox and their save queued under its one lock, from every interface's thread, so that
+   the judge, the session (and so the retained state) and the state file cannot disagree. The
+   step is short: no I/O, no thread started, nothing that waits (the save is queued, and the
+   writer woken once the step has let go); the lines thread never takes it, and a stop never
+   waits for it.
+6. A lock kept from the state file is said in the log at start: motion will be refused.
 """
 
 from __future__ import annotations
@@ -28,6 +41,21 @@ from bridge.protocols.base import ModelSpec
 log = logging.getLogger(__name__)
 
 
+class Owner:
+    """Rule 5: ``with owner:`` is one step of a rotator's safety state."""
+
+    def __init__(self, store: StateStore) -> None:
+        self._store = store
+        self._lock = threading.Lock()
+
+    def __enter__(self) -> None:
+        self._lock.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.release()
+        self._store.wake()  # what the step queued (state_store.py rule 5)
+
+
 class Kept:
     def __init__(
         self,
@@ -35,15 +63,15 @@ class Kept:
         rotator_id: str,
         spec: ModelSpec,
         *,
-        locked: Callable[[], bool],
         report: Callable[[ErrorKind, str, str | None], None],
     ) -> None:
         self._store = store
         self._id = rotator_id
         self._spec = spec
-        self._locked = locked  # the lock as the rotator has it now (rule 2)
         self._report = report
-        self._save_lock = threading.Lock()
+        self.locked = store.locked(rotator_id)  # rule 2: the one copy
+        if self.locked:  # rule 6
+            log.warning("%s: safety lock ON, kept from the state file", rotator_id)
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
 
     def seen_wind(self, wind: WindInfo | None) -> None:
@@ -78,7 +106,8 @@ class Kept:
         return kept
 
     def save_option(self, name: str, enabled: bool) -> None:
-        self._store.later(lambda: self._save_option_now(name, enabled))
+        """In the owner's step (rule 5)."""
+        self._store.queue(lambda: self._save_option_now(name, enabled))
 
     def _save_option_now(self, name: str, enabled: bool) -> None:
         if not self._store.set_option(self._id, name, enabled):
@@ -89,15 +118,13 @@ class Kept:
                 name,
             )
 
-    def save_lock(self) -> None:
-        """Rule 2."""
-        self._store.later(self._save_lock_now)
+    def set_lock(self, locked: bool) -> None:
+        """Rule 2, in the owner's step (rule 5): the lock is ``locked``, and saved as that."""
+        self.locked = locked
+        self._store.queue(lambda: self._save_lock_now(locked))
 
-    def _save_lock_now(self) -> None:
-        with self._save_lock:
-            locked = self._locked()
-            saved = self._store.set_locked(self._id, locked)
-        if not saved:
+    def _save_lock_now(self, locked: bool) -> None:
+        if not self._store.set_locked(self._id, locked):
             self._report(
                 ErrorKind.STATE,
                 f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "

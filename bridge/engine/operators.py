@@ -2,13 +2,18 @@
 lease.py) and the audit trail of every command judged. Rotator (rotator.py) owns one.
 
 Rules:
-1. The lease is judged on the front ends' threads (the judge's), under one lock; what changed
-   goes to the status through the mailbox (the status shows the holder), and to the state file
-   through the store's writer thread (state_store.py rule 5): no fsync on a front end's thread.
+1. The lease is judged on the front ends' threads (the judge's), in the rotator's owner step
+   (kept.py rule 5): the decision, the change put in the mailbox (the status shows the holder,
+   ``R/control`` says it) and its save queued for the store's writer thread (state_store.py
+   rule 5: no fsync on a front end's thread) are one step, so that the judge, the status and
+   the state file name the same holder whichever claims and releases race. The lease here is
+   the judge's one copy.
 2. A lease ends by itself: a timer (daemon, one at a time) fires at its end, so that the status
    and ``R/control`` say it is free without anyone asking, and the audit trail has it (its
    operator the holder, interface ``lease``). A timer that fires early (the wall clock was set
-   back) arms itself again.
+   back) arms itself again. The end is a step like a release (rule 1); the timer is armed
+   after the step, under a lock of its own (starting a thread waits for it: never in the
+   owner's step), for the lease as it is then, so the last arming follows the last change.
 3. Every command judged, executed or refused, from every interface, is one audit event handed
    to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
    listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
@@ -23,6 +28,7 @@ import threading
 from collections.abc import Callable
 from typing import Protocol
 
+from bridge.engine.kept import Owner
 from bridge.engine.lease import Lease, LeaseError, restorable
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
@@ -58,6 +64,7 @@ class Operators:
         report: Callable[[ErrorKind, str, str | None], None],
         on_audit: Callable[[AuditEvent], None] | None = None,
         timer: Callable[[float, Callable[[], None]], Timer] = thread_timer,
+        owner: Owner | None = None,
     ) -> None:
         self._id = rotator_id
         self._store = store
@@ -71,23 +78,24 @@ class Operators:
             log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
             kept = None
         self._lease = Lease(kept)
-        self._lock = threading.Lock()
+        self._owner = owner or Owner(store)  # rule 1: the rotator's, shared with the lock
+        self._timer_lock = threading.Lock()  # rule 2
         self._start_timer = timer
         self._timer: Timer | None = None
         self._stopped = False
 
     def start(self) -> None:
         """The lease kept across a restart shows in the status, and ends by itself."""
-        with self._lock:
+        with self._owner:
             held = self._lease.holder(self._wall())
-            self._arm(held)
-        if held is not None:
-            self._mailbox.put_control(held)
+            if held is not None:
+                self._mailbox.put_control(held)
+        self._arm()
 
     def stop(self) -> None:
-        with self._lock:
+        with self._timer_lock:
             self._stopped = True
-            self._arm(None)
+        self._arm()
 
     @property
     def holder(self) -> Control | None:
@@ -101,32 +109,34 @@ class Operators:
     def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> Control:
         """Raise Refused (reported and audited) if the claim is refused."""
         try:
-            with self._lock:
+            with self._owner:  # rule 1
                 held = self._lease.claim(operator, minutes, self._wall())
-                self._arm(held)
+                self._changed(held)
         except LeaseError as exc:
             self._report(ErrorKind.REFUSED, str(exc), described)
             self.audit(origin, described, f"refused: {exc}")
             raise Refused(RefusalCode.INVALID, str(exc)) from None
+        self._arm()
         log.info("%s: %s holds the control lease (%s)", self._id, held.operator, origin.who)
-        self._changed(held)
         self.audit(origin, described, EXECUTED)
         return held
 
     def release(self, origin: Origin, described: str) -> Control | None:
         """Anyone may (lease.py rule 4); releasing a free lease changes nothing."""
-        with self._lock:
+        with self._owner:  # rule 1
             held = self._lease.release(self._wall())
-            self._arm(None)
+            if held is not None:
+                self._changed(None)
+        self._arm()
         if held is not None:
             log.info("%s: %s released the control lease", self._id, origin.who)
-            self._changed(None)
         self.audit(origin, described, EXECUTED if held is not None else f"{EXECUTED} (was free)")
         return held
 
     def _changed(self, held: Control | None) -> None:
+        """In the owner's step (rule 1): to the status, and in line for the state file."""
         self._mailbox.put_control(held)
-        self._store.later(lambda: self._save(held))
+        self._store.queue(lambda: self._save(held))
 
     def _save(self, held: Control | None) -> None:
         if not self._store.set_lease(self._id, held):
@@ -138,25 +148,27 @@ class Operators:
             )
 
     # -- its end (rule 2) --------------------------------------------------------------------
-    def _arm(self, held: Control | None) -> None:
-        """Under the lock: the one timer for the lease's end (None: no timer)."""
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-        if held is None or self._stopped:
-            return
-        self._timer = self._start_timer(max(0.0, held.until_unix - self._wall()), self._expire)
+    def _arm(self) -> None:
+        """After a step: the one timer for the end of the lease as it is now (none if free)."""
+        with self._timer_lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            now = self._wall()
+            held = self._lease.holder(now)
+            if held is None or self._stopped:
+                return
+            self._timer = self._start_timer(max(0.0, held.until_unix - now), self._expire)
 
     def _expire(self) -> None:
-        with self._lock:
-            now = self._wall()
-            ended = self._lease.expired(now)
-            if ended is None:
-                self._arm(self._lease.holder(now))  # early (rule 2), or already released
-                return
-            self._timer = None
+        with self._owner:  # rule 1: an end is a change like a release
+            ended = self._lease.expired(self._wall())
+            if ended is not None:
+                self._changed(None)
+        self._arm()  # early (rule 2): a new timer for the rest; ended: none
+        if ended is None:
+            return
         log.info("%s: the control lease of %s has ended", self._id, ended.operator)
-        self._changed(None)
         self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
 
     # -- the trail (rule 3) ------------------------------------------------------------------

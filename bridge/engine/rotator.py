@@ -13,7 +13,11 @@ as a refusal too. Motion is judged in one order: the lock, the wind (safety), th
 its holder; nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule
 11); every command judged here, executed or refused, is an audit event. The bridge's own moves
 (auto-park, the wind park, tracking's and following's targets) are the session's, never judged
-by the lease.
+by the lease. The safety state has one owner per rotator (kept.py rule 5, docs/architecture.md
+rule 14): a lock word, and the lease's claims, releases and end (operators.py rule 1), are
+decided, put in the mailbox and their save queued in one step under the owner's lock, from
+every interface; the lock the judge asks is that owner's (kept.py rule 2). A stop takes no
+part in it: it never waits for the owner's lock.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ import serial
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.follow import Follow, Heard
 from bridge.engine.health_memory import HealthMemory
-from bridge.engine.kept import Kept
+from bridge.engine.kept import Kept, Owner
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.operators import EXECUTED, Operators
@@ -89,10 +93,8 @@ class Rotator:
         self._store = store
         self._on_event = on_event
         self._wall = wall
-        self._locked = store.locked(self.id)
-        self._kept = Kept(
-            store, self.id, self.spec, locked=lambda: self._locked, report=self.report
-        )
+        self._owner = Owner(store)  # kept.py rule 5: the lock's and the lease's one step
+        self._kept = Kept(store, self.id, self.spec, report=self.report)
         self._mailbox = Mailbox()
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
@@ -102,7 +104,7 @@ class Rotator:
             self._status,
             on_event,
             options=self._kept.options(),
-            locked=self._locked,
+            locked=self._kept.locked,
             health=store.health(self.id),
             storm=self._kept.storm,  # kept.py rule 4
             wall=wall,
@@ -118,6 +120,7 @@ class Rotator:
             bearing=lambda: self.status.bearing_deg,
             report=self.report,
             on_audit=on_audit,
+            owner=self._owner,
         )
         self._stopped = False
         # the last STOP or lock ON put in the mailbox (monotonic), from any front end: the
@@ -149,7 +152,7 @@ class Rotator:
 
     @property
     def locked(self) -> bool:
-        return self._locked
+        return self._kept.locked
 
     def start(self) -> None:
         """Once: a stopped rotator's mailbox is closed (build a new Rotator instead)."""
@@ -182,11 +185,14 @@ class Rotator:
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=origin)
             raise
-        if isinstance(command, SetOption):
-            self._kept.save_option(command.name, command.enabled)  # kept.py
-        if isinstance(command, Stop):
-            self.last_halt_s = time.monotonic()
-        self._mailbox.put(judged, hold=hold if isinstance(command, Stop) else None)
+        if isinstance(judged, SetOption):
+            with self._owner:  # the session and the state file in the same order (kept.py)
+                self._kept.save_option(judged.name, judged.enabled)
+                self._mailbox.put(judged)
+        else:
+            if isinstance(judged, Stop):
+                self.last_halt_s = time.monotonic()
+            self._mailbox.put(judged, hold=hold if isinstance(judged, Stop) else None)
         if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
             self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
 
@@ -345,25 +351,19 @@ class Rotator:
         locked: bool,
         *,
         hold: int | None = None,
-        save: bool = True,
         origin: Origin | None = None,
         echo: bool = False,
     ) -> None:
-        """``hold`` as for ``submit``; ``save=False``: the caller calls ``save_lock`` after
-        (outside its own lock: the state file is written with an fsync). Never refused."""
-        self._locked = locked
-        if locked:
-            self.last_halt_s = time.monotonic()
-        self._mailbox.put_lock(locked, hold=hold)
-        if save:
-            self.save_lock()
+        """Never refused; ``hold`` as for ``submit``. The lock, the mailbox put and the save
+        queued for the state file are one step (kept.py rules 2, 5), from every interface."""
+        with self._owner:
+            self._kept.set_lock(locked)
+            if locked:
+                self.last_halt_s = time.monotonic()
+            self._mailbox.put_lock(locked, hold=hold)
         if not echo:
             what = f"lock {'ON' if locked else 'OFF'}"
             self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
-
-    def save_lock(self) -> None:
-        """The lock to the state file, on its writer thread (kept.py rule 2)."""
-        self._kept.save_lock()
 
     def note(self, message: str) -> None:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
@@ -409,7 +409,7 @@ class Rotator:
         """Refused for motion now, in this order (docs/architecture.md rule 11; never asked
         for a stop or lock): the lock, then the wind (safety), then the lease (coordination);
         the pointing judge and the link come after, in ``_check``."""
-        if self._locked:
+        if self._kept.locked:  # the owner's lock: the one copy (kept.py rule 2)
             raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
         wind = self.status.wind
         if wind is not None and wind.refusal:  # engine/wind.py rule 1

@@ -98,7 +98,7 @@ class Halts:
         if kind == "stop":
             rot.submit(Stop(Source.MQTT, origin), what, hold=hold, echo=echo)
         else:
-            rot.set_lock(True, hold=hold, save=False, origin=origin, echo=echo)
+            rot.set_lock(True, hold=hold, origin=origin, echo=echo)
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
@@ -160,8 +160,6 @@ class Halts:
                 log.debug("%s: retained %s on %s already carried out once", rot.id, kind, topic)
                 return
             self.carry(rot, kind, what)
-        if kind == "lock":
-            rot.save_lock()
         self.report_retained_halt(rot, topic, kind, what)
 
     def report_retained_halt(self, rot: RotatorPort, topic: str, kind: str, what: str) -> None:
@@ -191,8 +189,7 @@ class Halts:
             with self._lock:  # lastword.py rule 3: the only word while it is down
                 if self._publisher.up:
                     return
-                rot.set_lock(False, save=False, origin=origin)
-            rot.save_lock()
+                rot.set_lock(False, origin=origin)
             return
         if retain and not self.retain_is_live:
             self.replayed_halt(rot, topic, kind, payload)
@@ -204,8 +201,6 @@ class Halts:
                 log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
                 return  # lastword.py rule 4: the echo of the main connection's copy
             self.carry(rot, kind, what, hold=marker or None, origin=origin)
-        if kind == "lock":
-            rot.save_lock()
         if marker:
             self._send_marker(marker)
 
@@ -224,8 +219,6 @@ class Halts:
             echo = self.word.lane_came_first(rot.id, kind)
             lane_marker = self.word.main_halt(rot.id, kind)
             self.carry(rot, kind, what, origin=origin, echo=echo)
-        if kind == "lock":
-            rot.save_lock()
         if lane_marker is not None:
             marker = self.word.marker(lane_marker)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
@@ -238,8 +231,7 @@ class Halts:
             if not self.word.main_lock_off(rot.id):
                 log.info("%s: lock OFF published before a lock ON: the ON stands", rot.id)
                 return
-            rot.set_lock(False, save=False, origin=origin)
-        rot.save_lock()
+            rot.set_lock(False, origin=origin)
 
     def retained_deleted(self, topic: str) -> None:
         with self._lock:

@@ -55,11 +55,9 @@ class RotatorPort(Protocol):
         locked: bool,
         *,
         hold: int | None = None,
-        save: bool = True,
         origin: Origin | None = None,
         echo: bool = False,
     ) -> None: ...
-    def save_lock(self) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None

@@ -11,7 +11,10 @@ Rules:
    command is published on the station's topic and the station's judge has the last word.
 3. Stop and lock ON are never refused (docs/architecture.md rule 11): they go straight into the
    mailbox, which takes a stop first. Tracking ``off`` likewise. On the remote they are refused
-   only while they cannot be delivered (the broker out of reach), and the answer says so.
+   only while they cannot be delivered (the broker out of reach), and the answer says so. A
+   lock word is the rotator's owner's step (docs/architecture.md rule 14), the same as MQTT's:
+   the console keeps no lock of its own, and a lock OFF racing another interface's lock ON
+   leaves the judge, the status and the state file with one of them.
 4. Every command carries ``Source.WEB``, so the status says the console sent it (from the
    remote the station's status says ``mqtt``: it came over its broker), and who sent it
    (``Origin``: ``web`` and the browser's address, as the server saw it: port.py rule 4).

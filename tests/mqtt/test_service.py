@@ -120,15 +120,11 @@ class RecordingRotator:
         locked: bool,
         *,
         hold: int | None = None,
-        save: bool = True,
         origin: Origin | None = None,
         echo: bool = False,
     ) -> None:
         self.calls.append(("lock", locked, *([hold] if hold else [])))
         self.origins.append(origin)
-
-    def save_lock(self) -> None:
-        pass
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None

@@ -1,0 +1,219 @@
+"""One owner per rotator for its safety state (kept.py rule 5, operators.py rule 1): a lock
+word or a change of the control lease is decided, put in the mailbox and its save queued in
+one step, whichever interfaces race. Each test forces the interleaving a review found: the
+first word is held between its steps (inside its mailbox put) while the other word runs on a
+thread of its own until it returns or has to wait for the owner's lock; then the first goes on.
+No timing decides it. Then the judge, the session (what ``R/lock/state`` and ``R/control``
+publish), the state file and a rotator built from that file after a restart must agree.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from bridge.app import worker_config
+from bridge.engine.rotator import Rotator
+from bridge.engine.state_store import StateStore
+from bridge.model import Control, Origin, RotatorStatus, Source
+from bridge.mqtt.halts import Halts
+from bridge.mqtt.topics import Topics
+from bridge.settings import RotatorSettings
+from bridge.web.commands import WebCommand, carry_out
+
+T0 = 1_790_000_000.0
+HOLDER = Origin(Source.MQTT, "DL1ABC")
+OTHER = Origin(Source.MQTT, "G4XYZ")
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = T0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class Gate:
+    """The owner's lock, saying when a thread has to wait for it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.waiting = threading.Event()
+
+    def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
+        if self._lock.acquire(blocking=False):
+            return True
+        self.waiting.set()
+        return self._lock.acquire(blocking, timeout)
+
+    def release(self) -> None:
+        self._lock.release()
+
+
+class Station:
+    """One rotator, its state file, what its session published, and its stop lane."""
+
+    def __init__(self, tmp_path: Path, clock: Clock | None = None) -> None:
+        self.path = tmp_path / "state.json"
+        self.clock = clock or Clock()
+        self.cfg = worker_config(RotatorSettings(id="tower", model="rotorez", port="/dev/null"))
+        self.store = StateStore(self.path)
+        self.statuses: list[RotatorStatus] = []
+        self.rot = Rotator(
+            self.cfg, self.store, self.statuses.append, lambda e: None, wall=self.clock
+        )
+        worker = self.rot._worker
+        worker._do(worker.session.start(0.0))  # the first status, as the lines thread's
+        self.threads: list[threading.Thread] = []
+
+    def lane(self) -> Halts:
+        """The MQTT stop lane while the main connection is down: its word is the only one."""
+
+        class Down:
+            up = False
+
+            def publish_marker(self, topic: str, payload: str) -> None:
+                raise AssertionError("no marker while the main connection is down")
+
+        topics = Topics("rotor", {"tower": "rotor/tower"})
+        rotators = {"tower": self.rot}
+        up = Down()
+        return Halts(topics, up, rotators, self.clock, retain_is_live=True, on_problem=None)
+
+    def in_between(self, step: Callable[[], None], gate: Gate) -> None:
+        """``step`` on a thread of its own, until it returns or waits for the owner's lock."""
+        returned_or_waiting = gate.waiting
+
+        def run() -> None:
+            step()
+            returned_or_waiting.set()
+
+        thread = threading.Thread(target=run, daemon=True)
+        self.threads.append(thread)
+        thread.start()
+        assert returned_or_waiting.wait(10), "the other word neither returned nor waited"
+
+    def hold_between_steps(self, put: str, when: object, other: Callable[[], None]) -> None:
+        """The first call of the mailbox's ``put`` with ``when`` runs ``other`` in between."""
+        gate = Gate()
+        owner = getattr(self.rot, "_owner", None)  # before the owner there was no lock to wait
+        if owner is not None:
+            owner._lock = gate
+        mailbox = self.rot._mailbox
+        real = getattr(mailbox, put)
+        once = [True]
+
+        def held(value: object, **kw: object) -> None:
+            if value == when and once[0]:
+                once[0] = False
+                self.in_between(other, gate)
+            real(value, **kw)
+
+        setattr(mailbox, put, held)
+
+    def settle(self) -> RotatorStatus:
+        """Every thread done, the session served the mailbox, the writer wrote: the status the
+        session published last (what R/lock/state and R/control say)."""
+        for thread in self.threads:
+            thread.join(10)
+            assert not thread.is_alive()
+        self.rot._worker.serve(0.0, {self.rot._mailbox.fileno()})
+        self.store.flush()
+        return self.statuses[-1]
+
+    def restarted(self) -> Rotator:
+        store = StateStore(self.path)
+        return Rotator(self.cfg, store, lambda s: None, lambda e: None, wall=self.clock)
+
+
+def console_lock(rot: Rotator, on: bool) -> None:
+    carry_out(rot, WebCommand("lock", on=on), "192.168.1.20")
+
+
+@pytest.mark.parametrize("held_first", ["lane lock ON", "console lock OFF"])
+def test_a_console_lock_off_racing_a_stop_lane_lock_on(tmp_path: Path, held_first: str) -> None:
+    """Either word held between its steps while the other runs: the judge, the session, the
+    state file and the restart agree on one lock (before the owner: the judge unlocked, the
+    session and R/lock/state locked, the file unlocked; or the other way round)."""
+    st = Station(tmp_path)
+    lane = st.lane()
+
+    def lane_on() -> None:
+        lane.on_lane("rotor/tower/lock", b"ON", False, Origin(Source.MQTT))
+
+    def console_off() -> None:
+        console_lock(st.rot, False)
+
+    if held_first == "lane lock ON":
+        st.hold_between_steps("put_lock", True, console_off)
+        lane_on()
+    else:
+        st.hold_between_steps("put_lock", False, lane_on)
+        console_off()
+    shown = st.settle()
+    saved = StateStore(st.path).locked("tower")
+    last_word = held_first == "console lock OFF"  # the word that waited came last
+    assert (st.rot.locked, shown.locked, saved) == (last_word,) * 3
+    again = st.restarted()
+    assert again.locked is shown.locked  # what R/lock/state said last
+    assert again._worker.session.status.locked is shown.locked
+
+
+@pytest.mark.parametrize("held_first", ["claim", "release", "end"])
+def test_the_lease_changed_by_two_at_once(tmp_path: Path, held_first: str) -> None:
+    """A claim held between its decision and its put while another releases it; a release, or
+    the lease's end, held while another claims: the judge, R/control and the state file name
+    one holder, and so does the restart (before the owner: the judge free while R/control and
+    the file named a holder who blocked everyone after a restart, or the other way round)."""
+    st = Station(tmp_path)
+    ops = st.rot.operators
+    if held_first == "claim":
+        st.hold_between_steps(
+            "put_control",
+            Control("DL1ABC", T0 + 1800),
+            lambda: ops.release(OTHER, "release"),
+        )
+        ops.claim("DL1ABC", 30, HOLDER, "claim")
+        expected = None
+    else:
+        ops.claim("DL1ABC", 30, HOLDER, "claim")
+
+        def other_claims() -> None:
+            ops.claim("G4XYZ", 30, OTHER, "claim")
+
+        st.hold_between_steps("put_control", None, other_claims)
+        if held_first == "release":
+            ops.release(HOLDER, "release")
+        else:
+            st.clock.now += 1800  # its end, as the timer says it
+            ops._expire()
+        expected = Control("G4XYZ", st.clock.now + 1800)
+    shown = st.settle()
+    ops.stop()
+    saved = StateStore(st.path).lease("tower")
+    assert (ops.holder, shown.control, saved) == (expected,) * 3
+    again = st.restarted()
+    assert again.operators.holder == shown.control  # what R/control said last
+
+
+def test_a_lock_kept_from_the_state_file_is_said_at_start(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    st = Station(tmp_path)
+    console_lock(st.rot, True)
+    st.settle()
+    with caplog.at_level(logging.INFO, logger="bridge"):
+        again = st.restarted()
+    assert again.locked
+    assert "tower: safety lock ON, kept from the state file" in caplog.messages
+    caplog.clear()
+    console_lock(again, False)
+    again._store.flush()
+    with caplog.at_level(logging.INFO, logger="bridge"):
+        st.restarted()
+    assert not any("safety lock" in m for m in caplog.messages)  # unlocked: nothing to say
