@@ -22,9 +22,9 @@ Rules:
    claim, a release or the end of the control lease, and an option, are decided, put in the
    mailbox and their save queued under its one lock, from every interface's thread, so that
    the judge, the session (and so the retained state) and the state file cannot disagree. The
-   step is short: no I/O, no thread started, nothing that waits (the save is queued, and the
-   writer woken once the step has let go); the lines thread never takes it, and a stop never
-   waits for it.
+   step is short: no I/O, no thread started, nothing that waits (the save is queued; the lines
+   thread and the writer are woken once the step has let go); the lines thread never takes
+   it, and a stop never waits for it.
 6. A lock kept from the state file is said in the log at start: motion will be refused.
 """
 
@@ -34,6 +34,7 @@ import logging
 import threading
 from collections.abc import Callable
 
+from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
 from bridge.model import ErrorKind, WindInfo
 from bridge.protocols.base import ModelSpec
@@ -42,10 +43,13 @@ log = logging.getLogger(__name__)
 
 
 class Owner:
-    """Rule 5: ``with owner:`` is one step of a rotator's safety state."""
+    """Rule 5: ``with owner:`` is one step of a rotator's safety state; its puts pass
+    ``wake=False`` (mailbox.py rule 5) and its saves are queued (state_store.py rule 5): the
+    lines thread and the writer are woken once the step has let go."""
 
-    def __init__(self, store: StateStore) -> None:
+    def __init__(self, store: StateStore, mailbox: Mailbox) -> None:
         self._store = store
+        self._mailbox = mailbox
         self._lock = threading.Lock()
 
     def __enter__(self) -> None:
@@ -53,7 +57,8 @@ class Owner:
 
     def __exit__(self, *exc: object) -> None:
         self._lock.release()
-        self._store.wake()  # what the step queued (state_store.py rule 5)
+        self._mailbox.wake_once()
+        self._store.wake()
 
 
 class Kept:

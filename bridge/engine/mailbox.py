@@ -18,6 +18,9 @@ Rules:
    (a flood of targets cost a system call and a lines-thread round per message, half the
    bridge's CPU at 10,000 a second). ``take`` clears the debt when it swaps the batch, under
    the lock: a ``put`` after that writes a byte again; one before it is in the batch taken.
+   A put in a rotator's owner step (engine/kept.py rule 5) passes ``wake=False`` and the step
+   calls ``wake_once`` when it has let go: no system call while the owner's lock is held (the
+   write gives the GIL away, and a lock ON waiting for the step would wait for it too).
 6. A hold (mqtt/lastword.py rule 2) comes with the stop or lock ON that starts it, in one put;
    a release ends the holds up to its marker. A release that clears (the connection that
    would have caught up was lost) ends every hold and drops a target or track put before it;
@@ -99,8 +102,10 @@ class Mailbox:
         batch = self._batch
         return batch.stop is not None or batch.lock_on
 
-    def put(self, command: Target | Stop | SetOption, *, hold: int | None = None) -> None:
-        """``hold``: a stop that holds the rotator until that marker (rule 6)."""
+    def put(
+        self, command: Target | Stop | SetOption, *, hold: int | None = None, wake: bool = True
+    ) -> None:
+        """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5."""
         with self._lock:
             if isinstance(command, Stop):
                 self._batch.stop = command
@@ -113,9 +118,10 @@ class Mailbox:
             else:
                 self._option_order.pop(command.name, None)
                 self._option_order[command.name] = command
-        self._wake_once()
+        if wake:
+            self._wake_once()
 
-    def put_lock(self, locked: bool, *, hold: int | None = None) -> None:
+    def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
             self._batch.lock = locked
             if locked:
@@ -124,7 +130,8 @@ class Mailbox:
                 self._batch.track = None
                 self._batch.follow = None
                 self._hold(hold)
-        self._wake_once()
+        if wake:  # rule 5
+            self._wake_once()
 
     def put_release(self, marker: int, *, clear: bool = False) -> None:
         """Rule 6: the holds up to ``marker`` end; ``clear``: what waits before it is dropped."""
@@ -186,11 +193,12 @@ class Mailbox:
             self._batch.health_reset = True
         self._wake_once()
 
-    def put_control(self, control: Control | None) -> None:
-        """The control lease changed (the status shows its holder)."""
+    def put_control(self, control: Control | None, *, wake: bool = True) -> None:
+        """The control lease changed (the status shows its holder); ``wake``: rule 5."""
         with self._lock:
             self._batch.control, self._batch.control_set = control, True
-        self._wake_once()
+        if wake:
+            self._wake_once()
 
     def take(self) -> Batch:
         try:  # first the wake bytes, then the batch (rule 4)
@@ -208,6 +216,10 @@ class Mailbox:
     def wake(self) -> None:
         """Wake the worker without a command (shutdown)."""
         self._wake()
+
+    def wake_once(self) -> None:
+        """Rule 5: after puts made with ``wake=False``."""
+        self._wake_once()
 
     def _wake_once(self) -> None:
         """Rule 5: after a put (outside the lock: the write is a system call)."""

@@ -78,7 +78,7 @@ class Operators:
             log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
             kept = None
         self._lease = Lease(kept)
-        self._owner = owner or Owner(store)  # rule 1: the rotator's, shared with the lock
+        self._owner = owner or Owner(store, mailbox)  # rule 1: the rotator's, shared with the lock
         self._timer_lock = threading.Lock()  # rule 2
         self._start_timer = timer
         self._timer: Timer | None = None
@@ -89,7 +89,7 @@ class Operators:
         with self._owner:
             held = self._lease.holder(self._wall())
             if held is not None:
-                self._mailbox.put_control(held)
+                self._mailbox.put_control(held, wake=False)  # woken after the step
         self._arm()
 
     def stop(self) -> None:
@@ -135,7 +135,7 @@ class Operators:
 
     def _changed(self, held: Control | None) -> None:
         """In the owner's step (rule 1): to the status, and in line for the state file."""
-        self._mailbox.put_control(held)
+        self._mailbox.put_control(held, wake=False)  # woken after the step (kept.py rule 5)
         self._store.queue(lambda: self._save(held))
 
     def _save(self, held: Control | None) -> None:

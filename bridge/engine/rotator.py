@@ -93,9 +93,9 @@ class Rotator:
         self._store = store
         self._on_event = on_event
         self._wall = wall
-        self._owner = Owner(store)  # kept.py rule 5: the lock's and the lease's one step
         self._kept = Kept(store, self.id, self.spec, report=self.report)
         self._mailbox = Mailbox()
+        self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
         self._worker = Worker(
@@ -188,7 +188,7 @@ class Rotator:
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
                 self._kept.save_option(judged.name, judged.enabled)
-                self._mailbox.put(judged)
+                self._mailbox.put(judged, wake=False)  # woken after the step
         else:
             if isinstance(judged, Stop):
                 self.last_halt_s = time.monotonic()
@@ -360,7 +360,7 @@ class Rotator:
             self._kept.set_lock(locked)
             if locked:
                 self.last_halt_s = time.monotonic()
-            self._mailbox.put_lock(locked, hold=hold)
+            self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
         if not echo:
             what = f"lock {'ON' if locked else 'OFF'}"
             self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)

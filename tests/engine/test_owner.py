@@ -10,6 +10,7 @@ publish), the state file and a rotator built from that file after a restart must
 from __future__ import annotations
 
 import logging
+import os
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -217,3 +218,33 @@ def test_a_lock_kept_from_the_state_file_is_said_at_start(
     with caplog.at_level(logging.INFO, logger="bridge"):
         st.restarted()
     assert not any("safety lock" in m for m in caplog.messages)  # unlocked: nothing to say
+
+
+def test_the_step_writes_no_byte_and_starts_no_thread_while_it_holds_the_lock(
+    tmp_path: Path,
+) -> None:
+    """kept.py rule 5: a lock ON waiting for another word's step waits for no system call and
+    no thread start (each can give the GIL away for milliseconds): the wake byte for the lines
+    thread and the state writer come once the step has let go."""
+    st = Station(tmp_path)
+    mailbox, writer = st.rot._mailbox, st.store._writer
+    assert writer._thread is None  # nothing saved yet: no writer (ondemand.py rule 3)
+    seen: list[tuple[bool, bool]] = []
+    real = mailbox.put_lock
+
+    def put_lock(locked: bool, **kw: object) -> None:
+        real(locked, **kw)
+        seen.append((woken(), writer._thread is not None))
+
+    def woken() -> bool:
+        try:
+            return bool(os.read(mailbox.fileno(), 4096))
+        except BlockingIOError:
+            return False
+
+    mailbox.put_lock = put_lock  # type: ignore[method-assign]
+    console_lock(st.rot, False)
+    assert seen == [(False, False)]  # in the step: nothing
+    assert woken() and writer._thread is not None  # after it: both
+    st.store.flush()
+    assert StateStore(st.path).locked("tower") is False
