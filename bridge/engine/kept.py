@@ -24,7 +24,8 @@ Rules:
    the judge, the session (and so the retained state) and the state file cannot disagree. The
    step is short: no I/O, no thread started, nothing that waits (the save is queued; the lines
    thread and the writer are woken once the step has let go); the lines thread never takes
-   it, and a stop never waits for it.
+   it, and a stop never waits for it. Steps take turns in the order they came: a lock ON
+   waits for the steps already under way or waiting, never for a flood of words after it.
 6. A lock kept from the state file is said in the log at start: motion will be refused.
 """
 
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from collections import deque
 from collections.abc import Callable
 
 from bridge.engine.mailbox import Mailbox
@@ -45,18 +47,35 @@ log = logging.getLogger(__name__)
 class Owner:
     """Rule 5: ``with owner:`` is one step of a rotator's safety state; its puts pass
     ``wake=False`` (mailbox.py rule 5) and its saves are queued (state_store.py rule 5): the
-    lines thread and the writer are woken once the step has let go."""
+    lines thread and the writer are woken once the step has let go. The steps take turns in
+    the order they came: a step that ends hands the turn to the oldest one waiting, so a lock
+    ON waits for the steps that came before it and never for a flood of words after it (a
+    plain lock lets the thread that let go take it again at once, for as long as it holds the
+    GIL)."""
 
     def __init__(self, store: StateStore, mailbox: Mailbox) -> None:
         self._store = store
         self._mailbox = mailbox
-        self._lock = threading.Lock()
+        self._guard = threading.Lock()  # only around the books below: a few bytecodes
+        self._busy = False
+        self._waiting: deque[threading.Lock] = deque()  # each one's turn, oldest first
 
     def __enter__(self) -> None:
-        self._lock.acquire()
+        with self._guard:
+            if not self._busy:
+                self._busy = True
+                return
+            turn = threading.Lock()
+            turn.acquire()
+            self._waiting.append(turn)
+        turn.acquire()  # handed over by the step before (``__exit__``)
 
     def __exit__(self, *exc: object) -> None:
-        self._lock.release()
+        with self._guard:
+            if self._waiting:
+                self._waiting.popleft().release()  # the next step's turn: still busy
+            else:
+                self._busy = False
         self._mailbox.wake_once()
         self._store.wake()
 

@@ -2,7 +2,7 @@
 word or a change of the control lease is decided, put in the mailbox and its save queued in
 one step, whichever interfaces race. Each test forces the interleaving a review found: the
 first word is held between its steps (inside its mailbox put) while the other word runs on a
-thread of its own until it returns or has to wait for the owner's lock; then the first goes on.
+thread of its own until it returns or has to wait its turn at the owner; then the first goes on.
 No timing decides it. Then the judge, the session (what ``R/lock/state`` and ``R/control``
 publish), the state file and a rotator built from that file after a restart must agree.
 """
@@ -12,12 +12,15 @@ from __future__ import annotations
 import logging
 import os
 import threading
+from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from bridge.app import worker_config
+from bridge.engine.kept import Owner
+from bridge.engine.mailbox import Mailbox
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.model import Control, Origin, RotatorStatus, Source
@@ -39,21 +42,18 @@ class Clock:
         return self.now
 
 
-class Gate:
-    """The owner's lock, saying when a thread has to wait for it."""
+class Turns(deque[threading.Lock]):
+    """The owner's steps waiting their turn (kept.py ``Owner``), saying when one has to."""
 
     def __init__(self) -> None:
-        self._lock = threading.Lock()
+        super().__init__()
         self.waiting = threading.Event()
+        self.came = threading.Semaphore(0)  # one for each step that had to wait
 
-    def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
-        if self._lock.acquire(blocking=False):
-            return True
+    def append(self, turn: threading.Lock) -> None:
+        super().append(turn)
         self.waiting.set()
-        return self._lock.acquire(blocking, timeout)
-
-    def release(self) -> None:
-        self._lock.release()
+        self.came.release()
 
 
 class Station:
@@ -86,9 +86,9 @@ class Station:
         up = Down()
         return Halts(topics, up, rotators, self.clock, retain_is_live=True, on_problem=None)
 
-    def in_between(self, step: Callable[[], None], gate: Gate) -> None:
-        """``step`` on a thread of its own, until it returns or waits for the owner's lock."""
-        returned_or_waiting = gate.waiting
+    def in_between(self, step: Callable[[], None], turns: Turns) -> None:
+        """``step`` on a thread of its own, until it returns or waits for its turn."""
+        returned_or_waiting = turns.waiting
 
         def run() -> None:
             step()
@@ -101,10 +101,10 @@ class Station:
 
     def hold_between_steps(self, put: str, when: object, other: Callable[[], None]) -> None:
         """The first call of the mailbox's ``put`` with ``when`` runs ``other`` in between."""
-        gate = Gate()
-        owner = getattr(self.rot, "_owner", None)  # before the owner there was no lock to wait
+        turns = Turns()
+        owner = getattr(self.rot, "_owner", None)  # before the owner no step had to wait
         if owner is not None:
-            owner._lock = gate
+            owner._waiting = turns
         mailbox = self.rot._mailbox
         real = getattr(mailbox, put)
         once = [True]
@@ -112,7 +112,7 @@ class Station:
         def held(value: object, **kw: object) -> None:
             if value == when and once[0]:
                 once[0] = False
-                self.in_between(other, gate)
+                self.in_between(other, turns)
             real(value, **kw)
 
         setattr(mailbox, put, held)
@@ -248,3 +248,34 @@ def test_the_step_writes_no_byte_and_starts_no_thread_while_it_holds_the_lock(
     assert woken() and writer._thread is not None  # after it: both
     st.store.flush()
     assert StateStore(st.path).locked("tower") is False
+
+
+def test_the_steps_take_turns_in_the_order_they_came() -> None:
+    """A lock ON that waits for a step waits only for the steps that came before it: a flood
+    of words that come after it cannot take the turn first (a plain lock lets the thread that
+    let go take it again for as long as it keeps the GIL)."""
+    mailbox = Mailbox()
+    owner = Owner(StateStore(None), mailbox)
+    owner._waiting = turns = Turns()
+    done: list[str] = []
+
+    def step(name: str) -> threading.Thread:
+        def run() -> None:
+            with owner:
+                done.append(name)
+
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        assert turns.came.acquire(timeout=10), f"{name} did not wait its turn"
+        return thread
+
+    owner.__enter__()  # a step under way
+    threads = [step("lock ON"), step("lock OFF"), step("claim")]
+    owner.__exit__(None, None, None)
+    for thread in threads:
+        thread.join(10)
+    assert done == ["lock ON", "lock OFF", "claim"]
+    with owner:  # free again
+        done.append("release")
+    assert done[-1] == "release" and not turns
+    mailbox.close()
