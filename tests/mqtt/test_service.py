@@ -607,10 +607,11 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
     assert rots["tower"].calls == [("submit", Target(5.0, None, M), "target '5'")]
 
 
-def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_one() -> None:
-    """Rule 5 (lastword.py rules 1 and 2): the lane's stop is carried out at once with a hold;
-    the main connection carries out everything in order, its own copy of the stop included;
-    the marker published after the lane's stop ends the hold when the main one reads it."""
+def test_a_lane_stop_holds_the_rotator_until_the_main_connection_reads_its_own_copy() -> None:
+    """Rule 5 (lastword.py rules 1, 2 and 9): the lane's stop is carried out at once with a
+    hold; the main connection carries out everything in order, its own copy of the stop
+    included, which ends the hold (everything published before the stop has been read); the
+    marker, back later, ends nothing more."""
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.on_lane_message("rotor/stop", b"", False)
@@ -626,8 +627,8 @@ def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_o
         ("submit", stop, "stop", 1),
         ("submit", Target(300.0, None, M), "target '300'"),
         ("submit", stop, "stop"),
-        ("submit", Target(250.0, None, M), "target '250'"),
         ("release", 1),
+        ("submit", Target(250.0, None, M), "target '250'"),
     ]
 
 
