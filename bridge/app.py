@@ -97,6 +97,7 @@ class App:
                 self.topics.bridge_hello,
             ),
             on_refused=self._refused,
+            fence_topic=self.topics.bridge_fence,  # client.py rule 16
         )
         self.client.publish_retained(self.topics.bridge_info, self.me.info([]))  # sent on connect
         self.mqtt = MqttService(
@@ -106,6 +107,7 @@ class App:
             error_events_per_s=settings.mqtt.error_events_per_s,
             retain_is_live=settings.mqtt.protocol == "5",
             on_problem=lambda topic, problem: self._denied(topic, problem),
+            on_info=lambda problem, on: self._info(problem, on),
         )
         store = self.store = StateStore(settings.state_file)
         try:
@@ -221,6 +223,7 @@ class App:
             on_message=self.mqtt.on_lane_message,
             on_denied=self._denied,
             on_new_connection=self.mqtt.lane_connected,
+            on_subscribed=self.mqtt.lane_subscribed,
             no_replay=self.mqtt.no_replay_subscriptions(),
         )
         self.client.watch_owned(self.topics.owned())
@@ -293,6 +296,15 @@ class App:
             if rid is None or rot.id == rid:
                 rot.note(problem)
         self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+
+    def _info(self, problem: str, on: bool) -> None:
+        """A problem said on ``B/bridge/info`` while it lasts (a long hold: mqtt/halts.py)."""
+        problems = self.client.problems
+        if on and problem not in problems:
+            problems.append(problem)
+        elif not on and problem in problems:
+            problems.remove(problem)
+        self.client.publish_retained(self.topics.bridge_info, self.me.info(problems))
 
     def _connected(self) -> None:
         """The main connection is up (its first look done): the stop lane connects too, now

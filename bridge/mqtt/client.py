@@ -24,6 +24,13 @@ each written out in the module that keeps it:
    bridge's CPU with 32 rotators turning, benchmarks/) and lets paho re-send an old value over
    the fresher state re-published from the cache. Discovery configs, the bridge's
    online/offline and error events stay QoS 1; a rotator's availability is state.
+16. The broker is asked whether the bridge can read back its markers (lastword.py rule 7), on
+   every connect, with no clock: right before the first look's hello (rule 14), a probe goes
+   to ``B/bridge/fence`` (QoS 1: under MQTT 5 a publish the ACL refuses gets its PUBACK
+   reason, rule 11); the broker keeps one order, so if the hello comes back and the probe has
+   not, the broker drops it (mosquitto 2.0 grants the subscription and drops the messages,
+   without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5 too). That is
+   said as rule 11 says, naming the topic, from the first connection on.
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
@@ -77,6 +84,7 @@ class MqttClient(Connection):
         on_denied: Callable[[str, str], None] | None = None,
         claim: Claim | None = None,
         on_refused: Callable[[str], None] | None = None,
+        fence_topic: str | None = None,
         clock: Callable[[], float] = time.monotonic,
         **options: Unpack[Options],
     ) -> None:
@@ -106,6 +114,8 @@ class MqttClient(Connection):
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         self._on_refused = on_refused
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
+        self._fence_topic = fence_topic  # rule 16
+        self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self.refused: str | None = None
 
     @property
@@ -263,6 +273,9 @@ class MqttClient(Connection):
             if look is not None:  # rule 14: look first
                 hello = look.begin()
                 self._subscribe(client, [(look.claim.hello_topic, 0)])
+                if self._fence_topic is not None:  # rule 16: the probe, then the hello
+                    self._probe = b"probe " + hello
+                    self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
                 client.publish(look.claim.hello_topic, hello, qos=0)  # not retained
                 timer = threading.Timer(LOOK_TIMEOUT_S, self._look_timed_out, args=(look.looking,))
                 timer.daemon = True
@@ -283,6 +296,10 @@ class MqttClient(Connection):
         return was_up and not self._stopping
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
+        if topic == self._fence_topic and payload.startswith(b"probe "):
+            if payload == self._probe:  # rule 16: back before the hello
+                self._probe = None
+            return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None and self._look_saw(self._look, topic, payload):
             return True
         return bool(self._owned.filters) and self._foreign(topic, payload)
@@ -356,10 +373,23 @@ class MqttClient(Connection):
             with self._lock:
                 n = look.ended_by(payload)
             if n is not None:
+                self._judge_probe()
                 self._end_look(n)
             return True  # another bridge's hello, or one of ours come late
         with self._lock:
             return look.saw(topic, payload)
+
+    def _judge_probe(self) -> None:
+        """Rule 16: the hello is back; the probe published before it is not: dropped."""
+        probe, self._probe = self._probe, None
+        if probe is not None and self._fence_topic is not None:
+            self._delivery.deny(
+                self._fence_topic,
+                "read back what it publishes on",
+                "a probe published there did not come back before the message published after "
+                "it (the broker's ACL denies reading or writing it?); a stop from the stop lane "
+                "then holds targets until the main connection reads its own copy of the stop",
+            )
 
     # -- rule 10: the bridge's own topics (owned.py judges) ---------------------------------
     def _foreign(self, topic: str, payload: bytes) -> bool:

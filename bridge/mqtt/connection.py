@@ -222,6 +222,7 @@ class Options(TypedDict, total=False):
     """What both connections take alike, as keywords of their constructors."""
 
     on_new_connection: Callable[[], None] | None  # before any message of a new connection
+    on_subscribed: Callable[[], None] | None  # the command topics' SUBACK, before their messages
     no_replay: list[str] | None  # command filters whose retained message is not replayed
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int
@@ -248,6 +249,7 @@ class Connection:
         self._no_replay = frozenset(options.get("no_replay") or ())
         self._handler = on_message
         self._on_new_connection = options.get("on_new_connection")
+        self._on_subscribed = options.get("on_subscribed")
         self._clock = clock
         self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
         self._guard = TakeoverGuard()
@@ -382,6 +384,8 @@ class Connection:
         filters = self._sub_filters.pop(mid, [])
         if mid == self._command_mid:
             self._subscribed = True  # the commands reach us from now on
+            if self._on_subscribed is not None:  # (paho reads what comes next after this)
+                self._on_subscribed()
         for topic, code in zip(filters, reason_codes, strict=False):
             if code.is_failure:
                 self._denied(topic, str(code))

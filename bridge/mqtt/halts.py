@@ -1,7 +1,11 @@
 """Stop and lock from both MQTT connections, in the order lastword.py decides (service.py rule
 5): the stop lane's messages, the main connection's halts, the markers and their resend, the
-retained halts. lastword.py decides; this carries its decisions out into the rotators, each
-decision and the mailbox put it lets through under one lock.
+retained halts, the report of a long hold. lastword.py decides; this carries its decisions out
+into the rotators, each decision and the mailbox put it lets through under one lock.
+
+One timer at a time (TICK_S, while a hold or a marker is out or a long hold is reported) sends
+a marker again and reports a long hold on ``B/bridge/info`` (``on_info``, never on paho's
+threads); it decides nothing (lastword.py rule 5): no hold ends by it.
 """
 
 from __future__ import annotations
@@ -12,11 +16,13 @@ from collections.abc import Callable
 
 from bridge.model import Origin, Source, Stop
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.lastword import RESEND_S, LastWord
+from bridge.mqtt.lastword import LONG_HOLD_S, LastWord
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
 
 log = logging.getLogger(__name__)
+
+TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
 
 
 def switch_on(payload: bytes) -> bool:
@@ -43,6 +49,7 @@ class Halts:
         *,
         retain_is_live: bool,
         on_problem: Callable[[str, str], None] | None,
+        on_info: Callable[[str, bool], None] | None = None,
     ) -> None:
         self.topics = topics
         self._publisher = publisher
@@ -50,10 +57,11 @@ class Halts:
         self._clock = clock
         self.retain_is_live = retain_is_live
         self._on_problem = on_problem  # (topic, problem): a broker problem the bridge reports
+        self._on_info = on_info  # (problem, still so): said on B/bridge/info while it lasts
         self.word = LastWord()
         self._lock = threading.Lock()  # two connections, two paho threads
-        self._resend_timer: threading.Timer | None = None
-        self._markers_denied = False
+        self._timer: threading.Timer | None = None
+        self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
 
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message): holds end with
@@ -68,12 +76,19 @@ class Halts:
         with self._lock:
             self.word.lane_connected()
 
-    def markers_denied(self) -> None:
-        """The main connection cannot read the markers: the lane's halts hold nothing
-        (lastword.py rule 7)."""
+    def lane_subscribed(self) -> None:
+        """The lane's subscription is acknowledged (lastword.py rule 9), on its paho thread:
+        before any message it brings."""
         with self._lock:
-            self._markers_denied = True
-        self.main_gone()
+            n = self.word.lane_subscribed(self._clock())
+        if n is not None:
+            self._send_marker(n)
+
+    def markers_denied(self) -> None:
+        """The broker does not let the main connection read its markers (lastword.py rule 7):
+        none goes out; a lane's halt holds until its main copy. The holds stay."""
+        with self._lock:
+            self.word.markers_denied()
 
     def lane_markers_denied(self) -> None:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
@@ -81,7 +96,7 @@ class Halts:
             self.word.echoes = False
 
     def _holds_possible(self) -> bool:
-        return self._publisher.up and not self._markers_denied
+        return self._publisher.up
 
     def carry(
         self,
@@ -102,50 +117,78 @@ class Halts:
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
-        self._arm_resend()
+        self._arm()
 
-    def _arm_resend(self) -> None:
-        """One timer at most looks again in RESEND_S while a hold is out."""
+    def _arm(self) -> None:
+        """One timer at most looks again in TICK_S while there is something to look at."""
         with self._lock:
-            if self._resend_timer is not None or not self.word.holding:
+            busy = self.word.holding or self.word.markers_out or self._said
+            if self._timer is not None or not busy:
                 return
-            timer = self._resend_timer = threading.Timer(RESEND_S, self._resend_marker)
+            timer = self._timer = threading.Timer(TICK_S, self._tick)
         timer.daemon = True
         timer.start()
 
-    def _resend_marker(self) -> None:
-        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
+    def _tick(self) -> None:
         with self._lock:
-            self._resend_timer = None
+            self._timer = None
         self.resend_if_due()
-        self._arm_resend()
+        self.say_long_holds()
+        self._arm()
 
     def resend_if_due(self) -> None:
+        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
         with self._lock:
             n = self.word.resend_due(self._clock())
         if n is None:
             return
-        if n < 0:  # lastword.py rule 5: the broker drops them
-            problem = (
-                f"the bridge's own markers on {self.topics.bridge_fence} do not come back "
-                "(does the broker's ACL deny that topic?): a stop from the stop lane can no "
-                "longer hold back a target published before it"
-            )
-            log.error("%s", problem)
-            self.markers_denied()
-            if self._on_problem is not None:
-                self._on_problem(self.topics.bridge_fence, problem)
-            return
-        log.info("a marker of the stop lane did not come back; sending another")
+        log.info("a marker of the stop lane did not come back yet; sending another")
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+
+    def say_long_holds(self) -> None:
+        """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
+        when it ends; it holds all the same."""
+        with self._lock:
+            held = self.word.long_holds(self._clock())
+            markers = self.word.markers
+            ended = {rid: said for rid, said in self._said.items() if rid not in held}
+            new = {rid: self._long_hold(rid, markers) for rid in held if rid not in self._said}
+            for rid in ended:
+                del self._said[rid]
+            self._said.update(new)
+        for problem in new.values():
+            log.warning("%s", problem)
+            if self._on_info is not None:
+                self._on_info(problem, True)
+        for rid, problem in ended.items():
+            log.info("%s: the hold of the stop lane ended", rid)
+            if self._on_info is not None:
+                self._on_info(problem, False)
+
+    def _long_hold(self, rid: str, markers: bool) -> str:
+        caught_up = (
+            f"its marker on {self.topics.bridge_fence} comes back"
+            if markers
+            else "it reads its own copy of the stop or lock"
+        )
+        return (
+            f"{rid}: a stop or lock from the stop lane has held this rotator's targets for more "
+            f"than {LONG_HOLD_S:g} s: the main connection has not yet read everything published "
+            f"before it (a flood of targets, a slow link?). Targets wait until {caught_up}; "
+            "stops and locks go through"
+        )
 
     def marker_back(self, payload: bytes) -> None:
         with self._lock:
             n, released = self.word.marker_back(payload)
-            for rid in released:
-                rot = self._rotators.get(rid)
-                if rot is not None:
-                    rot.release(n)
+            self._release(released, n)
+
+    def _release(self, released: list[str] | tuple[str, ...], marker: int) -> None:
+        """Under the lock: the holds of ``released`` up to ``marker`` end."""
+        for rid in released:
+            rot = self._rotators.get(rid)
+            if rot is not None:
+                rot.release(marker)
 
     def on_lane_marker(self, payload: bytes) -> None:
         """The lane read its marker (lastword.py rule 4)."""
@@ -201,8 +244,10 @@ class Halts:
                 log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
                 return  # lastword.py rule 4: the echo of the main connection's copy
             self.carry(rot, kind, what, hold=marker or None, origin=origin)
-        if marker:
+        if marker and self.word.markers:
             self._send_marker(marker)
+        elif marker:
+            self._arm()  # (a long hold is said)
 
     def main_halt(
         self,
@@ -216,11 +261,11 @@ class Halts:
         """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
         for rule 4."""
         with self._lock:
-            echo = self.word.lane_came_first(rot.id, kind)
-            lane_marker = self.word.main_halt(rot.id, kind)
-            self.carry(rot, kind, what, origin=origin, echo=echo)
-        if lane_marker is not None:
-            marker = self.word.marker(lane_marker)
+            copy = self.word.main_halt(rot.id, kind)
+            self.carry(rot, kind, what, origin=origin, echo=copy.echo)
+            self._release(copy.released, copy.upto)  # lastword.py rule 9
+        if copy.lane_marker is not None:
+            marker = self.word.marker(copy.lane_marker)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
         if retain:  # published retained, live (MQTT 5): carried out, and reported
             self.report_retained_halt(rot, topic, kind, what)

@@ -19,9 +19,11 @@ but not the order between them. So:
    marker, so every message the main connection brings before the marker was published at or
    before the lane's word: a target among them waits (held, not sent), and the main
    connection's own copy of the stop or lock, which comes among them too, drops every target
-   older than it, as rule 1 says. When the marker comes back, the hold ends and what is still
-   pending (published after the word) goes out. Nothing is decided by matching copies, and
-   nothing waits on a timer.
+   older than it, as rule 1 says. The hold ends when the marker comes back, or when that copy
+   is read (everything published before the lane's word has been read by then: rule 9 says
+   when a copy is known for one), whichever comes first; then what is still pending
+   (published after the word) goes out. Nothing is decided by matching payloads, and no clock
+   ends a hold (rule 5).
 3. A lock OFF from the lane is not carried out (it comes in order on the main connection,
    rule 1), except while the main connection is down: then the lane's word is the only one.
 4. The main connection may read a halt before the lane does (both are idle and race). The lane's
@@ -35,11 +37,12 @@ but not the order between them. So:
    new connection). No clock decides it.
 5. A hold ends with clearing when the main connection drops (nothing older can come any more;
    a target or tracking that waited is dropped and reported: its place in line is lost) and
-   when it connects again. A marker still out after RESEND_S (a broker that drops messages for
-   a reader that fell behind) is sent again with a new number; a later marker ends every hold
-   before it. One that has not come back after GIVE_UP markers (an ACL that denies the marker
-   topic: a broker may grant the subscription and drop the publish without a word) ends the
-   holds with clearing and is reported as a problem (rule 7).
+   when it connects again. While the main connection lives, no clock ends a hold: however
+   long the main connection takes to read what was published before the word (a backlog of
+   targets, a slow machine), the targets wait. A marker still out after RESEND_S (a broker
+   that drops messages for a reader that fell behind) is sent again with a new number, the
+   wait doubling up to RESEND_MAX_S, for as long as it is out; a later marker ends every hold
+   before it. A hold longer than LONG_HOLD_S is reported (halts.py) while it lasts, and holds.
 6. A retained stop or lock ON (a dashboard button set to retain by mistake) is carried out when
    it is published, like any, and reported; and once at most when the broker replays it: on a
    subscription, to either connection, at every reconnect. Under MQTT 5 the stop and lock
@@ -47,22 +50,49 @@ but not the order between them. So:
    one is always live; under MQTT 3.1.1 a live one arrives without the flag, and one with it
    is a replay, known by its payload (a new payload on the topic is a new message; an empty
    retained message deletes it and is forgotten).
-7. While the main connection cannot read the markers (rule 5, or a subscription the broker
-   denies), the lane's halts hold nothing: they are still carried out at once, and again in
-   order on the main connection, as before there were markers.
+7. Whether the main connection can read its markers is learnt from the broker, never from a
+   marker that is late: a subscription it denies (SUBACK), a marker publish it refuses (MQTT 5
+   PUBACK), or the probe the main connection publishes on the marker topic right before its
+   first look's hello on every connect: the hello back first, the probe not, is the broker
+   dropping it (client.py rule 16). Then no marker is sent, and a lane's halt holds until the
+   main connection reads its own copy (rule 9), or drops: holding is the safe direction. (No
+   marker can then tell when a new lane connection is in step, rule 9: its halts are taken as
+   in step; a halt published while the lane was down could then stand for a newer one.)
 8. A lock OFF the main connection reads while a lane lock ON for that rotator still waits for
    its main copy was published before that ON: it is not carried out (the ON is the last word,
    even if the main connection then drops before its copy comes).
+9. The main connection's copy of a lane halt is the oldest one the lane read of that rotator and
+   kind still waiting (the broker keeps one order for both connections), once the lane's
+   connection is known to be in step: a halt published while the lane was not subscribed
+   comes on the main connection only, and must not be taken for the copy of a newer one. So
+   when the lane's subscription is acknowledged, a marker goes out on the main connection
+   (``lane_subscribed``); until one at least as new comes back (or the main connection is new,
+   subscribed after the lane), a halt the main connection reads does not count as the copy of
+   the lane's halts read on that connection: carried out all the same (rule 1), noting and
+   ending nothing. A copy ends every hold up to its lane halt's number, as that marker would.
 """
 
 from __future__ import annotations
 
 import secrets
+import sys
 from collections import deque
 from dataclasses import dataclass, field
 
-RESEND_S = 2.0  # rule 5
-GIVE_UP = 3
+RESEND_S = 2.0  # rule 5: the first wait for a marker, doubled for each resend ...
+RESEND_MAX_S = 30.0  # ... up to this; a marker is sent again for as long as it is out
+LONG_HOLD_S = 5.0  # rule 5: a hold longer than this is reported while it lasts
+NOT_YET = sys.maxsize  # rule 9: a lane connected, not yet subscribed: nothing of it in step
+
+
+@dataclass(frozen=True)
+class Copy:
+    """What a halt read on the main connection means (rules 1, 4 and 9)."""
+
+    echo: bool = False  # the copy of a halt the lane carried out first
+    lane_marker: int | None = None  # rule 4: the lane marker to publish
+    upto: int = 0  # rule 9: the holds up to this marker end ...
+    released: tuple[str, ...] = ()  # ... these rotators'
 
 
 @dataclass
@@ -70,19 +100,26 @@ class LastWord:
     token: str = field(default_factory=lambda: secrets.token_hex(4))
     _next: int = 0
     _holds: dict[str, int] = field(default_factory=dict)  # rotator -> marker it waits for
+    _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
     _marker_sent_at: dict[int, float] = field(default_factory=dict)  # markers still out
-    _resends: int = 0
-    _lane_waiting: dict[tuple[str, str], deque[int]] = field(default_factory=dict)
+    _resend_s: float = RESEND_S
+    # rule 9: (rotator, kind) -> (number, the marker the main connection must have passed for
+    # the main copy to count), oldest first
+    _lane_waiting: dict[tuple[str, str], deque[tuple[int, int]]] = field(default_factory=dict)
+    _lane_sub: int = 0  # rule 9: the marker sent when the lane's subscription was acknowledged
+    _main_past: int = 0  # rule 9: the newest marker the main connection has read past
     _echoes: dict[tuple[str, str], deque[int]] = field(default_factory=dict)  # rule 4
     _lane_next: int = 0
     echoes: bool = True  # False: the lane cannot read its markers (rule 4 then notes nothing)
+    markers: bool = True  # False: the main connection cannot read its markers (rule 7)
     _retained: dict[str, bytes] = field(default_factory=dict)  # rule 6
 
     # -- the lane (rule 2) -------------------------------------------------------------------
     def lane_halt(self, rotator_id: str, kind: str, now: float, hold: bool = True) -> int | None:
-        """A stop or lock ON read on the lane: the marker to hold the rotator until (0: carry
-        it out without a hold, rule 7), or None when it is the echo of one the main connection
-        carried out (rule 4)."""
+        """A stop or lock ON read on the lane: the number of the hold it puts the rotator on
+        (0: carry it out without a hold, while the main connection is down), or None when it
+        is the echo of one the main connection carried out (rule 4). Publish its marker while
+        ``markers`` (rule 7)."""
         key = (rotator_id, kind)
         echoes = self._echoes.get(key)
         if echoes:
@@ -93,8 +130,10 @@ class LastWord:
         self._next += 1
         n = self._next
         self._holds[rotator_id] = n
-        self._marker_sent_at[n] = now
-        self._lane_waiting.setdefault(key, deque()).append(n)
+        self._held_since.setdefault(rotator_id, now)
+        if self.markers:
+            self._marker_sent_at[n] = now
+        self._lane_waiting.setdefault(key, deque()).append((n, self._lane_sub))
         return n
 
     def marker(self, n: int) -> str:
@@ -102,8 +141,20 @@ class LastWord:
         return f"{self.token} {n}"
 
     def lane_connected(self) -> None:
-        """Rule 4: no copy of an older halt comes on the new connection."""
+        """Rule 4: no copy of an older halt comes on the new connection; rule 9: nothing it
+        reads is in step until its subscription is."""
         self._echoes.clear()
+        self._lane_sub = NOT_YET
+
+    def lane_subscribed(self, now: float) -> int | None:
+        """Rule 9: the lane's subscription is acknowledged: the marker to publish on the main
+        connection (None while the main connection cannot read markers, rule 7)."""
+        self._next += 1
+        self._lane_sub = self._next
+        if not self.markers:
+            return None
+        self._marker_sent_at[self._next] = now
+        return self._next
 
     def lane_marker_back(self, payload: bytes) -> None:
         """Rule 4: the lane has read every copy it will get of the halts noted up to it."""
@@ -113,25 +164,23 @@ class LastWord:
                 echoes.popleft()
 
     # -- the main connection (rule 1) ----------------------------------------------------------
-    def main_halt(self, rotator_id: str, kind: str) -> int | None:
+    def main_halt(self, rotator_id: str, kind: str) -> Copy:
         """A stop or lock ON read on the main connection (it is carried out whatever this says):
-        the lane's copy, if it came first, is accounted for; if not, the number of the lane
+        the copy of the lane's, if it came first (rule 9: the holds it ends); if not, the lane
         marker to publish (rule 4)."""
         key = (rotator_id, kind)
         waiting = self._lane_waiting.get(key)
         if waiting:
+            n, after = waiting[0]
+            if after > self._main_past and self.markers:
+                return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
-            return None
+            return Copy(echo=True, upto=n, released=tuple(self._passed(n)))
         if not self.echoes:
-            return None
+            return Copy()
         self._lane_next += 1
         self._echoes.setdefault(key, deque()).append(self._lane_next)
-        return self._lane_next
-
-    def lane_came_first(self, rotator_id: str, kind: str) -> bool:
-        """Whether a halt the main connection reads now is one the lane has carried out already
-        (rule 2: carried out again all the same; the audit trail counts it once)."""
-        return bool(self._lane_waiting.get((rotator_id, kind)))
+        return Copy(lane_marker=self._lane_next)
 
     def main_lock_off(self, rotator_id: str) -> bool:
         """Rule 8: whether a lock OFF read on the main connection is carried out."""
@@ -143,43 +192,67 @@ class LastWord:
         n = self._number(payload)
         if not n:
             return 0, []
-        self._resends = 0
+        self._main_past = max(self._main_past, n)
+        return n, self._passed(n)
+
+    def _passed(self, n: int) -> list[str]:
+        """The main connection has read everything published before marker or lane halt
+        ``n``: the holds up to it end, and what waited for it is done."""
         for sent in [m for m in self._marker_sent_at if m <= n]:
             del self._marker_sent_at[sent]
+        if not self._marker_sent_at:
+            self._resend_s = RESEND_S
         for waiting in self._lane_waiting.values():
-            while waiting and waiting[0] <= n:  # its main copy came before the marker, or
-                waiting.popleft()  # was lost: either way none is to come (rule 1)
+            while waiting and waiting[0][0] <= n:  # its main copy came before, or was
+                waiting.popleft()  # lost: either way none is to come (rule 1)
         released = [rid for rid, m in self._holds.items() if m <= n]
         for rid in released:
             del self._holds[rid]
-        return n, released
+            self._held_since.pop(rid, None)
+        return released
 
     def main_gone(self) -> list[str]:
         """Rule 5 (the main connection dropped or is new): the rotators whose hold ends with
-        clearing; every marker out is void."""
+        clearing; every marker out is void. Rule 9: the next main connection subscribes after
+        the lane's present one did."""
         released = list(self._holds)
         self._holds.clear()
+        self._held_since.clear()
         self._marker_sent_at.clear()
         self._lane_waiting.clear()
-        self._resends = 0
+        self._resend_s = RESEND_S
+        if self._lane_sub != NOT_YET:
+            self._main_past = self._next
         return released
 
+    def markers_denied(self) -> None:
+        """Rule 7: the broker does not let the main connection read its markers: none goes out
+        any more; the holds stay, each until its main copy."""
+        self.markers = False
+        self._marker_sent_at.clear()
+
     def resend_due(self, now: float) -> int | None:
-        """Rule 5: a new marker to publish when one has been out RESEND_S, else None; -1 when
-        GIVE_UP markers went unanswered (the caller ends the holds and reports it)."""
-        if not self._marker_sent_at or now - min(self._marker_sent_at.values()) < RESEND_S:
+        """Rule 5: a new marker to publish when the oldest out has waited its turn (RESEND_S,
+        doubling up to RESEND_MAX_S), else None. Never gives up, never ends a hold."""
+        if not self._marker_sent_at or now - min(self._marker_sent_at.values()) < self._resend_s:
             return None
-        if self._resends >= GIVE_UP:
-            return -1
-        self._resends += 1
+        self._resend_s = min(2 * self._resend_s, RESEND_MAX_S)
         self._next += 1
         n = self._next
         self._marker_sent_at = {n: now}  # (a later marker ends every hold before it)
         return n
 
+    def long_holds(self, now: float) -> dict[str, float]:
+        """Rule 5: the rotators held for LONG_HOLD_S or more, and since when (to report)."""
+        return {rid: since for rid, since in self._held_since.items() if now - since >= LONG_HOLD_S}
+
     @property
     def holding(self) -> bool:
         return bool(self._holds)
+
+    @property
+    def markers_out(self) -> bool:
+        return bool(self._marker_sent_at)
 
     def _number(self, payload: bytes) -> int:
         token, _, number = payload.decode("ascii", "replace").partition(" ")

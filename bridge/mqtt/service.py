@@ -29,8 +29,9 @@ Rules:
 5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
    lastword.py decides what each copy does (halts.py carries it out): the main connection's
    carry out every word in order; the lane's stop or lock ON is carried out at once and holds
-   the rotator's targets until the bridge's marker comes back on the main connection. The
-   decision and the mailbox put it lets through are one step, under one lock.
+   the rotator's targets until the main connection has caught up with it (its marker, or its
+   own copy of the halt, read on the main connection; no clock ends a hold). The decision
+   and the mailbox put it lets through are one step, under one lock.
 6. While the main connection is gated (its first look runs, or the bridge refused to run:
    client.py rule 14) only halts are carried out from it.
 7. Who sent a command: the MQTT 5 user property ``operator`` when it is short printable text
@@ -89,6 +90,7 @@ class MqttService:
         clock: Callable[[], float] = time.monotonic,
         retain_is_live: bool = True,
         on_problem: Callable[[str, str], None] | None = None,
+        on_info: Callable[[str, bool], None] | None = None,
     ) -> None:
         """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
         handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
@@ -113,6 +115,7 @@ class MqttService:
             clock,
             retain_is_live=retain_is_live,
             on_problem=on_problem,
+            on_info=on_info,
         )
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
@@ -170,6 +173,9 @@ class MqttService:
 
     def lane_connected(self) -> None:
         self._halts.lane_connected()
+
+    def lane_subscribed(self) -> None:
+        self._halts.lane_subscribed()
 
     def markers_denied(self) -> None:
         self._halts.markers_denied()

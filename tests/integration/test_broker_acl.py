@@ -15,6 +15,7 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.app import App
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import Mosquitto
 from bridge.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
@@ -134,15 +135,24 @@ def acl_rig(tmp_path: Path, acl_text: str) -> Iterator[tuple[Rig, Probe]]:
         broker.stop()
 
 
-def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> None:
-    """lastword.py rule 5: mosquitto grants the subscription to B/bridge/fence and drops the
-    bridge's markers without a word; the rotor must not stay held for as long as the main
-    connection lasts: the hold ends (with clearing) after a few resends, and B/bridge/info
-    says why. The next target turns it."""
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_markers_the_acl_drops_are_known_from_the_first_connection_and_a_stop_still_holds(
+    tmp_path: Path, protocol: str
+) -> None:
+    """lastword.py rule 7, client.py rule 16: mosquitto grants the subscription to
+    B/bridge/fence and drops the bridge's markers without a word; the bridge knows it from its
+    probe on connecting (B/bridge/info says so before any stop), and a lane's stop still
+    holds the targets published before it until the main connection reads its own copy of
+    the stop; the next target turns the rotor. (Under MQTT 5 mosquitto refuses the probe's
+    publish in its PUBACK; under MQTT 3.1.1 only the probe's order says so.)"""
     acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
     with acl_rig(tmp_path, acl) as (rig, probe):
+        rig.mqtt_extra = {"protocol": protocol}
         emu = rig.add("tower", "rotorez", emu={"start_az_deg": 20, "speed_deg_s": 20.0})
         app = rig.start()
+        info = probe.wait_for("rotor/bridge/info", lambda m: b"rotor/bridge/fence" in m.payload)
+        (said,) = [p for p in json.loads(info.payload)["problems"] if "bridge/fence" in p]
+        assert ("publish to" if protocol == "5" else "read back") in said
         rig.ready("tower")
         wait_until(app.lane.connected.is_set, 10, "the lane is up")
         with main_held_at(app, "rotor/target", b"60") as held:
@@ -150,9 +160,7 @@ def test_markers_the_acl_drops_end_the_hold_and_are_reported(tmp_path: Path) -> 
             wait_until(held.is_set, 10, "the main connection is held")
             probe.publish("rotor/stop", "")
             wait_until(lambda: app.mqtt._word.holding, 10, "the lane's stop holds")
-        probe.wait_for(
-            "rotor/bridge/info", lambda m: b"do not come back" in m.payload, 20
-        )  # (about GIVE_UP x RESEND_S)
-        assert not app.mqtt._word.holding
+        wait_until(lambda: not app.mqtt._word.holding, 10, "its main copy ended the hold")
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"60" in f.data]
         probe.publish("rotor/target", "200")
         emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 200) <= 3, 30)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from bridge.mqtt.lastword import GIVE_UP, RESEND_S, LastWord
+from bridge.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, RESEND_S, Copy, LastWord
+
+HOUR_S = 3600.0
 
 
 def test_a_lane_halt_holds_until_its_marker_and_a_later_marker_ends_every_hold_before_it() -> None:
@@ -23,11 +25,12 @@ def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_
 ):
     w = LastWord(token="t")
     assert w.lane_halt("a", "stop", 0.0) == 1
-    assert w.main_halt("a", "stop") is None  # the copy of the lane's: no note
-    assert w.main_halt("a", "stop") == 1  # read first on the main connection: lane marker 1
+    copy = w.main_halt("a", "stop")  # the copy of the lane's: no note, its hold ends
+    assert copy == Copy(echo=True, upto=1, released=("a",))
+    assert w.main_halt("a", "stop") == Copy(lane_marker=1)  # read first on the main one
     assert w.lane_halt("a", "stop", 0.3) is None  # its echo on the lane
     assert w.lane_halt("a", "stop", 0.4) == 2  # a new stop: carried out at once
-    assert w.main_halt("a", "lock") == 2
+    assert w.main_halt("a", "lock").lane_marker == 2
     assert w.lane_halt("a", "stop", 1.1) == 3  # notes are per kind
     assert w.lane_halt("b", "lock", 1.2) == 4  # and per rotator
 
@@ -35,16 +38,19 @@ def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_
 def test_notes_end_with_their_lane_marker_and_when_the_lane_reconnects() -> None:
     """Rule 4: a note never costs a later stop more than the lane's own round trip."""
     w = LastWord(token="t")
-    w.main_halt("a", "stop")  # the lane missed this one (it was down)
-    w.lane_connected()
-    assert w.lane_halt("a", "stop", 0.5) == 1
-    n = w.main_halt("a", "stop")  # read late from the main connection's backlog
+    assert w.main_halt("a", "stop").lane_marker == 1  # the lane missed this one (it was down)
+    w.lane_connected()  # so its note is forgotten
+    w.marker_back(w.marker(w.lane_subscribed(0.4) or 0).encode())  # (in step: rule 9)
+    assert w.lane_halt("a", "stop", 0.5) == 2
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=2, released=("a",))
+    n = w.main_halt("a", "stop").lane_marker  # read first on the main connection
     w.lane_marker_back(w.marker(n or 0).encode())  # the lane has no copy of it
-    assert w.lane_halt("a", "stop", 0.6) == 2  # a new stop, not taken for an echo
+    assert w.lane_halt("a", "stop", 0.6) == 3  # a new stop, not taken for an echo
     w.lane_marker_back(b"other 99")  # not ours: nothing
     w.echoes = False  # the lane cannot read its markers: nothing noted
-    assert w.main_halt("a", "stop") is None
-    assert w.lane_halt("a", "stop", 0.7) == 3
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=3, released=("a",))
+    assert w.main_halt("a", "stop") == Copy()
+    assert w.lane_halt("a", "stop", 0.7) == 4
 
 
 def test_a_lock_off_is_older_than_a_lane_lock_on_waiting_for_its_copy() -> None:
@@ -75,7 +81,7 @@ def test_a_new_main_connection_ends_every_hold_and_voids_the_markers_out() -> No
     assert w.marker_back(b"t 2") == (2, []) and n == 3  # an old marker ends no newer hold
 
 
-def test_a_marker_out_too_long_is_replaced_by_a_new_one_and_then_given_up() -> None:
+def test_a_marker_out_too_long_is_sent_again_with_a_back_off_and_never_given_up() -> None:
     w = LastWord(token="t")
     w.lane_halt("a", "stop", 0.0)
     assert w.resend_due(RESEND_S - 0.1) is None
@@ -83,9 +89,92 @@ def test_a_marker_out_too_long_is_replaced_by_a_new_one_and_then_given_up() -> N
     assert n == 2 and w.resend_due(RESEND_S + 0.2) is None
     assert w.marker_back(b"t 2") == (2, ["a"])
     w.lane_halt("a", "stop", 10.0)
-    resent = [w.resend_due(10.0 + RESEND_S * (i + 1) + 0.1) for i in range(GIVE_UP + 1)]
-    assert resent[-1] == -1 and all(n and n > 0 for n in resent[:-1])  # (the caller gives up)
-    assert w.lane_halt("a", "stop", 0.0, hold=False) == 0  # rule 7: no hold
+    sent, t, waits = [], 10.0, []
+    while t < 10.0 + HOUR_S:  # an hour of a broker that drops every marker
+        t += 0.5
+        n = w.resend_due(t)
+        if n is not None:
+            sent.append((t, n))
+    waits = [b[0] - a[0] for a, b in zip(sent, sent[1:], strict=False)]
+    assert waits[:3] == [2 * RESEND_S, 4 * RESEND_S, 8 * RESEND_S] and max(waits) == RESEND_MAX_S
+    assert all(n > 0 for _t, n in sent) and w.holding  # never given up, still held
+    assert w.marker_back(w.marker(sent[-1][1]).encode())[1] == ["a"]  # the last one ends it
+
+
+def test_no_clock_ends_a_hold_while_the_main_connection_lives() -> None:
+    """Rule 5: hours of a main connection that reads nothing: held; then each way a hold
+    ends: the marker, the main connection's own copy, the main connection gone."""
+    for end in ("marker", "copy", "gone"):
+        w = LastWord(token="t")
+        n = w.lane_halt("a", "stop", 0.0)
+        for t in range(1, 5 * int(HOUR_S)):
+            w.resend_due(float(t))  # the timer's work: it may send markers again, no more
+        assert w.holding and w.long_holds(5 * HOUR_S) == {"a": 0.0}
+        if end == "marker":
+            assert w.marker_back(w.marker(n or 0).encode()) == (n, ["a"])
+        elif end == "copy":
+            assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=("a",))
+        else:
+            assert w.main_gone() == ["a"]  # (the caller releases with clearing)
+        assert not w.holding and w.long_holds(5 * HOUR_S) == {}
+
+
+def test_a_copy_ends_every_hold_up_to_its_own_and_no_later_one() -> None:
+    """Rule 9: the copy of lane halt n says as much as marker n would."""
+    w = LastWord(token="t")
+    w.lane_halt("a", "stop", 0.0)  # 1
+    w.lane_halt("b", "stop", 0.0)  # 2
+    w.lane_halt("a", "lock", 0.0)  # 3: a is held until 3 now
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=1, released=())
+    assert w.main_halt("b", "stop") == Copy(echo=True, upto=2, released=("b",))
+    assert w.holding and w.main_lock_off("a") is False  # rule 8: the ON waits for its copy
+    assert w.main_halt("a", "lock") == Copy(echo=True, upto=3, released=("a",))
+    assert not w.holding and not w.markers_out  # the markers out are done with too
+
+
+def test_a_long_hold_is_known_while_it_lasts() -> None:
+    w = LastWord(token="t")
+    w.lane_halt("a", "stop", 10.0)
+    assert w.long_holds(10.0 + LONG_HOLD_S - 0.1) == {}
+    assert w.long_holds(10.0 + LONG_HOLD_S) == {"a": 10.0}
+    w.lane_halt("a", "stop", 12.0)  # the hold goes on: since its start
+    assert w.long_holds(20.0) == {"a": 10.0}
+    w.marker_back(b"t 2")
+    assert w.long_holds(20.0) == {}
+
+
+def test_with_the_markers_denied_a_lane_halt_holds_until_its_main_copy() -> None:
+    """Rule 7: learnt from the broker; nothing goes out to wait for, the hold stays."""
+    w = LastWord(token="t")
+    held = w.lane_halt("a", "stop", 0.0)
+    w.markers_denied()
+    assert w.holding and not w.markers_out
+    assert w.lane_halt("b", "lock", 1.0) == 2  # still a hold, no marker out
+    assert not w.markers_out and w.resend_due(HOUR_S) is None
+    assert w.holding and w.long_holds(HOUR_S) == {"a": 0.0, "b": 1.0}
+    w.lane_connected()  # (without markers, a new lane connection is taken as in step)
+    w.lane_subscribed(2.0)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=held or 0, released=("a",))
+    assert w.main_halt("b", "lock").released == ("b",)
+    assert not w.holding
+
+
+def test_a_halt_published_while_the_lane_was_down_is_not_taken_for_a_newer_ones_copy() -> None:
+    """Rule 9: the lane reconnected; the main connection, behind, still reads a stop the lane
+    never had: it must not end the hold of the newer stop the lane read on its new connection."""
+    w = LastWord(token="t")
+    w.lane_connected()
+    sync = w.lane_subscribed(0.0)
+    assert sync == 1 and w.markers_out  # goes out on the main connection
+    held = w.lane_halt("a", "stop", 0.1)  # on the new connection
+    assert w.main_halt("a", "stop") == Copy()  # the stop the lane never had: nothing ends
+    assert w.holding
+    w.marker_back(w.marker(sync).encode())  # the main connection is past the lane's start
+    assert w.holding
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=held or 0, released=("a",))
+    w.main_gone()  # a new main connection subscribes after the lane did: in step at once
+    n = w.lane_halt("a", "stop", 1.0)
+    assert w.main_halt("a", "stop") == Copy(echo=True, upto=n or 0, released=("a",))
 
 
 def test_a_retained_stop_live_always_replayed_once_per_message() -> None:

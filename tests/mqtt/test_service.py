@@ -28,6 +28,7 @@ from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
+from tests.support.clock import FakeClock
 
 NOW_UNIX = 1_700_000_000.0
 NOW_ISO = "2023-11-14T22:13:20.000+00:00"
@@ -603,10 +604,11 @@ def test_other_topics_go_to_the_features_and_subscriptions_include_theirs() -> N
     assert rots["tower"].calls == [("submit", Target(5.0, None, M), "target '5'")]
 
 
-def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_one() -> None:
-    """Rule 5 (lastword.py rules 1 and 2): the lane's stop is carried out at once with a hold;
-    the main connection carries out everything in order, its own copy of the stop included;
-    the marker published after the lane's stop ends the hold when the main one reads it."""
+def test_a_lane_stop_holds_the_rotator_until_the_main_connection_reads_its_own_copy() -> None:
+    """Rule 5 (lastword.py rules 1, 2 and 9): the lane's stop is carried out at once with a
+    hold; the main connection carries out everything in order, its own copy of the stop
+    included, which ends the hold (everything published before the stop has been read); the
+    marker, back later, ends nothing more."""
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     svc.on_lane_message("rotor/stop", b"", False)
@@ -622,8 +624,8 @@ def test_a_lane_stop_holds_the_rotator_until_its_marker_comes_back_on_the_main_o
         ("submit", stop, "stop", 1),
         ("submit", Target(300.0, None, M), "target '300'"),
         ("submit", stop, "stop"),
-        ("submit", Target(250.0, None, M), "target '250'"),
         ("release", 1),
+        ("submit", Target(250.0, None, M), "target '250'"),
     ]
 
 
@@ -721,3 +723,35 @@ def test_while_gated_only_halts_are_taken_and_the_rest_is_reported() -> None:
     svc.on_message("rotor/stop", b"", False, gated=True)
     assert [c[0] for c in tower.calls] == ["refused", "lock", "submit"]
     assert "first look" in str(tower.calls[0][1])
+
+
+def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -> None:
+    """lastword.py rule 5, halts.py's timer work in virtual time: markers sent again, never
+    given up; the hold said once on B/bridge/info, never ended by the clock; the main
+    connection's copy of the stop ends it, and the saying."""
+    clock = FakeClock(0.0)
+    said: list[tuple[str, bool]] = []
+    pub = RecordingPublisher()
+    svc = MqttService(
+        Topics("rotor", {"tower": "rotor"}),
+        pub,
+        wall=lambda: NOW_UNIX,
+        clock=clock,
+        on_info=lambda problem, on: said.append((problem, on)),
+    )
+    tower = RecordingRotator("tower", "rotorez")
+    svc.attach(tower)
+    svc.on_lane_message("rotor/stop", b"", False)
+    for _ in range(3 * 3600):  # three hours of a main connection that reads nothing
+        clock.t += 1.0
+        svc._halts.resend_if_due()
+        svc._halts.say_long_holds()
+    assert not [c for c in tower.calls if c[0] == "release"]
+    markers = [m for m in pub.sent if m[0] == "rotor/bridge/fence"]
+    assert 3 < len(markers) < 3 * 3600 / 20  # sent again, with a back-off
+    assert [on for _p, on in said] == [True] and "tower: a stop" in said[0][0]
+    svc.on_message("rotor/target", b"300", False)  # published before the stop: held
+    svc.on_message("rotor/stop", b"", False)  # its own copy
+    assert tower.calls[-1] == ("release", 1)
+    svc._halts.say_long_holds()
+    assert said[-1] == (said[0][0], False)
