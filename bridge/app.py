@@ -90,6 +90,7 @@ class App:
             on_new_connection=lambda: self.mqtt.main_gone(),
             on_connection_lost=lambda: self.mqtt.main_gone(),
             no_replay=self.topics.stop_lane(),
+            replayed=[r.wind_topic for r in settings.rotators if r.wind_topic],  # mqtt/wind.py
             claim=Claim(
                 self.me,
                 settings.mqtt.base_topic,

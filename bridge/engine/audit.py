@@ -6,14 +6,18 @@ Rules:
    a full queue drops the line and counts it (said in the next line written, ``dropped``). A
    stop, a paho callback or the lines thread never wait for a disk (docs/architecture.md
    rule 12).
-2. One event is one line of JSON, whatever text it carries (``audit_line``). Lines are
-   appended and flushed one by one (no fsync: a trail, not the state file). Before a
+2. One event is one line of JSON, whatever text it carries (``audit_line``). Each line is one
+   ``os.write`` on a descriptor opened with O_APPEND (no fsync: a trail, not the state file),
+   so it reaches the file whole or not at all. Before a
    line that would take the file past ``max_bytes`` the file is rotated: ``audit.jsonl`` becomes
    ``audit.jsonl.1``, that one ``.2``, up to ``keep`` old files; the oldest is deleted.
 3. A write that fails (a full disk, a removed directory, no permission) is never fatal: the
-   line is dropped, and the failure is reported once (``on_problem``) until a write succeeds
-   again; then that is said once too. The file is opened anew for every batch, so a path that
-   becomes writable again (space freed, directory made) is used without a restart.
+   file is cut back to its size before that line (a short write on a full disk leaves no torn
+   line), the line and the rest of its batch are dropped and counted (``lines_lost``,
+   ``write_failures``), and the failure is reported once (``on_problem``) until a write
+   succeeds again; then that is said once too, in the log with the counts, and the first line
+   written says how many were lost (``dropped``). The file is opened anew for every batch, so
+   a path that becomes writable again (space freed, directory made) is used without a restart.
 4. ``stop`` writes what is queued, then ends the thread; it waits no longer than its timeout
    (a writer hung on its disk must not hang the bridge's shutdown).
 5. ``AuditTrail`` hands each rotator's events to the file (if one is configured) and to a
@@ -23,6 +27,7 @@ Rules:
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -61,6 +66,7 @@ class AuditFile:
         keep: int = KEEP_FILES,
         on_problem: Callable[[str | None], None] | None = None,
         queue_lines: int = QUEUE_LINES,
+        os_write: Callable[[int, bytes], int] = os.write,
     ) -> None:
         """``on_problem``: a message when writing fails (rule 3), None when it works again."""
         self.path = path
@@ -72,6 +78,9 @@ class AuditFile:
         self._failing = False  # rule 3
         self.lines_written = 0
         self.lines_lost = 0  # dropped by a full queue or a failed write
+        self.write_failures = 0  # rule 3: writes that failed (each ends its batch)
+        self._unsaid = 0  # rule 3: lines lost to failed writes, not said in a line yet
+        self._os_write = os_write  # (tests give a disk that fails their way)
         self._thread = threading.Thread(target=self._run, name="audit", daemon=True)
 
     def start(self) -> None:
@@ -125,52 +134,78 @@ class AuditFile:
 
     def _write(self, events: list[AuditEvent]) -> None:
         lines = []
+        carried = 0  # rule 3: lines lost before, said in the first line written
         for event in events:
             doc = event.as_dict()
-            if self._dropped:  # rule 1 (read and reset here only: a count, not a promise)
-                doc["dropped"], self._dropped = self._dropped, 0
+            if self._dropped or self._unsaid:  # rule 1 (read and reset here only: a count,
+                carried = self._dropped + self._unsaid  # not a promise)
+                doc["dropped"], self._dropped, self._unsaid = carried, 0, 0
             lines.append(audit_line(doc) + "\n")
-        try:
-            self._append(lines)
-        except OSError as exc:
-            self.lines_lost += len(lines)
-            if not self._failing:  # rule 3: once
+        done, exc = self._append(lines)
+        self.lines_written += done
+        if exc is not None:  # rule 3
+            lost = len(lines) - done
+            self.lines_lost += lost
+            self.write_failures += 1
+            self._unsaid = lost + (carried if done == 0 else 0)  # a lost line's count goes on
+            if not self._failing:  # once
                 self._failing = True
                 problem = f"audit file {self.path} cannot be written ({exc}): lines are lost"
                 log.error("%s", problem)
                 if self._on_problem is not None:
                     self._on_problem(problem)
             return
-        self.lines_written += len(lines)
         if self._failing:
             self._failing = False
-            log.warning("audit file %s is written again", self.path)
+            log.warning(
+                "audit file %s is written again; %d line(s) lost in all (%d failed write(s))",
+                self.path,
+                self.lines_lost,
+                self.write_failures,
+            )
             if self._on_problem is not None:
                 self._on_problem(None)
 
-    def _append(self, lines: list[str]) -> None:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        out = None
+    def _append(self, lines: list[str]) -> tuple[int, OSError | None]:
+        """Rule 2: the lines appended, one ``os.write`` each on an O_APPEND descriptor; how many
+        were, and the error that ended it (rule 3: the file is cut back to the line before)."""
+        fd, done, size = -1, 0, 0
         try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
             for line in lines:
                 data = line.encode()
-                if out is None:
+                if fd < 0 or (size and size + len(data) > self._max_bytes):
+                    if fd >= 0:
+                        os.close(fd)
+                        fd = -1
                     size = self._size()
                     if size and size + len(data) > self._max_bytes:
                         self._rotate()
                         size = 0
-                    out = open(self.path, "ab")  # noqa: SIM115  # closed below
-                    written = size
-                elif written and written + len(data) > self._max_bytes:
-                    out.close()
-                    self._rotate()
-                    out, written = open(self.path, "ab"), 0  # noqa: SIM115
-                out.write(data)
-                out.flush()  # rule 2: a line at a time reaches the system (and ENOSPC here)
-                written += len(data)
+                    fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+                self._append_line(fd, data)
+                size += len(data)
+                done += 1
+        except OSError as exc:
+            return done, exc
         finally:
-            if out is not None:
-                out.close()
+            if fd >= 0:
+                os.close(fd)
+        return done, None
+
+    def _append_line(self, fd: int, data: bytes) -> None:
+        """Rule 3: a line is written whole or not at all: after a failed or short write the
+        file is cut back to its size before it (no torn line for a reader, nor for the next
+        line to land on)."""
+        before = os.fstat(fd).st_size
+        try:
+            written = self._os_write(fd, data)
+        except OSError:
+            _cut(fd, before)
+            raise
+        if written != len(data):
+            _cut(fd, before)
+            raise OSError(errno.ENOSPC, f"short write ({written} of {len(data)} bytes)")
 
     def _size(self) -> int:
         """The current file's size: 0 for none, and for what is not a regular file (a directory
@@ -194,6 +229,15 @@ class AuditFile:
             if older.exists():
                 older.replace(self.path.with_name(f"{self.path.name}.{n + 1}"))
         self.path.replace(self.path.with_name(f"{self.path.name}.1"))
+
+
+def _cut(fd: int, size: int) -> None:
+    """Cut a regular file back to ``size`` (best effort: the failure is already reported)."""
+    try:
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            os.ftruncate(fd, size)
+    except OSError as exc:
+        log.debug("audit file: cutting back to %d bytes failed: %s", size, exc)
 
 
 class Reporter(Protocol):

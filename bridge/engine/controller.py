@@ -17,7 +17,9 @@ Rules:
 4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
    report that says automatic motion is off gets it switched on again (slewing.py has the
    rules for a report that does not come).
-5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so).
+5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so). A
+   reading is taken when its exchange is over (link.py rule 9): one that other bytes spoil, or
+   one the codec does not trust, is no reading, and the controller is asked again at once.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 """
 
@@ -192,7 +194,8 @@ class Controller:
         replies = link.codec.feed(data)
         for reply in replies:
             if isinstance(reply, PositionReply):
-                self._reading(link, reply, now)
+                if not link.hold_reading(reply, now):  # rule 5: taken once the exchange is over
+                    self._ask_again(link, now)
             elif isinstance(reply, VersionReply):
                 if reply.version != self.version:
                     log.info("%s: controller version %s", self.name, reply.version)
@@ -202,11 +205,23 @@ class Controller:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self.options.all_due()
                 link.add_junk(reply.data, now)
-                if reply.reason is JunkReason.UNTRUSTED:
-                    link.ask_again(now)
-                    if link.end_slew(now):  # the slew is over; where it ended, unseen
-                        self.motion = mo.slew_ended(self.motion, now)
+                if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
+                    self._ask_again(link, now)
+        self._settled(link, now)
         return bool(replies)
+
+    def _ask_again(self, link: Link, now: float) -> None:
+        """Rule 5: the exchange gave no reading it can trust."""
+        log.debug("%s: reply not trusted; asking again", self.name)
+        link.ask_again(now)
+        if link.end_slew(now):  # the slew is over; where it ended, unseen
+            self.motion = mo.slew_ended(self.motion, now)
+
+    def _settled(self, link: Link, now: float) -> None:
+        """Rule 5: a reading whose exchange is over is taken."""
+        reply = link.settled(now)
+        if reply is not None:
+            self._reading(link, reply, now)
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -244,6 +259,7 @@ class Controller:
         link = self.link
         if link is None:
             return
+        self._settled(link, now)
         if link.reply_overdue(now):
             todo = slewing.overdue(self.cfg, link.slew, link.reply_timeout_s, now)
             if todo.error is not None:

@@ -35,12 +35,16 @@ Rules:
    switched on, the fresh one it started with included. Statuses of any other instance (a
    second WSJT-X on another band, another station's in the same multicast group) are ignored
    while it follows, or the rotor would swing between two partners at every decoding period.
+   What it keeps of them is bounded (the IGNORED_KEPT heard last) and said at most once per
+   IGNORED_LOG_S, with the count of others since: a flood of forged instance names costs
+   neither memory nor the disk.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
@@ -54,6 +58,9 @@ from bridge.pointing import toward
 log = logging.getLogger(__name__)
 
 FRESH_S = 30.0  # rule 4
+IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said once)
+IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
+NAME_SHOWN = 40  # characters of an instance name a log line quotes (WSJT-X's Id is short)
 
 
 @dataclass(frozen=True)
@@ -93,7 +100,9 @@ class Follower:
         self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
         self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
         self._instance: str | None = None  # rule 8: the program followed
-        self._ignored: set[str] = set()  # rule 8: the others, logged once each
+        self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
+        self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
+        self._ignored_since = 0  # rule 8: others first heard since then
 
     @property
     def on(self) -> bool:
@@ -108,7 +117,7 @@ class Follower:
         if now - self._heard_t > FRESH_S:
             self._heard = None
         self._instance = self._heard.instance if self._heard is not None else None  # rule 8
-        self._ignored = set()
+        self._ignored.clear()
         log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
 
     def end(self, why: str) -> bool:
@@ -125,17 +134,32 @@ class Follower:
             if self._instance is None:
                 self._instance = heard.instance
             elif heard.instance != self._instance:
-                if heard.instance not in self._ignored:
-                    self._ignored.add(heard.instance)
-                    log.warning(
-                        "%s: following %r: the status of %r is ignored (switch following off "
-                        "and on to follow the program heard first then)",
-                        self._rig.rotator_id,
-                        self._instance,
-                        heard.instance,
-                    )
+                self._ignore(heard.instance, now)
                 return
         self._heard, self._heard_t = heard, now
+
+    def _ignore(self, instance: str, now: float) -> None:
+        """Rule 8: another program's status; remembered (bounded) and said rarely."""
+        ignored = self._ignored
+        if instance in ignored:
+            ignored.move_to_end(instance)
+            return
+        ignored[instance] = None
+        if len(ignored) > IGNORED_KEPT:
+            ignored.popitem(last=False)
+        self._ignored_since += 1
+        if now - self._ignored_log_t < IGNORED_LOG_S:
+            return
+        others = self._ignored_since - 1
+        self._ignored_log_t, self._ignored_since = now, 0
+        log.warning(
+            "%s: following %r: the status of %r is ignored%s (switch following off and on to "
+            "follow the program heard first then)",
+            self._rig.rotator_id,
+            (self._instance or "")[:NAME_SHOWN],
+            instance[:NAME_SHOWN],
+            f", and of {others} other program(s) since the last such line" if others else "",
+        )
 
     def _turning(self, scene: Scene) -> bool:
         """Its own turn is under way: while it follows, anything else that moves ends it."""

@@ -32,6 +32,14 @@ Rules:
    interval polls at the same instants, so one thread serves a round of them with one wake-up
    (lines.py rule 1). A poll asked for at once (a new target) is off the grid; the next one is
    back on it, never less than half an interval later.
+9. One exchange, one reading: a reading is held until the line has been quiet for SETTLE_BYTES
+   byte times (SETTLE_MIN_S at least) and only then taken (``settled``); bytes that go on
+   arriving hold it longer, up to a whole reply's bytes more (a frame that starts in the quiet
+   time is judged whole). Bytes in that time that no healthy exchange has (a second reply,
+   asked for or not, line noise; not the controller's own chatter, which its codec calls
+   harmless) spoil it: the exchange is not trusted, the reading is dropped and the controller
+   asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
+   as a move). A reply owed is not overdue while its reading is held.
 """
 
 from __future__ import annotations
@@ -41,9 +49,11 @@ from collections import deque
 from dataclasses import replace
 
 from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
-from bridge.protocols.base import Codec, ModelSpec
+from bridge.protocols.base import Codec, JunkReason, JunkReply, ModelSpec, PositionReply
 
 JUNK_QUIET_S = 0.05
+SETTLE_BYTES = 3  # rule 9: the next byte of a reply sent back to back comes after one
+SETTLE_MIN_S = 0.005  # rule 9: at a high baud rate, a little longer than three byte times
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
@@ -54,6 +64,7 @@ class Link:
         self.codec = codec
         self.spec = spec
         self._byte_s = 10 / baud  # 8N1
+        self._settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * self._byte_s)  # rule 9
         # the model's reply timeout is for its default baud: a slower line needs longer
         slower_s = max(0.0, spec.exchange_time_s(baud) - spec.exchange_time_s())
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
@@ -69,6 +80,9 @@ class Link:
         self._slew: Slew | None = None
         self._junk = bytearray()
         self._junk_t = 0.0
+        self._held: PositionReply | None = None  # rule 9: a reading, until the line is quiet
+        self._held_until = 0.0
+        self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -95,6 +109,8 @@ class Link:
         """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
         self._hold_bytes = max(0, self._hold_bytes - count)
         self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
+        if self._held is not None:  # rule 9: the line is not quiet yet
+            self._held_until = min(self._held_cap, max(self._held_until, now + self._settle_s))
 
     def output(self) -> list[bytes]:
         """The frames written since the last call, in order: the worker puts them on the wire."""
@@ -156,7 +172,37 @@ class Link:
 
     # -- replies ------------------------------------------------------------------------------
     def reply_overdue(self, now: float) -> bool:
-        return self._reply_deadline is not None and now >= self._reply_deadline
+        held = self._held is not None  # rule 9: the reply came
+        return not held and self._reply_deadline is not None and now >= self._reply_deadline
+
+    def hold_reading(self, reply: PositionReply, now: float) -> bool:
+        """Rule 9: a reading, taken once the line stays quiet after it; False when another is
+        held (two readings in one exchange: neither is, the held one is dropped)."""
+        if self._held is not None:
+            self._held = None
+            return False
+        self._held = reply
+        self._held_until = now + self._settle_s
+        self._held_cap = self._held_until + self.spec.reply_bytes * self._byte_s
+        return True
+
+    def spoils(self, junk: JunkReply) -> bool:
+        """Rule 9: whether ``junk`` came in the same exchange as a held reading and spoils it
+        (the reading is dropped then)."""
+        if self._held is None or junk.reason in (JunkReason.CHATTER, JunkReason.POWER_ON):
+            return False
+        if junk.reason is not JunkReason.UNSOLICITED and self.codec.harmless(junk.data):
+            return False
+        self._held = None
+        return True
+
+    def settled(self, now: float) -> PositionReply | None:
+        """Rule 9: the held reading, once the line has been quiet long enough after it."""
+        held = self._held
+        if held is None or now < self._held_until:
+            return None
+        self._held = None
+        return held
 
     def give_up_reply(self, now: float) -> None:
         """Stop waiting for the owed reply (and for a slew's report: the slew is over)."""
@@ -228,6 +274,8 @@ class Link:
             times.append(self._outbox[0][0])
         if self._junk:
             times.append(self._junk_t + JUNK_QUIET_S)
+        if self._held is not None:
+            times.append(self._held_until)
         if self.spec.can_report_position:
             times.append(self._reply_deadline or self._next_poll)
         return times

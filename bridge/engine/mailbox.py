@@ -33,7 +33,8 @@ Rules:
    target or track command put before it, and one put after it replaces it; a stop or lock ON
    drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
    dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
-   (``put_wind``: the highest since the last take, so that no gust is lost).
+   (``put_wind``: the highest since the last take, so that no gust is lost; one the broker
+   replayed apart, wind.py rule 6).
 """
 
 from __future__ import annotations
@@ -64,6 +65,7 @@ class Batch:
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
+    wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
 
     control: Control | None = None  # the control lease as the judge has it now...
@@ -78,7 +80,8 @@ class Batch:
             or self.control_set
         )
         fence = self.hold is not None or self.release is not None
-        feeds = self.follow is not None or self.heard is not None or self.wind is not None
+        feeds = self.follow is not None or self.heard is not None
+        feeds = feeds or self.wind is not None or self.wind_replayed is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
 
@@ -180,11 +183,16 @@ class Mailbox:
             self._batch.notes.append(message)
         self._wake_once()
 
-    def put_wind(self, speed_kmh: float) -> None:
-        """Rule 9: a wind reading."""
+    def put_wind(self, speed_kmh: float, replayed: bool = False) -> None:
+        """Rule 9: a wind reading (``replayed`` by the broker: wind.py rule 6)."""
         with self._lock:
-            held = self._batch.wind  # the highest of a batch: no gust is lost (wind.py)
-            self._batch.wind = speed_kmh if held is None else max(held, speed_kmh)
+            b = self._batch  # the highest of a batch: no gust is lost (wind.py)
+            held = b.wind_replayed if replayed else b.wind
+            speed_kmh = speed_kmh if held is None else max(held, speed_kmh)
+            if replayed:
+                b.wind_replayed = speed_kmh
+            else:
+                b.wind = speed_kmh
         self._wake_once()
 
     def put_health_reset(self) -> None:

@@ -322,9 +322,9 @@ class Rotator:
         self._mailbox.put_follow(Follow(on, long_path, source, described, origin))
         self.operators.audit(who, described, EXECUTED)
 
-    def wind(self, speed_kmh: float) -> None:
+    def wind(self, speed_kmh: float, replayed: bool = False) -> None:
         """A wind reading (MQTT's thread): an input for the wind park (engine/wind.py)."""
-        self._mailbox.put_wind(speed_kmh)
+        self._mailbox.put_wind(speed_kmh, replayed)
 
     def heard(self, heard: Heard) -> None:
         """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""

@@ -156,6 +156,8 @@ class RotatorSession:
             self.view.last_error = note
         if batch.heard is not None:
             self.follower.heard(batch.heard, now)  # rule 15
+        if batch.wind_replayed is not None:  # wind.py rule 6: before a fresh one
+            self.wind.reading(batch.wind_replayed, now, replayed=True)
         if batch.wind is not None:
             self.wind.reading(batch.wind, now)  # wind.py: no command either
         if batch.stop is not None or batch.lock_on:

@@ -22,6 +22,11 @@ Rules:
    the status; the state it had is kept. The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
    motion is refused all the same.
+6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
+   after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
+   new reading: it may start a storm or start the hold again (the safe side), and it is the
+   speed shown while no new reading has come; it never starts or continues a calm, so it never
+   ends a storm, and it says nothing of silence (rule 4: the station may be long gone).
 """
 
 from __future__ import annotations
@@ -66,24 +71,36 @@ class WindPark:
             refusal=self.refusal(),
         )
 
-    def reading(self, kmh: float, now: float) -> None:
-        """Rules 1, 2 and 4: a reading, in km/h."""
+    def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
+        """Rules 1, 2, 4 and 6: a reading, in km/h (``replayed`` by the broker)."""
         cfg = self._cfg
         if not self.on:
+            return
+        if replayed:  # rule 6
+            if self._last_t is None:
+                self._speed = kmh
+            if kmh > cfg.park_above_kmh:
+                self._stormy(kmh)
+            elif kmh >= cfg.release_below_kmh:
+                self._calm_since = None
             return
         gap = self._last_t is None or now - self._last_t >= cfg.silent_s  # rule 2
         self._speed, self._last_t, self._silent = kmh, now, False
         if kmh > cfg.park_above_kmh:
-            self._calm_since = None
-            if not self.storm:
-                self.storm, self._park_owed = True, True
-                self._why = f"wind {kmh:.0f} km/h above {cfg.park_above_kmh:g}"
-                log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
+            self._stormy(kmh)
         elif self.storm and kmh < cfg.release_below_kmh:
             if self._calm_since is None or gap:
                 self._calm_since = now
         else:
             self._calm_since = None  # rule 2: the hold starts again
+
+    def _stormy(self, kmh: float) -> None:
+        """Rule 1: a reading above the park level; rule 2: no calm since."""
+        self._calm_since = None
+        if not self.storm:
+            self.storm, self._park_owed = True, True
+            self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
+            log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
 
     def halted(self) -> None:
         """Rule 3: a stop or lock ON; the park is not tried again in this storm."""

@@ -8,8 +8,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
    commands sent while the bridge was away are not replayed to it; subscriptions ask for
    retain-as-published, so a command published with the retain flag is recognised as such even
-   while the bridge is connected (MQTT 3.1.1 clears the flag then). ``protocol = "3.1.1"`` in the
-   configuration is the fallback for brokers without MQTT 5 (clean session, same rules otherwise).
+   while the bridge is connected (MQTT 3.1.1 clears the flag then); not the state topics read
+   (``replayed``: the wind), whose flag then says "replayed", as under MQTT 3.1.1. ``protocol =
+   "3.1.1"`` is the fallback for brokers without MQTT 5 (clean session, same rules otherwise).
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
    subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
@@ -167,8 +168,7 @@ class Client(paho.Client):
 
 
 def new_client(settings: MqttSettings, client_id: str) -> Client:
-    """paho's client as both connections use it: rule 1's protocol and session, credentials
-    and TLS."""
+    """paho's client as both connections use it: rule 1's protocol, session, credentials, TLS."""
     v5 = settings.protocol == "5"
     c = Client(
         callback_api_version=CallbackAPIVersion.VERSION2,
@@ -191,20 +191,18 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
 
 
 def command_filters(
-    filters: list[str], no_replay: frozenset[str], v5: bool
+    filters: list[str], no_replay: frozenset[str], v5: bool, replayed: frozenset[str] = frozenset()
 ) -> list[tuple[str, Any]]:
     """Rules 1 and 4: command topics at COMMAND_QOS, MQTT 5 with retain-as-published; the
     filters in ``no_replay`` (stop: lastword.py rule 6) also ask the broker not to replay their
-    retained message on subscribing (retain handling 2)."""
+    retained message on subscribing (retain handling 2); those in ``replayed`` go without it."""
     if not v5:
         return [(topic, COMMAND_QOS) for topic in filters]
     live = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
-    fresh = SubscribeOptions(
-        qos=COMMAND_QOS,
-        retainAsPublished=True,
-        retainHandling=SubscribeOptions.RETAIN_DO_NOT_SEND,
-    )
-    return [(topic, fresh if topic in no_replay else live) for topic in filters]
+    keep = SubscribeOptions.RETAIN_DO_NOT_SEND
+    fresh = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True, retainHandling=keep)
+    state = SubscribeOptions(qos=COMMAND_QOS)  # rule 1: the retain flag says "replayed"
+    return [(t, fresh if t in no_replay else state if t in replayed else live) for t in filters]
 
 
 def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
@@ -224,6 +222,7 @@ class Options(TypedDict, total=False):
     on_new_connection: Callable[[], None] | None  # before any message of a new connection
     on_subscribed: Callable[[], None] | None  # the command topics' SUBACK, before their messages
     no_replay: list[str] | None  # command filters whose retained message is not replayed
+    replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
     reconnect_min_s: int  # paho's reconnect back-off (rule 6)
     reconnect_max_s: int
 
@@ -247,6 +246,7 @@ class Connection:
         self._v5 = settings.protocol == "5"
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
+        self._replayed = frozenset(options.get("replayed") or ())
         self._handler = on_message
         self._on_new_connection = options.get("on_new_connection")
         self._on_subscribed = options.get("on_subscribed")
@@ -340,7 +340,7 @@ class Connection:
             log.error("%s", takeover_message(self._client_id, ending))
 
     def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
-        return command_filters(self._subscriptions, self._no_replay, self._v5)
+        return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
         """Whether a message is the connection's own business, not the handler's."""

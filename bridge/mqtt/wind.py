@@ -5,7 +5,10 @@ Rules:
 1. A reading is a bare number (``12.5``, as Home Assistant's statestream and most weather
    stations publish), in the rotator's ``wind_unit``; it reaches the rotator in km/h.
 2. A retained reading is taken: it is the last known wind, a state and not a command (a high
-   one parks the rotor; a reading never moves it anywhere else).
+   one parks the rotor; a reading never moves it anywhere else). One the broker replays on
+   (re)subscribing is handed on as replayed (engine/wind.py rule 6: it never ends a storm):
+   the topic is subscribed without retain-as-published (connection.py rule 1), so the retain
+   flag says "replayed" under MQTT 5 and MQTT 3.1.1 alike.
 3. A payload that is no reading (text, a negative or non-finite number) is dropped and logged
    at most once per BAD_LOG_S per topic; the wind park's silence report (wind.py rule 4)
    tells the user when nothing readable comes at all.
@@ -29,11 +32,11 @@ Handler = Callable[[str, bytes, bool], bool]
 
 
 def wind_feed(
-    entries: list[tuple[str, str, Callable[[float], None]]],
+    entries: list[tuple[str, str, Callable[[float, bool], None]]],
     clock: Callable[[], float] = time.monotonic,
 ) -> tuple[list[str], Handler]:
     """(the topics to subscribe, the handler of their messages) for ``(topic, unit, to)``
-    entries: ``to`` gets each reading in km/h."""
+    entries: ``to`` gets each reading in km/h, and whether the broker replayed it (rule 2)."""
     logged: dict[str, float] = {}
 
     def on_message(topic: str, payload: bytes, retain: bool) -> bool:
@@ -51,7 +54,7 @@ def wind_feed(
                 log.warning("wind topic %s: reading dropped: %s", topic, exc)
             return True
         for unit, to in mine:  # rule 1
-            to(value * KMH_PER_MS if unit == "m/s" else value)
+            to(value * KMH_PER_MS if unit == "m/s" else value, retain)  # rule 2
         return True
 
     return sorted({t for t, _, _ in entries}), on_message

@@ -8,6 +8,10 @@ Rules:
    second program on the port shows as "in use"). With ``multicast_group`` it is shared
    (SO_REUSEADDR, as GridTracker and JTAlert share it), bound to the group's address and the
    port, and joins the group on the interface of ``bind`` (0.0.0.0: the system's choice).
+   It hears the group only where it joined it (IP_MULTICAST_ALL off: Linux otherwise hands it
+   the group's datagrams from every interface another program joined the group on), and a
+   listener bound to a loopback address takes datagrams from loopback sources alone (counted
+   as ``foreign``): a forged Status from the LAN never reaches a rotator.
 2. Each datagram is decoded on its own. A malformed one (messages.py rule 1) is dropped and
    counted, and logged at most once per JUNK_LOG_S with the count since: it reaches no
    rotator. Heartbeats and other message types are counted and ignored.
@@ -24,6 +28,7 @@ import os
 import selectors
 import socket
 import struct
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -40,6 +45,11 @@ log = logging.getLogger(__name__)
 
 JUNK_LOG_S = 30.0
 RECV_BYTES = 65536  # a whole datagram, whatever its size: a longer one is junk (messages.py)
+IP_MULTICAST_ALL = getattr(socket, "IP_MULTICAST_ALL", 49)  # Linux's number (rule 1)
+
+
+def _loopback(address: str) -> bool:
+    return address.startswith("127.")
 
 
 @dataclass
@@ -49,6 +59,7 @@ class Counts:
     statuses: int = 0
     malformed: int = 0
     ignored: int = 0  # heartbeats and message types nobody here needs
+    foreign: int = 0  # rule 1: from a source a loopback listener does not take
     faults: int = 0
 
 
@@ -81,6 +92,7 @@ class WsjtxListener:
         self._wake_r, self._wake_w = -1, -1
         self._junk_log = _Rarely(JUNK_LOG_S)
         self._fault_log = _Rarely(JUNK_LOG_S)
+        self._foreign_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
         self.rotators.append(rotator)
@@ -108,6 +120,8 @@ class WsjtxListener:
                     "4s4s", socket.inet_aton(self.multicast_group), socket.inet_aton(self.bind)
                 )
                 sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, membership)
+                if sys.platform.startswith("linux"):  # (49 may mean something else elsewhere)
+                    sock.setsockopt(socket.IPPROTO_IP, IP_MULTICAST_ALL, 0)
         except OSError as exc:
             sock.close()
             where = f"{self.multicast_group or self.bind}:{self.port}"
@@ -145,17 +159,29 @@ class WsjtxListener:
                     if key.fileobj == self._wake_r:
                         return
                     try:
-                        datagram = sock.recv(RECV_BYTES)
+                        datagram, source = sock.recvfrom(RECV_BYTES)
                     except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
                         self._fault("reading the WSJT-X port", exc)
                         continue
                     try:
-                        self.datagram(datagram)
+                        self.datagram(datagram, source[0])
                     except Exception as exc:  # rule 3: a bug behind it, not the end
                         self._fault("a WSJT-X datagram", exc)
 
-    def datagram(self, datagram: bytes) -> None:
-        """One datagram, decoded and handed on (rules 2-4)."""
+    def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> None:
+        """One datagram from the address ``source``, decoded and handed on (rules 1-4)."""
+        if _loopback(self.bind) and not _loopback(source):  # rule 1
+            self.counts.foreign += 1
+            count = self._foreign_log.due(self.clock())
+            if count is not None:
+                log.warning(
+                    "WSJT-X port: %d datagram(s) from outside this computer dropped (listening "
+                    "on %s), the last from %s",
+                    count,
+                    self.bind,
+                    source,
+                )
+            return
         try:
             message = decode(datagram)
         except Malformed as exc:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -139,10 +141,10 @@ def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -
 
     in_writer = threading.Event()
 
-    def stuck(batch: list[str]) -> None:
+    def stuck(batch: list[str]) -> tuple[int, OSError | None]:
         in_writer.set()
         disk.wait()  # the hang under test, ended by the test itself below
-        real_append(batch)
+        return real_append(batch)
 
     trail.file._append = stuck  # type: ignore[method-assign]
     trail.start()
@@ -196,9 +198,10 @@ def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
     audit = AuditFile(tmp_path / "audit.jsonl", 1_000_000, queue_lines=2)
     disk, in_writer = threading.Event(), threading.Event()
 
-    def stuck(batch: list[str]) -> None:
+    def stuck(batch: list[str]) -> tuple[int, OSError | None]:
         in_writer.set()
         disk.wait()  # the hang under test, ended by the test itself below
+        return len(batch), None
 
     audit._append = stuck  # type: ignore[method-assign]
     audit.start()
@@ -214,3 +217,79 @@ def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
     finally:
         disk.set()
         stopper.join()
+
+
+FULL_DISK = r"""
+import json, resource, signal, sys
+from pathlib import Path
+from bridge.engine.audit import AuditFile
+from bridge.model import AuditEvent, Origin, Source
+
+path, limit = Path(sys.argv[1]), int(sys.argv[2])
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # past the limit: EFBIG, as ENOSPC on a full disk
+soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+audit = AuditFile(path, 1_000_000)
+audit.start()
+resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))  # the disk holds `limit` bytes
+origin = Origin(Source.ROTCTLD, None, "192.168.1.20")
+for n in range(8):
+    audit.put(AuditEvent(1_790_000_000.0 + n, "rotor", origin, f"P {n} 0", "executed", 90.0))
+    audit.flush()
+resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))  # space again
+audit.put(AuditEvent(1_790_000_100.0, "rotor", origin, "P 100 0", "executed", 90.0))
+audit.flush()
+audit.stop()
+print(json.dumps([audit.lines_written, audit.lines_lost, audit.write_failures]))
+"""
+
+
+def test_a_full_disk_leaves_no_torn_line_and_the_lines_lost_are_counted(tmp_path: Path) -> None:
+    """A real file system that runs out of room in the middle of a line (RLIMIT_FSIZE, in a
+    process of its own: the write is short, then fails): the file is cut back to the last whole
+    line, every line in it is JSON, and the first line written once there is room again says
+    how many were lost."""
+    path = tmp_path / "audit.jsonl"
+    one = len(json.dumps(event(0).as_dict(), separators=(",", ":"))) + 1
+    limit = 3 * one + one // 2  # three lines and half of the fourth
+    done = subprocess.run(
+        [sys.executable, "-c", FULL_DISK, str(path), str(limit)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
+    written, lost, failures = json.loads(done.stdout.splitlines()[-1])
+    assert (written, lost, failures) == (4, 5, 5)
+    text = path.read_text()
+    assert text.endswith("\n")
+    docs = lines(path)  # every line whole
+    assert [d["command"] for d in docs] == ["P 0 0", "P 1 0", "P 2 0", "P 100 0"]
+    assert docs[-1]["dropped"] == 5 and "dropped" not in docs[2]
+
+
+def test_a_short_write_is_cut_back_and_counted(tmp_path: Path) -> None:
+    """A disk that takes part of a line and then says nothing wrong (a short write, no error):
+    the part is cut away and the line counted lost, said in the next line written."""
+    path = tmp_path / "audit.jsonl"
+    writes = 0
+
+    def short_once(fd: int, data: bytes) -> int:
+        nonlocal writes
+        writes += 1
+        return os.write(fd, data[:10] if writes == 2 else data)
+
+    said: list[str | None] = []
+    audit = AuditFile(path, 1_000_000, on_problem=said.append, os_write=short_once)
+    audit.start()
+    try:
+        for n in range(3):
+            audit.put(event(n))
+            audit.flush()
+    finally:
+        audit.stop()
+    assert [(d["command"], d.get("dropped")) for d in lines(path)] == [
+        ("P 0 0", None),
+        ("P 2 0", 1),
+    ]
+    assert (audit.lines_written, audit.lines_lost, audit.write_failures) == (2, 1, 1)
+    assert said[0] is not None and "short write" in said[0] and said[1:] == [None]

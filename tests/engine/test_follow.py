@@ -5,6 +5,7 @@ tests/integration/test_pointing_bridge.py, not the bridge's geo.py."""
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import pytest
@@ -344,3 +345,26 @@ def test_following_is_activity_auto_park_waits() -> None:
         assert not v.status.parked and angle_between(v.truth().az_deg, bearing("PM95")) <= 0.5
         v.follow(False)
         v.run_until(lambda h: h.status.parked, 120, "parked once following is off")
+
+
+def test_a_flood_of_other_instance_names_costs_no_memory_and_little_log(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Forged statuses, each naming another instance (a hostile neighbour in the multicast
+    group): what following remembers of them stays bounded and the log gets one line per
+    IGNORED_LOG_S with the count since, not one per name; the program followed is still
+    followed."""
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X"), 1.0)
+    assert part.step(at(1.0)).target is not None
+    caplog.set_level(logging.WARNING, "bridge.engine.follow")
+    for n in range(20_000):
+        part.heard(Heard("W1AW", "FN31", False, f"forged {n} " + "x" * 900), 2.0 + n * 0.001)
+    said = [r.getMessage() for r in caplog.records if "is ignored" in r.getMessage()]
+    assert len(said) == 1 and len(said[0]) < 300
+    assert len(part._ignored) <= fo.IGNORED_KEPT
+    part.heard(Heard("W1AW", "FN31", False, "one more"), 2.0 + fo.IGNORED_LOG_S + 1)
+    said = [r.getMessage() for r in caplog.records if "is ignored" in r.getMessage()]
+    assert len(said) == 2 and "of 19999 other program(s)" in said[1]
+    part.heard(Heard("VK2XYZ", "QF56", False, "WSJT-X"), 100.0)  # the one followed
+    assert part.step(at(100.0)).target is not None

@@ -504,3 +504,33 @@ def test_a_stop_while_turning_is_never_merged(rig: Rig) -> None:
     v.stop()
     v.run_for(0.2)
     assert [f.data for f in v.frames(since=t) if f.data == b";"] == [b";"]
+
+
+# -- one exchange, one reading (link.py rule 9) ------------------------------------------------
+def test_a_glitch_before_the_real_reply_is_no_reading_and_the_controller_is_asked_again(
+    rig: Rig,
+) -> None:
+    """One glitched exchange: ";359" arrives just before the real ";180" of one poll. Neither
+    is taken: no bearing 359 is published for a rotor that never moved, rotor health counts no
+    move, and the controller is asked again at once (its answer, 180, stands)."""
+    v = ready(rig, emulator={"start_az_deg": 180.0})
+    v.run_for(10)  # health's first report, at rest
+    health = v.status.health
+    assert health is not None and v.status.bearing_deg == 180.0
+    glitched: list[float] = []
+
+    def glitch(data: bytes, now: float) -> bytes:
+        if glitched or not data.startswith(b";"):
+            return data
+        glitched.append(now)
+        return b";359" + data  # the glitch, then the real reply's bytes as they come
+
+    v.to_host = glitch
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {s.bearing_deg for s in v.published(since=t)} <= {180.0}
+    assert v.status.health is not None and v.status.health.moves == health.moves
+    asked = [s.t for s in v.writes if s.data == QUERY and s.t > glitched[0]]
+    assert asked[0] - glitched[0] < 0.1  # asked again at once, not at the next idle poll
+    assert v.state is IDLE and v.status.bearing_deg == 180.0

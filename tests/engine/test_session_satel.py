@@ -10,6 +10,7 @@ give it up. Its own clock ticks every second and rides along in the status witho
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from datetime import datetime
 
@@ -195,3 +196,36 @@ def test_a_stream_of_targets_ends_at_the_last_without_input_into_a_slew(rig: Rig
 
     assert 1 <= len(points(v)) <= 3 and points(v)[-1] == b"p199 10\r"
     assert_nothing_but_stops_while_slewing(v)
+
+
+def test_a_second_report_in_the_same_exchange_is_no_reading(rig: Rig) -> None:
+    """link.py rule 9 for the SatEL: a whole second report, saying 180 deg, right behind the
+    real one of one exchange (a value garbled inside a report already spoils it: satel.py rule
+    3). Neither is taken: no 180 published, no move in rotor health, the controller asked
+    again."""
+    v = ready(rig)
+    v.run_for(10)
+    bearing, health = v.status.bearing_deg, v.status.health
+    assert health is not None and bearing is not None and abs(bearing - 180.0) > 1
+    second = (
+        b"Motion ENABLED\r\nMode 0 - azimuth break at NORTH\r\nTime: 2001/00/00 00:00:07\r\n"
+        b"Azimuth = 180     Absolute = 180\r\nElevation = 000\r\n\r\n"
+        b"Number of stored positions: 00\r\n"
+    )
+    seen = bytearray()
+    glitched: list[float] = []
+
+    def glitch(data: bytes, now: float) -> bytes:
+        seen.extend(data)
+        if glitched or not re.search(rb"stored positions: \d+\r\n$", seen):
+            return data
+        glitched.append(now)
+        return data + second
+
+    v.to_host = glitch
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {s.bearing_deg for s in v.published(since=t)} <= {bearing}
+    assert v.status.health is not None and v.status.health.moves == health.moves
+    assert v.state is IDLE and v.status.bearing_deg == bearing

@@ -158,3 +158,29 @@ def test_a_controller_without_a_brake_is_never_shown_braking(rig: Rig, model: st
     v.run_until(lambda h: h.state is IDLE and h.truth().az_deg > 140, 60, "arrived")
     v.run_for(5)
     assert _states(v) == [MotionState.OFFLINE, IDLE, MOVING, IDLE]
+
+
+def test_a_glitched_frame_before_the_real_reply_is_no_reading(rig: Rig) -> None:
+    """link.py rule 9, the same shape as the Rotor-EZ's: a well-formed frame saying 359 deg
+    just before the real reply of one status exchange. Neither is taken: no 359 published, no
+    move in rotor health, the controller asked again."""
+    v = ready(rig)
+    v.run_for(10)
+    bearing, health = v.status.bearing_deg, v.status.health
+    assert health is not None and bearing is not None and abs(bearing - 359.0) > 1
+    glitch_frame = bytes([0x57, 7, 1, 9, 0, 2, 3, 6, 0, 0, 2, 0x20])  # az 359.0, el 0.0
+    glitched: list[float] = []
+
+    def glitch(data: bytes, now: float) -> bytes:
+        if glitched or data[:1] != b"\x57":
+            return data
+        glitched.append(now)
+        return glitch_frame + data
+
+    v.to_host = glitch
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {s.bearing_deg for s in v.published(since=t)} <= {bearing}
+    assert v.status.health is not None and v.status.health.moves == health.moves
+    assert v.state is IDLE and v.status.bearing_deg == bearing

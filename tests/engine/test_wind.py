@@ -233,3 +233,53 @@ def test_a_wind_part_that_raises_keeps_the_storm(monkeypatch: pytest.MonkeyPatch
         assert v.errors("internal")  # each step, as long as the bug is there
         v.command(Target(200.0))
         assert v.errors("refused")[-1].message.endswith("parked for the storm")
+
+
+def test_a_replayed_calm_never_ends_a_storm_nor_says_the_station_is_back() -> None:
+    """Rule 6, as weather stations and Home Assistant's statestream publish (retained): a storm,
+    one calm reading, then the station falls silent; the broker restarts after the hold and
+    replays that same calm reading. It is no new reading: the storm goes on (a hold shorter
+    than the silence, so only the replay could end it)."""
+    part = park(wind_hold_min=5, wind_silent_min=15)
+    part.reading(80.0, 0.0)
+    assert part.step(scene(0.0)).target is not None
+    part.reading(10.0, 60.0)  # the last reading the station sends
+    part.step(scene(60.0))
+    part.reading(10.0, 60.0 + 300.0 + 10.0, replayed=True)  # the broker's restart, after the hold
+    part.step(scene(370.0))
+    assert part.storm and part.refusal() is not None
+    part.step(scene(60.0 + 900.0))  # the station is silent, and said so
+    part.reading(10.0, 1000.0, replayed=True)  # a reconnect: replayed again
+    part.step(scene(1000.0))
+    info = part.info
+    assert info is not None and info.silent and info.storm and info.speed_kmh == 10.0
+    part.reading(12.0, 1100.0)  # the station is back: the calm starts from here
+    part.reading(11.0, 1100.0 + 299.0)
+    part.step(scene(1399.0))
+    assert part.storm
+    part.reading(11.0, 1100.0 + 300.0)
+    part.step(scene(1400.0))
+    assert not part.storm
+
+
+def test_a_replayed_reading_may_start_a_storm_or_its_hold_again_and_shows_until_a_new_one() -> None:
+    """Rule 6's safe side: the last known wind after a restart of the bridge parks the rotor if
+    it was a storm; during a calm, a replayed gust starts the hold again."""
+    part = park(wind_hold_min=5)
+    part.reading(20.0, 0.0, replayed=True)  # the first state: shown, no storm
+    part.step(scene(0.0))
+    info = part.info
+    assert info is not None and info.speed_kmh == 20.0 and not info.storm
+    part.reading(75.0, 1.0, replayed=True)
+    proposal = part.step(scene(1.0))
+    assert part.storm and proposal.target is not None and proposal.target.az_deg == 90.0
+    part.reading(10.0, 10.0)  # new: the calm begins
+    part.reading(45.0, 200.0, replayed=True)  # at the release level: the hold starts again
+    part.reading(10.0, 320.0)
+    part.step(scene(320.0))
+    assert part.storm  # 310 s after the calm began, but it began again at 320
+    info = part.info
+    assert info is not None and info.speed_kmh == 10.0  # the newest new reading
+    part.reading(10.0, 620.0)
+    part.step(scene(620.0))
+    assert not part.storm

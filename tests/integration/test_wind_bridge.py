@@ -7,9 +7,12 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 from typing import Any
 
-from tests.support import wait_until
+import pytest
+
+from tests.support import Mosquitto, Probe, wait_until
 from tests.support.rig import Rig
 
 TOPIC = "weather/station/wind"
@@ -181,3 +184,75 @@ def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
     rig.probe.publish("rotor/target", "200")
     assert "parked for the storm" in error_after(rig, before, "refused")["message"]
     assert len(rig.emu.frames("set")) == sets
+
+
+def refused(rig: Rig, timeout_s: float) -> bool:
+    """A target, and whether it was refused within ``timeout_s`` (for the wind)."""
+    mark = rig.probe.mark()
+    try:
+        rig.probe.publish("rotor/target", "200")
+        msg = rig.probe.wait(
+            lambda m: m.topic == "rotor/error" and json.loads(m.payload)["kind"] == "refused",
+            timeout_s,
+            "a refusal",
+            mark,
+        )
+    except (AssertionError, RuntimeError):  # not refused; the probe not connected again yet
+        return False
+    return "parked for the storm" in json.loads(msg.payload)["message"]
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_a_calm_the_broker_replays_after_a_restart_never_ends_the_storm(
+    tmp_path: Path, protocol: str
+) -> None:
+    """wind.py rule 6, end to end: the station publishes retained (as weather stations and Home
+    Assistant's statestream do). 90 km/h parks the rotor, one calm reading follows, then the
+    station falls silent. The broker (persistence on) restarts after the hold and replays that
+    calm reading: no new reading, so the storm goes on, targets stay refused and the rotor stays
+    in its park. Then the station is back: its calm readings end the storm as ever."""
+    conf = f"allow_anonymous true\nuser root\npersistence true\npersistence_location {tmp_path}/"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
+    probe = Probe(broker.port, "rotor/#")
+    rig = Rig(tmp_path, broker, probe)
+    rig.mqtt_extra = {"protocol": protocol}
+    hold_s = 3.0
+    try:
+        start(rig, wind_hold_min=hold_s / 60, wind_silent_min=10)  # the hold, shorter
+        probe.publish(TOPIC, "25", retain=True)  # 90 km/h
+        rig.arrived("tower", 90.0, timeout_s=30)
+        mark = probe.mark()
+        probe.publish(TOPIC, "3", retain=True)  # a new calm reading (retained: not a replay)
+        calm = wind_of(rig, lambda w: w.get("storm") and w.get("calm_since"), mark)
+        assert calm["speed_kmh"] == 10.8
+        t_calm = time.monotonic()
+        # the scenario itself: the station is silent for longer than the hold
+        time.sleep(max(0.0, t_calm + hold_s + 1.0 - time.monotonic()))
+        sets = len(rig.emu.frames("set"))
+        broker.restart()  # saved to its file, read back: the calm reading is replayed
+
+        # targets until one is refused: the bridge is subscribed again, and the replay, sent
+        # on subscribing, came before that target and was taken before the next one
+        def refused_in_its_park() -> bool:
+            assert len(rig.emu.frames("set")) == sets, "turned out of its storm park"
+            return refused(rig, 1.0)
+
+        wait_until(refused_in_its_park, 30, "a target refused after the restart")
+        assert refused(rig, 10.0), "a target after the replay was not refused for the storm"
+        last = probe.last("rotor/status")
+        assert last is not None and json.loads(last.payload)["wind"]["storm"] is True
+        assert len(rig.emu.frames("set")) == sets  # never turned out of its park
+        assert abs(rig.emu.state().az_deg - 90.0) < 2.0
+
+        def calm_reading_released() -> bool:
+            probe.publish(TOPIC, "2.5", retain=True)  # the station is back
+            last = probe.last("rotor/status")
+            return last is not None and json.loads(last.payload)["wind"]["storm"] is False
+
+        wait_until(calm_reading_released, 20, "released by new calm readings after the hold", 0.5)
+        probe.publish("rotor/target", "150")
+        rig.arrived("tower", 150.0, timeout_s=30)
+    finally:
+        rig.close()
+        probe.close()
+        broker.stop()

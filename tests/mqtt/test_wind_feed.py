@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
+from bridge.mqtt.connection import command_filters
 from bridge.mqtt.wind import BAD_LOG_S, wind_feed
 from bridge.settings import RotatorSettings
 from tests.support.clock import FakeClock
@@ -18,19 +19,19 @@ from tests.support.clock import FakeClock
 def test_readings_reach_the_rotators_of_their_topic_in_km_h(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    got: list[tuple[str, float]] = []
+    got: list[tuple[str, float, bool]] = []
     clock = FakeClock()
     subs, handle = wind_feed(
         [
-            ("w/kmh", "km/h", lambda v: got.append(("a", v))),
-            ("w/ms", "m/s", lambda v: got.append(("b", v))),
-            ("w/kmh", "km/h", lambda v: got.append(("c", v))),
+            ("w/kmh", "km/h", lambda v, r: got.append(("a", v, r))),
+            ("w/ms", "m/s", lambda v, r: got.append(("b", v, r))),
+            ("w/kmh", "km/h", lambda v, r: got.append(("c", v, r))),
         ],
         clock,
     )
     assert subs == ["w/kmh", "w/ms"]
-    assert handle("w/kmh", b"12.5", False) and handle("w/ms", b" 10 ", True)  # retained: taken
-    assert got == [("a", 12.5), ("c", 12.5), ("b", 36.0)]
+    assert handle("w/kmh", b"12.5", False) and handle("w/ms", b" 10 ", True)  # replayed: taken
+    assert got == [("a", 12.5, False), ("c", 12.5, False), ("b", 36.0, True)]  # ... as replayed
     assert not handle("other/topic", b"99", False)  # not the feed's
     caplog.set_level(logging.WARNING, "bridge.mqtt.wind")
     for junk in (b"calm", b"-3", b"nan", b'{"speed": 3}', b""):
@@ -66,3 +67,16 @@ def test_wind_settings_that_cannot_work_are_refused(wind: dict[str, Any], says: 
 def test_a_wind_park_of_its_own_or_the_park_position() -> None:
     assert rotator(wind_topic="w", wind_park_above=60, park_az_deg=0).wind_park_az_deg is None
     assert rotator(wind_topic="w", wind_park_above=60, wind_park_az_deg=90).wind_topic == "w"
+
+
+def test_a_wind_topic_is_subscribed_so_that_the_retain_flag_says_replayed() -> None:
+    """connection.py rule 1: commands keep retain-as-published (a retained command is known
+    as such); the wind topic goes without it, so the broker sets the retain flag only on what
+    it replays on subscribing (as MQTT 3.1.1 does for every topic)."""
+    filters = dict(
+        command_filters(["r/target", "r/stop", "w"], frozenset({"r/stop"}), True, frozenset({"w"}))
+    )
+    assert filters["r/target"].retainAsPublished and filters["r/stop"].retainAsPublished
+    assert filters["r/stop"].retainHandling == 2
+    assert not filters["w"].retainAsPublished and filters["w"].retainHandling == 0
+    assert command_filters(["w"], frozenset(), False, frozenset({"w"})) == [("w", 0)]

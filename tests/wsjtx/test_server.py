@@ -4,8 +4,10 @@ in use is an error naming it."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
+import struct
 
 import pytest
 
@@ -15,6 +17,7 @@ from bridge.wsjtx.server import JUNK_LOG_S
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
+from tests.support.udp_logger import free_udp_port
 
 
 class Ears:
@@ -66,3 +69,74 @@ def test_a_port_in_use_is_an_error_naming_it() -> None:
         port = taken.getsockname()[1]
         with pytest.raises(OSError, match=f"WSJT-X UDP port 127.0.0.1:{port}"):
             WsjtxListener(port, "127.0.0.1").listen()
+
+
+def lan_address() -> str | None:
+    """This computer's address on a network interface (not loopback), if it has one."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("192.0.2.1", 9))  # no packet is sent: the route's source address
+        except OSError:
+            return None
+        address: str = probe.getsockname()[0]
+    return None if address.startswith(("127.", "0.")) else address
+
+
+def test_a_loopback_listener_never_hears_the_group_from_the_lan(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The bridge joins the group on loopback; another program on the same computer joins it on
+    the network interface (as GridTracker does). A Status sent to the group from that
+    interface (a hostile neighbour's, forged) reaches that program, and never a rotator; one
+    sent on loopback (WSJT-X on this computer) does."""
+    lan = lan_address()
+    if lan is None:
+        pytest.skip("no network interface besides loopback")
+    group, port = "239.255.77.41", free_udp_port()
+    ears = Ears("tower")
+    listener = WsjtxListener(port, "127.0.0.1", group, rotators=[ears])  # type: ignore[list-item]
+    listener.start()
+    caplog.set_level(logging.WARNING, "bridge.wsjtx.server")
+    try:
+        with contextlib.ExitStack() as stack:
+            other = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            other.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            other.bind((group, port))
+            join = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton(lan))
+            other.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, join)
+            other.settimeout(10)
+            forger = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            forger.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(lan))
+            forger.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+            forged = w.status(w.StatusFields(dx_call="FORGED", dx_grid="AA00"))
+            forger.sendto(forged, (group, port))
+            assert other.recvfrom(65536)[0] == forged  # on this computer, from the LAN side
+            genuine = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            genuine.setsockopt(
+                socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton("127.0.0.1")
+            )
+            genuine.sendto(
+                w.status(w.StatusFields(dx_call="JA1ABC", dx_grid="PM95")), (group, port)
+            )
+            wait_until(lambda: ears.got, 10, "the status sent on loopback")
+        assert ears.got == [Heard("JA1ABC", "PM95", False, "WSJT-X")]
+        assert listener.counts.foreign == 0  # the system never handed it over (IP_MULTICAST_ALL)
+    finally:
+        listener.stop()
+
+
+def test_a_loopback_listener_drops_a_datagram_from_elsewhere_counts_and_says_it(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Rule 1's second guard, whatever the system delivers: the source address is checked."""
+    ears = Ears("tower")
+    listener = WsjtxListener(0, "127.0.0.1", rotators=[ears])  # type: ignore[list-item]
+    caplog.set_level(logging.WARNING, "bridge.wsjtx.server")
+    status = w.status(w.StatusFields(dx_call="FORGED", dx_grid="AA00"))
+    for _ in range(3):
+        listener.datagram(status, "192.168.1.66")
+    assert ears.got == [] and listener.counts.foreign == 3 and listener.counts.statuses == 0
+    said = [r.getMessage() for r in caplog.records if "192.168.1.66" in r.getMessage()]
+    assert len(said) == 1
+    listener.datagram(status, "127.0.0.1")
+    assert [h.call for h in ears.got] == ["FORGED"]
