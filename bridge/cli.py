@@ -123,7 +123,12 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rotor-bridge", description="Antenna rotator controllers on MQTT."
     )
     parser.add_argument("--version", action="version", version=f"rotor-bridge {__version__}")
-    parser.add_argument("--log-level", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
+    parser.add_argument(
+        "--log-level",
+        choices=["DEBUG", "INFO", "WARNING", "ERROR"],
+        help="what the log on stderr shows (default: the file's log_level for run, INFO for "
+        "demo and remote, WARNING for emulate)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser(
