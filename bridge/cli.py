@@ -9,7 +9,7 @@ import os
 import sys
 
 from bridge import __version__
-from bridge.config_report import config_warnings, masked, summary
+from bridge.config_report import check_state_file, config_warnings, masked, summary
 from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
@@ -53,6 +53,10 @@ def cmd_check_config(args: argparse.Namespace) -> int:
     """A summary, the warnings, every value with --full, and the line that says it is good
     (config_report.py); a file that is not good is one message on stderr and exit 2."""
     settings = _load(args)
+    try:
+        check_state_file(settings)  # as the start tries it (config_report.py rule 5)
+    except ConfigError as exc:
+        raise _fail(exc) from None
     for line in summary(settings):
         print(line)
     warnings = config_warnings(settings)
@@ -119,7 +123,12 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rotor-bridge", description="Antenna rotator controllers on MQTT."
     )
     parser.add_argument("--version", action="version", version=f"rotor-bridge {__version__}")
-    parser.add_argument("--log-level", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
+    parser.add_argument(
+        "--log-level",
+        choices=["DEBUG", "INFO", "WARNING", "ERROR"],
+        help="what the log on stderr shows (default: the file's log_level for run, INFO for "
+        "demo and remote, WARNING for emulate)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser(

@@ -13,14 +13,21 @@ Rules:
 4. The summary says what a user checks first: each rotator's model and whether its port is
    there, the broker, and what is on (Home Assistant, the web console, rotctld and loggers'
    ports, the station, tracking). Looking at a port never opens it.
+5. The state file is tried as the start tries it (engine/state_store.py), short of writing:
+   what the start would refuse whoever runs it (a directory, a FIFO, a file where a directory
+   must be) is an error worded as the start's (check_state_file); a directory this user cannot
+   write is a warning, since the service may run as another user.
 """
 
 from __future__ import annotations
 
+import getpass
 import os
+from pathlib import Path
 from typing import Any
 
-from bridge.settings import RotatorSettings, Settings
+from bridge.engine.state_store import StateStore
+from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.settings_loggers import is_loopback
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
@@ -67,9 +74,37 @@ def masked(settings: Settings) -> dict[str, Any]:
     return out
 
 
+def check_state_file(settings: Settings) -> None:
+    """ConfigError, in the start's words (app.py), if the start would refuse the state file
+    whoever runs it (rule 5). Nothing is written."""
+    path = settings.state_file
+    try:
+        StateStore(path).check_kind()
+    except OSError as exc:
+        where = f" ({exc.filename})" if exc.filename else ""
+        raise ConfigError(
+            f"state_file {path} cannot be written: {exc.strerror or exc}{where}"
+        ) from None
+
+
+def _unwritable_state_dir(path: Path) -> Path | None:
+    """The directory the start would write the state file in (or make it in), if this user
+    may not write there (rule 5)."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    return None if os.access(parent, os.W_OK | os.X_OK) else parent
+
+
 def config_warnings(settings: Settings) -> list[str]:
     """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
     found = []
+    closed = _unwritable_state_dir(settings.state_file)
+    if closed is not None:
+        found.append(
+            f"state_file: {closed} cannot be written by {getpass.getuser()}: the bridge does "
+            f"not start unless the user it runs as may write {settings.state_file} there"
+        )
     if settings._password_in_file:  # set by load_settings, which saw the file
         found.append(
             "mqtt.password is written in the configuration file: put it in a file of its own, "

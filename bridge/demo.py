@@ -93,8 +93,18 @@ def demo_presets(station: str) -> dict[str, float]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--mqtt-host", default="127.0.0.1")
-    p.add_argument("--mqtt-port", type=int, default=1883)
+    p.add_argument(
+        "--mqtt-host",
+        default="127.0.0.1",
+        help="the MQTT broker's address (default 127.0.0.1); if no broker answers there, a "
+        "private mosquitto is started on it (see --no-private-broker)",
+    )
+    p.add_argument(
+        "--mqtt-port",
+        type=int,
+        default=1883,
+        help="the MQTT broker's port (default 1883), or the private mosquitto's",
+    )
     p.add_argument(
         "--base-topic", help="base topic (default rotor-demo-<instance>, new for every run)"
     )

@@ -113,7 +113,9 @@ class Settings(BaseSettings):
     )
     state_file: Path = Field(
         default_factory=_default_state_file,
-        description="where the lock and the options set at run time are kept across restarts",
+        description="where the lock and the options set at run time are kept across restarts; "
+        "with a console password, the console's login secret (console-secret, see the "
+        "console's page) is kept beside it",
         examples=["/var/lib/rotor-bridge/state.json"],
         json_schema_extra={
             "unset": "$STATE_DIRECTORY/state.json under systemd, else "

@@ -12,6 +12,8 @@ Rules:
 3. The value given is never added to a line (pydantic keeps it apart, and a password could be
    one): a line holds the key, pydantic's words for what was expected, or a validator's own
    message, which quotes no secret.
+4. An unknown model gets the same help as a key (``unknown_model``): the nearest model name, or,
+   for a maker's name, the models that fit that maker's controllers (BRANDS), on the same line.
 """
 
 from __future__ import annotations
@@ -20,6 +22,19 @@ import difflib
 from typing import Any, get_args
 
 from pydantic import BaseModel, ValidationError
+
+# rule 4: a maker's name (lower case, letters and digits only) and the models that fit its
+# controllers, as a user with that maker's box would read it
+BRANDS = {
+    "yaesu": "a Yaesu control box with Idiom Press's RotorCard fitted is rotorcard",
+    "hygain": "a Hy-Gain control box with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own "
+    "DCU-1 is dcu1",
+    "idiom": "Idiom Press's boards: rotorez (Rotor-EZ) or rotorcard (RotorCard)",
+    "spid": "SPID controllers: rot2prog, rot1prog (azimuth only) or md01 (MD-01/02)",
+    "alfa": "Alfa Radio's SPID controllers: rot2prog, rot1prog (azimuth only) or md01 (MD-01/02)",
+    "satel": "the SatEL controller (VE5FP) is satel",
+    "ve5fp": "the SatEL controller (VE5FP) is satel",
+}
 
 
 def describe(
@@ -59,6 +74,18 @@ def describe(
     # a misspelt table also leaves the real one missing (rule 2)
     lines = [ln for ln in lines if not any(ln.startswith(f"{s}: missing") for s in suggested)]
     return "invalid configuration:\n  " + "\n  ".join(lines)
+
+
+def unknown_model(name: str, known: list[str]) -> str:
+    """The one line for a model that is not in ``known`` (rule 4): the nearest name, or the
+    models for a maker's name, then every known model."""
+    plain = "".join(c for c in name.lower() if c.isalnum())
+    hint = next((text for brand, text in BRANDS.items() if brand in plain), None)
+    if hint is None:
+        close = difflib.get_close_matches(plain, known, n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]}?" if close else None
+    after = "" if hint is None else hint + (" " if hint.endswith("?") else "; ")
+    return f"unknown model {name!r}; {after}known models: {', '.join(sorted(known))}"
 
 
 def _variable(

@@ -24,6 +24,7 @@ from bridge import settings_defaults as defaults
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+from bridge.settings_errors import unknown_model
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_mqtt import check_topic
 from bridge.settings_pointing import PointingFields
@@ -286,7 +287,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
     @classmethod
     def _model(cls, v: str) -> str:
         if v not in REGISTRY:
-            raise ValueError(f"unknown model {v!r}; known models: {', '.join(sorted(REGISTRY))}")
+            raise ValueError(unknown_model(v, list(REGISTRY)))  # settings_errors.py rule 4
         return v
 
     @field_validator("topic")

@@ -51,3 +51,17 @@ def test_every_subcommand_help_says_what_it_does(
     assert exc.value.code == 0
     shown = " ".join(capsys.readouterr().out.split())  # argparse re-wraps the text
     assert " ".join(description.split()) in shown
+
+
+def test_every_option_of_every_command_says_what_it_does() -> None:
+    """`rotor-bridge demo --help` listed --mqtt-host and --mqtt-port bare: a user must not
+    have to read the code to learn what an option is for."""
+    bare = []
+    parsers = [("rotor-bridge", build_parser()), *subcommands().items()]
+    for name, parser in parsers:
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                continue
+            if not action.help or len(action.help.split()) < 3:
+                bare.append(f"{name} {'/'.join(action.option_strings) or action.dest}")
+    assert bare == []

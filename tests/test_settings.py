@@ -525,3 +525,81 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
     assert "rotators[0].baudrate (from ROTOR_BRIDGE_ROTATORS__TOWER__BAUDRATE): unknown key" in str(
         err.value
     )
+
+
+@pytest.mark.parametrize(
+    ("model", "said"),
+    [
+        ("rotor-ez", "did you mean rotorez?"),
+        ("RotorEZ", "did you mean rotorez?"),
+        ("rot2prg", "did you mean rot2prog?"),
+        ("yaesu", "with Idiom Press's RotorCard fitted is rotorcard"),
+        ("Yaesu G-800DXA", "with Idiom Press's RotorCard fitted is rotorcard"),
+        ("hy-gain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
+        ("hygain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
+        ("spid", "rot2prog, rot1prog (azimuth only) or md01"),
+        ("ve5fp", "is satel"),
+    ],
+)
+def test_an_unknown_model_names_the_nearest_model_or_the_one_for_its_maker(
+    tmp_path: Path, model: str, said: str
+) -> None:
+    """As a key typo names the key meant: a user who wrote the box's maker or misspelt the
+    model learns which name to write, on the one line that names the field."""
+    text = MINIMAL.replace('model = "rotorez"', f"model = {model!r}".replace("'", '"'))
+    with pytest.raises(ConfigError) as exc:
+        load_settings(write(tmp_path, text), environ={})
+    (line,) = [ln.strip() for ln in str(exc.value).splitlines() if "model" in ln]
+    assert line.startswith(f"rotators[0].model: unknown model {model!r}; ") and said in line, line
+    assert line.endswith(" known models: " + ", ".join(sorted(REGISTRY))), line
+
+
+def test_an_unknown_model_like_none_is_listed_without_a_guess(tmp_path: Path) -> None:
+    text = MINIMAL.replace('model = "rotorez"', 'model = "xyzzy"')
+    with pytest.raises(ConfigError) as exc:
+        load_settings(write(tmp_path, text), environ={})
+    assert "rotators[0].model: unknown model 'xyzzy'; known models: dcu1, " in str(exc.value)
+
+
+@pytest.mark.parametrize("kind", ["FIFO", "directory", "file under a file"])
+def test_check_config_refuses_a_state_file_the_start_would_refuse(
+    tmp_path: Path, kind: str
+) -> None:
+    """check-config said "config OK" and run then stopped with exit 2: it tries the state
+    file as the start does (tests/faults/test_config.py has the start's line), writing
+    nothing."""
+    state_file = tmp_path / "state" / "state.json"
+    state_file.parent.mkdir()
+    if kind == "FIFO":
+        os.mkfifo(state_file)
+        said = "it is a FIFO, not a regular file"
+    elif kind == "directory":
+        state_file.mkdir()
+        said = "it is a directory, not a regular file"
+    else:
+        (tmp_path / "state" / "a-file").write_text("")
+        state_file = tmp_path / "state" / "a-file" / "rotor" / "state.json"
+        said = f"Not a directory ({state_file})"
+    text = f"state_file = {str(state_file)!r}\n".replace("'", '"') + MINIMAL
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)), timeout_s=20)
+    assert out.returncode == 2 and out.stdout == "", out
+    assert out.stderr == f"rotor-bridge: state_file {state_file} cannot be written: {said}\n"
+    assert sorted(p.name for p in (tmp_path / "state").iterdir()) == [
+        "a-file" if kind == "file under a file" else "state.json"
+    ]
+
+
+def test_check_config_writes_no_state_file_and_warns_of_a_directory_it_cannot_write(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The service may run as another user than check-config, so a directory closed to this
+    one is a warning, not an error; and checking writes nothing (no directory either)."""
+    state_file = tmp_path / "state" / "rotor" / "state.json"
+    text = f"state_file = {str(state_file)!r}\n".replace("'", '"') + MINIMAL
+    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    assert out.returncode == 0 and "warning: state_file" not in out.stdout, out
+    assert not (tmp_path / "state").exists()
+    s = load_settings(write(tmp_path, text), environ={})
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)  # as non-root
+    (warning,) = [w for w in config_warnings(s) if w.startswith("state_file")]
+    assert warning.startswith(f"state_file: {tmp_path} cannot be written by "), warning

@@ -129,13 +129,20 @@ class StateStore:
         self._dirty = True
         return {"locked": True}
 
-    def check_writable(self) -> None:
-        """OSError if the file cannot be written where it is configured (rules 3, 4)."""
+    def check_kind(self) -> None:
+        """OSError if the path can be seen not to work without writing anything: no regular
+        file there (rule 4), or a file where a directory must be. check-config asks this."""
         if self._path is None:
             return
         kind = _kind_at(self._path) or self._kind
         if kind is not None:
             raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+
+    def check_writable(self) -> None:
+        """OSError if the file cannot be written where it is configured (rules 3, 4)."""
+        if self._path is None:
+            return
+        self.check_kind()
         self._path.parent.mkdir(parents=True, exist_ok=True)
         with self._lock:
             self._write(self._path, put_in_place=not self.corrupt)

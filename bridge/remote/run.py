@@ -363,4 +363,5 @@ def run(settings: RemoteSettings) -> int:
             pass
     finally:
         remote.stop()
+        log.info("stopped")  # the last line of its log, as the bridge's
     return 0

@@ -198,6 +198,7 @@ def test_the_command_line_prints_the_endpoints_and_stops_on_sigterm(
         assert ask(port, b"p\n").count(b"\n") == 2
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(10) == 0
+        assert proc.stderr is not None and proc.stderr.read().rstrip().endswith(": stopped")
     finally:
         if proc.poll() is None:
             proc.kill()

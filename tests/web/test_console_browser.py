@@ -265,6 +265,10 @@ def test_with_a_password_the_page_asks_for_it_and_says_when_it_is_wrong(
     try:
         page.goto(f"http://127.0.0.1:{web['port']}/")
         expect(page.locator("#login")).to_be_visible()
+        expect(page.locator("#connection")).to_have_text("log in to control the rotators")
+        # the header stays one line: its note was drawn as a second login card above the card
+        bar, card = page.locator("header.bar").bounding_box(), page.locator("#login").bounding_box()
+        assert bar is not None and card is not None and bar["height"] < card["height"] / 2, bar
         expect(page.locator("#stop")).to_be_hidden()  # nothing to press before the login
         page.fill("#password", "wrong horse battery")
         page.press("#password", "Enter")

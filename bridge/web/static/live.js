@@ -72,7 +72,7 @@ function askPassword() {
   document.body.classList.add('login-needed');
   $('login').hidden = false;
   $('connection').textContent = 'log in to control the rotators';
-  $('connection').className = 'connection login';
+  $('connection').className = 'connection asks-login';
   $('password').focus();
   return new Promise((resolve) => loginWaiters.push(resolve));
 }
