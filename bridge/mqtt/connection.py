@@ -66,12 +66,14 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
+from bridge.mqtt.heartbeat import Stamp
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
-# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it)
-MessageHandler = Callable[[str, bytes, bool, str | None], None]
+# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it),
+# the send time the message carries (heartbeat.py rule 4; None without one)
+MessageHandler = Callable[[str, bytes, bool, str | None, Stamp | None], None]
 COMMAND_QOS = 0  # rule 4
 
 
@@ -84,6 +86,13 @@ def operator_of(msg: paho.MQTTMessage) -> str | None:
         if key == "operator":
             return str(value)
     return None
+
+
+def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
+    """The user properties ``sent`` and ``expiry`` of an MQTT 5 message (heartbeat.py rule 4),
+    as sent (the service judges them); None without ``sent``."""
+    props = getattr(msg, "properties", None)
+    return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
 
 
 # rule 7
@@ -158,11 +167,26 @@ def acknowledge_now(sock: object) -> None:
 
 
 class Client(paho.Client):
-    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
+    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read; and
+    ``tick``, called on paho's thread after each round of its loop (at least once a second while
+    connected: its select waits 1 s at most), for what a connection does on a clock without a
+    thread of its own (the station's heartbeat, client.py rule 2)."""
+
+    tick: Callable[[], None] | None = None
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         rc = super().loop_read(max_packets)
         acknowledge_now(self.socket())
+        return rc
+
+    def loop_misc(self) -> MQTTErrorCode:
+        rc = super().loop_misc()
+        tick = self.tick
+        if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
+            try:
+                tick()
+            except Exception:  # rule 5: paho's network thread goes on
+                log.exception("error in the MQTT connection's tick")
         return rc
 
 
@@ -266,6 +290,7 @@ class Connection:
         c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
         c.on_subscribe = self._on_subscribe
+        c.tick = self._tick
         self._client = c
 
     def _connect(self) -> None:
@@ -344,6 +369,9 @@ class Connection:
         """Whether a message is the connection's own business, not the handler's."""
         return False
 
+    def _tick(self) -> None:
+        """After each round of paho's loop while connected (Client.tick): must be cheap."""
+
     # -- paho callbacks (paho's thread) ---------------------------------------------------
     def _on_connect(
         self,
@@ -415,6 +443,6 @@ class Connection:
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):
-                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg))
+                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg), stamp_of(msg))
         except Exception:  # rule 5: a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)

@@ -40,6 +40,11 @@ Rules:
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
    says how many were left out. The audit file has them all.
+9. A command stamped with its send time (the MQTT 5 user properties ``sent`` and ``expiry``:
+   ``rotor-bridge remote`` stamps every command) is refused when the stamp says it is older than
+   its expiry, from the future, or unreadable (heartbeat.py rule 5), on the main connection,
+   before anything else judges it; stop and lock ON are not asked. A link that held a command
+   up for seconds and then delivered it must not turn the rotor long after the operator asked.
 """
 
 from __future__ import annotations
@@ -68,6 +73,7 @@ from bridge.mqtt.call_payload import Called
 from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.health_payload import health_json
+from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
@@ -269,9 +275,14 @@ class MqttService:
         return Origin(Source.MQTT, name)
 
     def on_lane_message(
-        self, topic: str, payload: bytes, retain: bool, operator: str | None = None
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        stamp: Stamp | None = None,
     ) -> None:
-        """The stop lane's messages (rule 5: halts.py)."""
+        """The stop lane's messages (rule 5: halts.py); its halts are never refused (rule 9)."""
         self._halts.on_lane(topic, payload, retain, self.origin(operator))
 
     def on_message(
@@ -282,6 +293,7 @@ class MqttService:
         operator: str | None = None,
         *,
         gated: bool = False,
+        stamp: Stamp | None = None,
     ) -> None:
         """The main connection's messages, in the order the broker sent them (rule 5)."""
         route = self.topics.route(topic)
@@ -314,6 +326,10 @@ class MqttService:
                 what,
                 origin=origin,
             )
+            return
+        late = None if halt or stamp is None else stamp.judge(self._wall())  # rule 9
+        if late is not None:
+            rot.report_refusal(late, what, origin=origin)
             return
         if gated and not halt:  # rule 6
             rot.report_refusal(
