@@ -17,6 +17,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.errors import RefusalCode, Refused
 from bridge.model import Source, Stop, Target
+from bridge.mqtt.client import MqttClient
 from bridge.mqtt.heartbeat import (
     AHEAD_S,
     CLOCK_WINDOW_S,
@@ -287,3 +288,29 @@ def test_without_a_heartbeat_only_a_stop_goes_unstamped() -> None:
     link.send("rotor/stop", "stop", "DL1ABC", 5)
     ((topic, props),) = paho.published
     assert topic == "rotor/stop" and props.UserProperty == [("operator", "DL1ABC")]
+
+
+# -- the station's side of the heartbeat: its main connection beats while it is the bridge ----
+def test_the_station_beats_from_its_connection_only_while_connected_and_not_refused() -> None:
+    clock = FakeClock()
+    client = MqttClient(
+        MqttSettings(),
+        will_topic="rotor/bridge/state",
+        subscriptions=[],
+        on_message=lambda *a: None,
+        heartbeat="rotor/bridge/heartbeat",
+        clock=clock,
+        wall=lambda: 1_700_000_000.25,
+    )
+    beats: list[tuple[str, bytes, int]] = []
+    client._client.publish = lambda topic, payload, qos: beats.append((topic, payload, qos))  # type: ignore[assignment,method-assign,misc]
+    client._tick()  # not connected (or its first look still runs): nothing
+    client.connected.set()
+    for _ in range(9):  # paho's loop, a round every half second
+        client._tick()
+        clock.t += 0.5
+    assert beats == [("rotor/bridge/heartbeat", b"1700000000.250", 0)] * 3  # at 0, 2 and 4 s
+    client.refused = "another bridge runs on rotor"
+    clock.t += 10
+    client._tick()
+    assert len(beats) == 3

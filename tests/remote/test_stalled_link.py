@@ -15,6 +15,7 @@ import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import free_port
+from bridge.mqtt.heartbeat import parse_beat
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
@@ -139,3 +140,14 @@ def test_a_move_across_a_stalled_link_is_refused_and_never_turns_the_rotor_later
         assert station.status("tower").bearing_deg == pytest.approx(120, abs=3.5)
     finally:
         remote.stop()
+
+
+def test_the_station_bridge_beats_its_clock_not_retained(station: Rig, probe: Probe) -> None:
+    """What the remote reads the station's life and clock from (mqtt/heartbeat.py rule 1)."""
+    start = probe.mark()
+    first = probe.wait(lambda m: m.topic == "rotor/bridge/heartbeat", 10, "a heartbeat", start)
+    second = probe.wait(
+        lambda m: m.topic == "rotor/bridge/heartbeat" and m is not first, 10, "the next", start
+    )
+    assert not first.retain and not second.retain
+    assert parse_beat(first.payload) < parse_beat(second.payload)
