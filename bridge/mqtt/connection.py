@@ -45,14 +45,13 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    stop 0-3 ms behind a refused target reached the controller 44 ms late (p50;
    benchmarks/latency.py), and behind any target while state went out at QoS 1. The kernel
    leaves quick-ack mode again as soon as we send, so it is set after every read, not once (a
-   system call per read). Command topics stay QoS 0 (rule 4): our PUBACK would acknowledge a
-   command too, but brings back what rule 4 avoids.
+   system call per read; paho_client.py). Command topics stay QoS 0 (rule 4): our PUBACK would
+   acknowledge a command too, but brings back what rule 4 avoids.
 """
 
 from __future__ import annotations
 
 import logging
-import socket
 import ssl
 import sys
 import threading
@@ -61,12 +60,12 @@ from collections.abc import Callable
 from typing import Any, Literal, TypedDict, Unpack
 
 import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.heartbeat import Stamp
+from bridge.mqtt.paho_client import new_client
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -103,8 +102,6 @@ TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "other"]
-
-TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 
 
 class TakeoverGuard:
@@ -152,66 +149,6 @@ def takeover_message(client_id: str, ending: Ending) -> str:
         f"give each its own mqtt.client_id. Backing off: {TAKEOVER_FIRST_S} s, doubling up to "
         f"{TAKEOVER_MAX_S} s between reconnects, until a connection lasts {STABLE_S} s"
     )
-
-
-def acknowledge_now(sock: object) -> None:
-    """Rule 9: have the kernel acknowledge what was read so far now, not after its delayed-ACK
-    timer (and leave its interactive mode until we next send)."""
-    setsockopt = getattr(sock, "setsockopt", None)  # None before the first connect
-    if TCP_QUICKACK is None or setsockopt is None:
-        return
-    try:
-        setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
-    except OSError:  # closed meanwhile: paho notices that on its own
-        pass
-
-
-class Client(paho.Client):
-    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read; and
-    ``tick``, called on paho's thread after each round of its loop (at least once a second while
-    connected: its select waits 1 s at most), for what a connection does on a clock without a
-    thread of its own (the station's heartbeat, client.py rule 2)."""
-
-    tick: Callable[[], None] | None = None
-
-    def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        rc = super().loop_read(max_packets)
-        acknowledge_now(self.socket())
-        return rc
-
-    def loop_misc(self) -> MQTTErrorCode:
-        rc = super().loop_misc()
-        tick = self.tick
-        if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
-            try:
-                tick()
-            except Exception:  # rule 5: paho's network thread goes on
-                log.exception("error in the MQTT connection's tick")
-        return rc
-
-
-def new_client(settings: MqttSettings, client_id: str) -> Client:
-    """paho's client as both connections use it: rule 1's protocol and session, credentials
-    and TLS."""
-    v5 = settings.protocol == "5"
-    c = Client(
-        callback_api_version=CallbackAPIVersion.VERSION2,
-        client_id=client_id,
-        protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
-        clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
-    )
-    if settings.username is not None:
-        password = settings.password.get_secret_value() if settings.password else None
-        c.username_pw_set(settings.username, password)
-    if settings.tls.enabled:
-        c.tls_set(
-            ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
-            certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
-            keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
-            cert_reqs=ssl.CERT_REQUIRED,
-        )
-        c.tls_insecure_set(settings.tls.insecure)
-    return c
 
 
 def command_filters(

@@ -40,11 +40,9 @@ Rules:
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
    says how many were left out. The audit file has them all.
-9. A command stamped with its send time (the MQTT 5 user properties ``sent`` and ``expiry``:
-   ``rotor-bridge remote`` stamps every command) is refused when the stamp says it is older than
-   its expiry, from the future, or unreadable (heartbeat.py rule 5), on the main connection,
-   before anything else judges it; stop and lock ON are not asked. A link that held a command
-   up for seconds and then delivered it must not turn the rotor long after the operator asked.
+9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
+   remote sends) is refused when it is older than its expiry, from the future or unreadable
+   (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
 """
 
 from __future__ import annotations
@@ -275,12 +273,7 @@ class MqttService:
         return Origin(Source.MQTT, name)
 
     def on_lane_message(
-        self,
-        topic: str,
-        payload: bytes,
-        retain: bool,
-        operator: str | None = None,
-        stamp: Stamp | None = None,
+        self, topic: str, payload: bytes, retain: bool, operator: str | None = None, *_: object
     ) -> None:
         """The stop lane's messages (rule 5: halts.py); its halts are never refused (rule 9)."""
         self._halts.on_lane(topic, payload, retain, self.origin(operator))
