@@ -82,9 +82,11 @@ class App:
             settings.mqtt,
             will_topic=self.topics.bridge_state,
             subscriptions=[],  # the service's, added once its features are (end of __init__)
-            on_message=lambda topic, payload, retain, operator: self.mqtt.on_message(
-                topic, payload, retain, operator, gated=self.client.gated
+            on_message=lambda topic, payload, retain, operator, stamp: self.mqtt.on_message(
+                topic, payload, retain, operator, gated=self.client.gated, stamp=stamp
             ),
+            heartbeat=self.topics.bridge_heartbeat,  # client.py rule 2
+            wall=wall,
             on_denied=self._denied,
             on_connect=self._connected,
             on_new_connection=lambda: self.mqtt.main_gone(),

@@ -15,7 +15,10 @@ each written out in the module that keeps it:
   only halts are taken while it runs, ``gated``); 15 deletions said in a few lines.
 - here:
 2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
-   connect, ``offline`` on a clean shutdown.
+   connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
+   refused) the heartbeat (``heartbeat``: its topic) carries the wall clock every HEARTBEAT_S,
+   QoS 0, not retained (heartbeat.py rule 1), from paho's own loop (Client.tick): a bridge whose
+   broker was restored from its file says ``online`` for ever, a heartbeat only while it lives.
 3. On every connect: subscribe again and re-publish every retained message we own (the broker
    may have restarted without persistence and lost them). Retained messages are kept in a
    cache; while disconnected they only update the cache; events wait (rule 13).
@@ -59,6 +62,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.mqtt.claim import Claim
 from bridge.mqtt.connection import Connection, MessageHandler, Options
 from bridge.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
+from bridge.mqtt.heartbeat import Beat, beat_payload
 from bridge.mqtt.limiter import EventLimiter
 from bridge.mqtt.look import CLEARS_SAID_AT_ONCE, FirstLook, Outcome, say_clear, say_clears
 from bridge.mqtt.owned import FOREIGN_LOG_S, OwnedTopics
@@ -86,6 +90,8 @@ class MqttClient(Connection):
         on_refused: Callable[[str], None] | None = None,
         fence_topic: str | None = None,
         clock: Callable[[], float] = time.monotonic,
+        heartbeat: str | None = None,
+        wall: Callable[[], float] = time.time,
         **options: Unpack[Options],
     ) -> None:
         super().__init__(
@@ -117,6 +123,9 @@ class MqttClient(Connection):
         self._fence_topic = fence_topic  # rule 16
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
         self.refused: str | None = None
+        self._heartbeat = heartbeat  # rule 2
+        self._beat = Beat()
+        self._wall = wall
 
     @property
     def problems(self) -> list[str]:
@@ -294,6 +303,14 @@ class MqttClient(Connection):
         if was_up and self._on_connection_lost is not None:  # nothing more of it will come
             self._on_connection_lost()
         return was_up and not self._stopping
+
+    def _tick(self) -> None:
+        """Rule 2: the heartbeat, when due (paho's thread, after each round of its loop)."""
+        topic = self._heartbeat
+        if topic is None or not self.connected.is_set() or self.refused is not None:
+            return
+        if self._beat.due(self._clock()):
+            self._client.publish(topic, beat_payload(self._wall()).encode(), qos=0)
 
     def _intercepted(self, topic: str, payload: bytes) -> bool:
         if topic == self._fence_topic and payload.startswith(b"probe "):

@@ -46,14 +46,13 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    stop 0-3 ms behind a refused target reached the controller 44 ms late (p50;
    benchmarks/latency.py), and behind any target while state went out at QoS 1. The kernel
    leaves quick-ack mode again as soon as we send, so it is set after every read, not once (a
-   system call per read). Command topics stay QoS 0 (rule 4): our PUBACK would acknowledge a
-   command too, but brings back what rule 4 avoids.
+   system call per read; paho_client.py). Command topics stay QoS 0 (rule 4): our PUBACK would
+   acknowledge a command too, but brings back what rule 4 avoids.
 """
 
 from __future__ import annotations
 
 import logging
-import socket
 import ssl
 import sys
 import threading
@@ -62,17 +61,19 @@ from collections.abc import Callable
 from typing import Any, Literal, TypedDict, Unpack
 
 import paho.mqtt.client as paho
-from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
+from bridge.mqtt.heartbeat import Stamp
+from bridge.mqtt.paho_client import new_client
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
 
-# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it)
-MessageHandler = Callable[[str, bytes, bool, str | None], None]
+# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it),
+# the send time the message carries (heartbeat.py rule 4; None without one)
+MessageHandler = Callable[[str, bytes, bool, str | None, Stamp | None], None]
 COMMAND_QOS = 0  # rule 4
 
 
@@ -87,6 +88,13 @@ def operator_of(msg: paho.MQTTMessage) -> str | None:
     return None
 
 
+def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
+    """The user properties ``sent`` and ``expiry`` of an MQTT 5 message (heartbeat.py rule 4),
+    as sent (the service judges them); None without ``sent``."""
+    props = getattr(msg, "properties", None)
+    return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
+
+
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
 CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
@@ -95,8 +103,6 @@ TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
 FLAP_COUNT = 3
 Ending = Literal["taken over", "dropped", "other"]
-
-TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 
 
 class TakeoverGuard:
@@ -144,50 +150,6 @@ def takeover_message(client_id: str, ending: Ending) -> str:
         f"give each its own mqtt.client_id. Backing off: {TAKEOVER_FIRST_S} s, doubling up to "
         f"{TAKEOVER_MAX_S} s between reconnects, until a connection lasts {STABLE_S} s"
     )
-
-
-def acknowledge_now(sock: object) -> None:
-    """Rule 9: have the kernel acknowledge what was read so far now, not after its delayed-ACK
-    timer (and leave its interactive mode until we next send)."""
-    setsockopt = getattr(sock, "setsockopt", None)  # None before the first connect
-    if TCP_QUICKACK is None or setsockopt is None:
-        return
-    try:
-        setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
-    except OSError:  # closed meanwhile: paho notices that on its own
-        pass
-
-
-class Client(paho.Client):
-    """paho's client with rule 9: ``_loop`` (loop_start's thread) reads through loop_read."""
-
-    def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        rc = super().loop_read(max_packets)
-        acknowledge_now(self.socket())
-        return rc
-
-
-def new_client(settings: MqttSettings, client_id: str) -> Client:
-    """paho's client as both connections use it: rule 1's protocol, session, credentials, TLS."""
-    v5 = settings.protocol == "5"
-    c = Client(
-        callback_api_version=CallbackAPIVersion.VERSION2,
-        client_id=client_id,
-        protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
-        clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
-    )
-    if settings.username is not None:
-        password = settings.password.get_secret_value() if settings.password else None
-        c.username_pw_set(settings.username, password)
-    if settings.tls.enabled:
-        c.tls_set(
-            ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
-            certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
-            keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
-            cert_reqs=ssl.CERT_REQUIRED,
-        )
-        c.tls_insecure_set(settings.tls.insecure)
-    return c
 
 
 def command_filters(
@@ -268,6 +230,7 @@ class Connection:
         c.on_disconnect = self._on_disconnect
         c.on_message = self._on_message
         c.on_subscribe = self._on_subscribe
+        c.tick = self._tick
         self._client = c
 
     def _connect(self) -> None:
@@ -346,6 +309,9 @@ class Connection:
         """Whether a message is the connection's own business, not the handler's."""
         return False
 
+    def _tick(self) -> None:
+        """After each round of paho's loop while connected (Client.tick): must be cheap."""
+
     # -- paho callbacks (paho's thread) ---------------------------------------------------
     def _on_connect(
         self,
@@ -419,6 +385,6 @@ class Connection:
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):
-                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg))
+                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg), stamp_of(msg))
         except Exception:  # rule 5: a handler bug must not kill paho's network thread
             log.exception("error handling MQTT message on %s", msg.topic)

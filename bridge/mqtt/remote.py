@@ -34,10 +34,14 @@ Rules:
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import socket
 import ssl
+import struct
 import sys
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -49,11 +53,18 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.errors import RefusalCode, Refused
 from bridge.mqtt.connection import Connection
+from bridge.mqtt.heartbeat import Stamp, StationClock, parse_beat
 from bridge.settings_mqtt import MqttSettings
 
 log = logging.getLogger(__name__)
 
 COMMAND_QOS = 1  # rule 2
+ACK_WAIT_S = 1.0  # rule 7
+NOT_CONNECTED = "not connected to the station's broker"
+NOT_HEARD = (
+    "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
+    "remote sends none)"
+)
 LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
 
 
@@ -69,8 +80,16 @@ class RemoteLink(Connection):
         on_message: Callable[[str, bytes, bool], None],
         on_change: Callable[[], None] = lambda: None,
         last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
+        heartbeat: str | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        ack_wait_s: float = ACK_WAIT_S,
     ) -> None:
-        def handle(topic: str, payload: bytes, retain: bool, _operator: str | None) -> None:
+        def handle(
+            topic: str, payload: bytes, retain: bool, _operator: str | None, _stamp: Stamp | None
+        ) -> None:
+            if topic == heartbeat and not retain:  # rule 8: only a live one says the time
+                with contextlib.suppress(ValueError):
+                    self.station_clock.heard(parse_beat(payload))
             on_message(topic, payload, retain)  # a station's state carries no operator
 
         super().__init__(
@@ -83,6 +102,15 @@ class RemoteLink(Connection):
         self.fatal = False  # rule 5: ... and trying again will not mend it
         self._last_word = last_word  # rule 6
         self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
+        self.station_clock = StationClock(clock)  # rule 8
+        self._ack_wait_s = ack_wait_s
+        self._acks = threading.Condition()  # rule 7: PUBACKs, the connection's generation
+        self._acked: dict[int, ReasonCode | None] = {}  # mid -> the PUBACK's reason
+        self._unawaited: set[int] = set()  # held stops resent: nobody waits for their PUBACK
+        self._generation = 0  # one more on every connection opened or closed
+        self._reset_generation = -1  # the connection rule 7 reset
+        self.resets = 0  # rule 7: how many, for the operator's diagnostics and the tests
+        self._client.on_publish = self._on_publish
 
     @property
     def up(self) -> bool:
@@ -96,19 +124,96 @@ class RemoteLink(Connection):
         self._disconnect()
 
     def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
-        """Rules 2 and 3: published now, or Refused(OFFLINE) and nothing sent, ever."""
+        """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
+        (a stop excepted: rule 6)."""
+        halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
-        props.UserProperty = ("operator", operator)
         with self._send_lock:
             if not self.up:
-                raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+                raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            sent = self.station_clock.now_unix()
+            if sent is None and not halt:
+                raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
+            stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()
+            props.UserProperty = [("operator", operator), *stamp]
             info = self._client.publish(
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )
             if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
                 self._forget_unsent(refused_mid=info.mid)  # paho kept it for later: rule 3
-                raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+                raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            generation = self._generation
+        self._await_ack(topic, info.mid, generation, halt)
+
+    def _await_ack(self, topic: str, mid: int, generation: int, halt: bool) -> None:
+        """Rule 7: returns once the broker acknowledged ``mid``; else Refused."""
+        with self._acks:
+            self._acks.wait_for(
+                lambda: mid in self._acked or self._generation != generation, self._ack_wait_s
+            )
+            acked = mid in self._acked
+            reason = self._acked.pop(mid, None)
+        again = "; the stop goes again first thing on the next connection" if halt else ""
+        if acked:
+            if reason is not None and reason.is_failure:
+                raise Refused(
+                    RefusalCode.INVALID,
+                    f"the station's broker refused it ({reason}): may this user publish "
+                    f"{topic}? (the broker's ACL)",
+                )
+            return
+        if self._reset(generation):
+            raise Refused(
+                RefusalCode.OFFLINE,
+                f"the station's broker did not acknowledge it within {self._ack_wait_s:g} s "
+                f"(a stalled link): connection reset, nothing sent later{again}",
+            )
+        raise Refused(
+            RefusalCode.OFFLINE,
+            "the connection to the station's broker dropped before it acknowledged the "
+            f"command: not sent again{again}",
+        )
+
+    def _reset(self, generation: int) -> bool:
+        """Rule 7: the connection ``generation`` shut now, unless it is gone already (False)."""
+        with self._send_lock:
+            if self._generation != generation or not self.up:
+                return self._reset_generation == generation  # another send reset it
+            self._reset_generation = generation
+            self.resets += 1
+            self.connected.clear()  # no send goes into the dying connection
+            sock = self._client.socket()
+        log.warning(
+            "the station's broker did not acknowledge a command within %g s: the link stalls; "
+            "resetting the connection (what it holds unsent is dropped) and connecting again",
+            self._ack_wait_s,
+        )
+        abort(sock)
+        return True
+
+    def _on_publish(
+        self,
+        client: object,
+        userdata: object,
+        mid: int,
+        reason_code: ReasonCode | None,
+        properties: Properties | None,
+    ) -> None:
+        """paho's thread: a PUBACK (rule 7)."""
+        with self._acks:
+            if mid in self._unawaited:
+                self._unawaited.discard(mid)
+                return
+            self._acked[mid] = reason_code
+            self._acks.notify_all()
+
+    def _next_generation(self) -> None:
+        with self._acks:
+            self._generation += 1
+            self._acked.clear()
+            self._unawaited.clear()
+            self._acks.notify_all()
 
     def _forget_unsent(self, refused_mid: int | None = None) -> None:
         """Rules 3 and 6: paho's queue of unacknowledged messages emptied, the last words among
@@ -135,7 +240,11 @@ class RemoteLink(Connection):
         held, self._held = self._held, []
         for topic, payload, props in held:
             log.warning("%s sent again (not acknowledged on the last connection)", topic)
-            self._client.publish(topic, payload, qos=COMMAND_QOS, retain=False, properties=props)
+            info = self._client.publish(
+                topic, payload, qos=COMMAND_QOS, retain=False, properties=props
+            )
+            with self._acks:
+                self._unawaited.add(info.mid)
 
     # -- Connection's hooks (paho's thread) --------------------------------------------------
     def _refused(self, reason: str) -> None:
@@ -179,6 +288,7 @@ class RemoteLink(Connection):
         self._ever_up = True
         self.failure, self.fatal = None, False
         with self._send_lock:  # rule 6: the held last words first
+            self._next_generation()
             self._resend_held()
             self.connected.set()
         self._on_change()
@@ -186,7 +296,22 @@ class RemoteLink(Connection):
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         with self._send_lock:  # a send under way finishes first, then its message goes too
             self._forget_unsent()
+            ours = self._reset_generation == self._generation  # rule 7: said already
+            self._next_generation()
+            self.station_clock.forget()
         self._on_change()
-        if self._stopping:  # our own goodbye: no "reconnecting", no takeover evidence
+        if self._stopping or ours:  # our own goodbye or reset: no takeover evidence
             return False
         return super()._closed(was_up, reason_code)
+
+
+def abort(sock: object) -> None:
+    """Rule 7: shut a stalled connection's socket from any thread: paho's loop reads its end and
+    connects again; closed with a reset (SO_LINGER 0), so the kernel drops the bytes it still
+    held for the broker instead of delivering them when the link recovers."""
+    if not isinstance(sock, socket.socket):
+        return
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    with contextlib.suppress(OSError):
+        socket.socket.shutdown(sock, socket.SHUT_RDWR)  # the descriptor's, TLS or not

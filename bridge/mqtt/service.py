@@ -41,6 +41,9 @@ Rules:
 8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
    refusals (rule 4: a flood of commands must not flood the broker); the next one published
    says how many were left out. The audit file has them all.
+9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
+   remote sends) is refused when it is older than its expiry, from the future or unreadable
+   (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
 """
 
 from __future__ import annotations
@@ -69,6 +72,7 @@ from bridge.mqtt.call_payload import Called
 from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.health_payload import health_json
+from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
@@ -275,9 +279,9 @@ class MqttService:
         return Origin(Source.MQTT, name)
 
     def on_lane_message(
-        self, topic: str, payload: bytes, retain: bool, operator: str | None = None
+        self, topic: str, payload: bytes, retain: bool, operator: str | None = None, *_: object
     ) -> None:
-        """The stop lane's messages (rule 5: halts.py)."""
+        """The stop lane's messages (rule 5: halts.py); its halts are never refused (rule 9)."""
         self._halts.on_lane(topic, payload, retain, self.origin(operator))
 
     def on_message(
@@ -288,6 +292,7 @@ class MqttService:
         operator: str | None = None,
         *,
         gated: bool = False,
+        stamp: Stamp | None = None,
     ) -> None:
         """The main connection's messages, in the order the broker sent them (rule 5)."""
         route = self.topics.route(topic)
@@ -320,6 +325,10 @@ class MqttService:
                 what,
                 origin=origin,
             )
+            return
+        late = None if halt or stamp is None else stamp.judge(self._wall())  # rule 9
+        if late is not None:
+            rot.report_refusal(late, what, origin=origin)
             return
         if gated and not halt:  # rule 6
             rot.report_refusal(

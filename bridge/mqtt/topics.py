@@ -198,6 +198,11 @@ class Topics:
         return f"{self.base}/bridge/hello"
 
     @property
+    def bridge_heartbeat(self) -> str:
+        """The bridge's heartbeat: its clock every few seconds, not retained (heartbeat.py)."""
+        return f"{self.base}/bridge/heartbeat"
+
+    @property
     def bridge_fence(self) -> str:
         """Where the bridge's markers go to come back on the main connection (lastword.py)."""
         return f"{self.base}/bridge/fence"
@@ -291,19 +296,23 @@ class StationTopics:
     def bridge_state(self) -> str:
         return Topics(self.base, {}).bridge_state
 
+    @property
+    def bridge_heartbeat(self) -> str:
+        return Topics(self.base, {}).bridge_heartbeat
+
     def rotator(self, rotator_id: str | None) -> RotatorTopics:
         """The rotator ``rotator_id``'s topics, or the one rotator's (None)."""
         return RotatorTopics(self.base if rotator_id is None else f"{self.base}/{rotator_id}")
 
     def subscriptions(self) -> list[str]:
-        """What a remote reads: the bridge's state, and each rotator's description, status,
-        availability, presets and error events, whether the station has one rotator or
-        several."""
+        """What a remote reads: the bridge's state and heartbeat, and each rotator's
+        description, status, availability, presets, error events, control lease and lock,
+        whether the station has one rotator or several."""
         one, each = self.rotator(None), self.rotator("+")
-        return [self.bridge_state] + [
+        return [self.bridge_state, self.bridge_heartbeat] + [
             t
             for r in (one, each)
-            for t in (r.info, r.status, r.availability, r.presets, r.error, r.control)
+            for t in (r.info, r.status, r.availability, r.presets, r.error, r.control, r.lock_state)
         ]
 
     def described(self, topics: list[str]) -> list[str]:

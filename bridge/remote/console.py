@@ -9,8 +9,9 @@ Rules:
    (mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at once,
    STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
    tracking off are sent whatever the remote thinks of the station. A command that moves is
-   refused with OFFLINE at once too while the station is not current (rotator.py rule 1: its
-   bridge or the rotator offline), as the station's judge would refuse it.
+   refused at once too while the station is not current (rotator.py rule 1: its bridge or the
+   rotator offline, no heartbeat), locked or leased to another (rotator.py rule 6), as the
+   station's judge would refuse it.
 2. The station's judge has the last word: what it refuses comes back on ``R/error`` and reaches
    every page as an error event. What the remote refuses itself (offline, a target outside the
    station's ranges) is reported to the pages alone: the station never heard of it.
@@ -175,8 +176,10 @@ class RemoteConsoleRotator:
     # -- commands (rule 1) ---------------------------------------------------------------------
     def submit(self, command: Command, described: str | None = None) -> None:
         try:
-            if not isinstance(command, Stop) and self.remote.link_up and not self.remote.current:
-                raise Refused(RefusalCode.OFFLINE, OFFLINE)
+            if not isinstance(command, Stop) and self.remote.link_up:
+                away = self.remote.away()
+                if away is not None:
+                    raise Refused(RefusalCode.OFFLINE, away)
             self.remote.submit(command, described)
         except Refused as exc:
             self.report_refusal(exc.message, described or describe_command(command))
@@ -250,8 +253,8 @@ class RemoteConsoleRotator:
     def _send(self, topic: str, payload: str, described: str, *, moves: bool = True) -> None:
         """Rule 1; ``moves``: refused while the station is not current."""
         try:
-            if moves and self.remote.link_up and not self.remote.current:
-                raise Refused(RefusalCode.OFFLINE, OFFLINE)
+            if moves:
+                self.remote.check_move()  # the station away or locked, another's lease
             self.remote.publish(topic, payload)
         except Refused as exc:
             self.report_refusal(exc.message, described)

@@ -6,7 +6,10 @@ by publishing on its command topics.
 Rules:
 1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
    while it is current: the remote connected, ``B/bridge/state`` and ``R/availability`` both
-   received as ``online`` on this connection (positive word, whatever order they come in).
+   received as ``online`` on this connection (positive word, whatever order they come in), and
+   the station's heartbeat heard as published within heartbeat.py's SILENT_S on the remote's
+   clock (a broker restored from its file says ``online`` for a bridge long dead: only a
+   heartbeat says it lives).
    Otherwise the rotator reads as unavailable (rotctld answers an error code), never as the
    last number seen. The station publishes a status when something changes, not on a clock,
    so the age of a still rotor's status says nothing about staleness: the bridge's last will
@@ -40,6 +43,10 @@ Rules:
    ``R/control`` says another operator holds the control lease, in the words the station
    would use; the station judges it again (a lease that ended a moment ago, a clock that
    differs): this only spares the client a silent refusal on the station's ``R/error``.
+   Likewise (LOCKED, ``RPRT -9``) while the station's ``R/lock/state`` is ``ON``.
+7. A command is answered only once the station's broker acknowledged it (mqtt/remote.py
+   rule 7): ``RPRT 0`` means the broker has it, stamped with its send time for the station to
+   refuse it if a link held it up (heartbeat.py).
 """
 
 from __future__ import annotations
@@ -54,7 +61,8 @@ from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
 from bridge.model import Command, MotionState, Origin, RotatorStatus, Source, Stop, Target
-from bridge.mqtt.topics import RotatorTopics
+from bridge.mqtt.heartbeat import SILENT_S
+from bridge.mqtt.topics import RotatorTopics, StationTopics
 from bridge.pointing import Limits
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
 
@@ -64,6 +72,10 @@ log = logging.getLogger(__name__)
 
 REFUSAL_LOG_S = 10.0  # rule 5
 STATION_AWAY = "the station's rotator is offline (its bridge or its controller): nothing sent"
+STATION_SILENT = (
+    f"the station's bridge is not heard (no heartbeat within {SILENT_S:g} s): nothing sent"
+)
+LOCKED = "the station's safety lock is ON: nothing turns until it is switched off"
 
 
 class Sender(Protocol):
@@ -132,7 +144,7 @@ class RemoteRotator:
         self,
         rotator_id: str,
         topics: RotatorTopics,
-        bridge_state: str,
+        station: StationTopics,
         info: Info,
         view: StationView,
         link: Sender,
@@ -147,7 +159,7 @@ class RemoteRotator:
         self.name = info.name
         self.spec = info.spec
         self.pointing = info.pointing
-        self._bridge_state = bridge_state
+        self._station = station
         self._view = view
         self._link = link
         self._operator = operator
@@ -170,12 +182,19 @@ class RemoteRotator:
     @property
     def current(self) -> bool:
         """Rule 1: whether the retained status may be shown."""
+        return self._link.up and self.away() is None
+
+    def away(self) -> str | None:
+        """Rule 1: why the station is not current while the link is up (None: it is)."""
         view = self._view
-        return (
-            self._link.up
-            and view.get(self._bridge_state) == b"online"
-            and view.get(self.topics.availability) == b"online"
-        )
+        if not view.live_within(self._station.bridge_heartbeat, SILENT_S):
+            return STATION_SILENT
+        if (
+            view.get(self._station.bridge_state) != b"online"
+            or view.get(self.topics.availability) != b"online"
+        ):
+            return STATION_AWAY
+        return None
 
     @property
     def status(self) -> RotatorStatus:
@@ -207,7 +226,7 @@ class RemoteRotator:
             return
         if not isinstance(command, Target) or command.az_deg is None:
             raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
-        self._station_there()
+        self.check_move()
         self.pointing.judge(command, None)  # early word for the client; the station judges again
         if command.park:  # the station's park position, so that it shows "parked"
             self.publish(self.topics.park, "park")
@@ -217,11 +236,14 @@ class RemoteRotator:
             doc["elevation"] = command.el_deg
         self._send_target(doc)
 
-    def _station_there(self) -> None:
+    def check_move(self) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);
-        rule 6: nor while another operator holds the station's control lease."""
-        if self._link.up and not self.current:
-            raise Refused(RefusalCode.OFFLINE, STATION_AWAY)
+        rule 6: nor while the station is locked or another operator holds its control lease."""
+        away = self.away() if self._link.up else None
+        if away is not None:
+            raise Refused(RefusalCode.OFFLINE, away)
+        if self._view.get(self.topics.lock_state) == b"ON":
+            raise Refused(RefusalCode.LOCKED, LOCKED)
         held = parse_control(self._view.get(self.topics.control))
         now = self._wall()
         if held is not None and held.operator != self._operator and now < held.until_unix:
@@ -264,7 +286,7 @@ class RemoteRotator:
         if long_path:
             place["path"] = "long"
         try:
-            self._station_there()
+            self.check_move()
             self._send_target(place)
         except Refused as exc:
             self.report_refusal(exc.message, described)

@@ -29,6 +29,9 @@ Rules:
 7. What the station refuses is logged here too, as it comes on a rotator's ``R/error`` (not
    replayed from the broker's store): a rotctld, GS-232 or PstRotator client was told its
    command went, and the operator reads here why nothing turned.
+8. The endpoints are served once the station's heartbeat was heard (a move sent at once would
+   be refused until then: remote/rotator.py rule 1), or after heartbeat.py's SILENT_S without
+   one, said in the log: a station whose bridge is away still starts the remote.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from typing import Protocol
 
 from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
 from bridge.loggers import LoggerEndpoints
+from bridge.mqtt.heartbeat import SILENT_S
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import RotatorTopics, StationTopics
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
@@ -106,6 +110,7 @@ class Remote:
             self._on_message,
             on_change=self._on_link,
             last_word=self._last_word,
+            heartbeat=self.station.bridge_heartbeat,
         )
         self.link.start()
         try:
@@ -118,6 +123,7 @@ class Remote:
                     f"{s.operator} -> {s.mqtt.host}: {rot.id} ({spec.name}, {_g(lo)}..{_g(hi)}) "
                     f"on {', '.join(self._endpoints(ep, rot))}"
                 )
+            self._await_heartbeat()
             try:  # rule 5
                 for server in self.servers:
                     server.listen()
@@ -135,6 +141,21 @@ class Remote:
         except BaseException:
             self.stop()
             raise
+
+    def _await_heartbeat(self) -> None:
+        """Rule 8: the station's first heartbeat, for at most SILENT_S; no error without it."""
+        deadline = time.monotonic() + SILENT_S
+        beat = self.station.bridge_heartbeat
+        while not self.view.live_within(beat, SILENT_S) and not self.stopping.is_set():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                log.warning(
+                    "the station's bridge is not heard (no heartbeat on %s): moves are refused "
+                    "until it is (is it running, and as new as this remote?)",
+                    beat,
+                )
+                return
+            self.view.wait(left)
 
     def _endpoints(self, ep: Endpoint, rot: RemoteRotator) -> list[str]:
         """The endpoint's servers added (not yet listening); what each is, for rule 3."""
@@ -308,7 +329,7 @@ class Remote:
         return RemoteRotator(
             rid,
             topics,
-            self.station.bridge_state,
+            self.station,
             info,
             self.view,
             self.link,

@@ -20,6 +20,7 @@ from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.mqtt.heartbeat import Stamp
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until
 
@@ -31,11 +32,11 @@ def main_held_at(app: App, topic: str, payload: bytes) -> Iterator[threading.Eve
     release, held = threading.Event(), threading.Event()
     handle = app.client._handler  # the main connection's hand-off (client.py rule 5)
 
-    def stuck(t: str, p: bytes, retain: bool, operator: str | None) -> None:
+    def stuck(t: str, p: bytes, retain: bool, operator: str | None, stamp: Stamp | None) -> None:
         if t == topic and p == payload and not held.is_set():
             held.set()
             release.wait(30)
-        handle(t, p, retain, operator)
+        handle(t, p, retain, operator, stamp)
 
     app.client._handler = stuck
     try:

@@ -24,7 +24,7 @@ def test_a_stop_and_the_lock_get_through_while_the_targets_connection_is_stuck(r
     held = threading.Event()
     handle = app.mqtt.on_message
 
-    def stuck(topic: str, payload: bytes, retain: bool, operator: str | None) -> None:
+    def stuck(topic: str, payload: bytes, retain: bool, operator: str | None, *_: object) -> None:
         if topic == "rotor/target" and payload == b"300":
             held.set()
             release.wait(30)  # the main connection reads nothing more meanwhile

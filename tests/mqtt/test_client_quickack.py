@@ -56,7 +56,7 @@ def test_every_command_read_is_acknowledged_before_the_next_read(
 
     handled = threading.Event()
 
-    def on_message(topic: str, payload: bytes, retained: bool, _operator: str | None) -> None:
+    def on_message(topic: str, payload: bytes, retained: bool, *_who: object) -> None:
         events.append(("message", payload))
         handled.set()
 

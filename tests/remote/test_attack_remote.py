@@ -68,10 +68,9 @@ class Pages:
 def station_rotator(view: StationView, rid: str, link: Link | None = None) -> RemoteRotator:
     topics = STATION.rotator(rid)
     view.put(STATION.bridge_state, b"online")
+    view.put(STATION.bridge_heartbeat, b"1700000000.000")  # heard just now
     view.put(topics.availability, b"online")
-    return RemoteRotator(
-        rid, topics, STATION.bridge_state, Info.parse(INFO), view, link or Link(), "DL1ABC", 5
-    )
+    return RemoteRotator(rid, topics, STATION, Info.parse(INFO), view, link or Link(), "DL1ABC", 5)
 
 
 def idle_status(bearing: str) -> bytes:
@@ -98,7 +97,7 @@ def test_a_forged_status_is_no_reading_and_no_crash(payload: bytes) -> None:
     The remote's clients get "no position" (rotctld's error code, GS-232's ``?>``, Easycomm's
     error), never a number that is not one, and nothing raises: Gpredict polls ``p`` every
     second, each failure would be a traceback in the log."""
-    view = StationView()
+    view = StationView(FakeClock())
     rot = station_rotator(view, "tower")
     view.put(rot.topics.status, payload)
     status = rot.status  # raised AttributeError for a list, a string, a number
@@ -114,7 +113,7 @@ def test_one_rotators_forged_status_does_not_freeze_the_consoles_other_rotators(
 ) -> None:
     """The console's feed shows every rotator: a junk status on one must not stop the others'
     statuses reaching the pages (it stopped at the first that raised, on every message)."""
-    view, pages = StationView(), Pages()
+    view, pages = StationView(FakeClock()), Pages()
     junk, good = station_rotator(view, "a"), station_rotator(view, "b")
     shown = [RemoteConsoleRotator(r, Drawn(), view) for r in (junk, good)]
     feed = ConsoleFeed(shown, pages)
@@ -172,19 +171,22 @@ def ask(port: int, line: bytes) -> bytes:
 def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     station: Rig, remote: tuple[Remote, int]
 ) -> None:
-    """The broker stalls, then dies, between a stop's publish and its acknowledgement: the
-    client was told RPRT 0, and the stop sat unacknowledged in paho's queue. The remote dropped
-    it with the targets (never late), so the operator's STOP never reached the station
-    (docs/architecture.md rule 11: a stop is never lost; a stop moves nothing, rule 7). The
-    target before it must still never be sent again."""
+    """The broker stalls, then dies, between a stop's publish and its acknowledgement: the stop
+    sat unacknowledged in paho's queue. The remote dropped it with the targets (never late), so
+    the operator's STOP never reached the station (docs/architecture.md rule 11: a stop is never
+    lost; a stop moves nothing, rule 7). No PUBACK within a second resets the connection
+    (mqtt/remote.py rule 7): the client hears the stop is not confirmed, and it goes again on
+    the next connection; a target asked then is refused at once and never sent."""
     r, port = remote
     link = r.link
     assert link is not None
     station.broker.pause()
-    assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
-    assert ask(port, b"S\n") == b"RPRT 0\n"
+    assert ask(port, b"S\n") == b"RPRT -6\n"  # not acknowledged: held for the next connection
+    assert link.resets == 1
+    assert ask(port, b"P 250 0\n") == b"RPRT -6\n"  # refused at once while reconnecting
     tower = r.rotators[0]
-    tower.publish(tower.topics.lock, "ON")  # as the console's lock ON does (remote/console.py)
+    with pytest.raises(Refused):  # the console's lock ON (remote/console.py) likewise
+        tower.publish(tower.topics.lock, "ON")
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
     log_from = station.broker.log.stat().st_size
@@ -196,8 +198,10 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
             f.seek(log_from)
             return RECEIVED.findall(f.read())
 
-    wait_until(lambda: len(published()) >= 2, 10, "the unacknowledged stop and lock sent again")
-    assert published() == [b"stop", b"lock"]  # in their order; the target is not
+    wait_until(lambda: len(published()) >= 1, 10, "the unacknowledged stop sent again")
+    assert ask(port, b"S\n") == b"RPRT 0\n"  # a marker behind anything resent
+    wait_until(lambda: len(published()) >= 2, 10, "the marker stop")
+    assert published() == [b"stop", b"stop"]  # the target never
 
 
 # -- clock skew between the operator and the station -------------------------------------------
@@ -270,7 +274,7 @@ def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_go
     and published a target nobody would take, as the station's own rotctld does not (it answers
     RPRT -5 for a rotator offline). A stop still goes: the station's bridge takes it, and with
     the bridge's main connection gone its stop lane may still (mqtt/lane.py)."""
-    view, link = StationView(), Link()
+    view, link = StationView(FakeClock()), Link()
     rot = station_rotator(view, "tower", link)
     view.put(STATION.bridge_state if gone == "bridge" else rot.topics.availability, word)
     assert RotctldSession(rot).feed(b"P 120 0\n") == [b"RPRT -5\n"]  # type: ignore[arg-type]
@@ -377,7 +381,7 @@ def test_the_console_on_an_endpoints_port_is_a_configuration_error() -> None:
 def test_an_error_event_the_broker_replays_is_not_shown_as_new() -> None:
     """R/error is never retained by the station; one retained there (forged, or an old tool's)
     came to every page as a fresh error on every reconnect of the remote."""
-    view, pages = StationView(), Pages()
+    view, pages = StationView(FakeClock()), Pages()
     rot = station_rotator(view, "tower")
     events: list[object] = []
     pages.on_event = lambda rid, event: events.append(event)  # type: ignore[method-assign]
@@ -395,7 +399,7 @@ def test_a_gs232_or_easycomm_stop_refused_offline_is_an_answer_not_a_traceback(
     """The remote's link down: a stop is refused (it cannot be delivered). GS-232 ``S`` and
     Easycomm ``SA SE`` let that refusal escape as a failure: a traceback in the log for each
     (PstRotator under Wine sends stops on a timer), where a move's refusal is an answer."""
-    view, link = StationView(), Link()
+    view, link = StationView(FakeClock()), Link()
     rot = station_rotator(view, "tower", link)
     link.up = False
     with caplog.at_level(logging.WARNING):

@@ -76,9 +76,10 @@ def rig(
     payload = info_payload(station=(52.5, 13.3), locator="JO62qm", satellites=("ISS",))
     view.put(T.info, payload)
     view.put("rotor/bridge/state", b"online")
+    view.put("rotor/bridge/heartbeat", b"1000000.000")  # heard just now
     view.put(T.availability, b"online")
     remote = RemoteRotator(
-        "tower", T, "rotor/bridge/state", Info.parse(payload), view, link, "DL1ABC", 5
+        "tower", T, StationTopics("rotor"), Info.parse(payload), view, link, "DL1ABC", 5
     )
     rot = RemoteConsoleRotator(remote, Drawn.parse(payload), view, wall=clock)
     rot.pages = pages

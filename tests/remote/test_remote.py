@@ -24,7 +24,7 @@ from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
-from tests.support.remote import remote_published
+from tests.support.remote import Heartbeat, remote_published
 from tests.support.rig import Rig
 
 pytestmark = pytest.mark.hamlib
@@ -142,9 +142,9 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     assert link is not None
     moves = len(emu.frames(*BEARING_OUTCOMES))
     # a command the broker never acknowledges (frozen, then gone): paho would send it again on
-    # the next connection (mqtt/remote.py rule 3)
+    # the next connection (mqtt/remote.py rule 3); the client is told it did not go (rule 7)
     station.broker.pause()
-    assert ask(port, b"P 250 0\n") == b"RPRT 0\n"
+    assert ask(port, b"P 250 0\n") == b"RPRT -6\n"  # no PUBACK: refused, the link reset
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
     assert ask(port, b"P 200 0\n") == b"RPRT -6\n"  # refused, not queued for the broker
@@ -220,8 +220,15 @@ def iso(t_unix: float) -> str:
     return datetime.fromtimestamp(t_unix, UTC).isoformat(timespec="milliseconds")
 
 
+@pytest.fixture
+def heartbeat(probe: Probe) -> Iterator[Heartbeat]:
+    """A stand-in station's heartbeat (a live bridge's: remote/rotator.py rule 1)."""
+    with Heartbeat(probe) as beating:
+        yield beating
+
+
 def test_a_moving_status_older_than_the_limit_reads_as_an_error(
-    broker: Mosquitto, probe: Probe
+    broker: Mosquitto, probe: Probe, heartbeat: Heartbeat
 ) -> None:
     """A stand-in station (its retained topics, no bridge): a still rotor's status counts however
     old it is (the station publishes on change), a moving one's only while it is fresh on the
@@ -265,7 +272,7 @@ def test_a_moving_status_older_than_the_limit_reads_as_an_error(
 
 
 def test_what_the_broker_held_before_a_drop_is_not_read_after_it(
-    broker: Mosquitto, probe: Probe
+    broker: Mosquitto, probe: Probe, heartbeat: Heartbeat
 ) -> None:
     """remote/run.py rule 4, on a stand-in station (its retained topics, no bridge): the broker
     comes back without them (no persistence, nobody publishes them again), and the remote must
@@ -312,10 +319,45 @@ def test_another_operators_lease_is_refused_at_once_and_the_stations_refusals_ar
         other.publish("rotor/control/release", '{"operator": "G4XYZ"}', qos=1)
         wait_until(lambda: b'"holder":null' in (r.view.get("rotor/control") or b""), 10, "free")
         other.publish("rotor/lock", "ON", qos=1)
-        wait_until(lambda: station.status("tower").locked, 10, "the station locked")
-        assert ask(port, b"P 100 0\n") == b"RPRT 0\n"  # on its way: the station judges it
+        wait_until(lambda: r.view.get("rotor/lock/state") == b"ON", 10, "the station locked")
+        assert ask(port, b"P 100 0\n") == b"RPRT -9\n"  # refused at once, as for the lease
+        other.publish("rotor/lock", "OFF", qos=1)
+        wait_until(lambda: r.view.get("rotor/lock/state") == b"OFF", 10, "unlocked")
+        other.publish("rotor/control/claim", '{"operator": "G4XYZ", "minutes": 5}', qos=1)
+        other.publish("rotor/control/release", '{"operator": "G4XYZ"}', qos=1)
+        other.publish("rotor/lock", "ON", qos=1)  # the station judges again: R/error, logged
+        other.publish("rotor/target", "100", qos=1)
         wait_until(lambda: "the station says: rotator is locked" in caplog.text, 10, "logged")
     finally:
         other.loop_stop()
         other.disconnect()
     assert len(emu.frames(*BEARING_OUTCOMES)) == moves
+
+
+def test_a_dead_station_a_restored_broker_still_calls_online_is_no_reading_and_no_move(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A broker restored from its file holds what the station's bridge published before both
+    died: ``online``, the rotator online, its last bearing; the bridge's last will never came.
+    The remote answered ``p`` with that bearing and ``RPRT 0`` to moves. Only the station's
+    heartbeat (remote/rotator.py rule 1) says a bridge lives."""
+    for topic, payload in (
+        ("rotor/info", '{"name":"tower","model":"rotorez","azimuth_range":[0,360]}'),
+        ("rotor/bridge/state", "online"),
+        ("rotor/availability", "online"),
+        ("rotor/status", '{"bearing":42.0,"state":"idle","connected":true,"available":true}'),
+    ):
+        probe.publish(topic, payload, retain=True)
+    port = free_port()
+    r = Remote(settings(broker, port))  # type: ignore[arg-type]
+    r.start()
+    try:
+        wait_until(lambda: r.view.get("rotor/status") is not None, 5, "the restored status")
+        log_from = broker.log.stat().st_size
+        assert ask(port, b"p\n") == b"RPRT -5\n"
+        assert ask(port, b"P 200 0\n") == b"RPRT -5\n"
+        assert remote_published(broker, log_from) == []
+        with Heartbeat(probe):  # the station's bridge back: its word counts again
+            wait_until(lambda: ask(port, b"p\n") == b"42.00\n0.00\n", 10, "the station heard")
+    finally:
+        r.stop()

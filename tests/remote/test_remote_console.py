@@ -114,7 +114,7 @@ def test_a_preset_then_stop_from_the_page(
     assert abs(az - 320) > 20  # stopped on the way, long before W6
 
 
-def test_a_lock_from_the_page_holds_and_the_station_refusal_reaches_the_page(
+def test_a_lock_from_the_page_holds_and_a_move_is_refused_at_once_on_the_page(
     station: Rig, remote: tuple[Remote, ConsoleClient, list[str]]
 ) -> None:
     _, client, _ = remote
@@ -124,8 +124,9 @@ def test_a_lock_from_the_page_holds_and_the_station_refusal_reaches_the_page(
         for status in statuses(stream):
             if status["locked"]:
                 break
-        assert client.command("tower", command="target", az=200).status == 200  # sent on
-        while True:  # the station's judge said no, on R/error: the page hears it
+        refused = client.command("tower", command="target", az=200)  # refused at once
+        assert (refused.status, refused.doc["code"]) == (409, "locked")
+        while True:  # the page hears it as an error event too
             name, data = stream.next()
             if name == "error":
                 break

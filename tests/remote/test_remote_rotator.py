@@ -38,13 +38,14 @@ def info(park: str = "null") -> Info:
 
 def rotator(link: Link, clock: FakeClock, park: str = "null") -> RemoteRotator:
     station = StationTopics("rotor")
-    view = StationView()  # the station there: its bridge and the rotator online
+    view = StationView(clock)  # the station there: its bridge and the rotator online, heard
     view.put(station.bridge_state, b"online")
+    view.put(station.bridge_heartbeat, b"1700000000.000")
     view.put(station.rotator("tower").availability, b"online")
     return RemoteRotator(
         "tower",
         station.rotator("tower"),
-        station.bridge_state,
+        station,
         info(park),
         view,
         link,
@@ -124,7 +125,7 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
     (web/commands.py rule 5) measures a command against, on the remote's monotonic clock."""
     mono = FakeClock(100.0)
     remote = rotator(Link(), mono)
-    console = RemoteConsoleRotator(remote, Drawn(), StationView())
+    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
     console.submit(Stop(Source.WEB))
     assert console.last_halt_s == 100.0
     mono.t = 200.0
@@ -141,12 +142,11 @@ def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
     azel = Info.parse(
         b'{"name":"dish","model":"rot2prog","azimuth_range":[0,360],"elevation_range":[0,90]}'
     )
-    view = StationView()  # the station there (online), as a move needs
+    view = StationView(FakeClock())  # the station there (online, heard), as a move needs
     view.put(station.bridge_state, b"online")
+    view.put(station.bridge_heartbeat, b"1700000000.000")
     view.put(station.rotator("dish").availability, b"online")
-    rot = RemoteRotator(
-        "dish", station.rotator("dish"), station.bridge_state, azel, view, link, "X", 5
-    )
+    rot = RemoteRotator("dish", station.rotator("dish"), station, azel, view, link, "X", 5)
     assert EasycommSession(rot).feed(b"EL30.0\n") == [b"ALrefused unsupported\n"]
     assert link.sent == []
     assert EasycommSession(rot).feed(b"AZ30.0 EL10.0\n") == [b""]

@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import re
+import threading
+import time
+from types import TracebackType
 
 from bridge.mosquitto import Mosquitto
+from bridge.mqtt.heartbeat import beat_payload
+from tests.support.mqtt import Probe
 
 _RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
 
@@ -15,3 +20,28 @@ def remote_published(broker: Mosquitto, log_from: int) -> list[bytes]:
     with open(broker.log, "rb") as f:
         f.seek(log_from)
         return _RECEIVED.findall(f.read())
+
+
+class Heartbeat:
+    """A stand-in station's heartbeat (mqtt/heartbeat.py rule 1): the wall clock on
+    ``rotor/bridge/heartbeat`` every ``every_s`` through ``probe``, from entering to leaving."""
+
+    def __init__(self, probe: Probe, topic: str = "rotor/bridge/heartbeat", every_s: float = 0.5):
+        self._probe, self._topic, self._every_s = probe, topic, every_s
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._beat, daemon=True)
+
+    def __enter__(self) -> Heartbeat:
+        self._thread.start()
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self._done.set()
+        self._thread.join(5)
+
+    def _beat(self) -> None:
+        while not self._done.is_set():
+            self._probe.client.publish(self._topic, beat_payload(time.time()), qos=0)
+            self._done.wait(self._every_s)

@@ -1,0 +1,151 @@
+"""The station's heartbeat and the send time it lends the remote's commands: both sides, pure
+(no paho, no thread; the clocks are handed in).
+
+A command from ``rotor-bridge remote`` may be held up on its way (a link that stalls for seconds
+without dropping, then delivers what it held); the MQTT message expiry starts only at the broker,
+so only a time stamped at the sender can tell the station how old a command is. The two
+computers' clocks need not agree, so the remote does not stamp its own clock: it stamps the
+station's clock as the station's heartbeat lets it reckon it, never later than the truth.
+
+Rules:
+1. The station's bridge publishes its wall clock (unix seconds) on ``B/bridge/heartbeat`` every
+   HEARTBEAT_S while its main connection is up (after its first look; not when it refused to
+   run), QoS 0, NOT retained: one that arrives is a bridge alive now (a retained value the
+   broker restored from its file is no news of anyone).
+2. The remote counts the station as heard only while a heartbeat came as published within
+   SILENT_S on its own monotonic clock (remote/rotator.py); until then every move is refused.
+3. The remote reckons the station's clock (``StationClock``): each heartbeat says the station's
+   time ``t`` when it left, so at its arrival the station's clock is at least ``t``; the remote's
+   monotonic clock plus the largest such offset over the last CLOCK_WINDOW_S is never later than
+   the station's clock (up to the drift of two clocks over the window, milliseconds). The
+   error is the fastest trip down the link: a command's age reads longer than it was, the safe
+   direction. A station clock stepped back reads as a stamp from the future (rule 5), refused
+   until the window has forgotten the old beats; one stepped forward is learnt from the next
+   beat. No heartbeat within the window: no reckoning, and the remote stamps nothing.
+4. A command carries its send time on the station's clock and its expiry as the MQTT 5 user
+   properties ``sent`` and ``expiry`` (``Stamp``); a stop and a lock ON may go unstamped.
+5. The station refuses a command whose stamp says it is older than its expiry, or from more
+   than AHEAD_S in the future (the reckoning went wrong: refused, and said), or a stamp it
+   cannot read. Stop and lock ON are never refused (docs/architecture.md rule 11): the
+   service does not ask. A command without a stamp (a dashboard, Home Assistant) is judged as
+   before: it has only the broker's expiry.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+HEARTBEAT_S = 2.0  # rule 1
+SILENT_S = 3 * HEARTBEAT_S  # rule 2: three beats missed
+CLOCK_WINDOW_S = 60.0  # rule 3
+AHEAD_S = 1.0  # rule 5
+SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
+MAX_EXPIRY_S = 3600.0
+
+
+def beat_payload(now_unix: float) -> str:
+    """Rule 1: the station's wall clock, unix seconds to the millisecond."""
+    return f"{now_unix:.3f}"
+
+
+def parse_beat(payload: bytes) -> float:
+    """A heartbeat's time; ValueError for anything but a finite positive number."""
+    t = float(payload.decode("ascii", "replace"))
+    if not math.isfinite(t) or t <= 0:
+        raise ValueError(f"{payload[:20]!r} is no time")
+    return t
+
+
+class Beat:
+    """Rule 1 on the station: whether a heartbeat is due (``due`` is asked often)."""
+
+    def __init__(self, every_s: float = HEARTBEAT_S) -> None:
+        self._every_s = every_s
+        self._last = -math.inf
+
+    def due(self, now: float) -> bool:
+        if now - self._last < self._every_s:
+            return False
+        self._last = now
+        return True
+
+
+class StationClock:
+    """Rule 3 on the remote: the station's clock reckoned from its heartbeats; ``clock`` is the
+    remote's monotonic clock."""
+
+    def __init__(self, clock: Callable[[], float]) -> None:
+        self._clock = clock
+        self._offsets: deque[tuple[float, float]] = deque()  # (arrival, station - arrival)
+
+    def heard(self, station_unix: float) -> None:
+        now = self._clock()
+        self._offsets.append((now, station_unix - now))
+        self._trim(now)
+
+    def forget(self) -> None:
+        """The connection dropped: what comes next is learnt anew."""
+        self._offsets.clear()
+
+    def now_unix(self) -> float | None:
+        """The station's clock now, never later than it (rule 3); None without a recent beat."""
+        now = self._clock()
+        self._trim(now)
+        if not self._offsets:
+            return None
+        return now + max(offset for _, offset in self._offsets)
+
+    def _trim(self, now: float) -> None:
+        while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:
+            self._offsets.popleft()
+
+
+@dataclass(frozen=True)
+class Stamp:
+    """Rule 4: a command's ``sent`` and ``expiry`` user properties, as they came."""
+
+    sent: str
+    expiry: str | None
+
+    @classmethod
+    def of(cls, sent_unix: float, expiry_s: float) -> Stamp:
+        return cls(f"{sent_unix:.3f}", f"{expiry_s:g}")
+
+    def properties(self) -> list[tuple[str, str]]:
+        return [(SENT, self.sent), (EXPIRY, self.expiry or "")]
+
+    @classmethod
+    def of_properties(cls, pairs: list[tuple[str, str]]) -> Stamp | None:
+        """The stamp among a message's user properties; None without ``sent``."""
+        found = {str(k): str(v) for k, v in pairs if k in (SENT, EXPIRY)}
+        if SENT not in found:
+            return None
+        return cls(found[SENT], found.get(EXPIRY))
+
+    def judge(self, now_unix: float) -> str | None:
+        """Rule 5: why the command is refused, or None (fresh)."""
+        try:
+            sent = float(self.sent)
+            expiry = float(self.expiry if self.expiry is not None else "nan")
+        except ValueError:
+            sent = expiry = math.nan
+        if not (math.isfinite(sent) and math.isfinite(expiry) and 0 < expiry <= MAX_EXPIRY_S):
+            return (
+                f"its send time cannot be read (user properties {SENT}={self.sent[:24]!r}, "
+                f"{EXPIRY}={(self.expiry or '')[:24]!r}): not carried out"
+            )
+        age = now_unix - sent
+        if age > expiry:
+            return (
+                f"sent {age:.1f} s ago, older than its {expiry:g} s expiry (a link that held it "
+                "up): not carried out"
+            )
+        if age < -AHEAD_S:
+            return (
+                f"stamped {-age:.1f} s ahead of this station's clock (the station's clock went "
+                "back?): not carried out; send it again in a minute"
+            )
+        return None

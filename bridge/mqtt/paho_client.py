@@ -1,0 +1,86 @@
+"""paho's client as every broker connection of the bridge builds it (connection.py uses it for
+the main connection, the stop lane and the remote's link): protocol, session, credentials and
+TLS (connection.py rule 1), the kernel's quick acknowledgement after every read (connection.py
+rule 9, where it is explained), and a tick on paho's own thread.
+
+Rules:
+1. ``new_client`` builds paho's client for the settings: MQTT 5 or 3.1.1, credentials, TLS.
+2. ``tick``, when set, is called on paho's thread after each round of its loop (at least once a
+   second while connected: its select waits 1 s at most), for what a connection does on a clock
+   without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
+   one that raises is logged and paho's thread goes on.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+import ssl
+from collections.abc import Callable
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
+
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
+
+
+def acknowledge_now(sock: object) -> None:
+    """Rule 9: have the kernel acknowledge what was read so far now, not after its delayed-ACK
+    timer (and leave its interactive mode until we next send)."""
+    setsockopt = getattr(sock, "setsockopt", None)  # None before the first connect
+    if TCP_QUICKACK is None or setsockopt is None:
+        return
+    try:
+        setsockopt(socket.IPPROTO_TCP, TCP_QUICKACK, 1)
+    except OSError:  # closed meanwhile: paho notices that on its own
+        pass
+
+
+class Client(paho.Client):
+    """paho's client with rule 9 (``_loop``, loop_start's thread, reads through loop_read) and
+    rule 2 (``tick``)."""
+
+    tick: Callable[[], None] | None = None
+
+    def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
+        rc = super().loop_read(max_packets)
+        acknowledge_now(self.socket())
+        return rc
+
+    def loop_misc(self) -> MQTTErrorCode:
+        rc = super().loop_misc()
+        tick = self.tick
+        if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
+            try:
+                tick()
+            except Exception:  # connection.py rule 5: paho's network thread goes on
+                log.exception("error in the MQTT connection's tick")
+        return rc
+
+
+def new_client(settings: MqttSettings, client_id: str) -> Client:
+    """paho's client as both connections use it: rule 1's protocol and session, credentials
+    and TLS."""
+    v5 = settings.protocol == "5"
+    c = Client(
+        callback_api_version=CallbackAPIVersion.VERSION2,
+        client_id=client_id,
+        protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
+        clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
+    )
+    if settings.username is not None:
+        password = settings.password.get_secret_value() if settings.password else None
+        c.username_pw_set(settings.username, password)
+    if settings.tls.enabled:
+        c.tls_set(
+            ca_certs=str(settings.tls.ca_file) if settings.tls.ca_file else None,
+            certfile=str(settings.tls.cert_file) if settings.tls.cert_file else None,
+            keyfile=str(settings.tls.key_file) if settings.tls.key_file else None,
+            cert_reqs=ssl.CERT_REQUIRED,
+        )
+        c.tls_insecure_set(settings.tls.insecure)
+    return c

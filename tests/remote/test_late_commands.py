@@ -1,0 +1,316 @@
+"""A command from the remote that a link held up, a station that is dead or locked: in virtual
+time (fake clocks, a stand-in link, the station's service on a recording rotator). The wiring
+on a real mosquitto with a link that stalls is tests/remote/test_stalled_link.py.
+
+What the operator would see: rotctld's answer (``RPRT 0`` only when the command is on its way
+and the station will take it), and at the station, whether the rotator was asked to turn."""
+
+from __future__ import annotations
+
+import socket
+from dataclasses import dataclass, field
+from typing import Any
+
+import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.errors import RefusalCode, Refused
+from bridge.model import Source, Stop, Target
+from bridge.mqtt.client import MqttClient
+from bridge.mqtt.heartbeat import (
+    AHEAD_S,
+    CLOCK_WINDOW_S,
+    SILENT_S,
+    Beat,
+    Stamp,
+    StationClock,
+    beat_payload,
+    parse_beat,
+)
+from bridge.mqtt.remote import RemoteLink
+from bridge.mqtt.topics import StationTopics
+from bridge.remote.rotator import Info, RemoteRotator, StationView
+from bridge.rotctld.server import RotctldSession
+from bridge.settings_mqtt import MqttSettings
+from tests.mqtt.test_service import NOW_UNIX, service
+from tests.support.clock import FakeClock
+
+STATION = StationTopics("rotor")
+T = STATION.rotator(None)
+INFO = b'{"name":"tower","model":"rotorez","azimuth_range":[0,360]}'
+
+
+@dataclass
+class Link:
+    up: bool = True
+    sent: list[tuple[str, str]] = field(default_factory=list)
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        if not self.up:
+            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        self.sent.append((topic, payload))
+
+
+def remote(clock: FakeClock, link: Link) -> tuple[RemoteRotator, StationView]:
+    view = StationView(clock)
+    view.put(STATION.bridge_state, b"online", replayed=True)  # what a restored broker holds
+    view.put(T.availability, b"online", replayed=True)
+    view.put(
+        T.status,
+        b'{"bearing":42.0,"state":"idle","connected":true,"available":true}',
+        replayed=True,
+    )
+    return RemoteRotator("tower", T, STATION, Info.parse(INFO), view, link, "DL1ABC", 5), view
+
+
+def rotctld(rot: RemoteRotator, line: bytes) -> bytes:
+    return RotctldSession(rot).feed(line)[0]  # type: ignore[arg-type]
+
+
+# -- the station's heartbeat: a dead station is not read as alive -----------------------------
+def test_a_station_never_heard_is_offline_though_the_broker_says_online() -> None:
+    """A broker restored from its file holds ``online`` and the last bearing of a bridge that
+    died with it: the remote answered ``p`` with that bearing and ``RPRT 0`` to moves."""
+    clock, link = FakeClock(), Link()
+    rot, view = remote(clock, link)
+    assert rotctld(rot, b"p\n") == b"RPRT -5\n"
+    assert rotctld(rot, b"P 200 0\n") == b"RPRT -5\n"
+    assert link.sent == []
+    assert rotctld(rot, b"S\n") == b"RPRT 0\n"  # a stop goes whatever the remote thinks
+    view.put(STATION.bridge_heartbeat, beat_payload(NOW_UNIX).encode())  # a live bridge
+    assert rotctld(rot, b"p\n") == b"42.00\n0.00\n"
+    assert rotctld(rot, b"P 200 0\n") == b"RPRT 0\n"
+    assert link.sent == [(T.stop, "stop"), (T.target, '{"azimuth":200.0}')]
+
+
+def test_a_station_gone_silent_turns_offline_after_three_missed_beats() -> None:
+    clock, link = FakeClock(), Link()
+    rot, view = remote(clock, link)
+    view.put(STATION.bridge_heartbeat, b"1700000000.000")
+    clock.t += SILENT_S
+    assert rotctld(rot, b"p\n") == b"42.00\n0.00\n"
+    clock.t += 0.1
+    assert rotctld(rot, b"p\n") == b"RPRT -5\n"
+    assert rotctld(rot, b"P 10 0\n") == b"RPRT -5\n"
+    view.put(STATION.bridge_heartbeat, b"1700000000.000", replayed=True)  # no news of anyone
+    assert rotctld(rot, b"p\n") == b"RPRT -5\n"
+
+
+def test_the_station_beats_every_heartbeat_s() -> None:
+    beat, t = Beat(2.0), 100.0
+    due = []
+    for _ in range(50):
+        due.append(beat.due(t))
+        t += 0.25
+    assert due.count(True) == 7 and due[0] and due[8]  # at 0, 2, 4, ... 12 s
+    assert parse_beat(beat_payload(1_700_000_000.5).encode()) == 1_700_000_000.5
+    for junk in (b"", b"nan", b"-1", b"inf", b"\xff", b"1e400"):
+        with pytest.raises(ValueError):
+            parse_beat(junk)
+
+
+# -- the lock: refused at once, as for the lease ----------------------------------------------
+def test_a_move_while_the_station_is_locked_is_refused_at_once_and_a_stop_still_goes() -> None:
+    """The remote answered ``RPRT 0`` and the station refused in silence on its R/error."""
+    clock, link = FakeClock(), Link()
+    rot, view = remote(clock, link)
+    view.put(STATION.bridge_heartbeat, b"1700000000.000")
+    view.put(T.lock_state, b"ON", replayed=True)
+    assert rotctld(rot, b"P 200 0\n") == b"RPRT -9\n"
+    with pytest.raises(Refused) as refused:
+        rot.submit(Target(200, None, Source.ROTCTLD))
+    assert refused.value.code is RefusalCode.LOCKED
+    assert "safety lock is ON" in refused.value.message
+    assert rotctld(rot, b"S\n") == b"RPRT 0\n"
+    assert link.sent == [(T.stop, "stop")]
+    view.put(T.lock_state, b"OFF")
+    assert rotctld(rot, b"P 200 0\n") == b"RPRT 0\n"
+
+
+# -- the send time: reckoned on the station's clock, judged by the station ---------------------
+def test_the_reckoned_station_clock_is_never_ahead_whatever_the_skew() -> None:
+    """The remote's clock an hour off the station's: the stamp follows the station's clock,
+    late by the fastest trip of a heartbeat, never early."""
+    mono = FakeClock(50.0)
+    station_clock = StationClock(mono)
+    assert station_clock.now_unix() is None  # never heard: no stamp
+    station_now = 1_700_000_000.0
+    for trip_s in (0.30, 0.05, 0.80):  # each beat's trip from the station's clock to us
+        station_clock.heard(station_now - trip_s)
+        mono.t += 2.0
+        station_now += 2.0
+    reckoned = station_clock.now_unix()
+    assert reckoned is not None and station_now - 0.05 == pytest.approx(reckoned)
+    mono.t += CLOCK_WINDOW_S + 1  # the beats forgotten: no reckoning
+    assert station_clock.now_unix() is None
+
+
+def test_a_command_a_link_held_up_is_refused_by_the_station_and_a_stop_is_not() -> None:
+    """The link stalled 15 s with the target in it: stamped with its send time, the station
+    refuses it on arrival (R/error), and does not refuse a stop held as long."""
+    svc, _, rots = service({"tower": "rotorez"})
+    sent = Stamp.of(NOW_UNIX - 15.0, 5)
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=sent)
+    svc.on_message("rotor/park", b"park", False, "DL1ABC", stamp=sent)
+    svc.on_message("rotor/stop", b"stop", False, "DL1ABC", stamp=sent)
+    svc.on_message("rotor/lock", b"ON", False, "DL1ABC", stamp=sent)
+    calls = rots["tower"].calls
+    assert [c[0] for c in calls] == ["refused", "refused", "submit", "lock"]
+    assert "sent 15.0 s ago, older than its 5 s expiry" in calls[0][1]
+    assert calls[2][1] == Stop()
+
+
+@pytest.mark.parametrize(
+    ("stamp", "refused"),
+    [
+        (Stamp.of(NOW_UNIX - 4.9, 5), None),
+        (Stamp.of(NOW_UNIX - 5.1, 5), "older than its 5 s expiry"),
+        (Stamp.of(NOW_UNIX + AHEAD_S - 0.1, 5), None),
+        (Stamp.of(NOW_UNIX + AHEAD_S + 0.1, 5), "ahead of this station's clock"),
+        (Stamp("yesterday", "5"), "cannot be read"),
+        (Stamp(str(NOW_UNIX), None), "cannot be read"),
+        (Stamp(str(NOW_UNIX), "nan"), "cannot be read"),
+        (Stamp(str(NOW_UNIX), "-1"), "cannot be read"),
+        (None, None),  # a dashboard's command: the broker's expiry only
+    ],
+)
+def test_the_station_judges_the_stamp_on_its_own_clock(
+    stamp: Stamp | None, refused: str | None
+) -> None:
+    svc, _, rots = service({"tower": "rotorez"})
+    svc.on_message("rotor/target", b"200", False, "DL1ABC", stamp=stamp)
+    (call,) = rots["tower"].calls
+    if refused is None:
+        assert call[0] == "submit"
+    else:
+        assert call[0] == "refused" and refused in call[1]
+
+
+def test_the_stamp_travels_as_user_properties_and_reads_back() -> None:
+    stamp = Stamp.of(1_700_000_000.1234, 5)
+    pairs = [("operator", "DL1ABC"), *stamp.properties()]
+    assert pairs[1:] == [("sent", "1700000000.123"), ("expiry", "5")]
+    assert Stamp.of_properties(pairs) == stamp
+    assert Stamp.of_properties([("operator", "DL1ABC")]) is None
+
+
+# -- the remote's link: answered only once the broker has it ----------------------------------
+class Info_:
+    def __init__(self, mid: int) -> None:
+        self.mid, self.rc = mid, 0
+
+
+class Paho:
+    """paho's client as RemoteLink.send uses it; ``ack`` says what the broker answers at once
+    (None: nothing, the link stalls)."""
+
+    def __init__(self, link: RemoteLink, ack: ReasonCode | None) -> None:
+        self.link, self.ack = link, ack
+        self.published: list[tuple[str, Any]] = []
+        self.ours, self.broker = socket.socketpair()
+
+    def publish(self, topic: str, payload: Any, qos: int, retain: bool, properties: Any) -> Info_:
+        mid = len(self.published) + 1
+        self.published.append((topic, properties))
+        if self.ack is not None:
+            self.link._on_publish(None, None, mid, self.ack, None)
+        return Info_(mid)
+
+    def socket(self) -> socket.socket:
+        return self.ours
+
+    def drop_out_messages(self) -> list[Any]:
+        return []
+
+
+def link_on(ack: ReasonCode | None) -> tuple[RemoteLink, Paho]:
+    link = RemoteLink(
+        MqttSettings(),
+        "remote-test",
+        [],
+        lambda topic, payload, retain: None,
+        last_word=lambda topic, payload: topic.endswith("/stop"),
+        clock=FakeClock(),
+        ack_wait_s=0.0,  # the broker's answer is there at once, or never
+    )
+    fake = Paho(link, ack)
+    link._client = fake  # type: ignore[assignment]
+    link.connected.set()
+    link.station_clock.heard(1_700_000_000.0)
+    return link, fake
+
+
+def test_a_command_the_broker_acknowledged_is_sent_stamped_on_the_station_clock() -> None:
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    ((topic, props),) = paho.published
+    assert props.UserProperty == [
+        ("operator", "DL1ABC"),
+        ("sent", "1700000000.000"),
+        ("expiry", "5"),
+    ]
+    assert props.MessageExpiryInterval == 5 and link.up and link.resets == 0
+
+
+def test_no_puback_in_time_refuses_the_command_and_resets_the_stalled_connection() -> None:
+    """The link stalls: paho took the command and the broker says nothing. The client hears a
+    refusal (rotctld RPRT -6 once the link is down), not RPRT 0, and the connection is shut so
+    nothing of it reaches the broker when the link recovers."""
+    link, paho = link_on(None)
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    assert refused.value.code is RefusalCode.OFFLINE
+    assert "did not acknowledge it within" in refused.value.message
+    assert not link.up and link.resets == 1
+    paho.broker.settimeout(5)
+    assert paho.broker.recv(10) == b""  # the connection's end, for paho's loop to read
+    with pytest.raises(Refused) as again:  # refused at once until paho has connected again
+        link.send("rotor/stop", "stop", "DL1ABC", 5)
+    assert again.value.message == "not connected to the station's broker"
+    assert len(paho.published) == 1
+
+
+def test_a_puback_with_a_failure_is_a_refusal_naming_the_acl() -> None:
+    link, _ = link_on(ReasonCode(PacketTypes.PUBACK, "Not authorized"))
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    assert "refused it (Not authorized)" in refused.value.message
+    assert link.up and link.resets == 0
+
+
+def test_without_a_heartbeat_only_a_stop_goes_unstamped() -> None:
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.station_clock.forget()
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    assert "not heard" in refused.value.message
+    link.send("rotor/stop", "stop", "DL1ABC", 5)
+    ((topic, props),) = paho.published
+    assert topic == "rotor/stop" and props.UserProperty == [("operator", "DL1ABC")]
+
+
+# -- the station's side of the heartbeat: its main connection beats while it is the bridge ----
+def test_the_station_beats_from_its_connection_only_while_connected_and_not_refused() -> None:
+    clock = FakeClock()
+    client = MqttClient(
+        MqttSettings(),
+        will_topic="rotor/bridge/state",
+        subscriptions=[],
+        on_message=lambda *a: None,
+        heartbeat="rotor/bridge/heartbeat",
+        clock=clock,
+        wall=lambda: 1_700_000_000.25,
+    )
+    beats: list[tuple[str, bytes, int]] = []
+    client._client.publish = lambda topic, payload, qos: beats.append((topic, payload, qos))  # type: ignore[assignment,method-assign,misc]
+    client._tick()  # not connected (or its first look still runs): nothing
+    client.connected.set()
+    for _ in range(9):  # paho's loop, a round every half second
+        client._tick()
+        clock.t += 0.5
+    assert beats == [("rotor/bridge/heartbeat", b"1700000000.250", 0)] * 3  # at 0, 2 and 4 s
+    client.refused = "another bridge runs on rotor"
+    clock.t += 10
+    client._tick()
+    assert len(beats) == 3

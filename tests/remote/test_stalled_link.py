@@ -1,0 +1,153 @@
+"""The remote's link to the station's broker stalls without dropping (Wi-Fi, a mobile link): real
+mosquitto, the station's bridge on an emulated Rotor-EZ, the remote in this process reaching the
+broker through a TCP link this test stalls and recovers. Virtual-time proofs of the same rules
+are in tests/remote/test_late_commands.py; this proves the wiring."""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.mosquitto import free_port
+from bridge.mqtt.heartbeat import parse_beat
+from bridge.remote.run import Remote
+from bridge.remote.settings import RemoteSettings
+from tests.support import Probe, wait_until
+from tests.support.rig import Rig
+
+
+class StallingLink:
+    """A TCP link on a loopback port to ``target`` that can stall: stalled, what either side
+    sends is taken and held (as a Wi-Fi link's buffers hold it) and a new connection gets no
+    further than the link; recovered, what it held is delivered, the old connection's first."""
+
+    def __init__(self, target: int) -> None:
+        self.target = target
+        self.flowing = threading.Event()
+        self.flowing.set()
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self._server.getsockname()[1])
+        self._socks: list[socket.socket] = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def stall(self) -> None:
+        self.flowing.clear()
+
+    def recover(self) -> None:
+        self.flowing.set()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                conn, _ = self._server.accept()
+            except OSError:
+                return
+            if not self.flowing.is_set():  # no connection is made across a stalled link
+                conn.close()
+                continue
+            upstream = socket.create_connection(("127.0.0.1", self.target))
+            self._socks += [conn, upstream]
+            for a, b in ((conn, upstream), (upstream, conn)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                self.flowing.wait()  # held while the link stalls, delivered when it recovers
+                dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+    def close(self) -> None:
+        self.flowing.set()
+        self._server.close()
+        for s in self._socks:
+            with contextlib.suppress(OSError):
+                s.close()
+
+
+@pytest.fixture
+def station(rig: Rig) -> Rig:
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    return rig
+
+
+@pytest.fixture
+def link(station: Rig) -> Iterator[StallingLink]:
+    stalling = StallingLink(station.broker.port)
+    yield stalling
+    stalling.close()
+
+
+def ask(port: int, line: bytes) -> bytes:
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        sock.sendall(line)
+        buf = b""
+        while not buf.endswith(b"\n"):
+            chunk = sock.recv(100)
+            if not chunk:
+                break
+            buf += chunk
+    return buf
+
+
+def test_a_move_across_a_stalled_link_is_refused_and_never_turns_the_rotor_later(
+    station: Rig, link: StallingLink, probe: Probe
+) -> None:
+    port = free_port()
+    settings = RemoteSettings(
+        operator="DL1ABC",
+        mqtt={"host": "127.0.0.1", "port": link.port, "base_topic": "rotor"},
+        endpoints=[{"rotator": "tower", "rotctld_port": port}],
+        command_expiry_s=1,
+    )
+    remote = Remote(settings)
+    remote.start()
+    try:
+        mqtt = remote.link
+        assert mqtt is not None
+        emu = station.emus["tower"]
+        moves = len(emu.frames(*BEARING_OUTCOMES))
+        link.stall()
+        asked = time.time()
+        # the broker never acknowledges it: an error, not RPRT 0 (the link is reset: -6)
+        assert ask(port, b"P 200 0\n") == b"RPRT -6\n"
+        assert mqtt.resets == 1 and not mqtt.up
+        assert ask(port, b"P 210 0\n") == b"RPRT -6\n"  # refused at once while it reconnects
+        # the stall lasts past the command's 1 s expiry; then the link delivers what it held
+        wait_until(lambda: time.time() > asked + 2.5, 10, "the stall to last 2.5 s")
+        errors = probe.mark()
+        link.recover()
+        refused = probe.wait(
+            lambda m: m.topic == "rotor/error" and b"older than its 1 s expiry" in m.payload,
+            20,
+            "the station refusing the target the link held",
+            errors,
+        )
+        assert b"set_pos" not in refused.payload and b"200" in refused.payload
+        wait_until(lambda: mqtt.up, 30, "the remote connected again")
+        wait_until(lambda: ask(port, b"P 120 0\n") == b"RPRT 0\n", 10, "a move taken again")
+        station.arrived("tower", 120)
+        assert not [f for f in emu.frames(*BEARING_OUTCOMES)[moves:] if b"200" in f.data]
+        assert station.status("tower").bearing_deg == pytest.approx(120, abs=3.5)
+    finally:
+        remote.stop()
+
+
+def test_the_station_bridge_beats_its_clock_not_retained(station: Rig, probe: Probe) -> None:
+    """What the remote reads the station's life and clock from (mqtt/heartbeat.py rule 1)."""
+    start = probe.mark()
+    first = probe.wait(lambda m: m.topic == "rotor/bridge/heartbeat", 10, "a heartbeat", start)
+    second = probe.wait(
+        lambda m: m.topic == "rotor/bridge/heartbeat" and m is not first, 10, "the next", start
+    )
+    assert not first.retain and not second.retain
+    assert parse_beat(first.payload) < parse_beat(second.payload)
