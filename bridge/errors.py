@@ -15,6 +15,7 @@ class RefusalCode(enum.StrEnum):
     KEEP_OUT = "keep_out"  # the bearing lies in a configured keep-out sector
     INVALID = "invalid"  # not a command at all (a target without an axis)
     LEASED = "leased"  # another operator holds the control lease (engine/lease.py)
+    STALE = "stale"  # a stop or lock ON came first (engine/mailbox.py rule 10)
 
 
 class Refused(Exception):

@@ -1,7 +1,8 @@
 """Pending commands for one rotator: the only hand-off point into the lines thread.
 
 Rules:
-1. A stop pre-empts everything: it is taken first and drops any target that came before it.
+1. A stop pre-empts everything: it is taken first and drops any target that came before it,
+   and any judged before it that comes after it (rule 10).
 2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts);
    an axis the newer one leaves out is kept from the older (model.combine: an azimuth, then an
    elevation alone, is one target).
@@ -35,6 +36,15 @@ Rules:
    dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
    (``put_wind``: the highest since the last take, so that no gust is lost; one the broker
    replayed apart, wind.py rule 6).
+10. The halt count (``epoch``): every stop and lock ON put adds one to it, under the lock the
+    put takes anyway (nothing else: a stop waits for nothing new). A motion command (a target,
+    a track or follow start) is put with the count its judge read before judging it
+    (engine/rotator.py); one whose count is older than the mailbox's was judged before a stop
+    or lock ON that is in already, on another thread, and is dropped under the same lock (the
+    put returns False; the judge reports the refusal). So a motion command judged before a stop
+    or lock ON never runs after it, whichever front end's thread brought which, and a lock OFF
+    that follows in the same batch lets no such target through. A command put without a count
+    (tracking or following OFF, the session's own) is never dropped by it.
 """
 
 from __future__ import annotations
@@ -93,6 +103,7 @@ class Mailbox:
         self._rfd, self._wfd = os.pipe()
         self._woken = False  # rule 5: a wake byte is owed for the batch being filled
         self._fd_lock = threading.Lock()  # rule 8
+        self._epoch = 0  # rule 10: stops and lock ONs put so far
         os.set_blocking(self._rfd, False)
         os.set_blocking(self._wfd, False)
 
@@ -105,29 +116,50 @@ class Mailbox:
         batch = self._batch
         return batch.stop is not None or batch.lock_on
 
+    @property
+    def epoch(self) -> int:
+        """Rule 10: the halt count, read before judging a motion command (one attribute read:
+        a count read late is only newer, never one that lets a stale command in)."""
+        return self._epoch
+
     def put(
-        self, command: Target | Stop | SetOption, *, hold: int | None = None, wake: bool = True
-    ) -> None:
-        """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5."""
+        self,
+        command: Target | Stop | SetOption,
+        *,
+        hold: int | None = None,
+        wake: bool = True,
+        epoch: int | None = None,
+    ) -> bool:
+        """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5;
+        ``epoch``: the halt count a target was judged at (rule 10). False: dropped (rule 10)."""
         with self._lock:
             if isinstance(command, Stop):
+                self._epoch += 1  # rule 10
                 self._batch.stop = command
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
                 self._hold(hold)
             elif isinstance(command, Target):
+                if self._stale(epoch):
+                    return False
                 self._batch.target = combine(command, self._batch.target)
             else:
                 self._option_order.pop(command.name, None)
                 self._option_order[command.name] = command
         if wake:
             self._wake_once()
+        return True
+
+    def _stale(self, epoch: int | None) -> bool:
+        """Rule 10 (under the lock): judged before a stop or lock ON that is in already."""
+        return epoch is not None and epoch != self._epoch
 
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
             self._batch.lock = locked
             if locked:
+                self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
                 self._batch.target = None
                 self._batch.track = None
@@ -154,22 +186,30 @@ class Mailbox:
             held = self._batch.hold
             self._batch.hold = marker if held is None else max(held, marker)
 
-    def put_track(self, track: Track) -> None:
-        """Start or end tracking; it replaces a target put before it (the later command wins)."""
+    def put_track(self, track: Track, *, epoch: int | None = None) -> bool:
+        """Start or end tracking; it replaces a target put before it (the later command wins).
+        ``epoch``: a start's halt count (rule 10); False: dropped."""
         with self._lock:
+            if self._stale(epoch):
+                return False
             self._batch.track = track
             self._batch.target = None
             self._batch.follow = None  # rule 9: the later command wins
         self._wake_once()
+        return True
 
-    def put_follow(self, follow: Follow) -> None:
-        """Rule 9: start or end following; it replaces a target or track put before it."""
+    def put_follow(self, follow: Follow, *, epoch: int | None = None) -> bool:
+        """Rule 9: start or end following; it replaces a target or track put before it.
+        ``epoch``: a start's halt count (rule 10); False: dropped."""
         with self._lock:
+            if self._stale(epoch):
+                return False
             self._batch.follow = follow
             if follow.on:  # following off ends nothing else
                 self._batch.target = None
                 self._batch.track = None
         self._wake_once()
+        return True
 
     def put_heard(self, heard: Heard) -> None:
         """Rule 9: what WSJT-X said; the newest wins."""

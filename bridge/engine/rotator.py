@@ -17,7 +17,12 @@ by the lease. The safety state has one owner per rotator (kept.py rule 5, docs/a
 rule 14): a lock word, and the lease's claims, releases and end (operators.py rule 1), are
 decided, put in the mailbox and their save queued in one step under the owner's lock, from
 every interface; the lock the judge asks is that owner's (kept.py rule 2). A stop takes no
-part in it: it never waits for the owner's lock.
+part in it: it never waits for the owner's lock. A motion command judged before a stop or lock
+ON never runs after it, whichever threads brought the two: the judge reads the mailbox's halt
+count before it judges a target, a track or follow start (a preset, park, nudge, a place are
+targets), and the mailbox drops one whose count a stop or lock ON put since has made old
+(mailbox.py rule 10); the judge reports that as a refusal (``STALE_MESSAGE``, code ``stale``),
+on R/error and in the audit trail like any.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from typing import NoReturn
 
 import serial
 
@@ -61,6 +67,9 @@ from bridge.pointing import Limits, toward
 from bridge.protocols.base import ModelSpec
 
 log = logging.getLogger(__name__)
+
+# mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
+STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
 
 
 class Rotator:
@@ -178,6 +187,7 @@ class Rotator:
     ) -> None:
         """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
         stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
         origin = command.origin or Origin(command.source)
         what = described or describe_command(command)
         try:
@@ -189,10 +199,11 @@ class Rotator:
             with self._owner:  # the session and the state file in the same order (kept.py)
                 self._kept.save_option(judged.name, judged.enabled)
                 self._mailbox.put(judged, wake=False)  # woken after the step
-        else:
-            if isinstance(judged, Stop):
-                self.last_halt_s = time.monotonic()
-            self._mailbox.put(judged, hold=hold if isinstance(judged, Stop) else None)
+        elif isinstance(judged, Stop):
+            self.last_halt_s = time.monotonic()
+            self._mailbox.put(judged, hold=hold)
+        elif not self._mailbox.put(judged, epoch=epoch):
+            self._overtaken(what, origin)
         if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
             self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
 
@@ -276,6 +287,7 @@ class Rotator:
         up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
         refused by the session, as an error event. Tracking started by the lease's holder goes
         on (its targets are the bridge's own, never judged by the lease)."""
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
         who = origin or Origin(source)
         if name.strip().casefold() == "off" and tle is None:
             self._mailbox.put_track(Track(None, source, origin=origin))
@@ -289,9 +301,11 @@ class Rotator:
             raise
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
-            self._mailbox.put_track(Track(None, source, lookup, described, origin))
+            track = Track(None, source, lookup, described, origin)
         else:
-            self._mailbox.put_track(Track(body, source, None, described, origin))
+            track = Track(body, source, None, described, origin)
+        if not self._mailbox.put_track(track, epoch=epoch):
+            self._overtaken(described, who)
         self.operators.audit(who, described, EXECUTED)
 
     @property
@@ -311,6 +325,7 @@ class Rotator:
         """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
         stop). Raise Refused otherwise: judged like a track start (the lease included); what
         the holder started goes on, its targets are the bridge's own (``wsjtx``)."""
+        epoch = self._mailbox.epoch if on else None  # before the judge (mailbox.py rule 10)
         who = origin or Origin(source)
         if on:
             try:
@@ -319,7 +334,9 @@ class Rotator:
             except Refused as exc:
                 self.report_refusal(exc.message, described, origin=who)
                 raise
-        self._mailbox.put_follow(Follow(on, long_path, source, described, origin))
+        follow = Follow(on, long_path, source, described, origin)
+        if not self._mailbox.put_follow(follow, epoch=epoch):
+            self._overtaken(described, who)
         self.operators.audit(who, described, EXECUTED)
 
     def wind(self, speed_kmh: float, replayed: bool = False) -> None:
@@ -329,6 +346,12 @@ class Rotator:
     def heard(self, heard: Heard) -> None:
         """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
         self._mailbox.put_heard(heard)
+
+    def _overtaken(self, what: str, who: Origin) -> NoReturn:
+        """A motion command the mailbox dropped: a stop or lock ON from another thread was put
+        while it was judged (mailbox.py rule 10). Refused like any, and said so."""
+        self.report_refusal(STALE_MESSAGE, what, origin=who)
+        raise Refused(RefusalCode.STALE, STALE_MESSAGE)
 
     def _check_start(self, who: Origin) -> None:
         """A track or follow start: the judge's order (``_check``), with no target to judge."""

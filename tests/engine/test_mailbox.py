@@ -148,3 +148,43 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
             assert select.select([mb], [], [], 0)[0] == [mb], f"{name} woke nothing"
         finally:
             mb.close()
+
+
+def test_a_motion_judged_before_a_stop_or_lock_on_put_since_is_dropped() -> None:
+    """Rule 10: a stop or lock ON put adds one to the halt count; a target, track or follow
+    start put with an older count was judged before it and is dropped; nothing else is."""
+    from bridge.engine.follow import Follow
+    from bridge.engine.tracking import Track
+    from bridge.sky import Body
+
+    box = Mailbox()
+    try:
+        judged = box.epoch
+        box.put(Stop())
+        assert not box.put(Target(10.0), epoch=judged)
+        assert not box.put_track(Track(Body.sun()), epoch=judged)
+        assert not box.put_follow(Follow(True), epoch=judged)
+        batch = box.take()
+        assert batch.stop == Stop() and (batch.target, batch.track, batch.follow) == (None,) * 3
+        judged = box.epoch
+        box.put_lock(True)
+        box.put_lock(False)  # the OFF in the same batch lets no older target through
+        assert not box.put(Target(10.0), epoch=judged)
+        batch = box.take()
+        assert batch.lock_on and batch.lock is False and batch.target is None
+        judged = box.epoch
+        box.put_lock(False)  # not a halt: nor are options, releases, OFFs, notes
+        box.put(SetOption("jam", True))
+        box.put_release(1, clear=True)
+        box.put_track(Track(None))
+        box.put_follow(Follow(False))
+        box.put_note("x")
+        assert box.epoch == judged
+        assert box.put(Target(20.0), epoch=judged)  # judged after every halt: kept
+        assert box.put_track(Track(Body.sun()), epoch=judged)
+        assert box.put_follow(Follow(True), epoch=judged)
+        box.put(Stop())
+        assert box.put(Target(30.0))  # put without a count (the bench's, the session's own)
+        assert box.take().target == Target(30.0)
+    finally:
+        box.close()

@@ -1,0 +1,247 @@
+"""A motion command judged before a STOP or lock ON never runs after it (docs/architecture.md
+rule 11, mailbox.py rule 10), whichever front end's thread brought which. Each test forces the
+interleaving: the judge (``Rotator._check``, or ``_check_start`` for a track or follow start)
+returns, and before the command is put in the mailbox a halt runs to its end on a thread of its
+own (the stop lane, the console); then the command goes on to its put. No timing decides it.
+The rotator's front half runs on the virtual bench's session and mailbox (tests/engine/virtual.py),
+so what a user would notice is what the emulated controller received.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.engine.config import FollowConfig
+from bridge.engine.rotator import STALE_MESSAGE, Rotator
+from bridge.engine.state_store import StateStore
+from bridge.errors import Refused
+from bridge.model import AuditEvent, ErrorEvent, ErrorKind, MotionState, Origin, Source, Target
+from bridge.mqtt.halts import Halts
+from bridge.mqtt.topics import Topics
+from bridge.sky import Sky
+from bridge.web.commands import WebCommand, carry_out
+from tests.engine.virtual import VirtualRotator
+
+BERLIN = (52.52, 13.40)
+START_AZ = 30.0
+ROTCTLD = Origin(Source.ROTCTLD, None, "192.168.1.20")
+CONSOLE = "192.168.1.30"
+
+
+class Bench:
+    """A Rotator (the judge every front end calls) on a virtual controller, idle at START_AZ."""
+
+    def __init__(self, tmp_path: Path) -> None:
+        self.v = VirtualRotator(
+            "md01",
+            settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, "park_az_deg": 180},
+            emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, "start_az_deg": START_AZ},
+            sky=Sky(*BERLIN),
+            follow=FollowConfig(BERLIN, wsjtx=True),
+        )
+        self.v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        self.events: list[ErrorEvent] = []
+        self.audit: list[AuditEvent] = []
+        self.rot = Rotator(
+            self.v.cfg,
+            StateStore(tmp_path / "state.json"),
+            lambda s: None,
+            self.events.append,
+            on_audit=self.audit.append,
+        )
+        # the rotator's front half on the bench's session; the bench takes the rotator's mailbox
+        self.v.mailbox.close()
+        self.v.mailbox = self.rot._mailbox
+        self.rot._worker.session = self.v.session
+        topics = Topics("rotor", {"v": "rotor/v"})
+
+        class Down:  # the main connection is down: the lane's word is the only one
+            up = False
+
+            def publish_marker(self, topic: str, payload: str) -> None:
+                raise AssertionError("no marker while the main connection is down")
+
+        self.lane = Halts(
+            topics, Down(), {"v": self.rot}, lambda: 0.0, retain_is_live=True, on_problem=None
+        )
+
+    def close(self) -> None:
+        self.rot.operators.stop()
+        self.v.close()
+
+    def sets(self) -> list[bytes]:
+        """The target frames the controller received."""
+        return [f.data for f in self.v.frames("set")]
+
+
+@pytest.fixture
+def bench(tmp_path: Path) -> Iterator[Bench]:
+    made = Bench(tmp_path)
+    yield made
+    made.close()
+
+
+def on_a_thread(*words: Callable[[], None]) -> None:
+    """``words`` in order on another thread, to their end (a front end's thread)."""
+    failed: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            for word in words:
+                word()
+        except BaseException as exc:  # re-raised on the test's thread
+            failed.append(exc)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(10)
+    assert not thread.is_alive(), "the halt did not return"
+    if failed:
+        raise failed[0]
+
+
+def between_judge_and_put(
+    monkeypatch: pytest.MonkeyPatch, rot: Rotator, *words: Callable[[], None]
+) -> None:
+    """The first motion command judged runs ``words`` on another thread once its judge has
+    said yes, before its put."""
+    once = [True]
+
+    def hooked(real: Callable[..., object]) -> Callable[..., object]:
+        def judged(*args: object) -> object:
+            out = real(*args)
+            if once[0]:
+                once[0] = False
+                on_a_thread(*words)
+            return out
+
+        return judged
+
+    monkeypatch.setattr(rot, "_check", hooked(rot._check))
+    monkeypatch.setattr(rot, "_check_start", hooked(rot._check_start))
+
+
+def halts(b: Bench) -> dict[str, tuple[Callable[[], None], ...]]:
+    rot, lane = b.rot, b.lane
+
+    def lane_stop() -> None:
+        lane.on_lane("rotor/v/stop", b"", False, Origin(Source.MQTT, "DL1ABC"))
+
+    def lane_lock_on() -> None:
+        lane.on_lane("rotor/v/lock", b"ON", False, Origin(Source.MQTT, "DL1ABC"))
+
+    def console(on: bool | None) -> Callable[[], None]:
+        cmd = WebCommand("stop") if on is None else WebCommand("lock", on=on)
+        return lambda: carry_out(rot, cmd, CONSOLE)
+
+    return {
+        "lane STOP": (lane_stop,),
+        "console STOP": (console(None),),
+        "lane lock ON, console lock OFF": (lane_lock_on, console(False)),
+        "console lock ON, console lock OFF": (console(True), console(False)),
+    }
+
+
+def motions(b: Bench) -> dict[str, Callable[[], None]]:
+    rot = b.rot
+    return {
+        "target": lambda: rot.submit(Target(200.0, None, Source.ROTCTLD, origin=ROTCTLD)),
+        "park": lambda: rot.park(Source.PST, "pst park"),
+        "track": lambda: rot.track("sun", Source.MQTT, "track sun"),
+        "follow": lambda: rot.follow(True, Source.MQTT, "follow on"),
+    }
+
+
+def served(b: Bench) -> None:
+    """The lines thread takes the batch; WSJT-X names a partner (what following would turn
+    to); the rotor has time to turn."""
+    b.v._take()
+    b.v.heard("JA1ABC", "PM95")
+    b.v.run_for(30.0)
+
+
+HALTS = [
+    "lane STOP",
+    "console STOP",
+    "lane lock ON, console lock OFF",
+    "console lock ON, console lock OFF",
+]
+
+
+@pytest.mark.parametrize("halt", HALTS)
+@pytest.mark.parametrize("motion", ["target", "park", "track", "follow"])
+def test_a_motion_judged_before_a_halt_never_runs_after_it(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch, halt: str, motion: str
+) -> None:
+    """Judged (lock OFF, the link up), then a STOP, or a lock ON and OFF, from another thread,
+    then put: nothing turns the rotor (before: the batch had the halt and the motion after it,
+    and the rotor set off after the STOP or the lock ON)."""
+    between_judge_and_put(monkeypatch, bench.rot, *halts(bench)[halt])
+    try:
+        motions(bench)[motion]()
+        refused: Refused | None = None
+    except Refused as exc:
+        refused = exc
+    batch = bench.rot._mailbox.take()
+    bench.v._do(bench.v.session.commands(batch, bench.v.now))
+    served(bench)
+    assert bench.sets() == []  # no target frame reached the controller
+    assert (batch.target, batch.track, batch.follow) == (None, None, None)
+    assert abs(bench.v.truth().az_deg - START_AZ) <= 0.5 and not bench.v.truth().is_moving
+    assert bench.v.status.tracking is None and bench.v.status.following is None
+    # the front end was told, R/error says why, and the audit trail has it refused
+    assert refused is not None and refused.code == "stale" and refused.message == STALE_MESSAGE
+    said = [e for e in bench.events if e.kind is ErrorKind.REFUSED]
+    assert [e.message for e in said] == [STALE_MESSAGE]
+    assert bench.audit[-1].result == f"refused: {STALE_MESSAGE}"
+
+
+@pytest.mark.parametrize(
+    "halt",
+    ["lane STOP", "console STOP", "console lock ON, console lock OFF"],
+)
+def test_a_target_judged_after_the_halt_goes_out(bench: Bench, halt: str) -> None:
+    """The same halts on their thread, then a target judged on another: it is newer than them
+    and is carried out after them."""
+    on_a_thread(*halts(bench)[halt])
+    motions(bench)["target"]()
+    batch = bench.rot._mailbox.take()
+    assert batch.target is not None and (batch.stop is not None or batch.lock_on)
+    bench.v._do(bench.v.session.commands(batch, bench.v.now))
+    bench.v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 190, 60)
+    assert len(bench.sets()) == 1 and abs(bench.v.truth().az_deg - 200.0) <= 0.5
+    assert not [e for e in bench.events if e.kind is ErrorKind.REFUSED]
+    assert bench.audit[-1].result == "executed"
+
+
+def test_following_off_and_tracking_off_are_never_overtaken(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An OFF is never refused (docs/architecture.md rule 11), a halt around it or not."""
+    rot = bench.rot
+    box = rot._mailbox
+    real_track, real_follow = box.put_track, box.put_follow
+    stop = halts(bench)["console STOP"]
+
+    def put_track(*args: object, **kw: object) -> bool:
+        on_a_thread(*stop)
+        return real_track(*args, **kw)  # type: ignore[arg-type]
+
+    def put_follow(*args: object, **kw: object) -> bool:
+        on_a_thread(*stop)
+        return real_follow(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(box, "put_track", put_track)
+    monkeypatch.setattr(box, "put_follow", put_follow)
+    rot.track("off", Source.MQTT, "track off")
+    track = box.take().track
+    assert track is not None and track.body is None and track.lookup is None
+    rot.follow(False, Source.MQTT, "follow off")
+    follow = box.take().follow
+    assert follow is not None and not follow.on
+    assert not bench.events
+    assert [a.result for a in bench.audit] == ["executed"] * 4  # two stops, two OFFs
