@@ -21,7 +21,7 @@ from typing import Any
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 @contextmanager
@@ -34,7 +34,7 @@ def main_held_at(app: App, topic: str, payload: bytes) -> Iterator[threading.Eve
     def stuck(t: str, p: bytes, retain: bool, operator: str | None) -> None:
         if t == topic and p == payload and not held.is_set():
             held.set()
-            release.wait(30)
+            release.wait(slow(30))
         handle(t, p, retain, operator)
 
     app.client._handler = stuck
