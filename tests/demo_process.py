@@ -137,7 +137,7 @@ class DemoProcess:
         return seen
 
     def wait(self, timeout_s: float) -> int:
-        rc = self.proc.wait(slow(timeout_s))
+        rc = self.proc.wait(timeout_s)  # a deadline the caller scales, as Popen.wait's
         self._reader.join(slow(5))
         return rc
 

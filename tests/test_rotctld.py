@@ -716,7 +716,7 @@ def test_a_quiet_client_keeps_its_slot_until_the_idle_timeout(station: StationFa
     small.start()
     try:
         quiet = Client(small.port)
-        quiet.sock.settimeout(1.5)
+        quiet.sock.settimeout(1.5)  # a quiet period, not a deadline
         with pytest.raises(TimeoutError):  # no command for 1.5 s, past the 0.5 s: still there
             quiet.sock.recv(1)
         quiet.ask(b"S\n", b"RPRT 0\n")

@@ -98,7 +98,7 @@ def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -
 
     def chatty(s: Session) -> None:  # a byte every 0.1 s (the behaviour under test) until hung up
         try:
-            while not done.wait(0.1):
+            while not done.wait(0.1):  # a poll, not a deadline
                 s.send(b".")
         except OSError:
             pass
