@@ -216,8 +216,10 @@ def _shown() -> str:
         "`check-config` prints a summary (each rotator's model and whether its port is there,",
         "the broker, what is on), warnings for what is allowed but probably wrong, and a last",
         "line `config OK: FILE`; a file that is not good is one message naming the key and exit",
-        "code 2. `--full` prints every key above with the value in use, the password masked, and",
-        "these besides:",
+        "code 2. It tries `state_file` as the start does, writing nothing: a directory, a FIFO or",
+        "a file where its directory must be is that error, a directory this user may not write a",
+        "warning (the service may run as another user). `--full` prints every key above with the",
+        "value in use, the password masked, and these besides:",
         "",
     ]
     lines += [f"- **`{key}`**: {_sentence(text)}" for key, text in SHOWN.items()]

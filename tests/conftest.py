@@ -1,13 +1,51 @@
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
+from hypothesis import settings
 
+from bridge.emulators.pty import EmulatedPort
 from tests.support import Mosquitto, Probe
 from tests.support.rig import Rig
+from tests.support.waiting import SLOWDOWN, slow
+
+# Hypothesis fails an example that takes longer than 200 ms: a wall-clock upper bound, which a
+# busy machine breaks; what an example proves is its outcome, never its speed
+settings.register_profile("rotor-bridge", deadline=None)
+settings.load_profile("rotor-bridge")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _emulator_and_broker_waits_scaled() -> Iterator[None]:
+    """An emulator's waits (``wait_for``, ``wait_for_frame``, all through ``wait_until``) and
+    a private mosquitto's start (``start``, ``restart``) are the tests' deadlines, scaled like
+    every other (tests/support/waiting.py rule 1): both ship with the bridge (the demo's),
+    which knows nothing of the tests' factor."""
+    if SLOWDOWN == 1.0:
+        yield
+        return
+    original = EmulatedPort.wait_until
+    start_broker = Mosquitto._start
+
+    def broker_started(self: Mosquitto, timeout_s: float) -> Mosquitto:
+        return start_broker(self, slow(timeout_s))
+
+    def scaled(
+        self: EmulatedPort[Any],
+        probe: Callable[[Any, float], Any],
+        predicate: Callable[[Any], bool],
+        timeout_s: float = 5.0,
+    ) -> Any:
+        return original(self, probe, predicate, slow(timeout_s))
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(EmulatedPort, "wait_until", scaled)
+        patch.setattr(Mosquitto, "_start", broker_started)
+        yield
 
 
 @pytest.fixture

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from bridge.mosquitto import free_port
+from tests.support.waiting import slow
 
 BASE_LINE = re.compile(r"watch: mosquitto_sub (?:-h \S+ -p \d+ )?-t '([^']+)/#' -v")
 
@@ -77,7 +78,7 @@ class DemoProcess:
     def wait_screen(self, pattern: str, timeout_s: float = 20.0, start: int = 0) -> re.Match[str]:
         """The first match of `pattern` in what was written to the terminal (from `start`)."""
         rx = re.compile(pattern)
-        deadline = time.monotonic() + timeout_s
+        deadline = time.monotonic() + slow(timeout_s)
         with self._cond:
             while (m := rx.search(self.screen_text, start)) is None:
                 left = deadline - time.monotonic()
@@ -109,7 +110,7 @@ class DemoProcess:
     def wait_line(self, pattern: str, timeout_s: float = 20.0, start: int = 0) -> re.Match[str]:
         """The first printed line (from line number `start` on) that matches `pattern`."""
         rx = re.compile(pattern)
-        deadline = time.monotonic() + timeout_s
+        deadline = time.monotonic() + slow(timeout_s)
         with self._cond:
             while True:
                 for line in self.lines[start:]:
@@ -136,15 +137,15 @@ class DemoProcess:
         return seen
 
     def wait(self, timeout_s: float) -> int:
-        rc = self.proc.wait(timeout_s)
-        self._reader.join(5)
+        rc = self.proc.wait(timeout_s)  # a deadline the caller scales, as Popen.wait's
+        self._reader.join(slow(5))
         return rc
 
     def close(self) -> None:
         if self.proc.poll() is None:
             self.proc.terminate()
             try:
-                self.proc.wait(15)
+                self.proc.wait(slow(15))
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()

@@ -22,6 +22,7 @@ from bridge.sky import parse_tles
 from tests.demo_process import DemoProcess
 from tests.support import Probe, retained_snapshot
 from tests.support.sky import sgp4_altaz
+from tests.support.waiting import slow
 
 ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
 
@@ -73,7 +74,7 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         proc.type("200")  # a bearing typed into the demo goes over MQTT like any other
         probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 200) <= 3, timeout_s=20)
         proc.type("q")
-        assert proc.wait(20) == 0, proc.output
+        assert proc.wait(slow(20)) == 0, proc.output
     finally:
         if probe is not None:
             probe.close()
@@ -134,7 +135,7 @@ def test_the_demo_prompt_turns_by_preset_locator_path_nudge_and_park(tmp_path: P
         seen = proc.type("preset NOWHERE")  # the bridge refuses it, the console shows why
         proc.wait_line(r"/error = .*no preset 'NOWHERE'", start=seen, timeout_s=10)
         proc.type("q")
-        assert proc.wait(20) == 0, proc.output
+        assert proc.wait(slow(20)) == 0, proc.output
     finally:
         if probe is not None:
             probe.close()
@@ -151,7 +152,7 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
         probe.wait_value(f"{base}/availability", "online", timeout_s=20)
         probe.close()
         proc.proc.send_signal(signal.SIGINT)
-        assert proc.wait(20) == 0, proc.output
+        assert proc.wait(slow(20)) == 0, proc.output
     finally:
         proc.close()
     assert not answers("127.0.0.1", port)
@@ -188,7 +189,7 @@ def test_every_model_runs_turns_and_ends_cleanly(tmp_path: Path) -> None:
                     f"{root}/bearing", lambda m: abs(float(m.text) - 30) <= 3, timeout_s=15
                 )
         probe.close()
-        assert proc.wait(40) == 0, proc.output
+        assert proc.wait(slow(40)) == 0, proc.output
     finally:
         proc.close()
     assert "Traceback" not in proc.output, proc.output
@@ -332,7 +333,7 @@ def test_the_demo_tracks_its_own_satellite_from_the_prompt(tmp_path: Path) -> No
         probe.wait_value(f"{base}/tracking", "off", timeout_s=10)
         proc.wait_line(r"tracking ended \(off\)", start=seen, timeout_s=10)
         proc.type("q")
-        assert proc.wait(20) == 0, proc.output
+        assert proc.wait(slow(20)) == 0, proc.output
     finally:
         if probe is not None:
             probe.close()
@@ -390,7 +391,7 @@ def test_on_a_terminal_the_bearing_stays_on_one_status_line_below_what_is_typed(
         proc.wait_screen(rf"{base} az \d+ idle > 30$", start=typed)
         assert f"{base}/bearing = " not in proc.screen_text  # no line per degree
         proc.keys("\x15q\r")  # ^U: the half-typed line forgotten, then quit
-        assert proc.wait(20) == 0, proc.screen_text
+        assert proc.wait(slow(20)) == 0, proc.screen_text
     finally:
         after = termios.tcgetattr(proc.tty)
         proc.close()

@@ -22,6 +22,7 @@ from bridge.mqtt import feature_payloads, payloads
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, load_settings
+from tests.support.waiting import slow
 
 ROOT = Path(__file__).resolve().parent.parent
 DEPLOY = ROOT / "deploy"
@@ -431,7 +432,7 @@ def _run_relay(flow: list[dict], commands: list[object]) -> list[dict]:
     """
     job = json.dumps({"func": _relay(flow)["func"], "commands": commands})
     proc = subprocess.run(
-        [_node_js(), "-e", harness], input=job, capture_output=True, text=True, timeout=60
+        [_node_js(), "-e", harness], input=job, capture_output=True, text=True, timeout=slow(60)
     )
     assert proc.returncode == 0, proc.stderr
     results = json.loads(proc.stdout)
@@ -565,7 +566,7 @@ def test_the_page_script_and_every_function_node_are_javascript_that_parses(
         input=json.dumps(sources),
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=slow(60),
     )
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout) == {}
@@ -716,7 +717,7 @@ def _verify(unit_text: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
         [_systemd_analyze(), "verify", str(path)],
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=slow(120),
         env=env,
         cwd=tmp_path,
     )

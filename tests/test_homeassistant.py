@@ -28,6 +28,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
 from tests.ha_rules import validate
+from tests.support.waiting import slow
 
 
 def build(models: dict[str, str], base: str = "rotor", **kw) -> dict[str, dict]:
@@ -222,9 +223,9 @@ def test_home_assistant_birth_schedules_a_state_republish() -> None:
     rec = Recorder()
     pub = publisher(rec, birth_delay_s=0.01)
     assert pub.on_message("homeassistant/status", b"offline", False) is True
-    assert not rec.republished.wait(0.1)
+    assert not rec.republished.wait(0.1)  # a quiet period, not a deadline
     pub.on_message("homeassistant/status", b"online", False)
-    assert rec.republished.wait(5)
+    assert rec.republished.wait(slow(5))
 
 
 def test_az_el_models_get_elevation_entities_with_their_limits() -> None:

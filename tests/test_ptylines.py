@@ -18,6 +18,7 @@ from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Targe
 from bridge.protocols import REGISTRY
 from bridge.ptylines import PtyLineServer
 from tests.support import wait_until
+from tests.support.waiting import slow
 
 
 @dataclass
@@ -50,7 +51,7 @@ class Client:
 
     def ask(self, data: bytes, reply_ends: bytes = b"\n", timeout_s: float = 5.0) -> bytes:
         os.write(self.fd, data)
-        return self.read(reply_ends, timeout_s)
+        return self.read(reply_ends, slow(timeout_s))
 
     def read(self, reply_ends: bytes = b"\n", timeout_s: float = 5.0) -> bytes:
         buf = b""
@@ -173,7 +174,7 @@ def test_replies_nobody_reads_are_dropped_without_blocking(
         # the server may still be answering the C2s it has read: its answer to C comes after
         # them, in order (a C2's answer ends in "EL=000\r\n", never in C's "AZ=042\r\n")
         os.write(c.fd, b"C\r")
-        assert c.read(b"AZ=042\r\n", timeout_s=10).endswith(b"AZ=042\r\n")
+        assert c.read(b"AZ=042\r\n", timeout_s=slow(10)).endswith(b"AZ=042\r\n")
     finally:
         c.close()
 
@@ -226,7 +227,7 @@ def test_what_a_client_left_unread_is_not_the_next_ones(tmp_path: Path) -> None:
     try:
         c = Client(path)
         os.write(c.fd, b"C\r")
-        assert select.select([c.fd], [], [], 5)[0]
+        assert select.select([c.fd], [], [], slow(5))[0]
         assert os.read(c.fd, 7) == b"AZ=042\r"  # the LF left unread
         c.close()
         # the wait is the thing under test: the unread byte's time passing

@@ -24,13 +24,14 @@ from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
 from bridge.settings import RotatorSettings, Settings
 from tests.support import feed, wait_until
 from tests.support.rig import FAST_POLLING
+from tests.support.waiting import slow
 
 
 class Client:
     """A rotctld client on a real socket; replies are read until exactly the expected length."""
 
     def __init__(self, port: int) -> None:
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=slow(5))
 
     def send(self, data: bytes) -> None:
         self.sock.sendall(data)
@@ -715,11 +716,11 @@ def test_a_quiet_client_keeps_its_slot_until_the_idle_timeout(station: StationFa
     small.start()
     try:
         quiet = Client(small.port)
-        quiet.sock.settimeout(1.5)
+        quiet.sock.settimeout(1.5)  # a quiet period, not a deadline
         with pytest.raises(TimeoutError):  # no command for 1.5 s, past the 0.5 s: still there
             quiet.sock.recv(1)
         quiet.ask(b"S\n", b"RPRT 0\n")
-        quiet.sock.settimeout(10)
+        quiet.sock.settimeout(slow(10))
         assert quiet.at_eof()  # and dropped at the idle timeout
         quiet.close()
     finally:

@@ -23,6 +23,7 @@ from bridge.model import Origin, Source
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import wait_until
 from tests.support.cluster import FakeCluster, Session
+from tests.support.waiting import slow
 
 SPOT = b"DX de EA5WU:     14025.0  JA1ABC       cq up 2                        1829Z\r\n"
 
@@ -56,7 +57,7 @@ def test_no_prompt_in_time_is_a_failure_and_the_client_tries_again(
     published: list[str],
 ) -> None:
     def silent(s: Session) -> None:  # never prompts; waits until the client hangs up
-        s.conn.settimeout(30)
+        s.conn.settimeout(slow(30))
         while s.conn.recv(1024):
             pass
 
@@ -73,7 +74,7 @@ def _failing_then_prompting(first: Callable[[Session], None], published: list[st
         s.send(b"login: ")
         cluster.logins.append(s.read_line())
         s.send(SPOT)
-        cluster.done.wait(30)
+        cluster.done.wait(slow(30))
 
     cluster = FakeCluster([first, prompt])
     dx = client(cluster.port, published, JumpingClock())
@@ -97,7 +98,7 @@ def test_a_node_that_talks_but_never_prompts_is_left_too(published: list[str]) -
 
     def chatty(s: Session) -> None:  # a byte every 0.1 s (the behaviour under test) until hung up
         try:
-            while not done.wait(0.1):
+            while not done.wait(0.1):  # a poll, not a deadline
                 s.send(b".")
         except OSError:
             pass
@@ -160,7 +161,7 @@ def test_the_aim_thread_turns_to_the_newest_spot_else_the_entity_else_refuses(
     ]
     dx._stop.set()
     dx._aims.put(None)
-    thread.join(5)
+    thread.join(slow(5))
     assert not thread.is_alive()
 
 

@@ -10,6 +10,7 @@ import pytest
 import serial
 
 from bridge.emulators import EmulatedPort, start
+from tests.support.waiting import slow
 
 PortFactory = Callable[..., EmulatedPort[Any]]
 
@@ -39,7 +40,7 @@ def clients() -> Iterator[Callable[..., serial.Serial]]:
     opened: list[serial.Serial] = []
 
     def open_client(path: str, baud: int = 4800, timeout_s: float = 3.0) -> serial.Serial:
-        client = serial.Serial(path, baud, timeout=timeout_s)
+        client = serial.Serial(path, baud, timeout=slow(timeout_s))
         opened.append(client)
         return client
 

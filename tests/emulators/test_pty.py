@@ -132,7 +132,7 @@ def test_unplug_fails_the_client_and_removes_the_link(
     with pytest.raises(serial.SerialException):
         client.write(b"AI1;")
     with pytest.raises(serial.SerialException):
-        serial.Serial(port.link, 4800, timeout=0.1)
+        serial.Serial(port.link, 4800, timeout=0.1)  # refused at once: not a deadline
     # the rotor did not care about the USB plug
     assert port.wait_for(lambda s: s.az_deg == 100.0).az_deg == 100.0
 

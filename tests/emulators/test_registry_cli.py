@@ -17,6 +17,7 @@ import serial
 from bridge.emulators import EMULATORS, create, start
 from bridge.emulators.cli import _controller_options, add_arguments, main, run
 from bridge.emulators.rotorez import RotorEZ
+from tests.support.waiting import slow
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -79,7 +80,7 @@ def _read_lines(proc: subprocess.Popen[bytes], count: int, timeout_s: float) -> 
     """The first `count` stdout lines, read from the raw pipe with a deadline."""
     assert proc.stdout is not None
     fd = proc.stdout.fileno()
-    deadline_s = time.monotonic() + timeout_s
+    deadline_s = time.monotonic() + slow(timeout_s)
     buffer = b""
     while buffer.count(b"\n") < count:
         remaining_s = deadline_s - time.monotonic()
@@ -118,13 +119,13 @@ def test_emulate_command_serves_until_sigterm(tmp_path: Path) -> None:
         assert device_path.startswith("/dev/pts/")
         assert link_line == str(link)
         assert os.path.realpath(link) == device_path
-        with serial.Serial(str(link), 4800, timeout=2.0) as client:
+        with serial.Serial(str(link), 4800, timeout=slow(2)) as client:
             client.write(b"AI1;")
             assert client.read(4) == b";045"
             client.write(b";")
             assert client.read(18) == b"C2000 IDIOM V2.1A "
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=10) == 0
+        assert proc.wait(timeout=slow(10)) == 0
         assert not os.path.lexists(link)
     finally:
         if proc.poll() is None:

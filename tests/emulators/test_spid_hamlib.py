@@ -17,6 +17,7 @@ import pytest
 
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.spid import Spid
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -47,9 +48,9 @@ def rotctl(rotctl_path: str) -> Rotctl:
         hamlib_model: int, port: EmulatedPort[Spid], baud: int, *commands: str
     ) -> subprocess.CompletedProcess[str]:
         assert port.link is not None
-        argv = ["timeout", "20", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
         argv += ["-s", str(baud), *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
 
     return run
 
@@ -120,9 +121,11 @@ def test_903_set_is_answered_so_hamlib_does_not_wait_out_its_retries(
     spid_port: SpidPortFactory, rotctl: Rotctl
 ) -> None:
     port = spid_port("md01", az_speed_deg_s=500.0, el_speed_deg_s=500.0)
-    started = time.monotonic()
-    assert values(rotctl(903, port, 115200, "P", "100", "20")) == []
-    assert time.monotonic() - started < 1.9  # ~0.7 s; an unanswered set adds 4 x 400 ms
+    done = rotctl(903, port, 115200, "-vvvv", "P", "100", "20")  # Hamlib's own account
+    assert done.returncode == 0 and done.stdout.startswith("Opened rot model 903"), done
+    # unanswered, the set costs four waits of 400 ms, each logged "read_block_generic(): Timed
+    # out 0.40 seconds after 0 chars"
+    assert "Timed out" not in done.stderr, done.stderr[-600:]
     port.wait_for(lambda s: not s.is_moving)
     assert values(rotctl(903, port, 115200, "p")) == ["100.00", "20.00"]
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from bridge.engine.audit import QUEUE_LINES, AuditFile, AuditTrail
 from bridge.model import AuditEvent, Origin, Source
+from tests.support.waiting import slow
 
 
 def event(n: int, result: str = "executed") -> AuditEvent:
@@ -149,7 +150,7 @@ def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -
     trail.file._append = stuck  # type: ignore[method-assign]
     trail.start()
     trail.file.put(event(-1))  # straight to the queue: only the writer handles it
-    assert in_writer.wait(60)  # the writer hangs on its first line
+    assert in_writer.wait(slow(60))  # the writer hangs on its first line
     handed_in = threading.Event()
     sent = QUEUE_LINES + 50
 
@@ -162,7 +163,7 @@ def test_a_stuck_disk_never_holds_up_whoever_hands_in_an_event(tmp_path: Path) -
     worker = threading.Thread(target=front_end, daemon=True)
     worker.start()
     try:
-        assert handed_in.wait(60), "handing in an audit event waited for the disk"
+        assert handed_in.wait(slow(60)), "handing in an audit event waited for the disk"
         assert len(published) == sent
     finally:
         disk.set()
@@ -206,14 +207,14 @@ def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
     audit._append = stuck  # type: ignore[method-assign]
     audit.start()
     audit.put(event(0))
-    assert in_writer.wait(60)
+    assert in_writer.wait(slow(60))
     audit.put(event(1))
     audit.put(event(2))  # the queue is full now
     stopped = threading.Event()
     stopper = threading.Thread(target=lambda: (audit.stop(0.5), stopped.set()), daemon=True)
     stopper.start()
     try:
-        assert stopped.wait(60), "stop waited for a disk that never answers"
+        assert stopped.wait(slow(60)), "stop waited for a disk that never answers"
     finally:
         disk.set()
         stopper.join()

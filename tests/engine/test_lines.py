@@ -29,6 +29,7 @@ from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
 from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
+from tests.support.waiting import slow
 
 Opener = Callable[[str, ModelSpec, int], serial.Serial]
 
@@ -54,18 +55,18 @@ def rotator(rid: str, port: str, lines: Lines, opener: Opener, events: list) -> 
     )
 
 
-def stop_latency_s(emu: EmulatedPort, rot: Rotator) -> float:
-    """A target, then a stop while it turns: how long the stop took to reach the controller."""
+def stop_reaches_the_wire(emu: EmulatedPort, rot: Rotator) -> None:
+    """A target, then a stop while it turns: the stop reaches the controller (a deadline, not
+    a measure: what holds it up in the tests below holds it until the test lets go)."""
     rot.submit(Target(200.0))
     emu.wait_for(lambda s: s.is_moving, timeout_s=10)
     seen = len(emu.frames())
-    t = time.monotonic()
     rot.submit(Stop())
 
     def stop_seen(device, _now: float):  # noqa: ANN001
         return [f for f in device.log[seen:] if f.data == b";"]
 
-    return emu.wait_until(stop_seen, bool, timeout_s=5.0)[0].time_s - t
+    emu.wait_until(stop_seen, bool, timeout_s=5.0)
 
 
 class Counting:
@@ -88,9 +89,14 @@ def buggy() -> None:
 def test_one_rotators_trouble_never_holds_up_anothers_stop(
     emu: EmulatedPort, tmp_path: Path, trouble: str
 ) -> None:
-    release = threading.Event()
-    what = buggy if trouble == "a bug" else lambda: (release.wait(10), buggy())  # type: ignore[func-returns-value]
-    bad = Counting(what)
+    release, held = threading.Event(), threading.Event()
+
+    def wedged() -> None:  # the adapter's open() hangs until the test lets it go
+        held.set()
+        release.wait(slow(60))  # a guard, far past the stop's deadline
+        buggy()
+
+    bad = Counting(buggy if trouble == "a bug" else wedged)
     lines = Lines()
     events: list[ErrorEvent] = []
     sick = rotator("sick", str(tmp_path / "nowhere"), lines, bad, events)
@@ -100,9 +106,11 @@ def test_one_rotators_trouble_never_holds_up_anothers_stop(
     good.start()
     try:
         wait_until(lambda: good.status.state.value == "idle", 10, "the good rotator idle")
-        assert stop_latency_s(emu, good) < 0.15
-        assert stop_latency_s(emu, good) < 0.15
-        assert not sick.status.available
+        if trouble == "a wedged adapter":
+            wait_until(held.is_set, 10, "the sick rotator's open() hanging")
+        stop_reaches_the_wire(emu, good)  # while the trouble goes on: nothing let go of it
+        stop_reaches_the_wire(emu, good)
+        assert not release.is_set() and not sick.status.available
         with pytest.raises(Refused):
             sick.submit(Target(10.0))  # offline: refused, as with a missing adapter
     finally:
@@ -128,7 +136,7 @@ def test_a_port_that_will_not_close_holds_up_neither_another_line_nor_the_stop(
         port = opened[path] = open_port(path, spec, baud)
         if path == wedged.link:
             close = port.close
-            port.close = lambda: (release.wait(10), close())  # type: ignore[method-assign]
+            port.close = lambda: (release.wait(slow(60)), close())  # type: ignore[method-assign]
         return port
 
     lines = Lines()
@@ -140,13 +148,14 @@ def test_a_port_that_will_not_close_holds_up_neither_another_line_nor_the_stop(
     try:
         for rot in (sick, good):
             wait_until(lambda r=rot: r.status.state.value == "idle", 10, f"{rot.id} idle")
-        t = time.monotonic()
         with caplog.at_level(logging.WARNING, logger="bridge.engine.lines"):
             sick.stop(timeout_s=0.5)
-        assert time.monotonic() - t < 1.0
+        # stop() came back with its close still held (the guard on it is a minute): it did not
+        # wait for the close, which goes on on a thread of its own
         assert f"sick: {wedged.link} is still closing after 0.5 s" in caplog.text
-        assert opened[wedged.link].is_open  # being closed, on a thread of its own
-        assert stop_latency_s(emu, good) < 0.15  # meanwhile the other line is served
+        assert opened[wedged.link].is_open
+        stop_reaches_the_wire(emu, good)  # meanwhile the other line is served
+        assert opened[wedged.link].is_open  # the wedged close was still going on
         good.stop()
         assert not opened[emu.link].is_open  # a port that closes is closed when stop returns
     finally:
@@ -213,16 +222,18 @@ def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
     lines = Lines(lambda: clock[0])
     done = threading.Event()
     log: list[tuple[Timed, float]] = []  # who was served, at what time, in order
-    slow, quick = Timed(clock, 1.5, threading.Event(), log), Timed(clock, 0.0, done, log)
-    lines.add(slow)  # type: ignore[arg-type]
+    slow_one, quick = Timed(clock, 1.5, threading.Event(), log), Timed(clock, 0.0, done, log)
+    lines.add(slow_one)  # type: ignore[arg-type]
     lines.add(quick)  # type: ignore[arg-type]
     try:
-        assert done.wait(5)
+        assert done.wait(slow(5))
     finally:
-        lines.remove(slow)  # type: ignore[arg-type]
+        lines.remove(slow_one)  # type: ignore[arg-type]
         lines.remove(quick)  # type: ignore[arg-type]
     after_slow = [
-        (a[1], b[1]) for a, b in zip(log, log[1:], strict=False) if (a[0], b[0]) == (slow, quick)
+        (a[1], b[1])
+        for a, b in zip(log, log[1:], strict=False)
+        if (a[0], b[0]) == (slow_one, quick)
     ]
     assert after_slow
     for s_t, q_t in after_slow:
@@ -268,7 +279,7 @@ def test_a_stop_that_comes_during_a_round_is_served_next() -> None:
     for w in workers:
         lines.add(w)  # type: ignore[arg-type]
     try:
-        assert done.wait(5)
+        assert done.wait(slow(5))
     finally:
         for w in workers:
             lines.remove(w)  # type: ignore[arg-type]
@@ -291,7 +302,7 @@ def test_a_round_serves_only_the_lines_with_something_to_do() -> None:
     lines.add(waiting)  # type: ignore[arg-type]
     lines.add(busy)  # type: ignore[arg-type]
     try:
-        assert done.wait(5)
+        assert done.wait(slow(5))
     finally:
         lines.remove(busy)  # type: ignore[arg-type]
         lines.remove(waiting)  # type: ignore[arg-type]
@@ -323,7 +334,7 @@ def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
     for w in (first, second):
         lines.add(w)  # type: ignore[arg-type]
     try:
-        assert done.wait(5)
+        assert done.wait(slow(5))
     finally:
         for w in (first, second):
             lines.remove(w)  # type: ignore[arg-type]

@@ -4,6 +4,7 @@ import select
 
 from bridge.engine.mailbox import Mailbox
 from bridge.model import SetOption, Stop, Target
+from tests.support.waiting import slow
 
 
 def test_newest_target_replaces_older_ones() -> None:
@@ -47,7 +48,7 @@ def test_put_wakes_a_selecting_worker_and_take_clears_the_wakeup() -> None:
     mb = Mailbox()
     assert select.select([mb], [], [], 0)[0] == []
     mb.put(Target(1.0))
-    assert select.select([mb], [], [], 1)[0] == [mb]
+    assert select.select([mb], [], [], slow(1))[0] == [mb]
     mb.take()
     assert select.select([mb], [], [], 0)[0] == []
 

@@ -13,6 +13,7 @@ import serial
 
 from bridge.engine.port import open_port, read_available
 from bridge.protocols import REGISTRY
+from tests.support.waiting import slow
 
 
 @pytest.fixture
@@ -38,7 +39,7 @@ def test_while_the_bridge_has_the_port_no_other_program_can_open_it(tty: str) ->
         as_user = {"user": 65534} if os.geteuid() == 0 else {}
         python = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
         out = subprocess.run(
-            [python, "-c", code, tty], capture_output=True, text=True, timeout=10, **as_user
+            [python, "-c", code, tty], capture_output=True, text=True, timeout=slow(10), **as_user
         )
         assert out.stdout.strip() == "EBUSY", (out.stdout, out.stderr)
     finally:

@@ -12,6 +12,7 @@ from bridge.errors import Refused
 from bridge.geo import parse_locator
 from bridge.model import ErrorEvent, SetOption, Source, Stop, Target
 from bridge.settings import RotatorSettings
+from tests.support.waiting import slow
 
 
 def rotator(
@@ -97,7 +98,7 @@ def test_the_lock_and_options_are_saved_off_the_callers_thread(tmp_path) -> None
     waited_out: list[bool] = []  # a write that waited its 5 s: the caller was held all along
 
     def slow_write(*args, **kwargs) -> None:  # noqa: ANN002, ANN003
-        waited_out.append(not release.wait(5))
+        waited_out.append(not release.wait(slow(5)))
         write(*args, **kwargs)
 
     store._write = slow_write  # type: ignore[method-assign]

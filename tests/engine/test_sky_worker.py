@@ -17,6 +17,7 @@ from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle
+from tests.support.waiting import slow
 
 
 class GuardedSky(Sky):
@@ -110,7 +111,7 @@ def test_eight_rotors_asking_for_one_window_cost_one_computation() -> None:
     sky = Sky(52.5, 13.3)
     for _ in range(8):
         worker.ask(PositionsQuestion(sky, Body.sun(), (0.0, 10.0)), deliver)
-    assert done.wait(10.0)
+    assert done.wait(slow(10))
     assert len(computed) == 1 and all(a.value == [(1.0, 2.0)] for a in delivered)
 
 

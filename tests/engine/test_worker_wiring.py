@@ -166,4 +166,4 @@ def _spin(duration_s: float) -> None:
     """Hold the thread for a few milliseconds (time.sleep's granularity is too coarse here)."""
     end = time.monotonic() + duration_s
     while time.monotonic() < end:
-        threading.Event().wait(0)
+        threading.Event().wait(0)  # a yield, not a deadline

@@ -146,7 +146,8 @@ def retained_matches_bridge(rig: Rig, rid: str, snap: dict[str, bytes]) -> bool:
 
 
 def assert_retained_matches_within_one_poll(rig: Rig, rids: list[str]) -> None:
-    """The broker's retained state equals the bridge's own status within one (idle) poll."""
+    """The broker's retained state equals the bridge's own status within one (idle) poll on
+    a quiet machine (a deadline: wait_until scales it on a busy one)."""
     poll_s = max(float(r["idle_poll_interval_s"]) for r in rig.rotators)
 
     def all_match() -> bool:

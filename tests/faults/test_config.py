@@ -25,6 +25,7 @@ from bridge.settings import ConfigError, load_settings
 from tests.faults.conftest import Pki
 from tests.support import retained_snapshot, run_cli, to_toml
 from tests.support.process import bridge_env
+from tests.support.waiting import slow
 
 SECRET = "hunter2-do-not-show"
 BASE = """
@@ -254,7 +255,7 @@ def test_a_state_file_whose_content_cannot_be_written_is_exit_2_and_leaves_nothi
         capture_output=True,
         text=True,
         env=bridge_env({"PYTHONDONTWRITEBYTECODE": "1"}),
-        timeout=10,
+        timeout=slow(10),
         preexec_fn=no_file_may_grow,
     )
     line = the_one_line(out)

@@ -22,7 +22,7 @@ from bridge.settings import MqttSettings
 from tests.integration.test_last_word import main_held_at
 from tests.support import Probe
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 def test_denied_publishes_are_reported_once_each_naming_the_topic(
@@ -99,7 +99,7 @@ def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: P
     )
     try:
         client.start()
-        assert client.connected.wait(5)
+        assert client.connected.wait(slow(5))
         done = threading.Event()
 
         def lines() -> None:
@@ -109,7 +109,7 @@ def test_reporting_a_refusal_never_deadlocks_a_thread_that_publishes(tmp_path: P
             done.set()
 
         threading.Thread(target=lines, daemon=True).start()
-        assert done.wait(30), "the publishing thread hung"
+        assert done.wait(slow(30)), "the publishing thread hung"
         wait_until(lambda: len(client.problems) >= 100, 10, "refusals reported")
     finally:
         client.stop()

@@ -15,6 +15,7 @@ from bridge.mqtt.topics import DiscoveryTopics
 from tests.demo_process import DemoProcess
 from tests.support import Message, retained_snapshot
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 DISCOVERY = DiscoveryTopics("homeassistant")
 
@@ -71,7 +72,7 @@ def test_a_demo_beside_a_real_bridge_leaves_it_alone(tmp_path: Path, rig: Rig) -
         real_moves = [m for m in probe.on("rotor/state") if m.text == "moving"]
         assert real_moves and all(m.t < t1 for m in real_moves), "the demo's target moved rotor"
 
-        assert demo.wait(45) == 0, demo.output  # --duration-s over
+        assert demo.wait(slow(45)) == 0, demo.output  # --duration-s over
     finally:
         demo.close()
 
@@ -109,7 +110,7 @@ def test_a_demo_told_to_take_a_live_bridges_base_topic_refuses(tmp_path: Path, r
         tmp_path / "tmp",
     )
     try:
-        assert demo.wait(20) == 2, demo.output
+        assert demo.wait(slow(20)) == 2, demo.output
     finally:
         demo.close()
     assert "base topic 'rotor' belongs to a bridge (rotor/bridge/state is 'online')" in demo.output
@@ -136,7 +137,7 @@ def test_a_demo_refuses_the_base_topic_of_a_stopped_bridge_too(tmp_path: Path, r
         tmp_path / "tmp",
     )
     try:
-        assert demo.wait(20) == 2, demo.output
+        assert demo.wait(slow(20)) == 2, demo.output
     finally:
         demo.close()
     assert "(rotor/bridge/state is 'offline')" in demo.output

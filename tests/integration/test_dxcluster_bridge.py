@@ -24,6 +24,7 @@ from tests.integration.test_pointing_bridge import angle_between, locator_centre
 from tests.support import retained_snapshot, wait_until
 from tests.support.cluster import FakeCluster, Session
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 STATION = "JO62QM"  # Berlin
 JAPAN = (36.40, 138.38)  # the small cty file's Japan, east-positive
@@ -52,7 +53,7 @@ def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
 
     def first(s: Session) -> None:  # a slow login prompt, in two pieces, then spots and drop
         s.send(b"Connected to the fake node\r\n")
-        prompt_may_go.wait(30)  # the test lets it go when the client has waited a while
+        prompt_may_go.wait(slow(30))  # the test lets it go when the client has waited a while
         waited.append(s.nothing_sent_yet())  # the client waited for the prompt
         s.send(b"log")
         s.send(b"in: ")
@@ -65,7 +66,7 @@ def cluster_rig(rig: Rig, tmp_path: Path) -> Iterator[Running]:
         s.send(b"Please enter your call: ")
         cluster.logins.append(s.read_line())
         s.send(b"DX de K1TTT:    7012.5  VK2XYZ/P     CW 21 dB 28 WPM CQ       0102Z\r\n")
-        cluster.done.wait(60)
+        cluster.done.wait(slow(60))
 
     cluster = FakeCluster([first, second])
     cty = tmp_path / "cty.dat"

@@ -17,6 +17,7 @@ import pytest
 
 from tests.support import free_port, wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -49,8 +50,8 @@ def easycomm_port(rig: Rig) -> int:
 def rotctl(path: str, hamlib_model: str, port: int | str, *commands: str) -> str:
     """rotctl on the TCP port (a number) or a serial device (a path)."""
     where = f"127.0.0.1:{port}" if isinstance(port, int) else port
-    argv = ["timeout", "20", path, "-m", hamlib_model, "-r", where, *commands]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+    argv = ["timeout", f"{slow(20):g}", path, "-m", hamlib_model, "-r", where, *commands]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
 
@@ -60,7 +61,7 @@ def ask(port: int, request: bytes, expected: bytes, sentinel: tuple[bytes, bytes
     question follows it, and its known answer must come right after (no reply is proven by
     the order of the replies, not by waiting)."""
     question, answer = sentinel
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
         sock.sendall(request + question)
         want = len(expected) + len(answer)
         buf = b""
@@ -195,7 +196,7 @@ def test_an_unknown_position_is_an_error_never_a_number(rig: Rig) -> None:
 
 def test_http_is_refused_and_nothing_runs(rig: Rig) -> None:
     port = start(rig, start_az_deg=50)
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
         sock.sendall(b"POST / HTTP/1.1\r\nHost: x\r\n\r\nM120\r")
         assert sock.recv(64) == b""  # closed, nothing answered
     assert bearing_frames(rig) == []
@@ -219,7 +220,7 @@ def test_a_program_that_wants_a_serial_port_reaches_it_through_socat(
         assert abs(az - 90) <= 1
     finally:
         socat.terminate()
-        socat.wait(5)
+        socat.wait(slow(5))
 
 
 def test_every_gs232_command_byte_for_byte(rig: Rig) -> None:
@@ -260,6 +261,15 @@ def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str
     rig.emus["tower"].close()
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=20, after=t)
     for hamlib_model, where in ((GS232, port), (EASYCOMM, easycomm_port(rig))):
-        argv = ["timeout", "20", rotctl_path, "-m", hamlib_model, "-r", f"127.0.0.1:{where}", "p"]
-        done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+        argv = [
+            "timeout",
+            f"{slow(20):g}",
+            rotctl_path,
+            "-m",
+            hamlib_model,
+            "-r",
+            f"127.0.0.1:{where}",
+            "p",
+        ]
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
         assert done.returncode != 0 and "get_pos: error" in done.stdout, done

@@ -17,6 +17,7 @@ from tests.ha_rules import validate
 from tests.integration.test_process import start_bridge, write_config
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 PREFIX = "homeassistant"
 
@@ -157,7 +158,7 @@ def test_killed_bridge_makes_every_entity_unavailable(tmp_path: Path) -> None:
         msgs = configs(broker.port)
         assert msgs
         proc.kill()
-        proc.wait(5)
+        proc.wait(slow(5))
         wait_until(
             lambda: retained_snapshot(broker.port, "rotor/#")["rotor/bridge/state"] == b"offline",
             10,

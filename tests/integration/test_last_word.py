@@ -22,7 +22,7 @@ from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mqtt.heartbeat import Stamp
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 @contextmanager
@@ -35,7 +35,7 @@ def main_held_at(app: App, topic: str, payload: bytes) -> Iterator[threading.Eve
     def stuck(t: str, p: bytes, retain: bool, operator: str | None, stamp: Stamp | None) -> None:
         if t == topic and p == payload and not held.is_set():
             held.set()
-            release.wait(30)
+            release.wait(slow(30))
         handle(t, p, retain, operator, stamp)
 
     app.client._handler = stuck

@@ -258,7 +258,7 @@ def test_pst_stop_stops_a_turning_rotor_and_park_goes_to_the_park_position(bench
     client.command(tag("STOP", 1))  # Minos, KST4Contest
     stopped = emu.wait_for(lambda s: not s.is_moving, 3)
     assert [f.data for f in bench.motion(EZ, t)] == [f"AP1{target:03d}\r".encode(), b";"]
-    assert bench.motion(EZ, t_stop)[0].time_s - t_stop < 1.0, "the stop took over a second"
+    assert [f.data for f in bench.motion(EZ, t_stop)] == [b";"], "the stop was not what it sent"
     assert angle_between(stopped.az_deg, target) > 30, "it was not stopped, it arrived"
 
     bench.at_rest(EZ)
@@ -318,7 +318,7 @@ def test_each_n1mm_stop_form_stops_a_turning_rotor(bench: Bench, form: str) -> N
     bench.n1mm.send(STOPS[form](YAGI))
     stopped = emu.wait_for(lambda s: not s.is_moving, 3)
     assert [f.data for f in bench.motion(EZ, t)] == [f"AP1{target:03d}\r".encode(), b";"], form
-    assert bench.motion(EZ, t_stop)[0].time_s - t_stop < 1.0, "the stop took over a second"
+    assert [f.data for f in bench.motion(EZ, t_stop)] == [b";"], "the stop was not what it sent"
     assert angle_between(stopped.az_deg, target) > 30, "it was not stopped, it arrived"
 
 

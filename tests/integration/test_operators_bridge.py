@@ -31,6 +31,7 @@ from tests.support.console import ConsoleClient, web_section
 from tests.support.mqtt import retained_snapshot
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, reserve_pst_ports, tag
+from tests.support.waiting import slow
 
 PREFIX = "homeassistant"
 NODE = f"{PREFIX}/{{}}/rotorbridge_rotor_r_tower/{{}}/config"
@@ -65,7 +66,7 @@ def operators(rig: Rig) -> Iterator[tuple[Operator, Operator]]:
 
 
 def rotctld(port: int, line: bytes) -> bytes:
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
         s.sendall(line)
         return s.recv(100)
 
@@ -239,7 +240,7 @@ def test_a_lease_kept_across_a_restart_holds_and_then_ends_by_itself(
 
 def line(port: int, sent: bytes) -> bytes:
     """One line to a GS-232 or Easycomm port, and its answer (up to the line's end)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
         s.sendall(sent)
         got = b""
         while not got.endswith(b"\n"):

@@ -10,6 +10,7 @@ from pathlib import Path
 from bridge import emulators
 from bridge.mosquitto import Mosquitto, free_port
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
+from tests.support.waiting import slow
 
 
 def write_config(tmp: Path, port: int, link: Path) -> Path:
@@ -56,7 +57,7 @@ def test_broker_down_at_start_then_up_then_sigterm_is_a_clean_exit(tmp_path: Pat
         probe.wait_value("rotor/bridge/state", "online", timeout_s=40)
         probe.wait_value("rotor/availability", "online")
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(10) == 0  # a guard: a bridge that hangs on SIGTERM fails here
+        assert proc.wait(slow(10)) == 0  # a guard: a bridge that hangs on SIGTERM fails here
         snap = retained_snapshot(port, "rotor/#")
         assert snap["rotor/bridge/state"] == b"offline"
         assert snap["rotor/availability"] == b"offline"
@@ -79,7 +80,7 @@ def test_killed_bridge_is_marked_offline_by_its_last_will(tmp_path: Path) -> Non
         probe.wait_value("rotor/bridge/state", "online", timeout_s=20)
         t = time.monotonic()
         proc.kill()  # no goodbye: only the broker can tell
-        proc.wait(5)
+        proc.wait(slow(5))
         probe.wait_value("rotor/bridge/state", "offline", timeout_s=10, after=t)
         wait_until(
             lambda: retained_snapshot(broker.port, "rotor/#")["rotor/bridge/state"] == b"offline"

@@ -16,6 +16,7 @@ import pytest
 from bridge.rotctld import RotctldServer
 from tests.support import free_port, wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -31,8 +32,8 @@ def start(rig: Rig, start_az_deg: float = 10, **bridge: object) -> tuple[int, Ro
 
 
 def rotctl(path: str, port: int, *commands: str) -> subprocess.CompletedProcess[str]:
-    argv = ["timeout", "20", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
-    return subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+    argv = ["timeout", f"{slow(20):g}", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
+    return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
 
 
 def ok(result: subprocess.CompletedProcess[str]) -> str:
@@ -41,7 +42,7 @@ def ok(result: subprocess.CompletedProcess[str]) -> str:
 
 
 def connect(port: int) -> socket.socket:
-    return socket.create_connection(("127.0.0.1", port), timeout=5)
+    return socket.create_connection(("127.0.0.1", port), timeout=slow(5))
 
 
 def ask(sock: socket.socket, request: bytes, expected: bytes) -> None:
@@ -133,7 +134,9 @@ def test_two_clients_at_once_and_rotctl_beside_them(rig: Rig, rotctl_path: str) 
         rig.probe.wait_value("rotor/state", "moving")
         ask(b, b"S\n", b"RPRT 0\n")
         rig.emus["tower"].wait_for(lambda s: not s.is_moving, 2)
-        assert server.client_count == 2
+        # rotctl's connection is let go once the server reads its end: on a busy machine that
+        # may come after all this, so it is waited for; the two clients stay
+        wait_until(lambda: server.client_count == 2, 5, "rotctl's connection let go")
     wait_until(lambda: server.client_count == 0, 5, "clients gone")
 
 

@@ -13,7 +13,7 @@ import time
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 def test_a_stop_and_the_lock_get_through_while_the_targets_connection_is_stuck(rig: Rig) -> None:
@@ -27,7 +27,7 @@ def test_a_stop_and_the_lock_get_through_while_the_targets_connection_is_stuck(r
     def stuck(topic: str, payload: bytes, retain: bool, operator: str | None, *_: object) -> None:
         if topic == "rotor/target" and payload == b"300":
             held.set()
-            release.wait(30)  # the main connection reads nothing more meanwhile
+            release.wait(slow(30))  # the main connection reads nothing more meanwhile
         handle(topic, payload, retain, operator)
 
     app.client._handler = stuck  # the main connection's hand-off (client.py rule 5)

@@ -30,7 +30,7 @@ from tests.support.udp_logger import (
     tag,
     udp_socket,
 )
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 class Recording:
@@ -153,7 +153,7 @@ def test_a_datagram_asking_az_hundreds_of_times_gets_one_reply() -> None:
             client.send(pst("EL?"))  # answered after everything the flood brought
             got = []
             while not (got and got[-1].startswith(b"EL:")):
-                reply = client.reply(5)
+                reply = client.reply(slow(5))
                 assert reply is not None, f"no EL reply after {got[:3]}..."
                 got.append(reply)
             assert got == [b"AZ:10\r", b"EL:20\r"]
@@ -273,7 +273,7 @@ def test_n1mm_reports_leave_from_the_configured_address() -> None:
         ep.add_n1mm(Recording("tower"), "Tower", 0, "127.0.0.2", sink_address(sink))  # type: ignore[arg-type]
         ep.start()
         try:
-            ready, _, _ = select.select([sink], [], [], 5)
+            ready, _, _ = select.select([sink], [], [], slow(5))
             assert ready, "no position report"
             data, peer = sink.recvfrom(4096)
             assert data == b"Tower @ 100"

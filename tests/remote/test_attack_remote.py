@@ -35,6 +35,7 @@ from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 STATION = StationTopics("rotor")
 INFO = (
@@ -157,7 +158,7 @@ def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
 
 def ask(port: int, line: bytes) -> bytes:
     """One rotctld request on a fresh connection; its first reply line."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
         sock.sendall(line)
         buf = b""
         while not buf.endswith(b"\n"):
@@ -429,7 +430,8 @@ def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
             "the remote on the broker, waiting for the station",
         )
         proc.send_signal(signal.SIGTERM)
-        _, err = proc.communicate(timeout=30)  # far below info_wait_s: it did not sit it out
+        # below info_wait_s however slow the machine: it did not sit the wait out
+        _, err = proc.communicate(timeout=min(slow(30), 100))
         assert proc.returncode == 2
         assert "stopped before the station's rotators were found" in err
     finally:

@@ -26,6 +26,7 @@ from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
 from tests.support.remote import Heartbeat, remote_published
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -46,7 +47,7 @@ class Probe5:
         c.connect("127.0.0.1", port)
         c.loop_start()
         self.client = c
-        assert self._subscribed.wait(10), "probe5 subscribed"
+        assert self._subscribed.wait(slow(10)), "probe5 subscribed"
 
     def _on_message(self, client: Any, userdata: Any, msg: paho.MQTTMessage) -> None:
         with self._lock:
@@ -88,15 +89,15 @@ def remote(station: Rig) -> Iterator[tuple[Remote, int, list[str]]]:
 
 
 def rotctl(path: str, port: int, *commands: str) -> str:
-    argv = ["timeout", "20", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=25, check=False)
+    argv = ["timeout", f"{slow(20):g}", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
 
 
 def ask(port: int, line: bytes) -> bytes:
     """One rotctld request on a fresh connection; its reply (one line: an RPRT, or ``p``'s two)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
         sock.sendall(line)
         buf = b""
         while not buf.endswith(b"\n") or (line.startswith(b"p") and buf.count(b"\n") < 2):
@@ -197,7 +198,7 @@ def test_the_command_line_prints_the_endpoints_and_stops_on_sigterm(
         )
         assert ask(port, b"p\n").count(b"\n") == 2
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(10) == 0
+        assert proc.wait(slow(10)) == 0
         assert proc.stderr is not None and proc.stderr.read().rstrip().endswith(": stopped")
     finally:
         if proc.poll() is None:
@@ -211,7 +212,7 @@ def test_a_configuration_error_names_the_key(tmp_path: Path) -> None:
         'operator = "DL1ABC"\n[mqtt]\nprotocol = "3.1.1"\n[[endpoints]]\nrotctld_prot = 4533\n'
     )
     argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=30, check=False)
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(30), check=False)
     assert done.returncode == 2
     assert "endpoints[0].rotctld_prot: unknown key: did you mean rotctld_port?" in done.stderr
 

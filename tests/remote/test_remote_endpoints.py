@@ -27,6 +27,7 @@ from tests.support import wait_until
 from tests.support.remote import remote_published
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, minos_reply, reserve_pst_ports, tag
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -197,7 +198,7 @@ def test_the_command_line_serves_a_pty_and_removes_its_link_on_sigterm(
         az, _ = rotctl(rotctl_path, GS232, str(link), "p").split()
         assert abs(float(az) - 10) <= 1
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(10) == 0
+        assert proc.wait(slow(10)) == 0
         assert not os.path.lexists(link)
     finally:
         if proc.poll() is None:

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from bridge.mosquitto import Mosquitto, free_port
+from tests.support.waiting import slow
 
 POSIX_ONLY = ("fcntl", "termios", "pty", "tty", "resource", "grp", "pwd")
 
@@ -37,7 +38,7 @@ def test_the_remote_starts_without_posix_modules(tmp_path: Path, broker: Mosquit
         [sys.executable, "-c", RUN, str(conf)],
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=slow(60),
         check=False,
         cwd=Path(__file__).parents[2],
     )

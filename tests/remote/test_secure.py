@@ -29,6 +29,7 @@ from tests.faults.conftest import Pki, mosquitto_password_file
 from tests.remote.test_remote import rotctl
 from tests.support import ROOT, Probe, wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -215,7 +216,7 @@ def start_remote_process(
         f"[[endpoints]]\nrotctld_port = {free_port()}\n"
     )
     argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
-    return subprocess.run(argv, capture_output=True, text=True, timeout=60, check=False)
+    return subprocess.run(argv, capture_output=True, text=True, timeout=slow(60), check=False)
 
 
 @pytest.mark.parametrize(

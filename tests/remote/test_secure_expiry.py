@@ -140,7 +140,7 @@ def test_a_command_whose_expiry_passes_in_a_relay_queue_never_moves_the_rotor(
     # The thing under test is time passing in the queue: a real wait past a 1 s expiry (and
     # well inside the control's 60 s); the link stays shut all along.
     expired = threading.Event()
-    expired.wait(2.5)
+    expired.wait(2.5)  # time passing, not a deadline
     # a marker without expiry, behind the target in the same queue (FIFO): when it reaches the
     # station's broker, the target would have been before it
     publish(broker.port, "rotor/relay/marker", "m", None)

@@ -59,6 +59,7 @@ from tests.faults.conftest import (
 from tests.support import BridgeProcess
 from tests.support import Probe as FastProbe
 from tests.support import retained_snapshot as fast_retained
+from tests.support.waiting import slow
 
 # id: (model, emulator options, bridge options). Rotor speeds are faster than real rotators so
 # ten minutes hold many moves; the SatEL's are told to the bridge (it bounds a silent slew by
@@ -274,7 +275,7 @@ class Soak:
         }
         self.bridge = BridgeProcess(self.dir, config, log_level="INFO").start()
         self.monitor = Monitor(self.broker.port, self)
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + slow(60)
         while not all(self.healthy_view(r) for r in self.rots.values()):
             if time.monotonic() > deadline:
                 raise SystemExit(f"rotators not ready: {self.bridge.log()[-3000:]}")
@@ -646,7 +647,7 @@ class Soak:
                 self.violation(f"{rot.rid}: lock OFF not confirmed")
 
     def wait(self, predicate: Any, timeout_s: float = 5.0) -> bool:
-        deadline = time.monotonic() + timeout_s
+        deadline = time.monotonic() + slow(timeout_s)
         while time.monotonic() < deadline:
             if predicate():
                 return True
@@ -745,7 +746,7 @@ class Soak:
     # -- the end -------------------------------------------------------------------------------
     def final_phase(self) -> None:
         """No new faults: let everything recover, then one last target each, all must arrive."""
-        deadline = time.monotonic() + 90
+        deadline = time.monotonic() + slow(90)
         while True:
             now = time.monotonic()
             self.broker_step(now, allow_faults=False)
@@ -776,13 +777,14 @@ class Soak:
                 self.target(rot, time.monotonic())
             else:
                 self.violation(f"{rot.rid}: not healthy at the end")
-        deadline = time.monotonic() + 90
+        deadline = time.monotonic() + slow(90)
         while time.monotonic() < deadline:
             self.check_expectations(time.monotonic())
             if all(r.expectation and r.expectation.outcome for r in self.rots.values()):
                 break
             time.sleep(0.1)
-        self.check_expectations(time.monotonic() + 1e6)  # anything still open now is lost
+        never = time.monotonic() + 1e6  # not a deadline: a time past every one
+        self.check_expectations(never)  # anything still open now is lost
         self.audit_frames()
         # the wait above ends the moment the last rotor stands at its target; the bridge sees
         # that at its next reading, so the retained state may take one poll, as after a

@@ -1,6 +1,7 @@
 """Real parts for tests (and the benchmarks), one copy of each: import them from here.
 
-- waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep
+- waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep;
+  ``slow``, the one factor (ROTOR_TEST_SLOWDOWN) every deadline of the tests is scaled by
 - mqtt.py: ``Probe``, an MQTT client that records what arrives; ``retained_snapshot``
 - process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files;
   the one BridgeProcess of the tests, the fault suite, the soak and the benchmarks
@@ -19,7 +20,7 @@ from bridge.mosquitto import Mosquitto, free_port
 from tests.support.codecs import HOW, feed
 from tests.support.mqtt import Message, Probe, retained_snapshot
 from tests.support.process import ROOT, BridgeProcess, bridge_env, run_cli, to_toml
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 __all__ = [
     "HOW",
@@ -33,6 +34,7 @@ __all__ = [
     "free_port",
     "retained_snapshot",
     "run_cli",
+    "slow",
     "to_toml",
     "wait_until",
 ]

@@ -9,6 +9,8 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from tests.support.waiting import slow
+
 
 @dataclass
 class Session:
@@ -22,7 +24,7 @@ class Session:
 
     def read_line(self, timeout_s: float = 10.0) -> bytes:
         """The client's next line (up to CRLF), what it sent before it included."""
-        self.conn.settimeout(timeout_s)
+        self.conn.settimeout(slow(timeout_s))
         while b"\r\n" not in self.received:
             data = self.conn.recv(1024)
             if not data:
@@ -77,4 +79,4 @@ class FakeCluster:
     def close(self) -> None:
         self.done.set()
         self._server.close()
-        self._thread.join(timeout=5)
+        self._thread.join(timeout=slow(5))

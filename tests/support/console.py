@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from bridge.mosquitto import free_port
+from tests.support.waiting import slow
 
 T = TypeVar("T")
 
@@ -41,7 +42,7 @@ class ConsoleClient:
         body: bytes | None = None,
         headers: dict[str, str] | None = None,
     ) -> Answer:
-        conn = http.client.HTTPConnection(self.host, self.port, timeout=10)
+        conn = http.client.HTTPConnection(self.host, self.port, timeout=slow(10))
         try:
             conn.request(method, path, body=body, headers=headers or {})
             resp = conn.getresponse()
@@ -89,7 +90,7 @@ class EventStream:
     """``api/events``, read event by event."""
 
     def __init__(self, client: ConsoleClient, timeout_s: float = 10.0) -> None:
-        self.conn = http.client.HTTPConnection(client.host, client.port, timeout=timeout_s)
+        self.conn = http.client.HTTPConnection(client.host, client.port, timeout=slow(timeout_s))
         self.conn.request("GET", "/api/events", headers={"X-Rotor-Token": client.token or ""})
         self.resp = self.conn.getresponse()
         assert self.resp.status == 200, self.resp.status

@@ -18,7 +18,7 @@ from typing import Any
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
 
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 @dataclass
@@ -120,9 +120,13 @@ class Probe:
         start: int = 0,
         *,
         failure: Callable[[], str] | None = None,
+        quiet: bool = False,
     ) -> Message:
         """The first message (from number ``start`` on) that satisfies ``predicate``; on timeout,
-        ``timeout_error`` with ``failure()`` or a message naming ``what``."""
+        ``timeout_error`` with ``failure()`` or a message naming ``what``. ``timeout_s`` is a
+        deadline, scaled by ``slow``, unless ``quiet`` says the test expects the timeout (a
+        quiet period, waiting.py rule 2)."""
+        timeout_s = timeout_s if quiet else slow(timeout_s)
         deadline = time.monotonic() + timeout_s
         with self._cond:
             i = start
@@ -143,17 +147,21 @@ class Probe:
         predicate: Callable[[Message], bool] = lambda m: True,
         timeout_s: float = 10.0,
         after: float | None = None,
+        *,
+        quiet: bool = False,
     ) -> Message:
         """The first message on ``topic`` (received after ``after``) that satisfies predicate."""
 
         def seen() -> str:
             recent = [(m.topic, m.payload[:80]) for m in self.messages if m.topic == topic]
-            return f"no matching message on {topic} in {timeout_s} s; saw {recent[-10:]}"
+            waited = timeout_s if quiet else slow(timeout_s)
+            return f"no matching message on {topic} in {waited:g} s; saw {recent[-10:]}"
 
         return self.wait(
             lambda m: m.topic == topic and (after is None or m.t >= after) and predicate(m),
             timeout_s,
             failure=seen,
+            quiet=quiet,
         )
 
     def wait_value(

@@ -14,6 +14,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from tests.support.waiting import slow
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -75,7 +77,7 @@ def run_cli(
         text=True,
         env=bridge_env(env),
         cwd=str(ROOT),
-        timeout=timeout_s,
+        timeout=slow(timeout_s),
     )
 
 
@@ -177,12 +179,12 @@ class BridgeProcess:
         assert self.proc is not None
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
-        return self.proc.wait(timeout_s)
+        return self.proc.wait(slow(timeout_s))
 
     def kill(self) -> None:
         if self.proc is not None and self.proc.poll() is None:
             self.proc.kill()
-            self.proc.wait(10)
+            self.proc.wait(slow(10))
 
     def rss_kib(self) -> int:
         assert self.proc is not None

@@ -38,6 +38,7 @@ from tests.support.mqtt import Probe, retained_snapshot
 from tests.support.process import BridgeProcess, Spawn, bridge_config
 from tests.support.process import _spawn as _default_spawn
 from tests.support.tap import bogus_bearings, near_deg, start_emulator
+from tests.support.waiting import slow
 
 # Timings scaled down so a test takes seconds, with the same ratios as real hardware:
 # the controller's brake delay is still much longer than a poll, a settle window, a reply.
@@ -313,7 +314,7 @@ class Rig:
                 return False
             return el is None or abs(s.el_deg - el) <= tol
 
-        emu.wait_for(there, timeout_s)
+        emu.wait_for(there, slow(timeout_s))
 
     def bogus(self, rid: str) -> list[str]:
         """Bearings the bridge published that the controller never reported (a tapped rig)."""

@@ -28,6 +28,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from tests.support.waiting import slow
+
 HOST = "127.0.0.1"
 MAX_REPLY = 4096
 
@@ -139,10 +141,12 @@ class PstClient:
     def command(self, *items: str) -> None:
         self.send(pst(*items))
 
-    def reply(self, timeout_s: float = 3.0) -> bytes | None:
+    def reply(self, timeout_s: float | None = None) -> bytes | None:
         """The next datagram at port + 1, or None within ``timeout_s``; who sent it is added
         to ``peers``."""
-        got = _receive(self.replies, timeout_s)
+        # left out: a deadline for a reply that must come; given: a quiet period for one that
+        # must not (waiting.py rule 2)
+        got = _receive(self.replies, slow(3.0) if timeout_s is None else timeout_s)
         if got is None:
             return None
         self.peers.append(got[1])
@@ -156,7 +160,7 @@ class PstClient:
     def ask(self, query: str, timeout_s: float = 3.0) -> bytes:
         """``AZ?`` or ``EL?`` on its own (as Hamlib sends them): the reply datagram."""
         self.send(pst(f"{query}?"))
-        got = self.reply(timeout_s)
+        got = self.reply(slow(timeout_s))
         assert got is not None, f"no reply to {query}? at port {self.server[1] + 1}"
         return got
 
@@ -266,7 +270,7 @@ class N1mmListener:
     def wait(self, predicate: Callable[[Report], bool], timeout_s: float, what: str) -> Report:
         """The first report from now on for which ``predicate`` holds (every report read is
         checked for the documented form and kept in ``seen``)."""
-        deadline = time.monotonic() + timeout_s
+        deadline = time.monotonic() + slow(timeout_s)
         while True:
             got = _receive(self.sock, deadline - time.monotonic())
             if got is None:

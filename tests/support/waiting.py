@@ -1,10 +1,51 @@
-"""Waiting on a condition with a deadline: the one polling loop of the tests and benchmarks."""
+"""Waiting on a condition with a deadline: the one polling loop of the tests and benchmarks,
+and the one factor every deadline of the tests is scaled by.
+
+Rules:
+1. A deadline is how long a test waits for what must come (a message, a reply, a process's
+   end); it is never what the test asserts. Every deadline in tests/ is ``slow(seconds)`` or
+   goes through a helper that applies it (``wait_until``, the probe's waits, the rig's, the
+   demo's, ``run_cli``), so one environment variable, ROTOR_TEST_SLOWDOWN (default 1, at least
+   1), lengthens them all on a busy machine; ./tests/run sets it from the machine's load.
+2. A quiet period (how long nothing must come, to say that nothing came) is not a deadline and
+   is not scaled: made longer it could reach a timer of the bridge that is meant to fire later.
+3. A scaled deadline costs nothing when the test passes: the wait ends at the first answer.
+"""
 
 from __future__ import annotations
 
+import math
+import os
 import time
 from collections.abc import Callable
 from typing import Any
+
+MAX_SLOWDOWN = 10.0
+
+
+def _slowdown() -> float:
+    """ROTOR_TEST_SLOWDOWN as a number from 1 to MAX_SLOWDOWN (rule 1); 1 when unset."""
+    text = os.environ.get("ROTOR_TEST_SLOWDOWN", "").strip()
+    try:
+        factor = float(text) if text else 1.0
+    except ValueError:
+        raise RuntimeError(f"ROTOR_TEST_SLOWDOWN={text!r} is not a number") from None
+    if math.isnan(factor):
+        return 1.0
+    return min(max(factor, 1.0), MAX_SLOWDOWN)
+
+
+SLOWDOWN = _slowdown()
+
+
+def slow(seconds: float) -> float:
+    """A deadline of ``seconds`` on a quiet machine, as long as this machine needs (rule 1)."""
+    return seconds * SLOWDOWN
+
+
+def slow_ms(milliseconds: float) -> float:
+    """``slow`` for the APIs that count in milliseconds (Playwright)."""
+    return milliseconds * SLOWDOWN
 
 
 def wait_until(
@@ -16,12 +57,13 @@ def wait_until(
     error: type[Exception] = AssertionError,
 ) -> Any:
     """The first true value of ``predicate()``, asked every ``interval_s``; ``error`` (a failed
-    test by default; the benchmarks raise their own) when ``timeout_s`` passes without one."""
-    deadline = time.monotonic() + timeout_s
+    test by default; the benchmarks raise their own) when ``slow(timeout_s)`` passes without
+    one."""
+    deadline = time.monotonic() + slow(timeout_s)
     while True:
         value = predicate()
         if value:
             return value
         if time.monotonic() > deadline:
-            raise error(f"timed out after {timeout_s:g} s waiting for {what or predicate}")
+            raise error(f"timed out after {slow(timeout_s):g} s waiting for {what or predicate}")
         time.sleep(interval_s)

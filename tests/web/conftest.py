@@ -26,6 +26,7 @@ from bridge.mosquitto import Mosquitto
 from tests.support.console import ConsoleClient, web_section
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
+from tests.support.waiting import slow_ms
 
 CHROMIUM = "/usr/bin/chromium"
 STATION_LOCATOR = "JO62qm"
@@ -34,6 +35,8 @@ PRESETS = {"EU": 45, "W6": 320}
 PARK_AZ = 180.0
 START_AZ = 100.0
 VIEWBOX_HALF = 1.1  # #map's viewBox runs -1.1..1.1: the rim (radius 1) leaves room for labels
+# every expect() without a timeout of its own waits Playwright's 5 s, scaled (waiting.py rule 1)
+expect.set_options(timeout=slow_ms(5_000))
 
 
 @dataclass
@@ -99,7 +102,7 @@ def open_console(browser: Browser, url: str, width: int = 1100, height: int = 80
     """A new page on the console, live, the rotator's bearing shown."""
     page = browser.new_context(viewport={"width": width, "height": height}).new_page()
     page.goto(url)
-    expect(page.locator("#connection")).to_have_text("live", timeout=15_000)
+    expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
     expect(page.locator("#bearing")).to_have_text(re.compile(r"\d"))
     return page
 
@@ -109,7 +112,7 @@ def console_page(console_bridge: ConsoleBridge, browser: Browser) -> Iterator[Pa
     page = open_console(browser, console_bridge.url)
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
-    expect(page.locator("#state")).to_have_text("idle", timeout=15_000)
+    expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(15_000))
     try:
         yield page
     finally:
@@ -148,7 +151,7 @@ def wait_page_bearing(
           return Number.isFinite(v) && Math.abs(((v - want + 540) % 360) - 180) <= tol;
         }""",
         arg=[bearing_deg, tol_deg],
-        timeout=timeout_ms,
+        timeout=slow_ms(timeout_ms),
     )
 
 

@@ -30,6 +30,7 @@ from playwright.sync_api import Browser, expect
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, run_async, web_section
 from tests.support.rig import Rig
+from tests.support.waiting import slow, slow_ms
 
 URL = "/api/rotators/hf/command"
 
@@ -75,7 +76,7 @@ def test_the_page_limit_counts_websockets_still_waiting_for_their_token(
                 await ws.send_str(json.dumps({"token": client.token}))
             served = 0
             for ws in sockets:
-                message = await ws.receive(timeout=10)
+                message = await ws.receive(timeout=slow(10))
                 if message.type == aiohttp.WSMsgType.TEXT and json.loads(message.data) == {
                     "event": "hello"
                 }:
@@ -118,7 +119,7 @@ def test_a_first_message_that_is_not_a_token_is_closed_4401_and_told_nothing(
                 else:
                     await ws.send_str(first)
                 while True:
-                    message = await ws.receive(timeout=12)
+                    message = await ws.receive(timeout=slow(12))
                     if message.type != aiohttp.WSMsgType.TEXT:
                         break
                     got.append(message.data)
@@ -179,7 +180,7 @@ def test_an_open_websocket_idle_longer_than_idle_s_is_not_cut(
             async with session.ws_connect(url, headers=_origin(client)) as ws:
                 await ws.send_str(json.dumps({"token": client.token}))
                 while len(seen) < 4:  # hello, the status, then a ping after several sweeps
-                    message = await ws.receive(timeout=15)
+                    message = await ws.receive(timeout=slow(15))
                     assert message.type == aiohttp.WSMsgType.TEXT, (message, seen)
                     seen.append(json.loads(message.data)["event"])
                 return seen
@@ -376,8 +377,12 @@ def test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop
         delayed.close()
     moved = True
     try:
-        rig.mqtt.wait_for(
-            rig.t("status"), lambda m: json.loads(m.payload)["state"] == "moving", 3.0, t
+        rig.mqtt.wait_for(  # a quiet period: the test expects the timeout (waiting.py rule 2)
+            rig.t("status"),
+            lambda m: json.loads(m.payload)["state"] == "moving",
+            3.0,
+            t,
+            quiet=True,
         )
     except AssertionError:
         moved = False
@@ -412,7 +417,9 @@ def test_a_page_whose_token_ran_out_can_still_stop_a_turning_rotor(
         page.fill("#password", "correct horse battery")
         page.click("#login-go")
         expect(page.locator("#connection")).to_have_text("live")
-        expect(page.locator("#login")).to_be_visible(timeout=15_000)  # the token's life ended
+        expect(page.locator("#login")).to_be_visible(
+            timeout=slow_ms(15_000)
+        )  # the token's life ended
         t = time.monotonic()
         rig.mqtt.publish(rig.t("target"), "200")  # turned meanwhile by another front end
         rig.mqtt.wait_for(rig.t("status"), lambda m: json.loads(m.payload)["moving"], 5.0, t)
@@ -445,11 +452,11 @@ def test_the_bridge_stopping_closes_an_open_websocket_at_once(
         async with aiohttp.ClientSession() as session:
             async with session.ws_connect(url, headers=_origin(client)) as ws:
                 await ws.send_str(json.dumps({"token": client.token}))
-                assert json.loads((await ws.receive(timeout=10)).data) == {"event": "hello"}
+                assert json.loads((await ws.receive(timeout=slow(10))).data) == {"event": "hello"}
                 loop = asyncio.get_running_loop()
                 t = time.monotonic()
                 stopping = loop.run_in_executor(None, rig.stop)
-                while (await ws.receive(timeout=10)).type == aiohttp.WSMsgType.TEXT:
+                while (await ws.receive(timeout=slow(10))).type == aiohttp.WSMsgType.TEXT:
                     pass
                 took = time.monotonic() - t
                 await stopping

@@ -40,6 +40,7 @@ from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
+from tests.support.waiting import slow, slow_ms
 
 URL = "/api/rotators/hf/command"
 PASSWORD = "correct horse battery"
@@ -332,7 +333,7 @@ def test_stop_and_lock_do_not_wait_behind_a_slow_tle_file_or_the_land(
     gate = threading.Event()
 
     def slow_names() -> list[str]:
-        gate.wait(30.0)  # a guard: the test lets it go
+        gate.wait(slow(30))  # a guard: the test lets it go
         return []
 
     rig.app.web._satellites = slow_names  # noqa: SLF001  (the TLE file on a hung disk)
@@ -352,7 +353,7 @@ def test_stop_and_lock_do_not_wait_behind_a_slow_tle_file_or_the_land(
     finally:
         gate.set()
         for r in readers:
-            r.join(10)
+            r.join(slow(10))
     assert client.command("hf", command="target", az=100).status == 409
 
 
@@ -554,7 +555,7 @@ def test_the_page_limit_holds_for_streams_opened_at_once(
     for t in openers:
         t.start()
     for t in openers:
-        t.join(15)
+        t.join(slow(15))
     try:
         assert len(served) <= 2, f"{len(served)} streams served with MAX_PAGES = 2"
     finally:
@@ -629,8 +630,12 @@ def test_a_target_sent_before_stop_but_delayed_on_the_way_does_not_turn_the_roto
     assert answer.endswith(b" 409 Conflict"), answer  # refused as stale
     moved = True
     try:
-        rig.mqtt.wait_for(
-            rig.t("status"), lambda m: json.loads(m.payload)["state"] == "moving", 3.0, t
+        rig.mqtt.wait_for(  # a quiet period: the test expects the timeout (waiting.py rule 2)
+            rig.t("status"),
+            lambda m: json.loads(m.payload)["state"] == "moving",
+            3.0,
+            t,
+            quiet=True,
         )
     except AssertionError:
         moved = False
@@ -734,7 +739,7 @@ def test_another_sites_page_in_chromium_moves_nothing_and_gets_no_token(
             browser = p.chromium.launch(executable_path="/usr/bin/chromium")
             page = browser.new_page()
             page.goto(f"http://localhost:{evil.server_address[1]}/evil.html")
-            page.wait_for_function("window.done === true", timeout=15000)
+            page.wait_for_function("window.done === true", timeout=slow_ms(15_000))
             results = page.evaluate("window.results")
             framed = page.frames
             browser.close()

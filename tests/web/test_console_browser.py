@@ -22,6 +22,7 @@ from bridge import geo
 from bridge.web.projection import RIM_KM
 from tests.support.console import web_section
 from tests.support.rig import Rig, arrival_tol
+from tests.support.waiting import slow_ms
 from tests.web.conftest import (
     KEEP_OUT,
     PRESETS,
@@ -74,7 +75,7 @@ def test_a_click_on_the_map_turns_the_rotator_to_that_bearing(
     expect(page.locator("#pointer")).to_contain_text("sent")
     rig.arrived("hf", target)
     wait_page_bearing(page, target, TOL)
-    expect(page.locator("#state")).to_have_text("idle", timeout=10_000)
+    expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(10_000))
     expect(page.locator("#map .beam")).to_be_visible()
     # rotor health counted the move: its line shows the numbers, unmarked while all is well
     health = page.locator("#health-info")
@@ -109,7 +110,7 @@ def test_stop_stops_a_turning_rotator_far_from_its_target(
         page.keyboard.press("Space")
     stopped = rig.emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 10)
     assert angle_apart(stopped.az_deg, target) > 30.0, stopped
-    expect(page.locator("#state")).to_have_text("idle", timeout=10_000)
+    expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(10_000))
     wait_page_bearing(page, stopped.az_deg, TOL)
     assert rig.emu.state().az_deg == stopped.az_deg  # it stays where it stopped
     assert [c["command"] for c in sent] == ["toward", "stop"]  # Space never parked
@@ -127,7 +128,7 @@ def test_stop_reaches_the_bridge_with_eight_tabs_open_in_one_browser(
         for page in pages:
             page.goto(console_bridge.url)
         for page in pages:
-            expect(page.locator("#connection")).to_have_text("live", timeout=15_000)
+            expect(page.locator("#connection")).to_have_text("live", timeout=slow_ms(15_000))
         start = rig.emu.state().az_deg
         target = _farthest(start)
         assert console_bridge.client().command("hf", command="target", az=target).status == 200
@@ -217,12 +218,12 @@ def test_the_page_shows_the_bridge_going_away_and_coming_back(
     page, rig = console_page, console_bridge.rig
     assert rig.bridge is not None
     rig.bridge.terminate()
-    expect(page.locator("body")).to_have_class(OFFLINE, timeout=5_000)
+    expect(page.locator("body")).to_have_class(OFFLINE, timeout=slow_ms(5_000))
     expect(page.locator("#connection")).to_contain_text("connection lost")
     restarted = time.monotonic()
     rig.start_process()
     rig.ready("hf", timeout_s=20, after=restarted)
-    expect(page.locator("body")).not_to_have_class(OFFLINE, timeout=15_000)
+    expect(page.locator("body")).not_to_have_class(OFFLINE, timeout=slow_ms(15_000))
     expect(page.locator("#connection")).to_have_text("live")
     # live again, on a new token: a click turns the rotor and #bearing follows it
     target = _far_from(page_bearing(page))

@@ -21,6 +21,7 @@ from bridge.remote.settings import RemoteSettings
 from tests.support.console import web_section
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig, arrival_tol
+from tests.support.waiting import slow_ms
 from tests.web.conftest import (
     PRESETS,
     STATION_LOCATOR,
@@ -83,7 +84,7 @@ def test_the_remote_page_shows_the_station_map_and_turns_its_rotator(
         expect(page.locator("#map .station-label")).to_have_text(STATION_LOCATOR)
         expect(page.locator("#map .land-layer path").first).to_be_attached()
         expect(page.locator('#map .preset[data-preset="EU"] text')).to_have_text("EU")
-        expect(page.locator("#state")).to_have_text("idle", timeout=15_000)
+        expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(15_000))
         wait_page_bearing(page, START_AZ, TOL)
 
         target = 200.0
@@ -91,7 +92,7 @@ def test_the_remote_page_shows_the_station_map_and_turns_its_rotator(
         expect(page.locator("#pointer")).to_contain_text("sent")
         rig.arrived("tower", target)
         wait_page_bearing(page, target, TOL)
-        expect(page.locator("#state")).to_have_text("idle", timeout=10_000)
+        expect(page.locator("#state")).to_have_text("idle", timeout=slow_ms(10_000))
 
         page.locator('#map .preset[data-preset="EU"] text').click()  # a preset's tick
         rig.arrived("tower", PRESETS["EU"])
@@ -101,7 +102,7 @@ def test_the_remote_page_shows_the_station_map_and_turns_its_rotator(
         page.press("#locator", "Enter")
         lat0, lon0 = geo.parse_locator(STATION_LOCATOR)
         path = geo.great_circle(lat0, lon0, *geo.parse_locator("FN31pr"))
-        expect(page.locator("#target")).to_contain_text("FN31pr", timeout=10_000)
+        expect(page.locator("#target")).to_contain_text("FN31pr", timeout=slow_ms(10_000))
         rig.arrived("tower", path.short_path_deg)
         page.click("#path-long")  # the other way round, by the station's judge
         expect(page.locator("#path-long")).to_have_attribute("aria-pressed", "true")
@@ -110,7 +111,7 @@ def test_the_remote_page_shows_the_station_map_and_turns_its_rotator(
 
         # the station's bridge goes: the page greys the rotator, no stale bearing
         rig.stop()
-        expect(page.locator("#state")).to_have_text("offline", timeout=10_000)
+        expect(page.locator("#state")).to_have_text("offline", timeout=slow_ms(10_000))
         expect(page.locator("body")).to_have_class(re.compile(r"\brotor-down\b"))
         expect(page.locator("#bearing")).not_to_have_text(re.compile(r"\d"))
     finally:

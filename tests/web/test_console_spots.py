@@ -24,6 +24,7 @@ from tests.integration.test_pointing_bridge import angle_between, locator_centre
 from tests.support.cluster import FakeCluster, Session
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 from tests.web.conftest import STATION_LOCATOR, open_console
 
 SPOTS = [
@@ -42,7 +43,7 @@ def spotted(rig: Rig, tmp_path: Path) -> Iterator[tuple[Rig, int, list[dict[str,
         s.read_line()
         for line in SPOTS:
             s.send(line)
-        cluster.done.wait(60)  # the line stays open until the test ends
+        cluster.done.wait(slow(60))  # the line stays open until the test ends
 
     cluster = FakeCluster([node])
     cty = tmp_path / "cty.dat"

@@ -35,6 +35,7 @@ from bridge.mosquitto import answers
 from tests.support import ROOT, free_port, wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.rig import Rig
+from tests.support.waiting import slow, slow_ms
 
 DOC = ROOT / "docs" / "console.md"
 PREFIX = "/rotor/"
@@ -106,7 +107,7 @@ class Proxy(ABC):
     def stop(self) -> None:
         if self.process is not None and self.process.poll() is None:
             self.process.terminate()
-            self.process.wait(10)
+            self.process.wait(slow(10))
 
     @property
     def origin(self) -> str:
@@ -191,7 +192,7 @@ class ProxiedEvents(EventStream):
     """``api/events`` through the proxy (EventStream reads it; only the URL differs)."""
 
     def __init__(self, client: ConsoleClient, timeout_s: float) -> None:
-        self.conn = http.client.HTTPConnection(client.host, client.port, timeout=timeout_s)
+        self.conn = http.client.HTTPConnection(client.host, client.port, timeout=slow(timeout_s))
         headers = {"X-Rotor-Token": client.token or ""}
         self.conn.request("GET", PREFIX + "api/events", headers=headers)
         self.resp = self.conn.getresponse()
@@ -293,7 +294,7 @@ def test_the_page_through_the_proxy_connects_and_a_click_turns_the_rotor(
             page = browser.new_page(viewport={"width": 1100, "height": 800})
             page.goto(proxy.origin + PREFIX)
             bearing = page.locator("#bearing")
-            sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=10_000)
+            sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=slow_ms(10_000))
             _click_bearing(page.locator("#map"), page, 90)
             rig.arrived("hf", 90)
             sync_api.expect(bearing).to_have_text(re.compile(r"^(8[6-9]|9[0-4])"))
@@ -337,7 +338,7 @@ def test_in_a_webpage_card_the_console_works_where_frame_ancestors_allow_it(
                 page.goto(dashboard + "/card.html")
                 frame = page.frame_locator("iframe")
                 bearing = frame.locator("#bearing")
-                sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=10_000)
+                sync_api.expect(bearing).to_have_text(re.compile(r"\d"), timeout=slow_ms(10_000))
                 _click_bearing(frame.locator("#map"), page, 90)
                 rig.arrived("hf", 90)
             finally:

@@ -16,6 +16,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.web import live
 from tests.support.console import ConsoleClient, EventStream, run_async, web_section
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 
 @pytest.fixture
@@ -185,7 +186,7 @@ def test_another_sites_page_cannot_open_the_live_feed(console: tuple[Rig, Consol
     evil = client.request("GET", "/api/live", headers={**upgrade, "Origin": "http://evil.example"})
     assert evil.status == 403
     mine = {**upgrade, "Origin": f"http://127.0.0.1:{client.port}"}
-    conn = http.client.HTTPConnection("127.0.0.1", client.port, timeout=10)
+    conn = http.client.HTTPConnection("127.0.0.1", client.port, timeout=slow(10))
     try:
         conn.request("GET", "/api/live", headers=mine)
         assert conn.getresponse().status == 101  # switching protocols: the page's own
@@ -206,7 +207,7 @@ def test_the_live_feed_takes_the_token_first_then_brings_every_status(
             async with session.ws_connect(url, headers=origin) as ws:
                 await ws.send_str(json.dumps({"token": token}))
                 while len(got) < 2:
-                    message = await ws.receive(timeout=10)
+                    message = await ws.receive(timeout=slow(10))
                     if message.type != aiohttp.WSMsgType.TEXT:
                         break
                     got.append(json.loads(message.data))
@@ -233,9 +234,9 @@ def test_a_stop_over_the_live_feed_and_a_bad_body_are_audited_with_the_browsers_
         async with aiohttp.ClientSession() as session:
             async with session.ws_connect(url, headers=origin) as ws:
                 await ws.send_str(json.dumps({"token": client.token}))
-                await ws.receive(timeout=10)  # hello: the token is in
+                await ws.receive(timeout=slow(10))  # hello: the token is in
                 await ws.send_str(json.dumps({"rotator": "hf", "command": "stop"}))
-                await ws.receive(timeout=10)  # (a status) the stop was read before the close
+                await ws.receive(timeout=slow(10))  # (a status) the stop was read before the close
 
     run_async(stop())
     stop_audited = lambda m: json.loads(m.text)["command"] == "console: stop"  # noqa: E731

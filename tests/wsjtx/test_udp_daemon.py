@@ -23,6 +23,7 @@ from bridge.wsjtx.messages import Heartbeat, decode
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.udp_logger import free_udp_port
+from tests.support.waiting import slow
 
 GROUP = "239.255.0.1"
 
@@ -62,10 +63,10 @@ def udp_daemon(port: int, group: str | None = None) -> Iterator[Daemon]:
     finally:
         process.terminate()
         try:
-            process.wait(5)
+            process.wait(slow(5))
         except subprocess.TimeoutExpired:
             process.kill()
-            process.wait(5)
+            process.wait(slow(5))
 
 
 def discovered(daemon: Daemon, send: socket.socket, to: tuple[str, int]) -> None:
@@ -97,7 +98,7 @@ def test_udp_daemons_own_heartbeat_is_read_by_the_bridges_decoder() -> None:
     with udp_daemon(port) as daemon, socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         sock.bind(("127.0.0.1", 0))
         discovered(daemon, sock, to)
-        sock.settimeout(10)
+        sock.settimeout(slow(10))
         reply, _ = sock.recvfrom(65536)  # the reply to the first heartbeat it read
     message = decode(reply)
     assert isinstance(message, Heartbeat)
