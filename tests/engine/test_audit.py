@@ -256,7 +256,7 @@ def test_a_full_disk_leaves_no_torn_line_and_the_lines_lost_are_counted(tmp_path
         [sys.executable, "-c", FULL_DISK, str(path), str(limit)],
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=slow(60),
         check=True,
     )
     written, lost, failures = json.loads(done.stdout.splitlines()[-1])

@@ -25,6 +25,7 @@ from bridge.mqtt.topics import Topics
 from bridge.sky import Sky
 from bridge.web.commands import WebCommand, carry_out
 from tests.engine.virtual import VirtualRotator
+from tests.support.waiting import slow
 
 BERLIN = (52.52, 13.40)
 START_AZ = 30.0
@@ -98,7 +99,7 @@ def on_a_thread(*words: Callable[[], None]) -> None:
 
     thread = threading.Thread(target=run, daemon=True)
     thread.start()
-    thread.join(10)
+    thread.join(slow(10))
     assert not thread.is_alive(), "the halt did not return"
     if failed:
         raise failed[0]

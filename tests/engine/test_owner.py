@@ -28,6 +28,7 @@ from bridge.mqtt.halts import Halts
 from bridge.mqtt.topics import Topics
 from bridge.settings import RotatorSettings
 from bridge.web.commands import WebCommand, carry_out
+from tests.support.waiting import slow
 
 T0 = 1_790_000_000.0
 HOLDER = Origin(Source.MQTT, "DL1ABC")
@@ -97,7 +98,7 @@ class Station:
         thread = threading.Thread(target=run, daemon=True)
         self.threads.append(thread)
         thread.start()
-        assert returned_or_waiting.wait(10), "the other word neither returned nor waited"
+        assert returned_or_waiting.wait(slow(10)), "the other word neither returned nor waited"
 
     def hold_between_steps(self, put: str, when: object, other: Callable[[], None]) -> None:
         """The first call of the mailbox's ``put`` with ``when`` runs ``other`` in between."""
@@ -121,7 +122,7 @@ class Station:
         """Every thread done, the session served the mailbox, the writer wrote: the status the
         session published last (what R/lock/state and R/control say)."""
         for thread in self.threads:
-            thread.join(10)
+            thread.join(slow(10))
             assert not thread.is_alive()
         self.rot._worker.serve(0.0, {self.rot._mailbox.fileno()})
         self.store.flush()
@@ -266,14 +267,14 @@ def test_the_steps_take_turns_in_the_order_they_came() -> None:
 
         thread = threading.Thread(target=run, daemon=True)
         thread.start()
-        assert turns.came.acquire(timeout=10), f"{name} did not wait its turn"
+        assert turns.came.acquire(timeout=slow(10)), f"{name} did not wait its turn"
         return thread
 
     owner.__enter__()  # a step under way
     threads = [step("lock ON"), step("lock OFF"), step("claim")]
     owner.__exit__(None, None, None)
     for thread in threads:
-        thread.join(10)
+        thread.join(slow(10))
     assert done == ["lock ON", "lock OFF", "claim"]
     with owner:  # free again
         done.append("release")

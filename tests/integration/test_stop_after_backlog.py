@@ -33,7 +33,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import Mosquitto
 from tests.support import Probe
 from tests.support.rig import Rig
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 BACKLOG = 100_000
 FENCE_DENIED = (
@@ -85,7 +85,7 @@ def slide_then_stop(port: int, targets: int) -> None:
     all once it answers the PINGREQ written after them."""
     connect = packet(0x10, b"\x00\x04MQTT\x04\x02\x00\x3c\x00\x06slider")
     burst = b"".join(publish("rotor/target", str(100 + i % 200).encode()) for i in range(targets))
-    with socket.create_connection(("127.0.0.1", port), timeout=60) as s:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(60)) as s:
         s.sendall(connect)
         assert s.recv(4) == b"\x20\x02\x00\x00", "CONNACK"
         s.sendall(burst + publish("rotor/stop", b"") + b"\xc0\x00")  # ... and a PINGREQ
@@ -109,7 +109,7 @@ def stop_after_backlog(rig: Rig, probe: Probe, emu: Any, app: App, targets: int)
 
     app.lane._handler = seen
     slide_then_stop(rig.broker.port, targets)
-    assert lane_stop.wait(30), "the stop lane never read the STOP"
+    assert lane_stop.wait(slow(30)), "the stop lane never read the STOP"
     slider = Probe(rig.broker.port, "")
     try:
         t = time.monotonic()

@@ -35,6 +35,7 @@ from bridge.rotctld.server import RotctldSession
 from bridge.settings_mqtt import MqttSettings
 from tests.mqtt.test_service import NOW_UNIX, service
 from tests.support.clock import FakeClock
+from tests.support.waiting import slow
 
 STATION = StationTopics("rotor")
 T = STATION.rotator(None)
@@ -263,7 +264,7 @@ def test_no_puback_in_time_refuses_the_command_and_resets_the_stalled_connection
     assert refused.value.code is RefusalCode.OFFLINE
     assert "did not acknowledge it within" in refused.value.message
     assert not link.up and link.resets == 1
-    paho.broker.settimeout(5)
+    paho.broker.settimeout(slow(5))
     assert paho.broker.recv(10) == b""  # the connection's end, for paho's loop to read
     with pytest.raises(Refused) as again:  # refused at once until paho has connected again
         link.send("rotor/stop", "stop", "DL1ABC", 5)

@@ -20,6 +20,7 @@ from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 
 class StallingLink:
@@ -88,7 +89,7 @@ def link(station: Rig) -> Iterator[StallingLink]:
 
 
 def ask(port: int, line: bytes) -> bytes:
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(10)) as sock:
         sock.sendall(line)
         buf = b""
         while not buf.endswith(b"\n"):

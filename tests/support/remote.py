@@ -10,6 +10,7 @@ from types import TracebackType
 from bridge.mosquitto import Mosquitto
 from bridge.mqtt.heartbeat import beat_payload
 from tests.support.mqtt import Probe
+from tests.support.waiting import slow
 
 _RECEIVED = re.compile(rb"Received PUBLISH from remote-\S+ \(.*'rotor/(\w+)'")
 
@@ -39,7 +40,7 @@ class Heartbeat:
         self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self._done.set()
-        self._thread.join(5)
+        self._thread.join(slow(5))
 
     def _beat(self) -> None:
         while not self._done.is_set():

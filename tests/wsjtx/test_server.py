@@ -18,6 +18,7 @@ from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import free_udp_port
+from tests.support.waiting import slow
 
 
 class Ears:
@@ -104,7 +105,7 @@ def test_a_loopback_listener_never_hears_the_group_from_the_lan(
             other.bind((group, port))
             join = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton(lan))
             other.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, join)
-            other.settimeout(10)
+            other.settimeout(slow(10))
             forger = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
             forger.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(lan))
             forger.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
