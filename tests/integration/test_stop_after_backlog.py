@@ -31,6 +31,7 @@ from typing import Any
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import Mosquitto
+from bridge.mqtt.heartbeat import Stamp
 from tests.support import Probe
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
@@ -101,11 +102,13 @@ def stop_after_backlog(rig: Rig, probe: Probe, emu: Any, app: App, targets: int)
     frames_at_stop: list[int] = []
     on_lane = app.lane._handler
 
-    def seen(topic: str, payload: bytes, retain: bool, operator: str | None) -> None:
+    def seen(
+        topic: str, payload: bytes, retain: bool, operator: str | None, stamp: Stamp | None
+    ) -> None:
         if topic == "rotor/stop" and not lane_stop.is_set():
             frames_at_stop.append(len(emu.log()))  # before it is carried out
             lane_stop.set()
-        on_lane(topic, payload, retain, operator)
+        on_lane(topic, payload, retain, operator, stamp)
 
     app.lane._handler = seen
     slide_then_stop(rig.broker.port, targets)
