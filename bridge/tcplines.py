@@ -1,5 +1,6 @@
 """The TCP side shared by the text front ends (rotctld, GS-232, Easycomm): one listener per
-rotator and protocol, one thread per client, every reply in one send.
+rotator and protocol, one thread per client, every reply in one send, and a budget per client so
+that no client, nor all of them together, can starve the serial-lines thread of the GIL.
 
 What a client's bytes mean is not decided here: each client gets a fresh ``LineSession`` from the
 front end (its parser and its commands onto the judge); this module owns the sockets.
@@ -16,12 +17,23 @@ Rules:
    connections turned away because every slot is taken are logged once per 10 s, with a count.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
+5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction:
+   the threads are at most ``max_clients`` a port; each wake-up reads at most READ_BYTES, so
+   it runs at most that many commands (a rotctld command may be one byte); each client has a
+   Budget of bytes per second, every reply costing REPLY_COST more, and a client over it is
+   not read until it is back in credit: its thread sleeps in the kernel (an Event's wait) and
+   its bytes wait in the kernel's buffers (TCP pushes back on the sender), and it is said once
+   in the log (at most once per LOG_S for the port). A client that sends MAX_UNFINISHED bytes
+   without finishing a command (a line with no end: no command of any of these protocols is
+   near that long) is dropped and logged (at most once per LOG_S, with a count). A stop from
+   a well-behaved client is read at its first wake-up: its budget is its own.
 """
 
 from __future__ import annotations
 
 import errno
 import logging
+import math
 import os
 import re
 import selectors
@@ -35,6 +47,54 @@ log = logging.getLogger(__name__)
 
 USEFUL_WITHIN_S = 60.0  # bytes trickling in without a complete command: dropped after this
 REFUSAL_LOG_S = 10.0  # connections turned away are logged at most this often, with a count
+# rule 5: a tracker sending 20 targets and 20 readings a second spends about 3 KB/s of this
+READ_BYTES = 64  # at most this much read, and so at most this many commands run, a wake-up
+RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of as many
+REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
+MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
+LOG_S = 10.0  # rule 5's log lines, at most this often a port
+
+
+class Budget:
+    """Rule 5: a token bucket that may go into debt (what one wake-up read and ran is charged
+    after it ran). Pure: the time is handed in."""
+
+    def __init__(self, rate_per_s: float, now: float) -> None:
+        self.rate_per_s = rate_per_s
+        self._tokens = rate_per_s  # a second's worth at once
+        self._t = now
+
+    def spend(self, cost: float, now: float) -> None:
+        self._refill(now)
+        self._tokens -= cost
+
+    def wait_s(self, now: float) -> float:
+        """How long until the client is in credit again (0: read it now)."""
+        self._refill(now)
+        return 0.0 if self._tokens > 0 else (1.0 - self._tokens) / self.rate_per_s
+
+    def _refill(self, now: float) -> None:
+        gained = max(0.0, now - self._t) * self.rate_per_s
+        self._tokens = min(self.rate_per_s, self._tokens + gained)
+        self._t = now
+
+
+class RareLog:
+    """One warning at most once per ``every_s``, with how many since the last said."""
+
+    def __init__(self, every_s: float = LOG_S) -> None:
+        self._every_s = every_s
+        self._said_s = -math.inf
+        self._since = 0
+        self._lock = threading.Lock()
+
+    def warn(self, now: float, msg: str, *args: object) -> None:
+        with self._lock:
+            self._since += 1
+            if now - self._said_s < self._every_s:
+                return
+            count, self._since, self._said_s = self._since, 0, now
+        log.warning(msg + " (%d time(s) since last said)", *args, count)
 
 
 class Close:
@@ -81,9 +141,19 @@ class LineServer:
         useful_within_s: float = USEFUL_WITHIN_S,
         clock: Callable[[], float] = time.monotonic,
         peer_session: Callable[[str], LineSession] | None = None,
+        rate_bytes_s: float = RATE_BYTES_S,
+        read_bytes: int = READ_BYTES,
+        max_unfinished: int = MAX_UNFINISHED,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
-        sent a command: model.Origin) instead of ``session``."""
+        sent a command: model.Origin) instead of ``session``. The last three: rule 5."""
+        self._rate_bytes_s = rate_bytes_s
+        self._read_bytes = read_bytes
+        self._max_unfinished = max_unfinished
+        self._paused_log = RareLog()
+        self._dropped_log = RareLog()
+        self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
+        self.paused = 0  # rule 5: times a client was over its budget, for the tests
         self._peer_session = peer_session
         self.rotator_id = rotator_id
         self.label = label
@@ -155,6 +225,7 @@ class LineServer:
             )
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = False
+        self._ended.clear()
         self._accept_thread = threading.Thread(
             target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
@@ -172,6 +243,7 @@ class LineServer:
         with self._lock:
             self._stopping = True
             clients = list(self._clients.items())
+        self._ended.set()
         os.write(self._wake_w, b"x")
         self._accept_thread.join(timeout_s)
         for conn, _thread in clients:
@@ -242,10 +314,25 @@ class LineServer:
         log.info("%s connected", who)
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         guard = HttpGuard()
+        budget = Budget(self._rate_bytes_s, self._clock())
+        unfinished = 0  # rule 5: bytes since the client last finished a command
+        over = False  # rule 5: over its budget now (said once each time)
         last_bytes = self._clock()
         pending_since: float | None = None  # the first byte of a command not yet complete
         try:
             while True:
+                pause_s = budget.wait_s(self._clock())
+                if pause_s > 0:  # rule 5: in the kernel, unread, until back in credit
+                    if not over:
+                        over = True
+                        self.paused += 1
+                        self._paused_log.warn(
+                            self._clock(), "%s sends faster than a client may: paused", who
+                        )
+                    if self._ended.wait(pause_s):
+                        return
+                    continue
+                over = False
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
                 deadline = last_bytes + self._idle_timeout_s
@@ -257,12 +344,12 @@ class LineServer:
                     return
                 conn.settimeout(deadline - now)
                 try:
-                    data = conn.recv(4096)
+                    data = conn.recv(self._read_bytes)
                 except TimeoutError:
                     continue
                 if not data:
                     break
-                last_bytes = self._clock()
+                last_bytes, raw = self._clock(), len(data)
                 data = guard.feed(data)
                 if guard.http:
                     log.warning(
@@ -273,15 +360,27 @@ class LineServer:
                         self.label,
                     )
                     return
-                for reply in session.feed(data):
+                replies = session.feed(data) if data else ()
+                for reply in replies:
                     if isinstance(reply, Close):
                         return
                     if reply:
                         conn.sendall(reply)
-                if session.idle:
-                    pending_since = None
-                elif pending_since is None:
-                    pending_since = last_bytes
+                budget.spend(raw + REPLY_COST * len(replies), self._clock())
+                if session.idle and not guard.holding:
+                    pending_since, unfinished = None, 0
+                else:
+                    unfinished += raw
+                    if pending_since is None:
+                        pending_since = last_bytes
+                if unfinished > self._max_unfinished:  # rule 5: a line with no end
+                    self._dropped_log.warn(
+                        self._clock(),
+                        "%s dropped: %d bytes and no command finished",
+                        who,
+                        unfinished,
+                    )
+                    return
         except OSError as exc:
             log.debug("%s: %s", who, exc)
         finally:
@@ -309,11 +408,16 @@ class HttpGuard:
         self._head: bytes | None = b""  # the first line while it is incomplete; None after
         self._line = b""  # the current line's start, for the header check
 
+    @property
+    def holding(self) -> bool:
+        """True while the first line is held (incomplete)."""
+        return self._head is not None
+
     def feed(self, data: bytes) -> bytes:
         if self._head is not None:
             self._head += data
             # a GS-232 client ends its lines with CR alone; an HTTP request line ends in CR LF
-            ended = b"\n" in self._head or b"\r" in self._head
+            ended = b"\n" in data or b"\r" in data  # not in what came before: it was held
             if not ended and len(self._head) < HTTP_FIRST_LINE_MAX:
                 return b""
             data, self._head = self._head, None
