@@ -14,6 +14,11 @@ Rules:
 3. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
    logged at most once per JUNK_LOG_S with its traceback and the next datagram is served.
 4. The thread never waits on a rotator: ``Rotator.heard`` only puts into the mailbox.
+5. A flood cannot starve a stop (docs/architecture.md rule 12): the port is read at most
+   RATE_DATAGRAMS_S datagrams a second (tcplines.Budget, a second's worth at once, each one
+   costing 1 + its size in KiB), far above WSJT-X's few a second; past it the thread sleeps
+   on its stop pipe and the system drops what its buffer cannot hold; said at most once per
+   JUNK_LOG_S (``counts.paused``). Each datagram's decoding is linear in its size.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import select
 import selectors
 import socket
 import struct
@@ -31,6 +37,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bridge.engine.follow import Heard
+from bridge.tcplines import Budget
 from bridge.wsjtx.messages import Malformed, Status, decode
 
 if TYPE_CHECKING:
@@ -40,6 +47,7 @@ log = logging.getLogger(__name__)
 
 JUNK_LOG_S = 30.0
 RECV_BYTES = 65536  # a whole datagram, whatever its size: a longer one is junk (messages.py)
+RATE_DATAGRAMS_S = 200.0  # rule 5
 
 
 @dataclass
@@ -50,6 +58,7 @@ class Counts:
     malformed: int = 0
     ignored: int = 0  # heartbeats and message types nobody here needs
     faults: int = 0
+    paused: int = 0  # rule 5: times the port was read no faster
 
 
 @dataclass
@@ -81,6 +90,7 @@ class WsjtxListener:
         self._wake_r, self._wake_w = -1, -1
         self._junk_log = _Rarely(JUNK_LOG_S)
         self._fault_log = _Rarely(JUNK_LOG_S)
+        self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
         self.rotators.append(rotator)
@@ -140,7 +150,13 @@ class WsjtxListener:
         with selectors.DefaultSelector() as sel:
             sel.register(sock, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
+            budget = Budget(RATE_DATAGRAMS_S, self.clock())
             while True:
+                if (pause_s := budget.wait_s(self.clock())) > 0:  # rule 5
+                    self._flooded()
+                    if select.select([self._wake_r], [], [], pause_s)[0]:
+                        return
+                    continue
                 for key, _mask in sel.select():
                     if key.fileobj == self._wake_r:
                         return
@@ -149,6 +165,7 @@ class WsjtxListener:
                     except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
                         self._fault("reading the WSJT-X port", exc)
                         continue
+                    budget.spend(1 + len(datagram) / 1024, self.clock())
                     try:
                         self.datagram(datagram)
                     except Exception as exc:  # rule 3: a bug behind it, not the end
@@ -174,6 +191,18 @@ class WsjtxListener:
                 rotator.heard(heard)
             except Exception as exc:  # rule 3
                 self._fault(f"handing WSJT-X's status to {rotator.id}", exc)
+
+    def _flooded(self) -> None:
+        """Rule 5."""
+        self.counts.paused += 1
+        count = self._flood_log.due(self.clock())
+        if count is not None:
+            log.warning(
+                "WSJT-X port: datagrams come faster than %g a second: read no faster, the "
+                "system drops the rest (%d time(s) since last said)",
+                RATE_DATAGRAMS_S,
+                count,
+            )
 
     def _fault(self, what: str, exc: BaseException) -> None:
         self.counts.faults += 1
