@@ -26,7 +26,9 @@ Rules:
    in the log (at most once per LOG_S for the port). A client that sends MAX_UNFINISHED bytes
    without finishing a command (a line with no end: no command of any of these protocols is
    near that long) is dropped and logged (at most once per LOG_S, with a count). A stop from
-   a well-behaved client is read at its first wake-up: its budget is its own.
+   a well-behaved client is read at its first wake-up: its budget is its own. New connections
+   are accepted at most ACCEPTS_S a second (a second's worth at once): a client dropped that
+   connects again at once waits in the kernel's backlog, not in a thread of ours.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import logging
 import math
 import os
 import re
+import select
 import selectors
 import socket
 import threading
@@ -53,6 +56,7 @@ RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of
 REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
 MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
+ACCEPTS_S = 20.0  # rule 5: connections accepted a second, at most
 
 
 class Budget:
@@ -263,10 +267,16 @@ class LineServer:
         listener = self._listener
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
+        budget = Budget(ACCEPTS_S, self._clock())
         with selectors.DefaultSelector() as sel:
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
             while True:
+                pause_s = budget.wait_s(self._clock())
+                if pause_s > 0:  # rule 5: the next ones wait in the backlog
+                    if select.select([self._wake_r], [], [], pause_s)[0]:
+                        return
+                    continue
                 events = sel.select()
                 if any(key.fileobj == self._wake_r for key, _ in events):
                     return
@@ -278,6 +288,7 @@ class LineServer:
                     log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
                     continue
                 conn.setblocking(True)
+                budget.spend(1, self._clock())
                 self._admit(conn, peer)
 
     def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:

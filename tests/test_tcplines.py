@@ -13,7 +13,7 @@ import pytest
 
 from bridge.gs232 import Gs232Session
 from bridge.model import Origin, Source, Stop, Target
-from bridge.tcplines import HTTP_FIRST_LINE_MAX, Budget, HttpGuard, LineServer
+from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, Budget, HttpGuard, LineServer
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 
@@ -170,3 +170,30 @@ def test_a_client_over_its_budget_waits_and_another_clients_stop_is_read_at_once
     assert _read(greedy, 32 * 8) == b"AZ=120\r\n" * 32  # one more wake-up's worth
     wait_until(lambda: server.paused == 2, 10, "the greedy client paused again")
     greedy.close()
+
+
+def test_connections_are_accepted_no_faster_than_the_budget(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """In virtual time: a client dropped (or a crowd) connecting again at once costs a thread
+    each time; past ACCEPTS_S a second the next connections wait in the kernel's backlog, and
+    are taken when time passes."""
+    clock = FakeClock()
+    _tower, server = gs232(clock=clock, max_clients=40)
+    crowd = [
+        socket.create_connection(("127.0.0.1", server.port), timeout=10)
+        for _ in range(int(ACCEPTS_S) + 5)
+    ]
+    try:
+        wait_until(lambda: server.client_count == int(ACCEPTS_S), 10, "a second's worth taken")
+        crowd[-1].sendall(b"C\r")  # connected (the backlog), not yet served
+        crowd[-1].settimeout(0.2)
+        with pytest.raises(TimeoutError):
+            crowd[-1].recv(1)
+        clock.t += 1.0
+        crowd[-1].settimeout(10)
+        assert _read(crowd[-1], 8) == b"AZ=120\r\n"
+        assert server.client_count == len(crowd)
+    finally:
+        for sock in crowd:
+            sock.close()
