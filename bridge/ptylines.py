@@ -69,7 +69,8 @@ import tty
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST, Budget
+from bridge.ratelimit import Budget
+from bridge.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
 
 log = logging.getLogger(__name__)
 

@@ -18,17 +18,14 @@ Rules:
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
 5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction:
-   the threads are at most ``max_clients`` a port; each wake-up reads at most READ_BYTES, so
-   it runs at most that many commands (a rotctld command may be one byte); each client has a
-   Budget of bytes per second, every reply costing REPLY_COST more, and a client over it is
-   not read until it is back in credit: its thread sleeps in the kernel (an Event's wait) and
-   its bytes wait in the kernel's buffers (TCP pushes back on the sender), and it is said once
-   in the log (at most once per LOG_S for the port). A client that sends MAX_UNFINISHED bytes
-   without finishing a command (a line with no end: no command of any of these protocols is
-   near that long) is dropped and logged (at most once per LOG_S, with a count). A stop from
-   a well-behaved client is read at its first wake-up: its budget is its own. New connections
-   are accepted at most ACCEPTS_S a second (a second's worth at once): a client dropped that
-   connects again at once waits in the kernel's backlog, not in a thread of ours.
+   at most ``max_clients`` threads a port, ACCEPTS_S connections a second (the rest wait in the
+   kernel's backlog); a wake-up reads at most READ_BYTES (so runs at most that many commands);
+   each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
+   REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
+   TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
+   bytes without finishing a command (no command is near that long) is dropped and logged (at
+   most once per LOG_S, with a count). A well-behaved client's stop is read at its first
+   wake-up: its budget is its own.
 """
 
 from __future__ import annotations
@@ -46,6 +43,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from bridge.ratelimit import Budget
+
 log = logging.getLogger(__name__)
 
 USEFUL_WITHIN_S = 60.0  # bytes trickling in without a complete command: dropped after this
@@ -57,30 +56,6 @@ REPLY_COST = 64  # each reply (each command answered) costs this many bytes of t
 MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
 ACCEPTS_S = 20.0  # rule 5: connections accepted a second, at most
-
-
-class Budget:
-    """Rule 5: a token bucket that may go into debt (what one wake-up read and ran is charged
-    after it ran). Pure: the time is handed in."""
-
-    def __init__(self, rate_per_s: float, now: float) -> None:
-        self.rate_per_s = rate_per_s
-        self._tokens = rate_per_s  # a second's worth at once
-        self._t = now
-
-    def spend(self, cost: float, now: float) -> None:
-        self._refill(now)
-        self._tokens -= cost
-
-    def wait_s(self, now: float) -> float:
-        """How long until the client is in credit again (0: read it now)."""
-        self._refill(now)
-        return 0.0 if self._tokens > 0 else (1.0 - self._tokens) / self.rate_per_s
-
-    def _refill(self, now: float) -> None:
-        gained = max(0.0, now - self._t) * self.rate_per_s
-        self._tokens = min(self.rate_per_s, self._tokens + gained)
-        self._t = now
 
 
 class RareLog:

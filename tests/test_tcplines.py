@@ -13,7 +13,8 @@ import pytest
 
 from bridge.gs232 import Gs232Session
 from bridge.model import Origin, Source, Stop, Target
-from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, Budget, HttpGuard, LineServer
+from bridge.ratelimit import Budget
+from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 

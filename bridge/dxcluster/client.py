@@ -31,7 +31,7 @@ Rules:
    stop (docs/architecture.md rule 11).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
-   session has a budget of RATE_BYTES_S (tcplines.Budget; each line charged LINE_COST more):
+   session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more):
    a node sending faster is not read until the budget allows (the thread sleeps in the
    kernel, the node's bytes wait in TCP's buffers), counted in ``paused``.
 """
@@ -52,7 +52,7 @@ from bridge.dxcluster.spots import Lines, parse_spot
 from bridge.errors import Refused
 from bridge.model import Origin, Source
 from bridge.mqtt.ports import RotatorPort
-from bridge.tcplines import Budget
+from bridge.ratelimit import Budget
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    selector is made anew without it, so it can never wake the thread again.
 8. A flood cannot starve a stop (docs/architecture.md rule 12): beyond rule 3, the thread
    reads at most RATE_DATAGRAMS_S datagrams a second from all its sockets together
-   (tcplines.Budget: a second's worth at once, each datagram costing 1 + its size in KiB),
+   (ratelimit.Budget: a second's worth at once, each datagram costing 1 + its size in KiB),
    far above what loggers send; past it the thread sleeps on its stop pipe (the reports still
    looked at) and the system drops what its buffers cannot hold. Said at warning level at
    most once per FLOOD_LOG_S with the count since (``paused``).
@@ -51,7 +51,7 @@ from bridge.loggers.commands import (
 )
 from bridge.loggers.datagrams import MAX_DATAGRAM, Malformed, n1mm_report, parse_n1mm, parse_pst
 from bridge.pointing import angle_between
-from bridge.tcplines import Budget
+from bridge.ratelimit import Budget
 
 log = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ Rules:
    logged at most once per JUNK_LOG_S with its traceback and the next datagram is served.
 4. The thread never waits on a rotator: ``Rotator.heard`` only puts into the mailbox.
 5. A flood cannot starve a stop (docs/architecture.md rule 12): the port is read at most
-   RATE_DATAGRAMS_S datagrams a second (tcplines.Budget, a second's worth at once, each one
+   RATE_DATAGRAMS_S datagrams a second (ratelimit.Budget, a second's worth at once, each one
    costing 1 + its size in KiB), far above WSJT-X's few a second; past it the thread sleeps
    on its stop pipe and the system drops what its buffer cannot hold; said at most once per
    JUNK_LOG_S (``counts.paused``). Each datagram's decoding is linear in its size.
@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bridge.engine.follow import Heard
-from bridge.tcplines import Budget
+from bridge.ratelimit import Budget
 from bridge.wsjtx.messages import Malformed, Status, decode
 
 if TYPE_CHECKING:
