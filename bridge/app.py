@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import gc
 import logging
 import signal
 import sys
@@ -420,11 +421,15 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     except OSError as exc:  # not foreseen, but a start that cannot work all the same
         raise ConfigError(f"cannot start: {exc}") from None
     app.start()
+    # rule 12: a full collection no longer walks the start-up's 70,000 objects (30-80 ms)
+    gc.collect()
+    gc.freeze()
     try:
         while not done.wait(1.0) and not app.failed.is_set():
             pass
     finally:
         app.stop()
+        gc.unfreeze()  # a caller that runs the bridge again (the tests) keeps no garbage
     if app.failure is not None:
         raise ConfigError(app.failure)
     return 0

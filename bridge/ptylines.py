@@ -43,6 +43,12 @@ Rules:
    in the loop itself (an ioctl that fails, a bug) is logged with its traceback at most once
    per FAULT_LOG_S, and the server goes on with a fresh session after EIO_RETRY_S; the link
    stays served.
+9. A client cannot starve a stop (docs/architecture.md rule 12), as on the TCP ports
+   (tcplines.py rule 5): a wake-up reads at most tcplines.READ_BYTES (so runs at most that many
+   commands), and the pty has a budget of tcplines.RATE_BYTES_S, each reply costing
+   tcplines.REPLY_COST more; over it, the thread sleeps on the stop pipe (in the kernel) and
+   the client's bytes wait in the pty (its writes block or fail, as on a serial line),
+   counted in ``paused``.
 """
 
 from __future__ import annotations
@@ -63,6 +69,9 @@ import tty
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from bridge.ratelimit import Budget
+from bridge.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
+
 log = logging.getLogger(__name__)
 
 USEFUL_WITHIN_S = 60.0  # rule 4: an unfinished command is dropped after this
@@ -70,7 +79,6 @@ EIO_RETRY_S = 0.2  # rule 3
 DROP_LOG_S = 10.0  # rule 5
 STALE_S = 2.0  # rule 6
 FAULT_LOG_S = 60.0  # rule 8
-_READ_CHUNK = 4096
 
 
 class PtySession(Protocol):
@@ -114,6 +122,7 @@ class PtyLineServer:
         self._thread: threading.Thread | None = None
         self.wakeups = 0  # select() returns, for the tests (rule 3: no spinning)
         self.faults = 0  # rule 8
+        self.paused = 0  # rule 9
         self.replies_dropped = 0
         self.stale_dropped = 0  # bytes (rule 6)
         self._written_s: float | None = None  # when the last reply was written (rule 6)
@@ -229,8 +238,15 @@ class PtyLineServer:
 
     def _serve_until_stopped(self) -> None:
         session = self._session()
+        budget = Budget(RATE_BYTES_S, self._clock())
         pending_since: float | None = None
         while True:
+            pause_s = budget.wait_s(self._clock())
+            if pause_s > 0:  # rule 9: the pty unread until the budget allows
+                self.paused += 1
+                if select.select([self._wake_r], [], [], pause_s)[0]:
+                    return
+                continue
             deadlines = []
             if pending_since is not None:
                 deadlines.append(pending_since + self._useful_within_s)
@@ -252,7 +268,7 @@ class PtyLineServer:
                     session, pending_since = self._session(), None  # rule 4
                 continue
             try:
-                data = os.read(self._master, _READ_CHUNK)
+                data = os.read(self._master, READ_BYTES)
             except BlockingIOError:
                 continue
             except OSError as exc:
@@ -263,11 +279,13 @@ class PtyLineServer:
                 continue
             if not data:
                 continue
-            for reply in session.feed(data):
+            replies = session.feed(data)
+            for reply in replies:
                 if not isinstance(reply, bytes):  # a session's end (tcplines.Close)
                     session = self._session()
                 elif reply:
                     self._write(reply)
+            budget.spend(len(data) + REPLY_COST * len(replies), self._clock())
             if session.idle:
                 pending_since = None
             elif pending_since is None:

@@ -1,5 +1,6 @@
 """The TCP side shared by the text front ends (rotctld, GS-232, Easycomm): one listener per
-rotator and protocol, one thread per client, every reply in one send.
+rotator and protocol, one thread per client, every reply in one send, and a budget per client so
+that no client, nor all of them together, can starve the serial-lines thread of the GIL.
 
 What a client's bytes mean is not decided here: each client gets a fresh ``LineSession`` from the
 front end (its parser and its commands onto the judge); this module owns the sockets.
@@ -16,14 +17,25 @@ Rules:
    connections turned away because every slot is taken are logged once per 10 s, with a count.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
+5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction:
+   at most ``max_clients`` threads a port, ACCEPTS_S connections a second (the rest wait in the
+   kernel's backlog); a wake-up reads at most READ_BYTES (so runs at most that many commands);
+   each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
+   REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
+   TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
+   bytes without finishing a command (no command is near that long) is dropped and logged (at
+   most once per LOG_S, with a count). A well-behaved client's stop is read at its first
+   wake-up: its budget is its own.
 """
 
 from __future__ import annotations
 
 import errno
 import logging
+import math
 import os
 import re
+import select
 import selectors
 import socket
 import threading
@@ -31,10 +43,37 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from bridge.ratelimit import Budget
+
 log = logging.getLogger(__name__)
 
 USEFUL_WITHIN_S = 60.0  # bytes trickling in without a complete command: dropped after this
 REFUSAL_LOG_S = 10.0  # connections turned away are logged at most this often, with a count
+# rule 5: a tracker sending 20 targets and 20 readings a second spends about 3 KB/s of this
+READ_BYTES = 64  # at most this much read, and so at most this many commands run, a wake-up
+RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of as many
+REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
+MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
+LOG_S = 10.0  # rule 5's log lines, at most this often a port
+ACCEPTS_S = 20.0  # rule 5: connections accepted a second, at most
+
+
+class RareLog:
+    """One warning at most once per ``every_s``, with how many since the last said."""
+
+    def __init__(self, every_s: float = LOG_S) -> None:
+        self._every_s = every_s
+        self._said_s = -math.inf
+        self._since = 0
+        self._lock = threading.Lock()
+
+    def warn(self, now: float, msg: str, *args: object) -> None:
+        with self._lock:
+            self._since += 1
+            if now - self._said_s < self._every_s:
+                return
+            count, self._since, self._said_s = self._since, 0, now
+        log.warning(msg + " (%d time(s) since last said)", *args, count)
 
 
 class Close:
@@ -81,9 +120,19 @@ class LineServer:
         useful_within_s: float = USEFUL_WITHIN_S,
         clock: Callable[[], float] = time.monotonic,
         peer_session: Callable[[str], LineSession] | None = None,
+        rate_bytes_s: float = RATE_BYTES_S,
+        read_bytes: int = READ_BYTES,
+        max_unfinished: int = MAX_UNFINISHED,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
-        sent a command: model.Origin) instead of ``session``."""
+        sent a command: model.Origin) instead of ``session``. The last three: rule 5."""
+        self._rate_bytes_s = rate_bytes_s
+        self._read_bytes = read_bytes
+        self._max_unfinished = max_unfinished
+        self._paused_log = RareLog()
+        self._dropped_log = RareLog()
+        self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
+        self.paused = 0  # rule 5: times a client was over its budget, for the tests
         self._peer_session = peer_session
         self.rotator_id = rotator_id
         self.label = label
@@ -155,6 +204,7 @@ class LineServer:
             )
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = False
+        self._ended.clear()
         self._accept_thread = threading.Thread(
             target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
@@ -172,6 +222,7 @@ class LineServer:
         with self._lock:
             self._stopping = True
             clients = list(self._clients.items())
+        self._ended.set()
         os.write(self._wake_w, b"x")
         self._accept_thread.join(timeout_s)
         for conn, _thread in clients:
@@ -191,10 +242,16 @@ class LineServer:
         listener = self._listener
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
+        budget = Budget(ACCEPTS_S, self._clock())
         with selectors.DefaultSelector() as sel:
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
             while True:
+                pause_s = budget.wait_s(self._clock())
+                if pause_s > 0:  # rule 5: the next ones wait in the backlog
+                    if select.select([self._wake_r], [], [], pause_s)[0]:
+                        return
+                    continue
                 events = sel.select()
                 if any(key.fileobj == self._wake_r for key, _ in events):
                     return
@@ -206,6 +263,7 @@ class LineServer:
                     log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
                     continue
                 conn.setblocking(True)
+                budget.spend(1, self._clock())
                 self._admit(conn, peer)
 
     def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:
@@ -242,10 +300,25 @@ class LineServer:
         log.info("%s connected", who)
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         guard = HttpGuard()
+        budget = Budget(self._rate_bytes_s, self._clock())
+        unfinished = 0  # rule 5: bytes since the client last finished a command
+        over = False  # rule 5: over its budget now (said once each time)
         last_bytes = self._clock()
         pending_since: float | None = None  # the first byte of a command not yet complete
         try:
             while True:
+                pause_s = budget.wait_s(self._clock())
+                if pause_s > 0:  # rule 5: in the kernel, unread, until back in credit
+                    if not over:
+                        over = True
+                        self.paused += 1
+                        self._paused_log.warn(
+                            self._clock(), "%s sends faster than a client may: paused", who
+                        )
+                    if self._ended.wait(pause_s):
+                        return
+                    continue
+                over = False
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
                 deadline = last_bytes + self._idle_timeout_s
@@ -257,12 +330,12 @@ class LineServer:
                     return
                 conn.settimeout(deadline - now)
                 try:
-                    data = conn.recv(4096)
+                    data = conn.recv(self._read_bytes)
                 except TimeoutError:
                     continue
                 if not data:
                     break
-                last_bytes = self._clock()
+                last_bytes, raw = self._clock(), len(data)
                 data = guard.feed(data)
                 if guard.http:
                     log.warning(
@@ -273,15 +346,27 @@ class LineServer:
                         self.label,
                     )
                     return
-                for reply in session.feed(data):
+                replies = session.feed(data) if data else ()
+                for reply in replies:
                     if isinstance(reply, Close):
                         return
                     if reply:
                         conn.sendall(reply)
-                if session.idle:
-                    pending_since = None
-                elif pending_since is None:
-                    pending_since = last_bytes
+                budget.spend(raw + REPLY_COST * len(replies), self._clock())
+                if session.idle and not guard.holding:
+                    pending_since, unfinished = None, 0
+                else:
+                    unfinished += raw
+                    if pending_since is None:
+                        pending_since = last_bytes
+                if unfinished > self._max_unfinished:  # rule 5: a line with no end
+                    self._dropped_log.warn(
+                        self._clock(),
+                        "%s dropped: %d bytes and no command finished",
+                        who,
+                        unfinished,
+                    )
+                    return
         except OSError as exc:
             log.debug("%s: %s", who, exc)
         finally:
@@ -309,11 +394,16 @@ class HttpGuard:
         self._head: bytes | None = b""  # the first line while it is incomplete; None after
         self._line = b""  # the current line's start, for the header check
 
+    @property
+    def holding(self) -> bool:
+        """True while the first line is held (incomplete)."""
+        return self._head is not None
+
     def feed(self, data: bytes) -> bytes:
         if self._head is not None:
             self._head += data
             # a GS-232 client ends its lines with CR alone; an HTTP request line ends in CR LF
-            ended = b"\n" in self._head or b"\r" in self._head
+            ended = b"\n" in data or b"\r" in data  # not in what came before: it was held
             if not ended and len(self._head) < HTTP_FIRST_LINE_MAX:
                 return b""
             data, self._head = self._head, None

@@ -17,7 +17,9 @@ from bridge.gs232 import Gs232Session, gs232_pty
 from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.ptylines import PtyLineServer
+from bridge.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
 from tests.support import wait_until
+from tests.support.clock import FakeClock
 from tests.support.waiting import slow
 
 
@@ -270,4 +272,35 @@ def test_a_session_that_raises_does_not_end_the_link(
             c.close()
         assert "a bug behind the line" in caplog.text
     finally:
+        server.stop()
+
+
+def test_a_client_asking_faster_than_the_budget_is_read_no_faster(tmp_path: Path) -> None:
+    """Rule 9, in virtual time (the clock stands still): a program asking as fast as it can
+    write is answered up to the pty's budget, then not read (the server sleeps on its stop
+    pipe); its questions wait in the pty, and when time passes they are answered, in order."""
+    clock = FakeClock()
+    rot = StandIn()
+    path = str(tmp_path / "rotor-gs232")
+    server = PtyLineServer(
+        rot.id, path, lambda: Gs232Session(rot), label="gs232", key="gs232", clock=clock
+    )
+    server.start()
+    client = Client(path)
+    try:
+        per_read = READ_BYTES // 2  # "C\r": answered "AZ=042\r\n"
+        reads = int(RATE_BYTES_S // (READ_BYTES + REPLY_COST * per_read)) + 1
+        os.write(client.fd, b"C\r" * per_read * (reads + 3))
+        answered = client.read(b"\n", 5)
+        wait_until(lambda: server.paused > 0, 10, "the server paused")
+        answered += client.drain()
+        assert answered == b"AZ=042\r\n" * per_read * reads  # the budget's reads, no more
+        clock.t += 1.0  # the rest, three reads, within the second's budget
+        want = b"AZ=042\r\n" * per_read * 3
+        more = b""
+        while len(more) < len(want) and (chunk := client.read(b"\n", 10)):
+            more += chunk
+        assert more == want
+    finally:
+        client.close()
         server.stop()

@@ -671,7 +671,10 @@ def test_a_connection_speaking_http_is_closed_and_nothing_it_sent_runs(
         c.send(request_)
         request_ = BROWSER_GET[5:]
     c.send(request_)
-    while c.sock.recv(4096):  # the bridge closes it (a query before the header was answered)
+    try:
+        while c.sock.recv(4096):  # the bridge closes it (a query before the header was answered)
+            pass
+    except ConnectionResetError:  # closed with some of it unread: it reads a little at a time
         pass
     other = st.connect()  # the rotor went nowhere: nothing was parked, nothing set
     other.ask(b"S\n", b"RPRT 0\n")

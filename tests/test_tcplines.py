@@ -3,7 +3,20 @@ CR-ended first line goes through at once, HTTP never does."""
 
 from __future__ import annotations
 
-from bridge.tcplines import HTTP_FIRST_LINE_MAX, HttpGuard
+import socket
+import threading
+from collections.abc import Callable, Iterator
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from bridge.gs232 import Gs232Session
+from bridge.model import Origin, Source, Stop, Target
+from bridge.ratelimit import Budget
+from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer
+from tests.support import wait_until
+from tests.support.clock import FakeClock
 
 
 def test_a_first_line_ended_by_cr_alone_is_released_at_once() -> None:
@@ -30,3 +43,158 @@ def test_a_first_line_with_no_end_is_released_at_the_limit() -> None:
     guard = HttpGuard()
     assert guard.feed(b"x" * (HTTP_FIRST_LINE_MAX - 1)) == b""
     assert len(guard.feed(b"x")) == HTTP_FIRST_LINE_MAX
+
+
+# -- rule 5: nothing a client sends starves a stop ------------------------------------------
+
+
+class _Tower:
+    """What a GS-232 session uses of a rotator: at 120 degrees, every submit recorded."""
+
+    id = "tower"
+    spec = SimpleNamespace(has_elevation=False, can_report_position=True)
+
+    def __init__(self) -> None:
+        self.status = SimpleNamespace(bearing_deg=120.0, elevation_deg=0.0, available=True)
+        self.submitted: list[Target | Stop] = []
+
+    def submit(self, command: Target | Stop, described: str | None = None) -> None:
+        self.submitted.append(command)
+
+    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
+        raise AssertionError("not parked in these tests")
+
+
+@pytest.fixture
+def gs232() -> Iterator[Callable[..., tuple[_Tower, LineServer]]]:
+    made: list[LineServer] = []
+
+    def make(**kw: Any) -> tuple[_Tower, LineServer]:
+        tower = _Tower()
+        server = LineServer(
+            "tower", 0, "127.0.0.1", lambda: Gs232Session(tower), label="gs232", key="gs232", **kw
+        )
+        server.start()
+        made.append(server)
+        return tower, server
+
+    yield make
+    for server in made:
+        server.stop()
+
+
+def _read(sock: socket.socket, n: int) -> bytes:
+    buf = b""
+    while len(buf) < n:
+        chunk = sock.recv(n - len(buf))
+        if not chunk:
+            break
+        buf += chunk
+    return buf
+
+
+def _closed_by_peer(sock: socket.socket) -> bool:
+    try:
+        while sock.recv(65536):
+            pass
+    except ConnectionResetError:
+        pass
+    return True
+
+
+def test_budget_lets_a_second_of_bytes_through_then_a_steady_rate() -> None:
+    budget = Budget(1000.0, now=0.0)
+    assert budget.wait_s(0.0) == 0.0
+    budget.spend(1500, 0.0)  # a wake-up's work is charged after it ran: into debt
+    assert budget.wait_s(0.0) == pytest.approx(0.501)
+    assert budget.wait_s(0.4) == pytest.approx(0.101)
+    assert budget.wait_s(0.6) == 0.0
+    budget.spend(10, 100.0)  # a quiet spell buys one second's worth, not more
+    assert budget.wait_s(100.0) == 0.0
+    budget.spend(1000, 100.0)
+    assert budget.wait_s(100.0) > 0
+
+
+def test_a_client_sending_a_megabyte_with_no_line_end_is_dropped_and_the_port_answers(
+    gs232: Callable[..., tuple[_Tower, LineServer]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A client that streams bytes and never ends a line held its thread busy for as long as
+    it liked (no command is near 4 KB long): it is dropped, said in the log, and a
+    well-behaved client is answered and its stop carried out."""
+    tower, server = gs232()
+    flooder = socket.create_connection(("127.0.0.1", server.port), timeout=30)
+    sent = threading.Event()
+
+    def flood() -> None:
+        try:
+            flooder.sendall(b"x" * 1_000_000)
+        except OSError:
+            pass  # the bridge closed it under us
+        sent.set()
+
+    threading.Thread(target=flood, daemon=True).start()
+    assert _closed_by_peer(flooder)
+    assert sent.wait(30)
+    flooder.close()
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as client:
+        client.sendall(b"C2\rS\r")
+        assert _read(client, 16) == b"AZ=120  EL=000\r\n"
+        client.sendall(b"C\r")  # answered after the stop ran: the stop came in order
+        assert _read(client, 8) == b"AZ=120\r\n"
+    assert [type(c) for c in tower.submitted] == [Stop]
+    said = [r.getMessage() for r in caplog.records if "no command finished" in r.getMessage()]
+    assert len(said) == 1 and "gs232 for tower" in said[0], said
+
+
+def test_a_client_over_its_budget_waits_and_another_clients_stop_is_read_at_once(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """In virtual time (the clock stands still): a client asking as fast as it can is answered
+    up to its budget and then not read at all (its thread sleeps, its bytes wait in the
+    kernel); a second client's stop is read and carried out meanwhile; when time passes the
+    first is served again, every question answered in order."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, rate_bytes_s=1000.0, read_bytes=64)
+    greedy = socket.create_connection(("127.0.0.1", server.port), timeout=30)
+    greedy.sendall(b"C\r" * 300)  # 64 bytes a wake-up: 32 questions, 64 + 32 * 64 charged
+    assert _read(greedy, 32 * 8) == b"AZ=120\r\n" * 32
+    wait_until(lambda: server.paused == 1, 10, "the greedy client paused")
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as polite:
+        polite.sendall(b"S\rC\r")
+        assert _read(polite, 8) == b"AZ=120\r\n"
+    assert [type(c) for c in tower.submitted] == [Stop]
+    greedy.settimeout(0.2)  # nothing more for the greedy client while the clock stands still
+    with pytest.raises(TimeoutError):
+        greedy.recv(1)
+    clock.t += 100.0  # a second of budget back (no more: the bucket holds one second's worth)
+    greedy.settimeout(30)
+    assert _read(greedy, 32 * 8) == b"AZ=120\r\n" * 32  # one more wake-up's worth
+    wait_until(lambda: server.paused == 2, 10, "the greedy client paused again")
+    greedy.close()
+
+
+def test_connections_are_accepted_no_faster_than_the_budget(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """In virtual time: a client dropped (or a crowd) connecting again at once costs a thread
+    each time; past ACCEPTS_S a second the next connections wait in the kernel's backlog, and
+    are taken when time passes."""
+    clock = FakeClock()
+    _tower, server = gs232(clock=clock, max_clients=40)
+    crowd = [
+        socket.create_connection(("127.0.0.1", server.port), timeout=10)
+        for _ in range(int(ACCEPTS_S) + 5)
+    ]
+    try:
+        wait_until(lambda: server.client_count == int(ACCEPTS_S), 10, "a second's worth taken")
+        crowd[-1].sendall(b"C\r")  # connected (the backlog), not yet served
+        crowd[-1].settimeout(0.2)
+        with pytest.raises(TimeoutError):
+            crowd[-1].recv(1)
+        clock.t += 1.0
+        crowd[-1].settimeout(10)
+        assert _read(crowd[-1], 8) == b"AZ=120\r\n"
+        assert server.client_count == len(crowd)
+    finally:
+        for sock in crowd:
+            sock.close()

@@ -29,6 +29,11 @@ Rules:
    is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked (the
    rotator's ``last_halt_s``) overtakes it: the call is refused, never turned to after the
    stop (docs/architecture.md rule 11).
+5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
+   READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
+   session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more):
+   a node sending faster is not read until the budget allows (the thread sleeps in the
+   kernel, the node's bytes wait in TCP's buffers), counted in ``paused``.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from bridge.dxcluster.spots import Lines, parse_spot
 from bridge.errors import Refused
 from bridge.model import Origin, Source
 from bridge.mqtt.ports import RotatorPort
+from bridge.ratelimit import Budget
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +64,9 @@ LOG_EVERY_S = 60.0
 CALLS_EVERY_S = 60.0
 PUBLISH_EVERY_S = 1.0
 AIM_QUEUE = 16
+READ_BYTES = 4096  # rule 5
+RATE_BYTES_S = 32768.0  # rule 5: some 400 spot lines a second, far more than a busy node's
+LINE_COST = 64  # rule 5: each line costs as many bytes more (its parse, its place)
 _PROMPTS = (b"login:", b"your call", b"callsign:")
 
 
@@ -72,6 +81,7 @@ class Counts:
     failures: int = 0
     faults: int = 0  # a bug behind a line, a publish that raised: logged, the session goes on
     quiet_reads: int = 0  # reads that timed out (TICK_S without a byte): a quiet node
+    paused: int = 0  # rule 5: times the node sent faster than its budget
 
 
 @dataclass(frozen=True)
@@ -168,14 +178,21 @@ class DxCluster:
                 return
             self._sock = sock
         lines = Lines()
+        budget = Budget(RATE_BYTES_S, self.clock())
         logged_in, spots = False, self.counts.spots
         deadline = self.clock() + LOGIN_WAIT_S
         try:
             _keepalive(sock)
             sock.settimeout(TICK_S)
             while not self._stop.is_set():
+                pause_s = budget.wait_s(self.clock())
+                if pause_s > 0:  # rule 5: unread, in the kernel, until the budget allows
+                    self.counts.paused += 1
+                    self._stop.wait(min(pause_s, TICK_S))
+                    self._tick()
+                    continue
                 try:
-                    data = sock.recv(4096)
+                    data = sock.recv(READ_BYTES)
                 except TimeoutError:
                     self.counts.quiet_reads += 1
                     if not logged_in and self.counts.spots == spots and self.clock() > deadline:
@@ -188,6 +205,7 @@ class DxCluster:
                     raise ConnectionError("the node closed the connection")
                 before = lines.long_lines
                 complete = lines.feed(data)
+                budget.spend(len(data) + LINE_COST * len(complete), self.clock())
                 self.counts.long_lines += lines.long_lines - before
                 if not logged_in and any(
                     p in line.lower() for line in [*complete, lines.pending] for p in _PROMPTS

@@ -17,6 +17,13 @@ Rules:
    and frequency are ASCII whatever the decoding.
 4. A spot's call and spotter are upper case letters, digits and ``/`` (3 to 20 characters);
    its frequency 1 kHz to 300 GHz; its time ``HHMM`` with HH < 24 and MM < 60.
+5. Parsing a line takes time linear in its length, whatever its bytes (a node, or whoever
+   poses as one, chooses them; the parser runs beside the stop, docs/architecture.md rule 12):
+   the head (spotter, frequency, call) is one anchored match whose parts cannot overlap (each
+   class stops where the next one's first character starts), the tail (comment, time, an
+   optional locator) is read from the end with ``rfind``, and a line longer than
+   MAX_LINE_BYTES is no spot. No pattern here has two quantifiers that can take the same
+   characters (a regex that does backtracks in cubic time on a line of spaces).
 """
 
 from __future__ import annotations
@@ -25,14 +32,14 @@ import re
 from dataclasses import dataclass
 
 MAX_LINE_BYTES = 512  # rule 2: a spot line is under 100 characters
-_SPOT = re.compile(
-    r"DX de (?P<spotter>[A-Z0-9/#-]{3,24}):?\s+(?P<freq>\d{1,9}(?:\.\d{1,3})?)\s+"
-    r"(?P<call>[A-Z0-9/]{3,20})\s+(?P<comment>.*?)\s*(?P<time>\d{4})Z(?:\s+\S+)?\s*",
+# rule 5: spotter, colon, spaces, frequency, spaces, call, and a space (or the end): no two
+# neighbouring parts share a character, so the match never backtracks
+_HEAD = re.compile(
+    r"DX de (?P<spotter>[A-Z0-9/#-]{3,24}):? +(?P<freq>\d{1,9}(?:\.\d{1,3})?) +"
+    r"(?P<call>[A-Z0-9/]{3,20})(?= |$)",
     re.ASCII | re.IGNORECASE,
 )
-_CALL = re.compile(
-    r"[A-Z0-9/]*[0-9][A-Z0-9/]*[A-Z][A-Z0-9/]*|[A-Z0-9/]*[A-Z][A-Z0-9/]*[0-9][A-Z0-9/]*"
-)
+_DIGITS = frozenset("0123456789")
 
 
 @dataclass(frozen=True)
@@ -54,23 +61,56 @@ def parse_spot(line: bytes | str) -> Spot | None:
     else:
         text = line
     start = text.find("DX de ")  # after a prompt or junk too
-    if start < 0:
+    if start < 0 or len(text) > MAX_LINE_BYTES:  # rule 5
         return None
     text = text[start:].strip("\r\n\x07 ")
-    if not text.isprintable():
+    if not text.isprintable():  # so the only white space left is the space
         return None
-    m = _SPOT.fullmatch(text)
+    m = _HEAD.match(text)
     if m is None:
         return None
+    tail = _tail(text[m.end() :])
+    if tail is None:
+        return None
+    comment, hhmm = tail
     call = m["call"].upper()
     spotter = m["spotter"].upper()
-    hhmm = m["time"]
     freq_khz = float(m["freq"])
-    if not _CALL.fullmatch(call) or int(hhmm[:2]) > 23 or int(hhmm[2:]) > 59:
+    if not _is_call(call) or int(hhmm[:2]) > 23 or int(hhmm[2:]) > 59:
         return None
     if not 1.0 <= freq_khz <= 300e6:
         return None
-    return Spot(call, freq_khz, spotter, hhmm, m["comment"].strip())
+    return Spot(call, freq_khz, spotter, hhmm, comment)
+
+
+def _is_call(text: str) -> bool:
+    """A call has a digit and a letter (``ABCDEF`` is a word, ``1234`` a number)."""
+    return any(c in _DIGITS for c in text) and any(c.isalpha() for c in text)
+
+
+def _time_at_end(token: str) -> bool:
+    """``HHMMZ`` ends the token (``cq1829Z`` too: the comment may touch the time)."""
+    return len(token) >= 5 and token[-1] in "Zz" and all(c in _DIGITS for c in token[-5:-1])
+
+
+def _tail(rest: str) -> tuple[str, str] | None:
+    """Rule 5: what follows the call (empty, or starting with a space) as (comment, HHMM):
+    the time ends the last word, or the word before it (then the last is a locator); the
+    earlier of the two when both could be (``1829Z 1830Z``: the second is the locator)."""
+    rest = rest.rstrip(" ")
+    if not rest:
+        return None
+    cut = rest.rfind(" ")  # rest starts with a space: cut >= 0
+    last = rest[cut + 1 :]
+    before = rest[:cut].rstrip(" ")
+    word = before[before.rfind(" ") + 1 :]
+    if before and _time_at_end(word):
+        end = len(before)
+    elif _time_at_end(last):
+        end = len(rest)
+    else:
+        return None
+    return rest[: end - 5].strip(" "), rest[end - 5 : end - 1]
 
 
 class Lines:

@@ -43,9 +43,9 @@ Rules:
    rotator, more than asked but never less. A line that stops does nothing else. On the remote
    (remote/rotator.py) a stop that cannot be delivered (its broker away) is answered as a
    refusal is: ``?>``, ``ALrefused offline``.
-7. The sockets, threads, idle timeout and HTTP refusal are the shared line server's
+7. The sockets, threads, idle timeout, HTTP refusal and budgets are the shared line server's
    (tcplines.py), the pty, its link and its thread the pty server's (ptylines.py); this
-   package owns what the bytes mean.
+   package owns what the bytes mean, and cuts lines in time linear in the bytes.
 8. The pty server is imported only when a pty is asked for: it needs a POSIX system, and the
    remote, which imports this package, also runs where there is none (a TCP port only).
 """

@@ -20,6 +20,12 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
    socket that cannot be read any more (EBADF, ENOTSOCK) is reported once and dropped: the
    selector is made anew without it, so it can never wake the thread again.
+8. A flood cannot starve a stop (docs/architecture.md rule 12): beyond rule 3, the thread
+   reads at most RATE_DATAGRAMS_S datagrams a second from all its sockets together
+   (ratelimit.Budget: a second's worth at once, each datagram costing 1 + its size in KiB),
+   far above what loggers send; past it the thread sleeps on its stop pipe (the reports still
+   looked at) and the system drops what its buffers cannot hold. Said at warning level at
+   most once per FLOOD_LOG_S with the count since (``paused``).
 """
 
 from __future__ import annotations
@@ -45,11 +51,14 @@ from bridge.loggers.commands import (
 )
 from bridge.loggers.datagrams import MAX_DATAGRAM, Malformed, n1mm_report, parse_n1mm, parse_pst
 from bridge.pointing import angle_between
+from bridge.ratelimit import Budget
 
 log = logging.getLogger(__name__)
 
 FAULT_LOG_S = 10.0  # a fault behind a datagram or in the loop: logged at most this often
 PER_WAKEUP = 16  # datagrams read from one socket before the next ready one is served
+RATE_DATAGRAMS_S = 200.0  # rule 8
+FLOOD_LOG_S = 30.0  # rule 8
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
 REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
@@ -88,6 +97,9 @@ class LoggerEndpoints:
         self._wake_r, self._wake_w = -1, -1
         self._junk_log = Rarely(JUNK_LOG_S)
         self._fault_log = Rarely(FAULT_LOG_S)
+        self._flood_log = Rarely(FLOOD_LOG_S)
+        self._budget = Budget(RATE_DATAGRAMS_S, clock())
+        self.paused = 0  # rule 8
 
     # -- configuration --------------------------------------------------------------------
     def add_pst(self, rotator: Rotator, port: int, bind: str = "127.0.0.1") -> None:
@@ -215,6 +227,12 @@ class LoggerEndpoints:
         """One wake-up: every ready socket served PER_WAKEUP datagrams at most (rule 3), the
         reports looked at; False once stop() asks."""
         now = self._clock()
+        if (pause_s := self._budget.wait_s(now)) > 0:  # rule 8
+            self._flooded(now)
+            if select.select([self._wake_r], [], [], min(pause_s, REPORT_MOVING_S))[0]:
+                return False
+            self._report(self._clock())
+            return True
         due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
         if self._reporters:  # look at the rotors often enough to see a move begin or end
             due = min(due, now + REPORT_MOVING_S)
@@ -245,6 +263,7 @@ class LoggerEndpoints:
                     return
                 log.debug("logger UDP %s:%d: %s", *self._addresses[sock], exc)
                 continue
+            self._budget.spend(1 + len(data) / 1024, self._clock())  # rule 8
             try:
                 if isinstance(endpoint, PstEndpoint):
                     port = self._addresses[sock][1]
@@ -265,6 +284,18 @@ class LoggerEndpoints:
             _kind(self._sockets[sock]),
             exc,
         )
+
+    def _flooded(self, now: float) -> None:
+        """Rule 8."""
+        self.paused += 1
+        count = self._flood_log.due(now)
+        if count is not None:
+            log.warning(
+                "logger UDP: datagrams come faster than %g a second: read no faster, the "
+                "system drops the rest (%d time(s) since last said)",
+                RATE_DATAGRAMS_S,
+                count,
+            )
 
     def _fault(self, where: str, exc: Exception) -> None:
         """Rule 7: a bug behind a datagram or in the loop is logged (rarely) and survived."""

@@ -18,6 +18,11 @@ Rules:
 3. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
    logged at most once per JUNK_LOG_S with its traceback and the next datagram is served.
 4. The thread never waits on a rotator: ``Rotator.heard`` only puts into the mailbox.
+5. A flood cannot starve a stop (docs/architecture.md rule 12): the port is read at most
+   RATE_DATAGRAMS_S datagrams a second (ratelimit.Budget, a second's worth at once, each one
+   costing 1 + its size in KiB), far above WSJT-X's few a second; past it the thread sleeps
+   on its stop pipe and the system drops what its buffer cannot hold; said at most once per
+   JUNK_LOG_S (``counts.paused``). Each datagram's decoding is linear in its size.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import select
 import selectors
 import socket
 import struct
@@ -36,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bridge.engine.follow import Heard
+from bridge.ratelimit import Budget
 from bridge.wsjtx.messages import Malformed, Status, decode
 
 if TYPE_CHECKING:
@@ -52,6 +59,9 @@ def _loopback(address: str) -> bool:
     return address.startswith("127.")
 
 
+RATE_DATAGRAMS_S = 200.0  # rule 5
+
+
 @dataclass
 class Counts:
     """Read from any thread (tests, a status page); written by the listener's alone."""
@@ -61,6 +71,7 @@ class Counts:
     ignored: int = 0  # heartbeats and message types nobody here needs
     foreign: int = 0  # rule 1: from a source a loopback listener does not take
     faults: int = 0
+    paused: int = 0  # rule 5: times the port was read no faster
 
 
 @dataclass
@@ -93,6 +104,7 @@ class WsjtxListener:
         self._junk_log = _Rarely(JUNK_LOG_S)
         self._fault_log = _Rarely(JUNK_LOG_S)
         self._foreign_log = _Rarely(JUNK_LOG_S)
+        self._flood_log = _Rarely(JUNK_LOG_S)
 
     def add(self, rotator: Rotator) -> None:
         self.rotators.append(rotator)
@@ -154,7 +166,13 @@ class WsjtxListener:
         with selectors.DefaultSelector() as sel:
             sel.register(sock, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
+            budget = Budget(RATE_DATAGRAMS_S, self.clock())
             while True:
+                if (pause_s := budget.wait_s(self.clock())) > 0:  # rule 5
+                    self._flooded()
+                    if select.select([self._wake_r], [], [], pause_s)[0]:
+                        return
+                    continue
                 for key, _mask in sel.select():
                     if key.fileobj == self._wake_r:
                         return
@@ -163,6 +181,7 @@ class WsjtxListener:
                     except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
                         self._fault("reading the WSJT-X port", exc)
                         continue
+                    budget.spend(1 + len(datagram) / 1024, self.clock())
                     try:
                         self.datagram(datagram, source[0])
                     except Exception as exc:  # rule 3: a bug behind it, not the end
@@ -200,6 +219,18 @@ class WsjtxListener:
                 rotator.heard(heard)
             except Exception as exc:  # rule 3
                 self._fault(f"handing WSJT-X's status to {rotator.id}", exc)
+
+    def _flooded(self) -> None:
+        """Rule 5."""
+        self.counts.paused += 1
+        count = self._flood_log.due(self.clock())
+        if count is not None:
+            log.warning(
+                "WSJT-X port: datagrams come faster than %g a second: read no faster, the "
+                "system drops the rest (%d time(s) since last said)",
+                RATE_DATAGRAMS_S,
+                count,
+            )
 
     def _fault(self, what: str, exc: BaseException) -> None:
         self.counts.faults += 1

@@ -16,12 +16,18 @@ import pytest
 
 from bridge import geo
 from bridge.dxcluster.book import Book
-from bridge.dxcluster.client import LOGIN_WAIT_S, DxCluster
+from bridge.dxcluster.client import (
+    LOGIN_WAIT_S,
+    RATE_BYTES_S,
+    READ_BYTES,
+    DxCluster,
+)
 from bridge.dxcluster.cty import parse_dat
 from bridge.dxcluster.spots import Spot
 from bridge.model import Origin, Source
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import wait_until
+from tests.support.clock import FakeClock
 from tests.support.cluster import FakeCluster, Session
 from tests.support.waiting import slow
 
@@ -227,3 +233,40 @@ def test_a_stop_after_the_call_was_asked_overtakes_it(published: list[str]) -> N
     assert rot.calls == [
         ("refused", "JA1ABC: a stop came after it was asked: not turned", "target JA1ABC", who)
     ]
+
+
+def test_a_node_sending_faster_than_its_budget_is_read_no_faster(published: list[str]) -> None:
+    """Rule 5, in virtual time (the clock stands still): a node pouring spots out as fast as
+    TCP takes them is read up to the session's budget and then not at all (the thread sleeps,
+    the node's bytes wait in the kernel), however long it pours; when time passes, the
+    client reads on. A node that could keep the thread busy would hold the GIL beside a stop."""
+    lines = 4 * int(RATE_BYTES_S) // len(SPOT)
+    poured = threading.Event()
+
+    def pouring(s: Session) -> None:
+        s.send(b"login: ")
+        s.read_line()
+        s.send(SPOT * lines)  # four budgets' worth: returns once the kernel took the rest
+        poured.set()
+        cluster.done.wait(30)
+
+    cluster = FakeCluster([pouring])
+    clock = FakeClock()
+    dx = client(cluster.port, published)
+    dx.clock = clock
+    dx.start()
+    try:
+        wait_until(lambda: dx.counts.paused > 0, 20, "the client paused")
+        read = dx.counts.spots
+        # a second's budget, and one read's worth into debt (each line costs more than its bytes)
+        per_second = (RATE_BYTES_S + READ_BYTES) / len(SPOT)
+        assert 0 < read <= per_second < lines / 2
+        assert dx.counts.paused > 0 and dx.counts.spots == read  # still: nothing more read
+        clock.t += 1000.0  # a second's budget back (the bucket holds no more)
+        wait_until(lambda: dx.counts.spots > read, 20, "more read")
+        wait_until(lambda: dx.counts.paused > 1, 20, "paused again")
+        assert dx.counts.spots - read <= per_second
+    finally:
+        dx.stop()
+        cluster.close()
+    assert not cluster.errors, cluster.errors

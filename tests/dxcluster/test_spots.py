@@ -4,6 +4,10 @@ byte and surrounded by garbage (house rule 1)."""
 from __future__ import annotations
 
 import random
+import re
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from bridge.dxcluster.spots import MAX_LINE_BYTES, Lines, Spot, parse_spot
 
@@ -121,3 +125,84 @@ def test_a_spot_whose_comment_is_latin_1_is_kept() -> None:
     spot = parse_spot(line.encode("latin-1"))
     assert spot is not None
     assert (spot.call, spot.freq_khz, spot.comment) == ("JA1ABC", 14025.0, "señor grüß")
+
+
+# -- hostile lines (rule 5): whatever a node sends, parsing is linear in the line -------------
+
+_HOSTILE_HEADS = [
+    "DX de ",
+    "DX de K1ABC: ",
+    "DX de K1ABC: 14000 ",
+    "DX de K1ABC: 14000 DL1ABC ",
+]
+
+
+def _hostile(head: str, filler: str, length: int) -> str:
+    body = (filler * length)[: length - len(head) - 1]
+    return head + body + "x"
+
+
+def test_a_line_of_spaces_with_no_time_is_no_spot_at_the_longest_line() -> None:
+    """A line the node may send (under the longest line), made to make a backtracking pattern
+    try every split of its spaces between the comment and the time: cubic in the line, 0.2 s
+    for one such line, several seconds for a stream of them, all of it holding the GIL beside
+    a stop. Each shape below is parsed (and is no spot), a thousand of them in this test."""
+    for head in _HOSTILE_HEADS:
+        for filler in (" ", " 1", " 1234", "1 ", " Z", " 1829"):
+            line = _hostile(head, filler, MAX_LINE_BYTES - 1)
+            for _ in range(40):
+                assert parse_spot(line) is None, line
+                assert parse_spot(line.encode()) is None
+    spot = _hostile("DX de K1ABC: 14000 DL1ABC 1829Z", " ", MAX_LINE_BYTES - 1)  # x: a locator
+    assert parse_spot(spot) == Spot("DL1ABC", 14000.0, "K1ABC", "1829", "")
+
+
+def test_a_line_longer_than_the_longest_is_no_spot_whatever_it_holds() -> None:
+    """The parser takes str too (not only what Lines cut): a line past MAX_LINE_BYTES is no
+    spot, however it is made; a spot line is under 100 characters."""
+    spot = SPOTS[0][0].decode()
+    long_comment = spot.replace("cq up 2", "cq " + "a" * MAX_LINE_BYTES)
+    assert parse_spot(long_comment) is None
+    assert parse_spot(_hostile(_HOSTILE_HEADS[3], " ", 10 * (MAX_LINE_BYTES - 1))) is None
+    fits = spot.replace("cq up 2", "cq " + "a" * (MAX_LINE_BYTES - len(spot) + 4))
+    assert len(fits) == MAX_LINE_BYTES
+    assert parse_spot(fits) == Spot("JA1ABC", 14025.0, "EA5WU", "1829", fits[33:-5].strip())
+
+
+_ORACLE = re.compile(  # the pattern the parser had: right, but cubic on hostile lines
+    r"DX de (?P<spotter>[A-Z0-9/#-]{3,24}):?\s+(?P<freq>\d{1,9}(?:\.\d{1,3})?)\s+"
+    r"(?P<call>[A-Z0-9/]{3,20})\s+(?P<comment>.*?)\s*(?P<time>\d{4})Z(?:\s+\S+)?\s*",
+    re.ASCII | re.IGNORECASE,
+)
+
+
+def _oracle(text: str) -> Spot | None:
+    start = text.find("DX de ")
+    if start < 0:
+        return None
+    text = text[start:].strip("\r\n\x07 ")
+    m = _ORACLE.fullmatch(text) if text.isprintable() else None
+    if m is None:
+        return None
+    call, hhmm, freq_khz = m["call"].upper(), m["time"], float(m["freq"])
+    if not re.search("[0-9]", call) or not re.search("[A-Z]", call):
+        return None
+    if int(hhmm[:2]) > 23 or int(hhmm[2:]) > 59 or not 1.0 <= freq_khz <= 300e6:
+        return None
+    return Spot(call, freq_khz, m["spotter"].upper(), hhmm, m["comment"].strip())
+
+
+_PIECES = [" ", "  ", "1", "0", "9", "Z", "z", "A", "k", "/", ":", ".", "-", "#", "\t", "\x07"]
+_WORDS = ["1829Z", "2359z", "14025.0", "JA1ABC", "ea5wu", "FN20", "DX de "]
+
+
+@settings(max_examples=3000, deadline=None)
+@given(
+    head=st.sampled_from(["", "DX de ", "DX de EA5WU: ", "DX de EA5WU:  14025.0  "]),
+    body=st.lists(st.sampled_from(_PIECES + _WORDS), max_size=16),
+)
+def test_the_parser_reads_what_the_pattern_read(head: str, body: list[str]) -> None:
+    """On short lines (where the old pattern's backtracking costs nothing) the parser finds
+    the same spot as the pattern did, or no spot where it found none."""
+    line = head + "".join(body)
+    assert parse_spot(line) == _oracle(line), line

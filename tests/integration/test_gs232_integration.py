@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import socket
 import subprocess
+import threading
 import time
 from pathlib import Path
 
@@ -273,3 +274,46 @@ def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str
         ]
         done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
         assert done.returncode != 0 and "get_pos: error" in done.stdout, done
+
+
+def test_a_stop_reaches_the_controller_in_order_beside_clients_flooding_the_port(
+    rig: Rig,
+) -> None:
+    """Fifteen clients stream bytes with no line end into the GS-232 port (each dropped after
+    4 KB without a command; they connect again at once) while a well-behaved client turns the
+    rotor and stops it: the controller gets the target, then the stop, and the rotor stops
+    short of the target; the port answers the well-behaved client throughout."""
+    port = start(rig, start_az_deg=0)
+    emu = rig.emus["tower"]
+    done = threading.Event()
+
+    def flood() -> None:
+        while not done.is_set():
+            try:
+                with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+                    while not done.is_set():
+                        s.sendall(b"x" * 4096)
+            except OSError:
+                pass  # dropped: connect again
+
+    flooders = [threading.Thread(target=flood, daemon=True) for _ in range(15)]
+    for t in flooders:
+        t.start()
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as client:
+            client.sendall(b"M300\r")
+            emu.wait_for(lambda s: s.is_moving and s.az_deg > 40)
+            client.sendall(b"S\rVE\r")  # the sentinel's answer proves the stop was read
+            answer = b""
+            while len(answer) < 4 and (chunk := client.recv(4 - len(answer))):
+                answer += chunk
+            assert answer == b"?>\r\n"
+            stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+    finally:
+        done.set()
+        for t in flooders:
+            t.join(10)
+    assert stopped.az_deg < 200
+    frames = [f.data for f in emu.log()]
+    target = frames.index(next(f for f in frames if f.startswith(b"AP1300")))
+    assert b";" in frames[target + 1 :]  # the stop, after the target

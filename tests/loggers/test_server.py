@@ -18,7 +18,7 @@ import pytest
 
 from bridge.loggers import LoggerEndpoints
 from bridge.loggers.limiter import REPLY_BURST
-from bridge.loggers.server import PER_WAKEUP
+from bridge.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
 from bridge.model import RotatorStatus, Source, Stop, Target
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
@@ -341,3 +341,30 @@ def test_a_socket_that_went_bad_is_dropped_and_reported_once(
             ep.stop()
             os.close(keeper)
             os.close(devnull)
+
+
+def test_a_flood_is_read_no_faster_than_the_budget_and_said_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Rule 8, in virtual time (the clock stands still): a flood of PST targets is read up to
+    a second's budget and then not at all (each one it read is judged and put into a mailbox,
+    which wakes the serial-lines thread), said once; when time passes it is read on."""
+    clock = FakeClock()
+    rot = Recording("tower")
+    ep = LoggerEndpoints(clock=clock)
+    ep.add_pst(rot, port=0)  # type: ignore[arg-type]
+    ep.start()
+    try:
+        port = ep.address(ep.pst[0])[1]
+        with udp_socket() as s:
+            for i in range(int(RATE_DATAGRAMS_S) + 100):
+                s.sendto(pst(tag("AZIMUTH", i % 360)), ("127.0.0.1", port))
+        wait_until(lambda: ep.paused > 0, 10, "the loggers' thread paused")
+        read = len(rot.calls)
+        assert 0 < read <= RATE_DATAGRAMS_S + PER_WAKEUP  # a second's, one wake-up into debt
+        said = [r for r in caplog.records if "faster than" in r.getMessage()]
+        assert len(said) == 1 and said[0].levelno == logging.WARNING
+        clock.t += 10.0
+        wait_until(lambda: len(rot.calls) > read, 10, "read on")
+    finally:
+        ep.stop()

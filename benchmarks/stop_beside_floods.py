@@ -1,0 +1,176 @@
+"""A quick measure: a STOP's latency beside a TCP flood into the GS-232 port, beside a DX cluster
+node sending hostile lines, and with none (the control), on one bridge in one run.
+
+    .venv/bin/python -m benchmarks.stop_beside_floods            # 30 stops a phase
+    .venv/bin/python -m benchmarks.stop_beside_floods --stops 60
+
+Run from another checkout (``cd OTHER && /path/.venv/bin/python -m benchmarks.stop_beside_floods``)
+it measures that checkout's bridge: the bridge process takes the current directory's code first.
+
+The set-up: a private mosquitto; one bridge as its own process with one Rotor-EZ emulated in this
+process behind a line paced at 4800 baud (benchmarks/rig.py), its GS-232 port on, and a DX
+cluster client to a node that a process of its own plays (it prompts ``login:``, then sends
+lines). One sample is target_flood's: the rotor turned from its front panel, R/stop published
+(QoS 1), the latency to the stop frame ``;`` at the controller.
+
+Phases: no load; 16 TCP clients in a process of their own, each streaming bytes with no line
+end into the GS-232 port as fast as the port takes them (a client the bridge closes connects
+again at once); the node sending ``DX de`` lines of spaces with no time (511 bytes) as fast as
+the bridge reads them; the node sending ordinary spots as fast as the bridge reads them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from benchmarks.harness import PYTHON, BenchError, Mqtt, Scope, start_bridge, start_broker
+from benchmarks.line import FrameLog
+from benchmarks.procfs import cpu_seconds
+from benchmarks.report import percentile
+from benchmarks.rig import open_line
+from benchmarks.target_flood import BRIDGE, EMU, one_stop
+from bridge.mosquitto import free_port
+from tests.dxcluster.cty_sample import CTY_DAT
+
+HOSTILE = b"DX de K1ABC: 14000 DL1ABC " + b" " * 480 + b"x\r\n"
+SPOT = b"DX de EA5WU:     14025.0  JA1ABC       cq up 2                        1829Z\r\n"
+CLIENTS = 16
+
+
+# -- the loads (processes of their own) -----------------------------------------------------------
+def tcp_flood_main(port: int) -> int:
+    """CLIENTS threads, each streaming bytes with no line end, reconnecting when closed."""
+    junk = b"x" * 65536
+
+    def one() -> None:
+        while True:
+            try:
+                with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
+                    while True:
+                        s.sendall(junk)
+            except OSError:
+                time.sleep(0.001)
+
+    for _ in range(CLIENTS):
+        threading.Thread(target=one, daemon=True).start()
+    print("started", flush=True)
+    sys.stdin.readline()
+    return 0
+
+
+def node_main(port: int, mode_file: str) -> int:
+    """A cluster node: ``login:``, then lines as fast as the client reads them; which lines is
+    read from ``mode_file`` (quiet, hostile or spots) before each batch."""
+    srv = socket.create_server(("127.0.0.1", port))
+    print("started", flush=True)
+    while True:
+        conn, _ = srv.accept()
+        try:
+            conn.sendall(b"Welcome\r\nlogin: ")
+            conn.recv(100)
+            while True:
+                with open(mode_file) as f:
+                    mode = f.read().strip()
+                if mode == "hostile":
+                    conn.sendall(HOSTILE * 8)
+                elif mode == "spots":
+                    conn.sendall(SPOT * 64)
+                else:
+                    time.sleep(0.05)
+        except OSError:
+            conn.close()
+
+
+def _spawn(scope: Scope, args: list[str], log_name: str) -> subprocess.Popen[bytes]:
+    proc = scope.spawn(
+        [PYTHON, "-m", "benchmarks.stop_beside_floods", *args],
+        log_name=log_name,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
+    assert proc.stdout is not None
+    if proc.stdout.readline().strip() != b"started":
+        raise BenchError(f"{log_name}: did not start")
+    return proc
+
+
+# -- the measurement ------------------------------------------------------------------------------
+def measure(scope: Scope, n: int) -> dict[str, Any]:
+    broker_port = start_broker(scope)
+    gs232_port, node_port = free_port(), free_port()
+    mode = scope.workdir / "node-mode"
+    mode.write_text("quiet")
+    _spawn(scope, ["--node", str(node_port), str(mode)], "node.log")
+    frames = FrameLog()
+    emu, _relay, link = open_line(scope, "rotorez", frames, EMU, name="tty-m")
+    specs = [{"id": "m", "model": "rotorez", "port": str(link), "gs232_port": gs232_port, **BRIDGE}]
+    cty = scope.workdir / "cty.dat"
+    cty.write_text(CTY_DAT)
+    dx = {"enabled": True, "host": "127.0.0.1", "port": node_port, "login": "N0CALL"}
+    dx["cty_file"] = str(cty)
+    bridge = start_bridge(scope, broker_port, specs, sections={"dxcluster": dx})
+    mqtt = Mqtt(broker_port, ["rotor/#"], name="rec-floods")  # one rotator: R is the base
+    scope.callback(mqtt.close)
+    mqtt.wait_value("rotor/state", "idle", 60)
+    results: dict[str, Any] = {}
+
+    def phase(name: str) -> None:
+        c0, t0 = cpu_seconds(bridge.pid), time.monotonic()
+        lat = sorted(one_stop(emu, frames, mqtt, "rotor", bridge) for _ in range(n))
+        cpu = 100.0 * (cpu_seconds(bridge.pid) - c0) / (time.monotonic() - t0)
+        ms = [v * 1000 for v in lat]
+        results[name] = {
+            "p50_ms": percentile(ms, 50),
+            "p99_ms": percentile(ms, 99),
+            "max_ms": ms[-1],
+            "cpu_pct": cpu,
+        }
+        print(f"  {name}: {results[name]}", file=sys.stderr, flush=True)
+
+    phase("no load")
+    flood = _spawn(scope, ["--tcp-flood", str(gs232_port)], "tcp-flood.log")
+    time.sleep(2.0)  # the flood under way
+    phase(f"{CLIENTS} TCP clients flooding GS-232")
+    assert flood.stdin is not None
+    flood.stdin.close()
+    flood.wait(10)
+    for load in ("spots", "hostile"):  # hostile last: the old parser never caught up with it
+        mode.write_text(load)
+        time.sleep(2.0)
+        phase(f"DX node: {load} lines")
+    mode.write_text("quiet")
+    bridge.check()
+    return results
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.stop_beside_floods")
+    parser.add_argument("--stops", type=int, default=30)
+    parser.add_argument("--tcp-flood", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--node", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.tcp_flood is not None:
+        return tcp_flood_main(args.tcp_flood)
+    if args.node is not None:
+        return node_main(int(args.node[0]), args.node[1])
+    with Scope(Path(tempfile.mkdtemp(prefix="stop-beside-floods-"))) as scope:
+        results = measure(scope, args.stops)
+    print(f"{'load':40} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'CPU %':>6}")
+    for name, r in results.items():
+        print(
+            f"{name:40} {r['p50_ms']:8.1f} {r['p99_ms']:8.1f} {r['max_ms']:8.1f} "
+            f"{r['cpu_pct']:6.0f}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
