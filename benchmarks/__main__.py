@@ -41,6 +41,7 @@ from benchmarks import (
     remote,
     sky_stops,
     startup,
+    stop_under_load,
     target_flood,
 )
 from benchmarks.harness import ABORT, Scope
@@ -60,6 +61,7 @@ ITEMS = {
     "console": console.run,
     "remote": remote.run,
     "health": health.run,
+    "stop_under_load": stop_under_load.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 
