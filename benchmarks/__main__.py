@@ -1,7 +1,7 @@
 """`python -m benchmarks`: run the benchmarks, print one table per item, write results.json.
 
-    python -m benchmarks                      # everything (about 16 minutes on 2 cores)
-    python -m benchmarks --quick              # fewer samples, shorter windows (about 6 minutes)
+    python -m benchmarks                      # everything (about 25 minutes on 2 cores)
+    python -m benchmarks --quick              # fewer samples, shorter windows (about 10 minutes)
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first

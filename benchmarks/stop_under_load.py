@@ -4,15 +4,17 @@ within 10 ms whatever else runs" (p99), and the stop's tail against the engine o
     python -m benchmarks stop_under_load            # 60 stops per load, 300 pairs per engine
     python -m benchmarks stop_under_load --quick    # 20 stops per load, 60 pairs per engine
 
-The loaded bridge: a private mosquitto (its defaults) and one bridge as its own service process
-with everything a load needs switched on: MEASURED Rotor-EZ (m0..) emulated in this process
-behind lines paced at 4800 baud (turning at 45 deg/s, 0.5 s brake; the bridge is told the same
-and polls an idle one every 0.5 s), m0 with a rotctld, a GS-232 and an Easycomm TCP port, a
-PstRotator and an N1MM UDP port; the backlog's Rotor-EZ ``b`` (1 s brake, as on a Ham-IV) and
-``d`` (the backlog's end marker), in this process too; 8 MD-01 in the emulator host (t0..t7,
-for tracking and the console's commands); ``[station]`` and ``[tracking]`` with a TLE file,
-``[web]``, ``[wsjtx]`` and ``[dxcluster]`` pointing at a fake node this benchmark serves on
-loopback (its own process, started before the bridge and quiet until its load).
+The loaded bridge: a private mosquitto (no limit on the messages it queues for a client, so
+that the whole backlog reaches the bridge: its default 1000 would drop a large one) and one
+bridge as its own service process with everything a load needs switched on: MEASURED Rotor-EZ
+(m0..) emulated in this process behind lines paced at 4800 baud (turning at 45 deg/s, 0.5 s
+brake; the bridge is told the same and polls an idle one every 0.5 s), m0 with a rotctld, a
+GS-232 and an Easycomm TCP port, a PstRotator and an N1MM UDP port; the backlog's Rotor-EZ
+``b`` (1 s brake, as on a Ham-IV) and ``d`` (the backlog's end marker), in this process too;
+8 MD-01 in the emulator host (t0..t7, for tracking and the console's commands); ``[station]``
+and ``[tracking]`` with a TLE file, ``[web]``, ``[wsjtx]`` and ``[dxcluster]`` pointing at a
+fake node this benchmark serves on loopback (its own process, started before the bridge and
+quiet until its load).
 
 One stop: a measured rotor is turned far from its front panel (the emulator; no MQTT target,
 which could queue behind a load on the main connection); once the emulator turns and the
@@ -30,7 +32,10 @@ whose timestamps must not wait behind a load), each started about a second befor
   then on the same connection ``b``'s STOP (QoS 1) and a target to ``d`` (the round's end: the
   main connection has read the whole round when ``d`` gets it). Stops are taken while a round
   is being read, and each round is watched until TAIL_S after its end: every move frame ``b``
-  gets after its stop frame is a start after the STOP (reported; there must be none);
+  gets after its stop frame is a start after the STOP (reported; there must be none). Last, a
+  round alone (no measured stop beside it: each of those is a halt with a hold of its own),
+  with as many targets as keep the bridge reading HOLD_S after the STOP, at least 60,000 (a
+  timeout shorter than that which let the targets out would show here on a fast machine);
 - rotctld, GS-232, Easycomm: 16 TCP clients on m0's port each, 12 streaming bytes with no line
   end, 4 sending position queries as fast as the bridge reads them, reconnecting when closed;
 - PST, N1MM and WSJT-X: UDP datagrams at UDP_RATE a second in all, the loggers' junk
@@ -101,12 +106,14 @@ STOP_FRAME = b";"
 JITTER_S = 0.2  # after "moving": one moving poll's period
 LOAD_SETTLE_S = 1.0  # a load runs this long before its stops
 BACKLOG = 60_000
+HOLD_S = 15.0  # the round alone: the targets before its STOP keep arriving this long after it
+MAX_BACKLOG = 400_000
 TAIL_S = 10.0  # a round's rotor is watched this long after the round was read
 TCP_CLIENTS, TCP_QUERY_CLIENTS = 16, 4
 UDP_RATE = 20_000.0
 PAGES, POSTERS = 10, 8
 TRACKERS = 8
-TRACK_GAP_S = 1.2  # between two rounds of 8 starts (as benchmarks/sky_stops.py)
+TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
 OLD_ENGINE, NEW_ENGINE = f"engine-{OLD_COMMIT}", "this-engine"
@@ -145,7 +152,7 @@ def _paho(port: int, name: str) -> Any:
 
 
 def backlog_main(args: dict[str, Any]) -> None:
-    """Per ``round TARGET STOP MARKER PAYLOAD`` line: ``count`` targets (QoS 0) on TARGET, all
+    """Per ``round TARGET STOP MARKER PAYLOAD COUNT`` line: COUNT targets (QoS 0) on TARGET, all
     written, then STOP (QoS 1) on STOP and PAYLOAD (QoS 1) on MARKER, on this one connection;
     says ``sent T_FIRST T_STOP`` (time.monotonic)."""
     c = _paho(args["port"], "backlog")
@@ -157,10 +164,10 @@ def backlog_main(args: dict[str, Any]) -> None:
         words = line.split()
         if not words or words[0] != "round":
             continue
-        target, stop, marker, payload = words[1:5]
+        target, stop, marker, payload, count = words[1:6]
         t_first = time.monotonic()
         info = None
-        for i in range(args["count"]):
+        for i in range(int(count)):
             info = c.publish(target, payloads[i % len(payloads)], qos=0)
         if info is not None:
             info.wait_for_publish(300)  # every target written before the STOP is
@@ -542,8 +549,11 @@ class StopTaker:
 
     def _advance(self, r: Rotor, now: float) -> None:
         if r.step == "ready" and not r.retired:
-            if r.state_since(r.stopped_at) != "idle":
+            m = r.recorder.last(f"{r.topic}/state")
+            if m is None or m.text != "idle":
                 return
+            if m.t < r.stopped_at and now - r.stopped_at < 3.0:  # not yet said after our stop
+                return  # (a rotor that ran to its far end was said idle before we saw it)
             st = r.emu.state()
             if st.is_moving:
                 return
@@ -653,7 +663,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     from tests.support.console import web_section
     from tests.support.udp_logger import free_udp_port
 
-    broker_port = start_broker(scope)
+    broker_port = start_broker(scope, "max_queued_messages 0\n")  # the whole backlog delivered
     node = Loader(scope, "dxnode", {}, "dxnode")
     ports = {
         "rotctld": free_port(),
@@ -778,6 +788,35 @@ def _measure(
     return samples, cpu, la
 
 
+def queued_bytes(tcp_ports: list[int], udp_ports: list[int]) -> int:
+    """Bytes still queued in the kernel on a connection to or from these TCP ports, or for
+    these UDP ports (/proc/net): what a load sent that the bridge has not read yet."""
+    total = 0
+    for kind, ports in (("tcp", set(tcp_ports)), ("udp", set(udp_ports))):
+        if not ports:
+            continue
+        with open(f"/proc/net/{kind}") as f:
+            for line in f.readlines()[1:]:
+                fields = line.split()
+                local, remote = (int(a.rsplit(":", 1)[1], 16) for a in fields[1:3])
+                if local in ports or remote in ports:
+                    tx, rx = (int(v, 16) for v in fields[4].split(":"))
+                    total += tx + rx
+    return total
+
+
+def wait_read(tcp_ports: list[int], udp_ports: list[int], timeout_s: float = 120.0) -> float:
+    """Seconds until the bridge has read what a load left queued (the next load must not
+    meet this one's leftovers); inf if it has not after ``timeout_s``."""
+    t0 = time.monotonic()
+    while queued_bytes(tcp_ports, udp_ports) > 0:
+        check_abort()
+        if time.monotonic() - t0 > timeout_s:  # said in the row (the next load meets it)
+            return float("inf")
+        time.sleep(0.05)
+    return time.monotonic() - t0
+
+
 def simple_phase(
     lo: Loaded,
     name: str,
@@ -794,18 +833,31 @@ def simple_phase(
     return PhaseResult(name, samples, cpu, la, applied, counts)
 
 
-def loader_phase(lo: Loaded, name: str, n: int, kind: str, args: dict[str, Any]) -> PhaseResult:
+def loader_phase(
+    lo: Loaded,
+    name: str,
+    n: int,
+    kind: str,
+    args: dict[str, Any],
+    tcp: list[int] = [],  # noqa: B006 (read only)
+    udp: list[int] = [],  # noqa: B006
+) -> PhaseResult:
     def start() -> Loader:
         return Loader(lo.scope, kind, args, name=kind + "-" + str(args.get("proto", "")))
 
     def stop(load: Loader) -> tuple[str, dict[str, Any]]:
         counts = load.finish()
+        counts["read_after_s"] = round(wait_read(tcp, udp), 1)
         return describe(kind, counts), counts
 
     return simple_phase(lo, name, n, start, stop)
 
 
 def describe(kind: str, c: dict[str, Any]) -> str:
+    return _describe(kind, c) + f"; the rest read {c['read_after_s']:g} s after the load ended"
+
+
+def _describe(kind: str, c: dict[str, Any]) -> str:
     if kind == "tcp":
         return (
             f"{c['sent_bytes'] / 1e6:.1f} MB sent, {c['received_bytes'] / 1e6:.2f} MB answered, "
@@ -833,7 +885,11 @@ def dx_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
     def stop(_load: None) -> tuple[str, dict[str, Any]]:
         lo.node.send("quiet")
         counts: dict[str, Any] = json.loads(lo.node.expect("quiet", 10))
-        return f"{counts['lines']:,} lines ({counts['per_s']:,}/s), 5 in 101 hostile", counts
+        counts["read_after_s"] = round(wait_read([lo.ports["node"]], []), 1)
+        return (
+            f"{counts['lines']:,} lines sent ({counts['per_s']:,}/s), 5 in 101 hostile; "
+            f"the rest read {counts['read_after_s']:g} s after the node fell quiet"
+        ), counts
 
     return simple_phase(lo, name, n, start, stop)
 
@@ -864,7 +920,8 @@ def tracking_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
 @dataclass
 class Round:
     marker_az: int
-    t_sent: float = 0.0  # the loader asked
+    t_sent: float  # the loader asked
+    count: int  # targets before its STOP
     t_first: float = 0.0
     t_stop: float = 0.0  # its STOP published (every target written before it)
     t_read: float | None = None  # d got the marker: the main connection read the round
@@ -875,12 +932,27 @@ class Round:
     stops_beside: int = 0
 
 
+def alone_count(rounds: list[Round]) -> int:
+    """Targets for the round alone: as many as keep this bridge reading for HOLD_S after the
+    STOP, judging by the rounds before (publishing them goes on while the bridge reads), at
+    least BACKLOG and at most MAX_BACKLOG: a fault that lets targets out after a timeout
+    shorter than HOLD_S shows on a fast machine too."""
+    read = [(r.count, r.t_stop - r.t_first, r.t_read - r.t_first) for r in rounds if r.t_read]
+    if not read:
+        return BACKLOG
+    count = sum(c for c, _, _ in read)
+    per_target_s = (sum(rd for _, _, rd in read) - sum(p for _, p, _ in read)) / count
+    if per_target_s <= 0:
+        return MAX_BACKLOG
+    return int(min(MAX_BACKLOG, max(BACKLOG, HOLD_S / per_target_s)))
+
+
 def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
     """Rounds while the stops are taken, then one round alone: every measured stop is a halt
     of its own, with its own hold on the main connection, and must not stand in for the
     backlog's STOP being kept on its own."""
     lo.taker.settle()
-    loader = Loader(lo.scope, "backlog", {"port": lo.broker_port, "count": BACKLOG}, "backlog")
+    loader = Loader(lo.scope, "backlog", {"port": lo.broker_port}, "backlog")
     rounds: list[Round] = []
     samples: list[Sample] = []
     marks = {"b": 0, "d": 0}
@@ -896,13 +968,14 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
         r.moves_after = len(moves)
         r.starts_after = sum(1 for f in moves if f.outcome == "executed")
 
-    def begin(alone: bool) -> Round:
+    def begin(alone: bool, count: int = BACKLOG) -> Round:
         if rounds:
             close(rounds[-1])
         marks["b"], marks["d"] = lo.b.frames.mark(), lo.d_frames.mark()
-        r = Round(100 if len(rounds) % 2 == 0 else 260, t_sent=time.monotonic(), alone=alone)
+        r = Round(100 if len(rounds) % 2 == 0 else 260, time.monotonic(), count, alone=alone)
         rounds.append(r)
-        loader.send(f"round rotor/b/target rotor/b/stop rotor/d/target {r.marker_az}")
+        topics = "rotor/b/target rotor/b/stop rotor/d/target"
+        loader.send(f"round {topics} {r.marker_az} {count}")
         return r
 
     def read(r: Round) -> bool:
@@ -918,8 +991,12 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
         if hit is not None and r.t_stop:
             r.t_read = float(hit.time_s)
             return True
-        if time.monotonic() - r.t_sent > 600:
-            raise BenchError("backlog: the main connection did not read a round in 600 s")
+        if time.monotonic() - r.t_sent > 300:
+            drops = (lo.scope.workdir / "mosquitto.log").read_text(errors="replace")
+            raise BenchError(
+                f"backlog: a round's end marker did not reach its rotor in 300 s (mosquitto "
+                f"logged {drops.count('being dropped')} drop notice(s))"
+            )
         return False
 
     def take() -> list[Sample]:
@@ -937,7 +1014,7 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
 
     got, cpu, la = _measure(lo, name, n, take)
     lo.taker.settle()
-    alone = begin(alone=True)
+    alone = begin(alone=True, count=alone_count(rounds))
     while not read(alone):
         check_abort()
         time.sleep(0.01)
@@ -949,9 +1026,11 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
         "rounds": [
             {
                 "alone": r.alone,
+                "targets": r.count,
                 "stops_beside": r.stops_beside,
                 "publish_s": round(r.t_stop - r.t_first, 2),
                 "read_s": None if r.t_read is None else round(r.t_read - r.t_first, 2),
+                "held_s": None if r.t_read is None else round(r.t_read - r.t_stop, 2),
                 "stop_ms": None if r.stop_latency_s is None else round(r.stop_latency_s * 1000, 2),
                 "starts_after_stop": r.starts_after,
                 "move_frames_after_stop": r.moves_after,
@@ -1084,7 +1163,8 @@ def pairs(scope: Scope, n: int, rng: random.Random) -> dict[str, Any]:
             s = taker.step()
             if s is None:
                 continue
-            got[s.engine].append(s.latency_s * 1000)
+            if len(got[s.engine]) < n:  # (a stop already armed may come after the n-th)
+                got[s.engine].append(s.latency_s * 1000)
             if len(got[s.engine]) >= n:
                 for r in mixed:
                     r.retired = r.retired or r.engine == s.engine
@@ -1108,11 +1188,12 @@ def run(scope: Scope, quick: bool) -> ItemResult:
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
         for proto, label in (("rotctld", "rotctld"), ("gs232", "GS-232"), ("easycomm", "Easycomm")):
             args = {**tcp, "port": lo.ports[proto], "proto": proto}
-            phases.append(loader_phase(lo, f"{label}: 16 TCP clients", n, "tcp", args))
+            label = f"{label}: 16 TCP clients"
+            phases.append(loader_phase(lo, label, n, "tcp", args, tcp=[lo.ports[proto]]))
         udp = {"pst": lo.ports["pst"], "n1mm": lo.ports["n1mm"], "wsjtx": lo.ports["wsjtx"]}
-        phases.append(
-            loader_phase(lo, "PST + N1MM + WSJT-X UDP floods", n, "udp", {**udp, "rate": UDP_RATE})
-        )
+        label = "PST + N1MM + WSJT-X UDP floods"
+        args = {**udp, "rate": UDP_RATE}
+        phases.append(loader_phase(lo, label, n, "udp", args, udp=list(udp.values())))
         phases.append(dx_phase(lo, "DX cluster: hostile lines, full-speed spots", n))
         console = {
             "port": lo.ports["web"],
@@ -1120,7 +1201,8 @@ def run(scope: Scope, quick: bool) -> ItemResult:
             "posters": POSTERS,
             "rotators": [f"t{i}" for i in range(TRACKERS)],
         }
-        phases.append(loader_phase(lo, "console: 10 pages + POST flood", n, "console", console))
+        label = "console: 10 pages + POST flood"
+        phases.append(loader_phase(lo, label, n, "console", console, tcp=[lo.ports["web"]]))
         phases.append(tracking_phase(lo, TRACKING_LOAD, n))
         missed = lo.taker.missed
         lo.bridge.check()
@@ -1173,13 +1255,15 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> 
         return
     rounds = backlog.counts["rounds"]
     bt = Table(
-        f"The backlog's own STOP: {BACKLOG:,} targets, then STOP (QoS 1) on one connection, to "
+        "The backlog's own STOP: targets, then STOP (QoS 1) on one connection, to "
         "rotor b (Rotor-EZ, 1 s brake)",
         [
             "round",
+            "targets",
             "stops beside",
             "publish s",
             "read s",
+            "STOP to read s",
             "STOP -> ';' ms",
             "starts after",
             "moves after",
@@ -1188,9 +1272,11 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> 
     for i, r in enumerate(rounds, 1):
         bt.add(
             f"{i}, alone" if r["alone"] else i,
+            f"{r['targets']:,}",
             r["stops_beside"],
             r["publish_s"],
             r["read_s"],
+            r["held_s"],
             "no ';' (b was still)" if r["stop_ms"] is None else r["stop_ms"],
             r["starts_after_stop"],
             r["move_frames_after_stop"],
@@ -1200,12 +1286,18 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> 
         f"connection had read everything); b watched until {TAIL_S:g} s after that; "
         f"mosquitto's 'dropped' notices: {backlog.counts['broker_drop_notices']}"
     )
+    bt.notes.append(
+        "STOP to read s: how long the targets before the STOP were still arriving after it; a "
+        "fault that lets them out after a timeout shows only when this is longer than it: the "
+        f"round alone has as many targets as keep this bridge reading about {HOLD_S:g} s after "
+        f"its STOP (at least {BACKLOG:,})"
+    )
     result.tables.append(bt)
     starts = sum(r["starts_after_stop"] for r in rounds)
     moves = sum(r["move_frames_after_stop"] for r in rounds)
     result.verdicts.append(
         Verdict(
-            f"after a STOP that follows {BACKLOG:,} targets the rotor never starts again",
+            f"after a STOP that follows {BACKLOG:,} targets (or more) the rotor never starts again",
             f"{starts} start(s), {moves} move frame(s) after the stop frame, "
             f"{len(rounds)} round(s)",
             starts == 0 and moves == 0,
