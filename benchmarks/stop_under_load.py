@@ -1,5 +1,5 @@
-"""Stops under every load at once named by the stop's promise: "a STOP reaches the controller
-within 10 ms whatever else runs" (p99), and the stop's tail against the engine of 2026-11-26.
+"""Stops beside each load the stop's promise names: "a STOP reaches the controller within 10 ms
+whatever else runs" (p99), and the stop's tail against the engine of 2026-11-26.
 
     python -m benchmarks stop_under_load            # 60 stops per load, 300 pairs per engine
     python -m benchmarks stop_under_load --quick    # 20 stops per load, 60 pairs per engine
@@ -26,7 +26,9 @@ CLOCK_MONOTONIC as every process here), so it includes the byte's own 2.1 ms on 
 any exchange in flight. The rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
-whose timestamps must not wait behind a load), each started about a second before its stops:
+whose timestamps must not wait behind a load), each started about a second before its stops;
+what a load left queued in the kernel (/proc/net) is read by the bridge before the next one
+starts, and how long that took is said in its row:
 - no load: the control, first, in the same run;
 - a 60,000-target backlog: rounds of 60,000 valid targets (QoS 0) to ``b`` on one connection,
   then on the same connection ``b``'s STOP (QoS 1) and a target to ``d`` (the round's end: the
