@@ -1,7 +1,7 @@
 """`python -m benchmarks`: run the benchmarks, print one table per item, write results.json.
 
-    python -m benchmarks                      # everything (about 16 minutes on 2 cores)
-    python -m benchmarks --quick              # fewer samples, shorter windows (about 6 minutes)
+    python -m benchmarks                      # everything (about 25 minutes on 2 cores)
+    python -m benchmarks --quick              # fewer samples, shorter windows (about 10 minutes)
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first
@@ -41,6 +41,7 @@ from benchmarks import (
     remote,
     sky_stops,
     startup,
+    stop_under_load,
     target_flood,
 )
 from benchmarks.harness import ABORT, Scope
@@ -60,6 +61,7 @@ ITEMS = {
     "console": console.run,
     "remote": remote.run,
     "health": health.run,
+    "stop_under_load": stop_under_load.run,
 }
 DEFAULT_JSON = Path(__file__).resolve().parent / "results.json"
 

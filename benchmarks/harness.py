@@ -105,7 +105,9 @@ class Scope(contextlib.ExitStack):
         stdin: int | None = subprocess.DEVNULL,
         stdout: int | None = None,
         cwd: Path = REPO,
+        env: dict[str, str] | None = None,
     ) -> subprocess.Popen[bytes]:
+        """``env``: the child's whole environment (default: this checkout's, child_env)."""
         log = open(self.workdir / log_name, "ab")  # noqa: SIM115 (closed by the stack)
         self.callback(log.close)
         proc = subprocess.Popen(
@@ -114,7 +116,7 @@ class Scope(contextlib.ExitStack):
             stdout=log if stdout is None else stdout,
             stderr=log,
             cwd=cwd,
-            env=child_env(),
+            env=child_env() if env is None else env,
             preexec_fn=_die_with_parent,
         )
         self.callback(stop_process, proc)

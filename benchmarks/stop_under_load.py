@@ -1,0 +1,1340 @@
+"""Stops beside each load the stop's promise names: "a STOP reaches the controller within 10 ms
+whatever else runs" (p99), and the stop's tail against the engine of 2026-11-26.
+
+    python -m benchmarks stop_under_load            # 60 stops per load, 300 pairs per engine
+    python -m benchmarks stop_under_load --quick    # 20 stops per load, 60 pairs per engine
+
+The loaded bridge: a private mosquitto (no limit on the messages it queues for a client, so
+that the whole backlog reaches the bridge: its default 1000 would drop a large one) and one
+bridge as its own service process with everything a load needs switched on: MEASURED Rotor-EZ
+(m0..) emulated in this process behind lines paced at 4800 baud (turning at 45 deg/s, 0.5 s
+brake; the bridge is told the same and polls an idle one every 0.5 s), m0 with a rotctld, a
+GS-232 and an Easycomm TCP port, a PstRotator and an N1MM UDP port; the backlog's Rotor-EZ
+``b`` (1 s brake, as on a Ham-IV) and ``d`` (the backlog's end marker), in this process too;
+8 MD-01 in the emulator host (t0..t7, for tracking and the console's commands); ``[station]``
+and ``[tracking]`` with a TLE file, ``[web]``, ``[wsjtx]`` and ``[dxcluster]`` pointing at a
+fake node this benchmark serves on loopback (its own process, started before the bridge and
+quiet until its load).
+
+One stop: a measured rotor is turned far from its front panel (the emulator; no MQTT target,
+which could queue behind a load on the main connection); once the emulator turns and the
+bridge says ``moving``, 0-200 ms later (a moving poll's period: a stop lands anywhere in the
+poll cycle, not just after a reply), ``R/stop`` ``STOP`` (QoS 1, not retained) from a client
+of its own (it never queues behind a loader's messages). The latency is from that publish to
+the complete stop frame ``;`` at the controller (the emulator's log, on our clock: the same
+CLOCK_MONOTONIC as every process here), so it includes the byte's own 2.1 ms on the line and
+any exchange in flight. The rotors take turns; one stop is in flight at a time.
+
+The loads, one after the other, each in a process of its own (our process hosts the emulators,
+whose timestamps must not wait behind a load), each started about a second before its stops;
+what a load left queued in the kernel (/proc/net) is read by the bridge before the next one
+starts, and how long that took is said in its row:
+- no load: the control, first, in the same run;
+- a 60,000-target backlog: rounds of 60,000 valid targets (QoS 0) to ``b`` on one connection,
+  then on the same connection ``b``'s STOP (QoS 1) and a target to ``d`` (the round's end: the
+  main connection has read the whole round when ``d`` gets it). Stops are taken while a round
+  is being read, and each round is watched until TAIL_S after its end: every move frame ``b``
+  gets after its stop frame is a start after the STOP (reported; there must be none). Last, a
+  round alone (no measured stop beside it: each of those is a halt with a hold of its own),
+  with as many targets as keep the bridge reading HOLD_S after the STOP, at least 60,000 (a
+  timeout shorter than that which let the targets out would show here on a fast machine);
+- rotctld, GS-232, Easycomm: 16 TCP clients on m0's port each, 12 streaming bytes with no line
+  end, 4 sending position queries as fast as the bridge reads them, reconnecting when closed;
+- PST, N1MM and WSJT-X: UDP datagrams at UDP_RATE a second in all, the loggers' junk
+  (benchmarks/logger_flood.py) to m0's PST and N1MM ports, WSJT-X Status and Heartbeat from ever
+  new instance names and junk to the WSJT-X port;
+- a DX cluster node sending, as fast as the bridge reads, blocks of spots with hostile lines in
+  them (a ``DX de`` line of spaces with no time, over-long lines, telnet bytes, junk);
+- the console: 10 pages (the page's requests, then its WebSocket feed read to the end, again
+  when it closes) and 8 clients posting commands as fast as they are answered (targets to
+  the MD-01s, bad JSON, unknown keys, no token);
+- 8 satellite trackings starting: before each stop (0-50 ms before it; these stops come
+  TRACK_GAP_S or more apart, one event at a time) the 8 MD-01s get ``R/track`` with the
+  elements of a satellite new to the bridge.
+
+Also, on a bridge and broker of their own, the stop's tail against the engine of 2026-11-26
+(commit OLD_COMMIT, its ``bridge/`` taken out of git into the work directory and run with its
+own import path): PAIR_ROTORS Rotor-EZ per engine, each pair an ``R/target`` far away and,
+once the rotor turns, ``R/stop`` as above; the two engines' rotors take turns, so both meet the
+same machine. Each engine's worst stop over the pairs is compared.
+
+The machine is shared (2 cores): every row carries the load average over its stops, and the
+bridge's CPU over them.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import os
+import random
+import select
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from benchmarks.harness import (
+    ABORT,
+    PYTHON,
+    REPO,
+    BenchError,
+    Mqtt,
+    Scope,
+    check_abort,
+    start_bridge,
+    start_broker,
+)
+from benchmarks.line import FrameLog
+from benchmarks.report import ItemResult, Table, Verdict, percentile
+from benchmarks.rig import EmuHost, open_line
+from bridge.mosquitto import free_port
+from tests.support import BridgeProcess, bridge_env
+from tests.support.process import bridge_config
+
+GOAL_MS = 10.0
+MEASURED = 6  # measured Rotor-EZ taking turns (a stop every ~0.3 s; one rotor's cycle is ~2 s)
+EMU = {"speed_deg_s": 45.0, "brake_delay_s": 0.5, "jitter_deg": 0, "start_az_deg": 10}
+BRIDGE = {"brake_delay_s": 0.5, "settle_s": 0.5, "idle_poll_interval_s": 0.5}
+EMU_B = {**EMU, "brake_delay_s": 1.0}
+BRIDGE_B = {**BRIDGE, "brake_delay_s": 1.0}
+STOP_FRAME = b";"
+JITTER_S = 0.2  # after "moving": one moving poll's period
+LOAD_SETTLE_S = 1.0  # a load runs this long before its stops
+BACKLOG = 60_000
+HOLD_S = 15.0  # the round alone: the targets before its STOP keep arriving this long after it
+MAX_BACKLOG = 400_000
+TAIL_S = 10.0  # a round's rotor is watched this long after the round was read
+TCP_CLIENTS, TCP_QUERY_CLIENTS = 16, 4
+UDP_RATE = 20_000.0
+PAGES, POSTERS = 10, 8
+TRACKERS = 8
+TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
+STATION = (52.52, 13.29)
+OLD_COMMIT = "9104bbc"
+OLD_ENGINE, NEW_ENGINE = f"engine-{OLD_COMMIT}", "this-engine"
+PAIR_ROTORS = 5  # per engine
+CONTROL = "no load (control)"
+BACKLOG_LOAD = "60,000-target backlog"
+TRACKING_LOAD = "8 satellite trackings starting"
+
+
+# == the loads' processes ========================================================================
+# `python -m benchmarks.stop_under_load --load KIND JSON`: prints "started ..." once the load
+# runs, answers commands on stdin, and at the end of its input prints "done <JSON counts>".
+
+
+def _say(text: str) -> None:
+    print(text, flush=True)
+
+
+def _stdin_closed(timeout_s: float) -> bool:
+    """Whether our input ended (waiting up to ``timeout_s`` for it to say something)."""
+    ready, _, _ = select.select([sys.stdin], [], [], max(timeout_s, 0.0))
+    return bool(ready) and not sys.stdin.readline()
+
+
+def _paho(port: int, name: str) -> Any:
+    import paho.mqtt.client as paho
+    from paho.mqtt.enums import CallbackAPIVersion
+
+    c = paho.Client(CallbackAPIVersion.VERSION2, client_id=f"{name}-{os.getpid()}")
+    c.max_queued_messages_set(0)
+    nodelay = (socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    c.on_socket_open = lambda _c, _u, s: s.setsockopt(*nodelay)  # type: ignore[attr-defined]
+    c.connect("127.0.0.1", port, keepalive=60)
+    c.loop_start()
+    return c
+
+
+def backlog_main(args: dict[str, Any]) -> None:
+    """Per ``round TARGET STOP MARKER PAYLOAD COUNT`` line: COUNT targets (QoS 0) on TARGET, all
+    written, then STOP (QoS 1) on STOP and PAYLOAD (QoS 1) on MARKER, on this one connection;
+    says ``sent T_FIRST T_STOP`` (time.monotonic)."""
+    c = _paho(args["port"], "backlog")
+    rng = random.Random(11)
+    payloads = [str(rng.randrange(0, 360)) for _ in range(997)]
+    _say("started")
+    rounds = 0
+    for line in sys.stdin:
+        words = line.split()
+        if not words or words[0] != "round":
+            continue
+        target, stop, marker, payload, count = words[1:6]
+        t_first = time.monotonic()
+        info = None
+        for i in range(int(count)):
+            info = c.publish(target, payloads[i % len(payloads)], qos=0)
+        if info is not None:
+            info.wait_for_publish(300)  # every target written before the STOP is
+        t_stop = time.monotonic()
+        c.publish(stop, "STOP", qos=1)
+        c.publish(marker, payload, qos=1)
+        rounds += 1
+        _say(f"sent {t_first:.6f} {t_stop:.6f}")
+    c.loop_stop()
+    _say("done " + json.dumps({"rounds": rounds}))
+
+
+def tcp_main(args: dict[str, Any]) -> None:
+    """``clients`` connections to a TCP front end, ``queries`` of them asking its position as
+    fast as it reads, the others streaming bytes with no line end; a closed one reconnects."""
+    query = {"rotctld": b"p\n", "gs232": b"C2\r", "easycomm": b"AZ EL\n"}[args["proto"]] * 64
+    junk = b"Z" * 4096
+    address = ("127.0.0.1", args["port"])
+    counts = {"sent_bytes": 0, "received_bytes": 0, "reconnects": 0, "refused": 0}
+    socks: dict[socket.socket, bytes] = {}
+
+    def connect(payload: bytes) -> None:
+        while True:
+            try:
+                s = socket.create_connection(address, timeout=5)
+            except OSError:
+                counts["refused"] += 1
+                if _stdin_closed(0.1):
+                    raise SystemExit(0) from None
+                continue
+            s.setblocking(False)
+            socks[s] = payload
+            return
+
+    for i in range(args["clients"]):
+        connect(query if i < args["queries"] else junk)
+    _say("started")
+    while True:
+        ready, writable, _ = select.select([sys.stdin, *socks], list(socks), [], 0.5)
+        if sys.stdin in ready and not sys.stdin.readline():
+            break
+        for s in writable:
+            if s not in socks:
+                continue
+            try:
+                counts["sent_bytes"] += s.send(socks[s])
+            except BlockingIOError:
+                pass
+            except OSError:
+                payload = socks.pop(s)
+                s.close()
+                counts["reconnects"] += 1
+                connect(payload)
+        for r in ready:
+            if r is sys.stdin or r not in socks:
+                continue
+            s = r
+            try:
+                data = s.recv(65536)
+            except BlockingIOError:
+                continue
+            except OSError:
+                data = b""
+            counts["received_bytes"] += len(data)
+            if not data:
+                payload = socks.pop(s)
+                s.close()
+                counts["reconnects"] += 1
+                connect(payload)
+    for s in socks:
+        s.close()
+    _say("done " + json.dumps(counts))
+
+
+def udp_main(args: dict[str, Any]) -> None:
+    """Datagrams at ``rate`` a second in all: the loggers' junk to the PST and N1MM ports,
+    WSJT-X Status/Heartbeat from new instance names and junk to the WSJT-X port."""
+    from benchmarks.logger_flood import junk
+    from tests.support.wsjtx import StatusFields, heartbeat, status
+
+    rng = random.Random(5)
+    grids = ["JO62", "FN31pr", "PM95", "QF56", "IO91", "JN18", "KP20"]
+    datagrams: list[tuple[int, bytes]] = []
+    for i in range(3000):
+        if i % 3 < 2:
+            kind, data = junk(rng)
+            datagrams.append((args["pst"] if kind == "pst" else args["n1mm"], data))
+        else:
+            instance = f"WSJT-X-{rng.randrange(10**9)}"
+            form = rng.random()
+            if form < 0.6:
+                f = StatusFields(instance=instance, dx_call=f"DL{i}AB", dx_grid=rng.choice(grids))
+                data = status(f)
+            elif form < 0.8:
+                data = heartbeat(instance)
+            else:
+                data = rng.randbytes(rng.randint(1, 300))
+            datagrams.append((args["wsjtx"], data))
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sent = errors = 0
+    _say("started")
+    t0 = time.monotonic()
+    while True:
+        for _ in range(100):
+            port, data = datagrams[sent % len(datagrams)]
+            try:
+                sock.sendto(data, ("127.0.0.1", port))
+            except OSError:
+                errors += 1
+            sent += 1
+        if _stdin_closed(t0 + sent / args["rate"] - time.monotonic()):
+            break
+    seconds = time.monotonic() - t0
+    _say(
+        "done " + json.dumps({"datagrams": sent, "per_s": round(sent / seconds), "errors": errors})
+    )
+
+
+async def _console(args: dict[str, Any]) -> dict[str, Any]:
+    import aiohttp
+
+    base = f"http://127.0.0.1:{args['port']}"
+    origin = {"Origin": base}
+    counts: dict[str, int] = {"page_loads": 0, "feed_messages": 0}
+    done = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    loop.add_reader(sys.stdin, lambda: None if sys.stdin.readline() else done.set())
+    rng = random.Random(3)
+
+    def count(key: str) -> None:
+        counts[key] = counts.get(key, 0) + 1
+
+    async def token(http: Any) -> str:
+        async with http.post(f"{base}/api/session", json={}, headers=origin) as r:
+            return str((await r.json())["token"])
+
+    async def page(http: Any) -> None:
+        while not done.is_set():
+            try:
+                for path in ("/", "/api/hello"):
+                    async with http.get(base + path) as r:
+                        await r.read()
+                tok = await token(http)
+                for path in ("/api/config", "/api/land"):
+                    async with http.get(base + path, headers={"X-Rotor-Token": tok}) as r:
+                        await r.read()
+                counts["page_loads"] += 1
+                async with http.ws_connect(f"{base}/api/live", headers=origin) as ws:
+                    await ws.send_str(json.dumps({"token": tok}))
+                    async for _ in ws:
+                        counts["feed_messages"] += 1
+                        if done.is_set():
+                            break
+            except (aiohttp.ClientError, OSError, KeyError, ValueError):
+                count("page_errors")
+                await asyncio.sleep(0.2)
+
+    async def poster(http: Any) -> None:
+        tok = ""
+        while not done.is_set():
+            try:
+                if not tok:
+                    tok = await token(http)
+                rid = rng.choice(args["rotators"])
+                headers = {**origin, "X-Rotor-Token": tok, "Content-Type": "application/json"}
+                form = rng.random()
+                if form < 0.5:
+                    body = json.dumps({"command": "target", "az": rng.randrange(0, 360)})
+                elif form < 0.7:
+                    body = '{"command": "target", "az": '  # not JSON
+                elif form < 0.85:
+                    body = json.dumps({"command": "target", "azimuth": 10})  # an unknown key
+                else:
+                    body = json.dumps({"command": "park"})
+                    headers.pop("X-Rotor-Token")  # no token
+                url = f"{base}/api/rotators/{rid}/command"
+                async with http.post(url, data=body, headers=headers) as r:
+                    await r.read()
+                    count(f"answered_{r.status}")
+                    if r.status == 401:
+                        tok = ""
+            except (aiohttp.ClientError, OSError, KeyError, ValueError):
+                count("post_errors")
+                await asyncio.sleep(0.05)
+
+    async with aiohttp.ClientSession(connector=aiohttp.TCPConnector(limit=0)) as http:
+        tasks = [asyncio.create_task(page(http)) for _ in range(args["pages"])]
+        tasks += [asyncio.create_task(poster(http)) for _ in range(args["posters"])]
+        _say("started")
+        await done.wait()
+        for t in tasks:
+            t.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+    return counts
+
+
+def console_main(args: dict[str, Any]) -> None:
+    counts = asyncio.run(_console(args))
+    _say("done " + json.dumps(counts))
+
+
+def _spot_block() -> bytes:
+    """Spots a node sends, with the hostile lines among them."""
+    rng = random.Random(9)
+    prefixes = ["JA1", "VK2", "W1", "K3", "G4", "F5", "JR6", "N2"]
+    lines: list[bytes] = []
+    for i in range(96):
+        call = f"{rng.choice(prefixes)}{chr(65 + i % 26)}{chr(65 + i // 26 % 26)}X"
+        khz = rng.choice([7012.5, 14025.0, 14074.0, 21074.0, 28074.0, 50313.0])
+        comment = rng.choice(["CQ", "FT8 -12 dB", "up 2", "599 TNX QSO", ""])
+        hhmm = f"{i % 24:02d}{i % 60:02d}"
+        lines.append(f"DX de EA5WU:   {khz:>8.1f}  {call:<12} {comment:<30} {hhmm}Z\r\n".encode())
+    hostile = [
+        b"DX de K1ABC: 1 JA1" + b" " * 490 + b"x\r\n",  # spaces and no time: a regex's worst
+        b"DX de W3LPL-#:  " + b"9" * 3000 + b"\r\n",  # over the line limit
+        b"\xff\xfb\x01\xff\xfd\x03 telnet options \xfe\x00\r\n",
+        b"DX de " + bytes(range(1, 32)) * 8 + b"\r\n",
+        b"DX de G4ABC: 14025.0 JA1ABC " + "\u00e9".encode("latin-1") * 200 + b" 1200Z\r\n",
+    ]
+    for i, bad in enumerate(hostile):
+        lines.insert(i * 19 + 3, bad)
+    return b"".join(lines)
+
+
+def dxnode_main(args: dict[str, Any]) -> None:
+    """A cluster node on loopback: asks every client its call, then is quiet until ``flood``
+    (blocks of spots with hostile lines, as fast as the client reads) and ``quiet`` (answered
+    with the counts of that flood)."""
+    server = socket.create_server(("127.0.0.1", 0))
+    block = _spot_block()
+    lines_per_block = block.count(b"\n")
+    flooding = threading.Event()
+    counts = {"connections": 0, "bytes": 0}
+    lock = threading.Lock()
+
+    def session(conn: socket.socket) -> None:
+        with contextlib.suppress(OSError), conn:
+            conn.sendall(b"Hello, this is the benchmark's node\r\nlogin: ")
+            conn.settimeout(60)
+            got = b""
+            while b"\n" not in got:
+                data = conn.recv(256)
+                if not data:
+                    return
+                got += data
+            conn.setblocking(False)
+            view = memoryview(b"")
+            while True:
+                if not flooding.wait(0.2):
+                    continue
+                if not view:
+                    view = memoryview(block)
+                _, writable, _ = select.select([], [conn], [], 0.2)
+                if writable:
+                    with contextlib.suppress(BlockingIOError):
+                        n = conn.send(view[:65536])
+                        view = view[n:]
+                        with lock:
+                            counts["bytes"] += n
+
+    def accept() -> None:
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            counts["connections"] += 1
+            threading.Thread(target=session, args=(conn,), daemon=True).start()
+
+    threading.Thread(target=accept, daemon=True).start()
+    _say(f"started {server.getsockname()[1]}")
+    t0 = time.monotonic()
+    for line in sys.stdin:
+        word = line.strip()
+        if word == "flood":
+            with lock:
+                counts["bytes"] = 0
+            t0 = time.monotonic()
+            flooding.set()
+            _say("ok")
+        elif word == "quiet":
+            flooding.clear()
+            seconds = time.monotonic() - t0
+            with lock:
+                lines = counts["bytes"] * lines_per_block // len(block)
+            _say(f"quiet {json.dumps({'lines': lines, 'per_s': round(lines / seconds)})}")
+    server.close()
+    _say("done " + json.dumps({"connections": counts["connections"]}))
+
+
+LOADERS: dict[str, Callable[[dict[str, Any]], None]] = {
+    "backlog": backlog_main,
+    "tcp": tcp_main,
+    "udp": udp_main,
+    "console": console_main,
+    "dxnode": dxnode_main,
+}
+
+
+class Loader:
+    """A load's process (above), started through the scope (harness rule 1)."""
+
+    def __init__(self, scope: Scope, kind: str, args: dict[str, Any], name: str) -> None:
+        self.name = name
+        self.log = scope.workdir / f"load-{name}.log"
+        argv = [PYTHON, "-m", "benchmarks.stop_under_load", "--load", kind, json.dumps(args)]
+        self.proc = scope.spawn(
+            argv, log_name=self.log.name, stdin=subprocess.PIPE, stdout=subprocess.PIPE
+        )
+        self.started = self.expect("started", 60)
+
+    def read(self, timeout_s: float) -> str | None:
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], max(timeout_s, 0.0))
+        if not ready:
+            return None
+        return self.proc.stdout.readline().decode().strip()
+
+    def expect(self, word: str, timeout_s: float) -> str:
+        text = self.read(timeout_s)
+        if text is None or not text.startswith(word):
+            tail = self.log.read_text(errors="replace")[-1500:] if self.log.exists() else ""
+            raise BenchError(f"load {self.name}: expected {word!r}, got {text!r}\n{tail}")
+        return text[len(word) :].strip()
+
+    def send(self, text: str) -> None:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(text.encode() + b"\n")
+        self.proc.stdin.flush()
+
+    def finish(self, timeout_s: float = 30.0) -> dict[str, Any]:
+        assert self.proc.stdin is not None
+        self.proc.stdin.close()
+        counts: dict[str, Any] = json.loads(self.expect("done", timeout_s))
+        return counts
+
+
+# == the stops ===================================================================================
+@dataclass
+class Rotor:
+    """A measured Rotor-EZ: its emulator, frames, topic, the client its STOP comes from."""
+
+    rid: str
+    engine: str
+    emu: Any
+    frames: FrameLog
+    topic: str
+    recorder: Mqtt
+    sender: Mqtt
+    by_target: bool = False  # turned by R/target (the pairs) or from the front panel
+    step: str = "ready"
+    t_turn: float = 0.0
+    fire_at: float = 0.0
+    stopped_at: float = 0.0
+    retired: bool = False
+
+    def state_since(self, t: float) -> str | None:
+        m = self.recorder.last(f"{self.topic}/state")
+        return m.text if m is not None and m.t >= t else None
+
+
+@dataclass
+class Sample:
+    rid: str
+    engine: str
+    latency_s: float
+    t: float
+
+
+class StopTaker:
+    """The rotors take turns (module docstring): one ``step`` turns whoever is ready, arms who
+    turns, and stops the first armed one whose moment has come."""
+
+    def __init__(self, rotors: list[Rotor], rng: random.Random, check: Callable[[], None]) -> None:
+        self.rotors = rotors
+        self.rng = rng
+        self.check = check  # raises if the bridge(s) died
+        self.missed = 0  # armed rotors that reached the far end before their stop
+
+    def _advance(self, r: Rotor, now: float) -> None:
+        if r.step == "ready" and not r.retired:
+            m = r.recorder.last(f"{r.topic}/state")
+            if m is None or m.text != "idle":
+                return
+            if m.t < r.stopped_at and now - r.stopped_at < 3.0:  # not yet said after our stop
+                return  # (a rotor that ran to its far end was said idle before we saw it)
+            st = r.emu.state()
+            if st.is_moving:
+                return
+            far = 350 if st.az_deg < 180 else 10
+            r.t_turn = now
+            if r.by_target:
+                r.sender.publish(f"{r.topic}/target", str(far))
+            else:
+                r.emu.manual_rotate(float(far))
+            r.step = "turning"
+        elif r.step == "turning":
+            if r.state_since(r.t_turn) == "moving" and r.emu.state().is_moving:
+                r.step = "armed"
+                r.fire_at = now + self.rng.uniform(0.0, JITTER_S)
+            elif now - r.t_turn > 1.0 and not r.emu.state().is_moving:
+                self.missed += 1  # at the far end before the bridge said it turned (a load)
+                r.step, r.stopped_at = "ready", now
+            elif now - r.t_turn > 60.0:
+                self.check()
+                raise BenchError(f"{r.engine} {r.rid}: not seen turning 60 s after it was turned")
+
+    def _stop(self, r: Rotor, before: Callable[[], None] | None) -> Sample | None:
+        if before is not None:
+            before()
+            time.sleep(self.rng.uniform(0.0, 0.05))
+        if not r.emu.state().is_moving:  # reached the far end first
+            self.missed += 1
+            r.step, r.stopped_at = "ready", time.monotonic()
+            return None
+        mark = r.frames.mark()
+        t0 = time.monotonic()
+        r.sender.publish(f"{r.topic}/stop", "STOP")
+        frame = r.frames.wait(lambda f: f.data == STOP_FRAME, mark, 20.0)
+        if frame is None:
+            self.check()
+            raise BenchError(f"{r.engine} {r.rid}: the stop never reached the controller")
+        r.step, r.stopped_at = "ready", float(frame.time_s)
+        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0)
+
+    def step(self, before: Callable[[], None] | None = None) -> Sample | None:
+        check_abort()
+        now = time.monotonic()
+        for r in self.rotors:
+            self._advance(r, now)
+        armed = [r for r in self.rotors if r.step == "armed" and r.fire_at <= now]
+        if not armed:
+            time.sleep(0.003)
+            return None
+        return self._stop(min(armed, key=lambda r: r.fire_at), before)
+
+    def take(
+        self, n: int, before: Callable[[], None] | None = None, timeout_s: float = 600.0
+    ) -> list[Sample]:
+        out: list[Sample] = []
+        deadline = time.monotonic() + timeout_s
+        while len(out) < n:
+            if time.monotonic() > deadline:
+                raise BenchError(f"only {len(out)} of {n} stops in {timeout_s:g} s")
+            sample = self.step(before)
+            if sample is not None:
+                out.append(sample)
+        return out
+
+    def settle(self, timeout_s: float = 30.0) -> None:
+        """Every rotor still and said idle (no stop of the last phase left half done)."""
+        deadline = time.monotonic() + timeout_s
+        for r in self.rotors:
+            if r.step == "armed":  # turned, never stopped: stop it (not measured)
+                r.sender.publish(f"{r.topic}/stop", "STOP")
+                r.step, r.stopped_at = "ready", time.monotonic()
+            elif r.step == "turning":
+                r.emu.manual_rotate(r.emu.state().az_deg)  # the panel lets go
+                r.step, r.stopped_at = "ready", time.monotonic()
+        while not all(
+            r.state_since(0) == "idle" and not r.emu.state().is_moving for r in self.rotors
+        ):
+            if time.monotonic() > deadline:
+                raise BenchError("the measured rotors did not come to rest between loads")
+            time.sleep(0.05)
+
+
+# == the loaded bridge ===========================================================================
+@dataclass
+class Loaded:
+    scope: Scope
+    broker_port: int
+    bridge: BridgeProcess
+    recorder: Mqtt
+    sender: Mqtt
+    loads_client: Mqtt
+    taker: StopTaker
+    b: Rotor
+    d_frames: FrameLog
+    ports: dict[str, int]
+    node: Loader
+    tle_names: list[str]
+
+
+def _tle(path: Path) -> list[str]:
+    from benchmarks.sky_stops import tle_file
+
+    return tle_file(path, time.time())
+
+
+def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
+    from tests.dxcluster.cty_sample import CTY_DAT
+    from tests.support.console import web_section
+    from tests.support.udp_logger import free_udp_port
+
+    broker_port = start_broker(scope, "max_queued_messages 0\n")  # the whole backlog delivered
+    node = Loader(scope, "dxnode", {}, "dxnode")
+    ports = {
+        "rotctld": free_port(),
+        "gs232": free_port(),
+        "easycomm": free_port(),
+        "pst": free_udp_port(),
+        "n1mm": free_udp_port(),
+        "wsjtx": free_udp_port(),
+        "web": free_port(),
+        "node": int(node.started),
+    }
+    lines: dict[str, tuple[Any, FrameLog]] = {}
+    settings: list[dict[str, Any]] = []
+    for i in range(MEASURED):
+        frames = FrameLog()
+        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-m{i}")
+        lines[f"m{i}"] = (emu, frames)
+        settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
+    settings[0].update(
+        rotctld_port=ports["rotctld"],
+        gs232_port=ports["gs232"],
+        easycomm_port=ports["easycomm"],
+        pst_udp_port=ports["pst"],
+        n1mm_rotor_name="Yagi",
+        n1mm_udp_port=ports["n1mm"],
+    )
+    b_frames, d_frames = FrameLog(), FrameLog()
+    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b")
+    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d")
+    settings.append({"id": "b", "model": "rotorez", "port": str(b_path), **BRIDGE_B})
+    settings.append({"id": "d", "model": "rotorez", "port": str(d_path), **BRIDGE})
+    host = EmuHost(scope, "md01", TRACKERS)
+    settings += [
+        {"id": f"t{i}", "model": "md01", "port": str(host.link(i))} for i in range(TRACKERS)
+    ]
+    cty = scope.workdir / "cty.dat"
+    cty.write_text(CTY_DAT)
+    tle_names = _tle(scope.workdir / "sats.tle")
+    sections = {
+        "station": {"latitude_deg": STATION[0], "longitude_deg": STATION[1]},
+        "tracking": {"tle_file": str(scope.workdir / "sats.tle")},
+        "web": web_section(ports["web"]),
+        "wsjtx": {"enabled": True, "port": ports["wsjtx"], "bind": "127.0.0.1"},
+        "dxcluster": {
+            "enabled": True,
+            "host": "127.0.0.1",
+            "port": ports["node"],
+            "login": "G4ABC",
+            "cty_file": str(cty),
+        },
+    }
+    bridge = start_bridge(scope, broker_port, settings, homeassistant=False, sections=sections)
+    recorder = Mqtt(broker_port, ["rotor/+/state", "rotor/+/availability"], name="sul-rec")
+    scope.callback(recorder.close)
+    sender = Mqtt(broker_port, [], name="sul-stop")
+    scope.callback(sender.close)
+    loads_client = Mqtt(broker_port, [], name="sul-loads")
+    scope.callback(loads_client.close)
+    try:
+        recorder.wait_all([f"rotor/{s['id']}/availability" for s in settings], "online", 90)
+        recorder.wait_all([f"rotor/m{i}/state" for i in range(MEASURED)], "idle", 60)
+    except BenchError:
+        bridge.check()
+        raise
+    rotors = [
+        Rotor(rid, "now", emu, frames, f"rotor/{rid}", recorder, sender)
+        for rid, (emu, frames) in lines.items()
+    ]
+    taker = StopTaker(rotors, rng, bridge.check)
+    b = Rotor("b", "now", b_emu, b_frames, "rotor/b", recorder, sender)
+    return Loaded(
+        scope,
+        broker_port,
+        bridge,
+        recorder,
+        sender,
+        loads_client,
+        taker,
+        b,
+        d_frames,
+        ports,
+        node,
+        tle_names,
+    )
+
+
+@dataclass
+class PhaseResult:
+    name: str
+    samples: list[Sample]
+    cpu_pct: float
+    loadavg: float
+    applied: str
+    counts: dict[str, Any] = field(default_factory=dict)
+
+
+def cpu_seconds(pid: int) -> float:
+    """The process's CPU time, its ended threads' included (a TCP client's thread ends with
+    its connection: the live threads' sum would go down)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _measure(
+    lo: Loaded, name: str, n: int, take: Callable[[], list[Sample]]
+) -> tuple[list[Sample], float, float]:
+    pid = lo.bridge.pid
+    c0, t0, la0 = cpu_seconds(pid), time.monotonic(), os.getloadavg()[0]
+    samples = take()
+    wall = time.monotonic() - t0
+    cpu = 100.0 * (cpu_seconds(pid) - c0) / wall
+    la = (la0 + os.getloadavg()[0]) / 2
+    ms = sorted(s.latency_s * 1000 for s in samples)
+    print(
+        f"  {name}: {len(ms)} stops, p50 {percentile(ms, 50):.1f} p99 {percentile(ms, 99):.1f} "
+        f"max {ms[-1]:.1f} ms; bridge CPU {cpu:.0f} %, load {la:.1f}; {wall:.0f} s",
+        file=sys.stderr,
+        flush=True,
+    )
+    lo.bridge.check()
+    return samples, cpu, la
+
+
+def queued_bytes(tcp_ports: list[int], udp_ports: list[int]) -> int:
+    """Bytes still queued in the kernel on a connection to or from these TCP ports, or for
+    these UDP ports (/proc/net): what a load sent that the bridge has not read yet."""
+    total = 0
+    for kind, ports in (("tcp", set(tcp_ports)), ("udp", set(udp_ports))):
+        if not ports:
+            continue
+        with open(f"/proc/net/{kind}") as f:
+            for line in f.readlines()[1:]:
+                fields = line.split()
+                local, remote = (int(a.rsplit(":", 1)[1], 16) for a in fields[1:3])
+                if local in ports or remote in ports:
+                    tx, rx = (int(v, 16) for v in fields[4].split(":"))
+                    total += tx + rx
+    return total
+
+
+def wait_read(tcp_ports: list[int], udp_ports: list[int], timeout_s: float = 120.0) -> float:
+    """Seconds until the bridge has read what a load left queued (the next load must not
+    meet this one's leftovers); inf if it has not after ``timeout_s``."""
+    t0 = time.monotonic()
+    while queued_bytes(tcp_ports, udp_ports) > 0:
+        check_abort()
+        if time.monotonic() - t0 > timeout_s:  # said in the row (the next load meets it)
+            return float("inf")
+        time.sleep(0.05)
+    return time.monotonic() - t0
+
+
+def simple_phase(
+    lo: Loaded,
+    name: str,
+    n: int,
+    start: Callable[[], Any] | None,
+    stop: Callable[[Any], tuple[str, dict[str, Any]]] | None,
+    before: Callable[[], None] | None = None,
+) -> PhaseResult:
+    lo.taker.settle()
+    load = start() if start is not None else None
+    ABORT.wait(LOAD_SETTLE_S if start is not None else 0.0)
+    samples, cpu, la = _measure(lo, name, n, lambda: lo.taker.take(n, before))
+    applied, counts = stop(load) if stop is not None else ("nothing", {})
+    return PhaseResult(name, samples, cpu, la, applied, counts)
+
+
+def loader_phase(
+    lo: Loaded,
+    name: str,
+    n: int,
+    kind: str,
+    args: dict[str, Any],
+    tcp: list[int] = [],  # noqa: B006 (read only)
+    udp: list[int] = [],  # noqa: B006
+) -> PhaseResult:
+    def start() -> Loader:
+        return Loader(lo.scope, kind, args, name=kind + "-" + str(args.get("proto", "")))
+
+    def stop(load: Loader) -> tuple[str, dict[str, Any]]:
+        counts = load.finish()
+        counts["read_after_s"] = round(wait_read(tcp, udp), 1)
+        return describe(kind, counts), counts
+
+    return simple_phase(lo, name, n, start, stop)
+
+
+def describe(kind: str, c: dict[str, Any]) -> str:
+    return _describe(kind, c) + f"; the rest read {c['read_after_s']:g} s after the load ended"
+
+
+def _describe(kind: str, c: dict[str, Any]) -> str:
+    if kind == "tcp":
+        return (
+            f"{c['sent_bytes'] / 1e6:.1f} MB sent, {c['received_bytes'] / 1e6:.2f} MB answered, "
+            f"{c['reconnects']} reconnects"
+        )
+    if kind == "udp":
+        return f"{c['datagrams']:,} datagrams ({c['per_s']:,}/s)"
+    if kind == "console":
+        posts = sum(v for k, v in c.items() if k.startswith("answered_"))
+        codes = ", ".join(
+            f"{k[9:]}: {v}" for k, v in sorted(c.items()) if k.startswith("answered_")
+        )
+        return (
+            f"{c['page_loads']} page loads, {c['feed_messages']:,} feed messages, "
+            f"{posts:,} POSTs answered ({codes})"
+        )
+    return json.dumps(c)
+
+
+def dx_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
+    def start() -> None:
+        lo.node.send("flood")
+        lo.node.expect("ok", 10)
+
+    def stop(_load: None) -> tuple[str, dict[str, Any]]:
+        lo.node.send("quiet")
+        counts: dict[str, Any] = json.loads(lo.node.expect("quiet", 10))
+        counts["read_after_s"] = round(wait_read([lo.ports["node"]], []), 1)
+        return (
+            f"{counts['lines']:,} lines sent ({counts['per_s']:,}/s), 5 in 101 hostile; "
+            f"the rest read {counts['read_after_s']:g} s after the node fell quiet"
+        ), counts
+
+    return simple_phase(lo, name, n, start, stop)
+
+
+def tracking_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
+    from benchmarks.sky_stops import round_tle
+
+    rounds = [0]
+    last = [0.0]
+
+    def before() -> None:
+        time.sleep(max(0.0, last[0] + TRACK_GAP_S - time.monotonic()))  # one event at a time
+        last[0] = time.monotonic()
+        payload = round_tle(rounds[0])
+        rounds[0] += 1
+        for i in range(TRACKERS):
+            lo.loads_client.publish(f"rotor/t{i}/track", payload)
+
+    def stop(_load: None) -> tuple[str, dict[str, Any]]:
+        for i in range(TRACKERS):
+            lo.loads_client.publish(f"rotor/t{i}/track", "off")
+        return f"{rounds[0]} rounds of {TRACKERS} R/track, new elements each", {"rounds": rounds[0]}
+
+    return simple_phase(lo, name, n, lambda: None, stop, before)
+
+
+# -- the backlog ----------------------------------------------------------------------------------
+@dataclass
+class Round:
+    marker_az: int
+    t_sent: float  # the loader asked
+    count: int  # targets before its STOP
+    t_first: float = 0.0
+    t_stop: float = 0.0  # its STOP published (every target written before it)
+    t_read: float | None = None  # d got the marker: the main connection read the round
+    stop_latency_s: float | None = None
+    starts_after: int = 0  # moves the controller executed after the stop frame
+    moves_after: int = 0  # move frames written after it (executed or not)
+    alone: bool = False  # no measured stop beside it
+    stops_beside: int = 0
+
+
+def alone_count(rounds: list[Round]) -> int:
+    """Targets for the round alone: as many as keep this bridge reading for HOLD_S after the
+    STOP, judging by the rounds before (publishing them goes on while the bridge reads), at
+    least BACKLOG and at most MAX_BACKLOG: a fault that lets targets out after a timeout
+    shorter than HOLD_S shows on a fast machine too."""
+    read = [(r.count, r.t_stop - r.t_first, r.t_read - r.t_first) for r in rounds if r.t_read]
+    if not read:
+        return BACKLOG
+    count = sum(c for c, _, _ in read)
+    per_target_s = (sum(rd for _, _, rd in read) - sum(p for _, p, _ in read)) / count
+    if per_target_s <= 0:
+        return MAX_BACKLOG
+    return int(min(MAX_BACKLOG, max(BACKLOG, HOLD_S / per_target_s)))
+
+
+def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
+    """Rounds while the stops are taken, then one round alone: every measured stop is a halt
+    of its own, with its own hold on the main connection, and must not stand in for the
+    backlog's STOP being kept on its own."""
+    lo.taker.settle()
+    loader = Loader(lo.scope, "backlog", {"port": lo.broker_port}, "backlog")
+    rounds: list[Round] = []
+    samples: list[Sample] = []
+    marks = {"b": 0, "d": 0}
+
+    def close(r: Round) -> None:
+        """Judge a round once TAIL_S has passed since it was read."""
+        ABORT.wait(max(0.0, (r.t_read or 0.0) + TAIL_S - time.monotonic()))
+        frames = lo.b.frames.since(marks["b"])
+        stop = next((f for f in frames if f.data == STOP_FRAME and f.time_s >= r.t_stop), None)
+        after = stop.time_s if stop is not None else r.t_stop
+        r.stop_latency_s = None if stop is None else stop.time_s - r.t_stop
+        moves = [f for f in frames if f.time_s > after and f.data[:3] in (b"AP1", b"AM1")]
+        r.moves_after = len(moves)
+        r.starts_after = sum(1 for f in moves if f.outcome == "executed")
+
+    def begin(alone: bool, count: int = BACKLOG) -> Round:
+        if rounds:
+            close(rounds[-1])
+        marks["b"], marks["d"] = lo.b.frames.mark(), lo.d_frames.mark()
+        r = Round(100 if len(rounds) % 2 == 0 else 260, time.monotonic(), count, alone=alone)
+        rounds.append(r)
+        topics = "rotor/b/target rotor/b/stop rotor/d/target"
+        loader.send(f"round {topics} {r.marker_az} {count}")
+        return r
+
+    def read(r: Round) -> bool:
+        """Whether the main connection has read the round (its marker reached d)."""
+        if not r.t_stop:
+            text = loader.read(0)
+            if text is not None:
+                if not text.startswith("sent"):
+                    raise BenchError(f"backlog loader: {text!r}")
+                r.t_first, r.t_stop = map(float, text.split()[1:3])
+        want = f"AP1{r.marker_az:03d}".encode()
+        hit = next((f for f in lo.d_frames.since(marks["d"]) if f.data.startswith(want)), None)
+        if hit is not None and r.t_stop:
+            r.t_read = float(hit.time_s)
+            return True
+        if time.monotonic() - r.t_sent > 300:
+            drops = (lo.scope.workdir / "mosquitto.log").read_text(errors="replace")
+            raise BenchError(
+                f"backlog: a round's end marker did not reach its rotor in 300 s (mosquitto "
+                f"logged {drops.count('being dropped')} drop notice(s))"
+            )
+        return False
+
+    def take() -> list[Sample]:
+        while len(samples) < n:
+            r = begin(alone=False)
+            while not read(r):
+                if len(samples) < n:
+                    s = lo.taker.step()
+                    r.stops_beside += s is not None
+                    if s is not None:
+                        samples.append(s)
+                else:
+                    time.sleep(0.01)
+        return samples
+
+    got, cpu, la = _measure(lo, name, n, take)
+    lo.taker.settle()
+    alone = begin(alone=True, count=alone_count(rounds))
+    while not read(alone):
+        check_abort()
+        time.sleep(0.01)
+    close(alone)
+    loader.finish()
+    lo.bridge.check()
+    drops = (lo.scope.workdir / "mosquitto.log").read_text(errors="replace").count("dropped")
+    counts = {
+        "rounds": [
+            {
+                "alone": r.alone,
+                "targets": r.count,
+                "stops_beside": r.stops_beside,
+                "publish_s": round(r.t_stop - r.t_first, 2),
+                "read_s": None if r.t_read is None else round(r.t_read - r.t_first, 2),
+                "held_s": None if r.t_read is None else round(r.t_read - r.t_stop, 2),
+                "stop_ms": None if r.stop_latency_s is None else round(r.stop_latency_s * 1000, 2),
+                "starts_after_stop": r.starts_after,
+                "move_frames_after_stop": r.moves_after,
+            }
+            for r in rounds
+        ],
+        "broker_drop_notices": drops,
+    }
+    beside = [r for r in rounds if not r.alone]
+    read_s = ", ".join(f"{r.t_read - r.t_first:.0f}" for r in beside if r.t_read is not None)
+    applied = f"{len(beside)} round(s) of {BACKLOG:,} targets + STOP, read in {read_s} s"
+    return PhaseResult(name, got, cpu, la, applied, counts)
+
+
+# == the engine of 2026-11-26 against this one ===================================================
+def old_engine(scope: Scope) -> tuple[Path | None, str]:
+    """The old ``bridge/`` out of git into the work directory, or why not."""
+    root = scope.workdir / f"engine-{OLD_COMMIT}"
+    root.mkdir(parents=True, exist_ok=True)
+    try:
+        archive = subprocess.run(
+            ["git", "-C", str(REPO), "archive", OLD_COMMIT, "bridge"],
+            capture_output=True,
+            timeout=60,
+            check=True,
+        )
+        subprocess.run(["tar", "-x", "-C", str(root)], input=archive.stdout, check=True)
+        where = subprocess.run(  # the old bridge is what `python -m bridge` runs there
+            [PYTHON, "-c", "import bridge; print(bridge.__file__)"],
+            capture_output=True,
+            text=True,
+            cwd=root,
+            env=old_env(root),
+            timeout=60,
+            check=True,
+        ).stdout.strip()
+        if not where.startswith(str(root)):
+            return None, f"the old engine's bridge/ is not the one imported there ({where})"
+    except FileNotFoundError as exc:
+        return None, f"{exc.filename} is not installed"
+    except subprocess.TimeoutExpired as exc:
+        return None, f"{' '.join(map(str, exc.cmd))} took over {exc.timeout:g} s"
+    except subprocess.CalledProcessError as exc:
+        said = exc.stderr.decode(errors="replace") if isinstance(exc.stderr, bytes) else exc.stderr
+        return None, f"{' '.join(map(str, exc.cmd))[:80]} failed: {(said or '').strip()[-300:]}"
+    return root, ""
+
+
+def old_env(root: Path) -> dict[str, str]:
+    env = bridge_env()
+    env["PYTHONPATH"] = str(root)  # the old bridge, first and alone
+    return env
+
+
+def start_engine(
+    scope: Scope, engine: str, old_root: Path | None, rng: random.Random
+) -> tuple[BridgeProcess, list[Rotor]]:
+    broker_port = start_broker(scope)
+    specs, lines = [], []
+    for i in range(PAIR_ROTORS):
+        frames = FrameLog()
+        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}")
+        lines.append((f"p{i}", emu, frames))
+        specs.append({"id": f"p{i}", "model": "rotorez", "port": str(path), **BRIDGE})
+    config = bridge_config(
+        scope.workdir,
+        broker_port,
+        specs,
+        client_id=f"bench-{engine}-{os.getpid()}",
+        sections={"homeassistant": {"enabled": False}},
+        state_name=f"{engine}-state.json",
+    )
+    if old_root is None:
+        spawn = scope.spawner
+    else:
+        env = old_env(old_root)
+
+        def spawn(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
+            return scope.spawn(argv, log_name=log.name, cwd=old_root, env=env)
+
+    bridge = BridgeProcess(
+        scope.workdir, config, log_level="INFO", name=engine, spawn=spawn, error=BenchError
+    ).start()
+    recorder = Mqtt(broker_port, ["rotor/+/state", "rotor/+/availability"], name=f"rec-{engine}")
+    scope.callback(recorder.close)
+    sender = Mqtt(broker_port, [], name=f"send-{engine}")
+    scope.callback(sender.close)
+    try:
+        recorder.wait_all([f"rotor/{s['id']}/availability" for s in specs], "online", 60)
+        recorder.wait_all([f"rotor/{s['id']}/state" for s in specs], "idle", 60)
+    except BenchError:
+        bridge.check()
+        raise
+    rotors = [
+        Rotor(rid, engine, emu, frames, f"rotor/{rid}", recorder, sender, by_target=True)
+        for rid, emu, frames in lines
+    ]
+    return bridge, rotors
+
+
+def pairs(scope: Scope, n: int, rng: random.Random) -> dict[str, Any]:
+    """``n`` target+stop pairs on each engine, their rotors taking turns."""
+    with Scope(scope.workdir / "pairs") as inner:
+        old_root, why = old_engine(inner)
+        if old_root is None:
+            return {"error": why}
+        bridges, rotors = {}, []
+        try:
+            for engine, root in ((OLD_ENGINE, old_root), (NEW_ENGINE, None)):
+                sub = Scope(inner.workdir / engine)
+                inner.enter_context(sub)
+                bridges[engine], rs = start_engine(sub, engine, root, rng)
+                rotors.append(rs)
+        except BenchError as exc:
+            if OLD_ENGINE not in bridges:
+                return {"error": f"the engine of commit {OLD_COMMIT} did not run: {exc}"}
+            raise
+        mixed = [r for pair in zip(*rotors, strict=True) for r in pair]
+
+        def check() -> None:
+            for b in bridges.values():
+                b.check()
+
+        taker = StopTaker(mixed, rng, check)
+        got: dict[str, list[float]] = {e: [] for e in bridges}
+        deadline = time.monotonic() + 1800
+        while any(len(v) < n for v in got.values()):
+            if time.monotonic() > deadline:
+                raise BenchError(f"pairs: {[len(v) for v in got.values()]} of {n} in 1800 s")
+            s = taker.step()
+            if s is None:
+                continue
+            if len(got[s.engine]) < n:  # (a stop already armed may come after the n-th)
+                got[s.engine].append(s.latency_s * 1000)
+            if len(got[s.engine]) >= n:
+                for r in mixed:
+                    r.retired = r.retired or r.engine == s.engine
+        check()
+        print(f"  pairs: {[len(v) for v in got.values()]}, missed {taker.missed}", file=sys.stderr)
+        return {"engines": got}
+
+
+# == the item ====================================================================================
+def run(scope: Scope, quick: bool) -> ItemResult:
+    n = 20 if quick else 60
+    n_pairs = 60 if quick else 300
+    rng = random.Random(29)
+    result = ItemResult("stop_under_load", "Stops under every load, and against the old engine")
+    phases: list[PhaseResult] = []
+    with Scope(scope.workdir / "loaded") as inner:
+        lo = start_loaded(inner, rng)
+        ABORT.wait(2.0)  # past the start-up
+        tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
+        phases.append(simple_phase(lo, CONTROL, n, None, None))
+        phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
+        for proto, label in (("rotctld", "rotctld"), ("gs232", "GS-232"), ("easycomm", "Easycomm")):
+            args = {**tcp, "port": lo.ports[proto], "proto": proto}
+            label = f"{label}: 16 TCP clients"
+            phases.append(loader_phase(lo, label, n, "tcp", args, tcp=[lo.ports[proto]]))
+        udp = {"pst": lo.ports["pst"], "n1mm": lo.ports["n1mm"], "wsjtx": lo.ports["wsjtx"]}
+        label = "PST + N1MM + WSJT-X UDP floods"
+        args = {**udp, "rate": UDP_RATE}
+        phases.append(loader_phase(lo, label, n, "udp", args, udp=list(udp.values())))
+        phases.append(dx_phase(lo, "DX cluster: hostile lines, full-speed spots", n))
+        console = {
+            "port": lo.ports["web"],
+            "pages": PAGES,
+            "posters": POSTERS,
+            "rotators": [f"t{i}" for i in range(TRACKERS)],
+        }
+        label = "console: 10 pages + POST flood"
+        phases.append(loader_phase(lo, label, n, "console", console, tcp=[lo.ports["web"]]))
+        phases.append(tracking_phase(lo, TRACKING_LOAD, n))
+        missed = lo.taker.missed
+        lo.bridge.check()
+    report_loads(result, phases, missed)
+    report_pairs(result, pairs(scope, n_pairs, rng), n_pairs)
+    return result
+
+
+def _ms(samples: list[Sample]) -> list[float]:
+    return [s.latency_s * 1000.0 for s in samples]
+
+
+def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> None:
+    table = Table(
+        f"{result.title}: R/stop publish -> ';' at a turning Rotor-EZ (4800 baud, "
+        f"{MEASURED} taking turns); goal p99 <= {GOAL_MS:g} ms",
+        ["load", "stops", "p50 ms", "p99 ms", "max ms", "p99 goal", "bridge CPU %", "load avg"],
+    )
+    for p in phases:
+        ms = sorted(_ms(p.samples))
+        p99 = percentile(ms, 99)
+        met = "met" if p99 <= GOAL_MS else "NOT MET"
+        table.add(p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg)
+        result.data[p.name] = {
+            "latencies_ms": [round(v, 3) for v in _ms(p.samples)],
+            "rotors": [s.rid for s in p.samples],
+            "bridge_cpu_pct": round(p.cpu_pct, 1),
+            "loadavg": round(p.loadavg, 2),
+            "applied": p.applied,
+            "counts": p.counts,
+        }
+        if p.name != CONTROL:
+            result.verdicts.append(
+                Verdict(
+                    f"{p.name}: stop p99 <= {GOAL_MS:g} ms",
+                    f"p99 {p99:.1f} ms, max {ms[-1]:.1f} ms",
+                    p99 <= GOAL_MS,
+                )
+            )
+    for p in phases:
+        table.notes.append(f"{p.name}: {p.applied}")
+    table.notes.append(
+        "p99 is nearest-rank: with 60 stops it is the largest; the load average (1 min, 2 cores) "
+        f"is the machine's, shared; {missed} turned rotor(s) reached the far end unstopped "
+        "(not counted)"
+    )
+    result.tables.append(table)
+    backlog = next((p for p in phases if p.name == BACKLOG_LOAD), None)
+    if backlog is None:
+        return
+    rounds = backlog.counts["rounds"]
+    bt = Table(
+        "The backlog's own STOP: targets, then STOP (QoS 1) on one connection, to "
+        "rotor b (Rotor-EZ, 1 s brake)",
+        [
+            "round",
+            "targets",
+            "stops beside",
+            "publish s",
+            "read s",
+            "STOP to read s",
+            "STOP -> ';' ms",
+            "starts after",
+            "moves after",
+        ],
+    )
+    for i, r in enumerate(rounds, 1):
+        bt.add(
+            f"{i}, alone" if r["alone"] else i,
+            f"{r['targets']:,}",
+            r["stops_beside"],
+            r["publish_s"],
+            r["read_s"],
+            r["held_s"],
+            "no ';' (b was still)" if r["stop_ms"] is None else r["stop_ms"],
+            r["starts_after_stop"],
+            r["move_frames_after_stop"],
+        )
+    bt.notes.append(
+        "read s: from the first target until the round's end marker reached its rotor (the main "
+        f"connection had read everything); b watched until {TAIL_S:g} s after that; "
+        f"mosquitto's 'dropped' notices: {backlog.counts['broker_drop_notices']}"
+    )
+    bt.notes.append(
+        "STOP to read s: how long the targets before the STOP were still arriving after it; a "
+        "fault that lets them out after a timeout shows only when this is longer than it: the "
+        f"round alone has as many targets as keep this bridge reading about {HOLD_S:g} s after "
+        f"its STOP (at least {BACKLOG:,})"
+    )
+    result.tables.append(bt)
+    starts = sum(r["starts_after_stop"] for r in rounds)
+    moves = sum(r["move_frames_after_stop"] for r in rounds)
+    result.verdicts.append(
+        Verdict(
+            f"after a STOP that follows {BACKLOG:,} targets (or more) the rotor never starts again",
+            f"{starts} start(s), {moves} move frame(s) after the stop frame, "
+            f"{len(rounds)} round(s)",
+            starts == 0 and moves == 0,
+        )
+    )
+
+
+def report_pairs(result: ItemResult, got: dict[str, Any], n: int) -> None:
+    title = (
+        f"The stop's tail: {n} target+stop pairs per engine on Rotor-EZ ({PAIR_ROTORS} per "
+        "engine, the engines' rotors taking turns), R/stop publish -> ';'"
+    )
+    if "error" in got:
+        result.data["pairs"] = got
+        target = f"worst stop over {n} pairs no worse than commit {OLD_COMMIT}'s"
+        result.verdicts.append(Verdict(target, got["error"], None))
+        return
+    table = Table(title, ["engine", "pairs", "p50 ms", "p99 ms", "worst ms"])
+    worst = {}
+    for engine, ms in got["engines"].items():
+        table.add(engine, len(ms), percentile(ms, 50), percentile(ms, 99), max(ms))
+        worst[engine] = max(ms)
+    result.tables.append(table)
+    result.data["pairs"] = {e: [round(v, 3) for v in ms] for e, ms in got["engines"].items()}
+    old, new = worst[OLD_ENGINE], worst[NEW_ENGINE]
+    result.verdicts.append(
+        Verdict(
+            f"worst stop over {n} pairs no worse than commit {OLD_COMMIT}'s (same run)",
+            f"{new:.1f} ms against {old:.1f} ms",
+            new <= old,
+        )
+    )
+
+
+if __name__ == "__main__":  # a load's entry (Loader); the item runs in benchmarks
+    if sys.argv[1:2] != ["--load"] or sys.argv[2] not in LOADERS:
+        sys.exit("run it as: python -m benchmarks stop_under_load [--quick]")
+    LOADERS[sys.argv[2]](json.loads(sys.argv[3]))
