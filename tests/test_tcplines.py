@@ -17,6 +17,7 @@ from bridge.ratelimit import Budget
 from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer
 from tests.support import wait_until
 from tests.support.clock import FakeClock
+from tests.support.waiting import slow
 
 
 def test_a_first_line_ended_by_cr_alone_is_released_at_once() -> None:
@@ -122,7 +123,7 @@ def test_a_client_sending_a_megabyte_with_no_line_end_is_dropped_and_the_port_an
     it liked (no command is near 4 KB long): it is dropped, said in the log, and a
     well-behaved client is answered and its stop carried out."""
     tower, server = gs232()
-    flooder = socket.create_connection(("127.0.0.1", server.port), timeout=30)
+    flooder = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
     sent = threading.Event()
 
     def flood() -> None:
@@ -134,9 +135,9 @@ def test_a_client_sending_a_megabyte_with_no_line_end_is_dropped_and_the_port_an
 
     threading.Thread(target=flood, daemon=True).start()
     assert _closed_by_peer(flooder)
-    assert sent.wait(30)
+    assert sent.wait(slow(30))
     flooder.close()
-    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as client:
+    with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as client:
         client.sendall(b"C2\rS\r")
         assert _read(client, 16) == b"AZ=120  EL=000\r\n"
         client.sendall(b"C\r")  # answered after the stop ran: the stop came in order
@@ -155,19 +156,19 @@ def test_a_client_over_its_budget_waits_and_another_clients_stop_is_read_at_once
     first is served again, every question answered in order."""
     clock = FakeClock()
     tower, server = gs232(clock=clock, rate_bytes_s=1000.0, read_bytes=64)
-    greedy = socket.create_connection(("127.0.0.1", server.port), timeout=30)
+    greedy = socket.create_connection(("127.0.0.1", server.port), timeout=slow(30))
     greedy.sendall(b"C\r" * 300)  # 64 bytes a wake-up: 32 questions, 64 + 32 * 64 charged
     assert _read(greedy, 32 * 8) == b"AZ=120\r\n" * 32
     wait_until(lambda: server.paused == 1, 10, "the greedy client paused")
-    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as polite:
+    with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as polite:
         polite.sendall(b"S\rC\r")
         assert _read(polite, 8) == b"AZ=120\r\n"
     assert [type(c) for c in tower.submitted] == [Stop]
-    greedy.settimeout(0.2)  # nothing more for the greedy client while the clock stands still
+    greedy.settimeout(0.2)  # not a deadline: a quiet period, the clock stands still
     with pytest.raises(TimeoutError):
         greedy.recv(1)
     clock.t += 100.0  # a second of budget back (no more: the bucket holds one second's worth)
-    greedy.settimeout(30)
+    greedy.settimeout(slow(30))
     assert _read(greedy, 32 * 8) == b"AZ=120\r\n" * 32  # one more wake-up's worth
     wait_until(lambda: server.paused == 2, 10, "the greedy client paused again")
     greedy.close()
@@ -182,17 +183,17 @@ def test_connections_are_accepted_no_faster_than_the_budget(
     clock = FakeClock()
     _tower, server = gs232(clock=clock, max_clients=40)
     crowd = [
-        socket.create_connection(("127.0.0.1", server.port), timeout=10)
+        socket.create_connection(("127.0.0.1", server.port), timeout=slow(10))
         for _ in range(int(ACCEPTS_S) + 5)
     ]
     try:
         wait_until(lambda: server.client_count == int(ACCEPTS_S), 10, "a second's worth taken")
         crowd[-1].sendall(b"C\r")  # connected (the backlog), not yet served
-        crowd[-1].settimeout(0.2)
+        crowd[-1].settimeout(0.2)  # not a deadline: a quiet period
         with pytest.raises(TimeoutError):
             crowd[-1].recv(1)
         clock.t += 1.0
-        crowd[-1].settimeout(10)
+        crowd[-1].settimeout(slow(10))
         assert _read(crowd[-1], 8) == b"AZ=120\r\n"
         assert server.client_count == len(crowd)
     finally:

@@ -248,7 +248,7 @@ def test_a_node_sending_faster_than_its_budget_is_read_no_faster(published: list
         s.read_line()
         s.send(SPOT * lines)  # four budgets' worth: returns once the kernel took the rest
         poured.set()
-        cluster.done.wait(30)
+        cluster.done.wait(slow(30))
 
     cluster = FakeCluster([pouring])
     clock = FakeClock()

@@ -290,7 +290,7 @@ def test_a_stop_reaches_the_controller_in_order_beside_clients_flooding_the_port
     def flood() -> None:
         while not done.is_set():
             try:
-                with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+                with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as s:
                     while not done.is_set():
                         s.sendall(b"x" * 4096)
             except OSError:
@@ -300,7 +300,7 @@ def test_a_stop_reaches_the_controller_in_order_beside_clients_flooding_the_port
     for t in flooders:
         t.start()
     try:
-        with socket.create_connection(("127.0.0.1", port), timeout=10) as client:
+        with socket.create_connection(("127.0.0.1", port), timeout=slow(10)) as client:
             client.sendall(b"M300\r")
             emu.wait_for(lambda s: s.is_moving and s.az_deg > 40)
             client.sendall(b"S\rVE\r")  # the sentinel's answer proves the stop was read
@@ -312,7 +312,7 @@ def test_a_stop_reaches_the_controller_in_order_beside_clients_flooding_the_port
     finally:
         done.set()
         for t in flooders:
-            t.join(10)
+            t.join(slow(10))
     assert stopped.az_deg < 200
     frames = [f.data for f in emu.log()]
     target = frames.index(next(f for f in frames if f.startswith(b"AP1300")))

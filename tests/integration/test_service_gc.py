@@ -11,6 +11,7 @@ import threading
 from bridge.app import run
 from tests.support import wait_until
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 
 def test_the_running_service_has_its_start_up_frozen_and_thaws_it_at_the_end(rig: Rig) -> None:
@@ -25,6 +26,6 @@ def test_the_running_service_has_its_start_up_frozen_and_thaws_it_at_the_end(rig
         wait_until(lambda: gc.get_freeze_count() > before + 10_000, 20, "start-up frozen")
     finally:
         done.set()
-        thread.join(20)
+        thread.join(slow(20))
     assert result == [0]
     assert gc.get_freeze_count() == 0
