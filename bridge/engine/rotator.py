@@ -160,6 +160,10 @@ class Rotator:
         return Limits.of(self.pointing)
 
     @property
+    def commands_block(self) -> bool:
+        return False  # a command is judged and queued, never waited for (the console asks)
+
+    @property
     def locked(self) -> bool:
         return self._kept.locked
 

@@ -173,6 +173,10 @@ class RemoteConsoleRotator:
     def last_halt_s(self) -> float:
         return self.remote.last_halt_s
 
+    @property
+    def commands_block(self) -> bool:
+        return True  # a command waits for the broker's acknowledgement (mqtt/remote.py rule 7)
+
     # -- commands (rule 1) ---------------------------------------------------------------------
     def submit(self, command: Command, described: str | None = None) -> None:
         try:

@@ -24,13 +24,18 @@ Rules:
    since no ``X-Forwarded-For`` is believed (anyone can write one).
 5. Slow work (projecting the coastlines, reading the TLE file's names) runs on the loop's
    executor, never on the loop: a STOP posted meanwhile is carried out at once
-   (docs/architecture.md rule 12).
+   (docs/architecture.md rule 12). So do the commands of a rotator whose commands wait for a
+   round trip (``commands_block``: the remote's, which waits for its broker's
+   acknowledgement): on one thread of their own, in the order they came (a stop never
+   overtakes a target posted before it, nor a target the stop), so no page's stream or
+   command waits for them.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
 """
 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import gzip
 import json
 import logging
@@ -44,7 +49,7 @@ from bridge import __version__
 from bridge.errors import Refused
 from bridge.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.web import auth, view
-from bridge.web.commands import BadCommand, Order, carry_out, parse
+from bridge.web.commands import BadCommand, Order, WebCommand, carry_out, parse
 from bridge.web.connections import Connections
 from bridge.web.feed import Feed, Shape
 from bridge.web.files import static_files
@@ -117,9 +122,12 @@ class WebConsole:
         self._started: dict[int, float] = {}  # requests being served (by id): when they began
         self._thread: threading.Thread | None = None
         self._running = False
+        self._far: concurrent.futures.ThreadPoolExecutor | None = None  # rule 5
 
     # -- wiring (the main thread) ------------------------------------------------------------
     def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
+        if rot.commands_block and self._far is None:  # rule 5: one thread, in order
+            self._far = concurrent.futures.ThreadPoolExecutor(1, "console-commands")
         self._rotators[rot.id] = rot
         self._facts[rot.id] = facts
         self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
@@ -187,6 +195,8 @@ class WebConsole:
         self._thread.join(timeout=5.0)
         if not self._thread.is_alive():
             loop.close()
+        if self._far is not None:
+            self._far.shutdown(wait=False, cancel_futures=True)
 
     async def _shutdown(self) -> None:
         self.live.feed.close()
@@ -360,11 +370,20 @@ class WebConsole:
             return
         if rot is None or not cmd.halts():
             return
+        if self._far is not None and rot.commands_block:  # rule 5
+            done = asyncio.wrap_future(self._far.submit(carry_out, rot, cmd, peer))
+            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
+            return
         try:
             carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             return
         self._order.halted(rot.id, cmd, time.monotonic())
+
+    def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
+        """A halt carried out off the loop (rule 5), back on the loop."""
+        if not done.cancelled() and done.exception() is None:
+            self._order.halted(rotator_id, cmd, time.monotonic())
 
     async def _command(self, request: web.Request) -> web.StreamResponse:
         token = request.headers.get(TOKEN_HEADER)
@@ -395,7 +414,11 @@ class WebConsole:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
         try:
-            carry_out(rot, cmd, request.remote)
+            if self._far is not None and rot.commands_block:  # rule 5
+                far = self._far.submit(carry_out, rot, cmd, request.remote)
+                await asyncio.wrap_future(far)
+            else:
+                carry_out(rot, cmd, request.remote)
         except Refused as exc:
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:

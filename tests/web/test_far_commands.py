@@ -1,0 +1,101 @@
+"""server.py rule 5: the commands of a rotator far away (the remote's, which waits for its
+broker's acknowledgement) run off the console's loop, one at a time in the order they came; a
+page's stream and other requests go on while one waits."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+
+import pytest
+
+from bridge.model import Command, Origin, Stop
+from bridge.mosquitto import free_port
+from bridge.pointing import Pointing
+from bridge.protocols import REGISTRY
+from bridge.web.server import WebConsole
+from bridge.web.view import RotatorFacts
+from tests.support.console import ConsoleClient
+from tests.support.waiting import slow, wait_until
+
+EZ = REGISTRY["rotorez"]
+
+
+class FarRotator:
+    """A rotator whose commands wait until the test lets them through (a stalled link)."""
+
+    id = "far"
+    name = "Far"
+    spec = EZ
+    pointing = Pointing.of(EZ)
+    can_track = False
+    last_halt_s = 0.0
+    commands_block = True
+
+    def __init__(self) -> None:
+        self.link = threading.Event()  # cleared: the broker does not acknowledge yet
+        self.waiting = threading.Event()
+        self.carried: list[str] = []
+
+    def submit(self, command: Command, described: str | None = None) -> None:
+        self.waiting.set()
+        assert self.link.wait(slow(30)), "the test never let the command through"
+        self.carried.append("stop" if isinstance(command, Stop) else f"target {command.az_deg:g}")
+
+    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None:
+        self.carried.append(f"lock {locked}")
+
+    def report_refusal(self, *args: object, **kwargs: object) -> None:
+        pass
+
+
+@pytest.fixture
+def far() -> Iterator[tuple[FarRotator, WebConsole]]:
+    rot = FarRotator()
+    console = WebConsole(
+        "127.0.0.1",
+        free_port(),
+        password=None,
+        frame_ancestors=[],
+        station=(55.0, 13.0),
+        locator=None,
+        satellites=lambda: [],
+    )
+    console.attach(rot, RotatorFacts())  # type: ignore[arg-type]
+    console.listen()
+    try:
+        yield rot, console
+    finally:
+        rot.link.set()
+        console.stop()
+
+
+def test_a_command_waiting_far_away_holds_up_no_other_request_and_order_is_kept(
+    far: tuple[FarRotator, WebConsole],
+) -> None:
+    rot, console = far
+    answers: dict[str, int] = {}
+
+    def post(name: str, **doc: object) -> None:
+        client = ConsoleClient(console.port)
+        client.session()
+        answers[name] = client.command("far", **doc).status
+
+    target = threading.Thread(
+        target=post, args=("target",), kwargs={"command": "target", "az": 120}
+    )
+    target.start()
+    assert rot.waiting.wait(slow(10)), "the target never reached the rotator"
+    # the loop is free while the target waits for its acknowledgement: a new page is served
+    other = ConsoleClient(console.port)
+    assert other.session()
+    stop = threading.Thread(target=post, args=("stop",), kwargs={"command": "stop"})
+    stop.start()
+    assert other.get("/api/hello").status == 200  # still answered with two commands waiting
+    assert rot.carried == []
+    rot.link.set()
+    target.join(slow(10))
+    stop.join(slow(10))
+    wait_until(lambda: len(rot.carried) == 2, 10, "both carried out")
+    assert rot.carried == ["target 120", "stop"]  # in the order they came, never overtaken
+    assert answers == {"target": 200, "stop": 200}
