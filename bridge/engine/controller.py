@@ -19,7 +19,8 @@ Rules:
    rules for a report that does not come).
 5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so). A
    reading is taken when its exchange is over (link.py rule 9): one that other bytes spoil, or
-   one the codec does not trust, is no reading, and the controller is asked again at once.
+   one the codec does not trust, is no reading, and the controller is asked again at once. A
+   stop written while a reading is held ends its exchange: the reading is taken then.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 """
 
@@ -171,7 +172,9 @@ class Controller:
 
     def flush_stop(self, now: float) -> None:
         """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
-        if self.link is not None and self.link.flush_stop(now):
+        link = self.link
+        if link is not None and link.flush_stop(now):
+            self._settled(link, now)  # rule 5: the reading the stop cut short, before the stop
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
 
     def check_stop(self, now: float, target_going: bool) -> None:

@@ -39,7 +39,11 @@ Rules:
    asked for or not, line noise; not the controller's own chatter, which its codec calls
    harmless) spoil it: the exchange is not trusted, the reading is dropped and the controller
    asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
-   as a move). A reply owed is not overdue while its reading is held.
+   as a move). A reply owed is not overdue while its reading is held. The quiet time is no
+   reply still coming: a stop goes out at once (rule 3 does not hold it back once the reply is
+   whole), and a stop ends the held exchange there: its reading is taken as it stands, and
+   what comes after the stop belongs to the stop's own exchange (its reply is a reading of its
+   own, never a second reply that spoils the held one).
 """
 
 from __future__ import annotations
@@ -140,8 +144,13 @@ class Link:
         return True
 
     def write_stop(self, now: float) -> None:
-        """Write a stop now, whatever the line is doing (a stalled motor must not wait)."""
+        """Write a stop now, whatever the line is doing (a stalled motor must not wait). A
+        reading held (rule 9) is settled now: ``settled`` hands it over at once."""
         self._outbox.clear()
+        if self._held is not None:  # rule 9: the stop ends the held exchange
+            self._held_until = now
+            if not self.codec.awaiting_reply():  # its reply came: the stop's is owed now
+                self._reply_deadline = None
         self.write(self.codec.encode_stop(), now)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
@@ -168,7 +177,13 @@ class Link:
     def free(self, for_stop: bool = False) -> bool:
         if self.spec.full_duplex or self._reply_deadline is None:
             return True
-        return for_stop and self.spec.stop_interrupts
+        if not for_stop:
+            return False
+        # rule 9: a whole reply held for the quiet time is no reply still coming
+        return self.spec.stop_interrupts or self._reply_whole()
+
+    def _reply_whole(self) -> bool:
+        return self._held is not None and not self.codec.awaiting_reply()
 
     # -- replies ------------------------------------------------------------------------------
     def reply_overdue(self, now: float) -> bool:

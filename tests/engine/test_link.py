@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import pytest
 
+from bridge.emulators.spid_models import position_reply
 from bridge.engine.link import Link
 from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
+from bridge.protocols.base import PositionReply
 from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
+from bridge.protocols.spid import MODELS as SPID
 
 
 @pytest.mark.parametrize(
@@ -85,3 +88,32 @@ def test_polls_keep_to_a_grid_of_their_interval_so_rotators_poll_together() -> N
     assert a[1] == pytest.approx(3.4, abs=2e-4) and b[1] == pytest.approx(3.4, abs=2e-4)
     assert a[1:] == pytest.approx(b[1:], abs=2e-4)  # ... then together on the grid
     assert [y - x for x, y in zip(a[1:], a[2:], strict=False)] == pytest.approx([0.2] * 7, abs=2e-4)
+
+
+# -- rule 9: the quiet time after a reading holds no stop back -----------------------------------
+@pytest.mark.parametrize("model", ["rot2prog", "rot1prog", "md01"])
+def test_a_stop_goes_out_at_once_while_a_whole_reply_is_held_for_the_quiet_time(model: str) -> None:
+    """A half-duplex SPID takes no frame while a reply is owed, and a stop does not interrupt
+    one (no ``stop_interrupts``); but a reply that has come whole is no reply owed. The stop
+    goes out the instant it is wanted, the held reading is taken as it stands, and the stop's
+    own reply is a reading of its own exchange, not a second reply spoiling the held one."""
+    spec = SPID[model]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.poll(10.0, 1.0)
+    assert len(link.output()) == 1  # the status query
+    reply = position_reply(spec, 123.0, 45.0, 2)
+    t = 10.0 + spec.exchange_time_s()  # the whole reply is in
+    link.got_bytes(len(reply), t)
+    (reading,) = link.codec.feed(reply)
+    assert isinstance(reading, PositionReply) and link.hold_reading(reading, t)
+    assert link.settled(t) is None  # held for the quiet time
+    link.want_stop()
+    assert link.flush_stop(t)  # at once, not after the quiet time
+    assert link.output() == [b"\x57" + bytes(10) + b"\x0f\x20"]
+    assert link.settled(t) is reading  # the reading the stop cut short, as it stands
+    assert link.reply_owed and not link.reply_overdue(t + spec.reply_timeout_s - 1e-6)
+    later = t + spec.exchange_time_s()
+    link.got_bytes(len(reply), later)
+    (answer,) = link.codec.feed(reply)  # the stop's reply
+    assert isinstance(answer, PositionReply) and link.hold_reading(answer, later)
+    assert link.settled(later + 1.0) is answer

@@ -184,3 +184,30 @@ def test_a_glitched_frame_before_the_real_reply_is_no_reading(rig: Rig) -> None:
     assert {s.bearing_deg for s in v.published(since=t)} <= {bearing}
     assert v.status.health is not None and v.status.health.moves == health.moves
     assert v.state is IDLE and v.status.bearing_deg == bearing
+
+
+@pytest.mark.parametrize("model", ["rot2prog", "rot1prog", "md01"])
+def test_a_stop_in_the_quiet_time_after_a_reply_goes_out_at_once(rig: Rig, model: str) -> None:
+    """link.py rule 9 and rule 3: a reading is held for a few byte times of quiet after its
+    reply (50 ms at the Rot2Prog's 600 baud), but a reply that came whole is no reply owed. A
+    STOP pressed in that time is on the wire the same instant, the rotor stops, and the line
+    stays half duplex (the stop's reply is its own, not a second reply of the poll)."""
+    v = rig(model, emulator={"start_az_deg": 100})
+    v.run_until_state(IDLE, 30)
+    v.target(150)
+    v.run_until(lambda h: h.state is MOVING and h.truth().is_moving, 30, "moving")
+    reply_bytes = v.cfg.spec.reply_bytes
+
+    def whole_reply_in(h: VirtualRotator) -> bool:
+        last = h.writes[-1]
+        got = sum(len(data) for t, data in h.received if t > last.t)
+        return last.data[11] == K_STATUS and got >= reply_bytes
+
+    v.run_until(whole_reply_in, 10, "a poll's whole reply")
+    t = v.now
+    v.stop()
+    stop = bytes([0x57, *bytes(10), 0x0F, 0x20])
+    assert [(w.t, w.data) for w in v.writes if w.t >= t] == [(t, stop)]  # at once
+    v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 30, "stopped")
+    assert v.truth().az_deg < 149 and v.sent(since=t).count(stop) == 1  # it took: no second
+    assert_half_duplex(v)
