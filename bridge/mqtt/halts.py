@@ -93,6 +93,11 @@ class Halts:
         with self._lock:
             self.word.markers_denied()
 
+    def markers_allowed(self) -> None:
+        """A probe came back on a new connection: markers go out again (lastword.py rule 7)."""
+        with self._lock:
+            self.word.markers_allowed()
+
     def lane_markers_denied(self) -> None:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
         with self._lock:
