@@ -89,6 +89,7 @@ class App:
             heartbeat=self.topics.bridge_heartbeat,  # client.py rule 2
             wall=wall,
             on_denied=self._denied,
+            on_allowed=self._allowed,
             on_connect=self._connected,
             on_new_connection=lambda: self.mqtt.main_gone(),
             on_connection_lost=lambda: self.mqtt.main_gone(),
@@ -299,6 +300,13 @@ class App:
         for rot in self.rotators:
             if rid is None or rot.id == rid:
                 rot.note(problem)
+        self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+
+    def _allowed(self, topic: str) -> None:
+        """The broker takes a topic it refused before (client.py rule 16: the fence's probe
+        came back on a new connection): the markers go out again, ``B/bridge/info`` without it."""
+        if topic == self.topics.bridge_fence:
+            self.mqtt.markers_allowed()
         self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
 
     def _info(self, problem: str, on: bool) -> None:

@@ -24,7 +24,9 @@ Rules:
    REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
    TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
    bytes without finishing a command (no command is near that long) is dropped and logged (at
-   most once per LOG_S, with a count). A well-behaved client's stop is read at its first
+   most once per LOG_S, with a count); the bytes are counted from the last command finished
+   (a read that finishes one counts its own bytes at most), so commands sent back to back,
+   however the reads cut them, never add up. A well-behaved client's stop is read at its first
    wake-up: its budget is its own.
 """
 
@@ -353,8 +355,11 @@ class LineServer:
                     if reply:
                         conn.sendall(reply)
                 budget.spend(raw + REPLY_COST * len(replies), self._clock())
+                finished = any(not isinstance(r, Close) for r in replies)
                 if session.idle and not guard.holding:
                     pending_since, unfinished = None, 0
+                elif finished:  # rule 5: counted from the last command finished, not read
+                    pending_since, unfinished = last_bytes, raw  # its tail: within this read
                 else:
                     unfinished += raw
                     if pending_since is None:

@@ -199,3 +199,27 @@ def test_connections_are_accepted_no_faster_than_the_budget(
     finally:
         for sock in crowd:
             sock.close()
+
+
+def test_commands_sent_back_to_back_are_never_dropped_however_the_reads_cut_them(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """A client sending complete commands back to back, of mixed lengths, such that no 64-byte
+    read ends between two of them, was dropped once 4 KB had gone by: the count ran from the
+    last read that ended between commands, not from the last command finished. Every command
+    is answered; a 4 KB command with no end still drops its client."""
+    _tower, server = gs232(rate_bytes_s=1e9, read_bytes=64)
+    stream, ends = b"", 0
+    while len(stream) < 12_000:  # three times the limit; no command ends on a 64-byte line
+        command = b"C\r" if (len(stream) + 2) % 64 else b"C2\r"
+        stream += command
+        ends += 1
+    with socket.create_connection(("127.0.0.1", server.port), timeout=slow(30)) as client:
+        client.sendall(stream)
+        client.sendall(b"C\r")
+        replies = _read(client, ends * 8 + 16)
+        assert replies.count(b"AZ=120\r\n") + replies.count(b"AZ=120  EL=000\r\n") == ends + 1
+    with socket.create_connection(("127.0.0.1", server.port), timeout=slow(30)) as flooder:
+        flooder.sendall(b"C\r" + b"x" * 4200)
+        assert _read(flooder, 8) == b"AZ=120\r\n"
+        assert _closed_by_peer(flooder)

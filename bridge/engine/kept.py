@@ -23,9 +23,11 @@ Rules:
    mailbox and their save queued under its one lock, from every interface's thread, so that
    the judge, the session (and so the retained state) and the state file cannot disagree. The
    step is short: no I/O, no thread started, nothing that waits (the save is queued; the lines
-   thread and the writer are woken once the step has let go); the lines thread never takes
-   it, and a stop never waits for it. Steps take turns in the order they came: a lock ON
-   waits for the steps already under way or waiting, never for a flood of words after it.
+   thread and the writer are woken once the step has let go, and once every afterlock.py
+   ``Deferring`` lock around it has let go too: halts.py takes its steps under one, so nothing
+   under that lock writes a byte or starts a thread either); the lines thread never takes it,
+   and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
+   the steps already under way or waiting, never for a flood of words after it.
 6. A lock kept from the state file is said in the log at start: motion will be refused.
 """
 
@@ -36,6 +38,7 @@ import threading
 from collections import deque
 from collections.abc import Callable
 
+from bridge.afterlock import later
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
 from bridge.model import ErrorKind, WindInfo
@@ -76,6 +79,9 @@ class Owner:
                 self._waiting.popleft().release()  # the next step's turn: still busy
             else:
                 self._busy = False
+        later(self._wake)  # rule 5: once a caller's Deferring lock (halts.py) let go too
+
+    def _wake(self) -> None:
         self._mailbox.wake_once()
         self._store.wake()
 

@@ -21,11 +21,13 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    socket that cannot be read any more (EBADF, ENOTSOCK) is reported once and dropped: the
    selector is made anew without it, so it can never wake the thread again.
 8. A flood cannot starve a stop (docs/architecture.md rule 12): beyond rule 3, the thread
-   reads at most RATE_DATAGRAMS_S datagrams a second from all its sockets together
-   (ratelimit.Budget: a second's worth at once, each datagram costing 1 + its size in KiB),
-   far above what loggers send; past it the thread sleeps on its stop pipe (the reports still
-   looked at) and the system drops what its buffers cannot hold. Said at warning level at
-   most once per FLOOD_LOG_S with the count since (``paused``).
+   reads at most RATE_DATAGRAMS_S datagrams a second from each socket (ratelimit.Budget, one
+   per socket: a second's worth at once, each datagram costing 1 + its size in KiB), far
+   above what loggers send; past it that socket rests (out of the selector, its datagrams
+   left to the system, which drops what its buffers cannot hold) until back in credit, while
+   every other socket is served as before: a flood on the N1MM port holds up no PST port's
+   stop, nor another N1MM port's. Said at warning level at most once per FLOOD_LOG_S with the
+   count since (``paused``).
 """
 
 from __future__ import annotations
@@ -98,7 +100,8 @@ class LoggerEndpoints:
         self._junk_log = Rarely(JUNK_LOG_S)
         self._fault_log = Rarely(FAULT_LOG_S)
         self._flood_log = Rarely(FLOOD_LOG_S)
-        self._budget = Budget(RATE_DATAGRAMS_S, clock())
+        self._budgets: dict[socket.socket, Budget] = {}  # rule 8: one per socket
+        self._resting: set[socket.socket] = set()  # rule 8: in debt, out of the selector
         self.paused = 0  # rule 8
 
     # -- configuration --------------------------------------------------------------------
@@ -138,6 +141,7 @@ class LoggerEndpoints:
                 self._sockets[sock] = endpoint
                 host, port = sock.getsockname()[:2]
                 self._addresses[sock] = host, port
+                self._budgets[sock] = Budget(RATE_DATAGRAMS_S, self._clock())
         except OSError:
             self._close_sockets()
             raise
@@ -185,6 +189,8 @@ class LoggerEndpoints:
         self._sockets.clear()
         self._addresses.clear()
         self._dropped.clear()
+        self._budgets.clear()
+        self._resting.clear()
 
     # -- the thread -----------------------------------------------------------------------
     def _loop(self) -> None:
@@ -210,7 +216,7 @@ class LoggerEndpoints:
     def _new_selector(self) -> selectors.BaseSelector:
         sel = selectors.DefaultSelector()
         for sock in self._sockets:
-            if sock not in self._dropped:
+            if sock not in self._dropped and sock not in self._resting:
                 try:
                     sel.register(sock, selectors.EVENT_READ)
                 except (OSError, ValueError) as exc:  # closed under us
@@ -227,15 +233,15 @@ class LoggerEndpoints:
         """One wake-up: every ready socket served PER_WAKEUP datagrams at most (rule 3), the
         reports looked at; False once stop() asks."""
         now = self._clock()
-        if (pause_s := self._budget.wait_s(now)) > 0:  # rule 8
-            self._flooded(now)
-            if select.select([self._wake_r], [], [], min(pause_s, REPORT_MOVING_S))[0]:
-                return False
-            self._report(self._clock())
-            return True
+        for sock in [s for s in self._resting if self._budgets[s].wait_s(now) <= 0]:
+            self._resting.discard(sock)  # rule 8: back in credit, selected again
+            if sock not in self._dropped:
+                sel.register(sock, selectors.EVENT_READ)
         due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
         if self._reporters:  # look at the rotors often enough to see a move begin or end
             due = min(due, now + REPORT_MOVING_S)
+        for sock in self._resting:
+            due = min(due, now + self._budgets[sock].wait_s(now))
         ready: list[socket.socket] = []
         for key, _mask in sel.select(max(0.0, due - now)):
             if key.fileobj == self._wake_r:
@@ -244,6 +250,10 @@ class LoggerEndpoints:
             ready.append(key.fileobj)
         for sock in ready:
             self._serve(sock)
+            if sock not in self._dropped and self._budgets[sock].wait_s(self._clock()) > 0:
+                self._resting.add(sock)  # rule 8: out of the selector until in credit
+                sel.unregister(sock)
+                self._flooded(self._clock())
         if any(sock in self._dropped for sock in ready):
             self._close_selector()  # rule 7: a selector that never hears of it again
         self._report(self._clock())
@@ -263,7 +273,7 @@ class LoggerEndpoints:
                     return
                 log.debug("logger UDP %s:%d: %s", *self._addresses[sock], exc)
                 continue
-            self._budget.spend(1 + len(data) / 1024, self._clock())  # rule 8
+            self._budgets[sock].spend(1 + len(data) / 1024, self._clock())  # rule 8
             try:
                 if isinstance(endpoint, PstEndpoint):
                     port = self._addresses[sock][1]
@@ -291,8 +301,8 @@ class LoggerEndpoints:
         count = self._flood_log.due(now)
         if count is not None:
             log.warning(
-                "logger UDP: datagrams come faster than %g a second: read no faster, the "
-                "system drops the rest (%d time(s) since last said)",
+                "logger UDP: datagrams come faster than %g a second on a port: read no faster "
+                "there, the system drops the rest (%d time(s) since last said)",
                 RATE_DATAGRAMS_S,
                 count,
             )

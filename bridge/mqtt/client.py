@@ -33,7 +33,9 @@ each written out in the module that keeps it:
    reason, rule 11); the broker keeps one order, so if the hello comes back and the probe has
    not, the broker drops it (mosquitto 2.0 grants the subscription and drops the messages,
    without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5 too). That is
-   said as rule 11 says, naming the topic, from the first connection on.
+   said as rule 11 says, naming the topic, from the first connection on. It is judged again
+   on every connect: a probe that comes back clears the problem (``on_allowed``, never on
+   paho's thread), and the markers go out again.
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
@@ -86,6 +88,7 @@ class MqttClient(Connection):
         on_connect: Callable[[], None] | None = None,
         on_connection_lost: Callable[[], None] | None = None,
         on_denied: Callable[[str, str], None] | None = None,
+        on_allowed: Callable[[str], None] | None = None,
         claim: Claim | None = None,
         on_refused: Callable[[str], None] | None = None,
         fence_topic: str | None = None,
@@ -106,6 +109,7 @@ class MqttClient(Connection):
         self._on_connect_hook = on_connect
         self._on_connection_lost = on_connection_lost
         self._on_denied = on_denied
+        self._on_allowed = on_allowed  # rule 16: the fence topic works again
         self._retained: dict[str, tuple[bytes, int]] = {will_topic: (b"online", 1)}  # rule 3
         self._lock = threading.Lock()
         c = self._client
@@ -316,10 +320,17 @@ class MqttClient(Connection):
         if topic == self._fence_topic and payload.startswith(b"probe "):
             if payload == self._probe:  # rule 16: back before the hello
                 self._probe = None
+                self._fence_back(topic)
             return True  # (one of an earlier connection's, or another bridge's)
         if self._look is not None and self._look_saw(self._look, topic, payload):
             return True
         return bool(self._owned.filters) and self._foreign(topic, payload)
+
+    def _fence_back(self, topic: str) -> None:
+        """Rule 16: the probe came back; if the topic was denied before, it is not now (said on
+        a thread of its own: paho's holds its mutex here, and the report publishes)."""
+        if self._delivery.allow(topic) and self._on_allowed is not None:
+            threading.Thread(target=self._on_allowed, args=(topic,), daemon=True).start()
 
     def _report_denied(self, topic: str, problem: str) -> None:
         """Rule 11's hand-off (delivery.py calls it on a thread of its own)."""

@@ -11,7 +11,8 @@ client's lock taken in ``on_publish`` would deadlock (docs/architecture.md).
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 11. What the broker refuses is said: a subscription it denies (SUBACK, via connection.py) or a
    QoS 1 publish it will not take (PUBACK, MQTT 5; e.g. 0x87 "not authorised" from an ACL) is
-   logged as an error once per topic, naming the topic, kept in ``problems`` and handed to
+   logged as an error once per topic (until the broker is seen to take it: ``allow``),
+   naming the topic, kept in ``problems`` and handed to
    ``on_denied`` (the app shows it in the rotator's status and on ``B/bridge/info``), never on
    paho's thread. A denied QoS 0 publish (state) gets no answer from any broker: the bridge
    cannot see it.
@@ -60,7 +61,7 @@ class Delivery:
         self._pub_topics: dict[int, str] = {}  # a QoS 1 publish's message id -> its topic
         self._acked_early: dict[int, ReasonCode] = {}  # acknowledged before its id was noted
         self._ids_lock = threading.Lock()
-        self._denied: set[str] = set()  # rule 11: each denied topic reported once
+        self._denied: dict[str, str] = {}  # rule 11: each denied topic reported once, its problem
         self.problems: list[str] = []  # rule 11, for the bridge's own diagnostics
         self._dirty: set[str] = set()  # rule 13: retained topics whose last publish failed
         self._backlog: deque[tuple[str, str | bytes]] = deque(maxlen=EVENT_BACKLOG)
@@ -148,13 +149,24 @@ class Delivery:
         with self._ids_lock:
             if topic in self._denied:
                 return
-            self._denied.add(topic)
             problem = f"the MQTT broker does not let the bridge {what} {topic}: {reason}"
+            self._denied[topic] = problem
             self.problems.append(problem)
         log.error("%s (check the broker's ACL for user %r)", problem, self._username)
         # never on paho's thread: it holds paho's own mutex here, and the report publishes
         # (the client's lock, then paho's mutex: another thread may hold them the other way)
         threading.Thread(target=self._report, args=(topic, problem), daemon=True).start()
+
+    def allow(self, topic: str) -> bool:
+        """Rule 11: the broker was seen to take ``topic`` after all (the ACL changed): its
+        problem is gone, and a new refusal is said again. True if it had been denied."""
+        with self._ids_lock:
+            problem = self._denied.pop(topic, None)
+            if problem is not None and problem in self.problems:
+                self.problems.remove(problem)
+        if problem is not None:
+            log.warning("the MQTT broker lets the bridge use %s again", topic)
+        return problem is not None
 
     # -- the retry thread ---------------------------------------------------------------------
     def start_retrying(self, resend: Callable[[], None], stopping: Callable[[], bool]) -> None:

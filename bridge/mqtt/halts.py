@@ -14,6 +14,7 @@ import logging
 import threading
 from collections.abc import Callable
 
+from bridge.afterlock import Deferring
 from bridge.model import Origin, Source, Stop
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.lastword import LONG_HOLD_S, LastWord
@@ -59,7 +60,9 @@ class Halts:
         self._on_problem = on_problem  # (topic, problem): a broker problem the bridge reports
         self._on_info = on_info  # (problem, still so): said on B/bridge/info while it lasts
         self.word = LastWord()
-        self._lock = threading.Lock()  # two connections, two paho threads
+        # two connections, two paho threads; the owner steps under it wake the lines thread and
+        # start the state writer once it has let go (kept.py rule 5)
+        self._lock = Deferring()
         self._timer: threading.Timer | None = None
         self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
 
@@ -89,6 +92,11 @@ class Halts:
         none goes out; a lane's halt holds until its main copy. The holds stay."""
         with self._lock:
             self.word.markers_denied()
+
+    def markers_allowed(self) -> None:
+        """A probe came back on a new connection: markers go out again (lastword.py rule 7)."""
+        with self._lock:
+            self.word.markers_allowed()
 
     def lane_markers_denied(self) -> None:
         """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""

@@ -57,7 +57,9 @@ but not the order between them. So:
    dropping it (client.py rule 16). Then no marker is sent, and a lane's halt holds until the
    main connection reads its own copy (rule 9), or drops: holding is the safe direction. (No
    marker can then tell when a new lane connection is in step, rule 9: its halts are taken as
-   in step; a halt published while the lane was down could then stand for a newer one.)
+   in step; a halt published while the lane was down could then stand for a newer one.) It is
+   judged again on every connect: a probe that comes back (the ACL fixed) turns the markers on
+   again (``markers_allowed``).
 8. A lock OFF the main connection reads while a lane lock ON for that rotator still waits for
    its main copy was published before that ON: it is not carried out (the ON is the last word,
    even if the main connection then drops before its copy comes).
@@ -230,6 +232,11 @@ class LastWord:
         any more; the holds stay, each until its main copy."""
         self.markers = False
         self._marker_sent_at.clear()
+
+    def markers_allowed(self) -> None:
+        """Rule 7: a probe came back on a new connection: markers go out again (for the halts
+        from now on; one held before this waits for its main copy, or for the next marker)."""
+        self.markers = True
 
     def resend_due(self, now: float) -> int | None:
         """Rule 5: a new marker to publish when the oldest out has waited its turn (RESEND_S,

@@ -187,6 +187,9 @@ class MqttService:
     def lane_markers_denied(self) -> None:
         self._halts.lane_markers_denied()
 
+    def markers_allowed(self) -> None:
+        self._halts.markers_allowed()
+
     def start(self) -> None:
         self._publisher.start()
 

@@ -280,3 +280,33 @@ def test_the_steps_take_turns_in_the_order_they_came() -> None:
         done.append("release")
     assert done[-1] == "release" and not turns
     mailbox.close()
+
+
+def test_a_lane_lock_on_starts_no_thread_and_writes_no_byte_under_the_word_lock(
+    tmp_path: Path,
+) -> None:
+    """kept.py rule 5 under halts.py's lock: the owner let go of its step and woke the lines
+    thread and started the state writer at once, while the stop lane's word lock was still
+    held, so a lane STOP behind a lane lock ON waited for a thread start. Both come once the
+    word lock has let go."""
+    st = Station(tmp_path)
+    lane = st.lane()
+    mailbox, writer = st.rot._mailbox, st.store._writer
+    assert writer._thread is None  # nothing saved yet: no writer (ondemand.py rule 3)
+    seen: list[tuple[str, bool]] = []  # each wake, and whether the word lock was held
+
+    def watched(name: str, real: Callable[[], None]) -> Callable[[], None]:
+        def call() -> None:
+            seen.append((name, lane._lock.locked()))
+            real()
+
+        return call
+
+    mailbox.wake_once = watched("lines", mailbox.wake_once)  # type: ignore[method-assign]
+    st.store.wake = watched("writer", st.store.wake)  # type: ignore[method-assign]
+    lane.on_lane("rotor/tower/lock", b"ON", False, Origin(Source.MQTT))
+    assert seen == [("lines", False), ("writer", False)]
+    assert writer._thread is not None  # the save's writer, started after the word lock
+    assert os.read(mailbox.fileno(), 4096)  # and the lines thread woken
+    st.store.flush()
+    assert StateStore(st.path).locked("tower") is True

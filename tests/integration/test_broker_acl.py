@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -164,3 +165,27 @@ def test_markers_the_acl_drops_are_known_from_the_first_connection_and_a_stop_st
         assert not [f for f in emu.frames(*BEARING_OUTCOMES) if b"60" in f.data]
         probe.publish("rotor/target", "200")
         emu.wait_for(lambda s: not s.is_moving and abs(s.az_deg - 200) <= 3, 30)
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_markers_come_back_when_the_acl_lets_them_on_a_later_connect(
+    tmp_path: Path, protocol: str
+) -> None:
+    """lastword.py rule 7, client.py rule 16: one denied probe turned the markers off for the
+    life of the process, and B/bridge/info said so for ever. The probe is judged on every
+    connect: once the broker's ACL lets the fence through, the next connection's probe comes
+    back, the problem is gone from B/bridge/info and the markers go out again."""
+    acl = "topic readwrite rotor/#\ntopic deny rotor/bridge/fence\n"
+    with acl_rig(tmp_path, acl) as (rig, probe):
+        rig.mqtt_extra = {"protocol": protocol}
+        rig.add("tower", "rotorez", emu={"start_az_deg": 20})
+        app = rig.start()
+        probe.wait_for("rotor/bridge/info", lambda m: b"rotor/bridge/fence" in m.payload)
+        wait_until(lambda: not app.mqtt._word.markers, 10, "the markers off")
+        (tmp_path / "acl").write_text("topic readwrite rotor/#\n")
+        before = time.monotonic()
+        rig.broker.restart()
+        probe.wait_for(
+            "rotor/bridge/info", lambda m: b"rotor/bridge/fence" not in m.payload, 30, before
+        )
+        wait_until(lambda: app.mqtt._word.markers, 10, "the markers on again")

@@ -368,3 +368,28 @@ def test_a_flood_is_read_no_faster_than_the_budget_and_said_once(
         wait_until(lambda: len(rot.calls) > read, 10, "read on")
     finally:
         ep.stop()
+
+
+def test_a_flood_on_the_n1mm_port_holds_up_no_pst_stop() -> None:
+    """Rule 8, in virtual time (the clock stands still): one budget was shared by every
+    socket, so a flood on the N1MM port (often bound to the LAN) put the whole thread to sleep
+    and a PST stop for another rotator waited for it (or was lost once the system's buffer
+    filled). Each socket has its own budget now: the N1MM port rests, the PST port is read."""
+    clock = FakeClock()
+    tower, yagi = Recording("tower"), Recording("yagi")
+    ep = LoggerEndpoints(clock=clock)
+    ep.add_pst(tower, port=0)  # type: ignore[arg-type]
+    ep.add_n1mm(yagi, "Yagi", port=0, report_to=("127.0.0.1", 9))  # type: ignore[arg-type]
+    ep.start()
+    try:
+        pst_port = ep.address(ep.pst[0])[1]
+        n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+        aim = b"<N1MMRotor><rotor>Yagi</rotor><goazi>90</goazi></N1MMRotor>"
+        with udp_socket() as s:
+            for _ in range(int(RATE_DATAGRAMS_S) + 100):
+                s.sendto(aim, ("127.0.0.1", n1mm_port))
+        wait_until(lambda: ep.paused > 0, 10, "the N1MM port rested")
+        send(pst_port, pst(tag("STOP", 1)))
+        wait_until(lambda: Stop(Source.PST) in tower.calls, 10, "the PST stop carried out")
+    finally:
+        ep.stop()

@@ -186,3 +186,15 @@ def test_a_retained_stop_live_always_replayed_once_per_message() -> None:
     assert w.retained_halt("r/stop", b"now", replayed=True)  # another message
     assert not w.retained_halt("r/stop", b"", replayed=True)  # deleted
     assert w.retained_halt("r/stop", b"now", replayed=True)
+
+
+def test_markers_allowed_again_go_out_for_the_next_lane_halt() -> None:
+    """Rule 7: judged on every connect: a probe back on a later connection turns them on."""
+    w = LastWord(token="t")
+    w.markers_denied()
+    w.lane_halt("a", "stop", 0.0)
+    assert not w.markers_out
+    w.main_gone()  # the new connection
+    w.markers_allowed()
+    n = w.lane_halt("a", "stop", 1.0)
+    assert w.markers_out and w.marker_back(w.marker(n or 0).encode()) == (n, ["a"])
