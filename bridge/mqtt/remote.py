@@ -30,6 +30,12 @@ Rules:
    client was told went out is kept when the rest are dropped, and sent again, with a fresh
    expiry, first thing on the next connection, before any other command can be sent. One
    refused at once (``send`` raised) is not: its client knows it did not go.
+7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
+   ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
+   dropped, rule 3) and the command refused.
+8. A command is stamped with its send time on the station's clock as its live heartbeats let
+   the remote reckon it (heartbeat.py); without one heard, a move is refused. A halt goes
+   unstamped: it never asks the reckoning, so nothing about the heartbeat can keep it back.
 """
 
 from __future__ import annotations
@@ -132,7 +138,7 @@ class RemoteLink(Connection):
         with self._send_lock:
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            sent = self.station_clock.now_unix()
+            sent = None if halt else self.station_clock.now_unix()  # rule 8: a halt goes bare
             if sent is None and not halt:
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
             stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()

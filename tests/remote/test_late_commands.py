@@ -8,6 +8,8 @@ and the station will take it), and at the station, whether the rotator was asked
 from __future__ import annotations
 
 import socket
+import sys
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +23,7 @@ from bridge.mqtt.client import MqttClient
 from bridge.mqtt.heartbeat import (
     AHEAD_S,
     CLOCK_WINDOW_S,
+    MAX_BUCKETS,
     SILENT_S,
     Beat,
     Stamp,
@@ -289,6 +292,36 @@ def test_without_a_heartbeat_only_a_stop_goes_unstamped() -> None:
     link.send("rotor/stop", "stop", "DL1ABC", 5)
     ((topic, props),) = paho.published
     assert topic == "rotor/stop" and props.UserProperty == [("operator", "DL1ABC")]
+
+
+def test_a_flood_on_the_heartbeat_topic_never_keeps_a_stop_or_a_move_from_going() -> None:
+    """Anyone may publish on the heartbeat topic, as fast as they like, on paho's thread while
+    the operator's commands are sent on another: every stop and every move still goes out
+    (none fails on the reckoning), stamped with the best of the beats."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    flooding = threading.Event()
+    flooding.set()
+
+    def flood() -> None:
+        while flooding.is_set():
+            link.station_clock.heard(1_699_999_999.0)
+
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # threads switch all the time: a race shows at once
+    flooder = threading.Thread(target=flood, daemon=True)
+    flooder.start()
+    try:
+        for _ in range(100):
+            link.send("rotor/stop", "stop", "DL1ABC", 5)
+            link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    finally:
+        flooding.clear()
+        flooder.join()
+        sys.setswitchinterval(before)
+    assert [topic for topic, _ in paho.published] == ["rotor/stop", "rotor/target"] * 100
+    stamped = [p.UserProperty for t, p in paho.published if t == "rotor/target"]
+    assert all(("sent", "1700000000.000") in props for props in stamped)
+    assert len(link.station_clock._offsets) <= MAX_BUCKETS  # a minute of beats, no more
 
 
 # -- the station's side of the heartbeat: its main connection beats while it is the bridge ----
