@@ -270,9 +270,54 @@ def test_no_puback_in_time_refuses_the_command_and_resets_the_stalled_connection
     paho.broker.settimeout(slow(5))
     assert paho.broker.recv(10) == b""  # the connection's end, for paho's loop to read
     with pytest.raises(Refused) as again:  # refused at once until paho has connected again
-        link.send("rotor/stop", "stop", "DL1ABC", 5)
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)
     assert again.value.message == "not connected to the station's broker"
     assert len(paho.published) == 1
+
+
+def test_a_stop_pressed_while_a_stalled_link_is_reset_goes_first_on_reconnect() -> None:
+    """The link stalls and is reset; the rotor still turns to its last target. Every STOP the
+    operator presses meanwhile is answered truthfully (not delivered yet: rotctld RPRT -6,
+    "kept and sent first on reconnect"), and one of them reaches the station first thing on
+    the next connection, with its expiry counted from then; a move pressed meanwhile never
+    goes, a lock ON does (a halt too)."""
+    link, paho = link_on(None)
+    with pytest.raises(Refused):
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    assert not link.up
+    for _ in range(3):  # the operator presses STOP again and again through the stall
+        with pytest.raises(Refused) as kept:
+            link.send("rotor/stop", "stop", "DL1ABC", 5)
+        assert kept.value.code is RefusalCode.OFFLINE
+        assert "kept and sent first on reconnect" in kept.value.message
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)
+    assert "kept" not in refused.value.message
+    with pytest.raises(Refused):
+        link.send("rotor/lock", "OFF", "DL1ABC", 5)  # not a halt: refused, never sent later
+    assert len(paho.published) == 1  # nothing went into the dead connection
+    paho.ack = ReasonCode(PacketTypes.PUBACK, identifier=0)
+    link._closed(True, ReasonCode(PacketTypes.DISCONNECT, identifier=0))  # paho reads the reset
+    link._opened(None)  # the link recovered: paho connected again
+    link.station_clock.heard(1_700_000_000.0)  # and the station is heard again
+    link.send("rotor/target", '{"azimuth":300}', "DL1ABC", 5)
+    assert [topic for topic, _ in paho.published] == ["rotor/target", "rotor/stop", "rotor/target"]
+    _, held = paho.published[1]
+    assert held.MessageExpiryInterval == 5  # counted by the broker from this connection on
+    assert held.UserProperty == [("operator", "DL1ABC")]
+
+
+def test_a_stop_through_rotctld_while_the_broker_is_away_says_so_and_is_kept() -> None:
+    """rotctld's answer for a stop that could not go now is an error (RPRT -6, not RPRT 0):
+    the rotor may still turn; the stop goes first when the broker is back."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.connected.clear()  # the broker is away
+    clock = FakeClock()
+    rot, _view = remote(clock, link)  # type: ignore[arg-type]
+    assert rotctld(rot, b"S\n") == b"RPRT -6\n"
+    assert paho.published == []
+    link._opened(None)
+    assert [topic for topic, _ in paho.published] == [T.stop]
 
 
 def test_a_puback_with_a_failure_is_a_refusal_naming_the_acl() -> None:
