@@ -221,9 +221,16 @@ class Halts:
         )
 
     def on_lane(
-        self, topic: str, payload: bytes, retain: bool, origin: Origin | None = None
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        origin: Origin | None = None,
+        late: Callable[[], str | None] = lambda: None,
     ) -> None:
-        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6)."""
+        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6). ``late``: why a
+        stamped lock OFF is too old to carry out (service.py rule 9), asked only of the OFF it
+        would carry out; a stop or lock ON is never asked."""
         if topic == self.topics.bridge_fence_lane:
             self.on_lane_marker(payload)
             return
@@ -240,7 +247,11 @@ class Halts:
             with self._lock:  # lastword.py rule 3: the only word while it is down
                 if self._publisher.up:
                     return
-                rot.set_lock(False, origin=origin)
+                why = late()
+                if why is None:
+                    rot.set_lock(False, origin=origin)
+            if why is not None:  # a link held it up: refused as the main connection would
+                rot.report_refusal(why, pl.describe(kind, payload), origin=origin)
             return
         if retain and not self.retain_is_live:
             self.replayed_halt(rot, topic, kind, payload)

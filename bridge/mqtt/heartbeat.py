@@ -1,5 +1,5 @@
 """The station's heartbeat and the send time it lends the remote's commands: both sides, pure
-(no paho, no thread; the clocks are handed in).
+(no paho, no thread of its own; the clocks are handed in).
 
 A command from ``rotor-bridge remote`` may be held up on its way (a link that stalls for seconds
 without dropping, then delivers what it held); the MQTT message expiry starts only at the broker,
@@ -21,7 +21,9 @@ Rules:
    error is the fastest trip down the link: a command's age reads longer than it was, the safe
    direction. A station clock stepped back reads as a stamp from the future (rule 5), refused
    until the window has forgotten the old beats; one stepped forward is learnt from the next
-   beat. No heartbeat within the window: no reckoning, and the remote stamps nothing.
+   beat. No heartbeat within the window: no reckoning, and the remote stamps nothing. The beats
+   are kept one per second of arrival (the largest offset of that second), so a flood on the
+   heartbeat topic costs no command more than a minute's worth of beats.
 4. A command carries its send time on the station's clock and its expiry as the MQTT 5 user
    properties ``sent`` and ``expiry`` (``Stamp``); a stop and a lock ON may go unstamped.
 5. The station refuses a command whose stamp says it is older than its expiry, or from more
@@ -34,6 +36,7 @@ Rules:
 from __future__ import annotations
 
 import math
+import threading
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,6 +44,8 @@ from dataclasses import dataclass
 HEARTBEAT_S = 2.0  # rule 1
 SILENT_S = 3 * HEARTBEAT_S  # rule 2: three beats missed
 CLOCK_WINDOW_S = 60.0  # rule 3
+BUCKET_S = 1.0  # rule 3: beats kept one per second of arrival
+MAX_BUCKETS = int(CLOCK_WINDOW_S / BUCKET_S) + 2
 AHEAD_S = 1.0  # rule 5
 SENT, EXPIRY = "sent", "expiry"  # rule 4: the user properties
 MAX_EXPIRY_S = 3600.0
@@ -75,28 +80,40 @@ class Beat:
 
 class StationClock:
     """Rule 3 on the remote: the station's clock reckoned from its heartbeats; ``clock`` is the
-    remote's monotonic clock."""
+    remote's monotonic clock. ``heard`` runs on paho's thread and ``now_unix`` on the senders',
+    so both hold a lock; beats are kept one per BUCKET_S of arrival (the largest offset), at
+    most MAX_BUCKETS, so anyone beating fast costs nothing more than one beat a second."""
 
     def __init__(self, clock: Callable[[], float]) -> None:
         self._clock = clock
-        self._offsets: deque[tuple[float, float]] = deque()  # (arrival, station - arrival)
+        self._lock = threading.Lock()
+        # (first arrival, the largest station - arrival among the beats from then on)
+        self._offsets: deque[tuple[float, float]] = deque(maxlen=MAX_BUCKETS)
 
     def heard(self, station_unix: float) -> None:
-        now = self._clock()
-        self._offsets.append((now, station_unix - now))
-        self._trim(now)
+        with self._lock:
+            now = self._clock()
+            offset = station_unix - now
+            if self._offsets and now - self._offsets[-1][0] < BUCKET_S:
+                first, best = self._offsets[-1]
+                self._offsets[-1] = (first, max(best, offset))
+            else:
+                self._offsets.append((now, offset))
+            self._trim(now)
 
     def forget(self) -> None:
         """The connection dropped: what comes next is learnt anew."""
-        self._offsets.clear()
+        with self._lock:
+            self._offsets.clear()
 
     def now_unix(self) -> float | None:
         """The station's clock now, never later than it (rule 3); None without a recent beat."""
-        now = self._clock()
-        self._trim(now)
-        if not self._offsets:
-            return None
-        return now + max(offset for _, offset in self._offsets)
+        with self._lock:
+            now = self._clock()
+            self._trim(now)
+            if not self._offsets:
+                return None
+            return now + max(offset for _, offset in self._offsets)
 
     def _trim(self, now: float) -> None:
         while self._offsets and now - self._offsets[0][0] > CLOCK_WINDOW_S:

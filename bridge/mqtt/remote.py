@@ -10,11 +10,12 @@ Rules:
    seconds (a command stuck in a broker queue dies there) and the operator as the user
    property ``operator``.
 3. Never late: while the connection is not up, ``send`` raises Refused(OFFLINE) at once and
-   nothing is queued. paho keeps an unacknowledged QoS 1 message and sends it again on the
-   next connection (its ``_messages_reconnect_reset_out``), which would move the antenna
-   minutes after the operator asked; so when the connection drops, every command not yet
-   acknowledged is dropped from paho's queue, under the same lock ``send`` holds (but see
-   rule 6). The remote publishes nothing else at QoS 1, so the whole queue is commands.
+   nothing is queued (a halt excepted: rule 6). paho keeps an unacknowledged QoS 1 message
+   and sends it again on the next connection (its ``_messages_reconnect_reset_out``), which
+   would move the antenna minutes after the operator asked; so when the connection drops,
+   every command not yet acknowledged is dropped from paho's queue, under the same lock
+   ``send`` holds (but see rule 6). The remote publishes nothing else at QoS 1, so the whole
+   queue is commands.
 4. The state topics are subscribed at QoS 0: the newest retained value is what counts, and it
    comes again after every reconnect. Unlike the bridge's command topics they do not ask for
    retain-as-published, so the retain flag the handler gets says "replayed from the broker's
@@ -28,8 +29,17 @@ Rules:
 6. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
    unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
    client was told went out is kept when the rest are dropped, and sent again, with a fresh
-   expiry, first thing on the next connection, before any other command can be sent. One
-   refused at once (``send`` raised) is not: its client knows it did not go.
+   expiry, first thing on the next connection, before any other command can be sent. So is
+   one sent while the connection is down or being reset (rule 7): ``send`` keeps it (once,
+   however often it is pressed) and raises Refused(OFFLINE, KEPT), the truth for its client:
+   not delivered yet (rotctld ``RPRT -6``), kept and sent first on reconnect. Any other
+   command is refused then, and never sent later (rule 3).
+7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
+   ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
+   dropped, rule 3) and the command refused.
+8. A command is stamped with its send time on the station's clock as its live heartbeats let
+   the remote reckon it (heartbeat.py); without one heard, a move is refused. A halt goes
+   unstamped: it never asks the reckoning, so nothing about the heartbeat can keep it back.
 """
 
 from __future__ import annotations
@@ -64,6 +74,10 @@ NOT_CONNECTED = "not connected to the station's broker"
 NOT_HEARD = (
     "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
     "remote sends none)"
+)
+KEPT = (
+    f"{NOT_CONNECTED}: not delivered yet (the rotor may still be turning); the stop is kept "
+    "and sent first on reconnect"
 )
 LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
 
@@ -130,9 +144,13 @@ class RemoteLink(Connection):
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
         with self._send_lock:
+            if not self.up and halt:  # down, or being reset: rule 6
+                props.UserProperty = [("operator", operator)]
+                self._keep(topic, payload.encode(), props)
+                raise Refused(RefusalCode.OFFLINE, KEPT)
             if not self.up:
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
-            sent = self.station_clock.now_unix()
+            sent = None if halt else self.station_clock.now_unix()  # rule 8: a halt goes bare
             if sent is None and not halt:
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
             stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()
@@ -142,6 +160,9 @@ class RemoteLink(Connection):
             )
             if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
                 self._forget_unsent(refused_mid=info.mid)  # paho kept it for later: rule 3
+                if halt:
+                    self._keep(topic, payload.encode(), props)
+                    raise Refused(RefusalCode.OFFLINE, KEPT)
                 raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
             generation = self._generation
         self._await_ack(topic, info.mid, generation, halt)
@@ -234,6 +255,17 @@ class RemoteLink(Connection):
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
             )
+
+    def _keep(self, topic: str, payload: bytes, props: Properties) -> None:
+        """Rule 6: a halt that could not go now goes first on the next connection, once
+        (caller holds _send_lock)."""
+        if any(t == topic and p == payload for t, p, _ in self._held):
+            return  # the same stop pressed again: one is enough
+        self._held.append((topic, payload, props))
+        log.warning(
+            "%s: not connected to the station's broker: kept, sent first on the next connection",
+            topic,
+        )
 
     def _resend_held(self) -> None:
         """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock)."""

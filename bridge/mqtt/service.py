@@ -44,6 +44,7 @@ Rules:
 9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
+   The same on the stop lane, for the lock OFF it carries out while the main connection is down.
 """
 
 from __future__ import annotations
@@ -282,10 +283,22 @@ class MqttService:
         return Origin(Source.MQTT, name)
 
     def on_lane_message(
-        self, topic: str, payload: bytes, retain: bool, operator: str | None = None, *_: object
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        stamp: Stamp | None = None,
     ) -> None:
-        """The stop lane's messages (rule 5: halts.py); its halts are never refused (rule 9)."""
-        self._halts.on_lane(topic, payload, retain, self.origin(operator))
+        """The stop lane's messages (rule 5: halts.py); its halts are never refused, a lock OFF
+        it carries out is judged by its stamp as the main connection's would be (rule 9)."""
+        self._halts.on_lane(
+            topic, payload, retain, self.origin(operator), late=lambda: self._late(stamp)
+        )
+
+    def _late(self, stamp: Stamp | None) -> str | None:
+        """Rule 9: why a stamped command (never a halt) is too old to carry out, or None."""
+        return None if stamp is None else stamp.judge(self._wall())
 
     def on_message(
         self,
@@ -329,7 +342,7 @@ class MqttService:
                 origin=origin,
             )
             return
-        late = None if halt or stamp is None else stamp.judge(self._wall())  # rule 9
+        late = None if halt else self._late(stamp)  # rule 9
         if late is not None:
             rot.report_refusal(late, what, origin=origin)
             return

@@ -30,8 +30,10 @@ Rules:
    OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
    once too while the station is not current (rule 1: its bridge or the rotator offline), as
    the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
-   refused only while the link is down: the station's bridge may be offline on its main
-   connection and still take a stop on its stop lane (mqtt/lane.py).
+   refused only while the link is down (the station's bridge may be offline on its main
+   connection and still take a stop on its stop lane, mqtt/lane.py), and then it is kept and
+   sent first on reconnect (mqtt/remote.py rule 6): OFFLINE tells the client it has not
+   reached the station yet.
 4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
    endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
    position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on

@@ -28,7 +28,9 @@ Rules:
    round trip (``commands_block``: the remote's, which waits for its broker's
    acknowledgement): on one thread of their own, in the order they came (a stop never
    overtakes a target posted before it, nor a target the stop), so no page's stream or
-   command waits for them.
+   command waits for them. A STOP or lock ON posted there waits for the one command under way
+   at most: those queued before it that have not started are not sent (refused ``stale``:
+   the stop came first), so it is neither overtaken nor does it overtake.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
 """
 
@@ -46,7 +48,7 @@ from collections.abc import Awaitable, Callable
 from aiohttp import web
 
 from bridge import __version__
-from bridge.errors import Refused
+from bridge.errors import RefusalCode, Refused
 from bridge.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.web import auth, view
 from bridge.web.commands import BadCommand, Order, WebCommand, carry_out, parse
@@ -123,6 +125,7 @@ class WebConsole:
         self._thread: threading.Thread | None = None
         self._running = False
         self._far: concurrent.futures.ThreadPoolExecutor | None = None  # rule 5
+        self._far_halts: dict[str, int] = {}  # rule 5: halts posted per rotator (the loop's)
 
     # -- wiring (the main thread) ------------------------------------------------------------
     def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
@@ -371,6 +374,7 @@ class WebConsole:
         if rot is None or not cmd.halts():
             return
         if self._far is not None and rot.commands_block:  # rule 5
+            self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
             done = asyncio.wrap_future(self._far.submit(carry_out, rot, cmd, peer))
             done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
             return
@@ -379,6 +383,16 @@ class WebConsole:
         except Refused:  # a rotator far away, its broker out of reach: its POST says so
             return
         self._order.halted(rot.id, cmd, time.monotonic())
+
+    def _far_move(
+        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int
+    ) -> None:
+        """Rule 5, on the commands' thread: not sent if a halt was posted since it came."""
+        if self._far_halts.get(rot.id, 0) != posted:
+            why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
+            rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
+            raise Refused(RefusalCode.STALE, why)
+        carry_out(rot, cmd, peer)
 
     def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
         """A halt carried out off the loop (rule 5), back on the loop."""
@@ -415,7 +429,12 @@ class WebConsole:
             return _json({"error": stale, "code": "stale"}, 409)
         try:
             if self._far is not None and rot.commands_block:  # rule 5
-                far = self._far.submit(carry_out, rot, cmd, request.remote)
+                if halt:
+                    self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
+                    far = self._far.submit(carry_out, rot, cmd, request.remote)
+                else:
+                    posted = self._far_halts.get(rot.id, 0)
+                    far = self._far.submit(self._far_move, rot, cmd, request.remote, posted)
                 await asyncio.wrap_future(far)
             else:
                 carry_out(rot, cmd, request.remote)

@@ -24,6 +24,7 @@ from bridge.model import (
     Stop,
     Target,
 )
+from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import Topics
 from bridge.pointing import Pointing
@@ -755,3 +756,25 @@ def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -
     assert tower.calls[-1] == ("release", 1)
     svc._halts.say_long_holds()
     assert said[-1] == (said[0][0], False)
+
+
+def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> None:
+    """Rule 9 on the stop lane too: while the main connection is down the lane carries out a
+    lock OFF (lastword.py rule 3), but one a stalled link held up past its expiry is refused and
+    reported as the main connection would; a stop or lock ON is never judged by its stamp."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    pub.up = False  # the main connection is down
+    stale = Stamp.of(NOW_UNIX - 30, 5)
+    svc.on_lane_message("rotor/lock", b"OFF", False, "DL1ABC", stale)
+    assert [c[0] for c in tower.calls] == ["refused"]
+    assert "older than its 5 s expiry" in str(tower.calls[0][1])
+    tower.calls.clear()
+    svc.on_lane_message("rotor/lock", b"OFF", False, "DL1ABC", Stamp.of(NOW_UNIX - 1, 5))
+    svc.on_lane_message("rotor/stop", b"", False, "DL1ABC", stale)
+    svc.on_lane_message("rotor/lock", b"ON", False, "DL1ABC", stale)
+    assert [c[0] if c[0] == "submit" else c[:2] for c in tower.calls] == [
+        ("lock", False),
+        "submit",
+        ("lock", True),
+    ]

@@ -8,6 +8,8 @@ and the station will take it), and at the station, whether the rotator was asked
 from __future__ import annotations
 
 import socket
+import sys
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +23,7 @@ from bridge.mqtt.client import MqttClient
 from bridge.mqtt.heartbeat import (
     AHEAD_S,
     CLOCK_WINDOW_S,
+    MAX_BUCKETS,
     SILENT_S,
     Beat,
     Stamp,
@@ -267,9 +270,54 @@ def test_no_puback_in_time_refuses_the_command_and_resets_the_stalled_connection
     paho.broker.settimeout(slow(5))
     assert paho.broker.recv(10) == b""  # the connection's end, for paho's loop to read
     with pytest.raises(Refused) as again:  # refused at once until paho has connected again
-        link.send("rotor/stop", "stop", "DL1ABC", 5)
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)
     assert again.value.message == "not connected to the station's broker"
     assert len(paho.published) == 1
+
+
+def test_a_stop_pressed_while_a_stalled_link_is_reset_goes_first_on_reconnect() -> None:
+    """The link stalls and is reset; the rotor still turns to its last target. Every STOP the
+    operator presses meanwhile is answered truthfully (not delivered yet: rotctld RPRT -6,
+    "kept and sent first on reconnect"), and one of them reaches the station first thing on
+    the next connection, with its expiry counted from then; a move pressed meanwhile never
+    goes, a lock ON does (a halt too)."""
+    link, paho = link_on(None)
+    with pytest.raises(Refused):
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    assert not link.up
+    for _ in range(3):  # the operator presses STOP again and again through the stall
+        with pytest.raises(Refused) as kept:
+            link.send("rotor/stop", "stop", "DL1ABC", 5)
+        assert kept.value.code is RefusalCode.OFFLINE
+        assert "kept and sent first on reconnect" in kept.value.message
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5)
+    assert "kept" not in refused.value.message
+    with pytest.raises(Refused):
+        link.send("rotor/lock", "OFF", "DL1ABC", 5)  # not a halt: refused, never sent later
+    assert len(paho.published) == 1  # nothing went into the dead connection
+    paho.ack = ReasonCode(PacketTypes.PUBACK, identifier=0)
+    link._closed(True, ReasonCode(PacketTypes.DISCONNECT, identifier=0))  # paho reads the reset
+    link._opened(None)  # the link recovered: paho connected again
+    link.station_clock.heard(1_700_000_000.0)  # and the station is heard again
+    link.send("rotor/target", '{"azimuth":300}', "DL1ABC", 5)
+    assert [topic for topic, _ in paho.published] == ["rotor/target", "rotor/stop", "rotor/target"]
+    _, held = paho.published[1]
+    assert held.MessageExpiryInterval == 5  # counted by the broker from this connection on
+    assert held.UserProperty == [("operator", "DL1ABC")]
+
+
+def test_a_stop_through_rotctld_while_the_broker_is_away_says_so_and_is_kept() -> None:
+    """rotctld's answer for a stop that could not go now is an error (RPRT -6, not RPRT 0):
+    the rotor may still turn; the stop goes first when the broker is back."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    link.connected.clear()  # the broker is away
+    clock = FakeClock()
+    rot, _view = remote(clock, link)  # type: ignore[arg-type]
+    assert rotctld(rot, b"S\n") == b"RPRT -6\n"
+    assert paho.published == []
+    link._opened(None)
+    assert [topic for topic, _ in paho.published] == [T.stop]
 
 
 def test_a_puback_with_a_failure_is_a_refusal_naming_the_acl() -> None:
@@ -289,6 +337,36 @@ def test_without_a_heartbeat_only_a_stop_goes_unstamped() -> None:
     link.send("rotor/stop", "stop", "DL1ABC", 5)
     ((topic, props),) = paho.published
     assert topic == "rotor/stop" and props.UserProperty == [("operator", "DL1ABC")]
+
+
+def test_a_flood_on_the_heartbeat_topic_never_keeps_a_stop_or_a_move_from_going() -> None:
+    """Anyone may publish on the heartbeat topic, as fast as they like, on paho's thread while
+    the operator's commands are sent on another: every stop and every move still goes out
+    (none fails on the reckoning), stamped with the best of the beats."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    flooding = threading.Event()
+    flooding.set()
+
+    def flood() -> None:
+        while flooding.is_set():
+            link.station_clock.heard(1_699_999_999.0)
+
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # threads switch all the time: a race shows at once
+    flooder = threading.Thread(target=flood, daemon=True)
+    flooder.start()
+    try:
+        for _ in range(100):
+            link.send("rotor/stop", "stop", "DL1ABC", 5)
+            link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5)
+    finally:
+        flooding.clear()
+        flooder.join()
+        sys.setswitchinterval(before)
+    assert [topic for topic, _ in paho.published] == ["rotor/stop", "rotor/target"] * 100
+    stamped = [p.UserProperty for t, p in paho.published if t == "rotor/target"]
+    assert all(("sent", "1700000000.000") in props for props in stamped)
+    assert len(link.station_clock._offsets) <= MAX_BUCKETS  # a minute of beats, no more
 
 
 # -- the station's side of the heartbeat: its main connection beats while it is the bridge ----

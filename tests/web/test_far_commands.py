@@ -99,3 +99,38 @@ def test_a_command_waiting_far_away_holds_up_no_other_request_and_order_is_kept(
     wait_until(lambda: len(rot.carried) == 2, 10, "both carried out")
     assert rot.carried == ["target 120", "stop"]  # in the order they came, never overtaken
     assert answers == {"target": 200, "stop": 200}
+
+
+def test_a_stop_waits_for_the_one_command_under_way_and_the_older_queued_never_go(
+    far: tuple[FarRotator, WebConsole],
+) -> None:
+    """A stalled link: one target waits for its acknowledgement, two more wait behind it, then
+    STOP. The STOP goes right after the one under way; the queued targets, older than it, are
+    not sent at all (they would turn the rotor after the stop): refused as stale."""
+    rot, console = far
+    answers: dict[str, int] = {}
+
+    def post(name: str, **doc: object) -> None:
+        client = ConsoleClient(console.port)
+        client.session()
+        answers[name] = client.command("far", **doc).status
+
+    def start(name: str, **doc: object) -> threading.Thread:
+        t = threading.Thread(target=post, args=(name,), kwargs=doc)
+        t.start()
+        return t
+
+    posts = [start("first", command="target", az=120)]
+    assert rot.waiting.wait(slow(10)), "the first target never reached the rotator"
+    far_thread = console._far
+    assert far_thread is not None
+    for queued, (name, az) in enumerate((("second", 130), ("third", 140)), start=1):
+        posts.append(start(name, command="target", az=az))
+        wait_until(lambda n=queued: far_thread._work_queue.qsize() == n, 10, f"{name} queued")
+    posts.append(start("stop", command="stop"))
+    wait_until(lambda: far_thread._work_queue.qsize() == 3, 10, "the stop posted")
+    rot.link.set()
+    for t in posts:
+        t.join(slow(10))
+    assert rot.carried == ["target 120", "stop"]
+    assert answers == {"first": 200, "second": 409, "third": 409, "stop": 200}
