@@ -26,20 +26,23 @@ Rules:
    most once per 10 s, with a count.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
-5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction:
-   at most ``max_clients`` threads a port, each started only for a connection alive when
-   accepted and within its peer address's ACCEPTS_S a second (a burst of as many). The accept
-   loop never sleeps with connections waiting (a backlog full of dead connections would keep
-   a real client waiting, or drop it): a connection its peer already closed, or one over its
-   peer's budget, is closed at once with no thread (over budget: reset, said at most once per
-   LOG_S), so a flood of connect-and-close from anywhere, loopback included, costs an accept
-   and a close each and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at
-   most that many commands); each client has a budget (ratelimit.Budget) of bytes a second,
-   each reply costing REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and
-   its bytes wait in TCP's buffers, said once (at most once per LOG_S a port). A client that
-   sends MAX_UNFINISHED bytes without finishing a command (no command is near that long) is
-   dropped and logged (at most once per LOG_S, with a count). A well-behaved client's stop is
-   read at its first wake-up: its budget is its own.
+5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
+   most ``max_clients`` threads a port, each started only for a connection alive when accepted
+   and within its peer address's ACCEPTS_S a second (a burst of as many). The accept loop takes
+   every connection from the kernel at once (a backlog full of dead connections kept a real
+   client waiting, or dropped it): one its peer already closed is closed with no thread and no
+   budget; one over its peer's budget waits in the accept loop, no thread, until the budget
+   allows (oldest first), and is closed as soon as its peer leaves. At most ``max_clients`` wait;
+   past that the oldest that has sent nothing is reset (said at most once per LOG_S). Over budget
+   is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
+   would be turned away with it. So a flood of connect-and-close costs an accept and a close each
+   and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
+   commands); each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
+   REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
+   TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
+   bytes without finishing a command (no command is near that long) is dropped and logged (at
+   most once per LOG_S, with a count). A well-behaved client's stop is read at its first wake-up:
+   its budget is its own.
 """
 
 from __future__ import annotations
@@ -309,36 +312,92 @@ class LineServer:
         listener = self._listener
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
+        waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
         with selectors.DefaultSelector() as sel:
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
-            while True:  # rule 5: never a sleep while connections wait
-                events = sel.select()
-                if any(key.fileobj == self._wake_r for key, _ in events):
-                    return
-                try:
-                    conn, peer = listener.accept()
-                except BlockingIOError:
-                    continue
-                except OSError as exc:
-                    log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
-                    continue
-                if not _alive(conn):  # rule 5: its peer already left; no thread, no budget
+            try:
+                while True:  # rule 5: never a sleep while connections wait in the kernel
+                    events = sel.select(self._admit_waiting(waiting, sel))
+                    if any(key.fileobj == self._wake_r for key, _ in events):
+                        return
+                    for key, _ in events:
+                        if key.fileobj is listener:
+                            self._take(listener, waiting, sel)
+                        elif isinstance(key.fileobj, socket.socket):
+                            conn = key.fileobj  # a waiting one: its bytes came, or it left
+                            sel.unregister(conn)
+                            if not _alive(conn):
+                                del waiting[conn]
+                                conn.close()
+            finally:
+                for conn in waiting:
                     conn.close()
-                    continue
-                now = self._clock()
-                if not self._accept_budget(peer[0], now).take(now):
-                    _reset(conn)  # rule 5: over its peer's budget, at once and no thread
-                    self._over_log.warn(
-                        now,
-                        "%s for %s: %s connects faster than a client may: connection reset",
-                        self.label,
-                        self.rotator_id,
-                        peer[0],
-                    )
-                    continue
-                conn.setblocking(True)
-                self._admit(conn, peer)
+
+    def _take(
+        self,
+        listener: socket.socket,
+        waiting: dict[socket.socket, tuple[str, int]],
+        sel: selectors.BaseSelector,
+    ) -> None:
+        """Rule 5: one connection from the kernel's queue, at once: closed if its peer already
+        left, a thread if its peer is within its budget, else it waits here (no thread)."""
+        try:
+            conn, peer = listener.accept()
+        except BlockingIOError:
+            return
+        except OSError as exc:
+            log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
+            return
+        if not _alive(conn):  # its peer already left: no thread, no budget
+            conn.close()
+            return
+        now = self._clock()
+        queued = any(p[0] == peer[0] for p in waiting.values())
+        if not queued and self._accept_budget(peer[0], now).take(now):
+            conn.setblocking(True)
+            self._admit(conn, peer)
+            return
+        if len(waiting) >= self._max_clients:  # the oldest that has sent nothing goes
+            quiet = [c for c in waiting if c in sel.get_map()] or list(waiting)
+            gone = quiet[0]
+            if gone in sel.get_map():
+                sel.unregister(gone)
+            del waiting[gone]
+            _reset(gone)
+            self._over_log.warn(
+                now,
+                "%s for %s: %s connects faster than a client may: connection reset",
+                self.label,
+                self.rotator_id,
+                peer[0],
+            )
+        waiting[conn] = peer
+        sel.register(conn, selectors.EVENT_READ)
+
+    def _admit_waiting(
+        self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
+    ) -> float | None:
+        """Rule 5: a thread for each waiting connection whose peer is back in credit, oldest
+        first; returns how long until the next one may go (None: none waits)."""
+        now = self._clock()
+        next_s: float | None = None
+        held: set[str] = set()
+        for conn, peer in list(waiting.items()):
+            if peer[0] in held:
+                continue
+            bucket = self._accept_budget(peer[0], now)
+            if not bucket.take(now):
+                held.add(peer[0])
+                wait_s = max(0.001, (1.0 - bucket.tokens) / bucket.rate_per_s)
+                next_s = wait_s if next_s is None else min(next_s, wait_s)
+                continue
+            del waiting[conn]
+            if conn in sel.get_map():
+                sel.unregister(conn)
+            conn.setblocking(True)
+            self._admit(conn, peer)
+        return next_s
 
     def _accept_budget(self, host: str, now: float) -> TokenBucket:
         bucket = self._accepts.get(host)
