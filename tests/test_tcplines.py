@@ -14,7 +14,7 @@ import pytest
 from bridge.gs232 import Gs232Session
 from bridge.model import Origin, Source, Stop, Target
 from bridge.ratelimit import Budget
-from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer
+from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer, _Client
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow
@@ -291,3 +291,26 @@ def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
     finally:
         for sock in busy:
             sock.close()
+
+
+def test_one_address_off_loopback_holds_a_quarter_of_the_slots_and_loopback_no_share() -> None:
+    """One host's connections cannot fill the port for the others: at its share (4 of 16) a
+    newcomer from it makes room among its own clients; another address, or loopback (every
+    program on the host), is not held to it."""
+    server = LineServer("tower", 0, "127.0.0.1", lambda: Gs232Session(_Tower()), label="g", key="g")
+    pairs = [socket.socketpair() for _ in range(9)]
+    try:
+        for n, (mine, _theirs) in enumerate(pairs[:4]):
+            server._clients[mine] = _Client(threading.Thread(), "192.0.2.1", float(n))
+        assert server._make_room("192.0.2.7", 10.0) == (True, "")
+        assert len(server._clients) == 4  # another address: nobody dropped
+        assert server._make_room("192.0.2.1", 10.0)[0]
+        assert pairs[0][0] not in server._clients and len(server._clients) == 3  # its oldest
+        for n, (mine, _theirs) in enumerate(pairs[4:]):
+            server._clients[mine] = _Client(threading.Thread(), "127.0.0.1", float(n))
+        assert server._make_room("127.0.0.1", 10.0) == (True, "")
+        assert len(server._clients) == 8  # loopback: no share, room to spare
+    finally:
+        for a, b in pairs:
+            a.close()
+            b.close()
