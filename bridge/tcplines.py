@@ -13,14 +13,31 @@ Rules:
    HTTP header (``Host: ...``). A text protocol parses any bytes as commands, so a web page open
    on the shack PC could otherwise turn the antenna through a loopback port.
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
-   leaves a command unfinished for 60 s (one byte a second would hold a slot for ever);
-   connections turned away because every slot is taken are logged once per 10 s, with a count.
+   leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
+   A new client always gets in to send its stop: when every slot is taken (``max_clients``),
+   the client that has done nothing for longest (``_Client.evictable``: no command half
+   received, or one left half received for more than PENDING_GRACE_S) is dropped to make room;
+   only when every client is in the middle of a command is the newcomer turned away. A peer
+   address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
+   past that makes room among its own clients the same way or is turned away, so one host's
+   connections cannot fill the port for the others. Loopback has no such share: every program
+   on the host is 127.0.0.1 (or ::1), so a share would be a limit on the shack's own programs;
+   there the make-room rule is what lets the operator in. Drops and refusals are logged at
+   most once per 10 s, with a count.
 4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
    the rotator, the address and the setting to change.
-5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction:
-   at most ``max_clients`` threads a port, ACCEPTS_S connections a second (the rest wait in the
-   kernel's backlog); a wake-up reads at most READ_BYTES (so runs at most that many commands);
-   each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
+5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
+   most ``max_clients`` threads a port, each started only for a connection alive when accepted
+   and within its peer address's ACCEPTS_S a second (a burst of as many). The accept loop takes
+   every connection from the kernel at once (a backlog full of dead connections kept a real
+   client waiting, or dropped it): one its peer already closed is closed with no thread and no
+   budget; one over its peer's budget waits in the accept loop, no thread, until the budget
+   allows (oldest first), and is closed as soon as its peer leaves. At most ``max_clients`` wait;
+   past that the oldest that has sent nothing is reset (said at most once per LOG_S). Over budget
+   is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
+   would be turned away with it. So a flood of connect-and-close costs an accept and a close each
+   and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
+   commands); each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
    REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
    TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
    bytes without finishing a command (no command is near that long) is dropped and logged (at
@@ -33,19 +50,20 @@ Rules:
 from __future__ import annotations
 
 import errno
+import ipaddress
 import logging
 import math
 import os
 import re
-import select
 import selectors
 import socket
+import struct
 import threading
 import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge.ratelimit import Budget
+from bridge.ratelimit import Budget, TokenBucket
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +75,9 @@ RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of
 REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
 MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
-ACCEPTS_S = 20.0  # rule 5: connections accepted a second, at most
+ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
+PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
+PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 
 
 class RareLog:
@@ -83,6 +103,49 @@ class Close:
 
 
 CLOSE = Close()
+
+
+class _Client:
+    """Rule 3's bookkeeping for one connected client: what ``_admit`` weighs to make room."""
+
+    def __init__(self, thread: threading.Thread, host: str, now: float) -> None:
+        self.thread = thread
+        self.host = host
+        self.useful_s = now  # connected, or last finished a command
+        self.pending_s: float | None = None  # first byte of a command not yet complete
+
+    def evictable(self, now: float) -> bool:
+        return self.pending_s is None or now - self.pending_s > PENDING_GRACE_S
+
+
+def _loopback(host: str) -> bool:
+    try:
+        addr = ipaddress.ip_address(host.split("%")[0])
+    except ValueError:
+        return False
+    if isinstance(addr, ipaddress.IPv6Address) and addr.ipv4_mapped is not None:
+        addr = addr.ipv4_mapped
+    return addr.is_loopback
+
+
+def _alive(conn: socket.socket) -> bool:
+    """Rule 5: False if the peer already closed (or reset) the connection."""
+    conn.setblocking(False)
+    try:
+        return conn.recv(1, socket.MSG_PEEK) != b""
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+
+
+def _reset(conn: socket.socket) -> None:
+    """Close with a reset: nothing of this connection lingers on our side (no TIME_WAIT)."""
+    try:
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    except OSError:
+        pass
+    conn.close()
 
 
 class LineSession(Protocol):
@@ -118,6 +181,7 @@ class LineServer:
         label: str,
         key: str,
         max_clients: int = 16,
+        max_per_peer: int | None = None,
         idle_timeout_s: float = 300.0,
         useful_within_s: float = USEFUL_WITHIN_S,
         clock: Callable[[], float] = time.monotonic,
@@ -127,7 +191,9 @@ class LineServer:
         max_unfinished: int = MAX_UNFINISHED,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
-        sent a command: model.Origin) instead of ``session``. The last three: rule 5."""
+        sent a command: model.Origin) instead of ``session``. The last three: rule 5.
+        ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
+        of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
         self._read_bytes = read_bytes
         self._max_unfinished = max_unfinished
@@ -143,6 +209,10 @@ class LineServer:
         self._bind = bind
         self._requested_port = port
         self._max_clients = max_clients
+        self._max_per_peer = max_per_peer if max_per_peer else max(1, max_clients // 4)
+        self._accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
+        self._over_log = RareLog()
+        self._room_log = RareLog(REFUSAL_LOG_S)
         self._idle_timeout_s = idle_timeout_s
         self._useful_within_s = max(useful_within_s, 0.0)
         self._clock = clock
@@ -152,7 +222,7 @@ class LineServer:
         self._wake_r, self._wake_w = -1, -1
         self._accept_thread: threading.Thread | None = None
         self._lock = threading.Lock()
-        self._clients: dict[socket.socket, threading.Thread] = {}
+        self._clients: dict[socket.socket, _Client] = {}
         self._stopping = False
 
     @property
@@ -232,8 +302,8 @@ class LineServer:
                 conn.shutdown(socket.SHUT_RDWR)  # wakes the client thread's recv()
             except OSError:
                 pass
-        for _conn, thread in clients:
-            thread.join(timeout_s)
+        for _conn, client in clients:
+            client.thread.join(timeout_s)
         self._listener.close()
         self._listener = None
         self._accept_thread = None
@@ -244,63 +314,182 @@ class LineServer:
         listener = self._listener
         assert listener is not None
         listener.setblocking(False)  # a client that gave up between select and accept
-        budget = Budget(ACCEPTS_S, self._clock())
+        waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
         with selectors.DefaultSelector() as sel:
             sel.register(listener, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
-            while True:
-                pause_s = budget.wait_s(self._clock())
-                if pause_s > 0:  # rule 5: the next ones wait in the backlog
-                    if select.select([self._wake_r], [], [], pause_s)[0]:
+            try:
+                while True:  # rule 5: never a sleep while connections wait in the kernel
+                    events = sel.select(self._admit_waiting(waiting, sel))
+                    if any(key.fileobj == self._wake_r for key, _ in events):
                         return
-                    continue
-                events = sel.select()
-                if any(key.fileobj == self._wake_r for key, _ in events):
-                    return
-                try:
-                    conn, peer = listener.accept()
-                except BlockingIOError:
-                    continue
-                except OSError as exc:
-                    log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
-                    continue
-                conn.setblocking(True)
-                budget.spend(1, self._clock())
-                self._admit(conn, peer)
+                    for key, _ in events:
+                        if key.fileobj is listener:
+                            self._take(listener, waiting, sel)
+                        elif isinstance(key.fileobj, socket.socket):
+                            conn = key.fileobj  # a waiting one: its bytes came, or it left
+                            sel.unregister(conn)
+                            if not _alive(conn):
+                                del waiting[conn]
+                                conn.close()
+            finally:
+                for conn in waiting:
+                    conn.close()
+
+    def _take(
+        self,
+        listener: socket.socket,
+        waiting: dict[socket.socket, tuple[str, int]],
+        sel: selectors.BaseSelector,
+    ) -> None:
+        """Rule 5: one connection from the kernel's queue, at once: closed if its peer already
+        left, a thread if its peer is within its budget, else it waits here (no thread)."""
+        try:
+            conn, peer = listener.accept()
+        except BlockingIOError:
+            return
+        except OSError as exc:
+            log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
+            return
+        if not _alive(conn):  # its peer already left: no thread, no budget
+            conn.close()
+            return
+        now = self._clock()
+        queued = any(p[0] == peer[0] for p in waiting.values())
+        if not queued and self._accept_budget(peer[0], now).take(now):
+            conn.setblocking(True)
+            self._admit(conn, peer)
+            return
+        if len(waiting) >= self._max_clients:  # the oldest that has sent nothing goes
+            quiet = [c for c in waiting if c in sel.get_map()] or list(waiting)
+            gone = quiet[0]
+            if gone in sel.get_map():
+                sel.unregister(gone)
+            del waiting[gone]
+            _reset(gone)
+            self._over_log.warn(
+                now,
+                "%s for %s: %s connects faster than a client may: connection reset",
+                self.label,
+                self.rotator_id,
+                peer[0],
+            )
+        waiting[conn] = peer
+        sel.register(conn, selectors.EVENT_READ)
+
+    def _admit_waiting(
+        self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
+    ) -> float | None:
+        """Rule 5: a thread for each waiting connection whose peer is back in credit, oldest
+        first; returns how long until the next one may go (None: none waits)."""
+        now = self._clock()
+        next_s: float | None = None
+        held: set[str] = set()
+        for conn, peer in list(waiting.items()):
+            if peer[0] in held:
+                continue
+            bucket = self._accept_budget(peer[0], now)
+            if not bucket.take(now):
+                held.add(peer[0])
+                wait_s = max(0.001, (1.0 - bucket.tokens) / bucket.rate_per_s)
+                next_s = wait_s if next_s is None else min(next_s, wait_s)
+                continue
+            del waiting[conn]
+            if conn in sel.get_map():
+                sel.unregister(conn)
+            conn.setblocking(True)
+            self._admit(conn, peer)
+        return next_s
+
+    def _accept_budget(self, host: str, now: float) -> TokenBucket:
+        bucket = self._accepts.get(host)
+        if bucket is None:
+            if len(self._accepts) >= PEERS_KEPT:  # forget those back to a full bucket
+                full = [h for h, b in self._accepts.items() if now - b.t >= 1.0]
+                for h in full:
+                    del self._accepts[h]
+                if len(self._accepts) >= PEERS_KEPT:
+                    self._accepts.clear()
+            bucket = self._accepts[host] = TokenBucket.full(ACCEPTS_S, ACCEPTS_S, now)
+        return bucket
+
+    def _make_room(self, host: str, now: float) -> tuple[bool, str]:
+        """Rule 3, under the lock: whether a client from ``host`` may come in, dropping the
+        longest-idle evictable client if the port (or the peer's share) is full."""
+        if self._stopping:
+            return False, "stopping"
+        pool = list(self._clients.items())
+        if not _loopback(host):
+            own = [(c, k) for c, k in pool if k.host == host]
+            if len(own) >= self._max_per_peer:
+                pool, why = own, f"{host}'s share of {self._max_per_peer} slots"
+            elif len(pool) < self._max_clients:
+                return True, ""
+            else:
+                why = f"all {self._max_clients} slots"
+        elif len(pool) < self._max_clients:
+            return True, ""
+        else:
+            why = f"all {self._max_clients} slots"
+        candidates = [(k.useful_s, c) for c, k in pool if k.evictable(now)]
+        if not candidates:
+            return False, f"{why} taken, every client mid-command"
+        _useful_s, victim = min(candidates, key=lambda pair: pair[0])
+        gone = self._clients.pop(victim)
+        try:
+            victim.shutdown(socket.SHUT_RDWR)  # its thread wakes, says it is gone, closes
+        except OSError:
+            pass
+        self._room_log.warn(
+            now,
+            "%s for %s: %s taken, dropped the client idle longest (%s, %.0f s) to let one in",
+            self.label,
+            self.rotator_id,
+            why,
+            gone.host,
+            now - gone.useful_s,
+        )
+        return True, ""
 
     def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         with self._lock:
-            if self._stopping or len(self._clients) >= self._max_clients:
-                conn.close()
+            now = self._clock()
+            room, why = self._make_room(peer[0], now)
+            if not room:
+                _reset(conn)
                 self._refused_since += 1
-                now = self._clock()
                 if now - self._refused_logged_s >= REFUSAL_LOG_S:  # rule 3: one line, a count
                     log.warning(
-                        "%s for %s: turned away %d connection(s), the last from %s:%d "
-                        "(%d clients connected, the most it takes)",
+                        "%s for %s: turned away %d connection(s), the last from %s:%d (%s)",
                         self.label,
                         self.rotator_id,
                         self._refused_since,
                         peer[0],
                         peer[1],
-                        len(self._clients),
+                        why,
                     )
                     self._refused_logged_s, self._refused_since = now, 0
                 return
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            thread = threading.Thread(
-                target=self._serve,
-                args=(conn, peer),
-                name=f"{self._key}-{self.rotator_id}-{peer[1]}",
-                daemon=True,
+            client = _Client(
+                threading.Thread(
+                    target=self._serve,
+                    args=(conn, peer),
+                    name=f"{self._key}-{self.rotator_id}-{peer[1]}",
+                    daemon=True,
+                ),
+                peer[0],
+                now,
             )
-            self._clients[conn] = thread
-        thread.start()
+            self._clients[conn] = client
+        client.thread.start()
 
     def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
         who = f"{self.label} for {self.rotator_id}: client {peer[0]}:{peer[1]}"
         log.info("%s connected", who)
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
+        with self._lock:
+            me = self._clients.get(conn)  # None: already dropped to make room
         guard = HttpGuard()
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
@@ -321,6 +510,9 @@ class LineServer:
                         return
                     continue
                 over = False
+                if me is not None:  # rule 3: what _make_room weighs
+                    me.pending_s = pending_since
+                    me.useful_s = last_bytes if pending_since is None else me.useful_s
                 # rule 3: silent for the idle timeout, or a command left unfinished for a while
                 now = self._clock()
                 deadline = last_bytes + self._idle_timeout_s

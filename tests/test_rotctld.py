@@ -23,6 +23,7 @@ from bridge.model import ErrorEvent, MotionState
 from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
 from bridge.settings import RotatorSettings, Settings
 from tests.support import feed, wait_until
+from tests.support.clock import FakeClock
 from tests.support.rig import FAST_POLLING
 from tests.support.waiting import slow
 
@@ -55,7 +56,10 @@ class Client:
         return self.sock.recv(4096)
 
     def at_eof(self) -> bool:
-        return self.sock.recv(4096) == b""
+        try:
+            return self.sock.recv(4096) == b""
+        except ConnectionResetError:  # turned away: reset
+            return True
 
     def close(self) -> None:
         self.sock.close()
@@ -563,20 +567,38 @@ def test_a_port_in_use_is_a_clear_error(station: StationFactory) -> None:
         other.start()
 
 
-def test_clients_beyond_the_limit_are_turned_away(station: StationFactory) -> None:
+def test_a_client_beyond_the_limit_takes_the_slot_of_the_one_idle_longest(
+    station: StationFactory,
+) -> None:
+    """Every slot taken: the newcomer gets in (it may be the operator's stop) and the client
+    idle longest goes; one in the middle of a command is never dropped, the newcomer is."""
     st = station()
-    small = RotctldServer(st.rotator, 0, max_clients=1)
+    small = RotctldServer(st.rotator, 0, max_clients=1, clock=FakeClock())
     small.start()
     try:
         first = Client(small.port)
         first.ask(b"_\n", b"Rotor-EZ\n")
         second = Client(small.port)
-        assert second.at_eof()
-        first.ask(b"_\n", b"Rotor-EZ\n")
+        second.ask(b"_\n", b"Rotor-EZ\n")
+        assert first.at_eof()
+        second.send(b"\\")  # half a command: kept (the fake clock stands still)
+        wait_until(lambda: small.client_count == 1, 5, "the first gone")
+        wait_until(
+            lambda: all(c.pending_s is not None for c in small._clients.values()), 5, "mid-command"
+        )
+        assert _turned_away(small.port)
+        second.ask(b"stop\n", b"RPRT 0\n")
         first.close()
         second.close()
     finally:
         small.stop()
+
+
+def _turned_away(port: int) -> bool:
+    try:
+        return Client(port).at_eof()
+    except ConnectionResetError:  # the reset came before connect() returned
+        return True
 
 
 # -- configuration ------------------------------------------------------------------------------
@@ -698,14 +720,12 @@ def test_idle_clients_are_dropped_and_a_slot_frees_for_gpredict(station: Station
         trickle = Client(small.port)  # sends a byte at a time, never a whole command
         trickle.send(b"\\")
         wait_until(lambda: small.client_count == 2, 5, "both connected")
-        turned_away = Client(small.port)
-        assert turned_away.at_eof()  # no slot left
         trickle.send(b"d")
         assert silent.at_eof()  # dropped after 0.5 s of silence
         assert trickle.at_eof()  # dropped: bytes, but no command within 1 s
         gpredict = Client(small.port)
         gpredict.ask(b"S\n", b"RPRT 0\n")
-        for c in (silent, trickle, turned_away, gpredict):
+        for c in (silent, trickle, gpredict):
             c.close()
     finally:
         small.stop()
@@ -734,17 +754,21 @@ def test_turned_away_connections_are_logged_once_with_a_count(
     station: StationFactory, caplog: pytest.LogCaptureFixture
 ) -> None:
     st = station("rotorcard")
-    small = RotctldServer(st.rotator, 0, max_clients=1)
+    clock = FakeClock()
+    small = RotctldServer(st.rotator, 0, max_clients=1, clock=clock)
     small.start()
     try:
         kept = Client(small.port)
         kept.ask(b"S\n", b"RPRT 0\n")
-        for _ in range(50):
-            refused = Client(small.port)
-            assert refused.at_eof()
-            refused.close()
+        kept.send(b"\\")  # mid-command: not dropped to make room (for 2 s)
+        wait_until(
+            lambda: all(c.pending_s is not None for c in small._clients.values()), 5, "mid-command"
+        )
+        for _ in range(30):
+            clock.t += 0.05  # within the address's 20 connections a second, and the 2 s
+            assert _turned_away(small.port)
         lines = [r for r in caplog.records if "turned away" in r.getMessage()]
-        assert len(lines) == 1, [r.getMessage() for r in lines]  # 50 refusals, one line
+        assert len(lines) == 1, [r.getMessage() for r in lines]  # 30 refusals, one line
         kept.close()
     finally:
         small.stop()

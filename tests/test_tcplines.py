@@ -14,7 +14,7 @@ import pytest
 from bridge.gs232 import Gs232Session
 from bridge.model import Origin, Source, Stop, Target
 from bridge.ratelimit import Budget
-from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer
+from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer, _Client
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow
@@ -174,12 +174,12 @@ def test_a_client_over_its_budget_waits_and_another_clients_stop_is_read_at_once
     greedy.close()
 
 
-def test_connections_are_accepted_no_faster_than_the_budget(
+def test_threads_start_no_faster_than_a_peers_budget_and_the_rest_wait_without_one(
     gs232: Callable[..., tuple[_Tower, LineServer]],
 ) -> None:
     """In virtual time: a client dropped (or a crowd) connecting again at once costs a thread
-    each time; past ACCEPTS_S a second the next connections wait in the kernel's backlog, and
-    are taken when time passes."""
+    each time; past ACCEPTS_S a second from one address the next connections wait, taken from
+    the kernel but with no thread, and are served when time passes."""
     clock = FakeClock()
     _tower, server = gs232(clock=clock, max_clients=40)
     crowd = [
@@ -188,7 +188,7 @@ def test_connections_are_accepted_no_faster_than_the_budget(
     ]
     try:
         wait_until(lambda: server.client_count == int(ACCEPTS_S), 10, "a second's worth taken")
-        crowd[-1].sendall(b"C\r")  # connected (the backlog), not yet served
+        crowd[-1].sendall(b"C\r")  # connected, not yet served
         crowd[-1].settimeout(0.2)  # not a deadline: a quiet period
         with pytest.raises(TimeoutError):
             crowd[-1].recv(1)
@@ -223,3 +223,118 @@ def test_commands_sent_back_to_back_are_never_dropped_however_the_reads_cut_them
         flooder.sendall(b"C\r" + b"x" * 4200)
         assert _read(flooder, 8) == b"AZ=120\r\n"
         assert _closed_by_peer(flooder)
+
+
+def test_a_stop_gets_through_a_flood_of_connections_opened_and_closed(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """Two threads open and close connections as fast as they can: the accept loop slept
+    over its budget while the kernel's backlog filled with dead connections, and the
+    operator's connection waited behind them (or was dropped) for seconds while the rotor
+    turned. Dead connections are now closed at once and use no one's budget."""
+    tower, server = gs232()
+    done = threading.Event()
+    started = threading.Semaphore(0)
+
+    def flood() -> None:
+        n = 0
+        while not done.wait(0):  # not a deadline: a poll; bounded by the operator
+            sock = socket.socket()
+            sock.setblocking(False)
+            sock.connect_ex(("127.0.0.1", server.port))
+            sock.close()
+            n += 1
+            if n == 500:  # the backlog is full of dead connections by now
+                started.release()
+
+    flooders = [threading.Thread(target=flood, daemon=True) for _ in range(2)]
+    for thread in flooders:
+        thread.start()
+    try:
+        for _ in flooders:
+            assert started.acquire(timeout=slow(30))
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+    finally:
+        done.set()
+        for thread in flooders:
+            thread.join()
+    assert [type(c) for c in tower.submitted] == [Stop]
+
+
+def test_with_every_slot_held_by_idle_connections_a_new_clients_stop_is_carried_out(
+    gs232: Callable[..., tuple[_Tower, LineServer]], caplog: pytest.LogCaptureFixture
+) -> None:
+    """Sixteen idle connections held every slot until the idle timeout (300 s) and the
+    operator's stop was turned away: the client idle longest now makes room for it."""
+    tower, server = gs232()
+    hogs = [
+        socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) for _ in range(16)
+    ]
+    try:
+        wait_until(lambda: server.client_count == 16, 10, "every slot taken")
+        with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as operator:
+            operator.sendall(b"S\rC\r")
+            assert _read(operator, 8) == b"AZ=120\r\n"
+        assert [type(c) for c in tower.submitted] == [Stop]
+        assert _closed_by_peer(hogs[0])  # the longest idle went
+        said = [r.getMessage() for r in caplog.records if "to let one in" in r.getMessage()]
+        assert len(said) == 1 and "all 16 slots taken" in said[0], said
+    finally:
+        for sock in hogs:
+            sock.close()
+
+
+def test_a_client_in_the_middle_of_a_command_is_not_dropped_to_make_room(
+    gs232: Callable[..., tuple[_Tower, LineServer]],
+) -> None:
+    """The room is made from idle clients only: one whose command is half received (it may
+    be a stop arriving) keeps its slot, and a newcomer is turned away when all are so."""
+    clock = FakeClock()
+    tower, server = gs232(clock=clock, max_clients=2)
+    busy = [socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) for _ in "ab"]
+    try:
+        wait_until(lambda: server.client_count == 2, 10, "both connected")
+        for sock in busy:
+            sock.sendall(b"C2\rS")  # a stop's first byte, its CR still to come
+        wait_until(
+            lambda: all(c.pending_s is not None for c in server._clients.values()),
+            10,
+            "both mid-command",
+        )
+        try:  # the reset may come before connect() returns
+            with socket.create_connection(("127.0.0.1", server.port), timeout=slow(10)) as late:
+                assert _closed_by_peer(late)
+        except ConnectionResetError:
+            pass
+        for sock in busy:
+            sock.sendall(b"\r")
+            assert _read(sock, 16) == b"AZ=120  EL=000\r\n"
+        wait_until(lambda: len(tower.submitted) == 2, 10, "both stops carried out")
+    finally:
+        for sock in busy:
+            sock.close()
+
+
+def test_one_address_off_loopback_holds_a_quarter_of_the_slots_and_loopback_no_share() -> None:
+    """One host's connections cannot fill the port for the others: at its share (4 of 16) a
+    newcomer from it makes room among its own clients; another address, or loopback (every
+    program on the host), is not held to it."""
+    server = LineServer("tower", 0, "127.0.0.1", lambda: Gs232Session(_Tower()), label="g", key="g")
+    pairs = [socket.socketpair() for _ in range(9)]
+    try:
+        for n, (mine, _theirs) in enumerate(pairs[:4]):
+            server._clients[mine] = _Client(threading.Thread(), "192.0.2.1", float(n))
+        assert server._make_room("192.0.2.7", 10.0) == (True, "")
+        assert len(server._clients) == 4  # another address: nobody dropped
+        assert server._make_room("192.0.2.1", 10.0)[0]
+        assert pairs[0][0] not in server._clients and len(server._clients) == 3  # its oldest
+        for n, (mine, _theirs) in enumerate(pairs[4:]):
+            server._clients[mine] = _Client(threading.Thread(), "127.0.0.1", float(n))
+        assert server._make_room("127.0.0.1", 10.0) == (True, "")
+        assert len(server._clients) == 8  # loopback: no share, room to spare
+    finally:
+        for a, b in pairs:
+            a.close()
+            b.close()
