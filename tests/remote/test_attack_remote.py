@@ -186,8 +186,8 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     assert link.resets == 1
     assert ask(port, b"P 250 0\n") == b"RPRT -6\n"  # refused at once while reconnecting
     tower = r.rotators[0]
-    with pytest.raises(Refused):  # the console's lock ON (remote/console.py) likewise
-        tower.publish(tower.topics.lock, "ON")
+    with pytest.raises(Refused):  # the console's lock ON (remote/console.py): not confirmed,
+        tower.publish(tower.topics.lock, "ON")  # and kept like the stop (mqtt/remote.py rule 6)
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
     log_from = station.broker.log.stat().st_size
@@ -202,7 +202,7 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     wait_until(lambda: len(published()) >= 1, 10, "the unacknowledged stop sent again")
     assert ask(port, b"S\n") == b"RPRT 0\n"  # a marker behind anything resent
     wait_until(lambda: len(published()) >= 2, 10, "the marker stop")
-    assert published() == [b"stop", b"stop"]  # the target never
+    assert published() == [b"stop", b"lock", b"stop"]  # the halts kept, the target never
 
 
 # -- clock skew between the operator and the station -------------------------------------------
