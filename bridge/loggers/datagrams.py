@@ -23,6 +23,9 @@ Rules:
    a repeated one is ambiguous, Malformed. A stop is never refused: the other names it gives
    (a second ``<rotor>``, ``<stop>``'s text beside ``<rotor>``) are in ``also``.
 5. N1MM position report: ``name @ heading*10`` as plain text (``Tower @ 650`` is 65.0).
+6. Whether a datagram may be a stop is told by one byte search, before any parsing: ``<STOP>``
+   (PST, any case) or ``<stop`` (N1MM, any case), the forms rules 2 and 4 read as a stop, so
+   every datagram the parsers call a stop is one of them (and some junk too).
 """
 
 from __future__ import annotations
@@ -66,6 +69,16 @@ class N1mmRequest:
     offset: float = 0.0
     bidirectional: bool = False
     also: tuple[str, ...] = ()  # a stop's other names (rule 4)
+
+
+def may_stop_pst(datagram: bytes) -> bool:
+    """Rule 6."""
+    return b"<stop>" in datagram.lower()
+
+
+def may_stop_n1mm(datagram: bytes) -> bool:
+    """Rule 6."""
+    return b"<stop" in datagram.lower()
 
 
 def _text(datagram: bytes, pattern: re.Pattern[bytes], what: str) -> str:

@@ -20,18 +20,24 @@ Rules (numbered as before commands.py was split off, so that citations hold):
    fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
    socket that cannot be read any more (EBADF, ENOTSOCK) is reported once and dropped: the
    selector is made anew without it, so it can never wake the thread again.
-8. A flood cannot starve a stop (docs/architecture.md rule 12): beyond rule 3, the thread
-   reads at most RATE_DATAGRAMS_S datagrams a second from each socket (ratelimit.Budget, one
-   per socket: a second's worth at once, each datagram costing 1 + its size in KiB), far
-   above what loggers send; past it that socket rests (out of the selector, its datagrams
-   left to the system, which drops what its buffers cannot hold) until back in credit, while
-   every other socket is served as before: a flood on the N1MM port holds up no PST port's
-   stop, nor another N1MM port's. Said at warning level at most once per FLOOD_LOG_S with the
-   count since (``paused``).
+8. A flood cannot starve a stop (docs/architecture.md rule 12), nor hide one: the thread never
+   sleeps while a datagram waits (a sleeping reader lets the system's buffer fill with the
+   flood, and a stop sent then is dropped or queued behind it), so every wake-up reads what
+   waits, PER_WAKEUP a socket (rule 3), and comes straight back for more. Each datagram is
+   first searched for a stop (datagrams.py rule 6, one byte search); one that may be a stop is
+   parsed and carried out at once, whatever any budget says. Everything else is parsed and
+   carried out only within its sender's budget (ratelimit.SourceBudgets, per address and port:
+   RATE_DATAGRAMS_S a second each, a second's worth at once, each datagram costing 1 + its size
+   in KiB, at most MAX_SOURCES senders remembered; RATE_ALL_S for all of them together); a
+   stop is charged to it too, never refused. Over budget a datagram is dropped unparsed and
+   counted (``over_budget``), said at warning level at most once per FLOOD_LOG_S with the
+   count since and the last sender. A flood so costs a read and a search a datagram, and
+   each socket asks the system for a receive buffer of RECV_BUFFER bytes to ride out bursts.
 """
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import logging
 import os
@@ -51,16 +57,28 @@ from bridge.loggers.commands import (
     Rarely,
     Rotator,
 )
-from bridge.loggers.datagrams import MAX_DATAGRAM, Malformed, n1mm_report, parse_n1mm, parse_pst
+from bridge.loggers.datagrams import (
+    MAX_DATAGRAM,
+    Malformed,
+    may_stop_n1mm,
+    may_stop_pst,
+    n1mm_report,
+    parse_n1mm,
+    parse_pst,
+)
 from bridge.pointing import angle_between
-from bridge.ratelimit import Budget
+from bridge.ratelimit import SourceBudgets
 
 log = logging.getLogger(__name__)
 
 FAULT_LOG_S = 10.0  # a fault behind a datagram or in the loop: logged at most this often
 PER_WAKEUP = 16  # datagrams read from one socket before the next ready one is served
-RATE_DATAGRAMS_S = 200.0  # rule 8
+RATE_DATAGRAMS_S = 200.0  # rule 8: a sender's budget, a second
+RATE_ALL_S = 1000.0  # rule 8: every sender's together, a second
+MAX_SOURCES = 256  # rule 8: senders whose budget is remembered
+RECV_BUFFER = 1 << 20  # rule 8: asked of the system (which may give less: net.core.rmem_max)
 FLOOD_LOG_S = 30.0  # rule 8
+REPORT_LOOK_S = 0.1  # a flood's wake-ups look at the reports no more often than this
 REPORT_MOVING_S = 1.5
 REPORT_IDLE_S = 15.0
 REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
@@ -100,9 +118,9 @@ class LoggerEndpoints:
         self._junk_log = Rarely(JUNK_LOG_S)
         self._fault_log = Rarely(FAULT_LOG_S)
         self._flood_log = Rarely(FLOOD_LOG_S)
-        self._budgets: dict[socket.socket, Budget] = {}  # rule 8: one per socket
-        self._resting: set[socket.socket] = set()  # rule 8: in debt, out of the selector
-        self.paused = 0  # rule 8
+        self._budgets = SourceBudgets(RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, clock())
+        self._looked_s = -REPORT_LOOK_S
+        self.over_budget = 0  # rule 8: datagrams dropped unparsed
 
     # -- configuration --------------------------------------------------------------------
     def add_pst(self, rotator: Rotator, port: int, bind: str = "127.0.0.1") -> None:
@@ -141,7 +159,6 @@ class LoggerEndpoints:
                 self._sockets[sock] = endpoint
                 host, port = sock.getsockname()[:2]
                 self._addresses[sock] = host, port
-                self._budgets[sock] = Budget(RATE_DATAGRAMS_S, self._clock())
         except OSError:
             self._close_sockets()
             raise
@@ -189,8 +206,6 @@ class LoggerEndpoints:
         self._sockets.clear()
         self._addresses.clear()
         self._dropped.clear()
-        self._budgets.clear()
-        self._resting.clear()
 
     # -- the thread -----------------------------------------------------------------------
     def _loop(self) -> None:
@@ -216,7 +231,7 @@ class LoggerEndpoints:
     def _new_selector(self) -> selectors.BaseSelector:
         sel = selectors.DefaultSelector()
         for sock in self._sockets:
-            if sock not in self._dropped and sock not in self._resting:
+            if sock not in self._dropped:
                 try:
                     sel.register(sock, selectors.EVENT_READ)
                 except (OSError, ValueError) as exc:  # closed under us
@@ -231,17 +246,12 @@ class LoggerEndpoints:
 
     def _turn(self, sel: selectors.BaseSelector) -> bool:
         """One wake-up: every ready socket served PER_WAKEUP datagrams at most (rule 3), the
-        reports looked at; False once stop() asks."""
+        reports looked at; False once stop() asks. Never a sleep while a datagram waits (rule
+        8): a socket with more comes back ready at once."""
         now = self._clock()
-        for sock in [s for s in self._resting if self._budgets[s].wait_s(now) <= 0]:
-            self._resting.discard(sock)  # rule 8: back in credit, selected again
-            if sock not in self._dropped:
-                sel.register(sock, selectors.EVENT_READ)
         due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
         if self._reporters:  # look at the rotors often enough to see a move begin or end
             due = min(due, now + REPORT_MOVING_S)
-        for sock in self._resting:
-            due = min(due, now + self._budgets[sock].wait_s(now))
         ready: list[socket.socket] = []
         for key, _mask in sel.select(max(0.0, due - now)):
             if key.fileobj == self._wake_r:
@@ -250,18 +260,18 @@ class LoggerEndpoints:
             ready.append(key.fileobj)
         for sock in ready:
             self._serve(sock)
-            if sock not in self._dropped and self._budgets[sock].wait_s(self._clock()) > 0:
-                self._resting.add(sock)  # rule 8: out of the selector until in credit
-                sel.unregister(sock)
-                self._flooded(self._clock())
         if any(sock in self._dropped for sock in ready):
             self._close_selector()  # rule 7: a selector that never hears of it again
-        self._report(self._clock())
+        now = self._clock()
+        if not ready or now - self._looked_s >= REPORT_LOOK_S:
+            self._looked_s = now
+            self._report(now)
         return True
 
     def _serve(self, sock: socket.socket) -> None:
-        """Rule 3: PER_WAKEUP datagrams at most, each on its own."""
+        """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first."""
         endpoint = self._sockets[sock]
+        may_stop = may_stop_pst if isinstance(endpoint, PstEndpoint) else may_stop_n1mm
         for _ in range(PER_WAKEUP):
             try:
                 data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
@@ -273,17 +283,31 @@ class LoggerEndpoints:
                     return
                 log.debug("logger UDP %s:%d: %s", *self._addresses[sock], exc)
                 continue
-            self._budgets[sock].spend(1 + len(data) / 1024, self._clock())  # rule 8
-            try:
-                if isinstance(endpoint, PstEndpoint):
-                    port = self._addresses[sock][1]
-                    self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
-                else:
-                    self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
-            except Malformed as exc:
-                self._junk(_kind(endpoint), peer, exc)
-            except Exception as exc:
-                self._fault(f"{_kind(endpoint)} datagram from {peer[0]}", exc)
+            now = self._clock()
+            source = peer[0], peer[1]
+            if not may_stop(data) and not self._budgets.allow(source, now):
+                self._flooded(now, source)
+                continue
+            self._carry_out(sock, endpoint, data, peer)
+            self._budgets.spend(source, 1 + len(data) / 1024, now)
+
+    def _carry_out(
+        self,
+        sock: socket.socket,
+        endpoint: PstEndpoint | N1mmEndpoint,
+        data: bytes,
+        peer: tuple[str, int],
+    ) -> None:
+        try:
+            if isinstance(endpoint, PstEndpoint):
+                port = self._addresses[sock][1]
+                self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
+            else:
+                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
+        except Malformed as exc:
+            self._junk(_kind(endpoint), peer, exc)
+        except Exception as exc:
+            self._fault(f"{_kind(endpoint)} datagram from {peer[0]}", exc)
 
     def _drop(self, sock: socket.socket, exc: OSError) -> None:
         """Rule 7: a socket that cannot be read any more is said once and never selected."""
@@ -295,16 +319,18 @@ class LoggerEndpoints:
             exc,
         )
 
-    def _flooded(self, now: float) -> None:
-        """Rule 8."""
-        self.paused += 1
+    def _flooded(self, now: float, source: tuple[str, int]) -> None:
+        """Rule 8: a datagram over its sender's budget, dropped unparsed."""
+        self.over_budget += 1
         count = self._flood_log.due(now)
         if count is not None:
             log.warning(
-                "logger UDP: datagrams come faster than %g a second on a port: read no faster "
-                "there, the system drops the rest (%d time(s) since last said)",
-                RATE_DATAGRAMS_S,
+                "logger UDP: %d datagram(s) dropped unread, over the budget of their sender "
+                "(%g a second each, %g in all), the last from %s:%d; stops are still obeyed",
                 count,
+                RATE_DATAGRAMS_S,
+                RATE_ALL_S,
+                *source,
             )
 
     def _fault(self, where: str, exc: Exception) -> None:
@@ -369,6 +395,8 @@ def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))
         sock.setblocking(False)
+        with contextlib.suppress(OSError):  # rule 8: the system may give less, or refuse
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECV_BUFFER)
     except OSError as exc:
         sock.close()
         code = exc.errno or 0

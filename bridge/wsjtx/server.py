@@ -18,11 +18,14 @@ Rules:
 3. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
    logged at most once per JUNK_LOG_S with its traceback and the next datagram is served.
 4. The thread never waits on a rotator: ``Rotator.heard`` only puts into the mailbox.
-5. A flood cannot starve a stop (docs/architecture.md rule 12): the port is read at most
-   RATE_DATAGRAMS_S datagrams a second (ratelimit.Budget, a second's worth at once, each one
-   costing 1 + its size in KiB), far above WSJT-X's few a second; past it the thread sleeps
-   on its stop pipe and the system drops what its buffer cannot hold; said at most once per
-   JUNK_LOG_S (``counts.paused``). Each datagram's decoding is linear in its size.
+5. A flood cannot starve a stop (docs/architecture.md rule 12): the thread never sleeps while
+   a datagram waits (a sleeping reader lets the system's buffer fill), it reads PER_WAKEUP at
+   a wake-up and comes straight back for more; each datagram is decoded and handed on only
+   within its sender's budget (ratelimit.SourceBudgets, per address and port: RATE_DATAGRAMS_S
+   a second each, a second's worth at once, each one costing 1 + its size in KiB, MAX_SOURCES
+   remembered, RATE_ALL_S for all together), far above WSJT-X's few a second. Over it a
+   datagram is dropped undecoded and counted (``counts.over_budget``), said at most once per
+   JUNK_LOG_S. Each datagram's decoding is linear in its size.
 """
 
 from __future__ import annotations
@@ -30,7 +33,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import select
 import selectors
 import socket
 import struct
@@ -42,7 +44,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from bridge.engine.follow import Heard
-from bridge.ratelimit import Budget
+from bridge.ratelimit import SourceBudgets
 from bridge.wsjtx.messages import Malformed, Status, decode
 
 if TYPE_CHECKING:
@@ -59,7 +61,10 @@ def _loopback(address: str) -> bool:
     return address.startswith("127.")
 
 
-RATE_DATAGRAMS_S = 200.0  # rule 5
+RATE_DATAGRAMS_S = 200.0  # rule 5: a sender's budget, a second
+RATE_ALL_S = 1000.0  # rule 5: every sender's together
+MAX_SOURCES = 64  # rule 5
+PER_WAKEUP = 32  # rule 5: datagrams read at one wake-up
 
 
 @dataclass
@@ -71,7 +76,7 @@ class Counts:
     ignored: int = 0  # heartbeats and message types nobody here needs
     foreign: int = 0  # rule 1: from a source a loopback listener does not take
     faults: int = 0
-    paused: int = 0  # rule 5: times the port was read no faster
+    over_budget: int = 0  # rule 5: dropped undecoded
 
 
 @dataclass
@@ -138,6 +143,7 @@ class WsjtxListener:
             sock.close()
             where = f"{self.multicast_group or self.bind}:{self.port}"
             raise OSError(exc.errno, f"WSJT-X UDP port {where}: {exc.strerror or exc}") from None
+        sock.setblocking(False)  # rule 5: read until nothing waits
         self._sock = sock
 
     def start(self) -> None:
@@ -163,29 +169,36 @@ class WsjtxListener:
     def _loop(self) -> None:
         sock = self._sock
         assert sock is not None
+        budgets = SourceBudgets(RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, self.clock())
         with selectors.DefaultSelector() as sel:
             sel.register(sock, selectors.EVENT_READ)
             sel.register(self._wake_r, selectors.EVENT_READ)
-            budget = Budget(RATE_DATAGRAMS_S, self.clock())
             while True:
-                if (pause_s := budget.wait_s(self.clock())) > 0:  # rule 5
-                    self._flooded()
-                    if select.select([self._wake_r], [], [], pause_s)[0]:
-                        return
-                    continue
                 for key, _mask in sel.select():
                     if key.fileobj == self._wake_r:
                         return
-                    try:
-                        datagram, source = sock.recvfrom(RECV_BYTES)
-                    except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
-                        self._fault("reading the WSJT-X port", exc)
-                        continue
-                    budget.spend(1 + len(datagram) / 1024, self.clock())
-                    try:
-                        self.datagram(datagram, source[0])
-                    except Exception as exc:  # rule 3: a bug behind it, not the end
-                        self._fault("a WSJT-X datagram", exc)
+                    self._serve(sock, budgets)
+
+    def _serve(self, sock: socket.socket, budgets: SourceBudgets) -> None:
+        """Rule 5: what waits, PER_WAKEUP at most, each within its sender's budget."""
+        for _ in range(PER_WAKEUP):
+            try:
+                datagram, source = sock.recvfrom(RECV_BYTES)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
+                self._fault("reading the WSJT-X port", exc)
+                continue
+            now = self.clock()
+            sender = source[0], source[1]
+            if not budgets.allow(sender, now):
+                self._flooded(source[0])
+                continue
+            try:
+                self.datagram(datagram, source[0])
+            except Exception as exc:  # rule 3: a bug behind it, not the end
+                self._fault("a WSJT-X datagram", exc)
+            budgets.spend(sender, 1 + len(datagram) / 1024, now)
 
     def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> None:
         """One datagram from the address ``source``, decoded and handed on (rules 1-4)."""
@@ -220,16 +233,17 @@ class WsjtxListener:
             except Exception as exc:  # rule 3
                 self._fault(f"handing WSJT-X's status to {rotator.id}", exc)
 
-    def _flooded(self) -> None:
+    def _flooded(self, source: str) -> None:
         """Rule 5."""
-        self.counts.paused += 1
+        self.counts.over_budget += 1
         count = self._flood_log.due(self.clock())
         if count is not None:
             log.warning(
-                "WSJT-X port: datagrams come faster than %g a second: read no faster, the "
-                "system drops the rest (%d time(s) since last said)",
-                RATE_DATAGRAMS_S,
+                "WSJT-X port: %d datagram(s) dropped undecoded, over the budget of their "
+                "sender (%g a second each), the last from %s",
                 count,
+                RATE_DATAGRAMS_S,
+                source,
             )
 
     def _fault(self, what: str, exc: BaseException) -> None:

@@ -12,6 +12,8 @@ from bridge.loggers.datagrams import (
     Malformed,
     N1mmRequest,
     PstRequest,
+    may_stop_n1mm,
+    may_stop_pst,
     n1mm_report,
     parse_n1mm,
     parse_pst,
@@ -225,3 +227,57 @@ def test_an_n1mm_stop_beside_a_name_too_long_or_junk_stops_the_rotor_it_names() 
     long = b"x" * 80
     datagram = b"<N1MMRotor><stop><rotor>Tower</rotor><rotor>" + long + b"</rotor></stop>?"
     assert parse_n1mm(datagram + b"</N1MMRotor>") == N1mmRequest("Tower", stop=True)
+
+
+# -- rule 6: the byte search that finds a stop before any budget -----------------------------------
+_PIECES = [
+    "<STOP>1</STOP>",
+    "<stop></stop>",
+    "<Stop>0</Stop>",
+    "<AZIMUTH>5</AZIMUTH>",
+    "AZ?",
+    " ",
+    "<rotor>Tower</rotor>",
+    "<stop>Tower</stop>",
+    "<stop/>",
+    "<stop >",
+    "<goazi>9</goazi>",
+    "<STOP>",
+    "junk",
+    "<PARK>1</PARK>",
+    "\r\n",
+]
+
+
+def _mixed_case(draw: st.DrawFn, text: str) -> str:
+    flips = draw(st.lists(st.booleans(), min_size=len(text), max_size=len(text)))
+    return "".join(c.swapcase() if f else c for c, f in zip(text, flips, strict=True))
+
+
+@st.composite
+def _datagrams(draw: st.DrawFn, frame: str) -> bytes:
+    body = "".join(draw(st.lists(st.sampled_from(_PIECES), max_size=6)))
+    return _mixed_case(draw, f"<{frame}>{body}</{frame}>").encode("ascii")
+
+
+@given(_datagrams("PST"))
+def test_every_pst_stop_is_found_by_the_byte_search(datagram: bytes) -> None:
+    try:
+        stop = parse_pst(datagram).stop
+    except Malformed:
+        stop = False
+    assert may_stop_pst(datagram) or not stop
+
+
+@given(_datagrams("N1MMRotor"))
+def test_every_n1mm_stop_is_found_by_the_byte_search(datagram: bytes) -> None:
+    try:
+        stop = parse_n1mm(datagram).stop
+    except Malformed:
+        stop = False
+    assert may_stop_n1mm(datagram) or not stop
+
+
+def test_the_byte_search_passes_over_what_is_no_stop() -> None:
+    assert not may_stop_pst(b"<PST><AZIMUTH>x</AZIMUTH></PST>")
+    assert not may_stop_n1mm(b"<N1MMRotor><rotor>T</rotor><goazi>9</goazi></N1MMRotor>")

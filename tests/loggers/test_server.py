@@ -343,12 +343,23 @@ def test_a_socket_that_went_bad_is_dropped_and_reported_once(
             os.close(devnull)
 
 
-def test_a_flood_is_read_no_faster_than_the_budget_and_said_once(
-    caplog: pytest.LogCaptureFixture,
-) -> None:
-    """Rule 8, in virtual time (the clock stands still): a flood of PST targets is read up to
-    a second's budget and then not at all (each one it read is judged and put into a mailbox,
-    which wakes the serial-lines thread), said once; when time passes it is read on."""
+def _spend_the_budget(ep: LoggerEndpoints, port: int, s: socket.socket) -> None:
+    """Junk from ``s`` until its sender's budget is nearly spent (the clock stands still), in
+    batches the thread reads before the next goes out (no buffer overflows)."""
+    junk, sent = pst(tag("AZIMUTH", "x")), 0
+    while sent < int(RATE_DATAGRAMS_S * 0.9):
+        for _ in range(45):
+            s.sendto(junk, ("127.0.0.1", port))
+        sent += 45
+        wait_until(lambda n=sent: ep.counts["pst"].malformed >= n, 10, "junk parsed")
+
+
+def test_a_stop_behind_a_junk_flood_over_budget_is_carried_out() -> None:
+    """The thread slept while its budget was spent: the junk filled the system's buffer and a
+    PST STOP sent behind it was read seconds later or never (the rotor kept turning). In
+    virtual time (the clock stands still, the budget never refills): a sender spends its
+    budget, queues more junk and then the STOP; the rotator sees the Stop, the junk over the
+    budget is dropped unparsed."""
     clock = FakeClock()
     rot = Recording("tower")
     ep = LoggerEndpoints(clock=clock)
@@ -357,24 +368,22 @@ def test_a_flood_is_read_no_faster_than_the_budget_and_said_once(
     try:
         port = ep.address(ep.pst[0])[1]
         with udp_socket() as s:
-            for i in range(int(RATE_DATAGRAMS_S) + 100):
-                s.sendto(pst(tag("AZIMUTH", i % 360)), ("127.0.0.1", port))
-        wait_until(lambda: ep.paused > 0, 10, "the loggers' thread paused")
-        read = len(rot.calls)
-        assert 0 < read <= RATE_DATAGRAMS_S + PER_WAKEUP  # a second's, one wake-up into debt
-        said = [r for r in caplog.records if "faster than" in r.getMessage()]
-        assert len(said) == 1 and said[0].levelno == logging.WARNING
-        clock.t += 10.0
-        wait_until(lambda: len(rot.calls) > read, 10, "read on")
+            _spend_the_budget(ep, port, s)
+            for _ in range(100):  # over the budget now
+                s.sendto(pst(tag("AZIMUTH", "x")), ("127.0.0.1", port))
+            s.sendto(b"<PST><STOP>1</STOP></PST>", ("127.0.0.1", port))
+            wait_until(lambda: rot.calls, slow(10), "the STOP carried out")
+        assert rot.calls == [Stop(Source.PST)]
+        assert ep.over_budget > 0
     finally:
         ep.stop()
 
 
 def test_a_flood_on_the_n1mm_port_holds_up_no_pst_stop() -> None:
-    """Rule 8, in virtual time (the clock stands still): one budget was shared by every
-    socket, so a flood on the N1MM port (often bound to the LAN) put the whole thread to sleep
-    and a PST stop for another rotator waited for it (or was lost once the system's buffer
-    filled). Each socket has its own budget now: the N1MM port rests, the PST port is read."""
+    """A flood on the N1MM port (often bound to the LAN) once put the whole thread to sleep and
+    a PST stop for another rotator waited for it (or was lost once the system's buffer
+    filled); in virtual time (the clock stands still) the flood goes over its budget and the
+    PST stop is carried out all the same (rule 8)."""
     clock = FakeClock()
     tower, yagi = Recording("tower"), Recording("yagi")
     ep = LoggerEndpoints(clock=clock)
@@ -388,8 +397,47 @@ def test_a_flood_on_the_n1mm_port_holds_up_no_pst_stop() -> None:
         with udp_socket() as s:
             for _ in range(int(RATE_DATAGRAMS_S) + 100):
                 s.sendto(aim, ("127.0.0.1", n1mm_port))
-        wait_until(lambda: ep.paused > 0, 10, "the N1MM port rested")
+        wait_until(lambda: ep.over_budget > 0, 10, "the N1MM flood over its budget")
         send(pst_port, pst(tag("STOP", 1)))
         wait_until(lambda: Stop(Source.PST) in tower.calls, 10, "the PST stop carried out")
     finally:
         ep.stop()
+
+
+def test_a_flood_over_its_senders_budget_is_dropped_and_said_once_others_are_served(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Rule 8, in virtual time (the clock stands still): a sender past its budget has its
+    datagrams dropped unparsed, said once; another sender's target is carried out (the budget
+    is per sender); an N1MM stop in any of its forms from the flooding sender is carried out;
+    when time passes, the flooding sender is served again."""
+    clock = FakeClock()
+    rot = Recording("tower")
+    ep = LoggerEndpoints(clock=clock)
+    ep.add_pst(rot, port=0)  # type: ignore[arg-type]
+    with reports_sink() as sink:
+        ep.add_n1mm(rot, "Tower", port=0, report_to=sink_address(sink))  # type: ignore[arg-type]
+        ep.start()
+        try:
+            port = ep.address(ep.pst[0])[1]
+            n1mm_port = ep.address(next(iter(ep.n1mm.values())))[1]
+            with udp_socket() as s, udp_socket() as other:
+                _spend_the_budget(ep, port, s)
+                for _ in range(50):
+                    s.sendto(pst(tag("AZIMUTH", 7)), ("127.0.0.1", port))
+                wait_until(lambda: ep.over_budget > 0, 10, "the flood over its budget")
+                other.sendto(pst(tag("AZIMUTH", 42)), ("127.0.0.1", port))
+                wait_until(lambda: Target(42.0, None, Source.PST) in rot.calls, 10, "42")
+                for form in N1MM_STOPS.values():
+                    s.sendto(form("Tower"), ("127.0.0.1", n1mm_port))
+                stops = len(N1MM_STOPS)
+                wait_until(lambda: rot.calls.count(Stop(Source.N1MM)) == stops, 10, "stops")
+                read = [c for c in rot.calls if c == Target(7.0, None, Source.PST)]
+                assert len(read) < 50  # the rest dropped unparsed
+                said = [r for r in caplog.records if "over the budget" in r.getMessage()]
+                assert len(said) == 1 and said[0].levelno == logging.WARNING
+                clock.t += 10.0
+                s.sendto(pst(tag("AZIMUTH", 8)), ("127.0.0.1", port))
+                wait_until(lambda: Target(8.0, None, Source.PST) in rot.calls, 10, "read on")
+        finally:
+            ep.stop()

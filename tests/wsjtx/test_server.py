@@ -13,7 +13,7 @@ import pytest
 
 from bridge.engine.follow import Heard
 from bridge.wsjtx import WsjtxListener
-from bridge.wsjtx.server import JUNK_LOG_S, RATE_DATAGRAMS_S
+from bridge.wsjtx.server import JUNK_LOG_S
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
@@ -143,28 +143,39 @@ def test_a_loopback_listener_drops_a_datagram_from_elsewhere_counts_and_says_it(
     assert [h.call for h in ears.got] == ["FORGED"]
 
 
-def test_a_flood_is_read_no_faster_than_the_budget_and_said_once(
+def test_a_flood_over_its_senders_budget_is_dropped_said_once_and_others_are_heard(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     """Rule 5, in virtual time (the clock stands still): a program flooding the port with
-    statuses is read up to a second's budget, then not at all (each status it read would wake
-    the serial-lines thread through the mailboxes); said once; when time passes it is read on."""
+    statuses is heard up to a second's budget and the rest dropped undecoded, said once;
+    WSJT-X on another port is heard all the while, and each of them is read to the end (the
+    reader slept over its budget, and the system's buffer filled with the flood); when time
+    passes the flooding program is heard again."""
     clock = FakeClock()
     ears = Ears("a")
     listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[ears])  # type: ignore[list-item]
     listener.start()
     try:
-        status = w.status(w.StatusFields(dx_call="JA1ABC", dx_grid="PM95"))
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
-            for _ in range(int(RATE_DATAGRAMS_S) + 100):
-                sock.sendto(status, listener.address)
-            wait_until(lambda: listener.counts.paused > 0, 10, "the listener paused")
+        flood = w.status(w.StatusFields(dx_call="JA1ABC", dx_grid="PM95"))
+        with (
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s,
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as wsjtx,
+        ):
+            for sent in range(40, 161, 40):  # in batches the reader keeps up with
+                for _ in range(40):
+                    s.sendto(flood, listener.address)
+                wait_until(lambda n=sent: len(ears.got) >= n, 10, "heard")
+            for _ in range(50):  # over its budget now
+                s.sendto(flood, listener.address)
+            other = w.status(w.StatusFields(dx_call="K1ABC", dx_grid="FN42"))
+            wsjtx.sendto(other, listener.address)
+            wait_until(lambda: any(h.call == "K1ABC" for h in ears.got), 10, "the other heard")
             heard = len(ears.got)
-            assert heard <= RATE_DATAGRAMS_S + 1  # a second's worth, one into debt
-            assert len(ears.got) == heard  # and nothing more while the clock stands still
-            said = [r for r in caplog.records if "faster than" in r.getMessage()]
+            assert listener.counts.over_budget > 0 and heard < 160 + 50 + 1
+            said = [r for r in caplog.records if "over the budget" in r.getMessage()]
             assert len(said) == 1
             clock.t += 10.0
-            wait_until(lambda: len(ears.got) > heard, 10, "read on")
+            s.sendto(flood, listener.address)
+            wait_until(lambda: len(ears.got) > heard, 10, "heard again")
     finally:
         listener.stop()
