@@ -54,6 +54,33 @@ def install(path: str) -> None:
     ev = EVENTS.append
     counts = {"main": 0}
 
+    import socket
+    import struct
+
+    import paho.mqtt.client as paho
+
+    so_timestampns = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux
+    offset = time.time() - time.monotonic()  # a kernel stamp (real time) on our clock
+    arrived: dict[int, float] = {}
+    sock_recv = paho.Client._sock_recv
+
+    def _sock_recv(self: Any, bufsize: int) -> bytes:
+        """The stop lane's reads: when the kernel had the bytes (SO_TIMESTAMPNS)."""
+        sock = self._sock
+        if not self._client_id.endswith(b"-stop") or not isinstance(sock, socket.socket):
+            return sock_recv(self, bufsize)  # type: ignore[no-any-return]
+        if id(sock) not in arrived:
+            sock.setsockopt(socket.SOL_SOCKET, so_timestampns, 1)
+            arrived[id(sock)] = 0.0
+        data, anc, _flags, _addr = sock.recvmsg(bufsize, socket.CMSG_SPACE(16))
+        for level, kind, raw in anc:
+            if level == socket.SOL_SOCKET and kind == so_timestampns:
+                sec, ns = struct.unpack("qq", raw[:16])
+                arrived[id(sock)] = sec + ns / 1e9 - offset
+        return data
+
+    paho.Client._sock_recv = _sock_recv  # type: ignore[method-assign]
+
     on_message = connection.Connection._on_message
 
     def _on_message(self: Any, client: Any, userdata: Any, msg: Any) -> None:
@@ -61,7 +88,9 @@ def install(path: str) -> None:
         if msg.topic.endswith("/stop"):
             kind = "lane" if type(self).__name__ == "StopLane" else "main"
             main = _sched(MAIN_TID[0]) if kind == "lane" else (0, 0)
-            ev(("msg", t, kind, msg.topic, threading.current_thread().name, *_sched(), *main))
+            stamp = arrived.get(id(client._sock), 0.0)
+            name = threading.current_thread().name
+            ev(("msg", t, kind, msg.topic, name, *_sched(), *main, stamp))
         else:
             counts["main"] += 1
             if not MAIN_TID[0] and type(self).__name__ != "StopLane":
@@ -196,6 +225,8 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     out = f"{rid} {lat * 1e3:6.1f} ms:"
     for name, e, k in steps:
         out += f" {name} {(e[k] - t0) * 1e3:.1f}" if e else f" {name} --"
+    if m and len(m) > 9 and m[9]:
+        out += f" | lane bytes in the kernel at {(m[9] - t0) * 1e3:.1f}"
     if m and lane.index(m):
         prev = lane[lane.index(m) - 1]
         out += f" | lane thread runq {(m[6] - prev[6]) / 1e6:.1f} since its last"
