@@ -60,6 +60,15 @@ same machine. Each engine's worst stop over the pairs is compared.
 
 The machine is shared (2 cores): every row carries the load average over its stops, and the
 bridge's CPU over them.
+
+Where an outlier waits (a focused mode: the control, the backlog, the console, the trackings)::
+
+    STOP_TRACE=/tmp/t.json PYTHONPATH=benchmarks/stoptrace_site \
+        python -m benchmarks stop_under_load --quick
+    python -m benchmarks.stop_trace /tmp/t.json /tmp/t.json.samples.json
+
+the bridge stamps each stop's steps (benchmarks/stop_trace.py) and the analysis sets them
+against each stop's publish and its ``;`` at the emulator.
 """
 
 from __future__ import annotations
@@ -1182,12 +1191,15 @@ def run(scope: Scope, quick: bool) -> ItemResult:
     rng = random.Random(29)
     result = ItemResult("stop_under_load", "Stops under every load, and against the old engine")
     phases: list[PhaseResult] = []
+    trace = os.environ.get("STOP_TRACE")  # the focused mode: module docstring's end
     with Scope(scope.workdir / "loaded") as inner:
         lo = start_loaded(inner, rng)
         ABORT.wait(2.0)  # past the start-up
         tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
         phases.append(simple_phase(lo, CONTROL, n, None, None))
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
+        if trace is not None:
+            return _traced(result, lo, phases, n, trace)
         for proto, label in (("rotctld", "rotctld"), ("gs232", "GS-232"), ("easycomm", "Easycomm")):
             args = {**tcp, "port": lo.ports[proto], "proto": proto}
             label = f"{label}: 16 TCP clients"
@@ -1210,6 +1222,29 @@ def run(scope: Scope, quick: bool) -> ItemResult:
         lo.bridge.check()
     report_loads(result, phases, missed)
     report_pairs(result, pairs(scope, n_pairs, rng), n_pairs)
+    return result
+
+
+def _traced(
+    result: ItemResult, lo: Loaded, phases: list[PhaseResult], n: int, trace: str
+) -> ItemResult:
+    """STOP_TRACE=<file>: the control, the backlog, the console and the trackings only; the
+    bridge writes its steps to <file> as it exits (benchmarks/stop_trace.py) and the stops go
+    to <file>.samples.json: ``python -m benchmarks.stop_trace <file> <file>.samples.json``."""
+    console = {
+        "port": lo.ports["web"],
+        "pages": PAGES,
+        "posters": POSTERS,
+        "rotators": [f"t{i}" for i in range(TRACKERS)],
+    }
+    label = "console: 10 pages + POST flood"
+    phases.append(loader_phase(lo, label, n, "console", console, tcp=[lo.ports["web"]]))
+    phases.append(tracking_phase(lo, TRACKING_LOAD, n))
+    missed = lo.taker.missed
+    lo.bridge.check()
+    samples = {p.name: [(s.rid, s.t, s.latency_s) for s in p.samples] for p in phases}
+    Path(trace + ".samples.json").write_text(json.dumps(samples))
+    report_loads(result, phases, missed)
     return result
 
 

@@ -1,0 +1,267 @@
+"""Where an outlier stop waits inside the bridge: timestamps (time.monotonic, the clock of the
+benchmark's emulator logs) at the stop's steps, patched into a bridge process started with
+``STOP_TRACE=<file>`` and ``benchmarks/stoptrace_site`` first on PYTHONPATH (its
+sitecustomize imports this module). Written to the file as JSON when the bridge exits:
+
+- ``msg``: a connection's on_message for a ``/stop`` topic (``lane`` or ``main``), with the
+  thread that ran it;
+- ``carry``: Halts.carry (under Halts._lock: the decision carried out);
+- ``put``: the Stop in the mailbox (Mailbox.put returned);
+- ``serve``: the lines thread starts serving a worker whose mailbox holds a stop;
+- ``write``: a frame written to a port (the stop frame ``;`` only);
+- ``gc``: every collection (generation, start, end) and the main connection's message count;
+- ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
+- ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
+  but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
+
+``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish.
+"""
+
+from __future__ import annotations
+
+import atexit
+import gc
+import json
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+EVENTS: list[tuple[Any, ...]] = []
+_now = time.monotonic
+LINES_TID = [0]  # the serial-lines thread's native id, once it served a stop
+MAIN_TID = [0]  # the main connection's paho thread's, once it read a message
+
+
+def _sched(tid: int | None = None) -> tuple[int, int]:
+    """(ns on a CPU, ns runnable but waiting for one) of a thread, from the kernel."""
+    path = f"/proc/self/task/{tid}/schedstat" if tid else "/proc/thread-self/schedstat"
+    try:
+        with open(path) as f:
+            run, wait, _ = f.read().split()
+        return int(run), int(wait)
+    except (OSError, ValueError):
+        return 0, 0
+
+
+def install(path: str) -> None:
+    from bridge.engine import mailbox, worker
+    from bridge.model import Stop
+    from bridge.mqtt import connection, halts
+
+    ev = EVENTS.append
+    counts = {"main": 0}
+
+    import socket
+    import struct
+
+    import paho.mqtt.client as paho
+
+    so_timestampns = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux
+    offset = time.time() - time.monotonic()  # a kernel stamp (real time) on our clock
+    arrived: dict[int, float] = {}
+    sock_recv = paho.Client._sock_recv
+
+    def _sock_recv(self: Any, bufsize: int) -> bytes:
+        """The stop lane's reads: when the kernel had the bytes (SO_TIMESTAMPNS)."""
+        sock = self._sock
+        if not self._client_id.endswith(b"-stop") or not isinstance(sock, socket.socket):
+            return sock_recv(self, bufsize)  # type: ignore[no-any-return]
+        if id(sock) not in arrived:
+            sock.setsockopt(socket.SOL_SOCKET, so_timestampns, 1)
+            arrived[id(sock)] = 0.0
+        data, anc, _flags, _addr = sock.recvmsg(bufsize, socket.CMSG_SPACE(16))
+        for level, kind, raw in anc:
+            if level == socket.SOL_SOCKET and kind == so_timestampns:
+                sec, ns = struct.unpack("qq", raw[:16])
+                arrived[id(sock)] = sec + ns / 1e9 - offset
+        return data
+
+    paho.Client._sock_recv = _sock_recv  # type: ignore[method-assign]
+
+    on_message = connection.Connection._on_message
+
+    def _on_message(self: Any, client: Any, userdata: Any, msg: Any) -> None:
+        t = _now()
+        if msg.topic.endswith("/stop"):
+            kind = "lane" if type(self).__name__ == "StopLane" else "main"
+            main = _sched(MAIN_TID[0]) if kind == "lane" else (0, 0)
+            stamp = arrived.get(id(client._sock), 0.0)
+            name = threading.current_thread().name
+            ev(("msg", t, kind, msg.topic, name, *_sched(), *main, stamp))
+        else:
+            counts["main"] += 1
+            if not MAIN_TID[0] and type(self).__name__ != "StopLane":
+                MAIN_TID[0] = threading.get_native_id()
+        on_message(self, client, userdata, msg)
+
+    connection.Connection._on_message = _on_message  # type: ignore[method-assign]
+
+    class _Lock:
+        """Halts._lock, saying each wait of 0.5 ms or more, and who held the lock then."""
+
+        def __init__(self) -> None:
+            self._lock = threading.Lock()
+            self.holder = ("", "")
+            self.taken = {"main": 0}
+
+        def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
+            t = _now()
+            held = self.holder
+            got = self._lock.acquire(blocking, timeout)
+            waited = _now() - t
+            name = threading.current_thread().name
+            caller = sys._getframe(1)
+            if caller.f_code.co_name == "__enter__" and caller.f_back is not None:
+                caller = caller.f_back
+            self.holder = (name, caller.f_code.co_name)
+            if waited >= 0.0005:
+                ev(("lockwait", t, waited, name, self.holder[1], *held))
+            return got
+
+        def release(self) -> None:
+            self._lock.release()
+
+        def __enter__(self) -> bool:
+            return self.acquire()
+
+        def __exit__(self, *exc: object) -> None:
+            self._lock.release()
+
+    init = halts.Halts.__init__
+
+    def _init(self: Any, *a: Any, **k: Any) -> None:
+        init(self, *a, **k)
+        self._lock = _Lock()
+
+    halts.Halts.__init__ = _init  # type: ignore[method-assign]
+
+    carry = halts.Halts.carry
+
+    def _carry(self: Any, rot: Any, kind: str, *a: Any, **k: Any) -> None:
+        ev(("carry", _now(), rot.id, kind, threading.current_thread().name, *_sched(MAIN_TID[0])))
+        carry(self, rot, kind, *a, **k)
+
+    halts.Halts.carry = _carry  # type: ignore[method-assign]
+
+    put = mailbox.Mailbox.put
+
+    def _put(self: Any, command: Any, **k: Any) -> bool:
+        t = _now()
+        done = put(self, command, **k)
+        if isinstance(command, Stop):
+            ev(("put", t, _now(), id(self), *_sched(LINES_TID[0]), time.process_time()))
+        return done
+
+    mailbox.Mailbox.put = _put  # type: ignore[method-assign]
+
+    serve = worker.Worker.serve
+
+    def _serve(self: Any, now: float, ready: set[int]) -> None:
+        if self._mailbox.urgent:
+            LINES_TID[0] = threading.get_native_id()
+            t = _now()
+            ev(
+                (
+                    "serve",
+                    t,
+                    self.cfg.rotator_id,
+                    now,
+                    id(self._mailbox),
+                    *_sched(),
+                    time.process_time(),
+                )
+            )
+        serve(self, now, ready)
+
+    worker.Worker.serve = _serve  # type: ignore[method-assign]
+
+    write_frame = worker.write_frame
+
+    def _write(port: Any, data: bytes) -> None:
+        if data == b";":
+            ev(("write", _now(), port.port))
+        write_frame(port, data)
+
+    worker.write_frame = _write
+
+    starts: dict[int, float] = {}
+
+    def _gc(phase: str, info: dict[str, Any]) -> None:
+        if phase == "start":
+            starts[info["generation"]] = _now()
+        else:
+            g = info["generation"]
+            ev(("gc", starts.get(g, 0.0), _now(), g, info["collected"], counts["main"]))
+
+    gc.callbacks.append(_gc)
+
+    def _dump() -> None:
+        Path(path).write_text(json.dumps({"pid": os.getpid(), "events": EVENTS}))
+
+    atexit.register(_dump)
+
+
+def _first(events: list[Any], after: float, before: float, pred: Any) -> Any:
+    for e in events:
+        if after - 0.0005 <= e[1] <= before and pred(e):
+            return e
+    return None
+
+
+def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
+    """One stop: its steps as ms from its publish, the waits the kernel saw, the collections and
+    the Halts._lock waits inside it."""
+    t1 = t0 + lat
+    lane = by["lane"]
+    m = _first(lane, t0, t1, lambda e: f"/{rid}/" in e[3])
+    c = _first(by["carry"], m[1] if m else t0, t1, lambda e: e[2] == rid and "-stop" in e[4])
+    p = _first(by["put"], c[1] if c else t0, t1, lambda e: True)
+    s = _first(by["serve"], p[2] if p else t0, t1, lambda e: e[2] == rid)
+    w = _first(by["write"], s[1] if s else t0, t1, lambda e: True)
+    steps = [("lane", m, 1), ("carry", c, 1), ("put", p, 2), ("serve", s, 1), ("write", w, 1)]
+    out = f"{rid} {lat * 1e3:6.1f} ms:"
+    for name, e, k in steps:
+        out += f" {name} {(e[k] - t0) * 1e3:.1f}" if e else f" {name} --"
+    if m and len(m) > 9 and m[9]:
+        out += f" | lane bytes in the kernel at {(m[9] - t0) * 1e3:.1f}"
+    if m and lane.index(m):
+        prev = lane[lane.index(m) - 1]
+        out += f" | lane thread runq {(m[6] - prev[6]) / 1e6:.1f} since its last"
+    if m and c and c[4] == m[4]:  # the lane's own carry: the main thread meanwhile
+        out += f" | main thread lane->carry: cpu {(c[5] - m[7]) / 1e6:.1f}"
+        out += f" runq {(c[6] - m[8]) / 1e6:.1f}"
+    if p and s:
+        out += f" | lines thread runq {(s[6] - p[5]) / 1e6:.1f} cpu {(s[5] - p[4]) / 1e6:.1f}"
+        out += f", process cpu {(s[7] - p[6]) * 1e3:.1f} (put->serve)"
+    inside = [e for e in by["gc"] if e[2] >= t0 and e[1] <= t1 and e[2] - e[1] > 0.0005]
+    out += "".join(f" | gc{e[3]} {(e[2] - e[1]) * 1e3:.1f}" for e in inside)
+    waits = [e for e in by["lockwait"] if t0 <= e[1] <= t1]
+    out += "".join(f" | lock {e[2] * 1e3:.1f} ({e[3][-5:]} {e[4]})" for e in waits)
+    return out
+
+
+def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
+    trace = json.loads(Path(trace_path).read_text())["events"]
+    samples = json.loads(Path(samples_path).read_text())
+    kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait")
+    by = {k: [e for e in trace if e[0] == k] for k in kinds}
+    by["lane"] = [e for e in by["msg"] if e[2] == "lane"]
+    for phase, rows in samples.items():
+        print(f"== {phase}: the stops over {over_ms:g} ms (ms after the publish)")
+        for rid, t0, lat in rows:
+            if lat * 1e3 > over_ms:
+                print("  " + _row(by, rid, t0, lat))
+    per: dict[int, list[float]] = {}
+    for e in by["gc"]:
+        per.setdefault(e[3], []).append(e[2] - e[1])
+    for g, ds in sorted(per.items()):
+        print(
+            f"gc gen{g}: {len(ds)}, longest {max(ds) * 1e3:.1f} ms, in all {sum(ds) * 1e3:.0f} ms"
+        )
+
+
+if __name__ == "__main__":
+    analyse(sys.argv[1], sys.argv[2], float(sys.argv[3]) if len(sys.argv) > 3 else 9.0)
