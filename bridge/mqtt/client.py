@@ -35,7 +35,10 @@ each written out in the module that keeps it:
    without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5 too). That is
    said as rule 11 says, naming the topic, from the first connection on. It is judged again
    on every connect: a probe that comes back clears the problem (``on_allowed``, never on
-   paho's thread), and the markers go out again.
+   paho's thread), and the markers go out again. Each verdict is reported on a thread of its
+   own, so one may come late: under ``_fence_lock`` a report is made only if its verdict is
+   still the last one (an older connection's "allowed" never turns the markers on after a
+   newer one's "denied", nor the other way round).
 12. Nothing from before a disconnect lands after the state of the new connection: paho sends
    the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
    re-published there (a config changed while the broker stalled came back older, and
@@ -126,6 +129,7 @@ class MqttClient(Connection):
         self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
         self._fence_topic = fence_topic  # rule 16
         self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
+        self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self.refused: str | None = None
         self._heartbeat = heartbeat  # rule 2
         self._beat = Beat()
@@ -330,12 +334,25 @@ class MqttClient(Connection):
         """Rule 16: the probe came back; if the topic was denied before, it is not now (said on
         a thread of its own: paho's holds its mutex here, and the report publishes)."""
         if self._delivery.allow(topic) and self._on_allowed is not None:
-            threading.Thread(target=self._on_allowed, args=(topic,), daemon=True).start()
+            threading.Thread(target=self._report_allowed, args=(topic,), daemon=True).start()
+
+    def _report_allowed(self, topic: str) -> None:
+        """Rule 16 (its own thread): said only if the topic is still allowed."""
+        with self._fence_lock:
+            if self._on_allowed is not None and not self._delivery.denied(topic):
+                self._on_allowed(topic)
 
     def _report_denied(self, topic: str, problem: str) -> None:
-        """Rule 11's hand-off (delivery.py calls it on a thread of its own)."""
-        if self._on_denied is not None:
+        """Rule 11's hand-off (delivery.py calls it on a thread of its own); the fence's only
+        if it is still denied (rule 16)."""
+        if self._on_denied is None:
+            return
+        if topic != self._fence_topic:
             self._on_denied(topic, problem)
+            return
+        with self._fence_lock:
+            if self._delivery.denied(topic):
+                self._on_denied(topic, problem)
 
     def _open(self, look: Outcome | None) -> None:
         """Under the lock: the state goes out (rules 3 and 12), then the deletions a look let

@@ -157,6 +157,11 @@ class Delivery:
         # (the client's lock, then paho's mutex: another thread may hold them the other way)
         threading.Thread(target=self._report, args=(topic, problem), daemon=True).start()
 
+    def denied(self, topic: str) -> bool:
+        """Rule 11: whether ``topic`` is denied now (the last verdict on it)."""
+        with self._ids_lock:
+            return topic in self._denied
+
     def allow(self, topic: str) -> bool:
         """Rule 11: the broker was seen to take ``topic`` after all (the ACL changed): its
         problem is gone, and a new refusal is said again. True if it had been denied."""

@@ -26,11 +26,15 @@ Rules:
    executor, never on the loop: a STOP posted meanwhile is carried out at once
    (docs/architecture.md rule 12). So do the commands of a rotator whose commands wait for a
    round trip (``commands_block``: the remote's, which waits for its broker's
-   acknowledgement): on one thread of their own, in the order they came (a stop never
-   overtakes a target posted before it, nor a target the stop), so no page's stream or
-   command waits for them. A STOP or lock ON posted there waits for the one command under way
-   at most: those queued before it that have not started are not sent (refused ``stale``:
-   the stop came first), so it is neither overtaken nor does it overtake.
+   acknowledgement): on one thread per such rotator (made at ``attach``), in the order they
+   came (a stop never overtakes a target posted before it, nor a target the stop), so no
+   page's stream or command, nor another rotator's, waits for them (their order at the broker
+   is kept by the link's own send lock). A STOP or lock ON posted there waits for that
+   rotator's one command under way at most: those queued before it that have not started are
+   not sent (refused ``stale``: the stop came first), so it is neither overtaken nor does it
+   overtake. At most ``FAR_MOVES`` moves wait per rotator (the one under way included); one
+   more is refused at once (409, code ``busy``), never queued. A STOP or lock ON is never
+   refused so.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
 """
 
@@ -61,6 +65,7 @@ from bridge.web.port import ConsoleRotator
 log = logging.getLogger(__name__)
 
 BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
+FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
@@ -124,13 +129,14 @@ class WebConsole:
         self._started: dict[int, float] = {}  # requests being served (by id): when they began
         self._thread: threading.Thread | None = None
         self._running = False
-        self._far: concurrent.futures.ThreadPoolExecutor | None = None  # rule 5
+        self._far: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # rule 5, per rotator
         self._far_halts: dict[str, int] = {}  # rule 5: halts posted per rotator (the loop's)
+        self._far_moves: dict[str, int] = {}  # rule 5: moves not yet done per rotator (the loop's)
 
     # -- wiring (the main thread) ------------------------------------------------------------
     def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
-        if rot.commands_block and self._far is None:  # rule 5: one thread, in order
-            self._far = concurrent.futures.ThreadPoolExecutor(1, "console-commands")
+        if rot.commands_block and rot.id not in self._far:  # rule 5: one thread each, in order
+            self._far[rot.id] = concurrent.futures.ThreadPoolExecutor(1, f"console-{rot.id}")
         self._rotators[rot.id] = rot
         self._facts[rot.id] = facts
         self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
@@ -198,8 +204,8 @@ class WebConsole:
         self._thread.join(timeout=5.0)
         if not self._thread.is_alive():
             loop.close()
-        if self._far is not None:
-            self._far.shutdown(wait=False, cancel_futures=True)
+        for far in self._far.values():
+            far.shutdown(wait=False, cancel_futures=True)
 
     async def _shutdown(self) -> None:
         self.live.feed.close()
@@ -373,9 +379,10 @@ class WebConsole:
             return
         if rot is None or not cmd.halts():
             return
-        if self._far is not None and rot.commands_block:  # rule 5
+        far = self._far.get(rot.id)
+        if far is not None and rot.commands_block:  # rule 5
             self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
-            done = asyncio.wrap_future(self._far.submit(carry_out, rot, cmd, peer))
+            done = asyncio.wrap_future(far.submit(carry_out, rot, cmd, peer))
             done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
             return
         try:
@@ -393,6 +400,19 @@ class WebConsole:
             rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
             raise Refused(RefusalCode.STALE, why)
         carry_out(rot, cmd, peer)
+
+    def _far_moved(self, rotator_id: str) -> None:
+        """A far move done (any thread): no longer counted against rule 5's bound."""
+        loop = self._loop
+        if loop is None:
+            return
+        try:
+            loop.call_soon_threadsafe(self._far_unqueue, rotator_id)
+        except RuntimeError:  # the console stopped meanwhile: nothing is counted any more
+            pass
+
+    def _far_unqueue(self, rotator_id: str) -> None:
+        self._far_moves[rotator_id] = self._far_moves.get(rotator_id, 1) - 1
 
     def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
         """A halt carried out off the loop (rule 5), back on the loop."""
@@ -427,15 +447,23 @@ class WebConsole:
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
+        far = self._far.get(rot.id)
+        busy = self._far_moves.get(rot.id, 0) >= FAR_MOVES
+        if far is not None and rot.commands_block and not halt and busy:  # rule 5: a bound
+            why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
+            rot.report_refusal(why, cmd.described(), origin=by)
+            return _json({"error": why, "code": "busy"}, 409)
         try:
-            if self._far is not None and rot.commands_block:  # rule 5
+            if far is not None and rot.commands_block:  # rule 5
                 if halt:
                     self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
-                    far = self._far.submit(carry_out, rot, cmd, request.remote)
+                    done = far.submit(carry_out, rot, cmd, request.remote)
                 else:
                     posted = self._far_halts.get(rot.id, 0)
-                    far = self._far.submit(self._far_move, rot, cmd, request.remote, posted)
-                await asyncio.wrap_future(far)
+                    done = far.submit(self._far_move, rot, cmd, request.remote, posted)
+                    self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
+                    done.add_done_callback(lambda _: self._far_moved(rot.id))
+                await asyncio.wrap_future(done)
             else:
                 carry_out(rot, cmd, request.remote)
         except Refused as exc:

@@ -13,7 +13,7 @@ from bridge.model import Command, Origin, Stop
 from bridge.mosquitto import free_port
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
-from bridge.web.server import WebConsole
+from bridge.web.server import FAR_MOVES, WebConsole
 from bridge.web.view import RotatorFacts
 from tests.support.console import ConsoleClient
 from tests.support.waiting import slow, wait_until
@@ -24,7 +24,6 @@ EZ = REGISTRY["rotorez"]
 class FarRotator:
     """A rotator whose commands wait until the test lets them through (a stalled link)."""
 
-    id = "far"
     name = "Far"
     spec = EZ
     pointing = Pointing.of(EZ)
@@ -32,7 +31,8 @@ class FarRotator:
     last_halt_s = 0.0
     commands_block = True
 
-    def __init__(self) -> None:
+    def __init__(self, rotator_id: str = "far") -> None:
+        self.id = rotator_id
         self.link = threading.Event()  # cleared: the broker does not acknowledge yet
         self.waiting = threading.Event()
         self.carried: list[str] = []
@@ -122,8 +122,7 @@ def test_a_stop_waits_for_the_one_command_under_way_and_the_older_queued_never_g
 
     posts = [start("first", command="target", az=120)]
     assert rot.waiting.wait(slow(10)), "the first target never reached the rotator"
-    far_thread = console._far
-    assert far_thread is not None
+    far_thread = console._far["far"]
     for queued, (name, az) in enumerate((("second", 130), ("third", 140)), start=1):
         posts.append(start(name, command="target", az=az))
         wait_until(lambda n=queued: far_thread._work_queue.qsize() == n, 10, f"{name} queued")
@@ -134,3 +133,87 @@ def test_a_stop_waits_for_the_one_command_under_way_and_the_older_queued_never_g
         t.join(slow(10))
     assert rot.carried == ["target 120", "stop"]
     assert answers == {"first": 200, "second": 409, "third": 409, "stop": 200}
+
+
+@pytest.fixture
+def two() -> Iterator[tuple[FarRotator, FarRotator, WebConsole]]:
+    a, b = FarRotator("a"), FarRotator("b")
+    console = WebConsole(
+        "127.0.0.1",
+        free_port(),
+        password=None,
+        frame_ancestors=[],
+        station=(55.0, 13.0),
+        locator=None,
+        satellites=lambda: [],
+    )
+    console.attach(a, RotatorFacts())  # type: ignore[arg-type]
+    console.attach(b, RotatorFacts())  # type: ignore[arg-type]
+    console.listen()
+    try:
+        yield a, b, console
+    finally:
+        a.link.set()
+        b.link.set()
+        console.stop()
+
+
+def _post(
+    console: WebConsole, rotator: str, answers: dict[str, int], name: str, **doc: object
+) -> threading.Thread:
+    def run() -> None:
+        client = ConsoleClient(console.port)
+        client.session()
+        answers[name] = client.command(rotator, **doc).status
+
+    t = threading.Thread(target=run)
+    t.start()
+    return t
+
+
+def test_a_stop_for_one_far_rotator_never_waits_behind_another_s_commands(
+    two: tuple[FarRotator, FarRotator, WebConsole],
+) -> None:
+    """A's link is stalled with a move under way and another queued; a STOP for B is carried
+    out at once and answered, while A's commands still wait."""
+    a, b, console = two
+    b.link.set()
+    answers: dict[str, int] = {}
+    posts = [_post(console, "a", answers, "a1", command="target", az=120)]
+    assert a.waiting.wait(slow(10)), "A's target never reached the rotator"
+    posts.append(_post(console, "a", answers, "a2", command="target", az=130))
+    wait_until(lambda: console._far["a"]._work_queue.qsize() == 1, 10, "A's second queued")
+    posts.append(_post(console, "b", answers, "stop", command="stop"))
+    wait_until(lambda: answers.get("stop") == 200, 10, "B's STOP answered")
+    assert b.carried == ["stop"]
+    assert a.carried == []  # A's move still waits for its acknowledgement
+    a.link.set()
+    for t in posts:
+        t.join(slow(10))
+    assert a.carried == ["target 120", "target 130"]
+
+
+def test_moves_over_the_bound_for_one_far_rotator_are_refused_at_once_a_stop_never(
+    far: tuple[FarRotator, WebConsole],
+) -> None:
+    rot, console = far
+    answers: dict[str, int] = {}
+    posts = [_post(console, "far", answers, "m0", command="target", az=100)]
+    assert rot.waiting.wait(slow(10)), "the first target never reached the rotator"
+    queue = console._far["far"]._work_queue
+    for n in range(1, FAR_MOVES):
+        posts.append(_post(console, "far", answers, f"m{n}", command="target", az=100 + n))
+        wait_until(lambda n=n: queue.qsize() == n, 10, f"move {n} queued")
+    client = ConsoleClient(console.port)
+    client.session()
+    over = client.command("far", command="target", az=200)
+    assert (over.status, over.doc["code"]) == (409, "busy")
+    assert queue.qsize() == FAR_MOVES - 1  # not queued
+    assert answers == {}  # the others still wait
+    posts.append(_post(console, "far", answers, "stop", command="stop"))
+    wait_until(lambda: queue.qsize() == FAR_MOVES, 10, "the STOP queued, never refused")
+    rot.link.set()
+    for t in posts:
+        t.join(slow(10))
+    assert rot.carried == ["target 100", "stop"]
+    assert answers["stop"] == 200
