@@ -9,13 +9,17 @@ Rules:
 2. What is put off is a wake-up (a byte on a pipe, a thread started): each can give the
    interpreter lock away for milliseconds, and a stop or lock ON waiting for the lock must not
    wait for that too.
+3. One put-off call that raises does not cost the others: it is logged and the rest are
+   still made (a lost wake-up would leave a thread asleep until its next timed wake).
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 
+log = logging.getLogger(__name__)
 _held = threading.local()  # this thread's Deferring locks held, and the calls put off
 
 
@@ -39,7 +43,10 @@ class Deferring:
             calls, _held.calls = getattr(_held, "calls", []), []
         self._lock.release()
         for call in calls:
-            call()
+            try:
+                call()
+            except Exception:  # rule 3: the calls after it are still made
+                log.exception("a call put off until a lock was let go failed")
 
 
 def later(call: Callable[[], None]) -> None:

@@ -20,7 +20,9 @@ Rules:
 5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so). A
    reading is taken when its exchange is over (link.py rule 9): one that other bytes spoil, or
    one the codec does not trust, is no reading, and the controller is asked again at once. A
-   stop written while a reading is held ends its exchange: the reading is taken then.
+   stop written while a reading is held ends its exchange: the reading is taken just before the
+   stop is written (the motion machine sees the reading, then the stop), or dropped if bytes
+   came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 """
 
@@ -173,8 +175,12 @@ class Controller:
     def flush_stop(self, now: float) -> None:
         """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
         link = self.link
-        if link is not None and link.flush_stop(now):
-            self._settled(link, now)  # rule 5: the reading the stop cut short, before the stop
+        if link is None or not link.stop_ready():
+            return
+        reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
+        if reply is not None:
+            self._reading(link, reply, now)
+        if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
 
     def check_stop(self, now: float, target_going: bool) -> None:

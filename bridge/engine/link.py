@@ -41,8 +41,10 @@ Rules:
    asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
    as a move). A reply owed is not overdue while its reading is held. The quiet time is no
    reply still coming: a stop goes out at once (rule 3 does not hold it back once the reply is
-   whole), and a stop ends the held exchange there: its reading is taken as it stands, and
-   what comes after the stop belongs to the stop's own exchange (its reply is a reading of its
+   whole), and a stop ends the held exchange there, before it is written (``end_held``): its
+   reading is taken if the reply is whole and no byte came after it, and dropped otherwise
+   (bytes still coming may be the second reply that spoils it; the controller is asked again).
+   What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
    own, never a second reply that spoils the held one).
 """
 
@@ -87,6 +89,7 @@ class Link:
         self._held: PositionReply | None = None  # rule 9: a reading, until the line is quiet
         self._held_until = 0.0
         self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
+        self._held_after = False  # rule 9: bytes were read after the held reading
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -114,6 +117,7 @@ class Link:
         self._hold_bytes = max(0, self._hold_bytes - count)
         self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
         if self._held is not None:  # rule 9: the line is not quiet yet
+            self._held_after = True
             self._held_until = min(self._held_cap, max(self._held_until, now + self._settle_s))
 
     def output(self) -> list[bytes]:
@@ -133,6 +137,24 @@ class Link:
         self._outbox.clear()
         self._stop_due = True
 
+    def stop_ready(self) -> bool:
+        """A stop is due and the line takes it now (``flush_stop`` would write it)."""
+        return self._stop_due and self.free(for_stop=True)
+
+    def end_held(self, now: float) -> PositionReply | None:
+        """Rule 9: a stop is about to be written and ends the held exchange: its reading if
+        the reply is whole and nothing came after it; otherwise it is dropped and the
+        controller asked again after the stop."""
+        held, self._held = self._held, None
+        if held is None:
+            return None
+        if not self.codec.awaiting_reply():  # its reply came: the stop's is owed now
+            self._reply_deadline = None
+        if self._held_after or self.codec.awaiting_reply():
+            self._next_poll = now
+            return None
+        return held
+
     def flush_stop(self, now: float) -> bool:
         """Write the due stop if the line allows it now; True if it was written. During a slew
         the report now comes within one reply time, or the stop was lost, or the controller had
@@ -145,12 +167,12 @@ class Link:
 
     def write_stop(self, now: float) -> None:
         """Write a stop now, whatever the line is doing (a stalled motor must not wait). A
-        reading held (rule 9) is settled now: ``settled`` hands it over at once."""
+        reading still held (rule 9) is settled now if ``end_held`` would take it (``settled``
+        hands it over at once), dropped otherwise."""
         self._outbox.clear()
-        if self._held is not None:  # rule 9: the stop ends the held exchange
-            self._held_until = now
-            if not self.codec.awaiting_reply():  # its reply came: the stop's is owed now
-                self._reply_deadline = None
+        held = self._held
+        if held is not None and self.end_held(now) is held:
+            self._held, self._held_until = held, now
         self.write(self.codec.encode_stop(), now)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
@@ -199,6 +221,7 @@ class Link:
         self._held = reply
         self._held_until = now + self._settle_s
         self._held_cap = self._held_until + self.spec.reply_bytes * self._byte_s
+        self._held_after = False
         return True
 
     def spoils(self, junk: JunkReply) -> bool:

@@ -117,3 +117,27 @@ def test_a_stop_goes_out_at_once_while_a_whole_reply_is_held_for_the_quiet_time(
     (answer,) = link.codec.feed(reply)  # the stop's reply
     assert isinstance(answer, PositionReply) and link.hold_reading(answer, later)
     assert link.settled(later + 1.0) is answer
+
+
+def test_a_stop_drops_a_held_reading_that_bytes_after_it_spoil() -> None:
+    """Rule 9: a glitch ``;359`` held for the quiet time while the real ``;180`` is arriving
+    (its first bytes are in, the codec waits for the rest). A STOP pressed then goes out at
+    once, but the held reading is not taken as it stands: it is dropped, never published nor
+    judged as a move, and the controller is asked again."""
+    spec = ROTOREZ["rotorez"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.poll(10.0, 1.0)
+    assert link.output() == [b"AI1;"]
+    t = 10.0 + spec.exchange_time_s()
+    link.got_bytes(4, t)
+    (reading,) = link.codec.feed(b";359")
+    assert isinstance(reading, PositionReply) and link.hold_reading(reading, t)
+    later = t + 2 * 10 / spec.baud  # two byte times on
+    link.got_bytes(2, later)
+    assert link.codec.feed(b";1") == []  # the real reply is coming
+    link.want_stop()
+    assert link.flush_stop(later)
+    assert link.output() == [spec.codec_factory().encode_stop()]  # at once
+    assert link.settled(later + 1.0) is None  # the glitch is no reading
+    link.poll(later, 1.0)
+    assert link.output() == [b"AI1;"]  # asked again
