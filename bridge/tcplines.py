@@ -36,7 +36,8 @@ Rules:
    budget; one over its peer's budget waits in the accept loop, no thread, until the budget
    allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
    line (CR or LF) unread goes at once, ahead of the budget: it may be a stop. At most
-   ``max_clients`` wait; past that the newest without a complete line is reset (said at most
+   ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
+   part of a line before one that has sent nothing yet (it may be about to) (said at most
    once per LOG_S). accept() out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said
    at most once per LOG_S); any error in the loop is logged so and the loop carries on. Over budget
    is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
@@ -418,7 +419,9 @@ class LineServer:
             self._admit(conn, peer)
             return
         if len(waiting) >= self._max_clients:  # the newest without a complete command goes
-            gone = next((c for c in reversed(waiting) if not _line_ready(c)), conn)
+            partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
+            silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
+            gone = next((c for c in partial + silent if not _line_ready(c)), conn)
             if gone is conn:
                 _reset(conn)
             else:
