@@ -15,9 +15,11 @@ Rules:
 3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
    leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
    A new client always gets in to send its stop: when every slot is taken (``max_clients``),
-   the client that has done nothing for longest (``_Client.evictable``: no command half
-   received, or one left half received for more than PENDING_GRACE_S) is dropped to make room;
-   only when every client is in the middle of a command is the newcomer turned away. A peer
+   a client is dropped to make room among those ``_Client.evictable`` (no command half
+   received, or one left half received for more than PENDING_GRACE_S) with no complete
+   command line unread: first the newest that has never finished a command, else the one
+   idle longest (an established program is dropped last); only when none may go is the
+   newcomer turned away. A peer
    address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
    past that makes room among its own clients the same way or is turned away, so one host's
    connections cannot fill the port for the others. Loopback has no such share: every program
@@ -32,8 +34,12 @@ Rules:
    every connection from the kernel at once (a backlog full of dead connections kept a real
    client waiting, or dropped it): one its peer already closed is closed with no thread and no
    budget; one over its peer's budget waits in the accept loop, no thread, until the budget
-   allows (oldest first), and is closed as soon as its peer leaves. At most ``max_clients`` wait;
-   past that the oldest that has sent nothing is reset (said at most once per LOG_S). Over budget
+   allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
+   line (CR or LF) unread goes at once, ahead of the budget: it may be a stop. At most
+   ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
+   part of a line before one that has sent nothing yet (it may be about to) (said at most
+   once per LOG_S). accept() out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said
+   at most once per LOG_S); any error in the loop is logged so and the loop carries on. Over budget
    is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
    would be turned away with it. So a flood of connect-and-close costs an accept and a close each
    and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
@@ -77,6 +83,8 @@ MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
 ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
 PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
+ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
+PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
 PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
 
 
@@ -89,13 +97,13 @@ class RareLog:
         self._since = 0
         self._lock = threading.Lock()
 
-    def warn(self, now: float, msg: str, *args: object) -> None:
+    def warn(self, now: float, msg: str, *args: object, exc_info: bool = False) -> None:
         with self._lock:
             self._since += 1
             if now - self._said_s < self._every_s:
                 return
             count, self._since, self._said_s = self._since, 0, now
-        log.warning(msg + " (%d time(s) since last said)", *args, count)
+        log.warning(msg + " (%d time(s) since last said)", *args, count, exc_info=exc_info)
 
 
 class Close:
@@ -111,8 +119,10 @@ class _Client:
     def __init__(self, thread: threading.Thread, host: str, now: float) -> None:
         self.thread = thread
         self.host = host
+        self.since_s = now  # connected
         self.useful_s = now  # connected, or last finished a command
         self.pending_s: float | None = None  # first byte of a command not yet complete
+        self.done = False  # has finished a command: an established program, dropped last
 
     def evictable(self, now: float) -> bool:
         return self.pending_s is None or now - self.pending_s > PENDING_GRACE_S
@@ -137,6 +147,19 @@ def _alive(conn: socket.socket) -> bool:
         return True
     except OSError:
         return False
+
+
+def _line_ready(conn: socket.socket) -> bool:
+    """Rules 3 and 5: True if a complete command line (CR or LF) waits unread in the kernel."""
+    try:
+        if conn.gettimeout():  # a client's thread set one: recv() would poll for it first
+            with socket.socket(fileno=os.dup(conn.fileno())) as peek:  # no timeout: at once
+                data = peek.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+        else:
+            data = conn.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+    except OSError:
+        return False
+    return b"\r" in data or b"\n" in data
 
 
 def _reset(conn: socket.socket) -> None:
@@ -212,6 +235,8 @@ class LineServer:
         self._max_per_peer = max_per_peer if max_per_peer else max(1, max_clients // 4)
         self._accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
         self._over_log = RareLog()
+        self._accept_log = RareLog()
+        self._bug_log = RareLog()
         self._room_log = RareLog(REFUSAL_LOG_S)
         self._idle_timeout_s = idle_timeout_s
         self._useful_within_s = max(useful_within_s, 0.0)
@@ -320,21 +345,49 @@ class LineServer:
             sel.register(self._wake_r, selectors.EVENT_READ)
             try:
                 while True:  # rule 5: never a sleep while connections wait in the kernel
-                    events = sel.select(self._admit_waiting(waiting, sel))
-                    if any(key.fileobj == self._wake_r for key, _ in events):
-                        return
-                    for key, _ in events:
-                        if key.fileobj is listener:
-                            self._take(listener, waiting, sel)
-                        elif isinstance(key.fileobj, socket.socket):
-                            conn = key.fileobj  # a waiting one: its bytes came, or it left
-                            sel.unregister(conn)
-                            if not _alive(conn):
-                                del waiting[conn]
-                                conn.close()
+                    try:
+                        if self._accept_once(listener, waiting, sel):
+                            return
+                    except Exception:  # rule 5: the port must outlive any bug in this loop
+                        self._bug_log.warn(
+                            self._clock(),
+                            "%s for %s: accept loop error",
+                            self.label,
+                            self.rotator_id,
+                            exc_info=True,
+                        )
+                        self._ended.wait(ERROR_PAUSE_S)
             finally:
                 for conn in waiting:
                     conn.close()
+
+    def _accept_once(
+        self,
+        listener: socket.socket,
+        waiting: dict[socket.socket, tuple[str, int]],
+        sel: selectors.BaseSelector,
+    ) -> bool:
+        """One pass of the accept loop; True when stop() asked it to end."""
+        events = sel.select(self._admit_waiting(waiting, sel))
+        if any(key.fileobj == self._wake_r for key, _ in events):
+            return True
+        for key, _ in events:
+            if key.fileobj is listener:
+                self._take(listener, waiting, sel)
+                continue
+            conn = key.fileobj  # a waiting one: its bytes came, or it left
+            if not isinstance(conn, socket.socket) or conn not in waiting:
+                continue  # reset by _take earlier in this same pass
+            if conn in sel.get_map():
+                sel.unregister(conn)
+            if not _alive(conn):
+                del waiting[conn]
+                conn.close()
+            elif _line_ready(conn):  # a complete command: ahead of the budget
+                peer = waiting.pop(conn)
+                conn.setblocking(True)
+                self._admit(conn, peer)
+        return False
 
     def _take(
         self,
@@ -349,24 +402,33 @@ class LineServer:
         except BlockingIOError:
             return
         except OSError as exc:
-            log.warning("%s for %s: accept failed: %s", self.label, self.rotator_id, exc)
+            self._accept_log.warn(
+                self._clock(), "%s for %s: accept failed: %s", self.label, self.rotator_id, exc
+            )
+            if exc.errno in (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM):
+                self._ended.wait(ERROR_PAUSE_S)  # the listener stays readable: no spin
             return
         if not _alive(conn):  # its peer already left: no thread, no budget
             conn.close()
             return
         now = self._clock()
         queued = any(p[0] == peer[0] for p in waiting.values())
-        if not queued and self._accept_budget(peer[0], now).take(now):
+        ready = _line_ready(conn)  # a complete command waiting: ahead of the budget
+        if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
             conn.setblocking(True)
             self._admit(conn, peer)
             return
-        if len(waiting) >= self._max_clients:  # the oldest that has sent nothing goes
-            quiet = [c for c in waiting if c in sel.get_map()] or list(waiting)
-            gone = quiet[0]
-            if gone in sel.get_map():
-                sel.unregister(gone)
-            del waiting[gone]
-            _reset(gone)
+        if len(waiting) >= self._max_clients:  # the newest without a complete command goes
+            partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
+            silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
+            gone = next((c for c in partial + silent if not _line_ready(c)), conn)
+            if gone is conn:
+                _reset(conn)
+            else:
+                if gone in sel.get_map():
+                    sel.unregister(gone)
+                del waiting[gone]
+                _reset(gone)
             self._over_log.warn(
                 now,
                 "%s for %s: %s connects faster than a client may: connection reset",
@@ -374,17 +436,28 @@ class LineServer:
                 self.rotator_id,
                 peer[0],
             )
+            if gone is conn:
+                return
         waiting[conn] = peer
         sel.register(conn, selectors.EVENT_READ)
 
     def _admit_waiting(
         self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
     ) -> float | None:
-        """Rule 5: a thread for each waiting connection whose peer is back in credit, oldest
-        first; returns how long until the next one may go (None: none waits)."""
+        """Rule 5: a thread for each waiting connection with a complete command line, then
+        for each whose peer is back in credit, oldest first; returns how long until the next
+        one may go (None: none waits)."""
         now = self._clock()
         next_s: float | None = None
         held: set[str] = set()
+        for conn, peer in list(waiting.items()):
+            if conn not in sel.get_map():  # it has sent bytes: see whether a line is complete
+                if _line_ready(conn):
+                    del waiting[conn]
+                    conn.setblocking(True)
+                    self._admit(conn, peer)
+                else:
+                    next_s = PARTIAL_POLL_S
         for conn, peer in list(waiting.items()):
             if peer[0] in held:
                 continue
@@ -393,6 +466,8 @@ class LineServer:
                 held.add(peer[0])
                 wait_s = max(0.001, (1.0 - bucket.tokens) / bucket.rate_per_s)
                 next_s = wait_s if next_s is None else min(next_s, wait_s)
+                continue
+            if conn not in waiting:
                 continue
             del waiting[conn]
             if conn in sel.get_map():
@@ -431,10 +506,14 @@ class LineServer:
             return True, ""
         else:
             why = f"all {self._max_clients} slots"
-        candidates = [(k.useful_s, c) for c, k in pool if k.evictable(now)]
+        candidates = [(c, k) for c, k in pool if k.evictable(now) and not _line_ready(c)]
         if not candidates:
             return False, f"{why} taken, every client mid-command"
-        _useful_s, victim = min(candidates, key=lambda pair: pair[0])
+        fresh = [(c, k) for c, k in candidates if not k.done]
+        if fresh:  # never finished a command: the newest goes first
+            victim = max(fresh, key=lambda pair: pair[1].since_s)[0]
+        else:  # every one has a history: the one idle longest
+            victim = min(candidates, key=lambda pair: pair[1].useful_s)[0]
         gone = self._clients.pop(victim)
         try:
             victim.shutdown(socket.SHUT_RDWR)  # its thread wakes, says it is gone, closes
@@ -442,7 +521,7 @@ class LineServer:
             pass
         self._room_log.warn(
             now,
-            "%s for %s: %s taken, dropped the client idle longest (%s, %.0f s) to let one in",
+            "%s for %s: %s taken, dropped a client (%s, idle %.0f s) to let one in",
             self.label,
             self.rotator_id,
             why,
@@ -548,6 +627,8 @@ class LineServer:
                         conn.sendall(reply)
                 budget.spend(raw + REPLY_COST * len(replies), self._clock())
                 finished = any(not isinstance(r, Close) for r in replies)
+                if finished and me is not None:
+                    me.done = True  # rule 3: an established program, dropped last
                 if session.idle and not guard.holding:
                     pending_since, unfinished = None, 0
                 elif finished:  # rule 5: counted from the last command finished, not read
