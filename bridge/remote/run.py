@@ -111,6 +111,7 @@ class Remote:
             on_change=self._on_link,
             last_word=self._last_word,
             heartbeat=self.station.bridge_heartbeat,
+            ack_wait_s=s.ack_wait_s,
         )
         self.link.start()
         try:

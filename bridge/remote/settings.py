@@ -116,6 +116,14 @@ class RemoteSettings(_Strict):
     command_expiry_s: int = Field(
         5, ge=1, le=60, description="a command not delivered within this many seconds is dropped"
     )
+    ack_wait_s: float = Field(
+        1.0,
+        gt=0,
+        le=30,
+        description="how long a command waits for the station's broker to acknowledge it before "
+        "it is refused and the link reset (a stalled link); raise it for a link whose round trip "
+        "is longer (satellite, a congested mobile network); less than command_expiry_s",
+    )
     moving_max_age_s: float = Field(
         10.0,
         gt=0,
@@ -137,6 +145,12 @@ class RemoteSettings(_Strict):
     def _check(self) -> RemoteSettings:
         if self.mqtt.protocol != "5":
             raise ValueError('mqtt.protocol must be "5": commands carry a message expiry')
+        if self.ack_wait_s >= self.command_expiry_s:
+            raise ValueError(
+                f"ack_wait_s ({self.ack_wait_s:g}) must be less than command_expiry_s "
+                f"({self.command_expiry_s}): the station would refuse a command as old before "
+                "its acknowledgement was given up on"
+            )
         if len(self.endpoints) > 1 and any(e.rotator is None for e in self.endpoints):
             raise ValueError("with several [[endpoints]], each names its rotator")
         taken: dict[tuple[str, str | int], str] = {}  # (transport, port or path) -> its key
