@@ -122,7 +122,7 @@ class RemoteSettings(_Strict):
         le=30,
         description="how long a command waits for the station's broker to acknowledge it before "
         "it is refused and the link reset (a stalled link); raise it for a link whose round trip "
-        "is longer (satellite, a congested mobile network); less than command_expiry_s",
+        "is longer (satellite, a congested mobile network); at most command_expiry_s",
     )
     moving_max_age_s: float = Field(
         10.0,
@@ -145,11 +145,11 @@ class RemoteSettings(_Strict):
     def _check(self) -> RemoteSettings:
         if self.mqtt.protocol != "5":
             raise ValueError('mqtt.protocol must be "5": commands carry a message expiry')
-        if self.ack_wait_s >= self.command_expiry_s:
+        if self.ack_wait_s > self.command_expiry_s:
             raise ValueError(
-                f"ack_wait_s ({self.ack_wait_s:g}) must be less than command_expiry_s "
-                f"({self.command_expiry_s}): the station would refuse a command as old before "
-                "its acknowledgement was given up on"
+                f"ack_wait_s ({self.ack_wait_s:g}) must not be more than command_expiry_s "
+                f"({self.command_expiry_s}): a command acknowledged that late would be answered "
+                "as sent while the station refuses it as old"
             )
         if len(self.endpoints) > 1 and any(e.rotator is None for e in self.endpoints):
             raise ValueError("with several [[endpoints]], each names its rotator")
