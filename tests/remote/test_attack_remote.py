@@ -9,7 +9,6 @@ from __future__ import annotations
 import logging
 import re
 import signal
-import socket
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -34,6 +33,7 @@ from bridge.remote.settings import RemoteSettings
 from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
 from tests.support.clock import FakeClock
+from tests.support.remote import ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -154,19 +154,6 @@ def remote(station: Rig) -> Iterator[tuple[Remote, int]]:
     r.start()
     yield r, port
     r.stop()
-
-
-def ask(port: int, line: bytes) -> bytes:
-    """One rotctld request on a fresh connection; its first reply line."""
-    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
-        sock.sendall(line)
-        buf = b""
-        while not buf.endswith(b"\n"):
-            chunk = sock.recv(100)
-            if not chunk:
-                break
-            buf += chunk
-    return buf
 
 
 def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(

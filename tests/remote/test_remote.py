@@ -5,7 +5,6 @@ remote in this process on a free port, and Hamlib's ``rotctl -m 2`` as its clien
 from __future__ import annotations
 
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -24,7 +23,7 @@ from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
-from tests.support.remote import Heartbeat, remote_published
+from tests.support.remote import Heartbeat, ask, remote_published
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -93,21 +92,6 @@ def rotctl(path: str, port: int, *commands: str) -> str:
     done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
-
-
-def ask(port: int, line: bytes) -> bytes:
-    """One rotctld request on a fresh connection; its reply (one line: an RPRT, or ``p``'s two)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=slow(5)) as sock:
-        sock.sendall(line)
-        buf = b""
-        while not buf.endswith(b"\n") or (line.startswith(b"p") and buf.count(b"\n") < 2):
-            chunk = sock.recv(100)
-            if not chunk:
-                break
-            buf += chunk
-            if buf.startswith(b"RPRT"):
-                break
-    return buf
 
 
 def test_rotctl_turns_the_station_rotator_and_reads_it_back(

@@ -19,8 +19,8 @@ from bridge.mqtt.heartbeat import parse_beat
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
+from tests.support.remote import ask
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 
 class StallingLink:
@@ -86,18 +86,6 @@ def link(station: Rig) -> Iterator[StallingLink]:
     stalling = StallingLink(station.broker.port)
     yield stalling
     stalling.close()
-
-
-def ask(port: int, line: bytes) -> bytes:
-    with socket.create_connection(("127.0.0.1", port), timeout=slow(10)) as sock:
-        sock.sendall(line)
-        buf = b""
-        while not buf.endswith(b"\n"):
-            chunk = sock.recv(100)
-            if not chunk:
-                break
-            buf += chunk
-    return buf
 
 
 def test_a_move_across_a_stalled_link_is_refused_and_never_turns_the_rotor_later(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import socket
 import threading
 import time
 from types import TracebackType
@@ -46,3 +47,19 @@ class Heartbeat:
         while not self._done.is_set():
             self._probe.client.publish(self._topic, beat_payload(time.time()), qos=0)
             self._done.wait(self._every_s)
+
+
+def ask(port: int, line: bytes) -> bytes:
+    """One rotctld request to a remote's endpoint on a fresh connection; its reply (one line:
+    an RPRT, or ``p``'s two)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=slow(10)) as sock:
+        sock.sendall(line)
+        buf = b""
+        while not buf.endswith(b"\n") or (line.startswith(b"p") and buf.count(b"\n") < 2):
+            chunk = sock.recv(100)
+            if not chunk:
+                break
+            buf += chunk
+            if buf.startswith(b"RPRT") and buf.endswith(b"\n"):
+                break
+    return buf
