@@ -8,7 +8,8 @@ Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
    codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
-   (SPID, SatEL) adds entries here and reuses physics.Axis, base.PacedLine and pty.EmulatedPort.
+   (SPID, SatEL, GS-232) adds entries here and reuses physics.Axis, base.PacedLine and
+   pty.EmulatedPort.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from functools import partial
 from typing import Any
 
 from bridge.emulators.base import LoggedFrame, Responder, RotatorState
+from bridge.emulators.gs232 import MODELS as _GS232_MODELS
+from bridge.emulators.gs232 import Gs232
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez import RotorEZ
 from bridge.emulators.satel import SatEL
@@ -34,6 +37,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "rot1prog": partial(Spid, "rot1prog"),
     "md01": partial(Spid, "md01"),
     "satel": SatEL,
+    **{name: partial(Gs232, name) for name in _GS232_MODELS},
 }
 
 
@@ -71,6 +75,7 @@ def start(
 __all__ = [
     "EMULATORS",
     "EmulatedPort",
+    "Gs232",
     "LoggedFrame",
     "Responder",
     "RotatorState",

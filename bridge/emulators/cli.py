@@ -51,6 +51,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--resolution", type=int, help="pulses per degree (SPID: 1, 2, 4; MD-01 also 10)"
     )
     parser.add_argument(
+        "--blank-lines-after-w",
+        type=int,
+        help="blank lines after the answer to W, as K3NG's firmware sends (GS-232 family)",
+    )
+    parser.add_argument(
         "--log-frames", action="store_true", help="print every received frame on stderr"
     )
 
@@ -83,6 +88,8 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
             el_speed_deg_s=args.el_speed_deg_s,
             start_el_deg=args.start_el_deg,
         )
+        if args.model.startswith("gs232"):
+            opts.update(blank_lines_after_w=args.blank_lines_after_w)
     return {k: v for k, v in opts.items() if v is not None}
 
 

@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.protocols.base import JunkReply, PositionReply, VersionReply
+from bridge.protocols.gs232 import Gs232Codec
 from bridge.protocols.rotorez import RotorEzCodec
 from bridge.protocols.satel import SatelCodec
 from bridge.protocols.spid import SpidCodec
@@ -292,6 +293,8 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         SpidCodec("rot1prog"),
         SpidCodec("md01"),
         SatelCodec(),
+        Gs232Codec("a"),
+        Gs232Codec("b", elevation=False),
     ]
     for codec in codecs:
         for chunk in chunks:

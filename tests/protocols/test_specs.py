@@ -65,6 +65,7 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "rot1prog": 3.4,
         "md01": 1.0,
         "satel": 3.9,
+        **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
     }
 
 
@@ -83,6 +84,12 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "rot1prog": (902, HamlibRotType.AZ, None),
         "md01": (903, HamlibRotType.AZEL, None),
         "satel": (2101, HamlibRotType.AZEL, "SatEL rotator"),
+        "gs232a": (601, HamlibRotType.AZEL, None),
+        "gs232b": (603, HamlibRotType.AZEL, None),
+        "gs232a-az": (609, HamlibRotType.AZ, None),
+        "gs232b-az": (611, HamlibRotType.AZ, None),
+        "gs232a-450": (609, HamlibRotType.AZ, None),
+        "gs232b-450": (611, HamlibRotType.AZ, None),
     }
 
 

@@ -1,0 +1,243 @@
+"""Yaesu GS-232A and GS-232B (and the boxes that speak them: K3NG, ERC, ARS): the codec.
+
+Device: the computer interface of Yaesu's rotator controllers (G-450 to G-2800, G-5500) and of
+many clones. 9600 8N1, no flow control. ASCII commands ending in CR; every command is answered:
+by a CR where it returns nothing, by data and CR LF where it returns data (CR alone on some
+clones); K3NG's firmware sends blank lines after answering ``W``.
+Sources: Yaesu's GS-232A/B command tables as gathered on the project's protocol sheet; Hamlib
+4.5.4's gs232a backend (gs232a.c, gs232b.c: models 601, 603, 609, 611) and its traffic on the
+wire, seen with rotctl against our emulator.
+
+Frames we send:
+  ``Mxxx\\r``      turn to azimuth xxx (azimuth-only models)
+  ``Wxxx yyy\\r``  turn to azimuth xxx and elevation yyy (az/el models)
+  ``C\\r``         ask the azimuth: GS-232A ``+0xxx``, GS-232B ``AZ=xxx``
+  ``C2\\r``        ask both: GS-232A ``+0xxx+0yyy``, GS-232B ``AZ=xxx  EL=yyy`` (two spaces on
+                  Yaesu's boxes, one or none on some clones)
+  ``S\\r``         stop both axes (``A`` and ``E`` stop one axis: AXIS_STOPS, not used by the
+                  engine, which always stops everything)
+Not sent: ``X1``-``X4`` (speed) and ``P36``/``P45`` (the box's range) are the controller's own
+settings; ``R L U D`` (turn until stopped) have no place in a bridge that sends bearings.
+
+Rules:
+1. Replies are lines ended by CR or LF; blank lines (the CR answering ``M W S``, K3NG's blank
+   lines after ``W``, the LF of a CR LF) are the controller's chatter, never a reading.
+2. Only a line of this model's reply form (A or B) is a bearing, only while a query is open,
+   and only with values in range (azimuth 0..450, elevation 0..180). A reply of the other form
+   names the other model in its detail (a box set up as the wrong model). A reply with junk in
+   front of it on its line is not trusted (UNTRUSTED: the engine asks again at once).
+3. ``?>`` (the box refused a command) is junk with its own detail, whenever it comes and
+   whether or not a CR follows; it never closes a query (its reply, if any, still may come).
+4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
+   0..180 (elevation) they are refused before anything is sent.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from bridge.protocols.base import (
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+)
+
+AZ_MAX_DEG = 450  # the widest range the commands carry (the 450-degree models)
+EL_MAX_DEG = 180
+REFUSED = b"?>"
+AXIS_STOPS = {"az": b"A\r", "el": b"E\r"}
+_MAX_LINE = 64
+_NUM = rb"(\d{1,3})"
+# a reply at the end of its line; group "pre" is whatever came before it on that line
+_A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*\+0" + _NUM + rb")?\s*$", re.DOTALL)
+_B_FORM = re.compile(
+    rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _NUM + rb")?\s*$", re.DOTALL
+)
+# what a healthy box emits besides replies: blank lines (rule 1)
+_CHATTER = re.compile(rb"[\r\n ]*")
+
+
+def _degrees(value: float, top: int, axis: str) -> int:
+    whole = math.floor(value + 0.5)
+    if not 0 <= whole <= top:
+        raise ValueError(f"{axis} {value:g} outside 0..{top}")
+    return whole
+
+
+class Gs232Codec:
+    """Codec for one GS-232 box: ``variant`` "a" or "b" (its reply form), ``elevation`` whether
+    an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``)."""
+
+    def __init__(self, variant: str = "b", *, elevation: bool = True) -> None:
+        if variant not in ("a", "b"):
+            raise ValueError(f"unknown GS-232 variant {variant!r}")
+        self.variant = variant
+        self.elevation = elevation
+        self._own, self._other = (_A_FORM, _B_FORM) if variant == "a" else (_B_FORM, _A_FORM)
+        self._buf = bytearray()
+        self._query_open = False
+        self._noisy = False  # junk arrived since the query was opened
+
+    # -- encoding -------------------------------------------------------------------------
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        az = float(_degrees(az_deg, AZ_MAX_DEG, "azimuth"))
+        if not self.elevation:
+            return az, None
+        return az, float(_degrees(el_deg or 0.0, EL_MAX_DEG, "elevation"))
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        az, el = self.wire_target(az_deg, el_deg)
+        if el is None:
+            return [b"M%03d\r" % az]
+        return [b"W%03d %03d\r" % (az, el)]
+
+    def encode_stop(self) -> bytes:
+        return b"S\r"
+
+    def encode_query(self) -> bytes:
+        self._query_open = True
+        self._noisy = False
+        return b"C2\r" if self.elevation else b"C\r"
+
+    def expire_query(self) -> None:
+        self._query_open = False
+
+    def awaiting_reply(self) -> bool:
+        return self._query_open
+
+    def encode_version(self) -> None:
+        return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError("the GS-232 has no options the bridge switches")
+
+    def encode_enable(self) -> None:
+        return None
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return []
+
+    def harmless(self, junk: bytes) -> bool:
+        return _CHATTER.fullmatch(junk) is not None
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while True:
+            refused = self._buf.find(REFUSED)
+            ends = [i for i in (self._buf.find(b"\r"), self._buf.find(b"\n")) if i != -1]
+            end = min(ends) if ends else -1
+            if refused != -1 and (end == -1 or refused < end):
+                if refused:  # what came before it on its line
+                    self._line(bytes(self._buf[:refused]), out)
+                del self._buf[: refused + len(REFUSED)]
+                self._junk(REFUSED, JunkReason.NOISE, "the controller refused a command (?>)", out)
+                continue
+            if end == -1:
+                if len(self._buf) > _MAX_LINE:
+                    self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
+                    self._buf.clear()
+                return out
+            line = bytes(self._buf[: end + 1])
+            del self._buf[: end + 1]
+            self._line(line, out)
+
+    def _line(self, raw: bytes, out: list[Reply]) -> None:
+        if _CHATTER.fullmatch(raw):
+            out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
+            return
+        own = self._own.fullmatch(raw)
+        if own is None:
+            other = self._other.fullmatch(raw)
+            form = "GS-232B" if self.variant == "a" else "GS-232A"
+            why = f"a {form} reply: is the model right?" if other else "not a reply line"
+            self._junk(raw, JunkReason.NOISE, why, out)
+            return
+        az, el = int(own.group(2)), own.group(3)
+        el_deg = None if el is None else int(el)
+        if az > AZ_MAX_DEG or (el_deg is not None and el_deg > EL_MAX_DEG):
+            self._junk(raw, JunkReason.SPOILED, "position out of range", out)
+            return
+        if self.elevation and el_deg is None:
+            self._junk(raw, JunkReason.SPOILED, "no elevation in the reply", out)
+            return
+        if not self._query_open:
+            out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
+            return
+        self._query_open = False
+        if own.group("pre").strip(b"\r\n ") or self._noisy:
+            out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
+            return
+        if self.elevation and el_deg is not None:
+            out.append(PositionReply(float(az), float(el_deg)))
+        else:
+            out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        if self._query_open:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
+
+
+def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) -> ModelSpec:
+    a = variant == "a"
+    if elevation:
+        reply = b"+0123+0045\r\n" if a else b"AZ=123  EL=045\r\n"
+    else:
+        reply = b"+0123\r\n" if a else b"AZ=123\r\n"
+    defaults: dict[str, Any] = dict(
+        manufacturer="Yaesu",
+        codec_factory=lambda: Gs232Codec(variant, elevation=elevation),
+        baud=9600,
+        has_elevation=elevation,
+        retarget=RetargetPolicy.DIRECT,  # the box takes a new bearing while turning
+        az_min_deg=0.0,
+        az_max_deg=360.0,
+        el_min_deg=0.0,
+        el_max_deg=180.0 if elevation else 0.0,
+        az_wraps=True,
+        reply_timeout_s=0.4,  # Hamlib's timeout for these boxes
+        noise_deg=1.0,  # a potentiometer read by an ADC, whole degrees
+        # a Yaesu G-1000DXC or the G-5500's azimuth at full speed; the G-5500's elevation
+        nominal_speed_deg_s=6.0,
+        nominal_el_speed_deg_s=2.5,
+        whole_degrees=True,
+        query_bytes=3 if elevation else 2,  # C2\r, C\r
+        reply_bytes=len(reply),
+        hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
+        hamlib_info=None,  # Hamlib's gs232a backend has no get_info
+    )
+    defaults.update(kw)
+    return ModelSpec(name=name, display_name=display, **defaults)
+
+
+def _family(variant: str, hamlib_azel: int, hamlib_az: int) -> dict[str, ModelSpec]:
+    box = f"GS-232{variant.upper()}"
+    name = f"gs232{variant}"
+    return {
+        name: _spec(name, box, variant, elevation=True, hamlib_model=hamlib_azel),
+        f"{name}-az": _spec(
+            f"{name}-az", f"{box} azimuth", variant, elevation=False, hamlib_model=hamlib_az
+        ),
+        # the 450-degree rotors (G-800DXA, G-1000DXA, G-2800DXA) with the box set to P45: the
+        # overlap is real, 10 and 370 are the same direction on two different cable wraps
+        f"{name}-450": _spec(
+            f"{name}-450",
+            f"{box} azimuth 450",
+            variant,
+            elevation=False,
+            az_max_deg=float(AZ_MAX_DEG),
+            az_wraps=False,
+            hamlib_model=hamlib_az,
+        ),
+    }
+
+
+MODELS: dict[str, ModelSpec] = {**_family("a", 601, 609), **_family("b", 603, 611)}

@@ -1,0 +1,187 @@
+"""GS-232A/B codec: the commands byte for byte; both reply forms and their spacing variants
+whole, bytewise and amid junk; ``?>`` and K3NG's blank lines never become readings."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import HamlibRotType, JunkReason, JunkReply, PositionReply
+from bridge.protocols.gs232 import AXIS_STOPS, Gs232Codec
+from tests.support import HOW, feed
+
+
+def positions(replies: list[object]) -> list[tuple[float, float | None]]:
+    return [(r.az_deg, r.el_deg) for r in replies if isinstance(r, PositionReply)]
+
+
+def junk(replies: list[object]) -> list[JunkReply]:
+    return [r for r in replies if isinstance(r, JunkReply)]
+
+
+def asked(variant: str = "b", elevation: bool = True) -> Gs232Codec:
+    codec = Gs232Codec(variant, elevation=elevation)
+    codec.encode_query()
+    return codec
+
+
+def test_commands_on_the_wire() -> None:
+    azel, az = Gs232Codec("b"), Gs232Codec("a", elevation=False)
+    assert azel.encode_target(123.4, 45.5) == [b"W123 046\r"]  # whole degrees, half up
+    assert azel.encode_target(5, 0) == [b"W005 000\r"]
+    assert az.encode_target(359.5) == [b"M360\r"]
+    assert (azel.encode_query(), az.encode_query()) == (b"C2\r", b"C\r")
+    assert azel.encode_stop() == b"S\r"
+    assert AXIS_STOPS == {"az": b"A\r", "el": b"E\r"}
+    assert (azel.encode_version(), azel.encode_connect(0.0), azel.encode_enable()) == (
+        None,
+        [],
+        None,
+    )
+
+
+def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None:
+    codec = Gs232Codec("b")
+    for az, el in ((451, 0), (-1, 0), (10, 181)):
+        with pytest.raises(ValueError, match="outside"):
+            codec.encode_target(az, el)
+    assert codec.wire_target(450, 180) == (450.0, 180.0)
+    assert Gs232Codec("a", elevation=False).wire_target(12.5) == (13.0, None)
+
+
+@pytest.mark.parametrize("how", HOW)
+@pytest.mark.parametrize(
+    ("variant", "elevation", "reply", "want"),
+    [
+        ("a", True, b"+0123+0045\r\n", (123.0, 45.0)),
+        ("a", False, b"+0359\r\n", (359.0, None)),
+        ("a", True, b"+0123 +0045\r", (123.0, 45.0)),
+        ("b", True, b"AZ=123  EL=045\r\n", (123.0, 45.0)),  # Yaesu: two spaces
+        ("b", True, b"AZ=123 EL=045\r\n", (123.0, 45.0)),  # some clones: one
+        ("b", True, b"AZ=123EL=045\r", (123.0, 45.0)),  # or none, CR alone
+        ("b", False, b"AZ=420\r\n", (420.0, None)),  # a 450-degree rotor in its overlap
+        ("b", False, b"AZ=007  EL=000\r\n", (7.0, None)),  # an azimuth box that says EL too
+    ],
+)
+def test_replies_of_both_forms(
+    how: str, variant: str, elevation: bool, reply: bytes, want: tuple[float, float | None]
+) -> None:
+    codec = asked(variant, elevation)
+    replies = feed(codec, reply, how)
+    assert positions(replies) == [want]
+    assert all(j.reason is JunkReason.CHATTER for j in junk(replies))  # the LF, if any
+    assert not codec.awaiting_reply()
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_k3ng_blank_lines_after_w_are_chatter(how: str) -> None:
+    codec = Gs232Codec("b")
+    codec.encode_target(100, 10)
+    replies = feed(codec, b"\r\r\n\r\n", how)
+    assert positions(replies) == []
+    assert {j.reason for j in junk(replies)} == {JunkReason.CHATTER}
+    assert all(codec.harmless(j.data) for j in junk(replies))
+    codec.encode_query()
+    assert positions(feed(codec, b"AZ=100  EL=010\r\n", how)) == [(100.0, 10.0)]
+
+
+@pytest.mark.parametrize("how", HOW)
+@pytest.mark.parametrize("tail", [b"", b"\r", b"\r\n"])
+def test_a_refusal_is_junk_with_its_own_words_and_never_a_reading(how: str, tail: bytes) -> None:
+    codec = asked("b")
+    replies = feed(codec, b"?>" + tail, how)
+    assert positions(replies) == []
+    refusal = [j for j in junk(replies) if j.data == b"?>"]
+    assert len(refusal) == 1 and "refused" in refusal[0].detail
+    assert refusal[0].reason is JunkReason.NOISE and not codec.harmless(b"?>")
+    # the query stays open, but a reply after the refusal in the same exchange is not trusted
+    assert codec.awaiting_reply()
+    late = feed(codec, b"AZ=123  EL=045\r\n", how)
+    assert positions(late) == [] and junk(late)[0].reason is JunkReason.UNTRUSTED
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_junk_in_front_of_a_reply_on_its_line_makes_it_untrusted(how: str) -> None:
+    codec = asked("a")
+    replies = feed(codec, b"\x8f\x00+0123+0045\r\n", how)
+    assert positions(replies) == []
+    assert JunkReason.UNTRUSTED in {j.reason for j in junk(replies)}
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_junk_lines_around_a_reply_leave_the_reading_alone_when_not_asked(how: str) -> None:
+    codec = Gs232Codec("b")
+    replies = feed(codec, b"garbage\r\nAZ=123  EL=045\r\n", how)
+    assert positions(replies) == []  # nobody asked
+    assert [j.reason for j in junk(replies) if j.data.strip()] == [
+        JunkReason.NOISE,
+        JunkReason.UNSOLICITED,
+    ]
+
+
+def test_the_other_forms_reply_names_the_likely_mistake() -> None:
+    codec = asked("a")
+    replies = codec.feed(b"AZ=123  EL=045\r\n")
+    assert positions(replies) == []
+    assert "GS-232B reply" in junk(replies)[0].detail
+    codec = asked("b")
+    assert "GS-232A reply" in junk(codec.feed(b"+0123+0045\r\n"))[0].detail
+
+
+def test_out_of_range_and_half_replies_are_no_readings() -> None:
+    for reply in (b"AZ=451  EL=000\r\n", b"AZ=100  EL=181\r\n", b"AZ=100\r\n"):
+        codec = asked("b")
+        replies = codec.feed(reply)
+        assert positions(replies) == [], reply
+        assert junk(replies)[0].reason is JunkReason.SPOILED
+
+
+def test_a_line_without_end_is_given_up_once_too_long() -> None:
+    codec = asked("b")
+    replies = codec.feed(b"x" * 100)
+    assert [j.reason for j in junk(replies)] == [JunkReason.NOISE]
+    assert positions(codec.feed(b"\r")) == []
+
+
+def test_an_expired_query_takes_no_late_reply() -> None:
+    codec = asked("b")
+    codec.expire_query()
+    replies = codec.feed(b"AZ=123  EL=045\r\n")
+    assert positions(replies) == [] and junk(replies)[0].reason is JunkReason.UNSOLICITED
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    before=st.binary(max_size=40),
+    variant=st.sampled_from(["a", "b"]),
+    az=st.integers(0, 450),
+    el=st.integers(0, 180),
+)
+def test_noise_before_a_reply_never_yields_another_bearing(
+    before: bytes, variant: str, az: int, el: int
+) -> None:
+    codec = asked(variant)
+    reply = b"+0%03d+0%03d\r\n" % (az, el) if variant == "a" else b"AZ=%03d  EL=%03d\r\n" % (az, el)
+    got = positions(codec.feed(before + reply))
+    assert got in ([], [(float(az), float(el))])
+
+
+def test_the_model_table() -> None:
+    facts = {
+        name: (spec.hamlib_model, spec.hamlib_rot_type, spec.has_elevation, spec.az_max_deg)
+        for name, spec in REGISTRY.items()
+        if name.startswith("gs232")
+    }
+    az, azel = HamlibRotType.AZ, HamlibRotType.AZEL
+    assert facts == {
+        "gs232a": (601, azel, True, 360.0),
+        "gs232b": (603, azel, True, 360.0),
+        "gs232a-az": (609, az, False, 360.0),
+        "gs232b-az": (611, az, False, 360.0),
+        "gs232a-450": (609, az, False, 450.0),
+        "gs232b-450": (611, az, False, 450.0),
+    }
+    assert REGISTRY["gs232b-450"].az_wraps is False  # 10 and 370 are two cable wraps
+    assert REGISTRY["gs232b"].el_max_deg == 180.0  # the G-5500 flips over
