@@ -55,6 +55,9 @@ FAST_BRIDGE = {**FAST_POLLING, "brake_delay_s": 1.5}
 # SPID: digital encoders (no jitter), no brake, a slow line (600 baud: 0.42 s per exchange)
 FAST_SPID = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0}
 FAST_SATEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0, "corrupt_on_misuse": True}
+# GS-232: a potentiometer read in whole degrees, no brake, a fast line (9600 baud)
+FAST_GS232 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
+GS232_MODELS = ("gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450")
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -90,6 +93,7 @@ TEST_TIMINGS = Timings(
         "rot1prog": FAST_SPID,
         "md01": FAST_SPID,
         "satel": FAST_SATEL,
+        **dict.fromkeys(GS232_MODELS, FAST_GS232),
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -99,6 +103,7 @@ TEST_TIMINGS = Timings(
         "rot1prog": FAST_SPID_BRIDGE,
         "md01": FAST_SPID_BRIDGE,
         "satel": FAST_SPID_BRIDGE,
+        **dict.fromkeys(GS232_MODELS, FAST_POLLING),
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})
