@@ -1,0 +1,142 @@
+"""A Yaesu GS-232A/B in virtual time: bearings straight out, stops at once, the 450-degree
+overlap, K3NG's blank lines, a refused bearing, a glitched reply, a satellite pass.
+
+The box takes a new bearing at any time (no brake on Yaesu rotors), answers every command (a CR
+where it returns nothing) and reads its potentiometer in whole degrees. 9600 baud: one poll
+(``C2`` and ``AZ=123  EL=045`` CR LF) takes 20 ms of the line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.gs232 import Outcome
+from bridge.model import MotionState, Target
+from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+
+
+def ready(rig: Rig, model: str = "gs232b", **emulator: object) -> VirtualRotator:
+    v = rig(model, emulator={**FAST, **emulator})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
+
+
+def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is IDLE
+            and not truth.is_moving
+            and truth.az_deg == az
+            and (el is None or truth.el_deg == el)
+        )
+
+    return there
+
+
+@pytest.mark.parametrize("model", ["gs232a", "gs232b"])
+def test_a_target_arrives_and_the_bearing_is_read_back(rig: Rig, model: str) -> None:
+    v = ready(rig, model, start_az_deg=10, start_el_deg=5)
+    v.target(123.4, 45.6)
+    v.run_until(settled_at(123, 46), 60, "at 123/46")
+    assert moves(v) == [b"W123 046"]
+    assert (v.status.bearing_deg, v.status.elevation_deg) == (123.0, 46.0)
+    assert v.errors() == []
+
+
+def test_a_stop_while_turning_goes_out_at_once_and_takes(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(300, 60)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    t = v.now
+    v.stop()
+    assert [w.data for w in v.writes if w.t >= t][:1] == [b"S\r"]  # the same instant
+    v.run_until(lambda h: h.state is IDLE, 10, "idle")
+    truth = v.truth()
+    assert not truth.is_moving and 30 < truth.az_deg < 40
+    assert v.status.bearing_deg == round(truth.az_deg)
+    assert v.sent(since=t).count(b"S\r") == 1 and v.errors() == []
+
+
+def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_until(lambda h: h.truth().az_deg > 50, 30, "turning")
+    t = v.now
+    v.target(20, 10)
+    v.run_until(lambda h: moves(h, t), 2, "the new bearing")
+    assert v.truth().is_moving and moves(v, t) == [b"W020 010"]
+    v.run_until(settled_at(20, 10), 120, "at 20/10")
+    assert b"S\r" not in v.sent()
+
+
+def test_k3ng_blank_lines_after_w_are_no_error(rig: Rig) -> None:
+    v = ready(rig, blank_lines_after_w=2)
+    for az in (100, 50, 150):
+        v.target(az, 20)
+        v.run_until(settled_at(az, 20), 60, f"at {az}")
+    assert v.errors() == []
+
+
+def test_the_450_degree_rotor_turns_on_through_north_into_its_overlap(rig: Rig) -> None:
+    v = ready(rig, "gs232b-450", start_az_deg=350)
+    v.aim(Target(20))  # a true bearing, judged: 30 degrees on, not 330 back
+    v.run_until(settled_at(380), 60, "at 380")
+    assert moves(v) == [b"M380"]
+    assert (v.status.bearing_deg, v.status.raw_bearing_deg, v.status.overlap) == (20, 380, "cw")
+
+
+def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> None:
+    v = ready(rig, "gs232b-450", start_az_deg=77)
+    v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
+    t = v.now
+    v.aim(Target(400))  # past 360: on the controller's own scale
+    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
+    assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
+    assert v.frames(Outcome.REFUSED)[-1].data == b"M400"
+    assert v.truth().az_deg == 77 and not v.truth().is_moving
+    assert {s.bearing_deg for s in v.published()} - {None} == {77.0}
+
+
+def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=100, start_el_deg=20)
+    v.run_for(10)
+    glitched: list[float] = []
+
+    def glitch(data: bytes, now: float) -> bytes:
+        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
+            return data
+        glitched.append(now)
+        return b"\xffAZ=359  EL=000\r\n" + data
+
+    v.to_host = glitch
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(100.0, 20.0)}
+    assert v.state is IDLE
+
+
+def test_a_satellite_pass_is_followed_within_3_degrees() -> None:
+    """A G-5500 on a GS-232B (6 and 3 deg/s here) follows a pass clear of north (a 360-degree
+    azimuth cannot cross it without a turn round) as closely as the SPIDs do (3 degrees):
+    whole degrees on the wire, whole degrees read back."""
+    tle = a_pass_that(across_north=False)
+    v, errors = fly("gs232b", tle)
+    with v:
+        worst_az = max(e[1] for e in errors[5:])  # the body rises at the horizon's edge
+        worst_el = max(e[2] for e in errors[5:])
+        assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
+        assert not v.frames(Outcome.REFUSED)
+    assert BERLIN  # the station the pass was computed for
