@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 
 import pytest
 
-from tests.support.rig import Rig
+from tests.support.rig import FAST_POLLING, Rig
 
 
 def ready(rig: Rig) -> None:
@@ -118,3 +119,36 @@ def test_unplug_and_replug(rig: Rig) -> None:
     rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
     rig.probe.publish("rotor/target", "40 10")
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (40.0, 10.0) and not s.is_moving, 15)
+
+
+def test_the_gs232b_driver_drives_a_bridges_own_gs232_port(rig: Rig, tmp_path: Path) -> None:
+    """The two halves close the loop: rotator "dish" is a GS-232B whose serial line is the
+    station-side GS-232 pty of rotator "station", which turns an emulated MD-01. A target sent to
+    "dish" goes out as ``W``, is judged by "station" and turns its rotor; the bearing comes
+    back by ``C2``; a stop of "dish" stops the rotor."""
+    link = tmp_path / "station-gs232"
+    emu = rig.add(
+        "station",
+        model="md01",
+        emu={"start_az_deg": 10, "start_el_deg": 5, "az_speed_deg_s": 10},
+        gs232_pty=str(link),
+    )
+    rig.rotators.append({"id": "dish", "model": "gs232b", "port": str(link), **FAST_POLLING})
+    rig.start()
+    rig.ready("station", timeout_s=15)
+    rig.probe.wait_value(rig.topic("dish", "availability"), "online", timeout_s=15)
+    rig.probe.wait_value(rig.topic("dish", "state"), "idle", timeout_s=15)
+    assert rig.retained()[rig.topic("dish", "bearing")] == b"10"
+
+    rig.probe.publish(rig.topic("dish", "target"), "120 30")
+    emu.wait_for(lambda s: abs(s.az_deg - 120) < 0.6 and abs(s.el_deg - 30) < 0.6, 30)
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    dish = rig.topic("dish", "status")
+    rig.probe.wait_for(dish, lambda m: json.loads(m.payload)["bearing"] == 120, timeout_s=15)
+    assert json.loads(rig.retained()[dish])["elevation"] == 30
+
+    rig.probe.publish(rig.topic("dish", "target"), "250 60")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 150, 30)
+    rig.probe.publish(rig.topic("dish", "stop"), "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 10)
+    assert stopped.az_deg < 245
