@@ -25,6 +25,7 @@ from tests.support.sky import sgp4_altaz
 from tests.support.waiting import slow
 
 ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
+ALL_MODELS += ["gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450"]
 
 
 def _left_behind(tmpdir: Path) -> list[str]:
@@ -160,7 +161,7 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
 
 
 def test_every_model_runs_turns_and_ends_cleanly(tmp_path: Path) -> None:
-    """rotor-bridge demo --models rotorez,rotorcard,dcu1,rot2prog,rot1prog,md01,satel"""
+    """rotor-bridge demo --models rotorez,rotorcard,dcu1,rot2prog,rot1prog,md01,satel,gs232a,..."""
     port = free_port()
     tmpdir = tmp_path / "tmp"
     args = ["--models", ",".join(ALL_MODELS), "--mqtt-port", str(port), "--duration-s", "25"]

@@ -9,7 +9,9 @@ first CR or LF and flushes the rest before the next command. rotctl must be inst
 
 from __future__ import annotations
 
+import signal
 import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -19,6 +21,7 @@ import pytest
 
 from bridge.emulators.gs232 import Gs232, Outcome
 from bridge.emulators.pty import EmulatedPort
+from tests.support import ROOT
 from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
@@ -113,3 +116,26 @@ def test_k3ng_blank_lines_after_w_do_not_upset_hamlib(
     assert 0.0 <= az <= 90.0 and 0.0 <= el <= 30.0  # wherever the box has turned to by then
     port.wait_for(lambda s: not s.is_moving)
     assert values(rotctl(603, port, "p")) == ["90.00", "30.00"]
+
+
+def test_rotor_bridge_emulate_serves_a_gs232b_that_hamlib_drives(
+    tmp_path: Path, rotctl_path: str
+) -> None:
+    """``rotor-bridge emulate gs232b`` (here ``python -m bridge.emulators``), K3NG-style."""
+    link = tmp_path / "gs232"
+    argv = [sys.executable, "-m", "bridge.emulators", "gs232b", "--link", str(link)]
+    argv += ["--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("/dev/pts/")
+        assert proc.stdout.readline().strip() == str(link)
+        run = [rotctl_path, "-m", "603", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
+        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=slow(10)) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
