@@ -22,10 +22,11 @@ settings; ``R L U D`` (turn until stopped) have no place in a bridge that sends 
 Rules:
 1. Replies are lines ended by CR or LF; blank lines (the CR answering ``M W S``, K3NG's blank
    lines after ``W``, the LF of a CR LF) are the controller's chatter, never a reading.
-2. Only a line of this model's reply form (A or B) is a bearing, only while a query is open,
-   and only with values in range (azimuth 0..450, elevation 0..180). A reply of the other form
-   names the other model in its detail (a box set up as the wrong model). A reply with junk in
-   front of it on its line is not trusted (UNTRUSTED: the engine asks again at once).
+2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
+   while a query is open, and only with values in range (azimuth 0..450, elevation 0..180).
+   A reply of the other form names the other model in its detail (a box set up as the wrong
+   model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
+   asks again at once).
 3. ``?>`` (the box refused a command) is junk with its own detail, whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
@@ -53,7 +54,7 @@ EL_MAX_DEG = 180
 REFUSED = b"?>"
 AXIS_STOPS = {"az": b"A\r", "el": b"E\r"}
 _MAX_LINE = 64
-_NUM = rb"(\d{1,3})"
+_NUM = rb"(\d{3})"  # three digits, zero-padded, as the documents and every box send them
 # a reply at the end of its line; group "pre" is whatever came before it on that line
 _A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*\+0" + _NUM + rb")?\s*$", re.DOTALL)
 _B_FORM = re.compile(

@@ -3,8 +3,10 @@ whole, bytewise and amid junk; ``?>`` and K3NG's blank lines never become readin
 
 from __future__ import annotations
 
+import re
+
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
@@ -58,6 +60,7 @@ def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None
         ("a", True, b"+0123+0045\r\n", (123.0, 45.0)),
         ("a", False, b"+0359\r\n", (359.0, None)),
         ("a", True, b"+0123 +0045\r", (123.0, 45.0)),
+        ("a", False, b"+0005\r\n", (5.0, None)),
         ("b", True, b"AZ=123  EL=045\r\n", (123.0, 45.0)),  # Yaesu: two spaces
         ("b", True, b"AZ=123 EL=045\r\n", (123.0, 45.0)),  # some clones: one
         ("b", True, b"AZ=123EL=045\r", (123.0, 45.0)),  # or none, CR alone
@@ -164,6 +167,9 @@ def test_noise_before_a_reply_never_yields_another_bearing(
 ) -> None:
     codec = asked(variant)
     reply = b"+0%03d+0%03d\r\n" % (az, el) if variant == "a" else b"AZ=%03d  EL=%03d\r\n" % (az, el)
+    # noise that is itself a whole reply line cannot be told from one (the engine's settle
+    # rule catches the second reply of the exchange); anything else must not read
+    assume(not re.search(rb"(^|[\r\n])(\+0\d{3}|AZ=\s*\d{3})", before))
     got = positions(codec.feed(before + reply))
     assert got in ([], [(float(az), float(el))])
 
