@@ -152,3 +152,23 @@ def test_the_gs232b_driver_drives_a_bridges_own_gs232_port(rig: Rig, tmp_path: P
     rig.probe.publish(rig.topic("dish", "stop"), "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 10)
     assert stopped.az_deg < 245
+
+
+def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(rig: Rig) -> None:
+    emu = rig.add("sat", model="gs232b", emu={"start_az_deg": 50, "start_el_deg": 5}, el_max_deg=90)
+    rig.start()
+    ready(rig)
+    for payload, why in (("100 95", "elevation 95 outside"), ("400 10", "azimuth 400 outside")):
+        t = time.monotonic()
+        rig.probe.publish("rotor/target", payload)
+        err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+        assert err["kind"] == "refused" and why in err["message"]
+    rig.probe.publish("rotor/lock", "ON")
+    rig.probe.wait_value("rotor/lock/state", "ON")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "120 10")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "locked" in err["message"]
+    rig.probe.publish("rotor/stop", "STOP")  # never refused: on the wire even when locked
+    emu.wait_for_frame(b"S", "stop", 10)
+    assert emu.frames("move") == [] and emu.state().az_deg == 50.0
