@@ -140,3 +140,10 @@ def test_a_satellite_pass_is_followed_within_3_degrees() -> None:
         assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
         assert not v.frames(Outcome.REFUSED)
     assert BERLIN  # the station the pass was computed for
+
+
+def test_a_bare_azimuth_keeps_the_elevation(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=10, start_el_deg=30)
+    v.target(100)  # no elevation named: the box must not be sent elevation 0
+    v.run_until(settled_at(100, 30), 60, "at 100/30")
+    assert moves(v) == [b"W100 030"]
