@@ -104,6 +104,15 @@ def rotctld_cases() -> list[RotctldCase]:
             None,
             ("idle", "polling"),
         ),
+        RotctldCase(
+            "gs232b",
+            603,
+            lambda i: f"P {10 + i} 10",
+            "P -> Wxxx yyy<CR>",
+            lambda f: f.outcome == "move",
+            None,
+            ("idle", "polling"),
+        ),
     ]
 
 

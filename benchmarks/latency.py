@@ -114,6 +114,7 @@ def isolation_s() -> float:
 
 _EZ_POLL = lambda f: f.data == b"AI1;"  # noqa: E731
 _STATUS_POLL = lambda f: f.outcome == "status"  # noqa: E731
+_GS232_POLL = lambda f: f.outcome == "query"  # noqa: E731
 _SPID_FRAME = bytes(13)
 AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
 AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
@@ -244,6 +245,25 @@ def cases() -> list[Case]:
         _spid_target("rot2prog", 12, False),
         _spid_target("md01", 12, False),
         Case(
+            "gs232b",
+            "stop",
+            b"S\r",
+            "stop S<CR>",
+            lambda f: f.outcome == "stop",
+            (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
+            poll=_GS232_POLL,
+        ),
+        Case(
+            "gs232b",
+            "target",
+            b"W100 010\r",
+            "target Wxxx yyy<CR>",
+            lambda f: f.outcome == "move",
+            (Condition("idle", {}, (iso, iso + 0.5)),),
+            payload=_spid_payload(True),
+            poll=_GS232_POLL,
+        ),
+        Case(
             "satel",
             "stop",
             b"s",
@@ -371,7 +391,8 @@ def tasks(scope: Scope, quick: bool, models: set[str] | None) -> list[Task]:
     for rc in rotctld_cases():
         if (models and rc.model not in models) or (quick and rc.hamlib == 901):
             continue
-        frame = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}[rc.model]
+        frames = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}
+        frame = {**frames, "gs232b": b"W100 010\r"}[rc.model]
         frame_ms = _ms(line_time_s(len(frame), baud_of(rc.model, rc.emu_opts)))
         for condition in rc.conditions:
             if quick and condition != "idle":
