@@ -13,7 +13,6 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from bridge import priority
 from bridge.dxcluster import CtyError, DxCluster
 from bridge.dxcluster.setup import dxcluster
 from bridge.engine.audit import AuditTrail
@@ -326,9 +325,6 @@ class App:
         if not self._lane_started and not self._stopped.is_set():
             self._lane_started = True
             self.lane.start()
-        # the main connection's thread waits for a core behind the stop lane's from now on; not
-        # before: the lane's thread, started just above from this one, would inherit it
-        self.client.run_in_background()
 
     def _refused(self, message: str) -> None:
         """Another bridge owns the base topic (mqtt/claim.py): ``run`` stops, exit code 2."""
@@ -376,7 +372,7 @@ class App:
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
         if self.settings.tracking.tle_file is not None and self.discovery is not None:
-            priority.background_thread(self._watch_catalog, "tle-file").start()
+            threading.Thread(target=self._watch_catalog, name="tle-file", daemon=True).start()
         try:
             for server in self._text_ports():
                 server.start()

@@ -69,7 +69,6 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge import priority
 from bridge.ratelimit import Budget, TokenBucket
 
 log = logging.getLogger(__name__)
@@ -303,8 +302,8 @@ class LineServer:
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = False
         self._ended.clear()
-        self._accept_thread = priority.background_thread(  # its clients' threads inherit it
-            self._accept_loop, f"{self._key}-{self.rotator_id}"
+        self._accept_thread = threading.Thread(
+            target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
         self._accept_thread.start()
         log.info("%s for %s listening on %s:%d", self.label, self.rotator_id, *self.address)

@@ -47,7 +47,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from bridge import priority
 from bridge.dxcluster.book import Book
 from bridge.dxcluster.spots import Lines, parse_spot
 from bridge.errors import Refused
@@ -124,7 +123,7 @@ class DxCluster:
     def start(self) -> None:
         self._publish()  # an empty list at first: no stale spots from a run before
         for target, name in ((self._run, "dxcluster"), (self._aim_loop, "dxcluster-aim")):
-            thread = priority.background_thread(target, name)
+            thread = threading.Thread(target=target, name=name, daemon=True)
             thread.start()
             self._threads.append(thread)
         log.info("DX cluster: connecting to %s:%d as %s", self.host, self.port, self.login)

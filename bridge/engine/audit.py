@@ -39,7 +39,6 @@ from functools import partial
 from pathlib import Path
 from typing import Protocol
 
-from bridge import priority
 from bridge.model import AuditEvent, ErrorKind
 
 log = logging.getLogger(__name__)
@@ -82,7 +81,7 @@ class AuditFile:
         self.write_failures = 0  # rule 3: writes that failed (each ends its batch)
         self._unsaid = 0  # rule 3: lines lost to failed writes, not said in a line yet
         self._os_write = os_write  # (tests give a disk that fails their way)
-        self._thread = priority.background_thread(self._run, "audit")
+        self._thread = threading.Thread(target=self._run, name="audit", daemon=True)
 
     def start(self) -> None:
         self._thread.start()

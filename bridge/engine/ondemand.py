@@ -19,8 +19,6 @@ import queue
 import threading
 from collections.abc import Callable
 
-from bridge import priority
-
 log = logging.getLogger(__name__)
 
 
@@ -44,7 +42,7 @@ class OnDemandThread:
         """Rule 4: a thread for the jobs in line, if none runs (nothing in line: none)."""
         with self._lock:
             if self._thread is None and not self._jobs.empty():
-                self._thread = priority.background_thread(self._run, self._name)
+                self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
                 self._thread.start()
 
     def _run(self) -> None:

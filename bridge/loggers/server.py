@@ -49,7 +49,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from bridge import priority
 from bridge.loggers.commands import (
     JUNK_LOG_S,
     Commands,
@@ -176,7 +175,7 @@ class LoggerEndpoints:
                 )
             log.info("logger UDP port %s (%s) listening", where, _kind(endpoint))
         self._wake_r, self._wake_w = os.pipe()
-        self._thread = priority.background_thread(self._loop, "loggers")
+        self._thread = threading.Thread(target=self._loop, name="loggers", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:

@@ -240,10 +240,6 @@ class Connection:
         self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh)
         self._client.loop_start()
 
-    def run_in_background(self) -> None:
-        """paho's thread lowers its priority at its next round (paho_client.py rule 3)."""
-        self._client.background = True
-
     def _disconnect(self) -> None:
         self._client.disconnect()
         self._client.loop_stop()  # joins paho's thread: never call this on it

@@ -36,8 +36,6 @@ import paho.mqtt.client as paho
 from paho.mqtt.enums import MQTTErrorCode
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge import priority
-
 log = logging.getLogger(__name__)
 
 EVENT_BACKLOG = 50  # rule 13
@@ -188,7 +186,7 @@ class Delivery:
                     return
                 resend()
 
-        priority.background_thread(run, "mqtt-retry").start()
+        threading.Thread(target=run, name="mqtt-retry", daemon=True).start()
 
     def wake(self) -> None:
         """Ends the retry thread once ``stopping()`` says so."""

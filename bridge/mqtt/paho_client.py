@@ -1,7 +1,7 @@
 """paho's client as every broker connection of the bridge builds it (connection.py uses it for
 the main connection, the stop lane and the remote's link): protocol, session, credentials and
 TLS (connection.py rule 1), the kernel's quick acknowledgement after every read (connection.py
-rule 9, where it is explained), a tick on paho's own thread, and that thread's priority.
+rule 9, where it is explained), and a tick on paho's own thread.
 
 Rules:
 1. ``new_client`` builds paho's client for the settings: MQTT 5 or 3.1.1, credentials, TLS.
@@ -9,10 +9,6 @@ Rules:
    second while connected: its select waits 1 s at most), for what a connection does on a clock
    without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
    one that raises is logged and paho's thread goes on.
-3. ``background``, once set, has paho's thread lower its own priority at its next round
-   (bridge/priority.py rule 2). It is set from outside, not at the thread's start: a thread
-   started by a lowered thread inherits its priority, and the main connection's thread starts
-   the stop lane's (app.py ``_connected``), which must keep the process's.
 """
 
 from __future__ import annotations
@@ -25,7 +21,6 @@ from collections.abc import Callable
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
-from bridge import priority
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -46,12 +41,10 @@ def acknowledge_now(sock: object) -> None:
 
 
 class Client(paho.Client):
-    """paho's client with rule 9 (``_loop``, loop_start's thread, reads through loop_read),
-    rule 2 (``tick``) and rule 3 (``background``)."""
+    """paho's client with rule 9 (``_loop``, loop_start's thread, reads through loop_read) and
+    rule 2 (``tick``)."""
 
     tick: Callable[[], None] | None = None
-    background = False  # rule 3
-    _lowered = False
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         rc = super().loop_read(max_packets)
@@ -60,9 +53,6 @@ class Client(paho.Client):
 
     def loop_misc(self) -> MQTTErrorCode:
         rc = super().loop_misc()
-        if self.background and not self._lowered:  # rule 3, on paho's own thread
-            self._lowered = True
-            priority.background()
         tick = self.tick
         if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
             try:

@@ -51,7 +51,7 @@ from collections.abc import Awaitable, Callable
 
 from aiohttp import web
 
-from bridge import __version__, priority
+from bridge import __version__
 from bridge.errors import RefusalCode, Refused
 from bridge.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.web import auth, view
@@ -151,7 +151,7 @@ class WebConsole:
         loop runs on that thread from the start: the caller's thread may have a loop of its own
         running (a script, a test driving a browser)."""
         loop = self._loop = asyncio.new_event_loop()
-        self._thread = priority.background_thread(loop.run_forever, "web")
+        self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
         self._thread.start()
         try:
             asyncio.run_coroutine_threadsafe(self._start(), loop).result(timeout=30.0)

@@ -43,7 +43,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from bridge import priority
 from bridge.engine.follow import Heard
 from bridge.ratelimit import SourceBudgets
 from bridge.wsjtx.messages import Malformed, Status, decode
@@ -153,7 +152,7 @@ class WsjtxListener:
         group = f" (multicast group {self.multicast_group})" if self.multicast_group else ""
         log.info("WSJT-X UDP port %s:%d listening%s", host, port, group)
         self._wake_r, self._wake_w = os.pipe()
-        self._thread = priority.background_thread(self._loop, "wsjtx")
+        self._thread = threading.Thread(target=self._loop, name="wsjtx", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
