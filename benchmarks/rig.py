@@ -185,6 +185,7 @@ class EmuHost:
             log_name=f"{name}.log",
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            hardware=True,  # harness rule 5
         )
         scope.callback(self._quit)
         line = self._read_line(60)
