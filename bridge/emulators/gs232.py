@@ -83,8 +83,10 @@ MODELS: dict[str, Gs232Model] = {
     "gs232b": Gs232Model("gs232b", "b", True, 360.0),
     "gs232a-az": Gs232Model("gs232a-az", "a", False, 360.0),
     "gs232b-az": Gs232Model("gs232b-az", "b", False, 360.0),
-    "gs232a-450": Gs232Model("gs232a-450", "a", False, 450.0),
-    "gs232b-450": Gs232Model("gs232b-450", "b", False, 450.0),
+    "gs232a-450": Gs232Model("gs232a-450", "a", True, 450.0),
+    "gs232b-450": Gs232Model("gs232b-450", "b", True, 450.0),
+    "gs232a-az-450": Gs232Model("gs232a-az-450", "a", False, 450.0),
+    "gs232b-az-450": Gs232Model("gs232b-az-450", "b", False, 450.0),
 }
 
 

@@ -23,7 +23,8 @@ Rules:
 1. Replies are lines ended by CR or LF; blank lines (the CR answering ``M W S``, K3NG's blank
    lines after ``W``, the LF of a CR LF) are the controller's chatter, never a reading.
 2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
-   while a query is open, and only with values in range (azimuth 0..450, elevation 0..180).
+   while a query is open, and only with values in range (azimuth 0..450, elevation 0..180;
+   K3NG's form of an elevation a little below 0, ``EL=00-1``, reads as 0: the horizon).
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
@@ -57,8 +58,10 @@ _MAX_LINE = 64
 _NUM = rb"(\d{3})"  # three digits, zero-padded, as the documents and every box send them
 # a reply at the end of its line; group "pre" is whatever came before it on that line
 _A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*\+0" + _NUM + rb")?\s*$", re.DOTALL)
+# K3NG pads an elevation a little below the horizon (calibration drift) as EL=00-1
+_B_EL = rb"(\d{3}|0{0,2}-\d{1,2})"
 _B_FORM = re.compile(
-    rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _NUM + rb")?\s*$", re.DOTALL
+    rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _B_EL + rb")?\s*$", re.DOTALL
 )
 # what a healthy box emits besides replies: blank lines (rule 1)
 _CHATTER = re.compile(rb"[\r\n ]*")
@@ -162,7 +165,8 @@ class Gs232Codec:
             self._junk(raw, JunkReason.NOISE, why, out)
             return
         az, el = int(own.group(2)), own.group(3)
-        el_deg = None if el is None else int(el)
+        # K3NG's "00-1": the antenna at the horizon with its pot a degree off reads as the horizon
+        el_deg = None if el is None else max(0, int(el.lstrip(b"0") or b"0"))
         if az > AZ_MAX_DEG or (el_deg is not None and el_deg > EL_MAX_DEG):
             self._junk(raw, JunkReason.SPOILED, "position out of range", out)
             return
@@ -204,7 +208,8 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         el_min_deg=0.0,
         el_max_deg=180.0 if elevation else 0.0,
         az_wraps=True,
-        reply_timeout_s=0.4,  # Hamlib's timeout for these boxes
+        # K3NG's OPTION_DELAY_C_CMD_OUTPUT answers C and C2 400 ms late (for Ham Radio Deluxe)
+        reply_timeout_s=1.0,
         noise_deg=1.0,  # a potentiometer read by an ADC, whole degrees
         # a Yaesu G-1000DXC or the G-5500's azimuth at full speed; the G-5500's elevation
         nominal_speed_deg_s=6.0,
@@ -224,13 +229,24 @@ def _family(variant: str, hamlib_azel: int, hamlib_az: int) -> dict[str, ModelSp
     name = f"gs232{variant}"
     return {
         name: _spec(name, box, variant, elevation=True, hamlib_model=hamlib_azel),
+        # an az/el box whose azimuth turns 450 degrees with the box set to P45 (the G-5500's
+        # azimuth, say): the overlap is real on this axis too
+        f"{name}-450": _spec(
+            f"{name}-450",
+            f"{box} az/el 450",
+            variant,
+            elevation=True,
+            az_max_deg=float(AZ_MAX_DEG),
+            az_wraps=False,
+            hamlib_model=hamlib_azel,
+        ),
         f"{name}-az": _spec(
             f"{name}-az", f"{box} azimuth", variant, elevation=False, hamlib_model=hamlib_az
         ),
         # the 450-degree rotors (G-800DXA, G-1000DXA, G-2800DXA) with the box set to P45: the
         # overlap is real, 10 and 370 are the same direction on two different cable wraps
-        f"{name}-450": _spec(
-            f"{name}-450",
+        f"{name}-az-450": _spec(
+            f"{name}-az-450",
             f"{box} azimuth 450",
             variant,
             elevation=False,

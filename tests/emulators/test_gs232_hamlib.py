@@ -98,7 +98,7 @@ def test_a_set_move_arrives(
     assert values(rotctl(hamlib, port, "p")) == ["271.00", "12.00"]
 
 
-@pytest.mark.parametrize(("model", "hamlib"), [("gs232a-450", 609), ("gs232b-450", 611)])
+@pytest.mark.parametrize(("model", "hamlib"), [("gs232a-az-450", 609), ("gs232b-az-450", 611)])
 def test_the_azimuth_models_read_the_overlap(
     gs232_port: PortFactory, rotctl: Rotctl, model: str, hamlib: int
 ) -> None:

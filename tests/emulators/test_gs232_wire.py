@@ -69,7 +69,7 @@ def test_speed_levels() -> None:
 
 
 def test_the_450_degree_range() -> None:
-    p36, p45 = Gs232("gs232b-az"), Gs232("gs232b-450", az_speed_deg_s=100.0)
+    p36, p45 = Gs232("gs232b-az"), Gs232("gs232b-az-450", az_speed_deg_s=100.0)
     assert ask(p36, b"M400\r", 0) == b"?>\r\n" and not p36.state(1).is_moving
     assert ask(p45, b"M400\r", 0) == b"\r"
     assert ask(p45, b"C\r", 10) == b"AZ=400\r\n"
@@ -104,5 +104,14 @@ def test_power_cycle_forgets_range_and_speed() -> None:
 
 def test_every_gs232_model_is_in_the_registry() -> None:
     names = {n for n in emulators.EMULATORS if n.startswith("gs232")}
-    assert names == {"gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450"}
-    assert isinstance(emulators.create("gs232a-450", now=0.0), Gs232)
+    assert names == {
+        "gs232a",
+        "gs232b",
+        "gs232a-450",
+        "gs232b-450",
+        "gs232a-az",
+        "gs232b-az",
+        "gs232a-az-450",
+        "gs232b-az-450",
+    }
+    assert isinstance(emulators.create("gs232a-az-450", now=0.0), Gs232)

@@ -90,15 +90,68 @@ def test_k3ng_blank_lines_after_w_are_no_error(rig: Rig) -> None:
 
 
 def test_the_450_degree_rotor_turns_on_through_north_into_its_overlap(rig: Rig) -> None:
-    v = ready(rig, "gs232b-450", start_az_deg=350)
+    v = ready(rig, "gs232b-az-450", start_az_deg=350)
     v.aim(Target(20))  # a true bearing, judged: 30 degrees on, not 330 back
     v.run_until(settled_at(380), 60, "at 380")
     assert moves(v) == [b"M380"]
     assert (v.status.bearing_deg, v.status.raw_bearing_deg, v.status.overlap) == (20, 380, "cw")
 
 
+@pytest.mark.parametrize("model", ["gs232a-450", "gs232b-450"])
+def test_an_az_el_box_at_450_degrees_keeps_its_overlap(rig: Rig, model: str) -> None:
+    """A G-5500 with its box at P45: from 400 (40 degrees on the overlap), 45 is 5 degrees on,
+    not a swing of 355 degrees back through the whole circle."""
+    v = ready(rig, model, start_az_deg=400, start_el_deg=5)
+    v.aim(Target(45, 10))
+    v.run_until(settled_at(405, 10), 60, "at 405/10")
+    assert moves(v) == [b"W405 010"]
+    assert (v.status.bearing_deg, v.status.raw_bearing_deg, v.status.overlap) == (45, 405, "cw")
+
+
+def test_a_bare_bearing_brings_an_elevation_over_the_top_back_down(rig: Rig) -> None:
+    """A flipped pass ends at elevation 160: a bare azimuth afterwards (a logger, a DX spot) with
+    160 kept would point the beam at the opposite bearing; it goes out with 180 - 160."""
+    v = ready(rig, start_az_deg=10, start_el_deg=160)
+    v.target(90)
+    v.run_until(settled_at(90, 20), 120, "at 90/20")
+    assert moves(v) == [b"W090 020"]
+
+
+def test_k3ng_answering_late_for_ham_radio_deluxe_is_not_offline(rig: Rig) -> None:
+    """K3NG's OPTION_DELAY_C_CMD_OUTPUT answers C2 400 ms late."""
+    v = ready(rig, processing_delay_s=0.45, start_az_deg=10, start_el_deg=5)
+    v.target(40, 10)
+    v.run_until(settled_at(40, 10), 60, "at 40/10")
+    assert v.errors() == []
+
+
+def test_k3ng_reads_a_little_below_the_horizon_as_the_horizon(rig: Rig) -> None:
+    """K3NG prints an elevation of -1 (its pot a degree off at the horizon) as EL=00-1: the
+    rotator stays online and reads elevation 0."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    below: list[float] = []
+    seen = bytearray()  # what the box sent so far (the line hands it over a byte at a time)
+
+    def drifted(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for byte in data:
+            seen.append(byte)
+            if seen.endswith(b"EL=000"):
+                below.append(now)
+                out += b"-1"  # EL=00 went out already
+            else:
+                out.append(byte)
+        return bytes(out)
+
+    v.to_host = drifted
+    t = v.now
+    v.run_for(10)
+    assert len(below) > 5 and v.errors(since=t) == []
+    assert (v.state, v.status.bearing_deg, v.status.elevation_deg) == (IDLE, 10, 0)
+
+
 def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> None:
-    v = ready(rig, "gs232b-450", start_az_deg=77)
+    v = ready(rig, "gs232b-az-450", start_az_deg=77)
     v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
     t = v.now
     v.aim(Target(400))  # past 360: on the controller's own scale

@@ -30,19 +30,19 @@ def test_az_el_target_bearing_and_stop(rig: Rig, model: str) -> None:
     snap = rig.retained()
     assert snap["rotor/bearing"] == b"10" and snap["rotor/elevation"] == b"5"
 
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
     rig.probe.publish("rotor/target", '{"azimuth": 123, "elevation": 45}')
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (123.0, 45.0) and not s.is_moving, 20)
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert (status(rig)["bearing"], status(rig)["elevation"]) == (123, 45)
     assert [f.data for f in emu.frames("move")] == [b"W123 045"]
 
     rig.probe.publish("rotor/target", '{"azimuth": 300, "elevation": 10}')
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     assert stopped.az_deg < 290 and emu.frames("stop")
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert status(rig)["bearing"] == round(emu.state().az_deg)  # where it stopped, read back
     assert emu.frames("refused") == []
@@ -64,20 +64,20 @@ def test_azimuth_box_turns_and_refuses_an_elevation(rig: Rig) -> None:
 
 
 def test_the_450_degree_rotor_takes_the_overlap(rig: Rig) -> None:
-    emu = rig.add("tower", model="gs232b-450", emu={"start_az_deg": 350})
+    emu = rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 350})
     rig.start()
     ready(rig)
+    t = time.monotonic()
     rig.probe.publish("rotor/target", "20")  # 30 degrees on through north, not 330 back
     emu.wait_for(lambda s: s.az_deg == 380.0 and not s.is_moving, 20)
     assert [f.data for f in emu.frames("move")] == [b"M380"]
-    t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     doc = status(rig)
     assert (doc["bearing"], doc["raw_bearing"], doc["overlap"]) == (20, 380, "cw")
 
 
 def test_junk_and_refusals_give_an_error_and_change_nothing(rig: Rig) -> None:
-    emu = rig.add("tower", model="gs232b-450", emu={"start_az_deg": 77})
+    emu = rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
     rig.start()
     ready(rig)
     t = time.monotonic()
@@ -91,7 +91,7 @@ def test_junk_and_refusals_give_an_error_and_change_nothing(rig: Rig) -> None:
 
 
 def test_a_bearing_the_box_refuses_is_reported_and_moves_nothing(rig: Rig) -> None:
-    emu = rig.add("tower", model="gs232b-450", emu={"start_az_deg": 77})
+    emu = rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
     emu.inject(b"P36\r", to="device")  # the box set to 360 degrees; the bridge told 450
     emu.wait_for(lambda s: s.az_range_deg == 360.0, 5)
     rig.start()

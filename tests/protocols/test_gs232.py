@@ -186,8 +186,10 @@ def test_the_model_table() -> None:
         "gs232b": (603, azel, True, 360.0),
         "gs232a-az": (609, az, False, 360.0),
         "gs232b-az": (611, az, False, 360.0),
-        "gs232a-450": (609, az, False, 450.0),
-        "gs232b-450": (611, az, False, 450.0),
+        "gs232a-450": (601, azel, True, 450.0),
+        "gs232b-450": (603, azel, True, 450.0),
+        "gs232a-az-450": (609, az, False, 450.0),
+        "gs232b-az-450": (611, az, False, 450.0),
     }
-    assert REGISTRY["gs232b-450"].az_wraps is False  # 10 and 370 are two cable wraps
+    assert REGISTRY["gs232b-az-450"].az_wraps is False  # 10 and 370 are two cable wraps
     assert REGISTRY["gs232b"].el_max_deg == 180.0  # the G-5500 flips over

@@ -88,8 +88,10 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "gs232b": (603, HamlibRotType.AZEL, None),
         "gs232a-az": (609, HamlibRotType.AZ, None),
         "gs232b-az": (611, HamlibRotType.AZ, None),
-        "gs232a-450": (609, HamlibRotType.AZ, None),
-        "gs232b-450": (611, HamlibRotType.AZ, None),
+        "gs232a-450": (601, HamlibRotType.AZEL, None),
+        "gs232b-450": (603, HamlibRotType.AZEL, None),
+        "gs232a-az-450": (609, HamlibRotType.AZ, None),
+        "gs232b-az-450": (611, HamlibRotType.AZ, None),
     }
 
 

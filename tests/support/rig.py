@@ -57,7 +57,16 @@ FAST_SPID = {"az_speed_deg_s": 30.0, "el_speed_deg_s": 15.0}
 FAST_SATEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0, "corrupt_on_misuse": True}
 # GS-232: a potentiometer read in whole degrees, no brake, a fast line (9600 baud)
 FAST_GS232 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
-GS232_MODELS = ("gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450")
+GS232_MODELS = (
+    "gs232a",
+    "gs232b",
+    "gs232a-az",
+    "gs232b-az",
+    "gs232a-450",
+    "gs232b-450",
+    "gs232a-az-450",
+    "gs232b-az-450",
+)
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
