@@ -341,18 +341,6 @@ Command = (
 COMMANDS: tuple[type, ...] = get_args(Command)  # each kind, for isinstance
 
 
-def is_halt(command: Command) -> bool:
-    """A stop, a lock ON, tracking or following OFF: never refused by anything (the lock, the
-    wind, the lease, a fence), never stale (docs/architecture.md rule 11)."""
-    if isinstance(command, Lock):
-        return command.on
-    if isinstance(command, TrackBody):
-        return command.off
-    if isinstance(command, FollowQso):
-        return not command.on
-    return isinstance(command, Stop)
-
-
 class ErrorKind(enum.StrEnum):
     """The ``kind`` of an error event (``R/error``). Published API: listed here and in the
     README, and nothing else can be emitted (ErrorEvent refuses any other)."""
