@@ -1,5 +1,10 @@
 """Plain value types shared by every layer: commands, motion states, the status snapshot.
 
+``Command`` is the one union of everything an operator can ask of a rotator (a target, a stop,
+an option, the lock, the control lease, tracking, following, a preset, park, a nudge, a place,
+a path, a health reset): every front end parses into one of these frozen values and hands it to
+the rotator's one entry (front.py, engine/rotator.py ``submit``).
+
 Nothing here does I/O or knows about MQTT or serial ports. Angles are degrees, times are
 seconds (monotonic unless the name says ``_unix``).
 """
@@ -10,6 +15,7 @@ import enum
 import math
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
+from typing import get_args
 
 
 class MotionState(enum.StrEnum):
@@ -217,7 +223,122 @@ class SetOption:
     origin: Origin | None = None
 
 
-Command = Target | Stop | SetOption
+# -- the rest of what an operator can ask of a rotator (one union with the three above) ----
+# Every front end parses what it reads into one of these values and hands it to the rotator's
+# one entry (``submit``); the judge (engine/rotator.py) dispatches on the type.
+
+
+@dataclass(frozen=True, kw_only=True)
+class Asked:
+    """Who asked, on every command below (named, never by position): ``source``, the interface
+    (shown in the status), and ``origin``, who sent it (the audit trail, the control lease), as
+    Target, Stop and SetOption carry them."""
+
+    source: Source = Source.MQTT
+    origin: Origin | None = None
+
+
+@dataclass(frozen=True)
+class Lock(Asked):
+    """The safety lock: ON is never refused and never delayed (docs/architecture.md rule 11)."""
+
+    on: bool
+
+
+@dataclass(frozen=True)
+class Claim(Asked):
+    """Claim the control lease: ``operator`` and ``minutes`` as sent (engine/lease.py judges
+    them: a name the lease refuses is a refusal like any)."""
+
+    operator: object
+    minutes: object
+
+
+@dataclass(frozen=True)
+class Release(Asked):
+    """End the control lease, whoever holds it (engine/lease.py rule 4)."""
+
+
+@dataclass(frozen=True)
+class TrackBody(Asked):
+    """Follow the sun, the moon or a satellite (by name, or ``tle``: name and two lines);
+    ``off`` ends it and is never refused."""
+
+    name: str
+    tle: tuple[str, str, str] | None = None
+
+    @property
+    def off(self) -> bool:
+        return self.tle is None and self.name.strip().casefold() == "off"
+
+
+@dataclass(frozen=True)
+class FollowQso(Asked):
+    """Follow the QSO partner WSJT-X names; off ends it and is never refused."""
+
+    on: bool
+    long_path: bool = False
+
+
+@dataclass(frozen=True)
+class GoToPreset(Asked):
+    name: str
+
+
+@dataclass(frozen=True)
+class Park(Asked):
+    """Go to the configured park position (``parked`` once there)."""
+
+
+@dataclass(frozen=True)
+class Nudge(Asked):
+    """Turn by a step from where the rotor points (or is going)."""
+
+    d_az_deg: float
+    d_el_deg: float | None = None
+
+
+@dataclass(frozen=True)
+class Toward(Asked):
+    """Turn toward a place (a locator or coordinates) by the short or the long path."""
+
+    latitude_deg: float
+    longitude_deg: float
+    locator: str | None = None
+    long_path: bool = False
+
+
+@dataclass(frozen=True)
+class TakePath(Asked):
+    """The place of the current locator or coordinate target, by the path asked for."""
+
+    long_path: bool
+
+
+@dataclass(frozen=True)
+class ResetHealth(Asked):
+    """A new rotor health baseline (after a repair); it moves nothing."""
+
+
+# what the judge hands the mailbox as a command for the controller (targets in raw values)
+ControllerCommand = Target | Stop | SetOption
+Command = (
+    Target
+    | Stop
+    | SetOption
+    | Lock
+    | Claim
+    | Release
+    | TrackBody
+    | FollowQso
+    | GoToPreset
+    | Park
+    | Nudge
+    | Toward
+    | TakePath
+    | ResetHealth
+)
+COMMANDS: tuple[type, ...] = get_args(Command)  # each kind, for isinstance
 
 
 class ErrorKind(enum.StrEnum):
@@ -331,10 +452,37 @@ class RotatorStatus:
 
 
 def describe_command(command: Command) -> str:
-    """How a command is echoed back to the user in an error event."""
-    if isinstance(command, Target):
-        axes = (("az", command.az_deg), ("el", command.el_deg))
-        return "target " + " ".join(f"{axis} {v:g}" for axis, v in axes if v is not None)
-    if isinstance(command, SetOption):
-        return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
-    return "stop"
+    """How a command is echoed back to the user in an error event (and the audit trail) when
+    its front end has no words of its own for it (what the user sent)."""
+    match command:
+        case Target():
+            axes = (("az", command.az_deg), ("el", command.el_deg))
+            return "target " + " ".join(f"{axis} {v:g}" for axis, v in axes if v is not None)
+        case SetOption():
+            return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
+        case Lock():
+            return f"lock {'ON' if command.on else 'OFF'}"
+        case Claim():
+            return "claim"
+        case Release():
+            return "release"
+        case TrackBody():
+            return f"track {command.name}"
+        case FollowQso():
+            return f"follow {'ON' if command.on else 'OFF'}"
+        case GoToPreset():
+            return f"preset {command.name}"
+        case Park():
+            return "park"
+        case Nudge():
+            el = "" if command.d_el_deg is None else f" el {command.d_el_deg:+g}"
+            return f"nudge az {command.d_az_deg:+g}{el}"
+        case Toward():
+            where = command.locator or f"{command.latitude_deg:.4f},{command.longitude_deg:.4f}"
+            return f"toward {where}" + (" long path" if command.long_path else "")
+        case TakePath():
+            return "long path" if command.long_path else "short path"
+        case ResetHealth():
+            return "health reset"
+        case Stop():
+            return "stop"

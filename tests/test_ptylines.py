@@ -41,9 +41,6 @@ class StandIn:
     def submit(self, command: Target | Stop, described: str | None = None) -> None:
         self.submitted.append(command)
 
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        raise AssertionError("GS-232 has no park")
-
 
 class Client:
     """A serial client on the link: opens it as a program opens a port."""

@@ -19,7 +19,7 @@ from bridge.app import worker_config
 from bridge.emulators import EmulatedPort
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
-from bridge.model import ErrorEvent, MotionState
+from bridge.model import ErrorEvent, Lock, MotionState
 from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
 from bridge.settings import RotatorSettings, Settings
 from tests.support import feed, wait_until
@@ -302,7 +302,7 @@ def test_set_pos_errors(station: StationFactory) -> None:
 
 def test_a_locked_rotator_rejects_moves_but_not_stop(station: StationFactory) -> None:
     st = station(park_az_deg=10)
-    st.rotator.set_lock(True)
+    st.rotator.submit(Lock(True))
     c = st.connect()
     c.ask(b"P 100 0\n", b"RPRT -9\n")
     c.ask(b"+P 100 0\n", b"set_pos: 100 0\nRPRT -9\n")

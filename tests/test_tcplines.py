@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from bridge.gs232 import Gs232Session
-from bridge.model import Origin, Source, Stop, Target
+from bridge.model import Stop, Target
 from bridge.ratelimit import Budget
 from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer, _Client
 from tests.support import wait_until
@@ -61,9 +61,6 @@ class _Tower:
 
     def submit(self, command: Target | Stop, described: str | None = None) -> None:
         self.submitted.append(command)
-
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        raise AssertionError("not parked in these tests")
 
 
 @pytest.fixture

@@ -24,7 +24,7 @@ Rules:
    changed, at most once per CALLS_EVERY_S (the first at once).
 4. ``aim`` only queues (paho's thread returns at once; a full queue is a refusal). The aim
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
-   through its one judge (``go_toward``: limits, keep-out, lock, lease), with the source
+   through its one judge (a ``Toward`` command: limits, keep-out, lock, lease), with the source
    ``dxcluster`` and the asker's origin kept for the audit. An unknown call, or no station,
    is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked (the
    rotator's ``last_halt_s``) overtakes it: the call is refused, never turned to after the
@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 from bridge.dxcluster.book import Book
 from bridge.dxcluster.spots import Lines, parse_spot
 from bridge.errors import Refused
-from bridge.model import Origin, Source
+from bridge.model import Origin, Source, Toward
 from bridge.mqtt.ports import RotatorPort
 from bridge.ratelimit import Budget
 
@@ -322,15 +322,15 @@ class DxCluster:
                 f"{aim.call}: {why} in no entity of the cty file", aim.described, origin=aim.origin
             )
             return
-        aim.rotator.go_toward(
+        toward = Toward(
             place.latitude_deg,
             place.longitude_deg,
-            Source.DXCLUSTER,
-            aim.described,
-            locator=place.locator,
-            long_path=aim.long_path,
+            place.locator,
+            aim.long_path,
+            source=Source.DXCLUSTER,
             origin=aim.origin,
         )
+        aim.rotator.submit(toward, aim.described)
 
 
 def _keepalive(sock: socket.socket) -> None:

@@ -18,7 +18,8 @@ Rules:
    to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
    listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
    never costs a command, and a stop is put in the mailbox before its event is made.
-4. Claims and releases are commands too: audited, refused ones reported on ``R/error``.
+4. Claims and releases are commands too (model.py ``Claim``, ``Release``): the judge's
+   ``submit`` (rotator.py) audits them, and reports a refused one on ``R/error``, as any.
 """
 
 from __future__ import annotations
@@ -106,23 +107,21 @@ class Operators:
         return self._lease.refusal(who, self._wall())
 
     # -- claims and releases (rule 4) -----------------------------------------------------
-    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> Control:
-        """Raise Refused (reported and audited) if the claim is refused."""
+    def claim(self, operator: object, minutes: object, origin: Origin) -> Control:
+        """Raise Refused if the claim is refused (the judge reports and audits it, as every
+        command: rotator.py ``submit``)."""
         try:
             with self._owner:  # rule 1
                 held = self._lease.claim(operator, minutes, self._wall())
                 self._changed(held)
         except LeaseError as exc:
-            self._report(ErrorKind.REFUSED, str(exc), described)
-            self.audit(origin, described, f"refused: {exc}")
             raise Refused(RefusalCode.INVALID, str(exc)) from None
         self._arm()
         log.info("%s: %s holds the control lease (%s)", self._id, held.operator, origin.who)
-        self.audit(origin, described, EXECUTED)
         return held
 
-    def release(self, origin: Origin, described: str) -> Control | None:
-        """Anyone may (lease.py rule 4); releasing a free lease changes nothing."""
+    def release(self, origin: Origin) -> Control | None:
+        """Anyone may (lease.py rule 4); releasing a free lease changes nothing (None)."""
         with self._owner:  # rule 1
             held = self._lease.release(self._wall())
             if held is not None:
@@ -130,7 +129,6 @@ class Operators:
         self._arm()
         if held is not None:
             log.info("%s: %s released the control lease", self._id, origin.who)
-        self.audit(origin, described, EXECUTED if held is not None else f"{EXECUTED} (was free)")
         return held
 
     def _changed(self, held: Control | None) -> None:

@@ -1,28 +1,30 @@
 """A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
 
-This is the one judge of commands: every front end submits here, and here alone are the safety
-lock, the wind park, the configured limits and keep-out sectors (pointing.py: targets arrive as
-true bearings and leave as the controller's raw values), the model's capabilities and the link
-state checked against a command. A refused command raises Refused (with a RefusalCode front
-ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never reaches the
-mailbox, so it can never move anything. The worker judges nothing anew: it only drops an
-accepted target that the lock or a lost link overtook before it could be sent, and reports that
-as a refusal too. Motion is judged in one order: the lock, the wind (safety), the control lease
-(coordination), the pointing judge, the link (``_check``). Each command carries who sent it
-(``origin``): the lease (operators.py) refuses a target, a track or follow start from anyone but
-its holder; nothing refuses a stop, lock or tracking/following OFF (docs/architecture.md rule
-11); every command judged here, executed or refused, is an audit event. The bridge's own moves
-(auto-park, the wind park, tracking's and following's targets) are the session's, never judged
-by the lease. The safety state has one owner per rotator (kept.py rule 5, docs/architecture.md
-rule 14): a lock word, and the lease's claims, releases and end (operators.py rule 1), are
-decided, put in the mailbox and their save queued in one step under the owner's lock, from
-every interface; the lock the judge asks is that owner's (kept.py rule 2). A stop takes no
-part in it: it never waits for the owner's lock. A motion command judged before a stop or lock
-ON never runs after it, whichever threads brought the two: the judge reads the mailbox's halt
-count before it judges a target, a track or follow start (a preset, park, nudge, a place are
-targets), and the mailbox drops one whose count a stop or lock ON put since has made old
-(mailbox.py rule 10); the judge reports that as a refusal (``STALE_MESSAGE``, code ``stale``),
-on R/error and in the audit trail like any.
+This is the one judge of commands: every front end submits here (``submit``, the one entry: a
+value of model.py's ``Command`` union, dispatched on its type; front.py), and here alone are the
+safety lock, the wind park, the configured limits and keep-out sectors (pointing.py: targets
+arrive as true bearings and leave as the controller's raw values), the model's capabilities and
+the link state checked against a command. A refused command raises Refused (with a RefusalCode
+front ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never
+reaches the mailbox, so it can never move anything. The worker judges nothing anew: it only
+drops an accepted target that the lock or a lost link overtook before it could be sent, and
+reports that as a refusal too. Motion is judged in one order: the lock, the wind (safety), the
+control lease (coordination), the pointing judge, the link (``_check``). Each command carries
+who sent it (``origin``): the lease (operators.py) refuses a target, a track or follow start
+from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
+(docs/architecture.md rule 11); every command judged here, executed or refused, is an audit
+event, written in one place (``submit``, after the put; a value outside the union is refused as
+unsupported). The bridge's own moves (auto-park, the wind park, tracking's and following's
+targets) are the session's, never judged by the lease. The safety state has one owner per
+rotator (kept.py rule 5, docs/architecture.md rule 14): a lock word, and the lease's claims,
+releases and end (operators.py rule 1), are decided, put in the mailbox and their save queued in
+one step under the owner's lock, from every interface; the lock the judge asks is that owner's
+(kept.py rule 2). A stop takes no part in it: it never waits for the owner's lock. A motion
+command judged before a stop or lock ON never runs after it, whichever threads brought the two:
+the judge reads the mailbox's halt count before it judges a target, a track or follow start (a
+preset, park, nudge, a place are targets), and the mailbox drops one whose count a stop or lock
+ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
+(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any.
 """
 
 from __future__ import annotations
@@ -31,13 +33,13 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
 from typing import NoReturn
 
 import serial
 
 from bridge.engine.catalog import TleCatalog
-from bridge.engine.follow import Follow, Heard
+from bridge.engine.follow import Follow as Following
+from bridge.engine.follow import Heard
 from bridge.engine.health_memory import HealthMemory
 from bridge.engine.kept import Kept, Owner
 from bridge.engine.lines import Lines
@@ -47,20 +49,32 @@ from bridge.engine.port import open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
 from bridge.engine.starts import body_to_track, check_can_follow
 from bridge.engine.state_store import StateStore
-from bridge.engine.tracking import Track
+from bridge.engine.tracking import Track as Tracking
 from bridge.engine.worker import Worker, WorkerConfig
 from bridge.errors import RefusalCode, Refused
 from bridge.model import (
+    COMMANDS,
     AuditEvent,
+    Claim,
     Command,
+    ControllerCommand,
     ErrorEvent,
     ErrorKind,
+    FollowQso,
+    GoToPreset,
+    Lock,
+    Nudge,
     Origin,
+    Park,
+    Release,
+    ResetHealth,
     RotatorStatus,
     SetOption,
-    Source,
     Stop,
+    TakePath,
     Target,
+    Toward,
+    TrackBody,
     describe_command,
 )
 from bridge.pointing import Limits, toward
@@ -145,7 +159,7 @@ class Rotator:
         self._kept.seen_wind(status.wind)
         self._on_status(status)
 
-    def reset_health(self) -> None:
+    def _reset_health(self) -> None:
         """A new health baseline (after a repair); it moves nothing, so it is never refused."""
         self._health.reset()
         self._mailbox.put_health_reset()
@@ -189,16 +203,91 @@ class Rotator:
         hold: int | None = None,
         echo: bool = False,
     ) -> None:
-        """Queue a command or raise Refused. Stop is never refused; ``hold`` (a stop from the
-        stop lane): no target goes out until ``release`` reaches that marker (session rule 13)."""
-        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
-        origin = command.origin or Origin(command.source)
-        what = described or describe_command(command)
+        """The one way a front end reaches the judge (rules in the module header): queue
+        ``command`` (a value of model.py's ``Command`` union) or raise Refused, reported on
+        R/error and in the audit trail. ``described``: the words the user sent (the error
+        event's and the audit trail's). Stop and lock ON are never refused; ``hold`` (a stop or
+        lock ON from the stop lane): no target goes out until ``release`` reaches that marker
+        (session rule 13); ``echo``: a halt the stop lane carried out already (mqtt/halts.py),
+        not audited twice."""
+        if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
+            message = f"not a command the bridge knows: {type(command).__name__}"
+            self.report(ErrorKind.REFUSED, message, described)
+            raise Refused(RefusalCode.UNSUPPORTED, message)
+        who = command.origin or Origin(command.source)
+        # a lock word is audited in one wording, whichever interface said it
+        what = describe_command(command) if isinstance(command, Lock) else None
+        what = what or described or describe_command(command)
         try:
-            judged = self._check(command)
+            result = self._carry(command, what, who, hold)
         except Refused as exc:
-            self.report_refusal(exc.message, what, origin=origin)
+            self.report_refusal(exc.message, what, origin=who)
             raise
+        if result is not None and not echo:  # after the put (operators.py rule 3)
+            self.operators.audit(who, what, result)
+
+    def _carry(self, command: Command, what: str, who: Origin, hold: int | None) -> str | None:
+        """The decision for each kind: the audit trail's result, None for a command it does
+        not keep (a health reset moves nothing), or Refused (reported by ``submit``)."""
+        src, by = command.source, command.origin
+        match command:
+            case Target() | Stop() | SetOption():
+                self._judged(command, hold)
+            case Lock():
+                self._lock(command.on, hold)
+            case Claim():
+                self.operators.claim(command.operator, command.minutes, who)
+            case Release():
+                if self.operators.release(who) is None:
+                    return f"{EXECUTED} (was free)"
+            case TrackBody():
+                self._track(command, what)
+            case FollowQso():
+                self._start_follow(command, what)
+            # the other ways of naming a target (pointing.py rule 6), judged like any
+            case GoToPreset():
+                self._judged(Target(*self.pointing.preset(command.name), src, origin=by))
+            case Park():
+                self._judged(Target(*self.pointing.parking(), src, park=True, origin=by))
+            case Nudge():
+                step = self.pointing.nudged(self.status, command.d_az_deg, command.d_el_deg)
+                self._judged(Target(*step, src, origin=by))
+            case Toward():
+                self._toward(command, command.latitude_deg, command.longitude_deg)
+            case TakePath():
+                info = self.status.target_info  # the place of the current target
+                if info is None:
+                    message = "no locator or coordinate target to take the other path to"
+                    raise Refused(RefusalCode.INVALID, message)
+                self._toward(command, info.latitude_deg, info.longitude_deg, info.locator)
+            case ResetHealth():
+                self._reset_health()
+                return None
+        return EXECUTED
+
+    def _toward(
+        self,
+        command: Toward | TakePath,
+        latitude_deg: float,
+        longitude_deg: float,
+        locator: str | None = None,
+    ) -> None:
+        """A place, by the path asked for: a target with where it lies (``target_info``)."""
+        if isinstance(command, Toward):
+            locator = command.locator
+        az, info = toward(
+            self.station,
+            latitude_deg,
+            longitude_deg,
+            long_path=command.long_path,
+            locator=locator,
+        )
+        self._judged(Target(az, None, command.source, info=info, origin=command.origin))
+
+    def _judged(self, command: ControllerCommand, hold: int | None = None) -> None:
+        """A target, a stop or an option: judged (``_check``) and put in the mailbox."""
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
+        judged = self._check(command)
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
                 self._kept.save_option(judged.name, judged.enabled)
@@ -207,141 +296,50 @@ class Rotator:
             self.last_halt_s = time.monotonic()
             self._mailbox.put(judged, hold=hold)
         elif not self._mailbox.put(judged, epoch=epoch):
-            self._overtaken(what, origin)
-        if not echo:  # echo: a halt the stop lane carried out already (mqtt/halts.py)
-            self.operators.audit(origin, what, EXECUTED)  # after the put (operators.py rule 3)
+            self._overtaken()
 
     def release(self, marker: int, *, clear: bool = False) -> None:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
 
-    # -- the other ways of naming a target (pointing.py rule 6), judged like any --------------
-    def go_to_preset(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        self._named(lambda: Target(*self.pointing.preset(name), source), described, origin)
-
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        self._named(lambda: Target(*self.pointing.parking(), source, park=True), described, origin)
-
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None:
-        def target() -> Target:
-            az, info = toward(
-                self.station, latitude_deg, longitude_deg, long_path=long_path, locator=locator
-            )
-            return Target(az, None, source, info=info)
-
-        self._named(target, described, origin)
-
-    def take_path(
-        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        """The place of the current locator or coordinate target, by the path asked for."""
-        info = self.status.target_info
-        if info is None:
-            message = "no locator or coordinate target to take the other path to"
-            self.report_refusal(message, described, origin=origin or Origin(source))
-            raise Refused(RefusalCode.INVALID, message)
-        self.go_toward(
-            info.latitude_deg,
-            info.longitude_deg,
-            source,
-            described,
-            locator=info.locator,
-            long_path=long_path,
-            origin=origin,
-        )
-
-    def nudge(
-        self,
-        d_az: float,
-        d_el: float | None,
-        source: Source,
-        described: str,
-        *,
-        origin: Origin | None = None,
-    ) -> None:
-        self._named(
-            lambda: Target(*self.pointing.nudged(self.status, d_az, d_el), source),
-            described,
-            origin,
-        )
-
-    def track(
-        self,
-        name: str,
-        source: Source,
-        described: str,
-        tle: tuple[str, str, str] | None = None,
-        *,
-        origin: Origin | None = None,
-    ) -> None:
-        """Follow the sun, the moon or a satellite (by name from the TLE file, or ``tle``);
-        ``off`` ends it (never refused, like a stop). Raise Refused otherwise. A name is looked
-        up in the TLE file by the sky worker, not here (paho's thread): an unknown one is
-        refused by the session, as an error event. Tracking started by the lease's holder goes
-        on (its targets are the bridge's own, never judged by the lease)."""
+    def _track(self, command: TrackBody, what: str) -> None:
+        """Follow the sun, the moon or a satellite (by name from the TLE file, or its TLE);
+        ``off`` ends it (never refused, like a stop). A name is looked up in the TLE file by
+        the sky worker, not here (paho's thread): an unknown one is refused by the session, as
+        an error event. Tracking started by the lease's holder goes on (its targets are the
+        bridge's own, never judged by the lease)."""
         epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
-        who = origin or Origin(source)
-        if name.strip().casefold() == "off" and tle is None:
-            self._mailbox.put_track(Track(None, source, origin=origin))
-            self.operators.audit(who, described, EXECUTED)
+        source, origin, name = command.source, command.origin, command.name
+        if command.off:
+            self._mailbox.put_track(Tracking(None, source, origin=origin))
             return
-        try:
-            body = body_to_track(self.catalog, self.spec, self._has_sky, name, tle)
-            self._check_start(who)
-        except Refused as exc:
-            self.report_refusal(exc.message, described, origin=who)
-            raise
+        body = body_to_track(self.catalog, self.spec, self._has_sky, name, command.tle)
+        self._check_start(origin or Origin(source))
         if body is None:
             lookup = LookupQuestion(self.catalog, name)
-            track = Track(None, source, lookup, described, origin)
+            track = Tracking(None, source, lookup, what, origin)
         else:
-            track = Track(body, source, None, described, origin)
+            track = Tracking(body, source, None, what, origin)
         if not self._mailbox.put_track(track, epoch=epoch):
-            self._overtaken(described, who)
-        self.operators.audit(who, described, EXECUTED)
+            self._overtaken()
 
     @property
     def can_follow(self) -> bool:
         """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
         return self._follow.wsjtx and self._follow.station is not None
 
-    def follow(
-        self,
-        on: bool,
-        source: Source,
-        described: str,
-        *,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None:
+    def _start_follow(self, command: FollowQso, what: str) -> None:
         """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
-        stop). Raise Refused otherwise: judged like a track start (the lease included); what
-        the holder started goes on, its targets are the bridge's own (``wsjtx``)."""
+        stop). Judged like a track start (the lease included); what the holder started goes
+        on, its targets are the bridge's own (``wsjtx``)."""
+        on, origin = command.on, command.origin
         epoch = self._mailbox.epoch if on else None  # before the judge (mailbox.py rule 10)
-        who = origin or Origin(source)
         if on:
-            try:
-                check_can_follow(self._follow)
-                self._check_start(who)
-            except Refused as exc:
-                self.report_refusal(exc.message, described, origin=who)
-                raise
-        follow = Follow(on, long_path, source, described, origin)
+            check_can_follow(self._follow)
+            self._check_start(origin or Origin(command.source))
+        follow = Following(on, command.long_path, command.source, what, origin)
         if not self._mailbox.put_follow(follow, epoch=epoch):
-            self._overtaken(described, who)
-        self.operators.audit(who, described, EXECUTED)
+            self._overtaken()
 
     def wind(self, speed_kmh: float, replayed: bool = False) -> None:
         """A wind reading (MQTT's thread): an input for the wind park (engine/wind.py)."""
@@ -351,10 +349,9 @@ class Rotator:
         """What WSJT-X says of the QSO (wsjtx/server.py's thread): an input for following."""
         self._mailbox.put_heard(heard)
 
-    def _overtaken(self, what: str, who: Origin) -> NoReturn:
+    def _overtaken(self) -> NoReturn:
         """A motion command the mailbox dropped: a stop or lock ON from another thread was put
         while it was judged (mailbox.py rule 10). Refused like any, and said so."""
-        self.report_refusal(STALE_MESSAGE, what, origin=who)
         raise Refused(RefusalCode.STALE, STALE_MESSAGE)
 
     def _check_start(self, who: Origin) -> None:
@@ -365,22 +362,7 @@ class Rotator:
                 RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
 
-    def _named(self, make: Callable[[], Target], described: str, origin: Origin | None) -> None:
-        try:
-            target = make()
-        except Refused as exc:
-            self.report_refusal(exc.message, described, origin=origin or Origin(Source.MQTT))
-            raise
-        self.submit(target if origin is None else replace(target, origin=origin), described)
-
-    def set_lock(
-        self,
-        locked: bool,
-        *,
-        hold: int | None = None,
-        origin: Origin | None = None,
-        echo: bool = False,
-    ) -> None:
+    def _lock(self, locked: bool, hold: int | None) -> None:
         """Never refused; ``hold`` as for ``submit``. The lock, the mailbox put and the save
         queued for the state file are one step (kept.py rules 2, 5), from every interface."""
         with self._owner:
@@ -388,9 +370,6 @@ class Rotator:
             if locked:
                 self.last_halt_s = time.monotonic()
             self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
-        if not echo:
-            what = f"lock {'ON' if locked else 'OFF'}"
-            self.operators.audit(origin or Origin(Source.MQTT), what, EXECUTED)
 
     def note(self, message: str) -> None:
         """Show ``message`` as the status's last error (a problem found outside the rotator)."""
@@ -409,7 +388,7 @@ class Rotator:
         self._mailbox.put_note(message)
         self._on_event(ErrorEvent(kind, message, command, self._wall()))
 
-    def _check(self, command: Command) -> Command:
+    def _check(self, command: ControllerCommand) -> ControllerCommand:
         """``command`` as it goes to the controller (targets in raw values), or Refused."""
         if isinstance(command, Stop):
             return command

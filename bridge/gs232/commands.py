@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import logging
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 from bridge.errors import Refused
+from bridge.front import FrontRotator
 from bridge.gs232.parser import (
     EasycommRequest,
     Gs232Kind,
@@ -22,26 +23,15 @@ from bridge.gs232.parser import (
     parse_easycomm,
     parse_gs232,
 )
-from bridge.model import Origin, RotatorStatus, Source, Stop, Target
+from bridge.model import Origin, Park, Source, Stop, Target
 from bridge.tcplines import LineServer
 
 if TYPE_CHECKING:
-    from bridge.protocols.base import ModelSpec
     from bridge.ptylines import PtyLineServer
 
 
-class Rotator(Protocol):
-    """What the GS-232 and Easycomm sessions use of a rotator."""
-
-    @property
-    def id(self) -> str: ...
-    @property
-    def spec(self) -> ModelSpec: ...
-    @property
-    def status(self) -> RotatorStatus: ...
-    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
-
+# what these commands use of a rotator: the bridge's own or the remote's (front.py)
+Rotator = FrontRotator
 
 log = logging.getLogger(__name__)
 
@@ -159,7 +149,7 @@ class EasycommSession(_Session):
                 alarms.append(f"refused {exc.code.value}")
         elif req.park:
             try:
-                self.rotator.park(Source.EASYCOMM, described, origin=self.origin)
+                self.rotator.submit(Park(source=Source.EASYCOMM, origin=self.origin), described)
             except Refused as exc:
                 alarms.append(f"refused {exc.code.value}")
         elif req.az_deg is not None or req.el_deg is not None:

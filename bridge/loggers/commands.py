@@ -30,44 +30,17 @@ import math
 import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
 
 from bridge import geo
 from bridge.errors import Refused
+from bridge.front import FrontRotator
 from bridge.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
 from bridge.loggers.limiter import ReplyLimiter
-from bridge.model import Origin, RotatorStatus, Source, Stop, Target
+from bridge.model import Origin, Park, Source, Stop, Target, Toward
 from bridge.pointing import angle_between, norm360
 
-if TYPE_CHECKING:
-    from bridge.protocols.base import ModelSpec
-
-
-class Rotator(Protocol):
-    """What the loggers' datagrams use of a rotator: the bridge's own (engine/rotator.py) or the
-    remote's, which stands for the station's (remote/rotator.py)."""
-
-    @property
-    def id(self) -> str: ...
-    @property
-    def spec(self) -> ModelSpec: ...
-    @property
-    def status(self) -> RotatorStatus: ...
-    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
-    def report_refusal(self, message: str, command: str | None) -> None: ...
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None: ...
-
+# what these commands use of a rotator: the bridge's own or the remote's (front.py)
+Rotator = FrontRotator
 
 log = logging.getLogger(__name__)
 
@@ -168,14 +141,14 @@ class Commands:
             if req.stop:
                 rot.submit(Stop(Source.PST, by), described)
             elif req.park:
-                rot.park(Source.PST, described, origin=by)
+                rot.submit(Park(source=Source.PST, origin=by), described)
             elif req.locator is not None:
                 try:
                     lat, lon = geo.parse_locator(req.locator)
                 except geo.LocatorError as exc:
                     rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
                     return
-                rot.go_toward(lat, lon, Source.PST, described, locator=req.locator, origin=by)
+                rot.submit(Toward(lat, lon, req.locator, source=Source.PST, origin=by), described)
             elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
                 rot.report_refusal(
                     f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",

@@ -15,7 +15,7 @@ import threading
 from collections.abc import Callable
 
 from bridge.afterlock import Deferring
-from bridge.model import Origin, Source, Stop
+from bridge.model import Lock, Origin, Source, Stop
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.lastword import LONG_HOLD_S, LastWord
 from bridge.mqtt.ports import Publisher, RotatorPort
@@ -118,10 +118,12 @@ class Halts:
         """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
         and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
         copy of one the lane carried out (the audit trail has it once)."""
-        if kind == "stop":
-            rot.submit(Stop(Source.MQTT, origin), what, hold=hold, echo=echo)
-        else:
-            rot.set_lock(True, hold=hold, origin=origin, echo=echo)
+        halt = (
+            Stop(Source.MQTT, origin)
+            if kind == "stop"
+            else Lock(True, source=Source.MQTT, origin=origin)
+        )
+        rot.submit(halt, what, hold=hold, echo=echo)
 
     def _send_marker(self, n: int) -> None:
         self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
@@ -249,7 +251,9 @@ class Halts:
                     return
                 why = late()
                 if why is None:
-                    rot.set_lock(False, origin=origin)
+                    rot.submit(
+                        Lock(False, source=Source.MQTT, origin=origin), pl.describe(kind, payload)
+                    )
             if why is not None:  # a link held it up: refused as the main connection would
                 rot.report_refusal(why, pl.describe(kind, payload), origin=origin)
             return
@@ -295,7 +299,7 @@ class Halts:
             if not self.word.main_lock_off(rot.id):
                 log.info("%s: lock OFF published before a lock ON: the ON stands", rot.id)
                 return
-            rot.set_lock(False, origin=origin)
+            rot.submit(Lock(False, source=Source.MQTT, origin=origin))
 
     def retained_deleted(self, topic: str) -> None:
         with self._lock:

@@ -4,21 +4,16 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import Origin, RotatorStatus, SetOption, Source, Stop, Target
+from bridge.front import FrontRotator
+from bridge.model import Command, RotatorStatus
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
 
-class LeasePort(Protocol):
-    """A rotator's control lease (engine/operators.py): claim or release, Refused if not."""
+class RotatorPort(FrontRotator, Protocol):
+    """A rotator as the service sees it: every command through ``submit`` (front.py rule 1),
+    with the stop lane's hold and echo (halts.py)."""
 
-    def claim(
-        self, operator: object, minutes: object, origin: Origin, described: str
-    ) -> object: ...
-    def release(self, origin: Origin, described: str) -> object: ...
-
-
-class RotatorPort(Protocol):
     id: str
     name: str  # as dashboards show it
     spec: ModelSpec
@@ -27,79 +22,18 @@ class RotatorPort(Protocol):
     last_halt_s: float  # when a STOP or lock ON was last put in (monotonic; engine/rotator.py)
 
     @property
-    def operators(self) -> LeasePort: ...
-
-    @property
     def status(self) -> RotatorStatus: ...
     @property
     def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (engine/follow.py)
-    def follow(
-        self,
-        on: bool,
-        source: Source,
-        described: str,
-        *,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None: ...
     def submit(
         self,
-        command: Target | Stop | SetOption,
+        command: Command,
         described: str | None = None,
         *,
         hold: int | None = None,
         echo: bool = False,
     ) -> None: ...
-    def set_lock(
-        self,
-        locked: bool,
-        *,
-        hold: int | None = None,
-        origin: Origin | None = None,
-        echo: bool = False,
-    ) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
-    def report_refusal(
-        self, message: str, command: str | None, *, origin: Origin | None = None
-    ) -> None: ...
-    def reset_health(self) -> None: ...
-    def go_to_preset(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None: ...
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
-    def take_path(
-        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None: ...
-    def nudge(
-        self,
-        d_az: float,
-        d_el: float | None,
-        source: Source,
-        described: str,
-        *,
-        origin: Origin | None = None,
-    ) -> None: ...
-    def track(
-        self,
-        name: str,
-        source: Source,
-        described: str,
-        tle: tuple[str, str, str] | None = None,
-        *,
-        origin: Origin | None = None,
-    ) -> None: ...
-
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None: ...
 
 
 class Publisher(Protocol):

@@ -57,14 +57,25 @@ from collections.abc import Callable
 from bridge.errors import Refused
 from bridge.model import (
     AuditEvent,
+    Claim,
+    Command,
     ErrorEvent,
     ErrorKind,
+    FollowQso,
+    GoToPreset,
+    Nudge,
     Origin,
+    Park,
+    Release,
+    ResetHealth,
     RotatorHealth,
     RotatorStatus,
     SetOption,
     Source,
+    TakePath,
     Target,
+    Toward,
+    TrackBody,
     valid_operator,
 )
 from bridge.mqtt import control
@@ -375,59 +386,62 @@ class MqttService:
     def _command(
         self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
     ) -> None:
-        """Everything but stop and lock; PayloadError or Refused."""
-        if kind == "claim":
-            rot.operators.claim(*control.parse_claim(payload, by.operator), by, what)
-        elif kind == "release":
-            named = control.parse_release(payload) if by.operator is None else None
-            rot.operators.release(by if named is None else Origin(Source.MQTT, named), what)
-        elif kind == "health_reset":
-            if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
-                raise pl.PayloadError("empty payload")
-            rot.reset_health()  # moves nothing: no lease to ask
-        else:
-            self._motion(rot, kind, arg, payload, what, by)
+        """Everything but stop and lock, parsed into one command for the judge; PayloadError
+        or Refused."""
+        command = parse_command(kind, arg, payload, by)
+        if isinstance(command, Called):
+            if self._by_call is None:
+                raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
+            self._by_call(rot, command.call, command.long_path, what, by)
+        elif command is not None:
+            rot.submit(command, what)
 
-    def _motion(
-        self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
-    ) -> None:
-        """A target, a preset, park, nudge, track, follow, an option: from ``by``."""
-        if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
-            raise pl.PayloadError("empty payload")
-        src = Source.MQTT
-        if kind == "target":
-            aim = pl.parse_aim(payload)
-            if isinstance(aim, Called):
-                if self._by_call is None:
-                    raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
-                self._by_call(rot, aim.call, aim.long_path, what, by)
-            elif isinstance(aim, pl.Place):
-                lat, lon = aim.latitude_deg, aim.longitude_deg
-                if lat is None or lon is None:
-                    rot.take_path(aim.long_path, src, what, origin=by)
-                    return
-                rot.go_toward(
-                    lat, lon, src, what, locator=aim.locator, long_path=aim.long_path, origin=by
-                )
-            else:
-                rot.submit(Target(aim[0], aim[1], src, origin=by), what)
-        elif kind == "preset":
-            rot.go_to_preset(pl.parse_name(payload, "preset"), src, what, origin=by)
-        elif kind == "park":
-            rot.park(src, what, origin=by)
-        elif kind == "nudge":
-            rot.nudge(*pl.parse_nudge(payload), src, what, origin=by)
-        elif kind == "track":
-            name, tle = pl.parse_track(payload)
-            rot.track(name, src, what, tle, origin=by)
-        elif kind == "follow":
-            on, long_path = pl.parse_follow(payload)
-            rot.follow(on, src, what, long_path=long_path, origin=by)
-        elif kind == "target_elevation":
-            el = pl.parse_number(payload, "elevation")
-            rot.submit(Target(None, el, src, origin=by), what)
-        elif kind == "option" and arg is not None:
-            rot.submit(SetOption(arg, pl.parse_switch(payload), src, origin=by), what)
+
+def parse_command(
+    kind: str, arg: str | None, payload: bytes, by: Origin
+) -> Command | Called | None:
+    """A command topic's payload (everything but stop and lock) as the command it names, from
+    ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
+    for a topic that carries no command."""
+    src = Source.MQTT
+    if kind == "claim":
+        operator, minutes = control.parse_claim(payload, by.operator)
+        return Claim(operator, minutes, source=src, origin=by)
+    if kind == "release":
+        named = control.parse_release(payload) if by.operator is None else None
+        return Release(source=src, origin=by if named is None else Origin(Source.MQTT, named))
+    if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+        raise pl.PayloadError("empty payload")
+    if kind == "health_reset":
+        return ResetHealth(source=src, origin=by)  # moves nothing: no lease to ask
+    if kind == "target":
+        aim = pl.parse_aim(payload)
+        if isinstance(aim, Called):
+            return aim
+        if isinstance(aim, pl.Place):
+            lat, lon = aim.latitude_deg, aim.longitude_deg
+            if lat is None or lon is None:
+                return TakePath(aim.long_path, source=src, origin=by)
+            return Toward(lat, lon, aim.locator, aim.long_path, source=src, origin=by)
+        return Target(aim[0], aim[1], src, origin=by)
+    if kind == "preset":
+        return GoToPreset(pl.parse_name(payload, "preset"), source=src, origin=by)
+    if kind == "park":
+        return Park(source=src, origin=by)
+    if kind == "nudge":
+        d_az, d_el = pl.parse_nudge(payload)
+        return Nudge(d_az, d_el, source=src, origin=by)
+    if kind == "track":
+        name, tle = pl.parse_track(payload)
+        return TrackBody(name, tle, source=src, origin=by)
+    if kind == "follow":
+        on, long_path = pl.parse_follow(payload)
+        return FollowQso(on, long_path, source=src, origin=by)
+    if kind == "target_elevation":
+        return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
+    if kind == "option" and arg is not None:
+        return SetOption(arg, pl.parse_switch(payload), src, origin=by)
+    return None
 
 
 LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line

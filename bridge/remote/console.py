@@ -5,7 +5,8 @@ from the station's retained topics.
 Rules:
 1. Every console command is one publish on the station's own command topic (docs/mqtt.md:
    ``R/target`` as JSON, a place too; ``R/stop``, ``R/lock``, ``R/preset``, ``R/park``,
-   ``R/nudge``, ``R/track``) through the remote's link: QoS 1, an expiry, the operator
+   ``R/nudge``, ``R/track``), sent by the remote's rotator as the other front ends' are
+   (rotator.py rule 3), through the remote's link: QoS 1, an expiry, the operator
    (mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at once,
    STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
    tracking off are sent whatever the remote thinks of the station. A command that moves is
@@ -46,13 +47,12 @@ from bridge.model import (
     ErrorKind,
     Origin,
     RotatorStatus,
-    Source,
-    Stop,
+    TrackBody,
     describe_command,
 )
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
-from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView, place_doc
+from bridge.remote.rotator import STATION_AWAY, RemoteRotator, StationView
 
 log = logging.getLogger(__name__)
 
@@ -177,74 +177,22 @@ class RemoteConsoleRotator:
     def commands_block(self) -> bool:
         return True  # a command waits for the broker's acknowledgement (mqtt/remote.py rule 7)
 
+    @property
+    def status(self) -> RotatorStatus:
+        return self.remote.status  # rule 3
+
     # -- commands (rule 1) ---------------------------------------------------------------------
     def submit(self, command: Command, described: str | None = None) -> None:
+        """Rule 1: the remote's rotator sends it (remote/rotator.py rule 3); rule 2: what is
+        refused here is told to the pages alone."""
         try:
-            if not isinstance(command, Stop) and self.remote.link_up:
-                away = self.remote.away()
-                if away is not None:
-                    raise Refused(RefusalCode.OFFLINE, away)
+            if isinstance(command, TrackBody) and not command.off and not self.can_track:
+                message = "the station's rotator cannot track (its R/info says so)"  # rule 5
+                raise Refused(RefusalCode.UNSUPPORTED, message)
             self.remote.submit(command, described)
         except Refused as exc:
             self.report_refusal(exc.message, described or describe_command(command))
             raise
-
-    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None:
-        word = "ON" if locked else "OFF"
-        self._send(self.remote.topics.lock, word, f"console: lock {word}", moves=False)
-        if locked:
-            self.remote.halted()
-
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None:
-        place = place_doc(latitude_deg, longitude_deg, locator)
-        place["path"] = "long" if long_path else "short"
-        self._send(self.remote.topics.target, json.dumps(place, separators=(",", ":")), described)
-
-    def take_path(
-        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        path = json.dumps({"path": "long" if long_path else "short"}, separators=(",", ":"))
-        self._send(self.remote.topics.target, path, described)
-
-    def go_to_preset(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        self._send(self.remote.topics.preset, name, described)
-
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        self._send(self.remote.topics.park, "park", described)
-
-    def nudge(
-        self,
-        d_az: float,
-        d_el: float | None,
-        source: Source,
-        described: str,
-        *,
-        origin: Origin | None = None,
-    ) -> None:
-        doc = {"azimuth": d_az} if d_el is None else {"azimuth": d_az, "elevation": d_el}
-        self._send(self.remote.topics.nudge, json.dumps(doc, separators=(",", ":")), described)
-
-    def track(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        if not self.can_track and name.strip().casefold() != "off":  # rule 5
-            message = "the station's rotator cannot track (its R/info says so)"
-            self.report_refusal(message, described)
-            raise Refused(RefusalCode.UNSUPPORTED, message)
-        off = name.strip().casefold() == "off"
-        self._send(self.remote.topics.track, name, described, moves=not off)
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None
@@ -253,16 +201,6 @@ class RemoteConsoleRotator:
         if self.pages is not None:
             event = ErrorEvent(ErrorKind.REFUSED, message, command, self._wall())
             self.pages.on_event(self.id, event)
-
-    def _send(self, topic: str, payload: str, described: str, *, moves: bool = True) -> None:
-        """Rule 1; ``moves``: refused while the station is not current."""
-        try:
-            if moves:
-                self.remote.check_move()  # the station away or locked, another's lease
-            self.remote.publish(topic, payload)
-        except Refused as exc:
-            self.report_refusal(exc.message, described)
-            raise
 
 
 class ConsoleFeed:

@@ -1,7 +1,7 @@
-"""One station rotator as the remote sees it: what rotctld's, GS-232's and the loggers' commands
-ask of a Rotator (``id``, ``spec``, ``pointing``, ``limits``, ``status``, ``submit``, ``park``,
-``go_toward``, ``report_refusal``), answered from the station's retained topics and carried out
-by publishing on its command topics.
+"""One station rotator as the remote sees it: what rotctld's, GS-232's, the loggers' and the
+console's commands ask of a Rotator (front.py: ``id``, ``spec``, ``status``, ``submit``,
+``report_refusal``; and ``pointing``, ``limits``), answered from the station's retained
+topics and carried out by publishing on its command topics.
 
 Rules:
 1. ``status`` is the newest retained ``R/status`` read back into a RotatorStatus, and counts only
@@ -25,19 +25,22 @@ Rules:
    sector gets its error code at once), but the station's judge is the one that counts: what
    it refuses (the lock, say) is on ``R/error``, while the client got RPRT 0 once the command
    was on its way.
-3. ``submit``: a Target is published on ``R/target`` as JSON, a Stop on ``R/stop``, through the
-   link (mqtt/remote.py: QoS 1, expiry, operator). While the link is down both are refused with
+3. ``submit``: each command (model.py's union) is one publish on the station's own topic for
+   it (docs/mqtt.md): a Target on ``R/target`` as JSON, a Stop on ``R/stop``, the lock on
+   ``R/lock``, a preset, a nudge, tracking on theirs, through the link (mqtt/remote.py: QoS 1,
+   expiry, operator); one the station takes on no topic (an elevation alone, an option, the
+   lease, following) is refused (UNSUPPORTED). While the link is down each is refused with
    OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
    once too while the station is not current (rule 1: its bridge or the rotator offline), as
    the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
    refused only while the link is down (the station's bridge may be offline on its main
    connection and still take a stop on its stop lane, mqtt/lane.py), and then it is kept and
    sent first on reconnect (mqtt/remote.py rule 6): OFFLINE tells the client it has not
-   reached the station yet.
-4. The other ways the front ends name a target (what the GS-232, Easycomm and PstRotator
-   endpoints use of a Rotator): ``park`` goes to ``R/park`` when the station has a park
-   position, ``go_toward`` sends the place itself (``{"locator": ...}`` or coordinates) on
-   ``R/target``: the station knows where it is, the remote does not.
+   reached the station yet. The lock and tracking off, like a stop, never move: they go
+   whenever the link is up.
+4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
+   has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
+   coordinates) on ``R/target``: the station knows where it is, the remote does not.
 5. A refusal here (not connected, out of range, no park) is logged, at most once per
    REFUSAL_LOG_S and front end with the count since (Gpredict sends a target every few
    seconds), and raised; the station's own refusals are on its ``R/error``, not the remote's.
@@ -62,7 +65,22 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Command, MotionState, Origin, RotatorStatus, Source, Stop, Target
+from bridge.model import (
+    Command,
+    GoToPreset,
+    Lock,
+    MotionState,
+    Nudge,
+    Origin,
+    Park,
+    RotatorStatus,
+    Stop,
+    TakePath,
+    Target,
+    Toward,
+    TrackBody,
+    describe_command,
+)
 from bridge.mqtt.heartbeat import SILENT_S
 from bridge.mqtt.topics import RotatorTopics, StationTopics
 from bridge.pointing import Limits
@@ -214,29 +232,68 @@ class RemoteRotator:
         return status
 
     def submit(self, command: Command, described: str | None = None) -> None:
-        """Rules 3 and 5."""
+        """Rules 3 to 5: the command on the station's own topic for it, or Refused."""
         try:
-            self._submit(command)
+            self._send(command)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
 
-    def _submit(self, command: Command) -> None:
-        if isinstance(command, Stop):
-            self.publish(self.topics.stop, "stop")
-            self.halted()
-            return
-        if not isinstance(command, Target) or command.az_deg is None:
-            raise Refused(RefusalCode.UNSUPPORTED, "the remote sends azimuth targets and stops")
-        self.check_move()
-        self.pointing.judge(command, None)  # early word for the client; the station judges again
-        if command.park:  # the station's park position, so that it shows "parked"
-            self.publish(self.topics.park, "park")
-            return
-        doc: dict[str, float] = {"azimuth": command.az_deg}
-        if command.el_deg is not None:
-            doc["elevation"] = command.el_deg
-        self._send_target(doc)
+    def _send(self, command: Command) -> None:
+        """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
+        a place goes as the place, park as park."""
+        t = self.topics
+        match command:
+            case Stop():
+                self.publish(t.stop, "stop")
+                self.halted()
+            case Lock():
+                self.publish(t.lock, "ON" if command.on else "OFF")
+                if command.on:
+                    self.halted()
+            case TrackBody() if command.off:
+                self.publish(t.track, command.name)
+            case Target() if command.az_deg is not None:
+                self.check_move()
+                self.pointing.judge(command, None)  # early word; the station judges again
+                if command.park:  # the station's park position, so that it shows "parked"
+                    self.publish(t.park, "park")
+                else:
+                    doc: dict[str, float] = {"azimuth": command.az_deg}
+                    if command.el_deg is not None:
+                        doc["elevation"] = command.el_deg
+                    self._send_json(t.target, doc)
+            case Park():  # rule 3 first: the link's word, then the station's park position
+                self.check_move()
+                self._send(Target(*self.pointing.parking(), command.source, park=True))
+            case Toward():
+                lat, lon = command.latitude_deg, command.longitude_deg
+                place = place_doc(lat, lon, command.locator)
+                if command.long_path:
+                    place["path"] = "long"
+                self.check_move()
+                self._send_json(t.target, place)
+            case TakePath():
+                self.check_move()
+                self._send_json(t.target, {"path": "long" if command.long_path else "short"})
+            case GoToPreset():
+                self.check_move()
+                self.publish(t.preset, command.name)
+            case Nudge():
+                step = {"azimuth": command.d_az_deg}
+                if command.d_el_deg is not None:
+                    step["elevation"] = command.d_el_deg
+                self.check_move()
+                self._send_json(t.nudge, step)
+            case TrackBody() if command.tle is None:
+                self.check_move()
+                self.publish(t.track, command.name)
+            case _:
+                raise Refused(
+                    RefusalCode.UNSUPPORTED,
+                    f"the remote does not send {describe_command(command).split(' ')[0]!r}: "
+                    "targets, stops, the lock, presets, park, nudges, places and tracking",
+                )
 
     def check_move(self) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);
@@ -252,8 +309,8 @@ class RemoteRotator:
             text = held.held_text(now)
             raise Refused(RefusalCode.LEASED, f"{text}: only they may turn it (control lease)")
 
-    def _send_target(self, doc: dict[str, Any]) -> None:
-        self.publish(self.topics.target, json.dumps(doc, separators=(",", ":")))
+    def _send_json(self, topic: str, doc: dict[str, Any]) -> None:
+        self.publish(topic, json.dumps(doc, separators=(",", ":")))
 
     def halted(self) -> None:
         """A stop or a lock ON has gone out: ``last_halt_s`` is now (web/port.py rule 2)."""
@@ -263,39 +320,11 @@ class RemoteRotator:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
         self._link.send(topic, payload, self._operator, self._expiry_s)
 
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        """Rule 4: Refused without a park position. ``origin``: not sent (the operator is)."""
-        try:
-            where = self.pointing.parking()
-        except Refused as exc:
-            self.report_refusal(exc.message, described)
-            raise
-        self.submit(Target(*where, source, park=True), described)
-
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,  # not sent: the remote's operator is (rule 3)
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
     ) -> None:
-        """Rule 4: the place, for the station to turn into its bearing."""
-        place = place_doc(latitude_deg, longitude_deg, locator)
-        if long_path:
-            place["path"] = "long"
-        try:
-            self.check_move()
-            self._send_target(place)
-        except Refused as exc:
-            self.report_refusal(exc.message, described)
-            raise
-
-    def report_refusal(self, message: str, command: str | None) -> None:
-        """Rule 5: logged here, rarely (per front end: the first word of ``command``)."""
+        """Rule 5: logged here, rarely (per front end: the first word of ``command``);
+        ``origin`` is not sent (the remote's operator is, rule 3)."""
         kind = (command or "").split(" ", 1)[0]
         with self._refusals_lock:
             count, logged_s = self._refusals.get(kind, (0, -REFUSAL_LOG_S))

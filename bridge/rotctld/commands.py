@@ -8,29 +8,23 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.model import Origin, RotatorStatus, Source, Stop, Target
-from bridge.protocols.base import HamlibRotType, ModelSpec
+from bridge.front import FrontRotator
+from bridge.model import Origin, Source, Stop, Target
+from bridge.protocols.base import HamlibRotType
 from bridge.rotctld.parser import Request
 
 if TYPE_CHECKING:
     from bridge.pointing import Limits, Pointing
 
 
-class Rotator(Protocol):
+class Rotator(FrontRotator, Protocol):
     """What rotctld's commands use of a rotator: the bridge's own (engine/rotator.py) or the
     remote's, which stands for the station's (remote/rotator.py)."""
 
     @property
-    def id(self) -> str: ...
-    @property
-    def spec(self) -> ModelSpec: ...
-    @property
     def pointing(self) -> Pointing: ...
     @property
     def limits(self) -> Limits: ...
-    @property
-    def status(self) -> RotatorStatus: ...
-    def submit(self, command: Target | Stop, described: str | None = None) -> None: ...
 
 
 log = logging.getLogger(__name__)

@@ -1,10 +1,12 @@
-"""The console's commands: a JSON body in, a call on the rotator's judge out.
+"""The console's commands: a JSON body in, one command (model.py's union) for the rotator's
+judge out.
 
 Rules:
 1. ``parse`` is pure: a JSON object in, a ``WebCommand`` out, or BadCommand naming the field.
    Numbers are finite; text is bounded; unknown keys are refused (a typo must not be dropped
    silently on a machine that turns an antenna).
-2. ``carry_out`` hands the command to the same judge every front end uses (engine/rotator.py):
+2. ``carry_out`` hands the command (``WebCommand.command_for``) to the same judge every front
+   end uses, through the same one entry (front.py, engine/rotator.py ``submit``):
    limits, keep-out sectors, the lock, the offset, the link. A refusal raises Refused, and the
    judge has already reported it on R/error; a bad body is reported there by the server. On
    the remote (remote/console.py) the rotator is the station's far away (web/port.py): the
@@ -37,7 +39,20 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
-from bridge.model import Origin, Source, Stop, Target
+from bridge.model import (
+    Command,
+    GoToPreset,
+    Lock,
+    Nudge,
+    Origin,
+    Park,
+    Source,
+    Stop,
+    TakePath,
+    Target,
+    Toward,
+    TrackBody,
+)
 from bridge.web.port import ConsoleRotator
 
 MAX_BODY_BYTES = 4096
@@ -68,6 +83,35 @@ class WebCommand:
         if self.command == "track":
             return (self.name or "").strip().casefold() == "off"
         return self.command == "stop" or (self.command == "lock" and self.on)
+
+    def command_for(self, by: Origin) -> Command:
+        """The command for the judge (model.py's union), sent by ``by`` (rule 4)."""
+        src = Source.WEB
+        match self.command:
+            case "stop":
+                return Stop(src, by)
+            case "lock":
+                return Lock(self.on, source=src, origin=by)
+            case "target":
+                return Target(self.az_deg, self.el_deg, src, origin=by)
+            case "toward":
+                assert self.latitude_deg is not None and self.longitude_deg is not None
+                lat, lon = self.latitude_deg, self.longitude_deg
+                return Toward(lat, lon, self.locator, self.long_path, source=src, origin=by)
+            case "path":
+                return TakePath(self.long_path, source=src, origin=by)
+            case "preset":
+                assert self.name is not None
+                return GoToPreset(self.name, source=src, origin=by)
+            case "park":
+                return Park(source=src, origin=by)
+            case "nudge":
+                assert self.az_deg is not None
+                return Nudge(self.az_deg, self.el_deg, source=src, origin=by)
+            case "track":
+                assert self.name is not None
+                return TrackBody(self.name, None, source=src, origin=by)
+        raise BadCommand(f"unknown command {self.command[:40]!r}")  # parse() lets none through
 
     def described(self) -> str:
         """How an error event echoes it ("console: target az 120")."""
@@ -256,37 +300,4 @@ def _no_constant(name: str) -> object:
 def carry_out(rot: ConsoleRotator, cmd: WebCommand, peer: str | None = None) -> None:
     """Rule 2: raises Refused (already reported) when the judge says no; ``peer``: the
     browser's address (rule 4)."""
-    what = cmd.described()
-    src = Source.WEB
-    by = Origin(src, None, peer)
-    match cmd.command:
-        case "stop":
-            rot.submit(Stop(src, by), what)
-        case "lock":
-            rot.set_lock(cmd.on, origin=by)
-        case "target":
-            rot.submit(Target(cmd.az_deg, cmd.el_deg, src, origin=by), what)
-        case "toward":
-            assert cmd.latitude_deg is not None and cmd.longitude_deg is not None
-            rot.go_toward(
-                cmd.latitude_deg,
-                cmd.longitude_deg,
-                src,
-                what,
-                locator=cmd.locator,
-                long_path=cmd.long_path,
-                origin=by,
-            )
-        case "path":
-            rot.take_path(cmd.long_path, src, what, origin=by)
-        case "preset":
-            assert cmd.name is not None
-            rot.go_to_preset(cmd.name, src, what, origin=by)
-        case "park":
-            rot.park(src, what, origin=by)
-        case "nudge":
-            assert cmd.az_deg is not None
-            rot.nudge(cmd.az_deg, cmd.el_deg, src, what, origin=by)
-        case "track":
-            assert cmd.name is not None
-            rot.track(cmd.name, src, what, origin=by)
+    rot.submit(cmd.command_for(Origin(Source.WEB, None, peer)), cmd.described())

@@ -19,18 +19,15 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import Command, Origin, Source
+from bridge.front import FrontRotator
 from bridge.pointing import Pointing
-from bridge.protocols.base import ModelSpec
 
 
-class ConsoleRotator(Protocol):
-    @property
-    def id(self) -> str: ...
+class ConsoleRotator(FrontRotator, Protocol):
+    """Rule 1: every command through ``submit`` (front.py rule 1)."""
+
     @property
     def name(self) -> str: ...
-    @property
-    def spec(self) -> ModelSpec: ...
     @property
     def pointing(self) -> Pointing: ...
     @property
@@ -42,39 +39,3 @@ class ConsoleRotator(Protocol):
         """Carrying out a command may wait for a round trip far away (the remote's rotator
         waits for its broker's acknowledgement): the console runs it off its loop."""
         ...
-
-    def submit(self, command: Command, described: str | None = None) -> None: ...
-    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None: ...
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None: ...
-    def take_path(
-        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None: ...
-    def go_to_preset(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None: ...
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None: ...
-    def nudge(
-        self,
-        d_az: float,
-        d_el: float | None,
-        source: Source,
-        described: str,
-        *,
-        origin: Origin | None = None,
-    ) -> None: ...
-    def track(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None: ...
-    def report_refusal(
-        self, message: str, command: str | None, *, origin: Origin | None = None
-    ) -> None: ...

@@ -24,7 +24,7 @@ from bridge.dxcluster.client import (
 )
 from bridge.dxcluster.cty import parse_dat
 from bridge.dxcluster.spots import Spot
-from bridge.model import Origin, Source
+from bridge.model import Origin, Source, Toward
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import wait_until
 from tests.support.clock import FakeClock
@@ -139,10 +139,9 @@ class Asked:
         self.calls: list[tuple[object, ...]] = []
         self.last_halt_s = -math.inf
 
-    def go_toward(
-        self, lat: float, lon: float, source: Source, described: str, **kw: object
-    ) -> None:
-        self.calls.append(("go", lat, lon, source, described, kw["long_path"], kw["origin"]))
+    def submit(self, command: Toward, described: str) -> None:
+        lat, lon, long_path = command.latitude_deg, command.longitude_deg, command.long_path
+        self.calls.append(("go", lat, lon, command.source, described, long_path, command.origin))
 
     def report_refusal(self, message: str, command: str | None, *, origin: Origin) -> None:
         self.calls.append(("refused", message, command, origin))

@@ -17,7 +17,7 @@ from bridge.engine.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import LookupQuestion
 from bridge.engine.state_store import StateStore
-from bridge.model import ErrorKind, Source
+from bridge.model import ErrorKind, TrackBody
 from bridge.sky import Body, Sky
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle
@@ -260,7 +260,7 @@ def test_track_by_name_returns_before_the_file_is_read_and_is_refused_later(
         # the rotator's front half (what paho's thread runs) on the bench's session and mailbox
         rot._mailbox, rot._worker.session = v.mailbox, v.session
         rot.catalog = TleCatalog(path)
-        rot.track("ISS", Source.MQTT, "track 'ISS'")
+        rot.submit(TrackBody("ISS"), "track 'ISS'")
         assert readers == []  # returned: nothing read on the calling thread
         v._take()  # the lines thread takes the command: the look-up goes to the sky worker
         questions = [a.question for _t, a in v.asked]

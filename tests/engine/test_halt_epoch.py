@@ -19,7 +19,18 @@ from bridge.engine.config import FollowConfig
 from bridge.engine.rotator import STALE_MESSAGE, Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
-from bridge.model import AuditEvent, ErrorEvent, ErrorKind, MotionState, Origin, Source, Target
+from bridge.model import (
+    AuditEvent,
+    ErrorEvent,
+    ErrorKind,
+    FollowQso,
+    MotionState,
+    Origin,
+    Park,
+    Source,
+    Target,
+    TrackBody,
+)
 from bridge.mqtt.halts import Halts
 from bridge.mqtt.topics import Topics
 from bridge.sky import Sky
@@ -36,10 +47,15 @@ CONSOLE = "192.168.1.30"
 class Bench:
     """A Rotator (the judge every front end calls) on a virtual controller, idle at START_AZ."""
 
-    def __init__(self, tmp_path: Path) -> None:
+    def __init__(self, tmp_path: Path, **settings: object) -> None:
         self.v = VirtualRotator(
             "md01",
-            settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, "park_az_deg": 180},
+            settings={
+                "az_speed_deg_s": 10.0,
+                "el_speed_deg_s": 5.0,
+                "park_az_deg": 180,
+                **settings,
+            },
             emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0, "start_az_deg": START_AZ},
             sky=Sky(*BERLIN),
             follow=FollowConfig(BERLIN, wsjtx=True),
@@ -53,6 +69,7 @@ class Bench:
             lambda s: None,
             self.events.append,
             on_audit=self.audit.append,
+            station=BERLIN,
         )
         # the rotator's front half on the bench's session; the bench takes the rotator's mailbox
         self.v.mailbox.close()
@@ -151,9 +168,9 @@ def motions(b: Bench) -> dict[str, Callable[[], None]]:
     rot = b.rot
     return {
         "target": lambda: rot.submit(Target(200.0, None, Source.ROTCTLD, origin=ROTCTLD)),
-        "park": lambda: rot.park(Source.PST, "pst park"),
-        "track": lambda: rot.track("sun", Source.MQTT, "track sun"),
-        "follow": lambda: rot.follow(True, Source.MQTT, "follow on"),
+        "park": lambda: rot.submit(Park(source=Source.PST), "pst park"),
+        "track": lambda: rot.submit(TrackBody("sun"), "track sun"),
+        "follow": lambda: rot.submit(FollowQso(True), "follow on"),
     }
 
 
@@ -238,10 +255,10 @@ def test_following_off_and_tracking_off_are_never_overtaken(
 
     monkeypatch.setattr(box, "put_track", put_track)
     monkeypatch.setattr(box, "put_follow", put_follow)
-    rot.track("off", Source.MQTT, "track off")
+    rot.submit(TrackBody("off"), "track off")
     track = box.take().track
     assert track is not None and track.body is None and track.lookup is None
-    rot.follow(False, Source.MQTT, "follow off")
+    rot.submit(FollowQso(False), "follow off")
     follow = box.take().follow
     assert follow is not None and not follow.on
     assert not bench.events

@@ -14,7 +14,7 @@ from bridge.engine.config import FollowConfig
 from bridge.engine.follow import Follow
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
-from bridge.model import AuditEvent, Control, ErrorEvent, Origin, Source
+from bridge.model import AuditEvent, Claim, Control, ErrorEvent, FollowQso, Lock, Origin, Source
 from bridge.settings import RotatorSettings
 from bridge.wiring import worker_config
 from tests.engine.test_follow import bearing, spid
@@ -40,9 +40,9 @@ def test_a_follow_start_by_another_than_the_holder_is_refused_and_audited(
 ) -> None:
     clock = Clock()
     rot, audit, events = follower(tmp_path, clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
     clock.now += 300
-    follow = lambda who: rot.follow(True, Source.MQTT, "follow 'wsjtx'", origin=who)  # noqa: E731
+    follow = lambda who: rot.submit(FollowQso(True, origin=who), "follow 'wsjtx'")  # noqa: E731
     assert refused(lambda: follow(OTHER)) == "leased"
     assert events[-1].message == (
         "DL1ABC holds the rotator until 14:43 UTC (25 min left): only they may turn it "
@@ -52,9 +52,9 @@ def test_a_follow_start_by_another_than_the_holder_is_refused_and_audited(
     # the holder's start passes the lease (refused here only for the link: offline)
     assert refused(lambda: follow(HOLDER)) == "offline"
     # following off is never refused, whoever sends it (docs/architecture.md rule 11)
-    rot.follow(False, Source.MQTT, "follow 'off'", origin=OTHER)
+    rot.submit(FollowQso(False, origin=OTHER), "follow 'off'")
     # the lock comes before the lease: the other's start is refused for the lock
-    rot.set_lock(True, origin=OTHER)
+    rot.submit(Lock(True, origin=OTHER))
     assert refused(lambda: follow(OTHER)) == "locked"
     rows = [(a.origin.who, a.origin.interface, a.command, a.result.split(":")[0]) for a in audit]
     assert rows == [
@@ -71,7 +71,7 @@ def test_a_follow_start_by_another_than_the_holder_is_refused_and_audited(
 def test_without_a_lease_a_follow_start_is_judged_only_for_the_link(tmp_path: Path) -> None:
     rot, audit, _ = follower(tmp_path, Clock())
     anyone = Origin(Source.MQTT)
-    assert refused(lambda: rot.follow(True, Source.MQTT, "follow", origin=anyone)) == "offline"
+    assert refused(lambda: rot.submit(FollowQso(True, origin=anyone), "follow")) == "offline"
     assert [a.result.split(":")[0] for a in audit] == ["refused"]
 
 

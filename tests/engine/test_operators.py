@@ -16,7 +16,20 @@ from bridge.engine.operators import Operators
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
-from bridge.model import AuditEvent, Control, ErrorEvent, Origin, Source, Stop, Target
+from bridge.model import (
+    AuditEvent,
+    Claim,
+    Control,
+    ErrorEvent,
+    Lock,
+    Origin,
+    Park,
+    Release,
+    Source,
+    Stop,
+    Target,
+    TrackBody,
+)
 from bridge.settings import RotatorSettings
 from bridge.sky import Sky
 
@@ -77,7 +90,7 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
 ) -> None:
     clock = Clock()
     rot, audit, events = rotator(tmp_path, clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
     clock.now += 300
     assert refused(lambda: rot.submit(Target(120, origin=OTHER), "target 120")) == "leased"
     assert events[-1].message == (
@@ -87,8 +100,10 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
     assert refused(lambda: rot.submit(Target(120, source=Source.ROTCTLD, origin=ROTCTLD))) == (
         "leased"
     )
-    assert refused(lambda: rot.park(Source.PST, "pst park", origin=OTHER)) == "leased"
-    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=OTHER)) in (
+    assert (
+        refused(lambda: rot.submit(Park(source=Source.PST, origin=OTHER), "pst park")) == "leased"
+    )
+    assert refused(lambda: rot.submit(TrackBody("sun", origin=OTHER), "track sun")) in (
         "leased",
         "unsupported",  # no station here: tracking is refused before the lease is asked
     )
@@ -96,9 +111,9 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
     assert refused(lambda: rot.submit(Target(120, origin=HOLDER), "target 120")) == "offline"
     # a stop, a lock ON, tracking OFF: never refused, whoever sends them
     rot.submit(Stop(Source.MQTT, OTHER), "stop")
-    rot.set_lock(True, origin=OTHER)
-    rot.set_lock(False, origin=OTHER)
-    rot.track("off", Source.MQTT, "track off", origin=OTHER)
+    rot.submit(Lock(True, origin=OTHER))
+    rot.submit(Lock(False, origin=OTHER))
+    rot.submit(TrackBody("off", origin=OTHER), "track off")
     rows = [(a.origin.who, a.command, a.result.split(":")[0]) for a in audit]
     assert rows == [
         ("DL1ABC", "claim", "executed"),
@@ -119,12 +134,12 @@ def test_the_holders_targets_pass_anyone_elses_are_refused_naming_holder_and_end
 def test_a_claim_while_held_is_refused_and_anyone_may_release(tmp_path: Path) -> None:
     clock = Clock()
     rot, audit, events = rotator(tmp_path, clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
-    assert refused(lambda: rot.operators.claim("G4XYZ", 10, OTHER, "claim")) == "invalid"
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
+    assert refused(lambda: rot.submit(Claim("G4XYZ", 10, origin=OTHER), "claim")) == "invalid"
     assert "DL1ABC holds the rotator until 14:43 UTC (30 min left)" in events[-1].message
-    assert refused(lambda: rot.operators.claim("G4XYZ", 0, OTHER, "claim")) == "invalid"
+    assert refused(lambda: rot.submit(Claim("G4XYZ", 0, origin=OTHER), "claim")) == "invalid"
     assert rot.operators.holder == Control("DL1ABC", T0 + 1800)
-    rot.operators.release(OTHER, "release")  # the station owner's button, say
+    rot.submit(Release(origin=OTHER), "release")  # the station owner's button, say
     assert rot.operators.holder is None
     assert refused(lambda: rot.submit(Target(10, origin=OTHER))) == "offline"  # free
     assert [a.result.split(":")[0] for a in audit] == [
@@ -139,7 +154,7 @@ def test_a_claim_while_held_is_refused_and_anyone_may_release(tmp_path: Path) ->
 def test_the_lease_survives_a_restart(tmp_path: Path) -> None:
     clock = Clock()
     rot, _, _ = rotator(tmp_path, clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
     rot.operators.stop()
     rot._store.flush()  # the save runs on the store's writer thread
     kept = json.loads((tmp_path / "state.json").read_text())["rotators"]["t"]["lease"]
@@ -161,7 +176,7 @@ def test_the_lease_ends_by_itself_and_the_status_is_told(tmp_path: Path) -> None
         report=lambda *a: None,
         timer=timers,
     )
-    ops.claim("DL1ABC", 2, HOLDER, "claim")
+    ops.claim("DL1ABC", 2, HOLDER)
     assert mailbox.take().control == Control("DL1ABC", T0 + 120)
     [(delay_s, fire)] = timers.live()
     assert delay_s == 120
@@ -221,7 +236,7 @@ def test_a_kept_lease_with_the_clock_set_back_ends_within_a_claims_longest(
     with the time it shut down at): it has at most MAX_MINUTES left."""
     clock = Clock()
     rot, _, _ = rotator(tmp_path, clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
     rot.operators.stop()
     rot._store.flush()
     clock.now -= 3 * 86400
@@ -238,9 +253,9 @@ def test_tracking_is_a_motion_command_the_lease_judges(tmp_path: Path) -> None:
     store = StateStore(tmp_path / "state.json")
     cfg = worker_config(settings, Sky(52.52, 13.29))
     rot = Rotator(cfg, store, lambda s: None, events.append, wall=clock)
-    rot.operators.claim("DL1ABC", 30, HOLDER, "claim")
-    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=OTHER)) == "leased"
+    rot.submit(Claim("DL1ABC", 30, origin=HOLDER), "claim")
+    assert refused(lambda: rot.submit(TrackBody("sun", origin=OTHER), "track sun")) == "leased"
     assert events[-1].message.startswith("DL1ABC holds the rotator")
-    assert refused(lambda: rot.track("sun", Source.MQTT, "track sun", origin=HOLDER)) == (
+    assert refused(lambda: rot.submit(TrackBody("sun", origin=HOLDER), "track sun")) == (
         "offline"  # the holder's passes the lease (no controller here)
     )

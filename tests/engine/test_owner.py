@@ -178,19 +178,19 @@ def test_the_lease_changed_by_two_at_once(tmp_path: Path, held_first: str) -> No
         st.hold_between_steps(
             "put_control",
             Control("DL1ABC", T0 + 1800),
-            lambda: ops.release(OTHER, "release"),
+            lambda: ops.release(OTHER),
         )
-        ops.claim("DL1ABC", 30, HOLDER, "claim")
+        ops.claim("DL1ABC", 30, HOLDER)
         expected = None
     else:
-        ops.claim("DL1ABC", 30, HOLDER, "claim")
+        ops.claim("DL1ABC", 30, HOLDER)
 
         def other_claims() -> None:
-            ops.claim("G4XYZ", 30, OTHER, "claim")
+            ops.claim("G4XYZ", 30, OTHER)
 
         st.hold_between_steps("put_control", None, other_claims)
         if held_first == "release":
-            ops.release(HOLDER, "release")
+            ops.release(HOLDER)
         else:
             st.clock.now += 1800  # its end, as the timer says it
             ops._expire()

@@ -10,7 +10,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.errors import Refused
 from bridge.geo import parse_locator
-from bridge.model import ErrorEvent, SetOption, Source, Stop, Target
+from bridge.model import ErrorEvent, Lock, SetOption, Stop, Target, Toward
 from bridge.settings import RotatorSettings
 from tests.support.waiting import slow
 
@@ -41,7 +41,7 @@ def test_limits_are_judged_on_what_the_controller_will_get() -> None:
 
 def test_lock_refuses_motion_but_never_a_stop() -> None:
     rot, events = rotator()
-    rot.set_lock(True)
+    rot.submit(Lock(True))
     assert code(rot, Target(10)) == "locked"
     rot.submit(Stop())  # accepted: queued for the worker
     assert events[-1].kind == "refused" and "locked" in events[-1].message
@@ -63,26 +63,26 @@ def test_the_station_itself_and_its_antipode_are_refused_as_targets_with_a_reaso
     home = parse_locator("JO62qm")
     rot, events = rotator(station=home)
     with pytest.raises(Refused) as exc:
-        rot.go_toward(*home, Source.MQTT, "locator JO62qm", locator="JO62qm")
+        rot.submit(Toward(*home, "JO62qm"), "locator JO62qm")
     assert exc.value.code == "invalid"
     assert events[-1].kind == "refused"
     assert "JO62qm is the station's own position" in events[-1].message
     assert "no bearing" in events[-1].message
     # the same place typed as coordinates, by either path
     with pytest.raises(Refused):
-        rot.go_toward(*home, Source.MQTT, "coordinates", long_path=True)
+        rot.submit(Toward(*home, long_path=True), "coordinates")
     assert "the station's own position" in events[-1].message
     # the antipode of a locator's centre is another locator's centre
     antipode = (-home[0], home[1] - 180.0)
     assert parse_locator("AD67ql") == pytest.approx(antipode)
     with pytest.raises(Refused) as exc:
-        rot.go_toward(*parse_locator("AD67ql"), Source.MQTT, "locator AD67ql", locator="AD67ql")
+        rot.submit(Toward(*parse_locator("AD67ql"), "AD67ql"), "locator AD67ql")
     assert exc.value.code == "invalid"
     assert "AD67ql is the station's antipode" in events[-1].message
     assert "every bearing" in events[-1].message
     # a neighbouring square still has a bearing: judged further on (no link here: offline)
     with pytest.raises(Refused) as exc:
-        rot.go_toward(*parse_locator("JO62qn"), Source.MQTT, "locator JO62qn", locator="JO62qn")
+        rot.submit(Toward(*parse_locator("JO62qn"), "JO62qn"), "locator JO62qn")
     assert exc.value.code == "offline"
 
 
@@ -104,9 +104,9 @@ def test_the_lock_and_options_are_saved_off_the_callers_thread(tmp_path) -> None
     store._write = slow_write  # type: ignore[method-assign]
     cfg = worker_config(RotatorSettings(id="t", model="rotorez", port="/dev/null"))
     rot = Rotator(cfg, store, lambda s: None, lambda e: None)
-    rot.set_lock(True)  # returns while the write waits
-    rot.set_lock(False)
-    rot.set_lock(True)
+    rot.submit(Lock(True))  # returns while the write waits
+    rot.submit(Lock(False))
+    rot.submit(Lock(True))
     release.set()
     store.flush()
     assert not any(waited_out)

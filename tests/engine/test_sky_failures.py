@@ -25,7 +25,7 @@ from bridge.engine import autopark
 from bridge.engine.port import open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, Source, Stop, Target
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, Source, Stop, Target, TrackBody
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
@@ -113,7 +113,7 @@ def test_a_sky_that_cannot_be_computed_ends_tracking_and_a_stop_right_after_reac
         rot.submit(Target(300.0))  # 30 s away at 10 deg/s
         md01.wait_for(lambda s: s.is_moving, 5)
         tle = track()
-        rot.track(tle[0] if tle else "sun", Source.MQTT, f"track {what}", tle)
+        rot.submit(TrackBody(tle[0] if tle else "sun", tle, source=Source.MQTT), f"track {what}")
         # the failure is found (on the sky worker) and tracking ends with its reason: the
         # port stays open, so the STOP that follows reaches the rotor
         wait_until(lambda: rot.status.tracking_ended is not None, 5, "tracking ended")

@@ -19,7 +19,7 @@ import pytest
 from bridge.loggers import LoggerEndpoints
 from bridge.loggers.limiter import REPLY_BURST
 from bridge.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
-from bridge.model import RotatorStatus, Source, Stop, Target
+from bridge.model import RotatorStatus, Source, Stop, Target, Toward
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import (
@@ -47,15 +47,14 @@ class Recording:
     def submit(self, command: Any, described: str | None = None) -> None:
         with self._lock:
             self.peers.append(command.origin.peer if command.origin is not None else None)
+            if isinstance(command, Toward):
+                self.calls.append(("toward", command.latitude_deg, command.longitude_deg))
+                return
             self.calls.append(replace(command, origin=None))  # who sent it: in ``peers``
 
     def report_refusal(self, message: str, command: str | None, **_kw: Any) -> None:
         with self._lock:
             self.calls.append(("refused", message))
-
-    def go_toward(self, lat: float, lon: float, *_args: Any, **_kw: Any) -> None:
-        with self._lock:
-            self.calls.append(("toward", lat, lon))
 
 
 def send(port: int, data: bytes) -> None:

@@ -24,11 +24,6 @@ HEALTH = RotatorHealth(
 )
 
 
-class Resettable(RecordingRotator):
-    def reset_health(self) -> None:
-        self.calls.append(("reset_health",))
-
-
 def test_health_is_published_once_per_report_not_per_status() -> None:
     svc, pub, _ = service({"tower": "rotorez"})
     for bearing in (10.0, 11.0, 12.0):  # three polls, one report
@@ -67,7 +62,7 @@ def test_status_without_health_is_unchanged() -> None:
 
 def test_reset_is_a_command_and_never_taken_retained() -> None:
     svc, _pub, rots = service({"tower": "rotorez"})
-    rot = Resettable("tower", "rotorez")
+    rot = RecordingRotator("tower", "rotorez")  # a reset: ("reset_health",)
     svc.attach(rot)
     svc.on_message("rotor/health/reset", b"RESET", retain=True)
     assert rot.calls[0][0] == "refused" and "retained" in str(rot.calls[0][1])
@@ -79,7 +74,7 @@ def test_an_empty_reset_is_refused_not_taken() -> None:
     """MQTT 3.1.1: deleting a retained R/health/reset while the bridge is connected reaches it
     as an empty plain message (service.py rule 1); it must not throw away what was learned."""
     svc, _pub, _rots = service({"tower": "rotorez"})
-    rot = Resettable("tower", "rotorez")
+    rot = RecordingRotator("tower", "rotorez")  # a reset: ("reset_health",)
     svc.attach(rot)
     svc.on_message("rotor/health/reset", b"", retain=False)
     assert rot.calls and rot.calls[0][0] == "refused" and "empty" in str(rot.calls[0][1])

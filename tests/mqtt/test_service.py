@@ -15,14 +15,26 @@ import pytest
 
 from bridge.errors import Refused
 from bridge.model import (
+    Claim,
+    Command,
     ErrorEvent,
+    FollowQso,
+    GoToPreset,
+    Lock,
     MotionState,
+    Nudge,
     Origin,
+    Park,
+    Release,
+    ResetHealth,
     RotatorStatus,
     SetOption,
     Source,
     Stop,
+    TakePath,
     Target,
+    Toward,
+    TrackBody,
 )
 from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.service import MqttService
@@ -91,118 +103,60 @@ class RecordingRotator:
     def status(self) -> RotatorStatus:
         return RotatorStatus(self.id)
 
-    def follow(
-        self,
-        on: bool,
-        source: Source,
-        described: str,
-        *,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None:
-        self.calls.append(("follow", on, long_path, source, described))
-        self.origins.append(origin)
-
     def submit(
         self,
-        command: Target | Stop | SetOption,
+        command: Command,
         described: str | None = None,
         *,
         hold: int | None = None,
         echo: bool = False,
     ) -> None:
-        shown = replace(command, origin=None)  # who sent it: in ``origins``
-        self.calls.append(("submit", shown, described, *([hold] if hold else [])))
+        """Every command the service sends, recorded as what it asks for (who sent it: in
+        ``origins``)."""
+        self.calls.append(self._recorded(command, described, hold))
         self.origins.append(command.origin)
-        if self._refuse is not None:
+        if self._refuse is not None and isinstance(command, Target | Stop | SetOption):
             raise self._refuse
 
-    def set_lock(
-        self,
-        locked: bool,
-        *,
-        hold: int | None = None,
-        origin: Origin | None = None,
-        echo: bool = False,
-    ) -> None:
-        self.calls.append(("lock", locked, *([hold] if hold else [])))
-        self.origins.append(origin)
+    @staticmethod
+    def _recorded(command: Command, what: str | None, hold: int | None) -> tuple[object, ...]:
+        held = [hold] if hold else []
+        src = command.source
+        match command:
+            case Target() | Stop() | SetOption():
+                return ("submit", replace(command, origin=None), what, *held)
+            case Lock():
+                return ("lock", command.on, *held)
+            case FollowQso():
+                return ("follow", command.on, command.long_path, src, what)
+            case GoToPreset():
+                return ("preset", command.name, src, what)
+            case Park():
+                return ("park", src, what)
+            case TakePath():
+                return ("path", command.long_path, src, what)
+            case Nudge():
+                return ("nudge", command.d_az_deg, command.d_el_deg, src, what)
+            case Claim():
+                return ("claim", command.operator, command.minutes, what)
+            case Release():
+                return ("release_control", what)
+            case Toward():
+                lat, lon = round(command.latitude_deg, 4), round(command.longitude_deg, 4)
+                return ("toward", lat, lon, command.locator, command.long_path, src, what)
+            case TrackBody():
+                return ("track", command.name, command.tle, src, what)
+            case ResetHealth():
+                return ("reset_health",)
+        raise AssertionError(command)
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None
     ) -> None:
         self.calls.append(("refused", message, command))
 
-    def go_to_preset(
-        self, name: str, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        self.calls.append(("preset", name, source, described))
-        self.origins.append(origin)
-
-    def park(self, source: Source, described: str, *, origin: Origin | None = None) -> None:
-        self.calls.append(("park", source, described))
-        self.origins.append(origin)
-
-    def take_path(
-        self, long_path: bool, source: Source, described: str, *, origin: Origin | None = None
-    ) -> None:
-        self.calls.append(("path", long_path, source, described))
-        self.origins.append(origin)
-
-    def nudge(
-        self,
-        d_az: float,
-        d_el: float | None,
-        source: Source,
-        described: str,
-        *,
-        origin: Origin | None = None,
-    ) -> None:
-        self.calls.append(("nudge", d_az, d_el, source, described))
-        self.origins.append(origin)
-
-    @property
-    def operators(self) -> RecordingRotator:
-        return self  # the control lease's claim and release, recorded like the rest
-
-    def claim(self, operator: object, minutes: object, origin: Origin, described: str) -> None:
-        self.calls.append(("claim", operator, minutes, described))
-        self.origins.append(origin)
-
-    def release(self, *args: object, **kw: object) -> None:  # noqa: D102
-        if args and isinstance(args[0], Origin):  # the control lease's
-            self.calls.append(("release_control", args[1]))
-            self.origins.append(args[0])
-            return
-        marker, clear = args[0], bool(kw.get("clear"))
+    def release(self, marker: int, *, clear: bool = False) -> None:
         self.calls.append(("release", marker, *(["clear"] if clear else [])))
-
-    def go_toward(
-        self,
-        latitude_deg: float,
-        longitude_deg: float,
-        source: Source,
-        described: str,
-        *,
-        locator: str | None = None,
-        long_path: bool = False,
-        origin: Origin | None = None,
-    ) -> None:
-        place = (round(latitude_deg, 4), round(longitude_deg, 4), locator, long_path)
-        self.calls.append(("toward", *place, source, described))
-        self.origins.append(origin)
-
-    def track(
-        self,
-        name: str,
-        source: Source,
-        described: str,
-        tle: tuple[str, str, str] | None = None,
-        *,
-        origin: Origin | None = None,
-    ) -> None:
-        self.calls.append(("track", name, tle, source, described))
-        self.origins.append(origin)
 
 
 def service(

@@ -65,7 +65,9 @@ class Pages:
 
 def info_payload(**console: object) -> bytes:
     facts = pl.ConsoleFacts(**console)  # type: ignore[arg-type]
-    return pl.info_json("tower", SPEC, Pointing.of(SPEC), True, facts).encode()
+    # a park position: the console's page offers park only then (console.js)
+    pointing = Pointing.of(SPEC, park=(180.0, None))
+    return pl.info_json("tower", SPEC, pointing, True, facts).encode()
 
 
 def rig(

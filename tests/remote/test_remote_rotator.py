@@ -11,7 +11,7 @@ import pytest
 
 from bridge.errors import RefusalCode, Refused
 from bridge.gs232 import EasycommSession, Gs232Session
-from bridge.model import Source, Stop, Target
+from bridge.model import Lock, Park, Source, Stop, Target, Toward
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
@@ -58,9 +58,9 @@ def rotator(link: Link, clock: FakeClock, park: str = "null") -> RemoteRotator:
 def test_park_and_a_place_go_to_the_station_which_knows_where_it_is() -> None:
     link = Link()
     rot = rotator(link, FakeClock(), park="[180, null]")
-    rot.park(Source.EASYCOMM, "easycomm PARK")
-    rot.go_toward(35.7, 139.7, Source.PST, "pst", locator="PM95vq")
-    rot.go_toward(35.7, 139.7, Source.PST, "pst", long_path=True)
+    rot.submit(Park(source=Source.EASYCOMM), "easycomm PARK")
+    rot.submit(Toward(35.7, 139.7, "PM95vq", source=Source.PST), "pst")
+    rot.submit(Toward(35.7, 139.7, long_path=True, source=Source.PST), "pst")
     assert link.sent == [
         ("rotor/tower/park", "park"),
         ("rotor/tower/target", '{"locator":"PM95vq"}'),
@@ -71,7 +71,7 @@ def test_park_and_a_place_go_to_the_station_which_knows_where_it_is() -> None:
 def test_park_without_a_park_position_is_refused_and_sends_nothing() -> None:
     link = Link()
     with pytest.raises(Refused) as caught:
-        rotator(link, FakeClock()).park(Source.PST, "pst <PARK>")
+        rotator(link, FakeClock()).submit(Park(source=Source.PST), "pst <PARK>")
     assert caught.value.code is RefusalCode.UNSUPPORTED and link.sent == []
 
 
@@ -129,9 +129,9 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
     console.submit(Stop(Source.WEB))
     assert console.last_halt_s == 100.0
     mono.t = 200.0
-    console.set_lock(False)  # lock OFF halts nothing
+    console.submit(Lock(False, source=Source.WEB))  # lock OFF halts nothing
     assert console.last_halt_s == 100.0
-    console.set_lock(True)
+    console.submit(Lock(True, source=Source.WEB))
     assert console.last_halt_s == 200.0
 
 

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.model import Command, Origin, Stop
+from bridge.model import Command, Stop
 from bridge.mosquitto import free_port
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
@@ -41,9 +41,6 @@ class FarRotator:
         self.waiting.set()
         assert self.link.wait(slow(30)), "the test never let the command through"
         self.carried.append("stop" if isinstance(command, Stop) else f"target {command.az_deg:g}")
-
-    def set_lock(self, locked: bool, *, origin: Origin | None = None) -> None:
-        self.carried.append(f"lock {locked}")
 
     def report_refusal(self, *args: object, **kwargs: object) -> None:
         pass

@@ -1,0 +1,36 @@
+"""What every front end sees of a rotator: one Protocol, the station's own (engine/rotator.py)
+and the remote's stand-ins for the station's (remote/rotator.py, remote/console.py) alike.
+
+Rules:
+1. A front end (MQTT, rotctld, GS-232, Easycomm, the loggers, the console, the DX cluster's
+   aim) reaches the judge only through ``submit``: it parses what it read into one value of the
+   ``Command`` union (model.py) and hands it over with the words the user sent
+   (``described``, echoed on ``R/error`` and in the audit trail). ``submit`` raises Refused
+   once the refusal is reported where the rotator's refusals go; the front end only renders it
+   (an RPRT code, an alarm, an HTTP status).
+2. ``report_refusal`` is for input that never became a command (a bad payload, a locator that
+   does not parse): reported where the rotator's refusals go; with ``origin`` (who sent it) it
+   is in the audit trail too, where the rotator keeps one.
+3. A front end that needs more of a rotator (rotctld's limits, the console's last halt) says so
+   in a Protocol of its own that extends this one.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from bridge.model import Command, Origin, RotatorStatus
+from bridge.protocols.base import ModelSpec
+
+
+class FrontRotator(Protocol):
+    @property
+    def id(self) -> str: ...
+    @property
+    def spec(self) -> ModelSpec: ...
+    @property
+    def status(self) -> RotatorStatus: ...
+    def submit(self, command: Command, described: str | None = None) -> None: ...
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None: ...
