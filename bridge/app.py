@@ -281,6 +281,7 @@ class App:
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
             birth_delay_s=ha.birth_delay_s,
+            publish_again=partial(client.publish_retained, qos=1, only_if_changed=False),
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
         if self.dxcluster is not None:
