@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 from bridge.mosquitto import BrokerError, answers, free_port
+from tests.support.waiting import slow
 
 
 def find_nats() -> str | None:
@@ -48,7 +49,7 @@ class Nats:
     def start(self, timeout_s: float = 20.0) -> Nats:
         for attempt in range(3):
             try:
-                return self._start(timeout_s)
+                return self._start(slow(timeout_s))
             except BrokerError:
                 if attempt == 2:
                     raise
@@ -82,7 +83,7 @@ class Nats:
         if self.proc is not None and self.proc.poll() is None:
             self.proc.terminate()
             try:
-                self.proc.wait(10)
+                self.proc.wait(slow(10))
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
@@ -90,7 +91,7 @@ class Nats:
 
     def restart(self) -> None:
         self.stop()
-        self._start(20.0)
+        self._start(slow(20.0))
 
 
 def protocol_level(connect: bytes) -> int | None:
