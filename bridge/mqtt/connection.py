@@ -309,11 +309,13 @@ class Connection:
         """Rule 6: the connection ended before the broker answered the CONNECT."""
         if self._stopping:
             return
-        hint = (
-            '; a broker without MQTT 5 does that too: set mqtt.protocol = "auto" or "3.1.1"'
-            if self._v5 and not self._auto and not self._accepted_once
-            else ""
-        )
+        hint = ""
+        if self._accepted_once:
+            pass  # the protocol is not the reason: it was accepted before
+        elif self._v5 and not self._auto:
+            hint = '; a broker without MQTT 5 does that too: set mqtt.protocol = "auto" or "3.1.1"'
+        elif not self._v5 and self._settings.protocol == "auto":
+            hint = "; it did so for MQTT 5 and for MQTT 3.1.1 alike"
         text = (
             f"the MQTT broker closed the connection before accepting it ({reason}): check the "
             "broker's log "

@@ -87,6 +87,29 @@ def test_mqtt_5_forced_never_steps_down_and_says_why_once(
     assert said(caplog, FELL_BACK) == []
 
 
+def test_a_broker_that_closes_on_both_protocols_is_said_once_after_the_step_down(
+    closer: NoMqtt5, caplog: pytest.LogCaptureFixture
+) -> None:
+    closer.close_all = True
+    settings = MqttSettings(host="127.0.0.1", port=closer.port, client_id="tauto")
+    client = MqttClient(
+        settings,
+        will_topic="rotor/bridge/state",
+        subscriptions=[],
+        on_message=lambda *a: None,
+        reconnect_max_s=1,
+    )
+    client.start()
+    try:
+        wait_until(lambda: len(closer.levels) >= 4, 20, "four tries")
+    finally:
+        client.stop()
+    assert closer.levels[0] == 5 and set(closer.levels[1:]) == {4}, closer.levels
+    assert len(said(caplog, FELL_BACK)) == 1
+    (line,) = said(caplog, "closed the connection before accepting it")
+    assert "it did so for MQTT 5 and for MQTT 3.1.1 alike" in line
+
+
 def test_mqtt_5_forced_on_nats_is_refused_and_said_once(
     nats: Nats, caplog: pytest.LogCaptureFixture
 ) -> None:

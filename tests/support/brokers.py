@@ -118,6 +118,7 @@ class NoMqtt5:
     def __init__(self, port: int) -> None:
         self.target = port
         self.levels: list[int | None] = []
+        self.close_all = False  # closes on MQTT 3.1.1 too (an ACL, a connection limit)
         self._listener = socket.create_server(("127.0.0.1", 0))
         self.port = self._listener.getsockname()[1]
         self._socks: list[socket.socket] = []
@@ -148,7 +149,7 @@ class NoMqtt5:
             level = protocol_level(head)
         with self._lock:
             self.levels.append(level)
-        if level == 5 or self._closed:
+        if level == 5 or self.close_all or self._closed:
             sock.close()  # what RabbitMQ 3.10 does with MQTT 5
             return
         up = socket.create_connection(("127.0.0.1", self.target))
