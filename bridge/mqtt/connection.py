@@ -14,7 +14,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
    answers "Unsupported protocol version" (NATS, aedes) or closes the socket before any CONNACK
    (RabbitMQ, amqtt), as long as no MQTT 5 connection was ever accepted: said once, with what
-   3.1.1 loses (``_fell_back``). ``"5"`` and ``"3.1.1"`` never change.
+   3.1.1 loses (``_fell_back``). A broker that speaks MQTT 5 but closed the first connection
+   (not ready yet behind a proxy) is stepped down too, for the process's life: the warning says
+   what that loses and names ``"5"`` as the fix. ``"5"`` and ``"3.1.1"`` never change.
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
    subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
@@ -361,7 +363,8 @@ class Connection:
 
     def use_mqtt311(self) -> None:
         """MQTT 3.1.1 from the next connection on (rule 1; the stop lane follows the main
-        connection's choice); never while paho's loop runs a connection of this client."""
+        connection's choice): before ``start``, or from paho's callbacks once an attempt
+        ended, never while a connection of this client is up."""
         self._v5 = False
         self._auto = False
         self._client.use_mqtt311()
@@ -448,7 +451,10 @@ class Connection:
         self.connected.clear()
         if not was and not answered:  # no CONNACK came (after one, the refusal was said)
             lost = getattr(reason_code, "value", None) == CONNECTION_LOST  # the broker hung up
-            why = "closed the connection before accepting MQTT 5 (no CONNACK)"
+            why = (  # (a proxy whose broker behind it is not up yet looks the same)
+                "closed the connection before accepting MQTT 5 (no CONNACK; if it does speak "
+                'MQTT 5 and was only not ready, set mqtt.protocol = "5")'
+            )
             if not (lost and self._fall_back(why)):
                 self._closed_early(str(reason_code))  # rule 6: never silent
         if not self._closed(was, reason_code):
