@@ -17,6 +17,7 @@ from bridge.mqtt.connection import Connection
 from bridge.mqtt.paho_client import new_client
 from bridge.settings import MqttSettings
 from tests.support.brokers import protocol_level
+from tests.support.waiting import slow
 
 FELL_BACK = "using MQTT 3.1.1 from now on"
 CLOSED = "closed the connection before accepting it"
@@ -107,7 +108,7 @@ def test_after_the_step_down_paho_sends_an_mqtt_3_1_1_connect_with_a_clean_sessi
         client.reconnect()  # what paho's loop does for the next attempt
         peer, _ = server.accept()
         with peer:
-            peer.settimeout(5)
+            peer.settimeout(slow(5))
             connect = peer.recv(4096)
     client.socket().close()
     assert protocol_level(connect) == 4
