@@ -91,7 +91,7 @@ class App:
             on_denied=self._denied,
             on_allowed=self._allowed,
             on_connect=self._connected,
-            on_new_connection=lambda: self.mqtt.main_gone(),
+            on_new_connection=self._main_new,
             on_connection_lost=lambda: self.mqtt.main_gone(),
             no_replay=self.topics.stop_lane(),
             replayed=[r.wind_topic for r in settings.rotators if r.wind_topic],  # mqtt/wind.py
@@ -110,7 +110,7 @@ class App:
             self.client,
             wall=wall,
             error_events_per_s=settings.mqtt.error_events_per_s,
-            retain_is_live=settings.mqtt.protocol == "5",
+            retain_is_live=settings.mqtt.protocol != "3.1.1",  # "auto": until it steps down
             on_problem=lambda topic, problem: self._denied(topic, problem),
             on_info=lambda problem, on: self._info(problem, on),
         )
@@ -281,6 +281,7 @@ class App:
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
             birth_delay_s=ha.birth_delay_s,
+            publish_again=partial(client.publish_retained, qos=1, only_if_changed=False),
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
         if self.dxcluster is not None:
@@ -318,12 +319,20 @@ class App:
             problems.remove(problem)
         self.client.publish_retained(self.topics.bridge_info, self.me.info(problems))
 
+    def _main_new(self) -> None:
+        """A new main connection, before any of its messages: the protocol it speaks (mqtt/
+        connection.py rule 1: "auto" may have stepped down) says what a retained flag means."""
+        self.mqtt.retain_is_live(self.client.v5)
+        self.mqtt.main_gone()
+
     def _connected(self) -> None:
         """The main connection is up (its first look done): the stop lane connects too, now
         that the broker is known to take the bridge (a wrong password is refused once, not
         twice per try)."""
         if not self._lane_started and not self._stopped.is_set():
             self._lane_started = True
+            if not self.client.v5:  # mqtt.protocol "auto" stepped down (mqtt/connection.py)
+                self.lane.use_mqtt311()
             self.lane.start()
 
     def _refused(self, message: str) -> None:

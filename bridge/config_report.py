@@ -169,9 +169,9 @@ def summary(settings: Settings) -> list[str]:
     if m.username is not None:
         login = f"user {m.username}, " + ("a password" if m.password is not None else "no password")
     tls = "TLS" if m.tls.enabled else "no TLS"
+    version = "MQTT 5, else 3.1.1" if m.protocol == "auto" else f"MQTT {m.protocol}"
     lines.append(
-        f"broker: {m.host}:{m.port}, MQTT {m.protocol}, {tls}, {login}, "
-        f"client id {m.effective_client_id()}"
+        f"broker: {m.host}:{m.port}, {version}, {tls}, {login}, client id {m.effective_client_id()}"
     )
     ha = settings.homeassistant
     lines.append(

@@ -151,10 +151,12 @@ class MqttSettings(_Strict):
         "several <base_topic>/<id>/target ...",
         examples=["shack/rotor"],
     )
-    protocol: Literal["5", "3.1.1"] = Field(
-        "5",
-        description='the MQTT version: "5", or "3.1.1" for old brokers (retained commands are '
-        "then recognised only when the broker replays them)",
+    protocol: Literal["auto", "5", "3.1.1"] = Field(
+        "auto",
+        description='the MQTT version: "auto" tries MQTT 5 and falls back to 3.1.1 when the '
+        "broker refuses MQTT 5 or closes the connection before accepting it (said once, as a "
+        'warning); "5" or "3.1.1" forces one. Under 3.1.1 retained commands are recognised '
+        "only when the broker replays them (docs/brokers.md)",
         examples=["3.1.1"],
     )
 

@@ -28,7 +28,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
 from tests.ha_rules import validate
-from tests.support.waiting import slow
+from tests.support.waiting import slow, wait_until
 
 
 def build(models: dict[str, str], base: str = "rotor", **kw) -> dict[str, dict]:
@@ -170,6 +170,12 @@ class Recorder:
         self.published: list[tuple[str, str]] = []
         self.cleared: list[str] = []
         self.republished = threading.Event()
+        self.again: list[tuple[str, str]] = []  # configs sent again on a birth
+        self.sent_again = threading.Event()
+
+    def publish_again(self, topic: str, payload: str) -> None:
+        self.again.append((topic, payload))
+        self.sent_again.set()
 
 
 def publisher(
@@ -188,6 +194,7 @@ def publisher(
         clear_retained=rec.cleared.append,
         republish_state=rec.republished.set,
         birth_delay_s=birth_delay_s,
+        publish_again=rec.publish_again,
     )
 
 
@@ -217,6 +224,20 @@ def test_version_change_republishes_device_info_once() -> None:
     assert '"sw_version": "1.4S"' in rec.published[-1][1]
     pub.on_status("tower", RotatorStatus("tower", version="1.4S"))
     assert len(rec.published) == 2 * n
+
+
+def test_a_birth_sends_every_config_again_once_per_delay() -> None:
+    rec = Recorder()
+    pub = publisher(rec, birth_delay_s=30)  # the state waits longer than this test
+    pub.publish_all()
+    pub.on_message("homeassistant/status", b"online", False)
+    wait_until(lambda: len(rec.again) == len(rec.published), 5, "every config again")
+    assert rec.again == rec.published
+    rec.sent_again.clear()
+    pub.on_message("homeassistant/status", b"online", False)  # within the delay: no more
+    assert not rec.sent_again.wait(0.2)  # a quiet period, not a deadline
+    pub.stop()
+    assert len(rec.again) == len(rec.published)
 
 
 def test_home_assistant_birth_schedules_a_state_republish() -> None:

@@ -9,8 +9,12 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    payload when the broker shows them to us; the client says what it did (or, for a config
    another client publishes while the bridge runs, that it left it alone), a flood of them in a
    few lines (mqtt/client.py rule 15).
-5. On Home Assistant's birth message the retained state is published again after a delay, so
-   Home Assistant, which ignores state that arrives before it has processed discovery, gets it.
+5. On Home Assistant's birth message every config is published again at once (``publish_again``,
+   whether changed or not: a broker that replays retained messages only to exact-topic
+   subscriptions, RabbitMQ, gives Home Assistant's ``homeassistant/#`` none of them), then the
+   retained state after a delay, so Home Assistant, which ignores state that arrives before it
+   has processed discovery, gets it. Births that come while a delay runs send nothing again: a
+   flood of them costs one round of configs per delay.
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
@@ -47,6 +51,7 @@ class DiscoveryPublisher:
         clear_retained: Callable[[str], None],
         republish_state: Callable[[], None],
         birth_delay_s: float = 10.0,
+        publish_again: Callable[[str, str], None] | None = None,
     ) -> None:
         self.prefix = prefix
         self._disc = DiscoveryTopics(prefix)
@@ -57,6 +62,7 @@ class DiscoveryPublisher:
         self._publish = publish_retained
         self._clear = clear_retained
         self._republish_state = republish_state
+        self._publish_again = publish_again  # rule 5: a config, sent even if unchanged
         self._birth_delay_s = birth_delay_s
         self._lock = threading.Lock()
         self._timer: threading.Timer | None = None
@@ -124,12 +130,22 @@ class DiscoveryPublisher:
 
     def _schedule_republish(self) -> None:
         with self._lock:
+            waiting = self._timer is not None and self._timer.is_alive()
             if self._timer is not None:
                 self._timer.cancel()
             self._timer = threading.Timer(self._birth_delay_s, self._republish_state)
             self._timer.daemon = True
             self._timer.start()
+        if not waiting and self._publish_again is not None:  # rule 5, not on paho's thread
+            threading.Thread(target=self._configs_again, daemon=True).start()
         log.info("Home Assistant came online; state follows in %g s", self._birth_delay_s)
+
+    def _configs_again(self) -> None:
+        """Rule 5: every config, as published last (under the lock: see Lock)."""
+        with self._lock:
+            if self._publish_again is not None:
+                for topic, payload in self._current.items():
+                    self._publish_again(topic, payload)
 
     def stop(self) -> None:
         with self._lock:

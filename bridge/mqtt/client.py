@@ -65,7 +65,7 @@ import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.mqtt.claim import Claim
-from bridge.mqtt.connection import Connection, MessageHandler, Options
+from bridge.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
 from bridge.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
 from bridge.mqtt.heartbeat import Beat, beat_payload
 from bridge.mqtt.limiter import EventLimiter
@@ -77,6 +77,9 @@ from bridge.settings import MqttSettings
 log = logging.getLogger(__name__)
 
 STATE_QOS = 0  # rule 8
+# rule 10 (MQTT 3.1.1): a broker shutting down sends the bridge its own last will and closes the
+# connection right after; an ``offline`` the connection outlives by this long was a stranger's
+WILL_OUTLIVED_S = 1.0
 LOOK_TIMEOUT_S = 5.0  # rule 14
 
 
@@ -123,6 +126,7 @@ class MqttClient(Connection):
         )
         c.on_publish = self._delivery.on_publish
         self._owned = OwnedTopics(clock, hears_own=not self._v5)  # rule 10
+        self._owned.will = (will_topic, b"offline")
         self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
         self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
         self._on_refused = on_refused
@@ -132,6 +136,7 @@ class MqttClient(Connection):
         self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
         self.refused: str | None = None
         self._heartbeat = heartbeat  # rule 2
+        self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
         self._beat = Beat()
         self._wall = wall
 
@@ -175,6 +180,8 @@ class MqttClient(Connection):
     def start(self) -> None:
         s = self._settings
         log.info("connecting to MQTT broker %s:%d as %s", s.host, s.port, s.effective_client_id())
+        if not self._v5:
+            log.warning("MQTT 3.1.1 (mqtt.protocol): %s", MQTT311_LOSES)
         self._connect()
         self._delivery.start_retrying(self._resend, lambda: self._stopping)
 
@@ -277,6 +284,10 @@ class MqttClient(Connection):
                 self._delivery.send(topic, event, 1, retain=False)
 
     # -- connection.py's hooks (paho's thread) ----------------------------------------------
+    def _fell_back(self, what: str) -> None:
+        super()._fell_back(what)  # said, with MQTT311_LOSES
+        self._owned.hears_own = True  # rule 10: our own messages come back from now on
+
     def _opened(self, client: paho.Client) -> None:
         """Commands subscribed before ``online`` (the broker handles our packets in order: a
         client that sends a command the moment it sees ``online`` is already heard)."""
@@ -306,6 +317,7 @@ class MqttClient(Connection):
         self._delivery.deny(topic, "subscribe to", reason)
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        self._will_heard = None  # rule 10: the connection ended, so that ``offline`` was ours
         if self._look is not None:
             self._look.looking = None  # one assignment: no lock (paho may hold its own here)
         if was_up and self._on_connection_lost is not None:  # nothing more of it will come
@@ -313,7 +325,12 @@ class MqttClient(Connection):
         return was_up and not self._stopping
 
     def _tick(self) -> None:
-        """Rule 2: the heartbeat, when due (paho's thread, after each round of its loop)."""
+        """Rule 2: the heartbeat, when due (paho's thread, after each round of its loop); rule
+        10: an ``offline`` on the will topic that the connection outlived was a stranger's."""
+        heard = self._will_heard
+        if heard is not None and self._clock() - heard[0] >= WILL_OUTLIVED_S:
+            self._will_heard = None
+            self._say_foreign(self._will_topic, heard[1], b"online")
         topic = self._heartbeat
         if topic is None or not self.connected.is_set() or self.refused is not None:
             return
@@ -460,14 +477,19 @@ class MqttClient(Connection):
                     self._owned.sent(topic, held[0])
                     self._delivery.send(topic, held[0], held[1], retain=True)
                 say = fix.say
+                if say and self._owned.is_will(topic, payload):  # said later, if at all (_tick)
+                    self._will_heard, say = (self._clock(), payload), False
         if self.refused is not None:
             self._refuse()
         elif say:
-            log.warning(
-                "another client published %r on %s, a topic of the bridge's own: put back %r "
-                "(a second bridge on this base topic, or a flow publishing where it should not?)",
-                payload[:40],
-                topic,
-                held[0][:40],
-            )
+            self._say_foreign(topic, payload, held[0])
         return True
+
+    def _say_foreign(self, topic: str, payload: bytes, ours: bytes) -> None:
+        log.warning(
+            "another client published %r on %s, a topic of the bridge's own: put back %r "
+            "(a second bridge on this base topic, or a flow publishing where it should not?)",
+            payload[:40],
+            topic,
+            ours[:40],
+        )

@@ -10,7 +10,13 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    retain-as-published, so a command published with the retain flag is recognised as such even
    while the bridge is connected (MQTT 3.1.1 clears the flag then); not the state topics read
    (``replayed``: the wind), whose flag then says "replayed", as under MQTT 3.1.1. ``protocol =
-   "3.1.1"`` is the fallback for brokers without MQTT 5 (clean session, same rules otherwise).
+   "3.1.1"`` is for brokers without MQTT 5 (clean session, same rules otherwise). ``"auto"``, the
+   default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
+   answers "Unsupported protocol version" (NATS, aedes) or closes the socket before any CONNACK
+   (RabbitMQ, amqtt), as long as no MQTT 5 connection was ever accepted: said once, with what
+   3.1.1 loses (``_fell_back``). A broker that speaks MQTT 5 but closed the first connection
+   (not ready yet behind a proxy) is stepped down too, for the process's life: the warning says
+   what that loses and names ``"5"`` as the fix. ``"5"`` and ``"3.1.1"`` never change.
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
    subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
@@ -22,7 +28,9 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 6. paho owns the reconnect loop (connect_async + loop_start, exponential back-off); a refused
    connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
    reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
-   never a crash. Rule 7 only slows that loop down.
+   never a crash. Rule 7 only slows that loop down. A connection the broker closes before it
+   answers the CONNECT (an ACL on the client id, a connection limit, a broker without MQTT 5)
+   is said too, once, with the likely fixes (``_closed_early``): it is never silent.
 7. One client id, one connection. A broker that gets a second connection with a client id
    closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
    socket), so two processes with one id (two hosts sharing a configuration, a stale container
@@ -95,6 +103,12 @@ def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
     return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
 
 
+UNSUPPORTED_PROTOCOL = 0x84  # rule 1: CONNACK for a version the broker does not speak
+MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/brokers.md)
+    "a retained command published while the bridge is connected arrives without its retain "
+    "flag and is carried out like any other (a retained target moves the rotor once), and "
+    "rotor-bridge remote cannot use this broker (it needs MQTT 5)"
+)
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
 CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
@@ -205,7 +219,10 @@ class Connection:
     ) -> None:
         self._settings = settings
         self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
-        self._v5 = settings.protocol == "5"
+        self._v5 = settings.protocol != "3.1.1"  # rule 1: "auto" tries MQTT 5 first
+        self._auto = settings.protocol == "auto"  # ... and may step down (``_fall_back``)
+        self._accepted_once = False  # a connection was accepted: the protocol is settled
+        self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
         self._replayed = frozenset(options.get("replayed") or ())
@@ -276,7 +293,39 @@ class Connection:
     def _accepted(self) -> None:
         """A connection is accepted; nothing of it has been handed on yet."""
         self._last_refusal = None
-        log.info("connected to MQTT broker")
+        log.info("connected to MQTT broker (%s)", self.protocol)
+
+    def _fell_back(self, what: str) -> None:
+        """Rule 1: ``auto`` steps down to MQTT 3.1.1, the broker having done ``what``."""
+        s = self._settings
+        log.warning(
+            "the MQTT broker at %s:%d %s: using MQTT 3.1.1 from now on (set mqtt.protocol = "
+            '"3.1.1" to skip the try). Under MQTT 3.1.1 %s',
+            s.host,
+            s.port,
+            what,
+            MQTT311_LOSES,
+        )
+
+    def _closed_early(self, reason: str) -> None:
+        """Rule 6: the connection ended before the broker answered the CONNECT."""
+        if self._stopping:
+            return
+        hint = ""
+        if self._accepted_once:
+            pass  # the protocol is not the reason: it was accepted before
+        elif self._v5 and not self._auto:
+            hint = '; a broker without MQTT 5 does that too: set mqtt.protocol = "auto" or "3.1.1"'
+        elif not self._v5 and self._settings.protocol == "auto":
+            hint = "; it did so for MQTT 5 and for MQTT 3.1.1 alike"
+        text = (
+            f"the MQTT broker closed the connection before accepting it ({reason}): check the "
+            "broker's log "
+            "(its access rules for this client id and user, a connection limit)" + hint
+        )
+        if text != self._last_refusal:
+            log.error("%s (retrying)", text)
+            self._last_refusal = text
 
     def _opened(self, client: paho.Client) -> None:
         """The command topics are subscribed (the SUBACK may be on its way)."""
@@ -302,6 +351,32 @@ class Connection:
             self._guard.reported = True
             log.error("%s", takeover_message(self._client_id, ending))
 
+    @property
+    def v5(self) -> bool:
+        """Whether this connection speaks MQTT 5 now (rule 1)."""
+        return self._v5
+
+    @property
+    def protocol(self) -> str:
+        """The MQTT version this connection speaks now (rule 1): "MQTT 5" or "MQTT 3.1.1"."""
+        return "MQTT 5" if self._v5 else "MQTT 3.1.1"
+
+    def use_mqtt311(self) -> None:
+        """MQTT 3.1.1 from the next connection on (rule 1; the stop lane follows the main
+        connection's choice): before ``start``, or from paho's callbacks once an attempt
+        ended, never while a connection of this client is up."""
+        self._v5 = False
+        self._auto = False
+        self._client.use_mqtt311()
+
+    def _fall_back(self, what: str) -> bool:
+        """Rule 1: whether ``auto`` steps down now (then it is said)."""
+        if not (self._auto and self._v5) or self._accepted_once or self._stopping:
+            return False
+        self.use_mqtt311()
+        self._fell_back(what)
+        return True
+
     def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
         return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
 
@@ -321,11 +396,18 @@ class Connection:
         reason_code: ReasonCode,
         properties: Properties | None,
     ) -> None:
+        self._answered = True
         if reason_code.is_failure:
             self._guard.connect_failed()
+            code = getattr(reason_code, "value", None)
+            if code == UNSUPPORTED_PROTOCOL and self._fall_back(
+                f'refused MQTT 5 ("{reason_code}")'
+            ):
+                return
             self._refused(str(reason_code))
             return
         self._up = True
+        self._accepted_once = True
         self._guard.connected(self._clock())
         self._subscribed = False  # until the SUBACK of the command topics
         self._accepted()
@@ -365,7 +447,16 @@ class Connection:
         properties: Properties | None,
     ) -> None:
         was, self._up, self._subscribed = self._up, False, False
+        answered, self._answered = self._answered, False
         self.connected.clear()
+        if not was and not answered:  # no CONNACK came (after one, the refusal was said)
+            lost = getattr(reason_code, "value", None) == CONNECTION_LOST  # the broker hung up
+            why = (  # (a proxy whose broker behind it is not up yet looks the same)
+                "closed the connection before accepting MQTT 5 (no CONNACK; if it does speak "
+                'MQTT 5 and was only not ready, set mqtt.protocol = "5")'
+            )
+            if not (lost and self._fall_back(why)):
+                self._closed_early(str(reason_code))  # rule 6: never silent
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)

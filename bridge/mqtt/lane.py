@@ -17,9 +17,10 @@ Rules:
 2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
    retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
    quick-ack (client.py rule 9): both are connection.py's Connection, which builds, connects
-   and subscribes them. Client id: ``lane_client_id`` (the main id with ``rstop-``
-   for ``rotor-``, as long; an explicit id gets ``-stop``, shortened with a hash to 23
-   characters if it would be longer).
+   and subscribes them. Under ``mqtt.protocol = "auto"`` it speaks what the main connection
+   settled on (the app calls ``use_mqtt311`` before ``start``). Client id: ``lane_client_id``
+   (the main id with ``rstop-`` for ``rotor-``, as long; an explicit id gets ``-stop``,
+   shortened with a hash to 23 characters if it would be longer).
 3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
    limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
    (the bridge's problems, B/bridge/info): stops then take the main connection only. Its own
@@ -71,6 +72,7 @@ class StopLane(Connection):
         super().__init__(
             settings, self.client_id, subscriptions=subscriptions, on_message=on_message, **options
         )
+        self._auto = False  # the main connection settles the protocol (use_mqtt311, rule 2)
         self._on_denied = on_denied
         self._stopped = False  # stop() was called: start() does nothing any more
         self._started = False
@@ -110,6 +112,9 @@ class StopLane(Connection):
         self._report(
             f"the MQTT broker does not let the bridge subscribe to {topic}: {reason}", topic
         )
+
+    def _closed_early(self, reason: str) -> None:
+        pass  # _closed reports it, as the lane's own problem
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         if not was_up:  # closed before it was accepted (a connection limit): no takeover evidence

@@ -11,11 +11,21 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    it is on. What the broker held from before the connection (our own last will, a value of a
    run that ended) arrives within SETTLE_AFTER_CONNECT_S of it and is put back without a word:
    only a live stranger is news. Under MQTT 3.1.1 the bridge hears its own messages too, in the
-   order sent: one it sent and has not heard back yet (``sent``) is no stranger.
+   order sent: one it sent on this connection and has not heard back yet (``sent``) is no
+   stranger, however far the connection lags behind (a flood of commands read before them):
+   every one is kept until it or a later one comes back (the broker keeps the order, so the
+   older ones were dropped), as a keyed hash of its payload (``_digest``: a stranger cannot aim
+   at one, and a backlog of long payloads costs no memory); ECHOES_KEPT only bounds memory
+   against a broker that loses our messages without end. The bridge's own last will (``will``,
+   the broker publishes it when the bridge's connection dies, and at its own shutdown, right
+   before it closes the connection) is put back, and said only if the connection outlives it
+   (client.py, WILL_OUTLIVED_S): then it was a stranger's.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -26,7 +36,15 @@ from paho.mqtt.subscribeoptions import SubscribeOptions
 FOREIGN_FIX_S = 2.0
 FOREIGN_LOG_S = 60.0
 SETTLE_AFTER_CONNECT_S = 1.0  # retained values that arrive this soon after a connect are old
-ECHOES_KEPT = 32  # MQTT 3.1.1: payloads per topic sent and not yet heard back, at most
+# MQTT 3.1.1: echoes per topic sent and not yet heard back, at most (rule 10: memory only, about
+# 50 bytes each, for a broker that never sends them back: an ACL that drops what we may read).
+# A flood of 10,000 targets read before them lags the main connection by one status per target
+ECHOES_KEPT = 16384
+_KEY = os.urandom(16)  # rule 10: per process, so nobody else can make a payload hash alike
+
+
+def _digest(data: bytes) -> bytes:
+    return hashlib.blake2b(data, digest_size=8, key=_KEY).digest()
 
 
 @dataclass(frozen=True)
@@ -42,9 +60,10 @@ class OwnedTopics:
         """``hears_own``: the broker sends the bridge its own messages back (MQTT 3.1.1; MQTT 5
         subscribes with no-local)."""
         self._clock = clock
-        self._hears_own = hears_own
+        self.hears_own = hears_own  # (set again when mqtt.protocol "auto" steps down)
         self.filters: list[str] = []
-        self._echoes: dict[str, deque[bytes]] = {}  # sent, not heard back (hears_own)
+        self._echoes: dict[str, deque[bytes]] = {}  # digests sent, not heard back (hears_own)
+        self.will: tuple[str, bytes] | None = None  # the bridge's own last will
         self._fixed_at: dict[str, float] = {}
         self._logged_at: dict[str, float] = {}
         self.connected_at = -1e18  # the clock at the last accepted connection
@@ -55,7 +74,7 @@ class OwnedTopics:
     def subscriptions(self) -> list[tuple[str, int | SubscribeOptions]]:
         """What to subscribe to on every connect: MQTT 5 without our own messages back
         (no-local); MQTT 3.1.1 hears them, and ``ours`` knows them."""
-        if self._hears_own:
+        if self.hears_own:
             return [(f, 0) for f in self.filters]
         mine = SubscribeOptions(qos=0, noLocal=True, retainAsPublished=True)
         return [(f, mine) for f in self.filters]
@@ -70,19 +89,25 @@ class OwnedTopics:
 
     def sent(self, topic: str, data: bytes) -> None:
         """The bridge published ``data`` on ``topic``: when it comes back, it is ours."""
-        if self._hears_own and self.filters and self.owns(topic):
-            self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(data)
+        if self.hears_own and self.filters and self.owns(topic):
+            self._echoes.setdefault(topic, deque(maxlen=ECHOES_KEPT)).append(_digest(data))
 
     def ours(self, topic: str, payload: bytes, held: bytes) -> bool:
         """Whether ``payload`` heard on an owned ``topic`` is the bridge's: an echo of one it
         sent (the older ones before it are gone: the broker keeps the order), or the value it
         holds."""
         echoes = self._echoes.get(topic)
-        if echoes and payload in echoes:
-            while echoes.popleft() != payload:
-                pass
-            return True
+        if echoes:
+            digest = _digest(payload)
+            if digest in echoes:
+                while echoes.popleft() != digest:
+                    pass
+                return True
         return payload == held
+
+    def is_will(self, topic: str, payload: bytes) -> bool:
+        """Whether this is the bridge's own last will (put back without a word, rule 10)."""
+        return self.hears_own and (topic, payload) == self.will
 
     def put_back(self, topic: str) -> PutBack:
         """A stranger's value on ``topic``: ours again at most once per FOREIGN_FIX_S, said at

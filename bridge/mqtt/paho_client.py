@@ -9,6 +9,10 @@ Rules:
    second while connected: its select waits 1 s at most), for what a connection does on a clock
    without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
    one that raises is logged and paho's thread goes on.
+3. ``use_mqtt311`` turns a client built for MQTT 5 into one that speaks MQTT 3.1.1 with a clean
+   session from its next connection on (``mqtt.protocol = "auto"``, connection.py rule 1), as
+   paho itself steps down from 3.1.1 to 3.1 on a refusal: its CONNECT is built from these two
+   attributes on every connect (tests/mqtt/test_protocol_fallback.py holds paho to that).
 """
 
 from __future__ import annotations
@@ -46,6 +50,11 @@ class Client(paho.Client):
 
     tick: Callable[[], None] | None = None
 
+    def use_mqtt311(self) -> None:
+        """Rule 3: MQTT 3.1.1 and a clean session from the next connection on."""
+        self._protocol = paho.MQTTv311
+        self._clean_session = True
+
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         rc = super().loop_read(max_packets)
         acknowledge_now(self.socket())
@@ -65,7 +74,7 @@ class Client(paho.Client):
 def new_client(settings: MqttSettings, client_id: str) -> Client:
     """paho's client as both connections use it: rule 1's protocol and session, credentials
     and TLS."""
-    v5 = settings.protocol == "5"
+    v5 = settings.protocol != "3.1.1"  # "auto" tries MQTT 5 first (connection.py rule 1)
     c = Client(
         callback_api_version=CallbackAPIVersion.VERSION2,
         client_id=client_id,

@@ -22,7 +22,8 @@ Rules:
    store on subscribing" (an old value, of unknown age) and a message the station publishes
    while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
 5. Until the first connection is accepted, a refusal or a failed attempt is not logged (the
-   start-up error says it, once, in one line: ``failure``); a refused login or a TLS handshake
+   start-up error says it, once, in one line: ``failure``, also when the broker closed the
+   connection without a word); a refused login, a broker without MQTT 5 or a TLS handshake
    that fails is ``fatal``, for the start to end at once, since trying again cannot mend it.
    Once the remote has been connected, both are logged and retried as the bridge does
    (connection.py rule 6).
@@ -80,6 +81,7 @@ KEPT = (
     "and sent first on reconnect"
 )
 LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
+NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to 3.1.1 only
 
 
 class RemoteLink(Connection):
@@ -109,6 +111,7 @@ class RemoteLink(Connection):
         super().__init__(
             settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
         )
+        self._auto = False  # rule 1: never steps down to MQTT 3.1.1
         self._send_lock = threading.Lock()
         self._on_change = on_change
         self._ever_up = False
@@ -284,14 +287,28 @@ class RemoteLink(Connection):
             super()._refused(reason)
             return
         login = reason in LOGIN_REFUSED
+        old = reason == NO_MQTT5
         if login:
             self.failure = (
                 f"the broker refused the login ({reason}): check mqtt.username and "
                 "mqtt.password_file"
             )
+        elif old:
+            self.failure = f"this broker does not speak MQTT 5 ({reason}), which the remote needs"
         else:
             self.failure = f"the broker refused the connection ({reason})"
-        self.fatal = login
+        self.fatal = login or old  # trying again cannot mend either
+        log.debug("%s", self.failure)
+
+    def _closed_early(self, reason: str) -> None:
+        if self._ever_up or self._stopping:
+            super()._closed_early(reason)
+            return
+        self.failure = (
+            f"the broker closed the connection before accepting it ({reason}): it answered, but "
+            "either it does not speak MQTT 5, which the remote needs (RabbitMQ and amqtt close "
+            "the connection so), or its access rules refuse this client id or user"
+        )
         log.debug("%s", self.failure)
 
     def _failed(self) -> None:

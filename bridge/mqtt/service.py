@@ -13,7 +13,8 @@ Rules:
    An EMPTY retained message is no command: it is how a retained message is deleted (what the
    refusals themselves tell the user to do), so it is ignored silently, stop included. (With
    MQTT 3.1.1 the broker clears the retain flag of live messages, so a deletion sent while the
-   bridge is connected arrives as an empty plain message: refused under rule 2, or a stop.)
+   bridge is connected arrives as an empty plain message: under 3.1.1 an empty message is
+   ignored as a deletion too, but on a stop topic it is a stop, as any payload is there.)
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
    nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
@@ -135,6 +136,11 @@ class MqttService:
         )
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
+
+    def retain_is_live(self, v5: bool) -> None:
+        """The main connection's MQTT version, before any message of a connection (``auto``
+        settles it on the first: connection.py rule 1); see the constructor."""
+        self._halts.retain_is_live = v5
 
     def aim_calls_with(self, aimer: CallAimer) -> None:
         """Targets by call sign go to ``aimer`` (dxcluster/client.py: it looks the call up on
@@ -336,7 +342,7 @@ class MqttService:
         rot = self._rotators.get(rotator_id)
         if rot is None:
             return
-        if retain and not payload:
+        if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
             self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
@@ -410,7 +416,7 @@ def parse_command(
     if kind == "release":
         named = control.parse_release(payload) if by.operator is None else None
         return Release(source=src, origin=by if named is None else Origin(Source.MQTT, named))
-    if not payload:  # rule 2: also a retained one deleted under MQTT 3.1.1 (rule 1)
+    if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
         raise pl.PayloadError("empty payload")
     if kind == "health_reset":
         return ResetHealth(source=src, origin=by)  # moves nothing: no lease to ask

@@ -143,8 +143,9 @@ class RemoteSettings(_Strict):
 
     @model_validator(mode="after")
     def _check(self) -> RemoteSettings:
-        if self.mqtt.protocol != "5":
+        if self.mqtt.protocol == "3.1.1":
             raise ValueError('mqtt.protocol must be "5": commands carry a message expiry')
+        self.mqtt.protocol = "5"  # "auto" never falls back here: the remote needs MQTT 5
         if self.ack_wait_s > self.command_expiry_s:
             raise ValueError(
                 f"ack_wait_s ({self.ack_wait_s:g}) must not be more than command_expiry_s "

@@ -146,7 +146,7 @@ WINDOW_S = 30.0
 MAX_CONNECTS = 6  # per process in WINDOW_S; fighting at paho's 1 s pace would be about 15
 SHARED_ID = "shared-bridge"
 TAKEOVER_ERROR = re.compile(r" ERROR .*keep kicking each other off")
-CONNECTED = re.compile(r"\bconnected to MQTT broker$", re.MULTILINE)
+CONNECTED = re.compile(r"\bconnected to MQTT broker \(MQTT [0-9.]+\)$", re.MULTILINE)
 
 
 @pytest.mark.parametrize("protocol", ["5", "3.1.1"])

@@ -75,6 +75,25 @@ def test_home_assistant_birth_brings_the_state_again(rig: Rig) -> None:
         rig.probe.wait_for(topic, after=t, timeout_s=20)
 
 
+def test_home_assistant_birth_brings_every_discovery_config_again(rig: Rig) -> None:
+    """A broker that replays retained messages only to exact-topic subscriptions (RabbitMQ)
+    gives Home Assistant's ``homeassistant/#`` no config after its restart: the bridge sends
+    every one again on the birth message, whatever the broker replays."""
+    rig.add("tower")
+    rig.start()
+    rig.ready("tower")
+    known = configs(rig.broker.port)
+    ha = Probe(rig.broker.port, f"{PREFIX}/#")  # MQTT 3.1.1: retain flag set = a replay
+    try:
+        rig.probe.publish(f"{PREFIX}/status", "online")  # HA's birth message (not retained)
+        for topic, payload in known.items():
+            m = ha.wait_for(topic, lambda m: not m.retain)
+            assert json.loads(m.payload) == payload
+        assert all(m.qos == 1 for t in known for m in ha.on(t) if not m.retain)
+    finally:
+        ha.close()
+
+
 def test_removed_rotator_entities_are_cleared(rig: Rig) -> None:
     rig.add("tower")
     rig.add("yagi", model="rotorcard")

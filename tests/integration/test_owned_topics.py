@@ -48,8 +48,16 @@ def test_a_stray_value_on_a_topic_of_the_bridges_own_is_put_back(
 
     wait_until(restored, 5, "the bridge's own values back")
     assert ours["rotor/lock/state"] == b"ON" and ours["rotor/bridge/state"] == b"online"
-    warned = [r for r in caplog.records if "another client published" in r.getMessage()]
-    assert {r.getMessage().split(" on ")[1].split(",")[0] for r in warned} == set(strays)
+
+    def warned() -> set[str]:
+        said = [
+            r.getMessage() for r in caplog.records if "another client published" in r.getMessage()
+        ]
+        return {m.split(" on ")[1].split(",")[0] for m in said}
+
+    # (under 3.1.1 an ``offline`` on bridge/state may be the bridge's own last will, sent by a
+    # broker shutting down: it is said once the connection has outlived it, owned.py rule 10)
+    wait_until(lambda: warned() == set(strays), 5, f"every stray said, not only {warned()}")
 
 
 def test_the_bridge_does_not_take_its_own_messages_for_a_strangers_while_it_turns(

@@ -107,3 +107,35 @@ def test_mqtt_5_subscribes_without_its_own_messages_and_3_1_1_hears_them() -> No
     assert topic == STATE and not isinstance(options, int) and options.noLocal
     v311, _ = judge(hears_own=True)
     assert v311.subscriptions() == [(STATE, 0), ("rotor/option/+/state", 0)]
+
+
+def test_under_mqtt_3_1_1_echoes_far_behind_a_flood_are_still_the_bridges_own() -> None:
+    """The main connection reads a flood of targets before the bridge's own status messages
+    come back: thousands of them are in flight, and each is still known as its own."""
+    owned, _ = judge(hears_own=True)
+    sent = [f'{{"bearing": {i}}}'.encode() for i in range(5000)]
+    for data in sent:
+        owned.sent(STATE, data)
+    held = sent[-1]
+    assert all(owned.ours(STATE, data, held) for data in sent)
+    # every echo heard: a value sent before is a stranger's now (only the held one is ours)
+    assert not owned.ours(STATE, sent[0], held)
+    assert owned.ours(STATE, held, held)
+
+
+def test_under_mqtt_3_1_1_a_stranger_among_the_echoes_is_still_a_stranger() -> None:
+    owned, _ = judge(hears_own=True)
+    for data in (b"moving", b"idle", b"moving"):
+        owned.sent(STATE, data)
+    assert owned.ours(STATE, b"moving", held=b"moving")
+    assert not owned.ours(STATE, b"parked", held=b"moving")  # never sent on this connection
+    assert owned.ours(STATE, b"idle", held=b"moving")  # still in flight
+
+
+def test_the_bridges_own_last_will_is_known_under_mqtt_3_1_1_only() -> None:
+    owned, _ = judge(hears_own=True)
+    owned.will = ("rotor/bridge/state", b"offline")
+    assert owned.is_will("rotor/bridge/state", b"offline")
+    assert not owned.is_will("rotor/bridge/state", b"online")
+    owned.hears_own = False  # MQTT 5 subscribes with no-local: the broker never sends it to us
+    assert not owned.is_will("rotor/bridge/state", b"offline")

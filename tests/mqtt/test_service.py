@@ -456,7 +456,7 @@ def test_each_command_topic_reaches_its_rotator(
          "follow '{\"path\": \"long\"}'"),
         ("rotor/follow", b'{"source": "wsjtx", "band": 20}', "unknown key(s) in follow: band",
          "follow '{\"source\": \"wsjtx\", \"band\": 20}'"),
-        # a retained park deleted under MQTT 3.1.1 arrives as an empty plain message: no park
+        # MQTT 5; under 3.1.1 an empty plain message is a deletion (test_under_mqtt_3_1_1_...)
         ("rotor/park", b"", "empty payload", "park"),
     ],
 )  # fmt: skip
@@ -667,6 +667,20 @@ def test_a_replayed_retained_stop_is_carried_out_once() -> None:
     live.on_message("rotor/stop", b"STOP", True)
     live.on_message("rotor/stop", b"STOP", True)
     assert [c[0] for c in tower.calls] == ["submit", "refused", "submit", "refused"]
+
+
+def test_under_mqtt_3_1_1_an_empty_message_is_a_deletion_but_an_empty_stop_stops() -> None:
+    """Rule 1: under MQTT 3.1.1 the broker clears the retain flag of the empty retained message
+    that deletes a retained command while the bridge listens (docs/mqtt.md: ignored silently)."""
+    svc = MqttService(Topics("rotor", {"tower": "rotor"}), RecordingPublisher())
+    svc.retain_is_live(False)  # the main connection speaks MQTT 3.1.1
+    tower = RecordingRotator("tower", "rotorez")
+    svc.attach(tower)
+    for leaf in ("target", "park", "preset", "lock", "option/jam", "health/reset"):
+        svc.on_message(f"rotor/{leaf}", b"", False)
+    assert tower.calls == []
+    svc.on_message("rotor/stop", b"", False)  # a stop takes any payload: never refused
+    assert [c[0] for c in tower.calls] == ["submit"]
 
 
 def test_while_gated_only_halts_are_taken_and_the_rest_is_reported() -> None:

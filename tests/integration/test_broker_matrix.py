@@ -1,0 +1,167 @@
+"""The broker matrix (docs/brokers.md): what a station needs of its broker, checked end to end
+against each broker the tests can start, with the bridge's default ``mqtt.protocol`` ("auto")
+unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, and NATS (MQTT
+3.1.1 only: "auto" steps down). Each case: the protocol said at start, a target turns the rotor,
+a STOP while turning stops it, the retained state for a subscriber that comes late, the last
+will, the fence markers (lastword.py rule 7), and under 3.1.1 a flood of targets without a
+false "another client published" while a real stranger is still put back and said.
+
+Real parts: the broker, the bridge (App, or its own process for the last will) and an emulated
+Rotor-EZ on a pty (tests/support/rig.py); the probe speaks MQTT 3.1.1, as every broker does.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from bridge.mosquitto import Mosquitto
+from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.brokers import Nats, find_nats
+from tests.support.rig import Rig
+
+BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats"]
+STRANGER = "another client published"
+
+
+@pytest.fixture(params=BROKERS)
+def kind(request: pytest.FixtureRequest) -> str:
+    if request.param == "nats" and find_nats() is None:
+        pytest.skip("nats-server is not installed (tests/run installs Debian's nats-server)")
+    return str(request.param)
+
+
+@pytest.fixture
+def station(kind: str, tmp_path: Path) -> Iterator[Rig]:
+    broker: Mosquitto | Nats = (
+        Nats(tmp_path / "nats") if kind == "nats" else Mosquitto(tmp_path / "mosquitto")
+    )
+    broker.start()
+    probe = Probe(broker.port)
+    try:
+        with Rig(tmp_path, broker, probe) as rig:
+            if kind == "mosquitto-3.1.1":
+                rig.mqtt_extra = {"protocol": "3.1.1"}
+            yield rig
+    finally:
+        probe.close()
+        broker.stop()
+
+
+def said(caplog: pytest.LogCaptureFixture, words: str) -> list[str]:
+    return [r.getMessage() for r in caplog.records if words in r.getMessage()]
+
+
+def test_the_bridge_says_which_protocol_it_speaks_and_what_that_means(
+    kind: str, station: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO)
+    station.add("tower")
+    station.start()
+    station.ready("tower")
+    connected = said(caplog, "connected to MQTT broker (")
+    losses = said(caplog, "carried out like any other")
+    if kind == "mosquitto-5":
+        assert connected and all("(MQTT 5)" in line for line in connected), connected
+        assert losses == []
+    else:
+        assert connected and all("(MQTT 3.1.1)" in line for line in connected), connected
+        assert len(losses) == 1, losses  # one warning, at start
+    if kind == "nats":
+        (line,) = said(caplog, "using MQTT 3.1.1 from now on")
+        assert 'refused MQTT 5 ("Unsupported protocol version")' in line
+    assert said(caplog, "refused the connection") == []
+
+
+def test_a_target_turns_the_rotor_and_a_stop_while_turning_stops_it(station: Rig) -> None:
+    emu = station.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    station.start()
+    station.ready("tower")
+    station.probe.publish("rotor/target", "40")
+    emu.wait_for(lambda s: abs(s.az_deg - 40) <= 3 and not s.is_moving, 20)
+    station.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 60)
+    station.probe.publish("rotor/stop", "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 5)
+    assert stopped.az_deg < 250
+    # the fence markers (lastword.py rule 7): the stop's marker came back through this broker,
+    # and the bridge reports no problem with it
+    station.probe.wait_for("rotor/bridge/fence", lambda m: not m.payload.startswith(b"probe "))
+    info = json.loads(station.probe.wait_for("rotor/bridge/info").payload)
+    assert not [p for p in info.get("problems", []) if "fence" in p], info
+
+
+def test_a_late_subscriber_gets_the_retained_state(station: Rig) -> None:
+    emu = station.add("tower", emu={"start_az_deg": 0})
+    station.start()
+    station.ready("tower")
+    station.probe.publish("rotor/target", "90")
+    emu.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 20)
+
+    def settled() -> dict[str, bytes] | None:
+        snap = retained_snapshot(station.broker.port, "rotor/#")
+        return snap if snap.get("rotor/state") == b"idle" else None
+
+    snap = wait_until(settled, 10, "a new subscriber gets rotor/state idle")
+    assert snap["rotor/bridge/state"] == b"online"
+    assert snap["rotor/lock/state"] == b"OFF"
+    assert abs(json.loads(snap["rotor/status"])["bearing"] - 90) <= 3
+
+
+def test_the_last_will_marks_a_killed_bridge_offline(station: Rig) -> None:
+    station.add("tower")
+    bridge = station.start_process()
+    station.probe.wait_value("rotor/bridge/state", "online", timeout_s=20)
+    t = time.monotonic()
+    bridge.kill()
+    station.probe.wait_for("rotor/bridge/state", lambda m: m.text == "offline", 20, after=t)
+    assert retained_snapshot(station.broker.port, "rotor/bridge/state") == {
+        "rotor/bridge/state": b"offline"
+    }
+
+
+def test_a_flood_raises_no_false_alarm_and_a_real_stranger_is_still_put_back(
+    kind: str, station: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Under 3.1.1 the bridge hears its own messages; behind a flood of targets read first they
+    come back late, and none may pass for a stranger's (owned.py rule 10)."""
+    emu = station.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
+    station.start()
+    station.ready("tower")
+    flood = Probe(station.broker.port, "", max_inflight=1000)
+    try:
+        for i in range(5000):
+            flood.client.publish("rotor/target", str(10 + i % 300), qos=0)
+        flood.client.publish("rotor/stop", "STOP", qos=1).wait_for_publish(30)
+    finally:
+        flood.close()
+    # a sync round trip through the bridge: every target before it has been read
+    t = time.monotonic()
+    station.probe.publish("rotor/target", "sync")
+    station.probe.wait_for("rotor/error", lambda m: b"sync" in m.payload, 60, after=t)
+    assert said(caplog, STRANGER) == []
+    emu.wait_for(lambda s: not s.is_moving, 30)  # the STOP behind the flood held
+    # a stranger's value on a topic of the bridge's own is still put back, and said
+    t = time.monotonic()
+    station.probe.publish("rotor/lock/state", "ON", retain=True)
+    station.probe.wait_for("rotor/lock/state", lambda m: m.text == "OFF", 10, after=t)
+    assert len(said(caplog, STRANGER)) == 1
+
+
+def test_its_own_last_will_at_a_broker_shutdown_is_no_strangers(
+    kind: str, station: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A broker that shuts down publishes the wills of its clients, the bridge's too; under
+    3.1.1 the bridge hears it, and it is its own (owned.py rule 10)."""
+    station.add("tower")
+    app = station.start()
+    station.ready("tower")
+    station.broker.stop()
+    wait_until(lambda: not app.client.connected.is_set(), 10, "the bridge saw the broker go")
+    wait_until(lambda: said(caplog, "disconnected from MQTT broker"), 10, "the disconnect said")
+    assert said(caplog, STRANGER) == []

@@ -1,0 +1,116 @@
+"""connection.py rules 1 and 6, the decisions alone: when ``mqtt.protocol = "auto"`` steps down
+to MQTT 3.1.1 and when it does not, what is said, and that paho's client then really sends an
+MQTT 3.1.1 CONNECT with a clean session (paho_client.py rule 3). The callbacks are driven as
+paho calls them, with the reason codes brokers send; the real brokers are in
+tests/integration/test_broker_fallback.py."""
+
+from __future__ import annotations
+
+import socket
+
+import paho.mqtt.client as paho
+import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.mqtt.connection import Connection
+from bridge.mqtt.paho_client import new_client
+from bridge.settings import MqttSettings
+from tests.support.brokers import protocol_level
+from tests.support.waiting import slow
+
+FELL_BACK = "using MQTT 3.1.1 from now on"
+CLOSED = "closed the connection before accepting it"
+
+
+def connection(protocol: str) -> Connection:
+    settings = MqttSettings(host="127.0.0.1", port=1, protocol=protocol, client_id="fallback-t")
+    return Connection(settings, "fallback-t", subscriptions=["rotor/target"], on_message=print)
+
+
+def refused(conn: Connection, code: int) -> None:
+    reason = ReasonCode(PacketTypes.CONNACK, identifier=code)
+    conn._on_connect(conn._client, None, paho.ConnectFlags(False), reason, None)
+
+
+def accepted(conn: Connection) -> None:
+    ok = ReasonCode(PacketTypes.CONNACK, identifier=0)
+    conn._on_connect(conn._client, None, paho.ConnectFlags(False), ok, None)
+
+
+def closed(conn: Connection, code: int = 0x80) -> None:
+    reason = ReasonCode(PacketTypes.DISCONNECT, identifier=code)
+    conn._on_disconnect(conn._client, None, paho.DisconnectFlags(False), reason, None)
+
+
+def said(caplog: pytest.LogCaptureFixture, words: str) -> list[str]:
+    return [r.getMessage() for r in caplog.records if words in r.getMessage()]
+
+
+def test_auto_steps_down_on_unsupported_protocol_once(caplog: pytest.LogCaptureFixture) -> None:
+    conn = connection("auto")
+    assert conn.v5
+    refused(conn, 0x84)
+    closed(conn)  # paho closes the socket after a refusal
+    assert not conn.v5 and conn._client._protocol == paho.MQTTv311
+    assert len(said(caplog, FELL_BACK)) == 1
+    assert said(caplog, "refused the connection") == [] and said(caplog, CLOSED) == []
+    refused(conn, 0x84)  # a 3.1.1 broker's "unacceptable protocol version" now: said, not again
+    assert len(said(caplog, FELL_BACK)) == 1
+    assert len(said(caplog, "refused the connection")) == 1
+
+
+def test_auto_steps_down_when_the_socket_closes_before_any_connack(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    conn = connection("auto")
+    closed(conn, 0x80)
+    assert not conn.v5
+    assert "closed the connection before accepting MQTT 5" in said(caplog, FELL_BACK)[0]
+
+
+@pytest.mark.parametrize(
+    ("protocol", "why"),
+    [("5", "forced"), ("3.1.1", "forced"), ("auto", "accepted before"), ("auto", "keepalive")],
+)
+def test_no_step_down_where_the_protocol_is_not_the_reason(
+    protocol: str, why: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    conn = connection(protocol)
+    v5 = conn.v5
+    if why == "accepted before":  # MQTT 5 worked: a later close is an ACL, a limit, a restart
+        accepted(conn)
+        closed(conn)
+    closed(conn, 0x8D if why == "keepalive" else 0x80)  # 0x8D: paho's keepalive timeout
+    assert conn.v5 == v5
+    assert said(caplog, FELL_BACK) == []
+    (line,) = said(caplog, CLOSED)  # never silent
+    assert ('set mqtt.protocol = "auto"' in line) == (protocol == "5")
+
+
+def test_a_refusal_for_another_reason_never_steps_down(caplog: pytest.LogCaptureFixture) -> None:
+    conn = connection("auto")
+    refused(conn, 0x87)  # Not authorized
+    closed(conn)
+    assert conn.v5
+    assert said(caplog, FELL_BACK) == [] and said(caplog, CLOSED) == []
+    assert len(said(caplog, "Not authorized")) == 1
+
+
+def test_after_the_step_down_paho_sends_an_mqtt_3_1_1_connect_with_a_clean_session() -> None:
+    """paho_client.py rule 3 holds paho to the two attributes it builds its CONNECT from."""
+    settings = MqttSettings(host="127.0.0.1", port=1, client_id="fallback-p")
+    client = new_client(settings, "fallback-p")
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        # as the main connection: set up for MQTT 5 and a clean start, then stepped down
+        client.connect_async("127.0.0.1", server.getsockname()[1], clean_start=True)
+        client.use_mqtt311()
+        client.reconnect()  # what paho's loop does for the next attempt
+        peer, _ = server.accept()
+        with peer:
+            peer.settimeout(slow(5))
+            connect = peer.recv(4096)
+    client.socket().close()
+    assert protocol_level(connect) == 4
+    flags = connect[2 + 2 + 4 + 1]  # fixed header (2), name length (2), "MQTT", level
+    assert flags & 0x02  # clean session

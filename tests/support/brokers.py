@@ -1,0 +1,176 @@
+"""Brokers other than mosquitto, for the broker matrix (docs/brokers.md): a private nats-server
+with its MQTT listener on a free loopback port (MQTT 3.1.1 only: it answers an MQTT 5 CONNECT
+with "Unsupported protocol version"), and ``NoMqtt5``, a relay in front of a real broker that
+closes the socket on an MQTT 5 CONNECT without a CONNACK, as RabbitMQ 3.10 and amqtt do, and
+passes an MQTT 3.1.1 connection through byte for byte.
+
+nats-server comes from Debian's ``nats-server`` package (tests/run installs it); a test that
+needs it is skipped with that said when it is missing. NATS serves MQTT only with JetStream on,
+which needs a server name and a store directory: both are in the workdir.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+from bridge.mosquitto import BrokerError, answers, free_port
+from tests.support.waiting import slow
+
+
+def find_nats() -> str | None:
+    return shutil.which("nats-server") or next(
+        (p for p in ("/usr/sbin/nats-server", "/usr/bin/nats-server") if Path(p).exists()), None
+    )
+
+
+class Nats:
+    """``start()``/``stop()``/``restart()`` as ``bridge.mosquitto.Mosquitto``; ``port`` is the
+    MQTT listener's (the NATS client port is another free one, on loopback too)."""
+
+    def __init__(self, workdir: Path) -> None:
+        exe = find_nats()
+        if exe is None:
+            raise BrokerError("nats-server is not installed (Debian: apt-get install nats-server)")
+        self.exe = exe
+        self.host = "127.0.0.1"
+        self.port = free_port()
+        self.nats_port = free_port()
+        self.workdir = workdir
+        self.conf = workdir / "nats.conf"
+        self.log = workdir / "nats.log"
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self, timeout_s: float = 20.0) -> Nats:
+        for attempt in range(3):
+            try:
+                return self._start(slow(timeout_s))
+            except BrokerError:
+                if attempt == 2:
+                    raise
+                self.port, self.nats_port = free_port(), free_port()  # taken meanwhile
+        raise AssertionError("unreachable")
+
+    def _start(self, timeout_s: float) -> Nats:
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        store = self.workdir / "jetstream"
+        self.conf.write_text(
+            f"server_name: rb_{self.port}\n"
+            f"listen: {self.host}:{self.nats_port}\n"
+            f'jetstream {{ store_dir: "{store}" }}\n'
+            f"mqtt {{ listen: {self.host}:{self.port} }}\n"
+        )
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                [self.exe, "-c", str(self.conf)], stdout=log, stderr=subprocess.STDOUT
+            )
+        deadline = time.monotonic() + timeout_s
+        while not answers(self.host, self.port, 0.2):
+            if self.proc.poll() is not None:
+                raise BrokerError(f"nats-server exited: {self.log.read_text()[-2000:]}")
+            if time.monotonic() > deadline:
+                self.stop()
+                raise BrokerError(f"nats-server did not listen on {self.host}:{self.port}")
+            time.sleep(0.05)
+        return self
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(slow(10))
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.proc = None
+
+    def restart(self) -> None:
+        self.stop()
+        self._start(slow(20.0))
+
+
+def protocol_level(connect: bytes) -> int | None:
+    """The protocol level of an MQTT CONNECT packet (4: 3.1.1, 5: MQTT 5), None if ``connect``
+    is not (yet) a whole CONNECT's variable header."""
+    if not connect or connect[0] >> 4 != 1:
+        return None
+    i = 1  # the remaining length: 1 to 4 bytes, 7 bits each
+    while i < len(connect) and connect[i] & 0x80:
+        i += 1
+    i += 1
+    if len(connect) < i + 2:
+        return None
+    name_len = int.from_bytes(connect[i : i + 2], "big")
+    at = i + 2 + name_len
+    return connect[at] if len(connect) > at else None
+
+
+class NoMqtt5:
+    """A relay on a free loopback port in front of ``port``: an MQTT 5 CONNECT is answered by
+    closing the socket (no CONNACK); anything else is passed through both ways. ``levels``
+    lists the protocol level of every CONNECT seen, in order."""
+
+    def __init__(self, port: int) -> None:
+        self.target = port
+        self.levels: list[int | None] = []
+        self.close_all = False  # closes on MQTT 3.1.1 too (an ACL, a connection limit)
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self._listener.getsockname()[1]
+        self._socks: list[socket.socket] = []
+        self._lock = threading.Lock()
+        self._closed = False
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                sock, _ = self._listener.accept()
+            except OSError:
+                return
+            threading.Thread(target=self._serve, args=(sock,), daemon=True).start()
+
+    def _serve(self, sock: socket.socket) -> None:
+        head = b""
+        level: int | None = None
+        while level is None and len(head) < 4096:
+            try:
+                data = sock.recv(4096)
+            except OSError:
+                data = b""
+            if not data:
+                sock.close()
+                return
+            head += data
+            level = protocol_level(head)
+        with self._lock:
+            self.levels.append(level)
+        if level == 5 or self.close_all or self._closed:
+            sock.close()  # what RabbitMQ 3.10 does with MQTT 5
+            return
+        up = socket.create_connection(("127.0.0.1", self.target))
+        with self._lock:
+            self._socks += [sock, up]
+        up.sendall(head)
+        threading.Thread(target=self._pipe, args=(up, sock), daemon=True).start()
+        self._pipe(sock, up)
+
+    def _pipe(self, src: socket.socket, dst: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                dst.sendall(data)
+        for s in (src, dst):
+            with contextlib.suppress(OSError):
+                s.shutdown(socket.SHUT_RDWR)
+
+    def close(self) -> None:
+        self._closed = True
+        self._listener.close()
+        with self._lock:
+            for s in self._socks:
+                with contextlib.suppress(OSError):
+                    s.close()
