@@ -3,12 +3,15 @@ the bridge's own topics are its own, when its value is put back, and when that i
 
 from __future__ import annotations
 
+from paho.mqtt.client import topic_matches_sub
+
 from bridge.mqtt.owned import (
     FOREIGN_FIX_S,
     FOREIGN_LOG_S,
     SETTLE_AFTER_CONNECT_S,
     OwnedTopics,
 )
+from bridge.mqtt.topics import Topics
 
 STATE = "rotor/state"
 
@@ -107,3 +110,29 @@ def test_mqtt_5_subscribes_without_its_own_messages_and_3_1_1_hears_them() -> No
     assert topic == STATE and not isinstance(options, int) and options.noLocal
     v311, _ = judge(hears_own=True)
     assert v311.subscriptions() == [(STATE, 0), ("rotor/option/+/state", 0)]
+
+
+def test_owned_topics_are_those_mqtt_matches_for_every_kind_of_filter() -> None:
+    """The set and the compiled pattern answer as paho's matcher does, one filter at a time: a
+    table of filters (the bridge's own, several rotators' with their ``option/+/state``, and the
+    other wildcard forms) against topics at the edges (``$`` topics, empty levels, a parent of
+    ``#``, a level too many or too few)."""
+    own = Topics("rotor", {f"r{i}": f"rotor/r{i}" for i in range(3)}).owned()
+    others = ["a/#", "#", "+", "+/b", "+/+/c", "$SYS/#", "$SYS/+/x", "x/+", "x/#/y", "a.b/c*d"]
+    filters = own + others
+    topics = {t.replace("+", "brake").replace("/#", "/x") for t in filters}
+    topics |= {t.replace("/+", "").replace("#", "") for t in filters}
+    topics |= {
+        "", "/", "a", "a/", "a/b/c", "b", "/b", "x/b", "q/w/c", "q//c", "$SYS", "$SYS/x",
+        "$SYS/q/x", "$x/b", "$x", "x", "x/", "x/y", "x/#/y", "x/q/y", "a.b/c*d", "aXb/c*d",
+        "rotor/r1/option//state", "rotor/r1/option/a/b/state", "rotor/r1/state/x",
+        "rotor/r9/state", "rotor/r1/option/brake", "rotor/r1/option/brake/state\n",
+    }  # fmt: skip
+    for chosen in (own, others, filters, [], ["a/b"]):
+        owned = OwnedTopics(Clock(), hears_own=False)
+        owned.watch(chosen)
+        for topic in sorted(topics):
+            expected = any(topic_matches_sub(f, topic) for f in chosen)
+            assert owned.owns(topic) == expected, (topic, chosen[:3])
+    owned.watch(own)
+    assert owned.owns("rotor/r2/option/brake/state") and not owned.owns("rotor/r2/target")
