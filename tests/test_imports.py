@@ -59,3 +59,17 @@ def test_the_guard_finds_and_names_a_circle() -> None:
     assert find_cycle(graph, "p") is None
     graph.add_import(importer="p.c", imported="p.a")  # as a TYPE_CHECKING import would
     assert find_cycle(graph, "p") == ["p.a", "p.b", "p.c", "p.a"]
+
+
+def test_the_service_without_its_console_does_not_load_the_web_server() -> None:
+    """aiohttp and the console's server are a tenth of the bridge's start-up CPU (a second on a
+    small single-board computer): a bridge without ``[web]`` does not import them."""
+    import subprocess
+    import sys
+
+    check = "import sys, bridge.app, bridge.cli; print(sorted(m for m in sys.modules if m in W))"
+    wanted = "W = {'aiohttp', 'bridge.web.server', 'bridge.web.live'}; "
+    out = subprocess.run(
+        [sys.executable, "-c", wanted + check], capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip() == "[]"
