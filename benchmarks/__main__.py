@@ -4,6 +4,7 @@
     python -m benchmarks --quick              # fewer samples, shorter windows (about 10 minutes)
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
+    python -m benchmarks exchange_cpu --against 9104bbc   # beside older commits' engines
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first
 
 Every process started (brokers, bridges, rotctld, emulator hosts) is ended on the way out,
@@ -165,6 +166,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--quick", action="store_true", help="fewer samples, shorter windows")
     ap.add_argument("--models", help="comma-separated models for latency/freshness/line")
+    ap.add_argument(
+        "--against",
+        metavar="COMMIT",
+        help=f"exchange_cpu: older engines beside this one (default {exchange_cpu.AGAINST})",
+    )
     ap.add_argument("--json", type=Path, default=DEFAULT_JSON, help="results file")
     ap.add_argument("--keep", action="store_true", help="keep the work directory (logs, configs)")
     args = ap.parse_args(argv)
@@ -196,6 +202,8 @@ def main(argv: list[str] | None = None) -> int:
                     run = ITEMS[key]
                     if key in ("latency", "freshness", "line"):
                         result = run(scope, args.quick, models)  # type: ignore[operator]
+                    elif key == "exchange_cpu":
+                        result = exchange_cpu.run(scope, args.quick, args.against)
                     else:
                         result = run(scope, args.quick)  # type: ignore[operator]
             except KeyboardInterrupt:

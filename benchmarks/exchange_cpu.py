@@ -1,18 +1,31 @@
-"""Item exchange_cpu: the bridge's CPU time per poll exchange, 16 Rotor-EZ turning.
+"""Item exchange_cpu: the bridge's CPU time per poll exchange, 16 Rotor-EZ turning, this engine
+beside older ones, taking turns: by default the engine of 2026-11-26 (EXCHANGE_BASE, the goal per
+exchange is set against it) and main when the goals were set (STARTUP_BASE, the start-up goal).
 
-    python -m benchmarks exchange_cpu [--quick]
+    python -m benchmarks exchange_cpu [--quick] [--against COMMIT[,COMMIT...]]
 
-Set-up: one bridge process (the service as a user runs it: defaults, Home Assistant discovery
-on) with 16 emulated Rotor-EZ controllers behind paced lines at 4800 baud (rig.many_rotators).
-Every rotor is turned from its front panel (no command), so the bridge polls each at its moving
-rate (0.2 s) and publishes the bearing after every reply. The emulators transmit their replies
-as a real UART would: each byte when its time on the line is over, one write per byte (the
-"bytes per reply write" column shows it).
+Set-up, for each engine: one bridge process (the service as a user runs it: defaults, Home
+Assistant discovery on) with 16 emulated Rotor-EZ controllers behind paced lines at 4800 baud
+(rig.many_rotators), its own broker. The older engine is the commit's ``bridge/`` out of git,
+run with its own import path (benchmarks/engines.py); everything else is this checkout's.
+The engines take turns, ROUNDS rounds each (old, older, new, old, older, new, ...), so all
+meet the same machine; each round starts its bridge afresh and measures, from /proc
+(procfs.cpu_seconds: every thread of the bridge process):
 
-Measured over a fixed window, several times: the bridge process's CPU time (every thread, from
-/proc: procfs.cpu_seconds) divided by the poll exchanges completed in the window (the `AI1;`
-frames the controllers logged: the ground truth, each answered). The MQTT and Home Assistant work
-a reading causes is part of the cost; a reading is what an exchange is for.
+- start-up: the bridge's CPU seconds from its start to all 16 rotators ``online`` (Home
+  Assistant discovery on), and to "settled": all 16 ``idle`` and a second more, by when the
+  discovery configs it published have come back to it and been read;
+- idle: the 16 at rest (polled at their idle rate, nothing changing): % of one core;
+- turning: every rotor turned from its front panel (no command), so the bridge polls each at
+  its moving rate (0.2 s) and publishes the bearing after every reply. CPU seconds divided by
+  the poll exchanges completed in the window (the ``AI1;`` frames the controllers logged: the
+  ground truth, each answered). The MQTT and Home Assistant work a reading causes is part of
+  the cost; a reading is what an exchange is for. The emulators transmit their replies as a
+  real UART would: each byte when its time on the line is over, one write per byte (the
+  "bytes per reply write" note shows it).
+
+The machine may be shared: every round carries the load average at its end; a ratio is of the
+medians over the rounds (this tree / the older engine).
 """
 
 from __future__ import annotations
@@ -20,18 +33,29 @@ from __future__ import annotations
 import contextlib
 import os
 import time
+from collections.abc import Callable
+from functools import partial
 from typing import Any
 
-from benchmarks.harness import Scope
+from benchmarks.engines import engine_at, engine_spawner
+from benchmarks.harness import Scope, check_abort
 from benchmarks.procfs import cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
+from tests.support.process import Spawn
 
 MODEL = "rotorez"
 COUNT = 16
 POLL = b"AI1;"
-TARGET_MS = 0.2
-#: every rotor still turns at the end of the last window (0 -> 350 deg: 87 s; 6 deg/s default),
+EXCHANGE_BASE = "9104bbc"  # the engine of 2026-11-26: the goal per exchange is set against it
+STARTUP_BASE = "4825dd5"  # main when the goals were set: the start-up goal is set against it
+AGAINST = f"{EXCHANGE_BASE},{STARTUP_BASE}"
+NEW = "this tree"
+ROUNDS = 3  # per engine
+EXCHANGE_GOAL = 0.5  # of the old engine's CPU per exchange, at most
+STARTUP_GOAL = 0.5  # of the old engine's start-up CPU, at most
+IDLE_GOAL_PCT = 0.5  # of a core, 16 at rest
+#: every rotor still turns at the end of the window (0 -> 350 deg: 87 s; 6 deg/s default),
 #: and fast enough that every poll sees it move (at 2 deg/s some polls saw no change)
 SPEED_DEG_S = 4.0
 
@@ -75,78 +99,168 @@ def _polls_between(rig: Rig, t0: float, t1: float) -> int:
     )
 
 
-def measure(scope: Scope, windows: int, window_s: float) -> dict[str, Any]:
+def one_round(
+    scope: Scope, name: str, spawn: Callable[[Scope], Spawn] | None, window_s: float
+) -> dict[str, Any]:
+    """One engine, started afresh: its start-up, idle and turning costs."""
     specs = [(f"r{i}", MODEL, {"speed_deg_s": SPEED_DEG_S}, {}) for i in range(COUNT)]
-    with many_rotators(scope, "exchange-cpu", specs, wait_online_s=60) as rig:
+    with many_rotators(scope, name, specs, wait_online_s=60, spawn=spawn) as rig:
+        assert rig.bridge is not None
+        pid = rig.bridge.pid
+        startup_cpu_s = cpu_seconds(pid)  # all online (the rig waited for it)
+        startup_s = time.monotonic() - rig.bridge.started_t
         topics = [rig.t(rid, "state") for rid in rig.lines]
         rig.mqtt.wait_all(topics, "idle", 60)  # past the brake window assumed at start-up
+        time.sleep(1.0)  # discovery's echoes read (an idle second costs a few ms)
+        c0, t0 = cpu_seconds(pid), time.monotonic()
+        settled_cpu_s = c0
+        time.sleep(window_s)
+        c1, t1 = cpu_seconds(pid), time.monotonic()
+        idle_pct = 100 * (c1 - c0) / (t1 - t0)
+        idle_polls = _polls_between(rig, t0, t1)
+        check_abort()
         counters = [WriteCounter(line.emu) for line in rig.lines.values()]
         for line in rig.lines.values():
             line.emu.manual_rotate(350.0)
         rig.mqtt.wait_all(topics, "moving", 30)
         time.sleep(1.0)  # polling at the moving rate
-        pid = rig.bridge.pid
-        runs = []
-        for _ in range(windows):
-            c0, t0, th0 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
-            time.sleep(window_s)
-            c1, t1, th1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
-            busiest = sorted((th1[t] - th0[t] for t in th1 if t in th0), reverse=True)[:2]
-            polls = _polls_between(rig, t0, t1)
-            if polls == 0:
-                raise RuntimeError("no poll exchange in the window")
-            runs.append(
-                {
-                    "cpu_s": c1 - c0,
-                    "window_s": t1 - t0,
-                    "exchanges": polls,
-                    "ms_per_exchange": (c1 - c0) / polls * 1000,
-                    "cpu_pct": 100 * (c1 - c0) / (t1 - t0),
-                    "busiest_threads_ms": [b / polls * 1000 for b in busiest],
-                }
-            )
+        c0, t0, th0 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        time.sleep(window_s)
+        c1, t1, th1 = cpu_seconds(pid), time.monotonic(), thread_seconds(pid)
+        busiest = sorted((th1[t] - th0[t] for t in th1 if t in th0), reverse=True)[:2]
+        polls = _polls_between(rig, t0, t1)
+        if polls == 0:
+            raise RuntimeError("no poll exchange in the window")
         turning = sum(1 for line in rig.lines.values() if line.emu.state().is_moving)
         if turning < COUNT:
             raise RuntimeError(f"only {turning} of {COUNT} rotors still turned at the end")
         writes = sum(c.writes for c in counters)
         sent = sum(c.bytes for c in counters)
-    return {"runs": runs, "bytes_per_write": sent / writes if writes else float("nan")}
+    return {
+        "startup_cpu_s": startup_cpu_s,
+        "settled_cpu_s": settled_cpu_s,
+        "startup_s": startup_s,
+        "idle_pct": idle_pct,
+        "idle_polls_s": idle_polls / window_s,
+        "exchanges": polls,
+        "exchanges_s": polls / (t1 - t0),
+        "ms_per_exchange": (c1 - c0) / polls * 1000,
+        "busiest_threads_ms": [b / polls * 1000 for b in busiest],
+        "bytes_per_write": sent / writes if writes else float("nan"),
+        "load_avg": os.getloadavg()[0],
+    }
 
 
-def run(scope: Scope, quick: bool) -> ItemResult:
-    windows, window_s = (3, 5.0) if quick else (6, 10.0)
-    result = ItemResult("exchange_cpu", "CPU per poll exchange (16 Rotor-EZ turning)")
-    m = measure(scope, windows, window_s)
-    runs = m["runs"]
+def run(scope: Scope, quick: bool, against: str | None = None) -> ItemResult:
+    """``against``: older commits, comma-separated (default AGAINST)."""
+    commits = [c.strip() for c in (against or AGAINST).split(",") if c.strip()]
+    window_s = 5.0 if quick else 10.0
+    result = ItemResult("exchange_cpu", f"CPU per reading, this engine beside {', '.join(commits)}")
+    engines: dict[str, Callable[[Scope], Spawn] | None] = {}
+    for commit in commits:
+        root, why = engine_at(scope, commit)
+        if root is None:
+            raise RuntimeError(f"the engine of {commit} could not be set up: {why}")
+        engines[commit] = partial(engine_spawner, root=root)
+    engines[NEW] = None
+    rounds: dict[str, list[dict[str, Any]]] = {e: [] for e in engines}
+    for i in range(ROUNDS):
+        for k, (engine, spawn) in enumerate(engines.items()):
+            check_abort()
+            rounds[engine].append(one_round(scope, f"e{k}-{i}", spawn, window_s))
     table = Table(
-        f"{result.title}: {windows} windows of {window_s:g} s",
-        ["window", "exchanges", "exchanges/s", "CPU %", "CPU ms/exchange", "1st thread", "2nd"],
+        f"{result.title}: 16 Rotor-EZ, {ROUNDS} rounds each, taking turns, {window_s:g} s windows",
+        [
+            "round",
+            "engine",
+            "start-up CPU s",
+            "settled",
+            "idle % core",
+            "exchanges/s",
+            "CPU ms/exchange",
+            "1st thread",
+            "2nd",
+            "load avg",
+        ],
     )
-    for i, r in enumerate(runs, start=1):
-        table.add(
-            i,
-            r["exchanges"],
-            f"{r['exchanges'] / r['window_s']:.1f}",
-            f"{r['cpu_pct']:.2f}",
-            f"{r['ms_per_exchange']:.3f}",
-            *(f"{ms:.3f}" for ms in (r["busiest_threads_ms"] + [0.0, 0.0])[:2]),
+    for i in range(ROUNDS):
+        for engine in engines:
+            r = rounds[engine][i]
+            table.add(
+                i + 1,
+                engine,
+                f"{r['startup_cpu_s']:.2f}",
+                f"{r['settled_cpu_s']:.2f}",
+                f"{r['idle_pct']:.2f}",
+                f"{r['exchanges_s']:.1f}",
+                f"{r['ms_per_exchange']:.3f}",
+                *(f"{ms:.3f}" for ms in (r["busiest_threads_ms"] + [0.0, 0.0])[:2]),
+                f"{r['load_avg']:.2f}",
+            )
+    keys = ("startup_cpu_s", "settled_cpu_s", "idle_pct", "ms_per_exchange")
+    med = {
+        e: {k: percentile(sorted(r[k] for r in rs), 50) for k in keys} for e, rs in rounds.items()
+    }
+    spread = {
+        e: {k: (min(r[k] for r in rs), max(r[k] for r in rs)) for k in keys}
+        for e, rs in rounds.items()
+    }
+    new = med[NEW]
+    ratios = {
+        c: {k: new[k] / med[c][k] if med[c][k] else float("nan") for k in keys} for c in commits
+    }
+    for c in commits:
+        table.notes.append(
+            f"Medians, {c} -> this tree: {med[c]['ms_per_exchange']:.3f} -> "
+            f"{new['ms_per_exchange']:.3f} ms per exchange (x{ratios[c]['ms_per_exchange']:.2f}), "
+            f"start-up {med[c]['startup_cpu_s']:.2f} -> {new['startup_cpu_s']:.2f} s CPU "
+            f"(x{ratios[c]['startup_cpu_s']:.2f}; settled x{ratios[c]['settled_cpu_s']:.2f}), "
+            f"idle {med[c]['idle_pct']:.2f} -> {new['idle_pct']:.2f} % of a core."
         )
-    values = sorted(r["ms_per_exchange"] for r in runs)
-    median = percentile(values, 50)
     table.notes += [
-        f"CPU: the bridge process, every thread (/proc schedstat); exchanges: `AI1;` frames the "
-        f"controllers logged. Median {median:.3f} ms, range {values[0]:.3f}-{values[-1]:.3f} ms.",
-        f"Replies as a UART sends them: {m['bytes_per_write']:.2f} bytes per reply write.",
-        "1st / 2nd thread: the two busiest threads' share, ms per exchange (the serial lines' "
-        "thread, then paho's network thread).",
+        "CPU: the bridge process, every thread (/proc schedstat); exchanges: `AI1;` frames the "
+        "controllers logged. Start-up: from the process's start to all 16 `online` (discovery "
+        "on); settled: to all 16 `idle` and a second more (discovery's own configs read back). "
+        "1st / 2nd thread: the two busiest threads' share while turning, ms per exchange.",
+        "Replies as a UART sends them: "
+        + ", ".join(f"{e} {rounds[e][0]['bytes_per_write']:.2f}" for e in engines)
+        + " bytes per reply write.",
     ]
     result.tables.append(table)
-    result.data = {"runs": runs, "median_ms": median, "bytes_per_write": m["bytes_per_write"]}
+    result.data = {
+        "against": commits,
+        "rounds": rounds,
+        "medians": med,
+        "ratios": ratios,
+        "spread": spread,
+        "window_s": window_s,
+    }
+    if EXCHANGE_BASE in ratios:
+        x = ratios[EXCHANGE_BASE]["ms_per_exchange"]
+        result.verdicts.append(
+            Verdict(
+                f"CPU per poll exchange at most {EXCHANGE_GOAL}x of {EXCHANGE_BASE}'s",
+                f"x{x:.2f} ({new['ms_per_exchange']:.3f} / "
+                f"{med[EXCHANGE_BASE]['ms_per_exchange']:.3f} ms)",
+                x <= EXCHANGE_GOAL,
+            )
+        )
+    if STARTUP_BASE in ratios:
+        x = ratios[STARTUP_BASE]["startup_cpu_s"]
+        result.verdicts.append(
+            Verdict(
+                f"start-up CPU (16, discovery on) at most {STARTUP_GOAL}x of {STARTUP_BASE}'s",
+                f"x{x:.2f} ({new['startup_cpu_s']:.2f} / "
+                f"{med[STARTUP_BASE]['startup_cpu_s']:.2f} s)",
+                x <= STARTUP_GOAL,
+            )
+        )
+    lo, hi = spread[NEW]["idle_pct"]
     result.verdicts.append(
         Verdict(
-            f"CPU per poll exchange at most {TARGET_MS} ms",
-            f"median {median:.3f} ms (range {values[0]:.3f}-{values[-1]:.3f})",
-            median <= TARGET_MS,
+            f"idle, 16 at rest, at most {IDLE_GOAL_PCT} % of a core",
+            f"{new['idle_pct']:.2f} % (range {lo:.2f}-{hi:.2f})",
+            new["idle_pct"] <= IDLE_GOAL_PCT,
         )
     )
     return result

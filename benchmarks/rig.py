@@ -11,7 +11,7 @@ import contextlib
 import json
 import select
 import subprocess
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,6 +21,7 @@ from benchmarks.line import ByteCounter, FrameLog, PacedRelay
 from bridge import emulators
 from bridge.emulators import EmulatedPort
 from bridge.protocols import REGISTRY
+from tests.support.process import Spawn
 from tests.support.rig import REAL_TIMINGS, Line, OpenLine, Rig
 
 __all__ = [
@@ -95,9 +96,11 @@ def measured_rig(
     broker_conf: str = "",
     paced: bool = True,
     count_bytes: bool = True,
+    spawn: Callable[[Scope], Spawn] | None = None,
 ) -> Iterator[Rig]:
     """specs: (id, model, emulator options, rotator settings) for each rotator of one bridge,
-    which must be online within ``wait_online_s`` and still running at the end."""
+    which must be online within ``wait_online_s`` and still running at the end; ``spawn``
+    starts the bridge (default: this checkout's, benchmarks/engines.py for another's)."""
     with Scope(parent.workdir / name) as scope:
         broker = _Broker(start_broker(scope, broker_conf))
         mqtt = Mqtt(broker.port, [f"{TOPIC}/#"], name=f"rec-{name}")
@@ -110,7 +113,7 @@ def measured_rig(
             timings=REAL_TIMINGS,
             open_line=line,
             scope=scope,
-            spawn=scope.spawner,
+            spawn=scope.spawner if spawn is None else spawn(scope),
         )
         rig.base = TOPIC
         for rid, model, emu_opts, rot_opts in specs:
@@ -159,10 +162,11 @@ def many_rotators(
     specs: list[tuple[str, str, dict[str, Any], dict[str, Any]]],
     *,
     wait_online_s: float = 30.0,
+    spawn: Callable[[Scope], Spawn] | None = None,
 ) -> contextlib.AbstractContextManager[Rig]:
     """A rig with several rotators, each line's bytes counted: ``rig.lines``, ``rig.t(rid, leaf)``
-    (also ``rig.topic``)."""
-    return measured_rig(parent, name, specs, wait_online_s=wait_online_s)
+    (also ``rig.topic``); ``spawn(scope)``: how its bridge is started (measured_rig)."""
+    return measured_rig(parent, name, specs, wait_online_s=wait_online_s, spawn=spawn)
 
 
 class EmuHost:

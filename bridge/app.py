@@ -11,7 +11,7 @@ import threading
 import time
 from collections.abc import Callable
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bridge.dxcluster import CtyError, DxCluster
 from bridge.dxcluster.setup import dxcluster
@@ -40,11 +40,12 @@ from bridge.settings import ConfigError, Settings
 from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
-from bridge.web.live import with_console
-from bridge.web.server import WebConsole
 from bridge.web.view import RotatorFacts
 from bridge.wiring import worker_config
 from bridge.wsjtx import WsjtxListener
+
+if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
+    from bridge.web.server import WebConsole
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
 
@@ -135,6 +136,8 @@ class App:
         self.sky = SkyWorker()  # one thread computes the sky for all (engine/skywork.py)
         self.web: WebConsole | None = None  # the operator console ([web])
         if settings.web.enabled:
+            from bridge.web.server import WebConsole  # aiohttp: a tenth of a start-up's CPU
+
             password = settings.web.password
             self.web = WebConsole(
                 settings.web.bind,
@@ -208,6 +211,8 @@ class App:
         if settings.dxcluster.enabled:
             to_mqtt = partial(self.client.publish_retained, self.topics.spots)
             web = self.web  # its map shows the spots too (web/live.py rule 6)
+            from bridge.web.live import with_console  # (with the console's server, above)
+
             publish = to_mqtt if web is None else with_console(to_mqtt, web.on_spots)
             try:
                 self.dxcluster = dxcluster(settings.dxcluster, position, publish, wall=wall)

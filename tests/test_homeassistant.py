@@ -220,10 +220,45 @@ def test_version_change_republishes_device_info_once() -> None:
     pub.publish_all()
     n = len(rec.published)
     pub.on_status("tower", RotatorStatus("tower", version="1.4S"))
-    assert len(rec.published) == 2 * n
     assert '"sw_version": "1.4S"' in rec.published[-1][1]
+    after = len(rec.published)
     pub.on_status("tower", RotatorStatus("tower", version="1.4S"))
-    assert len(rec.published) == 2 * n
+    assert len(rec.published) == after and n < after <= 2 * n
+
+
+def test_a_version_hands_on_only_its_rotators_configs_and_the_broker_gets_them_all() -> None:
+    """With several rotators, a controller's version rebuilds its own rotator's configs only (all
+    of them, once per rotator, was a tenth of a start-up's CPU); what the broker holds is
+    every config with every version, as if all were built again."""
+    topics = Topics("rotor", {"a": "rotor/a", "b": "rotor/b"})
+    infos = [
+        RotatorInfo(rid, rid.upper(), REGISTRY["rotorez"], topics.rotator(rid), 0, 360)
+        for rid in ("a", "b")
+    ]
+    rec = Recorder()
+    pub = DiscoveryPublisher(
+        prefix="homeassistant",
+        status_topic="homeassistant/status",
+        topics=topics,
+        rotators=infos,
+        publish_retained=lambda t, p: rec.published.append((t, p)),
+        clear_retained=rec.cleared.append,
+        republish_state=rec.republished.set,
+    )
+    pub.publish_all()
+    start = len(rec.published)
+    pub.on_status("a", RotatorStatus("a", version="1.4S"))
+    handed = [t for t, _ in rec.published[start:]]
+    assert handed and all("_r_a" in t for t in handed)
+    pub.on_status("b", RotatorStatus("b", version="2.0"))
+    versioned = [
+        dataclasses.replace(infos[0], version="1.4S"),
+        dataclasses.replace(infos[1], version="2.0"),
+    ]
+    held = dict(rec.published)
+    assert held == all_configs("homeassistant", Identity("rotor"), topics, versioned)
+    current = "homeassistant/sensor/rotorbridge_rotor_r_b/bearing/config"
+    assert pub.on_message(current, b'{"x":1}', True) and rec.cleared == []
 
 
 def test_a_birth_sends_every_config_again_once_per_delay() -> None:

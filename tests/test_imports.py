@@ -59,3 +59,19 @@ def test_the_guard_finds_and_names_a_circle() -> None:
     assert find_cycle(graph, "p") is None
     graph.add_import(importer="p.c", imported="p.a")  # as a TYPE_CHECKING import would
     assert find_cycle(graph, "p") == ["p.a", "p.b", "p.c", "p.a"]
+
+
+def test_the_service_loads_neither_the_web_server_nor_the_astronomy_before_they_are_used() -> None:
+    """aiohttp and the console's server, numpy and skyfield are a third of the CPU the bridge
+    takes to start (a second or more on a small single-board computer): importing the service
+    loads none of them; the console imports its server when it is on, the sky its astronomy on
+    first use (sky/positions.py rule 6)."""
+    import subprocess
+    import sys
+
+    check = "import sys, bridge.app, bridge.cli; print(sorted(m for m in sys.modules if m in W))"
+    wanted = "W = {'aiohttp', 'bridge.web.server', 'bridge.web.live', 'numpy', 'skyfield'}; "
+    out = subprocess.run(
+        [sys.executable, "-c", wanted + check], capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip() == "[]"

@@ -360,5 +360,17 @@ def all_configs(
     configs = bridge_configs(ident, topics)
     for r in rotators:
         configs.update(rotator_configs(ident, topics, r))
+    return _messages(prefix, configs)
+
+
+def rotator_messages(
+    prefix: str, ident: Identity, topics: Topics, r: RotatorInfo
+) -> dict[str, str]:
+    """One rotator's discovery messages, as ``all_configs`` has them (its version came: the
+    other rotators' and the bridge's are as they were)."""
+    return _messages(prefix, rotator_configs(ident, topics, r))
+
+
+def _messages(prefix: str, configs: Configs) -> dict[str, str]:
     disc = DiscoveryTopics(prefix)
     return {disc.config(*where): json.dumps(p, sort_keys=True) for where, p in configs.items()}

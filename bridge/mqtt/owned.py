@@ -20,17 +20,21 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    the broker publishes it when the bridge's connection dies, and at its own shutdown, right
    before it closes the connection) is put back, and said only if the connection outlives it
    (client.py, WILL_OUTLIVED_S): then it was a stranger's.
+   Whether a topic is owned (``owns``) gives MQTT's answer for the filters watched (paho's
+   ``topic_matches_sub``, ``$`` topics included), from a set of the exact topics and one
+   pattern compiled for the wildcard filters at ``watch``: every message heard and every
+   publish under MQTT 3.1.1 asks it, hundreds of them at start-up.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from paho.mqtt.client import topic_matches_sub  # a pure function of two strings
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 FOREIGN_FIX_S = 2.0
@@ -62,6 +66,8 @@ class OwnedTopics:
         self._clock = clock
         self.hears_own = hears_own  # (set again when mqtt.protocol "auto" steps down)
         self.filters: list[str] = []
+        self._exact: frozenset[str] = frozenset()
+        self._wild: re.Pattern[str] | None = None
         self._echoes: dict[str, deque[bytes]] = {}  # digests sent, not heard back (hears_own)
         self.will: tuple[str, bytes] | None = None  # the bridge's own last will
         self._fixed_at: dict[str, float] = {}
@@ -70,6 +76,9 @@ class OwnedTopics:
 
     def watch(self, filters: list[str]) -> None:
         self.filters = list(filters)
+        wild = [f for f in filters if _is_wild(f)]
+        self._exact = frozenset(f for f in filters if not _is_wild(f))
+        self._wild = re.compile("|".join(map(_pattern, wild)), re.DOTALL) if wild else None
 
     def subscriptions(self) -> list[tuple[str, int | SubscribeOptions]]:
         """What to subscribe to on every connect: MQTT 5 without our own messages back
@@ -80,7 +89,9 @@ class OwnedTopics:
         return [(f, mine) for f in self.filters]
 
     def owns(self, topic: str) -> bool:
-        return any(topic_matches_sub(f, topic) for f in self.filters)
+        if topic in self._exact:
+            return True
+        return self._wild is not None and self._wild.fullmatch(topic) is not None
 
     def connected(self) -> None:
         """A new connection: what was in flight before is gone with the old one."""
@@ -122,3 +133,21 @@ class OwnedTopics:
             return PutBack(send=True, say=False)
         self._logged_at[topic] = now
         return PutBack(send=True, say=True)
+
+
+def _is_wild(topic_filter: str) -> bool:
+    return any(level in ("+", "#") for level in topic_filter.split("/"))
+
+
+def _pattern(topic_filter: str) -> str:
+    """One wildcard filter as a regular expression for the whole topic, as MQTT matches: ``+``
+    one level (an empty one too), a last ``#`` the parent level and everything under it, and a
+    wildcard first level never a topic that starts with ``$``."""
+    levels = topic_filter.split("/")
+    tail = ""
+    if levels[-1] == "#":
+        levels = levels[:-1]
+        tail = "(?:/.*)?" if levels else ".*"
+    body = "/".join("[^/]*" if level == "+" else re.escape(level) for level in levels)
+    head = r"(?!\$)" if not levels or levels[0] == "+" else ""
+    return f"(?:{head}{body}{tail})"

@@ -18,6 +18,9 @@ Rules:
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
    nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
+   A status's topics whose payload is the one this service last handed on for them are not
+   handed on again (the client would drop it: a reading changes two of a dozen); what the
+   service stops with (offline, ``stop``) forgets them.
 4. Refusals on ``R/error`` are rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``,
    10 by default, after a burst of five times as many); the next one published says how many
    were left out. Every other kind (a stall, a stop that did not take, the serial line) is
@@ -124,6 +127,7 @@ class MqttService:
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
         self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
+        self._handed: dict[str, str] = {}  # rule 3: a status's payloads last handed on, by topic
         self._clock = clock
         self._halts = Halts(  # rule 5
             topics,
@@ -212,6 +216,7 @@ class MqttService:
         self._publisher.start()
 
     def stop(self) -> None:
+        self._handed.clear()  # rule 3: offline is what the client holds now
         self._publisher.publish_offline_now(
             [self.topics.rotator(rid).availability for rid in self._rotators]
         )
@@ -224,7 +229,13 @@ class MqttService:
             return  # emitted before attach(): the first real status follows
         spec = rot.spec
         t = self.topics.rotator(rotator_id)
-        pub = self._publisher.publish_retained
+        handed, publish = self._handed, self._publisher.publish_retained
+
+        def pub(topic: str, payload: str) -> None:  # rule 3
+            if handed.get(topic) != payload:
+                handed[topic] = payload
+                publish(topic, payload)
+
         if status.bearing_deg is not None:
             pub(t.bearing, pl.number(status.bearing_deg))
         if status.elevation_deg is not None:

@@ -42,11 +42,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-from skyfield import almanac
-from skyfield.nutationlib import iau2000b_radians
-from skyfield.searchlib import find_discrete
-
 from bridge.sky.bodies import Body
 from bridge.sky.positions import (
     DAY_S,
@@ -85,6 +80,8 @@ def find_pass(
     station: Any, body: Body, t_unix: float, min_el_deg: float, within_s: float
 ) -> Pass | None:
     """The pass in progress at t_unix, else the next one rising within within_s (rule 1)."""
+    import numpy as np
+
     end = t_unix + within_s
     if alive(body, t_unix, t_unix) is None:
         return None  # rule 3
@@ -161,6 +158,9 @@ def _events(
 ) -> Events:
     """(unix time, RISE | TOP | SET) of the events in ``span``, in time order (rule 2): those of
     kind ``want`` at least (a satellite's search finds all three at once, over ``wide``)."""
+    import numpy as np
+    from skyfield import almanac
+
     lo, hi = span
     if hi <= lo:
         return []
@@ -187,6 +187,8 @@ def _polar_crossings(
 ) -> Events:
     """Rule 2: the sun's or the moon's rises (or sets) near a pole, as find_discrete's
     crossings of min_el."""
+    from skyfield.nutationlib import iau2000b_radians
+    from skyfield.searchlib import find_discrete
 
     def up(t: Any) -> Any:
         t._nutation_angles_radians = iau2000b_radians(t)  # positions.py rule 2
@@ -208,6 +210,10 @@ def _satellite_events(
 ) -> Events:
     """Rule 2: find_events over ``wide``, and for a long or eccentric orbit find_discrete's
     crossings over ``span`` (sampled regularly: nothing to miss at its ends)."""
+    import numpy as np
+    from skyfield.nutationlib import iau2000b_radians
+    from skyfield.searchlib import find_discrete
+
     assert body.tle is not None
     sat = satellite(*body.tle)
     t0, t1 = to_time(np.array(wide))
@@ -249,6 +255,8 @@ def _pass(
 ) -> Pass:
     """Rule 4: the pass from aos to los, its top the highest culmination in it (``tops``, when
     a search found them already) or an end."""
+    import numpy as np
+
     if tops is None:
         events = _events(station, body, (aos, los), (aos, los), -90.0, TOP)
         tops = [t for t, k in events if k == TOP and aos < t < los]

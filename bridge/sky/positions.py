@@ -20,6 +20,8 @@ Rules:
 5. A satellite SGP4 has no position for (its orbit decayed in the model) has elevation NaN;
    ``alive`` is the part of a time span where it has one (SGP4 fails from some time on, or
    before some time going back, never in between), ``no_position`` the SkyError saying why.
+6. numpy, skyfield and sgp4 are imported where they are first used, not with the module: a
+   bridge that tracks nothing never loads them (a seventh of its start-up's CPU).
 """
 
 from __future__ import annotations
@@ -29,20 +31,15 @@ import math
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
-
-import numpy as np
-import skyfield_data
-from numpy.typing import NDArray
-from sgp4.api import SGP4_ERRORS, Satrec
-from skyfield.api import EarthSatellite, load
-from skyfield.errors import EphemerisRangeError
-from skyfield.jpllib import SpiceKernel
-from skyfield.nutationlib import iau2000b_radians
+from typing import TYPE_CHECKING, Any
 
 from bridge.sky.bodies import Body, SkyError
 
-Floats = NDArray[np.float64]
+if TYPE_CHECKING:  # numpy, skyfield and sgp4 are imported on first use (rule 6)
+    import numpy as np
+    from numpy.typing import NDArray
+
+    Floats = NDArray[np.float64]
 
 DAY_S = 86400.0
 EPHEMERIS_END_S = 2643580800.0  # 2053-10-09 00:00 UTC: DE421 ends the day before
@@ -53,6 +50,10 @@ _ALIVE_S = 1.0  # how closely the end of a decayed orbit is found (rule 5)
 @functools.cache
 def ephemeris() -> tuple[Any, Any, Any, Any]:
     """(timescale, earth, sun, moon), read once per process from the bundled files (rule 3)."""
+    import skyfield_data
+    from skyfield.api import load
+    from skyfield.jpllib import SpiceKernel
+
     # not get_skyfield_data_path(): it warns about its finals2000A.all, which we never read
     path = os.path.join(os.path.dirname(skyfield_data.__file__), "data", "de421.bsp")
     kernel = SpiceKernel(path)  # a plain file open: no Loader, so no way to download
@@ -61,11 +62,16 @@ def ephemeris() -> tuple[Any, Any, Any, Any]:
 
 @functools.lru_cache(maxsize=256)
 def satellite(line1: str, line2: str) -> Any:
+    from skyfield.api import EarthSatellite
+
     return EarthSatellite(line1, line2, None, ephemeris()[0])
 
 
 def to_time(t_unix: Floats) -> Any:
     """Unix seconds as a skyfield Time (rule 4), nutation set to IAU 2000B (rule 2)."""
+    import numpy as np
+    from skyfield.nutationlib import iau2000b_radians
+
     if not np.isfinite(t_unix).all():
         raise SkyError(f"times must be finite numbers: {t_unix[~np.isfinite(t_unix)][0]!r}")
     days, second = np.divmod(t_unix, DAY_S)
@@ -82,6 +88,8 @@ def to_unix(t: Any) -> list[float]:
 @contextmanager
 def in_ephemeris(body: Body, t_unix: float) -> Iterator[None]:
     """Rule 2: a time outside DE421 is SkyError saying which end (``t_unix``: the latest asked)."""
+    from skyfield.errors import EphemerisRangeError
+
     try:
         yield
     except EphemerisRangeError as e:
@@ -110,6 +118,8 @@ def altaz(station: Any, body: Body, t_unix: Floats) -> tuple[Floats, Floats]:
 
 
 def _sgp4_fails(tle: tuple[str, str], t_unix: float) -> int:
+    from sgp4.api import Satrec
+
     days, second = divmod(t_unix, DAY_S)
     error, _, _ = Satrec.twoline2rv(*tle).sgp4(_UNIX_JD + days, second / DAY_S)
     return int(error)
@@ -135,6 +145,8 @@ def no_position(body: Body, t_unix: float) -> SkyError:
     """Rule 5: SGP4 has no position at ``t_unix``. The elements propagated at their epoch
     (bodies.py rule 1), so an error later means drag has brought the orbit down in the model:
     SGP4's own code (6, or an eccentricity driven out of range) goes in the message."""
+    from sgp4.api import SGP4_ERRORS
+
     assert body.tle is not None
     error = _sgp4_fails(body.tle, t_unix)
     what = SGP4_ERRORS.get(error, f"error {error}")

@@ -21,9 +21,6 @@ import math
 import threading
 from collections.abc import Sequence
 
-import numpy as np
-from skyfield.api import wgs84
-
 from bridge.sky.bodies import Body, SkyError
 from bridge.sky.passes import Pass, find_pass
 from bridge.sky.positions import DAY_S, altaz, no_position
@@ -46,12 +43,16 @@ class Sky:
             longitude_deg,
             height_m,
         )
+        from skyfield.api import wgs84  # (positions.py rule 6)
+
         self._station = wgs84.latlon(latitude_deg, longitude_deg, elevation_m=height_m)
         self._lock = threading.Lock()  # rule 3
         self._passes: dict[tuple[Body, float, float], tuple[float, Pass | None]] = {}
 
     def positions(self, body: Body, times_unix: Sequence[float]) -> list[tuple[float, float]]:
         """(azimuth, elevation) at each time (rule 2), in one vectorised call."""
+        import numpy as np
+
         if len(times_unix) == 0:
             return []
         t = np.asarray(times_unix, dtype=np.float64)

@@ -3,12 +3,15 @@ the bridge's own topics are its own, when its value is put back, and when that i
 
 from __future__ import annotations
 
+from paho.mqtt.client import topic_matches_sub
+
 from bridge.mqtt.owned import (
     FOREIGN_FIX_S,
     FOREIGN_LOG_S,
     SETTLE_AFTER_CONNECT_S,
     OwnedTopics,
 )
+from bridge.mqtt.topics import Topics
 
 STATE = "rotor/state"
 
@@ -139,3 +142,29 @@ def test_the_bridges_own_last_will_is_known_under_mqtt_3_1_1_only() -> None:
     assert not owned.is_will("rotor/bridge/state", b"online")
     owned.hears_own = False  # MQTT 5 subscribes with no-local: the broker never sends it to us
     assert not owned.is_will("rotor/bridge/state", b"offline")
+
+
+def test_owned_topics_are_those_mqtt_matches_for_every_kind_of_filter() -> None:
+    """The set and the compiled pattern answer as paho's matcher does, one filter at a time: a
+    table of filters (the bridge's own, several rotators' with their ``option/+/state``, and the
+    other wildcard forms) against topics at the edges (``$`` topics, empty levels, a parent of
+    ``#``, a level too many or too few)."""
+    own = Topics("rotor", {f"r{i}": f"rotor/r{i}" for i in range(3)}).owned()
+    others = ["a/#", "#", "+", "+/b", "+/+/c", "$SYS/#", "$SYS/+/x", "x/+", "x/#/y", "a.b/c*d"]
+    filters = own + others
+    topics = {t.replace("+", "brake").replace("/#", "/x") for t in filters}
+    topics |= {t.replace("/+", "").replace("#", "") for t in filters}
+    topics |= {
+        "", "/", "a", "a/", "a/b/c", "b", "/b", "x/b", "q/w/c", "q//c", "$SYS", "$SYS/x",
+        "$SYS/q/x", "$x/b", "$x", "x", "x/", "x/y", "x/#/y", "x/q/y", "a.b/c*d", "aXb/c*d",
+        "rotor/r1/option//state", "rotor/r1/option/a/b/state", "rotor/r1/state/x",
+        "rotor/r9/state", "rotor/r1/option/brake", "rotor/r1/option/brake/state\n",
+    }  # fmt: skip
+    for chosen in (own, others, filters, [], ["a/b"]):
+        owned = OwnedTopics(Clock(), hears_own=False)
+        owned.watch(chosen)
+        for topic in sorted(topics):
+            expected = any(topic_matches_sub(f, topic) for f in chosen)
+            assert owned.owns(topic) == expected, (topic, chosen[:3])
+    owned.watch(own)
+    assert owned.owns("rotor/r2/option/brake/state") and not owned.owns("rotor/r2/target")

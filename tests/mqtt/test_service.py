@@ -301,6 +301,42 @@ def test_only_what_changed_is_published_again() -> None:
     assert [topic for topic, _, _ in pub.take()] == ["rotor/bearing", "rotor/status"]
 
 
+def test_a_reading_hands_the_client_only_what_changed_and_stop_forgets_what_was_handed() -> None:
+    """Each hand-off takes the client's lock and encodes the payload (a reading's cost): a
+    reading that moves the bearing hands on the bearing and the status, nothing else. After
+    ``stop`` (offline published), a status hands everything on again."""
+    svc, pub, _ = service({"tower": "rotorez"})
+    calls: list[str] = []
+    record = pub.publish_retained
+
+    def counting(topic: str, payload: str | bytes, *, only_if_changed: bool = True) -> None:
+        calls.append(topic)
+        record(topic, payload, only_if_changed=only_if_changed)
+
+    pub.publish_retained = counting  # type: ignore[method-assign]
+    for bearing in (90.0, 91.0):
+        svc.publish_status(
+            "tower",
+            RotatorStatus(
+                "tower",
+                state=MotionState.MOVING,
+                bearing_deg=bearing,
+                available=True,
+                connected=True,
+            ),
+        )
+    assert calls[6:] == ["rotor/bearing", "rotor/status"]
+    svc.stop()
+    calls.clear()
+    svc.publish_status(
+        "tower",
+        RotatorStatus(
+            "tower", state=MotionState.MOVING, bearing_deg=91.0, available=True, connected=True
+        ),
+    )
+    assert "rotor/availability" in calls and pub.retained["rotor/availability"] == "online"
+
+
 def test_several_rotators_publish_under_their_own_topics_and_listeners_see_statuses() -> None:
     svc, pub, _ = service({"a": "rotorez", "b": "rotorcard"})
     seen: list[tuple[str, MotionState]] = []
