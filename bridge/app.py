@@ -29,6 +29,7 @@ from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
+from bridge.mqtt.connection import MQTT311_LOSES
 from bridge.mqtt.lane import StopLane
 from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
@@ -52,6 +53,11 @@ __all__ = ["App", "NotYet", "run", "worker_config"]
 log = logging.getLogger(__name__)
 
 GIL_SWITCH_S = 0.0005
+STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.1
+    "the MQTT broker did not take MQTT 5, so the bridge speaks MQTT 3.1.1: "
+    + MQTT311_LOSES
+    + '; if the broker does speak MQTT 5, set mqtt.protocol = "5"'
+)
 CATALOG_CHECK_S = 30.0  # the TLE file's names for Home Assistant's track select, this often
 
 
@@ -339,6 +345,13 @@ class App:
             if not self.client.v5:  # mqtt.protocol "auto" stepped down (mqtt/connection.py)
                 self.lane.use_mqtt311()
             self.lane.start()
+        stepped_down = self.settings.mqtt.protocol == "auto" and not self.client.v5
+        if stepped_down != (STEPPED_DOWN in self.client.problems):
+            # said while it lasts (mqtt/connection.py rule 1); not on paho's thread, which
+            # holds paho's mutex here while the publish takes the client's lock
+            threading.Thread(
+                target=self._info, args=(STEPPED_DOWN, stepped_down), daemon=True
+            ).start()
 
     def _refused(self, message: str) -> None:
         """Another bridge owns the base topic (mqtt/claim.py): ``run`` stops, exit code 2."""

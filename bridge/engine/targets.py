@@ -91,6 +91,4 @@ def resolve(target: Target, m: mo.Motion, aim: Pointing) -> tuple[float | None, 
         el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
         if el is None:
             return None, None
-        if el > 90.0:  # kept over the top (a flipped pass's end): the beam would face az + 180
-            el = 180.0 - el
     return az, el

@@ -24,7 +24,7 @@ Rules:
    lines after ``W``, the LF of a CR LF) are the controller's chatter, never a reading.
 2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
    while a query is open, and only with values in range (azimuth 0..450, elevation 0..180;
-   K3NG's form of an elevation a little below 0, ``EL=00-1``, reads as 0: the horizon).
+   K3NG's form of an elevation 1 to 3 degrees below 0, ``EL=00-1``, reads as 0: the horizon).
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
@@ -58,8 +58,9 @@ _MAX_LINE = 64
 _NUM = rb"(\d{3})"  # three digits, zero-padded, as the documents and every box send them
 # a reply at the end of its line; group "pre" is whatever came before it on that line
 _A_FORM = re.compile(rb"(?P<pre>.*?)\+0" + _NUM + rb"(?:\s*\+0" + _NUM + rb")?\s*$", re.DOTALL)
-# K3NG pads an elevation a little below the horizon (calibration drift) as EL=00-1
-_B_EL = rb"(\d{3}|0{0,2}-\d{1,2})"
+# K3NG pads an elevation a little below the horizon (calibration drift) as EL=00-1; further
+# below is no horizon but a pot that is broken or far off: no reading
+_B_EL = rb"(\d{3}|0{0,2}-[1-3])"
 _B_FORM = re.compile(
     rb"(?P<pre>.*?)AZ=\s*" + _NUM + rb"(?:\s*EL=\s*" + _B_EL + rb")?\s*$", re.DOTALL
 )

@@ -108,15 +108,6 @@ def test_an_az_el_box_at_450_degrees_keeps_its_overlap(rig: Rig, model: str) -> 
     assert (v.status.bearing_deg, v.status.raw_bearing_deg, v.status.overlap) == (45, 405, "cw")
 
 
-def test_a_bare_bearing_brings_an_elevation_over_the_top_back_down(rig: Rig) -> None:
-    """A flipped pass ends at elevation 160: a bare azimuth afterwards (a logger, a DX spot) with
-    160 kept would point the beam at the opposite bearing; it goes out with 180 - 160."""
-    v = ready(rig, start_az_deg=10, start_el_deg=160)
-    v.target(90)
-    v.run_until(settled_at(90, 20), 120, "at 90/20")
-    assert moves(v) == [b"W090 020"]
-
-
 def test_k3ng_answering_late_for_ham_radio_deluxe_is_not_offline(rig: Rig) -> None:
     """K3NG's OPTION_DELAY_C_CMD_OUTPUT answers C2 400 ms late."""
     v = ready(rig, processing_delay_s=0.45, start_az_deg=10, start_el_deg=5)

@@ -172,6 +172,9 @@ def test_under_the_lock_every_motion_is_refused_and_every_halt_is_carried_out(
     for command in HALTS:
         bench.submit(command, describe_command(command))
         assert bench.last_audit()[2] == "executed"
+    bench.v.run_for(30)  # long enough for any move the judge let through to show
+    truth = bench.v.truth()
+    assert truth.az_deg == pytest.approx(START_AZ, abs=0.5) and not truth.is_moving
     assert bench.v.status.bearing_deg == pytest.approx(START_AZ, abs=0.5)  # nothing moved
 
 
@@ -185,6 +188,9 @@ def test_under_another_operators_lease_every_motion_is_refused_and_every_halt_is
     for command in HALTS:
         bench.submit(command, describe_command(command))
         assert bench.last_audit() == ("G4XYZ", describe_command(command), "executed")
+    bench.v.run_for(30)
+    truth = bench.v.truth()
+    assert truth.az_deg == pytest.approx(START_AZ, abs=0.5) and not truth.is_moving
 
 
 @pytest.mark.parametrize("value", [object(), "target 120", 120.0, None])

@@ -13,7 +13,7 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.mqtt.connection import Connection
+from bridge.mqtt.connection import STEP_DOWN_CLOSES, Connection
 from bridge.mqtt.paho_client import new_client
 from bridge.settings import MqttSettings
 from tests.support.brokers import protocol_level
@@ -64,9 +64,25 @@ def test_auto_steps_down_when_the_socket_closes_before_any_connack(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     conn = connection("auto")
+    for _ in range(STEP_DOWN_CLOSES - 1):  # a broker restarting, or not ready behind a proxy
+        closed(conn, 0x80)
+        assert conn.v5 and said(caplog, FELL_BACK) == []
+    assert len(said(caplog, CLOSED)) == 1  # each said, once in a row
     closed(conn, 0x80)
     assert not conn.v5
-    assert "closed the connection before accepting MQTT 5" in said(caplog, FELL_BACK)[0]
+    (line,) = said(caplog, FELL_BACK)
+    assert f"before accepting MQTT 5, {STEP_DOWN_CLOSES} times in a row" in line
+
+
+def test_closes_that_are_not_in_a_row_never_step_down(caplog: pytest.LogCaptureFixture) -> None:
+    """A CONNACK between them (a refusal for another reason, say) starts the count again."""
+    conn = connection("auto")
+    for _ in range(3):
+        for _ in range(STEP_DOWN_CLOSES - 1):
+            closed(conn, 0x80)
+        refused(conn, 0x87)
+        closed(conn)
+    assert conn.v5 and said(caplog, FELL_BACK) == []
 
 
 @pytest.mark.parametrize(

@@ -193,3 +193,17 @@ def test_the_model_table() -> None:
     }
     assert REGISTRY["gs232b-az-450"].az_wraps is False  # 10 and 370 are two cable wraps
     assert REGISTRY["gs232b"].el_max_deg == 180.0  # the G-5500 flips over
+
+
+@pytest.mark.parametrize(
+    ("el", "reading"),
+    [(b"00-1", 0.0), (b"0-3", 0.0), (b"045", 45.0), (b"-9", None), (b"0-45", None), (b"-99", None)],
+)
+def test_k3ng_a_little_below_the_horizon_is_the_horizon_and_further_is_no_reading(
+    el: bytes, reading: float | None
+) -> None:
+    codec = REGISTRY["gs232b"].codec_factory()
+    codec.encode_query()
+    replies = codec.feed(b"AZ=123EL=" + el + b"\r\n")
+    positions = [r for r in replies if isinstance(r, PositionReply)]
+    assert [p.el_deg for p in positions] == ([] if reading is None else [reading])
