@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.emulators.easycomm import Outcome
+from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.model import MotionState
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator
@@ -62,6 +62,17 @@ def test_a_separate_controller_is_asked_each_axis_on_its_own_line(rig: Rig) -> N
     polls = v.frames(Outcome.QUERY)
     assert polls and {f.data for f in polls} == {b"AZ", b"EL"}
     assert b"AZ EL\n" not in v.sent() and b"AZ\nEL\n" in v.sent()
+
+
+def test_the_plain_model_on_separate_only_firmware_says_the_controller_does_not_answer(
+    rig: Rig,
+) -> None:
+    """What docs/controllers.md tells users to look for before picking the -separate model."""
+    v = rig("easycomm2")
+    v.device = EasycommController("easycomm2-separate", now=v.now, **FAST)
+    v.run_until(lambda h: h.errors("serial"), 30, "the complaint")
+    assert "does not answer" in v.errors("serial")[0].message
+    assert not v.status.available and {f.outcome for f in v.frames()} == {"unanswered"}
 
 
 def test_a_stop_while_turning_goes_out_at_once_and_takes(rig: Rig) -> None:
