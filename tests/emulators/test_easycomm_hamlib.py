@@ -150,3 +150,14 @@ def test_rotor_bridge_emulate_serves_an_easycomm_controller_that_hamlib_drives(
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+@pytest.mark.parametrize(("model", "hamlib"), [("easycomm2-az", 202), ("easycomm3-az", 204)])
+def test_an_azimuth_controller_turns_and_reads_elevation_zero(
+    easycomm_port: PortFactory, rotctl: Rotctl, model: str, hamlib: int
+) -> None:
+    port = easycomm_port(model, az_speed_deg_s=500.0, start_az_deg=5)
+    values(rotctl(hamlib, port, "P", "181.5", "30"))  # the elevation moves nothing
+    port.wait_for(lambda s: not s.is_moving and s.az_deg == 181.5)
+    assert port.state().el_deg is None
+    assert values(rotctl(hamlib, port, "p")) == ["181.50", "0.00"]
