@@ -27,8 +27,9 @@ sends bearings; ``GS``/``GE`` (status, errors) are not polled: the position show
 bridge needs. ``UP DN`` (radio words) belong to a radio, not a rotator.
 
 Rules:
-1. Replies are lines ended by CR or LF; blank lines are chatter, never a reading. ``ALxxx`` is
-   the controller's alarm: harmless chatter with its text in the detail, never a reading.
+1. Replies are lines ended by CR or LF; blank lines are harmless chatter, never a reading.
+   ``ALxxx`` is the controller's alarm (a refusal, a fault): never a reading and no spoiler of
+   one (CHATTER, its text in the detail), but not harmless either, so the user is told.
 2. A position is read only while a query is open, from lines of the form ``AZ<n>``, ``EL<n>``
    or ``AZ<n> EL<n>`` (spaces optional, decimals optional, a sign allowed, radio words after
    ignored). The query is answered once every axis the model reads has a value, whether they
@@ -140,7 +141,7 @@ class EasycommCodec:
         return [b"VE\n"] if self.version == 3 else []
 
     def harmless(self, junk: bytes) -> bool:
-        return _CHATTER.fullmatch(junk) is not None or _ALARM.fullmatch(junk) is not None
+        return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
