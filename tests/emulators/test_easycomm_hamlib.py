@@ -132,10 +132,11 @@ def test_hamlib_454_gets_no_answer_from_a_separate_controller_but_sets_and_stops
 def test_rotor_bridge_emulate_serves_an_easycomm_controller_that_hamlib_drives(
     tmp_path: Path, rotctl_path: str
 ) -> None:
-    """``rotor-bridge emulate easycomm2`` (here ``python -m bridge.emulators``)."""
+    """``rotor-bridge emulate easycomm2`` (here ``python -m bridge.emulators``), answering in
+    whole degrees as some firmware does."""
     link = tmp_path / "easycomm"
     argv = [sys.executable, "-m", "bridge.emulators", "easycomm2", "--link", str(link)]
-    argv += ["--start-az-deg", "30", "--start-el-deg", "10"]
+    argv += ["--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"]
     proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
     try:
         assert proc.stdout is not None
