@@ -113,6 +113,15 @@ def rotctld_cases() -> list[RotctldCase]:
             None,
             ("idle", "polling"),
         ),
+        RotctldCase(
+            "easycomm2",
+            202,
+            lambda i: f"P {10 + i} 10",
+            "P -> AZxx.x ELyy.y<LF>",
+            lambda f: f.outcome == "move",
+            None,
+            ("idle", "polling"),
+        ),
     ]
 
 

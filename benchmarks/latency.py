@@ -115,6 +115,7 @@ def isolation_s() -> float:
 _EZ_POLL = lambda f: f.data == b"AI1;"  # noqa: E731
 _STATUS_POLL = lambda f: f.outcome == "status"  # noqa: E731
 _GS232_POLL = lambda f: f.outcome == "query"  # noqa: E731
+_EASYCOMM_POLL = lambda f: f.data == b"AZ" and f.outcome == "query"  # noqa: E731
 _SPID_FRAME = bytes(13)
 AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
 AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
@@ -264,6 +265,25 @@ def cases() -> list[Case]:
             poll=_GS232_POLL,
         ),
         Case(
+            "easycomm2",
+            "stop",
+            b"SA SE\n",
+            "stop SA SE<LF>",
+            lambda f: f.outcome == "stop",
+            (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
+            poll=_EASYCOMM_POLL,
+        ),
+        Case(
+            "easycomm2",
+            "target",
+            b"AZ100.0 EL10.0\n",
+            "target AZxx.x ELyy.y<LF>",
+            lambda f: f.outcome == "move",
+            (Condition("idle", {}, (iso, iso + 0.5)),),
+            payload=_spid_payload(True),
+            poll=_EASYCOMM_POLL,
+        ),
+        Case(
             "satel",
             "stop",
             b"s",
@@ -392,7 +412,7 @@ def tasks(scope: Scope, quick: bool, models: set[str] | None) -> list[Task]:
         if (models and rc.model not in models) or (quick and rc.hamlib == 901):
             continue
         frames = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}
-        frame = {**frames, "gs232b": b"W100 010\r"}[rc.model]
+        frame = {**frames, "gs232b": b"W100 010\r", "easycomm2": b"AZ100.0 EL10.0\n"}[rc.model]
         frame_ms = _ms(line_time_s(len(frame), baud_of(rc.model, rc.emu_opts)))
         for condition in rc.conditions:
             if quick and condition != "idle":

@@ -155,8 +155,9 @@ class MqttSettings(_Strict):
         "auto",
         description='the MQTT version: "auto" tries MQTT 5 and falls back to 3.1.1 when the '
         "broker refuses MQTT 5 or closes the connection before accepting it three times in a "
-        'row (said once, as a warning, and in B/bridge/info); "5" or "3.1.1" forces one. Under 3.1.1 retained commands are recognised '
-        "only when the broker replays them (docs/brokers.md)",
+        'row (said once, as a warning, and in B/bridge/info); "5" or "3.1.1" forces one. '
+        "Under 3.1.1 retained commands are recognised only when the broker replays them "
+        "(docs/brokers.md)",
         examples=["3.1.1"],
     )
 

@@ -35,6 +35,7 @@ ALL_MODELS += [
     "gs232a-az-450",
     "gs232b-az-450",
 ]
+ALL_MODELS += [f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate")]
 
 
 def _left_behind(tmpdir: Path) -> list[str]:

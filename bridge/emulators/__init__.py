@@ -8,7 +8,7 @@ Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
    codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
-   (SPID, SatEL, GS-232) adds entries here and reuses physics.Axis, base.PacedLine and
+   (SPID, SatEL, GS-232, Easycomm) adds entries here and reuses physics.Axis, base.PacedLine and
    pty.EmulatedPort.
 """
 
@@ -21,6 +21,8 @@ from functools import partial
 from typing import Any
 
 from bridge.emulators.base import LoggedFrame, Responder, RotatorState
+from bridge.emulators.easycomm import MODELS as _EASYCOMM_MODELS
+from bridge.emulators.easycomm import EasycommController
 from bridge.emulators.gs232 import MODELS as _GS232_MODELS
 from bridge.emulators.gs232 import Gs232
 from bridge.emulators.pty import EmulatedPort
@@ -38,6 +40,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "md01": partial(Spid, "md01"),
     "satel": SatEL,
     **{name: partial(Gs232, name) for name in _GS232_MODELS},
+    **{name: partial(EasycommController, name) for name in _EASYCOMM_MODELS},
 }
 
 
@@ -74,6 +77,7 @@ def start(
 
 __all__ = [
     "EMULATORS",
+    "EasycommController",
     "EmulatedPort",
     "Gs232",
     "LoggedFrame",

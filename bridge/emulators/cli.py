@@ -56,6 +56,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="blank lines after the answer to W, as K3NG's firmware sends (GS-232 family)",
     )
     parser.add_argument(
+        "--decimals",
+        type=int,
+        help="decimals in a position answer, 1 or 0 for whole degrees (Easycomm family)",
+    )
+    parser.add_argument(
+        "--firmware-version", help="the answer to VE, without the letters (Easycomm family)"
+    )
+    parser.add_argument(
         "--log-frames", action="store_true", help="print every received frame on stderr"
     )
 
@@ -90,6 +98,8 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
         )
         if args.model.startswith("gs232"):
             opts.update(blank_lines_after_w=args.blank_lines_after_w)
+        if args.model.startswith("easycomm"):
+            opts.update(decimals=args.decimals, version=args.firmware_version)
     return {k: v for k, v in opts.items() if v is not None}
 
 

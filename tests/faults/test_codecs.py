@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.protocols.base import JunkReply, PositionReply, VersionReply
+from bridge.protocols.easycomm import EasycommCodec
 from bridge.protocols.gs232 import Gs232Codec
 from bridge.protocols.rotorez import RotorEzCodec
 from bridge.protocols.satel import SatelCodec
@@ -295,6 +296,9 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         SatelCodec(),
         Gs232Codec("a"),
         Gs232Codec("b", elevation=False),
+        EasycommCodec(2),
+        EasycommCodec(3, elevation=False),
+        EasycommCodec(2, separate=True),
     ]
     for codec in codecs:
         for chunk in chunks:

@@ -19,6 +19,8 @@ def measured_exchange(model: str) -> tuple[int, int]:
     spec = REGISTRY[model]
     codec = spec.codec_factory()
     options = {"power_on_junk": False} if model in ROTOR_EZ_BOARDS else {}
+    if model.startswith("easycomm"):  # its answer's width varies: the widest one
+        options = {"start_az_deg": 359.9, "start_el_deg": 180.0 if spec.has_elevation else 0.0}
     device = emulators.create(model, now=0.0, **options)
     enable = codec.encode_enable()
     if enable:  # as the bridge has it: automatic motion on (SatEL: "Motion ENABLED")
@@ -66,6 +68,7 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "md01": 1.0,
         "satel": 3.9,
         **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
+        **{name: 1.0 for name in REGISTRY if name.startswith("easycomm")},
     }
 
 
@@ -92,6 +95,11 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "gs232b-450": (603, HamlibRotType.AZEL, None),
         "gs232a-az-450": (609, HamlibRotType.AZ, None),
         "gs232b-az-450": (611, HamlibRotType.AZ, None),
+        **{
+            f"easycomm{v}{variant}": (h, HamlibRotType.OTHER, info)
+            for v, h, info in ((2, 202, "EasycommII"), (3, 204, "EasycommIII"))
+            for variant in ("", "-az", "-separate")
+        },
     }
 
 

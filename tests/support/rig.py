@@ -67,6 +67,9 @@ GS232_MODELS = (
     "gs232a-az-450",
     "gs232b-az-450",
 )
+# Easycomm: steppers or encoders read in tenths, no brake, a fast line (19200 baud)
+FAST_EASYCOMM = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
+EASYCOMM_MODELS = tuple(f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate"))
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -103,6 +106,7 @@ TEST_TIMINGS = Timings(
         "md01": FAST_SPID,
         "satel": FAST_SATEL,
         **dict.fromkeys(GS232_MODELS, FAST_GS232),
+        **dict.fromkeys(EASYCOMM_MODELS, FAST_EASYCOMM),
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -113,6 +117,7 @@ TEST_TIMINGS = Timings(
         "md01": FAST_SPID_BRIDGE,
         "satel": FAST_SPID_BRIDGE,
         **dict.fromkeys(GS232_MODELS, FAST_POLLING),
+        **dict.fromkeys(EASYCOMM_MODELS, FAST_POLLING),
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})

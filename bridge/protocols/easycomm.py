@@ -1,0 +1,256 @@
+"""Easycomm II and III controllers (SatNOGS rotator controllers, K3NG in Easycomm mode): the codec.
+
+This is the controller side: the bridge drives a box that speaks Easycomm. The other direction, a
+program speaking Easycomm II to the bridge (``easycomm_port``), lives in bridge/gs232/.
+
+Device: a rotator controller taking Easycomm commands on a serial line, SatNOGS controllers at
+19200 8N1, K3NG's firmware at 9600 8N1. Commands are two letters and a value, separated by a
+space, CR or LF; only commands that ask something are answered, by the command's letters and the
+value, and a line end (LF, or CR LF). Easycomm III adds velocities, a status and an error register
+and configuration registers.
+Sources: the Easycomm II/III descriptions shipped with Hamlib (easycomm.txt), Hamlib 4.5.4's and
+its newer easycomm backend (models 202, 204: what they send and how they read the answers), the
+project's protocol sheet, and our emulator's traffic with rotctl.
+
+Frames we send (each ends in LF):
+  ``AZ123.4 EL45.0``  turn to azimuth and elevation, tenths of a degree (az/el models)
+  ``AZ123.4``         turn to azimuth (azimuth models)
+  ``AZ EL``           ask both, answered ``AZ123.4 EL45.0`` on one line
+  ``AZ`` LF ``EL``    ask each on its own line (the ``-separate`` models: controllers that answer
+                      AZ and EL only when asked separately), answered ``AZ123.4`` and ``EL45.0``
+  ``AZ``              ask the azimuth (azimuth models)
+  ``SA SE``           stop azimuth and elevation (also to an azimuth controller: SE is harmless)
+  ``VE``              ask the version, once at connect (Easycomm III), answered ``VExxx``
+Not sent: ``VL VR VU VD`` (velocities) and ``CR``/``CW`` (configuration registers) are the
+controller's own settings; ``ML MR MU MD`` (turn until stopped) have no place in a bridge that
+sends bearings; ``GS``/``GE`` (status, errors) are not polled: the position shows what the
+bridge needs. ``UP DN`` (radio words) belong to a radio, not a rotator.
+
+Rules:
+1. Replies are lines ended by CR or LF; blank lines are harmless chatter, never a reading.
+   ``ALxxx`` is the controller's alarm (a refusal, a fault): never a reading and no spoiler of
+   one (CHATTER, its text in the detail), but not harmless either, so the user is told.
+2. A position is read only while a query is open, from lines of the form ``AZ<n>``, ``EL<n>``
+   or ``AZ<n> EL<n>`` (spaces optional, decimals optional, a sign allowed, radio words after
+   ignored). The query is answered once every axis the model reads has a value, whether they
+   came on one line or two; an azimuth model ignores an elevation on the line. Values outside
+   azimuth 0..360 or elevation -90..180 are spoiled.
+3. A line with junk in front of the reply, or junk anywhere in the exchange, makes its reading
+   UNTRUSTED (the engine asks again at once); a reply nobody asked for is UNSOLICITED.
+4. ``VExxx`` is the controller's version whenever it comes.
+5. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
+   they are refused before anything is sent.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from bridge.protocols.base import (
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+    VersionReply,
+)
+
+AZ_MAX_DEG = 360
+EL_MAX_DEG = 180
+EL_READ_MIN_DEG = -90  # a reading below the horizon is a reading (a rotor parked at -0.5)
+_MAX_LINE = 80
+_NUM = rb"[-+]?\d{1,3}(?:\.\d*)?"  # 123.4, 123, 5.
+# a reply at the end of its line, with whatever came before it on that line in "pre"
+_REPLY = re.compile(
+    rb"(?P<pre>.*?)(?:AZ\s*(?P<az>" + _NUM + rb"))?\s*(?:EL\s*(?P<el>" + _NUM + rb"))?"
+    rb"(?P<radio>(?:\s+(?:UP|DN|UM|DM|UR|DR)\S*(?:\s+[A-Z]{2,3})?)*)\s*",
+    re.DOTALL,
+)
+_VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
+_ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
+_CHATTER = re.compile(rb"[\r\n ]*")
+
+
+def _tenths(value: float, top: int, axis: str) -> float:
+    tenths = math.floor(value * 10 + 0.5)
+    if not 0 <= tenths <= top * 10:
+        raise ValueError(f"{axis} {value:g} outside 0..{top}")
+    return tenths / 10
+
+
+class EasycommCodec:
+    """Codec for one Easycomm controller: ``version`` 2 or 3, ``elevation`` whether it drives an
+    elevation rotor, ``separate`` whether it is asked AZ and EL on lines of their own."""
+
+    def __init__(self, version: int = 2, *, elevation: bool = True, separate: bool = False) -> None:
+        if version not in (2, 3):
+            raise ValueError(f"unknown Easycomm version {version!r}")
+        self.version = version
+        self.elevation = elevation
+        self.separate = separate and elevation
+        self._buf = bytearray()
+        self._query_open = False
+        self._noisy = False  # junk arrived since the query was opened
+        self._az: float | None = None  # what this exchange has said so far
+        self._el: float | None = None
+
+    # -- encoding -------------------------------------------------------------------------
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        az = _tenths(az_deg, AZ_MAX_DEG, "azimuth")
+        if not self.elevation:
+            return az, None
+        return az, _tenths(el_deg or 0.0, EL_MAX_DEG, "elevation")
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        az, el = self.wire_target(az_deg, el_deg)
+        if el is None:
+            return [b"AZ%.1f\n" % az]
+        return [b"AZ%.1f EL%.1f\n" % (az, el)]
+
+    def encode_stop(self) -> bytes:
+        return b"SA SE\n"
+
+    def encode_query(self) -> bytes:
+        self._query_open = True
+        self._noisy = False
+        self._az = self._el = None
+        if not self.elevation:
+            return b"AZ\n"
+        return b"AZ\nEL\n" if self.separate else b"AZ EL\n"
+
+    def expire_query(self) -> None:
+        self._query_open = False
+
+    def awaiting_reply(self) -> bool:
+        return self._query_open
+
+    def encode_version(self) -> bytes | None:
+        return b"VE\n" if self.version == 3 else None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError("an Easycomm controller has no options the bridge switches")
+
+    def encode_enable(self) -> None:
+        return None
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return [b"VE\n"] if self.version == 3 else []
+
+    def harmless(self, junk: bytes) -> bool:
+        return _CHATTER.fullmatch(junk) is not None  # an alarm is not (rule 1)
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while True:
+            ends = [i for i in (self._buf.find(b"\r"), self._buf.find(b"\n")) if i != -1]
+            if not ends:
+                if len(self._buf) > _MAX_LINE:
+                    self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
+                    self._buf.clear()
+                return out
+            end = min(ends)
+            line = bytes(self._buf[: end + 1])
+            del self._buf[: end + 1]
+            self._line(line, out)
+
+    def _line(self, raw: bytes, out: list[Reply]) -> None:
+        if _CHATTER.fullmatch(raw):
+            out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
+            return
+        if m := _ALARM.fullmatch(raw):
+            alarm = m.group("a").decode("ascii", "replace")
+            out.append(JunkReply(raw, JunkReason.CHATTER, f"controller alarm: {alarm}"))
+            return
+        if m := _VERSION.fullmatch(raw):
+            out.append(VersionReply(m.group("v").decode("ascii")))
+            return
+        m = _REPLY.fullmatch(raw)
+        if m is None or (m.group("az") is None and m.group("el") is None):
+            self._junk(raw, JunkReason.NOISE, "not a reply line", out)
+            return
+        az = None if m.group("az") is None else float(m.group("az"))
+        el = None if m.group("el") is None else float(m.group("el"))
+        if (az is not None and not 0 <= az <= AZ_MAX_DEG) or (
+            el is not None and not EL_READ_MIN_DEG <= el <= EL_MAX_DEG
+        ):
+            self._junk(raw, JunkReason.SPOILED, "position out of range", out)
+            return
+        if not self.elevation and az is None:
+            out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
+            return
+        if not self._query_open:
+            out.append(JunkReply(raw, JunkReason.UNSOLICITED, "position nobody asked for"))
+            return
+        if m.group("pre").strip(b"\r\n "):
+            self._noisy = True
+        self._az = self._az if az is None else az
+        self._el = self._el if el is None else el
+        if self._az is None or (self.elevation and self._el is None):
+            return  # the other axis's line is still to come (rule 2)
+        self._query_open = False
+        if self._noisy:
+            out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
+            return
+        out.append(PositionReply(self._az, self._el if self.elevation else None))
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        if self._query_open:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
+
+
+def _spec(name: str, display: str, version: int, *, elevation: bool, separate: bool) -> ModelSpec:
+    query = b"AZ\nEL\n" if separate else (b"AZ EL\n" if elevation else b"AZ\n")
+    # the longest answer (the width varies with the value): AZ359.9 EL180.0 LF, or on two lines
+    reply = b"AZ359.9 EL180.0\n" if elevation else b"AZ359.9\n"
+    defaults: dict[str, Any] = dict(
+        manufacturer="SatNOGS, K3NG",  # and others speaking the protocol
+        codec_factory=lambda: EasycommCodec(version, elevation=elevation, separate=separate),
+        baud=19200,  # SatNOGS controllers; K3NG's firmware runs at 9600 (set baud)
+        has_elevation=elevation,
+        has_version=version == 3,
+        retarget=RetargetPolicy.DIRECT,  # a new bearing is taken while turning
+        az_min_deg=0.0,
+        az_max_deg=360.0,
+        el_min_deg=0.0,
+        el_max_deg=180.0 if elevation else 0.0,
+        az_wraps=True,
+        reply_timeout_s=0.4,  # Hamlib waits 200 ms; an Arduino's loop may be busy stepping
+        noise_deg=0.1,  # encoders or steps counted, read in tenths
+        nominal_speed_deg_s=6.0,
+        nominal_el_speed_deg_s=6.0,
+        whole_degrees=False,
+        query_bytes=len(query),
+        reply_bytes=len(reply),
+        hamlib_model=204 if version == 3 else 202,
+        hamlib_rot_type=HamlibRotType.OTHER,  # what Hamlib's easycomm backend declares
+        hamlib_info="EasycommIII" if version == 3 else "EasycommII",
+    )
+    return ModelSpec(name=name, display_name=display, **defaults)
+
+
+def _family(version: int) -> dict[str, ModelSpec]:
+    box = "Easycomm " + "I" * version
+    name = f"easycomm{version}"
+    return {
+        name: _spec(name, f"{box} controller", version, elevation=True, separate=False),
+        f"{name}-az": _spec(
+            f"{name}-az", f"{box} azimuth controller", version, elevation=False, separate=False
+        ),
+        f"{name}-separate": _spec(
+            f"{name}-separate",
+            f"{box} controller (AZ and EL asked separately)",
+            version,
+            elevation=True,
+            separate=True,
+        ),
+    }
+
+
+MODELS: dict[str, ModelSpec] = {**_family(2), **_family(3)}

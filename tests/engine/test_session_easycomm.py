@@ -1,0 +1,174 @@
+"""An Easycomm II/III controller in virtual time: bearings in tenths straight out, stops at once,
+the controller that answers AZ and EL only when asked separately, a bearing it ignores, a
+glitched reply, an alarm, a satellite pass.
+
+The controller takes a new bearing at any time (no brake on the steppers of a SatNOGS rotator),
+answers only questions, and reads its position in tenths. 19200 baud: one poll (``AZ EL`` and
+``AZ123.4 EL45.0`` LF) takes about 11 ms of the line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.easycomm import EasycommController, Outcome
+from bridge.model import MotionState
+from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+
+
+def ready(rig: Rig, model: str = "easycomm2", **emulator: object) -> VirtualRotator:
+    v = rig(model, emulator={**FAST, **emulator})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
+
+
+def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is IDLE
+            and not truth.is_moving
+            and truth.az_deg == az
+            and (el is None or truth.el_deg == el)
+        )
+
+    return there
+
+
+@pytest.mark.parametrize("model", ["easycomm2", "easycomm3", "easycomm2-separate"])
+def test_a_target_arrives_and_the_bearing_is_read_back(rig: Rig, model: str) -> None:
+    v = ready(rig, model, start_az_deg=10, start_el_deg=5)
+    v.target(123.44, 45.66)
+    v.run_until(settled_at(123.4, 45.7), 60, "at 123.4/45.7")
+    assert moves(v) == [b"AZ123.4", b"EL45.7"]
+    assert (v.status.bearing_deg, v.status.elevation_deg) == (123.4, 45.7)
+    assert v.errors() == [] and v.frames(Outcome.UNANSWERED) == []
+
+
+def test_a_separate_controller_is_asked_each_axis_on_its_own_line(rig: Rig) -> None:
+    v = ready(rig, "easycomm2-separate", start_az_deg=30, start_el_deg=20)
+    v.run_for(5)
+    polls = v.frames(Outcome.QUERY)
+    assert polls and {f.data for f in polls} == {b"AZ", b"EL"}
+    assert b"AZ EL\n" not in v.sent() and b"AZ\nEL\n" in v.sent()
+
+
+def test_the_plain_model_on_separate_only_firmware_says_the_controller_does_not_answer(
+    rig: Rig,
+) -> None:
+    """What docs/controllers.md tells users to look for before picking the -separate model."""
+    v = rig("easycomm2")
+    v.device = EasycommController("easycomm2-separate", now=v.now, **FAST)
+    v.run_until(lambda h: h.errors("serial"), 30, "the complaint")
+    assert "does not answer" in v.errors("serial")[0].message
+    assert not v.status.available and {f.outcome for f in v.frames()} == {"unanswered"}
+
+
+def test_a_stop_while_turning_goes_out_at_once_and_takes(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(300, 60)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    t = v.now
+    v.stop()
+    stops = [w.t for w in v.writes if w.t >= t and w.data == b"SA SE\n"]
+    assert stops[:1] == [t]  # the same instant (after a poll that went out then, if one did)
+    v.run_until(lambda h: h.state is IDLE, 10, "idle")
+    truth = v.truth()
+    assert not truth.is_moving and 30 < truth.az_deg < 40
+    assert v.status.bearing_deg == pytest.approx(truth.az_deg, abs=0.051)
+    assert v.sent(since=t).count(b"SA SE\n") == 1 and v.errors() == []
+
+
+def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_until(lambda h: h.truth().az_deg > 50, 30, "turning")
+    t = v.now
+    v.target(20, 10)
+    v.run_until(lambda h: moves(h, t), 2, "the new bearing")
+    assert v.truth().is_moving and moves(v, t) == [b"AZ20.0", b"EL10.0"]
+    v.run_until(settled_at(20, 10), 120, "at 20/10")
+    assert b"SA SE\n" not in v.sent()
+
+
+def test_a_bare_azimuth_keeps_the_elevation(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=10, start_el_deg=30)
+    v.target(100)  # no elevation named: the controller must not be sent elevation 0
+    v.run_until(settled_at(100, 30), 60, "at 100/30")
+    assert moves(v) == [b"AZ100.0", b"EL30.0"]
+
+
+def test_an_alarm_amid_the_answers_is_reported_and_leaves_the_reading_alone(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=100, start_el_deg=20)
+    alarms: list[float] = []
+
+    def alarm(data: bytes, now: float) -> bytes:
+        if len(alarms) >= 3 or data != b"A":  # the first byte of a reply (the line is paced)
+            return data
+        alarms.append(now)
+        return b"ALhoming\n" + data
+
+    v.to_host = alarm
+    t = v.now
+    v.run_for(10)
+    assert len(alarms) == 3 and {e.kind for e in v.errors(since=t)} == {"protocol"}
+    readings = [s for s in v.published(since=t) if s.bearing_deg is not None]
+    assert {(s.bearing_deg, s.elevation_deg) for s in readings} <= {(100.0, 20.0)}
+    assert v.state is IDLE and v.status.available
+
+
+def test_a_bearing_the_controller_ignores_is_reported_and_nothing_moves(rig: Rig) -> None:
+    """A controller whose own limit is narrower than the bridge was told (here it never turns,
+    as a SatNOGS controller with its azimuth limit at 0 would): the bridge sees no motion."""
+    v = ready(rig, start_az_deg=77, start_el_deg=10)
+    v.device.jam(v.now)
+    t = v.now
+    v.target(200, 10)
+    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
+    assert "stalled at 77" in v.errors("stalled", since=t)[0].message
+    assert {s.bearing_deg for s in v.published()} - {None} == {77.0}
+
+
+def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=100, start_el_deg=20)
+    v.run_for(10)
+    glitched: list[float] = []
+
+    def glitch(data: bytes, now: float) -> bytes:
+        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
+            return data
+        glitched.append(now)
+        return b"\xffAZ359.0 EL0.0\n" + data
+
+    v.to_host = glitch
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(100.0, 20.0)}
+    assert v.state is IDLE
+
+
+@pytest.mark.parametrize("model", ["easycomm2", "easycomm3-separate"])
+def test_a_satellite_pass_is_followed_within_3_degrees(model: str) -> None:
+    """A SatNOGS rotator (6 and 3 deg/s here) follows a pass clear of north (a 360-degree
+    azimuth cannot cross it without a turn round) as closely as the SPIDs and the GS-232 do
+    (3 degrees: the tracker's own step, not the wire's tenths)."""
+    tle = a_pass_that(across_north=False)
+    v, errors = fly(model, tle)
+    with v:
+        worst_az = max(e[1] for e in errors[5:])  # the body rises at the horizon's edge
+        worst_el = max(e[2] for e in errors[5:])
+        assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
+        assert not v.frames(Outcome.REFUSED) and not v.frames(Outcome.UNANSWERED)
+    assert BERLIN  # the station the pass was computed for
