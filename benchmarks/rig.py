@@ -11,6 +11,7 @@ import contextlib
 import json
 import select
 import subprocess
+from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,16 +52,17 @@ def open_line(
     emu_opts: dict[str, Any] | None = None,
     paced: bool = True,
     name: str = "tty",
+    timeline: deque[tuple[Any, ...]] | None = None,
 ) -> tuple[EmulatedPort[Any], PacedRelay | None, Path]:
-    """An in-process emulator and, if paced, the line relay in front of it; returns the path a
-    client opens."""
+    """An in-process emulator and, if paced, the line relay in front of it (keeping its
+    ``timeline``, if given: line.py rule 5); returns the path a client opens."""
     emu_link = scope.workdir / f"{name}-emulator"
     emu = emulators.start(model, link=str(emu_link), on_frame=frames, **(emu_opts or {}))
     scope.callback(emu.close)
     if not paced:
         return emu, None, emu_link
     link = scope.workdir / name
-    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts))
+    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts), timeline=timeline)
     scope.callback(relay.close)
     return emu, relay, link
 

@@ -8,13 +8,17 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 - ``carry``: Halts.carry (under Halts._lock: the decision carried out);
 - ``put``: the Stop in the mailbox (Mailbox.put returned);
 - ``serve``: the lines thread starts serving a worker whose mailbox holds a stop;
-- ``write``: a frame written to a port (the stop frame ``;`` only);
+- ``write``: a frame written to a port (the stop frame ``;`` only), with the port's path (a
+  stop is matched to its own rotor's write, not another's: the backlog's rotor gets stops too);
 - ``gc``: every collection (generation, start, end) and the main connection's message count;
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
-``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish.
+``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish,
+and, where the benchmark wrote ``TRACE.lines.json`` (stop_under_load's focused mode), what the
+stop's line carried from 50 ms before the publish to its frame: the relay's reads of the
+bridge's bytes and deliveries to the controller, and the controller's frames.
 """
 
 from __future__ import annotations
@@ -218,9 +222,9 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     lane = by["lane"]
     m = _first(lane, t0, t1, lambda e: f"/{rid}/" in e[3])
     c = _first(by["carry"], m[1] if m else t0, t1, lambda e: e[2] == rid and "-stop" in e[4])
-    p = _first(by["put"], c[1] if c else t0, t1, lambda e: True)
-    s = _first(by["serve"], p[2] if p else t0, t1, lambda e: e[2] == rid)
-    w = _first(by["write"], s[1] if s else t0, t1, lambda e: True)
+    s = _first(by["serve"], c[1] if c else t0, t1, lambda e: e[2] == rid)
+    p = _first(by["put"], c[1] if c else t0, t1, lambda e: s is None or e[3] == s[4])
+    w = _first(by["write"], s[1] if s else t0, t1, lambda e: e[2].endswith(f"tty-{rid}"))
     steps = [("lane", m, 1), ("carry", c, 1), ("put", p, 2), ("serve", s, 1), ("write", w, 1)]
     out = f"{rid} {lat * 1e3:6.1f} ms:"
     for name, e, k in steps:
@@ -243,17 +247,49 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     return out
 
 
+def _line(window: dict[str, Any]) -> list[str]:
+    """A stop's line (the benchmark's ``<trace>.lines.json``): the relay's reads of the bridge's
+    bytes (``in``, with the due time of the last byte), its deliveries to the controller
+    (``out``, how late against the due time of the first byte) and the controller's frames,
+    in ms after the publish."""
+    t0 = window["t0"]
+    rows: list[tuple[float, str]] = []
+    last: list[int] = []
+    for kind, t, data, due, *sched in window["relay"]:
+        waited = f", relay runq +{(sched[1] - last[1]) / 1e6:.1f}" if sched and last else ""
+        last = sched
+        if kind == "in":
+            rows.append((t, f"relay read   {data!r} (due {(due - t0) * 1e3:.1f}{waited})"))
+        else:
+            rows.append((t, f"relay wrote  {data!r} ({(t - due) * 1e3:.1f} late{waited})"))
+    last = []
+    for t, data, outcome, *sched in window["frames"]:
+        waited = f" (emulator runq +{(sched[1] - last[1]) / 1e6:.1f})" if sched and last else ""
+        last = sched
+        rows.append((t, f"frame        {data!r} {outcome}{waited}"))
+    rows.sort(key=lambda row: row[0])  # stable: frames logged at one instant keep their order
+    return [f"      {(t - t0) * 1e3:7.1f} {text}" for t, text in rows]
+
+
 def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     trace = json.loads(Path(trace_path).read_text())["events"]
     samples = json.loads(Path(samples_path).read_text())
+    lines_path = Path(trace_path + ".lines.json")
+    windows = json.loads(lines_path.read_text()) if lines_path.exists() else {}
     kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait")
     by = {k: [e for e in trace if e[0] == k] for k in kinds}
     by["lane"] = [e for e in by["msg"] if e[2] == "lane"]
     for phase, rows in samples.items():
         print(f"== {phase}: the stops over {over_ms:g} ms (ms after the publish)")
-        for rid, t0, lat in rows:
+        shown = {(w["rid"], w["t0"]): w for w in windows.get(phase, [])}
+        for rid, t0, lat, *taker in rows:
             if lat * 1e3 > over_ms:
                 print("  " + _row(by, rid, t0, lat))
+                if taker:  # the benchmark's own thread: its publish returned, it woke up
+                    sent, seen = ((t - t0) * 1e3 for t in taker)
+                    print(f"      publish returned {sent:.1f}, the taker woke at {seen:.1f}")
+                if (rid, t0) in shown:
+                    print("\n".join(_line(shown[rid, t0])))
     per: dict[int, list[float]] = {}
     for e in by["gc"]:
         per.setdefault(e[3], []).append(e[2] - e[1])

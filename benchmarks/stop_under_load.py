@@ -68,7 +68,10 @@ Where an outlier waits (a focused mode: the control, the backlog, the console, t
     python -m benchmarks.stop_trace /tmp/t.json /tmp/t.json.samples.json
 
 the bridge stamps each stop's steps (benchmarks/stop_trace.py) and the analysis sets them
-against each stop's publish and its ``;`` at the emulator.
+against each stop's publish and its ``;`` at the emulator; for each stop over 9 ms it also
+shows what the stop's line carried from 50 ms before the publish (the relay's reads of the
+bridge's bytes and its deliveries, the controller's frames, and how long each of those threads
+waited for a CPU), from <file>.lines.json.
 """
 
 from __future__ import annotations
@@ -85,6 +88,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -126,6 +130,8 @@ TCP_CLIENTS, TCP_QUERY_CLIENTS = 16, 4
 UDP_RATE = 20_000.0
 PAGES, POSTERS = 10, 8
 TRACKERS = 8
+TIMELINE_EVENTS = 200_000  # per measured line, in the focused mode (a few minutes of polls)
+TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -548,6 +554,8 @@ class Sample:
     engine: str
     latency_s: float
     t: float
+    t_sent: float = 0.0  # our publish returned (the STOP is in the kernel's socket)
+    t_seen: float = 0.0  # this thread woke up to the stop frame
 
 
 class StopTaker:
@@ -599,12 +607,13 @@ class StopTaker:
         mark = r.frames.mark()
         t0 = time.monotonic()
         r.sender.publish(f"{r.topic}/stop", "STOP")
+        t_sent = time.monotonic()
         frame = r.frames.wait(lambda f: f.data == STOP_FRAME, mark, 20.0)
         if frame is None:
             self.check()
             raise BenchError(f"{r.engine} {r.rid}: the stop never reached the controller")
         r.step, r.stopped_at = "ready", float(frame.time_s)
-        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0)
+        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0, t_sent, time.monotonic())
 
     def step(self, before: Callable[[], None] | None = None) -> Sample | None:
         check_abort()
@@ -663,6 +672,7 @@ class Loaded:
     ports: dict[str, int]
     node: Loader
     tle_names: list[str]
+    timelines: dict[str, deque[tuple[Any, ...]]]  # the measured lines' relays (STOP_TRACE only)
 
 
 def _tle(path: Path) -> list[str]:
@@ -690,9 +700,14 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     }
     lines: dict[str, tuple[Any, FrameLog]] = {}
     settings: list[dict[str, Any]] = []
+    timelines: dict[str, deque[tuple[Any, ...]]] = {}
+    traced = bool(os.environ.get("STOP_TRACE"))  # keep the relays' timelines (line.py rule 5)
     for i in range(MEASURED):
-        frames = FrameLog()
-        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-m{i}")
+        frames = FrameLog(sched=traced)
+        timeline = timelines[f"m{i}"] = deque(maxlen=TIMELINE_EVENTS) if traced else None
+        emu, _relay, path = open_line(
+            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline
+        )
         lines[f"m{i}"] = (emu, frames)
         settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
     settings[0].update(
@@ -760,6 +775,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         ports,
         node,
         tle_names,
+        timelines,
     )
 
 
@@ -1260,10 +1276,42 @@ def _traced(
     phases.append(tracking_phase(lo, TRACKING_LOAD, n))
     missed = lo.taker.missed
     lo.bridge.check()
-    samples = {p.name: [(s.rid, s.t, s.latency_s) for s in p.samples] for p in phases}
+    samples = {
+        p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples] for p in phases
+    }
     Path(trace + ".samples.json").write_text(json.dumps(samples))
+    Path(trace + ".lines.json").write_text(json.dumps(_line_windows(lo, phases)))
     report_loads(result, phases, missed)
     return result
+
+
+def _line_windows(lo: Loaded, phases: list[PhaseResult]) -> dict[str, Any]:
+    """For each stop over TRACE_OVER_MS, what its line carried from TRACE_BEFORE_S before the
+    publish to just after its stop frame: the relay's reads and deliveries (line.py rule 5)
+    and the frames the controller logged (benchmarks/stop_trace.py prints them)."""
+    out: dict[str, Any] = {}
+    frames = {r.rid: r.frames for r in lo.taker.rotors}
+    for p in phases:
+        rows = []
+        for s in p.samples:
+            if s.latency_s * 1000 <= TRACE_OVER_MS or s.rid not in lo.timelines:
+                continue
+            lo_t, hi_t = s.t - TRACE_BEFORE_S, s.t + s.latency_s + 0.005
+            relay = [
+                (kind, t, data.decode("latin-1"), due, *sched)
+                for kind, t, data, due, *sched in list(lo.timelines[s.rid])
+                if lo_t <= t <= hi_t
+            ]
+            log = frames[s.rid]
+            stats = log.sched or []
+            logged = [
+                (f.time_s, f.data.decode("latin-1"), f.outcome, *(stats[i] if stats else ()))
+                for i, f in enumerate(log.since(0))
+                if lo_t <= f.time_s <= hi_t
+            ]
+            rows.append({"rid": s.rid, "t0": s.t, "relay": relay, "frames": logged})
+        out[p.name] = rows
+    return out
 
 
 def _ms(samples: list[Sample]) -> list[float]:
