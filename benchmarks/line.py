@@ -15,7 +15,13 @@ Rules:
 3. We keep our slave descriptor open, so the master never sees EIO when a client closes.
 4. `lateness` records how far behind its due time each chunk was delivered: the relay's own
    error, reported beside the results.
-5. With ``timeline`` set (a deque), every read from the client and every delivery to the
+5. With ``deliver`` set (in-process emulators: rig.open_line's ``direct``), bytes due go to it
+   (the emulator's ``inject(..., to="device")``) instead of through the emulator's pty: a pty
+   hands written bytes to its reader from a kernel worker thread (the tty flip buffer's work,
+   on the unbound workqueue, at nice 0), which on a busy machine waits for a CPU behind every
+   other program, tens of ms at times; a real UART has no such hop. Replies still come back
+   through the emulator's pty (rule 2).
+6. With ``timeline`` set (a deque), every read from the client and every delivery to the
    controller is kept there, on our clock: ``("in", t, bytes, due of the last byte, sched)``
    and ``("out", t, bytes, due of the first byte, sched)``, sched being the relay thread's
    (ns on a CPU, ns runnable waiting for one) (where a slow byte waited: stop_trace.py).
@@ -59,9 +65,11 @@ class PacedRelay:
         baud: int,
         bits_per_byte: int = 10,
         timeline: deque[tuple[Any, ...]] | None = None,
+        deliver: Callable[[bytes], None] | None = None,
     ) -> None:
         self.byte_time_s = bits_per_byte / baud
         self.timeline = timeline
+        self._deliver = deliver
         self.link = link
         self._master, self._slave = os.openpty()
         for fd in (self._master, self._slave):
@@ -97,7 +105,7 @@ class PacedRelay:
                 if self.timeline is not None:
                     event = ("out", time.monotonic(), bytes(out), first_due, *thread_sched())
                     self.timeline.append(event)
-                if not self._write(self._device, bytes(out)):
+                if not self._hand_over(bytes(out)):
                     return
             timeout = None if not self._queue else max(0.0, self._queue[0][0] - time.monotonic())
             try:
@@ -128,6 +136,16 @@ class PacedRelay:
             if self._wake_r in readable:
                 with contextlib.suppress(BlockingIOError):
                     os.read(self._wake_r, _CHUNK)
+
+    def _hand_over(self, data: bytes) -> bool:
+        """The bytes due to the controller: to ``deliver`` (rule 5), else through its pty."""
+        if self._deliver is None:
+            return self._write(self._device, data)
+        try:
+            self._deliver(data)
+        except (RuntimeError, TimeoutError):  # the emulator closed (or stuck): the line ends
+            return False
+        return True
 
     @staticmethod
     def _write(fd: int, data: bytes) -> bool:

@@ -14,6 +14,7 @@ import subprocess
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -53,16 +54,20 @@ def open_line(
     paced: bool = True,
     name: str = "tty",
     timeline: deque[tuple[Any, ...]] | None = None,
+    direct: bool = False,
 ) -> tuple[EmulatedPort[Any], PacedRelay | None, Path]:
     """An in-process emulator and, if paced, the line relay in front of it (keeping its
-    ``timeline``, if given: line.py rule 5); returns the path a client opens."""
+    ``timeline``, if given: line.py rule 6; handing the client's bytes to the emulator in
+    this process, not through its pty, if ``direct``: line.py rule 5); returns the path a
+    client opens."""
     emu_link = scope.workdir / f"{name}-emulator"
     emu = emulators.start(model, link=str(emu_link), on_frame=frames, **(emu_opts or {}))
     scope.callback(emu.close)
     if not paced:
         return emu, None, emu_link
     link = scope.workdir / name
-    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts), timeline=timeline)
+    deliver = partial(emu.inject, to="device") if direct else None
+    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts), timeline=timeline, deliver=deliver)
     scope.callback(relay.close)
     return emu, relay, link
 

@@ -23,7 +23,12 @@ poll cycle, not just after a reply), ``R/stop`` ``STOP`` (QoS 1, not retained) f
 of its own (it never queues behind a loader's messages). The latency is from that publish to
 the complete stop frame ``;`` at the controller (the emulator's log, on our clock: the same
 CLOCK_MONOTONIC as every process here), so it includes the byte's own 2.1 ms on the line and
-any exchange in flight. The rotors take turns; one stop is in flight at a time.
+any exchange in flight. The paced line hands the bytes to the emulator in this process, not
+through the emulator's pty (benchmarks/line.py rule 5): a pty passes them on from a kernel
+worker at nice 0, which under these loads waited for a CPU up to tens of ms after the line
+had delivered the byte (a real UART has no such hop). The bridge's own port is still a pty:
+its write reaches the line through that worker too (the focused mode below shows it). The
+rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
 whose timestamps must not wait behind a load), each started about a second before its stops;
@@ -701,12 +706,12 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     lines: dict[str, tuple[Any, FrameLog]] = {}
     settings: list[dict[str, Any]] = []
     timelines: dict[str, deque[tuple[Any, ...]]] = {}
-    traced = bool(os.environ.get("STOP_TRACE"))  # keep the relays' timelines (line.py rule 5)
+    traced = bool(os.environ.get("STOP_TRACE"))  # keep the relays' timelines (line.py rule 6)
     for i in range(MEASURED):
         frames = FrameLog(sched=traced)
         timeline = timelines[f"m{i}"] = deque(maxlen=TIMELINE_EVENTS) if traced else None
         emu, _relay, path = open_line(
-            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline
+            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline, direct=True
         )
         lines[f"m{i}"] = (emu, frames)
         settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
@@ -719,8 +724,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         n1mm_udp_port=ports["n1mm"],
     )
     b_frames, d_frames = FrameLog(), FrameLog()
-    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b")
-    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d")
+    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=True)
+    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=True)
     settings.append({"id": "b", "model": "rotorez", "port": str(b_path), **BRIDGE_B})
     settings.append({"id": "d", "model": "rotorez", "port": str(d_path), **BRIDGE})
     host = EmuHost(scope, "md01", TRACKERS)
@@ -1121,7 +1126,9 @@ def start_engine(
     specs, lines = [], []
     for i in range(PAIR_ROTORS):
         frames = FrameLog()
-        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}")
+        emu, _relay, path = open_line(
+            scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}", direct=True
+        )
         lines.append((f"p{i}", emu, frames))
         specs.append({"id": f"p{i}", "model": "rotorez", "port": str(path), **BRIDGE})
     config = bridge_config(
@@ -1287,7 +1294,7 @@ def _traced(
 
 def _line_windows(lo: Loaded, phases: list[PhaseResult]) -> dict[str, Any]:
     """For each stop over TRACE_OVER_MS, what its line carried from TRACE_BEFORE_S before the
-    publish to just after its stop frame: the relay's reads and deliveries (line.py rule 5)
+    publish to just after its stop frame: the relay's reads and deliveries (line.py rule 6)
     and the frames the controller logged (benchmarks/stop_trace.py prints them)."""
     out: dict[str, Any] = {}
     frames = {r.rid: r.frames for r in lo.taker.rotors}
