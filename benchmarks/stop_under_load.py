@@ -27,7 +27,9 @@ any exchange in flight. The paced line hands the bytes to the emulator in this p
 through the emulator's pty (benchmarks/line.py rule 5): a pty passes them on from a kernel
 worker at nice 0, which under these loads waited for a CPU up to tens of ms after the line
 had delivered the byte (a real UART has no such hop). The bridge's own port is still a pty:
-its write reaches the line through that worker too (the focused mode below shows it). The
+its write reaches the line through that worker too, so every row says how long that hop took
+on this machine while its stops were taken (``pty hop``: a probe writing a byte through a pty
+of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop. The
 rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
@@ -112,6 +114,7 @@ from benchmarks.harness import (
     start_broker,
 )
 from benchmarks.line import FrameLog
+from benchmarks.ptyhop import PtyHop
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import EmuHost, open_line
 from bridge.mosquitto import free_port
@@ -678,6 +681,7 @@ class Loaded:
     node: Loader
     tle_names: list[str]
     timelines: dict[str, deque[tuple[Any, ...]]]  # the measured lines' relays (STOP_TRACE only)
+    hop: PtyHop  # the host's own pty hop, beside the stops (benchmarks/ptyhop.py)
 
 
 def _tle(path: Path) -> list[str]:
@@ -691,6 +695,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     from tests.support.console import web_section
     from tests.support.udp_logger import free_udp_port
 
+    hop = PtyHop(scope)  # hardware's priority, as the controllers (harness rule 5)
     broker_port = start_broker(scope, "max_queued_messages 0\n")  # the whole backlog delivered
     node = Loader(scope, "dxnode", {}, "dxnode")
     ports = {
@@ -781,6 +786,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         node,
         tle_names,
         timelines,
+        hop,
     )
 
 
@@ -1261,7 +1267,8 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
         phases.append(tracking_phase(lo, TRACKING_LOAD, n))
         missed = lo.taker.missed
         lo.bridge.check()
-    report_loads(result, phases, missed)
+        lo.hop.finish()
+    report_loads(result, phases, missed, lo.hop)
     report_pairs(result, pairs(scope, n_pairs, rng), n_pairs)
     return result
 
@@ -1283,12 +1290,13 @@ def _traced(
     phases.append(tracking_phase(lo, TRACKING_LOAD, n))
     missed = lo.taker.missed
     lo.bridge.check()
+    lo.hop.finish()
     samples = {
         p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples] for p in phases
     }
     Path(trace + ".samples.json").write_text(json.dumps(samples))
     Path(trace + ".lines.json").write_text(json.dumps(_line_windows(lo, phases)))
-    report_loads(result, phases, missed)
+    report_loads(result, phases, missed, lo.hop)
     return result
 
 
@@ -1325,18 +1333,33 @@ def _ms(samples: list[Sample]) -> list[float]:
     return [s.latency_s * 1000.0 for s in samples]
 
 
-def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> None:
+def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int, hop: PtyHop) -> None:
     table = Table(
         f"{result.title}: R/stop publish -> ';' at a turning Rotor-EZ (4800 baud, "
         f"{MEASURED} taking turns); goal p99 <= {GOAL_MS:g} ms",
-        ["load", "stops", "p50 ms", "p99 ms", "max ms", "p99 goal", "bridge CPU %", "load avg"],
+        [
+            "load",
+            "stops",
+            "p50 ms",
+            "p99 ms",
+            "max ms",
+            "p99 goal",
+            "bridge CPU %",
+            "load avg",
+            "pty hop p99/max ms",
+        ],
     )
     for p in phases:
         ms = sorted(_ms(p.samples))
         p99 = percentile(ms, 99)
         met = "met" if p99 <= GOAL_MS else "NOT MET"
-        table.add(p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg)
+        t0 = min(s.t for s in p.samples)
+        hops = hop.between(t0, max(s.t + s.latency_s for s in p.samples))
+        said = "--" if hops is None else f"{hops[0]:.1f} / {hops[1]:.1f}"
+        row = [p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg]
+        table.add(*row, said)
         result.data[p.name] = {
+            "host_pty_hop_ms": None if hops is None else [round(v, 2) for v in hops],
             "latencies_ms": [round(v, 3) for v in _ms(p.samples)],
             "rotors": [s.rid for s in p.samples],
             "bridge_cpu_pct": round(p.cpu_pct, 1),
@@ -1359,6 +1382,12 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> 
         "hardware and the operator's machine would)"
         if result.data.get("controllers_first")
         else "the controllers shared one priority with the bridge and the loads (not root)"
+    )
+    table.notes.append(
+        "pty hop: a byte through a pty on this machine, written every 5 ms by a probe of its "
+        "own beside the stops (benchmarks/ptyhop.py): the bridge's port is a pty, and what the "
+        "host's kernel took to pass its stop on (a real serial adapter has no such hop) is in "
+        "the stop's time; a row whose tail is near this hop's waited for the host"
     )
     table.notes.append(
         "p99 is nearest-rank: with 60 stops it is the largest; the load average (1 min, 2 cores) "
