@@ -215,6 +215,28 @@ def _first(events: list[Any], after: float, before: float, pred: Any) -> Any:
     return None
 
 
+def _written(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> float | None:
+    """When the bridge wrote this stop's ``;`` to this rotor's port (None if not traced)."""
+    w = _first(by["write"], t0, t0 + lat, lambda e: e[2].endswith(f"tty-{rid}"))
+    return None if w is None else float(w[1])
+
+
+def _hops(window: dict[str, Any], written: float | None) -> tuple[float, float] | None:
+    """(the bridge's write -> the line read it, the line handed it on -> the frame) in ms: the
+    bridge's pty hop and the controller's side (benchmarks/ptyhop.py)."""
+    if written is None:
+        return None
+    relay = window["relay"]
+    read = next((e for e in relay if e[0] == "in" and e[1] >= written - 0.0005), None)
+    if read is None:
+        return None
+    handed = next((e for e in relay if e[0] == "out" and ";" in e[2] and e[1] >= read[1]), None)
+    frame = next((f for f in window["frames"] if f[1] == ";"), None)
+    if handed is None or frame is None:
+        return None
+    return (read[1] - written) * 1e3, (frame[0] - handed[1]) * 1e3
+
+
 def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     """One stop: its steps as ms from its publish, the waits the kernel saw, the collections and
     the Halts._lock waits inside it."""
@@ -282,6 +304,7 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     for phase, rows in samples.items():
         print(f"== {phase}: the stops over {over_ms:g} ms (ms after the publish)")
         shown = {(w["rid"], w["t0"]): w for w in windows.get(phase, [])}
+        hops: list[tuple[float, float]] = []
         for rid, t0, lat, *taker in rows:
             if lat * 1e3 > over_ms:
                 print("  " + _row(by, rid, t0, lat))
@@ -290,6 +313,16 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                     print(f"      publish returned {sent:.1f}, the taker woke at {seen:.1f}")
                 if (rid, t0) in shown:
                     print("\n".join(_line(shown[rid, t0])))
+                    hop = _hops(shown[rid, t0], _written(by, rid, t0, lat))
+                    if hop is not None:
+                        hops.append(hop)
+        if hops:
+            one, two = (sorted(h[i] for h in hops) for i in (0, 1))
+            print(
+                f"  {len(hops)} of them: the bridge's write -> the line read it: median "
+                f"{one[len(one) // 2]:.1f}, max {one[-1]:.1f} ms; the line handed it on -> "
+                f"the frame: median {two[len(two) // 2]:.1f}, max {two[-1]:.1f} ms"
+            )
     per: dict[int, list[float]] = {}
     for e in by["gc"]:
         per.setdefault(e[3], []).append(e[2] - e[1])
