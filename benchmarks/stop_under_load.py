@@ -29,8 +29,9 @@ worker at nice 0, which under these loads waited for a CPU up to tens of ms afte
 had delivered the byte (a real UART has no such hop). The bridge's own port is still a pty:
 its write reaches the line through that worker too, so every row says how long that hop took
 on this machine while its stops were taken (``pty hop``: a probe writing a byte through a pty
-of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop. The
-rotors take turns; one stop is in flight at a time.
+of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop.
+``STOP_VIA_PTY=1`` puts the controllers' ptys back on the path (the hop left out, to compare).
+The rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
 whose timestamps must not wait behind a load), each started about a second before its stops;
@@ -140,6 +141,9 @@ PAGES, POSTERS = 10, 8
 TRACKERS = 8
 TIMELINE_EVENTS = 200_000  # per measured line, in the focused mode (a few minutes of polls)
 TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
+# the line hands its bytes to the controller directly (line.py rule 5); STOP_VIA_PTY=1 sends
+# them through the controller's pty as before, to see what that hop adds on this machine
+DIRECT = not os.environ.get("STOP_VIA_PTY")
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -716,7 +720,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         frames = FrameLog(sched=traced)
         timeline = timelines[f"m{i}"] = deque(maxlen=TIMELINE_EVENTS) if traced else None
         emu, _relay, path = open_line(
-            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline, direct=True
+            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline, direct=DIRECT
         )
         lines[f"m{i}"] = (emu, frames)
         settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
@@ -729,8 +733,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         n1mm_udp_port=ports["n1mm"],
     )
     b_frames, d_frames = FrameLog(), FrameLog()
-    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=True)
-    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=True)
+    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=DIRECT)
+    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=DIRECT)
     settings.append({"id": "b", "model": "rotorez", "port": str(b_path), **BRIDGE_B})
     settings.append({"id": "d", "model": "rotorez", "port": str(d_path), **BRIDGE})
     host = EmuHost(scope, "md01", TRACKERS)
@@ -1133,7 +1137,7 @@ def start_engine(
     for i in range(PAIR_ROTORS):
         frames = FrameLog()
         emu, _relay, path = open_line(
-            scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}", direct=True
+            scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}", direct=DIRECT
         )
         lines.append((f"p{i}", emu, frames))
         specs.append({"id": f"p{i}", "model": "rotorez", "port": str(path), **BRIDGE})
