@@ -5,7 +5,8 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 
 - ``msg``: a connection's on_message for a ``/stop`` topic (``lane`` or ``main``), with the
   thread that ran it;
-- ``carry``: Halts.carry (under Halts._lock: the decision carried out);
+- ``carry``: Halts.carry (under Halts._lock: the decision carried out), with the main
+  connection's thread's schedstat and its own thread's;
 - ``put``: the Stop in the mailbox (Mailbox.put returned);
 - ``serve``: the lines thread starts serving a worker whose mailbox holds a stop;
 - ``write``: a frame written to a port (the stop frame ``;`` only), with the port's path (a
@@ -145,7 +146,8 @@ def install(path: str) -> None:
     carry = halts.Halts.carry
 
     def _carry(self: Any, rot: Any, kind: str, *a: Any, **k: Any) -> None:
-        ev(("carry", _now(), rot.id, kind, threading.current_thread().name, *_sched(MAIN_TID[0])))
+        name = threading.current_thread().name
+        ev(("carry", _now(), rot.id, kind, name, *_sched(MAIN_TID[0]), *_sched()))
         carry(self, rot, kind, *a, **k)
 
     halts.Halts.carry = _carry  # type: ignore[method-assign]
@@ -259,6 +261,8 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     if m and c and c[4] == m[4]:  # the lane's own carry: the main thread meanwhile
         out += f" | main thread lane->carry: cpu {(c[5] - m[7]) / 1e6:.1f}"
         out += f" runq {(c[6] - m[8]) / 1e6:.1f}"
+        if len(c) > 8:  # the lane thread's own: its CPU, or a wait for one (else the GIL)
+            out += f", lane thread cpu {(c[7] - m[5]) / 1e6:.1f} runq {(c[8] - m[6]) / 1e6:.1f}"
     if p and s:
         out += f" | lines thread runq {(s[6] - p[5]) / 1e6:.1f} cpu {(s[5] - p[4]) / 1e6:.1f}"
         out += f", process cpu {(s[7] - p[6]) * 1e3:.1f} (put->serve)"
