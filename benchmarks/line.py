@@ -15,6 +15,16 @@ Rules:
 3. We keep our slave descriptor open, so the master never sees EIO when a client closes.
 4. `lateness` records how far behind its due time each chunk was delivered: the relay's own
    error, reported beside the results.
+5. With ``deliver`` set (in-process emulators: rig.open_line's ``direct``), bytes due go to it
+   (the emulator's ``inject(..., to="device")``) instead of through the emulator's pty: a pty
+   hands written bytes to its reader from a kernel worker thread (the tty flip buffer's work,
+   on the unbound workqueue, at nice 0), which on a busy machine waits for a CPU behind every
+   other program, tens of ms at times; a real UART has no such hop. Replies still come back
+   through the emulator's pty (rule 2).
+6. With ``timeline`` set (a deque), every read from the client and every delivery to the
+   controller is kept there, on our clock: ``("in", t, bytes, due of the last byte, sched)``
+   and ``("out", t, bytes, due of the first byte, sched)``, sched being the relay thread's
+   (ns on a CPU, ns runnable waiting for one) (where a slow byte waited: stop_trace.py).
 """
 
 from __future__ import annotations
@@ -37,9 +47,29 @@ _lock = threading.Lock()
 ALL_LATENESS_S: list[float] = []
 
 
+def thread_sched() -> tuple[int, int]:
+    """(ns on a CPU, ns runnable but waiting for one) of the calling thread, from the kernel."""
+    try:
+        with open("/proc/thread-self/schedstat") as f:
+            run, wait, _ = f.read().split()
+        return int(run), int(wait)
+    except (OSError, ValueError):
+        return 0, 0
+
+
 class PacedRelay:
-    def __init__(self, device_path: str, link: Path, baud: int, bits_per_byte: int = 10) -> None:
+    def __init__(
+        self,
+        device_path: str,
+        link: Path,
+        baud: int,
+        bits_per_byte: int = 10,
+        timeline: deque[tuple[Any, ...]] | None = None,
+        deliver: Callable[[bytes], None] | None = None,
+    ) -> None:
         self.byte_time_s = bits_per_byte / baud
+        self.timeline = timeline
+        self._deliver = deliver
         self.link = link
         self._master, self._slave = os.openpty()
         for fd in (self._master, self._slave):
@@ -68,10 +98,14 @@ class PacedRelay:
             now = time.monotonic()
             if self._queue and self._queue[0][0] <= now:
                 self.lateness_s.append(now - self._queue[0][0])
+                first_due = self._queue[0][0]
                 out = bytearray()
                 while self._queue and self._queue[0][0] <= now:
                     out += self._queue.popleft()[1]
-                if not self._write(self._device, bytes(out)):
+                if self.timeline is not None:
+                    event = ("out", time.monotonic(), bytes(out), first_due, *thread_sched())
+                    self.timeline.append(event)
+                if not self._hand_over(bytes(out)):
                     return
             timeout = None if not self._queue else max(0.0, self._queue[0][0] - time.monotonic())
             try:
@@ -87,6 +121,9 @@ class PacedRelay:
                             due += self.byte_time_s
                             self._queue.append((due, data[i : i + 1]))
                         self._line_free_s = due
+                        if self.timeline is not None:
+                            event = ("in", time.monotonic(), data, due, *thread_sched())
+                            self.timeline.append(event)
             if self._device in readable:
                 try:
                     data = os.read(self._device, _CHUNK)
@@ -99,6 +136,16 @@ class PacedRelay:
             if self._wake_r in readable:
                 with contextlib.suppress(BlockingIOError):
                     os.read(self._wake_r, _CHUNK)
+
+    def _hand_over(self, data: bytes) -> bool:
+        """The bytes due to the controller: to ``deliver`` (rule 5), else through its pty."""
+        if self._deliver is None:
+            return self._write(self._device, data)
+        try:
+            self._deliver(data)
+        except (RuntimeError, TimeoutError):  # the emulator closed (or stuck): the line ends
+            return False
+        return True
 
     @staticmethod
     def _write(fd: int, data: bytes) -> bool:
@@ -128,14 +175,20 @@ class PacedRelay:
 
 
 class FrameLog:
-    """on_frame callback for emulators.start(): keeps frames and lets a thread wait for one."""
+    """on_frame callback for emulators.start(): keeps frames and lets a thread wait for one.
+    With ``sched``, each frame's (ns on a CPU, ns runnable waiting for one) of the emulator's
+    thread when it logged the frame goes to ``sched`` too (its waits: stop_trace.py)."""
 
-    def __init__(self) -> None:
+    def __init__(self, sched: bool = False) -> None:
         self.frames: list[Any] = []  # LoggedFrame
+        self.sched: list[tuple[int, int]] | None = [] if sched else None
         self._cond = threading.Condition()
 
     def __call__(self, frame: Any) -> None:
+        stat = thread_sched() if self.sched is not None else None
         with self._cond:
+            if self.sched is not None and stat is not None:
+                self.sched.append(stat)
             self.frames.append(frame)
             self._cond.notify_all()
 

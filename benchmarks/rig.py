@@ -11,8 +11,10 @@ import contextlib
 import json
 import select
 import subprocess
+from collections import deque
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -52,8 +54,12 @@ def open_line(
     emu_opts: dict[str, Any] | None = None,
     paced: bool = True,
     name: str = "tty",
+    timeline: deque[tuple[Any, ...]] | None = None,
+    direct: bool = False,
 ) -> tuple[EmulatedPort[Any], PacedRelay | None, Path]:
-    """An in-process emulator and, if paced, the line relay in front of it; returns the path a
+    """An in-process emulator and, if paced, the line relay in front of it (keeping its
+    ``timeline``, if given: line.py rule 6; handing the client's bytes to the emulator in
+    this process, not through its pty, if ``direct``: line.py rule 5); returns the path a
     client opens."""
     emu_link = scope.workdir / f"{name}-emulator"
     emu = emulators.start(model, link=str(emu_link), on_frame=frames, **(emu_opts or {}))
@@ -61,7 +67,8 @@ def open_line(
     if not paced:
         return emu, None, emu_link
     link = scope.workdir / name
-    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts))
+    deliver = partial(emu.inject, to="device") if direct else None
+    relay = PacedRelay(emu.path, link, baud_of(model, emu_opts), timeline=timeline, deliver=deliver)
     scope.callback(relay.close)
     return emu, relay, link
 

@@ -5,16 +5,21 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 
 - ``msg``: a connection's on_message for a ``/stop`` topic (``lane`` or ``main``), with the
   thread that ran it;
-- ``carry``: Halts.carry (under Halts._lock: the decision carried out);
+- ``carry``: Halts.carry (under Halts._lock: the decision carried out), with the main
+  connection's thread's schedstat and its own thread's;
 - ``put``: the Stop in the mailbox (Mailbox.put returned);
 - ``serve``: the lines thread starts serving a worker whose mailbox holds a stop;
-- ``write``: a frame written to a port (the stop frame ``;`` only);
+- ``write``: a frame written to a port (the stop frame ``;`` only), with the port's path (a
+  stop is matched to its own rotor's write, not another's: the backlog's rotor gets stops too);
 - ``gc``: every collection (generation, start, end) and the main connection's message count;
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
-``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish.
+``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish,
+and, where the benchmark wrote ``TRACE.lines.json`` (stop_under_load's focused mode), what the
+stop's line carried from 50 ms before the publish to its frame: the relay's reads of the
+bridge's bytes and deliveries to the controller, and the controller's frames.
 """
 
 from __future__ import annotations
@@ -141,7 +146,8 @@ def install(path: str) -> None:
     carry = halts.Halts.carry
 
     def _carry(self: Any, rot: Any, kind: str, *a: Any, **k: Any) -> None:
-        ev(("carry", _now(), rot.id, kind, threading.current_thread().name, *_sched(MAIN_TID[0])))
+        name = threading.current_thread().name
+        ev(("carry", _now(), rot.id, kind, name, *_sched(MAIN_TID[0]), *_sched()))
         carry(self, rot, kind, *a, **k)
 
     halts.Halts.carry = _carry  # type: ignore[method-assign]
@@ -211,6 +217,28 @@ def _first(events: list[Any], after: float, before: float, pred: Any) -> Any:
     return None
 
 
+def _written(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> float | None:
+    """When the bridge wrote this stop's ``;`` to this rotor's port (None if not traced)."""
+    w = _first(by["write"], t0, t0 + lat, lambda e: e[2].endswith(f"tty-{rid}"))
+    return None if w is None else float(w[1])
+
+
+def _hops(window: dict[str, Any], written: float | None) -> tuple[float, float] | None:
+    """(the bridge's write -> the line read it, the line handed it on -> the frame) in ms: the
+    bridge's pty hop and the controller's side (benchmarks/ptyhop.py)."""
+    if written is None:
+        return None
+    relay = window["relay"]
+    read = next((e for e in relay if e[0] == "in" and e[1] >= written - 0.0005), None)
+    if read is None:
+        return None
+    handed = next((e for e in relay if e[0] == "out" and ";" in e[2] and e[1] >= read[1]), None)
+    frame = next((f for f in window["frames"] if f[1] == ";"), None)
+    if handed is None or frame is None:
+        return None
+    return (read[1] - written) * 1e3, (frame[0] - handed[1]) * 1e3
+
+
 def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     """One stop: its steps as ms from its publish, the waits the kernel saw, the collections and
     the Halts._lock waits inside it."""
@@ -218,9 +246,9 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     lane = by["lane"]
     m = _first(lane, t0, t1, lambda e: f"/{rid}/" in e[3])
     c = _first(by["carry"], m[1] if m else t0, t1, lambda e: e[2] == rid and "-stop" in e[4])
-    p = _first(by["put"], c[1] if c else t0, t1, lambda e: True)
-    s = _first(by["serve"], p[2] if p else t0, t1, lambda e: e[2] == rid)
-    w = _first(by["write"], s[1] if s else t0, t1, lambda e: True)
+    s = _first(by["serve"], c[1] if c else t0, t1, lambda e: e[2] == rid)
+    p = _first(by["put"], c[1] if c else t0, t1, lambda e: s is None or e[3] == s[4])
+    w = _first(by["write"], s[1] if s else t0, t1, lambda e: e[2].endswith(f"tty-{rid}"))
     steps = [("lane", m, 1), ("carry", c, 1), ("put", p, 2), ("serve", s, 1), ("write", w, 1)]
     out = f"{rid} {lat * 1e3:6.1f} ms:"
     for name, e, k in steps:
@@ -233,6 +261,8 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     if m and c and c[4] == m[4]:  # the lane's own carry: the main thread meanwhile
         out += f" | main thread lane->carry: cpu {(c[5] - m[7]) / 1e6:.1f}"
         out += f" runq {(c[6] - m[8]) / 1e6:.1f}"
+        if len(c) > 8:  # the lane thread's own: its CPU, or a wait for one (else the GIL)
+            out += f", lane thread cpu {(c[7] - m[5]) / 1e6:.1f} runq {(c[8] - m[6]) / 1e6:.1f}"
     if p and s:
         out += f" | lines thread runq {(s[6] - p[5]) / 1e6:.1f} cpu {(s[5] - p[4]) / 1e6:.1f}"
         out += f", process cpu {(s[7] - p[6]) * 1e3:.1f} (put->serve)"
@@ -243,17 +273,60 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     return out
 
 
+def _line(window: dict[str, Any]) -> list[str]:
+    """A stop's line (the benchmark's ``<trace>.lines.json``): the relay's reads of the bridge's
+    bytes (``in``, with the due time of the last byte), its deliveries to the controller
+    (``out``, how late against the due time of the first byte) and the controller's frames,
+    in ms after the publish."""
+    t0 = window["t0"]
+    rows: list[tuple[float, str]] = []
+    last: list[int] = []
+    for kind, t, data, due, *sched in window["relay"]:
+        waited = f", relay runq +{(sched[1] - last[1]) / 1e6:.1f}" if sched and last else ""
+        last = sched
+        if kind == "in":
+            rows.append((t, f"relay read   {data!r} (due {(due - t0) * 1e3:.1f}{waited})"))
+        else:
+            rows.append((t, f"relay wrote  {data!r} ({(t - due) * 1e3:.1f} late{waited})"))
+    last = []
+    for t, data, outcome, *sched in window["frames"]:
+        waited = f" (emulator runq +{(sched[1] - last[1]) / 1e6:.1f})" if sched and last else ""
+        last = sched
+        rows.append((t, f"frame        {data!r} {outcome}{waited}"))
+    rows.sort(key=lambda row: row[0])  # stable: frames logged at one instant keep their order
+    return [f"      {(t - t0) * 1e3:7.1f} {text}" for t, text in rows]
+
+
 def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     trace = json.loads(Path(trace_path).read_text())["events"]
     samples = json.loads(Path(samples_path).read_text())
+    lines_path = Path(trace_path + ".lines.json")
+    windows = json.loads(lines_path.read_text()) if lines_path.exists() else {}
     kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait")
     by = {k: [e for e in trace if e[0] == k] for k in kinds}
     by["lane"] = [e for e in by["msg"] if e[2] == "lane"]
     for phase, rows in samples.items():
         print(f"== {phase}: the stops over {over_ms:g} ms (ms after the publish)")
-        for rid, t0, lat in rows:
+        shown = {(w["rid"], w["t0"]): w for w in windows.get(phase, [])}
+        hops: list[tuple[float, float]] = []
+        for rid, t0, lat, *taker in rows:
             if lat * 1e3 > over_ms:
                 print("  " + _row(by, rid, t0, lat))
+                if taker:  # the benchmark's own thread: its publish returned, it woke up
+                    sent, seen = ((t - t0) * 1e3 for t in taker)
+                    print(f"      publish returned {sent:.1f}, the taker woke at {seen:.1f}")
+                if (rid, t0) in shown:
+                    print("\n".join(_line(shown[rid, t0])))
+                    hop = _hops(shown[rid, t0], _written(by, rid, t0, lat))
+                    if hop is not None:
+                        hops.append(hop)
+        if hops:
+            one, two = (sorted(h[i] for h in hops) for i in (0, 1))
+            print(
+                f"  {len(hops)} of them: the bridge's write -> the line read it: median "
+                f"{one[len(one) // 2]:.1f}, max {one[-1]:.1f} ms; the line handed it on -> "
+                f"the frame: median {two[len(two) // 2]:.1f}, max {two[-1]:.1f} ms"
+            )
     per: dict[int, list[float]] = {}
     for e in by["gc"]:
         per.setdefault(e[3], []).append(e[2] - e[1])

@@ -23,7 +23,15 @@ poll cycle, not just after a reply), ``R/stop`` ``STOP`` (QoS 1, not retained) f
 of its own (it never queues behind a loader's messages). The latency is from that publish to
 the complete stop frame ``;`` at the controller (the emulator's log, on our clock: the same
 CLOCK_MONOTONIC as every process here), so it includes the byte's own 2.1 ms on the line and
-any exchange in flight. The rotors take turns; one stop is in flight at a time.
+any exchange in flight. The paced line hands the bytes to the emulator in this process, not
+through the emulator's pty (benchmarks/line.py rule 5): a pty passes them on from a kernel
+worker at nice 0, which under these loads waited for a CPU up to tens of ms after the line
+had delivered the byte (a real UART has no such hop). The bridge's own port is still a pty:
+its write reaches the line through that worker too, so every row says how long that hop took
+on this machine while its stops were taken (``pty hop``: a probe writing a byte through a pty
+of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop.
+``STOP_VIA_PTY=1`` puts the controllers' ptys back on the path (the hop left out, to compare).
+The rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
 whose timestamps must not wait behind a load), each started about a second before its stops;
@@ -68,7 +76,10 @@ Where an outlier waits (a focused mode: the control, the backlog, the console, t
     python -m benchmarks.stop_trace /tmp/t.json /tmp/t.json.samples.json
 
 the bridge stamps each stop's steps (benchmarks/stop_trace.py) and the analysis sets them
-against each stop's publish and its ``;`` at the emulator.
+against each stop's publish and its ``;`` at the emulator; for each stop over 9 ms it also
+shows what the stop's line carried from 50 ms before the publish (the relay's reads of the
+bridge's bytes and its deliveries, the controller's frames, and how long each of those threads
+waited for a CPU), from <file>.lines.json.
 """
 
 from __future__ import annotations
@@ -85,6 +96,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -103,6 +115,7 @@ from benchmarks.harness import (
     start_broker,
 )
 from benchmarks.line import FrameLog
+from benchmarks.ptyhop import PtyHop
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import EmuHost, open_line
 from bridge.mosquitto import free_port
@@ -126,6 +139,11 @@ TCP_CLIENTS, TCP_QUERY_CLIENTS = 16, 4
 UDP_RATE = 20_000.0
 PAGES, POSTERS = 10, 8
 TRACKERS = 8
+TIMELINE_EVENTS = 200_000  # per measured line, in the focused mode (a few minutes of polls)
+TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
+# the line hands its bytes to the controller directly (line.py rule 5); STOP_VIA_PTY=1 sends
+# them through the controller's pty as before, to see what that hop adds on this machine
+DIRECT = not os.environ.get("STOP_VIA_PTY")
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -548,6 +566,8 @@ class Sample:
     engine: str
     latency_s: float
     t: float
+    t_sent: float = 0.0  # our publish returned (the STOP is in the kernel's socket)
+    t_seen: float = 0.0  # this thread woke up to the stop frame
 
 
 class StopTaker:
@@ -599,12 +619,13 @@ class StopTaker:
         mark = r.frames.mark()
         t0 = time.monotonic()
         r.sender.publish(f"{r.topic}/stop", "STOP")
+        t_sent = time.monotonic()
         frame = r.frames.wait(lambda f: f.data == STOP_FRAME, mark, 20.0)
         if frame is None:
             self.check()
             raise BenchError(f"{r.engine} {r.rid}: the stop never reached the controller")
         r.step, r.stopped_at = "ready", float(frame.time_s)
-        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0)
+        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0, t_sent, time.monotonic())
 
     def step(self, before: Callable[[], None] | None = None) -> Sample | None:
         check_abort()
@@ -663,6 +684,8 @@ class Loaded:
     ports: dict[str, int]
     node: Loader
     tle_names: list[str]
+    timelines: dict[str, deque[tuple[Any, ...]]]  # the measured lines' relays (STOP_TRACE only)
+    hop: PtyHop  # the host's own pty hop, beside the stops (benchmarks/ptyhop.py)
 
 
 def _tle(path: Path) -> list[str]:
@@ -676,6 +699,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     from tests.support.console import web_section
     from tests.support.udp_logger import free_udp_port
 
+    hop = PtyHop(scope)  # hardware's priority, as the controllers (harness rule 5)
     broker_port = start_broker(scope, "max_queued_messages 0\n")  # the whole backlog delivered
     node = Loader(scope, "dxnode", {}, "dxnode")
     ports = {
@@ -690,9 +714,14 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     }
     lines: dict[str, tuple[Any, FrameLog]] = {}
     settings: list[dict[str, Any]] = []
+    timelines: dict[str, deque[tuple[Any, ...]]] = {}
+    traced = bool(os.environ.get("STOP_TRACE"))  # keep the relays' timelines (line.py rule 6)
     for i in range(MEASURED):
-        frames = FrameLog()
-        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-m{i}")
+        frames = FrameLog(sched=traced)
+        timeline = timelines[f"m{i}"] = deque(maxlen=TIMELINE_EVENTS) if traced else None
+        emu, _relay, path = open_line(
+            scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline, direct=DIRECT
+        )
         lines[f"m{i}"] = (emu, frames)
         settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
     settings[0].update(
@@ -704,8 +733,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         n1mm_udp_port=ports["n1mm"],
     )
     b_frames, d_frames = FrameLog(), FrameLog()
-    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b")
-    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d")
+    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=DIRECT)
+    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=DIRECT)
     settings.append({"id": "b", "model": "rotorez", "port": str(b_path), **BRIDGE_B})
     settings.append({"id": "d", "model": "rotorez", "port": str(d_path), **BRIDGE})
     host = EmuHost(scope, "md01", TRACKERS)
@@ -760,6 +789,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         ports,
         node,
         tle_names,
+        timelines,
+        hop,
     )
 
 
@@ -1105,7 +1136,9 @@ def start_engine(
     specs, lines = [], []
     for i in range(PAIR_ROTORS):
         frames = FrameLog()
-        emu, _relay, path = open_line(scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}")
+        emu, _relay, path = open_line(
+            scope, "rotorez", frames, EMU, name=f"tty-{engine}{i}", direct=DIRECT
+        )
         lines.append((f"p{i}", emu, frames))
         specs.append({"id": f"p{i}", "model": "rotorez", "port": str(path), **BRIDGE})
     config = bridge_config(
@@ -1238,7 +1271,8 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
         phases.append(tracking_phase(lo, TRACKING_LOAD, n))
         missed = lo.taker.missed
         lo.bridge.check()
-    report_loads(result, phases, missed)
+        lo.hop.finish()
+    report_loads(result, phases, missed, lo.hop)
     report_pairs(result, pairs(scope, n_pairs, rng), n_pairs)
     return result
 
@@ -1260,28 +1294,76 @@ def _traced(
     phases.append(tracking_phase(lo, TRACKING_LOAD, n))
     missed = lo.taker.missed
     lo.bridge.check()
-    samples = {p.name: [(s.rid, s.t, s.latency_s) for s in p.samples] for p in phases}
+    lo.hop.finish()
+    samples = {
+        p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples] for p in phases
+    }
     Path(trace + ".samples.json").write_text(json.dumps(samples))
-    report_loads(result, phases, missed)
+    Path(trace + ".lines.json").write_text(json.dumps(_line_windows(lo, phases)))
+    report_loads(result, phases, missed, lo.hop)
     return result
+
+
+def _line_windows(lo: Loaded, phases: list[PhaseResult]) -> dict[str, Any]:
+    """For each stop over TRACE_OVER_MS, what its line carried from TRACE_BEFORE_S before the
+    publish to just after its stop frame: the relay's reads and deliveries (line.py rule 6)
+    and the frames the controller logged (benchmarks/stop_trace.py prints them)."""
+    out: dict[str, Any] = {}
+    frames = {r.rid: r.frames for r in lo.taker.rotors}
+    for p in phases:
+        rows = []
+        for s in p.samples:
+            if s.latency_s * 1000 <= TRACE_OVER_MS or s.rid not in lo.timelines:
+                continue
+            lo_t, hi_t = s.t - TRACE_BEFORE_S, s.t + s.latency_s + 0.005
+            relay = [
+                (kind, t, data.decode("latin-1"), due, *sched)
+                for kind, t, data, due, *sched in list(lo.timelines[s.rid])
+                if lo_t <= t <= hi_t
+            ]
+            log = frames[s.rid]
+            stats = log.sched or []
+            logged = [
+                (f.time_s, f.data.decode("latin-1"), f.outcome, *(stats[i] if stats else ()))
+                for i, f in enumerate(log.since(0))
+                if lo_t <= f.time_s <= hi_t
+            ]
+            rows.append({"rid": s.rid, "t0": s.t, "relay": relay, "frames": logged})
+        out[p.name] = rows
+    return out
 
 
 def _ms(samples: list[Sample]) -> list[float]:
     return [s.latency_s * 1000.0 for s in samples]
 
 
-def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> None:
+def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int, hop: PtyHop) -> None:
     table = Table(
         f"{result.title}: R/stop publish -> ';' at a turning Rotor-EZ (4800 baud, "
         f"{MEASURED} taking turns); goal p99 <= {GOAL_MS:g} ms",
-        ["load", "stops", "p50 ms", "p99 ms", "max ms", "p99 goal", "bridge CPU %", "load avg"],
+        [
+            "load",
+            "stops",
+            "p50 ms",
+            "p99 ms",
+            "max ms",
+            "p99 goal",
+            "bridge CPU %",
+            "load avg",
+            "pty hop p99/max ms",
+        ],
     )
     for p in phases:
         ms = sorted(_ms(p.samples))
         p99 = percentile(ms, 99)
         met = "met" if p99 <= GOAL_MS else "NOT MET"
-        table.add(p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg)
+        t0 = min(s.t for s in p.samples)
+        hops = hop.between(t0, max(s.t + s.latency_s for s in p.samples))
+        said = "--" if hops is None else f"{hops[0]:.1f} / {hops[1]:.1f}"
+        row = [p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg]
+        table.add(*row, said)
         result.data[p.name] = {
+            "host_pty_hop_ms": None if hops is None else [round(v, 2) for v in hops],
             "latencies_ms": [round(v, 3) for v in _ms(p.samples)],
             "rotors": [s.rid for s in p.samples],
             "bridge_cpu_pct": round(p.cpu_pct, 1),
@@ -1304,6 +1386,12 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int) -> 
         "hardware and the operator's machine would)"
         if result.data.get("controllers_first")
         else "the controllers shared one priority with the bridge and the loads (not root)"
+    )
+    table.notes.append(
+        "pty hop: a byte through a pty on this machine, written every 5 ms by a probe of its "
+        "own beside the stops (benchmarks/ptyhop.py): the bridge's port is a pty, and what the "
+        "host's kernel took to pass its stop on (a real serial adapter has no such hop) is in "
+        "the stop's time; a row whose tail is near this hop's waited for the host"
     )
     table.notes.append(
         "p99 is nearest-rank: with 60 stops it is the largest; the load average (1 min, 2 cores) "
