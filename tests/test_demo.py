@@ -26,6 +26,7 @@ from tests.support.waiting import slow
 
 ALL_MODELS = ["rotorez", "rotorcard", "dcu1", "rot2prog", "rot1prog", "md01", "satel"]
 ALL_MODELS += ["gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450"]
+ALL_MODELS += ["rt21"]
 
 
 def _left_behind(tmpdir: Path) -> list[str]:

@@ -8,7 +8,7 @@ Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
    codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
-   (SPID, SatEL, GS-232) adds entries here and reuses physics.Axis, base.PacedLine and
+   (SPID, SatEL, GS-232, RT-21) adds entries here and reuses physics.Axis, base.PacedLine and
    pty.EmulatedPort.
 """
 
@@ -25,6 +25,7 @@ from bridge.emulators.gs232 import MODELS as _GS232_MODELS
 from bridge.emulators.gs232 import Gs232
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez import RotorEZ
+from bridge.emulators.rt21 import Rt21
 from bridge.emulators.satel import SatEL
 from bridge.emulators.spid import Spid
 
@@ -38,6 +39,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "md01": partial(Spid, "md01"),
     "satel": SatEL,
     **{name: partial(Gs232, name) for name in _GS232_MODELS},
+    "rt21": Rt21,
 }
 
 
@@ -79,6 +81,7 @@ __all__ = [
     "LoggedFrame",
     "Responder",
     "RotatorState",
+    "Rt21",
     "RotorEZ",
     "SatEL",
     "Spid",

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from bridge.protocols.base import JunkReply, PositionReply, VersionReply
 from bridge.protocols.gs232 import Gs232Codec
 from bridge.protocols.rotorez import RotorEzCodec
+from bridge.protocols.rt21 import Rt21Codec
 from bridge.protocols.satel import SatelCodec
 from bridge.protocols.spid import SpidCodec
 from tests.support import feed
@@ -295,6 +296,7 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         SatelCodec(),
         Gs232Codec("a"),
         Gs232Codec("b", elevation=False),
+        Rt21Codec(),
     ]
     for codec in codecs:
         for chunk in chunks:

@@ -19,6 +19,8 @@ def measured_exchange(model: str) -> tuple[int, int]:
     spec = REGISTRY[model]
     codec = spec.codec_factory()
     options = {"power_on_junk": False} if model in ROTOR_EZ_BOARDS else {}
+    if model == "rt21":  # its reply grows with the bearing: the longest, 123.4;
+        options = {"start_az_deg": 123.4}
     device = emulators.create(model, now=0.0, **options)
     enable = codec.encode_enable()
     if enable:  # as the bridge has it: automatic motion on (SatEL: "Motion ENABLED")
@@ -66,6 +68,7 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "md01": 1.0,
         "satel": 3.9,
         **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
+        "rt21": 1.0,
     }
 
 
@@ -90,6 +93,7 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "gs232b-az": (611, HamlibRotType.AZ, None),
         "gs232a-450": (609, HamlibRotType.AZ, None),
         "gs232b-450": (611, HamlibRotType.AZ, None),
+        "rt21": (405, HamlibRotType.OTHER, None),
     }
 
 

@@ -58,6 +58,8 @@ FAST_SATEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0, "corrupt_on_misuse
 # GS-232: a potentiometer read in whole degrees, no brake, a fast line (9600 baud)
 FAST_GS232 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 GS232_MODELS = ("gs232a", "gs232b", "gs232a-az", "gs232b-az", "gs232a-450", "gs232b-450")
+# RT-21: a potentiometer read in tenths, its own brake handling, 4800 baud
+FAST_RT21 = {"az_speed_deg_s": 20.0}
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -94,6 +96,7 @@ TEST_TIMINGS = Timings(
         "md01": FAST_SPID,
         "satel": FAST_SATEL,
         **dict.fromkeys(GS232_MODELS, FAST_GS232),
+        "rt21": FAST_RT21,
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -104,6 +107,7 @@ TEST_TIMINGS = Timings(
         "md01": FAST_SPID_BRIDGE,
         "satel": FAST_SPID_BRIDGE,
         **dict.fromkeys(GS232_MODELS, FAST_POLLING),
+        "rt21": FAST_POLLING,
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})
