@@ -25,7 +25,9 @@ Rules:
    rate after `processing_delay_s` (base.PacedLine); `now` never goes back. A reply shows the
    rotor at the instant its command's ``;`` arrived.
 2. ``AP1...<CR>`` starts the move at the CR; the ``;`` that follows only closes the command (it
-   is not a stop). A command longer than 16 bytes without its ``;`` is dropped as malformed.
+   is not a stop); any other byte after the CR closes it too and is read afresh (a client that
+   sends the Rotor-EZ's ``AP1ddd<CR>`` alone). A command longer than 16 bytes without its ``;``
+   is dropped as malformed.
 3. A new heading while turning re-targets at once (the box ramps and reverses by itself).
 4. Every complete command is logged once with its Outcome; motion is logged as MotionEvents.
    power_cycle() stops the motor, drops a half-received command, anything not yet sent and the
@@ -89,6 +91,8 @@ class Rt21:
         now = self._update(now)
         for value in data:
             byte = bytes((value,))
+            if self._executed and byte != b";":  # rule 2: a CR-run command without its ;
+                self._close(now)
             if not self._rx:
                 if byte == b";":
                     self._halt(now, "serial ;")
@@ -97,11 +101,9 @@ class Rt21:
                     self._rx += byte
                 continue  # CR, LF, spaces and stray bytes between commands
             if byte == b";":
-                command, self._rx = bytes(self._rx), bytearray()
-                executed, self._executed = self._executed, False
-                self._command(command, executed, now)
+                self._close(now, b";")
                 continue
-            if byte == b"\r" and not self._executed:
+            if byte == b"\r":
                 self._executed = True
                 self._execute(bytes(self._rx), now)
                 continue
@@ -109,6 +111,11 @@ class Rt21:
             if len(self._rx) > _MAX_COMMAND:  # rule 2
                 self._log.append(LoggedFrame(now, bytes(self._rx), Outcome.REFUSED.value))
                 self._rx, self._executed = bytearray(), False
+
+    def _close(self, now: float, end: bytes = b"") -> None:
+        command, self._rx = bytes(self._rx), bytearray()
+        executed, self._executed = self._executed, False
+        self._command(command, executed, end, now)
 
     def due_output(self, now: float) -> bytes:
         self._update(now)
@@ -216,9 +223,9 @@ class Rt21:
         if self._az.start_move(heading, now, driver=DRIVER_COMMAND):  # rule 3
             self._event(now, "move", f"to {heading:g}")
 
-    def _command(self, command: bytes, executed: bool, now: float) -> None:
+    def _command(self, command: bytes, executed: bool, end: bytes, now: float) -> None:
         outcome = self._dispatch(command, executed, now)
-        shown = command + (b"\r;" if executed else b";")
+        shown = command + (b"\r" if executed else b"") + end
         self._log.append(LoggedFrame(now, shown, outcome.value))
 
     def _dispatch(self, command: bytes, executed: bool, now: float) -> Outcome:

@@ -82,3 +82,10 @@ def test_power_cycle_forgets_the_half_command_and_the_stored_heading() -> None:
 def test_the_registry_builds_it() -> None:
     device = emulators.create("rt21", now=0.0, start_az_deg=42.0)
     assert isinstance(device, Rt21) and device.state(0.0).az_deg == 42.0
+
+
+def test_a_heading_run_by_its_cr_without_a_semicolon_leaves_the_next_command_whole() -> None:
+    device = Rt21(az_speed_deg_s=10.0, start_az_deg=10.0)
+    assert ask(device, b"AP1100\rBI1;", 0.0) == b"10.0;"  # the Rotor-EZ's form, then a query
+    assert [(f.data, f.outcome) for f in device.log] == [(b"AP1100\r", "move"), (b"BI1;", "query")]
+    assert device.state(1.0).is_moving and device.state(1.0).target_az_deg == 100.0
