@@ -122,6 +122,15 @@ def rotctld_cases() -> list[RotctldCase]:
             None,
             ("idle", "polling"),
         ),
+        RotctldCase(
+            "rt21",
+            405,
+            lambda i: f"P {10 + i}.5 0",
+            "P -> AP1ddd.d<CR>;",
+            lambda f: f.outcome == "move",
+            None,
+            ("idle", "polling"),
+        ),
     ]
 
 

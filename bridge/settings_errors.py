@@ -34,6 +34,7 @@ BRANDS = {
     "alfa": "Alfa Radio's SPID controllers: rot2prog, rot1prog (azimuth only) or md01 (MD-01/02)",
     "satel": "the SatEL controller (VE5FP) is satel",
     "ve5fp": "the SatEL controller (VE5FP) is satel",
+    "greenheron": "Green Heron's RT-21 is rt21 (one box per rotor)",
 }
 
 

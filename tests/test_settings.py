@@ -539,6 +539,8 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("hygain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
         ("spid", "rot2prog, rot1prog (azimuth only) or md01"),
         ("ve5fp", "is satel"),
+        ("Green Heron", "RT-21 is rt21"),
+        ("rt-21", "did you mean rt21?"),
     ],
 )
 def test_an_unknown_model_names_the_nearest_model_or_the_one_for_its_maker(

@@ -8,8 +8,8 @@ Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
    codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
-   (SPID, SatEL, GS-232, Easycomm) adds entries here and reuses physics.Axis, base.PacedLine and
-   pty.EmulatedPort.
+   (SPID, SatEL, GS-232, Easycomm, RT-21) adds entries here and reuses physics.Axis,
+   base.PacedLine and pty.EmulatedPort.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from bridge.emulators.gs232 import MODELS as _GS232_MODELS
 from bridge.emulators.gs232 import Gs232
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rotorez import RotorEZ
+from bridge.emulators.rt21 import Rt21
 from bridge.emulators.satel import SatEL
 from bridge.emulators.spid import Spid
 
@@ -41,6 +42,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     "satel": SatEL,
     **{name: partial(Gs232, name) for name in _GS232_MODELS},
     **{name: partial(EasycommController, name) for name in _EASYCOMM_MODELS},
+    "rt21": Rt21,
 }
 
 
@@ -83,6 +85,7 @@ __all__ = [
     "LoggedFrame",
     "Responder",
     "RotatorState",
+    "Rt21",
     "RotorEZ",
     "SatEL",
     "Spid",

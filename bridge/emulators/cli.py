@@ -64,6 +64,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--firmware-version", help="the answer to VE, without the letters (Easycomm family)"
     )
     parser.add_argument(
+        "--reply-padding",
+        choices=("none", "space", "zero"),
+        help="the bearing's padding (RT-21): space ' 5.0;' (default), none '5.0;', zero '005.0;'",
+    )
+    parser.add_argument(
         "--log-frames", action="store_true", help="print every received frame on stderr"
     )
 
@@ -90,6 +95,8 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
             start_el_deg=args.start_el_deg,
             resolution_ppd=args.resolution,
         )
+    elif args.model == "rt21":  # one box, one rotor: no elevation options
+        opts.update(az_speed_deg_s=args.speed_deg_s, reply_padding=args.reply_padding)
     else:
         opts.update(
             az_speed_deg_s=args.speed_deg_s,

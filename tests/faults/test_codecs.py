@@ -18,6 +18,7 @@ from bridge.protocols.base import JunkReply, PositionReply, VersionReply
 from bridge.protocols.easycomm import EasycommCodec
 from bridge.protocols.gs232 import Gs232Codec
 from bridge.protocols.rotorez import RotorEzCodec
+from bridge.protocols.rt21 import Rt21Codec
 from bridge.protocols.satel import SatelCodec
 from bridge.protocols.spid import SpidCodec
 from tests.support import feed
@@ -299,6 +300,7 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         EasycommCodec(2),
         EasycommCodec(3, elevation=False),
         EasycommCodec(2, separate=True),
+        Rt21Codec(),
     ]
     for codec in codecs:
         for chunk in chunks:

@@ -21,6 +21,8 @@ def measured_exchange(model: str) -> tuple[int, int]:
     options = {"power_on_junk": False} if model in ROTOR_EZ_BOARDS else {}
     if model.startswith("easycomm"):  # its answer's width varies: the widest one
         options = {"start_az_deg": 359.9, "start_el_deg": 180.0 if spec.has_elevation else 0.0}
+    if model == "rt21":  # its reply grows with the bearing: the longest, 123.4;
+        options = {"start_az_deg": 123.4}
     device = emulators.create(model, now=0.0, **options)
     enable = codec.encode_enable()
     if enable:  # as the bridge has it: automatic motion on (SatEL: "Motion ENABLED")
@@ -69,6 +71,7 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "satel": 3.9,
         **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
         **{name: 1.0 for name in REGISTRY if name.startswith("easycomm")},
+        "rt21": 1.0,
     }
 
 
@@ -100,6 +103,7 @@ def test_hamlib_facts_are_on_the_spec() -> None:
             for v, h, info in ((2, 202, "EasycommII"), (3, 204, "EasycommIII"))
             for variant in ("", "-az", "-separate")
         },
+        "rt21": (405, HamlibRotType.OTHER, None),
     }
 
 

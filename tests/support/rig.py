@@ -70,6 +70,8 @@ GS232_MODELS = (
 # Easycomm: steppers or encoders read in tenths, no brake, a fast line (19200 baud)
 FAST_EASYCOMM = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 EASYCOMM_MODELS = tuple(f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate"))
+# RT-21: a potentiometer read in tenths, its own brake handling, 4800 baud
+FAST_RT21 = {"az_speed_deg_s": 20.0}
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -107,6 +109,7 @@ TEST_TIMINGS = Timings(
         "satel": FAST_SATEL,
         **dict.fromkeys(GS232_MODELS, FAST_GS232),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_EASYCOMM),
+        "rt21": FAST_RT21,
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -118,6 +121,7 @@ TEST_TIMINGS = Timings(
         "satel": FAST_SPID_BRIDGE,
         **dict.fromkeys(GS232_MODELS, FAST_POLLING),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_POLLING),
+        "rt21": FAST_POLLING,
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})

@@ -1,0 +1,189 @@
+"""Green Heron RT-21 (azimuth): the codec.
+
+Device: Green Heron's digital rotator controller, one box per rotor (an az/el system is two
+boxes on two serial ports, one per axis). 4800 8N1, no flow control. It speaks a superset of
+Hy-Gain's DCU-1 commands: plain ASCII, every command and every reply ended by ``;``, bearings in
+tenths of a degree.
+Sources: the project's protocol sheet (Green Heron's command set as gathered there); Hamlib
+4.5.4's rotorez backend (rotorez.c: model 405, RT-21) and its traffic on the wire as users
+posted it in Hamlib's issue tracker (``BI1;`` answered ``20.0;``).
+
+Frames we send:
+  ``AP1ddd.d\\r;``  turn to ddd.d at once (the CR executes it; no ``AM1;`` as the DCU-1 needs)
+  ``BI1;``          ask the bearing; answer one to three digits, a point, the tenth, ``;``
+                    (``20.0;``; some firmware pads to five characters with leading spaces,
+                    `` 20.0;``, and the protocol sheet writes ``ddd.d;``: all are read)
+  ``;``             stop
+Not sent: ``AP1ddd;`` + ``AM1;`` (the DCU-1's two-step form), ``AI1;`` (whole degrees, ``;ddd``)
+and ``AS1;``: the RT-21 takes them, the bridge has no use for them.
+
+Rules:
+1. Replies end at ``;``. Only ``[spaces]d[dd].d`` before a ``;`` is a bearing, only while a
+   query is open, and only in 0.0..360.0 (above it: SPOILED). A lone ``;`` or spaces are the
+   box's chatter, never a reading.
+2. Bytes that cannot begin a reply are reported as NOISE as soon as they arrive (they need not
+   wait for a ``;``); once noise came within a query, the reply that follows is not trusted
+   (UNTRUSTED: the engine asks again at once), and neither is one with junk in front of it.
+3. Targets are rounded half up to tenths; outside 0..360 they are refused before anything is
+   sent. A new bearing while turning goes straight out: the box re-targets by itself, ramping
+   down and holding its own brake as its settings say (the bridge keeps no brake time of it).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from bridge.protocols.base import (
+    Codec,
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+)
+
+AZ_MAX_DEG = 360.0
+_MAX_PENDING = 32  # no reply is this long without its ';'
+# a complete reply (everything before its ';'); "pre" is whatever came in front of it
+_REPLY = re.compile(rb"(?P<pre>.*?) *(?P<deg>\d{1,3}\.\d)", re.DOTALL)
+# what may still become a reply once more bytes come: the longest such tail of the buffer
+_PARTIAL = re.compile(rb" *\d{0,3}(?:\.\d?)?\Z")
+# what a healthy box emits besides replies (rule 1)
+_CHATTER = re.compile(rb"[ ;]*")
+
+
+def tenths(az_deg: float) -> float:
+    """The bearing the box is sent for ``az_deg``: tenths, rounded half up (rule 3)."""
+    value = math.floor(az_deg * 10 + 0.5)
+    if not 0 <= value <= AZ_MAX_DEG * 10:
+        raise ValueError(f"azimuth {az_deg:g} outside 0..{AZ_MAX_DEG:g}")
+    return value / 10
+
+
+class Rt21Codec:
+    """Codec for one RT-21 box (one axis: azimuth)."""
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._query_open = False
+        self._noisy = False  # junk arrived since the query was opened
+
+    # -- encoding -------------------------------------------------------------------------
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, None]:
+        return tenths(az_deg), None
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        return [b"AP1%05.1f\r;" % tenths(az_deg)]
+
+    def encode_stop(self) -> bytes:
+        return b";"
+
+    def encode_query(self) -> bytes:
+        self._query_open = True
+        self._noisy = False
+        return b"BI1;"
+
+    def expire_query(self) -> None:
+        self._query_open = False
+
+    def awaiting_reply(self) -> bool:
+        return self._query_open
+
+    def encode_version(self) -> None:
+        return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError("the RT-21 has no options the bridge switches")
+
+    def encode_enable(self) -> None:
+        return None
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return []
+
+    def harmless(self, junk: bytes) -> bool:
+        return _CHATTER.fullmatch(junk) is not None
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while (end := self._buf.find(b";")) != -1:
+            segment = bytes(self._buf[:end])
+            del self._buf[: end + 1]
+            self._segment(segment, out)
+        tail = _PARTIAL.search(self._buf)
+        start = tail.start() if tail is not None else len(self._buf)
+        if start:  # rule 2: these bytes begin no reply, whatever follows
+            self._junk(bytes(self._buf[:start]), "not a reply", out)
+            del self._buf[:start]
+        if len(self._buf) > _MAX_PENDING:
+            self._junk(bytes(self._buf), "reply too long", out)
+            self._buf.clear()
+        return out
+
+    def _segment(self, raw: bytes, out: list[Reply]) -> None:
+        frame = raw + b";"
+        if _CHATTER.fullmatch(raw):
+            out.append(JunkReply(frame, JunkReason.CHATTER, "empty reply"))
+            return
+        m = _REPLY.fullmatch(raw)
+        if m is None:
+            self._junk(frame, "not a reply", out)
+            return
+        if m.group("pre"):
+            self._junk(m.group("pre"), "not a reply", out)
+        value = float(m.group("deg"))
+        reading = m.group("deg") + b";"
+        if value > AZ_MAX_DEG:
+            self._junk(reading, "bearing out of range", out, JunkReason.SPOILED)
+            return
+        if not self._query_open:
+            out.append(JunkReply(reading, JunkReason.UNSOLICITED, "bearing nobody asked for"))
+            return
+        self._query_open = False
+        if self._noisy:
+            out.append(JunkReply(reading, JunkReason.UNTRUSTED, "bearing after line noise"))
+            return
+        out.append(PositionReply(value))
+
+    def _junk(
+        self, raw: bytes, why: str, out: list[Reply], reason: JunkReason = JunkReason.NOISE
+    ) -> None:
+        if self._query_open:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
+
+
+def _spec(**kw: Any) -> ModelSpec:
+    return ModelSpec(
+        name="rt21",
+        display_name="RT-21",
+        manufacturer="Green Heron",
+        codec_factory=Rt21Codec,
+        baud=4800,
+        retarget=RetargetPolicy.DIRECT,  # rule 3: the box re-targets and brakes by itself
+        az_min_deg=0.0,
+        az_max_deg=AZ_MAX_DEG,
+        az_wraps=True,
+        reply_timeout_s=0.3,
+        # a potentiometer read in tenths: a still rotor's reading may wander a few tenths
+        noise_deg=0.5,
+        nominal_speed_deg_s=6.0,  # a Hy-Gain HAM-IV or a Yaesu G-1000 at full speed
+        whole_degrees=False,
+        query_bytes=4,  # BI1;
+        reply_bytes=6,  # 123.4;
+        hamlib_model=405,
+        hamlib_rot_type=HamlibRotType.OTHER,  # as Hamlib's rotorez backend calls its family
+        hamlib_info=None,  # Hamlib 4.5.4's RT-21 has no get_info
+        **kw,
+    )
+
+
+MODELS: dict[str, ModelSpec] = {"rt21": _spec()}
+
+_check: type[Codec] = Rt21Codec  # Rt21Codec satisfies the Codec protocol
