@@ -12,13 +12,14 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    (``replayed``: the wind), whose flag then says "replayed", as under MQTT 3.1.1. ``protocol =
    "3.1.1"`` is for brokers without MQTT 5 (clean session, same rules otherwise). ``"auto"``, the
    default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
-   answers "Unsupported protocol version" (NATS, aedes) or closes the socket before any CONNACK
-   STEP_DOWN_CLOSES times in a row (RabbitMQ, amqtt), as long as no MQTT 5 connection was ever
-   accepted: said once, with what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info`` while
-   it lasts (app.py). One close is not enough: a broker restarting, or not ready yet behind a
-   proxy, closes a connection or two too. One that went on closing for the whole back-off is
-   stepped down all the same, for the process's life: the warning and the info say what that
-   loses and name ``"5"`` as the fix. ``"5"`` and ``"3.1.1"`` never change.
+   answers "Unsupported protocol version" (NATS, aedes), as long as no MQTT 5 connection was
+   ever accepted: said once, with what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info``
+   while it lasts (app.py). A connection closed before any CONNACK never steps down: RabbitMQ
+   and amqtt close on MQTT 5 that way, but so does a broker restarting, one not ready yet
+   behind a proxy, a connection limit, or anyone on the path who wants the bridge on 3.1.1 and
+   its weaker rules (a retained command carried out, a remote's stale command without its
+   stamps); the close is said with the fix (set ``"3.1.1"`` for such a broker, rule 6).
+   ``"5"`` and ``"3.1.1"`` never change.
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
    subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
@@ -114,7 +115,6 @@ MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/broker
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
 CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
-STEP_DOWN_CLOSES = 3  # rule 1: MQTT 5 connections closed before a CONNACK, in a row (1 + 2 s)
 TAKEOVER_FIRST_S = 5
 TAKEOVER_MAX_S = 60
 STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
@@ -224,7 +224,6 @@ class Connection:
         self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
         self._v5 = settings.protocol != "3.1.1"  # rule 1: "auto" tries MQTT 5 first
         self._auto = settings.protocol == "auto"  # ... and may step down (``_fall_back``)
-        self._early_closes = 0  # rule 1: MQTT 5 attempts closed before a CONNACK, in a row
         self._accepted_once = False  # a connection was accepted: the protocol is settled
         self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
         self._subscriptions = subscriptions
@@ -316,12 +315,12 @@ class Connection:
         if self._stopping:
             return
         hint = ""
-        if self._accepted_once:
-            pass  # the protocol is not the reason: it was accepted before
-        elif self._v5 and not self._auto:
-            hint = '; a broker without MQTT 5 does that too: set mqtt.protocol = "auto" or "3.1.1"'
-        elif not self._v5 and self._settings.protocol == "auto":
-            hint = "; it did so for MQTT 5 and for MQTT 3.1.1 alike"
+        if self._v5 and not self._accepted_once:  # (once accepted, the protocol is not why)
+            hint = (
+                "; a broker without MQTT 5 (RabbitMQ 3, amqtt) closes it this way too: set "
+                'mqtt.protocol = "3.1.1" for it (the bridge does not step down on a close, which '
+                "anyone on the path can cause)"
+            )
         text = (
             f"the MQTT broker closed the connection before accepting it ({reason}): check the "
             "broker's log "
@@ -453,19 +452,8 @@ class Connection:
         was, self._up, self._subscribed = self._up, False, False
         answered, self._answered = self._answered, False
         self.connected.clear()
-        if was or answered:
-            self._early_closes = 0
-        else:  # no CONNACK came (after one, the refusal was said)
-            hung_up = getattr(reason_code, "value", None) == CONNECTION_LOST  # the broker hung up
-            self._early_closes = self._early_closes + 1 if hung_up else 0
-            why = (  # (a proxy whose broker behind it is not up yet looks the same)
-                f"closed the connection before accepting MQTT 5, {self._early_closes} times in a "
-                "row (no CONNACK; if it does speak MQTT 5 and was only not ready, set "
-                'mqtt.protocol = "5")'
-            )
-            enough = hung_up and self._early_closes >= STEP_DOWN_CLOSES
-            if not (enough and self._fall_back(why)):
-                self._closed_early(str(reason_code))  # rule 6: never silent
+        if not was and not answered:  # no CONNACK came (after one, the refusal was said)
+            self._closed_early(str(reason_code))  # rule 6: never silent; never a step-down
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)

@@ -32,7 +32,7 @@ STRANGER = "another client published"
 @pytest.fixture(params=BROKERS)
 def kind(request: pytest.FixtureRequest) -> str:
     if request.param == "nats" and find_nats() is None:
-        pytest.skip("nats-server is not installed (tests/run installs Debian's nats-server)")
+        pytest.fail("nats-server is not installed (tests/run installs Debian's nats-server)")
     return str(request.param)
 
 
@@ -75,6 +75,12 @@ def test_the_bridge_says_which_protocol_it_speaks_and_what_that_means(
     if kind == "nats":
         (line,) = said(caplog, "using MQTT 3.1.1 from now on")
         assert 'refused MQTT 5 ("Unsupported protocol version")' in line
+        # the step-down is on B/bridge/info while it lasts, for Home Assistant and a dashboard
+        info = station.probe.wait_for("rotor/bridge/info", lambda m: "MQTT 3.1.1" in m.text)
+        (problem,) = json.loads(info.payload)["problems"]
+        assert "a retained target moves the rotor once" in problem
+    else:  # MQTT 5, or 3.1.1 chosen by hand: nothing stepped down
+        assert json.loads(station.retained()["rotor/bridge/info"])["problems"] == []
     assert said(caplog, "refused the connection") == []
 
 
