@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 import re
 import threading
+import time
+from collections.abc import Callable
 from datetime import datetime
 
 import pytest
@@ -20,6 +23,7 @@ from bridge.homeassistant import (
     RotatorInfo,
     all_configs,
 )
+from bridge.homeassistant.publisher import ROUND_MIN_S
 from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
 from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
@@ -170,8 +174,13 @@ class Recorder:
         self.published: list[tuple[str, str]] = []
         self.cleared: list[str] = []
         self.republished = threading.Event()
+        self.rounds = 0  # states sent again
         self.again: list[tuple[str, str]] = []  # configs sent again on a birth
         self.sent_again = threading.Event()
+
+    def republish(self) -> None:
+        self.rounds += 1
+        self.republished.set()
 
     def publish_again(self, topic: str, payload: str) -> None:
         self.again.append((topic, payload))
@@ -179,7 +188,10 @@ class Recorder:
 
 
 def publisher(
-    rec: Recorder, birth_delay_s: float = 0.0, info: RotatorInfo | None = None
+    rec: Recorder,
+    birth_delay_s: float = 0.0,
+    info: RotatorInfo | None = None,
+    clock: Callable[[], float] = time.monotonic,
 ) -> DiscoveryPublisher:
     topics = Topics("rotor", {"tower": "rotor"})
     info = info or RotatorInfo(
@@ -192,9 +204,10 @@ def publisher(
         rotators=[info],
         publish_retained=lambda t, p: rec.published.append((t, p)),
         clear_retained=rec.cleared.append,
-        republish_state=rec.republished.set,
+        republish_state=rec.republish,
         birth_delay_s=birth_delay_s,
         publish_again=rec.publish_again,
+        clock=clock,
     )
 
 
@@ -273,6 +286,50 @@ def test_a_birth_sends_every_config_again_once_per_delay() -> None:
     assert not rec.sent_again.wait(0.2)  # a quiet period, not a deadline
     pub.stop()
     assert len(rec.again) == len(rec.published)
+
+
+def test_a_flood_of_births_neither_pushes_the_state_back_nor_multiplies_it(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Births while a round's delay runs are counted, not obeyed: the state goes out once, the
+    delay after the first of them, however long they go on (each used to start the delay
+    again), and the log says it once."""
+    caplog.set_level(logging.INFO)
+    rec = Recorder()
+    pub = publisher(rec, birth_delay_s=0.2)
+    pub.publish_all()
+    deadline = time.monotonic() + slow(10)
+    births = 0
+    while not rec.republished.is_set() and time.monotonic() < deadline:
+        pub.on_message("homeassistant/status", b"online", False)
+        births += 1
+    assert rec.republished.is_set(), f"no state after {births} births"
+    wait_until(lambda: len(rec.again) == len(rec.published), slow(5), "every config again")
+    pub.stop()
+    assert rec.rounds == 1 and len(rec.again) == len(rec.published)
+    said = [
+        r.getMessage() for r in caplog.records if "Home Assistant came online" in r.getMessage()
+    ]
+    assert len(said) == 1, said
+
+
+def test_with_no_birth_delay_a_flood_of_births_costs_one_round_per_interval() -> None:
+    """``birth_delay_s = 0`` sends the state at once; a round (every config, the state) still
+    comes at most once per ROUND_MIN_S: 500 births cost one, not 500 (10 MB of configs)."""
+    now = [1000.0]
+    rec = Recorder()
+    pub = publisher(rec, birth_delay_s=0.0, clock=lambda: now[0])
+    pub.publish_all()
+    for _ in range(500):
+        pub.on_message("homeassistant/status", b"online", False)
+        wait_until(lambda: rec.rounds >= 1, slow(5), "the first round's state")
+    wait_until(lambda: len(rec.again) == len(rec.published), slow(5), "every config again")
+    assert rec.rounds == 1 and len(rec.again) == len(rec.published)
+    now[0] += ROUND_MIN_S
+    pub.on_message("homeassistant/status", b"online", False)
+    wait_until(lambda: rec.rounds == 2, slow(5), "the next interval's round")
+    wait_until(lambda: len(rec.again) == 2 * len(rec.published), slow(5), "its configs")
+    pub.stop()
 
 
 def test_home_assistant_birth_schedules_a_state_republish() -> None:

@@ -13,8 +13,10 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    whether changed or not: a broker that replays retained messages only to exact-topic
    subscriptions, RabbitMQ, gives Home Assistant's ``homeassistant/#`` none of them), then the
    retained state after a delay, so Home Assistant, which ignores state that arrives before it
-   has processed discovery, gets it. Births that come while a delay runs send nothing again: a
-   flood of them costs one round of configs per delay.
+   has processed discovery, gets it. Births that come while a round's delay runs, or within
+   ROUND_MIN_S of its start (a ``birth_delay_s`` of 0), send nothing again and do not push its
+   state back: a flood of births costs one round of configs and state, and one log line
+   (counting them), per delay and at most one per ROUND_MIN_S.
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -35,6 +38,8 @@ from bridge.model import RotatorStatus
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 
 log = logging.getLogger(__name__)
+
+ROUND_MIN_S = 2.0  # rule 5: a round of configs and state at most this often
 
 
 class DiscoveryPublisher:
@@ -52,6 +57,7 @@ class DiscoveryPublisher:
         republish_state: Callable[[], None],
         birth_delay_s: float = 10.0,
         publish_again: Callable[[str, str], None] | None = None,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.prefix = prefix
         self._disc = DiscoveryTopics(prefix)
@@ -66,6 +72,9 @@ class DiscoveryPublisher:
         self._birth_delay_s = birth_delay_s
         self._lock = threading.Lock()
         self._timer: threading.Timer | None = None
+        self._clock = clock
+        self._round_t = -1e18  # rule 5: when the last round of configs and state began
+        self._births_since = 0  # rule 5: births that began no round since it
         self._current: dict[str, str] = {}
 
     @property
@@ -137,16 +146,24 @@ class DiscoveryPublisher:
         return True
 
     def _schedule_republish(self) -> None:
+        """Rule 5: a round of configs now and state after the delay, unless one runs."""
+        now = self._clock()
         with self._lock:
-            waiting = self._timer is not None and self._timer.is_alive()
-            if self._timer is not None:
-                self._timer.cancel()
+            running = self._timer is not None and self._timer.is_alive()
+            if running or now - self._round_t < ROUND_MIN_S:
+                self._births_since += 1
+                return
+            self._round_t, more, self._births_since = now, self._births_since, 0
             self._timer = threading.Timer(self._birth_delay_s, self._republish_state)
             self._timer.daemon = True
             self._timer.start()
-        if not waiting and self._publish_again is not None:  # rule 5, not on paho's thread
+        if self._publish_again is not None:  # rule 5, not on paho's thread
             threading.Thread(target=self._configs_again, daemon=True).start()
-        log.info("Home Assistant came online; state follows in %g s", self._birth_delay_s)
+        log.info(
+            "Home Assistant came online; state follows in %g s%s",
+            self._birth_delay_s,
+            f" ({more} more birth messages came during the last round)" if more else "",
+        )
 
     def _configs_again(self) -> None:
         """Rule 5: every config, as published last (under the lock: see Lock)."""
