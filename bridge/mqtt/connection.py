@@ -110,7 +110,8 @@ UNSUPPORTED_PROTOCOL = 0x84  # rule 1: CONNACK for a version the broker does not
 MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/brokers.md)
     "a retained command published while the bridge is connected arrives without its retain "
     "flag and is carried out like any other (a retained target moves the rotor once), and "
-    "rotor-bridge remote cannot use this broker (it needs MQTT 5)"
+    "rotor-bridge remote's commands lose their send time, expiry and operator (a command held "
+    "up on the remote's link is carried out late): remote operation needs MQTT 5 on both sides"
 )
 # rule 7
 SESSION_TAKEN_OVER = 0x8E
