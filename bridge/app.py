@@ -242,6 +242,7 @@ class App:
             on_subscribed=self.mqtt.lane_subscribed,
             no_replay=self.mqtt.no_replay_subscriptions(),
         )
+        self.client.before_message = self.lane.first  # mqtt/lane.py rule 4: a stop before a backlog
         self.client.watch_owned(self.topics.owned())
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:

@@ -244,6 +244,7 @@ class Connection:
         self._last_refusal: str | None = None  # rule 6: each reason said once in a row
         self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
         self.connected = threading.Event()
+        self.before_message: Callable[[], None] | None = None  # lane.py rule 4
         c = new_client(settings, client_id)
         c.reconnect_delay_set(*self._reconnect_s)
         c.on_connect = self._on_connect
@@ -471,6 +472,9 @@ class Connection:
         self._ended(reason_code, ending, fight)
 
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
+        before = self.before_message
+        if before is not None:
+            before()  # another connection's messages go before this one's (lane.py rule 4)
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):
