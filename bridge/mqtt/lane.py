@@ -35,8 +35,9 @@ Rules:
    interval only when the thread asking for it runs, and on a busy machine the kernel ran the
    reader instead, for up to ~90 ms. One poll of a socket per message (about a microsecond); a
    backlog is read no slower when no stop comes. The wait is a courtesy, never a condition:
-   past YIELD_MAX_S the main connection goes on, and what comes on the lane keeps its order
-   rules (lastword.py) whenever it is read.
+   past YIELD_MAX_S the main connection goes on, and past YIELD_BUDGET_S in a second (a flood
+   of anything on the stop and lock topics keeps the lane's socket busy) it waits no more in
+   that second; what comes on the lane keeps its order rules (lastword.py) whenever it is read.
 """
 
 from __future__ import annotations
@@ -59,6 +60,7 @@ log = logging.getLogger(__name__)
 
 YIELD_S = 0.0002  # rule 4: one step of the main connection's wait
 YIELD_MAX_S = 0.02  # rule 4: at most this long per message
+YIELD_BUDGET_S = 0.1  # rule 4: ... and this long in all per second (a flood on the lane)
 
 
 def lane_client_id(settings: MqttSettings) -> str:
@@ -93,17 +95,29 @@ class StopLane(Connection):
         self._started = False
         self._start_lock = threading.Lock()
         self._reported: set[str] = set()
+        self.clock: Callable[[], float] = time.monotonic  # rule 4 (the tests give their own)
+        self.sleep: Callable[[float], None] = time.sleep
+        self._window_t = -1e18  # rule 4: the second the main connection's waits are counted in
+        self._yielded = 0.0
 
     def first(self) -> None:
         """Rule 4, on the main connection's thread: while the lane has bytes to read, wait."""
         sock = self._client.socket()
         if sock is None or not self.connected.is_set():
             return
+        now = self.clock()
+        if now - self._window_t >= 1.0:
+            self._window_t, self._yielded = now, 0.0
         waited = 0.0
         try:
-            while waited < YIELD_MAX_S and select.select([sock], [], [], 0)[0]:
-                time.sleep(YIELD_S)  # the interpreter lock and a core for the lane's thread
+            while (
+                waited < YIELD_MAX_S
+                and self._yielded < YIELD_BUDGET_S
+                and select.select([sock], [], [], 0)[0]
+            ):
+                self.sleep(YIELD_S)  # the interpreter lock and a core for the lane's thread
                 waited += YIELD_S
+                self._yielded += YIELD_S
         except (OSError, ValueError):  # closed meanwhile: the lane's own thread notices
             return
 

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 import pytest
 
 from bridge.mqtt.connection import Connection
-from bridge.mqtt.lane import StopLane
+from bridge.mqtt.lane import YIELD_BUDGET_S, YIELD_MAX_S, YIELD_S, StopLane
 from bridge.settings import MqttSettings
 from tests.support.waiting import slow
 
@@ -86,3 +86,28 @@ def test_the_main_connection_calls_it_before_every_message() -> None:
 
     conn._on_message(conn._client, None, Msg())  # type: ignore[arg-type]
     assert calls == ["lane first", "message rotor/target"]
+
+
+def test_a_flood_on_the_lane_costs_the_main_connection_a_bounded_share_of_each_second(
+    lane: tuple[StopLane, socket.socket],
+) -> None:
+    """Junk flooding the stop and lock topics keeps the lane's socket busy: the main connection
+    then waits YIELD_BUDGET_S in a second at most, not YIELD_MAX_S for every target."""
+    stop_lane, broker = lane
+    broker.sendall(b"\x30\x0drotor/stopjunk")  # never read: a lane that is always busy
+    now = [100.0]
+    waited: list[float] = []
+
+    def sleep(s: float) -> None:
+        waited.append(s)
+        now[0] += s
+
+    stop_lane.clock = lambda: now[0]
+    stop_lane.sleep = sleep
+    for _ in range(1000):  # a thousand targets within the same second
+        stop_lane.first()
+    assert sum(waited) == pytest.approx(YIELD_BUDGET_S, abs=YIELD_S)
+    now[0] += 1.0  # the next second: the lane goes first again
+    waited.clear()
+    stop_lane.first()
+    assert sum(waited) == pytest.approx(YIELD_MAX_S, abs=YIELD_S)
