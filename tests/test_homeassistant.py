@@ -291,9 +291,10 @@ def test_a_birth_sends_every_config_again_once_per_delay() -> None:
 def test_a_flood_of_births_neither_pushes_the_state_back_nor_multiplies_it(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    """Births while a round's delay runs are counted, not obeyed: the state goes out once, the
-    delay after the first of them, however long they go on (each used to start the delay
-    again), and the log says it once."""
+    """Births while a round's delay runs start nothing at once: the state goes out the delay
+    after the first of them, however long they go on (each used to start the delay again), and
+    the births during it get one round of their own after it, said in one line that counts
+    them."""
     caplog.set_level(logging.INFO)
     rec = Recorder()
     pub = publisher(rec, birth_delay_s=0.2)
@@ -304,13 +305,28 @@ def test_a_flood_of_births_neither_pushes_the_state_back_nor_multiplies_it(
         pub.on_message("homeassistant/status", b"online", False)
         births += 1
     assert rec.republished.is_set(), f"no state after {births} births"
-    wait_until(lambda: len(rec.again) == len(rec.published), slow(5), "every config again")
+    wait_until(lambda: rec.rounds == 2, slow(10), "the round of the births during the first")
+    wait_until(lambda: len(rec.again) == 2 * len(rec.published), slow(5), "its configs")
     pub.stop()
-    assert rec.rounds == 1 and len(rec.again) == len(rec.published)
+    assert rec.rounds == 2
     said = [
         r.getMessage() for r in caplog.records if "Home Assistant came online" in r.getMessage()
     ]
-    assert len(said) == 1, said
+    assert len(said) == 2 and f"({births - 1} more birth messages" in said[1], said
+
+
+def test_a_home_assistant_that_restarts_during_a_round_gets_a_round_of_its_own() -> None:
+    """A birth during another's delay (a forged one first, or two restarts close together):
+    the later Home Assistant still gets every config and then the state, a round after it."""
+    rec = Recorder()
+    pub = publisher(rec, birth_delay_s=0.2)
+    pub.publish_all()
+    pub.on_message("homeassistant/status", b"online", False)
+    pub.on_message("homeassistant/status", b"online", False)  # the real restart, meanwhile
+    wait_until(lambda: rec.rounds == 2, slow(10), "a second round")
+    wait_until(lambda: len(rec.again) == 2 * len(rec.published), slow(5), "configs twice")
+    pub.stop()
+    assert rec.rounds == 2
 
 
 def test_with_no_birth_delay_a_flood_of_births_costs_one_round_per_interval() -> None:

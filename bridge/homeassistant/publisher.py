@@ -14,8 +14,10 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
    subscriptions, RabbitMQ, gives Home Assistant's ``homeassistant/#`` none of them), then the
    retained state after a delay, so Home Assistant, which ignores state that arrives before it
    has processed discovery, gets it. Births that come while a round's delay runs, or within
-   ROUND_MIN_S of its start (a ``birth_delay_s`` of 0), send nothing again and do not push its
-   state back: a flood of births costs one round of configs and state, and one log line
+   ROUND_MIN_S of its start (a ``birth_delay_s`` of 0), do not push its state back and start
+   nothing at once; once its state is out they get one round of their own (one of them may be
+   a Home Assistant that restarted meanwhile), ROUND_MIN_S after the last one's start at the
+   earliest: a flood of births costs one round of configs and state, and one log line
    (counting them), per delay and at most one per ROUND_MIN_S.
 
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
@@ -75,6 +77,7 @@ class DiscoveryPublisher:
         self._clock = clock
         self._round_t = -1e18  # rule 5: when the last round of configs and state began
         self._births_since = 0  # rule 5: births that began no round since it
+        self._stopped = False
         self._current: dict[str, str] = {}
 
     @property
@@ -154,7 +157,7 @@ class DiscoveryPublisher:
                 self._births_since += 1
                 return
             self._round_t, more, self._births_since = now, self._births_since, 0
-            self._timer = threading.Timer(self._birth_delay_s, self._republish_state)
+            self._timer = threading.Timer(self._birth_delay_s, self._round_done)
             self._timer.daemon = True
             self._timer.start()
         if self._publish_again is not None:  # rule 5, not on paho's thread
@@ -165,6 +168,24 @@ class DiscoveryPublisher:
             f" ({more} more birth messages came during the last round)" if more else "",
         )
 
+    def _round_done(self) -> None:
+        """Rule 5: the round's state; births that came during the round get a round of their
+        own (one may be a Home Assistant that restarted meanwhile), ROUND_MIN_S after this
+        one's start at the earliest."""
+        self._republish_state()
+        with self._lock:
+            if self._stopped or self._births_since == 0:
+                return
+            wait = max(0.0, self._round_t + ROUND_MIN_S - self._clock())
+            self._timer = threading.Timer(wait, self._trailing)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _trailing(self) -> None:
+        with self._lock:
+            self._timer = None  # (this thread: not a round that runs)
+        self._schedule_republish()
+
     def _configs_again(self) -> None:
         """Rule 5: every config, as published last (under the lock: see Lock)."""
         with self._lock:
@@ -174,5 +195,6 @@ class DiscoveryPublisher:
 
     def stop(self) -> None:
         with self._lock:
+            self._stopped = True
             if self._timer is not None:
                 self._timer.cancel()

@@ -474,7 +474,10 @@ class Connection:
     def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
         before = self.before_message
         if before is not None:
-            before()  # another connection's messages go before this one's (lane.py rule 4)
+            try:
+                before()  # another connection's messages go before this one's (lane.py rule 4)
+            except Exception:  # rule 5: a courtesy that fails costs neither thread nor message
+                log.exception("error letting the stop lane go first")
         try:
             payload = bytes(msg.payload)
             if not self._intercepted(msg.topic, payload):

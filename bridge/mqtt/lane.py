@@ -105,21 +105,20 @@ class StopLane(Connection):
         sock = self._client.socket()
         if sock is None or not self.connected.is_set():
             return
-        now = self.clock()
-        if now - self._window_t >= 1.0:
-            self._window_t, self._yielded = now, 0.0
-        waited = 0.0
+        t0 = self.clock()
+        if t0 - self._window_t >= 1.0:
+            self._window_t, self._yielded = t0, 0.0
+        # time that passed, not steps asked for: on a busy machine a step of YIELD_S can take
+        # tens of milliseconds before this thread has the interpreter lock back
+        left = min(YIELD_MAX_S, YIELD_BUDGET_S - self._yielded)
+        t = t0
         try:
-            while (
-                waited < YIELD_MAX_S
-                and self._yielded < YIELD_BUDGET_S
-                and select.select([sock], [], [], 0)[0]
-            ):
+            while t - t0 < left and select.select([sock], [], [], 0)[0]:
                 self.sleep(YIELD_S)  # the interpreter lock and a core for the lane's thread
-                waited += YIELD_S
-                self._yielded += YIELD_S
+                t = self.clock()
         except (OSError, ValueError):  # closed meanwhile: the lane's own thread notices
-            return
+            pass
+        self._yielded += t - t0
 
     def start(self) -> None:
         """Once; never after ``stop()`` (a shutdown under way: the lane stays down)."""
