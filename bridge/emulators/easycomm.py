@@ -49,11 +49,11 @@ from dataclasses import dataclass
 
 from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
+from bridge.emulators.twoaxes import EL_TOP_DEG, TwoAxes
 
 __all__ = ["MODELS", "EasycommController", "EasycommModel", "EasycommState", "Outcome"]
 
 AZ_TOP_DEG = 360.0
-EL_TOP_DEG = 180.0
 _MAX_LINE = 64
 _VALUE = re.compile(r"(AZ|EL)([-+]?\d+(?:\.\d*)?)")
 _VELOCITY = re.compile(r"(VL|VR|VU|VD)(\d{1,5})")
@@ -100,7 +100,7 @@ class EasycommState(RotatorState):
     target_el_deg: float | None = None
 
 
-class EasycommController:
+class EasycommController(TwoAxes):
     """One Easycomm controller with its rotor(s). See the module rules."""
 
     def __init__(
@@ -141,6 +141,7 @@ class EasycommController:
         self._rx = bytearray()
         self._log: list[LoggedFrame] = []
         self._events: list[MotionEvent] = []
+        self.name, self.has_elevation = self.spec.name, self.spec.elevation  # (TwoAxes)
         self._event(now, "power on")
 
     # -- sans-IO surface ------------------------------------------------------------------------
@@ -206,55 +207,7 @@ class EasycommController:
         self._tx.clear()
         self._event(now, "power on")
 
-    def press_brake(self, now: float) -> bool:
-        """No brake and no panel on most of these: a hand on the stop switch stops the motors."""
-        return self._halt(self._update(now), "panel stop")
-
-    def manual_rotate(self, az_deg: float, now: float, *, el_deg: float | None = None) -> None:
-        now = self._update(now)
-        if not 0.0 <= az_deg <= AZ_TOP_DEG:
-            raise ValueError(f"az {az_deg} outside 0..{AZ_TOP_DEG:g}")
-        if el_deg is not None and (not self.spec.elevation or not 0.0 <= el_deg <= EL_TOP_DEG):
-            raise ValueError(f"el {el_deg} not possible on {self.spec.name}")
-        if self._az.manual_move(az_deg, now):
-            self._event(now, "move", f"panel az to {az_deg:g}")
-        if el_deg is not None and self._el.manual_move(el_deg, now):
-            self._event(now, "move", f"panel el to {el_deg:g}")
-
-    def jam(self, now: float) -> None:
-        now = self._update(now)
-        self._az.jam(now)
-        self._el.jam(now)
-        self._event(now, "jammed")
-
-    def unjam(self, now: float) -> None:
-        now = self._update(now)
-        self._az.unjam(now)
-        self._el.unjam(now)
-        self._event(now, "unjammed")
-
     # -- internals ------------------------------------------------------------------------------
-
-    def _update(self, now: float) -> float:
-        now = max(now, self._now_s)
-        self._now_s = now
-        for axis, name in ((self._az, "az"), (self._el, "el")):
-            arrival_s = axis.advance(now)
-            if arrival_s is not None:
-                self._event(arrival_s, "arrived", f"{name} at {axis.position_deg:g}")
-        return now
-
-    def _event(self, time_s: float, kind: str, detail: str = "") -> None:
-        self._events.append(MotionEvent(time_s, kind, self._az.position_deg_at(time_s), detail))
-
-    def _halt(self, now: float, reason: str, axes: str = "az el") -> bool:
-        stopped = [axis.stop(now) for name, axis in self._named() if name in axes]
-        if any(stopped):
-            self._event(now, "stopped", reason)
-        return any(stopped)
-
-    def _named(self) -> list[tuple[str, Axis]]:
-        return [("az", self._az), ("el", self._el)]
 
     def _line(self, line: bytes, now: float) -> None:
         words = line.decode("latin-1").upper().split()

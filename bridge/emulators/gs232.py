@@ -48,11 +48,11 @@ from dataclasses import dataclass
 
 from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
+from bridge.emulators.twoaxes import EL_TOP_DEG, TwoAxes
 
 __all__ = ["MODELS", "Gs232", "Gs232Model", "Gs232State", "Outcome"]
 
 AZ_TOP_DEG = 450.0  # the azimuth rotor's travel on a 450-degree model
-EL_TOP_DEG = 180.0
 REFUSAL = b"?>"
 _MAX_LINE = 32
 _THREE = r"(\d{3})"
@@ -99,7 +99,7 @@ class Gs232State(RotatorState):
     az_range_deg: float = 360.0
 
 
-class Gs232:
+class Gs232(TwoAxes):
     """One GS-232 box with its rotor(s). See the module rules."""
 
     def __init__(
@@ -140,6 +140,7 @@ class Gs232:
         self._rx = bytearray()
         self._log: list[LoggedFrame] = []
         self._events: list[MotionEvent] = []
+        self.name, self.has_elevation = self.spec.name, self.spec.elevation  # (TwoAxes)
         self._event(now, "power on")
 
     # -- sans-IO surface ------------------------------------------------------------------------
@@ -210,55 +211,12 @@ class Gs232:
         self._set_level(4, now)
         self._event(now, "power on")
 
-    def press_brake(self, now: float) -> bool:
-        """The front panel has no brake; letting go of the turn switch stops the motors."""
-        return self._halt(self._update(now), "panel stop")
-
-    def manual_rotate(self, az_deg: float, now: float, *, el_deg: float | None = None) -> None:
-        now = self._update(now)
-        if not 0.0 <= az_deg <= self._range_deg:
-            raise ValueError(f"az {az_deg} outside 0..{self._range_deg:g}")
-        if el_deg is not None and (not self.spec.elevation or not 0.0 <= el_deg <= EL_TOP_DEG):
-            raise ValueError(f"el {el_deg} not possible on {self.spec.name}")
-        if self._az.manual_move(az_deg, now):
-            self._event(now, "move", f"panel az to {az_deg:g}")
-        if el_deg is not None and self._el.manual_move(el_deg, now):
-            self._event(now, "move", f"panel el to {el_deg:g}")
-
-    def jam(self, now: float) -> None:
-        now = self._update(now)
-        self._az.jam(now)
-        self._el.jam(now)
-        self._event(now, "jammed")
-
-    def unjam(self, now: float) -> None:
-        now = self._update(now)
-        self._az.unjam(now)
-        self._el.unjam(now)
-        self._event(now, "unjammed")
+    @property
+    def az_top_deg(self) -> float:
+        """twoaxes.py rule 2: 360 or 450 as the box is set now (P36, P45)."""
+        return self._range_deg
 
     # -- internals ------------------------------------------------------------------------------
-
-    def _update(self, now: float) -> float:
-        now = max(now, self._now_s)
-        self._now_s = now
-        for axis, name in ((self._az, "az"), (self._el, "el")):
-            arrival_s = axis.advance(now)
-            if arrival_s is not None:
-                self._event(arrival_s, "arrived", f"{name} at {axis.position_deg:g}")
-        return now
-
-    def _event(self, time_s: float, kind: str, detail: str = "") -> None:
-        self._events.append(MotionEvent(time_s, kind, self._az.position_deg_at(time_s), detail))
-
-    def _halt(self, now: float, reason: str, axes: str = "az el") -> bool:
-        stopped = [axis.stop(now) for name, axis in self._named() if name in axes]
-        if any(stopped):
-            self._event(now, "stopped", reason)
-        return any(stopped)
-
-    def _named(self) -> list[tuple[str, Axis]]:
-        return [("az", self._az), ("el", self._el)]
 
     def _answer(self, data: bytes, now: float) -> None:
         self._tx.send(data + self.line_ending if data else b"\r", now)  # rule 1 of the frame

@@ -1,0 +1,85 @@
+"""What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
+whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py).
+
+Rules:
+1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
+   event at the moment it happened, not when it was noticed.
+2. Turning by hand (``manual_rotate``) takes the box's whole range: azimuth 0..``az_top_deg``,
+   elevation 0..EL_TOP_DEG on a box with an elevation rotor; anything else is a ValueError.
+3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
+"""
+
+from __future__ import annotations
+
+from bridge.emulators.base import MotionEvent
+from bridge.emulators.physics import Axis
+
+EL_TOP_DEG = 180.0
+
+
+class TwoAxes:
+    """The axes' part of a box; the protocol's class sets the attributes below."""
+
+    _az: Axis
+    _el: Axis
+    _now_s: float
+    _events: list[MotionEvent]
+    name: str  # the model, for errors
+    has_elevation: bool
+
+    @property
+    def az_top_deg(self) -> float:
+        """Rule 2: the azimuth range the box is set to now."""
+        return self._az.max_deg
+
+    def press_brake(self, now: float) -> bool:
+        """No brake on these: letting go of the turn switch, or a hand on the stop switch,
+        stops the motors."""
+        return self._halt(self._update(now), "panel stop")
+
+    def manual_rotate(self, az_deg: float, now: float, *, el_deg: float | None = None) -> None:
+        now = self._update(now)
+        top = self.az_top_deg
+        if not 0.0 <= az_deg <= top:
+            raise ValueError(f"az {az_deg} outside 0..{top:g}")
+        if el_deg is not None and (not self.has_elevation or not 0.0 <= el_deg <= EL_TOP_DEG):
+            raise ValueError(f"el {el_deg} not possible on {self.name}")
+        if self._az.manual_move(az_deg, now):
+            self._event(now, "move", f"panel az to {az_deg:g}")
+        if el_deg is not None and self._el.manual_move(el_deg, now):
+            self._event(now, "move", f"panel el to {el_deg:g}")
+
+    def jam(self, now: float) -> None:
+        now = self._update(now)
+        self._az.jam(now)
+        self._el.jam(now)
+        self._event(now, "jammed")
+
+    def unjam(self, now: float) -> None:
+        now = self._update(now)
+        self._az.unjam(now)
+        self._el.unjam(now)
+        self._event(now, "unjammed")
+
+    def _update(self, now: float) -> float:
+        """Rule 1."""
+        now = max(now, self._now_s)
+        self._now_s = now
+        for name, axis in self._named():
+            arrival_s = axis.advance(now)
+            if arrival_s is not None:
+                self._event(arrival_s, "arrived", f"{name} at {axis.position_deg:g}")
+        return now
+
+    def _event(self, time_s: float, kind: str, detail: str = "") -> None:
+        self._events.append(MotionEvent(time_s, kind, self._az.position_deg_at(time_s), detail))
+
+    def _halt(self, now: float, reason: str, axes: str = "az el") -> bool:
+        """Rule 3."""
+        stopped = [axis.stop(now) for name, axis in self._named() if name in axes]
+        if any(stopped):
+            self._event(now, "stopped", reason)
+        return any(stopped)
+
+    def _named(self) -> list[tuple[str, Axis]]:
+        return [("az", self._az), ("el", self._el)]
