@@ -102,10 +102,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.engines import engine_at, engine_env
 from benchmarks.harness import (
     ABORT,
     PYTHON,
-    REPO,
     BenchError,
     Mqtt,
     Scope,
@@ -119,7 +119,7 @@ from benchmarks.ptyhop import PtyHop
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import EmuHost, open_line
 from bridge.mosquitto import free_port
-from tests.support import BridgeProcess, bridge_env
+from tests.support import BridgeProcess
 from tests.support.process import bridge_config
 
 GOAL_MS = 10.0
@@ -1090,45 +1090,6 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
 
 
 # == the engine of 2026-11-26 against this one ===================================================
-def old_engine(scope: Scope) -> tuple[Path | None, str]:
-    """The old ``bridge/`` out of git into the work directory, or why not."""
-    root = scope.workdir / f"engine-{OLD_COMMIT}"
-    root.mkdir(parents=True, exist_ok=True)
-    try:
-        archive = subprocess.run(
-            ["git", "-C", str(REPO), "archive", OLD_COMMIT, "bridge"],
-            capture_output=True,
-            timeout=60,
-            check=True,
-        )
-        subprocess.run(["tar", "-x", "-C", str(root)], input=archive.stdout, check=True)
-        where = subprocess.run(  # the old bridge is what `python -m bridge` runs there
-            [PYTHON, "-c", "import bridge; print(bridge.__file__)"],
-            capture_output=True,
-            text=True,
-            cwd=root,
-            env=old_env(root),
-            timeout=60,
-            check=True,
-        ).stdout.strip()
-        if not where.startswith(str(root)):
-            return None, f"the old engine's bridge/ is not the one imported there ({where})"
-    except FileNotFoundError as exc:
-        return None, f"{exc.filename} is not installed"
-    except subprocess.TimeoutExpired as exc:
-        return None, f"{' '.join(map(str, exc.cmd))} took over {exc.timeout:g} s"
-    except subprocess.CalledProcessError as exc:
-        said = exc.stderr.decode(errors="replace") if isinstance(exc.stderr, bytes) else exc.stderr
-        return None, f"{' '.join(map(str, exc.cmd))[:80]} failed: {(said or '').strip()[-300:]}"
-    return root, ""
-
-
-def old_env(root: Path) -> dict[str, str]:
-    env = bridge_env()
-    env["PYTHONPATH"] = str(root)  # the old bridge, first and alone
-    return env
-
-
 def start_engine(
     scope: Scope, engine: str, old_root: Path | None, rng: random.Random
 ) -> tuple[BridgeProcess, list[Rotor]]:
@@ -1152,7 +1113,7 @@ def start_engine(
     if old_root is None:
         spawn = scope.spawner
     else:
-        env = old_env(old_root)
+        env = engine_env(old_root)
 
         def spawn(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
             return scope.spawn(argv, log_name=log.name, cwd=old_root, env=env)
@@ -1180,7 +1141,7 @@ def start_engine(
 def pairs(scope: Scope, n: int, rng: random.Random) -> dict[str, Any]:
     """``n`` target+stop pairs on each engine, their rotors taking turns."""
     with Scope(scope.workdir / "pairs") as inner:
-        old_root, why = old_engine(inner)
+        old_root, why = engine_at(inner, OLD_COMMIT)
         if old_root is None:
             return {"error": why}
         bridges, rotors = {}, []
