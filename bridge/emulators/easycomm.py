@@ -159,31 +159,12 @@ class EasycommController(TwoAxes):
                 line, self._rx = bytes(self._rx), bytearray()
                 self._log.append(LoggedFrame(now, line, Outcome.REFUSED.value))
 
-    def due_output(self, now: float) -> bytes:
-        self._update(now)
-        return self._tx.due(now)
-
-    def next_wakeup(self, now: float) -> float | None:
-        self._update(now)
-        times = [self._tx.next_due_s(), self._az.arrival_time_s(), self._el.arrival_time_s()]
-        pending = [t for t in times if t is not None]
-        return min(pending) if pending else None
-
     # -- ground truth ---------------------------------------------------------------------------
 
     def state(self, now: float) -> EasycommState:
         now = self._update(now)
-        el = self._el if self.spec.elevation else None
         return EasycommState(
-            time_s=now,
-            az_deg=self._az.position_deg,
-            el_deg=None if el is None else el.position_deg,
-            is_moving=self._az.is_moving or self._el.is_moving,
-            is_jammed=self._az.is_jammed,
-            in_brake_delay=False,
-            target_az_deg=self._az.target_deg,
-            target_el_deg=None if el is None else el.target_deg,
-            driver=self._az.driver or self._el.driver,
+            **self._truth(now),
         )
 
     @property

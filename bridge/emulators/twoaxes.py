@@ -11,7 +11,9 @@ Rules:
 
 from __future__ import annotations
 
-from bridge.emulators.base import MotionEvent
+from typing import Any
+
+from bridge.emulators.base import MotionEvent, PacedLine
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
@@ -24,6 +26,7 @@ class TwoAxes:
     _el: Axis
     _now_s: float
     _events: list[MotionEvent]
+    _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
 
@@ -60,6 +63,32 @@ class TwoAxes:
         self._az.unjam(now)
         self._el.unjam(now)
         self._event(now, "unjammed")
+
+    def due_output(self, now: float) -> bytes:
+        self._update(now)
+        return self._tx.due(now)
+
+    def next_wakeup(self, now: float) -> float | None:
+        self._update(now)
+        times = [self._tx.next_due_s(), self._az.arrival_time_s(), self._el.arrival_time_s()]
+        pending = [t for t in times if t is not None]
+        return min(pending) if pending else None
+
+    def _truth(self, now: float) -> dict[str, Any]:
+        """The ground truth both axes give (RotatorState's fields), at ``now``, for the box's own
+        state class to add to."""
+        el = self._el if self.has_elevation else None
+        return {
+            "time_s": now,
+            "az_deg": self._az.position_deg,
+            "el_deg": None if el is None else el.position_deg,
+            "is_moving": self._az.is_moving or self._el.is_moving,
+            "is_jammed": self._az.is_jammed,
+            "in_brake_delay": False,
+            "target_az_deg": self._az.target_deg,
+            "target_el_deg": None if el is None else el.target_deg,
+            "driver": self._az.driver or self._el.driver,
+        }
 
     def _update(self, now: float) -> float:
         """Rule 1."""
