@@ -213,6 +213,11 @@ class Controller:
                 if reply.reason is JunkReason.POWER_ON:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self.options.all_due()
+                if reply.reason is JunkReason.REFUSED:  # motion.py rule 8
+                    self.motion, events = mo.refused(self.motion, self.cfg.motion, now)
+                    self._motion_events(events, now)
+                    if events:
+                        continue  # the answer to the target, reported as such: no junk
                 link.add_junk(reply.data, now)
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now)

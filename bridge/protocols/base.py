@@ -49,6 +49,9 @@ class JunkReason(enum.StrEnum):
     UNTRUSTED = "untrusted"
     # the controller announced that it was switched on: it has forgotten its options
     POWER_ON = "power_on"
+    # the controller answered a command with its refusal (GS-232's ``?>``): a target that went
+    # out and has not moved the rotor is dropped and reported, not waited on until a stall
+    REFUSED = "refused"
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ Rules:
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
-3. ``?>`` (the box refused a command) is junk with its own detail, whenever it comes and
+3. ``?>`` (the box refused a command) is junk of its own reason (REFUSED), whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
    0..180 (elevation) they are refused before anything is sent.
@@ -143,7 +143,8 @@ class Gs232Codec:
                 if refused:  # what came before it on its line
                     self._line(bytes(self._buf[:refused]), out)
                 del self._buf[: refused + len(REFUSED)]
-                self._junk(REFUSED, JunkReason.NOISE, "the controller refused a command (?>)", out)
+                why = "the controller refused a command (?>)"
+                self._junk(REFUSED, JunkReason.REFUSED, why, out)
                 continue
             if end == -1:
                 if len(self._buf) > _MAX_LINE:
