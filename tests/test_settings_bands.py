@@ -10,6 +10,7 @@ import pytest
 
 from bridge.settings import ConfigError, load_settings
 from bridge.wiring import worker_config
+from tests.support import ROOT
 
 TWO = (
     '[[rotators]]\nid = "high"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n{a}\n'
@@ -68,3 +69,11 @@ def test_rotators_chosen_by_band_may_share_one_n1mm_name(tmp_path: Path) -> None
         'n1mm_rotor_name = "Tower"\nbands = ["40m"]',
     )
     assert [r.n1mm_rotor_name for r in s.rotators] == ["Tower", "Tower"]  # type: ignore[attr-defined]
+
+
+def test_the_band_map_example_loads() -> None:
+    s = load_settings(ROOT / "config" / "band-map.toml", environ={})
+    assert [(r.id, r.n1mm_rotor_name, r.bands) for r in s.rotators] == [
+        ("high", "Tower", ["20m", "15m", "10m"]),
+        ("low", "Tower", ["40m", "80m"]),
+    ]
