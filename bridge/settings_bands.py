@@ -32,7 +32,9 @@ class BandFields(BaseModel):
         "message's band, and following WSJT-X turns it only while WSJT-X's dial is on one of "
         "them; no two rotators share a band",
         examples=[["20m", "15m", "10m"]],
-        json_schema_extra={"unset": "no band: turned by its N1MM name alone"},
+        json_schema_extra={
+            "unset": "no band: turned by its N1MM name alone; follows on every band"
+        },
     )
 
     @field_validator("bands")
