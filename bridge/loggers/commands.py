@@ -17,8 +17,9 @@ Rules:
    rotator's own rules pick the way round); one beyond that is refused (a mis-scaled value,
    99999, must not become 279). An elevation sent to an azimuth-only rotator is ignored.
 4. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
-   listens on that port, except a stop, which stops every rotator on it; a stop naming several
-   rotors stops each of them on the port, a fault behind one not keeping it from the next.
+   listens on that port (or by band: rule 5), except a stop, which stops every rotator on it;
+   a stop naming several rotors stops each of them on the port, a fault behind one not keeping
+   it from the next.
    ``bidirectional`` 1 turns to the heading or its reciprocal, whichever is nearer the bearing.
    A non-zero ``offset`` is logged once and not applied (its meaning is not documented).
 5. N1MM by band (``choose``, pure): a turn goes to the one rotator on the port that answers to
