@@ -208,7 +208,12 @@ class App:
                 self.loggers.add_pst(rot, r.pst_udp_port, r.pst_udp_bind)
             if r.n1mm_rotor_name is not None:
                 self.loggers.add_n1mm(
-                    rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
+                    rot,
+                    r.n1mm_rotor_name,
+                    r.n1mm_udp_port,
+                    r.n1mm_udp_bind,
+                    r.n1mm_report_address,
+                    tuple(r.bands),
                 )
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)

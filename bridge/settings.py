@@ -190,13 +190,23 @@ class Settings(BaseSettings):
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
             raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
-        names = [
-            (r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name)
-            for r in self.rotators
-            if r.n1mm_rotor_name is not None
-        ]
-        if len(set(names)) != len(names):
-            raise ValueError("two rotators have one n1mm_rotor_name on one N1MM port")
+        named = [r for r in self.rotators if r.n1mm_rotor_name is not None]
+        names = [(r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name) for r in named]
+        for key in {n for n in names if names.count(n) > 1}:  # one name, chosen by band
+            if any(n == key and not r.bands for n, r in zip(names, named, strict=True)):
+                raise ValueError(
+                    f"two rotators have n1mm_rotor_name {key[2]!r} on one N1MM port: give "
+                    "each its own, or give each of them its bands to be chosen by"
+                )
+        owner: dict[str, str] = {}  # settings_bands.py rule 3
+        for r in self.rotators:
+            for band in r.bands:
+                if band in owner:
+                    raise ValueError(
+                        f"rotators {owner[band]!r} and {r.id!r} both have {band!r} in bands: "
+                        "a band turns one antenna"
+                    )
+                owner[band] = r.id
         topics = [self.rotator_topic(r) for r in self.rotators]
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")

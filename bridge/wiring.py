@@ -67,7 +67,9 @@ def worker_config(
             step_deg=r.effective_track_step_deg,
             at_los=r.track_at_los,
         ),
-        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
+        follow=replace(
+            follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx, bands=tuple(r.bands)
+        ),
         wind=wind_config(r),
     )
 

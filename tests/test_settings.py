@@ -397,7 +397,7 @@ TWO = (
     ("a", "b", "message"),
     [
         ("pst_udp_port = 12000", "pst_udp_port = 12000", "share one pst_udp_port"),
-        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "one n1mm_rotor_name on one N1MM"),
+        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "n1mm_rotor_name 'T' on one N1MM"),
         ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
         ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
         ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),

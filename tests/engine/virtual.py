@@ -199,9 +199,11 @@ class VirtualRotator:
         self.mailbox.put_follow(Follow(on, long_path))
         self._take()
 
-    def heard(self, call: str, grid: str, transmitting: bool = False) -> None:
+    def heard(
+        self, call: str, grid: str, transmitting: bool = False, dial_hz: int | None = None
+    ) -> None:
         """What WSJT-X says, as the listener hands it on (wsjtx/server.py)."""
-        self.mailbox.put_heard(Heard(call, grid, transmitting))
+        self.mailbox.put_heard(Heard(call, grid, transmitting, dial_hz=dial_hz))
         self._take()
 
     def wall(self) -> float:
