@@ -193,6 +193,7 @@ class NoMqtt5:
         self.target = port
         self.levels: list[int | None] = []
         self.close_all = False  # closes on MQTT 3.1.1 too (an ACL, a connection limit)
+        self.v5_closes_left: int | None = None  # closes only so many MQTT 5 ones (a restart)
         self._listener = socket.create_server(("127.0.0.1", 0))
         self.port = self._listener.getsockname()[1]
         self._socks: list[socket.socket] = []
@@ -223,7 +224,10 @@ class NoMqtt5:
             level = protocol_level(head)
         with self._lock:
             self.levels.append(level)
-        if level == 5 or self.close_all or self._closed:
+            closes_v5 = level == 5 and self.v5_closes_left != 0
+            if closes_v5 and self.v5_closes_left is not None:
+                self.v5_closes_left -= 1
+        if closes_v5 or self.close_all or self._closed:
             sock.close()  # what RabbitMQ 3.10 does with MQTT 5
             return
         up = socket.create_connection(("127.0.0.1", self.target))
