@@ -42,7 +42,7 @@ from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.view import RotatorFacts
-from bridge.wiring import worker_config
+from bridge.wiring import group_of, worker_config
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
@@ -80,7 +80,8 @@ class App:
         give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
-        self.topics = Topics(settings.mqtt.base_topic, roots)
+        groups = {g.id: settings.group_topic(g) for g in settings.groups}  # mqtt/groups.py
+        self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
         self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
@@ -202,6 +203,8 @@ class App:
                 self.emulations.append(gs232_pty(rot, r.gs232_pty))
             if r.easycomm_pty is not None:
                 self.emulations.append(easycomm_pty(rot, r.easycomm_pty))
+        for g in settings.groups:  # turned together from G/target and G/stop (mqtt/groups.py)
+            self.mqtt.attach_group(group_of(g))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:

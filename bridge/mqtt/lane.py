@@ -9,7 +9,7 @@ to the same handler as the main connection's (the service: the same rules for re
 payloads and the lock).
 
 Rules:
-1. Subscribed to the stop and lock topics only (the main connection has them too, and its
+1. Subscribed to the stop and lock topics only, a group's stop too (the main connection has them, and its
    copies keep the order: lastword.py decides what each copy does, so a lane that is down or
    refused loses no stop, only speed). The stop topics are subscribed without the broker's
    replay of a retained stop (lastword.py rule 6). It publishes nothing: no will, no state;
