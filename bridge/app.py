@@ -25,7 +25,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
-from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
+from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
@@ -292,6 +292,10 @@ class App:
             status_topic=ha.status_topic,
             topics=self.topics,
             rotators=infos,
+            groups=tuple(  # a device each (mqtt/groups.py)
+                GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
+                for g in settings.groups
+            ),
             publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),
