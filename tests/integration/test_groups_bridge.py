@@ -1,8 +1,10 @@
 """A group of two Rotor-EZ end to end (mqtt/groups.py): real mosquitto, two emulated Rotor-EZ on
 real ptys, real pyserial, the bridge. One ``G/target`` turns both (each with its offset: the
 bytes on each wire, where each rotor really is, the retained bearings and ``G/status``); one
-``G/stop`` while they turn stops both (a stop frame on each wire); a retained ``G/target``
-moves neither.
+``G/stop`` while they turn stops both (a stop frame on each wire); a ``G/stop`` behind a flood
+of group targets is carried out first on the stop lane, and not one target of the flood
+reaches either wire after it (the main connection held still at its copy of the stop, as
+tests/integration/test_last_word.py holds it); a retained ``G/target`` moves neither.
 """
 
 from __future__ import annotations
@@ -11,8 +13,11 @@ import json
 import time
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.model import MotionState
+from tests.integration.test_last_word import bearings, main_held_at
 from tests.support.mqtt import Message
 from tests.support.rig import Rig
+from tests.support.waiting import wait_until
 
 GROUP = {"id": "stack", "name": "Stacked yagis", "rotators": ["upper", "lower"]}
 
@@ -75,6 +80,45 @@ def test_one_group_stop_while_turning_stops_both(rig: Rig) -> None:
     rig.probe.wait_value("rotor/lower/state", "idle", timeout_s=10, after=t)
     assert [f.data for f in up.frames(*BEARING_OUTCOMES)] == [b"AP1300\r"]  # never again
     assert [f.data for f in low.frames(*BEARING_OUTCOMES)] == [b"AP1120\r"]
+
+
+def test_a_group_stop_behind_a_flood_of_group_targets_is_never_overridden_by_them(
+    rig: Rig,
+) -> None:
+    """The lane carries the group's stop out at once on both members and holds both; the
+    flood published before it, handed on by the main connection before its own copy of the
+    stop (held there until both rotors are idle again), never reaches a wire; the copy ends
+    both holds, and a target published after it turns both."""
+    up, low = stack(rig, speed=20.0)
+    app = rig.start()
+    rig.ready("upper")
+    rig.ready("lower")
+    rig.probe.publish("rotor/stack/target", "300")  # both turning: upper to 300, lower to 120
+    up.wait_for(lambda s: s.is_moving)
+    low.wait_for(lambda s: s.is_moving)
+    with main_held_at(app, "rotor/stack/stop", b"") as held:
+        stops = len(up.frames("stop")), len(low.frames("stop"))
+        for az in range(120, 420):  # the flood
+            rig.probe.publish("rotor/stack/target", str(az % 360), qos=0)
+        rig.probe.publish("rotor/stack/stop", "")  # behind it
+        # the main connection has handed the whole flood on and stops at its copy of the stop
+        wait_until(held.is_set, 20, "the main connection is held at its copy of the stop")
+        wait_until(lambda: app.mqtt._word.holding, 10, "the lane's group stop carried out")
+        up.wait_until(lambda d, now: len(d.frames("stop")), lambda n: n > stops[0], 10)
+        low.wait_until(lambda d, now: len(d.frames("stop")), lambda n: n > stops[1], 10)
+        # both braked and read idle again (the bridge's own status: paho's thread, held, sends
+        # nothing): a target not held would go out now
+        for rid, emu in (("upper", up), ("lower", low)):
+            emu.wait_for(lambda s: not s.is_moving and not s.in_brake_delay, 10)
+            wait_until(lambda r=rid: rig.status(r).state is MotionState.IDLE, 10, f"{rid} idle")
+        assert app.mqtt._word.holding  # both members wait for the main connection
+    wait_until(lambda: not app.mqtt._word.holding, 20, "the main connection caught up")
+    # not one target of the flood, ever
+    assert bearings(up) == [b"AP1300\r"] and bearings(low) == [b"AP1120\r"]
+    rig.probe.publish("rotor/stack/target", "40")  # published after the stop: obeyed
+    rig.arrived("upper", 40)
+    rig.arrived("lower", 220)
+    assert bearings(up)[1:] == [b"AP1040\r"] and bearings(low)[1:] == [b"AP1220\r"]
 
 
 def test_a_retained_group_target_moves_nothing(rig: Rig) -> None:
