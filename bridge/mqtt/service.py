@@ -411,10 +411,11 @@ class MqttService:
                 rot.submit(part.target, said)
             except Refused as exc:
                 refused[part.member] = exc.message
-        self._group_refused[group_id] = refused
         if refused:
             self._group_event(group_id, refusals_json(group, what, refused))
-        self._publish_group(group)
+        if refused != self._group_refused.get(group_id, {}):  # a slider's flood: not each time
+            self._group_refused[group_id] = refused
+            self._publish_group(group)
 
     def publish_audit(self, rotator_id: str, event: AuditEvent) -> None:
         """Rule 8: ``R/audit``, rate-limited per rotator."""
