@@ -37,6 +37,7 @@ from bridge.settings import (
 )
 from bridge.settings_bands import BandFields
 from bridge.settings_defaults import model_defaults
+from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields
 from bridge.settings_wind import WindFields
@@ -143,6 +144,7 @@ def render() -> str:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]
         out.append(_section(heading, model.__doc__, model, names, env))
     out.append(_rotators())
+    out.append(_groups())
     out.append(_model_table())
     out.append(_shown())
     return "\n".join(out).rstrip("\n") + "\n"
@@ -170,6 +172,19 @@ def _rotators() -> str:
         lines += [f"### {heading}", "", what, ""]
         for name in sorted(names, key=order.index):
             lines.append(_key(RotatorSettings, name, f"{env}{name.upper()}"))
+    return "\n".join(lines)
+
+
+def _groups() -> str:
+    lines = ["## [[groups]]", "", _sentence(_untitled(GroupSettings.__doc__)), ""]
+    lines += [
+        "Rotators turned together from `<base_topic>/<id>/target` and `/stop`: see",
+        "[groups](groups.md). Groups are set in the file only (no environment variables).",
+        "",
+    ]
+    for name in GroupSettings.model_fields:
+        text = _key(GroupSettings, name, "")
+        lines.append(text.split("  \n  Environment:")[0].rstrip("\n") + "\n")
     return "\n".join(lines)
 
 

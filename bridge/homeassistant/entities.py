@@ -10,7 +10,9 @@ comes from bridge.mqtt.topics.
 
 Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
-   as ``sw_version``, ``via_device`` the bridge) and one bridge device. An entity exists only if
+   as ``sw_version``, ``via_device`` the bridge), one per group (GROUP_ENTITIES: its
+   target, its stop, its bearing and state from ``G/status``) and one bridge device. An
+   entity exists only if
    the model can do it: no bearing for a DCU-1, options only where the controller has them; and
    only where configured: the preset select with presets, park with a park position, the
    locator, long path and distance with the station's position.
@@ -30,7 +32,7 @@ from functools import partial
 from typing import Protocol
 
 from bridge import __version__
-from bridge.homeassistant.info import Identity, RotatorInfo
+from bridge.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.model import MotionState
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 
@@ -353,13 +355,64 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
     return out
 
 
+# a group's device (rule 1): the rotator's builders, on the group's topics (GroupTopics)
+GroupRow = tuple[str, str, str | None, bool, Callable[[GroupInfo], dict[str, object]]]
+GROUP_ENTITIES: tuple[GroupRow, ...] = (  # platform, object id, name, the stop?, config
+    ("number", "target_azimuth", "Target azimuth", False, lambda g: {
+        "command_topic": g.topics.target, "state_topic": g.topics.status,
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "min": 0, "max": 360, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+    ("button", "stop", "Stop", True, lambda g: {
+        "command_topic": g.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    ("sensor", "bearing", "Bearing", False, lambda g: {
+        "state_topic": g.topics.status, **DEGREES, "state_class": "measurement_angle",
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "suggested_display_precision": 0, "icon": "mdi:compass"}),
+    ("sensor", "state", "State", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "enum", "options": STATES,
+        "value_template": "{{ value_json.state }}", "icon": "mdi:rotate-3d-variant"}),
+    ("binary_sensor", "moving", "Moving", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "moving",
+        "value_template": "{{ 'ON' if value_json.moving else 'OFF' }}",
+        "json_attributes_topic": g.topics.status}),  # each member's bearing and the refusals
+)  # fmt: skip
+
+
+def group_configs(ident: Identity, topics: Topics, g: GroupInfo) -> Configs:
+    """The entities of one group's device; the stop follows the bridge only (rule 2: it must
+    work whatever its members say)."""
+    node = ident.group_node(g.group_id)
+    device: dict[str, object] = {
+        "identifiers": [node],
+        "name": g.name,
+        "manufacturer": "rotor-bridge",
+        "model": f"Group of {len(g.members)} rotators ({', '.join(g.members)})",
+        "via_device": ident.bridge_node,
+    }
+    both = [{"topic": topics.bridge_state}, {"topic": g.topics.availability}]
+    bridge_only = [{"topic": topics.bridge_state}]
+    slug = g.group_id.replace("-", "_")
+    out: Configs = {}
+    for platform, object_id, name, stop, config in GROUP_ENTITIES:
+        avail = bridge_only if stop else both
+        where, payload = _entity(platform, node, object_id, slug, name, device, avail, **config(g))
+        out[where] = payload
+    return out
+
+
 def all_configs(
-    prefix: str, ident: Identity, topics: Topics, rotators: list[RotatorInfo]
+    prefix: str,
+    ident: Identity,
+    topics: Topics,
+    rotators: list[RotatorInfo],
+    groups: tuple[GroupInfo, ...] = (),
 ) -> dict[str, str]:
     """Every discovery message: full topic -> JSON payload (stable key order)."""
     configs = bridge_configs(ident, topics)
     for r in rotators:
         configs.update(rotator_configs(ident, topics, r))
+    for g in groups:
+        configs.update(group_configs(ident, topics, g))
     return _messages(prefix, configs)
 
 
