@@ -250,6 +250,11 @@ def parse_number(payload: bytes, what: str) -> float:
     return _number(_text(payload), what)
 
 
+def text(payload: bytes) -> str:
+    """A payload as text: UTF-8, stripped, not empty, not too large (PayloadError)."""
+    return _text(payload)
+
+
 def parse_switch(payload: bytes) -> bool:
     text = _text(payload).lower()
     if text in _TRUE:

@@ -50,7 +50,8 @@ def test_a_lock_that_cannot_be_saved_says_so(tmp_path: Path) -> None:
         {"locked": "yes"},
         {"locked": 1},
         {"options": "x"},
-        {"options": {"jam": "on"}},
+        {"options": {"jam": None}},  # (a text is a choice's name: kept.py reads it by model)
+        {"options": {"jam": [True]}},
     ],
 )
 def test_a_malformed_entry_starts_its_rotator_locked_and_says_why(
