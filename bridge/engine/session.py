@@ -313,6 +313,7 @@ class RotatorSession:
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
+        self.health.speed_factor = ctl.options.speed_factor()  # (health.py rule 9)
         self._guarded("health", lambda: self.health.step(ctl.motion, now), now)  # in the status
         self._emit_status(now)
         if ctl.link is not None:

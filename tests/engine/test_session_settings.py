@@ -71,3 +71,17 @@ def test_the_speed_is_sent_again_after_a_reconnect(rig: Rig) -> None:
     v.run_until(lambda h: h.truth().speed_level == 3, 10, "X3 after the reconnect")
     assert v.sent(since=t).count(b"X3\r") == 1
     assert v.session.controller.cfg.az_speed_deg_s == 4.5  # three quarters of 6
+
+
+def test_rotor_health_measures_the_full_speed_whatever_speed_the_user_chose(rig: Rig) -> None:
+    """A rotor turned at X2 is no rotor that lost half its speed (health.py rule 9)."""
+    v = ready(rig, options={"speed": "2"}, settings={"az_speed_deg_s": 6.0})  # the baseline
+    for az in (120, 10, 200, 30, 150, 40):  # three moves each way: enough to judge by
+        v.target(az, 0)
+        v.run_until(lambda h, az=az: h.truth().az_deg == az and h.state is IDLE, 120, f"at {az}")
+    assert v.truth().speed_level == 2
+    health = v.status.health
+    assert health is not None and health.az is not None
+    assert health.az.speed_up_deg_s is not None and health.az.speed_down_deg_s is not None
+    assert 5.0 < health.az.speed_up_deg_s < 7.0 and 5.0 < health.az.speed_down_deg_s < 7.0
+    assert health.warnings == ()
