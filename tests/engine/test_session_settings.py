@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from bridge.emulators.gs232 import Outcome
 from bridge.engine.options import OPTIONS_REFRESH_S
-from bridge.model import MotionState
+from bridge.model import MotionState, SetOption, Stop
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -85,3 +85,15 @@ def test_rotor_health_measures_the_full_speed_whatever_speed_the_user_chose(rig:
     assert health.az.speed_up_deg_s is not None and health.az.speed_down_deg_s is not None
     assert 5.0 < health.az.speed_up_deg_s < 7.0 and 5.0 < health.az.speed_down_deg_s < 7.0
     assert health.warnings == ()
+
+
+def test_a_stop_with_a_speed_in_the_same_instant_goes_out_first(rig: Rig) -> None:
+    """A stop is never delayed (docs/architecture.md rule 11): not by a setting either."""
+    v = ready(rig)
+    v.target(300, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 10, 30, "turning")
+    t = v.now
+    v.command(Stop(), SetOption("speed", "1"))
+    v.run_until(lambda h: speeds(h), 1, "X1 on the wire")
+    sent = v.sent(since=t)
+    assert sent.index(b"S\r") < sent.index(b"X1\r")
