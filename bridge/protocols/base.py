@@ -87,7 +87,11 @@ class Codec(Protocol):
     def encode_query(self) -> bytes | None: ...
     def expire_query(self) -> None: ...
     def encode_version(self) -> bytes | None: ...
-    def encode_option(self, name: str, enabled: bool) -> bytes: ...
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        """An on/off option's bytes (ValueError where the model has none). The engine sends
+        every setting through its declaration's encoder (rule 6), which may call this."""
+        ...
+
     def feed(self, data: bytes) -> list[Reply]: ...
     def awaiting_reply(self) -> bool: ...
     def harmless(self, junk: bytes) -> bool:
@@ -263,10 +267,6 @@ class ModelSpec:
     def options(self) -> tuple[str, ...]:
         """The names of the controller's settings (R/option/<name>), in declared order."""
         return tuple(s.name for s in self.settings)
-
-    @property
-    def option_labels(self) -> dict[str, str]:
-        return {s.name: s.label for s in self.settings}
 
     def setting(self, name: str) -> Setting | None:
         return next((s for s in self.settings if s.name == name), None)

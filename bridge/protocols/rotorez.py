@@ -63,19 +63,6 @@ OPTION_LABELS = {
 }
 
 
-def _letter(name: str) -> Callable[[SettingValue], bytes]:
-    """The encoder of one option: its upper-case letter for on, lower-case for off."""
-    on, off = OPTION_LETTERS[name]
-    return lambda enabled: on if enabled else off
-
-
-# the Rotor-EZ's options: sent only at rest (the board stops on any input while turning) and
-# again after a power-on (it forgets them)
-OPTION_SETTINGS = tuple(
-    Setting(name, OPTION_LABELS[name], _letter(name), when=SendWhen.AT_REST, resend=True)
-    for name in OPTION_LETTERS
-)
-
 POWER_ON_BYTE = 0xE0  # sent once when the board is switched on (Hamlib's README.rotorez)
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
 # what a healthy board emits besides replies: the power-on byte, the banner after an invalid
@@ -209,6 +196,20 @@ class RotorEzCodec:
         del self._junk_window[:-_JUNK_WINDOW]
         out.append(JunkReply(bytes(junk), JunkReason.NOISE, "not a reply frame"))
         junk.clear()
+
+
+def _letter(name: str) -> Callable[[SettingValue], bytes]:
+    """The encoder of one option: the codec's letter, upper-case for on, lower-case for off."""
+    codec = RotorEzCodec()
+    return lambda enabled: codec.encode_option(name, bool(enabled))
+
+
+# the Rotor-EZ's options: sent only at rest (the board stops on any input while turning) and
+# again after a power-on (it forgets them)
+OPTION_SETTINGS = tuple(
+    Setting(name, OPTION_LABELS[name], _letter(name), when=SendWhen.AT_REST, resend=True)
+    for name in OPTION_LETTERS
+)
 
 
 def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
