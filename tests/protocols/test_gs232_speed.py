@@ -52,3 +52,21 @@ def test_the_speed_is_a_home_assistant_select() -> None:
     )
     for topic, payload in msgs.items():
         assert validate(topic, payload, prefix="ha") == []
+
+
+def test_r_info_says_what_the_speed_takes() -> None:
+    """A client far from the station (Node-RED, the remote) learns the choices from R/info."""
+    from bridge.mqtt.payloads import info_json
+    from bridge.pointing import Pointing
+
+    spec = REGISTRY["gs232b"]
+    doc = json.loads(info_json("Tower", spec, Pointing.of(spec), False))
+    assert doc["options"] == ["speed"]
+    assert doc["settings"] == [
+        {
+            "name": "speed",
+            "label": "Speed (1 slowest, 4 fastest)",
+            "kind": "choice",
+            "choices": ["1", "2", "3", "4"],
+        }
+    ]

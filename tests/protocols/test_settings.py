@@ -150,3 +150,17 @@ def test_each_kind_of_setting_is_its_home_assistant_platform() -> None:
     assert gear["options"] == ["low", "high"] and gear["state_topic"] == "rotor/option/gear/state"
     for topic, payload in msgs.items():
         assert validate(topic, payload, prefix="ha") == []
+
+
+def test_r_info_describes_a_number_setting_by_its_range_step_and_unit() -> None:
+    from bridge.mqtt.payloads import setting_info
+
+    assert setting_info(RAMP) == {
+        "name": "ramp",
+        "label": "Ramp",
+        "kind": "number",
+        "min": 0.0,
+        "max": 10.0,
+        "step": 0.5,
+        "unit": "s",
+    }
