@@ -21,6 +21,10 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
    unreachable (the safety lock, the connection state, the last error) follow the bridge only.
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
+6. A controller setting's entity comes from its declaration (protocols/base.py ``Setting``): a
+   bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
+   select (its names); all on R/option/<name> with R/option/<name>/state, in the config
+   category.
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ from bridge import __version__
 from bridge.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.model import MotionState
 from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.protocols.base import Setting, SettingKind
 
 ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
 STATES = [s.value for s in MotionState]
@@ -111,29 +116,55 @@ class Entity:
 
 
 class OptionConfig(Protocol):
-    """An option entity's config: the option is passed by name (EachOption binds it)."""
+    """A setting entity's config: the setting is passed by its declaration (EachOption)."""
 
-    def __call__(self, info: RotatorInfo, /, option: str) -> dict[str, object]: ...
+    def __call__(self, info: RotatorInfo, /, setting: Setting) -> dict[str, object]: ...
+
+
+# rule 6: the platform of each kind of setting
+SETTING_PLATFORMS = {
+    SettingKind.BOOL: "switch",
+    SettingKind.NUMBER: "number",
+    SettingKind.CHOICE: "select",
+}
 
 
 @dataclass(frozen=True)
 class EachOption:
-    """One entity per controller option (``spec.options``), labelled by ``spec.option_labels``."""
+    """One entity per controller setting (``spec.settings``), of the platform its kind has
+    (rule 6), labelled by its declaration."""
 
-    platform: str
     config: OptionConfig
 
     def expand(self, info: RotatorInfo) -> list[Entity]:
-        spec = info.spec
         return [
             Entity(
-                self.platform,
-                f"option_{name}",
-                spec.option_labels.get(name, name.title()),
-                partial(self.config, option=name),
+                SETTING_PLATFORMS[setting.kind],
+                f"option_{setting.name}",
+                setting.label,
+                partial(self.config, setting=setting),
             )
-            for name in spec.options
+            for setting in info.spec.settings
         ]
+
+
+def _setting_config(r: RotatorInfo, setting: Setting) -> dict[str, object]:
+    """Rule 6: the keys of a setting's entity."""
+    name = setting.name
+    keys: dict[str, object] = {
+        "command_topic": r.topics.option(name),
+        "state_topic": r.topics.option_state(name),
+    }
+    if setting.kind is SettingKind.BOOL:
+        keys.update(SWITCH)
+    elif setting.kind is SettingKind.NUMBER:
+        keys.update(min=setting.minimum, max=setting.maximum, step=setting.step, mode="box")
+        if setting.unit:
+            keys["unit_of_measurement"] = setting.unit
+    else:
+        keys["options"] = list(setting.choices)
+    icon = "mdi:speedometer" if setting.speed_factors else "mdi:cog"
+    return {**keys, "entity_category": "config", "icon": icon}
 
 
 def _current_or(field: str, fallback: str) -> str:
@@ -295,9 +326,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "device_class": "connectivity", **DIAGNOSTIC}),
     Entity("sensor", "version", "Controller version", needs="has_version", config=lambda r: {
         "state_topic": r.topics.version, **DIAGNOSTIC, "icon": "mdi:chip"}),
-    EachOption("switch", config=lambda r, option: {
-        "command_topic": r.topics.option(option), "state_topic": r.topics.option_state(option),
-        **SWITCH, "entity_category": "config", "icon": "mdi:cog"}),
+    EachOption(config=_setting_config),  # rule 6
     Entity("switch", "lock", "Safety lock", bridge_only=True, config=lambda r: {
         "command_topic": r.topics.lock, "state_topic": r.topics.lock_state, **SWITCH,
         "icon": "mdi:lock"}),

@@ -81,11 +81,13 @@ from bridge.model import (
     RotatorHealth,
     RotatorStatus,
     SetOption,
+    SettingValue,
     Source,
     TakePath,
     Target,
     Toward,
     TrackBody,
+    setting_text,
     valid_operator,
 )
 from bridge.mqtt import control
@@ -100,6 +102,7 @@ from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
+from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
 
@@ -263,9 +266,9 @@ class MqttService:
         pub(t.availability, "online" if status.available else "offline")
         if status.version:
             pub(t.version, status.version)
-        for name in spec.options:
+        for name in spec.options:  # ON/OFF, a number, a choice's name (model.setting_text)
             if name in status.options:
-                pub(t.option_state(name), pl.switch(status.options[name]))
+                pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
             pub(t.tracking, tracking_state(status))
@@ -544,7 +547,7 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
-        command = parse_command(kind, arg, payload, by)
+        command = parse_command(kind, arg, payload, by, rot.spec)
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
@@ -554,11 +557,13 @@ class MqttService:
 
 
 def parse_command(
-    kind: str, arg: str | None, payload: bytes, by: Origin
+    kind: str, arg: str | None, payload: bytes, by: Origin, spec: ModelSpec | None = None
 ) -> Command | Called | None:
     """A command topic's payload (everything but stop and lock) as the command it names, from
     ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
-    for a topic that carries no command."""
+    for a topic that carries no command. An option's value is read by ``spec``'s declaration
+    of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
+    text, to be refused there."""
     src = Source.MQTT
     if kind == "claim":
         operator, minutes = control.parse_claim(payload, by.operator)
@@ -596,8 +601,19 @@ def parse_command(
     if kind == "target_elevation":
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:
-        return SetOption(arg, pl.parse_switch(payload), src, origin=by)
+        return SetOption(arg, _setting_value(spec, arg, payload), src, origin=by)
     return None
+
+
+def _setting_value(spec: ModelSpec | None, name: str, payload: bytes) -> SettingValue:
+    """R/option/<name>'s payload by the setting's declaration (PayloadError if it refuses)."""
+    setting = spec.setting(name) if spec is not None else None
+    if setting is None or setting.kind is SettingKind.BOOL:
+        return pl.parse_switch(payload)  # the words of a bad switch as they always were
+    try:
+        return setting.read(pl.text(payload))
+    except ValueError as exc:
+        raise pl.PayloadError(str(exc)) from None
 
 
 LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line
