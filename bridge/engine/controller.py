@@ -82,6 +82,7 @@ class Controller:
         self.motion = mo.Motion()
         self.answering = False
         self.options = Options(options, cfg.spec.settings)
+        self.target_last = False  # the last command written was a target (motion.py rule 8)
         self.stops = Stops()
         self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
         self.version: str | None = None
@@ -217,7 +218,8 @@ class Controller:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self.options.all_due()
                     self._retune()
-                if reply.reason is JunkReason.REFUSED:  # motion.py rule 8
+                if reply.reason is JunkReason.REFUSED and self.target_last:  # motion.py rule 8
+                    self.target_last = False
                     self.motion, events = mo.refused(self.motion, self.cfg.motion, now)
                     self._motion_events(events, now)
                     if events:
@@ -309,6 +311,7 @@ class Controller:
             enable = link.codec.encode_enable()
             if enable:
                 link.write(enable, now)
+                self.target_last = False
             self.options.enable_due = False
 
     def send_options(self, now: float, target_waits: bool) -> None:
@@ -332,6 +335,7 @@ class Controller:
                 continue
             log.info("%s: setting %s sent (%r)", self.name, name, frame)
             link.write(frame, now)
+            self.target_last = False  # a refusal now may be the setting's
         if taken:
             self._retune()
 
@@ -350,6 +354,7 @@ class Controller:
         link, m, cfg = self.link, self.motion, self.cfg
         assert link is not None
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
+        self.target_last = True
         az, el = todo.wire
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)

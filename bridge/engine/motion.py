@@ -40,7 +40,8 @@ Rules:
 8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
    after a stop, instead of waiting ``stall_timeout_s`` for a stall that blames the brake.
-   Movement since the target went out means the refusal was of something else.
+   Movement since the target went out means the refusal was of something else; so does
+   any command written after the target (a setting: the controller asks, controller.py).
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ from collections.abc import Callable
 import pytest
 
 from bridge.emulators.gs232 import Outcome
-from bridge.model import MotionState, Target
+from bridge.model import MotionState, SetOption, Target
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator
 
@@ -157,6 +157,19 @@ def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> No
     assert {s.bearing_deg for s in v.published()} - {None} == {77.0}
     v.aim(Target(120))  # the next bearing goes out and is taken as always
     v.run_until(settled_at(120), 60, "at 120")
+
+
+def test_a_refusal_after_a_setting_is_not_the_targets(rig: Rig) -> None:
+    """A ``?>`` that follows a setting written after the target refuses the setting, not the
+    target: the rotor still turns there."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    v.garble_writes(b"X4\r", b"X9\r")  # the box gets a speed it refuses: ?>
+    t = v.now
+    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.run_until(lambda h: h.frames(Outcome.REFUSED, since=t), 2, "the setting refused")
+    assert [f.data for f in v.frames(since=t)][:2] == [b"W200 000", b"X9"]
+    v.run_until(settled_at(200, 0), 120, "at 200 all the same")
+    assert v.errors("refused", since=t) == []
 
 
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
