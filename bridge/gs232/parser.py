@@ -209,46 +209,41 @@ def _dcu1_frame(body: bytes, end: int) -> Dcu1Request:
     return Dcu1Request(Dcu1Kind.INVALID, text, stops=semicolon)
 
 
+# one token of the stream: a frame ended, a frame too long, a frame not yet ended (at the end
+# of what came), a byte that is a command of its own, line ends, a run of anything else
+_DCU1_TOKEN = re.compile(
+    rb"A[^;\r]{0,5}[;\r]|A[^;\r]{6}|A[^;\r]{0,5}\Z|[;VEeJjOoSs]|[\r\n]+|[^A;VEeJjOoSs\r\n]+"
+)
+
+
 class Dcu1Reader:
     """The DCU-1 / Rotor-EZ command stream (package rule 9): a frame opens at ``A`` and ends at
     ``;`` or CR; outside a frame each byte is a command of its own (``;`` stop, an option
     letter, ``V``), CR and LF are nothing, and a run of other bytes is one INVALID request.
-    One pass over the bytes, no more than DCU1_FRAME_MAX kept."""
+    One pass over the bytes (a regular expression's), no more than DCU1_FRAME_MAX kept."""
 
     def __init__(self) -> None:
-        self._frame = bytearray()
+        self._held = b""  # a frame not yet ended
 
     @property
     def idle(self) -> bool:
         """True when no frame is half received."""
-        return not self._frame
+        return not self._held
 
     def feed(self, data: bytes) -> list[Dcu1Request]:
         out: list[Dcu1Request] = []
-        frame, junk = self._frame, bytearray()
-        for byte in data:
-            if frame:
-                if byte in (_SEMICOLON, _CR):
-                    out.append(_dcu1_frame(bytes(frame), byte))
-                    frame.clear()
-                elif len(frame) == DCU1_FRAME_MAX:
-                    frame.append(byte)
-                    out.append(Dcu1Request(Dcu1Kind.INVALID, frame.decode("latin-1")))
-                    frame.clear()
-                else:
-                    frame.append(byte)
-                continue
-            single = _DCU1_SINGLES.get(byte)
-            if single is None and byte not in (_A, _CR, _LF):
-                junk.append(byte)  # a run of junk is one request, one reply
-                continue
-            if junk:
-                out.append(Dcu1Request(Dcu1Kind.INVALID, junk.decode("latin-1")))
-                junk.clear()
-            if byte == _A:
-                frame.append(byte)
-            elif single is not None:
-                out.append(Dcu1Request(single, chr(byte)))
-        if junk:
-            out.append(Dcu1Request(Dcu1Kind.INVALID, junk.decode("latin-1")))
+        buf, self._held = self._held + data, b""
+        for match in _DCU1_TOKEN.finditer(buf):
+            token = match[0]
+            first, last = token[0], token[-1]
+            if first == _A and last in (_SEMICOLON, _CR):
+                out.append(_dcu1_frame(token[:-1], last))
+            elif first == _A and len(token) > DCU1_FRAME_MAX:
+                out.append(Dcu1Request(Dcu1Kind.INVALID, token.decode("latin-1")))
+            elif first == _A:
+                self._held = token  # the last token: what came ends inside a frame
+            elif (single := _DCU1_SINGLES.get(first)) is not None:
+                out.append(Dcu1Request(single, chr(first)))
+            elif first not in (_CR, _LF):
+                out.append(Dcu1Request(Dcu1Kind.INVALID, token.decode("latin-1")))
         return out
