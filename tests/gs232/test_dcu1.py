@@ -4,6 +4,7 @@ pending bearing, the stop first, the replies byte for byte); and the GS-232A rea
 
 from __future__ import annotations
 
+import random
 from types import SimpleNamespace
 
 import pytest
@@ -94,6 +95,26 @@ def test_any_bytes_keep_the_stream_usable_and_never_read_as_a_move() -> None:
     out = reader.feed(junk)
     assert {r.kind for r in out} <= {K.INVALID, K.OPTION, K.VERSION}
     assert kinds(reader.feed(b"AP1045;AM1;")) == [(K.STORE, 45), (K.EXECUTE, None)]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_random_streams_read_the_same_commands_however_they_are_cut(seed: int) -> None:
+    """Only where a run of junk is cut may differ (one banner or two), never a command."""
+    rng = random.Random(seed)
+    said = (b"AP1123;", b"AM1;", b"AI1;", b";", b"AS1;", b"AP1045\r")
+    data = b"".join(  # junk, a CR (which ends a frame it opened), a command
+        bytes(rng.choice(b"AP1MIS;\r\n0123V Eex\xff") for _ in range(rng.randint(0, 30)))
+        + b"\r"
+        + rng.choice(said)
+        for _ in range(200)
+    )
+    runs = {how: feed(Dcu1Reader(), data, how) for how in HOW}
+    commands = {
+        how: [(r.kind, r.az_deg, r.stops) for r in out if r.kind is not K.INVALID or r.stops]
+        for how, out in runs.items()
+    }
+    assert commands["whole"] == commands["bytewise"] == commands["split"]
+    assert {K.STORE, K.EXECUTE, K.READ, K.STOP, K.GOTO} <= {k for k, _, _ in commands["whole"]}
 
 
 # -- the session ------------------------------------------------------------------------------
