@@ -25,7 +25,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.gs232 import EMULATIONS
-from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
+from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
@@ -42,7 +42,7 @@ from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.view import RotatorFacts
-from bridge.wiring import worker_config
+from bridge.wiring import group_of, worker_config
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
@@ -80,7 +80,8 @@ class App:
         give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
-        self.topics = Topics(settings.mqtt.base_topic, roots)
+        groups = {g.id: settings.group_topic(g) for g in settings.groups}  # mqtt/groups.py
+        self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
         self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
@@ -196,13 +197,20 @@ class App:
                 self.rotctld.append(server)
             for emulation in EMULATIONS.values():
                 self.emulations += emulation.offered(rot, r)
+        for g in settings.groups:  # turned together from G/target and G/stop (mqtt/groups.py)
+            self.mqtt.attach_group(group_of(g))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:
                 self.loggers.add_pst(rot, r.pst_udp_port, r.pst_udp_bind)
             if r.n1mm_rotor_name is not None:
                 self.loggers.add_n1mm(
-                    rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
+                    rot,
+                    r.n1mm_rotor_name,
+                    r.n1mm_udp_port,
+                    r.n1mm_udp_bind,
+                    r.n1mm_report_address,
+                    tuple(r.bands),
                 )
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
@@ -283,6 +291,10 @@ class App:
             status_topic=ha.status_topic,
             topics=self.topics,
             rotators=infos,
+            groups=tuple(  # a device each (mqtt/groups.py)
+                GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
+                for g in settings.groups
+            ),
             publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),

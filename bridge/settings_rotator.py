@@ -25,6 +25,7 @@ from bridge import settings_defaults as defaults
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
+from bridge.settings_bands import BandFields
 from bridge.settings_errors import unknown_model
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_mqtt import check_topic
@@ -38,7 +39,7 @@ EMULATION_KEYS = ("gs232", "easycomm", "dcu1")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
-class RotatorSettings(PointingFields, LoggerFields, WindFields):
+class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     """``[[rotators]]``: one table per rotator controller (at least one)."""
 
     id: str = Field(

@@ -1,8 +1,8 @@
 """A rotator's settings turned into the engine's configuration (engine/worker.py WorkerConfig):
 the one place where the user's keys meet the engine's terms, for the app and for the tests that
 build a rotator of their own: the speeds, limits, timings and the judge's terms resolved once,
-health's, tracking's, following's and the wind park's terms. Pure: settings in, frozen engine
-configuration out.
+health's, tracking's, following's and the wind park's terms; and a ``[[groups]]`` table as the
+group the MQTT service turns (mqtt/groups.py). Pure: settings in, frozen configuration out.
 
 Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
@@ -17,7 +17,8 @@ from dataclasses import replace
 from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
-from bridge.settings import RotatorSettings
+from bridge.mqtt.groups import Group, Member
+from bridge.settings import GroupSettings, RotatorSettings
 from bridge.sky import Sky
 
 
@@ -67,7 +68,9 @@ def worker_config(
             step_deg=r.effective_track_step_deg,
             at_los=r.track_at_los,
         ),
-        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
+        follow=replace(
+            follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx, bands=tuple(r.bands)
+        ),
         wind=wind_config(r),
     )
 
@@ -82,3 +85,9 @@ def wind_config(r: RotatorSettings) -> WindConfig | None:
     release = r.wind_kmh(r.wind_release_below) or above
     hold_s, silent_s = r.wind_hold_min * 60.0, r.wind_silent_min * 60.0
     return WindConfig(above, release, hold_s, (park_az, r.park_el_deg), silent_s, r.wind_topic)
+
+
+def group_of(g: GroupSettings) -> Group:
+    """A ``[[groups]]`` table as the MQTT service's group (members in the table's order)."""
+    members = tuple(Member(rid, g.offsets.get(rid, 0.0), g.limits.get(rid)) for rid in g.rotators)
+    return Group(g.id, g.label, members)

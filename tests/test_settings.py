@@ -397,7 +397,7 @@ TWO = (
     ("a", "b", "message"),
     [
         ("pst_udp_port = 12000", "pst_udp_port = 12000", "share one pst_udp_port"),
-        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "one n1mm_rotor_name on one N1MM"),
+        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "n1mm_rotor_name 'T' on one N1MM"),
         ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
         ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
         ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),
@@ -535,6 +535,9 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("rot2prg", "did you mean rot2prog?"),
         ("yaesu", "with Idiom Press's RotorCard fitted is rotorcard"),
         ("Yaesu G-800DXA", "with Idiom Press's RotorCard fitted is rotorcard"),
+        ("yaesu", "through a GS-232A or GS-232B box is gs232a or gs232b"),
+        ("K3NG", "speaks GS-232: gs232b"),
+        ("satnogs", "speaks Easycomm: easycomm2"),
         ("hy-gain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
         ("hygain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
         ("spid", "rot2prog, rot1prog (azimuth only) or md01"),

@@ -33,6 +33,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import NoReturn
 
 import serial
@@ -290,7 +291,7 @@ class Rotator:
         judged = self._check(command)
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
-                self._kept.save_option(judged.name, judged.enabled)
+                self._kept.save_option(judged.name, judged.value)
                 self._mailbox.put(judged, wake=False)  # woken after the step
         elif isinstance(judged, Stop):
             self.last_halt_s = time.monotonic()
@@ -393,13 +394,17 @@ class Rotator:
         if isinstance(command, Stop):
             return command
         if isinstance(command, SetOption):
-            if command.name not in self.spec.options:
+            setting = self.spec.setting(command.name)
+            if setting is None:
                 have = ", ".join(self.spec.options) or "none"
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
-            return command
+            try:  # the declaration is the judge of a value (protocols/base.py rule 6)
+                return replace(command, value=setting.read(command.value))
+            except ValueError as exc:
+                raise Refused(RefusalCode.INVALID, f"option {exc}") from None
         self._check_motion(
             command.origin.who if command.origin is not None else command.source.value
         )

@@ -60,7 +60,7 @@ from bridge.engine.port import (
 )
 from bridge.engine.session import RotatorSession
 from bridge.engine.skywork import Answer, SkyWorker
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SettingValue
 
 __all__ = ["Worker", "WorkerConfig"]
 
@@ -76,7 +76,7 @@ class Worker:
         on_status: Callable[[RotatorStatus], None],
         on_event: Callable[[ErrorEvent], None],
         *,
-        options: dict[str, bool] | None = None,
+        options: dict[str, SettingValue] | None = None,
         locked: bool = False,
         health: dict[str, object] | None = None,
         storm: bool = False,

@@ -13,13 +13,19 @@ Rules:
    session from its next connection on (``mqtt.protocol = "auto"``, connection.py rule 1), as
    paho itself steps down from 3.1.1 to 3.1 on a refusal: its CONNECT is built from these two
    attributes on every connect (tests/mqtt/test_protocol_fallback.py holds paho to that).
+4. ``accepts_mqtt311`` asks a broker once whether it accepts an MQTT 3.1.1 connection with these
+   settings (credentials, TLS, client id; no will, nothing subscribed or published): a trial
+   connection, closed as soon as the broker answered, within ``timeout_s``. It blocks: never on
+   paho's thread.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
 import ssl
+import time
 from collections.abc import Callable
 
 import paho.mqtt.client as paho
@@ -93,3 +99,32 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
         )
         c.tls_insecure_set(settings.tls.insecure)
     return c
+
+
+def accepts_mqtt311(settings: MqttSettings, client_id: str, timeout_s: float = 5.0) -> bool:
+    """Rule 4: whether the broker accepts an MQTT 3.1.1 connection from this client now."""
+    c = new_client(settings, client_id)
+    c.use_mqtt311()
+    c.connect_timeout = timeout_s
+    answers: list[bool] = []
+
+    def on_connect(*args: object) -> None:
+        reason = args[3]
+        answers.append(not getattr(reason, "is_failure", True))
+
+    c.on_connect = on_connect
+    try:
+        c.connect(settings.host, settings.port, keepalive=max(5, settings.keepalive_s))
+    except (OSError, ValueError, ssl.SSLError):
+        return False
+    try:
+        deadline = time.monotonic() + timeout_s
+        while not answers and time.monotonic() < deadline:
+            if c.loop(timeout=0.1) != MQTTErrorCode.MQTT_ERR_SUCCESS:
+                break
+    finally:
+        with contextlib.suppress(Exception):
+            c.disconnect()
+        with contextlib.suppress(Exception):
+            c.loop(timeout=0.1)  # hands the DISCONNECT to the socket
+    return answers == [True]

@@ -146,11 +146,17 @@ def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> No
     v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
     t = v.now
     v.aim(Target(400))  # past 360: on the controller's own scale
-    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
-    assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
+    v.run_until(lambda h: h.errors("refused", since=t), 1, "the refusal")
+    refusal = v.errors("refused", since=t)[0]
+    assert "the controller refused the target" in refusal.message
     assert v.frames(Outcome.REFUSED)[-1].data == b"M400"
+    v.run_until(lambda h: h.state is IDLE, 1, "at rest at once, not a stall 10 s later")
+    v.run_for(30)  # a quiet period, not a deadline: no stall is reported for it afterwards
+    assert [e.kind for e in v.errors(since=t)] == ["refused"]
     assert v.truth().az_deg == 77 and not v.truth().is_moving
     assert {s.bearing_deg for s in v.published()} - {None} == {77.0}
+    v.aim(Target(120))  # the next bearing goes out and is taken as always
+    v.run_until(settled_at(120), 60, "at 120")
 
 
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:

@@ -47,7 +47,7 @@ from bridge.engine.follow import Follow, Heard
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
 from bridge.engine.tracking import Track
-from bridge.model import MotionState, RotatorStatus, SetOption, Stop, Target
+from bridge.model import MotionState, RotatorStatus, SetOption, SettingValue, Stop, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 
@@ -86,7 +86,7 @@ class VirtualRotator:
         *,
         settings: Mapping[str, Any] | None = None,
         emulator: Mapping[str, Any] | None = None,
-        options: dict[str, bool] | None = None,
+        options: dict[str, SettingValue] | None = None,
         locked: bool = False,
         connect: bool = True,
         start_s: float = 0.0,
@@ -184,8 +184,11 @@ class VirtualRotator:
     def stop(self) -> None:
         self.command(Stop())
 
-    def option(self, name: str, enabled: bool) -> None:
-        self.command(SetOption(name, enabled))
+    def option(self, name: str, value: SettingValue) -> None:
+        """Straight to the session, as the judge hands it on: ``value`` as the declaration
+        reads it (the session does not judge; engine/rotator.py does)."""
+        setting = self.cfg.spec.setting(name)
+        self.command(SetOption(name, setting.read(value) if setting is not None else value))
 
     def lock(self, locked: bool) -> None:
         self.mailbox.put_lock(locked)
@@ -199,9 +202,11 @@ class VirtualRotator:
         self.mailbox.put_follow(Follow(on, long_path))
         self._take()
 
-    def heard(self, call: str, grid: str, transmitting: bool = False) -> None:
+    def heard(
+        self, call: str, grid: str, transmitting: bool = False, dial_hz: int | None = None
+    ) -> None:
         """What WSJT-X says, as the listener hands it on (wsjtx/server.py)."""
-        self.mailbox.put_heard(Heard(call, grid, transmitting))
+        self.mailbox.put_heard(Heard(call, grid, transmitting, dial_hz=dial_hz))
         self._take()
 
     def wall(self) -> float:

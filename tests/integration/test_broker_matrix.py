@@ -1,10 +1,12 @@
 """The broker matrix (docs/brokers.md): what a station needs of its broker, checked end to end
 against each broker the tests can start, with the bridge's default ``mqtt.protocol`` ("auto")
-unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, and NATS (MQTT
-3.1.1 only: "auto" steps down). Each case: the protocol said at start, a target turns the rotor,
-a STOP while turning stops it, the retained state for a subscriber that comes late, the last
-will, the fence markers (lastword.py rule 7), and under 3.1.1 a flood of targets without a
-false "another client published" while a real stranger is still put back and said.
+unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, NATS and aedes
+0.46 as Node-RED embeds it (both MQTT 3.1.1 only: "auto" steps down; aedes also reorders a QoS 0
+message before the QoS 1 one sent right before it, which once made the fence look denied).
+Each case: the protocol said at start, a target turns the rotor, a STOP while turning stops it,
+the retained state for a subscriber that comes late, the last will, the fence markers
+(lastword.py rule 7), and under 3.1.1 a flood of targets without a false "another client
+published" while a real stranger is still put back and said.
 
 Real parts: the broker, the bridge (App, or its own process for the last will) and an emulated
 Rotor-EZ on a pty (tests/support/rig.py); the probe speaks MQTT 3.1.1, as every broker does.
@@ -22,10 +24,11 @@ import pytest
 
 from bridge.mosquitto import Mosquitto
 from tests.support import Probe, retained_snapshot, wait_until
-from tests.support.brokers import Nats, find_nats
+from tests.support.brokers import Aedes, Nats, find_aedes, find_nats
 from tests.support.rig import Rig
 
-BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats"]
+BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats", "aedes"]
+STEPS_DOWN = {"nats", "aedes"}  # MQTT 3.1.1 only: "auto" steps down on their refusal
 STRANGER = "another client published"
 
 
@@ -33,13 +36,19 @@ STRANGER = "another client published"
 def kind(request: pytest.FixtureRequest) -> str:
     if request.param == "nats" and find_nats() is None:
         pytest.fail("nats-server is not installed (tests/run installs Debian's nats-server)")
+    if request.param == "aedes" and find_aedes() is None:
+        pytest.fail("aedes is not installed (tests/run installs it: npm ci in tests/brokers/aedes)")
     return str(request.param)
 
 
 @pytest.fixture
 def station(kind: str, tmp_path: Path) -> Iterator[Rig]:
-    broker: Mosquitto | Nats = (
-        Nats(tmp_path / "nats") if kind == "nats" else Mosquitto(tmp_path / "mosquitto")
+    broker: Mosquitto | Nats | Aedes = (
+        Nats(tmp_path / "nats")
+        if kind == "nats"
+        else Aedes(tmp_path / "aedes")
+        if kind == "aedes"
+        else Mosquitto(tmp_path / "mosquitto")
     )
     broker.start()
     probe = Probe(broker.port)
@@ -72,7 +81,7 @@ def test_the_bridge_says_which_protocol_it_speaks_and_what_that_means(
     else:
         assert connected and all("(MQTT 3.1.1)" in line for line in connected), connected
         assert len(losses) == 1, losses  # one warning, at start
-    if kind == "nats":
+    if kind in STEPS_DOWN:
         (line,) = said(caplog, "using MQTT 3.1.1 from now on")
         assert 'refused MQTT 5 ("Unsupported protocol version")' in line
         # the step-down is on B/bridge/info while it lasts, for Home Assistant and a dashboard
