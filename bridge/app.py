@@ -24,7 +24,7 @@ from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
+from bridge.gs232 import EMULATIONS
 from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
@@ -136,7 +136,7 @@ class App:
         audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
         self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
-        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
+        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232, Easycomm, DCU-1 (gs232/)
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
@@ -195,14 +195,8 @@ class App:
                     rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
                 )
                 self.rotctld.append(server)
-            if r.gs232_port is not None:
-                self.emulations.append(gs232_server(rot, r.gs232_port, r.gs232_bind))
-            if r.easycomm_port is not None:
-                self.emulations.append(easycomm_server(rot, r.easycomm_port, r.easycomm_bind))
-            if r.gs232_pty is not None:
-                self.emulations.append(gs232_pty(rot, r.gs232_pty))
-            if r.easycomm_pty is not None:
-                self.emulations.append(easycomm_pty(rot, r.easycomm_pty))
+            for emulation in EMULATIONS.values():
+                self.emulations += emulation.offered(rot, r)
         for g in settings.groups:  # turned together from G/target and G/stop (mqtt/groups.py)
             self.mqtt.attach_group(group_of(g))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all

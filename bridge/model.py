@@ -41,8 +41,9 @@ class Source(enum.StrEnum):
     PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
     N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
     WEB = "web"  # the operator console (web/)
-    GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
+    GS232 = "gs232"  # a program speaking Yaesu GS-232A/B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
+    DCU1 = "dcu1"  # a program speaking DCU-1 / Rotor-EZ to the dcu1_port (gs232/)
     LEASE = "lease"  # the control lease itself: its end, in the audit trail (engine/operators.py)
     WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
     WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)

@@ -45,7 +45,7 @@ from bridge.settings_dxcluster import DxClusterSettings
 from bridge.settings_groups import RESERVED, GroupSettings
 from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings_pointing import StationSettings, TrackingSettings
-from bridge.settings_rotator import RotatorSettings
+from bridge.settings_rotator import EMULATION_KEYS, RotatorSettings
 from bridge.settings_web import WebSettings
 from bridge.settings_wsjtx import WsjtxSettings
 
@@ -173,21 +173,22 @@ class Settings(BaseSettings):
                     f"web.port {self.web.port} is also rotators[{i}].rotctld_port: give the "
                     "console another port"
                 )
-        # a GS-232 or Easycomm port is no other TCP listener's (the second could not start) and
-        # no PstRotator port (one number, one program to point at it)
+        # a GS-232, Easycomm or DCU-1 port is no other TCP listener's (the second could not
+        # start) and no PstRotator port (one number, one program to point at it)
         taken = [("web.port", self.web.port)] if self.web.enabled else []
-        keys = ("rotctld_port", "pst_udp_port", "gs232_port", "easycomm_port")
+        emulated = tuple(f"{key}_port" for key in EMULATION_KEYS)
+        keys = ("rotctld_port", "pst_udp_port", *emulated)
         taken += [
             (f"rotators[{i}].{k}", getattr(r, k)) for i, r in enumerate(self.rotators) for k in keys
         ]
         for name, port in taken:
             clash = [other for other, p in taken if p == port and other != name]
-            if port is not None and name.endswith(("gs232_port", "easycomm_port")) and clash:
+            if port is not None and name.endswith(emulated) and clash:
                 raise ValueError(f"{name} {port} is also {clash[0]}: give it another port")
         ptys = [
             (os.path.abspath(os.path.expanduser(path)), f"rotators[{i}].{k}")
             for i, r in enumerate(self.rotators)
-            for k in ("gs232_pty", "easycomm_pty")
+            for k in (f"{key}_pty" for key in EMULATION_KEYS)
             if (path := getattr(r, k)) is not None
         ]
         for n, (path, name) in enumerate(ptys):  # one link, one pty

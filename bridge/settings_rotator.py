@@ -17,6 +17,7 @@ Rules:
 from __future__ import annotations
 
 import re
+from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -32,6 +33,9 @@ from bridge.settings_pointing import PointingFields
 from bridge.settings_wind import WindFields
 
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
+# the controllers' protocols offered to programs: each has <key>_port, <key>_bind, <key>_pty
+# (gs232/'s EMULATIONS has the same keys)
+EMULATION_KEYS = ("gs232", "easycomm", "dcu1")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
@@ -255,6 +259,37 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "linked at this path like gs232_pty",
         examples=["/tmp/rotor-easycomm"],
         json_schema_extra={"unset": "no Easycomm pty"},
+    )
+    gs232_replies: Literal["A", "B"] = Field(
+        "B",
+        description="the GS-232 port's and pty's readings: `B` as a GS-232B (`AZ=120  EL=000`: "
+        "PstRotator, `rotctl -m 603`), `A` as a GS-232A (`+0120+0000`: ARSVCOM, PstRotatorAz "
+        "set to GS-232A, `rotctl -m 601`)",
+        examples=["A"],
+    )
+    dcu1_port: int | None = Field(
+        None,
+        ge=1,
+        le=65535,
+        description="a TCP port speaking the Hy-Gain DCU-1 / Idiom Rotor-EZ protocol for this "
+        "rotator (DXView, DXbase, WriteLog, Win-EQF through a virtual COM port; `rotctl -m 401 "
+        "-r 127.0.0.1:4537`); one port per rotator",
+        examples=[4537],
+        json_schema_extra={"unset": "no DCU-1 listener"},
+    )
+    dcu1_bind: str = Field(
+        "127.0.0.1",
+        description="the address the DCU-1 port listens on. It has no authentication: anyone "
+        "who can reach it can turn the antenna (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    dcu1_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="DCU-1 / Rotor-EZ on a pseudo-terminal (`rotctl -m 401 -r /tmp/rotor-dcu1`, "
+        "a logger under Wine), linked at this path like gs232_pty",
+        examples=["/tmp/rotor-dcu1"],
+        json_schema_extra={"unset": "no DCU-1 pty"},
     )
     health_baseline_moves: int = Field(
         20,

@@ -154,7 +154,7 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
 NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg", "pst_udp_port", "n1mm_rotor_name"}
 NOT_APPLICABLE |= {"gs232_port", "easycomm_port"}
 NOT_APPLICABLE |= {"wind_topic", "wind_park_above", "wind_release_below", "wind_park_az_deg"}
-NOT_APPLICABLE |= {"gs232_pty", "easycomm_pty"}
+NOT_APPLICABLE |= {"gs232_pty", "easycomm_pty", "dcu1_port", "dcu1_pty"}
 AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
 
 
