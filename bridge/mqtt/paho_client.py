@@ -17,6 +17,10 @@ Rules:
    settings (credentials, TLS, client id; no will, nothing subscribed or published): a trial
    connection, closed as soon as the broker answered, within ``timeout_s``. It blocks: never on
    paho's thread.
+5. A broker that never answers the CONNECT is given CONNACK_TIMEOUT_S, then the connection is
+   ended as if the broker had closed it (the socket shut down: paho sees the end as always and
+   reconnects; connection.py says it, rule 6). amqtt 0.12 waits for ever on an MQTT 5 CONNECT
+   that carries a will; paho alone would wait the keepalive (a minute) each time.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from bridge.settings import MqttSettings
 log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
+CONNACK_TIMEOUT_S = 10.0  # rule 5
 
 
 def acknowledge_now(sock: object) -> None:
@@ -55,6 +60,26 @@ class Client(paho.Client):
     rule 2 (``tick``)."""
 
     tick: Callable[[], None] | None = None
+    _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
+
+    def reconnect(self) -> MQTTErrorCode:
+        self._connect_t = time.monotonic()
+        return super().reconnect()
+
+    def _unanswered(self) -> None:
+        """Rule 5: a CONNECT unanswered for too long ends its connection."""
+        t = self._connect_t
+        if t is None:
+            return
+        if self.is_connected():
+            self._connect_t = None
+        elif time.monotonic() - t >= CONNACK_TIMEOUT_S:
+            self._connect_t = None
+            shutdown = getattr(self.socket(), "shutdown", None)  # None: no socket (yet)
+            if shutdown is not None:
+                log.debug("no CONNACK in %g s: ending the connection", CONNACK_TIMEOUT_S)
+                with contextlib.suppress(OSError):
+                    shutdown(socket.SHUT_RDWR)
 
     def use_mqtt311(self) -> None:
         """Rule 3: MQTT 3.1.1 and a clean session from the next connection on."""
@@ -67,6 +92,7 @@ class Client(paho.Client):
         return rc
 
     def loop_misc(self) -> MQTTErrorCode:
+        self._unanswered()
         rc = super().loop_misc()
         tick = self.tick
         if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:

@@ -306,9 +306,12 @@ class Rig:
         return self.broker.port
 
     # -- what a test waits for and judges ---------------------------------------------------
-    def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
+    ready_s = 10.0  # how long ``ready`` waits unless told: a broker may take longer to join
+
+    def ready(self, rid: str, timeout_s: float | None = None, after: float | None = None) -> None:
         """Online and settled: idle, past the start-up brake window (``unknown`` for a DCU-1,
         which cannot report)."""
+        timeout_s = self.ready_s if timeout_s is None else timeout_s
         settled = "unknown" if self.models[rid] == "dcu1" else "idle"
         self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
         self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
