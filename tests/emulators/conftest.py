@@ -1,7 +1,9 @@
-"""Shared fixture: emulated controllers on ptys (links under tmp_path), closed after the test."""
+"""Shared fixtures: emulated controllers on ptys (links under tmp_path), closed after the test;
+real pyserial clients on them; Hamlib's rotctl as their judge."""
 
 from __future__ import annotations
 
+import subprocess
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -50,3 +52,22 @@ def clients() -> Iterator[Callable[..., serial.Serial]]:
             client.close()
         except (serial.SerialException, OSError):
             pass
+
+
+Hamlib = Callable[..., list[str]]
+
+
+@pytest.fixture
+def hamlib(rotctl_path: str) -> Hamlib:
+    """``hamlib(1701, port, "p")``: Hamlib's rotctl as that model on the emulator's link, at the
+    baud rate given (9600 unless told); what it printed, word by word (it must succeed)."""
+
+    def run(model: int, port: EmulatedPort[Any], *commands: str, baud: int = 9600) -> list[str]:
+        assert port.link is not None
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(model), "-r", port.link]
+        argv += ["-s", str(baud), *commands]
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+        return done.stdout.split()
+
+    return run

@@ -72,6 +72,8 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
         **{name: 1.0 for name in REGISTRY if name.startswith("easycomm")},
         "rt21": 1.0,
+        "prosistel": 1.0,
+        "prosistel-combi": 1.0,
     }
 
 
@@ -104,6 +106,8 @@ def test_hamlib_facts_are_on_the_spec() -> None:
             for variant in ("", "-az", "-separate")
         },
         "rt21": (405, HamlibRotType.OTHER, None),
+        "prosistel": (1701, HamlibRotType.AZ, None),
+        "prosistel-combi": (1703, HamlibRotType.AZEL, None),
     }
 
 
