@@ -72,6 +72,9 @@ FAST_EASYCOMM = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 EASYCOMM_MODELS = tuple(f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate"))
 # RT-21: a potentiometer read in tenths, its own brake handling, 4800 baud
 FAST_RT21 = {"az_speed_deg_s": 20.0}
+# Prosistel: a D (whole degrees) or a Combi-Track (tenths, two units), 9600 baud, own brakes
+FAST_PROSISTEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
+PROSISTEL_MODELS = ("prosistel", "prosistel-combi")
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -110,6 +113,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(GS232_MODELS, FAST_GS232),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_EASYCOMM),
         "rt21": FAST_RT21,
+        **dict.fromkeys(PROSISTEL_MODELS, FAST_PROSISTEL),
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -122,6 +126,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(GS232_MODELS, FAST_POLLING),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_POLLING),
         "rt21": FAST_POLLING,
+        **dict.fromkeys(PROSISTEL_MODELS, FAST_POLLING),
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})
