@@ -35,6 +35,9 @@ BRANDS = {
     "satel": "the SatEL controller (VE5FP) is satel",
     "ve5fp": "the SatEL controller (VE5FP) is satel",
     "greenheron": "Green Heron's RT-21 is rt21 (one box per rotor)",
+    "prosistel": "Prosistel's D box is prosistel (azimuth) or prosistel-el (elevation), its "
+    "Combi-Track prosistel-combi",
+    "combitrack": "Prosistel's Combi-Track is prosistel-combi",
 }
 
 

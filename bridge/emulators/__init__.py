@@ -45,9 +45,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     **{name: partial(Gs232, name) for name in _GS232_MODELS},
     **{name: partial(EasycommController, name) for name in _EASYCOMM_MODELS},
     "rt21": Rt21,
-    # not the D on an elevation rotor (prosistel-el, built directly): no bridge model drives a
-    # box with no azimuth
-    **{name: partial(Prosistel, name) for name in _PROSISTEL_MODELS if name != "prosistel-el"},
+    **{name: partial(Prosistel, name) for name in _PROSISTEL_MODELS},
 }
 
 

@@ -1,8 +1,9 @@
-"""Prosistel D (azimuth) and Combi-Track (azimuth and elevation): the codec.
+"""Prosistel D (one rotor: azimuth or elevation) and Combi-Track (azimuth and elevation): the codec.
 
 Device: Prosistel's rotator controllers. The D series (and the PRO series, which speaks the same)
-drives one rotor in whole degrees; the Combi-Track drives an azimuth and an elevation rotor as
-two units, A and B, in tenths of a degree. 9600 8N1, no flow control. Every frame starts with
+drives one rotor in whole degrees, as unit A (azimuth, 0..360) or unit E (elevation, 0..90); the
+Combi-Track drives an azimuth and an elevation rotor as two units, A and B, in tenths of a
+degree. 9600 8N1, no flow control. Every frame starts with
 STX (0x02) and ends with CR; a command is the unit's letter, the command's letter and its value
 (``STX A G 123 CR``), and every command is answered by the unit, the command and what it says,
 comma-separated (``STX A,?,123,B CR``). Some boxes send their position over and over unasked
@@ -18,7 +19,9 @@ Frames we send (STX written ``^B``):
   ``^BA?\\r``               ask unit A's position: ``^BA,?,123,R\\r`` (R: running, B: braked)
   ``^BAG999\\r``            stop at once (the hard stop; Combi-Track ``^BAG9999\\r`` per unit)
   ``^BAS\\r``               at open: no continuous position output (per unit)
-The Combi-Track's units go one frame each: A, then B, for a target, a query, a stop.
+The Combi-Track's units go one frame each: A, then B, for a target, a query, a stop. A D on an
+elevation rotor is sent the same frames for unit E; its elevation is that rotator's bearing (the
+box has no azimuth), as with one box of an az/el pair on two ports.
 Not sent: the soft stop (``G997``, Combi-Track ``G9777``): with the box's PWM ramps on it slows
 the rotor down over the ramp, so the rotor goes on turning after the user's STOP; the hard stop
 stops it where it is (rule 4).
@@ -39,7 +42,8 @@ Rules:
    rotor where it is. Both stop values lie far outside the targets' range, so a stop can never
    be read as a bearing by a box of the other family.
 5. Targets are whole degrees (D) or tenths (Combi-Track), rounded half up; outside azimuth
-   0..360 or elevation 0..90 they are refused before anything is sent.
+   0..360 or elevation 0..90 (a D elevation's bearing too) they are refused before anything is
+   sent.
 """
 
 from __future__ import annotations
@@ -73,16 +77,19 @@ _CHATTER = re.compile(rb"(?:[\r\n ]|\x02[A-Z],[^?\r],(?!E,)[^\r]*\r|\x02[A-Z],\?
 
 @dataclass(frozen=True)
 class Family:
-    """What a box of one family is on the wire: its units (azimuth first), its scale (1:
-    degrees, 10: tenths) and its hard stop's value."""
+    """What a box of one family is on the wire: its units (the bridge's bearing first), the top
+    of each unit's range in degrees, its scale (1: degrees, 10: tenths) and its hard stop."""
 
     units: tuple[str, ...]
+    tops: tuple[int, ...]
     scale: int
     hard_stop: int
 
 
-D_AZIMUTH = Family(("A",), 1, 999)
-COMBI_TRACK = Family(("A", "B"), 10, 9999)
+D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999)
+# a D on an elevation rotor: its one unit, E, is the rotator's bearing (0..90)
+D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999)
+COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999)
 
 
 def _value(deg: float, top: int, scale: int, axis: str) -> int:
@@ -105,11 +112,11 @@ class ProsistelCodec:
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        scale = self.family.scale
-        az = _value(az_deg, AZ_MAX_DEG, scale, "azimuth") / scale
+        scale, tops = self.family.scale, self.family.tops
+        az = _value(az_deg, tops[0], scale, "azimuth" if tops[0] == AZ_MAX_DEG else "bearing")
         if not self.elevation:
-            return az, None
-        return az, _value(el_deg or 0.0, EL_MAX_DEG, scale, "elevation") / scale
+            return az / scale, None
+        return az / scale, _value(el_deg or 0.0, tops[1], scale, "elevation") / scale
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         values = [v for v in self.wire_target(az_deg, el_deg) if v is not None]
@@ -195,8 +202,7 @@ class ProsistelCodec:
             )
             return
         deg = value / self.family.scale
-        top = AZ_MAX_DEG if unit == units[0] else EL_MAX_DEG
-        if deg > top:
+        if deg > self.family.tops[units.index(unit)]:
             self._junk(frame, JunkReason.SPOILED, "position out of range", out)
             return
         if not self._query_open or unit in self._said:  # rule 2
@@ -224,21 +230,20 @@ class ProsistelCodec:
 def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
     combi = family is COMBI_TRACK
     digits = 4 if combi else 3
+    top = float(family.tops[0])
     query = len(family.units) * len(b"\x02A?\r")
     reply = len(family.units) * len(b"\x02A,?,%s,B\r" % (b"0" * digits))
-    return ModelSpec(
-        name=name,
-        display_name=display,
+    defaults: dict[str, Any] = dict(
         manufacturer="Prosistel",
         codec_factory=lambda: ProsistelCodec(family),
         baud=9600,
         has_elevation=combi,
         retarget=RetargetPolicy.DIRECT,  # a new G while turning: the box turns to it
         az_min_deg=0.0,
-        az_max_deg=float(AZ_MAX_DEG),
+        az_max_deg=top,
         el_min_deg=0.0,
         el_max_deg=float(EL_MAX_DEG) if combi else 0.0,
-        az_wraps=True,
+        az_wraps=top == AZ_MAX_DEG,  # 0 and 360 are one direction; 0 and 90 of a mast are not
         reply_timeout_s=0.5,
         noise_deg=0.2 if combi else 1.0,  # an encoder read in tenths; a pot in whole degrees
         nominal_speed_deg_s=6.0,
@@ -248,12 +253,24 @@ def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
         reply_bytes=reply,
         hamlib_rot_type=HamlibRotType.AZEL if combi else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's prosistel backend has no get_info
-        **kw,
     )
+    defaults.update(kw)
+    return ModelSpec(name=name, display_name=display, **defaults)
 
 
 MODELS: dict[str, ModelSpec] = {
     "prosistel": _spec("prosistel", "D azimuth", D_AZIMUTH, hamlib_model=1701),
+    "prosistel-el": _spec(
+        "prosistel-el",
+        "D elevation",
+        D_ELEVATION,
+        hamlib_model=1702,
+        # Hamlib's 1702 is an El rotator, but this rotator's bearing is the elevation: the
+        # bridge's rotctld port answers it as an azimuth in 0..90, and says so in dump_state,
+        # so a client's view of the port is one that fits together
+        hamlib_rot_type=HamlibRotType.AZ,
+        nominal_speed_deg_s=3.0,  # an elevation rotor's speed, as the bearing's
+    ),
     "prosistel-combi": _spec(
         "prosistel-combi", "Combi-Track az/el", COMBI_TRACK, hamlib_model=1703
     ),

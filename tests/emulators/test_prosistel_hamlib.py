@@ -18,11 +18,10 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
-from time import monotonic
 
 import pytest
 
-from bridge.emulators.prosistel import Outcome, Prosistel
+from bridge.emulators.prosistel import Outcome
 from bridge.emulators.pty import EmulatedPort
 from tests.emulators.conftest import Hamlib, PortFactory
 from tests.support import ROOT
@@ -87,22 +86,21 @@ def test_a_set_move_arrives(make_port: PortFactory, hamlib: Hamlib) -> None:
     assert hamlib(1703, port, "p") == ["271.60", "89.90"]
 
 
-def test_hamlib_drives_a_d_box_on_an_elevation_rotor(tmp_path: Path, hamlib: Hamlib) -> None:
-    """The D on an elevation rotor (unit E): the emulator has it, the bridge has no model for a
-    box without azimuth, so ``rotor-bridge emulate`` does not offer it."""
-    device = Prosistel("prosistel-el", start_el_deg=4.0, el_speed_deg_s=500.0, now=monotonic())
-    with EmulatedPort(device, link=tmp_path / "tty-el", name="prosistel-el") as port:
-        assert hamlib(1702, port, "p") == ["0.00", "4.00"]
-        hamlib(1702, port, "P", "0", "45")
-        port.wait_for(lambda s: not s.is_moving and s.el_deg == 45.0)
-        assert hamlib(1702, port, "p", "S") == ["0.00", "45.00"]
-        assert (b"\x02EG45\r", "move") in commands(port)
-        assert commands(port)[-3:] == [
-            (b"\x02ES\r", "output off"),
-            (b"\x02E?\r", "query"),
-            (b"\x02EG997\r", "stop"),
-        ]
-        assert not port.frames(Outcome.REFUSED)
+def test_hamlib_drives_a_d_box_on_an_elevation_rotor(
+    make_port: PortFactory, hamlib: Hamlib
+) -> None:
+    port = make_port("prosistel-el", start_el_deg=4.0, el_speed_deg_s=500.0)
+    assert hamlib(1702, port, "p") == ["0.00", "4.00"]
+    hamlib(1702, port, "P", "0", "45")
+    port.wait_for(lambda s: not s.is_moving and s.el_deg == 45.0)
+    assert hamlib(1702, port, "p", "S") == ["0.00", "45.00"]
+    assert (b"\x02EG45\r", "move") in commands(port)
+    assert commands(port)[-3:] == [
+        (b"\x02ES\r", "output off"),
+        (b"\x02E?\r", "query"),
+        (b"\x02EG997\r", "stop"),
+    ]
+    assert not port.frames(Outcome.REFUSED)
 
 
 def test_rotor_bridge_emulate_serves_a_prosistel_that_hamlib_drives(

@@ -1,7 +1,8 @@
 """Prosistel D and Combi-Track end to end: real mosquitto, real pyserial on a pty, the bridge, and
 the Prosistel emulator (written from the documents and judged by Hamlib's rotctl -m 1701/1703)
-as the controller. Every check runs on both models: the D (unit A, whole degrees) and the
-Combi-Track (units A and B, tenths)."""
+as the controller. Every check runs on the D on an azimuth rotor (unit A, whole degrees) and the
+Combi-Track (units A and B, tenths); the D on an elevation rotor (unit E) is the D's codec on
+another unit, and is checked for what differs: its bearing is an elevation, 0..90."""
 
 from __future__ import annotations
 
@@ -11,9 +12,10 @@ import time
 import pytest
 
 from bridge.emulators.pty import EmulatedPort
-from tests.support.rig import PROSISTEL_MODELS, Rig
+from tests.support.rig import Rig
 
-pytestmark = pytest.mark.parametrize("model", PROSISTEL_MODELS)
+AZIMUTH_MODELS = ("prosistel", "prosistel-combi")
+azimuth_models = pytest.mark.parametrize("model", AZIMUTH_MODELS)
 
 
 def frames(emu: EmulatedPort[object], *outcomes: str) -> list[bytes]:
@@ -29,6 +31,7 @@ def each(model: str, command: bytes) -> list[bytes]:
     return [b"\x02" + unit + command + b"\r" for unit in units(model)]
 
 
+@azimuth_models
 def test_target_stop_while_turning_and_the_bearing_read_back(rig: Rig, model: str) -> None:
     emu = rig.add("tower", model=model, emu={"start_az_deg": 10})
     rig.start()
@@ -51,7 +54,9 @@ def test_target_stop_while_turning_and_the_bearing_read_back(rig: Rig, model: st
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
     assert stopped.az_deg < 290
-    assert frames(emu, "stop") == each(model, b"G9999" if combi else b"G999")  # the hard stop
+    hard = each(model, b"G9999" if combi else b"G999")  # (again, if a reading in flight
+    assert frames(emu, "stop")[: len(hard)] == hard  # showed the rotor still turning)
+    assert set(frames(emu, "stop")) == set(hard)
     t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     where = round(emu.state().az_deg, 1 if combi else 0)
@@ -59,6 +64,7 @@ def test_target_stop_while_turning_and_the_bearing_read_back(rig: Rig, model: st
     assert frames(emu, "refused") == []
 
 
+@azimuth_models
 def test_a_box_that_streams_its_position_is_told_to_stop_and_read_right(
     rig: Rig, model: str
 ) -> None:
@@ -84,6 +90,7 @@ def test_a_box_that_streams_its_position_is_told_to_stop_and_read_right(
     assert rig.probe.on("rotor/error") == []
 
 
+@azimuth_models
 def test_junk_gives_an_error_and_changes_nothing(rig: Rig, model: str) -> None:
     emu = rig.add("tower", model=model, emu={"start_az_deg": 77})
     rig.start()
@@ -99,6 +106,7 @@ def test_junk_gives_an_error_and_changes_nothing(rig: Rig, model: str) -> None:
     assert emu.frames("move") == [] and emu.state().az_deg == 77.0
 
 
+@azimuth_models
 def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(
     rig: Rig, model: str
 ) -> None:
@@ -121,6 +129,7 @@ def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(
     assert emu.frames("move") == [] and emu.state().az_deg == 50.0
 
 
+@azimuth_models
 def test_unplug_and_replug(rig: Rig, model: str) -> None:
     emu = rig.add("tower", model=model, emu={"start_az_deg": 33})
     rig.start()
@@ -136,6 +145,7 @@ def test_unplug_and_replug(rig: Rig, model: str) -> None:
     emu.wait_for(lambda s: s.az_deg == 40.0 and not s.is_moving, 15)
 
 
+@azimuth_models
 def test_a_box_that_ignores_its_input_is_offline_and_nothing_moves(rig: Rig, model: str) -> None:
     emu = rig.add("tower", model=model, emu={"start_az_deg": 20})
     rig.start()
@@ -155,3 +165,29 @@ def test_a_box_that_ignores_its_input_is_offline_and_nothing_moves(rig: Rig, mod
     assert emu.frames("move") == [] and emu.state().az_deg == 20.0  # the target is not replayed
     rig.probe.publish("rotor/target", "30")
     emu.wait_for(lambda s: s.az_deg == 30.0 and not s.is_moving, 15)
+
+
+def test_a_d_on_an_elevation_rotor_turns_stops_and_refuses_past_90(rig: Rig) -> None:
+    emu = rig.add("mast", model="prosistel-el", emu={"start_el_deg": 10})
+    rig.start()
+    rig.ready("mast", timeout_s=15)
+    assert frames(emu, "output off") == [b"\x02ES\r"]
+    assert rig.retained()["rotor/bearing"] == b"10"  # the elevation is this rotator's bearing
+    rig.probe.publish("rotor/target", "45.4")
+    emu.wait_for(lambda s: s.el_deg == 45.0 and not s.is_moving, 20)
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert rig.status("mast").bearing_deg == 45.0 and frames(emu, "move") == [b"\x02EG45\r"]
+
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "91")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "outside" in err["message"]
+    rig.probe.publish("rotor/target", "0")
+    emu.wait_for(lambda s: s.is_moving and s.el_deg is not None and s.el_deg < 40, 10)
+    rig.probe.publish("rotor/stop", "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 5)
+    assert stopped.el_deg is not None and stopped.el_deg > 5
+    # the hard stop (again, if a reading in flight showed the rotor still turning)
+    assert set(frames(emu, "stop")) == {b"\x02EG999\r"} and frames(emu, "refused") == []
+    assert emu.state().az_deg == 0.0  # the box has no azimuth

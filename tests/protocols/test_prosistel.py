@@ -19,7 +19,13 @@ from bridge.protocols.base import (
     PositionReply,
     RetargetPolicy,
 )
-from bridge.protocols.prosistel import COMBI_TRACK, D_AZIMUTH, ProsistelCodec
+from bridge.protocols.prosistel import (
+    COMBI_TRACK,
+    D_AZIMUTH,
+    D_ELEVATION,
+    Family,
+    ProsistelCodec,
+)
 from tests.support import HOW, feed
 
 D, COMBI = D_AZIMUTH, COMBI_TRACK
@@ -33,8 +39,8 @@ def junk(replies: list[object]) -> list[JunkReply]:
     return [r for r in replies if isinstance(r, JunkReply)]
 
 
-def asked(family: object = D) -> ProsistelCodec:
-    codec = ProsistelCodec(COMBI if family is COMBI else D)
+def asked(family: Family = D) -> ProsistelCodec:
+    codec = ProsistelCodec(family)
     codec.encode_query()
     return codec
 
@@ -56,6 +62,19 @@ def test_frames_on_the_wire() -> None:
         d.encode_option("jam", True)
 
 
+def test_a_d_on_an_elevation_rotor_speaks_as_unit_e_within_0_to_90() -> None:
+    codec = ProsistelCodec(D_ELEVATION)
+    assert codec.encode_target(45.4) == [b"\x02EG45\r"]
+    assert (codec.encode_query(), codec.encode_stop()) == (b"\x02E?\r", b"\x02EG999\r")
+    assert codec.encode_connect(0.0) == [b"\x02ES\r"]
+    with pytest.raises(ValueError, match="bearing 90.6 outside 0..90"):
+        codec.encode_target(90.6)
+    got = codec.feed(b"\x02E,?,091,B\r")
+    assert positions(got) == [] and junk(got)[0].reason is JunkReason.SPOILED
+    got = asked(D_ELEVATION).feed(b"\x02A,?,045,B\r")  # an azimuth box on the line
+    assert positions(got) == [] and "is the model right?" in junk(got)[0].detail
+
+
 def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None:
     d, combi = ProsistelCodec(D), ProsistelCodec(COMBI)
     for az in (360.5, -0.6, 997, 999):
@@ -73,11 +92,12 @@ def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None
     [
         (D, b"\x02A,?,290,R\r", (290.0, None)),
         (D, b"\x02A,?,7,B\r", (7.0, None)),
+        (D_ELEVATION, b"\x02E,?,045,R\r", (45.0, None)),  # the elevation is the bearing
         (COMBI, b"\x02A,?,1000,R\r\x02B,?,0900,B\r", (100.0, 90.0)),
         (COMBI, b"\x02B,?,0455,R\r\x02A,?,3600,R\r", (360.0, 45.5)),  # either order
     ],
 )
-def test_positions_in_their_forms(how: str, family: object, reply: bytes, want: object) -> None:
+def test_positions_in_their_forms(how: str, family: Family, reply: bytes, want: object) -> None:
     codec = asked(family)
     got = feed(codec, reply, how)
     assert positions(got) == [want] and not codec.awaiting_reply()
@@ -167,7 +187,19 @@ def test_noise_before_a_reply_never_yields_another_bearing(
 
 
 def test_the_model_table() -> None:
-    d, combi = REGISTRY["prosistel"], REGISTRY["prosistel-combi"]
+    d, el, combi = REGISTRY["prosistel"], REGISTRY["prosistel-el"], REGISTRY["prosistel-combi"]
+    assert (el.display_name, el.hamlib_model, el.hamlib_rot_type) == (
+        "D elevation",
+        1702,
+        HamlibRotType.AZ,  # the rotctld port answers its elevation as its bearing
+    )
+    assert (el.az_max_deg, el.az_wraps, el.has_elevation, el.nominal_speed_deg_s) == (
+        90.0,
+        False,
+        False,
+        3.0,
+    )
+    assert d.az_wraps and (d.az_max_deg, combi.az_max_deg) == (360.0, 360.0)
     assert (d.manufacturer, d.display_name, d.baud) == ("Prosistel", "D azimuth", 9600)
     assert (combi.display_name, combi.baud) == ("Combi-Track az/el", 9600)
     assert (d.hamlib_model, d.hamlib_rot_type) == (1701, HamlibRotType.AZ)

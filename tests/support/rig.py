@@ -74,7 +74,7 @@ EASYCOMM_MODELS = tuple(f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "
 FAST_RT21 = {"az_speed_deg_s": 20.0}
 # Prosistel: a D (whole degrees) or a Combi-Track (tenths, two units), 9600 baud, own brakes
 FAST_PROSISTEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
-PROSISTEL_MODELS = ("prosistel", "prosistel-combi")
+PROSISTEL_MODELS = ("prosistel", "prosistel-el", "prosistel-combi")
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
