@@ -1,6 +1,6 @@
 """What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
-whatever its protocol: the panel, a jam, time passing, a stop, the frame log (gs232.py,
-easycomm.py, prosistel.py).
+whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py,
+prosistel.py); the frame log is base.Recorder's.
 
 Rules:
 1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
@@ -14,20 +14,19 @@ from __future__ import annotations
 
 from typing import Any
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine
+from bridge.emulators.base import MotionEvent, PacedLine, Recorder
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
 
 
-class TwoAxes:
+class TwoAxes(Recorder):
     """The axes' part of a box; the protocol's class sets the attributes below."""
 
     _az: Axis
     _el: Axis
     _now_s: float
     _events: list[MotionEvent]
-    _log: list[LoggedFrame]
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
@@ -41,18 +40,6 @@ class TwoAxes:
     def el_top_deg(self) -> float:
         """Rule 2: the elevation rotor's travel."""
         return self._el.max_deg
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     def press_brake(self, now: float) -> bool:
         """No brake on these: letting go of the turn switch, or a hand on the stop switch,
