@@ -58,6 +58,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    OneQuery,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -99,8 +100,10 @@ def _value(deg: float, top: int, scale: int, axis: str) -> int:
     return value
 
 
-class ProsistelCodec:
-    """Codec for one Prosistel box: a D on one azimuth rotor, or a Combi-Track's two units."""
+class ProsistelCodec(OneQuery):
+    """Codec for one Prosistel box: a D on one rotor (unit A or E), or a Combi-Track's two."""
+
+    BOX = "a Prosistel box"
 
     def __init__(self, family: Family = D_AZIMUTH) -> None:
         self.family = family
@@ -129,25 +132,9 @@ class ProsistelCodec:
         return self._each(b"G%d" % self.family.hard_stop)
 
     def encode_query(self) -> bytes:
-        self._query_open = True
-        self._noisy = False
+        self._open_query()
         self._said = {}
         return self._each(b"?")
-
-    def expire_query(self) -> None:
-        self._query_open = False
-
-    def awaiting_reply(self) -> bool:
-        return self._query_open
-
-    def encode_version(self) -> None:
-        return None
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("a Prosistel box has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return [self._each(b"S")]  # no continuous position output
@@ -220,11 +207,6 @@ class ProsistelCodec:
                 self._said[units[0]], self._said.get(units[-1]) if self.elevation else None
             )
         )
-
-    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
-        if self._query_open:
-            self._noisy = True
-        out.append(JunkReply(raw, reason, why))
 
 
 def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
