@@ -23,7 +23,9 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import json
 import os
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -320,6 +322,29 @@ class Rig:
 
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")
+
+    def unplug_and_replug(self, rid: str) -> None:
+        """Yank ``rid``'s adapter and wait for ``offline``; plug it back (the controller
+        power-cycled with it) and wait for ``online``."""
+        emu, availability = self.emus[rid], self.topic(rid, "availability")
+        t = time.monotonic()
+        emu.unplug()
+        self.probe.wait_value(availability, "offline", after=t)
+        t = time.monotonic()
+        emu.replug()
+        self.probe.wait_value(availability, "online", timeout_s=15, after=t)
+
+    def junk_reported(self, rid: str, *junk: bytes, polls: int = 4) -> None:
+        """Put ``junk`` on ``rid``'s line towards the bridge; wait for the protocol error it
+        reports, then for ``polls`` more questions to the controller (the readings after it)."""
+        emu = self.emus[rid]
+        t = time.monotonic()
+        for data in junk:
+            emu.inject(data)
+        err = json.loads(self.probe.wait_for(self.topic(rid, "error"), after=t).payload)
+        assert err["kind"] == "protocol" and "no valid reply" in err["message"], err
+        n = len(emu.frames("query"))
+        emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + polls, 15)
 
     def status(self, rid: str) -> Any:
         """The in-process bridge's own status of rotator ``rid``."""
