@@ -3,7 +3,10 @@ real pyserial clients on them; Hamlib's rotctl as their judge."""
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -11,10 +14,19 @@ from typing import Any
 import pytest
 import serial
 
-from bridge.emulators import EmulatedPort, start
+from bridge.emulators import EmulatedPort, Responder, start
+from tests.support import ROOT
 from tests.support.waiting import slow
 
 PortFactory = Callable[..., EmulatedPort[Any]]
+
+
+def ask(device: Responder, data: bytes, now: float) -> bytes:
+    """A sans-IO emulator's whole answer to ``data`` sent at ``now`` (or at the device's
+    latest instant, if later: time never goes back)."""
+    now = device.state(now).time_s
+    device.receive(data, now)
+    return device.due_output(now + 0.1)
 
 
 @pytest.fixture
@@ -71,3 +83,23 @@ def hamlib(rotctl_path: str) -> Hamlib:
         return done.stdout.split()
 
     return run
+
+
+@contextlib.contextmanager
+def served(model: str, link: Path, *options: str) -> Iterator[None]:
+    """``rotor-bridge emulate MODEL --link LINK OPTIONS`` (here ``python -m bridge.emulators``)
+    as a process of its own, once it has printed its device and its link; at the end it must
+    take SIGTERM and exit with status 0."""
+    argv = [sys.executable, "-m", "bridge.emulators", model, "--link", str(link), *options]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("/dev/pts/")
+        assert proc.stdout.readline().strip() == str(link)
+        yield
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=slow(10)) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -14,17 +14,14 @@ installed (libhamlib-utils): a missing judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import signal
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from bridge.emulators.prosistel import Outcome
 from bridge.emulators.pty import EmulatedPort
-from tests.emulators.conftest import Hamlib, PortFactory
-from tests.support import ROOT
+from tests.emulators.conftest import Hamlib, PortFactory, served
 from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
@@ -106,21 +103,9 @@ def test_hamlib_drives_a_d_box_on_an_elevation_rotor(
 def test_rotor_bridge_emulate_serves_a_prosistel_that_hamlib_drives(
     tmp_path: Path, rotctl_path: str
 ) -> None:
-    """``rotor-bridge emulate prosistel`` (here ``python -m bridge.emulators``)."""
-    link = f"{tmp_path}/prosistel"
-    argv = [sys.executable, "-m", "bridge.emulators", "prosistel", "--link", link]
-    argv += ["--start-az-deg", "30"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        assert proc.stdout.readline().startswith("/dev/pts/")
-        assert proc.stdout.readline().strip() == link
-        run = [rotctl_path, "-m", "1701", "-r", link, "-s", "9600", "p", "P", "40", "0", "S"]
+    """``rotor-bridge emulate prosistel-combi``, driven by Hamlib's back end for it."""
+    link = tmp_path / "prosistel"
+    with served("prosistel-combi", link, "--start-az-deg", "30.5", "--start-el-deg", "10"):
+        run = [rotctl_path, "-m", "1703", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
         done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
-        assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "0.00"], done
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=slow(10)) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+        assert done.returncode == 0 and done.stdout.split()[:2] == ["30.50", "10.00"], done

@@ -9,13 +9,7 @@ import pytest
 
 from bridge import emulators
 from bridge.emulators.prosistel import Outcome, Prosistel
-
-
-def ask(device: Prosistel, data: bytes, now: float) -> bytes:
-    """The whole answer to ``data`` sent at ``now`` (or at the device's latest instant)."""
-    now = device.state(now).time_s
-    device.receive(data, now)
-    return device.due_output(now + 0.05)
+from tests.emulators.conftest import ask
 
 
 def test_positions_in_whole_degrees_and_in_tenths() -> None:
