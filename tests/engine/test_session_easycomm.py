@@ -143,15 +143,7 @@ def test_a_bearing_the_controller_ignores_is_reported_and_nothing_moves(rig: Rig
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100, start_el_deg=20)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xffAZ359.0 EL0.0\n" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"A", b"\xffAZ359.0 EL0.0\n")
     t = v.now
     v.run_for(30)
     assert glitched

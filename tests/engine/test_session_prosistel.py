@@ -112,15 +112,7 @@ def test_a_box_streaming_its_position_after_a_power_cycle_is_read_right(
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, "prosistel-combi", start_az_deg=100, start_el_deg=20)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"\x02":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xff\x02A,?,3599,B\r" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"\x02", b"\xff\x02A,?,3599,B\r")
     t = v.now
     v.run_for(30)
     assert glitched

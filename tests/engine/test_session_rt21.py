@@ -88,15 +88,7 @@ def test_a_padded_or_zero_filled_box_reads_the_same(rig: Rig) -> None:
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"1":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xff359.9;" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"1", b"\xff359.9;")
     t = v.now
     v.run_for(30)
     assert glitched

@@ -19,8 +19,9 @@ Rules:
    completely arrived. The device's output is already paced by the device.
 3. Faults act on the line, never on either side: a write can be lost or garbled on its way to
    the device (``drop_writes``, ``garble_writes``, ``set_deaf``, ``to_device``), the device's
-   output on its way to the host (``set_silent``, ``to_host``). Lost writes stay in ``writes``
-   (marked lost): they are what the bridge sent, the device's log is what arrived.
+   output on its way to the host (``set_silent``, ``to_host``, ``glitch_once``). Lost writes
+   stay in ``writes`` (marked lost): they are what the bridge sent, the device's log is what
+   arrived.
 4. A session that asks to be woken at or before the present, again and again, spins the real
    worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
    (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
@@ -239,6 +240,21 @@ class VirtualRotator:
     def set_deaf(self, deaf: bool) -> None:
         """Everything the host writes is lost before the device hears it."""
         self._deaf = deaf
+
+    def glitch_once(self, first: bytes, noise: bytes) -> list[float]:
+        """``noise`` reaches the host once, just before the next output that is ``first`` alone
+        (a reply's first byte: the device's output is paced); the list returned gets the
+        instant it did."""
+        when: list[float] = []
+
+        def glitch(data: bytes, now: float) -> bytes:
+            if when or data != first:
+                return data
+            when.append(now)
+            return noise + data
+
+        self.to_host = glitch
+        return when
 
     # -- front panel ----------------------------------------------------------------------------
     def jam(self) -> None:
