@@ -15,7 +15,7 @@ from bridge.emulators.rt21 import Outcome
 from bridge.model import MotionState
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, off_deg
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 from tests.support.sky import sgp4_altaz
 
 Rig = Callable[..., VirtualRotator]
@@ -27,18 +27,6 @@ def ready(rig: Rig, **emulator: object) -> VirtualRotator:
     v = rig("rt21", emulator={**FAST, **emulator})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return v.state is IDLE and not truth.is_moving and truth.az_deg == az
-
-    return there
 
 
 def test_a_target_arrives_to_the_tenth_and_is_read_back(rig: Rig) -> None:

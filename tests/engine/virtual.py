@@ -376,3 +376,23 @@ class VirtualRotator:
         self.writes.append(Sent(self.now, data, lost=wire != data))
         if wire:
             self._tx.send(wire, self.now)
+
+
+def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    """The bearings the device took since ``since``: the frames it logged as a move."""
+    return [f.data for f in v.frames("move", since=since)]
+
+
+def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
+    """For run_until: the session idle, the rotor still at ``az`` (and ``el``, if named)."""
+
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is MotionState.IDLE
+            and not truth.is_moving
+            and truth.az_deg == az
+            and (el is None or truth.el_deg == el)
+        )
+
+    return there
