@@ -323,6 +323,15 @@ class Rig:
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")
 
+    def refused(self, rid: str, payload: str, leaf: str = "target") -> str:
+        """Publish ``payload`` on ``rid``'s ``leaf`` topic; the message of the refusal the bridge
+        reports for it on the error topic."""
+        t = time.monotonic()
+        self.probe.publish(self.topic(rid, leaf), payload)
+        err = json.loads(self.probe.wait_for(self.topic(rid, "error"), after=t).payload)
+        assert err["kind"] == "refused", err
+        return str(err["message"])
+
     def unplug_and_replug(self, rid: str) -> None:
         """Yank ``rid``'s adapter and wait for ``offline``; plug it back (the controller
         power-cycled with it) and wait for ``online``."""
