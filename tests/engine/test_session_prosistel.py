@@ -130,3 +130,10 @@ def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> N
         assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
         assert len(moves(v)) >= 10 and not v.frames(Outcome.REFUSED)
         assert v.errors() == []
+
+
+def test_a_bare_azimuth_to_a_combi_track_keeps_its_elevation(rig: Rig) -> None:
+    v = ready(rig, "prosistel-combi", start_az_deg=10, start_el_deg=30)
+    v.target(100)  # no elevation named: unit B must not be sent to 0
+    v.run_until(settled_at(100, 30), 60, "at 100/30")
+    assert moves(v) == [b"\x02AG1000\r", b"\x02BG300\r"]
