@@ -131,6 +131,15 @@ def rotctld_cases() -> list[RotctldCase]:
             None,
             ("idle", "polling"),
         ),
+        RotctldCase(
+            "prosistel",
+            1701,
+            lambda i: f"P {10 + i} 0",
+            "P -> STX AGddd<CR>",
+            lambda f: f.outcome == "move",
+            None,
+            ("idle", "polling"),
+        ),
     ]
 
 

@@ -118,6 +118,7 @@ _GS232_POLL = lambda f: f.outcome == "query"  # noqa: E731
 _EASYCOMM_POLL = lambda f: f.data == b"AZ" and f.outcome == "query"  # noqa: E731
 _SPID_FRAME = bytes(13)
 _RT21_SET = b"AP1100.5\r;"
+_PROSISTEL_SET = b"\x02AG100\r"
 AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
 AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
 _SPID_IDLE = {"idle_poll_interval_s": 1.0, "moving_poll_interval_s": 1.0, "settle_s": 2.0}
@@ -299,7 +300,33 @@ def cases() -> list[Case]:
             quick=False,
         ),
         *_rt21(apart, iso),
+        *_prosistel(apart, iso),
     ]
+
+
+def _prosistel(apart: float, iso: float) -> list[Case]:
+    """The Prosistel D: the hard stop G999 and a bearing G, each STX-framed."""
+    poll = lambda f: f.outcome == "query"  # noqa: E731
+    stop = Case(
+        "prosistel",
+        "stop",
+        b"\x02AG999\r",
+        "stop STX AG999<CR>",
+        lambda f: f.outcome == "stop",
+        (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
+        poll=poll,
+    )
+    target = Case(
+        "prosistel",
+        "target",
+        _PROSISTEL_SET,
+        "target STX AGddd<CR>",
+        lambda f: f.outcome == "move",
+        (Condition("idle", {}, (iso, iso + 0.5)),),
+        payload=lambda i: f"{10 + i}",
+        poll=poll,
+    )
+    return [stop, target]
 
 
 def _rt21(apart: float, iso: float) -> list[Case]:
@@ -440,7 +467,7 @@ def tasks(scope: Scope, quick: bool, models: set[str] | None) -> list[Task]:
         if (models and rc.model not in models) or (quick and rc.hamlib == 901):
             continue
         frames = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}
-        frames["rt21"] = _RT21_SET
+        frames["rt21"], frames["prosistel"] = _RT21_SET, _PROSISTEL_SET
         frame = {**frames, "gs232b": b"W100 010\r", "easycomm2": b"AZ100.0 EL10.0\n"}[rc.model]
         frame_ms = _ms(line_time_s(len(frame), baud_of(rc.model, rc.emu_opts)))
         for condition in rc.conditions:

@@ -544,6 +544,8 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("ve5fp", "is satel"),
         ("Green Heron", "RT-21 is rt21"),
         ("rt-21", "did you mean rt21?"),
+        ("Prosistel PST-61D", "D box is prosistel (azimuth) or prosistel-el (elevation)"),
+        ("Combi-Track", "Combi-Track is prosistel-combi"),
     ],
 )
 def test_an_unknown_model_names_the_nearest_model_or_the_one_for_its_maker(

@@ -167,18 +167,6 @@ class EasycommController(TwoAxes):
             **self._truth(now),
         )
 
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
-
     # -- front panel and faults -----------------------------------------------------------------
 
     def power_cycle(self, now: float) -> None:

@@ -1,11 +1,12 @@
 """What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
-whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py).
+whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py,
+prosistel.py); the frame log is base.Recorder's.
 
 Rules:
 1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
    event at the moment it happened, not when it was noticed.
 2. Turning by hand (``manual_rotate``) takes the box's whole range: azimuth 0..``az_top_deg``,
-   elevation 0..EL_TOP_DEG on a box with an elevation rotor; anything else is a ValueError.
+   elevation 0..``el_top_deg`` on a box with an elevation rotor; anything else is a ValueError.
 3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
 """
 
@@ -13,13 +14,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from bridge.emulators.base import MotionEvent, PacedLine
+from bridge.emulators.base import MotionEvent, PacedLine, Recorder
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
 
 
-class TwoAxes:
+class TwoAxes(Recorder):
     """The axes' part of a box; the protocol's class sets the attributes below."""
 
     _az: Axis
@@ -35,6 +36,11 @@ class TwoAxes:
         """Rule 2: the azimuth range the box is set to now."""
         return self._az.max_deg
 
+    @property
+    def el_top_deg(self) -> float:
+        """Rule 2: the elevation rotor's travel."""
+        return self._el.max_deg
+
     def press_brake(self, now: float) -> bool:
         """No brake on these: letting go of the turn switch, or a hand on the stop switch,
         stops the motors."""
@@ -45,7 +51,7 @@ class TwoAxes:
         top = self.az_top_deg
         if not 0.0 <= az_deg <= top:
             raise ValueError(f"az {az_deg} outside 0..{top:g}")
-        if el_deg is not None and (not self.has_elevation or not 0.0 <= el_deg <= EL_TOP_DEG):
+        if el_deg is not None and (not self.has_elevation or not 0.0 <= el_deg <= self.el_top_deg):
             raise ValueError(f"el {el_deg} not possible on {self.name}")
         if self._az.manual_move(az_deg, now):
             self._event(now, "move", f"panel az to {az_deg:g}")

@@ -7,7 +7,8 @@ Rules:
    around the frames) and yields the same replies. Junk is reported, never turned into a reading.
 3. A position reply is only accepted while a reply is awaited (a query, or a command the
    controller answers with its position); ``awaiting_reply`` says so, ``expire_query`` gives up
-   on it after the engine's reply timeout. Anything else is junk.
+   on it after the engine's reply timeout. Anything else is junk. ``OneQuery`` keeps that
+   bookkeeping for the codecs that ask one question at a time.
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
@@ -27,7 +28,7 @@ import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 from bridge.model import SettingValue
 
@@ -203,6 +204,41 @@ def _read_bool(name: str, value: SettingValue) -> bool:
     if text in ("off", "0", "false"):
         return False
     raise ValueError(f"{name}: expected ON or OFF, got {str(value)[:20]!r}")
+
+
+class OneQuery:
+    """Rule 3's bookkeeping for a controller asked one question at a time that has no version
+    to ask, no options and no motion switch (GS-232, Easycomm, RT-21, Prosistel): the query open
+    and whether junk came within it. The codec names its controller in ``BOX``, calls
+    ``_open_query`` from encode_query and ``_junk`` for bytes that are no reply."""
+
+    BOX: ClassVar[str]
+    _query_open: bool = False
+    _noisy: bool = False  # junk arrived since the query was opened
+
+    def _open_query(self) -> None:
+        self._query_open = True
+        self._noisy = False
+
+    def expire_query(self) -> None:
+        self._query_open = False
+
+    def awaiting_reply(self) -> bool:
+        return self._query_open
+
+    def encode_version(self) -> bytes | None:
+        return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError(f"{self.BOX} has no options the bridge switches")
+
+    def encode_enable(self) -> None:
+        return None
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        if self._query_open:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
 
 
 class HamlibRotType(enum.StrEnum):

@@ -47,6 +47,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    OneQuery,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -80,9 +81,11 @@ def _degrees(value: float, top: int, axis: str) -> int:
     return whole
 
 
-class Gs232Codec:
+class Gs232Codec(OneQuery):
     """Codec for one GS-232 box: ``variant`` "a" or "b" (its reply form), ``elevation`` whether
     an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``)."""
+
+    BOX = "the GS-232"
 
     def __init__(self, variant: str = "b", *, elevation: bool = True) -> None:
         if variant not in ("a", "b"):
@@ -111,24 +114,8 @@ class Gs232Codec:
         return b"S\r"
 
     def encode_query(self) -> bytes:
-        self._query_open = True
-        self._noisy = False
+        self._open_query()
         return b"C2\r" if self.elevation else b"C\r"
-
-    def expire_query(self) -> None:
-        self._query_open = False
-
-    def awaiting_reply(self) -> bool:
-        return self._query_open
-
-    def encode_version(self) -> None:
-        return None
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("the GS-232 has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return []
@@ -191,11 +178,6 @@ class Gs232Codec:
             out.append(PositionReply(float(az), float(el_deg)))
         else:
             out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
-
-    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
-        if self._query_open:
-            self._noisy = True
-        out.append(JunkReply(raw, reason, why))
 
 
 def encode_speed(level: SettingValue) -> bytes:

@@ -10,9 +10,7 @@ no answer from those (``-separate`` here) but still sets and stops them. rotctl 
 
 from __future__ import annotations
 
-import signal
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -22,7 +20,7 @@ import pytest
 
 from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.emulators.pty import EmulatedPort
-from tests.support import ROOT
+from tests.emulators.conftest import served
 from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
@@ -135,22 +133,12 @@ def test_rotor_bridge_emulate_serves_an_easycomm_controller_that_hamlib_drives(
     """``rotor-bridge emulate easycomm2`` (here ``python -m bridge.emulators``), answering in
     whole degrees as some firmware does."""
     link = tmp_path / "easycomm"
-    argv = [sys.executable, "-m", "bridge.emulators", "easycomm2", "--link", str(link)]
-    argv += ["--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        assert proc.stdout.readline().startswith("/dev/pts/")
-        assert proc.stdout.readline().strip() == str(link)
+    with served(
+        "easycomm2", link, "--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"
+    ):
         run = [rotctl_path, "-m", "202", "-r", str(link), "-s", "19200", "p", "P", "40", "20", "S"]
         done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
         assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=slow(10)) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
 
 
 @pytest.mark.parametrize(("model", "hamlib"), [("easycomm2-az", 202), ("easycomm3-az", 204)])

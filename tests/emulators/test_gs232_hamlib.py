@@ -9,9 +9,7 @@ first CR or LF and flushes the rest before the next command. rotctl must be inst
 
 from __future__ import annotations
 
-import signal
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -21,7 +19,7 @@ import pytest
 
 from bridge.emulators.gs232 import Gs232, Outcome
 from bridge.emulators.pty import EmulatedPort
-from tests.support import ROOT
+from tests.emulators.conftest import served
 from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
@@ -123,19 +121,9 @@ def test_rotor_bridge_emulate_serves_a_gs232b_that_hamlib_drives(
 ) -> None:
     """``rotor-bridge emulate gs232b`` (here ``python -m bridge.emulators``), K3NG-style."""
     link = tmp_path / "gs232"
-    argv = [sys.executable, "-m", "bridge.emulators", "gs232b", "--link", str(link)]
-    argv += ["--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        assert proc.stdout.readline().startswith("/dev/pts/")
-        assert proc.stdout.readline().strip() == str(link)
+    with served(
+        "gs232b", link, "--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"
+    ):
         run = [rotctl_path, "-m", "603", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
         done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
         assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=slow(10)) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()

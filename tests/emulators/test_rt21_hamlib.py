@@ -9,9 +9,7 @@ judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import signal
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -21,7 +19,7 @@ import pytest
 
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rt21 import Outcome, Rt21
-from tests.support import ROOT
+from tests.emulators.conftest import served
 from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
@@ -105,19 +103,7 @@ def test_rotor_bridge_emulate_serves_an_rt21_that_hamlib_drives(
 ) -> None:
     """``rotor-bridge emulate rt21`` (here ``python -m bridge.emulators``)."""
     link = tmp_path / "rt21"
-    argv = [sys.executable, "-m", "bridge.emulators", "rt21", "--link", str(link)]
-    argv += ["--start-az-deg", "3.5", "--reply-padding", "none"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        assert proc.stdout.readline().startswith("/dev/pts/")
-        assert proc.stdout.readline().strip() == str(link)
+    with served("rt21", link, "--start-az-deg", "3.5", "--reply-padding", "none"):
         run = [rotctl_path, "-m", "405", "-r", str(link), "-s", "4800", "p", "P", "40", "0", "S"]
         done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
         assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "0.00"], done
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=slow(10)) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()

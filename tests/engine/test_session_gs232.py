@@ -15,7 +15,7 @@ import pytest
 from bridge.emulators.gs232 import Outcome
 from bridge.model import MotionState, SetOption, Target
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -26,23 +26,6 @@ def ready(rig: Rig, model: str = "gs232b", **emulator: object) -> VirtualRotator
     v = rig(model, emulator={**FAST, **emulator})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return (
-            v.state is IDLE
-            and not truth.is_moving
-            and truth.az_deg == az
-            and (el is None or truth.el_deg == el)
-        )
-
-    return there
 
 
 @pytest.mark.parametrize("model", ["gs232a", "gs232b"])
@@ -175,15 +158,7 @@ def test_a_refusal_after_a_setting_is_not_the_targets(rig: Rig) -> None:
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100, start_el_deg=20)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xffAZ=359  EL=000\r\n" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"A", b"\xffAZ=359  EL=000\r\n")
     t = v.now
     v.run_for(30)
     assert glitched

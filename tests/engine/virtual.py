@@ -19,8 +19,9 @@ Rules:
    completely arrived. The device's output is already paced by the device.
 3. Faults act on the line, never on either side: a write can be lost or garbled on its way to
    the device (``drop_writes``, ``garble_writes``, ``set_deaf``, ``to_device``), the device's
-   output on its way to the host (``set_silent``, ``to_host``). Lost writes stay in ``writes``
-   (marked lost): they are what the bridge sent, the device's log is what arrived.
+   output on its way to the host (``set_silent``, ``to_host``, ``glitch_once``). Lost writes
+   stay in ``writes`` (marked lost): they are what the bridge sent, the device's log is what
+   arrived.
 4. A session that asks to be woken at or before the present, again and again, spins the real
    worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
    (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
@@ -245,6 +246,21 @@ class VirtualRotator:
         """Everything the host writes is lost before the device hears it."""
         self._deaf = deaf
 
+    def glitch_once(self, first: bytes, noise: bytes) -> list[float]:
+        """``noise`` reaches the host once, just before the next output that is ``first`` alone
+        (a reply's first byte: the device's output is paced); the list returned gets the
+        instant it did."""
+        when: list[float] = []
+
+        def glitch(data: bytes, now: float) -> bytes:
+            if when or data != first:
+                return data
+            when.append(now)
+            return noise + data
+
+        self.to_host = glitch
+        return when
+
     # -- front panel ----------------------------------------------------------------------------
     def jam(self) -> None:
         self.device.jam(self.now)
@@ -365,3 +381,23 @@ class VirtualRotator:
         self.writes.append(Sent(self.now, data, lost=wire != data))
         if wire:
             self._tx.send(wire, self.now)
+
+
+def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    """The bearings the device took since ``since``: the frames it logged as a move."""
+    return [f.data for f in v.frames("move", since=since)]
+
+
+def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
+    """For run_until: the session idle, the rotor still at ``az`` (and ``el``, if named)."""
+
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is MotionState.IDLE
+            and not truth.is_moving
+            and truth.az_deg == az
+            and (el is None or truth.el_deg == el)
+        )
+
+    return there

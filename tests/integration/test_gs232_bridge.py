@@ -77,16 +77,10 @@ def test_the_450_degree_rotor_takes_the_overlap(rig: Rig) -> None:
 
 
 def test_junk_and_refusals_give_an_error_and_change_nothing(rig: Rig) -> None:
-    emu = rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
+    rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
     rig.start()
     ready(rig)
-    t = time.monotonic()
-    for junk in (b"?>\r\n", b"AZ=3", b"garbage\r\n", b"+0123+0045\r\n"):
-        emu.inject(junk)
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "protocol" and "no valid reply" in err["message"]
-    n = len(emu.frames("query"))
-    emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + 4, 15)
+    rig.junk_reported("tower", b"?>\r\n", b"AZ=3", b"garbage\r\n", b"+0123+0045\r\n")
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77"}
 
 
@@ -111,12 +105,7 @@ def test_unplug_and_replug(rig: Rig) -> None:
     emu = rig.add("sat", model="gs232a", emu={"start_az_deg": 33, "start_el_deg": 3})
     rig.start()
     ready(rig)
-    t = time.monotonic()
-    emu.unplug()
-    rig.probe.wait_value("rotor/availability", "offline", after=t)
-    t = time.monotonic()
-    emu.replug()
-    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    rig.unplug_and_replug("sat")
     rig.probe.publish("rotor/target", "40 10")
     emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (40.0, 10.0) and not s.is_moving, 15)
 

@@ -72,6 +72,9 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         **{name: 1.0 for name in REGISTRY if name.startswith("gs232")},
         **{name: 1.0 for name in REGISTRY if name.startswith("easycomm")},
         "rt21": 1.0,
+        "prosistel": 1.0,
+        "prosistel-el": 1.0,
+        "prosistel-combi": 1.0,
     }
 
 
@@ -104,6 +107,9 @@ def test_hamlib_facts_are_on_the_spec() -> None:
             for variant in ("", "-az", "-separate")
         },
         "rt21": (405, HamlibRotType.OTHER, None),
+        "prosistel": (1701, HamlibRotType.AZ, None),
+        "prosistel-el": (1702, HamlibRotType.AZ, None),  # its elevation is its bearing
+        "prosistel-combi": (1703, HamlibRotType.AZEL, None),
     }
 
 
