@@ -118,11 +118,13 @@ def config_warnings(settings: Settings) -> list[str]:
         )
     for i, r in enumerate(settings.rotators):
         where = f"rotators[{i}]"
-        if not os.path.exists(r.port):
-            found.append(
-                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
-                "lists the serial ports); the bridge keeps trying to open it"
-            )
+        keys = [f"{a}.port" for a in ("azimuth", "elevation")] if r.axes else ["port"]
+        for key, path in zip(keys, r.ports, strict=True):  # a composite's both
+            if not os.path.exists(path):
+                found.append(
+                    f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
+                    "ports` lists the serial ports); the bridge keeps trying to open it"
+                )
         for key, on, bind in (
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
             ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),

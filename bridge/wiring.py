@@ -8,6 +8,9 @@ Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
    settings_defaults.py derives for the model (check-config shows the same values).
 2. Wind speeds are km/h from here on, whatever the rotator's ``wind_unit``.
+3. A composite rotator's two boxes (engine/composite.py) are each configured as a rotator of
+   their own model, port and rate, with every other key of the rotator's, its id, and its
+   judge's terms: the azimuth box's without elevation (protocols/axes.py rule 1).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from dataclasses import replace
 from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
+from bridge.protocols.axes import Axis
 from bridge.settings import RotatorSettings
 from bridge.sky import Sky
 
@@ -82,3 +86,20 @@ def wind_config(r: RotatorSettings) -> WindConfig | None:
     release = r.wind_kmh(r.wind_release_below) or above
     hold_s, silent_s = r.wind_hold_min * 60.0, r.wind_silent_min * 60.0
     return WindConfig(above, release, hold_s, (park_az, r.park_el_deg), silent_s, r.wind_topic)
+
+
+def axis_configs(
+    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
+) -> tuple[WorkerConfig, WorkerConfig] | None:
+    """A composite rotator's (azimuth, elevation) boxes (rule 3); None for one controller."""
+    if not r.axes:
+        return None
+    boxes = []
+    for axis in Axis:
+        spec = r.axis_spec(axis)
+        own = r.axis_settings(axis)
+        cfg = worker_config(own, sky, follow)
+        pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
+        motion = replace(cfg.motion, spec=spec)
+        boxes.append(replace(cfg, spec=spec, motion=motion, pointing=pointing))
+    return boxes[0], boxes[1]

@@ -40,6 +40,7 @@ from bridge.settings import (
     WsjtxSettings,
     settings_from,
 )
+from bridge.settings_rotator import AxisSettings
 from tests.support import ROOT
 
 DOC = ROOT / "docs" / "configuration.md"
@@ -147,6 +148,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("wsjtx",), WsjtxSettings),
     (("dxcluster",), DxClusterSettings),
     (("rotators",), RotatorSettings),
+    (("rotators", "azimuth"), AxisSettings),
 ]
 
 
@@ -162,6 +164,11 @@ def example_documents() -> list[tuple[str, dict[str, Any]]]:
             dotted = ".".join((*place, name))
             keys = {name: value, **COMPANIONS.get(dotted, COMPANIONS.get(name, {}))}
             doc: dict[str, Any] = {"rotators": [{"id": "hf", "model": "md01", "port": "/x"}]}
+            if model is AxisSettings:  # a composite rotator's table
+                box = {"model": "rt21", "port": "/x", **keys}
+                el = {"model": "gs232b", "port": "/y"}
+                docs.append((dotted, {"rotators": [{"id": "hf", "azimuth": box, "elevation": el}]}))
+                continue
             target = doc["rotators"][0] if place == ("rotators",) else doc
             for part in place if place != ("rotators",) else ():
                 target = target.setdefault(part, {})

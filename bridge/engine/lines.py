@@ -44,8 +44,9 @@ import threading
 import time
 from collections.abc import Callable
 from collections.abc import Set as AbstractSet
+from typing import Any, Protocol
 
-from bridge.engine.worker import Worker
+from bridge.engine.config import WorkerConfig
 
 __all__ = ["Lines"]
 
@@ -53,6 +54,21 @@ log = logging.getLogger(__name__)
 _NOTHING: AbstractSet[int] = frozenset()
 GATHER_S = 0.002  # rule 7
 _READY = select.POLLIN | select.POLLPRI | select.POLLERR | select.POLLHUP | select.POLLNVAL
+
+
+class Worker(Protocol):
+    """What this loop asks of a worker: worker.py's, or a composite rotator's (composite.py)."""
+
+    cfg: WorkerConfig
+
+    def begin(self, now: float, wake: Callable[[], None]) -> None: ...
+    def end(self, now: float) -> None: ...
+    def wait_closed(self, timeout_s: float) -> bool: ...
+    def has_commands(self, ready: set[int]) -> bool: ...
+    def urgent(self) -> frozenset[int]: ...
+    def wants(self, now: float) -> tuple[list[int], float]: ...
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None: ...
+    def serve(self, now: float, ready: set[int]) -> None: ...
 
 
 class Lines:
