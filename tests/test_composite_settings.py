@@ -4,6 +4,8 @@ merge of engine/composite.py)."""
 
 from __future__ import annotations
 
+import re
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +18,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
 from bridge.settings import ConfigError, settings_from
-from tests.support import run_cli
+from tests.support import ROOT, run_cli
 
 AZ = {"model": "rt21", "port": "/dev/ttyAZ"}
 EL = {"model": "gs232b", "port": "/dev/ttyEL"}
@@ -36,10 +38,16 @@ def test_a_composite_rotator_is_az_from_one_box_and_el_from_the_other() -> None:
     assert r.pointing.el_max_deg == 90  # the rotator's keys apply to the whole
 
 
+def test_an_rt21_box_may_turn_the_elevation() -> None:
+    r = load(azimuth=AZ, elevation={**EL, "model": "rt21"})
+    assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 180.0)
+
+
 @pytest.mark.parametrize(
     ("rotator", "words"),
     [
         ({"azimuth": AZ, "elevation": {**EL, "model": "rotorez"}}, "elevation.model"),
+        ({"azimuth": AZ, "elevation": {**EL, "model": "gs232b-az"}}, "elevation.model"),
         ({"azimuth": AZ, "elevation": {**EL, "model": "dcu1"}}, "elevation.model"),
         ({"azimuth": AZ, "elevation": {**EL, "port": "/dev/ttyAZ"}}, "elevation.port"),
         ({"model": "rt21", "azimuth": AZ, "elevation": EL}, "model is given"),
@@ -121,3 +129,10 @@ def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=020\r")  # what the session asked for, as if there
     assert isinstance(reply, PositionReply) and (reply.az_deg, reply.el_deg) == (200.0, 20.0)
+
+
+def test_the_two_boxes_example_loads() -> None:
+    text = (ROOT / "config" / "two-boxes.toml").read_text()
+    text = re.sub(r"^# ((?:[a-z_]+ = |\[))", r"\1", text, flags=re.M)  # uncommented too
+    [sky] = settings_from(tomllib.loads(text), environ={}).rotators
+    assert sky.model == "rt21+gs232b" and sky.pointing.el_max_deg == 90

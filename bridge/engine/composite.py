@@ -107,6 +107,7 @@ class Composition:
         self.status = RotatorStatus(rotator_id)
         self._error: str | None = None
         self._ended: str | None = None  # rule 4: why the first one ended
+        self._owed: dict[Axis, tuple[bool, bool]] = {}  # (tracking, following) to end
 
     def seen(self, axis: Axis, status: RotatorStatus) -> RotatorStatus | None:
         """A box's new status; the rotator's, when it is worth publishing."""
@@ -115,31 +116,38 @@ class Composition:
             self._error = status.last_error  # rule 3: the newer of the two
         if status.tracking is not None:
             self._ended = None
+        # rule 4, on the edge: this box has just ended it (a look-up under way in one box
+        # while the other already has its answer is no end)
+        track = before.tracking is not None and status.tracking is None
+        follow = before.following is not None and status.following is None
+        if track or follow:
+            other = Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH
+            owed = self._owed.get(other, (False, False))
+            self._owed[other] = (owed[0] or track, owed[1] or follow)
+            if track and self._ended is None:
+                self._ended = status.tracking_ended
         self.boxes[axis] = status
         az, el = self.boxes[Axis.AZIMUTH], self.boxes[Axis.ELEVATION]
         merged = merge(self.rotator_id, az, el, error=self._error)
         if self._ended is not None and merged.tracking is None:
             merged = replace(merged, tracking_ended=self._ended)
-        if not st.worth_emitting(merged, self.status):
-            self.status = merged
-            return None
+        worth = st.worth_emitting(merged, self.status)
         self.status = merged
-        return merged
+        return merged if worth else None
 
     def ends(self) -> dict[Axis, Batch]:
-        """Rule 4: a batch ending tracking or following in the session that still has it."""
+        """Rule 4: a batch ending tracking or following in the box that still has it."""
         out: dict[Axis, Batch] = {}
-        for axis, other in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
-            mine, theirs = self.boxes[axis], self.boxes[other]
-            track = theirs.tracking is None and theirs.tracking_ended and mine.tracking
-            follow = theirs.following is None and theirs.following_ended and mine.following
-            if track:
-                self._ended = self._ended or theirs.tracking_ended
+        for axis, (track, follow) in self._owed.items():
+            mine = self.boxes[axis]
+            track = track and mine.tracking is not None
+            follow = follow and mine.following is not None
             if track or follow:
                 out[axis] = Batch(
                     track=Track(None, Source.TRACKING) if track else None,
                     follow=Follow(False) if follow else None,
                 )
+        self._owed = {}
         return out
 
 

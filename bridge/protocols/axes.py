@@ -9,11 +9,15 @@ Rules:
 1. Any model drives the azimuth. Its elevation, if it has one, is never commanded and never
    read: the azimuth box's spec has no elevation, its codec is sent no elevation and reports
    none.
-2. The elevation box is a model that drives elevation and reports where it points (an az/el
-   box used for its elevation). Its azimuth is never turned: every target it is sent carries
-   the azimuth the box last reported for itself, whatever azimuth the session asked for, and it
-   reports back as its azimuth the one the session last asked for (before any, its own), so that
-   the session's motion machine sees that axis arrive at once and judges the elevation alone.
+2. The elevation box reports where it points and is either an az/el box used for its
+   elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
+   Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
+   azimuth box) is no elevation box. An az/el box's azimuth is never turned: every target it
+   is sent carries the azimuth the box last reported for itself, whatever azimuth the session
+   asked for. A one-axis box is sent the elevation as its one bearing, and its bearing is read
+   as the elevation (0..180 of its range). Either reports back as its azimuth the one the
+   session last asked for (before any: an az/el box its own, a one-axis box 0), so that the
+   session's motion machine sees that axis arrive at once and judges the elevation alone.
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults), and it
@@ -33,9 +37,14 @@ class Axis(enum.StrEnum):
     ELEVATION = "elevation"
 
 
+# rule 2: one-axis boxes made to turn an elevation rotor as well as an azimuth one
+ONE_AXIS_ELEVATION = frozenset({"rt21"})
+ONE_AXIS_EL_MAX_DEG = 180.0
+
+
 def can_drive(spec: ModelSpec, axis: Axis) -> str | None:
     """Why ``spec`` cannot serve ``axis`` in a composite rotator (None: it can)."""
-    if axis is Axis.ELEVATION and not spec.has_elevation:
+    if axis is Axis.ELEVATION and not (spec.has_elevation or spec.name in ONE_AXIS_ELEVATION):
         return f"the {spec.display_name} ({spec.name}) has no elevation axis"
     if axis is Axis.ELEVATION and not spec.can_report_position:
         return f"the {spec.display_name} ({spec.name}) cannot report where it points"
@@ -116,6 +125,36 @@ class ElevationOnly(AzimuthOnly):
         return replies
 
 
+class OneAxisElevation(AzimuthOnly):
+    """Rule 2: a one-axis box whose one rotor is the elevation."""
+
+    def __init__(self, inner: Codec) -> None:
+        super().__init__(inner)
+        self._own_el: float | None = None  # what the box last said of its one axis
+        self._asked_az: float | None = None  # what the session last asked for
+
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        el = self._own_el if el_deg is None else el_deg
+        return az_deg, None if el is None else self._inner.wire_target(el, None)[0]
+
+    def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        el = self._own_el if el_deg is None else el_deg
+        if el is None:  # the session sends only once the box answered (a reading)
+            raise ValueError("the elevation box has not said where it points")
+        self._asked_az = az_deg
+        return self._inner.encode_target(el, None)
+
+    def feed(self, data: bytes) -> list[Reply]:
+        replies: list[Reply] = []
+        for r in self._inner.feed(data):
+            if isinstance(r, PositionReply):
+                self._own_el = r.az_deg
+                az = 0.0 if self._asked_az is None else self._asked_az
+                r = replace(r, az_deg=az, el_deg=r.az_deg)
+            replies.append(r)
+        return replies
+
+
 def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
     """``spec`` as the box of one axis of a composite rotator (rules 1 and 2)."""
     if axis is Axis.AZIMUTH:
@@ -128,7 +167,16 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
             el_max_deg=0.0,
         )
     inner = spec.codec_factory
-    return replace(spec, codec_factory=lambda: ElevationOnly(inner()))
+    if spec.has_elevation:
+        return replace(spec, codec_factory=lambda: ElevationOnly(inner()))
+    return replace(  # a one-axis box turning the elevation
+        spec,
+        codec_factory=lambda: OneAxisElevation(inner()),
+        has_elevation=True,
+        el_min_deg=max(0.0, spec.az_min_deg),
+        el_max_deg=min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg),
+        nominal_el_speed_deg_s=spec.nominal_speed_deg_s,
+    )
 
 
 _COMPOSITES: dict[tuple[str, str], ModelSpec] = {}
@@ -143,11 +191,12 @@ def composite_spec(az: ModelSpec, el: ModelSpec) -> ModelSpec:
     return _COMPOSITES[key]
 
 
-def _composite(az: ModelSpec, el: ModelSpec) -> ModelSpec:
+def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
+    el = axis_spec(box, Axis.ELEVATION)
     return replace(
         az,
-        name=f"{az.name}+{el.name}",
-        display_name=f"{az.display_name} + {el.display_name}",
+        name=f"{az.name}+{box.name}",
+        display_name=f"{az.display_name} + {box.display_name}",
         manufacturer=az.manufacturer
         if az.manufacturer == el.manufacturer
         else f"{az.manufacturer} + {el.manufacturer}",

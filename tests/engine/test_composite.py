@@ -99,3 +99,36 @@ def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() 
         assert v.el.sent(since=v.now)[:1] == [b"S\r"]
         v.run_until(online, 10, "both boxes answer again")
         assert v.status.state is not MotionState.OFFLINE
+
+
+def test_tracking_ends_in_both_boxes_when_one_box_is_unplugged() -> None:
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    sky = Sky(lat, lon)
+    with VirtualComposite("rt21", "gs232b", emulators=FAST, sky=sky, wall_epoch_s=SUN_EPOCH) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.track(Body.sun())
+        v.run_for(5.0)
+        assert v.az.status.tracking is not None and v.el.status.tracking is not None
+        v.el.link_down()
+        v.run_for(0.5)
+        assert v.az.status.tracking is None  # the azimuth does not follow the sun alone
+        assert v.status.tracking is None and v.status.tracking_ended == "serial link down"
+        v.run_for(30.0)  # (the step it was on is finished: ending tracking stops nothing)
+        t, az = v.now, v.az.truth().az_deg
+        v.run_for(600.0)
+        assert v.az.truth().az_deg == az and v.az.frames("move", since=t) == []
+
+
+def test_two_rt21_boxes_make_an_az_el_rotator() -> None:
+    """Green Heron's az/el pair: one RT-21 box turns the elevation rotor on its one axis."""
+    with VirtualComposite("rt21", "rt21", emulators={Axis.ELEVATION: {"az_speed_deg_s": 3.0}}) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 45.5))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 120, "idle")
+        assert v.az.truth().az_deg == 200.0 and v.el.truth().az_deg == 45.5
+        assert [f.data for f in v.el.frames("move")] == [b"AP1045.5\r;"]
+        assert (v.status.bearing_deg, v.status.elevation_deg) == (200.0, 45.5)
+        t = v.now
+        v.aim(Target(None, 10.0))  # the elevation alone: the azimuth box is sent nothing
+        v.run_until(lambda h: h.el.truth().az_deg == 10.0, 60, "the elevation turned")
+        assert v.az.frames("move", since=t) == []
