@@ -49,8 +49,8 @@ class AxisSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     model: str = Field(
-        description="the controller that turns this axis (any model for the azimuth; one with "
-        "an elevation axis that reports its position for the elevation)",
+        description="the controller that turns this axis (any model for the azimuth; for the "
+        "elevation an az/el model, or rt21)",
         examples=["rt21"],
     )
     port: str = Field(
@@ -135,9 +135,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
     )
     elevation: AxisSettings | None = Field(
         None,
-        description="the elevation's box of a composite rotator: a model with an elevation "
-        "axis that reports where it points (an az/el box used for its elevation: its azimuth "
-        "is never turned)",
+        description="the elevation's box of a composite rotator, a model that reports where "
+        "it points: an az/el box used for its elevation (its azimuth is never turned), or an "
+        "rt21 box on the elevation rotor",
         examples=[{"model": "gs232b", "port": "/dev/ttyUSB1"}],
         json_schema_extra={"unset": "model and port name one controller"},
     )

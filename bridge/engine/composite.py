@@ -14,8 +14,9 @@ worker for the rotator, serving both boxes' workers.
 Rules:
 1. A stop, a lock word, a hold and its release, options, notes, the lease, the wind, WSJT-X's
    news and track and follow commands go to both sessions, in one batch each, in the same
-   serve: one STOP writes a stop frame on both lines in the same round, and each session keeps
-   its own stop rules (a stop owed to an unplugged box is its first frame on replug).
+   serve: one STOP writes a stop frame on both lines before either status goes to the
+   listeners, and each session keeps its own stop rules (a stop owed to an unplugged box is
+   its first frame on replug).
 2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
    axis it leaves out is no target for that box.
 3. The status is the azimuth box's, with the elevation box's elevation and elevation target:
@@ -40,6 +41,7 @@ from functools import partial
 from typing import Any
 
 from bridge.engine import status as st
+from bridge.engine.actions import Action, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.follow import Follow
 from bridge.engine.mailbox import Batch, Mailbox
@@ -108,6 +110,7 @@ class Composition:
         self._error: str | None = None
         self._ended: str | None = None  # rule 4: why the first one ended
         self._owed: dict[Axis, tuple[bool, bool]] = {}  # (tracking, following) to end
+        self._first = True
 
     def seen(self, axis: Axis, status: RotatorStatus) -> RotatorStatus | None:
         """A box's new status; the rotator's, when it is worth publishing."""
@@ -131,7 +134,8 @@ class Composition:
         merged = merge(self.rotator_id, az, el, error=self._error)
         if self._ended is not None and merged.tracking is None:
             merged = replace(merged, tracking_ended=self._ended)
-        worth = st.worth_emitting(merged, self.status)
+        worth = self._first or st.worth_emitting(merged, self.status)
+        self._first = False  # the first status goes out whatever it says (session.py start)
         self.status = merged
         return merged if worth else None
 
@@ -249,6 +253,18 @@ class CompositeWorker:
             self._hand(ends, now)
 
     def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
+        """Each box's session decides on its batch; then the frames go out on both lines
+        (a stop on each) before any status or event is handed to the listeners (rule 1)."""
+        decided: dict[Axis, list[Action]] = {}
         for axis, batch in batches.items():
-            box = self.boxes[axis]
-            box.guarded(box.take_batch, now, batch)
+            session = self.boxes[axis].session
+            self.boxes[axis].guarded(
+                lambda t, s=session, b=batch, a=axis: decided.__setitem__(a, s.commands(b, t)),
+                now,
+            )
+        for wire in (True, False):
+            for axis, actions in decided.items():
+                box = self.boxes[axis]
+                todo = [a for a in actions if isinstance(a, Write) is wire]
+                if todo:
+                    box.guarded(box.carry_out, now, todo)

@@ -48,7 +48,7 @@ import serial
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.config import WorkerConfig
 from bridge.engine.listeners import contained
-from bridge.engine.mailbox import Batch, Mailbox
+from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import (
     PendingOpen,
     PortError,
@@ -195,10 +195,10 @@ class Worker:
         except (serial.SerialException, OSError) as exc:
             self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
 
-    def take_batch(self, now: float, batch: Batch) -> None:
-        """A batch taken from another mailbox (a composite rotator's, composite.py), handed to
-        the session as the worker's own would be, whether the port is open or not."""
-        self._do(self.session.commands(batch, now))
+    def carry_out(self, now: float, actions: list[Action]) -> None:
+        """What the session decided on a batch taken from another mailbox (a composite
+        rotator's, composite.py), carried out as for the worker's own."""
+        self._do(actions)
 
     @property
     def status(self) -> RotatorStatus:
