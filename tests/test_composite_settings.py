@@ -11,13 +11,15 @@ from typing import Any
 
 import pytest
 
-from bridge.engine.composite import Composition, merge, split
-from bridge.engine.mailbox import Batch
+from bridge.engine.actions import Write
+from bridge.engine.composite import CompositeWorker, Composition, merge, split
+from bridge.engine.mailbox import Batch, Mailbox
 from bridge.model import MotionState, RotatorStatus, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
 from bridge.settings import ConfigError, settings_from
+from bridge.wiring import axis_configs, worker_config
 from tests.support import ROOT, run_cli
 
 AZ = {"model": "rt21", "port": "/dev/ttyAZ"}
@@ -136,3 +138,23 @@ def test_the_two_boxes_example_loads() -> None:
     text = re.sub(r"^# ((?:[a-z_]+ = |\[))", r"\1", text, flags=re.M)  # uncommented too
     [sky] = settings_from(tomllib.loads(text), environ={}).rotators
     assert sky.model == "rt21+gs232b" and sky.pointing.el_max_deg == 90
+
+
+def test_a_stop_is_on_both_lines_before_either_status_goes_out() -> None:
+    """CompositeWorker (engine/composite.py rule 1): the two sessions decide, then both stop
+    frames are written, then the statuses go to the listeners."""
+    r = load(azimuth=AZ, elevation=EL)
+    boxes = axis_configs(r)
+    assert boxes is not None
+    worker = CompositeWorker(worker_config(r), boxes, Mailbox(), lambda s: None, lambda e: None)
+    done: list[tuple[Axis, str]] = []
+    for axis, box in worker.boxes.items():
+        box.session.start(0.0)
+        box.session.link_up(0.0, 1e9)
+        box.carry_out = lambda now, actions, a=axis: done.extend(  # type: ignore[method-assign]
+            (a, type(x).__name__ if not isinstance(x, Write) else repr(x.data)) for x in actions
+        )
+    worker._hand(split(Batch(stop=Stop(), notes=["shown"])), 0.0)
+    kinds = [k for _, k in done]
+    assert done[:2] == [(Axis.AZIMUTH, "b';'"), (Axis.ELEVATION, "b'S\\r'")], done
+    assert "Publish" in kinds and kinds.index("Publish") > 1

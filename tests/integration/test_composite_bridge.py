@@ -106,3 +106,23 @@ def test_home_assistant_sees_one_az_el_rotator(rig: Rig) -> None:
     assert f"{prefix}/number/{device}/target_elevation/config" in configs
     models = {c["device"].get("model") for c in configs.values() if "device" in c}
     assert any("RT-21" in (m or "") and "GS-232B" in (m or "") for m in models), models
+
+
+def test_lock_and_limits_are_judged_once_and_the_lock_stops_both(rig: Rig) -> None:
+    az, el = composite(rig)
+    rig.rotators[-1]["el_max_deg"] = 90
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 95")  # the elevation box could; the rotator may not
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "outside" in err["message"]
+    rig.probe.publish("rotor/lock", "ON")  # the lock is for tower work: a stop on both wires
+    rig.probe.wait_value("rotor/lock/state", "ON")
+    az.wait_for_frame(b";", "stop", 10)
+    el.wait_for_frame(b"S", "stop", 10)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "locked" in err["message"]
+    assert az.frames("move") == [] and el.frames("move") == []
