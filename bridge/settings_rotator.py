@@ -80,14 +80,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
     @classmethod
     def _composite(cls, data: Any) -> Any:
         """Rule 4: the tables stand for ``model`` and ``port``."""
-        if not isinstance(data, dict) or ("azimuth" not in data and "elevation" not in data):
+        if not isinstance(data, dict):
             return data
-        for key in ("model", "port", "baud"):
-            if key in data:
-                raise ValueError(
-                    f"{key} is given with azimuth/elevation tables: a composite rotator names "
-                    "its model, port and baud in each table"
-                )
+        if data.get("azimuth") is None and data.get("elevation") is None:
+            return data
         tables = []
         for axis in Axis:
             table = data.get(axis.value)
@@ -98,9 +94,15 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
                 )
             tables.append(table)
         az, el = tables
+        model, port = f"{az['model']}+{el['model']}", f"{az['port']}+{el['port']}"
+        for key, derived in (("model", model), ("port", port), ("baud", None)):
+            if data.get(key) not in (None, derived):  # (what a dump of these settings says)
+                raise ValueError(
+                    f"{key} is given with azimuth/elevation tables: a composite rotator names "
+                    "its model, port and baud in each table"
+                )
         if az["port"] == el["port"]:
             raise ValueError(f"elevation.port: {el['port']} is the azimuth's port too")
-        model, port = f"{az['model']}+{el['model']}", f"{az['port']}+{el['port']}"
         return {**data, "model": model, "port": port}
 
     id: str = Field(

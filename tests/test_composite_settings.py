@@ -38,6 +38,8 @@ def test_a_composite_rotator_is_az_from_one_box_and_el_from_the_other() -> None:
     assert (spec.az_min_deg, spec.az_max_deg) == (0.0, 360.0)  # the RT-21's
     assert (spec.el_min_deg, spec.el_max_deg) == (0.0, 180.0)  # the GS-232B's
     assert r.pointing.el_max_deg == 90  # the rotator's keys apply to the whole
+    again = type(r).model_validate(r.model_dump())  # what check-config --full prints loads
+    assert (again.model, again.ports) == (r.model, r.ports)
 
 
 def test_an_rt21_box_may_turn_the_elevation() -> None:

@@ -1,6 +1,7 @@
 """One thread for every rotator's serial line: the only code that touches the ports. I/O only.
 
-Each rotator is a Worker (worker.py: its port, back-off and session). This loop asks every
+Each rotator is a Worker (worker.py: its port, back-off and session; a rotator of two boxes,
+composite.py, is one worker serving both boxes' workers). This loop asks every
 worker what it waits for (file descriptors, a deadline), sleeps in one poll() on all of them
 and the loop's own wake pipe, then lets each worker serve what is ready. Sessions decide
 (session.py); workers carry out; this loop only waits.

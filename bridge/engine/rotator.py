@@ -24,7 +24,9 @@ command judged before a stop or lock ON never runs after it, whichever threads b
 the judge reads the mailbox's halt count before it judges a target, a track or follow start (a
 preset, park, nudge, a place are targets), and the mailbox drops one whose count a stop or lock
 ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
-(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any.
+(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any. A rotator of
+two boxes (``axes``) is judged here like any, against its one merged status; behind its
+mailbox, composite.py drives the two boxes.
 """
 
 from __future__ import annotations
