@@ -10,7 +10,7 @@ import time
 from typing import Any
 
 from bridge.emulators.pty import EmulatedPort
-from tests.support import retained_snapshot
+from tests.support import retained_snapshot, wait_until
 from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
 
 
@@ -77,6 +77,9 @@ def test_an_unplugged_box_refuses_targets_and_the_other_still_stops(rig: Rig) ->
     t = time.monotonic()
     el.unplug()
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=10, after=t)
+    # the status says which box went away (read once the status itself has it: the
+    # availability topic may come first)
+    wait_until(lambda: "serial-by-id-sky-el" in (status(rig)["last_error"] or ""), 10)
     rig.probe.publish("rotor/stop", "STOP")
     az.wait_for_frame(b";", "stop", 5)
     stopped = az.wait_for(lambda s: not s.is_moving, 5)
@@ -88,6 +91,7 @@ def test_an_unplugged_box_refuses_targets_and_the_other_still_stops(rig: Rig) ->
     t = time.monotonic()
     el.replug()
     rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    assert [f.data for f in el.frames("stop")] == [b"S"]  # the stop it was owed, on replug
     rig.probe.publish("rotor/target", "100 20")
     az.wait_for(lambda s: s.az_deg == 100 and not s.is_moving, 20)
     el.wait_for(lambda s: s.el_deg == 20 and not s.is_moving, 20)
