@@ -6,12 +6,14 @@ and Home Assistant sees one az/el rotator."""
 from __future__ import annotations
 
 import json
+import subprocess
 import time
 from typing import Any
 
 from bridge.emulators.pty import EmulatedPort
-from tests.support import retained_snapshot, wait_until
+from tests.support import free_port, retained_snapshot, wait_until
 from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
+from tests.support.waiting import slow
 
 
 def composite(rig: Rig) -> tuple[EmulatedPort[Any], EmulatedPort[Any]]:
@@ -130,3 +132,29 @@ def test_lock_and_limits_are_judged_once_and_the_lock_stops_both(rig: Rig) -> No
     err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
     assert err["kind"] == "refused" and "locked" in err["message"]
     assert az.frames("move") == [] and el.frames("move") == []
+
+
+def test_hamlib_rotctl_sets_and_reads_both_axes_and_stops_both(rig: Rig, rotctl_path: str) -> None:
+    """Gpredict's way in (rotctl -m 2 on the rotctld port): one az/el rotator."""
+    az, el = composite(rig)
+    port = free_port()
+    rig.rotators[-1]["rotctld_port"] = port
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "2", "-r", f"127.0.0.1:{port}"]
+    run = subprocess.run([*argv, "P", "150.5", "25"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    az.wait_for(lambda s: s.az_deg == 150.5 and not s.is_moving, 20)
+    el.wait_for(lambda s: s.el_deg == 25 and not s.is_moving, 20)
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    run = subprocess.run([*argv, "p"], capture_output=True, text=True, check=False)
+    assert [float(x) for x in run.stdout.split()] == [150.5, 25.0], run.stdout
+    run = subprocess.run([*argv, "P", "20", "60"], capture_output=True, text=True, check=False)
+    az.wait_for(lambda s: s.is_moving, 10)
+    el.wait_for(lambda s: s.is_moving, 10)
+    run = subprocess.run([*argv, "S"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    az.wait_for(lambda s: not s.is_moving, 5)
+    el.wait_for(lambda s: not s.is_moving, 5)
+    assert az.frames("stop") and el.frames("stop")  # one S, a stop on each wire
