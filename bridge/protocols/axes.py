@@ -20,8 +20,8 @@ Rules:
    session's motion machine sees that axis arrive at once and judges the elevation alone.
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
-   elevation's from the elevation box, no options (each box keeps its own defaults), and it
-   reports a position only when both boxes can.
+   elevation's from the elevation box, no options (each box keeps its own defaults); it
+   reports a position only when both boxes can, and takes whole degrees when either does.
 """
 
 from __future__ import annotations
@@ -209,5 +209,8 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         el_max_deg=el.el_max_deg,
         nominal_el_speed_deg_s=el.nominal_el_speed_deg_s,
         reports_while_moving=az.reports_while_moving and el.reports_while_moving,
+        # the judge's limits after rounding (pointing.py): whole degrees if either box takes
+        # them, the safe side for the other
+        whole_degrees=az.whole_degrees or el.whole_degrees,
         hamlib_rot_type=HamlibRotType.AZEL,
     )
