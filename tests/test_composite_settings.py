@@ -14,6 +14,7 @@ import pytest
 from bridge.engine.actions import Write
 from bridge.engine.composite import CompositeWorker, Composition, merge, split
 from bridge.engine.mailbox import Batch, Mailbox
+from bridge.errors import Refused
 from bridge.model import MotionState, RotatorStatus, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
@@ -160,3 +161,10 @@ def test_a_stop_is_on_both_lines_before_either_status_goes_out() -> None:
     kinds = [k for _, k in done]
     assert done[:2] == [(Axis.AZIMUTH, "b';'"), (Axis.ELEVATION, "b'S\\r'")], done
     assert "Publish" in kinds and kinds.index("Publish") > 1
+
+
+def test_an_elevation_the_gs232b_would_round_past_the_limit_is_refused() -> None:
+    judge = load(azimuth=AZ, elevation=EL, el_max_deg=89.5).pointing
+    assert judge.judge(Target(100.0, 89.4), None).el_deg == 89.4
+    with pytest.raises(Refused, match="whole degrees"):
+        judge.judge(Target(100.0, 89.5), None)  # the box would be sent 90
