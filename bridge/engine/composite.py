@@ -181,10 +181,11 @@ class CompositeWorker:
         self._on_status = on_status
         self.composition = Composition(cfg.rotator_id)
         self.boxes: dict[Axis, Worker] = {}
-        for axis, box in zip(AXES, axes, strict=True):
+        self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
+        for axis, box, own in zip(AXES, axes, self._own, strict=True):
             self.boxes[axis] = Worker(
                 box,
-                Mailbox(),  # the box's own: only the sky worker's answers wake it
+                own,
                 partial(self._seen, axis),
                 on_event,
                 locked=locked,
@@ -210,8 +211,11 @@ class CompositeWorker:
             box.guarded(box.begin, now, wake)
 
     def end(self, now: float) -> None:
-        for box in self.boxes.values():
+        """For good (lines.py rule 4): nothing serves the boxes after this, so their own
+        mailboxes are closed too (a late sky answer's wake-up then does nothing)."""
+        for box, mailbox in zip(self.boxes.values(), self._own, strict=True):
             box.guarded(box.end, now)
+            mailbox.close()
 
     def wait_closed(self, timeout_s: float) -> bool:
         deadline = time.monotonic() + timeout_s
