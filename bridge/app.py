@@ -42,7 +42,7 @@ from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.view import RotatorFacts
-from bridge.wiring import group_of, worker_config
+from bridge.wiring import axis_configs, group_of, worker_config
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
@@ -176,6 +176,7 @@ class App:
                 catalog=catalog,
                 sky=self.sky,
                 on_audit=self.audit.of(r.id),
+                axes=axis_configs(r, sky, follow),  # a composite's two boxes (wiring.py)
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,

@@ -40,6 +40,7 @@ from bridge.settings_defaults import model_defaults
 from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields
+from bridge.settings_rotator import AxisSettings
 from bridge.settings_wind import WindFields
 
 COMMAND = "scripts/gen-config-doc"
@@ -172,6 +173,9 @@ def _rotators() -> str:
         lines += [f"### {heading}", "", what, ""]
         for name in sorted(names, key=order.index):
             lines.append(_key(RotatorSettings, name, f"{env}{name.upper()}"))
+    lines += ["### The azimuth and elevation tables", "", _sentence(AxisSettings.__doc__), ""]
+    for name in AxisSettings.model_fields:  # inline tables: no environment variable of their own
+        lines.append(_key(AxisSettings, name, "").split("  \n  Environment:")[0].rstrip() + "\n")
     return "\n".join(lines)
 
 

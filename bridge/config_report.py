@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from bridge.engine.state_store import StateStore
+from bridge.protocols.axes import Axis
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.settings_loggers import is_loopback
 from bridge.settings_rotator import EMULATION_KEYS
@@ -119,11 +120,13 @@ def config_warnings(settings: Settings) -> list[str]:
         )
     for i, r in enumerate(settings.rotators):
         where = f"rotators[{i}]"
-        if not os.path.exists(r.port):
-            found.append(
-                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
-                "lists the serial ports); the bridge keeps trying to open it"
-            )
+        keys = [f"{a}.port" for a in ("azimuth", "elevation")] if r.axes else ["port"]
+        for key, path in zip(keys, r.ports, strict=True):  # a composite's both
+            if not os.path.exists(path):
+                found.append(
+                    f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
+                    "ports` lists the serial ports); the bridge keeps trying to open it"
+                )
         for key, on, bind in (
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
             ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
@@ -256,7 +259,16 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     if r.wind_topic is not None:
         unit = r.wind_unit
         on.append(f"parks for the wind above {r.wind_park_above:g} {unit} on {r.wind_topic}")
-    return [
-        f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), {r.effective_baud} baud",
-        "  " + "; ".join(on),
-    ]
+    first = f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), "
+    first += f"{r.effective_baud} baud"
+    if r.axes:  # a composite rotator: each box on its own port (settings_rotator.py rule 4)
+        boxes = []
+        for axis in Axis:
+            own = r.axis_settings(axis)
+            there = "found" if os.path.exists(own.port) else "NOT FOUND"
+            boxes.append(
+                f"{axis.value} by {own.spec.display_name} ({own.model}) on {own.port} "
+                f"({there}), {own.effective_baud} baud"
+            )
+        first = f"{name}: {'; '.join(boxes)}"
+    return [first, "  " + "; ".join(on)]

@@ -160,7 +160,7 @@ class Settings(BaseSettings):
             if r.id in seen:
                 raise ValueError(f"rotator id {r.id!r} is used twice")
             seen[r.id] = r.port
-        ports = [r.port for r in self.rotators]
+        ports = [p for r in self.rotators for p in r.ports]  # a composite's both
         dup = {p for p in ports if ports.count(p) > 1}
         if dup:
             raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")

@@ -8,6 +8,9 @@ Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
    settings_defaults.py derives for the model (check-config shows the same values).
 2. Wind speeds are km/h from here on, whatever the rotator's ``wind_unit``.
+3. A composite rotator's two boxes (engine/composite.py) are each configured as a rotator of
+   their own model, port and rate, with every other key of the rotator's, its id, and its
+   judge's terms: the azimuth box's without elevation (protocols/axes.py rule 1).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindCo
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
 from bridge.mqtt.groups import Group, Member
+from bridge.protocols.axes import Axis
 from bridge.settings import GroupSettings, RotatorSettings
 from bridge.sky import Sky
 
@@ -91,3 +95,20 @@ def group_of(g: GroupSettings) -> Group:
     """A ``[[groups]]`` table as the MQTT service's group (members in the table's order)."""
     members = tuple(Member(rid, g.offsets.get(rid, 0.0), g.limits.get(rid)) for rid in g.rotators)
     return Group(g.id, g.label, members)
+
+
+def axis_configs(
+    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
+) -> tuple[WorkerConfig, WorkerConfig] | None:
+    """A composite rotator's (azimuth, elevation) boxes (rule 3); None for one controller."""
+    if not r.axes:
+        return None
+    boxes = []
+    for axis in Axis:
+        spec = r.axis_spec(axis)
+        own = r.axis_settings(axis)
+        cfg = worker_config(own, sky, follow)
+        pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
+        motion = replace(cfg.motion, spec=spec)
+        boxes.append(replace(cfg, spec=spec, motion=motion, pointing=pointing))
+    return boxes[0], boxes[1]

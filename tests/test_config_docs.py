@@ -41,6 +41,7 @@ from bridge.settings import (
     WsjtxSettings,
     settings_from,
 )
+from bridge.settings_rotator import AxisSettings
 from tests.support import ROOT
 
 DOC = ROOT / "docs" / "configuration.md"
@@ -149,6 +150,7 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("dxcluster",), DxClusterSettings),
     (("rotators",), RotatorSettings),
     (("groups",), GroupSettings),
+    (("rotators", "azimuth"), AxisSettings),
 ]
 
 
@@ -164,6 +166,11 @@ def example_documents() -> list[tuple[str, dict[str, Any]]]:
             dotted = ".".join((*place, name))
             keys = {name: value, **COMPANIONS.get(dotted, COMPANIONS.get(name, {}))}
             doc: dict[str, Any] = {"rotators": [{"id": "hf", "model": "md01", "port": "/x"}]}
+            if model is AxisSettings:  # a composite rotator's table
+                box = {"model": "rt21", "port": "/x", **keys}
+                el = {"model": "gs232b", "port": "/y"}
+                docs.append((dotted, {"rotators": [{"id": "hf", "azimuth": box, "elevation": el}]}))
+                continue
             target = doc["rotators"][0] if place == ("rotators",) else doc
             if place == ("groups",):  # its examples name two rotators, upper and lower
                 doc["rotators"] = [

@@ -155,6 +155,7 @@ NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg", "pst_udp_port", 
 NOT_APPLICABLE |= {"gs232_port", "easycomm_port"}
 NOT_APPLICABLE |= {"wind_topic", "wind_park_above", "wind_release_below", "wind_park_az_deg"}
 NOT_APPLICABLE |= {"gs232_pty", "easycomm_pty", "dcu1_port", "dcu1_pty"}
+NOT_APPLICABLE |= {"azimuth", "elevation"}  # one controller, no composite's tables
 AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
 
 

@@ -24,7 +24,9 @@ command judged before a stop or lock ON never runs after it, whichever threads b
 the judge reads the mailbox's halt count before it judges a target, a track or follow start (a
 preset, park, nudge, a place are targets), and the mailbox drops one whose count a stop or lock
 ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
-(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any.
+(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any. A rotator of
+two boxes (``axes``) is judged here like any, against its one merged status; behind its
+mailbox, composite.py drives the two boxes.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from typing import NoReturn
 import serial
 
 from bridge.engine.catalog import TleCatalog
+from bridge.engine.composite import CompositeWorker
 from bridge.engine.follow import Follow as Following
 from bridge.engine.follow import Heard
 from bridge.engine.health_memory import HealthMemory
@@ -104,6 +107,7 @@ class Rotator:
         catalog: TleCatalog | None = None,
         sky: SkyWorker | None = None,
         on_audit: Callable[[AuditEvent], None] | None = None,
+        axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -122,19 +126,35 @@ class Rotator:
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
-        self._worker = Worker(
-            cfg,
-            self._mailbox,
-            self._status,
-            on_event,
-            options=self._kept.options(),
-            locked=self._kept.locked,
-            health=store.health(self.id),
-            storm=self._kept.storm,  # kept.py rule 4
-            wall=wall,
-            port_opener=port_opener,
-            sky=sky,  # the app shares one among all rotators (skywork.py)
-        )
+        self._worker: Worker | CompositeWorker
+        if axes is None:
+            self._worker = Worker(
+                cfg,
+                self._mailbox,
+                self._status,
+                on_event,
+                options=self._kept.options(),
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,  # kept.py rule 4
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,  # the app shares one among all rotators (skywork.py)
+            )
+        else:  # two boxes, one judge (this one), one mailbox, one status (composite.py)
+            self._worker = CompositeWorker(
+                cfg,
+                axes,
+                self._mailbox,
+                self._status,
+                on_event,
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,
+            )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self.operators = Operators(
             self.id,
@@ -167,7 +187,7 @@ class Rotator:
 
     @property
     def status(self) -> RotatorStatus:
-        return self._worker.session.status
+        return self._worker.status
 
     @property
     def limits(self) -> Limits:

@@ -195,6 +195,15 @@ class Worker:
         except (serial.SerialException, OSError) as exc:
             self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
 
+    def carry_out(self, now: float, actions: list[Action]) -> None:
+        """What the session decided on a batch taken from another mailbox (a composite
+        rotator's, composite.py), carried out as for the worker's own."""
+        self._do(actions)
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self.session.status
+
     def _serve(self, ready: set[int], now: float) -> None:
         session, acted = self.session, False
         session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking

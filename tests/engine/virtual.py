@@ -43,7 +43,7 @@ from bridge.app import worker_config
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
 from bridge.engine import skywork
 from bridge.engine.actions import Ask
-from bridge.engine.config import FollowConfig
+from bridge.engine.config import FollowConfig, WorkerConfig
 from bridge.engine.follow import Follow, Heard
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
@@ -95,6 +95,7 @@ class VirtualRotator:
         wall_epoch_s: float = WALL_EPOCH_S,
         sky_delay_s: float = 0.0,
         follow: FollowConfig | None = None,
+        cfg: WorkerConfig | None = None,  # one box of a composite rotator (virtual_composite.py)
     ) -> None:
         self.now = start_s
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
@@ -102,7 +103,7 @@ class VirtualRotator:
             {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
         )
         self.settings = rotator
-        self.cfg = worker_config(rotator, sky, follow)
+        self.cfg = cfg or worker_config(rotator, sky, follow)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
         self.session = RotatorSession(self.cfg, options=options, locked=locked)
         self.mailbox = Mailbox()
@@ -302,6 +303,20 @@ class VirtualRotator:
 
     def run_until_state(self, state: MotionState, timeout_s: float) -> float:
         return self.run_until(lambda h: h.state is state, timeout_s, f"state {state.value}")
+
+    def next_time(self, until: float) -> float:
+        """The time of the next thing that can happen here, ``until`` at the latest (rule 1)."""
+        times = [until]
+        if self.connected:
+            times.append(self.session.next_wakeup())
+        device_t = self.device.next_wakeup(self.now)
+        if device_t is not None:
+            times.append(device_t)
+        line_t = self._tx.next_due_s()
+        if line_t is not None:
+            times.append(line_t)
+        times += [due for due, _gen, _answer in self._answers]
+        return max(self.now, min(times))
 
     def _step(self, until: float) -> None:
         times = [until]
