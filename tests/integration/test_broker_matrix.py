@@ -191,3 +191,23 @@ def test_its_own_last_will_at_a_broker_shutdown_is_no_strangers(
     wait_until(lambda: not app.client.connected.is_set(), 10, "the bridge saw the broker go")
     wait_until(lambda: said(caplog, "disconnected from MQTT broker"), 10, "the disconnect said")
     assert said(caplog, STRANGER) == []
+
+
+def test_home_assistant_gets_every_config_again_on_its_birth(station: Rig) -> None:
+    """After Home Assistant restarts, its ``homeassistant/#`` subscription gets no retained
+    config on RabbitMQ (exact topics only): the bridge sends every config again on the birth
+    message, on every broker."""
+    ha = Probe(station.broker.port, "homeassistant/#")  # live, before the bridge starts
+    try:
+        station.add("tower")
+        app = station.start()
+        station.ready("tower")
+        assert app.discovery is not None
+        known = set(app.discovery._current)  # every config the bridge has published
+        assert len(known) >= 10, known
+        t = time.monotonic()
+        station.probe.publish("homeassistant/status", "online")  # the birth (not retained)
+        for topic in sorted(known):
+            ha.wait_for(topic, lambda m: bool(m.payload), 30, after=t)
+    finally:
+        ha.close()

@@ -92,10 +92,9 @@ def test_a_bearing_the_box_refuses_is_reported_and_moves_nothing(rig: Rig) -> No
     ready(rig)
     t = time.monotonic()
     rig.probe.publish("rotor/target", "400")  # past 360: on the controller's own scale
-    refused = rig.probe.wait_for("rotor/error", lambda m: "protocol" in m.text, after=t)
-    assert "no valid reply" in json.loads(refused.payload)["message"]
-    stalled = rig.probe.wait_for("rotor/error", lambda m: "stalled" in m.text, after=t)
-    assert "stalled at 77" in json.loads(stalled.payload)["message"]  # and it says where
+    refused = rig.probe.wait_for("rotor/error", lambda m: '"refused"' in m.text, after=t)
+    assert "the controller refused the target" in json.loads(refused.payload)["message"]
+    rig.probe.wait_value("rotor/state", "idle", after=t)  # at rest at once, no stall to wait
     assert emu.frames("refused")[-1].data == b"M400"
     assert emu.state().az_deg == 77.0 and not emu.state().is_moving
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77"}

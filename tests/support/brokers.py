@@ -227,7 +227,7 @@ class _Process:
 
 
 RABBITMQ_SERVER = Path("/usr/lib/rabbitmq/bin/rabbitmq-server")
-AMQTT = Path(__file__).resolve().parents[1] / "brokers" / "amqtt" / ".venv" / "bin" / "amqtt"
+AMQTT = Path(__file__).resolve().parents[2] / ".brokers" / "amqtt-venv" / "bin" / "amqtt"
 
 
 class RabbitMq(_Process):
@@ -262,7 +262,7 @@ class RabbitMq(_Process):
 
 
 class Amqtt(_Process):
-    """amqtt 0.12 (PyPI), in a venv of its own under tests/brokers/amqtt (MQTT 3.1.1 only: it
+    """amqtt 0.12 (PyPI), in a venv of its own in .brokers/amqtt-venv (MQTT 3.1.1 only: it
     closes an MQTT 5 connection before any CONNACK). ``./tests/run brokers``."""
 
     name = "amqtt"
