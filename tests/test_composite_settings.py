@@ -135,10 +135,22 @@ def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=010\r")
     assert isinstance(reply, PositionReply) and reply.az_deg == 87.0
+    codec.taken(reply)  # the engine took it as a reading (link.py rule 9)
     assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=020\r")  # what the session asked for, as if there
     assert isinstance(reply, PositionReply) and (reply.az_deg, reply.el_deg) == (200.0, 20.0)
+
+
+def test_a_position_the_engine_did_not_take_is_not_sent_back() -> None:
+    codec = ElevationOnly(REGISTRY["gs232b"].codec_factory())
+    codec.encode_query()
+    [reply] = codec.feed(b"AZ=087  EL=010\r")
+    codec.taken(reply)
+    codec.encode_query()
+    [glitch] = codec.feed(b"AZ=359  EL=010\r")  # dropped: a second reply spoiled it
+    assert isinstance(glitch, PositionReply)
+    assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
 
 
 def test_the_two_boxes_example_loads() -> None:
