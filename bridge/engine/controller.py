@@ -391,7 +391,8 @@ class Controller:
             self._silence_reported = True
             self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
         busy = busy or self.motion.state is MotionState.MOVING
-        link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
+        if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
+            self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:
         """Rule 6."""
