@@ -222,6 +222,7 @@ MODELS: dict[str, ModelSpec] = {
         codec_factory=RotorEzCodec,
         options=tuple(OPTION_LETTERS),
         brake_delay_s=5.0,
+        stop_anytime=True,  # ';' at any time; a second one is answered by the banner (harmless)
         hamlib_model=401,
         hamlib_info="Rotor-EZ",
     ),
@@ -231,6 +232,7 @@ MODELS: dict[str, ModelSpec] = {
         "Idiom Press",
         codec_factory=lambda: RotorEzCodec(options=False),
         brake_delay_s=0.0,
+        stop_anytime=True,
         hamlib_model=402,
         hamlib_info="RotorCard",
     ),
