@@ -1,0 +1,106 @@
+"""The stop express (mqtt/express.py): a STOP's frame reaches the controller while nothing in
+the bridge's process can run. Real parts: mosquitto, the bridge (App, in this process), the
+express (its own process) and a Rotor-EZ emulator in a process of its own on a pty.
+
+The bridge's interpreter is held the hard way: a call into C through ctypes.PyDLL keeps the
+interpreter lock for as long as it blocks, here a read() on a pipe. Every thread of this
+process (the stop lane, the main connection, the serial-lines thread, the test's own) stands
+still until a watcher process, which publishes the STOP and reads the emulator's frame log,
+lets it go: when the stop frame came, or after its deadline without one. The watcher, not
+this process, says which.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge.mosquitto import Mosquitto
+from tests.support.mqtt import Probe
+from tests.support.rig import Line, Rig
+from tests.support.waiting import slow, wait_until
+
+# the watcher: drains the frame log until armed, publishes the STOP, then waits for the stop
+# frame in the log; writes b"1" (seen) or b"0" (its deadline passed) on the release pipe
+WATCHER = r"""
+import os, select, subprocess, sys, time
+arm, release = int(sys.argv[1]), int(sys.argv[2])
+port, topic, deadline_s = sys.argv[3], sys.argv[4], float(sys.argv[5])
+while True:
+    ready = select.select([arm, 0], [], [])[0]
+    if 0 in ready and not os.read(0, 65536):
+        sys.exit(1)
+    if arm in ready:
+        os.read(arm, 1)
+        break
+subprocess.run(["mosquitto_pub", "-p", port, "-t", topic, "-m", "STOP", "-q", "1"], check=True)
+end, log, seen = time.monotonic() + deadline_s, b"", False
+while not seen and time.monotonic() < end:
+    if select.select([0], [], [], max(0.0, end - time.monotonic()))[0]:
+        data = os.read(0, 65536)
+        if not data:
+            break
+        log += data
+        seen = b"-> stop" in log
+os.write(release, b"1" if seen else b"0")
+"""
+
+
+def _emulator_process(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Line:
+    """The controller in a process of its own (the rig's run in this one), its frames logged
+    on a pipe the watcher reads."""
+    link = rig.tmp / f"serial-by-id-{rid}"
+    emu = subprocess.Popen(
+        [sys.executable, "-m", "bridge.emulators", model, "--link", str(link), "--log-frames"]
+        + ["--speed-deg-s", "20", "--brake-delay-s", "0.5", "--start-az-deg", "10"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    rig.scope.callback(emu.wait, 10)
+    rig.scope.callback(emu.terminate)
+    assert emu.stdout is not None
+    emu.stdout.readline()  # the device: the link is there now (emulators/cli.py rule 1)
+    line = Line(rid, model, None, link)  # type: ignore[arg-type]  # no emulator object here
+    line.relay = emu
+    return line
+
+
+def test_a_stop_frame_reaches_the_controller_while_the_bridge_process_is_held(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    if not Path("/usr/bin/mosquitto_pub").exists():
+        pytest.fail("mosquitto_pub (Debian: mosquitto-clients) is needed by this test")
+    with Rig(tmp_path, broker, probe, open_line=_emulator_process) as rig:
+        rig.add("tower", brake_delay_s=0.5)
+        app = rig.start()
+        rig.ready("tower")
+        wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+        emu = rig.lines["tower"].relay
+        arm_r, arm_w = os.pipe()
+        release_r, release_w = os.pipe()
+        watcher = subprocess.Popen(
+            [sys.executable, "-c", WATCHER, str(arm_r), str(release_w), str(broker.port)]
+            + ["rotor/stop", str(slow(20))],
+            stdin=emu.stderr,
+            pass_fds=[arm_r, release_w],
+        )
+        os.close(arm_r)
+        os.close(release_w)
+        rig.probe.publish("rotor/target", "300")
+        rig.probe.wait_value("rotor/state", "moving", 10)
+        answer = ctypes.create_string_buffer(1)
+        libc = ctypes.PyDLL(None)  # PyDLL: the interpreter lock is kept through the call
+        os.write(arm_w, b"1")
+        got = libc.read(release_r, answer, 1)  # every thread of this process stands still
+        assert watcher.wait(slow(10)) == 0
+        assert got == 1 and answer.raw == b"1", "no stop frame while the bridge's process was held"
+        os.close(arm_w)
+        os.close(release_r)
+        rig.probe.wait_value("rotor/state", "idle", 10)
+        assert app.express.wrote and app.express.wrote[0][0] == "tower"
