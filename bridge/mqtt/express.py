@@ -30,7 +30,11 @@ Rules:
    buffer, an unplugged adapter) is let go: the session's own stop follows. It decides
    nothing else and changes no state: the session still gets the stop from the lane and the
    main connection, holds, markers and the lock as before, and writes its own stop frame (the
-   controller gets two: ModelSpec.stop_anytime says the model takes that).
+   controller gets two: ModelSpec.stop_anytime says the model takes that). At most one frame
+   a rotator in GAP_S: a flood on the stop topic must not fill the port's output buffer (the
+   session's own frames would wait behind it, and a full buffer is a lost link, engine/port.py
+   rule 6); a second stop that soon adds nothing the first did not do, and the session's
+   still comes.
 4. Only models whose stop frame may go at any moment (``ModelSpec.stop_anytime``) get a copy
    of their port; elsewhere (a SatEL that slews, a SPID that owes replies) the session alone
    writes, as before.
@@ -44,7 +48,8 @@ Rules:
    stops then take the stop lane in the bridge's process, as without it. It is not restarted.
 7. Shutdown: ``stop`` closes the control socket; the express disconnects and exits on its end
    of file, and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
-   socket's other end closes with it).
+   socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
+   manager or a terminal signals the whole group; the bridge stops its rotators first).
 """
 
 from __future__ import annotations
@@ -53,11 +58,13 @@ import hashlib
 import json
 import logging
 import os
+import signal
 import socket
 import subprocess
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -74,6 +81,7 @@ log = logging.getLogger(__name__)
 START_WAIT_S = 10.0  # rule 6: said when the express is not up by then
 DROP_WAIT_S = 1.0  # rule 5
 STOP_WAIT_S = 2.0  # rule 7
+GAP_S = 0.1  # rule 3: one stop frame a rotator in this long, at most
 _PACKET = 65536
 
 
@@ -130,7 +138,8 @@ class Express:
         self.up = threading.Event()  # its connection subscribed (the tests wait for it)
         self.held: set[str] = set()  # the rotators whose port it holds (said by the child)
         self.held_changed = threading.Event()  # set on every change of ``held`` (the tests)
-        self.wrote: list[tuple[str, float]] = []  # (rotator, the child's clock) for each frame
+        # (rotator, the child's clock) of the latest frames written (the tests, the log)
+        self.wrote: deque[tuple[str, float]] = deque(maxlen=64)
         self.ended = threading.Event()  # the child is gone (rule 6)
 
     @property
@@ -399,6 +408,8 @@ class _Child:
         }
         self._frames = {rid: bytes.fromhex(f) for rid, f in config["frames"].items()}
         self._v5 = not config["mqtt311"]
+        self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
+        self.clock: Callable[[], float] = time.monotonic
         settings = MqttSettings.model_validate(config["mqtt"])
         self.link = _Link(
             settings,
@@ -430,14 +441,15 @@ class _Child:
         if kind == "lock" and not _switch_on(payload):
             return
         with self._lock:
-            held = self._ports.get(rid)
-            if held is None:
+            held, now = self._ports.get(rid), self.clock()
+            if held is None or now < self._next.get(rid, now):
                 return
             try:
                 os.write(held[1], self._frames[rid])
             except OSError:
                 return  # rule 3: the session's own stop follows
-        self.say(op="wrote", rotator=rid, t=time.monotonic())
+            self._next[rid] = now + GAP_S
+        self.say(op="wrote", rotator=rid, t=now)
 
     def serve(self) -> None:
         """The bridge's words until its end of file (rule 7)."""
@@ -481,6 +493,8 @@ def main(argv: list[str]) -> int:
     if not data:
         return 0
     config = json.loads(data)
+    for sig in (signal.SIGINT, signal.SIGTERM):  # rule 7: it ends with the bridge, not before
+        signal.signal(sig, signal.SIG_IGN)
     logging.basicConfig(
         level=config.get("log_level", logging.INFO),
         format="stop express: %(levelname)s %(message)s",

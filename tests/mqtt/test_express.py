@@ -15,7 +15,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.mqtt.express import DROP_WAIT_S, Express, _Child, express_client_id
+from bridge.mqtt.express import DROP_WAIT_S, GAP_S, Express, _Child, express_client_id
 from bridge.settings_mqtt import MqttSettings
 from tests.support.waiting import slow, wait_until
 
@@ -83,10 +83,26 @@ def test_a_stop_is_the_rotators_stop_frame_written_at_once_whatever_its_payload(
 ) -> None:
     port = Port()
     rig.hand("a", 1, port)
-    rig.stop("rotor/a/stop", b"")
-    rig.stop("rotor/a/stop", b"anything at all")
-    assert port.written() == b";;"
-    assert rig.word()["op"] == "wrote"
+    now = [100.0]
+    rig.child.clock = lambda: now[0]
+    for payload in (b"", b"STOP", b"anything at all"):
+        rig.stop("rotor/a/stop", payload)
+        now[0] += GAP_S
+    assert port.written() == b";;;"
+    assert rig.word() == {"op": "wrote", "rotator": "a", "t": 100.0}
+
+
+def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None:
+    port, now = Port(), [100.0]
+    rig.child.clock = lambda: now[0]
+    rig.hand("a", 1, port)
+    for _ in range(1000):
+        rig.stop("rotor/a/stop")
+        rig.stop("rotor/a/lock", b"ON")
+    assert port.written() == b";"
+    now[0] += GAP_S
+    rig.stop("rotor/a/stop")
+    assert port.written() == b";"
 
 
 def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
