@@ -31,6 +31,8 @@ its write reaches the line through that worker too, so every row says how long t
 on this machine while its stops were taken (``pty hop``: a probe writing a byte through a pty
 of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop.
 ``STOP_VIA_PTY=1`` puts the controllers' ptys back on the path (the hop left out, to compare).
+``STOP_EXPRESS=0`` runs this tree's bridges without the stop express (``mqtt.stop_express``
+off: the stop's frame written by the bridge's process alone), to compare in turns.
 The rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
@@ -144,6 +146,8 @@ TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
 # the line hands its bytes to the controller directly (line.py rule 5); STOP_VIA_PTY=1 sends
 # them through the controller's pty as before, to see what that hop adds on this machine
 DIRECT = not os.environ.get("STOP_VIA_PTY")
+# this tree's bridges with or without the stop express (module docstring)
+EXPRESS_OFF = {"stop_express": False} if os.environ.get("STOP_EXPRESS") == "0" else None
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -757,7 +761,9 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
             "cty_file": str(cty),
         },
     }
-    bridge = start_bridge(scope, broker_port, settings, homeassistant=False, sections=sections)
+    bridge = start_bridge(
+        scope, broker_port, settings, homeassistant=False, sections=sections, mqtt=EXPRESS_OFF
+    )
     recorder = Mqtt(broker_port, ["rotor/+/state", "rotor/+/availability"], name="sul-rec")
     scope.callback(recorder.close)
     sender = Mqtt(broker_port, [], name="sul-stop")
@@ -1108,6 +1114,7 @@ def start_engine(
         specs,
         client_id=f"bench-{engine}-{os.getpid()}",
         sections={"homeassistant": {"enabled": False}},
+        mqtt=EXPRESS_OFF if old_root is None else None,
         state_name=f"{engine}-state.json",
     )
     if old_root is None:
