@@ -16,6 +16,7 @@ import ctypes
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -104,3 +105,31 @@ def test_a_stop_frame_reaches_the_controller_while_the_bridge_process_is_held(
         os.close(release_r)
         rig.probe.wait_value("rotor/state", "idle", 10)
         assert app.express.wrote and app.express.wrote[0][0] == "tower"
+
+
+def test_after_an_unplug_and_replug_the_express_writes_on_the_new_port(rig: Rig) -> None:
+    """The old port's copy is given back before it is closed, the new one handed over: the
+    stop after the replug reaches the controller twice, the express's frame and the session's."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    wait_until(lambda: "tower" in app.express.held, 10, "the express holds the port")
+    t = time.monotonic()
+    emu.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    wait_until(lambda: "tower" not in app.express.held, 10, "the old port given back")
+    t = time.monotonic()
+    emu.replug()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    wait_until(lambda: "tower" in app.express.held, 10, "the new port handed over")
+    rig.ready("tower", timeout_s=15)
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    stops = len(emu.frames("stop"))
+    rig.probe.publish("rotor/stop", "")
+    wait_until(lambda: app.express.wrote, 10, "the express wrote")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    rig.probe.wait_value("rotor/state", "idle", 10)
+    wait_until(lambda: len(emu.frames("stop")) >= stops + 1, 10, "a stop frame")
+    frames = [f.data for f in emu.frames()][-6:]
+    assert frames.count(b";") >= 2, frames  # the express's and the session's
