@@ -13,6 +13,8 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
   stop is matched to its own rotor's write, not another's: the backlog's rotor gets stops too);
 - ``gc``: every collection (generation, start, end) and the main connection's message count;
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
+- ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
+  the express is another process, mqtt/express.py);
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
@@ -31,6 +33,7 @@ import os
 import sys
 import threading
 import time
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -204,6 +207,23 @@ def install(path: str) -> None:
 
     gc.callbacks.append(_gc)
 
+    from bridge.mqtt import express
+
+    express_init = express.Express.__init__
+
+    class _Wrote(deque[tuple[str, float]]):
+        """The stop express's words "wrote" (its own clock: CLOCK_MONOTONIC, as ours)."""
+
+        def append(self, x: tuple[str, float]) -> None:
+            ev(("xwrite", x[1], x[0]))
+            super().append(x)
+
+    def _express_init(self: Any, *a: Any, **k: Any) -> None:
+        express_init(self, *a, **k)
+        self.wrote = _Wrote(maxlen=64)
+
+    express.Express.__init__ = _express_init  # type: ignore[method-assign]
+
     def _dump() -> None:
         Path(path).write_text(json.dumps({"pid": os.getpid(), "events": EVENTS}))
 
@@ -250,6 +270,8 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     p = _first(by["put"], c[1] if c else t0, t1, lambda e: s is None or e[3] == s[4])
     w = _first(by["write"], s[1] if s else t0, t1, lambda e: e[2].endswith(f"tty-{rid}"))
     steps = [("lane", m, 1), ("carry", c, 1), ("put", p, 2), ("serve", s, 1), ("write", w, 1)]
+    x = _first(by["xwrite"], t0, t1, lambda e: e[2] == rid)
+    steps.insert(0, ("express wrote", x, 1))
     out = f"{rid} {lat * 1e3:6.1f} ms:"
     for name, e, k in steps:
         out += f" {name} {(e[k] - t0) * 1e3:.1f}" if e else f" {name} --"
@@ -302,7 +324,7 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     samples = json.loads(Path(samples_path).read_text())
     lines_path = Path(trace_path + ".lines.json")
     windows = json.loads(lines_path.read_text()) if lines_path.exists() else {}
-    kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait")
+    kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait", "xwrite")
     by = {k: [e for e in trace if e[0] == k] for k in kinds}
     by["lane"] = [e for e in by["msg"] if e[2] == "lane"]
     for phase, rows in samples.items():
