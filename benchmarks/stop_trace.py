@@ -29,6 +29,7 @@ from __future__ import annotations
 import atexit
 import gc
 import json
+import math
 import os
 import sys
 import threading
@@ -295,6 +296,31 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     return out
 
 
+def _firsts(by: dict[str, list[Any]], rows: list[Any]) -> str:
+    """Every stop of a phase, not only the slow ones: how long after its publish the stop
+    express wrote its frame and the bridge's serial-lines thread wrote its own (p50 / p99 /
+    max, nearest rank), apart from what the host took to carry the frame on (the pty hop)."""
+
+    def spread(name: str, ms: list[float]) -> str:
+        if not ms:
+            return f"{name}: none"
+        ms.sort()
+        p99 = ms[min(len(ms) - 1, math.ceil(0.99 * len(ms)) - 1)]
+        return f"{name} ({len(ms)}): {ms[len(ms) // 2]:.1f} / {p99:.1f} / {ms[-1]:.1f}"
+
+    express, lines = [], []
+    for rid, t0, lat, *_taker in rows:
+        x = _first(by["xwrite"], t0, t0 + lat, lambda e, rid=rid: e[2] == rid)
+        w = _first(by["write"], t0, t0 + lat + 0.1, lambda e, rid=rid: e[2].endswith(f"tty-{rid}"))
+        if x is not None:
+            express.append((x[1] - t0) * 1e3)
+        if w is not None:
+            lines.append((w[1] - t0) * 1e3)
+    return "every stop, ms after the publish, p50 / p99 / max: " + "; ".join(
+        [spread("the express wrote", express), spread("the serial-lines thread wrote", lines)]
+    )
+
+
 def _line(window: dict[str, Any]) -> list[str]:
     """A stop's line (the benchmark's ``<trace>.lines.json``): the relay's reads of the bridge's
     bytes (``in``, with the due time of the last byte), its deliveries to the controller
@@ -342,6 +368,7 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                     hop = _hops(shown[rid, t0], _written(by, rid, t0, lat))
                     if hop is not None:
                         hops.append(hop)
+        print("  " + _firsts(by, rows))
         if hops:
             one, two = (sorted(h[i] for h in hops) for i in (0, 1))
             print(
