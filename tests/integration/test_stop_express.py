@@ -201,3 +201,34 @@ def test_two_stop_frames_cost_nothing_on_the_models_the_express_writes_to(
     assert not rig.probe.on("rotor/error"), [m.text for m in rig.probe.on("rotor/error")]
     if model in ("rotorez", "rotorcard"):  # the tap reads this family's replies (tap.py)
         assert not rig.bogus("tower")  # a banner answering the second ';' is no bearing
+
+
+def test_an_express_that_dies_is_said_and_stops_take_the_lane(rig: Rig) -> None:
+    """Killed (an out-of-memory killer, a bug): B/bridge/info says so while the bridge runs,
+    and a stop still stops the rotor, by the stop lane in the bridge's process."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    child.kill()
+    info = rig.probe.wait_for("rotor/bridge/info", lambda m: b"stop express ended" in m.payload)
+    (said,) = [p for p in json.loads(info.payload)["problems"] if "express" in p]
+    assert "stop lane" in said
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    rig.probe.publish("rotor/stop", "")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert not app.express.wrote
+
+
+def test_the_express_ends_with_the_bridge(rig: Rig) -> None:
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    rig.stop()
+    assert child.wait(slow(5)) == 0  # its socket's end of file, not a kill

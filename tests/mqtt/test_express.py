@@ -16,7 +16,9 @@ from collections.abc import Iterator
 import pytest
 
 from bridge.mqtt.express import DROP_WAIT_S, GAP_S, Express, _Child, express_client_id
+from bridge.protocols import REGISTRY
 from bridge.settings_mqtt import MqttSettings
+from tests.support.rig import EASYCOMM_MODELS, GS232_MODELS
 from tests.support.waiting import slow, wait_until
 
 SETTINGS = MqttSettings(host="127.0.0.1", port=1, client_id="rotor-shack")
@@ -227,3 +229,11 @@ def test_no_rotator_of_a_model_that_takes_a_stop_at_any_time_no_express() -> Non
     assert not e.wanted and e.watch("a") is None
     e.start(mqtt311=False)
     assert e._child is None and not problems.said
+
+
+def test_only_models_that_take_a_stop_frame_at_any_moment_get_the_express() -> None:
+    """ModelSpec.stop_anytime (rule 4): not a SatEL (it ignores input while it slews), not a
+    SPID (a stop is answered: an extra one would be a reply nobody owes), not a DCU-1 or an
+    RT-21 (what they answer to a stop at any moment is not documented)."""
+    writes = {name for name, spec in REGISTRY.items() if spec.stop_anytime}
+    assert writes == {"rotorez", "rotorcard", *GS232_MODELS, *EASYCOMM_MODELS}
