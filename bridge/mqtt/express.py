@@ -23,7 +23,8 @@ Rules:
    rule 6). It publishes nothing.
 3. What it does, and all it does: a message on ``R/stop`` (any payload) or a lock ON on
    ``R/lock``, not a replay (under MQTT 3.1.1 a retained flag means "replayed"; the session
-   carries such a stop out once, lastword.py rule 6), is one ``os.write`` of that rotator's
+   carries such a stop out once, lastword.py rule 6) nor an empty retained message (the
+   deletion of a retained one: service.py rule 1), is one ``os.write`` of that rotator's
    stop frame on its copy of the port, at once, if it holds one. A tty takes one write whole
    against the serial-lines thread's (one write a frame too, engine/port.py), so the frame
    goes between two of the session's frames, never inside one. A write that fails (a full
@@ -435,8 +436,8 @@ class _Child:
     ) -> None:
         """Rule 3, on paho's thread."""
         where = self._topics.get(topic)
-        if where is None or (retain and not self._v5):
-            return
+        if where is None or (retain and (not self._v5 or not payload)):
+            return  # a replay (3.1.1), or a retained message being deleted (service.py rule 1)
         rid, kind = where
         if kind == "lock" and not _switch_on(payload):
             return

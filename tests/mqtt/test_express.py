@@ -128,6 +128,8 @@ def test_a_rotator_whose_port_it_does_not_hold_gets_nothing(rig: ChildRig) -> No
 def test_a_retained_stop_is_written_under_mqtt5_not_a_replay_under_311(rig: ChildRig) -> None:
     port = Port()
     rig.hand("a", 1, port)
+    rig.stop("rotor/a/stop", b"", retain=True)  # a retained stop being deleted: no command
+    assert port.written() == b""
     rig.stop("rotor/a/stop", retain=True)  # MQTT 5: published retained, live (never replayed)
     assert port.written() == b";"
     old = ChildRig(mqtt311=True)
