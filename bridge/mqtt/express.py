@@ -14,8 +14,9 @@ first. Both halves live here: ``Express`` in the bridge, ``main`` in the child.
 Rules:
 1. A process of its own (``python -m bridge.mqtt.express``), started by ``Express.start`` once
    the main connection is up (as the lane: the broker is known to take the bridge), on a
-   short-lived thread that then stays to read the child's words (one thread, asleep on a
-   socket). It imports paho, connection.py and the settings, nothing of the engine.
+   thread of its own that then stays to read the child's words (one thread, asleep on a
+   socket). The child imports paho, connection.py, the settings and payloads.py (the words
+   of a lock ON), nothing of the engine.
 2. Its connection is the lane's in all but the client id (``express_client_id``): the same
    broker settings, credentials and TLS (the password handed over the control socket, never
    on the command line), the protocol the main connection settled on, subscribed to the stop
@@ -44,9 +45,10 @@ Rules:
    close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
    copy keeps the tty open and its TIOCEXCL would refuse the reopen. An express that does not
    answer in time is killed (rule 6) and the port closed all the same.
-6. Never silent: an express not up within START_WAIT_S, one that ends, is killed or whose
-   connection the broker refuses is said on ``B/bridge/info`` (``on_problem``) while it lasts;
-   stops then take the stop lane in the bridge's process, as without it. It is not restarted.
+6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
+   connection the broker refuses (said until a connection is accepted) or whose subscription it
+   denies is said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
+   bridge's process, as without it. An express that ended is not restarted.
 7. Shutdown: ``stop`` closes the control socket; the express disconnects and exits on its end
    of file, and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
    socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
@@ -259,6 +261,7 @@ class Express:
                 self._hand(rid, number, fd)
         mine.settimeout(START_WAIT_S)
         late = f"the stop express did not come up within {START_WAIT_S:g} s"
+        passing: set[str] = set()  # problems said until it is up (rule 6)
         while True:
             try:
                 data = mine.recv(_PACKET)
@@ -274,7 +277,9 @@ class Express:
             op = word.get("op")
             if op == "up":
                 mine.settimeout(None)
-                self._problem(late, False)
+                for text in (late, *passing):
+                    self._problem(text, False)
+                passing.clear()
                 if not self.up.is_set():
                     log.info(
                         "stop express up as %s (pid %d, %.2f s)",
@@ -295,7 +300,10 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 log.debug("stop express: %s's stop frame written", word["rotator"])
             elif op == "problem":
-                self._problem(f"stop express: {word['text']}", True)
+                text = f"stop express: {word['text']}"
+                self._problem(text, True)
+                if word.get("until_up"):  # a connection refused: said until one is accepted
+                    passing.add(text)
         try:
             code = child.wait(STOP_WAIT_S)
         except subprocess.TimeoutExpired:
@@ -371,7 +379,9 @@ class _Link(Connection):
         self._say = say
 
     def _refused(self, reason: str) -> None:
-        self._say(op="problem", text=f"the MQTT broker refused its connection: {reason}")
+        self._say(
+            op="problem", text=f"the MQTT broker refused its connection: {reason}", until_up=True
+        )
 
     def _failed(self) -> None:
         pass  # the main connection says why the broker cannot be reached
@@ -389,7 +399,8 @@ class _Link(Connection):
 
     def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
         if not was_up:
-            self._say(op="problem", text=f"the MQTT broker closed its connection: {reason_code}")
+            text = f"the MQTT broker closed its connection: {reason_code}"
+            self._say(op="problem", text=text, until_up=True)
         return was_up
 
     def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:

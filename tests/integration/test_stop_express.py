@@ -232,3 +232,31 @@ def test_the_express_ends_with_the_bridge(rig: Rig) -> None:
     assert child is not None
     rig.stop()
     assert child.wait(slow(5)) == 0  # its socket's end of file, not a kill
+
+
+def test_a_broker_that_refuses_the_express_is_said_and_stops_take_the_lane(
+    tmp_path: Path,
+) -> None:
+    """A connection limit: the test's probe, the main connection and the stop lane take all
+    there are, the express's is turned away. B/bridge/info says so; a stop still stops the
+    rotor. (mosquitto 2.0 lets in one connection more than its max_connections.)"""
+    conf = "allow_anonymous true\nmax_connections 2\n"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
+    probe = Probe(broker.port, "rotor/#")
+    try:
+        with Rig(tmp_path, broker, probe) as rig:
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.lane.connected.is_set, 10, "the lane is up")
+            info = probe.wait_for("rotor/bridge/info", lambda m: b"stop express" in m.payload, 20)
+            (said,) = [p for p in json.loads(info.payload)["problems"] if "express" in p]
+            assert "closed its connection" in said or "refused" in said
+            assert not app.express.up.is_set()
+            probe.publish("rotor/target", "200")
+            emu.wait_for(lambda s: s.is_moving, 10)
+            probe.publish("rotor/stop", "")
+            emu.wait_for(lambda s: not s.is_moving, 10)
+    finally:
+        probe.close()
+        broker.stop()

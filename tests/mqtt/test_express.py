@@ -239,3 +239,28 @@ def test_only_models_that_take_a_stop_frame_at_any_moment_get_the_express() -> N
     RT-21 (what they answer to a stop at any moment is not documented)."""
     writes = {name for name, spec in REGISTRY.items() if spec.stop_anytime}
     assert writes == {"rotorez", "rotorcard", *GS232_MODELS, *EASYCOMM_MODELS}
+
+
+SAYS = (
+    "import json, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    "for word in sys.argv[1:-1]:\n"
+    "    s.send(word.encode())\n"
+    "s.recv(65536)\n"  # until the bridge closes its end
+)
+
+
+def test_a_refused_connection_is_said_until_the_express_is_up_a_denial_stays() -> None:
+    problems = Problems()
+    words = [
+        {"op": "problem", "text": "refused: not authorised", "until_up": True},
+        {"op": "problem", "text": "denied: rotor/a/stop"},
+        {"op": "up"},
+    ]
+    e = express([sys.executable, "-c", SAYS, *map(json.dumps, words)], problems)
+    e.start(mqtt311=False)
+    wait_until(e.up.is_set, 10, "up")
+    wait_until(lambda: len(problems.said) == 2, 10, "both said")
+    assert problems.on() == ["stop express: denied: rotor/a/stop"]
+    e.stop()
