@@ -154,3 +154,32 @@ def test_a_flood_of_settings_costs_the_card_a_write_or_two_and_a_lock_after_it_i
     assert writes[-1] == {"tower": {"options": {"speed": "1"}, "locked": True}}
     assert StateStore(path).locked("tower") is True
     assert StateStore(path).options("tower") == {"speed": "1"}
+
+
+def test_a_flood_of_lock_words_costs_the_card_a_write_or_two_and_the_last_word_is_kept(
+    tmp_path: Path,
+) -> None:
+    """A lock ON is never refused, so anyone allowed to lock can send thousands a second:
+    each was a rewrite of the state file with its fsyncs. The words waiting for the writer are
+    saved as one, the last word's."""
+    from bridge.engine.kept import Kept
+    from bridge.protocols import REGISTRY
+
+    path = tmp_path / "state.json"
+    store = StateStore(path)
+    writes: list[object] = []
+    save = store._save
+
+    def counted() -> bool:
+        writes.append(json.loads(json.dumps(store._data)))
+        return save()
+
+    store._save = counted  # type: ignore[method-assign]
+    kept = Kept(store, "tower", REGISTRY["gs232b"], report=lambda *a: None)
+    for i in range(3001):  # the owner's steps; the writer not woken
+        kept.set_lock(i % 2 == 0)
+    store.wake()
+    store.flush()
+    assert len(writes) <= 2, len(writes)
+    assert writes[-1] == {"tower": {"locked": True}}
+    assert StateStore(path).locked("tower") is True
