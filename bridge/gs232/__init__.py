@@ -68,8 +68,9 @@ Rules:
    bearing past 360), whose ``;`` may have been the stop; a stop goes first, before anything
    else of its frame is answered. Junk never turns anything.
 10. DCU-1 commands: ``AP1ddd;`` keeps the bearing and turns nothing; ``AM1;`` turns to it once,
-    if it was kept within DCU1_STORED_S (a pty outlives its clients: a bearing one left must
-    not be the next one's), else it is refused on ``R/error`` and turns nothing; ``AP1ddd`` CR
+    if it was kept within DCU1_STORED_S (1 s: the programs send both together; a pty outlives
+    its clients and cannot tell one from the next, so a bearing one left must not be the
+    next one's), else it is refused on ``R/error`` and turns nothing; ``AP1ddd`` CR
     turns at once; ``AI1;`` (or ``AI1`` CR) answers ``;ddd``, the true bearing rounded to a
     whole degree, 360 as 000, and nothing while the bridge does not have it (Hamlib's
     ``-m 401`` would otherwise ask for ever); the options are taken and change nothing (the

@@ -46,7 +46,7 @@ log = logging.getLogger(__name__)
 GS232_ERROR = b"?>\r\n"  # the GS-232 error prompt; Hamlib reads a line up to LF
 # what a Rotor-EZ prints after an invalid command (and for V): the one text it is known to send
 DCU1_ERROR = b"C2000 IDIOM V1.4S "
-DCU1_STORED_S = 10.0  # package rule 10: a bearing AP1 stored is for an AM1 within this
+DCU1_STORED_S = 1.0  # package rule 10: a bearing AP1 stored is for an AM1 within this
 IDLE_TIMEOUT_S = 300.0
 _STOPS = (Gs232Kind.STOP, Gs232Kind.STOP_AZ, Gs232Kind.STOP_EL)
 Item = TypeVar("Item")

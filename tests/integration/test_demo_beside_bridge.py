@@ -85,8 +85,13 @@ def test_a_demo_beside_a_real_bridge_leaves_it_alone(tmp_path: Path, rig: Rig) -
     # any broker
     ids = set(re.findall(r"New client connected from \S+ as (\S+) ", log))
     assert rig.settings.mqtt.effective_client_id() in ids
-    assert {i for i in ids if i.startswith(base)} == {base, f"{base}-ui", f"{base}-stop"}
-    assert all(len(i) <= 23 for i in (base, f"{base}-ui", f"{base}-stop"))
+    assert {i for i in ids if i.startswith(base)} == {
+        base,
+        f"{base}-ui",
+        f"{base}-stop",
+        f"{base}-fast",
+    }
+    assert all(len(i) <= 23 for i in (base, f"{base}-ui", f"{base}-stop", f"{base}-fast"))
     # none of its Home Assistant configs was cleared, and all are still there
     real_configs = _configs_of(real, probe.messages)
     assert [m.topic for m in real_configs if not m.payload] == []
