@@ -147,17 +147,12 @@ class Gs232(TwoAxes):
 
     def receive(self, data: bytes, now: float) -> None:
         now = self._update(now)
-        for value in data:
-            if value in (0x0D, 0x0A):
-                line, self._rx = bytes(self._rx), bytearray()
-                if line:
-                    self._command(line, now)
-                continue
-            self._rx.append(value)
-            if len(self._rx) > _MAX_LINE:  # no command is this long
-                line, self._rx = bytes(self._rx), bytearray()
+        for line, too_long in self._lines(data, _MAX_LINE):
+            if too_long:  # no command is this long
                 self._answer(REFUSAL, now)
                 self._log.append(LoggedFrame(now, line, Outcome.REFUSED.value))
+            else:
+                self._command(line, now)
 
     # -- ground truth ---------------------------------------------------------------------------
 
@@ -168,18 +163,6 @@ class Gs232(TwoAxes):
             speed_level=self._level,
             az_range_deg=self._range_deg,
         )
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     # -- front panel and faults -----------------------------------------------------------------
 

@@ -1,5 +1,6 @@
 """What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
-whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py).
+whatever its protocol: the panel, a jam, time passing, a stop, its lines in and its log
+(gs232.py, easycomm.py, rc2800.py).
 
 Rules:
 1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
@@ -7,13 +8,15 @@ Rules:
 2. Turning by hand (``manual_rotate``) takes the box's whole range: azimuth 0..``az_top_deg``,
    elevation 0..EL_TOP_DEG on a box with an elevation rotor; anything else is a ValueError.
 3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
+4. Commands come as lines ended by CR or LF; lines of nothing but spaces are no command.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
-from bridge.emulators.base import MotionEvent, PacedLine
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
@@ -26,9 +29,23 @@ class TwoAxes:
     _el: Axis
     _now_s: float
     _events: list[MotionEvent]
+    _log: list[LoggedFrame]
+    _rx: bytearray  # a line still coming
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
+
+    @property
+    def log(self) -> list[LoggedFrame]:
+        return self._log
+
+    @property
+    def events(self) -> list[MotionEvent]:
+        return self._events
+
+    def frames(self, *outcomes: str) -> list[LoggedFrame]:
+        wanted = set(outcomes)
+        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     @property
     def az_top_deg(self) -> float:
@@ -73,6 +90,20 @@ class TwoAxes:
         times = [self._tx.next_due_s(), self._az.arrival_time_s(), self._el.arrival_time_s()]
         pending = [t for t in times if t is not None]
         return min(pending) if pending else None
+
+    def _lines(self, data: bytes, max_line: int) -> Iterator[tuple[bytes, bool]]:
+        """Rule 4: the lines ``data`` completes, each with False, and a line that grew past
+        ``max_line`` (dropped where it stood) with True."""
+        for value in data:
+            if value in (0x0D, 0x0A):
+                line, self._rx = bytes(self._rx), bytearray()
+                if line.strip():
+                    yield line, False
+                continue
+            self._rx.append(value)
+            if len(self._rx) > max_line:
+                line, self._rx = bytes(self._rx), bytearray()
+                yield line, True
 
     def _truth(self, now: float) -> dict[str, Any]:
         """The ground truth both axes give (RotatorState's fields), at ``now``, for the box's own
