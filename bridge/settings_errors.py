@@ -35,6 +35,7 @@ BRANDS = {
     "satel": "the SatEL controller (VE5FP) is satel",
     "ve5fp": "the SatEL controller (VE5FP) is satel",
     "greenheron": "Green Heron's RT-21 is rt21 (one box per rotor)",
+    "m2": "M2's RC2800 is rc2800 (az/el) or rc2800-az (azimuth only)",
 }
 
 

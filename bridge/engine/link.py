@@ -46,6 +46,10 @@ Rules:
    (bytes still coming may be the second reply that spoils it; the controller is asked again).
    What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
    own, never a second reply that spoils the held one).
+10. A controller that needs time between commands to its axes (``spec.axis_gap_s``, RC2800)
+   gets it: a command's or a poll's frames (a list from the codec) go that far apart, no
+   frame and no poll goes sooner after the last one written or waiting, and a poll waits while
+   frames do. A stop never waits: its first frame goes at once, its others the gap apart.
 """
 
 from __future__ import annotations
@@ -90,6 +94,7 @@ class Link:
         self._held_until = 0.0
         self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
         self._held_after = False  # rule 9: bytes were read after the held reading
+        self._last_write_t = -math.inf  # rule 10
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -128,6 +133,7 @@ class Link:
     # -- writing ----------------------------------------------------------------------------
     def write(self, frame: bytes, now: float) -> None:
         self._output.append(frame)
+        self._last_write_t = now
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
@@ -173,7 +179,10 @@ class Link:
         held = self._held
         if held is not None and self.end_held(now) is held:
             self._held, self._held_until = held, now
-        self.write(self.codec.encode_stop(), now)
+        stop = self.codec.encode_stop()
+        frames = stop if isinstance(stop, list) else [stop]
+        self.write(frames[0], now)  # rule 10: never held back
+        self._queue(frames[1:], now + self._gap_s, now)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
             self._reply_deadline = now + self.reply_timeout_s
@@ -185,11 +194,30 @@ class Link:
         self._reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
 
     def send(self, frames: list[bytes], now: float) -> None:
-        """The first frame now, the rest spaced by the model's inter-frame gap (all now if
-        there is none: a stop that came between them would cancel the second alone)."""
+        """The first frame now (rule 10: once the axis gap allows), the rest spaced by the
+        model's inter-frame gap (all now if there is none: a stop that came between them would
+        cancel the second alone)."""
+        first_t = max(now, self._paced_from())
+        if first_t > now:
+            self._queue(frames, first_t, now)
+            return
         self.write(frames[0], now)
-        for i, frame in enumerate(frames[1:], start=1):
-            self._outbox.append((now + i * self.spec.inter_frame_gap_s, frame))
+        self._queue(frames[1:], now + self._gap_s, now)
+
+    @property
+    def _gap_s(self) -> float:
+        return max(self.spec.inter_frame_gap_s, self.spec.axis_gap_s)
+
+    def _paced_from(self) -> float:
+        """Rule 10: the earliest the next frame may go that is no stop's first."""
+        if not self.spec.axis_gap_s:
+            return -math.inf
+        last = self._outbox[-1][0] if self._outbox else self._last_write_t
+        return last + self.spec.axis_gap_s
+
+    def _queue(self, frames: list[bytes], first_t: float, now: float) -> None:
+        for i, frame in enumerate(frames):
+            self._outbox.append((first_t + i * self._gap_s, frame))
         self.flush_outbox(now)
 
     def flush_outbox(self, now: float) -> None:
@@ -281,9 +309,14 @@ class Link:
     def poll(self, now: float, interval_s: float) -> None:
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
             return
-        query = self.codec.encode_query()
+        if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
+            return
+        asked = self.codec.encode_query()
+        query = asked[0] if isinstance(asked, list) else asked
         if query:
             self.write(query, now)
+            if isinstance(asked, list):
+                self._queue(asked[1:], now + self._gap_s, now)
             self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
             self._hold_bytes = self.spec.reply_bytes
             self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
@@ -315,5 +348,5 @@ class Link:
         if self._held is not None:
             times.append(self._held_until)
         if self.spec.can_report_position:
-            times.append(self._reply_deadline or self._next_poll)
+            times.append(self._reply_deadline or max(self._next_poll, self._paced_from()))
         return times

@@ -7,7 +7,8 @@ Rules:
    around the frames) and yields the same replies. Junk is reported, never turned into a reading.
 3. A position reply is only accepted while a reply is awaited (a query, or a command the
    controller answers with its position); ``awaiting_reply`` says so, ``expire_query`` gives up
-   on it after the engine's reply timeout. Anything else is junk.
+   on it after the engine's reply timeout. Anything else is junk, but for a controller that
+   streams its position unasked (RC2800: a well-formed line of every axis is a reading).
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
@@ -75,8 +76,9 @@ class RetargetPolicy(enum.StrEnum):
 
 class Codec(Protocol):
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]: ...
-    def encode_stop(self) -> bytes: ...
-    def encode_query(self) -> bytes | None: ...
+    # a list: frames to the controller's axes in turn, paced by ModelSpec.axis_gap_s (RC2800)
+    def encode_stop(self) -> bytes | list[bytes]: ...
+    def encode_query(self) -> bytes | list[bytes] | None: ...
     def expire_query(self) -> None: ...
     def encode_version(self) -> bytes | None: ...
     def encode_option(self, name: str, enabled: bool) -> bytes: ...
@@ -139,6 +141,10 @@ class ModelSpec:
     az_wraps: bool = True  # 0 and 360 are the same direction
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
+    # the controller needs this long between commands to its two axes (RC2800): no frame goes
+    # sooner after the one before it, a command's frames go this far apart; a stop's first
+    # frame never waits for it (its frames keep the gap among themselves)
+    axis_gap_s: float = 0.0
     full_duplex: bool = True  # may a command be written while a reply is still coming?
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
