@@ -52,6 +52,9 @@ __all__ = ["AXIS_GAP_S", "MODELS", "Outcome", "Rc2800", "Rc2800Model", "Rc2800St
 
 AZ_TOP_DEG = 360.0
 AXIS_GAP_S = 0.2
+# rule 5: "about 200 ms", timed from the end of one command line to the end of the next, so a
+# shorter line after a longer one ends sooner by a few byte times (9600 baud: 1 ms a byte)
+_GAP_SLACK_S = 0.01
 SPEED_SETTING = 9  # the box's speed knob, 1..9: full speed
 _MAX_LINE = 32
 _COMMAND = re.compile(r"([AE])(\d{1,3}(?:\.\d*)?)?")
@@ -207,7 +210,7 @@ class Rc2800(TwoAxes):
         letter = self._selected if text == "S" else m.group(1) if m else None
         if letter is None:
             return Outcome.REFUSED
-        if now - self._axis_t["E" if letter == "A" else "A"] < AXIS_GAP_S:
+        if now - self._axis_t["E" if letter == "A" else "A"] < AXIS_GAP_S - _GAP_SLACK_S:
             self._too_soon += 1  # rule 5
         self._axis_t[letter] = now
         self._selected = letter
