@@ -1,0 +1,134 @@
+"""M2 RC2800 end to end: real mosquitto, real pyserial on a pty, the bridge, and the RC2800
+emulator (written from the documents and judged by Hamlib's rotctl -m 1001) as the controller,
+plain, echoing its commands, and streaming its position unasked. The 200 ms between the axes
+is proven in virtual time (tests/engine/test_session_rc2800.py): on a busy machine a pty hands
+the emulator two frames late together, so its count here would measure the machine."""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any
+
+import pytest
+
+from tests.support.rig import Rig
+
+KINDS = [{}, {"echo": True, "stream_s": 0.25}]  # a plain box; one that echoes and streams
+
+
+def ready(rig: Rig) -> None:
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+
+
+def status(rig: Rig) -> dict[str, object]:
+    doc: dict[str, object] = json.loads(rig.retained()["rotor/status"])
+    return doc
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=["plain", "echo+stream"])
+def test_az_el_target_bearing_and_stop(rig: Rig, kind: dict[str, Any]) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 10.3, "start_el_deg": 5, **kind})
+    rig.start()
+    ready(rig)
+    snap = rig.retained()
+    assert snap["rotor/bearing"] == b"10.3" and snap["rotor/elevation"] == b"5"
+
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
+    rig.probe.publish("rotor/target", '{"azimuth": 123.4, "elevation": 45}')
+    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (123.4, 45.0) and not s.is_moving, 20)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert (status(rig)["bearing"], status(rig)["elevation"]) == (123.4, 45.0)
+    assert [f.data for f in emu.frames("move")] == [b"A123.4", b"E45.0"]
+
+    rig.probe.publish("rotor/target", '{"azimuth": 300, "elevation": 10}')
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()
+    rig.probe.publish("rotor/stop", "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 5)
+    assert stopped.az_deg < 290 and [f.data for f in emu.frames("stop")] == [b"S", b"S"]
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    doc = status(rig)
+    assert (doc["bearing"], doc["elevation"]) == (
+        round(emu.state().az_deg, 1),
+        round(emu.state().el_deg or 0.0, 1),
+    )  # where it stopped, read back
+    assert emu.frames("refused") == []
+
+
+def test_the_azimuth_box_turns_and_refuses_an_elevation(rig: Rig) -> None:
+    emu = rig.add("az", model="rc2800-az", emu={"start_az_deg": 200, "echo": True})
+    rig.start()
+    ready(rig)
+    rig.probe.publish("rotor/target", "95")
+    emu.wait_for(lambda s: s.az_deg == 95.0 and not s.is_moving, 20)
+    assert [f.data for f in emu.frames("move")] == [b"A95.0"]
+    assert {f.data for f in emu.frames("query")} == {b"A"}
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")  # an elevation it cannot do
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert "no elevation" in err["message"]
+    assert len(emu.frames("move")) == 1
+
+
+def test_a_new_bearing_while_turning_goes_straight_out(rig: Rig) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 0, "start_el_deg": 0})
+    rig.start()
+    ready(rig)
+    rig.probe.publish("rotor/target", "200 40")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, 10)
+    rig.probe.publish("rotor/target", "20.5 10")  # no stop first
+    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (20.5, 10.0) and not s.is_moving, 20)
+    assert [f.data for f in emu.frames("move")] == [b"A200.0", b"E40.0", b"A20.5", b"E10.0"]
+    assert emu.frames("stop") == []
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=["plain", "echo+stream"])
+def test_junk_gives_an_error_and_changes_nothing(rig: Rig, kind: dict[str, Any]) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 77.7, "start_el_deg": 7, **kind})
+    rig.start()
+    ready(rig)
+    t = time.monotonic()
+    for junk in (b"garbage\r", b"A P= 3\xff3.0 S=9 MV\r", b"A P= 999.0 S=9 MV\r", b"E P=  1"):
+        emu.inject(junk)
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "protocol" and "no valid reply" in err["message"]
+    n = len(emu.frames("query"))
+    emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + 4, 15)
+    assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77.7"}
+    assert {m.text for m in rig.probe.on("rotor/elevation")} == {"7"}
+    assert emu.frames("move") == [] and emu.state().az_deg == 77.7
+
+
+def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(rig: Rig) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 50}, az_max_deg=300)
+    rig.start()
+    ready(rig)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "310 10")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "outside" in err["message"]
+    rig.probe.publish("rotor/lock", "ON")
+    rig.probe.wait_value("rotor/lock/state", "ON")
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "120 10")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "locked" in err["message"]
+    rig.probe.publish("rotor/stop", "STOP")  # never refused: on the wire even when locked
+    emu.wait_for_frame(b"S", "stop", 10)
+    assert emu.frames("move") == [] and emu.state().az_deg == 50.0
+
+
+def test_unplug_and_replug(rig: Rig) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 33.3, "start_el_deg": 3})
+    rig.start()
+    ready(rig)
+    t = time.monotonic()
+    emu.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    t = time.monotonic()
+    emu.replug()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    rig.probe.publish("rotor/target", "40.2 10")
+    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (40.2, 10.0) and not s.is_moving, 15)
