@@ -96,6 +96,26 @@ class Responder(Protocol):
     def unjam(self, now: float) -> None: ...
 
 
+class FrameLog:
+    """What every emulator keeps for the tests (rule 4): its frame log and its motion events."""
+
+    _log: list[LoggedFrame]
+    _events: list[MotionEvent]
+
+    @property
+    def log(self) -> list[LoggedFrame]:
+        return self._log
+
+    @property
+    def events(self) -> list[MotionEvent]:
+        return self._events
+
+    def frames(self, *outcomes: str) -> list[LoggedFrame]:
+        """Logged frames, optionally only those with one of `outcomes`."""
+        wanted = set(outcomes)
+        return [f for f in self._log if not wanted or f.outcome in wanted]
+
+
 class PacedLine:
     """A UART transmitter: queued bytes become due one byte time after another (rule 3)."""
 

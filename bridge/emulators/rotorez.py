@@ -49,7 +49,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 from bridge.emulators.rotorez_models import (
     BEARING_OUTCOMES,
@@ -79,7 +79,7 @@ def _parse_bearing(digits: bytes) -> int | None:
     return value if value <= 360 else None
 
 
-class RotorEZ:
+class RotorEZ(FrameLog):
     """One Rotor-EZ-family controller with its rotor. See the module rules."""
 
     def __init__(
@@ -184,21 +184,6 @@ class RotorEZ:
     @property
     def options(self) -> dict[str, bool]:
         return dict(self._options)
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        """Logged frames, optionally only those with one of `outcomes`."""
-        if not outcomes:
-            return list(self._log)
-        wanted = set(outcomes)
-        return [f for f in self._log if f.outcome in wanted]
 
     def bearing_frames_in_brake_delay(self) -> list[LoggedFrame]:
         """Bearing commands that arrived while the brake delay ran (a client should send none)."""

@@ -39,7 +39,7 @@ from __future__ import annotations
 import enum
 import re
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 
 __all__ = ["PADDINGS", "Outcome", "Rt21"]
@@ -58,7 +58,7 @@ class Outcome(enum.StrEnum):
     REFUSED = "refused"  # unknown, malformed or out of range: dropped silently
 
 
-class Rt21:
+class Rt21(FrameLog):
     """One RT-21 box with its rotor. See the module rules."""
 
     def __init__(
@@ -141,18 +141,6 @@ class Rt21:
             stored_target_az_deg=self._stored,
             driver=self._az.driver,
         )
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     # -- front panel and faults -----------------------------------------------------------------
 

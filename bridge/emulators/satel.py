@@ -55,7 +55,7 @@ Rules:
 
 from __future__ import annotations
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine
+from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine
 from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.satel_frames import (
     MEMORY_LIMIT,
@@ -80,7 +80,7 @@ DRIVER_JOG = "jog"
 _JOGS = {"u": ("el", 90.0), "d": ("el", 0.0), "r": ("az", 360.0), "l": ("az", 0.0)}
 
 
-class SatEL:
+class SatEL(FrameLog):
     """One SatEL controller with its two rotors. See the module rules."""
 
     def __init__(
@@ -167,19 +167,6 @@ class SatEL:
             misuse_count=len(self.frames(Outcome.MISUSE)),
             **flags,
         )
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        """Logged frames, optionally only those with one of `outcomes`."""
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     def misuse_frames(self) -> list[LoggedFrame]:
         """Bytes that arrived while the controller slewed (a client should send none)."""

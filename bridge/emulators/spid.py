@@ -56,7 +56,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 from bridge.emulators.spid_models import (
     COMMAND_BYTES,
@@ -93,7 +93,7 @@ class SpidState(RotatorState):
     resolution_ppd: int = 1
 
 
-class Spid:
+class Spid(FrameLog):
     """One SPID controller with its az/el rotator. See the module rules."""
 
     def __init__(
@@ -225,19 +225,6 @@ class Spid:
         """What a status reply sent at `now` would say, decoded (rule 8)."""
         self._update(now)
         return decode_reply(self.spec, self._position_frame())
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        """Logged frames, optionally only those with one of `outcomes`."""
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     # -- front panel, faults, debug output ------------------------------------------------------
 

@@ -16,36 +16,22 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine
+from bridge.emulators.base import FrameLog, MotionEvent, PacedLine
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
 
 
-class TwoAxes:
+class TwoAxes(FrameLog):
     """The axes' part of a box; the protocol's class sets the attributes below."""
 
     _az: Axis
     _el: Axis
     _now_s: float
-    _events: list[MotionEvent]
-    _log: list[LoggedFrame]
     _rx: bytearray  # a line still coming
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
-
-    @property
-    def log(self) -> list[LoggedFrame]:
-        return self._log
-
-    @property
-    def events(self) -> list[MotionEvent]:
-        return self._events
-
-    def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        wanted = set(outcomes)
-        return [f for f in self._log if not wanted or f.outcome in wanted]
 
     @property
     def az_top_deg(self) -> float:
