@@ -44,8 +44,8 @@ import enum
 import re
 from dataclasses import dataclass
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
-from bridge.emulators.physics import DRIVER_COMMAND, Axis
+from bridge.emulators.base import LoggedFrame, RotatorState
+from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.twoaxes import EL_TOP_DEG, TwoAxes
 
 __all__ = ["AXIS_GAP_S", "MODELS", "Outcome", "Rc2800", "Rc2800Model", "Rc2800State"]
@@ -106,32 +106,17 @@ class Rc2800(TwoAxes):
         processing_delay_s: float = 0.002,
         now: float = 0.0,
     ) -> None:
-        if model not in MODELS:
-            raise ValueError(f"unknown model {model!r}; known: {', '.join(sorted(MODELS))}")
-        if line_ending not in (b"\r", b"\n", b"\r\n"):
-            raise ValueError(f"line_ending must be CR, LF or CR LF, got {line_ending!r}")
         if stream_s is not None and stream_s <= 0:
             raise ValueError(f"stream_s must be positive, got {stream_s}")
-        self.spec = MODELS[model]
-        if not self.spec.elevation and start_el_deg != 0.0:
-            raise ValueError(f"{model} has no elevation rotor")
-        self.line_ending = line_ending
+        axes = (start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s)
+        line = (baud, line_ending, processing_delay_s)
+        self.spec: Rc2800Model = self._build(model, MODELS, AZ_TOP_DEG, axes, line, now)
         self.echo = echo
         self.stream_s = stream_s
-        self._az = Axis(start_az_deg, max_deg=AZ_TOP_DEG, speed_deg_s=az_speed_deg_s, now=now)
-        self._el = Axis(start_el_deg, max_deg=EL_TOP_DEG, speed_deg_s=el_speed_deg_s, now=now)
-        self.baud = int(baud)
-        self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
-        self._now_s = now
-        self._rx = bytearray()
-        self._log: list[LoggedFrame] = []
-        self._events: list[MotionEvent] = []
         self._selected = "A"
         self._axis_t = {"A": float("-inf"), "E": float("-inf")}  # last command to each axis
         self._too_soon = 0
         self._quiet_since_s = now  # rule 3: the stream waits for a quiet line
-        self.name, self.has_elevation = self.spec.name, self.spec.elevation  # (TwoAxes)
-        self._event(now, "power on")
 
     # -- sans-IO surface ------------------------------------------------------------------------
 

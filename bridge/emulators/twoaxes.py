@@ -9,11 +9,14 @@ Rules:
    elevation 0..EL_TOP_DEG on a box with an elevation rotor; anything else is a ValueError.
 3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
 4. Commands come as lines ended by CR or LF; lines of nothing but spaces are no command.
+5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
+   other than CR, LF or CR LF, or an elevation start on a box without one is a ValueError),
+   both axes at their start, nothing on the line.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 from bridge.emulators.base import FrameLog, MotionEvent, PacedLine
@@ -27,11 +30,49 @@ class TwoAxes(FrameLog):
 
     _az: Axis
     _el: Axis
+    _az_speed: float  # full speed of each axis
+    _el_speed: float
+    baud: int
+    line_ending: bytes
     _now_s: float
     _rx: bytearray  # a line still coming
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
+
+    def _build(
+        self,
+        model: str,
+        models: Mapping[str, Any],
+        az_top_deg: float,
+        axes: tuple[float, float, float, float],
+        line: tuple[int, bytes, float],
+        now: float,
+    ) -> Any:
+        """Rule 5: the box at power-on, ``models[model]`` (its variant) returned; ``axes`` its
+        start azimuth, elevation and their full speeds, ``line`` its baud, line ending and
+        processing delay."""
+        start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s = axes
+        baud, line_ending, processing_delay_s = line
+        if model not in models:
+            raise ValueError(f"unknown model {model!r}; known: {', '.join(sorted(models))}")
+        if line_ending not in (b"\r", b"\n", b"\r\n"):
+            raise ValueError(f"line_ending must be CR, LF or CR LF, got {line_ending!r}")
+        spec = models[model]
+        if not spec.elevation and start_el_deg != 0.0:
+            raise ValueError(f"{model} has no elevation rotor")
+        self.name, self.has_elevation = spec.name, spec.elevation
+        self.line_ending = line_ending
+        self._az_speed, self._el_speed = float(az_speed_deg_s), float(el_speed_deg_s)
+        self._az = Axis(start_az_deg, max_deg=az_top_deg, speed_deg_s=self._az_speed, now=now)
+        self._el = Axis(start_el_deg, max_deg=EL_TOP_DEG, speed_deg_s=self._el_speed, now=now)
+        self.baud = int(baud)
+        self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
+        self._now_s = now
+        self._rx = bytearray()
+        self._log, self._events = [], []
+        self._event(now, "power on")
+        return spec
 
     @property
     def az_top_deg(self) -> float:
