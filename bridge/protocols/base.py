@@ -101,6 +101,40 @@ class Codec(Protocol):
         ...
 
 
+class Plain:
+    """What most codecs send nothing for: no version query, no motion switch, nothing at
+    connect. A codec that has one of them writes its own."""
+
+    def encode_version(self) -> bytes | None:
+        return None
+
+    def encode_enable(self) -> bytes | None:
+        return None
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return []
+
+
+def tenths(value_deg: float, top_deg: float, axis: str) -> float:
+    """``value_deg`` rounded half up to tenths of a degree; outside 0..``top_deg`` a ValueError
+    that names the ``axis``."""
+    value = math.floor(value_deg * 10 + 0.5)
+    if not 0 <= value <= top_deg * 10:
+        raise ValueError(f"{axis} {value_deg:g} outside 0..{top_deg:g}")
+    return value / 10
+
+
+def tenths_pair(
+    az_deg: float, el_deg: float | None, az_top_deg: float, el_top_deg: float | None
+) -> tuple[float, float | None]:
+    """A target in tenths (``tenths``): the azimuth, and the elevation (0 when none is named)
+    on a controller with one (``el_top_deg`` not None), else None."""
+    az = tenths(az_deg, az_top_deg, "azimuth")
+    if el_top_deg is None:
+        return az, None
+    return az, tenths(el_deg or 0.0, el_top_deg, "elevation")
+
+
 class HamlibRotType(enum.StrEnum):
     """Hamlib's ``rot_type`` of a model, as its rotctld prints it in ``dump_state``."""
 

@@ -45,6 +45,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    Plain,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -75,7 +76,7 @@ def _degrees(value: float, top: int, axis: str) -> int:
     return whole
 
 
-class Gs232Codec:
+class Gs232Codec(Plain):
     """Codec for one GS-232 box: ``variant`` "a" or "b" (its reply form), ``elevation`` whether
     an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``)."""
 
@@ -116,17 +117,8 @@ class Gs232Codec:
     def awaiting_reply(self) -> bool:
         return self._query_open
 
-    def encode_version(self) -> None:
-        return None
-
     def encode_option(self, name: str, enabled: bool) -> bytes:
         raise ValueError("the GS-232 has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
-
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
 
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None

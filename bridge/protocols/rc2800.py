@@ -37,7 +37,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 
 from bridge.protocols.base import (
@@ -46,9 +45,11 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    Plain,
     PositionReply,
     Reply,
     RetargetPolicy,
+    tenths_pair,
 )
 
 AZ_MAX_DEG = 360
@@ -65,14 +66,7 @@ _ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, 
 _LINES = re.compile(rb"[^\r\n]*[\r\n]")
 
 
-def _tenths(value: float, top: int, axis: str) -> float:
-    tenths = math.floor(value * 10 + 0.5)
-    if not 0 <= tenths <= top * 10:
-        raise ValueError(f"{axis} {value:g} outside 0..{top}")
-    return tenths / 10
-
-
-class Rc2800Codec:
+class Rc2800Codec(Plain):
     """Codec for one RC2800: ``elevation`` whether an elevation rotor hangs on it."""
 
     def __init__(self, *, elevation: bool = True) -> None:
@@ -86,10 +80,7 @@ class Rc2800Codec:
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az = _tenths(az_deg, AZ_MAX_DEG, "azimuth")
-        if not self.elevation:
-            return az, None
-        return az, _tenths(el_deg or 0.0, EL_MAX_DEG, "elevation")
+        return tenths_pair(az_deg, el_deg, AZ_MAX_DEG, EL_MAX_DEG if self.elevation else None)
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         az, el = self.wire_target(az_deg, el_deg)
@@ -114,17 +105,8 @@ class Rc2800Codec:
     def awaiting_reply(self) -> bool:
         return bool(self._want)
 
-    def encode_version(self) -> None:
-        return None
-
     def encode_option(self, name: str, enabled: bool) -> bytes:
         raise ValueError("the RC2800 has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
-
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
 
     def harmless(self, junk: bytes) -> bool:
         """Echoes, blank lines and well-formed position lines (rule 1); an error is not."""

@@ -41,6 +41,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    Plain,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -64,7 +65,7 @@ def tenths(az_deg: float) -> float:
     return value / 10
 
 
-class Rt21Codec:
+class Rt21Codec(Plain):
     """Codec for one RT-21 box (one axis: azimuth)."""
 
     def __init__(self) -> None:
@@ -93,17 +94,8 @@ class Rt21Codec:
     def awaiting_reply(self) -> bool:
         return self._query_open
 
-    def encode_version(self) -> None:
-        return None
-
     def encode_option(self, name: str, enabled: bool) -> bytes:
         raise ValueError("the RT-21 has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
-
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
 
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None
