@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import subprocess
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -10,6 +11,7 @@ import pytest
 import serial
 
 from bridge.emulators import EmulatedPort, start
+from tests.support.hamlib import Rotctl, rotctl_argv, run
 from tests.support.waiting import slow
 
 PortFactory = Callable[..., EmulatedPort[Any]]
@@ -50,3 +52,17 @@ def clients() -> Iterator[Callable[..., serial.Serial]]:
             client.close()
         except (serial.SerialException, OSError):
             pass
+
+
+@pytest.fixture
+def rotctl_run(rotctl_path: str) -> Rotctl:
+    """Hamlib's rotctl, the emulators' judge: ``rotctl_run(hamlib_model, port, baud, *commands)``
+    runs it once on the port's link (tests/support/hamlib.py reads what it printed)."""
+
+    def judged(
+        hamlib_model: int, port: EmulatedPort[Any], baud: int, *commands: str
+    ) -> subprocess.CompletedProcess[str]:
+        assert port.link is not None
+        return run([*rotctl_argv(rotctl_path, hamlib_model, port.link, baud), *commands])
+
+    return judged

@@ -10,61 +10,30 @@ installed (libhamlib-utils): a missing judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import signal
-import subprocess
-import sys
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from bridge.emulators.pty import EmulatedPort
-from bridge.emulators.rc2800 import Outcome, Rc2800
-from tests.support import ROOT
-from tests.support.waiting import slow
+from bridge.emulators.rc2800 import Outcome
+from tests.support.hamlib import Rotctl, commands, emulate_and_drive, values
 
 pytestmark = pytest.mark.hamlib
 
-PortFactory = Callable[..., EmulatedPort[Rc2800]]
-Rotctl = Callable[..., subprocess.CompletedProcess[str]]
+PortFactory = Callable[..., EmulatedPort[Any]]
 ECHO_AND_STREAM = [{}, {"echo": True}, {"echo": True, "stream_s": 0.5}]
 
 
 @pytest.fixture
-def rc2800_port(tmp_path: Path) -> Iterator[PortFactory]:
-    ports: list[EmulatedPort[Rc2800]] = []
-
-    def factory(**options: Any) -> EmulatedPort[Rc2800]:
-        link = tmp_path / f"tty-rc2800-{len(ports)}"
-        port = EmulatedPort(Rc2800(now=time.monotonic(), **options), link=link, name="rc2800")
-        ports.append(port)
-        return port
-
-    yield factory
-    for port in ports:
-        port.close()
+def rc2800_port(make_port: PortFactory) -> PortFactory:
+    return lambda model="rc2800", **options: make_port(model, **options)
 
 
 @pytest.fixture
-def rotctl(rotctl_path: str) -> Rotctl:
-    def run(port: EmulatedPort[Rc2800], *commands: str) -> Any:
-        assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "1001", "-r", port.link]
-        argv += ["-s", "9600", *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
-
-    return run
-
-
-def values(result: subprocess.CompletedProcess[str]) -> list[str]:
-    assert result.returncode == 0, f"rotctl failed: {result.stdout!r} {result.stderr[-800:]!r}"
-    return result.stdout.split()
-
-
-def commands(port: EmulatedPort[Rc2800]) -> list[tuple[bytes, str]]:
-    return [(f.data, f.outcome) for f in port.log()]
+def rotctl(rotctl_run: Rotctl) -> Rotctl:
+    return lambda port, *commands: rotctl_run(1001, port, 9600, *commands)
 
 
 @pytest.mark.parametrize("options", ECHO_AND_STREAM, ids=["plain", "echo", "echo+stream"])
@@ -100,39 +69,23 @@ def test_rotor_bridge_emulate_serves_an_rc2800_that_hamlib_drives(
     tmp_path: Path, rotctl_path: str
 ) -> None:
     """``rotor-bridge emulate rc2800`` (here ``python -m bridge.emulators``), echoing."""
-    link = tmp_path / "rc2800"
-    argv = [sys.executable, "-m", "bridge.emulators", "rc2800", "--link", str(link)]
-    argv += ["--start-az-deg", "3.5", "--start-el-deg", "7", "--echo", "--stream-s", "0.5"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout is not None
-        assert proc.stdout.readline().startswith("/dev/pts/")
-        assert proc.stdout.readline().strip() == str(link)
-        run = [rotctl_path, "-m", "1001", "-r", str(link), "-s", "9600", "p", "P", "40", "9", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
-        assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "7.00"], done
-        proc.send_signal(signal.SIGTERM)
-        assert proc.wait(timeout=slow(10)) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    options = ["--start-az-deg", "3.5", "--start-el-deg", "7", "--echo", "--stream-s", "0.5"]
+    done = emulate_and_drive(
+        tmp_path, rotctl_path, "rc2800", options, (1001, 9600), "p", "P", "40", "9", "S"
+    )
+    assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "7.00"], done
 
 
 def test_the_azimuth_box_is_set_read_and_stopped_by_model_1001(
-    tmp_path: Path, rotctl: Rotctl
+    rc2800_port: PortFactory, rotctl: Rotctl
 ) -> None:
     """Hamlib has no azimuth-only model of the current protocol: 1001 drives the azimuth box,
     its elevation reads 0 and an elevation sent to it is refused (``E ERR=2``), moving nothing."""
-    link = tmp_path / "tty-rc2800-az"
-    port = EmulatedPort(Rc2800("rc2800-az", start_az_deg=200.0, now=time.monotonic()), link=link)
-    try:
-        assert values(rotctl(port, "p")) == ["200.00", "0.00"]
-        values(rotctl(port, "P", "95", "0"))
-        port.wait_for(lambda s: s.is_moving and s.target_az_deg == 95.0)
-        values(rotctl(port, "S"))
-        stopped = port.wait_for(lambda s: not s.is_moving)
-        assert 95.0 < stopped.az_deg < 200.0 and stopped.el_deg is None
-        assert [d for d, o in commands(port) if o == Outcome.REFUSED] == [b"E0", b"S"]
-    finally:
-        port.close()
+    port = rc2800_port("rc2800-az", start_az_deg=200.0)
+    assert values(rotctl(port, "p")) == ["200.00", "0.00"]
+    values(rotctl(port, "P", "95", "0"))
+    port.wait_for(lambda s: s.is_moving and s.target_az_deg == 95.0)
+    values(rotctl(port, "S"))
+    stopped = port.wait_for(lambda s: not s.is_moving)
+    assert 95.0 < stopped.az_deg < 200.0 and stopped.el_deg is None
+    assert [d for d, o in commands(port) if o == Outcome.REFUSED] == [b"E0", b"S"]
