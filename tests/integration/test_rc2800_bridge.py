@@ -99,36 +99,3 @@ def test_junk_gives_an_error_and_changes_nothing(rig: Rig, kind: dict[str, Any])
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77.7"}
     assert {m.text for m in rig.probe.on("rotor/elevation")} == {"7"}
     assert emu.frames("move") == [] and emu.state().az_deg == 77.7
-
-
-def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(rig: Rig) -> None:
-    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 50}, az_max_deg=300)
-    rig.start()
-    ready(rig)
-    t = time.monotonic()
-    rig.probe.publish("rotor/target", "310 10")
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "refused" and "outside" in err["message"]
-    rig.probe.publish("rotor/lock", "ON")
-    rig.probe.wait_value("rotor/lock/state", "ON")
-    t = time.monotonic()
-    rig.probe.publish("rotor/target", "120 10")
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "refused" and "locked" in err["message"]
-    rig.probe.publish("rotor/stop", "STOP")  # never refused: on the wire even when locked
-    emu.wait_for_frame(b"S", "stop", 10)
-    assert emu.frames("move") == [] and emu.state().az_deg == 50.0
-
-
-def test_unplug_and_replug(rig: Rig) -> None:
-    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 33.3, "start_el_deg": 3})
-    rig.start()
-    ready(rig)
-    t = time.monotonic()
-    emu.unplug()
-    rig.probe.wait_value("rotor/availability", "offline", after=t)
-    t = time.monotonic()
-    emu.replug()
-    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
-    rig.probe.publish("rotor/target", "40.2 10")
-    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (40.2, 10.0) and not s.is_moving, 15)
