@@ -16,6 +16,7 @@ import pytest
 
 from bridge.emulators.rc2800 import Outcome
 from bridge.model import MotionState
+from tests.engine.test_session_gs232 import settled_at
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator
 
@@ -34,19 +35,6 @@ def ready(
 
 def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
     return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return (
-            v.state is IDLE
-            and not truth.is_moving
-            and truth.az_deg == az
-            and (el is None or truth.el_deg == el)
-        )
-
-    return there
 
 
 def gaps(v: VirtualRotator, since: float = float("-inf")) -> list[float]:
