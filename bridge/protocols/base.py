@@ -179,6 +179,9 @@ class ModelSpec:
     # sooner after the one before it, a command's frames go this far apart; a stop's first
     # frame never waits for it (its frames keep the gap among themselves)
     axis_gap_s: float = 0.0
+    # how a frame names the axis it is for (its first bytes: RC2800 b"A", b"E"): frames to the
+    # same axis need no axis gap between them
+    axis_prefixes: tuple[bytes, ...] = ()
     full_duplex: bool = True  # may a command be written while a reply is still coming?
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)

@@ -173,8 +173,8 @@ def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None
     assert link.output() == []  # after the stop's elevation frame, then 200 ms apart
     assert wire(0.55, 1.15, poll=False) == [
         (0.7, b"E\rS\r"),
+        (0.7, b"E30.0\r"),  # the axis last addressed first: no gap needed
         (0.9, b"A200.0\r"),
-        (1.1, b"E30.0\r"),
     ]
 
 
@@ -186,3 +186,22 @@ def test_a_controller_without_an_axis_gap_sends_as_before() -> None:
     assert link.output() == [b"A100.0\r", b"A\r"]
     link.want_stop()
     assert link.flush_stop(0.0) and link.output() == [b"A\rS\r"]
+
+
+def test_an_rc2800_target_takes_the_place_of_a_polls_waiting_frame_and_the_axis_it_asked() -> None:
+    """A target while a poll's elevation frame waits: the poll's frame is dropped (the target's
+    answers answer it) and the target's azimuth goes at once (the axis just asked), its
+    elevation 200 ms later; after a poll's elevation frame it would go elevation first."""
+    spec = RC2800["rc2800"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.poll(0.0, 1.0)
+    assert link.output() == [b"A\r"]
+    link.send(link.codec.encode_target(100, 20), 0.05)
+    assert link.output() == [b"A100.0\r"]
+    assert link.wakeups()[0] == pytest.approx(0.25)
+    link.flush_outbox(0.25)
+    assert link.output() == [b"E20.0\r"]  # and no E\r of the poll's
+    link.send(link.codec.encode_target(110, 25), 0.3)
+    assert link.output() == [b"E25.0\r"]
+    link.flush_outbox(0.5)
+    assert link.output() == [b"A110.0\r"]
