@@ -118,6 +118,7 @@ _GS232_POLL = lambda f: f.outcome == "query"  # noqa: E731
 _EASYCOMM_POLL = lambda f: f.data == b"AZ" and f.outcome == "query"  # noqa: E731
 _SPID_FRAME = bytes(13)
 _RT21_SET = b"AP1100.5\r;"
+_RC2800_SET = b"A100.5\r"
 AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
 AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
 _SPID_IDLE = {"idle_poll_interval_s": 1.0, "moving_poll_interval_s": 1.0, "settle_s": 2.0}
@@ -298,34 +299,53 @@ def cases() -> list[Case]:
             poll=_STATUS_POLL,
             quick=False,
         ),
-        *_rt21(apart, iso),
+        *_rt21(iso, apart),
+        *_rc2800(iso, apart),
     ]
 
 
-def _rt21(apart: float, iso: float) -> list[Case]:
-    """The Green Heron RT-21: a stop ``;`` and a heading that runs at its CR."""
-    poll = lambda f: f.data == b"BI1;"  # noqa: E731
-    return [
-        Case(
-            "rt21",
-            "stop",
-            b";",
-            "stop ;",
-            lambda f: f.outcome == "stop",
-            (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
-            poll=poll,
-        ),
-        Case(
-            "rt21",
-            "target",
-            _RT21_SET,
-            "target AP1ddd.d<CR>;",
-            lambda f: f.outcome == "move",
-            (Condition("idle", {}, (iso, iso + 0.5)),),
-            payload=lambda i: f"{10 + i}.5",
-            poll=poll,
-        ),
-    ]
+def _stop_and_target(
+    model: str, stop: tuple[bytes, str], target: tuple[bytes, str], *, el: bool, poll: bytes
+) -> Callable[[float, tuple[float, float]], list[Case]]:
+    """A model's stop and target rows: each a (frame, label); the poll is the query's frame as
+    its emulator logs it. Returns what builds them for an isolation time and a stop spacing."""
+
+    def build(iso: float, apart: tuple[float, float]) -> list[Case]:
+        polled = lambda f: f.data == poll  # noqa: E731
+        return [
+            Case(
+                model,
+                "stop",
+                stop[0],
+                stop[1],
+                lambda f: f.outcome == "stop",
+                (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
+                poll=polled,
+            ),
+            Case(
+                model,
+                "target",
+                target[0],
+                target[1],
+                lambda f: f.outcome == "move",
+                (Condition("idle", {}, (iso, iso + 0.5)),),
+                payload=lambda i: f"{10 + i}.5 10" if el else f"{10 + i}.5",
+                poll=polled,
+            ),
+        ]
+
+    return build
+
+
+# the Green Heron RT-21: a stop ``;`` and a heading that runs at its CR
+_rt21 = _stop_and_target(
+    "rt21", (b";", "stop ;"), (_RT21_SET, "target AP1ddd.d<CR>;"), el=False, poll=b"BI1;"
+)
+# the M2 RC2800: the azimuth's stop (the elevation's goes 200 ms later) and the azimuth's bearing
+# (the elevation's follows 200 ms later); the query's frame as the emulator logs it is ``A``
+_rc2800 = _stop_and_target(
+    "rc2800", (b"A\rS\r", "stop A<CR>S<CR>"), (_RC2800_SET, "target Addd.d<CR>"), el=True, poll=b"A"
+)
 
 
 def run_bridge_case(
@@ -441,6 +461,7 @@ def tasks(scope: Scope, quick: bool, models: set[str] | None) -> list[Task]:
             continue
         frames = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}
         frames["rt21"] = _RT21_SET
+        frames["rc2800"] = _RC2800_SET
         frame = {**frames, "gs232b": b"W100 010\r", "easycomm2": b"AZ100.0 EL10.0\n"}[rc.model]
         frame_ms = _ms(line_time_s(len(frame), baud_of(rc.model, rc.emu_opts)))
         for condition in rc.conditions:
