@@ -341,10 +341,14 @@ def _stop_and_target(
 _rt21 = _stop_and_target(
     "rt21", (b";", "stop ;"), (_RT21_SET, "target AP1ddd.d<CR>;"), el=False, poll=b"BI1;"
 )
-# the M2 RC2800: the azimuth's stop (the elevation's goes 200 ms later) and the azimuth's bearing
-# (the elevation's follows 200 ms later); the query's frame as the emulator logs it is ``A``
+# the M2 RC2800: the azimuth's stop (the elevation's goes 200 ms later) and a bearing's first
+# frame (to the axis last addressed; the other's 200 ms later); its query as logged is ``A``
 _rc2800 = _stop_and_target(
-    "rc2800", (b"A\rS\r", "stop A<CR>S<CR>"), (_RC2800_SET, "target Addd.d<CR>"), el=True, poll=b"A"
+    "rc2800",
+    (b"A\rS\r", "stop A<CR>S<CR>"),
+    (_RC2800_SET, "target A/Eddd.d<CR>"),
+    el=True,
+    poll=b"A",
 )
 
 
