@@ -132,6 +132,15 @@ def rotctld_cases() -> list[RotctldCase]:
             ("idle", "polling"),
         ),
         RotctldCase(
+            "prosistel",
+            1701,
+            lambda i: f"P {10 + i} 0",
+            "P -> STX AGddd<CR>",
+            lambda f: f.outcome == "move",
+            None,
+            ("idle", "polling"),
+        ),
+        RotctldCase(
             "rc2800",
             1001,
             lambda i: f"P {10 + i}.5 10",

@@ -24,8 +24,8 @@ from bridge.engine.port import PortOpener, open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
-from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
-from bridge.homeassistant import DiscoveryPublisher, RotatorInfo
+from bridge.gs232 import EMULATIONS
+from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
@@ -42,7 +42,7 @@ from bridge.sky import Sky
 from bridge.tcplines import LineServer
 from bridge.web.files import installation_secret
 from bridge.web.view import RotatorFacts
-from bridge.wiring import worker_config
+from bridge.wiring import axis_configs, group_of, worker_config
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
@@ -80,7 +80,8 @@ class App:
         give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
-        self.topics = Topics(settings.mqtt.base_topic, roots)
+        groups = {g.id: settings.group_topic(g) for g in settings.groups}  # mqtt/groups.py
+        self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
         self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
@@ -135,7 +136,7 @@ class App:
         audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
         self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
-        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232 and Easycomm (gs232/)
+        self.emulations: list[LineServer | PtyLineServer] = []  # GS-232, Easycomm, DCU-1 (gs232/)
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
@@ -175,6 +176,7 @@ class App:
                 catalog=catalog,
                 sky=self.sky,
                 on_audit=self.audit.of(r.id),
+                axes=axis_configs(r, sky, follow),  # a composite's two boxes (wiring.py)
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,
@@ -194,21 +196,22 @@ class App:
                     rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
                 )
                 self.rotctld.append(server)
-            if r.gs232_port is not None:
-                self.emulations.append(gs232_server(rot, r.gs232_port, r.gs232_bind))
-            if r.easycomm_port is not None:
-                self.emulations.append(easycomm_server(rot, r.easycomm_port, r.easycomm_bind))
-            if r.gs232_pty is not None:
-                self.emulations.append(gs232_pty(rot, r.gs232_pty))
-            if r.easycomm_pty is not None:
-                self.emulations.append(easycomm_pty(rot, r.easycomm_pty))
+            for emulation in EMULATIONS.values():
+                self.emulations += emulation.offered(rot, r)
+        for g in settings.groups:  # turned together from G/target and G/stop (mqtt/groups.py)
+            self.mqtt.attach_group(group_of(g))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             if r.pst_udp_port is not None:
                 self.loggers.add_pst(rot, r.pst_udp_port, r.pst_udp_bind)
             if r.n1mm_rotor_name is not None:
                 self.loggers.add_n1mm(
-                    rot, r.n1mm_rotor_name, r.n1mm_udp_port, r.n1mm_udp_bind, r.n1mm_report_address
+                    rot,
+                    r.n1mm_rotor_name,
+                    r.n1mm_udp_port,
+                    r.n1mm_udp_bind,
+                    r.n1mm_report_address,
+                    tuple(r.bands),
                 )
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
@@ -289,6 +292,10 @@ class App:
             status_topic=ha.status_topic,
             topics=self.topics,
             rotators=infos,
+            groups=tuple(  # a device each (mqtt/groups.py)
+                GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
+                for g in settings.groups
+            ),
             publish_retained=partial(client.publish_retained, qos=1),
             clear_retained=client.clear_retained,
             republish_state=lambda: client.republish_retained(skip_prefix=discovery_topics.subtree),

@@ -35,9 +35,12 @@ from bridge.settings import (
     WebSettings,
     WsjtxSettings,
 )
+from bridge.settings_bands import BandFields
 from bridge.settings_defaults import model_defaults
+from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields
+from bridge.settings_rotator import AxisSettings
 from bridge.settings_wind import WindFields
 
 COMMAND = "scripts/gen-config-doc"
@@ -80,7 +83,8 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         {n for n in RotatorSettings.model_fields if not n.startswith("rotctld_")}
         - set(PointingFields.model_fields)
         - set(LoggerFields.model_fields)
-        - set(WindFields.model_fields),
+        - set(WindFields.model_fields)
+        - set(BandFields.model_fields),
     ),
     (
         "rotctld",
@@ -113,6 +117,12 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         "them on 127.0.0.1 unless every host that can reach the address may turn the antenna.",
         set(LoggerFields.model_fields),
     ),
+    (
+        "Bands (per rotator)",
+        "The bands the rotator's antenna is for: an N1MM rotor message and following WSJT-X "
+        "turn the antenna on the radio's band (docs/loggers.md, One antenna per band).",
+        set(BandFields.model_fields),
+    ),
 ]
 
 
@@ -135,6 +145,7 @@ def render() -> str:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]
         out.append(_section(heading, model.__doc__, model, names, env))
     out.append(_rotators())
+    out.append(_groups())
     out.append(_model_table())
     out.append(_shown())
     return "\n".join(out).rstrip("\n") + "\n"
@@ -162,6 +173,22 @@ def _rotators() -> str:
         lines += [f"### {heading}", "", what, ""]
         for name in sorted(names, key=order.index):
             lines.append(_key(RotatorSettings, name, f"{env}{name.upper()}"))
+    lines += ["### The azimuth and elevation tables", "", _sentence(AxisSettings.__doc__), ""]
+    for name in AxisSettings.model_fields:  # inline tables: no environment variable of their own
+        lines.append(_key(AxisSettings, name, "").split("  \n  Environment:")[0].rstrip() + "\n")
+    return "\n".join(lines)
+
+
+def _groups() -> str:
+    lines = ["## [[groups]]", "", _sentence(_untitled(GroupSettings.__doc__)), ""]
+    lines += [
+        "Rotators turned together from `<base_topic>/<id>/target` and `/stop`: see",
+        "[groups](groups.md). Groups are set in the file only (no environment variables).",
+        "",
+    ]
+    for name in GroupSettings.model_fields:
+        text = _key(GroupSettings, name, "")
+        lines.append(text.split("  \n  Environment:")[0].rstrip("\n") + "\n")
     return "\n".join(lines)
 
 

@@ -27,8 +27,10 @@ from pathlib import Path
 from typing import Any
 
 from bridge.engine.state_store import StateStore
+from bridge.protocols.axes import Axis
 from bridge.settings import ConfigError, RotatorSettings, Settings
 from bridge.settings_loggers import is_loopback
+from bridge.settings_rotator import EMULATION_KEYS
 
 IDENTITY = ("id", "name", "model", "port", "baud", "topic")
 # what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
@@ -118,11 +120,13 @@ def config_warnings(settings: Settings) -> list[str]:
         )
     for i, r in enumerate(settings.rotators):
         where = f"rotators[{i}]"
-        if not os.path.exists(r.port):
-            found.append(
-                f"{where}.port: {r.port} does not exist now (unplugged? `rotor-bridge ports` "
-                "lists the serial ports); the bridge keeps trying to open it"
-            )
+        keys = [f"{a}.port" for a in ("azimuth", "elevation")] if r.axes else ["port"]
+        for key, path in zip(keys, r.ports, strict=True):  # a composite's both
+            if not os.path.exists(path):
+                found.append(
+                    f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
+                    "ports` lists the serial ports); the bridge keeps trying to open it"
+                )
         for key, on, bind in (
             ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
             ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
@@ -139,10 +143,8 @@ def config_warnings(settings: Settings) -> list[str]:
                 f"address: rotctld has no authentication, anyone who can reach port "
                 f"{r.rotctld_port} there can turn the antenna"
             )
-        for label, port, bind in (
-            ("gs232", r.gs232_port, r.gs232_bind),
-            ("easycomm", r.easycomm_port, r.easycomm_bind),
-        ):
+        for label in EMULATION_KEYS:
+            port, bind = getattr(r, f"{label}_port"), getattr(r, f"{label}_bind")
             if port is not None and not is_loopback(bind):
                 found.append(
                     f"{where}.{label}_bind: {bind or '(every address)'} is not a loopback "
@@ -241,14 +243,13 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
     if r.rotctld_port is not None:
         on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
-    if r.gs232_port is not None:
-        on.append(f"GS-232B on {r.gs232_bind}:{r.gs232_port}")
-    if r.easycomm_port is not None:
-        on.append(f"Easycomm II on {r.easycomm_bind}:{r.easycomm_port}")
-    if r.gs232_pty is not None:
-        on.append(f"GS-232B on a pty at {r.gs232_pty}")
-    if r.easycomm_pty is not None:
-        on.append(f"Easycomm II on a pty at {r.easycomm_pty}")
+    titles = {"gs232": f"GS-232{r.gs232_replies}", "easycomm": "Easycomm II", "dcu1": "DCU-1"}
+    for key in EMULATION_KEYS:
+        if (port := getattr(r, f"{key}_port")) is not None:
+            on.append(f"{titles[key]} on {getattr(r, f'{key}_bind')}:{port}")
+    for key in EMULATION_KEYS:
+        if (path := getattr(r, f"{key}_pty")) is not None:
+            on.append(f"{titles[key]} on a pty at {path}")
     if r.pst_udp_port is not None:
         on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
     if r.n1mm_rotor_name is not None:
@@ -258,7 +259,16 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
     if r.wind_topic is not None:
         unit = r.wind_unit
         on.append(f"parks for the wind above {r.wind_park_above:g} {unit} on {r.wind_topic}")
-    return [
-        f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), {r.effective_baud} baud",
-        "  " + "; ".join(on),
-    ]
+    first = f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), "
+    first += f"{r.effective_baud} baud"
+    if r.axes:  # a composite rotator: each box on its own port (settings_rotator.py rule 4)
+        boxes = []
+        for axis in Axis:
+            own = r.axis_settings(axis)
+            there = "found" if os.path.exists(own.port) else "NOT FOUND"
+            boxes.append(
+                f"{axis.value} by {own.spec.display_name} ({own.model}) on {own.port} "
+                f"({there}), {own.effective_baud} baud"
+            )
+        first = f"{name}: {'; '.join(boxes)}"
+    return [first, "  " + "; ".join(on)]

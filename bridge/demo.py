@@ -177,6 +177,8 @@ def demo_settings(
         if REGISTRY[model].has_elevation:
             speeds["el_speed_deg_s"] = args.speed_deg_s
             park["park_el_deg"] = 0
+        # compass presets fit a rotator that turns all round (not an elevation box's 0..90)
+        compass = REGISTRY[model].az_max_deg >= 360
         rotators.append(
             {
                 "id": rid,
@@ -184,7 +186,7 @@ def demo_settings(
                 "model": model,
                 "port": str(workdir / f"tty-{rid}"),
                 **speeds,
-                "presets": demo_presets(args.locator),
+                "presets": demo_presets(args.locator) if compass else {},
                 **park,
             }
         )

@@ -41,8 +41,9 @@ class Source(enum.StrEnum):
     PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
     N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
     WEB = "web"  # the operator console (web/)
-    GS232 = "gs232"  # a program speaking Yaesu GS-232B to the gs232_port (gs232/)
+    GS232 = "gs232"  # a program speaking Yaesu GS-232A/B to the gs232_port (gs232/)
     EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
+    DCU1 = "dcu1"  # a program speaking DCU-1 / Rotor-EZ to the dcu1_port (gs232/)
     LEASE = "lease"  # the control lease itself: its end, in the audit trail (engine/operators.py)
     WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
     WIND = "wind"  # parked for a storm (wind_topic, engine/wind.py)
@@ -213,12 +214,29 @@ class Stop:
     origin: Origin | None = None
 
 
+# A controller setting's value (protocols/base.py ``Setting``): a bool option's on or off, a
+# number's value, or a choice's name. Text is a value as a user sent it, which the judge reads
+# by the setting's declaration.
+SettingValue = bool | float | str
+
+
+def setting_text(value: SettingValue) -> str:
+    """A setting's value as its state topic and an echo show it: ON or OFF, a number in its
+    shortest form (``2``, ``0.5``), a choice's name."""
+    if isinstance(value, bool):
+        return "ON" if value else "OFF"
+    if isinstance(value, float | int):
+        return f"{value:g}"
+    return value
+
+
 @dataclass(frozen=True)
 class SetOption:
-    """Switch a controller option (e.g. the Rotor-EZ jam protection) on or off."""
+    """Set a controller setting: switch an option (the Rotor-EZ jam protection) on or off, or
+    give a number or a choice (a GS-232's speed) its value."""
 
     name: str
-    enabled: bool
+    value: SettingValue
     source: Source = Source.MQTT
     origin: Origin | None = None
 
@@ -425,7 +443,7 @@ class RotatorStatus:
     available: bool = False  # port open and controller answering (or cannot answer)
     locked: bool = False
     version: str | None = None
-    options: dict[str, bool] = field(default_factory=dict)
+    options: dict[str, SettingValue] = field(default_factory=dict)  # the controller's settings
     last_error: str | None = None
     last_command_source: str | None = None
     estimated: bool = False  # bearing/elevation estimated during a slew the controller is silent in
@@ -459,7 +477,7 @@ def describe_command(command: Command) -> str:
             axes = (("az", command.az_deg), ("el", command.el_deg))
             return "target " + " ".join(f"{axis} {v:g}" for axis, v in axes if v is not None)
         case SetOption():
-            return f"option {command.name} {'ON' if command.enabled else 'OFF'}"
+            return f"option {command.name} {setting_text(command.value)}"
         case Lock():
             return f"lock {'ON' if command.on else 'OFF'}"
         case Claim():

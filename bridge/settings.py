@@ -42,9 +42,10 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, Settings
 from bridge import settings_errors
 from bridge.settings_defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings_dxcluster import DxClusterSettings
+from bridge.settings_groups import RESERVED, GroupSettings
 from bridge.settings_mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings_pointing import StationSettings, TrackingSettings
-from bridge.settings_rotator import RotatorSettings
+from bridge.settings_rotator import EMULATION_KEYS, RotatorSettings
 from bridge.settings_web import WebSettings
 from bridge.settings_wsjtx import WsjtxSettings
 
@@ -62,6 +63,7 @@ __all__ = [
     "WebSettings",
     "WsjtxSettings",
     "DxClusterSettings",
+    "GroupSettings",
     "format_validation_error",
     "load_settings",
 ]
@@ -105,6 +107,12 @@ class Settings(BaseSettings):
     )
     rotators: list[RotatorSettings] = Field(
         min_length=1, description="the [[rotators]] tables, one per rotator"
+    )
+    groups: list[GroupSettings] = Field(
+        default_factory=list,
+        description="the [[groups]] tables: rotators turned together from one topic "
+        "(docs/groups.md)",
+        json_schema_extra={"unset": "no groups"},
     )
     log_level: str = Field(
         "INFO",
@@ -152,7 +160,7 @@ class Settings(BaseSettings):
             if r.id in seen:
                 raise ValueError(f"rotator id {r.id!r} is used twice")
             seen[r.id] = r.port
-        ports = [r.port for r in self.rotators]
+        ports = [p for r in self.rotators for p in r.ports]  # a composite's both
         dup = {p for p in ports if ports.count(p) > 1}
         if dup:
             raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
@@ -165,21 +173,22 @@ class Settings(BaseSettings):
                     f"web.port {self.web.port} is also rotators[{i}].rotctld_port: give the "
                     "console another port"
                 )
-        # a GS-232 or Easycomm port is no other TCP listener's (the second could not start) and
-        # no PstRotator port (one number, one program to point at it)
+        # a GS-232, Easycomm or DCU-1 port is no other TCP listener's (the second could not
+        # start) and no PstRotator port (one number, one program to point at it)
         taken = [("web.port", self.web.port)] if self.web.enabled else []
-        keys = ("rotctld_port", "pst_udp_port", "gs232_port", "easycomm_port")
+        emulated = tuple(f"{key}_port" for key in EMULATION_KEYS)
+        keys = ("rotctld_port", "pst_udp_port", *emulated)
         taken += [
             (f"rotators[{i}].{k}", getattr(r, k)) for i, r in enumerate(self.rotators) for k in keys
         ]
         for name, port in taken:
             clash = [other for other, p in taken if p == port and other != name]
-            if port is not None and name.endswith(("gs232_port", "easycomm_port")) and clash:
+            if port is not None and name.endswith(emulated) and clash:
                 raise ValueError(f"{name} {port} is also {clash[0]}: give it another port")
         ptys = [
             (os.path.abspath(os.path.expanduser(path)), f"rotators[{i}].{k}")
             for i, r in enumerate(self.rotators)
-            for k in ("gs232_pty", "easycomm_pty")
+            for k in (f"{key}_pty" for key in EMULATION_KEYS)
             if (path := getattr(r, k)) is not None
         ]
         for n, (path, name) in enumerate(ptys):  # one link, one pty
@@ -190,13 +199,23 @@ class Settings(BaseSettings):
         n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
         if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
             raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
-        names = [
-            (r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name)
-            for r in self.rotators
-            if r.n1mm_rotor_name is not None
-        ]
-        if len(set(names)) != len(names):
-            raise ValueError("two rotators have one n1mm_rotor_name on one N1MM port")
+        named = [r for r in self.rotators if r.n1mm_rotor_name is not None]
+        names = [(r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name) for r in named]
+        for key in {n for n in names if names.count(n) > 1}:  # one name, chosen by band
+            if any(n == key and not r.bands for n, r in zip(names, named, strict=True)):
+                raise ValueError(
+                    f"two rotators have n1mm_rotor_name {key[2]!r} on one N1MM port: give "
+                    "each its own, or give each of them its bands to be chosen by"
+                )
+        owner: dict[str, str] = {}  # settings_bands.py rule 3
+        for r in self.rotators:
+            for band in r.bands:
+                if band in owner:
+                    raise ValueError(
+                        f"rotators {owner[band]!r} and {r.id!r} both have {band!r} in bands: "
+                        "a band turns one antenna"
+                    )
+                owner[band] = r.id
         topics = [self.rotator_topic(r) for r in self.rotators]
         if len(set(topics)) != len(topics):
             raise ValueError("two rotators share one topic")
@@ -206,6 +225,38 @@ class Settings(BaseSettings):
         ):
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
         return self
+
+    @model_validator(mode="after")
+    def _groups(self) -> Settings:
+        """settings_groups.py rule 4: members are rotators, a group's topics no other's."""
+        roots = {r.id: self.rotator_topic(r) for r in self.rotators}
+        seen: set[str] = set()
+        for i, g in enumerate(self.groups):
+            where = f"groups[{i}]"
+            if g.id in seen:
+                raise ValueError(f"{where}.id: group id {g.id!r} is used twice")
+            seen.add(g.id)
+            for rid in g.rotators:
+                if rid not in roots:
+                    raise ValueError(
+                        f"{where}.rotators: {rid!r} is no rotator's id (the rotators are "
+                        f"{', '.join(roots)})"
+                    )
+            if g.id in RESERVED:
+                raise ValueError(
+                    f"{where}.id: {g.id!r} is a word of the bridge's own topics: choose another"
+                )
+            root = self.group_topic(g)
+            for rid, r_root in roots.items():
+                if root == r_root or r_root.startswith(root + "/"):
+                    raise ValueError(
+                        f"{where}.id: {g.id!r} would share its topic {root} with rotator {rid!r}"
+                    )
+        return self
+
+    def group_topic(self, g: GroupSettings) -> str:
+        """Where a group's topics are (``<base_topic>/<id>``)."""
+        return f"{self.mqtt.base_topic}/{g.id}"
 
     @model_validator(mode="after")
     def _installation(self) -> Settings:

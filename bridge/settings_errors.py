@@ -26,7 +26,9 @@ from pydantic import BaseModel, ValidationError
 # rule 4: a maker's name (lower case, letters and digits only) and the models that fit its
 # controllers, as a user with that maker's box would read it
 BRANDS = {
-    "yaesu": "a Yaesu control box with Idiom Press's RotorCard fitted is rotorcard",
+    "yaesu": "a Yaesu rotor through a GS-232A or GS-232B box is gs232a or gs232b (-az for "
+    "azimuth only, -450 for a 450-degree rotor); a Yaesu control box with Idiom Press's "
+    "RotorCard fitted is rotorcard",
     "hygain": "a Hy-Gain control box with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own "
     "DCU-1 is dcu1",
     "idiom": "Idiom Press's boards: rotorez (Rotor-EZ) or rotorcard (RotorCard)",
@@ -36,6 +38,13 @@ BRANDS = {
     "ve5fp": "the SatEL controller (VE5FP) is satel",
     "greenheron": "Green Heron's RT-21 is rt21 (one box per rotor)",
     "m2": "M2's RC2800 is rc2800 (az/el) or rc2800-az (azimuth only)",
+    "k3ng": "K3NG's Arduino controller speaks GS-232: gs232b (gs232b-az for azimuth only), or "
+    "easycomm2 in satellite mode",
+    "satnogs": "a SatNOGS rotator controller speaks Easycomm: easycomm2 (easycomm3 with "
+    "firmware that has it)",
+    "prosistel": "Prosistel's D box is prosistel (azimuth) or prosistel-el (elevation), its "
+    "Combi-Track prosistel-combi",
+    "combitrack": "Prosistel's Combi-Track is prosistel-combi",
 }
 
 

@@ -154,9 +154,9 @@ class MqttSettings(_Strict):
     protocol: Literal["auto", "5", "3.1.1"] = Field(
         "auto",
         description='the MQTT version: "auto" tries MQTT 5 and falls back to 3.1.1 when the '
-        'broker answers "Unsupported protocol version" (said once, as a warning, and in '
-        'B/bridge/info); "5" or "3.1.1" forces one (a broker that closes the connection on '
-        'MQTT 5, RabbitMQ 3 or amqtt, needs "3.1.1"). '
+        'broker answers "Unsupported protocol version", or closes MQTT 5 connections and '
+        "accepts an MQTT 3.1.1 one (RabbitMQ 3, amqtt); said once, as a warning, and in "
+        'B/bridge/info. "5" or "3.1.1" forces one. '
         "Under 3.1.1 retained commands are recognised only when the broker replays them "
         "(docs/brokers.md)",
         examples=["3.1.1"],

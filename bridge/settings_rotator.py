@@ -12,18 +12,25 @@ Rules:
    rotator that could not work is a configuration error naming the key.
 3. The port is a name, never opened here: loading a configuration touches no hardware
    (check-config reports a port that does not exist as a warning).
+4. A composite rotator (protocols/axes.py) gives ``azimuth`` and ``elevation`` tables, each a
+   model and a port, in place of ``model`` and ``port``: its ``model`` reads ``AZ+EL`` and its
+   ``port`` both ports; a model that cannot drive its axis, one port for both, or ``model``
+   or ``port`` beside the tables is refused naming the key.
 """
 
 from __future__ import annotations
 
 import re
+from typing import Any, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from bridge import settings_defaults as defaults
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
+from bridge.protocols.axes import Axis, axis_spec, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
+from bridge.settings_bands import BandFields
 from bridge.settings_errors import unknown_model
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_mqtt import check_topic
@@ -31,11 +38,76 @@ from bridge.settings_pointing import PointingFields
 from bridge.settings_wind import WindFields
 
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
+# the controllers' protocols offered to programs: each has <key>_port, <key>_bind, <key>_pty
+# (gs232/'s EMULATIONS has the same keys)
+EMULATION_KEYS = ("gs232", "easycomm", "dcu1")
 MODEL_DEFAULT = "the model's (see the model table)"
 
 
-class RotatorSettings(PointingFields, LoggerFields, WindFields):
+class AxisSettings(BaseModel):
+    """A rotator whose azimuth and elevation are turned by two controllers on two ports (an
+    RT-21 for the azimuth and a GS-232B box for the elevation, say) gives an `azimuth` and an
+    `elevation` table in place of `model` and `port`, each with these keys. The two are one
+    rotator: one status, one judge of every command, and one STOP stops both."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    model: str = Field(
+        description="the controller that turns this axis (any model for the azimuth; for the "
+        "elevation an az/el model, or rt21 or prosistel-el)",
+        examples=["rt21"],
+    )
+    port: str = Field(
+        description="that controller's serial port, not the other axis's",
+        examples=["/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"],
+    )
+    baud: int | None = Field(
+        None,
+        gt=0,
+        description="that controller's line rate, as set on it",
+        examples=[9600],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
+
+    @field_validator("model")
+    @classmethod
+    def _model(cls, v: str) -> str:
+        if v not in REGISTRY:
+            raise ValueError(unknown_model(v, list(REGISTRY)))  # settings_errors.py rule 4
+        return v
+
+
+class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     """``[[rotators]]``: one table per rotator controller (at least one)."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _composite(cls, data: Any) -> Any:
+        """Rule 4: the tables stand for ``model`` and ``port``."""
+        if not isinstance(data, dict):
+            return data
+        if data.get("azimuth") is None and data.get("elevation") is None:
+            return data
+        tables = []
+        for axis in Axis:
+            table = data.get(axis.value)
+            if not isinstance(table, dict) or "model" not in table or "port" not in table:
+                raise ValueError(
+                    f"{axis.value}: a composite rotator needs both tables, each "
+                    '{ model = "...", port = "..." }'
+                )
+            tables.append(table)
+        az, el = tables
+        model, port = f"{az['model']}+{el['model']}", f"{az['port']}+{el['port']}"
+        for key, derived in (("model", model), ("port", port), ("baud", None)):
+            if data.get(key) not in (None, derived):  # (what a dump of these settings says)
+                raise ValueError(
+                    f"{key} is given with azimuth/elevation tables: a composite rotator names "
+                    "its model, port and baud in each table"
+                )
+        if az["port"] == el["port"]:
+            raise ValueError(f"elevation.port: {el['port']} is the azimuth's port too")
+        return {**data, "model": model, "port": port}
 
     id: str = Field(
         description="a short name for topics and environment overrides: lower-case letters, "
@@ -49,14 +121,31 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
         json_schema_extra={"unset": "the id"},
     )
     model: str = Field(
-        description="the controller: " + ", ".join(sorted(REGISTRY)) + " (see the model table)",
+        description="the controller: " + ", ".join(sorted(REGISTRY)) + " (see the model "
+        "table); not with azimuth/elevation tables",
         examples=["rotorez"],
     )
     port: str = Field(
         description="the serial port; a /dev/serial/by-id/ name survives re-plugging "
         "(`rotor-bridge ports` lists them). It need not exist when the bridge starts: the "
-        "bridge keeps trying to open it.",
+        "bridge keeps trying to open it. Not with azimuth/elevation tables",
         examples=["/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A1B2C3-if00-port0"],
+    )
+    azimuth: AxisSettings | None = Field(
+        None,
+        description="a composite rotator (its azimuth from one controller, its elevation from "
+        "another): the azimuth's box, `{ model = ..., port = ... }`, with elevation, in place "
+        "of model and port; any model",
+        examples=[{"model": "rt21", "port": "/dev/ttyUSB0"}],
+        json_schema_extra={"unset": "model and port name one controller"},
+    )
+    elevation: AxisSettings | None = Field(
+        None,
+        description="the elevation's box of a composite rotator, a model that reports where "
+        "it points: an az/el box used for its elevation (its azimuth is never turned), or an "
+        "rt21 box on the elevation rotor",
+        examples=[{"model": "gs232b", "port": "/dev/ttyUSB1"}],
+        json_schema_extra={"unset": "model and port name one controller"},
     )
     baud: int | None = Field(
         None,
@@ -255,6 +344,37 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
         examples=["/tmp/rotor-easycomm"],
         json_schema_extra={"unset": "no Easycomm pty"},
     )
+    gs232_replies: Literal["A", "B"] = Field(
+        "B",
+        description="the GS-232 port's and pty's readings: `B` as a GS-232B (`AZ=120  EL=000`: "
+        "PstRotator, `rotctl -m 603`), `A` as a GS-232A (`+0120+0000`: ARSVCOM, PstRotatorAz "
+        "set to GS-232A, `rotctl -m 601`)",
+        examples=["A"],
+    )
+    dcu1_port: int | None = Field(
+        None,
+        ge=1,
+        le=65535,
+        description="a TCP port speaking the Hy-Gain DCU-1 / Idiom Rotor-EZ protocol for this "
+        "rotator (DXView, DXbase, WriteLog, Win-EQF through a virtual COM port; `rotctl -m 401 "
+        "-r 127.0.0.1:4537`); one port per rotator",
+        examples=[4537],
+        json_schema_extra={"unset": "no DCU-1 listener"},
+    )
+    dcu1_bind: str = Field(
+        "127.0.0.1",
+        description="the address the DCU-1 port listens on. It has no authentication: anyone "
+        "who can reach it can turn the antenna (check-config warns off loopback)",
+        examples=["0.0.0.0"],
+    )
+    dcu1_pty: str | None = Field(
+        None,
+        min_length=1,
+        description="DCU-1 / Rotor-EZ on a pseudo-terminal (`rotctl -m 401 -r /tmp/rotor-dcu1`, "
+        "a logger under Wine), linked at this path like gs232_pty",
+        examples=["/tmp/rotor-dcu1"],
+        json_schema_extra={"unset": "no DCU-1 pty"},
+    )
     health_baseline_moves: int = Field(
         20,
         ge=3,
@@ -286,6 +406,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
     @field_validator("model")
     @classmethod
     def _model(cls, v: str) -> str:
+        if "+" in v and all(part in REGISTRY for part in v.split("+", 1)):
+            return v  # a composite's (rule 4; _limits checks that the tables are there)
         if v not in REGISTRY:
             raise ValueError(unknown_model(v, list(REGISTRY)))  # settings_errors.py rule 4
         return v
@@ -297,6 +419,12 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
 
     @model_validator(mode="after")
     def _limits(self) -> RotatorSettings:
+        if ("+" in self.model) != (self.azimuth is not None):
+            raise ValueError(f"unknown model {self.model!r}; see the model table")
+        for axis, table in zip(Axis, self.axes, strict=False):  # () for one controller
+            why = can_drive(REGISTRY[table.model], axis)
+            if why is not None:
+                raise ValueError(f"{axis.value}.model: {why}; it cannot turn the {axis.value}")
         spec = self.spec
         lo, hi = self.effective_az_limits
         if not spec.az_min_deg <= lo < hi <= spec.az_max_deg:
@@ -336,7 +464,31 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields):
 
     @property
     def spec(self) -> ModelSpec:
+        if self.azimuth is not None and self.elevation is not None:  # rule 4
+            return composite_spec(REGISTRY[self.azimuth.model], REGISTRY[self.elevation.model])
         return REGISTRY[self.model]
+
+    @property
+    def axes(self) -> tuple[AxisSettings, ...]:
+        """A composite's (azimuth, elevation) boxes; () for one controller."""
+        if self.azimuth is None or self.elevation is None:
+            return ()
+        return self.azimuth, self.elevation
+
+    @property
+    def ports(self) -> list[str]:
+        """The serial ports this rotator opens."""
+        return [t.port for t in self.axes] or [self.port]
+
+    def axis_settings(self, axis: Axis) -> RotatorSettings:
+        """A composite's one box as a rotator of its own (engine/composite.py): its model, port
+        and rate, with every other key of this rotator's."""
+        table = self.axes[0 if axis is Axis.AZIMUTH else 1]
+        own = {"model": table.model, "port": table.port, "baud": table.baud}
+        return self.model_copy(update={**own, "azimuth": None, "elevation": None})
+
+    def axis_spec(self, axis: Axis) -> ModelSpec:
+        return axis_spec(REGISTRY[self.axes[0 if axis is Axis.AZIMUTH else 1].model], axis)
 
     @property
     def pointing(self) -> Pointing:

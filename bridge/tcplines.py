@@ -1,4 +1,4 @@
-"""The TCP side shared by the text front ends (rotctld, GS-232, Easycomm): one listener per
+"""The TCP side shared by the text front ends (rotctld, GS-232, Easycomm, DCU-1): one listener per
 rotator and protocol, one thread per client, every reply in one send, and a budget per client so
 that no client, nor all of them together, can starve the serial-lines thread of the GIL.
 
@@ -35,7 +35,7 @@ Rules:
    client waiting, or dropped it): one its peer already closed is closed with no thread and no
    budget; one over its peer's budget waits in the accept loop, no thread, until the budget
    allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
-   line (CR or LF) unread goes at once, ahead of the budget: it may be a stop. At most
+   (rule 6) unread goes at once, ahead of the budget: it may be a stop. At most
    ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
    part of a line before one that has sent nothing yet (it may be about to) (said at most
    once per LOG_S). accept() out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said
@@ -51,6 +51,8 @@ Rules:
    (a read that finishes one counts its own bytes at most), so commands sent back to back,
    however the reads cut them, never add up. A well-behaved client's stop is read at its first
    wake-up: its budget is its own.
+6. A command ends at CR or LF unless the front end names its own ends (``ends``: a DCU-1's
+   ``;`` as well); rules 2, 3 and 5 look for those.
 """
 
 from __future__ import annotations
@@ -80,6 +82,7 @@ READ_BYTES = 64  # at most this much read, and so at most this many commands run
 RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of as many
 REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
 MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
+LINE_ENDS = b"\r\n"  # what ends a command, unless a front end names its own (rule 6)
 LOG_S = 10.0  # rule 5's log lines, at most this often a port
 ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
 PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
@@ -149,8 +152,9 @@ def _alive(conn: socket.socket) -> bool:
         return False
 
 
-def _line_ready(conn: socket.socket) -> bool:
-    """Rules 3 and 5: True if a complete command line (CR or LF) waits unread in the kernel."""
+def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
+    """Rules 3 and 5: True if a complete command (ended by one of ``ends``) waits unread in
+    the kernel."""
     try:
         if conn.gettimeout():  # a client's thread set one: recv() would poll for it first
             with socket.socket(fileno=os.dup(conn.fileno())) as peek:  # no timeout: at once
@@ -159,7 +163,7 @@ def _line_ready(conn: socket.socket) -> bool:
             data = conn.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
     except OSError:
         return False
-    return b"\r" in data or b"\n" in data
+    return any(bytes([end]) in data for end in ends)
 
 
 def _reset(conn: socket.socket) -> None:
@@ -212,14 +216,17 @@ class LineServer:
         rate_bytes_s: float = RATE_BYTES_S,
         read_bytes: int = READ_BYTES,
         max_unfinished: int = MAX_UNFINISHED,
+        ends: bytes = LINE_ENDS,
     ) -> None:
         """``peer_session``, if given, makes each client's session knowing its address (who
-        sent a command: model.Origin) instead of ``session``. The last three: rule 5.
+        sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
+        and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6).
         ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
         of ``max_clients`` (at least 1) unless given."""
         self._rate_bytes_s = rate_bytes_s
         self._read_bytes = read_bytes
         self._max_unfinished = max_unfinished
+        self._ends = ends
         self._paused_log = RareLog()
         self._dropped_log = RareLog()
         self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
@@ -383,7 +390,7 @@ class LineServer:
             if not _alive(conn):
                 del waiting[conn]
                 conn.close()
-            elif _line_ready(conn):  # a complete command: ahead of the budget
+            elif _line_ready(conn, self._ends):  # a complete command: ahead of the budget
                 peer = waiting.pop(conn)
                 conn.setblocking(True)
                 self._admit(conn, peer)
@@ -413,7 +420,7 @@ class LineServer:
             return
         now = self._clock()
         queued = any(p[0] == peer[0] for p in waiting.values())
-        ready = _line_ready(conn)  # a complete command waiting: ahead of the budget
+        ready = _line_ready(conn, self._ends)  # a complete command waiting: ahead of the budget
         if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
             conn.setblocking(True)
             self._admit(conn, peer)
@@ -421,7 +428,7 @@ class LineServer:
         if len(waiting) >= self._max_clients:  # the newest without a complete command goes
             partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
             silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
-            gone = next((c for c in partial + silent if not _line_ready(c)), conn)
+            gone = next((c for c in partial + silent if not _line_ready(c, self._ends)), conn)
             if gone is conn:
                 _reset(conn)
             else:
@@ -452,7 +459,7 @@ class LineServer:
         held: set[str] = set()
         for conn, peer in list(waiting.items()):
             if conn not in sel.get_map():  # it has sent bytes: see whether a line is complete
-                if _line_ready(conn):
+                if _line_ready(conn, self._ends):
                     del waiting[conn]
                     conn.setblocking(True)
                     self._admit(conn, peer)
@@ -506,7 +513,9 @@ class LineServer:
             return True, ""
         else:
             why = f"all {self._max_clients} slots"
-        candidates = [(c, k) for c, k in pool if k.evictable(now) and not _line_ready(c)]
+        candidates = [
+            (c, k) for c, k in pool if k.evictable(now) and not _line_ready(c, self._ends)
+        ]
         if not candidates:
             return False, f"{why} taken, every client mid-command"
         fresh = [(c, k) for c, k in candidates if not k.done]
@@ -569,7 +578,7 @@ class LineServer:
         session = self._session() if self._peer_session is None else self._peer_session(peer[0])
         with self._lock:
             me = self._clients.get(conn)  # None: already dropped to make room
-        guard = HttpGuard()
+        guard = HttpGuard(self._ends)
         budget = Budget(self._rate_bytes_s, self._clock())
         unfinished = 0  # rule 5: bytes since the client last finished a command
         over = False  # rule 5: over its budget now (said once each time)
@@ -656,6 +665,7 @@ class LineServer:
 
 
 _REQUEST_LINE = re.compile(rb"^[A-Za-z]{3,10} \S* ?HTTP/\d(\.\d)?\s*$")
+_REQUEST_START = re.compile(rb"[A-Za-z]{3,10} ")  # a method and its space: a request line begun
 _HEADER = re.compile(rb"^[A-Za-z][A-Za-z0-9-]{1,40}:[ \t]")
 HTTP_FIRST_LINE_MAX = 8192
 
@@ -665,12 +675,19 @@ class HttpGuard:
     first line is an HTTP request line, or that sends a header line (``Host: ...``) at any
     point, is HTTP and nothing of it may run (a web page cross-talking to a loopback port:
     ``KHTML`` in a User-Agent would park the rotor). ``feed`` returns the bytes the parser may
-    have now; ``http`` names what was seen."""
+    have now; ``http`` names what was seen.
 
-    def __init__(self) -> None:
+    ``ends`` are the bytes that end a command (rule 6). An end other than CR or LF (a DCU-1's
+    ``;``) ends the first line too, unless what came before it begins like a request line (a
+    method and a space, which no such command has): then it is held to its CR or LF as an
+    HTTP request line is, so ``GET /;AP1120;AM1; HTTP/1.1`` is refused whole."""
+
+    def __init__(self, ends: bytes = LINE_ENDS) -> None:
         self.http: str | None = None
         self._head: bytes | None = b""  # the first line while it is incomplete; None after
         self._line = b""  # the current line's start, for the header check
+        self._other_ends = bytes(e for e in ends if e not in b"\r\n")
+        self._request_like = False  # the first line began as a request line: CR or LF ends it
 
     @property
     def holding(self) -> bool:
@@ -682,6 +699,8 @@ class HttpGuard:
             self._head += data
             # a GS-232 client ends its lines with CR alone; an HTTP request line ends in CR LF
             ended = b"\n" in data or b"\r" in data  # not in what came before: it was held
+            if not ended and self._other_ends and not self._request_like:
+                ended = self._ended_by_other(len(self._head) - len(data))
             if not ended and len(self._head) < HTTP_FIRST_LINE_MAX:
                 return b""
             data, self._head = self._head, None
@@ -695,3 +714,15 @@ class HttpGuard:
                 self.http = f"an HTTP header ({line.split(b':')[0].decode('ascii', 'replace')})"
                 return b""
         return data
+
+    def _ended_by_other(self, new_from: int) -> bool:
+        """Whether an end other than CR or LF, arrived at or after ``new_from``, ends the held
+        first line (the class's last paragraph)."""
+        assert self._head is not None
+        cuts = [i for e in self._other_ends if (i := self._head.find(bytes([e]), new_from)) >= 0]
+        if not cuts:
+            return False
+        if _REQUEST_START.match(self._head[: min(cuts)]):
+            self._request_like = True
+            return False
+        return True

@@ -1,13 +1,16 @@
 """A rotator's settings turned into the engine's configuration (engine/worker.py WorkerConfig):
 the one place where the user's keys meet the engine's terms, for the app and for the tests that
 build a rotator of their own: the speeds, limits, timings and the judge's terms resolved once,
-health's, tracking's, following's and the wind park's terms. Pure: settings in, frozen engine
-configuration out.
+health's, tracking's, following's and the wind park's terms; and a ``[[groups]]`` table as the
+group the MQTT service turns (mqtt/groups.py). Pure: settings in, frozen configuration out.
 
 Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
    settings_defaults.py derives for the model (check-config shows the same values).
 2. Wind speeds are km/h from here on, whatever the rotator's ``wind_unit``.
+3. A composite rotator's two boxes (engine/composite.py) are each configured as a rotator of
+   their own model, port and rate, with every other key of the rotator's, its id, and its
+   judge's terms: the azimuth box's without elevation (protocols/axes.py rule 1).
 """
 
 from __future__ import annotations
@@ -17,7 +20,9 @@ from dataclasses import replace
 from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.engine.motion import MotionConfig
 from bridge.engine.worker import WorkerConfig
-from bridge.settings import RotatorSettings
+from bridge.mqtt.groups import Group, Member
+from bridge.protocols.axes import Axis
+from bridge.settings import GroupSettings, RotatorSettings
 from bridge.sky import Sky
 
 
@@ -67,7 +72,9 @@ def worker_config(
             step_deg=r.effective_track_step_deg,
             at_los=r.track_at_los,
         ),
-        follow=replace(follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx),
+        follow=replace(
+            follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx, bands=tuple(r.bands)
+        ),
         wind=wind_config(r),
     )
 
@@ -82,3 +89,26 @@ def wind_config(r: RotatorSettings) -> WindConfig | None:
     release = r.wind_kmh(r.wind_release_below) or above
     hold_s, silent_s = r.wind_hold_min * 60.0, r.wind_silent_min * 60.0
     return WindConfig(above, release, hold_s, (park_az, r.park_el_deg), silent_s, r.wind_topic)
+
+
+def group_of(g: GroupSettings) -> Group:
+    """A ``[[groups]]`` table as the MQTT service's group (members in the table's order)."""
+    members = tuple(Member(rid, g.offsets.get(rid, 0.0), g.limits.get(rid)) for rid in g.rotators)
+    return Group(g.id, g.label, members)
+
+
+def axis_configs(
+    r: RotatorSettings, sky: Sky | None = None, follow: FollowConfig | None = None
+) -> tuple[WorkerConfig, WorkerConfig] | None:
+    """A composite rotator's (azimuth, elevation) boxes (rule 3); None for one controller."""
+    if not r.axes:
+        return None
+    boxes = []
+    for axis in Axis:
+        spec = r.axis_spec(axis)
+        own = r.axis_settings(axis)
+        cfg = worker_config(own, sky, follow)
+        pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
+        motion = replace(cfg.motion, spec=spec)
+        boxes.append(replace(cfg, spec=spec, motion=motion, pointing=pointing))
+    return boxes[0], boxes[1]

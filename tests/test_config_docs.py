@@ -29,6 +29,7 @@ from bridge.remote.settings import RemoteSettings
 from bridge.settings import (
     ConfigError,
     DxClusterSettings,
+    GroupSettings,
     HomeAssistantSettings,
     MqttSettings,
     RotatorSettings,
@@ -40,6 +41,7 @@ from bridge.settings import (
     WsjtxSettings,
     settings_from,
 )
+from bridge.settings_rotator import AxisSettings
 from tests.support import ROOT
 
 DOC = ROOT / "docs" / "configuration.md"
@@ -147,6 +149,8 @@ TABLES: list[tuple[tuple[str, ...], type[BaseModel]]] = [
     (("wsjtx",), WsjtxSettings),
     (("dxcluster",), DxClusterSettings),
     (("rotators",), RotatorSettings),
+    (("groups",), GroupSettings),
+    (("rotators", "azimuth"), AxisSettings),
 ]
 
 
@@ -162,8 +166,19 @@ def example_documents() -> list[tuple[str, dict[str, Any]]]:
             dotted = ".".join((*place, name))
             keys = {name: value, **COMPANIONS.get(dotted, COMPANIONS.get(name, {}))}
             doc: dict[str, Any] = {"rotators": [{"id": "hf", "model": "md01", "port": "/x"}]}
+            if model is AxisSettings:  # a composite rotator's table
+                box = {"model": "rt21", "port": "/x", **keys}
+                el = {"model": "gs232b", "port": "/y"}
+                docs.append((dotted, {"rotators": [{"id": "hf", "azimuth": box, "elevation": el}]}))
+                continue
             target = doc["rotators"][0] if place == ("rotators",) else doc
-            for part in place if place != ("rotators",) else ():
+            if place == ("groups",):  # its examples name two rotators, upper and lower
+                doc["rotators"] = [
+                    {"id": rid, "model": "rotorez", "port": f"/{rid}"} for rid in ("upper", "lower")
+                ]
+                target = {"id": "stack", "rotators": ["upper", "lower"]}
+                doc["groups"] = [target]
+            for part in place if place not in (("rotators",), ("groups",)) else ():
                 target = target.setdefault(part, {})
             target.update(keys)
             docs.append((".".join((*place, name)), doc))
@@ -185,7 +200,7 @@ def test_the_example_configuration_loads_and_points_to_the_reference() -> None:
     assert settings.rotators[0].model == "rotorez"
     assert "docs/configuration.md" in text
     keys = re.findall(r"^#? ?([a-z_]+) = ", text, re.M)
-    assert len(keys) <= 20, keys  # the keys people change; the rest is in the reference
+    assert len(keys) <= 22, keys  # the keys people change (a group too); the rest: the reference
 
 
 def test_the_example_lines_are_valid_when_uncommented() -> None:
@@ -197,6 +212,7 @@ def test_the_example_lines_are_valid_when_uncommented() -> None:
     assert settings.station.position is not None and settings.mqtt.username == "rotor"
     assert (tower.rotctld_port, tower.az_offset_deg, tower.park_az_deg) == (4533, 180, 0)
     assert yagi.model == "rot2prog"
+    assert [(g.id, g.rotators) for g in settings.groups] == [("both", ["tower", "yagi"])]
 
 
 def test_what_the_example_says_about_the_client_id_is_true() -> None:

@@ -106,12 +106,13 @@ def test_user_docs_carry_no_issue_numbers_or_dates(doc: Path) -> None:
 # docs/mqtt.md against the code
 # ---------------------------------------------------------------------------------------------
 def built_topics() -> set[str]:
-    """Every topic the topics module builds, for base topic ``B``, one rotator at ``R`` and the
-    discovery prefix ``homeassistant``; a method's arguments stand as ``<name>`` placeholders.
-    Wildcard filters are left out (they are made of these topics)."""
-    topics = Topics("B", {"r": "R"})
+    """Every topic the topics module builds, for base topic ``B``, one rotator at ``R``, one
+    group at ``G`` and the discovery prefix ``homeassistant``; a method's arguments stand as
+    ``<name>`` placeholders. Wildcard filters are left out (they are made of these topics)."""
+    topics = Topics("B", {"r": "R"}, {"g": "G"})
     found: set[str] = set()
-    for obj in (topics, topics.rotator("r"), DiscoveryTopics("homeassistant")):
+    groups = topics.group("g")
+    for obj in (topics, topics.rotator("r"), groups, DiscoveryTopics("homeassistant")):
         for name, attr in inspect.getmembers(type(obj)):
             if name.startswith("_"):
                 continue

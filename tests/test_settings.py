@@ -154,7 +154,8 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
 NOT_APPLICABLE = {"rotctld_port", "park_az_deg", "park_el_deg", "pst_udp_port", "n1mm_rotor_name"}
 NOT_APPLICABLE |= {"gs232_port", "easycomm_port"}
 NOT_APPLICABLE |= {"wind_topic", "wind_park_above", "wind_release_below", "wind_park_az_deg"}
-NOT_APPLICABLE |= {"gs232_pty", "easycomm_pty"}
+NOT_APPLICABLE |= {"gs232_pty", "easycomm_pty", "dcu1_port", "dcu1_pty"}
+NOT_APPLICABLE |= {"azimuth", "elevation"}  # one controller, no composite's tables
 AZ_ONLY_NULLS = {"el_min_deg", "el_max_deg", "el_speed_deg_s"}  # no elevation axis
 
 
@@ -397,7 +398,7 @@ TWO = (
     ("a", "b", "message"),
     [
         ("pst_udp_port = 12000", "pst_udp_port = 12000", "share one pst_udp_port"),
-        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "one n1mm_rotor_name on one N1MM"),
+        ('n1mm_rotor_name = "T"', 'n1mm_rotor_name = "T"', "n1mm_rotor_name 'T' on one N1MM"),
         ("pst_udp_port = 12040", 'n1mm_rotor_name = "T"', "or it is an n1mm_udp_port"),
         ('n1mm_report_to = "13010"', "", r"rotators\[0\].*n1mm_report_to.*host:port"),
         ('n1mm_rotor_name = " T"', "", r"rotators\[0\].*n1mm_rotor_name"),
@@ -535,12 +536,17 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("rot2prg", "did you mean rot2prog?"),
         ("yaesu", "with Idiom Press's RotorCard fitted is rotorcard"),
         ("Yaesu G-800DXA", "with Idiom Press's RotorCard fitted is rotorcard"),
+        ("yaesu", "through a GS-232A or GS-232B box is gs232a or gs232b"),
+        ("K3NG", "speaks GS-232: gs232b"),
+        ("satnogs", "speaks Easycomm: easycomm2"),
         ("hy-gain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
         ("hygain", "with Idiom Press's Rotor-EZ is rotorez; Hy-Gain's own DCU-1 is dcu1"),
         ("spid", "rot2prog, rot1prog (azimuth only) or md01"),
         ("ve5fp", "is satel"),
         ("Green Heron", "RT-21 is rt21"),
         ("rt-21", "did you mean rt21?"),
+        ("Prosistel PST-61D", "D box is prosistel (azimuth) or prosistel-el (elevation)"),
+        ("Combi-Track", "Combi-Track is prosistel-combi"),
         ("M2", "RC2800 is rc2800 (az/el) or rc2800-az"),
     ],
 )

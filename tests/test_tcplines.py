@@ -46,6 +46,32 @@ def test_a_first_line_with_no_end_is_released_at_the_limit() -> None:
     assert len(guard.feed(b"x")) == HTTP_FIRST_LINE_MAX
 
 
+def test_a_dcu1_command_ended_by_a_semicolon_is_released_at_once() -> None:
+    guard = HttpGuard(b"\r\n;")
+    assert guard.feed(b"AI1") == b""  # held: it might still become a request line
+    assert guard.feed(b";") == b"AI1;" and guard.http is None
+    assert guard.feed(b"AP1120;AM1;") == b"AP1120;AM1;"
+    assert HttpGuard(b"\r\n;").feed(b";") == b";"  # a stop as the first byte goes at once
+
+
+@pytest.mark.parametrize(
+    "cuts",
+    [
+        (b"GET /;AP1120;AM1; HTTP/1.1\r\n",),
+        (b"GET /;AP1", b"120;AM1; HTT", b"P/1.1\r\n"),
+        (b"POST /x;", b";;; HTTP/1.0\n"),
+    ],
+)
+def test_a_request_line_with_semicolons_is_held_to_its_end_and_refused(
+    cuts: tuple[bytes, ...],
+) -> None:
+    """A web page's request for ``/;AP1120;AM1;`` on a DCU-1 port: its ``;`` end no line
+    while the line began as a request line, so nothing of it reaches the parser."""
+    guard = HttpGuard(b"\r\n;")
+    assert [guard.feed(cut) for cut in cuts] == [b""] * len(cuts)
+    assert guard.http == "an HTTP request line"
+
+
 # -- rule 5: nothing a client sends starves a stop ------------------------------------------
 
 

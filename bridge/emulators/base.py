@@ -18,8 +18,9 @@ Rules:
    latest one seen.
 3. Bytes leave at line rate: a byte takes `bits_per_byte / baud` seconds (10 bits: start, 8 data,
    stop) and starts only when the previous byte has finished (`PacedLine`).
-4. Ground truth (`RotatorState`, the frame log) is what tests assert on; it is never what the
-   device would report over the wire (that one is noisy, rounded, maybe silent).
+4. Ground truth (`RotatorState`, the frame log and the motion events, kept by `Recorder`) is
+   what tests assert on; it is never what the device would report over the wire (that one is
+   noisy, rounded, maybe silent).
 """
 
 from __future__ import annotations
@@ -96,8 +97,9 @@ class Responder(Protocol):
     def unjam(self, now: float) -> None: ...
 
 
-class FrameLog:
-    """What every emulator keeps for the tests (rule 4): its frame log and its motion events."""
+class Recorder:
+    """Rule 4: what a box keeps for tests, the frames it understood (with their outcomes) and
+    what its rotor did; the box's own class fills ``_log`` and ``_events``."""
 
     _log: list[LoggedFrame]
     _events: list[MotionEvent]
@@ -111,7 +113,7 @@ class FrameLog:
         return self._events
 
     def frames(self, *outcomes: str) -> list[LoggedFrame]:
-        """Logged frames, optionally only those with one of `outcomes`."""
+        """Logged frames; only those with one of ``outcomes`` if any are named."""
         wanted = set(outcomes)
         return [f for f in self._log if not wanted or f.outcome in wanted]
 

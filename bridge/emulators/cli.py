@@ -77,6 +77,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="send the position unasked after this many quiet seconds (RC2800)",
     )
     parser.add_argument(
+        "--streaming",
+        action="store_true",
+        help="send the position unasked until told STX u S CR, as some boxes do (Prosistel)",
+    )
+    parser.add_argument(
+        "--soft-stop-s",
+        type=float,
+        help="how long the rotor runs on after a soft stop, its PWM ramp (Prosistel; default 0)",
+    )
+    parser.add_argument(
         "--log-frames", action="store_true", help="print every received frame on stderr"
     )
 
@@ -117,6 +127,8 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
             opts.update(decimals=args.decimals, version=args.firmware_version)
         if args.model.startswith("rc2800"):
             opts.update(echo=args.echo or None, stream_s=args.stream_s)
+        if args.model.startswith("prosistel"):
+            opts.update(streaming=args.streaming or None, soft_stop_s=args.soft_stop_s)
     return {k: v for k, v in opts.items() if v is not None}
 
 

@@ -151,7 +151,7 @@ class EasycommController(TwoAxes):
     def power_cycle(self, now: float) -> None:
         now = self._update(now)
         self._halt(now, "power off")
-        self._rx.clear()
+        self._rx_line.clear()
         self._tx.clear()
         self._event(now, "power on")
 

@@ -153,7 +153,7 @@ class Gs232(TwoAxes):
     def power_cycle(self, now: float) -> None:
         now = self._update(now)
         self._halt(now, "power off")
-        self._rx.clear()
+        self._rx_line.clear()
         self._tx.clear()
         self._range_deg = self.spec.az_range_deg
         self._set_level(4, now)

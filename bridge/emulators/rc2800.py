@@ -150,7 +150,7 @@ class Rc2800(TwoAxes):
     def power_cycle(self, now: float) -> None:
         now = self._update(now)
         self._halt(now, "power off")
-        self._rx.clear()
+        self._rx_line.clear()
         self._tx.clear()
         self._selected = "A"
         self._quiet_since_s = now

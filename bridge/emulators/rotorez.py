@@ -49,7 +49,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, Recorder, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 from bridge.emulators.rotorez_models import (
     BEARING_OUTCOMES,
@@ -79,7 +79,7 @@ def _parse_bearing(digits: bytes) -> int | None:
     return value if value <= 360 else None
 
 
-class RotorEZ(FrameLog):
+class RotorEZ(Recorder):
     """One Rotor-EZ-family controller with its rotor. See the module rules."""
 
     def __init__(

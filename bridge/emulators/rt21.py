@@ -39,7 +39,7 @@ from __future__ import annotations
 import enum
 import re
 
-from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, Recorder, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 
 __all__ = ["PADDINGS", "Outcome", "Rt21"]
@@ -58,7 +58,7 @@ class Outcome(enum.StrEnum):
     REFUSED = "refused"  # unknown, malformed or out of range: dropped silently
 
 
-class Rt21(FrameLog):
+class Rt21(Recorder):
     """One RT-21 box with its rotor. See the module rules."""
 
     def __init__(

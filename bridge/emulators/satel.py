@@ -55,7 +55,7 @@ Rules:
 
 from __future__ import annotations
 
-from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, Recorder
 from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.satel_frames import (
     MEMORY_LIMIT,
@@ -80,7 +80,7 @@ DRIVER_JOG = "jog"
 _JOGS = {"u": ("el", 90.0), "d": ("el", 0.0), "r": ("az", 360.0), "l": ("az", 0.0)}
 
 
-class SatEL(FrameLog):
+class SatEL(Recorder):
     """One SatEL controller with its two rotors. See the module rules."""
 
     def __init__(

@@ -56,7 +56,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bridge.emulators.base import FrameLog, LoggedFrame, MotionEvent, PacedLine, RotatorState
+from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, Recorder, RotatorState
 from bridge.emulators.physics import DRIVER_COMMAND, Axis
 from bridge.emulators.spid_models import (
     COMMAND_BYTES,
@@ -93,7 +93,7 @@ class SpidState(RotatorState):
     resolution_ppd: int = 1
 
 
-class Spid(FrameLog):
+class Spid(Recorder):
     """One SPID controller with its az/el rotator. See the module rules."""
 
     def __init__(

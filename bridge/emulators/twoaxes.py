@@ -1,14 +1,15 @@
 """What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
-whatever its protocol: the panel, a jam, time passing, a stop, its lines in and its log
-(gs232.py, easycomm.py, rc2800.py).
+whatever its protocol: the panel, a jam, time passing, a stop, its lines in (gs232.py,
+easycomm.py, rc2800.py, prosistel.py); the frame log is base.Recorder's.
 
 Rules:
 1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
    event at the moment it happened, not when it was noticed.
 2. Turning by hand (``manual_rotate``) takes the box's whole range: azimuth 0..``az_top_deg``,
-   elevation 0..EL_TOP_DEG on a box with an elevation rotor; anything else is a ValueError.
+   elevation 0..``el_top_deg`` on a box with an elevation rotor; anything else is a ValueError.
 3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
-4. Commands come as lines ended by CR or LF; lines of nothing but spaces are no command.
+4. A line protocol's commands (``_lines``: GS-232, Easycomm, RC2800) come as lines ended by CR
+   or LF; lines of nothing but spaces are no command.
 5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
    other than CR, LF or CR LF, or an elevation start on a box without one is a ValueError),
    both axes at their start, nothing on the line.
@@ -19,13 +20,13 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from typing import Any
 
-from bridge.emulators.base import FrameLog, MotionEvent, PacedLine
+from bridge.emulators.base import MotionEvent, PacedLine, Recorder
 from bridge.emulators.physics import Axis
 
 EL_TOP_DEG = 180.0
 
 
-class TwoAxes(FrameLog):
+class TwoAxes(Recorder):
     """The axes' part of a box; the protocol's class sets the attributes below."""
 
     _az: Axis
@@ -35,7 +36,7 @@ class TwoAxes(FrameLog):
     baud: int
     line_ending: bytes
     _now_s: float
-    _rx: bytearray  # a line still coming
+    _rx_line: bytearray  # a line still coming
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
@@ -69,7 +70,7 @@ class TwoAxes(FrameLog):
         self.baud = int(baud)
         self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
         self._now_s = now
-        self._rx = bytearray()
+        self._rx_line = bytearray()
         self._log, self._events = [], []
         self._event(now, "power on")
         return spec
@@ -78,6 +79,11 @@ class TwoAxes(FrameLog):
     def az_top_deg(self) -> float:
         """Rule 2: the azimuth range the box is set to now."""
         return self._az.max_deg
+
+    @property
+    def el_top_deg(self) -> float:
+        """Rule 2: the elevation rotor's travel."""
+        return self._el.max_deg
 
     def press_brake(self, now: float) -> bool:
         """No brake on these: letting go of the turn switch, or a hand on the stop switch,
@@ -89,7 +95,7 @@ class TwoAxes(FrameLog):
         top = self.az_top_deg
         if not 0.0 <= az_deg <= top:
             raise ValueError(f"az {az_deg} outside 0..{top:g}")
-        if el_deg is not None and (not self.has_elevation or not 0.0 <= el_deg <= EL_TOP_DEG):
+        if el_deg is not None and (not self.has_elevation or not 0.0 <= el_deg <= self.el_top_deg):
             raise ValueError(f"el {el_deg} not possible on {self.name}")
         if self._az.manual_move(az_deg, now):
             self._event(now, "move", f"panel az to {az_deg:g}")
@@ -123,13 +129,13 @@ class TwoAxes(FrameLog):
         ``max_line`` (dropped where it stood) with True."""
         for value in data:
             if value in (0x0D, 0x0A):
-                line, self._rx = bytes(self._rx), bytearray()
+                line, self._rx_line = bytes(self._rx_line), bytearray()
                 if line.strip():
                     yield line, False
                 continue
-            self._rx.append(value)
-            if len(self._rx) > max_line:
-                line, self._rx = bytes(self._rx), bytearray()
+            self._rx_line.append(value)
+            if len(self._rx_line) > max_line:
+                line, self._rx_line = bytes(self._rx_line), bytearray()
                 yield line, True
 
     def _truth(self, now: float) -> dict[str, Any]:

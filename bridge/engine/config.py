@@ -28,6 +28,7 @@ class FollowConfig:
     station: tuple[float, float] | None = None  # (latitude, longitude); None: cannot follow
     hold_while_tx: bool = True  # a new partner's bearing waits for the transmission to end
     wsjtx: bool = False  # the [wsjtx] listener runs: there is something to follow
+    bands: tuple[str, ...] = ()  # the rotator's antenna's bands: followed on these alone
 
 
 @dataclass(frozen=True)

@@ -24,12 +24,14 @@ Rules:
    stop is written (the motion machine sees the reading, then the stop), or dropped if bytes
    came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
+7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
+   (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from bridge.engine import motion as mo
 from bridge.engine import slewing
@@ -42,7 +44,7 @@ from bridge.engine.sending import Sending
 from bridge.engine.slew import Slew
 from bridge.engine.stops import Stops
 from bridge.engine.targets import resolve
-from bridge.model import ErrorKind, MotionState, RotatorStatus, Target
+from bridge.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
 
 log = logging.getLogger(__name__)
@@ -74,12 +76,13 @@ Note = Report | Ends | Drop | Retry
 
 
 class Controller:
-    def __init__(self, cfg: WorkerConfig, options: dict[str, bool] | None) -> None:
-        self.cfg = cfg
+    def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
+        self.cfg = self.base_cfg = cfg  # rule 7
         self.link: Link | None = None
         self.motion = mo.Motion()
         self.answering = False
-        self.options = Options(options)
+        self.options = Options(options, cfg.spec.settings)
+        self.target_last = False  # the last command written was a target (motion.py rule 8)
         self.stops = Stops()
         self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
         self.version: str | None = None
@@ -145,6 +148,7 @@ class Controller:
         self.answering = not spec.can_report_position
         self._silence_reported = False
         self.options.connected(self.answering)
+        self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
             self.stops.owed = False
             log.info("%s: sending the stop that came while the port was closed", self.name)
@@ -213,6 +217,13 @@ class Controller:
                 if reply.reason is JunkReason.POWER_ON:
                     log.info("%s: power-on byte seen; options will be re-applied", self.name)
                     self.options.all_due()
+                    self._retune()
+                if reply.reason is JunkReason.REFUSED and self.target_last:  # motion.py rule 8
+                    self.target_last = False
+                    self.motion, events = mo.refused(self.motion, self.cfg.motion, now)
+                    self._motion_events(events, now)
+                    if events:
+                        continue  # the answer to the target, reported as such: no junk
                 link.add_junk(reply.data, now)
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now)
@@ -241,6 +252,7 @@ class Controller:
         if not self.answering:
             self.answering = True
             self.options.all_due()
+            self._retune()
             log.info("%s: controller answering", self.name)
         cfg = self.cfg
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
@@ -299,28 +311,50 @@ class Controller:
             enable = link.codec.encode_enable()
             if enable:
                 link.write(enable, now)
+                self.target_last = False
             self.options.enable_due = False
 
     def send_options(self, now: float, target_waits: bool) -> None:
-        """options.py rule 1."""
+        """options.py rule 1: each setting by its declaration's encoder (the codec's)."""
         link = self.link
         if link is None or not self.answering:
             return
-        for name, enabled in self.options.take(
-            mo.at_rest(self.motion), not target_waits and link.free(), now
-        ):
+        free = link.free()
+        line_free = free and link.slew is None and not link.stop_due
+        taken = self.options.take(
+            mo.at_rest(self.motion), not target_waits and free, now, line_free=line_free
+        )
+        for name, value in taken:
+            setting = self.cfg.spec.setting(name)
             try:
-                frame = link.codec.encode_option(name, enabled)
+                if setting is None:
+                    raise ValueError(name)
+                frame = setting.encode(setting.read(value))
             except (KeyError, ValueError):
                 log.warning("%s: option %r not supported; skipped", self.name, name)
                 continue
+            log.info("%s: setting %s sent (%r)", self.name, name, frame)
             link.write(frame, now)
+            self.target_last = False  # a refusal now may be the setting's
+        if taken:
+            self._retune()
+
+    def _retune(self) -> None:
+        """Rule 7: the speeds the settings in effect give the rotor."""
+        factor, base = self.options.speed_factor(), self.base_cfg
+        if factor == 1.0:
+            self.cfg = base
+            return
+        motion = replace(base.motion, nominal_speed_deg_s=base.motion.nominal_speed_deg_s * factor)
+        az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
+        self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
 
     def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
         """Write ``target`` as ``todo`` says (sending.py), try ``attempt``."""
         link, m, cfg = self.link, self.motion, self.cfg
         assert link is not None
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
+        self.target_last = True
         az, el = todo.wire
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)

@@ -38,6 +38,12 @@ Rules:
    What it keeps of them is bounded (the IGNORED_KEPT heard last) and said at most once per
    IGNORED_LOG_S, with the count of others since: a flood of forged instance names costs
    neither memory nor the disk.
+9. A rotator with ``bands`` (settings_bands.py) follows only while the program's dial frequency
+   is on one of them (bands.py): a grid heard on another band, on no amateur band, or with no
+   dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
+   bands again; the grid is then turned to. With following on for each rotator of a station
+   with one antenna per band, the one whose antenna is on the radio's band turns. A turn under
+   way when the band changes is not stopped (it was for the partner heard on its band).
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge import geo
+from bridge.bands import band_of_hz, describe_hz
 from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.parts import NOTHING, Proposal, Scene
@@ -71,6 +78,7 @@ class Heard:
     grid: str
     transmitting: bool
     instance: str = ""  # the program's Id (``WSJT-X``, ``JTDX``)
+    dial_hz: int | None = None  # the radio's dial frequency (rule 9)
 
 
 @dataclass(frozen=True)
@@ -103,6 +111,7 @@ class Follower:
         self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
         self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
         self._ignored_since = 0  # rule 8: others first heard since then
+        self._off_band: str | None = None  # rule 9: why the last grid was not turned to
 
     @property
     def on(self) -> bool:
@@ -111,7 +120,7 @@ class Follower:
     def start(self, follow: Follow, now: float) -> None:
         """Rule 1; rule 4: only a fresh status turns the rotor at once."""
         self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
-        self.ended, self._aimed = None, None
+        self.ended, self._aimed, self._off_band = None, None, None
         starter = follow.origin.operator if follow.origin is not None else None
         self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
         if now - self._heard_t > FRESH_S:
@@ -166,6 +175,23 @@ class Follower:
         own = scene.pending is not None and scene.pending.source is Source.WSJTX
         return self._aimed is not None and (own or scene.motion.state is MotionState.MOVING)
 
+    def _off_band_why(self, heard: Heard) -> tuple[str, str] | None:
+        """Rule 9: the band ``heard`` is on and why it is not for this rotator's antenna, or
+        None (it is)."""
+        bands = self._rig.follow.bands
+        if not bands:
+            return None
+        mine = ", ".join(bands)
+        if heard.dial_hz is None:
+            return "", f"following: WSJT-X gave no dial frequency, and this antenna is for {mine}"
+        band = band_of_hz(heard.dial_hz)
+        if band in bands:
+            return None
+        on = f"on {band}" if band is not None else "on no amateur band"
+        dial = describe_hz(heard.dial_hz)
+        why = f"following: WSJT-X's dial {dial} is {on}, and this antenna is for {mine}"
+        return band or "?", why
+
     def step(self, scene: Scene) -> Proposal:
         """Run by the session with its other rules, while the controller answers."""
         info, heard = self.info, self._heard
@@ -184,6 +210,15 @@ class Follower:
         if holding:  # rule 3
             self.info = replace(info, held=True)
             return Proposal(busy=True)
+        off_band = self._off_band_why(heard)
+        if off_band is not None:  # rule 9: reported once a band, until the dial comes back
+            band, why = off_band
+            said, self._off_band = self._off_band == band, band
+            if said:
+                return Proposal(busy=True)
+            what = f"follow {heard.call.strip() or '?'} {grid}"
+            return Proposal(error=Report(ErrorKind.REFUSED, why, what), busy=True)
+        self._off_band = None
         self._aimed = grid
         call = heard.call.strip() or None
         try:

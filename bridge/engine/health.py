@@ -44,6 +44,10 @@ Rules:
 8. The odometer and the motor-on time leave out a still potentiometer's jitter (a degree
    either way at every poll while it waits to start and while it settles): only steps beyond
    the noise band count, and the motor is on until the last of them.
+9. A speed is measured as the rotor's full speed: divided by the ``speed_factor`` of the
+   controller settings in effect (a GS-232 at X2 turns at half speed: options.py rule 3), so
+   a speed the user chose is no loss of speed; a move during which the factor changed gives
+   no speed.
 """
 
 from __future__ import annotations
@@ -77,6 +81,7 @@ class _Move:
     first_change_t: float | None = None
     stop_t: float | None = None
     from_rest: bool = True  # not a new target taken while turning (rule 3: no start delay)
+    factor: float | None = 1.0  # rule 9: the speed factor throughout (None: it changed)
 
 
 class Health:
@@ -100,6 +105,7 @@ class Health:
         self._changed_t: float | None = None
         self._stop_t: float | None = None
         self._seen: mo.Motion | None = None  # the motion last looked at
+        self.speed_factor = 1.0  # rule 9: the session's, from the settings in effect
 
     def rebuilt(self, cfg: WorkerConfig) -> Health:
         """Rule 7: a new part from this one's last memory, or off at its last report."""
@@ -122,6 +128,8 @@ class Health:
             return None  # rule 6: the motion is a new object whenever anything in it changed
         self._seen = m
         move = self._move
+        if move is not None and move.factor != self.speed_factor:
+            move.factor = None  # rule 9
         if m.changed_t is not None and m.changed_t != self._changed_t:
             self._changed_t = m.changed_t
             if move is not None and m.position_deg is not None:
@@ -153,6 +161,7 @@ class Health:
         if m.position_deg is None:
             return
         move = _Move(m.target_t, m.position_deg, m.el_position_deg, from_rest=from_rest)
+        move.factor = self.speed_factor
         move.target_az, move.target_el = m.target_deg, m.el_target_deg
         move.readings.append((m.target_t or m.changed_t or 0.0, m.position_deg, m.el_position_deg))
         if m.target_t is None:  # the front panel: it has moved already (rule 3: no delay)
@@ -193,6 +202,11 @@ class Health:
             left_t = _left_t(times, axes, values, self._noise_deg)
             if seen_turning and left_t is not None:  # not a silent slew's report (SatEL)
                 values["delay"] = max(0.0, left_t - move.target_t)
+        for key in [k for k in values if k.endswith(("_up", "_down"))]:  # rule 9
+            if move.factor is None:
+                del values[key]
+            else:
+                values[key] /= move.factor
         errors: list[float | None] = [None, None]
         at_rest = m.state is not MotionState.MOVING  # rule 3: not ended by a new target
         if at_rest and not stalled and move.stop_t is None and m.position_deg is not None:

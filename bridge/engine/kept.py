@@ -5,7 +5,7 @@ Rotator (rotator.py) owns one of each; the state file is written on its writer t
 
 Rules:
 1. An option remembered for this id that this model does not have (the id may have been
-   another model's) is logged and left out.
+   another model's), or a value its declaration refuses, is logged and left out.
 2. ``locked`` is the lock: the judge asks it, and nothing else keeps a copy that could differ
    (the session's comes from the mailbox, in the same step). Each lock word queues a save of
    the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
@@ -41,8 +41,8 @@ from collections.abc import Callable
 from bridge.afterlock import later
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.state_store import StateStore
-from bridge.model import ErrorKind, WindInfo
-from bridge.protocols.base import ModelSpec
+from bridge.model import ErrorKind, SettingValue, WindInfo
+from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
 
@@ -120,27 +120,27 @@ class Kept:
                 "wind",
             )
 
-    def options(self) -> dict[str, bool]:
-        """Rule 1."""
-        kept = {}
-        for name, enabled in self._store.options(self._id).items():
-            if name in self._spec.options:
-                kept[name] = enabled
-            else:
-                log.warning(
-                    "%s: stored option %r ignored: %s has no such option",
-                    self._id,
-                    name,
-                    self._spec.display_name,
-                )
+    def options(self) -> dict[str, SettingValue]:
+        """Rule 1: each as its model's declaration reads it (one it refuses is left out)."""
+        kept: dict[str, SettingValue] = {}
+        for name, value in self._store.options(self._id).items():
+            setting = self._spec.setting(name)
+            try:
+                if setting is None:
+                    raise ValueError(f"{self._spec.display_name} has no such option")
+                if (setting.kind is SettingKind.BOOL) != isinstance(value, bool):
+                    raise ValueError(f"{value!r} is no value of a {setting.kind} setting")
+                kept[name] = setting.read(value)
+            except ValueError as exc:
+                log.warning("%s: stored option %r ignored: %s", self._id, name, exc)
         return kept
 
-    def save_option(self, name: str, enabled: bool) -> None:
+    def save_option(self, name: str, value: SettingValue) -> None:
         """In the owner's step (rule 5)."""
-        self._store.queue(lambda: self._save_option_now(name, enabled))
+        self._store.queue(lambda: self._save_option_now(name, value))
 
-    def _save_option_now(self, name: str, enabled: bool) -> None:
-        if not self._store.set_option(self._id, name, enabled):
+    def _save_option_now(self, name: str, value: SettingValue) -> None:
+        if not self._store.set_option(self._id, name, value):
             self._report(
                 ErrorKind.STATE,
                 f"option {name} is in effect but could not be saved: it will not survive a "

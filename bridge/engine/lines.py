@@ -1,6 +1,7 @@
 """One thread for every rotator's serial line: the only code that touches the ports. I/O only.
 
-Each rotator is a Worker (worker.py: its port, back-off and session). This loop asks every
+Each rotator is a Worker (worker.py: its port, back-off and session; a rotator of two boxes,
+composite.py, is one worker serving both boxes' workers). This loop asks every
 worker what it waits for (file descriptors, a deadline), sleeps in one poll() on all of them
 and the loop's own wake pipe, then lets each worker serve what is ready. Sessions decide
 (session.py); workers carry out; this loop only waits.
@@ -44,8 +45,9 @@ import threading
 import time
 from collections.abc import Callable
 from collections.abc import Set as AbstractSet
+from typing import Any, Protocol
 
-from bridge.engine.worker import Worker
+from bridge.engine.config import WorkerConfig
 
 __all__ = ["Lines"]
 
@@ -53,6 +55,21 @@ log = logging.getLogger(__name__)
 _NOTHING: AbstractSet[int] = frozenset()
 GATHER_S = 0.002  # rule 7
 _READY = select.POLLIN | select.POLLPRI | select.POLLERR | select.POLLHUP | select.POLLNVAL
+
+
+class Worker(Protocol):
+    """What this loop asks of a worker: worker.py's, or a composite rotator's (composite.py)."""
+
+    cfg: WorkerConfig
+
+    def begin(self, now: float, wake: Callable[[], None]) -> None: ...
+    def end(self, now: float) -> None: ...
+    def wait_closed(self, timeout_s: float) -> bool: ...
+    def has_commands(self, ready: set[int]) -> bool: ...
+    def urgent(self) -> frozenset[int]: ...
+    def wants(self, now: float) -> tuple[list[int], float]: ...
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None: ...
+    def serve(self, now: float, ready: set[int]) -> None: ...
 
 
 class Lines:

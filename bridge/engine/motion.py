@@ -37,6 +37,11 @@ Rules:
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
+8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
+   not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
+   after a stop, instead of waiting ``stall_timeout_s`` for a stall that blames the brake.
+   Movement since the target went out means the refusal was of something else; so does
+   any command written after the target (a setting: the controller asks, controller.py).
 """
 
 from __future__ import annotations
@@ -106,6 +111,7 @@ class Event(enum.StrEnum):
     ARRIVED = "arrived"
     STALLED = "stalled"
     STOPPED = "stopped"
+    REFUSED = "refused"  # rule 8
     TURNED_AWAY = "turned away"
 
 
@@ -268,6 +274,15 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         closest_err=None,
         away_err=None,
     )
+
+
+def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
+    """Rule 8: the controller refused a command; whether it was the target that is out."""
+    if not cfg.can_report_position or m.target_deg is None or m.state is not MotionState.MOVING:
+        return m, []
+    if m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
+        return m, []  # it moved since: the refusal was of something else
+    return _at_rest(m, cfg, now, MotionState.BRAKING), [Event.REFUSED]
 
 
 def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:

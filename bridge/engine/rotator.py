@@ -24,7 +24,9 @@ command judged before a stop or lock ON never runs after it, whichever threads b
 the judge reads the mailbox's halt count before it judges a target, a track or follow start (a
 preset, park, nudge, a place are targets), and the mailbox drops one whose count a stop or lock
 ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
-(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any.
+(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any. A rotator of
+two boxes (``axes``) is judged here like any, against its one merged status; behind its
+mailbox, composite.py drives the two boxes.
 """
 
 from __future__ import annotations
@@ -33,11 +35,13 @@ import logging
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import NoReturn
 
 import serial
 
 from bridge.engine.catalog import TleCatalog
+from bridge.engine.composite import CompositeWorker
 from bridge.engine.follow import Follow as Following
 from bridge.engine.follow import Heard
 from bridge.engine.health_memory import HealthMemory
@@ -103,6 +107,7 @@ class Rotator:
         catalog: TleCatalog | None = None,
         sky: SkyWorker | None = None,
         on_audit: Callable[[AuditEvent], None] | None = None,
+        axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -121,19 +126,35 @@ class Rotator:
         self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
         self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
         self._on_status = on_status
-        self._worker = Worker(
-            cfg,
-            self._mailbox,
-            self._status,
-            on_event,
-            options=self._kept.options(),
-            locked=self._kept.locked,
-            health=store.health(self.id),
-            storm=self._kept.storm,  # kept.py rule 4
-            wall=wall,
-            port_opener=port_opener,
-            sky=sky,  # the app shares one among all rotators (skywork.py)
-        )
+        self._worker: Worker | CompositeWorker
+        if axes is None:
+            self._worker = Worker(
+                cfg,
+                self._mailbox,
+                self._status,
+                on_event,
+                options=self._kept.options(),
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,  # kept.py rule 4
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,  # the app shares one among all rotators (skywork.py)
+            )
+        else:  # two boxes, one judge (this one), one mailbox, one status (composite.py)
+            self._worker = CompositeWorker(
+                cfg,
+                axes,
+                self._mailbox,
+                self._status,
+                on_event,
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,
+            )
         self._lines = lines or Lines(clock)  # the app shares one among all rotators
         self.operators = Operators(
             self.id,
@@ -166,7 +187,7 @@ class Rotator:
 
     @property
     def status(self) -> RotatorStatus:
-        return self._worker.session.status
+        return self._worker.status
 
     @property
     def limits(self) -> Limits:
@@ -290,7 +311,7 @@ class Rotator:
         judged = self._check(command)
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
-                self._kept.save_option(judged.name, judged.enabled)
+                self._kept.save_option(judged.name, judged.value)
                 self._mailbox.put(judged, wake=False)  # woken after the step
         elif isinstance(judged, Stop):
             self.last_halt_s = time.monotonic()
@@ -393,13 +414,17 @@ class Rotator:
         if isinstance(command, Stop):
             return command
         if isinstance(command, SetOption):
-            if command.name not in self.spec.options:
+            setting = self.spec.setting(command.name)
+            if setting is None:
                 have = ", ".join(self.spec.options) or "none"
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
-            return command
+            try:  # the declaration is the judge of a value (protocols/base.py rule 6)
+                return replace(command, value=setting.read(command.value))
+            except ValueError as exc:
+                raise Refused(RefusalCode.INVALID, f"option {exc}") from None
         self._check_motion(
             command.origin.who if command.origin is not None else command.source.value
         )

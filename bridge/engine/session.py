@@ -77,7 +77,15 @@ from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Targets
 from bridge.engine.wind import WindPark
-from bridge.model import ErrorKind, Origin, RotatorStatus, Source, Target, describe_command
+from bridge.model import (
+    ErrorKind,
+    Origin,
+    RotatorStatus,
+    SettingValue,
+    Source,
+    Target,
+    describe_command,
+)
 
 __all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
 
@@ -92,7 +100,7 @@ class RotatorSession:
         self,
         cfg: WorkerConfig,
         *,
-        options: dict[str, bool] | None = None,
+        options: dict[str, SettingValue] | None = None,
         locked: bool = False,
         health: dict[str, object] | None = None,  # what the state file kept (health.py)
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
@@ -181,7 +189,7 @@ class RotatorSession:
         if batch.health_reset:
             self._guarded("health", self.health.reset, now)
         for opt in batch.options:
-            ctl.options.set(opt.name, opt.enabled, ctl.link is not None)
+            ctl.options.set(opt.name, opt.value, ctl.link is not None)
         if batch.track is not None:
             self._apply(self.features.track(batch.track, self._refused()))
         if batch.follow is not None:
@@ -305,6 +313,7 @@ class RotatorSession:
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
+        self.health.speed_factor = ctl.options.speed_factor()  # (health.py rule 9)
         self._guarded("health", lambda: self.health.step(ctl.motion, now), now)  # in the status
         self._emit_status(now)
         if ctl.link is not None:
@@ -388,7 +397,7 @@ class RotatorSession:
         seen = self.controller.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )
-        status = st.current(self.cfg, seen, now)
+        status = st.current(self.controller.cfg, seen, now)  # (controller.py rule 7)
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
         self.status = status  # also when only the controller's clock changed (status rule 4)

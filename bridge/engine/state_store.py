@@ -10,8 +10,8 @@ Rules:
    except that every rotator whose lock state cannot be read starts locked (safety before
    convenience) and is written down as locked, so it stays locked across restarts until someone
    unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
-   are not switches) does the same for its rotator alone, and the rotator's status says why
-   (``problems``).
+   are not on/off, a number or a name) does the same for its rotator alone, and the rotator's
+   status says why (``problems``).
 3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
    content it holds is written as in rule 1, so a full disk or a quota is found at the start,
    not when a lock set for tower work is silently not kept. An unreadable file is not replaced
@@ -43,7 +43,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from bridge.engine.ondemand import OnDemandThread
-from bridge.model import Control
+from bridge.model import Control, SettingValue
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +117,7 @@ class StateStore:
             isinstance(entry, dict)
             and isinstance(entry.get("locked", False), bool)
             and isinstance(options, dict)
-            and all(isinstance(v, bool) for v in options.values())
+            and all(isinstance(v, bool | int | float | str) for v in options.values())
         )
         if fine:
             assert isinstance(entry, dict)
@@ -161,11 +161,15 @@ class StateStore:
                 return True
             return bool(entry.get("locked", False))
 
-    def options(self, rotator_id: str) -> dict[str, bool]:
+    def options(self, rotator_id: str) -> dict[str, SettingValue]:
+        """As kept: on/off, a number or a choice's name (kept.py reads them by their model)."""
         raw = self._data.get(rotator_id, {}).get("options", {})
         if not isinstance(raw, dict):
             return {}
-        return {str(k): bool(v) for k, v in raw.items()}
+        return {
+            str(k): (float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
+            for k, v in raw.items()
+        }
 
     def health(self, rotator_id: str) -> dict[str, object] | None:
         """What rotor health kept (health_judge.py reads it, rule 6), if anything."""
@@ -241,7 +245,7 @@ class StateStore:
             self._data.setdefault(rotator_id, {})["locked"] = locked
             return self._save()
 
-    def set_option(self, rotator_id: str, name: str, enabled: bool) -> bool:
+    def set_option(self, rotator_id: str, name: str, enabled: SettingValue) -> bool:
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
             opts = entry.setdefault("options", {})

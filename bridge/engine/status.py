@@ -30,6 +30,7 @@ from bridge.model import (
     MotionState,
     RotatorHealth,
     RotatorStatus,
+    SettingValue,
     Target,
     TargetInfo,
     TrackingInfo,
@@ -88,7 +89,7 @@ class Seen(NamedTuple):
     connected: bool
     answering: bool  # connected, and the controller answers (or cannot: DCU-1)
     locked: bool
-    options: dict[str, bool]
+    options: dict[str, SettingValue]
     bearing_deg: float | None  # the published readings (rule 1), raw
     elevation_deg: float | None
     slew: Slew | None

@@ -112,6 +112,12 @@ class Stops:
                 "comes to rest"
             )
             return Verdict(False, Report(ErrorKind.STALLED, why), "turned by hand")
+        if event is mo.Event.REFUSED:
+            why = (
+                f"the controller refused the target (it answered with its refusal at {pos:g}°): "
+                "outside the range the box is set to turn, or a bearing it cannot take"
+            )
+            return Verdict(False, Report(ErrorKind.REFUSED, why), "refused by the controller")
         if event is mo.Event.STOPPED and self._at_rest:
             self._at_rest = False
             return Verdict(stop=True)

@@ -60,7 +60,7 @@ from bridge.engine.port import (
 )
 from bridge.engine.session import RotatorSession
 from bridge.engine.skywork import Answer, SkyWorker
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus
+from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, SettingValue
 
 __all__ = ["Worker", "WorkerConfig"]
 
@@ -76,7 +76,7 @@ class Worker:
         on_status: Callable[[RotatorStatus], None],
         on_event: Callable[[ErrorEvent], None],
         *,
-        options: dict[str, bool] | None = None,
+        options: dict[str, SettingValue] | None = None,
         locked: bool = False,
         health: dict[str, object] | None = None,
         storm: bool = False,
@@ -194,6 +194,15 @@ class Worker:
             self._serve(ready, now)
         except (serial.SerialException, OSError) as exc:
             self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+
+    def carry_out(self, now: float, actions: list[Action]) -> None:
+        """What the session decided on a batch taken from another mailbox (a composite
+        rotator's, composite.py), carried out as for the worker's own."""
+        self._do(actions)
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self.session.status
 
     def _serve(self, ready: set[int], now: float) -> None:
         session, acted = self.session, False

@@ -153,3 +153,97 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
     return EasycommRequest(
         tuple(queries), az, el, stop, park, tuple(unsupported), None, tuple(ignored)
     )
+
+
+# -- DCU-1 / Rotor-EZ ------------------------------------------------------------------------
+
+DCU1_FRAME_MAX = 6  # "AP1ddd", the longest body: a seventh byte without an end is junk
+_SEMICOLON, _CR, _LF, _A = 0x3B, 0x0D, 0x0A, 0x41
+
+
+class Dcu1Kind(Enum):
+    STORE = "AP1ddd;"  # keep a bearing for AM1
+    GOTO = "AP1ddd<CR>"  # keep it and turn at once
+    EXECUTE = "AM1;"
+    READ = "AI1;"
+    STOP = ";"  # and AS1;
+    OPTION = "option"  # E e J j O o S s
+    VERSION = "V"
+    INVALID = "?"
+
+
+# a byte outside a frame that is a command of its own; the option letters are the Rotor-EZ's
+# (S is "unstick on", never a stop)
+_DCU1_SINGLES = {
+    _SEMICOLON: Dcu1Kind.STOP,
+    ord("V"): Dcu1Kind.VERSION,
+    **{letter: Dcu1Kind.OPTION for letter in b"EeJjOoSs"},
+}
+
+
+@dataclass(frozen=True)
+class Dcu1Request:
+    """One command as read: ``text`` as sent (for logs and ``R/error``), ``az_deg`` for AP1;
+    ``stops`` on an INVALID frame ended by ``;`` (package rule 9)."""
+
+    kind: Dcu1Kind
+    text: str
+    az_deg: int | None = None
+    stops: bool = False
+
+
+def _dcu1_frame(body: bytes, end: int) -> Dcu1Request:
+    """A frame from ``A`` to its end (``;`` or CR), the end not in ``body``."""
+    text = (body + bytes([end])).decode("latin-1")
+    semicolon = end == _SEMICOLON
+    if body == b"AI1":
+        return Dcu1Request(Dcu1Kind.READ, text)
+    if body == b"AM1" and semicolon:
+        return Dcu1Request(Dcu1Kind.EXECUTE, text)
+    if body == b"AS1" and semicolon:
+        return Dcu1Request(Dcu1Kind.STOP, text)
+    digits = body[3:]
+    if body[:3] == b"AP1" and len(digits) == 3 and digits.isdigit() and int(digits) <= 360:
+        kind = Dcu1Kind.STORE if semicolon else Dcu1Kind.GOTO
+        return Dcu1Request(kind, text, int(digits))
+    return Dcu1Request(Dcu1Kind.INVALID, text, stops=semicolon)
+
+
+# one token of the stream: a frame ended, a frame too long, a frame not yet ended (at the end
+# of what came), a byte that is a command of its own, line ends, a run of anything else
+_DCU1_TOKEN = re.compile(
+    rb"A[^;\r]{0,5}[;\r]|A[^;\r]{6}|A[^;\r]{0,5}\Z|[;VEeJjOoSs]|[\r\n]+|[^A;VEeJjOoSs\r\n]+"
+)
+
+
+class Dcu1Reader:
+    """The DCU-1 / Rotor-EZ command stream (package rule 9): a frame opens at ``A`` and ends at
+    ``;`` or CR; outside a frame each byte is a command of its own (``;`` stop, an option
+    letter, ``V``), CR and LF are nothing, and a run of other bytes is one INVALID request.
+    One pass over the bytes (a regular expression's), no more than DCU1_FRAME_MAX kept."""
+
+    def __init__(self) -> None:
+        self._held = b""  # a frame not yet ended
+
+    @property
+    def idle(self) -> bool:
+        """True when no frame is half received."""
+        return not self._held
+
+    def feed(self, data: bytes) -> list[Dcu1Request]:
+        out: list[Dcu1Request] = []
+        buf, self._held = self._held + data, b""
+        for match in _DCU1_TOKEN.finditer(buf):
+            token = match[0]
+            first, last = token[0], token[-1]
+            if first == _A and last in (_SEMICOLON, _CR):
+                out.append(_dcu1_frame(token[:-1], last))
+            elif first == _A and len(token) > DCU1_FRAME_MAX:
+                out.append(Dcu1Request(Dcu1Kind.INVALID, token.decode("latin-1")))
+            elif first == _A:
+                self._held = token  # the last token: what came ends inside a frame
+            elif (single := _DCU1_SINGLES.get(first)) is not None:
+                out.append(Dcu1Request(single, chr(first)))
+            elif first not in (_CR, _LF):
+                out.append(Dcu1Request(Dcu1Kind.INVALID, token.decode("latin-1")))
+        return out

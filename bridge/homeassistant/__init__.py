@@ -3,7 +3,13 @@
 (publisher.py: a timer, a lock)."""
 
 from bridge.homeassistant.entities import ENTITIES, Entity, all_configs
-from bridge.homeassistant.info import MAX_SATELLITES, Identity, RotatorInfo, track_options
+from bridge.homeassistant.info import (
+    MAX_SATELLITES,
+    GroupInfo,
+    Identity,
+    RotatorInfo,
+    track_options,
+)
 from bridge.homeassistant.publisher import DiscoveryPublisher
 
 __all__ = [
@@ -13,6 +19,7 @@ __all__ = [
     "Entity",
     "Identity",
     "RotatorInfo",
+    "GroupInfo",
     "all_configs",
     "track_options",
 ]

@@ -10,7 +10,9 @@ comes from bridge.mqtt.topics.
 
 Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
-   as ``sw_version``, ``via_device`` the bridge) and one bridge device. An entity exists only if
+   as ``sw_version``, ``via_device`` the bridge), one per group (GROUP_ENTITIES: its
+   target, its stop, its bearing and state from ``G/status``) and one bridge device. An
+   entity exists only if
    the model can do it: no bearing for a DCU-1, options only where the controller has them; and
    only where configured: the preset select with presets, park with a park position, the
    locator, long path and distance with the station's position.
@@ -19,6 +21,10 @@ Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
    unreachable (the safety lock, the connection state, the last error) follow the bridge only.
 3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
    the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
+6. A controller setting's entity comes from its declaration (protocols/base.py ``Setting``): a
+   bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
+   select (its names); all on R/option/<name> with R/option/<name>/state, in the config
+   category.
 """
 
 from __future__ import annotations
@@ -30,9 +36,10 @@ from functools import partial
 from typing import Protocol
 
 from bridge import __version__
-from bridge.homeassistant.info import Identity, RotatorInfo
+from bridge.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.model import MotionState
 from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.protocols.base import Setting, SettingKind
 
 ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
 STATES = [s.value for s in MotionState]
@@ -109,29 +116,55 @@ class Entity:
 
 
 class OptionConfig(Protocol):
-    """An option entity's config: the option is passed by name (EachOption binds it)."""
+    """A setting entity's config: the setting is passed by its declaration (EachOption)."""
 
-    def __call__(self, info: RotatorInfo, /, option: str) -> dict[str, object]: ...
+    def __call__(self, info: RotatorInfo, /, setting: Setting) -> dict[str, object]: ...
+
+
+# rule 6: the platform of each kind of setting
+SETTING_PLATFORMS = {
+    SettingKind.BOOL: "switch",
+    SettingKind.NUMBER: "number",
+    SettingKind.CHOICE: "select",
+}
 
 
 @dataclass(frozen=True)
 class EachOption:
-    """One entity per controller option (``spec.options``), labelled by ``spec.option_labels``."""
+    """One entity per controller setting (``spec.settings``), of the platform its kind has
+    (rule 6), labelled by its declaration."""
 
-    platform: str
     config: OptionConfig
 
     def expand(self, info: RotatorInfo) -> list[Entity]:
-        spec = info.spec
         return [
             Entity(
-                self.platform,
-                f"option_{name}",
-                spec.option_labels.get(name, name.title()),
-                partial(self.config, option=name),
+                SETTING_PLATFORMS[setting.kind],
+                f"option_{setting.name}",
+                setting.label,
+                partial(self.config, setting=setting),
             )
-            for name in spec.options
+            for setting in info.spec.settings
         ]
+
+
+def _setting_config(r: RotatorInfo, setting: Setting) -> dict[str, object]:
+    """Rule 6: the keys of a setting's entity."""
+    name = setting.name
+    keys: dict[str, object] = {
+        "command_topic": r.topics.option(name),
+        "state_topic": r.topics.option_state(name),
+    }
+    if setting.kind is SettingKind.BOOL:
+        keys.update(SWITCH)
+    elif setting.kind is SettingKind.NUMBER:
+        keys.update(min=setting.minimum, max=setting.maximum, step=setting.step, mode="box")
+        if setting.unit:
+            keys["unit_of_measurement"] = setting.unit
+    else:
+        keys["options"] = list(setting.choices)
+    icon = "mdi:speedometer" if setting.speed_factors else "mdi:cog"
+    return {**keys, "entity_category": "config", "icon": icon}
 
 
 def _current_or(field: str, fallback: str) -> str:
@@ -293,9 +326,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "device_class": "connectivity", **DIAGNOSTIC}),
     Entity("sensor", "version", "Controller version", needs="has_version", config=lambda r: {
         "state_topic": r.topics.version, **DIAGNOSTIC, "icon": "mdi:chip"}),
-    EachOption("switch", config=lambda r, option: {
-        "command_topic": r.topics.option(option), "state_topic": r.topics.option_state(option),
-        **SWITCH, "entity_category": "config", "icon": "mdi:cog"}),
+    EachOption(config=_setting_config),  # rule 6
     Entity("switch", "lock", "Safety lock", bridge_only=True, config=lambda r: {
         "command_topic": r.topics.lock, "state_topic": r.topics.lock_state, **SWITCH,
         "icon": "mdi:lock"}),
@@ -353,13 +384,64 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
     return out
 
 
+# a group's device (rule 1): the rotator's builders, on the group's topics (GroupTopics)
+GroupRow = tuple[str, str, str | None, bool, Callable[[GroupInfo], dict[str, object]]]
+GROUP_ENTITIES: tuple[GroupRow, ...] = (  # platform, object id, name, the stop?, config
+    ("number", "target_azimuth", "Target azimuth", False, lambda g: {
+        "command_topic": g.topics.target, "state_topic": g.topics.status,
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "min": 0, "max": 360, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+    ("button", "stop", "Stop", True, lambda g: {
+        "command_topic": g.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    ("sensor", "bearing", "Bearing", False, lambda g: {
+        "state_topic": g.topics.status, **DEGREES, "state_class": "measurement_angle",
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "suggested_display_precision": 0, "icon": "mdi:compass"}),
+    ("sensor", "state", "State", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "enum", "options": STATES,
+        "value_template": "{{ value_json.state }}", "icon": "mdi:rotate-3d-variant"}),
+    ("binary_sensor", "moving", "Moving", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "moving",
+        "value_template": "{{ 'ON' if value_json.moving else 'OFF' }}",
+        "json_attributes_topic": g.topics.status}),  # each member's bearing and the refusals
+)  # fmt: skip
+
+
+def group_configs(ident: Identity, topics: Topics, g: GroupInfo) -> Configs:
+    """The entities of one group's device; the stop follows the bridge only (rule 2: it must
+    work whatever its members say)."""
+    node = ident.group_node(g.group_id)
+    device: dict[str, object] = {
+        "identifiers": [node],
+        "name": g.name,
+        "manufacturer": "rotor-bridge",
+        "model": f"Group of {len(g.members)} rotators ({', '.join(g.members)})",
+        "via_device": ident.bridge_node,
+    }
+    both = [{"topic": topics.bridge_state}, {"topic": g.topics.availability}]
+    bridge_only = [{"topic": topics.bridge_state}]
+    slug = g.group_id.replace("-", "_")
+    out: Configs = {}
+    for platform, object_id, name, stop, config in GROUP_ENTITIES:
+        avail = bridge_only if stop else both
+        where, payload = _entity(platform, node, object_id, slug, name, device, avail, **config(g))
+        out[where] = payload
+    return out
+
+
 def all_configs(
-    prefix: str, ident: Identity, topics: Topics, rotators: list[RotatorInfo]
+    prefix: str,
+    ident: Identity,
+    topics: Topics,
+    rotators: list[RotatorInfo],
+    groups: tuple[GroupInfo, ...] = (),
 ) -> dict[str, str]:
     """Every discovery message: full topic -> JSON payload (stable key order)."""
     configs = bridge_configs(ident, topics)
     for r in rotators:
         configs.update(rotator_configs(ident, topics, r))
+    for g in groups:
+        configs.update(group_configs(ident, topics, g))
     return _messages(prefix, configs)
 
 

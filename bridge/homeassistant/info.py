@@ -1,13 +1,13 @@
-"""What Home Assistant discovery knows of the bridge and of each rotator (homeassistant/ rules
-1 and 3, entities.py): the ids made from the base topic, a rotator's ranges and configured
-features, and the track select's options. Pure data."""
+"""What Home Assistant discovery knows of the bridge, of each rotator and of each group
+(homeassistant/ rules 1 and 3, entities.py): the ids made from the base topic, a rotator's
+ranges and configured features, and the track select's options. Pure data."""
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, replace
 
-from bridge.mqtt.topics import RotatorTopics
+from bridge.mqtt.topics import GroupTopics, RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 
@@ -117,5 +117,20 @@ class Identity:
     def rotator_node(self, rotator_id: str) -> str:
         return f"{self.bridge_node}_r_{rotator_id}"
 
+    def group_node(self, group_id: str) -> str:
+        return f"{self.bridge_node}_g_{group_id}"
+
     def owns(self, node_id: str) -> bool:
-        return node_id == self.bridge_node or node_id.startswith(self.bridge_node + "_r_")
+        return node_id == self.bridge_node or node_id.startswith(
+            (self.bridge_node + "_r_", self.bridge_node + "_g_")
+        )
+
+
+@dataclass(frozen=True)
+class GroupInfo:
+    """A group of rotators turned together (mqtt/groups.py): its device in Home Assistant."""
+
+    group_id: str
+    name: str
+    topics: GroupTopics
+    members: tuple[str, ...]

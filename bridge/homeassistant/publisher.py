@@ -35,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from bridge.homeassistant.entities import all_configs, rotator_messages
-from bridge.homeassistant.info import Identity, RotatorInfo
+from bridge.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.model import RotatorStatus
 from bridge.mqtt.topics import DiscoveryTopics, Topics
 
@@ -54,6 +54,7 @@ class DiscoveryPublisher:
         status_topic: str,
         topics: Topics,
         rotators: list[RotatorInfo],
+        groups: tuple[GroupInfo, ...] = (),
         publish_retained: Callable[[str, str], None],
         clear_retained: Callable[[str], None],
         republish_state: Callable[[], None],
@@ -67,6 +68,7 @@ class DiscoveryPublisher:
         self._topics = topics
         self._ident = Identity(topics.base)
         self._rotators = {r.rotator_id: r for r in rotators}
+        self._groups = groups  # mqtt/groups.py: a device each
         self._publish = publish_retained
         self._clear = clear_retained
         self._republish_state = republish_state
@@ -87,9 +89,8 @@ class DiscoveryPublisher:
     def publish_all(self) -> None:
         # under the lock (see Lock): an older snapshot published last would stay retained
         with self._lock:
-            configs = all_configs(
-                self.prefix, self._ident, self._topics, list(self._rotators.values())
-            )
+            rotators = list(self._rotators.values())
+            configs = all_configs(self.prefix, self._ident, self._topics, rotators, self._groups)
             self._current = configs
             for topic, payload in configs.items():
                 self._publish(topic, payload)  # the client skips what did not change

@@ -17,10 +17,20 @@ Rules:
    rotator's own rules pick the way round); one beyond that is refused (a mis-scaled value,
    99999, must not become 279). An elevation sent to an azimuth-only rotator is ignored.
 4. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
-   listens on that port, except a stop, which stops every rotator on it; a stop naming several
-   rotors stops each of them on the port, a fault behind one not keeping it from the next.
+   listens on that port (or by band: rule 5), except a stop, which stops every rotator on it;
+   a stop naming several rotors stops each of them on the port, a fault behind one not keeping
+   it from the next.
    ``bidirectional`` 1 turns to the heading or its reciprocal, whichever is nearer the bearing.
    A non-zero ``offset`` is logged once and not applied (its meaning is not documented).
+5. N1MM by band (``choose``, pure): a turn goes to the one rotator on the port that answers to
+   its name, whatever the band: a name is the sender's own choice (N1MM's Antennas tab already
+   picks the antenna for the band, or the operator turned this one by hand). A name several
+   rotators share, or ``*``, is chosen by band among those of them that have ``bands``: the one
+   whose bands hold the message's ``<freqband>`` (bands.py). A message with no band, a band
+   that is no amateur band, or one no rotator there is for moves nothing: the refusal is
+   logged (at most once per JUNK_LOG_S, with the count since) and published on the R/error of
+   each rotator it could have gone to. Where none of them has bands, it is as before: ``*``
+   turns the one rotator on the port, and nothing else. Stops are not chosen by band (rule 4).
 """
 
 from __future__ import annotations
@@ -32,6 +42,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from bridge import geo
+from bridge.bands import band_of_mhz
 from bridge.errors import Refused
 from bridge.front import FrontRotator
 from bridge.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
@@ -57,13 +68,58 @@ class PstEndpoint:
     port: int
 
 
+@dataclass(frozen=True)
+class N1mmRotor:
+    """A rotator on an N1MM port: the name it answers to and the bands it is for."""
+
+    name: str
+    rotator: Rotator
+    bands: tuple[str, ...] = ()
+
+
 @dataclass
 class N1mmEndpoint:
-    """One N1MM address; the rotators that answer to a name on it."""
+    """One N1MM address; the rotators that answer to a name on it (several may share one,
+    chosen by band: rule 5)."""
 
     bind: str
     port: int
-    rotators: dict[str, Rotator] = field(default_factory=dict)  # name -> rotator
+    rotors: list[N1mmRotor] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class NoRotor:
+    """Rule 5: a turn no rotator takes. ``why`` is None for a name that is not ours (ignored);
+    otherwise the refusal, reported to each of ``could``."""
+
+    why: str | None = None
+    could: tuple[N1mmRotor, ...] = ()
+
+
+def choose(
+    rotors: Iterable[N1mmRotor], name: str, freqband_mhz: float | None
+) -> N1mmRotor | NoRotor:
+    """Rule 5: the rotator a turn to ``name`` on ``freqband_mhz`` goes to, or why none does."""
+    on_port = list(rotors)
+    named = [r for r in on_port if r.name == name]
+    if len(named) == 1:
+        return named[0]  # a name is the sender's own choice
+    pool = named or (on_port if name == "*" else [])
+    banded = tuple(r for r in pool if r.bands)
+    if not banded:  # as before bands: "*" turns the one rotator on the port
+        return pool[0] if len(pool) == 1 else NoRotor()
+    if freqband_mhz is None:
+        return NoRotor(
+            f"rotor {name!r} is chosen by band, and the message has no <freqband>", banded
+        )
+    band = band_of_mhz(freqband_mhz)
+    if band is None:
+        return NoRotor(f"<freqband> {freqband_mhz:g} MHz is no amateur band", banded)
+    for r in banded:
+        if band in r.bands:
+            return r
+    have = "; ".join(f"{r.rotator.id}: {', '.join(r.bands)}" for r in banded)
+    return NoRotor(f"no rotator is for {band} ({have})", banded)
 
 
 @dataclass
@@ -75,6 +131,7 @@ class Counts:
     malformed: int = 0
     ignored: int = 0
     replies_dropped: int = 0  # over the rate limit of the address they would go to
+    no_band: int = 0  # rule 5: refused, no rotator for the band
 
 
 @dataclass
@@ -104,6 +161,7 @@ class Commands:
         self._replies = ReplyLimiter(clock)
         self._limited_log = Rarely(JUNK_LOG_S)
         self._offset_warned: set[str] = set()
+        self._no_band_log = Rarely(JUNK_LOG_S)
 
     # -- PstRotator -----------------------------------------------------------------------
     def pst(
@@ -184,18 +242,20 @@ class Commands:
         described = "n1mm " + data.decode("ascii").strip()[:160]
         if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
             names = {req.rotor, *req.also}
-            stopped = [r for n, r in e.rotators.items() if n in names or "*" in names]
+            stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
             if stopped:
                 self._stop_each(stopped, described, by)
                 counts.commands += 1
                 return
-        rot = e.rotators.get(req.rotor)
-        if rot is None and req.rotor == "*" and len(e.rotators) == 1:
-            rot = next(iter(e.rotators.values()))
-        if rot is None:
-            counts.ignored += 1
-            log.debug("N1MM UDP %d: rotor %r is not ours", e.port, req.rotor)
+        chosen = choose(e.rotors, req.rotor, req.freqband_mhz)  # rule 5
+        if isinstance(chosen, NoRotor):
+            if chosen.why is None:
+                counts.ignored += 1
+                log.debug("N1MM UDP %d: rotor %r is not ours", e.port, req.rotor)
+            else:
+                self._no_band(counts, chosen, described, by)
             return
+        rot = chosen.rotator
         assert req.azimuth is not None
         if req.offset and req.rotor not in self._offset_warned:
             self._offset_warned.add(req.rotor)
@@ -209,6 +269,19 @@ class Commands:
             counts.commands += 1
         except Refused:
             pass
+
+    def _no_band(self, counts: Counts, none: NoRotor, described: str, by: Origin) -> None:
+        """Rule 5: nothing moves; said (rarely) in the log and on each candidate's R/error."""
+        counts.no_band += 1
+        message = f"n1mm: {none.why}: nothing turned"
+        count = self._no_band_log.due(self._clock())
+        if count is not None:
+            log.warning("%s (%d such since the last line)", message, count)
+        for r in none.could:
+            try:
+                r.rotator.report_refusal(message, described, origin=by)
+            except Exception as exc:
+                self._fault(f"reporting an N1MM refusal on rotator {r.rotator.id!r}", exc)
 
     def _stop_each(
         self, rotators: Iterable[Rotator], described: str, by: Origin | None = None

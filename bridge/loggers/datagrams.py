@@ -19,9 +19,12 @@ Rules:
 4. N1MM: ``<N1MMRotor>`` with ``<rotor>``, ``<goazi>`` (0..360), ``<offset>``,
    ``<bidirectional>``, ``<freqband>`` in any order and layout; any ``<stop`` element is a stop,
    the rotor's name then from ``<rotor>`` wherever it is, else the text of ``<stop>``. A turn
-   gives ``<rotor>``, ``<goazi>``, ``<offset>``, ``<bidirectional>`` once each (N1MM's one form):
-   a repeated one is ambiguous, Malformed. A stop is never refused: the other names it gives
-   (a second ``<rotor>``, ``<stop>``'s text beside ``<rotor>``) are in ``also``.
+   gives ``<rotor>``, ``<goazi>``, ``<offset>``, ``<bidirectional>``, ``<freqband>`` once each
+   (N1MM's one form): a repeated one is ambiguous, Malformed. A stop is never refused: the other
+   names it gives (a second ``<rotor>``, ``<stop>``'s text beside ``<rotor>``) are in ``also``.
+   ``<freqband>`` (MHz, ``14``, ``21.0``) is kept as a number; one that is none is kept as
+   absent (before it chose a rotator it was never read: a sender whose band field is odd still
+   turns a rotator it names).
 5. N1MM position report: ``name @ heading*10`` as plain text (``Tower @ 650`` is 65.0).
 6. Whether a datagram may be a stop is told by one byte search, before any parsing: ``<STOP>``
    (PST, any case) or ``<stop`` (N1MM, any case), the forms rules 2 and 4 read as a stop, so
@@ -69,6 +72,7 @@ class N1mmRequest:
     offset: float = 0.0
     bidirectional: bool = False
     also: tuple[str, ...] = ()  # a stop's other names (rule 4)
+    freqband_mhz: float | None = None  # the radio's band as N1MM writes it (rule 4)
 
 
 def may_stop_pst(datagram: bytes) -> bool:
@@ -167,7 +171,7 @@ def pst_reply(query: str, degrees: float) -> bytes:
 
 
 _N1MM_TAG = re.compile(r"<(?P<tag>[a-z]+)>(?P<value>[^<]{0,64})</(?P=tag)>", re.I)
-_ONCE = ("rotor", "goazi", "offset", "bidirectional")  # a turn's tags, each given once
+_ONCE = ("rotor", "goazi", "offset", "bidirectional", "freqband")  # a turn's, each once
 _STOP_WRAP = re.compile(r"</?stop\s*/?>", re.I)  # <stop>, </stop>, <stop/>
 
 
@@ -200,7 +204,13 @@ def parse_n1mm(datagram: bytes) -> N1mmRequest:
         raise Malformed(f"goazi {az:g} outside 0..360")
     offset = _number(values["offset"], "offset") if values.get("offset") else 0.0
     bidirectional = values.get("bidirectional", "0") not in ("", "0")
-    return N1mmRequest(names[0], azimuth=az, offset=offset, bidirectional=bidirectional)
+    try:
+        band: float | None = _number(values["freqband"], "freqband")
+    except (KeyError, Malformed):
+        band = None  # rule 4: kept as absent
+    return N1mmRequest(
+        names[0], azimuth=az, offset=offset, bidirectional=bidirectional, freqband_mhz=band
+    )
 
 
 def n1mm_report(name: str, heading_deg: float) -> bytes:

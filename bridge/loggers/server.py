@@ -53,6 +53,7 @@ from bridge.loggers.commands import (
     JUNK_LOG_S,
     Commands,
     N1mmEndpoint,
+    N1mmRotor,
     PstEndpoint,
     Rarely,
     Rotator,
@@ -133,9 +134,11 @@ class LoggerEndpoints:
         port: int = 12040,
         bind: str = "127.0.0.1",
         report_to: tuple[str, int] = ("127.0.0.1", 13010),
+        bands: tuple[str, ...] = (),
     ) -> None:
+        """``bands``: what a turn to a shared name or ``*`` is chosen by (commands.py rule 5)."""
         endpoint = self.n1mm.setdefault((bind, port), N1mmEndpoint(bind, port))
-        endpoint.rotators[name] = rotator
+        endpoint.rotors.append(N1mmRotor(name, rotator, bands))
         self._reporters.append(N1mmReporter(rotator, name, endpoint, report_to))
 
     def __bool__(self) -> bool:
@@ -381,7 +384,7 @@ class LoggerEndpoints:
 
 def _named(e: N1mmEndpoint) -> str:
     """``rotator 'tower' (N1MM's "Yagi")``, for every rotator on the endpoint."""
-    return ", ".join(f"rotator {r.id!r} (N1MM's {n!r})" for n, r in e.rotators.items())
+    return ", ".join(f"rotator {r.rotator.id!r} (N1MM's {r.name!r})" for r in e.rotors)
 
 
 def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:

@@ -30,9 +30,12 @@ each written out in the module that keeps it:
 16. The broker is asked whether the bridge can read back its markers (lastword.py rule 7), on
    every connect, with no clock: right before the first look's hello (rule 14), a probe goes
    to ``B/bridge/fence`` (QoS 1: under MQTT 5 a publish the ACL refuses gets its PUBACK
-   reason, rule 11); the broker keeps one order, so if the hello comes back and the probe has
-   not, the broker drops it (mosquitto 2.0 grants the subscription and drops the messages,
-   without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5 too). That is
+   reason, rule 11); the broker keeps one order for one client's messages of one QoS (the
+   hello goes at QoS 1 too: MQTT promises no order between QoS levels, and aedes delivers a
+   QoS 0 message before the QoS 1 one sent right before it), so if the hello comes back and
+   the probe has not, the broker drops it (mosquitto 2.0 grants the subscription and drops
+   the messages, without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5
+   too). That is
    said as rule 11 says, naming the topic, from the first connection on. It is judged again
    on every connect: a probe that comes back clears the problem (``on_allowed``, never on
    paho's thread), and the markers go out again. Each verdict is reported on a thread of its
@@ -304,7 +307,7 @@ class MqttClient(Connection):
                 if self._fence_topic is not None:  # rule 16: the probe, then the hello
                     self._probe = b"probe " + hello
                     self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
-                client.publish(look.claim.hello_topic, hello, qos=0)  # not retained
+                client.publish(look.claim.hello_topic, hello, qos=1)  # rule 16: as the probe
                 timer = threading.Timer(LOOK_TIMEOUT_S, self._look_timed_out, args=(look.looking,))
                 timer.daemon = True
                 timer.start()

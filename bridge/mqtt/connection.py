@@ -14,11 +14,15 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
    answers "Unsupported protocol version" (NATS, aedes), as long as no MQTT 5 connection was
    ever accepted: said once, with what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info``
-   while it lasts (app.py). A connection closed before any CONNACK never steps down: RabbitMQ
-   and amqtt close on MQTT 5 that way, but so does a broker restarting, one not ready yet
-   behind a proxy, a connection limit, or anyone on the path who wants the bridge on 3.1.1 and
-   its weaker rules (a retained command carried out, a remote's stale command without its
-   stamps); the close is said with the fix (set ``"3.1.1"`` for such a broker, rule 6).
+   while it lasts (app.py). RabbitMQ 3 and amqtt close an MQTT 5 connection before any CONNACK
+   instead; but so does a broker restarting, one not ready yet behind a proxy, a connection
+   limit, or anyone on the path who wants the bridge on 3.1.1 and its weaker rules (a retained
+   command carried out, a remote's stale command without its stamps). So a close alone never
+   steps down: after one, ``auto`` asks the broker once in MQTT 3.1.1 (a trial connection on a
+   thread of its own, closed at once: paho_client.py rule 4), and steps down only if that
+   trial was accepted and the next MQTT 5 attempt is closed before its CONNACK again (a
+   broker that came back speaks MQTT 5 to that attempt; a connection limit refuses the trial
+   too). Until then, and for ``"5"``, the close is said with the fix (rule 6).
    ``"5"`` and ``"3.1.1"`` never change.
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
@@ -77,7 +81,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.mqtt.heartbeat import Stamp
-from bridge.mqtt.paho_client import new_client
+from bridge.mqtt.paho_client import accepts_mqtt311, new_client
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -227,6 +231,9 @@ class Connection:
         self._auto = settings.protocol == "auto"  # ... and may step down (``_fall_back``)
         self._accepted_once = False  # a connection was accepted: the protocol is settled
         self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
+        self._trial_lock = threading.Lock()  # rule 1: the MQTT 3.1.1 trial after a close
+        self._trial: threading.Thread | None = None
+        self._trial_ok = False  # ... was accepted, since the last MQTT 5 attempt closed
         self._subscriptions = subscriptions
         self._no_replay = frozenset(options.get("no_replay") or ())
         self._replayed = frozenset(options.get("replayed") or ())
@@ -320,8 +327,12 @@ class Connection:
         if self._v5 and not self._accepted_once:  # (once accepted, the protocol is not why)
             hint = (
                 "; a broker without MQTT 5 (RabbitMQ 3, amqtt) closes it this way too: set "
-                'mqtt.protocol = "3.1.1" for it (the bridge does not step down on a close, which '
-                "anyone on the path can cause)"
+                'mqtt.protocol = "3.1.1" for it'
+                + (
+                    ' (with "auto" the bridge asks the broker in MQTT 3.1.1 to tell)'
+                    if self._auto
+                    else ""
+                )
             )
         text = (
             f"the MQTT broker closed the connection before accepting it ({reason}): check the "
@@ -382,6 +393,35 @@ class Connection:
         self._fell_back(what)
         return True
 
+    def _close_steps_down(self) -> bool:
+        """Rule 1: an MQTT 5 attempt was closed before its CONNACK; whether ``auto`` steps down
+        now (an MQTT 3.1.1 trial since the last such close was accepted), else a trial is
+        started if none runs."""
+        if not (self._auto and self._v5) or self._accepted_once or self._stopping:
+            return False
+        with self._trial_lock:
+            accepted, self._trial_ok = self._trial_ok, False
+            running = self._trial is not None and self._trial.is_alive()
+            if not accepted and not running:
+                self._trial = threading.Thread(
+                    target=self._try_mqtt311, name="mqtt-3.1.1-trial", daemon=True
+                )
+                self._trial.start()
+        return accepted and self._fall_back(
+            "closed MQTT 5 connections before answering them and accepted an MQTT 3.1.1 one "
+            "between two of them"
+        )
+
+    def _try_mqtt311(self) -> None:
+        """Rule 1: the trial, on its own thread (it blocks for up to a few seconds)."""
+        try:
+            ok = accepts_mqtt311(self._settings, self._client_id)
+        except Exception:  # rule 5: a failed trial is no evidence, and no crash
+            log.debug("MQTT 3.1.1 trial failed", exc_info=True)
+            ok = False
+        with self._trial_lock:
+            self._trial_ok = ok and not self._accepted_once
+
     def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
         return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
 
@@ -402,6 +442,8 @@ class Connection:
         properties: Properties | None,
     ) -> None:
         self._answered = True
+        with self._trial_lock:
+            self._trial_ok = False  # rule 1: an answer, not a close: no evidence for a trial
         if reason_code.is_failure:
             self._guard.connect_failed()
             code = getattr(reason_code, "value", None)
@@ -423,6 +465,8 @@ class Connection:
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
+        with self._trial_lock:
+            self._trial_ok = False  # rule 1: the broker was away: no evidence either way
         self._guard.connect_failed()
         self._failed()
 
@@ -454,8 +498,8 @@ class Connection:
         was, self._up, self._subscribed = self._up, False, False
         answered, self._answered = self._answered, False
         self.connected.clear()
-        if not was and not answered:  # no CONNACK came (after one, the refusal was said)
-            self._closed_early(str(reason_code))  # rule 6: never silent; never a step-down
+        if not was and not answered and not self._close_steps_down():  # no CONNACK came
+            self._closed_early(str(reason_code))  # rule 6: never silent
         if not self._closed(was, reason_code):
             return
         ending = ending_of(flags, reason_code)

@@ -200,11 +200,11 @@ def wait_published(
     once the connection is gone (their acknowledgements will never come)."""
     deadline = time.monotonic() + timeout_s
     for info in infos:
-        while not info.is_published() and connected.is_set():
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return
-            try:
+        try:  # paho raises for a message it never queued (the connection had just gone)
+            while not info.is_published() and connected.is_set():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return
                 info.wait_for_publish(min(left, 0.1))
-            except (RuntimeError, ValueError):
-                break
+        except (RuntimeError, ValueError):
+            continue

@@ -6,6 +6,12 @@ into the rotators, each decision and the mailbox put it lets through under one l
 One timer at a time (TICK_S, while a hold or a marker is out or a long hold is reported) sends
 a marker again and reports a long hold on ``B/bridge/info`` (``on_info``, never on paho's
 threads); it decides nothing (lastword.py rule 5): no hold ends by it.
+
+A group's stop (``G/stop``, mqtt/groups.py) is a stop of each of its members, on either
+connection: the same decisions, member by member, in one step under the same lock (a lane's
+group stop holds every member; the main connection's copy is each member's copy), and one
+marker for them all, the newest. A member whose stop raises costs the others nothing: the
+failure is logged and the next member is stopped.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ from collections.abc import Callable
 from bridge.afterlock import Deferring
 from bridge.model import Lock, Origin, Source, Stop
 from bridge.mqtt import payloads as pl
+from bridge.mqtt.groups import Group
 from bridge.mqtt.lastword import LONG_HOLD_S, LastWord
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
@@ -51,8 +58,14 @@ class Halts:
         retain_is_live: bool,
         on_problem: Callable[[str, str], None] | None,
         on_info: Callable[[str, bool], None] | None = None,
+        groups: dict[str, Group] | None = None,
+        report_group: Callable[[str, str, str], None] | None = None,
     ) -> None:
+        """``groups``: the service's (groups added later are seen here too);
+        ``report_group``: (group id, message, command) on the group's error topic."""
         self.topics = topics
+        self._groups = {} if groups is None else groups
+        self._report_group = report_group
         self._publisher = publisher
         self._rotators = rotators  # the service's: rotators attached later are seen here too
         self._clock = clock
@@ -237,6 +250,11 @@ class Halts:
             self.on_lane_marker(payload)
             return
         route = self.topics.route(topic)
+        if route is None and not (retain and not payload):
+            group = self.topics.group_route(topic)
+            if group is not None and group[1] == "stop":
+                self.lane_group_stop(group[0], topic, payload, retain, origin)
+            return
         if route is None or (retain and not payload):
             return
         rotator_id, kind, _arg = route
@@ -304,3 +322,83 @@ class Halts:
     def retained_deleted(self, topic: str) -> None:
         with self._lock:
             self.word.retained_halt(topic, b"", replayed=True)  # forgotten (rule 6)
+
+    # -- a group's stop: a stop of each member (the module's docstring) ------------------------
+    def _members(self, group_id: str) -> list[RotatorPort]:
+        group = self._groups.get(group_id)
+        if group is None:
+            return []
+        return [rot for mid in group.member_ids if (rot := self._rotators.get(mid)) is not None]
+
+    def _stop_member(
+        self, rot: RotatorPort, what: str, hold: int | None, origin: Origin | None, echo: bool
+    ) -> None:
+        """Under the lock: one member's stop; a failure is this member's alone."""
+        try:
+            self.carry(rot, "stop", what, hold=hold, origin=origin, echo=echo)
+        except Exception:
+            log.exception("%s: the group's stop failed for this member", rot.id)
+
+    def lane_group_stop(
+        self, group_id: str, topic: str, payload: bytes, retain: bool, origin: Origin | None
+    ) -> None:
+        """A group's stop read on the lane: each member's stop carried out at once, each on
+        hold (lastword.py rule 2), one marker (the newest) for them all."""
+        members = self._members(group_id)
+        if not members:
+            return
+        if retain and not self.retain_is_live:
+            self.replayed_group_stop(group_id, topic, payload)
+            return
+        what = pl.describe("stop", payload)
+        newest = held = 0
+        with self._lock:
+            for rot in members:
+                marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
+                if marker is None:
+                    continue  # lastword.py rule 4: this member's echo
+                self._stop_member(rot, what, marker or None, origin, False)
+                newest, held = max(newest, marker), held + 1
+        if newest and self.word.markers:
+            self._send_marker(newest)
+        elif newest:
+            self._arm()
+        log.debug("%s: stop on the stop lane for %d member(s)", group_id, held)
+
+    def main_group_stop(
+        self, group_id: str, topic: str, what: str, retain: bool, origin: Origin | None = None
+    ) -> None:
+        """A group's stop read on the main connection: each member's, in order (rule 1); one
+        lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
+        lane_marker: int | None = None
+        with self._lock:
+            for rot in self._members(group_id):
+                copy = self.word.main_halt(rot.id, "stop")
+                self._stop_member(rot, what, None, origin, copy.echo)
+                self._release(copy.released, copy.upto)  # lastword.py rule 9
+                if copy.lane_marker is not None:
+                    lane_marker = copy.lane_marker
+        if lane_marker is not None:
+            marker = self.word.marker(lane_marker)
+            self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
+        if retain:
+            self._report_retained_group_stop(group_id, topic, what)
+
+    def replayed_group_stop(self, group_id: str, topic: str, payload: bytes) -> None:
+        """lastword.py rule 6 under MQTT 3.1.1: a replayed retained group stop, once."""
+        what = pl.describe("stop", payload)
+        with self._lock:
+            if not self.word.retained_halt(topic, payload, replayed=True):
+                return
+            for rot in self._members(group_id):
+                self._stop_member(rot, what, None, None, False)
+        self._report_retained_group_stop(group_id, topic, what)
+
+    def _report_retained_group_stop(self, group_id: str, topic: str, what: str) -> None:
+        if self._report_group is not None:
+            self._report_group(
+                group_id,
+                f"stop on {topic} was published retained: executed (stopping is always safe), "
+                "but clear it with an empty retained message",
+                what,
+            )

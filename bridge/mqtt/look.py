@@ -5,12 +5,13 @@ verdicts themselves are claim.py's.
 
 Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
 14. One live bridge per base topic. On every connect, after subscribing and before publishing
-   or deleting anything, the client publishes a hello to itself on ``B/bridge/hello`` (QoS 0,
-   not retained: nothing of it stays on the broker, and it names the instance and the look's
-   number, so a late hello of an earlier look, or another bridge's, ends nothing). The broker
-   handles one client's packets in order and sends the retained messages of a subscription
-   before anything published after it: so the retained ``B/bridge/info`` and
-   ``B/bridge/state`` that arrive before the hello comes back are all the broker held (``saw``).
+   or deleting anything, the client publishes a hello to itself on ``B/bridge/hello`` (QoS 1,
+   as the fence probe sent right before it, client.py rule 16; not retained: nothing of it
+   stays on the broker, and it names the instance and the look's number, so a late hello of an
+   earlier look, or another bridge's, ends nothing). The broker handles one client's packets in
+   order and sends the retained messages of a subscription before anything published after it:
+   so the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before the hello comes
+   back are all the broker held (``saw``).
    Its coming back ends the look (``end``): claim.py's verdict on what was seen. REFUSE: the
    bridge refuses to run, publishing nothing. OURS: the deletions of retained configs asked
    for during the look (``defer_clear``: Home Assistant's stale discovery) are sent. TAKE_OVER

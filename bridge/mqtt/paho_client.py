@@ -13,13 +13,23 @@ Rules:
    session from its next connection on (``mqtt.protocol = "auto"``, connection.py rule 1), as
    paho itself steps down from 3.1.1 to 3.1 on a refusal: its CONNECT is built from these two
    attributes on every connect (tests/mqtt/test_protocol_fallback.py holds paho to that).
+4. ``accepts_mqtt311`` asks a broker once whether it accepts an MQTT 3.1.1 connection with these
+   settings (credentials, TLS, client id; no will, nothing subscribed or published): a trial
+   connection, closed as soon as the broker answered, within ``timeout_s``. It blocks: never on
+   paho's thread.
+5. A broker that never answers the CONNECT is given CONNACK_TIMEOUT_S, then the connection is
+   ended as if the broker had closed it (the socket shut down: paho sees the end as always and
+   reconnects; connection.py says it, rule 6). amqtt 0.12 waits for ever on an MQTT 5 CONNECT
+   that carries a will; paho alone would wait the keepalive (a minute) each time.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import socket
 import ssl
+import time
 from collections.abc import Callable
 
 import paho.mqtt.client as paho
@@ -30,6 +40,7 @@ from bridge.settings import MqttSettings
 log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
+CONNACK_TIMEOUT_S = 10.0  # rule 5
 
 
 def acknowledge_now(sock: object) -> None:
@@ -49,6 +60,26 @@ class Client(paho.Client):
     rule 2 (``tick``)."""
 
     tick: Callable[[], None] | None = None
+    _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
+
+    def reconnect(self) -> MQTTErrorCode:
+        self._connect_t = time.monotonic()
+        return super().reconnect()
+
+    def _unanswered(self) -> None:
+        """Rule 5: a CONNECT unanswered for too long ends its connection."""
+        t = self._connect_t
+        if t is None:
+            return
+        if self.is_connected():
+            self._connect_t = None
+        elif time.monotonic() - t >= CONNACK_TIMEOUT_S:
+            self._connect_t = None
+            shutdown = getattr(self.socket(), "shutdown", None)  # None: no socket (yet)
+            if shutdown is not None:
+                log.debug("no CONNACK in %g s: ending the connection", CONNACK_TIMEOUT_S)
+                with contextlib.suppress(OSError):
+                    shutdown(socket.SHUT_RDWR)
 
     def use_mqtt311(self) -> None:
         """Rule 3: MQTT 3.1.1 and a clean session from the next connection on."""
@@ -61,6 +92,7 @@ class Client(paho.Client):
         return rc
 
     def loop_misc(self) -> MQTTErrorCode:
+        self._unanswered()
         rc = super().loop_misc()
         tick = self.tick
         if tick is not None and rc == MQTTErrorCode.MQTT_ERR_SUCCESS:
@@ -93,3 +125,32 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
         )
         c.tls_insecure_set(settings.tls.insecure)
     return c
+
+
+def accepts_mqtt311(settings: MqttSettings, client_id: str, timeout_s: float = 5.0) -> bool:
+    """Rule 4: whether the broker accepts an MQTT 3.1.1 connection from this client now."""
+    c = new_client(settings, client_id)
+    c.use_mqtt311()
+    c.connect_timeout = timeout_s
+    answers: list[bool] = []
+
+    def on_connect(*args: object) -> None:
+        reason = args[3]
+        answers.append(not getattr(reason, "is_failure", True))
+
+    c.on_connect = on_connect
+    try:
+        c.connect(settings.host, settings.port, keepalive=max(5, settings.keepalive_s))
+    except (OSError, ValueError, ssl.SSLError):
+        return False
+    try:
+        deadline = time.monotonic() + timeout_s
+        while not answers and time.monotonic() < deadline:
+            if c.loop(timeout=0.1) != MQTTErrorCode.MQTT_ERR_SUCCESS:
+                break
+    finally:
+        with contextlib.suppress(Exception):
+            c.disconnect()
+        with contextlib.suppress(Exception):
+            c.loop(timeout=0.1)  # hands the DISCONNECT to the socket
+    return answers == [True]

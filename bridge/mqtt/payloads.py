@@ -23,7 +23,7 @@ from bridge.mqtt.call_payload import Called, CallError, parse_called
 from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
 from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
-from bridge.protocols.base import ModelSpec
+from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
 MAX_COMMAND_BYTES = 256
 MAX_NAME_CHARS = 64  # a preset's or a satellite's name
@@ -250,6 +250,11 @@ def parse_number(payload: bytes, what: str) -> float:
     return _number(_text(payload), what)
 
 
+def text(payload: bytes) -> str:
+    """A payload as text: UTF-8, stripped, not empty, not too large (PayloadError)."""
+    return _text(payload)
+
+
 def parse_switch(payload: bytes) -> bool:
     text = _text(payload).lower()
     if text in _TRUE:
@@ -300,6 +305,17 @@ class ConsoleFacts:
     satellites: tuple[str, ...] = ()  # the TLE file's names when the bridge started
 
 
+def setting_info(setting: Setting) -> dict[str, object]:
+    """What ``R/option/<name>`` takes, for R/info (protocols/base.py ``Setting``): its name,
+    label and kind, a number's range, step and unit, a choice's names."""
+    doc: dict[str, object] = {"name": setting.name, "label": setting.label, "kind": setting.kind}
+    if setting.kind is SettingKind.NUMBER:
+        doc.update(min=setting.minimum, max=setting.maximum, step=setting.step, unit=setting.unit)
+    elif setting.kind is SettingKind.CHOICE:
+        doc["choices"] = list(setting.choices)
+    return doc
+
+
 def info_json(
     name: str,
     spec: ModelSpec,
@@ -327,6 +343,7 @@ def info_json(
         "keep_out": [list(sector) for sector in pointing.keep_out],
         "park": list(pointing.park) if pointing.park is not None else None,
         "options": sorted(spec.options),
+        "settings": [setting_info(s) for s in spec.settings],
     }
     if console is not None:
         where = console.station

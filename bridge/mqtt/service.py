@@ -49,12 +49,18 @@ Rules:
    remote sends) is refused when it is older than its expiry, from the future or unreadable
    (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
    The same on the stop lane, for the lock OFF it carries out while the main connection is down.
+10. A group's commands (mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each member
+   (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
+   refused, and moving nothing), each handed to that member's own ``submit``. Refusals go on
+   ``G/error`` (rule 4's limit, per group) and in ``G/status``, each member's also on its own
+   ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import threading
 import time
 from collections.abc import Callable
 
@@ -75,23 +81,28 @@ from bridge.model import (
     RotatorHealth,
     RotatorStatus,
     SetOption,
+    SettingValue,
     Source,
     TakePath,
     Target,
     Toward,
     TrackBody,
+    setting_text,
     valid_operator,
 )
 from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.call_payload import Called
 from bridge.mqtt.feature_payloads import follow_state, tracking_state
+from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
+from bridge.mqtt.groups import status_json as group_status_json
 from bridge.mqtt.halts import Halts, switch_on
 from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
 from bridge.mqtt.topics import Topics
+from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
 
@@ -129,6 +140,10 @@ class MqttService:
         self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
         self._handed: dict[str, str] = {}  # rule 3: a status's payloads last handed on, by topic
         self._clock = clock
+        self._groups: dict[str, Group] = {}  # rule 10
+        self._latest: dict[str, RotatorStatus] = {}  # each rotator's last status, for its groups
+        self._group_refused: dict[str, dict[str, str]] = {}  # a group's last target's refusals
+        self._group_lock = threading.Lock()  # G/status from paho's thread and the lines thread
         self._halts = Halts(  # rule 5
             topics,
             publisher,
@@ -137,6 +152,8 @@ class MqttService:
             retain_is_live=retain_is_live,
             on_problem=on_problem,
             on_info=on_info,
+            groups=self._groups,
+            report_group=self._report_group,
         )
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
@@ -161,6 +178,10 @@ class MqttService:
             rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console, rotator.id
         )
         self._publisher.publish_retained(t.info, info)  # for clients far from the station
+
+    def attach_group(self, group: Group) -> None:
+        """Rule 10: a group of attached rotators."""
+        self._groups[group.id] = group
 
     def add_feature(
         self,
@@ -219,6 +240,7 @@ class MqttService:
         self._handed.clear()  # rule 3: offline is what the client holds now
         self._publisher.publish_offline_now(
             [self.topics.rotator(rid).availability for rid in self._rotators]
+            + [self.topics.group(gid).availability for gid in self._groups]
         )
         self._publisher.stop()
 
@@ -244,9 +266,9 @@ class MqttService:
         pub(t.availability, "online" if status.available else "offline")
         if status.version:
             pub(t.version, status.version)
-        for name in spec.options:
+        for name in spec.options:  # ON/OFF, a number, a choice's name (model.setting_text)
             if name in status.options:
-                pub(t.option_state(name), pl.switch(status.options[name]))
+                pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
             pub(t.tracking, tracking_state(status))
@@ -258,6 +280,10 @@ class MqttService:
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         pub(t.control, control.control_json(status.control))
+        self._latest[rotator_id] = status
+        for group in self._groups.values():
+            if rotator_id in group.member_ids:
+                self._publish_group(group, pub)
         for listener in self._status_listeners:
             listener(rotator_id, status)
 
@@ -283,6 +309,116 @@ class MqttService:
             _one_line(event.command or "input"),
             _one_line(str(doc["message"])),
         )
+
+    # -- groups (rule 10) ---------------------------------------------------------------------
+    def _publish_group(self, group: Group, pub: Callable[[str, str], None] | None = None) -> None:
+        """``G/status`` and ``G/availability`` from the members' last statuses."""
+        if pub is None:
+
+            def pub(topic: str, payload: str) -> None:
+                if self._handed.get(topic) != payload:
+                    self._handed[topic] = payload
+                    self._publisher.publish_retained(topic, payload)
+
+        g = self.topics.group(group.id)
+        with self._group_lock:  # the newest of both threads' statuses is the last published
+            statuses = {mid: self._latest.get(mid) for mid in group.member_ids}
+            refused = self._group_refused.get(group.id, {})
+            pub(g.availability, "online" if group_available(statuses) else "offline")
+            pub(g.status, group_status_json(group, statuses, refused))
+
+    def _report_group(self, group_id: str, message: str, command: str) -> None:
+        """A refusal of a group's command on ``G/error`` (rule 4's limit) and in the log."""
+        self._group_event(
+            group_id, json.dumps({"kind": "refused", "command": command, "message": message})
+        )
+
+    def _group_event(self, group_id: str, payload: str) -> None:
+        topic = self.topics.group(group_id).error
+        left_out = self._limiter.admit(topic)
+        if left_out is None:
+            return
+        doc = json.loads(payload)
+        doc["time"] = round(self._wall(), 3)
+        if left_out:
+            doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(topic, json.dumps(doc, separators=(",", ":")))
+        log.info(
+            "group %s: refused %s: %s",
+            group_id,
+            _one_line(str(doc.get("command") or "input")),
+            _one_line(str(doc["message"])),
+        )
+
+    def _group_message(
+        self,
+        group_id: str,
+        kind: str,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        origin: Origin,
+        gated: bool,
+        stamp: Stamp | None,
+    ) -> None:
+        """Rule 10: a group's stop or target from the main connection."""
+        group = self._groups.get(group_id)
+        if group is None:
+            return
+        self._halts.resend_if_due()
+        if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
+            self._halts.retained_deleted(topic)
+            return  # a retained command being deleted (rule 1)
+        what = pl.describe(kind, payload)
+        if kind == "stop":
+            if retain and not self._halts.retain_is_live:
+                self._halts.replayed_group_stop(group_id, topic, payload)
+            else:
+                self._halts.main_group_stop(group_id, topic, what, retain, origin)
+            return
+        why = None
+        if retain:
+            why = (
+                f"retained command on {topic} ignored: commands must be published without the "
+                "retain flag (clear it with an empty retained message)"
+            )
+        elif (late := self._late(stamp)) is not None:
+            why = late
+        elif gated:
+            why = "not taken: the bridge is still checking its base topic; send it again"
+        if why is not None:
+            self._report_group(group_id, why, what)
+            return
+        has_elevation = {
+            mid: rot.spec.has_elevation
+            for mid in group.member_ids
+            if (rot := self._rotators.get(mid)) is not None
+        }
+        try:
+            parts = fan_out(group, payload, has_elevation, origin)
+        except pl.PayloadError as exc:
+            self._report_group(group_id, str(exc), what)
+            return
+        refused: dict[str, str] = {}
+        for part in parts:  # rule 10: the others still turn (groups.py rule 3)
+            rot = self._rotators.get(part.member)
+            if rot is None:
+                continue
+            said = f"{what} (group {group_id})"
+            if part.target is None:
+                refused[part.member] = part.refused or "refused"
+                rot.report_refusal(refused[part.member], said, origin=origin)
+                continue
+            try:
+                rot.submit(part.target, said)
+            except Refused as exc:
+                refused[part.member] = exc.message
+        if refused:
+            self._group_event(group_id, refusals_json(group, what, refused))
+        if refused != self._group_refused.get(group_id, {}):  # a slider's flood: not each time
+            self._group_refused[group_id] = refused
+            self._publish_group(group)
 
     def publish_audit(self, rotator_id: str, event: AuditEvent) -> None:
         """Rule 8: ``R/audit``, rate-limited per rotator."""
@@ -341,6 +477,12 @@ class MqttService:
         """The main connection's messages, in the order the broker sent them (rule 5)."""
         route = self.topics.route(topic)
         if route is None:
+            group = self.topics.group_route(topic)
+            if group is not None:
+                gid, kind = group
+                origin = self.origin(operator)
+                self._group_message(gid, kind, topic, payload, retain, origin, gated, stamp)
+                return
             if topic == self.topics.bridge_fence:
                 self._halts.marker_back(payload)
                 return
@@ -405,7 +547,7 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
-        command = parse_command(kind, arg, payload, by)
+        command = parse_command(kind, arg, payload, by, rot.spec)
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
@@ -415,11 +557,13 @@ class MqttService:
 
 
 def parse_command(
-    kind: str, arg: str | None, payload: bytes, by: Origin
+    kind: str, arg: str | None, payload: bytes, by: Origin, spec: ModelSpec | None = None
 ) -> Command | Called | None:
     """A command topic's payload (everything but stop and lock) as the command it names, from
     ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
-    for a topic that carries no command."""
+    for a topic that carries no command. An option's value is read by ``spec``'s declaration
+    of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
+    text, to be refused there."""
     src = Source.MQTT
     if kind == "claim":
         operator, minutes = control.parse_claim(payload, by.operator)
@@ -457,8 +601,19 @@ def parse_command(
     if kind == "target_elevation":
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:
-        return SetOption(arg, pl.parse_switch(payload), src, origin=by)
+        return SetOption(arg, _setting_value(spec, arg, payload), src, origin=by)
     return None
+
+
+def _setting_value(spec: ModelSpec | None, name: str, payload: bytes) -> SettingValue:
+    """R/option/<name>'s payload by the setting's declaration (PayloadError if it refuses)."""
+    setting = spec.setting(name) if spec is not None else None
+    if setting is None or setting.kind is SettingKind.BOOL:
+        return pl.parse_switch(payload)  # the words of a bad switch as they always were
+    try:
+        return setting.read(pl.text(payload))
+    except ValueError as exc:
+        raise pl.PayloadError(str(exc)) from None
 
 
 LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line

@@ -152,6 +152,33 @@ class RotatorTopics:
 
 
 @dataclass(frozen=True)
+class GroupTopics:
+    """A group's topics (mqtt/groups.py), ``G`` = ``<base>/<group id>``."""
+
+    root: str
+
+    @property
+    def target(self) -> str:
+        return f"{self.root}/target"
+
+    @property
+    def stop(self) -> str:
+        return f"{self.root}/stop"
+
+    @property
+    def status(self) -> str:
+        return f"{self.root}/status"
+
+    @property
+    def availability(self) -> str:
+        return f"{self.root}/availability"
+
+    @property
+    def error(self) -> str:
+        return f"{self.root}/error"
+
+
+@dataclass(frozen=True)
 class DiscoveryTopics:
     """Home Assistant MQTT discovery: ``<prefix>/<platform>/<node_id>/<object_id>/config``."""
 
@@ -179,9 +206,13 @@ class DiscoveryTopics:
 
 
 class Topics:
-    def __init__(self, base: str, roots: dict[str, str]) -> None:
+    def __init__(
+        self, base: str, roots: dict[str, str], groups: dict[str, str] | None = None
+    ) -> None:
+        """``groups``: each group's root (settings.py ``group_topic``), by its id."""
         self.base = base
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
+        self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
 
     @property
     def bridge_state(self) -> str:
@@ -229,10 +260,24 @@ class Topics:
     def rotator(self, rotator_id: str) -> RotatorTopics:
         return self._rotators[rotator_id]
 
+    def group(self, group_id: str) -> GroupTopics:
+        return self._groups[group_id]
+
+    def group_route(self, topic: str) -> tuple[str, str] | None:
+        """A group's command topic as (group id, "target" or "stop"), else None."""
+        for gid, g in self._groups.items():
+            if topic == g.target:
+                return gid, "target"
+            if topic == g.stop:
+                return gid, "stop"
+        return None
+
     def subscriptions(self) -> list[str]:
         """The command topics of the main connection (stop and lock too: service.py rule 5),
         and the bridge's own markers (lastword.py rule 2)."""
         subs: list[str] = []
+        for g in self._groups.values():
+            subs += [g.target, g.stop]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track, t.follow]
@@ -247,7 +292,7 @@ class Topics:
         subs: list[str] = []
         for t in self._rotators.values():
             subs += [t.stop, t.lock]
-        return subs
+        return subs + [g.stop for g in self._groups.values()]
 
     def owned(self) -> list[str]:
         """Filters for the retained topics the bridge publishes (client.py rule 10 watches them
@@ -259,6 +304,8 @@ class Topics:
             subs += [t.follow_state]
             subs.append(t.health)
             subs += [t.control]
+        for g in self._groups.values():
+            subs += [g.status, g.availability]
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:

@@ -9,11 +9,18 @@ Rules:
    controller answers with its position); ``awaiting_reply`` says so, ``expire_query`` gives up
    on it after the engine's reply timeout. Anything else is junk, but for a controller that
    streams its position unasked (RC2800: a well-formed line of every axis is a reading).
+   ``OneQuery`` keeps that bookkeeping for the codecs that ask one question at a time.
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
    a JunkReason (UNTRUSTED: ask again; POWER_ON: the controller forgot its options), never on
    the bytes themselves.
+6. A controller setting (an option, a speed) is data: a ``Setting`` in the spec's ``settings``
+   says its kind (bool, number with range/step/unit, choice of named values), when it may be
+   sent, whether the controller forgets it at power-off, what it does to the rotor's speed,
+   and names the codec's function that turns a value into bytes. ``Setting.read`` is the one
+   judge of a value: anything outside the declaration is refused with words a user can act
+   on, and nothing is sent. A new setting is one encoder in its codec and one spec entry.
 """
 
 from __future__ import annotations
@@ -22,7 +29,9 @@ import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import ClassVar, Protocol
+
+from bridge.model import SettingValue
 
 
 @dataclass(frozen=True)
@@ -50,6 +59,9 @@ class JunkReason(enum.StrEnum):
     UNTRUSTED = "untrusted"
     # the controller announced that it was switched on: it has forgotten its options
     POWER_ON = "power_on"
+    # the controller answered a command with its refusal (GS-232's ``?>``): a target that went
+    # out and has not moved the rotor is dropped and reported, not waited on until a stall
+    REFUSED = "refused"
 
 
 @dataclass(frozen=True)
@@ -81,7 +93,11 @@ class Codec(Protocol):
     def encode_query(self) -> bytes | list[bytes] | None: ...
     def expire_query(self) -> None: ...
     def encode_version(self) -> bytes | None: ...
-    def encode_option(self, name: str, enabled: bool) -> bytes: ...
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        """An on/off option's bytes (ValueError where the model has none). The engine sends
+        every setting through its declaration's encoder (rule 6), which may call this."""
+        ...
+
     def feed(self, data: bytes) -> list[Reply]: ...
     def awaiting_reply(self) -> bool: ...
     def harmless(self, junk: bytes) -> bool:
@@ -101,18 +117,139 @@ class Codec(Protocol):
         ...
 
 
+class SettingKind(enum.StrEnum):
+    BOOL = "bool"  # on or off (ON/OFF on its topic): a Home Assistant switch
+    NUMBER = "number"  # a value in a range, on a step, in a unit: a Home Assistant number
+    CHOICE = "choice"  # one of named values: a Home Assistant select
+
+
+class SendWhen(enum.StrEnum):
+    """When the engine may write a setting (engine/options.py rule 1)."""
+
+    # only with the rotor at rest and settled, no target waiting (a controller that takes no
+    # input while turning, or stops on it: the Rotor-EZ)
+    AT_REST = "at_rest"
+    # whenever the line is free, turning or not (a controller that takes any command at any
+    # time and applies it to the move in progress: the GS-232's speed); never during a silent
+    # slew or before a stop that is due
+    ANYTIME = "anytime"
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One controller setting, as data (rule 6)."""
+
+    name: str  # the topic's last part (R/option/<name>), the state file's key
+    label: str  # what a user reads (Home Assistant's entity name, the docs)
+    encode: Callable[[SettingValue], bytes]  # the codec's: a value already ``read``, as bytes
+    kind: SettingKind = SettingKind.BOOL
+    minimum: float = 0.0  # NUMBER: the range, inclusive
+    maximum: float = 0.0
+    step: float = 1.0  # NUMBER: values are minimum + n * step
+    unit: str = ""  # NUMBER: e.g. "deg/s"
+    choices: tuple[str, ...] = ()  # CHOICE: the named values, in the order a user sees them
+    when: SendWhen = SendWhen.AT_REST
+    # the controller forgets it at power-off: sent again after every (re)connect, a power-on
+    # byte and while idle every OPTIONS_REFRESH_S (engine/options.py); False: sent once when set
+    resend: bool = True
+    # what it changes in the motion model: the rotor's speeds, both axes, are the configured
+    # (or nominal) ones times the factor of the value in effect (a choice's name or a number
+    # as text, "ON"/"OFF" for a bool); a value not named leaves them as they are
+    speed_factors: dict[str, float] = field(default_factory=dict)
+
+    def read(self, value: SettingValue) -> SettingValue:
+        """``value`` (typed, or text as a user sent it) as this setting's own type, or
+        ValueError with words a user can act on (rule 6)."""
+        if self.kind is SettingKind.BOOL:
+            return _read_bool(self.name, value)
+        if self.kind is SettingKind.CHOICE:
+            text = str(value).strip() if not isinstance(value, bool) else ""
+            for choice in self.choices:
+                if text.casefold() == choice.casefold():
+                    return choice
+            raise ValueError(
+                f"{self.name}: {str(value)[:20]!r} is not one of {', '.join(self.choices)}"
+            )
+        return self._read_number(value)
+
+    def _read_number(self, value: SettingValue) -> float:
+        try:
+            if isinstance(value, bool):
+                raise ValueError
+            number = float(value)
+        except ValueError:
+            raise ValueError(f"{self.name}: expected a number, got {str(value)[:20]!r}") from None
+        unit = f" {self.unit}" if self.unit else ""
+        span = f"{self.minimum:g}..{self.maximum:g}{unit}"
+        if not math.isfinite(number) or not self.minimum <= number <= self.maximum:
+            raise ValueError(f"{self.name}: {number:g} is outside {span}")
+        steps = (number - self.minimum) / self.step
+        if abs(steps - round(steps)) > 1e-6:
+            raise ValueError(f"{self.name}: {number:g} is not on a step of {self.step:g} in {span}")
+        return number
+
+    def speed_factor(self, value: SettingValue) -> float:
+        """What ``value`` does to the rotor's speeds (1.0: nothing)."""
+        if isinstance(value, bool):
+            key = "ON" if value else "OFF"
+        else:
+            key = f"{value:g}" if isinstance(value, float | int) else value
+        return self.speed_factors.get(key, 1.0)
+
+
+def _read_bool(name: str, value: SettingValue) -> bool:
+    if isinstance(value, bool):
+        return value
+    text = str(value).strip().lower()
+    if text in ("on", "1", "true"):
+        return True
+    if text in ("off", "0", "false"):
+        return False
+    raise ValueError(f"{name}: expected ON or OFF, got {str(value)[:20]!r}")
+
+
 class Plain:
-    """What most codecs send nothing for: no version query, no motion switch, nothing at
-    connect. A codec that has one of them writes its own."""
+    """What most codecs send nothing for: no version query, no options, no motion switch,
+    nothing at connect (RT-21, GS-232, Easycomm, SPID, RC2800, Prosistel). The codec names its
+    controller in ``BOX``; a codec that has one of them writes its own."""
+
+    BOX: ClassVar[str]
 
     def encode_version(self) -> bytes | None:
         return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError(f"{self.BOX} has no options the bridge switches")
 
     def encode_enable(self) -> bytes | None:
         return None
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return []
+
+
+class OneQuery(Plain):
+    """Rule 3's bookkeeping for a controller asked one question at a time (GS-232, Easycomm,
+    RT-21, Prosistel): the query open and whether junk came within it. The codec calls
+    ``_open_query`` from encode_query and ``_junk`` for bytes that are no reply."""
+
+    _query_open: bool = False
+    _noisy: bool = False  # junk arrived since the query was opened
+
+    def _open_query(self) -> None:
+        self._query_open = True
+        self._noisy = False
+
+    def expire_query(self) -> None:
+        self._query_open = False
+
+    def awaiting_reply(self) -> bool:
+        return self._query_open
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        if self._query_open:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
 
 
 def tenths(value_deg: float, top_deg: float, axis: str) -> float:
@@ -165,7 +302,7 @@ class ModelSpec:
     can_report_position: bool = True
     has_elevation: bool = False
     has_version: bool = False
-    options: tuple[str, ...] = ()
+    settings: tuple[Setting, ...] = ()  # the controller's own settings, as data (rule 6)
     brake_delay_s: float = 0.0
     retarget: RetargetPolicy = RetargetPolicy.DIRECT
     az_min_deg: float = 0.0
@@ -192,7 +329,6 @@ class ModelSpec:
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
     nominal_speed_deg_s: float = 6.0
-    option_labels: dict[str, str] = field(default_factory=dict)
     # one position poll on the wire: the query frame and the controller's reply to it, in bytes
     # (0 and 0 for a controller that cannot be asked); the default idle poll interval comes
     # from these (default_idle_poll_interval_s)
@@ -203,6 +339,14 @@ class ModelSpec:
     hamlib_rot_type: HamlibRotType = field(kw_only=True)
     # get_info's text; None where Hamlib's backend has no get_info (rotctld then says "None")
     hamlib_info: str | None = field(default=None, kw_only=True)
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        """The names of the controller's settings (R/option/<name>), in declared order."""
+        return tuple(s.name for s in self.settings)
+
+    def setting(self, name: str) -> Setting | None:
+        return next((s for s in self.settings if s.name == name), None)
 
     def speeds_deg_s(
         self, az_deg_s: float | None = None, el_deg_s: float | None = None

@@ -52,6 +52,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    OneQuery,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -75,9 +76,11 @@ _ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
 _CHATTER = re.compile(rb"[\r\n ]*")
 
 
-class EasycommCodec:
+class EasycommCodec(OneQuery):
     """Codec for one Easycomm controller: ``version`` 2 or 3, ``elevation`` whether it drives an
     elevation rotor, ``separate`` whether it is asked AZ and EL on lines of their own."""
+
+    BOX = "an Easycomm controller"
 
     def __init__(self, version: int = 2, *, elevation: bool = True, separate: bool = False) -> None:
         if version not in (2, 3):
@@ -105,27 +108,14 @@ class EasycommCodec:
         return b"SA SE\n"
 
     def encode_query(self) -> bytes:
-        self._query_open = True
-        self._noisy = False
+        self._open_query()
         self._az = self._el = None
         if not self.elevation:
             return b"AZ\n"
         return b"AZ\nEL\n" if self.separate else b"AZ EL\n"
 
-    def expire_query(self) -> None:
-        self._query_open = False
-
-    def awaiting_reply(self) -> bool:
-        return self._query_open
-
     def encode_version(self) -> bytes | None:
         return b"VE\n" if self.version == 3 else None
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("an Easycomm controller has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return [b"VE\n"] if self.version == 3 else []
@@ -188,11 +178,6 @@ class EasycommCodec:
             out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
             return
         out.append(PositionReply(self._az, self._el if self.elevation else None))
-
-    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
-        if self._query_open:
-            self._noisy = True
-        out.append(JunkReply(raw, reason, why))
 
 
 def _spec(name: str, display: str, version: int, *, elevation: bool, separate: bool) -> ModelSpec:

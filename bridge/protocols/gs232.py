@@ -16,8 +16,9 @@ Frames we send:
                   Yaesu's boxes, one or none on some clones)
   ``S\\r``         stop both axes (``A`` and ``E`` stop one axis: AXIS_STOPS, not used by the
                   engine, which always stops everything)
-Not sent: ``X1``-``X4`` (speed) and ``P36``/``P45`` (the box's range) are the controller's own
-settings; ``R L U D`` (turn until stopped) have no place in a bridge that sends bearings.
+  ``Xn\\r``        the speed setting ``speed``, n = 1 (slowest) .. 4 (fastest), answered by a CR
+Not sent: ``P36``/``P45`` (the box's range) is the controller's own setting; ``R L U D`` (turn
+until stopped) have no place in a bridge that sends bearings.
 
 Rules:
 1. Replies are lines ended by CR or LF; blank lines (the CR answering ``M W S``, K3NG's blank
@@ -28,7 +29,7 @@ Rules:
    A reply of the other form names the other model in its detail (a box set up as the wrong
    model). A reply with junk in front of it on its line is not trusted (UNTRUSTED: the engine
    asks again at once).
-3. ``?>`` (the box refused a command) is junk with its own detail, whenever it comes and
+3. ``?>`` (the box refused a command) is junk of its own reason (REFUSED), whenever it comes and
    whether or not a CR follows; it never closes a query (its reply, if any, still may come).
 4. Targets are whole degrees, rounded half up, three digits; outside 0..450 (azimuth) or
    0..180 (elevation) they are refused before anything is sent.
@@ -40,15 +41,19 @@ import math
 import re
 from typing import Any
 
+from bridge.model import SettingValue
 from bridge.protocols.base import (
     HamlibRotType,
     JunkReason,
     JunkReply,
     ModelSpec,
-    Plain,
+    OneQuery,
     PositionReply,
     Reply,
     RetargetPolicy,
+    SendWhen,
+    Setting,
+    SettingKind,
 )
 
 AZ_MAX_DEG = 450  # the widest range the commands carry (the 450-degree models)
@@ -76,9 +81,11 @@ def _degrees(value: float, top: int, axis: str) -> int:
     return whole
 
 
-class Gs232Codec(Plain):
+class Gs232Codec(OneQuery):
     """Codec for one GS-232 box: ``variant`` "a" or "b" (its reply form), ``elevation`` whether
     an elevation rotor hangs on it (``W``/``C2``, else ``M``/``C``)."""
+
+    BOX = "the GS-232"
 
     def __init__(self, variant: str = "b", *, elevation: bool = True) -> None:
         if variant not in ("a", "b"):
@@ -107,18 +114,8 @@ class Gs232Codec(Plain):
         return b"S\r"
 
     def encode_query(self) -> bytes:
-        self._query_open = True
-        self._noisy = False
+        self._open_query()
         return b"C2\r" if self.elevation else b"C\r"
-
-    def expire_query(self) -> None:
-        self._query_open = False
-
-    def awaiting_reply(self) -> bool:
-        return self._query_open
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("the GS-232 has no options the bridge switches")
 
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None
@@ -135,7 +132,8 @@ class Gs232Codec(Plain):
                 if refused:  # what came before it on its line
                     self._line(bytes(self._buf[:refused]), out)
                 del self._buf[: refused + len(REFUSED)]
-                self._junk(REFUSED, JunkReason.NOISE, "the controller refused a command (?>)", out)
+                why = "the controller refused a command (?>)"
+                self._junk(REFUSED, JunkReason.REFUSED, why, out)
                 continue
             if end == -1:
                 if len(self._buf) > _MAX_LINE:
@@ -178,10 +176,26 @@ class Gs232Codec(Plain):
         else:
             out.append(PositionReply(float(az)))  # an azimuth box that also says EL: dropped
 
-    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
-        if self._query_open:
-            self._noisy = True
-        out.append(JunkReply(raw, reason, why))
+
+def encode_speed(level: SettingValue) -> bytes:
+    """``X1``..``X4``: the box's speed, 1 the slowest (Yaesu's table; Hamlib's gs232a
+    set_level SPEED sends the same)."""
+    return b"X%s\r" % str(level).encode("ascii")
+
+
+# The box takes X at any time and applies it to the turn in progress; it is back at its own
+# speed after a power-off, so it is sent again. The factors (a quarter per step, X4 full speed)
+# are an estimate: Yaesu's documents name the steps, not their speeds.
+SPEED = Setting(
+    "speed",
+    "Speed (1 slowest, 4 fastest)",
+    encode_speed,
+    kind=SettingKind.CHOICE,
+    choices=("1", "2", "3", "4"),
+    when=SendWhen.ANYTIME,
+    resend=True,
+    speed_factors={"1": 0.25, "2": 0.5, "3": 0.75, "4": 1.0},
+)
 
 
 def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) -> ModelSpec:
@@ -212,6 +226,7 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         reply_bytes=len(reply),
         hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's gs232a backend has no get_info
+        settings=(SPEED,),
     )
     defaults.update(kw)
     return ModelSpec(name=name, display_name=display, **defaults)

@@ -69,6 +69,8 @@ _LINES = re.compile(rb"[^\r\n]*[\r\n]")
 class Rc2800Codec(Plain):
     """Codec for one RC2800: ``elevation`` whether an elevation rotor hangs on it."""
 
+    BOX = "the RC2800"
+
     def __init__(self, *, elevation: bool = True) -> None:
         self.elevation = elevation
         self._axes = b"AE" if elevation else b"A"
@@ -104,9 +106,6 @@ class Rc2800Codec(Plain):
 
     def awaiting_reply(self) -> bool:
         return bool(self._want)
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("the RC2800 has no options the bridge switches")
 
     def harmless(self, junk: bytes) -> bool:
         """Echoes, blank lines and well-formed position lines (rule 1); an error is not."""

@@ -31,8 +31,10 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from typing import Any
 
+from bridge.model import SettingValue
 from bridge.protocols.base import (
     Codec,
     HamlibRotType,
@@ -42,6 +44,8 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     RetargetPolicy,
+    SendWhen,
+    Setting,
     VersionReply,
 )
 
@@ -57,6 +61,7 @@ OPTION_LABELS = {
     "overshoot": "Overshoot option",
     "unstick": "Unstick option",
 }
+
 
 POWER_ON_BYTE = 0xE0  # sent once when the board is switched on (Hamlib's README.rotorez)
 _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
@@ -193,6 +198,20 @@ class RotorEzCodec:
         junk.clear()
 
 
+def _letter(name: str) -> Callable[[SettingValue], bytes]:
+    """The encoder of one option: the codec's letter, upper-case for on, lower-case for off."""
+    codec = RotorEzCodec()
+    return lambda enabled: codec.encode_option(name, bool(enabled))
+
+
+# the Rotor-EZ's options: sent only at rest (the board stops on any input while turning) and
+# again after a power-on (it forgets them)
+OPTION_SETTINGS = tuple(
+    Setting(name, OPTION_LABELS[name], _letter(name), when=SendWhen.AT_REST, resend=True)
+    for name in OPTION_LETTERS
+)
+
+
 def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
     defaults: dict[str, Any] = dict(
         baud=4800,
@@ -204,7 +223,6 @@ def _spec(name: str, display: str, manufacturer: str, **kw: Any) -> ModelSpec:
         reply_timeout_s=0.25,
         noise_deg=2.0,
         nominal_speed_deg_s=6.0,
-        option_labels=OPTION_LABELS,
         whole_degrees=True,
         query_bytes=4,  # AI1;
         reply_bytes=4,  # ;xxx
@@ -220,7 +238,7 @@ MODELS: dict[str, ModelSpec] = {
         "Rotor-EZ",
         "Idiom Press",
         codec_factory=RotorEzCodec,
-        options=tuple(OPTION_LETTERS),
+        settings=OPTION_SETTINGS,
         brake_delay_s=5.0,
         hamlib_model=401,
         hamlib_info="Rotor-EZ",

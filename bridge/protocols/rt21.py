@@ -41,7 +41,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
-    Plain,
+    OneQuery,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -65,8 +65,10 @@ def tenths(az_deg: float) -> float:
     return value / 10
 
 
-class Rt21Codec(Plain):
+class Rt21Codec(OneQuery):
     """Codec for one RT-21 box (one axis: azimuth)."""
+
+    BOX = "the RT-21"
 
     def __init__(self) -> None:
         self._buf = bytearray()
@@ -84,18 +86,8 @@ class Rt21Codec(Plain):
         return b";"
 
     def encode_query(self) -> bytes:
-        self._query_open = True
-        self._noisy = False
+        self._open_query()
         return b"BI1;"
-
-    def expire_query(self) -> None:
-        self._query_open = False
-
-    def awaiting_reply(self) -> bool:
-        return self._query_open
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("the RT-21 has no options the bridge switches")
 
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None
@@ -111,10 +103,10 @@ class Rt21Codec(Plain):
         tail = _PARTIAL.search(self._buf)
         start = tail.start() if tail is not None else len(self._buf)
         if start:  # rule 2: these bytes begin no reply, whatever follows
-            self._junk(bytes(self._buf[:start]), "not a reply", out)
+            self._junk(bytes(self._buf[:start]), JunkReason.NOISE, "not a reply", out)
             del self._buf[:start]
         if len(self._buf) > _MAX_PENDING:
-            self._junk(bytes(self._buf), "reply too long", out)
+            self._junk(bytes(self._buf), JunkReason.NOISE, "reply too long", out)
             self._buf.clear()
         return out
 
@@ -125,14 +117,14 @@ class Rt21Codec(Plain):
             return
         m = _REPLY.fullmatch(raw)
         if m is None:
-            self._junk(frame, "not a reply", out)
+            self._junk(frame, JunkReason.NOISE, "not a reply", out)
             return
         if m.group("pre"):
-            self._junk(m.group("pre"), "not a reply", out)
+            self._junk(m.group("pre"), JunkReason.NOISE, "not a reply", out)
         value = float(m.group("deg"))
         reading = m.group("deg") + b";"
         if value > AZ_MAX_DEG:
-            self._junk(reading, "bearing out of range", out, JunkReason.SPOILED)
+            self._junk(reading, JunkReason.SPOILED, "bearing out of range", out)
             return
         if not self._query_open:
             out.append(JunkReply(reading, JunkReason.UNSOLICITED, "bearing nobody asked for"))
@@ -142,13 +134,6 @@ class Rt21Codec(Plain):
             out.append(JunkReply(reading, JunkReason.UNTRUSTED, "bearing after line noise"))
             return
         out.append(PositionReply(value))
-
-    def _junk(
-        self, raw: bytes, why: str, out: list[Reply], reason: JunkReason = JunkReason.NOISE
-    ) -> None:
-        if self._query_open:
-            self._noisy = True
-        out.append(JunkReply(raw, reason, why))
 
 
 def _spec(**kw: Any) -> ModelSpec:

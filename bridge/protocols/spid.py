@@ -54,6 +54,8 @@ def _frame(k: int, body: bytes = bytes(10)) -> bytes:
 
 
 class SpidCodec(Plain):
+    BOX = "a SPID controller"
+
     def __init__(self, variant: str = "rot2prog") -> None:
         if variant not in ("rot2prog", "rot1prog", "md01"):
             raise ValueError(f"unknown SPID variant {variant!r}")
@@ -73,9 +75,6 @@ class SpidCodec(Plain):
     def encode_stop(self) -> bytes:
         self._owed += 1
         return _frame(K_STOP)
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("SPID controllers have no options")
 
     def expire_query(self) -> None:
         self._owed = 0

@@ -16,7 +16,14 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from bridge.model import Control, MotionState, RotatorStatus, TargetInfo, TrackingInfo
+from bridge.model import (
+    Control,
+    MotionState,
+    RotatorStatus,
+    SettingValue,
+    TargetInfo,
+    TrackingInfo,
+)
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
@@ -56,6 +63,15 @@ class Info:
         )
         rid = doc.get("id")
         return cls(str(doc.get("name") or model), spec, aim, rid if isinstance(rid, str) else None)
+
+
+def _setting(value: object) -> SettingValue:
+    """A setting's value as the status carries it: on/off, a number or a choice's name."""
+    if isinstance(value, bool | str):
+        return value
+    if isinstance(value, int | float):
+        return float(value)
+    return bool(value)
 
 
 def _finite(value: object) -> float:
@@ -155,7 +171,9 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
         last_command_source=doc.get("last_command_source"),
         estimated=bool(doc.get("estimated")),
         parked=bool(doc.get("parked")),
-        options={str(k): bool(v) for k, v in options.items()} if isinstance(options, dict) else {},
+        options={str(k): _setting(v) for k, v in options.items()}
+        if isinstance(options, dict)
+        else {},
         controller_time=doc.get("controller_time"),
         expected_end_unix=_unix(doc.get("expected_end")),
         raw_bearing_deg=num("raw_bearing"),

@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 from types import FrameType
 from typing import Protocol
 
-from bridge.gs232 import easycomm_pty, easycomm_server, gs232_pty, gs232_server
+from bridge.gs232 import EMULATIONS
 from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.heartbeat import SILENT_S
 from bridge.mqtt.remote import RemoteLink
@@ -165,10 +165,12 @@ class Remote:
             where = str(offer.where)
             if offer.key == "rotctld_port":
                 self.servers.append(RotctldServer(rot, int(offer.where), offer.bind))
-            elif offer.key == "gs232_port":
-                self.servers.append(gs232_server(rot, int(offer.where), offer.bind))
-            elif offer.key == "easycomm_port":
-                self.servers.append(easycomm_server(rot, int(offer.where), offer.bind))
+            elif emulation := EMULATIONS.get(offer.key.rsplit("_", 1)[0]):
+                options = emulation.options_of(ep)  # gs232/'s rule 11: one table
+                if offer.transport == "pty":
+                    self.servers.append(emulation.pty(rot, where, **options))
+                else:
+                    self.servers.append(emulation.server(rot, int(where), offer.bind, **options))
             elif offer.key == "pst_udp_port":
                 self.loggers.add_pst(rot, int(offer.where), offer.bind)
                 if offer.bind not in ("127.0.0.1", "::1", "localhost"):  # as tcplines.py warns
@@ -179,10 +181,6 @@ class Remote:
                         offer.bind,
                         where,
                     )
-            elif offer.key == "gs232_pty":
-                self.servers.append(gs232_pty(rot, where))
-            elif offer.key == "easycomm_pty":
-                self.servers.append(easycomm_pty(rot, where))
             name = offer.key.rsplit("_", 1)[0].replace("_", " ")  # gs232, pst udp, ...
             said.append(f"{name} {offer.bind}:{where}" if offer.bind else f"{name} {where}")
         return said

@@ -8,7 +8,7 @@ Rules:
    take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
    client hears its replies on port + 1), a pty's path; nor the console's web.port.
 3. A problem is a ConfigError naming the key as the file spells it, one line each.
-4. An endpoint offers one thing at least (rotctld, GS-232 or Easycomm on TCP or a pty,
+4. An endpoint offers one thing at least (rotctld, GS-232, Easycomm or DCU-1 on TCP or a pty,
    PstRotator UDP); every bind is loopback unless set.
 5. ``[web]`` is the bridge's own table (WebSettings), with its refusal of a console beyond
    loopback without a password.
@@ -20,7 +20,7 @@ import hashlib
 import os
 import re
 import socket
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -43,8 +43,10 @@ OFFERS = (
     ("gs232_port", "gs232_bind", "tcp"),
     ("easycomm_port", "easycomm_bind", "tcp"),
     ("pst_udp_port", "pst_udp_bind", "udp"),
+    ("dcu1_port", "dcu1_bind", "tcp"),
     ("gs232_pty", None, "pty"),
     ("easycomm_pty", None, "pty"),
+    ("dcu1_pty", None, "pty"),
 )
 
 
@@ -88,6 +90,16 @@ class Endpoint(_Strict):
     easycomm_port: int | None = _port("an Easycomm II TCP port (rotctl -m 202)")
     easycomm_bind: str = _bind("Easycomm port")
     easycomm_pty: str | None = _pty("Easycomm II")
+    gs232_replies: Literal["A", "B"] = Field(
+        "B",
+        description="the GS-232 endpoints' readings: B as a GS-232B (AZ=120  EL=000), A as a "
+        "GS-232A (+0120+0000: ARSVCOM, PstRotatorAz, rotctl -m 601)",
+    )
+    dcu1_port: int | None = _port(
+        "a Hy-Gain DCU-1 / Rotor-EZ TCP port (DXView, DXbase, WriteLog, Win-EQF; rotctl -m 401)"
+    )
+    dcu1_bind: str = _bind("DCU-1 port")
+    dcu1_pty: str | None = _pty("DCU-1 / Rotor-EZ (rotctl -m 401 -r PATH)")
     pst_udp_port: int | None = _port(
         "a PstRotator-style UDP port (replies go to the sender's port + 1)"
     )

@@ -226,7 +226,13 @@ class WsjtxListener:
             self.counts.ignored += 1
             return
         self.counts.statuses += 1
-        heard = Heard(message.dx_call, message.dx_grid, message.transmitting, message.instance)
+        heard = Heard(
+            message.dx_call,
+            message.dx_grid,
+            message.transmitting,
+            message.instance,
+            message.dial_hz,
+        )
         for rotator in self.rotators:
             try:
                 rotator.heard(heard)

@@ -1,8 +1,12 @@
-"""Shared fixture: emulated controllers on ptys (links under tmp_path), closed after the test."""
+"""Shared fixtures: emulated controllers on ptys (links under tmp_path), closed after the test;
+real pyserial clients on them; Hamlib's rotctl as their judge."""
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -10,11 +14,19 @@ from typing import Any
 import pytest
 import serial
 
-from bridge.emulators import EmulatedPort, start
-from tests.support.hamlib import Rotctl, rotctl_argv, run
+from bridge.emulators import EmulatedPort, Responder, start
+from tests.support import ROOT
 from tests.support.waiting import slow
 
 PortFactory = Callable[..., EmulatedPort[Any]]
+
+
+def ask(device: Responder, data: bytes, now: float) -> bytes:
+    """A sans-IO emulator's whole answer to ``data`` sent at ``now`` (or at the device's
+    latest instant, if later: time never goes back)."""
+    now = device.state(now).time_s
+    device.receive(data, now)
+    return device.due_output(now + 0.1)
 
 
 @pytest.fixture
@@ -54,15 +66,40 @@ def clients() -> Iterator[Callable[..., serial.Serial]]:
             pass
 
 
+Hamlib = Callable[..., list[str]]
+
+
 @pytest.fixture
-def rotctl_run(rotctl_path: str) -> Rotctl:
-    """Hamlib's rotctl, the emulators' judge: ``rotctl_run(hamlib_model, port, baud, *commands)``
-    runs it once on the port's link (tests/support/hamlib.py reads what it printed)."""
+def hamlib(rotctl_path: str) -> Hamlib:
+    """``hamlib(1701, port, "p")``: Hamlib's rotctl as that model on the emulator's link, at the
+    baud rate given (9600 unless told); what it printed, word by word (it must succeed)."""
 
-    def judged(
-        hamlib_model: int, port: EmulatedPort[Any], baud: int, *commands: str
-    ) -> subprocess.CompletedProcess[str]:
+    def run(model: int, port: EmulatedPort[Any], *commands: str, baud: int = 9600) -> list[str]:
         assert port.link is not None
-        return run([*rotctl_argv(rotctl_path, hamlib_model, port.link, baud), *commands])
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(model), "-r", port.link]
+        argv += ["-s", str(baud), *commands]
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
+        return done.stdout.split()
 
-    return judged
+    return run
+
+
+@contextlib.contextmanager
+def served(model: str, link: Path, *options: str) -> Iterator[None]:
+    """``rotor-bridge emulate MODEL --link LINK OPTIONS`` (here ``python -m bridge.emulators``)
+    as a process of its own, once it has printed its device and its link; at the end it must
+    take SIGTERM and exit with status 0."""
+    argv = [sys.executable, "-m", "bridge.emulators", model, "--link", str(link), *options]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("/dev/pts/")
+        assert proc.stdout.readline().strip() == str(link)
+        yield
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=slow(10)) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -10,29 +10,59 @@ no answer from those (``-separate`` here) but still sets and stops them. rotctl 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import subprocess
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from bridge.emulators.easycomm import Outcome
+from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.emulators.pty import EmulatedPort
-from tests.support.hamlib import Rotctl, commands, emulate_and_drive, values
+from tests.emulators.conftest import served
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
-PortFactory = Callable[..., EmulatedPort[Any]]
+PortFactory = Callable[..., EmulatedPort[EasycommController]]
+Rotctl = Callable[..., subprocess.CompletedProcess[str]]
 
 
 @pytest.fixture
-def easycomm_port(make_port: PortFactory) -> PortFactory:
-    return make_port
+def easycomm_port(tmp_path: Path) -> Iterator[PortFactory]:
+    ports: list[EmulatedPort[EasycommController]] = []
+
+    def factory(model: str, **options: Any) -> EmulatedPort[EasycommController]:
+        link = tmp_path / f"tty-{model}-{len(ports)}"
+        device = EasycommController(model, now=time.monotonic(), **options)
+        port = EmulatedPort(device, link=link, name=model)
+        ports.append(port)
+        return port
+
+    yield factory
+    for port in ports:
+        port.close()
 
 
 @pytest.fixture
-def rotctl(rotctl_run: Rotctl) -> Rotctl:
-    return lambda model, port, *commands: rotctl_run(model, port, 19200, *commands)
+def rotctl(rotctl_path: str) -> Rotctl:
+    def run(hamlib_model: int, port: EmulatedPort[EasycommController], *commands: str) -> Any:
+        assert port.link is not None
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
+        argv += ["-s", "19200", *commands]
+        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+
+    return run
+
+
+def values(result: subprocess.CompletedProcess[str]) -> list[str]:
+    assert result.returncode == 0, f"rotctl failed: {result.stdout!r} {result.stderr[-800:]!r}"
+    return result.stdout.split()
+
+
+def commands(port: EmulatedPort[EasycommController]) -> list[tuple[bytes, str]]:
+    return [(f.data, f.outcome) for f in port.log()]
 
 
 @pytest.mark.parametrize(("model", "hamlib"), [("easycomm2", 202), ("easycomm3", 204)])
@@ -102,11 +132,13 @@ def test_rotor_bridge_emulate_serves_an_easycomm_controller_that_hamlib_drives(
 ) -> None:
     """``rotor-bridge emulate easycomm2`` (here ``python -m bridge.emulators``), answering in
     whole degrees as some firmware does."""
-    options = ["--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"]
-    done = emulate_and_drive(
-        tmp_path, rotctl_path, "easycomm2", options, (202, 19200), "p", "P", "40", "20", "S"
-    )
-    assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
+    link = tmp_path / "easycomm"
+    with served(
+        "easycomm2", link, "--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"
+    ):
+        run = [rotctl_path, "-m", "202", "-r", str(link), "-s", "19200", "p", "P", "40", "20", "S"]
+        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
 
 
 @pytest.mark.parametrize(("model", "hamlib"), [("easycomm2-az", 202), ("easycomm3-az", 204)])

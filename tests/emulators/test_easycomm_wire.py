@@ -6,14 +6,7 @@ from __future__ import annotations
 
 from bridge import emulators
 from bridge.emulators.easycomm import EasycommController, Outcome
-
-
-def ask(device: EasycommController, line: bytes, now: float) -> bytes:
-    """The whole answer to ``line`` sent at ``now`` (or at the device's latest instant, if later:
-    time never goes back)."""
-    now = device.state(now).time_s
-    device.receive(line, now)
-    return device.due_output(now + 0.1)
+from tests.emulators.conftest import ask
 
 
 def test_the_reply_forms() -> None:

@@ -9,29 +9,58 @@ first CR or LF and flushes the rest before the next command. rotctl must be inst
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import subprocess
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from bridge.emulators.gs232 import Outcome
+from bridge.emulators.gs232 import Gs232, Outcome
 from bridge.emulators.pty import EmulatedPort
-from tests.support.hamlib import Rotctl, commands, emulate_and_drive, values
+from tests.emulators.conftest import served
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
-PortFactory = Callable[..., EmulatedPort[Any]]
+PortFactory = Callable[..., EmulatedPort[Gs232]]
+Rotctl = Callable[..., subprocess.CompletedProcess[str]]
 
 
 @pytest.fixture
-def gs232_port(make_port: PortFactory) -> PortFactory:
-    return make_port
+def gs232_port(tmp_path: Path) -> Iterator[PortFactory]:
+    ports: list[EmulatedPort[Gs232]] = []
+
+    def factory(model: str, **options: Any) -> EmulatedPort[Gs232]:
+        link = tmp_path / f"tty-{model}-{len(ports)}"
+        port = EmulatedPort(Gs232(model, now=time.monotonic(), **options), link=link, name=model)
+        ports.append(port)
+        return port
+
+    yield factory
+    for port in ports:
+        port.close()
 
 
 @pytest.fixture
-def rotctl(rotctl_run: Rotctl) -> Rotctl:
-    return lambda model, port, *commands: rotctl_run(model, port, 9600, *commands)
+def rotctl(rotctl_path: str) -> Rotctl:
+    def run(hamlib_model: int, port: EmulatedPort[Gs232], *commands: str) -> Any:
+        assert port.link is not None
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
+        argv += ["-s", "9600", *commands]
+        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+
+    return run
+
+
+def values(result: subprocess.CompletedProcess[str]) -> list[str]:
+    assert result.returncode == 0, f"rotctl failed: {result.stdout!r} {result.stderr[-800:]!r}"
+    return result.stdout.split()
+
+
+def commands(port: EmulatedPort[Gs232]) -> list[tuple[bytes, str]]:
+    return [(f.data, f.outcome) for f in port.log()]
 
 
 @pytest.mark.parametrize(("model", "hamlib"), [("gs232a", 601), ("gs232b", 603)])
@@ -91,8 +120,10 @@ def test_rotor_bridge_emulate_serves_a_gs232b_that_hamlib_drives(
     tmp_path: Path, rotctl_path: str
 ) -> None:
     """``rotor-bridge emulate gs232b`` (here ``python -m bridge.emulators``), K3NG-style."""
-    options = ["--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"]
-    done = emulate_and_drive(
-        tmp_path, rotctl_path, "gs232b", options, (603, 9600), "p", "P", "40", "20", "S"
-    )
-    assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
+    link = tmp_path / "gs232"
+    with served(
+        "gs232b", link, "--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"
+    ):
+        run = [rotctl_path, "-m", "603", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
+        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done

@@ -7,14 +7,7 @@ import pytest
 
 from bridge import emulators
 from bridge.emulators.gs232 import Gs232, Outcome
-
-
-def ask(device: Gs232, line: bytes, now: float) -> bytes:
-    """The whole answer to ``line`` sent at ``now`` (or at the device's latest instant, if later:
-    time never goes back)."""
-    now = device.state(now).time_s
-    device.receive(line, now)
-    return device.due_output(now + 0.1)
+from tests.emulators.conftest import ask
 
 
 def test_the_replies_of_both_forms() -> None:

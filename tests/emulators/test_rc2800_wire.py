@@ -9,12 +9,7 @@ import pytest
 
 from bridge import emulators
 from bridge.emulators.rc2800 import Outcome, Rc2800
-
-
-def ask(device: Rc2800, data: bytes, now: float) -> bytes:
-    """The whole answer to ``data`` sent at ``now``."""
-    device.receive(data, now)
-    return device.due_output(now + 0.1)
+from tests.emulators.conftest import ask
 
 
 def test_each_command_is_answered_by_its_axis_line() -> None:

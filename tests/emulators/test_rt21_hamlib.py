@@ -9,29 +9,58 @@ judge is a failure, never a skip.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import subprocess
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from bridge.emulators.pty import EmulatedPort
-from bridge.emulators.rt21 import Outcome
-from tests.support.hamlib import Rotctl, commands, emulate_and_drive, values
+from bridge.emulators.rt21 import Outcome, Rt21
+from tests.emulators.conftest import served
+from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
-PortFactory = Callable[..., EmulatedPort[Any]]
+PortFactory = Callable[..., EmulatedPort[Rt21]]
+Rotctl = Callable[..., subprocess.CompletedProcess[str]]
 
 
 @pytest.fixture
-def rt21_port(make_port: PortFactory) -> PortFactory:
-    return lambda **options: make_port("rt21", **options)
+def rt21_port(tmp_path: Path) -> Iterator[PortFactory]:
+    ports: list[EmulatedPort[Rt21]] = []
+
+    def factory(**options: Any) -> EmulatedPort[Rt21]:
+        link = tmp_path / f"tty-rt21-{len(ports)}"
+        port = EmulatedPort(Rt21(now=time.monotonic(), **options), link=link, name="rt21")
+        ports.append(port)
+        return port
+
+    yield factory
+    for port in ports:
+        port.close()
 
 
 @pytest.fixture
-def rotctl(rotctl_run: Rotctl) -> Rotctl:
-    return lambda port, *commands: rotctl_run(405, port, 4800, *commands)
+def rotctl(rotctl_path: str) -> Rotctl:
+    def run(port: EmulatedPort[Rt21], *commands: str) -> Any:
+        assert port.link is not None
+        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "405", "-r", port.link]
+        argv += ["-s", "4800", *commands]
+        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+
+    return run
+
+
+def values(result: subprocess.CompletedProcess[str]) -> list[str]:
+    assert result.returncode == 0, f"rotctl failed: {result.stdout!r} {result.stderr[-800:]!r}"
+    return result.stdout.split()
+
+
+def commands(port: EmulatedPort[Rt21]) -> list[tuple[bytes, str]]:
+    return [(f.data, f.outcome) for f in port.log()]
 
 
 def test_reads_sets_and_stops_the_box(rt21_port: PortFactory, rotctl: Rotctl) -> None:
@@ -73,8 +102,8 @@ def test_rotor_bridge_emulate_serves_an_rt21_that_hamlib_drives(
     tmp_path: Path, rotctl_path: str
 ) -> None:
     """``rotor-bridge emulate rt21`` (here ``python -m bridge.emulators``)."""
-    options = ["--start-az-deg", "3.5", "--reply-padding", "none"]
-    done = emulate_and_drive(
-        tmp_path, rotctl_path, "rt21", options, (405, 4800), "p", "P", "40", "0", "S"
-    )
-    assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "0.00"], done
+    link = tmp_path / "rt21"
+    with served("rt21", link, "--start-az-deg", "3.5", "--reply-padding", "none"):
+        run = [rotctl_path, "-m", "405", "-r", str(link), "-s", "4800", "p", "P", "40", "0", "S"]
+        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "0.00"], done

@@ -8,13 +8,7 @@ import pytest
 
 from bridge import emulators
 from bridge.emulators.rt21 import Outcome, Rt21
-
-
-def ask(device: Rt21, data: bytes, now: float) -> bytes:
-    """The whole answer to ``data`` sent at ``now`` (or at the device's latest instant)."""
-    now = device.state(now).time_s
-    device.receive(data, now)
-    return device.due_output(now + 0.1)
+from tests.emulators.conftest import ask
 
 
 def test_the_bearing_in_tenths_and_its_paddings() -> None:

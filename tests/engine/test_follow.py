@@ -368,3 +368,65 @@ def test_a_flood_of_other_instance_names_costs_no_memory_and_little_log(
     assert len(said) == 2 and "of 19999 other program(s)" in said[1]
     part.heard(Heard("VK2XYZ", "QF56", False, "WSJT-X"), 100.0)  # the one followed
     assert part.step(at(100.0)).target is not None
+
+
+# -- one antenna per band (rule 9) --------------------------------------------------------------
+TWENTY, FORTY = 14_074_000, 7_074_000
+
+
+def test_a_rotator_with_bands_turns_only_while_the_dial_is_on_one_of_them() -> None:
+    part = following(rig(bands=["20m", "15m"]))
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=FORTY), 1.0)
+    off = part.step(at(1.0))
+    assert off.target is None and off.error is not None and off.error.kind is ErrorKind.REFUSED
+    assert off.error.message == (
+        "following: WSJT-X's dial 7.074 MHz is on 40m, and this antenna is for 20m, 15m"
+    )
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=7_047_000), 2.0)  # still 40 m: said once
+    again = part.step(at(2.0))
+    assert again.target is None and again.error is None
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=TWENTY), 3.0)  # back on 20 m: turned to
+    on = part.step(at(3.0))
+    assert on.target is not None and on.target.az_deg is not None
+    assert angle_between(on.target.az_deg, bearing("PM95")) < 0.1
+
+
+@pytest.mark.parametrize(
+    ("dial_hz", "why"),
+    [
+        (9_000_000, "WSJT-X's dial 9 MHz is on no amateur band"),
+        (None, "WSJT-X gave no dial frequency"),
+    ],
+)
+def test_a_rotator_with_bands_does_not_turn_off_every_band(dial_hz: int | None, why: str) -> None:
+    part = following(rig(bands=["20m"]))
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=dial_hz), 1.0)
+    proposal = part.step(at(1.0))
+    assert proposal.target is None and proposal.error is not None and why in proposal.error.message
+
+
+def test_a_rotator_without_bands_follows_on_every_band() -> None:
+    part = following(rig())
+    part.heard(Heard("JA1ABC", "PM95", False, dial_hz=9_000_000), 1.0)
+    assert part.step(at(1.0)).target is not None
+
+
+def test_of_two_antennas_the_one_on_the_dials_band_turns_in_the_session() -> None:
+    """Following on for both rotators of a station with one antenna per band: WSJT-X on 40 m
+    turns the 40 m antenna alone, then on 20 m the 20 m one alone."""
+    with spid(bands=["20m", "15m"]) as high, spid(bands=["40m"]) as low:
+        for v in (high, low):
+            v.follow(True)
+            v.heard("JA1ABC", "PM95", dial_hz=FORTY)
+            v.run_for(60.0)
+        assert sets(high) == 0 and not high.truth().is_moving
+        assert [e.message for e in high.errors("refused")] == [
+            "following: WSJT-X's dial 7.074 MHz is on 40m, and this antenna is for 20m, 15m"
+        ]
+        assert angle_between(low.truth().az_deg, bearing("PM95")) <= 0.5
+        for v in (high, low):
+            v.heard("VK2XYZ", "QF56", dial_hz=TWENTY)
+            v.run_for(60.0)
+        assert angle_between(high.truth().az_deg, bearing("QF56")) <= 0.5
+        assert angle_between(low.truth().az_deg, bearing("PM95")) <= 0.5  # still on PM95
+        assert low.errors("refused")[-1].message.startswith("following: WSJT-X's dial 14.074 MHz")

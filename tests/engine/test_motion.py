@@ -312,3 +312,20 @@ def test_on_a_wrapping_scale_a_way_that_leads_away_first_is_not_a_hand() -> None
     readings = [(10 + i * 0.5, 170 - 6.0 * i) for i in range(1, 20)]
     m, events = feed(m, readings)
     assert events == [] and m.target_deg == 190 and m.state is S.MOVING
+
+
+def test_a_refusal_drops_the_target_that_has_not_moved_the_rotor() -> None:
+    m = mo.commanded(ready(), CFG, 120, 10.0)
+    m, events = mo.refused(m, CFG, 10.05)
+    assert events == [mo.Event.REFUSED] and m.target_deg is None and m.state is S.BRAKING
+    m, _ = mo.tick(m, CFG, 10.05 + CFG.brake_delay_s + mo.BRAKE_GUARD_S)
+    assert m.state is S.IDLE and mo.plan_target(m, CFG, m.still_since_t or 0) is mo.Plan.SEND
+
+
+def test_a_refusal_after_the_rotor_moved_or_at_rest_refers_to_something_else() -> None:
+    m = mo.commanded(ready(), CFG, 120, 10.0)
+    m, _ = feed(m, [(10.25, 103.0), (10.5, 106.0)])
+    turning, events = mo.refused(m, CFG, 10.6)
+    assert events == [] and turning == m and turning.target_deg == 120
+    idle = ready()
+    assert mo.refused(idle, CFG, 20.0) == (idle, [])

@@ -16,7 +16,7 @@ import pytest
 from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.model import MotionState
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -27,23 +27,6 @@ def ready(rig: Rig, model: str = "easycomm2", **emulator: object) -> VirtualRota
     v = rig(model, emulator={**FAST, **emulator})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return (
-            v.state is IDLE
-            and not truth.is_moving
-            and truth.az_deg == az
-            and (el is None or truth.el_deg == el)
-        )
-
-    return there
 
 
 @pytest.mark.parametrize("model", ["easycomm2", "easycomm3", "easycomm2-separate"])
@@ -143,15 +126,7 @@ def test_a_bearing_the_controller_ignores_is_reported_and_nothing_moves(rig: Rig
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100, start_el_deg=20)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xffAZ359.0 EL0.0\n" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"A", b"\xffAZ359.0 EL0.0\n")
     t = v.now
     v.run_for(30)
     assert glitched

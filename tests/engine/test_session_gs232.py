@@ -13,9 +13,9 @@ from collections.abc import Callable
 import pytest
 
 from bridge.emulators.gs232 import Outcome
-from bridge.model import MotionState, Target
+from bridge.model import MotionState, SetOption, Target
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -26,23 +26,6 @@ def ready(rig: Rig, model: str = "gs232b", **emulator: object) -> VirtualRotator
     v = rig(model, emulator={**FAST, **emulator})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return (
-            v.state is IDLE
-            and not truth.is_moving
-            and truth.az_deg == az
-            and (el is None or truth.el_deg == el)
-        )
-
-    return there
 
 
 @pytest.mark.parametrize("model", ["gs232a", "gs232b"])
@@ -146,25 +129,36 @@ def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> No
     v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
     t = v.now
     v.aim(Target(400))  # past 360: on the controller's own scale
-    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
-    assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
+    v.run_until(lambda h: h.errors("refused", since=t), 1, "the refusal")
+    refusal = v.errors("refused", since=t)[0]
+    assert "the controller refused the target" in refusal.message
     assert v.frames(Outcome.REFUSED)[-1].data == b"M400"
+    v.run_until(lambda h: h.state is IDLE, 1, "at rest at once, not a stall 10 s later")
+    v.run_for(30)  # a quiet period, not a deadline: no stall is reported for it afterwards
+    assert [e.kind for e in v.errors(since=t)] == ["refused"]
     assert v.truth().az_deg == 77 and not v.truth().is_moving
     assert {s.bearing_deg for s in v.published()} - {None} == {77.0}
+    v.aim(Target(120))  # the next bearing goes out and is taken as always
+    v.run_until(settled_at(120), 60, "at 120")
+
+
+def test_a_refusal_after_a_setting_is_not_the_targets(rig: Rig) -> None:
+    """A ``?>`` that follows a setting written after the target refuses the setting, not the
+    target: the rotor still turns there."""
+    v = ready(rig, start_az_deg=10, start_el_deg=0)
+    v.garble_writes(b"X4\r", b"X9\r")  # the box gets a speed it refuses: ?>
+    t = v.now
+    v.command(Target(200, 0), SetOption("speed", "4"))
+    v.run_until(lambda h: h.frames(Outcome.REFUSED, since=t), 2, "the setting refused")
+    assert [f.data for f in v.frames(since=t)][:2] == [b"W200 000", b"X9"]
+    v.run_until(settled_at(200, 0), 120, "at 200 all the same")
+    assert v.errors("refused", since=t) == []
 
 
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100, start_el_deg=20)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"A":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xffAZ=359  EL=000\r\n" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"A", b"\xffAZ=359  EL=000\r\n")
     t = v.now
     v.run_for(30)
     assert glitched

@@ -16,9 +16,8 @@ import pytest
 
 from bridge.emulators.rc2800 import Outcome
 from bridge.model import MotionState
-from tests.engine.test_session_gs232 import settled_at
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -31,10 +30,6 @@ def ready(
     v = rig(model, emulator={**FAST, **emulator}, settings=settings or {})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
 
 
 def axis_gaps(v: VirtualRotator, since: float = float("-inf")) -> list[float]:

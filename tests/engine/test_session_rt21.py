@@ -15,7 +15,7 @@ from bridge.emulators.rt21 import Outcome
 from bridge.model import MotionState
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, off_deg
-from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual import VirtualRotator, moves, settled_at
 from tests.support.sky import sgp4_altaz
 
 Rig = Callable[..., VirtualRotator]
@@ -27,18 +27,6 @@ def ready(rig: Rig, **emulator: object) -> VirtualRotator:
     v = rig("rt21", emulator={**FAST, **emulator})
     v.run_until_state(IDLE, 30)
     return v
-
-
-def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.MOVE, since=since)]
-
-
-def settled_at(az: float) -> Callable[[VirtualRotator], bool]:
-    def there(v: VirtualRotator) -> bool:
-        truth = v.truth()
-        return v.state is IDLE and not truth.is_moving and truth.az_deg == az
-
-    return there
 
 
 def test_a_target_arrives_to_the_tenth_and_is_read_back(rig: Rig) -> None:
@@ -88,15 +76,7 @@ def test_a_padded_or_zero_filled_box_reads_the_same(rig: Rig) -> None:
 def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     v = ready(rig, start_az_deg=100)
     v.run_for(10)
-    glitched: list[float] = []
-
-    def glitch(data: bytes, now: float) -> bytes:
-        if glitched or data != b"1":  # the first byte of a reply (the line is paced)
-            return data
-        glitched.append(now)
-        return b"\xff359.9;" + data
-
-    v.to_host = glitch
+    glitched = v.glitch_once(b"1", b"\xff359.9;")
     t = v.now
     v.run_for(30)
     assert glitched

@@ -50,7 +50,8 @@ def test_a_lock_that_cannot_be_saved_says_so(tmp_path: Path) -> None:
         {"locked": "yes"},
         {"locked": 1},
         {"options": "x"},
-        {"options": {"jam": "on"}},
+        {"options": {"jam": None}},  # (a text is a choice's name: kept.py reads it by model)
+        {"options": {"jam": [True]}},
     ],
 )
 def test_a_malformed_entry_starts_its_rotator_locked_and_says_why(
@@ -101,3 +102,22 @@ def test_a_write_that_fails_keeps_the_old_file_and_leaves_no_temporary_file(
     assert [p.name for p in tmp_path.iterdir()] == ["state.json"]
     monkeypatch.undo()
     assert StateStore(path).locked("tower") is True
+
+
+def test_a_settings_value_survives_a_restart_and_one_its_model_refuses_is_left_out(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A GS-232's speed is kept as its name; read back by the model's declaration, a value it
+    does not take (hand-edited, or another model's) is logged and never sent."""
+    from bridge.engine.kept import Kept
+    from bridge.protocols import REGISTRY
+
+    path = tmp_path / "state.json"
+    StateStore(path).set_option("tower", "speed", "2")
+    kept = Kept(StateStore(path), "tower", REGISTRY["gs232b"], report=lambda *a: None)
+    assert kept.options() == {"speed": "2"}
+    for bad in ("9", True, 2):
+        path.write_text(json.dumps({"rotators": {"tower": {"options": {"speed": bad}}}}))
+        kept = Kept(StateStore(path), "tower", REGISTRY["gs232b"], report=lambda *a: None)
+        assert kept.options() == {}
+    assert "stored option 'speed' ignored" in caplog.text

@@ -19,8 +19,9 @@ Rules:
    completely arrived. The device's output is already paced by the device.
 3. Faults act on the line, never on either side: a write can be lost or garbled on its way to
    the device (``drop_writes``, ``garble_writes``, ``set_deaf``, ``to_device``), the device's
-   output on its way to the host (``set_silent``, ``to_host``). Lost writes stay in ``writes``
-   (marked lost): they are what the bridge sent, the device's log is what arrived.
+   output on its way to the host (``set_silent``, ``to_host``, ``glitch_once``). Lost writes
+   stay in ``writes`` (marked lost): they are what the bridge sent, the device's log is what
+   arrived.
 4. A session that asks to be woken at or before the present, again and again, spins the real
    worker's select loop until its clock moves on. Here the clock then moves on by CLOCK_GRAIN_S
    (counted in ``spins``); a spin that lasts SPIN_LIMIT grains raises ``BusyLoop`` instead of
@@ -42,12 +43,12 @@ from bridge.app import worker_config
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
 from bridge.engine import skywork
 from bridge.engine.actions import Ask
-from bridge.engine.config import FollowConfig
+from bridge.engine.config import FollowConfig, WorkerConfig
 from bridge.engine.follow import Follow, Heard
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
 from bridge.engine.tracking import Track
-from bridge.model import MotionState, RotatorStatus, SetOption, Stop, Target
+from bridge.model import MotionState, RotatorStatus, SetOption, SettingValue, Stop, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 
@@ -86,7 +87,7 @@ class VirtualRotator:
         *,
         settings: Mapping[str, Any] | None = None,
         emulator: Mapping[str, Any] | None = None,
-        options: dict[str, bool] | None = None,
+        options: dict[str, SettingValue] | None = None,
         locked: bool = False,
         connect: bool = True,
         start_s: float = 0.0,
@@ -94,6 +95,7 @@ class VirtualRotator:
         wall_epoch_s: float = WALL_EPOCH_S,
         sky_delay_s: float = 0.0,
         follow: FollowConfig | None = None,
+        cfg: WorkerConfig | None = None,  # one box of a composite rotator (virtual_composite.py)
     ) -> None:
         self.now = start_s
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
@@ -101,7 +103,7 @@ class VirtualRotator:
             {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
         )
         self.settings = rotator
-        self.cfg = worker_config(rotator, sky, follow)
+        self.cfg = cfg or worker_config(rotator, sky, follow)
         self.device: Responder = emulators.create(model, now=start_s, **(emulator or {}))
         self.session = RotatorSession(self.cfg, options=options, locked=locked)
         self.mailbox = Mailbox()
@@ -184,8 +186,11 @@ class VirtualRotator:
     def stop(self) -> None:
         self.command(Stop())
 
-    def option(self, name: str, enabled: bool) -> None:
-        self.command(SetOption(name, enabled))
+    def option(self, name: str, value: SettingValue) -> None:
+        """Straight to the session, as the judge hands it on: ``value`` as the declaration
+        reads it (the session does not judge; engine/rotator.py does)."""
+        setting = self.cfg.spec.setting(name)
+        self.command(SetOption(name, setting.read(value) if setting is not None else value))
 
     def lock(self, locked: bool) -> None:
         self.mailbox.put_lock(locked)
@@ -199,9 +204,11 @@ class VirtualRotator:
         self.mailbox.put_follow(Follow(on, long_path))
         self._take()
 
-    def heard(self, call: str, grid: str, transmitting: bool = False) -> None:
+    def heard(
+        self, call: str, grid: str, transmitting: bool = False, dial_hz: int | None = None
+    ) -> None:
         """What WSJT-X says, as the listener hands it on (wsjtx/server.py)."""
-        self.mailbox.put_heard(Heard(call, grid, transmitting))
+        self.mailbox.put_heard(Heard(call, grid, transmitting, dial_hz=dial_hz))
         self._take()
 
     def wall(self) -> float:
@@ -239,6 +246,21 @@ class VirtualRotator:
     def set_deaf(self, deaf: bool) -> None:
         """Everything the host writes is lost before the device hears it."""
         self._deaf = deaf
+
+    def glitch_once(self, first: bytes, noise: bytes) -> list[float]:
+        """``noise`` reaches the host once, just before the next output that is ``first`` alone
+        (a reply's first byte: the device's output is paced); the list returned gets the
+        instant it did."""
+        when: list[float] = []
+
+        def glitch(data: bytes, now: float) -> bytes:
+            if when or data != first:
+                return data
+            when.append(now)
+            return noise + data
+
+        self.to_host = glitch
+        return when
 
     # -- front panel ----------------------------------------------------------------------------
     def jam(self) -> None:
@@ -281,6 +303,20 @@ class VirtualRotator:
 
     def run_until_state(self, state: MotionState, timeout_s: float) -> float:
         return self.run_until(lambda h: h.state is state, timeout_s, f"state {state.value}")
+
+    def next_time(self, until: float) -> float:
+        """The time of the next thing that can happen here, ``until`` at the latest (rule 1)."""
+        times = [until]
+        if self.connected:
+            times.append(self.session.next_wakeup())
+        device_t = self.device.next_wakeup(self.now)
+        if device_t is not None:
+            times.append(device_t)
+        line_t = self._tx.next_due_s()
+        if line_t is not None:
+            times.append(line_t)
+        times += [due for due, _gen, _answer in self._answers]
+        return max(self.now, min(times))
 
     def _step(self, until: float) -> None:
         times = [until]
@@ -360,3 +396,23 @@ class VirtualRotator:
         self.writes.append(Sent(self.now, data, lost=wire != data))
         if wire:
             self._tx.send(wire, self.now)
+
+
+def moves(v: VirtualRotator, since: float = float("-inf")) -> list[bytes]:
+    """The bearings the device took since ``since``: the frames it logged as a move."""
+    return [f.data for f in v.frames("move", since=since)]
+
+
+def settled_at(az: float, el: float | None = None) -> Callable[[VirtualRotator], bool]:
+    """For run_until: the session idle, the rotor still at ``az`` (and ``el``, if named)."""
+
+    def there(v: VirtualRotator) -> bool:
+        truth = v.truth()
+        return (
+            v.state is MotionState.IDLE
+            and not truth.is_moving
+            and truth.az_deg == az
+            and (el is None or truth.el_deg == el)
+        )
+
+    return there

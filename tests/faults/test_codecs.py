@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from bridge.protocols.base import JunkReply, PositionReply, VersionReply
 from bridge.protocols.easycomm import EasycommCodec
 from bridge.protocols.gs232 import Gs232Codec
+from bridge.protocols.prosistel import COMBI_TRACK, ProsistelCodec
 from bridge.protocols.rc2800 import Rc2800Codec
 from bridge.protocols.rotorez import RotorEzCodec
 from bridge.protocols.rt21 import Rt21Codec
@@ -302,6 +303,8 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         EasycommCodec(3, elevation=False),
         EasycommCodec(2, separate=True),
         Rt21Codec(),
+        ProsistelCodec(),
+        ProsistelCodec(COMBI_TRACK),
         Rc2800Codec(),
         Rc2800Codec(elevation=False),
     ]

@@ -32,6 +32,8 @@ def write(tmp_path: Path, rotators: list[str], extra: str = "") -> Path:
         (["rotctld_port = 4535", "gs232_port = 4535"], "", "rotators[1].gs232_port 4535 is al"),
         (["gs232_port = 12000\npst_udp_port = 12000"], "", "is also rotators[0].pst_udp_port"),
         (["easycomm_port = 8080"], "[web]\nenabled = true\nport = 8080\n", "is also web.port"),
+        (["dcu1_port = 4536\neasycomm_port = 4536"], "", "rotators[0].easycomm_port 4536 is"),
+        (["rotctld_port = 4537", "dcu1_port = 4537"], "", "rotators[1].dcu1_port 4537 is also"),
     ],
 )
 def test_a_port_given_twice_is_refused(
@@ -76,6 +78,7 @@ def test_check_config_lists_them(tmp_path: Path) -> None:
     [
         (['gs232_pty = "/tmp/x"\neasycomm_pty = "/tmp/x"'], "rotators[0].easycomm_pty /tmp/x is"),
         (['gs232_pty = "/tmp/x"', 'gs232_pty = "/tmp/../tmp/x"'], "also rotators[0].gs232_pty"),
+        (['gs232_pty = "/tmp/x"', 'dcu1_pty = "/tmp/x"'], "rotators[1].dcu1_pty /tmp/x is also"),
     ],
 )
 def test_a_pty_path_given_twice_is_refused(tmp_path: Path, rotators: list[str], said: str) -> None:
@@ -87,3 +90,25 @@ def test_check_config_shows_the_ptys(tmp_path: Path) -> None:
     path = write(tmp_path, ['gs232_pty = "/tmp/rotor-gs232"\neasycomm_pty = "/tmp/rotor-ec"'])
     out = run_cli("check-config", "-c", str(path)).stdout
     assert "GS-232B on a pty at /tmp/rotor-gs232; Easycomm II on a pty at /tmp/rotor-ec" in out
+
+
+def test_check_config_shows_the_dcu1_endpoints_and_the_gs232_replies(tmp_path: Path) -> None:
+    keys = 'gs232_port = 4535\ngs232_replies = "A"\ndcu1_port = 4537\ndcu1_pty = "/tmp/rotor-dcu1"'
+    out = run_cli("check-config", "-c", str(write(tmp_path, [keys]))).stdout
+    assert (
+        "GS-232A on 127.0.0.1:4535; DCU-1 on 127.0.0.1:4537; DCU-1 on a pty at /tmp/rotor-dcu1"
+        in out
+    )
+
+
+def test_a_dcu1_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
+    keys = 'dcu1_port = 4537\ndcu1_bind = "0.0.0.0"'
+    assert config_warnings(load_settings(write(tmp_path, [keys]), environ={})) == [
+        "rotators[0].dcu1_bind: 0.0.0.0 is not a loopback address: dcu1 has no "
+        "authentication, anyone who can reach port 4537 there can turn the antenna",
+    ]
+
+
+def test_gs232_replies_are_a_or_b(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="gs232_replies"):
+        load_settings(write(tmp_path, ['gs232_replies = "C"']), environ={})

@@ -1,10 +1,12 @@
 """The broker matrix (docs/brokers.md): what a station needs of its broker, checked end to end
 against each broker the tests can start, with the bridge's default ``mqtt.protocol`` ("auto")
-unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, and NATS (MQTT
-3.1.1 only: "auto" steps down). Each case: the protocol said at start, a target turns the rotor,
-a STOP while turning stops it, the retained state for a subscriber that comes late, the last
-will, the fence markers (lastword.py rule 7), and under 3.1.1 a flood of targets without a
-false "another client published" while a real stranger is still put back and said.
+unless the case forces one: mosquitto on MQTT 5, mosquitto forced to 3.1.1, NATS and aedes
+0.46 as Node-RED embeds it (both MQTT 3.1.1 only: "auto" steps down; aedes also reorders a QoS 0
+message before the QoS 1 one sent right before it, which once made the fence look denied).
+Each case: the protocol said at start, a target turns the rotor, a STOP while turning stops it,
+the retained state for a subscriber that comes late, the last will, the fence markers
+(lastword.py rule 7), and under 3.1.1 a flood of targets without a false "another client
+published" while a real stranger is still put back and said.
 
 Real parts: the broker, the bridge (App, or its own process for the last will) and an emulated
 Rotor-EZ on a pty (tests/support/rig.py); the probe speaks MQTT 3.1.1, as every broker does.
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,10 +25,15 @@ import pytest
 
 from bridge.mosquitto import Mosquitto
 from tests.support import Probe, retained_snapshot, wait_until
-from tests.support.brokers import Nats, find_nats
+from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
 from tests.support.rig import Rig
 
-BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats"]
+BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats", "aedes"]
+# ./tests/run brokers adds the brokers that take longer to install and start (docs/brokers.md)
+if os.environ.get("ROTOR_TEST_BROKERS") == "all":
+    BROKERS += ["rabbitmq", "amqtt"]
+STEPS_DOWN = {"nats", "aedes"}  # MQTT 3.1.1 only: "auto" steps down on their refusal
+CLOSES_V5 = {"rabbitmq", "amqtt"}  # ... and these close MQTT 5: "auto" asks, then steps down
 STRANGER = "another client published"
 
 
@@ -33,13 +41,16 @@ STRANGER = "another client published"
 def kind(request: pytest.FixtureRequest) -> str:
     if request.param == "nats" and find_nats() is None:
         pytest.fail("nats-server is not installed (tests/run installs Debian's nats-server)")
+    if request.param == "aedes" and find_aedes() is None:
+        pytest.fail("aedes is not installed (tests/run installs it: npm ci in tests/brokers/aedes)")
     return str(request.param)
 
 
 @pytest.fixture
 def station(kind: str, tmp_path: Path) -> Iterator[Rig]:
-    broker: Mosquitto | Nats = (
-        Nats(tmp_path / "nats") if kind == "nats" else Mosquitto(tmp_path / "mosquitto")
+    others = {"nats": Nats, "aedes": Aedes, "rabbitmq": RabbitMq, "amqtt": Amqtt}
+    broker: Mosquitto | Nats | Aedes | RabbitMq | Amqtt = (
+        others[kind](tmp_path / kind) if kind in others else Mosquitto(tmp_path / "mosquitto")
     )
     broker.start()
     probe = Probe(broker.port)
@@ -47,6 +58,8 @@ def station(kind: str, tmp_path: Path) -> Iterator[Rig]:
         with Rig(tmp_path, broker, probe) as rig:
             if kind == "mosquitto-3.1.1":
                 rig.mqtt_extra = {"protocol": "3.1.1"}
+            if kind == "amqtt":  # it never answers an MQTT 5 CONNECT with a will: two CONNACK
+                rig.ready_s = 60.0  # timeouts and the MQTT 3.1.1 trial before the step-down
             yield rig
     finally:
         probe.close()
@@ -72,9 +85,12 @@ def test_the_bridge_says_which_protocol_it_speaks_and_what_that_means(
     else:
         assert connected and all("(MQTT 3.1.1)" in line for line in connected), connected
         assert len(losses) == 1, losses  # one warning, at start
-    if kind == "nats":
+    if kind in STEPS_DOWN | CLOSES_V5:
         (line,) = said(caplog, "using MQTT 3.1.1 from now on")
-        assert 'refused MQTT 5 ("Unsupported protocol version")' in line
+        if kind in CLOSES_V5:
+            assert "closed MQTT 5 connections before answering them and accepted" in line
+        else:
+            assert 'refused MQTT 5 ("Unsupported protocol version")' in line
         # the step-down is on B/bridge/info while it lasts, for Home Assistant and a dashboard
         info = station.probe.wait_for("rotor/bridge/info", lambda m: "MQTT 3.1.1" in m.text)
         (problem,) = json.loads(info.payload)["problems"]
@@ -102,15 +118,18 @@ def test_a_target_turns_the_rotor_and_a_stop_while_turning_stops_it(station: Rig
     assert not [p for p in info.get("problems", []) if "fence" in p], info
 
 
-def test_a_late_subscriber_gets_the_retained_state(station: Rig) -> None:
+def test_a_late_subscriber_gets_the_retained_state(kind: str, station: Rig) -> None:
     emu = station.add("tower", emu={"start_az_deg": 0})
     station.start()
     station.ready("tower")
     station.probe.publish("rotor/target", "90")
     emu.wait_for(lambda s: abs(s.az_deg - 90) <= 3 and not s.is_moving, 20)
+    # RabbitMQ replays retained messages to exact-topic subscriptions only (docs/brokers.md)
+    wanted = ["rotor/state", "rotor/bridge/state", "rotor/lock/state", "rotor/status"]
+    subscription = "|".join(wanted) if kind == "rabbitmq" else "rotor/#"
 
     def settled() -> dict[str, bytes] | None:
-        snap = retained_snapshot(station.broker.port, "rotor/#")
+        snap = retained_snapshot(station.broker.port, subscription)
         return snap if snap.get("rotor/state") == b"idle" else None
 
     snap = wait_until(settled, 10, "a new subscriber gets rotor/state idle")
@@ -122,13 +141,13 @@ def test_a_late_subscriber_gets_the_retained_state(station: Rig) -> None:
 def test_the_last_will_marks_a_killed_bridge_offline(station: Rig) -> None:
     station.add("tower")
     bridge = station.start_process()
-    station.probe.wait_value("rotor/bridge/state", "online", timeout_s=20)
+    station.probe.wait_value("rotor/bridge/state", "online", timeout_s=max(20, station.ready_s))
     t = time.monotonic()
     bridge.kill()
     station.probe.wait_for("rotor/bridge/state", lambda m: m.text == "offline", 20, after=t)
-    assert retained_snapshot(station.broker.port, "rotor/bridge/state") == {
-        "rotor/bridge/state": b"offline"
-    }
+    # (amqtt 0.12 also hands a new subscription retained messages of other topics)
+    snap = retained_snapshot(station.broker.port, "rotor/bridge/state")
+    assert snap["rotor/bridge/state"] == b"offline"
 
 
 def test_a_flood_raises_no_false_alarm_and_a_real_stranger_is_still_put_back(
@@ -156,6 +175,7 @@ def test_a_flood_raises_no_false_alarm_and_a_real_stranger_is_still_put_back(
     t = time.monotonic()
     station.probe.publish("rotor/lock/state", "ON", retain=True)
     station.probe.wait_for("rotor/lock/state", lambda m: m.text == "OFF", 10, after=t)
+    wait_until(lambda: said(caplog, STRANGER), 10, "the stranger said")  # (said after put back)
     assert len(said(caplog, STRANGER)) == 1
 
 
@@ -171,3 +191,23 @@ def test_its_own_last_will_at_a_broker_shutdown_is_no_strangers(
     wait_until(lambda: not app.client.connected.is_set(), 10, "the bridge saw the broker go")
     wait_until(lambda: said(caplog, "disconnected from MQTT broker"), 10, "the disconnect said")
     assert said(caplog, STRANGER) == []
+
+
+def test_home_assistant_gets_every_config_again_on_its_birth(station: Rig) -> None:
+    """After Home Assistant restarts, its ``homeassistant/#`` subscription gets no retained
+    config on RabbitMQ (exact topics only): the bridge sends every config again on the birth
+    message, on every broker."""
+    ha = Probe(station.broker.port, "homeassistant/#")  # live, before the bridge starts
+    try:
+        station.add("tower")
+        app = station.start()
+        station.ready("tower")
+        assert app.discovery is not None
+        known = set(app.discovery._current)  # every config the bridge has published
+        assert len(known) >= 10, known
+        t = time.monotonic()
+        station.probe.publish("homeassistant/status", "online")  # the birth (not retained)
+        for topic in sorted(known):
+            ha.wait_for(topic, lambda m: bool(m.payload), 30, after=t)
+    finally:
+        ha.close()

@@ -66,6 +66,9 @@ def status_doc(rig: Rig) -> dict[str, Any]:
     return doc
 
 
+DIAL = w.StatusFields().dial_hz  # what the statuses sent here carry (follow.py rule 9)
+
+
 def heard_by_follow_part(app: App, heard: Heard) -> None:
     """Wait until the rotator's follow part has taken ``heard`` in (the order a test proves
     absence by; read across threads, only to wait on)."""
@@ -126,7 +129,7 @@ def test_a_dx_grid_turns_the_rotor_the_same_grid_does_not_tx_holds_and_off_ends(
     rig.probe.publish("rotor/follow", "off")
     rig.probe.wait_value("rotor/follow/state", "off", 10)
     w.send(w.status(w.StatusFields(dx_call="W2ABC", dx_grid=NEW_YORK)), to)
-    heard_by_follow_part(app, Heard("W2ABC", NEW_YORK, False, "WSJT-X"))
+    heard_by_follow_part(app, Heard("W2ABC", NEW_YORK, False, "WSJT-X", DIAL))
     assert len(emu.frames("set")) == sets + 1
     ended = rig.probe.wait_for(
         "rotor/status", lambda m: json.loads(m.payload).get("following_ended") == "off", 10
@@ -158,7 +161,7 @@ def test_any_other_command_ends_following_and_a_long_path_is_asked_in_json(
     )
     sets = len(rig.emu.frames("set"))
     w.send(w.status(w.StatusFields(dx_call="W2ABC", dx_grid=NEW_YORK)), to)
-    heard_by_follow_part(app, Heard("W2ABC", NEW_YORK, False, "WSJT-X"))
+    heard_by_follow_part(app, Heard("W2ABC", NEW_YORK, False, "WSJT-X", DIAL))
     assert len(rig.emu.frames("set")) == sets
 
 
@@ -192,7 +195,7 @@ def test_a_retained_follow_never_switches_it_on_and_malformed_datagrams_change_n
         w.send(datagram, to)
     # then a status the follow part takes in: every datagram before it has been read
     w.send(w.status(w.StatusFields(dx_call="", dx_grid="")), to)
-    heard_by_follow_part(app, Heard("", "", False, "WSJT-X"))
+    heard_by_follow_part(app, Heard("", "", False, "WSJT-X", DIAL))
     assert listener.counts.malformed - before == len(junk)
     assert rig.emu.frames("set") == []  # nothing moved the rotor
     shown = rig.probe.wait_for("rotor/status", lambda m: "following" in json.loads(m.payload), 10)

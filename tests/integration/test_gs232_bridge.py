@@ -77,16 +77,10 @@ def test_the_450_degree_rotor_takes_the_overlap(rig: Rig) -> None:
 
 
 def test_junk_and_refusals_give_an_error_and_change_nothing(rig: Rig) -> None:
-    emu = rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
+    rig.add("tower", model="gs232b-az-450", emu={"start_az_deg": 77})
     rig.start()
     ready(rig)
-    t = time.monotonic()
-    for junk in (b"?>\r\n", b"AZ=3", b"garbage\r\n", b"+0123+0045\r\n"):
-        emu.inject(junk)
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "protocol" and "no valid reply" in err["message"]
-    n = len(emu.frames("query"))
-    emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + 4, 15)
+    rig.junk_reported("tower", b"?>\r\n", b"AZ=3", b"garbage\r\n", b"+0123+0045\r\n")
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77"}
 
 
@@ -98,10 +92,9 @@ def test_a_bearing_the_box_refuses_is_reported_and_moves_nothing(rig: Rig) -> No
     ready(rig)
     t = time.monotonic()
     rig.probe.publish("rotor/target", "400")  # past 360: on the controller's own scale
-    refused = rig.probe.wait_for("rotor/error", lambda m: "protocol" in m.text, after=t)
-    assert "no valid reply" in json.loads(refused.payload)["message"]
-    stalled = rig.probe.wait_for("rotor/error", lambda m: "stalled" in m.text, after=t)
-    assert "stalled at 77" in json.loads(stalled.payload)["message"]  # and it says where
+    refused = rig.probe.wait_for("rotor/error", lambda m: '"refused"' in m.text, after=t)
+    assert "the controller refused the target" in json.loads(refused.payload)["message"]
+    rig.probe.wait_value("rotor/state", "idle", after=t)  # at rest at once, no stall to wait
     assert emu.frames("refused")[-1].data == b"M400"
     assert emu.state().az_deg == 77.0 and not emu.state().is_moving
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77"}

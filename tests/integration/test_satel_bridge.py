@@ -122,12 +122,7 @@ def test_unplug_and_replug(rig: Rig) -> None:
     emu = rig.add("sat", model="satel", emu={"start_az_deg": 20, "start_el_deg": 2})
     rig.start()
     ready(rig)
-    t = time.monotonic()
-    emu.unplug()
-    rig.probe.wait_value("rotor/availability", "offline", after=t)
-    t = time.monotonic()
-    emu.replug()
-    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    rig.unplug_and_replug("sat")
     rig.probe.publish("rotor/target", "60 30")
     emu.wait_for(lambda s: near(s, 60, 30), 20)
     assert emu.device.misuse_frames() == []

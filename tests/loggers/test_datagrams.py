@@ -100,12 +100,12 @@ N1MM_SAMPLE = (  # n1kdo's capture, one line, no XML declaration
 @pytest.mark.parametrize(
     ("datagram", "request_"),
     [
-        (N1MM_SAMPLE, N1mmRequest("*", azimuth=66.0)),
+        (N1MM_SAMPLE, N1mmRequest("*", azimuth=66.0, freqband_mhz=28.0)),
         (
             b"<N1MMRotor>\r\n  <rotor>Tower</rotor>\r\n  <goazi>123.4</goazi>\r\n"
             b"  <offset>0</offset>\r\n  <bidirectional>1</bidirectional>\r\n"
             b"  <freqband>14</freqband>\r\n</N1MMRotor>",
-            N1mmRequest("Tower", azimuth=123.4, bidirectional=True),  # netrotor's layout
+            N1mmRequest("Tower", azimuth=123.4, bidirectional=True, freqband_mhz=14.0),
         ),
         (
             b"<N1MMRotor><stop><rotor>YaesuCom9</rotor><freqband>21.0</freqband></stop></N1MMRotor>",

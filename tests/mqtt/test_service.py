@@ -193,6 +193,15 @@ def test_attaching_publishes_the_presets_and_what_the_rotator_is_retained() -> N
         "keep_out": [],
         "park": None,
         "options": sorted(REGISTRY["rotorez"].options),
+        "settings": [
+            {"name": name, "label": label, "kind": "bool"}
+            for name, label in [
+                ("endpoint", "Endpoint option"),
+                ("jam", "Jam protection"),
+                ("overshoot", "Overshoot option"),
+                ("unstick", "Unstick option"),
+            ]
+        ],
     }
 
 

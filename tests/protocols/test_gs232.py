@@ -98,7 +98,7 @@ def test_a_refusal_is_junk_with_its_own_words_and_never_a_reading(how: str, tail
     assert positions(replies) == []
     refusal = [j for j in junk(replies) if j.data == b"?>"]
     assert len(refusal) == 1 and "refused" in refusal[0].detail
-    assert refusal[0].reason is JunkReason.NOISE and not codec.harmless(b"?>")
+    assert refusal[0].reason is JunkReason.REFUSED and not codec.harmless(b"?>")
     # the query stays open, but a reply after the refusal in the same exchange is not trusted
     assert codec.awaiting_reply()
     late = feed(codec, b"AZ=123  EL=045\r\n", how)

@@ -21,6 +21,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.mosquitto import free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
+from tests.integration.test_dcu1_endpoint import ROTOR_EZ
 from tests.integration.test_gs232_integration import EASYCOMM, GS232, gs232_ask, rotctl
 from tests.remote.test_remote import OPERATOR
 from tests.support import wait_until
@@ -228,3 +229,52 @@ def test_a_pst_port_beyond_loopback_is_warned_about(
         f"PstRotator UDP for tower listens on 0.0.0.0:{port}: it has no authentication, anyone "
         "who can reach this address can turn the antenna"
     ) in caplog.messages
+
+
+def test_the_remote_dcu1_and_gs232a_endpoints_turn_read_and_stop_the_station(
+    station: Rig, tmp_path: Path, rotctl_path: str
+) -> None:
+    """The Windows loggers on the operator's computer: DCU-1 on a pty (Hamlib's Rotor-EZ back
+    end as the judge) and on TCP (what DXView sends), GS-232A readings for ARSVCOM."""
+    dcu1_port, gs232_port = free_port(), free_port()
+    while gs232_port == dcu1_port:
+        gs232_port = free_port()
+    dcu1_pty = str(tmp_path / "rotor-dcu1")
+    remote = Remote(
+        RemoteSettings(
+            operator=OPERATOR,
+            mqtt={"host": "127.0.0.1", "port": station.broker.port, "base_topic": "rotor"},
+            endpoints=[
+                {
+                    "rotator": "tower",
+                    "dcu1_port": dcu1_port,
+                    "dcu1_pty": dcu1_pty,
+                    "gs232_port": gs232_port,
+                    "gs232_replies": "A",
+                }
+            ],
+        )
+    )
+    try:
+        lines = remote.start()
+        assert lines == [
+            f"{OPERATOR} -> 127.0.0.1: tower (rotorez, 0..360) on gs232 127.0.0.1:{gs232_port}, "
+            f"dcu1 127.0.0.1:{dcu1_port}, dcu1 {dcu1_pty}"
+        ]
+        rotctl(rotctl_path, ROTOR_EZ, dcu1_pty, "P", "150", "0")
+        station.arrived("tower", 150)
+        wait_until(lambda: station.status("tower").state == "idle", 10, "the bridge idle")
+        wait_until(lambda: remote.rotators[0].status.bearing_deg == 150, 10, "the remote's view")
+        az, _ = rotctl(rotctl_path, ROTOR_EZ, dcu1_pty, "p").split()
+        assert float(az) == 150
+        gs232_ask(gs232_port, b"C2\r", b"+0150+0000\r\n")
+        emu = station.emus["tower"]
+        with socket.create_connection(("127.0.0.1", dcu1_port), timeout=slow(5)) as dxview:
+            dxview.sendall(b"AP1010;AM1;")
+            emu.wait_for(lambda s: s.is_moving and s.az_deg < 120, 15)
+            dxview.sendall(b";")
+            stopped = emu.wait_for(lambda s: not s.is_moving, 5)
+        assert stopped.az_deg > 20
+    finally:
+        remote.stop()
+    assert not os.path.lexists(dcu1_pty)

@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 import pytest
 
 from bridge.errors import RefusalCode, Refused
-from bridge.gs232 import EasycommSession, Gs232Session
+from bridge.gs232 import Dcu1Session, EasycommSession, Gs232Session
+from bridge.gs232.commands import DCU1_ERROR
 from bridge.model import Lock, Park, Source, Stop, Target, Toward
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import Drawn, RemoteConsoleRotator
@@ -118,6 +119,19 @@ def test_a_stop_the_broker_cannot_take_is_answered_as_a_refusal_on_gs232_and_eas
             "tower: easycomm SA SE refused: not connected to the station's broker",
         ),
     ]
+
+
+def test_a_stop_the_broker_cannot_take_is_answered_with_the_banner_on_dcu1(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The DCU-1 session (gs232/ rules 6 and 10) on the remote with its link down: ``;`` and
+    ``AS1;`` are answered with the Rotor-EZ's banner, the client's only error."""
+    clock, link = FakeClock(), Link(up=False)
+    rot = rotator(link, clock)
+    with caplog.at_level(logging.WARNING):
+        assert Dcu1Session(rot).feed(b";AS1;") == [DCU1_ERROR, DCU1_ERROR]
+    assert link.sent == []
+    assert "tower: dcu1 ; refused: not connected to the station's broker" in caplog.messages
 
 
 def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:

@@ -94,6 +94,192 @@ class Nats:
         self._start(slow(20.0))
 
 
+AEDES_DIR = Path(__file__).resolve().parents[1] / "brokers" / "aedes"
+
+
+def find_aedes() -> tuple[str, Path] | None:
+    """Node.js and the server script, if aedes is installed beside it (scripts/bootstrap)."""
+    node = shutil.which("node") or shutil.which("nodejs")
+    if node is None or not (AEDES_DIR / "node_modules" / "aedes").is_dir():
+        return None
+    return node, AEDES_DIR / "server.cjs"
+
+
+class Aedes:
+    """aedes 0.46, as Node-RED users embed it (node-red-contrib-aedes): MQTT 3.1.1 only (it
+    refuses an MQTT 5 CONNECT with "Unsupported protocol version"), in memory (a restart loses
+    every retained message). ``start()``/``stop()``/``restart()`` as
+    ``bridge.mosquitto.Mosquitto``."""
+
+    def __init__(self, workdir: Path) -> None:
+        found = find_aedes()
+        if found is None:
+            raise BrokerError(
+                "aedes is not installed (scripts/bootstrap: npm ci in tests/brokers/aedes)"
+            )
+        self.node, self.script = found
+        self.host = "127.0.0.1"
+        self.port = free_port()
+        self.workdir = workdir
+        self.log = workdir / "aedes.log"
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self, timeout_s: float = 20.0) -> Aedes:
+        for attempt in range(3):
+            try:
+                return self._start(slow(timeout_s))
+            except BrokerError:
+                if attempt == 2:
+                    raise
+                self.port = free_port()  # taken meanwhile
+        raise AssertionError("unreachable")
+
+    def _start(self, timeout_s: float) -> Aedes:
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                [self.node, str(self.script), str(self.port)],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                cwd=self.script.parent,
+            )
+        deadline = time.monotonic() + timeout_s
+        while not answers(self.host, self.port, 0.2):
+            if self.proc.poll() is not None:
+                raise BrokerError(f"aedes exited: {self.log.read_text()[-2000:]}")
+            if time.monotonic() > deadline:
+                self.stop()
+                raise BrokerError(f"aedes did not listen on {self.host}:{self.port}")
+            time.sleep(0.05)
+        return self
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(slow(10))
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.proc = None
+
+    def restart(self) -> None:
+        self.stop()
+        self._start(slow(20.0))
+
+
+class _Process:
+    """A broker run as a child process on a free loopback port: ``start()``/``stop()``/
+    ``restart()`` as ``bridge.mosquitto.Mosquitto``; subclasses say how (``_command``)."""
+
+    name = "broker"
+
+    def __init__(self, workdir: Path) -> None:
+        self.host = "127.0.0.1"
+        self.port = free_port()
+        self.workdir = workdir
+        self.log = workdir / f"{self.name}.log"
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def _command(self) -> tuple[list[str], dict[str, str] | None]:
+        raise NotImplementedError
+
+    def start(self, timeout_s: float = 60.0) -> _Process:
+        for attempt in range(3):
+            try:
+                return self._start(slow(timeout_s))
+            except BrokerError:
+                if attempt == 2:
+                    raise
+                self.port = free_port()  # taken meanwhile
+        raise AssertionError("unreachable")
+
+    def _start(self, timeout_s: float) -> _Process:
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        argv, env = self._command()
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                argv, stdout=log, stderr=subprocess.STDOUT, cwd=self.workdir, env=env
+            )
+        deadline = time.monotonic() + timeout_s
+        while not answers(self.host, self.port, 0.2):
+            if self.proc.poll() is not None:
+                raise BrokerError(f"{self.name} exited: {self.log.read_text()[-2000:]}")
+            if time.monotonic() > deadline:
+                self.stop()
+                raise BrokerError(f"{self.name} did not listen on {self.host}:{self.port}")
+            time.sleep(0.05)
+        return self
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(slow(20))
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.proc = None
+
+    def restart(self) -> None:
+        self.stop()
+        self._start(slow(60.0))
+
+
+RABBITMQ_SERVER = Path("/usr/lib/rabbitmq/bin/rabbitmq-server")
+AMQTT = Path(__file__).resolve().parents[2] / ".brokers" / "amqtt-venv" / "bin" / "amqtt"
+
+
+class RabbitMq(_Process):
+    """RabbitMQ 3.10 (Debian's rabbitmq-server) with its MQTT plugin, a node of its own in the
+    workdir (MQTT 3.1.1 only: it closes an MQTT 5 connection before any CONNACK; retained
+    messages are replayed to exact-topic subscriptions only). ``./tests/run brokers``."""
+
+    name = "rabbitmq"
+
+    def _command(self) -> tuple[list[str], dict[str, str] | None]:
+        if not RABBITMQ_SERVER.exists():
+            raise BrokerError("rabbitmq-server is not installed (./tests/run brokers installs it)")
+        w = self.workdir
+        (w / "enabled_plugins").write_text("[rabbitmq_mqtt].\n")
+        amqp, dist = free_port(), free_port()
+        (w / "rabbitmq.conf").write_text(
+            f"listeners.tcp.default = {self.host}:{amqp}\n"
+            f"mqtt.listeners.tcp.default = {self.host}:{self.port}\n"
+            "mqtt.allow_anonymous = true\n"
+        )
+        env = {
+            "PATH": "/usr/bin:/bin:/usr/sbin:/sbin",
+            "HOME": str(w),
+            "RABBITMQ_NODENAME": f"rb{self.port}@localhost",
+            "RABBITMQ_DIST_PORT": str(dist),
+            "RABBITMQ_MNESIA_BASE": str(w / "mnesia"),
+            "RABBITMQ_LOG_BASE": str(w / "logs"),
+            "RABBITMQ_ENABLED_PLUGINS_FILE": str(w / "enabled_plugins"),
+            "RABBITMQ_CONFIG_FILE": str(w / "rabbitmq.conf"),
+        }
+        return [str(RABBITMQ_SERVER)], env
+
+
+class Amqtt(_Process):
+    """amqtt 0.12 (PyPI), in a venv of its own in .brokers/amqtt-venv (MQTT 3.1.1 only: it
+    closes an MQTT 5 connection before any CONNACK). ``./tests/run brokers``."""
+
+    name = "amqtt"
+
+    def _command(self) -> tuple[list[str], dict[str, str] | None]:
+        if not AMQTT.exists():
+            raise BrokerError("amqtt is not installed (./tests/run brokers installs it)")
+        conf = self.workdir / "amqtt.yaml"
+        conf.write_text(
+            "listeners:\n  default:\n    type: tcp\n"
+            f"    bind: {self.host}:{self.port}\n"
+            "plugins:\n  amqtt.plugins.authentication.AnonymousAuthPlugin:\n"
+            "    allow_anonymous: true\n"
+        )
+        return [str(AMQTT), "-c", str(conf)], None
+
+
 def protocol_level(connect: bytes) -> int | None:
     """The protocol level of an MQTT CONNECT packet (4: 3.1.1, 5: MQTT 5), None if ``connect``
     is not (yet) a whole CONNECT's variable header."""
@@ -119,6 +305,7 @@ class NoMqtt5:
         self.target = port
         self.levels: list[int | None] = []
         self.close_all = False  # closes on MQTT 3.1.1 too (an ACL, a connection limit)
+        self.v5_closes_left: int | None = None  # closes only so many MQTT 5 ones (a restart)
         self._listener = socket.create_server(("127.0.0.1", 0))
         self.port = self._listener.getsockname()[1]
         self._socks: list[socket.socket] = []
@@ -149,7 +336,10 @@ class NoMqtt5:
             level = protocol_level(head)
         with self._lock:
             self.levels.append(level)
-        if level == 5 or self.close_all or self._closed:
+            closes_v5 = level == 5 and self.v5_closes_left != 0
+            if closes_v5 and self.v5_closes_left is not None:
+                self.v5_closes_left -= 1
+        if closes_v5 or self.close_all or self._closed:
             sock.close()  # what RabbitMQ 3.10 does with MQTT 5
             return
         up = socket.create_connection(("127.0.0.1", self.target))

@@ -23,7 +23,9 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import json
 import os
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -75,6 +77,9 @@ FAST_RT21 = {"az_speed_deg_s": 20.0}
 # RC2800: potentiometers read in tenths, no brake, 9600 baud, 200 ms between its two axes
 FAST_RC2800 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 RC2800_MODELS = ("rc2800", "rc2800-az")
+# Prosistel: a D (whole degrees) or a Combi-Track (tenths, two units), 9600 baud, own brakes
+FAST_PROSISTEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
+PROSISTEL_MODELS = ("prosistel", "prosistel-el", "prosistel-combi")
 FAST_SPID_BRIDGE = {
     "idle_poll_interval_s": 0.5,
     "moving_poll_interval_s": 0.1,
@@ -114,6 +119,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(EASYCOMM_MODELS, FAST_EASYCOMM),
         "rt21": FAST_RT21,
         **dict.fromkeys(RC2800_MODELS, FAST_RC2800),
+        **dict.fromkeys(PROSISTEL_MODELS, FAST_PROSISTEL),
     },
     bridge={
         "rotorez": FAST_BRIDGE,
@@ -127,6 +133,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(EASYCOMM_MODELS, FAST_POLLING),
         "rt21": FAST_POLLING,
         **dict.fromkeys(RC2800_MODELS, FAST_POLLING),
+        **dict.fromkeys(PROSISTEL_MODELS, FAST_POLLING),
     },
 )
 REAL_TIMINGS = Timings(emulator={}, bridge={})
@@ -311,15 +318,50 @@ class Rig:
         return self.broker.port
 
     # -- what a test waits for and judges ---------------------------------------------------
-    def ready(self, rid: str, timeout_s: float = 10.0, after: float | None = None) -> None:
+    ready_s = 10.0  # how long ``ready`` waits unless told: a broker may take longer to join
+
+    def ready(self, rid: str, timeout_s: float | None = None, after: float | None = None) -> None:
         """Online and settled: idle, past the start-up brake window (``unknown`` for a DCU-1,
         which cannot report)."""
+        timeout_s = self.ready_s if timeout_s is None else timeout_s
         settled = "unknown" if self.models[rid] == "dcu1" else "idle"
         self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
         self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
 
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")
+
+    def refused(self, rid: str, payload: str, leaf: str = "target") -> str:
+        """Publish ``payload`` on ``rid``'s ``leaf`` topic; the message of the refusal the bridge
+        reports for it on the error topic."""
+        t = time.monotonic()
+        self.probe.publish(self.topic(rid, leaf), payload)
+        err = json.loads(self.probe.wait_for(self.topic(rid, "error"), after=t).payload)
+        assert err["kind"] == "refused", err
+        return str(err["message"])
+
+    def unplug_and_replug(self, rid: str) -> None:
+        """Yank ``rid``'s adapter and wait for ``offline``; plug it back (the controller
+        power-cycled with it) and wait for ``online``."""
+        emu, availability = self.emus[rid], self.topic(rid, "availability")
+        t = time.monotonic()
+        emu.unplug()
+        self.probe.wait_value(availability, "offline", after=t)
+        t = time.monotonic()
+        emu.replug()
+        self.probe.wait_value(availability, "online", timeout_s=15, after=t)
+
+    def junk_reported(self, rid: str, *junk: bytes, polls: int = 4) -> None:
+        """Put ``junk`` on ``rid``'s line towards the bridge; wait for the protocol error it
+        reports, then for ``polls`` more questions to the controller (the readings after it)."""
+        emu = self.emus[rid]
+        t = time.monotonic()
+        for data in junk:
+            emu.inject(data)
+        err = json.loads(self.probe.wait_for(self.topic(rid, "error"), after=t).payload)
+        assert err["kind"] == "protocol" and "no valid reply" in err["message"], err
+        n = len(emu.frames("query"))
+        emu.wait_until(lambda d, now: len(d.frames("query")), lambda k: k >= n + polls, 15)
 
     def status(self, rid: str) -> Any:
         """The in-process bridge's own status of rotator ``rid``."""

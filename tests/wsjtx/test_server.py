@@ -49,7 +49,7 @@ def test_statuses_reach_every_rotator_and_junk_is_counted_and_logged_rarely(
             sock.sendto(w.heartbeat(), to)
             sock.sendto(w.status(w.StatusFields(dx_call="JA1ABC", dx_grid="PM95")), to)
             wait_until(lambda: a.got and b.got, 10, "both rotators hear the status")
-            assert a.got == b.got == [Heard("JA1ABC", "PM95", False, "WSJT-X")]
+            assert a.got == b.got == [Heard("JA1ABC", "PM95", False, "WSJT-X", 14_074_000)]
             counts = listener.counts
             assert (counts.malformed, counts.ignored, counts.statuses) == (5, 1, 1)
             assert counts.faults == 1  # the broken rotator's, and the others heard it all the same
@@ -120,7 +120,7 @@ def test_a_loopback_listener_never_hears_the_group_from_the_lan(
                 w.status(w.StatusFields(dx_call="JA1ABC", dx_grid="PM95")), (group, port)
             )
             wait_until(lambda: ears.got, 10, "the status sent on loopback")
-        assert ears.got == [Heard("JA1ABC", "PM95", False, "WSJT-X")]
+        assert ears.got == [Heard("JA1ABC", "PM95", False, "WSJT-X", 14_074_000)]
         assert listener.counts.foreign == 0  # the system never handed it over (IP_MULTICAST_ALL)
     finally:
         listener.stop()

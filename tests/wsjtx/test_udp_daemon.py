@@ -124,6 +124,7 @@ def test_the_bridges_listener_shares_a_multicast_group_with_udp_daemon() -> None
             qso = w.StatusFields(dx_call="VK2XYZ", dx_grid="QF56", dial_hz=21_074_000)
             s.sendto(w.status(qso), (GROUP, port))
             daemon.wait_printed("Dial frequency changed to 21074000")
-            wait_until(lambda: Heard("VK2XYZ", "QF56", False, "WSJT-X") in got, 10, "heard")
+            heard = Heard("VK2XYZ", "QF56", False, "WSJT-X", 21_074_000)  # with its dial
+            wait_until(lambda: heard in got, 10, "heard")
         finally:
             listener.stop()

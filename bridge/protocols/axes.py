@@ -1,0 +1,215 @@
+"""One axis of a box, and a rotator made of two boxes (azimuth from one, elevation from the
+other): the model specs and the codecs that let one controller serve one axis only.
+
+A composite rotator (settings_rotator.py ``azimuth`` / ``elevation``, engine/composite.py)
+turns its azimuth with one controller and its elevation with another. Each box keeps its own
+codec; this module wraps it so that the session driving that box sees one axis only.
+
+Rules:
+1. Any model drives the azimuth. Its elevation, if it has one, is never commanded and never
+   read: the azimuth box's spec has no elevation, its codec is sent no elevation and reports
+   none.
+2. The elevation box reports where it points and is either an az/el box used for its
+   elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
+   Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
+   azimuth box) is no elevation box. An az/el box's azimuth is never turned: every target it
+   is sent carries the azimuth the box last reported for itself, whatever azimuth the session
+   asked for. A one-axis box is sent the elevation as its one bearing, and its bearing is read
+   as the elevation (0..180 of its range). Either reports back as its azimuth the one the
+   session last asked for (before any: an az/el box its own, a one-axis box 0), so that the
+   session's motion machine sees that axis arrive at once and judges the elevation alone.
+3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
+4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
+   elevation's from the elevation box, no options (each box keeps its own defaults); it
+   reports a position only when both boxes can, and takes whole degrees when either does.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import replace
+
+from bridge.protocols.base import Codec, HamlibRotType, ModelSpec, PositionReply, Reply
+
+
+class Axis(enum.StrEnum):
+    AZIMUTH = "azimuth"
+    ELEVATION = "elevation"
+
+
+# rule 2: one-axis boxes made to turn an elevation rotor as well as an azimuth one
+ONE_AXIS_ELEVATION = frozenset({"rt21", "prosistel-el"})  # (prosistel-el: a D box, unit E)
+ONE_AXIS_EL_MAX_DEG = 180.0
+
+
+def can_drive(spec: ModelSpec, axis: Axis) -> str | None:
+    """Why ``spec`` cannot serve ``axis`` in a composite rotator (None: it can)."""
+    if axis is Axis.ELEVATION and not (spec.has_elevation or spec.name in ONE_AXIS_ELEVATION):
+        return f"the {spec.display_name} ({spec.name}) has no elevation axis"
+    if axis is Axis.ELEVATION and not spec.can_report_position:
+        return f"the {spec.display_name} ({spec.name}) cannot report where it points"
+    return None
+
+
+class AzimuthOnly:
+    """Rule 1: ``inner``'s azimuth, and nothing of its elevation."""
+
+    def __init__(self, inner: Codec) -> None:
+        self._inner = inner
+
+    def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        return self._inner.encode_target(az_deg, None)
+
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        return self._inner.wire_target(az_deg, None)[0], None
+
+    def feed(self, data: bytes) -> list[Reply]:
+        return [
+            replace(r, el_deg=None) if isinstance(r, PositionReply) else r
+            for r in self._inner.feed(data)
+        ]
+
+    def encode_stop(self) -> bytes | list[bytes]:
+        return self._inner.encode_stop()
+
+    def encode_query(self) -> bytes | list[bytes] | None:
+        return self._inner.encode_query()
+
+    def expire_query(self) -> None:
+        self._inner.expire_query()
+
+    def encode_version(self) -> bytes | None:
+        return self._inner.encode_version()
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        return self._inner.encode_option(name, enabled)
+
+    def awaiting_reply(self) -> bool:
+        return self._inner.awaiting_reply()
+
+    def harmless(self, junk: bytes) -> bool:
+        return self._inner.harmless(junk)
+
+    def encode_enable(self) -> bytes | None:
+        return self._inner.encode_enable()
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return self._inner.encode_connect(now_unix)
+
+
+class ElevationOnly(AzimuthOnly):
+    """Rule 2: ``inner``'s elevation; its azimuth stays where the box has it."""
+
+    def __init__(self, inner: Codec) -> None:
+        super().__init__(inner)
+        self._own_az: float | None = None  # what the box last said of its azimuth
+        self._asked_az: float | None = None  # what the session last asked for
+
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        return self._inner.wire_target(az_deg, el_deg)
+
+    def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        if self._own_az is None:  # the session sends only once the box answered (a reading)
+            raise ValueError("the elevation box has not said where its azimuth is")
+        frames = self._inner.encode_target(self._own_az, el_deg)
+        self._asked_az = self._inner.wire_target(az_deg, el_deg)[0]
+        return frames
+
+    def feed(self, data: bytes) -> list[Reply]:
+        replies: list[Reply] = []
+        for r in self._inner.feed(data):
+            if isinstance(r, PositionReply):
+                self._own_az = r.az_deg
+                r = replace(r, az_deg=r.az_deg if self._asked_az is None else self._asked_az)
+            replies.append(r)
+        return replies
+
+
+class OneAxisElevation(AzimuthOnly):
+    """Rule 2: a one-axis box whose one rotor is the elevation."""
+
+    def __init__(self, inner: Codec) -> None:
+        super().__init__(inner)
+        self._own_el: float | None = None  # what the box last said of its one axis
+        self._asked_az: float | None = None  # what the session last asked for
+
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        el = self._own_el if el_deg is None else el_deg
+        return az_deg, None if el is None else self._inner.wire_target(el, None)[0]
+
+    def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        el = self._own_el if el_deg is None else el_deg
+        if el is None:  # the session sends only once the box answered (a reading)
+            raise ValueError("the elevation box has not said where it points")
+        self._asked_az = az_deg
+        return self._inner.encode_target(el, None)
+
+    def feed(self, data: bytes) -> list[Reply]:
+        replies: list[Reply] = []
+        for r in self._inner.feed(data):
+            if isinstance(r, PositionReply):
+                self._own_el = r.az_deg
+                az = 0.0 if self._asked_az is None else self._asked_az
+                r = replace(r, az_deg=az, el_deg=r.az_deg)
+            replies.append(r)
+        return replies
+
+
+def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
+    """``spec`` as the box of one axis of a composite rotator (rules 1 and 2)."""
+    if axis is Axis.AZIMUTH:
+        factory = spec.codec_factory
+        return replace(
+            spec,
+            codec_factory=lambda: AzimuthOnly(factory()),
+            has_elevation=False,
+            el_min_deg=0.0,
+            el_max_deg=0.0,
+        )
+    inner = spec.codec_factory
+    if spec.has_elevation:
+        return replace(spec, codec_factory=lambda: ElevationOnly(inner()))
+    return replace(  # a one-axis box turning the elevation
+        spec,
+        codec_factory=lambda: OneAxisElevation(inner()),
+        has_elevation=True,
+        el_min_deg=max(0.0, spec.az_min_deg),
+        el_max_deg=min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg),
+        nominal_el_speed_deg_s=spec.nominal_speed_deg_s,
+    )
+
+
+_COMPOSITES: dict[tuple[str, str], ModelSpec] = {}
+
+
+def composite_spec(az: ModelSpec, el: ModelSpec) -> ModelSpec:
+    """The spec of a rotator whose azimuth is ``az``'s and elevation ``el``'s (rule 4); one
+    value for each pair of models."""
+    key = (az.name, el.name)
+    if key not in _COMPOSITES:
+        _COMPOSITES[key] = _composite(az, el)
+    return _COMPOSITES[key]
+
+
+def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
+    el = axis_spec(box, Axis.ELEVATION)
+    return replace(
+        az,
+        name=f"{az.name}+{box.name}",
+        display_name=f"{az.display_name} + {box.display_name}",
+        manufacturer=az.manufacturer
+        if az.manufacturer == el.manufacturer
+        else f"{az.manufacturer} + {el.manufacturer}",
+        can_report_position=az.can_report_position and el.can_report_position,
+        has_elevation=True,
+        has_version=False,
+        settings=(),
+        el_min_deg=el.el_min_deg,
+        el_max_deg=el.el_max_deg,
+        nominal_el_speed_deg_s=el.nominal_el_speed_deg_s,
+        reports_while_moving=az.reports_while_moving and el.reports_while_moving,
+        # the judge's limits after rounding (pointing.py): whole degrees if either box takes
+        # them, the safe side for the other
+        whole_degrees=az.whole_degrees or el.whole_degrees,
+        hamlib_rot_type=HamlibRotType.AZEL,
+    )

@@ -1,0 +1,259 @@
+"""Prosistel D (one rotor: azimuth or elevation) and Combi-Track (azimuth and elevation): the codec.
+
+Device: Prosistel's rotator controllers. The D series (and the PRO series, which speaks the same)
+drives one rotor in whole degrees, as unit A (azimuth, 0..360) or unit E (elevation, 0..90); the
+Combi-Track drives an azimuth and an elevation rotor as two units, A and B, in tenths of a
+degree. 9600 8N1, no flow control. Every frame starts with
+STX (0x02) and ends with CR; a command is the unit's letter, the command's letter and its value
+(``STX A G 123 CR``), and every command is answered by the unit, the command and what it says,
+comma-separated (``STX A,?,123,B CR``). Some boxes send their position over and over unasked
+(continuous position monitoring, CPM) until ``STX A S CR`` turns it off.
+Sources: the project's protocol sheet (Prosistel's documents as gathered there); Hamlib 4.5.4's
+prosistel backend (prosistel.c: models 1701 D azimuth, 1702 D elevation, 1703 Combi-Track; its
+commands, its unit letters, its stop values and the reply examples in its comments) and its
+author's notes in Hamlib's tracker (the D tried on a PST-61D; the three families).
+
+Frames we send (STX written ``^B``):
+  ``^BAG123\\r``            turn unit A to 123 (D: degrees; Combi-Track: ``^BAG1234\\r``, tenths),
+                           without leading zeros, as Hamlib sends them to a PST-61D
+  ``^BA?\\r``               ask unit A's position: ``^BA,?,123,R\\r`` (R: running, B: braked)
+  ``^BAG999\\r``            stop at once (the hard stop; Combi-Track ``^BAG9999\\r`` per unit)
+  ``^BAS\\r``               at open: no continuous position output (per unit)
+The Combi-Track's units go one frame each: A, then B, for a target, a query, a stop. A D on an
+elevation rotor is sent the same frames for unit E; its elevation is that rotator's bearing (the
+box has no azimuth), as with one box of an az/el pair on two ports.
+Not sent: the soft stop (``G997``, Combi-Track ``G9777``): with the box's PWM ramps on it slows
+the rotor down over the ramp, so the rotor goes on turning after the user's STOP; the hard stop
+stops it where it is (rule 4).
+
+Rules:
+1. Frames end at CR; what comes on a line before its last STX is line noise. A position is
+   ``STX u,?,n,s`` with n one to four digits and s a status letter; it is read only while a
+   query is open and for a unit this model has, and the query is answered once every unit has
+   said its position (two lines on the Combi-Track, in any order). Values beyond the unit's
+   range (azimuth 0..360, elevation 0..90) are spoiled.
+2. A position nobody asked for (the box's continuous output, or a unit's second line in one
+   exchange) is the box's own chatter: harmless, never a reading, never a spoiler. The bridge
+   turns the output off at open; a box that streams anyway (power-cycled, say) costs nothing.
+3. The answers to ``G`` and ``S`` are chatter too, whatever their payload; an answer that says
+   ``E,<code>`` is the box's refusal or error (SPOILED, its code in the detail, not harmless).
+   Any junk within an open query makes its reading UNTRUSTED (the engine asks again at once).
+4. STOP is the hard stop (999; 9999 on the Combi-Track): a user's STOP and a lock stop the
+   rotor where it is. Both stop values lie far outside the targets' range, so a stop can never
+   be read as a bearing by a box of the other family.
+5. Targets are whole degrees (D) or tenths (Combi-Track), rounded half up; outside azimuth
+   0..360 or elevation 0..90 (a D elevation's bearing too) they are refused before anything is
+   sent.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from bridge.protocols.base import (
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    ModelSpec,
+    OneQuery,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+)
+
+STX = b"\x02"
+AZ_MAX_DEG = 360
+EL_MAX_DEG = 90
+_MAX_LINE = 32
+_POSITION = re.compile(rb"\x02(?P<unit>[A-Z]),\?,(?P<value>\d{1,4}),[A-Z]")
+_ERROR = re.compile(rb"\x02(?P<unit>[A-Z]),(?P<cmd>.),E,(?P<code>\d*)")
+_ANSWER = re.compile(rb"\x02(?P<unit>[A-Z]),(?P<cmd>[^?\r]),[^\r]*")
+# what a healthy box emits besides replies (rules 2 and 3): blank lines, answers without an
+# error, positions
+_CHATTER = re.compile(rb"(?:[\r\n ]|\x02[A-Z],[^?\r],(?!E,)[^\r]*\r|\x02[A-Z],\?,\d{1,4},[A-Z]\r)*")
+
+
+@dataclass(frozen=True)
+class Family:
+    """What a box of one family is on the wire: its units (the bridge's bearing first), the top
+    of each unit's range in degrees, its scale (1: degrees, 10: tenths) and its hard stop."""
+
+    units: tuple[str, ...]
+    tops: tuple[int, ...]
+    scale: int
+    hard_stop: int
+
+
+D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999)
+# a D on an elevation rotor: its one unit, E, is the rotator's bearing (0..90)
+D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999)
+COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999)
+
+
+def _value(deg: float, top: int, scale: int, axis: str) -> int:
+    value = math.floor(deg * scale + 0.5)
+    if not 0 <= value <= top * scale:
+        raise ValueError(f"{axis} {deg:g} outside 0..{top}")
+    return value
+
+
+class ProsistelCodec(OneQuery):
+    """Codec for one Prosistel box: a D on one rotor (unit A or E), or a Combi-Track's two."""
+
+    BOX = "a Prosistel box"
+
+    def __init__(self, family: Family = D_AZIMUTH) -> None:
+        self.family = family
+        self.elevation = len(family.units) == 2
+        self._buf = bytearray()
+        self._query_open = False
+        self._noisy = False  # junk arrived since the query was opened
+        self._said: dict[str, float] = {}  # what this exchange's units have said so far
+
+    # -- encoding -------------------------------------------------------------------------
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        scale, tops = self.family.scale, self.family.tops
+        az = _value(az_deg, tops[0], scale, "azimuth" if tops[0] == AZ_MAX_DEG else "bearing")
+        if not self.elevation:
+            return az / scale, None
+        return az / scale, _value(el_deg or 0.0, tops[1], scale, "elevation") / scale
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        values = [v for v in self.wire_target(az_deg, el_deg) if v is not None]
+        return [
+            STX + b"%sG%d\r" % (unit.encode(), round(v * self.family.scale))
+            for unit, v in zip(self.family.units, values, strict=True)
+        ]
+
+    def encode_stop(self) -> bytes:
+        return self._each(b"G%d" % self.family.hard_stop)
+
+    def encode_query(self) -> bytes:
+        self._open_query()
+        self._said = {}
+        return self._each(b"?")
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return [self._each(b"S")]  # no continuous position output
+
+    def harmless(self, junk: bytes) -> bool:
+        return _CHATTER.fullmatch(junk) is not None
+
+    def _each(self, command: bytes) -> bytes:
+        return b"".join(STX + unit.encode() + command + b"\r" for unit in self.family.units)
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while (end := self._buf.find(b"\r")) != -1:
+            line = bytes(self._buf[: end + 1])
+            del self._buf[: end + 1]
+            self._line(line, out)
+        if len(self._buf) > _MAX_LINE:
+            self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
+            self._buf.clear()
+        return out
+
+    def _line(self, raw: bytes, out: list[Reply]) -> None:
+        start = raw.rfind(STX)
+        if start == -1:
+            if raw.strip(b"\r\n "):
+                self._junk(raw, JunkReason.NOISE, "not a reply line", out)
+            else:
+                out.append(JunkReply(raw, JunkReason.CHATTER, "blank line"))
+            return
+        if start and raw[:start].strip(b"\r\n "):  # rule 1: noise in front of the frame
+            self._junk(raw[:start], JunkReason.NOISE, "not a reply", out)
+        frame = raw[start:]
+        body = frame.rstrip(b"\r")
+        if m := _ERROR.fullmatch(body):
+            code, cmd = m.group("code").decode(), m.group("cmd").decode("latin-1")
+            why = f"unit {m.group('unit').decode()} answered {cmd} with error {code}"
+            self._junk(frame, JunkReason.SPOILED, why, out)
+        elif _ANSWER.fullmatch(body):
+            out.append(JunkReply(frame, JunkReason.CHATTER, "the answer to a command"))
+        elif m := _POSITION.fullmatch(body):
+            self._position(frame, m.group("unit").decode(), int(m.group("value")), out)
+        else:
+            self._junk(frame, JunkReason.NOISE, "not a reply line", out)
+
+    def _position(self, frame: bytes, unit: str, value: int, out: list[Reply]) -> None:
+        units = self.family.units
+        if unit not in units:
+            self._junk(
+                frame, JunkReason.NOISE, f"a position of unit {unit}: is the model right?", out
+            )
+            return
+        deg = value / self.family.scale
+        if deg > self.family.tops[units.index(unit)]:
+            self._junk(frame, JunkReason.SPOILED, "position out of range", out)
+            return
+        if not self._query_open or unit in self._said:  # rule 2
+            out.append(JunkReply(frame, JunkReason.CHATTER, "position output nobody asked for"))
+            return
+        self._said[unit] = deg
+        if len(self._said) < len(units):
+            return  # the other unit's line is still to come
+        self._query_open = False
+        if self._noisy:
+            out.append(JunkReply(frame, JunkReason.UNTRUSTED, "position after line noise"))
+            return
+        out.append(
+            PositionReply(
+                self._said[units[0]], self._said.get(units[-1]) if self.elevation else None
+            )
+        )
+
+
+def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
+    combi = family is COMBI_TRACK
+    digits = 4 if combi else 3
+    top = float(family.tops[0])
+    query = len(family.units) * len(b"\x02A?\r")
+    reply = len(family.units) * len(b"\x02A,?,%s,B\r" % (b"0" * digits))
+    defaults: dict[str, Any] = dict(
+        manufacturer="Prosistel",
+        codec_factory=lambda: ProsistelCodec(family),
+        baud=9600,
+        has_elevation=combi,
+        retarget=RetargetPolicy.DIRECT,  # a new G while turning: the box turns to it
+        az_min_deg=0.0,
+        az_max_deg=top,
+        el_min_deg=0.0,
+        el_max_deg=float(EL_MAX_DEG) if combi else 0.0,
+        az_wraps=top == AZ_MAX_DEG,  # 0 and 360 are one direction; 0 and 90 of a mast are not
+        reply_timeout_s=0.5,
+        noise_deg=0.2 if combi else 1.0,  # an encoder read in tenths; a pot in whole degrees
+        nominal_speed_deg_s=6.0,
+        nominal_el_speed_deg_s=3.0,
+        whole_degrees=not combi,
+        query_bytes=query,
+        reply_bytes=reply,
+        hamlib_rot_type=HamlibRotType.AZEL if combi else HamlibRotType.AZ,
+        hamlib_info=None,  # Hamlib's prosistel backend has no get_info
+    )
+    defaults.update(kw)
+    return ModelSpec(name=name, display_name=display, **defaults)
+
+
+MODELS: dict[str, ModelSpec] = {
+    "prosistel": _spec("prosistel", "D azimuth", D_AZIMUTH, hamlib_model=1701),
+    "prosistel-el": _spec(
+        "prosistel-el",
+        "D elevation",
+        D_ELEVATION,
+        hamlib_model=1702,
+        # Hamlib's 1702 is an El rotator, but this rotator's bearing is the elevation: the
+        # bridge's rotctld port answers it as an azimuth in 0..90, and says so in dump_state,
+        # so a client's view of the port is one that fits together
+        hamlib_rot_type=HamlibRotType.AZ,
+        nominal_speed_deg_s=3.0,  # an elevation rotor's speed, as the bearing's
+    ),
+    "prosistel-combi": _spec(
+        "prosistel-combi", "Combi-Track az/el", COMBI_TRACK, hamlib_model=1703
+    ),
+}

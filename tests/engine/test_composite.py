@@ -1,0 +1,134 @@
+"""A composite rotator (engine/composite.py) in virtual time: a Green Heron RT-21 turns the
+azimuth, a GS-232B box the elevation, each on its own emulated line, one mailbox and one
+status in front (tests/engine/virtual_composite.py). The sky is fixed (SUN_EPOCH) and checked
+against the test's own solar formula (tests/support/sky.py)."""
+
+from __future__ import annotations
+
+from bridge.model import MotionState, Source, Target
+from bridge.protocols.axes import Axis
+from bridge.sky import Body, Sky
+from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
+from tests.engine.virtual_composite import VirtualComposite
+from tests.support.sky import sun_altaz
+
+FAST = {
+    Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
+    Axis.ELEVATION: {"az_speed_deg_s": 6.0, "el_speed_deg_s": 2.5},
+}
+FINE = {"tolerance_deg": 0.5, "track_step_deg": 1.0}
+
+
+def online(v: VirtualComposite) -> bool:
+    return v.status.available
+
+
+def test_an_rt21_and_a_gs232b_track_the_sun_within_1_5_degrees() -> None:
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    sky = Sky(lat, lon)
+    with VirtualComposite(
+        "rt21", "gs232b", settings=FINE, emulators=FAST, sky=sky, wall_epoch_s=SUN_EPOCH
+    ) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.track(Body.sun())
+        assert v.status.tracking is not None and v.status.tracking.body == "sun"
+
+        def on_the_sun(h: VirtualComposite) -> bool:
+            sun_az, sun_el = sun_altaz(lat, lon, h.wall())
+            az, el = h.az.truth().az_deg, h.el.truth().el_deg
+            return off_deg(az, sun_az) <= 1.5 and abs(el - sun_el) <= 1.5
+
+        v.run_until(on_the_sun, 120, "the rotor reaches the sun")
+        worst_az = worst_el = 0.0
+        end = v.now + 600.0  # ten minutes of rotor time, sampled every second
+        while v.now < end:
+            v.run_for(1.0)
+            sun_az, sun_el = sun_altaz(lat, lon, v.wall())
+            worst_az = max(worst_az, off_deg(v.az.truth().az_deg, sun_az))
+            worst_el = max(worst_el, abs(v.el.truth().el_deg - sun_el))
+        assert worst_az <= 1.5 and worst_el <= 1.5, (worst_az, worst_el)
+        # both boxes moved on with the sun, and the status shows each box's axis
+        assert len(v.az.frames("move")) >= 2 and len(v.el.frames("move")) >= 3
+        status = v.status
+        assert status.tracking is not None and status.last_command_source == Source.TRACKING.value
+        assert status.bearing_deg is not None and off_deg(status.bearing_deg, sun_az) <= 2.0
+        assert status.elevation_deg is not None and abs(status.elevation_deg - sun_el) <= 2.0
+        # the elevation box's own azimuth was never turned (protocols/axes.py rule 2)
+        assert v.el.truth().az_deg == 0.0
+        assert all(w.startswith((b"W000 ", b"C2")) for w in v.el.sent()), v.el.sent()
+
+
+def test_one_stop_stops_both_boxes() -> None:
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 60.0))
+        v.run_until(lambda h: h.status.state is MotionState.MOVING, 5, "moving")
+        v.run_for(2.0)
+        assert v.az.truth().az_deg > 1.0 and v.el.truth().el_deg > 1.0
+        t = v.now
+        v.stop()
+        assert v.az.sent(since=t) == [b";"]  # the RT-21's stop, in the same instant
+        assert v.el.sent(since=t) == [b"S\r"]  # the GS-232B's
+        v.run_for(5.0)
+        assert [f.outcome for f in v.az.frames(since=t)][:1] == ["stop"]  # each box obeyed
+        assert [f.outcome for f in v.el.frames(since=t)][:1] == ["stop"]
+        az, el = v.az.truth().az_deg, v.el.truth().el_deg
+        v.run_for(10.0)
+        assert (v.az.truth().az_deg, v.el.truth().el_deg) == (az, el)  # still
+        assert az < 100.0 and el < 40.0  # short of the target: stopped on the way
+        assert v.status.state is not MotionState.MOVING
+
+
+def test_an_unplugged_box_takes_the_rotator_offline_and_the_other_still_stops() -> None:
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 60.0))
+        v.run_for(2.0)
+        v.el.link_down()
+        v.run_for(0.1)
+        assert not v.status.available and v.status.state is MotionState.OFFLINE
+        assert v.status.last_error == "virtual port unplugged"
+        t = v.now
+        v.stop()
+        assert v.az.sent(since=t) == [b";"]  # the box still plugged stops at once
+        v.run_for(3.0)
+        az = v.az.truth().az_deg
+        v.run_for(3.0)
+        assert v.az.truth().az_deg == az < 100.0  # still, short of the target
+        v.el.link_up()  # replugged: the stop it was owed is its first frame
+        assert v.el.sent(since=v.now)[:1] == [b"S\r"]
+        v.run_until(online, 10, "both boxes answer again")
+        assert v.status.state is not MotionState.OFFLINE
+
+
+def test_tracking_ends_in_both_boxes_when_one_box_is_unplugged() -> None:
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    sky = Sky(lat, lon)
+    with VirtualComposite("rt21", "gs232b", emulators=FAST, sky=sky, wall_epoch_s=SUN_EPOCH) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.track(Body.sun())
+        v.run_for(5.0)
+        assert v.az.status.tracking is not None and v.el.status.tracking is not None
+        v.el.link_down()
+        v.run_for(0.5)
+        assert v.az.status.tracking is None  # the azimuth does not follow the sun alone
+        assert v.status.tracking is None and v.status.tracking_ended == "serial link down"
+        v.run_for(30.0)  # (the step it was on is finished: ending tracking stops nothing)
+        t, az = v.now, v.az.truth().az_deg
+        v.run_for(600.0)
+        assert v.az.truth().az_deg == az and v.az.frames("move", since=t) == []
+
+
+def test_two_rt21_boxes_make_an_az_el_rotator() -> None:
+    """Green Heron's az/el pair: one RT-21 box turns the elevation rotor on its one axis."""
+    with VirtualComposite("rt21", "rt21", emulators={Axis.ELEVATION: {"az_speed_deg_s": 3.0}}) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 45.5))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 120, "idle")
+        assert v.az.truth().az_deg == 200.0 and v.el.truth().az_deg == 45.5
+        assert [f.data for f in v.el.frames("move")] == [b"AP1045.5\r;"]
+        assert (v.status.bearing_deg, v.status.elevation_deg) == (200.0, 45.5)
+        t = v.now
+        v.aim(Target(None, 10.0))  # the elevation alone: the azimuth box is sent nothing
+        v.run_until(lambda h: h.el.truth().az_deg == 10.0, 60, "the elevation turned")
+        assert v.az.frames("move", since=t) == []

@@ -1,0 +1,139 @@
+"""A Prosistel D and a Combi-Track in virtual time: the position output turned off first, bearings
+straight out (whole degrees, tenths), the hard stop at once, a new bearing while turning without
+a stop, a box streaming its position read right, a glitched reply never read, a bearing the box
+refuses reported, and a satellite pass followed in azimuth and elevation by the Combi-Track.
+
+The box takes a new bearing at any time and brakes by itself, answers every frame (``STX A,G,R``
+to a bearing, ``STX A,?,123,B`` to a query) and reads its rotor in whole degrees (D) or tenths
+(Combi-Track, two units). 9600 baud: one poll of a D (4 bytes out, 11 back) takes 16 ms of the
+line, of a Combi-Track (8 out, 24 back) 33 ms.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.prosistel import Outcome
+from bridge.model import MotionState
+from tests.engine.test_session_tracking import a_pass_that, fly
+from tests.engine.virtual import VirtualRotator, moves, settled_at
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+MODELS = ("prosistel", "prosistel-combi")
+HARD_STOP = {"prosistel": [b"\x02AG999\r"], "prosistel-combi": [b"\x02AG9999\r", b"\x02BG9999\r"]}
+
+
+def ready(rig: Rig, model: str = "prosistel", **emulator: object) -> VirtualRotator:
+    v = rig(model, emulator={**FAST, **emulator})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+@pytest.mark.parametrize(
+    ("model", "wire", "at"),
+    [
+        ("prosistel", [b"\x02AG123\r"], (123.0, None)),
+        ("prosistel-combi", [b"\x02AG1235\r", b"\x02BG0\r"], (123.5, 0.0)),
+    ],
+)
+def test_a_target_goes_out_after_the_output_is_off_and_is_read_back(
+    rig: Rig, model: str, wire: list[bytes], at: tuple[float, float | None]
+) -> None:
+    v = ready(rig, model, start_az_deg=10)
+    first = [f.outcome for f in v.frames()][: len(HARD_STOP[model])]
+    assert set(first) == {Outcome.OUTPUT_OFF}  # before anything else
+    v.target(123.46)
+    v.run_until(settled_at(*at), 60, f"at {at}")
+    assert moves(v) == wire
+    assert v.status.bearing_deg == at[0] and v.errors() == []
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_stop_while_turning_is_the_hard_stop_at_once(rig: Rig, model: str) -> None:
+    v = ready(rig, model)
+    v.target(300)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    t = v.now
+    v.stop()
+    assert [w.t for w in v.writes if w.data == b"".join(HARD_STOP[model])] == [t]  # at once
+    v.run_until(lambda h: h.state is IDLE, 10, "idle")
+    truth = v.truth()
+    assert not truth.is_moving and 30 < truth.az_deg < 40
+    assert v.status.bearing_deg == pytest.approx(truth.az_deg, abs=0.51)
+    assert [f.data for f in v.frames(Outcome.STOP)] == HARD_STOP[model] and v.errors() == []
+
+
+def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200)
+    v.run_until(lambda h: h.truth().az_deg > 50, 30, "turning")
+    t = v.now
+    v.target(20)
+    v.run_until(lambda h: moves(h, t), 2, "the new bearing")
+    assert v.truth().is_moving and moves(v, t) == [b"\x02AG20\r"]
+    v.run_until(settled_at(20.0), 120, "at 20")
+    assert v.frames(Outcome.STOP) == []
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_box_streaming_its_position_after_a_power_cycle_is_read_right(
+    rig: Rig, model: str
+) -> None:
+    """A box that streams again after a power cycle (fast: every 40 ms) is no trouble: every
+    bearing published is one the rotor passed through, nothing is reported, a target arrives."""
+    v = ready(rig, model, start_az_deg=100, streaming=True, stream_interval_s=0.04)
+    v.power_cycle()
+    t = v.now
+    v.target(150)
+    v.run_until(settled_at(150.0, 0.0 if model == "prosistel-combi" else None), 60, "at 150")
+    v.run_for(10)
+    assert v.truth().streaming  # the box went on streaming all along
+    bearings = {s.bearing_deg for s in v.published(since=t)} - {None}
+    assert bearings and all(100.0 <= b <= 150.0 for b in bearings if b is not None)
+    assert v.status.bearing_deg == 150.0 and v.errors() == []
+
+
+def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
+    v = ready(rig, "prosistel-combi", start_az_deg=100, start_el_deg=20)
+    v.run_for(10)
+    glitched = v.glitch_once(b"\x02", b"\xff\x02A,?,3599,B\r")
+    t = v.now
+    v.run_for(30)
+    assert glitched
+    assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(100.0, 20.0)}
+    assert v.state is IDLE
+
+
+def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=77)
+    t = v.now
+    v.garble_writes(b"\x02AG150\r", b"\x02AG450\r")  # a bearing the box cannot take
+    v.target(150)
+    v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
+    assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
+    assert v.frames(Outcome.REFUSED)[-1].data == b"\x02AG450\r"
+    assert v.truth().az_deg == 77 and not v.truth().is_moving
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} == {77.0}
+
+
+def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> None:
+    """A Combi-Track (6 and 3 deg/s here) follows a pass clear of north (a 360-degree azimuth
+    cannot cross it without a turn round) as closely as the SPIDs do: tenths both ways."""
+    v, errors = fly("prosistel-combi", a_pass_that(across_north=False))
+    with v:
+        worst_az = max(e[1] for e in errors[5:])  # the body rises at the horizon's edge
+        worst_el = max(e[2] for e in errors[5:])
+        assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
+        assert len(moves(v)) >= 10 and not v.frames(Outcome.REFUSED)
+        assert v.errors() == []
+
+
+def test_a_bare_azimuth_to_a_combi_track_keeps_its_elevation(rig: Rig) -> None:
+    v = ready(rig, "prosistel-combi", start_az_deg=10, start_el_deg=30)
+    v.target(100)  # no elevation named: unit B must not be sent to 0
+    v.run_until(settled_at(100, 30), 60, "at 100/30")
+    assert moves(v) == [b"\x02AG1000\r", b"\x02BG300\r"]

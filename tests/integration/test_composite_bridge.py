@@ -1,0 +1,160 @@
+"""A rotator of two boxes end to end: real mosquitto, real pyserial on two ptys, the bridge,
+an RT-21 emulator turning the azimuth and a GS-232B emulator the elevation (engine/composite.py).
+One target moves both, one STOP is a stop on both wires, one retained status shows both axes,
+and Home Assistant sees one az/el rotator."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import time
+from typing import Any
+
+from bridge.emulators.pty import EmulatedPort
+from tests.support import free_port, retained_snapshot, wait_until
+from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
+from tests.support.waiting import slow
+
+
+def composite(rig: Rig) -> tuple[EmulatedPort[Any], EmulatedPort[Any]]:
+    """The sky rotator: its azimuth on an RT-21, its elevation on a GS-232B's."""
+    az = rig.open_line(rig, "sky-az", "rt21", {**FAST_RT21, "start_az_deg": 10.0})
+    el = rig.open_line(rig, "sky-el", "gs232b", dict(FAST_GS232))
+    rig.rotators.append(
+        {
+            "id": "sky",
+            "azimuth": {"model": "rt21", "port": str(az.path)},
+            "elevation": {"model": "gs232b", "port": str(el.path)},
+            **FAST_POLLING,
+        }
+    )
+    return az.emu, el.emu
+
+
+def status(rig: Rig) -> dict[str, Any]:
+    doc: dict[str, Any] = json.loads(rig.retained()["rotor/status"])
+    return doc
+
+
+def test_one_target_moves_both_boxes_and_one_stop_stops_both(rig: Rig) -> None:
+    az, el = composite(rig)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=15)
+
+    rig.probe.publish("rotor/target", "123.4 30")
+    az.wait_for(lambda s: s.az_deg == 123.4 and not s.is_moving, 20)
+    el.wait_for(lambda s: s.el_deg == 30 and not s.is_moving, 20)
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    doc = status(rig)
+    assert (doc["bearing"], doc["elevation"]) == (123.4, 30)  # each from its own box
+    assert [f.data for f in az.frames("move")] == [b"AP1123.4\r;"]
+    assert [f.data for f in el.frames("move")] == [b"W000 030"]  # its azimuth stays put
+    assert el.state().az_deg == 0
+
+    rig.probe.publish("rotor/target", "300 80")
+    az.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    el.wait_for(lambda s: s.is_moving and s.el_deg > 35, 10)
+    rig.probe.publish("rotor/stop", "STOP")
+    az_stopped = az.wait_for(lambda s: not s.is_moving, 5)
+    el_stopped = el.wait_for(lambda s: not s.is_moving, 5)
+    # a stop on each wire (a box seen still turning later may get it again: stops.py rule 2)
+    assert [f.data for f in az.frames("stop")][:1] == [b";"]
+    assert [f.data for f in el.frames("stop")][:1] == [b"S"]
+    assert az_stopped.az_deg < 290 and el_stopped.el_deg < 75
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    doc = status(rig)
+    assert doc["bearing"] == round(az.state().az_deg, 1)
+    assert doc["elevation"] == round(el.state().el_deg)
+
+
+def test_an_unplugged_box_refuses_targets_and_the_other_still_stops(rig: Rig) -> None:
+    az, el = composite(rig)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    rig.probe.publish("rotor/target", "300 10")
+    az.wait_for(lambda s: s.is_moving and s.az_deg > 60, 10)
+    t = time.monotonic()
+    el.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", timeout_s=10, after=t)
+    # the status says which box went away (read once the status itself has it: the
+    # availability topic may come first)
+    wait_until(lambda: "serial-by-id-sky-el" in (status(rig)["last_error"] or ""), 10)
+    rig.probe.publish("rotor/stop", "STOP")
+    az.wait_for_frame(b";", "stop", 5)
+    stopped = az.wait_for(lambda s: not s.is_moving, 5)
+    assert stopped.az_deg < 290
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "offline" in err["message"]
+    t = time.monotonic()
+    el.replug()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    assert [f.data for f in el.frames("stop")] == [b"S"]  # the stop it was owed, on replug
+    rig.probe.publish("rotor/target", "100 20")
+    az.wait_for(lambda s: s.az_deg == 100 and not s.is_moving, 20)
+    el.wait_for(lambda s: s.el_deg == 20 and not s.is_moving, 20)
+
+
+def test_home_assistant_sees_one_az_el_rotator(rig: Rig) -> None:
+    composite(rig)
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    prefix = "homeassistant"
+    snap = retained_snapshot(rig.broker.port, f"{prefix}/#")
+    configs = {t: json.loads(p) for t, p in snap.items() if t.endswith("/config") and p}
+    device = "rotorbridge_rotor_r_sky"
+    assert f"{prefix}/sensor/{device}/bearing/config" in configs
+    assert f"{prefix}/sensor/{device}/elevation/config" in configs
+    assert f"{prefix}/number/{device}/target_elevation/config" in configs
+    models = {c["device"].get("model") for c in configs.values() if "device" in c}
+    assert any("RT-21" in (m or "") and "GS-232B" in (m or "") for m in models), models
+
+
+def test_lock_and_limits_are_judged_once_and_the_lock_stops_both(rig: Rig) -> None:
+    az, el = composite(rig)
+    rig.rotators[-1]["el_max_deg"] = 90
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 95")  # the elevation box could; the rotator may not
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "outside" in err["message"]
+    rig.probe.publish("rotor/lock", "ON")  # the lock is for tower work: a stop on both wires
+    rig.probe.wait_value("rotor/lock/state", "ON")
+    az.wait_for_frame(b";", "stop", 10)
+    el.wait_for_frame(b"S", "stop", 10)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "100 20")
+    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
+    assert err["kind"] == "refused" and "locked" in err["message"]
+    assert az.frames("move") == [] and el.frames("move") == []
+
+
+def test_hamlib_rotctl_sets_and_reads_both_axes_and_stops_both(rig: Rig, rotctl_path: str) -> None:
+    """Gpredict's way in (rotctl -m 2 on the rotctld port): one az/el rotator."""
+    az, el = composite(rig)
+    port = free_port()
+    rig.rotators[-1]["rotctld_port"] = port
+    rig.start()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
+    argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "2", "-r", f"127.0.0.1:{port}"]
+    run = subprocess.run([*argv, "P", "150.5", "25"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    az.wait_for(lambda s: s.az_deg == 150.5 and not s.is_moving, 20)
+    el.wait_for(lambda s: s.el_deg == 25 and not s.is_moving, 20)
+    t = time.monotonic()
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    run = subprocess.run([*argv, "p"], capture_output=True, text=True, check=False)
+    assert [float(x) for x in run.stdout.split()] == [150.5, 25.0], run.stdout
+    run = subprocess.run([*argv, "P", "20", "60"], capture_output=True, text=True, check=False)
+    az.wait_for(lambda s: s.is_moving, 10)
+    el.wait_for(lambda s: s.is_moving, 10)
+    run = subprocess.run([*argv, "S"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    az.wait_for(lambda s: not s.is_moving, 5)
+    el.wait_for(lambda s: not s.is_moving, 5)
+    assert az.frames("stop") and el.frames("stop")  # one S, a stop on each wire

@@ -1,0 +1,247 @@
+"""Groups (mqtt/groups.py): the fan-out decision on its own (offsets, limits, elevation, what a
+group refuses), and the service's group topics with recording rotators: a group's target as
+each member's, a group's stop as each member's on both connections (the last word: a lane's
+group stop holds every member until the main connection's copy, so no target published before
+it runs after it), refusals on the group's error topic, the group's status."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from bridge.errors import RefusalCode, Refused
+from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
+from bridge.mqtt import payloads as pl
+from bridge.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
+from bridge.mqtt.service import MqttService
+from bridge.mqtt.topics import RotatorTopics, Topics
+from bridge.settings_groups import RESERVED
+from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
+
+M = Source.MQTT
+STACK = Group("stack", "Stack", (Member("upper"), Member("lower", 180.0)))
+AZ_ONLY = {"upper": False, "lower": False}
+
+
+def targets(parts: list[object]) -> list[tuple[str, float | None, float | None, str | None]]:
+    return [
+        (p.member, p.target and p.target.az_deg, p.target and p.target.el_deg, p.refused)  # type: ignore[attr-defined]
+        for p in parts
+    ]
+
+
+# -- the decision, pure ------------------------------------------------------------------------
+def test_each_member_turns_to_the_groups_bearing_plus_its_offset_within_0_to_360() -> None:
+    assert targets(fan_out(STACK, b"120", AZ_ONLY)) == [
+        ("upper", 120.0, None, None),
+        ("lower", 300.0, None, None),
+    ]
+    assert targets(fan_out(STACK, b"270", AZ_ONLY)) == [
+        ("upper", 270.0, None, None),
+        ("lower", 90.0, None, None),
+    ]
+    assert member_bearing(360.0, 0.0) == 360.0  # as sent: the rotator's range decides
+    assert member_bearing(180.0, 180.0) == 0.0
+
+
+def test_a_member_outside_its_group_limits_is_refused_and_the_others_still_turn() -> None:
+    narrow = Group("stack", "Stack", (Member("upper", 0.0, (20.0, 340.0)), Member("lower", 180.0)))
+    assert targets(fan_out(narrow, b"10", AZ_ONLY)) == [
+        ("upper", None, None, "10 is outside upper's limits in group stack (20..340)"),
+        ("lower", 190.0, None, None),
+    ]
+    assert targets(fan_out(narrow, b"20", AZ_ONLY))[0] == ("upper", 20.0, None, None)
+
+
+def test_an_elevation_needs_every_member_to_have_one_else_nothing_moves() -> None:
+    both = {"upper": True, "lower": True}
+    assert targets(fan_out(STACK, b'{"azimuth": 10, "elevation": 30}', both)) == [
+        ("upper", 10.0, 30.0, None),
+        ("lower", 190.0, 30.0, None),
+    ]
+    with pytest.raises(pl.PayloadError, match="lower turns in azimuth only"):
+        fan_out(STACK, b'{"azimuth": 10, "elevation": 30}', {"upper": True, "lower": False})
+
+
+@pytest.mark.parametrize(
+    "payload",
+    [b"", b"north", b"361", b"-5", b"NaN", b"JO01", b'{"call": "JA1ABC"}', b'{"path": "long"}'],
+)
+def test_what_is_no_bearing_is_refused_for_the_whole_group(payload: bytes) -> None:
+    with pytest.raises(pl.PayloadError):
+        fan_out(STACK, payload, AZ_ONLY)
+
+
+def test_the_reserved_words_are_every_first_level_of_a_rotators_topics() -> None:
+    """settings_groups.py rule 4 in step with topics.py: a group may not take any of them."""
+    t = RotatorTopics("R")
+    leaves = {
+        getattr(t, name).split("/")[1]
+        for name in dir(RotatorTopics)
+        if isinstance(getattr(RotatorTopics, name), property)
+    }
+    leaves |= {t.option("x").split("/")[1]}
+    assert leaves | {"bridge", "spots"} == set(RESERVED)
+
+
+def test_the_groups_status_is_its_members_with_its_refusals() -> None:
+    statuses = {
+        "upper": RotatorStatus("upper", MotionState.MOVING, 100.0, available=True),
+        "lower": RotatorStatus("lower", MotionState.IDLE, 280.0, available=True),
+    }
+    doc = json.loads(status_json(STACK, statuses, {"lower": "locked"}))
+    assert doc["bearing"] == 100.0 and doc["state"] == "moving" and doc["moving"] is True
+    assert doc["members"]["lower"] == {
+        "bearing": 280.0,
+        "elevation": None,
+        "state": "idle",
+        "available": True,
+        "offset": 180.0,
+    }
+    assert doc["refused"] == {"lower": "locked"} and doc["available"] is True
+    gone = {"upper": None, "lower": RotatorStatus("lower")}
+    doc = json.loads(status_json(STACK, gone, {}))
+    assert doc["state"] == "offline" and doc["available"] is False and doc["bearing"] is None
+
+
+# -- the service -------------------------------------------------------------------------------
+def group_service(
+    refuse_lower: Refused | None = None,
+) -> tuple[MqttService, RecordingPublisher, RecordingRotator, RecordingRotator]:
+    roots = {"upper": "rotor/upper", "lower": "rotor/lower", "other": "rotor/other"}
+    pub = RecordingPublisher()
+    svc = MqttService(Topics("rotor", roots, {"stack": "rotor/stack"}), pub, wall=lambda: NOW_UNIX)
+    upper = RecordingRotator("upper", "rotorez")
+    lower = RecordingRotator("lower", "rotorez", refuse=refuse_lower)
+    for rot in (upper, lower, RecordingRotator("other", "rotorez")):
+        svc.attach(rot)
+    svc.attach_group(STACK)
+    pub.take()
+    return svc, pub, upper, lower
+
+
+def test_the_group_topics_are_subscribed_its_stop_on_the_lane_too() -> None:
+    svc, _pub, _upper, _lower = group_service()
+    assert {"rotor/stack/target", "rotor/stack/stop"} <= set(svc.subscriptions())
+    assert "rotor/stack/stop" in svc.stop_lane_subscriptions()
+    assert "rotor/stack/stop" in svc.no_replay_subscriptions()
+    assert "rotor/stack/target" not in svc.stop_lane_subscriptions()
+    assert {"rotor/stack/status", "rotor/stack/availability"} <= set(svc.topics.owned())
+
+
+def test_a_group_target_is_a_target_for_each_member_through_its_own_submit() -> None:
+    svc, _pub, upper, lower = group_service()
+    svc.on_message("rotor/stack/target", b"120", False, "alice")
+    assert upper.calls == [("submit", Target(120.0, None, M), "target '120' (group stack)")]
+    assert lower.calls == [("submit", Target(300.0, None, M), "target '120' (group stack)")]
+    assert upper.origins == [Origin(Source.MQTT, "alice")]
+
+
+def test_a_members_refusal_is_on_the_groups_error_and_status_and_the_other_turns() -> None:
+    locked = Refused(RefusalCode.LOCKED, "locked: unlock it first")
+    svc, pub, upper, lower = group_service(refuse_lower=locked)
+    svc.on_message("rotor/stack/target", b"120", False)
+    assert upper.calls == [("submit", Target(120.0, None, M), "target '120' (group stack)")]
+    assert len(lower.calls) == 1
+    sent = pub.take()
+    (error,) = [json.loads(p) for t, p, _r in sent if t == "rotor/stack/error"]
+    assert error["members"] == {"lower": "locked: unlock it first"}
+    assert error["kind"] == "refused" and "the others turn" in error["message"]
+    status = json.loads(pub.retained["rotor/stack/status"])
+    assert status["refused"] == {"lower": "locked: unlock it first"}
+
+
+@pytest.mark.parametrize(
+    ("payload", "retain", "why"),
+    [
+        (b"120", True, "retained command on rotor/stack/target ignored"),
+        (b"north", False, "north"),
+        (b'{"azimuth": 1, "elevation": 2}', False, "turns in azimuth only"),
+    ],
+)
+def test_a_retained_or_bad_group_target_moves_nothing_and_says_why(
+    payload: bytes, retain: bool, why: str
+) -> None:
+    svc, pub, upper, lower = group_service()
+    svc.on_message("rotor/stack/target", payload, retain)
+    assert upper.calls == [] and lower.calls == []
+    (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
+    assert why in error["message"] and error["kind"] == "refused"
+
+
+def test_a_group_stop_on_the_main_connection_stops_every_member_even_retained() -> None:
+    svc, pub, upper, lower = group_service()
+    svc.on_message("rotor/stack/stop", b"", False)
+    svc.on_message("rotor/stack/stop", b"STOP", True)  # retained by mistake: stops, reported
+    stop = Stop(Source.MQTT)
+    assert upper.calls == [("submit", stop, "stop"), ("submit", stop, "stop 'STOP'")]
+    assert lower.calls == upper.calls
+    (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
+    assert "published retained: executed" in error["message"]
+
+
+def test_a_lane_group_stop_behind_a_flood_of_group_targets_holds_every_member() -> None:
+    """lastword.py rules 2 and 9 for each member: the lane's group stop is carried out at once
+    and holds both members (the judge keeps every target on hold); the flood of group targets
+    published before it, read after it on the main connection, stays held; the main
+    connection's copy drops them (it is carried out after them) and ends both holds; only the
+    target published after the stop goes out. One marker for the group."""
+    svc, pub, upper, lower = group_service()
+    svc.on_lane_message("rotor/stack/stop", b"", False)
+    markers = [m for m in pub.take() if m[0] == "rotor/bridge/fence"]
+    assert len(markers) == 1
+    for az in range(100, 110):  # published before the stop
+        svc.on_message("rotor/stack/target", str(az).encode(), False)
+    svc.on_message("rotor/stack/stop", b"", False)  # the main connection's copy
+    svc.on_message("rotor/stack/target", b"50", False)  # published after it
+    stop = Stop(Source.MQTT)
+    for rot, offset in ((upper, 0), (lower, 180)):
+        hold = rot.calls[0][-1]
+        assert rot.calls[0] == ("submit", stop, "stop", hold) and hold >= 1
+        flood = rot.calls[1:11]
+        assert [c[1].az_deg for c in flood] == [(az + offset) % 360 for az in range(100, 110)]
+        assert rot.calls[11:] == [
+            ("submit", stop, "stop"),  # after the flood: it drops every one of them
+            ("release", hold),
+            ("submit", Target((50.0 + offset) % 360, None, M), "target '50' (group stack)"),
+        ]
+    # the lane's group stop held both members with the marker that went out: its return
+    # would end both holds (already ended by the copy)
+    assert markers[0][1].endswith(f" {max(upper.calls[0][-1], lower.calls[0][-1])}")
+
+
+def test_the_lanes_late_copy_of_a_group_stop_the_main_connection_carried_out_is_an_echo() -> None:
+    """lastword.py rule 4 for each member: main read it first; the lane's copy must not stop
+    the group target published after it."""
+    svc, pub, upper, lower = group_service()
+    svc.on_message("rotor/stack/stop", b"", False)
+    (lane_marker,) = [m for m in pub.take() if m[0] == "rotor/bridge/fence/lane"]
+    svc.on_message("rotor/stack/target", b"10", False)
+    svc.on_lane_message("rotor/stack/stop", b"", False)  # the echo, for both
+    stop = Stop(Source.MQTT)
+    assert [c[:2] for c in upper.calls] == [("submit", stop), ("submit", Target(10.0, None, M))]
+    assert [c[:2] for c in lower.calls] == [("submit", stop), ("submit", Target(190.0, None, M))]
+    svc.on_lane_message(lane_marker[0], lane_marker[1].encode(), False)
+    svc.on_lane_message("rotor/stack/stop", b"", False)  # a new one: carried out at once
+    assert upper.calls[-1][:2] == ("submit", stop) and lower.calls[-1][:2] == ("submit", stop)
+
+
+def test_a_replayed_retained_group_stop_under_mqtt_311_stops_once() -> None:
+    svc, _pub, upper, lower = group_service()
+    svc.retain_is_live(False)
+    svc.on_lane_message("rotor/stack/stop", b"STOP", True)
+    svc.on_message("rotor/stack/stop", b"STOP", True)
+    assert len(upper.calls) == 1 and len(lower.calls) == 1
+
+
+def test_the_groups_status_and_availability_follow_its_members() -> None:
+    svc, pub, _upper, _lower = group_service()
+    svc.publish_status("upper", RotatorStatus("upper", MotionState.IDLE, 10.0, available=True))
+    assert pub.retained["rotor/stack/availability"] == "online"  # one member can hear a stop
+    svc.publish_status("upper", RotatorStatus("upper"))
+    assert pub.retained["rotor/stack/availability"] == "offline"
+    svc.publish_status("other", RotatorStatus("other", MotionState.IDLE, 1.0, available=True))
+    assert pub.retained["rotor/stack/availability"] == "offline"  # not a member
+    svc.stop()
+    assert "rotor/stack/availability" in pub.log[0]

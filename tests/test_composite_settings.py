@@ -1,0 +1,175 @@
+"""A composite rotator's configuration (settings_rotator.py rule 4), its check-config report,
+and the pure parts that make one rotator of two boxes (protocols/axes.py, the split and the
+merge of engine/composite.py)."""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge.engine.actions import Write
+from bridge.engine.composite import CompositeWorker, Composition, merge, split
+from bridge.engine.mailbox import Batch, Mailbox
+from bridge.errors import Refused
+from bridge.model import MotionState, RotatorStatus, Stop, Target
+from bridge.protocols import REGISTRY
+from bridge.protocols.axes import Axis, ElevationOnly
+from bridge.protocols.base import PositionReply
+from bridge.settings import ConfigError, settings_from
+from bridge.wiring import axis_configs, worker_config
+from tests.support import ROOT, run_cli
+
+AZ = {"model": "rt21", "port": "/dev/ttyAZ"}
+EL = {"model": "gs232b", "port": "/dev/ttyEL"}
+
+
+def load(**rotator: Any) -> Any:
+    return settings_from({"rotators": [{"id": "sky", **rotator}]}, environ={}).rotators[0]
+
+
+def test_a_composite_rotator_is_az_from_one_box_and_el_from_the_other() -> None:
+    r = load(azimuth=AZ, elevation=EL, el_max_deg=90)
+    assert r.model == "rt21+gs232b" and r.ports == ["/dev/ttyAZ", "/dev/ttyEL"]
+    spec = r.spec
+    assert spec.has_elevation and spec.options == () and spec.whole_degrees  # the GS-232B
+    assert (spec.az_min_deg, spec.az_max_deg) == (0.0, 360.0)  # the RT-21's
+    assert (spec.el_min_deg, spec.el_max_deg) == (0.0, 180.0)  # the GS-232B's
+    assert r.pointing.el_max_deg == 90  # the rotator's keys apply to the whole
+    again = type(r).model_validate(r.model_dump())  # what check-config --full prints loads
+    assert (again.model, again.ports) == (r.model, r.ports)
+
+
+def test_an_rt21_box_may_turn_the_elevation() -> None:
+    r = load(azimuth=AZ, elevation={**EL, "model": "rt21"})
+    assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 180.0)
+
+
+def test_a_prosistel_d_box_on_an_elevation_rotor_may_turn_the_elevation() -> None:
+    r = load(azimuth=AZ, elevation={**EL, "model": "prosistel-el"})
+    assert (r.spec.el_min_deg, r.spec.el_max_deg) == (0.0, 90.0)  # the box's own 0..90
+
+
+@pytest.mark.parametrize(
+    ("rotator", "words"),
+    [
+        ({"azimuth": AZ, "elevation": {**EL, "model": "rotorez"}}, "elevation.model"),
+        ({"azimuth": AZ, "elevation": {**EL, "model": "gs232b-az"}}, "elevation.model"),
+        ({"azimuth": AZ, "elevation": {**EL, "model": "dcu1"}}, "elevation.model"),
+        ({"azimuth": AZ, "elevation": {**EL, "port": "/dev/ttyAZ"}}, "elevation.port"),
+        ({"model": "rt21", "azimuth": AZ, "elevation": EL}, "model is given"),
+        ({"port": "/dev/x", "azimuth": AZ, "elevation": EL}, "port is given"),
+        ({"azimuth": AZ}, "elevation"),
+        ({"azimuth": {"model": "rt21"}, "elevation": EL}, "azimuth"),
+        ({"azimuth": {**AZ, "model": "rt-21"}, "elevation": EL}, "unknown model"),
+        ({"model": "rt21+gs232b", "port": "/dev/x"}, "unknown model"),
+    ],
+)
+def test_nonsense_is_refused_naming_the_key(rotator: dict[str, Any], words: str) -> None:
+    with pytest.raises(ConfigError) as err:
+        load(**rotator)
+    assert words in str(err.value), str(err.value)
+
+
+def test_a_box_port_is_no_other_rotators() -> None:
+    doc = {
+        "rotators": [
+            {"id": "sky", "azimuth": AZ, "elevation": EL},
+            {"id": "hf", "model": "rotorez", "port": "/dev/ttyEL"},
+        ]
+    }
+    with pytest.raises(ConfigError, match="/dev/ttyEL is given to two rotators"):
+        settings_from(doc, environ={})
+
+
+def test_check_config_names_both_boxes_and_warns_for_each_missing_port(tmp_path: Path) -> None:
+    there = tmp_path / "az-box"
+    there.touch()
+    path = tmp_path / "c.toml"
+    path.write_text(
+        '[[rotators]]\nid = "sky"\n'
+        f'azimuth = {{ model = "rt21", port = "{there}" }}\n'
+        f'elevation = {{ model = "gs232b", port = "{tmp_path / "gone"}", baud = 4800 }}\n'
+    )
+    out = run_cli("check-config", "-c", str(path))
+    assert out.returncode == 0, out.stderr
+    assert f"azimuth by RT-21 (rt21) on {there} (found), 4800 baud" in out.stdout
+    assert "elevation by GS-232B (gs232b) on" in out.stdout and "(NOT FOUND), 4800" in out.stdout
+    warned = [line for line in out.stdout.splitlines() if line.startswith("warning: ")]
+    assert [w.split(":")[1] for w in warned] == [" rotators[0].elevation.port"], warned
+
+
+def test_a_target_is_split_by_axis_and_a_stop_goes_to_both() -> None:
+    halves = split(Batch(stop=Stop(), target=Target(120.0, 30.0, true_az_deg=120.0)))
+    az, el = halves[Axis.AZIMUTH], halves[Axis.ELEVATION]
+    assert az.stop is not None and el.stop is not None
+    assert az.target is not None and (az.target.az_deg, az.target.el_deg) == (120.0, None)
+    assert el.target is not None and (el.target.az_deg, el.target.el_deg) == (None, 30.0)
+    only_el = split(Batch(target=Target(None, 10.0)))
+    assert only_el[Axis.AZIMUTH].target is None and only_el[Axis.ELEVATION].target is not None
+
+
+def test_the_status_is_offline_while_either_box_is() -> None:
+    az = RotatorStatus("a", MotionState.IDLE, 120.0, None, connected=True, available=True)
+    el = RotatorStatus("e", MotionState.OFFLINE, 0.0, 30.0)
+    merged = merge("sky", az, el)
+    assert (merged.rotator_id, merged.bearing_deg, merged.elevation_deg) == ("sky", 120.0, 30.0)
+    assert merged.state is MotionState.OFFLINE and not merged.available
+    el = RotatorStatus("e", MotionState.MOVING, 0.0, 31.0, connected=True, available=True)
+    merged = merge("sky", az, el)
+    assert merged.state is MotionState.MOVING and merged.available
+
+
+def test_the_newer_error_of_the_two_is_shown() -> None:
+    c = Composition("sky")
+    c.seen(Axis.AZIMUTH, RotatorStatus("a", last_error="az trouble"))
+    shown = c.seen(Axis.ELEVATION, RotatorStatus("e", last_error="el trouble"))
+    assert shown is not None and shown.last_error == "el trouble"
+
+
+def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
+    codec = ElevationOnly(REGISTRY["gs232b"].codec_factory())
+    codec.encode_query()
+    [reply] = codec.feed(b"AZ=087  EL=010\r")
+    assert isinstance(reply, PositionReply) and reply.az_deg == 87.0
+    assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
+    codec.encode_query()
+    [reply] = codec.feed(b"AZ=087  EL=020\r")  # what the session asked for, as if there
+    assert isinstance(reply, PositionReply) and (reply.az_deg, reply.el_deg) == (200.0, 20.0)
+
+
+def test_the_two_boxes_example_loads() -> None:
+    text = (ROOT / "config" / "two-boxes.toml").read_text()
+    text = re.sub(r"^# ((?:[a-z_]+ = |\[))", r"\1", text, flags=re.M)  # uncommented too
+    [sky] = settings_from(tomllib.loads(text), environ={}).rotators
+    assert sky.model == "rt21+gs232b" and sky.pointing.el_max_deg == 90
+
+
+def test_a_stop_is_on_both_lines_before_either_status_goes_out() -> None:
+    """CompositeWorker (engine/composite.py rule 1): the two sessions decide, then both stop
+    frames are written, then the statuses go to the listeners."""
+    r = load(azimuth=AZ, elevation=EL)
+    boxes = axis_configs(r)
+    assert boxes is not None
+    worker = CompositeWorker(worker_config(r), boxes, Mailbox(), lambda s: None, lambda e: None)
+    done: list[tuple[Axis, str]] = []
+    for axis, box in worker.boxes.items():
+        box.session.start(0.0)
+        box.session.link_up(0.0, 1e9)
+        box.carry_out = lambda now, actions, a=axis: done.extend(  # type: ignore[method-assign]
+            (a, type(x).__name__ if not isinstance(x, Write) else repr(x.data)) for x in actions
+        )
+    worker._hand(split(Batch(stop=Stop(), notes=["shown"])), 0.0)
+    kinds = [k for _, k in done]
+    assert done[:2] == [(Axis.AZIMUTH, "b';'"), (Axis.ELEVATION, "b'S\\r'")], done
+    assert "Publish" in kinds and kinds.index("Publish") > 1
+
+
+def test_an_elevation_the_gs232b_would_round_past_the_limit_is_refused() -> None:
+    judge = load(azimuth=AZ, elevation=EL, el_max_deg=89.5).pointing
+    assert judge.judge(Target(100.0, 89.4), None).el_deg == 89.4
+    with pytest.raises(Refused, match="whole degrees"):
+        judge.judge(Target(100.0, 89.5), None)  # the box would be sent 90

@@ -1,0 +1,73 @@
+"""``[[groups]]`` (settings_groups.py, settings.py ``_groups``): what a file says becomes the
+group the service turns, and every mistake is one line naming its key."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from bridge.mqtt.groups import Group, Member
+from bridge.settings import ConfigError, settings_from
+from bridge.wiring import group_of
+
+ROTATORS = [
+    {"id": "upper", "model": "rotorez", "port": "/dev/ttyUSB0"},
+    {"id": "lower", "model": "rotorez", "port": "/dev/ttyUSB1"},
+]
+
+
+def load(*groups: dict[str, Any]) -> Any:
+    return settings_from({"rotators": [dict(r) for r in ROTATORS], "groups": list(groups)}, {})
+
+
+def test_a_group_as_the_issue_names_it_and_with_offsets_and_limits() -> None:
+    s = load({"id": "stack", "name": "Stack", "rotators": ["upper", "lower"]})
+    assert s.group_topic(s.groups[0]) == "rotor/stack"
+    assert group_of(s.groups[0]) == Group("stack", "Stack", (Member("upper"), Member("lower")))
+    s = load(
+        {
+            "id": "stack",
+            "rotators": ["upper", "lower"],
+            "offsets": {"lower": 180},
+            "limits": {"upper": [20, 340]},
+        }
+    )
+    assert group_of(s.groups[0]) == Group(
+        "stack", "stack", (Member("upper", 0.0, (20.0, 340.0)), Member("lower", 180.0))
+    )
+    assert load().groups == []
+
+
+def test_a_rotator_may_be_in_two_groups() -> None:
+    both = ["upper", "lower"]
+    s = load({"id": "stack", "rotators": both}, {"id": "all", "rotators": both})
+    assert [g.id for g in s.groups] == ["stack", "all"]
+
+
+@pytest.mark.parametrize(
+    ("group", "said"),
+    [
+        ({"rotators": ["upper", "nope"]}, "groups[0].rotators: 'nope' is no rotator's id"),
+        ({"rotators": ["upper", "upper"]}, "rotator 'upper' is named twice"),
+        ({"rotators": ["upper"]}, "at least two rotators"),
+        ({"id": "upper"}, "groups[0].id: 'upper' would share its topic rotor/upper"),
+        ({"id": "bridge"}, "groups[0].id: 'bridge' is a word of the bridge's own topics"),
+        ({"id": "a/b"}, "groups.0.id: must be 1 to 32 letters"),
+        ({"offsets": {"lowr": 180}}, "offsets.lowr names no member of the group"),
+        ({"offsets": {"lower": 360}}, "lower = 360: an offset is 0 to 360"),
+        ({"limits": {"upper": [300, 20]}}, "upper = [300, 20]: limits are true bearings"),
+        ({"limts": {}}, "groups[0].limts"),
+    ],
+)
+def test_every_mistake_names_its_key(group: dict[str, Any], said: str) -> None:
+    table = {"id": "stack", "rotators": ["upper", "lower"], **group}
+    with pytest.raises(ConfigError) as err:
+        load(table)
+    assert said.replace("groups.0.", "groups[0].") in str(err.value)
+
+
+def test_a_group_id_used_twice_is_refused() -> None:
+    g = {"id": "stack", "rotators": ["upper", "lower"]}
+    with pytest.raises(ConfigError, match="group id 'stack' is used twice"):
+        load(g, g)
