@@ -4,6 +4,7 @@ merge of engine/composite.py)."""
 
 from __future__ import annotations
 
+import os
 import re
 import tomllib
 from pathlib import Path
@@ -15,7 +16,7 @@ from bridge.engine.actions import Write
 from bridge.engine.composite import CompositeWorker, Composition, merge, split
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.errors import Refused
-from bridge.model import MotionState, RotatorStatus, Stop, Target
+from bridge.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
@@ -135,10 +136,22 @@ def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=010\r")
     assert isinstance(reply, PositionReply) and reply.az_deg == 87.0
+    codec.taken(reply)  # the engine took it as a reading (link.py rule 9)
     assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=020\r")  # what the session asked for, as if there
     assert isinstance(reply, PositionReply) and (reply.az_deg, reply.el_deg) == (200.0, 20.0)
+
+
+def test_a_position_the_engine_did_not_take_is_not_sent_back() -> None:
+    codec = ElevationOnly(REGISTRY["gs232b"].codec_factory())
+    codec.encode_query()
+    [reply] = codec.feed(b"AZ=087  EL=010\r")
+    codec.taken(reply)
+    codec.encode_query()
+    [glitch] = codec.feed(b"AZ=359  EL=010\r")  # dropped: a second reply spoiled it
+    assert isinstance(glitch, PositionReply)
+    assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
 
 
 def test_the_two_boxes_example_loads() -> None:
@@ -173,3 +186,55 @@ def test_an_elevation_the_gs232b_would_round_past_the_limit_is_refused() -> None
     assert judge.judge(Target(100.0, 89.4), None).el_deg == 89.4
     with pytest.raises(Refused, match="whole degrees"):
         judge.judge(Target(100.0, 89.5), None)  # the box would be sent 90
+
+
+class _Port:
+    """A port that is a pipe: what is written to it is read at ``out``."""
+
+    def __init__(self) -> None:
+        self.out, self._w = os.pipe()
+        os.set_blocking(self.out, False)
+
+    def drain(self) -> bytes:
+        try:
+            return os.read(self.out, 4096)
+        except BlockingIOError:
+            return b""
+
+    def fileno(self) -> int:
+        return self._w
+
+    def unplug(self) -> None:
+        os.close(self.out)  # a write now fails as on a USB adapter that was pulled out
+
+    def close(self) -> None:
+        os.close(self._w)
+
+
+def test_a_box_unplugged_as_a_stop_is_written_is_a_lost_link_and_owes_that_stop() -> None:
+    """A box's port that fails while the rotator's command is written to it (composite.py
+    ``_hand``) is that box's serial link lost, as worker.py rule 1 says (not an internal error
+    with a traceback); the other box got its stop, and the failed one gets the stop first when
+    its port is back."""
+    r = load(azimuth=AZ, elevation=EL)
+    boxes = axis_configs(r)
+    assert boxes is not None
+    events: list[ErrorEvent] = []
+    worker = CompositeWorker(worker_config(r), boxes, Mailbox(), lambda s: None, events.append)
+    ports = {axis: _Port() for axis in Axis}
+    for axis, box in worker.boxes.items():
+        box._do(box.session.start(0.0))
+        box._port = ports[axis]  # type: ignore[assignment]
+        box._do(box.session.link_up(0.0, 1e9))
+    ports[Axis.AZIMUTH].drain()  # what each box is sent on connecting
+    ports[Axis.ELEVATION].unplug()
+    worker._hand(split(Batch(stop=Stop())), 0.5)
+    assert ports[Axis.AZIMUTH].drain() == b";"  # the other box stopped
+    kinds = [(e.kind, e.message) for e in events]
+    assert kinds and all(k is ErrorKind.SERIAL for k, _ in kinds), kinds
+    assert "serial link to /dev/ttyEL lost" in kinds[-1][1], kinds
+    back = _Port()
+    el = worker.boxes[Axis.ELEVATION]
+    el._port = back  # type: ignore[assignment]
+    el._do(el.session.link_up(5.0, 1e9))
+    assert back.drain().startswith(b"S\r")  # the stop it was owed, first

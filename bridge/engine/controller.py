@@ -26,6 +26,8 @@ Rules:
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
+8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
+   composite's elevation box) is told each reading taken, and only those (rule 5).
 """
 
 from __future__ import annotations
@@ -45,7 +47,13 @@ from bridge.engine.slew import Slew
 from bridge.engine.stops import Stops
 from bridge.engine.targets import resolve
 from bridge.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
-from bridge.protocols.base import JunkReason, JunkReply, PositionReply, VersionReply
+from bridge.protocols.base import (
+    JunkReason,
+    JunkReply,
+    PositionReply,
+    TakesReadings,
+    VersionReply,
+)
 
 log = logging.getLogger(__name__)
 
@@ -245,6 +253,8 @@ class Controller:
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
+        if isinstance(link.codec, TakesReadings):  # rule 8
+            link.codec.taken(reply)
         if reply.motion_enabled is False:
             self.options.enable_due = True  # rule 4
         if reply.controller_time is not None:
@@ -381,7 +391,8 @@ class Controller:
             self._silence_reported = True
             self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
         busy = busy or self.motion.state is MotionState.MOVING
-        link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s)
+        if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
+            self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:
         """Rule 6."""

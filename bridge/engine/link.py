@@ -326,20 +326,23 @@ class Link:
         """The next poll no later than ``t`` (a move just began: follow it closely)."""
         self._next_poll = min(self._next_poll, t)
 
-    def poll(self, now: float, interval_s: float) -> None:
+    def poll(self, now: float, interval_s: float) -> bool:
+        """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
-            return
+            return False
         if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
-            return
+            return False
         asked = self.codec.encode_query()
         query = asked[0] if isinstance(asked, list) else asked
-        if query:
-            self.write(query, now)
-            if isinstance(asked, list):
-                self._queue(asked[1:], now + self._gap_s, now, poll=True)
-            self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
-            self._hold_bytes = self.spec.reply_bytes
-            self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
+        if not query:
+            return False
+        self.write(query, now)
+        if isinstance(asked, list):
+            self._queue(asked[1:], now + self._gap_s, now, poll=True)
+        self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
+        self._hold_bytes = self.spec.reply_bytes
+        self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
+        return True
 
     def silent_for(self, now: float) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t

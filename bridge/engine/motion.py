@@ -41,7 +41,9 @@ Rules:
    not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
    after a stop, instead of waiting ``stall_timeout_s`` for a stall that blames the brake.
    Movement since the target went out means the refusal was of something else; so does
-   any command written after the target (a setting: the controller asks, controller.py).
+   any command written after the target (a setting, a query: the controller asks,
+   controller.py). A new bearing refused while the rotor still turns to the one before: the
+   target is dropped and the rotor stays ``moving`` (stops.py then stops it).
 """
 
 from __future__ import annotations
@@ -282,6 +284,11 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
         return m, []
     if m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
         return m, []  # it moved since: the refusal was of something else
+    if m.last_move_t is not None and m.target_t is not None:
+        if m.target_t - m.last_move_t <= cfg.settle_s:  # a new bearing refused mid-turn: the
+            # rotor still turns to the one before, which nobody wants now (stops.py stops it)
+            dropped = replace(m, target_deg=None, el_target_deg=None, progress_t=None)
+            return replace(dropped, closest_err=None, away_err=None), [Event.REFUSED]
     return _at_rest(m, cfg, now, MotionState.BRAKING), [Event.REFUSED]
 
 

@@ -9,7 +9,8 @@ Rules:
    line is free (the controller checks that no silent slew is under way and no stop is due).
    A setting declared ``resend`` (the controller forgets it at power-off) is sent again after
    every (re)connect, after a power-on byte and every OPTIONS_REFRESH_S while idle; the others
-   (the controller keeps them) when they are set, and once after the bridge starts (whether the
+   (the controller keeps them) when they are set (set while the port is closed or the
+   controller silent: once it answers), and once after the bridge starts (whether the
    controller has the kept value is not known).
 2. A report that says automatic motion is off owes an enable, sent once the line is free and
    no slew or stop is under way.
@@ -64,6 +65,7 @@ class Options:
 
     def set(self, name: str, value: SettingValue, connected: bool) -> None:
         self.values[name] = value
+        self._unsent.add(name)  # rule 1: owed until sent, whenever the controller answers
         if connected:
             self._due.add(name)
 

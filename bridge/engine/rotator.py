@@ -10,8 +10,8 @@ reaches the mailbox, so it can never move anything. The worker judges nothing an
 drops an accepted target that the lock or a lost link overtook before it could be sent, and
 reports that as a refusal too. Motion is judged in one order: the lock, the wind (safety), the
 control lease (coordination), the pointing judge, the link (``_check``). Each command carries
-who sent it (``origin``): the lease (operators.py) refuses a target, a track or follow start
-from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
+who sent it (``origin``): the lease (operators.py) refuses a target, a controller setting, a track
+or follow start from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
 (docs/architecture.md rule 11); every command judged here, executed or refused, is an audit
 event, written in one place (``submit``, after the put; a value outside the union is refused as
 unsupported). The bridge's own moves (auto-park, the wind park, tracking's and following's
@@ -422,12 +422,15 @@ class Rotator:
                     f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
                 )
             try:  # the declaration is the judge of a value (protocols/base.py rule 6)
-                return replace(command, value=setting.read(command.value))
+                judged = replace(command, value=setting.read(command.value))
             except ValueError as exc:
                 raise Refused(RefusalCode.INVALID, f"option {exc}") from None
-        self._check_motion(
-            command.origin.who if command.origin is not None else command.source.value
-        )
+            # a setting is control too (a speed in the middle of a turn): the lease's
+            leased = self.operators.refusal(self._who(command))
+            if leased is not None:
+                raise Refused(RefusalCode.LEASED, leased)
+            return judged
+        self._check_motion(self._who(command))
         status = self.status
         raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
         if not status.available:
@@ -435,6 +438,10 @@ class Rotator:
                 RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
             )
         return raw
+
+    @staticmethod
+    def _who(command: Target | SetOption) -> str:
+        return command.origin.who if command.origin is not None else command.source.value
 
     def _check_motion(self, who: str) -> None:
         """Refused for motion now, in this order (docs/architecture.md rule 11; never asked

@@ -117,7 +117,10 @@ class Stops:
                 f"the controller refused the target (it answered with its refusal at {pos:g}°): "
                 "outside the range the box is set to turn, or a bearing it cannot take"
             )
-            return Verdict(False, Report(ErrorKind.REFUSED, why), "refused by the controller")
+            turning = m.state is MotionState.MOVING  # still on its way to the bearing before
+            if turning:
+                why += "; the rotor was turning to the bearing before it: stopped"
+            return Verdict(turning, Report(ErrorKind.REFUSED, why), "refused by the controller")
         if event is mo.Event.STOPPED and self._at_rest:
             self._at_rest = False
             return Verdict(stop=True)

@@ -197,8 +197,12 @@ class Worker:
 
     def carry_out(self, now: float, actions: list[Action]) -> None:
         """What the session decided on a batch taken from another mailbox (a composite
-        rotator's, composite.py), carried out as for the worker's own."""
-        self._do(actions)
+        rotator's, composite.py), carried out as for the worker's own: a port that fails
+        meanwhile is the link lost (rule 1), as in ``serve``."""
+        try:
+            self._do(actions)
+        except (serial.SerialException, OSError) as exc:
+            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
 
     @property
     def status(self) -> RotatorStatus:

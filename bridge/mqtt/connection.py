@@ -22,7 +22,10 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    thread of its own, closed at once: paho_client.py rule 4), and steps down only if that
    trial was accepted and the next MQTT 5 attempt is closed before its CONNACK again (a
    broker that came back speaks MQTT 5 to that attempt; a connection limit refuses the trial
-   too). Until then, and for ``"5"``, the close is said with the fix (rule 6).
+   too). Over TLS a close never steps down (``_trusts_closes``): nobody on the path can answer
+   for the broker there, but anyone can still close connections, the first and the third, and
+   let the trial between them through. Until then, and for ``"5"``, the close is said with the
+   fix (rule 6).
    ``"5"`` and ``"3.1.1"`` never change.
 4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
    buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
@@ -330,7 +333,7 @@ class Connection:
                 'mqtt.protocol = "3.1.1" for it'
                 + (
                     ' (with "auto" the bridge asks the broker in MQTT 3.1.1 to tell)'
-                    if self._auto
+                    if self._trusts_closes
                     else ""
                 )
             )
@@ -397,7 +400,7 @@ class Connection:
         """Rule 1: an MQTT 5 attempt was closed before its CONNACK; whether ``auto`` steps down
         now (an MQTT 3.1.1 trial since the last such close was accepted), else a trial is
         started if none runs."""
-        if not (self._auto and self._v5) or self._accepted_once or self._stopping:
+        if not self._trusts_closes or self._accepted_once or self._stopping:
             return False
         with self._trial_lock:
             accepted, self._trial_ok = self._trial_ok, False
@@ -411,6 +414,11 @@ class Connection:
             "closed MQTT 5 connections before answering them and accepted an MQTT 3.1.1 one "
             "between two of them"
         )
+
+    @property
+    def _trusts_closes(self) -> bool:
+        """Rule 1: whether closes may step ``auto`` down (an MQTT 5 attempt, not over TLS)."""
+        return self._auto and self._v5 and not self._settings.tls.enabled
 
     def _try_mqtt311(self) -> None:
         """Rule 1: the trial, on its own thread (it blocks for up to a few seconds)."""

@@ -18,6 +18,8 @@ Rules:
    as the elevation (0..180 of its range). Either reports back as its azimuth the one the
    session last asked for (before any: an az/el box its own, a one-axis box 0), so that the
    session's motion machine sees that axis arrive at once and judges the elevation alone.
+   What the box said of itself counts once the engine took it as a reading (TakesReadings):
+   a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults); it
@@ -30,6 +32,9 @@ import enum
 from dataclasses import replace
 
 from bridge.protocols.base import Codec, HamlibRotType, ModelSpec, PositionReply, Reply
+
+# positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
+_PENDING = 4
 
 
 class Axis(enum.StrEnum):
@@ -102,8 +107,9 @@ class ElevationOnly(AzimuthOnly):
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
-        self._own_az: float | None = None  # what the box last said of its azimuth
+        self._own_az: float | None = None  # what the box last said of its azimuth, taken
         self._asked_az: float | None = None  # what the session last asked for
+        self._pending: list[tuple[PositionReply, float]] = []  # fed: (reply, its own azimuth)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         return self._inner.wire_target(az_deg, el_deg)
@@ -119,10 +125,18 @@ class ElevationOnly(AzimuthOnly):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
-                self._own_az = r.az_deg
-                r = replace(r, az_deg=r.az_deg if self._asked_az is None else self._asked_az)
+                own = r.az_deg
+                r = replace(r, az_deg=own if self._asked_az is None else self._asked_az)
+                self._pending = [*self._pending[-_PENDING:], (r, own)]
             replies.append(r)
         return replies
+
+    def taken(self, reply: PositionReply) -> None:
+        for i, (fed, own) in enumerate(self._pending):
+            if fed is reply:
+                self._own_az = own
+                del self._pending[: i + 1]
+                return
 
 
 class OneAxisElevation(AzimuthOnly):
@@ -130,8 +144,9 @@ class OneAxisElevation(AzimuthOnly):
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
-        self._own_el: float | None = None  # what the box last said of its one axis
+        self._own_el: float | None = None  # what the box last said of its one axis, taken
         self._asked_az: float | None = None  # what the session last asked for
+        self._pending: list[tuple[PositionReply, float]] = []  # fed: (reply, its own bearing)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         el = self._own_el if el_deg is None else el_deg
@@ -148,11 +163,18 @@ class OneAxisElevation(AzimuthOnly):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
-                self._own_el = r.az_deg
                 az = 0.0 if self._asked_az is None else self._asked_az
-                r = replace(r, az_deg=az, el_deg=r.az_deg)
+                own, r = r.az_deg, replace(r, az_deg=az, el_deg=r.az_deg)
+                self._pending = [*self._pending[-_PENDING:], (r, own)]
             replies.append(r)
         return replies
+
+    def taken(self, reply: PositionReply) -> None:
+        for i, (fed, own) in enumerate(self._pending):
+            if fed is reply:
+                self._own_el = own
+                del self._pending[: i + 1]
+                return
 
 
 def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:

@@ -29,7 +29,7 @@ import enum
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import ClassVar, Protocol
+from typing import ClassVar, Protocol, runtime_checkable
 
 from bridge.model import SettingValue
 
@@ -115,6 +115,15 @@ class Codec(Protocol):
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         """The position the controller will actually be sent (after its rounding)."""
         ...
+
+
+@runtime_checkable
+class TakesReadings(Protocol):
+    """A codec told which of its positions the engine took as readings (link.py rule 9: a
+    position whose exchange a second reply spoiled is none). A composite's elevation box sends
+    back the azimuth of a reading taken, never of a glitch dropped (axes.py rule 2)."""
+
+    def taken(self, reply: PositionReply) -> None: ...
 
 
 class SettingKind(enum.StrEnum):

@@ -39,11 +39,16 @@ Rules:
    ``E,<code>`` is the box's refusal or error (SPOILED, its code in the detail, not harmless).
    Any junk within an open query makes its reading UNTRUSTED (the engine asks again at once).
 4. STOP is the hard stop (999; 9999 on the Combi-Track): a user's STOP and a lock stop the
-   rotor where it is. Both stop values lie far outside the targets' range, so a stop can never
-   be read as a bearing by a box of the other family.
+   rotor where it is. Each lies outside its own family's targets, but not outside the other's:
+   a Combi-Track set up as a D would read the D's 999 as a bearing, 99.9 degrees (rule 6 is
+   how that set-up shows itself before anyone relies on its STOP).
 5. Targets are whole degrees (D) or tenths (Combi-Track), rounded half up; outside azimuth
    0..360 or elevation 0..90 (a D elevation's bearing too) they are refused before anything is
    sent.
+6. A D says its position in one to three digits (``A,?,290,R``), a Combi-Track in four, zero
+   padded (``B,?,0900,R``). A position of the other family's width is a box set up as the
+   wrong model: never a reading (a Combi-Track at 35.0 degrees read as 350), its detail says
+   so, and the rotator never becomes available to be sent targets.
 """
 
 from __future__ import annotations
@@ -79,18 +84,20 @@ _CHATTER = re.compile(rb"(?:[\r\n ]|\x02[A-Z],[^?\r],(?!E,)[^\r]*\r|\x02[A-Z],\?
 @dataclass(frozen=True)
 class Family:
     """What a box of one family is on the wire: its units (the bridge's bearing first), the top
-    of each unit's range in degrees, its scale (1: degrees, 10: tenths) and its hard stop."""
+    of each unit's range in degrees, its scale (1: degrees, 10: tenths), its hard stop and how
+    many digits its positions have (rule 6)."""
 
     units: tuple[str, ...]
     tops: tuple[int, ...]
     scale: int
     hard_stop: int
+    digits: range
 
 
-D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999)
+D_AZIMUTH = Family(("A",), (AZ_MAX_DEG,), 1, 999, range(1, 4))
 # a D on an elevation rotor: its one unit, E, is the rotator's bearing (0..90)
-D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999)
-COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999)
+D_ELEVATION = Family(("E",), (EL_MAX_DEG,), 1, 999, range(1, 4))
+COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999, range(4, 5))
 
 
 def _value(deg: float, top: int, scale: int, axis: str) -> int:
@@ -177,18 +184,22 @@ class ProsistelCodec(OneQuery):
         elif _ANSWER.fullmatch(body):
             out.append(JunkReply(frame, JunkReason.CHATTER, "the answer to a command"))
         elif m := _POSITION.fullmatch(body):
-            self._position(frame, m.group("unit").decode(), int(m.group("value")), out)
+            self._position(frame, m.group("unit").decode(), m.group("value"), out)
         else:
             self._junk(frame, JunkReason.NOISE, "not a reply line", out)
 
-    def _position(self, frame: bytes, unit: str, value: int, out: list[Reply]) -> None:
+    def _position(self, frame: bytes, unit: str, digits: bytes, out: list[Reply]) -> None:
         units = self.family.units
         if unit not in units:
             self._junk(
                 frame, JunkReason.NOISE, f"a position of unit {unit}: is the model right?", out
             )
             return
-        deg = value / self.family.scale
+        if len(digits) not in self.family.digits:  # rule 6
+            form = "tenths (a Combi-Track)" if len(digits) == 4 else "whole degrees (a D)"
+            self._junk(frame, JunkReason.NOISE, f"a position in {form}: is the model right?", out)
+            return
+        deg = int(digits) / self.family.scale
         if deg > self.family.tops[units.index(unit)]:
             self._junk(frame, JunkReason.SPOILED, "position out of range", out)
             return

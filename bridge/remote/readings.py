@@ -26,6 +26,7 @@ from bridge.model import (
 )
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
+from bridge.protocols.axes import Axis, can_drive, composite_spec
 from bridge.protocols.base import ModelSpec
 
 
@@ -46,7 +47,7 @@ class Info:
     def parse(cls, payload: bytes) -> Info:
         doc = json.loads(payload)
         model = str(doc["model"])
-        spec = REGISTRY.get(model)
+        spec = _spec(model)
         if spec is None:
             raise InfoError(f"the station's model {model!r} is unknown to this rotor-bridge")
         az_lo, az_hi = (_finite(v) for v in doc["azimuth_range"])
@@ -63,6 +64,19 @@ class Info:
         )
         rid = doc.get("id")
         return cls(str(doc.get("name") or model), spec, aim, rid if isinstance(rid, str) else None)
+
+
+def _spec(model: str) -> ModelSpec | None:
+    """The spec R/info's ``model`` names: a model's, or a rotator of two boxes' (``az+el``,
+    protocols/axes.py rule 4), as the station makes it; None for one this version lacks."""
+    if model in REGISTRY:
+        return REGISTRY[model]
+    az, _, el = model.partition("+")
+    if az not in REGISTRY or el not in REGISTRY:
+        return None
+    if can_drive(REGISTRY[el], Axis.ELEVATION) is not None:
+        return None
+    return composite_spec(REGISTRY[az], REGISTRY[el])
 
 
 def _setting(value: object) -> SettingValue:

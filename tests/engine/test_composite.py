@@ -132,3 +132,23 @@ def test_two_rt21_boxes_make_an_az_el_rotator() -> None:
         v.aim(Target(None, 10.0))  # the elevation alone: the azimuth box is sent nothing
         v.run_until(lambda h: h.el.truth().az_deg == 10.0, 60, "the elevation turned")
         assert v.az.frames("move", since=t) == []
+
+
+def test_a_glitched_reading_of_the_elevation_box_never_becomes_its_azimuth() -> None:
+    """The azimuth an az/el box used for its elevation is sent back (protocols/axes.py rule 2)
+    is one the session took as a reading: a well-formed glitch just before the real reply is
+    no reading (link.py rule 9), and a target sent before the box is asked again must not carry
+    it, or the box's own azimuth rotor turns to 359."""
+    boxes = {**FAST, Axis.ELEVATION: {**FAST[Axis.ELEVATION], "start_az_deg": 100.0}}
+    with VirtualComposite("rt21", "gs232b", emulators=boxes) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(5.0)
+        glitched = v.el.glitch_once(b"A", b"AZ=359  EL=000\r\n")
+        v.run_until(lambda h: glitched, 10, "the glitch reaches the bridge")
+        t = v.now
+        v.aim(Target(200.0, 30.0))  # while the glitched exchange is not over yet
+        v.run_for(20.0)
+        sent = [w for w in v.el.sent(since=t) if w.startswith(b"W")]
+        assert sent and all(w.startswith(b"W100 ") for w in sent), sent
+        assert v.el.truth().az_deg == 100.0  # its own azimuth never turned
+        assert abs(v.el.truth().el_deg - 30.0) <= 1.0

@@ -47,9 +47,9 @@ CONSOLE = "192.168.1.30"
 class Bench:
     """A Rotator (the judge every front end calls) on a virtual controller, idle at START_AZ."""
 
-    def __init__(self, tmp_path: Path, **settings: object) -> None:
+    def __init__(self, tmp_path: Path, model: str = "md01", **settings: object) -> None:
         self.v = VirtualRotator(
-            "md01",
+            model,
             settings={
                 "az_speed_deg_s": 10.0,
                 "el_speed_deg_s": 5.0,

@@ -329,3 +329,11 @@ def test_a_refusal_after_the_rotor_moved_or_at_rest_refers_to_something_else() -
     assert events == [] and turning == m and turning.target_deg == 120
     idle = ready()
     assert mo.refused(idle, CFG, 20.0) == (idle, [])
+
+
+def test_a_refusal_of_a_new_bearing_mid_turn_keeps_the_rotor_moving_without_a_target() -> None:
+    m = mo.commanded(ready(), CFG, 120, 10.0)
+    m, _ = feed(m, [(10.25, 103.0), (10.5, 106.0)])
+    m = mo.commanded(m, CFG, 200, 10.6)  # a new bearing while it turns
+    m, events = mo.refused(m, CFG, 10.62)
+    assert events == [mo.Event.REFUSED] and m.state is S.MOVING and m.target_deg is None

@@ -142,6 +142,22 @@ def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> No
     v.run_until(settled_at(120), 60, "at 120")
 
 
+def test_a_new_bearing_refused_while_turning_stops_the_rotor(rig: Rig) -> None:
+    """The box refuses a new bearing mid-turn and keeps turning to the one before, which
+    nobody wants any more: the bridge reports the refusal and stops the rotor."""
+    v = ready(rig, "gs232b-az-450", start_az_deg=77)
+    v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
+    v.aim(Target(300))
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 100, 60, "turning")
+    t = v.now
+    v.aim(Target(400))  # past 360: the box refuses it and turns on to 300
+    v.run_until(lambda h: h.errors("refused", since=t), 1, "the refusal")
+    assert "stopped" in v.errors("refused", since=t)[0].message
+    assert v.sent(since=t).count(b"S\r") >= 1
+    v.run_until(lambda h: h.state is IDLE, 30, "at rest")
+    assert 100 < v.truth().az_deg < 200 and not v.truth().is_moving
+
+
 def test_a_refusal_after_a_setting_is_not_the_targets(rig: Rig) -> None:
     """A ``?>`` that follows a setting written after the target refuses the setting, not the
     target: the rotor still turns there."""

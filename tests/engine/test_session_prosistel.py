@@ -15,8 +15,11 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge import emulators
 from bridge.emulators.prosistel import Outcome
 from bridge.model import MotionState
+from bridge.protocols.base import JunkReply
+from bridge.protocols.prosistel import COMBI_TRACK, D_AZIMUTH, ProsistelCodec
 from tests.engine.test_session_tracking import a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
 
@@ -137,3 +140,35 @@ def test_a_bare_azimuth_to_a_combi_track_keeps_its_elevation(rig: Rig) -> None:
     v.target(100)  # no elevation named: unit B must not be sent to 0
     v.run_until(settled_at(100, 30), 60, "at 100/30")
     assert moves(v) == [b"\x02AG1000\r", b"\x02BG300\r"]
+
+
+@pytest.mark.parametrize(
+    ("model", "box", "start_az_deg", "misread"),
+    [
+        ("prosistel", "prosistel-combi", 35.0, 350.0),  # 0350: tenths read as degrees
+        ("prosistel-combi", "prosistel", 290.0, 29.0),  # 290: degrees read as tenths
+    ],
+)
+def test_a_box_of_the_other_family_gives_no_reading(
+    rig: Rig, model: str, box: str, start_az_deg: float, misread: float
+) -> None:
+    """A D answers in whole degrees (three digits), a Combi-Track in tenths, always four
+    (Hamlib's examples: ``A,?,290,R``, ``B,?,0900,R``): a reply of the other width is a box
+    set up as the wrong model, never a bearing ten times off."""
+    v = rig(model, connect=False)
+    v.device = emulators.create(box, now=v.now, start_az_deg=start_az_deg, **FAST)
+    v.link_up()
+    v.run_for(30)
+    assert all(s.bearing_deg != misread for s in v.published())
+    assert not v.status.available and v.status.bearing_deg is None
+
+
+def test_the_other_familys_width_is_named_in_the_detail() -> None:
+    codec = ProsistelCodec(D_AZIMUTH)
+    codec.encode_query()
+    [junk] = codec.feed(b"\x02A,?,0350,B\r")
+    assert isinstance(junk, JunkReply) and "Combi-Track" in junk.detail
+    combi = ProsistelCodec(COMBI_TRACK)
+    combi.encode_query()
+    [junk] = combi.feed(b"\x02A,?,290,B\r\x02B,?,0450,B\r")
+    assert isinstance(junk, JunkReply) and "(a D)" in junk.detail

@@ -193,6 +193,19 @@ def test_under_another_operators_lease_every_motion_is_refused_and_every_halt_is
     assert truth.az_deg == pytest.approx(START_AZ, abs=0.5) and not truth.is_moving
 
 
+def test_under_another_operators_lease_a_controller_setting_is_theirs_to_change(
+    tmp_path: Path,
+) -> None:
+    """Changing the controller's settings (a GS-232's speed in the middle of someone's turn)
+    is control like a target: another operator's lease refuses it; its holder may."""
+    bench = Bench(tmp_path, model="gs232b")
+    bench.submit(Claim("DL1ABC", 30, origin=WHO), "claim")
+    assert bench.refused(SetOption("speed", "2", origin=OTHER), "option speed 2") == "leased"
+    assert "DL1ABC holds the rotator" in bench.events[-1].message
+    bench.submit(SetOption("speed", "2", origin=WHO), "option speed 2")
+    assert bench.last_audit() == ("DL1ABC", "option speed 2", "executed")
+
+
 @pytest.mark.parametrize("value", [object(), "target 120", 120.0, None])
 def test_a_value_outside_the_union_is_refused_clearly_and_moves_nothing(
     bench: Bench, value: object

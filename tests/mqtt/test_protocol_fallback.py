@@ -119,3 +119,29 @@ def test_after_the_step_down_paho_sends_an_mqtt_3_1_1_connect_with_a_clean_sessi
     assert protocol_level(connect) == 4
     flags = connect[2 + 2 + 4 + 1]  # fixed header (2), name length (2), "MQTT", level
     assert flags & 0x02  # clean session
+
+
+@pytest.mark.parametrize("tls", [False, True])
+def test_closes_around_an_accepted_trial_step_down_only_without_tls(
+    tls: bool, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Closing connections needs no key: anyone on the path can close the first and the third
+    connection and let the 3.1.1 trial between them through, TLS or not (a load balancer with
+    one broker of two down does the same). Over TLS nobody on the path can answer "Unsupported
+    protocol version", so the close must not be the weaker way down either (docs/brokers.md:
+    TLS is what keeps MQTT 5's rules)."""
+    monkeypatch.setattr("bridge.mqtt.connection.accepts_mqtt311", lambda *a: True)
+    settings = MqttSettings(
+        host="127.0.0.1", port=1, client_id="fallback-tls", tls={"enabled": tls}
+    )
+    conn = Connection(settings, "fallback-tls", subscriptions=["rotor/t"], on_message=print)
+    closed(conn)  # the first close: a trial, accepted
+    trial = conn._trial
+    if trial is not None:
+        trial.join(slow(5))
+    closed(conn)  # the next MQTT 5 attempt closed too
+    assert conn.v5 is tls
+    assert (said(caplog, FELL_BACK) == []) is tls
+    if tls:
+        (line,) = said(caplog, CLOSED)  # the fix is said, without the promise of a trial
+        assert 'set mqtt.protocol = "3.1.1" for it' in line and "asks the broker" not in line

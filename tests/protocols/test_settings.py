@@ -107,6 +107,22 @@ def test_only_settings_the_controller_forgets_are_sent_again() -> None:
     assert options.take(idle=True, free=True, now=3.0 + OPTIONS_REFRESH_S) == [("ramp", 2.0)]
 
 
+def test_a_kept_setting_changed_while_the_port_is_closed_is_sent_on_the_reconnect() -> None:
+    """A setting the controller keeps (``resend=False``) is sent when it is set: set while the
+    port is closed, or before the controller answers, that is once it answers again. Before,
+    the new value was saved and shown but never reached the controller."""
+    options = Options({"ramp": 1.0}, (RAMP,))
+    options.connected(answering=True)
+    assert options.take(idle=True, free=True, now=0.0) == [("ramp", 1.0)]
+    options.set("ramp", 2.0, connected=False)  # the port is closed
+    options.connected(answering=True)
+    assert options.take(idle=True, free=True, now=1.0) == [("ramp", 2.0)]
+    options.connected(answering=False)  # open, the controller not answering yet
+    options.set("ramp", 3.0, connected=True)
+    options.all_due()  # it answers
+    assert options.take(idle=True, free=True, now=2.0) == [("ramp", 3.0)]
+
+
 def test_a_settings_value_is_shown_as_its_state_topic_carries_it() -> None:
     assert [setting_text(v) for v in (True, False, 2.0, 0.5, "X2")] == [
         "ON",

@@ -13,9 +13,11 @@ from bridge.errors import RefusalCode, Refused
 from bridge.gs232 import Dcu1Session, EasycommSession, Gs232Session
 from bridge.gs232.commands import DCU1_ERROR
 from bridge.model import Lock, Park, Source, Stop, Target, Toward
+from bridge.mqtt.payloads import info_json
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
+from bridge.settings import settings_from
 from tests.support.clock import FakeClock
 
 
@@ -193,3 +195,31 @@ def test_another_operators_lease_refuses_a_move_at_once_in_the_stations_words() 
         '{"azimuth":130.0}',
         '{"azimuth":140.0}',
     ]
+
+
+def test_a_station_rotator_of_two_boxes_is_served_by_the_remote() -> None:
+    """A composite rotator's R/info (its model ``rt21+gs232b``, protocols/axes.py rule 4) is
+    one the remote knows: an az/el rotator whose GS-232 ``W`` goes to the station."""
+    r = settings_from(
+        {
+            "rotators": [
+                {
+                    "id": "dish",
+                    "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+                    "elevation": {"model": "gs232b", "port": "/dev/ttyEL"},
+                }
+            ]
+        },
+        environ={},
+    ).rotators[0]
+    payload = info_json("dish", r.spec, r.pointing, True, rotator_id="dish").encode()
+    azel = Info.parse(payload)  # refused as an unknown model before
+    assert azel.spec.has_elevation and azel.spec.name == "rt21+gs232b"
+    station, link = StationTopics("rotor"), Link()
+    view = StationView(FakeClock())
+    view.put(station.bridge_state, b"online")
+    view.put(station.bridge_heartbeat, b"1700000000.000")
+    view.put(station.rotator("dish").availability, b"online")
+    rot = RemoteRotator("dish", station.rotator("dish"), station, azel, view, link, "X", 5)
+    assert Gs232Session(rot).feed(b"W120 030\r") == [b""]
+    assert link.sent == [("rotor/dish/target", '{"azimuth":120,"elevation":30}')]
