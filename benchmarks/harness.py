@@ -199,14 +199,17 @@ def start_bridge(
     log_level: str = "INFO",
     name: str = "bridge",
     sections: dict[str, Any] | None = None,
+    mqtt: dict[str, Any] | None = None,
 ) -> BridgeProcess:
     """tests.support's BridgeProcess, started through ``scope`` (rule 1), its ``check`` raising
-    BenchError. ``sections``: more of the configuration file (e.g. ``station``, ``tracking``)."""
+    BenchError. ``sections``: more of the configuration file (e.g. ``station``, ``tracking``);
+    ``mqtt``: more of its ``[mqtt]`` table."""
     config = bridge_config(
         scope.workdir,
         broker_port,
         rotators,
         client_id=f"bench-{name}-{os.getpid()}",
+        mqtt=mqtt,
         sections={"homeassistant": {"enabled": homeassistant}, **(sections or {})},
         state_name=f"{name}-state.json",
     )

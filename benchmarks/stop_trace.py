@@ -13,6 +13,8 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
   stop is matched to its own rotor's write, not another's: the backlog's rotor gets stops too);
 - ``gc``: every collection (generation, start, end) and the main connection's message count;
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
+- ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
+  the express is another process, mqtt/express.py);
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
@@ -27,10 +29,12 @@ from __future__ import annotations
 import atexit
 import gc
 import json
+import math
 import os
 import sys
 import threading
 import time
+from collections import deque
 from pathlib import Path
 from typing import Any
 
@@ -204,6 +208,23 @@ def install(path: str) -> None:
 
     gc.callbacks.append(_gc)
 
+    from bridge.mqtt import express
+
+    express_init = express.Express.__init__
+
+    class _Wrote(deque[tuple[str, float]]):
+        """The stop express's words "wrote" (its own clock: CLOCK_MONOTONIC, as ours)."""
+
+        def append(self, x: tuple[str, float]) -> None:
+            ev(("xwrite", x[1], x[0]))
+            super().append(x)
+
+    def _express_init(self: Any, *a: Any, **k: Any) -> None:
+        express_init(self, *a, **k)
+        self.wrote = _Wrote(maxlen=64)
+
+    express.Express.__init__ = _express_init  # type: ignore[method-assign]
+
     def _dump() -> None:
         Path(path).write_text(json.dumps({"pid": os.getpid(), "events": EVENTS}))
 
@@ -250,6 +271,8 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     p = _first(by["put"], c[1] if c else t0, t1, lambda e: s is None or e[3] == s[4])
     w = _first(by["write"], s[1] if s else t0, t1, lambda e: e[2].endswith(f"tty-{rid}"))
     steps = [("lane", m, 1), ("carry", c, 1), ("put", p, 2), ("serve", s, 1), ("write", w, 1)]
+    x = _first(by["xwrite"], t0, t1, lambda e: e[2] == rid)
+    steps.insert(0, ("express wrote", x, 1))
     out = f"{rid} {lat * 1e3:6.1f} ms:"
     for name, e, k in steps:
         out += f" {name} {(e[k] - t0) * 1e3:.1f}" if e else f" {name} --"
@@ -271,6 +294,31 @@ def _row(by: dict[str, list[Any]], rid: str, t0: float, lat: float) -> str:
     waits = [e for e in by["lockwait"] if t0 <= e[1] <= t1]
     out += "".join(f" | lock {e[2] * 1e3:.1f} ({e[3][-5:]} {e[4]})" for e in waits)
     return out
+
+
+def _firsts(by: dict[str, list[Any]], rows: list[Any]) -> str:
+    """Every stop of a phase, not only the slow ones: how long after its publish the stop
+    express wrote its frame and the bridge's serial-lines thread wrote its own (p50 / p99 /
+    max, nearest rank), apart from what the host took to carry the frame on (the pty hop)."""
+
+    def spread(name: str, ms: list[float]) -> str:
+        if not ms:
+            return f"{name}: none"
+        ms.sort()
+        p99 = ms[min(len(ms) - 1, math.ceil(0.99 * len(ms)) - 1)]
+        return f"{name} ({len(ms)}): {ms[len(ms) // 2]:.1f} / {p99:.1f} / {ms[-1]:.1f}"
+
+    express, lines = [], []
+    for rid, t0, lat, *_taker in rows:
+        x = _first(by["xwrite"], t0, t0 + lat, lambda e, rid=rid: e[2] == rid)
+        w = _first(by["write"], t0, t0 + lat + 0.1, lambda e, rid=rid: e[2].endswith(f"tty-{rid}"))
+        if x is not None:
+            express.append((x[1] - t0) * 1e3)
+        if w is not None:
+            lines.append((w[1] - t0) * 1e3)
+    return "every stop, ms after the publish, p50 / p99 / max: " + "; ".join(
+        [spread("the express wrote", express), spread("the serial-lines thread wrote", lines)]
+    )
 
 
 def _line(window: dict[str, Any]) -> list[str]:
@@ -302,7 +350,7 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     samples = json.loads(Path(samples_path).read_text())
     lines_path = Path(trace_path + ".lines.json")
     windows = json.loads(lines_path.read_text()) if lines_path.exists() else {}
-    kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait")
+    kinds = ("msg", "carry", "put", "serve", "write", "gc", "lockwait", "xwrite")
     by = {k: [e for e in trace if e[0] == k] for k in kinds}
     by["lane"] = [e for e in by["msg"] if e[2] == "lane"]
     for phase, rows in samples.items():
@@ -320,6 +368,7 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                     hop = _hops(shown[rid, t0], _written(by, rid, t0, lat))
                     if hop is not None:
                         hops.append(hop)
+        print("  " + _firsts(by, rows))
         if hops:
             one, two = (sorted(h[i] for h in hops) for i in (0, 1))
             print(

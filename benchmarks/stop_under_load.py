@@ -31,6 +31,11 @@ its write reaches the line through that worker too, so every row says how long t
 on this machine while its stops were taken (``pty hop``: a probe writing a byte through a pty
 of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows it per stop.
 ``STOP_VIA_PTY=1`` puts the controllers' ptys back on the path (the hop left out, to compare).
+``STOP_EXPRESS=0`` runs this tree's bridges without the stop express (``mqtt.stop_express``
+off: the stop's frame written by the bridge's process alone), to compare in turns.
+``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
+stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
+pty's kernel worker, the express) then waits less behind the bridge's busy threads.
 The rotors take turns; one stop is in flight at a time.
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
@@ -121,6 +126,7 @@ from benchmarks.rig import EmuHost, open_line
 from bridge.mosquitto import free_port
 from tests.support import BridgeProcess
 from tests.support.process import bridge_config
+from tests.support.waiting import wait_until
 
 GOAL_MS = 10.0
 MEASURED = 6  # measured Rotor-EZ taking turns (a stop every ~0.3 s; one rotor's cycle is ~2 s)
@@ -144,6 +150,10 @@ TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
 # the line hands its bytes to the controller directly (line.py rule 5); STOP_VIA_PTY=1 sends
 # them through the controller's pty as before, to see what that hop adds on this machine
 DIRECT = not os.environ.get("STOP_VIA_PTY")
+# the loaded bridge's threads at a lower priority, its stop express not (module docstring)
+BRIDGE_NICE = int(os.environ.get("BRIDGE_NICE") or 0)
+# this tree's bridges with or without the stop express (module docstring)
+EXPRESS_OFF = {"stop_express": False} if os.environ.get("STOP_EXPRESS") == "0" else None
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -757,7 +767,9 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
             "cty_file": str(cty),
         },
     }
-    bridge = start_bridge(scope, broker_port, settings, homeassistant=False, sections=sections)
+    bridge = start_bridge(
+        scope, broker_port, settings, homeassistant=False, sections=sections, mqtt=EXPRESS_OFF
+    )
     recorder = Mqtt(broker_port, ["rotor/+/state", "rotor/+/availability"], name="sul-rec")
     scope.callback(recorder.close)
     sender = Mqtt(broker_port, [], name="sul-stop")
@@ -770,6 +782,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     except BenchError:
         bridge.check()
         raise
+    if BRIDGE_NICE:
+        _renice(bridge)
     rotors = [
         Rotor(rid, "now", emu, frames, f"rotor/{rid}", recorder, sender)
         for rid, (emu, frames) in lines.items()
@@ -1089,6 +1103,20 @@ def backlog_phase(lo: Loaded, name: str, n: int) -> PhaseResult:
     return PhaseResult(name, got, cpu, la, applied, counts)
 
 
+def _renice(bridge: BridgeProcess) -> None:
+    """BRIDGE_NICE: every thread of the bridge's process (a nice value is a thread's on
+    Linux), after its stop express started (a child inherits its parent thread's value)."""
+    if EXPRESS_OFF is None:
+        wait_until(
+            lambda: "stop express up" in bridge.log(),
+            30,
+            "the stop express up",
+            error=BenchError,
+        )
+    for tid in os.listdir(f"/proc/{bridge.pid}/task"):
+        os.setpriority(os.PRIO_PROCESS, int(tid), BRIDGE_NICE)
+
+
 # == the engine of 2026-11-26 against this one ===================================================
 def start_engine(
     scope: Scope, engine: str, old_root: Path | None, rng: random.Random
@@ -1108,6 +1136,7 @@ def start_engine(
         specs,
         client_id=f"bench-{engine}-{os.getpid()}",
         sections={"homeassistant": {"enabled": False}},
+        mqtt=EXPRESS_OFF if old_root is None else None,
         state_name=f"{engine}-state.json",
     )
     if old_root is None:

@@ -30,6 +30,7 @@ from bridge.loggers import LoggerEndpoints
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.mqtt.connection import MQTT311_LOSES
+from bridge.mqtt.express import Express
 from bridge.mqtt.lane import StopLane
 from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
@@ -162,6 +163,7 @@ class App:
             )
         satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
         follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
+        self.express = self._express(settings)  # mqtt/express.py: a stop's frame first
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky, follow),
@@ -177,6 +179,7 @@ class App:
                 sky=self.sky,
                 on_audit=self.audit.of(r.id),
                 axes=axis_configs(r, sky, follow),  # a composite's two boxes (wiring.py)
+                port_watch=self.express.watch(r.id),
             )
             self.mqtt.attach(  # what a console far from the station draws (remote/console.py)
                 rot,
@@ -247,6 +250,23 @@ class App:
         )
         self.client.before_message = self.lane.first  # mqtt/lane.py rule 4: a stop before a backlog
         self.client.watch_owned(self.topics.owned())
+
+    def _express(self, settings: Settings) -> Express:
+        """The stop express (mqtt/express.py) for the rotators whose model takes a stop frame
+        at any moment (its rule 4); none with ``mqtt.stop_express`` off."""
+        topics: dict[str, tuple[str, str]] = {}
+        frames: dict[str, bytes] = {}
+        for r in settings.rotators:
+            # (a rotator of two boxes has two ports: its stops take the stop lane)
+            # (nor does a stop of several frames: an RC2800's, paced by the session)
+            if settings.mqtt.stop_express and r.spec.stop_anytime and not r.axes:
+                stop = r.spec.codec_factory().encode_stop()
+                if not isinstance(stop, bytes):
+                    continue
+                t = self.topics.rotator(r.id)
+                topics[t.stop], topics[t.lock] = (r.id, "stop"), (r.id, "lock")
+                frames[r.id] = stop
+        return Express(settings.mqtt, topics=topics, frames=frames, on_problem=self._info)
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs
@@ -353,6 +373,7 @@ class App:
             if not self.client.v5:  # mqtt.protocol "auto" stepped down (mqtt/connection.py)
                 self.lane.use_mqtt311()
             self.lane.start()
+            self.express.start(mqtt311=not self.client.v5)
         stepped_down = self.settings.mqtt.protocol == "auto" and not self.client.v5
         if stepped_down != (STEPPED_DOWN in self.client.problems):
             # said while it lasts (mqtt/connection.py rule 1); not on paho's thread, which
@@ -445,6 +466,7 @@ class App:
         self.audit.stop()  # what is queued is written (audit.py rule 4)
         self.mqtt.stop()  # first: its offline goes out, and it stops reconnecting
         self.lane.stop()  # (a stop on it now reaches no rotator: they are stopped)
+        self.express.stop()  # (the ports are closed: it holds none)
         log.info("stopped")
 
 

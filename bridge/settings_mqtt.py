@@ -162,6 +162,16 @@ class MqttSettings(_Strict):
         examples=["3.1.1"],
     )
 
+    stop_express: bool = Field(
+        True,
+        description="a STOP's frame written by a small process of its own, on a third "
+        "connection to the broker (client id 'rfast-...' beside 'rotor-...' and the stop "
+        "lane's 'rstop-...'), so that nothing the bridge's process is busy with delays it; "
+        "only for controllers that take a stop frame at any moment (Rotor-EZ, RotorCard, "
+        "GS-232, Easycomm). Off: stops take the stop lane in the bridge's process",
+        examples=[False],
+    )
+
     @field_validator("protocol", mode="before")
     @classmethod
     def _protocol(cls, v: object) -> object:

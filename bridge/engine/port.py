@@ -16,18 +16,24 @@ Rules:
    layer that imports pyserial.
 6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
    lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
+7. A PortWatch (the stop express, mqtt/express.py) is told an opened port's descriptor on the
+   thread that opened it, and that it is going before it is closed, on the thread that closes
+   it (``watched``, ``close_in_background``): a copy of the descriptor held elsewhere keeps the
+   tty open, and TIOCEXCL (rule 2) would then refuse the reopen. A watch that fails costs the
+   port nothing (logged).
 """
 
 from __future__ import annotations
 
 import errno
 import fcntl
+import logging
 import os
 import termios
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TypeAlias
+from typing import Protocol, TypeAlias
 
 import serial
 from serial.tools import list_ports
@@ -41,6 +47,29 @@ class PortError(Exception):
 
 # what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)
 PortOpener: TypeAlias = Callable[[str, ModelSpec, int | None], serial.Serial]
+log = logging.getLogger(__name__)
+
+
+class PortWatch(Protocol):
+    """Rule 7: told of each port of one rotator, on the short-lived open and close threads."""
+
+    def opened(self, fd: int) -> None: ...
+
+    def closing(self) -> None: ...
+
+
+def watched(opener: PortOpener, watch: PortWatch) -> PortOpener:
+    """``opener``, and the watch told the descriptor of each port it opens (rule 7)."""
+
+    def open_watched(path: str, spec: ModelSpec, baud: int | None) -> serial.Serial:
+        port = opener(path, spec, baud)
+        try:
+            watch.opened(port.fileno())
+        except Exception:
+            log.exception("%s: the port's watch failed (the port is open all the same)", path)
+        return port
+
+    return open_watched
 
 
 _PARITY = {"N": serial.PARITY_NONE, "E": serial.PARITY_EVEN, "O": serial.PARITY_ODD}
@@ -127,11 +156,24 @@ def close_quietly(port: serial.Serial) -> None:
         pass
 
 
-def close_in_background(port: serial.Serial) -> threading.Thread:
+def close_watched(port: serial.Serial, watch: PortWatch | None) -> None:
+    """The watch told (rule 7), then the port closed."""
+    if watch is not None:
+        try:
+            watch.closing()
+        except Exception:
+            log.exception("the port's watch failed (the port is closed all the same)")
+    close_quietly(port)
+
+
+def close_in_background(port: serial.Serial, watch: PortWatch | None = None) -> threading.Thread:
     """Close a port on a thread of its own, returned to be waited for where waiting is fine: a
     tty with unsent output waits for it to drain (up to 30 s on a USB adapter), and the lines
-    thread may not wait for that."""
-    closing = threading.Thread(target=close_quietly, args=(port,), name="close port", daemon=True)
+    thread may not wait for that. ``watch`` is told first (rule 7)."""
+
+    closing = threading.Thread(
+        target=close_watched, args=(port, watch), name="close port", daemon=True
+    )
     closing.start()
     return closing
 
@@ -145,6 +187,7 @@ class PendingOpen:
         self.result: serial.Serial | Exception | None = None
         self._lock = threading.Lock()
         self._abandoned = False
+        self._watch: PortWatch | None = None  # abandon's, told before a late port is closed
         threading.Thread(
             target=self._run, args=(attempt, wake), name="open port", daemon=True
         ).start()
@@ -157,18 +200,19 @@ class PendingOpen:
         with self._lock:
             if self._abandoned:
                 if isinstance(result, serial.Serial):
-                    close_quietly(result)
+                    close_watched(result, self._watch)
                 return
             self.result = result
         wake()
 
-    def abandon(self) -> threading.Thread | None:
+    def abandon(self, watch: PortWatch | None = None) -> threading.Thread | None:
         """Give the attempt up; a port it already opened is closed in the background (the
-        thread closing it is returned)."""
+        thread closing it is returned; ``watch`` told first, rule 7)."""
         with self._lock:
             self._abandoned = True
+            self._watch = watch
             if isinstance(self.result, serial.Serial):
-                return close_in_background(self.result)
+                return close_in_background(self.result, watch)
         return None
 
 

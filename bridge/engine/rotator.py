@@ -49,7 +49,7 @@ from bridge.engine.kept import Kept, Owner
 from bridge.engine.lines import Lines
 from bridge.engine.mailbox import Mailbox
 from bridge.engine.operators import EXECUTED, Operators
-from bridge.engine.port import open_port
+from bridge.engine.port import PortWatch, open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
 from bridge.engine.starts import body_to_track, check_can_follow
 from bridge.engine.state_store import StateStore
@@ -108,6 +108,7 @@ class Rotator:
         sky: SkyWorker | None = None,
         on_audit: Callable[[AuditEvent], None] | None = None,
         axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
+        port_watch: PortWatch | None = None,
     ) -> None:
         self.id = cfg.rotator_id
         self.name = name or cfg.rotator_id
@@ -140,6 +141,7 @@ class Rotator:
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
+                port_watch=port_watch,  # the stop express's copy of the port (port.py rule 7)
             )
         else:  # two boxes, one judge (this one), one mailbox, one status (composite.py)
             self._worker = CompositeWorker(

@@ -53,9 +53,11 @@ from bridge.engine.port import (
     PendingOpen,
     PortError,
     PortOpener,
+    PortWatch,
     close_in_background,
     open_port,
     read_available,
+    watched,
     write_frame,
 )
 from bridge.engine.session import RotatorSession
@@ -83,6 +85,7 @@ class Worker:
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
+        port_watch: PortWatch | None = None,
     ) -> None:
         self.cfg = cfg
         self._sky = sky or SkyWorker()
@@ -95,7 +98,8 @@ class Worker:
         self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")
         self._on_event = contained(on_event, f"{cfg.rotator_id}: event listener")
         self._wall = wall
-        self._open = port_opener
+        self._watch = port_watch  # port.py rule 7: the stop express holds a copy of the port
+        self._open = port_opener if port_watch is None else watched(port_opener, port_watch)
         self._backoff_s = cfg.reconnect_min_s
         self._port: serial.Serial | None = None
         self._fd = -1
@@ -118,11 +122,11 @@ class Worker:
         """Close the port for good (the rotator is stopping), in the background (rule 4): the
         rotator's stop() waits for that with ``wait_closed``, off this thread."""
         if self._opening is not None:
-            self._closes(self._opening.abandon())
+            self._closes(self._opening.abandon(self._watch))
             self._opening = None
         port, self._port, self._fd = self._port, None, -1
         if port is not None:
-            self._closes(close_in_background(port))
+            self._closes(close_in_background(port, self._watch))
             self._do(self.session.link_down(None, now, ErrorKind.SERIAL))
 
     def wait_closed(self, timeout_s: float) -> bool:
@@ -244,7 +248,7 @@ class Worker:
     def _lost(self, reason: str, kind: ErrorKind, now: float) -> None:
         port, self._port, self._fd = self._port, None, -1
         if port is not None:
-            self._closes(close_in_background(port))  # rule 4
+            self._closes(close_in_background(port, self._watch))  # rule 4
         self._reopen_at = now + self._backoff_s
         self._do(self.session.link_down(reason, now, kind))
 

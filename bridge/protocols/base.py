@@ -330,6 +330,10 @@ class ModelSpec:
     axis_prefixes: tuple[bytes, ...] = ()
     full_duplex: bool = True  # may a command be written while a reply is still coming?
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
+    # the stop frame may reach the controller at any moment, between any two frames the session
+    # writes, and what the controller answers to it (nothing, a blank line, a banner) the codec
+    # takes unasked: the stop express may write it ahead of the session (mqtt/express.py)
+    stop_anytime: bool = False
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
     nominal_el_speed_deg_s: float = 1.0
     # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)

@@ -222,6 +222,7 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=2.5,
         whole_degrees=True,
+        stop_anytime=True,  # S is answered by a CR, a blank line the codec skips (rule 1)
         query_bytes=3 if elevation else 2,  # C2\r, C\r
         reply_bytes=len(reply),
         hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,

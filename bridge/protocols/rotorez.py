@@ -25,6 +25,10 @@ Rules:
 3. Targets are rounded half up to whole degrees. The Idiom boards take 000..360; the DCU-1 gets
    360 as 000 (Hamlib does the same "for DCU-1 compatibility"; both are north on a Hy-Gain).
 4. The single letter ``S`` means "unstick on", never stop.
+5. What a healthy board emits besides replies (the power-on byte, the banner) is harmless junk
+   (``harmless``), also when the banner comes torn across reads, whatever the cuts: each piece
+   that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
+   reaches an idle board twice when the stop express writes one too: mqtt/express.py.)
 """
 
 from __future__ import annotations
@@ -71,6 +75,11 @@ _VERSION_RE = re.compile(rb"V(\d+(?:\.\d+)?[A-Za-z]?)[\s\x00;]")
 _KNOWN_JUNK = re.compile(rb"\xe0|C?\d*\s*IDIOM\s+V[0-9][0-9A-Za-z.]*\s?|;\d{3}")
 _BOARD_BYTES = frozenset(b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ")
 _JUNK_WINDOW = 64  # bytes of recent junk kept to find a version banner torn across reads
+# the banner or its beginning at the end of the recent junk: a piece of a banner torn across
+# reads (rule 5: a busy host reads "C2000 IDIOM V" and "1.4S " apart) is harmless too
+_BANNER_SO_FAR = re.compile(
+    rb"C\d*\s*(?:I(?:D(?:I(?:O(?:M(?:\s+(?:V[0-9A-Za-z.]*\s?)?)?)?)?)?)?)?\Z"
+)
 
 
 def _bearing_digits(az_deg: float, *, wrap_360: bool) -> int:
@@ -92,6 +101,7 @@ class RotorEzCodec:
         self._junk_window = bytearray()
         self._queries_open = 0
         self._noisy = False  # bytes the board never sends arrived since the query was opened
+        self._banner_so_far = bytearray()  # rule 5: the latest junk, as long as all banner
 
     # -- encoding -------------------------------------------------------------------------
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
@@ -107,7 +117,8 @@ class RotorEzCodec:
         return bool(self._queries_open)
 
     def harmless(self, junk: bytes) -> bool:
-        return _KNOWN_JUNK.sub(b"", junk) == b""
+        known = _KNOWN_JUNK.sub(b"", junk) == b""
+        return known or (bool(junk) and self._banner_so_far.endswith(junk))  # rule 5
 
     def encode_enable(self) -> None:
         return None
@@ -189,6 +200,12 @@ class RotorEzCodec:
         if self._queries_open and any(b not in _BOARD_BYTES for b in junk):
             self._noisy = True
         self._junk_window += junk
+        so_far = _BANNER_SO_FAR.search(self._junk_window)
+        if so_far is not None and so_far.start() <= len(self._junk_window) - len(junk):
+            self._banner_so_far += junk  # rule 5: all of it in a banner (or its beginning)
+            del self._banner_so_far[: -2 * _JUNK_WINDOW]
+        else:
+            self._banner_so_far.clear()
         match = _VERSION_RE.search(self._junk_window)
         if match:
             out.append(VersionReply(match.group(1).decode("ascii")))
@@ -240,6 +257,7 @@ MODELS: dict[str, ModelSpec] = {
         codec_factory=RotorEzCodec,
         settings=OPTION_SETTINGS,
         brake_delay_s=5.0,
+        stop_anytime=True,  # ';' at any time; a second one is answered by the banner (harmless)
         hamlib_model=401,
         hamlib_info="Rotor-EZ",
     ),
@@ -249,6 +267,7 @@ MODELS: dict[str, ModelSpec] = {
         "Idiom Press",
         codec_factory=lambda: RotorEzCodec(options=False),
         brake_delay_s=0.0,
+        stop_anytime=True,
         hamlib_model=402,
         hamlib_info="RotorCard",
     ),

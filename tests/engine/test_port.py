@@ -11,7 +11,7 @@ import sys
 import pytest
 import serial
 
-from bridge.engine.port import open_port, read_available
+from bridge.engine.port import close_in_background, open_port, read_available, watched
 from bridge.protocols import REGISTRY
 from tests.support.waiting import slow
 
@@ -57,3 +57,49 @@ def test_a_port_whose_bytes_another_reader_took_is_busy_not_unplugged(tty: str) 
         assert read_available(port.fileno(), False, tty) == b""  # not readable: nothing to say
     finally:
         port.close()
+
+
+class Watch:
+    """What the stop express is told (port.py rule 7), and whether the port was open then."""
+
+    def __init__(self) -> None:
+        self.told: list[tuple[str, int, bool]] = []
+        self.fd = -1
+
+    def opened(self, fd: int) -> None:
+        self.fd = fd
+        self.told.append(("opened", fd, _is_open(fd)))
+
+    def closing(self) -> None:
+        self.told.append(("closing", self.fd, _is_open(self.fd)))
+
+
+def _is_open(fd: int) -> bool:
+    try:
+        os.fstat(fd)
+    except OSError:
+        return False
+    return True
+
+
+def test_a_watch_gets_each_port_open_and_is_told_before_it_is_closed(tty: str) -> None:
+    watch = Watch()
+    port = watched(open_port, watch)(tty, REGISTRY["rotorez"], None)
+    close_in_background(port, watch).join(slow(10))
+    fd = watch.fd
+    assert watch.told == [("opened", fd, True), ("closing", fd, True)]  # still open when told
+    assert not port.is_open
+
+
+def test_a_watch_that_fails_costs_the_port_nothing(tty: str) -> None:
+    class Broken:
+        def opened(self, fd: int) -> None:
+            raise RuntimeError("the express is gone")
+
+        def closing(self) -> None:
+            raise RuntimeError("the express is gone")
+
+    port = watched(open_port, Broken())(tty, REGISTRY["rotorez"], None)
+    assert port.is_open
+    close_in_background(port, Broken()).join(slow(10))
+    assert not port.is_open

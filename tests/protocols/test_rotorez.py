@@ -193,3 +193,33 @@ def test_reply_amid_junk_is_read_only_when_the_junk_is_the_boards_own(
     got = positions(c.feed(prefix + b";%03d" % az + suffix))
     clean = all(b in b"\xe0 .0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ" for b in prefix)
     assert got[:1] == ([float(az)] if clean else [])
+
+
+BANNER = b"C2000 IDIOM V1.4S "
+
+
+def junk_of(codec: RotorEzCodec, data: bytes) -> bytes:
+    """The junk of one read, as the line gathers it (engine/link.py) and asks about it."""
+    return b"".join(r.data for r in codec.feed(data) if isinstance(r, JunkReply))
+
+
+@pytest.mark.parametrize("cut", range(1, len(BANNER)))
+def test_a_banner_torn_across_reads_is_harmless_at_every_cut(cut: int) -> None:
+    """Rule 5: a second stop reaching an idle board (the stop express's and the session's) is
+    answered with the banner, which a busy host reads in pieces, judged as they come (the line
+    went quiet between them) or together: no piece is reported."""
+    codec = RotorEzCodec()
+    first = junk_of(codec, BANNER[:cut])
+    assert first == BANNER[:cut] and codec.harmless(first)
+    second = junk_of(codec, BANNER[cut:])
+    assert second == BANNER[cut:] and codec.harmless(second)
+    assert codec.harmless(first + second)
+
+
+def test_a_banner_fed_byte_by_byte_is_harmless_and_what_goes_on_otherwise_is_not() -> None:
+    codec = RotorEzCodec()
+    assert all(codec.harmless(junk_of(codec, bytes([b]))) for b in BANNER * 2)
+    assert not codec.harmless(junk_of(codec, b"XYZ"))
+    pieces = [junk_of(codec, bytes([b])) for b in b"C2000 IDX"]
+    assert not codec.harmless(pieces[-1])  # no banner goes on like that
+    assert not codec.harmless(b"1.4S ")  # the end of a banner whose beginning never came

@@ -1,0 +1,262 @@
+"""The stop express (mqtt/express.py): a STOP's frame reaches the controller while nothing in
+the bridge's process can run. Real parts: mosquitto, the bridge (App, in this process), the
+express (its own process) and a Rotor-EZ emulator in a process of its own on a pty.
+
+The bridge's interpreter is held the hard way: a call into C through ctypes.PyDLL keeps the
+interpreter lock for as long as it blocks, here a read() on a pipe. Every thread of this
+process (the stop lane, the main connection, the serial-lines thread, the test's own) stands
+still until a watcher process, which publishes the STOP and reads the emulator's frame log,
+lets it go: when the stop frame came, or after its deadline without one. The watcher, not
+this process, says which.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bridge.app import App
+from bridge.mosquitto import Mosquitto
+from tests.faults.conftest import mosquitto_password_file
+from tests.support.mqtt import Probe
+from tests.support.rig import Line, Rig
+from tests.support.waiting import slow, wait_until
+
+# the watcher: drains the frame log until armed, publishes the STOP, then waits for the stop
+# frame in the log; writes b"1" (seen) or b"0" (its deadline passed) on the release pipe
+WATCHER = r"""
+import os, select, subprocess, sys, time
+arm, release = int(sys.argv[1]), int(sys.argv[2])
+port, topic, deadline_s = sys.argv[3], sys.argv[4], float(sys.argv[5])
+while True:
+    ready = select.select([arm, 0], [], [])[0]
+    if 0 in ready and not os.read(0, 65536):
+        sys.exit(1)
+    if arm in ready:
+        os.read(arm, 1)
+        break
+subprocess.run(["mosquitto_pub", "-p", port, "-t", topic, "-m", "STOP", "-q", "1"], check=True)
+end, log, seen = time.monotonic() + deadline_s, b"", False
+while not seen and time.monotonic() < end:
+    if select.select([0], [], [], max(0.0, end - time.monotonic()))[0]:
+        data = os.read(0, 65536)
+        if not data:
+            break
+        log += data
+        seen = b"-> stop" in log
+os.write(release, b"1" if seen else b"0")
+"""
+
+
+def express_ready(app: App, rid: str = "tower") -> None:
+    """Subscribed, and holding the rotator's port: from now on it writes a stop."""
+    wait_until(app.express.up.is_set, 10, "the express is up")
+    wait_until(lambda: rid in app.express.held, 10, "the express holds the port")
+
+
+def _emulator_process(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Line:
+    """The controller in a process of its own (the rig's run in this one), its frames logged
+    on a pipe the watcher reads."""
+    link = rig.tmp / f"serial-by-id-{rid}"
+    emu = subprocess.Popen(
+        [sys.executable, "-m", "bridge.emulators", model, "--link", str(link), "--log-frames"]
+        + ["--speed-deg-s", "20", "--brake-delay-s", "0.5", "--start-az-deg", "10"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    rig.scope.callback(emu.wait, 10)
+    rig.scope.callback(emu.terminate)
+    assert emu.stdout is not None
+    emu.stdout.readline()  # the device: the link is there now (emulators/cli.py rule 1)
+    line = Line(rid, model, None, link)  # type: ignore[arg-type]  # no emulator object here
+    line.relay = emu
+    return line
+
+
+def test_a_stop_frame_reaches_the_controller_while_the_bridge_process_is_held(
+    tmp_path: Path, broker: Mosquitto, probe: Probe
+) -> None:
+    if not Path("/usr/bin/mosquitto_pub").exists():
+        pytest.fail("mosquitto_pub (Debian: mosquitto-clients) is needed by this test")
+    with Rig(tmp_path, broker, probe, open_line=_emulator_process) as rig:
+        rig.add("tower", brake_delay_s=0.5)
+        app = rig.start()
+        rig.ready("tower")
+        express_ready(app)
+        emu = rig.lines["tower"].relay
+        arm_r, arm_w = os.pipe()
+        release_r, release_w = os.pipe()
+        watcher = subprocess.Popen(
+            [sys.executable, "-c", WATCHER, str(arm_r), str(release_w), str(broker.port)]
+            + ["rotor/stop", str(slow(20))],
+            stdin=emu.stderr,
+            pass_fds=[arm_r, release_w],
+        )
+        os.close(arm_r)
+        os.close(release_w)
+        rig.probe.publish("rotor/target", "300")
+        rig.probe.wait_value("rotor/state", "moving", 10)
+        answer = ctypes.create_string_buffer(1)
+        libc = ctypes.PyDLL(None)  # PyDLL: the interpreter lock is kept through the call
+        os.write(arm_w, b"1")
+        got = libc.read(release_r, answer, 1)  # every thread of this process stands still
+        assert watcher.wait(slow(10)) == 0
+        assert got == 1 and answer.raw == b"1", "no stop frame while the bridge's process was held"
+        os.close(arm_w)
+        os.close(release_r)
+        rig.probe.wait_value("rotor/state", "idle", 10)
+        assert app.express.wrote and app.express.wrote[0][0] == "tower"
+
+
+def test_after_an_unplug_and_replug_the_express_writes_on_the_new_port(rig: Rig) -> None:
+    """The old port's copy is given back before it is closed, the new one handed over: the
+    express writes the stop after the replug on the new port."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    t = time.monotonic()
+    emu.unplug()
+    rig.probe.wait_value("rotor/availability", "offline", after=t)
+    wait_until(lambda: "tower" not in app.express.held, 10, "the old port given back")
+    t = time.monotonic()
+    emu.replug()
+    rig.probe.wait_value("rotor/availability", "online", timeout_s=15, after=t)
+    wait_until(lambda: "tower" in app.express.held, 10, "the new port handed over")
+    rig.ready("tower", timeout_s=15)
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    stops = len(emu.frames("stop"))
+    rig.probe.publish("rotor/stop", "")
+    wait_until(lambda: app.express.wrote, 10, "the express wrote")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    rig.probe.wait_value("rotor/state", "idle", 10)
+    wait_until(lambda: len(emu.frames("stop")) > stops, 10, "a stop frame")
+    # written on the new port: a write on the old one (hung up) fails and is not said
+    assert [rid for rid, _t in app.express.wrote] == ["tower"]
+
+
+@pytest.mark.parametrize("protocol", ["5", "3.1.1"])
+def test_the_express_logs_in_as_the_bridge_does(tmp_path: Path, protocol: str) -> None:
+    """A broker that takes only a user with a password, and an ACL by user: the express gets the
+    password from the bridge (never on its command line), connects and writes; under MQTT 3.1.1
+    too (the protocol the main connection speaks)."""
+    passwd = mosquitto_password_file(tmp_path / "passwd", {"station": "s3cret"})
+    (tmp_path / "acl").write_text("user station\ntopic readwrite rotor/#\n")
+    conf = (
+        f"user root\nallow_anonymous false\npassword_file {passwd}\nacl_file {tmp_path / 'acl'}\n"
+    )
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
+    probe = Probe(broker.port, "rotor/#", username="station", password="s3cret")
+    try:
+        with Rig(tmp_path, broker, probe) as rig:
+            rig.mqtt_extra = {"username": "station", "password": "s3cret", "protocol": protocol}
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+            app = rig.start()
+            rig.ready("tower")
+            express_ready(app)
+            child = app.express._child
+            assert child is not None and "s3cret" not in " ".join(map(str, child.args))
+            probe.publish("rotor/target", "200")
+            emu.wait_for(lambda s: s.is_moving, 10)
+            probe.publish("rotor/stop", "")
+            wait_until(lambda: app.express.wrote, 10, "the express wrote")
+            emu.wait_for(lambda s: not s.is_moving, 10)
+            info = json.loads(probe.wait_for("rotor/bridge/info", lambda m: True, 10).payload)
+            assert not [p for p in info["problems"] if "express" in p]
+    finally:
+        probe.close()
+        broker.stop()
+
+
+@pytest.mark.parametrize("model", ["rotorez", "rotorcard", "gs232b", "easycomm2", "easycomm3"])
+def test_two_stop_frames_cost_nothing_on_the_models_the_express_writes_to(
+    rig: Rig, model: str
+) -> None:
+    """ModelSpec.stop_anytime: the express's frame and the session's reach the controller; the
+    rotor stops where it was, nothing is reported as an error, no reading is bogus, and the
+    next target is carried out."""
+    rig.tapped = model in ("rotorez", "rotorcard")  # what the controller sent, for rig.bogus
+    emu = rig.add("tower", model, emu={"start_az_deg": 10})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    t = time.monotonic()
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    rig.probe.publish("rotor/stop", "")
+    wait_until(lambda: app.express.wrote, 10, "the express wrote")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    rig.probe.wait_value("rotor/state", "idle", 15, after=t)
+    rig.probe.publish("rotor/target", "90")
+    rig.arrived("tower", 90)
+    assert not rig.probe.on("rotor/error"), [m.text for m in rig.probe.on("rotor/error")]
+    if model in ("rotorez", "rotorcard"):  # the tap reads this family's replies (tap.py)
+        assert not rig.bogus("tower")  # a banner answering the second ';' is no bearing
+
+
+def test_an_express_that_dies_is_said_and_stops_take_the_lane(rig: Rig) -> None:
+    """Killed (an out-of-memory killer, a bug): B/bridge/info says so while the bridge runs,
+    and a stop still stops the rotor, by the stop lane in the bridge's process."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    child.kill()
+    info = rig.probe.wait_for("rotor/bridge/info", lambda m: b"stop express ended" in m.payload)
+    (said,) = [p for p in json.loads(info.payload)["problems"] if "express" in p]
+    assert "stop lane" in said
+    rig.probe.publish("rotor/target", "200")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    rig.probe.publish("rotor/stop", "")
+    emu.wait_for(lambda s: not s.is_moving, 10)
+    assert not app.express.wrote
+
+
+def test_the_express_ends_with_the_bridge(rig: Rig) -> None:
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    rig.stop()
+    assert child.wait(slow(5)) == 0  # its socket's end of file, not a kill
+
+
+def test_a_broker_that_refuses_the_express_is_said_and_stops_take_the_lane(
+    tmp_path: Path,
+) -> None:
+    """A connection limit: the test's probe, the main connection and the stop lane take all
+    there are, the express's is turned away. B/bridge/info says so; a stop still stops the
+    rotor. (mosquitto 2.0 lets in one connection more than its max_connections.)"""
+    conf = "allow_anonymous true\nmax_connections 2\n"
+    broker = Mosquitto(tmp_path / "broker", extra_conf=conf).start()
+    probe = Probe(broker.port, "rotor/#")
+    try:
+        with Rig(tmp_path, broker, probe) as rig:
+            emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+            app = rig.start()
+            rig.ready("tower")
+            wait_until(app.lane.connected.is_set, 10, "the lane is up")
+            info = probe.wait_for("rotor/bridge/info", lambda m: b"stop express" in m.payload, 20)
+            (said,) = [p for p in json.loads(info.payload)["problems"] if "express" in p]
+            assert "closed its connection" in said or "refused" in said
+            assert not app.express.up.is_set()
+            probe.publish("rotor/target", "200")
+            emu.wait_for(lambda s: s.is_moving, 10)
+            probe.publish("rotor/stop", "")
+            emu.wait_for(lambda s: not s.is_moving, 10)
+    finally:
+        probe.close()
+        broker.stop()

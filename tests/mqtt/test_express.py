@@ -1,0 +1,266 @@
+"""The stop express (mqtt/express.py): what it writes and when (rule 3), the ports it holds and
+gives back (rule 5), and that its failures are said (rule 6). The child's decisions are run
+here on a socket pair and a pipe standing in for the port; the parent's on child processes that
+misbehave. The real path (broker, express, pty, a held bridge) is
+tests/integration/test_stop_express.py."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import sys
+import threading
+from collections.abc import Iterator
+
+import pytest
+
+from bridge.mqtt.express import DROP_WAIT_S, GAP_S, Express, _Child, express_client_id
+from bridge.protocols import REGISTRY
+from bridge.settings_mqtt import MqttSettings
+from tests.support.rig import EASYCOMM_MODELS, GS232_MODELS
+from tests.support.waiting import slow, wait_until
+
+SETTINGS = MqttSettings(host="127.0.0.1", port=1, client_id="rotor-shack")
+TOPICS = {
+    "rotor/a/stop": ("a", "stop"),
+    "rotor/a/lock": ("a", "lock"),
+    "rotor/b/stop": ("b", "stop"),
+}
+
+
+class Port:
+    """A pipe standing in for a controller's port: what the express wrote to it."""
+
+    def __init__(self) -> None:
+        self.r, self.w = os.pipe()
+        os.set_blocking(self.r, False)
+
+    def written(self) -> bytes:
+        try:
+            return os.read(self.r, 4096)
+        except BlockingIOError:
+            return b""
+
+
+class ChildRig:
+    def __init__(self, mqtt311: bool) -> None:
+        self.mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        config = {
+            "topics": TOPICS,
+            "frames": {"a": b";".hex(), "b": b"S\r".hex()},
+            "mqtt311": mqtt311,
+            "mqtt": SETTINGS.model_dump(mode="json"),
+            "client_id": "rfast-shack",
+        }
+        self.child = _Child(theirs, config)
+        self.thread = threading.Thread(target=self.child.serve, daemon=True)
+        self.thread.start()
+
+    def word(self) -> dict[str, object]:
+        self.mine.settimeout(slow(5))
+        word: dict[str, object] = json.loads(self.mine.recv(65536))
+        return word
+
+    def hand(self, rid: str, n: int, port: Port) -> None:
+        socket.send_fds(
+            self.mine, [json.dumps({"op": "port", "rotator": rid, "n": n}).encode()], [port.w]
+        )
+        assert self.word() == {"op": "held", "rotator": rid, "n": n}
+
+    def stop(self, topic: str, payload: bytes = b"STOP", retain: bool = False) -> None:
+        self.child.on_message(topic, payload, retain, None, None)
+
+
+@pytest.fixture
+def rig() -> Iterator[ChildRig]:
+    r = ChildRig(mqtt311=False)
+    yield r
+    r.mine.close()
+    r.thread.join(slow(5))
+
+
+def test_a_stop_is_the_rotators_stop_frame_written_at_once_whatever_its_payload(
+    rig: ChildRig,
+) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    now = [100.0]
+    rig.child.clock = lambda: now[0]
+    for payload in (b"", b"STOP", b"anything at all"):
+        rig.stop("rotor/a/stop", payload)
+        now[0] += GAP_S
+    assert port.written() == b";;;"
+    assert rig.word() == {"op": "wrote", "rotator": "a", "t": 100.0}
+
+
+def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None:
+    port, now = Port(), [100.0]
+    rig.child.clock = lambda: now[0]
+    rig.hand("a", 1, port)
+    for _ in range(1000):
+        rig.stop("rotor/a/stop")
+        rig.stop("rotor/a/lock", b"ON")
+    assert port.written() == b";"
+    now[0] += GAP_S
+    rig.stop("rotor/a/stop")
+    assert port.written() == b";"
+
+
+def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    for payload in (b"OFF", b"maybe", b"0"):
+        rig.stop("rotor/a/lock", payload)
+    assert port.written() == b""
+    rig.stop("rotor/a/lock", b"ON")
+    assert port.written() == b";"
+
+
+def test_a_rotator_whose_port_it_does_not_hold_gets_nothing(rig: ChildRig) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.stop("rotor/b/stop")  # b's port was never handed over (closed, or not open yet)
+    rig.stop("rotor/c/stop")  # not a rotator of the express (rule 4)
+    assert port.written() == b""
+
+
+def test_a_retained_stop_is_written_under_mqtt5_not_a_replay_under_311(rig: ChildRig) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.stop("rotor/a/stop", b"", retain=True)  # a retained stop being deleted: no command
+    assert port.written() == b""
+    rig.stop("rotor/a/stop", retain=True)  # MQTT 5: published retained, live (never replayed)
+    assert port.written() == b";"
+    old = ChildRig(mqtt311=True)
+    port311 = Port()
+    old.hand("a", 1, port311)
+    old.stop("rotor/a/stop", retain=True)  # 3.1.1: the broker's replay (the session's, once)
+    old.stop("rotor/a/stop")
+    assert port311.written() == b";"
+    old.mine.close()
+
+
+def test_a_port_given_back_is_closed_and_written_to_no_more(rig: ChildRig) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.mine.send(json.dumps({"op": "drop", "rotator": "a", "n": 1}).encode())
+    assert rig.word() == {"op": "dropped", "rotator": "a", "n": 1}
+    rig.stop("rotor/a/stop")
+    os.close(port.w)  # the express's copy is closed: the pipe has no writer left
+    assert os.read(port.r, 10) == b""
+
+
+def test_a_late_word_about_an_older_port_leaves_the_newer_one(rig: ChildRig) -> None:
+    old, new = Port(), Port()
+    rig.hand("a", 1, old)
+    rig.hand("a", 2, new)  # reopened (unplug, replug) before the old one's drop came
+    rig.mine.send(json.dumps({"op": "drop", "rotator": "a", "n": 1}).encode())
+    assert rig.word()["op"] == "dropped"
+    rig.stop("rotor/a/stop")
+    assert (old.written(), new.written()) == (b"", b";")
+
+
+def test_client_id_is_the_lanes_rule_with_its_own_mark() -> None:
+    assert express_client_id(SETTINGS) == "rotor-shack-fast"
+    long = MqttSettings(client_id="a-very-long-client-id-x")
+    assert len(express_client_id(long)) <= 23 and express_client_id(long).endswith("-fast")
+
+
+# -- the parent's side: failures are said (rule 6) ----------------------------------------------
+class Problems:
+    def __init__(self) -> None:
+        self.said: dict[str, bool] = {}
+        self.changed = threading.Event()
+
+    def __call__(self, text: str, on: bool) -> None:
+        self.said[text] = on
+        self.changed.set()
+
+    def on(self) -> list[str]:
+        return [t for t, on in self.said.items() if on]
+
+
+def express(command: list[str], problems: Problems) -> Express:
+    return Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=command,
+    )
+
+
+def test_an_express_that_cannot_start_is_said() -> None:
+    problems = Problems()
+    e = express(["/nonexistent/python"], problems)
+    e.start(mqtt311=False)
+    wait_until(problems.on, 10, "the problem said")
+    assert "could not start" in problems.on()[0] and "stop lane" in problems.on()[0]
+    e.stop()
+
+
+def test_an_express_that_ends_is_said_with_its_exit_code() -> None:
+    problems = Problems()
+    e = express([sys.executable, "-c", "import sys; sys.exit(3)"], problems)
+    e.start(mqtt311=False)
+    wait_until(problems.on, 10, "the problem said")
+    assert "ended (exit code 3)" in problems.on()[0]
+    e.stop()
+
+
+def test_an_express_that_does_not_give_a_port_back_is_killed_and_the_port_closed() -> None:
+    problems = Problems()
+    # holds the socket, reads nothing, answers nothing
+    e = express([sys.executable, "-c", "import time; time.sleep(600)"], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: e._sock is not None, 10, "started")
+    done = threading.Event()
+    threading.Thread(target=lambda: (e.closing("a"), done.set()), daemon=True).start()
+    wait_until(done.is_set, DROP_WAIT_S + 10, "the closing thread goes on")
+    wait_until(problems.on, 10, "the problem said")
+    assert "ended" in problems.on()[0]
+    e.stop()
+
+
+def test_no_rotator_of_a_model_that_takes_a_stop_at_any_time_no_express() -> None:
+    problems = Problems()
+    e = Express(SETTINGS, topics=TOPICS, frames={}, on_problem=problems, command=["false"])
+    assert not e.wanted and e.watch("a") is None
+    e.start(mqtt311=False)
+    assert e._child is None and not problems.said
+
+
+def test_only_models_that_take_a_stop_frame_at_any_moment_get_the_express() -> None:
+    """ModelSpec.stop_anytime (rule 4): not a SatEL (it ignores input while it slews), not a
+    SPID (a stop is answered: an extra one would be a reply nobody owes), not a DCU-1 or an
+    RT-21 (what they answer to a stop at any moment is not documented)."""
+    writes = {name for name, spec in REGISTRY.items() if spec.stop_anytime}
+    assert writes == {"rotorez", "rotorcard", *GS232_MODELS, *EASYCOMM_MODELS}
+
+
+SAYS = (
+    "import json, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    "for word in sys.argv[1:-1]:\n"
+    "    s.send(word.encode())\n"
+    "s.recv(65536)\n"  # until the bridge closes its end
+)
+
+
+def test_a_refused_connection_is_said_until_the_express_is_up_a_denial_stays() -> None:
+    problems = Problems()
+    words = [
+        {"op": "problem", "text": "refused: not authorised", "until_up": True},
+        {"op": "problem", "text": "denied: rotor/a/stop"},
+        {"op": "up"},
+    ]
+    e = express([sys.executable, "-c", SAYS, *map(json.dumps, words)], problems)
+    e.start(mqtt311=False)
+    wait_until(e.up.is_set, 10, "up")
+    wait_until(lambda: len(problems.said) == 2, 10, "both said")
+    assert problems.on() == ["stop express: denied: rotor/a/stop"]
+    e.stop()
