@@ -9,7 +9,8 @@ Rules:
 2. ``locked`` is the lock: the judge asks it, and nothing else keeps a copy that could differ
    (the session's comes from the mailbox, in the same step). Each lock word queues a save of
    the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
-   last word is the last written, whatever order the front ends asked in.
+   last word is the last written, whatever order the front ends asked in; words that come
+   while a save waits for the writer join it, which writes the last of them (rule 7).
 3. A save that fails is reported (kind ``state``): the setting is in effect but will not
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
@@ -29,6 +30,11 @@ Rules:
    and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
    the steps already under way or waiting, never for a flood of words after it.
 6. A lock kept from the state file is said in the log at start: motion will be refused.
+7. Options waiting for the writer are saved together, the last value of each, and so are lock
+   words (one save of each queued at a time): anyone who may publish ``R/option/<name>`` (or
+   lock, never refused) can send thousands a second, and each was a rewrite of the state file
+   with its fsyncs, in line before a lock word said after them (its save held back for
+   minutes on an SD card, the card worn for nothing).
 """
 
 from __future__ import annotations
@@ -99,6 +105,9 @@ class Kept:
         self._id = rotator_id
         self._spec = spec
         self._report = report
+        self._unsaved: dict[str, SettingValue] = {}  # rule 7: options whose save is queued
+        self._unsaved_guard = threading.Lock()  # the owner's step and the writer's
+        self._lock_unsaved = False  # rule 7: a lock save is queued and has not read the lock
         self.locked = store.locked(rotator_id)  # rule 2: the one copy
         if self.locked:  # rule 6
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
@@ -136,24 +145,36 @@ class Kept:
         return kept
 
     def save_option(self, name: str, value: SettingValue) -> None:
-        """In the owner's step (rule 5)."""
-        self._store.queue(lambda: self._save_option_now(name, value))
+        """In the owner's step (rule 5); joins a save already queued (rule 7)."""
+        with self._unsaved_guard:
+            queued = bool(self._unsaved)
+            self._unsaved[name] = value
+        if not queued:
+            self._store.queue(self._save_options_now)
 
-    def _save_option_now(self, name: str, value: SettingValue) -> None:
-        if not self._store.set_option(self._id, name, value):
-            self._report(
-                ErrorKind.STATE,
-                f"option {name} is in effect but could not be saved: it will not survive a "
-                "restart (state file not writable)",
-                name,
-            )
+    def _save_options_now(self) -> None:
+        with self._unsaved_guard:
+            unsaved, self._unsaved = self._unsaved, {}
+        for name, value in unsaved.items():
+            if not self._store.set_option(self._id, name, value):
+                self._report(
+                    ErrorKind.STATE,
+                    f"option {name} is in effect but could not be saved: it will not survive "
+                    "a restart (state file not writable)",
+                    name,
+                )
 
     def set_lock(self, locked: bool) -> None:
         """Rule 2, in the owner's step (rule 5): the lock is ``locked``, and saved as that."""
-        self.locked = locked
-        self._store.queue(lambda: self._save_lock_now(locked))
+        with self._unsaved_guard:
+            self.locked = locked
+            queued, self._lock_unsaved = self._lock_unsaved, True
+        if not queued:
+            self._store.queue(self._save_lock_now)
 
-    def _save_lock_now(self, locked: bool) -> None:
+    def _save_lock_now(self) -> None:
+        with self._unsaved_guard:  # rule 7: the last word so far
+            locked, self._lock_unsaved = self.locked, False
         if not self._store.set_locked(self._id, locked):
             self._report(
                 ErrorKind.STATE,

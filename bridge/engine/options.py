@@ -18,6 +18,10 @@ Rules:
    declarations' ``speed_factor``) scales the rotor's speeds the engine expects. A (re)connect
    or a power-on forgets the values it will send again: the controller runs at its own
    default until then.
+4. A setting goes to the controller at most once per SETTING_GAP_S: a value set meanwhile
+   waits, and only the last one set goes. Anyone who may publish
+   ``R/option/<name>`` can send hundreds a second, and each went out as its own frame (a
+   GS-232's line full of X commands, its polls crowded out, a target left unturned).
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from bridge.model import SettingValue
 from bridge.protocols.base import SendWhen, Setting
 
 OPTIONS_REFRESH_S = 60.0
+SETTING_GAP_S = 0.5  # rule 4
 
 
 class Options:
@@ -41,6 +46,7 @@ class Options:
         self.enable_due = False  # rule 2
         self._due: set[str] = set()
         self._sent_t = 0.0
+        self._written_t: dict[str, float] = {}  # rule 4: when each was last written
 
     def _resent(self) -> set[str]:
         """The values the controller forgets, and those not sent since the start (rule 1)."""
@@ -81,12 +87,18 @@ class Options:
         line_free = free if line_free is None else line_free
         if idle and self.values and now - self._sent_t >= OPTIONS_REFRESH_S:
             self._due |= self._resent()
-        due = sorted(n for n in self._due if (idle and free) or (line_free and self._anytime(n)))
+        due = sorted(
+            n
+            for n in self._due
+            if ((idle and free) or (line_free and self._anytime(n)))
+            and now - self._written_t.get(n, -math.inf) >= SETTING_GAP_S  # rule 4
+        )
         if not due:
             return []
         self._due -= set(due)
         self._unsent -= set(due)
         self._sent_t = now
+        self._written_t.update((n, now) for n in due)
         taken = [(name, self.values[name]) for name in due]
         self.in_effect.update(taken)
         return taken

@@ -97,3 +97,30 @@ def test_a_stop_with_a_speed_in_the_same_instant_goes_out_first(rig: Rig) -> Non
     v.run_until(lambda h: speeds(h), 1, "X1 on the wire")
     sent = v.sent(since=t)
     assert sent.index(b"S\r") < sent.index(b"X1\r")
+
+
+def test_a_flood_of_speeds_puts_a_few_on_the_wire_and_the_last_one_wins(rig: Rig) -> None:
+    """Anyone who may publish R/option/speed can send hundreds a second: each went to the box
+    as its own X command (15,315 of the 15,458 frames on the wire in 35 s through mosquitto,
+    the polls crowded out, an INFO line each). A setting goes out at most once per
+    SETTING_GAP_S, the last value set meanwhile; the turn and a stop go on as without it."""
+    from bridge.engine.options import SETTING_GAP_S
+
+    v = ready(rig)
+    v.target(300, 0)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 10, 30, "turning")
+    t = v.now
+    for i in range(2000):  # 10 s of words every 5 ms, the same value twice in a row
+        v.option("speed", "1" if (i // 2) % 2 else "4")
+        v.run_for(0.005)
+    v.option("speed", "3")
+    flood_s = v.now - t
+    v.run_for(2 * SETTING_GAP_S)
+    sent = [d for d in v.sent(since=t) if d.startswith(b"X")]
+    assert len(sent) <= flood_s / SETTING_GAP_S + 2, len(sent)
+    assert sent[-1] == b"X3\r" and v.truth().speed_level == 3
+    v.stop()
+    stopped_at = v.now
+    v.run_until(lambda h: not h.truth().is_moving, 2, "stopped")
+    assert v.frames(Outcome.STOP, since=stopped_at)
+    assert v.errors() == []

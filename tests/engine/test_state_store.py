@@ -121,3 +121,65 @@ def test_a_settings_value_survives_a_restart_and_one_its_model_refuses_is_left_o
         kept = Kept(StateStore(path), "tower", REGISTRY["gs232b"], report=lambda *a: None)
         assert kept.options() == {}
     assert "stored option 'speed' ignored" in caplog.text
+
+
+def test_a_flood_of_settings_costs_the_card_a_write_or_two_and_a_lock_after_it_is_kept_at_once(
+    tmp_path: Path,
+) -> None:
+    """Anyone who may publish R/option/speed can send thousands a second: each was a whole
+    rewrite of the state file with two fsyncs, in line before a lock ON said after them (3000
+    words held the lock's save back two minutes at an SD card's 40 ms a write, and wore the
+    card). Settings waiting for the writer are saved together, the last value of each; the
+    lock is written right behind them."""
+    from bridge.engine.kept import Kept
+    from bridge.protocols import REGISTRY
+
+    path = tmp_path / "state.json"
+    store = StateStore(path)
+    writes: list[dict[str, object]] = []
+    save = store._save
+
+    def counted() -> bool:
+        writes.append(json.loads(json.dumps(store._data)))
+        return save()
+
+    store._save = counted  # type: ignore[method-assign]
+    kept = Kept(store, "tower", REGISTRY["gs232b"], report=lambda *a: None)
+    for i in range(3000):  # the owner's steps, as rotator.py takes them; the writer not woken
+        kept.save_option("speed", "1" if i % 2 else "4")
+    kept.set_lock(True)
+    store.wake()
+    store.flush()
+    assert len(writes) <= 2, len(writes)
+    assert writes[-1] == {"tower": {"options": {"speed": "1"}, "locked": True}}
+    assert StateStore(path).locked("tower") is True
+    assert StateStore(path).options("tower") == {"speed": "1"}
+
+
+def test_a_flood_of_lock_words_costs_the_card_a_write_or_two_and_the_last_word_is_kept(
+    tmp_path: Path,
+) -> None:
+    """A lock ON is never refused, so anyone allowed to lock can send thousands a second:
+    each was a rewrite of the state file with its fsyncs. The words waiting for the writer are
+    saved as one, the last word's."""
+    from bridge.engine.kept import Kept
+    from bridge.protocols import REGISTRY
+
+    path = tmp_path / "state.json"
+    store = StateStore(path)
+    writes: list[object] = []
+    save = store._save
+
+    def counted() -> bool:
+        writes.append(json.loads(json.dumps(store._data)))
+        return save()
+
+    store._save = counted  # type: ignore[method-assign]
+    kept = Kept(store, "tower", REGISTRY["gs232b"], report=lambda *a: None)
+    for i in range(3001):  # the owner's steps; the writer not woken
+        kept.set_lock(i % 2 == 0)
+    store.wake()
+    store.flush()
+    assert len(writes) <= 2, len(writes)
+    assert writes[-1] == {"tower": {"locked": True}}
+    assert StateStore(path).locked("tower") is True
