@@ -140,6 +140,15 @@ def rotctld_cases() -> list[RotctldCase]:
             None,
             ("idle", "polling"),
         ),
+        RotctldCase(
+            "rc2800",
+            1001,
+            lambda i: f"P {10 + i}.5 10",
+            "P -> Addd<CR> (200 ms) Eee<CR>",
+            lambda f: f.outcome == "move" and f.data.startswith(b"A"),
+            None,
+            ("idle", "polling"),
+        ),
     ]
 
 

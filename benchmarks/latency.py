@@ -118,6 +118,7 @@ _GS232_POLL = lambda f: f.outcome == "query"  # noqa: E731
 _EASYCOMM_POLL = lambda f: f.data == b"AZ" and f.outcome == "query"  # noqa: E731
 _SPID_FRAME = bytes(13)
 _RT21_SET = b"AP1100.5\r;"
+_RC2800_SET = b"A100.5\r"
 _PROSISTEL_SET = b"\x02AG100\r"
 AFTER_TARGET = Lead("target", lambda i: "110" if i % 2 else "100")
 AFTER_REFUSED = Lead("target", lambda i: "999")  # out of range: an error event (QoS 1)
@@ -299,60 +300,76 @@ def cases() -> list[Case]:
             poll=_STATUS_POLL,
             quick=False,
         ),
-        *_rt21(apart, iso),
-        *_prosistel(apart, iso),
+        *_rt21(iso, apart),
+        *_rc2800(iso, apart),
+        *_prosistel(iso, apart),
     ]
 
 
-def _prosistel(apart: float, iso: float) -> list[Case]:
-    """The Prosistel D: the hard stop G999 and a bearing G, each STX-framed."""
-    poll = lambda f: f.outcome == "query"  # noqa: E731
-    stop = Case(
-        "prosistel",
-        "stop",
-        b"\x02AG999\r",
-        "stop STX AG999<CR>",
-        lambda f: f.outcome == "stop",
-        (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
-        poll=poll,
-    )
-    target = Case(
-        "prosistel",
-        "target",
-        _PROSISTEL_SET,
-        "target STX AGddd<CR>",
-        lambda f: f.outcome == "move",
-        (Condition("idle", {}, (iso, iso + 0.5)),),
-        payload=lambda i: f"{10 + i}",
-        poll=poll,
-    )
-    return [stop, target]
+def _stop_and_target(
+    model: str,
+    stop: tuple[bytes, str],
+    target: tuple[bytes, str],
+    *,
+    payload: Callable[[int], str],
+    poll: Callable[[Any], bool],
+) -> Callable[[float, tuple[float, float]], list[Case]]:
+    """A model's stop and target rows: each a (frame, label); ``payload`` the i-th target's
+    message, ``poll`` which logged frame is its query. Returns what builds them for an isolation
+    time and a stop spacing."""
+
+    def build(iso: float, apart: tuple[float, float]) -> list[Case]:
+        polled = poll
+        return [
+            Case(
+                model,
+                "stop",
+                stop[0],
+                stop[1],
+                lambda f: f.outcome == "stop",
+                (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
+                poll=polled,
+            ),
+            Case(
+                model,
+                "target",
+                target[0],
+                target[1],
+                lambda f: f.outcome == "move",
+                (Condition("idle", {}, (iso, iso + 0.5)),),
+                payload=payload,
+                poll=polled,
+            ),
+        ]
+
+    return build
 
 
-def _rt21(apart: float, iso: float) -> list[Case]:
-    """The Green Heron RT-21: a stop ``;`` and a heading that runs at its CR."""
-    poll = lambda f: f.data == b"BI1;"  # noqa: E731
-    return [
-        Case(
-            "rt21",
-            "stop",
-            b";",
-            "stop ;",
-            lambda f: f.outcome == "stop",
-            (Condition("idle", {}, apart), Condition("polling", FLAT_OUT, apart)),
-            poll=poll,
-        ),
-        Case(
-            "rt21",
-            "target",
-            _RT21_SET,
-            "target AP1ddd.d<CR>;",
-            lambda f: f.outcome == "move",
-            (Condition("idle", {}, (iso, iso + 0.5)),),
-            payload=lambda i: f"{10 + i}.5",
-            poll=poll,
-        ),
-    ]
+# the Green Heron RT-21: a stop ``;`` and a heading that runs at its CR
+_rt21 = _stop_and_target(
+    "rt21",
+    (b";", "stop ;"),
+    (_RT21_SET, "target AP1ddd.d<CR>;"),
+    payload=lambda i: f"{10 + i}.5",
+    poll=lambda f: f.data == b"BI1;",
+)
+# the M2 RC2800: the azimuth's stop (the elevation's goes 200 ms later) and a bearing's first
+# frame (to the axis last addressed; the other's 200 ms later); its query as logged is ``A``
+_rc2800 = _stop_and_target(
+    "rc2800",
+    (b"A\rS\r", "stop A<CR>S<CR>"),
+    (_RC2800_SET, "target A/Eddd.d<CR>"),
+    payload=lambda i: f"{10 + i}.5 10",
+    poll=lambda f: f.data == b"A",
+)
+# the Prosistel D: the hard stop G999 and a bearing G in whole degrees, each STX-framed
+_prosistel = _stop_and_target(
+    "prosistel",
+    (b"\x02AG999\r", "stop STX AG999<CR>"),
+    (_PROSISTEL_SET, "target STX AGddd<CR>"),
+    payload=lambda i: f"{10 + i}",
+    poll=lambda f: f.outcome == "query",
+)
 
 
 def run_bridge_case(
@@ -468,6 +485,7 @@ def tasks(scope: Scope, quick: bool, models: set[str] | None) -> list[Task]:
             continue
         frames = {"rotorez": b";", "rotorcard": b"AM1;", "rot2prog": _SPID_FRAME}
         frames["rt21"], frames["prosistel"] = _RT21_SET, _PROSISTEL_SET
+        frames["rc2800"] = _RC2800_SET
         frame = {**frames, "gs232b": b"W100 010\r", "easycomm2": b"AZ100.0 EL10.0\n"}[rc.model]
         frame_ms = _ms(line_time_s(len(frame), baud_of(rc.model, rc.emu_opts)))
         for condition in rc.conditions:

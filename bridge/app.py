@@ -258,10 +258,14 @@ class App:
         frames: dict[str, bytes] = {}
         for r in settings.rotators:
             # (a rotator of two boxes has two ports: its stops take the stop lane)
+            # (nor does a stop of several frames: an RC2800's, paced by the session)
             if settings.mqtt.stop_express and r.spec.stop_anytime and not r.axes:
+                stop = r.spec.codec_factory().encode_stop()
+                if not isinstance(stop, bytes):
+                    continue
                 t = self.topics.rotator(r.id)
                 topics[t.stop], topics[t.lock] = (r.id, "stop"), (r.id, "lock")
-                frames[r.id] = r.spec.codec_factory().encode_stop()
+                frames[r.id] = stop
         return Express(settings.mqtt, topics=topics, frames=frames, on_problem=self._info)
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:

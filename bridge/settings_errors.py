@@ -37,6 +37,7 @@ BRANDS = {
     "satel": "the SatEL controller (VE5FP) is satel",
     "ve5fp": "the SatEL controller (VE5FP) is satel",
     "greenheron": "Green Heron's RT-21 is rt21 (one box per rotor)",
+    "m2": "M2's RC2800 is rc2800 (az/el) or rc2800-az (azimuth only)",
     "k3ng": "K3NG's Arduino controller speaks GS-232: gs232b (gs232b-az for azimuth only), or "
     "easycomm2 in satellite mode",
     "satnogs": "a SatNOGS rotator controller speaks Easycomm: easycomm2 (easycomm3 with "

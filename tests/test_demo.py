@@ -37,6 +37,7 @@ ALL_MODELS += [
 ]
 ALL_MODELS += [f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate")]
 ALL_MODELS += ["rt21", "prosistel", "prosistel-el", "prosistel-combi"]
+ALL_MODELS += ["rc2800", "rc2800-az"]
 
 
 def _left_behind(tmpdir: Path) -> list[str]:

@@ -547,6 +547,7 @@ def test_an_unknown_key_set_in_the_environment_names_its_variable(
         ("rt-21", "did you mean rt21?"),
         ("Prosistel PST-61D", "D box is prosistel (azimuth) or prosistel-el (elevation)"),
         ("Combi-Track", "Combi-Track is prosistel-combi"),
+        ("M2", "RC2800 is rc2800 (az/el) or rc2800-az"),
     ],
 )
 def test_an_unknown_model_names_the_nearest_model_or_the_one_for_its_maker(

@@ -8,8 +8,8 @@ Rules:
 1. Nothing here imports bridge.protocols, bridge.engine or paho: an emulator written from our own
    codec would share its misreadings, and every test would pass with both wrong.
 2. EMULATORS maps a model name to a factory taking keyword options and `now`; a new family
-   (SPID, SatEL, GS-232, Easycomm, RT-21, Prosistel) adds entries here and reuses physics.Axis,
-   base.PacedLine and pty.EmulatedPort.
+   (SPID, SatEL, GS-232, Easycomm, RT-21, RC2800, Prosistel) adds entries here and reuses
+   physics.Axis, base.PacedLine and pty.EmulatedPort.
 """
 
 from __future__ import annotations
@@ -28,6 +28,8 @@ from bridge.emulators.gs232 import Gs232
 from bridge.emulators.prosistel import MODELS as _PROSISTEL_MODELS
 from bridge.emulators.prosistel import Prosistel
 from bridge.emulators.pty import EmulatedPort
+from bridge.emulators.rc2800 import MODELS as _RC2800_MODELS
+from bridge.emulators.rc2800 import Rc2800
 from bridge.emulators.rotorez import RotorEZ
 from bridge.emulators.rt21 import Rt21
 from bridge.emulators.satel import SatEL
@@ -45,6 +47,7 @@ EMULATORS: Mapping[str, Callable[..., Responder]] = {
     **{name: partial(Gs232, name) for name in _GS232_MODELS},
     **{name: partial(EasycommController, name) for name in _EASYCOMM_MODELS},
     "rt21": Rt21,
+    **{name: partial(Rc2800, name) for name in _RC2800_MODELS},
     **{name: partial(Prosistel, name) for name in _PROSISTEL_MODELS},
 }
 
@@ -87,6 +90,7 @@ __all__ = [
     "Gs232",
     "LoggedFrame",
     "Prosistel",
+    "Rc2800",
     "Responder",
     "RotatorState",
     "Rt21",

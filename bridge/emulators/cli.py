@@ -69,6 +69,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the bearing's padding (RT-21): space ' 5.0;' (default), none '5.0;', zero '005.0;'",
     )
     parser.add_argument(
+        "--echo", action="store_true", help="echo every command before answering (RC2800)"
+    )
+    parser.add_argument(
+        "--stream-s",
+        type=float,
+        help="send the position unasked after this many quiet seconds (RC2800)",
+    )
+    parser.add_argument(
         "--streaming",
         action="store_true",
         help="send the position unasked until told STX u S CR, as some boxes do (Prosistel)",
@@ -117,6 +125,8 @@ def _controller_options(args: argparse.Namespace) -> dict[str, Any]:
             opts.update(blank_lines_after_w=args.blank_lines_after_w)
         if args.model.startswith("easycomm"):
             opts.update(decimals=args.decimals, version=args.firmware_version)
+        if args.model.startswith("rc2800"):
+            opts.update(echo=args.echo or None, stream_s=args.stream_s)
         if args.model.startswith("prosistel"):
             opts.update(streaming=args.streaming or None, soft_stop_s=args.soft_stop_s)
     return {k: v for k, v in opts.items() if v is not None}

@@ -46,8 +46,8 @@ import enum
 import re
 from dataclasses import dataclass
 
-from bridge.emulators.base import LoggedFrame, MotionEvent, PacedLine, RotatorState
-from bridge.emulators.physics import DRIVER_COMMAND, Axis
+from bridge.emulators.base import LoggedFrame, RotatorState
+from bridge.emulators.physics import DRIVER_COMMAND
 from bridge.emulators.twoaxes import EL_TOP_DEG, TwoAxes
 
 __all__ = ["MODELS", "Gs232", "Gs232Model", "Gs232State", "Outcome"]
@@ -117,47 +117,26 @@ class Gs232(TwoAxes):
         processing_delay_s: float = 0.002,
         now: float = 0.0,
     ) -> None:
-        if model not in MODELS:
-            raise ValueError(f"unknown model {model!r}; known: {', '.join(sorted(MODELS))}")
-        if line_ending not in (b"\r", b"\n", b"\r\n"):
-            raise ValueError(f"line_ending must be CR, LF or CR LF, got {line_ending!r}")
         if not 0 <= spacing <= 4 or blank_lines_after_w < 0:
             raise ValueError("spacing must be 0..4 and blank_lines_after_w >= 0")
-        self.spec = MODELS[model]
-        if not self.spec.elevation and start_el_deg != 0.0:
-            raise ValueError(f"{model} has no elevation rotor")
-        self.line_ending = line_ending
+        axes = (start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s)
+        line = (baud, line_ending, processing_delay_s)
+        self.spec: Gs232Model = self._build(model, MODELS, AZ_TOP_DEG, axes, line, now)
         self.spacing = spacing
         self.blank_lines_after_w = blank_lines_after_w
-        self._az_speed, self._el_speed = float(az_speed_deg_s), float(el_speed_deg_s)
-        self._az = Axis(start_az_deg, max_deg=AZ_TOP_DEG, speed_deg_s=self._az_speed, now=now)
-        self._el = Axis(start_el_deg, max_deg=EL_TOP_DEG, speed_deg_s=self._el_speed, now=now)
-        self._range_deg = self.spec.az_range_deg
+        self._range_deg: float = self.spec.az_range_deg
         self._level = 4
-        self.baud = int(baud)
-        self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
-        self._now_s = now
-        self._rx = bytearray()
-        self._log: list[LoggedFrame] = []
-        self._events: list[MotionEvent] = []
-        self.name, self.has_elevation = self.spec.name, self.spec.elevation  # (TwoAxes)
-        self._event(now, "power on")
 
     # -- sans-IO surface ------------------------------------------------------------------------
 
     def receive(self, data: bytes, now: float) -> None:
         now = self._update(now)
-        for value in data:
-            if value in (0x0D, 0x0A):
-                line, self._rx = bytes(self._rx), bytearray()
-                if line:
-                    self._command(line, now)
-                continue
-            self._rx.append(value)
-            if len(self._rx) > _MAX_LINE:  # no command is this long
-                line, self._rx = bytes(self._rx), bytearray()
+        for line, too_long in self._lines(data, _MAX_LINE):
+            if too_long:  # no command is this long
                 self._answer(REFUSAL, now)
                 self._log.append(LoggedFrame(now, line, Outcome.REFUSED.value))
+            else:
+                self._command(line, now)
 
     # -- ground truth ---------------------------------------------------------------------------
 
@@ -174,7 +153,7 @@ class Gs232(TwoAxes):
     def power_cycle(self, now: float) -> None:
         now = self._update(now)
         self._halt(now, "power off")
-        self._rx.clear()
+        self._rx_line.clear()
         self._tx.clear()
         self._range_deg = self.spec.az_range_deg
         self._set_level(4, now)

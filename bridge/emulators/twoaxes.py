@@ -1,6 +1,6 @@
 """What an emulated box with an azimuth and an elevation axis (and no brake) does with them,
-whatever its protocol: the panel, a jam, time passing, a stop (gs232.py, easycomm.py,
-prosistel.py); the frame log is base.Recorder's.
+whatever its protocol: the panel, a jam, time passing, a stop, its lines in (gs232.py,
+easycomm.py, rc2800.py, prosistel.py); the frame log is base.Recorder's.
 
 Rules:
 1. Time only goes forward (``_update``): each axis advances to ``now`` and an arrival is an
@@ -8,10 +8,16 @@ Rules:
 2. Turning by hand (``manual_rotate``) takes the box's whole range: azimuth 0..``az_top_deg``,
    elevation 0..``el_top_deg`` on a box with an elevation rotor; anything else is a ValueError.
 3. A stop (``_halt``) stops the axes it names and is one event, if anything was moving.
+4. A line protocol's commands (``_lines``: GS-232, Easycomm, RC2800) come as lines ended by CR
+   or LF; lines of nothing but spaces are no command.
+5. At power-on (``_build``) the box is its model's variant (an unknown model, a line ending
+   other than CR, LF or CR LF, or an elevation start on a box without one is a ValueError),
+   both axes at their start, nothing on the line.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 from bridge.emulators.base import MotionEvent, PacedLine, Recorder
@@ -25,11 +31,49 @@ class TwoAxes(Recorder):
 
     _az: Axis
     _el: Axis
+    _az_speed: float  # full speed of each axis
+    _el_speed: float
+    baud: int
+    line_ending: bytes
     _now_s: float
-    _events: list[MotionEvent]
+    _rx_line: bytearray  # a line still coming
     _tx: PacedLine  # the box's replies, paced at its line rate
     name: str  # the model, for errors
     has_elevation: bool
+
+    def _build(
+        self,
+        model: str,
+        models: Mapping[str, Any],
+        az_top_deg: float,
+        axes: tuple[float, float, float, float],
+        line: tuple[int, bytes, float],
+        now: float,
+    ) -> Any:
+        """Rule 5: the box at power-on, ``models[model]`` (its variant) returned; ``axes`` its
+        start azimuth, elevation and their full speeds, ``line`` its baud, line ending and
+        processing delay."""
+        start_az_deg, start_el_deg, az_speed_deg_s, el_speed_deg_s = axes
+        baud, line_ending, processing_delay_s = line
+        if model not in models:
+            raise ValueError(f"unknown model {model!r}; known: {', '.join(sorted(models))}")
+        if line_ending not in (b"\r", b"\n", b"\r\n"):
+            raise ValueError(f"line_ending must be CR, LF or CR LF, got {line_ending!r}")
+        spec = models[model]
+        if not spec.elevation and start_el_deg != 0.0:
+            raise ValueError(f"{model} has no elevation rotor")
+        self.name, self.has_elevation = spec.name, spec.elevation
+        self.line_ending = line_ending
+        self._az_speed, self._el_speed = float(az_speed_deg_s), float(el_speed_deg_s)
+        self._az = Axis(start_az_deg, max_deg=az_top_deg, speed_deg_s=self._az_speed, now=now)
+        self._el = Axis(start_el_deg, max_deg=EL_TOP_DEG, speed_deg_s=self._el_speed, now=now)
+        self.baud = int(baud)
+        self._tx = PacedLine(self.baud, processing_delay_s=processing_delay_s)
+        self._now_s = now
+        self._rx_line = bytearray()
+        self._log, self._events = [], []
+        self._event(now, "power on")
+        return spec
 
     @property
     def az_top_deg(self) -> float:
@@ -79,6 +123,20 @@ class TwoAxes(Recorder):
         times = [self._tx.next_due_s(), self._az.arrival_time_s(), self._el.arrival_time_s()]
         pending = [t for t in times if t is not None]
         return min(pending) if pending else None
+
+    def _lines(self, data: bytes, max_line: int) -> Iterator[tuple[bytes, bool]]:
+        """Rule 4: the lines ``data`` completes, each with False, and a line that grew past
+        ``max_line`` (dropped where it stood) with True."""
+        for value in data:
+            if value in (0x0D, 0x0A):
+                line, self._rx_line = bytes(self._rx_line), bytearray()
+                if line.strip():
+                    yield line, False
+                continue
+            self._rx_line.append(value)
+            if len(self._rx_line) > max_line:
+                line, self._rx_line = bytes(self._rx_line), bytearray()
+                yield line, True
 
     def _truth(self, now: float) -> dict[str, Any]:
         """The ground truth both axes give (RotatorState's fields), at ``now``, for the box's own

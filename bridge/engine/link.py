@@ -46,6 +46,13 @@ Rules:
    (bytes still coming may be the second reply that spoils it; the controller is asked again).
    What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
    own, never a second reply that spoils the held one).
+10. A controller that needs time between commands to its two axes (``spec.axis_gap_s``,
+   RC2800; a frame's axis by its first bytes, ``spec.axis_prefixes``) gets it: a command's or
+   a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
+   one to the other axis, written or waiting. A target goes first to the axis last addressed
+   (no wait), and the poll frames still waiting are dropped for it (its answers answer the
+   poll); a poll waits while frames do and for the gap after any frame. A stop never waits:
+   its first frame goes at once, its others the gap apart.
 """
 
 from __future__ import annotations
@@ -81,7 +88,7 @@ class Link:
         self._next_poll = now
         self._last_reply_t: float | None = None
         self._stop_due = False
-        self._outbox: deque[tuple[float, bytes]] = deque()
+        self._outbox: deque[tuple[float, bytes, bool]] = deque()  # when, frame, a poll's
         self._output: list[bytes] = []
         self._slew: Slew | None = None
         self._junk = bytearray()
@@ -90,6 +97,8 @@ class Link:
         self._held_until = 0.0
         self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
         self._held_after = False  # rule 9: bytes were read after the held reading
+        self._last_write_t = -math.inf  # rule 10
+        self._last_axis: bytes | None = None
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -128,6 +137,8 @@ class Link:
     # -- writing ----------------------------------------------------------------------------
     def write(self, frame: bytes, now: float) -> None:
         self._output.append(frame)
+        self._last_write_t = now
+        self._last_axis = self._axis(frame)
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
@@ -173,7 +184,10 @@ class Link:
         held = self._held
         if held is not None and self.end_held(now) is held:
             self._held, self._held_until = held, now
-        self.write(self.codec.encode_stop(), now)
+        stop = self.codec.encode_stop()
+        frames = stop if isinstance(stop, list) else [stop]
+        self.write(frames[0], now)  # rule 10: never held back
+        self._queue(frames[1:], now + self._gap_s, now)
         if self._slew is not None:
             self._slew = replace(self._slew, stops=self._slew.stops + 1)
             self._reply_deadline = now + self.reply_timeout_s
@@ -185,11 +199,45 @@ class Link:
         self._reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
 
     def send(self, frames: list[bytes], now: float) -> None:
-        """The first frame now, the rest spaced by the model's inter-frame gap (all now if
-        there is none: a stop that came between them would cancel the second alone)."""
+        """The first frame now (rule 10: once the axis gap allows), the rest spaced by the
+        model's inter-frame gap (all now if there is none: a stop that came between them would
+        cancel the second alone)."""
+        if self.spec.axis_gap_s:  # rule 10
+            self._outbox = deque(e for e in self._outbox if not e[2])
+            last = self._outbox[-1][1] if self._outbox else None
+            last_axis = self._axis(last) if last is not None else self._last_axis
+            first = [f for f in frames if self._axis(f) == last_axis and last_axis is not None]
+            frames = first[:1] + [f for f in frames if f is not first[0]] if first else frames
+        first_t = max(now, self._paced_from(frames[0]))
+        if first_t > now:
+            self._queue(frames, first_t, now)
+            return
         self.write(frames[0], now)
-        for i, frame in enumerate(frames[1:], start=1):
-            self._outbox.append((now + i * self.spec.inter_frame_gap_s, frame))
+        self._queue(frames[1:], now + self._gap_s, now)
+
+    @property
+    def _gap_s(self) -> float:
+        return max(self.spec.inter_frame_gap_s, self.spec.axis_gap_s)
+
+    def _axis(self, frame: bytes) -> bytes | None:
+        """Rule 10: the axis ``frame`` is for, None if it names none."""
+        return next((p for p in self.spec.axis_prefixes if frame.startswith(p)), None)
+
+    def _paced_from(self, frame: bytes | None = None) -> float:
+        """Rule 10: the earliest ``frame`` may go (any frame if None) that is no stop's first:
+        after what waits, and the axis gap after a frame to another axis."""
+        if not self.spec.axis_gap_s:
+            return -math.inf
+        last_t, last_axis = self._last_write_t, self._last_axis
+        if self._outbox:
+            last_t, last_axis = self._outbox[-1][0], self._axis(self._outbox[-1][1])
+        axis = None if frame is None else self._axis(frame)
+        same = axis is not None and axis == last_axis
+        return last_t if same else last_t + self.spec.axis_gap_s
+
+    def _queue(self, frames: list[bytes], first_t: float, now: float, poll: bool = False) -> None:
+        for i, frame in enumerate(frames):
+            self._outbox.append((first_t + i * self._gap_s, frame, poll))
         self.flush_outbox(now)
 
     def flush_outbox(self, now: float) -> None:
@@ -282,10 +330,15 @@ class Link:
         """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
             return False
-        query = self.codec.encode_query()
+        if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
+            return False
+        asked = self.codec.encode_query()
+        query = asked[0] if isinstance(asked, list) else asked
         if not query:
             return False
         self.write(query, now)
+        if isinstance(asked, list):
+            self._queue(asked[1:], now + self._gap_s, now, poll=True)
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
         self._hold_bytes = self.spec.reply_bytes
         self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
@@ -318,5 +371,5 @@ class Link:
         if self._held is not None:
             times.append(self._held_until)
         if self.spec.can_report_position:
-            times.append(self._reply_deadline or self._next_poll)
+            times.append(self._reply_deadline or max(self._next_poll, self._paced_from()))
         return times

@@ -74,10 +74,10 @@ class AzimuthOnly:
             for r in self._inner.feed(data)
         ]
 
-    def encode_stop(self) -> bytes:
+    def encode_stop(self) -> bytes | list[bytes]:
         return self._inner.encode_stop()
 
-    def encode_query(self) -> bytes | None:
+    def encode_query(self) -> bytes | list[bytes] | None:
         return self._inner.encode_query()
 
     def expire_query(self) -> None:

@@ -7,8 +7,9 @@ Rules:
    around the frames) and yields the same replies. Junk is reported, never turned into a reading.
 3. A position reply is only accepted while a reply is awaited (a query, or a command the
    controller answers with its position); ``awaiting_reply`` says so, ``expire_query`` gives up
-   on it after the engine's reply timeout. Anything else is junk. ``OneQuery`` keeps that
-   bookkeeping for the codecs that ask one question at a time.
+   on it after the engine's reply timeout. Anything else is junk, but for a controller that
+   streams its position unasked (RC2800: a well-formed line of every axis is a reading).
+   ``OneQuery`` keeps that bookkeeping for the codecs that ask one question at a time.
 4. The engine, the MQTT topics and Home Assistant ask the spec's capabilities; nothing offers
    what the model cannot do.
 5. What the bytes mean is the codec's to say, as a type: the engine acts on a reply's type and
@@ -87,8 +88,9 @@ class RetargetPolicy(enum.StrEnum):
 
 class Codec(Protocol):
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]: ...
-    def encode_stop(self) -> bytes: ...
-    def encode_query(self) -> bytes | None: ...
+    # a list: frames to the controller's axes in turn, paced by ModelSpec.axis_gap_s (RC2800)
+    def encode_stop(self) -> bytes | list[bytes]: ...
+    def encode_query(self) -> bytes | list[bytes] | None: ...
     def expire_query(self) -> None: ...
     def encode_version(self) -> bytes | None: ...
     def encode_option(self, name: str, enabled: bool) -> bytes:
@@ -215,13 +217,31 @@ def _read_bool(name: str, value: SettingValue) -> bool:
     raise ValueError(f"{name}: expected ON or OFF, got {str(value)[:20]!r}")
 
 
-class OneQuery:
-    """Rule 3's bookkeeping for a controller asked one question at a time that has no version
-    to ask, no options and no motion switch (GS-232, Easycomm, RT-21, Prosistel): the query open
-    and whether junk came within it. The codec names its controller in ``BOX``, calls
-    ``_open_query`` from encode_query and ``_junk`` for bytes that are no reply."""
+class Plain:
+    """What most codecs send nothing for: no version query, no options, no motion switch,
+    nothing at connect (RT-21, GS-232, Easycomm, SPID, RC2800, Prosistel). The codec names its
+    controller in ``BOX``; a codec that has one of them writes its own."""
 
     BOX: ClassVar[str]
+
+    def encode_version(self) -> bytes | None:
+        return None
+
+    def encode_option(self, name: str, enabled: bool) -> bytes:
+        raise ValueError(f"{self.BOX} has no options the bridge switches")
+
+    def encode_enable(self) -> bytes | None:
+        return None
+
+    def encode_connect(self, now_unix: float) -> list[bytes]:
+        return []
+
+
+class OneQuery(Plain):
+    """Rule 3's bookkeeping for a controller asked one question at a time (GS-232, Easycomm,
+    RT-21, Prosistel): the query open and whether junk came within it. The codec calls
+    ``_open_query`` from encode_query and ``_junk`` for bytes that are no reply."""
+
     _query_open: bool = False
     _noisy: bool = False  # junk arrived since the query was opened
 
@@ -235,19 +255,30 @@ class OneQuery:
     def awaiting_reply(self) -> bool:
         return self._query_open
 
-    def encode_version(self) -> bytes | None:
-        return None
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError(f"{self.BOX} has no options the bridge switches")
-
-    def encode_enable(self) -> None:
-        return None
-
     def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
         if self._query_open:
             self._noisy = True
         out.append(JunkReply(raw, reason, why))
+
+
+def tenths(value_deg: float, top_deg: float, axis: str) -> float:
+    """``value_deg`` rounded half up to tenths of a degree; outside 0..``top_deg`` a ValueError
+    that names the ``axis``."""
+    value = math.floor(value_deg * 10 + 0.5)
+    if not 0 <= value <= top_deg * 10:
+        raise ValueError(f"{axis} {value_deg:g} outside 0..{top_deg:g}")
+    return value / 10
+
+
+def tenths_pair(
+    az_deg: float, el_deg: float | None, az_top_deg: float, el_top_deg: float | None
+) -> tuple[float, float | None]:
+    """A target in tenths (``tenths``): the azimuth, and the elevation (0 when none is named)
+    on a controller with one (``el_top_deg`` not None), else None."""
+    az = tenths(az_deg, az_top_deg, "azimuth")
+    if el_top_deg is None:
+        return az, None
+    return az, tenths(el_deg or 0.0, el_top_deg, "elevation")
 
 
 class HamlibRotType(enum.StrEnum):
@@ -290,6 +321,13 @@ class ModelSpec:
     az_wraps: bool = True  # 0 and 360 are the same direction
     reply_timeout_s: float = 0.3
     inter_frame_gap_s: float = 0.0  # pause between the frames of one multi-frame command
+    # the controller needs this long between commands to its two axes (RC2800): no frame goes
+    # sooner after the one before it, a command's frames go this far apart; a stop's first
+    # frame never waits for it (its frames keep the gap among themselves)
+    axis_gap_s: float = 0.0
+    # how a frame names the axis it is for (its first bytes: RC2800 b"A", b"E"): frames to the
+    # same axis need no axis gap between them
+    axis_prefixes: tuple[bytes, ...] = ()
     full_duplex: bool = True  # may a command be written while a reply is still coming?
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     # the stop frame may reach the controller at any moment, between any two frames the session

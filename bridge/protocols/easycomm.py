@@ -44,7 +44,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
@@ -58,6 +57,7 @@ from bridge.protocols.base import (
     Reply,
     RetargetPolicy,
     VersionReply,
+    tenths_pair,
 )
 
 AZ_MAX_DEG = 360
@@ -74,13 +74,6 @@ _REPLY = re.compile(
 _VERSION = re.compile(rb"\s*VE(?P<v>[ -~]*?)\s*")
 _ALARM = re.compile(rb"\s*AL(?P<a>[ -~]*?)\s*")
 _CHATTER = re.compile(rb"[\r\n ]*")
-
-
-def _tenths(value: float, top: int, axis: str) -> float:
-    tenths = math.floor(value * 10 + 0.5)
-    if not 0 <= tenths <= top * 10:
-        raise ValueError(f"{axis} {value:g} outside 0..{top}")
-    return tenths / 10
 
 
 class EasycommCodec(OneQuery):
@@ -103,10 +96,7 @@ class EasycommCodec(OneQuery):
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az = _tenths(az_deg, AZ_MAX_DEG, "azimuth")
-        if not self.elevation:
-            return az, None
-        return az, _tenths(el_deg or 0.0, EL_MAX_DEG, "elevation")
+        return tenths_pair(az_deg, el_deg, AZ_MAX_DEG, EL_MAX_DEG if self.elevation else None)
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
         az, el = self.wire_target(az_deg, el_deg)

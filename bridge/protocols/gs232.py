@@ -117,9 +117,6 @@ class Gs232Codec(OneQuery):
         self._open_query()
         return b"C2\r" if self.elevation else b"C\r"
 
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
-
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None
 

@@ -89,9 +89,6 @@ class Rt21Codec(OneQuery):
         self._open_query()
         return b"BI1;"
 
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
-
     def harmless(self, junk: bytes) -> bool:
         return _CHATTER.fullmatch(junk) is not None
 

@@ -36,6 +36,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    Plain,
     PositionReply,
     Reply,
     RetargetPolicy,
@@ -52,7 +53,9 @@ def _frame(k: int, body: bytes = bytes(10)) -> bytes:
     return bytes([START]) + body + bytes([k, END])
 
 
-class SpidCodec:
+class SpidCodec(Plain):
+    BOX = "a SPID controller"
+
     def __init__(self, variant: str = "rot2prog") -> None:
         if variant not in ("rot2prog", "rot1prog", "md01"):
             raise ValueError(f"unknown SPID variant {variant!r}")
@@ -73,12 +76,6 @@ class SpidCodec:
         self._owed += 1
         return _frame(K_STOP)
 
-    def encode_version(self) -> None:
-        return None
-
-    def encode_option(self, name: str, enabled: bool) -> bytes:
-        raise ValueError("SPID controllers have no options")
-
     def expire_query(self) -> None:
         self._owed = 0
 
@@ -87,12 +84,6 @@ class SpidCodec:
 
     def harmless(self, junk: bytes) -> bool:
         return bool(_DEBUG_LINES.fullmatch(junk))
-
-    def encode_enable(self) -> None:
-        return None
-
-    def encode_connect(self, now_unix: float) -> list[bytes]:
-        return []
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
         if self.variant == "rot1prog":

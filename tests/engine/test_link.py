@@ -9,6 +9,7 @@ from bridge.emulators.spid_models import position_reply
 from bridge.engine.link import Link
 from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 from bridge.protocols.base import PositionReply
+from bridge.protocols.rc2800 import MODELS as RC2800
 from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
 from bridge.protocols.spid import MODELS as SPID
@@ -141,3 +142,66 @@ def test_a_stop_drops_a_held_reading_that_bytes_after_it_spoil() -> None:
     assert link.settled(later + 1.0) is None  # the glitch is no reading
     link.poll(later, 1.0)
     assert link.output() == [b"AI1;"]  # asked again
+
+
+# -- rule 10: a controller that needs time between its axes -------------------------------------
+def test_an_rc2800s_axes_get_their_200_ms_and_a_stop_waits_for_nothing() -> None:
+    """A target's and a poll's frames go 200 ms apart, the next frame no sooner after the last;
+    a stop's first frame goes at once (and cancels what waits), its second 200 ms later."""
+    spec = RC2800["rc2800"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+
+    def wire(start: float, until: float, poll: bool = True) -> list[tuple[float, bytes]]:
+        out: list[tuple[float, bytes]] = []
+        t = start
+        while t <= until + 1e-9:
+            link.flush_outbox(t)
+            if poll:
+                link.poll(t, 0.1)
+            out += [(round(t, 2), frame) for frame in link.output()]
+            t += 0.01
+        return out
+
+    link.send(link.codec.encode_target(100, 20), 0.0)
+    link.poll_now(0.0)
+    assert wire(0.0, 0.5) == [(0.0, b"A100.0\r"), (0.2, b"E20.0\r"), (0.4, b"A\r")]
+    assert link.wakeups()[0] == pytest.approx(0.6)  # the poll's E
+    link.want_stop()
+    assert link.flush_stop(0.5)  # at once, 100 ms after the last frame: a stop never waits
+    assert link.output() == [b"A\rS\r"]
+    link.send(link.codec.encode_target(200, 30), 0.55)
+    assert link.output() == []  # after the stop's elevation frame, then 200 ms apart
+    assert wire(0.55, 1.15, poll=False) == [
+        (0.7, b"E\rS\r"),
+        (0.7, b"E30.0\r"),  # the axis last addressed first: no gap needed
+        (0.9, b"A200.0\r"),
+    ]
+
+
+def test_a_controller_without_an_axis_gap_sends_as_before() -> None:
+    spec = RC2800["rc2800-az"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.send(link.codec.encode_target(100), 0.0)
+    link.poll(0.0, 0.1)
+    assert link.output() == [b"A100.0\r", b"A\r"]
+    link.want_stop()
+    assert link.flush_stop(0.0) and link.output() == [b"A\rS\r"]
+
+
+def test_an_rc2800_target_takes_the_place_of_a_polls_waiting_frame_and_the_axis_it_asked() -> None:
+    """A target while a poll's elevation frame waits: the poll's frame is dropped (the target's
+    answers answer it) and the target's azimuth goes at once (the axis just asked), its
+    elevation 200 ms later; after a poll's elevation frame it would go elevation first."""
+    spec = RC2800["rc2800"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.poll(0.0, 1.0)
+    assert link.output() == [b"A\r"]
+    link.send(link.codec.encode_target(100, 20), 0.05)
+    assert link.output() == [b"A100.0\r"]
+    assert link.wakeups()[0] == pytest.approx(0.25)
+    link.flush_outbox(0.25)
+    assert link.output() == [b"E20.0\r"]  # and no E\r of the poll's
+    link.send(link.codec.encode_target(110, 25), 0.3)
+    assert link.output() == [b"E25.0\r"]
+    link.flush_outbox(0.5)
+    assert link.output() == [b"A110.0\r"]

@@ -18,6 +18,7 @@ from bridge.protocols.base import JunkReply, PositionReply, VersionReply
 from bridge.protocols.easycomm import EasycommCodec
 from bridge.protocols.gs232 import Gs232Codec
 from bridge.protocols.prosistel import COMBI_TRACK, ProsistelCodec
+from bridge.protocols.rc2800 import Rc2800Codec
 from bridge.protocols.rotorez import RotorEzCodec
 from bridge.protocols.rt21 import Rt21Codec
 from bridge.protocols.satel import SatelCodec
@@ -304,6 +305,8 @@ def test_any_bytes_into_any_codec_never_raise(chunks: list[bytes], ask_each: boo
         Rt21Codec(),
         ProsistelCodec(),
         ProsistelCodec(COMBI_TRACK),
+        Rc2800Codec(),
+        Rc2800Codec(elevation=False),
     ]
     for codec in codecs:
         for chunk in chunks:

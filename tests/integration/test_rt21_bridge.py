@@ -62,35 +62,3 @@ def test_a_new_bearing_while_turning_goes_straight_out(rig: Rig) -> None:
     emu.wait_for(lambda s: s.az_deg == 20.5 and not s.is_moving, 20)
     assert [f.data for f in emu.frames("move")] == [b"AP1200.0\r;", b"AP1020.5\r;"]
     assert emu.frames("stop") == []
-
-
-def test_lock_and_limits_refuse_and_send_nothing_but_a_stop_still_goes(rig: Rig) -> None:
-    emu = rig.add("tower", model="rt21", emu={"start_az_deg": 50}, az_max_deg=300)
-    rig.start()
-    ready(rig)
-    t = time.monotonic()
-    rig.probe.publish("rotor/target", "310")
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "refused" and "outside" in err["message"]
-    t = time.monotonic()
-    rig.probe.publish("rotor/target", "100 20")  # an elevation it cannot do
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert "no elevation" in err["message"]
-    rig.probe.publish("rotor/lock", "ON")
-    rig.probe.wait_value("rotor/lock/state", "ON")
-    t = time.monotonic()
-    rig.probe.publish("rotor/target", "120")
-    err = json.loads(rig.probe.wait_for("rotor/error", after=t).payload)
-    assert err["kind"] == "refused" and "locked" in err["message"]
-    rig.probe.publish("rotor/stop", "STOP")  # never refused: on the wire even when locked
-    emu.wait_for_frame(b";", "stop", 10)
-    assert emu.frames("move") == [] and emu.state().az_deg == 50.0
-
-
-def test_unplug_and_replug(rig: Rig) -> None:
-    emu = rig.add("tower", model="rt21", emu={"start_az_deg": 33.3})
-    rig.start()
-    ready(rig)
-    rig.unplug_and_replug("tower")
-    rig.probe.publish("rotor/target", "40.2")
-    emu.wait_for(lambda s: s.az_deg == 40.2 and not s.is_moving, 15)

@@ -99,12 +99,3 @@ def test_md01_debug_lines_and_junk_never_become_positions(rig: Rig) -> None:
     emu.wait_until(lambda d, now: len(d.frames("status")), lambda k: k >= n + 4, 15)
     assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77"}
     assert {m.text for m in rig.probe.on("rotor/elevation")} == {"7"}
-
-
-def test_unplug_and_replug(rig: Rig) -> None:
-    emu = rig.add("sat", model="rot2prog", emu={"start_az_deg": 33, "start_el_deg": 3})
-    rig.start()
-    ready(rig)
-    rig.unplug_and_replug("sat")
-    rig.probe.publish("rotor/target", "40 10")
-    emu.wait_for(lambda s: abs(s.az_deg - 40) < 0.3 and not s.is_moving, 15)

@@ -28,8 +28,9 @@ def measured_exchange(model: str) -> tuple[int, int]:
     if enable:  # as the bridge has it: automatic motion on (SatEL: "Motion ENABLED")
         device.receive(enable, 0.0)
         device.due_output(1.0)
-    query = codec.encode_query()
-    assert query is not None
+    asked = codec.encode_query()
+    assert asked is not None
+    query = b"".join(asked) if isinstance(asked, list) else asked  # an RC2800's axes in turn
     device.receive(query, 2.0)
     return len(query), len(device.due_output(100.0))
 
@@ -75,6 +76,8 @@ def test_the_derived_idle_intervals_of_the_slow_lines() -> None:
         "prosistel": 1.0,
         "prosistel-el": 1.0,
         "prosistel-combi": 1.0,
+        "rc2800": 1.0,
+        "rc2800-az": 1.0,
     }
 
 
@@ -110,6 +113,9 @@ def test_hamlib_facts_are_on_the_spec() -> None:
         "prosistel": (1701, HamlibRotType.AZ, None),
         "prosistel-el": (1702, HamlibRotType.AZ, None),  # its elevation is its bearing
         "prosistel-combi": (1703, HamlibRotType.AZEL, None),
+        # Hamlib's one model of the current protocol; the azimuth box is driven by it too
+        "rc2800": (1001, HamlibRotType.AZEL, None),
+        "rc2800-az": (1001, HamlibRotType.AZ, None),
     }
 
 

@@ -74,6 +74,9 @@ FAST_EASYCOMM = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 EASYCOMM_MODELS = tuple(f"easycomm{v}{s}" for v in (2, 3) for s in ("", "-az", "-separate"))
 # RT-21: a potentiometer read in tenths, its own brake handling, 4800 baud
 FAST_RT21 = {"az_speed_deg_s": 20.0}
+# RC2800: potentiometers read in tenths, no brake, 9600 baud, 200 ms between its two axes
+FAST_RC2800 = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
+RC2800_MODELS = ("rc2800", "rc2800-az")
 # Prosistel: a D (whole degrees) or a Combi-Track (tenths, two units), 9600 baud, own brakes
 FAST_PROSISTEL = {"az_speed_deg_s": 20.0, "el_speed_deg_s": 10.0}
 PROSISTEL_MODELS = ("prosistel", "prosistel-el", "prosistel-combi")
@@ -115,6 +118,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(GS232_MODELS, FAST_GS232),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_EASYCOMM),
         "rt21": FAST_RT21,
+        **dict.fromkeys(RC2800_MODELS, FAST_RC2800),
         **dict.fromkeys(PROSISTEL_MODELS, FAST_PROSISTEL),
     },
     bridge={
@@ -128,6 +132,7 @@ TEST_TIMINGS = Timings(
         **dict.fromkeys(GS232_MODELS, FAST_POLLING),
         **dict.fromkeys(EASYCOMM_MODELS, FAST_POLLING),
         "rt21": FAST_POLLING,
+        **dict.fromkeys(RC2800_MODELS, FAST_POLLING),
         **dict.fromkeys(PROSISTEL_MODELS, FAST_POLLING),
     },
 )

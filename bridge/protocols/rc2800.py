@@ -1,0 +1,209 @@
+"""M2 RC2800 (azimuth, or azimuth and elevation): the codec.
+
+Device: M2 Antenna Systems' RC2800 rotator controller, one box driving an azimuth rotor and, on
+the az/el versions, an elevation rotor. 9600 8N1, no flow control. ASCII commands ending in CR,
+each to one axis: a letter selects the axis (``A`` azimuth, ``E`` elevation) and the box answers
+with that axis's line, like ``A P= 98.1 S=9 MV`` (position, speed, moving or stopped). Some
+boxes echo every command before answering it; some stream their position lines unasked. The box
+needs about 200 ms between commands to its two axes.
+Sources: the project's protocol sheet (M2 RC2800), Hamlib's m2 backend (rc2800.c: model 1001,
+its reply forms ``A P= 98.1 S=9 MV``, ``E=43.7 S=9 M`` and ``A ERR=5``, its echo handling, its
+200 ms between the axes, its stop as the axis selected then ``S``), and our emulator's traffic
+with rotctl -m 1001.
+
+Frames we send (each a list the link paces by the spec's ``axis_gap_s``, 200 ms on az/el):
+  ``A123.4\\r`` then ``E45.0\\r``      turn to azimuth and elevation, tenths of a degree
+  ``A\\r`` then ``E\\r``               ask each axis; answered by its line
+  ``A\\rS\\r`` then ``E\\rS\\r``         stop: select each axis, stop it (the first at once)
+The azimuth model sends only the azimuth's frames.
+
+Rules:
+1. Replies are lines ended by CR or LF. A position line is ``A`` or ``E``, then ``P=`` (after a
+   space) or ``=``, a number, optionally the speed ``S=n`` and a one- or two-letter state; only
+   such a whole line is read. A line shaped like a command (``A``, ``E45``, ``S``) is the box's
+   echo: harmless chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported.
+2. A query (or a stop, whose axis selections are answered too) waits for a line of each axis it
+   asked, in order; when the last has come, they are one reading (UNTRUSTED if any noise came
+   in the exchange: the engine asks again). An axis's line while nothing is asked is kept; a
+   reading is made of it once every axis the model reads has had a line since the last reading
+   (the box's own stream, or its answers to a target's frames): a well-formed line updates the
+   bearing, anything else changes nothing.
+3. Values outside azimuth 0..360 or elevation -90..180 are spoiled and no reading.
+4. Targets are tenths of a degree, rounded half up; outside azimuth 0..360 or elevation 0..180
+   they are refused before anything is sent. A new bearing while turning goes straight out.
+5. The 200 ms between the axes is the link's to keep (``ModelSpec.axis_gap_s``): this codec
+   only splits each command into its axes' frames, in the order they must go.
+"""
+
+from __future__ import annotations
+
+import re
+
+from bridge.protocols.base import (
+    Codec,
+    HamlibRotType,
+    JunkReason,
+    JunkReply,
+    ModelSpec,
+    Plain,
+    PositionReply,
+    Reply,
+    RetargetPolicy,
+    tenths_pair,
+)
+
+AZ_MAX_DEG = 360
+EL_MAX_DEG = 180
+EL_READ_MIN_DEG = -90  # a pot a little below the horizon is still a reading
+AXIS_GAP_S = 0.2  # between commands to the two axes (Hamlib's rc2800.c waits as long)
+_MAX_LINE = 64
+_POSITION = re.compile(
+    rb"\s*(?P<axis>[AE])(?: P=|=)\s*(?P<deg>-?\d{1,3}(?:\.\d+)?)"
+    rb"(?:\s+S=\d+)?(?:\s+[A-Z]{1,2})?\s*"
+)
+_ERROR = re.compile(rb"\s*[AE] ERR=(?P<code>\d+)\s*")
+_ECHO = re.compile(rb"\s*(?:[AE](?:\d{1,3}(?:\.\d*)?)?|S)\s*")  # what we send, echoed
+_LINES = re.compile(rb"[^\r\n]*[\r\n]")
+
+
+class Rc2800Codec(Plain):
+    """Codec for one RC2800: ``elevation`` whether an elevation rotor hangs on it."""
+
+    BOX = "the RC2800"
+
+    def __init__(self, *, elevation: bool = True) -> None:
+        self.elevation = elevation
+        self._axes = b"AE" if elevation else b"A"
+        self._buf = bytearray()
+        self._want: list[int] = []  # rule 2: the axes' lines the open exchange waits for
+        self._noisy = False  # junk arrived since the exchange was opened
+        self._seen: set[int] = set()  # rule 2: axes heard since the last reading
+        self._deg: dict[int, float] = {}  # each axis's latest value
+
+    # -- encoding -------------------------------------------------------------------------
+    def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
+        return tenths_pair(az_deg, el_deg, AZ_MAX_DEG, EL_MAX_DEG if self.elevation else None)
+
+    def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
+        az, el = self.wire_target(az_deg, el_deg)
+        frames = [b"A%.1f\r" % az]
+        return frames if el is None else [*frames, b"E%.1f\r" % el]
+
+    def encode_stop(self) -> list[bytes]:
+        self._open(2)  # each axis answers its selection and its stop
+        return [b"%c\rS\r" % axis for axis in self._axes]
+
+    def encode_query(self) -> list[bytes]:
+        self._open(1)
+        return [b"%c\r" % axis for axis in self._axes]
+
+    def _open(self, lines_per_axis: int) -> None:
+        self._want = [axis for axis in self._axes for _ in range(lines_per_axis)]
+        self._noisy = False
+
+    def expire_query(self) -> None:
+        self._want = []
+
+    def awaiting_reply(self) -> bool:
+        return bool(self._want)
+
+    def harmless(self, junk: bytes) -> bool:
+        """Echoes, blank lines and well-formed position lines (rule 1); an error is not."""
+        lines = re.split(rb"[\r\n]", junk)
+        return all(
+            not line.strip() or _ECHO.fullmatch(line) or _POSITION.fullmatch(line) for line in lines
+        )
+
+    # -- decoding -------------------------------------------------------------------------
+    def feed(self, data: bytes) -> list[Reply]:
+        self._buf += data
+        out: list[Reply] = []
+        while (m := _LINES.match(self._buf)) is not None:
+            line = bytes(m.group())
+            del self._buf[: m.end()]
+            self._line(line, out)
+        if len(self._buf) > _MAX_LINE:
+            self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
+            self._buf.clear()
+        return out
+
+    def _line(self, raw: bytes, out: list[Reply]) -> None:
+        if not raw.strip() or _ECHO.fullmatch(raw):
+            out.append(JunkReply(raw, JunkReason.CHATTER, "echo" if raw.strip() else "blank"))
+            return
+        if m := _ERROR.fullmatch(raw):
+            code = m.group("code").decode()
+            out.append(JunkReply(raw, JunkReason.CHATTER, f"controller error {code}"))
+            return
+        m = _POSITION.fullmatch(raw)
+        if m is None:
+            self._junk(raw, JunkReason.NOISE, "not a reply line", out)
+            return
+        axis, value = m.group("axis")[0], float(m.group("deg"))
+        low, top = (0, AZ_MAX_DEG) if axis == ord("A") else (EL_READ_MIN_DEG, EL_MAX_DEG)
+        if not low <= value <= top:
+            self._junk(raw, JunkReason.SPOILED, "position out of range", out)
+            return
+        if axis not in self._axes:
+            out.append(JunkReply(raw, JunkReason.CHATTER, "an elevation from an azimuth model"))
+            return
+        self._deg[axis] = value
+        self._seen.add(axis)
+        if self._want:
+            if axis == self._want[0]:
+                self._want.pop(0)
+            if self._want:
+                return  # the exchange's other lines are still to come (rule 2)
+            if self._noisy:
+                self._seen.clear()
+                out.append(JunkReply(raw, JunkReason.UNTRUSTED, "position after line noise"))
+                return
+        elif len(self._seen) < len(self._axes):
+            out.append(JunkReply(raw, JunkReason.CHATTER, "one axis's position, kept"))
+            return
+        self._seen.clear()
+        out.append(PositionReply(self._deg[ord("A")], self._deg.get(ord("E"))))
+
+    def _junk(self, raw: bytes, reason: JunkReason, why: str, out: list[Reply]) -> None:
+        if self._want:
+            self._noisy = True
+        out.append(JunkReply(raw, reason, why))
+
+
+def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
+    line = len(b"A P= 123.4 S=9 MV\r")  # one axis's answer
+    return ModelSpec(
+        name=name,
+        display_name=display,
+        manufacturer="M2",
+        codec_factory=lambda: Rc2800Codec(elevation=elevation),
+        baud=9600,
+        has_elevation=elevation,
+        retarget=RetargetPolicy.DIRECT,  # a new bearing is taken while turning
+        axis_gap_s=AXIS_GAP_S if elevation else 0.0,
+        axis_prefixes=(b"A", b"E"),
+        az_min_deg=0.0,
+        az_max_deg=float(AZ_MAX_DEG),
+        el_min_deg=0.0,
+        el_max_deg=float(EL_MAX_DEG) if elevation else 0.0,
+        az_wraps=True,
+        # Hamlib waits up to a second; the elevation's answer comes 200 ms after the azimuth's
+        reply_timeout_s=1.0,
+        noise_deg=0.5,  # potentiometers read in tenths
+        nominal_speed_deg_s=6.0,
+        nominal_el_speed_deg_s=3.0,
+        whole_degrees=False,
+        query_bytes=4 if elevation else 2,  # A CR, E CR
+        reply_bytes=2 * line if elevation else line,
+        hamlib_model=1001,
+        hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
+        hamlib_info=None,  # Hamlib's m2 backend has no get_info
+    )
+
+
+MODELS: dict[str, ModelSpec] = {
+    "rc2800": _spec("rc2800", "RC2800 az/el", elevation=True),
+    "rc2800-az": _spec("rc2800-az", "RC2800 azimuth", elevation=False),
+}
+
+_check: type[Codec] = Rc2800Codec  # Rc2800Codec satisfies the Codec protocol

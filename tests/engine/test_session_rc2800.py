@@ -1,0 +1,152 @@
+"""An M2 RC2800 in virtual time: each axis its own frame, 200 ms apart and never sooner after
+the last one (the box's rule), a stop's first frame at once and its second 200 ms on, a new
+bearing while turning without a stop, an echo that is no reply, a position streamed unasked
+that moves the bearing, a torn line that does not, and an az/el satellite pass followed.
+
+The box takes a new bearing at any time, answers every command with the line of the axis it
+selected (``A P=  98.1 S=9 MV``) and reads its rotors in tenths. 9600 baud: one poll (``A`` CR
+and its line, 200 ms, ``E`` CR and its line) takes 40 ms of the line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.emulators.rc2800 import Outcome
+from bridge.model import MotionState
+from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
+from tests.engine.virtual import VirtualRotator, moves, settled_at
+
+Rig = Callable[..., VirtualRotator]
+IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+
+
+def ready(
+    rig: Rig, model: str = "rc2800", settings: dict[str, object] | None = None, **emulator: object
+) -> VirtualRotator:
+    v = rig(model, emulator={**FAST, **emulator}, settings=settings or {})
+    v.run_until_state(IDLE, 30)
+    return v
+
+
+def axis_gaps(v: VirtualRotator, since: float = float("-inf")) -> list[float]:
+    """The time between each frame written and the one before it, where they are for different
+    axes (the box's rule: about 200 ms between its axes)."""
+    writes = [w for w in v.writes if w.t >= since]
+    return [b.t - a.t for a, b in zip(writes, writes[1:], strict=False) if a.data[:1] != b.data[:1]]
+
+
+@pytest.mark.parametrize("echo", [False, True])
+def test_a_target_goes_out_axis_by_axis_and_is_read_back(rig: Rig, echo: bool) -> None:
+    v = ready(rig, start_az_deg=10, start_el_deg=5, echo=echo)
+    t = v.now
+    v.target(123.45, 45.6)
+    v.run_until(settled_at(123.5, 45.6), 60, "at 123.5/45.6")
+    assert sorted(moves(v)) == [b"A123.5", b"E45.6"]  # the axis last asked goes first
+    (a_t,) = [w.t for w in v.writes if w.data == b"A123.5\r"]
+    (e_t,) = [w.t for w in v.writes if w.data == b"E45.6\r"]
+    assert abs(e_t - a_t) == pytest.approx(0.2) and min(a_t, e_t) == t  # the first at once
+    assert min(axis_gaps(v, t)) >= 0.2 - 1e-9  # nothing sooner after the other axis
+    assert v.truth().too_soon == 0  # the box never saw its axes closer than 200 ms
+    assert (v.status.bearing_deg, v.status.elevation_deg) == (123.5, 45.6)
+    assert v.errors() == []
+
+
+def test_a_stop_while_turning_goes_out_at_once_and_stops_both_axes(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(300, 60)
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 30, 30, "turning")
+    t = v.now
+    v.stop()
+    after = [w for w in v.writes if w.t >= t]
+    assert (after[0].t, after[0].data) == (t, b"A\rS\r")  # the same instant
+    v.run_until(lambda h: h.state is IDLE, 10, "idle")
+    (el_stop,) = [w.t for w in v.writes if w.data == b"E\rS\r"]
+    assert el_stop == pytest.approx(t + 0.2)
+    truth = v.truth()
+    assert not truth.is_moving and 30 < truth.az_deg < 40 and 15 < truth.el_deg < 20
+    assert v.status.bearing_deg == round(truth.az_deg, 1)
+    assert v.status.elevation_deg == round(truth.el_deg, 1)
+    assert len(v.frames(Outcome.STOP, since=t)) == 2 and v.errors() == []
+
+
+def test_a_new_target_while_turning_goes_straight_out_without_a_stop(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(200, 40)
+    v.run_until(lambda h: h.truth().az_deg > 50, 30, "turning")
+    t = v.now
+    v.target(20, 10)
+    v.run_until(lambda h: len(moves(h, t)) == 2, 2, "the new bearing")
+    assert v.truth().is_moving and sorted(moves(v, t)) == [b"A20.0", b"E10.0"]
+    v.run_until(settled_at(20, 10), 120, "at 20/10")
+    assert v.frames(Outcome.STOP) == [] and v.truth().too_soon == 0
+
+
+def test_the_azimuth_box_is_asked_and_sent_its_azimuth_only(rig: Rig) -> None:
+    v = ready(rig, "rc2800-az", start_az_deg=200)
+    v.target(95)
+    v.run_until(settled_at(95), 60, "at 95")
+    assert moves(v) == [b"A95.0"] and {f.data for f in v.frames(Outcome.QUERY)} == {b"A"}
+    assert v.status.bearing_deg == 95.0 and v.status.elevation_deg is None
+    assert v.errors() == []
+
+
+def test_a_position_streamed_unasked_moves_the_bearing_between_polls(rig: Rig) -> None:
+    """Polled every 30 s, a box that streams its lines every half second: a turn by hand shows
+    as soon as both axes have streamed, with no poll in between."""
+    v = ready(
+        rig,
+        settings={"idle_poll_interval_s": 30.0},
+        stream_s=0.5,
+        echo=True,
+        start_az_deg=100,
+        start_el_deg=10,
+    )
+    v.run_for(5)
+    t = v.now
+    v.device.manual_rotate(110.0, t, el_deg=12.0)
+    v.run_until(lambda h: h.status.bearing_deg == 110.0, 10, "the stream read")
+    assert v.frames(Outcome.QUERY, since=t) == []  # not asked
+    assert v.status.elevation_deg == 12.0 and v.errors(since=t) == []
+
+
+def test_a_torn_or_garbled_stream_line_changes_nothing(rig: Rig) -> None:
+    v = ready(
+        rig,
+        settings={"idle_poll_interval_s": 30.0},
+        stream_s=0.5,
+        start_az_deg=100,
+        start_el_deg=10,
+    )
+    v.run_for(5)
+
+    garbled: list[float] = []
+
+    def garble(data: bytes, now: float) -> bytes:
+        if garbled or not data.startswith(b"A"):  # the first byte of a streamed line
+            return data
+        garbled.append(now)
+        return b"A P= 9\xff9.0 S=9 ST\rE P=  1" + data  # a garbled line, a torn one
+
+    v.to_host = garble
+    t = v.now
+    v.run_for(5)
+    assert garbled and v.errors("protocol", since=t)  # reported
+    assert {(s.bearing_deg, s.elevation_deg) for s in v.published(since=t)} <= {(100.0, 10.0)}
+
+
+def test_an_az_el_satellite_pass_is_followed_within_3_degrees() -> None:
+    """An az/el RC2800 (6 and 3 deg/s here) follows a pass clear of north as closely as the
+    other az/el models (3 degrees), its two axes always 200 ms apart."""
+    tle = a_pass_that(across_north=False)
+    v, errors = fly("rc2800", tle)
+    with v:
+        worst_az = max(e[1] for e in errors[5:])  # the body rises at the horizon's edge
+        worst_el = max(e[2] for e in errors[5:])
+        assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
+        assert len(moves(v)) > 50 and not v.frames(Outcome.REFUSED)
+        assert v.truth().too_soon == 0 and min(axis_gaps(v)) >= 0.2 - 1e-9
+    assert BERLIN  # the station the pass was computed for

@@ -1,0 +1,78 @@
+"""M2 RC2800 end to end: real mosquitto, real pyserial on a pty, the bridge, and the RC2800
+emulator (written from the documents and judged by Hamlib's rotctl -m 1001) as the controller,
+plain, echoing its commands, and streaming its position unasked. The 200 ms between the axes
+is proven in virtual time (tests/engine/test_session_rc2800.py): on a busy machine a pty hands
+the emulator two frames late together, so its count here would measure the machine."""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any
+
+import pytest
+
+from tests.support.rig import Rig
+
+KINDS = [{}, {"echo": True, "stream_s": 0.25}]  # a plain box; one that echoes and streams
+
+
+def status(rig: Rig) -> dict[str, object]:
+    return dict(json.loads(rig.retained()["rotor/status"]))
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=["plain", "echo+stream"])
+def test_az_el_target_bearing_and_stop(rig: Rig, kind: dict[str, Any]) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 10.3, "start_el_deg": 5, **kind})
+    rig.start()
+    rig.ready("sat", timeout_s=15)
+    snap = rig.retained()
+    assert snap["rotor/bearing"] == b"10.3" and snap["rotor/elevation"] == b"5"
+
+    t = time.monotonic()  # before the move: its idle may come before the emulator is asked
+    rig.probe.publish("rotor/target", '{"azimuth": 123.4, "elevation": 45}')
+    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (123.4, 45.0) and not s.is_moving, 20)
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    assert (status(rig)["bearing"], status(rig)["elevation"]) == (123.4, 45.0)
+    assert sorted(f.data for f in emu.frames("move")) == [b"A123.4", b"E45.0"]
+
+    rig.probe.publish("rotor/target", '{"azimuth": 300, "elevation": 10}')
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
+    t = time.monotonic()
+    rig.probe.publish("rotor/stop", "STOP")
+    stopped = emu.wait_for(lambda s: not s.is_moving, 5)
+    log = emu.log()  # the STOP may come twice (lane and main connection): S to each axis
+    stops = [(log[i - 1].data, f.data) for i, f in enumerate(log) if f.outcome == "stop"]
+    assert stopped.az_deg < 290 and set(stops) == {(b"A", b"S"), (b"E", b"S")}, stops
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
+    doc = status(rig)
+    assert (doc["bearing"], doc["elevation"]) == (
+        round(emu.state().az_deg, 1),
+        round(emu.state().el_deg or 0.0, 1),
+    )  # where it stopped, read back
+    assert emu.frames("refused") == []
+
+
+def test_a_new_bearing_while_turning_goes_straight_out(rig: Rig) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 0, "start_el_deg": 0})
+    rig.start()
+    rig.ready("sat", timeout_s=15)
+    rig.probe.publish("rotor/target", "200 40")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, 10)
+    rig.probe.publish("rotor/target", "20.5 10")  # no stop first
+    emu.wait_for(lambda s: (s.az_deg, s.el_deg) == (20.5, 10.0) and not s.is_moving, 20)
+    moves = [f.data for f in emu.frames("move")]
+    assert sorted(moves[:2]) == [b"A200.0", b"E40.0"] and sorted(moves[2:]) == [b"A20.5", b"E10.0"]
+    assert emu.frames("stop") == []
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=["plain", "echo+stream"])
+def test_junk_gives_an_error_and_changes_nothing(rig: Rig, kind: dict[str, Any]) -> None:
+    emu = rig.add("sat", model="rc2800", emu={"start_az_deg": 77.7, "start_el_deg": 7, **kind})
+    rig.start()
+    rig.ready("sat", timeout_s=15)
+    junk = (b"garbage\r", b"A P= 3\xff3.0 S=9 MV\r", b"A P= 999.0 S=9 MV\r", b"E P=  1")
+    rig.junk_reported("sat", *junk)
+    assert {m.text for m in rig.probe.on("rotor/bearing")} == {"77.7"}
+    assert {m.text for m in rig.probe.on("rotor/elevation")} == {"7"}
+    assert emu.frames("move") == [] and emu.state().az_deg == 77.7

@@ -1,0 +1,177 @@
+"""M2 RC2800 codec: the commands byte for byte, split into each axis's frames in the order the
+link paces them; the reply forms Hamlib reads (``A P=  98.1 S=9 MV``, ``E=43.7 S=9 M``) whole,
+bytewise and split; an echo is never a reply; a line streamed unasked updates the bearing once
+every axis has had a well-formed one; junk never becomes a reading."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bridge.protocols import REGISTRY
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply, RetargetPolicy
+from bridge.protocols.rc2800 import Rc2800Codec
+from tests.support import HOW, feed
+
+
+def positions(replies: list[object]) -> list[tuple[float, float | None]]:
+    return [(r.az_deg, r.el_deg) for r in replies if isinstance(r, PositionReply)]
+
+
+def junk(replies: list[object]) -> list[JunkReply]:
+    return [r for r in replies if isinstance(r, JunkReply)]
+
+
+def test_commands_on_the_wire_one_frame_per_axis() -> None:
+    azel, az = Rc2800Codec(), Rc2800Codec(elevation=False)
+    assert azel.encode_target(123.45, 45) == [b"A123.5\r", b"E45.0\r"]  # tenths, half up
+    assert az.encode_target(5) == [b"A5.0\r"]
+    assert azel.encode_query() == [b"A\r", b"E\r"] and az.encode_query() == [b"A\r"]
+    assert azel.encode_stop() == [b"A\rS\r", b"E\rS\r"]  # select the axis, stop it
+    assert az.encode_stop() == [b"A\rS\r"]
+    for codec in (azel, az):
+        assert (codec.encode_version(), codec.encode_connect(0.0), codec.encode_enable()) == (
+            None,
+            [],
+            None,
+        )
+    with pytest.raises(ValueError, match="no options"):
+        azel.encode_option("jam", True)
+
+
+def test_targets_outside_what_the_box_takes_are_refused_before_sending() -> None:
+    for az, el in ((360.1, 0), (-0.1, 0), (10, 180.1), (10, -1)):
+        with pytest.raises(ValueError, match="outside"):
+            Rc2800Codec().encode_target(az, el)
+    assert Rc2800Codec().wire_target(359.95, 0.04) == (360.0, 0.0)
+
+
+def test_the_spec_paces_the_two_axes_and_not_the_lone_azimuth() -> None:
+    azel, az = REGISTRY["rc2800"], REGISTRY["rc2800-az"]
+    assert (azel.axis_gap_s, az.axis_gap_s) == (0.2, 0.0)
+    assert (azel.baud, azel.has_elevation, az.has_elevation) == (9600, True, False)
+    assert azel.retarget is RetargetPolicy.DIRECT and azel.reply_timeout_s >= 0.2 + 0.1
+
+
+@pytest.mark.parametrize("how", HOW)
+@pytest.mark.parametrize(
+    ("az_line", "el_line", "want"),
+    [
+        (b"A P=  98.1 S=9 MV\r", b"E P=  12.5 S=9 MV\r", (98.1, 12.5)),
+        (b"A P= 100.0 S=9 ST\r\n", b"E P=   0.0 S=4 ST\r\n", (100.0, 0.0)),  # CR LF
+        (b"A=43.7 S=9 M\n", b"E=42.8 S=9 S\n", (43.7, 42.8)),  # the older form
+        (b"A=359\r", b"E=-0.4\r", (359.0, -0.4)),  # a pot a little below the horizon
+    ],
+)
+def test_a_query_reads_each_axis_line(
+    az_line: bytes, el_line: bytes, want: tuple[float, float], how: str
+) -> None:
+    codec = Rc2800Codec()
+    codec.encode_query()
+    assert positions(feed(codec, az_line, how)) == []  # the elevation is still to come
+    assert codec.awaiting_reply()
+    assert positions(feed(codec, el_line, how)) == [want]
+    assert not codec.awaiting_reply()
+
+
+def test_an_echo_is_no_reply_and_harmless() -> None:
+    codec = Rc2800Codec()
+    codec.encode_query()
+    out = feed(codec, b"A\rA P=  98.1 S=9 MV\rE\r")
+    assert positions(out) == [] and codec.awaiting_reply()  # "E" echoed is not the elevation
+    assert [j.reason for j in junk(out)] == [JunkReason.CHATTER, JunkReason.CHATTER]
+    assert positions(feed(codec, b"E P=  10.0 S=9 ST\r")) == [(98.1, 10.0)]
+    assert codec.harmless(b"A123.5\rA P= 123.5 S=9 MV\rE45.0\rS\r\r\n")
+
+
+def test_the_stop_is_answered_by_both_axes_and_read_once() -> None:
+    codec = Rc2800Codec()
+    codec.encode_stop()
+    out = feed(codec, b"A P=  50.0 S=9 MV\rA P=  50.2 S=9 ST\rE P=  10.0 S=9 MV\r")
+    assert positions(out) == [] and codec.awaiting_reply()
+    assert positions(feed(codec, b"E P=  10.1 S=9 ST\r")) == [(50.2, 10.1)]
+
+
+def test_lines_nobody_asked_for_update_the_bearing_once_every_axis_has_spoken() -> None:
+    codec = Rc2800Codec()
+    out = feed(codec, b"A P= 200.0 S=9 MV\r")
+    assert positions(out) == [] and junk(out)[0].reason is JunkReason.CHATTER  # kept
+    assert positions(feed(codec, b"E P=  30.0 S=9 MV\r")) == [(200.0, 30.0)]
+    assert positions(feed(codec, b"E P=  31.0 S=9 MV\r")) == []  # the azimuth must speak again
+    assert positions(feed(codec, b"A P= 201.0 S=9 MV\r")) == [(201.0, 31.0)]
+    lone = Rc2800Codec(elevation=False)
+    assert positions(feed(lone, b"A P=  77.7 S=9 ST\rA P=  77.8 S=9 ST\r")) == [
+        (77.7, None),
+        (77.8, None),
+    ]
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        b"A P=  98",  # torn: no line end yet, then noise
+        b"A P= 98.1 S=9 MVX\r",
+        b"X P=  98.1 S=9 MV\r",
+        b"A P= 1234.5 S=9 MV\r",
+        b"\xffA P=  98.1 S=9 MV\r",  # noise in front of it on its line
+    ],
+)
+def test_an_ill_formed_line_changes_nothing(bad: bytes) -> None:
+    codec = Rc2800Codec(elevation=False)
+    out = feed(codec, bad + b"\xfe\r")
+    assert positions(out) == [] and not codec.harmless(bad + b"\xfe\r")
+    assert any(j.reason is JunkReason.NOISE for j in junk(out))
+
+
+def test_out_of_range_is_spoiled_an_error_is_reported_and_noise_spoils_the_exchange() -> None:
+    codec = Rc2800Codec()
+    out = feed(codec, b"A P= 361.0 S=9 MV\rE P= 181.0 S=9 MV\r")
+    assert positions(out) == [] and {j.reason for j in junk(out)} == {JunkReason.SPOILED}
+    (err,) = junk(feed(codec, b"A ERR=2\r"))
+    assert err.reason is JunkReason.CHATTER and "error 2" in err.detail
+    assert not codec.harmless(b"A ERR=2\r")
+    codec.encode_query()
+    out = feed(codec, b"A P=  10.0 S=9 MV\rgarbage\rE P=  20.0 S=9 MV\r")
+    assert positions(out) == [] and junk(out)[-1].reason is JunkReason.UNTRUSTED
+    codec.encode_query()  # asked again: believed
+    assert positions(feed(codec, b"A P=  10.0 S=9 MV\rE P=  20.0 S=9 MV\r")) == [(10.0, 20.0)]
+
+
+_PIECES = st.one_of(
+    st.binary(max_size=20),
+    st.builds(
+        lambda axis, deg, state: b"%c P=%6.1f S=9 %s\r" % (axis, deg, state),
+        st.sampled_from(b"AE"),
+        st.floats(-100, 400).map(lambda d: round(d, 1)),
+        st.sampled_from([b"MV", b"ST"]),
+    ),
+    st.sampled_from([b"A\r", b"E\r", b"S\r", b"A123.4\r", b"\r\n", b"A ERR=5\r", b"A P= "]),
+)
+
+
+@given(pieces=st.lists(st.tuples(st.booleans(), _PIECES), max_size=20), el=st.booleans())
+def test_any_stream_gives_the_same_readings_however_sliced_and_none_it_did_not_carry(
+    pieces: list[tuple[bool, bytes]], el: bool
+) -> None:
+    def run(how: str) -> list[tuple[float, float | None]]:
+        codec = Rc2800Codec(elevation=el)
+        out: list[object] = []
+        for ask, data in pieces:
+            if ask:
+                codec.encode_query()
+            out += feed(codec, data, how)
+        return positions(out)
+
+    whole = run("whole")
+    assert run("bytewise") == whole and run("split") == whole
+    stream = b"".join(data for _, data in pieces)
+    lines = {
+        (m.group(1), float(m.group(2)))
+        for m in re.finditer(rb"(?:^|[\r\n])([AE]) P=\s*(-?\d+\.\d)", stream)
+    }
+    for az, elev in whole:
+        assert (b"A", az) in lines and 0 <= az <= 360
+        assert (elev is None) is (not el) and (elev is None or (b"E", elev) in lines)
