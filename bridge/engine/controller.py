@@ -17,12 +17,12 @@ Rules:
 4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
    report that says automatic motion is off gets it switched on again (slewing.py has the
    rules for a report that does not come).
-5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so). A
-   reading is taken when its exchange is over (link.py rule 9): one that other bytes spoil, or
-   one the codec does not trust, is no reading, and the controller is asked again at once. A
-   stop written while a reading is held ends its exchange: the reading is taken just before the
-   stop is written (the motion machine sees the reading, then the stop), or dropped if bytes
-   came after it.
+5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so, and
+   whether all they did was to hold a reading: session.py rule 16). A reading is taken when
+   its exchange is over (link.py rule 9): one that other bytes spoil, or one the codec does not
+   trust, is no reading, and the controller is asked again at once. A stop written while a
+   reading is held ends its exchange: the reading is taken just before the stop is written
+   (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
