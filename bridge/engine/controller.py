@@ -17,12 +17,12 @@ Rules:
 4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
    report that says automatic motion is off gets it switched on again (slewing.py has the
    rules for a report that does not come).
-5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so). A
-   reading is taken when its exchange is over (link.py rule 9): one that other bytes spoil, or
-   one the codec does not trust, is no reading, and the controller is asked again at once. A
-   stop written while a reading is held ends its exchange: the reading is taken just before the
-   stop is written (the motion machine sees the reading, then the stop), or dropped if bytes
-   came after it.
+5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so, and
+   whether all they did was to hold a reading: session.py rule 16). A reading is taken when
+   its exchange is over (link.py rule 9): one that other bytes spoil, or one the codec does not
+   trust, is no reading, and the controller is asked again at once. A stop written while a
+   reading is held ends its exchange: the reading is taken just before the stop is written
+   (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
    (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
@@ -34,6 +34,8 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, replace
+from enum import Enum
+from typing import cast
 
 from bridge.engine import motion as mo
 from bridge.engine import slewing
@@ -83,6 +85,14 @@ class Retry:
 Note = Report | Ends | Drop | Retry
 
 
+class Fed(Enum):
+    """What bytes from the port did (``feed``)."""
+
+    NOTHING = "nothing"  # no reply completed: nothing changed (rule 5)
+    HELD = "held"  # one reading completed, now held for its quiet time and nothing else
+    REPLY = "reply"  # anything else: a reading taken or dropped, junk, a version
+
+
 class Controller:
     def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
         self.cfg = self.base_cfg = cfg  # rule 7
@@ -98,6 +108,7 @@ class Controller:
         self._silence_reported = False
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
+        self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
 
     @property
@@ -152,6 +163,8 @@ class Controller:
         spec = self.cfg.spec
         self._port_error = None
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
+        # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
+        self._takes_readings = isinstance(link.codec, TakesReadings)
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -205,17 +218,22 @@ class Controller:
             self.stop(now)
 
     # -- what comes in ---------------------------------------------------------------------------
-    def feed(self, data: bytes, now: float) -> bool:
-        """Bytes from the port; whether they completed a reply (rule 5)."""
+    def feed(self, data: bytes, now: float) -> Fed:
+        """Bytes from the port: whether they completed a reply, and if so whether all they did
+        was to hold a reading (rules 5 and 9)."""
         link = self.link
         if link is None:
-            return False
+            return Fed.NOTHING
         log.debug("%s: <- %r", self.cfg.rotator_id, data)
         link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
+        if not replies:
+            return Fed.NOTHING
+        held = len(replies) == 1 and isinstance(replies[0], PositionReply)
         for reply in replies:
             if isinstance(reply, PositionReply):
                 if not link.hold_reading(reply, now):  # rule 5: taken once the exchange is over
+                    held = False
                     self._ask_again(link, now)
             elif isinstance(reply, VersionReply):
                 if reply.version != self.version:
@@ -235,8 +253,9 @@ class Controller:
                 link.add_junk(reply.data, now)
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now)
-        self._settled(link, now)
-        return bool(replies)
+        if self._settled(link, now):
+            held = False
+        return Fed.HELD if held else Fed.REPLY
 
     def _ask_again(self, link: Link, now: float) -> None:
         """Rule 5: the exchange gave no reading it can trust."""
@@ -245,16 +264,18 @@ class Controller:
         if link.end_slew(now):  # the slew is over; where it ended, unseen
             self.motion = mo.slew_ended(self.motion, now)
 
-    def _settled(self, link: Link, now: float) -> None:
-        """Rule 5: a reading whose exchange is over is taken."""
+    def _settled(self, link: Link, now: float) -> bool:
+        """Rule 5: a reading whose exchange is over is taken; True if one was."""
         reply = link.settled(now)
-        if reply is not None:
-            self._reading(link, reply, now)
+        if reply is None:
+            return False
+        self._reading(link, reply, now)
+        return True
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
-        if isinstance(link.codec, TakesReadings):  # rule 8
-            link.codec.taken(reply)
+        if self._takes_readings:  # rule 8
+            cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:
             self.options.enable_due = True  # rule 4
         if reply.controller_time is not None:

@@ -54,6 +54,12 @@ Rules:
    reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
    Following may also stop its own turn (a transmission began: follow.py rule 3). The
    wind's park, like auto-park, is the bridge's own move: the control lease never judges it.
+16. Bytes that complete a reading the link holds for its quiet time (link.py rule 9), and do
+   nothing else, run no step either: the held reading changes nothing the rules read until it
+   is taken, and the session asks to be woken when the quiet time is over (the step then takes
+   it). Only when nothing waits on such a step: no stop due (a half-duplex line takes one as
+   soon as the reply is whole: that step writes it), no target waiting, nothing noted, and
+   ``next_wakeup`` not yet come (what is due by then runs as before).
 """
 
 from __future__ import annotations
@@ -66,7 +72,7 @@ from bridge.engine import status as st
 from bridge.engine.actions import Action, Ask, Publish, Report, Write
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
-from bridge.engine.controller import Controller, Drop, Ends, Retry
+from bridge.engine.controller import Controller, Drop, Ends, Fed, Retry
 from bridge.engine.feature_commands import Done, FeatureCommands
 from bridge.engine.health import Health
 from bridge.engine.link import Link
@@ -205,9 +211,13 @@ class RotatorSession:
         return self._step(now)
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
-        was_answering = self.controller.answering
-        if not self.controller.feed(data, now):
+        ctl = self.controller
+        was_answering = ctl.answering
+        fed = ctl.feed(data, now)
+        if fed is Fed.NOTHING:
             return []  # rule 9
+        if fed is Fed.HELD and self._quiet_hold(now):
+            return []  # rule 16
         if self.controller.answering and not was_answering:
             self.autopark.activity(now)  # autopark.py rule 1
         self._heed(now)
@@ -226,6 +236,17 @@ class RotatorSession:
     def set_wall(self, now: float, wall_s: float) -> None:
         """The wall clock (unix seconds) at ``now``: tracking reads the sky by it."""
         self.wall_offset_s = wall_s - now
+
+    def _quiet_hold(self, now: float) -> bool:
+        """Rule 16: whether a reading just held, and nothing else, needs no step now; if so,
+        the session is woken when its quiet time is over."""
+        ctl, link = self.controller, self.controller.link
+        if link is None or link.stop_due or ctl.notes or self._actions:
+            return False
+        if now >= self._wakeup or self.targets.pending is not None:
+            return False
+        self._wakeup = min(self._wakeup, *link.wakeups())
+        return True
 
     def tick(self, now: float) -> list[Action]:
         return self._step(now)
