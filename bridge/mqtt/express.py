@@ -43,8 +43,10 @@ Rules:
 5. Ports (engine/port.py rule 7): the descriptor of each port opened goes to the express over
    the control socket (SCM_RIGHTS), numbered; before a port is closed the express is told to
    close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
-   copy keeps the tty open and its TIOCEXCL would refuse the reopen. An express that does not
-   answer in time is killed (rule 6) and the port closed all the same.
+   copy keeps the tty open and its TIOCEXCL would refuse the reopen. The port going is named
+   by its descriptor: a close that runs late, after the rotator's next port was handed over
+   (an unplug and replug), leaves that one held (the express closed the old copy then). An
+   express that does not answer in time is killed (rule 6) and the port closed all the same.
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies is said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
@@ -190,10 +192,13 @@ class Express:
             if self._sock is not None:
                 self._hand(rotator_id, self._number, fd)
 
-    def closing(self, rotator_id: str) -> None:
+    def closing(self, rotator_id: str, fd: int) -> None:
         with self._lock:
-            number, _fd = self._ports.pop(rotator_id, (0, -1))
-            if number == 0 or self._sock is None or self.ended.is_set():
+            number, held = self._ports.get(rotator_id, (0, -1))
+            if held != fd:
+                return  # a newer port's (its close ran late): the express dropped this copy
+            del self._ports[rotator_id]
+            if self._sock is None or self.ended.is_set():
                 return
             dropped = self._dropped[number] = threading.Event()
             try:
@@ -365,8 +370,8 @@ class _PortWatch:
     def opened(self, fd: int) -> None:
         self._express.opened(self._id, fd)
 
-    def closing(self) -> None:
-        self._express.closing(self._id)
+    def closing(self, fd: int) -> None:
+        self._express.closing(self._id, fd)
 
 
 # -- the child's side ----------------------------------------------------------------------------

@@ -218,7 +218,7 @@ def test_an_express_that_does_not_give_a_port_back_is_killed_and_the_port_closed
     e.start(mqtt311=False)
     wait_until(lambda: e._sock is not None, 10, "started")
     done = threading.Event()
-    threading.Thread(target=lambda: (e.closing("a"), done.set()), daemon=True).start()
+    threading.Thread(target=lambda: (e.closing("a", port.w), done.set()), daemon=True).start()
     wait_until(done.is_set, DROP_WAIT_S + 10, "the closing thread goes on")
     wait_until(problems.on, 10, "the problem said")
     assert "ended" in problems.on()[0]
@@ -264,3 +264,27 @@ def test_a_refused_connection_is_said_until_the_express_is_up_a_denial_stays() -
     wait_until(lambda: len(problems.said) == 2, 10, "both said")
     assert problems.on() == ["stop express: denied: rotor/a/stop"]
     e.stop()
+
+
+def test_a_port_reopened_before_the_old_one_is_closed_stays_the_expresss() -> None:
+    """The old port's closing thread runs late (a busy machine): the new port is already
+    open and handed over. Only the old copy is given back; the express keeps the new one."""
+    problems = Problems()
+    e = Express(SETTINGS, topics=TOPICS, frames={"a": b";"}, on_problem=problems)
+    old, new = Port(), Port()
+    e.opened("a", old.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: "a" in e.held, 10, "the old port held")
+    e.held_changed.clear()
+    e.opened("a", new.w)  # the replugged adapter's port, opened first
+    wait_until(e.held_changed.is_set, 10, "the new port held")
+    e.closing("a", old.w)  # then the old port's close thread tells it is going
+    os.close(old.w)
+    os.close(new.w)  # the bridge's copy of the new port; the express's must stay
+    try:
+        assert "a" in e.held
+        with pytest.raises(BlockingIOError):  # a writer is left: the express's copy
+            os.read(new.r, 10)
+        assert os.read(old.r, 10) == b""  # the old port: no copy left anywhere
+    finally:
+        e.stop()
