@@ -43,7 +43,8 @@ Rules:
 5. Ports (engine/port.py rule 7): the descriptor of each port opened goes to the express over
    the control socket (SCM_RIGHTS), numbered; before a port is closed the express is told to
    close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
-   copy keeps the tty open and its TIOCEXCL would refuse the reopen. The port going is named
+   copy keeps the tty open and its TIOCEXCL would refuse the reopen (START_WAIT_S while the
+   express has not said a word yet: still starting, not hung). The port going is named
    by its descriptor: a close that runs late, after the rotator's next port was handed over
    (an unplug and replug), leaves that one held (the express closed the old copy then). An
    express that does not answer in time is killed (rule 6) and the port closed all the same.
@@ -146,6 +147,7 @@ class Express:
         # (rotator, the child's clock) of the latest frames written (the tests, the log)
         self.wrote: deque[tuple[str, float]] = deque(maxlen=64)
         self.ended = threading.Event()  # the child is gone (rule 6)
+        self._heard = threading.Event()  # a word from the child: it reads its socket (rule 5)
 
     @property
     def wanted(self) -> bool:
@@ -205,8 +207,10 @@ class Express:
                 _send(self._sock, {"op": "drop", "rotator": rotator_id, "n": number})
             except OSError:
                 return  # gone: its copies are closed with it
-        if not dropped.wait(DROP_WAIT_S):
-            self._kill(f"did not give {rotator_id}'s port back within {DROP_WAIT_S:g} s")
+        # not reading its socket yet is a start (importing Python on a slow machine), no hang
+        wait_s = DROP_WAIT_S if self._heard.is_set() else START_WAIT_S
+        if not dropped.wait(wait_s):
+            self._kill(f"did not give {rotator_id}'s port back within {wait_s:g} s")
         with self._lock:
             self._dropped.pop(number, None)
 
@@ -278,6 +282,7 @@ class Express:
                 data = b""
             if not data:
                 break
+            self._heard.set()
             word = json.loads(data)
             op = word.get("op")
             if op == "up":

@@ -211,12 +211,16 @@ def test_an_express_that_ends_is_said_with_its_exit_code() -> None:
 
 def test_an_express_that_does_not_give_a_port_back_is_killed_and_the_port_closed() -> None:
     problems = Problems()
-    # holds the socket, reads nothing, answers nothing
-    e = express([sys.executable, "-c", "import time; time.sleep(600)"], problems)
+    # takes the port, then hangs: holds the socket, reads nothing more, answers nothing
+    hung = (
+        "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[1])); s.recv(65536); "
+        """s.send(b'{"op": "held", "rotator": "a", "n": 1}'); time.sleep(600)"""
+    )
+    e = express([sys.executable, "-c", hung], problems)
     port = Port()
     e.opened("a", port.w)
     e.start(mqtt311=False)
-    wait_until(lambda: e._sock is not None, 10, "started")
+    wait_until(lambda: "a" in e.held, 10, "it took the port")
     done = threading.Event()
     threading.Thread(target=lambda: (e.closing("a", port.w), done.set()), daemon=True).start()
     wait_until(done.is_set, DROP_WAIT_S + 10, "the closing thread goes on")
@@ -286,5 +290,28 @@ def test_a_port_reopened_before_the_old_one_is_closed_stays_the_expresss() -> No
         with pytest.raises(BlockingIOError):  # a writer is left: the express's copy
             os.read(new.r, 10)
         assert os.read(old.r, 10) == b""  # the old port: no copy left anywhere
+    finally:
+        e.stop()
+
+
+def test_a_port_closed_while_the_express_is_still_starting_is_given_back_not_killed() -> None:
+    """A slow machine (a Raspberry Pi loading Python): the express is not reading its socket
+    yet when a port closes (an unplug, a quick shutdown). That is no hung express: the drop
+    waits for it to start, and it stays the rotators' fast stop afterwards."""
+    problems = Problems()
+    slow_start = (
+        f"import sys, time; time.sleep({2 * DROP_WAIT_S}); "
+        "from bridge.mqtt.express import main; sys.exit(main(sys.argv))"
+    )
+    e = express([sys.executable, "-c", slow_start], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: e._sock is not None, 10, "started")
+    try:
+        e.closing("a", port.w)
+        os.close(port.w)
+        assert os.read(port.r, 10) == b""  # its copy given back
+        assert not problems.on() and not e.ended.is_set()
     finally:
         e.stop()
