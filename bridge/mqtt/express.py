@@ -52,8 +52,9 @@ Rules:
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies is said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
    bridge's process, as without it. An express that ended is not restarted.
-7. Shutdown: ``stop`` closes the control socket; the express disconnects and exits on its end
-   of file, and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
+7. Shutdown: ``stop`` closes the control socket; the express closes its copies of the ports
+   (a bridge restarted at once finds them free), disconnects and exits on its end of file,
+   and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
    socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
    manager or a terminal signals the whole group; the bridge stops its rotators first).
 """
@@ -500,6 +501,10 @@ class _Child:
                 self.say(op="dropped", rotator=rid, n=number)
             for extra in fds[1:] if word.get("op") == "port" else fds:
                 os.close(extra)
+        with self._lock:  # the bridge is gone: its ports are free at once (rule 7)
+            for _number, fd in self._ports.values():
+                os.close(fd)
+            self._ports.clear()
 
 
 def _switch_on(payload: bytes) -> bool:

@@ -315,3 +315,17 @@ def test_a_port_closed_while_the_express_is_still_starting_is_given_back_not_kil
         assert not problems.on() and not e.ended.is_set()
     finally:
         e.stop()
+
+
+def test_when_the_bridge_goes_its_ports_are_given_back_before_the_express_disconnects(
+    rig: ChildRig,
+) -> None:
+    """The bridge's process died (its end of the socket closed): the express closes its copies
+    of the ports at once, not after its MQTT goodbye (a broker away: seconds), so a bridge
+    restarted at once does not find its ports busy (their TIOCEXCL)."""
+    port = Port()
+    rig.hand("a", 1, port)
+    os.close(port.w)  # the bridge's copy went with its process
+    rig.mine.close()
+    rig.thread.join(slow(5))
+    assert os.read(port.r, 10) == b""  # no writer left: the express's copy is closed
