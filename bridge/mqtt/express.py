@@ -43,11 +43,12 @@ Rules:
 5. Ports (engine/port.py rule 7): the descriptor of each port opened goes to the express over
    the control socket (SCM_RIGHTS), numbered; before a port is closed the express is told to
    close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
-   copy keeps the tty open and its TIOCEXCL would refuse the reopen (START_WAIT_S while the
-   express has not said a word yet: still starting, not hung). The port going is named
-   by its descriptor: a close that runs late, after the rotator's next port was handed over
-   (an unplug and replug), leaves that one held (the express closed the old copy then). An
-   express that does not answer in time is killed (rule 6) and the port closed all the same.
+   copy keeps the tty open and its TIOCEXCL would refuse the reopen (until START_WAIT_S after
+   its start while the express has not said a word yet: still starting, not hung). The port
+   going is named by its descriptor: a close that runs late, after the rotator's next port was
+   handed over (an unplug and replug), leaves that one held (the express closed the old copy
+   then). An express that does not answer in time is killed (rule 6) and the port closed all
+   the same.
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies is said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
@@ -149,6 +150,7 @@ class Express:
         self.wrote: deque[tuple[str, float]] = deque(maxlen=64)
         self.ended = threading.Event()  # the child is gone (rule 6)
         self._heard = threading.Event()  # a word from the child: it reads its socket (rule 5)
+        self._started_at = 0.0  # when the child was started (its START_WAIT_S, rule 5)
 
     @property
     def wanted(self) -> bool:
@@ -209,9 +211,11 @@ class Express:
             except OSError:
                 return  # gone: its copies are closed with it
         # not reading its socket yet is a start (importing Python on a slow machine), no hang
-        wait_s = DROP_WAIT_S if self._heard.is_set() else START_WAIT_S
+        wait_s = DROP_WAIT_S
+        if not self._heard.is_set():
+            wait_s = max(wait_s, self._started_at + START_WAIT_S - time.monotonic())
         if not dropped.wait(wait_s):
-            self._kill(f"did not give {rotator_id}'s port back within {wait_s:g} s")
+            self._kill(f"did not give {rotator_id}'s port back within {wait_s:.1f} s")
         with self._lock:
             self._dropped.pop(number, None)
 
@@ -225,7 +229,7 @@ class Express:
 
     # -- the child (rule 1, on the express's thread) -------------------------------------------
     def _run(self, mqtt311: bool) -> None:
-        t0 = time.monotonic()
+        t0 = self._started_at = time.monotonic()
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         env = dict(os.environ)
         root = str(Path(__file__).resolve().parents[2])  # the bridge's own code, whatever runs it
