@@ -327,6 +327,9 @@ class Express:
         with self._lock:
             stopping = self._stopping
             self._sock = None
+            waiting = list(self._dropped.values())
+        for event in waiting:  # its copies of the ports went with it
+            event.set()
         mine.close()
         if not stopping:
             self._ended(f"the stop express ended (exit code {code})")

@@ -329,3 +329,30 @@ def test_when_the_bridge_goes_its_ports_are_given_back_before_the_express_discon
     rig.mine.close()
     rig.thread.join(slow(5))
     assert os.read(port.r, 10) == b""  # no writer left: the express's copy is closed
+
+
+def test_a_port_closing_as_the_bridge_stops_is_not_called_a_hung_express(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The express is told to stop while a port's close waits for its copy back: the express
+    is gone with its copies, so the close goes on at once, and no kill is logged."""
+    problems = Problems()
+    # takes the port, never answers a drop, ends on its end of file
+    deaf = (
+        "import socket, sys; s = socket.socket(fileno=int(sys.argv[1])); s.recv(65536); "
+        """socket.recv_fds(s, 65536, 4); s.send(b'{"op": "held", "rotator": "a", "n": 1}')\n"""
+        "while s.recv(65536): pass"
+    )
+    e = express([sys.executable, "-c", deaf], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: "a" in e.held, 10, "it took the port")
+    done = threading.Event()
+    closing = threading.Thread(target=lambda: (e.closing("a", port.w), done.set()), daemon=True)
+    closing.start()
+    wait_until(lambda: 1 in e._dropped, 10, "the close waits for the copy back")
+    e.stop()
+    wait_until(done.is_set, 10, "the close goes on")
+    assert e._child is not None and e._child.returncode == 0  # its end of file, not a kill
+    assert not [r for r in caplog.records if "killed" in r.getMessage()]
