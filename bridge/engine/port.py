@@ -17,10 +17,10 @@ Rules:
 6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
    lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
 7. A PortWatch (the stop express, mqtt/express.py) is told an opened port's descriptor on the
-   thread that opened it, and that it is going before it is closed, on the thread that closes
-   it (``watched``, ``close_in_background``): a copy of the descriptor held elsewhere keeps the
-   tty open, and TIOCEXCL (rule 2) would then refuse the reopen. A watch that fails costs the
-   port nothing (logged).
+   thread that opened it, and that it (its descriptor) is going before it is closed, on the
+   thread that closes it (``watched``, ``close_in_background``): a copy of the descriptor held
+   elsewhere keeps the tty open, and TIOCEXCL (rule 2) would then refuse the reopen. A watch
+   that fails costs the port nothing (logged).
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ class PortWatch(Protocol):
 
     def opened(self, fd: int) -> None: ...
 
-    def closing(self) -> None: ...
+    def closing(self, fd: int) -> None: ...
 
 
 def watched(opener: PortOpener, watch: PortWatch) -> PortOpener:
@@ -160,7 +160,7 @@ def close_watched(port: serial.Serial, watch: PortWatch | None) -> None:
     """The watch told (rule 7), then the port closed."""
     if watch is not None:
         try:
-            watch.closing()
+            watch.closing(port.fileno())
         except Exception:
             log.exception("the port's watch failed (the port is closed all the same)")
     close_quietly(port)

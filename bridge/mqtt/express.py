@@ -43,14 +43,19 @@ Rules:
 5. Ports (engine/port.py rule 7): the descriptor of each port opened goes to the express over
    the control socket (SCM_RIGHTS), numbered; before a port is closed the express is told to
    close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
-   copy keeps the tty open and its TIOCEXCL would refuse the reopen. An express that does not
-   answer in time is killed (rule 6) and the port closed all the same.
+   copy keeps the tty open and its TIOCEXCL would refuse the reopen (until START_WAIT_S after
+   its start while the express has not said a word yet: still starting, not hung). The port
+   going is named by its descriptor: a close that runs late, after the rotator's next port was
+   handed over (an unplug and replug), leaves that one held (the express closed the old copy
+   then). An express that does not answer in time is killed (rule 6) and the port closed all
+   the same.
 6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
    connection the broker refuses (said until a connection is accepted) or whose subscription it
    denies is said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
    bridge's process, as without it. An express that ended is not restarted.
-7. Shutdown: ``stop`` closes the control socket; the express disconnects and exits on its end
-   of file, and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
+7. Shutdown: ``stop`` closes the control socket; the express closes its copies of the ports
+   (a bridge restarted at once finds them free), disconnects and exits on its end of file,
+   and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
    socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
    manager or a terminal signals the whole group; the bridge stops its rotators first).
 """
@@ -144,6 +149,8 @@ class Express:
         # (rotator, the child's clock) of the latest frames written (the tests, the log)
         self.wrote: deque[tuple[str, float]] = deque(maxlen=64)
         self.ended = threading.Event()  # the child is gone (rule 6)
+        self._heard = threading.Event()  # a word from the child: it reads its socket (rule 5)
+        self._started_at = 0.0  # when the child was started (its START_WAIT_S, rule 5)
 
     @property
     def wanted(self) -> bool:
@@ -190,18 +197,25 @@ class Express:
             if self._sock is not None:
                 self._hand(rotator_id, self._number, fd)
 
-    def closing(self, rotator_id: str) -> None:
+    def closing(self, rotator_id: str, fd: int) -> None:
         with self._lock:
-            number, _fd = self._ports.pop(rotator_id, (0, -1))
-            if number == 0 or self._sock is None or self.ended.is_set():
+            number, held = self._ports.get(rotator_id, (0, -1))
+            if held != fd:
+                return  # a newer port's (its close ran late): the express dropped this copy
+            del self._ports[rotator_id]
+            if self._sock is None or self.ended.is_set():
                 return
             dropped = self._dropped[number] = threading.Event()
             try:
                 _send(self._sock, {"op": "drop", "rotator": rotator_id, "n": number})
             except OSError:
                 return  # gone: its copies are closed with it
-        if not dropped.wait(DROP_WAIT_S):
-            self._kill(f"did not give {rotator_id}'s port back within {DROP_WAIT_S:g} s")
+        # not reading its socket yet is a start (importing Python on a slow machine), no hang
+        wait_s = DROP_WAIT_S
+        if not self._heard.is_set():
+            wait_s = max(wait_s, self._started_at + START_WAIT_S - time.monotonic())
+        if not dropped.wait(wait_s):
+            self._kill(f"did not give {rotator_id}'s port back within {wait_s:.1f} s")
         with self._lock:
             self._dropped.pop(number, None)
 
@@ -215,7 +229,7 @@ class Express:
 
     # -- the child (rule 1, on the express's thread) -------------------------------------------
     def _run(self, mqtt311: bool) -> None:
-        t0 = time.monotonic()
+        t0 = self._started_at = time.monotonic()
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         env = dict(os.environ)
         root = str(Path(__file__).resolve().parents[2])  # the bridge's own code, whatever runs it
@@ -273,6 +287,7 @@ class Express:
                 data = b""
             if not data:
                 break
+            self._heard.set()
             word = json.loads(data)
             op = word.get("op")
             if op == "up":
@@ -312,6 +327,9 @@ class Express:
         with self._lock:
             stopping = self._stopping
             self._sock = None
+            waiting = list(self._dropped.values())
+        for event in waiting:  # its copies of the ports went with it
+            event.set()
         mine.close()
         if not stopping:
             self._ended(f"the stop express ended (exit code {code})")
@@ -365,8 +383,8 @@ class _PortWatch:
     def opened(self, fd: int) -> None:
         self._express.opened(self._id, fd)
 
-    def closing(self) -> None:
-        self._express.closing(self._id)
+    def closing(self, fd: int) -> None:
+        self._express.closing(self._id, fd)
 
 
 # -- the child's side ----------------------------------------------------------------------------
@@ -490,6 +508,10 @@ class _Child:
                 self.say(op="dropped", rotator=rid, n=number)
             for extra in fds[1:] if word.get("op") == "port" else fds:
                 os.close(extra)
+        with self._lock:  # the bridge is gone: its ports are free at once (rule 7)
+            for _number, fd in self._ports.values():
+                os.close(fd)
+            self._ports.clear()
 
 
 def _switch_on(payload: bytes) -> bool:

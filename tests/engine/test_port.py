@@ -70,8 +70,8 @@ class Watch:
         self.fd = fd
         self.told.append(("opened", fd, _is_open(fd)))
 
-    def closing(self) -> None:
-        self.told.append(("closing", self.fd, _is_open(self.fd)))
+    def closing(self, fd: int) -> None:
+        self.told.append(("closing", fd, _is_open(fd)))
 
 
 def _is_open(fd: int) -> bool:
@@ -96,7 +96,7 @@ def test_a_watch_that_fails_costs_the_port_nothing(tty: str) -> None:
         def opened(self, fd: int) -> None:
             raise RuntimeError("the express is gone")
 
-        def closing(self) -> None:
+        def closing(self, fd: int) -> None:
             raise RuntimeError("the express is gone")
 
     port = watched(open_port, Broken())(tty, REGISTRY["rotorez"], None)

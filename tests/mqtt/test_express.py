@@ -211,14 +211,18 @@ def test_an_express_that_ends_is_said_with_its_exit_code() -> None:
 
 def test_an_express_that_does_not_give_a_port_back_is_killed_and_the_port_closed() -> None:
     problems = Problems()
-    # holds the socket, reads nothing, answers nothing
-    e = express([sys.executable, "-c", "import time; time.sleep(600)"], problems)
+    # takes the port, then hangs: holds the socket, reads nothing more, answers nothing
+    hung = (
+        "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[1])); s.recv(65536); "
+        """s.send(b'{"op": "held", "rotator": "a", "n": 1}'); time.sleep(600)"""
+    )
+    e = express([sys.executable, "-c", hung], problems)
     port = Port()
     e.opened("a", port.w)
     e.start(mqtt311=False)
-    wait_until(lambda: e._sock is not None, 10, "started")
+    wait_until(lambda: "a" in e.held, 10, "it took the port")
     done = threading.Event()
-    threading.Thread(target=lambda: (e.closing("a"), done.set()), daemon=True).start()
+    threading.Thread(target=lambda: (e.closing("a", port.w), done.set()), daemon=True).start()
     wait_until(done.is_set, DROP_WAIT_S + 10, "the closing thread goes on")
     wait_until(problems.on, 10, "the problem said")
     assert "ended" in problems.on()[0]
@@ -264,3 +268,91 @@ def test_a_refused_connection_is_said_until_the_express_is_up_a_denial_stays() -
     wait_until(lambda: len(problems.said) == 2, 10, "both said")
     assert problems.on() == ["stop express: denied: rotor/a/stop"]
     e.stop()
+
+
+def test_a_port_reopened_before_the_old_one_is_closed_stays_the_expresss() -> None:
+    """The old port's closing thread runs late (a busy machine): the new port is already
+    open and handed over. Only the old copy is given back; the express keeps the new one."""
+    problems = Problems()
+    e = Express(SETTINGS, topics=TOPICS, frames={"a": b";"}, on_problem=problems)
+    old, new = Port(), Port()
+    e.opened("a", old.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: "a" in e.held, 10, "the old port held")
+    e.held_changed.clear()
+    e.opened("a", new.w)  # the replugged adapter's port, opened first
+    wait_until(e.held_changed.is_set, 10, "the new port held")
+    e.closing("a", old.w)  # then the old port's close thread tells it is going
+    os.close(old.w)
+    os.close(new.w)  # the bridge's copy of the new port; the express's must stay
+    try:
+        assert "a" in e.held
+        with pytest.raises(BlockingIOError):  # a writer is left: the express's copy
+            os.read(new.r, 10)
+        assert os.read(old.r, 10) == b""  # the old port: no copy left anywhere
+    finally:
+        e.stop()
+
+
+def test_a_port_closed_while_the_express_is_still_starting_is_given_back_not_killed() -> None:
+    """A slow machine (a Raspberry Pi loading Python): the express is not reading its socket
+    yet when a port closes (an unplug, a quick shutdown). That is no hung express: the drop
+    waits for it to start, and it stays the rotators' fast stop afterwards."""
+    problems = Problems()
+    slow_start = (
+        f"import sys, time; time.sleep({2 * DROP_WAIT_S}); "
+        "from bridge.mqtt.express import main; sys.exit(main(sys.argv))"
+    )
+    e = express([sys.executable, "-c", slow_start], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: e._sock is not None, 10, "started")
+    try:
+        e.closing("a", port.w)
+        os.close(port.w)
+        assert os.read(port.r, 10) == b""  # its copy given back
+        assert not problems.on() and not e.ended.is_set()
+    finally:
+        e.stop()
+
+
+def test_when_the_bridge_goes_its_ports_are_given_back_before_the_express_disconnects(
+    rig: ChildRig,
+) -> None:
+    """The bridge's process died (its end of the socket closed): the express closes its copies
+    of the ports at once, not after its MQTT goodbye (a broker away: seconds), so a bridge
+    restarted at once does not find its ports busy (their TIOCEXCL)."""
+    port = Port()
+    rig.hand("a", 1, port)
+    os.close(port.w)  # the bridge's copy went with its process
+    rig.mine.close()
+    rig.thread.join(slow(5))
+    assert os.read(port.r, 10) == b""  # no writer left: the express's copy is closed
+
+
+def test_a_port_closing_as_the_bridge_stops_is_not_called_a_hung_express(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The express is told to stop while a port's close waits for its copy back: the express
+    is gone with its copies, so the close goes on at once, and no kill is logged."""
+    problems = Problems()
+    # takes the port, never answers a drop, ends on its end of file
+    deaf = (
+        "import socket, sys; s = socket.socket(fileno=int(sys.argv[1])); s.recv(65536); "
+        """socket.recv_fds(s, 65536, 4); s.send(b'{"op": "held", "rotator": "a", "n": 1}')\n"""
+        "while s.recv(65536): pass"
+    )
+    e = express([sys.executable, "-c", deaf], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    wait_until(lambda: "a" in e.held, 10, "it took the port")
+    done = threading.Event()
+    closing = threading.Thread(target=lambda: (e.closing("a", port.w), done.set()), daemon=True)
+    closing.start()
+    wait_until(lambda: 1 in e._dropped, 10, "the close waits for the copy back")
+    e.stop()
+    wait_until(done.is_set, 10, "the close goes on")
+    assert e._child is not None and e._child.returncode == 0  # its end of file, not a kill
+    assert not [r for r in caplog.records if "killed" in r.getMessage()]
