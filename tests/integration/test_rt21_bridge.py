@@ -36,7 +36,10 @@ def test_target_to_the_tenth_stop_while_turning_and_the_bearing_read_back(rig: R
     emu.wait_for(lambda s: s.is_moving and s.az_deg > 140, 10)
     rig.probe.publish("rotor/stop", "STOP")
     stopped = emu.wait_for(lambda s: not s.is_moving, 5)
-    assert stopped.az_deg < 290 and [f.data for f in emu.frames("stop")] == [b";"]
+    # the stop lane's STOP and the main connection's copy may both go out (lastword.py: a
+    # stop carried out twice stops twice); nothing but stops
+    stops = [f.data for f in emu.frames("stop")]
+    assert stopped.az_deg < 290 and stops and set(stops) == {b";"} and len(stops) <= 2
     t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
     assert status(rig)["bearing"] == round(emu.state().az_deg, 1)  # where it stopped, read back
