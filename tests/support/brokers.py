@@ -11,6 +11,7 @@ which needs a server name and a store directory: both are in the workdir.
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import shutil
 import socket
@@ -29,72 +30,9 @@ def find_nats() -> str | None:
     )
 
 
-class Nats:
-    """``start()``/``stop()``/``restart()`` as ``bridge.mosquitto.Mosquitto``; ``port`` is the
-    MQTT listener's (the NATS client port is another free one, on loopback too)."""
-
-    def __init__(self, workdir: Path) -> None:
-        exe = find_nats()
-        if exe is None:
-            raise BrokerError("nats-server is not installed (Debian: apt-get install nats-server)")
-        self.exe = exe
-        self.host = "127.0.0.1"
-        self.port = free_port()
-        self.nats_port = free_port()
-        self.workdir = workdir
-        self.conf = workdir / "nats.conf"
-        self.log = workdir / "nats.log"
-        self.proc: subprocess.Popen[bytes] | None = None
-
-    def start(self, timeout_s: float = 20.0) -> Nats:
-        for attempt in range(3):
-            try:
-                return self._start(slow(timeout_s))
-            except BrokerError:
-                if attempt == 2:
-                    raise
-                self.port, self.nats_port = free_port(), free_port()  # taken meanwhile
-        raise AssertionError("unreachable")
-
-    def _start(self, timeout_s: float) -> Nats:
-        self.workdir.mkdir(parents=True, exist_ok=True)
-        store = self.workdir / "jetstream"
-        self.conf.write_text(
-            f"server_name: rb_{self.port}\n"
-            f"listen: {self.host}:{self.nats_port}\n"
-            f'jetstream {{ store_dir: "{store}" }}\n'
-            f"mqtt {{ listen: {self.host}:{self.port} }}\n"
-        )
-        with open(self.log, "ab") as log:
-            self.proc = subprocess.Popen(
-                [self.exe, "-c", str(self.conf)], stdout=log, stderr=subprocess.STDOUT
-            )
-        deadline = time.monotonic() + timeout_s
-        while not answers(self.host, self.port, 0.2):
-            if self.proc.poll() is not None:
-                raise BrokerError(f"nats-server exited: {self.log.read_text()[-2000:]}")
-            if time.monotonic() > deadline:
-                self.stop()
-                raise BrokerError(f"nats-server did not listen on {self.host}:{self.port}")
-            time.sleep(0.05)
-        return self
-
-    def stop(self) -> None:
-        if self.proc is not None and self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(slow(10))
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.proc = None
-
-    def restart(self) -> None:
-        self.stop()
-        self._start(slow(20.0))
-
-
 AEDES_DIR = Path(__file__).resolve().parents[1] / "brokers" / "aedes"
+RABBITMQ_SERVER = Path("/usr/lib/rabbitmq/bin/rabbitmq-server")
+AMQTT = Path(__file__).resolve().parents[2] / ".brokers" / "amqtt-venv" / "bin" / "amqtt"
 
 
 def find_aedes() -> tuple[str, Path] | None:
@@ -105,74 +43,12 @@ def find_aedes() -> tuple[str, Path] | None:
     return node, AEDES_DIR / "server.cjs"
 
 
-class Aedes:
-    """aedes 0.46, as Node-RED users embed it (node-red-contrib-aedes): MQTT 3.1.1 only (it
-    refuses an MQTT 5 CONNECT with "Unsupported protocol version"), in memory (a restart loses
-    every retained message). ``start()``/``stop()``/``restart()`` as
-    ``bridge.mosquitto.Mosquitto``."""
-
-    def __init__(self, workdir: Path) -> None:
-        found = find_aedes()
-        if found is None:
-            raise BrokerError(
-                "aedes is not installed (scripts/bootstrap: npm ci in tests/brokers/aedes)"
-            )
-        self.node, self.script = found
-        self.host = "127.0.0.1"
-        self.port = free_port()
-        self.workdir = workdir
-        self.log = workdir / "aedes.log"
-        self.proc: subprocess.Popen[bytes] | None = None
-
-    def start(self, timeout_s: float = 20.0) -> Aedes:
-        for attempt in range(3):
-            try:
-                return self._start(slow(timeout_s))
-            except BrokerError:
-                if attempt == 2:
-                    raise
-                self.port = free_port()  # taken meanwhile
-        raise AssertionError("unreachable")
-
-    def _start(self, timeout_s: float) -> Aedes:
-        self.workdir.mkdir(parents=True, exist_ok=True)
-        with open(self.log, "ab") as log:
-            self.proc = subprocess.Popen(
-                [self.node, str(self.script), str(self.port)],
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                cwd=self.script.parent,
-            )
-        deadline = time.monotonic() + timeout_s
-        while not answers(self.host, self.port, 0.2):
-            if self.proc.poll() is not None:
-                raise BrokerError(f"aedes exited: {self.log.read_text()[-2000:]}")
-            if time.monotonic() > deadline:
-                self.stop()
-                raise BrokerError(f"aedes did not listen on {self.host}:{self.port}")
-            time.sleep(0.05)
-        return self
-
-    def stop(self) -> None:
-        if self.proc is not None and self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(slow(10))
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.proc = None
-
-    def restart(self) -> None:
-        self.stop()
-        self._start(slow(20.0))
-
-
-class _Process:
+class _Process(abc.ABC):
     """A broker run as a child process on a free loopback port: ``start()``/``stop()``/
-    ``restart()`` as ``bridge.mosquitto.Mosquitto``; subclasses say how (``_command``)."""
+    ``restart()`` as ``bridge.mosquitto.Mosquitto``; each broker says how (``_command``)."""
 
     name = "broker"
+    start_s = 20.0  # how long it may take to listen (scaled by ``slow``)
 
     def __init__(self, workdir: Path) -> None:
         self.host = "127.0.0.1"
@@ -181,17 +57,22 @@ class _Process:
         self.log = workdir / f"{self.name}.log"
         self.proc: subprocess.Popen[bytes] | None = None
 
+    @abc.abstractmethod
     def _command(self) -> tuple[list[str], dict[str, str] | None]:
-        raise NotImplementedError
+        """The command line and environment (None: this one's) that start it on ``port``."""
 
-    def start(self, timeout_s: float = 60.0) -> _Process:
+    def _new_ports(self) -> None:
+        """Other free ports, the last ones having been taken meanwhile."""
+        self.port = free_port()
+
+    def start(self) -> _Process:
         for attempt in range(3):
             try:
-                return self._start(slow(timeout_s))
+                return self._start(slow(self.start_s))
             except BrokerError:
                 if attempt == 2:
                     raise
-                self.port = free_port()  # taken meanwhile
+                self._new_ports()
         raise AssertionError("unreachable")
 
     def _start(self, timeout_s: float) -> _Process:
@@ -222,12 +103,57 @@ class _Process:
         self.proc = None
 
     def restart(self) -> None:
+        """Same port: clients reconnect to where it was."""
         self.stop()
-        self._start(slow(60.0))
+        self._start(slow(self.start_s))
 
 
-RABBITMQ_SERVER = Path("/usr/lib/rabbitmq/bin/rabbitmq-server")
-AMQTT = Path(__file__).resolve().parents[2] / ".brokers" / "amqtt-venv" / "bin" / "amqtt"
+class Nats(_Process):
+    """nats-server's MQTT listener on ``port`` (the NATS client port is another free one, on
+    loopback too)."""
+
+    name = "nats"
+
+    def __init__(self, workdir: Path) -> None:
+        exe = find_nats()
+        if exe is None:
+            raise BrokerError("nats-server is not installed (Debian: apt-get install nats-server)")
+        super().__init__(workdir)
+        self.exe = exe
+        self.nats_port = free_port()
+
+    def _new_ports(self) -> None:
+        self.port, self.nats_port = free_port(), free_port()
+
+    def _command(self) -> tuple[list[str], dict[str, str] | None]:
+        conf = self.workdir / "nats.conf"
+        conf.write_text(
+            f"server_name: rb_{self.port}\n"
+            f"listen: {self.host}:{self.nats_port}\n"
+            f'jetstream {{ store_dir: "{self.workdir / "jetstream"}" }}\n'
+            f"mqtt {{ listen: {self.host}:{self.port} }}\n"
+        )
+        return [self.exe, "-c", str(conf)], None
+
+
+class Aedes(_Process):
+    """aedes 0.46, as Node-RED users embed it (node-red-contrib-aedes): MQTT 3.1.1 only (it
+    refuses an MQTT 5 CONNECT with "Unsupported protocol version"), in memory (a restart loses
+    every retained message)."""
+
+    name = "aedes"
+
+    def __init__(self, workdir: Path) -> None:
+        found = find_aedes()
+        if found is None:
+            raise BrokerError(
+                "aedes is not installed (scripts/bootstrap: npm ci in tests/brokers/aedes)"
+            )
+        super().__init__(workdir)
+        self.node, self.script = found
+
+    def _command(self) -> tuple[list[str], dict[str, str] | None]:
+        return [self.node, str(self.script), str(self.port)], None
 
 
 class RabbitMq(_Process):
@@ -236,6 +162,7 @@ class RabbitMq(_Process):
     messages are replayed to exact-topic subscriptions only). ``./tests/run brokers``."""
 
     name = "rabbitmq"
+    start_s = 60.0
 
     def _command(self) -> tuple[list[str], dict[str, str] | None]:
         if not RABBITMQ_SERVER.exists():
@@ -263,7 +190,8 @@ class RabbitMq(_Process):
 
 class Amqtt(_Process):
     """amqtt 0.12 (PyPI), in a venv of its own in .brokers/amqtt-venv (MQTT 3.1.1 only: it
-    closes an MQTT 5 connection before any CONNACK). ``./tests/run brokers``."""
+    refuses an MQTT 5 CONNECT, and never answers one that carries a will).
+    ``./tests/run brokers``."""
 
     name = "amqtt"
 
