@@ -26,6 +26,8 @@ Rules:
    a release ends the holds up to its marker. A release that clears (the connection that
    would have caught up was lost) ends every hold and drops a target or track put before it;
    a target or hold put after it is newer and stays (the session applies it first).
+   The stop express's hold (mqtt/express.py rule 8) has numbers of its own: ``put_express_hold``
+   and ``put_express_release``; nothing clears it but its own release.
 7. A lock ON leaves its stop in the batch (``lock_on``) even when a lock OFF follows it in the
    same batch: the lock ON always stops the rotor.
 8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
@@ -72,6 +74,8 @@ class Batch:
     hold: int | None = None  # rule 6: the newest marker a hold waits for
     release: int | None = None  # rule 6: holds up to this marker end
     release_clear: bool = False
+    express_hold: int | None = None  # rule 6: the newest sync word the express's hold waits for
+    express_release: int | None = None  # ... and the one its answer reached
     follow: Follow | None = None  # rule 9: applied after the track command
     heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
@@ -90,6 +94,7 @@ class Batch:
             or self.control_set
         )
         fence = self.hold is not None or self.release is not None
+        fence = fence or self.express_hold is not None or self.express_release is not None
         feeds = self.follow is not None or self.heard is not None
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
@@ -179,6 +184,20 @@ class Mailbox:
                 batch.track = None
                 batch.follow = None
                 batch.hold = None  # ended with the rest: a hold put after it is newer
+        self._wake_once()
+
+    def put_express_hold(self, n: int) -> None:
+        """Rule 6: no target goes out until ``put_express_release`` reaches ``n`` (put before
+        the stop it comes with; no wake-up: the stop's put wakes the worker)."""
+        with self._lock:
+            held = self._batch.express_hold
+            self._batch.express_hold = n if held is None else max(held, n)
+
+    def put_express_release(self, n: int) -> None:
+        """Rule 6: the stop express's holds up to ``n`` end."""
+        with self._lock:
+            done = self._batch.express_release
+            self._batch.express_release = n if done is None else max(done, n)
         self._wake_once()
 
     def _hold(self, marker: int | None) -> None:

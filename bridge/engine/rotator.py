@@ -325,6 +325,15 @@ class Rotator:
         """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
         self._mailbox.put_release(marker, clear=clear)
 
+    def express_hold(self, n: int) -> None:
+        """No target goes out until the stop express has answered sync word ``n`` (mqtt/
+        express.py rule 8): put before the stop it comes with."""
+        self._mailbox.put_express_hold(n)
+
+    def express_release(self, n: int) -> None:
+        """The stop express answered up to sync word ``n``: its holds up to it end."""
+        self._mailbox.put_express_release(n)
+
     def _track(self, command: TrackBody, what: str) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or its TLE);
         ``off`` ends it (never refused, like a stop). A name is looked up in the TLE file by

@@ -20,7 +20,9 @@ Rules:
 5. The last word's fence (mqtt/lastword.py): a stop or lock ON from the stop lane comes with a
    hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
-   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6).
+   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6). The stop
+   express's hold (mqtt/express.py rule 8) is a second one, with numbers of its own: a target
+   waits while either is held; its release never clears (what waited is newer than the stop).
 """
 
 from __future__ import annotations
@@ -134,10 +136,11 @@ class Fence:
 
     def __init__(self) -> None:
         self._hold: int | None = None
+        self._express: int | None = None  # rule 5: the stop express's sync word waited for
 
     @property
     def held(self) -> bool:
-        return self._hold is not None
+        return self._hold is not None or self._express is not None
 
     def apply(self, batch: Batch) -> bool:
         """Take a batch's hold and release in; whether a held fence was cleared (what waited
@@ -150,4 +153,11 @@ class Fence:
         if batch.release is not None and self._hold is not None and self._hold <= batch.release:
             self._hold = None
             log.debug("hold ended")
+        if batch.express_hold is not None:
+            held = self._express
+            self._express = batch.express_hold if held is None else max(held, batch.express_hold)
+        done = batch.express_release
+        if done is not None and self._express is not None and self._express <= done:
+            self._express = None
+            log.debug("the stop express's hold ended")
         return cleared

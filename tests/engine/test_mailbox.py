@@ -132,6 +132,7 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put": lambda mb: mb.put(Target(10.0)),
         "put_lock": lambda mb: mb.put_lock(True),
         "put_release": lambda mb: mb.put_release(1),
+        "put_express_release": lambda mb: mb.put_express_release(1),
         "put_track": lambda mb: mb.put_track(Track(None)),
         "put_note": lambda mb: mb.put_note("x"),
         "put_health_reset": lambda mb: mb.put_health_reset(),
@@ -141,7 +142,8 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put_wind": lambda mb: mb.put_wind(80.0),
     }
     named = {n for n in dir(Mailbox) if n == "put" or n.startswith("put_")}
-    assert named == set(puts), "a new kind of put: add it here"
+    # the express's hold goes in just before its stop, whose put wakes the worker
+    assert named - {"put_express_hold"} == set(puts), "a new kind of put: add it here"
     for name, put in puts.items():
         mb = Mailbox()
         try:

@@ -159,6 +159,22 @@ def test_the_fence_holds_until_its_marker_and_a_clearing_release_says_so() -> No
     assert not fence.apply(Batch(release_clear=True))  # nothing was held
 
 
+def test_the_stop_expresss_hold_has_numbers_of_its_own_and_only_its_answer_ends_it() -> None:
+    """stops.py rule 5: a lane marker or a clearing release (the main connection's) says
+    nothing of the stop express's frame; only its answer does."""
+    fence = Fence()
+    fence.apply(Batch(express_hold=2))
+    fence.apply(Batch(stop=Stop(), hold=1))
+    fence.apply(Batch(release=5))  # the lane's marker, numbered above the express's word
+    assert fence.held
+    fence.apply(Batch(release_clear=True))
+    assert fence.held
+    fence.apply(Batch(express_release=1))
+    assert fence.held
+    fence.apply(Batch(express_release=2))
+    assert not fence.held
+
+
 # -- options -----------------------------------------------------------------------------------
 def test_options_go_out_when_idle_and_free_and_again_after_the_refresh() -> None:
     options = Options({"b": True, "a": False})

@@ -53,6 +53,23 @@ def test_a_target_read_after_a_lane_stop_waits_and_the_main_copy_of_the_stop_dro
     assert t < v.now
 
 
+def test_a_target_after_a_stop_waits_for_the_stop_expresss_answer(rig: Rig) -> None:
+    """mqtt/express.py rule 8: the express may still write its frame for the stop; the move
+    read after the stop goes out only when the express answered for it."""
+    v = ready(rig)
+    t = v.now
+    v.mailbox.put_express_hold(1)
+    v.mailbox.put(Stop(Source.MQTT))
+    v.mailbox.put(Target(120.0))  # published just after the stop
+    v._take()
+    v.run_for(8)
+    assert bearings(v, since=t) == [] and not v.truth().is_moving
+    v.mailbox.put_express_release(1)
+    v._take()
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 120) < 4, 120, "at 120")
+    assert bearings(v, since=t) == [b"AP1120\r"]
+
+
 def test_a_hold_ended_by_a_lost_connection_drops_what_waited(rig: Rig) -> None:
     """Rule 13: the target's place in line is lost; it is reported, never carried out."""
     v = ready(rig)
