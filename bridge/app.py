@@ -134,6 +134,7 @@ class App:
         self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
+        self._by_id: dict[str, Rotator] = {}  # the stop express's holds (mqtt/express.py rule 8)
         audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
         self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
@@ -194,6 +195,7 @@ class App:
             if self.web is not None:
                 self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)
+            self._by_id[r.id] = rot
             if r.rotctld_port is not None:
                 server = RotctldServer(
                     rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
@@ -266,7 +268,21 @@ class App:
                 t = self.topics.rotator(r.id)
                 topics[t.stop], topics[t.lock] = (r.id, "stop"), (r.id, "lock")
                 frames[r.id] = stop
-        return Express(settings.mqtt, topics=topics, frames=frames, on_problem=self._info)
+        groups = {  # a group's stop: each member's frame (mqtt/groups.py)
+            self.topics.group(g.id).stop: tuple(g.rotators) for g in settings.groups
+        }
+        express = Express(
+            settings.mqtt,
+            topics=topics,
+            frames=frames,
+            on_problem=self._info,
+            groups=groups,
+            sync_topic=self.topics.bridge_fence_express,
+            on_hold=lambda rid, n: self._by_id[rid].express_hold(n),
+            on_release=lambda rid, n: self._by_id[rid].express_release(n),
+        )
+        self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
+        return express
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs

@@ -12,6 +12,11 @@ connection: the same decisions, member by member, in one step under the same loc
 group stop holds every member; the main connection's copy is each member's copy), and one
 marker for them all, the newest. A member whose stop raises costs the others nothing: the
 failure is logged and the next member is stopped.
+
+Every stop and lock ON carried out here is first shown to the stop express (``express``,
+mqtt/express.py rule 8), which may put the rotator's targets on a hold of its own, in the same
+step: the express may still be writing its frame for that stop, and a target sent before it
+did would be stopped by it.
 """
 
 from __future__ import annotations
@@ -78,6 +83,8 @@ class Halts:
         self._lock = Deferring()
         self._timer: threading.Timer | None = None
         self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
+        # the stop express's hold (mqtt/express.py rule 8), asked before each halt's put
+        self.express: Callable[[str], None] | None = None
 
     def main_gone(self) -> None:
         """The main connection dropped, or is new (before its first message): holds end with
@@ -136,6 +143,8 @@ class Halts:
             if kind == "stop"
             else Lock(True, source=Source.MQTT, origin=origin)
         )
+        if self.express is not None:  # its hold before the halt (mqtt/express.py rule 8)
+            self.express(rot.id)
         rot.submit(halt, what, hold=hold, echo=echo)
 
     def _send_marker(self, n: int) -> None:

@@ -233,6 +233,11 @@ class MqttService:
     def markers_allowed(self) -> None:
         self._halts.markers_allowed()
 
+    def hold_for_express(self, hold: Callable[[str], None]) -> None:
+        """Every MQTT stop and lock ON is shown to the stop express first (mqtt/express.py
+        rule 8: its hold), in the step that carries it out."""
+        self._halts.express = hold
+
     def start(self) -> None:
         self._publisher.start()
 

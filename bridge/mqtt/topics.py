@@ -15,7 +15,8 @@ Two topics under ``B/bridge/`` are the bridge's messages to itself, not for othe
   broker's ACL must let the bridge publish and subscribe there: without it every connect
   waits LOOK_TIMEOUT_S (5 s) and deletes no stale discovery.
 - ``B/bridge/fence`` and ``B/bridge/fence/lane``: the markers of the last word
-  (mqtt/lastword.py), QoS 0, not retained, seen only while stops and locks come in.
+  (mqtt/lastword.py), ``B/bridge/fence/express`` the stop express's sync words (its rule 8),
+  QoS 0, not retained, seen only while stops and locks come in.
 """
 
 from __future__ import annotations
@@ -242,6 +243,11 @@ class Topics:
     def bridge_fence_lane(self) -> str:
         """The markers the stop lane reads (lastword.py rule 4)."""
         return f"{self.base}/bridge/fence/lane"
+
+    @property
+    def bridge_fence_express(self) -> str:
+        """The stop express's own sync words, published and read by it (express.py rule 8)."""
+        return f"{self.base}/bridge/fence/express"
 
     @property
     def spots(self) -> str:

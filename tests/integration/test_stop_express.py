@@ -15,6 +15,7 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -203,9 +204,11 @@ def test_two_stop_frames_cost_nothing_on_the_models_the_express_writes_to(
         assert not rig.bogus("tower")  # a banner answering the second ';' is no bearing
 
 
-def test_an_express_that_dies_is_said_and_stops_take_the_lane(rig: Rig) -> None:
-    """Killed (an out-of-memory killer, a bug): B/bridge/info says so while the bridge runs,
-    and a stop still stops the rotor, by the stop lane in the bridge's process."""
+def test_an_express_that_dies_is_said_started_again_and_writes_again(rig: Rig) -> None:
+    """Killed (an out-of-memory killer, a bug): B/bridge/info says so while it is down, a stop
+    still stops the rotor (the stop lane in the bridge's process), and it is started again,
+    given the port again, and writes the next stop's frame; B/bridge/info then says nothing
+    of it."""
     emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
     app = rig.start()
     rig.ready("tower")
@@ -215,12 +218,23 @@ def test_an_express_that_dies_is_said_and_stops_take_the_lane(rig: Rig) -> None:
     child.kill()
     info = rig.probe.wait_for("rotor/bridge/info", lambda m: b"stop express ended" in m.payload)
     (said,) = [p for p in json.loads(info.payload)["problems"] if "express" in p]
-    assert "stop lane" in said
+    assert "stop lane" in said and "started again" in said
     rig.probe.publish("rotor/target", "200")
     emu.wait_for(lambda s: s.is_moving, 10)
     rig.probe.publish("rotor/stop", "")
     emu.wait_for(lambda s: not s.is_moving, 10)
-    assert not app.express.wrote
+    wait_until(lambda: app.express.starts == 2, 10, "started again")
+    express_ready(app)
+    rig.probe.wait_for(
+        "rotor/bridge/info",
+        lambda m: not [p for p in json.loads(m.payload)["problems"] if "express" in p],
+    )
+    app.express.wrote.clear()
+    rig.probe.publish("rotor/target", "100")
+    emu.wait_for(lambda s: s.is_moving, 10)
+    rig.probe.publish("rotor/stop", "")
+    wait_until(lambda: app.express.wrote, 10, "the new express wrote the stop")
+    emu.wait_for(lambda s: not s.is_moving, 10)
 
 
 def test_the_express_ends_with_the_bridge(rig: Rig) -> None:
@@ -260,3 +274,31 @@ def test_a_broker_that_refuses_the_express_is_said_and_stops_take_the_lane(
     finally:
         probe.close()
         broker.stop()
+
+
+def test_a_late_express_frame_does_not_stop_a_move_published_after_the_stop(rig: Rig) -> None:
+    """STOP, then a target: the express is descheduled (here: stopped by a signal) between
+    reading the STOP and writing its frame, while the bridge carries the STOP out and reads
+    the target. The move waits until the express has answered for that STOP (its rule 8),
+    so its late frame comes before the move, never after it: the rotor turns to the target."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 30.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    child = app.express._child
+    assert child is not None
+    os.kill(child.pid, signal.SIGSTOP)
+    try:
+        rig.probe.publish("rotor/stop", "")
+        rig.probe.publish("rotor/target", "60")
+
+        def taken() -> bool:  # the move is out, or waits for the express (its rule 8)
+            status = rig.probe.last("rotor/status")
+            pending = status is not None and json.loads(status.payload).get("target") == 60
+            return emu.state().is_moving or (pending and bool(getattr(app.express, "_holds", {})))
+
+        wait_until(taken, 10, "the target taken by the session")
+    finally:
+        os.kill(child.pid, signal.SIGCONT)
+    rig.arrived("tower", 60)
+    assert app.express.wrote and app.express.wrote[-1][0] == "tower"  # its frame did go

@@ -14,8 +14,18 @@ import threading
 from collections.abc import Iterator
 
 import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.mqtt.express import DROP_WAIT_S, GAP_S, Express, _Child, express_client_id
+from bridge.mqtt.express import (
+    DROP_WAIT_S,
+    FINISH_WAIT_S,
+    GAP_S,
+    Express,
+    Sync,
+    _Child,
+    express_client_id,
+)
 from bridge.protocols import REGISTRY
 from bridge.settings_mqtt import MqttSettings
 from tests.support.rig import EASYCOMM_MODELS, GS232_MODELS
@@ -27,6 +37,8 @@ TOPICS = {
     "rotor/a/lock": ("a", "lock"),
     "rotor/b/stop": ("b", "stop"),
 }
+GROUPS = {"rotor/stack/stop": ["a", "b"]}
+SYNC = "rotor/bridge/fence/express"
 
 
 class Port:
@@ -52,10 +64,31 @@ class ChildRig:
             "mqtt311": mqtt311,
             "mqtt": SETTINGS.model_dump(mode="json"),
             "client_id": "rfast-shack",
+            "groups": GROUPS,
+            "sync_topic": SYNC,
         }
         self.child = _Child(theirs, config)
+        self.published: list[str] = []  # its sync words, as published (rule 8)
+        self.child.link.publish = lambda topic, payload: self.published.append(payload)
         self.thread = threading.Thread(target=self.child.serve, daemon=True)
         self.thread.start()
+        self.connect()
+
+    def connect(self) -> None:
+        """Its connection accepted and subscribed, its first word back: it writes (rule 8)."""
+        self.child._linked(True)
+        self.child._subscribed()
+        self.back()
+        assert self.word() == {"op": "up"}
+
+    def back(self) -> None:
+        """Every word it published comes back, in order (the broker's copy)."""
+        words, self.published[:] = list(self.published), []
+        for payload in words:
+            self.child.on_message(SYNC, payload.encode(), False, None, None)
+
+    def ask(self, n: int, again: bool = False) -> None:
+        self.mine.send(json.dumps({"op": "sync", "n": n, "again": again}).encode())
 
     def word(self) -> dict[str, object]:
         self.mine.settimeout(slow(5))
@@ -159,6 +192,121 @@ def test_a_late_word_about_an_older_port_leaves_the_newer_one(rig: ChildRig) -> 
     assert rig.word()["op"] == "dropped"
     rig.stop("rotor/a/stop")
     assert (old.written(), new.written()) == (b"", b";")
+
+
+# -- rule 8: a late frame never stops a newer move -------------------------------------------
+def linked() -> Sync:
+    sync = Sync()
+    sync.accepted()
+    word = sync.subscribed()
+    assert sync.read_back(word) == (None, None) and sync.writing
+    return sync
+
+
+def test_a_request_is_answered_by_a_word_published_after_it_not_by_one_out_before() -> None:
+    sync = linked()
+    assert sync.asked(1) == (None, 2)  # word 2 published after request 1 came
+    assert sync.asked(2) == (None, None)  # word 2 is out: it was published before request 2
+    assert sync.read_back(2) == (1, 3)  # answers 1; request 2 needs a word after it: 3
+    assert sync.read_back(3) == (2, None)
+    assert sync.read_back(3) == (None, None)  # (a duplicate, an earlier connection's word)
+
+
+def test_a_word_the_broker_dropped_is_published_again_when_asked_again() -> None:
+    sync = linked()
+    assert sync.asked(1) == (None, 2)  # word 2 never comes back
+    assert sync.asked(1, again=True) == (None, 3)
+    assert sync.read_back(3) == (1, None)
+
+
+def test_while_its_connection_is_down_a_request_is_answered_at_once() -> None:
+    sync = Sync()
+    assert sync.asked(1) == (1, None)  # nothing it reads later can be that old
+    sync = linked()
+    assert sync.asked(1) == (None, 2)
+    assert sync.ended() == 1  # a connection that ends answers every request
+    assert not sync.writing and sync.asked(2) == (2, None)
+
+
+def test_an_answer_given_at_once_keeps_it_from_writing_until_a_newer_word_came_back() -> None:
+    """Connected, its first word not back yet: a request is answered at once (it writes
+    nothing now). A word published before that answer may come back before a stop the bridge
+    read before asking: only a word published after the answer lets it write."""
+    sync = Sync()
+    sync.accepted()
+    first = sync.subscribed()
+    assert sync.asked(1) == (1, first + 1)
+    assert sync.read_back(first) == (None, None) and not sync.writing
+    assert sync.read_back(first + 1) == (None, None) and sync.writing
+
+
+def test_a_stop_read_before_its_words_came_back_is_not_written(rig: ChildRig) -> None:
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.child._linked(False)  # the broker went away: every request answered from now on
+    assert rig.word() == {"op": "down"}
+    rig.child._linked(True)
+    rig.child._subscribed()
+    rig.stop("rotor/a/stop")  # its word not back yet: it may not write
+    assert port.written() == b""
+    rig.back()
+    assert rig.word() == {"op": "up"}
+    rig.stop("rotor/a/stop")
+    assert port.written() == b";"
+
+
+def test_the_bridge_is_answered_after_the_stops_read_before_its_word(rig: ChildRig) -> None:
+    """The order on its socket: the frame of a stop the broker had before the word, then the
+    answer (the bridge's hold ends with it)."""
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.ask(7)
+    wait_until(lambda: rig.published, 5, "its word published")
+    rig.stop("rotor/a/stop")  # the stop the bridge read before asking
+    rig.back()
+    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "synced", "n": 7}
+    assert port.written() == b";"
+
+
+def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
+    a, b = Port(), Port()
+    rig.hand("a", 1, a)
+    rig.hand("b", 2, b)
+    rig.stop("rotor/stack/stop")
+    assert (a.written(), b.written()) == (b";", b"S\r")
+    assert {rig.word()["rotator"], rig.word()["rotator"]} == {"a", "b"}
+
+
+# -- rule 9: a frame is never left half-written ------------------------------------------------
+def test_a_write_cut_short_by_a_full_buffer_is_finished(rig: ChildRig) -> None:
+    port, calls = Port(), []
+
+    def short_first(fd: int, data: bytes) -> int:  # a tty whose output buffer had 1 byte left
+        calls.append(data)
+        return os.write(fd, data[:1] if len(calls) == 1 else data)
+
+    rig.child.write = short_first
+    rig.hand("b", 1, port)
+    rig.stop("rotor/b/stop")
+    assert port.written() == b"S\r"  # whole: no frame of the session's lands inside it
+    assert rig.word()["op"] == "wrote"
+
+
+def test_a_frame_the_port_never_finishes_taking_is_said(rig: ChildRig) -> None:
+    port, now = Port(), [100.0]
+    rig.child.clock = lambda: now[0]
+
+    def stuck(fd: int, data: bytes) -> int:
+        if data == b"S\r":
+            return os.write(fd, b"S")
+        now[0] += FINISH_WAIT_S  # the line takes nothing more
+        raise BlockingIOError
+
+    rig.child.write = stuck
+    rig.hand("b", 1, port)
+    rig.stop("rotor/b/stop")
+    assert rig.word() == {"op": "half", "rotator": "b"}
 
 
 def test_client_id_is_the_lanes_rule_with_its_own_mark() -> None:
@@ -356,3 +504,155 @@ def test_a_port_closing_as_the_bridge_stops_is_not_called_a_hung_express(
     wait_until(done.is_set, 10, "the close goes on")
     assert e._child is not None and e._child.returncode == 0  # its end of file, not a kill
     assert not [r for r in caplog.records if "killed" in r.getMessage()]
+
+
+# -- the parent's side of rule 8, rule 6's restart, a fight said ---------------------------------
+ANSWERS_LATE = (  # answers each sync word when the next is asked for (a slow express)
+    "import json, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    's.send(b\'{"op": "up"}\')\n'
+    "last = None\n"
+    "while True:\n"
+    "    word = s.recv(65536)\n"
+    "    if not word:\n"
+    "        break\n"
+    "    word = json.loads(word)\n"
+    "    if word.get('op') == 'sync':\n"
+    "        if last is not None:\n"
+    "            s.send(json.dumps({'op': 'synced', 'n': last}).encode())\n"
+    "        last = word['n']\n"
+)
+
+
+class Holds:
+    def __init__(self) -> None:
+        self.log: list[tuple[str, str, int]] = []
+
+    def hold(self, rid: str, n: int) -> None:
+        self.log.append(("hold", rid, n))
+
+    def release(self, rid: str, n: int) -> None:
+        self.log.append(("release", rid, n))
+
+
+def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> None:
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";", "b": b"S\r"},
+        on_problem=problems,
+        command=[sys.executable, "-c", ANSWERS_LATE],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    e.hold("a")  # no express running: nothing of one can write, no hold
+    assert holds.log == []
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        e.hold("a")
+        e.hold("b")  # answers word 1: a's hold waits for it, b's for 2
+        wait_until(lambda: ("release", "a", 1) in holds.log, 10, "a's hold ended")
+        e.hold("a")  # answers 2: b's hold ends; a's waits for 3
+        wait_until(lambda: ("release", "b", 2) in holds.log, 10, "b's hold ended")
+        assert [h for h in holds.log if h[0] == "release"] == [
+            ("release", "a", 1),
+            ("release", "b", 2),
+        ]
+        child = e._child
+        assert child is not None
+        child.kill()  # nothing of it can write any more: the last hold ends
+        wait_until(lambda: ("release", "a", 3) in holds.log, 10, "a's hold ended by its end")
+    finally:
+        e.stop()
+
+
+def test_a_long_hold_is_said_and_the_word_asked_for_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", ANSWERS_LATE],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    now = [1000.0]
+    e.clock = lambda: now[0]
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        e.hold("a")
+        now[0] += 10.0  # the answer does not come: said, and asked for again
+        wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
+        wait_until(lambda: ("release", "a", 1) in holds.log, 10, "the word asked for again")
+        wait_until(lambda: not problems.on(), 10, "unsaid once it ended")
+    finally:
+        e.stop()
+
+
+UP_AND_HOLDING = (
+    "import json, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    's.send(b\'{"op": "up"}\')\n'
+    "while True:\n"
+    "    data, fds, _f, _a = socket.recv_fds(s, 65536, 4)\n"
+    "    if not data:\n"
+    "        break\n"
+    "    word = json.loads(data)\n"
+    "    if word.get('op') == 'port':\n"
+    "        held = {'op': 'held', 'rotator': word['rotator'], 'n': word['n']}\n"
+    "        s.send(json.dumps(held).encode())\n"
+)
+
+
+def test_an_express_that_dies_is_said_started_again_and_given_the_ports_again() -> None:
+    problems = Problems()
+    e = express([sys.executable, "-c", UP_AND_HOLDING], problems)
+    port = Port()
+    e.opened("a", port.w)
+    e.start(mqtt311=False)
+    try:
+        wait_until(lambda: "a" in e.held, 10, "it holds the port")
+        first = e._child
+        assert first is not None
+        first.kill()
+        wait_until(lambda: any("ended" in p for p in problems.on()), 10, "its end said")
+        (said,) = problems.on()
+        assert "started again in" in said and "stop lane" in said
+        wait_until(lambda: e.starts == 2 and "a" in e.held, 10, "started again, the port handed")
+        assert e._child is not first
+        wait_until(lambda: not problems.on(), 10, "unsaid once it is up again")
+    finally:
+        e.stop()
+
+
+def test_a_fight_over_its_client_id_is_said_and_unsaid_once_a_connection_lasts() -> None:
+    from bridge.mqtt.connection import STABLE_S
+    from bridge.mqtt.express import _Link
+
+    said: list[dict[str, object]] = []
+    now = [0.0]
+    link = _Link(
+        SETTINGS,
+        "rfast-shack",
+        lambda **word: said.append(word),
+        lambda up: None,
+        subscriptions=["rotor/a/stop"],
+        on_message=lambda *a: None,
+        clock=lambda: now[0],
+    )
+    link._ended(ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True)
+    assert said and "taken over" in str(said[0]["text"]) and "rfast-shack" in str(said[0]["text"])
+    link._ended(
+        ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True
+    )  # once an episode
+    assert len(said) == 1
+    link._guard.connected(now[0])
+    now[0] += STABLE_S
+    link._tick()
+    assert said[-1] == {"op": "problem", "text": said[0]["text"], "off": True}
