@@ -302,3 +302,23 @@ def test_a_late_express_frame_does_not_stop_a_move_published_after_the_stop(rig:
         os.kill(child.pid, signal.SIGCONT)
     rig.arrived("tower", 60)
     assert app.express.wrote and app.express.wrote[-1][0] == "tower"  # its frame did go
+
+
+def test_a_groups_stop_is_written_by_the_express_for_each_member(rig: Rig) -> None:
+    """``G/stop`` (mqtt/groups.py) is a stop of each member: the express writes each member's
+    frame, as for its own ``R/stop``."""
+    upper = rig.add("upper", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    lower = rig.add("lower", emu={"start_az_deg": 190, "speed_deg_s": 20.0})
+    rig.sections = {"groups": [{"id": "stack", "rotators": ["upper", "lower"]}]}
+    app = rig.start()
+    rig.ready("upper")
+    rig.ready("lower")
+    express_ready(app, "upper")
+    express_ready(app, "lower")
+    rig.probe.publish("rotor/stack/target", "120")
+    upper.wait_for(lambda s: s.is_moving, 10)
+    lower.wait_for(lambda s: s.is_moving, 10)
+    rig.probe.publish("rotor/stack/stop", "")
+    wait_until(lambda: {rid for rid, _t in app.express.wrote} == {"upper", "lower"}, 10, "both")
+    upper.wait_for(lambda s: not s.is_moving, 10)
+    lower.wait_for(lambda s: not s.is_moving, 10)

@@ -17,6 +17,7 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
+import bridge.mqtt.express as express_module
 from bridge.mqtt.express import (
     DROP_WAIT_S,
     FINISH_WAIT_S,
@@ -279,18 +280,22 @@ def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
 
 
 # -- rule 9: a frame is never left half-written ------------------------------------------------
-def test_a_write_cut_short_by_a_full_buffer_is_finished(rig: ChildRig) -> None:
-    port, calls = Port(), []
+def test_a_write_cut_short_by_a_full_buffer_is_finished(monkeypatch: pytest.MonkeyPatch) -> None:
+    port, calls, write = Port(), [], os.write
 
     def short_first(fd: int, data: bytes) -> int:  # a tty whose output buffer had 1 byte left
         calls.append(data)
-        return os.write(fd, data[:1] if len(calls) == 1 else data)
+        return write(fd, data[:1] if len(calls) == 1 else data)
 
-    rig.child.write = short_first
-    rig.hand("b", 1, port)
-    rig.stop("rotor/b/stop")
-    assert port.written() == b"S\r"  # whole: no frame of the session's lands inside it
-    assert rig.word()["op"] == "wrote"
+    monkeypatch.setattr(express_module.os, "write", short_first)
+    rig = ChildRig(mqtt311=False)
+    try:
+        rig.hand("b", 1, port)
+        rig.stop("rotor/b/stop")
+        assert port.written() == b"S\r"  # whole: no frame of the session's lands inside it
+        assert rig.word()["op"] == "wrote"
+    finally:
+        rig.mine.close()
 
 
 def test_a_frame_the_port_never_finishes_taking_is_said(rig: ChildRig) -> None:
