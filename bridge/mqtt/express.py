@@ -92,11 +92,11 @@ Rules:
    GS-232 reads ``S`` then the session's ``M180`` as ``SM180``, an unknown command (``?>``),
    and an Easycomm ``SA S`` then ``AZ180.0`` as ``SA`` and ``SAZ180.0``: the stop, and the
    move, lost; a Rotor-EZ's ``;`` is one byte and cannot be cut. No leading byte is added to
-   clear the controller's line: a GS-232 answers an empty line with ``?>`` (a reply nobody
-   owes, rule 4's reason), and a Rotor-EZ's ``;`` ends a half ``AP1`` frame as a set, not a
-   stop. A frame still unfinished after FINISH_WAIT_S (the line is stuck: the session finds
-   its port lost, engine/port.py rule 6) is said (rule 6) until that rotator's next whole
-   frame.
+   clear the controller's line first: a GS-232 answers an empty line with ``?>`` (a reply
+   nobody owes: rule 4's reason), and a leading terminator would also carry out a session
+   frame a full buffer had cut short before it (a GS-232's ``M18`` of ``M180``: a move).
+   A frame still unfinished after FINISH_WAIT_S (the line is stuck: the session finds its
+   port lost, engine/port.py rule 6) is said (rule 6) until that rotator's next whole frame.
 """
 
 from __future__ import annotations
@@ -324,9 +324,9 @@ class Express:
 
     def _tick(self, up: bool, late: str) -> None:
         """On the reader's thread, once a second while the child starts or a hold waits."""
-        now = self.clock()
-        if not up and now - self._started_at >= START_WAIT_S:
+        if not up and time.monotonic() - self._started_at >= START_WAIT_S:
             self._problem(late, True)
+        now = self.clock()
         with self._lock:
             oldest = min(self._held_since.values(), default=None)
             newest = self._sync

@@ -144,7 +144,10 @@ class Halts:
             else Lock(True, source=Source.MQTT, origin=origin)
         )
         if self.express is not None:  # its hold before the halt (mqtt/express.py rule 8)
-            self.express(rot.id)
+            try:
+                self.express(rot.id)
+            except Exception:  # a bug there never costs the stop
+                log.exception("%s: the stop express's hold failed", rot.id)
         rot.submit(halt, what, hold=hold, echo=echo)
 
     def _send_marker(self, n: int) -> None:

@@ -791,3 +791,24 @@ def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> 
         "submit",
         ("lock", True),
     ]
+
+
+def test_every_mqtt_halt_is_shown_to_the_stop_express_first_and_its_failure_costs_no_stop() -> None:
+    """mqtt/express.py rule 8: its hold goes in before the halt, from either connection, a
+    group's stop too; a hook that raises is logged and the stop still goes in."""
+    svc, _pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    shown: list[str] = []
+
+    def hold(rid: str) -> None:
+        shown.append(rid)
+        tower.calls.append(("express", rid))
+        if len(shown) == 3:
+            raise RuntimeError("a bug in the hook")
+
+    svc.hold_for_express(hold)
+    svc.on_lane_message("rotor/stop", b"", False)
+    svc.on_message("rotor/stop", b"", False)
+    svc.on_message("rotor/lock", b"ON", False)
+    kinds = [c[0] if c[0] != "submit" else "stop" for c in tower.calls]
+    assert kinds == ["express", "stop", "express", "stop", "release", "express", "lock"]
