@@ -626,9 +626,8 @@ def test_an_express_that_dies_is_said_started_again_and_given_the_ports_again() 
         first = e._child
         assert first is not None
         first.kill()
-        wait_until(lambda: any("ended" in p for p in problems.on()), 10, "its end said")
-        (said,) = problems.on()
-        assert "started again in" in said and "stop lane" in said
+        said = wait_until(lambda: [p for p in problems.said if "ended" in p], 10, "its end said")
+        assert "started again in" in said[0] and "stop lane" in said[0]
         wait_until(lambda: e.starts == 2 and "a" in e.held, 10, "started again, the port handed")
         assert e._child is not first
         wait_until(lambda: not problems.on(), 10, "unsaid once it is up again")
