@@ -701,8 +701,7 @@ class _Link(Connection):
         log.debug("stop express disconnected (%s)", reason_code)
         if fight and self._fight is None:  # rule 6: said, not only slowed down
             self._fight = takeover_message(self._client_id, ending)
-            log.error("%s", self._fight)
-            self._say(op="problem", text=self._fight)
+            self._say(op="problem", text=self._fight)  # (the bridge logs it)
 
     def _tick(self) -> None:
         """Rule 6: a fight said is unsaid once a connection lasted STABLE_S (cheap: a compare)."""

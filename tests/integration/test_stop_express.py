@@ -322,3 +322,21 @@ def test_a_groups_stop_is_written_by_the_express_for_each_member(rig: Rig) -> No
     wait_until(lambda: {rid for rid, _t in app.express.wrote} == {"upper", "lower"}, 10, "both")
     upper.wait_for(lambda s: not s.is_moving, 10)
     lower.wait_for(lambda s: not s.is_moving, 10)
+
+
+def test_a_client_that_takes_the_expresss_client_id_is_said(rig: Rig) -> None:
+    """Another client with the express's client id (a copied configuration on another host):
+    the broker hands the session over (mosquitto 2.0 just drops the other connection) and the
+    express backs off (connection.py rule 7), and B/bridge/info says so."""
+    rig.add("tower")
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    thief = Probe(rig.broker_port, "", client_id=app.express.client_id)
+    try:
+        mark = app.express.client_id.encode()
+        info = rig.probe.wait_for("rotor/bridge/info", lambda m: mark in m.payload, 30)
+        (said,) = [p for p in json.loads(info.payload)["problems"] if "client id" in p]
+        assert said.startswith("stop express: ") and app.express.client_id in said
+    finally:
+        thief.close()
