@@ -139,7 +139,7 @@ RESTART_MAX_S = 60.0  # ... doubling up to this
 RESTART_STABLE_S = 60.0  # ... back to the first once one ran this long
 RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this long
 LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
-TICK_S = 1.0  # rule 1: the reader's wake-ups while the child starts or a hold waits
+TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
 FINISH_WAIT_S = 0.5  # rule 9: the rest of a frame a write cut short, written within this
 _PACKET = 65536
 
