@@ -15,6 +15,10 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
   the express is another process, mqtt/express.py);
+- ``SKY_LOWER_BY=N``: the sky worker's thread N nice steps below the process instead of
+  skywork.LOWER_BY (0: at the process's priority, as before), to compare in turns;
+- every thread's name is given to the kernel (its ``comm`` in /proc/<pid>/task), to read
+  per-thread CPU from outside while a load runs;
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
@@ -55,8 +59,31 @@ def _sched(tid: int | None = None) -> tuple[int, int]:
         return 0, 0
 
 
+def _name_threads() -> None:
+    """Each Python thread's name given to the kernel too (the first 15 bytes, the thread's
+    ``comm``), so that per-thread CPU and scheduling read from /proc/<pid>/task name the
+    bridge's threads (the sky worker, the lines thread, paho's) while a load runs."""
+    import ctypes
+
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return
+    bootstrap = threading.Thread._bootstrap_inner  # type: ignore[attr-defined]
+
+    def _bootstrap_inner(self: threading.Thread) -> None:
+        prctl(15, self.name.encode()[:15], 0, 0, 0)  # PR_SET_NAME
+        bootstrap(self)
+
+    threading.Thread._bootstrap_inner = _bootstrap_inner  # type: ignore[attr-defined]
+
+
 def install(path: str) -> None:
-    from bridge.engine import mailbox, worker
+    _name_threads()
+    from bridge.engine import mailbox, skywork, worker
+
+    if os.environ.get("SKY_LOWER_BY") is not None:  # the sky worker's priority, to compare
+        skywork.LOWER_BY = int(os.environ["SKY_LOWER_BY"])
     from bridge.model import Stop
     from bridge.mqtt import connection, halts
 
