@@ -10,16 +10,11 @@ Rules:
 4. ``queue`` puts a job in line without starting the thread, for a caller under a lock of its
    own (starting a thread waits until it runs, milliseconds on a busy machine); it calls
    ``wake`` once it has let go, and rule 3 holds again from then on.
-5. ``lower_by`` > 0: the thread lowers its own scheduling priority by that much (a Linux thread
-   has a nice value of its own) before its first job, so the host's other work gets a core
-   first; lowering is always allowed, raising never is, so the other threads keep theirs. Where
-   the system refuses (another kernel), the thread runs at the process's priority, as before.
 """
 
 from __future__ import annotations
 
 import logging
-import os
 import queue
 import threading
 from collections.abc import Callable
@@ -28,10 +23,9 @@ log = logging.getLogger(__name__)
 
 
 class OnDemandThread:
-    def __init__(self, name: str, idle_s: float = 30.0, lower_by: int = 0) -> None:
+    def __init__(self, name: str, idle_s: float = 30.0) -> None:
         self._name = name
         self._idle_s = idle_s
-        self._lower_by = lower_by
         self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
@@ -52,8 +46,6 @@ class OnDemandThread:
                 self._thread.start()
 
     def _run(self) -> None:
-        if self._lower_by > 0:
-            lower_this_thread(self._lower_by)
         while True:
             try:
                 job = self._jobs.get(timeout=self._idle_s)
@@ -67,20 +59,3 @@ class OnDemandThread:
                 job()
             except Exception:  # rule 2
                 log.exception("%s: a job failed", self._name)
-
-
-NICEST = 19  # the lowest priority a nice value gives (Linux)
-
-
-def lower_this_thread(by: int) -> None:
-    """Rule 5: the calling thread's nice value raised by ``by`` (at most NICEST); on Linux a
-    thread id names one thread, not its process, so the others keep theirs."""
-    setpriority = getattr(os, "setpriority", None)
-    get_native_id = getattr(threading, "get_native_id", None)
-    if setpriority is None or get_native_id is None:  # no such call on this system
-        return
-    tid = get_native_id()
-    try:
-        setpriority(os.PRIO_PROCESS, tid, min(NICEST, os.getpriority(os.PRIO_PROCESS, tid) + by))
-    except OSError as exc:  # a kernel that refuses: the thread keeps the process's priority
-        log.debug("%s: its priority stays: %s", threading.current_thread().name, exc)

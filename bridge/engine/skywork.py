@@ -20,9 +20,6 @@ Rules:
 3. One thread, started with the first question and ending after IDLE_EXIT_S with nothing to do;
    questions are answered in the order asked, each callback called on this thread (it must only
    queue, as worker.py's does).
-4. The thread runs LOWER_BY nice steps below the process (ondemand.py rule 5): the stop express,
-   the broker and the kernel's pty worker, which carry a stop to a controller, get a core
-   before a pass search when eight trackings start together (docs/architecture.md, threads).
 """
 
 from __future__ import annotations
@@ -40,7 +37,6 @@ log = logging.getLogger(__name__)
 
 KEPT = 64  # positions answers kept (rule 1): a few windows per body tracked
 IDLE_EXIT_S = 30.0
-LOWER_BY = 10  # rule 4
 
 
 @dataclass(frozen=True)
@@ -108,7 +104,7 @@ class SkyWorker:
 
     def __init__(self, compute: Callable[[Question], Answer] = answer) -> None:
         self._compute = compute
-        self._thread = OnDemandThread("sky", IDLE_EXIT_S, lower_by=LOWER_BY)  # rule 4
+        self._thread = OnDemandThread("sky", IDLE_EXIT_S)
         self._kept: OrderedDict[PositionsQuestion, Answer] = OrderedDict()
 
     def ask(self, question: Question, deliver: Deliver) -> None:

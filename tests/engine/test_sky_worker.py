@@ -5,12 +5,9 @@ sharing of answers between rotators are proven on their own."""
 
 from __future__ import annotations
 
-import os
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
-
-import pytest
 
 from bridge.engine import skywork
 from bridge.engine.actions import Ask
@@ -116,49 +113,6 @@ def test_eight_rotors_asking_for_one_window_cost_one_computation() -> None:
         worker.ask(PositionsQuestion(sky, Body.sun(), (0.0, 10.0)), deliver)
     assert done.wait(slow(10))
     assert len(computed) == 1 and all(a.value == [(1.0, 2.0)] for a in delivered)
-
-
-def _nice() -> int:
-    """The calling thread's own nice value (Linux: a thread id names one thread)."""
-    return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
-
-
-def test_the_sky_is_computed_below_the_process_priority_and_nothing_else_is_lowered() -> None:
-    """Eight trackings starting together: their pass searches ran at the priority of the stop
-    express, the broker and the pty's kernel worker, which carry a stop, and took cores from
-    them (skywork.py rule 4). The sky worker's thread lowers itself; the asker keeps its own."""
-    base = _nice()
-    seen: list[int] = []
-    done = threading.Event()
-
-    def compute(question: Question) -> Answer:
-        seen.append(_nice())
-        return Answer(question, [(1.0, 2.0)])
-
-    worker = SkyWorker(compute)
-    sky = Sky(52.5, 13.3)
-    worker.ask(PositionsQuestion(sky, Body.sun(), (0.0, 10.0)), lambda _a: done.set())
-    assert done.wait(slow(10))
-    assert seen == [min(19, base + skywork.LOWER_BY)] and skywork.LOWER_BY >= 5
-    assert _nice() == base
-
-
-def test_a_system_that_refuses_the_lower_priority_still_gets_its_sky_computed(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    def refuse(*_args: object) -> None:
-        raise PermissionError(1, "Operation not permitted")
-
-    monkeypatch.setattr(os, "setpriority", refuse)
-    done = threading.Event()
-    worker = SkyWorker(lambda q: Answer(q, [(1.0, 2.0)]))
-    got: list[Answer] = []
-    worker.ask(
-        PositionsQuestion(Sky(52.5, 13.3), Body.sun(), (0.0,)),
-        lambda a: (got.append(a), done.set()),
-    )
-    assert done.wait(slow(10))
-    assert got[0].value == [(1.0, 2.0)] and got[0].failure is None
 
 
 def test_a_sky_that_cannot_be_computed_is_answered_with_the_reason_never_raised() -> None:
