@@ -15,8 +15,6 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
   the express is another process, mqtt/express.py);
-- ``SKY_LOWER_BY=N``: the sky worker's thread N nice steps below the process instead of
-  skywork.LOWER_BY (0: at the process's priority, as before), to compare in turns;
 - every thread's name is given to the kernel (its ``comm`` in /proc/<pid>/task), to read
   per-thread CPU from outside while a load runs;
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
@@ -80,10 +78,7 @@ def _name_threads() -> None:
 
 def install(path: str) -> None:
     _name_threads()
-    from bridge.engine import mailbox, skywork, worker
-
-    if os.environ.get("SKY_LOWER_BY") is not None:  # the sky worker's priority, to compare
-        skywork.LOWER_BY = int(os.environ["SKY_LOWER_BY"])
+    from bridge.engine import mailbox, worker
     from bridge.model import Stop
     from bridge.mqtt import connection, halts
 
