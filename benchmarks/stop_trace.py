@@ -15,6 +15,8 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
   the express is another process, mqtt/express.py);
+- every thread's name is given to the kernel (its ``comm`` in /proc/<pid>/task), to read
+  per-thread CPU from outside while a load runs;
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
@@ -55,7 +57,27 @@ def _sched(tid: int | None = None) -> tuple[int, int]:
         return 0, 0
 
 
+def _name_threads() -> None:
+    """Each Python thread's name given to the kernel too (the first 15 bytes, the thread's
+    ``comm``), so that per-thread CPU and scheduling read from /proc/<pid>/task name the
+    bridge's threads (the sky worker, the lines thread, paho's) while a load runs."""
+    import ctypes
+
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return
+    bootstrap = threading.Thread._bootstrap_inner  # type: ignore[attr-defined]
+
+    def _bootstrap_inner(self: threading.Thread) -> None:
+        prctl(15, self.name.encode()[:15], 0, 0, 0)  # PR_SET_NAME
+        bootstrap(self)
+
+    threading.Thread._bootstrap_inner = _bootstrap_inner  # type: ignore[attr-defined]
+
+
 def install(path: str) -> None:
+    _name_threads()
     from bridge.engine import mailbox, worker
     from bridge.model import Stop
     from bridge.mqtt import connection, halts

@@ -33,6 +33,8 @@ of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows i
 ``STOP_VIA_PTY=1`` puts the controllers' ptys back on the path (the hop left out, to compare).
 ``STOP_EXPRESS=0`` runs this tree's bridges without the stop express (``mqtt.stop_express``
 off: the stop's frame written by the bridge's process alone), to compare in turns.
+``STOP_ONLY=trackings`` takes the control and the trackings only (no other load, no pairs; with
+``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns.
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
@@ -154,6 +156,8 @@ DIRECT = not os.environ.get("STOP_VIA_PTY")
 BRIDGE_NICE = int(os.environ.get("BRIDGE_NICE") or 0)
 # this tree's bridges with or without the stop express (module docstring)
 EXPRESS_OFF = {"stop_express": False} if os.environ.get("STOP_EXPRESS") == "0" else None
+# the focused mode of one load (module docstring): the control and that load alone
+ONLY = os.environ.get("STOP_ONLY")
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -1238,6 +1242,11 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
         ABORT.wait(2.0)  # past the start-up
         tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
         phases.append(simple_phase(lo, CONTROL, n, None, None))
+        if ONLY == "trackings":
+            phases.append(tracking_phase(lo, TRACKING_LOAD, n))
+            return _focused_end(result, lo, phases, trace)
+        if ONLY is not None:
+            raise BenchError(f"STOP_ONLY={ONLY!r}: only 'trackings' is known")
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
         if trace is not None:
             return _traced(result, lo, phases, n, trace)
@@ -1282,14 +1291,24 @@ def _traced(
     label = "console: 10 pages + POST flood"
     phases.append(loader_phase(lo, label, n, "console", console, tcp=[lo.ports["web"]]))
     phases.append(tracking_phase(lo, TRACKING_LOAD, n))
+    return _focused_end(result, lo, phases, trace)
+
+
+def _focused_end(
+    result: ItemResult, lo: Loaded, phases: list[PhaseResult], trace: str | None
+) -> ItemResult:
+    """The rows of a focused run (STOP_TRACE, STOP_ONLY), and with STOP_TRACE the stops and
+    their lines' windows for ``python -m benchmarks.stop_trace``."""
     missed = lo.taker.missed
     lo.bridge.check()
     lo.hop.finish()
-    samples = {
-        p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples] for p in phases
-    }
-    Path(trace + ".samples.json").write_text(json.dumps(samples))
-    Path(trace + ".lines.json").write_text(json.dumps(_line_windows(lo, phases)))
+    if trace is not None:
+        samples = {
+            p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples]
+            for p in phases
+        }
+        Path(trace + ".samples.json").write_text(json.dumps(samples))
+        Path(trace + ".lines.json").write_text(json.dumps(_line_windows(lo, phases)))
     report_loads(result, phases, missed, lo.hop)
     return result
 
