@@ -8,7 +8,7 @@ Rules:
    pauses for BURST_QUIET_S, and at the latest STREAM_MAX_WAIT_S after the stream's first unsent
    target (longer for controllers that must stop to re-target), so a continuous stream is
    followed without flooding the line. A single command is never delayed.
-3. A target put back after a silent controller's lost report (slewing.py) carries its try
+3. A target put back after a silent controller's lost report (slew.py) carries its try
    number; any newer target replaces it and starts again at the first try.
 """
 

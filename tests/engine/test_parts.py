@@ -9,7 +9,7 @@ from typing import Any
 
 from bridge.app import worker_config
 from bridge.engine import motion as mo
-from bridge.engine import slewing
+from bridge.engine import slew as slewing
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
