@@ -43,10 +43,9 @@ from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.options import Options
-from bridge.engine.sending import Sending
 from bridge.engine.slew import Slew, overdue, travel_s
 from bridge.engine.stops import Stops
-from bridge.engine.targets import resolve
+from bridge.engine.targets import Sending, resolve
 from bridge.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import (
     JunkReason,
@@ -380,7 +379,7 @@ class Controller:
         self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
 
     def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
-        """Write ``target`` as ``todo`` says (sending.py), try ``attempt``."""
+        """Write ``target`` as ``todo`` says (targets.py), try ``attempt``."""
         link, m, cfg = self.link, self.motion, self.cfg
         assert link is not None
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
