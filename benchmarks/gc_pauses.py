@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bridge.mosquitto import Mosquitto
 from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 

@@ -16,10 +16,10 @@ Rules:
    tests.support's rig brings in the bridge's modules for its in-process mode, unused here):
    what is measured is the service as a user runs it.
 4. What the tests have too comes from them (tests.support: waiting with a deadline, the MQTT
-   probe, the bridge's process, environment and configuration, the rig; bridge.mosquitto: a free
-   port, the mosquitto executable), not a copy of it. `python -m benchmarks` runs from the top of
-   the checkout, so `tests` is importable; the broker here is its own start (rule 1, and no -v
-   log per message).
+   probe, the bridge's process, environment and configuration, the rig, and mosquitto.py: a
+   free port, the mosquitto executable), not a copy of it. `python -m benchmarks` runs from the
+   top of the checkout, so `tests` is importable; the broker here is its own start (rule 1, and
+   no -v log per message).
 5. ``hardware_first()`` (as root) raises this process's priority above everything else here:
    it stands for the controllers on the wire and the operator's own machine, which on a station
    do not wait for a core behind the bridge, the broker or a load, and it stamps the frames the
@@ -43,9 +43,9 @@ from typing import Any
 
 import paho.mqtt.client as paho
 
-from bridge.mosquitto import answers, find_mosquitto, free_port
 from tests.support import BridgeProcess, Probe, bridge_env
 from tests.support import wait_until as _wait_until
+from tests.support.mosquitto import answers, find_mosquitto, free_port
 from tests.support.process import bridge_config
 
 REPO = Path(__file__).resolve().parent.parent

@@ -28,7 +28,7 @@ from benchmarks.harness import PYTHON, BenchError, Scope, check_abort, check_ali
 from benchmarks.line import FrameLog
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import baud_of, open_line, single_rotator
-from bridge.mosquitto import free_port
+from tests.support.mosquitto import free_port
 
 MODEL, HAMLIB = "rotorcard", 402
 EMU = {"speed_deg_s": 1000.0}

@@ -17,9 +17,9 @@ from pathlib import Path
 
 from bridge import emulators
 from bridge.app import App
-from bridge.mosquitto import Mosquitto
 from bridge.settings import Settings
 from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
 
 AZ_SPEED, EL_SPEED = 8.0, 4.0
 

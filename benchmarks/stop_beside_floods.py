@@ -37,8 +37,8 @@ from benchmarks.procfs import cpu_seconds
 from benchmarks.report import percentile
 from benchmarks.rig import open_line
 from benchmarks.target_flood import BRIDGE, EMU, one_stop
-from bridge.mosquitto import free_port
 from tests.dxcluster.cty_sample import CTY_DAT
+from tests.support.mosquitto import free_port
 
 HOSTILE = b"DX de K1ABC: 14000 DL1ABC " + b" " * 480 + b"x\r\n"
 SPOT = b"DX de EA5WU:     14025.0  JA1ABC       cq up 2                        1829Z\r\n"

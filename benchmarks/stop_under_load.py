@@ -125,8 +125,8 @@ from benchmarks.line import FrameLog
 from benchmarks.ptyhop import PtyHop
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import EmuHost, open_line
-from bridge.mosquitto import free_port
 from tests.support import BridgeProcess
+from tests.support.mosquitto import free_port
 from tests.support.process import bridge_config
 from tests.support.waiting import wait_until
 

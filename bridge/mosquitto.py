@@ -1,19 +1,21 @@
-"""A private mosquitto process on a loopback port: for the demo and the tests.
+"""The demo's private mosquitto: a broker process on a loopback port, started only when nothing
+answers at the demo's MQTT address, stopped with the demo. (The tests' broker,
+tests/support/mosquitto.py, is this one with what only tests need: a configuration of their own,
+a crash, a freeze, a restart.)
 
-The demo starts one only when nothing answers at the configured address. (We tried amqtt as an
-embedded broker: 0.12.1 moved the bridge's subscriptions to a later anonymous client's session,
-after which the bridge silently received no commands. Debian's mosquitto is what the tests and
-production use anyway.)
+(We tried amqtt as an embedded broker: 0.12.1 moved the bridge's subscriptions to a later
+anonymous client's session, after which the bridge silently received no commands. Debian's
+mosquitto is what the tests and production use anyway.)
 """
 
 from __future__ import annotations
 
 import shutil
-import signal
 import socket
 import subprocess
 import time
 from pathlib import Path
+from typing import Self
 
 
 class BrokerError(RuntimeError):
@@ -41,16 +43,9 @@ def answers(host: str, port: int, timeout_s: float = 0.5) -> bool:
 
 
 class Mosquitto:
-    """``start()``/``stop()``/``restart()``; the port stays the same across restarts."""
+    """``start()``/``stop()``; a free port unless one is given."""
 
-    def __init__(
-        self,
-        workdir: Path,
-        *,
-        port: int | None = None,
-        host: str = "127.0.0.1",
-        extra_conf: str = "",
-    ) -> None:
+    def __init__(self, workdir: Path, *, port: int | None = None, host: str = "127.0.0.1") -> None:
         exe = find_mosquitto()
         if exe is None:
             raise BrokerError(
@@ -58,33 +53,19 @@ class Mosquitto:
             )
         self.exe = exe
         self.host = host
-        self._auto_port = port is None
         self.port = port or free_port()
         self.workdir = workdir
         self.conf = workdir / "mosquitto.conf"
         self.log = workdir / "mosquitto.log"
-        self.extra_conf = extra_conf
         self.proc: subprocess.Popen[bytes] | None = None
 
-    def start(self, timeout_s: float = 10.0) -> Mosquitto:
-        for attempt in range(3):
-            try:
-                return self._start(timeout_s)
-            except BrokerError:
-                # a free port can be taken by someone else between finding it and binding it
-                # (parallel test workers); an automatically chosen one is simply chosen again
-                if not self._auto_port or attempt == 2:
-                    raise
-                self.port = free_port()
-        raise AssertionError("unreachable")
+    def config(self) -> str:
+        """mosquitto.conf: one listener, nothing kept, anyone may connect (the demo's own)."""
+        return f"listener {self.port} {self.host}\npersistence false\nallow_anonymous true\n"
 
-    def _start(self, timeout_s: float) -> Mosquitto:
+    def start(self, timeout_s: float = 10.0) -> Self:
         self.workdir.mkdir(parents=True, exist_ok=True)
-        self.conf.write_text(
-            f"listener {self.port} {self.host}\n"
-            "persistence false\n"
-            f"{self.extra_conf or 'allow_anonymous true'}\n"
-        )
+        self.conf.write_text(self.config())
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [self.exe, "-c", str(self.conf), "-v"], stdout=log, stderr=subprocess.STDOUT
@@ -108,25 +89,3 @@ class Mosquitto:
                 self.proc.kill()
                 self.proc.wait()
         self.proc = None
-
-    def kill(self) -> None:
-        """Die without a clean shutdown (a crashed broker)."""
-        if self.proc is not None:
-            self.proc.kill()
-            self.proc.wait()
-        self.proc = None
-
-    def pause(self) -> None:
-        """Freeze the broker (SIGSTOP): its sockets stay open and the kernel goes on taking
-        bytes for it, but nothing is read, answered or delivered (a stalled broker)."""
-        if self.proc is not None:
-            self.proc.send_signal(signal.SIGSTOP)
-
-    def resume(self) -> None:
-        if self.proc is not None:
-            self.proc.send_signal(signal.SIGCONT)
-
-    def restart(self) -> None:
-        """Same port: clients reconnect to where it was."""
-        self.stop()
-        self._start(10.0)

@@ -31,7 +31,7 @@ from pathlib import Path
 import paho.mqtt.client as mqtt
 from playwright.sync_api import ViewportSize, sync_playwright
 
-from bridge.mosquitto import Mosquitto, answers, free_port
+from tests.support.mosquitto import Mosquitto, answers, free_port
 
 ROOT = Path(__file__).resolve().parent.parent
 FLOW = ROOT / "deploy" / "node-red" / "rotor-flow.json"

@@ -15,7 +15,7 @@ import threading
 import time
 from pathlib import Path
 
-from bridge.mosquitto import free_port
+from tests.support.mosquitto import free_port
 from tests.support.waiting import slow
 
 BASE_LINE = re.compile(r"watch: mosquitto_sub (?:-h \S+ -p \d+ )?-t '([^']+)/#' -v")

@@ -12,6 +12,7 @@ from typing import Any
 
 import pytest
 
+from bridge.app import axis_configs, worker_config
 from bridge.engine.actions import Write
 from bridge.engine.composite import CompositeWorker, Composition, merge, split
 from bridge.engine.mailbox import Batch, Mailbox
@@ -21,7 +22,6 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
 from bridge.settings import ConfigError, settings_from
-from bridge.wiring import axis_configs, worker_config
 from tests.support import ROOT, run_cli
 
 AZ = {"model": "rt21", "port": "/dev/ttyAZ"}

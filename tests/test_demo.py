@@ -17,10 +17,10 @@ import pytest
 from bridge import demo, demo_sky, emulators, geo
 from bridge.cli import build_parser
 from bridge.homeassistant import Identity
-from bridge.mosquitto import answers, free_port
 from bridge.sky import parse_tles
 from tests.demo_process import DemoProcess
 from tests.support import Probe, retained_snapshot
+from tests.support.mosquitto import answers, free_port
 from tests.support.sky import sgp4_altaz
 from tests.support.waiting import slow
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from bridge.app import worker_config
 from bridge.settings import ConfigError, load_settings
-from bridge.wiring import worker_config
 from tests.support import ROOT
 
 TWO = (

@@ -7,9 +7,9 @@ from typing import Any
 
 import pytest
 
+from bridge.app import group_of
 from bridge.mqtt.groups import Group, Member
 from bridge.settings import ConfigError, settings_from
-from bridge.wiring import group_of
 
 ROTATORS = [
     {"id": "upper", "model": "rotorez", "port": "/dev/ttyUSB0"},

@@ -15,7 +15,7 @@ Rules:
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open.
 4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
-   report that says automatic motion is off gets it switched on again (slewing.py has the
+   report that says automatic motion is off gets it switched on again (slew.py has the
    rules for a report that does not come).
 5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so, and
    whether all they did was to hold a reading: session.py rule 16). A reading is taken when
@@ -38,16 +38,14 @@ from enum import Enum
 from typing import cast
 
 from bridge.engine import motion as mo
-from bridge.engine import slewing
 from bridge.engine import status as st
 from bridge.engine.actions import Report
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.options import Options
-from bridge.engine.sending import Sending
-from bridge.engine.slew import Slew
+from bridge.engine.slew import Slew, overdue, travel_s
 from bridge.engine.stops import Stops
-from bridge.engine.targets import resolve
+from bridge.engine.targets import Sending, resolve
 from bridge.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import (
     JunkReason,
@@ -76,7 +74,7 @@ class Drop:
 
 @dataclass(frozen=True)
 class Retry:
-    """Put ``target`` back as the waiting one, try ``attempt`` (slewing.py rule 1)."""
+    """Put ``target`` back as the waiting one, try ``attempt`` (slew.py rule 4)."""
 
     target: Target
     attempt: int
@@ -307,13 +305,13 @@ class Controller:
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:
-        """An overdue reply (slewing.py), a due stop, the outbox, junk gone quiet."""
+        """An overdue reply (slew.py), a due stop, the outbox, junk gone quiet."""
         link = self.link
         if link is None:
             return
         self._settled(link, now)
         if link.reply_overdue(now):
-            todo = slewing.overdue(self.cfg, link.slew, link.reply_timeout_s, now)
+            todo = overdue(self.cfg, link.slew, link.reply_timeout_s, now)
             if todo.error is not None:
                 self.notes.append(todo.error)
             if todo.retry is not None:
@@ -381,7 +379,7 @@ class Controller:
         self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
 
     def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
-        """Write ``target`` as ``todo`` says (sending.py), try ``attempt``."""
+        """Write ``target`` as ``todo`` says (targets.py), try ``attempt``."""
         link, m, cfg = self.link, self.motion, self.cfg
         assert link is not None
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
@@ -389,7 +387,7 @@ class Controller:
         az, el = todo.wire
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
-            link.begin_slew(slew, slewing.travel_s(cfg, slew))
+            link.begin_slew(slew, travel_s(cfg, slew))
         self.motion = mo.commanded(m, cfg.motion, az, now, el)
         link.poll_by(now + cfg.moving_poll_interval_s)
 

@@ -1,9 +1,12 @@
-"""Tracking and following as commands start and end them (session.py rules 10 and 15): the
-track and follow commands, the sky worker's answer to a satellite's name, and the end that
-every other command brings. It owns the tracker (tracking.py) and the follower (follow.py)
-and drops a target of theirs still waiting (targets.py) when they end; what the status and the
-error events must say it returns as a ``Done`` that the session applies. It never imports the
-session.
+"""Tracking and following as commands start and end them (session.py rules 10 and 15): what a
+start needs of the station and the controller, judged before anything is queued; the track and
+follow commands, the sky worker's answer to a satellite's name, and the end that every other
+command brings. It owns the tracker (tracking.py) and the follower (follow.py) and drops a
+target of theirs still waiting (targets.py) when they end; what the status and the error events
+must say it returns as a ``Done`` that the session applies. It never imports the session. The
+judge (rotator.py) asks ``body_to_track`` or ``check_can_follow`` first (pure: the rotator's
+facts in, the body or nothing out, or Refused saying what is missing), then the lock, the wind
+and the lease.
 
 Rules:
 1. A start the session refuses (``refused``: the lock, the link, the wind) is an error and
@@ -14,6 +17,10 @@ Rules:
    never goes out after it.
 3. A satellite's name answered by the sky worker starts tracking as the command would have,
    judged when the answer comes (tracking.py rule 8).
+4. A start the station cannot serve is refused by the judge as unsupported, naming the setting
+   that is missing, whoever sent it: it never waits in the mailbox.
+5. A satellite's name is not looked up by the judge (a file read, docs/architecture.md rule
+   12): the sky worker answers it, and ``body_to_track`` says so with None.
 """
 
 from __future__ import annotations
@@ -22,15 +29,58 @@ import logging
 from dataclasses import dataclass
 
 from bridge.engine.actions import Report
-from bridge.engine.config import WorkerConfig
+from bridge.engine.catalog import CatalogError, TleCatalog
+from bridge.engine.config import FollowConfig, WorkerConfig
 from bridge.engine.follow import Follow, Follower
 from bridge.engine.skywork import Answer
 from bridge.engine.targets import Targets
 from bridge.engine.tracking import Track, Tracker
+from bridge.errors import RefusalCode, Refused
 from bridge.model import ErrorKind, Origin, Source
-from bridge.sky import Body
+from bridge.protocols.base import ModelSpec
+from bridge.sky import Body, SkyError
 
 log = logging.getLogger(__name__)
+
+
+def body_to_track(
+    catalog: TleCatalog,
+    spec: ModelSpec,
+    has_sky: bool,
+    name: str,
+    tle: tuple[str, str, str] | None,
+) -> Body | None:
+    """The body to track, or None for a satellite to look up in the TLE file (rule 5)."""
+    if not has_sky:
+        raise Refused(
+            RefusalCode.UNSUPPORTED,
+            "tracking needs the station's position ([station] locator, or latitude_deg "
+            "and longitude_deg)",
+        )
+    if not spec.can_report_position:
+        raise Refused(
+            RefusalCode.UNSUPPORTED,
+            f"the {spec.display_name} cannot report where it points: tracking needs a "
+            "controller that does",
+        )
+    try:
+        return catalog.body(name, tle)
+    except (SkyError, CatalogError) as exc:
+        raise Refused(RefusalCode.INVALID, str(exc)) from None
+
+
+def check_can_follow(cfg: FollowConfig) -> None:
+    """Following WSJT-X needs its messages and the station's position (rule 4)."""
+    if not cfg.wsjtx:
+        raise Refused(
+            RefusalCode.UNSUPPORTED, "following WSJT-X needs its messages: [wsjtx] enabled = true"
+        )
+    if cfg.station is None:
+        raise Refused(
+            RefusalCode.UNSUPPORTED,
+            "following WSJT-X needs the station's position ([station] locator, or "
+            "latitude_deg and longitude_deg): bearings are from there",
+        )
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,7 @@ import serial
 
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.composite import CompositeWorker
+from bridge.engine.feature_commands import body_to_track, check_can_follow
 from bridge.engine.follow import Follow as Following
 from bridge.engine.follow import Heard
 from bridge.engine.health_memory import HealthMemory
@@ -51,7 +52,6 @@ from bridge.engine.mailbox import Mailbox
 from bridge.engine.operators import EXECUTED, Operators
 from bridge.engine.port import PortWatch, open_port
 from bridge.engine.skywork import LookupQuestion, SkyWorker
-from bridge.engine.starts import body_to_track, check_can_follow
 from bridge.engine.state_store import StateStore
 from bridge.engine.tracking import Track as Tracking
 from bridge.engine.worker import Worker, WorkerConfig

@@ -78,10 +78,9 @@ from bridge.engine.health import Health
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.parts import Proposal, Scene
-from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
-from bridge.engine.targets import Targets
+from bridge.engine.targets import Go, Targets, decide
 from bridge.engine.wind import WindPark
 from bridge.model import (
     ErrorKind,

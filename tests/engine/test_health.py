@@ -95,7 +95,7 @@ def _jam_at(v: VirtualRotator, target_deg: float, at_deg: float) -> None:
     v.run_until(lambda h: (h.truth().az_deg >= at_deg) == up, 120, f"reach {at_deg}")
     v.jam()
     v.run_until(lambda h: _health(h).stalls > stalls, 60, "stall")
-    v.unjam()  # the next target waits for the brake delay in the session (sending.py)
+    v.unjam()  # the next target waits for the brake delay in the session (targets.py)
 
 
 def test_a_stall_repeated_at_one_azimuth_warns(rig: Rig) -> None:

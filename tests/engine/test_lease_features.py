@@ -10,13 +10,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from bridge.app import worker_config
 from bridge.engine.config import FollowConfig
 from bridge.engine.follow import Follow
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
 from bridge.model import AuditEvent, Claim, Control, ErrorEvent, FollowQso, Lock, Origin, Source
 from bridge.settings import RotatorSettings
-from bridge.wiring import worker_config
 from tests.engine.test_follow import bearing, spid
 from tests.engine.test_operators import HOLDER, OTHER, Clock, refused
 from tests.integration.test_pointing_bridge import angle_between

@@ -9,18 +9,17 @@ from typing import Any
 
 from bridge.app import worker_config
 from bridge.engine import motion as mo
-from bridge.engine import slewing
+from bridge.engine import slew as slewing
 from bridge.engine.autopark import AutoPark
 from bridge.engine.config import WorkerConfig
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
 from bridge.engine.options import OPTIONS_REFRESH_S, Options
 from bridge.engine.parts import NOTHING, Scene
-from bridge.engine.sending import Go, decide
 from bridge.engine.skywork import PassQuestion
 from bridge.engine.slew import Slew
 from bridge.engine.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
-from bridge.engine.targets import Targets
+from bridge.engine.targets import Go, Targets, decide
 from bridge.engine.tracking import Tracker
 from bridge.model import ErrorKind, MotionState, Source, Stop, Target
 from bridge.settings import RotatorSettings

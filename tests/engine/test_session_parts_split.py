@@ -1,5 +1,5 @@
 """Behaviour the split of the session into parts (controller.py, stops.py, options.py,
-sending.py, tracking.py, autopark.py) must keep, in virtual time: each scenario here once
+targets.py, tracking.py, autopark.py) must keep, in virtual time: each scenario here once
 changed with the split, and each passes on the session before it."""
 
 from __future__ import annotations

@@ -54,7 +54,7 @@ def brake_set_times(v: VirtualRotator, after: float) -> list[float]:
     return [e.time_s for e in v.device.events if e.kind == "brake set" and e.time_s > after]
 
 
-# -- brake delay and re-target while turning (sending.py rule 1, motion rule 4) ---------------
+# -- brake delay and re-target while turning (targets.py rule 4, motion rule 4) ---------------
 def test_a_new_target_while_turning_stops_waits_out_the_brake_then_goes(rig: Rig) -> None:
     v = ready(rig)
     v.target(180)
@@ -152,7 +152,7 @@ def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
     assert_never_disobeyed(v)
 
 
-# -- manual front-panel move (motion rule 5, sending.py rule 4) -------------------------------
+# -- manual front-panel move (motion rule 5, targets.py rule 7) -------------------------------
 def test_a_front_panel_move_is_shown_as_moving_without_a_command(rig: Rig) -> None:
     v = ready(rig)
     t = v.now

@@ -3,7 +3,7 @@
 The SatEL answers nothing while it moves and prints a status report when the move is over
 (protocols/satel.md). Input while it slews can wedge it (the emulator logs every such byte as
 "misuse: input while slewing"), so the session sends only ``s`` then (session rule 8). A report
-that does not come is handled by slewing.py: stop, ask, send the target again; the second time,
+that does not come is handled by slew.py: stop, ask, send the target again; the second time,
 give it up. Its own clock ticks every second and rides along in the status without causing one
 (status.py rule 4).
 """
@@ -15,7 +15,7 @@ from collections.abc import Callable
 from datetime import datetime
 
 from bridge.emulators.satel import Outcome
-from bridge.engine.slewing import SLEW_STOP_TRIES
+from bridge.engine.slew import SLEW_STOP_TRIES
 from bridge.model import MotionState
 from tests.engine.virtual import VirtualRotator
 

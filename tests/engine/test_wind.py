@@ -7,12 +7,12 @@ from typing import Any
 
 import pytest
 
+from bridge.app import worker_config
 from bridge.engine.parts import NOTHING
 from bridge.engine.wind import WindPark
 from bridge.model import ErrorKind, MotionState, Source, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
-from bridge.wiring import worker_config
 from tests.engine.test_parts import rig, scene
 from tests.engine.virtual import VirtualRotator
 

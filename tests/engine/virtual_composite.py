@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from bridge.app import axis_configs, worker_config
 from bridge.engine.composite import Composition, split
 from bridge.engine.mailbox import Batch, Mailbox
 from bridge.engine.tracking import Track
@@ -23,7 +24,6 @@ from bridge.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
-from bridge.wiring import axis_configs, worker_config
 from tests.engine.virtual import WALL_EPOCH_S, VirtualRotator
 
 

@@ -25,8 +25,8 @@ import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.emulators.spid_models import MOTION_OUTCOMES
-from bridge.mosquitto import Mosquitto
 from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import ARRIVAL_TOL_DEG, Rig, Timings, arrival_tol
 from tests.support.tap import (
     Tap,

@@ -15,7 +15,6 @@ import time
 import pytest
 
 from bridge import emulators
-from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import (
     BRIDGE_FAST,
     EMU_FAST,
@@ -27,6 +26,7 @@ from tests.faults.conftest import (
     send_target,
 )
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 
 
 def polls_answered(emu, k: int, timeout_s: float = 5.0) -> None:  # noqa: ANN001

@@ -20,10 +20,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bridge.cli import main
-from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError, load_settings
 from tests.faults.conftest import Pki
 from tests.support import retained_snapshot, run_cli, to_toml
+from tests.support.mosquitto import Mosquitto
 from tests.support.process import bridge_env
 from tests.support.waiting import slow
 

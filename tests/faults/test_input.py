@@ -21,9 +21,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import FAST_BROKER_CONF, Rig, fault_rig, motion_frames, send_target
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 
 ROTATORS = {"ez": "rotorez", "spid": "rot2prog", "sat": "satel"}
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")

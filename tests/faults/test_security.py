@@ -15,7 +15,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import (
     BRIDGE_FAST,
     EMU_FAST,
@@ -25,6 +24,7 @@ from tests.faults.conftest import (
     start_emulator,
 )
 from tests.support import BridgeProcess, run_cli, to_toml, wait_until
+from tests.support.mosquitto import Mosquitto
 
 PROBE_USER, PROBE_PASSWORD = "probe", "probe-pass"
 

@@ -25,9 +25,9 @@ import pytest
 
 from bridge.app import App
 from bridge.emulators.base import LoggedFrame
-from bridge.mosquitto import Mosquitto
 from tests.integration.test_pointing_bridge import angle_between
 from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import retained_snapshot
 from tests.support.rig import Rig
 from tests.support.udp_logger import N1mmSender, free_udp_port, n1mm_turn

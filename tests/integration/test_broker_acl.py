@@ -17,11 +17,11 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.integration.test_last_word import main_held_at
 from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 

@@ -19,10 +19,10 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mosquitto import Mosquitto
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats", "aedes"]

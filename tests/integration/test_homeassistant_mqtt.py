@@ -11,11 +11,11 @@ from pathlib import Path
 import pytest
 
 from bridge import emulators
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt import client as mqtt_client
 from tests.ha_rules import validate
 from tests.integration.test_process import start_bridge, write_config
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 

@@ -37,11 +37,11 @@ import pytest
 from bridge.app import App
 from bridge.emulators.base import LoggedFrame, RotatorState
 from bridge.emulators.pty import EmulatedPort
-from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError, Settings
 from bridge.settings_pointing import StationSettings
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.udp_logger import (
     N1MM_STOPS,

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import mosquitto_password_file
 from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
 from tests.support.process import ROOT
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until

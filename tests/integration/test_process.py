@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 from bridge import emulators
-from bridge.mosquitto import Mosquitto, free_port
 from tests.support import BridgeProcess, Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.waiting import slow
 
 

@@ -35,9 +35,9 @@ from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.heartbeat import Stamp
 from tests.support import Probe
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 

@@ -25,8 +25,8 @@ from typing import Any
 import pytest
 
 from bridge.app import App
-from bridge.mosquitto import Mosquitto
 from tests.faults.conftest import mosquitto_password_file
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Line, Rig
 from tests.support.waiting import slow, wait_until

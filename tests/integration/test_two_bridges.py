@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.claim import Instance
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.process import run_cli, to_toml
 from tests.support.rig import Rig
 

@@ -4,11 +4,11 @@ lingers on the broker for a client that subscribes to the base topic later."""
 
 from __future__ import annotations
 
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.claim import Claim, Instance
 from bridge.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 
 
 def test_the_hello_is_the_first_message_and_does_not_linger(broker: Mosquitto) -> None:

@@ -8,10 +8,10 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.mosquitto import Mosquitto
 
 WILL = "t/bridge/state"
 

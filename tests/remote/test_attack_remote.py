@@ -23,7 +23,6 @@ from paho.mqtt.reasoncodes import ReasonCode
 from bridge.errors import RefusalCode, Refused
 from bridge.gs232.commands import EasycommSession, Gs232Session
 from bridge.model import RotatorStatus
-from bridge.mosquitto import free_port
 from bridge.mqtt.remote import RemoteLink
 from bridge.mqtt.topics import StationTopics
 from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator, drawn_of
@@ -33,6 +32,7 @@ from bridge.remote.settings import RemoteSettings
 from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
 from tests.support.clock import FakeClock
+from tests.support.mosquitto import free_port
 from tests.support.remote import ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow

@@ -19,10 +19,10 @@ import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.remote import Heartbeat, ask, remote_published
 from tests.support.rig import Rig
 from tests.support.waiting import slow

@@ -12,11 +12,11 @@ from typing import Any
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.mosquitto import free_port
 from tests.support.rig import Rig, arrival_tol
 
 OPERATOR = "DL1ABC"

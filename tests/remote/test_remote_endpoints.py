@@ -18,13 +18,13 @@ from pathlib import Path
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.integration.test_dcu1_endpoint import ROTOR_EZ
 from tests.integration.test_gs232_integration import EASYCOMM, GS232, gs232_ask, rotctl
 from tests.remote.test_remote import OPERATOR
 from tests.support import wait_until
+from tests.support.mosquitto import free_port
 from tests.support.remote import remote_published
 from tests.support.rig import Rig
 from tests.support.udp_logger import PstClient, minos_reply, reserve_pst_ports, tag

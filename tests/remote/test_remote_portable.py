@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bridge.mosquitto import Mosquitto, free_port
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.waiting import slow
 
 POSIX_ONLY = ("fcntl", "termios", "pty", "tty", "resource", "grp", "pwd")

@@ -22,12 +22,12 @@ import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 from pydantic import SecretStr
 
-from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.faults.conftest import Pki, mosquitto_password_file
 from tests.remote.test_remote import rotctl
 from tests.support import ROOT, Probe, wait_until
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 

@@ -24,8 +24,8 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto
 from tests.support import wait_until
+from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig
 
 

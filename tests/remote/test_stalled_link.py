@@ -14,11 +14,11 @@ from collections.abc import Iterator
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import free_port
 from bridge.mqtt.heartbeat import parse_beat
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
+from tests.support.mosquitto import free_port
 from tests.support.remote import ask
 from tests.support.rig import Rig
 

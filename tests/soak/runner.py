@@ -44,7 +44,6 @@ from pathlib import Path
 from typing import Any
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto, free_port
 from tests.faults.conftest import (
     ROTOREZ_FAMILY,
     SPID,
@@ -59,6 +58,7 @@ from tests.faults.conftest import (
 from tests.support import BridgeProcess
 from tests.support import Probe as FastProbe
 from tests.support import retained_snapshot as fast_retained
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.waiting import slow
 
 # id: (model, emulator options, bridge options). Rotor speeds are faster than real rotators so

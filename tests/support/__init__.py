@@ -12,12 +12,13 @@
 - tap.py: the serial sniffer on a controller's transmit line and independent parsers of what
   it reports (the ground truth of "a bearing the controller never reported")
 
-A private mosquitto on a free loopback port is ``bridge.mosquitto.Mosquitto`` (the demo's too);
-the pytest fixtures ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
+A private mosquitto on a free loopback port is mosquitto.py's ``Mosquitto`` (the demo's broker
+with a configuration of its own, a crash, a freeze and a restart); the pytest fixtures
+``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
 """
 
-from bridge.mosquitto import Mosquitto, free_port
 from tests.support.codecs import HOW, feed
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.mqtt import Message, Probe, retained_snapshot
 from tests.support.process import ROOT, BridgeProcess, bridge_env, run_cli, to_toml
 from tests.support.waiting import slow, wait_until

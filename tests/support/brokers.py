@@ -20,7 +20,7 @@ import threading
 import time
 from pathlib import Path
 
-from bridge.mosquitto import BrokerError, answers, free_port
+from tests.support.mosquitto import BrokerError, answers, free_port
 from tests.support.waiting import slow
 
 
@@ -45,7 +45,7 @@ def find_aedes() -> tuple[str, Path] | None:
 
 class _Process(abc.ABC):
     """A broker run as a child process on a free loopback port: ``start()``/``stop()``/
-    ``restart()`` as ``bridge.mosquitto.Mosquitto``; each broker says how (``_command``)."""
+    ``restart()`` as ``tests.support.mosquitto.Mosquitto``; each broker says how (``_command``)."""
 
     name = "broker"
     start_s = 20.0  # how long it may take to listen (scaled by ``slow``)

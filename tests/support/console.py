@@ -11,7 +11,7 @@ from collections.abc import Coroutine
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from bridge.mosquitto import free_port
+from tests.support.mosquitto import free_port
 from tests.support.waiting import slow
 
 T = TypeVar("T")

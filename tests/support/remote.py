@@ -8,8 +8,8 @@ import threading
 import time
 from types import TracebackType
 
-from bridge.mosquitto import Mosquitto
 from bridge.mqtt.heartbeat import beat_payload
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.waiting import slow
 

@@ -140,7 +140,7 @@ REAL_TIMINGS = Timings(emulator={}, bridge={})
 
 
 class Broker(Protocol):
-    """What the rig needs of a broker: ``bridge.mosquitto.Mosquitto``, or the benchmarks'."""
+    """What the rig needs of a broker: ``tests.support.mosquitto.Mosquitto``, or the benchmarks'."""
 
     port: int
 

@@ -22,8 +22,8 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Browser, Page, expect, sync_playwright
 
-from bridge.mosquitto import Mosquitto
 from tests.support.console import ConsoleClient, web_section
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
 from tests.support.waiting import slow_ms

@@ -31,13 +31,13 @@ from typing import Any
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import Mosquitto
 from bridge.settings import ConfigError
 from bridge.web import auth
 from bridge.web.connections import MAX_PER_ADDRESS
 from bridge.web.files import installation_secret
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms

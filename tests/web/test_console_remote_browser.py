@@ -15,10 +15,10 @@ import pytest
 from playwright.sync_api import Browser, expect
 
 from bridge import geo
-from bridge.mosquitto import Mosquitto, free_port
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support.console import web_section
+from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.mqtt import Probe
 from tests.support.rig import Rig, arrival_tol
 from tests.support.waiting import slow_ms

@@ -31,9 +31,9 @@ import pytest
 from playwright import sync_api
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mosquitto import answers
 from tests.support import ROOT, free_port, wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
+from tests.support.mosquitto import answers
 from tests.support.rig import Rig
 from tests.support.waiting import slow, slow_ms
 
