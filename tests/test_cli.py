@@ -30,12 +30,15 @@ def test_run_without_a_configuration_says_how_to_give_one() -> None:
 
 
 def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_options() -> None:
-    """What a start of ``run`` imports is start-up CPU (benchmarks/exchange_cpu.py)."""
+    """What a start of ``run`` imports is start-up CPU (benchmarks/exchange_cpu.py): not the
+    emulators, the demo, or the DX cluster's code without ``[dxcluster]``."""
     code = (
         "import sys\n"
         "from bridge.cli import build_parser\n"
         "args = build_parser(sys.argv[1:]).parse_args(sys.argv[1:])\n"
-        "print(sorted(m for m in sys.modules if m.startswith(('bridge.emulators', 'bridge.demo'))))"
+        "import bridge.app\n"
+        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.dxcluster')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(lazy)))"
     )
     run = subprocess.run(
         [sys.executable, "-c", code, "--log-level", "INFO", "run", "-c", "bridge.toml"],
