@@ -134,7 +134,14 @@ class Client(paho.Client):
             self._wake_w.send(b"\0")
 
     def _serve(self) -> None:
-        """The thread: paho's reconnect loop (``loop_forever``'s) around ``_round``."""
+        """The thread (a new ``loop_start`` may follow its end, as with paho's)."""
+        try:
+            self._reconnecting()
+        finally:
+            self._net = None
+
+    def _reconnecting(self) -> None:
+        """paho's reconnect loop (``loop_forever``'s) around ``_round``."""
         first, lost = True, False
         while True:
             sock = self.socket()
