@@ -9,6 +9,7 @@ the DISCONNECT (the broker then drops the last will) before the thread ends."""
 from __future__ import annotations
 
 import contextlib
+import select
 import socket
 import threading
 from collections.abc import Iterator
@@ -16,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from bridge.mqtt.paho_client import Client, new_client
+from bridge.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
 from tests.support.waiting import slow
@@ -170,3 +171,18 @@ def test_loop_stop_after_disconnect_writes_the_disconnect_first(
     assert net == []  # joined
     assert ThreadSocket.sent[-1][:1] == b"\xe0"  # DISCONNECT, the last thing written
     assert threads == {"paho-mqtt-client-net-leave"}
+
+
+def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_closed() -> None:
+    waker = Waker()
+    try:
+        assert select.select([waker], [], [], 0)[0] == []
+        waker.wake()
+        waker.wake()  # (paho asks once per queue; twice is one wake-up)
+        assert select.select([waker], [], [], slow(5))[0] == [waker]
+        waker.drain()
+        assert select.select([waker], [], [], 0)[0] == []
+    finally:
+        waker.close()
+    waker.wake()  # after the thread ended (a late publish): nothing, no error
+    waker.close()
