@@ -30,8 +30,6 @@ from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from bridge.dxcluster import CtyError, DxCluster
-from bridge.dxcluster.setup import dxcluster
 from bridge.engine.audit import AuditTrail
 from bridge.engine.catalog import TleCatalog
 from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
@@ -67,6 +65,7 @@ from bridge.web.view import RotatorFacts
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
+    from bridge.dxcluster import DxCluster  # (and the cluster's code, with [dxcluster] only)
     from bridge.web.server import WebConsole
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
@@ -331,6 +330,9 @@ class App:
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
         self.dxcluster: DxCluster | None = None  # spots on B/spots, R/target {"call": ...}
         if settings.dxcluster.enabled:
+            from bridge.dxcluster import CtyError
+            from bridge.dxcluster.setup import dxcluster
+
             to_mqtt = partial(self.client.publish_retained, self.topics.spots)
             web = self.web  # its map shows the spots too (web/live.py rule 6)
             from bridge.web.live import with_console  # (with the console's server, above)

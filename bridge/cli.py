@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import logging
 import os
@@ -118,7 +119,11 @@ def cmd_remote(args: argparse.Namespace) -> int:
         raise SystemExit(EXIT_CONFIG) from None
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """``argv``: the command line to be parsed. The options of ``emulate`` and ``demo`` come
+    from their modules (the emulators, the demo's console), which a start of ``run`` has no
+    use for (a tenth of its start-up CPU): they are loaded only when ``argv`` names one of the
+    two, or is None (every option, for the docs)."""
     parser = argparse.ArgumentParser(
         prog="rotor-bridge", description="Antenna rotator controllers on MQTT."
     )
@@ -162,9 +167,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_ports)
 
+    named = argv is None or not {"emulate", "demo"}.isdisjoint(argv)
     try:  # pseudo-terminals need a POSIX system; the remote (below) runs without one
-        from bridge import demo
-        from bridge.emulators import cli as emulate_cli
+        if named:
+            from bridge import demo
+            from bridge.emulators import cli as emulate_cli
+        elif importlib.util.find_spec("termios") is None:
+            raise ImportError("termios")
     except ImportError:
         pass  # Windows: no emulate and no demo
     else:
@@ -175,7 +184,8 @@ def build_parser() -> argparse.ArgumentParser:
             "print its path, for trying the bridge, Hamlib's rotctl or other software without "
             "hardware.",
         )
-        emulate_cli.add_arguments(p)
+        if named:
+            emulate_cli.add_arguments(p)
         p.set_defaults(func=cmd_emulate)
 
         p = sub.add_parser(
@@ -185,7 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
             "--mqtt-port is used, or a private mosquitto started there; type a bearing, s "
             "(stop) or lock on/off.",
         )
-        demo.add_arguments(p)
+        if named:
+            demo.add_arguments(p)
         p.set_defaults(func=cmd_demo)
 
     p = sub.add_parser(
@@ -202,7 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv).parse_args(argv)
     return int(args.func(args) or 0)
 
 

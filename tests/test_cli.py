@@ -1,12 +1,14 @@
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 
 import pytest
 
 from bridge import __version__
 from bridge.cli import build_parser, main
-from tests.support import run_cli
+from tests.support import bridge_env, run_cli
 
 
 def test_ports_lists_serial_ports_or_says_there_are_none() -> None:
@@ -25,6 +27,29 @@ def test_version_and_help() -> None:
 def test_run_without_a_configuration_says_how_to_give_one() -> None:
     out = run_cli("run")
     assert out.returncode == 2 and "--config" in out.stderr
+
+
+def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_options() -> None:
+    """What a start of ``run`` imports is start-up CPU (benchmarks/exchange_cpu.py): not the
+    emulators, the demo, or the DX cluster's code without ``[dxcluster]``."""
+    code = (
+        "import sys\n"
+        "from bridge.cli import build_parser\n"
+        "args = build_parser(sys.argv[1:]).parse_args(sys.argv[1:])\n"
+        "import bridge.app\n"
+        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.dxcluster')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(lazy)))"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code, "--log-level", "INFO", "run", "-c", "bridge.toml"],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=bridge_env(),
+    )
+    assert run.stdout.strip() == "[]"
+    assert "--models" in run_cli("demo", "--help").stdout
+    assert "--link" in run_cli("emulate", "--help").stdout
 
 
 def subcommands() -> dict[str, argparse.ArgumentParser]:

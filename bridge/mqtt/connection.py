@@ -35,7 +35,8 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
 5. Callbacks run on paho's thread and stay short: they hand messages to the handler, which must
    not block (it drops commands into mailboxes); a handler that raises is logged, and paho's
    thread goes on.
-6. paho owns the reconnect loop (connect_async + loop_start, exponential back-off); a refused
+6. paho's reconnect loop (connect_async + loop_start, exponential back-off; the loop runs on a
+   thread of ours, paho_client.py rule 6); a refused
    connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
    reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
    never a crash. Rule 7 only slows that loop down. A connection the broker closes before it

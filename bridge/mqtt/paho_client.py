@@ -21,16 +21,36 @@ Rules:
    ended as if the broker had closed it (the socket shut down: paho sees the end as always and
    reconnects; connection.py says it, rule 6). amqtt 0.12 waits for ever on an MQTT 5 CONNECT
    that carries a will; paho alone would wait the keepalive (a minute) each time.
+6. ``loop_start`` runs paho's external-loop API (``socket``, ``want_write``, ``loop_read``,
+   ``loop_write``, ``loop_misc``) on a thread of ours, in place of paho's own loop, and
+   ``loop_stop`` ends it as paho's does (the queue written first). Everything else is as with
+   paho's thread: every read, write, reconnect and callback happens on that one thread (a TLS
+   socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
+   (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
+   inside the failure, no reconnect after ``disconnect``. What changes is the wake-up: paho's
+   own loop is woken by a byte on its socket pair for every packet a publish queues (a system
+   call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
+   through paho's ``on_socket_register_write``, which paho calls once until the queue has been
+   written, so a reading's messages cost one wake-up between them.
+7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
+   the message left the socket, building a reason code and properties each time (about as much
+   CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
+   acknowledgements only (which come in ``loop_read`` and still call it).
+   ``on_publish`` is set before ``loop_start``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import os
+import select
 import socket
 import ssl
+import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
@@ -55,16 +75,188 @@ def acknowledge_now(sock: object) -> None:
         pass
 
 
+class Waker:
+    """Rule 6: what wakes the network thread: an eventfd on Linux (a fifth of a socket pair's
+    cost), else a socket pair. ``wake`` from any thread, once closed too (then nothing: the lock
+    keeps it off a descriptor number reused by then); ``close`` and ``drain`` on the thread."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._pair: tuple[socket.socket, socket.socket] | None = None
+        if hasattr(os, "eventfd"):
+            self._fd = os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC)
+        else:
+            r, w = socket.socketpair()
+            r.setblocking(False)
+            w.setblocking(False)
+            self._pair, self._fd = (r, w), r.fileno()
+
+    def fileno(self) -> int:
+        return self._fd
+
+    def wake(self) -> None:
+        with self._lock, contextlib.suppress(OSError):  # full: awake already
+            if self._fd < 0:
+                return
+            if self._pair is None:
+                os.eventfd_write(self._fd, 1)
+            else:
+                self._pair[1].send(b"\0")
+
+    def drain(self) -> None:
+        with contextlib.suppress(OSError):
+            if self._pair is None:
+                os.eventfd_read(self._fd)
+            else:
+                self._pair[0].recv(4096)
+
+    def close(self) -> None:
+        with self._lock:
+            fd, self._fd = self._fd, -1
+            if fd < 0:
+                return
+            if self._pair is None:
+                os.close(fd)
+            else:
+                for sock in self._pair:
+                    sock.close()
+
+
 class Client(paho.Client):
-    """paho's client with rule 9 (``_loop``, loop_start's thread, reads through loop_read) and
-    rule 2 (``tick``)."""
+    """paho's client with rule 9 (every read goes through loop_read), rule 2 (``tick``) and
+    rule 6 (``loop_start``: the network thread)."""
 
     tick: Callable[[], None] | None = None
+    name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
+    _net: threading.Thread | None = None  # rule 6
+    _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
+    _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
+    _delay_s: float | None = None  # ... the last wait, None after an accepted connection
 
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
         return super().reconnect()
+
+    def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
+        super().reconnect_delay_set(min_delay, max_delay)
+        self._delays, self._delay_s = (min_delay, max_delay), None
+
+    def connect_async(self, *args: Any, **kwargs: Any) -> None:
+        self._leaving = False
+        super().connect_async(*args, **kwargs)
+
+    def disconnect(self, *args: Any, **kwargs: Any) -> MQTTErrorCode:
+        self._leaving = True
+        return super().disconnect(*args, **kwargs)
+
+    # -- rule 6: the network thread --------------------------------------------------------
+    def loop_start(self) -> MQTTErrorCode:
+        if self._net is not None:
+            return MQTTErrorCode.MQTT_ERR_INVAL
+        self._waker = Waker()
+        self._halt = threading.Event()
+        self.on_socket_register_write = self._wake
+        self._net = threading.Thread(
+            target=self._serve, name=f"paho-mqtt-client-{self.name}", daemon=True
+        )
+        self._net.start()
+        return MQTTErrorCode.MQTT_ERR_SUCCESS
+
+    def loop_stop(self) -> MQTTErrorCode:
+        """Ends the network thread once the queue is written, and joins it (not from it)."""
+        net = self._net
+        if net is None:
+            return MQTTErrorCode.MQTT_ERR_INVAL
+        self._halt.set()
+        self._wake()
+        if threading.current_thread() is not net:
+            net.join()
+        return MQTTErrorCode.MQTT_ERR_SUCCESS
+
+    def _wake(self, *_args: object) -> None:
+        """paho's on_socket_register_write: something is queued to write (any thread)."""
+        self._waker.wake()
+
+    def _serve(self) -> None:
+        """The thread (a new ``loop_start`` may follow its end, as with paho's)."""
+        try:
+            self._reconnecting()
+        finally:
+            self._net = None
+            self._waker.close()
+
+    def _reconnecting(self) -> None:
+        """paho's reconnect loop (``loop_forever``'s) around ``_round``."""
+        first, lost = True, False
+        while True:
+            sock = self.socket()
+            if self._halt.is_set() and (sock is None or lost or not self.want_write()):
+                return
+            if sock is not None and not lost:
+                lost = not self._round(sock)
+                continue
+            if self._leaving:
+                return
+            if not first and not self._back_off():
+                return
+            first, lost = False, False
+            try:
+                self.reconnect()
+            except OSError:  # paho's loop says so, and waits
+                self._connect_failed()
+
+    def _round(self, sock: Any) -> bool:
+        """One round of the loop: wait (1 s at most, rule 2) for the socket or a wake-up, then
+        read, write what is queued, and the keepalive. False: the socket failed the select."""
+        pending = getattr(sock, "pending", None)  # TLS: bytes already decrypted
+        ready = pending() if pending is not None else 0
+        wlist = [sock] if self.want_write() else []
+        try:
+            readable, _, _ = select.select([sock, self._waker], wlist, [], 0.0 if ready else 1.0)
+        except (OSError, TypeError, ValueError):  # closed under us: reconnect
+            return False
+        if self._waker in readable:
+            self._waker.drain()
+        if ready or sock in readable:
+            self.loop_read()
+            if self.socket() is not sock:
+                return True
+            if self._delay_s is not None and self.is_connected():
+                self._delay_s = None  # paho starts its back-off again after a CONNACK
+        if self.want_write():
+            self.loop_write()
+            if self.socket() is not sock:
+                return True
+        self.loop_misc()
+        return True
+
+    def _back_off(self) -> bool:
+        """paho's wait before a reconnect: min, doubling up to max. False: stopped meanwhile."""
+        lo, hi = self._delays
+        self._delay_s = lo if self._delay_s is None else min(self._delay_s * 2, hi)
+        return not self._halt.wait(self._delay_s) and not self._leaving
+
+    def _connect_failed(self) -> None:
+        """paho's on_connect_fail, inside the ``except OSError`` that says why."""
+        on_fail = self.on_connect_fail
+        if on_fail is not None:
+            try:
+                on_fail(self, self.user_data_get())
+            except Exception:  # connection.py rule 5: the thread goes on
+                log.exception("error in on_connect_fail")
+
+    def loop_write(self) -> MQTTErrorCode:
+        """Rule 7: no on_publish for a QoS 0 PUBLISH written (only on the thread: paho calls
+        ``loop_write`` from a publishing thread when no thread serves it)."""
+        if self._net is None:
+            return super().loop_write()
+        keep = self.on_publish
+        self.on_publish = None
+        try:
+            return super().loop_write()
+        finally:
+            self.on_publish = keep
 
     def _unanswered(self) -> None:
         """Rule 5: a CONNECT unanswered for too long ends its connection."""
@@ -113,6 +305,7 @@ def new_client(settings: MqttSettings, client_id: str) -> Client:
         protocol=paho.MQTTv5 if v5 else paho.MQTTv311,
         clean_session=None if v5 else True,  # None: MQTT 5 has clean_start instead
     )
+    c.name = client_id
     if settings.username is not None:
         password = settings.password.get_secret_value() if settings.password else None
         c.username_pw_set(settings.username, password)

@@ -1,0 +1,188 @@
+"""paho_client.py rules 6 and 7: paho's loop on a thread of the bridge's, against a real
+mosquitto. What a publish costs is measured in benchmarks/exchange_cpu.py; here, what must hold
+for it: the messages a thread queues while the network thread is busy wake it once; every read
+and write of the socket happens on that thread (a TLS socket is never shared); a QoS 0 message
+calls no ``on_publish`` while a QoS 1 message's PUBACK still does; a broker that restarts is
+reconnected to and what is published then arrives; ``loop_stop`` after ``disconnect`` writes
+the DISCONNECT (the broker then drops the last will) before the thread ends."""
+
+from __future__ import annotations
+
+import contextlib
+import select
+import socket
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from bridge.mqtt.paho_client import Client, Waker, new_client
+from bridge.settings import MqttSettings
+from tests.support import Mosquitto, Probe, wait_until
+from tests.support.waiting import slow
+
+
+class ThreadSocket(socket.socket):
+    """The TCP connection paho opens, unchanged, noting which thread reads and writes it."""
+
+    sent: list[bytes] = []  # every write, in order (the last socket's)
+
+    def __init__(self, sock: socket.socket, threads: set[str]) -> None:
+        super().__init__(sock.family, sock.type, sock.proto, fileno=sock.detach())
+        self.threads = threads
+        ThreadSocket.sent = []
+
+    def send(self, data: Any, flags: int = 0) -> int:
+        self.threads.add(threading.current_thread().name)
+        n = super().send(data, flags)
+        ThreadSocket.sent.append(bytes(data[:n]))
+        return n
+
+    def recv(self, bufsize: int, flags: int = 0) -> bytes:
+        self.threads.add(threading.current_thread().name)
+        return super().recv(bufsize, flags)
+
+
+@pytest.fixture
+def threads(monkeypatch: pytest.MonkeyPatch) -> set[str]:
+    seen: set[str] = set()
+    real = socket.create_connection
+
+    def create_connection(*args: Any, **kwargs: Any) -> socket.socket:
+        return ThreadSocket(real(*args, **kwargs), seen)
+
+    monkeypatch.setattr(socket, "create_connection", create_connection)
+    return seen
+
+
+@contextlib.contextmanager
+def connected(broker: Mosquitto, client_id: str = "net-test") -> Iterator[Client]:
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id=client_id)
+    c = new_client(settings, client_id)
+    c.will_set("net/will", b"gone", qos=1)
+    c.reconnect_delay_set(1, 2)
+    up = threading.Event()
+    c.on_connect = lambda *_a: up.set()
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        assert up.wait(slow(10)), "never connected"
+        yield c
+    finally:
+        c.disconnect()
+        c.loop_stop()
+
+
+@pytest.fixture
+def client(broker: Mosquitto, threads: set[str]) -> Iterator[Client]:
+    with connected(broker) as c:
+        yield c
+
+
+def test_a_burst_queued_while_the_thread_is_busy_wakes_it_once_and_arrives_in_order(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-burst")
+    c = new_client(settings, "net-burst")
+    wakes: list[str] = []
+    wake = c._wake
+
+    def counted(*args: object) -> None:
+        wakes.append(threading.current_thread().name)
+        wake(*args)
+
+    c._wake = counted  # type: ignore[method-assign]
+    busy, release = threading.Event(), threading.Event()
+
+    def on_message(*_args: object) -> None:  # holds the network thread, as a callback may
+        busy.set()
+        release.wait(slow(10))
+
+    c.on_message = on_message
+    up = threading.Event()
+    c.on_connect = lambda client, *_a: client.subscribe("net/hold")
+    c.on_subscribe = lambda *_a: up.set()
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        assert up.wait(slow(10)), "never subscribed"
+        probe.publish("net/hold", b"x", qos=0)
+        assert busy.wait(slow(10))
+        mark = probe.mark()
+        before = len(wakes)
+        for i in range(50):  # a reading's publishes, and more
+            c.publish("net/burst", str(i).encode(), qos=0)
+        assert len(wakes) - before == 1  # one wake-up for the 50 (paho's loop: 50)
+        release.set()
+        for i in range(50):
+            probe.wait(lambda m, i=i: m.topic == "net/burst" and m.text == str(i), start=mark)
+        assert [m.text for m in probe.on("net/burst")] == [str(i) for i in range(50)]
+    finally:
+        release.set()
+        c.disconnect()
+        c.loop_stop()
+    assert threads == {"paho-mqtt-client-net-burst"}  # never the publishing thread
+
+
+def test_qos0_calls_no_on_publish_and_a_puback_still_does(
+    client: Client, probe: Probe, threads: set[str]
+) -> None:
+    acked: list[int] = []
+    done = threading.Event()
+
+    def on_publish(_c: object, _u: object, mid: int, *_rest: object) -> None:
+        acked.append(mid)
+        done.set()
+
+    client.on_publish = on_publish
+    mark = probe.mark()
+    for i in range(20):
+        client.publish("net/state", str(i).encode(), qos=0)
+    info = client.publish("net/event", b"e", qos=1)
+    assert done.wait(slow(10))
+    probe.wait(lambda m: m.topic == "net/event", start=mark)
+    assert len(probe.on("net/state")) == 20
+    assert acked == [info.mid]  # the QoS 1 message's PUBACK only (paho's loop: 21 calls)
+    assert info.is_published()
+
+
+def test_a_restarted_broker_is_reconnected_to(broker: Mosquitto, threads: set[str]) -> None:
+    with connected(broker, "net-restart") as c:
+        ups: list[int] = []
+        c.on_connect = lambda *_a: ups.append(1)
+        broker.restart()
+        wait_until(lambda: ups and c.is_connected(), 15, "reconnected")
+        probe = Probe(broker.port, "net/#")
+        try:
+            mark = probe.mark()
+            c.publish("net/after", b"again", qos=1)
+            probe.wait(lambda m: m.topic == "net/after", start=mark)
+        finally:
+            probe.close()
+
+
+def test_loop_stop_after_disconnect_writes_the_disconnect_first(
+    threads: set[str], broker: Mosquitto
+) -> None:
+    with connected(broker, "net-leave") as c:
+        c.publish("net/last", b"1", qos=0)
+    net = [t for t in threading.enumerate() if t.name == "paho-mqtt-client-net-leave"]
+    assert net == []  # joined
+    assert ThreadSocket.sent[-1][:1] == b"\xe0"  # DISCONNECT, the last thing written
+    assert threads == {"paho-mqtt-client-net-leave"}
+
+
+def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_closed() -> None:
+    waker = Waker()
+    try:
+        assert select.select([waker], [], [], 0)[0] == []
+        waker.wake()
+        waker.wake()  # (paho asks once per queue; twice is one wake-up)
+        assert select.select([waker], [], [], slow(5))[0] == [waker]
+        waker.drain()
+        assert select.select([waker], [], [], 0)[0] == []
+    finally:
+        waker.close()
+    waker.wake()  # after the thread ended (a late publish): nothing, no error
+    waker.close()
