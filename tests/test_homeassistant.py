@@ -789,7 +789,8 @@ def test_the_wind_entities_are_there_only_with_a_wind_topic_and_pass_the_rules()
     for has_wind in (False, True):
         info = RotatorInfo.of(
             "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
-            has_station=False, nudge_step_deg=cfg.nudge_step_deg, has_wind=has_wind,
+            has_station=False, nudge_step_deg=cfg.nudge_step_deg,
+            features=frozenset({"wind"} if has_wind else ()),
         )  # fmt: skip
         msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
         found = {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}

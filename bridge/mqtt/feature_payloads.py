@@ -1,14 +1,14 @@
 """The status's blocks of the features that propose targets, rendered: tracking
-(``tracking``, ``R/tracking``: engine/tracking.py), following WSJT-X (``following``,
-``R/follow/state``: engine/follow.py) and the wind park (``wind``: engine/wind.py). Pure,
-beside payloads.py, which puts them into ``R/status``.
+(``tracking``, ``R/tracking``: engine/tracking.py) and following WSJT-X (``following``,
+``R/follow/state``: engine/follow.py). Pure, beside payloads.py, which puts them into
+``R/status``. (The wind park's block is its package's: bridge/features/wind/.)
 """
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
 
-from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo, WindInfo
+from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
 
 
 def tracking_json(info: TrackingInfo) -> dict[str, object]:
@@ -48,17 +48,6 @@ def following_json(info: FollowingInfo) -> dict[str, object]:
         "bearing": None if info.bearing_deg is None else round(info.bearing_deg, 1),
         "distance_km": None if info.distance_km is None else round(info.distance_km, 1),
         "held": info.held,
-    }
-
-
-def wind_json(info: WindInfo) -> dict[str, object]:
-    """The status's ``wind`` block (engine/wind.py)."""
-    calm = info.calm_since_unix
-    return {
-        "speed_kmh": info.speed_kmh,
-        "storm": info.storm,
-        "calm_since": None if calm is None else _iso(calm),
-        "silent": info.silent,
     }
 
 

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
+from bridge.feature import registered
 from bridge.model import RotatorStatus, TargetInfo
 from bridge.mqtt.call_payload import Called, CallError, parse_called
-from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
-from bridge.mqtt.health_payload import health_json
+from bridge.mqtt.feature_payloads import following_json, tracking_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
@@ -397,8 +397,16 @@ def status_json(
         doc["following"] = following_json(status.following)
     if status.following_ended is not None:
         doc["following_ended"] = status.following_ended
-    if status.wind is not None:
-        doc["wind"] = wind_json(status.wind)
+    tail = []  # the blocks rendered once (rotor health's, once per move), last
+    for feature in registered():  # bridge/feature.py: each feature's block, in its order
+        for block in feature.status:
+            value = block.value(status)
+            if value is None:
+                continue
+            if block.rendered:
+                tail.append(f',"{block.key}":{block.render(value)}')
+            else:
+                doc[block.key] = block.render(value)
     doc.update(
         state=status.state.value,
         moving=status.moving,
@@ -417,9 +425,9 @@ def status_json(
         time=_iso(time_unix),
     )
     text = _COMPACT.encode(doc)
-    if status.health is None:
+    if not tail:
         return text
-    return f'{text[:-1]},"health":{health_json(status.health)}}}'  # rendered once per move
+    return f"{text[:-1]}{''.join(tail)}}}"
 
 
 def _iso(time_unix: float) -> str:

@@ -65,6 +65,7 @@ import time
 from collections.abc import Callable
 
 from bridge.errors import Refused
+from bridge.feature import Feature, registered
 from bridge.model import (
     AuditEvent,
     Claim,
@@ -77,8 +78,6 @@ from bridge.model import (
     Origin,
     Park,
     Release,
-    ResetHealth,
-    RotatorHealth,
     RotatorStatus,
     SetOption,
     SettingValue,
@@ -97,7 +96,6 @@ from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.mqtt.groups import status_json as group_status_json
 from bridge.mqtt.halts import Halts, switch_on
-from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
@@ -137,7 +135,7 @@ class MqttService:
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
-        self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
+        self._values: dict[str, object] = {}  # a feature's last state published, by topic
         self._handed: dict[str, str] = {}  # rule 3: a status's payloads last handed on, by topic
         self._clock = clock
         self._groups: dict[str, Group] = {}  # rule 10
@@ -157,6 +155,7 @@ class MqttService:
         )
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
+        self._states = [state for f in topics.features for state in f.states]
 
     def retain_is_live(self, v5: bool) -> None:
         """The main connection's MQTT version, before any message of a connection (``auto``
@@ -274,9 +273,16 @@ class MqttService:
             pub(t.tracking, tracking_state(status))
         if rot.can_follow:
             pub(t.follow_state, follow_state(status))
-        if status.health is not None and status.health is not self._health.get(rotator_id):
-            self._health[rotator_id] = status.health  # a new one after each move only
-            pub(t.health, health_json(status.health))
+        for state in self._states:  # the registry's (bridge/feature.py)
+            value = state.value(status)
+            if value is None:
+                continue
+            topic = t.feature(state.suffix)
+            if state.new_only:  # a new one after each move only (rotor health)
+                if value is self._values.get(topic):
+                    continue
+                self._values[topic] = value
+            pub(topic, state.render(value))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
         pub(t.control, control.control_json(status.control))
@@ -547,7 +553,7 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
-        command = parse_command(kind, arg, payload, by, rot.spec)
+        command = parse_command(kind, arg, payload, by, rot.spec, self.topics.features)
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
@@ -557,13 +563,19 @@ class MqttService:
 
 
 def parse_command(
-    kind: str, arg: str | None, payload: bytes, by: Origin, spec: ModelSpec | None = None
+    kind: str,
+    arg: str | None,
+    payload: bytes,
+    by: Origin,
+    spec: ModelSpec | None = None,
+    features: tuple[Feature, ...] | None = None,
 ) -> Command | Called | None:
     """A command topic's payload (everything but stop and lock) as the command it names, from
     ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
     for a topic that carries no command. An option's value is read by ``spec``'s declaration
     of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
-    text, to be refused there."""
+    text, to be refused there. A registered feature's command (``features``: the registry's
+    unless given) is parsed by its declaration (bridge/feature.py)."""
     src = Source.MQTT
     if kind == "claim":
         operator, minutes = control.parse_claim(payload, by.operator)
@@ -573,8 +585,6 @@ def parse_command(
         return Release(source=src, origin=by if named is None else Origin(Source.MQTT, named))
     if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
         raise pl.PayloadError("empty payload")
-    if kind == "health_reset":
-        return ResetHealth(source=src, origin=by)  # moves nothing: no lease to ask
     if kind == "target":
         aim = pl.parse_aim(payload)
         if isinstance(aim, Called):
@@ -602,6 +612,10 @@ def parse_command(
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:
         return SetOption(arg, _setting_value(spec, arg, payload), src, origin=by)
+    for feature in registered() if features is None else features:
+        for command in feature.commands:
+            if command.kind == kind:
+                return command.parse(payload, by)
     return None
 
 

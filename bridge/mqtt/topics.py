@@ -1,5 +1,7 @@
 """Every MQTT topic string of the bridge lives here and nowhere else (docs/architecture.md,
-rule 4).
+rule 4), but a registered feature's: its package declares its topics as suffixes under ``R/``
+(bridge/feature.py), and the table here iterates the registry for them (``Topics.features``);
+stop and lock stay hard-wired, first.
 
 R = a rotator's topic (the base topic itself when exactly one rotator is configured,
 ``<base>/<id>`` otherwise), B = the base topic.
@@ -20,7 +22,10 @@ Two topics under ``B/bridge/`` are the bridge's messages to itself, not for othe
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+from bridge.feature import Feature, registered
 
 
 @dataclass(frozen=True)
@@ -67,9 +72,9 @@ class RotatorTopics:
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
-    @property
-    def health_reset(self) -> str:
-        return f"{self.root}/health/reset"
+    def feature(self, suffix: str) -> str:
+        """A registered feature's topic (bridge/feature.py): ``R/<suffix>``."""
+        return f"{self.root}/{suffix}"
 
     @property
     def option_filter(self) -> str:
@@ -126,10 +131,6 @@ class RotatorTopics:
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
-
-    @property
-    def health(self) -> str:
-        return f"{self.root}/health"
 
     # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
     @property
@@ -207,10 +208,17 @@ class DiscoveryTopics:
 
 class Topics:
     def __init__(
-        self, base: str, roots: dict[str, str], groups: dict[str, str] | None = None
+        self,
+        base: str,
+        roots: dict[str, str],
+        groups: dict[str, str] | None = None,
+        features: Sequence[Feature] | None = None,
     ) -> None:
-        """``groups``: each group's root (settings.py ``group_topic``), by its id."""
+        """``groups``: each group's root (settings.py ``group_topic``), by its id; ``features``:
+        the registry's (bridge/feature.py ``registered``) unless given."""
         self.base = base
+        self.features = tuple(registered() if features is None else features)
+        self._commands = {c.suffix: c.kind for f in self.features for c in f.commands}
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
         self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
 
@@ -281,7 +289,7 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge, t.track, t.follow]
-            subs.append(t.health_reset)
+            subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
             subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
 
@@ -302,7 +310,7 @@ class Topics:
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
             subs += [t.follow_state]
-            subs.append(t.health)
+            subs += [t.feature(s.suffix) for f in self.features for s in f.states]
             subs += [t.control]
         for g in self._groups.values():
             subs += [g.status, g.availability]
@@ -319,9 +327,13 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track", "follow", "health_reset"):
+            for kind in ("preset", "park", "nudge", "track", "follow"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
+            if topic.startswith(t.root + "/"):  # a registered feature's command
+                named = self._commands.get(topic[len(t.root) + 1 :])
+                if named is not None:
+                    return rid, named, None
             if topic in (t.control_claim, t.control_release):
                 return rid, "claim" if topic == t.control_claim else "release", None
             prefix = f"{t.root}/option/"
