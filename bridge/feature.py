@@ -134,6 +134,7 @@ class Feature:
     # rotator's table turns it on (its entities' ``needs`` is then the feature's name)
     rotator_settings: type[BaseModel] | None = None
     configured: Callable[[BaseModel], bool] | None = None
+    settings_section: tuple[str, str] = ("", "")  # its heading and line in configuration.md
     # (a rotator's settings, its rotator) -> the input it reads, from the app (None: none)
     inputs: Callable[[Sequence[tuple[Any, Any]]], Input | None] | None = None
     replayed: Callable[[BaseModel], str | None] | None = None

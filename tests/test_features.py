@@ -109,6 +109,8 @@ def test_a_features_docs_part_and_settings_are_real(feature: Feature) -> None:
         assert isinstance(getattr(importlib.import_module(module), name), type)
     if feature.rotator_settings is not None:  # a rotator's table includes its keys
         assert issubclass(RotatorSettings, feature.rotator_settings)
+        heading = feature.settings_section[0]  # its keys' section in configuration.md
+        assert f"### {heading}" in (ROOT / "docs" / "configuration.md").read_text()
     assert feature.name in (ROOT / "docs" / "architecture.md").read_text()
 
 

@@ -85,6 +85,10 @@ FEATURE = Feature(
         EntityRow("binary_sensor", "storm", "Parked for the storm", _storm, needs=NAME),
     ),
     rotator_settings=WindFields,
+    settings_section=(
+        "Wind (per rotator)",
+        "Parking for a storm, from a wind speed published on MQTT.",
+    ),
     configured=_configured,
     inputs=_inputs,
     replayed=_replayed,
