@@ -57,12 +57,14 @@ class CommandTopic:
 class StateTopic(Generic[T]):
     """``R/<suffix>``: retained, published from each status that carries a value (``value``
     None: nothing published); with ``new_only`` only when the value is a new object (a report
-    made once per move, not at every status)."""
+    made once per move, not at every status); with ``needs`` only for a rotator that has it
+    (a capability of mqtt/ports.py ``RotatorPort``: ``can_follow``)."""
 
     suffix: str
     value: Callable[[RotatorStatus], T | None]
     render: Callable[[T], str]
     new_only: bool = False
+    needs: str | None = None
 
 
 @dataclass(frozen=True)

@@ -46,7 +46,7 @@ def core_topics(t: RotatorTopics) -> set[str]:
 
 def test_the_registry_is_the_features_tuple_in_its_order() -> None:
     assert registered() == FEATURES
-    assert [f.name for f in FEATURES][:2] == ["wind", "health"]
+    assert [f.name for f in FEATURES][:3] == ["follow", "wind", "health"]
     assert len({f.name for f in FEATURES}) == len(FEATURES)
 
 
@@ -81,7 +81,7 @@ def test_a_features_entities_are_in_discovery_for_a_rotator_that_has_it(feature:
     topics = Topics("rotor", {"tower": "rotor"})
     info = RotatorInfo.of(
         "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
-        has_station=False, nudge_step_deg=cfg.nudge_step_deg,
+        has_station=True, nudge_step_deg=cfg.nudge_step_deg, can_follow=True,
         features=frozenset({feature.name}),
     )  # fmt: skip
     found = {t.split("/")[1] + "." + t.split("/")[3] for t in all_configs(

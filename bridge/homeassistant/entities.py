@@ -285,14 +285,6 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "next_aos", "Next AOS", needs="track_options", config=lambda r: {
         "state_topic": r.topics.status, "value_template": _tracked("aos"),
         "device_class": "timestamp", "icon": "mdi:clock-start"}),
-    Entity("switch", "follow", "Follow WSJT-X", needs="can_follow", config=lambda r: {
-        "command_topic": r.topics.follow, "state_topic": r.topics.follow_state,
-        "payload_on": "wsjtx", "payload_off": "off", "state_on": "wsjtx", "state_off": "off",
-        "icon": "mdi:account-arrow-right"}),
-    Entity("sensor", "followed", "Followed station", needs="can_follow", config=lambda r: {
-        "state_topic": r.topics.status, "icon": "mdi:account-voice",
-        "value_template": "{{ value_json.following.call if value_json.following is defined "
-                          "and value_json.following.call else 'None' }}"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),

@@ -1,14 +1,13 @@
-"""The status's blocks of the features that propose targets, rendered: tracking
-(``tracking``, ``R/tracking``: engine/tracking.py) and following WSJT-X (``following``,
-``R/follow/state``: engine/follow.py). Pure, beside payloads.py, which puts them into
-``R/status``. (The wind park's block is its package's: bridge/features/wind/.)
+"""The status's block of tracking, rendered (``tracking``, ``R/tracking``: engine/tracking.py).
+Pure, beside payloads.py, which puts it into ``R/status``. (The blocks of the registered
+features are their packages': bridge/features/.)
 """
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
 
-from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
+from bridge.model import RotatorStatus, TrackingInfo
 
 
 def tracking_json(info: TrackingInfo) -> dict[str, object]:
@@ -36,24 +35,6 @@ def tracking_json(info: TrackingInfo) -> dict[str, object]:
 def tracking_state(status: RotatorStatus) -> str:
     """``R/tracking``: what is followed, or ``off``."""
     return status.tracking.body if status.tracking is not None else "off"
-
-
-def following_json(info: FollowingInfo) -> dict[str, object]:
-    """The status's ``following`` block: whom WSJT-X names, and where the rotor was turned."""
-    return {
-        "source": info.source,
-        "path": info.path,
-        "call": info.call,
-        "grid": info.grid,
-        "bearing": None if info.bearing_deg is None else round(info.bearing_deg, 1),
-        "distance_km": None if info.distance_km is None else round(info.distance_km, 1),
-        "held": info.held,
-    }
-
-
-def follow_state(status: RotatorStatus) -> str:
-    """``R/follow/state``: what is followed (``wsjtx``), or ``off``."""
-    return status.following.source if status.following is not None else "off"
 
 
 def _iso(time_unix: float) -> str:

@@ -21,7 +21,7 @@ from bridge import geo
 from bridge.feature import registered
 from bridge.model import RotatorStatus, TargetInfo
 from bridge.mqtt.call_payload import Called, CallError, parse_called
-from bridge.mqtt.feature_payloads import following_json, tracking_json
+from bridge.mqtt.feature_payloads import tracking_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
@@ -393,10 +393,6 @@ def status_json(
         doc["tracking"] = tracking_json(status.tracking)
     if status.tracking_ended is not None:
         doc["tracking_ended"] = status.tracking_ended
-    if status.following is not None:
-        doc["following"] = following_json(status.following)
-    if status.following_ended is not None:
-        doc["following_ended"] = status.following_ended
     tail = []  # the blocks rendered once (rotor health's, once per move), last
     for feature in registered():  # bridge/feature.py: each feature's block, in its order
         for block in feature.status:

@@ -72,7 +72,6 @@ from bridge.model import (
     Command,
     ErrorEvent,
     ErrorKind,
-    FollowQso,
     GoToPreset,
     Nudge,
     Origin,
@@ -92,7 +91,7 @@ from bridge.model import (
 from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.call_payload import Called
-from bridge.mqtt.feature_payloads import follow_state, tracking_state
+from bridge.mqtt.feature_payloads import tracking_state
 from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.mqtt.groups import status_json as group_status_json
 from bridge.mqtt.halts import Halts, switch_on
@@ -271,9 +270,9 @@ class MqttService:
         pub(t.lock_state, pl.switch(status.locked))
         if rot.can_track:
             pub(t.tracking, tracking_state(status))
-        if rot.can_follow:
-            pub(t.follow_state, follow_state(status))
         for state in self._states:  # the registry's (bridge/feature.py)
+            if state.needs is not None and not getattr(rot, state.needs):
+                continue
             value = state.value(status)
             if value is None:
                 continue
@@ -605,9 +604,6 @@ def parse_command(
     if kind == "track":
         name, tle = pl.parse_track(payload)
         return TrackBody(name, tle, source=src, origin=by)
-    if kind == "follow":
-        on, long_path = pl.parse_follow(payload)
-        return FollowQso(on, long_path, source=src, origin=by)
     if kind == "target_elevation":
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:

@@ -65,10 +65,6 @@ class RotatorTopics:
     def track(self) -> str:
         return f"{self.root}/track"
 
-    @property
-    def follow(self) -> str:
-        return f"{self.root}/follow"
-
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -124,10 +120,6 @@ class RotatorTopics:
     @property
     def lock_state(self) -> str:
         return f"{self.root}/lock/state"
-
-    @property
-    def follow_state(self) -> str:
-        return f"{self.root}/follow/state"
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
@@ -288,7 +280,7 @@ class Topics:
             subs += [g.target, g.stop]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge, t.track, t.follow]
+            subs += [t.preset, t.park, t.nudge, t.track]
             subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
             subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
@@ -309,7 +301,6 @@ class Topics:
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
-            subs += [t.follow_state]
             subs += [t.feature(s.suffix) for f in self.features for s in f.states]
             subs += [t.control]
         for g in self._groups.values():
@@ -327,7 +318,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track", "follow"):
+            for kind in ("preset", "park", "nudge", "track"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             if topic.startswith(t.root + "/"):  # a registered feature's command
