@@ -15,6 +15,7 @@ import pytest
 
 from bridge import geo
 from bridge.features.follow import follow_state
+from bridge.features.tracking import tracking_state
 from bridge.homeassistant import (
     ENTITIES,
     MAX_SATELLITES,
@@ -26,7 +27,6 @@ from bridge.homeassistant import (
 )
 from bridge.homeassistant.publisher import ROUND_MIN_S
 from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
-from bridge.mqtt.feature_payloads import tracking_state
 from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY

@@ -210,14 +210,6 @@ DISTANCE = (
 RELEASE_PAYLOAD = '{"operator": "homeassistant"}'
 
 
-def _tracked(field: str) -> str:
-    """A template for a field of the status's tracking block (unknown while not tracking)."""
-    return (
-        f"{{{{ value_json.tracking.{field} if value_json.tracking is defined and "
-        f"value_json.tracking.{field} is defined else 'None' }}}}"
-    )
-
-
 DEGREES = {"unit_of_measurement": "°"}
 SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
 TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
@@ -265,26 +257,10 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
         "device_class": "distance", "state_class": "measurement",
         "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
-    Entity("select", "track", "Track", needs="track_options", config=lambda r: {
-        "command_topic": r.topics.track, "state_topic": r.topics.tracking,
-        "options": list(r.track_options), "icon": "mdi:satellite-variant"}),
     Entity("select", "spot", "Turn to spot", needs="spot_options", config=lambda r: {
         "command_topic": r.topics.target, "command_template": CALL_TEMPLATE,
         "options": list(r.spot_options), "state_topic": r.topics.status,
         "value_template": NO_OPTION, "icon": "mdi:account-voice"}),
-    Entity("sensor", "track_azimuth", "Tracked azimuth", needs="track_options",
-           config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("azimuth"), **DEGREES,
-        "state_class": "measurement_angle", "suggested_display_precision": 1,
-        "icon": "mdi:compass-rose"}),
-    Entity("sensor", "track_elevation", "Tracked elevation", needs="track_options",
-           config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("elevation"), **DEGREES,
-        "state_class": "measurement", "suggested_display_precision": 1,
-        "icon": "mdi:angle-acute"}),
-    Entity("sensor", "next_aos", "Next AOS", needs="track_options", config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("aos"),
-        "device_class": "timestamp", "icon": "mdi:clock-start"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),

@@ -21,7 +21,6 @@ from bridge import geo
 from bridge.feature import registered
 from bridge.model import RotatorStatus, TargetInfo
 from bridge.mqtt.call_payload import Called, CallError, parse_called
-from bridge.mqtt.feature_payloads import tracking_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
@@ -389,10 +388,6 @@ def status_json(
     if status.target_info is not None:
         doc["target_info"] = target_info(status.target_info)
     doc["parked"] = status.parked
-    if status.tracking is not None:
-        doc["tracking"] = tracking_json(status.tracking)
-    if status.tracking_ended is not None:
-        doc["tracking_ended"] = status.tracking_ended
     tail = []  # the blocks rendered once (rotor health's, once per move), last
     for feature in registered():  # bridge/feature.py: each feature's block, in its order
         for block in feature.status:

@@ -84,14 +84,12 @@ from bridge.model import (
     TakePath,
     Target,
     Toward,
-    TrackBody,
     setting_text,
     valid_operator,
 )
 from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.call_payload import Called
-from bridge.mqtt.feature_payloads import tracking_state
 from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.mqtt.groups import status_json as group_status_json
 from bridge.mqtt.halts import Halts, switch_on
@@ -268,8 +266,6 @@ class MqttService:
             if name in status.options:
                 pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
-        if rot.can_track:
-            pub(t.tracking, tracking_state(status))
         for state in self._states:  # the registry's (bridge/feature.py)
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
@@ -601,9 +597,6 @@ def parse_command(
     if kind == "nudge":
         d_az, d_el = pl.parse_nudge(payload)
         return Nudge(d_az, d_el, source=src, origin=by)
-    if kind == "track":
-        name, tle = pl.parse_track(payload)
-        return TrackBody(name, tle, source=src, origin=by)
     if kind == "target_elevation":
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:

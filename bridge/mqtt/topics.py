@@ -61,10 +61,6 @@ class RotatorTopics:
     def nudge(self) -> str:
         return f"{self.root}/nudge"
 
-    @property
-    def track(self) -> str:
-        return f"{self.root}/track"
-
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
@@ -112,10 +108,6 @@ class RotatorTopics:
     @property
     def info(self) -> str:
         return f"{self.root}/info"
-
-    @property
-    def tracking(self) -> str:
-        return f"{self.root}/tracking"
 
     @property
     def lock_state(self) -> str:
@@ -280,7 +272,7 @@ class Topics:
             subs += [g.target, g.stop]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge, t.track]
+            subs += [t.preset, t.park, t.nudge]
             subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
             subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
@@ -300,7 +292,7 @@ class Topics:
         subs = [self.bridge_state, self.bridge_info]
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
-            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
+            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.info]
             subs += [t.feature(s.suffix) for f in self.features for s in f.states]
             subs += [t.control]
         for g in self._groups.values():
@@ -318,7 +310,7 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track"):
+            for kind in ("preset", "park", "nudge"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
             if topic.startswith(t.root + "/"):  # a registered feature's command
