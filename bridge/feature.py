@@ -149,6 +149,7 @@ class Feature:
 
 
 _loaded: tuple[Feature, ...] | None = None
+_blocks: tuple[tuple[Feature, ...], tuple[StatusBlock[Any], ...]] | None = None
 
 
 def registered() -> tuple[Feature, ...]:
@@ -158,3 +159,13 @@ def registered() -> tuple[Feature, ...]:
         features: tuple[Feature, ...] = importlib.import_module(REGISTRY_MODULE).FEATURES
         _loaded = features
     return _loaded
+
+
+def status_blocks() -> tuple[StatusBlock[Any], ...]:
+    """Every registered feature's blocks in ``R/status``, in the registry's order (made once:
+    every status of every rotator goes through them)."""
+    global _blocks
+    features = registered()
+    if _blocks is None or _blocks[0] is not features:
+        _blocks = features, tuple(block for f in features for block in f.status)
+    return _blocks[1]

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
-from bridge.feature import registered
+from bridge.feature import status_blocks
 from bridge.model import RotatorStatus, TargetInfo
 from bridge.mqtt.call_payload import Called, CallError, parse_called
 from bridge.pointing import Pointing
@@ -389,15 +389,14 @@ def status_json(
         doc["target_info"] = target_info(status.target_info)
     doc["parked"] = status.parked
     tail = []  # the blocks rendered once (rotor health's, once per move), last
-    for feature in registered():  # bridge/feature.py: each feature's block, in its order
-        for block in feature.status:
-            value = block.value(status)
-            if value is None:
-                continue
-            if block.rendered:
-                tail.append(f',"{block.key}":{block.render(value)}')
-            else:
-                doc[block.key] = block.render(value)
+    for block in status_blocks():  # bridge/feature.py: each feature's, in the registry's order
+        value = block.value(status)
+        if value is None:
+            continue
+        if block.rendered:
+            tail.append(f',"{block.key}":{block.render(value)}')
+        else:
+            doc[block.key] = block.render(value)
     doc.update(
         state=status.state.value,
         moving=status.moving,
