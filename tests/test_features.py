@@ -197,3 +197,12 @@ def test_without_the_toy_its_topic_is_no_ones() -> None:
     topics = Topics("rotor", {"tower": "rotor"})
     assert topics.route("rotor/toy/go") is None
     assert "rotor/toy/go" not in topics.subscriptions()
+
+
+@pytest.mark.parametrize("suffix", ["stop", "lock", "target", "option/speed", "health", ""])
+def test_a_feature_cannot_take_a_core_topic_or_another_features(suffix: str) -> None:
+    """Rule 3 (rule 1 above all: no feature answers on R/stop or R/lock)."""
+    thief = Feature("thief", "docs/architecture.md", "takes a topic", commands=(
+        CommandTopic(suffix, "thief", _toy_nudge),))  # fmt: skip
+    with pytest.raises(ValueError, match="is taken"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))

@@ -203,6 +203,7 @@ class Topics:
         self.base = base
         self.features = tuple(registered() if features is None else features)
         self._commands = {c.suffix: c.kind for f in self.features for c in f.commands}
+        _check_suffixes(self.features)
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
         self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
 
@@ -323,6 +324,23 @@ class Topics:
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
         return None
+
+
+def _check_suffixes(features: Sequence[Feature]) -> None:
+    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all)
+    and no other feature's; ValueError naming it, before anything is subscribed."""
+    core = RotatorTopics("")
+    taken = {
+        getattr(core, name).lstrip("/")
+        for name in dir(RotatorTopics)
+        if isinstance(getattr(RotatorTopics, name), property)
+    }
+    for feature in features:
+        suffixes = [c.suffix for c in feature.commands] + [s.suffix for s in feature.states]
+        for suffix in suffixes:
+            if suffix in taken or suffix.startswith("option/") or not suffix:
+                raise ValueError(f"feature {feature.name}: topic R/{suffix} is taken")
+            taken.add(suffix)
 
 
 @dataclass(frozen=True)
