@@ -46,11 +46,13 @@ REGISTRY_MODULE = "bridge.features"  # rule 4: its ``FEATURES``
 class CommandTopic:
     """``R/<suffix>``: a command topic of the main connection (never the stop lane's: rule 1).
     ``parse`` turns its payload, from ``origin``, into one command for the judge; it raises
-    mqtt/payloads.py's PayloadError naming what was wrong (refused on ``R/error``)."""
+    mqtt/payloads.py's PayloadError naming what was wrong (refused on ``R/error``). An empty
+    payload is refused before it ("empty payload") unless it ``takes_empty``."""
 
     suffix: str
     kind: str  # the command's name in refusals and the audit (mqtt/payloads.py describe)
     parse: Callable[[bytes, Origin], Command]
+    takes_empty: bool = False
 
 
 @dataclass(frozen=True)
@@ -58,13 +60,17 @@ class StateTopic(Generic[T]):
     """``R/<suffix>``: retained, published from each status that carries a value (``value``
     None: nothing published); with ``new_only`` only when the value is a new object (a report
     made once per move, not at every status); with ``needs`` only for a rotator that has it
-    (a capability of mqtt/ports.py ``RotatorPort``: ``can_follow``)."""
+    (a capability of mqtt/ports.py ``RotatorPort``: ``can_follow``); ``after_status``: published
+    after ``R/status``, not before; ``remote``: a client far from the station reads it
+    (mqtt/topics.py ``StationTopics``)."""
 
     suffix: str
     value: Callable[[RotatorStatus], T | None]
     render: Callable[[T], str]
     new_only: bool = False
     needs: str | None = None
+    after_status: bool = False
+    remote: bool = False
 
 
 @dataclass(frozen=True)

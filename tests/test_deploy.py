@@ -373,9 +373,7 @@ def test_each_page_command_output_leads_to_its_own_publisher(flow: list[dict]) -
     relay = _relay(flow)
     outputs = _relay_outputs(relay)
     assert sorted(outputs.values()) == list(range(relay["outputs"]))
-    expected = {
-        name: _mqtt_out(flow, _topic_of(name))["id"] for name in outputs if name != "reply"
-    }
+    expected = {name: _mqtt_out(flow, _topic_of(name))["id"] for name in outputs if name != "reply"}
     assert set(expected) == {"target", "stop", "preset", "park", "nudge", "track"}
     for name, index in outputs.items():
         (wired,) = relay["wires"][index]

@@ -46,7 +46,7 @@ def core_topics(t: RotatorTopics) -> set[str]:
 
 def test_the_registry_is_the_features_tuple_in_its_order() -> None:
     assert registered() == FEATURES
-    assert [f.name for f in FEATURES][:4] == ["tracking", "follow", "wind", "health"]
+    assert [f.name for f in FEATURES][:5] == ["tracking", "follow", "wind", "health", "control"]
     assert len({f.name for f in FEATURES}) == len(FEATURES)
 
 

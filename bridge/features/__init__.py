@@ -9,11 +9,12 @@ rule 1). A new feature is a package beside these and one line below.
 from __future__ import annotations
 
 from bridge.feature import Feature
-from bridge.features import follow, health, tracking, wind
+from bridge.features import control, follow, health, tracking, wind
 
 FEATURES: tuple[Feature, ...] = (
     tracking.FEATURE,
     follow.FEATURE,
     wind.FEATURE,
     health.FEATURE,
+    control.FEATURE,
 )

@@ -207,7 +207,6 @@ DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
 # the release button names Home Assistant as who released (it sends no MQTT 5 user property)
-RELEASE_PAYLOAD = '{"operator": "homeassistant"}'
 
 
 DEGREES = {"unit_of_measurement": "°"}
@@ -280,14 +279,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
         "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
-    # who is turning it: the control lease's holder (its end as an attribute), its release
-    # (anyone may: the station owner's button), and who sent the last command
-    Entity("sensor", "control", "Control", bridge_only=True, config=lambda r: {
-        "state_topic": r.topics.control, "json_attributes_topic": r.topics.control,
-        "value_template": "{{ value_json.holder or 'free' }}", "icon": "mdi:account-lock"}),
-    Entity("button", "release_control", "Release control", bridge_only=True, config=lambda r: {
-        "command_topic": r.topics.control_release, "payload_press": RELEASE_PAYLOAD,
-        "icon": "mdi:lock-open-variant"}),
+    # who sent the last command (the control lease's holder and release: features/control/)
     Entity("sensor", "last_operator", "Last operator", config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:account-arrow-right",
         "value_template": "{{ value_json.last_operator or 'none' }}"}),

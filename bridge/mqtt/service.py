@@ -62,13 +62,12 @@ import json
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from bridge.errors import Refused
-from bridge.feature import Feature, registered
+from bridge.feature import CommandTopic, registered
 from bridge.model import (
     AuditEvent,
-    Claim,
     Command,
     ErrorEvent,
     ErrorKind,
@@ -76,7 +75,6 @@ from bridge.model import (
     Nudge,
     Origin,
     Park,
-    Release,
     RotatorStatus,
     SetOption,
     SettingValue,
@@ -87,7 +85,6 @@ from bridge.model import (
     setting_text,
     valid_operator,
 )
-from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.call_payload import Called
 from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
@@ -267,6 +264,8 @@ class MqttService:
                 pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
         for state in self._states:  # the registry's (bridge/feature.py)
+            if state.after_status:
+                continue
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
             value = state.value(status)
@@ -280,7 +279,9 @@ class MqttService:
             pub(topic, state.render(value))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
-        pub(t.control, control.control_json(status.control))
+        for state in self._states:  # (the control lease's: after the status, as ever)
+            if state.after_status and (value := state.value(status)) is not None:
+                pub(t.feature(state.suffix), state.render(value))
         self._latest[rotator_id] = status
         for group in self._groups.values():
             if rotator_id in group.member_ids:
@@ -548,7 +549,7 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
-        command = parse_command(kind, arg, payload, by, rot.spec, self.topics.features)
+        command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
@@ -563,21 +564,22 @@ def parse_command(
     payload: bytes,
     by: Origin,
     spec: ModelSpec | None = None,
-    features: tuple[Feature, ...] | None = None,
+    features: Mapping[str, CommandTopic] | None = None,
 ) -> Command | Called | None:
     """A command topic's payload (everything but stop and lock) as the command it names, from
     ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
     for a topic that carries no command. An option's value is read by ``spec``'s declaration
     of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
-    text, to be refused there. A registered feature's command (``features``: the registry's
-    unless given) is parsed by its declaration (bridge/feature.py)."""
+    text, to be refused there. A registered feature's command (``features``: the registry's by
+    kind unless given) is parsed by its declaration (bridge/feature.py)."""
     src = Source.MQTT
-    if kind == "claim":
-        operator, minutes = control.parse_claim(payload, by.operator)
-        return Claim(operator, minutes, source=src, origin=by)
-    if kind == "release":
-        named = control.parse_release(payload) if by.operator is None else None
-        return Release(source=src, origin=by if named is None else Origin(Source.MQTT, named))
+    if features is None:
+        features = {c.kind: c for f in registered() for c in f.commands}
+    feature = features.get(kind)
+    if feature is not None:
+        if not payload and not feature.takes_empty:
+            raise pl.PayloadError("empty payload")  # rule 2
+        return feature.parse(payload, by)
     if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
         raise pl.PayloadError("empty payload")
     if kind == "target":
@@ -601,10 +603,6 @@ def parse_command(
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:
         return SetOption(arg, _setting_value(spec, arg, payload), src, origin=by)
-    for feature in registered() if features is None else features:
-        for command in feature.commands:
-            if command.kind == kind:
-                return command.parse(payload, by)
     return None
 
 

@@ -116,20 +116,7 @@ class RotatorTopics:
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
 
-    # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
-    @property
-    def control(self) -> str:
-        """Retained: who holds the control lease, and until when."""
-        return f"{self.root}/control"
-
-    @property
-    def control_claim(self) -> str:
-        return f"{self.root}/control/claim"
-
-    @property
-    def control_release(self) -> str:
-        return f"{self.root}/control/release"
-
+    # the audit trail (engine/operators.py)
     @property
     def audit(self) -> str:
         """Not retained: every command judged, executed or refused."""
@@ -203,6 +190,7 @@ class Topics:
         self.base = base
         self.features = tuple(registered() if features is None else features)
         self._commands = {c.suffix: c.kind for f in self.features for c in f.commands}
+        self.commands = {c.kind: c for f in self.features for c in f.commands}  # by kind
         _check_suffixes(self.features)
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
         self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
@@ -275,7 +263,6 @@ class Topics:
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
             subs += [t.preset, t.park, t.nudge]
             subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
-            subs += [t.control_claim, t.control_release]
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -295,7 +282,6 @@ class Topics:
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
             subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.info]
             subs += [t.feature(s.suffix) for f in self.features for s in f.states]
-            subs += [t.control]
         for g in self._groups.values():
             subs += [g.status, g.availability]
         return subs
@@ -318,8 +304,6 @@ class Topics:
                 named = self._commands.get(topic[len(t.root) + 1 :])
                 if named is not None:
                     return rid, named, None
-            if topic in (t.control_claim, t.control_release):
-                return rid, "claim" if topic == t.control_claim else "release", None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
@@ -369,10 +353,19 @@ class StationTopics:
         description, status, availability, presets, error events, control lease and lock,
         whether the station has one rotator or several."""
         one, each = self.rotator(None), self.rotator("+")
+        read = [s.suffix for f in registered() for s in f.states if s.remote]  # R/control
         return [self.bridge_state, self.bridge_heartbeat] + [
             t
             for r in (one, each)
-            for t in (r.info, r.status, r.availability, r.presets, r.error, r.control, r.lock_state)
+            for t in (
+                r.info,
+                r.status,
+                r.availability,
+                r.presets,
+                r.error,
+                *(r.feature(suffix) for suffix in read),
+                r.lock_state,
+            )
         ]
 
     def described(self, topics: list[str]) -> list[str]:

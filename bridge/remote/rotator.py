@@ -65,7 +65,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
-from bridge.features import tracking
+from bridge.features import control, tracking
 from bridge.model import (
     Command,
     GoToPreset,
@@ -304,7 +304,7 @@ class RemoteRotator:
             raise Refused(RefusalCode.OFFLINE, away)
         if self._view.get(self.topics.lock_state) == b"ON":
             raise Refused(RefusalCode.LOCKED, LOCKED)
-        held = parse_control(self._view.get(self.topics.control))
+        held = parse_control(self._view.get(self.topics.feature(control.STATE)))
         now = self._wall()
         if held is not None and held.operator != self._operator and now < held.until_unix:
             text = held.held_text(now)
