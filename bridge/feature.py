@@ -17,9 +17,9 @@ Rules:
    lane.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
    subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
-3. A feature's topic suffix is unique across the core topics and every feature, and its first
-   word is reserved from group ids (settings_groups.py ``RESERVED``); tests/test_features.py
-   checks both.
+3. A feature's topic suffix is unique across the core topics and every feature (the topic
+   table refuses one that is not, at start: mqtt/topics.py), and its first word is reserved
+   from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks it).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on mqtt/payloads.py while mqtt's
    topic table iterates it), so an import of it from below would be a circle. Nothing heavy is
@@ -120,8 +120,9 @@ class EntityRow:
 @dataclass(frozen=True)
 class Input:
     """Topics of the user's (not under the base topic) a feature reads, with the handler of
-    their messages (True: it was one of them); ``replayed`` are read without
-    retain-as-published (mqtt/connection.py rule 1: the flag then says "replayed")."""
+    their messages (True: it was one of them). Which of them are read without
+    retain-as-published (mqtt/connection.py rule 1: the flag then says "replayed") is the
+    feature's ``replayed``."""
 
     subscriptions: list[str]
     on_message: Callable[[str, bytes, bool], bool]
