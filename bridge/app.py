@@ -41,6 +41,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
+from bridge.features import FEATURES
 from bridge.gs232 import EMULATIONS
 from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
 from bridge.loggers import LoggerEndpoints
@@ -53,7 +54,6 @@ from bridge.mqtt.lane import StopLane
 from bridge.mqtt.payloads import ConsoleFacts
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import DiscoveryTopics, Topics
-from bridge.mqtt.wind import wind_feed
 from bridge.protocols.axes import Axis
 from bridge.ptylines import PtyLineServer
 from bridge.rotctld import RotctldServer
@@ -210,7 +210,13 @@ class App:
             on_new_connection=self._main_new,
             on_connection_lost=lambda: self.mqtt.main_gone(),
             no_replay=self.topics.stop_lane(),
-            replayed=[r.wind_topic for r in settings.rotators if r.wind_topic],  # mqtt/wind.py
+            replayed=[  # a feature's input whose retain flag says "replayed" (the wind's)
+                topic
+                for f in FEATURES
+                if f.replayed is not None
+                for r in settings.rotators
+                if (topic := f.replayed(r)) is not None
+            ],
             claim=Claim(
                 self.me,
                 settings.mqtt.base_topic,
@@ -343,10 +349,11 @@ class App:
             except CtyError as exc:
                 raise ConfigError(str(exc)) from None
             self.mqtt.aim_calls_with(self.dxcluster.aim)
-        pairs = zip(settings.rotators, self.rotators, strict=True)
-        self.mqtt.add_feature(
-            *wind_feed([(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if r.wind_topic])
-        )
+        pairs = list(zip(settings.rotators, self.rotators, strict=True))
+        for feature in FEATURES:  # the inputs of the user's topics (bridge/feature.py)
+            given = feature.inputs(pairs) if feature.inputs is not None else None
+            if given is not None:
+                self.mqtt.add_feature(given.subscriptions, given.on_message)
         self.discovery: DiscoveryPublisher | None = None
         if settings.homeassistant.enabled:
             self.discovery = self._discovery(settings)
@@ -429,7 +436,7 @@ class App:
                     nudge_step_deg=r.nudge_step_deg,
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
-                    has_wind=r.wind_topic is not None,
+                    features=frozenset(f.name for f in FEATURES if f.on_for(r)),
                     dxcluster=self.dxcluster is not None,
                 )
             )

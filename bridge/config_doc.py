@@ -21,6 +21,7 @@ from pydantic.fields import FieldInfo
 from pydantic_core import PydanticUndefined
 
 from bridge.config_report import SHOWN
+from bridge.features import FEATURES
 from bridge.protocols import REGISTRY
 from bridge.settings import (
     ENV_PREFIX,
@@ -41,7 +42,6 @@ from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
 from bridge.settings_pointing import PointingFields
 from bridge.settings_rotator import AxisSettings
-from bridge.settings_wind import WindFields
 
 COMMAND = "scripts/gen-config-doc"
 MINIMAL = """[mqtt]
@@ -75,6 +75,14 @@ a rotator's keys by its id (`ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1`).
 `config/example.toml` is a commented starting point with the keys most people change.
 """
 
+# a registered feature's keys in [[rotators]] (bridge/feature.py), a group each
+FEATURE_GROUPS: list[tuple[str, str, set[str]]] = [
+    (*f.settings_section, set(f.rotator_settings.model_fields))
+    for f in FEATURES
+    if f.rotator_settings is not None
+]
+FEATURE_KEYS = {key for _, _, keys in FEATURE_GROUPS for key in keys}
+
 # [[rotators]]' keys in groups: (heading, what they are for, the keys)
 ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
     (
@@ -83,7 +91,7 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         {n for n in RotatorSettings.model_fields if not n.startswith("rotctld_")}
         - set(PointingFields.model_fields)
         - set(LoggerFields.model_fields)
-        - set(WindFields.model_fields)
+        - FEATURE_KEYS
         - set(BandFields.model_fields),
     ),
     (
@@ -106,11 +114,7 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         "Turning to the station WSJT-X or JTDX is working (needs [wsjtx] and [station]).",
         {n for n in PointingFields.model_fields if n.startswith("follow_")},
     ),
-    (
-        "Wind (per rotator)",
-        "Parking for a storm, from a wind speed published on MQTT.",
-        set(WindFields.model_fields),
-    ),
+    *FEATURE_GROUPS,
     (
         "Loggers",
         "PstRotator's and N1MM Logger+'s UDP interfaces. Neither has authentication: keep "

@@ -28,6 +28,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
 from bridge.demo_screen import Screen
+from bridge.features import tracking
 from bridge.mqtt.topics import Topics
 
 OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
@@ -204,7 +205,7 @@ class Console:
             path = rest[1] if len(rest) == 2 else "short"
             self.publish(t.target, json.dumps({"locator": rest[0], "path": path}))
         elif head == "track" and rest:
-            self.publish(t.track, " ".join(rest))
+            self.publish(t.feature(tracking.COMMAND), " ".join(rest))
         elif head in ("long", "short") and not rest:
             self.publish(t.target, json.dumps({"path": head}))
         elif head == "nudge" and len(rest) in (1, 2) and all(map(_is_number, rest)):

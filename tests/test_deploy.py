@@ -17,8 +17,9 @@ from pathlib import Path
 import pytest
 
 from bridge.cli import EXIT_CONFIG, build_parser
+from bridge.features import tracking
 from bridge.model import TrackingInfo
-from bridge.mqtt import feature_payloads, payloads
+from bridge.mqtt import payloads
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, load_settings
@@ -75,8 +76,8 @@ DOCUMENTED_TOPICS = frozenset(
         _R.park,
         _R.nudge,
         _R.presets,
-        _R.track,
-        _R.tracking,
+        _R.feature(tracking.COMMAND),
+        _R.feature(tracking.STATE),
         _R.bearing,
         _R.state,
         _R.status,
@@ -217,11 +218,11 @@ def test_mqtt_subscriptions_are_plain_topics(flow: list[dict]) -> None:
 def test_flow_subscribes_to_bearing_state_and_availability(flow: list[dict]) -> None:
     topics = {n["topic"] for n in _of_type(flow, "mqtt in")}
     assert {_R.bearing, _R.state, _R.availability, _R.status, _TOPICS.bridge_state} <= topics
-    assert _R.tracking in topics
+    assert _R.feature(tracking.STATE) in topics
     nodes = _by_id(flow)
     for node in _of_type(flow, "mqtt in"):
         shown = [nodes[t] for t in _targets(flow, node) if nodes[t]["type"] == "debug"]
-        if node["topic"] in (_R.bearing, _R.state, _R.availability, _R.tracking):
+        if node["topic"] in (_R.bearing, _R.state, _R.availability, _R.feature(tracking.STATE)):
             assert shown and shown[0]["tostatus"] is True, f"{node['topic']} has no status"
 
 
@@ -253,7 +254,7 @@ def test_editor_injects_park_and_nudge(flow: list[dict]) -> None:
 
 
 def test_editor_injects_start_and_end_tracking(flow: list[dict]) -> None:
-    track = _mqtt_out(flow, _R.track)
+    track = _mqtt_out(flow, _R.feature(tracking.COMMAND))
     trackers = [n for n in _of_type(flow, "inject") if track["id"] in _targets(flow, n)]
     assert {n["payload"] for n in trackers} == {"sun", "moon", "off"}
     for node in trackers:
@@ -302,7 +303,7 @@ def test_web_page_starts_and_ends_tracking_and_shows_it(flow: list[dict]) -> Non
     # the status's tracking block as the bridge writes it (every key, a pass included) and
     # tracking_ended: the page reads each of them
     info = TrackingInfo("ISS", "waiting", 1.0, 2.0, 3.0, 4.0, 1e9, 1e9 + 600, 50.0, 180.0, True)
-    keys = set(feature_payloads.tracking_json(info)) - {"next"}  # where the body is in a minute
+    keys = set(tracking.tracking_json(info)) - {"next"}  # where the body is in a minute
     assert keys >= {"body", "phase", "azimuth", "elevation", "aos", "los", "flip"}
     for key in keys:
         assert f"t.{key}" in page, f"the page ignores tracking.{key}"
@@ -337,6 +338,11 @@ def _relay(flow: list[dict]) -> dict:
     return relay
 
 
+def _topic_of(name: str) -> str:
+    """A command's topic by its name in the relay (a registered feature's by its suffix)."""
+    return getattr(_R, name) if hasattr(_R, name) else _R.feature(name)
+
+
 def _relay_outputs(relay: dict) -> dict[str, int]:
     """The function's table of its outputs by name: const OUT = { target: 0, ... }."""
     table = re.search(r"const OUT = \{([^}]*)\};", relay["func"])
@@ -350,7 +356,10 @@ def test_page_commands_reach_the_target_and_stop_publishers(flow: list[dict]) ->
     relay = _relay(flow)
     reached = _targets(flow, relay)
     assert {target["id"], stop["id"]} <= reached
-    publishers = {_mqtt_out(flow, t)["id"] for t in (_R.preset, _R.park, _R.nudge, _R.track)}
+    publishers = {
+        _mqtt_out(flow, t)["id"]
+        for t in (_R.preset, _R.park, _R.nudge, _R.feature(tracking.COMMAND))
+    }
     for node_id in reached - {target["id"], stop["id"]} - publishers:
         assert nodes[node_id]["type"] == "websocket out"  # the reply to that page only
     code = relay["func"]
@@ -364,9 +373,7 @@ def test_each_page_command_output_leads_to_its_own_publisher(flow: list[dict]) -
     relay = _relay(flow)
     outputs = _relay_outputs(relay)
     assert sorted(outputs.values()) == list(range(relay["outputs"]))
-    expected = {
-        name: _mqtt_out(flow, getattr(_R, name))["id"] for name in outputs if name != "reply"
-    }
+    expected = {name: _mqtt_out(flow, _topic_of(name))["id"] for name in outputs if name != "reply"}
     assert set(expected) == {"target", "stop", "preset", "park", "nudge", "track"}
     for name, index in outputs.items():
         (wired,) = relay["wires"][index]

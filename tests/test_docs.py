@@ -118,6 +118,12 @@ def built_topics() -> set[str]:
                 continue
             if isinstance(attr, property):
                 value = getattr(obj, name)
+            elif name == "feature":  # a registered feature's topics (bridge/feature.py)
+                value = [
+                    getattr(obj, name)(x.suffix)
+                    for f in topics.features
+                    for x in (*f.commands, *f.states)
+                ]
             elif inspect.isfunction(attr):
                 params = list(inspect.signature(attr).parameters)[1:]
                 try:

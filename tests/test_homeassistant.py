@@ -14,6 +14,8 @@ from datetime import datetime
 import pytest
 
 from bridge import geo
+from bridge.features.follow import follow_state
+from bridge.features.tracking import tracking_state
 from bridge.homeassistant import (
     ENTITIES,
     MAX_SATELLITES,
@@ -25,7 +27,6 @@ from bridge.homeassistant import (
 )
 from bridge.homeassistant.publisher import ROUND_MIN_S
 from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
-from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
 from bridge.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
@@ -789,7 +790,8 @@ def test_the_wind_entities_are_there_only_with_a_wind_topic_and_pass_the_rules()
     for has_wind in (False, True):
         info = RotatorInfo.of(
             "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
-            has_station=False, nudge_step_deg=cfg.nudge_step_deg, has_wind=has_wind,
+            has_station=False, nudge_step_deg=cfg.nudge_step_deg,
+            features=frozenset({"wind"} if has_wind else ()),
         )  # fmt: skip
         msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
         found = {t.split("/")[1] + "." + t.split("/")[3]: json.loads(p) for t, p in msgs.items()}

@@ -4,9 +4,10 @@ publisher.py keeps them current on the broker.
 
 Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
 QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
-entities are rows of a data table (ENTITIES), each naming what it needs: a ModelSpec capability
-or a configured feature (presets, park, the station); every topic, discovery topics included,
-comes from bridge.mqtt.topics.
+entities are rows of a data table (ENTITIES, then each registered feature's rows:
+bridge/feature.py), each naming what it needs: a ModelSpec capability or a configured feature
+(presets, park, the station, a registered feature's name); every topic, discovery topics
+included, comes from bridge.mqtt.topics.
 
 Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
@@ -36,6 +37,7 @@ from functools import partial
 from typing import Protocol
 
 from bridge import __version__
+from bridge.feature import registered
 from bridge.homeassistant.info import GroupInfo, Identity, RotatorInfo
 from bridge.model import MotionState
 from bridge.mqtt.topics import DiscoveryTopics, Topics
@@ -113,6 +115,16 @@ class Entity:
 
     def expand(self, info: RotatorInfo) -> list[Entity]:
         return [self] if self.needs is None or info.has(self.needs) else []
+
+
+def feature_entities() -> tuple[Entity, ...]:
+    """The registered features' rows (bridge/feature.py), in the registry's order, after the
+    table's own."""
+    return tuple(
+        Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only)
+        for f in registered()
+        for e in f.entities
+    )
 
 
 class OptionConfig(Protocol):
@@ -195,38 +207,6 @@ DISTANCE = (
     "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
 )
 # the release button names Home Assistant as who released (it sends no MQTT 5 user property)
-RELEASE_PAYLOAD = '{"operator": "homeassistant"}'
-
-
-def _tracked(field: str) -> str:
-    """A template for a field of the status's tracking block (unknown while not tracking)."""
-    return (
-        f"{{{{ value_json.tracking.{field} if value_json.tracking is defined and "
-        f"value_json.tracking.{field} is defined else 'None' }}}}"
-    )
-
-
-def _health_sensor(oid: str, name: str, field: str, unit: str, kind: str, needs: str) -> Entity:
-    """Rotor health (R/health): long-term statistics keep the trend; kept while offline too."""
-    return Entity("sensor", oid, name, needs=needs, bridge_only=True, config=lambda r: {
-        "state_topic": r.topics.health, "unit_of_measurement": unit, "state_class": kind,
-        "value_template": f"{{{{ value_json.{field} }}}}",  # null: None, unknown to HA
-        **({"device_class": "duration"} if unit == "s" else {}), **DIAGNOSTIC})  # fmt: skip
-
-
-HEALTH_NUMBERS = (  # object id, name, R/health field, unit, state class, what it needs
-    ("speed_cw", "Speed clockwise", "speed_cw_deg_s", "°/s", "measurement", "can_report_position"),
-    ("speed_ccw", "Speed counter-clockwise", "speed_ccw_deg_s", "°/s", "measurement",
-     "can_report_position"),
-    ("speed_up", "Speed up", "speed_up_deg_s", "°/s", "measurement", "has_elevation"),
-    ("speed_down", "Speed down", "speed_down_deg_s", "°/s", "measurement", "has_elevation"),
-    ("start_delay", "Start delay", "start_delay_s", "s", "measurement", "can_report_position"),
-    ("coast", "Coast after a stop", "coast_deg", "°", "measurement", "can_report_position"),
-    ("odometer", "Odometer", "odometer_deg", "°", "total_increasing", "can_report_position"),
-    ("moves", "Moves", "moves", "moves", "total_increasing", "can_report_position"),
-    ("stalls", "Stalls", "stalls", "stalls", "total_increasing", "can_report_position"),
-    ("motor_on", "Motor-on time", "motor_on_s", "s", "total_increasing", "can_report_position"),
-)  # fmt: skip
 
 
 DEGREES = {"unit_of_measurement": "°"}
@@ -276,44 +256,10 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
         "device_class": "distance", "state_class": "measurement",
         "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
-    Entity("select", "track", "Track", needs="track_options", config=lambda r: {
-        "command_topic": r.topics.track, "state_topic": r.topics.tracking,
-        "options": list(r.track_options), "icon": "mdi:satellite-variant"}),
     Entity("select", "spot", "Turn to spot", needs="spot_options", config=lambda r: {
         "command_topic": r.topics.target, "command_template": CALL_TEMPLATE,
         "options": list(r.spot_options), "state_topic": r.topics.status,
         "value_template": NO_OPTION, "icon": "mdi:account-voice"}),
-    Entity("sensor", "track_azimuth", "Tracked azimuth", needs="track_options",
-           config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("azimuth"), **DEGREES,
-        "state_class": "measurement_angle", "suggested_display_precision": 1,
-        "icon": "mdi:compass-rose"}),
-    Entity("sensor", "track_elevation", "Tracked elevation", needs="track_options",
-           config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("elevation"), **DEGREES,
-        "state_class": "measurement", "suggested_display_precision": 1,
-        "icon": "mdi:angle-acute"}),
-    Entity("sensor", "next_aos", "Next AOS", needs="track_options", config=lambda r: {
-        "state_topic": r.topics.status, "value_template": _tracked("aos"),
-        "device_class": "timestamp", "icon": "mdi:clock-start"}),
-    Entity("switch", "follow", "Follow WSJT-X", needs="can_follow", config=lambda r: {
-        "command_topic": r.topics.follow, "state_topic": r.topics.follow_state,
-        "payload_on": "wsjtx", "payload_off": "off", "state_on": "wsjtx", "state_off": "off",
-        "icon": "mdi:account-arrow-right"}),
-    Entity("sensor", "followed", "Followed station", needs="can_follow", config=lambda r: {
-        "state_topic": r.topics.status, "icon": "mdi:account-voice",
-        "value_template": "{{ value_json.following.call if value_json.following is defined "
-                          "and value_json.following.call else 'None' }}"}),
-    Entity("sensor", "wind", "Wind", needs="has_wind", config=lambda r: {
-        "state_topic": r.topics.status, "unit_of_measurement": "km/h",
-        "device_class": "wind_speed", "state_class": "measurement",
-        "value_template": "{{ value_json.wind.speed_kmh if value_json.wind is defined and "
-                          "value_json.wind.speed_kmh is not none else 'None' }}"}),
-    Entity("binary_sensor", "storm", "Parked for the storm", needs="has_wind",
-           config=lambda r: {
-        "state_topic": r.topics.status, "icon": "mdi:weather-windy",
-        "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm "
-                          "else 'OFF' }}"}),
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),
@@ -333,24 +279,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
     Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
         "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
-    *(_health_sensor(*row) for row in HEALTH_NUMBERS),  # rotor health (engine/health.py)
-    Entity("binary_sensor", "health_problem", "Rotor health", needs="can_report_position",
-           bridge_only=True, config=lambda r: {
-        "state_topic": r.topics.health, "device_class": "problem",
-        "value_template": "{{ 'ON' if value_json.warnings else 'OFF' }}",
-        "json_attributes_topic": r.topics.health}),  # the warnings, the numbers, the baseline
-    Entity("button", "health_reset", "Reset rotor health", needs="can_report_position",
-           bridge_only=True, config=lambda r: {
-        "command_topic": r.topics.health_reset, "payload_press": "RESET", **DIAGNOSTIC,
-        "icon": "mdi:restart"}),
-    # who is turning it: the control lease's holder (its end as an attribute), its release
-    # (anyone may: the station owner's button), and who sent the last command
-    Entity("sensor", "control", "Control", bridge_only=True, config=lambda r: {
-        "state_topic": r.topics.control, "json_attributes_topic": r.topics.control,
-        "value_template": "{{ value_json.holder or 'free' }}", "icon": "mdi:account-lock"}),
-    Entity("button", "release_control", "Release control", bridge_only=True, config=lambda r: {
-        "command_topic": r.topics.control_release, "payload_press": RELEASE_PAYLOAD,
-        "icon": "mdi:lock-open-variant"}),
+    # who sent the last command (the control lease's holder and release: features/control/)
     Entity("sensor", "last_operator", "Last operator", config=lambda r: {
         "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:account-arrow-right",
         "value_template": "{{ value_json.last_operator or 'none' }}"}),
@@ -374,7 +303,7 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
     bridge_only = [{"topic": topics.bridge_state}]
     slug = r.rotator_id.replace("-", "_")
     out: Configs = {}
-    for row in ENTITIES:
+    for row in (*ENTITIES, *feature_entities()):
         for e in row.expand(r):
             avail = bridge_only if e.bridge_only else both
             where, payload = _entity(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, replace
 
+from bridge.feature import registered
 from bridge.mqtt.topics import GroupTopics, RotatorTopics
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
@@ -46,7 +47,7 @@ class RotatorInfo:
     nudge_step_deg: float = 10.0
     track_options: tuple[str, ...] = ()  # off, sun, moon and the TLE file's satellites
     can_follow: bool = False  # [wsjtx] and a station: R/follow (engine/follow.py)
-    has_wind: bool = False  # a wind_topic (engine/wind.py)
+    features: frozenset[str] = frozenset()  # the registered features it has (bridge/feature.py)
     spot_options: tuple[str, ...] = ()  # [dxcluster] and a station: the newest spots' calls
 
     @classmethod
@@ -62,7 +63,7 @@ class RotatorInfo:
         nudge_step_deg: float,
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
-        has_wind: bool = False,
+        features: frozenset[str] = frozenset(),
         dxcluster: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
@@ -84,7 +85,7 @@ class RotatorInfo:
                 track_options(satellites) if has_station and spec.can_report_position else ()
             ),
             can_follow=can_follow,
-            has_wind=has_wind,
+            features=features,
             spot_options=spot_options(()) if dxcluster and has_station else (),
         )
 
@@ -99,7 +100,10 @@ class RotatorInfo:
         return replace(self, spot_options=spot_options(calls)) if self.spot_options else self
 
     def has(self, need: str) -> bool:
-        """An ENTITIES row's need: a field of this info (configured), else a model capability."""
+        """An entity's need: a registered feature this rotator has, a field of this info
+        (configured), else a model capability."""
+        if need in self.features or any(f.name == need for f in registered()):
+            return need in self.features
         where = self if need in self.__dataclass_fields__ else self.spec
         return bool(getattr(where, need))
 

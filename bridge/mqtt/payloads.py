@@ -18,10 +18,9 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from bridge import geo
+from bridge.feature import status_blocks
 from bridge.model import RotatorStatus, TargetInfo
 from bridge.mqtt.call_payload import Called, CallError, parse_called
-from bridge.mqtt.feature_payloads import following_json, tracking_json, wind_json
-from bridge.mqtt.health_payload import health_json
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
 
@@ -389,16 +388,15 @@ def status_json(
     if status.target_info is not None:
         doc["target_info"] = target_info(status.target_info)
     doc["parked"] = status.parked
-    if status.tracking is not None:
-        doc["tracking"] = tracking_json(status.tracking)
-    if status.tracking_ended is not None:
-        doc["tracking_ended"] = status.tracking_ended
-    if status.following is not None:
-        doc["following"] = following_json(status.following)
-    if status.following_ended is not None:
-        doc["following_ended"] = status.following_ended
-    if status.wind is not None:
-        doc["wind"] = wind_json(status.wind)
+    tail = []  # the blocks rendered once (rotor health's, once per move), last
+    for block in status_blocks():  # bridge/feature.py: each feature's, in the registry's order
+        value = block.value(status)
+        if value is None:
+            continue
+        if block.rendered:
+            tail.append(f',"{block.key}":{block.render(value)}')
+        else:
+            doc[block.key] = block.render(value)
     doc.update(
         state=status.state.value,
         moving=status.moving,
@@ -417,9 +415,9 @@ def status_json(
         time=_iso(time_unix),
     )
     text = _COMPACT.encode(doc)
-    if status.health is None:
+    if not tail:
         return text
-    return f'{text[:-1]},"health":{health_json(status.health)}}}'  # rendered once per move
+    return f"{text[:-1]}{''.join(tail)}}}"
 
 
 def _iso(time_unix: float) -> str:

@@ -62,23 +62,19 @@ import json
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from bridge.errors import Refused
+from bridge.feature import CommandTopic, registered
 from bridge.model import (
     AuditEvent,
-    Claim,
     Command,
     ErrorEvent,
     ErrorKind,
-    FollowQso,
     GoToPreset,
     Nudge,
     Origin,
     Park,
-    Release,
-    ResetHealth,
-    RotatorHealth,
     RotatorStatus,
     SetOption,
     SettingValue,
@@ -86,18 +82,14 @@ from bridge.model import (
     TakePath,
     Target,
     Toward,
-    TrackBody,
     setting_text,
     valid_operator,
 )
-from bridge.mqtt import control
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.call_payload import Called
-from bridge.mqtt.feature_payloads import follow_state, tracking_state
 from bridge.mqtt.groups import Group, fan_out, group_available, refusals_json
 from bridge.mqtt.groups import status_json as group_status_json
 from bridge.mqtt.halts import Halts, switch_on
-from bridge.mqtt.health_payload import health_json
 from bridge.mqtt.heartbeat import Stamp
 from bridge.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.mqtt.ports import Publisher, RotatorPort
@@ -137,7 +129,7 @@ class MqttService:
         self._feature_subscriptions: list[str] = []
         self._handlers: list[Callable[[str, bytes, bool], bool]] = []
         self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
-        self._health: dict[str, RotatorHealth] = {}  # the last health published, per rotator
+        self._values: dict[str, object] = {}  # a feature's last state published, by topic
         self._handed: dict[str, str] = {}  # rule 3: a status's payloads last handed on, by topic
         self._clock = clock
         self._groups: dict[str, Group] = {}  # rule 10
@@ -157,6 +149,7 @@ class MqttService:
         )
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
+        self._states = [state for f in topics.features for state in f.states]
 
     def retain_is_live(self, v5: bool) -> None:
         """The main connection's MQTT version, before any message of a connection (``auto``
@@ -275,16 +268,25 @@ class MqttService:
             if name in status.options:
                 pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
-        if rot.can_track:
-            pub(t.tracking, tracking_state(status))
-        if rot.can_follow:
-            pub(t.follow_state, follow_state(status))
-        if status.health is not None and status.health is not self._health.get(rotator_id):
-            self._health[rotator_id] = status.health  # a new one after each move only
-            pub(t.health, health_json(status.health))
+        for state in self._states:  # the registry's (bridge/feature.py)
+            if state.after_status:
+                continue
+            if state.needs is not None and not getattr(rot, state.needs):
+                continue
+            value = state.value(status)
+            if value is None:
+                continue
+            topic = t.feature(state.suffix)
+            if state.new_only:  # a new one after each move only (rotor health)
+                if value is self._values.get(topic):
+                    continue
+                self._values[topic] = value
+            pub(topic, state.render(value))
         shows_raw = rot.pointing.shows_raw
         pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
-        pub(t.control, control.control_json(status.control))
+        for state in self._states:  # (the control lease's: after the status, as ever)
+            if state.after_status and (value := state.value(status)) is not None:
+                pub(t.feature(state.suffix), state.render(value))
         self._latest[rotator_id] = status
         for group in self._groups.values():
             if rotator_id in group.member_ids:
@@ -552,7 +554,7 @@ class MqttService:
     ) -> None:
         """Everything but stop and lock, parsed into one command for the judge; PayloadError
         or Refused."""
-        command = parse_command(kind, arg, payload, by, rot.spec)
+        command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
         if isinstance(command, Called):
             if self._by_call is None:
                 raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
@@ -562,24 +564,29 @@ class MqttService:
 
 
 def parse_command(
-    kind: str, arg: str | None, payload: bytes, by: Origin, spec: ModelSpec | None = None
+    kind: str,
+    arg: str | None,
+    payload: bytes,
+    by: Origin,
+    spec: ModelSpec | None = None,
+    features: Mapping[str, CommandTopic] | None = None,
 ) -> Command | Called | None:
     """A command topic's payload (everything but stop and lock) as the command it names, from
     ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
     for a topic that carries no command. An option's value is read by ``spec``'s declaration
     of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
-    text, to be refused there."""
+    text, to be refused there. A registered feature's command (``features``: the registry's by
+    kind unless given) is parsed by its declaration (bridge/feature.py)."""
     src = Source.MQTT
-    if kind == "claim":
-        operator, minutes = control.parse_claim(payload, by.operator)
-        return Claim(operator, minutes, source=src, origin=by)
-    if kind == "release":
-        named = control.parse_release(payload) if by.operator is None else None
-        return Release(source=src, origin=by if named is None else Origin(Source.MQTT, named))
+    if features is None:
+        features = {c.kind: c for f in registered() for c in f.commands}
+    feature = features.get(kind)
+    if feature is not None:
+        if not payload and not feature.takes_empty:
+            raise pl.PayloadError("empty payload")  # rule 2
+        return feature.parse(payload, by)
     if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
         raise pl.PayloadError("empty payload")
-    if kind == "health_reset":
-        return ResetHealth(source=src, origin=by)  # moves nothing: no lease to ask
     if kind == "target":
         aim = pl.parse_aim(payload)
         if isinstance(aim, Called):
@@ -597,12 +604,6 @@ def parse_command(
     if kind == "nudge":
         d_az, d_el = pl.parse_nudge(payload)
         return Nudge(d_az, d_el, source=src, origin=by)
-    if kind == "track":
-        name, tle = pl.parse_track(payload)
-        return TrackBody(name, tle, source=src, origin=by)
-    if kind == "follow":
-        on, long_path = pl.parse_follow(payload)
-        return FollowQso(on, long_path, source=src, origin=by)
     if kind == "target_elevation":
         return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
     if kind == "option" and arg is not None:

@@ -1,5 +1,7 @@
 """Every MQTT topic string of the bridge lives here and nowhere else (docs/architecture.md,
-rule 4).
+rule 4), but a registered feature's: its package declares its topics as suffixes under ``R/``
+(bridge/feature.py), and the table here iterates the registry for them (``Topics.features``);
+stop and lock stay hard-wired, first.
 
 R = a rotator's topic (the base topic itself when exactly one rotator is configured,
 ``<base>/<id>`` otherwise), B = the base topic.
@@ -21,7 +23,10 @@ Two topics under ``B/bridge/`` are the bridge's messages to itself, not for othe
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+from bridge.feature import Feature, registered
 
 
 @dataclass(frozen=True)
@@ -57,20 +62,12 @@ class RotatorTopics:
     def nudge(self) -> str:
         return f"{self.root}/nudge"
 
-    @property
-    def track(self) -> str:
-        return f"{self.root}/track"
-
-    @property
-    def follow(self) -> str:
-        return f"{self.root}/follow"
-
     def option(self, name: str) -> str:
         return f"{self.root}/option/{name}"
 
-    @property
-    def health_reset(self) -> str:
-        return f"{self.root}/health/reset"
+    def feature(self, suffix: str) -> str:
+        """A registered feature's topic (bridge/feature.py): ``R/<suffix>``."""
+        return f"{self.root}/{suffix}"
 
     @property
     def option_filter(self) -> str:
@@ -114,38 +111,13 @@ class RotatorTopics:
         return f"{self.root}/info"
 
     @property
-    def tracking(self) -> str:
-        return f"{self.root}/tracking"
-
-    @property
     def lock_state(self) -> str:
         return f"{self.root}/lock/state"
-
-    @property
-    def follow_state(self) -> str:
-        return f"{self.root}/follow/state"
 
     def option_state(self, name: str) -> str:
         return f"{self.root}/option/{name}/state"
 
-    @property
-    def health(self) -> str:
-        return f"{self.root}/health"
-
-    # the control lease (engine/lease.py) and the audit trail (engine/operators.py)
-    @property
-    def control(self) -> str:
-        """Retained: who holds the control lease, and until when."""
-        return f"{self.root}/control"
-
-    @property
-    def control_claim(self) -> str:
-        return f"{self.root}/control/claim"
-
-    @property
-    def control_release(self) -> str:
-        return f"{self.root}/control/release"
-
+    # the audit trail (engine/operators.py)
     @property
     def audit(self) -> str:
         """Not retained: every command judged, executed or refused."""
@@ -208,10 +180,19 @@ class DiscoveryTopics:
 
 class Topics:
     def __init__(
-        self, base: str, roots: dict[str, str], groups: dict[str, str] | None = None
+        self,
+        base: str,
+        roots: dict[str, str],
+        groups: dict[str, str] | None = None,
+        features: Sequence[Feature] | None = None,
     ) -> None:
-        """``groups``: each group's root (settings.py ``group_topic``), by its id."""
+        """``groups``: each group's root (settings.py ``group_topic``), by its id; ``features``:
+        the registry's (bridge/feature.py ``registered``) unless given."""
         self.base = base
+        self.features = tuple(registered() if features is None else features)
+        self._commands = {c.suffix: c.kind for f in self.features for c in f.commands}
+        self.commands = {c.kind: c for f in self.features for c in f.commands}  # by kind
+        _check_suffixes(self.features)
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
         self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
 
@@ -286,9 +267,8 @@ class Topics:
             subs += [g.target, g.stop]
         for t in self._rotators.values():
             subs += [t.target, t.target_elevation, t.stop, t.lock, t.option_filter]
-            subs += [t.preset, t.park, t.nudge, t.track, t.follow]
-            subs.append(t.health_reset)
-            subs += [t.control_claim, t.control_release]
+            subs += [t.preset, t.park, t.nudge]
+            subs += [t.feature(suffix) for suffix in self._commands]  # the registry's
         return [*subs, self.bridge_fence]
 
     def stop_lane(self) -> list[str]:
@@ -306,10 +286,8 @@ class Topics:
         subs = [self.bridge_state, self.bridge_info]
         for t in self._rotators.values():
             subs += [t.bearing, t.elevation, t.state, t.status, t.version, t.availability]
-            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.tracking, t.info]
-            subs += [t.follow_state]
-            subs.append(t.health)
-            subs += [t.control]
+            subs += [f"{t.root}/option/+/state", t.lock_state, t.presets, t.info]
+            subs += [t.feature(s.suffix) for f in self.features for s in f.states]
         for g in self._groups.values():
             subs += [g.status, g.availability]
         return subs
@@ -325,15 +303,34 @@ class Topics:
                 return rid, "stop", None
             if topic == t.lock:
                 return rid, "lock", None
-            for kind in ("preset", "park", "nudge", "track", "follow", "health_reset"):
+            for kind in ("preset", "park", "nudge"):
                 if topic == getattr(t, kind):
                     return rid, kind, None
-            if topic in (t.control_claim, t.control_release):
-                return rid, "claim" if topic == t.control_claim else "release", None
+            if topic.startswith(t.root + "/"):  # a registered feature's command
+                named = self._commands.get(topic[len(t.root) + 1 :])
+                if named is not None:
+                    return rid, named, None
             prefix = f"{t.root}/option/"
             if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
                 return rid, "option", topic[len(prefix) :]
         return None
+
+
+def _check_suffixes(features: Sequence[Feature]) -> None:
+    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all)
+    and no other feature's; ValueError naming it, before anything is subscribed."""
+    core = RotatorTopics("")
+    taken = {
+        getattr(core, name).lstrip("/")
+        for name in dir(RotatorTopics)
+        if isinstance(getattr(RotatorTopics, name), property)
+    }
+    for feature in features:
+        suffixes = [c.suffix for c in feature.commands] + [s.suffix for s in feature.states]
+        for suffix in suffixes:
+            if suffix in taken or suffix.startswith("option/") or not suffix:
+                raise ValueError(f"feature {feature.name}: topic R/{suffix} is taken")
+            taken.add(suffix)
 
 
 @dataclass(frozen=True)
@@ -362,10 +359,19 @@ class StationTopics:
         description, status, availability, presets, error events, control lease and lock,
         whether the station has one rotator or several."""
         one, each = self.rotator(None), self.rotator("+")
+        read = [s.suffix for f in registered() for s in f.states if s.remote]  # R/control
         return [self.bridge_state, self.bridge_heartbeat] + [
             t
             for r in (one, each)
-            for t in (r.info, r.status, r.availability, r.presets, r.error, r.control, r.lock_state)
+            for t in (
+                r.info,
+                r.status,
+                r.availability,
+                r.presets,
+                r.error,
+                *(r.feature(suffix) for suffix in read),
+                r.lock_state,
+            )
         ]
 
     def described(self, topics: list[str]) -> list[str]:

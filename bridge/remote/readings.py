@@ -199,8 +199,8 @@ def parse_status(rotator_id: str, payload: bytes) -> RotatorStatus:
 
 
 def parse_control(payload: bytes | None) -> Control | None:
-    """``R/control`` (mqtt/control.py): who holds the control lease, or None (free, or not a
-    payload the station writes: the station judges every command again anyway)."""
+    """``R/control`` (features/control/payload.py): who holds the control lease, or None (free,
+    or not a payload the station writes: the station judges every command again anyway)."""
     try:
         doc = json.loads(payload or b"null")
     except ValueError:

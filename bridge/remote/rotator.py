@@ -65,6 +65,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from bridge.errors import RefusalCode, Refused
+from bridge.features import control, tracking
 from bridge.model import (
     Command,
     GoToPreset,
@@ -252,7 +253,7 @@ class RemoteRotator:
                 if command.on:
                     self.halted()
             case TrackBody() if command.off:
-                self.publish(t.track, command.name)
+                self.publish(t.feature(tracking.COMMAND), command.name)
             case Target() if command.az_deg is not None:
                 self.check_move()
                 self.pointing.judge(command, None)  # early word; the station judges again
@@ -287,7 +288,7 @@ class RemoteRotator:
                 self._send_json(t.nudge, step)
             case TrackBody() if command.tle is None:
                 self.check_move()
-                self.publish(t.track, command.name)
+                self.publish(t.feature(tracking.COMMAND), command.name)
             case _:
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
@@ -303,7 +304,7 @@ class RemoteRotator:
             raise Refused(RefusalCode.OFFLINE, away)
         if self._view.get(self.topics.lock_state) == b"ON":
             raise Refused(RefusalCode.LOCKED, LOCKED)
-        held = parse_control(self._view.get(self.topics.control))
+        held = parse_control(self._view.get(self.topics.feature(control.STATE)))
         now = self._wall()
         if held is not None and held.operator != self._operator and now < held.until_unix:
             text = held.held_text(now)

@@ -24,8 +24,8 @@ from bridge.engine import motion as mo
 from bridge.engine.config import HealthConfig
 from bridge.engine.health import MAX_READINGS, Health
 from bridge.engine.health_judge import Judge, Move
+from bridge.features.health.payload import health_json
 from bridge.model import MotionState, RotatorHealth
-from bridge.mqtt.health_payload import health_json
 from bridge.settings import RotatorSettings
 from tests.engine.virtual import VirtualRotator
 

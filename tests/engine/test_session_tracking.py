@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import pytest
 
+from bridge.features.tracking import tracking_state
 from bridge.model import MotionState, Source, Target
-from bridge.mqtt.feature_payloads import tracking_state
 from bridge.sky import Body, Sky, SkyError
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass

@@ -1,11 +1,11 @@
-"""The control lease's payloads, pure (mqtt/control.py)."""
+"""The control lease's payloads, pure (bridge/features/control/payload.py)."""
 
 from __future__ import annotations
 
 import pytest
 
+from bridge.features.control.payload import control_json, parse_claim, parse_release
 from bridge.model import Control
-from bridge.mqtt.control import control_json, parse_claim, parse_release
 from bridge.mqtt.payloads import PayloadError
 
 

@@ -11,6 +11,7 @@ import json
 import pytest
 
 from bridge.errors import RefusalCode, Refused
+from bridge.feature import registered
 from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
@@ -82,6 +83,8 @@ def test_the_reserved_words_are_every_first_level_of_a_rotators_topics() -> None
         if isinstance(getattr(RotatorTopics, name), property)
     }
     leaves |= {t.option("x").split("/")[1]}
+    # and each registered feature's (bridge/feature.py rule 3)
+    leaves |= {x.suffix.split("/")[0] for f in registered() for x in (*f.commands, *f.states)}
     assert leaves | {"bridge", "spots"} == set(RESERVED)
 
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import json
 
+from bridge.features.health.payload import health_doc
 from bridge.model import AxisHealth, RotatorHealth, RotatorStatus
 from bridge.mqtt import payloads as pl
-from bridge.mqtt.health_payload import health_doc
 from tests.mqtt.test_service import RecordingRotator, service
 
 HEALTH = RotatorHealth(

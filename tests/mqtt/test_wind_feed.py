@@ -1,6 +1,6 @@
-"""The wind topics (bridge/mqtt/wind.py) and the wind keys (bridge/settings_wind.py): readings
-to km/h for the rotators whose topic it is, junk dropped and logged rarely, settings refused
-with the key named."""
+"""The wind topics (bridge/features/wind/feed.py) and the wind keys (bridge/settings_wind.py):
+readings to km/h for the rotators whose topic it is, junk dropped and logged rarely, settings
+refused with the key named."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
+from bridge.features.wind.feed import BAD_LOG_S, wind_feed
 from bridge.mqtt.connection import command_filters
-from bridge.mqtt.wind import BAD_LOG_S, wind_feed
 from bridge.settings import RotatorSettings
 from tests.support.clock import FakeClock
 
@@ -33,7 +33,7 @@ def test_readings_reach_the_rotators_of_their_topic_in_km_h(
     assert handle("w/kmh", b"12.5", False) and handle("w/ms", b" 10 ", True)  # replayed: taken
     assert got == [("a", 12.5, False), ("c", 12.5, False), ("b", 36.0, True)]  # ... as replayed
     assert not handle("other/topic", b"99", False)  # not the feed's
-    caplog.set_level(logging.WARNING, "bridge.mqtt.wind")
+    caplog.set_level(logging.WARNING, "bridge.features.wind.feed")
     for junk in (b"calm", b"-3", b"nan", b'{"speed": 3}', b""):
         assert handle("w/kmh", junk, False)  # the feed's, dropped
     assert len(got) == 3 and len(caplog.records) == 1  # logged once per BAD_LOG_S

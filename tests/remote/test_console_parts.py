@@ -11,6 +11,7 @@ from dataclasses import replace
 import pytest
 
 from bridge.errors import RefusalCode, Refused
+from bridge.features import tracking
 from bridge.model import (
     ErrorEvent,
     ErrorKind,
@@ -110,7 +111,7 @@ def run(rot: RemoteConsoleRotator, **doc: object) -> None:
         ({"command": "nudge", "d_az": -5}, T.nudge, (-5.0, None)),
         ({"command": "preset", "name": "EU"}, T.preset, "EU"),
         ({"command": "park"}, T.park, "park"),
-        ({"command": "track", "body": "ISS"}, T.track, ("ISS", None)),
+        ({"command": "track", "body": "ISS"}, T.feature(tracking.COMMAND), ("ISS", None)),
         ({"command": "lock", "on": True}, T.lock, True),
         ({"command": "stop"}, T.stop, "stop"),
     ],
@@ -132,7 +133,7 @@ def test_each_command_is_one_publish_the_station_understands(
             got = replace(got, longitude_deg=round(got.longitude_deg, 4))
     elif topic == T.nudge:
         got = pl.parse_nudge(raw)
-    elif topic == T.track:
+    elif topic == T.feature(tracking.COMMAND):
         got = pl.parse_track(raw)
     elif topic == T.lock:
         got = pl.parse_switch(raw)
@@ -175,7 +176,12 @@ def test_with_the_station_offline_what_moves_is_refused_and_stop_and_lock_go_out
         {"command": "track", "body": "off"},
     ):
         run(rot, **doc)
-    assert [topic for topic, _ in link.sent] == [T.stop, T.lock, T.lock, T.track]
+    assert [topic for topic, _ in link.sent] == [
+        T.stop,
+        T.lock,
+        T.lock,
+        T.feature(tracking.COMMAND),
+    ]
 
 
 def test_a_target_outside_the_station_range_is_refused_here_and_nothing_sent() -> None:
@@ -191,7 +197,7 @@ def test_a_station_that_cannot_track_is_not_asked_but_off_goes_out() -> None:
     with pytest.raises(Refused):
         run(rot, command="track", body="sun")
     run(rot, command="track", body="off")
-    assert link.sent == [(T.track, "off")]
+    assert link.sent == [(T.feature(tracking.COMMAND), "off")]
 
 
 def test_the_station_description_and_presets_read_back() -> None:

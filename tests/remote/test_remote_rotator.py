@@ -176,7 +176,7 @@ def test_another_operators_lease_refuses_a_move_at_once_in_the_stations_words() 
     rot = rotator(link, FakeClock())
     wall = 1_800_000_000.0
     rot._wall = lambda: wall  # the operator's clock
-    control = rot.topics.control
+    control = rot.topics.feature("control")  # R/control (bridge/features/control/)
     rot._view.put(control, b'{"holder":"G4XYZ","until":"2027-01-15T08:30:00.000+00:00"}')
     with pytest.raises(Refused) as caught:
         rot.submit(Target(120.0, None, Source.ROTCTLD), "rotctld P 120")

@@ -1,0 +1,178 @@
+"""What a feature declares (docs/architecture.md "The feature registry"): one value per
+feature, listed once in the registry (bridge/features/__init__.py ``FEATURES``), that the
+topic table, the MQTT service, the status payload, the Home Assistant entity table and the app
+iterate instead of naming each feature. Pure data: no thread, no I/O.
+
+A feature declares its commands (a topic under ``R/`` and the parser of its payload into one
+``Command``), its retained state topics and its block in ``R/status`` (each a value read from
+the status and how it is written), its Home Assistant entities (rows as data), its settings
+(the model of its keys), its session part (the class, pointed at: the session owns the order
+of its parts), its inputs from topics of the user's (the wind speed), its console parts and
+its docs section.
+
+Rules:
+1. Stop, lock and the last word are no feature: they stay first and hard-wired (mqtt/topics.py,
+   mqtt/lastword.py, mqtt/halts.py), in the order written there. A feature's command is judged
+   like any (``Rotator.submit``); it is never a stop or a lock, and it never reaches the stop
+   lane.
+2. The registry is an ordered tuple; its order is the order of the features' topics in the
+   subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
+3. A feature's topic suffix is unique across the core topics and every feature (the topic
+   table refuses one that is not, at start: mqtt/topics.py), and its first word is reserved
+   from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks it).
+4. The registry is found by name at its first use (``registered``), as python-can finds its
+   back ends: a feature spans the layers (its parser sits on mqtt/payloads.py while mqtt's
+   topic table iterates it), so an import of it from below would be a circle. Nothing heavy is
+   imported by a declaration: a feature's session part is the session's to import.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Generic, Protocol, TypeVar
+
+from pydantic import BaseModel
+
+from bridge.model import Command, Origin, RotatorStatus
+
+T = TypeVar("T")
+
+REGISTRY_MODULE = "bridge.features"  # rule 4: its ``FEATURES``
+
+
+@dataclass(frozen=True)
+class CommandTopic:
+    """``R/<suffix>``: a command topic of the main connection (never the stop lane's: rule 1).
+    ``parse`` turns its payload, from ``origin``, into one command for the judge; it raises
+    mqtt/payloads.py's PayloadError naming what was wrong (refused on ``R/error``). An empty
+    payload is refused before it ("empty payload") unless it ``takes_empty``."""
+
+    suffix: str
+    kind: str  # the command's name in refusals and the audit (mqtt/payloads.py describe)
+    parse: Callable[[bytes, Origin], Command]
+    takes_empty: bool = False
+
+
+@dataclass(frozen=True)
+class StateTopic(Generic[T]):
+    """``R/<suffix>``: retained, published from each status that carries a value (``value``
+    None: nothing published); with ``new_only`` only when the value is a new object (a report
+    made once per move, not at every status); with ``needs`` only for a rotator that has it
+    (a capability of mqtt/ports.py ``RotatorPort``: ``can_follow``); ``after_status``: published
+    after ``R/status``, not before; ``remote``: a client far from the station reads it
+    (mqtt/topics.py ``StationTopics``)."""
+
+    suffix: str
+    value: Callable[[RotatorStatus], T | None]
+    render: Callable[[T], str]
+    new_only: bool = False
+    needs: str | None = None
+    after_status: bool = False
+    remote: bool = False
+
+
+@dataclass(frozen=True)
+class StatusBlock(Generic[T]):
+    """``key`` in ``R/status``, there while ``value`` is not None. ``render`` gives the block
+    (a JSON value) or, with ``rendered``, its JSON text (made once, appended last)."""
+
+    key: str
+    value: Callable[[RotatorStatus], T | None]
+    render: Callable[[T], object]
+    rendered: bool = False
+
+
+class TopicView(Protocol):
+    """What an entity's config reads of its rotator's topics (mqtt/topics.py RotatorTopics)."""
+
+    @property
+    def root(self) -> str: ...
+
+    @property
+    def status(self) -> str: ...
+
+    def feature(self, suffix: str) -> str: ...
+
+
+class RotatorView(Protocol):
+    """What an entity's config reads of its rotator (homeassistant/info.py RotatorInfo)."""
+
+    @property
+    def topics(self) -> TopicView: ...
+
+
+@dataclass(frozen=True)
+class EntityRow:
+    """A Home Assistant entity of a rotator's device (homeassistant/entities.py ``Entity``):
+    ``needs`` a feature's name (configured on that rotator), a RotatorInfo field or a model
+    capability; ``bridge_only``: available while the rotator is unreachable."""
+
+    platform: str
+    object_id: str
+    name: str | None
+    config: Callable[[RotatorView], dict[str, object]]
+    needs: str | None = None
+    bridge_only: bool = False
+
+
+@dataclass(frozen=True)
+class Input:
+    """Topics of the user's (not under the base topic) a feature reads, with the handler of
+    their messages (True: it was one of them). Which of them are read without
+    retain-as-published (mqtt/connection.py rule 1: the flag then says "replayed") is the
+    feature's ``replayed``."""
+
+    subscriptions: list[str]
+    on_message: Callable[[str, bytes, bool], bool]
+
+
+@dataclass(frozen=True)
+class Feature:
+    """One feature, as the registry lists it (the module's docstring)."""
+
+    name: str
+    docs: str  # its page for users, and section: "docs/wind.md", "docs/mqtt.md#rotor-health"
+    summary: str  # one line, for docs/architecture.md's table and the logs
+    commands: tuple[CommandTopic, ...] = ()
+    states: tuple[StateTopic[Any], ...] = ()
+    status: tuple[StatusBlock[Any], ...] = ()
+    entities: tuple[EntityRow, ...] = ()
+    # its keys in ``[[rotators]]`` (a model the rotator's table includes) and whether a
+    # rotator's table turns it on (its entities' ``needs`` is then the feature's name)
+    rotator_settings: type[BaseModel] | None = None
+    configured: Callable[[BaseModel], bool] | None = None
+    settings_section: tuple[str, str] = ("", "")  # its heading and line in configuration.md
+    # (a rotator's settings, its rotator) -> the input it reads, from the app (None: none)
+    inputs: Callable[[Sequence[tuple[Any, Any]]], Input | None] | None = None
+    replayed: Callable[[BaseModel], str | None] | None = None
+    part: str | None = None  # its session part, "module:Class" (the session imports it)
+    console: tuple[str, ...] = ()  # what the web console shows of it (web/static/)
+
+    def on_for(self, rotator_settings: BaseModel) -> bool:
+        """Whether a rotator's table turns this feature on (always, without ``configured``)."""
+        return self.configured is None or self.configured(rotator_settings)
+
+
+_loaded: tuple[Feature, ...] | None = None
+_blocks: tuple[tuple[Feature, ...], tuple[StatusBlock[Any], ...]] | None = None
+
+
+def registered() -> tuple[Feature, ...]:
+    """The registry (rule 4), in its order (rule 2)."""
+    global _loaded
+    if _loaded is None:
+        features: tuple[Feature, ...] = importlib.import_module(REGISTRY_MODULE).FEATURES
+        _loaded = features
+    return _loaded
+
+
+def status_blocks() -> tuple[StatusBlock[Any], ...]:
+    """Every registered feature's blocks in ``R/status``, in the registry's order (made once:
+    every status of every rotator goes through them)."""
+    global _blocks
+    features = registered()
+    if _blocks is None or _blocks[0] is not features:
+        _blocks = features, tuple(block for f in features for block in f.status)
+    return _blocks[1]

@@ -1,0 +1,96 @@
+"""The wind-aware park, as one feature (bridge/feature.py): a rotator with a ``wind_topic``
+parks for a storm and refuses motion until the wind has calmed.
+
+What it is made of:
+- its keys in ``[[rotators]]``: settings_wind.py ``WindFields`` (the rotator's table includes
+  them; the settings' layer sits below the MQTT parts this package uses);
+- its session part: engine/wind.py ``WindPark`` (the session owns the order of its parts);
+- its input: the user's wind topic, read by feed.py;
+- here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm)
+  and its declaration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from datetime import UTC, datetime
+from typing import Any
+
+from pydantic import BaseModel
+
+from bridge.feature import EntityRow, Feature, Input, RotatorView, StatusBlock
+from bridge.features.wind.feed import wind_feed
+from bridge.model import RotatorStatus, WindInfo
+from bridge.settings_wind import WindFields
+
+NAME = "wind"
+
+
+def wind_json(info: WindInfo) -> dict[str, object]:
+    """The status's ``wind`` block (engine/wind.py)."""
+    calm = info.calm_since_unix
+    return {
+        "speed_kmh": info.speed_kmh,
+        "storm": info.storm,
+        "calm_since": None
+        if calm is None
+        else datetime.fromtimestamp(calm, UTC).isoformat(timespec="milliseconds"),
+        "silent": info.silent,
+    }
+
+
+def _wind(status: RotatorStatus) -> WindInfo | None:
+    return status.wind
+
+
+def _speed(r: RotatorView) -> dict[str, object]:
+    return {
+        "state_topic": r.topics.status, "unit_of_measurement": "km/h",
+        "device_class": "wind_speed", "state_class": "measurement",
+        "value_template": "{{ value_json.wind.speed_kmh if value_json.wind is defined and "
+                          "value_json.wind.speed_kmh is not none else 'None' }}",
+    }  # fmt: skip
+
+
+def _storm(r: RotatorView) -> dict[str, object]:
+    return {
+        "state_topic": r.topics.status, "icon": "mdi:weather-windy",
+        "value_template": "{{ 'ON' if value_json.wind is defined and value_json.wind.storm "
+                          "else 'OFF' }}",
+    }  # fmt: skip
+
+
+def _configured(r: BaseModel) -> bool:
+    return isinstance(r, WindFields) and r.wind_topic is not None
+
+
+def _replayed(r: BaseModel) -> str | None:
+    """Feed.py rule 2: a reading the broker replays says so by its retain flag."""
+    return r.wind_topic if isinstance(r, WindFields) else None
+
+
+def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
+    """Each rotator's wind topic, read into its ``wind`` (engine/rotator.py)."""
+    entries = [(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if _configured(r)]
+    return Input(*wind_feed(entries))
+
+
+FEATURE = Feature(
+    name=NAME,
+    docs="docs/wind.md",
+    summary="parks for a storm from a wind speed on MQTT and refuses motion until it calms",
+    status=(StatusBlock("wind", _wind, wind_json),),
+    entities=(
+        EntityRow("sensor", "wind", "Wind", _speed, needs=NAME),
+        EntityRow("binary_sensor", "storm", "Parked for the storm", _storm, needs=NAME),
+    ),
+    rotator_settings=WindFields,
+    settings_section=(
+        "Wind (per rotator)",
+        "Parking for a storm, from a wind speed published on MQTT.",
+    ),
+    configured=_configured,
+    inputs=_inputs,
+    replayed=_replayed,
+    part="bridge.engine.wind:WindPark",
+)

@@ -1,0 +1,208 @@
+"""The feature registry (bridge/feature.py, bridge/features/): every registered feature's
+topics are in the topic table (subscribed, routed, owned), its command parsed by its
+declaration, its block in R/status and its entities in discovery; and a toy feature, declared
+here and registered for one test, gets all of that without a line in any other module."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import re
+from pathlib import Path
+
+import pytest
+from pydantic import BaseModel
+
+import bridge.feature
+from bridge.feature import (
+    CommandTopic,
+    EntityRow,
+    Feature,
+    RotatorView,
+    StateTopic,
+    StatusBlock,
+    registered,
+)
+from bridge.features import FEATURES
+from bridge.homeassistant import Identity, RotatorInfo, all_configs
+from bridge.model import MotionState, Nudge, Origin, RotatorStatus, Source
+from bridge.mqtt import payloads as pl
+from bridge.mqtt.service import MqttService
+from bridge.mqtt.topics import RotatorTopics, Topics
+from bridge.settings import RotatorSettings
+from bridge.settings_groups import RESERVED
+from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def core_topics(t: RotatorTopics) -> set[str]:
+    """Every topic the table builds for a rotator without the registry (its properties)."""
+    found = {
+        getattr(t, n) for n in dir(RotatorTopics) if isinstance(getattr(RotatorTopics, n), property)
+    }
+    return found | {t.option("x"), t.option_state("x")}
+
+
+def test_the_registry_is_the_features_tuple_in_its_order() -> None:
+    assert registered() == FEATURES
+    assert [f.name for f in FEATURES][:5] == ["tracking", "follow", "wind", "health", "control"]
+    assert len({f.name for f in FEATURES}) == len(FEATURES)
+
+
+@pytest.mark.parametrize("feature", FEATURES, ids=lambda f: f.name)
+def test_a_features_topics_are_subscribed_routed_and_owned_never_on_the_stop_lane(
+    feature: Feature,
+) -> None:
+    topics = Topics("B", {"r": "R"})
+    t = topics.rotator("r")
+    for command in feature.commands:
+        topic = t.feature(command.suffix)
+        assert topic in topics.subscriptions()
+        assert topics.route(topic) == ("r", command.kind, None)
+        assert topic not in topics.stop_lane()  # rule 1: the last word is no feature's
+        assert topic not in core_topics(t)  # rule 3
+    for state in feature.states:
+        assert t.feature(state.suffix) in topics.owned()
+        assert t.feature(state.suffix) not in core_topics(t)
+    for x in (*feature.commands, *feature.states):
+        assert x.suffix.split("/")[0] in RESERVED  # rule 3: no group may take it
+
+
+def test_no_two_features_share_a_topic_or_a_command_kind() -> None:
+    suffixes = [x.suffix for f in FEATURES for x in (*f.commands, *f.states)]
+    kinds = [c.kind for f in FEATURES for c in f.commands]
+    assert len(set(suffixes)) == len(suffixes) and len(set(kinds)) == len(kinds)
+
+
+@pytest.mark.parametrize("feature", FEATURES, ids=lambda f: f.name)
+def test_a_features_entities_are_in_discovery_for_a_rotator_that_has_it(feature: Feature) -> None:
+    cfg = RotatorSettings(id="tower", model="rot2prog", port="/dev/ttyUSB0")
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=True, nudge_step_deg=cfg.nudge_step_deg, can_follow=True,
+        features=frozenset({feature.name}),
+    )  # fmt: skip
+    found = {t.split("/")[1] + "." + t.split("/")[3] for t in all_configs(
+        "homeassistant", Identity("rotor"), topics, [info])}  # fmt: skip
+    assert {f"{e.platform}.{e.object_id}" for e in feature.entities} <= found
+    without = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=False, nudge_step_deg=cfg.nudge_step_deg,
+    )  # fmt: skip
+    for e in feature.entities:  # an entity that needs the feature: not without it
+        if e.needs == feature.name:
+            assert without.has(e.needs) is False
+
+
+@pytest.mark.parametrize("feature", FEATURES, ids=lambda f: f.name)
+def test_a_features_docs_part_and_settings_are_real(feature: Feature) -> None:
+    page, _, anchor = feature.docs.partition("#")
+    text = (ROOT / page).read_text()
+    if anchor:
+        headings = {re.sub(r"[^a-z0-9 -]", "", h.lower()).replace(" ", "-")
+                    for h in re.findall(r"^#+ (.+)$", text, re.M)}  # fmt: skip
+        assert anchor in headings
+    if feature.part is not None:
+        module, _, name = feature.part.partition(":")
+        assert isinstance(getattr(importlib.import_module(module), name), type)
+    if feature.rotator_settings is not None:  # a rotator's table includes its keys
+        assert issubclass(RotatorSettings, feature.rotator_settings)
+        heading = feature.settings_section[0]  # its keys' section in configuration.md
+        assert f"### {heading}" in (ROOT / "docs" / "configuration.md").read_text()
+    assert feature.name in (ROOT / "docs" / "architecture.md").read_text()
+
+
+def test_wind_is_on_for_a_rotator_with_a_wind_topic_only() -> None:
+    (wind,) = [f for f in FEATURES if f.name == "wind"]
+    plain = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0)
+    windy = RotatorSettings(
+        id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0,
+        wind_topic="weather/wind", wind_park_above=60,
+    )  # fmt: skip
+    assert (wind.on_for(plain), wind.on_for(windy)) == (False, True)
+    assert wind.replayed is not None and wind.replayed(windy) == "weather/wind"
+
+
+# -- a toy feature, registered here only -----------------------------------------------------
+def _toy_nudge(payload: bytes, by: Origin) -> Nudge:
+    return Nudge(pl.parse_number(payload, "toy step"), 0.0, source=Source.MQTT, origin=by)
+
+
+def _toy_state(status: RotatorStatus) -> str | None:
+    return status.state.value if status.available else None
+
+
+def _toy_entity(r: RotatorView) -> dict[str, object]:
+    return {"command_topic": r.topics.feature("toy/go"), "state_topic": r.topics.status}
+
+
+class ToyFields(BaseModel):
+    toy: bool = False
+
+
+TOY = Feature(
+    name="toy",
+    docs="docs/architecture.md#the-feature-registry",
+    summary="a toy: nudges by the number sent",
+    commands=(CommandTopic("toy/go", "toy", _toy_nudge),),
+    states=(StateTopic("toy/state", _toy_state, lambda v: f"toy {v}"),),
+    status=(StatusBlock("toy", _toy_state, lambda v: {"says": v}),),
+    entities=(EntityRow("button", "toy", "Toy", _toy_entity, needs="toy"),),
+    configured=lambda r: isinstance(r, ToyFields) and r.toy,
+)
+
+
+@pytest.fixture
+def toy(monkeypatch: pytest.MonkeyPatch) -> Feature:
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
+    return TOY
+
+
+def test_a_toy_feature_gets_its_topics_command_state_status_and_entity(toy: Feature) -> None:
+    topics = Topics("rotor", {"tower": "rotor"})
+    assert "rotor/toy/go" in topics.subscriptions() and "rotor/toy/state" in topics.owned()
+    assert "rotor/toy/go" not in topics.stop_lane()
+    pub = RecordingPublisher()
+    svc = MqttService(topics, pub, wall=lambda: NOW_UNIX)
+    rot = RecordingRotator("tower", "rotorez")
+    svc.attach(rot)
+    pub.take()
+    svc.on_message("rotor/toy/go", b"15", False)  # parsed by its declaration, judged as any
+    assert rot.calls == [("nudge", 15.0, 0.0, Source.MQTT, "toy '15'")]
+    svc.on_message("rotor/toy/go", b"far", False)  # its parser's error: refused, nothing moves
+    assert rot.calls[-1][0] == "refused" and "toy step" in str(rot.calls[-1][1])
+    svc.on_message("rotor/toy/go", b"15", True)  # retained: refused like any command
+    assert rot.calls[-1][0] == "refused"
+    svc.publish_status("tower", RotatorStatus("tower", MotionState.IDLE, 10.0, available=True))
+    sent = {topic: payload for topic, payload, _ in pub.take()}
+    assert sent["rotor/toy/state"] == "toy idle"
+    assert json.loads(sent["rotor/status"])["toy"] == {"says": "idle"}
+    cfg = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=False, nudge_step_deg=cfg.nudge_step_deg, features=frozenset({"toy"}),
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    button = json.loads(msgs["homeassistant/button/rotorbridge_rotor_r_tower/toy/config"])
+    assert button["command_topic"] == "rotor/toy/go"
+    without = all_configs("homeassistant", Identity("rotor"), topics, [
+        RotatorInfo.of("tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+                       has_station=False, nudge_step_deg=cfg.nudge_step_deg)])  # fmt: skip
+    assert not any("/toy/" in topic for topic in without)
+
+
+def test_without_the_toy_its_topic_is_no_ones() -> None:
+    topics = Topics("rotor", {"tower": "rotor"})
+    assert topics.route("rotor/toy/go") is None
+    assert "rotor/toy/go" not in topics.subscriptions()
+
+
+@pytest.mark.parametrize("suffix", ["stop", "lock", "target", "option/speed", "health", ""])
+def test_a_feature_cannot_take_a_core_topic_or_another_features(suffix: str) -> None:
+    """Rule 3 (rule 1 above all: no feature answers on R/stop or R/lock)."""
+    thief = Feature("thief", "docs/architecture.md", "takes a topic", commands=(
+        CommandTopic(suffix, "thief", _toy_nudge),))  # fmt: skip
+    with pytest.raises(ValueError, match="is taken"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
