@@ -373,7 +373,7 @@ class RotatorSession:
         for part in parts:
             if not part.on(self):
                 continue
-            if not part.wakes & Wake.STEP:  # Wake.MOTION: only a motion it has not seen
+            if part.wakes is Wake.MOTION:  # only a motion it has not seen
                 motion = self.controller.motion
                 if self._seen_motion.get(part.name) is motion:
                     continue
