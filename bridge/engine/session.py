@@ -451,11 +451,13 @@ class RotatorSession:
         )
         link, view = ctl.link, self.view
         wind_info = wind.info if wind.on else None
-        timed = link is not None and link.slew is not None  # a slew's estimate (status rule 2)
+        slew = link.slew if link is not None else None
+        timed = slew is not None  # a slew's estimate (status rule 2)
         key = (
             ctl.cfg,
             ctl.motion,
             link,
+            slew,  # (its end ends the estimate)
             ctl.answering,
             ctl.version,
             ctl.controller_time,
