@@ -561,8 +561,8 @@ AUTO_PARK = Part(
     Wake.STEP,  # a turning rotor's every step starts its quiet spell again
     True,
     lambda s: s.autopark.on,
-    lambda s, scene: None if s.wind.storm else s.autopark.step(scene),  # (the wind's park is
-    # the park then)
+    # (in a storm the wind's park is the park: auto-park waits, its wake-up still asked for)
+    lambda s, scene: None if s.wind.storm else s.autopark.step(scene),
     lambda s, now: s.autopark.wakeup(now),
     _reset_autopark,
 )
