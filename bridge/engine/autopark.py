@@ -37,6 +37,12 @@ class AutoPark:
         self._park = park
         self._since = -math.inf
 
+    @property
+    def on(self) -> bool:
+        """Whether it ever parks (a park position and a quiet time configured): off, its step
+        changes nothing and the session does not run it (parts.py rule 3)."""
+        return self._after_s > 0.0
+
     def activity(self, now: float) -> None:
         """Rule 1: the quiet spell starts again."""
         self._since = now

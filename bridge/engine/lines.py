@@ -33,6 +33,10 @@ Rules:
    late: the replies of one poll round come whole over a few milliseconds (each controller
    and adapter takes its own time), and are read in one wake-up, not one each. A descriptor
    that becomes ready (a stop in a mailbox) still ends the wait at once.
+8. Rule 5's look for a stop among the workers not served yet is made before the first of a
+   round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
+   11) or that look found one (there may be another): not one question to every worker after
+   each one served.
 """
 
 from __future__ import annotations
@@ -47,6 +51,7 @@ from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from typing import Any, Protocol
 
+from bridge.engine import mailbox
 from bridge.engine.config import WorkerConfig
 
 __all__ = ["Lines"]
@@ -180,14 +185,19 @@ class Lines:
         due = [w for w, fds, until in wanted if now >= until or not ready.isdisjoint(fds)]  # rule 6
         due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
         left = list(self._workers)  # not served yet this round: any of them may get a stop
+        look, seen = True, 0
         while due:
             # rule 5: a stop that came while this round served others goes next
             worker, urgent = due[0], _NOTHING
-            for other in left:
-                urgent = other.urgent()
-                if urgent:
-                    worker = other
-                    break
+            halts = mailbox.halts()
+            if look or halts != seen:  # (rule 8: none put since a look that found none)
+                seen = halts
+                for other in left:
+                    urgent = other.urgent()
+                    if urgent:
+                        worker = other
+                        break
+                look = bool(urgent)  # one found: there may be another
             if worker in due:
                 due.remove(worker)
             left.remove(worker)

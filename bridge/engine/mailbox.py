@@ -47,6 +47,10 @@ Rules:
     or lock ON never runs after it, whichever front end's thread brought which, and a lock OFF
     that follows in the same batch lets no such target through. A command put without a count
     (tracking or following OFF, the session's own) is never dropped by it.
+11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
+    them. The lines thread reads it to know whether one came while it served others (lines.py
+    rule 5) without asking every mailbox after every rotator it serves. (Puts in two mailboxes
+    at once may count one: the count still moves, which is all a reader looks for.)
 """
 
 from __future__ import annotations
@@ -100,6 +104,15 @@ class Batch:
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
 
+class _Halts:
+    count = 0  # rule 11
+
+
+def halts() -> int:
+    """Rule 11: a number that changes whenever a stop or lock ON is put in any mailbox."""
+    return _Halts.count
+
+
 class Mailbox:
     def __init__(self) -> None:
         self._lock = threading.Lock()
@@ -145,6 +158,7 @@ class Mailbox:
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
                 self._hold(hold)
+                _Halts.count += 1  # rule 11: once the batch holds it
             elif isinstance(command, Target):
                 if self._stale(epoch):
                     return False
@@ -170,6 +184,7 @@ class Mailbox:
                 self._batch.track = None
                 self._batch.follow = None
                 self._hold(hold)
+                _Halts.count += 1  # rule 11: once the batch holds it
         if wake:  # rule 5
             self._wake_once()
 

@@ -47,6 +47,7 @@ class Options:
         self._due: set[str] = set()
         self._sent_t = 0.0
         self._written_t: dict[str, float] = {}  # rule 4: when each was last written
+        self.revision = 0  # one more for every value set: the status shows them (session.py)
 
     def _resent(self) -> set[str]:
         """The values the controller forgets, and those not sent since the start (rule 1)."""
@@ -71,6 +72,7 @@ class Options:
 
     def set(self, name: str, value: SettingValue, connected: bool) -> None:
         self.values[name] = value
+        self.revision += 1
         self._unsent.add(name)  # rule 1: owed until sent, whenever the controller answers
         if connected:
             self._due.add(name)

@@ -5,16 +5,28 @@ Rules:
 1. A part never holds the session: it gets a ``Scene`` (a read-only view of the moment) and
    returns a ``Proposal``; the session applies proposals in one order it shows in its step.
 2. A proposal's target is already judged (pointing.py): the session only queues it.
+3. A part says what wakes it (``Wake``): a step that brings none of that does not run it, and
+   a part that is off (nothing tracked, no wind configured, no auto-park) is not run at all.
+   A part that reads the time itself, or whose side effects count its steps, asks for every
+   step while it is on.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Flag, auto
 from typing import NamedTuple
 
 from bridge.engine import motion as mo
 from bridge.engine.actions import Report
 from bridge.model import Target
+
+
+class Wake(Flag):
+    """What makes a part worth running in a step (rule 3)."""
+
+    STEP = auto()  # every step while it is on: it reads the time (the sky, a quiet spell)
+    MOTION = auto()  # the motion changed: a reading taken, the motion machine's clock, a write
 
 
 class Scene(NamedTuple):

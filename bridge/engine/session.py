@@ -18,8 +18,9 @@ what they need (a read-only ``parts.Scene``, ``status.Seen``, the motion, the ti
 back what they propose (a ``parts.Proposal``, the controller's notes, a health report, what a
 command did); the session applies it. None of them imports this module. ``_step`` runs them in
 one order after every input: the line's own work (an overdue reply, a due stop), the motion
-machine's clock, the stop check, tracking, following, the wind, auto-park, the pending target,
-options, the poll, health, the status.
+machine's clock, the stop check, the parts of ``PARTS`` that decide (tracking, following, the
+wind, auto-park), the pending target, options, the poll, the parts that measure (health), the
+status. Stops and the lock come before all of it, in ``commands``, in a fixed written order.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -60,12 +61,21 @@ Rules:
    it). Only when nothing waits on such a step: no stop due (a half-duplex line takes one as
    soon as the reply is whole: that step writes it), no target waiting, nothing noted, and
    ``next_wakeup`` not yet come (what is due by then runs as before).
+17. The parts are registered in ``PARTS``, in the order the step runs them; each says what
+   wakes it (parts.py rule 3), whether it is on, when it wants to be woken and how it is
+   reset (rule 14). A part that is off costs nothing, and is asked for no wake-up; one woken
+   by the motion (health) runs only in a step where the motion is not the one it last saw.
+18. The status is built again only when something it shows may have changed (the values it is
+   built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
+   time, and are built at every step): a poll that changed nothing builds no status.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TypeVar
 
 from bridge.engine import status as st
@@ -77,7 +87,8 @@ from bridge.engine.feature_commands import Done, FeatureCommands
 from bridge.engine.health import Health
 from bridge.engine.link import Link
 from bridge.engine.mailbox import Batch
-from bridge.engine.parts import Proposal, Scene
+from bridge.engine.motion import Motion
+from bridge.engine.parts import Proposal, Scene, Wake
 from bridge.engine.skywork import Answer
 from bridge.engine.stops import CLEARED, Fence
 from bridge.engine.targets import Go, Targets, decide
@@ -98,6 +109,21 @@ log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+
+
+@dataclass(frozen=True)
+class Part:
+    """One of the session's parts as its step runs it (``PARTS``, rules 14 and 17): looked up
+    on the session at every step (a reset part is a new object), each with its own reset."""
+
+    name: str  # as the error event of its failure names it (rule 14)
+    wakes: Wake  # parts.py rule 3
+    deciding: bool  # True: runs while the controller answers, before the pending target goes;
+    # False: after the poll, whatever the link (what it measures rides along in the status)
+    on: Callable[[RotatorSession], bool]  # off: not run, and no wake-up of its own
+    step: Callable[[RotatorSession, Scene], Proposal | None]
+    wakeup: Callable[[RotatorSession, float], float | None]
+    reset: Callable[[RotatorSession, float], None]
 
 
 class RotatorSession:
@@ -125,6 +151,8 @@ class RotatorSession:
         self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
         self._actions: list[Action] = []
         self._wakeup = 0.0
+        self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
+        self._status_key: tuple[object, ...] | None = None  # rule 18
 
     @property
     def name(self) -> str:
@@ -192,7 +220,7 @@ class RotatorSession:
             ctl.stop(now, merge=True)
         self._fence(batch)
         if batch.health_reset:
-            self._guarded("health", self.health.reset, now)
+            self._guarded(HEALTH, lambda: self.health.reset(), now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.value, ctl.link is not None)
         if batch.track is not None:
@@ -226,7 +254,7 @@ class RotatorSession:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
         if generation == self.tracker.generation:
             answered = self._guarded(
-                "tracking", lambda: self.features.answered(answer, self._refused()), now
+                TRACKING, lambda: self.features.answered(answer, self._refused()), now
             )
             if answered is not None:
                 self._apply(answered)
@@ -320,37 +348,44 @@ class RotatorSession:
             ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
             if ctl.notes:
                 self._heed(now)
-            if self.tracker.body is not None:  # (nothing tracked: nothing to ask)
-                self._part("tracking", self.tracker.step, now)  # rule 14
-            if self.follower.on:
-                self._part("following", self.follower.step, now)
-            self._part("wind", self.wind.step, now)
-            if not self.wind.storm:  # (the wind's park is the park then)
-                self._part("auto-park", self.autopark.step, now)
+            self._parts(_DECIDING, now)  # rule 17: tracking, following, the wind, auto-park
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
-        self.health.speed_factor = ctl.options.speed_factor()  # (health.py rule 9)
-        self._guarded("health", lambda: self.health.step(ctl.motion, now), now)  # in the status
+        self._parts(_MEASURING, now)  # health: what it measures is in the status
         self._emit_status(now)
         if ctl.link is not None:
             self._actions.extend(Write(frame) for frame in ctl.link.output())
-        generation = self.tracker.generation
-        self._actions.extend(Ask(generation, q) for q in self.tracker.take_asks())
+        asks = self.tracker.take_asks()
+        if asks:
+            generation = self.tracker.generation
+            self._actions.extend(Ask(generation, q) for q in asks)
         self._wakeup = self._next_wakeup(now)
         actions, self._actions = self._actions, []
         return actions
 
-    def _part(self, name: str, step: Callable[[Scene], Proposal], now: float) -> None:
+    def _parts(self, parts: tuple[Part, ...], now: float) -> None:
+        """Rule 17: each part that is on and that something woke, in the registry's order."""
+        for part in parts:
+            if not part.on(self):
+                continue
+            if part.wakes is Wake.MOTION:  # only a motion it has not seen
+                motion = self.controller.motion
+                if self._seen_motion.get(part.name) is motion:
+                    continue
+                self._seen_motion[part.name] = motion
+            self._part(part, now)
+
+    def _part(self, part: Part, now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""
         link, motion, pending = self.controller.link, self.controller.motion, self.targets.pending
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
-        proposal = self._guarded(name, lambda: step(scene), now)
+        proposal = self._guarded(part, lambda: part.step(self, scene), now)
         if proposal is None:
             return
         if proposal.busy:
@@ -366,21 +401,16 @@ class RotatorSession:
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
-    def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
-        """Rule 14: a part that raises is reset and reported; nothing else stops."""
+    def _guarded(self, part: Part, run: Callable[[], T], now: float) -> T | None:
+        """Rule 14: a part that raises is reset (its own reset, ``PARTS``) and reported;
+        nothing else stops."""
         try:
             return run()
         except Exception:
-            log.exception("%s: %s failed", self.name, name)
-            if name in ("tracking", "following"):
-                self.features.end("internal error", tracking=name == "tracking")
-            elif name == "wind":  # a storm it was in goes on: refusing is the safe side
-                self.wind = WindPark(self.cfg, storm=self.wind.storm)
-            elif name == "health":
-                self.health = self.health.rebuilt(self.cfg)  # health.py rule 7
-            else:
-                self.autopark = AutoPark(self.cfg)
-                self.autopark.activity(now)
+            log.exception("%s: %s failed", self.name, part.name)
+            part.reset(self, now)
+            self._seen_motion.pop(part.name, None)  # a new part has seen nothing yet
+            name = part.name
             self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
             return None
 
@@ -410,24 +440,143 @@ class RotatorSession:
             self.view.park_raw = wire if target.park else None
 
     def _emit_status(self, now: float) -> None:
-        tracker, follower, wind, health = self.tracker, self.follower, self.wind, self.health
-        shown = st.Features(
-            tracker.info, tracker.ended, follower.info, follower.ended, wind.info, health.report
+        """Rule 18: the status is built again only when something it shows may have changed."""
+        ctl, tracker, follower, wind, health = (
+            self.controller,
+            self.tracker,
+            self.follower,
+            self.wind,
+            self.health,
         )
-        seen = self.controller.seen(
+        link, view = ctl.link, self.view
+        wind_info = wind.info if wind.on else None
+        slew = link.slew if link is not None else None
+        timed = slew is not None  # a slew's estimate (status rule 2)
+        key = (
+            ctl.cfg,
+            ctl.motion,
+            link,
+            slew,  # (its end ends the estimate)
+            ctl.answering,
+            ctl.version,
+            ctl.controller_time,
+            ctl.options.revision,
+            ctl.az_shown.value,
+            ctl.el_shown.value,
+            self.targets.pending,
+            self.locked,
+            view.last_error,
+            view.last_source,
+            view.target_info,
+            view.park_raw,
+            view.last_operator,
+            view.control,
+            tracker.info,
+            tracker.ended,
+            follower.info,
+            follower.ended,
+            wind_info,
+            health.report,
+        )
+        if key == self._status_key and not timed and ctl.cfg.spec.can_report_position:
+            return  # (a DCU-1's estimated move reads the time: status rule 3)
+        self._status_key = key
+        shown = st.Features(
+            tracker.info, tracker.ended, follower.info, follower.ended, wind_info, health.report
+        )
+        seen = ctl.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )
-        status = st.current(self.controller.cfg, seen, now)  # (controller.py rule 7)
+        status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
         self.status = status  # also when only the controller's clock changed (status rule 4)
 
     def _next_wakeup(self, now: float) -> float:
-        times = [now + IDLE_WAKEUP_S, *self.controller.wakeups(now)]
-        waits = [
-            self.targets.stream_deadline(now),
-            self.autopark.wakeup(now),
-            self.wind.wakeup(now),
-        ]
-        times += [t for t in (*waits, self.tracker.wakeup(now)) if t is not None]
-        return min(times)
+        wakeup = min(now + IDLE_WAKEUP_S, min(self.controller.wakeups(now), default=math.inf))
+        stream = self.targets.stream_deadline(now)
+        if stream is not None and stream < wakeup:
+            wakeup = stream
+        for part in _WAKING:
+            if part.on(self):
+                t = part.wakeup(self, now)
+                if t is not None and t < wakeup:
+                    wakeup = t
+        return wakeup
+
+
+# -- the parts, registered (rule 17) -------------------------------------------------------------
+def _health_step(s: RotatorSession, scene: Scene) -> None:
+    s.health.speed_factor = s.controller.options.speed_factor()  # (health.py rule 9)
+    s.health.step(scene.motion, scene.now)  # (its report is in the status)
+
+
+def _reset_autopark(s: RotatorSession, now: float) -> None:
+    s.autopark = AutoPark(s.cfg)
+    s.autopark.activity(now)
+
+
+def _reset_wind(s: RotatorSession, now: float) -> None:
+    s.wind = WindPark(s.cfg, storm=s.wind.storm)  # a storm goes on: refusing is the safe side
+
+
+def _reset_health(s: RotatorSession, now: float) -> None:
+    s.health = s.health.rebuilt(s.cfg)  # health.py rule 7
+
+
+def _no_wakeup(s: RotatorSession, now: float) -> float | None:
+    return None
+
+
+TRACKING = Part(
+    "tracking",
+    Wake.STEP,  # it reads the sky by the time
+    True,
+    lambda s: s.tracker.body is not None,  # (nothing tracked: nothing to ask)
+    lambda s, scene: s.tracker.step(scene),
+    lambda s, now: s.tracker.wakeup(now),
+    lambda s, now: s.features.end("internal error", tracking=True),
+)
+FOLLOWING = Part(
+    "following",
+    Wake.STEP,  # each of its steps is activity for auto-park
+    True,
+    lambda s: s.follower.on,
+    lambda s, scene: s.follower.step(scene),
+    _no_wakeup,
+    lambda s, now: s.features.end("internal error", tracking=False),
+)
+WIND = Part(
+    "wind",
+    Wake.STEP,  # the silence of its sensor is counted in time
+    True,
+    lambda s: s.wind.on,
+    lambda s, scene: s.wind.step(scene),
+    lambda s, now: s.wind.wakeup(now),
+    _reset_wind,
+)
+AUTO_PARK = Part(
+    "auto-park",
+    Wake.STEP,  # a turning rotor's every step starts its quiet spell again
+    True,
+    lambda s: s.autopark.on,
+    # (in a storm the wind's park is the park: auto-park waits, its wake-up still asked for)
+    lambda s, scene: None if s.wind.storm else s.autopark.step(scene),
+    lambda s, now: s.autopark.wakeup(now),
+    _reset_autopark,
+)
+HEALTH = Part(
+    "health",
+    Wake.MOTION,  # it measures moves from the motion (health.py rule 6)
+    False,
+    lambda s: True,
+    _health_step,
+    _no_wakeup,
+    _reset_health,
+)
+#: rule 17: the parts, in the order the step runs them (after the line's own work and the stop
+#: check; stops and the lock are the commands', first of all, in ``commands``)
+PARTS: tuple[Part, ...] = (TRACKING, FOLLOWING, WIND, AUTO_PARK, HEALTH)
+_DECIDING = tuple(p for p in PARTS if p.deciding)
+_MEASURING = tuple(p for p in PARTS if not p.deciding)
+_WAKING = tuple(p for p in PARTS if p.wakeup is not _no_wakeup)

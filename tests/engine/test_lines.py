@@ -12,6 +12,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import serial
@@ -20,6 +21,7 @@ from bridge import emulators
 from bridge.app import worker_config
 from bridge.emulators.pty import EmulatedPort
 from bridge.engine.lines import Lines
+from bridge.engine.mailbox import Mailbox
 from bridge.engine.port import open_port
 from bridge.engine.rotator import Rotator
 from bridge.engine.state_store import StateStore
@@ -241,15 +243,17 @@ def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
 
 
 class Urgent(Timed):
-    """A stand-in whose mailbox gets a stop while another worker is being served."""
+    """A stand-in whose mailbox (a real one) gets a stop while another worker is served."""
 
-    stop_waiting = False
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.box = Mailbox()
 
     def urgent(self) -> set[int]:
-        return {-1} if self.stop_waiting else set()
+        return {-1} if self.box.urgent else set()
 
     def serve(self, now: float, ready: set[int]) -> None:
-        self.stop_waiting = False
+        self.box.take()
         super().serve(now, ready)
 
 
@@ -267,7 +271,7 @@ def test_a_stop_that_comes_during_a_round_is_served_next() -> None:
         def serve(self, now: float, ready: set[int]) -> None:
             everyone = all(w in lines._workers for w in (stopped, second))
             if everyone and not flagged:
-                stopped.stop_waiting = True  # a stop put while this one is served
+                stopped.box.put(Stop(), wake=False)  # a stop put while this one is served
                 flagged.append(len(log))
             super().serve(now, ready)
             if flagged and len(log) > flagged[0] + 2:

@@ -7,6 +7,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+import pytest
+
 from bridge.app import worker_config
 from bridge.engine import motion as mo
 from bridge.engine import slew as slewing
@@ -24,6 +26,7 @@ from bridge.engine.tracking import Tracker
 from bridge.model import ErrorKind, MotionState, Source, Stop, Target
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
+from tests.engine.virtual import VirtualRotator
 
 IDLE_AT_90 = mo.Motion(state=MotionState.IDLE, position_deg=90.0, anchor_deg=90.0)
 
@@ -220,3 +223,25 @@ def test_a_target_the_rotor_is_already_at_is_done_without_a_frame() -> None:
     cfg = rig()
     done = decide(cfg, line(cfg, 9.9), IDLE_AT_90, pending(cfg, 91), False, 10.0)
     assert done.go is Go.DONE and done.wire == (91.0, None)
+
+
+def test_a_part_that_is_off_is_never_run_and_one_that_is_on_runs_while_the_rotor_turns(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """session.py rule 17: auto-park without a park time is never called (a step with nothing
+    for it costs nothing); with one, it sees the turn (its quiet spell starts again)."""
+    calls: list[float] = []
+    step = AutoPark.step
+
+    def counted(part: AutoPark, seen: Scene) -> Any:
+        calls.append(seen.now)
+        return step(part, seen)
+
+    monkeypatch.setattr(AutoPark, "step", counted)
+    for park in ({}, {"park_az_deg": 0, "park_after_idle_s": 600}):
+        calls.clear()
+        with VirtualRotator("rotorez", settings=park) as v:
+            v.run_until_state(MotionState.IDLE, 30)
+            v.target(120)
+            v.run_until(lambda h: h.state is MotionState.IDLE and h.truth().az_deg > 110, 120)
+        assert (len(calls) > 0) == bool(park), park

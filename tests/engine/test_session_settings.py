@@ -124,3 +124,16 @@ def test_a_flood_of_speeds_puts_a_few_on_the_wire_and_the_last_one_wins(rig: Rig
     v.run_until(lambda h: not h.truth().is_moving, 2, "stopped")
     assert v.frames(Outcome.STOP, since=stopped_at)
     assert v.errors() == []
+
+
+def test_a_setting_shows_in_the_status_at_once_though_it_waits_to_go_out(rig: Rig) -> None:
+    """The status is built again only when something it shows changed (session.py rule 18): a
+    value set while the one before still holds the line's gap (options.py rule 4) changes
+    nothing else, and is shown all the same."""
+    v = ready(rig)
+    v.option("speed", "2")
+    v.run_until(lambda h: speeds(h), 1, "X2 on the wire")
+    v.option("speed", "3")  # within the gap: it waits, the rotor at rest, nothing else new
+    v.run_for(0.1)
+    assert speeds(v) == [b"X2"]
+    assert v.status.options == {"speed": "3"}

@@ -159,7 +159,8 @@ def test_a_part_that_raises_is_reset_and_reported_and_stops_still_go_out(
         raise RuntimeError("a bug in auto-park")
 
     monkeypatch.setattr(autopark.AutoPark, "step", broken)
-    with VirtualRotator("md01", emulator={"az_speed_deg_s": 5.0}) as v:
+    park = {"park_az_deg": 0, "park_after_idle_s": 600}  # on: a part that is off is never run
+    with VirtualRotator("md01", settings=park, emulator={"az_speed_deg_s": 5.0}) as v:
         v.run_until(lambda h: h.status.available, 10, "the controller answers")
         internal = v.errors(ErrorKind.INTERNAL)
         assert internal and "auto-park" in internal[0].message
