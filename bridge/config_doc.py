@@ -25,7 +25,6 @@ from bridge.features import FEATURES
 from bridge.protocols import REGISTRY
 from bridge.settings import (
     ENV_PREFIX,
-    DxClusterSettings,
     HomeAssistantSettings,
     MqttSettings,
     RotatorSettings,
@@ -143,7 +142,12 @@ def render() -> str:
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
         ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
         ("[wsjtx]", WsjtxSettings, f"{ENV_PREFIX}WSJTX__"),
-        ("[dxcluster]", DxClusterSettings, f"{ENV_PREFIX}DXCLUSTER__"),
+        *(  # the station's features' tables ([dxcluster]: bridge/feature.py), after the core's
+            (f"[{table}]", model, f"{ENV_PREFIX}{table.upper()}__")
+            for f in FEATURES
+            if f.settings_table is not None
+            for table, model in [f.settings_table]
+        ),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]
