@@ -54,7 +54,7 @@ def settings(**tables: object) -> Settings:
 def test_the_registry_is_the_features_tuple_in_its_order() -> None:
     assert registered() == FEATURES
     assert [f.name for f in FEATURES] == [
-        "tracking", "follow", "wind", "health", "control", "dxcluster",
+        "tracking", "follow", "wind", "health", "control", "dxcluster", "autopark",
     ]  # fmt: skip
     assert len({f.name for f in FEATURES}) == len(FEATURES)
 
@@ -136,6 +136,15 @@ def test_the_dx_clusters_service_is_made_only_with_dxcluster_enabled() -> None:
     module, _, name = dx.service.partition(":")
     assert callable(getattr(importlib.import_module(module), name))
     assert [e.after for e in dx.entities] == ["distance"]
+
+
+def test_auto_park_is_on_for_a_rotator_that_parks_after_a_quiet_spell() -> None:
+    (park,) = [f for f in FEATURES if f.name == "autopark"]
+    never = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0)
+    idle = RotatorSettings(
+        id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0, park_after_idle_s=60
+    )
+    assert (park.on_for(never), park.on_for(idle)) == (False, True)
 
 
 def test_wind_is_on_for_a_rotator_with_a_wind_topic_only() -> None:

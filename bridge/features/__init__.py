@@ -9,7 +9,7 @@ rule 1). A new feature is a package beside these and one line below.
 from __future__ import annotations
 
 from bridge.feature import Feature
-from bridge.features import control, dxcluster, follow, health, tracking, wind
+from bridge.features import autopark, control, dxcluster, follow, health, tracking, wind
 
 FEATURES: tuple[Feature, ...] = (
     tracking.FEATURE,
@@ -18,4 +18,5 @@ FEATURES: tuple[Feature, ...] = (
     health.FEATURE,
     control.FEATURE,
     dxcluster.FEATURE,
+    autopark.FEATURE,
 )
