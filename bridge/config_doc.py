@@ -35,7 +35,6 @@ from bridge.settings import (
     WebSettings,
     WsjtxSettings,
 )
-from bridge.settings_bands import BandFields
 from bridge.settings_defaults import model_defaults
 from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
@@ -90,8 +89,7 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         {n for n in RotatorSettings.model_fields if not n.startswith("rotctld_")}
         - set(PointingFields.model_fields)
         - set(LoggerFields.model_fields)
-        - FEATURE_KEYS
-        - set(BandFields.model_fields),
+        - FEATURE_KEYS,
     ),
     (
         "rotctld",
@@ -119,12 +117,6 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         "PstRotator's and N1MM Logger+'s UDP interfaces. Neither has authentication: keep "
         "them on 127.0.0.1 unless every host that can reach the address may turn the antenna.",
         set(LoggerFields.model_fields),
-    ),
-    (
-        "Bands (per rotator)",
-        "The bands the rotator's antenna is for: an N1MM rotor message and following WSJT-X "
-        "turn the antenna on the radio's band (docs/loggers.md, One antenna per band).",
-        set(BandFields.model_fields),
     ),
 ]
 

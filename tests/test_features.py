@@ -54,7 +54,7 @@ def settings(**tables: object) -> Settings:
 def test_the_registry_is_the_features_tuple_in_its_order() -> None:
     assert registered() == FEATURES
     assert [f.name for f in FEATURES] == [
-        "tracking", "follow", "wind", "health", "control", "dxcluster", "autopark",
+        "tracking", "follow", "wind", "health", "control", "dxcluster", "autopark", "bands",
     ]  # fmt: skip
     assert len({f.name for f in FEATURES}) == len(FEATURES)
 
@@ -145,6 +145,16 @@ def test_auto_park_is_on_for_a_rotator_that_parks_after_a_quiet_spell() -> None:
         id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0, park_after_idle_s=60
     )
     assert (park.on_for(never), park.on_for(idle)) == (False, True)
+
+
+def test_the_band_map_is_on_for_a_rotator_with_bands_and_documents_its_key() -> None:
+    (bands,) = [f for f in FEATURES if f.name == "bands"]
+    plain = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    banded = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", bands=["20m"])
+    assert (bands.on_for(plain), bands.on_for(banded)) == (False, True)
+    page = (ROOT / "docs" / "configuration.md").read_text()
+    section = page.split("### Bands (per rotator)")[1].split("\n### ")[0]
+    assert "**`bands`**" in section  # its key in its section, from its declaration
 
 
 def test_wind_is_on_for_a_rotator_with_a_wind_topic_only() -> None:

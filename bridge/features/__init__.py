@@ -9,7 +9,7 @@ rule 1). A new feature is a package beside these and one line below.
 from __future__ import annotations
 
 from bridge.feature import Feature
-from bridge.features import autopark, control, dxcluster, follow, health, tracking, wind
+from bridge.features import autopark, bands, control, dxcluster, follow, health, tracking, wind
 
 FEATURES: tuple[Feature, ...] = (
     tracking.FEATURE,
@@ -19,4 +19,5 @@ FEATURES: tuple[Feature, ...] = (
     control.FEATURE,
     dxcluster.FEATURE,
     autopark.FEATURE,
+    bands.FEATURE,
 )
