@@ -41,6 +41,7 @@ from bridge.engine.rotator import Rotator
 from bridge.engine.skywork import SkyWorker
 from bridge.engine.state_store import StateStore
 from bridge.engine.worker import WorkerConfig
+from bridge.feature import AppView, Feature, FeatureService, make_service
 from bridge.features import FEATURES
 from bridge.gs232 import EMULATIONS
 from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
@@ -65,7 +66,6 @@ from bridge.web.view import RotatorFacts
 from bridge.wsjtx import WsjtxListener
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
-    from bridge.dxcluster import DxCluster  # (and the cluster's code, with [dxcluster] only)
     from bridge.web.server import WebConsole
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
@@ -334,21 +334,13 @@ class App:
         wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
-        self.dxcluster: DxCluster | None = None  # spots on B/spots, R/target {"call": ...}
-        if settings.dxcluster.enabled:
-            from bridge.dxcluster import CtyError
-            from bridge.dxcluster.setup import dxcluster
-
-            to_mqtt = partial(self.client.publish_retained, self.topics.spots)
-            web = self.web  # its map shows the spots too (web/live.py rule 6)
-            from bridge.web.live import with_console  # (with the console's server, above)
-
-            publish = to_mqtt if web is None else with_console(to_mqtt, web.on_spots)
-            try:
-                self.dxcluster = dxcluster(settings.dxcluster, position, publish, wall=wall)
-            except CtyError as exc:
-                raise ConfigError(str(exc)) from None
-            self.mqtt.aim_calls_with(self.dxcluster.aim)
+        self.services: dict[str, FeatureService] = {}  # the station's features (the DX cluster)
+        for feature in FEATURES:  # each imported only when its settings turn it on
+            if feature.serves(settings):
+                view = AppView(settings, position, self._publishers(feature), self.mqtt, wall)
+                service = make_service(feature, view)
+                if service is not None:
+                    self.services[feature.name] = service
         pairs = list(zip(settings.rotators, self.rotators, strict=True))
         for feature in FEATURES:  # the inputs of the user's topics (bridge/feature.py)
             given = feature.inputs(pairs) if feature.inputs is not None else None
@@ -369,6 +361,21 @@ class App:
         )
         self.client.before_message = self.lane.first  # mqtt/lane.py rule 4: a stop before a backlog
         self.client.watch_owned(self.topics.owned())
+
+    def _publishers(self, feature: Feature) -> tuple[Callable[[str], None], ...]:
+        """A feature's retained topics under the base topic (``B/spots``); the console's
+        ``on_<suffix>`` gets each document first, contained (web/live.py rule 6)."""
+        out = []
+        for suffix in feature.base_topics:
+            to_mqtt = partial(self.client.publish_retained, self.topics.under_base(suffix))
+            console = getattr(self.web, f"on_{suffix}", None)
+            if console is not None:
+                from bridge.web.live import with_console  # (with the console's server, above)
+
+                out.append(with_console(to_mqtt, console))
+            else:
+                out.append(to_mqtt)
+        return tuple(out)
 
     def _express(self, settings: Settings) -> Express:
         """The stop express (mqtt/express.py) for the rotators whose model takes a stop frame
@@ -424,6 +431,7 @@ class App:
         client = self.client
         discovery_topics = DiscoveryTopics(ha.discovery_prefix)
         infos = []
+        on = self.services  # a feature of the station is on for every rotator
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
             infos.append(
                 RotatorInfo.of(
@@ -436,8 +444,7 @@ class App:
                     nudge_step_deg=r.nudge_step_deg,
                     satellites=tuple(self.catalog.names()),
                     can_follow=rot.can_follow,
-                    features=frozenset(f.name for f in FEATURES if f.on_for(r)),
-                    dxcluster=self.dxcluster is not None,
+                    features=frozenset(f.name for f in FEATURES if f.on_for(r) or f.name in on),
                 )
             )
         publisher = DiscoveryPublisher(
@@ -456,8 +463,8 @@ class App:
             publish_again=partial(client.publish_retained, qos=1, only_if_changed=False),
         )
         self.mqtt.add_feature(publisher.subscriptions, publisher.on_message, publisher.on_status)
-        if self.dxcluster is not None:
-            self.dxcluster.on_calls = publisher.set_spot_calls
+        for service in self.services.values():  # (the DX cluster's spot select)
+            service.with_discovery(publisher)
         return publisher
 
     def _denied(self, topic: str, problem: str) -> None:
@@ -569,8 +576,8 @@ class App:
                 self.loggers.start()
             if self.settings.wsjtx.enabled:
                 self.wsjtx.start()
-            if self.dxcluster is not None:
-                self.dxcluster.start()
+            for service in self.services.values():
+                service.start()
         except OSError:  # e.g. the port is taken: fail the start, leave nothing running
             self.stop()
             raise
@@ -589,8 +596,8 @@ class App:
             server.stop()
         self.loggers.stop()
         self.wsjtx.stop()
-        if self.dxcluster is not None:
-            self.dxcluster.stop()
+        for service in self.services.values():
+            service.stop()
         if self.web is not None:
             self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
         for rot in self.rotators:

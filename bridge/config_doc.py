@@ -25,7 +25,6 @@ from bridge.features import FEATURES
 from bridge.protocols import REGISTRY
 from bridge.settings import (
     ENV_PREFIX,
-    DxClusterSettings,
     HomeAssistantSettings,
     MqttSettings,
     RotatorSettings,
@@ -36,7 +35,6 @@ from bridge.settings import (
     WebSettings,
     WsjtxSettings,
 )
-from bridge.settings_bands import BandFields
 from bridge.settings_defaults import model_defaults
 from bridge.settings_groups import GroupSettings
 from bridge.settings_loggers import LoggerFields
@@ -91,8 +89,7 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         {n for n in RotatorSettings.model_fields if not n.startswith("rotctld_")}
         - set(PointingFields.model_fields)
         - set(LoggerFields.model_fields)
-        - FEATURE_KEYS
-        - set(BandFields.model_fields),
+        - FEATURE_KEYS,
     ),
     (
         "rotctld",
@@ -121,12 +118,6 @@ ROTATOR_GROUPS: list[tuple[str, str, set[str]]] = [
         "them on 127.0.0.1 unless every host that can reach the address may turn the antenna.",
         set(LoggerFields.model_fields),
     ),
-    (
-        "Bands (per rotator)",
-        "The bands the rotator's antenna is for: an N1MM rotor message and following WSJT-X "
-        "turn the antenna on the radio's band (docs/loggers.md, One antenna per band).",
-        set(BandFields.model_fields),
-    ),
 ]
 
 
@@ -143,7 +134,12 @@ def render() -> str:
         ("[tracking]", TrackingSettings, f"{ENV_PREFIX}TRACKING__"),
         ("[web]", WebSettings, f"{ENV_PREFIX}WEB__"),
         ("[wsjtx]", WsjtxSettings, f"{ENV_PREFIX}WSJTX__"),
-        ("[dxcluster]", DxClusterSettings, f"{ENV_PREFIX}DXCLUSTER__"),
+        *(  # the station's features' tables ([dxcluster]: bridge/feature.py), after the core's
+            (f"[{table}]", model, f"{ENV_PREFIX}{table.upper()}__")
+            for f in FEATURES
+            if f.settings_table is not None
+            for table, model in [f.settings_table]
+        ),
     ]
     for heading, model, env in tables:
         names = [n for n in model.model_fields if _model(model.model_fields[n]) is None]

@@ -8,7 +8,8 @@ A feature declares its commands (a topic under ``R/`` and the parser of its payl
 the status and how it is written), its Home Assistant entities (rows as data), its settings
 (the model of its keys), its session part (the class, pointed at: the session owns the order
 of its parts), its inputs from topics of the user's (the wind speed), its console parts and
-its docs section.
+its docs section; a feature of the station (the DX cluster) its table of the file, its topics
+under the base topic and the service the app starts when that table turns it on.
 
 Rules:
 1. Stop, lock and the last word are no feature: they stay first and hard-wired (mqtt/topics.py,
@@ -23,7 +24,10 @@ Rules:
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on mqtt/payloads.py while mqtt's
    topic table iterates it), so an import of it from below would be a circle. Nothing heavy is
-   imported by a declaration: a feature's session part is the session's to import.
+   imported by a declaration: a feature's session part is the session's to import, its
+   service the app's, and only when its settings turn it on (``service_on``).
+5. A feature's entity sits after the entity table's own rows, or right after the row it names
+   (``EntityRow.after``: where the table had it before the feature was a package).
 """
 
 from __future__ import annotations
@@ -93,6 +97,9 @@ class TopicView(Protocol):
     @property
     def status(self) -> str: ...
 
+    @property
+    def target(self) -> str: ...
+
     def feature(self, suffix: str) -> str: ...
 
 
@@ -115,6 +122,7 @@ class EntityRow:
     config: Callable[[RotatorView], dict[str, object]]
     needs: str | None = None
     bridge_only: bool = False
+    after: str | None = None  # rule 5: the object id of the table's row it follows
 
 
 @dataclass(frozen=True)
@@ -126,6 +134,34 @@ class Input:
 
     subscriptions: list[str]
     on_message: Callable[[str, bytes, bool], bool]
+
+
+@dataclass(frozen=True)
+class AppView:
+    """What a feature's service is given by the app (app.py) when it starts it. ``settings``
+    is the whole file (bridge/settings.py ``Settings``, above this module); ``publishers`` are
+    the publishes of the feature's ``base_topics``, in their order (``B/<suffix>``, retained;
+    the web console's ``on_<suffix>`` is handed each document first, when the console is on);
+    ``mqtt`` is the MQTT service (mqtt/service.py)."""
+
+    settings: Any
+    station: tuple[float, float] | None
+    publishers: tuple[Callable[[str], None], ...]
+    mqtt: Any
+    wall: Callable[[], float]
+
+
+class FeatureService(Protocol):
+    """A feature's own threads (the DX cluster's client), made by its ``service`` from an
+    AppView (ConfigError from bridge/settings.py if it cannot be), started after the rotators
+    and stopped with the listeners; ``with_discovery`` hands it Home Assistant's publisher
+    (homeassistant/publisher.py) when discovery is on."""
+
+    def start(self) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def with_discovery(self, publisher: Any) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -149,6 +185,19 @@ class Feature:
     replayed: Callable[[BaseModel], str | None] | None = None
     part: str | None = None  # its session part, "module:Class" (the session imports it)
     console: tuple[str, ...] = ()  # what the web console shows of it (web/static/)
+    # a feature of the station: its table in the file (the Settings field, its model: in
+    # configuration.md after the core's tables), its retained topics under the base topic
+    # (``B/<suffix>``: its service publishes them), and its service, "module:function" of an
+    # AppView, imported and started by the app only while ``service_on(settings)`` (rule 4)
+    settings_table: tuple[str, type[BaseModel]] | None = None
+    base_topics: tuple[str, ...] = ()
+    service: str | None = None
+    service_on: Callable[[Any], bool] | None = None
+
+    def serves(self, settings: Any) -> bool:
+        """Whether the file's settings turn this feature's service on (rule 4)."""
+        on = self.service_on
+        return self.service is not None and on is not None and on(settings)
 
     def on_for(self, rotator_settings: BaseModel) -> bool:
         """Whether a rotator's table turns this feature on (always, without ``configured``)."""
@@ -157,6 +206,15 @@ class Feature:
 
 _loaded: tuple[Feature, ...] | None = None
 _blocks: tuple[tuple[Feature, ...], tuple[StatusBlock[Any], ...]] | None = None
+
+
+def make_service(feature: Feature, view: AppView) -> FeatureService | None:
+    """The feature's service, its module imported now (rule 4), if its settings turn it on."""
+    if feature.service is None or not feature.serves(view.settings):
+        return None
+    module, _, name = feature.service.partition(":")
+    make: Callable[[AppView], FeatureService] = getattr(importlib.import_module(module), name)
+    return make(view)
 
 
 def registered() -> tuple[Feature, ...]:

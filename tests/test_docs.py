@@ -124,6 +124,8 @@ def built_topics() -> set[str]:
                     for f in topics.features
                     for x in (*f.commands, *f.states)
                 ]
+            elif name == "under_base":  # a registered feature's under the base topic
+                value = [obj.under_base(x) for f in topics.features for x in f.base_topics]
             elif inspect.isfunction(attr):
                 params = list(inspect.signature(attr).parameters)[1:]
                 try:

@@ -15,12 +15,14 @@ from pydantic import BaseModel
 
 import bridge.feature
 from bridge.feature import (
+    AppView,
     CommandTopic,
     EntityRow,
     Feature,
     RotatorView,
     StateTopic,
     StatusBlock,
+    make_service,
     registered,
 )
 from bridge.features import FEATURES
@@ -29,7 +31,7 @@ from bridge.model import MotionState, Nudge, Origin, RotatorStatus, Source
 from bridge.mqtt import payloads as pl
 from bridge.mqtt.service import MqttService
 from bridge.mqtt.topics import RotatorTopics, Topics
-from bridge.settings import RotatorSettings
+from bridge.settings import RotatorSettings, Settings
 from bridge.settings_groups import RESERVED
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
@@ -44,9 +46,16 @@ def core_topics(t: RotatorTopics) -> set[str]:
     return found | {t.option("x"), t.option_state("x")}
 
 
+def settings(**tables: object) -> Settings:
+    rotator = {"id": "tower", "model": "rotorez", "port": "/dev/ttyUSB0"}
+    return Settings(rotators=[rotator], **tables)  # type: ignore[arg-type]
+
+
 def test_the_registry_is_the_features_tuple_in_its_order() -> None:
     assert registered() == FEATURES
-    assert [f.name for f in FEATURES][:5] == ["tracking", "follow", "wind", "health", "control"]
+    assert [f.name for f in FEATURES] == [
+        "tracking", "follow", "wind", "health", "control", "dxcluster", "autopark", "bands",
+    ]  # fmt: skip
     assert len({f.name for f in FEATURES}) == len(FEATURES)
 
 
@@ -67,6 +76,9 @@ def test_a_features_topics_are_subscribed_routed_and_owned_never_on_the_stop_lan
         assert t.feature(state.suffix) not in core_topics(t)
     for x in (*feature.commands, *feature.states):
         assert x.suffix.split("/")[0] in RESERVED  # rule 3: no group may take it
+    for suffix in feature.base_topics:  # B/<suffix>: no group's nor rotator's id either
+        assert topics.under_base(suffix) == f"B/{suffix}"
+        assert suffix.split("/")[0] in RESERVED
 
 
 def test_no_two_features_share_a_topic_or_a_command_kind() -> None:
@@ -114,6 +126,37 @@ def test_a_features_docs_part_and_settings_are_real(feature: Feature) -> None:
     assert feature.name in (ROOT / "docs" / "architecture.md").read_text()
 
 
+def test_the_dx_clusters_service_is_made_only_with_dxcluster_enabled() -> None:
+    """Rule 4: off, its module is not even imported (tests/test_cli.py checks a whole start);
+    its select sits where the entity table had it (rule 5)."""
+    (dx,) = [f for f in FEATURES if f.name == "dxcluster"]
+    off = AppView(settings(), None, (lambda doc: None,), None, lambda: 0.0)
+    assert make_service(dx, off) is None
+    assert dx.service is not None and dx.service_on is not None
+    module, _, name = dx.service.partition(":")
+    assert callable(getattr(importlib.import_module(module), name))
+    assert [e.after for e in dx.entities] == ["distance"]
+
+
+def test_auto_park_is_on_for_a_rotator_that_parks_after_a_quiet_spell() -> None:
+    (park,) = [f for f in FEATURES if f.name == "autopark"]
+    never = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0)
+    idle = RotatorSettings(
+        id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0, park_after_idle_s=60
+    )
+    assert (park.on_for(never), park.on_for(idle)) == (False, True)
+
+
+def test_the_band_map_is_on_for_a_rotator_with_bands_and_documents_its_key() -> None:
+    (bands,) = [f for f in FEATURES if f.name == "bands"]
+    plain = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
+    banded = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", bands=["20m"])
+    assert (bands.on_for(plain), bands.on_for(banded)) == (False, True)
+    page = (ROOT / "docs" / "configuration.md").read_text()
+    section = page.split("### Bands (per rotator)")[1].split("\n### ")[0]
+    assert "**`bands`**" in section  # its key in its section, from its declaration
+
+
 def test_wind_is_on_for_a_rotator_with_a_wind_topic_only() -> None:
     (wind,) = [f for f in FEATURES if f.name == "wind"]
     plain = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0", park_az_deg=0)
@@ -149,9 +192,29 @@ TOY = Feature(
     commands=(CommandTopic("toy/go", "toy", _toy_nudge),),
     states=(StateTopic("toy/state", _toy_state, lambda v: f"toy {v}"),),
     status=(StatusBlock("toy", _toy_state, lambda v: {"says": v}),),
-    entities=(EntityRow("button", "toy", "Toy", _toy_entity, needs="toy"),),
+    entities=(
+        EntityRow("button", "toy", "Toy", _toy_entity, needs="toy"),
+        EntityRow("button", "toy_near", "Toy by the stop", _toy_entity, needs="toy", after="stop"),
+    ),
     configured=lambda r: isinstance(r, ToyFields) and r.toy,
+    base_topics=("toys",),
+    service="tests.test_features:ToyService",
+    service_on=lambda settings: settings.web.enabled,  # any table's switch
 )
+
+
+class ToyService:
+    """A feature's service: made from the app's view, publishing its base topic."""
+
+    def __init__(self, view: AppView) -> None:
+        (self.publish,) = view.publishers
+        self.publish("made")
+
+    def start(self) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def with_discovery(self, publisher: object) -> None: ...
 
 
 @pytest.fixture
@@ -187,10 +250,32 @@ def test_a_toy_feature_gets_its_topics_command_state_status_and_entity(toy: Feat
     msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
     button = json.loads(msgs["homeassistant/button/rotorbridge_rotor_r_tower/toy/config"])
     assert button["command_topic"] == "rotor/toy/go"
+    order = [t.split("/")[3] for t in msgs if t.split("/")[2].endswith("_r_tower")]
+    assert order[order.index("stop") + 1] == "toy_near" and order[-1] == "toy"  # rule 5
     without = all_configs("homeassistant", Identity("rotor"), topics, [
         RotatorInfo.of("tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
                        has_station=False, nudge_step_deg=cfg.nudge_step_deg)])  # fmt: skip
     assert not any("/toy/" in topic for topic in without)
+
+
+def test_a_toy_features_service_is_made_from_the_view_only_when_its_settings_say(
+    toy: Feature,
+) -> None:
+    sent: list[str] = []
+    view = AppView(settings(), None, (sent.append,), None, lambda: 0.0)
+    assert make_service(toy, view) is None and sent == []  # off: nothing made
+    on = AppView(settings(web={"enabled": True}), None, (sent.append,), None, lambda: 0.0)
+    assert isinstance(make_service(toy, on), ToyService) and sent == ["made"]
+    assert Topics("rotor", {}).under_base("toys") == "rotor/toys"
+
+
+@pytest.mark.parametrize("suffix", ["bridge", "bridge/x", "spots", ""])
+def test_a_feature_cannot_take_the_bridges_own_or_another_features_base_topic(
+    suffix: str,
+) -> None:
+    thief = Feature("thief", "docs/architecture.md", "takes a topic", base_topics=(suffix,))
+    with pytest.raises(ValueError, match="is taken"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
 
 
 def test_without_the_toy_its_topic_is_no_ones() -> None:

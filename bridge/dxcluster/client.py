@@ -46,6 +46,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from bridge.dxcluster.book import Book
 from bridge.dxcluster.spots import Lines, parse_spot
@@ -82,6 +83,12 @@ class Counts:
     faults: int = 0  # a bug behind a line, a publish that raised: logged, the session goes on
     quiet_reads: int = 0  # reads that timed out (TICK_S without a byte): a quiet node
     paused: int = 0  # rule 5: times the node sent faster than its budget
+
+
+class SpotSelect(Protocol):
+    """Home Assistant's publisher as the spot select's options need it (homeassistant/)."""
+
+    def set_spot_calls(self, calls: tuple[str, ...]) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -143,6 +150,10 @@ class DxCluster:
         for thread in self._threads:
             thread.join(timeout=5.0)
         self._threads.clear()
+
+    def with_discovery(self, publisher: SpotSelect) -> None:
+        """Home Assistant's spot select follows the newest calls (rule 3's ``on_calls``)."""
+        self.on_calls = publisher.set_spot_calls
 
     # -- the telnet session (its own thread) ---------------------------------------------------
     def _run(self) -> None:

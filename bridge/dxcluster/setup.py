@@ -1,6 +1,7 @@
-"""The DX cluster client made from ``[dxcluster]`` (app.py's part, kept here so the
-composition root stays short): the cty file read once, at start-up (settings_dxcluster.py
-rule 2: CtyError names the file), the spots' book, the client."""
+"""The DX cluster's service, made from ``[dxcluster]`` (features/dxcluster: its declaration
+points here; the app imports this module only when ``[dxcluster] enabled``): the cty file read
+once, at start-up (settings_dxcluster.py rule 2: a ConfigError names the file), the spots'
+book, the client publishing ``B/spots`` and taking the MQTT service's targets by call."""
 
 from __future__ import annotations
 
@@ -9,8 +10,23 @@ from collections.abc import Callable
 
 from bridge.dxcluster.book import Book
 from bridge.dxcluster.client import DxCluster
-from bridge.dxcluster.cty import load
+from bridge.dxcluster.cty import CtyError, load
+from bridge.feature import AppView
+from bridge.settings import ConfigError
 from bridge.settings_dxcluster import DxClusterSettings
+
+
+def service(view: AppView) -> DxCluster:
+    """The client of ``view``'s ``[dxcluster]``, its spots on ``B/spots`` (and the console's
+    map), the calls of ``R/target`` turned by it; ConfigError if the cty file cannot be read
+    or holds nothing."""
+    (spots,) = view.publishers  # B/spots, its one topic (features/dxcluster)
+    try:
+        cluster = dxcluster(view.settings.dxcluster, view.station, spots, wall=view.wall)
+    except CtyError as exc:
+        raise ConfigError(str(exc)) from None
+    view.mqtt.aim_calls_with(cluster.aim)
+    return cluster
 
 
 def dxcluster(

@@ -9,7 +9,7 @@ rule 1). A new feature is a package beside these and one line below.
 from __future__ import annotations
 
 from bridge.feature import Feature
-from bridge.features import control, follow, health, tracking, wind
+from bridge.features import autopark, bands, control, dxcluster, follow, health, tracking, wind
 
 FEATURES: tuple[Feature, ...] = (
     tracking.FEATURE,
@@ -17,4 +17,7 @@ FEATURES: tuple[Feature, ...] = (
     wind.FEATURE,
     health.FEATURE,
     control.FEATURE,
+    dxcluster.FEATURE,
+    autopark.FEATURE,
+    bands.FEATURE,
 )

@@ -4,10 +4,10 @@ publisher.py keeps them current on the broker.
 
 Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
 QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
-entities are rows of a data table (ENTITIES, then each registered feature's rows:
-bridge/feature.py), each naming what it needs: a ModelSpec capability or a configured feature
-(presets, park, the station, a registered feature's name); every topic, discovery topics
-included, comes from bridge.mqtt.topics.
+entities are rows of a data table (ENTITIES, and each registered feature's rows in their
+places: bridge/feature.py rule 5), each naming what it needs: a ModelSpec capability or a
+configured feature (presets, park, the station, a registered feature's name); every topic,
+discovery topics included, comes from bridge.mqtt.topics.
 
 Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
 1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
@@ -117,14 +117,27 @@ class Entity:
         return [self] if self.needs is None or info.has(self.needs) else []
 
 
-def feature_entities() -> tuple[Entity, ...]:
-    """The registered features' rows (bridge/feature.py), in the registry's order, after the
-    table's own."""
+def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
+    """The registered features' rows (bridge/feature.py), in the registry's order, each with
+    the object id of the table's row it follows (None: after the table's own)."""
     return tuple(
-        Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only)
+        (e.after, Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only))
         for f in registered()
         for e in f.entities
     )
+
+
+def rows() -> list[Entity | EachOption]:
+    """ENTITIES with the features' rows in their places (bridge/feature.py rule 5); a row
+    that names no row of the table follows them all."""
+    features = feature_entities()
+    own = {row.object_id for row in ENTITIES if isinstance(row, Entity)}
+    out: list[Entity | EachOption] = []
+    for row in ENTITIES:
+        out.append(row)
+        if isinstance(row, Entity):
+            out += [e for after, e in features if after == row.object_id]
+    return out + [e for after, e in features if after not in own]
 
 
 class OptionConfig(Protocol):
@@ -198,8 +211,6 @@ LOCATOR_PATTERN = "^[A-Ra-r]{2}([0-9]{2}([A-Xa-x]{2}([0-9]{2})?)?)?$"
 # sent as {"locator": ...}: a bare two-letter field on the target topic is refused (it is more
 # often a preset's name sent to the wrong topic); the pattern keeps the JSON well formed
 LOCATOR_TEMPLATE = '{"locator": "{{ value }}"}'
-# the spot select sends the call it shows to the target topic (dxcluster/client.py turns to it)
-CALL_TEMPLATE = '{"call": "{{ value }}"}'
 # the preset select is a menu of places to go: every status shows it with none chosen, because
 # Home Assistant's dashboard sends nothing when the option it shows is picked again
 NO_OPTION = "{{ 'None' }}"
@@ -256,10 +267,7 @@ ENTITIES: tuple[Entity | EachOption, ...] = (
         "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
         "device_class": "distance", "state_class": "measurement",
         "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
-    Entity("select", "spot", "Turn to spot", needs="spot_options", config=lambda r: {
-        "command_topic": r.topics.target, "command_template": CALL_TEMPLATE,
-        "options": list(r.spot_options), "state_topic": r.topics.status,
-        "value_template": NO_OPTION, "icon": "mdi:account-voice"}),
+    # (the DX cluster's spot select: features/dxcluster, after the distance)
     Entity("sensor", "state", "State", config=lambda r: {
         "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
         "icon": "mdi:rotate-3d-variant"}),
@@ -303,7 +311,7 @@ def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
     bridge_only = [{"topic": topics.bridge_state}]
     slug = r.rotator_id.replace("-", "_")
     out: Configs = {}
-    for row in (*ENTITIES, *feature_entities()):
+    for row in rows():
         for e in row.expand(r):
             avail = bridge_only if e.bridge_only else both
             where, payload = _entity(

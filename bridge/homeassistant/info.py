@@ -15,6 +15,8 @@ from bridge.protocols.base import ModelSpec
 _UNSAFE = re.compile(r"[^a-zA-Z0-9_-]")
 MAX_SATELLITES = 100  # in the track select: a whole Celestrak "active" file has thousands
 MAX_SPOTS = 20  # in the spot select: the calls of the newest DX cluster spots
+# the DX cluster's feature (features/dxcluster), on for a station: its spot select's options
+DXCLUSTER = "dxcluster"
 NO_SPOTS = "no spots yet"  # the spot select's one option before the first spot (HA needs one)
 
 
@@ -64,7 +66,6 @@ class RotatorInfo:
         satellites: tuple[str, ...] = (),
         can_follow: bool = False,
         features: frozenset[str] = frozenset(),
-        dxcluster: bool = False,
     ) -> RotatorInfo:
         """From the rotator's pointing (limits, offset, presets, park) and the settings."""
         az_min, az_max = pointing.target_range()
@@ -86,7 +87,7 @@ class RotatorInfo:
             ),
             can_follow=can_follow,
             features=features,
-            spot_options=spot_options(()) if dxcluster and has_station else (),
+            spot_options=spot_options(()) if DXCLUSTER in features and has_station else (),
         )
 
     def with_satellites(self, satellites: tuple[str, ...]) -> RotatorInfo:

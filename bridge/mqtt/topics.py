@@ -1,7 +1,7 @@
 """Every MQTT topic string of the bridge lives here and nowhere else (docs/architecture.md,
 rule 4), but a registered feature's: its package declares its topics as suffixes under ``R/``
-(bridge/feature.py), and the table here iterates the registry for them (``Topics.features``);
-stop and lock stay hard-wired, first.
+or ``B/`` (bridge/feature.py), and the table here iterates the registry for them
+(``Topics.features``); stop and lock stay hard-wired, first.
 
 R = a rotator's topic (the base topic itself when exactly one rotator is configured,
 ``<base>/<id>`` otherwise), B = the base topic.
@@ -230,10 +230,10 @@ class Topics:
         """The stop express's own sync words, published and read by it (express.py rule 8)."""
         return f"{self.base}/bridge/fence/express"
 
-    @property
-    def spots(self) -> str:
-        """The DX cluster's newest spots, retained (dxcluster/client.py)."""
-        return f"{self.base}/spots"
+    def under_base(self, suffix: str) -> str:
+        """A registered feature's topic under the base topic (bridge/feature.py
+        ``base_topics``: the DX cluster's ``B/spots``): ``B/<suffix>``."""
+        return f"{self.base}/{suffix}"
 
     def rotator_of(self, topic: str) -> str | None:
         """The rotator whose topic ``topic`` is under, if any (the longest root wins)."""
@@ -318,7 +318,8 @@ class Topics:
 
 def _check_suffixes(features: Sequence[Feature]) -> None:
     """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all)
-    and no other feature's; ValueError naming it, before anything is subscribed."""
+    and no other feature's, under its rotator's or the base topic; ValueError naming it,
+    before anything is subscribed."""
     core = RotatorTopics("")
     taken = {
         getattr(core, name).lstrip("/")
@@ -331,6 +332,12 @@ def _check_suffixes(features: Sequence[Feature]) -> None:
             if suffix in taken or suffix.startswith("option/") or not suffix:
                 raise ValueError(f"feature {feature.name}: topic R/{suffix} is taken")
             taken.add(suffix)
+    under_base = {"bridge"}  # the bridge's own B/bridge/... (a rotator's or group's id: RESERVED)
+    for feature in features:
+        for suffix in feature.base_topics:
+            if suffix.split("/")[0] in under_base or not suffix:
+                raise ValueError(f"feature {feature.name}: topic B/{suffix} is taken")
+            under_base.add(suffix)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from bridge.app import App
+from bridge.dxcluster import DxCluster
 from bridge.settings import ConfigError, Settings, load_settings
 from tests.dxcluster.cty_sample import CTY_DAT
 
@@ -70,4 +71,5 @@ def test_a_missing_or_empty_cty_file_stops_the_start_naming_it(tmp_path: Path) -
     (tmp_path / "cty.dat").write_text(CTY_DAT)
     good = load(tmp_path, table + f'cty_file = "{tmp_path / "cty.dat"}"\n')
     app = App(good)  # built, never started: no socket, no broker, no serial port
-    assert app.dxcluster is not None and app.dxcluster.book.entity_place("JA1ABC") is not None
+    dx = app.services["dxcluster"]  # the feature's service (features/dxcluster)
+    assert isinstance(dx, DxCluster) and dx.book.entity_place("JA1ABC") is not None

@@ -1,4 +1,4 @@
-"""Home Assistant's spot select (homeassistant/entities.py, info.py): there with [dxcluster]
+"""Home Assistant's spot select (features/dxcluster, homeassistant/info.py): there with [dxcluster]
 and a station only, the newest spots' calls as options (bounded, never none), sending the call
 form of R/target, and following the spots when the client hands new calls."""
 
@@ -21,7 +21,8 @@ def info(dxcluster: bool, station: bool = True) -> RotatorInfo:
     topics = Topics("rotor", {"tower": "rotor"})
     return RotatorInfo.of(
         "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
-        has_station=station, nudge_step_deg=cfg.nudge_step_deg, dxcluster=dxcluster,
+        has_station=station, nudge_step_deg=cfg.nudge_step_deg,
+        features=frozenset({"dxcluster"} if dxcluster else ()),
     )  # fmt: skip
 
 

@@ -19,6 +19,7 @@ from typing import Any
 import pytest
 
 from bridge.app import App
+from bridge.dxcluster import DxCluster
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import retained_snapshot, wait_until
@@ -115,8 +116,8 @@ def test_spots_reach_b_spots_the_client_reconnects_and_a_call_turns_the_rotor(
     cluster_rig: Running,
 ) -> None:
     rig, app, cluster, prompt_may_go = cluster_rig
-    dx = app.dxcluster
-    assert dx is not None
+    dx = app.services["dxcluster"]  # the feature's service (features/dxcluster)
+    assert isinstance(dx, DxCluster)
     # the node has said hello and sent no prompt for a whole read timeout: the client goes on
     # waiting (this wait is the slow prompt under test), sends nothing and fails nothing
     wait_until(lambda: dx.counts.quiet_reads >= 1, 10, "a quiet read before the prompt")
