@@ -85,6 +85,8 @@ Rules:
    hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
    waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A socket the
    express does not read (its buffer full) is a hung express: killed, which ends the holds.
+   No send to it ever waits for room (a request, a port handed over or given back): the lock
+   they are sent under is the one every MQTT stop's hold takes before the stop is put in.
 9. A frame is never left half-written. A write that took part of the frame is finished by the
    express as soon as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
    it holds up nothing but its own next frame), so no frame of the session's lands inside
@@ -101,6 +103,7 @@ Rules:
 
 from __future__ import annotations
 
+import array
 import hashlib
 import json
 import logging
@@ -156,12 +159,15 @@ def express_client_id(settings: MqttSettings) -> str:
     return f"{main[:11]}-{digest}-fast"
 
 
-def _send(sock: socket.socket, word: dict[str, Any], fds: list[int] | None = None) -> None:
+def _send(
+    sock: socket.socket, word: dict[str, Any], fds: list[int] | None = None, flags: int = 0
+) -> None:
     data = json.dumps(word).encode()
-    if fds:
-        socket.send_fds(sock, [data], fds)
+    if fds:  # (not socket.send_fds: Python 3.11's drops its flags, MSG_DONTWAIT with them)
+        rights = array.array("i", fds).tobytes()
+        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, rights)], flags)
     else:
-        sock.send(data)
+        sock.send(data, flags)
 
 
 # -- the bridge's side ---------------------------------------------------------------------------
@@ -286,9 +292,7 @@ class Express:
         if sock is None:
             return  # gone: its end answered every hold
         try:
-            sock.send(
-                json.dumps({"op": "sync", "n": n, "again": again}).encode(), socket.MSG_DONTWAIT
-            )
+            _send(sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
         except BlockingIOError:
             self._kill("does not read its socket")
         except OSError:
@@ -344,8 +348,9 @@ class Express:
         with self._lock:
             self._number += 1
             self._ports[rotator_id] = (self._number, fd)
-            if self._sock is not None:
-                self._hand(rotator_id, self._number, fd)
+            hung = self._sock is not None and not self._hand(rotator_id, self._number, fd)
+        if hung:
+            self._kill("does not read its socket")
 
     def closing(self, rotator_id: str, fd: int) -> None:
         with self._lock:
@@ -357,9 +362,19 @@ class Express:
                 return
             dropped = self._dropped[number] = threading.Event()
             try:
-                _send(self._sock, {"op": "drop", "rotator": rotator_id, "n": number})
+                word = {"op": "drop", "rotator": rotator_id, "n": number}
+                _send(self._sock, word, flags=socket.MSG_DONTWAIT)  # (rule 8: no wait under
+                sent = True  # the lock every MQTT stop takes)
+            except BlockingIOError:
+                sent = False
             except OSError:
                 return  # gone: its copies are closed with it
+        if not sent:
+            self._kill(f"does not read its socket ({rotator_id}'s port going)")
+            dropped.wait(STOP_WAIT_S)  # its end: _run sets it once the child is gone
+            with self._lock:
+                self._dropped.pop(number, None)
+            return
         # not reading its socket yet is a start (importing Python on a slow machine), no hang
         wait_s = DROP_WAIT_S
         if not self._heard.is_set():
@@ -369,13 +384,19 @@ class Express:
         with self._lock:
             self._dropped.pop(number, None)
 
-    def _hand(self, rotator_id: str, number: int, fd: int) -> None:
-        """Under the lock: a copy of the port to the child (rule 5)."""
+    def _hand(self, rotator_id: str, number: int, fd: int) -> bool:
+        """Under the lock: a copy of the port to the child (rule 5). Never waits (the lock is
+        every MQTT stop's, rule 8): False when its socket is full (a hung express: the caller
+        kills it once the lock is let go)."""
         assert self._sock is not None
+        word = {"op": "port", "rotator": rotator_id, "n": number}
         try:
-            _send(self._sock, {"op": "port", "rotator": rotator_id, "n": number}, [fd])
+            _send(self._sock, word, [fd], socket.MSG_DONTWAIT)
+        except BlockingIOError:
+            return False
         except OSError as exc:
             log.warning("stop express: could not hand over %s's port: %s", rotator_id, exc)
+        return True
 
     # -- the child (rules 1 and 6, on the express's thread) ------------------------------------
     def _run(self, mqtt311: bool) -> None:
@@ -442,24 +463,28 @@ class Express:
                 child.wait()
                 return None
             try:
-                _send(mine, config)
+                _send(mine, config, flags=socket.MSG_DONTWAIT)
             except OSError:
                 pass  # it died at once: read below as an end of file
             self._sock = mine
             self.ended.clear()
-            for rid, (number, fd) in self._ports.items():
-                self._hand(rid, number, fd)
+            hung = not all(self._hand(rid, n, fd) for rid, (n, fd) in self._ports.items())
+        if hung:
+            self._kill("does not read its socket")
         late = f"the stop express did not come up within {START_WAIT_S:g} s"
         passing: set[str] = set()  # problems said until it is up (rule 6)
         up = False
         while True:
-            mine.settimeout(TICK_S)  # (a hold put meanwhile: rule 8's tick)
+            # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
+            # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
+            # blocking socket), the stops' sends among them.
             try:
+                readable, _w, _x = select.select([mine], [], [], TICK_S)
+                if not readable:
+                    self._tick(up, late)
+                    continue
                 data = mine.recv(_PACKET)
-            except TimeoutError:
-                self._tick(up, late)
-                continue
-            except OSError:
+            except (OSError, ValueError):
                 data = b""
             if not data:
                 break

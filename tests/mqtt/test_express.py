@@ -660,3 +660,59 @@ def test_a_fight_over_its_client_id_is_said_and_unsaid_once_a_connection_lasts()
     now[0] += STABLE_S
     link._tick()
     assert said[-1] == {"op": "problem", "text": said[0]["text"], "off": True}
+
+
+UP_THEN_HUNG = (  # says it is up, then reads nothing more: a hung express
+    "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[-1])); s.recv(65536); "
+    """s.send(b'{"op": "up"}'); time.sleep(600)"""
+)
+
+
+def _fill(sock: socket.socket) -> None:
+    """What requests the express does not read leave behind: its socket full."""
+    try:
+        while True:
+            sock.send(b"{}", socket.MSG_DONTWAIT)
+    except (BlockingIOError, TimeoutError):
+        pass
+
+
+@pytest.mark.parametrize("what", ["opened", "closing"])
+def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
+    """A port opened or closed while a hung express's socket is full: the send to it never
+    waits under the express's lock, which every MQTT stop takes (its hold, rule 8) before it
+    is put in; the express is killed, and the stop goes on."""
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", UP_THEN_HUNG],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    port = Port()
+    if what == "closing":
+        e.opened("a", port.w)
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        sock = e._sock
+        assert sock is not None
+        _fill(sock)
+        told = threading.Thread(target=getattr(e, what), args=("a", port.w), daemon=True)
+        told.start()
+        stopped = threading.Event()
+
+        def stop() -> None:  # what halts.py does for an MQTT stop, before it puts the stop in
+            e.hold("a")
+            stopped.set()
+
+        threading.Thread(target=stop, daemon=True).start()
+        wait_until(stopped.is_set, 10, "the stop's hold returned")
+        wait_until(lambda: any("ended" in p for p in problems.on()), 10, "the hung one killed")
+        told.join(slow(10))
+        assert not told.is_alive()
+    finally:
+        e.stop()
