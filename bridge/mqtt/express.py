@@ -74,9 +74,12 @@ Rules:
    its own on its sync topic (``B/bridge/fence/express``) and answers the request when it
    reads that word back: the broker had the stop before the word (the bridge had read it
    before asking), so by then the express has read the stop and written its frame or let it
-   go; the hold ends with the answer. No payload is matched and nothing is counted: the word
-   orders the two connections as the last word's markers do. Where it cannot, the express
-   writes nothing and answers at once: while its connection is down (a stop it reads later
+   go; the hold ends with the answer. Nothing is counted: the word orders the two
+   connections as the last word's markers do. Each word carries a random mark of its own,
+   known to nobody before it is published: a word another client forges from earlier ones
+   (it may read the topic) or leaves retained there could otherwise come back before the
+   stop and end the hold early; a copy of the real one comes after it. Where it cannot, the
+   express writes nothing and answers at once: while its connection is down (a stop it reads later
    comes on a subscription made after the bridge read it: this one will never come), and
    from each connection until a word it published after its last answer given at once came
    back (it says ``up`` then, not at the SUBACK): a broker that drops its words (an ACL) keeps
@@ -758,7 +761,7 @@ class _Child:
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
         self._sync_topic: str | None = config.get("sync_topic")
-        self._token = secrets.token_hex(4)  # its own words, not another's
+        self._marks: dict[int, str] = {}  # rule 8: each word out -> its own random mark
         self._sync_lock = threading.Lock()
         self.sync = Sync()
         self._upped = False  # rule 8: ``up`` said on this connection
@@ -786,8 +789,14 @@ class _Child:
 
     # -- rule 8 -------------------------------------------------------------------------------
     def _publish(self, word: int | None) -> None:
-        if word is not None and self._sync_topic is not None:
-            self.link.publish(self._sync_topic, f"{self._token} {word}")
+        """A word out, with a mark of its own nobody could know before it was published: a
+        word another client forges, or left retained, is not its own (rule 8)."""
+        if word is None or self._sync_topic is None:
+            return
+        mark = secrets.token_hex(8)
+        with self._sync_lock:
+            self._marks[word] = mark
+        self.link.publish(self._sync_topic, f"{mark} {word}")
 
     def _answer(self, answer: int | None) -> None:
         if answer is not None:
@@ -803,6 +812,7 @@ class _Child:
     def _linked(self, up: bool) -> None:
         """Paho's thread: a connection accepted (before it subscribes), or ended."""
         with self._sync_lock:
+            self._marks.clear()  # (as Sync forgets its words out)
             if up:
                 self.sync.accepted()
                 return
@@ -817,11 +827,16 @@ class _Child:
         self._publish(word)
 
     def _read_back(self, payload: bytes) -> None:
-        token, _, number = payload.decode("ascii", "replace").partition(" ")
-        if token != self._token or not number.isdigit():
+        mark, _, number = payload.decode("ascii", "replace").partition(" ")
+        if not number.isdigit():
             return
+        w = int(number)
         with self._sync_lock:
-            answer, word = self.sync.read_back(int(number))
+            if self._marks.get(w) != mark:
+                return  # another's, forged or replayed (rule 8)
+            for k in [k for k in self._marks if k <= w]:
+                del self._marks[k]  # (as Sync forgets its words out up to it)
+            answer, word = self.sync.read_back(w)
             self._answer(answer)
             if self.sync.writing and not self._upped:
                 self._upped = True

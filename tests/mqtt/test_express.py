@@ -270,6 +270,29 @@ def test_the_bridge_is_answered_after_the_stops_read_before_its_word(rig: ChildR
     assert port.written() == b";"
 
 
+def test_a_word_forged_by_another_client_ends_no_hold(rig: ChildRig) -> None:
+    """Anyone who may read its sync topic sees its words. A word forged from them (the next
+    number), published before the bridge's STOP and so read before it, must not answer a
+    request: the hold would end before the express read the STOP, and its late frame would
+    stop a move published after it. Nor may a word another client left retained there."""
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.ask(1)
+    seen = wait_until(lambda: rig.published, 5, "its word published")[0]
+    token, _, number = seen.partition(" ")
+    rig.back()
+    assert rig.word() == {"op": "synced", "n": 1}
+    rig.ask(2)
+    wait_until(lambda: rig.published, 5, "its next word published")
+    forged = f"{token} {int(number) + 1}".encode()
+    rig.child.on_message(SYNC, forged, False, None, None)  # read before the STOP
+    rig.child.on_message(SYNC, forged, True, None, None)  # (or replayed, retained)
+    rig.stop("rotor/a/stop")  # the STOP, read late
+    rig.back()  # then its own word
+    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "synced", "n": 2}  # after the frame, not before it
+
+
 def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
     a, b = Port(), Port()
     rig.hand("a", 1, a)
