@@ -477,14 +477,17 @@ class Express:
         late = f"the stop express did not come up within {START_WAIT_S:g} s"
         passing: set[str] = set()  # problems said until it is up (rule 6)
         up = False
+        ticked = time.monotonic()
         while True:
             # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
             # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
             # blocking socket), the stops' sends among them.
             try:
                 readable, _w, _x = select.select([mine], [], [], TICK_S)
-                if not readable:
+                if time.monotonic() - ticked >= TICK_S or not readable:
+                    ticked = time.monotonic()  # (due even while its words keep coming)
                     self._tick(up, late)
+                if not readable:
                     continue
                 data = mine.recv(_PACKET)
             except (OSError, ValueError):

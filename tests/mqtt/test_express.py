@@ -739,3 +739,36 @@ def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
         assert not told.is_alive()
     finally:
         e.stop()
+
+
+CHATTY = (  # up, then a word every 50 ms (a frame written for each stop of a flood), no answer
+    "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[-1])); s.recv(65536); "
+    """s.send(b'{"op": "up"}')\n"""
+    "while True:\n"
+    """    s.send(b'{"op": "wrote", "rotator": "a", "t": 0}'); time.sleep(0.05)"""
+)
+
+
+def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
+    """Its words coming faster than once a second (a stop flood, each frame said) must not
+    keep the reader from looking at the holds: a long one is said and its word asked again."""
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", CHATTY],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    now = [1000.0]
+    e.clock = lambda: now[0]
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        e.hold("a")
+        now[0] += 10.0  # the answer does not come: said all the same
+        wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
+    finally:
+        e.stop()
