@@ -631,8 +631,10 @@ class Sync:
         self._asked = max(self._asked, n)
         if not self.linked or not self.writing:
             # it writes nothing now, and nothing older later: only a word published after
-            # this answer lets it write again
+            # this answer lets it write again (those out now answer nothing more: forgotten,
+            # or a broker that drops them would have them pile up, one a stop)
             self._clean_from = self._word
+            self._out.clear()
             return self._answer_all(), self._publish() if self.linked else None
         if again or not self._out:  # a word out now was published before the request
             return None, self._publish()
@@ -809,6 +811,8 @@ class _Child:
         """A request from the bridge (its socket's thread)."""
         with self._sync_lock:
             answer, word = self.sync.asked(n, again)
+            if answer is not None:
+                self._marks.clear()  # (as Sync forgot its words out)
             self._answer(answer)  # (under the lock: the answers in order)
         self._publish(word)
 

@@ -241,6 +241,30 @@ def test_an_answer_given_at_once_keeps_it_from_writing_until_a_newer_word_came_b
     assert sync.read_back(first + 1) == (None, None) and sync.writing
 
 
+def test_words_a_broker_drops_are_not_kept_for_ever() -> None:
+    """A broker that drops its words (an ACL): each stop's request is answered at once and a
+    word published; a flood of stops must not leave a word kept for each (nor its mark)."""
+    sync = Sync()
+    sync.accepted()
+    sync.subscribed()
+    for n in range(1, 10_001):
+        answer, word = sync.asked(n)
+        assert answer == n and word is not None
+    assert len(sync._out) <= 1
+    assert sync.read_back(word) == (None, None) and sync.writing  # the newest still counts
+
+
+def test_marks_of_words_a_broker_drops_are_not_kept_for_ever(rig: ChildRig) -> None:
+    rig.child._linked(False)
+    assert rig.word() == {"op": "down"}
+    rig.child._linked(True)
+    rig.child._subscribed()
+    for n in range(1, 501):
+        rig.ask(n)
+        assert rig.word() == {"op": "synced", "n": n}
+    assert len(rig.child._marks) <= 2
+
+
 def test_a_stop_read_before_its_words_came_back_is_not_written(rig: ChildRig) -> None:
     port = Port()
     rig.hand("a", 1, port)
