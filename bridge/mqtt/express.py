@@ -478,12 +478,14 @@ class Express:
         passing: set[str] = set()  # problems said until it is up (rule 6)
         up = False
         ticked = time.monotonic()
+        poller = select.poll()  # (not select.select: a bridge with many clients has fds > 1023)
+        poller.register(mine, select.POLLIN)
         while True:
             # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
             # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
             # blocking socket), the stops' sends among them.
             try:
-                readable, _w, _x = select.select([mine], [], [], TICK_S)
+                readable = poller.poll(TICK_S * 1000)
                 if time.monotonic() - ticked >= TICK_S or not readable:
                     ticked = time.monotonic()  # (due even while its words keep coming)
                     self._tick(up, late)

@@ -796,3 +796,26 @@ def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
         wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
     finally:
         e.stop()
+
+
+def test_an_express_whose_socket_has_a_high_descriptor_number_is_read() -> None:
+    """A bridge with many clients open has descriptors above 1023 (beyond select())."""
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip("no room for 1200 descriptors")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
+    r, w = os.pipe()
+    taken = [os.dup(r) for _ in range(1100)]
+    problems = Problems()
+    e = express([sys.executable, "-c", UP_AND_HOLDING], problems)
+    try:
+        e.start(mqtt311=False)
+        wait_until(e.up.is_set, 10, "its words read")
+        assert e.starts == 1
+    finally:
+        e.stop()
+        for fd in [*taken, r, w]:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
