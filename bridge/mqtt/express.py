@@ -74,9 +74,12 @@ Rules:
    its own on its sync topic (``B/bridge/fence/express``) and answers the request when it
    reads that word back: the broker had the stop before the word (the bridge had read it
    before asking), so by then the express has read the stop and written its frame or let it
-   go; the hold ends with the answer. No payload is matched and nothing is counted: the word
-   orders the two connections as the last word's markers do. Where it cannot, the express
-   writes nothing and answers at once: while its connection is down (a stop it reads later
+   go; the hold ends with the answer. Nothing is counted: the word orders the two
+   connections as the last word's markers do. Each word carries a random mark of its own,
+   known to nobody before it is published: a word another client forges from earlier ones
+   (it may read the topic) or leaves retained there could otherwise come back before the
+   stop and end the hold early; a copy of the real one comes after it. Where it cannot, the
+   express writes nothing and answers at once: while its connection is down (a stop it reads later
    comes on a subscription made after the bridge read it: this one will never come), and
    from each connection until a word it published after its last answer given at once came
    back (it says ``up`` then, not at the SUBACK): a broker that drops its words (an ACL) keeps
@@ -85,6 +88,8 @@ Rules:
    hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
    waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A socket the
    express does not read (its buffer full) is a hung express: killed, which ends the holds.
+   No send to it ever waits for room (a request, a port handed over or given back): the lock
+   they are sent under is the one every MQTT stop's hold takes before the stop is put in.
 9. A frame is never left half-written. A write that took part of the frame is finished by the
    express as soon as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
    it holds up nothing but its own next frame), so no frame of the session's lands inside
@@ -101,6 +106,7 @@ Rules:
 
 from __future__ import annotations
 
+import array
 import hashlib
 import json
 import logging
@@ -156,12 +162,15 @@ def express_client_id(settings: MqttSettings) -> str:
     return f"{main[:11]}-{digest}-fast"
 
 
-def _send(sock: socket.socket, word: dict[str, Any], fds: list[int] | None = None) -> None:
+def _send(
+    sock: socket.socket, word: dict[str, Any], fds: list[int] | None = None, flags: int = 0
+) -> None:
     data = json.dumps(word).encode()
-    if fds:
-        socket.send_fds(sock, [data], fds)
+    if fds:  # (not socket.send_fds: Python 3.11's drops its flags, MSG_DONTWAIT with them)
+        rights = array.array("i", fds).tobytes()
+        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, rights)], flags)
     else:
-        sock.send(data)
+        sock.send(data, flags)
 
 
 # -- the bridge's side ---------------------------------------------------------------------------
@@ -286,9 +295,7 @@ class Express:
         if sock is None:
             return  # gone: its end answered every hold
         try:
-            sock.send(
-                json.dumps({"op": "sync", "n": n, "again": again}).encode(), socket.MSG_DONTWAIT
-            )
+            _send(sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
         except BlockingIOError:
             self._kill("does not read its socket")
         except OSError:
@@ -344,8 +351,9 @@ class Express:
         with self._lock:
             self._number += 1
             self._ports[rotator_id] = (self._number, fd)
-            if self._sock is not None:
-                self._hand(rotator_id, self._number, fd)
+            hung = self._sock is not None and not self._hand(rotator_id, self._number, fd)
+        if hung:
+            self._kill("does not read its socket")
 
     def closing(self, rotator_id: str, fd: int) -> None:
         with self._lock:
@@ -357,9 +365,19 @@ class Express:
                 return
             dropped = self._dropped[number] = threading.Event()
             try:
-                _send(self._sock, {"op": "drop", "rotator": rotator_id, "n": number})
+                word = {"op": "drop", "rotator": rotator_id, "n": number}
+                _send(self._sock, word, flags=socket.MSG_DONTWAIT)  # (rule 8: no wait under
+                sent = True  # the lock every MQTT stop takes)
+            except BlockingIOError:
+                sent = False
             except OSError:
                 return  # gone: its copies are closed with it
+        if not sent:
+            self._kill(f"does not read its socket ({rotator_id}'s port going)")
+            dropped.wait(STOP_WAIT_S)  # its end: _run sets it once the child is gone
+            with self._lock:
+                self._dropped.pop(number, None)
+            return
         # not reading its socket yet is a start (importing Python on a slow machine), no hang
         wait_s = DROP_WAIT_S
         if not self._heard.is_set():
@@ -369,13 +387,19 @@ class Express:
         with self._lock:
             self._dropped.pop(number, None)
 
-    def _hand(self, rotator_id: str, number: int, fd: int) -> None:
-        """Under the lock: a copy of the port to the child (rule 5)."""
+    def _hand(self, rotator_id: str, number: int, fd: int) -> bool:
+        """Under the lock: a copy of the port to the child (rule 5). Never waits (the lock is
+        every MQTT stop's, rule 8): False when its socket is full (a hung express: the caller
+        kills it once the lock is let go)."""
         assert self._sock is not None
+        word = {"op": "port", "rotator": rotator_id, "n": number}
         try:
-            _send(self._sock, {"op": "port", "rotator": rotator_id, "n": number}, [fd])
+            _send(self._sock, word, [fd], socket.MSG_DONTWAIT)
+        except BlockingIOError:
+            return False
         except OSError as exc:
             log.warning("stop express: could not hand over %s's port: %s", rotator_id, exc)
+        return True
 
     # -- the child (rules 1 and 6, on the express's thread) ------------------------------------
     def _run(self, mqtt311: bool) -> None:
@@ -442,24 +466,33 @@ class Express:
                 child.wait()
                 return None
             try:
-                _send(mine, config)
+                _send(mine, config, flags=socket.MSG_DONTWAIT)
             except OSError:
                 pass  # it died at once: read below as an end of file
             self._sock = mine
             self.ended.clear()
-            for rid, (number, fd) in self._ports.items():
-                self._hand(rid, number, fd)
+            hung = not all(self._hand(rid, n, fd) for rid, (n, fd) in self._ports.items())
+        if hung:
+            self._kill("does not read its socket")
         late = f"the stop express did not come up within {START_WAIT_S:g} s"
         passing: set[str] = set()  # problems said until it is up (rule 6)
         up = False
+        ticked = time.monotonic()
+        poller = select.poll()  # (not select.select: a bridge with many clients has fds > 1023)
+        poller.register(mine, select.POLLIN)
         while True:
-            mine.settimeout(TICK_S)  # (a hold put meanwhile: rule 8's tick)
+            # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
+            # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
+            # blocking socket), the stops' sends among them.
             try:
+                readable = poller.poll(TICK_S * 1000)
+                if time.monotonic() - ticked >= TICK_S or not readable:
+                    ticked = time.monotonic()  # (due even while its words keep coming)
+                    self._tick(up, late)
+                if not readable:
+                    continue
                 data = mine.recv(_PACKET)
-            except TimeoutError:
-                self._tick(up, late)
-                continue
-            except OSError:
+            except (OSError, ValueError):
                 data = b""
             if not data:
                 break
@@ -600,8 +633,10 @@ class Sync:
         self._asked = max(self._asked, n)
         if not self.linked or not self.writing:
             # it writes nothing now, and nothing older later: only a word published after
-            # this answer lets it write again
+            # this answer lets it write again (those out now answer nothing more: forgotten,
+            # or a broker that drops them would have them pile up, one a stop)
             self._clean_from = self._word
+            self._out.clear()
             return self._answer_all(), self._publish() if self.linked else None
         if again or not self._out:  # a word out now was published before the request
             return None, self._publish()
@@ -733,7 +768,7 @@ class _Child:
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
         self._sync_topic: str | None = config.get("sync_topic")
-        self._token = secrets.token_hex(4)  # its own words, not another's
+        self._marks: dict[int, str] = {}  # rule 8: each word out -> its own random mark
         self._sync_lock = threading.Lock()
         self.sync = Sync()
         self._upped = False  # rule 8: ``up`` said on this connection
@@ -761,8 +796,14 @@ class _Child:
 
     # -- rule 8 -------------------------------------------------------------------------------
     def _publish(self, word: int | None) -> None:
-        if word is not None and self._sync_topic is not None:
-            self.link.publish(self._sync_topic, f"{self._token} {word}")
+        """A word out, with a mark of its own nobody could know before it was published: a
+        word another client forges, or left retained, is not its own (rule 8)."""
+        if word is None or self._sync_topic is None:
+            return
+        mark = secrets.token_hex(8)
+        with self._sync_lock:
+            self._marks[word] = mark
+        self.link.publish(self._sync_topic, f"{mark} {word}")
 
     def _answer(self, answer: int | None) -> None:
         if answer is not None:
@@ -772,12 +813,15 @@ class _Child:
         """A request from the bridge (its socket's thread)."""
         with self._sync_lock:
             answer, word = self.sync.asked(n, again)
+            if answer is not None:
+                self._marks.clear()  # (as Sync forgot its words out)
             self._answer(answer)  # (under the lock: the answers in order)
         self._publish(word)
 
     def _linked(self, up: bool) -> None:
         """Paho's thread: a connection accepted (before it subscribes), or ended."""
         with self._sync_lock:
+            self._marks.clear()  # (as Sync forgets its words out)
             if up:
                 self.sync.accepted()
                 return
@@ -792,11 +836,16 @@ class _Child:
         self._publish(word)
 
     def _read_back(self, payload: bytes) -> None:
-        token, _, number = payload.decode("ascii", "replace").partition(" ")
-        if token != self._token or not number.isdigit():
+        mark, _, number = payload.decode("ascii", "replace").partition(" ")
+        if not number.isdigit():
             return
+        w = int(number)
         with self._sync_lock:
-            answer, word = self.sync.read_back(int(number))
+            if self._marks.get(w) != mark:
+                return  # another's, forged or replayed (rule 8)
+            for k in [k for k in self._marks if k <= w]:
+                del self._marks[k]  # (as Sync forgets its words out up to it)
+            answer, word = self.sync.read_back(w)
             self._answer(answer)
             if self.sync.writing and not self._upped:
                 self._upped = True

@@ -241,6 +241,30 @@ def test_an_answer_given_at_once_keeps_it_from_writing_until_a_newer_word_came_b
     assert sync.read_back(first + 1) == (None, None) and sync.writing
 
 
+def test_words_a_broker_drops_are_not_kept_for_ever() -> None:
+    """A broker that drops its words (an ACL): each stop's request is answered at once and a
+    word published; a flood of stops must not leave a word kept for each (nor its mark)."""
+    sync = Sync()
+    sync.accepted()
+    sync.subscribed()
+    for n in range(1, 10_001):
+        answer, word = sync.asked(n)
+        assert answer == n and word is not None
+    assert len(sync._out) <= 1
+    assert sync.read_back(word) == (None, None) and sync.writing  # the newest still counts
+
+
+def test_marks_of_words_a_broker_drops_are_not_kept_for_ever(rig: ChildRig) -> None:
+    rig.child._linked(False)
+    assert rig.word() == {"op": "down"}
+    rig.child._linked(True)
+    rig.child._subscribed()
+    for n in range(1, 501):
+        rig.ask(n)
+        assert rig.word() == {"op": "synced", "n": n}
+    assert len(rig.child._marks) <= 2
+
+
 def test_a_stop_read_before_its_words_came_back_is_not_written(rig: ChildRig) -> None:
     port = Port()
     rig.hand("a", 1, port)
@@ -268,6 +292,29 @@ def test_the_bridge_is_answered_after_the_stops_read_before_its_word(rig: ChildR
     assert rig.word()["op"] == "wrote"
     assert rig.word() == {"op": "synced", "n": 7}
     assert port.written() == b";"
+
+
+def test_a_word_forged_by_another_client_ends_no_hold(rig: ChildRig) -> None:
+    """Anyone who may read its sync topic sees its words. A word forged from them (the next
+    number), published before the bridge's STOP and so read before it, must not answer a
+    request: the hold would end before the express read the STOP, and its late frame would
+    stop a move published after it. Nor may a word another client left retained there."""
+    port = Port()
+    rig.hand("a", 1, port)
+    rig.ask(1)
+    seen = wait_until(lambda: rig.published, 5, "its word published")[0]
+    token, _, number = seen.partition(" ")
+    rig.back()
+    assert rig.word() == {"op": "synced", "n": 1}
+    rig.ask(2)
+    wait_until(lambda: rig.published, 5, "its next word published")
+    forged = f"{token} {int(number) + 1}".encode()
+    rig.child.on_message(SYNC, forged, False, None, None)  # read before the STOP
+    rig.child.on_message(SYNC, forged, True, None, None)  # (or replayed, retained)
+    rig.stop("rotor/a/stop")  # the STOP, read late
+    rig.back()  # then its own word
+    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "synced", "n": 2}  # after the frame, not before it
 
 
 def test_a_group_stop_is_each_members_frame(rig: ChildRig) -> None:
@@ -660,3 +707,115 @@ def test_a_fight_over_its_client_id_is_said_and_unsaid_once_a_connection_lasts()
     now[0] += STABLE_S
     link._tick()
     assert said[-1] == {"op": "problem", "text": said[0]["text"], "off": True}
+
+
+UP_THEN_HUNG = (  # says it is up, then reads nothing more: a hung express
+    "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[-1])); s.recv(65536); "
+    """s.send(b'{"op": "up"}'); time.sleep(600)"""
+)
+
+
+def _fill(sock: socket.socket) -> None:
+    """What requests the express does not read leave behind: its socket full."""
+    try:
+        while True:
+            sock.send(b"{}", socket.MSG_DONTWAIT)
+    except (BlockingIOError, TimeoutError):
+        pass
+
+
+@pytest.mark.parametrize("what", ["opened", "closing"])
+def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
+    """A port opened or closed while a hung express's socket is full: the send to it never
+    waits under the express's lock, which every MQTT stop takes (its hold, rule 8) before it
+    is put in; the express is killed, and the stop goes on."""
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", UP_THEN_HUNG],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    port = Port()
+    if what == "closing":
+        e.opened("a", port.w)
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        sock = e._sock
+        assert sock is not None
+        _fill(sock)
+        told = threading.Thread(target=getattr(e, what), args=("a", port.w), daemon=True)
+        told.start()
+        stopped = threading.Event()
+
+        def stop() -> None:  # what halts.py does for an MQTT stop, before it puts the stop in
+            e.hold("a")
+            stopped.set()
+
+        threading.Thread(target=stop, daemon=True).start()
+        wait_until(stopped.is_set, 10, "the stop's hold returned")
+        wait_until(lambda: any("ended" in p for p in problems.on()), 10, "the hung one killed")
+        told.join(slow(10))
+        assert not told.is_alive()
+    finally:
+        e.stop()
+
+
+CHATTY = (  # up, then a word every 50 ms (a frame written for each stop of a flood), no answer
+    "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[-1])); s.recv(65536); "
+    """s.send(b'{"op": "up"}')\n"""
+    "while True:\n"
+    """    s.send(b'{"op": "wrote", "rotator": "a", "t": 0}'); time.sleep(0.05)"""
+)
+
+
+def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
+    """Its words coming faster than once a second (a stop flood, each frame said) must not
+    keep the reader from looking at the holds: a long one is said and its word asked again."""
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", CHATTY],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    now = [1000.0]
+    e.clock = lambda: now[0]
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        e.hold("a")
+        now[0] += 10.0  # the answer does not come: said all the same
+        wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
+    finally:
+        e.stop()
+
+
+def test_an_express_whose_socket_has_a_high_descriptor_number_is_read() -> None:
+    """A bridge with many clients open has descriptors above 1023 (beyond select())."""
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip("no room for 1200 descriptors")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
+    r, w = os.pipe()
+    taken = [os.dup(r) for _ in range(1100)]
+    problems = Problems()
+    e = express([sys.executable, "-c", UP_AND_HOLDING], problems)
+    try:
+        e.start(mqtt311=False)
+        wait_until(e.up.is_set, 10, "its words read")
+        assert e.starts == 1
+    finally:
+        e.stop()
+        for fd in [*taken, r, w]:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
