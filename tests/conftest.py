@@ -10,6 +10,7 @@ from hypothesis import settings
 
 from bridge.emulators.pty import EmulatedPort
 from tests.support import Mosquitto, Probe
+from tests.support.cpu import register as register_cpu_recorder
 from tests.support.rig import Rig
 from tests.support.waiting import SLOWDOWN, slow
 
@@ -17,6 +18,11 @@ from tests.support.waiting import SLOWDOWN, slow
 # busy machine breaks; what an example proves is its outcome, never its speed
 settings.register_profile("rotor-bridge", deadline=None)
 settings.load_profile("rotor-bridge")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    # each test's CPU-seconds into a file when ROTOR_TEST_CPU names one (tests/support/cpu.py)
+    register_cpu_recorder(config)
 
 
 @pytest.fixture(autouse=True, scope="session")

@@ -11,6 +11,8 @@
   benchmarks (real timings, paced lines); imported from there, as it brings the whole bridge in
 - tap.py: the serial sniffer on a controller's transmit line and independent parsers of what
   it reports (the ground truth of "a bearing the controller never reported")
+- cpu.py: where the suite's CPU goes, each test's CPU-seconds and its children's, recorded
+  when ROTOR_TEST_CPU names a file (``python -m tests.support.cpu FILE`` reports them)
 
 A private mosquitto on a free loopback port is ``bridge.mosquitto.Mosquitto`` (the demo's too);
 the pytest fixtures ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
