@@ -21,6 +21,7 @@ import json
 import os
 import resource
 import sys
+import threading
 from collections import defaultdict
 from collections.abc import Generator, Iterable
 from pathlib import Path
@@ -31,10 +32,21 @@ import pytest
 ENV = "ROTOR_TEST_CPU"
 
 
+def _children_s() -> float:
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return kids.ru_utime + kids.ru_stime
+
+
 def _cpu_s() -> float:
     own = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+    return own.ru_utime + own.ru_stime + _children_s()
+
+
+def _open_fds() -> int:
+    try:
+        return len(os.listdir("/proc/self/fd"))
+    except OSError:
+        return -1
 
 
 class CpuRecorder:
@@ -67,12 +79,17 @@ class CpuRecorder:
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item: pytest.Item) -> Generator[None, Any, None]:
         self.phases = {}
+        children = _children_s()
         yield
         record = {
             "test": item.nodeid,
             "file": item.nodeid.split("::")[0],
             "fixtures": sorted(getattr(item, "fixturenames", ())),
             **{k: round(v, 4) for k, v in self.phases.items()},
+            "children": round(_children_s() - children, 4),  # of the three phases' sum
+            # what the worker holds after the test: a count that only grows is a leak
+            "fds": _open_fds(),
+            "threads": threading.active_count(),
         }
         with self.path.open("a") as out:
             out.write(json.dumps(record) + "\n")
@@ -87,32 +104,48 @@ def register(config: pytest.Config) -> None:
 def _records(base: Path) -> Iterable[dict[str, Any]]:
     for f in sorted(base.parent.glob(base.name + ".*")):
         for line in f.read_text().splitlines():
-            yield json.loads(line)
+            yield {**json.loads(line), "worker": f.suffix}
 
 
 def report(base: Path, top: int = 25) -> str:
-    by_file: dict[str, list[float]] = defaultdict(lambda: [0.0, 0])
-    by_fixture: dict[str, list[float]] = defaultdict(lambda: [0.0, 0])
+    by_file: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0.0])
+    by_fixture: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0.0])
     tests: list[tuple[float, str]] = []
-    total = 0.0
+    total = children = 0.0
+    fds_before: dict[str, int] = {}  # a worker's open descriptors after its last test
+    fds_grown: dict[str, int] = defaultdict(int)  # by file: descriptors its tests left open
     for r in _records(base):
         cost = r.get("setup", 0.0) + r.get("call", 0.0) + r.get("teardown", 0.0)
         total += cost
         by_file[r["file"]][0] += cost
         by_file[r["file"]][1] += 1
+        by_file[r["file"]][2] += r.get("children", 0.0)
+        children += r.get("children", 0.0)
         for name in r["fixtures"]:
             by_fixture[name][0] += cost
             by_fixture[name][1] += 1
+            by_fixture[name][2] += r.get("children", 0.0)
         tests.append((cost, r["test"]))
-    lines = [f"{len(tests)} tests, {total:.1f} CPU-s in the tests (workers + their children)"]
+        held = r.get("fds", -1)
+        if held >= 0 and r["worker"] in fds_before:
+            fds_grown[r["file"]] += held - fds_before[r["worker"]]
+        fds_before[r["worker"]] = held
+    lines = [
+        f"{len(tests)} tests, {total:.1f} CPU-s in the tests (workers + their children), "
+        f"{children:.1f} of it in child processes"
+    ]
 
     def table(title: str, rows: dict[str, list[float]]) -> None:
-        lines.append(f"\n{title}: CPU-s, tests, CPU-s per test")
-        for name, (cost, n) in sorted(rows.items(), key=lambda kv: -kv[1][0])[:top]:
-            lines.append(f"{cost:8.1f} {int(n):5d} {cost / n:6.2f}  {name}")
+        lines.append(f"\n{title}: CPU-s, tests, CPU-s per test, CPU-s in child processes")
+        for name, (cost, n, kids) in sorted(rows.items(), key=lambda kv: -kv[1][0])[:top]:
+            kept = f"{kids:8.1f}" if kids else ""
+            lines.append(f"{cost:8.1f} {int(n):5d} {cost / n:6.2f}{kept}  {name}")
 
     table("by file", by_file)
     table("by fixture (a test counts for each fixture it uses)", by_fixture)
+    leaks = [(n, f) for f, n in fds_grown.items() if n > 0]
+    lines.append("\nfiles whose tests left descriptors open in the worker: descriptors")
+    lines.extend(f"{n:8d}  {f}" for n, f in sorted(leaks, reverse=True)[:top])
     lines.append("\ntests: CPU-s")
     lines.extend(f"{cost:8.2f}  {name}" for cost, name in sorted(tests, reverse=True)[:top])
     return "\n".join(lines)
