@@ -3,7 +3,8 @@
 - waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep;
   ``slow``, the one factor (ROTOR_TEST_SLOWDOWN) every deadline of the tests is scaled by
 - mqtt.py: ``Probe``, an MQTT client that records what arrives; ``retained_snapshot``
-- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files;
+- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``; ``cli`` in this
+  process, for check-config), its TOML files;
   the one BridgeProcess of the tests, the fault suite, the soak and the benchmarks
 - codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
 - rig.py: a broker, emulated controllers on real ptys and the bridge, in-process or as its own
@@ -21,7 +22,7 @@ the pytest fixtures ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
 from bridge.mosquitto import Mosquitto, free_port
 from tests.support.codecs import HOW, feed
 from tests.support.mqtt import Message, Probe, retained_snapshot
-from tests.support.process import ROOT, BridgeProcess, bridge_env, run_cli, to_toml
+from tests.support.process import ROOT, BridgeProcess, bridge_env, cli, run_cli, to_toml
 from tests.support.waiting import slow, wait_until
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "Mosquitto",
     "Probe",
     "bridge_env",
+    "cli",
     "feed",
     "free_port",
     "retained_snapshot",
