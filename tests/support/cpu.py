@@ -56,6 +56,7 @@ class CpuRecorder:
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
         self.path = Path(f"{path}.{worker}")
         self.phases: dict[str, float] = {}
+        self.failed: list[str] = []
 
     def _timed(self, phase: str) -> Generator[None, Any, Any]:
         before = _cpu_s()
@@ -76,9 +77,14 @@ class CpuRecorder:
     def pytest_runtest_teardown(self, item: pytest.Item) -> Generator[None, Any, None]:
         yield from self._timed("teardown")
 
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        if report.failed:
+            self.failed.append(report.when)
+
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item: pytest.Item) -> Generator[None, Any, None]:
         self.phases = {}
+        self.failed = []
         children = _children_s()
         yield
         record = {
@@ -87,6 +93,7 @@ class CpuRecorder:
             "fixtures": sorted(getattr(item, "fixturenames", ())),
             **{k: round(v, 4) for k, v in self.phases.items()},
             "children": round(_children_s() - children, 4),  # of the three phases' sum
+            "failed": self.failed,  # the phases that failed: a cost is read beside its outcome
             # what the worker holds after the test: a count that only grows is a leak
             "fds": _open_fds(),
             "threads": threading.active_count(),
