@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import gc
+import os
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -10,6 +12,7 @@ from hypothesis import settings
 
 from bridge.emulators.pty import EmulatedPort
 from tests.support import Mosquitto, Probe
+from tests.support.cpu import register as register_cpu_recorder
 from tests.support.rig import Rig
 from tests.support.waiting import SLOWDOWN, slow
 
@@ -17,6 +20,30 @@ from tests.support.waiting import SLOWDOWN, slow
 # busy machine breaks; what an example proves is its outcome, never its speed
 settings.register_profile("rotor-bridge", deadline=None)
 settings.load_profile("rotor-bridge")
+
+
+_fds_kept = 0  # the worker's open descriptors after its last collection
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_teardown(item: pytest.Item) -> None:
+    """A closed paho client keeps its wake-up socket pair until the garbage collector breaks the
+    client's reference cycles; after some hundreds of bridges and probes a worker held more than
+    1,024 descriptors, and pyserial's select() failed on the next port opened. Collected when 128
+    more are open than after the last collection: a few times a worker."""
+    global _fds_kept
+    try:
+        held = len(os.listdir("/proc/self/fd"))
+    except OSError:
+        return
+    if held > _fds_kept + 128:
+        gc.collect()
+        _fds_kept = len(os.listdir("/proc/self/fd"))
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    # each test's CPU-seconds into a file when ROTOR_TEST_CPU names one (tests/support/cpu.py)
+    register_cpu_recorder(config)
 
 
 @pytest.fixture(autouse=True, scope="session")

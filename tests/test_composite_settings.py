@@ -22,7 +22,7 @@ from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
 from bridge.settings import ConfigError, settings_from
-from tests.support import ROOT, run_cli
+from tests.support import ROOT, cli
 
 AZ = {"model": "rt21", "port": "/dev/ttyAZ"}
 EL = {"model": "gs232b", "port": "/dev/ttyEL"}
@@ -95,7 +95,7 @@ def test_check_config_names_both_boxes_and_warns_for_each_missing_port(tmp_path:
         f'azimuth = {{ model = "rt21", port = "{there}" }}\n'
         f'elevation = {{ model = "gs232b", port = "{tmp_path / "gone"}", baud = 4800 }}\n'
     )
-    out = run_cli("check-config", "-c", str(path))
+    out = cli("check-config", "-c", str(path))
     assert out.returncode == 0, out.stderr
     assert f"azimuth by RT-21 (rt21) on {there} (found), 4800 baud" in out.stdout
     assert "elevation by GS-232B (gs232b) on" in out.stdout and "(NOT FOUND), 4800" in out.stdout

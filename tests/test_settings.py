@@ -10,7 +10,7 @@ from bridge.config_report import config_warnings, masked
 from bridge.model import Target
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, RotatorSettings, load_settings
-from tests.support import run_cli
+from tests.support import cli, run_cli
 
 MINIMAL = """
 [mqtt]
@@ -124,7 +124,7 @@ def test_check_config_prints_effective_settings_with_secrets_masked(tmp_path: Pa
         'base_topic = "rotor"', 'base_topic = "rotor"\nusername = "u"\npassword = "topsecret"'
     )
     path = write(tmp_path, text)
-    out = run_cli("check-config", "--full", "-c", str(path))
+    out = cli("check-config", "--full", "-c", str(path))
     assert out.returncode == 0, out.stderr
     doc = full_values(out.stdout)
     assert doc["mqtt"]["password"] == "********" and "topsecret" not in out.stdout + out.stderr
@@ -144,9 +144,9 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
     assert out.returncode == 2
     assert "rotators[0].model: unknown model 'rotorz'" in out.stderr
     assert "Traceback" not in out.stderr
-    out = run_cli("check-config", "-c", str(tmp_path / "missing.toml"))
+    out = cli("check-config", "-c", str(tmp_path / "missing.toml"))
     assert out.returncode == 2 and "not found" in out.stderr
-    out = run_cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
+    out = cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
     assert out.returncode == 2 and "not valid TOML" in out.stderr
 
 
@@ -224,8 +224,8 @@ def test_check_config_shows_what_the_pointing_settings_mean(tmp_path: Path) -> N
 
 
 def check_config(path: Path, **env: str) -> tuple[dict, list[str]]:
-    """``rotor-bridge check-config --full`` as a process: (the printed settings, the warnings)."""
-    out = run_cli("check-config", "--full", "-c", str(path), env=env)
+    """``rotor-bridge check-config --full``: (the printed settings, the warnings)."""
+    out = cli("check-config", "--full", "-c", str(path), env=env)
     assert out.returncode == 0, out.stderr  # warnings never fail it
     assert out.stderr == "" and out.stdout.splitlines()[-1] == f"config OK: {path}"
     warned = [line for line in out.stdout.splitlines() if line.startswith("warning: ")]
@@ -451,7 +451,7 @@ def test_check_config_summarises_rotators_broker_and_what_is_on(tmp_path: Path) 
         f'[[rotators]]\nid = "sky"\nmodel = "rot2prog"\nport = "{missing}"\naz_offset_deg = 90\n'
     )
     path = write(tmp_path, text)
-    out = run_cli("check-config", "-c", str(path))
+    out = cli("check-config", "-c", str(path))
     assert out.returncode == 0 and out.stderr == "", out.stderr
     lines = out.stdout.splitlines()
     said = "\n".join(lines)
@@ -474,7 +474,7 @@ def test_check_config_names_the_gap_an_offset_puts_in_narrowed_limits(tmp_path: 
         f'[[rotators]]\nid = "hf"\nmodel = "rotorez"\nport = "{tmp_path / "tty"}"\n'
         "az_offset_deg = 180\naz_min_deg = 20\naz_max_deg = 340\n"
     )
-    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    out = cli("check-config", "-c", str(write(tmp_path, text)))
     assert out.returncode == 0, out.stderr
     assert "takes bearings 0..360 except 160..200" in out.stdout, out.stdout
 
@@ -495,7 +495,7 @@ def test_an_unknown_table_or_key_names_the_nearest_known_one(
     tmp_path: Path, change: tuple[str, str], said: str
 ) -> None:
     text = MINIMAL.replace(*change)
-    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    out = cli("check-config", "-c", str(write(tmp_path, text)))
     assert out.returncode == 2 and out.stdout == "", out
     assert said in out.stderr, out.stderr
     assert "no rotators configured" not in out.stderr and "Field required" not in out.stderr
@@ -590,6 +590,8 @@ def test_check_config_refuses_a_state_file_the_start_would_refuse(
         state_file = tmp_path / "state" / "a-file" / "rotor" / "state.json"
         said = f"Not a directory ({state_file})"
     text = f"state_file = {str(state_file)!r}\n".replace("'", '"') + MINIMAL
+    # a process of its own: a FIFO opened for writing would block a check-config in this one
+    # for ever, where the process's deadline says so
     out = run_cli("check-config", "-c", str(write(tmp_path, text)), timeout_s=20)
     assert out.returncode == 2 and out.stdout == "", out
     assert out.stderr == f"rotor-bridge: state_file {state_file} cannot be written: {said}\n"
@@ -605,7 +607,7 @@ def test_check_config_writes_no_state_file_and_warns_of_a_directory_it_cannot_wr
     one is a warning, not an error; and checking writes nothing (no directory either)."""
     state_file = tmp_path / "state" / "rotor" / "state.json"
     text = f"state_file = {str(state_file)!r}\n".replace("'", '"') + MINIMAL
-    out = run_cli("check-config", "-c", str(write(tmp_path, text)))
+    out = cli("check-config", "-c", str(write(tmp_path, text)))
     assert out.returncode == 0 and "warning: state_file" not in out.stdout, out
     assert not (tmp_path / "state").exists()
     s = load_settings(write(tmp_path, text), environ={})

@@ -11,7 +11,7 @@ import pytest
 
 from bridge.config_report import config_warnings, masked
 from bridge.settings import ConfigError, Settings, load_settings
-from tests.support import run_cli
+from tests.support import cli
 
 ROTATOR = '[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'
 PASSWORD = "correct horse battery"
@@ -190,17 +190,17 @@ def test_the_beamwidth_defaults_to_60_and_is_an_angle(tmp_path: Path) -> None:
 def test_check_config_says_whether_the_console_is_on_and_where(tmp_path: Path) -> None:
     path = tmp_path / "c.toml"
     path.write_text(ROTATOR)
-    out = run_cli("check-config", "-c", str(path))
+    out = cli("check-config", "-c", str(path))
     assert out.returncode == 0 and "web console: off" in out.stdout.splitlines(), out
 
     path.write_text("[web]\nenabled = true\n" + ROTATOR)
-    out = run_cli("check-config", "-c", str(path))
+    out = cli("check-config", "-c", str(path))
     assert "web console: http://127.0.0.1:8754/, no password" in out.stdout.splitlines(), out
     assert "web.bind" not in out.stdout  # loopback: nothing to warn about
 
     secret = password_file(tmp_path, PASSWORD + "\n")
     path.write_text(f'[web]\nenabled = true\nbind = "::"\npassword_file = "{secret}"\n' + ROTATOR)
-    out = run_cli("check-config", "--full", "-c", str(path))
+    out = cli("check-config", "--full", "-c", str(path))
     assert out.returncode == 0, out.stderr
     assert "web console: http://[::]:8754/, a password" in out.stdout.splitlines()
     assert PASSWORD not in out.stdout + out.stderr

@@ -196,7 +196,7 @@ _PIECES = [" ", "  ", "1", "0", "9", "Z", "z", "A", "k", "/", ":", ".", "-", "#"
 _WORDS = ["1829Z", "2359z", "14025.0", "JA1ABC", "ea5wu", "FN20", "DX de "]
 
 
-@settings(max_examples=3000, deadline=None)
+@settings(max_examples=500, deadline=None)
 @given(
     head=st.sampled_from(["", "DX de ", "DX de EA5WU: ", "DX de EA5WU:  14025.0  "]),
     body=st.lists(st.sampled_from(_PIECES + _WORDS), max_size=16),

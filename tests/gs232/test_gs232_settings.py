@@ -9,7 +9,7 @@ import pytest
 
 from bridge.config_report import config_warnings
 from bridge.settings import ConfigError, load_settings
-from tests.support import run_cli
+from tests.support import cli
 
 
 def write(tmp_path: Path, rotators: list[str], extra: str = "") -> Path:
@@ -65,7 +65,7 @@ def test_a_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
 
 def test_check_config_lists_them(tmp_path: Path) -> None:
     path = write(tmp_path, ["rotctld_port = 4533\ngs232_port = 4535\neasycomm_port = 4536"])
-    out = run_cli("check-config", "-c", str(path))
+    out = cli("check-config", "-c", str(path))
     assert out.returncode == 0, out.stderr
     assert (
         "rotctld on 127.0.0.1:4533; GS-232B on 127.0.0.1:4535; Easycomm II on 127.0.0.1:4536"
@@ -88,13 +88,13 @@ def test_a_pty_path_given_twice_is_refused(tmp_path: Path, rotators: list[str], 
 
 def test_check_config_shows_the_ptys(tmp_path: Path) -> None:
     path = write(tmp_path, ['gs232_pty = "/tmp/rotor-gs232"\neasycomm_pty = "/tmp/rotor-ec"'])
-    out = run_cli("check-config", "-c", str(path)).stdout
+    out = cli("check-config", "-c", str(path)).stdout
     assert "GS-232B on a pty at /tmp/rotor-gs232; Easycomm II on a pty at /tmp/rotor-ec" in out
 
 
 def test_check_config_shows_the_dcu1_endpoints_and_the_gs232_replies(tmp_path: Path) -> None:
     keys = 'gs232_port = 4535\ngs232_replies = "A"\ndcu1_port = 4537\ndcu1_pty = "/tmp/rotor-dcu1"'
-    out = run_cli("check-config", "-c", str(write(tmp_path, [keys]))).stdout
+    out = cli("check-config", "-c", str(write(tmp_path, [keys]))).stdout
     assert (
         "GS-232A on 127.0.0.1:4535; DCU-1 on 127.0.0.1:4537; DCU-1 on a pty at /tmp/rotor-dcu1"
         in out

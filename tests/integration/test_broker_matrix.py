@@ -101,6 +101,7 @@ def test_the_bridge_says_which_protocol_it_speaks_and_what_that_means(
 
 
 def test_a_target_turns_the_rotor_and_a_stop_while_turning_stops_it(station: Rig) -> None:
+    station.express = True  # the stop express's own connection, on each broker (rig.py)
     emu = station.add("tower", emu={"start_az_deg": 0, "speed_deg_s": 20})
     station.start()
     station.ready("tower")

@@ -57,6 +57,12 @@ os.write(release, b"1" if seen else b"0")
 """
 
 
+@pytest.fixture(autouse=True)
+def _express_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The rigs here start the express: it is what they test (the rig's default is off)."""
+    monkeypatch.setattr(Rig, "express", True)
+
+
 def express_ready(app: App, rid: str = "tower") -> None:
     """Subscribed, and holding the rotator's port: from now on it writes a stop."""
     wait_until(app.express.up.is_set, 10, "the express is up")

@@ -13,7 +13,7 @@ import pytest
 
 from bridge.config_report import masked
 from bridge.settings import load_settings
-from tests.support import run_cli
+from tests.support import cli
 
 CONFIG = """
 state_file = "{state}"
@@ -38,7 +38,7 @@ def client_id(path: Path) -> str:
 
 
 def shown_by_check_config(path: Path) -> str:
-    done = run_cli("check-config", "--full", "-c", str(path))
+    done = cli("check-config", "--full", "-c", str(path))
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()  # every value: the JSON between the summary and "config OK"
     full = lines[lines.index("{") : lines.index("}") + 1]

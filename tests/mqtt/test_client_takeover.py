@@ -22,7 +22,7 @@ from bridge.mqtt.connection import (
     TakeoverGuard,
 )
 from bridge.settings import MqttSettings
-from tests.support import wait_until
+from tests.support import slow, wait_until
 
 
 def test_a_takeover_backs_off_doubling_up_to_a_minute() -> None:
@@ -215,9 +215,10 @@ def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
         client.stop()
         broker.close()
     first, second, third = broker.accepted[:3]
-    # paho alone would be back after 1 s every time
-    assert second - first >= TAKEOVER_FIRST_S - 0.5
-    assert third - second >= 2 * TAKEOVER_FIRST_S - 0.5
+    # paho alone would be back after 1 s every time; a connection taken late (a busy machine)
+    # shortens the gap after it by as much: that allowance is a deadline, scaled
+    assert second - first >= TAKEOVER_FIRST_S - slow(0.5)
+    assert third - second >= 2 * TAKEOVER_FIRST_S - slow(0.5)
     errors = [r.getMessage() for r in caplog.records if r.levelno >= logging.ERROR]
     assert len(errors) == 1, errors
     assert "session taken over" in errors[0] and "'tower-bridge'" in errors[0]

@@ -3,7 +3,8 @@
 - waiting.py: ``wait_until``, waiting on a condition with a deadline, never a bare sleep;
   ``slow``, the one factor (ROTOR_TEST_SLOWDOWN) every deadline of the tests is scaled by
 - mqtt.py: ``Probe``, an MQTT client that records what arrives; ``retained_snapshot``
-- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``), its TOML files;
+- process.py: the bridge as a user runs it (``BridgeProcess``, ``run_cli``; ``cli`` in this
+  process, for check-config), its TOML files;
   the one BridgeProcess of the tests, the fault suite, the soak and the benchmarks
 - codecs.py: feeding a sans-IO parser whole, byte by byte, and split (``feed``, ``HOW``)
 - rig.py: a broker, emulated controllers on real ptys and the bridge, in-process or as its own
@@ -11,6 +12,8 @@
   benchmarks (real timings, paced lines); imported from there, as it brings the whole bridge in
 - tap.py: the serial sniffer on a controller's transmit line and independent parsers of what
   it reports (the ground truth of "a bearing the controller never reported")
+- cpu.py: where the suite's CPU goes, each test's CPU-seconds and its children's, recorded
+  when ROTOR_TEST_CPU names a file (``python -m tests.support.cpu FILE`` reports them)
 
 A private mosquitto on a free loopback port is mosquitto.py's ``Mosquitto`` (the demo's broker
 with a configuration of its own, a crash, a freeze and a restart); the pytest fixtures
@@ -20,7 +23,7 @@ with a configuration of its own, a crash, a freeze and a restart); the pytest fi
 from tests.support.codecs import HOW, feed
 from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.mqtt import Message, Probe, retained_snapshot
-from tests.support.process import ROOT, BridgeProcess, bridge_env, run_cli, to_toml
+from tests.support.process import ROOT, BridgeProcess, bridge_env, cli, run_cli, to_toml
 from tests.support.waiting import slow, wait_until
 
 __all__ = [
@@ -31,6 +34,7 @@ __all__ = [
     "Mosquitto",
     "Probe",
     "bridge_env",
+    "cli",
     "feed",
     "free_port",
     "retained_snapshot",

@@ -175,6 +175,13 @@ def emulator_line(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Li
 
 
 class Rig:
+    #: the stop express (mqtt/express.py), a Python process of its own beside each bridge the
+    #: rig starts (about 0.4 CPU-s each, most of a rig test's cost): on where it is what a test
+    #: is about (tests/integration/test_stop_express.py, the broker matrix; tests/mqtt/
+    #: test_express.py proves it on its own), off elsewhere: the stop lane then carries the
+    #: stops, as with ``mqtt.stop_express`` off; ``mqtt_extra`` may say otherwise
+    express = False
+
     def __init__(
         self,
         tmp_path: Path,
@@ -238,7 +245,7 @@ class Rig:
             self.rotators,
             client_id=f"bridge-under-test-{os.getpid()}-{id(self)}",
             base_topic=self.base,
-            mqtt=self.mqtt_extra,
+            mqtt={"stop_express": self.express, **self.mqtt_extra},
             sections=self.sections,
         )
 
