@@ -1,5 +1,5 @@
-"""Item: the operator console (bridge/web/): how soon a status change reaches a page, what open
-pages cost the bridge, and what the page weighs.
+"""Item: the operator console (bridge/interfaces/web/): how soon a status change reaches a page,
+what open pages cost the bridge, and what the page weighs.
 
 One bridge process (`python -m bridge run -c FILE`, `[web]` on, a station for the map) on four
 emulated Rotor-EZ controllers at their real speed (6 deg/s) in the emulator host, behind paced

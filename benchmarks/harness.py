@@ -16,7 +16,7 @@ Rules:
    tests.support's rig brings in the bridge's modules for its in-process mode, unused here):
    what is measured is the service as a user runs it.
 4. What the tests have too comes from them (tests.support: waiting with a deadline, the MQTT
-   probe, the bridge's process, environment and configuration, the rig, and mosquitto.py: a
+   probe, the bridge's process, environment and configuration, the rig, and demo/mosquitto.py: a
    free port, the mosquitto executable), not a copy of it. `python -m benchmarks` runs from the
    top of the checkout, so `tests` is importable; the broker here is its own start (rule 1, and
    no -v log per message).

@@ -1,4 +1,4 @@
-"""Item health: what rotor health (bridge/engine/health.py) costs per poll exchange.
+"""Item health: what rotor health (bridge/session/health.py) costs per poll exchange.
 
     python -m benchmarks health [--quick]
 
@@ -23,7 +23,7 @@ from typing import Any
 
 from benchmarks.harness import Scope
 from benchmarks.report import ItemResult, Table, Verdict
-from bridge.model import MotionState
+from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 MOVES = 6  # per round: back and forth, 280 deg each at the emulator's 6 deg/s

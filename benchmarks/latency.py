@@ -30,8 +30,8 @@ target goes out on the line first, so the stop may wait behind its 7 bytes (14.6
 baud), counted in the verdict's limit. "0-3 ms after a refused target" (999, out of range): the
 answer is an error event at QoS 1, and the broker's PUBACK for it is the packet the bridge does
 not answer, so the broker's hold lasts until the bridge's delayed ACK unless the bridge
-acknowledges at once (bridge/mqtt/client.py rule 9). While retained state went out at QoS 1,
-every target was answered that way.
+acknowledges at once (bridge/interfaces/mqtt/client.py rule 9). While retained state went out at QoS
+1, every target was answered that way.
 
 Every controller sits behind a paced line (line.PacedRelay): the host's bytes reach it when
 their last bit would have at the line rate, queued behind anything still being sent, and the
@@ -107,7 +107,7 @@ def _spid_payload(el: bool) -> Callable[[int], str]:
 def isolation_s() -> float:
     """How long after a target was sent the next one counts as a new command, not as part of a
     stream the bridge holds back on purpose (targets.BURST_QUIET_S)."""
-    from bridge.engine import targets
+    from bridge.session import targets
 
     return float(targets.BURST_QUIET_S)
 
@@ -128,9 +128,9 @@ _SPID_IDLE = {"idle_poll_interval_s": 1.0, "moving_poll_interval_s": 1.0, "settl
 def apart_s() -> tuple[float, float]:
     """The pause between two stops to a rotor at rest, each a stop of its own: a stop that comes
     within the brake window of another, with nothing sent and no turning seen since, adds
-    nothing on the wire (engine/stops.py rule 1), so such stops are spaced past that window,
+    nothing on the wire (session/stops.py rule 1), so such stops are spaced past that window,
     which with no brake delay is STOP_MERGE_MIN_S."""
-    from bridge.engine import stops
+    from bridge.session import stops
 
     return (stops.STOP_MERGE_MIN_S + 0.02, stops.STOP_MERGE_MIN_S + 0.08)
 

@@ -68,7 +68,7 @@ def start_remote(scope: Scope, broker_port: int) -> int:
 
 
 def remote_case(scope: Scope, n_set: int, n_get: int, rng: random.Random) -> dict[str, Any]:
-    from bridge.engine import targets
+    from bridge.session import targets
 
     quiet_s = float(targets.BURST_QUIET_S) + 0.02
     with single_rotator(

@@ -14,7 +14,7 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 - ``gc``: every collection (generation, start, end) and the main connection's message count;
 - ``lockwait``: a wait of 0.5 ms or more for Halts._lock (who waited, in what; who held it);
 - ``xwrite``: the stop express wrote a rotator's stop frame (its own stamp, said to the bridge:
-  the express is another process, mqtt/express.py);
+  the express is another process, interfaces/mqtt/express.py);
 - every thread's name is given to the kernel (its ``comm`` in /proc/<pid>/task), to read
   per-thread CPU from outside while a load runs;
 - ``put`` and ``serve`` carry the serial-lines thread's schedstat (ns on a CPU, ns runnable
@@ -78,9 +78,10 @@ def _name_threads() -> None:
 
 def install(path: str) -> None:
     _name_threads()
-    from bridge.engine import mailbox, worker
-    from bridge.model import Stop
-    from bridge.mqtt import connection, halts
+    from bridge.core.model import Stop
+    from bridge.interfaces.mqtt import connection, halts
+    from bridge.runtime import worker
+    from bridge.session import mailbox
 
     ev = EVENTS.append
     counts = {"main": 0}
@@ -230,7 +231,7 @@ def install(path: str) -> None:
 
     gc.callbacks.append(_gc)
 
-    from bridge.mqtt import express
+    from bridge.interfaces.mqtt import express
 
     express_init = express.Express.__init__
 

@@ -1,17 +1,17 @@
 """Composition root: settings -> rotators (workers) -> MQTT; signals; ordered shutdown.
 
-It also turns a rotator's settings into the engine's configuration (engine/worker.py
+It also turns a rotator's settings into the engine's configuration (runtime/worker.py
 WorkerConfig), for itself and for the tests that build a rotator of their own
 (``worker_config``): the one place where the user's keys meet the engine's terms, the speeds,
 limits, timings and the judge's terms resolved once, health's, tracking's, following's and the
 wind park's terms; and a ``[[groups]]`` table as the group the MQTT service turns
-(mqtt/groups.py). Those functions are pure: settings in, frozen configuration out.
+(interfaces/mqtt/groups.py). Those functions are pure: settings in, frozen configuration out.
 
 Rules:
 1. Every value the engine uses comes from here: a key left out gets the default
-   settings_defaults.py derives for the model (check-config shows the same values).
+   settings/defaults.py derives for the model (check-config shows the same values).
 2. Wind speeds are km/h from here on, whatever the rotator's ``wind_unit``.
-3. A composite rotator's two boxes (engine/composite.py) are each configured as a rotator of
+3. A composite rotator's two boxes (runtime/composite.py) are each configured as a rotator of
    their own model, port and rate, with every other key of the rotator's, its id, and its
    judge's terms: the azimuth box's without elevation (protocols/axes.py rule 1).
 """
@@ -30,43 +30,43 @@ from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from bridge.engine.audit import AuditTrail
-from bridge.engine.catalog import TleCatalog
-from bridge.engine.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
-from bridge.engine.lines import Lines
-from bridge.engine.listeners import contained
-from bridge.engine.motion import MotionConfig
-from bridge.engine.port import PortOpener, open_port
-from bridge.engine.rotator import Rotator
-from bridge.engine.skywork import SkyWorker
-from bridge.engine.state_store import StateStore
-from bridge.engine.worker import WorkerConfig
 from bridge.feature import AppView, Feature, FeatureService, make_service
 from bridge.features import FEATURES
-from bridge.gs232 import EMULATIONS
-from bridge.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
-from bridge.loggers import LoggerEndpoints
-from bridge.mqtt.claim import Claim, Instance
-from bridge.mqtt.client import MqttClient
-from bridge.mqtt.connection import MQTT311_LOSES
-from bridge.mqtt.express import Express
-from bridge.mqtt.groups import Group, Member
-from bridge.mqtt.lane import StopLane
-from bridge.mqtt.payloads import ConsoleFacts
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.interfaces.gs232 import EMULATIONS
+from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
+from bridge.interfaces.loggers import LoggerEndpoints
+from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.connection import MQTT311_LOSES
+from bridge.interfaces.mqtt.express import Express
+from bridge.interfaces.mqtt.groups import Group, Member
+from bridge.interfaces.mqtt.lane import StopLane
+from bridge.interfaces.mqtt.payloads import ConsoleFacts
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
+from bridge.interfaces.ptylines import PtyLineServer
+from bridge.interfaces.rotctld import RotctldServer
+from bridge.interfaces.tcplines import LineServer
+from bridge.interfaces.web.files import installation_secret
+from bridge.interfaces.web.view import RotatorFacts
+from bridge.interfaces.wsjtx import WsjtxListener
 from bridge.protocols.axes import Axis
-from bridge.ptylines import PtyLineServer
-from bridge.rotctld import RotctldServer
+from bridge.runtime.audit import AuditTrail
+from bridge.runtime.lines import Lines
+from bridge.runtime.listeners import contained
+from bridge.runtime.port import PortOpener, open_port
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.runtime.worker import WorkerConfig
+from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
+from bridge.session.motion import MotionConfig
 from bridge.settings import ConfigError, GroupSettings, RotatorSettings, Settings
 from bridge.sky import Sky
-from bridge.tcplines import LineServer
-from bridge.web.files import installation_secret
-from bridge.web.view import RotatorFacts
-from bridge.wsjtx import WsjtxListener
+from bridge.sky.catalog import TleCatalog
+from bridge.sky.worker import SkyWorker
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
-    from bridge.web.server import WebConsole
+    from bridge.interfaces.web.server import WebConsole
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
 
@@ -135,12 +135,12 @@ def worker_config(
 
 
 def wind_config(r: RotatorSettings) -> WindConfig | None:
-    """The wind park's terms in km/h (settings_wind.py), or None without a wind_topic."""
+    """The wind park's terms in km/h (settings/wind.py), or None without a wind_topic."""
     above = r.wind_kmh(r.wind_park_above)
     if r.wind_topic is None or above is None:
         return None
     park_az = r.wind_park_az_deg if r.wind_park_az_deg is not None else r.park_az_deg
-    assert park_az is not None  # settings_wind.py rule 1
+    assert park_az is not None  # settings/wind.py rule 1
     release = r.wind_kmh(r.wind_release_below) or above
     hold_s, silent_s = r.wind_hold_min * 60.0, r.wind_silent_min * 60.0
     return WindConfig(above, release, hold_s, (park_az, r.park_el_deg), silent_s, r.wind_topic)
@@ -188,10 +188,11 @@ class App:
         give one of their own, so the sky they judge is the same at any time of day."""
         self.settings = settings
         roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
-        groups = {g.id: settings.group_topic(g) for g in settings.groups}  # mqtt/groups.py
+        # interfaces/mqtt/groups.py
+        groups = {g.id: settings.group_topic(g) for g in settings.groups}
         self.topics = Topics(settings.mqtt.base_topic, roots, groups)
         # the service publishes through the client; the client hands every message to the service
-        self.me = Instance.me(settings.mqtt.effective_client_id())  # mqtt/claim.py
+        self.me = Instance.me(settings.mqtt.effective_client_id())  # interfaces/mqtt/claim.py
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
         self._lane_started = False
@@ -244,10 +245,11 @@ class App:
             raise ConfigError(
                 f"state_file {settings.state_file} cannot be written: {exc.strerror or exc}{where}"
             ) from None
-        self.lines = Lines()  # one thread serves every serial line (engine/lines.py)
+        self.lines = Lines()  # one thread serves every serial line (runtime/lines.py)
         self._stopped = threading.Event()
         self.rotators: list[Rotator] = []
-        self._by_id: dict[str, Rotator] = {}  # the stop express's holds (mqtt/express.py rule 8)
+        # the stop express's holds (interfaces/mqtt/express.py rule 8)
+        self._by_id: dict[str, Rotator] = {}
         audit = settings.audit_file, settings.audit_max_bytes  # every command judged: R/audit
         self.audit = AuditTrail(*audit, self.mqtt.publish_audit, self.rotators)  # and the file
         self.rotctld: list[RotctldServer] = []  # one per rotator with a rotctld_port
@@ -255,10 +257,11 @@ class App:
         position = settings.station.position
         sky = Sky(*position) if position is not None else None
         catalog = self.catalog = TleCatalog(settings.tracking.tle_file)  # one file for all
-        self.sky = SkyWorker()  # one thread computes the sky for all (engine/skywork.py)
+        self.sky = SkyWorker()  # one thread computes the sky for all (sky/worker.py)
         self.web: WebConsole | None = None  # the operator console ([web])
         if settings.web.enabled:
-            from bridge.web.server import WebConsole  # aiohttp: a tenth of a start-up's CPU
+            # aiohttp: a tenth of a start-up's CPU
+            from bridge.interfaces.web.server import WebConsole
 
             password = settings.web.password
             self.web = WebConsole(
@@ -275,9 +278,9 @@ class App:
                 satellites=catalog.names,
                 wall=wall,
             )
-        satellites = tuple(catalog.names())  # for R/info, read once (mqtt/payloads.py)
+        satellites = tuple(catalog.names())  # for R/info, read once (interfaces/mqtt/payloads.py)
         follow = FollowConfig(position, wsjtx=settings.wsjtx.enabled)
-        self.express = self._express(settings)  # mqtt/express.py: a stop's frame first
+        self.express = self._express(settings)  # interfaces/mqtt/express.py: a stop's frame first
         for r in settings.rotators:
             rot = Rotator(
                 worker_config(r, sky, follow),
@@ -316,7 +319,8 @@ class App:
                 self.rotctld.append(server)
             for emulation in EMULATIONS.values():
                 self.emulations += emulation.offered(rot, r)
-        for g in settings.groups:  # turned together from G/target and G/stop (mqtt/groups.py)
+        # turned together from G/target and G/stop (interfaces/mqtt/groups.py)
+        for g in settings.groups:
             self.mqtt.attach_group(group_of(g))
         self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
@@ -331,7 +335,8 @@ class App:
                     r.n1mm_report_address,
                     tuple(r.bands),
                 )
-        wsjtx = settings.wsjtx  # what WSJT-X says goes to every rotator (wsjtx/server.py)
+        # what WSJT-X says goes to every rotator (interfaces/wsjtx/server.py)
+        wsjtx = settings.wsjtx
         self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
         self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
         self.services: dict[str, FeatureService] = {}  # the station's features (the DX cluster)
@@ -359,18 +364,20 @@ class App:
             on_subscribed=self.mqtt.lane_subscribed,
             no_replay=self.mqtt.no_replay_subscriptions(),
         )
-        self.client.before_message = self.lane.first  # mqtt/lane.py rule 4: a stop before a backlog
+        # interfaces/mqtt/lane.py rule 4: a stop before a backlog
+        self.client.before_message = self.lane.first
         self.client.watch_owned(self.topics.owned())
 
     def _publishers(self, feature: Feature) -> tuple[Callable[[str], None], ...]:
         """A feature's retained topics under the base topic (``B/spots``); the console's
-        ``on_<suffix>`` gets each document first, contained (web/live.py rule 6)."""
+        ``on_<suffix>`` gets each document first, contained (interfaces/web/live.py rule 6)."""
         out = []
         for suffix in feature.base_topics:
             to_mqtt = partial(self.client.publish_retained, self.topics.under_base(suffix))
             console = getattr(self.web, f"on_{suffix}", None)
             if console is not None:
-                from bridge.web.live import with_console  # (with the console's server, above)
+                # (with the console's server, above)
+                from bridge.interfaces.web.live import with_console
 
                 out.append(with_console(to_mqtt, console))
             else:
@@ -378,8 +385,8 @@ class App:
         return tuple(out)
 
     def _express(self, settings: Settings) -> Express:
-        """The stop express (mqtt/express.py) for the rotators whose model takes a stop frame
-        at any moment (its rule 4); none with ``mqtt.stop_express`` off."""
+        """The stop express (interfaces/mqtt/express.py) for the rotators whose model takes a stop
+        frame at any moment (its rule 4); none with ``mqtt.stop_express`` off."""
         topics: dict[str, tuple[str, str]] = {}
         frames: dict[str, bytes] = {}
         for r in settings.rotators:
@@ -392,7 +399,7 @@ class App:
                 t = self.topics.rotator(r.id)
                 topics[t.stop], topics[t.lock] = (r.id, "stop"), (r.id, "lock")
                 frames[r.id] = stop
-        groups = {  # a group's stop: each member's frame (mqtt/groups.py)
+        groups = {  # a group's stop: each member's frame (interfaces/mqtt/groups.py)
             self.topics.group(g.id).stop: tuple(g.rotators) for g in settings.groups
         }
         express = Express(
@@ -452,7 +459,7 @@ class App:
             status_topic=ha.status_topic,
             topics=self.topics,
             rotators=infos,
-            groups=tuple(  # a device each (mqtt/groups.py)
+            groups=tuple(  # a device each (interfaces/mqtt/groups.py)
                 GroupInfo(g.id, g.label, self.topics.group(g.id), tuple(g.rotators))
                 for g in settings.groups
             ),
@@ -490,7 +497,8 @@ class App:
         self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
 
     def _info(self, problem: str, on: bool) -> None:
-        """A problem said on ``B/bridge/info`` while it lasts (a long hold: mqtt/halts.py)."""
+        """A problem said on ``B/bridge/info`` while it lasts (a long hold:
+        interfaces/mqtt/halts.py)."""
         problems = self.client.problems
         if on and problem not in problems:
             problems.append(problem)
@@ -510,20 +518,22 @@ class App:
         twice per try)."""
         if not self._lane_started and not self._stopped.is_set():
             self._lane_started = True
-            if not self.client.v5:  # mqtt.protocol "auto" stepped down (mqtt/connection.py)
+            # mqtt.protocol "auto" stepped down (interfaces/mqtt/connection.py)
+            if not self.client.v5:
                 self.lane.use_mqtt311()
             self.lane.start()
             self.express.start(mqtt311=not self.client.v5)
         stepped_down = self.settings.mqtt.protocol == "auto" and not self.client.v5
         if stepped_down != (STEPPED_DOWN in self.client.problems):
-            # said while it lasts (mqtt/connection.py rule 1); not on paho's thread, which
-            # holds paho's mutex here while the publish takes the client's lock
+            # said while it lasts (interfaces/mqtt/connection.py rule 1); not on paho's thread,
+            # which holds paho's mutex here while the publish takes the client's lock
             threading.Thread(
                 target=self._info, args=(STEPPED_DOWN, stepped_down), daemon=True
             ).start()
 
     def _refused(self, message: str) -> None:
-        """Another bridge owns the base topic (mqtt/claim.py): ``run`` stops, exit code 2."""
+        """Another bridge owns the base topic (interfaces/mqtt/claim.py): ``run`` stops, exit code
+        2."""
         self.failure = message
         self.failed.set()
 
@@ -599,7 +609,7 @@ class App:
         for service in self.services.values():
             service.stop()
         if self.web is not None:
-            self.web.stop()  # each page sees the bridge go (web/server.py rule 6)
+            self.web.stop()  # each page sees the bridge go (interfaces/web/server.py rule 6)
         for rot in self.rotators:
             rot.stop()
         self.store.flush()  # the last lock or option set is on disk (state_store.py rule 5)

@@ -10,8 +10,8 @@ import os
 import sys
 
 from bridge import __version__
-from bridge.config_report import check_state_file, config_warnings, masked, summary
 from bridge.settings import ConfigError, Settings, load_settings
+from bridge.settings.report import check_state_file, config_warnings, masked, summary
 
 EXIT_CONFIG = 2
 
@@ -52,10 +52,10 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def cmd_check_config(args: argparse.Namespace) -> int:
     """A summary, the warnings, every value with --full, and the line that says it is good
-    (config_report.py); a file that is not good is one message on stderr and exit 2."""
+    (settings/report.py); a file that is not good is one message on stderr and exit 2."""
     settings = _load(args)
     try:
-        check_state_file(settings)  # as the start tries it (config_report.py rule 5)
+        check_state_file(settings)  # as the start tries it (settings/report.py rule 5)
     except ConfigError as exc:
         raise _fail(exc) from None
     for line in summary(settings):
@@ -73,7 +73,7 @@ def cmd_check_config(args: argparse.Namespace) -> int:
 
 
 def cmd_ports(args: argparse.Namespace) -> int:
-    from bridge.engine.port import list_serial_ports
+    from bridge.runtime.port import list_serial_ports
 
     ports = list_serial_ports()
     if not ports:

@@ -5,7 +5,7 @@ Rules:
    the example (``examples``, else the default), the words for a key left out (``unset``),
    the environment variable from its place. A key without a description is an error here, so
    a new key cannot go undocumented.
-2. The model table comes from the registry and settings_defaults.py: the values a rotator
+2. The model table comes from the registry and settings/defaults.py: the values a rotator
    left at its defaults runs with.
 3. The output depends on nothing but the code (no host name, home directory or time), so the
    committed page can be compared with what this writes (tests/test_config_docs.py).
@@ -20,7 +20,6 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 from pydantic_core import PydanticUndefined
 
-from bridge.config_report import SHOWN
 from bridge.features import FEATURES
 from bridge.protocols import REGISTRY
 from bridge.settings import (
@@ -35,11 +34,12 @@ from bridge.settings import (
     WebSettings,
     WsjtxSettings,
 )
-from bridge.settings_defaults import model_defaults
-from bridge.settings_groups import GroupSettings
-from bridge.settings_loggers import LoggerFields
-from bridge.settings_pointing import PointingFields
-from bridge.settings_rotator import AxisSettings
+from bridge.settings.defaults import model_defaults
+from bridge.settings.groups import GroupSettings
+from bridge.settings.loggers import LoggerFields
+from bridge.settings.pointing import PointingFields
+from bridge.settings.report import SHOWN
+from bridge.settings.rotator import AxisSettings
 
 COMMAND = "scripts/gen-config-doc"
 MINIMAL = """[mqtt]

@@ -12,19 +12,19 @@ its docs section; a feature of the station (the DX cluster) its table of the fil
 under the base topic and the service the app starts when that table turns it on.
 
 Rules:
-1. Stop, lock and the last word are no feature: they stay first and hard-wired (mqtt/topics.py,
-   mqtt/lastword.py, mqtt/halts.py), in the order written there. A feature's command is judged
-   like any (``Rotator.submit``); it is never a stop or a lock, and it never reaches the stop
-   lane.
+1. Stop, lock and the last word are no feature: they stay first and hard-wired
+   (interfaces/mqtt/topics.py, interfaces/mqtt/lastword.py, interfaces/mqtt/halts.py), in the order
+   written there. A feature's command is judged like any (``Rotator.submit``); it is never a stop or
+   a lock, and it never reaches the stop lane.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
    subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
 3. A feature's topic suffix is unique across the core topics and every feature (the topic
-   table refuses one that is not, at start: mqtt/topics.py), and its first word is reserved
-   from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks it).
+   table refuses one that is not, at start: interfaces/mqtt/topics.py), and its first word is
+   reserved from group ids (settings/groups.py ``RESERVED``; tests/test_features.py checks it).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
-   back ends: a feature spans the layers (its parser sits on mqtt/payloads.py while mqtt's
-   topic table iterates it), so an import of it from below would be a circle. Nothing heavy is
-   imported by a declaration: a feature's session part is the session's to import, its
+   back ends: a feature spans the layers (its parser sits on interfaces/mqtt/payloads.py while
+   mqtt's topic table iterates it), so an import of it from below would be a circle. Nothing heavy
+   is imported by a declaration: a feature's session part is the session's to import, its
    service the app's, and only when its settings turn it on (``service_on``).
 5. A feature's entity sits after the entity table's own rows, or right after the row it names
    (``EntityRow.after``: where the table had it before the feature was a package).
@@ -39,7 +39,7 @@ from typing import Any, Generic, Protocol, TypeVar
 
 from pydantic import BaseModel
 
-from bridge.model import Command, Origin, RotatorStatus
+from bridge.core.model import Command, Origin, RotatorStatus
 
 T = TypeVar("T")
 
@@ -50,11 +50,11 @@ REGISTRY_MODULE = "bridge.features"  # rule 4: its ``FEATURES``
 class CommandTopic:
     """``R/<suffix>``: a command topic of the main connection (never the stop lane's: rule 1).
     ``parse`` turns its payload, from ``origin``, into one command for the judge; it raises
-    mqtt/payloads.py's PayloadError naming what was wrong (refused on ``R/error``). An empty
-    payload is refused before it ("empty payload") unless it ``takes_empty``."""
+    interfaces/mqtt/payloads.py's PayloadError naming what was wrong (refused on ``R/error``). An
+    empty payload is refused before it ("empty payload") unless it ``takes_empty``."""
 
     suffix: str
-    kind: str  # the command's name in refusals and the audit (mqtt/payloads.py describe)
+    kind: str  # the command's name in refusals and the audit (interfaces/mqtt/payloads.py describe)
     parse: Callable[[bytes, Origin], Command]
     takes_empty: bool = False
 
@@ -64,9 +64,9 @@ class StateTopic(Generic[T]):
     """``R/<suffix>``: retained, published from each status that carries a value (``value``
     None: nothing published); with ``new_only`` only when the value is a new object (a report
     made once per move, not at every status); with ``needs`` only for a rotator that has it
-    (a capability of mqtt/ports.py ``RotatorPort``: ``can_follow``); ``after_status``: published
-    after ``R/status``, not before; ``remote``: a client far from the station reads it
-    (mqtt/topics.py ``StationTopics``)."""
+    (a capability of interfaces/mqtt/ports.py ``RotatorPort``: ``can_follow``); ``after_status``:
+    published after ``R/status``, not before; ``remote``: a client far from the station reads it
+    (interfaces/mqtt/topics.py ``StationTopics``)."""
 
     suffix: str
     value: Callable[[RotatorStatus], T | None]
@@ -89,7 +89,8 @@ class StatusBlock(Generic[T]):
 
 
 class TopicView(Protocol):
-    """What an entity's config reads of its rotator's topics (mqtt/topics.py RotatorTopics)."""
+    """What an entity's config reads of its rotator's topics (interfaces/mqtt/topics.py
+    RotatorTopics)."""
 
     @property
     def root(self) -> str: ...
@@ -104,7 +105,8 @@ class TopicView(Protocol):
 
 
 class RotatorView(Protocol):
-    """What an entity's config reads of its rotator (homeassistant/info.py RotatorInfo)."""
+    """What an entity's config reads of its rotator (interfaces/homeassistant/info.py
+    RotatorInfo)."""
 
     @property
     def topics(self) -> TopicView: ...
@@ -112,9 +114,9 @@ class RotatorView(Protocol):
 
 @dataclass(frozen=True)
 class EntityRow:
-    """A Home Assistant entity of a rotator's device (homeassistant/entities.py ``Entity``):
-    ``needs`` a feature's name (configured on that rotator), a RotatorInfo field or a model
-    capability; ``bridge_only``: available while the rotator is unreachable."""
+    """A Home Assistant entity of a rotator's device (interfaces/homeassistant/entities.py
+    ``Entity``): ``needs`` a feature's name (configured on that rotator), a RotatorInfo field or a
+    model capability; ``bridge_only``: available while the rotator is unreachable."""
 
     platform: str
     object_id: str
@@ -129,7 +131,7 @@ class EntityRow:
 class Input:
     """Topics of the user's (not under the base topic) a feature reads, with the handler of
     their messages (True: it was one of them). Which of them are read without
-    retain-as-published (mqtt/connection.py rule 1: the flag then says "replayed") is the
+    retain-as-published (interfaces/mqtt/connection.py rule 1: the flag then says "replayed") is the
     feature's ``replayed``."""
 
     subscriptions: list[str]
@@ -139,10 +141,10 @@ class Input:
 @dataclass(frozen=True)
 class AppView:
     """What a feature's service is given by the app (app.py) when it starts it. ``settings``
-    is the whole file (bridge/settings.py ``Settings``, above this module); ``publishers`` are
+    is the whole file (bridge/settings/ ``Settings``, above this module); ``publishers`` are
     the publishes of the feature's ``base_topics``, in their order (``B/<suffix>``, retained;
     the web console's ``on_<suffix>`` is handed each document first, when the console is on);
-    ``mqtt`` is the MQTT service (mqtt/service.py)."""
+    ``mqtt`` is the MQTT service (interfaces/mqtt/service.py)."""
 
     settings: Any
     station: tuple[float, float] | None
@@ -153,9 +155,9 @@ class AppView:
 
 class FeatureService(Protocol):
     """A feature's own threads (the DX cluster's client), made by its ``service`` from an
-    AppView (ConfigError from bridge/settings.py if it cannot be), started after the rotators
+    AppView (ConfigError from bridge/settings/ if it cannot be), started after the rotators
     and stopped with the listeners; ``with_discovery`` hands it Home Assistant's publisher
-    (homeassistant/publisher.py) when discovery is on."""
+    (interfaces/homeassistant/publisher.py) when discovery is on."""
 
     def start(self) -> None: ...
 

@@ -1,10 +1,10 @@
-"""What every front end sees of a rotator: one Protocol, the station's own (engine/rotator.py)
+"""What every front end sees of a rotator: one Protocol, the station's own (runtime/rotator.py)
 and the remote's stand-ins for the station's (remote/rotator.py, remote/console.py) alike.
 
 Rules:
 1. A front end (MQTT, rotctld, GS-232, Easycomm, the loggers, the console, the DX cluster's
    aim) reaches the judge only through ``submit``: it parses what it read into one value of the
-   ``Command`` union (model.py) and hands it over with the words the user sent
+   ``Command`` union (core/model.py) and hands it over with the words the user sent
    (``described``, echoed on ``R/error`` and in the audit trail). ``submit`` raises Refused
    once the refusal is reported where the rotator's refusals go; the front end only renders it
    (an RPRT code, an alarm, an HTTP status).
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.model import Command, Origin, RotatorStatus
+from bridge.core.model import Command, Origin, RotatorStatus
 from bridge.protocols.base import ModelSpec
 
 

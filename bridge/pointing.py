@@ -24,7 +24,7 @@ Rules:
 5. A refusal raises Refused with a message naming the true and the raw value when they differ.
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
-   station, short path unless the long one is asked for; geo.py) and a nudge (relative to the
+   station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
    target while one is being approached, turning or braking, else to the bearing).
 7. A place without a direction from the station is refused: the station's own position (no
    bearing at all) and its antipode, where every direction is a great circle of the same
@@ -38,9 +38,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from bridge import geo
-from bridge.errors import RefusalCode, Refused
-from bridge.model import MotionState, RotatorStatus, Target, TargetInfo
+from bridge.core import geo
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
 from bridge.protocols.base import ModelSpec
 
 

@@ -1,4 +1,4 @@
-"""afterlock.py: the calls a lock's holder put off are all made once it lets go."""
+"""core/afterlock.py: the calls a lock's holder put off are all made once it lets go."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import logging
 
 import pytest
 
-from bridge.afterlock import Deferring, later
+from bridge.core.afterlock import Deferring, later
 
 
 def test_a_put_off_call_that_raises_does_not_cost_the_ones_after_it(
@@ -21,7 +21,7 @@ def test_a_put_off_call_that_raises_does_not_cost_the_ones_after_it(
         raise RuntimeError("pipe closed")
 
     lock = Deferring()
-    with caplog.at_level(logging.ERROR, logger="bridge.afterlock"), lock:
+    with caplog.at_level(logging.ERROR, logger="bridge.core.afterlock"), lock:
         later(fails)
         later(lambda: made.append("wake"))
         assert made == []  # put off while the lock is held

@@ -1,5 +1,5 @@
-"""Attacks on the pty line server (ptylines.py): what an unlucky client's terminal settings do,
-on real pseudo-terminals with the GS-232B session onto a stand-in rotator."""
+"""Attacks on the pty line server (interfaces/ptylines.py): what an unlucky client's terminal
+settings do, on real pseudo-terminals with the GS-232B session onto a stand-in rotator."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.gs232 import gs232_pty
-from bridge.ptylines import PtyLineServer
+from bridge.interfaces.gs232 import gs232_pty
+from bridge.interfaces.ptylines import PtyLineServer
 from tests.test_ptylines import Client, StandIn
 
 

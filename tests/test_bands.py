@@ -1,4 +1,4 @@
-"""The band table (bridge/bands.py): a frequency as each program sends it names its band, edges
+"""The band table (bridge/core/bands.py): a frequency as each program sends it names its band, edges
 included, whatever IARU region the station is in; a band name in any case is the table's, and
 one that is not gets the nearest names."""
 
@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from bridge.bands import NAMES, UnknownBand, band_of_hz, band_of_mhz, canonical
+from bridge.core.bands import NAMES, UnknownBand, band_of_hz, band_of_mhz, canonical
 
 
 @pytest.mark.parametrize(
@@ -83,7 +83,7 @@ def test_an_n1mm_band_field_that_is_no_band_names_none(mhz: float) -> None:
 
 
 def test_bands_do_not_overlap_and_are_in_order() -> None:
-    from bridge.bands import BANDS
+    from bridge.core.bands import BANDS
 
     for lower, upper in zip(BANDS, BANDS[1:], strict=False):
         assert lower.low_hz < lower.high_hz < upper.low_hz, (lower, upper)

@@ -37,7 +37,7 @@ def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_opt
         "from bridge.cli import build_parser\n"
         "args = build_parser(sys.argv[1:]).parse_args(sys.argv[1:])\n"
         "import bridge.app\n"
-        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.dxcluster')\n"
+        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.interfaces.dxcluster')\n"
         "print(sorted(m for m in sys.modules if m.startswith(lazy)))"
     )
     run = subprocess.run(

@@ -1,6 +1,6 @@
-"""A composite rotator's configuration (settings_rotator.py rule 4), its check-config report,
+"""A composite rotator's configuration (settings/rotator.py rule 4), its check-config report,
 and the pure parts that make one rotator of two boxes (protocols/axes.py, the split and the
-merge of engine/composite.py)."""
+merge of runtime/composite.py)."""
 
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ from typing import Any
 import pytest
 
 from bridge.app import axis_configs, worker_config
-from bridge.engine.actions import Write
-from bridge.engine.composite import CompositeWorker, Composition, merge, split
-from bridge.engine.mailbox import Batch, Mailbox
-from bridge.errors import Refused
-from bridge.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus, Stop, Target
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import PositionReply
+from bridge.runtime.composite import CompositeWorker, Composition, merge, split
+from bridge.session.actions import Write
+from bridge.session.mailbox import Batch, Mailbox
 from bridge.settings import ConfigError, settings_from
 from tests.support import ROOT, cli
 
@@ -162,7 +162,7 @@ def test_the_two_boxes_example_loads() -> None:
 
 
 def test_a_stop_is_on_both_lines_before_either_status_goes_out() -> None:
-    """CompositeWorker (engine/composite.py rule 1): the two sessions decide, then both stop
+    """CompositeWorker (runtime/composite.py rule 1): the two sessions decide, then both stop
     frames are written, then the statuses go to the listeners."""
     r = load(azimuth=AZ, elevation=EL)
     boxes = axis_configs(r)

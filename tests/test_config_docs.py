@@ -23,7 +23,6 @@ from unittest import mock
 import pytest
 from pydantic import BaseModel, ValidationError
 
-from bridge import settings_mqtt, settings_web
 from bridge.config_doc import COMMAND, render
 from bridge.remote.settings import RemoteSettings
 from bridge.settings import (
@@ -41,7 +40,9 @@ from bridge.settings import (
     WsjtxSettings,
     settings_from,
 )
-from bridge.settings_rotator import AxisSettings
+from bridge.settings import mqtt as settings_mqtt
+from bridge.settings import web as settings_web
+from bridge.settings.rotator import AxisSettings
 from tests.support import ROOT
 
 DOC = ROOT / "docs" / "configuration.md"

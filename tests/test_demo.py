@@ -14,9 +14,11 @@ from typing import Any
 
 import pytest
 
-from bridge import demo, demo_sky, emulators, geo
+from bridge import demo, emulators
 from bridge.cli import build_parser
-from bridge.homeassistant import Identity
+from bridge.core import geo
+from bridge.demo import sky as demo_sky
+from bridge.interfaces.homeassistant import Identity
 from bridge.sky import parse_tles
 from tests.demo_process import DemoProcess
 from tests.support import Probe, retained_snapshot
@@ -355,7 +357,7 @@ def test_the_demo_tracks_its_own_satellite_from_the_prompt(tmp_path: Path) -> No
 
 @pytest.mark.parametrize("locator", ["JO62qm", "PM95vq", "QF56", "FN31", "KP03", "RE78", "AA00"])
 def test_the_demo_satellite_passes_over_any_station_when_the_banner_says(locator: str) -> None:
-    """demo_sky.py's elements, checked by the tests' own SGP4 (sgp4 and our frame rotation):
+    """demo/sky.py's elements, checked by the tests' own SGP4 (sgp4 and our frame rotation):
     a pass peaking between 40 and 70 degrees within a minute of the time given."""
     lat, lon = geo.parse_locator(locator)
     closest = 1_795_000_000.0 + 3600 * len(locator)  # any time will do

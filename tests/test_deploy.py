@@ -17,10 +17,10 @@ from pathlib import Path
 import pytest
 
 from bridge.cli import EXIT_CONFIG, build_parser
+from bridge.core.model import TrackingInfo
 from bridge.features import tracking
-from bridge.model import TrackingInfo
-from bridge.mqtt import payloads
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.mqtt import payloads
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, Settings, load_settings
 from tests.support.waiting import slow

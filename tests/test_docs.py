@@ -1,6 +1,6 @@
 """The user documentation cannot drift from the code: every link resolves, docs/mqtt.md names
-every topic bridge/mqtt/topics.py builds and every error kind the bridge publishes, and the
-README stays short enough to read."""
+every topic bridge/interfaces/mqtt/topics.py builds and every error kind the bridge publishes, and
+the README stays short enough to read."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.model import ErrorKind
-from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.core.model import ErrorKind
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
@@ -201,7 +201,7 @@ def test_links_in_code_are_not_links(tmp_path: Path) -> None:
 def test_the_module_map_names_every_module_in_bridge() -> None:
     """architecture.md's module map is the newcomer's way into the code: a module added or
     moved without a line there fails here. A row names a module by its path under bridge/
-    (`engine/stops.py`), by a pattern (`settings_*.py`) or by its package (`sky/`)."""
+    (`session/stops.py`), by a pattern (`settings_*.py`) or by its package (`sky/`)."""
     text = (ROOT / "docs" / "architecture.md").read_text()
     section = text.split("## Module map", 1)[1].split("\n## ", 1)[0]
     named = set(re.findall(r"`([\w/*.]+)`", section))

@@ -14,6 +14,7 @@ import pytest
 from pydantic import BaseModel
 
 import bridge.feature
+from bridge.core.model import MotionState, Nudge, Origin, RotatorStatus, Source
 from bridge.feature import (
     AppView,
     CommandTopic,
@@ -26,13 +27,12 @@ from bridge.feature import (
     registered,
 )
 from bridge.features import FEATURES
-from bridge.homeassistant import Identity, RotatorInfo, all_configs
-from bridge.model import MotionState, Nudge, Origin, RotatorStatus, Source
-from bridge.mqtt import payloads as pl
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import RotatorTopics, Topics
+from bridge.interfaces.homeassistant import Identity, RotatorInfo, all_configs
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 from bridge.settings import RotatorSettings, Settings
-from bridge.settings_groups import RESERVED
+from bridge.settings.groups import RESERVED
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -2,8 +2,8 @@
 
 The bridge's acceptance rule for a path: distance within 1 %, bearing within 1 degree of an
 independent reference. Every reference below is either a published value (its source is cited
-beside it) or computed here by a different method than bridge/geo.py uses (Vincenty's inverse on
-an ellipsoid, and 3-D unit vectors on the sphere), never by the module itself.
+beside it) or computed here by a different method than bridge/core/geo.py uses (Vincenty's inverse
+on an ellipsoid, and 3-D unit vectors on the sphere), never by the module itself.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.geo import LocatorError, Path, great_circle, is_locator, parse_locator
+from bridge.core.geo import LocatorError, Path, great_circle, is_locator, parse_locator
 from tests.support.locator import to_locator
 
 CIRCUMFERENCE_KM = 2 * math.pi * 6371.0

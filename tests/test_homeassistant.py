@@ -13,10 +13,11 @@ from datetime import datetime
 
 import pytest
 
-from bridge import geo
+from bridge.core import geo
+from bridge.core.model import FollowingInfo, RotatorStatus, TrackingInfo
 from bridge.features.follow import follow_state
 from bridge.features.tracking import tracking_state
-from bridge.homeassistant import (
+from bridge.interfaces.homeassistant import (
     ENTITIES,
     MAX_SATELLITES,
     DiscoveryPublisher,
@@ -25,10 +26,9 @@ from bridge.homeassistant import (
     RotatorInfo,
     all_configs,
 )
-from bridge.homeassistant.publisher import ROUND_MIN_S
-from bridge.model import FollowingInfo, RotatorStatus, TrackingInfo
-from bridge.mqtt.payloads import parse_follow, parse_nudge, status_json
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.homeassistant.publisher import ROUND_MIN_S
+from bridge.interfaces.mqtt.payloads import parse_follow, parse_nudge, status_json
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import ModelSpec
 from bridge.settings import RotatorSettings
@@ -750,7 +750,7 @@ def test_the_track_select_follows_the_tle_file_when_it_changes() -> None:
     assert options == [["off", "sun", "moon", "ISS (ZARYA)", "NOAA 19"]]
 
 
-# -- following WSJT-X (engine/follow.py) ---------------------------------------------------------
+# -- following WSJT-X (session/follow.py) ---------------------------------------------------------
 def follow_discovery(can_follow: bool) -> dict[str, dict]:
     cfg = RotatorSettings(id="tower", model="rotorez", port="/dev/ttyUSB0")
     topics = Topics("rotor", {"tower": "rotor"})

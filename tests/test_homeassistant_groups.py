@@ -1,5 +1,5 @@
-"""A group's Home Assistant device (homeassistant/entities.py rule 1, GROUP_ENTITIES): its
-target number and stop button publish on the group's own topics, its sensors read
+"""A group's Home Assistant device (interfaces/homeassistant/entities.py rule 1, GROUP_ENTITIES):
+its target number and stop button publish on the group's own topics, its sensors read
 ``G/status``, every config passes Home Assistant's discovery rules, and the bridge owns the
 group's node (stale configs of a group removed from the file are deleted like a rotator's)."""
 
@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import json
 
-from bridge.homeassistant.entities import all_configs
-from bridge.homeassistant.info import GroupInfo, Identity
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.homeassistant.entities import all_configs
+from bridge.interfaces.homeassistant.info import GroupInfo, Identity
+from bridge.interfaces.mqtt.topics import Topics
 from tests.ha_rules import validate
 
 TOPICS = Topics("rotor", {"upper": "rotor/upper", "lower": "rotor/lower"}, {"stack": "rotor/stack"})

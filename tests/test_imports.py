@@ -69,7 +69,13 @@ def test_the_service_loads_neither_the_web_server_nor_the_astronomy_before_they_
     import subprocess
     import sys
 
-    heavy = ["aiohttp", "numpy", "skyfield", "bridge.web.server", "bridge.web.live"]
+    heavy = [
+        "aiohttp",
+        "numpy",
+        "skyfield",
+        "bridge.interfaces.web.server",
+        "bridge.interfaces.web.live",
+    ]
     check = "import sys, bridge.app, bridge.cli; print(sorted(m for m in sys.modules if m in W))"
     out = subprocess.run(
         [sys.executable, "-c", f"W = {set(heavy)!r}; {check}"],

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from bridge.model import ErrorEvent, ErrorKind
+from bridge.core.model import ErrorEvent, ErrorKind
 
 PUBLISHED_KINDS = {
     "refused",

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from bridge import geo
-from bridge.errors import RefusalCode, Refused
-from bridge.model import MotionState, RotatorStatus, Target
+from bridge.core import geo
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import MotionState, RotatorStatus, Target
 from bridge.pointing import Pointing, in_sector, norm360, toward
 from bridge.protocols import REGISTRY
 

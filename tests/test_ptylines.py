@@ -1,5 +1,5 @@
-"""The pty line server (ptylines.py) on real pseudo-terminals, with the GS-232B session onto a
-stand-in rotator: what a serial client opening the link sees, byte for byte."""
+"""The pty line server (interfaces/ptylines.py) on real pseudo-terminals, with the GS-232B session
+onto a stand-in rotator: what a serial client opening the link sees, byte for byte."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from bridge.gs232 import Gs232Session, gs232_pty
-from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
+from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
+from bridge.interfaces.gs232 import Gs232Session, gs232_pty
+from bridge.interfaces.ptylines import PtyLineServer
+from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
 from bridge.protocols import REGISTRY
-from bridge.ptylines import PtyLineServer
-from bridge.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow

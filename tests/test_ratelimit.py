@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bridge.ratelimit import SourceBudgets
+from bridge.core.ratelimit import SourceBudgets
 
 
 def test_one_senders_flood_leaves_anothers_budget_whole() -> None:

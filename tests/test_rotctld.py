@@ -16,11 +16,11 @@ from pydantic import ValidationError
 
 from bridge import emulators
 from bridge.app import worker_config
+from bridge.core.model import ErrorEvent, Lock, MotionState
 from bridge.emulators import EmulatedPort
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.model import ErrorEvent, Lock, MotionState
-from bridge.rotctld import QUIT, Request, RequestParser, RotctldServer
+from bridge.interfaces.rotctld import QUIT, Request, RequestParser, RotctldServer
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings, Settings
 from tests.support import feed, wait_until
 from tests.support.clock import FakeClock

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from bridge.config_report import config_warnings, masked
-from bridge.model import Target
+from bridge.core.model import Target
 from bridge.protocols import REGISTRY
 from bridge.settings import ConfigError, RotatorSettings, load_settings
+from bridge.settings.report import config_warnings, masked
 from tests.support import cli, run_cli
 
 MINIMAL = """
@@ -428,8 +428,8 @@ def test_a_logger_port_off_loopback_is_warned_about(tmp_path: Path) -> None:
 
 
 def test_n1mm_reports_to_another_machine_need_a_bind_that_can_reach_it(tmp_path: Path) -> None:
-    """Reports leave from the N1MM port's own socket (loggers/server.py rule 6): one bound to
-    loopback cannot reach another PC, and N1MM's rotor display would never move."""
+    """Reports leave from the N1MM port's own socket (interfaces/loggers/server.py rule 6): one
+    bound to loopback cannot reach another PC, and N1MM's rotor display would never move."""
     base = 'n1mm_rotor_name = "Tower"\nn1mm_report_to = "192.168.1.20:13010"\n'
     with pytest.raises(ConfigError) as err:
         load_settings(write(tmp_path, MINIMAL + base), environ={})

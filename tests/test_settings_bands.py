@@ -1,4 +1,4 @@
-"""A rotator's ``bands`` (settings_bands.py): known band names in any case, an unknown one a
+"""A rotator's ``bands`` (settings/bands.py): known band names in any case, an unknown one a
 configuration error naming the key and what was meant, no band shared by two rotators, and one
 N1MM name shared only by rotators chosen by band."""
 

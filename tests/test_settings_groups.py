@@ -1,4 +1,4 @@
-"""``[[groups]]`` (settings_groups.py, settings.py ``_groups``): what a file says becomes the
+"""``[[groups]]`` (settings/groups.py, settings/ ``_groups``): what a file says becomes the
 group the service turns, and every mistake is one line naming its key."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from bridge.app import group_of
-from bridge.mqtt.groups import Group, Member
+from bridge.interfaces.mqtt.groups import Group, Member
 from bridge.settings import ConfigError, settings_from
 
 ROTATORS = [

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.config_report import config_warnings, masked
 from bridge.settings import ConfigError, Settings, load_settings
+from bridge.settings.report import config_warnings, masked
 from tests.support import cli
 
 ROTATOR = '[[rotators]]\nid = "tower"\nmodel = "rotorez"\nport = "/dev/ttyUSB0"\n'

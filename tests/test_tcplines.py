@@ -1,5 +1,5 @@
-"""The shared line server's HTTP guard (tcplines.py rule 2), sans sockets: a GS-232 client's
-CR-ended first line goes through at once, HTTP never does."""
+"""The shared line server's HTTP guard (interfaces/tcplines.py rule 2), sans sockets: a GS-232
+client's CR-ended first line goes through at once, HTTP never does."""
 
 from __future__ import annotations
 
@@ -11,10 +11,16 @@ from typing import Any
 
 import pytest
 
-from bridge.gs232 import Gs232Session
-from bridge.model import Stop, Target
-from bridge.ratelimit import Budget
-from bridge.tcplines import ACCEPTS_S, HTTP_FIRST_LINE_MAX, HttpGuard, LineServer, _Client
+from bridge.core.model import Stop, Target
+from bridge.core.ratelimit import Budget
+from bridge.interfaces.gs232 import Gs232Session
+from bridge.interfaces.tcplines import (
+    ACCEPTS_S,
+    HTTP_FIRST_LINE_MAX,
+    HttpGuard,
+    LineServer,
+    _Client,
+)
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow

@@ -1,7 +1,7 @@
 """One axis of a box, and a rotator made of two boxes (azimuth from one, elevation from the
 other): the model specs and the codecs that let one controller serve one axis only.
 
-A composite rotator (settings_rotator.py ``azimuth`` / ``elevation``, engine/composite.py)
+A composite rotator (settings/rotator.py ``azimuth`` / ``elevation``, runtime/composite.py)
 turns its azimuth with one controller and its elevation with another. Each box keeps its own
 codec; this module wraps it so that the session driving that box sees one axis only.
 

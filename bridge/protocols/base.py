@@ -31,7 +31,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
 
-from bridge.model import SettingValue
+from bridge.core.model import SettingValue
 
 
 @dataclass(frozen=True)
@@ -133,7 +133,7 @@ class SettingKind(enum.StrEnum):
 
 
 class SendWhen(enum.StrEnum):
-    """When the engine may write a setting (engine/options.py rule 1)."""
+    """When the engine may write a setting (session/options.py rule 1)."""
 
     # only with the rotor at rest and settled, no target waiting (a controller that takes no
     # input while turning, or stops on it: the Rotor-EZ)
@@ -159,7 +159,7 @@ class Setting:
     choices: tuple[str, ...] = ()  # CHOICE: the named values, in the order a user sees them
     when: SendWhen = SendWhen.AT_REST
     # the controller forgets it at power-off: sent again after every (re)connect, a power-on
-    # byte and while idle every OPTIONS_REFRESH_S (engine/options.py); False: sent once when set
+    # byte and while idle every OPTIONS_REFRESH_S (session/options.py); False: sent once when set
     resend: bool = True
     # what it changes in the motion model: the rotor's speeds, both axes, are the configured
     # (or nominal) ones times the factor of the value in effect (a choice's name or a number
@@ -332,7 +332,7 @@ class ModelSpec:
     stop_interrupts: bool = False  # a stop may go out while a (slew) reply is owed
     # the stop frame may reach the controller at any moment, between any two frames the session
     # writes, and what the controller answers to it (nothing, a blank line, a banner) the codec
-    # takes unasked: the stop express may write it ahead of the session (mqtt/express.py)
+    # takes unasked: the stop express may write it ahead of the session (interfaces/mqtt/express.py)
     stop_anytime: bool = False
     reports_while_moving: bool = True  # False: silent until the after-move report (SatEL)
     nominal_el_speed_deg_s: float = 1.0

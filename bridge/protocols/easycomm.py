@@ -1,7 +1,7 @@
 """Easycomm II and III controllers (SatNOGS rotator controllers, K3NG in Easycomm mode): the codec.
 
 This is the controller side: the bridge drives a box that speaks Easycomm. The other direction, a
-program speaking Easycomm II to the bridge (``easycomm_port``), lives in bridge/gs232/.
+program speaking Easycomm II to the bridge (``easycomm_port``), lives in bridge/interfaces/gs232/.
 
 Device: a rotator controller taking Easycomm commands on a serial line, SatNOGS controllers at
 19200 8N1, K3NG's firmware at 9600 8N1. Commands are two letters and a value, separated by a

@@ -41,7 +41,7 @@ import math
 import re
 from typing import Any
 
-from bridge.model import SettingValue
+from bridge.core.model import SettingValue
 from bridge.protocols.base import (
     HamlibRotType,
     JunkReason,

@@ -28,7 +28,7 @@ Rules:
 5. What a healthy board emits besides replies (the power-on byte, the banner) is harmless junk
    (``harmless``), also when the banner comes torn across reads, whatever the cuts: each piece
    that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
-   reaches an idle board twice when the stop express writes one too: mqtt/express.py.)
+   reaches an idle board twice when the stop express writes one too: interfaces/mqtt/express.py.)
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from bridge.model import SettingValue
+from bridge.core.model import SettingValue
 from bridge.protocols.base import (
     Codec,
     HamlibRotType,

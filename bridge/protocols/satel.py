@@ -30,7 +30,7 @@ Rules:
 4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
    sent while it is disabled is silently ignored.
 5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
-   take depends on the rotor: the engine's business, engine/link.py).
+   take depends on the rotor: the engine's business, session/link.py).
 6. A report whose position can be read (even one that lost its first line) ends a slew only
    if it shows the point's position (within SLEW_END_TOLERANCE_DEG; 000 and 360 are one
    place) or a stop went out since the point. Any other report while a slew is owed was on

@@ -1,14 +1,14 @@
-"""The operator console on the remote: the station's rotators, as the console (bridge/web/) asks
-for them (web/port.py), driven by publishing on the station's command topics, and the live feed
-from the station's retained topics.
+"""The operator console on the remote: the station's rotators, as the console
+(bridge/interfaces/web/) asks for them (interfaces/web/port.py), driven by publishing on the
+station's command topics, and the live feed from the station's retained topics.
 
 Rules:
 1. Every console command is one publish on the station's own command topic (docs/mqtt.md:
    ``R/target`` as JSON, a place too; ``R/stop``, ``R/lock``, ``R/preset``, ``R/park``,
    ``R/nudge``, ``R/track``), sent by the remote's rotator as the other front ends' are
    (rotator.py rule 3), through the remote's link: QoS 1, an expiry, the operator
-   (mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at once,
-   STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
+   (interfaces/mqtt/remote.py rules 2 and 3). While the link is down each is refused with OFFLINE at
+   once, STOP and lock ON included (they cannot be delivered); while it is up, STOP, the lock and
    tracking off are sent whatever the remote thinks of the station. A command that moves is
    refused at once too while the station is not current (rotator.py rule 1: its bridge or the
    rotator offline, no heartbeat), locked or leased to another (rotator.py rule 6), as the
@@ -26,8 +26,8 @@ Rules:
 5. What the console draws beyond the judge's terms (the station's position, the beamwidth, the
    nudge step, the satellites) is the station's ``R/info``; the presets are its ``R/presets``,
    read at each use (they may come after the description).
-6. Who sent a command (``origin``, web/port.py rule 4) is taken and not sent: the station hears
-   the remote's operator (mqtt/remote.py), the one name it knows this console by.
+6. Who sent a command (``origin``, interfaces/web/port.py rule 4) is taken and not sent: the station
+   hears the remote's operator (interfaces/mqtt/remote.py), the one name it knows this console by.
 """
 
 from __future__ import annotations
@@ -40,8 +40,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Protocol
 
-from bridge.errors import RefusalCode, Refused
-from bridge.model import (
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import (
     Command,
     ErrorEvent,
     ErrorKind,
@@ -131,7 +131,7 @@ class Pages(Protocol):
 
 
 class RemoteConsoleRotator:
-    """A station rotator as the console asks for it (web/port.py), rules 1, 2 and 5."""
+    """A station rotator as the console asks for it (interfaces/web/port.py), rules 1, 2 and 5."""
 
     def __init__(
         self,
@@ -175,7 +175,8 @@ class RemoteConsoleRotator:
 
     @property
     def commands_block(self) -> bool:
-        return True  # a command waits for the broker's acknowledgement (mqtt/remote.py rule 7)
+        # a command waits for the broker's acknowledgement (interfaces/mqtt/remote.py rule 7)
+        return True
 
     @property
     def status(self) -> RotatorStatus:

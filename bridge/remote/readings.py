@@ -1,5 +1,5 @@
 """The station's retained payloads read back (``R/info``, ``R/status``): the other side of
-mqtt/payloads.py, for the remote (docs/mqtt.md says what each field means).
+interfaces/mqtt/payloads.py, for the remote (docs/mqtt.md says what each field means).
 
 Rules:
 1. Anyone the broker's ACL lets publish there can put anything there: a payload that is not
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from bridge.model import (
+from bridge.core.model import (
     Control,
     MotionState,
     RotatorStatus,

@@ -17,26 +17,26 @@ Rules:
    ``moving`` status counts only while one came from the station, as it published it, within
    ``moving_max_age_s`` on the remote's own clock: older, the station went quiet mid-move (its
    last will comes only after 1.5 keepalives); replayed from the broker's store (the retain
-   flag, mqtt/remote.py rule 4), it is of unknown age until the next one. Its ``time`` is the
-   station's clock, which need not agree with ours: not used.
+   flag, interfaces/mqtt/remote.py rule 4), it is of unknown age until the next one. Its ``time`` is
+   the station's clock, which need not agree with ours: not used.
 2. What the rotator is comes from the station's ``R/info``: the model (its ModelSpec, for
    Hamlib's facts), the target ranges in true bearings, park. Nothing of it is configured here.
    The remote judges a target against these facts (a target out of range or in a keep-out
    sector gets its error code at once), but the station's judge is the one that counts: what
    it refuses (the lock, say) is on ``R/error``, while the client got RPRT 0 once the command
    was on its way.
-3. ``submit``: each command (model.py's union) is one publish on the station's own topic for
+3. ``submit``: each command (core/model.py's union) is one publish on the station's own topic for
    it (docs/mqtt.md): a Target on ``R/target`` as JSON, a Stop on ``R/stop``, the lock on
-   ``R/lock``, a preset, a nudge, tracking on theirs, through the link (mqtt/remote.py: QoS 1,
-   expiry, operator); one the station takes on no topic (an elevation alone, an option, the
+   ``R/lock``, a preset, a nudge, tracking on theirs, through the link (interfaces/mqtt/remote.py:
+   QoS 1, expiry, operator); one the station takes on no topic (an elevation alone, an option, the
    lease, following) is refused (UNSUPPORTED). While the link is down each is refused with
    OFFLINE at once. A command that moves (a target, park, a place) is refused with OFFLINE at
    once too while the station is not current (rule 1: its bridge or the rotator offline), as
    the station's own rotctld refuses it for a rotator offline: nobody would take it. A stop is
    refused only while the link is down (the station's bridge may be offline on its main
-   connection and still take a stop on its stop lane, mqtt/lane.py), and then it is kept and
-   sent first on reconnect (mqtt/remote.py rule 6): OFFLINE tells the client it has not
-   reached the station yet. The lock and tracking off, like a stop, never move: they go
+   connection and still take a stop on its stop lane, interfaces/mqtt/lane.py), and then it is kept
+   and sent first on reconnect (interfaces/mqtt/remote.py rule 6): OFFLINE tells the client it has
+   not reached the station yet. The lock and tracking off, like a stop, never move: they go
    whenever the link is up.
 4. The other ways the front ends name a target: ``Park`` goes to ``R/park`` when the station
    has a park position, ``Toward`` sends the place itself (``{"locator": ...}`` or
@@ -49,7 +49,7 @@ Rules:
    would use; the station judges it again (a lease that ended a moment ago, a clock that
    differs): this only spares the client a silent refusal on the station's ``R/error``.
    Likewise (LOCKED, ``RPRT -9``) while the station's ``R/lock/state`` is ``ON``.
-7. A command is answered only once the station's broker acknowledged it (mqtt/remote.py
+7. A command is answered only once the station's broker acknowledged it (interfaces/mqtt/remote.py
    rule 7): ``RPRT 0`` means the broker has it, stamped with its send time for the station to
    refuse it if a link held it up (heartbeat.py).
 """
@@ -64,9 +64,8 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from bridge.errors import RefusalCode, Refused
-from bridge.features import control, tracking
-from bridge.model import (
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import (
     Command,
     GoToPreset,
     Lock,
@@ -82,8 +81,9 @@ from bridge.model import (
     TrackBody,
     describe_command,
 )
-from bridge.mqtt.heartbeat import SILENT_S
-from bridge.mqtt.topics import RotatorTopics, StationTopics
+from bridge.features import control, tracking
+from bridge.interfaces.mqtt.heartbeat import SILENT_S
+from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
 from bridge.pointing import Limits
 from bridge.remote.readings import Info, InfoError, parse_control, parse_status
 
@@ -186,7 +186,8 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
-        self.last_halt_s = -math.inf  # the last stop sent (monotonic; web/port.py rule 2)
+        # the last stop sent (monotonic; interfaces/web/port.py rule 2)
+        self.last_halt_s = -math.inf
         self._clock = clock
         self._wall = wall
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -314,7 +315,8 @@ class RemoteRotator:
         self.publish(topic, json.dumps(doc, separators=(",", ":")))
 
     def halted(self) -> None:
-        """A stop or a lock ON has gone out: ``last_halt_s`` is now (web/port.py rule 2)."""
+        """A stop or a lock ON has gone out: ``last_halt_s`` is now (interfaces/web/port.py rule
+        2)."""
         self.last_halt_s = self._clock()
 
     def publish(self, topic: str, payload: str) -> None:

@@ -6,7 +6,7 @@ Rules:
    a rotator that does not show within ``info_wait_s`` is a start-up error that names the topic
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
    A refused login or a failed TLS handshake ends the start at once, in one line that says
-   which (mqtt/remote.py rule 5).
+   which (interfaces/mqtt/remote.py rule 5).
    SIGINT or SIGTERM meanwhile (``stopping``) ends the wait at once, as a start error.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
@@ -45,18 +45,18 @@ from dataclasses import dataclass, field
 from types import FrameType
 from typing import Protocol
 
-from bridge.gs232 import EMULATIONS
-from bridge.loggers import LoggerEndpoints
-from bridge.mqtt.heartbeat import SILENT_S
-from bridge.mqtt.remote import RemoteLink
-from bridge.mqtt.topics import RotatorTopics, StationTopics
+from bridge.interfaces.gs232 import EMULATIONS
+from bridge.interfaces.loggers import LoggerEndpoints
+from bridge.interfaces.mqtt.heartbeat import SILENT_S
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.interfaces.mqtt.topics import RotatorTopics, StationTopics
+from bridge.interfaces.rotctld import RotctldServer
+from bridge.interfaces.web.server import WebConsole
+from bridge.interfaces.web.view import RotatorFacts
 from bridge.remote.console import ConsoleFeed, RemoteConsoleRotator, drawn_of, parse_event
 from bridge.remote.rotator import Info, InfoError, RemoteRotator, StationView
 from bridge.remote.settings import Endpoint, RemoteSettings
-from bridge.rotctld import RotctldServer
 from bridge.settings import ConfigError
-from bridge.web.server import WebConsole
-from bridge.web.view import RotatorFacts
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +64,8 @@ ONE_ROTATOR_GRACE_S = 0.5  # rule 2: B/X/info may come just after B/info in one 
 
 
 class Served(Protocol):
-    """A line server (tcplines.py, ptylines.py): its address taken, then served, then ended."""
+    """A line server (interfaces/tcplines.py, interfaces/ptylines.py): its address taken, then
+    served, then ended."""
 
     def listen(self) -> None: ...
     def start(self) -> None: ...
@@ -173,7 +174,8 @@ class Remote:
                     self.servers.append(emulation.server(rot, int(where), offer.bind, **options))
             elif offer.key == "pst_udp_port":
                 self.loggers.add_pst(rot, int(offer.where), offer.bind)
-                if offer.bind not in ("127.0.0.1", "::1", "localhost"):  # as tcplines.py warns
+                # as interfaces/tcplines.py warns
+                if offer.bind not in ("127.0.0.1", "::1", "localhost"):
                     log.warning(
                         "PstRotator UDP for %s listens on %s:%s: it has no authentication, "
                         "anyone who can reach this address can turn the antenna",
@@ -190,7 +192,7 @@ class Remote:
             self.feed.stop()
             self.feed = None
         if self.console is not None:
-            self.console.stop()  # each page sees the remote go (web/server.py rule 6)
+            self.console.stop()  # each page sees the remote go (interfaces/web/server.py rule 6)
             self.console = None
         for server in self.servers:
             server.stop()
@@ -209,8 +211,8 @@ class Remote:
             feed.refresh()  # the pages see the station go (console.py rule 3)
 
     def _last_word(self, topic: str, payload: bytes) -> bool:
-        """A stop or lock ON to one of the station's rotators (mqtt/remote.py rule 6); paho's
-        thread or a front end's, with the send lock held."""
+        """A stop or lock ON to one of the station's rotators (interfaces/mqtt/remote.py rule 6);
+        paho's thread or a front end's, with the send lock held."""
         return topic in self._stops or (topic in self._locks and payload.strip() == b"ON")
 
     def _on_message(self, topic: str, payload: bytes, retain: bool) -> None:
@@ -319,7 +321,7 @@ class Remote:
 
     def _remote_rotator(self, rid: str, topics: RotatorTopics, info: Info) -> RemoteRotator:
         """One station rotator on this remote's link; its stop and lock topics are the ones
-        a dropped connection must not lose (mqtt/remote.py rule 6)."""
+        a dropped connection must not lose (interfaces/mqtt/remote.py rule 6)."""
         s = self.settings
         assert self.link is not None
         self._stops.add(topics.stop)
@@ -350,7 +352,7 @@ class Remote:
         s = self.settings
         where = f"{s.mqtt.host}:{s.mqtt.port}"
         assert self.link is not None
-        if not self.link.up:  # mqtt/remote.py rule 5: why, in this one line
+        if not self.link.up:  # interfaces/mqtt/remote.py rule 5: why, in this one line
             return (
                 f"cannot reach the station's broker at {where}: {self.link.failure or 'no answer'}"
             )

@@ -3,7 +3,8 @@ and which local endpoints to offer.
 
 Rules:
 1. ``[mqtt]`` is the bridge's own table (MqttSettings: TLS, password_file, ...); ``base_topic``
-   is the station's. MQTT 5 only: every command carries an expiry (mqtt/remote.py rule 1).
+   is the station's. MQTT 5 only: every command carries an expiry (interfaces/mqtt/remote.py rule
+   1).
 2. An endpoint may leave ``rotator`` out only when it is the only endpoint; no two endpoints
    take one address: a TCP port (whatever its bind), a UDP port or the one beside it (a PST
    client hears its replies on port + 1), a pty's path; nor the console's web.port.
@@ -25,9 +26,9 @@ from typing import Any, Literal, NamedTuple
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from bridge.settings import ConfigError, read_toml
-from bridge.settings_errors import describe
-from bridge.settings_mqtt import MqttSettings
-from bridge.settings_web import WebSettings
+from bridge.settings.errors import describe
+from bridge.settings.mqtt import MqttSettings
+from bridge.settings.web import WebSettings
 
 ENV_PREFIX = "ROTOR_REMOTE_"  # no variables are read; describe() wants a prefix to name
 
@@ -196,7 +197,7 @@ class RemoteSettings(_Strict):
         """``mqtt.client_id``, or one per operator, host and what the file serves, that no
         bridge uses ("remote-"): two remotes of one operator on one host (one per rotator, a
         console beside a rotctld port) would otherwise take each other's connection over for
-        ever (mqtt/connection.py rule 7); one file keeps its id across restarts."""
+        ever (interfaces/mqtt/connection.py rule 7); one file keeps its id across restarts."""
         if self.mqtt.client_id:
             return self.mqtt.client_id
         served = [(e.rotator, e.offers()) for e in self.endpoints]

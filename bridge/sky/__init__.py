@@ -8,7 +8,7 @@ do the astronomy and the searching. Each part states its own rules:
 - station.py: ``Sky``, one station's positions and passes, the passes kept.
 
 Computing takes from a millisecond to a second: the engine asks its sky worker
-(engine/skywork.py), never the thread that serves the serial lines (docs/architecture.md
+(sky/worker.py), never the thread that serves the serial lines (docs/architecture.md
 rule 12).
 """
 

@@ -1,6 +1,6 @@
 """The sky seen from one station: positions of a body and its passes, with the passes kept.
 One ``Sky`` serves every rotator of the station, from the sky worker's thread
-(engine/skywork.py) and tests alike.
+(sky/worker.py) and tests alike.
 
 Rules:
 1. A station is a latitude and a longitude in degrees and a height in metres on the WGS84

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import json
 
-from bridge import geo
-from bridge.dxcluster.book import MAX_CALLS, Book, locator_in
-from bridge.dxcluster.cty import parse_dat
-from bridge.dxcluster.spots import Spot
+from bridge.core import geo
+from bridge.interfaces.dxcluster.book import MAX_CALLS, Book, locator_in
+from bridge.interfaces.dxcluster.cty import parse_dat
+from bridge.interfaces.dxcluster.spots import Spot
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import locator_centre, reference_path
 from tests.support.clock import FakeClock

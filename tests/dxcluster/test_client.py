@@ -14,17 +14,17 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
-from bridge import geo
-from bridge.dxcluster.book import Book
-from bridge.dxcluster.client import (
+from bridge.core import geo
+from bridge.core.model import Origin, Source, Toward
+from bridge.interfaces.dxcluster.book import Book
+from bridge.interfaces.dxcluster.client import (
     LOGIN_WAIT_S,
     RATE_BYTES_S,
     READ_BYTES,
     DxCluster,
 )
-from bridge.dxcluster.cty import parse_dat
-from bridge.dxcluster.spots import Spot
-from bridge.model import Origin, Source, Toward
+from bridge.interfaces.dxcluster.cty import parse_dat
+from bridge.interfaces.dxcluster.spots import Spot
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.support import wait_until
 from tests.support.clock import FakeClock

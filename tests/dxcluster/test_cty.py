@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge.dxcluster.cty import Cty, CtyError, load, parse_csv, parse_dat
+from bridge.interfaces.dxcluster.cty import Cty, CtyError, load, parse_csv, parse_dat
 from tests.dxcluster.cty_sample import CTY_CSV, CTY_DAT
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bridge.app import App
-from bridge.dxcluster import DxCluster
+from bridge.interfaces.dxcluster import DxCluster
 from bridge.settings import ConfigError, Settings, load_settings
 from tests.dxcluster.cty_sample import CTY_DAT
 

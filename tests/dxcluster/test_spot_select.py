@@ -1,15 +1,15 @@
-"""Home Assistant's spot select (features/dxcluster, homeassistant/info.py): there with [dxcluster]
-and a station only, the newest spots' calls as options (bounded, never none), sending the call
-form of R/target, and following the spots when the client hands new calls."""
+"""Home Assistant's spot select (features/dxcluster, interfaces/homeassistant/info.py): there with
+[dxcluster] and a station only, the newest spots' calls as options (bounded, never none), sending
+the call form of R/target, and following the spots when the client hands new calls."""
 
 from __future__ import annotations
 
 import json
 
-from bridge.homeassistant import DiscoveryPublisher, Identity, RotatorInfo, all_configs
-from bridge.homeassistant.info import MAX_SPOTS, NO_SPOTS
-from bridge.mqtt.payloads import parse_aim
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.homeassistant import DiscoveryPublisher, Identity, RotatorInfo, all_configs
+from bridge.interfaces.homeassistant.info import MAX_SPOTS, NO_SPOTS
+from bridge.interfaces.mqtt.payloads import parse_aim
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.settings import RotatorSettings
 from tests.ha_rules import validate
 

@@ -9,7 +9,7 @@ import re
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bridge.dxcluster.spots import MAX_LINE_BYTES, Lines, Spot, parse_spot
+from bridge.interfaces.dxcluster.spots import MAX_LINE_BYTES, Lines, Spot, parse_spot
 
 SPOTS = [
     (

@@ -10,8 +10,8 @@ import sys
 import threading
 from pathlib import Path
 
-from bridge.engine.audit import QUEUE_LINES, AuditFile, AuditTrail
-from bridge.model import AuditEvent, Origin, Source
+from bridge.core.model import AuditEvent, Origin, Source
+from bridge.runtime.audit import QUEUE_LINES, AuditFile, AuditTrail
 from tests.support.waiting import slow
 
 
@@ -223,8 +223,8 @@ def test_stopping_with_the_writer_hung_on_its_disk_gives_up_after_its_timeout(
 FULL_DISK = r"""
 import json, resource, signal, sys
 from pathlib import Path
-from bridge.engine.audit import AuditFile
-from bridge.model import AuditEvent, Origin, Source
+from bridge.runtime.audit import AuditFile
+from bridge.core.model import AuditEvent, Origin, Source
 
 path, limit = Path(sys.argv[1]), int(sys.argv[2])
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # past the limit: EFBIG, as ENOSPC on a full disk

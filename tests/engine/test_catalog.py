@@ -1,4 +1,4 @@
-"""TleCatalog (engine/catalog.py): satellites by name from ``[tracking] tle_file``, re-read when
+"""TleCatalog (sky/catalog.py): satellites by name from ``[tracking] tle_file``, re-read when
 the file changes. The element sets are written here (tests/support/sky.py's synthetic_tle,
 checksums computed there from Celestrak's format), so what a lookup returns is checked against
 lines the test made, never against the parser's own output."""
@@ -12,13 +12,13 @@ from pathlib import Path
 
 import pytest
 
-from bridge.engine import catalog as catalog_module
-from bridge.engine.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
-from bridge.engine.rotator import Rotator
-from bridge.engine.skywork import LookupQuestion
-from bridge.engine.state_store import StateStore
-from bridge.model import ErrorKind, TrackBody
+from bridge.core.model import ErrorKind, TrackBody
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from bridge.sky import Body, Sky
+from bridge.sky import catalog as catalog_module
+from bridge.sky.catalog import MAX_FILE_BYTES, CatalogError, TleCatalog
+from bridge.sky.worker import LookupQuestion
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle
 
@@ -101,7 +101,7 @@ def test_a_missing_file_has_no_satellites_until_it_appears(
 ) -> None:
     path = tmp_path / "later.txt"
     catalog = TleCatalog(path)
-    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
         assert catalog.names() == []
         with pytest.raises(CatalogError, match=r"\(0 satellites\)"):
             catalog.lookup("ISS (ZARYA)")
@@ -148,7 +148,7 @@ def test_a_file_that_goes_away_keeps_the_satellites_last_read(
     catalog = TleCatalog(tle_file)
     assert catalog.names() == ["ISS (ZARYA)", "NOAA 19"]
     tle_file.unlink()  # a refresh in progress (or a broken cron job)
-    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
         assert catalog.lookup("ISS (ZARYA)") == Body.satellite("ISS (ZARYA)", *ISS)
         assert catalog.names() == ["ISS (ZARYA)", "NOAA 19"]
     said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
@@ -162,7 +162,7 @@ def test_a_bad_set_is_skipped_with_a_warning_naming_its_line(
     l1, l2 = NOAA
     broken = l2[:68] + str((int(l2[68]) + 1) % 10)  # a wrong checksum on line 2 of NOAA 19
     path.write_text(three_line(("ISS (ZARYA)", ISS), ("NOAA 19", (l1, broken)), ("AO-7", AO7)))
-    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
         catalog = TleCatalog(path)
         assert catalog.names() == ["AO-7", "ISS (ZARYA)"]
     said = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
@@ -211,7 +211,7 @@ def test_bad_lines_are_counted_in_one_warning_per_read(
 ) -> None:
     path = tmp_path / "broken.txt"
     path.write_text(garbage(5000) + three_line(("ISS (ZARYA)", ISS)))
-    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
         catalog = TleCatalog(path)
         assert catalog.lookup("ISS (ZARYA)") == Body.satellite("ISS (ZARYA)", *ISS)
         assert catalog.names() == ["ISS (ZARYA)"]  # read once: no second warning
@@ -229,7 +229,7 @@ def test_a_file_over_the_limit_is_not_read_and_a_lookup_says_why(
         f.truncate(MAX_FILE_BYTES + 1)  # sparse: 4 MiB and a byte of nothing
     parsed: list[int] = []
     monkeypatch.setattr(catalog_module, "parse_tles", lambda text: parsed.append(1) or ({}, []))
-    with caplog.at_level(logging.WARNING, logger="bridge.engine.catalog"):
+    with caplog.at_level(logging.WARNING, logger="bridge.sky.catalog"):
         catalog = TleCatalog(path)
         for _ in range(3):
             with pytest.raises(CatalogError) as err:

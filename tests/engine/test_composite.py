@@ -1,11 +1,11 @@
-"""A composite rotator (engine/composite.py) in virtual time: a Green Heron RT-21 turns the
+"""A composite rotator (runtime/composite.py) in virtual time: a Green Heron RT-21 turns the
 azimuth, a GS-232B box the elevation, each on its own emulated line, one mailbox and one
 status in front (tests/engine/virtual_composite.py). The sky is fixed (SUN_EPOCH) and checked
 against the test's own solar formula (tests/support/sky.py)."""
 
 from __future__ import annotations
 
-from bridge.model import MotionState, Source, Target
+from bridge.core.model import MotionState, Source, Target
 from bridge.protocols.axes import Axis
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere

@@ -1,7 +1,7 @@
-"""Following the QSO partner (engine/follow.py): the part on its own, on read-only scenes and
+"""Following the QSO partner (session/follow.py): the part on its own, on read-only scenes and
 a fake time; then wired into the session in virtual time against an emulated controller
 (tests/engine/virtual.py). Bearings are checked against the vector great circle of
-tests/integration/test_pointing_bridge.py, not the bridge's geo.py."""
+tests/integration/test_pointing_bridge.py, not the bridge's core/geo.py."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ from typing import Any
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine import follow as fo
-from bridge.engine.config import FollowConfig, WorkerConfig
-from bridge.engine.follow import Follow, Follower, Heard
-from bridge.engine.parts import NOTHING, Scene
-from bridge.model import ErrorKind, MotionState, Source
+from bridge.core.model import ErrorKind, MotionState, Source
+from bridge.session import follow as fo
+from bridge.session.config import FollowConfig, WorkerConfig
+from bridge.session.follow import Follow, Follower, Heard
+from bridge.session.parts import NOTHING, Scene
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 from tests.engine.test_parts import scene
@@ -357,7 +357,7 @@ def test_a_flood_of_other_instance_names_costs_no_memory_and_little_log(
     part = following(rig())
     part.heard(Heard("JA1ABC", "PM95", False, "WSJT-X"), 1.0)
     assert part.step(at(1.0)).target is not None
-    caplog.set_level(logging.WARNING, "bridge.engine.follow")
+    caplog.set_level(logging.WARNING, "bridge.session.follow")
     for n in range(20_000):
         part.heard(Heard("W1AW", "FN31", False, f"forged {n} " + "x" * 900), 2.0 + n * 0.001)
     said = [r.getMessage() for r in caplog.records if "is ignored" in r.getMessage()]

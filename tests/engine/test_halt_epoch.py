@@ -15,11 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.engine.config import FollowConfig
-from bridge.engine.rotator import STALE_MESSAGE, Rotator
-from bridge.engine.state_store import StateStore
-from bridge.errors import Refused
-from bridge.model import (
+from bridge.core.errors import Refused
+from bridge.core.model import (
     AuditEvent,
     ErrorEvent,
     ErrorKind,
@@ -31,10 +28,13 @@ from bridge.model import (
     Target,
     TrackBody,
 )
-from bridge.mqtt.halts import Halts
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.mqtt.halts import Halts
+from bridge.interfaces.mqtt.topics import Topics
+from bridge.interfaces.web.commands import WebCommand, carry_out
+from bridge.runtime.rotator import STALE_MESSAGE, Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session.config import FollowConfig
 from bridge.sky import Sky
-from bridge.web.commands import WebCommand, carry_out
 from tests.engine.virtual import VirtualRotator
 from tests.support.waiting import slow
 

@@ -1,4 +1,4 @@
-"""Rotor health (engine/health.py, health_judge.py) in virtual time.
+"""Rotor health (session/health.py, health_judge.py) in virtual time.
 
 The session runs against the Rotor-EZ emulator (tests/engine/virtual.py) for what a user would
 see: a rotor slowing down one way warns and names the direction, a stall repeated at one
@@ -19,13 +19,13 @@ from dataclasses import replace
 import pytest
 
 from bridge.app import worker_config
+from bridge.core.model import MotionState, RotatorHealth
 from bridge.emulators.physics import Axis
-from bridge.engine import motion as mo
-from bridge.engine.config import HealthConfig
-from bridge.engine.health import MAX_READINGS, Health
-from bridge.engine.health_judge import Judge, Move
 from bridge.features.health.payload import health_json
-from bridge.model import MotionState, RotatorHealth
+from bridge.session import motion as mo
+from bridge.session.config import HealthConfig
+from bridge.session.health import MAX_READINGS, Health
+from bridge.session.health_judge import Judge, Move
 from bridge.settings import RotatorSettings
 from tests.engine.virtual import VirtualRotator
 

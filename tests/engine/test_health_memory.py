@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bridge.engine.health_memory import SAVE_S, HealthMemory
-from bridge.engine.state_store import StateStore
-from bridge.model import RotatorHealth
+from bridge.core.model import RotatorHealth
+from bridge.runtime.health_memory import SAVE_S, HealthMemory
+from bridge.runtime.state_store import StateStore
 from tests.support.clock import FakeClock
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from bridge.engine.state_store import StateStore
+from bridge.runtime.state_store import StateStore
 
 
 def test_health_memory_survives_a_new_store_beside_the_lock(tmp_path: Path) -> None:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.engine.lease import Lease, LeaseError, held_text, valid_operator
-from bridge.model import Control
+from bridge.core.model import Control
+from bridge.runtime.lease import Lease, LeaseError, held_text, valid_operator
 
 T0 = 1_790_000_000.0  # 2026-09-21 14:13:20 UTC (any fixed time: nothing reads the real clock)
 

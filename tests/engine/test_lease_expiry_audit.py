@@ -1,4 +1,4 @@
-"""The control lease's end by itself is in the audit trail (engine/operators.py rule 2): the
+"""The control lease's end by itself is in the audit trail (runtime/operators.py rule 2): the
 holder named as its operator, ``lease`` as its interface; a release or a renewal before the end
 writes no such line. Virtual time, as tests/engine/test_operators.py."""
 
@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.operators import Operators
-from bridge.engine.state_store import StateStore
-from bridge.model import AuditEvent, Origin, Source
+from bridge.core.model import AuditEvent, Origin, Source
+from bridge.runtime.operators import Operators
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
 from tests.engine.test_operators import HOLDER, T0, Clock, Timers
 
 

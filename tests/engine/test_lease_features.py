@@ -1,4 +1,4 @@
-"""The control lease beside following WSJT-X, as the judge (engine/rotator.py) applies it, in
+"""The control lease beside following WSJT-X, as the judge (runtime/rotator.py) applies it, in
 virtual time (a wall clock that is a number; no port is opened, so a start the lease lets
 through is refused for the link). A follow start is judged like a track start: the lock, then
 the lease, then the link; following off is never refused. Each is an audit event with its
@@ -11,11 +11,20 @@ from __future__ import annotations
 from pathlib import Path
 
 from bridge.app import worker_config
-from bridge.engine.config import FollowConfig
-from bridge.engine.follow import Follow
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.model import AuditEvent, Claim, Control, ErrorEvent, FollowQso, Lock, Origin, Source
+from bridge.core.model import (
+    AuditEvent,
+    Claim,
+    Control,
+    ErrorEvent,
+    FollowQso,
+    Lock,
+    Origin,
+    Source,
+)
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session.config import FollowConfig
+from bridge.session.follow import Follow
 from bridge.settings import RotatorSettings
 from tests.engine.test_follow import bearing, spid
 from tests.engine.test_operators import HOLDER, OTHER, Clock, refused

@@ -1,4 +1,4 @@
-"""engine/lines.py: one thread serves every rotator's line, and no rotator can hold up another.
+"""runtime/lines.py: one thread serves every rotator's line, and no rotator can hold up another.
 
 Real parts: ptys driven by the emulators, real pyserial; what goes wrong is the port opener of
 one rotator (a bug that raises, an adapter that takes seconds to open), the other's stop must
@@ -19,15 +19,15 @@ import serial
 
 from bridge import emulators
 from bridge.app import worker_config
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorEvent, Stop, Target
 from bridge.emulators.pty import EmulatedPort
-from bridge.engine.lines import Lines
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.port import open_port
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.errors import Refused
-from bridge.model import ErrorEvent, Stop, Target
 from bridge.protocols.base import ModelSpec
+from bridge.runtime.lines import Lines
+from bridge.runtime.port import open_port
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
 from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
@@ -150,7 +150,7 @@ def test_a_port_that_will_not_close_holds_up_neither_another_line_nor_the_stop(
     try:
         for rot in (sick, good):
             wait_until(lambda r=rot: r.status.state.value == "idle", 10, f"{rot.id} idle")
-        with caplog.at_level(logging.WARNING, logger="bridge.engine.lines"):
+        with caplog.at_level(logging.WARNING, logger="bridge.runtime.lines"):
             sick.stop(timeout_s=0.5)
         # stop() came back with its close still held (the guard on it is a minute): it did not
         # wait for the close, which goes on on a thread of its own

@@ -1,4 +1,4 @@
-"""engine/link.py's slews: how long a silent controller's move may take, and how long its
+"""session/link.py's slews: how long a silent controller's move may take, and how long its
 report is waited for."""
 
 from __future__ import annotations
@@ -6,13 +6,13 @@ from __future__ import annotations
 import pytest
 
 from bridge.emulators.spid_models import position_reply
-from bridge.engine.link import Link
-from bridge.engine.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 from bridge.protocols.base import PositionReply
 from bridge.protocols.rc2800 import MODELS as RC2800
 from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
 from bridge.protocols.spid import MODELS as SPID
+from bridge.session.link import Link
+from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 
 
 @pytest.mark.parametrize(

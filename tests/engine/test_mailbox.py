@@ -2,8 +2,8 @@ from __future__ import annotations
 
 import select
 
-from bridge.engine.mailbox import Mailbox
-from bridge.model import SetOption, Stop, Target
+from bridge.core.model import SetOption, Stop, Target
+from bridge.session.mailbox import Mailbox
 from tests.support.waiting import slow
 
 
@@ -124,9 +124,9 @@ def test_a_flood_of_puts_costs_one_wake_byte_per_batch() -> None:
 def test_every_kind_of_put_wakes_the_worker() -> None:
     """A put that leaves no wake byte waits for the next serial byte or poll: each kind of
     input, however harmless, must wake the lines thread (rule 4)."""
-    from bridge.engine.follow import Follow, Heard
-    from bridge.engine.tracking import Track
-    from bridge.model import Control
+    from bridge.core.model import Control
+    from bridge.session.follow import Follow, Heard
+    from bridge.session.tracking import Track
 
     puts = {
         "put": lambda mb: mb.put(Target(10.0)),
@@ -156,8 +156,8 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
 def test_a_motion_judged_before_a_stop_or_lock_on_put_since_is_dropped() -> None:
     """Rule 10: a stop or lock ON put adds one to the halt count; a target, track or follow
     start put with an older count was judged before it and is dropped; nothing else is."""
-    from bridge.engine.follow import Follow
-    from bridge.engine.tracking import Track
+    from bridge.session.follow import Follow
+    from bridge.session.tracking import Track
     from bridge.sky import Body
 
     box = Mailbox()

@@ -1,12 +1,12 @@
-"""The mailbox's rule 9 (engine/mailbox.py): follow commands are commands like a track command;
+"""The mailbox's rule 9 (session/mailbox.py): follow commands are commands like a track command;
 what WSJT-X says and the wind are inputs, never dropped, the newest (the highest wind) kept."""
 
 from __future__ import annotations
 
-from bridge.engine.follow import Follow, Heard
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.tracking import Track
-from bridge.model import Stop, Target
+from bridge.core.model import Stop, Target
+from bridge.session.follow import Follow, Heard
+from bridge.session.mailbox import Mailbox
+from bridge.session.tracking import Track
 
 
 def test_follow_on_replaces_a_target_or_track_before_it_and_a_later_one_wins() -> None:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from bridge.engine import motion as mo
-from bridge.engine.status import publishable_bearing
-from bridge.model import MotionState as S
+from bridge.core.model import MotionState as S
 from bridge.protocols import REGISTRY
+from bridge.session import motion as mo
+from bridge.session.status import publishable_bearing
 
 CFG = mo.MotionConfig(
     REGISTRY["rotorez"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5,

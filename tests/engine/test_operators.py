@@ -11,12 +11,8 @@ from pathlib import Path
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.operators import Operators
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.errors import Refused
-from bridge.model import (
+from bridge.core.errors import Refused
+from bridge.core.model import (
     AuditEvent,
     Claim,
     Control,
@@ -30,6 +26,10 @@ from bridge.model import (
     Target,
     TrackBody,
 )
+from bridge.runtime.operators import Operators
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from bridge.sky import Sky
 

@@ -19,15 +19,15 @@ from pathlib import Path
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine.kept import Owner
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.model import Control, Origin, RotatorStatus, Source
-from bridge.mqtt.halts import Halts
-from bridge.mqtt.topics import Topics
+from bridge.core.model import Control, Origin, RotatorStatus, Source
+from bridge.interfaces.mqtt.halts import Halts
+from bridge.interfaces.mqtt.topics import Topics
+from bridge.interfaces.web.commands import WebCommand, carry_out
+from bridge.runtime.kept import Owner
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
-from bridge.web.commands import WebCommand, carry_out
 from tests.support.waiting import slow
 
 T0 = 1_790_000_000.0

@@ -10,22 +10,22 @@ from typing import Any
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine import motion as mo
-from bridge.engine import slew as slewing
-from bridge.engine.autopark import AutoPark
-from bridge.engine.config import WorkerConfig
-from bridge.engine.link import Link
-from bridge.engine.mailbox import Batch
-from bridge.engine.options import OPTIONS_REFRESH_S, Options
-from bridge.engine.parts import NOTHING, Scene
-from bridge.engine.skywork import PassQuestion
-from bridge.engine.slew import Slew
-from bridge.engine.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
-from bridge.engine.targets import Go, Targets, decide
-from bridge.engine.tracking import Tracker
-from bridge.model import ErrorKind, MotionState, Source, Stop, Target
+from bridge.core.model import ErrorKind, MotionState, Source, Stop, Target
+from bridge.session import motion as mo
+from bridge.session import slew as slewing
+from bridge.session.autopark import AutoPark
+from bridge.session.config import WorkerConfig
+from bridge.session.link import Link
+from bridge.session.mailbox import Batch
+from bridge.session.options import OPTIONS_REFRESH_S, Options
+from bridge.session.parts import NOTHING, Scene
+from bridge.session.slew import Slew
+from bridge.session.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
+from bridge.session.targets import Go, Targets, decide
+from bridge.session.tracking import Tracker
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
+from bridge.sky.worker import PassQuestion
 from tests.engine.virtual import VirtualRotator
 
 IDLE_AT_90 = mo.Motion(state=MotionState.IDLE, position_deg=90.0, anchor_deg=90.0)

@@ -1,4 +1,4 @@
-"""Opening a port (engine/port.py): what another program on the same tty meets, and what the
+"""Opening a port (runtime/port.py): what another program on the same tty meets, and what the
 bridge says when one is there (issue 14, item 8: Hamlib's rotctld takes no flock, so the bridge
 opened a port rotctld held and the two stole each other's replies, 27 reopen cycles in 20 s)."""
 
@@ -11,8 +11,8 @@ import sys
 import pytest
 import serial
 
-from bridge.engine.port import close_in_background, open_port, read_available, watched
 from bridge.protocols import REGISTRY
+from bridge.runtime.port import close_in_background, open_port, read_available, watched
 from tests.support.waiting import slow
 
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.errors import Refused
-from bridge.geo import parse_locator
-from bridge.model import ErrorEvent, Lock, SetOption, Stop, Target, Toward
+from bridge.core.errors import Refused
+from bridge.core.geo import parse_locator
+from bridge.core.model import ErrorEvent, Lock, SetOption, Stop, Target, Toward
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings
 from tests.support.waiting import slow
 

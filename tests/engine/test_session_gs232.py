@@ -12,8 +12,8 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState, SetOption, Target
 from bridge.emulators.gs232 import Outcome
-from bridge.model import MotionState, SetOption, Target
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
 

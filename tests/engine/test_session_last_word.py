@@ -3,15 +3,15 @@ the Rotor-EZ emulator: what the controller understood and where the rotor ends.
 
 The two MQTT connections are stood in for by what they put in the mailbox: the stop lane's
 stop with its hold, the main connection's copies in order, and the release its marker brings
-(mqtt/lastword.py; the real-broker orderings are in tests/integration/test_last_word.py).
+(interfaces/mqtt/lastword.py; the real-broker orderings are in tests/integration/test_last_word.py).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from bridge.core.model import MotionState, Source, Stop, Target, TargetInfo
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.model import MotionState, Source, Stop, Target, TargetInfo
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -54,8 +54,8 @@ def test_a_target_read_after_a_lane_stop_waits_and_the_main_copy_of_the_stop_dro
 
 
 def test_a_target_after_a_stop_waits_for_the_stop_expresss_answer(rig: Rig) -> None:
-    """mqtt/express.py rule 8: the express may still write its frame for the stop; the move
-    read after the stop goes out only when the express answered for it."""
+    """interfaces/mqtt/express.py rule 8: the express may still write its frame for the stop; the
+    move read after the stop goes out only when the express answered for it."""
     v = ready(rig)
     t = v.now
     v.mailbox.put_express_hold(1)

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.model import MotionState
+from bridge.core.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

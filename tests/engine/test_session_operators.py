@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from bridge.model import Control, MotionState, Origin, Source, Stop, Target
+from bridge.core.model import Control, MotionState, Origin, Source, Stop, Target
 from tests.engine.test_session_pointing import settled
 from tests.engine.virtual import VirtualRotator
 

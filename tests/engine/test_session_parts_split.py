@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from bridge.model import MotionState, Source, Stop
+from bridge.core.model import MotionState, Source, Stop
 from bridge.sky import Body, Sky
 from tests.engine.virtual import VirtualRotator
 

@@ -10,9 +10,9 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import MotionState, Source, Target
 from bridge.emulators.rotorez_models import Outcome
-from bridge.errors import RefusalCode, Refused
-from bridge.model import MotionState, Source, Target
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -16,8 +16,8 @@ from collections.abc import Callable
 import pytest
 
 from bridge import emulators
+from bridge.core.model import MotionState
 from bridge.emulators.prosistel import Outcome
-from bridge.model import MotionState
 from bridge.protocols.base import JunkReply
 from bridge.protocols.prosistel import COMBI_TRACK, D_AZIMUTH, ProsistelCodec
 from tests.engine.test_session_tracking import a_pass_that, fly

@@ -9,10 +9,10 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState
 from bridge.emulators.spid_models import K_STATUS
-from bridge.engine.link import SETTLE_BYTES, SETTLE_MIN_S
-from bridge.engine.session import Action
-from bridge.model import MotionState
+from bridge.session.link import SETTLE_BYTES, SETTLE_MIN_S
+from bridge.session.session import Action
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState
 from bridge.emulators.rc2800 import Outcome
-from bridge.model import MotionState
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
 

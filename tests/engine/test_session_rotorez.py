@@ -13,8 +13,8 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState
 from bridge.emulators.rotorez_models import Outcome
-from bridge.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from bridge.core.model import MotionState
 from bridge.emulators.rt21 import Outcome
-from bridge.model import MotionState
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, off_deg
 from tests.engine.virtual import VirtualRotator, moves, settled_at

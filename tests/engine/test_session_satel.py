@@ -14,9 +14,9 @@ import re
 from collections.abc import Callable
 from datetime import datetime
 
+from bridge.core.model import MotionState
 from bridge.emulators.satel import Outcome
-from bridge.engine.slew import SLEW_STOP_TRIES
-from bridge.model import MotionState
+from bridge.session.slew import SLEW_STOP_TRIES
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

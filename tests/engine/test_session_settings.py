@@ -1,4 +1,4 @@
-"""A controller setting in virtual time (engine/options.py): a GS-232's speed goes out when its
+"""A controller setting in virtual time (session/options.py): a GS-232's speed goes out when its
 declaration allows (any time the line is free: the box applies it to the turn in progress), the
 rotor turns at the new speed and the engine expects that speed, and the setting is sent again
 after the box was switched off and on (it forgets it) and after a reconnect."""
@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from bridge.core.model import MotionState, SetOption, Stop
 from bridge.emulators.gs232 import Outcome
-from bridge.engine.options import OPTIONS_REFRESH_S
-from bridge.model import MotionState, SetOption, Stop
+from bridge.session.options import OPTIONS_REFRESH_S
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -104,7 +104,7 @@ def test_a_flood_of_speeds_puts_a_few_on_the_wire_and_the_last_one_wins(rig: Rig
     as its own X command (15,315 of the 15,458 frames on the wire in 35 s through mosquitto,
     the polls crowded out, an INFO line each). A setting goes out at most once per
     SETTING_GAP_S, the last value set meanwhile; the turn and a stop go on as without it."""
-    from bridge.engine.options import SETTING_GAP_S
+    from bridge.session.options import SETTING_GAP_S
 
     v = ready(rig)
     v.target(300, 0)

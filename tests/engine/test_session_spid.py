@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 import pytest
 
+from bridge.core.model import MotionState
 from bridge.emulators.spid_models import K_SET, K_STATUS, K_STOP, Outcome
-from bridge.model import MotionState
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]

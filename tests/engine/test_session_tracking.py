@@ -1,4 +1,4 @@
-"""Tracking (engine/tracking.py) in virtual time: the session, an emulated controller and a
+"""Tracking (session/tracking.py) in virtual time: the session, an emulated controller and a
 fake clock whose wall time starts at a fixed instant (SUN_EPOCH, SAT_EPOCH): every run, at any
 time of day, judges the same sky. Positions are checked
 against references computed in the test by other means (tests/support/sky.py: a published
@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import pytest
 
+from bridge.core.model import MotionState, Source, Target
 from bridge.features.tracking import tracking_state
-from bridge.model import MotionState, Source, Target
 from bridge.sky import Body, Sky, SkyError
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import sgp4_altaz, sun_altaz, synthetic_tle, tle_with_pass

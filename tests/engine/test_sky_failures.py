@@ -20,13 +20,13 @@ import serial
 
 from bridge import emulators
 from bridge.app import worker_config
+from bridge.core.model import ErrorEvent, ErrorKind, RotatorStatus, Source, Stop, Target, TrackBody
 from bridge.emulators.pty import EmulatedPort
-from bridge.engine import autopark
-from bridge.engine.port import open_port
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.model import ErrorEvent, ErrorKind, RotatorStatus, Source, Stop, Target, TrackBody
 from bridge.protocols.base import ModelSpec
+from bridge.runtime.port import open_port
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
+from bridge.session import autopark
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 from tests.engine.virtual import VirtualRotator

@@ -9,11 +9,11 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from bridge.engine import skywork
-from bridge.engine.actions import Ask
-from bridge.engine.skywork import Answer, PassQuestion, PositionsQuestion, Question, SkyWorker
-from bridge.model import ErrorKind
+from bridge.core.model import ErrorKind
+from bridge.session.actions import Ask
 from bridge.sky import Body, Sky
+from bridge.sky import worker as skywork
+from bridge.sky.worker import Answer, PassQuestion, PositionsQuestion, Question, SkyWorker
 from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
 from tests.engine.virtual import VirtualRotator
 from tests.support.sky import synthetic_tle

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge.engine.state_store import StateStore
+from bridge.runtime.state_store import StateStore
 
 
 def test_lock_and_options_survive_a_restart(tmp_path: Path) -> None:
@@ -109,8 +109,8 @@ def test_a_settings_value_survives_a_restart_and_one_its_model_refuses_is_left_o
 ) -> None:
     """A GS-232's speed is kept as its name; read back by the model's declaration, a value it
     does not take (hand-edited, or another model's) is logged and never sent."""
-    from bridge.engine.kept import Kept
     from bridge.protocols import REGISTRY
+    from bridge.runtime.kept import Kept
 
     path = tmp_path / "state.json"
     StateStore(path).set_option("tower", "speed", "2")
@@ -131,8 +131,8 @@ def test_a_flood_of_settings_costs_the_card_a_write_or_two_and_a_lock_after_it_i
     words held the lock's save back two minutes at an SD card's 40 ms a write, and wore the
     card). Settings waiting for the writer are saved together, the last value of each; the
     lock is written right behind them."""
-    from bridge.engine.kept import Kept
     from bridge.protocols import REGISTRY
+    from bridge.runtime.kept import Kept
 
     path = tmp_path / "state.json"
     store = StateStore(path)
@@ -162,8 +162,8 @@ def test_a_flood_of_lock_words_costs_the_card_a_write_or_two_and_the_last_word_i
     """A lock ON is never refused, so anyone allowed to lock can send thousands a second:
     each was a rewrite of the state file with its fsyncs. The words waiting for the writer are
     saved as one, the last word's."""
-    from bridge.engine.kept import Kept
     from bridge.protocols import REGISTRY
+    from bridge.runtime.kept import Kept
 
     path = tmp_path / "state.json"
     store = StateStore(path)

@@ -1,4 +1,4 @@
-"""One command union, one entry (engine/rotator.py ``submit``, front.py rule 1): every kind of
+"""One command union, one entry (runtime/rotator.py ``submit``, front.py rule 1): every kind of
 command a front end can give reaches the judge through ``submit``, is judged in the house's one
 order (docs/architecture.md rule 11: a stop, a lock ON, tracking and following OFF never
 refused), and is written to the audit trail there, once; a value outside the union is refused
@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.errors import RefusalCode, Refused
-from bridge.model import (
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import (
     COMMANDS,
     Claim,
     Command,

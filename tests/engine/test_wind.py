@@ -1,4 +1,4 @@
-"""The wind-aware park (engine/wind.py): the part on its own, on read-only scenes and a fake
+"""The wind-aware park (session/wind.py): the part on its own, on read-only scenes and a fake
 time; then wired into the session in virtual time against an emulated controller."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from typing import Any
 import pytest
 
 from bridge.app import worker_config
-from bridge.engine.parts import NOTHING
-from bridge.engine.wind import WindPark
-from bridge.model import ErrorKind, MotionState, Source, Target
+from bridge.core.model import ErrorKind, MotionState, Source, Target
+from bridge.session.parts import NOTHING
+from bridge.session.wind import WindPark
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 from tests.engine.test_parts import rig, scene

@@ -1,4 +1,4 @@
-"""The worker's wiring (engine/lines.py + worker.py), with real parts: a real pty driven by the
+"""The worker's wiring (runtime/lines.py + worker.py), with real parts: a real pty driven by the
 emulator, real pyserial.
 
 What is proven here is what no virtual-time scenario can show: that the thread wakes at once for
@@ -18,12 +18,12 @@ import serial
 
 from bridge import emulators
 from bridge.app import worker_config
+from bridge.core.model import ErrorEvent, RotatorStatus, Stop, Target
 from bridge.emulators.pty import EmulatedPort
-from bridge.engine.port import open_port
-from bridge.engine.rotator import Rotator
-from bridge.engine.state_store import StateStore
-from bridge.model import ErrorEvent, RotatorStatus, Stop, Target
 from bridge.protocols.base import ModelSpec
+from bridge.runtime.port import open_port
+from bridge.runtime.rotator import Rotator
+from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
 from tests.support.rig import FAST_BRIDGE, FAST_ROTOR

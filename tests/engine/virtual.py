@@ -1,11 +1,11 @@
 """One RotatorSession wired to one device emulator in-process, in virtual time.
 
 What this is: the proof bench of docs/architecture.md ("decisions are proven in virtual time").
-The session (engine/session.py) and an emulator (emulators/, a sans-IO Responder written from
+The session (session/session.py) and an emulator (emulators/, a sans-IO Responder written from
 the documents, never from our codecs) talk through a simulated serial line; a fake clock jumps
 from one thing that can happen to the next, so minutes of rotor time cost milliseconds.
 
-How it drives the session: exactly as engine/worker.py does (``start``, ``link_up``, then
+How it drives the session: exactly as runtime/worker.py does (``start``, ``link_up``, then
 ``commands`` / ``bytes_received`` / ``tick`` when ``next_wakeup`` has passed and nothing else
 acted), and it carries out the actions: ``Write`` bytes go on the line to the device,
 ``Publish`` and ``Report`` are recorded with the virtual time they came at.
@@ -40,17 +40,17 @@ from typing import Any
 
 from bridge import emulators
 from bridge.app import worker_config
+from bridge.core.model import MotionState, RotatorStatus, SetOption, SettingValue, Stop, Target
 from bridge.emulators.base import LoggedFrame, PacedLine, Responder, RotatorState
-from bridge.engine import skywork
-from bridge.engine.actions import Ask
-from bridge.engine.config import FollowConfig, WorkerConfig
-from bridge.engine.follow import Follow, Heard
-from bridge.engine.mailbox import Mailbox
-from bridge.engine.session import Action, Publish, Report, RotatorSession, Write
-from bridge.engine.tracking import Track
-from bridge.model import MotionState, RotatorStatus, SetOption, SettingValue, Stop, Target
+from bridge.session.actions import Ask
+from bridge.session.config import FollowConfig, WorkerConfig
+from bridge.session.follow import Follow, Heard
+from bridge.session.mailbox import Mailbox
+from bridge.session.session import Action, Publish, Report, RotatorSession, Write
+from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
+from bridge.sky import worker as skywork
 
 WALL_EPOCH_S = 1_750_000_000.0  # the wall clock reads this at virtual time 0
 MAX_STEPS_AT_ONE_INSTANT = 20  # bytes, a tick, a command: a few things may share an instant
@@ -188,7 +188,7 @@ class VirtualRotator:
 
     def option(self, name: str, value: SettingValue) -> None:
         """Straight to the session, as the judge hands it on: ``value`` as the declaration
-        reads it (the session does not judge; engine/rotator.py does)."""
+        reads it (the session does not judge; runtime/rotator.py does)."""
         setting = self.cfg.spec.setting(name)
         self.command(SetOption(name, setting.read(value) if setting is not None else value))
 
@@ -207,7 +207,7 @@ class VirtualRotator:
     def heard(
         self, call: str, grid: str, transmitting: bool = False, dial_hz: int | None = None
     ) -> None:
-        """What WSJT-X says, as the listener hands it on (wsjtx/server.py)."""
+        """What WSJT-X says, as the listener hands it on (interfaces/wsjtx/server.py)."""
         self.mailbox.put_heard(Heard(call, grid, transmitting, dial_hz=dial_hz))
         self._take()
 

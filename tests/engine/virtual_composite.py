@@ -1,6 +1,6 @@
 """A composite rotator in virtual time: two boxes (two VirtualRotators, each a session, its
 emulated controller and its line) run on one fake clock, with the composite's own parts in
-front of them as the real worker has them (engine/composite.py): one mailbox, the judge's
+front of them as the real worker has them (runtime/composite.py): one mailbox, the judge's
 terms, ``split`` of every batch, and the ``Composition`` that merges the two statuses and ends
 tracking in one box when the other ended it.
 
@@ -17,11 +17,11 @@ from collections.abc import Callable
 from typing import Any
 
 from bridge.app import axis_configs, worker_config
-from bridge.engine.composite import Composition, split
-from bridge.engine.mailbox import Batch, Mailbox
-from bridge.engine.tracking import Track
-from bridge.model import RotatorStatus, Stop, Target
+from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
+from bridge.runtime.composite import Composition, split
+from bridge.session.mailbox import Batch, Mailbox
+from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 from tests.engine.virtual import WALL_EPOCH_S, VirtualRotator

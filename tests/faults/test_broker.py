@@ -141,7 +141,8 @@ def motion_frames_of(emu) -> int:  # noqa: ANN001
     return len(emu.frames(*BEARING_OUTCOMES))
 
 
-# -- two bridges with one client id (mqtt/client.py rule 7) --------------------------------------
+# -- two bridges with one client id (interfaces/mqtt/client.py rule 7)
+# --------------------------------------
 WINDOW_S = 30.0
 MAX_CONNECTS = 6  # per process in WINDOW_S; fighting at paho's 1 s pace would be about 15
 SHARED_ID = "shared-bridge"

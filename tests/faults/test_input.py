@@ -55,7 +55,7 @@ class Bench:
     def errors_after(self, rid: str) -> list[dict[str, Any]]:
         """Error events of ``rid`` since the last call, up to and including fresh sentinels:
         one on each connection the bridge takes commands on (stop and lock have their own,
-        mqtt/lane.py), so whatever went before on either has been handled."""
+        interfaces/mqtt/lane.py), so whatever went before on either has been handled."""
         mark = f"sentinel-{next(self._n)}"
         marks = [f"{mark}-{leaf}".encode() for leaf in ("target", "lock")]
         for leaf in ("target", "lock"):

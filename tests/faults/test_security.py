@@ -136,8 +136,8 @@ def test_tls_with_client_certificate_and_password_file_and_the_password_never_sh
         probe.wait_value("rotor/state", "idle", timeout_s=10)
         probe.publish("rotor/target", "90")  # commands flow over TLS too
         emu.wait_for(lambda s: abs(s.az_deg - 90) <= 3.5 and not s.is_moving, 15)
-        # the stop express logs in the same way (mqtt/express.py rule 2), its password handed
-        # over its socket, not on its command line
+        # the stop express logs in the same way (interfaces/mqtt/express.py rule 2), its password
+        # handed over its socket, not on its command line
         wait_until(lambda: "stop express up" in bridge.log(), 20, "the stop express up")
         probe.publish("rotor/target", "300")
         emu.wait_for(lambda s: s.is_moving, 10)

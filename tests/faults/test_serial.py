@@ -20,7 +20,7 @@ from typing import Any
 
 import pytest
 
-from bridge.engine.slew import SLEW_STOP_TRIES
+from bridge.session.slew import SLEW_STOP_TRIES
 from tests.faults.conftest import (
     SPID,
     Rig,

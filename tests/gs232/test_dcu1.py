@@ -9,12 +9,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from bridge.errors import RefusalCode, Refused
-from bridge.gs232 import Dcu1Session, Gs232Session
-from bridge.gs232.commands import DCU1_ERROR, DCU1_STORED_S, EMULATIONS
-from bridge.gs232.parser import DCU1_FRAME_MAX, Dcu1Kind, Dcu1Reader, Dcu1Request
-from bridge.model import Source, Stop, Target
-from bridge.settings_rotator import EMULATION_KEYS
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Source, Stop, Target
+from bridge.interfaces.gs232 import Dcu1Session, Gs232Session
+from bridge.interfaces.gs232.commands import DCU1_ERROR, DCU1_STORED_S, EMULATIONS
+from bridge.interfaces.gs232.parser import DCU1_FRAME_MAX, Dcu1Kind, Dcu1Reader, Dcu1Request
+from bridge.settings.rotator import EMULATION_KEYS
 from tests.support import feed
 from tests.support.clock import FakeClock
 from tests.support.codecs import HOW

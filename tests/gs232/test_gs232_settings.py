@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.config_report import config_warnings
 from bridge.settings import ConfigError, load_settings
+from bridge.settings.report import config_warnings
 from tests.support import cli
 
 

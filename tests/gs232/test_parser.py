@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.gs232.parser import (
+from bridge.interfaces.gs232.parser import (
     MAX_LINE,
     EasycommRequest,
     Gs232Kind,

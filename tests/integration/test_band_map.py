@@ -1,7 +1,7 @@
 """Turning the antenna for the band, end to end: N1MM Logger+'s rotor messages on a real UDP
 socket, through one running bridge (the App in-process) with a private mosquitto and two emulated
 Rotor-EZ on real ptys, one the 20/15/10 m yagi's rotator and one the 40/80 m antenna's, both
-answering to N1MM's one Rotor Description "Tower" (settings_bands.py, loggers/commands.py
+answering to N1MM's one Rotor Description "Tower" (settings/bands.py, interfaces/loggers/commands.py
 rule 5). The datagrams are the fact sheet's form (tests/support/udp_logger.py), the band in
 ``<freqband>`` as N1MM writes it (``14``, ``7``).
 

@@ -1,4 +1,4 @@
-"""What the broker refuses is said (mqtt/client.py rule 11; issue 14, item 9): mosquitto
+"""What the broker refuses is said (interfaces/mqtt/client.py rule 11; issue 14, item 9): mosquitto
 answered "not authorised" (0x87) to 71 discovery publishes and the bridge logged nothing."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.integration.test_last_word import main_held_at
 from tests.support import Probe

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mqtt.client import MqttClient
-from bridge.mqtt.remote import RemoteLink
-from bridge.settings_mqtt import MqttSettings
+from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.settings.mqtt import MqttSettings
 from tests.support import wait_until
 from tests.support.brokers import Nats, NoMqtt5, find_nats
 

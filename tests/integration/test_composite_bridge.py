@@ -1,5 +1,5 @@
 """A rotator of two boxes end to end: real mosquitto, real pyserial on two ptys, the bridge,
-an RT-21 emulator turning the azimuth and a GS-232B emulator the elevation (engine/composite.py).
+an RT-21 emulator turning the azimuth and a GS-232B emulator the elevation (runtime/composite.py).
 One target moves both, one STOP is a stop on both wires, one retained status shows both axes,
 and Home Assistant sees one az/el rotator."""
 

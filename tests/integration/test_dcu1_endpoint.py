@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.gs232.parser import Dcu1Kind, Dcu1Reader
+from bridge.interfaces.gs232.parser import Dcu1Kind, Dcu1Reader
 from tests.integration.test_gs232_integration import gs232_ask, rotctl, settled
 from tests.support import free_port, wait_until
 from tests.support.rig import FAST_POLLING, Rig

@@ -10,8 +10,8 @@ import re
 import time
 from pathlib import Path
 
-from bridge.homeassistant import Identity
-from bridge.mqtt.topics import DiscoveryTopics
+from bridge.interfaces.homeassistant import Identity
+from bridge.interfaces.mqtt.topics import DiscoveryTopics
 from tests.demo_process import DemoProcess
 from tests.support import Message, retained_snapshot
 from tests.support.rig import Rig

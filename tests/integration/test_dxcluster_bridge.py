@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from bridge.app import App
-from bridge.dxcluster import DxCluster
+from bridge.interfaces.dxcluster import DxCluster
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import retained_snapshot, wait_until

@@ -20,8 +20,8 @@ from typing import Any
 import pytest
 
 from bridge.app import App
-from bridge.engine.follow import Heard
-from bridge.engine.rotator import Rotator
+from bridge.runtime.rotator import Rotator
+from bridge.session.follow import Heard
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import wait_until
 from tests.support import wsjtx as w

@@ -1,6 +1,6 @@
-"""A group of two Rotor-EZ end to end (mqtt/groups.py): real mosquitto, two emulated Rotor-EZ on
-real ptys, real pyserial, the bridge. One ``G/target`` turns both (each with its offset: the
-bytes on each wire, where each rotor really is, the retained bearings and ``G/status``); one
+"""A group of two Rotor-EZ end to end (interfaces/mqtt/groups.py): real mosquitto, two emulated
+Rotor-EZ on real ptys, real pyserial, the bridge. One ``G/target`` turns both (each with its offset:
+the bytes on each wire, where each rotor really is, the retained bearings and ``G/status``); one
 ``G/stop`` while they turn stops both (a stop frame on each wire); a ``G/stop`` behind a flood
 of group targets is carried out first on the stop lane, and not one target of the flood
 reaches either wire after it (the main connection held still at its copy of the stop, as
@@ -12,8 +12,8 @@ from __future__ import annotations
 import json
 import time
 
+from bridge.core.model import MotionState
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.model import MotionState
 from tests.integration.test_last_word import bearings, main_held_at
 from tests.support.mqtt import Message
 from tests.support.rig import Rig

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from bridge import emulators
-from bridge.mqtt import client as mqtt_client
+from bridge.interfaces.mqtt import client as mqtt_client
 from tests.ha_rules import validate
 from tests.integration.test_process import start_bridge, write_config
 from tests.support import Probe, retained_snapshot, wait_until

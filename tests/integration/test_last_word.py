@@ -1,5 +1,5 @@
-"""The last word on stop and lock across the two MQTT connections (mqtt/lastword.py), with real
-parts: mosquitto, the bridge (App), an emulated Rotor-EZ on a pty.
+"""The last word on stop and lock across the two MQTT connections (interfaces/mqtt/lastword.py),
+with real parts: mosquitto, the bridge (App), an emulated Rotor-EZ on a pty.
 
 A flood that keeps the main connection behind is stood in for by holding its hand-off still
 (the main connection reads nothing more) at a chosen message, while the stop lane reads on;
@@ -20,7 +20,7 @@ from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.heartbeat import Stamp
 from tests.support.rig import Rig
 from tests.support.waiting import slow, wait_until
 

@@ -38,7 +38,7 @@ from bridge.app import App
 from bridge.emulators.base import LoggedFrame, RotatorState
 from bridge.emulators.pty import EmulatedPort
 from bridge.settings import ConfigError, Settings
-from bridge.settings_pointing import StationSettings
+from bridge.settings.pointing import StationSettings
 from tests.integration.test_pointing_bridge import angle_between, locator_centre, reference_path
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import Mosquitto

@@ -1,5 +1,5 @@
-"""The bridge's retained topics are its own (mqtt/client.py rule 10; issue 14, item 10): a
-retained `rotor/lock/state OFF` published by someone else while the rotator was locked stayed
+"""The bridge's retained topics are its own (interfaces/mqtt/client.py rule 10; issue 14, item 10):
+a retained `rotor/lock/state OFF` published by someone else while the rotator was locked stayed
 there, and so did `bearing 42`, `state moving` and `bridge/state offline`."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from bridge.mqtt.client import SETTLE_AFTER_CONNECT_S
+from bridge.interfaces.mqtt.client import SETTLE_AFTER_CONNECT_S
 from tests.support import retained_snapshot
 from tests.support.rig import Rig
 from tests.support.waiting import wait_until

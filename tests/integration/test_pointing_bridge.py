@@ -5,7 +5,7 @@ the App in-process, its rotctld port).
 What is asserted is what a user sees: the frames the controller received (the emulator's log:
 ``AP1xxx<CR>`` is the Rotor-EZ's "store and go"), where the rotor really is (its ground truth),
 the retained payloads and the rotctld replies. The great-circle reference is computed here, from
-the Maidenhead definition and vector geometry, never by bridge.geo.
+the Maidenhead definition and vector geometry, never by bridge.core.geo.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 from bridge.app import App
 from bridge.emulators.base import LoggedFrame, MotionEvent
 from bridge.emulators.pty import EmulatedPort
-from bridge.settings_pointing import StationSettings
+from bridge.settings.pointing import StationSettings
 from tests.integration.test_rotctld_integration import ask, connect
 from tests.support import free_port
 from tests.support.rig import Rig

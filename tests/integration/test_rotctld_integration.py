@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from bridge.rotctld import RotctldServer
+from bridge.interfaces.rotctld import RotctldServer
 from tests.support import free_port, wait_until
 from tests.support.rig import Rig
 from tests.support.waiting import slow

@@ -1,5 +1,5 @@
 """A STOP published after a large backlog of targets, on one connection, to an idle Rotor-EZ:
-the rotor never starts again after it (mqtt/lastword.py rules 2, 5 and 7). Real parts:
+the rotor never starts again after it (interfaces/mqtt/lastword.py rules 2, 5 and 7). Real parts:
 mosquitto, the bridge (App), an emulated Rotor-EZ on a pty.
 
 The stop lane carries the STOP out at once and holds the rotator's targets; the main connection
@@ -35,7 +35,7 @@ from typing import Any
 
 from bridge.app import App
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.heartbeat import Stamp
 from tests.support import Probe
 from tests.support.mosquitto import Mosquitto
 from tests.support.rig import Rig

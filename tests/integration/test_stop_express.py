@@ -1,6 +1,6 @@
-"""The stop express (mqtt/express.py): a STOP's frame reaches the controller while nothing in
-the bridge's process can run. Real parts: mosquitto, the bridge (App, in this process), the
-express (its own process) and a Rotor-EZ emulator in a process of its own on a pty.
+"""The stop express (interfaces/mqtt/express.py): a STOP's frame reaches the controller while
+nothing in the bridge's process can run. Real parts: mosquitto, the bridge (App, in this process),
+the express (its own process) and a Rotor-EZ emulator in a process of its own on a pty.
 
 The bridge's interpreter is held the hard way: a call into C through ctypes.PyDLL keeps the
 interpreter lock for as long as it blocks, here a read() on a pipe. Every thread of this
@@ -311,8 +311,8 @@ def test_a_late_express_frame_does_not_stop_a_move_published_after_the_stop(rig:
 
 
 def test_a_groups_stop_is_written_by_the_express_for_each_member(rig: Rig) -> None:
-    """``G/stop`` (mqtt/groups.py) is a stop of each member: the express writes each member's
-    frame, as for its own ``R/stop``."""
+    """``G/stop`` (interfaces/mqtt/groups.py) is a stop of each member: the express writes each
+    member's frame, as for its own ``R/stop``."""
     upper = rig.add("upper", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
     lower = rig.add("lower", emu={"start_az_deg": 190, "speed_deg_s": 20.0})
     rig.sections = {"groups": [{"id": "stack", "rotators": ["upper", "lower"]}]}

@@ -1,4 +1,4 @@
-"""Stop and lock on a connection of their own (mqtt/lane.py; issue 14, item 13): a stop
+"""Stop and lock on a connection of their own (interfaces/mqtt/lane.py; issue 14, item 13): a stop
 published behind a flood of targets waited until the bridge had read every one of them
 (stops 0.85 to 3.9 s late). Real parts: mosquitto, the bridge (App) and an emulated Rotor-EZ.
 

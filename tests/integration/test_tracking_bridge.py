@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from bridge.app import App
-from bridge.settings_pointing import StationSettings, TrackingSettings
+from bridge.settings.pointing import StationSettings, TrackingSettings
 from tests.engine.test_session_tracking import (
     BERLIN,
     SAT_EPOCH,

@@ -1,5 +1,5 @@
-"""Two bridges on one base topic (issue 14, item 11; mqtt/claim.py): before, they deleted each
-other's Home Assistant discovery (0 of 26 configs left) and overwrote each other's state. Real
+"""Two bridges on one base topic (issue 14, item 11; interfaces/mqtt/claim.py): before, they deleted
+each other's Home Assistant discovery (0 of 26 configs left) and overwrote each other's state. Real
 parts: mosquitto, two bridges (App) each with an emulated controller, and the CLI's exit code."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge.mqtt.claim import Instance
+from bridge.interfaces.mqtt.claim import Instance
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto
 from tests.support.process import run_cli, to_toml

@@ -1,5 +1,5 @@
-"""Which rotator an N1MM turn goes to when rotators have bands (loggers/commands.py rule 5):
-the pure choice, then Commands carrying it out on stand-in rotators (the wiring through the App,
+"""Which rotator an N1MM turn goes to when rotators have bands (interfaces/loggers/commands.py rule
+5): the pure choice, then Commands carrying it out on stand-in rotators (the wiring through the App,
 mosquitto and two emulated controllers is tests/integration/test_band_map.py)."""
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ from typing import Any
 
 import pytest
 
-from bridge.loggers.commands import Commands, N1mmEndpoint, N1mmRotor, NoRotor, choose
-from bridge.loggers.datagrams import parse_n1mm
-from bridge.model import RotatorStatus, Source, Stop, Target
+from bridge.core.model import RotatorStatus, Source, Stop, Target
+from bridge.interfaces.loggers.commands import Commands, N1mmEndpoint, N1mmRotor, NoRotor, choose
+from bridge.interfaces.loggers.datagrams import parse_n1mm
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import n1mm_turn
@@ -129,7 +129,7 @@ def test_turns_go_by_band_and_a_band_nobody_has_moves_nothing_and_says_so(
     carry(e, n1mm_turn("Tower", 200, freqband="7"), commands)
     assert high.calls == [Target(90.0, None, Source.N1MM)]
     assert low.calls == [Target(200.0, None, Source.N1MM)]
-    with caplog.at_level(logging.WARNING, "bridge.loggers.commands"):
+    with caplog.at_level(logging.WARNING, "bridge.interfaces.loggers.commands"):
         carry(e, n1mm_turn("Tower", 300, freqband="1.8"), commands)
     refusal = (
         "refused",

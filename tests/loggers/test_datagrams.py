@@ -1,4 +1,4 @@
-"""The loggers' datagrams (bridge/loggers/datagrams.py), from the fact sheet's examples
+"""The loggers' datagrams (bridge/interfaces/loggers/datagrams.py), from the fact sheet's examples
 (../shared/protocols/logger-udp.md): what each client sends, and what must be refused."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.loggers.datagrams import (
+from bridge.interfaces.loggers.datagrams import (
     MAX_DATAGRAM,
     Malformed,
     N1mmRequest,

@@ -1,9 +1,9 @@
-"""The PST replies' rate limit (bridge/loggers/limiter.py), in virtual time: a spoofed query
-makes the bridge send to its victim, so one address gets a burst and then a few a second."""
+"""The PST replies' rate limit (bridge/interfaces/loggers/limiter.py), in virtual time: a spoofed
+query makes the bridge send to its victim, so one address gets a burst and then a few a second."""
 
 from __future__ import annotations
 
-from bridge.loggers.limiter import ReplyLimiter
+from bridge.interfaces.loggers.limiter import ReplyLimiter
 from tests.support.clock import FakeClock as Clock
 
 

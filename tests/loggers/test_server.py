@@ -16,10 +16,10 @@ from typing import Any
 
 import pytest
 
-from bridge.loggers import LoggerEndpoints
-from bridge.loggers.limiter import REPLY_BURST
-from bridge.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
-from bridge.model import RotatorStatus, Source, Stop, Target, Toward
+from bridge.core.model import RotatorStatus, Source, Stop, Target, Toward
+from bridge.interfaces.loggers import LoggerEndpoints
+from bridge.interfaces.loggers.limiter import REPLY_BURST
+from bridge.interfaces.loggers.server import PER_WAKEUP, RATE_DATAGRAMS_S
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
 from tests.support.udp_logger import (

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from bridge.model import Origin, Source
-from bridge.mqtt.call_payload import Called
-from bridge.mqtt.payloads import PayloadError, parse_aim
-from bridge.mqtt.ports import RotatorPort
+from bridge.core.model import Origin, Source
+from bridge.interfaces.mqtt.call_payload import Called
+from bridge.interfaces.mqtt.payloads import PayloadError, parse_aim
+from bridge.interfaces.mqtt.ports import RotatorPort
 from tests.mqtt.test_service import service
 
 

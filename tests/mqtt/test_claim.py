@@ -1,8 +1,8 @@
-"""Who owns a base topic (mqtt/claim.py), pure."""
+"""Who owns a base topic (interfaces/mqtt/claim.py), pure."""
 
 from __future__ import annotations
 
-from bridge.mqtt.claim import Instance, Verdict, first_look, refusal, yields_to
+from bridge.interfaces.mqtt.claim import Instance, Verdict, first_look, refusal, yields_to
 
 ME = Instance("rotor-shack-1a2b3c", "shack", 100, 1000.0)
 OTHER = Instance("rotor-tower-9f8e7d", "tower", 200, 900.0)

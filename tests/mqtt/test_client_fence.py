@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-import bridge.mqtt.client as client_module
-from bridge.mqtt.client import MqttClient
+import bridge.interfaces.mqtt.client as client_module
+from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import wait_until
 

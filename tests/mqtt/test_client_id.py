@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bridge.config_report import masked
 from bridge.settings import load_settings
+from bridge.settings.report import masked
 from tests.support import cli
 
 CONFIG = """

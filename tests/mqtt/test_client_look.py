@@ -1,11 +1,11 @@
-"""The first look's hello (B/bridge/hello, mqtt/look.py and client.py rule 14) with a real
-mosquitto: it comes back to the bridge before anything else goes out, and nothing of it
+"""The first look's hello (B/bridge/hello, interfaces/mqtt/look.py and client.py rule 14) with a
+real mosquitto: it comes back to the bridge before anything else goes out, and nothing of it
 lingers on the broker for a client that subscribes to the base topic later."""
 
 from __future__ import annotations
 
-from bridge.mqtt.claim import Claim, Instance
-from bridge.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto

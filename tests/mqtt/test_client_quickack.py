@@ -1,4 +1,4 @@
-"""MQTT rule 9 (bridge/mqtt/connection.py):
+"""MQTT rule 9 (bridge/interfaces/mqtt/connection.py):
 after every read from the broker the client sets TCP_QUICKACK
 on its socket, so the kernel acknowledges a command at once instead of after its delayed-ACK
 timer (which a mosquitto with Nagle on waits for before it sends the next command, a STOP
@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from bridge.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
 

@@ -1,5 +1,5 @@
 """The broker connection through a stalled broker (SIGSTOP), with a real mosquitto (issue 14,
-items 2 and 3; mqtt/client.py rules 12 and 13)."""
+items 2 and 3; interfaces/mqtt/client.py rules 12 and 13)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.client import MqttClient
 from bridge.settings import MqttSettings
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.mosquitto import Mosquitto

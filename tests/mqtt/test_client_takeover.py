@@ -1,4 +1,4 @@
-"""MQTT rule 7 (bridge/mqtt/connection.py):
+"""MQTT rule 7 (bridge/interfaces/mqtt/connection.py):
 two bridges with one client id back off instead of
 fighting; anything else keeps paho's quick reconnects. The rule in virtual time, then the MQTT 5
 reason code on a real socket. (Two real processes on a real mosquitto:
@@ -13,8 +13,8 @@ import time
 
 import pytest
 
-from bridge.mqtt.client import MqttClient
-from bridge.mqtt.connection import (
+from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.connection import (
     FLAP_COUNT,
     STABLE_S,
     TAKEOVER_FIRST_S,
@@ -207,7 +207,7 @@ def test_mqtt5_session_taken_over_is_logged_once_and_slows_reconnects(
     client = MqttClient(
         settings, will_topic="rotor/bridge/state", subscriptions=["rotor/target"], on_message=print
     )
-    caplog.set_level(logging.INFO, logger="bridge.mqtt.connection")
+    caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.connection")
     client.start()
     try:
         wait_until(lambda: len(broker.accepted) >= 3, 3 * TAKEOVER_FIRST_S + 10, "3 connections")

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from bridge.core.model import Control
 from bridge.features.control.payload import control_json, parse_claim, parse_release
-from bridge.model import Control
-from bridge.mqtt.payloads import PayloadError
+from bridge.interfaces.mqtt.payloads import PayloadError
 
 
 def test_a_claim_names_an_operator_and_minutes_or_takes_the_messages_operator() -> None:

@@ -1,6 +1,6 @@
-"""The stop express (mqtt/express.py): what it writes and when (rule 3), the ports it holds and
-gives back (rule 5), and that its failures are said (rule 6). The child's decisions are run
-here on a socket pair and a pipe standing in for the port; the parent's on child processes that
+"""The stop express (interfaces/mqtt/express.py): what it writes and when (rule 3), the ports it
+holds and gives back (rule 5), and that its failures are said (rule 6). The child's decisions are
+run here on a socket pair and a pipe standing in for the port; the parent's on child processes that
 misbehave. The real path (broker, express, pty, a held bridge) is
 tests/integration/test_stop_express.py."""
 
@@ -17,8 +17,8 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-import bridge.mqtt.express as express_module
-from bridge.mqtt.express import (
+import bridge.interfaces.mqtt.express as express_module
+from bridge.interfaces.mqtt.express import (
     DROP_WAIT_S,
     FINISH_WAIT_S,
     GAP_S,
@@ -28,7 +28,7 @@ from bridge.mqtt.express import (
     express_client_id,
 )
 from bridge.protocols import REGISTRY
-from bridge.settings_mqtt import MqttSettings
+from bridge.settings.mqtt import MqttSettings
 from tests.support.rig import EASYCOMM_MODELS, GS232_MODELS
 from tests.support.waiting import slow, wait_until
 
@@ -501,7 +501,7 @@ def test_a_port_closed_while_the_express_is_still_starting_is_given_back_not_kil
     problems = Problems()
     slow_start = (
         f"import sys, time; time.sleep({2 * DROP_WAIT_S}); "
-        "from bridge.mqtt.express import main; sys.exit(main(sys.argv))"
+        "from bridge.interfaces.mqtt.express import main; sys.exit(main(sys.argv))"
     )
     e = express([sys.executable, "-c", slow_start], problems)
     port = Port()
@@ -683,8 +683,8 @@ def test_an_express_that_dies_is_said_started_again_and_given_the_ports_again() 
 
 
 def test_a_fight_over_its_client_id_is_said_and_unsaid_once_a_connection_lasts() -> None:
-    from bridge.mqtt.connection import STABLE_S
-    from bridge.mqtt.express import _Link
+    from bridge.interfaces.mqtt.connection import STABLE_S
+    from bridge.interfaces.mqtt.express import _Link
 
     said: list[dict[str, object]] = []
     now = [0.0]

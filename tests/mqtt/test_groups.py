@@ -1,5 +1,5 @@
-"""Groups (mqtt/groups.py): the fan-out decision on its own (offsets, limits, elevation, what a
-group refuses), and the service's group topics with recording rotators: a group's target as
+"""Groups (interfaces/mqtt/groups.py): the fan-out decision on its own (offsets, limits, elevation,
+what a group refuses), and the service's group topics with recording rotators: a group's target as
 each member's, a group's stop as each member's on both connections (the last word: a lane's
 group stop holds every member until the main connection's copy, so no target published before
 it runs after it), refusals on the group's error topic, the group's status."""
@@ -10,14 +10,14 @@ import json
 
 import pytest
 
-from bridge.errors import RefusalCode, Refused
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
 from bridge.feature import registered
-from bridge.model import MotionState, Origin, RotatorStatus, Source, Stop, Target
-from bridge.mqtt import payloads as pl
-from bridge.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import RotatorTopics, Topics
-from bridge.settings_groups import RESERVED
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
+from bridge.settings.groups import RESERVED
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 M = Source.MQTT
@@ -75,7 +75,7 @@ def test_what_is_no_bearing_is_refused_for_the_whole_group(payload: bytes) -> No
 
 
 def test_the_reserved_words_are_every_first_level_of_a_rotators_topics() -> None:
-    """settings_groups.py rule 4 in step with topics.py: a group may not take any of them."""
+    """settings/groups.py rule 4 in step with topics.py: a group may not take any of them."""
     t = RotatorTopics("R")
     leaves = {
         getattr(t, name).split("/")[1]

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import json
 
+from bridge.core.model import AxisHealth, RotatorHealth, RotatorStatus
 from bridge.features.health.payload import health_doc
-from bridge.model import AxisHealth, RotatorHealth, RotatorStatus
-from bridge.mqtt import payloads as pl
+from bridge.interfaces.mqtt import payloads as pl
 from tests.mqtt.test_service import RecordingRotator, service
 
 HEALTH = RotatorHealth(

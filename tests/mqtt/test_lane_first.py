@@ -1,5 +1,5 @@
-"""The stop lane goes first (mqtt/lane.py rule 4): the main connection's thread, before each
-message it hands on, waits while the lane's socket has bytes the lane has not read yet, so a
+"""The stop lane goes first (interfaces/mqtt/lane.py rule 4): the main connection's thread, before
+each message it hands on, waits while the lane's socket has bytes the lane has not read yet, so a
 stop published beside a backlog of targets is read and carried out before the next target
 (the reader of a backlog otherwise keeps the interpreter lock and a core for itself). A
 socket pair stands for the lane's connection to the broker; a clock the test moves stands for
@@ -13,8 +13,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.mqtt.connection import Connection
-from bridge.mqtt.lane import YIELD_BUDGET_S, YIELD_MAX_S, YIELD_S, StopLane
+from bridge.interfaces.mqtt.connection import Connection
+from bridge.interfaces.mqtt.lane import YIELD_BUDGET_S, YIELD_MAX_S, YIELD_S, StopLane
 from bridge.settings import MqttSettings
 from tests.support.waiting import slow
 

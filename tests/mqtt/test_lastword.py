@@ -1,8 +1,8 @@
-"""The last word's bookkeeping (mqtt/lastword.py), pure: a clock passed in."""
+"""The last word's bookkeeping (interfaces/mqtt/lastword.py), pure: a clock passed in."""
 
 from __future__ import annotations
 
-from bridge.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, RESEND_S, Copy, LastWord
+from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, RESEND_MAX_S, RESEND_S, Copy, LastWord
 
 HOUR_S = 3600.0
 

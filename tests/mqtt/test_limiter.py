@@ -1,5 +1,5 @@
-"""R/error's rate limit (bridge/mqtt/limiter.py and the service), issue 14 item 6: 200,000
-refused rotctld commands published 200,000 QoS 1 events; round trips rose to 6 s and the
+"""R/error's rate limit (bridge/interfaces/mqtt/limiter.py and the service), issue 14 item 6:
+200,000 refused rotctld commands published 200,000 QoS 1 events; round trips rose to 6 s and the
 bridge's memory grew from 42 to 174 MB and stayed."""
 
 from __future__ import annotations
@@ -9,10 +9,10 @@ import logging
 
 import pytest
 
-from bridge.model import ErrorEvent, ErrorKind
-from bridge.mqtt.limiter import EventLimiter
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import Topics
+from bridge.core.model import ErrorEvent, ErrorKind
+from bridge.interfaces.mqtt.limiter import EventLimiter
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
 from tests.mqtt.test_service import RecordingPublisher, RecordingRotator
 
 
@@ -82,7 +82,7 @@ def test_each_refusal_published_is_one_info_line_and_a_flood_as_few(
     svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, error_events_per_s=10, clock=clock)
     svc.attach(RecordingRotator("tower", "rotorez"))
     pub.take()
-    caplog.set_level(logging.INFO, logger="bridge.mqtt.service")
+    caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.service")
     event = ErrorEvent(ErrorKind.REFUSED, "azimuth 999 outside the limits 0..360", "P 999 0")
     for _ in range(1000):  # at one instant: the burst goes, the rest is counted
         svc.publish_event("tower", event)
@@ -104,7 +104,7 @@ def test_a_refusal_in_the_log_is_one_line_however_the_payload_was_written(
     pub = RecordingPublisher()
     svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub)
     svc.attach(RecordingRotator("tower", "rotorez"))
-    caplog.set_level(logging.INFO, logger="bridge.mqtt.service")
+    caplog.set_level(logging.INFO, logger="bridge.interfaces.mqtt.service")
     forged = "target '1'\nINFO bridge: all is well" + "x" * 500
     svc.publish_event("tower", ErrorEvent(ErrorKind.REFUSED, "not a number", forged))
     svc.publish_event("tower", ErrorEvent(ErrorKind.STALLED, "no progress for 10 s", None))

@@ -1,10 +1,10 @@
-"""The first look's books (bridge/mqtt/look.py, MQTT rule 14), without a broker: what a look
-saw decides whether stale discovery is deleted, left alone, or the bridge refuses to run."""
+"""The first look's books (bridge/interfaces/mqtt/look.py, MQTT rule 14), without a broker: what a
+look saw decides whether stale discovery is deleted, left alone, or the bridge refuses to run."""
 
 from __future__ import annotations
 
-from bridge.mqtt.claim import Claim, Instance
-from bridge.mqtt.look import FirstLook
+from bridge.interfaces.mqtt.claim import Claim, Instance
+from bridge.interfaces.mqtt.look import FirstLook
 
 ME = Instance("rotor-me", "shack", 100, 1000.0)
 OTHER = Instance("rotor-other", "attic", 200, 900.0)

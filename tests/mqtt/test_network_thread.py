@@ -17,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from bridge.mqtt.paho_client import Client, Waker, new_client
+from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
 from tests.support.waiting import slow

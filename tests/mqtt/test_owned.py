@@ -1,17 +1,17 @@
-"""The owned-topic judge (bridge/mqtt/owned.py, MQTT rule 10) in virtual time: which values on
-the bridge's own topics are its own, when its value is put back, and when that is said."""
+"""The owned-topic judge (bridge/interfaces/mqtt/owned.py, MQTT rule 10) in virtual time: which
+values on the bridge's own topics are its own, when its value is put back, and when that is said."""
 
 from __future__ import annotations
 
 from paho.mqtt.client import topic_matches_sub
 
-from bridge.mqtt.owned import (
+from bridge.interfaces.mqtt.owned import (
     FOREIGN_FIX_S,
     FOREIGN_LOG_S,
     SETTLE_AFTER_CONNECT_S,
     OwnedTopics,
 )
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.mqtt.topics import Topics
 
 STATE = "rotor/state"
 

@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.model import MotionState, RotatorStatus
-from bridge.mqtt import payloads as pl
+from bridge.core.model import MotionState, RotatorStatus
+from bridge.interfaces.mqtt import payloads as pl
 
 
 @pytest.mark.parametrize(

@@ -13,8 +13,8 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.mqtt.connection import Connection
-from bridge.mqtt.paho_client import new_client
+from bridge.interfaces.mqtt.connection import Connection
+from bridge.interfaces.mqtt.paho_client import new_client
 from bridge.settings import MqttSettings
 from tests.support.brokers import protocol_level
 from tests.support.waiting import slow
@@ -130,7 +130,7 @@ def test_closes_around_an_accepted_trial_step_down_only_without_tls(
     one broker of two down does the same). Over TLS nobody on the path can answer "Unsupported
     protocol version", so the close must not be the weaker way down either (docs/brokers.md:
     TLS is what keeps MQTT 5's rules)."""
-    monkeypatch.setattr("bridge.mqtt.connection.accepts_mqtt311", lambda *a: True)
+    monkeypatch.setattr("bridge.interfaces.mqtt.connection.accepts_mqtt311", lambda *a: True)
     settings = MqttSettings(
         host="127.0.0.1", port=1, client_id="fallback-tls", tls={"enabled": tls}
     )

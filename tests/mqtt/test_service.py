@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import pytest
 
-from bridge.errors import Refused
-from bridge.model import (
+from bridge.core.errors import Refused
+from bridge.core.model import (
     Claim,
     Command,
     ErrorEvent,
@@ -36,9 +36,9 @@ from bridge.model import (
     Toward,
     TrackBody,
 )
-from bridge.mqtt.heartbeat import Stamp
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import Topics
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from tests.support.clock import FakeClock
@@ -794,8 +794,8 @@ def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> 
 
 
 def test_every_mqtt_halt_is_shown_to_the_stop_express_first_and_its_failure_costs_no_stop() -> None:
-    """mqtt/express.py rule 8: its hold goes in before the halt, from either connection, a
-    group's stop too; a hook that raises is logged and the stop still goes in."""
+    """interfaces/mqtt/express.py rule 8: its hold goes in before the halt, from either connection,
+    a group's stop too; a hook that raises is logged and the stop still goes in."""
     svc, _pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
     shown: list[str] = []

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import json
 
-from bridge.model import AuditEvent, Control, Origin, RotatorStatus, Source, Stop
-from bridge.mqtt.service import MqttService
-from bridge.mqtt.topics import Topics
+from bridge.core.model import AuditEvent, Control, Origin, RotatorStatus, Source, Stop
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
 from tests.mqtt.test_service import RecordingRotator, service
 
 

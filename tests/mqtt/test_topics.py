@@ -1,4 +1,4 @@
-from bridge.mqtt.topics import DiscoveryTopics, Topics
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
 
 
 def test_single_rotator_lives_on_the_base_topic() -> None:

@@ -9,7 +9,7 @@ import threading
 import paho.mqtt.client as paho
 from paho.mqtt.enums import MQTTErrorCode
 
-from bridge.mqtt.delivery import wait_published
+from bridge.interfaces.mqtt.delivery import wait_published
 
 
 def test_a_message_never_queued_ends_the_wait_without_raising() -> None:

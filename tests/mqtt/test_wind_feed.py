@@ -1,4 +1,4 @@
-"""The wind topics (bridge/features/wind/feed.py) and the wind keys (bridge/settings_wind.py):
+"""The wind topics (bridge/features/wind/feed.py) and the wind keys (bridge/settings/wind.py):
 readings to km/h for the rotators whose topic it is, junk dropped and logged rarely, settings
 refused with the key named."""
 
@@ -11,7 +11,7 @@ import pytest
 from pydantic import ValidationError
 
 from bridge.features.wind.feed import BAD_LOG_S, wind_feed
-from bridge.mqtt.connection import command_filters
+from bridge.interfaces.mqtt.connection import command_filters
 from bridge.settings import RotatorSettings
 from tests.support.clock import FakeClock
 

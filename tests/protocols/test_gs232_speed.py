@@ -7,11 +7,11 @@ import json
 
 import pytest
 
-from bridge.homeassistant import Identity, RotatorInfo, all_configs
-from bridge.model import Origin, SetOption, Source
-from bridge.mqtt import payloads as pl
-from bridge.mqtt.service import parse_command
-from bridge.mqtt.topics import Topics
+from bridge.core.model import Origin, SetOption, Source
+from bridge.interfaces.homeassistant import Identity, RotatorInfo, all_configs
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.service import parse_command
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import SendWhen, SettingKind
 from tests.ha_rules import validate
@@ -56,7 +56,7 @@ def test_the_speed_is_a_home_assistant_select() -> None:
 
 def test_r_info_says_what_the_speed_takes() -> None:
     """A client far from the station (Node-RED, the remote) learns the choices from R/info."""
-    from bridge.mqtt.payloads import info_json
+    from bridge.interfaces.mqtt.payloads import info_json
     from bridge.pointing import Pointing
 
     spec = REGISTRY["gs232b"]

@@ -199,7 +199,7 @@ BANNER = b"C2000 IDIOM V1.4S "
 
 
 def junk_of(codec: RotorEzCodec, data: bytes) -> bytes:
-    """The junk of one read, as the line gathers it (engine/link.py) and asks about it."""
+    """The junk of one read, as the line gathers it (session/link.py) and asks about it."""
     return b"".join(r.data for r in codec.feed(data) if isinstance(r, JunkReply))
 
 

@@ -1,5 +1,5 @@
 """Controller settings as data (protocols/base.py rule 6): what a declaration accepts and
-refuses, what the engine owes the controller and when (engine/options.py), and the Home
+refuses, what the engine owes the controller and when (session/options.py), and the Home
 Assistant entity each kind becomes. Pure: no port, no broker."""
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import json
 
 import pytest
 
-from bridge.engine.options import OPTIONS_REFRESH_S, Options
-from bridge.homeassistant import Identity, RotatorInfo, all_configs
-from bridge.model import SetOption, describe_command, setting_text
-from bridge.mqtt.topics import Topics
+from bridge.core.model import SetOption, describe_command, setting_text
+from bridge.interfaces.homeassistant import Identity, RotatorInfo, all_configs
+from bridge.interfaces.mqtt.topics import Topics
 from bridge.protocols import REGISTRY
 from bridge.protocols.base import SendWhen, Setting, SettingKind
+from bridge.session.options import OPTIONS_REFRESH_S, Options
 from tests.ha_rules import validate
 
 RAMP = Setting(
@@ -169,7 +169,7 @@ def test_each_kind_of_setting_is_its_home_assistant_platform() -> None:
 
 
 def test_r_info_describes_a_number_setting_by_its_range_step_and_unit() -> None:
-    from bridge.mqtt.payloads import setting_info
+    from bridge.interfaces.mqtt.payloads import setting_info
 
     assert setting_info(RAMP) == {
         "name": "ramp",

@@ -20,16 +20,16 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.errors import RefusalCode, Refused
-from bridge.gs232.commands import EasycommSession, Gs232Session
-from bridge.model import RotatorStatus
-from bridge.mqtt.remote import RemoteLink
-from bridge.mqtt.topics import StationTopics
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import RotatorStatus
+from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.interfaces.mqtt.topics import StationTopics
+from bridge.interfaces.rotctld.server import RotctldSession
 from bridge.remote.console import ConsoleFeed, Drawn, RemoteConsoleRotator, drawn_of
 from bridge.remote.rotator import Info, RemoteRotator, StationView
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
-from bridge.rotctld.server import RotctldSession
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.mosquitto import free_port
@@ -163,8 +163,8 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     sat unacknowledged in paho's queue. The remote dropped it with the targets (never late), so
     the operator's STOP never reached the station (docs/architecture.md rule 11: a stop is never
     lost; a stop moves nothing, rule 7). No PUBACK within a second resets the connection
-    (mqtt/remote.py rule 7): the client hears the stop is not confirmed, and it goes again on
-    the next connection; a target asked then is refused at once and never sent."""
+    (interfaces/mqtt/remote.py rule 7): the client hears the stop is not confirmed, and it goes
+    again on the next connection; a target asked then is refused at once and never sent."""
     r, port = remote
     link = r.link
     assert link is not None
@@ -174,7 +174,8 @@ def test_a_stop_the_broker_never_acknowledged_is_not_lost_when_it_comes_back(
     assert ask(port, b"P 250 0\n") == b"RPRT -6\n"  # refused at once while reconnecting
     tower = r.rotators[0]
     with pytest.raises(Refused):  # the console's lock ON (remote/console.py): not confirmed,
-        tower.publish(tower.topics.lock, "ON")  # and kept like the stop (mqtt/remote.py rule 6)
+        # and kept like the stop (interfaces/mqtt/remote.py rule 6)
+        tower.publish(tower.topics.lock, "ON")
     station.broker.kill()
     wait_until(lambda: not link.up, 30, "the remote sees the broker gone")
     log_from = station.broker.log.stat().st_size
@@ -261,7 +262,7 @@ def test_a_move_while_the_station_is_away_is_refused_at_once_and_a_stop_still_go
     console refused a move then; rotctld, GS-232, Easycomm and PstRotator said RPRT 0 / nothing
     and published a target nobody would take, as the station's own rotctld does not (it answers
     RPRT -5 for a rotator offline). A stop still goes: the station's bridge takes it, and with
-    the bridge's main connection gone its stop lane may still (mqtt/lane.py)."""
+    the bridge's main connection gone its stop lane may still (interfaces/mqtt/lane.py)."""
     view, link = StationView(FakeClock()), Link()
     rot = station_rotator(view, "tower", link)
     view.put(STATION.bridge_state if gone == "bridge" else rot.topics.availability, word)
@@ -295,7 +296,7 @@ def test_a_takeover_names_the_client_id_the_remote_uses(caplog: pytest.LogCaptur
     for a bridge."""
     s = remote_settings(1883, 4533)
     link = RemoteLink(s.mqtt, s.client_id(), [], lambda topic, payload, retain: None)
-    with caplog.at_level(logging.ERROR, logger="bridge.mqtt.connection"):
+    with caplog.at_level(logging.ERROR, logger="bridge.interfaces.mqtt.connection"):
         link._ended(ReasonCode(PacketTypes.DISCONNECT, identifier=0x8E), "taken over", True)
     (said,) = [r.getMessage() for r in caplog.records]
     assert f"client id {s.client_id()!r}" in said

@@ -1,6 +1,6 @@
 """The remote console's pure parts (bridge/remote/console.py), in virtual time: what each console
-command publishes (judged by the station's own payload parsers, mqtt/payloads.py), what is
-refused at once offline, the station's R/info, R/presets, R/status and R/error read back, and
+command publishes (judged by the station's own payload parsers, interfaces/mqtt/payloads.py), what
+is refused at once offline, the station's R/info, R/presets, R/status and R/error read back, and
 which statuses reach the pages."""
 
 from __future__ import annotations
@@ -10,9 +10,8 @@ from dataclasses import replace
 
 import pytest
 
-from bridge.errors import RefusalCode, Refused
-from bridge.features import tracking
-from bridge.model import (
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import (
     ErrorEvent,
     ErrorKind,
     MotionState,
@@ -22,8 +21,10 @@ from bridge.model import (
     TargetInfo,
     TrackingInfo,
 )
-from bridge.mqtt import payloads as pl
-from bridge.mqtt.topics import StationTopics
+from bridge.features import tracking
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.topics import StationTopics
+from bridge.interfaces.web.commands import carry_out, parse
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
 from bridge.remote.console import (
@@ -34,7 +35,6 @@ from bridge.remote.console import (
     parse_presets,
 )
 from bridge.remote.rotator import Info, RemoteRotator, StationView, parse_status
-from bridge.web.commands import carry_out, parse
 from tests.support.clock import FakeClock
 
 SPEC = REGISTRY["rotorez"]

@@ -17,10 +17,10 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.errors import RefusalCode, Refused
-from bridge.model import Source, Stop, Target
-from bridge.mqtt.client import MqttClient
-from bridge.mqtt.heartbeat import (
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Source, Stop, Target
+from bridge.interfaces.mqtt.client import MqttClient
+from bridge.interfaces.mqtt.heartbeat import (
     AHEAD_S,
     CLOCK_WINDOW_S,
     MAX_BUCKETS,
@@ -31,11 +31,11 @@ from bridge.mqtt.heartbeat import (
     beat_payload,
     parse_beat,
 )
-from bridge.mqtt.remote import RemoteLink
-from bridge.mqtt.topics import StationTopics
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.interfaces.mqtt.topics import StationTopics
+from bridge.interfaces.rotctld.server import RotctldSession
 from bridge.remote.rotator import Info, RemoteRotator, StationView
-from bridge.rotctld.server import RotctldSession
-from bridge.settings_mqtt import MqttSettings
+from bridge.settings.mqtt import MqttSettings
 from tests.mqtt.test_service import NOW_UNIX, service
 from tests.support.clock import FakeClock
 from tests.support.waiting import slow

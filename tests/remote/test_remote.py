@@ -127,7 +127,8 @@ def test_broker_away_refuses_at_once_and_nothing_moves_when_it_is_back(
     assert link is not None
     moves = len(emu.frames(*BEARING_OUTCOMES))
     # a command the broker never acknowledges (frozen, then gone): paho would send it again on
-    # the next connection (mqtt/remote.py rule 3); the client is told it did not go (rule 7)
+    # the next connection (interfaces/mqtt/remote.py rule 3); the client is told it did not go (rule
+    # 7)
     station.broker.pause()
     assert ask(port, b"P 250 0\n") == b"RPRT -6\n"  # no PUBACK: refused, the link reset
     station.broker.kill()

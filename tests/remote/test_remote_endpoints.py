@@ -210,7 +210,8 @@ def test_the_command_line_serves_a_pty_and_removes_its_link_on_sigterm(
 def test_a_pst_port_beyond_loopback_is_warned_about(
     station: Rig, caplog: pytest.LogCaptureFixture
 ) -> None:
-    """remote/__init__.py rule 4, as the TCP ports (tcplines.py) have it: no login on UDP."""
+    """remote/__init__.py rule 4, as the TCP ports (interfaces/tcplines.py) have it: no login on
+    UDP."""
     port, replies = reserve_pst_ports()
     remote = Remote(
         RemoteSettings(

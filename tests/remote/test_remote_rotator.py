@@ -9,12 +9,12 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from bridge.errors import RefusalCode, Refused
-from bridge.gs232 import Dcu1Session, EasycommSession, Gs232Session
-from bridge.gs232.commands import DCU1_ERROR
-from bridge.model import Lock, Park, Source, Stop, Target, Toward
-from bridge.mqtt.payloads import info_json
-from bridge.mqtt.topics import StationTopics
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import Lock, Park, Source, Stop, Target, Toward
+from bridge.interfaces.gs232 import Dcu1Session, EasycommSession, Gs232Session
+from bridge.interfaces.gs232.commands import DCU1_ERROR
+from bridge.interfaces.mqtt.payloads import info_json
+from bridge.interfaces.mqtt.topics import StationTopics
 from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
 from bridge.settings import settings_from
@@ -137,8 +137,9 @@ def test_a_stop_the_broker_cannot_take_is_answered_with_the_banner_on_dcu1(
 
 
 def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
-    """web/port.py rule 2, for the console on the remote: what the console's order of commands
-    (web/commands.py rule 5) measures a command against, on the remote's monotonic clock."""
+    """interfaces/web/port.py rule 2, for the console on the remote: what the console's order of
+    commands (interfaces/web/commands.py rule 5) measures a command against, on the remote's
+    monotonic clock."""
     mono = FakeClock(100.0)
     remote = rotator(Link(), mono)
     console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))

@@ -1,8 +1,8 @@
 """A command whose expiry passes in a broker queue never moves the rotor.
 
-The station's bridge keeps no session (clean start: mqtt/connection.py rule 1), so nothing waits
-for it in the station's broker. The queue a command really waits in is a relay's: a broker on
-the operator's side, bridged to the station's (mosquitto's ``connection`` bridge, MQTT 5,
+The station's bridge keeps no session (clean start: interfaces/mqtt/connection.py rule 1), so
+nothing waits for it in the station's broker. The queue a command really waits in is a relay's: a
+broker on the operator's side, bridged to the station's (mosquitto's ``connection`` bridge, MQTT 5,
 ``topic rotor/# out 1``), whose link to the station is down while the command waits. The link
 here goes through a gate this test opens when it wants: shut, it takes each connection and
 closes it at once, so the relay keeps its queue; open, it forwards bytes both ways.

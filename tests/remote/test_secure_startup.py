@@ -1,6 +1,6 @@
-"""mqtt/remote.py rule 5, the decisions alone (no broker): before the first connection a refused
-login or a failed TLS handshake is kept as one line for the start-up error, not logged; once the
-remote has been connected, both are logged and retried like the bridge's."""
+"""interfaces/mqtt/remote.py rule 5, the decisions alone (no broker): before the first connection a
+refused login or a failed TLS handshake is kept as one line for the start-up error, not logged; once
+the remote has been connected, both are logged and retried like the bridge's."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import ssl
 
 import pytest
 
-from bridge.mqtt.remote import RemoteLink
-from bridge.settings_mqtt import MqttSettings
+from bridge.interfaces.mqtt.remote import RemoteLink
+from bridge.settings.mqtt import MqttSettings
 
 
 def link() -> RemoteLink:

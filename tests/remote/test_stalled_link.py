@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.mqtt.heartbeat import parse_beat
+from bridge.interfaces.mqtt.heartbeat import parse_beat
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
@@ -132,7 +132,8 @@ def test_a_move_across_a_stalled_link_is_refused_and_never_turns_the_rotor_later
 
 
 def test_the_station_bridge_beats_its_clock_not_retained(station: Rig, probe: Probe) -> None:
-    """What the remote reads the station's life and clock from (mqtt/heartbeat.py rule 1)."""
+    """What the remote reads the station's life and clock from (interfaces/mqtt/heartbeat.py rule
+    1)."""
     start = probe.mark()
     first = probe.wait(lambda m: m.topic == "rotor/bridge/heartbeat", 10, "a heartbeat", start)
     second = probe.wait(

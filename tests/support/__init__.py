@@ -15,7 +15,7 @@
 - cpu.py: where the suite's CPU goes, each test's CPU-seconds and its children's, recorded
   when ROTOR_TEST_CPU names a file (``python -m tests.support.cpu FILE`` reports them)
 
-A private mosquitto on a free loopback port is mosquitto.py's ``Mosquitto`` (the demo's broker
+A private mosquitto on a free loopback port is demo/mosquitto.py's ``Mosquitto`` (the demo's broker
 with a configuration of its own, a crash, a freeze and a restart); the pytest fixtures
 ``broker``, ``probe`` and ``rig`` are in tests/conftest.py.
 """

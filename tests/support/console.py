@@ -1,5 +1,5 @@
-"""A plain HTTP client of the operator console (bridge/web/), as a script would use it: the
-token, the commands, the live feed. The standard library only."""
+"""A plain HTTP client of the operator console (bridge/interfaces/web/), as a script would use it:
+the token, the commands, the live feed. The standard library only."""
 
 from __future__ import annotations
 

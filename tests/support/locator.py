@@ -1,8 +1,8 @@
 """A Maidenhead encoder for tests: the locator of the area holding a point. The bridge only reads
-locators (bridge/geo.py parse_locator); tests use this to check that reading from the other
+locators (bridge/core/geo.py parse_locator); tests use this to check that reading from the other
 side (a point's locator read back is the square around it) and to name a place's locator.
 
-Written from the definition (IARU; bridge/geo.py's header): pairs of longitude then latitude,
+Written from the definition (IARU; bridge/core/geo.py's header): pairs of longitude then latitude,
 field A..R (20 x 10 deg), square 0..9, subsquare A..X, extended square 0..9; counted east from
 180 W (180 E counts as 180 W) and north from 90 S (the North Pole belongs to the top row).
 """

@@ -1,4 +1,4 @@
-"""The tests' mosquitto: the demo's private broker (bridge/mosquitto.py) with what only tests
+"""The tests' mosquitto: the demo's private broker (bridge/demo/mosquitto.py) with what only tests
 ask of a broker: a configuration of their own (ACLs, TLS, bridges between brokers), another free
 port when a parallel worker took the one chosen, a crash, a freeze and a restart on the same
 port. Its start's deadline scales with the machine (waiting.py rule 1)."""
@@ -9,8 +9,8 @@ import signal
 from pathlib import Path
 from typing import Self
 
-from bridge.mosquitto import BrokerError, answers, find_mosquitto, free_port
-from bridge.mosquitto import Mosquitto as DemoMosquitto
+from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto, free_port
+from bridge.demo.mosquitto import Mosquitto as DemoMosquitto
 from tests.support.waiting import slow
 
 __all__ = ["BrokerError", "Mosquitto", "answers", "find_mosquitto", "free_port"]

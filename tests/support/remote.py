@@ -8,7 +8,7 @@ import threading
 import time
 from types import TracebackType
 
-from bridge.mqtt.heartbeat import beat_payload
+from bridge.interfaces.mqtt.heartbeat import beat_payload
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
 from tests.support.waiting import slow
@@ -25,7 +25,7 @@ def remote_published(broker: Mosquitto, log_from: int) -> list[bytes]:
 
 
 class Heartbeat:
-    """A stand-in station's heartbeat (mqtt/heartbeat.py rule 1): the wall clock on
+    """A stand-in station's heartbeat (interfaces/mqtt/heartbeat.py rule 1): the wall clock on
     ``rotor/bridge/heartbeat`` every ``every_s`` through ``probe``, from entering to leaving."""
 
     def __init__(self, probe: Probe, topic: str = "rotor/bridge/heartbeat", every_s: float = 0.5):

@@ -175,7 +175,8 @@ def emulator_line(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Li
 
 
 class Rig:
-    #: the stop express (mqtt/express.py), a Python process of its own beside each bridge the
+    #: the stop express (interfaces/mqtt/express.py), a Python process of its own beside each bridge
+    # the
     #: rig starts (about 0.4 CPU-s each, most of a rig test's cost): on where it is what a test
     #: is about (tests/integration/test_stop_express.py, the broker matrix; tests/mqtt/
     #: test_express.py proves it on its own), off elsewhere: the stop lane then carries the

@@ -1,6 +1,6 @@
 """WSJT-X's UDP messages encoded as WSJT-X writes them, for the tests: written from the fact
-sheet (bridge/wsjtx/messages.py's header, itself from WSJT-X's NetworkMessage.hpp), never from
-the bridge's decoder, and judged by WSJT-X's own reference server (``udp_daemon``, Debian's
+sheet (bridge/interfaces/wsjtx/messages.py's header, itself from WSJT-X's NetworkMessage.hpp), never
+from the bridge's decoder, and judged by WSJT-X's own reference server (``udp_daemon``, Debian's
 ``wsjtx`` package) in tests/wsjtx/test_udp_daemon.py."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""Second hostile pass over the operator console (bridge/web/), after the WebSocket feed, the
-connection cap and the stale-command order were added. Real parts: the bridge in this process
+"""Second hostile pass over the operator console (bridge/interfaces/web/), after the WebSocket feed,
+the connection cap and the stale-command order were added. Real parts: the bridge in this process
 on an emulated controller (pty) and a real mosquitto.
 
 Tests marked ``DEFECT`` in their docstring FAIL on the code they were written against (each is
@@ -58,7 +58,7 @@ def test_the_page_limit_counts_websockets_still_waiting_for_their_token(
     but the page joins the feed only when its token comes (up to BODY_S later). WebSockets
     opened together all pass the check while none has sent its token, then all join: the cap
     of 100 pages is exceeded by as many as the connection cap lets in (256)."""
-    from bridge.web import live
+    from bridge.interfaces.web import live
 
     _rig, client = console
     monkeypatch.setattr(live, "MAX_PAGES", 2)
@@ -167,7 +167,7 @@ def test_an_open_websocket_idle_longer_than_idle_s_is_not_cut(
 ) -> None:
     """Held: a page open with the rotor still (nothing but pings for minutes) is a request
     being served, never swept (connections.py rule 2)."""
-    from bridge.web import connections, live
+    from bridge.interfaces.web import connections, live
 
     rig, client = console
     monkeypatch.setattr(connections, "IDLE_S", 0.2)
@@ -294,7 +294,7 @@ def test_behind_a_reverse_proxy_64_tokenless_websockets_keep_the_operators_stop_
     and every other connection through the proxy, the operator's STOP included, is closed as
     it is accepted (the proxy answers 502). Renewed every 10 s it lasts as long as the
     attacker likes."""
-    from bridge.web import connections
+    from bridge.interfaces.web import connections
     from tests.web.test_proxy import PREFIX, Caddy, _client, _command
 
     monkeypatch.setattr(connections, "IDLE_S", 1.0)
@@ -347,7 +347,7 @@ def test_a_console_click_held_up_on_the_way_does_not_turn_the_rotor_after_a_stop
     whose POST began before a STOP sent by MQTT (Home Assistant's button, the stop lane, a
     script) was carried out, and whose body arrived after it, is carried out: the rotor turns
     AFTER that STOP, to a target sent before it. The same click delayed past the console's own
-    STOP is refused as stale (test_attack_console.py); the judge (engine/rotator.py) knows when
+    STOP is refused as stale (test_attack_console.py); the judge (runtime/rotator.py) knows when
     any front end's halt was carried out and could be the one asked."""
     rig, client = console
     body = b'{"command":"target","az":200}'
@@ -401,7 +401,7 @@ def test_a_page_whose_token_ran_out_can_still_stop_a_turning_rotor(
     Assistant or still tracking: the operator walks up, presses STOP or Escape, and nothing
     stops until the password is typed. The page should keep the expired token for STOP and
     lock ON (and keep #stop on screen) while it asks for a new one."""
-    from bridge.web import auth
+    from bridge.interfaces.web import auth
 
     monkeypatch.setattr(auth, "TOKEN_LIFETIME_S", 6.0)  # the week, shortened
     secret = tmp_path / "web-password"

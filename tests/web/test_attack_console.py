@@ -1,6 +1,6 @@
-"""Hostile tests of the operator console (bridge/web/): a neighbour on the LAN, another site's
-page, a clumsy user. Real parts: the bridge in this process on an emulated controller (pty) and
-a real mosquitto.
+"""Hostile tests of the operator console (bridge/interfaces/web/): a neighbour on the LAN, another
+site's page, a clumsy user. Real parts: the bridge in this process on an emulated controller (pty)
+and a real mosquitto.
 
 Tests marked ``DEFECT`` in their docstring FAIL on the code they were written against (each is
 a finding of the review); the others are attacks that held and stay as regression guards.
@@ -31,10 +31,10 @@ from typing import Any
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
+from bridge.interfaces.web import auth
+from bridge.interfaces.web.connections import MAX_PER_ADDRESS
+from bridge.interfaces.web.files import installation_secret
 from bridge.settings import ConfigError
-from bridge.web import auth
-from bridge.web.connections import MAX_PER_ADDRESS
-from bridge.web.files import installation_secret
 from tests.support import wait_until
 from tests.support.console import ConsoleClient, EventStream, web_section
 from tests.support.mosquitto import Mosquitto
@@ -534,7 +534,7 @@ def test_the_page_limit_holds_for_streams_opened_at_once(
     """Held (a guard): _events checks ``feed.pages >= MAX_PAGES`` before ``response.prepare``
     and joins the feed after it; should prepare ever yield to the loop there, a burst of
     streams would all pass the check."""
-    from bridge.web import live
+    from bridge.interfaces.web import live
 
     _rig, client = console
     monkeypatch.setattr(live, "MAX_PAGES", 2)
@@ -613,8 +613,8 @@ def test_a_target_sent_before_stop_but_delayed_on_the_way_does_not_turn_the_roto
     click's POST (its own connection) is held up on the way (Wi-Fi retransmits, a proxy) and
     reaches the bridge after the STOP's. The console carries it out: the rotor starts turning
     AFTER the STOP, to a target the operator already cancelled. MQTT has a fence for exactly
-    this (the stop lane's hold, mqtt/lastword.py); the console's STOP has none, and its commands
-    carry no order the server could check."""
+    this (the stop lane's hold, interfaces/mqtt/lastword.py); the console's STOP has none, and its
+    commands carry no order the server could check."""
     rig, client = console
     body = b'{"command":"target","az":200}'
     delayed = socket.create_connection(("127.0.0.1", client.port))
@@ -757,7 +757,7 @@ def test_a_refused_point_leaves_no_target_behind_for_path(
 ) -> None:
     """Held: a map point in the keep-out sector is refused, and leaves nothing the 'other
     path' button could then turn the rotor to."""
-    from bridge import geo
+    from bridge.core import geo
 
     rig, client = console
     lat, lon = geo.parse_locator("JO62qm")

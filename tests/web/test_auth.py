@@ -1,11 +1,11 @@
-"""The console's safety checks (web/auth.py), pure: tokens, the password, the login limit, the
-Origin and the host name."""
+"""The console's safety checks (interfaces/web/auth.py), pure: tokens, the password, the login
+limit, the Origin and the host name."""
 
 from __future__ import annotations
 
 import pytest
 
-from bridge.web import auth
+from bridge.interfaces.web import auth
 
 T0 = 1_800_000_000.0
 

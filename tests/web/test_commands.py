@@ -1,10 +1,11 @@
-"""The console's command bodies (web/commands.py): what parses, and what is refused by name."""
+"""The console's command bodies (interfaces/web/commands.py): what parses, and what is refused by
+name."""
 
 from __future__ import annotations
 
 import pytest
 
-from bridge.web.commands import BadCommand, WebCommand, parse
+from bridge.interfaces.web.commands import BadCommand, WebCommand, parse
 
 
 @pytest.mark.parametrize(

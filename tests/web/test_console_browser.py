@@ -18,8 +18,8 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, Page, Request, expect
 
-from bridge import geo
-from bridge.web.projection import RIM_KM
+from bridge.core import geo
+from bridge.interfaces.web.projection import RIM_KM
 from tests.support.console import web_section
 from tests.support.rig import Rig, arrival_tol
 from tests.support.waiting import slow_ms

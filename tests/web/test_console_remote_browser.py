@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Browser, expect
 
-from bridge import geo
+from bridge.core import geo
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support.console import web_section

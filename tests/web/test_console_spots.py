@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, Page, expect
 
-from bridge.web.projection import RIM_KM
+from bridge.interfaces.web.projection import RIM_KM
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_dxcluster_bridge import JAPAN, W1XYZ_GRID, bearing_to
 from tests.integration.test_pointing_bridge import angle_between, locator_centre

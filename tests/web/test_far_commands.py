@@ -9,11 +9,11 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.model import Command, Stop
+from bridge.core.model import Command, Stop
+from bridge.interfaces.web.server import FAR_MOVES, WebConsole
+from bridge.interfaces.web.view import RotatorFacts
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
-from bridge.web.server import FAR_MOVES, WebConsole
-from bridge.web.view import RotatorFacts
 from tests.support.console import ConsoleClient
 from tests.support.mosquitto import free_port
 from tests.support.waiting import slow, wait_until

@@ -1,5 +1,5 @@
 """The console's map: where a point of the Earth lands on the station's disc and back, and the
-shipped coastlines. Bearings and distances are judged by bridge/geo.py's great_circle, which
+shipped coastlines. Bearings and distances are judged by bridge/core/geo.py's great_circle, which
 tests/test_geo.py judges against published values."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from importlib import resources
 
 import pytest
 
-from bridge.geo import EARTH_RADIUS_KM, great_circle
-from bridge.web.projection import RIM_KM, project, unproject
+from bridge.core.geo import EARTH_RADIUS_KM, great_circle
+from bridge.interfaces.web.projection import RIM_KM, project, unproject
 
 LONDON = (51.5, -0.13)
 STATIONS = [
@@ -37,7 +37,7 @@ def _antipode(station: tuple[float, float]) -> tuple[float, float]:
 
 
 def _land() -> dict[str, object]:
-    text = resources.files("bridge.web").joinpath("land-110m.json").read_text()
+    text = resources.files("bridge.interfaces.web").joinpath("land-110m.json").read_text()
     data: dict[str, object] = json.loads(text)
     return data
 

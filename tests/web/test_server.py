@@ -13,7 +13,7 @@ import aiohttp
 import pytest
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
-from bridge.web import live
+from bridge.interfaces.web import live
 from tests.support.console import ConsoleClient, EventStream, run_async, web_section
 from tests.support.rig import Rig
 from tests.support.waiting import slow

@@ -1,4 +1,5 @@
-"""The console's map data (web/view.py) and its live feed (web/feed.py), without a server."""
+"""The console's map data (interfaces/web/view.py) and its live feed (interfaces/web/feed.py),
+without a server."""
 
 from __future__ import annotations
 
@@ -6,9 +7,9 @@ import asyncio
 import json
 import math
 
-from bridge.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus
-from bridge.web.feed import EVENTS_KEPT, Feed, Shape, sse, websocket
-from bridge.web.view import SCALE, land_doc, land_rings
+from bridge.core.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus
+from bridge.interfaces.web.feed import EVENTS_KEPT, Feed, Shape, sse, websocket
+from bridge.interfaces.web.view import SCALE, land_doc, land_rings
 
 BERLIN = (52.5, 13.4)
 

@@ -1,5 +1,5 @@
-"""WSJT-X's messages decoded (bridge/wsjtx/messages.py), from datagrams the tests' encoder
-writes from the fact sheet (tests/support/wsjtx.py, judged by WSJT-X's own udp_daemon in
+"""WSJT-X's messages decoded (bridge/interfaces/wsjtx/messages.py), from datagrams the tests'
+encoder writes from the fact sheet (tests/support/wsjtx.py, judged by WSJT-X's own udp_daemon in
 test_udp_daemon.py): whole, with every field, and as junk of every kind."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.wsjtx.messages import (
+from bridge.interfaces.wsjtx.messages import (
     MAX_DATAGRAM,
     Heartbeat,
     Malformed,

@@ -1,4 +1,4 @@
-"""The WSJT-X listener (bridge/wsjtx/server.py) on real UDP sockets: statuses reach every
+"""The WSJT-X listener (bridge/interfaces/wsjtx/server.py) on real UDP sockets: statuses reach every
 rotator, junk is counted and logged rarely, a fault behind a datagram is contained, a port
 in use is an error naming it."""
 
@@ -11,9 +11,9 @@ import struct
 
 import pytest
 
-from bridge.engine.follow import Heard
-from bridge.wsjtx import WsjtxListener
-from bridge.wsjtx.server import JUNK_LOG_S
+from bridge.interfaces.wsjtx import WsjtxListener
+from bridge.interfaces.wsjtx.server import JUNK_LOG_S
+from bridge.session.follow import Heard
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.clock import FakeClock
@@ -40,7 +40,7 @@ def test_statuses_reach_every_rotator_and_junk_is_counted_and_logged_rarely(
     broken, a, b = Ears("broken", fail=True), Ears("a"), Ears("b")
     listener = WsjtxListener(0, "127.0.0.1", clock=clock, rotators=[broken, a, b])  # type: ignore[list-item]
     listener.start()
-    caplog.set_level(logging.INFO, "bridge.wsjtx.server")
+    caplog.set_level(logging.INFO, "bridge.interfaces.wsjtx.server")
     try:
         to = listener.address
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
@@ -97,7 +97,7 @@ def test_a_loopback_listener_never_hears_the_group_from_the_lan(
     ears = Ears("tower")
     listener = WsjtxListener(port, "127.0.0.1", group, rotators=[ears])  # type: ignore[list-item]
     listener.start()
-    caplog.set_level(logging.WARNING, "bridge.wsjtx.server")
+    caplog.set_level(logging.WARNING, "bridge.interfaces.wsjtx.server")
     try:
         with contextlib.ExitStack() as stack:
             other = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
@@ -132,7 +132,7 @@ def test_a_loopback_listener_drops_a_datagram_from_elsewhere_counts_and_says_it(
     """Rule 1's second guard, whatever the system delivers: the source address is checked."""
     ears = Ears("tower")
     listener = WsjtxListener(0, "127.0.0.1", rotators=[ears])  # type: ignore[list-item]
-    caplog.set_level(logging.WARNING, "bridge.wsjtx.server")
+    caplog.set_level(logging.WARNING, "bridge.interfaces.wsjtx.server")
     status = w.status(w.StatusFields(dx_call="FORGED", dx_grid="AA00"))
     for _ in range(3):
         listener.datagram(status, "192.168.1.66")

@@ -17,9 +17,9 @@ from contextlib import contextmanager
 
 import pytest
 
-from bridge.engine.follow import Heard
-from bridge.wsjtx import WsjtxListener
-from bridge.wsjtx.messages import Heartbeat, decode
+from bridge.interfaces.wsjtx import WsjtxListener
+from bridge.interfaces.wsjtx.messages import Heartbeat, decode
+from bridge.session.follow import Heard
 from tests.support import wait_until
 from tests.support import wsjtx as w
 from tests.support.udp_logger import free_udp_port

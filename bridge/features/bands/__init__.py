@@ -3,10 +3,10 @@
 antenna on the radio's band.
 
 What it is made of:
-- its key: settings_bands.py ``BandFields`` (the rotator's table includes it; no two rotators
-  share a band: settings.py), the bands by name: bands.py;
-- its readers: an N1MM rotor message to a shared name or ``*`` (loggers/commands.py rule 5)
-  and following WSJT-X (engine/follow.py rule 9), each with the rotator's ``bands`` handed
+- its key: settings/bands.py ``BandFields`` (the rotator's table includes it; no two rotators
+  share a band: settings/), the bands by name: core/bands.py;
+- its readers: an N1MM rotor message to a shared name or ``*`` (interfaces/loggers/commands.py rule
+  5) and following WSJT-X (session/follow.py rule 9), each with the rotator's ``bands`` handed
   over by the app; no topic, block, entity or part of its own;
 - here: its declaration (its section in docs/configuration.md comes from it).
 """
@@ -16,7 +16,7 @@ from __future__ import annotations
 from pydantic import BaseModel
 
 from bridge.feature import Feature
-from bridge.settings_bands import BandFields
+from bridge.settings.bands import BandFields
 
 NAME = "bands"
 

@@ -2,8 +2,8 @@
 holds the rotator for a while; the others are refused) and its release.
 
 What it is made of:
-- its keys: ``control_*`` in ``[[rotators]]`` (settings_rotator.py);
-- the lease: engine/lease.py (pure), judged by engine/rotator.py (engine/operators.py: the
+- its keys: ``control_*`` in ``[[rotators]]`` (settings/rotator.py);
+- the lease: runtime/lease.py (pure), judged by runtime/rotator.py (runtime/operators.py: the
   judge's lease and the audit trail), saved by the state writer;
 - payload.py: a claim's and a release's payloads, ``R/control``;
 - here: ``R/control/claim``, ``R/control/release``, ``R/control``, its Home Assistant sensor
@@ -13,9 +13,9 @@ What it is made of:
 
 from __future__ import annotations
 
+from bridge.core.model import Claim, Origin, Release, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic
 from bridge.features.control.payload import control_json, parse_claim, parse_release
-from bridge.model import Claim, Origin, Release, RotatorStatus, Source
 
 NAME = "control"
 STATE = "control"  # R/control: who holds the lease, until when (retained)
@@ -73,6 +73,8 @@ FEATURE = Feature(
         EntityRow("sensor", "control", "Control", _sensor, bridge_only=True),
         EntityRow("button", "release_control", "Release control", _button, bridge_only=True),
     ),
-    part="bridge.engine.operators:Operators",
-    console=("the lease line of the rotator's card and its claim (web/static/console.js)",),
+    part="bridge.runtime.operators:Operators",
+    console=(
+        "the lease line of the rotator's card and its claim (interfaces/web/static/console.js)",
+    ),
 )

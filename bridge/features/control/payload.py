@@ -1,6 +1,6 @@
 """The payloads of who is turning it (pure, tested on their own: docs/architecture.md rule 4):
 a claim of the control lease, a release, ``R/control``. What a claim's operator and minutes
-may be is the lease's to judge (engine/lease.py rule 1); here only the JSON's shape.
+may be is the lease's to judge (runtime/lease.py rule 1); here only the JSON's shape.
 
 Rules:
 1. A claim is a JSON object with ``minutes`` and, unless the message carries the MQTT 5 user
@@ -16,8 +16,8 @@ from __future__ import annotations
 import json
 from datetime import UTC, datetime
 
-from bridge.model import Control, valid_operator
-from bridge.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError
+from bridge.core.model import Control, valid_operator
+from bridge.interfaces.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError
 
 EXAMPLE = '{"operator": "DL1ABC", "minutes": 30}'
 

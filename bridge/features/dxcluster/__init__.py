@@ -3,15 +3,15 @@ keeps the newest spots with their bearings, publishes them on ``B/spots`` and tu
 to a spotted call (``R/target`` ``{"call": ...}``).
 
 What it is made of:
-- its table, ``[dxcluster]``: settings_dxcluster.py ``DxClusterSettings`` (the file's model
+- its table, ``[dxcluster]``: settings/dxcluster.py ``DxClusterSettings`` (the file's model
   includes it; the settings' layer sits below this package);
 - its service: dxcluster/ (the spot and country-file parsers, the spots' book, the telnet
-  client and its aim thread), made by dxcluster/setup.py ``service`` when ``[dxcluster]
+  client and its aim thread), made by interfaces/dxcluster/setup.py ``service`` when ``[dxcluster]
   enabled`` and imported only then; it publishes ``B/spots`` and takes the targets by call;
-- the call form of ``R/target``: mqtt/call_payload.py, parsed with the target's other forms
-  (mqtt/payloads.py ``parse_aim``) and handed to the service (mqtt/service.py
-  ``aim_calls_with``);
-- here: ``B/spots``, Home Assistant's spot select (its options: homeassistant/info.py
+- the call form of ``R/target``: interfaces/mqtt/call_payload.py, parsed with the target's other
+  forms (interfaces/mqtt/payloads.py ``parse_aim``) and handed to the service
+  (interfaces/mqtt/service.py ``aim_calls_with``);
+- here: ``B/spots``, Home Assistant's spot select (its options: interfaces/homeassistant/info.py
   ``spot_options``, the newest calls the service hands over), its declaration.
 """
 
@@ -20,12 +20,13 @@ from __future__ import annotations
 from typing import Any
 
 from bridge.feature import EntityRow, Feature, RotatorView
-from bridge.settings_dxcluster import DxClusterSettings
+from bridge.settings.dxcluster import DxClusterSettings
 
-NAME = "dxcluster"  # homeassistant/info.py names it too: the spot select's options
+NAME = "dxcluster"  # interfaces/homeassistant/info.py names it too: the spot select's options
 SPOTS = "spots"  # B/spots: the newest spots with their bearings, retained
 OPTIONS = "spot_options"  # RotatorInfo's: the newest calls; none without a station
-# the spot select sends the call it shows to the target topic (dxcluster/client.py turns to it)
+# the spot select sends the call it shows to the target topic (interfaces/dxcluster/client.py turns
+# to it)
 CALL_TEMPLATE = '{"call": "{{ value }}"}'
 # shown with none chosen, as the preset select (Home Assistant's dashboard sends nothing when
 # the option it shows is picked again)
@@ -52,7 +53,7 @@ FEATURE = Feature(
     entities=(EntityRow("select", "spot", "Turn to spot", _spot, needs=OPTIONS, after="distance"),),
     settings_table=("dxcluster", DxClusterSettings),
     base_topics=(SPOTS,),
-    service="bridge.dxcluster.setup:service",
+    service="bridge.interfaces.dxcluster.setup:service",
     service_on=_on,
-    console=("the spots on the map (web/static/console.js, from B/spots' document)",),
+    console=("the spots on the map (interfaces/web/static/console.js, from B/spots' document)",),
 )

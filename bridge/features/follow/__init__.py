@@ -2,21 +2,22 @@
 or JTDX is working, while ``R/follow`` says so.
 
 What it is made of:
-- its keys: ``follow_*`` in ``[[rotators]]`` (settings_pointing.py) and ``[wsjtx]``
-  (settings_wsjtx.py); WSJT-X's UDP messages: wsjtx/ (the listener hands each Status to the
+- its keys: ``follow_*`` in ``[[rotators]]`` (settings/pointing.py) and ``[wsjtx]``
+  (settings/wsjtx.py); WSJT-X's UDP messages: wsjtx/ (the listener hands each Status to the
   rotators as an input);
-- its session part: engine/follow.py ``Follow`` (started and ended as a command:
-  engine/feature_commands.py);
-- ``R/follow``'s payload: mqtt/payloads.py ``parse_follow`` (beside the other commands' words);
+- its session part: session/follow.py ``Follow`` (started and ended as a command:
+  session/feature_commands.py);
+- ``R/follow``'s payload: interfaces/mqtt/payloads.py ``parse_follow`` (beside the other commands'
+  words);
 - here: ``R/follow``, ``R/follow/state``, its ``following`` and ``following_ended`` blocks in
   ``R/status``, its Home Assistant switch and sensor, its declaration.
 """
 
 from __future__ import annotations
 
+from bridge.core.model import FollowingInfo, FollowQso, Origin, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
-from bridge.model import FollowingInfo, FollowQso, Origin, RotatorStatus, Source
-from bridge.mqtt.payloads import parse_follow
+from bridge.interfaces.mqtt.payloads import parse_follow
 
 NAME = "follow"
 COMMAND = "follow"  # R/follow: wsjtx, off, or JSON with the path
@@ -89,5 +90,5 @@ FEATURE = Feature(
         EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS),
         EntityRow("sensor", "followed", "Followed station", _followed, needs=NEEDS),
     ),
-    part="bridge.engine.follow:Follower",
+    part="bridge.session.follow:Follower",
 )

@@ -2,20 +2,20 @@
 delay, coast, odometer), judged against a baseline it learnt, with its warnings.
 
 What it is made of:
-- its keys in ``[[rotators]]``: ``health_*`` in settings_rotator.py;
-- its session part: engine/health.py ``Health`` (the judge: engine/health_judge.py, its
-  memory: engine/health_memory.py, saved by the state writer);
+- its keys in ``[[rotators]]``: ``health_*`` in settings/rotator.py;
+- its session part: session/health.py ``Health`` (the judge: session/health_judge.py, its
+  memory: runtime/health_memory.py, saved by the state writer);
 - payload.py: ``R/health`` and the ``health`` block of ``R/status``, rendered once per move;
 - here: ``R/health/reset``, ``R/health``, its Home Assistant sensors and button, its
-  declaration; the console's health line (web/static/console.js ``renderHealth``) reads the
-  status's block.
+  declaration; the console's health line (interfaces/web/static/console.js ``renderHealth``) reads
+  the status's block.
 """
 
 from __future__ import annotations
 
+from bridge.core.model import Origin, ResetHealth, RotatorHealth, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
 from bridge.features.health.payload import health_json
-from bridge.model import Origin, ResetHealth, RotatorHealth, RotatorStatus, Source
 
 NAME = "health"
 STATE = "health"  # R/health: the last report, retained
@@ -102,6 +102,8 @@ FEATURE = Feature(
             bridge_only=True,
         ),
     ),  # fmt: skip
-    part="bridge.engine.health:Health",
-    console=("the health line of the rotator's card (web/static/console.js renderHealth)",),
+    part="bridge.session.health:Health",
+    console=(
+        "the health line of the rotator's card (interfaces/web/static/console.js renderHealth)",
+    ),
 )

@@ -1,4 +1,4 @@
-"""``R/health``, rendered: how the rotor turns (engine/health.py), for MQTT clients, Home
+"""``R/health``, rendered: how the rotor turns (session/health.py), for MQTT clients, Home
 Assistant's sensors and the console (``health`` in ``R/status``). Pure.
 
 Rules:
@@ -15,13 +15,13 @@ from __future__ import annotations
 import functools
 import json
 
-from bridge.model import AxisHealth, RotatorHealth
+from bridge.core.model import AxisHealth, RotatorHealth
 
 _COMPACT = json.JSONEncoder(separators=(",", ":"))
 
 
 def health_doc(health: RotatorHealth) -> dict[str, object]:
-    """``R/health`` (and ``health`` in ``R/status``): how the rotor turns (engine/health.py).
+    """``R/health`` (and ``health`` in ``R/status``): how the rotor turns (session/health.py).
     A value not measured yet is null; speeds are the median of the recent moves."""
     if not health.measured:
         return {"measured": False, "reason": "the controller reports no position"}

@@ -1,11 +1,12 @@
 """Tracking the sun, the moon or a satellite, as one feature (bridge/feature.py).
 
 What it is made of:
-- its keys: ``track_*`` in ``[[rotators]]`` (settings_pointing.py), ``[tracking]`` (the TLE
+- its keys: ``track_*`` in ``[[rotators]]`` (settings/pointing.py), ``[tracking]`` (the TLE
   file) and ``[station]``;
-- its session part: engine/tracking.py ``Tracker`` (with engine/skytrack.py; the sky worker,
-  engine/skywork.py, computes; started and ended as a command: engine/feature_commands.py);
-- ``R/track``'s payload: mqtt/payloads.py ``parse_track`` (beside the other commands' words);
+- its session part: session/tracking.py ``Tracker`` (with session/skytrack.py; the sky worker,
+  sky/worker.py, computes; started and ended as a command: session/feature_commands.py);
+- ``R/track``'s payload: interfaces/mqtt/payloads.py ``parse_track`` (beside the other commands'
+  words);
 - here: ``R/track``, ``R/tracking``, its ``tracking`` and ``tracking_ended`` blocks in
   ``R/status``, its Home Assistant select and sensors, its declaration.
 """
@@ -14,9 +15,9 @@ from __future__ import annotations
 
 from datetime import UTC, datetime
 
+from bridge.core.model import Origin, RotatorStatus, Source, TrackBody, TrackingInfo
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
-from bridge.model import Origin, RotatorStatus, Source, TrackBody, TrackingInfo
-from bridge.mqtt.payloads import parse_track
+from bridge.interfaces.mqtt.payloads import parse_track
 
 NAME = "tracking"
 COMMAND = "track"  # R/track: sun, moon, a satellite's name or TLE, off
@@ -130,6 +131,8 @@ FEATURE = Feature(
         ),
         EntityRow("sensor", "next_aos", "Next AOS", _aos, needs=TRACK_OPTIONS),
     ),  # fmt: skip
-    part="bridge.engine.tracking:Tracker",
-    console=("the tracking line and the pass on the sky plot (web/static/console.js, sky.js)",),
+    part="bridge.session.tracking:Tracker",
+    console=(
+        "the tracking line and the pass on the sky plot (interfaces/web/static/console.js, sky.js)",
+    ),
 )

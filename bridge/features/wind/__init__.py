@@ -2,9 +2,9 @@
 parks for a storm and refuses motion until the wind has calmed.
 
 What it is made of:
-- its keys in ``[[rotators]]``: settings_wind.py ``WindFields`` (the rotator's table includes
+- its keys in ``[[rotators]]``: settings/wind.py ``WindFields`` (the rotator's table includes
   them; the settings' layer sits below the MQTT parts this package uses);
-- its session part: engine/wind.py ``WindPark`` (the session owns the order of its parts);
+- its session part: session/wind.py ``WindPark`` (the session owns the order of its parts);
 - its input: the user's wind topic, read by feed.py;
 - here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm)
   and its declaration.
@@ -18,16 +18,16 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from bridge.core.model import RotatorStatus, WindInfo
 from bridge.feature import EntityRow, Feature, Input, RotatorView, StatusBlock
 from bridge.features.wind.feed import wind_feed
-from bridge.model import RotatorStatus, WindInfo
-from bridge.settings_wind import WindFields
+from bridge.settings.wind import WindFields
 
 NAME = "wind"
 
 
 def wind_json(info: WindInfo) -> dict[str, object]:
-    """The status's ``wind`` block (engine/wind.py)."""
+    """The status's ``wind`` block (session/wind.py)."""
     calm = info.calm_since_unix
     return {
         "speed_kmh": info.speed_kmh,
@@ -70,7 +70,7 @@ def _replayed(r: BaseModel) -> str | None:
 
 
 def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
-    """Each rotator's wind topic, read into its ``wind`` (engine/rotator.py)."""
+    """Each rotator's wind topic, read into its ``wind`` (runtime/rotator.py)."""
     entries = [(r.wind_topic, r.wind_unit, rot.wind) for r, rot in pairs if _configured(r)]
     return Input(*wind_feed(entries))
 
@@ -92,5 +92,5 @@ FEATURE = Feature(
     configured=_configured,
     inputs=_inputs,
     replayed=_replayed,
-    part="bridge.engine.wind:WindPark",
+    part="bridge.session.wind:WindPark",
 )

@@ -1,12 +1,12 @@
 """The wind topics: each rotator's ``wind_topic`` read into wind readings for the engine (its
-wind park, engine/wind.py, decides). Its topics are the user's, named in the configuration.
+wind park, session/wind.py, decides). Its topics are the user's, named in the configuration.
 
 Rules:
 1. A reading is a bare number (``12.5``, as Home Assistant's statestream and most weather
    stations publish), in the rotator's ``wind_unit``; it reaches the rotator in km/h.
 2. A retained reading is taken: it is the last known wind, a state and not a command (a high
    one parks the rotor; a reading never moves it anywhere else). One the broker replays on
-   (re)subscribing is handed on as replayed (engine/wind.py rule 6: it never ends a storm):
+   (re)subscribing is handed on as replayed (session/wind.py rule 6: it never ends a storm):
    the topic is subscribed without retain-as-published (connection.py rule 1), so the retain
    flag says "replayed" under MQTT 5 and MQTT 3.1.1 alike.
 3. A payload that is no reading (text, a negative or non-finite number) is dropped and logged
@@ -21,7 +21,7 @@ import math
 import time
 from collections.abc import Callable
 
-from bridge.mqtt.payloads import PayloadError, parse_number
+from bridge.interfaces.mqtt.payloads import PayloadError, parse_number
 
 log = logging.getLogger(__name__)
 

@@ -1,0 +1,506 @@
+"""Plain value types shared by every layer: commands, motion states, the status snapshot.
+
+``Command`` is the one union of everything an operator can ask of a rotator (a target, a stop,
+an option, the lock, the control lease, tracking, following, a preset, park, a nudge, a place,
+a path, a health reset): every front end parses into one of these frozen values and hands it to
+the rotator's one entry (front.py, runtime/rotator.py ``submit``).
+
+Nothing here does I/O or knows about MQTT or serial ports. Angles are degrees, times are
+seconds (monotonic unless the name says ``_unix``).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field, replace
+from datetime import UTC, datetime
+from typing import get_args
+
+
+class MotionState(enum.StrEnum):
+    """What the rotor is doing, as far as the bridge can tell."""
+
+    IDLE = "idle"  # still, brake set (or no brake), ready for a command
+    MOVING = "moving"  # turning: commanded, or by hand from the front panel
+    BRAKING = "braking"  # just stopped; the controller ignores bearings until its brake delay ends
+    STALLED = "stalled"  # commanded but no progress for the stall timeout while off target
+    # link up, but the bridge cannot tell: a controller that cannot report a position (DCU-1),
+    # or a silent one whose report after a move was lost (SatEL), until its next reading
+    UNKNOWN = "unknown"
+    OFFLINE = "offline"  # serial link down or controller silent
+
+
+class Source(enum.StrEnum):
+    """Who asked for a command (shown in the status snapshot)."""
+
+    MQTT = "mqtt"
+    ROTCTLD = "rotctld"
+    AUTO_PARK = "auto-park"  # park_after_idle_s: the bridge parked it, nobody asked
+    TRACKING = "tracking"  # the bridge follows the sun, the moon or a satellite (R/track)
+    PST = "pst"  # a logger through the PstRotator UDP endpoint (loggers/)
+    N1MM = "n1mm"  # N1MM Logger+ through its rotor UDP endpoint
+    WEB = "web"  # the operator console (web/)
+    GS232 = "gs232"  # a program speaking Yaesu GS-232A/B to the gs232_port (gs232/)
+    EASYCOMM = "easycomm"  # a program speaking Easycomm II to the easycomm_port (gs232/)
+    DCU1 = "dcu1"  # a program speaking DCU-1 / Rotor-EZ to the dcu1_port (gs232/)
+    LEASE = "lease"  # the control lease itself: its end, in the audit trail (runtime/operators.py)
+    WSJTX = "wsjtx"  # following the QSO partner WSJT-X or JTDX names (R/follow, wsjtx/)
+    WIND = "wind"  # parked for a storm (wind_topic, session/wind.py)
+    DXCLUSTER = "dxcluster"  # turned to a spotted call (R/target {"call": ...}, dxcluster/)
+
+
+OPERATOR_CHARS = 32  # an operator's name, at most (a call sign, a name, "rotctld <address>")
+
+
+def valid_operator(text: object) -> str | None:
+    """``text`` as an operator's name (short printable text, spaces at the ends dropped), or
+    None if it is not one."""
+    if not isinstance(text, str):
+        return None
+    name = text.strip()
+    if not name or len(name) > OPERATOR_CHARS or not name.isprintable():
+        return None
+    return name
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Who sent a command and how (the audit log, ``last_operator``, the control lease).
+
+    ``operator`` is what the sender said it is (the MQTT 5 user property ``operator``); without
+    it the interface and the peer stand for the operator (``rotctld 192.168.1.20``)."""
+
+    interface: Source
+    operator: str | None = None
+    peer: str | None = None  # the peer's address (TCP, UDP), when the interface knows it
+
+    @property
+    def who(self) -> str:
+        if self.operator:
+            return self.operator
+        return f"{self.interface.value} {self.peer}" if self.peer else self.interface.value
+
+
+@dataclass(frozen=True)
+class Control:
+    """The control lease: ``operator`` holds the rotator until ``until_unix`` (runtime/lease.py)."""
+
+    operator: str
+    until_unix: float
+
+    def held_text(self, now_unix: float) -> str:
+        """``DL1ABC holds the rotator until 14:30 UTC (25 min left)``."""
+        end = datetime.fromtimestamp(self.until_unix, UTC).strftime("%H:%M")
+        left = max(1, math.ceil((self.until_unix - now_unix) / 60.0))
+        return f"{self.operator} holds the rotator until {end} UTC ({left} min left)"
+
+
+@dataclass(frozen=True)
+class AuditEvent:
+    """One command judged, executed or refused (the audit file and ``R/audit``)."""
+
+    time_unix: float
+    rotator: str
+    origin: Origin
+    command: str  # as the user sent it
+    result: str  # "executed" or "refused: <why>"
+    bearing_before: float | None
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "time": self.time_unix,
+            "rotator": self.rotator,
+            "operator": self.origin.who,
+            "interface": self.origin.interface.value,
+            "peer": self.origin.peer,
+            "command": self.command,
+            "result": self.result,
+            "bearing_before": self.bearing_before,
+        }
+
+
+@dataclass(frozen=True)
+class TargetInfo:
+    """Where a target given by locator or coordinates lies (``target_info`` in the status)."""
+
+    latitude_deg: float
+    longitude_deg: float
+    distance_km: float  # the path taken
+    short_path_deg: float
+    long_path_deg: float
+    path: str = "short"  # or "long"
+    locator: str | None = None
+
+
+@dataclass(frozen=True)
+class TrackingInfo:
+    """What the rotator follows (``tracking`` in the status). Times are unix seconds."""
+
+    body: str  # "sun", "moon" or the satellite's name
+    phase: str  # "waiting" (below the minimum elevation), "tracking", "no pass"
+    azimuth_deg: float | None = None  # the body now, true bearing
+    elevation_deg: float | None = None
+    next_azimuth_deg: float | None = None  # the body in a minute
+    next_elevation_deg: float | None = None
+    aos_unix: float | None = None  # the current or next pass above the minimum elevation
+    los_unix: float | None = None
+    max_elevation_deg: float | None = None
+    aos_azimuth_deg: float | None = None
+    flip: bool = False  # this pass is flown with elevation past 90 and azimuth + 180
+    # the body's predicted (azimuth, elevation) over that pass, AOS to LOS, once computed
+    pass_track: tuple[tuple[float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class FollowingInfo:
+    """Whom the rotator follows (``following`` in the status): the QSO partner a program
+    (WSJT-X, JTDX) names, and where it was last turned for them."""
+
+    source: str  # "wsjtx"
+    path: str = "short"  # or "long"
+    call: str | None = None  # the DX call and grid last heard with a grid
+    grid: str | None = None
+    bearing_deg: float | None = None  # the true bearing turned to for ``grid``
+    distance_km: float | None = None  # along the path taken
+    held: bool = False  # a new grid waits for the transmission to end (follow_hold_while_tx)
+
+
+@dataclass(frozen=True)
+class WindInfo:
+    """The wind as the rotator sees it (``wind`` in the status), speeds in km/h."""
+
+    speed_kmh: float | None = None  # the last reading (None: none yet)
+    storm: bool = False  # parked for the storm: motion is refused
+    calm_since_unix: float | None = None  # in a storm: below the release level since then
+    silent: bool = False  # no reading for wind_silent_min: the state is kept
+    refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
+
+
+@dataclass(frozen=True)
+class Target:
+    """Go here. An axis left None keeps its current target (or position): a bare azimuth on an
+    az/el rotator leaves the elevation alone, an elevation-only request the azimuth."""
+
+    az_deg: float | None
+    el_deg: float | None = None
+    source: Source = Source.MQTT
+    info: TargetInfo | None = None  # named by locator or coordinates
+    park: bool = False  # the park position: ``parked`` once there
+    # A 0..360 bearing on a rotor that can pass 360 (set by the judge, pointing.py rule 2): the
+    # session picks the side from where the rotor is when it sends, not when the command came.
+    true_az_deg: float | None = None
+    origin: Origin | None = None  # who sent it (None: the bridge's own, tracking or auto-park)
+
+
+def combine(newer: Target, older: Target | None) -> Target:
+    """``newer`` with the axis it leaves out (None) taken from ``older`` still pending: Hamlib
+    4.6's PstRotator client sends ``P 200 30`` as an azimuth and then an elevation datagram,
+    and an MQTT user may send a bare azimuth and then ``R/target/elevation``: one must not
+    replace the other. An axis ``newer`` names wins; so do its source, place and park mark.
+    Only targets from one source combine, and never with a park."""
+    if older is None or older.source is not newer.source or older.park:
+        return newer  # only a sender's own two halves: never a park or a tracking step
+    if newer.az_deg is None and older.az_deg is not None:
+        newer = replace(newer, az_deg=older.az_deg, true_az_deg=older.true_az_deg)
+    if newer.el_deg is None and older.el_deg is not None:
+        newer = replace(newer, el_deg=older.el_deg)
+    return newer
+
+
+@dataclass(frozen=True)
+class Stop:
+    source: Source = Source.MQTT
+    origin: Origin | None = None
+
+
+# A controller setting's value (protocols/base.py ``Setting``): a bool option's on or off, a
+# number's value, or a choice's name. Text is a value as a user sent it, which the judge reads
+# by the setting's declaration.
+SettingValue = bool | float | str
+
+
+def setting_text(value: SettingValue) -> str:
+    """A setting's value as its state topic and an echo show it: ON or OFF, a number in its
+    shortest form (``2``, ``0.5``), a choice's name."""
+    if isinstance(value, bool):
+        return "ON" if value else "OFF"
+    if isinstance(value, float | int):
+        return f"{value:g}"
+    return value
+
+
+@dataclass(frozen=True)
+class SetOption:
+    """Set a controller setting: switch an option (the Rotor-EZ jam protection) on or off, or
+    give a number or a choice (a GS-232's speed) its value."""
+
+    name: str
+    value: SettingValue
+    source: Source = Source.MQTT
+    origin: Origin | None = None
+
+
+# -- the rest of what an operator can ask of a rotator (one union with the three above) ----
+# Every front end parses what it reads into one of these values and hands it to the rotator's
+# one entry (``submit``); the judge (runtime/rotator.py) dispatches on the type.
+
+
+@dataclass(frozen=True, kw_only=True)
+class Asked:
+    """Who asked, on every command below (named, never by position): ``source``, the interface
+    (shown in the status), and ``origin``, who sent it (the audit trail, the control lease), as
+    Target, Stop and SetOption carry them."""
+
+    source: Source = Source.MQTT
+    origin: Origin | None = None
+
+
+@dataclass(frozen=True)
+class Lock(Asked):
+    """The safety lock: ON is never refused and never delayed (docs/architecture.md rule 11)."""
+
+    on: bool
+
+
+@dataclass(frozen=True)
+class Claim(Asked):
+    """Claim the control lease: ``operator`` and ``minutes`` as sent (runtime/lease.py judges
+    them: a name the lease refuses is a refusal like any)."""
+
+    operator: object
+    minutes: object
+
+
+@dataclass(frozen=True)
+class Release(Asked):
+    """End the control lease, whoever holds it (runtime/lease.py rule 4)."""
+
+
+@dataclass(frozen=True)
+class TrackBody(Asked):
+    """Follow the sun, the moon or a satellite (by name, or ``tle``: name and two lines);
+    ``off`` ends it and is never refused."""
+
+    name: str
+    tle: tuple[str, str, str] | None = None
+
+    @property
+    def off(self) -> bool:
+        return self.tle is None and self.name.strip().casefold() == "off"
+
+
+@dataclass(frozen=True)
+class FollowQso(Asked):
+    """Follow the QSO partner WSJT-X names; off ends it and is never refused."""
+
+    on: bool
+    long_path: bool = False
+
+
+@dataclass(frozen=True)
+class GoToPreset(Asked):
+    name: str
+
+
+@dataclass(frozen=True)
+class Park(Asked):
+    """Go to the configured park position (``parked`` once there)."""
+
+
+@dataclass(frozen=True)
+class Nudge(Asked):
+    """Turn by a step from where the rotor points (or is going)."""
+
+    d_az_deg: float
+    d_el_deg: float | None = None
+
+
+@dataclass(frozen=True)
+class Toward(Asked):
+    """Turn toward a place (a locator or coordinates) by the short or the long path."""
+
+    latitude_deg: float
+    longitude_deg: float
+    locator: str | None = None
+    long_path: bool = False
+
+
+@dataclass(frozen=True)
+class TakePath(Asked):
+    """The place of the current locator or coordinate target, by the path asked for."""
+
+    long_path: bool
+
+
+@dataclass(frozen=True)
+class ResetHealth(Asked):
+    """A new rotor health baseline (after a repair); it moves nothing."""
+
+
+# what the judge hands the mailbox as a command for the controller (targets in raw values)
+ControllerCommand = Target | Stop | SetOption
+Command = (
+    Target
+    | Stop
+    | SetOption
+    | Lock
+    | Claim
+    | Release
+    | TrackBody
+    | FollowQso
+    | GoToPreset
+    | Park
+    | Nudge
+    | Toward
+    | TakePath
+    | ResetHealth
+)
+COMMANDS: tuple[type, ...] = get_args(Command)  # each kind, for isinstance
+
+
+class ErrorKind(enum.StrEnum):
+    """The ``kind`` of an error event (``R/error``). Published API: listed here and in the
+    README, and nothing else can be emitted (ErrorEvent refuses any other)."""
+
+    REFUSED = "refused"  # a command (or payload) judged and not executed: nothing moved
+    STALLED = "stalled"  # a commanded rotor made no progress: the bridge stopped it
+    STOP = "stop"  # the rotor kept turning after repeated stops
+    SERIAL = "serial"  # the port, the line or the controller's answers failed
+    PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
+    STATE = "state"  # the lock could not be saved in the state file
+    INTERNAL = "internal"  # a bug in the bridge (see the log): the feature (or link) is reset
+    WIND = "wind"  # the wind topic fell silent or sent no number: the state it had is kept
+    AUDIT = "audit"  # the audit file could not be written (the bridge goes on without it)
+
+
+@dataclass(frozen=True)
+class ErrorEvent:
+    """Something the user should hear about: a refused command, a stall, a serial fault."""
+
+    kind: ErrorKind  # a plain string is taken if it is one of ErrorKind's values
+    message: str
+    command: str | None = None  # what was refused, as the user sent it
+    time_unix: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", ErrorKind(self.kind))  # ValueError for any other
+
+    def as_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {"kind": self.kind.value, "message": self.message}
+        if self.command is not None:
+            out["command"] = self.command
+        out["time"] = self.time_unix
+        return out
+
+
+@dataclass(frozen=True)
+class AxisHealth:
+    """One axis of ``RotatorHealth``: "up" is clockwise in azimuth, up in elevation."""
+
+    speed_up_deg_s: float | None = None  # the median of the recent moves that way
+    speed_down_deg_s: float | None = None
+    baseline_up_deg_s: float | None = None  # what they are judged against
+    baseline_down_deg_s: float | None = None
+    coast_deg: float | None = None  # turned after the last stop
+    baseline_coast_deg: float | None = None
+    arrival_error_deg: float | None = None  # of the last move that arrived
+    odometer_deg: float = 0.0  # every degree turned, ever
+
+
+@dataclass(frozen=True)
+class RotatorHealth:
+    """How the rotor really turns, measured from its own readings (session/health.py); published
+    on ``R/health`` after each move. ``measured`` False: the controller reports no position."""
+
+    measured: bool = True
+    az: AxisHealth = AxisHealth()
+    el: AxisHealth | None = None  # az/el rotators
+    start_delay_s: float | None = None  # command to the first reading that moved (recent median)
+    baseline_start_delay_s: float | None = None
+    baseline_from: str = "learning"  # "learned" (the first moves), "settings", "learning"
+    baseline_moves_left: int = 0  # still to learn from
+    moves: int = 0
+    stalls: int = 0
+    stall_azimuths_deg: tuple[float, ...] = ()  # the recent stalls, raw
+    motor_on_s: float = 0.0
+    warnings: tuple[str, ...] = ()
+    # what the state file keeps (session/health_judge.py); never compared
+    memory: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class RotatorStatus:
+    """One complete snapshot of a rotator, as published on ``R/status``."""
+
+    rotator_id: str
+    state: MotionState = MotionState.OFFLINE
+    bearing_deg: float | None = None
+    elevation_deg: float | None = None
+    target_az_deg: float | None = None
+    target_el_deg: float | None = None
+    connected: bool = False  # serial port open
+    available: bool = False  # port open and controller answering (or cannot answer)
+    locked: bool = False
+    version: str | None = None
+    options: dict[str, SettingValue] = field(default_factory=dict)  # the controller's settings
+    last_error: str | None = None
+    last_command_source: str | None = None
+    estimated: bool = False  # bearing/elevation estimated during a slew the controller is silent in
+    controller_time: str | None = None  # the controller's own clock (SatEL)
+    expected_end_unix: float | None = None  # no feedback (DCU-1): when a commanded move should end
+    # bearing_deg and target_az_deg are true bearings (pointing.py); this is the controller's own
+    raw_bearing_deg: float | None = None
+    raw_target_az_deg: float | None = None  # the controller's own value of target_az_deg
+    overlap: str | None = None  # "cw" past 360, "ccw" below 0 (rotors that can pass 360)
+    target_info: TargetInfo | None = None
+    parked: bool = False  # at the park position after a park, until the next move
+    tracking: TrackingInfo | None = None
+    tracking_ended: str | None = None  # why the last tracking ended, until the next one starts
+    following: FollowingInfo | None = None  # R/follow (session/follow.py)
+    following_ended: str | None = None  # why following last ended, until it starts again
+    wind: WindInfo | None = None  # with a wind_topic (session/wind.py)
+    health: RotatorHealth | None = None  # how the rotor turns (session/health.py)
+    last_operator: str | None = None  # who sent the command of last_command_source (Origin.who)
+    control: Control | None = None  # the control lease's holder, if it is held
+
+    @property
+    def moving(self) -> bool:
+        return self.state is MotionState.MOVING
+
+
+def describe_command(command: Command) -> str:
+    """How a command is echoed back to the user in an error event (and the audit trail) when
+    its front end has no words of its own for it (what the user sent)."""
+    match command:
+        case Target():
+            axes = (("az", command.az_deg), ("el", command.el_deg))
+            return "target " + " ".join(f"{axis} {v:g}" for axis, v in axes if v is not None)
+        case SetOption():
+            return f"option {command.name} {setting_text(command.value)}"
+        case Lock():
+            return f"lock {'ON' if command.on else 'OFF'}"
+        case Claim():
+            return "claim"
+        case Release():
+            return "release"
+        case TrackBody():
+            return f"track {command.name}"
+        case FollowQso():
+            return f"follow {'ON' if command.on else 'OFF'}"
+        case GoToPreset():
+            return f"preset {command.name}"
+        case Park():
+            return "park"
+        case Nudge():
+            el = "" if command.d_el_deg is None else f" el {command.d_el_deg:+g}"
+            return f"nudge az {command.d_az_deg:+g}{el}"
+        case Toward():
+            where = command.locator or f"{command.latitude_deg:.4f},{command.longitude_deg:.4f}"
+            return f"toward {where}" + (" long path" if command.long_path else "")
+        case TakePath():
+            return "long path" if command.long_path else "short path"
+        case ResetHealth():
+            return "health reset"
+        case Stop():
+            return "stop"

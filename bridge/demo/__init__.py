@@ -1,0 +1,399 @@
+"""``rotor-bridge demo``: emulated rotators bridged to MQTT, no hardware and no broker needed.
+
+If nothing answers at the MQTT address, a private mosquitto is started there
+(bridge.demo.mosquitto); a broker that answers is used as it is. Everything the console shows and
+sends goes through the broker, exactly as Home Assistant or Node-RED would see it.
+
+Rules:
+1. A demo is never mistaken for a real bridge on the same broker, nor for another demo: each run
+   draws a short instance name (4 characters) and takes its own base topic
+   ``rotor-demo-<instance>`` (``--base-topic`` overrides it), its own MQTT client ids
+   (``rotor-demo-<instance>``, the console ``...-ui``: at most 23 characters, which every broker
+   must accept; a real bridge's default has 6 hex digits there) and, from the base topic, its
+   own Home Assistant node ids (``rotorbridge_rotor_demo_<instance>``; a real bridge on ``rotor``
+   owns only ``rotorbridge_rotor`` and ``rotorbridge_rotor_r_*``, so neither clears the other's
+   configs). Device names say "Demo".
+2. Its settings come from its flags alone: a ``ROTOR_BRIDGE_*`` environment written for the real
+   service (its base topic, its client id) must not turn the demo into that service's twin.
+3. Everything it starts (private broker, emulators, bridge, console client) is stopped and its
+   temporary folder removed on every way out: ``--duration-s`` over, ``q`` or ^D typed, ^C,
+   SIGTERM, SIGHUP (terminal closed), a failure during start-up.
+4. When it ends it removes what it left retained on the broker (its state topics and its Home
+   Assistant configs), so runs do not pile up dead devices in Home Assistant. Not so under a
+   ``--base-topic`` the user chose: that may hold someone else's retained state. A base topic
+   that a bridge uses (``<base>/bridge/state`` retained, online or offline) is refused.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import inspect
+import secrets
+import shutil
+import signal
+import socket
+import string
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
+
+from bridge import emulators
+from bridge.app import App
+from bridge.core import geo
+from bridge.demo import sky as demo_sky
+from bridge.demo.console import Console
+from bridge.demo.mosquitto import BrokerError, Mosquitto, answers
+from bridge.demo.screen import Screen
+from bridge.interfaces.homeassistant import Identity
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
+from bridge.protocols import REGISTRY
+from bridge.settings import ConfigError, Settings, format_validation_error
+
+MIN_SPEED_DEG_S, MAX_SPEED_DEG_S = 0.5, 360.0  # the settings' range for a rotor's speed
+DEMOSAT_RISES_IN_S = 40.0  # the demo's satellite rises this long after the start (default)
+
+
+def _speed(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not MIN_SPEED_DEG_S <= value <= MAX_SPEED_DEG_S:
+        raise argparse.ArgumentTypeError(
+            f"{value:g} is outside {MIN_SPEED_DEG_S:g}..{MAX_SPEED_DEG_S:g} deg/s"
+        )
+    return value
+
+
+def _locator(text: str) -> str:
+    try:
+        geo.parse_locator(text)
+    except geo.LocatorError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+# The demo's presets: where a few well-known places lie from its station (the bearings are
+# worked out at start-up, so they stay right for any --locator).
+PRESET_PLACES = {"EU": "JN18eu", "JA": "PM95vq", "VK": "QF56od", "W": "FN30as"}
+
+
+def demo_presets(station: str) -> dict[str, float]:
+    here = geo.parse_locator(station)
+    return {
+        name: round(geo.great_circle(*here, *geo.parse_locator(place)).short_path_deg) % 360
+        for name, place in PRESET_PLACES.items()
+    }
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--mqtt-host",
+        default="127.0.0.1",
+        help="the MQTT broker's address (default 127.0.0.1); if no broker answers there, a "
+        "private mosquitto is started on it (see --no-private-broker)",
+    )
+    p.add_argument(
+        "--mqtt-port",
+        type=int,
+        default=1883,
+        help="the MQTT broker's port (default 1883), or the private mosquitto's",
+    )
+    p.add_argument(
+        "--base-topic", help="base topic (default rotor-demo-<instance>, new for every run)"
+    )
+    p.add_argument(
+        "--models",
+        default="rotorez",
+        help="comma-separated emulated controllers, e.g. rotorez,rotorcard,dcu1 (default "
+        f"rotorez; known: {','.join(emulators.EMULATORS)})",
+    )
+    p.add_argument(
+        "--speed-deg-s", type=_speed, default=6.0, help="rotor speed, both axes (HAM-IV: ~6)"
+    )
+    p.add_argument(
+        "--locator",
+        type=_locator,
+        default="JO62qm",
+        help="the emulated station's Maidenhead locator, for `locator` targets and the presets "
+        "(default JO62qm, Berlin)",
+    )
+    p.add_argument(
+        "--no-private-broker",
+        action="store_true",
+        help="fail instead of starting a private mosquitto when no broker answers",
+    )
+    p.add_argument(
+        "--web-port",
+        type=int,
+        default=8754,
+        help="the operator console's port on 127.0.0.1 (default 8754; another free one if that "
+        "is taken; 0: no console)",
+    )
+    p.add_argument("--duration-s", type=float, help="stop after this long (default: until q/^C)")
+    p.add_argument(
+        "--satellite-rises-in-s",
+        type=float,
+        default=DEMOSAT_RISES_IN_S,
+        help=f"when the made-up satellite {demo_sky.NAME} rises over the station, in seconds "
+        f"from the start (default {DEMOSAT_RISES_IN_S:g})",
+    )
+
+
+def instance_name() -> str:
+    """Four lower-case letters or digits: short to type, 1.7 million to choose from."""
+    return "".join(secrets.choice(string.ascii_lowercase + string.digits) for _ in range(4))
+
+
+class DemoSettings(Settings):
+    """Settings from the demo's flags only, never from the environment (rule 2)."""
+
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        return (init_settings,)
+
+
+def demo_settings(
+    args: argparse.Namespace, models: list[str], instance: str, workdir: Path
+) -> DemoSettings:
+    rotators = []
+    for i, model in enumerate(models):
+        rid = model if models.count(model) == 1 else f"{model}{i + 1}"
+        speeds = {"az_speed_deg_s": args.speed_deg_s}
+        park: dict[str, float] = {"park_az_deg": 0}
+        if REGISTRY[model].has_elevation:
+            speeds["el_speed_deg_s"] = args.speed_deg_s
+            park["park_el_deg"] = 0
+        # compass presets fit a rotator that turns all round (not an elevation box's 0..90)
+        compass = REGISTRY[model].az_max_deg >= 360
+        rotators.append(
+            {
+                "id": rid,
+                "name": f"Demo {model} ({instance})",
+                "model": model,
+                "port": str(workdir / f"tty-{rid}"),
+                **speeds,
+                "presets": demo_presets(args.locator) if compass else {},
+                **park,
+            }
+        )
+    return DemoSettings(
+        mqtt={
+            "host": args.mqtt_host,
+            "port": args.mqtt_port,
+            "base_topic": args.base_topic or f"rotor-demo-{instance}",
+            "client_id": f"rotor-demo-{instance}",
+        },
+        rotators=rotators,
+        station={"locator": args.locator},
+        tracking={"tle_file": workdir / "demo.tle"},  # demo/sky.py writes it before the start
+        state_file=workdir / "state.json",
+        web={"enabled": args.web_port != 0, "port": _free_port(args.web_port) or 8754},
+    )
+
+
+def _free_port(wanted: int) -> int:
+    """``wanted`` if nothing listens there on loopback, else one the system picks (two demos
+    at once each get a console)."""
+    if wanted == 0:
+        return 0
+    with socket.socket() as probe:
+        try:
+            probe.bind(("127.0.0.1", wanted))
+        except OSError:
+            probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
+    """The demo's one speed in the words of this model's emulator (families name it apart): the
+    keyword arguments for emulators.start, whose options are typed Any."""
+    params = inspect.signature(emulators.EMULATORS[model]).parameters
+    if "speed_deg_s" in params:
+        return {"speed_deg_s": speed_deg_s}
+    return {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
+
+
+def _on_signals(handler: Callable[[], None]) -> Callable[[], None]:
+    """Route SIGINT/SIGTERM/SIGHUP to `handler`; returns what puts the old handlers back."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = {
+        sig: signal.signal(sig, lambda *_: handler())
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    }
+
+    def restore() -> None:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+    return restore
+
+
+def run(args: argparse.Namespace) -> int:
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    unknown = [m for m in models if m not in emulators.EMULATORS]
+    if unknown or not models:
+        print(
+            f"rotor-bridge demo: no emulator for {', '.join(unknown) or 'nothing'}; "
+            f"known: {', '.join(emulators.EMULATORS)}",
+            file=sys.stderr,
+        )
+        return 2
+    done = threading.Event()
+    restore_signals = _on_signals(done.set)  # ^C during start-up: start, then clean up at once
+    try:
+        with contextlib.ExitStack() as stack:  # undone in reverse on every way out (rule 3)
+            workdir = Path(tempfile.mkdtemp(prefix="rotor-bridge-demo-"))
+            stack.callback(shutil.rmtree, workdir, ignore_errors=True)
+            return _run(args, models, workdir, stack, done)
+    except (BrokerError, ConfigError, OSError) as exc:
+        print(f"rotor-bridge demo: could not start: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        restore_signals()
+
+
+def _run(
+    args: argparse.Namespace,
+    models: list[str],
+    workdir: Path,
+    stack: contextlib.ExitStack,
+    done: threading.Event,
+) -> int:
+    instance = instance_name()
+    try:
+        settings = demo_settings(args, models, instance, workdir)
+    except ValidationError as exc:
+        print(f"rotor-bridge demo: {format_validation_error(exc)}", file=sys.stderr)
+        return 2
+    host, port = args.mqtt_host, args.mqtt_port
+    if answers(host, port):
+        where = f"the MQTT broker already running at {host}:{port}"
+    elif args.no_private_broker:
+        print(f"rotor-bridge demo: no MQTT broker at {host}:{port}", file=sys.stderr)
+        return 1
+    else:
+        broker = Mosquitto(workdir / "broker", port=port, host=host)
+        stack.callback(broker.stop)
+        try:
+            broker.start()
+        except BrokerError as exc:
+            raise BrokerError(f"no MQTT broker answers and {exc}") from None
+        where = f"a private mosquitto on {host}:{port}"
+    roots = {r.id: settings.rotator_topic(r) for r in settings.rotators}
+    topics = Topics(settings.mqtt.base_topic, roots)
+    ident = Identity(topics.base)
+    discovery = DiscoveryTopics(settings.homeassistant.discovery_prefix)
+    nodes = [ident.bridge_node, *(ident.rotator_node(rid) for rid in roots)]
+    screen = Screen.for_terminal()
+    stack.callback(screen.close)  # the terminal as it was, whatever happens next
+    console = Console(
+        host,
+        port,
+        client_id=f"{settings.mqtt.effective_client_id()}-ui",
+        topics=topics,
+        rotator_ids=list(roots),
+        discovery_filters=[discovery.config("+", node, "+") for node in nodes],
+        screen=screen,
+    )
+    # a base topic of its own making is the demo's alone to clean up; one given with --base-topic
+    # may hold someone else's retained state, which is not the demo's to delete
+    stack.callback(console.close, remove_retained=args.base_topic is None)
+    console.sync()
+    # a bridge that uses this base topic, running or stopped, owns its Home Assistant devices:
+    # the demo's discovery would clear them as stale
+    held = console.retained(topics.bridge_state) if args.base_topic is not None else None
+    if held is not None:
+        print(
+            f"rotor-bridge demo: base topic {topics.base!r} belongs to a bridge "
+            f"({topics.bridge_state} is {held.decode(errors='replace')!r}); choose another "
+            "--base-topic or none",
+            file=sys.stderr,
+        )
+        return 2
+    for r in settings.rotators:
+        emu = emulators.start(r.model, link=r.port, **emulator_options(r.model, args.speed_deg_s))
+        stack.callback(emu.close)
+    position = settings.station.position
+    assert position is not None and settings.tracking.tle_file is not None
+    rise = demo_sky.write_tle_file(settings.tracking.tle_file, *position, args.satellite_rises_in_s)
+    app = App(settings)
+    stack.callback(app.stop)  # before the console's clean-up: the bridge's "offline" goes first
+    app.start()
+    _print_banner(args, settings, topics, where, instance, app.web.url if app.web else None)
+    print(
+        f"  A made-up satellite, {demo_sky.NAME}, rises over the station around "
+        f"{time.strftime('%H:%M:%S', time.gmtime(rise))} UTC (in {args.satellite_rises_in_s:g} s):"
+        f" type 'track {demo_sky.NAME}' (or 'track sun', 'track moon').\n",
+        flush=True,
+    )
+    deadline = None if args.duration_s is None else time.monotonic() + args.duration_s
+    if sys.stdin.isatty():
+        print(
+            "  Or type here: a bearing (120), 's' to stop, 'help' for more, 'q' to quit\n",
+            flush=True,
+        )
+    screen.start()  # on a terminal: from here one status line, log lines above it
+    if sys.stdin.isatty():
+        threading.Thread(target=_read_stdin, args=(screen, console, done), daemon=True).start()
+    while not done.wait(0.2):
+        if deadline is not None and time.monotonic() >= deadline:
+            break
+    screen.log("rotor-bridge demo: stopping")
+    return 0
+
+
+def _print_banner(
+    args: argparse.Namespace,
+    settings: Settings,
+    topics: Topics,
+    where: str,
+    instance: str,
+    app_url: str | None,
+) -> None:
+    hp = (
+        ""
+        if (args.mqtt_host, args.mqtt_port) == ("127.0.0.1", 1883)
+        else (f"-h {args.mqtt_host} -p {args.mqtt_port} ")
+    )
+    first = topics.rotator(settings.rotators[0].id)
+    lines = [
+        "",
+        f"rotor-bridge demo {instance}: {len(settings.rotators)} emulated rotator(s) bridged "
+        f"to {where}.",
+        f"  its own topics: {topics.base}/...  (a real bridge's are not touched)",
+    ]
+    if len(settings.rotators) > 1:
+        lines += [f"    {r.id}: {topics.rotator(r.id).root}/..." for r in settings.rotators]
+    lines += [
+        f"  watch: mosquitto_sub {hp}-t '{topics.base}/#' -v",
+        f"  turn:  mosquitto_pub {hp}-t {first.target} -m 120",
+        f"  stop:  mosquitto_pub {hp}-t {first.stop} -m STOP",
+        *([f"  console: {app_url}  (the beam on a map, in any browser)"] if app_url else []),
+        f'  Home Assistant: the devices "Demo ... ({instance})"'
+        + (", removed again when the demo ends" if args.base_topic is None else ""),
+        "",
+    ]
+    print("\n".join(lines), flush=True)
+
+
+def _read_stdin(screen: Screen, console: Console, done: threading.Event) -> None:
+    screen.read_lines(console.command)
+    done.set()

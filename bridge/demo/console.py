@@ -1,0 +1,289 @@
+"""The demo's console: an ordinary MQTT client beside the demo's bridge. It prints what the
+bridge publishes, turns typed lines into commands on the same topics any client would use, and at
+the end removes what the demo left retained (bridge.demo, rule 4).
+
+Rules:
+1. It reaches the bridge only through the broker: every typed line becomes one MQTT message on
+   the demo's topics (from bridge.interfaces.mqtt.topics), nothing is called directly.
+2. It subscribes with retain-as-published (MQTT 5), so it knows which of the demo's topics hold a
+   retained message on the broker, and can clear exactly those.
+3. A line that is not a command is answered with a hint, never published as a target.
+4. What it prints goes through a Screen (bridge/demo/screen.py): on a terminal the bearing,
+   elevation and state of every rotator stay on one status line, redrawn in place, and
+   everything else is a log line printed above it; elsewhere (a pipe, a file, a test) every
+   change is a line of its own, ``  <topic> = <value>``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import threading
+from typing import Any
+
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.demo.screen import Screen
+from bridge.features import tracking
+from bridge.interfaces.mqtt.topics import Topics
+
+OPTIONS = ("endpoint", "jam", "overshoot", "unstick")
+SHOWN_LEAVES = (
+    "bearing", "elevation", "state", "availability", "version", "error", "presets", "tracking"
+)  # fmt: skip
+STATUS_LEAVES = ("bearing", "elevation", "state")  # on a terminal: the status line (rule 4)
+
+
+class Console:
+    """Shows what arrives on the broker, turns typed lines into MQTT commands, and at the end can
+    remove what the demo left retained (rule 4)."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        *,
+        client_id: str,
+        topics: Topics,
+        rotator_ids: list[str],
+        discovery_filters: list[str],
+        screen: Screen | None = None,
+    ) -> None:
+        self.screen = screen or Screen()
+        self._topics = topics
+        self._ids = rotator_ids
+        self._roots = {topics.rotator(rid).root for rid in rotator_ids}
+        self._filters = [f"{topics.base}/#", *discovery_filters]
+        self._sync_topic = f"{topics.base}/console/sync"
+        self._retained: dict[str, bytes] = {}
+        self._last: dict[str, str] = {}
+        self._lock = threading.Lock()
+        self._synced = threading.Event()
+        self.connected = threading.Event()
+        c = paho.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=paho.MQTTv5)
+        c.on_connect = self._on_connect
+        c.on_message = self._on_message
+        c.reconnect_delay_set(1, 5)
+        c.connect_async(host, port, clean_start=True)
+        c.loop_start()
+        self._client = c
+
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        if reason_code.is_failure:
+            return
+        # retain-as-published: what is retained on the broker arrives marked so even while we
+        # are subscribed, which is how the console knows what to remove at the end
+        opts = SubscribeOptions(qos=1, retainAsPublished=True)
+        client.subscribe([(f, opts) for f in self._filters])
+        self.connected.set()
+
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
+        topic = msg.topic
+        if topic == self._sync_topic:
+            self._synced.set()
+            return
+        if msg.retain:
+            with self._lock:
+                if msg.payload:
+                    self._retained[topic] = bytes(msg.payload)
+                else:
+                    self._retained.pop(topic, None)
+        if not topic.startswith(self._topics.base + "/") or not msg.payload:
+            return  # a Home Assistant config (kept track of) or a removal: not shown
+        leaf = topic.rsplit("/", 1)[-1]
+        text = msg.payload.decode("utf-8", "replace")
+        if leaf == "status":
+            self._show_target_info(topic, text)
+            self._show_tracking(topic, text)
+            return
+        if leaf not in SHOWN_LEAVES or (self._last.get(topic) == text and leaf != "error"):
+            return
+        self._last[topic] = text
+        root = topic.rsplit("/", 1)[0]
+        on_status = leaf in STATUS_LEAVES and root in self._roots
+        if on_status:
+            self.screen.status(root, leaf, text)
+        self.screen.log(f"  {topic} = {text}", quiet=on_status and leaf != "state")
+
+    def _show_target_info(self, topic: str, text: str) -> None:
+        """A locator target's distance and paths, once each time it changes."""
+        with contextlib.suppress(ValueError, AttributeError, KeyError, TypeError):
+            info = json.loads(text).get("target_info")
+            key = f"{topic}:target_info"
+            if info and json.dumps(info) != self._last.get(key):
+                self._last[key] = json.dumps(info)
+                where = info.get("locator") or f"{info['latitude']:.2f}, {info['longitude']:.2f}"
+                root = topic.rsplit("/", 1)[0]
+                self.screen.log(
+                    f"  {root}: {where} is {info['distance_km']:,.0f} km away by the "
+                    f"{info['path']} path (short {info['short_path_deg']:g}°, "
+                    f"long {info['long_path_deg']:g}°)"
+                )
+
+    def _show_tracking(self, topic: str, text: str) -> None:
+        """What tracking does, once each time its phase or pass changes."""
+        with contextlib.suppress(ValueError, AttributeError, KeyError, TypeError):
+            doc = json.loads(text)
+            info, ended = doc.get("tracking"), doc.get("tracking_ended")
+            key = f"{topic}:tracking"
+            root = topic.rsplit("/", 1)[0]
+            if info is None:
+                if ended and self._last.get(key) != f"ended {ended}":
+                    self._last[key] = f"ended {ended}"
+                    self.screen.log(f"  {root}: tracking ended ({ended})")
+                return
+            shown = f"{info['body']} {info['phase']} {info.get('aos')}"
+            if shown == self._last.get(key):
+                return
+            self._last[key] = shown
+            now = f"now az {info['azimuth']:g} el {info['elevation']:g}"
+            if info["phase"] == "waiting":
+                self.screen.log(
+                    f"  {root}: {info['body']} is below the horizon ({now}); waiting at "
+                    f"az {info['aos_azimuth']:g} for its rise at {info['aos'][11:19]} UTC"
+                )
+            elif info["phase"] == "tracking":
+                until = f" until {info['los'][11:19]} UTC" if "los" in info else ""
+                flip = ", flipped (elevation past 90)" if info.get("flip") else ""
+                self.screen.log(f"  {root}: tracking {info['body']} ({now}){until}{flip}")
+            else:
+                self.screen.log(f"  {root}: {info['body']}: no pass in the next two days")
+
+    def _presets_text(self) -> str:
+        """The first rotator's preset names, as its retained R/presets lists them."""
+        topic = self._topics.rotator(self._ids[0]).presets
+        with contextlib.suppress(ValueError, AttributeError):
+            return ", ".join(json.loads(self._last.get(topic, "{}"))) or "none"
+        return "see " + topic
+
+    def publish(self, topic: str, payload: str) -> None:
+        self._client.publish(topic, payload, qos=1)
+
+    def command(self, line: str) -> bool:
+        """Handle one typed line; False to quit."""
+        words = line.split()
+        if not words:
+            return True
+        head = words[0].lower()
+        if head in ("q", "quit", "exit"):
+            return False
+        if head in ("help", "h", "?"):
+            self.screen.log(self.help_text())
+            return True
+        rid = self._ids[0]
+        if len(self._ids) > 1 and words[0] in self._ids:
+            rid, words = words[0], words[1:]
+            if not words:
+                self.screen.log(f"  {rid} what? type 'help'")
+                return True
+        t = self._topics.rotator(rid)
+        head, rest = words[0].lower(), words[1:]
+        if head in ("s", "stop") and not rest:
+            self.publish(t.stop, "STOP")
+        elif head == "lock" and len(rest) == 1:
+            self.publish(t.lock, rest[0].upper())
+        elif head in OPTIONS and len(rest) == 1:
+            self.publish(t.option(head), rest[0].upper())
+        elif head == "el" and len(rest) == 1:
+            self.publish(t.target_elevation, rest[0])
+        elif head == "preset" and len(rest) == 1:
+            self.publish(t.preset, rest[0])
+        elif head == "park" and not rest:
+            self.publish(t.park, "PARK")
+        elif head == "locator" and len(rest) in (1, 2) and rest[1:] in ([], ["long"], ["short"]):
+            path = rest[1] if len(rest) == 2 else "short"
+            self.publish(t.target, json.dumps({"locator": rest[0], "path": path}))
+        elif head == "track" and rest:
+            self.publish(t.feature(tracking.COMMAND), " ".join(rest))
+        elif head in ("long", "short") and not rest:
+            self.publish(t.target, json.dumps({"path": head}))
+        elif head == "nudge" and len(rest) in (1, 2) and all(map(_is_number, rest)):
+            if len(rest) == 1:
+                self.publish(t.nudge, rest[0])
+            else:
+                axes = dict(zip(("azimuth", "elevation"), map(float, rest), strict=True))
+                self.publish(t.nudge, json.dumps(axes))
+        elif _is_number(head) or head.startswith("{"):
+            self.publish(t.target, " ".join(words))
+        else:
+            self.screen.log(f"  unknown command {line.strip()!r}; type 'help'")
+        return True
+
+    def help_text(self) -> str:
+        first = self._topics.rotator(self._ids[0]).root
+        lines = [
+            "  Type (each line becomes an MQTT message, as from any other client):",
+            f"    120            turn to 120 deg              -> {first}/target",
+            "    120 30         azimuth and elevation (SPID, SatEL)",
+            f"    el 30          elevation alone              -> {first}/target/elevation",
+            f"    preset JA      a configured preset ({self._presets_text()})  -> {first}/preset",
+            f"    park           the park position            -> {first}/park",
+            f"    locator PM95   great-circle bearing from the station; add 'long' for the long "
+            f"path -> {first}/target",
+            "    long, short    the other path to that locator",
+            f"    nudge -10      turn by a few degrees (az/el: nudge 5 -2) -> {first}/nudge",
+            f"    track sun      follow the sun, moon, a satellite; 'track off' -> {first}/track",
+            f"    s, stop        stop now                     -> {first}/stop",
+            f"    lock on|off    safety lock                  -> {first}/lock",
+            f"    jam on|off     Rotor-EZ options ({', '.join(OPTIONS)})",
+        ]
+        if len(self._ids) > 1:
+            lines.append(
+                f"    <id> ...       the same for one rotator (default {self._ids[0]}); ids: "
+                + ", ".join(self._ids)
+            )
+        lines += ["    help           this list", "    q              quit (also ^D, ^C)"]
+        return "\n".join(lines)
+
+    def sync(self, timeout_s: float = 5.0) -> bool:
+        """Wait until everything the broker had for us so far has arrived (a round trip through
+        it: what was published before our marker reaches us before the marker)."""
+        if not self.connected.wait(timeout_s):
+            return False
+        self._synced.clear()
+        self._client.publish(self._sync_topic, b"sync", qos=1)
+        return self._synced.wait(timeout_s)
+
+    def retained(self, topic: str) -> bytes | None:
+        with self._lock:
+            return self._retained.get(topic)
+
+    def remove_retained(self, timeout_s: float = 3.0) -> int:
+        """Clear every retained message seen on the demo's topics; how many there were."""
+        if not self.sync(timeout_s):  # the bridge's last "offline" included
+            return 0
+        with self._lock:
+            topics = sorted(self._retained)
+        infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
+        for info in infos:
+            with contextlib.suppress(RuntimeError, ValueError):
+                info.wait_for_publish(timeout_s)
+        return len(topics)
+
+    def close(self, *, remove_retained: bool = False) -> None:
+        try:
+            if remove_retained:
+                n = self.remove_retained()
+                self.screen.log(f"rotor-bridge demo: removed its {n} retained messages")
+        finally:
+            self._client.disconnect()
+            self._client.loop_stop()
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True

@@ -1,0 +1,169 @@
+"""The spots kept: each with its position, bearing and distance from the station; what
+``B/spots`` carries; the place of a call for ``R/target`` ``{"call": ...}``.
+
+Rules:
+1. A spot's position: a Maidenhead locator in its comment first (``JO01 <> PM95``: the one
+   after ``>``, the DX's; otherwise the first one; ``RR73`` is WSJT-X's sign-off, never a
+   locator), else its call's entity from the cty file (cty.py rule 3), else none (still
+   listed, without a bearing). ``position`` says which: ``locator``, ``cty`` or null.
+2. Kept: spots on the configured bands, the newest ``max_spots``, none older than
+   ``max_age_s`` (by the monotonic clock of when it was heard, so a wrong wall clock or a
+   node's odd ``HHMM`` never ages a spot). The newest spot of a call replaces an older one
+   of the same call on the same band.
+3. Bearings and distances are geo.great_circle's from [station] (the same function the
+   pointing judge uses); without a station they are null, and so are the bearings of a
+   place with no direction (the station's own, its antipode).
+4. Thread-safe: the client's thread adds and prunes, the aim thread reads (one lock, held
+   for dictionary work only: the cty lookup is done before taking it).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from bridge.core import geo
+from bridge.interfaces.dxcluster.cty import Cty
+from bridge.interfaces.dxcluster.spots import Spot
+from bridge.settings.dxcluster import band_of
+
+MAX_CALLS = 20  # Home Assistant's spot select lists this many calls at most
+_LOCATORS = re.compile(r"(?<![A-Z0-9])[A-R]{2}[0-9]{2}(?:[A-X]{2}(?:[0-9]{2})?)?(?![A-Z0-9])")
+
+
+@dataclass(frozen=True)
+class Place:
+    latitude_deg: float
+    longitude_deg: float
+    source: str  # "locator" or "cty"
+    locator: str | None = None
+    entity: str | None = None
+
+
+@dataclass(frozen=True)
+class Kept:
+    spot: Spot
+    band: str | None
+    place: Place | None
+    heard_s: float  # monotonic
+    heard_wall: float
+
+
+def locator_in(comment: str) -> str | None:
+    """Rule 1: the DX's locator in a spot's comment, or None."""
+    text = comment.upper()
+    found = [m for m in _LOCATORS.finditer(text) if m.group() != "RR73"]
+    if not found:
+        return None
+    after = [m for m in found if ">" in text[: m.start()]]
+    return (after or found)[0].group()
+
+
+class Book:
+    def __init__(
+        self,
+        cty: Cty | None,
+        station: tuple[float, float] | None,
+        *,
+        max_spots: int = 50,
+        max_age_s: float = 1800.0,
+        bands: tuple[str, ...] = (),
+        clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        self._cty = cty
+        self.station = station
+        self._max = max_spots
+        self._max_age_s = max_age_s
+        self._bands = frozenset(bands)
+        self._clock = clock
+        self._wall = wall
+        self._lock = threading.Lock()
+        self._spots: list[Kept] = []  # newest first
+
+    def place(self, spot: Spot) -> Place | None:
+        """Rule 1 (no lock: the cty data is read-only once loaded)."""
+        locator = locator_in(spot.comment)
+        if locator is not None:
+            lat, lon = geo.parse_locator(locator)
+            return Place(lat, lon, "locator", locator=locator)
+        return self.entity_place(spot.call)
+
+    def entity_place(self, call: str) -> Place | None:
+        entity = self._cty.lookup(call) if self._cty is not None else None
+        if entity is None:
+            return None
+        return Place(entity.latitude_deg, entity.longitude_deg, "cty", entity=entity.name)
+
+    def add(self, spot: Spot) -> bool:
+        """Rule 2: whether it was kept (False: not on a configured band)."""
+        band = band_of(spot.freq_khz)
+        if self._bands and band not in self._bands:
+            return False
+        kept = Kept(spot, band, self.place(spot), self._clock(), self._wall())
+        with self._lock:
+            rest = [k for k in self._spots if (k.spot.call, k.band) != (spot.call, band)]
+            self._spots = [kept, *rest][: self._max]
+        return True
+
+    def prune(self) -> bool:
+        """Rule 2: the spots too old dropped; whether any was."""
+        oldest = self._clock() - self._max_age_s
+        with self._lock:
+            before = len(self._spots)
+            self._spots = [k for k in self._spots if k.heard_s >= oldest]
+            return len(self._spots) != before
+
+    def newest(self, call: str) -> Kept | None:
+        """The newest spot of ``call`` (any case), if one is kept."""
+        wanted = call.strip().upper()
+        with self._lock:
+            return next((k for k in self._spots if k.spot.call == wanted), None)
+
+    def calls(self) -> tuple[str, ...]:
+        """The calls of the newest spots, each once, at most MAX_CALLS."""
+        with self._lock:
+            calls = dict.fromkeys(k.spot.call for k in self._spots)
+        return tuple(calls)[:MAX_CALLS]
+
+    def as_json(self) -> str:
+        """``B/spots``: ``{"spots": [...]}``, newest first."""
+        with self._lock:
+            spots = list(self._spots)
+        doc = {"spots": [self._one(k) for k in spots]}
+        return json.dumps(doc, separators=(",", ":"))
+
+    def _one(self, k: Kept) -> dict[str, object]:
+        s = k.spot
+        heard = datetime.fromtimestamp(k.heard_wall, UTC).isoformat(timespec="seconds")
+        doc: dict[str, object] = {
+            "call": s.call,
+            "frequency_khz": s.freq_khz,
+            "band": k.band,
+            "spotter": s.spotter,
+            "time": f"{s.time}Z",
+            "heard": heard.replace("+00:00", "Z"),
+            "comment": s.comment,
+            "position": None,
+        }
+        p = k.place
+        if p is None:
+            return doc
+        doc.update(position=p.source, latitude=round(p.latitude_deg, 3))
+        doc.update(longitude=round(p.longitude_deg, 3))
+        if p.locator is not None:
+            doc["locator"] = p.locator
+        if p.entity is not None:
+            doc["entity"] = p.entity
+        if self.station is not None:
+            path = geo.great_circle(*self.station, p.latitude_deg, p.longitude_deg)
+            turn = path.has_direction  # rule 3: at the station or its antipode, no bearing
+            doc["bearing_deg"] = round(path.short_path_deg, 1) if turn else None
+            doc["long_path_deg"] = round(path.long_path_deg, 1) if turn else None
+            doc["distance_km"] = round(path.distance_km)
+        return doc

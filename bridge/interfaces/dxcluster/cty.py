@@ -1,0 +1,180 @@
+"""AD1C's country files (cty.dat or cty.csv, from country-files.com): a call sign's entity.
+
+The user downloads the file; the bridge reads it from disk once, at start-up (``load``), and
+never downloads anything.
+
+Rules:
+1. Longitudes: both files give them WEST-positive (``-139.00`` is 139 degrees EAST, Japan);
+   ``Entity.longitude_deg`` is east-positive like the rest of the project (core/geo.py).
+2. A prefix line's overrides apply to that prefix or exact call alone: ``(cq)`` the CQ zone,
+   ``[itu]`` the ITU zone, ``<lat/lon>`` the position (west-positive too), ``{cont}`` the
+   continent; ``~tz~`` is read past. ``=CALL`` is an exact call, matched before any prefix.
+3. ``lookup``: an exact call first, then the longest prefix of the call. What is looked up:
+   upper case; a portable suffix (``/P``, ``/M``, ``/QRP``, ``/QRPP``, ``/A``, a lone digit) is
+   dropped, and so are ``/LH`` and ``/LGT`` (a lighthouse), ``/R`` (a rover) and ``/B`` (a
+   beacon), which say what a station is, not where (read as prefixes: Norway, Russia, China);
+   ``/MM`` and ``/AM`` (maritime and aeronautical mobile) are in no entity (None); of two
+   parts left (``F/G4ABC``, ``G4ABC/F``) the shorter one is the prefix that names the
+   entity (equal lengths: the first).
+4. A file that cannot be read or holds no entity raises CtyError naming the file and line;
+   an odd line inside a good file is skipped and counted (``skipped``): AD1C's files are
+   trusted, a hand-edited one should not stop the bridge.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+_OVERRIDE = re.compile(r"\((\d+)\)|\[(\d+)\]|<(-?[\d.]+)/(-?[\d.]+)>|\{(\w+)\}|~(-?[\d.]+)~")
+_PLAIN = re.compile(r"=?[A-Z0-9/]+")
+_DROPPED = frozenset({"P", "M", "QRP", "QRPP", "A", "LH", "LGT", "R", "B"})  # rule 3
+_NOWHERE = frozenset({"MM", "AM"})
+
+
+class CtyError(ValueError):
+    pass
+
+
+@dataclass(frozen=True)
+class Entity:
+    name: str
+    continent: str
+    cq_zone: int
+    itu_zone: int
+    latitude_deg: float
+    longitude_deg: float  # east-positive (rule 1)
+    prefix: str  # the entity's main prefix (``JA``)
+
+
+@dataclass
+class Cty:
+    prefixes: dict[str, Entity]
+    exact: dict[str, Entity]
+    skipped: int = 0
+
+    def lookup(self, call: str) -> Entity | None:
+        """Rule 3."""
+        whole = call.strip().upper()
+        if whole in self.exact:
+            return self.exact[whole]
+        parts = [p for p in whole.split("/") if p]
+        if not parts or any(p in _NOWHERE for p in parts[1:]):
+            return None
+        parts = [parts[0], *(p for p in parts[1:] if p not in _DROPPED and not p.isdigit())]
+        if len(parts) == 1:
+            base = parts[0]
+            if base in self.exact:
+                return self.exact[base]
+        else:
+            base = min(parts[:2], key=len)  # the first of equals: min keeps it
+        for end in range(len(base), 0, -1):
+            entity = self.prefixes.get(base[:end])
+            if entity is not None:
+                return entity
+        return None
+
+
+def _override(base: Entity, token: str) -> tuple[str, Entity]:
+    """A prefix or ``=CALL`` with its overrides (rule 2), as (the text, its entity)."""
+    changes: dict[str, object] = {}
+    for m in _OVERRIDE.finditer(token):
+        cq, itu, lat, lon, cont, _tz = m.groups()
+        if cq:
+            changes["cq_zone"] = int(cq)
+        elif itu:
+            changes["itu_zone"] = int(itu)
+        elif lat and lon:
+            changes["latitude_deg"] = float(lat)
+            changes["longitude_deg"] = -float(lon)
+        elif cont:
+            changes["continent"] = cont.upper()
+    plain = _OVERRIDE.sub("", token).strip().upper()
+    if not _PLAIN.fullmatch(plain):
+        raise ValueError(token)
+    return plain, replace(base, **changes) if changes else base  # type: ignore[arg-type]
+
+
+def _add(cty: Cty, base: Entity, tokens: list[str]) -> None:
+    for token in tokens:
+        token = token.strip()
+        if not token:
+            continue
+        try:
+            plain, entity = _override(base, token)
+        except ValueError:
+            cty.skipped += 1
+            continue
+        if plain.startswith("="):
+            cty.exact[plain[1:]] = entity
+        else:
+            cty.prefixes[plain] = entity
+
+
+def _entity(name: str, cq: str, itu: str, cont: str, lat: str, lon: str, prefix: str) -> Entity:
+    return Entity(
+        name.strip(),
+        cont.strip().upper(),
+        int(cq),
+        int(itu),
+        float(lat),
+        -float(lon),  # rule 1
+        prefix.strip().lstrip("*").upper(),
+    )
+
+
+def parse_dat(text: str) -> Cty:
+    """cty.dat: a header line of 8 ``:``-ended fields, then prefixes up to ``;``."""
+    cty = Cty({}, {})
+    base: Entity | None = None
+    for line in text.splitlines():
+        if not line.strip():
+            continue
+        if not line[0].isspace():  # a header
+            fields = line.split(":")
+            try:
+                name, cq, itu, cont, lat, lon, _utc, prefix = fields[:8]
+                base = _entity(name, cq, itu, cont, lat, lon, prefix)
+            except ValueError:
+                base = None
+                cty.skipped += 1
+            continue
+        if base is None:
+            cty.skipped += 1
+            continue
+        _add(cty, base, line.strip().rstrip(";").split(","))
+        if line.rstrip().endswith(";"):
+            base = None
+    return cty
+
+
+def parse_csv(text: str) -> Cty:
+    """cty.csv: ``prefix,name,dxcc,continent,cq,itu,lat,lon,utc,prefixes;`` one entity a line."""
+    cty = Cty({}, {})
+    for line in text.splitlines():
+        if not line.strip():
+            continue
+        fields = line.split(",", 9)
+        try:
+            prefix, name, _dxcc, cont, cq, itu, lat, lon, _utc, rest = fields
+            base = _entity(name, cq, itu, cont, lat, lon, prefix)
+        except ValueError:
+            cty.skipped += 1
+            continue
+        _add(cty, base, rest.strip().rstrip(";").split())
+    return cty
+
+
+def load(path: Path) -> Cty:
+    """Rule 4: the file read and parsed; CtyError says what is wrong with it."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise CtyError(f"cty_file {path} cannot be read: {exc.strerror or exc}") from None
+    first = next((line for line in text.splitlines() if line.strip()), "")
+    csv = first.count(",") >= 9 and ":" not in first.split(",")[0]
+    cty = parse_csv(text) if csv else parse_dat(text)
+    if not cty.prefixes and not cty.exact:
+        raise CtyError(f"cty_file {path}: no entity in it (is it AD1C's cty.dat or cty.csv?)")
+    return cty

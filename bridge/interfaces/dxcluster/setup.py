@@ -1,0 +1,50 @@
+"""The DX cluster's service, made from ``[dxcluster]`` (features/dxcluster: its declaration
+points here; the app imports this module only when ``[dxcluster] enabled``): the cty file read
+once, at start-up (settings/dxcluster.py rule 2: a ConfigError names the file), the spots'
+book, the client publishing ``B/spots`` and taking the MQTT service's targets by call."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from bridge.feature import AppView
+from bridge.interfaces.dxcluster.book import Book
+from bridge.interfaces.dxcluster.client import DxCluster
+from bridge.interfaces.dxcluster.cty import CtyError, load
+from bridge.settings import ConfigError
+from bridge.settings.dxcluster import DxClusterSettings
+
+
+def service(view: AppView) -> DxCluster:
+    """The client of ``view``'s ``[dxcluster]``, its spots on ``B/spots`` (and the console's
+    map), the calls of ``R/target`` turned by it; ConfigError if the cty file cannot be read
+    or holds nothing."""
+    (spots,) = view.publishers  # B/spots, its one topic (features/dxcluster)
+    try:
+        cluster = dxcluster(view.settings.dxcluster, view.station, spots, wall=view.wall)
+    except CtyError as exc:
+        raise ConfigError(str(exc)) from None
+    view.mqtt.aim_calls_with(cluster.aim)
+    return cluster
+
+
+def dxcluster(
+    settings: DxClusterSettings,
+    station: tuple[float, float] | None,
+    publish: Callable[[str], None],
+    *,
+    wall: Callable[[], float] = time.time,
+) -> DxCluster:
+    """CtyError if the cty file cannot be read or holds nothing."""
+    assert settings.host is not None and settings.login is not None  # enabled: validated
+    assert settings.cty_file is not None
+    book = Book(
+        load(settings.cty_file),
+        station,
+        max_spots=settings.max_spots,
+        max_age_s=settings.max_age_min * 60.0,
+        bands=tuple(settings.bands),
+        wall=wall,
+    )
+    return DxCluster(settings.host, settings.port, settings.login, book, publish)

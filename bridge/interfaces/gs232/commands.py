@@ -1,0 +1,379 @@
+"""GS-232A/B, Easycomm II and DCU-1 sessions onto one Rotator: each client's commands judged by
+Rotator.submit and answered in the protocol's bytes (package rules 4-7, 9, 10); the servers that
+carry them are the shared line server (interfaces/tcplines.py) and the pty server
+(interfaces/ptylines.py), made from one table, EMULATIONS (package rule 11).
+
+The Rotator is a Protocol: the bridge's own (runtime/rotator.py) or the remote's, which stands
+for the station's (remote/rotator.py), as rotctld's commands take either. Every command carries
+who sent it (``Origin``: the audit trail, the control lease): on a TCP port the client's address
+(``gs232 192.168.1.20``); a pty has no peer, so its commands are the interface's alone."""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
+
+from bridge.core.errors import Refused
+from bridge.core.model import Origin, Park, Source, Stop, Target
+from bridge.front import FrontRotator
+from bridge.interfaces.gs232.parser import (
+    Dcu1Kind,
+    Dcu1Reader,
+    Dcu1Request,
+    EasycommRequest,
+    Gs232Kind,
+    Gs232Request,
+    LineSplitter,
+    parse_easycomm,
+    parse_gs232,
+)
+from bridge.interfaces.tcplines import LINE_ENDS, LineServer, LineSession
+
+if TYPE_CHECKING:
+    from bridge.interfaces.ptylines import PtyLineServer
+
+
+# what these commands use of a rotator: the bridge's own or the remote's (front.py)
+Rotator = FrontRotator
+
+log = logging.getLogger(__name__)
+
+GS232_ERROR = b"?>\r\n"  # the GS-232 error prompt; Hamlib reads a line up to LF
+# what a Rotor-EZ prints after an invalid command (and for V): the one text it is known to send
+DCU1_ERROR = b"C2000 IDIOM V1.4S "
+DCU1_STORED_S = 1.0  # package rule 10: a bearing AP1 stored is for an AM1 within this
+IDLE_TIMEOUT_S = 300.0
+_STOPS = (Gs232Kind.STOP, Gs232Kind.STOP_AZ, Gs232Kind.STOP_EL)
+Item = TypeVar("Item")
+
+
+def _position(rotator: Rotator) -> tuple[float, float] | None:
+    """The true bearing and elevation now (0 without an elevation axis), None when the bridge
+    does not currently have them: never the last value seen (rotctld's rule 5)."""
+    status = rotator.status
+    el = status.elevation_deg if rotator.spec.has_elevation else 0.0
+    az = status.bearing_deg
+    if not rotator.spec.can_report_position or not status.available or az is None or el is None:
+        return None
+    return az, el
+
+
+def _azimuth(az_deg: float) -> str:
+    whole = round(az_deg)
+    return f"{whole + 360 if whole < 0 else whole:03d}"  # a GS-232 azimuth is never negative
+
+
+class _Reader(Protocol[Item]):
+    """A protocol's input, sans-IO: bytes in, its commands (or lines) out."""
+
+    @property
+    def idle(self) -> bool: ...
+
+    def feed(self, data: bytes) -> list[Item]: ...
+
+
+class _Session(ABC, Generic[Item]):
+    """One client's commands (tcplines.LineSession): each answered in turn, a failure contained
+    (rule 8 of the house: answered with the protocol's error, logged)."""
+
+    name = ""
+    failed_reply = b""
+    source = Source.GS232
+
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
+        self.rotator = rotator
+        self.origin = Origin(self.source, None, peer)  # peer: the TCP client's address
+        self._reader = self.reader()
+
+    @abstractmethod
+    def reader(self) -> _Reader[Item]:
+        """A fresh reader of the protocol's input."""
+
+    @property
+    def idle(self) -> bool:
+        return self._reader.idle
+
+    def feed(self, data: bytes) -> list[bytes]:
+        out = []
+        for item in self._reader.feed(data):
+            try:
+                out.append(self.answer(item))
+            except Exception:
+                log.exception("%s for %s: %r failed", self.name, self.rotator.id, item)
+                out.append(self.failed_reply)
+        return out
+
+    @abstractmethod
+    def answer(self, item: Item) -> bytes:
+        """The protocol's reply to one command (b"" for none)."""
+
+
+class _LineSession(_Session[str | None]):
+    """A protocol whose commands are lines (LineSplitter)."""
+
+    def reader(self) -> LineSplitter:
+        return LineSplitter()
+
+
+class Gs232Session(_LineSession):
+    """One GS-232 client; ``replies`` "A" or "B": the controller whose readings it gives
+    (package rule 2)."""
+
+    name, failed_reply = "gs232", GS232_ERROR
+
+    def __init__(self, rotator: Rotator, peer: str | None = None, *, replies: str = "B") -> None:
+        super().__init__(rotator, peer)
+        if replies not in ("A", "B"):
+            raise ValueError(f"GS-232 replies are A or B, not {replies!r}")
+        self.replies = replies
+
+    def answer(self, line: str | None) -> bytes:
+        return self.execute(line, parse_gs232(line))
+
+    def execute(self, line: str | None, req: Gs232Request) -> bytes:
+        described = f"gs232 {line}"
+        if req.kind in _STOPS:  # the rotor stops as a whole: never less than what was asked
+            try:
+                self.rotator.submit(Stop(Source.GS232, self.origin), described)
+            except Refused:  # the remote's, its broker away (package rule 6): reported there
+                return GS232_ERROR
+            return b""
+        if req.kind in (Gs232Kind.READ_AZ, Gs232Kind.READ_EL, Gs232Kind.READ_AZEL):
+            where = _position(self.rotator)
+            if where is None:
+                return GS232_ERROR
+            az_text, el_text = _azimuth(where[0]), f"{round(where[1]):03d}"
+            if self.replies == "A":
+                az_text, el_text = f"+0{az_text}", f"+0{el_text}"
+                reply = {
+                    Gs232Kind.READ_AZ: az_text,
+                    Gs232Kind.READ_EL: el_text,
+                    Gs232Kind.READ_AZEL: az_text + el_text,
+                }[req.kind]
+            else:
+                reply = {
+                    Gs232Kind.READ_AZ: f"AZ={az_text}",
+                    Gs232Kind.READ_EL: f"EL={el_text}",
+                    Gs232Kind.READ_AZEL: f"AZ={az_text}  EL={el_text}",
+                }[req.kind]
+            return reply.encode() + b"\r\n"
+        if req.kind is Gs232Kind.GOTO_AZ or req.kind is Gs232Kind.GOTO_AZEL:
+            el = req.el_deg
+            if el == 0 and not self.rotator.spec.has_elevation:
+                el = None  # Hamlib sends W with elevation 000 to an azimuth-only rotator
+            try:
+                target = Target(req.az_deg, el, Source.GS232, origin=self.origin)
+                self.rotator.submit(target, described)
+            except Refused:
+                return GS232_ERROR  # Rotator.submit has reported it on R/error
+            return b""
+        log.debug("gs232 for %s: %r not understood", self.rotator.id, line)
+        return GS232_ERROR
+
+
+class EasycommSession(_LineSession):
+    """One Easycomm II client."""
+
+    name, failed_reply, source = "easycomm", b"ALinternal error\n", Source.EASYCOMM
+
+    def answer(self, line: str | None) -> bytes:
+        return self.execute(line, parse_easycomm(line))
+
+    def execute(self, line: str | None, req: EasycommRequest) -> bytes:
+        described = f"easycomm {line}"
+        alarms: list[str] = []
+        if req.invalid is not None:
+            return f"ALinvalid {req.invalid}\n".encode("latin-1")
+        if req.stop:  # a line that stops does nothing else
+            try:
+                self.rotator.submit(Stop(Source.EASYCOMM, self.origin), described)
+            except Refused as exc:  # the remote's, its broker away (package rule 6)
+                alarms.append(f"refused {exc.code.value}")
+        elif req.park:
+            try:
+                self.rotator.submit(Park(source=Source.EASYCOMM, origin=self.origin), described)
+            except Refused as exc:
+                alarms.append(f"refused {exc.code.value}")
+        elif req.az_deg is not None or req.el_deg is not None:
+            el = req.el_deg
+            if el == 0 and not self.rotator.spec.has_elevation:
+                el = None  # Hamlib sends EL0.0 to an azimuth-only rotator
+            try:
+                target = Target(req.az_deg, el, Source.EASYCOMM, origin=self.origin)
+                self.rotator.submit(target, described)
+            except Refused as exc:
+                alarms.append(f"refused {exc.code.value}")
+        alarms += [f"{word} not available" for word in req.unsupported]
+        words = self._answers(req.queries)
+        if words is None:
+            alarms.append("position unknown")
+            words = []
+        lines = [" ".join(words)] if words else []
+        lines += ["AL" + alarm for alarm in alarms]
+        return "".join(text + "\n" for text in lines).encode("ascii", "replace")
+
+    def _answers(self, queries: tuple[str, ...]) -> list[str] | None:
+        words = []
+        where = _position(self.rotator) if set(queries) & {"AZ", "EL"} else None
+        for query in queries:
+            if query == "VE":
+                words.append("VErotor-bridge")
+            elif where is None:
+                return None
+            else:
+                words.append(f"AZ{where[0]:.1f}" if query == "AZ" else f"EL{where[1]:.1f}")
+        return words
+
+
+class Dcu1Session(_Session[Dcu1Request]):
+    """One DCU-1 / Rotor-EZ client (package rules 9 and 10). ``clock``: when AP1 stored its
+    bearing (monotonic seconds)."""
+
+    name, failed_reply, source = "dcu1", DCU1_ERROR, Source.DCU1
+
+    def __init__(
+        self,
+        rotator: Rotator,
+        peer: str | None = None,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        super().__init__(rotator, peer)
+        self._clock = clock
+        self._stored: tuple[int, float] | None = None  # AP1's bearing, and when
+
+    def reader(self) -> Dcu1Reader:
+        return Dcu1Reader()
+
+    def answer(self, item: Dcu1Request) -> bytes:
+        described = f"dcu1 {item.text}"
+        if item.kind is Dcu1Kind.STOP or item.stops:  # first, whatever else the frame was
+            try:
+                self.rotator.submit(Stop(Source.DCU1, self.origin), described)
+            except Refused:  # the remote's, its broker away (package rule 6): reported there
+                return DCU1_ERROR
+            if item.kind is Dcu1Kind.STOP:
+                return b""
+        if item.kind is Dcu1Kind.READ:
+            where = _position(self.rotator)
+            if where is None:  # package rule 10: silence, a timeout to the client
+                log.debug("dcu1 for %s: %r, position unknown", self.rotator.id, item.text)
+                return b""
+            return b";%03d" % (math.floor(where[0] + 0.5) % 360)
+        if item.kind is Dcu1Kind.STORE:
+            assert item.az_deg is not None
+            self._stored = (item.az_deg, self._clock())
+            return b""
+        if item.kind is Dcu1Kind.EXECUTE or item.kind is Dcu1Kind.GOTO:
+            return self._turn(item, described)
+        if item.kind is Dcu1Kind.OPTION:
+            return b""  # the station's options are its own (R/option): taken, changed nothing
+        if item.kind is Dcu1Kind.VERSION:
+            return DCU1_ERROR  # the banner names the version
+        log.debug("dcu1 for %s: %r not understood", self.rotator.id, item.text)
+        return DCU1_ERROR
+
+    def _turn(self, item: Dcu1Request, described: str) -> bytes:
+        az_deg = item.az_deg
+        if item.kind is Dcu1Kind.EXECUTE:  # the bearing AP1 stored, once, while fresh
+            stored, self._stored = self._stored, None
+            if stored is None or self._clock() - stored[1] > DCU1_STORED_S:
+                why = f"AM1; with no bearing stored by AP1 in the last {DCU1_STORED_S:g} s"
+                self.rotator.report_refusal(why, described, origin=self.origin)
+                return DCU1_ERROR
+            az_deg = stored[0]
+        try:
+            target = Target(az_deg, None, Source.DCU1, origin=self.origin)
+            self.rotator.submit(target, described)
+        except Refused:
+            return DCU1_ERROR  # Rotator.submit has reported it on R/error
+        return b""
+
+
+@dataclass(frozen=True)
+class Emulation:
+    """A controller's protocol offered to programs (package rule 11): ``key`` is its settings'
+    prefix (``gs232_port``, ``gs232_bind``, ``gs232_pty``), ``ends`` what ends its commands."""
+
+    key: str
+    session: Callable[..., LineSession]  # (rotator, peer, **options)
+    ends: bytes = LINE_ENDS
+    options: tuple[str, ...] = ()  # each session's keyword, from the setting <key>_<option>
+
+    def options_of(self, table: object) -> dict[str, str]:
+        """Its options as a settings table gives them (``gs232_replies``: replies)."""
+        return {name: getattr(table, f"{self.key}_{name}") for name in self.options}
+
+    def offered(self, rotator: Rotator, table: object) -> list[LineServer | PtyLineServer]:
+        """The port and the pty a settings table (a station's ``[[rotators]]``, a remote's
+        ``[[endpoints]]``) asks for with ``<key>_port``, ``<key>_bind`` and ``<key>_pty``."""
+        options = self.options_of(table)
+        out: list[LineServer | PtyLineServer] = []
+        if (port := getattr(table, f"{self.key}_port")) is not None:
+            out.append(self.server(rotator, port, getattr(table, f"{self.key}_bind"), **options))
+        if (path := getattr(table, f"{self.key}_pty")) is not None:
+            out.append(self.pty(rotator, path, **options))
+        return out
+
+    def server(
+        self, rotator: Rotator, port: int, bind: str = "127.0.0.1", **options: str
+    ) -> LineServer:
+        """Its TCP port for one rotator; ``options`` go to each session (gs232's replies)."""
+        return LineServer(
+            rotator.id,
+            port,
+            bind,
+            lambda: self.session(rotator, None, **options),
+            label=self.key,
+            peer_session=lambda peer: self.session(rotator, peer, **options),
+            key=self.key,
+            idle_timeout_s=IDLE_TIMEOUT_S,
+            ends=self.ends,
+        )
+
+    def pty(self, rotator: Rotator, path: str, **options: str) -> PtyLineServer:
+        """Its pty for one rotator, linked at ``path``."""
+        from bridge.interfaces.ptylines import PtyLineServer  # package rule 8
+
+        return PtyLineServer(
+            rotator.id,
+            path,
+            lambda: self.session(rotator, None, **options),
+            label=self.key,
+            key=self.key,
+        )
+
+
+EMULATIONS = {
+    e.key: e
+    for e in (
+        Emulation("gs232", Gs232Session, options=("replies",)),
+        Emulation("easycomm", EasycommSession),
+        Emulation("dcu1", Dcu1Session, ends=b"\r\n;"),
+    )
+}
+
+
+def gs232_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> LineServer:
+    """The GS-232B port of one rotator."""
+    return EMULATIONS["gs232"].server(rotator, port, bind)
+
+
+def easycomm_server(rotator: Rotator, port: int, bind: str = "127.0.0.1") -> LineServer:
+    """The Easycomm II port of one rotator."""
+    return EMULATIONS["easycomm"].server(rotator, port, bind)
+
+
+def gs232_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The GS-232B pty of one rotator, linked at ``path``."""
+    return EMULATIONS["gs232"].pty(rotator, path)
+
+
+def easycomm_pty(rotator: Rotator, path: str) -> PtyLineServer:
+    """The Easycomm II pty of one rotator, linked at ``path``."""
+    return EMULATIONS["easycomm"].pty(rotator, path)

@@ -1,0 +1,395 @@
+"""Home Assistant MQTT discovery, the entity table: pure data and the builders that turn the
+settings and the model's capabilities into discovery messages. No thread, no lock, no clock:
+publisher.py keeps them current on the broker.
+
+Single-component discovery (``<prefix>/<platform>/<node_id>/<object_id>/config``, retained,
+QoS 1): it works on every Home Assistant version and is what zigbee2mqtt uses. A rotator's
+entities are rows of a data table (ENTITIES, and each registered feature's rows in their
+places: bridge/feature.py rule 5), each naming what it needs: a ModelSpec capability or a
+configured feature (presets, park, the station, a registered feature's name); every topic,
+discovery topics included, comes from bridge.interfaces.mqtt.topics.
+
+Rules (numbered for all of homeassistant/; 4 and 5 are publisher.py's):
+1. One device per rotator (manufacturer and model from the model spec, the controller's firmware
+   as ``sw_version``, ``via_device`` the bridge), one per group (GROUP_ENTITIES: its
+   target, its stop, its bearing and state from ``G/status``) and one bridge device. An
+   entity exists only if
+   the model can do it: no bearing for a DCU-1, options only where the controller has them; and
+   only where configured: the preset select with presets, park with a park position, the
+   locator, long path and distance with the station's position.
+2. Entities that describe the rotator are available only while both the bridge and the rotator
+   are online (``availability_mode: all``). Entities that must work while the rotator is
+   unreachable (the safety lock, the connection state, the last error) follow the bridge only.
+3. Target numbers take min/max/step from the rotator's limits, never Home Assistant's 1..100;
+   the azimuth's are true bearings (Pointing.target_range: an offset shifts them).
+6. A controller setting's entity comes from its declaration (protocols/base.py ``Setting``): a
+   bool is a switch (ON/OFF), a number a number (its min, max, step and unit), a choice a
+   select (its names); all on R/option/<name> with R/option/<name>/state, in the config
+   category.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import Protocol
+
+from bridge import __version__
+from bridge.core.model import MotionState
+from bridge.feature import registered
+from bridge.interfaces.homeassistant.info import GroupInfo, Identity, RotatorInfo
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
+from bridge.protocols.base import Setting, SettingKind
+
+ORIGIN = {"name": "rotor-bridge", "sw_version": __version__}
+STATES = [s.value for s in MotionState]
+
+
+def _entity(
+    platform: str,
+    node: str,
+    object_id: str,
+    entity_slug: str,
+    name: str | None,
+    device: dict[str, object],
+    availability: list[dict[str, str]] | None,
+    **config: object,
+) -> tuple[tuple[str, str, str], dict[str, object]]:
+    """((platform, node, object_id), payload); availability None: the entity has none."""
+    payload: dict[str, object] = {
+        "name": name,
+        "unique_id": f"{node}_{object_id}",
+        "default_entity_id": f"{platform}.{entity_slug}_{object_id}",
+        "device": device,
+        "origin": ORIGIN,
+        "qos": 1,
+        **config,
+    }
+    if availability is not None:
+        payload.update(availability=availability, availability_mode="all")
+    return (platform, node, object_id), payload
+
+
+Configs = dict[tuple[str, str, str], dict[str, object]]
+
+
+def bridge_configs(ident: Identity, topics: Topics) -> Configs:
+    """The bridge device and its connection-state entity (no availability of its own)."""
+    device: dict[str, object] = {
+        "identifiers": [ident.bridge_node],
+        "name": f"Rotor bridge ({topics.base})",
+        "manufacturer": "rotor-bridge",
+        "model": "Bridge",
+        "sw_version": __version__,
+    }
+    where, payload = _entity(
+        "binary_sensor",
+        ident.bridge_node,
+        "connection",
+        ident.bridge_node,
+        "Connection state",
+        device,
+        None,
+        state_topic=topics.bridge_state,
+        payload_on="online",
+        payload_off="offline",
+        device_class="connectivity",
+        entity_category="diagnostic",
+    )
+    return {where: payload}
+
+
+# -- the entity table ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Entity:
+    """One entity of a rotator device; ``config`` gives the platform-specific keys."""
+
+    platform: str
+    object_id: str
+    name: str | None
+    config: Callable[[RotatorInfo], dict[str, object]]
+    needs: str | None = None  # RotatorInfo.has (rule 1): without it, no entity
+    bridge_only: bool = False  # rule 2: available while the rotator is unreachable
+
+    def expand(self, info: RotatorInfo) -> list[Entity]:
+        return [self] if self.needs is None or info.has(self.needs) else []
+
+
+def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
+    """The registered features' rows (bridge/feature.py), in the registry's order, each with
+    the object id of the table's row it follows (None: after the table's own)."""
+    return tuple(
+        (e.after, Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only))
+        for f in registered()
+        for e in f.entities
+    )
+
+
+def rows() -> list[Entity | EachOption]:
+    """ENTITIES with the features' rows in their places (bridge/feature.py rule 5); a row
+    that names no row of the table follows them all."""
+    features = feature_entities()
+    own = {row.object_id for row in ENTITIES if isinstance(row, Entity)}
+    out: list[Entity | EachOption] = []
+    for row in ENTITIES:
+        out.append(row)
+        if isinstance(row, Entity):
+            out += [e for after, e in features if after == row.object_id]
+    return out + [e for after, e in features if after not in own]
+
+
+class OptionConfig(Protocol):
+    """A setting entity's config: the setting is passed by its declaration (EachOption)."""
+
+    def __call__(self, info: RotatorInfo, /, setting: Setting) -> dict[str, object]: ...
+
+
+# rule 6: the platform of each kind of setting
+SETTING_PLATFORMS = {
+    SettingKind.BOOL: "switch",
+    SettingKind.NUMBER: "number",
+    SettingKind.CHOICE: "select",
+}
+
+
+@dataclass(frozen=True)
+class EachOption:
+    """One entity per controller setting (``spec.settings``), of the platform its kind has
+    (rule 6), labelled by its declaration."""
+
+    config: OptionConfig
+
+    def expand(self, info: RotatorInfo) -> list[Entity]:
+        return [
+            Entity(
+                SETTING_PLATFORMS[setting.kind],
+                f"option_{setting.name}",
+                setting.label,
+                partial(self.config, setting=setting),
+            )
+            for setting in info.spec.settings
+        ]
+
+
+def _setting_config(r: RotatorInfo, setting: Setting) -> dict[str, object]:
+    """Rule 6: the keys of a setting's entity."""
+    name = setting.name
+    keys: dict[str, object] = {
+        "command_topic": r.topics.option(name),
+        "state_topic": r.topics.option_state(name),
+    }
+    if setting.kind is SettingKind.BOOL:
+        keys.update(SWITCH)
+    elif setting.kind is SettingKind.NUMBER:
+        keys.update(min=setting.minimum, max=setting.maximum, step=setting.step, mode="box")
+        if setting.unit:
+            keys["unit_of_measurement"] = setting.unit
+    else:
+        keys["options"] = list(setting.choices)
+    icon = "mdi:speedometer" if setting.speed_factors else "mdi:cog"
+    return {**keys, "entity_category": "config", "icon": icon}
+
+
+def _current_or(field: str, fallback: str) -> str:
+    """A template for a target number: the active target, else where the rotor is."""
+    return (
+        f"{{{{ value_json.{field} if value_json.{field} is not none else (value_json.{fallback} "
+        f"if value_json.{fallback} is not none else 'None') }}}}"
+    )
+
+
+def _nudge(info: RotatorInfo, sign: str) -> str:
+    """A nudge button's payload: ``+10``, ``-2.5`` (the step without a trailing .0)."""
+    return f"{sign}{info.nudge_step_deg:g}"
+
+
+# a 2, 4, 6 or 8 character Maidenhead locator, either case (as geo.is_locator): Home Assistant
+# checks it with Python's re and its dashboard with an HTML pattern, so no inline flags
+LOCATOR_PATTERN = "^[A-Ra-r]{2}([0-9]{2}([A-Xa-x]{2}([0-9]{2})?)?)?$"
+# sent as {"locator": ...}: a bare two-letter field on the target topic is refused (it is more
+# often a preset's name sent to the wrong topic); the pattern keeps the JSON well formed
+LOCATOR_TEMPLATE = '{"locator": "{{ value }}"}'
+# the preset select is a menu of places to go: every status shows it with none chosen, because
+# Home Assistant's dashboard sends nothing when the option it shows is picked again
+NO_OPTION = "{{ 'None' }}"
+DISTANCE = (
+    "{{ value_json.target_info.distance_km if value_json.target_info is defined else 'None' }}"
+)
+# the release button names Home Assistant as who released (it sends no MQTT 5 user property)
+
+
+DEGREES = {"unit_of_measurement": "°"}
+SWITCH = {"payload_on": "ON", "payload_off": "OFF"}
+TARGET_BOX = {"step": 1, "mode": "box", **DEGREES}
+DIAGNOSTIC = {"entity_category": "diagnostic"}
+
+# in the order they are published; every topic comes from RotatorTopics (r.topics)
+ENTITIES: tuple[Entity | EachOption, ...] = (
+    Entity("sensor", "bearing", "Bearing", needs="can_report_position", config=lambda r: {
+        "state_topic": r.topics.bearing, "state_class": "measurement_angle", **DEGREES,
+        "suggested_display_precision": 0, "icon": "mdi:compass"}),
+    Entity("number", "target_azimuth", "Target azimuth", config=lambda r: {
+        "command_topic": r.topics.target, "state_topic": r.topics.status,
+        "value_template": _current_or("target", "bearing"),
+        "min": r.az_min_deg, "max": r.az_max_deg, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+    Entity("sensor", "elevation", "Elevation", needs="has_elevation", config=lambda r: {
+        "state_topic": r.topics.elevation, "state_class": "measurement", **DEGREES,
+        "suggested_display_precision": 1, "icon": "mdi:angle-acute"}),
+    Entity("number", "target_elevation", "Target elevation", needs="has_elevation",
+           config=lambda r: {
+        "command_topic": r.topics.target_elevation, "state_topic": r.topics.status,
+        "value_template": _current_or("target_elevation", "elevation"),
+        "min": r.el_min_deg, "max": r.el_max_deg, **TARGET_BOX}),
+    Entity("button", "stop", "Stop", config=lambda r: {
+        "command_topic": r.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    Entity("select", "preset", "Preset", needs="presets", config=lambda r: {
+        "command_topic": r.topics.preset, "options": list(r.presets),
+        "state_topic": r.topics.status, "value_template": NO_OPTION, "icon": "mdi:star"}),
+    Entity("button", "park", "Park", needs="has_park", config=lambda r: {
+        "command_topic": r.topics.park, "payload_press": "PARK", "icon": "mdi:parking"}),
+    Entity("button", "nudge_ccw", "Nudge counter-clockwise", needs="can_report_position",
+           config=lambda r: {
+        "command_topic": r.topics.nudge, "payload_press": _nudge(r, "-"),
+        "icon": "mdi:rotate-left"}),
+    Entity("button", "nudge_cw", "Nudge clockwise", needs="can_report_position",
+           config=lambda r: {
+        "command_topic": r.topics.nudge, "payload_press": _nudge(r, "+"),
+        "icon": "mdi:rotate-right"}),
+    Entity("text", "locator", "Locator", needs="has_station", config=lambda r: {
+        "command_topic": r.topics.target, "command_template": LOCATOR_TEMPLATE, "mode": "text",
+        "min": 2, "max": 8, "pattern": LOCATOR_PATTERN, "icon": "mdi:map-search"}),
+    Entity("button", "long_path", "Long path", needs="has_station", config=lambda r: {
+        "command_topic": r.topics.target, "payload_press": '{"path": "long"}',
+        "icon": "mdi:earth"}),
+    Entity("sensor", "distance", "Distance", needs="has_station", config=lambda r: {
+        "state_topic": r.topics.status, "value_template": DISTANCE, "unit_of_measurement": "km",
+        "device_class": "distance", "state_class": "measurement",
+        "suggested_display_precision": 0, "icon": "mdi:map-marker-distance"}),
+    # (the DX cluster's spot select: features/dxcluster, after the distance)
+    Entity("sensor", "state", "State", config=lambda r: {
+        "state_topic": r.topics.state, "device_class": "enum", "options": STATES,
+        "icon": "mdi:rotate-3d-variant"}),
+    Entity("binary_sensor", "moving", "Moving", config=lambda r: {
+        "state_topic": r.topics.status, "device_class": "moving",
+        "value_template": "{{ 'ON' if value_json.moving else 'OFF' }}"}),
+    Entity("binary_sensor", "connected", "Controller connected", bridge_only=True,
+           config=lambda r: {
+        "state_topic": r.topics.availability, "payload_on": "online", "payload_off": "offline",
+        "device_class": "connectivity", **DIAGNOSTIC}),
+    Entity("sensor", "version", "Controller version", needs="has_version", config=lambda r: {
+        "state_topic": r.topics.version, **DIAGNOSTIC, "icon": "mdi:chip"}),
+    EachOption(config=_setting_config),  # rule 6
+    Entity("switch", "lock", "Safety lock", bridge_only=True, config=lambda r: {
+        "command_topic": r.topics.lock, "state_topic": r.topics.lock_state, **SWITCH,
+        "icon": "mdi:lock"}),
+    Entity("sensor", "last_error", "Last error", bridge_only=True, config=lambda r: {
+        "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:alert-circle-outline",
+        "value_template": "{{ (value_json.last_error or 'none')[:250] }}"}),
+    # who sent the last command (the control lease's holder and release: features/control/)
+    Entity("sensor", "last_operator", "Last operator", config=lambda r: {
+        "state_topic": r.topics.status, **DIAGNOSTIC, "icon": "mdi:account-arrow-right",
+        "value_template": "{{ value_json.last_operator or 'none' }}"}),
+)  # fmt: skip
+
+
+def rotator_configs(ident: Identity, topics: Topics, r: RotatorInfo) -> Configs:
+    """The entities of one rotator device: the rows of ENTITIES it has what they need for."""
+    spec = r.spec
+    node = ident.rotator_node(r.rotator_id)
+    device: dict[str, object] = {
+        "identifiers": [node],
+        "name": r.name,
+        "manufacturer": spec.manufacturer,
+        "model": spec.display_name,
+        "via_device": ident.bridge_node,
+    }
+    if r.version:
+        device["sw_version"] = r.version
+    both = [{"topic": topics.bridge_state}, {"topic": r.topics.availability}]
+    bridge_only = [{"topic": topics.bridge_state}]
+    slug = r.rotator_id.replace("-", "_")
+    out: Configs = {}
+    for row in rows():
+        for e in row.expand(r):
+            avail = bridge_only if e.bridge_only else both
+            where, payload = _entity(
+                e.platform, node, e.object_id, slug, e.name, device, avail, **e.config(r)
+            )
+            out[where] = payload
+    return out
+
+
+# a group's device (rule 1): the rotator's builders, on the group's topics (GroupTopics)
+GroupRow = tuple[str, str, str | None, bool, Callable[[GroupInfo], dict[str, object]]]
+GROUP_ENTITIES: tuple[GroupRow, ...] = (  # platform, object id, name, the stop?, config
+    ("number", "target_azimuth", "Target azimuth", False, lambda g: {
+        "command_topic": g.topics.target, "state_topic": g.topics.status,
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "min": 0, "max": 360, **TARGET_BOX, "icon": "mdi:compass-outline"}),
+    ("button", "stop", "Stop", True, lambda g: {
+        "command_topic": g.topics.stop, "payload_press": "STOP", "icon": "mdi:stop-circle"}),
+    ("sensor", "bearing", "Bearing", False, lambda g: {
+        "state_topic": g.topics.status, **DEGREES, "state_class": "measurement_angle",
+        "value_template": "{{ value_json.bearing if value_json.bearing is not none else 'None' }}",
+        "suggested_display_precision": 0, "icon": "mdi:compass"}),
+    ("sensor", "state", "State", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "enum", "options": STATES,
+        "value_template": "{{ value_json.state }}", "icon": "mdi:rotate-3d-variant"}),
+    ("binary_sensor", "moving", "Moving", False, lambda g: {
+        "state_topic": g.topics.status, "device_class": "moving",
+        "value_template": "{{ 'ON' if value_json.moving else 'OFF' }}",
+        "json_attributes_topic": g.topics.status}),  # each member's bearing and the refusals
+)  # fmt: skip
+
+
+def group_configs(ident: Identity, topics: Topics, g: GroupInfo) -> Configs:
+    """The entities of one group's device; the stop follows the bridge only (rule 2: it must
+    work whatever its members say)."""
+    node = ident.group_node(g.group_id)
+    device: dict[str, object] = {
+        "identifiers": [node],
+        "name": g.name,
+        "manufacturer": "rotor-bridge",
+        "model": f"Group of {len(g.members)} rotators ({', '.join(g.members)})",
+        "via_device": ident.bridge_node,
+    }
+    both = [{"topic": topics.bridge_state}, {"topic": g.topics.availability}]
+    bridge_only = [{"topic": topics.bridge_state}]
+    slug = g.group_id.replace("-", "_")
+    out: Configs = {}
+    for platform, object_id, name, stop, config in GROUP_ENTITIES:
+        avail = bridge_only if stop else both
+        where, payload = _entity(platform, node, object_id, slug, name, device, avail, **config(g))
+        out[where] = payload
+    return out
+
+
+def all_configs(
+    prefix: str,
+    ident: Identity,
+    topics: Topics,
+    rotators: list[RotatorInfo],
+    groups: tuple[GroupInfo, ...] = (),
+) -> dict[str, str]:
+    """Every discovery message: full topic -> JSON payload (stable key order)."""
+    configs = bridge_configs(ident, topics)
+    for r in rotators:
+        configs.update(rotator_configs(ident, topics, r))
+    for g in groups:
+        configs.update(group_configs(ident, topics, g))
+    return _messages(prefix, configs)
+
+
+def rotator_messages(
+    prefix: str, ident: Identity, topics: Topics, r: RotatorInfo
+) -> dict[str, str]:
+    """One rotator's discovery messages, as ``all_configs`` has them (its version came: the
+    other rotators' and the bridge's are as they were)."""
+    return _messages(prefix, rotator_configs(ident, topics, r))
+
+
+def _messages(prefix: str, configs: Configs) -> dict[str, str]:
+    disc = DiscoveryTopics(prefix)
+    return {disc.config(*where): json.dumps(p, sort_keys=True) for where, p in configs.items()}

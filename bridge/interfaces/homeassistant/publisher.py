@@ -1,0 +1,201 @@
+"""Home Assistant MQTT discovery, the publisher: keeps the entity table's messages
+(entities.py) current on the broker, as the rotators' versions and the TLE file change, and
+sends the state again when Home Assistant comes back. The only part of homeassistant/ with a
+thread (a timer) and a lock.
+
+Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
+4. Configs are published only when they changed. Configs under our node ids that we no longer
+   generate (a rotator removed from the configuration) are cleared with an empty retained
+   payload when the broker shows them to us; the client says what it did (or, for a config
+   another client publishes while the bridge runs, that it left it alone), a flood of them in a
+   few lines (interfaces/mqtt/client.py rule 15).
+5. On Home Assistant's birth message every config is published again at once (``publish_again``,
+   whether changed or not: a broker that replays retained messages only to exact-topic
+   subscriptions, RabbitMQ, gives Home Assistant's ``homeassistant/#`` none of them), then the
+   retained state after a delay, so Home Assistant, which ignores state that arrives before it
+   has processed discovery, gets it. Births that come while a round's delay runs, or within
+   ROUND_MIN_S of its start (a ``birth_delay_s`` of 0), do not push its state back and start
+   nothing at once; once its state is out they get one round of their own (one of them may be
+   a Home Assistant that restarted meanwhile), ROUND_MIN_S after the last one's start at the
+   earliest: a flood of births costs one round of configs and state, and one log line
+   (counting them), per delay and at most one per ROUND_MIN_S.
+
+Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
+(a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
+watcher (the TLE file changed) all publish, and an older snapshot published last would stay
+retained.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+from bridge.core.model import RotatorStatus
+from bridge.interfaces.homeassistant.entities import all_configs, rotator_messages
+from bridge.interfaces.homeassistant.info import GroupInfo, Identity, RotatorInfo
+from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
+
+log = logging.getLogger(__name__)
+
+ROUND_MIN_S = 2.0  # rule 5: a round of configs and state at most this often
+
+
+class DiscoveryPublisher:
+    """Keeps the discovery messages current on the broker (see the module rules)."""
+
+    def __init__(
+        self,
+        *,
+        prefix: str,
+        status_topic: str,
+        topics: Topics,
+        rotators: list[RotatorInfo],
+        groups: tuple[GroupInfo, ...] = (),
+        publish_retained: Callable[[str, str], None],
+        clear_retained: Callable[[str], None],
+        republish_state: Callable[[], None],
+        birth_delay_s: float = 10.0,
+        publish_again: Callable[[str, str], None] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.prefix = prefix
+        self._disc = DiscoveryTopics(prefix)
+        self.status_topic = status_topic
+        self._topics = topics
+        self._ident = Identity(topics.base)
+        self._rotators = {r.rotator_id: r for r in rotators}
+        self._groups = groups  # interfaces/mqtt/groups.py: a device each
+        self._publish = publish_retained
+        self._clear = clear_retained
+        self._republish_state = republish_state
+        self._publish_again = publish_again  # rule 5: a config, sent even if unchanged
+        self._birth_delay_s = birth_delay_s
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._clock = clock
+        self._round_t = -1e18  # rule 5: when the last round of configs and state began
+        self._births_since = 0  # rule 5: births that began no round since it
+        self._stopped = False
+        self._current: dict[str, str] = {}
+
+    @property
+    def subscriptions(self) -> list[str]:
+        return [self.status_topic, self._disc.config_filter]
+
+    def publish_all(self) -> None:
+        # under the lock (see Lock): an older snapshot published last would stay retained
+        with self._lock:
+            rotators = list(self._rotators.values())
+            configs = all_configs(self.prefix, self._ident, self._topics, rotators, self._groups)
+            self._current = configs
+            for topic, payload in configs.items():
+                self._publish(topic, payload)  # the client skips what did not change
+
+    def set_satellites(self, satellites: tuple[str, ...]) -> None:
+        """The TLE file changed: the track select offers what it holds now."""
+        with self._lock:
+            before = dict(self._rotators)
+            self._rotators = {k: r.with_satellites(satellites) for k, r in before.items()}
+            changed = self._rotators != before
+        if changed:
+            log.info("Home Assistant's track select now lists %d satellite(s)", len(satellites))
+            self.publish_all()
+
+    def set_spot_calls(self, calls: tuple[str, ...]) -> None:
+        """The newest DX cluster spots changed (interfaces/dxcluster/client.py, at most once a
+        minute): the spot select offers their calls."""
+        with self._lock:
+            before = dict(self._rotators)
+            self._rotators = {k: r.with_spot_calls(calls) for k, r in before.items()}
+            changed = self._rotators != before
+        if changed:
+            self.publish_all()
+
+    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        """A controller's version came: its rotator's configs say it (only they change; all of
+        them for 16 rotators took a tenth of the start-up's CPU, once per rotator)."""
+        with self._lock:
+            r = self._rotators.get(rotator_id)
+            if r is None or not status.version or status.version == r.version:
+                return
+            r = self._rotators[rotator_id] = replace(r, version=status.version)
+            if self._current:  # (else every config goes out below, as at the start)
+                configs = rotator_messages(self.prefix, self._ident, self._topics, r)
+                self._current.update(configs)
+                for topic, payload in configs.items():
+                    self._publish(topic, payload)
+                return
+        self.publish_all()
+
+    def on_message(self, topic: str, payload: bytes, retain: bool) -> bool:
+        """Handle Home Assistant's birth and our own retained configs; True if it was ours."""
+        if topic == self.status_topic:
+            if payload.strip().lower() == b"online":
+                self._schedule_republish()
+            return True
+        parsed = self._disc.parse_config(topic)
+        if parsed is None:
+            return False
+        _, node, _ = parsed
+        if not self._ident.owns(node) or not payload:
+            return True
+        with self._lock:
+            stale = topic not in self._current
+        if stale:
+            self._clear(topic)  # said by the client, a flood in a few lines (rule 4)
+        return True
+
+    def _schedule_republish(self) -> None:
+        """Rule 5: a round of configs now and state after the delay, unless one runs."""
+        now = self._clock()
+        with self._lock:
+            running = self._timer is not None and self._timer.is_alive()
+            if running or now - self._round_t < ROUND_MIN_S:
+                self._births_since += 1
+                return
+            self._round_t, more, self._births_since = now, self._births_since, 0
+            self._timer = threading.Timer(self._birth_delay_s, self._round_done)
+            self._timer.daemon = True
+            self._timer.start()
+        if self._publish_again is not None:  # rule 5, not on paho's thread
+            threading.Thread(target=self._configs_again, daemon=True).start()
+        log.info(
+            "Home Assistant came online; state follows in %g s%s",
+            self._birth_delay_s,
+            f" ({more} more birth messages came during the last round)" if more else "",
+        )
+
+    def _round_done(self) -> None:
+        """Rule 5: the round's state; births that came during the round get a round of their
+        own (one may be a Home Assistant that restarted meanwhile), ROUND_MIN_S after this
+        one's start at the earliest."""
+        self._republish_state()
+        with self._lock:
+            if self._stopped or self._births_since == 0:
+                return
+            wait = max(0.0, self._round_t + ROUND_MIN_S - self._clock())
+            self._timer = threading.Timer(wait, self._trailing)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _trailing(self) -> None:
+        with self._lock:
+            self._timer = None  # (this thread: not a round that runs)
+        self._schedule_republish()
+
+    def _configs_again(self) -> None:
+        """Rule 5: every config, as published last (under the lock: see Lock)."""
+        with self._lock:
+            if self._publish_again is not None:
+                for topic, payload in self._current.items():
+                    self._publish_again(topic, payload)
+
+    def stop(self) -> None:
+        with self._lock:
+            self._stopped = True
+            if self._timer is not None:
+                self._timer.cancel()

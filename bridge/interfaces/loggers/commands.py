@@ -1,0 +1,294 @@
+"""What a PstRotator or N1MM datagram does, once parsed (datagrams.py): the command it gives its
+rotator, and the ``AZ?``/``EL?`` replies. No thread and no socket of its own: server.py reads
+the datagrams on its thread and hands each here with the socket to answer from.
+
+Rules:
+1. Every command goes through the Rotator like MQTT's and rotctld's (Source.PST, Source.N1MM):
+   the lock, limits, keep-out sectors and offsets are judged there, and a refusal is published
+   on ``R/error`` naming the protocol. The sender gets no reply to a command: neither protocol
+   has one.
+2. ``AZ?``/``EL?`` are answered at once from the rotator's status, to the sender's address at
+   the listen port + 1, in integer degrees with a CR: one reply per kind per datagram however
+   often it asks, and no more than limiter.py lets go to that address (a sender's address can
+   be anybody's: a burst, then a few a second); a reply beyond is dropped, counted
+   (``replies_dropped``) and logged at most once per JUNK_LOG_S. No position, no answer (never
+   a made-up one); an azimuth-only rotator does not answer ``EL?``.
+3. An azimuth outside 0..360 but inside Hamlib's -180..450 is folded into 0..360 (the
+   rotator's own rules pick the way round); one beyond that is refused (a mis-scaled value,
+   99999, must not become 279). An elevation sent to an azimuth-only rotator is ignored.
+4. N1MM: a datagram for another rotor name is ignored; ``*`` is taken only when one rotator
+   listens on that port (or by band: rule 5), except a stop, which stops every rotator on it;
+   a stop naming several rotors stops each of them on the port, a fault behind one not keeping
+   it from the next.
+   ``bidirectional`` 1 turns to the heading or its reciprocal, whichever is nearer the bearing.
+   A non-zero ``offset`` is logged once and not applied (its meaning is not documented).
+5. N1MM by band (``choose``, pure): a turn goes to the one rotator on the port that answers to
+   its name, whatever the band: a name is the sender's own choice (N1MM's Antennas tab already
+   picks the antenna for the band, or the operator turned this one by hand). A name several
+   rotators share, or ``*``, is chosen by band among those of them that have ``bands``: the one
+   whose bands hold the message's ``<freqband>`` (core/bands.py). A message with no band, a band
+   that is no amateur band, or one no rotator there is for moves nothing: the refusal is
+   logged (at most once per JUNK_LOG_S, with the count since) and published on the R/error of
+   each rotator it could have gone to. Where none of them has bands, it is as before: ``*``
+   turns the one rotator on the port, and nothing else. Stops are not chosen by band (rule 4).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import socket
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+from bridge.core import geo
+from bridge.core.bands import band_of_mhz
+from bridge.core.errors import Refused
+from bridge.core.model import Origin, Park, Source, Stop, Target, Toward
+from bridge.front import FrontRotator
+from bridge.interfaces.loggers.datagrams import N1mmRequest, PstRequest, pst_reply
+from bridge.interfaces.loggers.limiter import ReplyLimiter
+from bridge.pointing import angle_between, norm360
+
+# what these commands use of a rotator: the bridge's own or the remote's (front.py)
+Rotator = FrontRotator
+
+log = logging.getLogger(__name__)
+
+JUNK_LOG_S = 10.0  # malformed datagrams, replies dropped: logged at most this often, a count
+AZ_FOLDED = (-180.0, 450.0)  # Hamlib's azimuth range: folded into 0..360; beyond, refused
+
+Fault = Callable[[str, Exception], None]  # logs a fault behind a datagram and goes on
+
+
+@dataclass
+class PstEndpoint:
+    rotator: Rotator
+    bind: str
+    port: int
+
+
+@dataclass(frozen=True)
+class N1mmRotor:
+    """A rotator on an N1MM port: the name it answers to and the bands it is for."""
+
+    name: str
+    rotator: Rotator
+    bands: tuple[str, ...] = ()
+
+
+@dataclass
+class N1mmEndpoint:
+    """One N1MM address; the rotators that answer to a name on it (several may share one,
+    chosen by band: rule 5)."""
+
+    bind: str
+    port: int
+    rotors: list[N1mmRotor] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class NoRotor:
+    """Rule 5: a turn no rotator takes. ``why`` is None for a name that is not ours (ignored);
+    otherwise the refusal, reported to each of ``could``."""
+
+    why: str | None = None
+    could: tuple[N1mmRotor, ...] = ()
+
+
+def choose(
+    rotors: Iterable[N1mmRotor], name: str, freqband_mhz: float | None
+) -> N1mmRotor | NoRotor:
+    """Rule 5: the rotator a turn to ``name`` on ``freqband_mhz`` goes to, or why none does."""
+    on_port = list(rotors)
+    named = [r for r in on_port if r.name == name]
+    if len(named) == 1:
+        return named[0]  # a name is the sender's own choice
+    pool = named or (on_port if name == "*" else [])
+    banded = tuple(r for r in pool if r.bands)
+    if not banded:  # as before bands: "*" turns the one rotator on the port
+        return pool[0] if len(pool) == 1 else NoRotor()
+    if freqband_mhz is None:
+        return NoRotor(
+            f"rotor {name!r} is chosen by band, and the message has no <freqband>", banded
+        )
+    band = band_of_mhz(freqband_mhz)
+    if band is None:
+        return NoRotor(f"<freqband> {freqband_mhz:g} MHz is no amateur band", banded)
+    for r in banded:
+        if band in r.bands:
+            return r
+    have = "; ".join(f"{r.rotator.id}: {', '.join(r.bands)}" for r in banded)
+    return NoRotor(f"no rotator is for {band} ({have})", banded)
+
+
+@dataclass
+class Counts:
+    """What came in, per protocol (the benchmark and the tests read them)."""
+
+    commands: int = 0
+    queries: int = 0
+    malformed: int = 0
+    ignored: int = 0
+    replies_dropped: int = 0  # over the rate limit of the address they would go to
+    no_band: int = 0  # rule 5: refused, no rotator for the band
+
+
+@dataclass
+class Rarely:
+    """What can come in floods is logged at most once per ``every_s``, with the count since."""
+
+    every_s: float
+    logged_s: float = -math.inf
+    since: int = 0
+
+    def due(self, now: float) -> int | None:
+        """One more; how many to report now, or None (not yet)."""
+        self.since += 1
+        if now - self.logged_s < self.every_s:
+            return None
+        count, self.since, self.logged_s = self.since, 0, now
+        return count
+
+
+class Commands:
+    """Called on the loggers' thread only; ``counts`` may be read from any."""
+
+    def __init__(self, clock: Callable[[], float], fault: Fault) -> None:
+        self._clock = clock
+        self._fault = fault
+        self.counts = {"pst": Counts(), "n1mm": Counts()}
+        self._replies = ReplyLimiter(clock)
+        self._limited_log = Rarely(JUNK_LOG_S)
+        self._offset_warned: set[str] = set()
+        self._no_band_log = Rarely(JUNK_LOG_S)
+
+    # -- PstRotator -----------------------------------------------------------------------
+    def pst(
+        self,
+        e: PstEndpoint,
+        sock: socket.socket,
+        port: int,
+        req: PstRequest,
+        peer: tuple[str, int],
+        data: bytes,
+    ) -> None:
+        """Rules 1 to 3; ``sock`` listens on ``port`` and sends the replies."""
+        counts, rot = self.counts["pst"], e.rotator
+        for query in req.queries:  # rule 2, before the command: the position it had
+            status = rot.status
+            value = status.bearing_deg if query == "AZ" else status.elevation_deg
+            counts.queries += 1
+            if not status.available or value is None:
+                continue
+            if not self._replies.allow(peer[0]):
+                self._limited(counts, peer[0])
+                continue
+            try:
+                sock.sendto(pst_reply(query, value), (peer[0], port + 1))
+            except OSError as exc:
+                log.debug("PST reply to %s:%d: %s", peer[0], port + 1, exc)
+        counts.ignored += len(req.ignored)
+        described = "pst " + data.decode("ascii").strip()[:120]
+        # who sent it (the audit trail, the lease): on the commands themselves, which every
+        # rotator these endpoints serve takes (the bridge's and the remote's)
+        by = Origin(Source.PST, None, peer[0])
+        has_el = rot.spec.has_elevation
+        el = req.elevation if has_el else None
+        try:
+            if req.stop:
+                rot.submit(Stop(Source.PST, by), described)
+            elif req.park:
+                rot.submit(Park(source=Source.PST, origin=by), described)
+            elif req.locator is not None:
+                try:
+                    lat, lon = geo.parse_locator(req.locator)
+                except geo.LocatorError as exc:
+                    rot.report_refusal(f"pst: locator {req.locator!r}: {exc}", described)
+                    return
+                rot.submit(Toward(lat, lon, req.locator, source=Source.PST, origin=by), described)
+            elif req.azimuth is not None and not AZ_FOLDED[0] <= req.azimuth <= AZ_FOLDED[1]:
+                rot.report_refusal(
+                    f"pst: azimuth {req.azimuth:g} outside {AZ_FOLDED[0]:g}..{AZ_FOLDED[1]:g}",
+                    described,
+                )
+                return
+            elif req.azimuth is not None or el is not None:
+                az = None if req.azimuth is None else norm360(req.azimuth)  # rule 3
+                rot.submit(Target(az, el, Source.PST, origin=by), described)
+            else:
+                return
+            counts.commands += 1
+        except Refused:
+            pass  # the rotator has published it on R/error
+
+    def _limited(self, counts: Counts, address: str) -> None:
+        """Rule 2: a reply over the address's rate is dropped, counted, logged rarely."""
+        counts.replies_dropped += 1
+        count = self._limited_log.due(self._clock())
+        if count is not None:
+            log.info(
+                "PST UDP: %d repl(ies) dropped over the rate limit, the last to %s (a client "
+                "polling too fast, or queries sent in its name)",
+                count,
+                address,
+            )
+
+    # -- N1MM -----------------------------------------------------------------------------
+    def n1mm(self, e: N1mmEndpoint, req: N1mmRequest, data: bytes, peer: str | None = None) -> None:
+        """Rules 1 and 4 (``peer``: the sender's address)."""
+        by = Origin(Source.N1MM, None, peer)
+        counts = self.counts["n1mm"]
+        described = "n1mm " + data.decode("ascii").strip()[:160]
+        if req.stop:  # a stop is never dropped: every rotor it names, every one for "*"
+            names = {req.rotor, *req.also}
+            stopped = [r.rotator for r in e.rotors if r.name in names or "*" in names]
+            if stopped:
+                self._stop_each(stopped, described, by)
+                counts.commands += 1
+                return
+        chosen = choose(e.rotors, req.rotor, req.freqband_mhz)  # rule 5
+        if isinstance(chosen, NoRotor):
+            if chosen.why is None:
+                counts.ignored += 1
+                log.debug("N1MM UDP %d: rotor %r is not ours", e.port, req.rotor)
+            else:
+                self._no_band(counts, chosen, described, by)
+            return
+        rot = chosen.rotator
+        assert req.azimuth is not None
+        if req.offset and req.rotor not in self._offset_warned:
+            self._offset_warned.add(req.rotor)
+            log.warning("N1MM rotor %r sends offset %g: not applied", req.rotor, req.offset)
+        az = req.azimuth
+        bearing = rot.status.bearing_deg
+        if req.bidirectional and bearing is not None:
+            az = min((az, norm360(az + 180.0)), key=lambda a: angle_between(a, bearing))
+        try:
+            rot.submit(Target(norm360(az), None, Source.N1MM, origin=by), described)
+            counts.commands += 1
+        except Refused:
+            pass
+
+    def _no_band(self, counts: Counts, none: NoRotor, described: str, by: Origin) -> None:
+        """Rule 5: nothing moves; said (rarely) in the log and on each candidate's R/error."""
+        counts.no_band += 1
+        message = f"n1mm: {none.why}: nothing turned"
+        count = self._no_band_log.due(self._clock())
+        if count is not None:
+            log.warning("%s (%d such since the last line)", message, count)
+        for r in none.could:
+            try:
+                r.rotator.report_refusal(message, described, origin=by)
+            except Exception as exc:
+                self._fault(f"reporting an N1MM refusal on rotator {r.rotator.id!r}", exc)
+
+    def _stop_each(
+        self, rotators: Iterable[Rotator], described: str, by: Origin | None = None
+    ) -> None:
+        """Rule 4: a fault behind one rotator's stop does not keep it from the next."""
+        for rot in rotators:
+            try:
+                rot.submit(Stop(Source.N1MM, by), described)
+            except Exception as exc:
+                self._fault(f"the N1MM stop of rotator {rot.id!r}", exc)

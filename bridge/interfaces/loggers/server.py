@@ -1,0 +1,411 @@
+"""The loggers' UDP endpoints: one thread, every socket (a PST port per rotator, an N1MM port
+per address shared by the rotators named on it), and the N1MM position reports. What each
+datagram does, once read and parsed, is commands.py's.
+
+Rules (numbered as before commands.py was split off, so that citations hold):
+1. 2. 4. 5. What a datagram commands and how a query is answered: commands.py rules 1 to 4.
+3. Sockets are served in turn: on every wake-up each ready socket gives PER_WAKEUP datagrams
+   at most, so a flood on one port delays a stop on another by that many datagrams, not by the
+   flood. Each datagram is parsed on its own: a malformed or ambiguous one (datagrams.py rules
+   1, 2 and 4) is dropped and counted, logged at debug level at most once per JUNK_LOG_S with
+   the count since. Nothing of it reaches the rotator; the serial line is served by another
+   thread and never waits for this one.
+6. N1MM position reports go to the configured destination from the N1MM port's own socket, so
+   from the configured bind address (no socket of ours listens anywhere else); one that cannot
+   be sent is said once at warning level. The heading is looked at every REPORT_MOVING_S and
+   reported when it has moved REPORT_MOVE_DEG since the last report (while the rotor turns,
+   and where it came to rest), else every REPORT_IDLE_S.
+7. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
+   logged with its traceback at most once per FAULT_LOG_S and the next datagram is served; a
+   fault in the loop itself gets a fresh selector (and a pause if it comes again at once). A
+   socket that cannot be read any more (EBADF, ENOTSOCK) is reported once and dropped: the
+   selector is made anew without it, so it can never wake the thread again.
+8. A flood cannot starve a stop (docs/architecture.md rule 12), nor hide one: the thread never
+   sleeps while a datagram waits (a sleeping reader lets the system's buffer fill with the
+   flood, and a stop sent then is dropped or queued behind it), so every wake-up reads what
+   waits, PER_WAKEUP a socket (rule 3), and comes straight back for more. Each datagram is
+   first searched for a stop (datagrams.py rule 6, one byte search); one that may be a stop is
+   parsed and carried out at once, whatever any budget says. Everything else is parsed and
+   carried out only within its sender's budget (ratelimit.SourceBudgets, per address and port:
+   RATE_DATAGRAMS_S a second each, a second's worth at once, each datagram costing 1 + its size
+   in KiB, at most MAX_SOURCES senders remembered; RATE_ALL_S for all of them together); a
+   stop is charged to it too, never refused. Over budget a datagram is dropped unparsed and
+   counted (``over_budget``), said at warning level at most once per FLOOD_LOG_S with the
+   count since and the last sender. A flood so costs a read and a search a datagram, and
+   each socket asks the system for a receive buffer of RECV_BUFFER bytes to ride out bursts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import logging
+import os
+import select
+import selectors
+import socket
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from bridge.core.ratelimit import SourceBudgets
+from bridge.interfaces.loggers.commands import (
+    JUNK_LOG_S,
+    Commands,
+    N1mmEndpoint,
+    N1mmRotor,
+    PstEndpoint,
+    Rarely,
+    Rotator,
+)
+from bridge.interfaces.loggers.datagrams import (
+    MAX_DATAGRAM,
+    Malformed,
+    may_stop_n1mm,
+    may_stop_pst,
+    n1mm_report,
+    parse_n1mm,
+    parse_pst,
+)
+from bridge.pointing import angle_between
+
+log = logging.getLogger(__name__)
+
+FAULT_LOG_S = 10.0  # a fault behind a datagram or in the loop: logged at most this often
+PER_WAKEUP = 16  # datagrams read from one socket before the next ready one is served
+RATE_DATAGRAMS_S = 200.0  # rule 8: a sender's budget, a second
+RATE_ALL_S = 1000.0  # rule 8: every sender's together, a second
+MAX_SOURCES = 256  # rule 8: senders whose budget is remembered
+RECV_BUFFER = 1 << 20  # rule 8: asked of the system (which may give less: net.core.rmem_max)
+FLOOD_LOG_S = 30.0  # rule 8
+REPORT_LOOK_S = 0.1  # a flood's wake-ups look at the reports no more often than this
+REPORT_MOVING_S = 1.5
+REPORT_IDLE_S = 15.0
+REPORT_MOVE_DEG = 1.0  # a heading this far from the last report is reported at the next look
+
+_BIND_HINTS = {
+    errno.EADDRINUSE: " (another program, PstRotator or a second bridge, has it)",
+    errno.EACCES: " (ports below 1024 need privileges)",
+    errno.EADDRNOTAVAIL: " (the bind address is not an address of this host)",
+}
+
+
+@dataclass
+class N1mmReporter:
+    rotator: Rotator
+    name: str
+    endpoint: N1mmEndpoint  # its socket sends the reports (from the configured address)
+    to: tuple[str, int]
+    next_s: float = 0.0
+    last_deg: float | None = None  # the heading last reported
+    failed: bool = False  # a report could not be sent (said once at warning level)
+
+
+class LoggerEndpoints:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self.pst: list[PstEndpoint] = []
+        self.n1mm: dict[tuple[str, int], N1mmEndpoint] = {}
+        self._reporters: list[N1mmReporter] = []
+        self._commands = Commands(clock, self._fault)
+        self.counts = self._commands.counts
+        self._sockets: dict[socket.socket, PstEndpoint | N1mmEndpoint] = {}
+        self._addresses: dict[socket.socket, tuple[str, int]] = {}  # where each really listens
+        self._dropped: set[socket.socket] = set()  # went bad: no longer selected (rule 7)
+        self._selector: selectors.BaseSelector | None = None
+        self._thread: threading.Thread | None = None
+        self._wake_r, self._wake_w = -1, -1
+        self._junk_log = Rarely(JUNK_LOG_S)
+        self._fault_log = Rarely(FAULT_LOG_S)
+        self._flood_log = Rarely(FLOOD_LOG_S)
+        self._budgets = SourceBudgets(RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, clock())
+        self._looked_s = -REPORT_LOOK_S
+        self.over_budget = 0  # rule 8: datagrams dropped unparsed
+
+    # -- configuration --------------------------------------------------------------------
+    def add_pst(self, rotator: Rotator, port: int, bind: str = "127.0.0.1") -> None:
+        self.pst.append(PstEndpoint(rotator, bind, port))
+
+    def add_n1mm(
+        self,
+        rotator: Rotator,
+        name: str,
+        port: int = 12040,
+        bind: str = "127.0.0.1",
+        report_to: tuple[str, int] = ("127.0.0.1", 13010),
+        bands: tuple[str, ...] = (),
+    ) -> None:
+        """``bands``: what a turn to a shared name or ``*`` is chosen by (commands.py rule 5)."""
+        endpoint = self.n1mm.setdefault((bind, port), N1mmEndpoint(bind, port))
+        endpoint.rotors.append(N1mmRotor(name, rotator, bands))
+        self._reporters.append(N1mmReporter(rotator, name, endpoint, report_to))
+
+    def __bool__(self) -> bool:
+        return bool(self.pst or self.n1mm)
+
+    # -- life -----------------------------------------------------------------------------
+    def listen(self) -> None:
+        """Take every address (OSError naming the endpoint and the reason if one cannot be
+        had, and none kept)."""
+        if self._sockets:
+            return
+        # a PST port has one owner (a PstRotator still running must show as "in use"); N1MM's
+        # advice is to share its port (SO_REUSEADDR), as its loggers and rotor programs do
+        wanted: list[tuple[PstEndpoint | N1mmEndpoint, str, bool]] = [
+            (e, f"PstRotator UDP for rotator {e.rotator.id!r}", False) for e in self.pst
+        ]
+        wanted += [(e, f"N1MM rotor UDP for {_named(e)}", True) for e in self.n1mm.values()]
+        try:
+            for endpoint, what, shared in wanted:
+                sock = _bound(endpoint.bind, endpoint.port, what, shared)
+                self._sockets[sock] = endpoint
+                host, port = sock.getsockname()[:2]
+                self._addresses[sock] = host, port
+        except OSError:
+            self._close_sockets()
+            raise
+
+    def start(self) -> None:
+        self.listen()
+        for endpoint in self._sockets.values():
+            where = f"{endpoint.bind}:{endpoint.port}"
+            if endpoint.bind not in ("127.0.0.1", "localhost"):
+                log.warning(
+                    "logger UDP port %s is not on loopback: neither PstRotator's nor N1MM's "
+                    "protocol has authentication, anyone who can reach it can turn the antenna",
+                    where,
+                )
+            log.info("logger UDP port %s (%s) listening", where, _kind(endpoint))
+        self._wake_r, self._wake_w = os.pipe()
+        self._thread = threading.Thread(target=self._loop, name="loggers", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        if self._thread is not None:
+            os.write(self._wake_w, b"x")
+            self._thread.join(timeout_s)
+            self._thread = None
+            os.close(self._wake_r)
+            os.close(self._wake_w)
+        self._close_sockets()
+
+    def address(self, endpoint: PstEndpoint | N1mmEndpoint) -> tuple[str, int]:
+        """Where ``endpoint`` really listens (port 0 in tests: the one the system gave)."""
+        for sock, e in self._sockets.items():
+            if e is endpoint:
+                return self._addresses[sock]
+        return endpoint.bind, endpoint.port
+
+    def _socket_of(self, endpoint: PstEndpoint | N1mmEndpoint) -> socket.socket | None:
+        for sock, e in self._sockets.items():
+            if e is endpoint and sock not in self._dropped:
+                return sock
+        return None
+
+    def _close_sockets(self) -> None:
+        for sock in self._sockets:
+            sock.close()
+        self._sockets.clear()
+        self._addresses.clear()
+        self._dropped.clear()
+
+    # -- the thread -----------------------------------------------------------------------
+    def _loop(self) -> None:
+        """Rule 7: nothing that goes wrong in here ends the thread."""
+        failed_before = False
+        try:
+            while True:
+                try:
+                    if self._selector is None:
+                        self._selector = self._new_selector()
+                    if not self._turn(self._selector):
+                        return
+                    failed_before = False
+                except Exception as exc:
+                    self._fault("the loggers' loop", exc)
+                    self._close_selector()  # a fresh one next time round
+                    if failed_before:  # the same again: not at 100 % of a core
+                        select.select([self._wake_r], [], [], 0.1)
+                    failed_before = True
+        finally:
+            self._close_selector()
+
+    def _new_selector(self) -> selectors.BaseSelector:
+        sel = selectors.DefaultSelector()
+        for sock in self._sockets:
+            if sock not in self._dropped:
+                try:
+                    sel.register(sock, selectors.EVENT_READ)
+                except (OSError, ValueError) as exc:  # closed under us
+                    self._drop(sock, OSError(str(exc)))
+        sel.register(self._wake_r, selectors.EVENT_READ)
+        return sel
+
+    def _close_selector(self) -> None:
+        if self._selector is not None:
+            self._selector.close()
+            self._selector = None
+
+    def _turn(self, sel: selectors.BaseSelector) -> bool:
+        """One wake-up: every ready socket served PER_WAKEUP datagrams at most (rule 3), the
+        reports looked at; False once stop() asks. Never a sleep while a datagram waits (rule
+        8): a socket with more comes back ready at once."""
+        now = self._clock()
+        due = min((r.next_s for r in self._reporters), default=now + REPORT_IDLE_S)
+        if self._reporters:  # look at the rotors often enough to see a move begin or end
+            due = min(due, now + REPORT_MOVING_S)
+        ready: list[socket.socket] = []
+        for key, _mask in sel.select(max(0.0, due - now)):
+            if key.fileobj == self._wake_r:
+                return False
+            assert isinstance(key.fileobj, socket.socket)
+            ready.append(key.fileobj)
+        for sock in ready:
+            self._serve(sock)
+        if any(sock in self._dropped for sock in ready):
+            self._close_selector()  # rule 7: a selector that never hears of it again
+        now = self._clock()
+        if not ready or now - self._looked_s >= REPORT_LOOK_S:
+            self._looked_s = now
+            self._report(now)
+        return True
+
+    def _serve(self, sock: socket.socket) -> None:
+        """Rule 3: PER_WAKEUP datagrams at most, each on its own; rule 8: a stop first."""
+        endpoint = self._sockets[sock]
+        may_stop = may_stop_pst if isinstance(endpoint, PstEndpoint) else may_stop_n1mm
+        for _ in range(PER_WAKEUP):
+            try:
+                data, peer = sock.recvfrom(MAX_DATAGRAM + 1)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                if exc.errno in (errno.EBADF, errno.ENOTSOCK):
+                    self._drop(sock, exc)
+                    return
+                log.debug("logger UDP %s:%d: %s", *self._addresses[sock], exc)
+                continue
+            now = self._clock()
+            source = peer[0], peer[1]
+            if not may_stop(data) and not self._budgets.allow(source, now):
+                self._flooded(now, source)
+                continue
+            self._carry_out(sock, endpoint, data, peer)
+            self._budgets.spend(source, 1 + len(data) / 1024, now)
+
+    def _carry_out(
+        self,
+        sock: socket.socket,
+        endpoint: PstEndpoint | N1mmEndpoint,
+        data: bytes,
+        peer: tuple[str, int],
+    ) -> None:
+        try:
+            if isinstance(endpoint, PstEndpoint):
+                port = self._addresses[sock][1]
+                self._commands.pst(endpoint, sock, port, parse_pst(data), peer, data)
+            else:
+                self._commands.n1mm(endpoint, parse_n1mm(data), data, peer[0])
+        except Malformed as exc:
+            self._junk(_kind(endpoint), peer, exc)
+        except Exception as exc:
+            self._fault(f"{_kind(endpoint)} datagram from {peer[0]}", exc)
+
+    def _drop(self, sock: socket.socket, exc: OSError) -> None:
+        """Rule 7: a socket that cannot be read any more is said once and never selected."""
+        self._dropped.add(sock)
+        log.error(
+            "logger UDP port %s:%d (%s) stopped listening: %s; restart the bridge to listen again",
+            *self._addresses[sock],
+            _kind(self._sockets[sock]),
+            exc,
+        )
+
+    def _flooded(self, now: float, source: tuple[str, int]) -> None:
+        """Rule 8: a datagram over its sender's budget, dropped unparsed."""
+        self.over_budget += 1
+        count = self._flood_log.due(now)
+        if count is not None:
+            log.warning(
+                "logger UDP: %d datagram(s) dropped unread, over the budget of their sender "
+                "(%g a second each, %g in all), the last from %s:%d; stops are still obeyed",
+                count,
+                RATE_DATAGRAMS_S,
+                RATE_ALL_S,
+                *source,
+            )
+
+    def _fault(self, where: str, exc: Exception) -> None:
+        """Rule 7: a bug behind a datagram or in the loop is logged (rarely) and survived."""
+        count = self._fault_log.due(self._clock())
+        if count is not None:
+            log.error("loggers: %s failed (%d since the last report)", where, count, exc_info=exc)
+
+    def _junk(self, kind: str, peer: tuple[str, int], exc: Malformed) -> None:
+        """Rule 3."""
+        self.counts[kind].malformed += 1
+        count = self._junk_log.due(self._clock())
+        if count is not None:
+            log.debug(
+                "%s UDP: dropped %d malformed datagram(s), the last from %s: %s",
+                kind,
+                count,
+                peer[0],
+                exc,
+            )
+
+    # -- N1MM reports ---------------------------------------------------------------------
+    def _report(self, now: float) -> None:
+        """Rule 6 (the loop comes here at least every REPORT_MOVING_S)."""
+        for r in self._reporters:
+            try:
+                self._report_one(r, now)
+            except Exception as exc:  # rule 7
+                self._fault(f"the N1MM report of rotator {r.rotator.id!r}", exc)
+
+    def _report_one(self, r: N1mmReporter, now: float) -> None:
+        status = r.rotator.status
+        bearing = status.bearing_deg
+        sock = self._socket_of(r.endpoint)
+        if bearing is None or not status.available or sock is None:
+            return
+        moved = r.last_deg is None or angle_between(bearing, r.last_deg) >= REPORT_MOVE_DEG
+        if now < r.next_s and not moved:
+            return
+        r.next_s, r.last_deg = now + REPORT_IDLE_S, bearing
+        try:
+            sock.sendto(n1mm_report(r.name, bearing), r.to)
+        except OSError as exc:  # e.g. from 127.0.0.1 to another host: said once
+            level = logging.DEBUG if r.failed else logging.WARNING
+            r.failed = True
+            log.log(level, "N1MM report from %s to %s:%d: %s", r.endpoint.bind, *r.to, exc)
+
+
+def _named(e: N1mmEndpoint) -> str:
+    """``rotator 'tower' (N1MM's "Yagi")``, for every rotator on the endpoint."""
+    return ", ".join(f"rotator {r.rotator.id!r} (N1MM's {r.name!r})" for r in e.rotors)
+
+
+def _kind(endpoint: PstEndpoint | N1mmEndpoint) -> str:
+    return "pst" if isinstance(endpoint, PstEndpoint) else "n1mm"
+
+
+def _bound(host: str, port: int, what: str, shared: bool) -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        if shared:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.setblocking(False)
+        with contextlib.suppress(OSError):  # rule 8: the system may give less, or refuse
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECV_BUFFER)
+    except OSError as exc:
+        sock.close()
+        code = exc.errno or 0
+        reason = os.strerror(code) if code > 0 else exc.strerror or str(exc)
+        raise OSError(
+            exc.errno,
+            f"{what}: cannot listen on {host}:{port}: {reason}{_BIND_HINTS.get(code, '')}",
+        ) from None
+    return sock

@@ -1,0 +1,504 @@
+"""The main broker connection: the bridge's presence (online/offline, its last will), the
+retained state it owns and re-publishes, its events, and the first look of every connect.
+connection.py builds, connects and subscribes paho's client (for the stop lane too, lane.py);
+owned.py judges the bridge's own topics; delivery.py follows each publish; look.py keeps the
+first look's books and claim.py gives its verdicts.
+
+The bridge's MQTT rules, numbered once for all of mqtt/ (code and docs cite "client.py rule N"),
+each written out in the module that keeps it:
+- connection.py: 1 protocol, clean start, retain-as-published; 4 commands at QoS 0; 5 short
+  callbacks; 6 paho's reconnect loop, a refusal said once; 7 one client id, one connection
+  (the takeover back-off); 9 TCP quick-ack after every read.
+- owned.py: 10 the bridge's retained topics are its own (here: subscribed, our value put back).
+- delivery.py: 11 what the broker refuses is said; 13 what paho does not take goes again.
+- look.py: 14 one live bridge per base topic, the first look (here: the look is started,
+  only halts are taken while it runs, ``gated``); 15 deletions said in a few lines.
+- here:
+2. The last will marks the bridge offline (retained, QoS 1); ``online`` is published on every
+   connect, ``offline`` on a clean shutdown. While connected (after the first look, not when
+   refused) the heartbeat (``heartbeat``: its topic) carries the wall clock every HEARTBEAT_S,
+   QoS 0, not retained (heartbeat.py rule 1), from paho's own loop (Client.tick): a bridge whose
+   broker was restored from its file says ``online`` for ever, a heartbeat only while it lives.
+3. On every connect: subscribe again and re-publish every retained message we own (the broker
+   may have restarted without persistence and lost them). Retained messages are kept in a
+   cache; while disconnected they only update the cache; events wait (rule 13).
+8. Retained state goes out at QoS 0 (STATE_QOS): the newest value supersedes every older one,
+   so an acknowledgement buys nothing, while QoS 1 costs a PUBACK per message (half of the
+   bridge's CPU with 32 rotators turning, benchmarks/) and lets paho re-send an old value over
+   the fresher state re-published from the cache. Discovery configs, the bridge's
+   online/offline and error events stay QoS 1; a rotator's availability is state.
+16. The broker is asked whether the bridge can read back its markers (lastword.py rule 7), on
+   every connect, with no clock: right before the first look's hello (rule 14), a probe goes
+   to ``B/bridge/fence`` (QoS 1: under MQTT 5 a publish the ACL refuses gets its PUBACK
+   reason, rule 11); the broker keeps one order for one client's messages of one QoS (the
+   hello goes at QoS 1 too: MQTT promises no order between QoS levels, and aedes delivers a
+   QoS 0 message before the QoS 1 one sent right before it), so if the hello comes back and
+   the probe has not, the broker drops it (mosquitto 2.0 grants the subscription and drops
+   the messages, without a word under MQTT 3.1.1, and for a topic denied to read under MQTT 5
+   too). That is
+   said as rule 11 says, naming the topic, from the first connection on. It is judged again
+   on every connect: a probe that comes back clears the problem (``on_allowed``, never on
+   paho's thread), and the markers go out again. Each verdict is reported on a thread of its
+   own, so one may come late: under ``_fence_lock`` a report is made only if its verdict is
+   still the last one (an older connection's "allowed" never turns the markers on after a
+   newer one's "denied", nor the other way round).
+12. Nothing from before a disconnect lands after the state of the new connection: paho sends
+   the QoS 1 messages it still held only after ``on_connect`` has returned, behind the cache
+   re-published there (a config changed while the broker stalled came back older, and
+   stayed). So ``on_connect`` takes them from paho: one whose retained topic is in the cache
+   is superseded by the value just sent; the others (events, deletions) go again, after it.
+
+Locks: ``_lock`` orders the cache and every publish of it (a connect that re-publishes the
+cache cannot overtake a newer value with an older one; paho's publish only enqueues). paho
+calls back holding its own mutex, and a thread that publishes holds ``_lock``, then waits for
+paho's: so ``on_publish`` never takes ``_lock`` (delivery.py has a lock of its own), and what a
+callback hands on that publishes (a denied topic, the refusal) goes on a thread of its own
+(docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import Unpack
+
+import paho.mqtt.client as paho
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.interfaces.mqtt.claim import Claim
+from bridge.interfaces.mqtt.connection import MQTT311_LOSES, Connection, MessageHandler, Options
+from bridge.interfaces.mqtt.delivery import MAX_QUEUED, Delivery, wait_published
+from bridge.interfaces.mqtt.heartbeat import Beat, beat_payload
+from bridge.interfaces.mqtt.limiter import EventLimiter
+from bridge.interfaces.mqtt.look import (
+    CLEARS_SAID_AT_ONCE,
+    FirstLook,
+    Outcome,
+    say_clear,
+    say_clears,
+)
+from bridge.interfaces.mqtt.owned import FOREIGN_LOG_S, OwnedTopics
+from bridge.interfaces.mqtt.owned import SETTLE_AFTER_CONNECT_S as SETTLE_AFTER_CONNECT_S
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+STATE_QOS = 0  # rule 8
+# rule 10 (MQTT 3.1.1): a broker shutting down sends the bridge its own last will and closes the
+# connection right after; an ``offline`` the connection outlives by this long was a stranger's
+WILL_OUTLIVED_S = 1.0
+LOOK_TIMEOUT_S = 5.0  # rule 14
+
+
+class MqttClient(Connection):
+    def __init__(
+        self,
+        settings: MqttSettings,
+        *,
+        will_topic: str,
+        subscriptions: list[str],
+        on_message: MessageHandler,
+        on_connect: Callable[[], None] | None = None,
+        on_connection_lost: Callable[[], None] | None = None,
+        on_denied: Callable[[str, str], None] | None = None,
+        on_allowed: Callable[[str], None] | None = None,
+        claim: Claim | None = None,
+        on_refused: Callable[[str], None] | None = None,
+        fence_topic: str | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        heartbeat: str | None = None,
+        wall: Callable[[], float] = time.time,
+        **options: Unpack[Options],
+    ) -> None:
+        super().__init__(
+            settings,
+            settings.effective_client_id(),
+            subscriptions=subscriptions,
+            on_message=on_message,
+            clock=clock,
+            **options,
+        )
+        self._will_topic = will_topic
+        self._on_connect_hook = on_connect
+        self._on_connection_lost = on_connection_lost
+        self._on_denied = on_denied
+        self._on_allowed = on_allowed  # rule 16: the fence topic works again
+        self._retained: dict[str, tuple[bytes, int]] = {will_topic: (b"online", 1)}  # rule 3
+        self._lock = threading.Lock()
+        c = self._client
+        c.will_set(will_topic, b"offline", qos=1, retain=True)  # rule 2
+        c.max_queued_messages_set(MAX_QUEUED)  # rule 13
+        self._delivery = Delivery(
+            c, username=settings.username, report=self._report_denied, clock=clock
+        )
+        c.on_publish = self._delivery.on_publish
+        self._owned = OwnedTopics(clock, hears_own=not self._v5)  # rule 10
+        self._owned.will = (will_topic, b"offline")
+        self._clears_said = EventLimiter(clock, CLEARS_SAID_AT_ONCE, 1.0 / FOREIGN_LOG_S)
+        self._look = FirstLook(claim, will_topic) if claim is not None else None  # rule 14
+        self._on_refused = on_refused
+        self._held: list[paho.MQTTMessage] = []  # rule 12: taken from paho, sent at the open
+        self._fence_topic = fence_topic  # rule 16
+        self._probe: bytes | None = None  # rule 16: the probe out, None once it came back
+        self._fence_lock = threading.Lock()  # rule 16: the fence's reports, one at a time
+        self.refused: str | None = None
+        self._heartbeat = heartbeat  # rule 2
+        self._will_heard: tuple[float, bytes] | None = None  # rule 10: when, and what
+        self._beat = Beat()
+        self._wall = wall
+
+    @property
+    def problems(self) -> list[str]:
+        """Rule 11: what the broker refused, for the bridge's own diagnostics."""
+        return self._delivery.problems
+
+    @property
+    def failed_publishes(self) -> int:
+        """Rule 13: publishes paho did not take, so far."""
+        return self._delivery.failed_publishes
+
+    @property
+    def connected_at(self) -> float:
+        """The clock at the last accepted connection (rule 10)."""
+        return self._owned.connected_at
+
+    @property
+    def gated(self) -> bool:
+        """Rule 14: the first look runs, or the bridge refused to run: only halts are taken."""
+        return (
+            self._look is not None and self._look.looking is not None
+        ) or self.refused is not None
+
+    @property
+    def up(self) -> bool:
+        """A connection is accepted and its command topics subscribed (its first look may
+        still run): from now on a command published reaches this connection."""
+        return self._up and self._subscribed
+
+    def add_subscriptions(self, topics: list[str]) -> None:
+        """More topic filters (features such as discovery); before ``start()``."""
+        self._subscriptions = [*self._subscriptions, *topics]
+
+    def watch_owned(self, filters: list[str]) -> None:
+        """Rule 10: the filters of the retained topics the bridge publishes; before ``start()``."""
+        self._owned.watch(filters)
+
+    # -- lifecycle --------------------------------------------------------------------------
+    def start(self) -> None:
+        s = self._settings
+        log.info("connecting to MQTT broker %s:%d as %s", s.host, s.port, s.effective_client_id())
+        if not self._v5:
+            log.warning("MQTT 3.1.1 (mqtt.protocol): %s", MQTT311_LOSES)
+        self._connect()
+        self._delivery.start_retrying(self._resend, lambda: self._stopping)
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        """Publish offline, flush, disconnect."""
+        self._stopping = True  # rule 10 stands down: our own offline is about to come back
+        self._delivery.wake()  # ends the retry thread
+        with self._lock:
+            self._retained[self._will_topic] = (b"offline", 1)
+        if self.connected.is_set() and self.refused is None:  # refused: it is another's
+            self._client.drop_out_messages()  # a full queue would refuse the offline (rule 13)
+            info = self._client.publish(self._will_topic, b"offline", qos=1, retain=True)
+            wait_published([info], timeout_s, self.connected)
+        self._disconnect()
+
+    def shutting_down(self) -> None:
+        """The bridge is stopping: a broker that goes away now (a Ctrl-C reaches the demo's
+        private broker too) is no news, and is not reconnected to with a warning."""
+        self._stopping = True
+
+    # -- publishing (any thread) ----------------------------------------------------------
+    def publish_retained(
+        self,
+        topic: str,
+        payload: str | bytes,
+        *,
+        only_if_changed: bool = True,
+        qos: int = STATE_QOS,
+    ) -> None:
+        data = payload.encode() if isinstance(payload, str) else payload
+        with self._lock:  # cache, connected check and publish: one step (see Locks)
+            held = self._retained.get(topic)
+            if only_if_changed and held is not None and held[0] == data:
+                return
+            self._retained[topic] = (data, qos)
+            if self.connected.is_set():
+                self._owned.sent(topic, data)
+                self._delivery.send(topic, data, qos, retain=True)
+
+    def clear_retained(self, topic: str) -> None:
+        """Delete a retained config from the broker (empty retained payload); said (rule 15)."""
+        with self._lock:
+            self._retained.pop(topic, None)
+            if self._look is None:
+                if self.connected.is_set():
+                    self._client.publish(topic, b"", qos=1, retain=True)
+                cleared = True
+            elif self._look.defer_clear(topic):  # rule 14: held by the broker before we came
+                return
+            else:  # published while we run: another client's (claim rule 3)
+                cleared = False
+        say_clear(self._clears_said, topic, cleared=cleared)
+
+    def republish_retained(self, skip_prefix: str | None = None) -> None:
+        """Send the retained messages we own again (Home Assistant came back, for example)."""
+        with self._lock:
+            if not self.connected.is_set():
+                return
+            for topic, (data, qos) in self._retained.items():
+                if skip_prefix is None or not topic.startswith(skip_prefix):
+                    self._owned.sent(topic, data)
+                    self._delivery.send(topic, data, qos, retain=True)
+
+    def publish_event(self, topic: str, payload: str | bytes) -> None:
+        with self._lock:
+            if self.connected.is_set():
+                self._delivery.send(topic, payload, 1, retain=False)
+            else:
+                self._delivery.hold_event(topic, payload)  # rule 3
+
+    def publish_marker(self, topic: str, payload: str) -> None:
+        """A message to the bridge itself (lastword.py): QoS 0, now or never (no cache, no
+        backlog: one that cannot go now is void with the connection), during the first look
+        too. paho's publish is thread-safe; the stop lane's thread calls this."""
+        if self._up:
+            self._client.publish(topic, payload.encode(), qos=0)
+
+    def publish_offline_now(self, topics: list[str], timeout_s: float = 1.0) -> None:
+        """At shutdown: mark these retained topics offline and wait until the broker has them."""
+        infos = []
+        if self.refused is not None:
+            return  # rule 14: these topics are another bridge's
+        for topic in topics:
+            with self._lock:
+                self._retained[topic] = (b"offline", 1)
+            if self.connected.is_set():
+                infos.append(self._client.publish(topic, b"offline", qos=1, retain=True))
+        wait_published(infos, timeout_s, self.connected)
+
+    def _resend(self) -> None:
+        """Rule 13, on delivery.py's retry thread: what paho did not take, again."""
+        with self._lock:
+            if not self.connected.is_set():
+                return  # the connect sends everything
+            for topic in self._delivery.take_dirty():
+                held = self._retained.get(topic)
+                if held is not None:
+                    self._delivery.send(topic, held[0], held[1], retain=True)
+            for topic, event in self._delivery.take_backlog():
+                self._delivery.send(topic, event, 1, retain=False)
+
+    # -- connection.py's hooks (paho's thread) ----------------------------------------------
+    def _fell_back(self, what: str) -> None:
+        super()._fell_back(what)  # said, with MQTT311_LOSES
+        self._owned.hears_own = True  # rule 10: our own messages come back from now on
+
+    def _opened(self, client: paho.Client) -> None:
+        """Commands subscribed before ``online`` (the broker handles our packets in order: a
+        client that sends a command the moment it sees ``online`` is already heard)."""
+        self._subscribe(client, self._owned.subscriptions())  # rule 10
+        held = client.drop_out_messages()  # rule 12: paho would send them after this returns
+        with self._lock:
+            self._delivery.new_connection()
+            self._held.extend(held)  # a look that never ended leaves its own
+            self._owned.connected()
+            look = self._look
+            if look is not None:  # rule 14: look first
+                hello = look.begin()
+                self._subscribe(client, [(look.claim.hello_topic, 0)])
+                if self._fence_topic is not None:  # rule 16: the probe, then the hello
+                    self._probe = b"probe " + hello
+                    self._delivery.send(self._fence_topic, self._probe, 1, retain=False)
+                client.publish(look.claim.hello_topic, hello, qos=1)  # rule 16: as the probe
+                timer = threading.Timer(LOOK_TIMEOUT_S, self._look_timed_out, args=(look.looking,))
+                timer.daemon = True
+                timer.start()
+                return
+            self._open(None)
+        if self._on_connect_hook is not None:
+            self._on_connect_hook()
+
+    def _denied(self, topic: str, reason: str) -> None:
+        self._delivery.deny(topic, "subscribe to", reason)
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        self._will_heard = None  # rule 10: the connection ended, so that ``offline`` was ours
+        if self._look is not None:
+            self._look.looking = None  # one assignment: no lock (paho may hold its own here)
+        if was_up and self._on_connection_lost is not None:  # nothing more of it will come
+            self._on_connection_lost()
+        return was_up and not self._stopping
+
+    def _tick(self) -> None:
+        """Rule 2: the heartbeat, when due (paho's thread, after each round of its loop); rule
+        10: an ``offline`` on the will topic that the connection outlived was a stranger's."""
+        heard = self._will_heard
+        if heard is not None and self._clock() - heard[0] >= WILL_OUTLIVED_S:
+            self._will_heard = None
+            self._say_foreign(self._will_topic, heard[1], b"online")
+        topic = self._heartbeat
+        if topic is None or not self.connected.is_set() or self.refused is not None:
+            return
+        if self._beat.due(self._clock()):
+            self._client.publish(topic, beat_payload(self._wall()).encode(), qos=0)
+
+    def _intercepted(self, topic: str, payload: bytes) -> bool:
+        if topic == self._fence_topic and payload.startswith(b"probe "):
+            if payload == self._probe:  # rule 16: back before the hello
+                self._probe = None
+                self._fence_back(topic)
+            return True  # (one of an earlier connection's, or another bridge's)
+        if self._look is not None and self._look_saw(self._look, topic, payload):
+            return True
+        return bool(self._owned.filters) and self._foreign(topic, payload)
+
+    def _fence_back(self, topic: str) -> None:
+        """Rule 16: the probe came back; if the topic was denied before, it is not now (said on
+        a thread of its own: paho's holds its mutex here, and the report publishes)."""
+        if self._delivery.allow(topic) and self._on_allowed is not None:
+            threading.Thread(target=self._report_allowed, args=(topic,), daemon=True).start()
+
+    def _report_allowed(self, topic: str) -> None:
+        """Rule 16 (its own thread): said only if the topic is still allowed."""
+        with self._fence_lock:
+            if self._on_allowed is not None and not self._delivery.denied(topic):
+                self._on_allowed(topic)
+
+    def _report_denied(self, topic: str, problem: str) -> None:
+        """Rule 11's hand-off (delivery.py calls it on a thread of its own); the fence's only
+        if it is still denied (rule 16)."""
+        if self._on_denied is None:
+            return
+        if topic != self._fence_topic:
+            self._on_denied(topic, problem)
+            return
+        with self._fence_lock:
+            if self._delivery.denied(topic):
+                self._on_denied(topic, problem)
+
+    def _open(self, look: Outcome | None) -> None:
+        """Under the lock: the state goes out (rules 3 and 12), then the deletions a look let
+        through (rule 14), then ``connected``."""
+        send = self._delivery.send
+        self._delivery.take_dirty()  # every retained value goes out below
+        send(self._will_topic, b"online", 1, retain=True)
+        for topic, (data, qos) in self._retained.items():
+            self._owned.sent(topic, data)
+            if topic != self._will_topic:
+                send(topic, data, qos, retain=True)
+        held, self._held = self._held, []
+        for msg in held:  # rule 12 (older than the backlog's events)
+            if not (msg.retain and msg.topic in self._retained):
+                send(msg.topic, bytes(msg.payload), msg.qos, retain=msg.retain)
+        for topic, event in self._delivery.take_backlog():
+            send(topic, event, 1, retain=False)
+        if look is not None:
+            if look.clear:
+                for topic in look.clears:
+                    send(topic, b"", 1, retain=True)
+            say_clears(look)
+        self.connected.set()
+
+    # -- rule 14: the first look (look.py keeps its books) -----------------------------------
+    def _end_look(self, n: int, timed_out: bool = False) -> None:
+        look = self._look
+        assert look is not None
+        with self._lock:
+            if look.looking != n or not self._up or self._stopping:
+                return
+            outcome = look.end(timed_out=timed_out)
+            if outcome.refused is not None:
+                self.refused = outcome.refused
+                self._stopping = True
+            else:
+                self._open(outcome)
+        if self.refused is not None:
+            self._refuse()
+        elif self._on_connect_hook is not None:
+            self._on_connect_hook()
+
+    def _look_timed_out(self, n: int) -> None:
+        look = self._look
+        assert look is not None
+        with self._lock:
+            if look.looking != n:
+                return
+        look.say_timed_out(LOOK_TIMEOUT_S)
+        self._end_look(n, timed_out=True)
+
+    def _refuse(self) -> None:
+        """Never on paho's thread: the app stops the client (loop_stop joins paho's thread)."""
+        message = self.refused
+        assert message is not None
+        log.error("%s", message)
+        if self._on_refused is not None:
+            threading.Thread(target=self._on_refused, args=(message,), daemon=True).start()
+
+    def _look_saw(self, look: FirstLook, topic: str, payload: bytes) -> bool:
+        """Rule 14: True if the message belongs to the first look (handled here)."""
+        if topic == look.claim.hello_topic:
+            with self._lock:
+                n = look.ended_by(payload)
+            if n is not None:
+                self._judge_probe()
+                self._end_look(n)
+            return True  # another bridge's hello, or one of ours come late
+        with self._lock:
+            return look.saw(topic, payload)
+
+    def _judge_probe(self) -> None:
+        """Rule 16: the hello is back; the probe published before it is not: dropped."""
+        probe, self._probe = self._probe, None
+        if probe is not None and self._fence_topic is not None:
+            self._delivery.deny(
+                self._fence_topic,
+                "read back what it publishes on",
+                "a probe published there did not come back before the message published after "
+                "it (the broker's ACL denies reading or writing it?); a stop from the stop lane "
+                "then holds targets until the main connection reads its own copy of the stop",
+            )
+
+    # -- rule 10: the bridge's own topics (owned.py judges) ---------------------------------
+    def _foreign(self, topic: str, payload: bytes) -> bool:
+        """True if ``topic`` is one of ours (handled here, whatever its value)."""
+        with self._lock:
+            held = self._retained.get(topic)
+            if held is None or not self._owned.owns(topic):
+                return False
+            if self._stopping:
+                return True  # shutting down (or refused): our offline values, or not ours
+            if self._owned.ours(topic, payload, held[0]):
+                return True
+            look = self._look
+            if look is not None and topic == look.claim.info_topic:
+                self.refused = look.live_info(payload)  # claim rule 4
+                if self.refused is not None:
+                    self._stopping = True  # nothing more goes out, nothing is put back
+                    self.connected.clear()  # (every publish checks it, under this lock)
+            say = False
+            if self.refused is None:
+                fix = self._owned.put_back(topic)
+                if fix.send and self.connected.is_set():
+                    self._owned.sent(topic, held[0])
+                    self._delivery.send(topic, held[0], held[1], retain=True)
+                say = fix.say
+                if say and self._owned.is_will(topic, payload):  # said later, if at all (_tick)
+                    self._will_heard, say = (self._clock(), payload), False
+        if self.refused is not None:
+            self._refuse()
+        elif say:
+            self._say_foreign(topic, payload, held[0])
+        return True
+
+    def _say_foreign(self, topic: str, payload: bytes, ours: bytes) -> None:
+        log.warning(
+            "another client published %r on %s, a topic of the bridge's own: put back %r "
+            "(a second bridge on this base topic, or a flow publishing where it should not?)",
+            payload[:40],
+            topic,
+            ours[:40],
+        )

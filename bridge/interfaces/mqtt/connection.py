@@ -1,0 +1,539 @@
+"""One connection to the broker, as both of the bridge's use it: the main one (client.py) and
+the stop lane (lane.py). It builds paho's client (protocol, session, credentials, TLS), connects
+it, subscribes the command topics on every connect, notes which subscriptions the broker denies,
+hands every message on, and slows down a fight over the client id. What a connection means
+beyond that (the bridge's presence, its retained state; or a lane for stops) is the subclass's.
+
+Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
+1. paho 2.x, CallbackAPIVersion.VERSION2. MQTT 5 with a clean start and no session expiry, so
+   commands sent while the bridge was away are not replayed to it; subscriptions ask for
+   retain-as-published, so a command published with the retain flag is recognised as such even
+   while the bridge is connected (MQTT 3.1.1 clears the flag then); not the state topics read
+   (``replayed``: the wind), whose flag then says "replayed", as under MQTT 3.1.1. ``protocol =
+   "3.1.1"`` is for brokers without MQTT 5 (clean session, same rules otherwise). ``"auto"``, the
+   default, tries MQTT 5 and steps down to 3.1.1 for good (paho_client.py rule 3) when the broker
+   answers "Unsupported protocol version" (NATS, aedes), as long as no MQTT 5 connection was
+   ever accepted: said once, with what 3.1.1 loses (``_fell_back``), and on ``B/bridge/info``
+   while it lasts (app.py). RabbitMQ 3 and amqtt close an MQTT 5 connection before any CONNACK
+   instead; but so does a broker restarting, one not ready yet behind a proxy, a connection
+   limit, or anyone on the path who wants the bridge on 3.1.1 and its weaker rules (a retained
+   command carried out, a remote's stale command without its stamps). So a close alone never
+   steps down: after one, ``auto`` asks the broker once in MQTT 3.1.1 (a trial connection on a
+   thread of its own, closed at once: paho_client.py rule 4), and steps down only if that
+   trial was accepted and the next MQTT 5 attempt is closed before its CONNACK again (a
+   broker that came back speaks MQTT 5 to that attempt; a connection limit refuses the trial
+   too). Over TLS a close never steps down (``_trusts_closes``): nobody on the path can answer
+   for the broker there, but anyone can still close connections, the first and the third, and
+   let the trial between them through. Until then, and for ``"5"``, the close is said with the
+   fix (rule 6).
+   ``"5"`` and ``"3.1.1"`` never change.
+4. Command topics are subscribed at QoS 0 (COMMAND_QOS). The session is clean, so QoS 1 would
+   buy no redelivery; what it does cost: a broker holds at most ~1000 QoS 1 messages for a
+   subscriber that falls behind and then drops the NEWEST (mosquitto: "Outgoing messages are
+   being dropped"), which in a flood of targets loses the final target, or a STOP. At QoS 0 a
+   connected subscriber gets everything, in order. (Measured: tests/faults, 10,000-target burst.)
+5. Callbacks run on paho's thread and stay short: they hand messages to the handler, which must
+   not block (it drops commands into mailboxes); a handler that raises is logged, and paho's
+   thread goes on.
+6. paho's reconnect loop (connect_async + loop_start, exponential back-off; the loop runs on a
+   thread of ours, paho_client.py rule 6); a refused
+   connection (bad credentials) or a failed one (TLS, unreachable) is logged once with the
+   reason (the main connection's words; the lane has its own, lane.py rule 3) and retried,
+   never a crash. Rule 7 only slows that loop down. A connection the broker closes before it
+   answers the CONNECT (an ACL on the client id, a connection limit, a broker without MQTT 5)
+   is said too, once, with the likely fixes (``_closed_early``): it is never silent.
+7. One client id, one connection. A broker that gets a second connection with a client id
+   closes the first ("session taken over": MQTT 5 reason 0x8E; MQTT 3.1.1 just closes the
+   socket), so two processes with one id (two hosts sharing a configuration, a stale container
+   beside a new one) would take each other over in a loop, each reconnect kicking the other.
+   The main connection logs that ONCE, naming the client id and the likely cause, and both
+   back off instead of fighting: TAKEOVER_FIRST_S, doubling per reconnect up to TAKEOVER_MAX_S
+   (so at most one reconnect a minute), until a connection lasts STABLE_S. Brokers that say
+   nothing (MQTT 3.1.1; mosquitto 2.0.11 even with MQTT 5) just drop the connection, so
+   FLAP_COUNT drops in a row, each less than STABLE_S after the connection was accepted and
+   each followed by a connection accepted at the first try (the broker never went away), count
+   as a takeover too; the side that holds the connection longer sees exactly that. A drop after
+   a keepalive timeout or with another reason from the broker is no evidence. (A link that
+   keeps breaking the same way earns the same back-off; the error says "most likely".) The
+   default client id is unique per installation (MqttSettings.effective_client_id): only an
+   explicit one, or a copied state file on a host of the same name, can collide.
+9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
+   socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on
+   (mosquitto's default, set_tcp_nodelay false) holds a second small packet until the first is
+   acknowledged, and Linux delays the acknowledgement of a packet we do not answer (a PUBACK for
+   our error event, a command that changes nothing) by 40 ms once we answer others quickly: a
+   stop 0-3 ms behind a refused target reached the controller 44 ms late (p50;
+   benchmarks/latency.py), and behind any target while state went out at QoS 1. The kernel
+   leaves quick-ack mode again as soon as we send, so it is set after every read, not once (a
+   system call per read; paho_client.py). Command topics stay QoS 0 (rule 4): our PUBACK would
+   acknowledge a command too, but brings back what rule 4 avoids.
+"""
+
+from __future__ import annotations
+
+import logging
+import ssl
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any, Literal, TypedDict, Unpack
+
+import paho.mqtt.client as paho
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.paho_client import accepts_mqtt311, new_client
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+# topic, payload, retain flag, the MQTT 5 user property ``operator`` as sent (None without it),
+# the send time the message carries (heartbeat.py rule 4; None without one)
+MessageHandler = Callable[[str, bytes, bool, str | None, Stamp | None], None]
+COMMAND_QOS = 0  # rule 4
+
+
+def operator_of(msg: paho.MQTTMessage) -> str | None:
+    """The user property ``operator`` of an MQTT 5 message, as sent (the service judges it);
+    None without one (and always under MQTT 3.1.1, which has no properties)."""
+    props = getattr(msg, "properties", None)
+    pairs = getattr(props, "UserProperty", None) or []
+    for key, value in pairs:
+        if key == "operator":
+            return str(value)
+    return None
+
+
+def stamp_of(msg: paho.MQTTMessage) -> Stamp | None:
+    """The user properties ``sent`` and ``expiry`` of an MQTT 5 message (heartbeat.py rule 4),
+    as sent (the service judges them); None without ``sent``."""
+    props = getattr(msg, "properties", None)
+    return Stamp.of_properties(getattr(props, "UserProperty", None) or [])
+
+
+UNSUPPORTED_PROTOCOL = 0x84  # rule 1: CONNACK for a version the broker does not speak
+MQTT311_LOSES = (  # rule 1: said when the bridge speaks MQTT 3.1.1 (docs/brokers.md)
+    "a retained command published while the bridge is connected arrives without its retain "
+    "flag and is carried out like any other (a retained target moves the rotor once), and "
+    "rotor-bridge remote's commands lose their send time, expiry and operator (a command held "
+    "up on the remote's link is carried out late): remote operation needs MQTT 5 on both sides"
+)
+# rule 7
+SESSION_TAKEN_OVER = 0x8E
+CONNECTION_LOST = 0x80  # paho's "Unspecified error" for a socket that closed without a word
+TAKEOVER_FIRST_S = 5
+TAKEOVER_MAX_S = 60
+STABLE_S = 2 * TAKEOVER_MAX_S  # longer than the other side's back-off: a fight never looks stable
+FLAP_COUNT = 3
+Ending = Literal["taken over", "dropped", "other"]
+
+
+class TakeoverGuard:
+    """Rule 7's bookkeeping, without paho or a clock: times in, a back-off out."""
+
+    def __init__(self) -> None:
+        self.connected_at: float | None = None
+        self._drops = 0  # dropped connections in a row, the broker reachable throughout
+        self.backoff_s = 0  # 0: no takeover episode, paho's own reconnect delays apply
+        self.reported = False
+
+    def connected(self, now: float) -> None:
+        self.connected_at = now
+
+    def connect_failed(self) -> None:
+        """The broker was unreachable or refused us: the drops before were not a fight."""
+        self._drops = 0
+
+    def disconnected(self, now: float, ending: Ending) -> bool:
+        """Whether this disconnect is part of a takeover episode (``backoff_s`` is then set)."""
+        lasted = now - self.connected_at if self.connected_at is not None else 0.0
+        self.connected_at = None
+        if lasted >= STABLE_S:
+            self._drops, self.backoff_s, self.reported = 0, 0, False
+        self._drops = self._drops + 1 if ending == "dropped" else 0
+        if not (ending == "taken over" or self._drops >= FLAP_COUNT or self.backoff_s):
+            return False
+        self.backoff_s = min(TAKEOVER_MAX_S, self.backoff_s * 2 or TAKEOVER_FIRST_S)
+        return True
+
+
+def takeover_message(client_id: str, ending: Ending) -> str:
+    """Rule 7: what the main connection says, once an episode."""
+    if ending == "taken over":
+        what = f"MQTT session taken over: another client connected with client id {client_id!r}"
+    else:
+        what = (
+            f"the MQTT broker dropped the connection {FLAP_COUNT} times in a row without a "
+            f"reason, taking new ones at once: most likely another client connects with "
+            f"client id {client_id!r}"
+        )
+    return (
+        f"{what}. Two processes with one client id (two hosts sharing one configuration, a "
+        f"stale container still running) keep kicking each other off: stop the other one or "
+        f"give each its own mqtt.client_id. Backing off: {TAKEOVER_FIRST_S} s, doubling up to "
+        f"{TAKEOVER_MAX_S} s between reconnects, until a connection lasts {STABLE_S} s"
+    )
+
+
+def command_filters(
+    filters: list[str], no_replay: frozenset[str], v5: bool, replayed: frozenset[str] = frozenset()
+) -> list[tuple[str, Any]]:
+    """Rules 1 and 4: command topics at COMMAND_QOS, MQTT 5 with retain-as-published; the
+    filters in ``no_replay`` (stop: lastword.py rule 6) also ask the broker not to replay their
+    retained message on subscribing (retain handling 2); those in ``replayed`` go without it."""
+    if not v5:
+        return [(topic, COMMAND_QOS) for topic in filters]
+    live = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True)
+    keep = SubscribeOptions.RETAIN_DO_NOT_SEND
+    fresh = SubscribeOptions(qos=COMMAND_QOS, retainAsPublished=True, retainHandling=keep)
+    state = SubscribeOptions(qos=COMMAND_QOS)  # rule 1: the retain flag says "replayed"
+    return [(t, fresh if t in no_replay else state if t in replayed else live) for t in filters]
+
+
+def ending_of(flags: paho.DisconnectFlags, reason_code: ReasonCode) -> Ending:
+    """Rule 7: how a connection ended, as evidence of a takeover."""
+    code = getattr(reason_code, "value", None)
+    from_server = bool(getattr(flags, "is_disconnect_packet_from_server", False))
+    if from_server and code == SESSION_TAKEN_OVER:
+        return "taken over"
+    if not from_server and code == CONNECTION_LOST:
+        return "dropped"
+    return "other"
+
+
+class Options(TypedDict, total=False):
+    """What both connections take alike, as keywords of their constructors."""
+
+    on_new_connection: Callable[[], None] | None  # before any message of a new connection
+    on_subscribed: Callable[[], None] | None  # the command topics' SUBACK, before their messages
+    no_replay: list[str] | None  # command filters whose retained message is not replayed
+    replayed: list[str] | None  # state topics read, their retain flag saying "replayed" (rule 1)
+    reconnect_min_s: int  # paho's reconnect back-off (rule 6)
+    reconnect_max_s: int
+
+
+class Connection:
+    """A paho client and what both connections do with it. Subclasses say what the rest means
+    through the hooks below (all called on paho's thread, holding paho's callback mutex)."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        client_id: str,
+        *,
+        subscriptions: list[str],
+        on_message: MessageHandler,
+        clock: Callable[[], float] = time.monotonic,
+        **options: Unpack[Options],
+    ) -> None:
+        self._settings = settings
+        self._client_id = client_id  # what a takeover names (rule 7): the remote has its own
+        self._v5 = settings.protocol != "3.1.1"  # rule 1: "auto" tries MQTT 5 first
+        self._auto = settings.protocol == "auto"  # ... and may step down (``_fall_back``)
+        self._accepted_once = False  # a connection was accepted: the protocol is settled
+        self._answered = False  # the broker sent a CONNACK to this attempt (rules 1 and 6)
+        self._trial_lock = threading.Lock()  # rule 1: the MQTT 3.1.1 trial after a close
+        self._trial: threading.Thread | None = None
+        self._trial_ok = False  # ... was accepted, since the last MQTT 5 attempt closed
+        self._subscriptions = subscriptions
+        self._no_replay = frozenset(options.get("no_replay") or ())
+        self._replayed = frozenset(options.get("replayed") or ())
+        self._handler = on_message
+        self._on_new_connection = options.get("on_new_connection")
+        self._on_subscribed = options.get("on_subscribed")
+        self._clock = clock
+        self._reconnect_s = (options.get("reconnect_min_s", 1), options.get("reconnect_max_s", 30))
+        self._guard = TakeoverGuard()
+        self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
+        self._up = False  # a connection accepted
+        self._subscribed = False  # ... and the SUBACK of its command topics came
+        self._command_mid: int | None = None
+        self._stopping = False  # a shutdown under way: a broker going away is no news
+        self._last_refusal: str | None = None  # rule 6: each reason said once in a row
+        self._sub_filters: dict[int, list[str]] = {}  # SUBSCRIBE's message id -> its filters
+        self.connected = threading.Event()
+        self.before_message: Callable[[], None] | None = None  # lane.py rule 4
+        c = new_client(settings, client_id)
+        c.reconnect_delay_set(*self._reconnect_s)
+        c.on_connect = self._on_connect
+        c.on_connect_fail = self._on_connect_fail
+        c.on_disconnect = self._on_disconnect
+        c.on_message = self._on_message
+        c.on_subscribe = self._on_subscribe
+        c.tick = self._tick
+        self._client = c
+
+    def _connect(self) -> None:
+        """Rule 6: paho's reconnect loop from now on (a clean start under MQTT 5, rule 1)."""
+        s = self._settings
+        fresh = True if self._v5 else paho.MQTT_CLEAN_START_FIRST_ONLY  # 3.1.1: clean session
+        self._client.connect_async(s.host, s.port, keepalive=s.keepalive_s, clean_start=fresh)
+        self._client.loop_start()
+
+    def _disconnect(self) -> None:
+        self._client.disconnect()
+        self._client.loop_stop()  # joins paho's thread: never call this on it
+
+    def _subscribe(self, client: paho.Client, filters: list[tuple[str, Any]]) -> int | None:
+        """SUBSCRIBE, its filters kept by message id to name what the SUBACK denies."""
+        if not filters:
+            return None
+        _rc, mid = client.subscribe(filters)
+        if mid is not None:
+            self._sub_filters[mid] = [f for f, _opts in filters]
+        return mid
+
+    # -- hooks: by default what the main connection (client.py) says of rules 6 and 7 --------
+    def _refused(self, reason: str) -> None:
+        """The broker refused the connection (CONNACK failure)."""
+        if reason != self._last_refusal:
+            log.error("MQTT broker refused the connection: %s (retrying)", reason)
+            self._last_refusal = reason
+
+    def _failed(self) -> None:
+        """The connection could not be made (inside paho's ``except OSError``)."""
+        if self._stopping:
+            return
+        exc = sys.exc_info()[1]  # paho calls back inside its `except OSError`: it says why
+        if isinstance(exc, ssl.SSLError):
+            text = f"TLS handshake with the MQTT broker failed: {exc} (check tls.ca_file/cert_file)"
+        else:
+            text = f"cannot connect to the MQTT broker: {exc or 'unknown error'}"
+        if text != self._last_refusal:
+            log.error("%s (retrying with back-off)", text)
+            self._last_refusal = text
+
+    def _accepted(self) -> None:
+        """A connection is accepted; nothing of it has been handed on yet."""
+        self._last_refusal = None
+        log.info("connected to MQTT broker (%s)", self.protocol)
+
+    def _fell_back(self, what: str) -> None:
+        """Rule 1: ``auto`` steps down to MQTT 3.1.1, the broker having done ``what``."""
+        s = self._settings
+        log.warning(
+            "the MQTT broker at %s:%d %s: using MQTT 3.1.1 from now on (set mqtt.protocol = "
+            '"3.1.1" to skip the try). Under MQTT 3.1.1 %s',
+            s.host,
+            s.port,
+            what,
+            MQTT311_LOSES,
+        )
+
+    def _closed_early(self, reason: str) -> None:
+        """Rule 6: the connection ended before the broker answered the CONNECT."""
+        if self._stopping:
+            return
+        hint = ""
+        if self._v5 and not self._accepted_once:  # (once accepted, the protocol is not why)
+            hint = (
+                "; a broker without MQTT 5 (RabbitMQ 3, amqtt) closes it this way too: set "
+                'mqtt.protocol = "3.1.1" for it'
+                + (
+                    ' (with "auto" the bridge asks the broker in MQTT 3.1.1 to tell)'
+                    if self._trusts_closes
+                    else ""
+                )
+            )
+        text = (
+            f"the MQTT broker closed the connection before accepting it ({reason}): check the "
+            "broker's log "
+            "(its access rules for this client id and user, a connection limit)" + hint
+        )
+        if text != self._last_refusal:
+            log.error("%s (retrying)", text)
+            self._last_refusal = text
+
+    def _opened(self, client: paho.Client) -> None:
+        """The command topics are subscribed (the SUBACK may be on its way)."""
+
+    def _denied(self, topic: str, reason: str) -> None:
+        """The broker denied a subscription to ``topic``."""
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        """The connection is gone; whether to judge its end as takeover evidence (rule 7)."""
+        return was_up
+
+    def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
+        """After rule 7's judgement: ``fight``, a takeover episode (the back-off is set)."""
+        if not fight:
+            log.warning("disconnected from MQTT broker (%s); reconnecting", reason_code)
+        elif self._guard.reported:
+            log.debug(
+                "MQTT connection closed again (%s); next try in %d s",
+                reason_code,
+                self._guard.backoff_s,
+            )
+        else:  # once an episode
+            self._guard.reported = True
+            log.error("%s", takeover_message(self._client_id, ending))
+
+    @property
+    def v5(self) -> bool:
+        """Whether this connection speaks MQTT 5 now (rule 1)."""
+        return self._v5
+
+    @property
+    def protocol(self) -> str:
+        """The MQTT version this connection speaks now (rule 1): "MQTT 5" or "MQTT 3.1.1"."""
+        return "MQTT 5" if self._v5 else "MQTT 3.1.1"
+
+    def use_mqtt311(self) -> None:
+        """MQTT 3.1.1 from the next connection on (rule 1; the stop lane follows the main
+        connection's choice): before ``start``, or from paho's callbacks once an attempt
+        ended, never while a connection of this client is up."""
+        self._v5 = False
+        self._auto = False
+        self._client.use_mqtt311()
+
+    def _fall_back(self, what: str) -> bool:
+        """Rule 1: whether ``auto`` steps down now (then it is said)."""
+        if not (self._auto and self._v5) or self._accepted_once or self._stopping:
+            return False
+        self.use_mqtt311()
+        self._fell_back(what)
+        return True
+
+    def _close_steps_down(self) -> bool:
+        """Rule 1: an MQTT 5 attempt was closed before its CONNACK; whether ``auto`` steps down
+        now (an MQTT 3.1.1 trial since the last such close was accepted), else a trial is
+        started if none runs."""
+        if not self._trusts_closes or self._accepted_once or self._stopping:
+            return False
+        with self._trial_lock:
+            accepted, self._trial_ok = self._trial_ok, False
+            running = self._trial is not None and self._trial.is_alive()
+            if not accepted and not running:
+                self._trial = threading.Thread(
+                    target=self._try_mqtt311, name="mqtt-3.1.1-trial", daemon=True
+                )
+                self._trial.start()
+        return accepted and self._fall_back(
+            "closed MQTT 5 connections before answering them and accepted an MQTT 3.1.1 one "
+            "between two of them"
+        )
+
+    @property
+    def _trusts_closes(self) -> bool:
+        """Rule 1: whether closes may step ``auto`` down (an MQTT 5 attempt, not over TLS)."""
+        return self._auto and self._v5 and not self._settings.tls.enabled
+
+    def _try_mqtt311(self) -> None:
+        """Rule 1: the trial, on its own thread (it blocks for up to a few seconds)."""
+        try:
+            ok = accepts_mqtt311(self._settings, self._client_id)
+        except Exception:  # rule 5: a failed trial is no evidence, and no crash
+            log.debug("MQTT 3.1.1 trial failed", exc_info=True)
+            ok = False
+        with self._trial_lock:
+            self._trial_ok = ok and not self._accepted_once
+
+    def _filters(self) -> list[tuple[str, Any]]:  # the subscriptions, their options (rules 1, 4)
+        return command_filters(self._subscriptions, self._no_replay, self._v5, self._replayed)
+
+    def _intercepted(self, topic: str, payload: bytes) -> bool:
+        """Whether a message is the connection's own business, not the handler's."""
+        return False
+
+    def _tick(self) -> None:
+        """After each round of paho's loop while connected (Client.tick): must be cheap."""
+
+    # -- paho callbacks (paho's thread) ---------------------------------------------------
+    def _on_connect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.ConnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        self._answered = True
+        with self._trial_lock:
+            self._trial_ok = False  # rule 1: an answer, not a close: no evidence for a trial
+        if reason_code.is_failure:
+            self._guard.connect_failed()
+            code = getattr(reason_code, "value", None)
+            if code == UNSUPPORTED_PROTOCOL and self._fall_back(
+                f'refused MQTT 5 ("{reason_code}")'
+            ):
+                return
+            self._refused(str(reason_code))
+            return
+        self._up = True
+        self._accepted_once = True
+        self._guard.connected(self._clock())
+        self._subscribed = False  # until the SUBACK of the command topics
+        self._accepted()
+        if self._on_new_connection is not None:  # before any message of the new connection
+            self._on_new_connection()
+        self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
+        self._command_mid = self._subscribe(client, self._filters())
+        self._opened(client)
+
+    def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
+        with self._trial_lock:
+            self._trial_ok = False  # rule 1: the broker was away: no evidence either way
+        self._guard.connect_failed()
+        self._failed()
+
+    def _on_subscribe(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        mid: int,
+        reason_codes: list[ReasonCode],
+        properties: Properties | None,
+    ) -> None:
+        filters = self._sub_filters.pop(mid, [])
+        if mid == self._command_mid:
+            self._subscribed = True  # the commands reach us from now on
+            if self._on_subscribed is not None:  # (paho reads what comes next after this)
+                self._on_subscribed()
+        for topic, code in zip(filters, reason_codes, strict=False):
+            if code.is_failure:
+                self._denied(topic, str(code))
+
+    def _on_disconnect(
+        self,
+        client: paho.Client,
+        userdata: Any,
+        flags: paho.DisconnectFlags,
+        reason_code: ReasonCode,
+        properties: Properties | None,
+    ) -> None:
+        was, self._up, self._subscribed = self._up, False, False
+        answered, self._answered = self._answered, False
+        self.connected.clear()
+        if not was and not answered and not self._close_steps_down():  # no CONNACK came
+            self._closed_early(str(reason_code))  # rule 6: never silent
+        if not self._closed(was, reason_code):
+            return
+        ending = ending_of(flags, reason_code)
+        fight = self._guard.disconnected(self._clock(), ending)
+        if fight:
+            # paho forgets its back-off on every accepted connection and starts again at the
+            # minimum delay: the minimum is what slows a fight down (rule 7)
+            backoff = self._guard.backoff_s
+            client.reconnect_delay_set(backoff, max(backoff, self._reconnect_s[1]))
+            self._slowed = True
+        elif self._slowed:  # a connection lasted: paho's own delays again
+            client.reconnect_delay_set(*self._reconnect_s)
+            self._slowed = False
+        self._ended(reason_code, ending, fight)
+
+    def _on_message(self, client: paho.Client, userdata: Any, msg: paho.MQTTMessage) -> None:
+        before = self.before_message
+        if before is not None:
+            try:
+                before()  # another connection's messages go before this one's (lane.py rule 4)
+            except Exception:  # rule 5: a courtesy that fails costs neither thread nor message
+                log.exception("error letting the stop lane go first")
+        try:
+            payload = bytes(msg.payload)
+            if not self._intercepted(msg.topic, payload):
+                self._handler(msg.topic, payload, bool(msg.retain), operator_of(msg), stamp_of(msg))
+        except Exception:  # rule 5: a handler bug must not kill paho's network thread
+            log.exception("error handling MQTT message on %s", msg.topic)

@@ -1,0 +1,977 @@
+"""The stop express: a STOP's frame written to the controller by a process of its own.
+
+Every thread of the bridge's process shares one interpreter lock. A stop read by the stop lane
+(lane.py) still waits for that lock at each step (the lane's paho thread, the last word, the
+mailbox, the serial-lines thread) while anything else holds it: the main connection reading a
+backlog of targets, the console, a tracking starting. Bounds and courtesies (lane.py rule 4,
+the front ends' budgets) keep those waits short, not absent. So the stop's frame takes a
+second path that no work of the bridge's process can hold up: a small child process with its
+own interpreter, its own connection to the broker and a copy of each port's descriptor. The
+bridge itself is unchanged: the same stop reaches it on the stop lane and the main connection,
+and its session decides and writes as before; the express only gets the frame to the wire
+first. Both halves live here: ``Express`` in the bridge, ``main`` in the child.
+
+Rules:
+1. A process of its own (``python -m bridge.interfaces.mqtt.express``), started by ``Express.start``
+   once the main connection is up (as the lane: the broker is known to take the bridge), on a
+   thread of its own that then stays to read the child's words (one thread, asleep on a
+   socket, awake once a second to look at the start and the holds, rule 8). The
+   child imports paho, connection.py, the settings and payloads.py (the words of a lock ON),
+   nothing of the engine.
+2. Its connection is the lane's in all but the client id (``express_client_id``): the same
+   broker settings, credentials and TLS (the password handed over the control socket, never
+   on the command line), the protocol the main connection settled on, subscribed to the stop
+   and lock topics, the stop topics of the groups its rotators are in, and its own sync topic
+   (rule 8), without the broker's replay of a retained message (lastword.py rule 6). It
+   publishes its sync words, nothing else.
+3. What it does, and all it does: a message on ``R/stop`` (any payload), a lock ON on
+   ``R/lock`` or a message on ``G/stop`` of a group (each member it writes for), not a
+   replay (under MQTT 3.1.1 a retained flag means "replayed"; the session carries such a
+   stop out once, lastword.py rule 6) nor an empty retained message (the deletion of a
+   retained one: service.py rule 1), is one ``os.write`` of that rotator's stop frame on its
+   copy of the port, at once, if it holds one and may write (rule 8). A tty takes one write
+   whole against the serial-lines thread's (one write a frame too, runtime/port.py) unless its
+   output buffer is nearly full: then the write takes part of the frame, and the rest is owed
+   (rule 9). A write that takes nothing (a full buffer, an unplugged adapter) is let go: the
+   session's own stop follows. It decides nothing else and changes no state: the session
+   still gets the stop from the lane and the main connection, holds, markers and the lock as
+   before, and writes its own stop frame (the controller gets two: ModelSpec.stop_anytime
+   says the model takes that). At most one frame a rotator in GAP_S: a flood on the stop
+   topic must not fill the port's output buffer (the session's own frames would wait behind
+   it, and a full buffer is a lost link, runtime/port.py rule 6); a second stop that soon adds
+   nothing the first did not do, and the session's still comes.
+4. Only models whose stop frame may go at any moment (``ModelSpec.stop_anytime``) get a copy
+   of their port; elsewhere (a SatEL that slews, a SPID that owes replies) the session alone
+   writes, as before.
+5. Ports (runtime/port.py rule 7): the descriptor of each port opened goes to the express over
+   the control socket (SCM_RIGHTS), numbered; before a port is closed the express is told to
+   close its copy and says it did, and the closing thread waits for that (DROP_WAIT_S), since a
+   copy keeps the tty open and its TIOCEXCL would refuse the reopen (until START_WAIT_S after
+   its start while the express has not said a word yet: still starting, not hung). The port
+   going is named by its descriptor: a close that runs late, after the rotator's next port was
+   handed over (an unplug and replug), leaves that one held (the express closed the old copy
+   then). An express that does not answer in time is killed (rule 6) and the port closed all
+   the same.
+6. Never silent: an express not up within START_WAIT_S, one that ends or is killed, one whose
+   connection the broker refuses (said until a connection is accepted) or whose subscription it
+   denies, one whose client id another client keeps taking over (said until a connection of it
+   lasts connection.py's STABLE_S), a frame left half-written (rule 9) and a long hold (rule
+   8) are said on ``B/bridge/info`` (``on_problem``); stops then take the stop lane in the
+   bridge's process, as without it. An express that ended is started again, RESTART_FIRST_S
+   later, the wait doubling for each end in a row up to RESTART_MAX_S (back to the first once
+   one ran for RESTART_STABLE_S); the ports open then are handed to it again.
+7. Shutdown: ``stop`` closes the control socket; the express closes its copies of the ports
+   (a bridge restarted at once finds them free), disconnects and exits on its end of file,
+   and is killed after STOP_WAIT_S. It exits too when the bridge's process dies (the
+   socket's other end closes with it), and only then: it ignores SIGINT and SIGTERM (a service
+   manager or a terminal signals the whole group; the bridge stops its rotators first).
+8. A late frame never stops a newer move. The express may be descheduled between reading a
+   STOP and writing its frame; meanwhile the bridge can carry the same STOP out, read a target
+   published just after it and send the move, which the late frame would then stop. So every
+   stop or lock ON the bridge carries out from MQTT (halts.py) first puts that rotator's
+   targets on a hold of the express's own (session/stops.py rule 5), in the same step, and asks
+   the express for a sync word (a number, over the socket). The express publishes a word of
+   its own on its sync topic (``B/bridge/fence/express``) and answers the request when it
+   reads that word back: the broker had the stop before the word (the bridge had read it
+   before asking), so by then the express has read the stop and written its frame or let it
+   go; the hold ends with the answer. Nothing is counted: the word orders the two
+   connections as the last word's markers do. Each word carries a random mark of its own,
+   known to nobody before it is published: a word another client forges from earlier ones
+   (it may read the topic) or leaves retained there could otherwise come back before the
+   stop and end the hold early; a copy of the real one comes after it. Where it cannot, the
+   express writes nothing and answers at once: while its connection is down (a stop it reads later
+   comes on a subscription made after the bridge read it: this one will never come), and
+   from each connection until a word it published after its last answer given at once came
+   back (it says ``up`` then, not at the SUBACK): a broker that drops its words (an ACL) keeps
+   it from writing, never holds a target. A connection that ends, an express that dies or is
+   not running, answer every request (nothing of it can write any more); no clock ends a
+   hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
+   waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A socket the
+   express does not read (its buffer full) is a hung express: killed, which ends the holds.
+   No send to it ever waits for room (a request, a port handed over or given back): the lock
+   they are sent under is the one every MQTT stop's hold takes before the stop is put in.
+9. A frame is never left half-written. A write that took part of the frame is finished by the
+   express as soon as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
+   it holds up nothing but its own next frame), so no frame of the session's lands inside
+   it. What a half frame with more bytes after it would do (the protocol fact sheets): a
+   GS-232 reads ``S`` then the session's ``M180`` as ``SM180``, an unknown command (``?>``),
+   and an Easycomm ``SA S`` then ``AZ180.0`` as ``SA`` and ``SAZ180.0``: the stop, and the
+   move, lost; a Rotor-EZ's ``;`` is one byte and cannot be cut. No leading byte is added to
+   clear the controller's line first: a GS-232 answers an empty line with ``?>`` (a reply
+   nobody owes: rule 4's reason), and a leading terminator would also carry out a session
+   frame a full buffer had cut short before it (a GS-232's ``M18`` of ``M180``: a move).
+   A frame still unfinished after FINISH_WAIT_S (the line is stuck: the session finds its
+   port lost, runtime/port.py rule 6) is said (rule 6) until that rotator's next whole frame.
+"""
+
+from __future__ import annotations
+
+import array
+import hashlib
+import json
+import logging
+import os
+import secrets
+import select
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.core.afterlock import later
+from bridge.interfaces.mqtt.connection import STABLE_S, Connection, Ending, takeover_message
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+START_WAIT_S = 10.0  # rule 6: said when the express is not up by then
+DROP_WAIT_S = 1.0  # rule 5
+STOP_WAIT_S = 2.0  # rule 7
+GAP_S = 0.1  # rule 3: one stop frame a rotator in this long, at most
+RESTART_FIRST_S = 1.0  # rule 6: the first wait before an express that ended is started again
+RESTART_MAX_S = 60.0  # ... doubling up to this
+RESTART_STABLE_S = 60.0  # ... back to the first once one ran this long
+RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this long
+LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
+TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
+FINISH_WAIT_S = 0.5  # rule 9: the rest of a frame a write cut short, written within this
+_PACKET = 65536
+
+
+def express_client_id(settings: MqttSettings) -> str:
+    """Rule 2: the lane's rule (lane.py rule 2) with its own mark."""
+    main = settings.effective_client_id()
+    if settings.client_id is None and main.startswith("rotor-"):
+        return "rfast-" + main[len("rotor-") :]
+    mine = main + "-fast"
+    if len(mine) <= 23:
+        return mine
+    digest = hashlib.sha256(main.encode()).hexdigest()[:6]
+    return f"{main[:11]}-{digest}-fast"
+
+
+def _send(
+    sock: socket.socket, word: dict[str, Any], fds: list[int] | None = None, flags: int = 0
+) -> None:
+    data = json.dumps(word).encode()
+    if fds:  # (not socket.send_fds: Python 3.11's drops its flags, MSG_DONTWAIT with them)
+        rights = array.array("i", fds).tobytes()
+        sock.sendmsg([data], [(socket.SOL_SOCKET, socket.SCM_RIGHTS, rights)], flags)
+    else:
+        sock.send(data, flags)
+
+
+# -- the bridge's side ---------------------------------------------------------------------------
+class Express:
+    """The child process, seen from the bridge: its ports (rule 5), its start and restarts,
+    its problems (rule 6), its holds (rule 8)."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        *,
+        topics: dict[str, tuple[str, str]],
+        frames: dict[str, bytes],
+        on_problem: Callable[[str, bool], None],
+        command: list[str] | None = None,
+        groups: dict[str, tuple[str, ...]] | None = None,
+        sync_topic: str | None = None,
+        on_hold: Callable[[str, int], None] | None = None,
+        on_release: Callable[[str, int], None] | None = None,
+    ) -> None:
+        """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"); ``frames``:
+        each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
+        each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
+        express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended."""
+        self._settings = settings
+        self.client_id = express_client_id(settings)
+        self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames}
+        self._groups = {
+            t: members
+            for t, all_members in (groups or {}).items()
+            if (members := [m for m in all_members if m in frames])
+        }
+        self._frames = frames
+        self._sync_topic = sync_topic
+        self._on_problem = on_problem
+        self._on_hold = on_hold
+        self._on_release = on_release
+        self._command = command or [sys.executable, "-m", "bridge.interfaces.mqtt.express"]
+        self._lock = threading.Lock()  # the ports, the socket, the child, the holds
+        self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd), while open
+        self._number = 0
+        self._dropped: dict[int, threading.Event] = {}
+        self._sock: socket.socket | None = None
+        self._child: subprocess.Popen[bytes] | None = None
+        self._started = False
+        self._stopping = False
+        self._wake = threading.Event()  # stop(): no restart, no wait for one
+        self._said: set[str] = set()
+        self._sync = 0  # rule 8: the newest sync word asked for
+        self._holds: dict[str, int] = {}  # rotator -> the sync word its hold waits for
+        self._held_since: dict[str, float] = {}  # ... since when (rule 8: resent, said)
+        self._asked_at = 0.0  # when a sync word was last asked for again
+        self.clock: Callable[[], float] = time.monotonic
+        self.up = threading.Event()  # its connection subscribed (the tests wait for it)
+        self.held: set[str] = set()  # the rotators whose port it holds (said by the child)
+        self.held_changed = threading.Event()  # set on every change of ``held`` (the tests)
+        # (rotator, the child's clock) of the latest frames written (the tests, the log)
+        self.wrote: deque[tuple[str, float]] = deque(maxlen=64)
+        self.ended = threading.Event()  # the child is gone (rule 6), until the next starts
+        self.starts = 0  # children started (rule 6: the restarts)
+        self._heard = threading.Event()  # a word from the child: it reads its socket (rule 5)
+        self._started_at = 0.0  # when the child was started (its START_WAIT_S, rule 5)
+
+    @property
+    def wanted(self) -> bool:
+        """Whether any rotator's model lets the express write its stop (rule 4)."""
+        return bool(self._frames)
+
+    def watch(self, rotator_id: str) -> _PortWatch | None:
+        """What the rotator's worker tells of its ports (runtime/port.py rule 7), where rule 4
+        lets the express write."""
+        return _PortWatch(self, rotator_id) if rotator_id in self._frames else None
+
+    def start(self, mqtt311: bool) -> None:
+        """Rule 1: once, never after ``stop``; the child is started off the caller's thread."""
+        with self._lock:
+            if self._started or self._stopping or not self._frames:
+                return
+            self._started = True
+        threading.Thread(
+            target=self._run, args=(mqtt311,), name="stop express", daemon=True
+        ).start()
+
+    def stop(self) -> None:
+        """Rule 7."""
+        with self._lock:
+            self._stopping = True
+            sock, child = self._sock, self._child
+        self._wake.set()
+        if sock is not None:
+            try:
+                sock.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+        if child is not None:
+            try:
+                child.wait(STOP_WAIT_S)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait()
+
+    # -- rule 8: the holds (on the thread that carries a stop out, under the last word's lock)
+    def hold(self, rotator_id: str) -> None:
+        """A stop or lock ON of ``rotator_id`` is being carried out: while an express runs that
+        may write its frame, the rotator's targets wait for the answer to a new sync word."""
+        if rotator_id not in self._frames or self._on_hold is None:
+            return
+        with self._lock:
+            if self._sock is None:
+                return  # no express: nothing of one can write
+            self._sync += 1
+            n = self._sync
+            self._holds[rotator_id] = n
+            self._held_since.setdefault(rotator_id, self.clock())
+            self._on_hold(rotator_id, n)  # before the stop's put (halts.py)
+        later(partial(self._ask, n))  # a system call: once the last word's lock is let go
+
+    def _ask(self, n: int, again: bool = False) -> None:
+        """Rule 8: sync word ``n`` asked for; a socket the express does not read is a hang."""
+        with self._lock:
+            sock = self._sock
+        if sock is None:
+            return  # gone: its end answered every hold
+        try:
+            _send(sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
+        except BlockingIOError:
+            self._kill("does not read its socket")
+        except OSError:
+            pass  # gone: its end answers every hold
+
+    def _answered(self, n: int) -> None:
+        """Rule 8: the holds up to sync word ``n`` end."""
+        with self._lock:
+            done = [rid for rid, m in self._holds.items() if m <= n]
+            for rid in done:
+                del self._holds[rid]
+                self._held_since.pop(rid, None)
+                if self._on_release is not None:
+                    self._on_release(rid, n)
+
+    def _gone(self) -> None:
+        """Under the lock: the child is gone; every hold ends (nothing of it writes)."""
+        self._sock = None
+        for rid in list(self._holds):
+            if self._on_release is not None:
+                self._on_release(rid, self._sync)
+        self._holds.clear()
+        self._held_since.clear()
+
+    def _long_hold(self) -> str:
+        return (
+            "stop express: it has not yet answered for a stop carried out more than "
+            f"{LONG_HOLD_S:g} s ago, and that rotator's targets wait until it does (its "
+            "connection to the broker slow, or the broker dropping its sync words on "
+            f"{self._sync_topic}: check the broker's ACL for client id {self.client_id!r}); "
+            "stops and locks go through"
+        )
+
+    def _tick(self, up: bool, late: str) -> None:
+        """On the reader's thread, once a second while the child starts or a hold waits."""
+        if not up and time.monotonic() - self._started_at >= START_WAIT_S:
+            self._problem(late, True)
+        now = self.clock()
+        with self._lock:
+            oldest = min(self._held_since.values(), default=None)
+            newest = self._sync
+        if oldest is None:
+            self._problem(self._long_hold(), False)
+            return
+        if now - oldest >= RESEND_S and now - self._asked_at >= RESEND_S:
+            self._asked_at = now
+            self._ask(newest, again=True)
+        if now - oldest >= LONG_HOLD_S:
+            self._problem(self._long_hold(), True)
+
+    # -- the ports (runtime/port.py rule 7, on the ports' open and close threads) ---------------
+    def opened(self, rotator_id: str, fd: int) -> None:
+        with self._lock:
+            self._number += 1
+            self._ports[rotator_id] = (self._number, fd)
+            hung = self._sock is not None and not self._hand(rotator_id, self._number, fd)
+        if hung:
+            self._kill("does not read its socket")
+
+    def closing(self, rotator_id: str, fd: int) -> None:
+        with self._lock:
+            number, held = self._ports.get(rotator_id, (0, -1))
+            if held != fd:
+                return  # a newer port's (its close ran late): the express dropped this copy
+            del self._ports[rotator_id]
+            if self._sock is None or self.ended.is_set():
+                return
+            dropped = self._dropped[number] = threading.Event()
+            try:
+                word = {"op": "drop", "rotator": rotator_id, "n": number}
+                _send(self._sock, word, flags=socket.MSG_DONTWAIT)  # (rule 8: no wait under
+                sent = True  # the lock every MQTT stop takes)
+            except BlockingIOError:
+                sent = False
+            except OSError:
+                return  # gone: its copies are closed with it
+        if not sent:
+            self._kill(f"does not read its socket ({rotator_id}'s port going)")
+            dropped.wait(STOP_WAIT_S)  # its end: _run sets it once the child is gone
+            with self._lock:
+                self._dropped.pop(number, None)
+            return
+        # not reading its socket yet is a start (importing Python on a slow machine), no hang
+        wait_s = DROP_WAIT_S
+        if not self._heard.is_set():
+            wait_s = max(wait_s, self._started_at + START_WAIT_S - time.monotonic())
+        if not dropped.wait(wait_s):
+            self._kill(f"did not give {rotator_id}'s port back within {wait_s:.1f} s")
+        with self._lock:
+            self._dropped.pop(number, None)
+
+    def _hand(self, rotator_id: str, number: int, fd: int) -> bool:
+        """Under the lock: a copy of the port to the child (rule 5). Never waits (the lock is
+        every MQTT stop's, rule 8): False when its socket is full (a hung express: the caller
+        kills it once the lock is let go)."""
+        assert self._sock is not None
+        word = {"op": "port", "rotator": rotator_id, "n": number}
+        try:
+            _send(self._sock, word, [fd], socket.MSG_DONTWAIT)
+        except BlockingIOError:
+            return False
+        except OSError as exc:
+            log.warning("stop express: could not hand over %s's port: %s", rotator_id, exc)
+        return True
+
+    # -- the child (rules 1 and 6, on the express's thread) ------------------------------------
+    def _run(self, mqtt311: bool) -> None:
+        """Rule 6: a child, and another after it ends, until ``stop``."""
+        wait_s = RESTART_FIRST_S
+        while True:
+            t0 = time.monotonic()
+            why = self._life(mqtt311)
+            if why is None:  # stopping
+                self.ended.set()
+                return
+            if time.monotonic() - t0 >= RESTART_STABLE_S:
+                wait_s = RESTART_FIRST_S
+            self._ended(f"{why}: started again in {wait_s:g} s")
+            if self._wake.wait(wait_s):
+                return
+            wait_s = min(2 * wait_s, RESTART_MAX_S)
+
+    def _life(self, mqtt311: bool) -> str | None:
+        """One child, from its start to its end: why it ended (None: ``stop``)."""
+        t0 = self._started_at = time.monotonic()
+        self._heard.clear()
+        mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        env = dict(os.environ)
+        root = str(Path(__file__).resolve().parents[2])  # the bridge's own code, whatever runs it
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        with self._lock:
+            if self._stopping:
+                mine.close()
+                theirs.close()
+                return None
+        try:
+            child = subprocess.Popen(
+                [*self._command, str(theirs.fileno())],
+                pass_fds=[theirs.fileno()],
+                stdin=subprocess.DEVNULL,
+                env=env,
+                close_fds=True,
+            )
+        except OSError as exc:
+            theirs.close()
+            mine.close()
+            return f"the stop express could not start: {exc}"
+        theirs.close()
+        self.starts += 1
+        s = self._settings
+        secret = s.password.get_secret_value() if s.password is not None else None
+        config = {
+            "op": "config",
+            "mqtt": {**s.model_dump(mode="json"), "password": secret, "password_file": None},
+            "client_id": self.client_id,
+            "mqtt311": mqtt311,
+            "topics": self._topics,
+            "groups": self._groups,
+            "sync_topic": self._sync_topic,
+            "frames": {rid: frame.hex() for rid, frame in self._frames.items()},
+            "log_level": logging.getLogger("bridge").getEffectiveLevel(),
+        }
+        with self._lock:
+            self._child = child
+            if self._stopping:
+                mine.close()
+                child.kill()
+                child.wait()
+                return None
+            try:
+                _send(mine, config, flags=socket.MSG_DONTWAIT)
+            except OSError:
+                pass  # it died at once: read below as an end of file
+            self._sock = mine
+            self.ended.clear()
+            hung = not all(self._hand(rid, n, fd) for rid, (n, fd) in self._ports.items())
+        if hung:
+            self._kill("does not read its socket")
+        late = f"the stop express did not come up within {START_WAIT_S:g} s"
+        passing: set[str] = set()  # problems said until it is up (rule 6)
+        up = False
+        ticked = time.monotonic()
+        poller = select.poll()  # (not select.select: a bridge with many clients has fds > 1023)
+        poller.register(mine, select.POLLIN)
+        while True:
+            # (a hold put meanwhile: rule 8's tick) The socket stays blocking: a timeout on it
+            # would make every send to it wait for room (MSG_DONTWAIT only fails at once on a
+            # blocking socket), the stops' sends among them.
+            try:
+                readable = poller.poll(TICK_S * 1000)
+                if time.monotonic() - ticked >= TICK_S or not readable:
+                    ticked = time.monotonic()  # (due even while its words keep coming)
+                    self._tick(up, late)
+                if not readable:
+                    continue
+                data = mine.recv(_PACKET)
+            except (OSError, ValueError):
+                data = b""
+            if not data:
+                break
+            self._heard.set()
+            word = json.loads(data)
+            op = word.get("op")
+            if op == "up":
+                up = True
+                ended = [t for t in self._said if t.startswith("the stop express ")]
+                for text in (late, *passing, *ended):
+                    self._problem(text, False)
+                passing.clear()
+                log.info(
+                    "stop express up as %s (pid %d, %.2f s)",
+                    self.client_id,
+                    child.pid,
+                    time.monotonic() - t0,
+                )
+                self.up.set()
+            elif op == "down":  # its connection ended: up again when it is back (rule 8)
+                up = False
+                self._started_at = time.monotonic()
+                self.up.clear()
+            elif op == "synced":
+                self._answered(word["n"])
+            elif op == "held":
+                self._held(word["rotator"], True)
+            elif op == "dropped":
+                self._held(word["rotator"], False)
+                with self._lock:
+                    event = self._dropped.get(word["n"])
+                if event is not None:
+                    event.set()
+            elif op == "wrote":
+                self.wrote.append((word["rotator"], word["t"]))
+                self._problem(self._half(word["rotator"]), False)
+                log.debug("stop express: %s's stop frame written", word["rotator"])
+            elif op == "half":
+                self._problem(self._half(word["rotator"]), True)
+            elif op == "problem":
+                text = f"stop express: {word['text']}"
+                self._problem(text, not word.get("off"))
+                if word.get("until_up"):  # a connection refused: said until one is accepted
+                    passing.add(text)
+        try:
+            code = child.wait(STOP_WAIT_S)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            code = child.wait()
+        with self._lock:
+            stopping = self._stopping
+            self._gone()
+            waiting_drops = list(self._dropped.values())
+        for event in waiting_drops:  # its copies of the ports went with it
+            event.set()
+        mine.close()
+        self.up.clear()
+        self.held.clear()
+        self._problem(self._long_hold(), False)
+        for text in (late, *passing):
+            self._problem(text, False)
+        return None if stopping else f"the stop express ended (exit code {code})"
+
+    def _half(self, rotator_id: str) -> str:
+        return (
+            f"stop express: {rotator_id}'s stop frame is half-written: the port took no more "
+            f"bytes for {FINISH_WAIT_S:g} s (a stuck line, an adapter gone?)"
+        )
+
+    def _held(self, rotator_id: str, held: bool) -> None:
+        if held:
+            self.held.add(rotator_id)
+        else:
+            self.held.discard(rotator_id)
+        self.held_changed.set()
+
+    def _kill(self, why: str) -> None:
+        with self._lock:
+            child = self._child
+        log.error("stop express %s: killed", why)
+        if child is not None:
+            child.kill()  # its copies of the ports close with it; _run says it ended
+
+    def _ended(self, why: str) -> None:
+        """Rule 6: said until the next child is up."""
+        self.ended.set()
+        for event in list(self._dropped.values()):
+            event.set()
+        text = f"{why}; meanwhile stops take the stop lane in the bridge's process"
+        for said in [t for t in self._said if t.startswith("the stop express ")]:
+            self._problem(said, False)
+        self._problem(text, True)
+
+    def _problem(self, text: str, on: bool) -> None:
+        if on == (text in self._said):
+            return
+        if on:
+            self._said.add(text)
+            log.error("%s", text)
+        else:
+            self._said.discard(text)
+        try:
+            self._on_problem(text, on)
+        except Exception:
+            log.exception("error reporting a problem of the stop express")
+
+
+class _PortWatch:
+    """One rotator's ports, told to the express (runtime/port.py PortWatch)."""
+
+    def __init__(self, express: Express, rotator_id: str) -> None:
+        self._express = express
+        self._id = rotator_id
+
+    def opened(self, fd: int) -> None:
+        self._express.opened(self._id, fd)
+
+    def closing(self, fd: int) -> None:
+        self._express.closing(self._id, fd)
+
+
+# -- the child's side ----------------------------------------------------------------------------
+@dataclass
+class Sync:
+    """Rule 8 in the express, pure: the bridge's requests and its own words read back in,
+    the words to publish and the answers out. Its caller holds one lock around each call."""
+
+    linked: bool = False  # a connection accepted, not yet ended (its subscription may come)
+    writing: bool = False  # a word published after the last answer given at once came back
+    _word: int = 0  # words published so far
+    _clean_from: int = 0  # only a word numbered above this lets it write
+    _out: dict[int, int] = field(default_factory=dict)  # word out -> the newest request it answers
+    _asked: int = 0  # the newest request
+    _answered: int = 0  # the newest request answered
+
+    def asked(self, n: int, again: bool = False) -> tuple[int | None, int | None]:
+        """Request ``n``: (the answer to give now, the word to publish now), each or None."""
+        self._asked = max(self._asked, n)
+        if not self.linked or not self.writing:
+            # it writes nothing now, and nothing older later: only a word published after
+            # this answer lets it write again (those out now answer nothing more: forgotten,
+            # or a broker that drops them would have them pile up, one a stop)
+            self._clean_from = self._word
+            self._out.clear()
+            return self._answer_all(), self._publish() if self.linked else None
+        if again or not self._out:  # a word out now was published before the request
+            return None, self._publish()
+        return None, None
+
+    def read_back(self, w: int) -> tuple[int | None, int | None]:
+        """Its word ``w`` came back: (the answer to give, the next word to publish)."""
+        if w not in self._out:
+            return None, None  # an earlier connection's, or answered already
+        upto = self._out[w]
+        for k in [k for k in self._out if k <= w]:
+            del self._out[k]
+        if w > self._clean_from:
+            self.writing = True
+        answer = None
+        if upto > self._answered:
+            self._answered = answer = upto
+        word = self._publish() if self._asked > self._answered and not self._out else None
+        return answer, word
+
+    def accepted(self) -> None:
+        """A connection accepted (before it subscribes): its words are still to come."""
+        self.linked, self.writing = True, False
+        self._clean_from = self._word
+        self._out.clear()
+
+    def subscribed(self) -> int:
+        """Its subscriptions are acknowledged: the first word to publish (rule 8's ``up``)."""
+        return self._publish()
+
+    def ended(self) -> int | None:
+        """The connection ended: the answer to every request (nothing more comes on it)."""
+        self.linked = self.writing = False
+        self._out.clear()
+        return self._answer_all()
+
+    def _answer_all(self) -> int | None:
+        if self._asked <= self._answered:
+            return None
+        self._answered = self._asked
+        return self._answered
+
+    def _publish(self) -> int:
+        self._word += 1
+        self._out[self._word] = self._asked
+        return self._word
+
+
+class _Link(Connection):
+    """The express's connection (rule 2): the lane's hooks, its words to the bridge."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        client_id: str,
+        say: Callable[..., None],
+        on_link: Callable[[bool], None],
+        **kw: Any,
+    ):
+        super().__init__(settings, client_id, **kw)
+        self._auto = False  # the main connection settled the protocol (rule 2)
+        self._say = say
+        self._on_link = on_link
+        self._fight: str | None = None  # rule 6: a takeover fight said, until a connection lasts
+
+    def publish(self, topic: str, payload: str) -> None:
+        self._client.publish(topic, payload, qos=0)
+
+    def _refused(self, reason: str) -> None:
+        self._say(
+            op="problem", text=f"the MQTT broker refused its connection: {reason}", until_up=True
+        )
+
+    def _failed(self) -> None:
+        pass  # the main connection says why the broker cannot be reached
+
+    def _accepted(self) -> None:
+        self._on_link(True)  # before it subscribes (rule 8)
+
+    def _denied(self, topic: str, reason: str) -> None:
+        self._say(
+            op="problem", text=f"the MQTT broker does not let it subscribe to {topic}: {reason}"
+        )
+
+    def _closed_early(self, reason: str) -> None:
+        pass
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        if was_up:
+            self._on_link(False)  # after its last message (rule 8)
+        else:
+            text = f"the MQTT broker closed its connection: {reason_code}"
+            self._say(op="problem", text=text, until_up=True)
+        return was_up
+
+    def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
+        log.debug("stop express disconnected (%s)", reason_code)
+        if fight and self._fight is None:  # rule 6: said, not only slowed down
+            self._fight = takeover_message(self._client_id, ending)
+            self._say(op="problem", text=self._fight)  # (the bridge logs it)
+
+    def _tick(self) -> None:
+        """Rule 6: a fight said is unsaid once a connection lasted STABLE_S (cheap: a compare)."""
+        since = self._guard.connected_at
+        if self._fight is not None and since is not None and self._clock() - since >= STABLE_S:
+            self._say(op="problem", text=self._fight, off=True)
+            self._fight = None
+
+
+class _Child:
+    """The express itself (rules 3, 5, 8 and 9): the ports it holds, the frames it writes."""
+
+    def __init__(self, sock: socket.socket, config: dict[str, Any]) -> None:
+        self._sock = sock
+        self._send_lock = threading.Lock()
+        self._lock = threading.Lock()  # the ports: never closed while written to
+        self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd)
+        self._topics: dict[str, list[str]] = {
+            t: [r] for t, (r, k) in config["topics"].items() if k == "stop"
+        }
+        self._locks: dict[str, str] = {
+            t: r for t, (r, k) in config["topics"].items() if k == "lock"
+        }
+        for t, members in (config.get("groups") or {}).items():
+            self._topics[t] = list(members)
+        self._frames = {rid: bytes.fromhex(f) for rid, f in config["frames"].items()}
+        self._v5 = not config["mqtt311"]
+        self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
+        self.clock: Callable[[], float] = time.monotonic
+        self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
+        self._sync_topic: str | None = config.get("sync_topic")
+        self._marks: dict[int, str] = {}  # rule 8: each word out -> its own random mark
+        self._sync_lock = threading.Lock()
+        self.sync = Sync()
+        self._upped = False  # rule 8: ``up`` said on this connection
+        settings = MqttSettings.model_validate(config["mqtt"])
+        filters = [*self._topics, *self._locks]
+        self.link = _Link(
+            settings,
+            config["client_id"],
+            self.say,
+            self._linked,
+            subscriptions=[*filters, *([self._sync_topic] if self._sync_topic else [])],
+            on_message=self.on_message,
+            on_subscribed=self._subscribed,
+            no_replay=filters,
+        )
+        if config["mqtt311"]:
+            self.link.use_mqtt311()
+
+    def say(self, **word: Any) -> None:
+        with self._send_lock:
+            try:
+                _send(self._sock, word)
+            except OSError:
+                pass  # the bridge is gone: the main loop ends on it
+
+    # -- rule 8 -------------------------------------------------------------------------------
+    def _publish(self, word: int | None) -> None:
+        """A word out, with a mark of its own nobody could know before it was published: a
+        word another client forges, or left retained, is not its own (rule 8)."""
+        if word is None or self._sync_topic is None:
+            return
+        mark = secrets.token_hex(8)
+        with self._sync_lock:
+            self._marks[word] = mark
+        self.link.publish(self._sync_topic, f"{mark} {word}")
+
+    def _answer(self, answer: int | None) -> None:
+        if answer is not None:
+            self.say(op="synced", n=answer)
+
+    def asked(self, n: int, again: bool) -> None:
+        """A request from the bridge (its socket's thread)."""
+        with self._sync_lock:
+            answer, word = self.sync.asked(n, again)
+            if answer is not None:
+                self._marks.clear()  # (as Sync forgot its words out)
+            self._answer(answer)  # (under the lock: the answers in order)
+        self._publish(word)
+
+    def _linked(self, up: bool) -> None:
+        """Paho's thread: a connection accepted (before it subscribes), or ended."""
+        with self._sync_lock:
+            self._marks.clear()  # (as Sync forgets its words out)
+            if up:
+                self.sync.accepted()
+                return
+            self._answer(self.sync.ended())
+            if self._upped:
+                self._upped = False
+                self.say(op="down")
+
+    def _subscribed(self) -> None:
+        with self._sync_lock:
+            word = self.sync.subscribed()
+        self._publish(word)
+
+    def _read_back(self, payload: bytes) -> None:
+        mark, _, number = payload.decode("ascii", "replace").partition(" ")
+        if not number.isdigit():
+            return
+        w = int(number)
+        with self._sync_lock:
+            if self._marks.get(w) != mark:
+                return  # another's, forged or replayed (rule 8)
+            for k in [k for k in self._marks if k <= w]:
+                del self._marks[k]  # (as Sync forgets its words out up to it)
+            answer, word = self.sync.read_back(w)
+            self._answer(answer)
+            if self.sync.writing and not self._upped:
+                self._upped = True
+                self.say(op="up")
+        self._publish(word)
+
+    # -- rule 3 -------------------------------------------------------------------------------
+    def on_message(
+        self, topic: str, payload: bytes, retain: bool, operator: str | None, stamp: Stamp | None
+    ) -> None:
+        """Rule 3, on paho's thread."""
+        if topic == self._sync_topic:
+            self._read_back(payload)
+            return
+        rids = self._topics.get(topic)
+        if rids is None:
+            rid = self._locks.get(topic)
+            if rid is None or not _switch_on(payload):
+                return
+            rids = [rid]
+        if retain and (not self._v5 or not payload):
+            return  # a replay (3.1.1), or a retained message being deleted (service.py rule 1)
+        if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
+            return
+        for rid in rids:
+            self._stop(rid)
+
+    def _stop(self, rid: str) -> None:
+        with self._lock:
+            held, now = self._ports.get(rid), self.clock()
+            if held is None or now < self._next.get(rid, now):
+                return
+            done = self._write_whole(held[1], self._frames[rid])
+            if done is None:
+                return  # rule 3: nothing went; the session's own stop follows
+            self._next[rid] = now + GAP_S
+        if done:
+            self.say(op="wrote", rotator=rid, t=now)
+        else:
+            self.say(op="half", rotator=rid)
+
+    def _write_whole(self, fd: int, frame: bytes) -> bool | None:
+        """Rule 9: True: the frame written whole; None: nothing of it; False: half of it."""
+        try:
+            done = self.write(fd, frame)
+        except OSError:
+            return None
+        if done >= len(frame):
+            return True
+        rest, end = frame[done:], self.clock() + FINISH_WAIT_S
+        while rest:
+            left = end - self.clock()
+            if left <= 0:
+                return False
+            try:
+                select.select([], [fd], [], left)
+                rest = rest[self.write(fd, rest) :]
+            except BlockingIOError:
+                continue
+            except (OSError, ValueError):
+                return False
+        log.info("a stop frame cut short by a full output buffer was finished")
+        return True
+
+    def serve(self) -> None:
+        """The bridge's words until its end of file (rule 7)."""
+        while True:
+            try:
+                data, fds, _flags, _addr = socket.recv_fds(self._sock, _PACKET, 4)
+            except OSError:
+                break
+            if not data:
+                break
+            word = json.loads(data)
+            rid, number = word.get("rotator"), word.get("n")
+            if word.get("op") == "sync":
+                self.asked(int(word["n"]), bool(word.get("again")))
+            elif word.get("op") == "port" and fds:
+                with self._lock:
+                    old = self._ports.get(rid)
+                    self._ports[rid] = (number, fds[0])
+                if old is not None:
+                    os.close(old[1])
+                self.say(op="held", rotator=rid, n=number)
+            elif word.get("op") == "drop":
+                with self._lock:
+                    held = self._ports.get(rid)
+                    if held is not None and held[0] == number:
+                        del self._ports[rid]
+                        os.close(held[1])
+                self.say(op="dropped", rotator=rid, n=number)
+            for extra in fds[1:] if word.get("op") == "port" else fds:
+                os.close(extra)
+        with self._lock:  # the bridge is gone: its ports are free at once (rule 7)
+            for _number, fd in self._ports.values():
+                os.close(fd)
+            self._ports.clear()
+
+
+def _switch_on(payload: bytes) -> bool:
+    try:
+        return parse_switch(payload)
+    except PayloadError:
+        return False
+
+
+def main(argv: list[str]) -> int:
+    sock = socket.socket(fileno=int(argv[1]))
+    data = sock.recv(_PACKET)
+    if not data:
+        return 0
+    config = json.loads(data)
+    for sig in (signal.SIGINT, signal.SIGTERM):  # rule 7: it ends with the bridge, not before
+        signal.signal(sig, signal.SIG_IGN)
+    logging.basicConfig(
+        level=config.get("log_level", logging.INFO),
+        format="stop express: %(levelname)s %(message)s",
+    )
+    child = _Child(sock, config)
+    child.link._connect()
+    try:
+        child.serve()
+    finally:
+        child.link._disconnect()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,172 @@
+"""Groups: rotators turned together from one topic (``[[groups]]``, settings/groups.py). Pure:
+what a group's target asks of each member, and the group's status from its members'. The
+service (service.py rule 10) hands each member's part to that member's own judge and the
+group's stop to the last word (halts.py), as a stop of every member.
+
+Rules:
+1. A group's target is a bearing, or an azimuth and an elevation (the payloads of a rotator's
+   ``R/target``); a place or a call is refused (each member would point at it from where it
+   stands, not with the group's offsets). An elevation is refused, for the whole group, unless
+   every member has an elevation axis: nothing moves.
+2. Each member's part is one ``Target``: the group's azimuth plus the member's offset, brought
+   into 0..360; the elevation as given. The group's azimuth itself must be 0..360 (an
+   offset would make 361 a bearing the member takes). A part outside the member's group limits (true
+   bearings, after its offset) is that member's refusal, decided here.
+3. The others still turn: a member's refusal, here or by its own judge (its limits, its lock,
+   the wind, its lease, its link), is reported on the group's error topic and in the group's
+   status, and costs the other members nothing (docs/groups.md says why).
+4. The group's status is its members' (each one's bearing, elevation, state, availability)
+   with the refusals of the group's last target; the group's bearing is its first member's
+   less that member's offset. A group is available while any member is: a stop must reach
+   whichever member can still hear one.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from bridge.core.model import MotionState, Origin, RotatorStatus, Source, Target
+from bridge.interfaces.mqtt import payloads as pl
+
+
+@dataclass(frozen=True)
+class Member:
+    id: str
+    offset_deg: float = 0.0
+    limits_deg: tuple[float, float] | None = None  # true bearings, after the offset (rule 2)
+
+
+@dataclass(frozen=True)
+class Group:
+    id: str
+    name: str
+    members: tuple[Member, ...]
+
+    @property
+    def member_ids(self) -> tuple[str, ...]:
+        return tuple(m.id for m in self.members)
+
+
+@dataclass(frozen=True)
+class Part:
+    """One member's part of a group's target: a target for its judge, or why none (rule 2)."""
+
+    member: str
+    target: Target | None
+    refused: str | None = None
+
+
+def member_bearing(az_deg: float, offset_deg: float) -> float:
+    """Rule 2: a member's azimuth for the group's ``az_deg``, brought into 0..360 (a member
+    without an offset gets the group's bearing as sent: 360 stays 360)."""
+    return az_deg if offset_deg == 0 else (az_deg + offset_deg) % 360.0
+
+
+def fan_out(
+    group: Group,
+    payload: bytes,
+    has_elevation: Mapping[str, bool],
+    origin: Origin | None = None,
+) -> list[Part]:
+    """The group target ``payload`` as each member's part (rules 1 and 2); PayloadError when
+    it is no target for a group (nothing moves)."""
+    aim = pl.parse_aim(payload)
+    if not isinstance(aim, tuple):
+        raise pl.PayloadError(
+            "a group turns to a bearing (or an azimuth and an elevation): a place or a call is "
+            "sent to each rotator's own target topic"
+        )
+    az, el = aim
+    if not 0 <= az <= 360:  # an offset must not turn a bearing no rotator takes into one
+        raise pl.PayloadError(f"a group's azimuth is a bearing 0..360, not {az:g}")
+    if el is not None:
+        flat = [m.id for m in group.members if not has_elevation.get(m.id, False)]
+        if flat:
+            raise pl.PayloadError(
+                f"an elevation for group {group.id}, but {', '.join(flat)} turns in azimuth only"
+            )
+    parts = []
+    for m in group.members:
+        member_az = member_bearing(az, m.offset_deg)
+        lo_hi = m.limits_deg
+        if lo_hi is not None and not lo_hi[0] <= member_az <= lo_hi[1]:
+            parts.append(
+                Part(
+                    m.id,
+                    None,
+                    f"{member_az:g} is outside {m.id}'s limits in group {group.id} "
+                    f"({lo_hi[0]:g}..{lo_hi[1]:g})",
+                )
+            )
+            continue
+        parts.append(Part(m.id, Target(member_az, el, Source.MQTT, origin=origin)))
+    return parts
+
+
+def refusals_json(group: Group, command: str, refused: Mapping[str, str]) -> str:
+    """The group's error event (rule 3): which members did not take the command, and why."""
+    names = ", ".join(refused)
+    doc = {
+        "kind": "refused",
+        "command": command,
+        "message": f"group {group.id}: not taken by {names}; the others turn",
+        "members": dict(refused),
+    }
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def group_available(statuses: Mapping[str, RotatorStatus | None]) -> bool:
+    """Rule 4: while any member is available."""
+    return any(s is not None and s.available for s in statuses.values())
+
+
+def group_state(statuses: Mapping[str, RotatorStatus | None]) -> MotionState:
+    """Moving while any member moves; offline when none is available; else the first
+    member's state that is not idle, or idle."""
+    known = [s for s in statuses.values() if s is not None and s.available]
+    if not known:
+        return MotionState.OFFLINE
+    if any(s.state is MotionState.MOVING for s in known):
+        return MotionState.MOVING
+    for s in known:
+        if s.state is not MotionState.IDLE:
+            return s.state
+    return MotionState.IDLE
+
+
+def group_bearing(group: Group, statuses: Mapping[str, RotatorStatus | None]) -> float | None:
+    """Rule 4: the first member with a bearing, less its offset."""
+    for m in group.members:
+        s = statuses.get(m.id)
+        if s is not None and s.bearing_deg is not None:
+            return round((s.bearing_deg - m.offset_deg) % 360.0, 1)
+    return None
+
+
+def status_json(
+    group: Group,
+    statuses: Mapping[str, RotatorStatus | None],
+    refused: Mapping[str, str],
+) -> str:
+    """The group's retained status (rule 4)."""
+    members = {}
+    for m in group.members:
+        s = statuses.get(m.id)
+        members[m.id] = {
+            "bearing": None if s is None else s.bearing_deg,
+            "elevation": None if s is None else s.elevation_deg,
+            "state": MotionState.OFFLINE.value if s is None else s.state.value,
+            "available": s is not None and s.available,
+            "offset": m.offset_deg,
+        }
+    doc = {
+        "bearing": group_bearing(group, statuses),
+        "state": group_state(statuses).value,
+        "moving": any(s is not None and s.moving for s in statuses.values()),
+        "available": group_available(statuses),
+        "members": members,
+        "refused": dict(refused),
+    }
+    return json.dumps(doc, separators=(",", ":"))

@@ -1,0 +1,416 @@
+"""Stop and lock from both MQTT connections, in the order lastword.py decides (service.py rule
+5): the stop lane's messages, the main connection's halts, the markers and their resend, the
+retained halts, the report of a long hold. lastword.py decides; this carries its decisions out
+into the rotators, each decision and the mailbox put it lets through under one lock.
+
+One timer at a time (TICK_S, while a hold or a marker is out or a long hold is reported) sends
+a marker again and reports a long hold on ``B/bridge/info`` (``on_info``, never on paho's
+threads); it decides nothing (lastword.py rule 5): no hold ends by it.
+
+A group's stop (``G/stop``, interfaces/mqtt/groups.py) is a stop of each of its members, on either
+connection: the same decisions, member by member, in one step under the same lock (a lane's
+group stop holds every member; the main connection's copy is each member's copy), and one
+marker for them all, the newest. A member whose stop raises costs the others nothing: the
+failure is logged and the next member is stopped.
+
+Every stop and lock ON carried out here is first shown to the stop express (``express``,
+interfaces/mqtt/express.py rule 8), which may put the rotator's targets on a hold of its own, in the
+same step: the express may still be writing its frame for that stop, and a target sent before it
+did would be stopped by it.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+
+from bridge.core.afterlock import Deferring
+from bridge.core.model import Lock, Origin, Source, Stop
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.groups import Group
+from bridge.interfaces.mqtt.lastword import LONG_HOLD_S, LastWord
+from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
+from bridge.interfaces.mqtt.topics import Topics
+
+log = logging.getLogger(__name__)
+
+TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
+
+
+def switch_on(payload: bytes) -> bool:
+    try:
+        return pl.parse_switch(payload)
+    except pl.PayloadError:
+        return False
+
+
+def _switch_off(payload: bytes) -> bool:
+    try:
+        return not pl.parse_switch(payload)
+    except pl.PayloadError:
+        return False
+
+
+class Halts:
+    def __init__(
+        self,
+        topics: Topics,
+        publisher: Publisher,
+        rotators: dict[str, RotatorPort],
+        clock: Callable[[], float],
+        *,
+        retain_is_live: bool,
+        on_problem: Callable[[str, str], None] | None,
+        on_info: Callable[[str, bool], None] | None = None,
+        groups: dict[str, Group] | None = None,
+        report_group: Callable[[str, str, str], None] | None = None,
+    ) -> None:
+        """``groups``: the service's (groups added later are seen here too);
+        ``report_group``: (group id, message, command) on the group's error topic."""
+        self.topics = topics
+        self._groups = {} if groups is None else groups
+        self._report_group = report_group
+        self._publisher = publisher
+        self._rotators = rotators  # the service's: rotators attached later are seen here too
+        self._clock = clock
+        self.retain_is_live = retain_is_live
+        self._on_problem = on_problem  # (topic, problem): a broker problem the bridge reports
+        self._on_info = on_info  # (problem, still so): said on B/bridge/info while it lasts
+        self.word = LastWord()
+        # two connections, two paho threads; the owner steps under it wake the lines thread and
+        # start the state writer once it has let go (kept.py rule 5)
+        self._lock = Deferring()
+        self._timer: threading.Timer | None = None
+        self._said: dict[str, str] = {}  # rotator -> its long hold, as said (on_info)
+        # the stop express's hold (interfaces/mqtt/express.py rule 8), asked before each halt's put
+        self.express: Callable[[str], None] | None = None
+
+    def main_gone(self) -> None:
+        """The main connection dropped, or is new (before its first message): holds end with
+        clearing (lastword.py rule 5)."""
+        with self._lock:
+            for rid in self.word.main_gone():
+                rot = self._rotators.get(rid)
+                if rot is not None:
+                    rot.release(0, clear=True)
+
+    def lane_connected(self) -> None:
+        with self._lock:
+            self.word.lane_connected()
+
+    def lane_subscribed(self) -> None:
+        """The lane's subscription is acknowledged (lastword.py rule 9), on its paho thread:
+        before any message it brings."""
+        with self._lock:
+            n = self.word.lane_subscribed(self._clock())
+        if n is not None:
+            self._send_marker(n)
+
+    def markers_denied(self) -> None:
+        """The broker does not let the main connection read its markers (lastword.py rule 7):
+        none goes out; a lane's halt holds until its main copy. The holds stay."""
+        with self._lock:
+            self.word.markers_denied()
+
+    def markers_allowed(self) -> None:
+        """A probe came back on a new connection: markers go out again (lastword.py rule 7)."""
+        with self._lock:
+            self.word.markers_allowed()
+
+    def lane_markers_denied(self) -> None:
+        """The lane cannot read its markers: no echo is expected (lastword.py rule 4)."""
+        with self._lock:
+            self.word.echoes = False
+
+    def _holds_possible(self) -> bool:
+        return self._publisher.up
+
+    def carry(
+        self,
+        rot: RotatorPort,
+        kind: str,
+        what: str,
+        hold: int | None = None,
+        origin: Origin | None = None,
+        echo: bool = False,
+    ) -> None:
+        """A stop or a lock ON, into the mailbox (under the word lock: lastword.py's decision
+        and the put are one step). ``origin``: who sent it; ``echo``: the main connection's
+        copy of one the lane carried out (the audit trail has it once)."""
+        halt = (
+            Stop(Source.MQTT, origin)
+            if kind == "stop"
+            else Lock(True, source=Source.MQTT, origin=origin)
+        )
+        if self.express is not None:  # its hold before the halt (interfaces/mqtt/express.py rule 8)
+            try:
+                self.express(rot.id)
+            except Exception:  # a bug there never costs the stop
+                log.exception("%s: the stop express's hold failed", rot.id)
+        rot.submit(halt, what, hold=hold, echo=echo)
+
+    def _send_marker(self, n: int) -> None:
+        self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+        self._arm()
+
+    def _arm(self) -> None:
+        """One timer at most looks again in TICK_S while there is something to look at."""
+        with self._lock:
+            busy = self.word.holding or self.word.markers_out or self._said
+            if self._timer is not None or not busy:
+                return
+            timer = self._timer = threading.Timer(TICK_S, self._tick)
+        timer.daemon = True
+        timer.start()
+
+    def _tick(self) -> None:
+        with self._lock:
+            self._timer = None
+        self.resend_if_due()
+        self.say_long_holds()
+        self._arm()
+
+    def resend_if_due(self) -> None:
+        """lastword.py rule 5: a marker the broker dropped is sent again (a new number)."""
+        with self._lock:
+            n = self.word.resend_due(self._clock())
+        if n is None:
+            return
+        log.info("a marker of the stop lane did not come back yet; sending another")
+        self._publisher.publish_marker(self.topics.bridge_fence, self.word.marker(n))
+
+    def say_long_holds(self) -> None:
+        """lastword.py rule 5: a long hold is said while it lasts (logged once), and unsaid
+        when it ends; it holds all the same."""
+        with self._lock:
+            held = self.word.long_holds(self._clock())
+            markers = self.word.markers
+            ended = {rid: said for rid, said in self._said.items() if rid not in held}
+            new = {rid: self._long_hold(rid, markers) for rid in held if rid not in self._said}
+            for rid in ended:
+                del self._said[rid]
+            self._said.update(new)
+        for problem in new.values():
+            log.warning("%s", problem)
+            if self._on_info is not None:
+                self._on_info(problem, True)
+        for rid, problem in ended.items():
+            log.info("%s: the hold of the stop lane ended", rid)
+            if self._on_info is not None:
+                self._on_info(problem, False)
+
+    def _long_hold(self, rid: str, markers: bool) -> str:
+        caught_up = (
+            f"its marker on {self.topics.bridge_fence} comes back"
+            if markers
+            else "it reads its own copy of the stop or lock"
+        )
+        return (
+            f"{rid}: a stop or lock from the stop lane has held this rotator's targets for more "
+            f"than {LONG_HOLD_S:g} s: the main connection has not yet read everything published "
+            f"before it (a flood of targets, a slow link?). Targets wait until {caught_up}; "
+            "stops and locks go through"
+        )
+
+    def marker_back(self, payload: bytes) -> None:
+        with self._lock:
+            n, released = self.word.marker_back(payload)
+            self._release(released, n)
+
+    def _release(self, released: list[str] | tuple[str, ...], marker: int) -> None:
+        """Under the lock: the holds of ``released`` up to ``marker`` end."""
+        for rid in released:
+            rot = self._rotators.get(rid)
+            if rot is not None:
+                rot.release(marker)
+
+    def on_lane_marker(self, payload: bytes) -> None:
+        """The lane read its marker (lastword.py rule 4)."""
+        with self._lock:
+            self.word.lane_marker_back(payload)
+
+    def replayed_halt(self, rot: RotatorPort, topic: str, kind: str, payload: bytes) -> None:
+        """lastword.py rule 6 under MQTT 3.1.1: a replayed retained stop or lock ON, once."""
+        what = pl.describe(kind, payload)
+        with self._lock:
+            if not self.word.retained_halt(topic, payload, replayed=True):
+                log.debug("%s: retained %s on %s already carried out once", rot.id, kind, topic)
+                return
+            self.carry(rot, kind, what)
+        self.report_retained_halt(rot, topic, kind, what)
+
+    def report_retained_halt(self, rot: RotatorPort, topic: str, kind: str, what: str) -> None:
+        rot.report_refusal(
+            f"{kind} on {topic} was published retained: executed (stopping is always safe), "
+            "but clear it with an empty retained message",
+            what,
+        )
+
+    def on_lane(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        origin: Origin | None = None,
+        late: Callable[[], str | None] = lambda: None,
+    ) -> None:
+        """The stop lane's messages (rule 5; lastword.py rules 2-4 and 6). ``late``: why a
+        stamped lock OFF is too old to carry out (service.py rule 9), asked only of the OFF it
+        would carry out; a stop or lock ON is never asked."""
+        if topic == self.topics.bridge_fence_lane:
+            self.on_lane_marker(payload)
+            return
+        route = self.topics.route(topic)
+        if route is None and not (retain and not payload):
+            group = self.topics.group_route(topic)
+            if group is not None and group[1] == "stop":
+                self.lane_group_stop(group[0], topic, payload, retain, origin)
+            return
+        if route is None or (retain and not payload):
+            return
+        rotator_id, kind, _arg = route
+        rot = self._rotators.get(rotator_id)
+        if rot is None or kind not in ("stop", "lock"):
+            return
+        if kind == "lock" and not switch_on(payload):
+            if retain or not _switch_off(payload):
+                return  # the main connection refuses or reports it
+            with self._lock:  # lastword.py rule 3: the only word while it is down
+                if self._publisher.up:
+                    return
+                why = late()
+                if why is None:
+                    rot.submit(
+                        Lock(False, source=Source.MQTT, origin=origin), pl.describe(kind, payload)
+                    )
+            if why is not None:  # a link held it up: refused as the main connection would
+                rot.report_refusal(why, pl.describe(kind, payload), origin=origin)
+            return
+        if retain and not self.retain_is_live:
+            self.replayed_halt(rot, topic, kind, payload)
+            return
+        what = pl.describe(kind, payload)
+        with self._lock:
+            marker = self.word.lane_halt(rotator_id, kind, self._clock(), self._holds_possible())
+            if marker is None:
+                log.debug("%s: %s on the stop lane: already carried out", rotator_id, kind)
+                return  # lastword.py rule 4: the echo of the main connection's copy
+            self.carry(rot, kind, what, hold=marker or None, origin=origin)
+        if marker and self.word.markers:
+            self._send_marker(marker)
+        elif marker:
+            self._arm()  # (a long hold is said)
+
+    def main_halt(
+        self,
+        rot: RotatorPort,
+        topic: str,
+        kind: str,
+        what: str,
+        retain: bool,
+        origin: Origin | None = None,
+    ) -> None:
+        """A stop or lock ON read on the main connection: carried out in order (rule 1), noted
+        for rule 4."""
+        with self._lock:
+            copy = self.word.main_halt(rot.id, kind)
+            self.carry(rot, kind, what, origin=origin, echo=copy.echo)
+            self._release(copy.released, copy.upto)  # lastword.py rule 9
+        if copy.lane_marker is not None:
+            marker = self.word.marker(copy.lane_marker)
+            self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
+        if retain:  # published retained, live (MQTT 5): carried out, and reported
+            self.report_retained_halt(rot, topic, kind, what)
+
+    def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
+        """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
+        with self._lock:
+            if not self.word.main_lock_off(rot.id):
+                log.info("%s: lock OFF published before a lock ON: the ON stands", rot.id)
+                return
+            rot.submit(Lock(False, source=Source.MQTT, origin=origin))
+
+    def retained_deleted(self, topic: str) -> None:
+        with self._lock:
+            self.word.retained_halt(topic, b"", replayed=True)  # forgotten (rule 6)
+
+    # -- a group's stop: a stop of each member (the module's docstring) ------------------------
+    def _members(self, group_id: str) -> list[RotatorPort]:
+        group = self._groups.get(group_id)
+        if group is None:
+            return []
+        return [rot for mid in group.member_ids if (rot := self._rotators.get(mid)) is not None]
+
+    def _stop_member(
+        self, rot: RotatorPort, what: str, hold: int | None, origin: Origin | None, echo: bool
+    ) -> None:
+        """Under the lock: one member's stop; a failure is this member's alone."""
+        try:
+            self.carry(rot, "stop", what, hold=hold, origin=origin, echo=echo)
+        except Exception:
+            log.exception("%s: the group's stop failed for this member", rot.id)
+
+    def lane_group_stop(
+        self, group_id: str, topic: str, payload: bytes, retain: bool, origin: Origin | None
+    ) -> None:
+        """A group's stop read on the lane: each member's stop carried out at once, each on
+        hold (lastword.py rule 2), one marker (the newest) for them all."""
+        members = self._members(group_id)
+        if not members:
+            return
+        if retain and not self.retain_is_live:
+            self.replayed_group_stop(group_id, topic, payload)
+            return
+        what = pl.describe("stop", payload)
+        newest = held = 0
+        with self._lock:
+            for rot in members:
+                marker = self.word.lane_halt(rot.id, "stop", self._clock(), self._holds_possible())
+                if marker is None:
+                    continue  # lastword.py rule 4: this member's echo
+                self._stop_member(rot, what, marker or None, origin, False)
+                newest, held = max(newest, marker), held + 1
+        if newest and self.word.markers:
+            self._send_marker(newest)
+        elif newest:
+            self._arm()
+        log.debug("%s: stop on the stop lane for %d member(s)", group_id, held)
+
+    def main_group_stop(
+        self, group_id: str, topic: str, what: str, retain: bool, origin: Origin | None = None
+    ) -> None:
+        """A group's stop read on the main connection: each member's, in order (rule 1); one
+        lane marker, the newest, for the members the lane had no copy of (lastword.py rule 4)."""
+        lane_marker: int | None = None
+        with self._lock:
+            for rot in self._members(group_id):
+                copy = self.word.main_halt(rot.id, "stop")
+                self._stop_member(rot, what, None, origin, copy.echo)
+                self._release(copy.released, copy.upto)  # lastword.py rule 9
+                if copy.lane_marker is not None:
+                    lane_marker = copy.lane_marker
+        if lane_marker is not None:
+            marker = self.word.marker(lane_marker)
+            self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
+        if retain:
+            self._report_retained_group_stop(group_id, topic, what)
+
+    def replayed_group_stop(self, group_id: str, topic: str, payload: bytes) -> None:
+        """lastword.py rule 6 under MQTT 3.1.1: a replayed retained group stop, once."""
+        what = pl.describe("stop", payload)
+        with self._lock:
+            if not self.word.retained_halt(topic, payload, replayed=True):
+                return
+            for rot in self._members(group_id):
+                self._stop_member(rot, what, None, None, False)
+        self._report_retained_group_stop(group_id, topic, what)
+
+    def _report_retained_group_stop(self, group_id: str, topic: str, what: str) -> None:
+        if self._report_group is not None:
+            self._report_group(
+                group_id,
+                f"stop on {topic} was published retained: executed (stopping is always safe), "
+                "but clear it with an empty retained message",
+                what,
+            )

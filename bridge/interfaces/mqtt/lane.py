@@ -1,0 +1,181 @@
+"""The stop lane: stop and lock on an MQTT connection of their own (issue 14, item 13).
+
+One connection delivers its messages in order: a stop published behind a flood of targets
+waited until the bridge had read every one of them (100,000 targets in 10 s on 32 rotators:
+stops reached their controllers 0.85 to 3.9 s late). The broker writes what a subscriber gets
+on that subscriber's socket, so a second connection subscribed only to ``R/stop`` and
+``R/lock`` is a lane no target is queued in; its own paho thread reads it, and the message goes
+to the same handler as the main connection's (the service: the same rules for retained stops,
+payloads and the lock).
+
+Rules:
+1. Subscribed to the stop and lock topics only, a group's stop too (the main connection has
+   them, and its copies keep the order: lastword.py decides what each copy does, so a lane
+   that is down or refused loses no stop, only speed). The stop topics are subscribed
+   without the broker's replay of a retained stop (lastword.py rule 6). It publishes nothing:
+   no will, no state; the main connection (client.py) is the bridge's presence and carries
+   its markers.
+2. Same broker settings as the main connection (credentials, TLS, protocol, clean start,
+   retain-as-published, QoS 0 for commands: client.py rules 1 and 4), and the same TCP
+   quick-ack (client.py rule 9): both are connection.py's Connection, which builds, connects
+   and subscribes them. Under ``mqtt.protocol = "auto"`` it speaks what the main connection
+   settled on (the app calls ``use_mqtt311`` before ``start``). Client id: ``lane_client_id``
+   (the main id with ``rstop-`` for ``rotor-``, as long; an explicit id gets ``-stop``,
+   shortened with a hash to 23 characters if it would be longer).
+3. A lane the broker refuses (while the main connection is up: a client-id ACL, a connection
+   limit) or a subscription it denies is an error, logged once and handed to ``on_denied``
+   (the bridge's problems, B/bridge/info): stops then take the main connection only. Its own
+   disconnects are logged at debug level (the main connection says the same). Its takeover
+   back-off is client.py rule 7's (connection.py), counting only connections that were
+   accepted.
+4. The lane goes first (``first``, the main connection's ``before_message``): the main
+   connection's thread calls it before each message it hands on, and while the lane's socket
+   has bytes waiting it sleeps in steps of YIELD_S, up to YIELD_MAX_S in all, so the lane's
+   thread takes the interpreter lock and a core, reads its stop and carries it out. A thread
+   reading a backlog of targets otherwise keeps both: the lock changes hands within the switch
+   interval only when the thread asking for it runs, and on a busy machine the kernel ran the
+   reader instead, for up to ~90 ms. One poll of a socket per message (about a microsecond); a
+   backlog is read no slower when no stop comes. The wait is a courtesy, never a condition:
+   past YIELD_MAX_S the main connection goes on, and past YIELD_BUDGET_S in a second (a flood
+   of anything on the stop and lock topics keeps the lane's socket busy) it waits no more in
+   that second; what comes on the lane keeps its order rules (lastword.py) whenever it is read.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import select
+import threading
+import time
+from collections.abc import Callable
+from typing import Unpack
+
+import paho.mqtt.client as paho
+from paho.mqtt.reasoncodes import ReasonCode
+
+from bridge.interfaces.mqtt.connection import Connection, Ending, MessageHandler, Options
+from bridge.settings import MqttSettings
+
+log = logging.getLogger(__name__)
+
+YIELD_S = 0.0002  # rule 4: one step of the main connection's wait
+YIELD_MAX_S = 0.02  # rule 4: at most this long per message
+YIELD_BUDGET_S = 0.1  # rule 4: ... and this long in all per second (a flood on the lane)
+
+
+def lane_client_id(settings: MqttSettings) -> str:
+    """Rule 2: as short as the main id where that one is generated (23 characters at most)."""
+    main = settings.effective_client_id()
+    if settings.client_id is None and main.startswith("rotor-"):
+        return "rstop-" + main[len("rotor-") :]
+    lane = main + "-stop"
+    if len(lane) <= 23:
+        return lane
+    digest = hashlib.sha256(main.encode()).hexdigest()[:6]
+    return f"{main[:11]}-{digest}-stop"
+
+
+class StopLane(Connection):
+    def __init__(
+        self,
+        settings: MqttSettings,
+        *,
+        subscriptions: list[str],
+        on_message: MessageHandler,
+        on_denied: Callable[[str, str], None] | None = None,
+        **options: Unpack[Options],
+    ) -> None:
+        self.client_id = lane_client_id(settings)
+        super().__init__(
+            settings, self.client_id, subscriptions=subscriptions, on_message=on_message, **options
+        )
+        self._auto = False  # the main connection settles the protocol (use_mqtt311, rule 2)
+        self._on_denied = on_denied
+        self._stopped = False  # stop() was called: start() does nothing any more
+        self._started = False
+        self._start_lock = threading.Lock()
+        self._reported: set[str] = set()
+        self.clock: Callable[[], float] = time.monotonic  # rule 4 (the tests give their own)
+        self.sleep: Callable[[float], None] = time.sleep
+        self._window_t = -1e18  # rule 4: the second the main connection's waits are counted in
+        self._yielded = 0.0
+
+    def first(self) -> None:
+        """Rule 4, on the main connection's thread: while the lane has bytes to read, wait."""
+        sock = self._client.socket()
+        if sock is None or not self.connected.is_set():
+            return
+        t0 = self.clock()
+        if t0 - self._window_t >= 1.0:
+            self._window_t, self._yielded = t0, 0.0
+        # time that passed, not steps asked for: on a busy machine a step of YIELD_S can take
+        # tens of milliseconds before this thread has the interpreter lock back
+        left = min(YIELD_MAX_S, YIELD_BUDGET_S - self._yielded)
+        t = t0
+        try:
+            while t - t0 < left and select.select([sock], [], [], 0)[0]:
+                self.sleep(YIELD_S)  # the interpreter lock and a core for the lane's thread
+                t = self.clock()
+        except (OSError, ValueError):  # closed meanwhile: the lane's own thread notices
+            pass
+        self._yielded += t - t0
+
+    def start(self) -> None:
+        """Once; never after ``stop()`` (a shutdown under way: the lane stays down)."""
+        with self._start_lock:
+            if self._stopped or self._started:
+                return
+            self._started = True
+            self._connect()
+
+    def stop(self) -> None:
+        with self._start_lock:
+            self._stopped = True
+            started = self._started
+        if started:
+            self._disconnect()
+
+    # -- connection.py's hooks (the lane's own paho thread) ---------------------------------
+    def _refused(self, reason: str) -> None:
+        self._report(f"the MQTT broker refused the stop lane's connection: {reason}")
+
+    def _failed(self) -> None:
+        pass  # the main connection says why the broker cannot be reached
+
+    def _accepted(self) -> None:
+        pass
+
+    def _opened(self, client: paho.Client) -> None:
+        self.connected.set()
+        log.debug("stop lane connected as %s", self.client_id)
+
+    def _denied(self, topic: str, reason: str) -> None:
+        self._report(
+            f"the MQTT broker does not let the bridge subscribe to {topic}: {reason}", topic
+        )
+
+    def _closed_early(self, reason: str) -> None:
+        pass  # _closed reports it, as the lane's own problem
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        if not was_up:  # closed before it was accepted (a connection limit): no takeover evidence
+            self._report(f"the MQTT broker closed the stop lane's connection: {reason_code}")
+        return was_up
+
+    def _ended(self, reason_code: ReasonCode, ending: Ending, fight: bool) -> None:
+        log.debug("stop lane disconnected (%s)", reason_code)  # the main connection says why
+
+    def _report(self, problem: str, topic: str = "") -> None:
+        """Rule 3: once per problem, an error, handed on (never on paho's thread)."""
+        if problem in self._reported:
+            return
+        self._reported.add(problem)
+        log.error(
+            "%s (stops still come on the main connection, without the lane's speed; check the "
+            "broker's ACL and connection limits for client id %r)",
+            problem,
+            self.client_id,
+        )
+        if self._on_denied is not None:
+            threading.Thread(target=self._on_denied, args=(topic, problem), daemon=True).start()

@@ -1,0 +1,162 @@
+"""The first look of every connect, as the main connection takes it (client.py rule 14), and
+what is said of deleting retained configs (rule 15): bookkeeping and log lines, without paho,
+a lock or a clock. The client asks under its own lock and publishes what this says; the
+verdicts themselves are claim.py's.
+
+Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of them):
+14. One live bridge per base topic. On every connect, after subscribing and before publishing
+   or deleting anything, the client publishes a hello to itself on ``B/bridge/hello`` (QoS 1,
+   as the fence probe sent right before it, client.py rule 16; not retained: nothing of it
+   stays on the broker, and it names the instance and the look's number, so a late hello of an
+   earlier look, or another bridge's, ends nothing). The broker handles one client's packets in
+   order and sends the retained messages of a subscription before anything published after it:
+   so the retained ``B/bridge/info`` and ``B/bridge/state`` that arrive before the hello comes
+   back are all the broker held (``saw``).
+   Its coming back ends the look (``end``): claim.py's verdict on what was seen. REFUSE: the
+   bridge refuses to run, publishing nothing. OURS: the deletions of retained configs asked
+   for during the look (``defer_clear``: Home Assistant's stale discovery) are sent. TAKE_OVER
+   (said once, in the log), or a look that timed out (an ACL that denies the hello), or any
+   look after one of those in this process: nothing is deleted, and the configs are named in
+   the log as left alone (claim rule 3). Another instance's info arriving while the bridge runs
+   is judged by claim rule 4 (``live_info``).
+15. Deleting a retained config (``clear_retained``) is said in the log, but a flood of them
+   (thousands of configs published under the bridge's node ids) is a few lines: a few at once
+   (CLEARS_SAID_AT_ONCE), then one a minute (client.py's FOREIGN_LOG_S, the limiter it hands
+   to ``say_clear``) for each of "cleared" and "left alone", the next line saying how many
+   were not logged; a look's deletions are one line, naming CLEARS_NAMED topics at most.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from bridge.interfaces.mqtt.claim import Claim, Instance, Verdict, first_look, refusal, yields_to
+from bridge.interfaces.mqtt.limiter import EventLimiter
+
+log = logging.getLogger(__name__)
+
+CLEARS_SAID_AT_ONCE = 3  # rule 15
+CLEARS_NAMED = 10  # rule 15: topics named in one line
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How a look ended: ``refused`` (the error to exit with), or open with ``clears`` to
+    delete (``clear``) or to leave alone."""
+
+    refused: str | None
+    clear: bool
+    clears: list[str]
+
+
+class FirstLook:
+    def __init__(self, claim: Claim, will_topic: str) -> None:
+        self.claim = claim
+        self._state_topic = will_topic  # ``B/bridge/state``
+        self._looks = 0
+        self.looking: int | None = None  # the look under way: its number
+        self._seen: dict[str, bytes] = {}  # retained info/state seen during the look
+        self._clears: list[str] = []
+        self._took_over = False  # for the life of the process (claim rule 3)
+
+    def _hello(self, n: int) -> bytes:
+        return f"{self.claim.me.id} {n}".encode()
+
+    def begin(self) -> bytes:
+        """A new look: the hello to publish."""
+        self._looks += 1
+        n = self.looking = self._looks
+        self._seen = {}
+        self._clears = []
+        return self._hello(n)
+
+    def ended_by(self, payload: bytes) -> int | None:
+        """The look that a hello heard back ends, if any."""
+        n = self.looking
+        return n if n is not None and payload == self._hello(n) else None
+
+    def saw(self, topic: str, payload: bytes) -> bool:
+        """Whether a message belongs to the look under way (and is kept for its verdict)."""
+        if self.looking is None or topic not in (self.claim.info_topic, self._state_topic):
+            return False
+        self._seen[topic] = payload
+        return True
+
+    def defer_clear(self, topic: str) -> bool:
+        """Whether a deletion waits for the look's verdict."""
+        if self.looking is None:
+            return False
+        self._clears.append(topic)
+        return True
+
+    def end(self, *, timed_out: bool) -> Outcome:
+        """The look under way ends (timed out: judged on what was seen)."""
+        self.looking = None
+        info, state = self._seen.get(self.claim.info_topic), self._seen.get(self._state_topic)
+        verdict = first_look(self.claim.me, info, state)
+        if verdict is Verdict.OURS and (timed_out or self._took_over):
+            verdict = Verdict.TAKE_OVER  # not known to be ours: delete nothing (claim rule 3)
+        clears, self._clears = self._clears, []
+        other = Instance.parse(info or b"")
+        if verdict is Verdict.REFUSE:
+            assert other is not None
+            message = refusal(self.claim.base_topic, other, live_since_look=False)
+            return Outcome(refused=message, clear=False, clears=[])
+        if verdict is Verdict.TAKE_OVER and not (timed_out or self._took_over):
+            self._took_over = True
+            log.warning(
+                "taking over base topic %r from %s, which is offline",
+                self.claim.base_topic,
+                other.described() if other else "another bridge",
+            )
+        return Outcome(refused=None, clear=verdict is Verdict.OURS, clears=clears)
+
+    def say_timed_out(self, timeout_s: float) -> None:
+        log.warning(
+            "no answer to the bridge's first look in %g s (does the broker's ACL deny %s?): "
+            "judging by what the broker showed so far, and deleting no stale discovery",
+            timeout_s,
+            self.claim.hello_topic,
+        )
+
+    def live_info(self, payload: bytes) -> str | None:
+        """Claim rule 4: the error to exit with, if another live bridge's info means this one
+        must go."""
+        other = Instance.parse(payload)
+        if other is not None and yields_to(self.claim.me, other):
+            return refusal(self.claim.base_topic, other, live_since_look=True)
+        return None
+
+
+def say_clears(outcome: Outcome) -> None:
+    """Rule 15: a look's deletions, one line."""
+    clears = outcome.clears
+    if not clears:
+        return
+    named = ", ".join(clears[:CLEARS_NAMED])
+    rest = len(clears) - CLEARS_NAMED
+    some = f"{named} and {rest} more" if rest > 0 else named
+    if outcome.clear:
+        log.info("cleared %d retained config(s) this bridge no longer makes: %s", len(clears), some)
+    else:
+        log.warning(
+            "left alone %d retained config(s) this bridge does not generate, as the base "
+            "topic was not its own (delete them by hand if that bridge is gone for good): %s",
+            len(clears),
+            some,
+        )
+
+
+def say_clear(said: EventLimiter, topic: str, *, cleared: bool) -> None:
+    """Rule 15: one deletion, ``cleared`` or left alone (another client's config)."""
+    left_out = said.admit("cleared" if cleared else "left alone")
+    if left_out is None:
+        return
+    more = f" ({left_out} more like it not logged)" if left_out else ""
+    if cleared:
+        log.info("cleared %s, a retained config this bridge no longer makes%s", topic, more)
+    else:
+        log.warning(
+            "%s was published by another client: not ours to delete; left alone%s", topic, more
+        )

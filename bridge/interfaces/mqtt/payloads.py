@@ -1,0 +1,424 @@
+"""Inbound payloads parsed, outbound payloads rendered. Pure functions, no paho.
+
+Inbound rules: UTF-8 text at most MAX_COMMAND_BYTES long; numbers are finite decimals; a target
+is a bare azimuth (``123``, ``123.5``), ``az el`` (space or comma), a JSON object
+``{"azimuth": a, "elevation": e}``, or a place: a bare Maidenhead locator of 4, 6 or 8
+characters (``PM95vq``; a two-letter field only in JSON: ``JA`` is more often a preset's name),
+``{"locator": "PM95vq"}`` or ``{"latitude": 35.7, "longitude": 139.7}``, each with an optional
+``"path": "long"``; switches are ON/OFF, 1/0, true/false in any case. Anything else raises
+PayloadError with a message meant for the user.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from bridge.core import geo
+from bridge.core.model import RotatorStatus, TargetInfo
+from bridge.feature import status_blocks
+from bridge.interfaces.mqtt.call_payload import Called, CallError, parse_called
+from bridge.pointing import Pointing
+from bridge.protocols.base import ModelSpec, Setting, SettingKind
+
+MAX_COMMAND_BYTES = 256
+MAX_NAME_CHARS = 64  # a preset's or a satellite's name
+_SPLIT = re.compile(r"[\s,;]+")
+# ASCII digits only: Python's float() also takes "１３３" and "١٤٤"
+_NUMBER = re.compile(r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$")
+#: json.dumps(doc, separators=(",", ":")), the encoder made once (dumps makes one each call)
+_COMPACT = json.JSONEncoder(separators=(",", ":"))
+_TRUE = {"on", "1", "true"}
+_FALSE = {"off", "0", "false"}
+
+
+class PayloadError(ValueError):
+    pass
+
+
+def _text(payload: bytes) -> str:
+    if len(payload) > MAX_COMMAND_BYTES:
+        raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")
+    try:
+        text = payload.decode("utf-8").strip()
+    except UnicodeDecodeError:
+        raise PayloadError("payload is not UTF-8 text") from None
+    if not text:
+        raise PayloadError("empty payload")
+    return text
+
+
+def _number(raw: object, what: str) -> float:
+    if isinstance(raw, bool) or raw is None:
+        raise PayloadError(f"{what} must be a number, got {json.dumps(raw)}")
+    if isinstance(raw, int | float):
+        value = float(raw)
+    elif isinstance(raw, str) and _NUMBER.match(raw.strip()):
+        value = float(raw)
+    else:
+        shown = raw if isinstance(raw, str) else json.dumps(raw)
+        raise PayloadError(f"{what} must be a number, got {str(shown)[:40]!r}")
+    if not math.isfinite(value):
+        raise PayloadError(f"{what} must be a finite number")
+    return value
+
+
+@dataclass(frozen=True)
+class Place:
+    """A target named by where it is; the bearing comes from the station (pointing.py)."""
+
+    latitude_deg: float | None  # None (with longitude): the place of the current target
+    longitude_deg: float | None
+    locator: str | None = None
+    long_path: bool = False
+
+
+def _json_object(text: str, what: str) -> dict[str, object]:
+    try:
+        obj = json.loads(text, parse_constant=lambda c: c)  # NaN/Infinity stay strings
+    except json.JSONDecodeError as exc:
+        raise PayloadError(f"bad JSON: {exc.msg}") from None
+    if not isinstance(obj, dict):
+        raise PayloadError(f"JSON {what} must be an object")
+    return obj
+
+
+def parse_aim(payload: bytes) -> tuple[float, float | None] | Place | Called:
+    """A target (parse_target), a place (a locator or coordinates), or a call (call_payload.py),
+    short or long path."""
+    text = _text(payload)
+    if len(text) == 2 and text.isalpha():  # a preset's name or a word sent to the wrong topic
+        raise PayloadError(
+            f"{text!r} is no bearing; a bare locator has 4, 6 or 8 characters (a field alone: "
+            f'{{"locator": "{text}"}}; a preset goes to the preset topic)'
+        )
+    if geo.is_locator(text) or _looks_like_locator(text):
+        return _place(text, None, None, False)  # a bad locator gets the locator's error
+    if not text.startswith("{"):
+        return parse_target(payload)
+    obj = _json_object(text, "target")
+    if "call" in obj:
+        try:
+            return parse_called(obj)
+        except CallError as exc:
+            raise PayloadError(str(exc)) from None
+    if not {"locator", "latitude", "longitude", "path"} & set(obj):
+        return parse_target(payload)
+    unknown = set(obj) - {"locator", "latitude", "longitude", "path"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in a place target: {', '.join(sorted(unknown))}")
+    path = obj.get("path", "short")
+    if path not in ("short", "long"):
+        raise PayloadError(f'"path" must be "short" or "long", got {json.dumps(path)[:20]}')
+    locator = obj.get("locator")
+    if locator is not None:
+        if "latitude" in obj or "longitude" in obj:
+            raise PayloadError('give "locator" or "latitude"/"longitude", not both')
+        if not isinstance(locator, str):
+            raise PayloadError('"locator" must be text, e.g. "PM95vq"')
+        return _place(locator.strip(), None, None, path == "long")
+    if set(obj) == {"path"}:  # the current place, the other way round (HA's long path button)
+        return Place(None, None, None, path == "long")
+    if "latitude" not in obj or "longitude" not in obj:
+        raise PayloadError('a place needs "locator", or "latitude" and "longitude"')
+    lat, lon = _number(obj["latitude"], "latitude"), _number(obj["longitude"], "longitude")
+    if not -90 <= lat <= 90 or not -180 <= lon <= 180:
+        raise PayloadError("latitude must be -90..90 and longitude -180..180")
+    return _place(None, lat, lon, path == "long")
+
+
+def _looks_like_locator(text: str) -> bool:
+    """Two letters, then a digit, and a locator's length (``JZ62``): a bad locator, no number."""
+    return (
+        len(text) in geo.LOCATOR_LENGTHS
+        and text[:2].isalpha()
+        and (len(text) == 2 or text[2].isdigit())
+    )
+
+
+def _place(locator: str | None, lat: float | None, lon: float | None, long: bool) -> Place:
+    if locator is not None:
+        try:
+            lat, lon = geo.parse_locator(locator)
+        except geo.LocatorError as exc:
+            raise PayloadError(str(exc)) from None
+        locator = locator.upper()[:4] + locator.lower()[4:6] + locator[6:]
+    assert lat is not None and lon is not None
+    return Place(lat, lon, locator, long)
+
+
+def parse_nudge(payload: bytes) -> tuple[float, float | None]:
+    """(azimuth step, elevation step or None): ``+10``, ``-10`` or ``{"azimuth": 5, ...}``."""
+    text = _text(payload)
+    if not text.startswith("{"):
+        return _number(text, "nudge"), None
+    obj = _json_object(text, "nudge")
+    unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
+    if unknown or not obj:
+        raise PayloadError('a nudge is a number, or JSON {"azimuth": 5, "elevation": -2}')
+    _one_name_each(obj)
+    az, el = obj.get("azimuth", obj.get("az", 0)), obj.get("elevation", obj.get("el"))
+    return _number(az, "azimuth"), None if el is None else _number(el, "elevation")
+
+
+def _one_name_each(obj: dict[str, object]) -> None:
+    """``{"az": 30, "azimuth": 181}`` names one axis twice: which did the sender mean?"""
+    for long, short in (("azimuth", "az"), ("elevation", "el")):
+        if long in obj and short in obj:
+            raise PayloadError(f'give "{long}" or "{short}", not both')
+
+
+def parse_name(payload: bytes, what: str) -> str:
+    text = _text(payload)
+    if any(not c.isprintable() for c in text):
+        raise PayloadError(f"{what} must be printable text")
+    return text
+
+
+def parse_track(payload: bytes) -> tuple[str, tuple[str, str, str] | None]:
+    """``R/track``: ``sun``, ``moon``, ``off``, a satellite's name from the TLE file, or JSON
+    ``{"tle": ["NAME", "1 ...", "2 ..."]}`` (the name line may be left out). The elements are
+    checked by the rotator (sky.Body.satellite)."""
+    text = _text(payload)
+    if not text.startswith("{"):
+        if len(text) > MAX_NAME_CHARS or not text.isprintable():
+            raise PayloadError(f"track: a name of at most {MAX_NAME_CHARS} printable characters")
+        return text, None
+    doc = _json_object(text, "track")
+    lines = doc.get("tle")
+    if set(doc) != {"tle"} or not isinstance(lines, list) or len(lines) not in (2, 3):
+        raise PayloadError('track: JSON must be {"tle": ["NAME", "1 ...", "2 ..."]}')
+    if not all(isinstance(line, str) for line in lines):
+        raise PayloadError("track: the TLE lines must be strings")
+    strings = [str(line).strip() for line in lines]
+    if len(strings) == 2:
+        strings.insert(0, "")
+    name, line1, line2 = strings
+    name = name or line1[2:7].strip()  # the catalog number, as a TLE file without names
+    return name, (name, line1, line2)
+
+
+FOLLOW_SOURCES = ("wsjtx",)  # what R/follow can follow (session/follow.py)
+
+
+def parse_follow(payload: bytes) -> tuple[bool, bool]:
+    """``R/follow``: ``wsjtx`` or ``off``, or JSON ``{"source": "wsjtx", "path": "long"}``;
+    (on, long path)."""
+    text = _text(payload)
+    doc = _json_object(text, "follow") if text.startswith("{") else {"source": text}
+    unknown = set(doc) - {"source", "path"}
+    if unknown:
+        raise PayloadError(f"unknown key(s) in follow: {', '.join(sorted(unknown))}")
+    source, path = doc.get("source"), doc.get("path", "short")
+    if not isinstance(source, str) or source.strip().lower() not in (*FOLLOW_SOURCES, "off"):
+        shown = repr(source[:20]) if isinstance(source, str) else json.dumps(source)
+        raise PayloadError(f"follow: expected wsjtx or off, got {shown}")
+    if path not in ("short", "long"):
+        raise PayloadError(f'follow: "path" must be "short" or "long", got {json.dumps(path)}')
+    return source.strip().lower() != "off", path == "long"
+
+
+def parse_target(payload: bytes) -> tuple[float, float | None]:
+    """(azimuth, elevation or None). Limits are checked later, in one place (the rotator)."""
+    text = _text(payload)
+    if text.startswith("{"):
+        obj = _json_object(text, "target")
+        unknown = set(obj) - {"azimuth", "elevation", "az", "el"}
+        if unknown:
+            raise PayloadError(f"unknown key(s) in target: {', '.join(sorted(unknown))}")
+        _one_name_each(obj)
+        az_raw = obj.get("azimuth", obj.get("az"))
+        el_raw = obj.get("elevation", obj.get("el"))
+        if az_raw is None:
+            raise PayloadError('JSON target needs "azimuth"')
+        az = _number(az_raw, "azimuth")
+        return az, None if el_raw is None else _number(el_raw, "elevation")
+    parts = [p for p in _SPLIT.split(text) if p]
+    if not parts or len(parts) > 2:
+        raise PayloadError(f"target must be 'azimuth' or 'azimuth elevation', got {text[:40]!r}")
+    az = _number(parts[0], "azimuth")
+    el = _number(parts[1], "elevation") if len(parts) == 2 else None
+    return az, el
+
+
+def parse_number(payload: bytes, what: str) -> float:
+    """One bare number (also as a JSON number)."""
+    return _number(_text(payload), what)
+
+
+def text(payload: bytes) -> str:
+    """A payload as text: UTF-8, stripped, not empty, not too large (PayloadError)."""
+    return _text(payload)
+
+
+def parse_switch(payload: bytes) -> bool:
+    text = _text(payload).lower()
+    if text in _TRUE:
+        return True
+    if text in _FALSE:
+        return False
+    raise PayloadError(f"expected ON or OFF, got {text[:20]!r}")
+
+
+def describe(kind: str, payload: bytes) -> str:
+    """How a refused command is echoed back on the error topic (short, printable)."""
+    shown = payload[:40].decode("utf-8", "replace")
+    more = "…" if len(payload) > 40 else ""
+    return f"{kind} {shown!r}{more}" if payload else kind
+
+
+def number(value: float) -> str:
+    if value == int(value):
+        return str(int(value))
+    return f"{value:.2f}".rstrip("0").rstrip(".")
+
+
+def switch(value: bool) -> str:
+    return "ON" if value else "OFF"
+
+
+def target_info(info: TargetInfo) -> dict[str, object]:
+    return {
+        "locator": info.locator,
+        "latitude": round(info.latitude_deg, 4),
+        "longitude": round(info.longitude_deg, 4),
+        "distance_km": round(info.distance_km, 1),
+        "short_path_deg": round(info.short_path_deg, 1),
+        "long_path_deg": round(info.long_path_deg, 1),
+        "path": info.path,
+    }
+
+
+@dataclass(frozen=True)
+class ConsoleFacts:
+    """What a console far from the station draws beyond the judge's terms (``R/info``'s
+    ``station``, ``beamwidth``, ``nudge_step``, ``satellites``)."""
+
+    station: tuple[float, float] | None = None  # latitude, longitude (degrees)
+    locator: str | None = None
+    beamwidth_deg: float = 60.0
+    nudge_step_deg: float = 5.0
+    satellites: tuple[str, ...] = ()  # the TLE file's names when the bridge started
+
+
+def setting_info(setting: Setting) -> dict[str, object]:
+    """What ``R/option/<name>`` takes, for R/info (protocols/base.py ``Setting``): its name,
+    label and kind, a number's range, step and unit, a choice's names."""
+    doc: dict[str, object] = {"name": setting.name, "label": setting.label, "kind": setting.kind}
+    if setting.kind is SettingKind.NUMBER:
+        doc.update(min=setting.minimum, max=setting.maximum, step=setting.step, unit=setting.unit)
+    elif setting.kind is SettingKind.CHOICE:
+        doc["choices"] = list(setting.choices)
+    return doc
+
+
+def info_json(
+    name: str,
+    spec: ModelSpec,
+    pointing: Pointing,
+    can_track: bool,
+    console: ConsoleFacts | None = None,
+    rotator_id: str | None = None,
+) -> str:
+    """``R/info``: what a rotator is and may do, for a client far from the station (limits,
+    sectors, presets, capabilities as the station's configuration has them; true bearings);
+    with ``console``, what a console there draws too."""
+    lo, hi = pointing.target_range()
+    doc: dict[str, object] = {
+        "id": rotator_id,
+        "name": name,
+        "model": spec.name,
+        "model_name": spec.display_name,
+        "has_elevation": spec.has_elevation,
+        "can_report_position": spec.can_report_position,
+        "can_track": can_track,
+        "azimuth_range": [lo, hi],
+        "elevation_range": [pointing.el_min_deg, pointing.el_max_deg]
+        if spec.has_elevation
+        else None,
+        "keep_out": [list(sector) for sector in pointing.keep_out],
+        "park": list(pointing.park) if pointing.park is not None else None,
+        "options": sorted(spec.options),
+        "settings": [setting_info(s) for s in spec.settings],
+    }
+    if console is not None:
+        where = console.station
+        doc["station"] = (
+            {"latitude": where[0], "longitude": where[1], "locator": console.locator}
+            if where is not None
+            else None
+        )
+        doc["beamwidth"] = console.beamwidth_deg
+        doc["nudge_step"] = console.nudge_step_deg
+        doc["satellites"] = list(console.satellites)
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:
+    """``R/presets``: name -> azimuth, or [azimuth, elevation]; whole degrees without ".0", as
+    the user wrote them in the configuration."""
+
+    def num(x: float) -> float | int:
+        return int(x) if x.is_integer() else x
+
+    doc = {n: num(az) if el is None else [num(az), num(el)] for n, (az, el) in presets.items()}
+    return json.dumps(doc, separators=(",", ":"))
+
+
+def status_json(
+    status: RotatorStatus, time_unix: float, has_elevation: bool, shows_raw: bool = False
+) -> str:
+    doc: dict[str, object] = {
+        "bearing": status.bearing_deg,
+        "target": status.target_az_deg,
+    }
+    if has_elevation:
+        doc["elevation"] = status.elevation_deg
+        doc["target_elevation"] = status.target_el_deg
+    if status.controller_time is not None:
+        doc["controller_time"] = status.controller_time
+    if status.expected_end_unix is not None:
+        doc["expected_end"] = _iso(status.expected_end_unix)
+    if shows_raw:
+        doc["raw_bearing"] = status.raw_bearing_deg
+        doc["overlap"] = status.overlap
+    if status.target_info is not None:
+        doc["target_info"] = target_info(status.target_info)
+    doc["parked"] = status.parked
+    tail = []  # the blocks rendered once (rotor health's, once per move), last
+    for block in status_blocks():  # bridge/feature.py: each feature's, in the registry's order
+        value = block.value(status)
+        if value is None:
+            continue
+        if block.rendered:
+            tail.append(f',"{block.key}":{block.render(value)}')
+        else:
+            doc[block.key] = block.render(value)
+    doc.update(
+        state=status.state.value,
+        moving=status.moving,
+        connected=status.connected,
+        available=status.available,
+        locked=status.locked,
+        version=status.version,
+        options={k: v for k, v in sorted(status.options.items())},
+        last_error=status.last_error,
+        last_command_source=status.last_command_source,
+        last_operator=status.last_operator,
+        control=None
+        if status.control is None
+        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
+        estimated=status.estimated,
+        time=_iso(time_unix),
+    )
+    text = _COMPACT.encode(doc)
+    if not tail:
+        return text
+    return f"{text[:-1]}{''.join(tail)}}}"
+
+
+def _iso(time_unix: float) -> str:
+    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")

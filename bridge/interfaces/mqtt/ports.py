@@ -1,0 +1,58 @@
+"""What the MQTT front end (service.py, halts.py) sees of a rotator and of the broker."""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from bridge.core.model import Command, RotatorStatus
+from bridge.front import FrontRotator
+from bridge.pointing import Pointing
+from bridge.protocols.base import ModelSpec
+
+
+class RotatorPort(FrontRotator, Protocol):
+    """A rotator as the service sees it: every command through ``submit`` (front.py rule 1),
+    with the stop lane's hold and echo (halts.py)."""
+
+    id: str
+    name: str  # as dashboards show it
+    spec: ModelSpec
+    pointing: Pointing
+    can_track: bool  # a station and a controller that reports where it points
+    last_halt_s: float  # when a STOP or lock ON was last put in (monotonic; runtime/rotator.py)
+
+    @property
+    def status(self) -> RotatorStatus: ...
+    @property
+    def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (session/follow.py)
+    def submit(
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+        echo: bool = False,
+    ) -> None: ...
+    def release(self, marker: int, *, clear: bool = False) -> None: ...
+
+
+class Publisher(Protocol):
+    """The broker connection as the service uses it (bridge.interfaces.mqtt.client.MqttClient).
+
+    ``publish_retained`` with ``only_if_changed`` sends nothing when the payload equals the last
+    one for that topic (rule 3). ``publish_offline_now`` marks retained topics ``offline`` and
+    waits until the broker has them (shutdown). ``publish_marker`` sends a message to the
+    bridge itself, at QoS 0, now or never (lastword.py); ``up``: a connection is accepted.
+    """
+
+    def publish_retained(
+        self, topic: str, payload: str | bytes, *, only_if_changed: bool = True
+    ) -> None: ...
+    def publish_event(self, topic: str, payload: str | bytes) -> None: ...
+    def publish_marker(self, topic: str, payload: str) -> None: ...
+    def publish_offline_now(self, topics: list[str]) -> None: ...
+
+    @property
+    def up(self) -> bool: ...
+    def start(self) -> None: ...
+    def stop(self) -> None: ...

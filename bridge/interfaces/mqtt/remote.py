@@ -1,0 +1,366 @@
+"""The remote's one connection to the station's broker (``rotor-bridge remote``): it reads the
+station's retained state and publishes commands that are never late.
+
+It is the bridge's Connection (connection.py: protocol, TLS, credentials, reconnects, one log
+line per reason) with other topics and one more duty: sending a command.
+
+Rules:
+1. MQTT 5 only (the remote's settings refuse 3.1.1): a command must carry an expiry.
+2. A command is published at QoS 1, never retained, with a message expiry interval of a few
+   seconds (a command stuck in a broker queue dies there) and the operator as the user
+   property ``operator``.
+3. Never late: while the connection is not up, ``send`` raises Refused(OFFLINE) at once and
+   nothing is queued (a halt excepted: rule 6). paho keeps an unacknowledged QoS 1 message
+   and sends it again on the next connection (its ``_messages_reconnect_reset_out``), which
+   would move the antenna minutes after the operator asked; so when the connection drops,
+   every command not yet acknowledged is dropped from paho's queue, under the same lock
+   ``send`` holds (but see rule 6). The remote publishes nothing else at QoS 1, so the whole
+   queue is commands.
+4. The state topics are subscribed at QoS 0: the newest retained value is what counts, and it
+   comes again after every reconnect. Unlike the bridge's command topics they do not ask for
+   retain-as-published, so the retain flag the handler gets says "replayed from the broker's
+   store on subscribing" (an old value, of unknown age) and a message the station publishes
+   while we listen comes without it (remote/rotator.py rule 1 times a moving status by that).
+5. Until the first connection is accepted, a refusal or a failed attempt is not logged (the
+   start-up error says it, once, in one line: ``failure``, also when the broker closed the
+   connection without a word); a refused login, a broker without MQTT 5 or a TLS handshake
+   that fails is ``fatal``, for the start to end at once, since trying again cannot mend it.
+   Once the remote has been connected, both are logged and retried as the bridge does
+   (connection.py rule 6).
+6. A stop is never lost (docs/architecture.md rule 11; a stop moves nothing, rule 7): an
+   unacknowledged command that ``last_word`` says is one (a stop, lock ON) and that its
+   client was told went out is kept when the rest are dropped, and sent again, with a fresh
+   expiry, first thing on the next connection, before any other command can be sent. So is
+   one sent while the connection is down or being reset (rule 7): ``send`` keeps it (once,
+   however often it is pressed) and raises Refused(OFFLINE, KEPT), the truth for its client:
+   not delivered yet (rotctld ``RPRT -6``), kept and sent first on reconnect. Any other
+   command is refused then, and never sent later (rule 3).
+7. ``send`` returns only once the broker acknowledged the command (PUBACK) within
+   ACK_WAIT_S; otherwise the link stalls: the connection is reset (what it holds unsent is
+   dropped, rule 3) and the command refused.
+8. A command is stamped with its send time on the station's clock as its live heartbeats let
+   the remote reckon it (heartbeat.py); without one heard, a move is refused. A halt goes
+   unstamped: it never asks the reckoning, so nothing about the heartbeat can keep it back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import socket
+import ssl
+import struct
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from paho.mqtt.enums import MQTTErrorCode
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
+from paho.mqtt.reasoncodes import ReasonCode
+from paho.mqtt.subscribeoptions import SubscribeOptions
+
+from bridge.core.errors import RefusalCode, Refused
+from bridge.interfaces.mqtt.connection import Connection
+from bridge.interfaces.mqtt.heartbeat import Stamp, StationClock, parse_beat
+from bridge.settings.mqtt import MqttSettings
+
+log = logging.getLogger(__name__)
+
+COMMAND_QOS = 1  # rule 2
+ACK_WAIT_S = 1.0  # rule 7
+NOT_CONNECTED = "not connected to the station's broker"
+NOT_HEARD = (
+    "the station's bridge is not heard (no heartbeat): nothing sent (a bridge older than this "
+    "remote sends none)"
+)
+KEPT = (
+    f"{NOT_CONNECTED}: not delivered yet (the rotor may still be turning); the stop is kept "
+    "and sent first on reconnect"
+)
+LOGIN_REFUSED = ("Bad user name or password", "Not authorized")  # MQTT 5 reasons 0x86, 0x87
+NO_MQTT5 = "Unsupported protocol version"  # 0x84: NATS, aedes, mosquitto set to 3.1.1 only
+
+
+class RemoteLink(Connection):
+    """Subscribes ``filters``; hands every message to ``on_message`` (paho's thread);
+    ``on_change`` is called whenever the connection comes up or goes down."""
+
+    def __init__(
+        self,
+        settings: MqttSettings,
+        client_id: str,
+        filters: list[str],
+        on_message: Callable[[str, bytes, bool], None],
+        on_change: Callable[[], None] = lambda: None,
+        last_word: Callable[[str, bytes], bool] = lambda topic, payload: False,
+        heartbeat: str | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        ack_wait_s: float = ACK_WAIT_S,
+    ) -> None:
+        def handle(
+            topic: str, payload: bytes, retain: bool, _operator: str | None, _stamp: Stamp | None
+        ) -> None:
+            if topic == heartbeat and not retain:  # rule 8: only a live one says the time
+                with contextlib.suppress(ValueError):
+                    self.station_clock.heard(parse_beat(payload))
+            on_message(topic, payload, retain)  # a station's state carries no operator
+
+        super().__init__(
+            settings, client_id, subscriptions=filters, on_message=handle, reconnect_max_s=10
+        )
+        self._auto = False  # rule 1: never steps down to MQTT 3.1.1
+        self._send_lock = threading.Lock()
+        self._on_change = on_change
+        self._ever_up = False
+        self.failure: str | None = None  # rule 5: why the last attempt failed, said in one line
+        self.fatal = False  # rule 5: ... and trying again will not mend it
+        self._last_word = last_word  # rule 6
+        self._held: list[tuple[str, bytes, Properties]] = []  # rule 6: for the next connection
+        self.station_clock = StationClock(clock)  # rule 8
+        self._ack_wait_s = ack_wait_s
+        self._acks = threading.Condition()  # rule 7: PUBACKs, the connection's generation
+        self._acked: dict[int, ReasonCode | None] = {}  # mid -> the PUBACK's reason
+        self._unawaited: set[int] = set()  # held stops resent: nobody waits for their PUBACK
+        self._generation = 0  # one more on every connection opened or closed
+        self._reset_generation = -1  # the connection rule 7 reset
+        self.resets = 0  # rule 7: how many, for the operator's diagnostics and the tests
+        self._client.on_publish = self._on_publish
+
+    @property
+    def up(self) -> bool:
+        return self.connected.is_set()
+
+    def start(self) -> None:
+        self._connect()
+
+    def stop(self) -> None:
+        self._stopping = True
+        self._disconnect()
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
+        (a stop excepted: rule 6)."""
+        halt = self._last_word(topic, payload.encode())
+        props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
+        props.MessageExpiryInterval = expiry_s
+        with self._send_lock:
+            if not self.up and halt:  # down, or being reset: rule 6
+                props.UserProperty = [("operator", operator)]
+                self._keep(topic, payload.encode(), props)
+                raise Refused(RefusalCode.OFFLINE, KEPT)
+            if not self.up:
+                raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            sent = None if halt else self.station_clock.now_unix()  # rule 8: a halt goes bare
+            if sent is None and not halt:
+                raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
+            stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()
+            props.UserProperty = [("operator", operator), *stamp]
+            info = self._client.publish(
+                topic, payload, qos=COMMAND_QOS, retain=False, properties=props
+            )
+            if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
+                self._forget_unsent(refused_mid=info.mid)  # paho kept it for later: rule 3
+                if halt:
+                    self._keep(topic, payload.encode(), props)
+                    raise Refused(RefusalCode.OFFLINE, KEPT)
+                raise Refused(RefusalCode.OFFLINE, NOT_CONNECTED)
+            generation = self._generation
+        self._await_ack(topic, info.mid, generation, halt)
+
+    def _await_ack(self, topic: str, mid: int, generation: int, halt: bool) -> None:
+        """Rule 7: returns once the broker acknowledged ``mid``; else Refused."""
+        with self._acks:
+            self._acks.wait_for(
+                lambda: mid in self._acked or self._generation != generation, self._ack_wait_s
+            )
+            acked = mid in self._acked
+            reason = self._acked.pop(mid, None)
+        again = "; the stop goes again first thing on the next connection" if halt else ""
+        if acked:
+            if reason is not None and reason.is_failure:
+                raise Refused(
+                    RefusalCode.INVALID,
+                    f"the station's broker refused it ({reason}): may this user publish "
+                    f"{topic}? (the broker's ACL)",
+                )
+            return
+        if self._reset(generation):
+            raise Refused(
+                RefusalCode.OFFLINE,
+                f"the station's broker did not acknowledge it within {self._ack_wait_s:g} s "
+                f"(a stalled link): connection reset, nothing sent later{again}",
+            )
+        raise Refused(
+            RefusalCode.OFFLINE,
+            "the connection to the station's broker dropped before it acknowledged the "
+            f"command: not sent again{again}",
+        )
+
+    def _reset(self, generation: int) -> bool:
+        """Rule 7: the connection ``generation`` shut now, unless it is gone already (False)."""
+        with self._send_lock:
+            if self._generation != generation or not self.up:
+                return self._reset_generation == generation  # another send reset it
+            self._reset_generation = generation
+            self.resets += 1
+            self.connected.clear()  # no send goes into the dying connection
+            sock = self._client.socket()
+        log.warning(
+            "the station's broker did not acknowledge a command within %g s: the link stalls; "
+            "resetting the connection (what it holds unsent is dropped) and connecting again",
+            self._ack_wait_s,
+        )
+        abort(sock)
+        return True
+
+    def _on_publish(
+        self,
+        client: object,
+        userdata: object,
+        mid: int,
+        reason_code: ReasonCode | None,
+        properties: Properties | None,
+    ) -> None:
+        """paho's thread: a PUBACK (rule 7)."""
+        with self._acks:
+            if mid in self._unawaited:
+                self._unawaited.discard(mid)
+                return
+            self._acked[mid] = reason_code
+            self._acks.notify_all()
+
+    def _next_generation(self) -> None:
+        with self._acks:
+            self._generation += 1
+            self._acked.clear()
+            self._unawaited.clear()
+            self._acks.notify_all()
+
+    def _forget_unsent(self, refused_mid: int | None = None) -> None:
+        """Rules 3 and 6: paho's queue of unacknowledged messages emptied, the last words among
+        them held for the next connection (caller holds _send_lock)."""
+        dropped = 0
+        for m in self._client.drop_out_messages():  # paho 2.2's own, as client.py uses
+            payload, props = bytes(m.payload), m.properties  # send gave it its properties
+            if m.mid != refused_mid and props is not None and self._last_word(m.topic, payload):
+                self._held.append((m.topic, payload, props))
+                log.warning(
+                    "%s: not acknowledged by the broker before the connection dropped: it may "
+                    "not have reached the station; sent again on the next connection",
+                    m.topic,
+                )
+            else:
+                dropped += 1
+        if dropped:
+            log.warning(
+                "%d command(s) not acknowledged by the broker dropped, never resent", dropped
+            )
+
+    def _keep(self, topic: str, payload: bytes, props: Properties) -> None:
+        """Rule 6: a halt that could not go now goes first on the next connection, once
+        (caller holds _send_lock)."""
+        if any(t == topic and p == payload for t, p, _ in self._held):
+            return  # the same stop pressed again: one is enough
+        self._held.append((topic, payload, props))
+        log.warning(
+            "%s: not connected to the station's broker: kept, sent first on the next connection",
+            topic,
+        )
+
+    def _resend_held(self) -> None:
+        """Rule 6, on the new connection before ``send`` may run (caller holds _send_lock)."""
+        held, self._held = self._held, []
+        for topic, payload, props in held:
+            log.warning("%s sent again (not acknowledged on the last connection)", topic)
+            info = self._client.publish(
+                topic, payload, qos=COMMAND_QOS, retain=False, properties=props
+            )
+            with self._acks:
+                self._unawaited.add(info.mid)
+
+    # -- Connection's hooks (paho's thread) --------------------------------------------------
+    def _refused(self, reason: str) -> None:
+        if self._ever_up:
+            super()._refused(reason)
+            return
+        login = reason in LOGIN_REFUSED
+        old = reason == NO_MQTT5
+        if login:
+            self.failure = (
+                f"the broker refused the login ({reason}): check mqtt.username and "
+                "mqtt.password_file"
+            )
+        elif old:
+            self.failure = f"this broker does not speak MQTT 5 ({reason}), which the remote needs"
+        else:
+            self.failure = f"the broker refused the connection ({reason})"
+        self.fatal = login or old  # trying again cannot mend either
+        log.debug("%s", self.failure)
+
+    def _closed_early(self, reason: str) -> None:
+        if self._ever_up or self._stopping:
+            super()._closed_early(reason)
+            return
+        self.failure = (
+            f"the broker closed the connection before accepting it ({reason}): it answered, but "
+            "either it does not speak MQTT 5, which the remote needs (RabbitMQ and amqtt close "
+            "the connection so), or its access rules refuse this client id or user"
+        )
+        log.debug("%s", self.failure)
+
+    def _failed(self) -> None:
+        if self._ever_up or self._stopping:
+            super()._failed()
+            return
+        exc = sys.exc_info()[1]  # paho calls back inside its `except OSError`: it says why
+        if isinstance(exc, ssl.SSLError):
+            # "[SSL: CERTIFICATE_VERIFY_FAILED] certificate verify failed: ... (_ssl.c:1006)"
+            why = str(exc).split("] ", 1)[-1].split(" (_ssl.c")[0]
+            self.failure = (
+                f"TLS handshake failed: {why}: check mqtt.tls.ca_file (the authority that "
+                "signed the broker's certificate) and mqtt.host (the name it was issued for)"
+            )
+            self.fatal = True
+        else:
+            self.failure = str(exc or "no answer")
+        log.debug("%s", self.failure)
+
+    def _filters(self) -> list[tuple[str, Any]]:
+        """Rule 4: retain-as-published off (the retain flag then means replayed)."""
+        state = SubscribeOptions(qos=0, retainAsPublished=False)
+        return [(topic, state) for topic in self._subscriptions]
+
+    def _opened(self, client: object) -> None:
+        self._ever_up = True
+        self.failure, self.fatal = None, False
+        with self._send_lock:  # rule 6: the held last words first
+            self._next_generation()
+            self._resend_held()
+            self.connected.set()
+        self._on_change()
+
+    def _closed(self, was_up: bool, reason_code: ReasonCode) -> bool:
+        with self._send_lock:  # a send under way finishes first, then its message goes too
+            self._forget_unsent()
+            ours = self._reset_generation == self._generation  # rule 7: said already
+            self._next_generation()
+            self.station_clock.forget()
+        self._on_change()
+        if self._stopping or ours:  # our own goodbye or reset: no takeover evidence
+            return False
+        return super()._closed(was_up, reason_code)
+
+
+def abort(sock: object) -> None:
+    """Rule 7: shut a stalled connection's socket from any thread: paho's loop reads its end and
+    connects again; closed with a reset (SO_LINGER 0), so the kernel drops the bytes it still
+    held for the broker instead of delivering them when the link recovers."""
+    if not isinstance(sock, socket.socket):
+        return
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    with contextlib.suppress(OSError):
+        socket.socket.shutdown(sock, socket.SHUT_RDWR)  # the descriptor's, TLS or not

@@ -1,0 +1,633 @@
+"""MQTT front end: inbound topics become rotator commands, rotator statuses become topics.
+
+It reaches the rotators only through the RotatorPort interface that app.py hands it, and the
+broker only through the Publisher it is given (MqttClient; a recorder in unit tests). Inbound, it
+says what to subscribe to (``subscriptions()``) and takes every message (``on_message``): app.py
+wires both into the client.
+
+Rules:
+1. A command that arrives retained is never executed: it is reported on the error topic. (A
+   retained target would turn the rotor again on every restart of the bridge or the broker.)
+   The one exception is stop: stopping never moves anything, and a dashboard button wrongly
+   set to retain must still stop a turning rotor. It is executed and reported.
+   An EMPTY retained message is no command: it is how a retained message is deleted (what the
+   refusals themselves tell the user to do), so it is ignored silently, stop included. (With
+   MQTT 3.1.1 the broker clears the retain flag of live messages, so a deletion sent while the
+   bridge is connected arrives as an empty plain message: under 3.1.1 an empty message is
+   ignored as a deletion too, but on a stop topic it is a stop, as any payload is there.)
+2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
+   nothing moves. A stop takes any payload: stopping is never refused.
+3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
+   A status's topics whose payload is the one this service last handed on for them are not
+   handed on again (the client would drop it: a reading changes two of a dozen); what the
+   service stops with (offline, ``stop``) forgets them.
+4. Refusals on ``R/error`` are rate-limited per rotator (limiter.py: ``mqtt.error_events_per_s``,
+   10 by default, after a burst of five times as many); the next one published says how many
+   were left out. Every other kind (a stall, a stop that did not take, the serial line) is
+   always published: a flood of refusals must not hide it. 200,000 refused rotctld ``P 999``
+   neither queue 200,000 QoS 1 messages nor delay the state. Each refusal published is also
+   logged at INFO, one line naming the rotator, the command and the reason (an operator
+   reading the log sees why nothing moved): the same limit, so a flood is as few lines as
+   events; what the sender wrote is shown escaped on one line and cut short (LOGGED_CHARS), so
+   no payload can forge or flood a log line.
+5. Stop and lock come on both connections, the main one and the stop lane (lane.py), and
+   lastword.py decides what each copy does (halts.py carries it out): the main connection's
+   carry out every word in order; the lane's stop or lock ON is carried out at once and holds
+   the rotator's targets until the main connection has caught up with it (its marker, or its
+   own copy of the halt, read on the main connection; no clock ends a hold). The decision
+   and the mailbox put it lets through are one step, under one lock.
+6. While the main connection is gated (its first look runs, or the bridge refused to run:
+   client.py rule 14) only halts are carried out from it.
+7. Who sent a command: the MQTT 5 user property ``operator`` when it is short printable text
+   (model.valid_operator); one that is not is ignored (the command goes on as from ``mqtt``)
+   and logged, once at WARNING, then at DEBUG. ``R/control/claim`` and ``R/control/release``
+   are commands like any (never retained, never while gated); ``R/control`` follows the status.
+8. ``R/audit`` (not retained) carries every audit event, rate-limited per rotator like the
+   refusals (rule 4: a flood of commands must not flood the broker); the next one published
+   says how many were left out. The audit file has them all.
+9. A command stamped with its send time (MQTT 5 user properties ``sent`` and ``expiry``, as the
+   remote sends) is refused when it is older than its expiry, from the future or unreadable
+   (heartbeat.py rule 5): a link that held it up must not turn the rotor late. Halts: never.
+   The same on the stop lane, for the lock OFF it carries out while the main connection is down.
+10. A group's commands (interfaces/mqtt/groups.py) keep these rules: ``G/stop`` is a stop of each
+    member
+   (rule 5, halts.py), ``G/target`` a target for each member (a retained, stale or gated one
+   refused, and moving nothing), each handed to that member's own ``submit``. Refusals go on
+   ``G/error`` (rule 4's limit, per group) and in ``G/status``, each member's also on its own
+   ``R/error``; ``G/status`` and ``G/availability`` follow the members' statuses.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from collections.abc import Callable, Mapping
+
+from bridge.core.errors import Refused
+from bridge.core.model import (
+    AuditEvent,
+    Command,
+    ErrorEvent,
+    ErrorKind,
+    GoToPreset,
+    Nudge,
+    Origin,
+    Park,
+    RotatorStatus,
+    SetOption,
+    SettingValue,
+    Source,
+    TakePath,
+    Target,
+    Toward,
+    setting_text,
+    valid_operator,
+)
+from bridge.feature import CommandTopic, registered
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.call_payload import Called
+from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
+from bridge.interfaces.mqtt.groups import status_json as group_status_json
+from bridge.interfaces.mqtt.halts import Halts, switch_on
+from bridge.interfaces.mqtt.heartbeat import Stamp
+from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
+from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
+from bridge.interfaces.mqtt.topics import Topics
+from bridge.protocols.base import ModelSpec, SettingKind
+
+log = logging.getLogger(__name__)
+
+# (the rotator, the call, long path?, the command as described, who asked)
+CallAimer = Callable[[RotatorPort, str, bool, str, Origin], None]
+
+
+class MqttService:
+    def __init__(
+        self,
+        topics: Topics,
+        publisher: Publisher,
+        *,
+        wall: Callable[[], float] = time.time,
+        error_events_per_s: float = RATE_PER_S,
+        clock: Callable[[], float] = time.monotonic,
+        retain_is_live: bool = True,
+        on_problem: Callable[[str, str], None] | None = None,
+        on_info: Callable[[str, bool], None] | None = None,
+    ) -> None:
+        """``retain_is_live``: MQTT 5 (a retained stop arrives only when published, retain
+        handling 2); False under MQTT 3.1.1, where one with the flag is the broker's replay."""
+        self.topics = topics
+        self._publisher = publisher
+        self._wall = wall
+        self._limiter = EventLimiter(clock, round(5 * error_events_per_s), error_events_per_s)
+        self._audit_limiter = EventLimiter(
+            clock, round(5 * error_events_per_s), error_events_per_s
+        )  # rule 8
+        self._bad_operator_said = False  # rule 7
+        self._rotators: dict[str, RotatorPort] = {}
+        self._feature_subscriptions: list[str] = []
+        self._handlers: list[Callable[[str, bytes, bool], bool]] = []
+        self._status_listeners: list[Callable[[str, RotatorStatus], None]] = []
+        self._values: dict[str, object] = {}  # a feature's last state published, by topic
+        self._handed: dict[str, str] = {}  # rule 3: a status's payloads last handed on, by topic
+        self._clock = clock
+        self._groups: dict[str, Group] = {}  # rule 10
+        self._latest: dict[str, RotatorStatus] = {}  # each rotator's last status, for its groups
+        self._group_refused: dict[str, dict[str, str]] = {}  # a group's last target's refusals
+        self._group_lock = threading.Lock()  # G/status from paho's thread and the lines thread
+        self._halts = Halts(  # rule 5
+            topics,
+            publisher,
+            self._rotators,
+            clock,
+            retain_is_live=retain_is_live,
+            on_problem=on_problem,
+            on_info=on_info,
+            groups=self._groups,
+            report_group=self._report_group,
+        )
+        self._word = self._halts.word
+        self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
+        self._states = [state for f in topics.features for state in f.states]
+
+    def retain_is_live(self, v5: bool) -> None:
+        """The main connection's MQTT version, before any message of a connection (``auto``
+        settles it on the first: connection.py rule 1); see the constructor."""
+        self._halts.retain_is_live = v5
+
+    def aim_calls_with(self, aimer: CallAimer) -> None:
+        """Targets by call sign go to ``aimer`` (interfaces/dxcluster/client.py: it looks the call
+        up on a thread of its own and asks the rotator's judge); without one they are refused."""
+        self._by_call = aimer
+
+    def attach(self, rotator: RotatorPort, console: pl.ConsoleFacts | None = None) -> None:
+        """``console``: what a console far from the station draws, in ``R/info`` too."""
+        self._rotators[rotator.id] = rotator
+        t = self.topics.rotator(rotator.id)
+        presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
+        self._publisher.publish_retained(t.presets, presets)
+        info = pl.info_json(
+            rotator.name, rotator.spec, rotator.pointing, rotator.can_track, console, rotator.id
+        )
+        self._publisher.publish_retained(t.info, info)  # for clients far from the station
+
+    def attach_group(self, group: Group) -> None:
+        """Rule 10: a group of attached rotators."""
+        self._groups[group.id] = group
+
+    def add_feature(
+        self,
+        subscriptions: list[str],
+        on_message: Callable[[str, bytes, bool], bool],
+        on_status: Callable[[str, RotatorStatus], None] | None = None,
+    ) -> None:
+        """A feature (e.g. Home Assistant discovery) with topics of its own; before
+        ``subscriptions()`` is handed to the client.
+
+        ``on_message`` gets every message that is not a rotator command and returns True when
+        it was the feature's; ``on_status`` sees every status a rotator emits.
+        """
+        self._feature_subscriptions += subscriptions
+        self._handlers.append(on_message)
+        if on_status is not None:
+            self._status_listeners.append(on_status)
+
+    def subscriptions(self) -> list[str]:
+        """Every topic filter the service wants messages from: commands, then features'."""
+        return [*self.topics.subscriptions(), *self._feature_subscriptions]
+
+    def stop_lane_subscriptions(self) -> list[str]:
+        """Stop and lock, for the connection of their own (lane.py), also handled here; and the
+        lane's own markers (lastword.py rule 4)."""
+        return [*self.topics.stop_lane(), self.topics.bridge_fence_lane]
+
+    def no_replay_subscriptions(self) -> list[str]:
+        """Filters the broker is asked not to replay retained messages of (lastword.py rule 6)."""
+        return self.topics.stop_lane()
+
+    # -- the last word (halts.py), both connections --------------------------------------------
+    def main_gone(self) -> None:
+        """The main connection dropped, or is new (before its first message)."""
+        self._halts.main_gone()
+
+    def lane_connected(self) -> None:
+        self._halts.lane_connected()
+
+    def lane_subscribed(self) -> None:
+        self._halts.lane_subscribed()
+
+    def markers_denied(self) -> None:
+        self._halts.markers_denied()
+
+    def lane_markers_denied(self) -> None:
+        self._halts.lane_markers_denied()
+
+    def markers_allowed(self) -> None:
+        self._halts.markers_allowed()
+
+    def hold_for_express(self, hold: Callable[[str], None]) -> None:
+        """Every MQTT stop and lock ON is shown to the stop express first
+        (interfaces/mqtt/express.py rule 8: its hold), in the step that carries it out."""
+        self._halts.express = hold
+
+    def start(self) -> None:
+        self._publisher.start()
+
+    def stop(self) -> None:
+        self._handed.clear()  # rule 3: offline is what the client holds now
+        self._publisher.publish_offline_now(
+            [self.topics.rotator(rid).availability for rid in self._rotators]
+            + [self.topics.group(gid).availability for gid in self._groups]
+        )
+        self._publisher.stop()
+
+    # -- outbound (the lines thread) -------------------------------------------------------
+    def publish_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        rot = self._rotators.get(rotator_id)
+        if rot is None:
+            return  # emitted before attach(): the first real status follows
+        spec = rot.spec
+        t = self.topics.rotator(rotator_id)
+        handed, publish = self._handed, self._publisher.publish_retained
+
+        def pub(topic: str, payload: str) -> None:  # rule 3
+            if handed.get(topic) != payload:
+                handed[topic] = payload
+                publish(topic, payload)
+
+        if status.bearing_deg is not None:
+            pub(t.bearing, pl.number(status.bearing_deg))
+        if status.elevation_deg is not None:
+            pub(t.elevation, pl.number(status.elevation_deg))
+        pub(t.state, status.state.value)
+        pub(t.availability, "online" if status.available else "offline")
+        if status.version:
+            pub(t.version, status.version)
+        for name in spec.options:  # ON/OFF, a number, a choice's name (model.setting_text)
+            if name in status.options:
+                pub(t.option_state(name), setting_text(status.options[name]))
+        pub(t.lock_state, pl.switch(status.locked))
+        for state in self._states:  # the registry's (bridge/feature.py)
+            if state.after_status:
+                continue
+            if state.needs is not None and not getattr(rot, state.needs):
+                continue
+            value = state.value(status)
+            if value is None:
+                continue
+            topic = t.feature(state.suffix)
+            if state.new_only:  # a new one after each move only (rotor health)
+                if value is self._values.get(topic):
+                    continue
+                self._values[topic] = value
+            pub(topic, state.render(value))
+        shows_raw = rot.pointing.shows_raw
+        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
+        for state in self._states:  # (the control lease's: after the status, as ever)
+            if state.after_status and (value := state.value(status)) is not None:
+                pub(t.feature(state.suffix), state.render(value))
+        self._latest[rotator_id] = status
+        for group in self._groups.values():
+            if rotator_id in group.member_ids:
+                self._publish_group(group, pub)
+        for listener in self._status_listeners:
+            listener(rotator_id, status)
+
+    def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
+        """Rule 4: rate-limited per rotator; the next one published counts those left out."""
+        t = self.topics.rotator(rotator_id)
+        if event.kind is not ErrorKind.REFUSED:  # a stall, a stop that did not take: always
+            self._publisher.publish_event(
+                t.error, json.dumps(event.as_dict(), separators=(",", ":"))
+            )
+            return
+        left_out = self._limiter.admit(t.error)
+        if left_out is None:
+            return
+        doc = event.as_dict()
+        if left_out:
+            doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(t.error, json.dumps(doc, separators=(",", ":")))
+        log.info(  # rule 4: the same line for whoever reads the log (journalctl -f)
+            "%s: refused %s: %s",
+            rotator_id,
+            _one_line(event.command or "input"),
+            _one_line(str(doc["message"])),
+        )
+
+    # -- groups (rule 10) ---------------------------------------------------------------------
+    def _publish_group(self, group: Group, pub: Callable[[str, str], None] | None = None) -> None:
+        """``G/status`` and ``G/availability`` from the members' last statuses."""
+        if pub is None:
+
+            def pub(topic: str, payload: str) -> None:
+                if self._handed.get(topic) != payload:
+                    self._handed[topic] = payload
+                    self._publisher.publish_retained(topic, payload)
+
+        g = self.topics.group(group.id)
+        with self._group_lock:  # the newest of both threads' statuses is the last published
+            statuses = {mid: self._latest.get(mid) for mid in group.member_ids}
+            refused = self._group_refused.get(group.id, {})
+            pub(g.availability, "online" if group_available(statuses) else "offline")
+            pub(g.status, group_status_json(group, statuses, refused))
+
+    def _report_group(self, group_id: str, message: str, command: str) -> None:
+        """A refusal of a group's command on ``G/error`` (rule 4's limit) and in the log."""
+        self._group_event(
+            group_id, json.dumps({"kind": "refused", "command": command, "message": message})
+        )
+
+    def _group_event(self, group_id: str, payload: str) -> None:
+        topic = self.topics.group(group_id).error
+        left_out = self._limiter.admit(topic)
+        if left_out is None:
+            return
+        doc = json.loads(payload)
+        doc["time"] = round(self._wall(), 3)
+        if left_out:
+            doc["message"] = f"{doc['message']} ({left_out} more error(s) before this not shown)"
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(topic, json.dumps(doc, separators=(",", ":")))
+        log.info(
+            "group %s: refused %s: %s",
+            group_id,
+            _one_line(str(doc.get("command") or "input")),
+            _one_line(str(doc["message"])),
+        )
+
+    def _group_message(
+        self,
+        group_id: str,
+        kind: str,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        origin: Origin,
+        gated: bool,
+        stamp: Stamp | None,
+    ) -> None:
+        """Rule 10: a group's stop or target from the main connection."""
+        group = self._groups.get(group_id)
+        if group is None:
+            return
+        self._halts.resend_if_due()
+        if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
+            self._halts.retained_deleted(topic)
+            return  # a retained command being deleted (rule 1)
+        what = pl.describe(kind, payload)
+        if kind == "stop":
+            if retain and not self._halts.retain_is_live:
+                self._halts.replayed_group_stop(group_id, topic, payload)
+            else:
+                self._halts.main_group_stop(group_id, topic, what, retain, origin)
+            return
+        why = None
+        if retain:
+            why = (
+                f"retained command on {topic} ignored: commands must be published without the "
+                "retain flag (clear it with an empty retained message)"
+            )
+        elif (late := self._late(stamp)) is not None:
+            why = late
+        elif gated:
+            why = "not taken: the bridge is still checking its base topic; send it again"
+        if why is not None:
+            self._report_group(group_id, why, what)
+            return
+        has_elevation = {
+            mid: rot.spec.has_elevation
+            for mid in group.member_ids
+            if (rot := self._rotators.get(mid)) is not None
+        }
+        try:
+            parts = fan_out(group, payload, has_elevation, origin)
+        except pl.PayloadError as exc:
+            self._report_group(group_id, str(exc), what)
+            return
+        refused: dict[str, str] = {}
+        for part in parts:  # rule 10: the others still turn (groups.py rule 3)
+            rot = self._rotators.get(part.member)
+            if rot is None:
+                continue
+            said = f"{what} (group {group_id})"
+            if part.target is None:
+                refused[part.member] = part.refused or "refused"
+                rot.report_refusal(refused[part.member], said, origin=origin)
+                continue
+            try:
+                rot.submit(part.target, said)
+            except Refused as exc:
+                refused[part.member] = exc.message
+        if refused:
+            self._group_event(group_id, refusals_json(group, what, refused))
+        if refused != self._group_refused.get(group_id, {}):  # a slider's flood: not each time
+            self._group_refused[group_id] = refused
+            self._publish_group(group)
+
+    def publish_audit(self, rotator_id: str, event: AuditEvent) -> None:
+        """Rule 8: ``R/audit``, rate-limited per rotator."""
+        if rotator_id not in self._rotators:
+            return
+        t = self.topics.rotator(rotator_id)
+        left_out = self._audit_limiter.admit(t.audit)
+        if left_out is None:
+            return
+        doc = event.as_dict()
+        if left_out:
+            doc["suppressed"] = left_out
+        self._publisher.publish_event(t.audit, json.dumps(doc, separators=(",", ":")))
+
+    # -- inbound (paho's threads) -----------------------------------------------------------
+    def origin(self, operator: str | None) -> Origin:
+        """Rule 7: who sent a message, from its user property ``operator`` (None: none)."""
+        if operator is None:
+            return Origin(Source.MQTT)
+        name = valid_operator(operator)
+        if name is None:
+            level = logging.DEBUG if self._bad_operator_said else logging.WARNING
+            self._bad_operator_said = True
+            log.log(level, "operator %r ignored: not 1 to 32 printable characters", operator[:40])
+            return Origin(Source.MQTT)
+        return Origin(Source.MQTT, name)
+
+    def on_lane_message(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        stamp: Stamp | None = None,
+    ) -> None:
+        """The stop lane's messages (rule 5: halts.py); its halts are never refused, a lock OFF
+        it carries out is judged by its stamp as the main connection's would be (rule 9)."""
+        self._halts.on_lane(
+            topic, payload, retain, self.origin(operator), late=lambda: self._late(stamp)
+        )
+
+    def _late(self, stamp: Stamp | None) -> str | None:
+        """Rule 9: why a stamped command (never a halt) is too old to carry out, or None."""
+        return None if stamp is None else stamp.judge(self._wall())
+
+    def on_message(
+        self,
+        topic: str,
+        payload: bytes,
+        retain: bool,
+        operator: str | None = None,
+        *,
+        gated: bool = False,
+        stamp: Stamp | None = None,
+    ) -> None:
+        """The main connection's messages, in the order the broker sent them (rule 5)."""
+        route = self.topics.route(topic)
+        if route is None:
+            group = self.topics.group_route(topic)
+            if group is not None:
+                gid, kind = group
+                origin = self.origin(operator)
+                self._group_message(gid, kind, topic, payload, retain, origin, gated, stamp)
+                return
+            if topic == self.topics.bridge_fence:
+                self._halts.marker_back(payload)
+                return
+            for handler in self._handlers:
+                if handler(topic, payload, retain):
+                    return
+            return
+        self._halts.resend_if_due()
+        rotator_id, kind, arg = route
+        rot = self._rotators.get(rotator_id)
+        if rot is None:
+            return
+        if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
+            self._halts.retained_deleted(topic)
+            return  # a retained command being deleted (rule 1)
+        what = pl.describe(kind if arg is None else f"option {arg}", payload)
+        origin = self.origin(operator)
+        halt = kind == "stop" or (kind == "lock" and switch_on(payload))
+        if retain and halt and not self._halts.retain_is_live:
+            self._halts.replayed_halt(rot, topic, kind, payload)
+            return
+        if retain and not halt:
+            rot.report_refusal(
+                f"retained command on {topic} ignored: commands must be published without the "
+                "retain flag (clear it with an empty retained message)",
+                what,
+                origin=origin,
+            )
+            return
+        late = None if halt else self._late(stamp)  # rule 9
+        if late is not None:
+            rot.report_refusal(late, what, origin=origin)
+            return
+        if gated and not halt:  # rule 6
+            rot.report_refusal(
+                "not taken: the bridge is still checking that no other bridge runs on its base "
+                "topic (its first look after connecting); send it again",
+                what,
+                origin=origin,
+            )
+            return
+        if halt:
+            self._halts.main_halt(rot, topic, kind, what, retain, origin)
+            return
+        if kind == "lock":
+            try:
+                pl.parse_switch(payload)
+            except pl.PayloadError as exc:
+                rot.report_refusal(str(exc), what, origin=origin)
+                return
+            self._halts.main_lock_off(rot, origin)
+            return
+        try:
+            self._command(rot, kind, arg, payload, what, origin)
+        except pl.PayloadError as exc:
+            rot.report_refusal(str(exc), what, origin=origin)
+        except Refused:
+            pass  # the rotator has reported it
+
+    def _command(
+        self, rot: RotatorPort, kind: str, arg: str | None, payload: bytes, what: str, by: Origin
+    ) -> None:
+        """Everything but stop and lock, parsed into one command for the judge; PayloadError
+        or Refused."""
+        command = parse_command(kind, arg, payload, by, rot.spec, self.topics.commands)
+        if isinstance(command, Called):
+            if self._by_call is None:
+                raise pl.PayloadError("a target by call needs [dxcluster] enabled = true")
+            self._by_call(rot, command.call, command.long_path, what, by)
+        elif command is not None:
+            rot.submit(command, what)
+
+
+def parse_command(
+    kind: str,
+    arg: str | None,
+    payload: bytes,
+    by: Origin,
+    spec: ModelSpec | None = None,
+    features: Mapping[str, CommandTopic] | None = None,
+) -> Command | Called | None:
+    """A command topic's payload (everything but stop and lock) as the command it names, from
+    ``by`` (a call is resolved by the DX cluster first); PayloadError when it names none, None
+    for a topic that carries no command. An option's value is read by ``spec``'s declaration
+    of it (ON/OFF, a number, a choice); one ``spec`` does not declare goes to the judge as
+    text, to be refused there. A registered feature's command (``features``: the registry's by
+    kind unless given) is parsed by its declaration (bridge/feature.py)."""
+    src = Source.MQTT
+    if features is None:
+        features = {c.kind: c for f in registered() for c in f.commands}
+    feature = features.get(kind)
+    if feature is not None:
+        if not payload and not feature.takes_empty:
+            raise pl.PayloadError("empty payload")  # rule 2
+        return feature.parse(payload, by)
+    if not payload:  # rule 2 (MQTT 5: under 3.1.1 it is a deletion, rule 1)
+        raise pl.PayloadError("empty payload")
+    if kind == "target":
+        aim = pl.parse_aim(payload)
+        if isinstance(aim, Called):
+            return aim
+        if isinstance(aim, pl.Place):
+            lat, lon = aim.latitude_deg, aim.longitude_deg
+            if lat is None or lon is None:
+                return TakePath(aim.long_path, source=src, origin=by)
+            return Toward(lat, lon, aim.locator, aim.long_path, source=src, origin=by)
+        return Target(aim[0], aim[1], src, origin=by)
+    if kind == "preset":
+        return GoToPreset(pl.parse_name(payload, "preset"), source=src, origin=by)
+    if kind == "park":
+        return Park(source=src, origin=by)
+    if kind == "nudge":
+        d_az, d_el = pl.parse_nudge(payload)
+        return Nudge(d_az, d_el, source=src, origin=by)
+    if kind == "target_elevation":
+        return Target(None, pl.parse_number(payload, "elevation"), src, origin=by)
+    if kind == "option" and arg is not None:
+        return SetOption(arg, _setting_value(spec, arg, payload), src, origin=by)
+    return None
+
+
+def _setting_value(spec: ModelSpec | None, name: str, payload: bytes) -> SettingValue:
+    """R/option/<name>'s payload by the setting's declaration (PayloadError if it refuses)."""
+    setting = spec.setting(name) if spec is not None else None
+    if setting is None or setting.kind is SettingKind.BOOL:
+        return pl.parse_switch(payload)  # the words of a bad switch as they always were
+    try:
+        return setting.read(pl.text(payload))
+    except ValueError as exc:
+        raise pl.PayloadError(str(exc)) from None
+
+
+LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line
+
+
+def _one_line(text: str) -> str:
+    """Rule 4: what is not printable escaped (no payload starts a log line of its own), cut
+    short."""
+    shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return shown if len(shown) <= LOGGED_CHARS else shown[: LOGGED_CHARS - 3] + "..."

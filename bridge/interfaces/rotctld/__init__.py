@@ -1,0 +1,35 @@
+"""A Hamlib rotctld-compatible TCP port onto one rotator, beside MQTT.
+
+Gpredict, loggers and Hamlib's own network client (``rotctl -m 2``) speak rotctld's text
+protocol. Here they reach the same Rotator as MQTT does: the same mailbox, limits, safety lock
+and status. Source: Hamlib 4.5.4's rotctld (rotctl_parse.c); every reply's bytes were compared
+with what rotctld 4.5.4 itself sends.
+
+Rules:
+1. Input is a character stream, as rotctld reads it: a one-character command or ``\\long_name``,
+   optionally prefixed by ``+`` or one punctuation character (extended replies, that character
+   as separator), then whitespace-separated arguments; CR and LF are plain whitespace, so a
+   command still waiting for arguments takes them from the following lines. ``#`` comments out
+   the rest of the line. ``q``/``Q`` closes the connection.
+2. A command runs only once it is complete (its last argument followed by whitespace). What a
+   client leaves unfinished when it disconnects is dropped: it never moves anything.
+3. Unknown commands get no reply at all (rotctld logs them on its own stderr and says nothing).
+4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
+5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
+   currently have is an error code, never the last value seen.
+6. Motion goes through Rotator.submit with Source.ROTCTLD, so the lock, the limits and the link
+   state are judged in one place and MQTT shows the refusal or the move.
+7. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs
+   (interfaces/tcplines.py rule 2): rotctld parses any bytes as commands, so a web page open on the
+   shack PC could otherwise turn the antenna through a loopback port (a ``POST`` body of ``P 200
+   0``; ``KHTML`` in a browser's User-Agent read as park).
+8. A client is disconnected when it sends nothing for ``rotctld_idle_timeout_s`` (300 s), or
+   leaves a command unfinished for 60 s (interfaces/tcplines.py rule 3). The sockets and threads are
+   the shared line server's (interfaces/tcplines.py); this package owns what the bytes mean.
+"""
+
+from bridge.interfaces.rotctld.commands import RotctldCommands
+from bridge.interfaces.rotctld.parser import QUIT, Request, RequestParser
+from bridge.interfaces.rotctld.server import RotctldServer
+
+__all__ = ["QUIT", "Request", "RequestParser", "RotctldCommands", "RotctldServer"]

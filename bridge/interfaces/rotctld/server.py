@@ -1,0 +1,63 @@
+"""The TCP side: the shared line server (interfaces/tcplines.py) with rotctld's parser and commands,
+one session per client (``p`` answers each client in its own terms)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from bridge.core.model import Origin, Source
+from bridge.interfaces.rotctld.commands import Rotator, RotctldCommands
+from bridge.interfaces.rotctld.parser import Quit, RequestParser
+from bridge.interfaces.tcplines import CLOSE, USEFUL_WITHIN_S, Close, LineServer
+
+
+class RotctldSession:
+    """One client: its parser and its commands (tcplines.LineSession)."""
+
+    def __init__(self, rotator: Rotator, peer: str | None = None) -> None:
+        self._parser = RequestParser()
+        self._commands = RotctldCommands(rotator, Origin(Source.ROTCTLD, None, peer))
+
+    @property
+    def idle(self) -> bool:
+        return self._parser.idle
+
+    def feed(self, data: bytes) -> list[bytes | Close]:
+        out: list[bytes | Close] = []
+        for item in self._parser.feed(data):
+            if isinstance(item, Quit):
+                out.append(CLOSE)
+                break
+            out.append(self._commands.execute(item))
+        return out
+
+
+class RotctldServer(LineServer):
+    """One TCP listener for one rotator; one thread per client."""
+
+    def __init__(
+        self,
+        rotator: Rotator,
+        port: int,
+        bind: str = "127.0.0.1",
+        *,
+        max_clients: int = 16,
+        idle_timeout_s: float = 300.0,
+        useful_within_s: float = USEFUL_WITHIN_S,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        super().__init__(
+            rotator.id,
+            port,
+            bind,
+            lambda: RotctldSession(rotator),
+            label="rotctld",
+            key="rotctld",
+            max_clients=max_clients,
+            idle_timeout_s=idle_timeout_s,
+            useful_within_s=useful_within_s,
+            clock=clock,
+            peer_session=lambda peer: RotctldSession(rotator, peer),
+        )
+        self.rotator = rotator

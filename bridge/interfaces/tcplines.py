@@ -1,0 +1,728 @@
+"""The TCP side shared by the text front ends (rotctld, GS-232, Easycomm, DCU-1): one listener per
+rotator and protocol, one thread per client, every reply in one send, and a budget per client so
+that no client, nor all of them together, can starve the serial-lines thread of the GIL.
+
+What a client's bytes mean is not decided here: each client gets a fresh ``LineSession`` from the
+front end (its parser and its commands onto the judge); this module owns the sockets.
+
+Rules:
+1. Each reply the session returns goes out in one ``sendall`` (Gpredict reads ``p`` with a single
+   recv(); a GS-232 client reads one line).
+2. A connection that speaks HTTP is closed at once with a warning and nothing it sent runs: its
+   first line is held until complete and may not be an HTTP request line, and no line may be an
+   HTTP header (``Host: ...``). A text protocol parses any bytes as commands, so a web page open
+   on the shack PC could otherwise turn the antenna through a loopback port.
+3. A client is disconnected when it sends nothing for the idle timeout (300 s by default), or
+   leaves a command unfinished for 60 s (one byte a second would hold a slot for ever).
+   A new client always gets in to send its stop: when every slot is taken (``max_clients``),
+   a client is dropped to make room among those ``_Client.evictable`` (no command half
+   received, or one left half received for more than PENDING_GRACE_S) with no complete
+   command line unread: first the newest that has never finished a command, else the one
+   idle longest (an established program is dropped last); only when none may go is the
+   newcomer turned away. A peer
+   address other than loopback holds at most ``max_per_peer`` slots (a quarter by default), and
+   past that makes room among its own clients the same way or is turned away, so one host's
+   connections cannot fill the port for the others. Loopback has no such share: every program
+   on the host is 127.0.0.1 (or ::1), so a share would be a limit on the shack's own programs;
+   there the make-room rule is what lets the operator in. Drops and refusals are logged at
+   most once per 10 s, with a count.
+4. ``listen`` takes the address before anything else starts, and its OSError names the front end,
+   the rotator, the address and the setting to change.
+5. Nothing a client sends can starve a stop (docs/architecture.md rule 12), by construction: at
+   most ``max_clients`` threads a port, each started only for a connection alive when accepted
+   and within its peer address's ACCEPTS_S a second (a burst of as many). The accept loop takes
+   every connection from the kernel at once (a backlog full of dead connections kept a real
+   client waiting, or dropped it): one its peer already closed is closed with no thread and no
+   budget; one over its peer's budget waits in the accept loop, no thread, until the budget
+   allows (oldest first), and is closed as soon as its peer leaves. One with a complete command
+   (rule 6) unread goes at once, ahead of the budget: it may be a stop. At most
+   ``max_clients`` wait; past that the newest without a complete line is reset, one that sent
+   part of a line before one that has sent nothing yet (it may be about to) (said at most
+   once per LOG_S). accept() out of descriptors or buffers pauses the loop ERROR_PAUSE_S (said
+   at most once per LOG_S); any error in the loop is logged so and the loop carries on. Over budget
+   is not reset at once: on loopback the operator shares 127.0.0.1 with any flooding program, and
+   would be turned away with it. So a flood of connect-and-close costs an accept and a close each
+   and uses no one's budget. A wake-up reads at most READ_BYTES (so runs at most that many
+   commands); each client has a budget (ratelimit.Budget) of bytes a second, each reply costing
+   REPLY_COST more: over it, its thread sleeps in the kernel (an Event) and its bytes wait in
+   TCP's buffers, said once (at most once per LOG_S a port). A client that sends MAX_UNFINISHED
+   bytes without finishing a command (no command is near that long) is dropped and logged (at
+   most once per LOG_S, with a count); the bytes are counted from the last command finished
+   (a read that finishes one counts its own bytes at most), so commands sent back to back,
+   however the reads cut them, never add up. A well-behaved client's stop is read at its first
+   wake-up: its budget is its own.
+6. A command ends at CR or LF unless the front end names its own ends (``ends``: a DCU-1's
+   ``;`` as well); rules 2, 3 and 5 look for those.
+"""
+
+from __future__ import annotations
+
+import errno
+import ipaddress
+import logging
+import math
+import os
+import re
+import selectors
+import socket
+import struct
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+from bridge.core.ratelimit import Budget, TokenBucket
+
+log = logging.getLogger(__name__)
+
+USEFUL_WITHIN_S = 60.0  # bytes trickling in without a complete command: dropped after this
+REFUSAL_LOG_S = 10.0  # connections turned away are logged at most this often, with a count
+# rule 5: a tracker sending 20 targets and 20 readings a second spends about 3 KB/s of this
+READ_BYTES = 64  # at most this much read, and so at most this many commands run, a wake-up
+RATE_BYTES_S = 8192.0  # a client's budget: this many bytes a second, a burst of as many
+REPLY_COST = 64  # each reply (each command answered) costs this many bytes of the budget
+MAX_UNFINISHED = 4096  # bytes without a complete command: the client is dropped
+LINE_ENDS = b"\r\n"  # what ends a command, unless a front end names its own (rule 6)
+LOG_S = 10.0  # rule 5's log lines, at most this often a port
+ACCEPTS_S = 20.0  # rule 5: threads started a second for one peer address, at most
+PENDING_GRACE_S = 2.0  # rule 3: a command half received for less is never dropped for room
+ERROR_PAUSE_S = 0.05  # rule 5: accept() out of descriptors or buffers, or a bug: pause this
+PARTIAL_POLL_S = 0.05  # rule 5: a waiting connection with part of a line is looked at this often
+PEERS_KEPT = 256  # rule 5: accept budgets remembered; past this, those back to full go
+
+
+class RareLog:
+    """One warning at most once per ``every_s``, with how many since the last said."""
+
+    def __init__(self, every_s: float = LOG_S) -> None:
+        self._every_s = every_s
+        self._said_s = -math.inf
+        self._since = 0
+        self._lock = threading.Lock()
+
+    def warn(self, now: float, msg: str, *args: object, exc_info: bool = False) -> None:
+        with self._lock:
+            self._since += 1
+            if now - self._said_s < self._every_s:
+                return
+            count, self._since, self._said_s = self._since, 0, now
+        log.warning(msg + " (%d time(s) since last said)", *args, count, exc_info=exc_info)
+
+
+class Close:
+    """A session's answer that ends the connection (rotctld's ``q``)."""
+
+
+CLOSE = Close()
+
+
+class _Client:
+    """Rule 3's bookkeeping for one connected client: what ``_admit`` weighs to make room."""
+
+    def __init__(self, thread: threading.Thread, host: str, now: float) -> None:
+        self.thread = thread
+        self.host = host
+        self.since_s = now  # connected
+        self.useful_s = now  # connected, or last finished a command
+        self.pending_s: float | None = None  # first byte of a command not yet complete
+        self.done = False  # has finished a command: an established program, dropped last
+
+    def evictable(self, now: float) -> bool:
+        return self.pending_s is None or now - self.pending_s > PENDING_GRACE_S
+
+
+def _loopback(host: str) -> bool:
+    try:
+        addr = ipaddress.ip_address(host.split("%")[0])
+    except ValueError:
+        return False
+    if isinstance(addr, ipaddress.IPv6Address) and addr.ipv4_mapped is not None:
+        addr = addr.ipv4_mapped
+    return addr.is_loopback
+
+
+def _alive(conn: socket.socket) -> bool:
+    """Rule 5: False if the peer already closed (or reset) the connection."""
+    conn.setblocking(False)
+    try:
+        return conn.recv(1, socket.MSG_PEEK) != b""
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+
+
+def _line_ready(conn: socket.socket, ends: bytes = LINE_ENDS) -> bool:
+    """Rules 3 and 5: True if a complete command (ended by one of ``ends``) waits unread in
+    the kernel."""
+    try:
+        if conn.gettimeout():  # a client's thread set one: recv() would poll for it first
+            with socket.socket(fileno=os.dup(conn.fileno())) as peek:  # no timeout: at once
+                data = peek.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+        else:
+            data = conn.recv(MAX_UNFINISHED, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+    except OSError:
+        return False
+    return any(bytes([end]) in data for end in ends)
+
+
+def _reset(conn: socket.socket) -> None:
+    """Close with a reset: nothing of this connection lingers on our side (no TIME_WAIT)."""
+    try:
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    except OSError:
+        pass
+    conn.close()
+
+
+class LineSession(Protocol):
+    """One client's conversation: bytes in, replies out (each reply is sent in one write)."""
+
+    @property
+    def idle(self) -> bool:
+        """True when no command is half received."""
+        ...
+
+    def feed(self, data: bytes) -> Sequence[bytes | Close]: ...
+
+
+def _bind_hints(key: str) -> dict[int, str]:
+    return {
+        errno.EADDRINUSE: f" (another program on this port? give this rotator another {key}_port)",
+        errno.EACCES: " (ports below 1024 need privileges: use 4533 or above)",
+        errno.EADDRNOTAVAIL: f" ({key}_bind is not an address of this host)",
+    }
+
+
+class LineServer:
+    """One TCP listener for one rotator; one thread per client, each with its own session.
+    ``label`` names the front end in logs and errors; ``key`` is its settings prefix."""
+
+    def __init__(
+        self,
+        rotator_id: str,
+        port: int,
+        bind: str,
+        session: Callable[[], LineSession],
+        *,
+        label: str,
+        key: str,
+        max_clients: int = 16,
+        max_per_peer: int | None = None,
+        idle_timeout_s: float = 300.0,
+        useful_within_s: float = USEFUL_WITHIN_S,
+        clock: Callable[[], float] = time.monotonic,
+        peer_session: Callable[[str], LineSession] | None = None,
+        rate_bytes_s: float = RATE_BYTES_S,
+        read_bytes: int = READ_BYTES,
+        max_unfinished: int = MAX_UNFINISHED,
+        ends: bytes = LINE_ENDS,
+    ) -> None:
+        """``peer_session``, if given, makes each client's session knowing its address (who
+        sent a command: model.Origin) instead of ``session``. ``rate_bytes_s``, ``read_bytes``
+        and ``max_unfinished``: rule 5; ``ends``: the bytes that end a command (rule 6).
+        ``max_per_peer`` (rule 3): slots one address other than loopback may hold, a quarter
+        of ``max_clients`` (at least 1) unless given."""
+        self._rate_bytes_s = rate_bytes_s
+        self._read_bytes = read_bytes
+        self._max_unfinished = max_unfinished
+        self._ends = ends
+        self._paused_log = RareLog()
+        self._dropped_log = RareLog()
+        self._ended = threading.Event()  # stop(): a paused client's thread wakes at once
+        self.paused = 0  # rule 5: times a client was over its budget, for the tests
+        self._peer_session = peer_session
+        self.rotator_id = rotator_id
+        self.label = label
+        self._key = key
+        self._session = session
+        self._bind = bind
+        self._requested_port = port
+        self._max_clients = max_clients
+        self._max_per_peer = max_per_peer if max_per_peer else max(1, max_clients // 4)
+        self._accepts: dict[str, TokenBucket] = {}  # rule 5: per peer address
+        self._over_log = RareLog()
+        self._accept_log = RareLog()
+        self._bug_log = RareLog()
+        self._room_log = RareLog(REFUSAL_LOG_S)
+        self._idle_timeout_s = idle_timeout_s
+        self._useful_within_s = max(useful_within_s, 0.0)
+        self._clock = clock
+        self._refused_logged_s = -REFUSAL_LOG_S
+        self._refused_since = 0
+        self._listener: socket.socket | None = None
+        self._wake_r, self._wake_w = -1, -1
+        self._accept_thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._clients: dict[socket.socket, _Client] = {}
+        self._stopping = False
+
+    @property
+    def address(self) -> tuple[str, int]:
+        if self._listener is None:
+            return self._bind, self._requested_port
+        host, port = self._listener.getsockname()[:2]
+        return host, port
+
+    @property
+    def port(self) -> int:
+        return self.address[1]
+
+    @property
+    def client_count(self) -> int:
+        with self._lock:
+            return len(self._clients)
+
+    def listen(self) -> None:
+        """Rule 4: take the address; OSError whose strerror is one line naming the rotator, the
+        address and the reason if it cannot be had. ``start`` does this too."""
+        if self._listener is not None:
+            return
+        host, port = self._bind, self._requested_port
+        try:
+            family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+            self._listener = socket.create_server((host, port), family=family)
+        except OSError as exc:
+            # create_server's strerror repeats the address; the plain reason is enough
+            code = exc.errno or 0
+            reason = os.strerror(code) if code > 0 else exc.strerror or str(exc)
+            raise OSError(
+                exc.errno,
+                f"{self.label} for rotator {self.rotator_id!r}: cannot listen on {host}:{port}: "
+                f"{reason}{_bind_hints(self._key).get(code, '')}",
+            ) from None
+
+    def start(self) -> None:
+        """Listen (OSError if the address cannot be had) and accept clients in a thread."""
+        self.listen()
+        host = self._bind
+        if host not in ("127.0.0.1", "::1", "localhost"):
+            log.warning(
+                "%s for %s listens on %s:%d: %s has no authentication, anyone who "
+                "can reach this address can turn the antenna",
+                self.label,
+                self.rotator_id,
+                host,
+                self.port,
+                self.label,
+            )
+        self._wake_r, self._wake_w = os.pipe()
+        self._stopping = False
+        self._ended.clear()
+        self._accept_thread = threading.Thread(
+            target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
+        )
+        self._accept_thread.start()
+        log.info("%s for %s listening on %s:%d", self.label, self.rotator_id, *self.address)
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        """Stop listening, close every client; commands already queued stay queued."""
+        if self._listener is None:
+            return
+        if self._accept_thread is None:  # listening, never started: nothing else to end
+            self._listener.close()
+            self._listener = None
+            return
+        with self._lock:
+            self._stopping = True
+            clients = list(self._clients.items())
+        self._ended.set()
+        os.write(self._wake_w, b"x")
+        self._accept_thread.join(timeout_s)
+        for conn, _thread in clients:
+            try:
+                conn.shutdown(socket.SHUT_RDWR)  # wakes the client thread's recv()
+            except OSError:
+                pass
+        for _conn, client in clients:
+            client.thread.join(timeout_s)
+        self._listener.close()
+        self._listener = None
+        self._accept_thread = None
+        os.close(self._wake_r)
+        os.close(self._wake_w)
+
+    def _accept_loop(self) -> None:
+        listener = self._listener
+        assert listener is not None
+        listener.setblocking(False)  # a client that gave up between select and accept
+        waiting: dict[socket.socket, tuple[str, int]] = {}  # rule 5: over budget, oldest first
+        with selectors.DefaultSelector() as sel:
+            sel.register(listener, selectors.EVENT_READ)
+            sel.register(self._wake_r, selectors.EVENT_READ)
+            try:
+                while True:  # rule 5: never a sleep while connections wait in the kernel
+                    try:
+                        if self._accept_once(listener, waiting, sel):
+                            return
+                    except Exception:  # rule 5: the port must outlive any bug in this loop
+                        self._bug_log.warn(
+                            self._clock(),
+                            "%s for %s: accept loop error",
+                            self.label,
+                            self.rotator_id,
+                            exc_info=True,
+                        )
+                        self._ended.wait(ERROR_PAUSE_S)
+            finally:
+                for conn in waiting:
+                    conn.close()
+
+    def _accept_once(
+        self,
+        listener: socket.socket,
+        waiting: dict[socket.socket, tuple[str, int]],
+        sel: selectors.BaseSelector,
+    ) -> bool:
+        """One pass of the accept loop; True when stop() asked it to end."""
+        events = sel.select(self._admit_waiting(waiting, sel))
+        if any(key.fileobj == self._wake_r for key, _ in events):
+            return True
+        for key, _ in events:
+            if key.fileobj is listener:
+                self._take(listener, waiting, sel)
+                continue
+            conn = key.fileobj  # a waiting one: its bytes came, or it left
+            if not isinstance(conn, socket.socket) or conn not in waiting:
+                continue  # reset by _take earlier in this same pass
+            if conn in sel.get_map():
+                sel.unregister(conn)
+            if not _alive(conn):
+                del waiting[conn]
+                conn.close()
+            elif _line_ready(conn, self._ends):  # a complete command: ahead of the budget
+                peer = waiting.pop(conn)
+                conn.setblocking(True)
+                self._admit(conn, peer)
+        return False
+
+    def _take(
+        self,
+        listener: socket.socket,
+        waiting: dict[socket.socket, tuple[str, int]],
+        sel: selectors.BaseSelector,
+    ) -> None:
+        """Rule 5: one connection from the kernel's queue, at once: closed if its peer already
+        left, a thread if its peer is within its budget, else it waits here (no thread)."""
+        try:
+            conn, peer = listener.accept()
+        except BlockingIOError:
+            return
+        except OSError as exc:
+            self._accept_log.warn(
+                self._clock(), "%s for %s: accept failed: %s", self.label, self.rotator_id, exc
+            )
+            if exc.errno in (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM):
+                self._ended.wait(ERROR_PAUSE_S)  # the listener stays readable: no spin
+            return
+        if not _alive(conn):  # its peer already left: no thread, no budget
+            conn.close()
+            return
+        now = self._clock()
+        queued = any(p[0] == peer[0] for p in waiting.values())
+        ready = _line_ready(conn, self._ends)  # a complete command waiting: ahead of the budget
+        if ready or (not queued and self._accept_budget(peer[0], now).take(now)):
+            conn.setblocking(True)
+            self._admit(conn, peer)
+            return
+        if len(waiting) >= self._max_clients:  # the newest without a complete command goes
+            partial = [c for c in reversed(waiting) if c not in sel.get_map()]  # sent bytes
+            silent = [c for c in reversed(waiting) if c in sel.get_map()]  # may be connecting
+            gone = next((c for c in partial + silent if not _line_ready(c, self._ends)), conn)
+            if gone is conn:
+                _reset(conn)
+            else:
+                if gone in sel.get_map():
+                    sel.unregister(gone)
+                del waiting[gone]
+                _reset(gone)
+            self._over_log.warn(
+                now,
+                "%s for %s: %s connects faster than a client may: connection reset",
+                self.label,
+                self.rotator_id,
+                peer[0],
+            )
+            if gone is conn:
+                return
+        waiting[conn] = peer
+        sel.register(conn, selectors.EVENT_READ)
+
+    def _admit_waiting(
+        self, waiting: dict[socket.socket, tuple[str, int]], sel: selectors.BaseSelector
+    ) -> float | None:
+        """Rule 5: a thread for each waiting connection with a complete command line, then
+        for each whose peer is back in credit, oldest first; returns how long until the next
+        one may go (None: none waits)."""
+        now = self._clock()
+        next_s: float | None = None
+        held: set[str] = set()
+        for conn, peer in list(waiting.items()):
+            if conn not in sel.get_map():  # it has sent bytes: see whether a line is complete
+                if _line_ready(conn, self._ends):
+                    del waiting[conn]
+                    conn.setblocking(True)
+                    self._admit(conn, peer)
+                else:
+                    next_s = PARTIAL_POLL_S
+        for conn, peer in list(waiting.items()):
+            if peer[0] in held:
+                continue
+            bucket = self._accept_budget(peer[0], now)
+            if not bucket.take(now):
+                held.add(peer[0])
+                wait_s = max(0.001, (1.0 - bucket.tokens) / bucket.rate_per_s)
+                next_s = wait_s if next_s is None else min(next_s, wait_s)
+                continue
+            if conn not in waiting:
+                continue
+            del waiting[conn]
+            if conn in sel.get_map():
+                sel.unregister(conn)
+            conn.setblocking(True)
+            self._admit(conn, peer)
+        return next_s
+
+    def _accept_budget(self, host: str, now: float) -> TokenBucket:
+        bucket = self._accepts.get(host)
+        if bucket is None:
+            if len(self._accepts) >= PEERS_KEPT:  # forget those back to a full bucket
+                full = [h for h, b in self._accepts.items() if now - b.t >= 1.0]
+                for h in full:
+                    del self._accepts[h]
+                if len(self._accepts) >= PEERS_KEPT:
+                    self._accepts.clear()
+            bucket = self._accepts[host] = TokenBucket.full(ACCEPTS_S, ACCEPTS_S, now)
+        return bucket
+
+    def _make_room(self, host: str, now: float) -> tuple[bool, str]:
+        """Rule 3, under the lock: whether a client from ``host`` may come in, dropping the
+        longest-idle evictable client if the port (or the peer's share) is full."""
+        if self._stopping:
+            return False, "stopping"
+        pool = list(self._clients.items())
+        if not _loopback(host):
+            own = [(c, k) for c, k in pool if k.host == host]
+            if len(own) >= self._max_per_peer:
+                pool, why = own, f"{host}'s share of {self._max_per_peer} slots"
+            elif len(pool) < self._max_clients:
+                return True, ""
+            else:
+                why = f"all {self._max_clients} slots"
+        elif len(pool) < self._max_clients:
+            return True, ""
+        else:
+            why = f"all {self._max_clients} slots"
+        candidates = [
+            (c, k) for c, k in pool if k.evictable(now) and not _line_ready(c, self._ends)
+        ]
+        if not candidates:
+            return False, f"{why} taken, every client mid-command"
+        fresh = [(c, k) for c, k in candidates if not k.done]
+        if fresh:  # never finished a command: the newest goes first
+            victim = max(fresh, key=lambda pair: pair[1].since_s)[0]
+        else:  # every one has a history: the one idle longest
+            victim = min(candidates, key=lambda pair: pair[1].useful_s)[0]
+        gone = self._clients.pop(victim)
+        try:
+            victim.shutdown(socket.SHUT_RDWR)  # its thread wakes, says it is gone, closes
+        except OSError:
+            pass
+        self._room_log.warn(
+            now,
+            "%s for %s: %s taken, dropped a client (%s, idle %.0f s) to let one in",
+            self.label,
+            self.rotator_id,
+            why,
+            gone.host,
+            now - gone.useful_s,
+        )
+        return True, ""
+
+    def _admit(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        with self._lock:
+            now = self._clock()
+            room, why = self._make_room(peer[0], now)
+            if not room:
+                _reset(conn)
+                self._refused_since += 1
+                if now - self._refused_logged_s >= REFUSAL_LOG_S:  # rule 3: one line, a count
+                    log.warning(
+                        "%s for %s: turned away %d connection(s), the last from %s:%d (%s)",
+                        self.label,
+                        self.rotator_id,
+                        self._refused_since,
+                        peer[0],
+                        peer[1],
+                        why,
+                    )
+                    self._refused_logged_s, self._refused_since = now, 0
+                return
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            client = _Client(
+                threading.Thread(
+                    target=self._serve,
+                    args=(conn, peer),
+                    name=f"{self._key}-{self.rotator_id}-{peer[1]}",
+                    daemon=True,
+                ),
+                peer[0],
+                now,
+            )
+            self._clients[conn] = client
+        client.thread.start()
+
+    def _serve(self, conn: socket.socket, peer: tuple[str, int]) -> None:
+        who = f"{self.label} for {self.rotator_id}: client {peer[0]}:{peer[1]}"
+        log.info("%s connected", who)
+        session = self._session() if self._peer_session is None else self._peer_session(peer[0])
+        with self._lock:
+            me = self._clients.get(conn)  # None: already dropped to make room
+        guard = HttpGuard(self._ends)
+        budget = Budget(self._rate_bytes_s, self._clock())
+        unfinished = 0  # rule 5: bytes since the client last finished a command
+        over = False  # rule 5: over its budget now (said once each time)
+        last_bytes = self._clock()
+        pending_since: float | None = None  # the first byte of a command not yet complete
+        try:
+            while True:
+                pause_s = budget.wait_s(self._clock())
+                if pause_s > 0:  # rule 5: in the kernel, unread, until back in credit
+                    if not over:
+                        over = True
+                        self.paused += 1
+                        self._paused_log.warn(
+                            self._clock(), "%s sends faster than a client may: paused", who
+                        )
+                    if self._ended.wait(pause_s):
+                        return
+                    continue
+                over = False
+                if me is not None:  # rule 3: what _make_room weighs
+                    me.pending_s = pending_since
+                    me.useful_s = last_bytes if pending_since is None else me.useful_s
+                # rule 3: silent for the idle timeout, or a command left unfinished for a while
+                now = self._clock()
+                deadline = last_bytes + self._idle_timeout_s
+                if pending_since is not None:
+                    deadline = min(deadline, pending_since + self._useful_within_s)
+                if now >= deadline:
+                    idle = now >= last_bytes + self._idle_timeout_s
+                    log.info("%s dropped: %s", who, "idle" if idle else "no command")
+                    return
+                conn.settimeout(deadline - now)
+                try:
+                    data = conn.recv(self._read_bytes)
+                except TimeoutError:
+                    continue
+                if not data:
+                    break
+                last_bytes, raw = self._clock(), len(data)
+                data = guard.feed(data)
+                if guard.http:
+                    log.warning(
+                        "%s sent %s: connection closed, nothing executed "
+                        "(a web page may try to reach %s on this host)",
+                        who,
+                        guard.http,
+                        self.label,
+                    )
+                    return
+                replies = session.feed(data) if data else ()
+                for reply in replies:
+                    if isinstance(reply, Close):
+                        return
+                    if reply:
+                        conn.sendall(reply)
+                budget.spend(raw + REPLY_COST * len(replies), self._clock())
+                finished = any(not isinstance(r, Close) for r in replies)
+                if finished and me is not None:
+                    me.done = True  # rule 3: an established program, dropped last
+                if session.idle and not guard.holding:
+                    pending_since, unfinished = None, 0
+                elif finished:  # rule 5: counted from the last command finished, not read
+                    pending_since, unfinished = last_bytes, raw  # its tail: within this read
+                else:
+                    unfinished += raw
+                    if pending_since is None:
+                        pending_since = last_bytes
+                if unfinished > self._max_unfinished:  # rule 5: a line with no end
+                    self._dropped_log.warn(
+                        self._clock(),
+                        "%s dropped: %d bytes and no command finished",
+                        who,
+                        unfinished,
+                    )
+                    return
+        except OSError as exc:
+            log.debug("%s: %s", who, exc)
+        finally:
+            with self._lock:
+                self._clients.pop(conn, None)
+            conn.close()
+            dropped = "" if session.idle else " (an unfinished command was dropped)"
+            log.info("%s gone%s", who, dropped)
+
+
+_REQUEST_LINE = re.compile(rb"^[A-Za-z]{3,10} \S* ?HTTP/\d(\.\d)?\s*$")
+_REQUEST_START = re.compile(rb"[A-Za-z]{3,10} ")  # a method and its space: a request line begun
+_HEADER = re.compile(rb"^[A-Za-z][A-Za-z0-9-]{1,40}:[ \t]")
+HTTP_FIRST_LINE_MAX = 8192
+
+
+class HttpGuard:
+    """Rule 2: what a client sends is held until its first line is complete; a connection whose
+    first line is an HTTP request line, or that sends a header line (``Host: ...``) at any
+    point, is HTTP and nothing of it may run (a web page cross-talking to a loopback port:
+    ``KHTML`` in a User-Agent would park the rotor). ``feed`` returns the bytes the parser may
+    have now; ``http`` names what was seen.
+
+    ``ends`` are the bytes that end a command (rule 6). An end other than CR or LF (a DCU-1's
+    ``;``) ends the first line too, unless what came before it begins like a request line (a
+    method and a space, which no such command has): then it is held to its CR or LF as an
+    HTTP request line is, so ``GET /;AP1120;AM1; HTTP/1.1`` is refused whole."""
+
+    def __init__(self, ends: bytes = LINE_ENDS) -> None:
+        self.http: str | None = None
+        self._head: bytes | None = b""  # the first line while it is incomplete; None after
+        self._line = b""  # the current line's start, for the header check
+        self._other_ends = bytes(e for e in ends if e not in b"\r\n")
+        self._request_like = False  # the first line began as a request line: CR or LF ends it
+
+    @property
+    def holding(self) -> bool:
+        """True while the first line is held (incomplete)."""
+        return self._head is not None
+
+    def feed(self, data: bytes) -> bytes:
+        if self._head is not None:
+            self._head += data
+            # a GS-232 client ends its lines with CR alone; an HTTP request line ends in CR LF
+            ended = b"\n" in data or b"\r" in data  # not in what came before: it was held
+            if not ended and self._other_ends and not self._request_like:
+                ended = self._ended_by_other(len(self._head) - len(data))
+            if not ended and len(self._head) < HTTP_FIRST_LINE_MAX:
+                return b""
+            data, self._head = self._head, None
+            if _REQUEST_LINE.match(re.split(rb"[\r\n]", data, maxsplit=1)[0]):
+                self.http = "an HTTP request line"
+                return b""
+        lines = (self._line + data).split(b"\n")
+        self._line = lines[-1][-64:]  # enough of a partial line to see "Name: " at its start
+        for line in lines:
+            if _HEADER.match(line):
+                self.http = f"an HTTP header ({line.split(b':')[0].decode('ascii', 'replace')})"
+                return b""
+        return data
+
+    def _ended_by_other(self, new_from: int) -> bool:
+        """Whether an end other than CR or LF, arrived at or after ``new_from``, ends the held
+        first line (the class's last paragraph)."""
+        assert self._head is not None
+        cuts = [i for e in self._other_ends if (i := self._head.find(bytes([e]), new_from)) >= 0]
+        if not cuts:
+            return False
+        if _REQUEST_START.match(self._head[: min(cuts)]):
+            self._request_like = True
+            return False
+        return True

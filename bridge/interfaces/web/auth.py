@@ -1,0 +1,186 @@
+"""Who may use the console, and which requests are the page's own. Pure: time is handed in.
+
+The console turns an antenna, so a request another site makes a browser send must never move
+it (the rotctld port once obeyed a browser's HTTP request as commands). Rules:
+
+1. Nothing that moves a rotator is a GET. Commands are POSTs with a JSON body and a token in the
+   ``X-Rotor-Token`` header: a plain form post cannot set a header, and another site's fetch
+   with one is held back by the browser's preflight, which the console never grants.
+2. A token is ``<issued, hex>.<nonce>.<mac>``, the MAC an HMAC-SHA256 of the first two parts
+   under the console's key. It is good for TOKEN_LIFETIME_S after it was issued and checked in
+   constant time. Without a password the key is random per process (a restarted bridge hands
+   out new tokens; the page asks again by itself); with one it is derived from the password and
+   this installation's own random secret (PBKDF2, so a token seen on the wire is slow to guess
+   the password from, and another bridge with the same password takes none of these tokens),
+   so tokens outlive a restart and die with a changed password. A token past its life is still
+   genuine: it carries a STOP or a lock ON (docs/architecture.md rule 11), nothing else.
+3. A password is compared in constant time (digests of equal length). Failed logins are
+   limited per client address (an IPv6 address by its /64, which one client has plenty of); a
+   client over its limit is answered without the password being looked at, so a flood learns
+   nothing, and a right password from another address is never held back by it. A login that
+   succeeds costs nothing (each new tab logs in).
+4. A POST whose ``Origin`` is not this host (the ``Host`` header, or the ``X-Forwarded-Host`` a
+   reverse proxy sets) is refused: another site's page, even one holding a token. A request
+   without ``Origin`` is not a browser's and needs the token like any.
+5. Without a password the console only listens on loopback (settings/web.py) and takes only
+   requests addressed to an IP literal, ``localhost`` or a name the user listed (``host_names``,
+   a reverse proxy's): a web page whose own host name has been pointed at 127.0.0.1 (DNS
+   rebinding) would otherwise be "this host" and could fetch a token. Behind a proxy the name
+   asked for is the ``X-Forwarded-Host`` it passes on, checked the same way (a name pointed at
+   the proxy is the same attack).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import ipaddress
+import secrets
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from urllib.parse import urlsplit
+
+from bridge.core.ratelimit import TokenBucket
+
+TOKEN_LIFETIME_S = 7 * 24 * 3600.0
+PBKDF2_ROUNDS = 100_000
+LOGIN_BURST_PER_CLIENT = 5  # rule 3: failed tries, then one per LOGIN_EVERY_S per address
+LOGIN_EVERY_S = 30.0
+CLIENTS_KEPT = 4096
+
+
+def key_for(password: str | None, secret: bytes = b"") -> bytes:
+    """Rule 2: the key tokens are signed with (``secret``: this installation's own)."""
+    if password is None:
+        return secrets.token_bytes(32)
+    return hashlib.pbkdf2_hmac(
+        "sha256", password.encode(), b"rotor-bridge console tokens" + secret, PBKDF2_ROUNDS
+    )
+
+
+@dataclass
+class Tokens:
+    key: bytes
+
+    def issue(self, now_s: float) -> str:
+        body = f"{int(now_s):x}.{secrets.token_hex(8)}"
+        return f"{body}.{self._mac(body)}"
+
+    def valid(self, token: str | None, now_s: float) -> bool:
+        issued = self.issued(token)
+        return issued is not None and issued - 60.0 <= now_s < issued + TOKEN_LIFETIME_S
+
+    def expires(self, token: str | None) -> float | None:
+        issued = self.issued(token)
+        return None if issued is None else issued + TOKEN_LIFETIME_S
+
+    def issued(self, token: str | None) -> float | None:
+        """When a genuine token (this key's) was issued, whether or not it has expired; None
+        for anything else (rule 2)."""
+        if not token or len(token) > 200:
+            return None
+        body, _, mac = token.rpartition(".")
+        issued_hex, _, nonce = body.partition(".")
+        if not nonce or not hmac.compare_digest(mac.encode(), self._mac(body).encode()):
+            return None
+        try:
+            return float(int(issued_hex, 16))
+        except ValueError:
+            return None
+
+    def _mac(self, body: str) -> str:
+        return hmac.new(self.key, body.encode(), hashlib.sha256).hexdigest()
+
+
+def password_matches(given: str, password: str) -> bool:
+    """Rule 3: in constant time, whatever the lengths."""
+    return hmac.compare_digest(
+        hashlib.sha256(given.encode()).digest(), hashlib.sha256(password.encode()).digest()
+    )
+
+
+@dataclass
+class LoginLimiter:
+    """Rule 3: ``wait`` says whether ``client`` (an address) may try now; ``failed`` spends."""
+
+    _clients: OrderedDict[str, TokenBucket] = field(default_factory=OrderedDict)
+
+    def wait(self, client: str, now_s: float) -> float | None:
+        """None: the try may go ahead; else the seconds until one may."""
+        bucket = self._clients.get(client_key(client))
+        if bucket is None:
+            return None
+        bucket.tokens = min(bucket.burst, bucket.tokens + (now_s - bucket.t) * bucket.rate_per_s)
+        bucket.t = now_s
+        return None if bucket.tokens >= 1.0 else _wait(bucket)
+
+    def failed(self, client: str, now_s: float) -> None:
+        key = client_key(client)
+        bucket = self._clients.pop(key, None)
+        if bucket is None:
+            bucket = TokenBucket.full(LOGIN_BURST_PER_CLIENT, 1.0 / LOGIN_EVERY_S, now_s)
+        self._clients[key] = bucket  # most recent last
+        while len(self._clients) > CLIENTS_KEPT:
+            self._clients.popitem(last=False)
+        bucket.take(now_s)
+
+
+def client_key(client: str) -> str:
+    """An IPv6 address counts by its /64 (one client has all of it), any other as it is."""
+    try:
+        address = ipaddress.ip_address(client)
+    except ValueError:
+        return client
+    if isinstance(address, ipaddress.IPv6Address):
+        if address.ipv4_mapped is not None:
+            return str(address.ipv4_mapped)
+        return str(ipaddress.ip_network(f"{address}/64", strict=False))
+    return str(address)
+
+
+def _wait(bucket: TokenBucket) -> float:
+    return max(1.0, (1.0 - bucket.tokens) / bucket.rate_per_s)
+
+
+def _netloc(text: str) -> str:
+    """``host[:port]`` lower-cased, without the default ports."""
+    text = text.strip().casefold()
+    for default in (":80", ":443"):
+        if text.endswith(default):
+            return text[: -len(default)]
+    return text
+
+
+def origin_allowed(origin: str | None, host: str | None, forwarded_host: str | None) -> bool:
+    """Rule 4."""
+    if origin is None:
+        return True
+    if origin.strip() == "null":
+        return False
+    parts = urlsplit(origin.strip())
+    if parts.scheme not in ("http", "https") or not parts.netloc:
+        return False
+    mine = {_netloc(h) for h in (host, (forwarded_host or "").split(",")[0]) if h and h.strip()}
+    return _netloc(parts.netloc) in mine
+
+
+def host_is_local_name(host: str | None, names: tuple[str, ...] = ()) -> bool:
+    """Rule 5: an IP literal, localhost or one of ``names`` (lower case), with any port."""
+    if not host:
+        return False
+    name = host.strip()
+    if name.startswith("["):  # [::1] or [::1]:8754, and nothing else after the bracket
+        inside, bracket, rest = name[1:].partition("]")
+        if not bracket or not (rest == "" or (rest[:1] == ":" and rest[1:].isdigit())):
+            return False
+        name = inside
+    elif name.count(":") == 1:
+        name = name.rsplit(":", 1)[0]
+    name = name.casefold()
+    if name == "localhost" or name.endswith(".localhost") or name in names:
+        return True
+    try:
+        ipaddress.ip_address(name)
+    except ValueError:
+        return False
+    return True

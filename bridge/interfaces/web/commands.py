@@ -1,0 +1,303 @@
+"""The console's commands: a JSON body in, one command (core/model.py's union) for the rotator's
+judge out.
+
+Rules:
+1. ``parse`` is pure: a JSON object in, a ``WebCommand`` out, or BadCommand naming the field.
+   Numbers are finite; text is bounded; unknown keys are refused (a typo must not be dropped
+   silently on a machine that turns an antenna).
+2. ``carry_out`` hands the command (``WebCommand.command_for``) to the same judge every front
+   end uses, through the same one entry (front.py, runtime/rotator.py ``submit``):
+   limits, keep-out sectors, the lock, the offset, the link. A refusal raises Refused, and the
+   judge has already reported it on R/error; a bad body is reported there by the server. On
+   the remote (remote/console.py) the rotator is the station's far away (interfaces/web/port.py):
+   the command is published on the station's topic and the station's judge has the last word.
+3. Stop and lock ON are never refused (docs/architecture.md rule 11): they go straight into the
+   mailbox, which takes a stop first. Tracking ``off`` likewise. On the remote they are refused
+   only while they cannot be delivered (the broker out of reach), and the answer says so. A
+   lock word is the rotator's owner's step (docs/architecture.md rule 14), the same as MQTT's:
+   the console keeps no lock of its own, and a lock OFF racing another interface's lock ON
+   leaves the judge, the status and the state file with one of them.
+4. Every command carries ``Source.WEB``, so the status says the console sent it (from the
+   remote the station's status says ``mqtt``: it came over its broker), and who sent it
+   (``Origin``: ``web`` and the browser's address, as the server saw it: port.py rule 4).
+5. A STOP or a lock ON is the last word over everything sent before it (docs/architecture.md
+   rule 11), whichever of the browser's connections brought what first. ``Order`` refuses, as
+   stale, a command that reached the bridge before a STOP or lock ON (from any interface: MQTT,
+   rotctld, the console) was carried out while it was still arriving (its body held up on the
+   way), and a command a page numbered (``page`` and ``seq``, which the console's page sends)
+   before a STOP or lock ON the same page sent after it, however late it comes; but not one
+   the same page numbered after its own STOP, the latest there is, that merely overtook it. A
+   stop, a lock ON and tracking off are never stale.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import unicodedata
+from collections import OrderedDict
+from dataclasses import dataclass, replace
+
+from bridge.core import geo
+from bridge.core.model import (
+    Command,
+    GoToPreset,
+    Lock,
+    Nudge,
+    Origin,
+    Park,
+    Source,
+    Stop,
+    TakePath,
+    Target,
+    Toward,
+    TrackBody,
+)
+from bridge.interfaces.web.port import ConsoleRotator
+
+MAX_BODY_BYTES = 4096
+PAGES_KEPT = 1024  # pages whose last STOP is remembered (rule 5)
+STALE = "sent before a STOP or lock ON that came first: not carried out"
+
+
+class BadCommand(ValueError):
+    """Not a command the console sends: the message names what is wrong."""
+
+
+@dataclass(frozen=True)
+class WebCommand:
+    command: str
+    az_deg: float | None = None
+    el_deg: float | None = None
+    latitude_deg: float | None = None
+    longitude_deg: float | None = None
+    locator: str | None = None
+    long_path: bool = False
+    name: str | None = None  # a preset's, or the body to track
+    on: bool = False  # lock
+    page: str | None = None  # rule 5: the page that sent it, and its number there
+    seq: int | None = None
+
+    def halts(self) -> bool:
+        """Stop, lock ON, tracking off: never refused, never stale (rules 3, 5)."""
+        if self.command == "track":
+            return (self.name or "").strip().casefold() == "off"
+        return self.command == "stop" or (self.command == "lock" and self.on)
+
+    def command_for(self, by: Origin) -> Command:
+        """The command for the judge (core/model.py's union), sent by ``by`` (rule 4)."""
+        src = Source.WEB
+        match self.command:
+            case "stop":
+                return Stop(src, by)
+            case "lock":
+                return Lock(self.on, source=src, origin=by)
+            case "target":
+                return Target(self.az_deg, self.el_deg, src, origin=by)
+            case "toward":
+                assert self.latitude_deg is not None and self.longitude_deg is not None
+                lat, lon = self.latitude_deg, self.longitude_deg
+                return Toward(lat, lon, self.locator, self.long_path, source=src, origin=by)
+            case "path":
+                return TakePath(self.long_path, source=src, origin=by)
+            case "preset":
+                assert self.name is not None
+                return GoToPreset(self.name, source=src, origin=by)
+            case "park":
+                return Park(source=src, origin=by)
+            case "nudge":
+                assert self.az_deg is not None
+                return Nudge(self.az_deg, self.el_deg, source=src, origin=by)
+            case "track":
+                assert self.name is not None
+                return TrackBody(self.name, None, source=src, origin=by)
+        raise BadCommand(f"unknown command {self.command[:40]!r}")  # parse() lets none through
+
+    def described(self) -> str:
+        """How an error event echoes it ("console: target az 120")."""
+        parts = [self.command]
+        for label, value in (("az", self.az_deg), ("el", self.el_deg)):
+            if value is not None:
+                parts.append(f"{label} {value:g}")
+        if self.locator is not None:
+            parts.append(self.locator)
+        elif self.latitude_deg is not None and self.longitude_deg is not None:
+            parts.append(f"{self.latitude_deg:.4f},{self.longitude_deg:.4f}")
+        if self.command in ("toward", "path"):
+            parts.append("long path" if self.long_path else "short path")
+        if self.name is not None:
+            parts.append(self.name)
+        if self.command == "lock":
+            parts.append("ON" if self.on else "OFF")
+        return "console: " + " ".join(parts)
+
+
+_KEYS: dict[str, frozenset[str]] = {
+    "stop": frozenset(),
+    "target": frozenset({"az", "el"}),
+    "toward": frozenset({"latitude_deg", "longitude_deg", "locator", "long_path"}),
+    "path": frozenset({"long_path"}),
+    "preset": frozenset({"name"}),
+    "park": frozenset(),
+    "nudge": frozenset({"d_az", "d_el"}),
+    "track": frozenset({"body"}),
+    "lock": frozenset({"on"}),
+}
+
+
+def parse(body: bytes) -> WebCommand:
+    """Rule 1."""
+    if len(body) > MAX_BODY_BYTES:
+        raise BadCommand(f"a command is at most {MAX_BODY_BYTES} bytes")
+    try:
+        doc = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
+    except RecursionError:
+        raise BadCommand("not a JSON command: nested too deep") from None
+    except ValueError as exc:  # not UTF-8, not JSON, a number too long to read
+        raise BadCommand(f"not a JSON command: {str(exc)[:120]}") from None
+    if not isinstance(doc, dict):
+        raise BadCommand('a command is a JSON object such as {"command": "stop"}')
+    kind = doc.pop("command", None)
+    if not isinstance(kind, str) or kind not in _KEYS:
+        raise BadCommand(f"unknown command {str(kind)[:40]!r}; one of: {', '.join(_KEYS)}")
+    page, seq = doc.pop("page", None), doc.pop("seq", None)
+    unknown = set(doc) - _KEYS[kind]
+    if unknown:
+        raise BadCommand(f"unknown key(s) for {kind}: {', '.join(sorted(unknown)[:5])}")
+    if (page is None) != (seq is None):
+        raise BadCommand('"page" and "seq" come together')
+    if page is not None and (not isinstance(page, str) or not 1 <= len(page) <= 40):
+        raise BadCommand('"page" must be text (1 to 40 characters)')
+    if seq is not None and (isinstance(seq, bool) or not isinstance(seq, int) or seq < 0):
+        raise BadCommand('"seq" must be a whole number, 0 or more')
+    return replace(_parsed(kind, doc), page=page, seq=seq)
+
+
+def _parsed(kind: str, doc: dict[str, object]) -> WebCommand:
+    if kind == "target":
+        return WebCommand(kind, az_deg=_number(doc, "az"), el_deg=_number(doc, "el", None))
+    if kind == "toward":
+        return _toward(doc)
+    if kind == "path":
+        return WebCommand(kind, long_path=_flag(doc, "long_path"))
+    if kind == "preset":
+        return WebCommand(kind, name=_text(doc, "name"))
+    if kind == "nudge":
+        d_az, d_el = _number(doc, "d_az", 0.0), _number(doc, "d_el", None)
+        assert d_az is not None
+        return WebCommand(kind, az_deg=d_az, el_deg=d_el)
+    if kind == "track":
+        return WebCommand(kind, name=_text(doc, "body"))
+    if kind == "lock":
+        return WebCommand(kind, on=_flag(doc, "on", required=True))
+    return WebCommand(kind)  # stop, park
+
+
+def _toward(doc: dict[str, object]) -> WebCommand:
+    long_path = _flag(doc, "long_path")
+    if "locator" in doc:
+        if "latitude_deg" in doc or "longitude_deg" in doc:
+            raise BadCommand('give "locator" or "latitude_deg"/"longitude_deg", not both')
+        text = _text(doc, "locator").strip()
+        try:
+            lat, lon = geo.parse_locator(text)
+        except geo.LocatorError as exc:
+            raise BadCommand(str(exc)) from None
+        locator = text.upper()[:4] + text.lower()[4:6] + text[6:]
+        return WebCommand(
+            "toward", latitude_deg=lat, longitude_deg=lon, locator=locator, long_path=long_path
+        )
+    lat_or_none, lon_or_none = _number(doc, "latitude_deg"), _number(doc, "longitude_deg")
+    assert lat_or_none is not None and lon_or_none is not None
+    lat, lon = lat_or_none, lon_or_none
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise BadCommand("latitude_deg must be -90..90 and longitude_deg -180..180")
+    return WebCommand("toward", latitude_deg=lat, longitude_deg=lon, long_path=long_path)
+
+
+_REQUIRED = object()
+
+
+def _number(doc: dict[str, object], key: str, default: object = _REQUIRED) -> float | None:
+    value = doc.get(key, default)
+    if value is _REQUIRED:
+        raise BadCommand(f'"{key}" is missing')
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise BadCommand(f'"{key}" must be a finite number')
+    try:
+        number = float(value)  # an integer too big for a float raises here
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise BadCommand(f'"{key}" must be a finite number')
+    return number
+
+
+def _flag(doc: dict[str, object], key: str, *, required: bool = False) -> bool:
+    value = doc.get(key, _REQUIRED if required else False)
+    if value is _REQUIRED:
+        raise BadCommand(f'"{key}" is missing')
+    if not isinstance(value, bool):
+        raise BadCommand(f'"{key}" must be true or false')
+    return value
+
+
+def _text(doc: dict[str, object], key: str) -> str:
+    value = doc.get(key)
+    if not isinstance(value, str) or not value.strip() or len(value) > 80:
+        raise BadCommand(f'"{key}" must be text (1 to 80 characters)')
+    if any(unicodedata.category(c) == "Cc" for c in value):  # as the settings take names
+        raise BadCommand(f'"{key}" must be text without control characters')
+    return value
+
+
+class Order:
+    """Rule 5, for one console (the server's event loop alone calls it)."""
+
+    def __init__(self) -> None:
+        # rotator -> the console's last halt: when it was carried out, the page and its number
+        self._last: dict[str, tuple[float, str | None, int | None]] = {}
+        self._halt_seq: OrderedDict[tuple[str, str], int] = OrderedDict()  # (page, rotator)
+
+    def stale(
+        self, rotator_id: str, cmd: WebCommand, started: float, halted_s: float = -math.inf
+    ) -> str | None:
+        """Why ``cmd`` (its request begun at ``started``) is not carried out; ``halted_s``:
+        when the rotator last carried out a STOP or lock ON from any interface (all times
+        monotonic)."""
+        if cmd.halts():
+            return None
+        numbered = cmd.page is not None and cmd.seq is not None
+        if numbered:
+            last_seq = self._halt_seq.get((str(cmd.page), rotator_id))
+            if last_seq is not None and cmd.seq is not None and cmd.seq < last_seq:
+                return STALE
+        at, page, seq = self._last.get(rotator_id, (-math.inf, None, None))
+        latest = max(at, halted_s)
+        if started < latest:
+            # the page's own halt, numbered before this command and the latest there is: the
+            # page sent this after it, whichever arrived first
+            own = numbered and page == cmd.page and seq is not None and at >= halted_s
+            if not (own and cmd.seq is not None and seq is not None and cmd.seq > seq):
+                return STALE
+        return None
+
+    def halted(self, rotator_id: str, cmd: WebCommand, now: float) -> None:
+        self._last[rotator_id] = (now, cmd.page, cmd.seq)
+        if cmd.page is not None and cmd.seq is not None:
+            key = (cmd.page, rotator_id)
+            self._halt_seq[key] = max(cmd.seq, self._halt_seq.pop(key, cmd.seq))
+            while len(self._halt_seq) > PAGES_KEPT:
+                self._halt_seq.popitem(last=False)
+
+
+def _no_constant(name: str) -> object:
+    raise ValueError(f"{name} is not a number here")
+
+
+def carry_out(rot: ConsoleRotator, cmd: WebCommand, peer: str | None = None) -> None:
+    """Rule 2: raises Refused (already reported) when the judge says no; ``peer``: the
+    browser's address (rule 4)."""
+    rot.submit(cmd.command_for(Origin(Source.WEB, None, peer)), cmd.described())

@@ -1,0 +1,478 @@
+"""The operator console over HTTP: the page, its token, the live feed and the commands (aiohttp
+on a thread of its own; the contract the page keeps is docs/console.md).
+
+Why aiohttp: one event loop on one thread serves every open page's stream and every command
+(a page costs a coroutine, not a thread), the streams and the POSTs need nothing beyond it, and
+the rest of the bridge stays threads and queues: the serial-lines thread hands statuses over
+with ``call_soon_threadsafe`` and never waits for a page.
+
+Rules:
+1. Every URL is relative to the page (``api/events``, never ``/api/events``): the console
+   works behind a reverse proxy under a path prefix and inside a Home Assistant card.
+2. The safety rules of auth.py hold for every request: the host check (no password), the
+   Origin of every POST, the token of every ``api/`` call but ``hello``, ``session`` and
+   ``login``; commands are POSTs only (a GET is 405 and moves nothing). A command without a
+   token is 403, one with a bad or expired token 401 (the page fetches a new one).
+3. Every answer carries a strict Content-Security-Policy (scripts and styles from this origin
+   only, no inline script), ``nosniff`` and no referrer; who may frame the page is the
+   ``frame_ancestors`` setting (only the console itself by default: a hostile page must not
+   frame it and steer clicks onto the map).
+4. A command is judged by the rotator's judge (commands.py); the answer says what the judge
+   said (409 with the refusal's code), and the refusal reaches every page as an error event
+   too, as it reaches R/error. Who sent it is ``web`` and the connection's address (aiohttp's
+   ``request.remote``, as the login's limit counts it): behind a reverse proxy, the proxy's,
+   since no ``X-Forwarded-For`` is believed (anyone can write one).
+5. Slow work (projecting the coastlines, reading the TLE file's names) runs on the loop's
+   executor, never on the loop: a STOP posted meanwhile is carried out at once
+   (docs/architecture.md rule 12). So do the commands of a rotator whose commands wait for a
+   round trip (``commands_block``: the remote's, which waits for its broker's
+   acknowledgement): on one thread per such rotator (made at ``attach``), in the order they
+   came (a stop never overtakes a target posted before it, nor a target the stop), so no
+   page's stream or command, nor another rotator's, waits for them (their order at the broker
+   is kept by the link's own send lock). A STOP or lock ON posted there waits for that
+   rotator's one command under way at most: those queued before it that have not started are
+   not sent (refused ``stale``: the stop came first), so it is neither overtaken nor does it
+   overtake. At most ``FAR_MOVES`` moves wait per rotator (the one under way included); one
+   more is refused at once (409, code ``busy``), never queued. A STOP or lock ON is never
+   refused so.
+6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import gzip
+import json
+import logging
+import threading
+import time
+from collections.abc import Awaitable, Callable
+
+from aiohttp import web
+
+from bridge import __version__
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
+from bridge.interfaces.web import auth, view
+from bridge.interfaces.web.commands import BadCommand, Order, WebCommand, carry_out, parse
+from bridge.interfaces.web.connections import Connections
+from bridge.interfaces.web.feed import Feed, Shape
+from bridge.interfaces.web.files import static_files
+from bridge.interfaces.web.live import TOKEN_HEADER, Live
+from bridge.interfaces.web.port import ConsoleRotator
+
+log = logging.getLogger(__name__)
+
+BODY_S = 10.0  # a command's body arrives within this, or it is not waited for
+FAR_MOVES = 4  # rule 5: moves waiting per far rotator (the one under way included), no more
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def _json(doc: object, status: int = 200) -> web.Response:
+    return web.json_response(doc, status=status, headers={"Cache-Control": "no-store"})
+
+
+class WebConsole:
+    def __init__(
+        self,
+        bind: str,
+        port: int,
+        *,
+        password: str | None,
+        frame_ancestors: list[str],
+        host_names: list[str] | None = None,
+        secret: bytes = b"",
+        station: tuple[float, float] | None,
+        locator: str | None,
+        satellites: Callable[[], list[str]],
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        self.bind, self.port = bind, port
+        self._password = password
+        self._host_names = tuple(host_names or ())
+        self._tokens = auth.Tokens(auth.key_for(password, secret))
+        self._logins = auth.LoginLimiter()
+        self._station, self._locator = station, locator
+        self._satellites = satellites
+        self._wall = wall
+        self._rotators: dict[str, ConsoleRotator] = {}
+        self._facts: dict[str, view.RotatorFacts] = {}
+        self._shapes: dict[str, Shape] = {}
+        self._files = static_files()
+        self._land: asyncio.Future[bytes] | None = None
+        ancestors = " ".join(["'self'", *frame_ancestors])
+        self._headers = {
+            "Content-Security-Policy": "default-src 'self'; script-src 'self'; style-src 'self'; "
+            "img-src 'self' data:; connect-src 'self'; base-uri 'none'; form-action 'self'; "
+            f"frame-ancestors {ancestors}",
+            "X-Content-Type-Options": "nosniff",
+            "Referrer-Policy": "no-referrer",
+        }
+        if not frame_ancestors:
+            self._headers["X-Frame-Options"] = "SAMEORIGIN"
+        self.live = Live(
+            Feed(self._shapes),
+            self._tokens,
+            wall,
+            self._headers,
+            trust=lambda transport: self._conns.trust(transport),
+            halt=self._halt,
+        )
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._runner: web.AppRunner | None = None
+        self._conns = Connections(lambda: None)
+        self._listener: asyncio.Server | None = None
+        self._sweeper: asyncio.Task[None] | None = None
+        self._ticker: asyncio.Task[None] | None = None
+        self._order = Order()
+        self._started: dict[int, float] = {}  # requests being served (by id): when they began
+        self._thread: threading.Thread | None = None
+        self._running = False
+        self._far: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # rule 5, per rotator
+        self._far_halts: dict[str, int] = {}  # rule 5: halts posted per rotator (the loop's)
+        self._far_moves: dict[str, int] = {}  # rule 5: moves not yet done per rotator (the loop's)
+
+    # -- wiring (the main thread) ------------------------------------------------------------
+    def attach(self, rot: ConsoleRotator, facts: view.RotatorFacts) -> None:
+        if rot.commands_block and rot.id not in self._far:  # rule 5: one thread each, in order
+            self._far[rot.id] = concurrent.futures.ThreadPoolExecutor(1, f"console-{rot.id}")
+        self._rotators[rot.id] = rot
+        self._facts[rot.id] = facts
+        self._shapes[rot.id] = Shape(rot.spec.has_elevation, rot.pointing.shows_raw)
+
+    @property
+    def url(self) -> str:
+        host = self.bind if self.bind not in ("", "0.0.0.0", "::") else "127.0.0.1"
+        return f"http://{f'[{host}]' if ':' in host else host}:{self.port}/"
+
+    def listen(self) -> None:
+        """Bind the port (OSError if it cannot be had) and serve on a thread of its own. The
+        loop runs on that thread from the start: the caller's thread may have a loop of its own
+        running (a script, a test driving a browser)."""
+        loop = self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
+        self._thread.start()
+        try:
+            asyncio.run_coroutine_threadsafe(self._start(), loop).result(timeout=30.0)
+        except BaseException:
+            loop.call_soon_threadsafe(loop.stop)
+            self._thread.join(timeout=5.0)
+            loop.close()
+            self._loop = self._thread = None
+            raise
+        self._running = True
+        log.info("web console on %s", self.url)
+
+    async def _start(self) -> None:
+        app = web.Application(middlewares=[self._guard], client_max_size=16 * 1024)
+        app.router.add_get("/", self._index)
+        app.router.add_get("/api/hello", self._hello)
+        app.router.add_post("/api/session", self._session)
+        app.router.add_post("/api/login", self._login)
+        app.router.add_get("/api/config", self._config)
+        app.router.add_get("/api/land", self._land_data)
+        app.router.add_get("/api/events", self._tokened(self.live.events))
+        app.router.add_get("/api/live", self.live.websocket)
+        app.router.add_post("/api/rotators/{rid}/command", self._command)
+        app.router.add_get("/{name}", self._file)
+        # the streams end themselves at stop (feed.close): nothing is worth waiting long for
+        runner = self._runner = web.AppRunner(app, access_log=None, shutdown_timeout=1.0)
+        await runner.setup()
+        # served through Connections (connections.py), not a TCPSite: what is held is counted
+        server = runner.server
+        assert server is not None  # set up above
+        self._conns = Connections(server)
+        loop = asyncio.get_running_loop()
+        self._listener = await loop.create_server(
+            self._conns.protocol, self.bind or None, self.port, reuse_address=True
+        )
+        self._sweeper = loop.create_task(self._conns.sweeping())
+        self._ticker = loop.create_task(self.live.ticking())
+
+    def stop(self) -> None:
+        """Rule 6."""
+        loop, self._running = self._loop, False
+        if loop is None or self._thread is None:
+            return
+        done = asyncio.run_coroutine_threadsafe(self._shutdown(), loop)
+        try:
+            done.result(timeout=5.0)
+        except Exception:
+            log.exception("the web console did not stop cleanly")
+        loop.call_soon_threadsafe(loop.stop)
+        self._thread.join(timeout=5.0)
+        if not self._thread.is_alive():
+            loop.close()
+        for far in self._far.values():
+            far.shutdown(wait=False, cancel_futures=True)
+
+    async def _shutdown(self) -> None:
+        self.live.feed.close()
+        for task in (self._sweeper, self._ticker):
+            if task is not None:
+                task.cancel()
+        if self._listener is not None:
+            self._listener.close()
+        if self._runner is not None:
+            await self._runner.cleanup()
+
+    # -- the engine's listeners (the serial-lines thread: live.py rule 1) --------------------
+    def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
+        self.live.on_status(rotator_id, status, self._loop if self._running else None)
+
+    def on_event(self, rotator_id: str, event: ErrorEvent) -> None:
+        self.live.on_event(rotator_id, event, self._loop if self._running else None)
+
+    def on_spots(self, doc: str) -> None:
+        """The DX cluster's spot list (``B/spots``' document), from its thread (live.py rule 6)."""
+        self.live.on_spots(doc, self._loop if self._running else None)
+
+    # -- every request (rules 2, 3) ----------------------------------------------------------
+    @web.middleware
+    async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        refusal = self._refusal(request)
+        if refusal is not None:
+            response: web.StreamResponse = _json({"error": refusal}, 403)
+        else:
+            self._started[id(request)] = time.monotonic()  # commands.py rule 5
+            self._conns.started(request.transport)
+            try:
+                response = await handler(request)
+            except web.HTTPException as exc:
+                response = _json({"error": exc.reason}, exc.status)
+            finally:
+                self._conns.finished(request.transport)
+                del self._started[id(request)]
+        response.headers.update(self._headers)
+        return response
+
+    def _refusal(self, request: web.Request) -> str | None:
+        host = request.headers.get("Host")
+        forwarded = request.headers.get("X-Forwarded-Host")
+        if self._password is None:  # auth.py rule 5: the name asked for, through a proxy too
+            for name in (host, *([forwarded.split(",")[0]] if forwarded else [])):
+                if not auth.host_is_local_name(name, self._host_names):
+                    return (
+                        f"this console answers to IP addresses, localhost and web.host_names "
+                        f"only, not {name!r}: without web.password_file a page from another "
+                        "name could drive it"
+                    )
+        if request.method in ("GET", "HEAD") and request.headers.get("Upgrade") is None:
+            return None  # a WebSocket's opening GET is checked as a POST is (its Origin)
+        if not auth.origin_allowed(request.headers.get("Origin"), host, forwarded):
+            return "a request from another site's page is refused"
+        if request.method == "GET":
+            return None
+        if request.content_type != "application/json":
+            return "commands are JSON (Content-Type: application/json)"
+        return None
+
+    def _tokened(self, handler: Handler) -> Handler:
+        async def checked(request: web.Request) -> web.StreamResponse:
+            if not self._token_ok(request):
+                return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+            return await handler(request)
+
+        return checked
+
+    def _token_ok(self, request: web.Request) -> bool:
+        if not self._tokens.valid(request.headers.get(TOKEN_HEADER), self._wall()):
+            return False
+        self._conns.trust(request.transport)  # connections.py rule 1
+        return True
+
+    # -- the page ----------------------------------------------------------------------------
+    async def _index(self, request: web.Request) -> web.StreamResponse:
+        return self._serve(request, "index.html")
+
+    async def _file(self, request: web.Request) -> web.StreamResponse:
+        return self._serve(request, request.match_info["name"])
+
+    def _serve(self, request: web.Request, name: str) -> web.StreamResponse:
+        found = self._files.get(name)
+        if found is None:
+            raise web.HTTPNotFound(reason=f"no {name}")
+        plain, packed, kind = found
+        zipped = "gzip" in request.headers.get("Accept-Encoding", "")
+        response = web.Response(body=packed if zipped else plain)
+        response.headers["Content-Type"] = kind
+        response.headers["Cache-Control"] = "no-cache"
+        response.headers["Vary"] = "Accept-Encoding"
+        if zipped:
+            response.headers["Content-Encoding"] = "gzip"
+        return response
+
+    # -- tokens --------------------------------------------------------------------------------
+    async def _hello(self, request: web.Request) -> web.StreamResponse:
+        return _json({"password": self._password is not None, "version": __version__})
+
+    async def _session(self, request: web.Request) -> web.StreamResponse:
+        if self._password is not None:
+            return _json({"error": "this console asks for a password (api/login)"}, 403)
+        return _json({"token": self._tokens.issue(self._wall())})
+
+    async def _login(self, request: web.Request) -> web.StreamResponse:
+        if self._password is None:
+            return _json({"token": self._tokens.issue(self._wall())})
+        client, now = request.remote or "?", time.monotonic()
+        wait_s = self._logins.wait(client, now)
+        if wait_s is not None:
+            message = f"too many failed logins; try again in {wait_s:.0f} s"
+            return _json({"error": message, "retry_after_s": round(wait_s)}, 429)
+        try:
+            doc = await request.json()
+        except (ValueError, RecursionError):
+            doc = None
+        given = doc.get("password") if isinstance(doc, dict) else None
+        if not isinstance(given, str) or not auth.password_matches(given, self._password):
+            self._logins.failed(client, now)
+            log.warning("web console: a wrong password from %s", client)
+            return _json({"error": "wrong password"}, 401)
+        return _json({"token": self._tokens.issue(self._wall())})
+
+    # -- what the page reads -----------------------------------------------------------------
+    async def _config(self, request: web.Request) -> web.StreamResponse:
+        if not self._token_ok(request):
+            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        loop = asyncio.get_running_loop()
+        try:  # rule 5: the TLE file is read here
+            satellites = await loop.run_in_executor(None, self._satellites)
+        except Exception:
+            log.exception("web console: the TLE file's names could not be read")
+            satellites = []
+        doc = {
+            "version": __version__,
+            "station": view.station_doc(self._station, self._locator),
+            "rotators": [
+                view.rotator_doc(rot, self._facts[rid], satellites)
+                for rid, rot in self._rotators.items()
+            ],
+        }
+        return _json(doc)
+
+    async def _land_data(self, request: web.Request) -> web.StreamResponse:
+        if not self._token_ok(request):
+            return _json({"error": "no valid token: ask api/session or api/login"}, 401)
+        station = self._station
+        if station is None:
+            return _json({"error": "no [station]: the console shows a dial without a map"}, 404)
+        if self._land is None:  # rule 5: projected once, on the executor
+            loop = asyncio.get_running_loop()
+            self._land = loop.run_in_executor(None, _land_gzip, station)
+        packed = await asyncio.shield(self._land)
+        zipped = "gzip" in request.headers.get("Accept-Encoding", "")
+        response = web.Response(body=packed if zipped else gzip.decompress(packed))
+        response.headers["Content-Type"] = "application/json"
+        if zipped:
+            response.headers["Content-Encoding"] = "gzip"
+        response.headers["Cache-Control"] = "no-cache"
+        return response
+
+    # -- commands (rule 4) -------------------------------------------------------------------
+    def _halt(self, rotator_id: str, body: bytes, peer: str | None = None) -> None:
+        """A STOP or lock ON over a page's WebSocket (live.py rule 5); nothing else."""
+        rot = self._rotators.get(rotator_id)
+        try:
+            cmd = parse(body)
+        except BadCommand:
+            return
+        if rot is None or not cmd.halts():
+            return
+        far = self._far.get(rot.id)
+        if far is not None and rot.commands_block:  # rule 5
+            self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
+            done = asyncio.wrap_future(far.submit(carry_out, rot, cmd, peer))
+            done.add_done_callback(lambda f: self._halted(rot.id, cmd, f))
+            return
+        try:
+            carry_out(rot, cmd, peer)  # never refused by a judge (commands.py rule 3)
+        except Refused:  # a rotator far away, its broker out of reach: its POST says so
+            return
+        self._order.halted(rot.id, cmd, time.monotonic())
+
+    def _far_move(
+        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int
+    ) -> None:
+        """Rule 5, on the commands' thread: not sent if a halt was posted since it came."""
+        if self._far_halts.get(rot.id, 0) != posted:
+            why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
+            rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
+            raise Refused(RefusalCode.STALE, why)
+        carry_out(rot, cmd, peer)
+
+    def _far_moved(self, rotator_id: str) -> None:
+        """A far move done (any thread): no longer counted against rule 5's bound."""
+        loop = self._loop
+        if loop is None:
+            return
+        try:
+            loop.call_soon_threadsafe(self._far_unqueue, rotator_id)
+        except RuntimeError:  # the console stopped meanwhile: nothing is counted any more
+            pass
+
+    def _far_unqueue(self, rotator_id: str) -> None:
+        self._far_moves[rotator_id] = self._far_moves.get(rotator_id, 1) - 1
+
+    def _halted(self, rotator_id: str, cmd: WebCommand, done: asyncio.Future[None]) -> None:
+        """A halt carried out off the loop (rule 5), back on the loop."""
+        if not done.cancelled() and done.exception() is None:
+            self._order.halted(rotator_id, cmd, time.monotonic())
+
+    async def _command(self, request: web.Request) -> web.StreamResponse:
+        token = request.headers.get(TOKEN_HEADER)
+        if token is None:
+            return _json({"error": f"a command needs the page's token ({TOKEN_HEADER})"}, 403)
+        if self._tokens.issued(token) is None:
+            return _json({"error": "the token is not valid (any more): reload"}, 401)
+        self._conns.trust(request.transport)  # connections.py rule 1
+        rot = self._rotators.get(request.match_info["rid"])
+        if rot is None:
+            return _json({"error": "no such rotator"}, 404)
+        try:
+            body = await asyncio.wait_for(request.read(), BODY_S)
+        except TimeoutError:
+            return _json({"error": f"the command's body did not come within {BODY_S:g} s"}, 408)
+        by = Origin(Source.WEB, None, request.remote)  # rule 4
+        try:
+            cmd = parse(body)
+        except BadCommand as exc:
+            said = "console: " + body[:80].decode("utf-8", "replace")
+            rot.report_refusal(str(exc), said, origin=by)
+            return _json({"error": str(exc), "code": "invalid"}, 400)
+        halt = cmd.halts()
+        if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
+            return _json({"error": "the token has expired: log in again"}, 401)
+        stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
+        if stale is not None:
+            rot.report_refusal(stale, cmd.described(), origin=by)
+            return _json({"error": stale, "code": "stale"}, 409)
+        far = self._far.get(rot.id)
+        busy = self._far_moves.get(rot.id, 0) >= FAR_MOVES
+        if far is not None and rot.commands_block and not halt and busy:  # rule 5: a bound
+            why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
+            rot.report_refusal(why, cmd.described(), origin=by)
+            return _json({"error": why, "code": "busy"}, 409)
+        try:
+            if far is not None and rot.commands_block:  # rule 5
+                if halt:
+                    self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
+                    done = far.submit(carry_out, rot, cmd, request.remote)
+                else:
+                    posted = self._far_halts.get(rot.id, 0)
+                    done = far.submit(self._far_move, rot, cmd, request.remote, posted)
+                    self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
+                    done.add_done_callback(lambda _: self._far_moved(rot.id))
+                await asyncio.wrap_future(done)
+            else:
+                carry_out(rot, cmd, request.remote)
+        except Refused as exc:
+            return _json({"error": str(exc), "code": exc.code.value}, 409)
+        if halt:
+            self._order.halted(rot.id, cmd, time.monotonic())
+        return _json({"ok": True})
+
+
+def _land_gzip(station: tuple[float, float]) -> bytes:
+    doc = view.land_doc(station, view.land_rings())
+    return gzip.compress(json.dumps(doc, separators=(",", ":")).encode(), mtime=0)

@@ -1,0 +1,258 @@
+"""The WSJT-X (JTDX) listener: one UDP socket on a thread of its own; what WSJT-X says of the
+QSO under way (its Status messages, decoded by messages.py) handed to every rotator as an input
+(``Rotator.heard``). Whether a rotator turns is its follow part's decision (session/follow.py),
+made on the serial-lines thread: nothing here judges or moves anything.
+
+Rules:
+1. Off unless ``[wsjtx] enabled``. Unicast: the socket is bound to ``bind:port`` alone (a
+   second program on the port shows as "in use"). With ``multicast_group`` it is shared
+   (SO_REUSEADDR, as GridTracker and JTAlert share it), bound to the group's address and the
+   port, and joins the group on the interface of ``bind`` (0.0.0.0: the system's choice).
+   It hears the group only where it joined it (IP_MULTICAST_ALL off: Linux otherwise hands it
+   the group's datagrams from every interface another program joined the group on), and a
+   listener bound to a loopback address takes datagrams from loopback sources alone (counted
+   as ``foreign``): a forged Status from the LAN never reaches a rotator.
+2. Each datagram is decoded on its own. A malformed one (messages.py rule 1) is dropped and
+   counted, and logged at most once per JUNK_LOG_S with the count since: it reaches no
+   rotator. Heartbeats and other message types are counted and ignored.
+3. Nothing ends the thread but stop(): a fault behind a datagram (a bug in what it reaches) is
+   logged at most once per JUNK_LOG_S with its traceback and the next datagram is served.
+4. The thread never waits on a rotator: ``Rotator.heard`` only puts into the mailbox.
+5. A flood cannot starve a stop (docs/architecture.md rule 12): the thread never sleeps while
+   a datagram waits (a sleeping reader lets the system's buffer fill), it reads PER_WAKEUP at
+   a wake-up and comes straight back for more; each datagram is decoded and handed on only
+   within its sender's budget (ratelimit.SourceBudgets, per address and port: RATE_DATAGRAMS_S
+   a second each, a second's worth at once, each one costing 1 + its size in KiB, MAX_SOURCES
+   remembered, RATE_ALL_S for all together), far above WSJT-X's few a second. Over it a
+   datagram is dropped undecoded and counted (``counts.over_budget``), said at most once per
+   JUNK_LOG_S. Each datagram's decoding is linear in its size.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import selectors
+import socket
+import struct
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from bridge.core.ratelimit import SourceBudgets
+from bridge.interfaces.wsjtx.messages import Malformed, Status, decode
+from bridge.session.follow import Heard
+
+if TYPE_CHECKING:
+    from bridge.runtime.rotator import Rotator
+
+log = logging.getLogger(__name__)
+
+JUNK_LOG_S = 30.0
+RECV_BYTES = 65536  # a whole datagram, whatever its size: a longer one is junk (messages.py)
+IP_MULTICAST_ALL = getattr(socket, "IP_MULTICAST_ALL", 49)  # Linux's number (rule 1)
+
+
+def _loopback(address: str) -> bool:
+    return address.startswith("127.")
+
+
+RATE_DATAGRAMS_S = 200.0  # rule 5: a sender's budget, a second
+RATE_ALL_S = 1000.0  # rule 5: every sender's together
+MAX_SOURCES = 64  # rule 5
+PER_WAKEUP = 32  # rule 5: datagrams read at one wake-up
+
+
+@dataclass
+class Counts:
+    """Read from any thread (tests, a status page); written by the listener's alone."""
+
+    statuses: int = 0
+    malformed: int = 0
+    ignored: int = 0  # heartbeats and message types nobody here needs
+    foreign: int = 0  # rule 1: from a source a loopback listener does not take
+    faults: int = 0
+    over_budget: int = 0  # rule 5: dropped undecoded
+
+
+@dataclass
+class _Rarely:
+    every_s: float
+    logged_s: float = -math.inf
+    since: int = 0
+
+    def due(self, now: float) -> int | None:
+        self.since += 1
+        if now - self.logged_s < self.every_s:
+            return None
+        count, self.since, self.logged_s = self.since, 0, now
+        return count
+
+
+@dataclass
+class WsjtxListener:
+    port: int
+    bind: str = "127.0.0.1"
+    multicast_group: str | None = None
+    clock: Callable[[], float] = time.monotonic
+    rotators: list[Rotator] = field(default_factory=list)
+    counts: Counts = field(default_factory=Counts)
+
+    def __post_init__(self) -> None:
+        self._sock: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._wake_r, self._wake_w = -1, -1
+        self._junk_log = _Rarely(JUNK_LOG_S)
+        self._fault_log = _Rarely(JUNK_LOG_S)
+        self._foreign_log = _Rarely(JUNK_LOG_S)
+        self._flood_log = _Rarely(JUNK_LOG_S)
+
+    def add(self, rotator: Rotator) -> None:
+        self.rotators.append(rotator)
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """Where it really listens (port 0 in tests: the one the system gave)."""
+        if self._sock is None:
+            return self.bind, self.port
+        host, port = self._sock.getsockname()[:2]
+        return host, port
+
+    def listen(self) -> None:
+        """Rule 1; OSError naming the port and the reason if it cannot be had."""
+        if self._sock is not None:
+            return
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            if self.multicast_group is None:
+                sock.bind((self.bind, self.port))
+            else:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                sock.bind((self.multicast_group, self.port))
+                membership = struct.pack(
+                    "4s4s", socket.inet_aton(self.multicast_group), socket.inet_aton(self.bind)
+                )
+                sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, membership)
+                if sys.platform.startswith("linux"):  # (49 may mean something else elsewhere)
+                    sock.setsockopt(socket.IPPROTO_IP, IP_MULTICAST_ALL, 0)
+        except OSError as exc:
+            sock.close()
+            where = f"{self.multicast_group or self.bind}:{self.port}"
+            raise OSError(exc.errno, f"WSJT-X UDP port {where}: {exc.strerror or exc}") from None
+        sock.setblocking(False)  # rule 5: read until nothing waits
+        self._sock = sock
+
+    def start(self) -> None:
+        self.listen()
+        host, port = self.address
+        group = f" (multicast group {self.multicast_group})" if self.multicast_group else ""
+        log.info("WSJT-X UDP port %s:%d listening%s", host, port, group)
+        self._wake_r, self._wake_w = os.pipe()
+        self._thread = threading.Thread(target=self._loop, name="wsjtx", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        if self._thread is not None:
+            os.write(self._wake_w, b"x")
+            self._thread.join(timeout_s)
+            self._thread = None
+            os.close(self._wake_r)
+            os.close(self._wake_w)
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    def _loop(self) -> None:
+        sock = self._sock
+        assert sock is not None
+        budgets = SourceBudgets(RATE_DATAGRAMS_S, RATE_ALL_S, MAX_SOURCES, self.clock())
+        with selectors.DefaultSelector() as sel:
+            sel.register(sock, selectors.EVENT_READ)
+            sel.register(self._wake_r, selectors.EVENT_READ)
+            while True:
+                for key, _mask in sel.select():
+                    if key.fileobj == self._wake_r:
+                        return
+                    self._serve(sock, budgets)
+
+    def _serve(self, sock: socket.socket, budgets: SourceBudgets) -> None:
+        """Rule 5: what waits, PER_WAKEUP at most, each within its sender's budget."""
+        for _ in range(PER_WAKEUP):
+            try:
+                datagram, source = sock.recvfrom(RECV_BYTES)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # a transient error (ICMP, ENOBUFS): the next one
+                self._fault("reading the WSJT-X port", exc)
+                continue
+            now = self.clock()
+            sender = source[0], source[1]
+            if not budgets.allow(sender, now):
+                self._flooded(source[0])
+                continue
+            try:
+                self.datagram(datagram, source[0])
+            except Exception as exc:  # rule 3: a bug behind it, not the end
+                self._fault("a WSJT-X datagram", exc)
+            budgets.spend(sender, 1 + len(datagram) / 1024, now)
+
+    def datagram(self, datagram: bytes, source: str = "127.0.0.1") -> None:
+        """One datagram from the address ``source``, decoded and handed on (rules 1-4)."""
+        if _loopback(self.bind) and not _loopback(source):  # rule 1
+            self.counts.foreign += 1
+            count = self._foreign_log.due(self.clock())
+            if count is not None:
+                log.warning(
+                    "WSJT-X port: %d datagram(s) from outside this computer dropped (listening "
+                    "on %s), the last from %s",
+                    count,
+                    self.bind,
+                    source,
+                )
+            return
+        try:
+            message = decode(datagram)
+        except Malformed as exc:
+            self.counts.malformed += 1
+            count = self._junk_log.due(self.clock())
+            if count is not None:
+                log.info("WSJT-X port: %d malformed datagram(s) dropped, the last: %s", count, exc)
+            return
+        if not isinstance(message, Status):
+            self.counts.ignored += 1
+            return
+        self.counts.statuses += 1
+        heard = Heard(
+            message.dx_call,
+            message.dx_grid,
+            message.transmitting,
+            message.instance,
+            message.dial_hz,
+        )
+        for rotator in self.rotators:
+            try:
+                rotator.heard(heard)
+            except Exception as exc:  # rule 3
+                self._fault(f"handing WSJT-X's status to {rotator.id}", exc)
+
+    def _flooded(self, source: str) -> None:
+        """Rule 5."""
+        self.counts.over_budget += 1
+        count = self._flood_log.due(self.clock())
+        if count is not None:
+            log.warning(
+                "WSJT-X port: %d datagram(s) dropped undecoded, over the budget of their "
+                "sender (%g a second each), the last from %s",
+                count,
+                RATE_DATAGRAMS_S,
+                source,
+            )
+
+    def _fault(self, what: str, exc: BaseException) -> None:
+        self.counts.faults += 1
+        if self._fault_log.due(self.clock()) is not None:
+            log.error("%s failed: %s", what, exc, exc_info=exc)

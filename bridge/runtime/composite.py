@@ -1,0 +1,274 @@
+"""A composite rotator: its azimuth turned by one controller, its elevation by another, on two
+serial lines (settings/rotator.py rule 4, protocols/axes.py). One judge, one mailbox, one
+status, one stop for both.
+
+The rotator's judge (rotator.py) is the one every rotator has: the lock, the wind, the lease,
+the limits and the link are judged once, against the merged status, and what it accepts goes
+into the rotator's one mailbox. Each box is then driven by a session of its own (session.py,
+every rule of a single controller: the stop re-sent, the stop owed while a port is closed, the
+polls, the motion machine), served by a worker of its own (worker.py: its port, its back-off).
+``Composition`` (sans-IO) splits each batch the mailbox hands out between the two sessions and
+merges their statuses into the rotator's; ``CompositeWorker`` is the serial-lines thread's one
+worker for the rotator, serving both boxes' workers.
+
+Rules:
+1. A stop, a lock word, a hold and its release, options, notes, the lease, the wind, WSJT-X's
+   news and track and follow commands go to both sessions, in one batch each, in the same
+   serve: one STOP writes a stop frame on both lines before either status goes to the
+   listeners, and each session keeps its own stop rules (a stop owed to an unplugged box is
+   its first frame on replug).
+2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
+   axis it leaves out is no target for that box.
+3. The status is the azimuth box's, with the elevation box's elevation and elevation target:
+   connected and available only when both are, offline when either is (the judge then refuses
+   targets and track commands: the safe side), moving when either moves; the last error is the
+   newer of the two.
+4. Tracking and following run in both sessions (each aims its own axis); when one ends (an
+   unplugged box, a stop, the horizon) the other is ended too, and the status says why the
+   first one ended.
+5. Each box's worker is guarded on its own: a bug in serving one closes and reopens that line
+   only, and the other line goes on.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from functools import partial
+from typing import Any
+
+from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source
+from bridge.protocols.axes import Axis
+from bridge.runtime.port import PortOpener, open_port
+from bridge.runtime.worker import Worker
+from bridge.session import status as st
+from bridge.session.actions import Action, Write
+from bridge.session.config import WorkerConfig
+from bridge.session.follow import Follow
+from bridge.session.mailbox import Batch, Mailbox
+from bridge.session.tracking import Track
+from bridge.sky.worker import SkyWorker
+
+__all__ = ["CompositeWorker", "Composition", "merge", "split"]
+
+log = logging.getLogger(__name__)
+AXES = (Axis.AZIMUTH, Axis.ELEVATION)
+
+
+def split(batch: Batch) -> dict[Axis, Batch]:
+    """Rules 1 and 2: the batch each box's session gets."""
+    target = batch.target
+    az = el = None
+    if target is not None and target.az_deg is not None:
+        az = replace(target, el_deg=None)
+    if target is not None and target.el_deg is not None:
+        el = replace(target, az_deg=None, true_az_deg=None)
+    return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: replace(batch, target=el)}
+
+
+def merge(
+    rotator_id: str, az: RotatorStatus, el: RotatorStatus, *, error: str | None = None
+) -> RotatorStatus:
+    """Rule 3: the rotator's status from its two boxes' (``error``: the newer last error)."""
+    states = {az.state, el.state}
+    if MotionState.OFFLINE in states:
+        state = MotionState.OFFLINE
+    elif MotionState.MOVING in states:
+        state = MotionState.MOVING
+    else:
+        order = (MotionState.STALLED, MotionState.BRAKING, MotionState.UNKNOWN)
+        state = next((s for s in order if s in states), az.state)
+    versions = [v for v in (az.version, el.version) if v]
+    return replace(
+        az,
+        rotator_id=rotator_id,
+        state=state,
+        elevation_deg=el.elevation_deg,
+        target_el_deg=el.target_el_deg,
+        connected=az.connected and el.connected,
+        available=az.available and el.available,
+        locked=az.locked or el.locked,
+        version=" / ".join(versions) or None,
+        last_error=error,
+        estimated=az.estimated or el.estimated,
+        controller_time=az.controller_time or el.controller_time,
+        parked=az.parked and el.parked,
+    )
+
+
+class Composition:
+    """Sans-IO: the two boxes' statuses in, the rotator's out (rule 3), and what rule 4 asks of
+    the other session when one ends tracking or following."""
+
+    def __init__(self, rotator_id: str) -> None:
+        self.rotator_id = rotator_id
+        self.boxes: dict[Axis, RotatorStatus] = {a: RotatorStatus(rotator_id) for a in AXES}
+        self.status = RotatorStatus(rotator_id)
+        self._error: str | None = None
+        self._ended: str | None = None  # rule 4: why the first one ended
+        self._owed: dict[Axis, tuple[bool, bool]] = {}  # (tracking, following) to end
+        self._first = True
+
+    def seen(self, axis: Axis, status: RotatorStatus) -> RotatorStatus | None:
+        """A box's new status; the rotator's, when it is worth publishing."""
+        before = self.boxes[axis]
+        if status.last_error != before.last_error:
+            self._error = status.last_error  # rule 3: the newer of the two
+        if status.tracking is not None:
+            self._ended = None
+        # rule 4, on the edge: this box has just ended it (a look-up under way in one box
+        # while the other already has its answer is no end)
+        track = before.tracking is not None and status.tracking is None
+        follow = before.following is not None and status.following is None
+        if track or follow:
+            other = Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH
+            owed = self._owed.get(other, (False, False))
+            self._owed[other] = (owed[0] or track, owed[1] or follow)
+            if track and self._ended is None:
+                self._ended = status.tracking_ended
+        self.boxes[axis] = status
+        az, el = self.boxes[Axis.AZIMUTH], self.boxes[Axis.ELEVATION]
+        merged = merge(self.rotator_id, az, el, error=self._error)
+        if self._ended is not None and merged.tracking is None:
+            merged = replace(merged, tracking_ended=self._ended)
+        worth = self._first or st.worth_emitting(merged, self.status)
+        self._first = False  # the first status goes out whatever it says (session.py start)
+        self.status = merged
+        return merged if worth else None
+
+    def ends(self) -> dict[Axis, Batch]:
+        """Rule 4: a batch ending tracking or following in the box that still has it."""
+        out: dict[Axis, Batch] = {}
+        for axis, (track, follow) in self._owed.items():
+            mine = self.boxes[axis]
+            track = track and mine.tracking is not None
+            follow = follow and mine.following is not None
+            if track or follow:
+                out[axis] = Batch(
+                    track=Track(None, Source.TRACKING) if track else None,
+                    follow=Follow(False) if follow else None,
+                )
+        self._owed = {}
+        return out
+
+
+class CompositeWorker:
+    """The serial-lines thread's worker for a composite rotator (lines.py): the rotator's
+    mailbox, and the two boxes' workers, each with its port, back-off and session."""
+
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        axes: tuple[WorkerConfig, WorkerConfig],
+        mailbox: Mailbox,
+        on_status: Callable[[RotatorStatus], None],
+        on_event: Callable[[ErrorEvent], None],
+        *,
+        locked: bool = False,
+        health: dict[str, object] | None = None,
+        storm: bool = False,
+        wall: Callable[[], float] = time.time,
+        port_opener: PortOpener = open_port,
+        sky: SkyWorker | None = None,
+    ) -> None:
+        self.cfg = cfg
+        self._mailbox = mailbox
+        self._box = mailbox.fileno()
+        self._urgent = frozenset({self._box})
+        self._on_status = on_status
+        self.composition = Composition(cfg.rotator_id)
+        self.boxes: dict[Axis, Worker] = {}
+        self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
+        for axis, box, own in zip(AXES, axes, self._own, strict=True):
+            self.boxes[axis] = Worker(
+                box,
+                own,
+                partial(self._seen, axis),
+                on_event,
+                locked=locked,
+                health=health if axis is Axis.AZIMUTH else None,  # the azimuth's is shown
+                storm=storm,
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,
+            )
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self.composition.status
+
+    def _seen(self, axis: Axis, status: RotatorStatus) -> None:
+        merged = self.composition.seen(axis, status)
+        if merged is not None:
+            self._on_status(merged)
+
+    # -- what the serial-lines thread asks of a worker (lines.py) -------------------------------
+    def begin(self, now: float, wake: Callable[[], None]) -> None:
+        for box in self.boxes.values():
+            box.guarded(box.begin, now, wake)
+
+    def end(self, now: float) -> None:
+        """For good (lines.py rule 4): nothing serves the boxes after this, so their own
+        mailboxes are closed too (a late sky answer's wake-up then does nothing)."""
+        for box, mailbox in zip(self.boxes.values(), self._own, strict=True):
+            box.guarded(box.end, now)
+            mailbox.close()
+
+    def wait_closed(self, timeout_s: float) -> bool:
+        deadline = time.monotonic() + timeout_s
+        closed = [b.wait_closed(max(0.0, deadline - time.monotonic())) for b in self.boxes.values()]
+        return all(closed)
+
+    def has_commands(self, ready: set[int]) -> bool:
+        return self._box in ready
+
+    def urgent(self) -> frozenset[int]:
+        return self._urgent if self._mailbox.urgent else frozenset()
+
+    def wants(self, now: float) -> tuple[list[int], float]:
+        fds, until = [self._box], math.inf
+        for box in self.boxes.values():
+            more, when = box.wants(now)
+            fds += more
+            until = min(until, when)
+        return fds, until
+
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
+        """``step`` (begin, end, serve): each box is guarded on its own inside it (rule 5)."""
+        try:
+            step(now, *args)
+        except Exception:
+            log.exception("%s: unexpected error in the composite worker", self.cfg.rotator_id)
+
+    def serve(self, now: float, ready: set[int]) -> None:
+        if self._box in ready:
+            batch = self._mailbox.take()
+            if batch:
+                self._hand(split(batch), now)  # rule 1: both boxes in this one serve
+        for box in self.boxes.values():
+            fds, until = box.wants(now)
+            if now >= until or not ready.isdisjoint(fds):
+                box.guarded(box.serve, now, ready)
+        ends = self.composition.ends()  # rule 4
+        if ends:
+            self._hand(ends, now)
+
+    def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
+        """Each box's session decides on its batch; then the frames go out on both lines
+        (a stop on each) before any status or event is handed to the listeners (rule 1)."""
+        decided: dict[Axis, list[Action]] = {}
+        for axis, batch in batches.items():
+            session = self.boxes[axis].session
+            self.boxes[axis].guarded(
+                lambda t, s=session, b=batch, a=axis: decided.__setitem__(a, s.commands(b, t)),
+                now,
+            )
+        for wire in (True, False):
+            for axis, actions in decided.items():
+                box = self.boxes[axis]
+                todo = [a for a in actions if isinstance(a, Write) is wire]
+                if todo:
+                    box.guarded(box.carry_out, now, todo)

@@ -1,0 +1,184 @@
+"""What a rotator keeps in the state file of its own settings: the options its model has, the
+safety lock, and a storm it is parked for; and the one owner of its safety state (``Owner``).
+Rotator (rotator.py) owns one of each; the state file is written on its writer thread
+(state_store.py rule 5), never on a front end's nor the lines thread's.
+
+Rules:
+1. An option remembered for this id that this model does not have (the id may have been
+   another model's), or a value its declaration refuses, is logged and left out.
+2. ``locked`` is the lock: the judge asks it, and nothing else keeps a copy that could differ
+   (the session's comes from the mailbox, in the same step). Each lock word queues a save of
+   the value it set, in the owner's step (rule 5): saves run in the order of the words, so the
+   last word is the last written, whatever order the front ends asked in; words that come
+   while a save waits for the writer join it, which writes the last of them (rule 7).
+3. A save that fails is reported (kind ``state``): the setting is in effect but will not
+   survive a restart.
+4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
+   every status on the lines thread and hands a storm begun or ended to the writer; the next
+   start begins in the storm (parked again, motion refused) until readings end it. The wind
+   park has one owner, the session on the lines thread: it alone decides a storm, the judge
+   reads the session's status, and the save is queued on that same thread in the order the
+   storms came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
+5. ``Owner`` is one rotator's safety step (docs/architecture.md rule 14): a lock word, a
+   claim, a release or the end of the control lease, and an option, are decided, put in the
+   mailbox and their save queued under its one lock, from every interface's thread, so that
+   the judge, the session (and so the retained state) and the state file cannot disagree. The
+   step is short: no I/O, no thread started, nothing that waits (the save is queued; the lines
+   thread and the writer are woken once the step has let go, and once every core/afterlock.py
+   ``Deferring`` lock around it has let go too: halts.py takes its steps under one, so nothing
+   under that lock writes a byte or starts a thread either); the lines thread never takes it,
+   and a stop never waits for it. Steps take turns in the order they came: a lock ON waits for
+   the steps already under way or waiting, never for a flood of words after it.
+6. A lock kept from the state file is said in the log at start: motion will be refused.
+7. Options waiting for the writer are saved together, the last value of each, and so are lock
+   words (one save of each queued at a time): anyone who may publish ``R/option/<name>`` (or
+   lock, never refused) can send thousands a second, and each was a rewrite of the state file
+   with its fsyncs, in line before a lock word said after them (its save held back for
+   minutes on an SD card, the card worn for nothing).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections import deque
+from collections.abc import Callable
+
+from bridge.core.afterlock import later
+from bridge.core.model import ErrorKind, SettingValue, WindInfo
+from bridge.protocols.base import ModelSpec, SettingKind
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
+
+log = logging.getLogger(__name__)
+
+
+class Owner:
+    """Rule 5: ``with owner:`` is one step of a rotator's safety state; its puts pass
+    ``wake=False`` (mailbox.py rule 5) and its saves are queued (state_store.py rule 5): the
+    lines thread and the writer are woken once the step has let go. The steps take turns in
+    the order they came: a step that ends hands the turn to the oldest one waiting, so a lock
+    ON waits for the steps that came before it and never for a flood of words after it (a
+    plain lock lets the thread that let go take it again at once, for as long as it holds the
+    GIL)."""
+
+    def __init__(self, store: StateStore, mailbox: Mailbox) -> None:
+        self._store = store
+        self._mailbox = mailbox
+        self._guard = threading.Lock()  # only around the books below: a few bytecodes
+        self._busy = False
+        self._waiting: deque[threading.Lock] = deque()  # each one's turn, oldest first
+
+    def __enter__(self) -> None:
+        with self._guard:
+            if not self._busy:
+                self._busy = True
+                return
+            turn = threading.Lock()
+            turn.acquire()
+            self._waiting.append(turn)
+        turn.acquire()  # handed over by the step before (``__exit__``)
+
+    def __exit__(self, *exc: object) -> None:
+        with self._guard:
+            if self._waiting:
+                self._waiting.popleft().release()  # the next step's turn: still busy
+            else:
+                self._busy = False
+        later(self._wake)  # rule 5: once a caller's Deferring lock (halts.py) let go too
+
+    def _wake(self) -> None:
+        self._mailbox.wake_once()
+        self._store.wake()
+
+
+class Kept:
+    def __init__(
+        self,
+        store: StateStore,
+        rotator_id: str,
+        spec: ModelSpec,
+        *,
+        report: Callable[[ErrorKind, str, str | None], None],
+    ) -> None:
+        self._store = store
+        self._id = rotator_id
+        self._spec = spec
+        self._report = report
+        self._unsaved: dict[str, SettingValue] = {}  # rule 7: options whose save is queued
+        self._unsaved_guard = threading.Lock()  # the owner's step and the writer's
+        self._lock_unsaved = False  # rule 7: a lock save is queued and has not read the lock
+        self.locked = store.locked(rotator_id)  # rule 2: the one copy
+        if self.locked:  # rule 6
+            log.warning("%s: safety lock ON, kept from the state file", rotator_id)
+        self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
+
+    def seen_wind(self, wind: WindInfo | None) -> None:
+        """Rule 4 (lines thread: it only compares and hands over)."""
+        storm = wind is not None and wind.storm
+        if storm != self.storm:
+            self.storm = storm
+            self._store.later(lambda: self._save_storm_now(storm))
+
+    def _save_storm_now(self, storm: bool) -> None:
+        if not self._store.set_storm(self._id, storm):
+            self._report(
+                ErrorKind.STATE,
+                f"the storm's {'start' if storm else 'end'} could not be saved: a restart "
+                "would not know it (state file not writable)",
+                "wind",
+            )
+
+    def options(self) -> dict[str, SettingValue]:
+        """Rule 1: each as its model's declaration reads it (one it refuses is left out)."""
+        kept: dict[str, SettingValue] = {}
+        for name, value in self._store.options(self._id).items():
+            setting = self._spec.setting(name)
+            try:
+                if setting is None:
+                    raise ValueError(f"{self._spec.display_name} has no such option")
+                if (setting.kind is SettingKind.BOOL) != isinstance(value, bool):
+                    raise ValueError(f"{value!r} is no value of a {setting.kind} setting")
+                kept[name] = setting.read(value)
+            except ValueError as exc:
+                log.warning("%s: stored option %r ignored: %s", self._id, name, exc)
+        return kept
+
+    def save_option(self, name: str, value: SettingValue) -> None:
+        """In the owner's step (rule 5); joins a save already queued (rule 7)."""
+        with self._unsaved_guard:
+            queued = bool(self._unsaved)
+            self._unsaved[name] = value
+        if not queued:
+            self._store.queue(self._save_options_now)
+
+    def _save_options_now(self) -> None:
+        with self._unsaved_guard:
+            unsaved, self._unsaved = self._unsaved, {}
+        for name, value in unsaved.items():
+            if not self._store.set_option(self._id, name, value):
+                self._report(
+                    ErrorKind.STATE,
+                    f"option {name} is in effect but could not be saved: it will not survive "
+                    "a restart (state file not writable)",
+                    name,
+                )
+
+    def set_lock(self, locked: bool) -> None:
+        """Rule 2, in the owner's step (rule 5): the lock is ``locked``, and saved as that."""
+        with self._unsaved_guard:
+            self.locked = locked
+            queued, self._lock_unsaved = self._lock_unsaved, True
+        if not queued:
+            self._store.queue(self._save_lock_now)
+
+    def _save_lock_now(self) -> None:
+        with self._unsaved_guard:  # rule 7: the last word so far
+            locked, self._lock_unsaved = self.locked, False
+        if not self._store.set_locked(self._id, locked):
+            self._report(
+                ErrorKind.STATE,
+                f"lock {'ON' if locked else 'OFF'} is in effect but could not be saved: "
+                "it will not survive a restart (state file not writable)",
+                "lock",
+            )

@@ -1,0 +1,206 @@
+"""One thread for every rotator's serial line: the only code that touches the ports. I/O only.
+
+Each rotator is a Worker (worker.py: its port, back-off and session; a rotator of two boxes,
+composite.py, is one worker serving both boxes' workers). This loop asks every
+worker what it waits for (file descriptors, a deadline), sleeps in one poll() on all of them
+and the loop's own wake pipe, then lets each worker serve what is ready. Sessions decide
+(session.py); workers carry out; this loop only waits.
+
+Rules:
+1. One thread, however many rotators: a poll round of 32 rotators is one wake-up, not 32
+   threads each waking for its own (sessions that poll at the same interval poll at the same
+   instants, link.py rule 8), and the statuses of a round reach the MQTT thread in one burst.
+2. Nothing here blocks but poll(): writes are one short frame to a non-blocking port, reads
+   take what is there; opening a port and closing a failed one (a wedged USB adapter can take
+   seconds) happen on a short-lived thread of their own (worker.py rule 4). Each worker is
+   called inside its own guard: one that raises is logged (once per kind), its port closed and
+   reopened after its back-off, and every other line goes on; the loop never sleeps for it.
+3. Deadlines are met late, never early: poll() counts whole milliseconds, rounded up.
+4. ``add`` and ``remove`` may be called from any thread; the thread ends when the last worker
+   is removed. A removed worker's port is closed on a thread of its own (worker.py rule 4; a
+   wedged adapter's close can take 30 s and must not hold up the other lines), and ``remove``
+   waits for it: when it returns the port is closed, or, if closing it outlasts the time given
+   to ``remove``, still being closed (a warning says so); either way nothing serves it any more.
+   A worker is added once: adding it again is a programming error (ValueError).
+5. Commands first: the workers whose mailbox is ready are served before the others in a round,
+   and a worker with a stop (or lock ON) waiting is served next, even one that came while the
+   round was under way: a stop never waits behind other rotators' replies, sky answers and
+   status publishing, only behind the one worker being served when it came.
+6. A round serves only the workers with something to do: a descriptor of theirs is ready, the
+   time they asked to be woken at has come, or a stop waits (rule 5). The others are not
+   called: with 16 rotators polled on one grid, most rounds concern a few of them.
+7. Times that come within GATHER_S after the first one are met with it, at most GATHER_S
+   late: the replies of one poll round come whole over a few milliseconds (each controller
+   and adapter takes its own time), and are read in one wake-up, not one each. A descriptor
+   that becomes ready (a stop in a mailbox) still ends the wait at once.
+8. Rule 5's look for a stop among the workers not served yet is made before the first of a
+   round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
+   11) or that look found one (there may be another): not one question to every worker after
+   each one served.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import select
+import threading
+import time
+from collections.abc import Callable
+from collections.abc import Set as AbstractSet
+from typing import Any, Protocol
+
+from bridge.session import mailbox
+from bridge.session.config import WorkerConfig
+
+__all__ = ["Lines"]
+
+log = logging.getLogger(__name__)
+_NOTHING: AbstractSet[int] = frozenset()
+GATHER_S = 0.002  # rule 7
+_READY = select.POLLIN | select.POLLPRI | select.POLLERR | select.POLLHUP | select.POLLNVAL
+
+
+class Worker(Protocol):
+    """What this loop asks of a worker: worker.py's, or a composite rotator's (composite.py)."""
+
+    cfg: WorkerConfig
+
+    def begin(self, now: float, wake: Callable[[], None]) -> None: ...
+    def end(self, now: float) -> None: ...
+    def wait_closed(self, timeout_s: float) -> bool: ...
+    def has_commands(self, ready: set[int]) -> bool: ...
+    def urgent(self) -> frozenset[int]: ...
+    def wants(self, now: float) -> tuple[list[int], float]: ...
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None: ...
+    def serve(self, now: float, ready: set[int]) -> None: ...
+
+
+class Lines:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._workers: list[Worker] = []
+        self._joining: list[Worker] = []
+        self._leaving: dict[Worker, threading.Event] = {}
+        self._thread: threading.Thread | None = None
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_r, False)
+        os.set_blocking(self._wake_w, False)
+
+    # -- any thread (rule 4) --------------------------------------------------------------------
+    def add(self, worker: Worker) -> None:
+        """Serve ``worker`` from now on (the thread starts with the first one)."""
+        with self._lock:
+            if worker in self._joining or worker in self._workers or worker in self._leaving:
+                raise ValueError(f"{worker.cfg.rotator_id}: already on the lines")
+            self._joining.append(worker)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="serial-lines")
+                self._thread.start()
+        self._wake()
+
+    def remove(self, worker: Worker, timeout_s: float = 3.0) -> bool:
+        """Stop serving ``worker`` and close its port; True once it is served no more, its port
+        closed or being closed (rule 4)."""
+        deadline = time.monotonic() + timeout_s
+        done = threading.Event()
+        with self._lock:
+            if worker in self._joining:
+                self._joining.remove(worker)
+                return True
+            if worker not in self._workers or self._thread is None:
+                return True
+            done = self._leaving.setdefault(worker, done)  # a second remove() waits the same
+        self._wake()
+        if not done.wait(timeout_s):
+            return False
+        if not worker.wait_closed(max(0.0, deadline - time.monotonic())):
+            log.warning(
+                "%s: %s is still closing after %g s (a wedged adapter?); it closes on its own",
+                worker.cfg.rotator_id,
+                worker.cfg.port,
+                timeout_s,
+            )
+        return True
+
+    def _wake(self) -> None:
+        try:
+            os.write(self._wake_w, b"\0")
+        except BlockingIOError:
+            pass  # full: the loop is going to wake up anyway
+
+    # -- the thread -----------------------------------------------------------------------------
+    def _run(self) -> None:
+        while self._membership():
+            try:
+                self._round()
+            except Exception:  # a bug here, not in a worker (those are guarded): never a spin
+                log.exception("unexpected error in the serial loop")
+                time.sleep(0.1)
+
+    def _membership(self) -> bool:
+        """Take in joining workers, let leaving ones go; False when none is left."""
+        with self._lock:
+            joining, self._joining = self._joining, []
+            leaving, self._leaving = self._leaving, {}
+            self._workers.extend(joining)
+            for worker in leaving:
+                self._workers.remove(worker)
+        for worker in joining:
+            worker.guarded(worker.begin, self._clock(), self._wake)
+        for worker, done in leaving.items():
+            worker.guarded(worker.end, self._clock())
+            done.set()
+        with self._lock:
+            if self._workers or self._joining:
+                return True
+            self._thread = None  # the next add() starts a new one
+            return False
+
+    def _round(self) -> None:
+        now = self._clock()
+        poller = select.poll()
+        poller.register(self._wake_r, select.POLLIN)
+        deadline = math.inf
+        wanted: list[tuple[Worker, list[int], float]] = []
+        for worker in self._workers:
+            fds, until = worker.wants(now)  # pure arithmetic on the session: nothing to guard
+            for fd in fds:
+                poller.register(fd, _READY)
+            deadline = min(deadline, until)
+            wanted.append((worker, fds, until))
+        if deadline != math.inf:  # rule 7: the times that come soon after it come with it
+            deadline = max(u for _, _, u in wanted if u <= deadline + GATHER_S)
+        wait_ms = None if deadline == math.inf else max(0, math.ceil((deadline - now) * 1000))
+        ready = {fd for fd, _ in poller.poll(wait_ms)}
+        if self._wake_r in ready:
+            try:
+                while os.read(self._wake_r, 4096):
+                    pass
+            except BlockingIOError:
+                pass
+        now = self._clock()
+        due = [w for w, fds, until in wanted if now >= until or not ready.isdisjoint(fds)]  # rule 6
+        due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
+        left = list(self._workers)  # not served yet this round: any of them may get a stop
+        look, seen = True, 0
+        while due:
+            # rule 5: a stop that came while this round served others goes next
+            worker, urgent = due[0], _NOTHING
+            halts = mailbox.halts()
+            if look or halts != seen:  # (rule 8: none put since a look that found none)
+                seen = halts
+                for other in left:
+                    urgent = other.urgent()
+                    if urgent:
+                        worker = other
+                        break
+                look = bool(urgent)  # one found: there may be another
+            if worker in due:
+                due.remove(worker)
+            left.remove(worker)
+            # the clock read for each: a slow step (a burst of statuses to the listeners) must
+            # not hand the next a stale time, or a query it writes looks overdue at once
+            worker.guarded(worker.serve, self._clock(), ready | urgent)

@@ -1,0 +1,180 @@
+"""Who is turning a rotator: its control lease as the judge keeps it (the pure lease is
+lease.py) and the audit trail of every command judged. Rotator (rotator.py) owns one.
+
+Rules:
+1. The lease is judged on the front ends' threads (the judge's), in the rotator's owner step
+   (kept.py rule 5): the decision, the change put in the mailbox (the status shows the holder,
+   ``R/control`` says it) and its save queued for the store's writer thread (state_store.py
+   rule 5: no fsync on a front end's thread) are one step, so that the judge, the status and
+   the state file name the same holder whichever claims and releases race. The lease here is
+   the judge's one copy.
+2. A lease ends by itself: a timer (daemon, one at a time) fires at its end, so that the status
+   and ``R/control`` say it is free without anyone asking, and the audit trail has it (its
+   operator the holder, interface ``lease``). A timer that fires early (the wall clock was set
+   back) arms itself again. The end is a step like a release (rule 1); the timer is armed
+   after the step, under a lock of its own (starting a thread waits for it: never in the
+   owner's step), for the lease as it is then, so the last arming follows the last change.
+3. Every command judged, executed or refused, from every interface, is one audit event handed
+   to ``on_audit`` (the audit file's queue and ``R/audit``, both of which only queue). A
+   listener that raises is logged and ignored (docs/architecture.md rule 8): the audit trail
+   never costs a command, and a stop is put in the mailbox before its event is made.
+4. Claims and releases are commands too (core/model.py ``Claim``, ``Release``): the judge's
+   ``submit`` (rotator.py) audits them, and reports a refused one on ``R/error``, as any.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from typing import Protocol
+
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import AuditEvent, Control, ErrorKind, Origin, Source
+from bridge.runtime.kept import Owner
+from bridge.runtime.lease import Lease, LeaseError, restorable
+from bridge.runtime.state_store import StateStore
+from bridge.session.mailbox import Mailbox
+
+log = logging.getLogger(__name__)
+
+EXECUTED = "executed"
+
+
+class Timer(Protocol):
+    def cancel(self) -> None: ...
+
+
+def thread_timer(delay_s: float, fire: Callable[[], None]) -> Timer:
+    """Rule 2's timer: a daemon thread that calls ``fire`` after ``delay_s``."""
+    timer = threading.Timer(delay_s, fire)
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
+class Operators:
+    def __init__(
+        self,
+        rotator_id: str,
+        store: StateStore,
+        mailbox: Mailbox,
+        *,
+        wall: Callable[[], float],
+        bearing: Callable[[], float | None],
+        report: Callable[[ErrorKind, str, str | None], None],
+        on_audit: Callable[[AuditEvent], None] | None = None,
+        timer: Callable[[float, Callable[[], None]], Timer] = thread_timer,
+        owner: Owner | None = None,
+    ) -> None:
+        self._id = rotator_id
+        self._store = store
+        self._mailbox = mailbox
+        self._wall = wall
+        self._bearing = bearing
+        self._report = report
+        self._on_audit = on_audit
+        kept = store.lease(rotator_id)  # state_store.py rule 6
+        if kept is not None and restorable(kept, wall()) is None:  # lease.py rule 6
+            log.warning("%s: control lease in the state file ignored: %r", rotator_id, kept)
+            kept = None
+        self._lease = Lease(kept)
+        self._owner = owner or Owner(store, mailbox)  # rule 1: the rotator's, shared with the lock
+        self._timer_lock = threading.Lock()  # rule 2
+        self._start_timer = timer
+        self._timer: Timer | None = None
+        self._stopped = False
+
+    def start(self) -> None:
+        """The lease kept across a restart shows in the status, and ends by itself."""
+        with self._owner:
+            held = self._lease.holder(self._wall())
+            if held is not None:
+                self._mailbox.put_control(held, wake=False)  # woken after the step
+        self._arm()
+
+    def stop(self) -> None:
+        with self._timer_lock:
+            self._stopped = True
+        self._arm()
+
+    @property
+    def holder(self) -> Control | None:
+        return self._lease.holder(self._wall())
+
+    def refusal(self, who: str) -> str | None:
+        """lease.py rule 5: why a motion command from ``who`` is refused, or None."""
+        return self._lease.refusal(who, self._wall())
+
+    # -- claims and releases (rule 4) -----------------------------------------------------
+    def claim(self, operator: object, minutes: object, origin: Origin) -> Control:
+        """Raise Refused if the claim is refused (the judge reports and audits it, as every
+        command: rotator.py ``submit``)."""
+        try:
+            with self._owner:  # rule 1
+                held = self._lease.claim(operator, minutes, self._wall())
+                self._changed(held)
+        except LeaseError as exc:
+            raise Refused(RefusalCode.INVALID, str(exc)) from None
+        self._arm()
+        log.info("%s: %s holds the control lease (%s)", self._id, held.operator, origin.who)
+        return held
+
+    def release(self, origin: Origin) -> Control | None:
+        """Anyone may (lease.py rule 4); releasing a free lease changes nothing (None)."""
+        with self._owner:  # rule 1
+            held = self._lease.release(self._wall())
+            if held is not None:
+                self._changed(None)
+        self._arm()
+        if held is not None:
+            log.info("%s: %s released the control lease", self._id, origin.who)
+        return held
+
+    def _changed(self, held: Control | None) -> None:
+        """In the owner's step (rule 1): to the status, and in line for the state file."""
+        self._mailbox.put_control(held, wake=False)  # woken after the step (kept.py rule 5)
+        self._store.queue(lambda: self._save(held))
+
+    def _save(self, held: Control | None) -> None:
+        if not self._store.set_lease(self._id, held):
+            self._report(
+                ErrorKind.STATE,
+                "the control lease is in effect but could not be saved: it will not survive a "
+                "restart (state file not writable)",
+                "control",
+            )
+
+    # -- its end (rule 2) --------------------------------------------------------------------
+    def _arm(self) -> None:
+        """After a step: the one timer for the end of the lease as it is now (none if free)."""
+        with self._timer_lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            now = self._wall()
+            held = self._lease.holder(now)
+            if held is None or self._stopped:
+                return
+            self._timer = self._start_timer(max(0.0, held.until_unix - now), self._expire)
+
+    def _expire(self) -> None:
+        with self._owner:  # rule 1: an end is a change like a release
+            ended = self._lease.expired(self._wall())
+            if ended is not None:
+                self._changed(None)
+        self._arm()  # early (rule 2): a new timer for the rest; ended: none
+        if ended is None:
+            return
+        log.info("%s: the control lease of %s has ended", self._id, ended.operator)
+        self.audit(Origin(Source.LEASE, ended.operator), "control expired", EXECUTED)
+
+    # -- the trail (rule 3) ------------------------------------------------------------------
+    def audit(self, origin: Origin, command: str, result: str) -> None:
+        if self._on_audit is None:
+            return
+        try:
+            event = AuditEvent(self._wall(), self._id, origin, command, result, self._bearing())
+            self._on_audit(event)
+        except Exception:
+            log.exception("%s: audit listener failed", self._id)

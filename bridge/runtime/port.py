@@ -1,0 +1,247 @@
+"""Opening a controller's serial port, the way a long-running service must.
+
+Rules:
+1. Ports are opened by path, ideally a stable /dev/serial/by-id/... link, so a replugged adapter
+   that comes back as another ttyUSB is found again.
+2. ``exclusive=True``: two programs on one tty silently steal each other's bytes; a held port is
+   a clear "port busy" error instead (pyserial uses flock on POSIX). flock binds only programs
+   that ask for it (Hamlib's rotctld does not), so the tty is also set TIOCEXCL: the kernel
+   then refuses every later open() of it (but root's) while the bridge has it.
+3. Junk already waiting (the 0xE0 power-on byte, a banner) is drained right after opening.
+4. Every failure is a PortError with a message a user can act on; nothing here retries or
+   sleeps: the worker owns back-off.
+5. A port that poll() calls readable but that has no bytes while its device is still there
+   has a second reader (one that opened it first, without a lock): "busy", not "unplugged".
+6. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
+   layer that imports pyserial.
+6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
+   lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
+7. A PortWatch (the stop express, interfaces/mqtt/express.py) is told an opened port's descriptor on
+   the thread that opened it, and that it (its descriptor) is going before it is closed, on the
+   thread that closes it (``watched``, ``close_in_background``): a copy of the descriptor held
+   elsewhere keeps the tty open, and TIOCEXCL (rule 2) would then refuse the reopen. A watch
+   that fails costs the port nothing (logged).
+"""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import logging
+import os
+import termios
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol, TypeAlias
+
+import serial
+from serial.tools import list_ports
+
+from bridge.protocols.base import ModelSpec
+
+
+class PortError(Exception):
+    pass
+
+
+# what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)
+PortOpener: TypeAlias = Callable[[str, ModelSpec, int | None], serial.Serial]
+log = logging.getLogger(__name__)
+
+
+class PortWatch(Protocol):
+    """Rule 7: told of each port of one rotator, on the short-lived open and close threads."""
+
+    def opened(self, fd: int) -> None: ...
+
+    def closing(self, fd: int) -> None: ...
+
+
+def watched(opener: PortOpener, watch: PortWatch) -> PortOpener:
+    """``opener``, and the watch told the descriptor of each port it opens (rule 7)."""
+
+    def open_watched(path: str, spec: ModelSpec, baud: int | None) -> serial.Serial:
+        port = opener(path, spec, baud)
+        try:
+            watch.opened(port.fileno())
+        except Exception:
+            log.exception("%s: the port's watch failed (the port is open all the same)", path)
+        return port
+
+    return open_watched
+
+
+_PARITY = {"N": serial.PARITY_NONE, "E": serial.PARITY_EVEN, "O": serial.PARITY_ODD}
+
+
+def open_port(path: str, spec: ModelSpec, baud: int | None = None) -> serial.Serial:
+    try:
+        port = serial.Serial(
+            port=None,
+            baudrate=baud or spec.baud,
+            bytesize=spec.bytesize,
+            parity=_PARITY[spec.parity],
+            stopbits=spec.stopbits,
+            timeout=0,  # the lines thread polls the fd; the worker reads what is there
+            xonxoff=False,
+            rtscts=False,
+            dsrdtr=False,
+            exclusive=True,
+        )
+        port.port = path
+        port.open()
+    except serial.SerialException as exc:
+        raise PortError(_explain(path, exc)) from None
+    except (OSError, ValueError, termios.error) as exc:  # termios.error is no OSError
+        raise PortError(f"cannot open {path}: {exc}") from None
+    try:
+        port.reset_input_buffer()
+        fcntl.ioctl(port.fileno(), termios.TIOCEXCL)  # rule 2: no later open() either
+    except (serial.SerialException, OSError, termios.error) as exc:
+        port.close()
+        raise PortError(f"cannot flush {path}: {exc}") from None
+    return port
+
+
+def _explain(path: str, exc: serial.SerialException) -> str:
+    text = str(exc)
+    err = getattr(exc, "errno", None)
+    if err == errno.ENOENT or (not os.path.exists(path) and "No such file" in text):
+        return f"{path} does not exist (adapter unplugged? see `rotor-bridge ports`)"
+    if err == errno.EACCES or "Permission denied" in text:
+        return f"no permission to open {path} (add the user to the 'dialout' group)"
+    if "exclusively lock" in text or err in (errno.EAGAIN, errno.EWOULDBLOCK):
+        return f"{path} is busy: another program holds it (rotctld, another bridge?)"
+    return f"cannot open {path}: {text}"
+
+
+BY_ID_DIR = "/dev/serial/by-id"
+
+
+@dataclass(frozen=True)
+class PortInfo:
+    device: str
+    stable_path: str | None  # the /dev/serial/by-id link to it (rule 1), if there is one
+    description: str
+    vid: int | None
+    pid: int | None
+    serial_number: str | None
+
+
+def list_serial_ports() -> list[PortInfo]:
+    """The machine's serial ports, sorted by device path (rule 5)."""
+    by_id: dict[str, str] = {}
+    if os.path.isdir(BY_ID_DIR):
+        for name in sorted(os.listdir(BY_ID_DIR)):
+            link = os.path.join(BY_ID_DIR, name)
+            by_id[os.path.realpath(link)] = link
+    return [
+        PortInfo(
+            device=p.device,
+            stable_path=by_id.get(os.path.realpath(p.device)),
+            description=p.description,
+            vid=p.vid,
+            pid=p.pid,
+            serial_number=p.serial_number,
+        )
+        for p in sorted(list_ports.comports(), key=lambda p: p.device)
+    ]
+
+
+def close_quietly(port: serial.Serial) -> None:
+    try:
+        port.close()
+    except Exception:  # closing a yanked port may fail too
+        pass
+
+
+def close_watched(port: serial.Serial, watch: PortWatch | None) -> None:
+    """The watch told (rule 7), then the port closed."""
+    if watch is not None:
+        try:
+            watch.closing(port.fileno())
+        except Exception:
+            log.exception("the port's watch failed (the port is closed all the same)")
+    close_quietly(port)
+
+
+def close_in_background(port: serial.Serial, watch: PortWatch | None = None) -> threading.Thread:
+    """Close a port on a thread of its own, returned to be waited for where waiting is fine: a
+    tty with unsent output waits for it to drain (up to 30 s on a USB adapter), and the lines
+    thread may not wait for that. ``watch`` is told first (rule 7)."""
+
+    closing = threading.Thread(
+        target=close_watched, args=(port, watch), name="close port", daemon=True
+    )
+    closing.start()
+    return closing
+
+
+class PendingOpen:
+    """One attempt to open a port, on a thread of its own (a wedged USB adapter can hold open()
+    for seconds); ``wake`` is called when ``result`` (the port, or the exception) is there.
+    Abandoned (the rotator stops meanwhile), a port opened too late is closed at once."""
+
+    def __init__(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
+        self.result: serial.Serial | Exception | None = None
+        self._lock = threading.Lock()
+        self._abandoned = False
+        self._watch: PortWatch | None = None  # abandon's, told before a late port is closed
+        threading.Thread(
+            target=self._run, args=(attempt, wake), name="open port", daemon=True
+        ).start()
+
+    def _run(self, attempt: Callable[[], serial.Serial], wake: Callable[[], None]) -> None:
+        try:
+            result: serial.Serial | Exception = attempt()
+        except Exception as exc:
+            result = exc
+        with self._lock:
+            if self._abandoned:
+                if isinstance(result, serial.Serial):
+                    close_watched(result, self._watch)
+                return
+            self.result = result
+        wake()
+
+    def abandon(self, watch: PortWatch | None = None) -> threading.Thread | None:
+        """Give the attempt up; a port it already opened is closed in the background (the
+        thread closing it is returned; ``watch`` told first, rule 7)."""
+        with self._lock:
+            self._abandoned = True
+            self._watch = watch
+            if isinstance(self.result, serial.Serial):
+                return close_in_background(self.result, watch)
+        return None
+
+
+def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
+    """Everything the port has now. ``readable``: poll said so (else a reply is due: worker.py
+    rule 2). A tty set to return at once (VMIN 0) reads b"" when it has nothing: only after
+    poll said it was readable does that mean the adapter is gone, or (rule 5), while the
+    device is still there, that another program took the bytes."""
+    try:
+        data = os.read(fd, 4096)
+    except BlockingIOError:
+        return b""
+    if not data and readable:
+        if path is not None and os.path.exists(path):
+            raise serial.SerialException(
+                f"{path} is busy: readable but the bytes were gone, while the adapter is "
+                "there: another program reads from this port (Hamlib's rotctld, another "
+                "bridge?); stop it"
+            )
+        raise serial.SerialException("port readable but no data (adapter unplugged?)")
+    return data
+
+
+def write_frame(port: serial.Serial, data: bytes) -> None:
+    """One write() of a short frame. A port that cannot take it (the line is stuck) is a lost
+    link: waiting for room would hold up every other rotator's line (lines.py rule 2)."""
+    try:
+        done = os.write(port.fileno(), data)
+    except BlockingIOError:
+        done = 0
+    if done < len(data):
+        raise serial.SerialException("the port takes no more bytes (adapter stuck?)")

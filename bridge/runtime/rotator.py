@@ -1,0 +1,469 @@
+"""A rotator as the front ends (MQTT, rotctld) see it: submit commands, read the status.
+
+This is the one judge of commands: every front end submits here (``submit``, the one entry: a
+value of core/model.py's ``Command`` union, dispatched on its type; front.py), and here alone are
+the safety lock, the wind park, the configured limits and keep-out sectors (pointing.py: targets
+arrive as true bearings and leave as the controller's raw values), the model's capabilities and
+the link state checked against a command. A refused command raises Refused (with a RefusalCode
+front ends map, e.g. to a Hamlib RPRT number) and is reported as an error event; it never
+reaches the mailbox, so it can never move anything. The worker judges nothing anew: it only
+drops an accepted target that the lock or a lost link overtook before it could be sent, and
+reports that as a refusal too. Motion is judged in one order: the lock, the wind (safety), the
+control lease (coordination), the pointing judge, the link (``_check``). Each command carries
+who sent it (``origin``): the lease (operators.py) refuses a target, a controller setting, a track
+or follow start from anyone but its holder; nothing refuses a stop, lock or tracking/following OFF
+(docs/architecture.md rule 11); every command judged here, executed or refused, is an audit
+event, written in one place (``submit``, after the put; a value outside the union is refused as
+unsupported). The bridge's own moves (auto-park, the wind park, tracking's and following's
+targets) are the session's, never judged by the lease. The safety state has one owner per
+rotator (kept.py rule 5, docs/architecture.md rule 14): a lock word, and the lease's claims,
+releases and end (operators.py rule 1), are decided, put in the mailbox and their save queued in
+one step under the owner's lock, from every interface; the lock the judge asks is that owner's
+(kept.py rule 2). A stop takes no part in it: it never waits for the owner's lock. A motion
+command judged before a stop or lock ON never runs after it, whichever threads brought the two:
+the judge reads the mailbox's halt count before it judges a target, a track or follow start (a
+preset, park, nudge, a place are targets), and the mailbox drops one whose count a stop or lock
+ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
+(``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any. A rotator of
+two boxes (``axes``) is judged here like any, against its one merged status; behind its
+mailbox, composite.py drives the two boxes.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from typing import NoReturn
+
+import serial
+
+from bridge.core.errors import RefusalCode, Refused
+from bridge.core.model import (
+    COMMANDS,
+    AuditEvent,
+    Claim,
+    Command,
+    ControllerCommand,
+    ErrorEvent,
+    ErrorKind,
+    FollowQso,
+    GoToPreset,
+    Lock,
+    Nudge,
+    Origin,
+    Park,
+    Release,
+    ResetHealth,
+    RotatorStatus,
+    SetOption,
+    Stop,
+    TakePath,
+    Target,
+    Toward,
+    TrackBody,
+    describe_command,
+)
+from bridge.pointing import Limits, toward
+from bridge.protocols.base import ModelSpec
+from bridge.runtime.composite import CompositeWorker
+from bridge.runtime.health_memory import HealthMemory
+from bridge.runtime.kept import Kept, Owner
+from bridge.runtime.lines import Lines
+from bridge.runtime.operators import EXECUTED, Operators
+from bridge.runtime.port import PortWatch, open_port
+from bridge.runtime.state_store import StateStore
+from bridge.runtime.worker import Worker, WorkerConfig
+from bridge.session.feature_commands import body_to_track, check_can_follow
+from bridge.session.follow import Follow as Following
+from bridge.session.follow import Heard
+from bridge.session.mailbox import Mailbox
+from bridge.session.tracking import Track as Tracking
+from bridge.sky.catalog import TleCatalog
+from bridge.sky.worker import LookupQuestion, SkyWorker
+
+log = logging.getLogger(__name__)
+
+# mailbox.py rule 10: judged, then overtaken by a stop or lock ON from another thread
+STALE_MESSAGE = "a STOP or lock ON came while it was being judged: not carried out"
+
+
+class Rotator:
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        store: StateStore,
+        on_status: Callable[[RotatorStatus], None],
+        on_event: Callable[[ErrorEvent], None],
+        name: str | None = None,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+        port_opener: Callable[..., serial.Serial] = open_port,
+        lines: Lines | None = None,
+        station: tuple[float, float] | None = None,
+        catalog: TleCatalog | None = None,
+        sky: SkyWorker | None = None,
+        on_audit: Callable[[AuditEvent], None] | None = None,
+        axes: tuple[WorkerConfig, WorkerConfig] | None = None,  # a composite's (composite.py)
+        port_watch: PortWatch | None = None,
+    ) -> None:
+        self.id = cfg.rotator_id
+        self.name = name or cfg.rotator_id
+        self.spec: ModelSpec = cfg.spec
+        self.pointing = cfg.aim  # limits, offset, keep-out, presets, park: the judge's terms
+        self.station = station  # (latitude, longitude): targets by locator or coordinates
+        self.catalog = catalog or TleCatalog(None)  # satellites to track by name
+        self._has_sky = cfg.tracking.sky is not None
+        self.can_track = self._has_sky and cfg.spec.can_report_position
+        self._follow = cfg.follow  # follow.py: the station, the [wsjtx] listener
+        self._store = store
+        self._on_event = on_event
+        self._wall = wall
+        self._kept = Kept(store, self.id, self.spec, report=self.report)
+        self._mailbox = Mailbox()
+        self._owner = Owner(store, self._mailbox)  # kept.py rule 5: the lock's, the lease's
+        self._health = HealthMemory(store, self.id)  # what rotor health learned, kept
+        self._on_status = on_status
+        self._worker: Worker | CompositeWorker
+        if axes is None:
+            self._worker = Worker(
+                cfg,
+                self._mailbox,
+                self._status,
+                on_event,
+                options=self._kept.options(),
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,  # kept.py rule 4
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,  # the app shares one among all rotators (skywork.py)
+                port_watch=port_watch,  # the stop express's copy of the port (port.py rule 7)
+            )
+        else:  # two boxes, one judge (this one), one mailbox, one status (composite.py)
+            self._worker = CompositeWorker(
+                cfg,
+                axes,
+                self._mailbox,
+                self._status,
+                on_event,
+                locked=self._kept.locked,
+                health=store.health(self.id),
+                storm=self._kept.storm,
+                wall=wall,
+                port_opener=port_opener,
+                sky=sky,
+            )
+        self._lines = lines or Lines(clock)  # the app shares one among all rotators
+        self.operators = Operators(
+            self.id,
+            store,
+            self._mailbox,
+            wall=wall,
+            bearing=lambda: self.status.bearing_deg,
+            report=self.report,
+            on_audit=on_audit,
+            owner=self._owner,
+        )
+        self._stopped = False
+        # the last STOP or lock ON put in the mailbox (monotonic), from any front end: the
+        # console refuses a command under way before it (interfaces/web/commands.py rule 5)
+        self.last_halt_s = -math.inf
+        problem = store.problems.get(self.id)
+        if problem is not None:  # the lock is ON for it; the status's last error says why
+            self._mailbox.put_note(problem)
+
+    def _status(self, status: RotatorStatus) -> None:
+        """Every status to the listeners, once rotor health's memory had a look at it."""
+        self._health.seen(status.health)
+        self._kept.seen_wind(status.wind)
+        self._on_status(status)
+
+    def _reset_health(self) -> None:
+        """A new health baseline (after a repair); it moves nothing, so it is never refused."""
+        self._health.reset()
+        self._mailbox.put_health_reset()
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self._worker.status
+
+    @property
+    def limits(self) -> Limits:
+        """The mechanical limits (the controller's raw values)."""
+        return Limits.of(self.pointing)
+
+    @property
+    def commands_block(self) -> bool:
+        return False  # a command is judged and queued, never waited for (the console asks)
+
+    @property
+    def locked(self) -> bool:
+        return self._kept.locked
+
+    def start(self) -> None:
+        """Once: a stopped rotator's mailbox is closed (build a new Rotator instead)."""
+        if self._stopped:
+            raise RuntimeError(f"{self.id}: a stopped rotator cannot start again")
+        self._lines.add(self._worker)
+        self.operators.start()
+
+    def stop(self, timeout_s: float = 3.0) -> None:
+        self._stopped = True
+        self.operators.stop()
+        if self._lines.remove(self._worker, timeout_s):
+            self._mailbox.close()  # only once nothing can wait on it any more
+        self._health.flush()  # what the last moves taught (app.py flushes the store)
+
+    def submit(
+        self,
+        command: Command,
+        described: str | None = None,
+        *,
+        hold: int | None = None,
+        echo: bool = False,
+    ) -> None:
+        """The one way a front end reaches the judge (rules in the module header): queue
+        ``command`` (a value of core/model.py's ``Command`` union) or raise Refused, reported on
+        R/error and in the audit trail. ``described``: the words the user sent (the error
+        event's and the audit trail's). Stop and lock ON are never refused; ``hold`` (a stop or
+        lock ON from the stop lane): no target goes out until ``release`` reaches that marker
+        (session rule 13); ``echo``: a halt the stop lane carried out already
+        (interfaces/mqtt/halts.py), not audited twice."""
+        if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
+            message = f"not a command the bridge knows: {type(command).__name__}"
+            self.report(ErrorKind.REFUSED, message, described)
+            raise Refused(RefusalCode.UNSUPPORTED, message)
+        who = command.origin or Origin(command.source)
+        # a lock word is audited in one wording, whichever interface said it
+        what = describe_command(command) if isinstance(command, Lock) else None
+        what = what or described or describe_command(command)
+        try:
+            result = self._carry(command, what, who, hold)
+        except Refused as exc:
+            self.report_refusal(exc.message, what, origin=who)
+            raise
+        if result is not None and not echo:  # after the put (operators.py rule 3)
+            self.operators.audit(who, what, result)
+
+    def _carry(self, command: Command, what: str, who: Origin, hold: int | None) -> str | None:
+        """The decision for each kind: the audit trail's result, None for a command it does
+        not keep (a health reset moves nothing), or Refused (reported by ``submit``)."""
+        src, by = command.source, command.origin
+        match command:
+            case Target() | Stop() | SetOption():
+                self._judged(command, hold)
+            case Lock():
+                self._lock(command.on, hold)
+            case Claim():
+                self.operators.claim(command.operator, command.minutes, who)
+            case Release():
+                if self.operators.release(who) is None:
+                    return f"{EXECUTED} (was free)"
+            case TrackBody():
+                self._track(command, what)
+            case FollowQso():
+                self._start_follow(command, what)
+            # the other ways of naming a target (pointing.py rule 6), judged like any
+            case GoToPreset():
+                self._judged(Target(*self.pointing.preset(command.name), src, origin=by))
+            case Park():
+                self._judged(Target(*self.pointing.parking(), src, park=True, origin=by))
+            case Nudge():
+                step = self.pointing.nudged(self.status, command.d_az_deg, command.d_el_deg)
+                self._judged(Target(*step, src, origin=by))
+            case Toward():
+                self._toward(command, command.latitude_deg, command.longitude_deg)
+            case TakePath():
+                info = self.status.target_info  # the place of the current target
+                if info is None:
+                    message = "no locator or coordinate target to take the other path to"
+                    raise Refused(RefusalCode.INVALID, message)
+                self._toward(command, info.latitude_deg, info.longitude_deg, info.locator)
+            case ResetHealth():
+                self._reset_health()
+                return None
+        return EXECUTED
+
+    def _toward(
+        self,
+        command: Toward | TakePath,
+        latitude_deg: float,
+        longitude_deg: float,
+        locator: str | None = None,
+    ) -> None:
+        """A place, by the path asked for: a target with where it lies (``target_info``)."""
+        if isinstance(command, Toward):
+            locator = command.locator
+        az, info = toward(
+            self.station,
+            latitude_deg,
+            longitude_deg,
+            long_path=command.long_path,
+            locator=locator,
+        )
+        self._judged(Target(az, None, command.source, info=info, origin=command.origin))
+
+    def _judged(self, command: ControllerCommand, hold: int | None = None) -> None:
+        """A target, a stop or an option: judged (``_check``) and put in the mailbox."""
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
+        judged = self._check(command)
+        if isinstance(judged, SetOption):
+            with self._owner:  # the session and the state file in the same order (kept.py)
+                self._kept.save_option(judged.name, judged.value)
+                self._mailbox.put(judged, wake=False)  # woken after the step
+        elif isinstance(judged, Stop):
+            self.last_halt_s = time.monotonic()
+            self._mailbox.put(judged, hold=hold)
+        elif not self._mailbox.put(judged, epoch=epoch):
+            self._overtaken()
+
+    def release(self, marker: int, *, clear: bool = False) -> None:
+        """The holds up to ``marker`` end (``clear``: what waits meanwhile is dropped)."""
+        self._mailbox.put_release(marker, clear=clear)
+
+    def express_hold(self, n: int) -> None:
+        """No target goes out until the stop express has answered sync word ``n`` (mqtt/
+        express.py rule 8): put before the stop it comes with."""
+        self._mailbox.put_express_hold(n)
+
+    def express_release(self, n: int) -> None:
+        """The stop express answered up to sync word ``n``: its holds up to it end."""
+        self._mailbox.put_express_release(n)
+
+    def _track(self, command: TrackBody, what: str) -> None:
+        """Follow the sun, the moon or a satellite (by name from the TLE file, or its TLE);
+        ``off`` ends it (never refused, like a stop). A name is looked up in the TLE file by
+        the sky worker, not here (paho's thread): an unknown one is refused by the session, as
+        an error event. Tracking started by the lease's holder goes on (its targets are the
+        bridge's own, never judged by the lease)."""
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
+        source, origin, name = command.source, command.origin, command.name
+        if command.off:
+            self._mailbox.put_track(Tracking(None, source, origin=origin))
+            return
+        body = body_to_track(self.catalog, self.spec, self._has_sky, name, command.tle)
+        self._check_start(origin or Origin(source))
+        if body is None:
+            lookup = LookupQuestion(self.catalog, name)
+            track = Tracking(None, source, lookup, what, origin)
+        else:
+            track = Tracking(body, source, None, what, origin)
+        if not self._mailbox.put_track(track, epoch=epoch):
+            self._overtaken()
+
+    @property
+    def can_follow(self) -> bool:
+        """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
+        return self._follow.wsjtx and self._follow.station is not None
+
+    def _start_follow(self, command: FollowQso, what: str) -> None:
+        """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
+        stop). Judged like a track start (the lease included); what the holder started goes
+        on, its targets are the bridge's own (``wsjtx``)."""
+        on, origin = command.on, command.origin
+        epoch = self._mailbox.epoch if on else None  # before the judge (mailbox.py rule 10)
+        if on:
+            check_can_follow(self._follow)
+            self._check_start(origin or Origin(command.source))
+        follow = Following(on, command.long_path, command.source, what, origin)
+        if not self._mailbox.put_follow(follow, epoch=epoch):
+            self._overtaken()
+
+    def wind(self, speed_kmh: float, replayed: bool = False) -> None:
+        """A wind reading (MQTT's thread): an input for the wind park (session/wind.py)."""
+        self._mailbox.put_wind(speed_kmh, replayed)
+
+    def heard(self, heard: Heard) -> None:
+        """What WSJT-X says of the QSO (interfaces/wsjtx/server.py's thread): an input for
+        following."""
+        self._mailbox.put_heard(heard)
+
+    def _overtaken(self) -> NoReturn:
+        """A motion command the mailbox dropped: a stop or lock ON from another thread was put
+        while it was judged (mailbox.py rule 10). Refused like any, and said so."""
+        raise Refused(RefusalCode.STALE, STALE_MESSAGE)
+
+    def _check_start(self, who: Origin) -> None:
+        """A track or follow start: the judge's order (``_check``), with no target to judge."""
+        self._check_motion(who.who)
+        if not self.status.available:
+            raise Refused(
+                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
+            )
+
+    def _lock(self, locked: bool, hold: int | None) -> None:
+        """Never refused; ``hold`` as for ``submit``. The lock, the mailbox put and the save
+        queued for the state file are one step (kept.py rules 2, 5), from every interface."""
+        with self._owner:
+            self._kept.set_lock(locked)
+            if locked:
+                self.last_halt_s = time.monotonic()
+            self._mailbox.put_lock(locked, hold=hold, wake=False)  # woken after the step
+
+    def note(self, message: str) -> None:
+        """Show ``message`` as the status's last error (a problem found outside the rotator)."""
+        self._mailbox.put_note(message)
+
+    def report_refusal(
+        self, message: str, command: str | None, *, origin: Origin | None = None
+    ) -> None:
+        """Publish a refusal (also for input that never became a command, e.g. a bad payload);
+        with ``origin`` (who sent it) it is in the audit trail too."""
+        self.report(ErrorKind.REFUSED, message, command)
+        if origin is not None:
+            self.operators.audit(origin, command or "input", f"refused: {message}")
+
+    def report(self, kind: ErrorKind, message: str, command: str | None) -> None:
+        self._mailbox.put_note(message)
+        self._on_event(ErrorEvent(kind, message, command, self._wall()))
+
+    def _check(self, command: ControllerCommand) -> ControllerCommand:
+        """``command`` as it goes to the controller (targets in raw values), or Refused."""
+        if isinstance(command, Stop):
+            return command
+        if isinstance(command, SetOption):
+            setting = self.spec.setting(command.name)
+            if setting is None:
+                have = ", ".join(self.spec.options) or "none"
+                raise Refused(
+                    RefusalCode.UNSUPPORTED,
+                    f"{self.spec.display_name} has no option {command.name!r} (options: {have})",
+                )
+            try:  # the declaration is the judge of a value (protocols/base.py rule 6)
+                judged = replace(command, value=setting.read(command.value))
+            except ValueError as exc:
+                raise Refused(RefusalCode.INVALID, f"option {exc}") from None
+            # a setting is control too (a speed in the middle of a turn): the lease's
+            leased = self.operators.refusal(self._who(command))
+            if leased is not None:
+                raise Refused(RefusalCode.LEASED, leased)
+            return judged
+        self._check_motion(self._who(command))
+        status = self.status
+        raw = self.pointing.judge(command, status.raw_bearing_deg)  # pointing.py: the judge
+        if not status.available:
+            raise Refused(
+                RefusalCode.OFFLINE, "rotator offline (serial link down or controller silent)"
+            )
+        return raw
+
+    @staticmethod
+    def _who(command: Target | SetOption) -> str:
+        return command.origin.who if command.origin is not None else command.source.value
+
+    def _check_motion(self, who: str) -> None:
+        """Refused for motion now, in this order (docs/architecture.md rule 11; never asked
+        for a stop or lock): the lock, then the wind (safety), then the lease (coordination);
+        the pointing judge and the link come after, in ``_check``."""
+        if self._kept.locked:  # the owner's lock: the one copy (kept.py rule 2)
+            raise Refused(RefusalCode.LOCKED, "rotator is locked (safety lock ON): motion refused")
+        wind = self.status.wind
+        if wind is not None and wind.refusal:  # session/wind.py rule 1
+            raise Refused(RefusalCode.LOCKED, wind.refusal)
+        leased = self.operators.refusal(who)
+        if leased is not None:
+            raise Refused(RefusalCode.LEASED, leased)

@@ -1,0 +1,297 @@
+"""What must survive a restart of the bridge: each rotator's safety lock, the options the
+user set (the controller forgets them at power-off, so the bridge re-applies them), what rotor
+health (session/health.py) has learned of the rotor, and the control lease (runtime/lease.py).
+
+Rules:
+1. A small JSON file, replaced atomically on every change: written in full to a temporary file
+   beside it, fsynced, renamed over it (and the directory fsynced). A write that fails leaves
+   no temporary file behind and the old file as it was.
+2. A missing file means "nothing set"; an unreadable one is reported and treated as empty,
+   except that every rotator whose lock state cannot be read starts locked (safety before
+   convenience) and is written down as locked, so it stays locked across restarts until someone
+   unlocks it. A malformed entry (not a table, a lock that is not true or false, options that
+   are not on/off, a number or a name) does the same for its rotator alone, and the rotator's
+   status says why (``problems``).
+3. The start proves the file can be written (``check_writable``, an OSError otherwise): the
+   content it holds is written as in rule 1, so a full disk or a quota is found at the start,
+   not when a lock set for tower work is silently not kept. An unreadable file is not replaced
+   by that write (it keeps the next start locked too): the content is written beside it and
+   removed.
+4. Anything at the path that is not a regular file (a FIFO, a device, a socket, a directory)
+   is never opened for reading, which could wait for ever (a FIFO without a writer) or touch
+   hardware (a serial device), and never replaced: ``check_writable`` refuses it by its kind.
+5. ``later`` runs a save on the store's own writer thread, in the order asked: a lock or an
+   option set from an MQTT callback must not hold that connection (and a stop behind it) for
+   an fsync, tens of milliseconds on an SD card. ``flush`` waits for what was asked so far.
+   ``queue`` is ``later`` for a rotator's owner step (kept.py rule 5): the save is in line, in
+   the order of the decisions, before the step lets go; ``wake`` then starts the writer.
+6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
+   that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import json
+import logging
+import os
+import stat
+import tempfile
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+from bridge.core.model import Control, SettingValue
+from bridge.core.ondemand import OnDemandThread
+
+log = logging.getLogger(__name__)
+
+_KINDS = (
+    (stat.S_ISDIR, "directory"),
+    (stat.S_ISFIFO, "FIFO"),
+    (stat.S_ISCHR, "character device"),
+    (stat.S_ISBLK, "block device"),
+    (stat.S_ISSOCK, "socket"),
+)
+
+
+def _not_regular(mode: int) -> str | None:
+    """What a file of ``mode`` is, if it is not a regular file (rule 4)."""
+    if stat.S_ISREG(mode):
+        return None
+    return next((kind for is_kind, kind in _KINDS if is_kind(mode)), "special file")
+
+
+def _kind_at(path: Path) -> str | None:
+    """What is at ``path`` (symbolic links followed) if it exists and is not a regular file."""
+    try:
+        return _not_regular(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return None
+
+
+def _read(path: Path) -> str:
+    """The file's text; OSError naming its kind if it is not a regular file (rule 4), also if
+    one was put there since it was looked at (O_NONBLOCK: opening a FIFO does not wait)."""
+    kind = _kind_at(path)
+    if kind is None:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as f:
+            kind = _not_regular(os.fstat(fd).st_mode)
+            if kind is None:
+                return f.read().decode()
+    raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+
+
+class StateStore:
+    def __init__(self, path: Path | None) -> None:
+        self._path = path
+        self._lock = threading.Lock()
+        self._writer = OnDemandThread("state")  # rule 5
+        self._data: dict[str, dict[str, object]] = {}
+        self.corrupt = False
+        self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry
+        self._dirty = False  # a malformed entry was replaced: written down at the first read
+        self._kind: str | None = None  # not a regular file: refused at the start (rule 4)
+        if path is not None and path.exists():
+            self._kind = _kind_at(path)
+            if self._kind is not None:
+                self.corrupt = True  # nothing read: every rotator locked, should it be used
+                return
+            try:
+                loaded = json.loads(_read(path))
+                if not isinstance(loaded, dict) or not isinstance(loaded.get("rotators"), dict):
+                    raise ValueError("no 'rotators' table")
+                self._data = {
+                    str(k): self._entry(path, str(k), v) for k, v in loaded["rotators"].items()
+                }
+            except (OSError, ValueError) as exc:
+                log.error("state file %s unreadable (%s): every rotator starts locked", path, exc)
+                self.corrupt = True
+
+    def _entry(self, path: Path, rotator_id: str, entry: object) -> dict[str, object]:
+        """One rotator's entry as it must be; one that is not starts that rotator locked."""
+        options = entry.get("options", {}) if isinstance(entry, dict) else None
+        fine = (
+            isinstance(entry, dict)
+            and isinstance(entry.get("locked", False), bool)
+            and isinstance(options, dict)
+            and all(isinstance(v, bool | int | float | str) for v in options.values())
+        )
+        if fine:
+            assert isinstance(entry, dict)
+            return entry
+        shown = json.dumps(entry)[:80]
+        problem = f"state file {path}: entry for {rotator_id!r} is malformed ({shown}): locked"
+        log.error("%s", problem)
+        self.problems[rotator_id] = problem
+        self._dirty = True
+        return {"locked": True}
+
+    def check_kind(self) -> None:
+        """OSError if the path can be seen not to work without writing anything: no regular
+        file there (rule 4), or a file where a directory must be. check-config asks this."""
+        if self._path is None:
+            return
+        kind = _kind_at(self._path) or self._kind
+        if kind is not None:
+            raise OSError(errno.EINVAL, f"it is a {kind}, not a regular file")
+
+    def check_writable(self) -> None:
+        """OSError if the file cannot be written where it is configured (rules 3, 4)."""
+        if self._path is None:
+            return
+        self.check_kind()
+        self._path.parent.mkdir(parents=True, exist_ok=True)
+        with self._lock:
+            self._write(self._path, put_in_place=not self.corrupt)
+            self._dirty = self._dirty and self.corrupt  # malformed entries now written locked
+
+    def locked(self, rotator_id: str) -> bool:
+        with self._lock:
+            if self._dirty:  # the replacement of a malformed entry, locked, kept for next time
+                self._dirty = False
+                self._save()
+            entry = self._data.get(rotator_id, {})
+            if self.corrupt and "locked" not in entry:
+                # written down explicitly, so the next start is locked too until someone unlocks
+                self._data.setdefault(rotator_id, {})["locked"] = True
+                self._save()
+                return True
+            return bool(entry.get("locked", False))
+
+    def options(self, rotator_id: str) -> dict[str, SettingValue]:
+        """As kept: on/off, a number or a choice's name (kept.py reads them by their model)."""
+        raw = self._data.get(rotator_id, {}).get("options", {})
+        if not isinstance(raw, dict):
+            return {}
+        return {
+            str(k): (float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
+            for k, v in raw.items()
+        }
+
+    def health(self, rotator_id: str) -> dict[str, object] | None:
+        """What rotor health kept (health_judge.py reads it, rule 6), if anything."""
+        raw = self._data.get(rotator_id, {}).get("health")
+        return raw if isinstance(raw, dict) else None
+
+    def set_health(self, rotator_id: str, memory: dict[str, object]) -> bool:
+        """Rotor health's memory, on the writer thread (rule 5) after each move."""
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["health"] = memory
+            return self._save()
+
+    def lease(self, rotator_id: str) -> Control | None:
+        """Rule 6: the control lease kept for the rotator, if any."""
+        raw = self._data.get(rotator_id, {}).get("lease")
+        if raw is None:
+            return None
+        if isinstance(raw, dict):
+            operator, until = raw.get("operator"), raw.get("until")
+            if isinstance(operator, str) and isinstance(until, (int, float)):
+                if not isinstance(until, bool) and abs(until) < 1e300:  # float() can't fail
+                    return Control(operator, float(until))
+        log.warning("state file: lease for %r is malformed (%s): ignored", rotator_id, raw)
+        return None
+
+    def set_lease(self, rotator_id: str, held: Control | None) -> bool:
+        """Rule 6: remember the lease (None: free); False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if held is None:
+                entry.pop("lease", None)
+            else:
+                entry["lease"] = {"operator": held.operator, "until": held.until_unix}
+            return self._save()
+
+    def later(self, job: Callable[[], None]) -> None:
+        """Rule 5: ``job`` on the writer thread."""
+        self._writer.put(job)
+
+    def queue(self, job: Callable[[], None]) -> None:
+        """Rule 5: ``job`` in line for the writer thread, which ``wake`` starts (ondemand.py
+        rule 4)."""
+        self._writer.queue(job)
+
+    def wake(self) -> None:
+        """Rule 5: the writer thread for what was queued, if it is not running."""
+        self._writer.wake()
+
+    def flush(self, timeout_s: float = 5.0) -> None:
+        """Rule 5: the jobs asked so far are done (or ``timeout_s`` passed)."""
+        done = threading.Event()
+        self.later(done.set)
+        done.wait(timeout_s)
+
+    def storm(self, rotator_id: str) -> bool:
+        """Whether the rotator was parked for a storm (session/wind.py) when last written."""
+        with self._lock:
+            return self._data.get(rotator_id, {}).get("storm") is True
+
+    def set_storm(self, rotator_id: str, storm: bool) -> bool:
+        """Remember a storm begun or ended; False if it could not be written."""
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            if storm:
+                entry["storm"] = True
+            else:
+                entry.pop("storm", None)
+            return self._save()
+
+    def set_locked(self, rotator_id: str, locked: bool) -> bool:
+        """Remember the lock; False if it could not be written (it will not survive a restart)."""
+        with self._lock:
+            self._data.setdefault(rotator_id, {})["locked"] = locked
+            return self._save()
+
+    def set_option(self, rotator_id: str, name: str, enabled: SettingValue) -> bool:
+        with self._lock:
+            entry = self._data.setdefault(rotator_id, {})
+            opts = entry.setdefault("options", {})
+            assert isinstance(opts, dict)
+            opts[name] = enabled
+            return self._save()
+
+    def _save(self) -> bool:
+        if self._path is None:
+            return True
+        try:
+            self._path.parent.mkdir(parents=True, exist_ok=True)
+            self._write(self._path)
+            return True
+        except OSError as exc:
+            log.error("cannot write state file %s: %s", self._path, exc)
+            return False
+
+    def _write(self, path: Path, *, put_in_place: bool = True) -> None:
+        """The content, in full and on the disk, then renamed over ``path`` (rule 1); without
+        ``put_in_place`` it is removed instead (rule 3). OSError if any step fails."""
+        content = json.dumps({"rotators": self._data}, indent=1, sort_keys=True).encode()
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".state-")
+        renamed = False
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(content)
+                f.flush()
+                os.fsync(f.fileno())
+            if put_in_place:
+                os.replace(tmp, path)
+                renamed = True
+        finally:
+            if not renamed:
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
+        if renamed:
+            _sync_directory(path.parent)
+
+
+def _sync_directory(directory: Path) -> None:
+    """The rename on the disk too; where a file system cannot sync a directory, the file's own
+    sync has to do (the rename happened: nothing to report)."""
+    with contextlib.suppress(OSError):
+        fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

@@ -1,0 +1,281 @@
+"""One rotator's serial line: its port, the back-off between attempts to open it, and its session.
+I/O only, and no thread of its own: lines.py runs every worker from one thread.
+
+The loop (lines.py) asks ``wants(now)`` (what to wait for: the port and the mailbox pipe, until
+when) and calls ``serve(ready, now)``. Whatever happened (bytes, commands, time) goes into the
+rotator's session (session.py, where every decision is made) and the actions it hands back are
+carried out: bytes written, statuses and error events handed to the listeners (the second and
+last hand-off point, docs/architecture.md rule 3).
+
+Rules:
+1. Any serial error closes the port, tells the session the link is down and retries with
+   back-off (``reconnect_min_s`` doubling up to ``reconnect_max_s``); a worker never dies of
+   one. Commands are still taken while the port is closed (they are refused with a reason).
+2. Everything the port has is read in one go and handed to the session as one chunk; while the
+   session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
+   and when that hold ends the port is read without waiting to be told it is readable.
+3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and one
+   that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
+   display problem never closes or reopens the line to the controller.
+   Listeners must be quick (they only queue for the network): every line waits while one runs.
+4. Opening a port and closing one (failed, or for good when the rotator stops) run on a
+   short-lived thread (port.py PendingOpen, close_in_background): a wedged USB adapter must
+   not hold up the other lines. Meanwhile the rotator is offline and its commands are answered
+   (refused) as when the port is closed. ``wait_closed`` waits for those closes, on any thread
+   but the lines thread (lines.py rule 4: a stopped rotator's port is closed or being closed).
+5. The session's questions about the sky (``Ask``) go to the sky worker (skywork.py); each
+   answer is queued here by that thread, which then wakes the lines thread through the mailbox
+   pipe, and is handed to the session on the lines thread after the mailbox's commands.
+6. What a worker with an open port waits for (``wants``) changes only when it is served: the
+   session is touched by nothing else, and what other threads bring (commands, sky answers)
+   comes through the mailbox, whose descriptor is always watched. So it is worked out once
+   after each step and kept until the next; a port being opened is asked about every time.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+import serial
+
+from bridge.core.model import ErrorEvent, ErrorKind, RotatorStatus, SettingValue
+from bridge.runtime.listeners import contained
+from bridge.runtime.port import (
+    PendingOpen,
+    PortError,
+    PortOpener,
+    PortWatch,
+    close_in_background,
+    open_port,
+    read_available,
+    watched,
+    write_frame,
+)
+from bridge.session.actions import Action, Ask, Publish, Report, Write
+from bridge.session.config import WorkerConfig
+from bridge.session.mailbox import Mailbox
+from bridge.session.session import RotatorSession
+from bridge.sky.worker import Answer, SkyWorker
+
+__all__ = ["Worker", "WorkerConfig"]
+
+log = logging.getLogger(__name__)
+_NOTHING: frozenset[int] = frozenset()
+
+
+class Worker:
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        mailbox: Mailbox,
+        on_status: Callable[[RotatorStatus], None],
+        on_event: Callable[[ErrorEvent], None],
+        *,
+        options: dict[str, SettingValue] | None = None,
+        locked: bool = False,
+        health: dict[str, object] | None = None,
+        storm: bool = False,
+        wall: Callable[[], float] = time.time,
+        port_opener: PortOpener = open_port,
+        sky: SkyWorker | None = None,
+        port_watch: PortWatch | None = None,
+    ) -> None:
+        self.cfg = cfg
+        self._sky = sky or SkyWorker()
+        self._answers: deque[tuple[int, Answer]] = deque()  # rule 5: filled by the sky thread
+        self.session = RotatorSession(
+            cfg, options=options, locked=locked, health=health, storm=storm
+        )
+        self._mailbox = mailbox
+        self._box = mailbox.fileno()
+        self._on_status = contained(on_status, f"{cfg.rotator_id}: status listener")
+        self._on_event = contained(on_event, f"{cfg.rotator_id}: event listener")
+        self._wall = wall
+        self._watch = port_watch  # port.py rule 7: the stop express holds a copy of the port
+        self._open = port_opener if port_watch is None else watched(port_opener, port_watch)
+        self._backoff_s = cfg.reconnect_min_s
+        self._port: serial.Serial | None = None
+        self._fd = -1
+        self._opening: PendingOpen | None = None
+        self._closing: list[threading.Thread] = []  # ports being closed (rule 4)
+        self._wake: Callable[[], None] = lambda: None
+        self._reopen_at = 0.0
+        self._held = False
+        self._wanted: tuple[list[int], float] | None = None  # rule 6
+        self._urgent = frozenset({self._box})
+        self._failures: set[type[BaseException]] = set()
+
+    # -- called by the lines thread only -------------------------------------------------------
+    def begin(self, now: float, wake: Callable[[], None]) -> None:
+        self._wake = wake  # wakes the lines thread when a port opened (rule 4)
+        self._do(self.session.start(now))
+        self._reopen_at = now
+
+    def end(self, now: float) -> None:
+        """Close the port for good (the rotator is stopping), in the background (rule 4): the
+        rotator's stop() waits for that with ``wait_closed``, off this thread."""
+        if self._opening is not None:
+            self._closes(self._opening.abandon(self._watch))
+            self._opening = None
+        port, self._port, self._fd = self._port, None, -1
+        if port is not None:
+            self._closes(close_in_background(port, self._watch))
+            self._do(self.session.link_down(None, now, ErrorKind.SERIAL))
+
+    def wait_closed(self, timeout_s: float) -> bool:
+        """Whether every port this worker closed is closed, waiting up to ``timeout_s`` for it.
+        Not on the lines thread (rule 4); after ``end`` it is the only one touching the list."""
+        deadline = time.monotonic() + timeout_s
+        for closing in self._closing:
+            closing.join(max(0.0, deadline - time.monotonic()))
+        return not any(closing.is_alive() for closing in self._closing)
+
+    def _closes(self, closing: threading.Thread | None) -> None:
+        self._closing = [c for c in self._closing if c.is_alive()]
+        if closing is not None:
+            self._closing.append(closing)
+
+    def has_commands(self, ready: set[int]) -> bool:
+        return self._box in ready
+
+    def urgent(self) -> frozenset[int]:
+        """The mailbox's descriptor when a stop or lock ON waits in it (lines.py rule 5), else
+        nothing: read without the mailbox's lock, a hint for the order of a round."""
+        return self._urgent if self._mailbox.urgent else _NOTHING
+
+    def wants(self, now: float) -> tuple[list[int], float]:
+        """The descriptors to wait on and the time to be woken at the latest (rule 6)."""
+        if self._wanted is not None:
+            return self._wanted
+        if self._port is None:
+            if self._opening is None:
+                return [self._box], self._reopen_at
+            return [self._box], math.inf if self._opening.result is None else now  # it is there
+        session = self.session
+        until, hold = session.next_wakeup(), session.hold_reads_until()
+        self._held = now < hold
+        if self._held:  # rule 2
+            self._wanted = [self._box], min(until, hold)
+        else:
+            self._wanted = [self._box, self._fd], until
+        return self._wanted
+
+    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
+        """``step(now, *args)`` with a bug in it logged (once per kind), the port closed and
+        reopened after the back-off: never raised into the lines thread (lines.py rule 2)."""
+        self._wanted = None  # rule 6: what it waits for is asked anew after every step
+        try:
+            step(now, *args)
+        except Exception as exc:
+            if type(exc) not in self._failures:
+                self._failures.add(type(exc))
+                log.exception("%s: unexpected error, reconnecting", self.cfg.rotator_id)
+            try:
+                reason = "unexpected error in the rotator worker (see the log)"
+                self._lost(reason, ErrorKind.INTERNAL, now)
+            except Exception:
+                self._port, self._fd = None, -1  # at least: no port nobody serves
+
+    def serve(self, now: float, ready: set[int]) -> None:
+        if self._port is None:
+            if self._box in ready:
+                self._do(self.session.commands(self._mailbox.take(), now))
+                self._take_answers(now)
+            if self._opening is not None and self._opening.result is not None:
+                self._opened(self._opening.result, now)
+            elif self._opening is None and now >= self._reopen_at:
+                attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
+                self._opening = PendingOpen(attempt, self._wake)
+            return
+        try:
+            self._serve(ready, now)
+        except (serial.SerialException, OSError) as exc:
+            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+
+    def carry_out(self, now: float, actions: list[Action]) -> None:
+        """What the session decided on a batch taken from another mailbox (a composite
+        rotator's, composite.py), carried out as for the worker's own: a port that fails
+        meanwhile is the link lost (rule 1), as in ``serve``."""
+        try:
+            self._do(actions)
+        except (serial.SerialException, OSError) as exc:
+            self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
+
+    @property
+    def status(self) -> RotatorStatus:
+        return self.session.status
+
+    def _serve(self, ready: set[int], now: float) -> None:
+        session, acted = self.session, False
+        session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking
+        if self._box in ready:
+            batch = self._mailbox.take()
+            if batch:
+                self._do(session.commands(batch, now))
+                acted = True
+            acted = self._take_answers(now) or acted
+        readable = self._fd in ready
+        if readable or (self._held and now >= session.hold_reads_until()):
+            data = read_available(self._fd, readable, self.cfg.port)
+            if data:
+                actions = session.bytes_received(data, now)
+                acted = acted or bool(actions)
+                self._do(actions)
+        if not acted and now >= session.next_wakeup():
+            self._do(session.tick(now))
+
+    def _opened(self, result: serial.Serial | Exception, now: float) -> None:
+        self._opening = None
+        if isinstance(result, Exception):
+            if not isinstance(result, PortError):
+                log.error("%s: opening %s failed: %r", self.cfg.rotator_id, self.cfg.port, result)
+            self._do(self.session.open_failed(str(result), now))
+            self._reopen_at = now + self._backoff_s
+            self._backoff_s = min(self._backoff_s * 2, self.cfg.reconnect_max_s)
+            return
+        log.info("%s: opened %s", self.cfg.rotator_id, self.cfg.port)
+        self._backoff_s = self.cfg.reconnect_min_s
+        self._port, self._fd = result, result.fileno()
+        self._do(self.session.link_up(now, self._wall()))
+
+    def _lost(self, reason: str, kind: ErrorKind, now: float) -> None:
+        port, self._port, self._fd = self._port, None, -1
+        if port is not None:
+            self._closes(close_in_background(port, self._watch))  # rule 4
+        self._reopen_at = now + self._backoff_s
+        self._do(self.session.link_down(reason, now, kind))
+
+    def _take_answers(self, now: float) -> bool:
+        """Rule 5 (after the mailbox's take, which drained the wake bytes of these answers)."""
+        acted = False
+        while self._answers:
+            generation, answer = self._answers.popleft()
+            self._do(self.session.sky_answer(generation, answer, now))
+            acted = True
+        return acted
+
+    def _answered(self, generation: int, answer: Answer) -> None:
+        """On the sky worker's thread: queue, and wake the lines thread."""
+        self._answers.append((generation, answer))
+        self._mailbox.wake()
+
+    def _do(self, actions: list[Action]) -> None:
+        for action in actions:
+            if isinstance(action, Write):
+                if self._port is not None:
+                    write_frame(self._port, action.data)
+                    log.debug("%s: -> %r", self.cfg.rotator_id, action.data)
+            elif isinstance(action, Publish):
+                self._on_status(action.status)
+            elif isinstance(action, Report):
+                event = ErrorEvent(action.kind, action.message, action.command, self._wall())
+                self._on_event(event)
+            elif isinstance(action, Ask):
+                self._sky.ask(action.question, partial(self._answered, action.generation))

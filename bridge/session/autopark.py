@@ -1,0 +1,84 @@
+"""Parking by itself after a quiet spell (``park_after_idle_s``; a windy remote site). Pure: it
+owns the quiet spell; each step gets a read-only ``Scene`` (parts.py) and returns a ``Proposal``
+(the park target, or the error of a park the judge refuses) that the session applies.
+
+Rules:
+1. The quiet spell counts from the last command (a target, a stop or the lock switched either
+   way), from the last moment the rotor was seen turning (a hand on the front panel), from
+   start-up and from the controller answering again: a rotor never parks the moment someone
+   unlocks it or switches its controller back on.
+2. Parking happens only when everything else would allow a target: the controller answering,
+   the lock off, the rotor idle, no target waiting, and not already at the park position.
+3. The park is an ordinary target (source ``auto-park``): any command meanwhile replaces or
+   stops it, and it counts as activity itself, so a park that cannot finish (a stall) is
+   tried again only after another quiet spell.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorKind, MotionState, Source, Target
+from bridge.session import motion as mo
+from bridge.session.actions import Report
+from bridge.session.config import WorkerConfig
+from bridge.session.parts import NOTHING, Proposal, Scene
+
+log = logging.getLogger(__name__)
+
+
+class AutoPark:
+    def __init__(self, rig: WorkerConfig) -> None:
+        park = rig.aim.park
+        self._rig = rig
+        self._after_s = rig.park_after_idle_s if park is not None else 0.0
+        self._park = park
+        self._since = -math.inf
+
+    @property
+    def on(self) -> bool:
+        """Whether it ever parks (a park position and a quiet time configured): off, its step
+        changes nothing and the session does not run it (parts.py rule 3)."""
+        return self._after_s > 0.0
+
+    def activity(self, now: float) -> None:
+        """Rule 1: the quiet spell starts again."""
+        self._since = now
+
+    def deadline(self) -> float | None:
+        """When parking is due (None: never)."""
+        if self._after_s <= 0.0 or not math.isfinite(self._since):
+            return None
+        return self._since + self._after_s
+
+    def wakeup(self, now: float) -> float | None:
+        """When the session must look again: the deadline while it lies ahead. Once it has
+        passed without parking (not ready: locked, turning), the session's own polls and
+        inputs bring it back; waking at a past time would spin."""
+        deadline = self.deadline()
+        return deadline if deadline is not None and deadline > now else None
+
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        m, now = scene.motion, scene.now
+        if m.state is MotionState.MOVING:
+            self.activity(now)  # rule 1: someone is turning it
+            return NOTHING
+        deadline = self.deadline()
+        if deadline is None or now < deadline or self._park is None:
+            return NOTHING
+        ready = mo.at_rest(m) and scene.pending is None  # rule 2 (no brake: motion rule 4)
+        if not ready or scene.locked or scene.parked:
+            return NOTHING
+        self._since = now  # rule 3
+        park = Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
+        try:
+            judged = self._rig.aim.judge(park, m.position_deg)
+        except Refused as exc:
+            return Proposal(
+                error=Report(ErrorKind.REFUSED, f"auto-park refused: {exc.message}", "park")
+            )
+        log.info("%s: parking (no command for %g s)", self._rig.rotator_id, self._after_s)
+        return Proposal(target=judged)

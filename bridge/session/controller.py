@@ -1,0 +1,435 @@
+"""One controller as the bridge knows it through its line: the link (link.py, the line
+discipline), the motion machine fed by its readings (motion.py), whether it answers, what it is
+owed (a stop, options, an enable: stops.py, options.py) and its polls. Sans-IO like the session
+that owns it: the session calls it with the time, and it hands back, as ``notes``, what the
+session must act on (an error event, tracking to end, the pending target to drop or to put
+back); it never touches the session's targets, tracking or auto-park.
+
+Rules:
+1. The link's state belongs to ``Link`` and the motion machine's to ``motion``; this class
+   keeps the controller's: answering or not, options owed, motion to re-enable, the bearings
+   shown (status.py rule 1).
+2. A controller that reports positions is "available" only after a valid reading, and stops
+   being available after ``silence_timeout_s`` without one (tracking ends, a waiting target is
+   dropped). A DCU-1 is available while its port is open (it never answers).
+3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
+   controller that cannot report. A query is never sent while another is open.
+4. A silent controller's slew (SatEL) feeds the motion machine nothing until its report; a
+   report that says automatic motion is off gets it switched on again (slew.py has the
+   rules for a report that does not come).
+5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so, and
+   whether all they did was to hold a reading: session.py rule 16). A reading is taken when
+   its exchange is over (link.py rule 9): one that other bytes spoil, or one the codec does not
+   trust, is no reading, and the controller is asked again at once. A stop written while a
+   reading is held ends its exchange: the reading is taken just before the stop is written
+   (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
+6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
+7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
+   (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
+8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
+   composite's elevation box) is told each reading taken, and only those (rule 5).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+from enum import Enum
+from typing import cast
+
+from bridge.core.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
+from bridge.protocols.base import (
+    JunkReason,
+    JunkReply,
+    PositionReply,
+    TakesReadings,
+    VersionReply,
+)
+from bridge.session import motion as mo
+from bridge.session import status as st
+from bridge.session.actions import Report
+from bridge.session.config import WorkerConfig
+from bridge.session.link import Link
+from bridge.session.options import Options
+from bridge.session.slew import Slew, overdue, travel_s
+from bridge.session.stops import Stops
+from bridge.session.targets import Sending, resolve
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Ends:
+    """Tracking ends for ``reason``, and a target of its own still waiting is dropped."""
+
+    reason: str
+
+
+@dataclass(frozen=True)
+class Drop:
+    """The waiting target is dropped, with an error that says ``why``."""
+
+    why: str
+
+
+@dataclass(frozen=True)
+class Retry:
+    """Put ``target`` back as the waiting one, try ``attempt`` (slew.py rule 4)."""
+
+    target: Target
+    attempt: int
+
+
+Note = Report | Ends | Drop | Retry
+
+
+class Fed(Enum):
+    """What bytes from the port did (``feed``)."""
+
+    NOTHING = "nothing"  # no reply completed: nothing changed (rule 5)
+    HELD = "held"  # one reading completed, now held for its quiet time and nothing else
+    REPLY = "reply"  # anything else: a reading taken or dropped, junk, a version
+
+
+class Controller:
+    def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
+        self.cfg = self.base_cfg = cfg  # rule 7
+        self.link: Link | None = None
+        self.motion = mo.Motion()
+        self.answering = False
+        self.options = Options(options, cfg.spec.settings)
+        self.target_last = False  # the last command written was a target (motion.py rule 8)
+        self.stops = Stops()
+        self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
+        self.version: str | None = None
+        self.controller_time: str | None = None  # its own clock (SatEL)
+        self._silence_reported = False
+        self._junk_reported_t = -1e18
+        self._port_error: str | None = None
+        self._takes_readings = False  # rule 8: the link's codec does (set on connect)
+        self.notes: list[Note] = []  # for the session, in order (``take_notes``)
+
+    @property
+    def name(self) -> str:
+        return self.cfg.rotator_id
+
+    def seen(
+        self,
+        previous: RotatorStatus,
+        view: st.View,
+        pending: Target | None,
+        locked: bool,
+        wall_offset_s: float,
+        features: st.Features,
+    ) -> st.Seen:
+        """What the status view needs (status.py), the controller's part from here."""
+        link, wire = self.link, None
+        if pending is not None and link is not None:
+            az, el = resolve(pending, self.motion, self.cfg.aim)
+            wire = link.codec.wire_target(az, el) if az is not None else None
+        return st.Seen(
+            previous=previous,
+            view=view,
+            version=self.version,
+            controller_time=self.controller_time,
+            motion=self.motion,
+            connected=link is not None,
+            answering=link is not None and self.answering,
+            locked=locked,
+            options=self.options.values,
+            bearing_deg=self.az_shown.value,
+            elevation_deg=self.el_shown.value,
+            slew=link.slew if link is not None else None,
+            pending=pending,
+            pending_wire=wire,
+            wall_offset_s=wall_offset_s,
+            features=features,
+        )
+
+    def take_notes(self) -> list[Note]:
+        """What happened since the last call that the session must act on, in order."""
+        notes, self.notes = self.notes, []
+        return notes
+
+    # -- the port ----------------------------------------------------------------------------
+    def open_failed(self, reason: str) -> None:
+        if reason != self._port_error:  # once per reason
+            self._port_error = reason
+            self.notes.append(Report(ErrorKind.SERIAL, reason))
+
+    def connect(self, now: float, wall_s: float) -> None:
+        spec = self.cfg.spec
+        self._port_error = None
+        self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
+        # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
+        self._takes_readings = isinstance(link.codec, TakesReadings)
+        self.motion = mo.link_up(self.motion, self.cfg.motion, now)
+        self.answering = not spec.can_report_position
+        self._silence_reported = False
+        self.options.connected(self.answering)
+        self._retune()
+        if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
+            self.stops.owed = False
+            log.info("%s: sending the stop that came while the port was closed", self.name)
+            link.write_stop(now)
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        for frame in link.codec.encode_connect(wall_s):
+            link.write(frame, now)
+
+    def disconnect(self, failed: bool, now: float) -> None:
+        """The port is closed (``failed``: not on purpose)."""
+        if failed:
+            stop_due = self.link is not None and self.link.stop_due
+            self.stops.owed = self.stops.owed or self.stops.unsure(stop_due, self.motion, now)
+        self.link = None
+        self.answering = False
+        self.motion = mo.link_down(self.motion)
+
+    # -- stops ---------------------------------------------------------------------------------
+    def stop(self, now: float, merge: bool = False) -> None:
+        """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
+        is closed, as the first frame it gets (stops.py rule 3)."""
+        if self.link is None:
+            self.stops.owed = True
+        elif not merge or not self.stops.merges(self.motion, self.cfg.motion, now):
+            self.link.want_stop()
+            self.flush_stop(now)
+
+    def flush_stop(self, now: float) -> None:
+        """Write a due stop now, or as soon as a half-duplex line is free (one reply time)."""
+        link = self.link
+        if link is None or not link.stop_ready():
+            return
+        reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
+        if reply is not None:
+            self._reading(link, reply, now)
+        if link.flush_stop(now):
+            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+
+    def check_stop(self, now: float, target_going: bool) -> None:
+        """stops.py rule 2: a stop that did not take is sent again."""
+        again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
+        if error is not None:
+            self.notes.append(error)
+        if again:
+            log.warning("%s: still turning after a stop; stopping again", self.name)
+            self.stop(now)
+
+    # -- what comes in ---------------------------------------------------------------------------
+    def feed(self, data: bytes, now: float) -> Fed:
+        """Bytes from the port: whether they completed a reply, and if so whether all they did
+        was to hold a reading (rules 5 and 9)."""
+        link = self.link
+        if link is None:
+            return Fed.NOTHING
+        log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        link.got_bytes(len(data), now)
+        replies = link.codec.feed(data)
+        if not replies:
+            return Fed.NOTHING
+        held = len(replies) == 1 and isinstance(replies[0], PositionReply)
+        for reply in replies:
+            if isinstance(reply, PositionReply):
+                if not link.hold_reading(reply, now):  # rule 5: taken once the exchange is over
+                    held = False
+                    self._ask_again(link, now)
+            elif isinstance(reply, VersionReply):
+                if reply.version != self.version:
+                    log.info("%s: controller version %s", self.name, reply.version)
+                self.version = reply.version
+            elif isinstance(reply, JunkReply):
+                if reply.reason is JunkReason.POWER_ON:
+                    log.info("%s: power-on byte seen; options will be re-applied", self.name)
+                    self.options.all_due()
+                    self._retune()
+                if reply.reason is JunkReason.REFUSED and self.target_last:  # motion.py rule 8
+                    self.target_last = False
+                    self.motion, events = mo.refused(self.motion, self.cfg.motion, now)
+                    self._motion_events(events, now)
+                    if events:
+                        continue  # the answer to the target, reported as such: no junk
+                link.add_junk(reply.data, now)
+                if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
+                    self._ask_again(link, now)
+        if self._settled(link, now):
+            held = False
+        return Fed.HELD if held else Fed.REPLY
+
+    def _ask_again(self, link: Link, now: float) -> None:
+        """Rule 5: the exchange gave no reading it can trust."""
+        log.debug("%s: reply not trusted; asking again", self.name)
+        link.ask_again(now)
+        if link.end_slew(now):  # the slew is over; where it ended, unseen
+            self.motion = mo.slew_ended(self.motion, now)
+
+    def _settled(self, link: Link, now: float) -> bool:
+        """Rule 5: a reading whose exchange is over is taken; True if one was."""
+        reply = link.settled(now)
+        if reply is None:
+            return False
+        self._reading(link, reply, now)
+        return True
+
+    def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
+        link.got_reading(now)
+        if self._takes_readings:  # rule 8
+            cast(TakesReadings, link.codec).taken(reply)
+        if reply.motion_enabled is False:
+            self.options.enable_due = True  # rule 4
+        if reply.controller_time is not None:
+            self.controller_time = reply.controller_time
+        if not self.answering:
+            self.answering = True
+            self.options.all_due()
+            self._retune()
+            log.info("%s: controller answering", self.name)
+        cfg = self.cfg
+        self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        self._motion_events(events, now)
+        moving = self.motion.state is MotionState.MOVING
+        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
+        if reply.el_deg is not None:
+            self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
+
+    def _motion_events(self, events: list[mo.Event], now: float) -> None:
+        for event in events:
+            verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
+            if verdict.ends_tracking is not None:
+                self.notes.append(Ends(verdict.ends_tracking))
+            if verdict.error is not None:
+                self.notes.append(verdict.error)
+            else:
+                log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
+            if verdict.stop and self.link is not None:
+                self.link.write_stop(now)
+
+    # -- the line's own work, run by the session's step ------------------------------------------
+    def line_work(self, now: float) -> None:
+        """An overdue reply (slew.py), a due stop, the outbox, junk gone quiet."""
+        link = self.link
+        if link is None:
+            return
+        self._settled(link, now)
+        if link.reply_overdue(now):
+            todo = overdue(self.cfg, link.slew, link.reply_timeout_s, now)
+            if todo.error is not None:
+                self.notes.append(todo.error)
+            if todo.retry is not None:
+                self.notes.append(Retry(todo.retry, todo.attempt))
+            if todo.stop:
+                self.stop(now)
+            else:
+                link.give_up_reply(now)
+                if todo.track_lost:
+                    self.motion = mo.track_lost(self.motion, self.cfg.motion)
+        self.flush_stop(now)
+        link.flush_outbox(now)
+        junk = link.quiet_junk(now)
+        if junk is not None:
+            self._junk(*junk, now)
+
+    def tick(self, now: float) -> None:
+        """The motion machine's clock (rule 4: not during a slew), and an enable owed."""
+        link = self.link
+        if link is None or link.slew is None:
+            self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
+            self._motion_events(events, now)
+        if link is None or not self.answering:
+            return
+        if self.options.enable_due and link.slew is None and link.free() and not link.stop_due:
+            enable = link.codec.encode_enable()
+            if enable:
+                link.write(enable, now)
+                self.target_last = False
+            self.options.enable_due = False
+
+    def send_options(self, now: float, target_waits: bool) -> None:
+        """options.py rule 1: each setting by its declaration's encoder (the codec's)."""
+        link = self.link
+        if link is None or not self.answering:
+            return
+        free = link.free()
+        line_free = free and link.slew is None and not link.stop_due
+        taken = self.options.take(
+            mo.at_rest(self.motion), not target_waits and free, now, line_free=line_free
+        )
+        for name, value in taken:
+            setting = self.cfg.spec.setting(name)
+            try:
+                if setting is None:
+                    raise ValueError(name)
+                frame = setting.encode(setting.read(value))
+            except (KeyError, ValueError):
+                log.warning("%s: option %r not supported; skipped", self.name, name)
+                continue
+            log.info("%s: setting %s sent (%r)", self.name, name, frame)
+            link.write(frame, now)
+            self.target_last = False  # a refusal now may be the setting's
+        if taken:
+            self._retune()
+
+    def _retune(self) -> None:
+        """Rule 7: the speeds the settings in effect give the rotor."""
+        factor, base = self.options.speed_factor(), self.base_cfg
+        if factor == 1.0:
+            self.cfg = base
+            return
+        motion = replace(base.motion, nominal_speed_deg_s=base.motion.nominal_speed_deg_s * factor)
+        az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
+        self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
+
+    def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:
+        """Write ``target`` as ``todo`` says (targets.py), try ``attempt``."""
+        link, m, cfg = self.link, self.motion, self.cfg
+        assert link is not None
+        link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
+        self.target_last = True
+        az, el = todo.wire
+        if not cfg.spec.reports_while_moving:
+            slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
+            link.begin_slew(slew, travel_s(cfg, slew))
+        self.motion = mo.commanded(m, cfg.motion, az, now, el)
+        link.poll_by(now + cfg.moving_poll_interval_s)
+
+    def poll(self, now: float, busy: bool) -> None:
+        """Rules 2 and 3 (``busy``: a target waits)."""
+        link, cfg = self.link, self.cfg
+        if link is None or not cfg.spec.can_report_position:
+            return
+        timeout_s = cfg.silence_timeout_s
+        silent = not link.reply_owed and link.silent_for(now) >= timeout_s  # (a slew's report
+        if silent and self.answering:  # takes the whole slew: a reply owed may still come)
+            self.answering, busy = False, False  # (the waiting target is dropped)
+            self.motion = mo.link_down(self.motion)
+            why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
+            # the drop before tracking's end: a target of tracking's own is reported dropped
+            # too (Ends would drop it silently first)
+            self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
+            self.notes.append(Ends("controller not answering"))
+        elif silent and link.last_reply_t is None and not self._silence_reported:
+            self._silence_reported = True
+            self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
+        busy = busy or self.motion.state is MotionState.MOVING
+        if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
+            self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
+
+    def _junk(self, data: bytes, harmless: bool, now: float) -> None:
+        """Rule 6."""
+        if harmless:  # a banner after a stop, a blank line: nothing a user acts on
+            log.debug("%s: ignored %d harmless bytes: %r", self.name, len(data), data[:64])
+            return
+        log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
+        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
+            self._junk_reported_t = now
+            why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
+            self.notes.append(Report(ErrorKind.PROTOCOL, why))
+
+    def wakeups(self, now: float) -> list[float]:
+        """When the line or the motion machine needs the session next."""
+        times: list[float] = []
+        if self.link is not None:
+            times += self.link.wakeups()
+            if self.link.slew is not None:
+                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+        deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
+        return times if deadline is None else [*times, deadline]

@@ -1,0 +1,242 @@
+"""Following the QSO partner (``R/follow``): the rotator turns to the great-circle bearing of
+the station WSJT-X or JTDX names as its DX call and grid. Pure: the follower owns whether it
+follows, what it last heard and the grid it last turned to; each step gets a read-only
+``Scene`` (parts.py) and returns a ``Proposal`` the session applies. What WSJT-X says comes in
+as ``Heard`` inputs (interfaces/wsjtx/server.py reads the datagrams on a thread of its own).
+
+Rules:
+1. Following is off until a Follow command switches it on, and ends on ``R/follow off``, a
+   stop, the lock, a track command, any other target (a manual one, rotctld's P, a preset, a
+   nudge, a park), a stall, the serial link going down or the controller falling silent: the
+   rotor never turns by itself after any of these. The status says why
+   (``following_ended``). Its own targets are put by the session, not through the mailbox,
+   so they never end it.
+2. While it follows, a grid not turned to before turns the rotor to its great-circle bearing
+   from the station (the long path if asked). The same grid again moves nothing (the
+   deadband), whatever else the program's status says; so does a status without a grid, or
+   with one that is no Maidenhead locator.
+3. Hold while transmitting (``follow_hold_while_tx``, on by default): a new grid heard while
+   the program transmits waits, shown as ``held``, until a status says the transmission has
+   ended; then the newest grid is turned to. A transmission that begins while its own turn is
+   under way (the usual case: the grid is named a second before the transmit period) stops
+   the turn (``Proposal.halt``), and the grid is turned to again once it has ended.
+4. Switching it on takes the newest status heard if it is at most FRESH_S old (WSJT-X sends one
+   on every change and at least at every decoding period): the rotor turns to the partner of
+   the QSO already under way. An older one is stale and moves nothing (docs/architecture.md
+   rule 7).
+5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
+   sectors). One it refuses is reported once for that grid and not tried again.
+6. Following is activity for auto-park (the rotor does not park while it follows a QSO).
+7. Its targets carry an origin of interface ``wsjtx`` (the status's ``last_command_source``
+   and ``last_operator``), with the operator who switched following on if they named
+   themselves. Like tracking's, they are the bridge's own: the control lease judged who
+   switched it on (rotator.py), not each grid WSJT-X names.
+8. It follows one program: the instance (WSJT-X's Id) of the first status heard since it was
+   switched on, the fresh one it started with included. Statuses of any other instance (a
+   second WSJT-X on another band, another station's in the same multicast group) are ignored
+   while it follows, or the rotor would swing between two partners at every decoding period.
+   What it keeps of them is bounded (the IGNORED_KEPT heard last) and said at most once per
+   IGNORED_LOG_S, with the count of others since: a flood of forged instance names costs
+   neither memory nor the disk.
+9. A rotator with ``bands`` (settings/bands.py) follows only while the program's dial frequency
+   is on one of them (core/bands.py): a grid heard on another band, on no amateur band, or with no
+   dial frequency moves nothing, and is reported once (R/error) until the dial is on one of its
+   bands again; the grid is then turned to. With following on for each rotator of a station
+   with one antenna per band, the one whose antenna is on the radio's band turns. A turn under
+   way when the band changes is not stopped (it was for the partner heard on its band).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import OrderedDict
+from dataclasses import dataclass, replace
+
+from bridge.core import geo
+from bridge.core.bands import band_of_hz, describe_hz
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorKind, FollowingInfo, MotionState, Origin, Source, Target
+from bridge.pointing import toward
+from bridge.session.actions import Report
+from bridge.session.config import WorkerConfig
+from bridge.session.parts import NOTHING, Proposal, Scene
+
+log = logging.getLogger(__name__)
+
+FRESH_S = 30.0  # rule 4
+IGNORED_KEPT = 32  # rule 8: the other instances remembered (so each is said once)
+IGNORED_LOG_S = 60.0  # rule 8: at most one line this often about the others
+NAME_SHOWN = 40  # characters of an instance name a log line quotes (WSJT-X's Id is short)
+
+
+@dataclass(frozen=True)
+class Heard:
+    """What the program says of the QSO under way (WSJT-X's Status message)."""
+
+    call: str
+    grid: str
+    transmitting: bool
+    instance: str = ""  # the program's Id (``WSJT-X``, ``JTDX``)
+    dial_hz: int | None = None  # the radio's dial frequency (rule 9)
+
+
+@dataclass(frozen=True)
+class Follow:
+    """Start following the partner WSJT-X names (``on``), or stop."""
+
+    on: bool
+    long_path: bool = False
+    source: Source = Source.MQTT  # who asked
+    described: str | None = None  # the command as the user gave it (a refusal names it)
+    origin: Origin | None = None  # who asked (the status's last_operator)
+
+
+def grid_of(text: str) -> str | None:
+    """A Maidenhead locator as WSJT-X writes it (``FN31``, ``fn31pr``), upper case, or None."""
+    grid = text.strip().upper()
+    return grid if grid and geo.is_locator(grid) else None
+
+
+class Follower:
+    def __init__(self, rig: WorkerConfig) -> None:
+        self._rig = rig
+        self.info: FollowingInfo | None = None  # None: not following
+        self.ended: str | None = None
+        self._heard: Heard | None = None
+        self._heard_t = -math.inf
+        self._aimed: str | None = None  # rule 2: the grid last turned to (or refused)
+        self._origin = Origin(Source.WSJTX)  # rule 7: what its targets carry
+        self._instance: str | None = None  # rule 8: the program followed
+        self._ignored: OrderedDict[str, None] = OrderedDict()  # rule 8: the others heard last
+        self._ignored_log_t = -math.inf  # rule 8: when the last line about them was logged
+        self._ignored_since = 0  # rule 8: others first heard since then
+        self._off_band: str | None = None  # rule 9: why the last grid was not turned to
+
+    @property
+    def on(self) -> bool:
+        return self.info is not None
+
+    def start(self, follow: Follow, now: float) -> None:
+        """Rule 1; rule 4: only a fresh status turns the rotor at once."""
+        self.info = FollowingInfo(Source.WSJTX.value, "long" if follow.long_path else "short")
+        self.ended, self._aimed, self._off_band = None, None, None
+        starter = follow.origin.operator if follow.origin is not None else None
+        self._origin = Origin(Source.WSJTX, operator=starter)  # rule 7
+        if now - self._heard_t > FRESH_S:
+            self._heard = None
+        self._instance = self._heard.instance if self._heard is not None else None  # rule 8
+        self._ignored.clear()
+        log.info("%s: following the QSO partner WSJT-X names", self._rig.rotator_id)
+
+    def end(self, why: str) -> bool:
+        """Stop following (``why`` shows as ``following_ended``); whether it was on."""
+        if self.info is None:
+            return False
+        log.info("%s: following ended: %s", self._rig.rotator_id, why)
+        self.info, self.ended, self._aimed = None, why, None
+        return True
+
+    def heard(self, heard: Heard, now: float) -> None:
+        """The newest status (kept while off too: rule 4), of the program followed (rule 8)."""
+        if self.info is not None:
+            if self._instance is None:
+                self._instance = heard.instance
+            elif heard.instance != self._instance:
+                self._ignore(heard.instance, now)
+                return
+        self._heard, self._heard_t = heard, now
+
+    def _ignore(self, instance: str, now: float) -> None:
+        """Rule 8: another program's status; remembered (bounded) and said rarely."""
+        ignored = self._ignored
+        if instance in ignored:
+            ignored.move_to_end(instance)
+            return
+        ignored[instance] = None
+        if len(ignored) > IGNORED_KEPT:
+            ignored.popitem(last=False)
+        self._ignored_since += 1
+        if now - self._ignored_log_t < IGNORED_LOG_S:
+            return
+        others = self._ignored_since - 1
+        self._ignored_log_t, self._ignored_since = now, 0
+        log.warning(
+            "%s: following %r: the status of %r is ignored%s (switch following off and on to "
+            "follow the program heard first then)",
+            self._rig.rotator_id,
+            (self._instance or "")[:NAME_SHOWN],
+            instance[:NAME_SHOWN],
+            f", and of {others} other program(s) since the last such line" if others else "",
+        )
+
+    def _turning(self, scene: Scene) -> bool:
+        """Its own turn is under way: while it follows, anything else that moves ends it."""
+        own = scene.pending is not None and scene.pending.source is Source.WSJTX
+        return self._aimed is not None and (own or scene.motion.state is MotionState.MOVING)
+
+    def _off_band_why(self, heard: Heard) -> tuple[str, str] | None:
+        """Rule 9: the band ``heard`` is on and why it is not for this rotator's antenna, or
+        None (it is)."""
+        bands = self._rig.follow.bands
+        if not bands:
+            return None
+        mine = ", ".join(bands)
+        if heard.dial_hz is None:
+            return "", f"following: WSJT-X gave no dial frequency, and this antenna is for {mine}"
+        band = band_of_hz(heard.dial_hz)
+        if band in bands:
+            return None
+        on = f"on {band}" if band is not None else "on no amateur band"
+        dial = describe_hz(heard.dial_hz)
+        why = f"following: WSJT-X's dial {dial} is {on}, and this antenna is for {mine}"
+        return band or "?", why
+
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        info, heard = self.info, self._heard
+        if info is None or heard is None:
+            return NOTHING
+        grid = grid_of(heard.grid)
+        holding = heard.transmitting and self._rig.follow.hold_while_tx
+        if holding and self._turning(scene):  # rule 3: the turn under way stops
+            self._aimed = None  # turned to again after the transmission
+            self.info = replace(info, held=True)
+            return Proposal(halt=True, busy=True)
+        if grid is None or grid == self._aimed:  # rule 2
+            if info.held:  # the grid held for is gone: nothing waits any more
+                self.info = replace(info, held=False)
+            return Proposal(busy=True)  # rule 6
+        if holding:  # rule 3
+            self.info = replace(info, held=True)
+            return Proposal(busy=True)
+        off_band = self._off_band_why(heard)
+        if off_band is not None:  # rule 9: reported once a band, until the dial comes back
+            band, why = off_band
+            said, self._off_band = self._off_band == band, band
+            if said:
+                return Proposal(busy=True)
+            what = f"follow {heard.call.strip() or '?'} {grid}"
+            return Proposal(error=Report(ErrorKind.REFUSED, why, what), busy=True)
+        self._off_band = None
+        self._aimed = grid
+        call = heard.call.strip() or None
+        try:
+            lat, lon = geo.parse_locator(grid)
+            az, place = toward(
+                self._rig.follow.station, lat, lon, long_path=info.path == "long", locator=grid
+            )
+            judged = self._rig.aim.judge(
+                Target(az, None, Source.WSJTX, info=place, origin=self._origin),
+                scene.motion.position_deg,
+            )
+        except (Refused, ValueError) as exc:  # rule 5
+            why = exc.message if isinstance(exc, Refused) else str(exc)
+            self.info = replace(info, call=call, grid=grid, bearing_deg=None, held=False)
+            what = f"follow {call or '?'} {grid}"
+            return Proposal(error=Report(ErrorKind.REFUSED, f"following: {why}", what), busy=True)
+        self.info = replace(
+            info, call=call, grid=grid, bearing_deg=az, distance_km=place.distance_km, held=False
+        )
+        log.info("%s: following %s in %s: %.1f deg", self._rig.rotator_id, call, grid, az)
+        return Proposal(target=judged, busy=True)

@@ -1,0 +1,375 @@
+"""One open serial connection's line discipline, sans-IO: frames out, timing in, no port.
+
+What it does: queues the frames to write, keeps the controller's replies in order, decides when
+the line may carry the next frame, polls, holds back junk until the line is quiet, and says when
+it next needs attention. What it does not do: decide anything about motion or commands
+(session.py), parse bytes (the model's codec) or touch a port (worker.py writes what ``output``
+hands it).
+
+Rules:
+1. A reply is owed when the codec says so after a write; its deadline is the model's reply
+   timeout. An owed reply that does not come is given up at its deadline (the session decides).
+   A slew's report (a controller silent while it moves) is owed until twice the travel time at
+   the rotor's speeds plus SLEW_MARGIN_S; a stop written during the slew brings that deadline
+   forward to one reply time: a stopped controller reports at once, or the stop was lost, or
+   the slew had already ended (and its report was lost).
+2. Silence is counted from the last valid reply, or from the end of a wait for a slew's report
+   (a controller that was silent for a whole slew was not "not answering").
+3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
+   except a stop on a controller that takes one at any time (``spec.stop_interrupts``).
+4. A poll is sent only when due, when nothing is owed and no stop is waiting.
+5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
+   is judged whole (by the codec: it knows what its controller emits besides replies).
+6. A stop cancels every frame still waiting for its inter-frame gap.
+7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
+   at the line rate, plus one byte time for the controller to turn round (``hold_reads_until``),
+   the worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
+   watched meanwhile. If part of the reply is still missing then (a controller that takes its
+   time), the hold starts again for the time the missing bytes take: a late reply costs a
+   wake-up per chunk, not per byte, and is read at most one byte time after its last byte.
+8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
+   multiple of the interval at least half an interval away): every rotator polling at the same
+   interval polls at the same instants, so one thread serves a round of them with one wake-up
+   (lines.py rule 1). A poll asked for at once (a new target) is off the grid; the next one is
+   back on it, never less than half an interval later.
+9. One exchange, one reading: a reading is held until the line has been quiet for SETTLE_BYTES
+   byte times (SETTLE_MIN_S at least) and only then taken (``settled``); bytes that go on
+   arriving hold it longer, up to a whole reply's bytes more (a frame that starts in the quiet
+   time is judged whole). Bytes in that time that no healthy exchange has (a second reply,
+   asked for or not, line noise; not the controller's own chatter, which its codec calls
+   harmless) spoil it: the exchange is not trusted, the reading is dropped and the controller
+   asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
+   as a move). A reply owed is not overdue while its reading is held. The quiet time is no
+   reply still coming: a stop goes out at once (rule 3 does not hold it back once the reply is
+   whole), and a stop ends the held exchange there, before it is written (``end_held``): its
+   reading is taken if the reply is whole and no byte came after it, and dropped otherwise
+   (bytes still coming may be the second reply that spoils it; the controller is asked again).
+   What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
+   own, never a second reply that spoils the held one).
+10. A controller that needs time between commands to its two axes (``spec.axis_gap_s``,
+   RC2800; a frame's axis by its first bytes, ``spec.axis_prefixes``) gets it: a command's or
+   a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
+   one to the other axis, written or waiting. A target goes first to the axis last addressed
+   (no wait), and the poll frames still waiting are dropped for it (its answers answer the
+   poll); a poll waits while frames do and for the gap after any frame. A stop never waits:
+   its first frame goes at once, its others the gap apart.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import replace
+
+from bridge.protocols.base import Codec, JunkReason, JunkReply, ModelSpec, PositionReply
+from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
+
+JUNK_QUIET_S = 0.05
+SETTLE_BYTES = 3  # rule 9: the next byte of a reply sent back to back comes after one
+SETTLE_MIN_S = 0.005  # rule 9: at a high baud rate, a little longer than three byte times
+_JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
+
+__all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
+
+
+class Link:
+    def __init__(self, codec: Codec, spec: ModelSpec, now: float, baud: int) -> None:
+        self.codec = codec
+        self.spec = spec
+        self._byte_s = 10 / baud  # 8N1
+        self._settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * self._byte_s)  # rule 9
+        # the model's reply timeout is for its default baud: a slower line needs longer
+        slower_s = max(0.0, spec.exchange_time_s(baud) - spec.exchange_time_s())
+        self.reply_timeout_s = spec.reply_timeout_s + slower_s
+        self._hold_until = 0.0
+        self._hold_bytes = 0  # of the polled reply, not read yet (rule 7)
+        self._quiet_from_t = now  # silence counts from here when no reply came since
+        self._reply_deadline: float | None = None
+        self._next_poll = now
+        self._last_reply_t: float | None = None
+        self._stop_due = False
+        self._outbox: deque[tuple[float, bytes, bool]] = deque()  # when, frame, a poll's
+        self._output: list[bytes] = []
+        self._slew: Slew | None = None
+        self._junk = bytearray()
+        self._junk_t = 0.0
+        self._held: PositionReply | None = None  # rule 9: a reading, until the line is quiet
+        self._held_until = 0.0
+        self._held_cap = 0.0  # rule 9: bytes after it hold it no longer than this
+        self._held_after = False  # rule 9: bytes were read after the held reading
+        self._last_write_t = -math.inf  # rule 10
+        self._last_axis: bytes | None = None
+
+    # -- what the session reads -------------------------------------------------------------
+    @property
+    def slew(self) -> Slew | None:
+        return self._slew
+
+    @property
+    def last_reply_t(self) -> float | None:
+        return self._last_reply_t
+
+    @property
+    def reply_owed(self) -> bool:
+        return self._reply_deadline is not None
+
+    @property
+    def stop_due(self) -> bool:
+        return self._stop_due
+
+    def hold_reads_until(self) -> float:
+        """Rule 7: bytes arriving before this time can wait in the port."""
+        return self._hold_until if self._reply_deadline is not None else 0.0
+
+    def got_bytes(self, count: int, now: float) -> None:
+        """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
+        self._hold_bytes = max(0, self._hold_bytes - count)
+        self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
+        if self._held is not None:  # rule 9: the line is not quiet yet
+            self._held_after = True
+            self._held_until = min(self._held_cap, max(self._held_until, now + self._settle_s))
+
+    def output(self) -> list[bytes]:
+        """The frames written since the last call, in order: the worker puts them on the wire."""
+        out, self._output = self._output, []
+        return out
+
+    # -- writing ----------------------------------------------------------------------------
+    def write(self, frame: bytes, now: float) -> None:
+        self._output.append(frame)
+        self._last_write_t = now
+        self._last_axis = self._axis(frame)
+        if self._reply_deadline is None and self.codec.awaiting_reply():
+            self._reply_deadline = now + self.reply_timeout_s
+            self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
+
+    def want_stop(self) -> None:
+        """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
+        self._outbox.clear()
+        self._stop_due = True
+
+    def stop_ready(self) -> bool:
+        """A stop is due and the line takes it now (``flush_stop`` would write it)."""
+        return self._stop_due and self.free(for_stop=True)
+
+    def end_held(self, now: float) -> PositionReply | None:
+        """Rule 9: a stop is about to be written and ends the held exchange: its reading if
+        the reply is whole and nothing came after it; otherwise it is dropped and the
+        controller asked again after the stop."""
+        held, self._held = self._held, None
+        if held is None:
+            return None
+        if not self.codec.awaiting_reply():  # its reply came: the stop's is owed now
+            self._reply_deadline = None
+        if self._held_after or self.codec.awaiting_reply():
+            self._next_poll = now
+            return None
+        return held
+
+    def flush_stop(self, now: float) -> bool:
+        """Write the due stop if the line allows it now; True if it was written. During a slew
+        the report now comes within one reply time, or the stop was lost, or the controller had
+        already stopped (the session decides)."""
+        if not self._stop_due or not self.free(for_stop=True):
+            return False
+        self._stop_due = False
+        self.write_stop(now)
+        return True
+
+    def write_stop(self, now: float) -> None:
+        """Write a stop now, whatever the line is doing (a stalled motor must not wait). A
+        reading still held (rule 9) is settled now if ``end_held`` would take it (``settled``
+        hands it over at once), dropped otherwise."""
+        self._outbox.clear()
+        held = self._held
+        if held is not None and self.end_held(now) is held:
+            self._held, self._held_until = held, now
+        stop = self.codec.encode_stop()
+        frames = stop if isinstance(stop, list) else [stop]
+        self.write(frames[0], now)  # rule 10: never held back
+        self._queue(frames[1:], now + self._gap_s, now)
+        if self._slew is not None:
+            self._slew = replace(self._slew, stops=self._slew.stops + 1)
+            self._reply_deadline = now + self.reply_timeout_s
+
+    def begin_slew(self, slew: Slew, travel_s: float) -> None:
+        """The target just sent starts a slew expected to take ``travel_s``: its report is owed
+        until twice that, plus SLEW_MARGIN_S."""
+        self._slew = slew
+        self._reply_deadline = slew.start_t + SLEW_TIME_FACTOR * travel_s + SLEW_MARGIN_S
+
+    def send(self, frames: list[bytes], now: float) -> None:
+        """The first frame now (rule 10: once the axis gap allows), the rest spaced by the
+        model's inter-frame gap (all now if there is none: a stop that came between them would
+        cancel the second alone)."""
+        if self.spec.axis_gap_s:  # rule 10
+            self._outbox = deque(e for e in self._outbox if not e[2])
+            last = self._outbox[-1][1] if self._outbox else None
+            last_axis = self._axis(last) if last is not None else self._last_axis
+            first = [f for f in frames if self._axis(f) == last_axis and last_axis is not None]
+            frames = first[:1] + [f for f in frames if f is not first[0]] if first else frames
+        first_t = max(now, self._paced_from(frames[0]))
+        if first_t > now:
+            self._queue(frames, first_t, now)
+            return
+        self.write(frames[0], now)
+        self._queue(frames[1:], now + self._gap_s, now)
+
+    @property
+    def _gap_s(self) -> float:
+        return max(self.spec.inter_frame_gap_s, self.spec.axis_gap_s)
+
+    def _axis(self, frame: bytes) -> bytes | None:
+        """Rule 10: the axis ``frame`` is for, None if it names none."""
+        return next((p for p in self.spec.axis_prefixes if frame.startswith(p)), None)
+
+    def _paced_from(self, frame: bytes | None = None) -> float:
+        """Rule 10: the earliest ``frame`` may go (any frame if None) that is no stop's first:
+        after what waits, and the axis gap after a frame to another axis."""
+        if not self.spec.axis_gap_s:
+            return -math.inf
+        last_t, last_axis = self._last_write_t, self._last_axis
+        if self._outbox:
+            last_t, last_axis = self._outbox[-1][0], self._axis(self._outbox[-1][1])
+        axis = None if frame is None else self._axis(frame)
+        same = axis is not None and axis == last_axis
+        return last_t if same else last_t + self.spec.axis_gap_s
+
+    def _queue(self, frames: list[bytes], first_t: float, now: float, poll: bool = False) -> None:
+        for i, frame in enumerate(frames):
+            self._outbox.append((first_t + i * self._gap_s, frame, poll))
+        self.flush_outbox(now)
+
+    def flush_outbox(self, now: float) -> None:
+        while self._outbox and self._outbox[0][0] <= now:
+            self.write(self._outbox.popleft()[1], now)
+
+    def free(self, for_stop: bool = False) -> bool:
+        if self.spec.full_duplex or self._reply_deadline is None:
+            return True
+        if not for_stop:
+            return False
+        # rule 9: a whole reply held for the quiet time is no reply still coming
+        return self.spec.stop_interrupts or self._reply_whole()
+
+    def _reply_whole(self) -> bool:
+        return self._held is not None and not self.codec.awaiting_reply()
+
+    # -- replies ------------------------------------------------------------------------------
+    def reply_overdue(self, now: float) -> bool:
+        held = self._held is not None  # rule 9: the reply came
+        return not held and self._reply_deadline is not None and now >= self._reply_deadline
+
+    def hold_reading(self, reply: PositionReply, now: float) -> bool:
+        """Rule 9: a reading, taken once the line stays quiet after it; False when another is
+        held (two readings in one exchange: neither is, the held one is dropped)."""
+        if self._held is not None:
+            self._held = None
+            return False
+        self._held = reply
+        self._held_until = now + self._settle_s
+        self._held_cap = self._held_until + self.spec.reply_bytes * self._byte_s
+        self._held_after = False
+        return True
+
+    def spoils(self, junk: JunkReply) -> bool:
+        """Rule 9: whether ``junk`` came in the same exchange as a held reading and spoils it
+        (the reading is dropped then)."""
+        if self._held is None or junk.reason in (JunkReason.CHATTER, JunkReason.POWER_ON):
+            return False
+        if junk.reason is not JunkReason.UNSOLICITED and self.codec.harmless(junk.data):
+            return False
+        self._held = None
+        return True
+
+    def settled(self, now: float) -> PositionReply | None:
+        """Rule 9: the held reading, once the line has been quiet long enough after it."""
+        held = self._held
+        if held is None or now < self._held_until:
+            return None
+        self._held = None
+        return held
+
+    def give_up_reply(self, now: float) -> None:
+        """Stop waiting for the owed reply (and for a slew's report: the slew is over)."""
+        self.codec.expire_query()
+        self._reply_deadline = None
+        self.end_slew(now)
+
+    def end_slew(self, now: float) -> bool:
+        """The slew (if any) is over without a reading: silence counts from now (rule 2).
+        True if there was one."""
+        if self._slew is None:
+            return False
+        self._slew = None
+        self._quiet_from_t = now
+        return True
+
+    def got_reading(self, now: float) -> None:
+        """A valid position: the slew (if any) is over and the reply is no longer owed."""
+        if not self.codec.awaiting_reply():
+            self._reply_deadline = None
+        self._last_reply_t = now
+        self._slew = None
+
+    def ask_again(self, now: float) -> None:
+        """The reply was not usable: close it and poll at once."""
+        self.codec.expire_query()
+        self._reply_deadline = None
+        self._next_poll = now
+
+    def poll_now(self, now: float) -> None:
+        """Ask at the next chance (a target waits for a fresh reading)."""
+        self._next_poll = now
+
+    def poll_by(self, t: float) -> None:
+        """The next poll no later than ``t`` (a move just began: follow it closely)."""
+        self._next_poll = min(self._next_poll, t)
+
+    def poll(self, now: float, interval_s: float) -> bool:
+        """Whether a query was written."""
+        if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
+            return False
+        if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
+            return False
+        asked = self.codec.encode_query()
+        query = asked[0] if isinstance(asked, list) else asked
+        if not query:
+            return False
+        self.write(query, now)
+        if isinstance(asked, list):
+            self._queue(asked[1:], now + self._gap_s, now, poll=True)
+        self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
+        self._hold_bytes = self.spec.reply_bytes
+        self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
+        return True
+
+    def silent_for(self, now: float) -> float:
+        heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
+        return now - max(heard, self._quiet_from_t)
+
+    # -- junk ---------------------------------------------------------------------------------
+    def add_junk(self, data: bytes, now: float) -> None:
+        if len(self._junk) < _JUNK_KEEP:
+            self._junk += data[: _JUNK_KEEP - len(self._junk)]
+        self._junk_t = now
+
+    def quiet_junk(self, now: float) -> tuple[bytes, bool] | None:
+        """Junk held back until the line went quiet, and whether the codec calls it harmless."""
+        if not self._junk or now < self._junk_t + JUNK_QUIET_S:  # as wakeups() says
+            return None
+        data, self._junk = bytes(self._junk), bytearray()
+        return data, self.codec.harmless(data)
+
+    # -- scheduling ---------------------------------------------------------------------------
+    def wakeups(self) -> list[float]:
+        times: list[float] = []
+        if self._outbox:
+            times.append(self._outbox[0][0])
+        if self._junk:
+            times.append(self._junk_t + JUNK_QUIET_S)
+        if self._held is not None:
+            times.append(self._held_until)
+        if self.spec.can_report_position:
+            times.append(self._reply_deadline or max(self._next_poll, self._paced_from()))
+        return times

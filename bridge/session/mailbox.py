@@ -1,0 +1,331 @@
+"""Pending commands for one rotator: the only hand-off point into the lines thread.
+
+Rules:
+1. A stop pre-empts everything: it is taken first and drops any target that came before it,
+   and any judged before it that comes after it (rule 10).
+2. A newer target replaces an older pending one (a dragged slider sends dozens; the last counts);
+   an axis the newer one leaves out is kept from the older (model.combine: an azimuth, then an
+   elevation alone, is one target).
+   A track command (start or off) replaces a target put before it; a target put after it is
+   kept, and the session lets it end the tracking (the later command wins either way).
+3. Options and the lock are settings: the latest value per name wins, order between names kept.
+4. ``put`` never blocks on the worker; it wakes the worker through a pipe the lines thread polls,
+   so a command reaches the wire while the worker waits for serial bytes, never after a timeout.
+   ``take`` drains the pipe *before* it takes the batch: a ``put`` that lands between the two
+   then leaves its wake byte in the pipe (one spurious wake-up at worst). Draining after taking
+   would swallow the byte of a command that is not in the batch taken, and that command (a stop)
+   would wait for the next serial byte or timeout.
+5. One wake byte per batch: a ``put`` writes one only if none is owed since the last ``take``
+   (a flood of targets cost a system call and a lines-thread round per message, half the
+   bridge's CPU at 10,000 a second). ``take`` clears the debt when it swaps the batch, under
+   the lock: a ``put`` after that writes a byte again; one before it is in the batch taken.
+   A put in a rotator's owner step (runtime/kept.py rule 5) passes ``wake=False`` and the step
+   calls ``wake_once`` when it has let go: no system call while the owner's lock is held (the
+   write gives the GIL away, and a lock ON waiting for the step would wait for it too).
+6. A hold (interfaces/mqtt/lastword.py rule 2) comes with the stop or lock ON that starts it, in one
+   put; a release ends the holds up to its marker. A release that clears (the connection that
+   would have caught up was lost) ends every hold and drops a target or track put before it;
+   a target or hold put after it is newer and stays (the session applies it first).
+   The stop express's hold (interfaces/mqtt/express.py rule 8) has numbers of its own:
+   ``put_express_hold`` and ``put_express_release``; nothing clears it but its own release.
+7. A lock ON leaves its stop in the batch (``lock_on``) even when a lock OFF follows it in the
+   same batch: the lock ON always stops the rotor.
+8. ``close`` and a wake-up are one step under their own lock: a put racing a shutdown never
+   writes into a descriptor number the system has handed to someone else meanwhile.
+9. A follow command (on or off) is a command like a track command (rule 2): on, it replaces a
+   target or track command put before it, and one put after it replaces it; a stop or lock ON
+   drops it. What WSJT-X says (``put_heard``) is no command: the newest is kept, never
+   dropped by anything (follow.py rule 4 decides whether it is fresh); nor is a wind reading
+   (``put_wind``: the highest since the last take, so that no gust is lost; one the broker
+   replayed apart, wind.py rule 6).
+10. The halt count (``epoch``): every stop and lock ON put adds one to it, under the lock the
+    put takes anyway (nothing else: a stop waits for nothing new). A motion command (a target,
+    a track or follow start) is put with the count its judge read before judging it
+    (runtime/rotator.py); one whose count is older than the mailbox's was judged before a stop
+    or lock ON that is in already, on another thread, and is dropped under the same lock (the
+    put returns False; the judge reports the refusal). So a motion command judged before a stop
+    or lock ON never runs after it, whichever front end's thread brought which, and a lock OFF
+    that follows in the same batch lets no such target through. A command put without a count
+    (tracking or following OFF, the session's own) is never dropped by it.
+11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
+    them. The lines thread reads it to know whether one came while it served others (lines.py
+    rule 5) without asking every mailbox after every rotator it serves. (Puts in two mailboxes
+    at once may count one: the count still moves, which is all a reader looks for.)
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from dataclasses import dataclass, field
+
+from bridge.core.model import Control, SetOption, Stop, Target, combine
+from bridge.session.follow import Follow, Heard
+from bridge.session.tracking import Track
+
+
+@dataclass
+class Batch:
+    """Everything taken from the mailbox in one go, in the order the worker must apply it."""
+
+    stop: Stop | None = None
+    target: Target | None = None
+    options: list[SetOption] = field(default_factory=list)
+    lock: bool | None = None
+    notes: list[str] = field(default_factory=list)
+    track: Track | None = None  # applied after the stop and before the target (tracking.py)
+    lock_on: bool = False  # rule 7: a lock ON was put, whatever ``lock`` ends as
+    hold: int | None = None  # rule 6: the newest marker a hold waits for
+    release: int | None = None  # rule 6: holds up to this marker end
+    release_clear: bool = False
+    express_hold: int | None = None  # rule 6: the newest sync word the express's hold waits for
+    express_release: int | None = None  # ... and the one its answer reached
+    follow: Follow | None = None  # rule 9: applied after the track command
+    heard: Heard | None = None  # rule 9: the newest status WSJT-X sent
+    wind: float | None = None  # rule 9: the newest wind reading (km/h)
+    wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
+    health_reset: bool = False  # a new health baseline (health.py)
+
+    control: Control | None = None  # the control lease as the judge has it now...
+    control_set: bool = False  # ...when it changed (runtime/lease.py)
+
+    def __bool__(self) -> bool:
+        settings = (
+            self.options
+            or self.lock is not None
+            or self.notes
+            or self.health_reset
+            or self.control_set
+        )
+        fence = self.hold is not None or self.release is not None
+        fence = fence or self.express_hold is not None or self.express_release is not None
+        feeds = self.follow is not None or self.heard is not None
+        feeds = feeds or self.wind is not None or self.wind_replayed is not None
+        return bool(self.stop or self.target or settings or self.track or fence or feeds)
+
+
+class _Halts:
+    count = 0  # rule 11
+
+
+def halts() -> int:
+    """Rule 11: a number that changes whenever a stop or lock ON is put in any mailbox."""
+    return _Halts.count
+
+
+class Mailbox:
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._batch = Batch()
+        self._option_order: dict[str, SetOption] = {}
+        self._rfd, self._wfd = os.pipe()
+        self._woken = False  # rule 5: a wake byte is owed for the batch being filled
+        self._fd_lock = threading.Lock()  # rule 8
+        self._epoch = 0  # rule 10: stops and lock ONs put so far
+        os.set_blocking(self._rfd, False)
+        os.set_blocking(self._wfd, False)
+
+    def fileno(self) -> int:
+        return self._rfd
+
+    @property
+    def urgent(self) -> bool:
+        """A stop or lock ON waits (read without the lock: a hint for the lines thread)."""
+        batch = self._batch
+        return batch.stop is not None or batch.lock_on
+
+    @property
+    def epoch(self) -> int:
+        """Rule 10: the halt count, read before judging a motion command (one attribute read:
+        a count read late is only newer, never one that lets a stale command in)."""
+        return self._epoch
+
+    def put(
+        self,
+        command: Target | Stop | SetOption,
+        *,
+        hold: int | None = None,
+        wake: bool = True,
+        epoch: int | None = None,
+    ) -> bool:
+        """``hold``: a stop that holds the rotator until that marker (rule 6); ``wake``: rule 5;
+        ``epoch``: the halt count a target was judged at (rule 10). False: dropped (rule 10)."""
+        with self._lock:
+            if isinstance(command, Stop):
+                self._epoch += 1  # rule 10
+                self._batch.stop = command
+                self._batch.target = None
+                self._batch.track = None  # the stop ends tracking anyway
+                self._batch.follow = None  # and following (rule 9)
+                self._hold(hold)
+                _Halts.count += 1  # rule 11: once the batch holds it
+            elif isinstance(command, Target):
+                if self._stale(epoch):
+                    return False
+                self._batch.target = combine(command, self._batch.target)
+            else:
+                self._option_order.pop(command.name, None)
+                self._option_order[command.name] = command
+        if wake:
+            self._wake_once()
+        return True
+
+    def _stale(self, epoch: int | None) -> bool:
+        """Rule 10 (under the lock): judged before a stop or lock ON that is in already."""
+        return epoch is not None and epoch != self._epoch
+
+    def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
+        with self._lock:
+            self._batch.lock = locked
+            if locked:
+                self._epoch += 1  # rule 10
+                self._batch.lock_on = True  # rule 7
+                self._batch.target = None
+                self._batch.track = None
+                self._batch.follow = None
+                self._hold(hold)
+                _Halts.count += 1  # rule 11: once the batch holds it
+        if wake:  # rule 5
+            self._wake_once()
+
+    def put_release(self, marker: int, *, clear: bool = False) -> None:
+        """Rule 6: the holds up to ``marker`` end; ``clear``: what waits before it is dropped."""
+        with self._lock:
+            batch = self._batch
+            batch.release = marker if batch.release is None else max(batch.release, marker)
+            if clear:
+                batch.release_clear = True
+                batch.target = None
+                batch.track = None
+                batch.follow = None
+                batch.hold = None  # ended with the rest: a hold put after it is newer
+        self._wake_once()
+
+    def put_express_hold(self, n: int) -> None:
+        """Rule 6: no target goes out until ``put_express_release`` reaches ``n`` (put before
+        the stop it comes with; no wake-up: the stop's put wakes the worker)."""
+        with self._lock:
+            held = self._batch.express_hold
+            self._batch.express_hold = n if held is None else max(held, n)
+
+    def put_express_release(self, n: int) -> None:
+        """Rule 6: the stop express's holds up to ``n`` end."""
+        with self._lock:
+            done = self._batch.express_release
+            self._batch.express_release = n if done is None else max(done, n)
+        self._wake_once()
+
+    def _hold(self, marker: int | None) -> None:
+        if marker is not None:
+            held = self._batch.hold
+            self._batch.hold = marker if held is None else max(held, marker)
+
+    def put_track(self, track: Track, *, epoch: int | None = None) -> bool:
+        """Start or end tracking; it replaces a target put before it (the later command wins).
+        ``epoch``: a start's halt count (rule 10); False: dropped."""
+        with self._lock:
+            if self._stale(epoch):
+                return False
+            self._batch.track = track
+            self._batch.target = None
+            self._batch.follow = None  # rule 9: the later command wins
+        self._wake_once()
+        return True
+
+    def put_follow(self, follow: Follow, *, epoch: int | None = None) -> bool:
+        """Rule 9: start or end following; it replaces a target or track put before it.
+        ``epoch``: a start's halt count (rule 10); False: dropped."""
+        with self._lock:
+            if self._stale(epoch):
+                return False
+            self._batch.follow = follow
+            if follow.on:  # following off ends nothing else
+                self._batch.target = None
+                self._batch.track = None
+        self._wake_once()
+        return True
+
+    def put_heard(self, heard: Heard) -> None:
+        """Rule 9: what WSJT-X said; the newest wins."""
+        with self._lock:
+            self._batch.heard = heard
+        self._wake_once()
+
+    def put_note(self, message: str) -> None:
+        """A refusal decided outside the worker, so that the status shows it as the last error."""
+        with self._lock:
+            self._batch.notes.append(message)
+        self._wake_once()
+
+    def put_wind(self, speed_kmh: float, replayed: bool = False) -> None:
+        """Rule 9: a wind reading (``replayed`` by the broker: wind.py rule 6)."""
+        with self._lock:
+            b = self._batch  # the highest of a batch: no gust is lost (wind.py)
+            held = b.wind_replayed if replayed else b.wind
+            speed_kmh = speed_kmh if held is None else max(held, speed_kmh)
+            if replayed:
+                b.wind_replayed = speed_kmh
+            else:
+                b.wind = speed_kmh
+        self._wake_once()
+
+    def put_health_reset(self) -> None:
+        """Start a new health baseline (a setting: it moves nothing)."""
+        with self._lock:
+            self._batch.health_reset = True
+        self._wake_once()
+
+    def put_control(self, control: Control | None, *, wake: bool = True) -> None:
+        """The control lease changed (the status shows its holder); ``wake``: rule 5."""
+        with self._lock:
+            self._batch.control, self._batch.control_set = control, True
+        if wake:
+            self._wake_once()
+
+    def take(self) -> Batch:
+        try:  # first the wake bytes, then the batch (rule 4)
+            while os.read(self._rfd, 4096):
+                pass
+        except BlockingIOError:
+            pass
+        with self._lock:
+            batch, self._batch = self._batch, Batch()
+            self._woken = False  # rule 5
+            batch.options = list(self._option_order.values())
+            self._option_order = {}
+        return batch
+
+    def wake(self) -> None:
+        """Wake the worker without a command (shutdown)."""
+        self._wake()
+
+    def wake_once(self) -> None:
+        """Rule 5: after puts made with ``wake=False``."""
+        self._wake_once()
+
+    def _wake_once(self) -> None:
+        """Rule 5: after a put (outside the lock: the write is a system call)."""
+        with self._lock:
+            owed, self._woken = self._woken, True
+        if not owed:
+            self._wake()
+
+    def _wake(self) -> None:
+        with self._fd_lock:  # rule 8
+            if self._wfd < 0:
+                return  # closed: the rotator has stopped
+            try:
+                os.write(self._wfd, b"\0")
+            except BlockingIOError:
+                pass  # the pipe is full: the worker is going to wake up anyway
+
+    def close(self) -> None:
+        """Once nothing waits on it any more; a second close does nothing."""
+        with self._fd_lock:  # rule 8
+            fds, self._rfd, self._wfd = (self._rfd, self._wfd), -1, -1
+            for fd in fds:
+                if fd >= 0:
+                    try:
+                        os.close(fd)
+                    except OSError:
+                        pass

@@ -1,0 +1,424 @@
+"""The motion state machine: pure, clock passed in, no I/O.
+
+What it models: an analog rotator seen through periodic bearing readings (Rotor-EZ family), or
+not seen at all (DCU-1). Source: the Idiom Press FAQ ("if the bearing is changing, the rotator is
+probably turning; close to the target and steady for several seconds: arrived; not changing but
+not close: cancelled from the front panel or a hardware failure") and its brake-delay answers.
+
+Rules:
+1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
+   movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
+2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
+   last command, so a rotor that has not started yet is not "still").
+3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
+   ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
+   (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
+   end stop first moves away from a target across the stop.)
+4. Every stop starts the brake window: ``braking`` for ``brake_delay_s`` counted from when the
+   rotor stopped: the last reading that changed at all (a move smaller than ``noise_deg`` is
+   still a move: the rotor creeps up to its stop) plus one poll interval (``poll_margin_s``:
+   it stopped somewhere before the next reading), never before a stop or target went out, plus
+   BRAKE_GUARD_S for the controller's own timer. Not from when the stillness was detected: that
+   is ``settle_s`` later and would make every new target after an arrival wait for nothing. A
+   stall counts from its detection (safe side).
+   At start-up the machine assumes a brake window may be running, and that the rotor may be
+   turning: no target goes out before ``settle_s`` of stillness after the first reading. Without
+   a brake (``brake_delay_s`` 0: SPID, SatEL, RotorCard) the rotor is never ``braking``: it is
+   ``idle`` from the first still reading (a turning one shows ``moving`` at the next), and that
+   wait is kept apart (``settling``).
+5. Movement without a command (front panel) is ``moving`` too. So is movement away from the
+   target on a controller whose scale does not wrap (SPID: it always heads straight for the raw
+   target): two readings in a row, each further from it than the one before and both more
+   than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG further than the closest one so far,
+   are someone else's hand on the front panel, or a controller driving the wrong way (not one
+   stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
+   dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
+   the way round the stop may lead away first (rule 3), so there only a stall tells.
+6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
+   last the travel time at the nominal speed (the whole range when the start is unknown).
+7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
+8. A controller that answers with its refusal (GS-232's ``?>``) while a target is out that has
+   not moved the rotor refused that target: it is dropped at once (``refused``), at rest as
+   after a stop, instead of waiting ``stall_timeout_s`` for a stall that blames the brake.
+   Movement since the target went out means the refusal was of something else; so does
+   any command written after the target (a setting, a query: the controller asks,
+   controller.py). A new bearing refused while the rotor still turns to the one before: the
+   target is dropped and the rotor stays ``moving`` (stops.py then stops it).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, replace
+from typing import Any
+
+from bridge.core.model import MotionState
+from bridge.protocols.base import ModelSpec, RetargetPolicy
+
+AWAY_MARGIN_DEG = 5.0  # rule 5
+BRAKE_GUARD_S = 0.3  # rule 4: the controller's brake timer is its own; do not cut it fine
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    spec: ModelSpec  # the model's capabilities: read from here, never copied (the one place)
+    tolerance_deg: float = 3.0
+    stall_timeout_s: float = 10.0
+    brake_delay_s: float = 5.0
+    settle_s: float = 1.5
+    noise_deg: float = 2.0
+    az_span_deg: float = 360.0
+    nominal_speed_deg_s: float = 6.0
+    stop_resend_s: float = 2.0  # a stop that did not take is sent again after this long
+    poll_margin_s: float = 0.2  # readings while moving come this often (rule 4)
+
+    @property
+    def can_report_position(self) -> bool:
+        return self.spec.can_report_position
+
+    @property
+    def az_wraps(self) -> bool:
+        return self.spec.az_wraps
+
+    @property
+    def direct_retarget(self) -> bool:
+        """The controller takes a new target while turning (SPID)."""
+        return self.spec.retarget is RetargetPolicy.DIRECT
+
+
+@dataclass(frozen=True)
+class Motion:
+    state: MotionState = MotionState.OFFLINE
+    position_deg: float | None = None
+    anchor_deg: float | None = None
+    last_move_t: float | None = None
+    changed_t: float | None = None  # last reading that differed at all from the one before
+    still_since_t: float | None = None
+    target_deg: float | None = None
+    target_t: float | None = None
+    progress_t: float | None = None  # last movement while a target is active
+    idle_not_before_t: float | None = None
+    stop_sent_t: float | None = None
+    busy_until_t: float | None = None  # no feedback: when the last move is assumed done
+    assumed_deg: float | None = None  # no feedback: where the last move should have ended
+    # elevation, for az/el controllers; movement on either axis is movement
+    el_position_deg: float | None = None
+    el_anchor_deg: float | None = None
+    el_target_deg: float | None = None
+    closest_err: float | None = None  # rule 5: the least error seen since the target went out
+    away_err: float | None = None  # rule 5: the last reading's error, if already turned away
+
+
+class Event(enum.StrEnum):
+    ARRIVED = "arrived"
+    STALLED = "stalled"
+    STOPPED = "stopped"
+    REFUSED = "refused"  # rule 8
+    TURNED_AWAY = "turned away"
+
+
+class Plan(enum.StrEnum):
+    SEND = "send"  # write the target now
+    STOP_FIRST = "stop_first"  # the rotor turns: stop it, then wait
+    WAIT = "wait"  # brake delay or a stop in progress: keep the target pending
+
+
+def angle_error(a_deg: float, b_deg: float, wraps: bool) -> float:
+    d = abs(a_deg - b_deg)
+    return min(d, 360.0 - d) if wraps and d > 180.0 else d
+
+
+# -- observations ----------------------------------------------------------------------------
+def link_up(m: Motion, cfg: MotionConfig, now: float) -> Motion:
+    if not cfg.can_report_position:
+        # we cannot know whether it is still turning or braking: assume the worst once
+        worst = cfg.az_span_deg / cfg.nominal_speed_deg_s
+        return Motion(state=MotionState.UNKNOWN, busy_until_t=now + worst)
+    return Motion(state=MotionState.OFFLINE, position_deg=m.position_deg)
+
+
+def link_down(m: Motion) -> Motion:
+    return Motion(
+        state=MotionState.OFFLINE, position_deg=m.position_deg, el_position_deg=m.el_position_deg
+    )
+
+
+def track_lost(m: Motion, cfg: MotionConfig) -> Motion:
+    """Readings were missed (a silent controller's after-move report was lost): whether and
+    where the rotor moved since is unknown, so the next reading is taken like the first one
+    after a connect (rule 4). Until it comes the rotor is braking (it was just stopped), or,
+    without a brake, in a state the bridge cannot tell."""
+    state = MotionState.BRAKING if cfg.brake_delay_s > 0 else MotionState.UNKNOWN
+    return Motion(state=state, position_deg=m.position_deg, el_position_deg=m.el_position_deg)
+
+
+def slew_ended(m: Motion, now: float) -> Motion:
+    """A slew the controller was silent through ended without a readable report: the rotor was
+    turning all along where no reading could show it, so the stall clock and the settling
+    count start now. The reading asked for at once decides arrival (or a real stall)."""
+    if m.state is not MotionState.MOVING:
+        return m
+    return replace(m, last_move_t=now, progress_t=now if m.target_deg is not None else None)
+
+
+def target_error(m: Motion, cfg: MotionConfig) -> float | None:
+    """How far the rotor is from its target (the worse axis), or None if unknown."""
+    if m.target_deg is None or m.position_deg is None:
+        return None
+    err = angle_error(m.position_deg, m.target_deg, cfg.az_wraps)
+    if m.el_target_deg is not None and m.el_position_deg is not None:
+        err = max(err, abs(m.el_position_deg - m.el_target_deg))
+    return err
+
+
+def reading(
+    m: Motion, cfg: MotionConfig, az_deg: float, now: float, el_deg: float | None = None
+) -> tuple[Motion, list[Event]]:
+    if m.anchor_deg is None:
+        # first reading since the link came up: the brake window may still be running
+        m = replace(
+            m,
+            state=MotionState.BRAKING if cfg.brake_delay_s > 0 else MotionState.IDLE,
+            position_deg=az_deg,
+            anchor_deg=az_deg,
+            el_position_deg=el_deg,
+            el_anchor_deg=el_deg,
+            still_since_t=now,
+            idle_not_before_t=now + cfg.settle_s,
+        )
+        return tick(m, cfg, now)
+    anchor_deg = m.anchor_deg  # not None: the first reading returned above
+    changes: dict[str, Any] = {}  # one replace() per reading: this runs at every poll
+    if az_deg != m.position_deg or el_deg != m.el_position_deg:
+        changes.update(changed_t=now, position_deg=az_deg, el_position_deg=el_deg)
+    moved = angle_error(az_deg, anchor_deg, cfg.az_wraps) > cfg.noise_deg
+    if el_deg is not None and m.el_anchor_deg is not None:
+        moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    if moved:
+        changes.update(anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
+        changes["state"] = MotionState.MOVING
+        if m.target_deg is not None:
+            changes["progress_t"] = now
+    if changes:
+        m = replace(m, **changes)
+    if m.target_deg is not None and not cfg.az_wraps:
+        err = target_error(m, cfg)
+        if err is not None:
+            away = m.closest_err is not None and err > (
+                m.closest_err + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+            )
+            if m.closest_err is None or err < m.closest_err:
+                m = replace(m, closest_err=err, away_err=None)
+            elif not away or not moved:
+                if m.away_err is not None and not away:
+                    m = replace(m, away_err=None)
+            elif m.away_err is None or err <= m.away_err:
+                m = replace(m, away_err=err)  # the first reading away: one more must follow
+            else:
+                m = replace(
+                    m,
+                    target_deg=None,
+                    el_target_deg=None,
+                    target_t=None,
+                    progress_t=None,
+                    closest_err=None,
+                    away_err=None,
+                )
+                m, events = tick(m, cfg, now)
+                return m, [Event.TURNED_AWAY, *events]
+    return tick(m, cfg, now)
+
+
+def commanded(
+    m: Motion, cfg: MotionConfig, target_deg: float, now: float, el_target_deg: float | None = None
+) -> Motion:
+    if not cfg.can_report_position:
+        start = m.assumed_deg
+        travel = (
+            cfg.az_span_deg
+            if start is None
+            else angle_error(start, target_deg, False)  # linear travel, no wrap past the stop
+        )
+        # generous: 50 % slower than nominal plus two seconds to get going
+        busy = 1.5 * travel / cfg.nominal_speed_deg_s + 2.0
+        return replace(
+            m,
+            target_deg=target_deg,
+            target_t=now,
+            busy_until_t=now + busy,
+            assumed_deg=target_deg,
+            stop_sent_t=None,
+        )
+    return replace(
+        m,
+        state=MotionState.MOVING,
+        target_deg=target_deg,
+        el_target_deg=el_target_deg,
+        target_t=now,
+        progress_t=now,
+        stop_sent_t=None,
+        still_since_t=None,
+        closest_err=None,
+        away_err=None,
+    )
+
+
+def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
+    if not cfg.can_report_position:
+        # it may have been turning; from now on it is stopping, then braking
+        return replace(m, target_deg=None, stop_sent_t=now, busy_until_t=now, assumed_deg=None)
+    return replace(
+        m,
+        target_deg=None,
+        el_target_deg=None,
+        progress_t=None,
+        stop_sent_t=now,
+        closest_err=None,
+        away_err=None,
+    )
+
+
+def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
+    """Rule 8: the controller refused a command; whether it was the target that is out."""
+    if not cfg.can_report_position or m.target_deg is None or m.state is not MotionState.MOVING:
+        return m, []
+    if m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
+        return m, []  # it moved since: the refusal was of something else
+    if m.last_move_t is not None and m.target_t is not None:
+        if m.target_t - m.last_move_t <= cfg.settle_s:  # a new bearing refused mid-turn: the
+            # rotor still turns to the one before, which nobody wants now (stops.py stops it)
+            dropped = replace(m, target_deg=None, el_target_deg=None, progress_t=None)
+            return replace(dropped, closest_err=None, away_err=None), [Event.REFUSED]
+    return _at_rest(m, cfg, now, MotionState.BRAKING), [Event.REFUSED]
+
+
+def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]:
+    """Time-driven transitions: settling, arrival, stall, end of the brake window."""
+    events: list[Event] = []
+    if not cfg.can_report_position:
+        done_t = m.busy_until_t if m.stop_sent_t is None else m.stop_sent_t
+        if m.target_deg is not None and done_t is not None and now >= done_t + cfg.brake_delay_s:
+            m = replace(m, target_deg=None, target_t=None)
+        return m, events
+    if m.state is MotionState.OFFLINE:
+        return m, events
+    if m.state is MotionState.MOVING:
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
+        still = now >= ref + cfg.settle_s
+        if m.target_deg is not None:
+            err = target_error(m, cfg)
+            if still and err is not None and err <= cfg.tolerance_deg:
+                events.append(Event.ARRIVED)
+                m = _at_rest(m, cfg, now, MotionState.BRAKING)
+            elif err is not None and now >= (m.progress_t or now) + cfg.stall_timeout_s:
+                events.append(Event.STALLED)
+                m = _at_rest(m, cfg, now, MotionState.STALLED)
+        elif still:
+            events.append(Event.STOPPED)
+            m = _at_rest(m, cfg, now, MotionState.BRAKING)
+    if m.state is MotionState.BRAKING and m.still_since_t is not None:
+        if now >= m.still_since_t + cfg.brake_delay_s and now >= (m.idle_not_before_t or now):
+            m = replace(m, state=MotionState.IDLE, idle_not_before_t=None)
+    elif m.state is MotionState.IDLE and m.idle_not_before_t is not None:
+        if now >= m.idle_not_before_t:
+            m = replace(m, idle_not_before_t=None)  # rule 4: settled
+    return m, events
+
+
+def settling(m: Motion) -> bool:
+    """Idle with no brake, but not yet still for ``settle_s`` since the first reading (rule 4):
+    no target goes out yet."""
+    return m.state is MotionState.IDLE and m.idle_not_before_t is not None
+
+
+def at_rest(m: Motion) -> bool:
+    """Idle and settled (rule 4): ready for a target, an option, a park."""
+    return m.state is MotionState.IDLE and m.idle_not_before_t is None
+
+
+def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Motion:
+    if state is MotionState.BRAKING and cfg.brake_delay_s <= 0:
+        state = MotionState.IDLE  # rule 4: no brake, never braking (``settling`` may still hold)
+    stopped_t = now  # rule 4
+    if state is MotionState.BRAKING and m.last_move_t is not None:
+        after = [t for t in (m.stop_sent_t, m.target_t) if t is not None]
+        last = max(m.last_move_t, m.changed_t or m.last_move_t)
+        stopped_t = min(now, max([last + cfg.poll_margin_s, *after]) + BRAKE_GUARD_S)
+    return replace(
+        m,
+        state=state,
+        still_since_t=stopped_t,
+        target_deg=None,
+        el_target_deg=None,
+        target_t=None,
+        progress_t=None,
+        stop_sent_t=None,
+        closest_err=None,
+        away_err=None,
+    )
+
+
+# -- decisions -------------------------------------------------------------------------------
+def within_tolerance(m: Motion, cfg: MotionConfig, wire: tuple[float, float | None]) -> bool:
+    """Idle and already within tolerance of ``wire`` on both axes: nothing to send."""
+    if not at_rest(m) or m.position_deg is None:
+        return False
+    if angle_error(m.position_deg, wire[0], cfg.az_wraps) > cfg.tolerance_deg:
+        return False
+    el = wire[1]
+    return (
+        el is None or m.el_position_deg is None or abs(m.el_position_deg - el) <= cfg.tolerance_deg
+    )
+
+
+def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
+    """May a new target be written to the controller now?"""
+    if not cfg.can_report_position:
+        if m.stop_sent_t is not None:
+            # the brake timer starts when the stop has arrived: not a hair before (rule 4)
+            brake_over = now >= m.stop_sent_t + cfg.brake_delay_s + BRAKE_GUARD_S
+            return Plan.SEND if brake_over else Plan.WAIT
+        if m.busy_until_t is not None and now < m.busy_until_t:
+            return Plan.STOP_FIRST
+        if m.busy_until_t is not None and now < m.busy_until_t + cfg.brake_delay_s:
+            return Plan.WAIT
+        return Plan.SEND
+    if cfg.direct_retarget:
+        return Plan.SEND
+    if m.state is MotionState.IDLE:
+        return Plan.SEND if at_rest(m) else Plan.WAIT
+    if m.state is MotionState.STALLED:
+        rested = m.still_since_t is not None and now >= m.still_since_t + cfg.brake_delay_s
+        return Plan.SEND if rested else Plan.WAIT
+    if m.state is MotionState.MOVING:
+        if m.stop_sent_t is None:
+            return Plan.STOP_FIRST
+        # a stop went out: send another only if a reading since shows it did not take
+        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
+        if moved_since and now >= m.stop_sent_t + cfg.stop_resend_s:
+            return Plan.STOP_FIRST
+        return Plan.WAIT
+    return Plan.WAIT  # braking (or no reading yet)
+
+
+def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
+    """The next time after ``now`` that ``tick`` or ``plan_target`` could change its answer."""
+    times: list[float] = []
+    if m.state is MotionState.MOVING:
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
+        times.append(ref + cfg.settle_s)
+        if m.progress_t is not None:
+            times.append(m.progress_t + cfg.stall_timeout_s)
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.stop_resend_s)
+    if m.state in (MotionState.BRAKING, MotionState.STALLED) and m.still_since_t is not None:
+        times.append(m.still_since_t + cfg.brake_delay_s)
+    if m.idle_not_before_t is not None:
+        times.append(m.idle_not_before_t)
+    if not cfg.can_report_position:
+        if m.busy_until_t is not None:
+            times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.brake_delay_s)
+    future = [t for t in times if t > now]
+    return min(future) if future else None

@@ -1,0 +1,583 @@
+"""Every decision about one rotator, sans-IO (in the shape of h11's Connection): events in,
+actions out. No port, no thread, no select, no clock: time comes in with every input.
+
+Inputs: ``start``, ``link_up`` / ``link_down`` / ``open_failed``, ``commands`` (a mailbox batch),
+``bytes_received`` (whatever the port had), ``sky_answer`` (the sky worker's answer to an ``Ask``),
+``tick`` (nothing happened, but time passed).
+Outputs: a list of actions (``Write`` bytes, ``Publish`` a status, ``Report`` an error event,
+``Ask`` the sky worker) and ``next_wakeup``, the time by which ``tick`` must be called if nothing
+else happens first.
+
+The session owns the commands' state (the lock, the hold, the last error) and its parts, each
+with its own state (docs/architecture.md, "parts decide and return"): the controller as seen
+through its line (controller.py, with link.py, motion.py, stops.py, options.py, slew.py),
+tracking (tracking.py) and following (follow.py) as their commands start and end them
+(feature_commands.py), the wind park (wind.py), auto-park (autopark.py), the pending target
+(targets.py, targets.py), rotor health (health.py) and the status view (status.py). They see
+what they need (a read-only ``parts.Scene``, ``status.Seen``, the motion, the time) and hand
+back what they propose (a ``parts.Proposal``, the controller's notes, a health report, what a
+command did); the session applies it. None of them imports this module. ``_step`` runs them in
+one order after every input: the line's own work (an overdue reply, a due stop), the motion
+machine's clock, the stop check, the parts of ``PARTS`` that decide (tracking, following, the
+wind, auto-park), the pending target, options, the poll, the parts that measure (health), the
+status. Stops and the lock come before all of it, in ``commands``, in a fixed written order.
+
+Rules:
+1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
+   available, and its polls: controller.py rules 1-3.
+4. Targets go to the controller only when targets.py says so (targets.py keeps the pending
+   one and the stream rules); a target waiting for a brake delay is replaced by newer ones
+   and dropped by a stop, the lock, or the link going down.
+5. Stops: written at once, merged, checked and sent again as stops.py rules 1-2 say.
+6.-7. Options: options.py. A controller that stops on re-target (Rotor-EZ): targets.py rule 7.
+8. A controller silent while it moves (SatEL) is sent nothing but a stop until its after-move
+   report (controller.py rule 4, slew.py); a new target stops the slew and is sent once the
+   rotor is still (stop and redirect).
+9. Bytes that complete no reply change nothing: the rest of the rules run only when a reply
+   (or junk) came, a command came, or ``next_wakeup`` passed.
+10. Tracking (tracking.py) proposes its own targets, judged like any; a stop, the lock, a track
+   command or any other target ends it. What it needs of the sky goes out as ``Ask`` actions
+   and comes back through ``sky_answer``.
+11. A stop is never lost (stops.py rule 3): one owed is the first frame once the port is open.
+12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
+   that was taken: a command after it that is carried out clears it.
+13. The last word (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane holds the
+    rotator:
+   no target (the user's, tracking's, auto-park's) goes to the controller until the batch
+   that releases it, put by the main connection when it has caught up. A release that clears
+   drops whatever target or tracking waits.
+14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
+   here: it is reset (tracking ends, "internal error"; the wind keeps its storm; health starts
+   again from its last memory, or stops measuring), an error event of kind internal names it,
+   and the link, the stops and every other rule go on (a feature's failure never takes a link
+   down, and never costs a stop).
+15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
+   WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
+   reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
+   Following may also stop its own turn (a transmission began: follow.py rule 3). The
+   wind's park, like auto-park, is the bridge's own move: the control lease never judges it.
+16. Bytes that complete a reading the link holds for its quiet time (link.py rule 9), and do
+   nothing else, run no step either: the held reading changes nothing the rules read until it
+   is taken, and the session asks to be woken when the quiet time is over (the step then takes
+   it). Only when nothing waits on such a step: no stop due (a half-duplex line takes one as
+   soon as the reply is whole: that step writes it), no target waiting, nothing noted, and
+   ``next_wakeup`` not yet come (what is due by then runs as before).
+17. The parts are registered in ``PARTS``, in the order the step runs them; each says what
+   wakes it (parts.py rule 3), whether it is on, when it wants to be woken and how it is
+   reset (rule 14). A part that is off costs nothing, and is asked for no wake-up; one woken
+   by the motion (health) runs only in a step where the motion is not the one it last saw.
+18. The status is built again only when something it shows may have changed (the values it is
+   built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
+   time, and are built at every step): a poll that changed nothing builds no status.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TypeVar
+
+from bridge.core.model import (
+    ErrorKind,
+    Origin,
+    RotatorStatus,
+    SettingValue,
+    Source,
+    Target,
+    describe_command,
+)
+from bridge.session import status as st
+from bridge.session.actions import Action, Ask, Publish, Report, Write
+from bridge.session.autopark import AutoPark
+from bridge.session.config import WorkerConfig
+from bridge.session.controller import Controller, Drop, Ends, Fed, Retry
+from bridge.session.feature_commands import Done, FeatureCommands
+from bridge.session.health import Health
+from bridge.session.link import Link
+from bridge.session.mailbox import Batch
+from bridge.session.motion import Motion
+from bridge.session.parts import Proposal, Scene, Wake
+from bridge.session.stops import CLEARED, Fence
+from bridge.session.targets import Go, Targets, decide
+from bridge.session.wind import WindPark
+from bridge.sky.worker import Answer
+
+__all__ = ["Action", "Publish", "Report", "RotatorSession", "Write"]
+
+log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+
+
+@dataclass(frozen=True)
+class Part:
+    """One of the session's parts as its step runs it (``PARTS``, rules 14 and 17): looked up
+    on the session at every step (a reset part is a new object), each with its own reset."""
+
+    name: str  # as the error event of its failure names it (rule 14)
+    wakes: Wake  # parts.py rule 3
+    deciding: bool  # True: runs while the controller answers, before the pending target goes;
+    # False: after the poll, whatever the link (what it measures rides along in the status)
+    on: Callable[[RotatorSession], bool]  # off: not run, and no wake-up of its own
+    step: Callable[[RotatorSession, Scene], Proposal | None]
+    wakeup: Callable[[RotatorSession, float], float | None]
+    reset: Callable[[RotatorSession, float], None]
+
+
+class RotatorSession:
+    def __init__(
+        self,
+        cfg: WorkerConfig,
+        *,
+        options: dict[str, SettingValue] | None = None,
+        locked: bool = False,
+        health: dict[str, object] | None = None,  # what the state file kept (health.py)
+        storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
+    ) -> None:
+        self.cfg = cfg
+        self.locked = locked
+        self.fence = Fence()  # rule 13
+        self.wall_offset_s = 0.0
+        self.controller = Controller(cfg, options)
+        self.targets = Targets(cfg)
+        self.features = FeatureCommands(cfg, self.targets)  # tracking and following
+        self.tracker, self.follower = self.features.tracker, self.features.follower
+        self.autopark = AutoPark(cfg)
+        self.wind = WindPark(cfg, storm=storm and cfg.wind is not None)
+        self.health = Health(cfg, health)
+        self.view = st.View()
+        self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
+        self._actions: list[Action] = []
+        self._wakeup = 0.0
+        self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
+        self._status_key: tuple[object, ...] | None = None  # rule 18
+
+    @property
+    def name(self) -> str:
+        return self.cfg.rotator_id
+
+    # -- inputs -------------------------------------------------------------------------------
+    def start(self, now: float) -> list[Action]:
+        """The first status, whatever it says (nothing has been published for this rotator)."""
+        self._actions.append(Publish(self.status))
+        self.autopark.activity(now)
+        return self._step(now)
+
+    def open_failed(self, reason: str, now: float) -> list[Action]:
+        self.controller.open_failed(reason)
+        return self._step(now)
+
+    def link_up(self, now: float, wall_s: float) -> list[Action]:
+        self.wall_offset_s = wall_s - now
+        self.autopark.activity(now)  # never park the moment a controller comes back
+        self.controller.connect(now, wall_s)
+        return self._step(now)
+
+    def link_down(
+        self, reason: str | None, now: float, kind: ErrorKind = ErrorKind.SERIAL
+    ) -> list[Action]:
+        """The port is closed (``reason`` says why; None on shutdown)."""
+        if reason is not None:
+            self._error(kind, reason)
+        self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
+        # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
+        why = "serial link down" if reason is not None else "bridge stopped"
+        self.features.end(why)  # (what waits is reported dropped: next line)
+        self._drop_pending("serial link down")
+        return self._step(now)
+
+    def commands(self, batch: Batch, now: float) -> list[Action]:
+        ctl = self.controller
+        commanded = batch.stop or batch.target or batch.options or batch.track or batch.follow
+        if commanded or batch.lock is not None:
+            self.view.last_error = None  # rule 12: until this batch refuses something again
+        for note in batch.notes:
+            self.view.last_error = note
+        if batch.heard is not None:
+            self.follower.heard(batch.heard, now)  # rule 15
+        if batch.wind_replayed is not None:  # wind.py rule 6: before a fresh one
+            self.wind.reading(batch.wind_replayed, now, replayed=True)
+        if batch.wind is not None:
+            self.wind.reading(batch.wind, now)  # wind.py: no command either
+        if batch.stop is not None or batch.lock_on:
+            self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
+        if batch.control_set:
+            self.view.control = batch.control
+        if batch.lock is not None:
+            self.locked = batch.lock
+        if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
+            self.features.end("lock")
+            self._drop_pending(None)
+            ctl.stop(now)  # whatever we believe: the lock is for tower work
+        if batch.stop is not None or batch.target is not None or batch.lock is not None:
+            self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
+        if batch.stop is not None:
+            self.features.end("stop")
+            self.targets.clear()
+            self._taken(batch.stop.source.value, batch.stop.origin)
+            ctl.stop(now, merge=True)
+        self._fence(batch)
+        if batch.health_reset:
+            self._guarded(HEALTH, lambda: self.health.reset(), now)
+        for opt in batch.options:
+            ctl.options.set(opt.name, opt.value, ctl.link is not None)
+        if batch.track is not None:
+            self._apply(self.features.track(batch.track, self._refused()))
+        if batch.follow is not None:
+            self._apply(self.features.follow(batch.follow, self._refused(), now))
+        if batch.target is not None:
+            what = describe_command(batch.target)
+            self.features.end(f"{batch.target.source.value} target")  # never combined
+            refused = self._refused()
+            if refused is not None:
+                self._error(ErrorKind.REFUSED, refused, command=what)
+            else:
+                self.targets.put(batch.target, now)
+        return self._step(now)
+
+    def bytes_received(self, data: bytes, now: float) -> list[Action]:
+        ctl = self.controller
+        was_answering = ctl.answering
+        fed = ctl.feed(data, now)
+        if fed is Fed.NOTHING:
+            return []  # rule 9
+        if fed is Fed.HELD and self._quiet_hold(now):
+            return []  # rule 16
+        if self.controller.answering and not was_answering:
+            self.autopark.activity(now)  # autopark.py rule 1
+        self._heed(now)
+        return self._step(now)
+
+    def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
+        """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
+        if generation == self.tracker.generation:
+            answered = self._guarded(
+                TRACKING, lambda: self.features.answered(answer, self._refused()), now
+            )
+            if answered is not None:
+                self._apply(answered)
+        return self._step(now)
+
+    def set_wall(self, now: float, wall_s: float) -> None:
+        """The wall clock (unix seconds) at ``now``: tracking reads the sky by it."""
+        self.wall_offset_s = wall_s - now
+
+    def _quiet_hold(self, now: float) -> bool:
+        """Rule 16: whether a reading just held, and nothing else, needs no step now; if so,
+        the session is woken when its quiet time is over."""
+        ctl, link = self.controller, self.controller.link
+        if link is None or link.stop_due or ctl.notes or self._actions:
+            return False
+        if now >= self._wakeup or self.targets.pending is not None:
+            return False
+        self._wakeup = min(self._wakeup, *link.wakeups())
+        return True
+
+    def tick(self, now: float) -> list[Action]:
+        return self._step(now)
+
+    def next_wakeup(self) -> float:
+        return self._wakeup
+
+    def hold_reads_until(self) -> float:
+        """Bytes arriving before this time can wait in the port (link.py rule 7)."""
+        link = self.controller.link
+        return link.hold_reads_until() if link is not None else 0.0
+
+    # -- commands, applied ----------------------------------------------------------------------
+    def _refused(self) -> str | None:
+        """Why a target or a track command cannot be taken now, if it cannot."""
+        if self.locked:
+            return "rotator is locked"
+        if self.controller.link is None or not self.controller.answering:
+            return "rotator offline"
+        return self.wind.refusal()  # wind.py rule 1
+
+    def _fence(self, batch: Batch) -> None:
+        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
+        if self.fence.apply(batch):
+            self._drop_pending(CLEARED)
+            self.features.end("a stop or lock came first; send the {} command again")
+
+    def _apply(self, done: Done) -> None:
+        """What a tracking or following command did (feature_commands.py), shown."""
+        if done.error is not None:
+            self._error(done.error.kind, done.error.message, done.error.command)
+        if done.taken is not None:
+            self._taken(*done.taken)
+
+    def _taken(self, source: str, origin: Origin | None) -> None:
+        """A stop or a new track: the status names its source and no target of before."""
+        self.view.last_source = source
+        self.view.last_operator = origin.who if origin is not None else None
+        self.view.target_info, self.view.park_raw = None, None
+
+    def _drop_pending(self, why: str | None) -> None:
+        dropped = self.targets.clear()
+        if dropped is not None and why:
+            what = describe_command(dropped)
+            self._error(ErrorKind.REFUSED, f"target dropped: {why}", command=what)
+
+    def _error(self, kind: ErrorKind, message: str, command: str | None = None) -> None:
+        log.warning("%s: %s%s", self.name, message, f" ({command})" if command else "")
+        self.view.last_error = message
+        self._actions.append(Report(kind, message, command))
+
+    def _heed(self, now: float) -> None:
+        """What the controller noted, applied in the order it came."""
+        for note in self.controller.take_notes():
+            if isinstance(note, Report):
+                self._error(note.kind, note.message, note.command)
+            elif isinstance(note, Ends):
+                self.features.end(note.reason)
+            elif isinstance(note, Drop):
+                self._drop_pending(note.why)
+            elif isinstance(note, Retry):
+                self.targets.put_back(note.target, note.attempt, now)
+
+    # -- the rules, run after every input, in this order ---------------------------------------
+    def _step(self, now: float) -> list[Action]:
+        ctl = self.controller
+        ctl.line_work(now)  # an overdue reply (slew.py), a due stop, the outbox, junk
+        ctl.tick(now)  # the motion machine's clock, an enable owed
+        if ctl.notes:
+            self._heed(now)
+        if ctl.link is not None and ctl.answering:
+            ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
+            if ctl.notes:
+                self._heed(now)
+            self._parts(_DECIDING, now)  # rule 17: tracking, following, the wind, auto-park
+            if self.targets.pending is not None:
+                self._try_target(ctl.link, now)
+            ctl.send_options(now, self.targets.pending is not None)
+        ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
+        if ctl.notes:
+            self._heed(now)
+        self._parts(_MEASURING, now)  # health: what it measures is in the status
+        self._emit_status(now)
+        if ctl.link is not None:
+            self._actions.extend(Write(frame) for frame in ctl.link.output())
+        asks = self.tracker.take_asks()
+        if asks:
+            generation = self.tracker.generation
+            self._actions.extend(Ask(generation, q) for q in asks)
+        self._wakeup = self._next_wakeup(now)
+        actions, self._actions = self._actions, []
+        return actions
+
+    def _parts(self, parts: tuple[Part, ...], now: float) -> None:
+        """Rule 17: each part that is on and that something woke, in the registry's order."""
+        for part in parts:
+            if not part.on(self):
+                continue
+            if part.wakes is Wake.MOTION:  # only a motion it has not seen
+                motion = self.controller.motion
+                if self._seen_motion.get(part.name) is motion:
+                    continue
+                self._seen_motion[part.name] = motion
+            self._part(part, now)
+
+    def _part(self, part: Part, now: float) -> None:
+        """A part decides on a read-only scene; its proposal is applied here."""
+        link, motion, pending = self.controller.link, self.controller.motion, self.targets.pending
+        slewing = link is not None and link.slew is not None
+        parked, offset_s = self.status.parked, self.wall_offset_s
+        scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
+        proposal = self._guarded(part, lambda: part.step(self, scene), now)
+        if proposal is None:
+            return
+        if proposal.busy:
+            self.autopark.activity(now)  # autopark.py rule 1 (tracking.py rule 7)
+        if proposal.error is not None:
+            self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
+        if proposal.ended is not None:
+            self.features.end(proposal.ended)  # (tracking may have ended itself)
+            self.targets.clear_from(Source.TRACKING)
+        if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
+            self.targets.clear_from(Source.WSJTX)
+            self.controller.stop(now)
+        if proposal.target is not None:
+            self.targets.put(proposal.target, now)
+
+    def _guarded(self, part: Part, run: Callable[[], T], now: float) -> T | None:
+        """Rule 14: a part that raises is reset (its own reset, ``PARTS``) and reported;
+        nothing else stops."""
+        try:
+            return run()
+        except Exception:
+            log.exception("%s: %s failed", self.name, part.name)
+            part.reset(self, now)
+            self._seen_motion.pop(part.name, None)  # a new part has seen nothing yet
+            name = part.name
+            self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
+            return None
+
+    def _try_target(self, link: Link, now: float) -> None:
+        ctl, pending = self.controller, self.targets.pending
+        assert pending is not None
+        todo = decide(self.cfg, link, ctl.motion, self.targets, self.fence.held, now)
+        if todo.go is Go.DONE:
+            self._aimed(self.targets.clear(), todo.wire)
+        elif todo.go is Go.STOP_FIRST:
+            ctl.stop(now)
+        elif todo.go is Go.ASK_FIRST:
+            link.poll_now(now)  # ask first; the target follows the answer
+        elif todo.go is Go.SEND:
+            ctl.send(todo, pending, self.targets.sent(now), now)
+            self._aimed(pending, todo.wire)
+
+    def _aimed(self, target: Target | None, wire: tuple[float, float | None]) -> None:
+        """What the status says about the target now taken (status.py rule 4)."""
+        if target is not None:
+            self.view.last_source = target.source.value
+            if target.origin is not None:  # following's: wsjtx (follow.py rule 7)
+                self.view.last_operator = target.origin.who
+            elif target.source is not Source.TRACKING:  # tracking's: who started it stays
+                self.view.last_operator = None  # the bridge's own (auto-park, the wind)
+            self.view.target_info = target.info
+            self.view.park_raw = wire if target.park else None
+
+    def _emit_status(self, now: float) -> None:
+        """Rule 18: the status is built again only when something it shows may have changed."""
+        ctl, tracker, follower, wind, health = (
+            self.controller,
+            self.tracker,
+            self.follower,
+            self.wind,
+            self.health,
+        )
+        link, view = ctl.link, self.view
+        wind_info = wind.info if wind.on else None
+        slew = link.slew if link is not None else None
+        timed = slew is not None  # a slew's estimate (status rule 2)
+        key = (
+            ctl.cfg,
+            ctl.motion,
+            link,
+            slew,  # (its end ends the estimate)
+            ctl.answering,
+            ctl.version,
+            ctl.controller_time,
+            ctl.options.revision,
+            ctl.az_shown.value,
+            ctl.el_shown.value,
+            self.targets.pending,
+            self.locked,
+            view.last_error,
+            view.last_source,
+            view.target_info,
+            view.park_raw,
+            view.last_operator,
+            view.control,
+            tracker.info,
+            tracker.ended,
+            follower.info,
+            follower.ended,
+            wind_info,
+            health.report,
+        )
+        if key == self._status_key and not timed and ctl.cfg.spec.can_report_position:
+            return  # (a DCU-1's estimated move reads the time: status rule 3)
+        self._status_key = key
+        shown = st.Features(
+            tracker.info, tracker.ended, follower.info, follower.ended, wind_info, health.report
+        )
+        seen = ctl.seen(
+            self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
+        )
+        status = st.current(ctl.cfg, seen, now)  # (controller.py rule 7)
+        if st.worth_emitting(status, self.status):
+            self._actions.append(Publish(status))
+        self.status = status  # also when only the controller's clock changed (status rule 4)
+
+    def _next_wakeup(self, now: float) -> float:
+        wakeup = min(now + IDLE_WAKEUP_S, min(self.controller.wakeups(now), default=math.inf))
+        stream = self.targets.stream_deadline(now)
+        if stream is not None and stream < wakeup:
+            wakeup = stream
+        for part in _WAKING:
+            if part.on(self):
+                t = part.wakeup(self, now)
+                if t is not None and t < wakeup:
+                    wakeup = t
+        return wakeup
+
+
+# -- the parts, registered (rule 17) -------------------------------------------------------------
+def _health_step(s: RotatorSession, scene: Scene) -> None:
+    s.health.speed_factor = s.controller.options.speed_factor()  # (health.py rule 9)
+    s.health.step(scene.motion, scene.now)  # (its report is in the status)
+
+
+def _reset_autopark(s: RotatorSession, now: float) -> None:
+    s.autopark = AutoPark(s.cfg)
+    s.autopark.activity(now)
+
+
+def _reset_wind(s: RotatorSession, now: float) -> None:
+    s.wind = WindPark(s.cfg, storm=s.wind.storm)  # a storm goes on: refusing is the safe side
+
+
+def _reset_health(s: RotatorSession, now: float) -> None:
+    s.health = s.health.rebuilt(s.cfg)  # health.py rule 7
+
+
+def _no_wakeup(s: RotatorSession, now: float) -> float | None:
+    return None
+
+
+TRACKING = Part(
+    "tracking",
+    Wake.STEP,  # it reads the sky by the time
+    True,
+    lambda s: s.tracker.body is not None,  # (nothing tracked: nothing to ask)
+    lambda s, scene: s.tracker.step(scene),
+    lambda s, now: s.tracker.wakeup(now),
+    lambda s, now: s.features.end("internal error", tracking=True),
+)
+FOLLOWING = Part(
+    "following",
+    Wake.STEP,  # each of its steps is activity for auto-park
+    True,
+    lambda s: s.follower.on,
+    lambda s, scene: s.follower.step(scene),
+    _no_wakeup,
+    lambda s, now: s.features.end("internal error", tracking=False),
+)
+WIND = Part(
+    "wind",
+    Wake.STEP,  # the silence of its sensor is counted in time
+    True,
+    lambda s: s.wind.on,
+    lambda s, scene: s.wind.step(scene),
+    lambda s, now: s.wind.wakeup(now),
+    _reset_wind,
+)
+AUTO_PARK = Part(
+    "auto-park",
+    Wake.STEP,  # a turning rotor's every step starts its quiet spell again
+    True,
+    lambda s: s.autopark.on,
+    # (in a storm the wind's park is the park: auto-park waits, its wake-up still asked for)
+    lambda s, scene: None if s.wind.storm else s.autopark.step(scene),
+    lambda s, now: s.autopark.wakeup(now),
+    _reset_autopark,
+)
+HEALTH = Part(
+    "health",
+    Wake.MOTION,  # it measures moves from the motion (health.py rule 6)
+    False,
+    lambda s: True,
+    _health_step,
+    _no_wakeup,
+    _reset_health,
+)
+#: rule 17: the parts, in the order the step runs them (after the line's own work and the stop
+#: check; stops and the lock are the commands', first of all, in ``commands``)
+PARTS: tuple[Part, ...] = (TRACKING, FOLLOWING, WIND, AUTO_PARK, HEALTH)
+_DECIDING = tuple(p for p in PARTS if p.deciding)
+_MEASURING = tuple(p for p in PARTS if not p.deciding)
+_WAKING = tuple(p for p in PARTS if p.wakeup is not _no_wakeup)

@@ -1,0 +1,206 @@
+"""What a rotator's status says, and when a new one is worth emitting. Pure, no clock: the
+session hands ``current`` what it knows (``Seen``, a read-only view) and publishes what it
+returns.
+
+Rules:
+1. The published bearing follows readings with hysteresis (``publishable_bearing``): analog
+   jitter of a still rotor never reaches a dashboard.
+2. During a silent slew (SatEL) the bearing is the slew's estimate, marked ``estimated``.
+3. Without position feedback (DCU-1) a commanded move is shown as ``moving`` with
+   ``estimated`` set, the target and the time it should be over; after that the state is
+   ``unknown`` and the target is cleared. The bridge never shows more than it knows.
+4. Bearings and targets are shown as true bearings (pointing.py), with the controller's raw
+   value beside them (``raw_bearing``, ``overlap``). ``parked`` holds while the rotor is still
+   within tolerance of the park position it was last sent to.
+5. A status is emitted when something a user would notice changed. The controller's own clock
+   (SatEL) ticks every second: it rides along in the next status but never causes one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import NamedTuple
+
+from bridge.core.model import (
+    Control,
+    FollowingInfo,
+    MotionState,
+    RotatorHealth,
+    RotatorStatus,
+    SettingValue,
+    Target,
+    TargetInfo,
+    TrackingInfo,
+    WindInfo,
+)
+from bridge.session import motion as mo
+from bridge.session.config import WorkerConfig
+from bridge.session.slew import Slew
+
+
+@dataclass
+class Hysteresis:
+    """One axis's published value (rule 1)."""
+
+    value: float | None = None
+    direction: int = 0
+
+    def feed(self, reading: float, moving: bool, deadband_deg: float, wraps: bool) -> None:
+        new, self.direction = publishable_bearing(
+            self.value, self.direction, reading, moving, deadband_deg, wraps
+        )
+        if new is not None:
+            self.value = new
+
+
+@dataclass
+class View:
+    """Everything the status shows besides what the motion machine and the link know."""
+
+    last_error: str | None = None
+    last_source: str | None = None
+    target_info: TargetInfo | None = None  # of the last target sent (locator, coordinates);
+    # a target still waiting (a brake delay) shows its own: it is the current one for ``long``
+    park_raw: tuple[float, float | None] | None = None  # the park target last sent (rule 4)
+    last_operator: str | None = None  # who sent the command of last_source (model.Origin)
+    control: Control | None = None  # the control lease's holder (runtime/lease.py)
+
+
+class Features(NamedTuple):
+    """What the session's parts show (tracking.py, follow.py, wind.py, health.py)."""
+
+    tracking: TrackingInfo | None = None
+    tracking_ended: str | None = None
+    following: FollowingInfo | None = None
+    following_ended: str | None = None
+    wind: WindInfo | None = None
+    health: RotatorHealth | None = None  # health.py: a new one after each move
+
+
+class Seen(NamedTuple):
+    """What the session knows at one moment, as the status needs it (a tuple: read-only, and
+    cheap to build at every step)."""
+
+    previous: RotatorStatus
+    view: View
+    version: str | None  # the controller's, as it says
+    controller_time: str | None  # its own clock (SatEL)
+    motion: mo.Motion
+    connected: bool
+    answering: bool  # connected, and the controller answers (or cannot: DCU-1)
+    locked: bool
+    options: dict[str, SettingValue]
+    bearing_deg: float | None  # the published readings (rule 1), raw
+    elevation_deg: float | None
+    slew: Slew | None
+    pending: Target | None  # the target waiting to go out...
+    pending_wire: tuple[float | None, float | None] | None  # ...and its raw values, if known
+    wall_offset_s: float
+    features: Features
+
+
+def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
+    """The status as of ``now``."""
+    m, spec, view = seen.motion, rig.spec, seen.view
+    answering = seen.answering
+    target: tuple[float | None, float | None] = (m.target_deg, m.el_target_deg)
+    if seen.pending_wire is not None:
+        target = seen.pending_wire
+    state = m.state if answering else MotionState.OFFLINE
+    bearing, elevation = seen.bearing_deg, seen.elevation_deg
+    estimated = False
+    if seen.slew is not None:  # rule 2
+        bearing, elevation = seen.slew.estimate(now, rig.az_speed_deg_s, rig.el_speed_deg_s)
+        estimated = True
+    expected_end: float | None = None
+    if not spec.can_report_position and answering:  # rule 3
+        moving = m.target_deg is not None and m.stop_sent_t is None
+        if moving and m.busy_until_t is not None and now < m.busy_until_t:
+            state, estimated = MotionState.MOVING, True
+            expected_end = m.busy_until_t + seen.wall_offset_s
+        else:
+            state, target = MotionState.UNKNOWN, (None, None)
+    aim = rig.aim
+    raw = bearing if spec.can_report_position else None
+    pending = seen.pending
+    return RotatorStatus(  # every field: cheaper than dataclasses.replace over them all
+        rotator_id=seen.previous.rotator_id,
+        state=state,
+        bearing_deg=None if raw is None else aim.true_of(raw),
+        raw_bearing_deg=raw,
+        overlap=aim.overlap(raw),
+        target_info=pending.info if pending is not None else view.target_info,
+        parked=_parked(rig, seen, state),
+        tracking=seen.features.tracking,
+        tracking_ended=seen.features.tracking_ended,
+        following=seen.features.following,
+        following_ended=seen.features.following_ended,
+        wind=seen.features.wind,
+        health=seen.features.health,
+        elevation_deg=elevation if spec.has_elevation else None,
+        estimated=estimated,
+        expected_end_unix=expected_end,
+        controller_time=seen.controller_time,
+        target_az_deg=None if target[0] is None else aim.true_of(target[0]),
+        raw_target_az_deg=target[0],
+        target_el_deg=target[1] if spec.has_elevation else None,
+        connected=seen.connected,
+        available=answering,
+        locked=seen.locked,
+        version=seen.version,
+        options=dict(seen.options),
+        last_error=view.last_error,
+        last_command_source=view.last_source,
+        last_operator=view.last_operator,
+        control=view.control,
+    )
+
+
+def _parked(rig: WorkerConfig, seen: Seen, state: MotionState) -> bool:
+    park = seen.view.park_raw
+    if park is None or state in (MotionState.MOVING, MotionState.OFFLINE):
+        return False
+    if not rig.spec.can_report_position:
+        return True  # the estimated move is over
+    return mo.within_tolerance(seen.motion, rig.motion, park)
+
+
+def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
+    """Rule 5: the controller's clock alone is no change."""
+    if new.controller_time == old.controller_time:
+        return new != old
+    return replace(new, controller_time=None) != replace(old, controller_time=None)
+
+
+def signed_delta(to_deg: float, from_deg: float, wraps: bool) -> float:
+    d = to_deg - from_deg
+    if wraps and abs(d) > 180.0:
+        d -= 360.0 if d > 0 else -360.0
+    return d
+
+
+def publishable_bearing(
+    published_deg: float | None,
+    direction: int,
+    reading_deg: float,
+    moving: bool,
+    deadband_deg: float,
+    wraps: bool,
+) -> tuple[float | None, int]:
+    """Hysteresis on the published bearing: (bearing to publish or None, direction of travel).
+
+    At rest only a change beyond the deadband is published. While moving, every step in the
+    direction of travel is published (dashboards stay fresh), but a step back inside the
+    deadband is analog jitter and is not.
+    """
+    if published_deg is None:
+        return reading_deg, 0
+    delta = signed_delta(reading_deg, published_deg, wraps)
+    if delta == 0:
+        return None, direction
+    step = 1 if delta > 0 else -1
+    if abs(delta) > deadband_deg or (moving and step == direction):
+        return reading_deg, step
+    if moving and direction == 0:
+        return reading_deg, step
+    return None, direction

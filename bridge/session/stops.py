@@ -1,0 +1,163 @@
+"""The stop rules of one rotator: when a stop adds nothing, when one must be sent again, and
+what a motion verdict (a stall, a rotor turned away) asks of the line. Pure: the session asks,
+with the motion and the time, and writes what these answer.
+
+Rules:
+1. A stop is written at once (on a half-duplex line right after the reply in flight) and
+   cancels any frame still waiting in the outbox. One that comes within the brake window (at
+   least STOP_MERGE_MIN_S) of another, with no target sent and no reading showing the rotor
+   turning since, is merged into it: nothing more goes on the wire (a flood of stops to an idle
+   Rotor-EZ had it answer each with its banner, crowding out the readings).
+2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
+   again, and after STOP_TRIES_BEFORE_ERROR tries an error says so. Lock ON always sends a
+   stop, whatever the bridge believes the rotor is doing.
+3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
+   one still waiting for the line when the port failed, or one written less than
+   STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
+   (stopping is always safe).
+4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
+   is stopped once it comes to rest. Either ends tracking.
+5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
+   with a hold; no target goes out while one is held, until a release reaches its marker. A release
+   that clears (the connection that would have caught up was lost) ends every hold, and what
+   waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6). The stop
+   express's hold (interfaces/mqtt/express.py rule 8) is a second one, with numbers of its own: a
+   target waits while either is held; its release never clears (what waited is newer than the stop).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from bridge.core.model import ErrorKind, MotionState
+from bridge.session import motion as mo
+from bridge.session.actions import Report
+from bridge.session.mailbox import Batch
+
+log = logging.getLogger(__name__)
+
+STOP_TRIES_BEFORE_ERROR = 3
+STOP_MERGE_MIN_S = 1.0  # rule 1: stops merge within the brake window, or at least this long
+STOP_UNSURE_S = 1.0  # rule 3: a stop written this recently when the port failed is sent again
+CLEARED = (
+    "a stop or lock from the stop lane came before it, and the MQTT connection that would have "
+    "told which was published first dropped; send it again"
+)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the session does about one motion event (rule 4)."""
+
+    stop: bool = False  # write a stop now
+    error: Report | None = None
+    ends_tracking: str | None = None
+
+
+class Stops:
+    def __init__(self) -> None:
+        self.owed = False  # rule 3: a stop came while the port was closed
+        self._tries = 0
+        self._at_rest = False  # rule 4: turned away, a stop when it is still
+
+    def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
+        """Rule 1: a stop now adds nothing on the wire."""
+        if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
+            return False  # a target went out after the last stop: this stop is needed
+        window = max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
+        turning = m.state is MotionState.MOVING
+        return not turning and now - m.stop_sent_t < window
+
+    @staticmethod
+    def unsure(stop_due: bool, m: mo.Motion, now: float) -> bool:
+        """Rule 3: a stop still waiting for the line, or written so recently (a failed write
+        closes the port too) that the controller may never have had it."""
+        sent = m.stop_sent_t
+        return stop_due or (sent is not None and now - sent < STOP_UNSURE_S)
+
+    def check(
+        self, m: mo.Motion, cfg: mo.MotionConfig, now: float, target_going: bool
+    ) -> tuple[bool, Report | None]:
+        """Rule 2: whether to stop again (and the error after the last try). A target about to
+        go out stops the rotor by itself (motion.plan_target)."""
+        if m.stop_sent_t is None:
+            self._tries = 0
+            return False, None
+        moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
+        late = now >= m.stop_sent_t + cfg.stop_resend_s  # as motion.next_deadline
+        if m.state is not MotionState.MOVING or not moved_since or not late or target_going:
+            return False, None
+        self._tries += 1
+        error = None
+        if self._tries == STOP_TRIES_BEFORE_ERROR:
+            error = Report(
+                ErrorKind.STOP,
+                f"rotor still turning after {self._tries} stop commands; stop it at the controller",
+            )
+        return True, error
+
+    def verdict(self, event: mo.Event, m: mo.Motion, cfg: mo.MotionConfig) -> Verdict:
+        """Rule 4: what ``event`` (just reported by the motion machine, now at ``m``) asks."""
+        pos = m.position_deg
+        if event is mo.Event.STALLED:
+            why = (
+                f"rotor stalled at {pos:g}° (no progress for {cfg.stall_timeout_s:g} s): brake "
+                "paddle pressed or rotor stuck"
+            )
+            return Verdict(True, Report(ErrorKind.STALLED, why), "stalled")
+        if event is mo.Event.TURNED_AWAY:
+            self._at_rest = True  # a controller driving the wrong way: stop it then
+            why = (
+                f"rotor turned away from its target at {pos:g}° (the front panel, or a "
+                "controller driving the wrong way): target dropped, and a stop follows when it "
+                "comes to rest"
+            )
+            return Verdict(False, Report(ErrorKind.STALLED, why), "turned by hand")
+        if event is mo.Event.REFUSED:
+            why = (
+                f"the controller refused the target (it answered with its refusal at {pos:g}°): "
+                "outside the range the box is set to turn, or a bearing it cannot take"
+            )
+            turning = m.state is MotionState.MOVING  # still on its way to the bearing before
+            if turning:
+                why += "; the rotor was turning to the bearing before it: stopped"
+            return Verdict(turning, Report(ErrorKind.REFUSED, why), "refused by the controller")
+        if event is mo.Event.STOPPED and self._at_rest:
+            self._at_rest = False
+            return Verdict(stop=True)
+        if event is mo.Event.ARRIVED:
+            self._at_rest = False
+        return Verdict()
+
+
+class Fence:
+    """Rule 5: the newest marker a hold waits for."""
+
+    def __init__(self) -> None:
+        self._hold: int | None = None
+        self._express: int | None = None  # rule 5: the stop express's sync word waited for
+
+    @property
+    def held(self) -> bool:
+        return self._hold is not None or self._express is not None
+
+    def apply(self, batch: Batch) -> bool:
+        """Take a batch's hold and release in; whether a held fence was cleared (what waited
+        is then dropped: CLEARED says why)."""
+        cleared = batch.release_clear and self._hold is not None  # (before the rest)
+        if cleared:
+            self._hold = None
+        if batch.hold is not None:
+            self._hold = batch.hold if self._hold is None else max(self._hold, batch.hold)
+        if batch.release is not None and self._hold is not None and self._hold <= batch.release:
+            self._hold = None
+            log.debug("hold ended")
+        if batch.express_hold is not None:
+            held = self._express
+            self._express = batch.express_hold if held is None else max(held, batch.express_hold)
+        done = batch.express_release
+        if done is not None and self._express is not None and self._express <= done:
+            self._express = None
+            log.debug("the stop express's hold ended")
+        return cleared

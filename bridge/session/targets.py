@@ -1,0 +1,167 @@
+"""The target waiting to go to the controller, the rules for streams of targets, and its way to
+the wire: whether it goes now, waits, is already done, needs a stop or a fresh reading first.
+Pure: the session asks with the motion, the link's line state and the time, and carries the
+answer out.
+
+Rules:
+1. One target waits at a time; a newer one replaces it (a dragged slider sends dozens),
+   keeping an axis it leaves out from the one it replaces (model.combine).
+2. Targets that come as a stream (one replaces a still-pending one, or arrives within
+   BURST_QUIET_S of the last target sent: a dragged slider, a flood) are sent when the stream
+   pauses for BURST_QUIET_S, and at the latest STREAM_MAX_WAIT_S after the stream's first unsent
+   target (longer for controllers that must stop to re-target), so a continuous stream is
+   followed without flooding the line. A single command is never delayed.
+3. A target put back after a silent controller's lost report (slew.py) carries its try
+   number; any newer target replaces it and starts again at the first try.
+4. A target goes to the controller only when ``motion.plan_target`` says so; a stop due goes
+   first, and a held target (session rule 13) waits for its marker.
+5. A target the rotor is already on its way to, or (not tracking's: its steps may be finer
+   than the tolerance) already within tolerance of, is done without a frame.
+6. A stream of targets waits for its pause (rule 2); a half-duplex line with a reply in flight
+   is free right after it.
+7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
+   younger than one moving poll interval has shown the rotor idle: a front-panel move that
+   began after the last poll must not be cut short. Otherwise the controller is asked first.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from dataclasses import dataclass
+
+from bridge.core.model import Source, Target, combine
+from bridge.pointing import Pointing
+from bridge.session import motion as mo
+from bridge.session.config import WorkerConfig
+from bridge.session.link import Link
+
+log = logging.getLogger(__name__)
+
+BURST_QUIET_S = 0.5
+STREAM_MAX_WAIT_S = {"direct": 1.0, "stop_and_wait": 5.0}
+
+
+class Targets:
+    def __init__(self, cfg: WorkerConfig) -> None:
+        self._max_wait_s = STREAM_MAX_WAIT_S[cfg.spec.retarget.value]
+        self.pending: Target | None = None
+        self._pending_t = 0.0
+        self._replaced = False  # part of a stream (rule 2)
+        self._stream_t = 0.0
+        self._last_sent_t = -1e18
+        self._attempt = 1
+
+    def put(self, target: Target, now: float) -> None:
+        recent = now - self._last_sent_t < BURST_QUIET_S
+        if self.pending is None:
+            self._stream_t = now
+        self._replaced = self.pending is not None or recent
+        self.pending, self._pending_t, self._attempt = combine(target, self.pending), now, 1
+
+    def put_back(self, target: Target, attempt: int, now: float) -> None:
+        """Rule 3: send ``target`` again (unless a newer one waits already)."""
+        if self.pending is None:
+            self.pending, self._pending_t, self._stream_t = target, now, now
+            self._replaced, self._attempt = False, attempt
+
+    def clear(self) -> Target | None:
+        """Drop the waiting target (a stop, the lock, the link down); the one dropped."""
+        dropped, self.pending = self.pending, None
+        return dropped
+
+    def clear_from(self, source: Source) -> None:
+        """Drop the waiting target if ``source`` put it (a feature that has ended: a target of
+        its own must not go out after it)."""
+        if self.pending is not None and self.pending.source is source:
+            self.clear()
+
+    def sent(self, now: float) -> int:
+        """The waiting target went to the controller; which try it was."""
+        attempt = self._attempt
+        self.pending, self._attempt, self._last_sent_t = None, 1, now
+        return attempt
+
+    def stream_wait(self, now: float) -> bool:
+        if not self._replaced:
+            return False
+        # the same sums as stream_deadline: a wake-up at that time must end the wait
+        return now < self._pending_t + BURST_QUIET_S and now < self._stream_t + self._max_wait_s
+
+    def stream_deadline(self, now: float) -> float | None:
+        """When a waiting stream's target goes out at the latest (None: not waiting)."""
+        if self.pending is None or not self.stream_wait(now):
+            return None
+        return min(self._pending_t + BURST_QUIET_S, self._stream_t + self._max_wait_s)
+
+
+def resolve(target: Target, m: mo.Motion, aim: Pointing) -> tuple[float | None, float | None]:
+    """The raw values to send now: a target whose side is free takes the side nearest to where
+    the rotor is now (pointing.py rule 2); an axis left out keeps its current target, else its
+    position."""
+    az = target.az_deg
+    if target.true_az_deg is not None and m.position_deg is not None:
+        az = aim.raw_for(target.true_az_deg, m.position_deg)
+    has_elevation = aim.has_elevation
+    if az is None:
+        az = m.target_deg if m.target_deg is not None else m.position_deg
+    el = target.el_deg
+    if has_elevation and el is None:
+        el = m.el_target_deg if m.el_target_deg is not None else m.el_position_deg
+        if el is None:
+            return None, None
+    return az, el
+
+
+class Go(enum.Enum):
+    WAIT = "wait"
+    DONE = "done"  # rule 5: clear it, nothing to write
+    STOP_FIRST = "stop first"
+    ASK_FIRST = "ask first"  # rule 7: poll now, the target follows the answer
+    SEND = "send"
+
+
+@dataclass(frozen=True)
+class Sending:
+    go: Go
+    az_deg: float = 0.0  # the raw values to encode (SEND)
+    el_deg: float | None = None
+    wire: tuple[float, float | None] = (0.0, None)  # as the controller will hold them
+
+
+def decide(
+    rig: WorkerConfig, link: Link, m: mo.Motion, targets: Targets, held: bool, now: float
+) -> Sending:
+    """What the pending target of ``targets`` does now (``held``: session rule 13)."""
+    pending = targets.pending
+    assert pending is not None
+    if link.stop_due or held:
+        return Sending(Go.WAIT)  # rule 4
+    az, el = resolve(pending, m, rig.aim)
+    if az is None:
+        return Sending(Go.WAIT)  # no reading yet to keep the other axis where it is
+    wire = link.codec.wire_target(az, el)
+    if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
+        return Sending(Go.DONE, wire=wire)  # already on its way there
+    small = pending.source is not Source.TRACKING
+    if small and rig.spec.can_report_position and mo.within_tolerance(m, rig.motion, wire):
+        log.info("%s: already within tolerance of %s", rig.rotator_id, wire)
+        return Sending(Go.DONE, wire=wire)
+    plan = mo.plan_target(m, rig.motion, now)
+    if plan is mo.Plan.STOP_FIRST:
+        doing = "turning" if rig.spec.can_report_position else "may still be turning"
+        log.info("%s: %s; stopping before the new target %s", rig.rotator_id, doing, wire)
+        return Sending(Go.STOP_FIRST)
+    if plan is not mo.Plan.SEND or not link.free() or targets.stream_wait(now):
+        return Sending(Go.WAIT)  # rules 4 and 6
+    if _needs_fresh_reading(rig, link, now):
+        return Sending(Go.ASK_FIRST)
+    return Sending(Go.SEND, az, el, wire)
+
+
+def _needs_fresh_reading(rig: WorkerConfig, link: Link, now: float) -> bool:
+    """Rule 7."""
+    if not rig.motion.can_report_position or rig.motion.direct_retarget:
+        return False
+    age = now - (link.last_reply_t if link.last_reply_t is not None else -1e18)
+    return age > rig.moving_poll_interval_s

@@ -1,0 +1,380 @@
+"""Following the sun, the moon or a satellite (``R/track``): the tracker owns what is tracked and
+decides the targets. Pure: each step gets a read-only ``Scene`` (parts.py: the time, the
+motion, the pending target) and returns a ``Proposal`` the session applies; what the sky says
+comes from skytrack.py (the sky worker's answers, rule 8).
+
+Rules:
+1. Tracking starts on a Track command and ends on ``R/track off``, a stop, the lock, any
+   other target (a manual one, rotctld's P, a preset, a nudge, a park), the rotor turned by
+   hand, a stall, the serial link going down or the controller falling silent: the rotor never
+   turns by itself after any of these. The status says why (``tracking_ended``). Tracking's
+   own targets are put here, not in the mailbox, so they never end it. It goes on from pass
+   to pass until it is ended. A step is measured from the last target and, once the rotor
+   has got there (arrived, not still on its way), from where it really is: a rotor that fell
+   short or was turned gets the step again; one turned away while still holding the last step
+   is left to the motion machine's verdict (a stall ends tracking), never pulled back.
+2. Passes: while the body is below ``min_el_deg`` the rotator waits at the azimuth where the
+   next pass rises (at the minimum elevation): at once when tracking starts, and after a pass
+   when the rotor, at its real speeds, would just make it in time plus PREPOSITION_MARGIN_S.
+   At the end of a pass it parks (``at_los = "park"``, if a park position is configured) or
+   stays where it is.
+3. During a pass a new target goes out when the body has moved ``step_deg`` on either axis
+   from the last one, and only when the controller may take one: any time on a controller that
+   re-targets while turning (SPID); when the rotor is idle on the others (a Rotor-EZ stops to
+   re-target, a SatEL takes no input while slewing). The target leads the body by half a
+   step, so the rotor straddles it: within half a step either side, plus what the rotor lags.
+4. Flip: an az/el rotor whose elevation reaches 180 minus the minimum elevation flies a
+   satellite's pass with elevation 180 - el and azimuth + 180 when that saves turning time
+   during the pass: both axes at their real speeds, each raw azimuth picked as the judge would
+   (the first from where the rotor is); the saving must exceed FLIP_SAVING_DEG at the azimuth
+   speed. A pass across a
+   stop (the north on a 0..360 rotor) then stays clear of it. Decided once per pass.
+5. Every target goes through the same judge as any other (pointing.py: limits, keep-out
+   sectors). One it refuses is skipped, reported once per pass, and the rotor holds until the
+   body is back where it may go.
+6. Azimuth-only rotors follow the azimuth; the body's elevation only decides the passes.
+7. Tracking is activity for auto-park: a rotor that is tracking never parks by itself.
+8. Nothing of the sky is computed here (docs/architecture.md, "nothing slow beside a stop"):
+   pass searches, windows of the body's track, a pass's samples for the flip and TLE file
+   look-ups are questions (skywork.py, skytrack.py) the session hands to the sky worker, and
+   their answers come back as inputs.
+   Until an answer is in, tracking waits: no target from it, the status's block as it was.
+   Each start or end of tracking is a new generation: an answer asked for before it is
+   dropped (a stop or ``off`` meanwhile is never undone by a late answer). An answer that says
+   the sky cannot be computed (an orbit decayed, a date beyond the ephemeris) ends tracking
+   with that reason. A look-up leaves what is tracked alone until its answer names a body.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorKind, MotionState, Origin, Source, Target, TrackingInfo
+from bridge.pointing import angle_between
+from bridge.session import motion as mo
+from bridge.session.actions import Report
+from bridge.session.config import WorkerConfig
+from bridge.session.parts import NOTHING, Proposal, Scene
+from bridge.session.skytrack import SkyTrack
+from bridge.sky import Body, Pass
+from bridge.sky.worker import Answer, LookupQuestion, Question
+
+log = logging.getLogger(__name__)
+
+SAMPLE_S = 1.0  # tracking looks at the sky at least this often
+PREPOSITION_MARGIN_S = 20.0
+PASS_TRACK_POINTS = 40  # the pass as the status shows it (_thinned)
+INFO_EVERY_S = 5.0  # the status's tracking block is refreshed this often (and on a target)
+NEXT_S = 60.0  # the status's "next" position: this far ahead
+MAX_LEAD_S = 300.0
+FLIP_SAVING_DEG = 30.0
+
+
+@dataclass(frozen=True)
+class Track:
+    """Start following ``body``; or look the satellite ``lookup`` up in the TLE file first (the
+    file is read by the sky worker: rule 8); or stop (neither)."""
+
+    body: Body | None
+    source: Source = Source.MQTT
+    lookup: LookupQuestion | None = None
+    described: str | None = None  # the command as the user gave it (a refusal names it)
+    origin: Origin | None = None  # who asked (the status's last_operator)
+
+
+class Tracker:
+    def __init__(self, rig: WorkerConfig) -> None:
+        self._rig = rig
+        self.cfg = rig.tracking
+        self.body: Body | None = None
+        self.ended: str | None = None
+        self.info: TrackingInfo | None = None
+        self.generation = 0  # rule 8: an answer asked for before a start or an end is stale
+        self.lookup: Track | None = None  # a look-up under way (the body tracked goes on)
+        self._lookups: list[Question] = []  # rule 8: look-ups not yet handed out
+        self._reset(None)
+
+    def _reset(self, body: Body | None) -> None:
+        self.generation += 1
+        self.lookup = None
+        self._sky = SkyTrack(self.cfg, body) if body is not None and self.cfg.sky else None
+        self._flip = False
+        self._flip_for: float | None = None  # the AOS the flip was decided for
+        self._last: tuple[float, float | None] | None = None  # last target put (true, flipped)
+        self._waited_for: float | None = None  # AOS of the pass the rotor went to wait for
+        self._parked_after: float | None = None  # LOS of the pass parked (or stayed) after
+        self._refused_for: float | None = None
+        self._info_t = -math.inf
+
+    # -- rule 1 ----------------------------------------------------------------------------
+    def start(self, body: Body) -> None:
+        self._reset(body)
+        self.body, self.ended, self.info = body, None, TrackingInfo(body.name, "waiting")
+
+    def end(self, why: str) -> bool:
+        """Stop following (``why`` shows as ``tracking_ended``); whether anything was tracked.
+        A look-up under way is dropped too (its answer comes too late)."""
+        if self.body is None:
+            self.lookup = None
+            self.generation += 1
+            return False
+        log.info("tracking %s ended: %s", self.body.name, why)
+        self.body, self.ended, self.info = None, why, None
+        self._reset(None)
+        return True
+
+    def look_up(self, track: Track) -> None:
+        """Rule 8: ask the sky worker for the satellite by name; whatever is tracked goes on
+        until the answer (an unknown name changes nothing)."""
+        assert track.lookup is not None
+        self.lookup = track
+        self._lookups.append(track.lookup)
+
+    def wakeup(self, now: float) -> float | None:
+        """Tracking looks at the sky at least once a second."""
+        return now + SAMPLE_S if self.body is not None else None
+
+    # -- rule 8: questions and answers -------------------------------------------------------
+    def take_asks(self) -> list[Question]:
+        """The questions for the sky worker not yet handed out (the session asks them)."""
+        asks, self._lookups = self._lookups, []
+        if self._sky is not None:
+            asks += self._sky.asks
+            self._sky.asks = []
+        return asks
+
+    def answered(self, answer: Answer) -> str | None:
+        """Take an answer of this generation in; why tracking must end, if it must."""
+        if isinstance(answer.question, LookupQuestion) or self._sky is None:
+            return None
+        return self._sky.answered(answer)
+
+    # -- the step ----------------------------------------------------------------------------
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        sky = self._sky
+        if self.body is None or sky is None:
+            return NOTHING
+        if scene.locked:
+            return Proposal(busy=True)  # rule 7
+        if self._turned_by_hand(scene):
+            self.end("turned by hand")  # rule 1: the front panel is a command too
+            return Proposal(ended="turned by hand", busy=True)
+        utc = scene.now + scene.wall_offset_s
+        if sky.searching(utc):
+            return Proposal(busy=True)  # rule 8: the answer comes as an input
+        p = sky.pass_now
+        if p is None:
+            self._inform(sky, utc, None, "no pass", scene.now)
+            return Proposal(busy=True)
+        if self._flip_for != p.aos_s:
+            flip = self._flip_saves(sky, p, scene)
+            if flip is None:
+                return Proposal(busy=True)  # rule 8: the pass's track is being computed
+            self._flip_for, self._flip = p.aos_s, flip
+        if utc < p.aos_s:  # the pass in hand has moved on past a LOS: utc <= p.los_s
+            self._inform(sky, utc, p, "waiting", scene.now)
+            return self._wait_for(sky, p, utc, scene)
+        self._inform(sky, utc, p, "tracking", scene.now)
+        return self._follow(sky, p, utc, scene)
+
+    def _aim(self, az: float, el: float) -> tuple[float, float | None]:
+        """Rules 4 and 6: what the rotor is sent for a body at (az, el)."""
+        if self._flip:
+            az, el = (az + 180.0) % 360.0, 180.0 - el
+        aim = self._rig.aim
+        if not aim.has_elevation:
+            return az, None
+        lo = max(aim.el_min_deg, self.cfg.min_el_deg if not self._flip else -math.inf)
+        hi = min(aim.el_max_deg, 180.0 - self.cfg.min_el_deg if self._flip else math.inf)
+        return az, min(max(el, lo), hi)
+
+    def _put(self, sky: SkyTrack, target: Target, scene: Scene) -> Proposal:
+        """Rule 5: judged like any target; a refusal is reported once per pass."""
+        try:
+            judged = self._rig.aim.judge(target, scene.motion.position_deg)
+        except Refused as exc:
+            aos = sky.pass_now.aos_s if sky.pass_now is not None else None
+            if self._refused_for != aos or aos is None:
+                self._refused_for = aos
+                why = f"tracking {sky.body.name}: {exc.message}; holding"
+                return Proposal(error=Report(ErrorKind.REFUSED, why), busy=True)
+            return Proposal(busy=True)
+        return Proposal(target=judged, busy=True)
+
+    def _wait_for(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
+        """Rule 2: after a pass park or stay, then go and wait where the next one rises."""
+        rig = self._rig
+        if sky.after_pass and self._parked_after != p.aos_s:
+            self._parked_after = p.aos_s
+            if self.cfg.at_los == "park" and rig.aim.park is not None:
+                az, el = rig.aim.park
+                park = self._put(sky, Target(az, el, Source.TRACKING, park=True), scene)
+                if park.target is not None:
+                    log.info("%s: pass over; parking until the next one", rig.rotator_id)
+                return park
+        if self._waited_for == p.aos_s or scene.pending is not None:
+            return Proposal(busy=True)
+        az, el = self._aim(p.aos_az_deg, self.cfg.min_el_deg)
+        margin_s = self._travel_s(scene, az, el) + PREPOSITION_MARGIN_S
+        if sky.after_pass and utc < p.aos_s - margin_s:
+            return Proposal(busy=True)
+        m = scene.motion
+        if sky.after_pass and (
+            m.state in (MotionState.MOVING, MotionState.BRAKING) or mo.settling(m)
+        ):
+            return Proposal(busy=True)  # a park still on its way: the wait target follows it
+        self._waited_for = p.aos_s
+        self._last = (az, el)
+        return self._put(sky, Target(az, el, Source.TRACKING), scene)
+
+    def _follow(self, sky: SkyTrack, p: Pass, utc: float, scene: Scene) -> Proposal:
+        """Rule 3."""
+        m = scene.motion
+        waiting = Proposal(busy=True)
+        if scene.pending is not None or scene.slewing:
+            return waiting
+        if not self._rig.motion.direct_retarget and m.state is not MotionState.IDLE:
+            return waiting
+        if m.state in (MotionState.BRAKING, MotionState.STALLED) or mo.settling(m):
+            return waiting  # (settling: no brake, but maybe still turning, motion.py rule 4)
+        lead = self._half_step_s(sky, utc)
+        body = sky.at(min(utc + lead, p.los_s)) if lead is not None else None
+        if body is None:
+            return waiting  # rule 8: that part of the track is being computed
+        az, el = self._aim(*body)
+        if self._last is not None and _apart(self._last, (az, el)) < self.cfg.step_deg:
+            if m.target_deg is not None or self._near(scene, az, el):
+                return waiting  # on its way to the last step (its verdict decides)
+        put = self._put(sky, Target(az, el, Source.TRACKING), scene)
+        if put.target is not None:
+            self._last = (az, el)
+        return put
+
+    def _turned_by_hand(self, scene: Scene) -> bool:
+        """Turning with no target and no stop of ours, and already further from the last
+        tracking target than a step and the tolerance: a hand on the front panel, not jitter,
+        coasting or a late start on a small step."""
+        m = scene.motion
+        if m.state is not MotionState.MOVING or m.target_deg is not None:
+            return False
+        if m.stop_sent_t is not None:
+            return False
+        if self._last is None or m.position_deg is None:
+            return True
+        at = self._rig.aim.true_of(m.position_deg)
+        far_deg = self.cfg.step_deg + self._rig.motion.tolerance_deg
+        return _apart((at, None), (self._last[0], None)) > far_deg
+
+    def _near(self, scene: Scene, az: float, el: float | None) -> bool:
+        """The rotor really is within a step (and its tolerance) of (az, el): the last target
+        is not enough, the rotor may have been turned since or have fallen short."""
+        m, aim = scene.motion, self._rig.aim
+        if m.position_deg is None:
+            return True  # nothing to judge by: the last target stands
+        at = (aim.true_of(m.position_deg), m.el_position_deg if el is not None else None)
+        return _apart(at, (az, el)) < self.cfg.step_deg + self._rig.motion.tolerance_deg
+
+    def _half_step_s(self, sky: SkyTrack, utc: float) -> float | None:
+        """How long the body takes to move half a step (rule 3), from its rate over 10 s; None
+        while its track is being computed."""
+        a, b = sky.at(utc), sky.at(utc + 10.0)
+        if a is None or b is None:
+            return None
+        rate = _apart(a, b) / 10.0
+        if rate <= 0.0:
+            return MAX_LEAD_S
+        return min(self.cfg.step_deg / 2.0 / rate, MAX_LEAD_S)
+
+    def _travel_s(self, scene: Scene, az: float, el: float | None) -> float:
+        """How long the rotor takes from where it is to (az, el) at its real speeds (rule 2)."""
+        rig, m = self._rig, scene.motion
+        try:
+            raw = rig.aim.raw_for(az, m.position_deg)
+        except Refused:
+            return 0.0
+        t = 0.0 if m.position_deg is None else abs(raw - m.position_deg) / rig.az_speed_deg_s
+        if el is not None and m.el_position_deg is not None:
+            t = max(t, abs(el - m.el_position_deg) / rig.el_speed_deg_s)
+        return t + rig.spec.brake_delay_s
+
+    def _flip_saves(self, sky: SkyTrack, p: Pass, scene: Scene) -> bool | None:
+        """Rule 4: whether this pass is flown flipped (None: its track is being computed, rule
+        8). Satellites only: the sun and the moon move too slowly across a "pass" of half a day
+        for a flip to be worth its elevation travel."""
+        aim, rig = self._rig.aim, self._rig
+        if not aim.has_elevation or aim.el_max_deg < 180.0 - self.cfg.min_el_deg:
+            return False
+        if sky.body.kind != "satellite":
+            return False
+        track = sky.flip_track(p)
+        if track is None:
+            return None
+
+        def travel_s(flip: bool) -> float:
+            """The time the rotor spends turning during the pass, on its slower axis at each
+            step (both axes at their real speeds): an unwind through a stop shows as a long
+            step. The move to where the pass rises is left out: it is made while waiting."""
+            raw: float | None = scene.motion.position_deg
+            el: float | None = None
+            total = 0.0
+            for az_b, el_b in track:
+                az_want, el_want = ((az_b + 180.0) % 360.0, 180.0 - el_b) if flip else (az_b, el_b)
+                try:
+                    nxt = aim.raw_for(az_want, raw)
+                except Refused:
+                    return math.inf
+                if el is not None and raw is not None:
+                    total += max(
+                        abs(nxt - raw) / rig.az_speed_deg_s, abs(el_want - el) / rig.el_speed_deg_s
+                    )
+                raw, el = nxt, el_want
+            return total
+
+        return travel_s(True) + FLIP_SAVING_DEG / rig.az_speed_deg_s < travel_s(False)
+
+    def _inform(self, sky: SkyTrack, utc: float, p: Pass | None, phase: str, now: float) -> None:
+        """The status's tracking block, refreshed every INFO_EVERY_S or when the phase changes."""
+        old = self.info
+        if old is not None and old.phase == phase and now - self._info_t < INFO_EVERY_S:
+            return
+        here, then = sky.at(utc), sky.at(utc + NEXT_S)
+        if here is None or then is None:
+            return  # rule 8: shown once its track is computed
+        self._info_t = now
+        (az, el), (naz, nel) = here, then
+        name = sky.body.name
+        info = TrackingInfo(
+            name, phase, round(az, 1), round(el, 1), round(naz, 1), round(nel, 1), flip=self._flip
+        )
+        if p is not None:
+            info = replace(
+                info,
+                aos_unix=round(p.aos_s, 1),
+                los_unix=round(p.los_s, 1),
+                max_elevation_deg=round(p.max_el_deg, 1),
+                aos_azimuth_deg=round(p.aos_az_deg, 1),
+                pass_track=_thinned(sky.flip_track(p)),
+            )
+        self.info = info
+
+
+def _thinned(track: list[tuple[float, float]] | None) -> tuple[tuple[float, float], ...]:
+    """The pass's track for the status (a sky plot draws it): at most PASS_TRACK_POINTS, the
+    first and the last among them, to a tenth of a degree; nothing while it is computed."""
+    if not track:
+        return ()
+    n = len(track)
+    step = max(1, math.ceil((n - 1) / (PASS_TRACK_POINTS - 1)))
+    picked = [*track[: n - 1 : step], track[-1]]
+    return tuple((round(az % 360.0, 1), round(el, 1)) for az, el in picked)
+
+
+def _apart(a: tuple[float, float | None], b: tuple[float, float | None]) -> float:
+    daz = angle_between(a[0], b[0])
+    if a[1] is None or b[1] is None:
+        return daz
+    return max(daz, abs(a[1] - b[1]))

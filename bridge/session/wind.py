@@ -1,0 +1,153 @@
+"""Parking for a storm (``wind_topic``): the wind park owns the storm, the readings and when they
+came. Pure: readings come in as inputs (``reading``, from the MQTT wind topic through the
+mailbox); each step gets a read-only ``Scene`` (parts.py) and returns a ``Proposal`` (the park,
+the end of tracking and following, a report) that the session applies.
+
+Rules:
+1. A reading above ``wind_park_above`` starts a storm: the rotator is sent to the wind park
+   position (source ``wind``), tracking and following end, and every motion command (a target,
+   a preset, a park, a nudge, a track or follow command) is refused with the reason
+   ("wind 72 km/h above 60: parked for the storm") until the storm is over.
+2. The storm is over once the readings have stayed below ``wind_release_below`` for
+   ``wind_hold_min``: a reading at or above the release level starts the hold again. Only
+   readings end a storm: nothing else does, not a restart of the wind station, not silence.
+   So the hold ends with a reading that comes at least ``wind_hold_min`` after the calm began,
+   never by the clock alone, and a gap of ``wind_silent_min`` between readings starts the calm
+   again from the reading after it (a station that fell silent after one calm reading says
+   nothing of the wind since).
+3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
+   storm stops the park under way, and the park is not tried again until the next storm;
+   motion stays refused meanwhile.
+4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
+   the status; the state it had is kept. The next reading clears it.
+5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
+   motion is refused all the same.
+6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
+   after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
+   new reading: it may start a storm or start the hold again (the safe side), and it is the
+   speed shown while no new reading has come; it never starts or continues a calm, so it never
+   ends a storm, and it says nothing of silence (rule 4: the station may be long gone).
+"""
+
+from __future__ import annotations
+
+import logging
+
+from bridge.core.errors import Refused
+from bridge.core.model import ErrorKind, Source, Target, WindInfo
+from bridge.session.actions import Report
+from bridge.session.config import WindConfig, WorkerConfig
+from bridge.session.parts import NOTHING, Proposal, Scene
+
+log = logging.getLogger(__name__)
+
+
+class WindPark:
+    """Without a wind topic (``rig.wind`` None) it never does anything."""
+
+    def __init__(self, rig: WorkerConfig, *, storm: bool = False) -> None:
+        self._rig, self._cfg = rig, rig.wind or WindConfig(0.0, 0.0, 0.0, (0.0, None), 0.0)
+        self.on = rig.wind is not None
+        self.storm = storm
+        self._why = "wind above the park level"  # rule 1's reason, once a reading says it
+        self._speed: float | None = None
+        self._last_t: float | None = None  # when the last reading came
+        self._since_t: float | None = None  # silence counts from here before any reading
+        self._calm_since: float | None = None
+        self._silent = False
+        self._park_owed = storm
+        self._wall_offset_s = 0.0
+
+    @property
+    def info(self) -> WindInfo | None:
+        if not self.on:
+            return None
+        calm = self._calm_since
+        return WindInfo(
+            speed_kmh=None if self._speed is None else round(self._speed, 1),
+            storm=self.storm,
+            calm_since_unix=None if calm is None else calm + self._wall_offset_s,
+            silent=self._silent,
+            refusal=self.refusal(),
+        )
+
+    def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
+        """Rules 1, 2, 4 and 6: a reading, in km/h (``replayed`` by the broker)."""
+        cfg = self._cfg
+        if not self.on:
+            return
+        if replayed:  # rule 6
+            if self._last_t is None:
+                self._speed = kmh
+            if kmh > cfg.park_above_kmh:
+                self._stormy(kmh)
+            elif kmh >= cfg.release_below_kmh:
+                self._calm_since = None
+            return
+        gap = self._last_t is None or now - self._last_t >= cfg.silent_s  # rule 2
+        self._speed, self._last_t, self._silent = kmh, now, False
+        if kmh > cfg.park_above_kmh:
+            self._stormy(kmh)
+        elif self.storm and kmh < cfg.release_below_kmh:
+            if self._calm_since is None or gap:
+                self._calm_since = now
+        else:
+            self._calm_since = None  # rule 2: the hold starts again
+
+    def _stormy(self, kmh: float) -> None:
+        """Rule 1: a reading above the park level; rule 2: no calm since."""
+        self._calm_since = None
+        if not self.storm:
+            self.storm, self._park_owed = True, True
+            self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
+            log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
+
+    def halted(self) -> None:
+        """Rule 3: a stop or lock ON; the park is not tried again in this storm."""
+        self._park_owed = False
+
+    def refusal(self) -> str | None:
+        """Why motion is refused now (rule 1), if it is."""
+        return f"{self._why}: parked for the storm" if self.storm else None
+
+    def wakeup(self, now: float) -> float | None:
+        """When the silence is due, if it lies ahead (the hold ends with a reading: rule 2)."""
+        times = []
+        quiet_from = self._last_t if self._last_t is not None else self._since_t
+        if quiet_from is not None and not self._silent and self.on:
+            times.append(quiet_from + self._cfg.silent_s)
+        ahead = [t for t in times if t > now]
+        return min(ahead) if ahead else None
+
+    def step(self, scene: Scene) -> Proposal:
+        """Run by the session with its other rules, while the controller answers."""
+        cfg, now = self._cfg, scene.now
+        if not self.on:
+            return NOTHING
+        self._wall_offset_s = scene.wall_offset_s
+        if self._since_t is None:
+            self._since_t = now
+        error = None
+        quiet_from = self._last_t if self._last_t is not None else self._since_t
+        if not self._silent and now - quiet_from >= cfg.silent_s:  # rule 4
+            self._silent = True
+            kept = "parked for the storm" if self.storm else "no storm"
+            error = Report(
+                ErrorKind.WIND,
+                f"no wind reading on {cfg.topic} for {cfg.silent_s / 60:g} min: keeping the "
+                f"state it had ({kept})",
+            )
+        calm, last = self._calm_since, self._last_t
+        if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
+            self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
+            log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
+        if not (self.storm and self._park_owed) or scene.locked:
+            return NOTHING if error is None else Proposal(error=error)
+        self._park_owed = False
+        park = Target(cfg.park[0], cfg.park[1], Source.WIND, park=True)
+        try:
+            judged = self._rig.aim.judge(park, scene.motion.position_deg)
+        except Refused as exc:  # rule 5
+            why = Report(ErrorKind.REFUSED, f"wind park refused: {exc.message}", "wind park")
+            return Proposal(error=why, ended=self._why, busy=True)
+        return Proposal(target=judged, error=error, ended=self._why, busy=True)

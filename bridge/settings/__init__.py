@@ -1,0 +1,368 @@
+"""Configuration: a TOML file, every value overridable from the environment, validated once.
+
+Environment: ``ROTOR_BRIDGE_<FIELD>``, nested with ``__`` (``ROTOR_BRIDGE_MQTT__HOST=broker``).
+Rotators are a list in the file; their fields are overridden by id:
+``ROTOR_BRIDGE_ROTATORS__TOWER__PORT=/dev/ttyUSB1``. The file itself is ``--config`` or
+``ROTOR_BRIDGE_CONFIG``.
+
+Where the parts are: the broker's tables in settings/mqtt.py, a rotator's in
+settings/rotator.py (its pointing and loggers' keys in settings/pointing.py and
+settings/loggers.py), the console's in settings/web.py, the engine values derived for keys
+left out in settings/defaults.py, the files settings name in settings/files.py, the wording of
+errors in settings/errors.py.
+check-config's report is settings/report.py; docs/configuration.md is written from these models
+by config_doc.py.
+
+Rules:
+1. Unknown keys and tables are errors (a typo must not silently do nothing), with the nearest
+   known name suggested: ``[[rotator]]`` is "did you mean [[rotators]]?".
+2. Every error names the key it is about, as the file spells it (``rotators[0].port``), one line
+   per problem; the password never appears in one.
+3. Loading touches no hardware: a serial port is a name here (check-config looks whether it
+   exists, as a warning).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import (
+    Field,
+    PrivateAttr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
+
+from bridge.settings import errors as settings_errors
+from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
+from bridge.settings.dxcluster import DxClusterSettings
+from bridge.settings.groups import RESERVED, GroupSettings
+from bridge.settings.mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
+from bridge.settings.pointing import StationSettings, TrackingSettings
+from bridge.settings.rotator import EMULATION_KEYS, RotatorSettings
+from bridge.settings.web import WebSettings
+from bridge.settings.wsjtx import WsjtxSettings
+
+__all__ = [
+    "DEFAULT_SILENCE_TIMEOUT_S",
+    "ENV_PREFIX",
+    "ConfigError",
+    "HomeAssistantSettings",
+    "MqttSettings",
+    "RotatorSettings",
+    "Settings",
+    "StationSettings",
+    "TlsSettings",
+    "TrackingSettings",
+    "WebSettings",
+    "WsjtxSettings",
+    "DxClusterSettings",
+    "GroupSettings",
+    "format_validation_error",
+    "load_settings",
+]
+
+ENV_PREFIX = "ROTOR_BRIDGE_"
+_ROTATOR_ENV = re.compile(r"^ROTOR_BRIDGE_ROTATORS__([^_].*?)__([A-Za-z0-9_]+)$", re.IGNORECASE)
+
+
+class ConfigError(Exception):
+    """A configuration problem, worded for the user; the CLI prints it and exits with 2."""
+
+
+def _default_state_file() -> Path:
+    base = os.environ.get("STATE_DIRECTORY")  # systemd's StateDirectory=
+    if base:
+        return Path(base.split(":")[0]) / "state.json"
+    return Path.home() / ".local" / "state" / "rotor-bridge" / "state.json"
+
+
+class Settings(BaseSettings):
+    """The keys at the top of the file, before any table."""
+
+    model_config = SettingsConfigDict(
+        env_prefix=ENV_PREFIX, env_nested_delimiter="__", extra="forbid", case_sensitive=False
+    )
+
+    mqtt: MqttSettings = Field(default_factory=MqttSettings, description="the [mqtt] table")
+    homeassistant: HomeAssistantSettings = Field(
+        default_factory=HomeAssistantSettings, description="the [homeassistant] table"
+    )
+    station: StationSettings = Field(
+        default_factory=StationSettings, description="the [station] table"
+    )
+    tracking: TrackingSettings = Field(
+        default_factory=TrackingSettings, description="the [tracking] table"
+    )
+    web: WebSettings = Field(default_factory=WebSettings, description="the [web] table")
+    wsjtx: WsjtxSettings = Field(default_factory=WsjtxSettings, description="the [wsjtx] table")
+    dxcluster: DxClusterSettings = Field(
+        default_factory=DxClusterSettings, description="the [dxcluster] table"
+    )
+    rotators: list[RotatorSettings] = Field(
+        min_length=1, description="the [[rotators]] tables, one per rotator"
+    )
+    groups: list[GroupSettings] = Field(
+        default_factory=list,
+        description="the [[groups]] tables: rotators turned together from one topic "
+        "(docs/groups.md)",
+        json_schema_extra={"unset": "no groups"},
+    )
+    log_level: str = Field(
+        "INFO",
+        description="DEBUG, INFO, WARNING or ERROR; DEBUG shows every byte on the serial lines",
+        examples=["DEBUG"],
+    )
+    state_file: Path = Field(
+        default_factory=_default_state_file,
+        description="where the lock and the options set at run time are kept across restarts; "
+        "with a console password, the console's login secret (console-secret, see the "
+        "console's page) is kept beside it",
+        examples=["/var/lib/rotor-bridge/state.json"],
+        json_schema_extra={
+            "unset": "$STATE_DIRECTORY/state.json under systemd, else "
+            "~/.local/state/rotor-bridge/state.json"
+        },
+    )
+    audit_file: Path | None = Field(
+        None,
+        description="the audit log: one JSON line per command executed or refused, from every "
+        "interface (who, how, what, the result); rotated by size",
+        examples=["/var/log/rotor-bridge/audit.jsonl"],
+        json_schema_extra={"unset": "no audit file (R/audit is published all the same)"},
+    )
+    audit_max_bytes: int = Field(
+        1_000_000,
+        ge=10_000,
+        description="the audit file's size at which it is renamed to .1 (three old files kept)",
+    )
+    # mqtt.password is written in the configuration file itself (check-config warns)
+    _password_in_file: bool = PrivateAttr(default=False)
+
+    @field_validator("log_level")
+    @classmethod
+    def _level(cls, v: str) -> str:
+        v = v.upper()
+        if v not in ("DEBUG", "INFO", "WARNING", "ERROR"):
+            raise ValueError("must be DEBUG, INFO, WARNING or ERROR")
+        return v
+
+    @model_validator(mode="after")
+    def _unique(self) -> Settings:
+        seen: dict[str, str] = {}
+        for r in self.rotators:
+            if r.id in seen:
+                raise ValueError(f"rotator id {r.id!r} is used twice")
+            seen[r.id] = r.port
+        ports = [p for r in self.rotators for p in r.ports]  # a composite's both
+        dup = {p for p in ports if ports.count(p) > 1}
+        if dup:
+            raise ValueError(f"port {sorted(dup)[0]} is given to two rotators")
+        rotctld = [r.rotctld_port for r in self.rotators if r.rotctld_port is not None]
+        if len(set(rotctld)) != len(rotctld):
+            raise ValueError("two rotators share one rotctld_port")
+        for i, r in enumerate(self.rotators):  # both TCP: the second listener could not start
+            if self.web.enabled and r.rotctld_port == self.web.port:
+                raise ValueError(
+                    f"web.port {self.web.port} is also rotators[{i}].rotctld_port: give the "
+                    "console another port"
+                )
+        # a GS-232, Easycomm or DCU-1 port is no other TCP listener's (the second could not
+        # start) and no PstRotator port (one number, one program to point at it)
+        taken = [("web.port", self.web.port)] if self.web.enabled else []
+        emulated = tuple(f"{key}_port" for key in EMULATION_KEYS)
+        keys = ("rotctld_port", "pst_udp_port", *emulated)
+        taken += [
+            (f"rotators[{i}].{k}", getattr(r, k)) for i, r in enumerate(self.rotators) for k in keys
+        ]
+        for name, port in taken:
+            clash = [other for other, p in taken if p == port and other != name]
+            if port is not None and name.endswith(emulated) and clash:
+                raise ValueError(f"{name} {port} is also {clash[0]}: give it another port")
+        ptys = [
+            (os.path.abspath(os.path.expanduser(path)), f"rotators[{i}].{k}")
+            for i, r in enumerate(self.rotators)
+            for k in (f"{key}_pty" for key in EMULATION_KEYS)
+            if (path := getattr(r, k)) is not None
+        ]
+        for n, (path, name) in enumerate(ptys):  # one link, one pty
+            clash = [other for p, other in ptys[:n] if p == path]
+            if clash:
+                raise ValueError(f"{name} {path} is also {clash[0]}: give it another path")
+        pst = [r.pst_udp_port for r in self.rotators if r.pst_udp_port is not None]
+        n1mm_ports = {r.n1mm_udp_port for r in self.rotators if r.n1mm_rotor_name is not None}
+        if len(set(pst)) != len(pst) or set(pst) & n1mm_ports:
+            raise ValueError("two rotators share one pst_udp_port (or it is an n1mm_udp_port)")
+        named = [r for r in self.rotators if r.n1mm_rotor_name is not None]
+        names = [(r.n1mm_udp_bind, r.n1mm_udp_port, r.n1mm_rotor_name) for r in named]
+        for key in {n for n in names if names.count(n) > 1}:  # one name, chosen by band
+            if any(n == key and not r.bands for n, r in zip(names, named, strict=True)):
+                raise ValueError(
+                    f"two rotators have n1mm_rotor_name {key[2]!r} on one N1MM port: give "
+                    "each its own, or give each of them its bands to be chosen by"
+                )
+        owner: dict[str, str] = {}  # settings/bands.py rule 3
+        for r in self.rotators:
+            for band in r.bands:
+                if band in owner:
+                    raise ValueError(
+                        f"rotators {owner[band]!r} and {r.id!r} both have {band!r} in bands: "
+                        "a band turns one antenna"
+                    )
+                owner[band] = r.id
+        topics = [self.rotator_topic(r) for r in self.rotators]
+        if len(set(topics)) != len(topics):
+            raise ValueError("two rotators share one topic")
+        prefix = self.homeassistant.discovery_prefix
+        if self.homeassistant.enabled and (
+            prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
+        ):
+            raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
+        return self
+
+    @model_validator(mode="after")
+    def _groups(self) -> Settings:
+        """settings/groups.py rule 4: members are rotators, a group's topics no other's."""
+        roots = {r.id: self.rotator_topic(r) for r in self.rotators}
+        seen: set[str] = set()
+        for i, g in enumerate(self.groups):
+            where = f"groups[{i}]"
+            if g.id in seen:
+                raise ValueError(f"{where}.id: group id {g.id!r} is used twice")
+            seen.add(g.id)
+            for rid in g.rotators:
+                if rid not in roots:
+                    raise ValueError(
+                        f"{where}.rotators: {rid!r} is no rotator's id (the rotators are "
+                        f"{', '.join(roots)})"
+                    )
+            if g.id in RESERVED:
+                raise ValueError(
+                    f"{where}.id: {g.id!r} is a word of the bridge's own topics: choose another"
+                )
+            root = self.group_topic(g)
+            for rid, r_root in roots.items():
+                if root == r_root or r_root.startswith(root + "/"):
+                    raise ValueError(
+                        f"{where}.id: {g.id!r} would share its topic {root} with rotator {rid!r}"
+                    )
+        return self
+
+    def group_topic(self, g: GroupSettings) -> str:
+        """Where a group's topics are (``<base_topic>/<id>``)."""
+        return f"{self.mqtt.base_topic}/{g.id}"
+
+    @model_validator(mode="after")
+    def _installation(self) -> Settings:
+        self.mqtt._state_file = str(self.state_file.expanduser().absolute())
+        return self
+
+    def rotator_topic(self, r: RotatorSettings) -> str:
+        if r.topic:
+            return r.topic
+        base = self.mqtt.base_topic
+        return base if len(self.rotators) == 1 else f"{base}/{r.id}"
+
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        # Rotator overrides by id are merged into the file's list by load_settings; the env source
+        # must not see them, or it would replace the list with a dict.
+        env_vars = getattr(env_settings, "env_vars", None)
+        if isinstance(env_vars, dict):
+            for key in [k for k in env_vars if k.lower().startswith("rotor_bridge_rotators__")]:
+                del env_vars[key]
+        return (env_settings, init_settings)  # environment beats the file
+
+
+def load_settings(
+    path: str | os.PathLike[str] | None, environ: dict[str, str] | None = None
+) -> Settings:
+    """Read, merge and validate; raise ConfigError with one message per problem."""
+    env = os.environ if environ is None else environ
+    path = path or env.get("ROTOR_BRIDGE_CONFIG")
+    data: dict[str, Any] = read_toml(path) if path else {}
+    return settings_from(data, env, path)
+
+
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The file as a TOML document; ConfigError if it cannot be read or is no TOML."""
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise ConfigError(f"config file {path} not found") from None
+    except OSError as exc:
+        raise ConfigError(f"config file {path}: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"config file {path} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"config file {path} is not UTF-8 text (byte {exc.start}): save it as UTF-8"
+        ) from None
+
+
+def settings_from(
+    data: dict[str, Any],
+    environ: Any = None,
+    path: str | os.PathLike[str] | None = None,
+) -> Settings:
+    """``data`` (a TOML document) with the environment's overrides, validated (ConfigError)."""
+    env = os.environ if environ is None else environ
+    _apply_rotator_env(data, env)
+    unknown = [k for k in data if k not in Settings.model_fields]
+    if (
+        "rotators" not in data
+        and not unknown  # a misspelt [[rotators]] is named as that (rule 1)
+        and not any(k.upper().startswith("ROTOR_BRIDGE_ROTATORS") for k in env)
+    ):
+        if path:
+            raise ConfigError(
+                f"no rotators configured in {path}: add a [[rotators]] table with id, model "
+                "and port (docs/configuration.md)"
+            )
+        raise ConfigError(
+            "no rotators configured: pass --config FILE (see config/example.toml) "
+            "or set ROTOR_BRIDGE_CONFIG"
+        )
+    try:
+        settings = Settings(**data)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, data, env)) from None
+    mqtt = data.get("mqtt")
+    settings._password_in_file = isinstance(mqtt, dict) and "password" in mqtt
+    return settings
+
+
+def _apply_rotator_env(data: dict[str, Any], env: Any) -> None:
+    for key, value in env.items():
+        m = _ROTATOR_ENV.match(key)
+        if not m:
+            continue
+        rid, field = m.group(1).lower(), m.group(2).lower()
+        for r in data.get("rotators", []):
+            if isinstance(r, dict) and str(r.get("id", "")).lower() == rid:
+                r[field] = value
+                break
+        else:
+            raise ConfigError(f"{key}: no rotator with id {rid!r} in the configuration")
+
+
+def format_validation_error(
+    exc: ValidationError, data: dict[str, Any] | None = None, environ: Any = None
+) -> str:
+    """One line per problem, each naming the key as the file spells it (rule 2), and the
+    environment variable where one set the value (settings/errors.py)."""
+    return settings_errors.describe(exc, Settings, ENV_PREFIX, data, environ)

@@ -1,0 +1,125 @@
+"""The DX cluster client's settings: ``[dxcluster]`` (the client is bridge/interfaces/dxcluster/).
+
+Rules:
+1. Off unless enabled. Enabled, ``host``, ``login`` and ``cty_file`` are needed: a node asks
+   for a call sign, and a spot without a cty file has no position unless its comment holds a
+   locator. Each missing one is an error naming it.
+2. The cty file is read from disk at start-up (interfaces/dxcluster/cty.py): one that is missing or
+   unreadable stops the start with one line naming it. The bridge never downloads it.
+3. ``bands`` names bands of BANDS_KHZ (empty: every spot); a name not there is an error that
+   lists the known ones.
+4. Every key carries its meaning (``description``) for docs/configuration.md.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+DEFAULT_PORT = 7300  # DX Spider's usual telnet port (many nodes also take 23 or 8000)
+
+BANDS_KHZ: dict[str, tuple[float, float]] = {  # rule 3: the IARU amateur bands, widest region
+    "160m": (1800, 2000),
+    "80m": (3500, 4000),
+    "60m": (5250, 5450),
+    "40m": (7000, 7300),
+    "30m": (10100, 10150),
+    "20m": (14000, 14350),
+    "17m": (18068, 18168),
+    "15m": (21000, 21450),
+    "12m": (24890, 24990),
+    "10m": (28000, 29700),
+    "6m": (50000, 54000),
+    "4m": (70000, 71000),
+    "2m": (144000, 148000),
+    "70cm": (430000, 440000),
+}
+_CALL = re.compile(r"[A-Z0-9/-]{3,20}", re.ASCII)
+
+
+def band_of(freq_khz: float) -> str | None:
+    """The band a frequency is in, or None."""
+    for name, (low, high) in BANDS_KHZ.items():
+        if low <= freq_khz <= high:
+            return name
+    return None
+
+
+class DxClusterSettings(BaseModel):
+    """``[dxcluster]``: spots from a DX cluster node (telnet), on ``B/spots``, and turning a
+    rotator to a spotted call (``R/target`` ``{"call": ...}``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    enabled: bool = Field(
+        False,
+        description="connect to a DX cluster node and publish its spots (B/spots)",
+        examples=[True],
+    )
+    host: str | None = Field(
+        None,
+        description="the cluster node's host name or address (a DX Spider node, for example)",
+        examples=["dxc.example.org"],
+        json_schema_extra={"unset": "needed when enabled"},
+    )
+    port: int = Field(
+        DEFAULT_PORT, ge=1, le=65535, description="the node's telnet port", examples=[8000]
+    )
+    login: str | None = Field(
+        None,
+        description="your call sign, sent when the node asks for it",
+        examples=["G4ABC"],
+        json_schema_extra={"unset": "needed when enabled"},
+    )
+    cty_file: Path | None = Field(
+        None,
+        description="AD1C's cty.dat or cty.csv (country-files.com), downloaded by you: the "
+        "entity, and so the bearing, of a spotted call without a locator",
+        examples=["/etc/rotor-bridge/cty.dat"],
+        json_schema_extra={"unset": "needed when enabled"},
+    )
+    max_spots: int = Field(
+        50, ge=1, le=200, description="the newest spots kept on B/spots, at most", examples=[20]
+    )
+    max_age_min: float = Field(
+        30.0,
+        gt=0,
+        le=1440,
+        description="a spot older than this (minutes since it was heard) leaves B/spots",
+        examples=[15],
+    )
+    bands: list[str] = Field(
+        default_factory=list,
+        description="only spots on these bands (" + ", ".join(BANDS_KHZ) + "); empty: all",
+        examples=[["20m", "15m", "10m"]],
+        json_schema_extra={"unset": "every band"},
+    )
+
+    @field_validator("login")
+    @classmethod
+    def _login(cls, v: str | None) -> str | None:
+        if v is None:
+            return v
+        call = v.strip().upper()
+        if not _CALL.fullmatch(call):
+            raise ValueError("must be a call sign: 3 to 20 letters, digits, / or -")
+        return call
+
+    @field_validator("bands")
+    @classmethod
+    def _bands(cls, v: list[str]) -> list[str]:
+        names = [b.strip().lower() for b in v]
+        unknown = [b for b in names if b not in BANDS_KHZ]
+        if unknown:
+            known = ", ".join(BANDS_KHZ)
+            raise ValueError(f"unknown band(s) {', '.join(unknown)}: known are {known}")
+        return names
+
+    @model_validator(mode="after")
+    def _needed(self) -> DxClusterSettings:
+        if self.enabled:
+            for name in ("host", "login", "cty_file"):
+                if getattr(self, name) is None:
+                    raise ValueError(f"{name}: needed when [dxcluster] is enabled")
+        return self

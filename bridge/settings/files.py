@@ -1,0 +1,72 @@
+"""The files the settings name (TLS certificates and key, the MQTT password file), checked once.
+
+settings/'s validators call these, so a file that will not do is a configuration error at
+start, worded for the user, and not a traceback when the MQTT client first reads it.
+
+Rules:
+1. A file is read the way its user will read it: the TLS files through an ssl context as paho's
+   tls_set loads them, the password file as text with its line ending stripped.
+2. Every problem is a ValueError naming the setting and the path (pydantic turns it into one
+   line of the configuration error); nothing is changed when one is raised.
+3. Secrets never appear in a message: the password is returned, never quoted; a key is never
+   decrypted (an encrypted key is an error, or OpenSSL would ask on a terminal there is not).
+"""
+
+from __future__ import annotations
+
+import ssl
+import stat
+from pathlib import Path
+
+
+def check_tls_files(ca_file: Path | None, cert_file: Path | None, key_file: Path | None) -> None:
+    """Raise ValueError unless the files exist, can be read and load as the MQTT client will."""
+    if (cert_file is None) != (key_file is None):
+        raise ValueError("cert_file and key_file go together")
+    for name, f in (("ca_file", ca_file), ("cert_file", cert_file), ("key_file", key_file)):
+        if f is not None and not f.is_file():
+            raise ValueError(f"{name} {f} is not a readable file")
+        try:
+            if f is not None:
+                f.open("rb").close()
+        except OSError as exc:
+            raise ValueError(f"{name} {f}: {exc.strerror}") from None
+    context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+    if ca_file is not None:
+        try:
+            context.load_verify_locations(cafile=str(ca_file))
+        except ssl.SSLError as exc:
+            raise ValueError(
+                f"ca_file {ca_file} holds no PEM certificate ({_ssl_reason(exc)})"
+            ) from None
+    if cert_file is not None and key_file is not None:
+
+        def no_passphrase() -> bytes:  # rule 3
+            raise ValueError(f"key_file {key_file} is encrypted: it must not be")
+
+        try:
+            context.load_cert_chain(cert_file, key_file, password=no_passphrase)
+        except ssl.SSLError as exc:
+            raise ValueError(
+                f"cert_file {cert_file} and key_file {key_file} are not a PEM "
+                f"certificate and its key ({_ssl_reason(exc)})"
+            ) from None
+
+
+def _ssl_reason(exc: ssl.SSLError) -> str:
+    return exc.reason or str(exc.strerror or exc).split(" (_ssl.c")[0]
+
+
+def read_password_file(path: Path) -> str:
+    """The password in `path`; ValueError if it cannot be read or every user may read it."""
+    try:
+        mode = path.stat().st_mode
+        text = path.read_text()
+    except OSError as exc:
+        raise ValueError(f"password_file {path}: {exc.strerror}") from None
+    if mode & (stat.S_IROTH | stat.S_IWOTH):
+        raise ValueError(
+            f"password_file {path} is readable by every user; let only the user that runs "
+            "rotor-bridge read it (chmod 600; for the service: chown root:rotor-bridge, chmod 640)"
+        )
+    return text.strip("\r\n")

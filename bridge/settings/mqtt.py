@@ -1,0 +1,249 @@
+"""The broker settings: ``[mqtt]``, ``[mqtt.tls]`` and ``[homeassistant]``.
+
+Rules:
+1. Every key carries its meaning (``description``) and, where its default says nothing, an
+   example and the words for "left out" (``unset``); docs/configuration.md is generated from
+   them (bridge/config_doc.py).
+2. The files named here (TLS, password) are read once while loading (settings/files.py), so a
+   file that will not do is a configuration error naming the key, not a traceback at start.
+3. The client id left out is unique per installation and stable across restarts
+   (effective_client_id).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import socket
+from pathlib import Path
+from typing import Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    SecretStr,
+    field_validator,
+    model_validator,
+)
+
+from bridge.settings.files import check_tls_files, read_password_file
+
+_TOPIC_BAD = re.compile(r"[+#\x00]")
+
+
+def check_topic(v: str) -> str:
+    """``v`` if it is a plain topic (no wildcards, no leading, trailing or double '/')."""
+    if not v or v.startswith("/") or v.endswith("/") or _TOPIC_BAD.search(v) or "//" in v:
+        raise ValueError(
+            "must be a plain topic like 'rotor' (no wildcards, no leading/trailing '/')"
+        )
+    return v
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class TlsSettings(_Strict):
+    """``[mqtt.tls]``: an encrypted connection to the broker, with a client certificate if the
+    broker asks for one. Every file is checked while the configuration loads."""
+
+    enabled: bool = Field(
+        False, description="connect with TLS (the broker's TLS port, usually 8883)", examples=[True]
+    )
+    ca_file: Path | None = Field(
+        None,
+        description="the certificate authority that signed the broker's certificate (PEM)",
+        examples=["/etc/ssl/certs/my-ca.pem"],
+        json_schema_extra={"unset": "the system's trusted authorities"},
+    )
+    cert_file: Path | None = Field(
+        None,
+        description="a client certificate (PEM), for brokers that authenticate clients by "
+        "certificate; goes with key_file",
+        examples=["/etc/rotor-bridge/client.crt"],
+        json_schema_extra={"unset": "no client certificate"},
+    )
+    key_file: Path | None = Field(
+        None,
+        description="the client certificate's private key (PEM, not encrypted); goes with "
+        "cert_file",
+        examples=["/etc/rotor-bridge/client.key"],
+        json_schema_extra={"unset": "no client certificate"},
+    )
+    insecure: bool = Field(
+        False,
+        description="skip the check that the broker's certificate names its host (self-signed "
+        "lab brokers only)",
+        examples=[True],
+    )
+
+    @model_validator(mode="after")
+    def _files(self) -> TlsSettings:
+        # loaded here as the MQTT client will load them, so a bad file is a config error now and
+        # not a traceback at start (paho's tls_set would raise it)
+        check_tls_files(self.ca_file, self.cert_file, self.key_file)
+        return self
+
+
+class MqttSettings(_Strict):
+    """``[mqtt]``: the broker the bridge connects to, and the topics it uses there."""
+
+    host: str = Field(
+        "127.0.0.1", description="the broker's host name or address", examples=["broker.lan"]
+    )
+    port: int = Field(
+        1883, ge=1, le=65535, description="the broker's port (TLS: usually 8883)", examples=[8883]
+    )
+    username: str | None = Field(
+        None,
+        description="the user name to log in to the broker with",
+        examples=["rotor"],
+        json_schema_extra={"unset": "no login"},
+    )
+    password: SecretStr | None = Field(
+        None,
+        description="the password; better in password_file (this file then holds a secret: "
+        "check-config warns). Never printed.",
+        examples=["s3cret"],
+        json_schema_extra={"unset": "no password"},
+    )
+    password_file: Path | None = Field(
+        None,
+        description="a file holding the password (one line), readable by the service user and "
+        "not by every user (chown root:rotor-bridge, chmod 640); not together with password",
+        examples=["/etc/rotor-bridge/mqtt-password"],
+        json_schema_extra={"unset": "no password file"},
+    )
+    tls: TlsSettings = Field(
+        default_factory=TlsSettings, description="the [mqtt.tls] table (below)"
+    )
+    client_id: str | None = Field(
+        None,
+        description="the MQTT client id. Left out, it is 'rotor-', up to 10 characters of the "
+        "host name, '-' and 6 hex digits of a hash of the host name, base_topic and state_file: "
+        "unique per installation, stable across restarts, at most 23 characters. Set it only "
+        "if the broker's access rules need a fixed id.",
+        examples=["rotor-shack"],
+        json_schema_extra={"unset": "rotor-<host>-<6 hex digits>"},
+    )
+    keepalive_s: int = Field(
+        30,
+        ge=5,
+        le=3600,
+        description="seconds between keep-alive pings; the broker declares the bridge offline "
+        "after 1.5 times this without a word",
+        examples=[60],
+    )
+    error_events_per_s: float = Field(
+        10.0,
+        gt=0,
+        le=10000,
+        description="R/error events per rotator: at most this many a second after a burst of "
+        "five times as many (a controller spewing junk cannot flood the broker)",
+        examples=[2],
+    )
+    base_topic: str = Field(
+        "rotor",
+        description="the first level of every topic: one rotator uses <base_topic>/target ..., "
+        "several <base_topic>/<id>/target ...",
+        examples=["shack/rotor"],
+    )
+    protocol: Literal["auto", "5", "3.1.1"] = Field(
+        "auto",
+        description='the MQTT version: "auto" tries MQTT 5 and falls back to 3.1.1 when the '
+        'broker answers "Unsupported protocol version", or closes MQTT 5 connections and '
+        "accepts an MQTT 3.1.1 one (RabbitMQ 3, amqtt); said once, as a warning, and in "
+        'B/bridge/info. "5" or "3.1.1" forces one. '
+        "Under 3.1.1 retained commands are recognised only when the broker replays them "
+        "(docs/brokers.md)",
+        examples=["3.1.1"],
+    )
+
+    stop_express: bool = Field(
+        True,
+        description="a STOP's frame written by a small process of its own, on a third "
+        "connection to the broker (client id 'rfast-...' beside 'rotor-...' and the stop "
+        "lane's 'rstop-...'), so that nothing the bridge's process is busy with delays it; "
+        "only for controllers that take a stop frame at any moment (Rotor-EZ, RotorCard, "
+        "GS-232, Easycomm). Off: stops take the stop lane in the bridge's process",
+        examples=[False],
+    )
+
+    @field_validator("protocol", mode="before")
+    @classmethod
+    def _protocol(cls, v: object) -> object:
+        return str(v) if isinstance(v, int | float) and not isinstance(v, bool) else v
+
+    @field_validator("base_topic")
+    @classmethod
+    def _topic(cls, v: str) -> str:
+        return check_topic(v)
+
+    @model_validator(mode="after")
+    def _password_file(self) -> MqttSettings:
+        if self.password_file is None:
+            return self
+        if self.password is not None:
+            raise ValueError("set password or password_file, not both")
+        self.password = SecretStr(read_password_file(self.password_file))
+        return self
+
+    # the state file of the installation these settings belong to (Settings fills it in)
+    _state_file: str = PrivateAttr(default="")
+
+    def effective_client_id(self) -> str:
+        """``client_id``, or a default that is unique per installation and stable across restarts.
+
+        The default is "rotor-", up to 10 characters of the host name, "-" and 6 hex digits of a
+        hash of the full host name, the base topic and the state file path: at most 23
+        characters, the length every MQTT 3.1.1 broker must accept, from the characters every
+        broker takes (plus "-"). Two bridges on one host (a second installation, the demo beside
+        the real one) differ in state file or base topic, so they do not take each other's
+        session over; one installation keeps its id. Two hosts sharing one configuration with
+        an explicit client_id still collide: the client reports that (interfaces/mqtt/client.py rule
+        7).
+        """
+        if self.client_id:
+            return self.client_id
+        host = socket.gethostname()
+        key = f"{host}\n{self.base_topic}\n{self._state_file}".encode()
+        digest = hashlib.sha256(key).hexdigest()[:6]
+        short = re.sub(r"[^a-z0-9-]", "", host.split(".")[0].lower())[:10].strip("-")
+        return f"rotor-{short}-{digest}" if short else f"rotor-{digest}"
+
+
+class HomeAssistantSettings(_Strict):
+    """``[homeassistant]``: MQTT discovery, so every rotator appears in Home Assistant as a
+    device with its controls, by itself."""
+
+    enabled: bool = Field(
+        True, description="publish Home Assistant's discovery messages", examples=[False]
+    )
+    discovery_prefix: str = Field(
+        "homeassistant",
+        description="the discovery prefix set in Home Assistant's MQTT options; must differ "
+        "from mqtt.base_topic",
+        examples=["ha"],
+    )
+    status_topic: str = Field(
+        "homeassistant/status",
+        description="where Home Assistant announces its start (its birth message); the bridge "
+        "then publishes its state again",
+        examples=["ha/status"],
+    )
+    birth_delay_s: float = Field(
+        10.0,
+        ge=0,
+        le=300,
+        description="wait this long after Home Assistant's birth message before publishing the "
+        "state again (state that arrives before Home Assistant has read discovery is ignored)",
+        examples=[5],
+    )
+
+    @field_validator("discovery_prefix", "status_topic")
+    @classmethod
+    def _topic(cls, v: str) -> str:
+        return check_topic(v)

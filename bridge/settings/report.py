@@ -1,0 +1,274 @@
+"""What `rotor-bridge check-config` prints about valid settings: a summary, the warnings and
+(``--full``) every value.
+
+Rules:
+1. masked() shows every value the bridge will use, model defaults filled in; null only where
+   nothing applies (no elevation axis, no rotctld port, no park position, no credentials).
+   What a value means where that is not plain is shown beside it (SHOWN: the station's position
+   from its locator, the true bearings a rotator takes); docs/configuration.md lists these too.
+2. Secrets never appear: the MQTT password is shown as asterisks, wherever it came from, and
+   the summary only says whether there is one; the console's password is no field, so it is
+   not in the values at all.
+3. A warning is for what is legal but probably wrong; it never makes valid settings invalid.
+4. The summary says what a user checks first: each rotator's model and whether its port is
+   there, the broker, and what is on (Home Assistant, the web console, rotctld and loggers'
+   ports, the station, tracking). Looking at a port never opens it.
+5. The state file is tried as the start tries it (runtime/state_store.py), short of writing:
+   what the start would refuse whoever runs it (a directory, a FIFO, a file where a directory
+   must be) is an error worded as the start's (check_state_file); a directory this user cannot
+   write is a warning, since the service may run as another user.
+"""
+
+from __future__ import annotations
+
+import getpass
+import os
+from pathlib import Path
+from typing import Any
+
+from bridge.protocols.axes import Axis
+from bridge.runtime.state_store import StateStore
+from bridge.settings import ConfigError, RotatorSettings, Settings
+from bridge.settings.loggers import is_loopback
+from bridge.settings.rotator import EMULATION_KEYS
+
+IDENTITY = ("id", "name", "model", "port", "baud", "topic")
+# what masked() shows besides the keys of the file, and what it means (docs/configuration.md)
+SHOWN = {
+    "mqtt.client_id": "the client id in use: the one set, or the default made for this "
+    "installation",
+    "station.position_deg": "[latitude, longitude] of the station, from its locator (the "
+    "square's centre) or its coordinates: to check on a map",
+    "rotators.az_targets_deg": "[lowest, highest] true bearing this rotator takes as a target: "
+    "its azimuth limits seen through az_offset_deg (0..360 on a scale that wraps)",
+}
+
+
+def masked(settings: Settings) -> dict[str, Any]:
+    """The effective settings as plain data, secrets replaced, for check-config and logs."""
+    out = settings.model_dump(mode="json")
+    if settings.mqtt.password is not None:
+        out["mqtt"]["password"] = "********"
+    if settings.station.position is not None:  # what a locator means, to check it on a map
+        lat, lon = settings.station.position
+        out["station"]["position_deg"] = [round(lat, 4), round(lon, 4)]
+    shown = []
+    for r, rs in zip(out["rotators"], settings.rotators, strict=True):
+        r["name"] = rs.name or rs.id
+        r["topic"] = settings.rotator_topic(rs)
+        r["baud"] = rs.effective_baud
+        r["brake_delay_s"] = rs.effective_brake_delay_s
+        r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
+        r["silence_timeout_s"] = rs.effective_silence_timeout_s
+        r["noise_deg"] = rs.effective_noise_deg
+        r["track_step_deg"] = rs.effective_track_step_deg
+        az_speed, el_speed = rs.effective_speeds_deg_s
+        r["az_speed_deg_s"] = az_speed
+        r["az_min_deg"], r["az_max_deg"] = rs.effective_az_limits
+        if rs.spec.has_elevation:
+            r["el_speed_deg_s"] = el_speed
+            r["el_min_deg"], r["el_max_deg"] = rs.effective_el_limits
+        # the bearings a user may name: the limits (raw) seen through the offset
+        r["az_targets_deg"] = list(rs.pointing.target_range())
+        shown.append({k: r.pop(k) for k in IDENTITY} | r)  # who it is first, then the rest
+    out["rotators"] = shown
+    out["mqtt"]["client_id"] = settings.mqtt.effective_client_id()
+    return out
+
+
+def check_state_file(settings: Settings) -> None:
+    """ConfigError, in the start's words (app.py), if the start would refuse the state file
+    whoever runs it (rule 5). Nothing is written."""
+    path = settings.state_file
+    try:
+        StateStore(path).check_kind()
+    except OSError as exc:
+        where = f" ({exc.filename})" if exc.filename else ""
+        raise ConfigError(
+            f"state_file {path} cannot be written: {exc.strerror or exc}{where}"
+        ) from None
+
+
+def _unwritable_state_dir(path: Path) -> Path | None:
+    """The directory the start would write the state file in (or make it in), if this user
+    may not write there (rule 5)."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    return None if os.access(parent, os.W_OK | os.X_OK) else parent
+
+
+def config_warnings(settings: Settings) -> list[str]:
+    """Legal but probably wrong: check-config prints these on stderr and still succeeds."""
+    found = []
+    closed = _unwritable_state_dir(settings.state_file)
+    if closed is not None:
+        found.append(
+            f"state_file: {closed} cannot be written by {getpass.getuser()}: the bridge does "
+            f"not start unless the user it runs as may write {settings.state_file} there"
+        )
+    if settings._password_in_file:  # set by load_settings, which saw the file
+        found.append(
+            "mqtt.password is written in the configuration file: put it in a file of its own, "
+            "readable only by the service user, and name that in mqtt.password_file"
+        )
+    tle = settings.tracking.tle_file
+    if tle is not None and not os.path.isfile(tle):
+        found.append(
+            f"tracking.tle_file: {tle} does not exist now; satellites can be tracked by name "
+            "once it does (it is read when it changes)"
+        )
+    for i, r in enumerate(settings.rotators):
+        where = f"rotators[{i}]"
+        keys = [f"{a}.port" for a in ("azimuth", "elevation")] if r.axes else ["port"]
+        for key, path in zip(keys, r.ports, strict=True):  # a composite's both
+            if not os.path.exists(path):
+                found.append(
+                    f"{where}.{key}: {path} does not exist now (unplugged? `rotor-bridge "
+                    "ports` lists the serial ports); the bridge keeps trying to open it"
+                )
+        for key, on, bind in (
+            ("pst_udp_bind", r.pst_udp_port is not None, r.pst_udp_bind),
+            ("n1mm_udp_bind", r.n1mm_rotor_name is not None, r.n1mm_udp_bind),
+        ):
+            if on and not is_loopback(bind):
+                found.append(
+                    f"{where}.{key}: {bind or '(every address)'} is not a loopback address: "
+                    "the loggers' UDP protocols have no authentication, anyone who can reach "
+                    "it can turn the antenna"
+                )
+        if r.rotctld_port is not None and not is_loopback(r.rotctld_bind):
+            found.append(
+                f"{where}.rotctld_bind: {r.rotctld_bind or '(every address)'} is not a loopback "
+                f"address: rotctld has no authentication, anyone who can reach port "
+                f"{r.rotctld_port} there can turn the antenna"
+            )
+        for label in EMULATION_KEYS:
+            port, bind = getattr(r, f"{label}_port"), getattr(r, f"{label}_bind")
+            if port is not None and not is_loopback(bind):
+                found.append(
+                    f"{where}.{label}_bind: {bind or '(every address)'} is not a loopback "
+                    f"address: {label} has no authentication, anyone who can reach port {port} "
+                    "there can turn the antenna"
+                )
+    web = settings.web
+    if web.enabled and not is_loopback(web.bind):
+        found.append(
+            f"web.bind: {web.bind or '(every address)'} is not a loopback address: the console "
+            "speaks plain HTTP, so its password and every command cross the network "
+            "unencrypted; keep it on 127.0.0.1 behind a reverse proxy that speaks HTTPS"
+        )
+    return found
+
+
+def summary(settings: Settings) -> list[str]:
+    """The lines check-config prints first (rule 4)."""
+    lines = ["rotators:"]
+    for r in settings.rotators:
+        lines += [f"  {line}" for line in _rotator(settings, r)]
+    m = settings.mqtt
+    login = "no login"
+    if m.username is not None:
+        login = f"user {m.username}, " + ("a password" if m.password is not None else "no password")
+    tls = "TLS" if m.tls.enabled else "no TLS"
+    version = "MQTT 5, else 3.1.1" if m.protocol == "auto" else f"MQTT {m.protocol}"
+    lines.append(
+        f"broker: {m.host}:{m.port}, {version}, {tls}, {login}, client id {m.effective_client_id()}"
+    )
+    ha = settings.homeassistant
+    lines.append(
+        f"home assistant: on (discovery prefix {ha.discovery_prefix})" if ha.enabled else
+        "home assistant: off"
+    )  # fmt: skip
+    lines.append(_web(settings))
+    st = settings.station
+    if st.position is None:
+        lines.append("station: not set (targets by locator and tracking need it)")
+    else:
+        lat, lon = st.position
+        where = f"locator {st.locator}, " if st.locator is not None else ""
+        lines.append(f"station: {where}latitude {lat:.4f}, longitude {lon:.4f}")
+    tle = settings.tracking.tle_file
+    sky = "the sun and the moon" if st.position is not None else "nothing (no station)"
+    if tle is None:
+        lines.append(f"tracking: {sky}; no TLE file, so no satellites")
+    else:
+        there = "found" if os.path.isfile(tle) else "NOT FOUND"
+        lines.append(f"tracking: {sky} and the satellites in {tle} ({there})")
+    wsjtx = settings.wsjtx
+    where = f"{wsjtx.multicast_group or wsjtx.bind}:{wsjtx.port}"
+    lines.append(f"wsjtx: listening on {where}" if wsjtx.enabled else "wsjtx: off")
+    dx = settings.dxcluster
+    if dx.enabled:
+        there = "found" if dx.cty_file is not None and os.path.isfile(dx.cty_file) else "NOT FOUND"
+        lines.append(f"dxcluster: {dx.host}:{dx.port} as {dx.login}, {dx.cty_file} ({there})")
+    else:
+        lines.append("dxcluster: off")
+    lines.append(f"state file: {settings.state_file}")
+    if settings.audit_file is not None:
+        most = settings.audit_max_bytes
+        lines.append(f"audit file: {settings.audit_file} (renamed to .1 at {most} bytes)")
+    return lines
+
+
+def _web(settings: Settings) -> str:
+    """Where to open the console, and whether it asks for a password (never which: rule 2)."""
+    w = settings.web
+    if not w.enabled:
+        return "web console: off"
+    host = w.bind or "0.0.0.0"
+    if ":" in host and not host.startswith("["):
+        host = f"[{host}]"  # an IPv6 address in a URL
+    asks = "a password" if w.password is not None else "no password"
+    return f"web console: http://{host}:{w.port}/, {asks}"
+
+
+def _bearings(r: RotatorSettings) -> str:
+    """The true bearings a rotator takes, as a user would say them: on a scale that wraps, an
+    offset turns limits narrower than a circle into a gap anywhere on it (limits 20..340 with
+    offset 180 refuse 160..200, not the ends of 0..360)."""
+    p = r.pointing
+    lo, hi = p.target_range()
+    gap = 360.0 - (p.az_max_deg - p.az_min_deg)
+    if not (p.az_wraps and p.offset_deg and gap > 0.0):
+        return f"{lo:g}..{hi:g}"
+    start = (p.az_max_deg + p.offset_deg) % 360.0
+    end = (p.az_min_deg + p.offset_deg) % 360.0
+    return f"0..360 except {start:g}..{end:g}"
+
+
+def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
+    found = "found" if os.path.exists(r.port) else "NOT FOUND"
+    name = f"{r.id} ({r.name})" if r.name and r.name != r.id else r.id
+    on = [f"topic {settings.rotator_topic(r)}", f"takes bearings {_bearings(r)}"]
+    if r.rotctld_port is not None:
+        on.append(f"rotctld on {r.rotctld_bind}:{r.rotctld_port}")
+    titles = {"gs232": f"GS-232{r.gs232_replies}", "easycomm": "Easycomm II", "dcu1": "DCU-1"}
+    for key in EMULATION_KEYS:
+        if (port := getattr(r, f"{key}_port")) is not None:
+            on.append(f"{titles[key]} on {getattr(r, f'{key}_bind')}:{port}")
+    for key in EMULATION_KEYS:
+        if (path := getattr(r, f"{key}_pty")) is not None:
+            on.append(f"{titles[key]} on a pty at {path}")
+    if r.pst_udp_port is not None:
+        on.append(f"PstRotator UDP on {r.pst_udp_bind}:{r.pst_udp_port}")
+    if r.n1mm_rotor_name is not None:
+        on.append(f"N1MM {r.n1mm_rotor_name!r} on {r.n1mm_udp_bind}:{r.n1mm_udp_port}")
+    if r.park_az_deg is not None:
+        on.append(f"parks at {r.park_az_deg:g}")
+    if r.wind_topic is not None:
+        unit = r.wind_unit
+        on.append(f"parks for the wind above {r.wind_park_above:g} {unit} on {r.wind_topic}")
+    first = f"{name}: {r.spec.display_name} ({r.model}) on {r.port} ({found}), "
+    first += f"{r.effective_baud} baud"
+    if r.axes:  # a composite rotator: each box on its own port (settings/rotator.py rule 4)
+        boxes = []
+        for axis in Axis:
+            own = r.axis_settings(axis)
+            there = "found" if os.path.exists(own.port) else "NOT FOUND"
+            boxes.append(
+                f"{axis.value} by {own.spec.display_name} ({own.model}) on {own.port} "
+                f"({there}), {own.effective_baud} baud"
+            )
+        first = f"{name}: {'; '.join(boxes)}"
+    return [first, "  " + "; ".join(on)]

@@ -1,0 +1,101 @@
+"""The wind-aware park's part of ``[[rotators]]``: where the wind speed comes from and when the
+rotator parks for a storm (session/wind.py decides).
+
+Rules:
+1. Off unless ``wind_topic`` is set. With it, ``wind_park_above`` is needed, and a place to
+   park: ``wind_park_az_deg`` or the rotator's ``park_az_deg``.
+2. ``wind_release_below`` is at most ``wind_park_above`` (the same value unless given): a
+   gust around one threshold must not park and release the rotor again and again, and the
+   hold time (``wind_hold_min``) stands between the two anyway.
+3. The topic is one topic, no wildcard: one sensor's reading, not a whole weather station.
+4. Every key carries its meaning (``description``) for docs/configuration.md.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+KMH_PER_MS = 3.6
+
+
+class WindFields(BaseModel):
+    """The wind part of ``[[rotators]]``."""
+
+    model_config = ConfigDict(extra="forbid")
+    wind_topic: str | None = Field(
+        None,
+        description="an MQTT topic carrying the wind speed as a number (a weather station, "
+        "Home Assistant's statestream of a wind sensor): above wind_park_above the rotator "
+        "parks and refuses motion until the wind has calmed",
+        examples=["homeassistant/sensor/wind_speed/state"],
+        json_schema_extra={"unset": "no wind-aware park"},
+    )
+    wind_unit: Literal["km/h", "m/s"] = Field(
+        "km/h",
+        description='the unit of the numbers on wind_topic, "km/h" or "m/s" (the thresholds '
+        "are in the same unit)",
+        examples=["m/s"],
+    )
+    wind_park_above: float | None = Field(
+        None,
+        gt=0,
+        le=500,
+        description="park for the storm when a reading is above this speed (needs wind_topic)",
+        examples=[60],
+        json_schema_extra={"unset": "none: needed with wind_topic"},
+    )
+    wind_release_below: float | None = Field(
+        None,
+        gt=0,
+        le=500,
+        description="the storm is over once the wind has stayed below this for wind_hold_min",
+        examples=[40],
+        json_schema_extra={"unset": "wind_park_above"},
+    )
+    wind_hold_min: float = Field(
+        10.0,
+        ge=0,
+        le=1440,
+        description="how long the wind must stay below wind_release_below before motion is "
+        "allowed again, in minutes",
+        examples=[30],
+    )
+    wind_park_az_deg: float | None = Field(
+        None,
+        ge=0,
+        le=360,
+        description="the true bearing this antenna faces a storm with (least wind load)",
+        examples=[90],
+        json_schema_extra={"unset": "park_az_deg"},
+    )
+    wind_silent_min: float = Field(
+        15.0,
+        gt=0,
+        le=1440,
+        description="a wind topic silent this long is reported (kind wind); the rotator keeps "
+        "the state it had: a storm never ends for want of readings",
+        examples=[5],
+    )
+
+    @model_validator(mode="after")
+    def _wind(self) -> WindFields:
+        """Rules 1-3."""
+        if self.wind_topic is None:
+            return self
+        if not self.wind_topic.strip() or any(c in self.wind_topic for c in "+#\0"):
+            raise ValueError("wind_topic: one topic, without wildcards (+, #)")
+        if self.wind_park_above is None:
+            raise ValueError("wind_topic needs wind_park_above (the speed to park above)")
+        if self.wind_release_below is not None and self.wind_release_below > self.wind_park_above:
+            raise ValueError("wind_release_below must be at most wind_park_above")
+        if self.wind_park_az_deg is None and getattr(self, "park_az_deg", None) is None:
+            raise ValueError("wind_topic needs wind_park_az_deg or park_az_deg (where to park)")
+        return self
+
+    def wind_kmh(self, value: float | None) -> float | None:
+        """A threshold of this rotator's unit in km/h."""
+        if value is None:
+            return None
+        return value * KMH_PER_MS if self.wind_unit == "m/s" else value
