@@ -47,19 +47,15 @@ def pytest_configure(config: pytest.Config) -> None:
 
 
 @pytest.fixture(autouse=True, scope="session")
-def _emulator_and_broker_waits_scaled() -> Iterator[None]:
-    """An emulator's waits (``wait_for``, ``wait_for_frame``, all through ``wait_until``) and
-    a private mosquitto's start (``start``, ``restart``) are the tests' deadlines, scaled like
-    every other (tests/support/waiting.py rule 1): both ship with the bridge (the demo's),
-    which knows nothing of the tests' factor."""
+def _emulator_waits_scaled() -> Iterator[None]:
+    """An emulator's waits (``wait_for``, ``wait_for_frame``, all through ``wait_until``) are
+    the tests' deadlines, scaled like every other (tests/support/waiting.py rule 1): the
+    emulators ship with the bridge, which knows nothing of the tests' factor. (The tests'
+    mosquitto scales its own start: tests/support/mosquitto.py.)"""
     if SLOWDOWN == 1.0:
         yield
         return
     original = EmulatedPort.wait_until
-    start_broker = Mosquitto._start
-
-    def broker_started(self: Mosquitto, timeout_s: float) -> Mosquitto:
-        return start_broker(self, slow(timeout_s))
 
     def scaled(
         self: EmulatedPort[Any],
@@ -71,7 +67,6 @@ def _emulator_and_broker_waits_scaled() -> Iterator[None]:
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(EmulatedPort, "wait_until", scaled)
-        patch.setattr(Mosquitto, "_start", broker_started)
         yield
 
 

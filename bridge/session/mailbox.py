@@ -49,12 +49,15 @@ Rules:
     (tracking or following OFF, the session's own) is never dropped by it.
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
-    rule 5) without asking every mailbox after every rotator it serves. (Puts in two mailboxes
-    at once may count one: the count still moves, which is all a reader looks for.)
+    rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
+    number of its own from one counter (``next`` on an ``itertools.count`` is one step under
+    the interpreter's lock), so puts into two mailboxes at once can never both write the number
+    a reader has already seen: any put after a read makes the next read differ.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import threading
 from dataclasses import dataclass, field
@@ -106,6 +109,7 @@ class Batch:
 
 class _Halts:
     count = 0  # rule 11
+    numbers = itertools.count(1)
 
 
 def halts() -> int:
@@ -158,7 +162,7 @@ class Mailbox:
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
                 self._hold(hold)
-                _Halts.count += 1  # rule 11: once the batch holds it
+                _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
                 if self._stale(epoch):
                     return False
@@ -184,7 +188,7 @@ class Mailbox:
                 self._batch.track = None
                 self._batch.follow = None
                 self._hold(hold)
-                _Halts.count += 1  # rule 11: once the batch holds it
+                _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5
             self._wake_once()
 

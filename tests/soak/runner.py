@@ -343,7 +343,7 @@ class Soak:
                 self.log(f"{self.broker_kind} (moving: {moving})")
         elif self.broker_state == "down":
             if now >= self.broker_t:
-                self.broker._start(10.0)  # same port, no persistence: every retained msg lost
+                self.broker.start(10.0)  # same port, no persistence: every retained msg lost
                 self.broker_state = "recovering"
                 self.broker_t = time.monotonic()
         elif self.broker_state == "recovering":
@@ -802,7 +802,7 @@ class Soak:
     def teardown(self) -> None:
         try:
             if self.broker.proc is None:
-                self.broker._start(10.0)
+                self.broker.start(10.0)
             if self.bridge.alive():
                 self.exit_status = self.bridge.terminate(15)
                 snap = fast_retained(self.broker.port, "rotor/#")
