@@ -190,8 +190,12 @@ def test_two_bridges_with_one_client_id_say_so_once_and_back_off(
             time.sleep(0.5)
         for bridge in bridges:
             log = bridge.log()
-            errors = [line for line in log.splitlines() if TAKEOVER_ERROR.search(line)]
+            said = [line for line in log.splitlines() if TAKEOVER_ERROR.search(line)]
+            # the stop express's connections share a client id of their own (<id>-fast) and
+            # fight too: it says so once, on its own logger
+            errors = [line for line in said if "mqtt.express" not in line]
             assert len(errors) == 1, errors
+            assert len(said) - len(errors) <= 1, said
             assert f"client id {SHARED_ID!r}" in errors[0]
             assert "two hosts sharing one configuration" in errors[0]
             connects = len(CONNECTED.findall(log))
