@@ -26,8 +26,9 @@ Rules:
    topic table iterates it), so an import of it from below would be a circle. Nothing heavy is
    imported by a declaration: a feature's session part is the session's to import, its
    service the app's, and only when its settings turn it on (``service_on``).
-5. A feature's entity sits after the entity table's own rows, or right after the row it names
-   (``EntityRow.after``: where the table had it before the feature was a package).
+5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
+   entity table's or of a feature's: where the table had it before the feature was a package),
+   those after one row in the registry's order; one that names no row, after all the others.
 """
 
 from __future__ import annotations
@@ -122,7 +123,7 @@ class EntityRow:
     config: Callable[[RotatorView], dict[str, object]]
     needs: str | None = None
     bridge_only: bool = False
-    after: str | None = None  # rule 5: the object id of the table's row it follows
+    after: str | None = None  # rule 5: the object id of the row it follows
 
 
 @dataclass(frozen=True)

@@ -135,7 +135,7 @@ def test_the_dx_clusters_service_is_made_only_with_dxcluster_enabled() -> None:
     assert dx.service is not None and dx.service_on is not None
     module, _, name = dx.service.partition(":")
     assert callable(getattr(importlib.import_module(module), name))
-    assert [e.after for e in dx.entities] == ["distance"]
+    assert [e.after for e in dx.entities] == ["track"]
 
 
 def test_auto_park_is_on_for_a_rotator_that_parks_after_a_quiet_spell() -> None:
@@ -291,3 +291,35 @@ def test_a_feature_cannot_take_a_core_topic_or_another_features(suffix: str) -> 
         CommandTopic(suffix, "thief", _toy_nudge),))  # fmt: skip
     with pytest.raises(ValueError, match="is taken"):
         Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
+
+
+# a rotator's discovery messages as the entity table published them before its features were
+# packages (every row a rot2prog with a station, presets, park, tracking, WSJT-X, the wind, the
+# DX cluster and the lease has): the order a client watching the discovery prefix sees
+ORDER_BEFORE_THE_REGISTRY = [
+    "bearing", "target_azimuth", "elevation", "target_elevation", "stop", "preset", "park",
+    "nudge_ccw", "nudge_cw", "locator", "long_path", "distance", "track", "spot",
+    "track_azimuth", "track_elevation", "next_aos", "follow", "followed", "wind", "storm",
+    "state", "moving", "connected", "version", "lock", "last_error", "speed_cw", "speed_ccw",
+    "speed_up", "speed_down", "start_delay", "coast", "odometer", "moves", "stalls", "motor_on",
+    "health_problem", "health_reset", "control", "release_control", "last_operator",
+]  # fmt: skip
+
+
+def test_a_rotators_discovery_messages_come_in_the_order_they_always_did() -> None:
+    """bridge/feature.py rule 5: each feature's entities sit where the table had them."""
+    cfg = RotatorSettings(
+        id="tower", model="rot2prog", port="/dev/ttyUSB0", presets={"EU": [45, 0]},
+        park_az_deg=0, park_el_deg=0,
+    )  # fmt: skip
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=True, nudge_step_deg=cfg.nudge_step_deg, satellites=("ISS",),
+        can_follow=True, features=frozenset(f.name for f in FEATURES),
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    order = [t.split("/")[3] for t in msgs if t.split("/")[2].endswith("_r_tower")]
+    shown = [oid for oid in ORDER_BEFORE_THE_REGISTRY if oid in order]  # (a rot2prog: no version)
+    assert len(shown) >= len(ORDER_BEFORE_THE_REGISTRY) - 1
+    assert [oid for oid in order if oid in ORDER_BEFORE_THE_REGISTRY] == shown

@@ -86,8 +86,10 @@ FEATURE = Feature(
         StatusBlock("following_ended", _ended, str),
     ),
     entities=(
-        EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS),
-        EntityRow("sensor", "followed", "Followed station", _followed, needs=NEEDS),
+        EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS, after="distance"),
+        EntityRow(
+            "sensor", "followed", "Followed station", _followed, needs=NEEDS, after="distance"
+        ),
     ),
     part="bridge.engine.follow:Follower",
 )
