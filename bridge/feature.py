@@ -18,9 +18,11 @@ Rules:
    lane.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
    subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
-3. A feature's topic suffix is unique across the core topics and every feature (the topic
-   table refuses one that is not, at start: mqtt/topics.py), and its first word is reserved
-   from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks it).
+3. A feature's topic suffix, under ``R/`` or ``B/`` alike (with one rotator R is B), is unique
+   across the core topics, the bridge's own (``B/bridge/...``) and every feature, and names a
+   topic (no wildcard; the topic table refuses it at start: mqtt/topics.py); its first word
+   is reserved from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks
+   it).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on mqtt/payloads.py while mqtt's
    topic table iterates it), so an import of it from below would be a circle. Nothing heavy is

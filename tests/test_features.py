@@ -293,6 +293,35 @@ def test_a_feature_cannot_take_a_core_topic_or_another_features(suffix: str) -> 
         Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
 
 
+@pytest.mark.parametrize(
+    ("commands", "base"),
+    [
+        (("spots",), ()),  # R/spots is B/spots, the DX cluster's, with one rotator
+        (("bridge/fence",), ()),  # the last word's markers (R is B with one rotator)
+        (("bridge/state",), ()),
+        ((), ("status",)),  # B/status is R/status with one rotator
+        ((), ("lock",)),
+        (("toy/+",), ()),  # a wildcard is no topic
+        (("#",), ()),
+        ((), ("toys/#",)),
+        (("toy//go",), ()),
+        (("toy/",), ()),
+    ],
+)
+def test_a_features_topic_is_refused_where_a_rotators_topic_is_the_base_topic(
+    commands: tuple[str, ...], base: tuple[str, ...]
+) -> None:
+    """Rule 3: with one rotator R is B, so a feature's R/<suffix> and B/<suffix> share one
+    namespace with the core's and the bridge's own (B/bridge/...); a wildcard names no topic."""
+    thief = Feature(
+        "thief", "docs/architecture.md", "takes a topic",
+        commands=tuple(CommandTopic(c, f"thief{i}", _toy_nudge) for i, c in enumerate(commands)),
+        base_topics=base,
+    )  # fmt: skip
+    with pytest.raises(ValueError, match="is taken|is no topic"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
+
+
 # a rotator's discovery messages as the entity table published them before its features were
 # packages (every row a rot2prog with a station, presets, park, tracking, WSJT-X, the wind, the
 # DX cluster and the lease has): the order a client watching the discovery prefix sees

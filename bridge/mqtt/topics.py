@@ -317,9 +317,12 @@ class Topics:
 
 
 def _check_suffixes(features: Sequence[Feature]) -> None:
-    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all)
-    and no other feature's, under its rotator's or the base topic; ValueError naming it,
-    before anything is subscribed."""
+    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all),
+    none of the bridge's own (``B/bridge/...``) and no other feature's; ValueError naming it,
+    before anything is subscribed. A suffix under a rotator's root and one under the base topic
+    share one namespace: with one rotator the root is the base topic (``R/spots`` is the DX
+    cluster's ``B/spots``, ``R/bridge/fence`` the last word's markers). A wildcard or an empty
+    level names no topic."""
     core = RotatorTopics("")
     taken = {
         getattr(core, name).lstrip("/")
@@ -327,17 +330,16 @@ def _check_suffixes(features: Sequence[Feature]) -> None:
         if isinstance(getattr(RotatorTopics, name), property)
     }
     for feature in features:
-        suffixes = [c.suffix for c in feature.commands] + [s.suffix for s in feature.states]
-        for suffix in suffixes:
-            if suffix in taken or suffix.startswith("option/") or not suffix:
-                raise ValueError(f"feature {feature.name}: topic R/{suffix} is taken")
+        suffixes = [("R", c.suffix) for c in feature.commands]
+        suffixes += [("R", s.suffix) for s in feature.states]
+        suffixes += [("B", suffix) for suffix in feature.base_topics]
+        for where, suffix in suffixes:
+            levels = suffix.split("/")
+            if suffix and ("" in levels or "+" in suffix or "#" in suffix):
+                raise ValueError(f"feature {feature.name}: {where}/{suffix} is no topic name")
+            if not suffix or suffix in taken or levels[0] in ("option", "bridge"):
+                raise ValueError(f"feature {feature.name}: topic {where}/{suffix} is taken")
             taken.add(suffix)
-    under_base = {"bridge"}  # the bridge's own B/bridge/... (a rotator's or group's id: RESERVED)
-    for feature in features:
-        for suffix in feature.base_topics:
-            if suffix.split("/")[0] in under_base or not suffix:
-                raise ValueError(f"feature {feature.name}: topic B/{suffix} is taken")
-            under_base.add(suffix)
 
 
 @dataclass(frozen=True)
