@@ -352,3 +352,24 @@ def test_a_rotators_discovery_messages_come_in_the_order_they_always_did() -> No
     shown = [oid for oid in ORDER_BEFORE_THE_REGISTRY if oid in order]  # (a rot2prog: no version)
     assert len(shown) >= len(ORDER_BEFORE_THE_REGISTRY) - 1
     assert [oid for oid in order if oid in ORDER_BEFORE_THE_REGISTRY] == shown
+
+
+def test_a_state_published_after_the_status_keeps_its_needs_and_its_new_only() -> None:
+    """bridge/feature.py StateTopic: ``needs`` and ``new_only`` hold after R/status as before."""
+    late = Feature(
+        "late", "docs/architecture.md", "a state after the status",
+        states=(
+            StateTopic("late/needs", lambda s: "x", str, needs="can_track", after_status=True),
+            StateTopic("late/new", lambda s: s.version, str, new_only=True, after_status=True),
+        ),
+    )  # fmt: skip
+    topics = Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, late))
+    pub = RecordingPublisher()
+    svc = MqttService(topics, pub, wall=lambda: NOW_UNIX)
+    svc.attach(RecordingRotator("tower", "rotorez"))  # it cannot track
+    pub.take()
+    version = "v1"
+    for bearing in (10.0, 11.0):  # the same version object: new once
+        svc.publish_status("tower", RotatorStatus("tower", bearing_deg=bearing, version=version))
+    sent = [topic for topic, _, _ in pub.take()]
+    assert "rotor/late/needs" not in sent and sent.count("rotor/late/new") == 1
