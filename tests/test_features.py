@@ -373,3 +373,15 @@ def test_a_state_published_after_the_status_keeps_its_needs_and_its_new_only() -
         svc.publish_status("tower", RotatorStatus("tower", bearing_deg=bearing, version=version))
     sent = [topic for topic, _, _ in pub.take()]
     assert "rotor/late/needs" not in sent and sent.count("rotor/late/new") == 1
+
+
+@pytest.mark.parametrize("kind", ["target", "stop", "lock", "option", "nudge", "track"])
+def test_a_features_command_cannot_take_a_core_commands_or_another_features_name(
+    kind: str,
+) -> None:
+    """Rule 3: a command is parsed and routed by its name (``kind``): one named ``target``
+    would parse every R/target by the feature's parser, one named ``stop`` be taken as a stop."""
+    thief = Feature("thief", "docs/architecture.md", "takes a name", commands=(
+        CommandTopic("thief/go", kind, _toy_nudge),))  # fmt: skip
+    with pytest.raises(ValueError, match="is taken"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
