@@ -18,16 +18,20 @@ Rules:
    a lock, and it never reaches the stop lane.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
    subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
-3. A feature's topic suffix is unique across the core topics and every feature (the topic
-   table refuses one that is not, at start: interfaces/mqtt/topics.py), and its first word is
-   reserved from group ids (settings/groups.py ``RESERVED``; tests/test_features.py checks it).
+3. A feature's topic suffix, under ``R/`` or ``B/`` alike (with one rotator R is B), is unique
+   across the core topics, the bridge's own (``B/bridge/...``) and every feature, and names a
+   topic (no wildcard), and its command's name is no core command's nor another's (the topic
+   table refuses them at start: mqtt/topics.py); its first word
+   is reserved from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks
+   it).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on interfaces/mqtt/payloads.py while
    mqtt's topic table iterates it), so an import of it from below would be a circle. Nothing heavy
    is imported by a declaration: a feature's session part is the session's to import, its
    service the app's, and only when its settings turn it on (``service_on``).
-5. A feature's entity sits after the entity table's own rows, or right after the row it names
-   (``EntityRow.after``: where the table had it before the feature was a package).
+5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
+   entity table's or of a feature's: where the table had it before the feature was a package),
+   those after one row in the registry's order; one that names no row, after all the others.
 """
 
 from __future__ import annotations
@@ -124,7 +128,7 @@ class EntityRow:
     config: Callable[[RotatorView], dict[str, object]]
     needs: str | None = None
     bridge_only: bool = False
-    after: str | None = None  # rule 5: the object id of the table's row it follows
+    after: str | None = None  # rule 5: the object id of the row it follows
 
 
 @dataclass(frozen=True)

@@ -135,7 +135,7 @@ def test_the_dx_clusters_service_is_made_only_with_dxcluster_enabled() -> None:
     assert dx.service is not None and dx.service_on is not None
     module, _, name = dx.service.partition(":")
     assert callable(getattr(importlib.import_module(module), name))
-    assert [e.after for e in dx.entities] == ["distance"]
+    assert [e.after for e in dx.entities] == ["track"]
 
 
 def test_auto_park_is_on_for_a_rotator_that_parks_after_a_quiet_spell() -> None:
@@ -289,5 +289,99 @@ def test_a_feature_cannot_take_a_core_topic_or_another_features(suffix: str) -> 
     """Rule 3 (rule 1 above all: no feature answers on R/stop or R/lock)."""
     thief = Feature("thief", "docs/architecture.md", "takes a topic", commands=(
         CommandTopic(suffix, "thief", _toy_nudge),))  # fmt: skip
+    with pytest.raises(ValueError, match="is taken"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
+
+
+@pytest.mark.parametrize(
+    ("commands", "base"),
+    [
+        (("spots",), ()),  # R/spots is B/spots, the DX cluster's, with one rotator
+        (("bridge/fence",), ()),  # the last word's markers (R is B with one rotator)
+        (("bridge/state",), ()),
+        ((), ("status",)),  # B/status is R/status with one rotator
+        ((), ("lock",)),
+        (("toy/+",), ()),  # a wildcard is no topic
+        (("#",), ()),
+        ((), ("toys/#",)),
+        (("toy//go",), ()),
+        (("toy/",), ()),
+    ],
+)
+def test_a_features_topic_is_refused_where_a_rotators_topic_is_the_base_topic(
+    commands: tuple[str, ...], base: tuple[str, ...]
+) -> None:
+    """Rule 3: with one rotator R is B, so a feature's R/<suffix> and B/<suffix> share one
+    namespace with the core's and the bridge's own (B/bridge/...); a wildcard names no topic."""
+    thief = Feature(
+        "thief", "docs/architecture.md", "takes a topic",
+        commands=tuple(CommandTopic(c, f"thief{i}", _toy_nudge) for i, c in enumerate(commands)),
+        base_topics=base,
+    )  # fmt: skip
+    with pytest.raises(ValueError, match="is taken|is no topic"):
+        Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
+
+
+# a rotator's discovery messages as the entity table published them before its features were
+# packages (every row a rot2prog with a station, presets, park, tracking, WSJT-X, the wind, the
+# DX cluster and the lease has): the order a client watching the discovery prefix sees
+ORDER_BEFORE_THE_REGISTRY = [
+    "bearing", "target_azimuth", "elevation", "target_elevation", "stop", "preset", "park",
+    "nudge_ccw", "nudge_cw", "locator", "long_path", "distance", "track", "spot",
+    "track_azimuth", "track_elevation", "next_aos", "follow", "followed", "wind", "storm",
+    "state", "moving", "connected", "version", "lock", "last_error", "speed_cw", "speed_ccw",
+    "speed_up", "speed_down", "start_delay", "coast", "odometer", "moves", "stalls", "motor_on",
+    "health_problem", "health_reset", "control", "release_control", "last_operator",
+]  # fmt: skip
+
+
+def test_a_rotators_discovery_messages_come_in_the_order_they_always_did() -> None:
+    """bridge/feature.py rule 5: each feature's entities sit where the table had them."""
+    cfg = RotatorSettings(
+        id="tower", model="rot2prog", port="/dev/ttyUSB0", presets={"EU": [45, 0]},
+        park_az_deg=0, park_el_deg=0,
+    )  # fmt: skip
+    topics = Topics("rotor", {"tower": "rotor"})
+    info = RotatorInfo.of(
+        "tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
+        has_station=True, nudge_step_deg=cfg.nudge_step_deg, satellites=("ISS",),
+        can_follow=True, features=frozenset(f.name for f in FEATURES),
+    )  # fmt: skip
+    msgs = all_configs("homeassistant", Identity("rotor"), topics, [info])
+    order = [t.split("/")[3] for t in msgs if t.split("/")[2].endswith("_r_tower")]
+    shown = [oid for oid in ORDER_BEFORE_THE_REGISTRY if oid in order]  # (a rot2prog: no version)
+    assert len(shown) >= len(ORDER_BEFORE_THE_REGISTRY) - 1
+    assert [oid for oid in order if oid in ORDER_BEFORE_THE_REGISTRY] == shown
+
+
+def test_a_state_published_after_the_status_keeps_its_needs_and_its_new_only() -> None:
+    """bridge/feature.py StateTopic: ``needs`` and ``new_only`` hold after R/status as before."""
+    late = Feature(
+        "late", "docs/architecture.md", "a state after the status",
+        states=(
+            StateTopic("late/needs", lambda s: "x", str, needs="can_track", after_status=True),
+            StateTopic("late/new", lambda s: s.version, str, new_only=True, after_status=True),
+        ),
+    )  # fmt: skip
+    topics = Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, late))
+    pub = RecordingPublisher()
+    svc = MqttService(topics, pub, wall=lambda: NOW_UNIX)
+    svc.attach(RecordingRotator("tower", "rotorez"))  # it cannot track
+    pub.take()
+    version = "v1"
+    for bearing in (10.0, 11.0):  # the same version object: new once
+        svc.publish_status("tower", RotatorStatus("tower", bearing_deg=bearing, version=version))
+    sent = [topic for topic, _, _ in pub.take()]
+    assert "rotor/late/needs" not in sent and sent.count("rotor/late/new") == 1
+
+
+@pytest.mark.parametrize("kind", ["target", "stop", "lock", "option", "nudge", "track"])
+def test_a_features_command_cannot_take_a_core_commands_or_another_features_name(
+    kind: str,
+) -> None:
+    """Rule 3: a command is parsed and routed by its name (``kind``): one named ``target``
+    would parse every R/target by the feature's parser, one named ``stop`` be taken as a stop."""
+    thief = Feature("thief", "docs/architecture.md", "takes a name", commands=(
+        CommandTopic("thief/go", kind, _toy_nudge),))  # fmt: skip
     with pytest.raises(ValueError, match="is taken"):
         Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))

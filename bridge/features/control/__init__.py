@@ -22,6 +22,7 @@ STATE = "control"  # R/control: who holds the lease, until when (retained)
 CLAIM = "control/claim"
 RELEASE = "control/release"
 RELEASE_PAYLOAD = '{"operator": "homeassistant"}'  # who pressed Home Assistant's button
+AFTER = "last_error"  # its entities' place in discovery: after rotor health's (feature.py rule 5)
 
 
 def _claim(payload: bytes, by: Origin) -> Claim:
@@ -70,8 +71,10 @@ FEATURE = Feature(
     ),
     states=(StateTopic(STATE, _status, _control, after_status=True, remote=True),),
     entities=(
-        EntityRow("sensor", "control", "Control", _sensor, bridge_only=True),
-        EntityRow("button", "release_control", "Release control", _button, bridge_only=True),
+        EntityRow("sensor", "control", "Control", _sensor, bridge_only=True, after=AFTER),
+        EntityRow(
+            "button", "release_control", "Release control", _button, bridge_only=True, after=AFTER
+        ),
     ),
     part="bridge.runtime.operators:Operators",
     console=(

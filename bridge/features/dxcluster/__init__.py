@@ -25,8 +25,10 @@ from bridge.settings.dxcluster import DxClusterSettings
 NAME = "dxcluster"  # interfaces/homeassistant/info.py names it too: the spot select's options
 SPOTS = "spots"  # B/spots: the newest spots with their bearings, retained
 OPTIONS = "spot_options"  # RotatorInfo's: the newest calls; none without a station
-# the spot select sends the call it shows to the target topic (interfaces/dxcluster/client.py turns
-# to it)
+# its select's place in discovery (bridge/feature.py rule 5): right after tracking's select, as
+# the entity table had it (after the distance, the other features' rows, without tracking)
+AFTER = "track"
+# the spot select sends the call it shows to the target topic (dxcluster/client.py turns to it)
 CALL_TEMPLATE = '{"call": "{{ value }}"}'
 # shown with none chosen, as the preset select (Home Assistant's dashboard sends nothing when
 # the option it shows is picked again)
@@ -50,7 +52,7 @@ FEATURE = Feature(
     name=NAME,
     docs="docs/dxcluster.md",
     summary="keeps a DX cluster's newest spots with their bearings and turns to a spotted call",
-    entities=(EntityRow("select", "spot", "Turn to spot", _spot, needs=OPTIONS, after="distance"),),
+    entities=(EntityRow("select", "spot", "Turn to spot", _spot, needs=OPTIONS, after=AFTER),),
     settings_table=("dxcluster", DxClusterSettings),
     base_topics=(SPOTS,),
     service="bridge.interfaces.dxcluster.setup:service",

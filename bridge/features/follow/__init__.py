@@ -87,8 +87,10 @@ FEATURE = Feature(
         StatusBlock("following_ended", _ended, str),
     ),
     entities=(
-        EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS),
-        EntityRow("sensor", "followed", "Followed station", _followed, needs=NEEDS),
+        EntityRow("switch", "follow", "Follow WSJT-X", _switch, needs=NEEDS, after="distance"),
+        EntityRow(
+            "sensor", "followed", "Followed station", _followed, needs=NEEDS, after="distance"
+        ),
     ),
     part="bridge.session.follow:Follower",
 )

@@ -21,6 +21,7 @@ NAME = "health"
 STATE = "health"  # R/health: the last report, retained
 RESET = "health/reset"  # R/health/reset: a new baseline (after a repair)
 DIAGNOSTIC = {"entity_category": "diagnostic"}
+AFTER = "last_error"  # its entities' place in discovery (bridge/feature.py rule 5)
 
 
 def _health(status: RotatorStatus) -> RotatorHealth | None:
@@ -43,7 +44,7 @@ def _sensor(oid: str, name: str, field: str, unit: str, kind: str, needs: str) -
             **({"device_class": "duration"} if unit == "s" else {}), **DIAGNOSTIC,
         }  # fmt: skip
 
-    return EntityRow("sensor", oid, name, config, needs=needs, bridge_only=True)
+    return EntityRow("sensor", oid, name, config, needs=needs, bridge_only=True, after=AFTER)
 
 
 NUMBERS = (  # object id, name, R/health field, unit, state class, what it needs
@@ -92,6 +93,7 @@ FEATURE = Feature(
             _problem,
             needs="can_report_position",
             bridge_only=True,
+            after=AFTER,
         ),
         EntityRow(
             "button",
@@ -100,6 +102,7 @@ FEATURE = Feature(
             _reset_button,
             needs="can_report_position",
             bridge_only=True,
+            after=AFTER,
         ),
     ),  # fmt: skip
     part="bridge.session.health:Health",

@@ -24,6 +24,7 @@ COMMAND = "track"  # R/track: sun, moon, a satellite's name or TLE, off
 STATE = "tracking"  # R/tracking: what is tracked, or off
 NEEDS = "can_track"  # a station and a controller that reports where it points
 TRACK_OPTIONS = "track_options"  # RotatorInfo's: off, sun, moon and the TLE file's satellites
+AFTER = "distance"  # its entities' place in discovery (bridge/feature.py rule 5)
 
 
 def _track(payload: bytes, by: Origin) -> TrackBody:
@@ -124,12 +125,19 @@ FEATURE = Feature(
         StatusBlock("tracking_ended", _ended, str),
     ),
     entities=(
-        EntityRow("select", "track", "Track", _select, needs=TRACK_OPTIONS),
-        EntityRow("sensor", "track_azimuth", "Tracked azimuth", _azimuth, needs=TRACK_OPTIONS),
+        EntityRow("select", "track", "Track", _select, needs=TRACK_OPTIONS, after=AFTER),
         EntityRow(
-            "sensor", "track_elevation", "Tracked elevation", _elevation, needs=TRACK_OPTIONS
+            "sensor", "track_azimuth", "Tracked azimuth", _azimuth, needs=TRACK_OPTIONS, after=AFTER
         ),
-        EntityRow("sensor", "next_aos", "Next AOS", _aos, needs=TRACK_OPTIONS),
+        EntityRow(
+            "sensor",
+            "track_elevation",
+            "Tracked elevation",
+            _elevation,
+            needs=TRACK_OPTIONS,
+            after=AFTER,
+        ),
+        EntityRow("sensor", "next_aos", "Next AOS", _aos, needs=TRACK_OPTIONS, after=AFTER),
     ),  # fmt: skip
     part="bridge.session.tracking:Tracker",
     console=(

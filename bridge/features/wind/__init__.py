@@ -81,8 +81,10 @@ FEATURE = Feature(
     summary="parks for a storm from a wind speed on MQTT and refuses motion until it calms",
     status=(StatusBlock("wind", _wind, wind_json),),
     entities=(
-        EntityRow("sensor", "wind", "Wind", _speed, needs=NAME),
-        EntityRow("binary_sensor", "storm", "Parked for the storm", _storm, needs=NAME),
+        EntityRow("sensor", "wind", "Wind", _speed, needs=NAME, after="distance"),
+        EntityRow(
+            "binary_sensor", "storm", "Parked for the storm", _storm, needs=NAME, after="distance"
+        ),
     ),
     rotator_settings=WindFields,
     settings_section=(

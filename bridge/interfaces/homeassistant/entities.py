@@ -119,7 +119,7 @@ class Entity:
 
 def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
     """The registered features' rows (bridge/feature.py), in the registry's order, each with
-    the object id of the table's row it follows (None: after the table's own)."""
+    the object id of the row it follows (None: after all the others)."""
     return tuple(
         (e.after, Entity(e.platform, e.object_id, e.name, e.config, e.needs, e.bridge_only))
         for f in registered()
@@ -128,16 +128,31 @@ def feature_entities() -> tuple[tuple[str | None, Entity], ...]:
 
 
 def rows() -> list[Entity | EachOption]:
-    """ENTITIES with the features' rows in their places (bridge/feature.py rule 5); a row
-    that names no row of the table follows them all."""
+    """ENTITIES with the features' rows in their places (bridge/feature.py rule 5): right after
+    the row each names, a row of the table or of a feature, those after one row in the
+    registry's order; a row that names no row follows them all."""
     features = feature_entities()
-    own = {row.object_id for row in ENTITIES if isinstance(row, Entity)}
+    named = {row.object_id for row in ENTITIES if isinstance(row, Entity)}
+    named |= {e.object_id for _, e in features}
     out: list[Entity | EachOption] = []
-    for row in ENTITIES:
+    placed: set[int] = set()
+
+    def place(row: Entity | EachOption) -> None:
         out.append(row)
         if isinstance(row, Entity):
-            out += [e for after, e in features if after == row.object_id]
-    return out + [e for after, e in features if after not in own]
+            for i, (after, e) in enumerate(features):
+                if after == row.object_id and i not in placed:
+                    placed.add(i)
+                    place(e)
+
+    for row in ENTITIES:
+        place(row)
+    for anywhere in (False, True):  # the rows that name none, then a cycle's
+        for i, (after, e) in enumerate(features):
+            if i not in placed and (anywhere or after not in named):
+                placed.add(i)
+                place(e)
+    return out
 
 
 class OptionConfig(Protocol):

@@ -94,7 +94,7 @@ from bridge.interfaces.mqtt.halts import Halts, switch_on
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.limiter import RATE_PER_S, EventLimiter
 from bridge.interfaces.mqtt.ports import Publisher, RotatorPort
-from bridge.interfaces.mqtt.topics import Topics
+from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
 from bridge.protocols.base import ModelSpec, SettingKind
 
 log = logging.getLogger(__name__)
@@ -269,8 +269,30 @@ class MqttService:
             if name in status.options:
                 pub(t.option_state(name), setting_text(status.options[name]))
         pub(t.lock_state, pl.switch(status.locked))
-        for state in self._states:  # the registry's (bridge/feature.py)
-            if state.after_status:
+        self._publish_states(rot, t, status, pub, after_status=False)
+        shows_raw = rot.pointing.shows_raw
+        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
+        self._publish_states(rot, t, status, pub, after_status=True)  # (R/control, as ever)
+        self._latest[rotator_id] = status
+        for group in self._groups.values():
+            if rotator_id in group.member_ids:
+                self._publish_group(group, pub)
+        for listener in self._status_listeners:
+            listener(rotator_id, status)
+
+    def _publish_states(
+        self,
+        rot: RotatorPort,
+        t: RotatorTopics,
+        status: RotatorStatus,
+        pub: Callable[[str, str], None],
+        *,
+        after_status: bool,
+    ) -> None:
+        """The registry's state topics (bridge/feature.py ``StateTopic``) before R/status, or
+        after it."""
+        for state in self._states:
+            if state.after_status is not after_status:
                 continue
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
@@ -283,17 +305,6 @@ class MqttService:
                     continue
                 self._values[topic] = value
             pub(topic, state.render(value))
-        shows_raw = rot.pointing.shows_raw
-        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
-        for state in self._states:  # (the control lease's: after the status, as ever)
-            if state.after_status and (value := state.value(status)) is not None:
-                pub(t.feature(state.suffix), state.render(value))
-        self._latest[rotator_id] = status
-        for group in self._groups.values():
-            if rotator_id in group.member_ids:
-                self._publish_group(group, pub)
-        for listener in self._status_listeners:
-            listener(rotator_id, status)
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         """Rule 4: rate-limited per rotator; the next one published counts those left out."""

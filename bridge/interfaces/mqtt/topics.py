@@ -28,6 +28,11 @@ from dataclasses import dataclass
 
 from bridge.feature import Feature, registered
 
+# the core commands' names, as ``Topics.route`` gives them (a feature's may be none of them)
+CORE_KINDS = frozenset(
+    ("target", "target_elevation", "stop", "lock", "preset", "park", "nudge", "option")
+)
+
 
 @dataclass(frozen=True)
 class RotatorTopics:
@@ -317,9 +322,13 @@ class Topics:
 
 
 def _check_suffixes(features: Sequence[Feature]) -> None:
-    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all)
-    and no other feature's, under its rotator's or the base topic; ValueError naming it,
-    before anything is subscribed."""
+    """bridge/feature.py rule 3: a feature's topic is no core topic (stop and lock above all),
+    none of the bridge's own (``B/bridge/...``) and no other feature's, nor is its command's
+    name a core command's or another's (``R/target`` would be parsed by the feature's parser);
+    ValueError naming it, before anything is subscribed. A suffix under a rotator's root and
+    one under the base topic share one namespace: with one rotator the root is the base topic
+    (``R/spots`` is the DX cluster's ``B/spots``, ``R/bridge/fence`` the last word's markers).
+    A wildcard or an empty level names no topic."""
     core = RotatorTopics("")
     taken = {
         getattr(core, name).lstrip("/")
@@ -327,17 +336,22 @@ def _check_suffixes(features: Sequence[Feature]) -> None:
         if isinstance(getattr(RotatorTopics, name), property)
     }
     for feature in features:
-        suffixes = [c.suffix for c in feature.commands] + [s.suffix for s in feature.states]
-        for suffix in suffixes:
-            if suffix in taken or suffix.startswith("option/") or not suffix:
-                raise ValueError(f"feature {feature.name}: topic R/{suffix} is taken")
+        suffixes = [("R", c.suffix) for c in feature.commands]
+        suffixes += [("R", s.suffix) for s in feature.states]
+        suffixes += [("B", suffix) for suffix in feature.base_topics]
+        for where, suffix in suffixes:
+            levels = suffix.split("/")
+            if suffix and ("" in levels or "+" in suffix or "#" in suffix):
+                raise ValueError(f"feature {feature.name}: {where}/{suffix} is no topic name")
+            if not suffix or suffix in taken or levels[0] in ("option", "bridge"):
+                raise ValueError(f"feature {feature.name}: topic {where}/{suffix} is taken")
             taken.add(suffix)
-    under_base = {"bridge"}  # the bridge's own B/bridge/... (a rotator's or group's id: RESERVED)
+    kinds = set(CORE_KINDS)  # a command is parsed and routed by its name (mqtt/service.py)
     for feature in features:
-        for suffix in feature.base_topics:
-            if suffix.split("/")[0] in under_base or not suffix:
-                raise ValueError(f"feature {feature.name}: topic B/{suffix} is taken")
-            under_base.add(suffix)
+        for command in feature.commands:
+            if command.kind in kinds:
+                raise ValueError(f"feature {feature.name}: command name {command.kind} is taken")
+            kinds.add(command.kind)
 
 
 @dataclass(frozen=True)
