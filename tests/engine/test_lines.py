@@ -343,3 +343,42 @@ def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
         for w in (first, second):
             lines.remove(w)  # type: ignore[arg-type]
     assert first.given[0] >= second.due_s and second.given[0] >= second.due_s
+
+
+def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None:
+    """Rule 8: the look for a stop is skipped only while none was put since the last look that
+    found none; a lock ON put while the fifth of 16 is served goes next, and a stop put while
+    that lock ON is served goes next after it (not at the end of the round)."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+    put: list[int] = []  # where in the log the lock ON came
+
+    class Busy(Urgent):
+        def serve(self, now: float, ready: set[int]) -> None:
+            if len(lines._workers) == 16 and not put and log and log[-1][0] is workers[3]:
+                workers[12].box.put_lock(True, wake=False)  # while the fifth is served
+                put.append(len(log))
+            super().serve(now, ready)
+
+    class Locked(Urgent):
+        def serve(self, now: float, ready: set[int]) -> None:
+            if put and len(log) == put[0] + 1:
+                workers[14].box.put(Stop(), wake=False)  # while the lock ON is served
+            super().serve(now, ready)
+            if put and len(log) > put[0] + 3:
+                done.set()
+
+    workers: list[Urgent] = [Urgent(clock, 0.0, threading.Event(), log) for _ in range(16)]
+    workers[4] = Busy(clock, 0.0, threading.Event(), log)
+    workers[12] = Locked(clock, 0.0, threading.Event(), log)
+    for w in workers:
+        lines.add(w)  # type: ignore[arg-type]
+    try:
+        assert done.wait(slow(5))
+    finally:
+        for w in workers:
+            lines.remove(w)  # type: ignore[arg-type]
+    k = put[0]
+    assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]

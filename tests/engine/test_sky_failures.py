@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import serial
@@ -172,3 +173,29 @@ def test_a_part_that_raises_is_reset_and_reported_and_stops_still_go_out(
         assert v.frames("stop", since=t), "the stop reached the controller"
         assert not v.truth().is_moving
         assert v.session.controller.link is not None
+
+
+def test_a_part_reset_after_a_fault_runs_again_and_parks_after_a_new_quiet_spell(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The registry looks a part up on the session at every step: the new auto-park made by the
+    reset is the one run (not the broken one), and its quiet spell starts at the reset."""
+    real, calls = autopark.AutoPark.step, []
+
+    def once_broken(part: autopark.AutoPark, scene: Any) -> Any:
+        calls.append(scene.now)
+        if len(calls) == 1:
+            raise RuntimeError("a bug in auto-park, once")
+        return real(part, scene)
+
+    monkeypatch.setattr(autopark.AutoPark, "step", once_broken)
+    park = {"park_az_deg": 0, "park_after_idle_s": 60}
+    emulator = {"az_speed_deg_s": 5.0, "start_az_deg": 90}
+    with VirtualRotator("md01", settings=park, emulator=emulator) as v:
+        v.run_until(lambda h: h.status.available, 10, "the controller answers")
+        reset_at = calls[0]
+        assert "auto-park" in v.errors(ErrorKind.INTERNAL)[0].message
+        v.run_until(lambda h: h.status.parked, 120, "parked by the new auto-park")
+        parked_at = next(t for t, s in v.statuses if s.last_command_source == "auto-park")
+        assert parked_at >= reset_at + 60.0  # a new quiet spell from the reset
+        assert abs(v.truth().az_deg - 0.0) <= 0.5
