@@ -21,8 +21,8 @@ Rules:
 3. A feature's topic suffix, under ``R/`` or ``B/`` alike (with one rotator R is B), is unique
    across the core topics, the bridge's own (``B/bridge/...``) and every feature, and names a
    topic (no wildcard), and its command's name is no core command's nor another's (the topic
-   table refuses them at start: mqtt/topics.py); its first word
-   is reserved from group ids (settings_groups.py ``RESERVED``; tests/test_features.py checks
+   table refuses them at start: interfaces/mqtt/topics.py); its first word
+   is reserved from group ids (settings/groups.py ``RESERVED``; tests/test_features.py checks
    it).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on interfaces/mqtt/payloads.py while

@@ -11,8 +11,8 @@ from typing import Any
 
 import pytest
 
-from bridge.engine.follow import Follow
-from bridge.model import Control, RotatorStatus
+from bridge.core.model import Control, RotatorStatus
+from bridge.session.follow import Follow
 from tests.engine.test_follow import STATION
 from tests.engine.test_wind import WIND
 from tests.engine.virtual import VirtualRotator

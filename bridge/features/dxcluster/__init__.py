@@ -28,7 +28,8 @@ OPTIONS = "spot_options"  # RotatorInfo's: the newest calls; none without a stat
 # its select's place in discovery (bridge/feature.py rule 5): right after tracking's select, as
 # the entity table had it (after the distance, the other features' rows, without tracking)
 AFTER = "track"
-# the spot select sends the call it shows to the target topic (dxcluster/client.py turns to it)
+# the spot select sends the call it shows to the target topic (interfaces/dxcluster/client.py turns
+# to it)
 CALL_TEMPLATE = '{"call": "{{ value }}"}'
 # shown with none chosen, as the preset select (Home Assistant's dashboard sends nothing when
 # the option it shows is picked again)

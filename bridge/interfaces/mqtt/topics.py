@@ -346,7 +346,8 @@ def _check_suffixes(features: Sequence[Feature]) -> None:
             if not suffix or suffix in taken or levels[0] in ("option", "bridge"):
                 raise ValueError(f"feature {feature.name}: topic {where}/{suffix} is taken")
             taken.add(suffix)
-    kinds = set(CORE_KINDS)  # a command is parsed and routed by its name (mqtt/service.py)
+    # a command is parsed and routed by its name (interfaces/mqtt/service.py)
+    kinds = set(CORE_KINDS)
     for feature in features:
         for command in feature.commands:
             if command.kind in kinds:
