@@ -6,7 +6,7 @@ rule 9, where it is explained), and a tick on paho's own thread.
 Rules:
 1. ``new_client`` builds paho's client for the settings: MQTT 5 or 3.1.1, credentials, TLS.
 2. ``tick``, when set, is called on paho's thread after each round of its loop (at least once a
-   second while connected: its select waits 1 s at most), for what a connection does on a clock
+   second while connected: its wait lasts 1 s at most), for what a connection does on a clock
    without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
    one that raises is logged and paho's thread goes on.
 3. ``use_mqtt311`` turns a client built for MQTT 5 into one that speaks MQTT 3.1.1 with a clean
@@ -31,7 +31,8 @@ Rules:
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
    call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
    through paho's ``on_socket_register_write``, which paho calls once until the queue has been
-   written, so a reading's messages cost one wake-up between them.
+   written, so a reading's messages cost one wake-up between them. It waits with poll, not
+   select (which refuses a descriptor above 1023, as a bridge with many clients open has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
    the message left the socket, building a reason code and properties each time (about as much
    CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
@@ -61,6 +62,8 @@ log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
+POLL_READ = select.POLLIN | select.POLLPRI  # rule 6: what wakes the network thread to read
+READ_EVENTS = POLL_READ | select.POLLERR | select.POLLHUP  # ... and what it then reads
 
 
 def acknowledge_now(sock: object) -> None:
@@ -189,12 +192,19 @@ class Client(paho.Client):
     def _reconnecting(self) -> None:
         """paho's reconnect loop (``loop_forever``'s) around ``_round``."""
         first, lost = True, False
+        poller, polled = select.poll(), -1  # the socket's descriptor in the poller, -1: none
+        poller.register(self._waker.fileno(), select.POLLIN)
         while True:
             sock = self.socket()
             if self._halt.is_set() and (sock is None or lost or not self.want_write()):
                 return
             if sock is not None and not lost:
-                lost = not self._round(sock)
+                fd = getattr(sock, "fileno", lambda: -1)()
+                if fd != polled and polled >= 0:
+                    with contextlib.suppress(KeyError):
+                        poller.unregister(polled)
+                polled = fd
+                lost = not self._round(sock, poller)
                 continue
             if self._leaving:
                 return
@@ -206,19 +216,28 @@ class Client(paho.Client):
             except OSError:  # paho's loop says so, and waits
                 self._connect_failed()
 
-    def _round(self, sock: Any) -> bool:
+    def _round(self, sock: Any, poller: Any) -> bool:
         """One round of the loop: wait (1 s at most, rule 2) for the socket or a wake-up, then
-        read, write what is queued, and the keepalive. False: the socket failed the select."""
+        read, write what is queued, and the keepalive. False: the socket cannot be waited on.
+        poll, not select: a bridge with many clients open has descriptors above 1023, which
+        select refuses (the connection would be made and torn down again for ever)."""
         pending = getattr(sock, "pending", None)  # TLS: bytes already decrypted
         ready = pending() if pending is not None else 0
-        wlist = [sock] if self.want_write() else []
         try:
-            readable, _, _ = select.select([sock, self._waker], wlist, [], 0.0 if ready else 1.0)
+            fd = sock.fileno()
+            poller.register(fd, POLL_READ | select.POLLOUT if self.want_write() else POLL_READ)
+            events = poller.poll(0 if ready else 1000)
         except (OSError, TypeError, ValueError):  # closed under us: reconnect
             return False
-        if self._waker in readable:
-            self._waker.drain()
-        if ready or sock in readable:
+        readable = False
+        for got, mask in events:
+            if mask & select.POLLNVAL:
+                return False
+            if got == fd:
+                readable = bool(mask & READ_EVENTS)  # an error or a hang-up too: read, it says
+            else:
+                self._waker.drain()
+        if ready or readable:
             self.loop_read()
             if self.socket() is not sock:
                 return True

@@ -186,3 +186,33 @@ def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_clos
         waker.close()
     waker.wake()  # after the thread ended (a late publish): nothing, no error
     waker.close()
+
+
+def test_a_connection_whose_socket_has_a_high_descriptor_number_is_served(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A bridge with many clients open has descriptors above 1023, which select() refuses: the
+    connection must still be made, read and written (not torn down and tried again for ever)."""
+    import os
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip("no room for 1200 descriptors")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
+    r, w = os.pipe()
+    taken = [os.dup(r) for _ in range(1100)]
+    try:
+        with connected(broker, "net-high-fd") as c:
+            assert c.socket().fileno() > 1023  # type: ignore[union-attr]
+            got = threading.Event()
+            c.on_message = lambda *_a: got.set()
+            c.subscribe("net/high")
+            mark = probe.mark()
+            c.publish("net/high", b"up", qos=1)
+            probe.wait(lambda m: m.topic == "net/high", start=mark)
+            assert got.wait(slow(10)), "never read"
+    finally:
+        for fd in [*taken, r, w]:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
