@@ -182,12 +182,14 @@ class Client(paho.Client):
         self._waker.wake()
 
     def _serve(self) -> None:
-        """The thread (a new ``loop_start`` may follow its end, as with paho's)."""
+        """The thread (a new ``loop_start`` may follow its end, as with paho's: from the moment
+        ``_net`` is None, so what it closes then is its own wake-up, not the next thread's)."""
+        waker = self._waker
         try:
             self._reconnecting()
         finally:
             self._net = None
-            self._waker.close()
+            waker.close()
 
     def _reconnecting(self) -> None:
         """paho's reconnect loop (``loop_forever``'s) around ``_round``."""

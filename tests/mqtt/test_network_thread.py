@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from paho.mqtt.enums import CallbackAPIVersion
 
 from bridge.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
@@ -216,3 +217,53 @@ def test_a_connection_whose_socket_has_a_high_descriptor_number_is_served(
         for fd in [*taken, r, w]:
             os.close(fd)
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+
+
+class Racing(Client):
+    """A client whose ending network thread is overtaken, right after it marked itself ended,
+    by a ``loop_start`` on another thread (as ``disconnect``, ``loop_stop`` finding the thread
+    ended, then ``connect_async`` and ``loop_start`` may do)."""
+
+    overtake: Any = None
+
+    @property  # type: ignore[override]
+    def _net(self) -> threading.Thread | None:
+        return self.__dict__.get("net")  # type: ignore[no-any-return]
+
+    @_net.setter
+    def _net(self, thread: threading.Thread | None) -> None:
+        self.__dict__["net"] = thread
+        overtake, self.overtake = self.overtake, None
+        if thread is None and overtake is not None:
+            other = threading.Thread(target=overtake)
+            other.start()
+            other.join()
+
+
+def test_a_loop_start_overtaking_the_ending_thread_keeps_its_own_wake_up(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    c = Racing(callback_api_version=CallbackAPIVersion.VERSION2, client_id="net-race")
+    c.name = "net-race"
+    ups: list[int] = []
+    c.on_connect = lambda *_a: ups.append(1)
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: len(ups) == 1, 10, "connected")
+
+        def again() -> None:
+            c.connect_async("127.0.0.1", broker.port, keepalive=10)
+            assert c.loop_start() == 0
+
+        c.overtake = again
+        c.disconnect()  # the thread writes the DISCONNECT and ends on its own
+        wait_until(lambda: len(ups) == 2 and c.is_connected(), 10, "connected again")
+        assert c._waker.fileno() >= 0, "the new thread's wake-up was closed by the old thread"
+        mark = probe.mark()
+        c.publish("net/race", b"after", qos=0)
+        probe.wait(lambda m: m.topic == "net/race", start=mark)
+    finally:
+        c.overtake = None
+        c.disconnect()
+        c.loop_stop()
