@@ -27,7 +27,9 @@ Rules:
    paho's thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
    (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
-   inside the failure, no reconnect after ``disconnect``. What changes is the wake-up: paho's
+   inside the failure, no reconnect after ``disconnect``. A callback that raises (paho hands
+   its exception up the loop, which ended paho's thread) is logged and the connection made
+   again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
    call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
    through paho's ``on_socket_register_write``, which paho calls once until the queue has been
@@ -206,7 +208,12 @@ class Client(paho.Client):
                     with contextlib.suppress(KeyError):
                         poller.unregister(polled)
                 polled = fd
-                lost = not self._round(sock, poller)
+                try:
+                    lost = not self._round(sock, poller)
+                except Exception:  # a callback's bug, which paho hands up: not the thread's end
+                    log.exception("error on the MQTT network thread: connecting again")
+                    with contextlib.suppress(OSError, AttributeError):
+                        sock.shutdown(socket.SHUT_RDWR)  # paho reads the end as always
                 continue
             if self._leaving:
                 return
@@ -217,6 +224,8 @@ class Client(paho.Client):
                 self.reconnect()
             except OSError:  # paho's loop says so, and waits
                 self._connect_failed()
+            except Exception:  # a callback's bug (on_pre_connect, on_socket_open): waits too
+                log.exception("error on the MQTT network thread while connecting")
 
     def _round(self, sock: Any, poller: Any) -> bool:
         """One round of the loop: wait (1 s at most, rule 2) for the socket or a wake-up, then

@@ -267,3 +267,31 @@ def test_a_loop_start_overtaking_the_ending_thread_keeps_its_own_wake_up(
         c.overtake = None
         c.disconnect()
         c.loop_stop()
+
+
+def test_a_callback_that_raises_does_not_end_the_network_thread(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """paho hands a callback's exception up its loop: on our thread, it must not end the
+    connection for good (connection.py rule 5: the thread goes on)."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-raise")
+    c = new_client(settings, "net-raise")
+    c.reconnect_delay_set(1, 2)
+    ups: list[int] = []
+
+    def on_connect(*_args: object) -> None:
+        ups.append(1)
+        if len(ups) == 1:
+            raise RuntimeError("a bug in a callback")
+
+    c.on_connect = on_connect
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: len(ups) >= 2 and c.is_connected(), 15, "connected again")
+        mark = probe.mark()
+        c.publish("net/raised", b"still here", qos=1)
+        probe.wait(lambda m: m.topic == "net/raised", start=mark)
+    finally:
+        c.disconnect()
+        c.loop_stop()
