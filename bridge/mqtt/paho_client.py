@@ -212,8 +212,10 @@ class Client(paho.Client):
                     lost = not self._round(sock, poller)
                 except Exception:  # a callback's bug, which paho hands up: not the thread's end
                     log.exception("error on the MQTT network thread: connecting again")
-                    with contextlib.suppress(OSError, AttributeError):
-                        sock.shutdown(socket.SHUT_RDWR)  # paho reads the end as always
+                    shutdown = getattr(sock, "shutdown", None)
+                    if shutdown is not None:
+                        with contextlib.suppress(OSError):
+                            shutdown(socket.SHUT_RDWR)  # paho reads the end as always
                 continue
             if self._leaving:
                 return
