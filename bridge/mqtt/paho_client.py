@@ -40,6 +40,11 @@ Rules:
    CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
    acknowledgements only (which come in ``loop_read`` and still call it).
    ``on_publish`` is set before ``loop_start``.
+8. A new connection writes its CONNECT first. paho's ``publish`` queues a message as soon as
+   the new socket exists, a moment before paho queues the CONNECT: a status published from
+   another thread in that moment went first, which the broker reads as a protocol error (the
+   connection dropped: under a stream of statuses, reconnecting took many tries). The CONNECT
+   is moved ahead of it (what was queued follows it, as a publish just after the CONNECT).
 """
 
 from __future__ import annotations
@@ -141,7 +146,21 @@ class Client(paho.Client):
 
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
-        return super().reconnect()
+        rc = super().reconnect()
+        self._connect_first()
+        return rc
+
+    def _connect_first(self) -> None:
+        """Rule 8: the CONNECT ahead of what other threads queued while paho opened the socket
+        (nothing is written before this: the thread that writes is this one)."""
+        queue = self._out_packet
+        for i in range(len(queue)):  # by index: other threads may append meanwhile
+            packet = queue[i]
+            if packet["command"] & 0xF0 == paho.CONNECT:
+                if i:
+                    del queue[i]
+                    queue.appendleft(packet)
+                return
 
     def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
         super().reconnect_delay_set(min_delay, max_delay)

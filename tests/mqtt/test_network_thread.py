@@ -295,3 +295,36 @@ def test_a_callback_that_raises_does_not_end_the_network_thread(
     finally:
         c.disconnect()
         c.loop_stop()
+
+
+def test_a_publish_while_paho_opens_the_socket_goes_after_the_connect(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    """A status published by another thread just as paho has opened a new socket, before it
+    queued its CONNECT: the broker must get the CONNECT first (a PUBLISH first is a protocol
+    error, the connection dropped; under a stream of statuses, reconnecting took many tries)."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-first")
+    c = new_client(settings, "net-first")
+    ups: list[int] = []
+    c.on_connect = lambda *_a: ups.append(1)
+    sneaked: list[int] = []
+
+    def on_socket_open(*_args: object) -> None:  # paho: the socket is open, no CONNECT yet
+        if not sneaked:
+            other = threading.Thread(target=lambda: sneaked.append(c.publish("net/x", b"s").rc))
+            other.start()
+            other.join()
+
+    c.on_socket_open = on_socket_open
+    mark = probe.mark()
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: ups and c.is_connected(), 10, "connected")
+        assert sneaked == [0]  # queued, on the new socket
+        assert ThreadSocket.sent[0][:1] == b"\x10"  # CONNECT, the first thing written
+        assert len(ups) == 1
+        probe.wait(lambda m: m.topic == "net/x", start=mark)
+    finally:
+        c.disconnect()
+        c.loop_stop()
