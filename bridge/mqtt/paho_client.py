@@ -23,8 +23,11 @@ Rules:
    that carries a will; paho alone would wait the keepalive (a minute) each time.
 6. ``loop_start`` runs paho's external-loop API (``socket``, ``want_write``, ``loop_read``,
    ``loop_write``, ``loop_misc``) on a thread of ours, in place of paho's own loop, and
-   ``loop_stop`` ends it as paho's does (the queue written first). Everything else is as with
-   paho's thread: every read, write, reconnect and callback happens on that one thread (a TLS
+   ``loop_stop`` ends it as paho's does (the queue written first), but gives the queue
+   STOP_WRITE_S at most: a frozen broker (the TCP window full) held paho's loop until the
+   keepalive gave the connection up (a minute), and the bridge's stop with it (the socket is
+   then shut down: the broker, once back, sees the end). Everything else is as with paho's
+   thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
    (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
    inside the failure, no reconnect after ``disconnect``. A callback that raises (paho hands
@@ -69,6 +72,7 @@ log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
+STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
 POLL_READ = select.POLLIN | select.POLLPRI  # rule 6: what wakes the network thread to read
 READ_EVENTS = POLL_READ | select.POLLERR | select.POLLHUP  # ... and what it then reads
 
@@ -143,6 +147,7 @@ class Client(paho.Client):
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
+    _halt_t = 0.0  # rule 6: when loop_stop was called
 
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
@@ -192,6 +197,7 @@ class Client(paho.Client):
         net = self._net
         if net is None:
             return MQTTErrorCode.MQTT_ERR_INVAL
+        self._halt_t = time.monotonic()
         self._halt.set()
         self._wake()
         if threading.current_thread() is not net:
@@ -220,6 +226,13 @@ class Client(paho.Client):
         while True:
             sock = self.socket()
             if self._halt.is_set() and (sock is None or lost or not self.want_write()):
+                return
+            if self._halt.is_set() and time.monotonic() - self._halt_t >= STOP_WRITE_S:
+                log.warning("MQTT: %g s and the broker has not taken all: stopping", STOP_WRITE_S)
+                shutdown = getattr(sock, "shutdown", None)
+                if shutdown is not None:
+                    with contextlib.suppress(OSError):
+                        shutdown(socket.SHUT_RDWR)
                 return
             if sock is not None and not lost:
                 fd = getattr(sock, "fileno", lambda: -1)()

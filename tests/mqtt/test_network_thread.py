@@ -328,3 +328,28 @@ def test_a_publish_while_paho_opens_the_socket_goes_after_the_connect(
     finally:
         c.disconnect()
         c.loop_stop()
+
+
+def test_loop_stop_ends_while_a_stalled_broker_takes_nothing(broker: Mosquitto) -> None:
+    """A broker that reads nothing more (frozen, the TCP window full): stopping the bridge
+    ends the thread after a short wait, not once the keepalive gives the connection up."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-stalled")
+    c = new_client(settings, "net-stalled")
+    up = threading.Event()
+    c.on_connect = lambda *_a: up.set()
+    c.connect_async("127.0.0.1", broker.port, keepalive=600)
+    c.loop_start()
+    stopper = threading.Thread(target=lambda: (c.disconnect(), c.loop_stop()))
+    try:
+        assert up.wait(slow(10)), "never connected"
+        broker.pause()
+        for _ in range(20000):  # more than the kernel's buffers take
+            c.publish("net/flood", b"s" * 1000, qos=0)
+        wait_until(lambda: not c.want_write() or len(c._out_packet) > 1000, 10, "a queue")
+        assert c.want_write()  # the window is full
+        stopper.start()
+        stopper.join(slow(20))
+        assert not stopper.is_alive(), "loop_stop still waits for the stalled broker"
+    finally:
+        broker.resume()
+        stopper.join()
