@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from paho.mqtt.enums import CallbackAPIVersion
 
 from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
@@ -186,3 +187,169 @@ def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_clos
         waker.close()
     waker.wake()  # after the thread ended (a late publish): nothing, no error
     waker.close()
+
+
+def test_a_connection_whose_socket_has_a_high_descriptor_number_is_served(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """A bridge with many clients open has descriptors above 1023, which select() refuses: the
+    connection must still be made, read and written (not torn down and tried again for ever)."""
+    import os
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip("no room for 1200 descriptors")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
+    r, w = os.pipe()
+    taken = [os.dup(r) for _ in range(1100)]
+    try:
+        with connected(broker, "net-high-fd") as c:
+            assert c.socket().fileno() > 1023  # type: ignore[union-attr]
+            got = threading.Event()
+            c.on_message = lambda *_a: got.set()
+            c.subscribe("net/high")
+            mark = probe.mark()
+            c.publish("net/high", b"up", qos=1)
+            probe.wait(lambda m: m.topic == "net/high", start=mark)
+            assert got.wait(slow(10)), "never read"
+    finally:
+        for fd in [*taken, r, w]:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+
+
+class Racing(Client):
+    """A client whose ending network thread is overtaken, right after it marked itself ended,
+    by a ``loop_start`` on another thread (as ``disconnect``, ``loop_stop`` finding the thread
+    ended, then ``connect_async`` and ``loop_start`` may do)."""
+
+    overtake: Any = None
+
+    @property  # type: ignore[override]
+    def _net(self) -> threading.Thread | None:
+        return self.__dict__.get("net")  # type: ignore[no-any-return]
+
+    @_net.setter
+    def _net(self, thread: threading.Thread | None) -> None:
+        self.__dict__["net"] = thread
+        overtake, self.overtake = self.overtake, None
+        if thread is None and overtake is not None:
+            other = threading.Thread(target=overtake)
+            other.start()
+            other.join()
+
+
+def test_a_loop_start_overtaking_the_ending_thread_keeps_its_own_wake_up(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    c = Racing(callback_api_version=CallbackAPIVersion.VERSION2, client_id="net-race")
+    c.name = "net-race"
+    ups: list[int] = []
+    c.on_connect = lambda *_a: ups.append(1)
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: len(ups) == 1, 10, "connected")
+
+        def again() -> None:
+            c.connect_async("127.0.0.1", broker.port, keepalive=10)
+            assert c.loop_start() == 0
+
+        c.overtake = again
+        c.disconnect()  # the thread writes the DISCONNECT and ends on its own
+        wait_until(lambda: len(ups) == 2 and c.is_connected(), 10, "connected again")
+        assert c._waker.fileno() >= 0, "the new thread's wake-up was closed by the old thread"
+        mark = probe.mark()
+        c.publish("net/race", b"after", qos=0)
+        probe.wait(lambda m: m.topic == "net/race", start=mark)
+    finally:
+        c.overtake = None
+        c.disconnect()
+        c.loop_stop()
+
+
+def test_a_callback_that_raises_does_not_end_the_network_thread(
+    broker: Mosquitto, probe: Probe
+) -> None:
+    """paho hands a callback's exception up its loop: on our thread, it must not end the
+    connection for good (connection.py rule 5: the thread goes on)."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-raise")
+    c = new_client(settings, "net-raise")
+    c.reconnect_delay_set(1, 2)
+    ups: list[int] = []
+
+    def on_connect(*_args: object) -> None:
+        ups.append(1)
+        if len(ups) == 1:
+            raise RuntimeError("a bug in a callback")
+
+    c.on_connect = on_connect
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: len(ups) >= 2 and c.is_connected(), 15, "connected again")
+        mark = probe.mark()
+        c.publish("net/raised", b"still here", qos=1)
+        probe.wait(lambda m: m.topic == "net/raised", start=mark)
+    finally:
+        c.disconnect()
+        c.loop_stop()
+
+
+def test_a_publish_while_paho_opens_the_socket_goes_after_the_connect(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    """A status published by another thread just as paho has opened a new socket, before it
+    queued its CONNECT: the broker must get the CONNECT first (a PUBLISH first is a protocol
+    error, the connection dropped; under a stream of statuses, reconnecting took many tries)."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-first")
+    c = new_client(settings, "net-first")
+    ups: list[int] = []
+    c.on_connect = lambda *_a: ups.append(1)
+    sneaked: list[int] = []
+
+    def on_socket_open(*_args: object) -> None:  # paho: the socket is open, no CONNECT yet
+        if not sneaked:
+            other = threading.Thread(target=lambda: sneaked.append(c.publish("net/x", b"s").rc))
+            other.start()
+            other.join()
+
+    c.on_socket_open = on_socket_open
+    mark = probe.mark()
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        wait_until(lambda: ups and c.is_connected(), 10, "connected")
+        assert sneaked == [0]  # queued, on the new socket
+        assert ThreadSocket.sent[0][:1] == b"\x10"  # CONNECT, the first thing written
+        assert len(ups) == 1
+        probe.wait(lambda m: m.topic == "net/x", start=mark)
+    finally:
+        c.disconnect()
+        c.loop_stop()
+
+
+def test_loop_stop_ends_while_a_stalled_broker_takes_nothing(broker: Mosquitto) -> None:
+    """A broker that reads nothing more (frozen, the TCP window full): stopping the bridge
+    ends the thread after a short wait, not once the keepalive gives the connection up."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-stalled")
+    c = new_client(settings, "net-stalled")
+    up = threading.Event()
+    c.on_connect = lambda *_a: up.set()
+    c.connect_async("127.0.0.1", broker.port, keepalive=600)
+    c.loop_start()
+    stopper = threading.Thread(target=lambda: (c.disconnect(), c.loop_stop()))
+    try:
+        assert up.wait(slow(10)), "never connected"
+        broker.pause()
+        for _ in range(20000):  # more than the kernel's buffers take
+            c.publish("net/flood", b"s" * 1000, qos=0)
+        wait_until(lambda: not c.want_write() or len(c._out_packet) > 1000, 10, "a queue")
+        assert c.want_write()  # the window is full
+        stopper.start()
+        stopper.join(slow(20))
+        assert not stopper.is_alive(), "loop_stop still waits for the stalled broker"
+    finally:
+        broker.resume()
+        stopper.join()

@@ -6,7 +6,7 @@ rule 9, where it is explained), and a tick on paho's own thread.
 Rules:
 1. ``new_client`` builds paho's client for the settings: MQTT 5 or 3.1.1, credentials, TLS.
 2. ``tick``, when set, is called on paho's thread after each round of its loop (at least once a
-   second while connected: its select waits 1 s at most), for what a connection does on a clock
+   second while connected: its wait lasts 1 s at most), for what a connection does on a clock
    without a thread of its own (the station's heartbeat, client.py rule 2). It must be cheap;
    one that raises is logged and paho's thread goes on.
 3. ``use_mqtt311`` turns a client built for MQTT 5 into one that speaks MQTT 3.1.1 with a clean
@@ -23,20 +23,31 @@ Rules:
    that carries a will; paho alone would wait the keepalive (a minute) each time.
 6. ``loop_start`` runs paho's external-loop API (``socket``, ``want_write``, ``loop_read``,
    ``loop_write``, ``loop_misc``) on a thread of ours, in place of paho's own loop, and
-   ``loop_stop`` ends it as paho's does (the queue written first). Everything else is as with
-   paho's thread: every read, write, reconnect and callback happens on that one thread (a TLS
+   ``loop_stop`` ends it as paho's does (the queue written first), but gives the queue
+   STOP_WRITE_S at most: a frozen broker (the TCP window full) held paho's loop until the
+   keepalive gave the connection up (a minute), and the bridge's stop with it (the socket is
+   then shut down: the broker, once back, sees the end). Everything else is as with paho's
+   thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
    (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
-   inside the failure, no reconnect after ``disconnect``. What changes is the wake-up: paho's
+   inside the failure, no reconnect after ``disconnect``. A callback that raises (paho hands
+   its exception up the loop, which ended paho's thread) is logged and the connection made
+   again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
    call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
    through paho's ``on_socket_register_write``, which paho calls once until the queue has been
-   written, so a reading's messages cost one wake-up between them.
+   written, so a reading's messages cost one wake-up between them. It waits with poll, not
+   select (which refuses a descriptor above 1023, as a bridge with many clients open has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
    the message left the socket, building a reason code and properties each time (about as much
    CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
    acknowledgements only (which come in ``loop_read`` and still call it).
    ``on_publish`` is set before ``loop_start``.
+8. A new connection writes its CONNECT first. paho's ``publish`` queues a message as soon as
+   the new socket exists, a moment before paho queues the CONNECT: a status published from
+   another thread in that moment went first, which the broker reads as a protocol error (the
+   connection dropped: under a stream of statuses, reconnecting took many tries). The CONNECT
+   is moved ahead of it (what was queued follows it, as a publish just after the CONNECT).
 """
 
 from __future__ import annotations
@@ -61,6 +72,9 @@ log = logging.getLogger(__name__)
 
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
+STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
+POLL_READ = select.POLLIN | select.POLLPRI  # rule 6: what wakes the network thread to read
+READ_EVENTS = POLL_READ | select.POLLERR | select.POLLHUP  # ... and what it then reads
 
 
 def acknowledge_now(sock: object) -> None:
@@ -133,10 +147,25 @@ class Client(paho.Client):
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
+    _halt_t = 0.0  # rule 6: when loop_stop was called
 
     def reconnect(self) -> MQTTErrorCode:
         self._connect_t = time.monotonic()
-        return super().reconnect()
+        rc = super().reconnect()
+        self._connect_first()
+        return rc
+
+    def _connect_first(self) -> None:
+        """Rule 8: the CONNECT ahead of what other threads queued while paho opened the socket
+        (nothing is written before this: the thread that writes is this one)."""
+        queue = self._out_packet
+        for i in range(len(queue)):  # by index: other threads may append meanwhile
+            packet = queue[i]
+            if packet["command"] & 0xF0 == paho.CONNECT:
+                if i:
+                    del queue[i]
+                    queue.appendleft(packet)
+                return
 
     def reconnect_delay_set(self, min_delay: int = 1, max_delay: int = 120) -> None:
         super().reconnect_delay_set(min_delay, max_delay)
@@ -168,6 +197,7 @@ class Client(paho.Client):
         net = self._net
         if net is None:
             return MQTTErrorCode.MQTT_ERR_INVAL
+        self._halt_t = time.monotonic()
         self._halt.set()
         self._wake()
         if threading.current_thread() is not net:
@@ -179,22 +209,45 @@ class Client(paho.Client):
         self._waker.wake()
 
     def _serve(self) -> None:
-        """The thread (a new ``loop_start`` may follow its end, as with paho's)."""
+        """The thread (a new ``loop_start`` may follow its end, as with paho's: from the moment
+        ``_net`` is None, so what it closes then is its own wake-up, not the next thread's)."""
+        waker = self._waker
         try:
             self._reconnecting()
         finally:
             self._net = None
-            self._waker.close()
+            waker.close()
 
     def _reconnecting(self) -> None:
         """paho's reconnect loop (``loop_forever``'s) around ``_round``."""
         first, lost = True, False
+        poller, polled = select.poll(), -1  # the socket's descriptor in the poller, -1: none
+        poller.register(self._waker.fileno(), select.POLLIN)
         while True:
             sock = self.socket()
             if self._halt.is_set() and (sock is None or lost or not self.want_write()):
                 return
+            if self._halt.is_set() and time.monotonic() - self._halt_t >= STOP_WRITE_S:
+                log.warning("MQTT: %g s and the broker has not taken all: stopping", STOP_WRITE_S)
+                shutdown = getattr(sock, "shutdown", None)
+                if shutdown is not None:
+                    with contextlib.suppress(OSError):
+                        shutdown(socket.SHUT_RDWR)
+                return
             if sock is not None and not lost:
-                lost = not self._round(sock)
+                fd = getattr(sock, "fileno", lambda: -1)()
+                if fd != polled and polled >= 0:
+                    with contextlib.suppress(KeyError):
+                        poller.unregister(polled)
+                polled = fd
+                try:
+                    lost = not self._round(sock, poller)
+                except Exception:  # a callback's bug, which paho hands up: not the thread's end
+                    log.exception("error on the MQTT network thread: connecting again")
+                    shutdown = getattr(sock, "shutdown", None)
+                    if shutdown is not None:
+                        with contextlib.suppress(OSError):
+                            shutdown(socket.SHUT_RDWR)  # paho reads the end as always
                 continue
             if self._leaving:
                 return
@@ -205,20 +258,31 @@ class Client(paho.Client):
                 self.reconnect()
             except OSError:  # paho's loop says so, and waits
                 self._connect_failed()
+            except Exception:  # a callback's bug (on_pre_connect, on_socket_open): waits too
+                log.exception("error on the MQTT network thread while connecting")
 
-    def _round(self, sock: Any) -> bool:
+    def _round(self, sock: Any, poller: Any) -> bool:
         """One round of the loop: wait (1 s at most, rule 2) for the socket or a wake-up, then
-        read, write what is queued, and the keepalive. False: the socket failed the select."""
+        read, write what is queued, and the keepalive. False: the socket cannot be waited on.
+        poll, not select: a bridge with many clients open has descriptors above 1023, which
+        select refuses (the connection would be made and torn down again for ever)."""
         pending = getattr(sock, "pending", None)  # TLS: bytes already decrypted
         ready = pending() if pending is not None else 0
-        wlist = [sock] if self.want_write() else []
         try:
-            readable, _, _ = select.select([sock, self._waker], wlist, [], 0.0 if ready else 1.0)
+            fd = sock.fileno()
+            poller.register(fd, POLL_READ | select.POLLOUT if self.want_write() else POLL_READ)
+            events = poller.poll(0 if ready else 1000)
         except (OSError, TypeError, ValueError):  # closed under us: reconnect
             return False
-        if self._waker in readable:
-            self._waker.drain()
-        if ready or sock in readable:
+        readable = False
+        for got, mask in events:
+            if mask & select.POLLNVAL:
+                return False
+            if got == fd:
+                readable = bool(mask & READ_EVENTS)  # an error or a hang-up too: read, it says
+            else:
+                self._waker.drain()
+        if ready or readable:
             self.loop_read()
             if self.socket() is not sock:
                 return True
