@@ -190,19 +190,30 @@ def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_clos
 
 
 def test_a_connection_whose_socket_has_a_high_descriptor_number_is_served(
-    broker: Mosquitto, probe: Probe
+    broker: Mosquitto, probe: Probe, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A bridge with many clients open has descriptors above 1023, which select() refuses: the
-    connection must still be made, read and written (not torn down and tried again for ever)."""
-    import os
+    connection must still be made, read and written (not torn down and tried again for ever).
+    The connection's socket is moved above 1023 as it is made (not by taking the numbers below
+    it: another thread of the test worker may give one back meanwhile)."""
+    import fcntl
     import resource
+    import socket as socket_module
 
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     if hard != resource.RLIM_INFINITY and hard < 1200:
         pytest.skip("no room for 1200 descriptors")
     resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
-    r, w = os.pipe()
-    taken = [os.dup(r) for _ in range(1100)]
+    made = socket_module.create_connection
+
+    def made_high(*args: Any, **kwargs: Any) -> socket_module.socket:
+        low = made(*args, **kwargs)
+        high = socket_module.socket(fileno=fcntl.fcntl(low.fileno(), fcntl.F_DUPFD, 1100))
+        high.settimeout(low.gettimeout())
+        low.close()
+        return high
+
+    monkeypatch.setattr(socket_module, "create_connection", made_high)
     try:
         with connected(broker, "net-high-fd") as c:
             assert c.socket().fileno() > 1023  # type: ignore[union-attr]
@@ -214,8 +225,7 @@ def test_a_connection_whose_socket_has_a_high_descriptor_number_is_served(
             probe.wait(lambda m: m.topic == "net/high", start=mark)
             assert got.wait(slow(10)), "never read"
     finally:
-        for fd in [*taken, r, w]:
-            os.close(fd)
+        monkeypatch.undo()
         resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
 
 

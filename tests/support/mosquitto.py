@@ -5,15 +5,46 @@ port. Its start's deadline scales with the machine (waiting.py rule 1)."""
 
 from __future__ import annotations
 
+import random
 import signal
+import socket
 from pathlib import Path
 from typing import Self
 
-from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto, free_port
+from bridge.demo.mosquitto import BrokerError, answers, find_mosquitto
 from bridge.demo.mosquitto import Mosquitto as DemoMosquitto
 from tests.support.waiting import slow
 
 __all__ = ["BrokerError", "Mosquitto", "answers", "find_mosquitto", "free_port"]
+
+_PICK = random.SystemRandom()
+
+
+def _ephemeral_low() -> int:
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            return int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return 32768
+
+
+def free_port() -> int:
+    """A loopback port free now, below the kernel's range for outgoing connections: a port the
+    kernel hands out (bind to 0) is one every other test's outgoing connection may take before
+    the test listens on it, which a busy parallel suite does; one below that range only a
+    listener can take."""
+    top = _ephemeral_low()
+    for _ in range(50):
+        port = _PICK.randrange(10_000, top)
+        with socket.socket() as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    with socket.socket() as s:  # a crowded range: the kernel's choice
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
 
 
 class Mosquitto(DemoMosquitto):
@@ -27,7 +58,7 @@ class Mosquitto(DemoMosquitto):
         host: str = "127.0.0.1",
         extra_conf: str = "",
     ) -> None:
-        super().__init__(workdir, port=port, host=host)
+        super().__init__(workdir, port=port or free_port(), host=host)
         self._auto_port = port is None
         self.extra_conf = extra_conf
 
