@@ -123,6 +123,7 @@ def measured_rig(
             spawn=scope.spawner if spawn is None else spawn(scope),
         )
         rig.base = TOPIC
+        rig.express = None  # each engine as it ships (this one with its stop express)
         for rid, model, emu_opts, rot_opts in specs:
             rig.add(rid, model, emu_opts, **rot_opts)
         rig.sections["homeassistant"] = {"enabled": homeassistant}

@@ -175,13 +175,14 @@ def emulator_line(rig: Rig, rid: str, model: str, options: dict[str, Any]) -> Li
 
 
 class Rig:
-    #: the stop express (interfaces/mqtt/express.py), a Python process of its own beside each bridge
-    # the
-    #: rig starts (about 0.4 CPU-s each, most of a rig test's cost): on where it is what a test
-    #: is about (tests/integration/test_stop_express.py, the broker matrix; tests/mqtt/
-    #: test_express.py proves it on its own), off elsewhere: the stop lane then carries the
-    #: stops, as with ``mqtt.stop_express`` off; ``mqtt_extra`` may say otherwise
-    express = False
+    #: the stop express (interfaces/mqtt/express.py), a Python process of its own beside each
+    #: bridge the rig starts (about 0.4 CPU-s each, most of a rig test's cost): on where it is
+    #: what a test is about (tests/integration/test_stop_express.py, the broker matrix;
+    #: tests/mqtt/test_express.py proves it on its own), off elsewhere: the stop lane then
+    #: carries the stops, as with ``mqtt.stop_express`` off; ``mqtt_extra`` may say otherwise.
+    #: None leaves the key out: the bridge's own default (the benchmarks, whose older engines
+    #: know no such key)
+    express: bool | None = False
 
     def __init__(
         self,
@@ -246,7 +247,10 @@ class Rig:
             self.rotators,
             client_id=f"bridge-under-test-{os.getpid()}-{id(self)}",
             base_topic=self.base,
-            mqtt={"stop_express": self.express, **self.mqtt_extra},
+            mqtt={
+                **({} if self.express is None else {"stop_express": self.express}),
+                **self.mqtt_extra,
+            },
             sections=self.sections,
         )
 
