@@ -22,6 +22,10 @@ Rules:
    waits for it: when it returns the port is closed, or, if closing it outlasts the time given
    to ``remove``, still being closed (a warning says so); either way nothing serves it any more.
    A worker is added once: adding it again is a programming error (ValueError).
+   The wake pipe lives as long as the thread: made when the thread starts, closed by the thread
+   as it ends, both under the loop's lock, and a wake-up writes to it under that lock too: a
+   late wake-up (a port opener's thread, a ``remove`` racing the end) finds it closed and does
+   nothing, never raises and never writes to a descriptor number the process has reused.
 5. Commands first: the workers whose mailbox is ready are served before the others in a round,
    and a worker with a stop (or lock ON) waiting is served next, even one that came while the
    round was under way: a stop never waits behind other rotators' replies, sky answers and
@@ -85,9 +89,7 @@ class Lines:
         self._joining: list[Worker] = []
         self._leaving: dict[Worker, threading.Event] = {}
         self._thread: threading.Thread | None = None
-        self._wake_r, self._wake_w = os.pipe()
-        os.set_blocking(self._wake_r, False)
-        os.set_blocking(self._wake_w, False)
+        self._wake_r = self._wake_w = -1  # the wake pipe, open while the thread runs (rule 4)
 
     # -- any thread (rule 4) --------------------------------------------------------------------
     def add(self, worker: Worker) -> None:
@@ -97,6 +99,10 @@ class Lines:
                 raise ValueError(f"{worker.cfg.rotator_id}: already on the lines")
             self._joining.append(worker)
             if self._thread is None or not self._thread.is_alive():
+                if self._wake_r < 0:  # (a thread that died of a bug left its pipe: kept)
+                    self._wake_r, self._wake_w = os.pipe()
+                    os.set_blocking(self._wake_r, False)
+                    os.set_blocking(self._wake_w, False)
                 self._thread = threading.Thread(target=self._run, name="serial-lines")
                 self._thread.start()
         self._wake()
@@ -126,10 +132,13 @@ class Lines:
         return True
 
     def _wake(self) -> None:
-        try:
-            os.write(self._wake_w, b"\0")
-        except BlockingIOError:
-            pass  # full: the loop is going to wake up anyway
+        with self._lock:  # rule 4: never after the pipe closed
+            if self._wake_w < 0:
+                return  # no thread to wake
+            try:
+                os.write(self._wake_w, b"\0")
+            except BlockingIOError:
+                pass  # full: the loop is going to wake up anyway
 
     # -- the thread -----------------------------------------------------------------------------
     def _run(self) -> None:
@@ -157,6 +166,9 @@ class Lines:
             if self._workers or self._joining:
                 return True
             self._thread = None  # the next add() starts a new one
+            os.close(self._wake_r)  # rule 4: this thread polls it no more
+            os.close(self._wake_w)
+            self._wake_r = self._wake_w = -1
             return False
 
     def _round(self) -> None:

@@ -8,6 +8,7 @@ still reach its controller at once.
 from __future__ import annotations
 
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -382,3 +383,67 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
             lines.remove(w)  # type: ignore[arg-type]
     k = put[0]
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
+
+
+def _pipes() -> set[int]:
+    """This process's open pipe descriptors (the lines' wake pipe is one pair of them)."""
+    found = set()
+    for name in os.listdir("/proc/self/fd"):
+        try:
+            if os.readlink(f"/proc/self/fd/{name}").startswith("pipe:"):
+                found.add(int(name))
+        except OSError:
+            pass  # closed while listed (the listing's own descriptor, another thread's)
+    return found
+
+
+def test_lines_started_and_stopped_leave_no_descriptor_and_a_late_wake_up_does_nothing() -> None:
+    """Rule 4: each Lines kept its wake pipe open for good, two descriptors per bridge started
+    and stopped in one process. A wake-up from another thread (a port opener's) racing the end,
+    or coming after it, neither raises nor writes to the closed pipe's number, reused since."""
+    wakes: list[Callable[[], None]] = []
+
+    class Idle(Timed):
+        def wants(self, now: float) -> tuple[list[int], float]:
+            return [], now + 3600.0
+
+        def begin(self, now: float, wake: Callable[[], None]) -> None:
+            wakes.append(wake)
+
+    errors: list[BaseException] = []
+    done = threading.Event()
+
+    def waking() -> None:  # another thread, waking the lines as they start and stop
+        while not done.is_set():
+            for wake in list(wakes[-2:]):
+                try:
+                    wake()
+                except BaseException as exc:  # noqa: BLE001
+                    errors.append(exc)
+            time.sleep(0)  # let the lines thread have the GIL between rounds of wake-ups
+
+    before = _pipes()
+    waker = threading.Thread(target=waking)
+    waker.start()
+    try:
+        for i in range(20):
+            lines = Lines()
+            worker = Idle([0.0], 0.0, threading.Event(), [])
+            lines.add(worker)  # type: ignore[arg-type]
+            wait_until(lambda i=i: len(wakes) > i, 5, "the worker begun")
+            assert lines.remove(worker)  # type: ignore[arg-type]
+            wait_until(lambda lines=lines: lines._thread is None, 5, "the lines thread ended")
+    finally:
+        done.set()
+        waker.join()
+    assert errors == []
+    assert _pipes() - before == set()
+    reused_r, reused_w = os.pipe()  # most likely the numbers the last wake pipe had
+    try:
+        os.set_blocking(reused_r, False)
+        wakes[-1]()  # the last worker's wake-up, long after its lines ended
+        with pytest.raises(BlockingIOError):
+            os.read(reused_r, 1)  # nothing written to whatever pipe has the number now
+    finally:
+        os.close(reused_r)
+        os.close(reused_w)
