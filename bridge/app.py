@@ -14,6 +14,10 @@ Rules:
 3. A composite rotator's two boxes (runtime/composite.py) are each configured as a rotator of
    their own model, port and rate, with every other key of the rotator's, its id, and its
    judge's terms: the azimuth box's without elevation (protocols/axes.py rule 1).
+4. ``B/bridge/info``'s problems (a denied topic, a long hold, the stop express's, a step down
+   to MQTT 3.1.1) come from several threads: each change of the list and the publish of the
+   list as it then is are one step under one lock (``_say``), so two problems said or unsaid at
+   once are both in the retained payload, and no stale list is published after a newer one.
 """
 
 from __future__ import annotations
@@ -196,6 +200,7 @@ class App:
         self.failure: str | None = None  # set when the bridge must not go on (claim rule 2, 4)
         self.failed = threading.Event()
         self._lane_started = False
+        self._problems_lock = threading.Lock()  # rule 4
         self.client = MqttClient(
             settings.mqtt,
             will_topic=self.topics.bridge_state,
@@ -477,8 +482,6 @@ class App:
     def _denied(self, topic: str, problem: str) -> None:
         """The broker refused a topic (client.py rule 11): the rotator's status says so, and
         ``B/bridge/info`` lists every such problem."""
-        if problem not in self.client.problems:  # the stop lane's (the client's are there)
-            self.client.problems.append(problem)
         if topic == self.topics.bridge_fence:
             self.mqtt.markers_denied()
         elif topic == self.topics.bridge_fence_lane:
@@ -487,24 +490,30 @@ class App:
         for rot in self.rotators:
             if rid is None or rot.id == rid:
                 rot.note(problem)
-        self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+        self._say(problem, True)  # the stop lane's (the client's is in the list already)
 
     def _allowed(self, topic: str) -> None:
         """The broker takes a topic it refused before (client.py rule 16: the fence's probe
         came back on a new connection): the markers go out again, ``B/bridge/info`` without it."""
         if topic == self.topics.bridge_fence:
             self.mqtt.markers_allowed()
-        self.client.publish_retained(self.topics.bridge_info, self.me.info(self.client.problems))
+        self._say()  # (the client took it out of the list)
 
     def _info(self, problem: str, on: bool) -> None:
         """A problem said on ``B/bridge/info`` while it lasts (a long hold:
         interfaces/mqtt/halts.py)."""
-        problems = self.client.problems
-        if on and problem not in problems:
-            problems.append(problem)
-        elif not on and problem in problems:
-            problems.remove(problem)
-        self.client.publish_retained(self.topics.bridge_info, self.me.info(problems))
+        self._say(problem, on)
+
+    def _say(self, problem: str | None = None, on: bool = True) -> None:
+        """Rule 4: ``problem`` in the list (or out of it), and the list as it then is published
+        retained on ``B/bridge/info``, in one step."""
+        with self._problems_lock:
+            problems = self.client.problems
+            if problem is not None and on and problem not in problems:
+                problems.append(problem)
+            elif problem is not None and not on and problem in problems:
+                problems.remove(problem)
+            self.client.publish_retained(self.topics.bridge_info, self.me.info(list(problems)))
 
     def _main_new(self) -> None:
         """A new main connection, before any of its messages: the protocol it speaks (mqtt/

@@ -189,3 +189,56 @@ def test_markers_come_back_when_the_acl_lets_them_on_a_later_connect(
             "rotor/bridge/info", lambda m: b"rotor/bridge/fence" not in m.payload, 30, before
         )
         wait_until(lambda: app.mqtt._word.markers, 10, "the markers on again")
+
+
+class Watched:
+    """A lock that notes when a thread has to wait for it."""
+
+    def __init__(self) -> None:
+        self.lock, self.waited = threading.Lock(), threading.Event()
+
+    def __enter__(self) -> None:
+        if not self.lock.acquire(blocking=False):
+            self.waited.set()
+            self.lock.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self.lock.release()
+
+
+def test_two_problems_said_at_once_from_two_threads_are_both_on_bridge_info(rig: Rig) -> None:
+    """App rule 4 (review finding): each thread changed the list, then published the list it had
+    built, each on its own: a thread that built its payload before another's change published
+    it after, and the broker kept a list without the other's problem. Forced here: the second
+    problem is said while the first one's publish is under way."""
+    rig.add("tower", "rotorez")
+    app = rig.start()
+    rig.ready("tower")
+    info = "rotor/bridge/info"
+    first, second = "tower: the first problem", "tower: the second problem"
+    publish, watched = app.client.publish_retained, Watched()
+    app._problems_lock = watched  # type: ignore[assignment]
+    second_out, both = threading.Event(), threading.Thread(target=app._info, args=(second, True))
+
+    def publishing(topic: str, payload: str | bytes, **kw: Any) -> None:
+        text = payload if isinstance(payload, str) else payload.decode()
+        if topic == info and first in text and second not in text:  # the first one's publish
+            both.start()  # the second problem said now: its list goes out before, or it waits
+            wait_until(lambda: second_out.is_set() or watched.waited.is_set(), 10, "the second")
+        publish(topic, payload, **kw)
+        if topic == info and second in text:
+            second_out.set()
+
+    app.client.publish_retained = publishing  # type: ignore[method-assign]
+    start = rig.probe.mark()
+    app._info(first, True)
+    both.join(slow(10))
+    assert not both.is_alive()
+    for said in ([first], [first, second]):  # both lists reached the broker (in either order)
+        rig.probe.wait(
+            lambda m, s=said: m.topic == info and json.loads(m.payload)["problems"] == s,
+            10,
+            f"{said} on {info}",
+            start,
+        )
+    assert json.loads(rig.retained()[info])["problems"] == [first, second]
