@@ -14,6 +14,7 @@ file survives a full disk.
 from __future__ import annotations
 
 import json
+import logging
 import socket
 import time
 from collections.abc import Iterator
@@ -311,3 +312,35 @@ def test_every_other_interface_names_its_peer_in_the_audit_trail(
     )
     assert [e["command"] for e in events[7:]] == ["lock ON", "lock OFF"]
     pst.close()
+
+
+def test_under_mqtt_311_an_empty_claim_or_release_is_refused_and_the_lease_holds(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Review finding: under MQTT 3.1.1 an empty message on R/control/claim or
+    R/control/release was taken for the deletion of a retained one and dropped without a word
+    (under MQTT 5 the claim is refused, the release carried out). It cannot be told from a
+    deletion, so it is not carried out, and it is refused aloud: R/error and the log say so."""
+    rig.mqtt_extra["protocol"] = "3.1.1"
+    rig.add("tower", emu={"start_az_deg": 10, "jitter_deg": 0})
+    rig.start()
+    rig.ready("tower")
+    probe = rig.probe
+    probe.publish("rotor/control/claim", json.dumps({"operator": "DL1ABC", "minutes": 30}))
+    held = probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] == "DL1ABC")
+    with caplog.at_level(logging.INFO, logger="bridge.interfaces.mqtt.service"):
+        for n, topic in enumerate(("rotor/control/claim", "rotor/control/release"), 1):
+            probe.publish(topic, b"")
+            wait_until(lambda n=n: len(probe.on("rotor/error")) >= n, 10, f"refusal {n}")
+    refusals = [json.loads(m.text) for m in probe.on("rotor/error")]
+    assert [r["command"] for r in refusals] == ["claim", "release"]
+    assert all("empty payload" in r["message"] for r in refusals)
+    logged = [r.getMessage() for r in caplog.records if "refused" in r.getMessage()]
+    assert [line.split(":")[1] for line in logged] == [" refused claim", " refused release"]
+    # nothing changed: the lease is DL1ABC's (a release after them frees it: they were heard)
+    probe.publish("rotor/control/release", json.dumps({"operator": "DL1ABC"}))
+    probe.wait_for("rotor/control", lambda m: json.loads(m.text)["holder"] is None, after=held.t)
+    assert [json.loads(m.text)["holder"] for m in probe.on("rotor/control")][-2:] == [
+        "DL1ABC",
+        None,
+    ]

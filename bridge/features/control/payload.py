@@ -7,7 +7,8 @@ Rules:
    property ``operator``, an ``operator``; any other key, or anything that is not such an
    object, is a PayloadError naming what was wrong (refused on ``R/error``, nothing changes).
 2. A release takes any payload; a JSON object's valid ``operator`` names who released it when
-   the message has no user property (Home Assistant's button sends one).
+   the message has no user property (Home Assistant's button sends one). (Under MQTT 3.1.1 an
+   empty one is refused before it comes here: interfaces/mqtt/service.py rule 1.)
 3. ``R/control`` says who holds the lease and until when (ISO 8601, UTC), or nobody.
 """
 

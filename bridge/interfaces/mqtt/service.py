@@ -14,7 +14,10 @@ Rules:
    refusals themselves tell the user to do), so it is ignored silently, stop included. (With
    MQTT 3.1.1 the broker clears the retain flag of live messages, so a deletion sent while the
    bridge is connected arrives as an empty plain message: under 3.1.1 an empty message is
-   ignored as a deletion too, but on a stop topic it is a stop, as any payload is there.)
+   ignored as a deletion too, but on a stop topic it is a stop, as any payload is there,
+   and on a topic whose command gives an empty payload a meaning of its own (``takes_empty``:
+   the lease's claim and release) it is refused, "empty payload", and changes nothing: it can
+   be neither carried out, being perhaps a deletion, nor dropped without a word.)
 2. Bad payloads (an empty one too) are refused with an error event naming what was wrong;
    nothing moves. A stop takes any payload: stopping is never refused.
 3. Outbound state is retained and published only when it changed; ``R/error`` is not retained.
@@ -515,6 +518,10 @@ class MqttService:
         if rot is None:
             return
         if not payload and (retain or (kind != "stop" and not self._halts.retain_is_live)):
+            feature = self.topics.commands.get(kind)
+            if not retain and feature is not None and feature.takes_empty:  # rule 1 (3.1.1)
+                rot.report_refusal(EMPTY_311, kind, origin=self.origin(operator))
+                return
             self._halts.retained_deleted(topic)
             return  # a retained command being deleted (rule 1)
         what = pl.describe(kind if arg is None else f"option {arg}", payload)
@@ -634,6 +641,10 @@ def _setting_value(spec: ModelSpec | None, name: str, payload: bytes) -> Setting
         raise pl.PayloadError(str(exc)) from None
 
 
+EMPTY_311 = (  # rule 1
+    "empty payload (under MQTT 3.1.1 an empty message may be the deletion of a retained one: "
+    "nothing was done)"
+)
 LOGGED_CHARS = 200  # rule 4: of a command or a reason, in a log line
 
 
