@@ -34,7 +34,8 @@ of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows i
 ``STOP_EXPRESS=0`` runs this tree's bridges without the stop express (``mqtt.stop_express``
 off: the stop's frame written by the bridge's process alone), to compare in turns.
 ``STOP_ONLY=trackings`` takes the control and the trackings only (no other load, no pairs; with
-``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns.
+``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns;
+``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table).
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
@@ -1283,16 +1284,20 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
     rng = random.Random(29)
     phases: list[PhaseResult] = []
     trace = os.environ.get("STOP_TRACE")  # the focused mode: module docstring's end
+    focused = {
+        "trackings": lambda lo: tracking_phase(lo, TRACKING_LOAD, n),
+        "backlog": lambda lo: backlog_phase(lo, BACKLOG_LOAD, n),
+    }
+    if ONLY is not None and ONLY not in focused:
+        raise BenchError(f"STOP_ONLY={ONLY!r}: one of {', '.join(focused)}")
     with Scope(scope.workdir / "loaded") as inner:
         lo = start_loaded(inner, rng)
         ABORT.wait(2.0)  # past the start-up
         tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
         phases.append(simple_phase(lo, CONTROL, n, None, None))
-        if ONLY == "trackings":
-            phases.append(tracking_phase(lo, TRACKING_LOAD, n))
-            return _focused_end(result, lo, phases, trace)
         if ONLY is not None:
-            raise BenchError(f"STOP_ONLY={ONLY!r}: only 'trackings' is known")
+            phases.append(focused[ONLY](lo))
+            return _focused_end(result, lo, phases, trace)
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
         if trace is not None:
             return _traced(result, lo, phases, n, trace)
