@@ -25,6 +25,14 @@ Rules:
    controller is kept there, on our clock: ``("in", t, bytes, due of the last byte, sched)``
    and ``("out", t, bytes, due of the first byte, sched)``, sched being the relay thread's
    (ns on a CPU, ns runnable waiting for one) (where a slow byte waited: stop_trace.py).
+7. ``received`` keeps the last RECEIVED reads from the client, always: ``(t, due of the last
+   byte, bytes)``, ``t`` when we read them (time.monotonic: on Linux CLOCK_MONOTONIC, the clock
+   of a benchmark's publish stamps and of the emulators' frame logs). ``ahead_of(t)`` says from
+   it what the line still carried at ``t`` of bytes read before ``t`` (``wire_ahead``): the
+   line's own floor for a byte the client writes at ``t``, which no client can shorten (bytes
+   handed to a UART are not recalled). The due times are the line's, not our deliveries (a
+   late delivery is the relay's error, rule 4, and is not taken for the line's floor).
+   ``read_between(t0, t1)``: the bytes read from ``t0`` to ``t1`` (what came after a publish).
 """
 
 from __future__ import annotations
@@ -37,11 +45,13 @@ import threading
 import time
 import tty
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 _CHUNK = 4096
+RECEIVED = 256  # reads kept in ``received`` (rule 7): seconds of polls on a busy line
 _lock = threading.Lock()
 #: lateness of every delivery by every relay closed so far in this process (seconds)
 ALL_LATENESS_S: list[float] = []
@@ -55,6 +65,28 @@ def thread_sched() -> tuple[int, int]:
         return int(run), int(wait)
     except (OSError, ValueError):
         return 0, 0
+
+
+@dataclass(frozen=True)
+class Ahead:
+    """What a line still carried at a moment of bytes it had read before it (rule 7)."""
+
+    s: float  # how long after the moment the line stayed busy with them (0: it was idle)
+    data: bytes  # the reads those bytes came in, whole (b"" if none)
+
+
+def wire_ahead(received: Iterable[tuple[float, float, bytes]], t: float) -> Ahead:
+    """From a line's reads ``(t read, due of its last byte, bytes)`` (rule 7): how long after
+    ``t`` the line was busy with bytes read before ``t``, and the reads they came in. A read
+    whose last byte is due after ``t`` has bytes still on the line at ``t`` (sent in part, or
+    waiting behind others); the line is free when the last of them is due."""
+    busy_until = t
+    data = bytearray()
+    for t_read, due_last, chunk in received:
+        if t_read < t < due_last:
+            busy_until = max(busy_until, due_last)
+            data += chunk
+    return Ahead(busy_until - t, bytes(data))
 
 
 class PacedRelay:
@@ -79,6 +111,8 @@ class PacedRelay:
         tty.setraw(self._device)
         termios.tcflush(self._device, termios.TCIFLUSH)  # "a client opened the port"
         self._queue: deque[tuple[float, bytes]] = deque()
+        self.received: deque[tuple[float, float, bytes]] = deque(maxlen=RECEIVED)
+        self._received_lock = threading.Lock()
         self._line_free_s = 0.0
         self.lateness_s: list[float] = []
         self._stop = False
@@ -116,11 +150,14 @@ class PacedRelay:
                 with contextlib.suppress(BlockingIOError):
                     data = os.read(self._master, _CHUNK)
                     if data:
-                        due = max(time.monotonic(), self._line_free_s)
+                        t_read = time.monotonic()
+                        due = max(t_read, self._line_free_s)
                         for i in range(len(data)):
                             due += self.byte_time_s
                             self._queue.append((due, data[i : i + 1]))
                         self._line_free_s = due
+                        with self._received_lock:
+                            self.received.append((t_read, due, data))
                         if self.timeline is not None:
                             event = ("in", time.monotonic(), data, due, *thread_sched())
                             self.timeline.append(event)
@@ -136,6 +173,17 @@ class PacedRelay:
             if self._wake_r in readable:
                 with contextlib.suppress(BlockingIOError):
                     os.read(self._wake_r, _CHUNK)
+
+    def ahead_of(self, t: float) -> Ahead:
+        """What the line still carried at ``t`` (time.monotonic) of bytes read before it."""
+        with self._received_lock:
+            received = tuple(self.received)
+        return wire_ahead(received, t)
+
+    def read_between(self, t0: float, t1: float) -> bytes:
+        """The bytes read from the client from ``t0`` to ``t1`` (time.monotonic)."""
+        with self._received_lock:
+            return b"".join(data for t, _, data in self.received if t0 <= t <= t1)
 
     def _hand_over(self, data: bytes) -> bool:
         """The bytes due to the controller: to ``deliver`` (rule 5), else through its pty."""

