@@ -22,8 +22,7 @@ Rules:
    across the core topics, the bridge's own (``B/bridge/...``) and every feature, and names a
    topic (no wildcard), and its command's name is no core command's nor another's (the topic
    table refuses them at start: interfaces/mqtt/topics.py); its first word
-   is reserved from group ids (settings/groups.py ``RESERVED``; tests/test_features.py checks
-   it).
+   is reserved from group ids (``topic_words``, read by settings/groups.py ``reserved``).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on interfaces/mqtt/payloads.py while
    mqtt's topic table iterates it), so an import of it from below would be a circle. Nothing heavy
@@ -230,6 +229,18 @@ def registered() -> tuple[Feature, ...]:
         features: tuple[Feature, ...] = importlib.import_module(REGISTRY_MODULE).FEATURES
         _loaded = features
     return _loaded
+
+
+def topic_words() -> dict[str, str]:
+    """The first word of every registered feature's topics, under ``R/`` and ``B/`` alike, and
+    the feature that has it (rule 3: no group id may take one; settings/groups.py)."""
+    words: dict[str, str] = {}
+    for f in registered():
+        for suffix in (*(c.suffix for c in f.commands), *(s.suffix for s in f.states)):
+            words.setdefault(suffix.split("/")[0], f.name)
+        for suffix in f.base_topics:
+            words.setdefault(suffix.split("/")[0], f.name)
+    return words
 
 
 def status_blocks() -> tuple[StatusBlock[Any], ...]:
