@@ -127,4 +127,5 @@ def test_the_app_hands_the_registered_features_parts_in_the_steps_order() -> Non
     parts = session_parts()
     assert [p.name for p in parts if p.deciding] == ["tracking", "following", "wind", "auto-park"]
     assert [p.name for p in parts if not p.deciding] == ["health"]
+    assert len({p.name for p in parts}) == len(parts)  # each reset and named as its own
     assert worker_config(SETTINGS).parts == parts
