@@ -34,7 +34,7 @@ from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from bridge.feature import AppView, Feature, FeatureService, make_service
+from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
@@ -135,6 +135,7 @@ def worker_config(
             follow or FollowConfig(), hold_while_tx=r.follow_hold_while_tx, bands=tuple(r.bands)
         ),
         wind=wind_config(r),
+        parts=session_parts(),  # the features', in the order the session's step runs them
     )
 
 

@@ -6,10 +6,11 @@ iterate instead of naming each feature. Pure data: no thread, no I/O.
 A feature declares its commands (a topic under ``R/`` and the parser of its payload into one
 ``Command``), its retained state topics and its block in ``R/status`` (each a value read from
 the status and how it is written), its Home Assistant entities (rows as data), its settings
-(the model of its keys), its session part (the class, pointed at: the session owns the order
-of its parts), its inputs from topics of the user's (the wind speed), its console parts and
-its docs section; a feature of the station (the DX cluster) its table of the file, its topics
-under the base topic and the service the app starts when that table turns it on.
+(the model of its keys), its session part (a session/parts.py ``Part``: what wakes it, its step
+and its reset, run by the session's step in the registry's order), its inputs from topics of
+the user's (the wind speed), its console parts and its docs section; a feature of the station
+(the DX cluster) its table of the file, its topics under the base topic and the service the app
+starts when that table turns it on.
 
 Rules:
 1. Stop, lock and the last word are no feature: they stay first and hard-wired
@@ -17,18 +18,22 @@ Rules:
    written there. A feature's command is judged like any (``Rotator.submit``); it is never a stop or
    a lock, and it never reaches the stop lane.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
-   subscriptions, of their blocks in ``R/status`` and of their entities in discovery.
+   subscriptions, of their blocks in ``R/status`` and of their entities in discovery, and the
+   order in which the session's step runs their parts (``session_parts``; the deciding ones
+   before the pending target goes, the measuring ones after the poll: session/session.py
+   rule 17). It matters there: tracking and following before the wind, whose storm ends them,
+   and the wind before auto-park, which waits while it parks.
 3. A feature's topic suffix, under ``R/`` or ``B/`` alike (with one rotator R is B), is unique
    across the core topics, the bridge's own (``B/bridge/...``) and every feature, and names a
    topic (no wildcard), and its command's name is no core command's nor another's (the topic
    table refuses them at start: interfaces/mqtt/topics.py); its first word
-   is reserved from group ids (settings/groups.py ``RESERVED``; tests/test_features.py checks
-   it).
+   is reserved from group ids (``topic_words``, read by settings/groups.py ``reserved``).
 4. The registry is found by name at its first use (``registered``), as python-can finds its
    back ends: a feature spans the layers (its parser sits on interfaces/mqtt/payloads.py while
-   mqtt's topic table iterates it), so an import of it from below would be a circle. Nothing heavy
-   is imported by a declaration: a feature's session part is the session's to import, its
-   service the app's, and only when its settings turn it on (``service_on``).
+   mqtt's topic table iterates it), so an import of it from below would be a circle; the app
+   hands the parts to the sessions, and a session made without them finds them here. Nothing
+   heavy is imported by a declaration: a feature's service is the app's to import, and only
+   when its settings turn it on (``service_on``).
 5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
    entity table's or of a feature's: where the table had it before the feature was a package),
    those after one row in the registry's order; one that names no row, after all the others.
@@ -189,7 +194,9 @@ class Feature:
     # (a rotator's settings, its rotator) -> the input it reads, from the app (None: none)
     inputs: Callable[[Sequence[tuple[Any, Any]]], Input | None] | None = None
     replayed: Callable[[BaseModel], str | None] | None = None
-    part: str | None = None  # its session part, "module:Class" (the session imports it)
+    # its session part: a session/parts.py ``Part`` (above this module), run by the session's
+    # step in the registry's order (rule 2); the app hands them to each rotator's session
+    part: Any = None
     console: tuple[str, ...] = ()  # what the web console shows of it (web/static/)
     # a feature of the station: its table in the file (the Settings field, its model: in
     # configuration.md after the core's tables), its retained topics under the base topic
@@ -230,6 +237,24 @@ def registered() -> tuple[Feature, ...]:
         features: tuple[Feature, ...] = importlib.import_module(REGISTRY_MODULE).FEATURES
         _loaded = features
     return _loaded
+
+
+def session_parts() -> tuple[Any, ...]:
+    """Every registered feature's session part (a session/parts.py ``Part``), in the
+    registry's order: the order the session's step runs them (rule 2)."""
+    return tuple(f.part for f in registered() if f.part is not None)
+
+
+def topic_words() -> dict[str, str]:
+    """The first word of every registered feature's topics, under ``R/`` and ``B/`` alike, and
+    the feature that has it (rule 3: no group id may take one; settings/groups.py)."""
+    words: dict[str, str] = {}
+    for f in registered():
+        for suffix in (*(c.suffix for c in f.commands), *(s.suffix for s in f.states)):
+            words.setdefault(suffix.split("/")[0], f.name)
+        for suffix in f.base_topics:
+            words.setdefault(suffix.split("/")[0], f.name)
+    return words
 
 
 def status_blocks() -> tuple[StatusBlock[Any], ...]:

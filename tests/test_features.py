@@ -25,14 +25,16 @@ from bridge.feature import (
     StatusBlock,
     make_service,
     registered,
+    session_parts,
 )
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import Identity, RotatorInfo, all_configs
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
+from bridge.session.parts import Part
 from bridge.settings import RotatorSettings, Settings
-from bridge.settings.groups import RESERVED
+from bridge.settings.groups import reserved
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,10 +77,10 @@ def test_a_features_topics_are_subscribed_routed_and_owned_never_on_the_stop_lan
         assert t.feature(state.suffix) in topics.owned()
         assert t.feature(state.suffix) not in core_topics(t)
     for x in (*feature.commands, *feature.states):
-        assert x.suffix.split("/")[0] in RESERVED  # rule 3: no group may take it
+        assert x.suffix.split("/")[0] in reserved()  # rule 3: no group may take it
     for suffix in feature.base_topics:  # B/<suffix>: no group's nor rotator's id either
         assert topics.under_base(suffix) == f"B/{suffix}"
-        assert suffix.split("/")[0] in RESERVED
+        assert suffix.split("/")[0] in reserved()
 
 
 def test_no_two_features_share_a_topic_or_a_command_kind() -> None:
@@ -116,9 +118,8 @@ def test_a_features_docs_part_and_settings_are_real(feature: Feature) -> None:
         headings = {re.sub(r"[^a-z0-9 -]", "", h.lower()).replace(" ", "-")
                     for h in re.findall(r"^#+ (.+)$", text, re.M)}  # fmt: skip
         assert anchor in headings
-    if feature.part is not None:
-        module, _, name = feature.part.partition(":")
-        assert isinstance(getattr(importlib.import_module(module), name), type)
+    if feature.part is not None:  # its session part, run by the session's step
+        assert isinstance(feature.part, Part) and feature.part in session_parts()
     if feature.rotator_settings is not None:  # a rotator's table includes its keys
         assert issubclass(RotatorSettings, feature.rotator_settings)
         heading = feature.settings_section[0]  # its keys' section in configuration.md
@@ -256,6 +257,16 @@ def test_a_toy_feature_gets_its_topics_command_state_status_and_entity(toy: Feat
         RotatorInfo.of("tower", "Tower", cfg.spec, topics.rotator("tower"), cfg.pointing,
                        has_station=False, nudge_step_deg=cfg.nudge_step_deg)])  # fmt: skip
     assert not any("/toy/" in topic for topic in without)
+
+
+def test_a_toy_features_topic_words_are_no_groups_id(toy: Feature) -> None:
+    """Rule 3, from its declaration alone: a group may take neither R/toy/... nor B/toys."""
+    both = ["tower", "mast"]
+    rotators = [{"id": r, "model": "rotorez", "port": f"/dev/{r}"} for r in both]
+    for word in ("toy", "toys"):
+        with pytest.raises(ValueError, match=f"'{word}' is a word of the bridge's own topics"):
+            Settings(rotators=rotators, groups=[{"id": word, "rotators": both}])  # type: ignore[arg-type, list-item]
+    Settings(rotators=rotators, groups=[{"id": "toyz", "rotators": both}])  # type: ignore[arg-type, list-item]
 
 
 def test_a_toy_features_service_is_made_from_the_view_only_when_its_settings_say(

@@ -1,13 +1,16 @@
-"""One rotator's engine settings, resolved once from the configuration (app.py builds them).
-Frozen data, imported by every part of the engine and importing none of them."""
+"""One rotator's engine settings, resolved once from the configuration (app.py builds them),
+and the session's parts it runs (the features', handed in by the app). Frozen data, imported
+by every part of the engine and importing none of them (parts.py is what a part is, no part)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec
 from bridge.session import motion as mo
+from bridge.session.parts import Part
 from bridge.sky import Sky
 
 
@@ -75,6 +78,9 @@ class WorkerConfig:
     follow: FollowConfig = FollowConfig()  # follow.py
     wind: WindConfig | None = None  # wind.py; None: no wind_topic
     health: HealthConfig = HealthConfig()
+    # the session's parts, in the order its step runs them (session.py rule 17): the registered
+    # features', handed in by the app; None: the registry's (bridge/feature.py session_parts)
+    parts: tuple[Part[Any], ...] | None = None
 
     def __post_init__(self) -> None:
         if self.pointing is None:

@@ -1,5 +1,7 @@
 """What the session's parts (tracking.py, autopark.py) see and what they hand back
-(docs/architecture.md, "parts decide and return"). Frozen data, nothing else.
+(docs/architecture.md, "parts decide and return"), and how the session's step runs one
+(``Part``: each feature's package declares its part's, bridge/features/). Frozen data, nothing
+else.
 
 Rules:
 1. A part never holds the session: it gets a ``Scene`` (a read-only view of the moment) and
@@ -9,17 +11,27 @@ Rules:
    a part that is off (nothing tracked, no wind configured, no auto-park) is not run at all.
    A part that reads the time itself, or whose side effects count its steps, asks for every
    step while it is on.
+4. The session's step runs the parts it is handed (session.py rule 17), in their order, and
+   knows them by nothing but their ``Part``: what wakes one, whether it is on, its step, its
+   wake-up and its reset after a bug. ``H`` is the session (session.py, above this module):
+   a part's callables reach its own state there: the session's attribute for the parts it
+   was written with (tracking's, the wind's...), or what the part's ``state`` made for it
+   when the session was made (``RotatorSession.own[name]``), so that a new feature's part
+   keeps its state without a line in the session.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Flag, auto
-from typing import NamedTuple
+from typing import Generic, NamedTuple, TypeVar
 
 from bridge.core.model import Target
 from bridge.session import motion as mo
 from bridge.session.actions import Report
+
+H = TypeVar("H")  # the session a part is run by (rule 4)
 
 
 class Wake(Flag):
@@ -53,3 +65,19 @@ class Proposal:
 
 
 NOTHING = Proposal()
+
+
+@dataclass(frozen=True)
+class Part(Generic[H]):
+    """One of the session's parts as its step runs it (rule 4; session.py rules 14 and 17):
+    looked up on the session at every step (a reset part is a new object)."""
+
+    name: str  # as the error event of its failure names it (session.py rule 14)
+    wakes: Wake  # rule 3
+    deciding: bool  # True: runs while the controller answers, before the pending target goes;
+    # False: after the poll, whatever the link (what it measures rides along in the status)
+    on: Callable[[H], bool]  # off: not run, and no wake-up of its own
+    step: Callable[[H, Scene], Proposal | None]
+    reset: Callable[[H, float], None]  # after a bug: its state made again (session.py rule 14)
+    wakeup: Callable[[H, float], float | None] | None = None  # when it wants to be woken
+    state: Callable[[H], object] | None = None  # rule 4: its own state, made with the session

@@ -18,9 +18,10 @@ what they need (a read-only ``parts.Scene``, ``status.Seen``, the motion, the ti
 back what they propose (a ``parts.Proposal``, the controller's notes, a health report, what a
 command did); the session applies it. None of them imports this module. ``_step`` runs them in
 one order after every input: the line's own work (an overdue reply, a due stop), the motion
-machine's clock, the stop check, the parts of ``PARTS`` that decide (tracking, following, the
-wind, auto-park), the pending target, options, the poll, the parts that measure (health), the
-status. Stops and the lock come before all of it, in ``commands``, in a fixed written order.
+machine's clock, the stop check, the parts handed in that decide (the registered features':
+tracking, following, the wind, auto-park), the pending target, options, the poll, the parts
+that measure (health), the status. Stops and the lock come before all of it, in ``commands``,
+in a fixed written order.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -47,10 +48,10 @@ Rules:
    that releases it, put by the main connection when it has caught up. A release that clears
    drops whatever target or tracking waits.
 14. A part that raises (tracking, following, the wind, auto-park, health) is a bug contained
-   here: it is reset (tracking ends, "internal error"; the wind keeps its storm; health starts
-   again from its last memory, or stops measuring), an error event of kind internal names it,
-   and the link, the stops and every other rule go on (a feature's failure never takes a link
-   down, and never costs a stop).
+   here: its Part resets it (tracking ends, "internal error"; the wind keeps its storm;
+   health starts again from its last memory, or stops measuring), an error event of kind
+   internal names it, and the link, the stops and every other rule go on (a feature's
+   failure never takes a link down, and never costs a stop).
 15. Following (follow.py) is like tracking (rule 10), and a track command ends it too; what
    WSJT-X says comes in with the commands, and is no command itself (rule 12), nor is a wind
    reading (wind.py): a storm ends tracking and following, parks, and refuses motion.
@@ -62,10 +63,16 @@ Rules:
    it). Only when nothing waits on such a step: no stop due (a half-duplex line takes one as
    soon as the reply is whole: that step writes it), no target waiting, nothing noted, and
    ``next_wakeup`` not yet come (what is due by then runs as before).
-17. The parts are registered in ``PARTS``, in the order the step runs them; each says what
-   wakes it (parts.py rule 3), whether it is on, when it wants to be woken and how it is
-   reset (rule 14). A part that is off costs nothing, and is asked for no wake-up; one woken
-   by the motion (health) runs only in a step where the motion is not the one it last saw.
+17. The step runs the parts it is handed (``WorkerConfig.parts``: the registered features'
+   ``Part``, parts.py rule 4, from the app; a session made without them takes the registry's,
+   bridge/feature.py ``session_parts``), in their order, which is the registry's
+   (bridge/features/ ``FEATURES``, bridge/feature.py rule 2); each says what wakes it (parts.py
+   rule 3), whether it is on, when it wants to be woken and how it is reset (rule 14). A part
+   that is off costs nothing, and is asked for no wake-up; one woken by the motion (health)
+   runs only in a step where the motion is not the one it last saw. The step, the wake-ups and
+   the resets name no feature: what still does is the commands' routing (a track, a follow, a
+   wind reading, a health reset), the status, the refusal in a storm and auto-park's
+   activity, each in a method of its own.
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
    time, and are built at every step): a poll that changed nothing builds no status.
@@ -76,7 +83,6 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TypeVar
 
 from bridge.core.model import (
@@ -88,6 +94,7 @@ from bridge.core.model import (
     Target,
     describe_command,
 )
+from bridge.feature import session_parts
 from bridge.session import status as st
 from bridge.session.actions import Action, Ask, Publish, Report, Write
 from bridge.session.autopark import AutoPark
@@ -98,7 +105,7 @@ from bridge.session.health import Health
 from bridge.session.link import Link
 from bridge.session.mailbox import Batch
 from bridge.session.motion import Motion
-from bridge.session.parts import Proposal, Scene, Wake
+from bridge.session.parts import Part, Scene, Wake
 from bridge.session.stops import CLEARED, Fence
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.wind import WindPark
@@ -110,21 +117,6 @@ log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
-
-
-@dataclass(frozen=True)
-class Part:
-    """One of the session's parts as its step runs it (``PARTS``, rules 14 and 17): looked up
-    on the session at every step (a reset part is a new object), each with its own reset."""
-
-    name: str  # as the error event of its failure names it (rule 14)
-    wakes: Wake  # parts.py rule 3
-    deciding: bool  # True: runs while the controller answers, before the pending target goes;
-    # False: after the poll, whatever the link (what it measures rides along in the status)
-    on: Callable[[RotatorSession], bool]  # off: not run, and no wake-up of its own
-    step: Callable[[RotatorSession, Scene], Proposal | None]
-    wakeup: Callable[[RotatorSession, float], float | None]
-    reset: Callable[[RotatorSession, float], None]
 
 
 class RotatorSession:
@@ -150,6 +142,16 @@ class RotatorSession:
         self.health = Health(cfg, health)
         self.view = st.View()
         self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)
+        # rule 17: the parts handed in (the features', from the app), in the order they run
+        parts: tuple[Part[RotatorSession], ...] = (
+            session_parts() if cfg.parts is None else cfg.parts
+        )
+        self._deciding = tuple(p for p in parts if p.deciding)
+        self._measuring = tuple(p for p in parts if not p.deciding)
+        self._waking = tuple(p for p in parts if p.wakeup is not None)
+        self._parts_named = {p.name: p for p in parts}
+        # parts.py rule 4: the state of the parts the session knows by their Part alone
+        self.own: dict[str, object] = {p.name: p.state(self) for p in parts if p.state}
         self._actions: list[Action] = []
         self._wakeup = 0.0
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
@@ -163,7 +165,7 @@ class RotatorSession:
     def start(self, now: float) -> list[Action]:
         """The first status, whatever it says (nothing has been published for this rotator)."""
         self._actions.append(Publish(self.status))
-        self.autopark.activity(now)
+        self._activity(now)
         return self._step(now)
 
     def open_failed(self, reason: str, now: float) -> list[Action]:
@@ -172,7 +174,7 @@ class RotatorSession:
 
     def link_up(self, now: float, wall_s: float) -> list[Action]:
         self.wall_offset_s = wall_s - now
-        self.autopark.activity(now)  # never park the moment a controller comes back
+        self._activity(now)  # never park the moment a controller comes back
         self.controller.connect(now, wall_s)
         return self._step(now)
 
@@ -213,7 +215,7 @@ class RotatorSession:
             self._drop_pending(None)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
-            self.autopark.activity(now)  # autopark.py rule 1 (unlocking starts a new spell)
+            self._activity(now)  # (unlocking starts a new spell)
         if batch.stop is not None:
             self.features.end("stop")
             self.targets.clear()
@@ -221,7 +223,7 @@ class RotatorSession:
             ctl.stop(now, merge=True)
         self._fence(batch)
         if batch.health_reset:
-            self._guarded(HEALTH, lambda: self.health.reset(), now)
+            self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.value, ctl.link is not None)
         if batch.track is not None:
@@ -247,7 +249,7 @@ class RotatorSession:
         if fed is Fed.HELD and self._quiet_hold(now):
             return []  # rule 16
         if self.controller.answering and not was_answering:
-            self.autopark.activity(now)  # autopark.py rule 1
+            self._activity(now)
         self._heed(now)
         return self._step(now)
 
@@ -255,7 +257,7 @@ class RotatorSession:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
         if generation == self.tracker.generation:
             answered = self._guarded(
-                TRACKING, lambda: self.features.answered(answer, self._refused()), now
+                "tracking", lambda: self.features.answered(answer, self._refused()), now
             )
             if answered is not None:
                 self._apply(answered)
@@ -338,6 +340,18 @@ class RotatorSession:
             elif isinstance(note, Retry):
                 self.targets.put_back(note.target, note.attempt, now)
 
+    # -- the features' state the commands, the sky and the status reach by name (rule 17) -------
+    def _activity(self, now: float) -> None:
+        """Something happened: auto-park's quiet spell starts again (autopark.py rule 1)."""
+        self.autopark.activity(now)
+
+    def _ask_sky(self) -> None:
+        """What tracking asks of the sky worker (tracking.py rule 8), sent with its generation."""
+        asks = self.tracker.take_asks()
+        if asks:
+            generation = self.tracker.generation
+            self._actions.extend(Ask(generation, q) for q in asks)
+
     # -- the rules, run after every input, in this order ---------------------------------------
     def _step(self, now: float) -> list[Action]:
         ctl = self.controller
@@ -349,27 +363,24 @@ class RotatorSession:
             ctl.check_stop(now, self.targets.pending is not None and not self.fence.held)
             if ctl.notes:
                 self._heed(now)
-            self._parts(_DECIDING, now)  # rule 17: tracking, following, the wind, auto-park
+            self._parts(self._deciding, now)  # rule 17: the parts that decide
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)
-        self._parts(_MEASURING, now)  # health: what it measures is in the status
+        self._parts(self._measuring, now)  # what they measure is in the status
         self._emit_status(now)
         if ctl.link is not None:
             self._actions.extend(Write(frame) for frame in ctl.link.output())
-        asks = self.tracker.take_asks()
-        if asks:
-            generation = self.tracker.generation
-            self._actions.extend(Ask(generation, q) for q in asks)
+        self._ask_sky()
         self._wakeup = self._next_wakeup(now)
         actions, self._actions = self._actions, []
         return actions
 
-    def _parts(self, parts: tuple[Part, ...], now: float) -> None:
-        """Rule 17: each part that is on and that something woke, in the registry's order."""
+    def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
+        """Rule 17: each part that is on and that something woke, in the order handed in."""
         for part in parts:
             if not part.on(self):
                 continue
@@ -380,17 +391,17 @@ class RotatorSession:
                 self._seen_motion[part.name] = motion
             self._part(part, now)
 
-    def _part(self, part: Part, now: float) -> None:
+    def _part(self, part: Part[RotatorSession], now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""
         link, motion, pending = self.controller.link, self.controller.motion, self.targets.pending
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
-        proposal = self._guarded(part, lambda: part.step(self, scene), now)
+        proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
         if proposal is None:
             return
         if proposal.busy:
-            self.autopark.activity(now)  # autopark.py rule 1 (tracking.py rule 7)
+            self._activity(now)  # (tracking.py rule 7)
         if proposal.error is not None:
             self._error(proposal.error.kind, proposal.error.message, proposal.error.command)
         if proposal.ended is not None:
@@ -402,16 +413,17 @@ class RotatorSession:
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 
-    def _guarded(self, part: Part, run: Callable[[], T], now: float) -> T | None:
-        """Rule 14: a part that raises is reset (its own reset, ``PARTS``) and reported;
-        nothing else stops."""
+    def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
+        """Rule 14: a part that raises is reset (its own reset, the ``Part`` handed in under
+        ``name``: one not handed in has none) and reported; nothing else stops."""
         try:
             return run()
         except Exception:
-            log.exception("%s: %s failed", self.name, part.name)
-            part.reset(self, now)
-            self._seen_motion.pop(part.name, None)  # a new part has seen nothing yet
-            name = part.name
+            log.exception("%s: %s failed", self.name, name)
+            part = self._parts_named.get(name)
+            if part is not None:
+                part.reset(self, now)
+            self._seen_motion.pop(name, None)  # a new part has seen nothing yet
             self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
             return None
 
@@ -498,86 +510,9 @@ class RotatorSession:
         stream = self.targets.stream_deadline(now)
         if stream is not None and stream < wakeup:
             wakeup = stream
-        for part in _WAKING:
-            if part.on(self):
+        for part in self._waking:
+            if part.on(self) and part.wakeup is not None:
                 t = part.wakeup(self, now)
                 if t is not None and t < wakeup:
                     wakeup = t
         return wakeup
-
-
-# -- the parts, registered (rule 17) -------------------------------------------------------------
-def _health_step(s: RotatorSession, scene: Scene) -> None:
-    s.health.speed_factor = s.controller.options.speed_factor()  # (health.py rule 9)
-    s.health.step(scene.motion, scene.now)  # (its report is in the status)
-
-
-def _reset_autopark(s: RotatorSession, now: float) -> None:
-    s.autopark = AutoPark(s.cfg)
-    s.autopark.activity(now)
-
-
-def _reset_wind(s: RotatorSession, now: float) -> None:
-    s.wind = WindPark(s.cfg, storm=s.wind.storm)  # a storm goes on: refusing is the safe side
-
-
-def _reset_health(s: RotatorSession, now: float) -> None:
-    s.health = s.health.rebuilt(s.cfg)  # health.py rule 7
-
-
-def _no_wakeup(s: RotatorSession, now: float) -> float | None:
-    return None
-
-
-TRACKING = Part(
-    "tracking",
-    Wake.STEP,  # it reads the sky by the time
-    True,
-    lambda s: s.tracker.body is not None,  # (nothing tracked: nothing to ask)
-    lambda s, scene: s.tracker.step(scene),
-    lambda s, now: s.tracker.wakeup(now),
-    lambda s, now: s.features.end("internal error", tracking=True),
-)
-FOLLOWING = Part(
-    "following",
-    Wake.STEP,  # each of its steps is activity for auto-park
-    True,
-    lambda s: s.follower.on,
-    lambda s, scene: s.follower.step(scene),
-    _no_wakeup,
-    lambda s, now: s.features.end("internal error", tracking=False),
-)
-WIND = Part(
-    "wind",
-    Wake.STEP,  # the silence of its sensor is counted in time
-    True,
-    lambda s: s.wind.on,
-    lambda s, scene: s.wind.step(scene),
-    lambda s, now: s.wind.wakeup(now),
-    _reset_wind,
-)
-AUTO_PARK = Part(
-    "auto-park",
-    Wake.STEP,  # a turning rotor's every step starts its quiet spell again
-    True,
-    lambda s: s.autopark.on,
-    # (in a storm the wind's park is the park: auto-park waits, its wake-up still asked for)
-    lambda s, scene: None if s.wind.storm else s.autopark.step(scene),
-    lambda s, now: s.autopark.wakeup(now),
-    _reset_autopark,
-)
-HEALTH = Part(
-    "health",
-    Wake.MOTION,  # it measures moves from the motion (health.py rule 6)
-    False,
-    lambda s: True,
-    _health_step,
-    _no_wakeup,
-    _reset_health,
-)
-#: rule 17: the parts, in the order the step runs them (after the line's own work and the stop
-#: check; stops and the lock are the commands', first of all, in ``commands``)
-PARTS: tuple[Part, ...] = (TRACKING, FOLLOWING, WIND, AUTO_PARK, HEALTH)
-_DECIDING = tuple(p for p in PARTS if p.deciding)
-_MEASURING = tuple(p for p in PARTS if not p.deciding)
-_WAKING = tuple(p for p in PARTS if p.wakeup is not _no_wakeup)

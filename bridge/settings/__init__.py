@@ -39,10 +39,11 @@ from pydantic import (
 )
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict
 
+from bridge.feature import topic_words
 from bridge.settings import errors as settings_errors
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
-from bridge.settings.groups import RESERVED, GroupSettings
+from bridge.settings.groups import GroupSettings, reserved
 from bridge.settings.mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings.pointing import StationSettings, TrackingSettings
 from bridge.settings.rotator import EMULATION_KEYS, RotatorSettings
@@ -242,9 +243,11 @@ class Settings(BaseSettings):
                         f"{where}.rotators: {rid!r} is no rotator's id (the rotators are "
                         f"{', '.join(roots)})"
                     )
-            if g.id in RESERVED:
+            if g.id in reserved():
+                whose = topic_words().get(g.id)
+                of = f" (the {whose} feature's)" if whose is not None else ""
                 raise ValueError(
-                    f"{where}.id: {g.id!r} is a word of the bridge's own topics: choose another"
+                    f"{where}.id: {g.id!r} is a word of the bridge's own topics{of}: choose another"
                 )
             root = self.group_topic(g)
             for rid, r_root in roots.items():

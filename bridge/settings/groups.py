@@ -12,7 +12,9 @@ Rules:
    are true bearings (after its offset) within 0..360, the lower first; they only narrow what
    the member's own judge accepts.
 4. The cross-checks against the rotators (an unknown id, an id that clashes with a rotator's
-   topic or a word of the bridge's own topics) are settings/'s, which sees both.
+   topic or a word of the bridge's own topics) are settings/'s, which sees both. The words are
+   the core's (``CORE_WORDS``, written here) and each registered feature's first topic words,
+   from its declaration (``reserved``): a new feature needs no line here.
 5. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
@@ -22,18 +24,26 @@ import re
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from bridge.feature import topic_words
+
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
-# rule 4: the first level of every topic under a rotator's root and of the bridge's own under
-# the base topic (interfaces/mqtt/topics.py; tests/mqtt/test_groups.py keeps the two in step): a
-# group named so, under a rotator whose root is the base topic, would take over that rotator's topic
-RESERVED = frozenset(
+# rule 4: the first level of every core topic under a rotator's root and of the bridge's own
+# under the base topic (interfaces/mqtt/topics.py; tests/mqtt/test_groups.py keeps the two in
+# step): a group named so, under a rotator whose root is the base topic, would take over that
+# rotator's topic. The features' words are their declarations' (``reserved``).
+CORE_WORDS = frozenset(
     (
-        "target stop lock preset park nudge track follow option health control bearing "
-        "elevation state status version availability error presets info tracking audit "
-        "bridge spots"
+        "target stop lock preset park nudge option bearing elevation state status version "
+        "availability error presets info audit bridge"
     ).split()
 )
+
+
+def reserved() -> frozenset[str]:
+    """Rule 4: every word a group id may not take, the core's and each registered feature's
+    (bridge/feature.py rule 3), the registry found by name at the first group checked."""
+    return CORE_WORDS | frozenset(topic_words())
 
 
 class GroupSettings(BaseModel):

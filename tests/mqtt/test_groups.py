@@ -17,7 +17,7 @@ from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.groups import Group, Member, fan_out, member_bearing, status_json
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
-from bridge.settings.groups import RESERVED
+from bridge.settings.groups import CORE_WORDS, reserved
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
 
 M = Source.MQTT
@@ -83,9 +83,11 @@ def test_the_reserved_words_are_every_first_level_of_a_rotators_topics() -> None
         if isinstance(getattr(RotatorTopics, name), property)
     }
     leaves |= {t.option("x").split("/")[1]}
-    # and each registered feature's (bridge/feature.py rule 3)
-    leaves |= {x.suffix.split("/")[0] for f in registered() for x in (*f.commands, *f.states)}
-    assert leaves | {"bridge", "spots"} == set(RESERVED)
+    assert leaves | {"bridge"} == CORE_WORDS  # the core's, written once
+    # and each registered feature's (bridge/feature.py rule 3), under R/ and B/
+    words = {x.suffix.split("/")[0] for f in registered() for x in (*f.commands, *f.states)}
+    words |= {suffix.split("/")[0] for f in registered() for suffix in f.base_topics}
+    assert reserved() == CORE_WORDS | words and "spots" in words
 
 
 def test_the_groups_status_is_its_members_with_its_refusals() -> None:

@@ -4,7 +4,8 @@ holds the rotator for a while; the others are refused) and its release.
 What it is made of:
 - its keys: ``control_*`` in ``[[rotators]]`` (settings/rotator.py);
 - the lease: runtime/lease.py (pure), judged by runtime/rotator.py (runtime/operators.py: the
-  judge's lease and the audit trail), saved by the state writer;
+  judge's lease and the audit trail), saved by the state writer; no session part (the judge,
+  not the session's step, keeps it);
 - payload.py: a claim's and a release's payloads, ``R/control``;
 - here: ``R/control/claim``, ``R/control/release``, ``R/control``, its Home Assistant sensor
   and button, its declaration. (``control`` in ``R/status`` and ``R/audit`` are the core's:
@@ -76,7 +77,6 @@ FEATURE = Feature(
             "button", "release_control", "Release control", _button, bridge_only=True, after=AFTER
         ),
     ),
-    part="bridge.runtime.operators:Operators",
     console=(
         "the lease line of the rotator's card and its claim (interfaces/web/static/console.js)",
     ),

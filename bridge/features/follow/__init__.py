@@ -5,8 +5,8 @@ What it is made of:
 - its keys: ``follow_*`` in ``[[rotators]]`` (settings/pointing.py) and ``[wsjtx]``
   (settings/wsjtx.py); WSJT-X's UDP messages: wsjtx/ (the listener hands each Status to the
   rotators as an input);
-- its session part: session/follow.py ``Follow`` (started and ended as a command:
-  session/feature_commands.py);
+- its session part: session/follow.py ``Follower`` (started and ended as a command:
+  session/feature_commands.py), run by the session's step as ``PART`` here says;
 - ``R/follow``'s payload: interfaces/mqtt/payloads.py ``parse_follow`` (beside the other commands'
   words);
 - here: ``R/follow``, ``R/follow/state``, its ``following`` and ``following_ended`` blocks in
@@ -18,6 +18,8 @@ from __future__ import annotations
 from bridge.core.model import FollowingInfo, FollowQso, Origin, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
 from bridge.interfaces.mqtt.payloads import parse_follow
+from bridge.session.parts import Part, Wake
+from bridge.session.session import RotatorSession
 
 NAME = "follow"
 COMMAND = "follow"  # R/follow: wsjtx, off, or JSON with the path
@@ -76,6 +78,16 @@ def _followed(r: RotatorView) -> dict[str, object]:
     }  # fmt: skip
 
 
+# its session part (parts.py rule 4)
+PART: Part[RotatorSession] = Part(
+    "following",
+    Wake.STEP,  # each of its steps is activity for auto-park
+    True,
+    lambda s: s.follower.on,
+    lambda s, scene: s.follower.step(scene),
+    lambda s, now: s.features.end("internal error", tracking=False),
+)
+
 FEATURE = Feature(
     name=NAME,
     docs="docs/follow.md",
@@ -92,5 +104,5 @@ FEATURE = Feature(
             "sensor", "followed", "Followed station", _followed, needs=NEEDS, after="distance"
         ),
     ),
-    part="bridge.session.follow:Follower",
+    part=PART,
 )

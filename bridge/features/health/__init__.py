@@ -4,7 +4,8 @@ delay, coast, odometer), judged against a baseline it learnt, with its warnings.
 What it is made of:
 - its keys in ``[[rotators]]``: ``health_*`` in settings/rotator.py;
 - its session part: session/health.py ``Health`` (the judge: session/health_judge.py, its
-  memory: runtime/health_memory.py, saved by the state writer);
+  memory: runtime/health_memory.py, saved by the state writer), run by the session's step
+  as ``PART`` here says;
 - payload.py: ``R/health`` and the ``health`` block of ``R/status``, rendered once per move;
 - here: ``R/health/reset``, ``R/health``, its Home Assistant sensors and button, its
   declaration; the console's health line (interfaces/web/static/console.js ``renderHealth``) reads
@@ -16,6 +17,8 @@ from __future__ import annotations
 from bridge.core.model import Origin, ResetHealth, RotatorHealth, RotatorStatus, Source
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
 from bridge.features.health.payload import health_json
+from bridge.session.parts import Part, Scene, Wake
+from bridge.session.session import RotatorSession
 
 NAME = "health"
 STATE = "health"  # R/health: the last report, retained
@@ -77,6 +80,25 @@ def _reset_button(r: RotatorView) -> dict[str, object]:
     }  # fmt: skip
 
 
+def _step_part(s: RotatorSession, scene: Scene) -> None:
+    s.health.speed_factor = s.controller.options.speed_factor()  # (health.py rule 9)
+    s.health.step(scene.motion, scene.now)  # (its report is in the status)
+
+
+def _reset_part(s: RotatorSession, now: float) -> None:
+    s.health = s.health.rebuilt(s.cfg)  # health.py rule 7
+
+
+# its session part (parts.py rule 4): it measures, after the poll
+PART: Part[RotatorSession] = Part(
+    "health",
+    Wake.MOTION,  # it measures moves from the motion (health.py rule 6)
+    False,
+    lambda s: True,
+    _step_part,
+    _reset_part,
+)
+
 FEATURE = Feature(
     name=NAME,
     docs="docs/mqtt.md#rotor-health",
@@ -105,7 +127,7 @@ FEATURE = Feature(
             after=AFTER,
         ),
     ),  # fmt: skip
-    part="bridge.session.health:Health",
+    part=PART,
     console=(
         "the health line of the rotator's card (interfaces/web/static/console.js renderHealth)",
     ),

@@ -4,7 +4,8 @@ What it is made of:
 - its keys: ``track_*`` in ``[[rotators]]`` (settings/pointing.py), ``[tracking]`` (the TLE
   file) and ``[station]``;
 - its session part: session/tracking.py ``Tracker`` (with session/skytrack.py; the sky worker,
-  sky/worker.py, computes; started and ended as a command: session/feature_commands.py);
+  sky/worker.py, computes; started and ended as a command: session/feature_commands.py), run
+  by the session's step as ``PART`` here says;
 - ``R/track``'s payload: interfaces/mqtt/payloads.py ``parse_track`` (beside the other commands'
   words);
 - here: ``R/track``, ``R/tracking``, its ``tracking`` and ``tracking_ended`` blocks in
@@ -18,6 +19,8 @@ from datetime import UTC, datetime
 from bridge.core.model import Origin, RotatorStatus, Source, TrackBody, TrackingInfo
 from bridge.feature import CommandTopic, EntityRow, Feature, RotatorView, StateTopic, StatusBlock
 from bridge.interfaces.mqtt.payloads import parse_track
+from bridge.session.parts import Part, Wake
+from bridge.session.session import RotatorSession
 
 NAME = "tracking"
 COMMAND = "track"  # R/track: sun, moon, a satellite's name or TLE, off
@@ -114,6 +117,17 @@ def _aos(r: RotatorView) -> dict[str, object]:
     }  # fmt: skip
 
 
+# its session part (parts.py rule 4): the sky read by the time, so every step while it tracks
+PART: Part[RotatorSession] = Part(
+    "tracking",
+    Wake.STEP,  # it reads the sky by the time
+    True,
+    lambda s: s.tracker.body is not None,  # (nothing tracked: nothing to ask)
+    lambda s, scene: s.tracker.step(scene),
+    lambda s, now: s.features.end("internal error", tracking=True),
+    lambda s, now: s.tracker.wakeup(now),
+)
+
 FEATURE = Feature(
     name=NAME,
     docs="docs/tracking.md",
@@ -139,7 +153,7 @@ FEATURE = Feature(
         ),
         EntityRow("sensor", "next_aos", "Next AOS", _aos, needs=TRACK_OPTIONS, after=AFTER),
     ),  # fmt: skip
-    part="bridge.session.tracking:Tracker",
+    part=PART,
     console=(
         "the tracking line and the pass on the sky plot (interfaces/web/static/console.js, sky.js)",
     ),

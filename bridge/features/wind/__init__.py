@@ -4,7 +4,8 @@ parks for a storm and refuses motion until the wind has calmed.
 What it is made of:
 - its keys in ``[[rotators]]``: settings/wind.py ``WindFields`` (the rotator's table includes
   them; the settings' layer sits below the MQTT parts this package uses);
-- its session part: session/wind.py ``WindPark`` (the session owns the order of its parts);
+- its session part: session/wind.py ``WindPark``, run by the session's step as ``PART`` here
+  says (the registry's order is the step's);
 - its input: the user's wind topic, read by feed.py;
 - here: its ``wind`` block in ``R/status``, its Home Assistant sensors (the speed, the storm)
   and its declaration.
@@ -21,6 +22,9 @@ from pydantic import BaseModel
 from bridge.core.model import RotatorStatus, WindInfo
 from bridge.feature import EntityRow, Feature, Input, RotatorView, StatusBlock
 from bridge.features.wind.feed import wind_feed
+from bridge.session.parts import Part, Wake
+from bridge.session.session import RotatorSession
+from bridge.session.wind import WindPark
 from bridge.settings.wind import WindFields
 
 NAME = "wind"
@@ -75,6 +79,21 @@ def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
     return Input(*wind_feed(entries))
 
 
+def _reset(s: RotatorSession, now: float) -> None:
+    s.wind = WindPark(s.cfg, storm=s.wind.storm)  # a storm goes on: refusing is the safe side
+
+
+# its session part (parts.py rule 4)
+PART: Part[RotatorSession] = Part(
+    "wind",
+    Wake.STEP,  # the silence of its sensor is counted in time
+    True,
+    lambda s: s.wind.on,
+    lambda s, scene: s.wind.step(scene),
+    _reset,
+    lambda s, now: s.wind.wakeup(now),
+)
+
 FEATURE = Feature(
     name=NAME,
     docs="docs/wind.md",
@@ -94,5 +113,5 @@ FEATURE = Feature(
     configured=_configured,
     inputs=_inputs,
     replayed=_replayed,
-    part="bridge.session.wind:WindPark",
+    part=PART,
 )
