@@ -16,7 +16,10 @@ Rules:
 1. Stop, lock and the last word are no feature: they stay first and hard-wired
    (interfaces/mqtt/topics.py, interfaces/mqtt/lastword.py, interfaces/mqtt/halts.py), in the order
    written there. A feature's command is judged like any (``Rotator.submit``); it is never a stop or
-   a lock, and it never reaches the stop lane.
+   a lock, and it never reaches the stop lane. A command for the feature's own session part is a
+   core/model.py ``FeatureCommand`` of the feature's name, judged generically and handed to its
+   ``Part.command`` (session/parts.py rule 5); what the part shows in ``R/status`` is
+   ``RotatorStatus.features[name]`` (parts.py rule 6), which its StatusBlock reads.
 2. The registry is an ordered tuple; its order is the order of the features' topics in the
    subscriptions, of their blocks in ``R/status`` and of their entities in discovery, and the
    order in which the session's step runs their parts (``session_parts``; the deciding ones

@@ -338,6 +338,32 @@ class ResetHealth(Asked):
     """A new rotor health baseline (after a repair); it moves nothing."""
 
 
+# A feature's command's value: frozen and hashable (a tuple of these for more than one).
+FeatureValue = bool | int | float | str | tuple["FeatureValue", ...] | None
+
+
+def feature_value_text(value: FeatureValue) -> str:
+    """A feature's command's value as the audit trail and an error event show it."""
+    if value is None:
+        return ""
+    if isinstance(value, tuple):
+        return " ".join(feature_value_text(v) for v in value)
+    return setting_text(value)
+
+
+@dataclass(frozen=True)
+class FeatureCommand(Asked):
+    """A registered feature's own command (bridge/feature.py ``CommandTopic``), for its
+    session part (session/parts.py ``Part.command``), named by the feature's name: the judge
+    judges it like a target when it ``moves`` the rotor (the lock, the wind, the lease, the
+    link), and like a controller setting when it does not (the lease); it is never a stop."""
+
+    feature: str
+    name: str
+    value: FeatureValue = None
+    moves: bool = True  # the safe default: judged as motion
+
+
 # what the judge hands the mailbox as a command for the controller (targets in raw values)
 ControllerCommand = Target | Stop | SetOption
 Command = (
@@ -355,6 +381,7 @@ Command = (
     | Toward
     | TakePath
     | ResetHealth
+    | FeatureCommand
 )
 COMMANDS: tuple[type, ...] = get_args(Command)  # each kind, for isinstance
 
@@ -463,6 +490,9 @@ class RotatorStatus:
     health: RotatorHealth | None = None  # how the rotor turns (session/health.py)
     last_operator: str | None = None  # who sent the command of last_command_source (Origin.who)
     control: Control | None = None  # the control lease's holder, if it is held
+    # what a feature's session part shows (session/parts.py ``Part.status``), by the part's
+    # name; a feature's StatusBlock reads its own (bridge/feature.py)
+    features: dict[str, object] = field(default_factory=dict)
 
     @property
     def moving(self) -> bool:
@@ -502,5 +532,8 @@ def describe_command(command: Command) -> str:
             return "long path" if command.long_path else "short path"
         case ResetHealth():
             return "health reset"
+        case FeatureCommand():
+            words = (command.feature, command.name, feature_value_text(command.value))
+            return " ".join(word for word in words if word)
         case Stop():
             return "stop"

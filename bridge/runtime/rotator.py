@@ -26,7 +26,13 @@ preset, park, nudge, a place are targets), and the mailbox drops one whose count
 ON put since has made old (mailbox.py rule 10); the judge reports that as a refusal
 (``STALE_MESSAGE``, code ``stale``), on R/error and in the audit trail like any. A rotator of
 two boxes (``axes``) is judged here like any, against its one merged status; behind its
-mailbox, composite.py drives the two boxes.
+mailbox, composite.py drives the two boxes. A feature's own command (``FeatureCommand``, for
+its session part: session/parts.py rule 5) is judged here generically, naming no feature: one
+for no part of this rotator's that takes commands is refused (``unsupported``); one that moves
+the rotor like a track start (the lock, the wind, the lease, the link; put with its halt
+count), one that does not like a controller setting (the lease alone). It is never a stop,
+never on the stop lane, and a stop or lock ON drops it as it drops a target (mailbox.py
+rule 12).
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ from bridge.core.model import (
     ControllerCommand,
     ErrorEvent,
     ErrorKind,
+    FeatureCommand,
     FollowQso,
     GoToPreset,
     Lock,
@@ -66,6 +73,7 @@ from bridge.core.model import (
     TrackBody,
     describe_command,
 )
+from bridge.feature import session_parts
 from bridge.pointing import Limits, toward
 from bridge.protocols.base import ModelSpec
 from bridge.runtime.composite import CompositeWorker
@@ -119,6 +127,7 @@ class Rotator:
         self._has_sky = cfg.tracking.sky is not None
         self.can_track = self._has_sky and cfg.spec.can_report_position
         self._follow = cfg.follow  # follow.py: the station, the [wsjtx] listener
+        self._parts = cfg.parts  # the session's parts (a feature's command goes to its own)
         self._store = store
         self._on_event = on_event
         self._wall = wall
@@ -286,6 +295,8 @@ class Rotator:
             case ResetHealth():
                 self._reset_health()
                 return None
+            case FeatureCommand():
+                self._feature(command)
         return EXECUTED
 
     def _toward(
@@ -371,6 +382,26 @@ class Rotator:
             self._check_start(origin or Origin(command.source))
         follow = Following(on, command.long_path, command.source, what, origin)
         if not self._mailbox.put_follow(follow, epoch=epoch):
+            self._overtaken()
+
+    def _feature(self, command: FeatureCommand) -> None:
+        """A feature's own command (the module's docstring): judged like a track start when
+        it moves the rotor, like a controller setting when it does not, then put for its
+        part."""
+        parts = self._parts if self._parts is not None else session_parts()
+        if not any(p.name == command.feature and p.command is not None for p in parts):
+            message = f"no feature {command.feature!r} takes commands on this rotator"
+            raise Refused(RefusalCode.UNSUPPORTED, message)
+        who = command.origin or Origin(command.source)
+        if not command.moves:
+            leased = self.operators.refusal(who.who)
+            if leased is not None:
+                raise Refused(RefusalCode.LEASED, leased)
+            self._mailbox.put_feature(command)
+            return
+        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
+        self._check_start(who)
+        if not self._mailbox.put_feature(command, epoch=epoch):
             self._overtaken()
 
     def wind(self, speed_kmh: float, replayed: bool = False) -> None:

@@ -62,7 +62,7 @@ import os
 import threading
 from dataclasses import dataclass, field
 
-from bridge.core.model import Control, SetOption, Stop, Target, combine
+from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, combine
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
 
@@ -88,6 +88,7 @@ class Batch:
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
+    feature_commands: list[FeatureCommand] = field(default_factory=list)  # rule 12, in order
 
     control: Control | None = None  # the control lease as the judge has it now...
     control_set: bool = False  # ...when it changed (runtime/lease.py)
@@ -104,7 +105,13 @@ class Batch:
         fence = fence or self.express_hold is not None or self.express_release is not None
         feeds = self.follow is not None or self.heard is not None
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
+        feeds = feeds or bool(self.feature_commands)
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
+
+    def drop_moving(self) -> None:
+        """Rule 12: a stop, a lock ON or a clearing release drops the features' motion."""
+        if self.feature_commands:
+            self.feature_commands = [c for c in self.feature_commands if not c.moves]
 
 
 class _Halts:
@@ -161,6 +168,7 @@ class Mailbox:
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
+                self._batch.drop_moving()  # and a feature's motion (rule 12)
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
@@ -187,6 +195,7 @@ class Mailbox:
                 self._batch.target = None
                 self._batch.track = None
                 self._batch.follow = None
+                self._batch.drop_moving()  # rule 12
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5
@@ -202,6 +211,7 @@ class Mailbox:
                 batch.target = None
                 batch.track = None
                 batch.follow = None
+                batch.drop_moving()  # rule 12
                 batch.hold = None  # ended with the rest: a hold put after it is newer
         self._wake_once()
 
@@ -246,6 +256,18 @@ class Mailbox:
             if follow.on:  # following off ends nothing else
                 self._batch.target = None
                 self._batch.track = None
+        self._wake_once()
+        return True
+
+    def put_feature(self, command: FeatureCommand, *, epoch: int | None = None) -> bool:
+        """Rule 12: a feature's own command, for its part. ``epoch``: the halt count one that
+        moves was judged at (rule 10); False: dropped."""
+        with self._lock:
+            if self._stale(epoch):
+                return False
+            if command.moves:
+                self._batch.target = None  # rule 12: the later command wins
+            self._batch.feature_commands.append(command)
         self._wake_once()
         return True
 

@@ -18,6 +18,17 @@ Rules:
    was written with (tracking's, the wind's...), or what the part's ``state`` made for it
    when the session was made (``RotatorSession.own[name]``), so that a new feature's part
    keeps its state without a line in the session.
+5. A feature's own command (core/model.py ``FeatureCommand``, judged by runtime/rotator.py)
+   reaches its part by the feature's name through ``command``, in the session's ``commands``,
+   after any stop or lock of its batch; what it returns is applied like a step's proposal,
+   except that its target is refused (on R/error, nothing queued) while the session would
+   refuse a user's target (locked, offline, a storm), and always when the command said it
+   does not move the rotor (the judge judged it as no motion). A part that has no
+   ``command``, or a name no part has, is a refusal too.
+6. ``status`` gives what the part shows in ``R/status`` (a JSON-able value, None: nothing),
+   read at every status the session builds and compared with the last: the part hands a new
+   value when it changes (never one it changes afterwards). The status keeps it by the part's
+   name (``RotatorStatus.features``), where the feature's StatusBlock reads it.
 """
 
 from __future__ import annotations
@@ -27,7 +38,7 @@ from dataclasses import dataclass
 from enum import Flag, auto
 from typing import Generic, NamedTuple, TypeVar
 
-from bridge.core.model import Target
+from bridge.core.model import FeatureCommand, Target
 from bridge.session import motion as mo
 from bridge.session.actions import Report
 
@@ -81,3 +92,5 @@ class Part(Generic[H]):
     reset: Callable[[H, float], None]  # after a bug: its state made again (session.py rule 14)
     wakeup: Callable[[H, float], float | None] | None = None  # when it wants to be woken
     state: Callable[[H], object] | None = None  # rule 4: its own state, made with the session
+    command: Callable[[H, FeatureCommand, float], Proposal | None] | None = None  # rule 5
+    status: Callable[[H], object] | None = None  # rule 6: its block's value, None: none

@@ -72,7 +72,10 @@ Rules:
    runs only in a step where the motion is not the one it last saw. The step, the wake-ups and
    the resets name no feature: what still does is the commands' routing (a track, a follow, a
    wind reading, a health reset), the status, the refusal in a storm and auto-park's
-   activity, each in a method of its own.
+   activity, each in a method of its own. A feature's own command (``FeatureCommand``) goes
+   to its part by its name (parts.py rule 5), after the batch's stop, lock and fence and
+   before its target; what a part shows in the status is asked of it by its ``Part`` alone
+   (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
    time, and are built at every step): a poll that changed nothing builds no status.
@@ -83,10 +86,13 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
+from dataclasses import replace
+from functools import partial
 from typing import TypeVar
 
 from bridge.core.model import (
     ErrorKind,
+    FeatureCommand,
     Origin,
     RotatorStatus,
     SettingValue,
@@ -105,7 +111,7 @@ from bridge.session.health import Health
 from bridge.session.link import Link
 from bridge.session.mailbox import Batch
 from bridge.session.motion import Motion
-from bridge.session.parts import Part, Scene, Wake
+from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.stops import CLEARED, Fence
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.wind import WindPark
@@ -150,6 +156,7 @@ class RotatorSession:
         self._measuring = tuple(p for p in parts if not p.deciding)
         self._waking = tuple(p for p in parts if p.wakeup is not None)
         self._parts_named = {p.name: p for p in parts}
+        self._showing = tuple((p.name, p.status) for p in parts if p.status is not None)
         # parts.py rule 4: the state of the parts the session knows by their Part alone
         self.own: dict[str, object] = {p.name: p.state(self) for p in parts if p.state}
         self._actions: list[Action] = []
@@ -194,7 +201,7 @@ class RotatorSession:
     def commands(self, batch: Batch, now: float) -> list[Action]:
         ctl = self.controller
         commanded = batch.stop or batch.target or batch.options or batch.track or batch.follow
-        if commanded or batch.lock is not None:
+        if commanded or batch.feature_commands or batch.lock is not None:
             self.view.last_error = None  # rule 12: until this batch refuses something again
         for note in batch.notes:
             self.view.last_error = note
@@ -216,6 +223,8 @@ class RotatorSession:
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self._activity(now)  # (unlocking starts a new spell)
+        elif batch.feature_commands:
+            self._activity(now)
         if batch.stop is not None:
             self.features.end("stop")
             self.targets.clear()
@@ -230,6 +239,8 @@ class RotatorSession:
             self._apply(self.features.track(batch.track, self._refused()))
         if batch.follow is not None:
             self._apply(self.features.follow(batch.follow, self._refused(), now))
+        for command in batch.feature_commands:  # rule 17, in the order they were put
+            self._feature_command(command, now)
         if batch.target is not None:
             what = describe_command(batch.target)
             self.features.end(f"{batch.target.source.value} target")  # never combined
@@ -398,8 +409,30 @@ class RotatorSession:
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
         proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
+        if proposal is not None:
+            self._propose(proposal, now)
+
+    def _feature_command(self, command: FeatureCommand, now: float) -> None:
+        """parts.py rule 5: a feature's own command to its part; what it proposes, applied."""
+        what = describe_command(command)
+        part = self._parts_named.get(command.feature)
+        run = part.command if part is not None else None
+        if part is None or run is None:
+            message = f"no feature {command.feature!r} takes commands on this rotator"
+            self._error(ErrorKind.REFUSED, message, command=what)
+            return
+        proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return
+        if proposal.target is not None:
+            refused = self._refused() if command.moves else "the command does not move the rotor"
+            if refused is not None:
+                self._error(ErrorKind.REFUSED, refused, command=what)
+                proposal = replace(proposal, target=None)
+        self._propose(proposal, now)
+
+    def _propose(self, proposal: Proposal, now: float) -> None:
+        """A part's proposal, applied in this order (parts.py rule 1)."""
         if proposal.busy:
             self._activity(now)  # (tracking.py rule 7)
         if proposal.error is not None:
@@ -465,7 +498,7 @@ class RotatorSession:
         wind_info = wind.info if wind.on else None
         slew = link.slew if link is not None else None
         timed = slew is not None  # a slew's estimate (status rule 2)
-        key = (
+        key: tuple[object, ...] = (
             ctl.cfg,
             ctl.motion,
             link,
@@ -491,11 +524,20 @@ class RotatorSession:
             wind_info,
             health.report,
         )
+        parts = self._shown(now) if self._showing else None  # parts.py rule 6
+        if parts is not None:
+            key = (*key, parts)
         if key == self._status_key and not timed and ctl.cfg.spec.can_report_position:
             return  # (a DCU-1's estimated move reads the time: status rule 3)
         self._status_key = key
         shown = st.Features(
-            tracker.info, tracker.ended, follower.info, follower.ended, wind_info, health.report
+            tracker.info,
+            tracker.ended,
+            follower.info,
+            follower.ended,
+            wind_info,
+            health.report,
+            parts,
         )
         seen = ctl.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
@@ -504,6 +546,16 @@ class RotatorSession:
         if st.worth_emitting(status, self.status):
             self._actions.append(Publish(status))
         self.status = status  # also when only the controller's clock changed (status rule 4)
+
+    def _shown(self, now: float) -> dict[str, object]:
+        """parts.py rule 6: what each part shows in the status, by its name (one that raises
+        is reset and shows nothing: rule 14)."""
+        shown: dict[str, object] = {}
+        for name, status in self._showing:
+            value = self._guarded(name, partial(status, self), now)
+            if value is not None:
+                shown[name] = value
+        return shown
 
     def _next_wakeup(self, now: float) -> float:
         wakeup = min(now + IDLE_WAKEUP_S, min(self.controller.wakeups(now), default=math.inf))

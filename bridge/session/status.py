@@ -75,6 +75,7 @@ class Features(NamedTuple):
     following_ended: str | None = None
     wind: WindInfo | None = None
     health: RotatorHealth | None = None  # health.py: a new one after each move
+    parts: dict[str, object] | None = None  # what the handed parts show (parts.py rule 6)
 
 
 class Seen(NamedTuple):
@@ -153,6 +154,7 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         last_command_source=view.last_source,
         last_operator=view.last_operator,
         control=view.control,
+        features=dict(seen.features.parts) if seen.features.parts else {},
     )
 
 

@@ -124,7 +124,7 @@ def test_a_flood_of_puts_costs_one_wake_byte_per_batch() -> None:
 def test_every_kind_of_put_wakes_the_worker() -> None:
     """A put that leaves no wake byte waits for the next serial byte or poll: each kind of
     input, however harmless, must wake the lines thread (rule 4)."""
-    from bridge.core.model import Control
+    from bridge.core.model import Control, FeatureCommand
     from bridge.session.follow import Follow, Heard
     from bridge.session.tracking import Track
 
@@ -140,6 +140,7 @@ def test_every_kind_of_put_wakes_the_worker() -> None:
         "put_follow": lambda mb: mb.put_follow(Follow(True)),
         "put_heard": lambda mb: mb.put_heard(Heard("JA1ABC", "PM95", False)),
         "put_wind": lambda mb: mb.put_wind(80.0),
+        "put_feature": lambda mb: mb.put_feature(FeatureCommand(feature="x", name="y")),
     }
     named = {n for n in dir(Mailbox) if n == "put" or n.startswith("put_")}
     # the express's hold goes in just before its stop, whose put wakes the worker

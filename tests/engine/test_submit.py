@@ -17,6 +17,7 @@ from bridge.core.model import (
     COMMANDS,
     Claim,
     Command,
+    FeatureCommand,
     FollowQso,
     GoToPreset,
     Lock,
@@ -130,6 +131,14 @@ def test_every_kind_of_command_reaches_the_judge_through_submit(bench: Bench) ->
     assert bench.refused(SetOption("overlap", True, origin=WHO), "option overlap") == "unsupported"
     assert "has no option 'overlap'" in bench.events[-1].message
     assert bench.last_audit()[2].startswith("refused: ")
+    # a feature's own command for no part of this rotator's (test_feature_commands.py has one)
+    no_part = FeatureCommand(feature="none", name="go", origin=WHO)
+    assert bench.refused(no_part, "none go") == "unsupported"
+    assert bench.last_audit() == (
+        "DL1ABC",
+        "none go",
+        "refused: no feature 'none' takes commands on this rotator",
+    )
     # every kind of the union was given above
     given = {type(c) for c, _ in steps} | {
         TrackBody,
@@ -140,6 +149,7 @@ def test_every_kind_of_command_reaches_the_judge_through_submit(bench: Bench) ->
         Stop,
         ResetHealth,
         SetOption,
+        FeatureCommand,
     }
     assert given == set(COMMANDS)
 

@@ -1,0 +1,262 @@
+"""A feature's own command and status block, declared in its package alone (bridge/feature.py,
+session/parts.py rules 5 and 6): a toy feature registered here, and nowhere in core/, runtime/
+or session/, has a command parsed from its topic, judged by the one judge like a target (the
+lock, the lease, the link; a stop or lock ON wins over it), carried by the mailbox to its part,
+whose proposal turns the rotor; what its part shows is in ``R/status``, written by the MQTT
+payload code. In virtual time, on the judge every front end calls (test_halt_epoch.py's bench).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import cast
+
+import pytest
+
+import bridge.feature
+from bridge.core.errors import Refused
+from bridge.core.model import (
+    Claim,
+    ErrorKind,
+    FeatureCommand,
+    Lock,
+    Origin,
+    RotatorStatus,
+    Source,
+    Stop,
+    Target,
+)
+from bridge.feature import CommandTopic, Feature, StatusBlock
+from bridge.features import FEATURES
+from bridge.interfaces.mqtt import payloads as pl
+from bridge.interfaces.mqtt.service import parse_command
+from bridge.runtime.rotator import STALE_MESSAGE
+from bridge.session.parts import Part, Proposal, Wake
+from bridge.session.session import RotatorSession
+from tests.engine.test_halt_epoch import START_AZ, between_judge_and_put
+from tests.engine.test_halt_epoch import Bench as EpochBench
+
+WHO = Origin(Source.MQTT, "DL1ABC")
+OTHER = Origin(Source.MQTT, "G4XYZ")
+
+
+class Beam:
+    """The toy feature's own state, one per session (parts.py rule 4)."""
+
+    def __init__(self, s: RotatorSession) -> None:
+        self.shown: dict[str, object] = {"label": None, "aimed": 0}
+
+
+def _beam(s: RotatorSession) -> Beam:
+    return cast(Beam, s.own["beam"])
+
+
+def _command(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | None:
+    """``aim <az>`` turns the rotor there; ``label <text>`` (no motion) only shows it, and
+    ``sneak <az>`` is a command that says it does not move yet proposes a target."""
+    beam = _beam(s)
+    if cmd.name == "label":
+        beam.shown = {**beam.shown, "label": cmd.value}  # a new value when it changes
+        return None
+    assert isinstance(cmd.value, float)
+    beam.shown = {**beam.shown, "aimed": cast(int, beam.shown["aimed"]) + 1}
+    target = Target(cmd.value, None, cmd.source, origin=cmd.origin)
+    return Proposal(target=s.cfg.aim.judge(target, s.status.raw_bearing_deg))
+
+
+BEAM = Part[RotatorSession](
+    "beam",
+    Wake.STEP,
+    True,
+    lambda s: False,  # never run by the step: it acts on its commands alone
+    lambda s, scene: None,
+    lambda s, now: None,
+    state=Beam,
+    command=_command,
+    status=lambda s: _beam(s).shown,
+)
+
+
+def _parse(payload: bytes, by: Origin) -> FeatureCommand:
+    word, _, rest = payload.decode().partition(" ")
+    if word == "label":
+        return FeatureCommand(feature="beam", name="label", value=rest, moves=False, origin=by)
+    try:
+        az = float(rest)
+    except ValueError:
+        raise pl.PayloadError(f"not a bearing: {rest!r}") from None
+    return FeatureCommand(feature="beam", name=word, value=az, moves=word != "sneak", origin=by)
+
+
+def _shown(status: RotatorStatus) -> object:
+    return status.features.get("beam")
+
+
+TOY = Feature(
+    "beam",
+    "docs/architecture.md",
+    "turns the rotor on its own command and shows what it did",
+    commands=(CommandTopic("beam", "beam", _parse),),
+    status=(StatusBlock("beam", _shown, lambda v: v),),
+    part=BEAM,
+)
+
+
+class Bench(EpochBench):
+    def submit(self, payload: bytes, by: Origin = WHO) -> None:
+        """``payload`` on ``R/beam``, parsed as the MQTT service parses it, then judged."""
+        command = parse_command("beam", None, payload, by)
+        assert isinstance(command, FeatureCommand)
+        self.rot.submit(command, f"beam {payload.decode()}")
+
+    def refused(self, payload: bytes, by: Origin = WHO) -> str:
+        with pytest.raises(Refused) as exc:
+            self.submit(payload, by)
+        self.v._take()
+        return exc.value.code
+
+    def rest(self) -> None:
+        self.v.run_for(40)
+
+
+@pytest.fixture
+def bench(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Bench]:
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
+    made = Bench(tmp_path)
+    assert made.v.cfg.parts is not None and made.v.cfg.parts[-1] is BEAM
+    yield made
+    made.close()
+
+
+def test_its_command_over_the_judge_reaches_its_part_and_turns_the_rotor(bench: Bench) -> None:
+    bench.submit(b"aim 200")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.truth().az_deg == pytest.approx(200.0, abs=0.5)
+    assert bench.v.status.bearing_deg == pytest.approx(200.0, abs=1.0)
+    assert bench.v.status.last_operator == "DL1ABC"
+    last = bench.audit[-1]
+    assert (last.origin.who, last.command, last.result) == ("DL1ABC", "beam aim 200", "executed")
+
+
+def test_its_status_block_is_in_the_r_status_payload(bench: Bench) -> None:
+    bench.submit(b"label Yagi 6el")
+    bench.v._take()
+    bench.submit(b"aim 90")
+    bench.v._take()
+    bench.rest()
+    doc = json.loads(pl.status_json(bench.v.status, 0.0, has_elevation=True))
+    assert doc["beam"] == {"label": "Yagi 6el", "aimed": 1}
+    # a status with nothing of it shows no block
+    assert "beam" not in json.loads(pl.status_json(RotatorStatus("v"), 0.0, True))
+
+
+def test_a_stop_put_after_it_in_the_same_batch_wins(bench: Bench) -> None:
+    bench.submit(b"aim 200")
+    bench.rot.submit(Stop(Source.MQTT, WHO), "stop")
+    bench.v._take()  # one batch: the command, then the stop
+    bench.rest()
+    assert bench.sets() == []
+    assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+    assert bench.v.status.features["beam"] == {"label": None, "aimed": 0}  # never reached it
+
+
+def test_a_lock_on_put_after_it_in_the_same_batch_wins(bench: Bench) -> None:
+    bench.submit(b"aim 200")
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    bench.v._take()
+    bench.rest()
+    assert bench.sets() == []
+    assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+
+
+def test_put_after_a_stop_in_the_same_batch_it_is_the_later_word(bench: Bench) -> None:
+    bench.rot.submit(Stop(Source.MQTT, WHO), "stop")
+    bench.submit(b"aim 100")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.truth().az_deg == pytest.approx(100.0, abs=0.5)
+
+
+def test_a_target_put_before_it_is_replaced_and_one_after_it_wins(bench: Bench) -> None:
+    bench.rot.submit(Target(300.0, None, origin=WHO), "target 300")
+    bench.submit(b"aim 100")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.truth().az_deg == pytest.approx(100.0, abs=0.5)
+    bench.submit(b"aim 200")
+    bench.rot.submit(Target(60.0, None, origin=WHO), "target 60")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.truth().az_deg == pytest.approx(60.0, abs=0.5)
+
+
+def test_the_lock_refuses_its_motion_but_not_what_does_not_move(bench: Bench) -> None:
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    assert bench.refused(b"aim 200") == "locked"
+    assert bench.events[-1].kind is ErrorKind.REFUSED
+    assert bench.audit[-1].result.startswith("refused: rotator is locked")
+    bench.submit(b"label tower work")
+    bench.v._take()
+    bench.rest()
+    assert bench.sets() == []
+    assert bench.v.status.features["beam"] == {"label": "tower work", "aimed": 0}
+
+
+def test_the_lease_refuses_it_from_another_operator(bench: Bench) -> None:
+    bench.rot.submit(Claim("DL1ABC", 30, origin=WHO), "claim")
+    bench.v._take()
+    assert bench.refused(b"aim 200", OTHER) == "leased"
+    assert "DL1ABC holds the rotator" in bench.events[-1].message
+    assert bench.refused(b"label mine", OTHER) == "leased"  # a setting is control too
+    bench.submit(b"aim 120")  # its holder's goes
+    bench.v._take()
+    bench.rest()
+    assert bench.v.truth().az_deg == pytest.approx(120.0, abs=0.5)
+    assert bench.v.status.features["beam"] == {"label": None, "aimed": 1}
+
+
+def test_a_command_that_says_it_does_not_move_cannot_turn_the_rotor(bench: Bench) -> None:
+    """Judged as no motion (the lock did not refuse it), its part's target is refused."""
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    bench.v._take()
+    bench.submit(b"sneak 200")
+    bench.v._take()
+    bench.rest()
+    assert bench.sets() == []
+    assert bench.v.errors("refused")[-1].message == "the command does not move the rotor"
+    assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+
+
+def test_one_judged_before_a_stop_from_another_thread_never_runs_after_it(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """mailbox.py rule 10: judged, then a STOP on another thread, then put: dropped, said."""
+    between_judge_and_put(
+        monkeypatch, bench.rot, lambda: bench.rot.submit(Stop(Source.MQTT, OTHER), "stop")
+    )
+    with pytest.raises(Refused) as exc:
+        bench.submit(b"aim 200")
+    bench.v._take()
+    bench.rest()
+    assert exc.value.code == "stale" and bench.audit[-1].result == f"refused: {STALE_MESSAGE}"
+    assert bench.sets() == []
+
+
+def test_a_feature_no_part_takes_is_refused_clearly(bench: Bench) -> None:
+    command = FeatureCommand(feature="nothing", name="go", value=1.0, origin=WHO)
+    with pytest.raises(Refused) as exc:
+        bench.rot.submit(command, "nothing go 1")
+    assert exc.value.code == "unsupported"
+    assert bench.events[-1].message == "no feature 'nothing' takes commands on this rotator"
+    assert bench.audit[-1].result.startswith("refused: no feature")
+
+
+def test_a_bad_payload_is_refused_before_the_judge() -> None:
+    topic = TOY.commands[0]
+    with pytest.raises(pl.PayloadError, match="not a bearing"):
+        parse_command("beam", None, b"aim north", WHO, features={"beam": topic})
