@@ -110,8 +110,7 @@ class Batch:
 
     def drop_moving(self) -> None:
         """Rule 12: a stop, a lock ON or a clearing release drops the features' motion."""
-        if self.feature_commands:
-            self.feature_commands = [c for c in self.feature_commands if not c.moves]
+        self.feature_commands = [c for c in self.feature_commands if not c.moves]
 
 
 class _Halts:
@@ -168,7 +167,8 @@ class Mailbox:
                 self._batch.target = None
                 self._batch.track = None  # the stop ends tracking anyway
                 self._batch.follow = None  # and following (rule 9)
-                self._batch.drop_moving()  # and a feature's motion (rule 12)
+                if self._batch.feature_commands:  # and a feature's motion (rule 12)
+                    self._batch.drop_moving()
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
@@ -195,7 +195,8 @@ class Mailbox:
                 self._batch.target = None
                 self._batch.track = None
                 self._batch.follow = None
-                self._batch.drop_moving()  # rule 12
+                if self._batch.feature_commands:  # rule 12
+                    self._batch.drop_moving()
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5

@@ -260,3 +260,36 @@ def test_a_bad_payload_is_refused_before_the_judge() -> None:
     topic = TOY.commands[0]
     with pytest.raises(pl.PayloadError, match="not a bearing"):
         parse_command("beam", None, b"aim north", WHO, features={"beam": topic})
+
+
+def test_a_storm_refuses_its_motion_at_the_judge_and_in_the_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The judge reads the storm in the status; one put before the judge could know (straight
+    in the mailbox, as a command judged just before the storm's reading) the session refuses."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
+    bench = Bench(tmp_path, **STORMY)
+    try:
+        bench.v.mailbox.put_wind(75.0)
+        bench.v._take()
+        bench.v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        assert bench.refused(b"aim 200") == "locked"
+        assert bench.events[-1].message == "wind 75 km/h above 60: parked for the storm"
+        bench.v.mailbox.put_feature(FeatureCommand(feature="beam", name="aim", value=200.0))
+        bench.v._take()
+        bench.rest()
+        refused = bench.v.errors("refused")[-1]
+        assert refused.message == "wind 75 km/h above 60: parked for the storm"
+        assert refused.command == "beam aim 200"
+        assert bench.v.truth().az_deg == pytest.approx(90.0, abs=0.5)  # still parked
+    finally:
+        bench.close()
+
+
+STORMY = {
+    "wind_topic": "weather/wind",
+    "wind_park_above": 60,
+    "wind_release_below": 40,
+    "wind_hold_min": 10,
+    "wind_park_az_deg": 90,
+}
