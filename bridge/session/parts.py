@@ -20,7 +20,8 @@ Rules:
    keeps its state without a line in the session.
 5. A feature's own command (core/model.py ``FeatureCommand``, judged by runtime/rotator.py)
    reaches its part by the feature's name through ``command``, in the session's ``commands``,
-   after any stop or lock of its batch; what it returns is applied like a step's proposal,
+   after any stop or lock of its batch, whether the part is on or not (a command may turn it
+   on); what it returns is applied like a step's proposal,
    except that its target is refused (on R/error, nothing queued) while the session would
    refuse a user's target (locked, offline, a storm), and always when the command said it
    does not move the rotor (the judge judged it as no motion). A part that has no
