@@ -53,6 +53,11 @@ Rules:
     number of its own from one counter (``next`` on an ``itertools.count`` is one step under
     the interpreter's lock), so puts into two mailboxes at once can never both write the number
     a reader has already seen: any put after a read makes the next read differ.
+12. A feature's own command (``put_feature``, core/model.py ``FeatureCommand``) is kept in a
+    list in the order put. One that moves is a motion command: it is put with its halt count
+    (rule 10), replaces a target put before it, is replaced by a track or follow start put
+    after it (the session applies those before it), and a stop, a lock ON or a clearing
+    release drops it as it drops a target. One that does not move is dropped by nothing.
 """
 
 from __future__ import annotations
@@ -244,6 +249,8 @@ class Mailbox:
             self._batch.track = track
             self._batch.target = None
             self._batch.follow = None  # rule 9: the later command wins
+            if (track.body or track.lookup) is not None and self._batch.feature_commands:
+                self._batch.drop_moving()  # rule 12: and over a feature's motion put before
         self._wake_once()
         return True
 
@@ -257,6 +264,8 @@ class Mailbox:
             if follow.on:  # following off ends nothing else
                 self._batch.target = None
                 self._batch.track = None
+                if self._batch.feature_commands:
+                    self._batch.drop_moving()  # rule 12
         self._wake_once()
         return True
 

@@ -30,6 +30,12 @@ Rules:
    read at every status the session builds and compared with the last: the part hands a new
    value when it changes (never one it changes afterwards). The status keeps it by the part's
    name (``RotatorStatus.features``), where the feature's StatusBlock reads it.
+7. Whatever ends tracking and following ends a part's own motion too, through its ``end``
+   (a stop, a lock ON, a release that clears, the link lost, a user's target, a track or
+   follow start, a feature's command that moves, its own too, before its part is handed
+   it): a part a command turned on never
+   turns the rotor after a later stop or lock, nor over the user's later word. And no part's
+   step turns a locked rotor: its target is dropped by the session, whatever the part says.
 """
 
 from __future__ import annotations
@@ -95,3 +101,4 @@ class Part(Generic[H]):
     state: Callable[[H], object] | None = None  # rule 4: its own state, made with the session
     command: Callable[[H, FeatureCommand, float], Proposal | None] | None = None  # rule 5
     status: Callable[[H], object] | None = None  # rule 6: its block's value, None: none
+    end: Callable[[H, str], None] | None = None  # rule 7: its motion ends, for this reason

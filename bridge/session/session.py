@@ -74,8 +74,10 @@ Rules:
    wind reading, a health reset), the status, the refusal in a storm and auto-park's
    activity, each in a method of its own. A feature's own command (``FeatureCommand``) goes
    to its part by its name (parts.py rule 5), after the batch's stop, lock and fence and
-   before its target; what a part shows in the status is asked of it by its ``Part`` alone
-   (parts.py rule 6).
+   before its target; one that moves ends tracking, following and every part's own motion
+   first, as a target does. Whatever ends tracking ends a part's own motion too (``Part.end``,
+   parts.py rule 7), and no part's step gets a target through while the rotator is locked.
+   What a part shows in the status is asked of it by its ``Part`` alone (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
    time, and are built at every step): a poll that changed nothing builds no status.
@@ -155,6 +157,7 @@ class RotatorSession:
         self._deciding = tuple(p for p in parts if p.deciding)
         self._measuring = tuple(p for p in parts if not p.deciding)
         self._waking = tuple(p for p in parts if p.wakeup is not None)
+        self._ending = tuple(p for p in parts if p.end is not None)
         self._parts_named = {p.name: p for p in parts}
         self._showing = tuple((p.name, p.status) for p in parts if p.status is not None)
         # parts.py rule 4: the state of the parts the session knows by their Part alone
@@ -194,7 +197,7 @@ class RotatorSession:
         self.controller.disconnect(reason is not None, now)  # rule 11: a stop may be owed
         # tracking after a reconnect needs a new command (reason None: the bridge is stopping)
         why = "serial link down" if reason is not None else "bridge stopped"
-        self.features.end(why)  # (what waits is reported dropped: next line)
+        self._end(why, now)  # (what waits is reported dropped: next line)
         self._drop_pending("serial link down")
         return self._step(now)
 
@@ -218,7 +221,7 @@ class RotatorSession:
         if batch.lock is not None:
             self.locked = batch.lock
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
-            self.features.end("lock")
+            self._end("lock", now)
             self._drop_pending(None)
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
@@ -226,24 +229,28 @@ class RotatorSession:
         elif batch.feature_commands:
             self._activity(now)
         if batch.stop is not None:
-            self.features.end("stop")
+            self._end("stop", now)
             self.targets.clear()
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
-        self._fence(batch)
+        self._fence(batch, now)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
             ctl.options.set(opt.name, opt.value, ctl.link is not None)
         if batch.track is not None:
+            if batch.track.body is not None or batch.track.lookup is not None:
+                self._end_parts("track command", now)  # parts.py rule 7
             self._apply(self.features.track(batch.track, self._refused()))
         if batch.follow is not None:
+            if batch.follow.on:
+                self._end_parts("follow command", now)
             self._apply(self.features.follow(batch.follow, self._refused(), now))
         for command in batch.feature_commands:  # rule 17, in the order they were put
             self._feature_command(command, now)
         if batch.target is not None:
             what = describe_command(batch.target)
-            self.features.end(f"{batch.target.source.value} target")  # never combined
+            self._end(f"{batch.target.source.value} target", now)  # never combined
             refused = self._refused()
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
@@ -309,11 +316,24 @@ class RotatorSession:
             return "rotator offline"
         return self.wind.refusal()  # wind.py rule 1
 
-    def _fence(self, batch: Batch) -> None:
+    def _fence(self, batch: Batch, now: float) -> None:
         """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
         if self.fence.apply(batch):
             self._drop_pending(CLEARED)
-            self.features.end("a stop or lock came first; send the {} command again")
+            self._end("a stop or lock came first; send the {} command again", now)
+
+    def _end(self, why: str, now: float) -> None:
+        """Tracking and following end (feature_commands.py), and every part's motion
+        (parts.py rule 7)."""
+        self.features.end(why)
+        self._end_parts(why, now)
+
+    def _end_parts(self, why: str, now: float) -> None:
+        """parts.py rule 7: each part's own motion ends (one that raises is reset: rule 14)."""
+        for part in self._ending:
+            end = part.end
+            assert end is not None
+            self._guarded(part.name, partial(end, self, why), now)
 
     def _apply(self, done: Done) -> None:
         """What a tracking or following command did (feature_commands.py), shown."""
@@ -345,7 +365,7 @@ class RotatorSession:
             if isinstance(note, Report):
                 self._error(note.kind, note.message, note.command)
             elif isinstance(note, Ends):
-                self.features.end(note.reason)
+                self._end(note.reason, now)
             elif isinstance(note, Drop):
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
@@ -409,6 +429,8 @@ class RotatorSession:
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
         proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
+        if proposal is not None and proposal.target is not None and self.locked:
+            proposal = replace(proposal, target=None)  # parts.py rule 7: never while locked
         if proposal is not None:
             self._propose(proposal, now)
 
@@ -421,6 +443,8 @@ class RotatorSession:
             message = f"no feature {command.feature!r} takes commands on this rotator"
             self._error(ErrorKind.REFUSED, message, command=what)
             return
+        if command.moves:  # the later command wins: it ends tracking and following, as a
+            self._end(f"{command.feature} command", now)  # target does (rules 10, 15)
         proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return

@@ -27,13 +27,14 @@ from bridge.core.model import (
     Source,
     Stop,
     Target,
+    TrackBody,
 )
 from bridge.feature import CommandTopic, Feature, StatusBlock
 from bridge.features import FEATURES
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.service import parse_command
 from bridge.runtime.rotator import STALE_MESSAGE
-from bridge.session.parts import Part, Proposal, Wake
+from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.session import RotatorSession
 from tests.engine.test_halt_epoch import START_AZ, between_judge_and_put
 from tests.engine.test_halt_epoch import Bench as EpochBench
@@ -293,3 +294,137 @@ STORMY = {
     "wind_hold_min": 10,
     "wind_park_az_deg": 90,
 }
+
+
+def test_its_motion_ends_tracking_as_a_target_does(bench: Bench) -> None:
+    """The later command wins: an aim after a track start leaves the rotor where it aimed, not
+    where the sky says at the tracker's next step."""
+    bench.rot.submit(TrackBody("sun", origin=WHO), "track sun")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.status.tracking is not None
+    bench.submit(b"aim 10")
+    bench.v._take()
+    bench.rest()
+    assert bench.v.status.tracking is None
+    assert bench.v.truth().az_deg == pytest.approx(10.0, abs=0.5)
+
+
+def test_a_track_start_put_after_it_in_the_same_batch_wins(bench: Bench) -> None:
+    bench.submit(b"aim 10")
+    bench.rot.submit(TrackBody("sun", origin=WHO), "track sun")
+    bench.v._take()  # one batch: the aim, then the track start
+    bench.rest()
+    assert bench.v.status.tracking is not None
+    assert bench.v.status.last_command_source == "tracking"
+
+
+class Sweep:
+    """A toy part a command turns on: while on, its step sends the rotor to 300 (parts.py
+    rule 7: whatever ends tracking ends it)."""
+
+    def __init__(self, s: RotatorSession) -> None:
+        self.on = False
+        self.ended: list[str] = []
+
+
+def _sweep(s: RotatorSession) -> Sweep:
+    return cast(Sweep, s.own["sweep"])
+
+
+def _sweep_command(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | None:
+    _sweep(s).on = True
+    return None
+
+
+def _sweep_step(s: RotatorSession, scene: Scene) -> Proposal | None:
+    if scene.pending is not None or s.status.bearing_deg == pytest.approx(300.0, abs=1.0):
+        return None
+    target = Target(300.0, None, Source.MQTT, origin=WHO)
+    return Proposal(target=s.cfg.aim.judge(target, s.status.raw_bearing_deg))
+
+
+def _sweep_end(s: RotatorSession, why: str) -> None:
+    _sweep(s).on = False
+    _sweep(s).ended.append(why)
+
+
+SWEEP = Part[RotatorSession](
+    "sweep",
+    Wake.STEP,
+    True,
+    lambda s: _sweep(s).on,
+    _sweep_step,
+    lambda s, now: None,
+    state=Sweep,
+    command=_sweep_command,
+    end=_sweep_end,
+)
+SWEEP_FEATURE = Feature(
+    "sweep",
+    "docs/architecture.md",
+    "turns the rotor while it is on",
+    commands=(
+        CommandTopic(
+            "sweep", "sweep", lambda p, by: FeatureCommand("sweep", "on", None, origin=by)
+        ),
+    ),
+    part=SWEEP,
+)
+
+
+@pytest.fixture
+def sweeping(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Bench]:
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, SWEEP_FEATURE))
+    made = Bench(tmp_path)
+    made.rot.submit(FeatureCommand("sweep", "on", None, origin=WHO), "sweep on")
+    made.v._take()
+    made.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "the sweep turns")
+    yield made
+    made.close()
+
+
+def test_a_stop_ends_a_part_its_command_turned_on(sweeping: Bench) -> None:
+    sweeping.rot.submit(Stop(Source.MQTT, WHO), "stop")
+    sweeping.v._take()
+    sweeping.v.run_until(lambda h: not h.status.moving, 10, "stopped")
+    stopped = sweeping.v.truth().az_deg
+    sent = len(sweeping.sets())
+    sweeping.rest()
+    assert len(sweeping.sets()) == sent  # no target after the stop
+    assert sweeping.v.truth().az_deg == pytest.approx(stopped, abs=0.5)
+    assert _sweep(sweeping.v.session).ended[-1] == "stop"
+
+
+def test_a_lock_ends_a_part_its_command_turned_on(sweeping: Bench) -> None:
+    at, sent = sweeping.v.truth().az_deg, len(sweeping.sets())
+    sweeping.rot.submit(Lock(True, origin=WHO), "lock ON")
+    sweeping.v._take()
+    sweeping.rest()
+    assert len(sweeping.sets()) == sent  # no target while locked
+    assert sweeping.v.truth().az_deg == pytest.approx(at, abs=3.0)  # stopped where it was
+    stopped = sweeping.v.truth().az_deg
+    sweeping.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    sweeping.v._take()
+    sweeping.rest()
+    assert len(sweeping.sets()) == sent
+    assert sweeping.v.truth().az_deg == pytest.approx(stopped, abs=0.5)  # nothing resumed
+
+
+def test_a_users_target_ends_a_part_its_command_turned_on(sweeping: Bench) -> None:
+    sweeping.rot.submit(Target(60.0, None, origin=WHO), "target 60")
+    sweeping.v._take()
+    sweeping.rest()
+    assert sweeping.v.truth().az_deg == pytest.approx(60.0, abs=0.5)
+
+
+def test_no_parts_step_turns_a_locked_rotor(sweeping: Bench) -> None:
+    """Even a part that ignores its end and the scene's lock (a bug) gets no target through."""
+    session = sweeping.v.session
+    at, sent = sweeping.v.truth().az_deg, len(sweeping.sets())
+    sweeping.rot.submit(Lock(True, origin=WHO), "lock ON")
+    sweeping.v._take()
+    _sweep(session).on = True  # as if its end had been forgotten
+    sweeping.rest()
+    assert len(sweeping.sets()) == sent
+    assert sweeping.v.truth().az_deg == pytest.approx(at, abs=3.0)
