@@ -31,6 +31,9 @@ Rules:
    length (a locator's centre has one: JO62qm's is AD67ql). Anything short of these has a
    bearing and is taken, even close to the antipode, where the bearing swings with the
    station's exact position: that is the great circle from the position configured.
+8. A target already in raw values (one a session part made: a feature's, judged by its own
+   code) is checked again by ``check_raw`` against the limits and the keep-out sectors, with
+   the messages of rules 3-5: the session sends nothing those refuse, whoever judged it.
 """
 
 from __future__ import annotations
@@ -194,6 +197,31 @@ class Pointing:
             if not self._sent_within(el, lo, hi):
                 raise Refused(RefusalCode.LIMITS, self._rounding(f"elevation {el:g}", el, lo, hi))
         return replace(target, az_deg=raw_az, true_az_deg=self._side_free(target.az_deg))
+
+    def check_raw(self, target: Target) -> None:
+        """Rule 8: Refused if the controller may not be sent ``target`` (raw values)."""
+        if target.az_deg is not None:
+            raw = target.az_deg
+            if not math.isfinite(raw):
+                raise Refused(RefusalCode.LIMITS, "azimuth must be a finite number")
+            true = raw + self.offset_deg
+            sector = self.keep_out_of(true)
+            if sector is not None:
+                raise Refused(
+                    RefusalCode.KEEP_OUT,
+                    f"azimuth {norm360(true):g} is in the keep-out sector "
+                    f"{sector[0]:g}..{sector[1]:g}: refused",
+                )
+            self._checked(true, raw)
+            self._check_sent_keep_out(true, raw)
+        if target.el_deg is not None:
+            el, lo, hi = target.el_deg, self.el_min_deg, self.el_max_deg
+            if not self.has_elevation:
+                raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
+            if not math.isfinite(el) or not lo <= el <= hi or not self._sent_within(el, lo, hi):
+                raise Refused(
+                    RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
+                )
 
     def _side_free(self, az_deg: float | None) -> float | None:
         """``az_deg`` if the rotor may take it on either side (rule 2), else None."""

@@ -23,7 +23,8 @@ Rules:
    after any stop or lock of its batch, whether the part is on or not (a command may turn it
    on); what it returns is applied like a step's proposal,
    except that its target is refused (on R/error, nothing queued) while the session would
-   refuse a user's target (locked, offline, a storm), and always when the command said it
+   refuse a user's target (locked, offline, a storm) or the controller may not be sent it
+   (the limits, a keep-out sector: pointing.py rule 8), and always when the command said it
    does not move the rotor (the judge judged it as no motion). A part that has no
    ``command``, or a name no part has, is a refusal too.
 6. ``status`` gives what the part shows in ``R/status`` (a JSON-able value, None: nothing),

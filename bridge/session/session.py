@@ -92,6 +92,7 @@ from dataclasses import replace
 from functools import partial
 from typing import TypeVar
 
+from bridge.core.errors import Refused
 from bridge.core.model import (
     ErrorKind,
     FeatureCommand,
@@ -450,10 +451,21 @@ class RotatorSession:
             return
         if proposal.target is not None:
             refused = self._refused() if command.moves else "the command does not move the rotor"
+            if refused is None:
+                refused = self._outside(proposal.target)
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
         self._propose(proposal, now)
+
+    def _outside(self, target: Target) -> str | None:
+        """Why the controller may not be sent a part's target (its limits, a keep-out sector:
+        pointing.py rule 8), if it may not: a feature's part judges its own, checked here."""
+        try:
+            self.cfg.aim.check_raw(target)
+        except Refused as exc:
+            return exc.message
+        return None
 
     def _propose(self, proposal: Proposal, now: float) -> None:
         """A part's proposal, applied in this order (parts.py rule 1)."""

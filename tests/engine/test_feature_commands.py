@@ -64,6 +64,8 @@ def _command(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | N
     assert isinstance(cmd.value, float)
     beam.shown = {**beam.shown, "aimed": cast(int, beam.shown["aimed"]) + 1}
     target = Target(cmd.value, None, cmd.source, origin=cmd.origin)
+    if cmd.name == "raw":  # a part that forgot to judge its target (a bug)
+        return Proposal(target=target)
     return Proposal(target=s.cfg.aim.judge(target, s.status.raw_bearing_deg))
 
 
@@ -428,3 +430,23 @@ def test_no_parts_step_turns_a_locked_rotor(sweeping: Bench) -> None:
     sweeping.rest()
     assert len(sweeping.sets()) == sent
     assert sweeping.v.truth().az_deg == pytest.approx(at, abs=3.0)
+
+
+def test_a_target_its_part_forgot_to_judge_is_refused_in_a_keep_out_sector(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """pointing.py rule 8: the session checks a part's target against the keep-out sectors
+    and the limits, as the judge checks a user's."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, TOY))
+    bench = Bench(tmp_path, keep_out=[[190, 210]])
+    try:
+        bench.submit(b"raw 200")
+        bench.v._take()
+        bench.rest()
+        assert bench.sets() == []
+        refused = bench.v.errors("refused")[-1]
+        assert refused.message == "azimuth 200 is in the keep-out sector 190..210: refused"
+        assert refused.command == "beam raw 200"
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+    finally:
+        bench.close()
