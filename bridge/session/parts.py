@@ -21,7 +21,8 @@ Rules:
 5. A feature's own command (core/model.py ``FeatureCommand``, judged by runtime/rotator.py)
    reaches its part by the feature's name through ``command``, in the session's ``commands``,
    after any stop or lock of its batch, whether the part is on or not (a command may turn it
-   on); what it returns is applied like a step's proposal,
+   on; one that moves is refused first while a user's target would be: rule 7); what it
+   returns is applied like a step's proposal,
    except that its target is refused (on R/error, nothing queued) while the session would
    refuse a user's target (locked, offline, a storm) or the controller may not be sent it
    (the limits, a keep-out sector: pointing.py rule 8), and always when the command said it
@@ -34,9 +35,11 @@ Rules:
 7. Whatever ends tracking and following ends a part's own motion too, through its ``end``
    (a stop, a lock ON, a release that clears, the link lost, a user's target, a track or
    follow start, a feature's command that moves, its own too, before its part is handed
-   it): a part a command turned on never
-   turns the rotor after a later stop or lock, nor over the user's later word. And no part's
-   step turns a locked rotor: its target is dropped by the session, whatever the part says.
+   it, a storm that begins): a part a command turned on never turns the rotor after a later
+   stop or lock, nor over the user's later word. A command that moves reaches no part while
+   the session would refuse a user's target (locked, offline, a storm). And no part's step
+   target goes to a locked rotor, nor in a storm but the wind's own park: the session drops
+   it, whatever the part says.
 """
 
 from __future__ import annotations

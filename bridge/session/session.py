@@ -75,8 +75,10 @@ Rules:
    activity, each in a method of its own. A feature's own command (``FeatureCommand``) goes
    to its part by its name (parts.py rule 5), after the batch's stop, lock and fence and
    before its target; one that moves ends tracking, following and every part's own motion
-   first, as a target does. Whatever ends tracking ends a part's own motion too (``Part.end``,
-   parts.py rule 7), and no part's step gets a target through while the rotator is locked.
+   first, as a target does, and is refused while a target would be. Whatever ends tracking
+   ends a part's own motion too (``Part.end``, parts.py rule 7: a storm that begins too), and
+   no part's step gets a target through while the rotator is locked, nor in a storm but the
+   wind's own park.
    What a part shows in the status is asked of it by its ``Part`` alone (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
@@ -159,6 +161,7 @@ class RotatorSession:
         self._measuring = tuple(p for p in parts if not p.deciding)
         self._waking = tuple(p for p in parts if p.wakeup is not None)
         self._ending = tuple(p for p in parts if p.end is not None)
+        self._storm_seen = self.wind.storm  # parts.py rule 7: a storm kept was seen
         self._parts_named = {p.name: p for p in parts}
         self._showing = tuple((p.name, p.status) for p in parts if p.status is not None)
         # parts.py rule 4: the state of the parts the session knows by their Part alone
@@ -413,6 +416,7 @@ class RotatorSession:
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
         """Rule 17: each part that is on and that something woke, in the order handed in."""
+        self._storm(now)
         for part in parts:
             if not part.on(self):
                 continue
@@ -422,6 +426,15 @@ class RotatorSession:
                     continue
                 self._seen_motion[part.name] = motion
             self._part(part, now)
+            self._storm(now)
+
+    def _storm(self, now: float) -> None:
+        """parts.py rule 7: a storm that began ends every part's own motion, as it ends
+        tracking and following (rule 15)."""
+        storm = self.wind.storm
+        if storm and not self._storm_seen:
+            self._end_parts(self.wind.refusal() or "storm", now)
+        self._storm_seen = storm
 
     def _part(self, part: Part[RotatorSession], now: float) -> None:
         """A part decides on a read-only scene; its proposal is applied here."""
@@ -430,8 +443,8 @@ class RotatorSession:
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
         proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
-        if proposal is not None and proposal.target is not None and self.locked:
-            proposal = replace(proposal, target=None)  # parts.py rule 7: never while locked
+        if proposal is not None and proposal.target is not None and self._still(proposal.target):
+            proposal = replace(proposal, target=None)  # parts.py rule 7
         if proposal is not None:
             self._propose(proposal, now)
 
@@ -446,6 +459,10 @@ class RotatorSession:
             return
         if command.moves:  # the later command wins: it ends tracking and following, as a
             self._end(f"{command.feature} command", now)  # target does (rules 10, 15)
+            refused = self._refused()  # and, refused, it reaches no part, as a track start
+            if refused is not None:
+                self._error(ErrorKind.REFUSED, refused, command=what)
+                return
         proposal = self._guarded(part.name, lambda: run(self, command, now), now)
         if proposal is None:
             return
@@ -457,6 +474,11 @@ class RotatorSession:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
         self._propose(proposal, now)
+
+    def _still(self, target: Target) -> bool:
+        """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but
+        the wind's own park (auto-park waits, tracking and following are ended)."""
+        return self.locked or (self.wind.storm and target.source is not Source.WIND)
 
     def _outside(self, target: Target) -> str | None:
         """Why the controller may not be sent a part's target (its limits, a keep-out sector:

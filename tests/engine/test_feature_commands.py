@@ -450,3 +450,45 @@ def test_a_target_its_part_forgot_to_judge_is_refused_in_a_keep_out_sector(
         assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
     finally:
         bench.close()
+
+
+def test_a_storm_ends_a_part_its_command_turned_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The wind's park is the park: a part turned on before the storm does not take the rotor
+    away from it, during the storm or after it."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, SWEEP_FEATURE))
+    bench = Bench(tmp_path, **STORMY)
+    try:
+        bench.rot.submit(FeatureCommand("sweep", "on", None, origin=WHO), "sweep on")
+        bench.v._take()
+        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "the sweep turns")
+        bench.v.mailbox.put_wind(75.0)
+        bench.v._take()
+        bench.v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        bench.rest()
+        assert bench.v.truth().az_deg == pytest.approx(90.0, abs=0.5)  # still parked
+        assert _sweep(bench.v.session).on is False
+    finally:
+        bench.close()
+
+
+def test_one_put_with_the_storms_reading_reaches_no_part(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Judged just before the storm's reading, in the same batch: refused, never turned on."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, SWEEP_FEATURE))
+    bench = Bench(tmp_path, **STORMY)
+    try:
+        bench.v.mailbox.put_feature(FeatureCommand("sweep", "on", None, origin=WHO))
+        bench.v.mailbox.put_wind(75.0)
+        bench.v._take()
+        bench.v.run_until(lambda h: h.status.parked, 60, "parked for the storm")
+        bench.rest()
+        assert bench.v.truth().az_deg == pytest.approx(90.0, abs=0.5)
+        assert _sweep(bench.v.session).on is False
+        refused = bench.v.errors("refused")[-1]
+        assert refused.message == "wind 75 km/h above 60: parked for the storm"
+        assert refused.command == "sweep on"
+    finally:
+        bench.close()
