@@ -40,6 +40,9 @@ Rules:
 5. A feature's entity sits right after the row it names (``EntityRow.after``, a row of the
    entity table's or of a feature's: where the table had it before the feature was a package),
    those after one row in the registry's order; one that names no row, after all the others.
+6. A part that takes commands (``Part.command``) bears its feature's name: a
+   ``FeatureCommand`` names the feature, and the judge and the session route it by the part's
+   name (a declaration that differs is refused as it is made).
 """
 
 from __future__ import annotations
@@ -209,6 +212,15 @@ class Feature:
     base_topics: tuple[str, ...] = ()
     service: str | None = None
     service_on: Callable[[Any], bool] | None = None
+
+    def __post_init__(self) -> None:
+        part = self.part
+        if part is not None and getattr(part, "command", None) is not None:
+            if part.name != self.name:  # rule 6
+                raise ValueError(
+                    f"feature {self.name!r}: a part that takes commands is named as its "
+                    f"feature (its commands name the feature), not {part.name!r}"
+                )
 
     def serves(self, settings: Any) -> bool:
         """Whether the file's settings turn this feature's service on (rule 4)."""

@@ -32,7 +32,7 @@ from bridge.interfaces.homeassistant import Identity, RotatorInfo, all_configs
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import RotatorTopics, Topics
-from bridge.session.parts import Part
+from bridge.session.parts import Part, Wake
 from bridge.settings import RotatorSettings, Settings
 from bridge.settings.groups import reserved
 from tests.mqtt.test_service import NOW_UNIX, RecordingPublisher, RecordingRotator
@@ -396,3 +396,29 @@ def test_a_features_command_cannot_take_a_core_commands_or_another_features_name
         CommandTopic("thief/go", kind, _toy_nudge),))  # fmt: skip
     with pytest.raises(ValueError, match="is taken"):
         Topics("rotor", {"tower": "rotor"}, features=(*FEATURES, thief))
+
+
+def test_a_part_that_takes_commands_must_bear_its_features_name() -> None:
+    """bridge/feature.py rule 6: a FeatureCommand names the feature and is routed by the part's
+    name, so a part named otherwise ("following" for "follow") would refuse every command."""
+
+    def no_command(s: object, cmd: object, now: float) -> None:
+        return None
+
+    part = Part[object](
+        "sweeping",
+        Wake.STEP,
+        True,
+        lambda s: False,
+        lambda s, scene: None,
+        lambda s, now: None,
+        command=no_command,
+    )
+    with pytest.raises(ValueError, match="'sweep'.*'sweeping'"):
+        Feature("sweep", "docs/mqtt.md", "a toy", part=part)
+    assert Feature("sweeping", "docs/mqtt.md", "a toy", part=part).part is part
+    # a part without commands keeps the name its error events had (auto-park, following)
+    silent = Part[object](
+        "auto-park", Wake.STEP, True, lambda s: False, lambda s, scene: None, lambda s, now: None
+    )
+    assert Feature("autopark", "docs/mqtt.md", "a toy", part=silent).name == "autopark"
