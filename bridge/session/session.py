@@ -556,6 +556,15 @@ class RotatorSession:
         wind_info = wind.info if wind.on else None
         slew = link.slew if link is not None else None
         timed = slew is not None  # a slew's estimate (status rule 2)
+        shown = st.Features(
+            tracker.info,
+            tracker.ended,
+            follower.info,
+            follower.ended,
+            wind_info,
+            health.report,
+            self._shown(now) if self._showing else None,  # parts.py rule 6
+        )
         key: tuple[object, ...] = (
             ctl.cfg,
             ctl.motion,
@@ -575,28 +584,11 @@ class RotatorSession:
             view.park_raw,
             view.last_operator,
             view.control,
-            tracker.info,
-            tracker.ended,
-            follower.info,
-            follower.ended,
-            wind_info,
-            health.report,
+            shown,
         )
-        parts = self._shown(now) if self._showing else None  # parts.py rule 6
-        if parts is not None:
-            key = (*key, parts)
         if key == self._status_key and not timed and ctl.cfg.spec.can_report_position:
             return  # (a DCU-1's estimated move reads the time: status rule 3)
         self._status_key = key
-        shown = st.Features(
-            tracker.info,
-            tracker.ended,
-            follower.info,
-            follower.ended,
-            wind_info,
-            health.report,
-            parts,
-        )
         seen = ctl.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )
