@@ -32,8 +32,9 @@ Rules:
    copy of the port, at once, if it holds one and may write (rule 8). A tty takes one write
    whole against the serial-lines thread's (one write a frame too, runtime/port.py) unless its
    output buffer is nearly full: then the write takes part of the frame, and the rest is owed
-   (rule 9). A write that takes nothing (a full buffer, an unplugged adapter) is let go: the
-   session's own stop follows. It decides nothing else and changes no state: the session
+   (rule 9). A write that takes nothing (a full buffer, an unplugged adapter, the
+   serial-lines thread inside its own write that instant) is let go: the session's own stop
+   follows. It decides nothing else and changes no state: the session
    still gets the stop from the lane and the main connection, holds, markers and the lock as
    before, and writes its own stop frame (the controller gets two: ModelSpec.stop_anytime
    says the model takes that). At most one frame a rotator in GAP_S: a flood on the stop
