@@ -90,6 +90,8 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 200) <= 3, timeout_s=20)
         proc.type("q")
         assert proc.wait(slow(20)) == 0, proc.output
+    except AssertionError as exc:  # what the demo printed says why (it failed once under load)
+        raise AssertionError(f"{exc}\nthe demo printed:\n{proc.output[-4000:]}") from None
     finally:
         if probe is not None:
             probe.close()
