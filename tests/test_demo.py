@@ -90,6 +90,7 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 200) <= 3, timeout_s=20)
         proc.type("q")
         assert proc.wait(slow(20)) == 0, proc.output
+        assert "rotor-bridge demo: stopping (q typed)" in proc.output
     except AssertionError as exc:  # what the demo printed says why (it failed once under load)
         raise AssertionError(f"{exc}\nthe demo printed:\n{proc.output[-4000:]}") from None
     finally:
@@ -170,6 +171,7 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
         probe.close()
         proc.proc.send_signal(signal.SIGINT)
         assert proc.wait(slow(20)) == 0, proc.output
+        assert "rotor-bridge demo: stopping (SIGINT)" in proc.output  # what ended it is said
     finally:
         proc.close()
     assert not answers("127.0.0.1", port)
