@@ -271,5 +271,7 @@ def write_frame(port: serial.Serial, data: bytes) -> None:
             break
         waiting = select.poll()  # not select(): a busy bridge's descriptors pass 1023
         waiting.register(fd, select.POLLOUT)
-        waiting.poll(max(1, math.ceil((deadline - now) * 1000)))
+        events = waiting.poll(max(1, math.ceil((deadline - now) * 1000)))
+        if events and not events[0][1] & select.POLLOUT:
+            break  # an error or a hang-up, not room: no use waiting for it
     raise serial.SerialException("the port takes no more bytes (adapter stuck?)")
