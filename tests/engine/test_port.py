@@ -14,6 +14,7 @@ import pytest
 import serial
 
 from bridge.protocols import REGISTRY
+from bridge.runtime import port as port_module
 from bridge.runtime.port import (
     close_in_background,
     open_port,
@@ -122,11 +123,16 @@ while True:
 """
 
 
-def test_a_frame_written_while_another_writer_has_the_tty_goes_whole() -> None:
+def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """A non-blocking write to a tty another writer is inside of (the stop express writing its
     stop frame) is refused outright by the kernel (EAGAIN), with room to spare; the bridge took
     that for a stuck adapter and dropped the link (a stop express test failed so under load).
-    Every frame reaches the wire whole, however often the other writer is in the way."""
+    Every frame reaches the wire whole, however often the other writer is in the way. (This
+    writer never pauses, unlike the express, which writes one frame a stop: how long the tty
+    may be taken from the bridge here is a deadline, scaled.)"""
+    monkeypatch.setattr(port_module, "WRITE_WAIT_S", slow(port_module.WRITE_WAIT_S))
     master, slave = os.openpty()
     path = os.ttyname(slave)
     os.close(slave)
