@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import termios
 from collections.abc import Callable
 from pathlib import Path
@@ -18,6 +19,8 @@ from bridge import demo, emulators
 from bridge.cli import build_parser
 from bridge.core import geo
 from bridge.demo import sky as demo_sky
+from bridge.demo.mosquitto import BrokerError
+from bridge.demo.mosquitto import Mosquitto as PrivateBroker
 from bridge.interfaces.homeassistant import Identity
 from bridge.sky import parse_tles
 from tests.demo_process import DemoProcess
@@ -44,6 +47,24 @@ ALL_MODELS += ["rc2800", "rc2800-az"]
 
 def _left_behind(tmpdir: Path) -> list[str]:
     return sorted(p.name for p in tmpdir.iterdir())
+
+
+def test_a_private_broker_whose_port_another_program_holds_is_not_taken_for_started(
+    tmp_path: Path,
+) -> None:
+    """Another program listening on the port answered before mosquitto had tried to bind it:
+    ``start`` returned, mosquitto exited ("Address already in use"), and every client reached
+    the other program's broker (under two suites at once a test froze its own broker and its
+    client, on another test's, never gave up). The start fails, in mosquitto's words."""
+    with socket.socket() as other:
+        other.bind(("127.0.0.1", 0))
+        other.listen()
+        broker = PrivateBroker(tmp_path, port=other.getsockname()[1])
+        try:
+            with pytest.raises(BrokerError, match="Address already in use"):
+                broker.start(slow(10))
+        finally:
+            broker.stop()
 
 
 def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
@@ -90,6 +111,9 @@ def test_demo_turns_on_a_published_and_a_typed_target_and_q_ends_it_cleanly(
         probe.wait_for(f"{base}/bearing", lambda m: abs(float(m.text) - 200) <= 3, timeout_s=20)
         proc.type("q")
         assert proc.wait(slow(20)) == 0, proc.output
+        assert "rotor-bridge demo: stopping (q typed)" in proc.output
+    except AssertionError as exc:  # what the demo printed says why (it failed once under load)
+        raise AssertionError(f"{exc}\nthe demo printed:\n{proc.output[-4000:]}") from None
     finally:
         if probe is not None:
             probe.close()
@@ -168,6 +192,7 @@ def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:
         probe.close()
         proc.proc.send_signal(signal.SIGINT)
         assert proc.wait(slow(20)) == 0, proc.output
+        assert "rotor-bridge demo: stopping (SIGINT)" in proc.output  # what ended it is said
     finally:
         proc.close()
     assert not answers("127.0.0.1", port)

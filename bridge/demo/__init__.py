@@ -230,12 +230,25 @@ def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
     return {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
 
 
-def _on_signals(handler: Callable[[], None]) -> Callable[[], None]:
-    """Route SIGINT/SIGTERM/SIGHUP to `handler`; returns what puts the old handlers back."""
+class _Done(threading.Event):
+    """The demo's end, and what ended it first (said as it stops: a demo that ends on its own
+    is otherwise a mystery)."""
+
+    reason = ""
+
+    def end(self, reason: str) -> None:
+        if not self.is_set():
+            self.reason = reason
+        self.set()
+
+
+def _on_signals(handler: Callable[[str], None]) -> Callable[[], None]:
+    """Route SIGINT/SIGTERM/SIGHUP to `handler` (with the signal's name); returns what puts the
+    old handlers back."""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
     previous = {
-        sig: signal.signal(sig, lambda *_: handler())
+        sig: signal.signal(sig, lambda signum, _frame: handler(signal.Signals(signum).name))
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
     }
 
@@ -256,8 +269,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    done = threading.Event()
-    restore_signals = _on_signals(done.set)  # ^C during start-up: start, then clean up at once
+    done = _Done()
+    restore_signals = _on_signals(done.end)  # ^C during start-up: start, then clean up at once
     try:
         with contextlib.ExitStack() as stack:  # undone in reverse on every way out (rule 3)
             workdir = Path(tempfile.mkdtemp(prefix="rotor-bridge-demo-"))
@@ -275,7 +288,7 @@ def _run(
     models: list[str],
     workdir: Path,
     stack: contextlib.ExitStack,
-    done: threading.Event,
+    done: _Done,
 ) -> int:
     instance = instance_name()
     try:
@@ -355,8 +368,8 @@ def _run(
         threading.Thread(target=_read_stdin, args=(screen, console, done), daemon=True).start()
     while not done.wait(0.2):
         if deadline is not None and time.monotonic() >= deadline:
-            break
-    screen.log("rotor-bridge demo: stopping")
+            done.end("--duration-s is over")
+    screen.log(f"rotor-bridge demo: stopping ({done.reason})")
     return 0
 
 
@@ -394,6 +407,14 @@ def _print_banner(
     print("\n".join(lines), flush=True)
 
 
-def _read_stdin(screen: Screen, console: Console, done: threading.Event) -> None:
-    screen.read_lines(console.command)
-    done.set()
+def _read_stdin(screen: Screen, console: Console, done: _Done) -> None:
+    quit_typed = False
+
+    def handle(line: str) -> bool:
+        nonlocal quit_typed
+        going_on = console.command(line)
+        quit_typed = not going_on
+        return going_on
+
+    screen.read_lines(handle)
+    done.end("q typed" if quit_typed else "the terminal's input ended")

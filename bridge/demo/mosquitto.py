@@ -6,10 +6,17 @@ a crash, a freeze, a restart.)
 (We tried amqtt as an embedded broker: 0.12.1 moved the bridge's subscriptions to a later
 anonymous client's session, after which the bridge silently received no commands. Debian's
 mosquitto is what the tests and production use anyway.)
+
+Started means this broker listens: its log (``-v``) says it runs, which it says only once every
+listener is bound. Another program on the port answers too, before mosquitto has even tried
+to bind it; mosquitto then exits ("Address already in use") and every client would reach the
+other program's broker instead (under parallel tests: another test's, which this one's
+freezing and restarting then never touch).
 """
 
 from __future__ import annotations
 
+import re
 import shutil
 import socket
 import subprocess
@@ -42,6 +49,9 @@ def answers(host: str, port: int, timeout_s: float = 0.5) -> bool:
         return False
 
 
+_RUNNING = re.compile(rb"mosquitto version \S+ running")  # said once every listener is bound
+
+
 class Mosquitto:
     """``start()``/``stop()``; a free port unless one is given."""
 
@@ -67,11 +77,12 @@ class Mosquitto:
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.conf.write_text(self.config())
         with open(self.log, "ab") as log:
+            logged = log.tell()  # (the log of an earlier start on the same path stays before it)
             self.proc = subprocess.Popen(
                 [self.exe, "-c", str(self.conf), "-v"], stdout=log, stderr=subprocess.STDOUT
             )
         deadline = time.monotonic() + timeout_s
-        while not answers(self.host, self.port, 0.2):
+        while not (self._running(logged) and answers(self.host, self.port, 0.2)):
             if self.proc.poll() is not None:
                 raise BrokerError(f"mosquitto exited: {self.log.read_text()[-2000:]}")
             if time.monotonic() > deadline:
@@ -79,6 +90,12 @@ class Mosquitto:
                 raise BrokerError(f"mosquitto did not listen on {self.host}:{self.port}")
             time.sleep(0.02)
         return self
+
+    def _running(self, logged: int) -> bool:
+        """Whether the log since ``logged`` says mosquitto runs: all its listeners are bound."""
+        with open(self.log, "rb") as log:
+            log.seek(logged)
+            return _RUNNING.search(log.read()) is not None
 
     def stop(self) -> None:
         if self.proc is not None and self.proc.poll() is None:

@@ -14,8 +14,10 @@ Rules:
 1. Only the device thread touches the pty descriptors. Calls from other threads (unplug, replug,
    inject, close) are queued to it and wait for it; the responder is used under `lock`.
 2. We keep our own slave descriptor open, so the master never sees EIO when a client closes.
-3. The thread sleeps in select() until a byte arrives, a call is queued, or the responder's
-   next_wakeup(); an idle port costs nothing.
+3. The thread sleeps in poll() until a byte arrives, a call is queued, or the responder's
+   next_wakeup(); an idle port costs nothing. poll, not select: select refuses a descriptor
+   above 1023, which ended the thread (the controller then never answered) in a process that
+   holds that many (a test worker late in a long run, a demo with many clients).
 4. `link` is an atomic symlink to the current slave: replaced with os.replace, removed on unplug
    and close (only if it still points at our pty), re-pointed by replug.
 5. A fresh pty holds back its output until a client shows up (first input flush or first byte
@@ -34,6 +36,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import itertools
+import math
 import os
 import select
 import struct
@@ -300,7 +303,11 @@ class EmulatedPort(Generic[R]):
                 fds = [self._wake_r] if self._master is None else [self._wake_r, self._master]
                 self._changed.notify_all()
             timeout_s = None if wake_at_s is None else max(0.0, wake_at_s - self._clock())
-            readable, _, _ = select.select(fds, [], [], timeout_s)
+            waiting = select.poll()  # rule 3
+            for fd in fds:
+                waiting.register(fd, select.POLLIN)
+            timeout_ms = None if timeout_s is None else math.ceil(timeout_s * 1000)
+            readable = [fd for fd, _events in waiting.poll(timeout_ms)]
             if self._wake_r in readable:
                 with contextlib.suppress(BlockingIOError):
                     os.read(self._wake_r, _READ_CHUNK)

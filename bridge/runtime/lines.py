@@ -10,9 +10,10 @@ Rules:
 1. One thread, however many rotators: a poll round of 32 rotators is one wake-up, not 32
    threads each waking for its own (sessions that poll at the same interval poll at the same
    instants, link.py rule 8), and the statuses of a round reach the MQTT thread in one burst.
-2. Nothing here blocks but poll(): writes are one short frame to a non-blocking port, reads
-   take what is there; opening a port and closing a failed one (a wedged USB adapter can take
-   seconds) happen on a short-lived thread of their own (worker.py rule 4). Each worker is
+2. Nothing here blocks but poll(): writes are one short frame to a non-blocking port (one the
+   tty refuses is waited for up to port.py's WRITE_WAIT_S, its rule 6), reads take what is
+   there; opening a port and closing a failed one (a wedged USB adapter can take seconds)
+   happen on a short-lived thread of their own (worker.py rule 4). Each worker is
    called inside its own guard: one that raises is logged (once per kind), its port closed and
    reopened after its back-off, and every other line goes on; the loop never sleeps for it.
 3. Deadlines are met late, never early: poll() counts whole milliseconds, rounded up.

@@ -14,8 +14,15 @@ Rules:
    has a second reader (one that opened it first, without a lock): "busy", not "unplugged".
 6. Listing the machine's ports (``rotor-bridge ports``) is here too: the engine is the only
    layer that imports pyserial.
-6. Reads and writes never wait: a read takes what is there, a write is one short frame or a
-   lost link (a stuck line must not hold up every other rotator: lines.py rule 2).
+6. Reads never wait: a read takes what is there. A write is one short frame or a lost link (a
+   stuck line must not hold up every other rotator: lines.py rule 2), with one bounded wait: a
+   tty refuses a non-blocking write outright (EAGAIN, nothing taken) while another writer of
+   the same tty is inside its own write (the kernel's per-tty write lock: the stop express
+   writing its stop frame, interfaces/mqtt/express.py), however much room it has; the tty says
+   writable again as that write ends. So a frame the tty takes none or part of is finished as
+   soon as the tty is writable, for up to WRITE_WAIT_S; only a tty that stays unwritable that
+   long (a full buffer: the adapter is stuck) is a lost link, and no frame is left cut short
+   for the next one to land in while it can still be finished.
 7. A PortWatch (the stop express, interfaces/mqtt/express.py) is told an opened port's descriptor on
    the thread that opened it, and that it (its descriptor) is going before it is closed, on the
    thread that closes it (``watched``, ``close_in_background``): a copy of the descriptor held
@@ -28,9 +35,12 @@ from __future__ import annotations
 import errno
 import fcntl
 import logging
+import math
 import os
+import select
 import termios
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, TypeAlias
@@ -43,6 +53,11 @@ from bridge.protocols.base import ModelSpec
 
 class PortError(Exception):
     pass
+
+
+# rule 6: how long a write waits for a tty that refused it (another writer inside its own
+# write holds the tty for microseconds, a descheduled one for a few scheduler slices)
+WRITE_WAIT_S = 0.5
 
 
 # what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)
@@ -237,11 +252,26 @@ def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
 
 
 def write_frame(port: serial.Serial, data: bytes) -> None:
-    """One write() of a short frame. A port that cannot take it (the line is stuck) is a lost
-    link: waiting for room would hold up every other rotator's line (lines.py rule 2)."""
-    try:
-        done = os.write(port.fileno(), data)
-    except BlockingIOError:
-        done = 0
-    if done < len(data):
-        raise serial.SerialException("the port takes no more bytes (adapter stuck?)")
+    """A short frame written whole: one write() as a rule. A tty that takes none or part of it
+    (another writer of the tty inside its write, or a full buffer) is waited for, up to
+    WRITE_WAIT_S, and the rest written; one still unwritable then is a lost link: the line is
+    stuck, and waiting longer would hold up every other rotator's line (rule 6)."""
+    fd = port.fileno()
+    rest, deadline = data, None
+    while True:
+        try:
+            rest = rest[os.write(fd, rest) :]
+        except BlockingIOError:
+            pass
+        if not rest:
+            return
+        now = time.monotonic()
+        deadline = now + WRITE_WAIT_S if deadline is None else deadline
+        if now >= deadline:
+            break
+        waiting = select.poll()  # not select(): a busy bridge's descriptors pass 1023
+        waiting.register(fd, select.POLLOUT)
+        events = waiting.poll(max(1, math.ceil((deadline - now) * 1000)))
+        if events and not events[0][1] & select.POLLOUT:
+            break  # an error or a hang-up, not room: no use waiting for it
+    raise serial.SerialException("the port takes no more bytes (adapter stuck?)")

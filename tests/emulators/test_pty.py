@@ -7,6 +7,8 @@ except the one idle-cost measurement, which needs a stretch of idle time to meas
 from __future__ import annotations
 
 import os
+import resource
+import select
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -15,6 +17,7 @@ import pytest
 import serial
 
 from tests.emulators.conftest import PortFactory
+from tests.support.waiting import slow
 
 BANNER = b"C2000 IDIOM V1.4S "
 
@@ -229,3 +232,34 @@ def test_idle_port_sleeps(make_port: PortFactory, clients: Callable[[str], seria
     before = port.loop_iterations
     time.sleep(0.3)  # measuring idle cost, not waiting for anything
     assert port.loop_iterations - before <= 2
+
+
+def test_a_port_whose_descriptors_pass_1023_still_answers(make_port: PortFactory) -> None:
+    """select() refuses a descriptor above 1023: the device thread ended at its first wait and
+    the controller never answered (a test worker late in a busy run holds that many: a bridge
+    there never came online). However high its descriptors, the port answers."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft < 1100:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (min(hard, 2048), hard))
+    fillers: list[int] = []
+    try:
+        while not fillers or fillers[-1] < 1030:  # the port's descriptors come after these
+            fillers.append(os.open(os.devnull, os.O_RDONLY))
+        port = make_port(start_az_deg=123)
+    finally:
+        for fd in fillers:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+    assert port.link is not None
+    client = os.open(port.link, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+    try:
+        os.write(client, b"AI1;")
+        got, deadline = b"", time.monotonic() + slow(5)
+        waiting = select.poll()
+        waiting.register(client, select.POLLIN)
+        while len(got) < 4 and time.monotonic() < deadline:
+            if waiting.poll(100):
+                got += os.read(client, 16)
+        assert got == b";123"
+    finally:
+        os.close(client)

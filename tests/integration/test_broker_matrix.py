@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import socket
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,8 +26,9 @@ import pytest
 
 from tests.support import Probe, retained_snapshot, wait_until
 from tests.support.brokers import Aedes, Amqtt, Nats, RabbitMq, find_aedes, find_nats
-from tests.support.mosquitto import Mosquitto
+from tests.support.mosquitto import BrokerError, Mosquitto
 from tests.support.rig import Rig
+from tests.support.waiting import slow
 
 BROKERS = ["mosquitto-5", "mosquitto-3.1.1", "nats", "aedes"]
 # ./tests/run brokers adds the brokers that take longer to install and start (docs/brokers.md)
@@ -64,6 +66,32 @@ def station(kind: str, tmp_path: Path) -> Iterator[Rig]:
     finally:
         probe.close()
         broker.stop()
+
+
+@pytest.mark.parametrize("other", ["nats", "aedes"])
+def test_a_broker_whose_port_another_program_holds_is_not_taken_for_started(
+    other: str, tmp_path: Path
+) -> None:
+    """Another program listening on the port answered before the broker had tried to bind it:
+    the start returned, the broker exited, and the station reached the other program's broker
+    (under two suites at once, another test's). That start fails now, and ``start`` takes
+    another port, as when the broker's own bind fails."""
+    if (find_nats() if other == "nats" else find_aedes()) is None:
+        pytest.fail(f"{other} is not installed (tests/run installs it)")
+    broker = Nats(tmp_path / other) if other == "nats" else Aedes(tmp_path / other)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", broker.port))
+        taken.listen()
+        try:
+            with pytest.raises(BrokerError, match="exited"):
+                broker._start(slow(broker.start_s))
+        finally:
+            broker.stop()
+        broker.start()
+        try:
+            assert broker.port != taken.getsockname()[1]
+        finally:
+            broker.stop()
 
 
 def said(caplog: pytest.LogCaptureFixture, words: str) -> list[str]:

@@ -345,6 +345,31 @@ def test_a_write_cut_short_by_a_full_buffer_is_finished(monkeypatch: pytest.Monk
         rig.mine.close()
 
 
+def test_a_write_the_tty_refuses_whole_is_made_when_it_takes_bytes_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A tty refuses a non-blocking write outright while another writer of it is inside its own
+    (the serial-lines thread writing the session's stop that instant): the express let its
+    frame go and said nothing (a stop express test waited for it in vain under load)."""
+    port, calls, write = Port(), [], os.write
+
+    def refused_first(fd: int, data: bytes) -> int:
+        calls.append(data)
+        if len(calls) == 1:
+            raise BlockingIOError
+        return write(fd, data)
+
+    monkeypatch.setattr(express_module.os, "write", refused_first)
+    rig = ChildRig(mqtt311=False)
+    try:
+        rig.hand("b", 1, port)
+        rig.stop("rotor/b/stop")
+        assert port.written() == b"S\r"
+        assert rig.word()["op"] == "wrote"
+    finally:
+        rig.mine.close()
+
+
 def test_a_frame_the_port_never_finishes_taking_is_said(rig: ChildRig) -> None:
     port, now = Port(), [100.0]
     rig.child.clock = lambda: now[0]

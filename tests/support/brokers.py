@@ -7,6 +7,11 @@ passes an MQTT 3.1.1 connection through byte for byte.
 nats-server comes from Debian's ``nats-server`` package (tests/run installs it); a test that
 needs it is skipped with that said when it is missing. NATS serves MQTT only with JetStream on,
 which needs a server name and a store directory: both are in the workdir.
+
+A broker is started when the port answers and, where it says one (``ready``), its log says
+its listeners are bound: another program on the port answers before the broker has even tried
+to bind it, and the broker then exits while every client reaches the other program's (as
+tests/support/mosquitto.py's).
 """
 
 from __future__ import annotations
@@ -49,6 +54,7 @@ class _Process(abc.ABC):
 
     name = "broker"
     start_s = 20.0  # how long it may take to listen (scaled by ``slow``)
+    ready: bytes | None = None  # what its log says once its listeners are bound, if anything
 
     def __init__(self, workdir: Path) -> None:
         self.host = "127.0.0.1"
@@ -79,11 +85,12 @@ class _Process(abc.ABC):
         self.workdir.mkdir(parents=True, exist_ok=True)
         argv, env = self._command()
         with open(self.log, "ab") as log:
+            logged = log.tell()  # (an earlier start's log stays before it)
             self.proc = subprocess.Popen(
                 argv, stdout=log, stderr=subprocess.STDOUT, cwd=self.workdir, env=env
             )
         deadline = time.monotonic() + timeout_s
-        while not answers(self.host, self.port, 0.2):
+        while not (self._bound(logged) and answers(self.host, self.port, 0.2)):
             if self.proc.poll() is not None:
                 raise BrokerError(f"{self.name} exited: {self.log.read_text()[-2000:]}")
             if time.monotonic() > deadline:
@@ -91,6 +98,14 @@ class _Process(abc.ABC):
                 raise BrokerError(f"{self.name} did not listen on {self.host}:{self.port}")
             time.sleep(0.05)
         return self
+
+    def _bound(self, logged: int) -> bool:
+        """Whether the log since ``logged`` says the listeners are bound (``ready``)."""
+        if self.ready is None:
+            return True
+        with open(self.log, "rb") as log:
+            log.seek(logged)
+            return self.ready in log.read()
 
     def stop(self) -> None:
         if self.proc is not None and self.proc.poll() is None:
@@ -113,6 +128,7 @@ class Nats(_Process):
     loopback too)."""
 
     name = "nats"
+    ready = b"Server is ready"
 
     def __init__(self, workdir: Path) -> None:
         exe = find_nats()
@@ -142,6 +158,7 @@ class Aedes(_Process):
     every retained message)."""
 
     name = "aedes"
+    ready = b"aedes listening on"
 
     def __init__(self, workdir: Path) -> None:
         found = find_aedes()

@@ -18,6 +18,9 @@ Rules:
    holds, in reverse order: the emulators, and whatever a caller put there.
 2. A rig with one rotator publishes under the base topic, with several under ``base/<id>``
    (``topic``); ``t(leaf)`` is the one rotator's topic, ``t(id, leaf)`` any rotator's.
+3. A rotator not ready in time says why it may not be: its errors, and for a bridge process
+   whether it runs and the end of its log (a fixture that failed under load said only that
+   ``online`` never came).
 """
 
 from __future__ import annotations
@@ -337,8 +340,23 @@ class Rig:
         which cannot report)."""
         timeout_s = self.ready_s if timeout_s is None else timeout_s
         settled = "unknown" if self.models[rid] == "dcu1" else "idle"
-        self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
-        self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
+        error = self.probe.timeout_error
+        try:
+            self.probe.wait_value(self.topic(rid, "availability"), "online", timeout_s, after)
+            self.probe.wait_value(self.topic(rid, "state"), settled, timeout_s, after)
+        except error as exc:  # rule 3
+            raise error(f"{exc}\n{self.why_not_ready(rid)}") from None
+
+    def why_not_ready(self, rid: str) -> str:
+        """Rule 3: what the bridge said of ``rid`` (its error topic), and, for a bridge process,
+        whether it still runs and the end of its log."""
+        errors = [m.text for m in self.probe.on(self.topic(rid, "error"))]
+        said = f"{rid}'s errors: {errors[-10:]}"
+        bridge = self.bridge
+        if bridge is None:
+            return said  # (an in-process bridge's log is the test's captured log)
+        running = "runs" if bridge.alive() else f"exited with {bridge.proc and bridge.proc.poll()}"
+        return f"{said}\nthe bridge process {running}; the end of its log:\n{bridge.log()[-4000:]}"
 
     def retained(self) -> dict[str, bytes]:
         return retained_snapshot(self.broker.port, f"{self.base}/#")

@@ -32,8 +32,11 @@ Rules:
    copy of the port, at once, if it holds one and may write (rule 8). A tty takes one write
    whole against the serial-lines thread's (one write a frame too, runtime/port.py) unless its
    output buffer is nearly full: then the write takes part of the frame, and the rest is owed
-   (rule 9). A write that takes nothing (a full buffer, an unplugged adapter) is let go: the
-   session's own stop follows. It decides nothing else and changes no state: the session
+   (rule 9). A tty refuses a write whole while another writer of it is inside its own
+   (the serial-lines thread, writing the session's stop that instant): the frame is written as
+   soon as the tty takes bytes again, within rule 9's wait. A write that takes nothing for that
+   long (a full buffer) or fails (an unplugged adapter) is let go: the session's own stop
+   follows. It decides nothing else and changes no state: the session
    still gets the stop from the lane and the main connection, holds, markers and the lock as
    before, and writes its own stop frame (the controller gets two: ModelSpec.stop_anytime
    says the model takes that). At most one frame a rotator in GAP_S: a flood on the stop
@@ -90,8 +93,9 @@ Rules:
    express does not read (its buffer full) is a hung express: killed, which ends the holds.
    No send to it ever waits for room (a request, a port handed over or given back): the lock
    they are sent under is the one every MQTT stop's hold takes before the stop is put in.
-9. A frame is never left half-written. A write that took part of the frame is finished by the
-   express as soon as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
+9. A frame is never left half-written. A write that took part of the frame (or none, refused
+   whole while another writer was inside its own: rule 3) is finished by the express as soon
+   as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
    it holds up nothing but its own next frame), so no frame of the session's lands inside
    it. What a half frame with more bytes after it would do (the protocol fact sheets): a
    GS-232 reads ``S`` then the session's ``M180`` as ``SM180``, an unknown command (``?>``),
@@ -891,6 +895,8 @@ class _Child:
         """Rule 9: True: the frame written whole; None: nothing of it; False: half of it."""
         try:
             done = self.write(fd, frame)
+        except BlockingIOError:  # refused whole: the serial-lines thread inside its write (rule 3)
+            done = 0
         except OSError:
             return None
         if done >= len(frame):
@@ -899,15 +905,16 @@ class _Child:
         while rest:
             left = end - self.clock()
             if left <= 0:
-                return False
+                return False if len(rest) < len(frame) else None
             try:
                 select.select([], [fd], [], left)
                 rest = rest[self.write(fd, rest) :]
             except BlockingIOError:
                 continue
             except (OSError, ValueError):
-                return False
-        log.info("a stop frame cut short by a full output buffer was finished")
+                return False if len(rest) < len(frame) else None
+        if done:
+            log.info("a stop frame cut short by a full output buffer was finished")
         return True
 
     def serve(self) -> None:
