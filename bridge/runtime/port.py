@@ -56,8 +56,10 @@ class PortError(Exception):
 
 
 # rule 6: how long a write waits for a tty that refused it (another writer inside its own
-# write holds the tty for microseconds, a descheduled one for a few scheduler slices)
-WRITE_WAIT_S = 0.5
+# write holds the tty for microseconds, a descheduled one for a few scheduler slices). A stuck
+# adapter costs every other line this wait once per reconnect, so it stays short: the tty is
+# tried again after every wake, so this thread's own lateness under load is no refusal.
+WRITE_WAIT_S = 0.05
 
 
 # what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)

@@ -168,3 +168,26 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
         port.close()
         os.close(master)
         reader.join(slow(10))
+
+
+def test_a_tty_whose_buffer_is_full_is_a_lost_link_and_nothing_is_left_half_written() -> None:
+    """A stuck adapter (its output never drains: here a pty nobody reads) fills the tty; a
+    frame it cannot take is a lost link ("the port takes no more bytes"), after the short
+    bounded wait, not a wait for ever that would hold up every other rotator's line."""
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    os.close(slave)
+    port = open_port(path, REGISTRY["rotorez"])
+    try:
+        fd = port.fileno()
+        while True:  # fill it: nobody reads the master
+            try:
+                if os.write(fd, b"AI1;" * 64) == 0:
+                    break
+            except BlockingIOError:
+                break
+        with pytest.raises(serial.SerialException, match="takes no more bytes"):
+            write_frame(port, b";")
+    finally:
+        port.close()
+        os.close(master)
