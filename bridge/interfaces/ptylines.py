@@ -19,7 +19,8 @@ Rules:
    put there since is left alone), then closes the pair.
 3. A client may close the slave and open it again, as often as it likes: the server keeps its
    own slave descriptor open, so the master never reads EIO while nobody has it open (as
-   emulators/pty.py rule 2), and its thread sleeps in select() until bytes or ``stop`` come.
+   emulators/pty.py rule 2), and its thread sleeps in poll() (interfaces/fdwait.py) until
+   bytes or ``stop`` come.
    An EIO that comes anyway waits EIO_RETRY_S on the stop pipe before the next read: the
    thread never spins.
 4. One client at a time is the serial port's nature: one session serves whoever has the slave
@@ -59,7 +60,6 @@ import hashlib
 import logging
 import math
 import os
-import select
 import socket
 import struct
 import termios
@@ -70,6 +70,7 @@ from collections.abc import Callable, Sequence
 from typing import Protocol
 
 from bridge.core.ratelimit import Budget
+from bridge.interfaces.fdwait import readable
 from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
 
 log = logging.getLogger(__name__)
@@ -233,7 +234,7 @@ class PtyLineServer:
                     logged_s = now
                     log.exception("%s for %s failed; serving on", self.label, self.rotator_id)
                 self.faults += 1
-            if select.select([self._wake_r], [], [], EIO_RETRY_S)[0]:
+            if readable((self._wake_r,), EIO_RETRY_S):
                 return
 
     def _serve_until_stopped(self) -> None:
@@ -244,7 +245,7 @@ class PtyLineServer:
             pause_s = budget.wait_s(self._clock())
             if pause_s > 0:  # rule 9: the pty unread until the budget allows
                 self.paused += 1
-                if select.select([self._wake_r], [], [], pause_s)[0]:
+                if readable((self._wake_r,), pause_s):
                     return
                 continue
             deadlines = []
@@ -253,7 +254,7 @@ class PtyLineServer:
             if self._written_s is not None:
                 deadlines.append(self._written_s + self._stale_s)
             timeout = max(0.0, min(deadlines) - self._clock()) if deadlines else None
-            ready, _, _ = select.select([self._master, self._wake_r], [], [], timeout)
+            ready = readable((self._master, self._wake_r), timeout)
             self.wakeups += 1
             if self._wake_r in ready:
                 return
@@ -274,7 +275,7 @@ class PtyLineServer:
             except OSError as exc:
                 if exc.errno != errno.EIO:
                     log.warning("%s for %s: %s", self.label, self.rotator_id, exc)
-                if select.select([self._wake_r], [], [], EIO_RETRY_S)[0]:  # rule 3
+                if readable((self._wake_r,), EIO_RETRY_S):  # rule 3
                     return
                 continue
             if not data:

@@ -41,7 +41,6 @@ import contextlib
 import errno
 import logging
 import os
-import select
 import selectors
 import socket
 import threading
@@ -50,6 +49,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from bridge.core.ratelimit import SourceBudgets
+from bridge.interfaces.fdwait import readable
 from bridge.interfaces.loggers.commands import (
     JUNK_LOG_S,
     Commands,
@@ -226,7 +226,7 @@ class LoggerEndpoints:
                     self._fault("the loggers' loop", exc)
                     self._close_selector()  # a fresh one next time round
                     if failed_before:  # the same again: not at 100 % of a core
-                        select.select([self._wake_r], [], [], 0.1)
+                        readable((self._wake_r,), 0.1)
                     failed_before = True
         finally:
             self._close_selector()

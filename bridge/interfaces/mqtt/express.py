@@ -133,6 +133,7 @@ from typing import Any
 from paho.mqtt.reasoncodes import ReasonCode
 
 from bridge.core.afterlock import later
+from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import STABLE_S, Connection, Ending, takeover_message
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.payloads import PayloadError, parse_switch
@@ -907,7 +908,7 @@ class _Child:
             if left <= 0:
                 return False if len(rest) < len(frame) else None
             try:
-                select.select([], [fd], [], left)
+                writable(fd, left)
                 rest = rest[self.write(fd, rest) :]
             except BlockingIOError:
                 continue

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import select
 import threading
 import time
 from collections.abc import Callable
@@ -54,6 +53,7 @@ from typing import Unpack
 import paho.mqtt.client as paho
 from paho.mqtt.reasoncodes import ReasonCode
 
+from bridge.interfaces.fdwait import readable
 from bridge.interfaces.mqtt.connection import Connection, Ending, MessageHandler, Options
 from bridge.settings import MqttSettings
 
@@ -114,7 +114,7 @@ class StopLane(Connection):
         left = min(YIELD_MAX_S, YIELD_BUDGET_S - self._yielded)
         t = t0
         try:
-            while t - t0 < left and select.select([sock], [], [], 0)[0]:
+            while t - t0 < left and readable((sock.fileno(),), 0):
                 self.sleep(YIELD_S)  # the interpreter lock and a core for the lane's thread
                 t = self.clock()
         except (OSError, ValueError):  # closed meanwhile: the lane's own thread notices
