@@ -16,6 +16,7 @@ import serial
 
 from bridge.emulators import EmulatedPort, Responder, start
 from tests.support import ROOT
+from tests.support.hamlib import run_rotctl
 from tests.support.waiting import slow
 
 PortFactory = Callable[..., EmulatedPort[Any]]
@@ -76,9 +77,7 @@ def hamlib(rotctl_path: str) -> Hamlib:
 
     def run(model: int, port: EmulatedPort[Any], *commands: str, baud: int = 9600) -> list[str]:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(model), "-r", port.link]
-        argv += ["-s", str(baud), *commands]
-        done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, model, port.link, "-s", str(baud), *commands)
         assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr[-800:]!r}"
         return done.stdout.split()
 

@@ -21,7 +21,7 @@ import pytest
 from bridge.emulators.easycomm import EasycommController, Outcome
 from bridge.emulators.pty import EmulatedPort
 from tests.emulators.conftest import served
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -49,9 +49,7 @@ def easycomm_port(tmp_path: Path) -> Iterator[PortFactory]:
 def rotctl(rotctl_path: str) -> Rotctl:
     def run(hamlib_model: int, port: EmulatedPort[EasycommController], *commands: str) -> Any:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
-        argv += ["-s", "19200", *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        return run_rotctl(rotctl_path, hamlib_model, port.link, "-s", "19200", *commands)
 
     return run
 
@@ -136,8 +134,7 @@ def test_rotor_bridge_emulate_serves_an_easycomm_controller_that_hamlib_drives(
     with served(
         "easycomm2", link, "--start-az-deg", "30.3", "--start-el-deg", "10", "--decimals", "0"
     ):
-        run = [rotctl_path, "-m", "202", "-r", str(link), "-s", "19200", "p", "P", "40", "20", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, 202, str(link), "-s", "19200", "p", "P", "40", "20", "S")
         assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done
 
 

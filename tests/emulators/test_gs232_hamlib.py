@@ -20,7 +20,7 @@ import pytest
 from bridge.emulators.gs232 import Gs232, Outcome
 from bridge.emulators.pty import EmulatedPort
 from tests.emulators.conftest import served
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -47,9 +47,7 @@ def gs232_port(tmp_path: Path) -> Iterator[PortFactory]:
 def rotctl(rotctl_path: str) -> Rotctl:
     def run(hamlib_model: int, port: EmulatedPort[Gs232], *commands: str) -> Any:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
-        argv += ["-s", "9600", *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        return run_rotctl(rotctl_path, hamlib_model, port.link, "-s", "9600", *commands)
 
     return run
 
@@ -124,6 +122,5 @@ def test_rotor_bridge_emulate_serves_a_gs232b_that_hamlib_drives(
     with served(
         "gs232b", link, "--start-az-deg", "30", "--start-el-deg", "10", "--blank-lines-after-w", "2"
     ):
-        run = [rotctl_path, "-m", "603", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, 603, str(link), "-s", "9600", "p", "P", "40", "20", "S")
         assert done.returncode == 0 and done.stdout.split()[:2] == ["30.00", "10.00"], done

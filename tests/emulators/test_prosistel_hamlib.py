@@ -14,7 +14,6 @@ installed (libhamlib-utils): a missing judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -22,7 +21,7 @@ import pytest
 from bridge.emulators.prosistel import Outcome
 from bridge.emulators.pty import EmulatedPort
 from tests.emulators.conftest import Hamlib, PortFactory, served
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -106,6 +105,5 @@ def test_rotor_bridge_emulate_serves_a_prosistel_that_hamlib_drives(
     """``rotor-bridge emulate prosistel-combi``, driven by Hamlib's back end for it."""
     link = tmp_path / "prosistel"
     with served("prosistel-combi", link, "--start-az-deg", "30.5", "--start-el-deg", "10"):
-        run = [rotctl_path, "-m", "1703", "-r", str(link), "-s", "9600", "p", "P", "40", "20", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, 1703, str(link), "-s", "9600", "p", "P", "40", "20", "S")
         assert done.returncode == 0 and done.stdout.split()[:2] == ["30.50", "10.00"], done

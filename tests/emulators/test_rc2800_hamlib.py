@@ -10,7 +10,6 @@ installed (libhamlib-utils): a missing judge is a failure, never a skip.
 
 from __future__ import annotations
 
-import subprocess
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -20,7 +19,7 @@ import pytest
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rc2800 import Outcome
 from tests.emulators.conftest import Hamlib, PortFactory, served
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -79,8 +78,7 @@ def test_rotor_bridge_emulate_serves_an_rc2800_that_hamlib_drives(
     options = ["--start-az-deg", "3.5", "--start-el-deg", "7", "--echo", "--stream-s", "0.5"]
     link = tmp_path / "rc2800"
     with served("rc2800", link, *options):
-        run = [rotctl_path, "-m", "1001", "-r", str(link), "-s", "9600", "p", "P", "40", "9", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, 1001, str(link), "-s", "9600", "p", "P", "40", "9", "S")
     assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "7.00"], done
 
 

@@ -15,7 +15,7 @@ import pytest
 
 from bridge.emulators import EmulatedPort
 from tests.emulators.conftest import PortFactory
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -29,9 +29,7 @@ def rotctl(rotctl_path: str) -> Rotctl:
         hamlib_model: int, port: EmulatedPort[Any], *commands: str
     ) -> subprocess.CompletedProcess[str]:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
-        argv += ["-s", "4800", *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        return run_rotctl(rotctl_path, hamlib_model, port.link, "-s", "4800", *commands)
 
     return run
 

@@ -20,7 +20,7 @@ import pytest
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.rt21 import Outcome, Rt21
 from tests.emulators.conftest import served
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -47,9 +47,7 @@ def rt21_port(tmp_path: Path) -> Iterator[PortFactory]:
 def rotctl(rotctl_path: str) -> Rotctl:
     def run(port: EmulatedPort[Rt21], *commands: str) -> Any:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "405", "-r", port.link]
-        argv += ["-s", "4800", *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        return run_rotctl(rotctl_path, 405, port.link, "-s", "4800", *commands)
 
     return run
 
@@ -104,6 +102,5 @@ def test_rotor_bridge_emulate_serves_an_rt21_that_hamlib_drives(
     """``rotor-bridge emulate rt21`` (here ``python -m bridge.emulators``)."""
     link = tmp_path / "rt21"
     with served("rt21", link, "--start-az-deg", "3.5", "--reply-padding", "none"):
-        run = [rotctl_path, "-m", "405", "-r", str(link), "-s", "4800", "p", "P", "40", "0", "S"]
-        done = subprocess.run(run, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, 405, str(link), "-s", "4800", "p", "P", "40", "0", "S")
         assert done.returncode == 0 and done.stdout.split()[:2] == ["3.50", "0.00"], done

@@ -22,7 +22,7 @@ import pytest
 
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.satel import SatEL
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -50,20 +50,7 @@ def satel_port(tmp_path: Path) -> Iterator[SatelPort]:
 def rotctl(rotctl_path: str) -> Rotctl:
     def run(port: EmulatedPort[SatEL], *commands: str) -> subprocess.CompletedProcess[str]:
         assert port.link is not None
-        argv = [
-            "timeout",
-            f"{slow(20):g}",
-            rotctl_path,
-            "-m",
-            "2101",
-            "-r",
-            port.link,
-            "-s",
-            "9600",
-        ]
-        return subprocess.run(
-            [*argv, *commands], capture_output=True, text=True, timeout=slow(25), check=False
-        )
+        return run_rotctl(rotctl_path, 2101, port.link, "-s", "9600", *commands)
 
     return run
 

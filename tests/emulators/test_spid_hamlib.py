@@ -17,7 +17,7 @@ import pytest
 
 from bridge.emulators.pty import EmulatedPort
 from bridge.emulators.spid import Spid
-from tests.support.waiting import slow
+from tests.support.hamlib import run_rotctl
 
 pytestmark = pytest.mark.hamlib
 
@@ -48,9 +48,7 @@ def rotctl(rotctl_path: str) -> Rotctl:
         hamlib_model: int, port: EmulatedPort[Spid], baud: int, *commands: str
     ) -> subprocess.CompletedProcess[str]:
         assert port.link is not None
-        argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", str(hamlib_model), "-r", port.link]
-        argv += ["-s", str(baud), *commands]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        return run_rotctl(rotctl_path, hamlib_model, port.link, "-s", str(baud), *commands)
 
     return run
 

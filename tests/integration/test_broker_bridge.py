@@ -12,7 +12,6 @@ Hamlib's ``rotctl -m 2`` as its client.
 from __future__ import annotations
 
 import json
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,9 +21,9 @@ import pytest
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, retained_snapshot, wait_until
+from tests.support.hamlib import run_rotctl
 from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.rig import Rig
-from tests.support.waiting import slow
 
 pytestmark = pytest.mark.hamlib
 
@@ -69,8 +68,7 @@ def station(tmp_path: Path, far: Mosquitto) -> Iterator[Rig]:
 
 
 def rotctl(path: str, port: int, *commands: str) -> str:
-    argv = ["timeout", f"{slow(20):g}", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+    done = run_rotctl(path, 2, port, *commands)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
 

@@ -6,14 +6,13 @@ and Home Assistant sees one az/el rotator."""
 from __future__ import annotations
 
 import json
-import subprocess
 import time
 from typing import Any
 
 from bridge.emulators.pty import EmulatedPort
 from tests.support import free_port, retained_snapshot, wait_until
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import FAST_GS232, FAST_POLLING, FAST_RT21, Rig
-from tests.support.waiting import slow
 
 
 def composite(rig: Rig) -> tuple[EmulatedPort[Any], EmulatedPort[Any]]:
@@ -141,19 +140,18 @@ def test_hamlib_rotctl_sets_and_reads_both_axes_and_stops_both(rig: Rig, rotctl_
     rig.rotators[-1]["rotctld_port"] = port
     rig.start()
     rig.probe.wait_value("rotor/availability", "online", timeout_s=15)
-    argv = ["timeout", f"{slow(20):g}", rotctl_path, "-m", "2", "-r", f"127.0.0.1:{port}"]
-    run = subprocess.run([*argv, "P", "150.5", "25"], capture_output=True, text=True, check=False)
+    run = run_rotctl(rotctl_path, 2, port, "P", "150.5", "25")
     assert run.returncode == 0, run.stderr
     az.wait_for(lambda s: s.az_deg == 150.5 and not s.is_moving, 20)
     el.wait_for(lambda s: s.el_deg == 25 and not s.is_moving, 20)
     t = time.monotonic()
     rig.probe.wait_value("rotor/state", "idle", timeout_s=10, after=t)
-    run = subprocess.run([*argv, "p"], capture_output=True, text=True, check=False)
+    run = run_rotctl(rotctl_path, 2, port, "p")
     assert [float(x) for x in run.stdout.split()] == [150.5, 25.0], run.stdout
-    run = subprocess.run([*argv, "P", "20", "60"], capture_output=True, text=True, check=False)
+    run = run_rotctl(rotctl_path, 2, port, "P", "20", "60")
     az.wait_for(lambda s: s.is_moving, 10)
     el.wait_for(lambda s: s.is_moving, 10)
-    run = subprocess.run([*argv, "S"], capture_output=True, text=True, check=False)
+    run = run_rotctl(rotctl_path, 2, port, "S")
     assert run.returncode == 0, run.stderr
     az.wait_for(lambda s: not s.is_moving, 5)
     el.wait_for(lambda s: not s.is_moving, 5)

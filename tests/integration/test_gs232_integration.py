@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from tests.support import free_port, wait_until
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -50,9 +51,7 @@ def easycomm_port(rig: Rig) -> int:
 
 def rotctl(path: str, hamlib_model: str, port: int | str, *commands: str) -> str:
     """rotctl on the TCP port (a number) or a serial device (a path)."""
-    where = f"127.0.0.1:{port}" if isinstance(port, int) else port
-    argv = ["timeout", f"{slow(20):g}", path, "-m", hamlib_model, "-r", where, *commands]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+    done = run_rotctl(path, hamlib_model, port, *commands)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
 
@@ -262,17 +261,7 @@ def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str
     rig.emus["tower"].close()
     rig.probe.wait_value("rotor/availability", "offline", timeout_s=20, after=t)
     for hamlib_model, where in ((GS232, port), (EASYCOMM, easycomm_port(rig))):
-        argv = [
-            "timeout",
-            f"{slow(20):g}",
-            rotctl_path,
-            "-m",
-            hamlib_model,
-            "-r",
-            f"127.0.0.1:{where}",
-            "p",
-        ]
-        done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+        done = run_rotctl(rotctl_path, hamlib_model, where, "p")
         assert done.returncode != 0 and "get_pos: error" in done.stdout, done
 
 

@@ -15,6 +15,7 @@ import pytest
 
 from bridge.interfaces.rotctld import RotctldServer
 from tests.support import free_port, wait_until
+from tests.support.hamlib import run_rotctl
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -32,8 +33,7 @@ def start(rig: Rig, start_az_deg: float = 10, **bridge: object) -> tuple[int, Ro
 
 
 def rotctl(path: str, port: int, *commands: str) -> subprocess.CompletedProcess[str]:
-    argv = ["timeout", f"{slow(20):g}", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
-    return subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+    return run_rotctl(path, 2, port, *commands)
 
 
 def ok(result: subprocess.CompletedProcess[str]) -> str:

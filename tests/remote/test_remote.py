@@ -22,6 +22,7 @@ from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.remote.run import Remote, StartError
 from bridge.remote.settings import RemoteSettings
 from tests.support import Probe, wait_until
+from tests.support.hamlib import run_rotctl
 from tests.support.mosquitto import Mosquitto, free_port
 from tests.support.remote import Heartbeat, ask, remote_published
 from tests.support.rig import Rig
@@ -88,8 +89,7 @@ def remote(station: Rig) -> Iterator[tuple[Remote, int, list[str]]]:
 
 
 def rotctl(path: str, port: int, *commands: str) -> str:
-    argv = ["timeout", f"{slow(20):g}", path, "-m", "2", "-r", f"127.0.0.1:{port}", *commands]
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(25), check=False)
+    done = run_rotctl(path, 2, port, *commands)
     assert done.returncode == 0, f"rotctl failed: {done.stdout!r} {done.stderr!r}"
     return done.stdout
 

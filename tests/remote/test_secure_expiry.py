@@ -26,6 +26,7 @@ from paho.mqtt.properties import Properties
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.support import wait_until
 from tests.support.mosquitto import Mosquitto
+from tests.support.mqtt import end_paho
 from tests.support.rig import Rig
 
 
@@ -120,8 +121,7 @@ def publish(port: int, topic: str, payload: str, expiry_s: int | None) -> None:
             props.MessageExpiryInterval = expiry_s
         c.publish(topic, payload, qos=1, properties=props).wait_for_publish(5)
     finally:
-        c.disconnect()
-        c.loop_stop()
+        end_paho(c)
 
 
 @pytest.mark.parametrize(

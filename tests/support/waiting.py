@@ -5,8 +5,9 @@ Rules:
 1. A deadline is how long a test waits for what must come (a message, a reply, a process's
    end); it is never what the test asserts. Every deadline in tests/ is ``slow(seconds)`` or
    goes through a helper that applies it (``wait_until``, the probe's waits, the rig's, the
-   demo's, ``run_cli``), so one environment variable, ROTOR_TEST_SLOWDOWN (default 1, at least
-   1), lengthens them all on a busy machine; ./tests/run sets it from the machine's load.
+   demo's, ``run_cli``, hamlib.py's ``rotctl_argv`` with Hamlib's own read timeout), so one
+   environment variable, ROTOR_TEST_SLOWDOWN (default 1, at least 1), lengthens them all on a
+   busy machine; ./tests/run sets it from the machine's load.
 2. A quiet period (how long nothing must come, to say that nothing came) is not a deadline and
    is not scaled: made longer it could reach a timer of the bridge that is meant to fire later.
 3. A scaled deadline costs nothing when the test passes: the wait ends at the first answer.
