@@ -14,7 +14,7 @@ from bridge.emulators.pty import EmulatedPort
 from tests.support import Mosquitto, Probe
 from tests.support.cpu import register as register_cpu_recorder
 from tests.support.rig import Rig
-from tests.support.waiting import SLOWDOWN, slow
+from tests.support.waiting import FOLLOW, SLOWDOWN, slow
 
 # Hypothesis fails an example that takes longer than 200 ms: a wall-clock upper bound, which a
 # busy machine breaks; what an example proves is its outcome, never its speed
@@ -52,7 +52,7 @@ def _emulator_waits_scaled() -> Iterator[None]:
     the tests' deadlines, scaled like every other (tests/support/waiting.py rule 1): the
     emulators ship with the bridge, which knows nothing of the tests' factor. (The tests'
     mosquitto scales its own start: tests/support/mosquitto.py.)"""
-    if SLOWDOWN == 1.0:
+    if SLOWDOWN == 1.0 and not FOLLOW:
         yield
         return
     original = EmulatedPort.wait_until

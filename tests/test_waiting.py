@@ -3,6 +3,7 @@ kept sane, and applied by wait_until."""
 
 from __future__ import annotations
 
+import os
 import time
 
 import pytest
@@ -47,3 +48,28 @@ def test_wait_until_waits_the_scaled_deadline(monkeypatch: pytest.MonkeyPatch) -
     with pytest.raises(AssertionError, match=r"timed out after 0.2 s waiting for nothing"):
         waiting.wait_until(lambda: False, 0.05, "nothing")
     assert time.monotonic() - started >= 0.2
+
+
+def test_the_factor_follows_the_load_when_tests_run_chose_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """waiting.py rule 4: a suite started on a quiet machine (factor 1) gets longer deadlines
+    once a second suite loads the machine; never shorter than the factor it started with, never
+    more than LIVE_MAX from the load; a factor the user chose is kept as it is."""
+    cores = len(os.sched_getaffinity(0))
+    load = [0.0]
+    monkeypatch.setattr(waiting.os, "getloadavg", lambda: (load[0], 0.0, 0.0))
+    monkeypatch.setattr(waiting, "SLOWDOWN", 1.5)
+    monkeypatch.setattr(waiting, "FOLLOW", True)
+
+    def factor_at(one_minute_load: float) -> float:
+        load[0] = one_minute_load
+        monkeypatch.setattr(waiting, "_live", (-float("inf"), 1.0))  # read it again now
+        return waiting.slow(1.0)
+
+    assert factor_at(0.0) == 1.5  # the factor it started with
+    assert factor_at(2.0 * cores) == 3.0  # 1 + 2 a core
+    assert factor_at(50.0 * cores) == waiting.LIVE_MAX
+    assert waiting.slow_ms(1_000) == waiting.LIVE_MAX * 1_000
+    monkeypatch.setattr(waiting, "FOLLOW", False)
+    assert factor_at(50.0 * cores) == 1.5  # the user's own

@@ -11,6 +11,10 @@ Rules:
 2. A quiet period (how long nothing must come, to say that nothing came) is not a deadline and
    is not scaled: made longer it could reach a timer of the bridge that is meant to fire later.
 3. A scaled deadline costs nothing when the test passes: the wait ends at the first answer.
+4. The load can grow after the suite starts (a second suite beside it): when ./tests/run chose
+   the factor itself it says so (ROTOR_TEST_SLOWDOWN_FOLLOW=1), and each deadline is then
+   scaled by the larger of that factor and the one the load gives at the moment it is taken.
+   A factor the user set (ROTOR_TEST_SLOWDOWN) is used as it is.
 """
 
 from __future__ import annotations
@@ -37,16 +41,38 @@ def _slowdown() -> float:
 
 
 SLOWDOWN = _slowdown()
+# rule 4: set by ./tests/run when it chose the factor itself (ROTOR_TEST_SLOWDOWN unset)
+FOLLOW = os.environ.get("ROTOR_TEST_SLOWDOWN_FOLLOW", "") == "1"
+LIVE_MAX = 4.0  # the load's factor at most (as ./tests/run's)
+_live: tuple[float, float] = (-math.inf, 1.0)  # (read at, factor)
+
+
+def _live_factor() -> float:
+    """1 + the 1-minute load per core, at most LIVE_MAX, read at most once a second."""
+    global _live
+    now = time.monotonic()
+    if now - _live[0] >= 1.0:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:
+            load = 0.0
+        _live = (now, min(LIVE_MAX, 1.0 + load / max(1, len(os.sched_getaffinity(0)))))
+    return _live[1]
+
+
+def factor() -> float:
+    """The factor now (rules 1 and 4)."""
+    return max(SLOWDOWN, _live_factor()) if FOLLOW else SLOWDOWN
 
 
 def slow(seconds: float) -> float:
     """A deadline of ``seconds`` on a quiet machine, as long as this machine needs (rule 1)."""
-    return seconds * SLOWDOWN
+    return seconds * factor()
 
 
 def slow_ms(milliseconds: float) -> float:
     """``slow`` for the APIs that count in milliseconds (Playwright)."""
-    return milliseconds * SLOWDOWN
+    return milliseconds * factor()
 
 
 def wait_until(
