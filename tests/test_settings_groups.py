@@ -56,6 +56,7 @@ def test_a_rotator_may_be_in_two_groups() -> None:
         ({"id": "track"}, "'track' is a word of the bridge's own topics (the tracking feature's)"),
         ({"id": "spots"}, "'spots' is a word of the bridge's own topics (the dxcluster feature's)"),
         ({"id": "a/b"}, "groups.0.id: must be 1 to 32 letters"),
+        ({"id": "stack\n"}, "groups.0.id: must be 1 to 32 letters"),
         ({"offsets": {"lowr": 180}}, "offsets.lowr names no member of the group"),
         ({"offsets": {"lower": 360}}, "lower = 360: an offset is 0 to 360"),
         ({"limits": {"upper": [300, 20]}}, "upper = [300, 20]: limits are true bearings"),
@@ -73,3 +74,12 @@ def test_a_group_id_used_twice_is_refused() -> None:
     g = {"id": "stack", "rotators": ["upper", "lower"]}
     with pytest.raises(ConfigError, match="group id 'stack' is used twice"):
         load(g, g)
+
+
+@pytest.mark.parametrize("rid", ["upper\n", "bridge\n"])
+def test_a_rotator_id_ending_in_a_newline_is_refused(rid: str) -> None:
+    """A newline is no letter of a topic level: ``$`` matched before a final one, so a TOML
+    ``id = "bridge\\n"`` passed as a slug (and as not 'bridge') into every topic of it."""
+    rotators = [{**ROTATORS[0], "id": rid}, ROTATORS[1]]
+    with pytest.raises(ConfigError, match=r"rotators\[0\]\.id: .*short slug"):
+        settings_from({"rotators": rotators}, {})

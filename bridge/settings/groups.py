@@ -83,7 +83,7 @@ class GroupSettings(BaseModel):
     @field_validator("id")
     @classmethod
     def _id(cls, v: str) -> str:
-        if not _ID.match(v):
+        if not _ID.fullmatch(v):  # not match: its $ passes a final newline
             raise ValueError("must be 1 to 32 letters, digits, - or _ (it is a topic level)")
         return v
 
