@@ -83,3 +83,51 @@ def test_a_rotator_id_ending_in_a_newline_is_refused(rid: str) -> None:
     rotators = [{**ROTATORS[0], "id": rid}, ROTATORS[1]]
     with pytest.raises(ConfigError, match=r"rotators\[0\]\.id: .*short slug"):
         settings_from({"rotators": rotators}, {})
+
+
+AT_BASE = {"topic": "rotor"}
+
+
+@pytest.mark.parametrize(
+    ("upper", "lower", "said"),
+    [
+        # rotor/bridge/state is the bridge's own (every entity's availability): the rotator's
+        # "moving" went there
+        (
+            {"topic": "rotor/bridge"},
+            {},
+            "rotators[0].topic: its topic rotor/bridge lies under "
+            "rotor (of the bridge), where 'bridge' is a word of the bridge's own topics",
+        ),
+        (
+            {"topic": "rotor/spots"},
+            {},
+            "rotators[0].topic: its topic rotor/spots lies under rotor (of the bridge)",
+        ),
+        # under a rotator at the base topic: rotor/target/elevation, the one's reading and the
+        # other's command
+        (
+            {"id": "target"},
+            AT_BASE,
+            "rotators[0].id: its topic rotor/target lies under rotor (of rotator 'lower')",
+        ),
+        (
+            {"topic": "rotor/option/x"},
+            AT_BASE,
+            "where 'option' is a word of the bridge's own topics",
+        ),
+    ],
+)
+def test_a_rotators_topic_takes_no_word_of_the_topics_it_lies_under(
+    upper: dict[str, Any], lower: dict[str, Any], said: str
+) -> None:
+    rotators = [{**ROTATORS[0], **upper}, {**ROTATORS[1], **lower}]
+    with pytest.raises(ConfigError) as err:
+        settings_from({"rotators": rotators}, {})
+    assert said in str(err.value)
+
+
+def test_a_rotators_topic_may_lie_under_another_by_a_word_of_its_own() -> None:
+    rotators = [{**ROTATORS[0], "topic": "shack/2m"}, {**ROTATORS[1], "topic": "shack"}]
+    s = settings_from({"rotators": rotators}, {})
+    assert [s.rotator_topic(r) for r in s.rotators] == ["shack/2m", "shack"]
