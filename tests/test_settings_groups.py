@@ -131,3 +131,28 @@ def test_a_rotators_topic_may_lie_under_another_by_a_word_of_its_own() -> None:
     rotators = [{**ROTATORS[0], "topic": "shack/2m"}, {**ROTATORS[1], "topic": "shack"}]
     s = settings_from({"rotators": rotators}, {})
     assert [s.rotator_topic(r) for r in s.rotators] == ["shack/2m", "shack"]
+
+
+@pytest.mark.parametrize(
+    ("upper", "said"),
+    [
+        # its R/status on Home Assistant's birth topic, its readings among the discovery's
+        (
+            {"topic": "homeassistant"},
+            "rotators[0].topic: its topic homeassistant lies under "
+            "homeassistant.discovery_prefix homeassistant",
+        ),
+        ({"topic": "homeassistant/tower"}, "lies under homeassistant.discovery_prefix"),
+        (
+            {"topic": "ha"},
+            "rotators[0].topic: homeassistant.status_topic ha/status lies under its topic ha",
+        ),
+    ],
+)
+def test_a_rotators_topic_keeps_off_home_assistants(upper: dict[str, Any], said: str) -> None:
+    rotators = [{**ROTATORS[0], **upper}, ROTATORS[1]]
+    ha = {"status_topic": "ha/status"} if upper["topic"] == "ha" else {}
+    with pytest.raises(ConfigError) as err:
+        settings_from({"rotators": rotators, "homeassistant": {"enabled": True, **ha}}, {})
+    assert said in str(err.value)
+    settings_from({"rotators": rotators, "homeassistant": {**ha, "enabled": False}}, {})

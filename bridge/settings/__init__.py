@@ -231,7 +231,8 @@ class Settings(BaseSettings):
     def _rotator_topics(self) -> Settings:
         """settings/groups.py rule 5: a rotator's topic under another's, or under the base
         topic, takes none of their topics' words (one topic would be a command of one and a
-        reading of the other, or the bridge's own)."""
+        reading of the other, or the bridge's own); none lies under Home Assistant's discovery
+        prefix, nor Home Assistant's status topic under it (its R/status would be that)."""
         roots = [(r.id, self.rotator_topic(r)) for r in self.rotators]
         for i, (r, (_, root)) in enumerate(zip(self.rotators, roots, strict=True)):
             above = [
@@ -248,6 +249,17 @@ class Settings(BaseSettings):
                         f"under {prefix} (of {whose}), where {word!r} is a word of the bridge's "
                         "own topics: choose another"
                     )
+            ha = self.homeassistant
+            if ha.enabled and (root + "/").startswith(ha.discovery_prefix + "/"):
+                raise ValueError(
+                    f"rotators[{i}].{'topic' if r.topic else 'id'}: its topic {root} lies "
+                    f"under homeassistant.discovery_prefix {ha.discovery_prefix}: choose another"
+                )
+            if ha.enabled and ha.status_topic.startswith(root + "/"):
+                raise ValueError(
+                    f"rotators[{i}].{'topic' if r.topic else 'id'}: homeassistant.status_topic "
+                    f"{ha.status_topic} lies under its topic {root}: choose another"
+                )
         return self
 
     @model_validator(mode="after")
