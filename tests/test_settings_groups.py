@@ -56,6 +56,7 @@ def test_a_rotator_may_be_in_two_groups() -> None:
         ({"id": "track"}, "'track' is a word of the bridge's own topics (the tracking feature's)"),
         ({"id": "spots"}, "'spots' is a word of the bridge's own topics (the dxcluster feature's)"),
         ({"id": "a/b"}, "groups.0.id: must be 1 to 32 letters"),
+        ({"id": "stack\n"}, "groups.0.id: must be 1 to 32 letters"),
         ({"offsets": {"lowr": 180}}, "offsets.lowr names no member of the group"),
         ({"offsets": {"lower": 360}}, "lower = 360: an offset is 0 to 360"),
         ({"limits": {"upper": [300, 20]}}, "upper = [300, 20]: limits are true bearings"),
@@ -73,3 +74,85 @@ def test_a_group_id_used_twice_is_refused() -> None:
     g = {"id": "stack", "rotators": ["upper", "lower"]}
     with pytest.raises(ConfigError, match="group id 'stack' is used twice"):
         load(g, g)
+
+
+@pytest.mark.parametrize("rid", ["upper\n", "bridge\n"])
+def test_a_rotator_id_ending_in_a_newline_is_refused(rid: str) -> None:
+    """A newline is no letter of a topic level: ``$`` matched before a final one, so a TOML
+    ``id = "bridge\\n"`` passed as a slug (and as not 'bridge') into every topic of it."""
+    rotators = [{**ROTATORS[0], "id": rid}, ROTATORS[1]]
+    with pytest.raises(ConfigError, match=r"rotators\[0\]\.id: .*short slug"):
+        settings_from({"rotators": rotators}, {})
+
+
+AT_BASE = {"topic": "rotor"}
+
+
+@pytest.mark.parametrize(
+    ("upper", "lower", "said"),
+    [
+        # rotor/bridge/state is the bridge's own (every entity's availability): the rotator's
+        # "moving" went there
+        (
+            {"topic": "rotor/bridge"},
+            {},
+            "rotators[0].topic: its topic rotor/bridge lies under "
+            "rotor (of the bridge), where 'bridge' is a word of the bridge's own topics",
+        ),
+        (
+            {"topic": "rotor/spots"},
+            {},
+            "rotators[0].topic: its topic rotor/spots lies under rotor (of the bridge)",
+        ),
+        # under a rotator at the base topic: rotor/target/elevation, the one's reading and the
+        # other's command
+        (
+            {"id": "target"},
+            AT_BASE,
+            "rotators[0].id: its topic rotor/target lies under rotor (of rotator 'lower')",
+        ),
+        (
+            {"topic": "rotor/option/x"},
+            AT_BASE,
+            "where 'option' is a word of the bridge's own topics",
+        ),
+    ],
+)
+def test_a_rotators_topic_takes_no_word_of_the_topics_it_lies_under(
+    upper: dict[str, Any], lower: dict[str, Any], said: str
+) -> None:
+    rotators = [{**ROTATORS[0], **upper}, {**ROTATORS[1], **lower}]
+    with pytest.raises(ConfigError) as err:
+        settings_from({"rotators": rotators}, {})
+    assert said in str(err.value)
+
+
+def test_a_rotators_topic_may_lie_under_another_by_a_word_of_its_own() -> None:
+    rotators = [{**ROTATORS[0], "topic": "shack/2m"}, {**ROTATORS[1], "topic": "shack"}]
+    s = settings_from({"rotators": rotators}, {})
+    assert [s.rotator_topic(r) for r in s.rotators] == ["shack/2m", "shack"]
+
+
+@pytest.mark.parametrize(
+    ("upper", "said"),
+    [
+        # its R/status on Home Assistant's birth topic, its readings among the discovery's
+        (
+            {"topic": "homeassistant"},
+            "rotators[0].topic: its topic homeassistant lies under "
+            "homeassistant.discovery_prefix homeassistant",
+        ),
+        ({"topic": "homeassistant/tower"}, "lies under homeassistant.discovery_prefix"),
+        (
+            {"topic": "ha"},
+            "rotators[0].topic: homeassistant.status_topic ha/status lies under its topic ha",
+        ),
+    ],
+)
+def test_a_rotators_topic_keeps_off_home_assistants(upper: dict[str, Any], said: str) -> None:
+    rotators = [{**ROTATORS[0], **upper}, ROTATORS[1]]
+    ha = {"status_topic": "ha/status"} if upper["topic"] == "ha" else {}
+    with pytest.raises(ConfigError) as err:
+        settings_from({"rotators": rotators, "homeassistant": {"enabled": True, **ha}}, {})
+    assert said in str(err.value)
+    settings_from({"rotators": rotators, "homeassistant": {**ha, "enabled": False}}, {})

@@ -43,7 +43,7 @@ from bridge.feature import topic_words
 from bridge.settings import errors as settings_errors
 from bridge.settings.defaults import DEFAULT_SILENCE_TIMEOUT_S
 from bridge.settings.dxcluster import DxClusterSettings
-from bridge.settings.groups import GroupSettings, reserved
+from bridge.settings.groups import GroupSettings, reserved, station_words
 from bridge.settings.mqtt import HomeAssistantSettings, MqttSettings, TlsSettings
 from bridge.settings.pointing import StationSettings, TrackingSettings
 from bridge.settings.rotator import EMULATION_KEYS, RotatorSettings
@@ -225,6 +225,41 @@ class Settings(BaseSettings):
             prefix == self.mqtt.base_topic or self.mqtt.base_topic.startswith(prefix + "/")
         ):
             raise ValueError("homeassistant.discovery_prefix must differ from mqtt.base_topic")
+        return self
+
+    @model_validator(mode="after")
+    def _rotator_topics(self) -> Settings:
+        """settings/groups.py rule 5: a rotator's topic under another's, or under the base
+        topic, takes none of their topics' words (one topic would be a command of one and a
+        reading of the other, or the bridge's own); none lies under Home Assistant's discovery
+        prefix, nor Home Assistant's status topic under it (its R/status would be that)."""
+        roots = [(r.id, self.rotator_topic(r)) for r in self.rotators]
+        for i, (r, (_, root)) in enumerate(zip(self.rotators, roots, strict=True)):
+            above = [
+                (f"rotator {rid!r}", other, reserved()) for rid, other in roots if other != root
+            ]
+            for whose, prefix, words in [
+                *above,
+                ("the bridge", self.mqtt.base_topic, station_words()),
+            ]:
+                word = root.removeprefix(prefix + "/").split("/")[0]
+                if root.startswith(prefix + "/") and word in words:
+                    raise ValueError(
+                        f"rotators[{i}].{'topic' if r.topic else 'id'}: its topic {root} lies "
+                        f"under {prefix} (of {whose}), where {word!r} is a word of the bridge's "
+                        "own topics: choose another"
+                    )
+            ha = self.homeassistant
+            if ha.enabled and (root + "/").startswith(ha.discovery_prefix + "/"):
+                raise ValueError(
+                    f"rotators[{i}].{'topic' if r.topic else 'id'}: its topic {root} lies "
+                    f"under homeassistant.discovery_prefix {ha.discovery_prefix}: choose another"
+                )
+            if ha.enabled and ha.status_topic.startswith(root + "/"):
+                raise ValueError(
+                    f"rotators[{i}].{'topic' if r.topic else 'id'}: homeassistant.status_topic "
+                    f"{ha.status_topic} lies under its topic {root}: choose another"
+                )
         return self
 
     @model_validator(mode="after")

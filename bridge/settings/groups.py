@@ -15,7 +15,11 @@ Rules:
    topic or a word of the bridge's own topics) are settings/'s, which sees both. The words are
    the core's (``CORE_WORDS``, written here) and each registered feature's first topic words,
    from its declaration (``reserved``): a new feature needs no line here.
-5. Every key carries its meaning (``description``) for docs/configuration.md.
+5. A rotator's topic is held to the same (settings/ ``_rotator_topics``): one that lies under
+   another rotator's takes no word of ``reserved`` as its next level, and one under the base
+   topic none of ``station_words`` (a rotator at rotor/bridge published its state on the
+   bridge's own rotor/bridge/state, every Home Assistant entity's availability).
+6. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import re
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from bridge.feature import topic_words
+from bridge.feature import registered, topic_words
 
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
@@ -44,6 +48,12 @@ def reserved() -> frozenset[str]:
     """Rule 4: every word a group id may not take, the core's and each registered feature's
     (bridge/feature.py rule 3), the registry found by name at the first group checked."""
     return CORE_WORDS | frozenset(topic_words())
+
+
+def station_words() -> frozenset[str]:
+    """Rule 5: the first levels of the bridge's own topics under the base topic (its
+    ``bridge/...`` and each station feature's, bridge/feature.py ``base_topics``)."""
+    return frozenset(("bridge", *(s.split("/")[0] for f in registered() for s in f.base_topics)))
 
 
 class GroupSettings(BaseModel):
@@ -83,7 +93,7 @@ class GroupSettings(BaseModel):
     @field_validator("id")
     @classmethod
     def _id(cls, v: str) -> str:
-        if not _ID.match(v):
+        if not _ID.fullmatch(v):  # not match: its $ passes a final newline
             raise ValueError("must be 1 to 32 letters, digits, - or _ (it is a topic level)")
         return v
 

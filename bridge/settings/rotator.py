@@ -397,7 +397,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     @field_validator("id")
     @classmethod
     def _id(cls, v: str) -> str:
-        if not _SLUG.match(v) or v == "bridge":
+        if not _SLUG.fullmatch(v) or v == "bridge":  # fullmatch: $ passes a final newline
             raise ValueError(
                 "must be a short slug: lower-case letters, digits, '-' or '_' (and not 'bridge')"
             )
