@@ -106,7 +106,11 @@ Rules:
    terminator would also carry out a session frame a full buffer had cut short before it (a
    GS-232's ``M18`` of ``M180``: a move). A frame still unfinished after FINISH_WAIT_S (the line
    is stuck: the session finds its port lost, runtime/port.py rule 6) is said (rule 6) until
-   that rotator's next whole frame.
+   that rotator's next whole frame. Such a rotator's tty (a frame of it unfinished, or not
+   begun, after the whole wait) is stuck: its later frames get their one write and no wait (one
+   cut short is said so too), until it takes a frame whole or a new port is handed over, or the
+   one thread that writes every rotator's frame would spend that wait again at each of its
+   stops, with another rotator's stop behind it.
 """
 
 from __future__ import annotations
@@ -771,6 +775,7 @@ class _Child:
         self._frames = {rid: bytes.fromhex(f) for rid, f in config["frames"].items()}
         self._v5 = not config["mqtt311"]
         self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
+        self._stuck: set[str] = set()  # rule 9: rotators whose tty took nothing for a whole wait
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
         self._sync_topic: str | None = config.get("sync_topic")
@@ -894,10 +899,17 @@ class _Child:
                 done = 0
             except OSError:
                 return None  # rule 3: nothing went; the session's own stop follows
-            if done < len(frame):
+            if done < len(frame) and rid not in self._stuck:
                 return now, held, done
+            if done == 0:
+                return None  # rule 9: its tty is stuck; the session's own stop follows
             self._next[rid] = now + GAP_S
-        self.say(op="wrote", rotator=rid, t=now)
+            if done == len(frame):
+                self._stuck.discard(rid)
+        if done == len(frame):
+            self.say(op="wrote", rotator=rid, t=now)
+        else:  # (cut short on a stuck tty: said, as one the wait did not finish)
+            self.say(op="half", rotator=rid)
         return None
 
     def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> None:
@@ -906,6 +918,8 @@ class _Child:
             if self._ports.get(rid) is not held:
                 return  # given back meanwhile (closed): nothing more goes to it, nor its copy
             whole = self._write_whole(held[1], self._frames[rid], done)
+            if not whole:  # rule 9: stuck: no more waits for it until it takes a frame
+                self._stuck.add(rid)
             if whole is None:
                 return  # rule 3: nothing went; the session's own stop follows
             self._next[rid] = now + GAP_S
@@ -950,6 +964,7 @@ class _Child:
                 with self._lock:
                     old = self._ports.get(rid)
                     self._ports[rid] = (number, fds[0])
+                    self._stuck.discard(rid)  # (rule 9: a new port is waited for again)
                 if old is not None:
                     os.close(old[1])
                 self.say(op="held", rotator=rid, n=number)
