@@ -410,8 +410,7 @@ def test_a_tty_found_stuck_is_waited_for_no_more_until_it_takes_a_frame(
     """A rotator whose tty took nothing for the whole wait (a dead adapter, its buffer full)
     cost the express's one thread that wait again at each of its later stops, so another
     rotator's stop that came behind one waited too (in virtual time here). Once found stuck,
-    its frame is tried at once and let go, until a port handed over again or a frame it takes
-    whole."""
+    a frame it refuses whole is let go at once, until it takes bytes again (or a new port)."""
     a, b = Port(), Port()
     now = [100.0]
 

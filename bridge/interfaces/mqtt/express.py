@@ -107,10 +107,10 @@ Rules:
    GS-232's ``M18`` of ``M180``: a move). A frame still unfinished after FINISH_WAIT_S (the line
    is stuck: the session finds its port lost, runtime/port.py rule 6) is said (rule 6) until
    that rotator's next whole frame. Such a rotator's tty (a frame of it unfinished, or not
-   begun, after the whole wait) is stuck: its later frames get their one write and no wait (one
-   cut short is said so too), until it takes a frame whole or a new port is handed over, or the
-   one thread that writes every rotator's frame would spend that wait again at each of its
-   stops, with another rotator's stop behind it.
+   begun, after the whole wait) is stuck: a later frame it refuses whole is let go at once, not
+   waited for, until it takes bytes again or a new port is handed over, or the one thread that
+   writes every rotator's frame would spend that wait again at each of its stops, with another
+   rotator's stop behind it.
 """
 
 from __future__ import annotations
@@ -899,17 +899,13 @@ class _Child:
                 done = 0
             except OSError:
                 return None  # rule 3: nothing went; the session's own stop follows
-            if done < len(frame) and rid not in self._stuck:
-                return now, held, done
-            if done == 0:
+            if done == 0 and rid in self._stuck:
                 return None  # rule 9: its tty is stuck; the session's own stop follows
+            if done < len(frame):  # (part taken: a stuck tty moves again)
+                return now, held, done
             self._next[rid] = now + GAP_S
-            if done == len(frame):
-                self._stuck.discard(rid)
-        if done == len(frame):
-            self.say(op="wrote", rotator=rid, t=now)
-        else:  # (cut short on a stuck tty: said, as one the wait did not finish)
-            self.say(op="half", rotator=rid)
+            self._stuck.discard(rid)
+        self.say(op="wrote", rotator=rid, t=now)
         return None
 
     def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> None:
@@ -918,7 +914,9 @@ class _Child:
             if self._ports.get(rid) is not held:
                 return  # given back meanwhile (closed): nothing more goes to it, nor its copy
             whole = self._write_whole(held[1], self._frames[rid], done)
-            if not whole:  # rule 9: stuck: no more waits for it until it takes a frame
+            if whole:
+                self._stuck.discard(rid)
+            else:  # rule 9: stuck: no more waits for it until it takes bytes again
                 self._stuck.add(rid)
             if whole is None:
                 return  # rule 3: nothing went; the session's own stop follows
