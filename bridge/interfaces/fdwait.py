@@ -9,9 +9,11 @@ limit and stay where they are used.
 Rules:
 1. Every wait of interfaces/ on a raw descriptor goes through here; none calls ``select()``
    (tests/test_house.py looks).
-2. A timeout is in seconds, None for no limit; a descriptor that is closed (-1) or reports an
-   error or a hang-up counts as ready, as ``select()`` had it: the read or write that follows
-   says what happened.
+2. A timeout is in seconds, None for no limit; a descriptor that reports an error or a hang-up
+   (or was closed since it was handed over) counts as ready, as ``select()`` had it: the read or
+   write that follows says what happened. A descriptor numbered -1 (a socket already closed) is
+   not waited on and never ready (``select()`` raised ValueError for it): a wait with no other
+   descriptor is its timeout alone, and for ever with None.
 """
 
 from __future__ import annotations

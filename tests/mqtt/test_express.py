@@ -370,6 +370,84 @@ def test_a_write_the_tty_refuses_whole_is_made_when_it_takes_bytes_again(
         rig.mine.close()
 
 
+def test_a_members_stuck_tty_holds_up_no_other_members_frame_of_a_group_stop(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """One thread writes every rotator's frame: a group stop whose first member's tty takes
+    nothing (a stuck adapter: its buffer full) waited out that member's whole wait, in virtual
+    time here, before it wrote the second member's stop, which the express is for."""
+    a, b = Port(), Port()
+    now = [100.0]
+
+    def waited(fd: int, timeout_s: float | None) -> bool:  # nothing drains a's tty
+        now[0] += timeout_s or 0.0
+        return False
+
+    monkeypatch.setattr(express_module, "writable", waited)
+    rig = ChildRig(mqtt311=False)
+    try:
+        rig.child.clock = lambda: now[0]
+        stuck, write = os.fstat(a.w).st_ino, rig.child.write  # (the express holds a copy)
+
+        def full_for_a(fd: int, data: bytes) -> int:
+            if os.fstat(fd).st_ino == stuck:
+                raise BlockingIOError
+            return write(fd, data)
+
+        rig.child.write = full_for_a
+        rig.hand("a", 1, a)
+        rig.hand("b", 2, b)
+        rig.stop("rotor/stack/stop")
+        assert b.written() == b"S\r"
+        assert rig.word() == {"op": "wrote", "rotator": "b", "t": 100.0}  # at once, not after a's
+    finally:
+        rig.mine.close()
+
+
+def test_a_tty_found_stuck_is_waited_for_no_more_until_it_takes_a_frame(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A rotator whose tty took nothing for the whole wait (a dead adapter, its buffer full)
+    cost the express's one thread that wait again at each of its later stops, so another
+    rotator's stop that came behind one waited too (in virtual time here). Once found stuck,
+    a frame it refuses whole is let go at once, until it takes bytes again (or a new port)."""
+    a, b = Port(), Port()
+    now = [100.0]
+
+    def waited(fd: int, timeout_s: float | None) -> bool:
+        now[0] += timeout_s or 0.0
+        return False
+
+    monkeypatch.setattr(express_module, "writable", waited)
+    rig = ChildRig(mqtt311=False)
+    try:
+        rig.child.clock = lambda: now[0]
+        stuck, write, full = os.fstat(a.w).st_ino, rig.child.write, [True]
+
+        def full_for_a(fd: int, data: bytes) -> int:
+            if full[0] and os.fstat(fd).st_ino == stuck:
+                raise BlockingIOError
+            return write(fd, data)
+
+        rig.child.write = full_for_a
+        rig.hand("a", 1, a)
+        rig.hand("b", 2, b)
+        rig.stop("rotor/a/stop")  # found stuck: waited for once
+        now[0] += GAP_S
+        came = now[0]
+        rig.stop("rotor/a/stop")
+        rig.stop("rotor/b/stop")
+        assert b.written() == b"S\r"
+        assert rig.word() == {"op": "wrote", "rotator": "b", "t": came}  # not after a's wait
+        full[0] = False  # a's line moves again: its frame goes, and it is waited for again
+        now[0] += GAP_S
+        rig.stop("rotor/a/stop")
+        assert a.written() == b";"
+        assert rig.word() == {"op": "wrote", "rotator": "a", "t": now[0]}
+    finally:
+        rig.mine.close()
+
+
 def test_a_frame_the_port_never_finishes_taking_is_said(rig: ChildRig) -> None:
     port, now = Port(), [100.0]
     rig.child.clock = lambda: now[0]

@@ -94,18 +94,23 @@ Rules:
    No send to it ever waits for room (a request, a port handed over or given back): the lock
    they are sent under is the one every MQTT stop's hold takes before the stop is put in.
 9. A frame is never left half-written. A write that took part of the frame (or none, refused
-   whole while another writer was inside its own: rule 3) is finished by the express as soon
-   as the port takes bytes again (it waits for that, for up to FINISH_WAIT_S:
-   it holds up nothing but its own next frame), so no frame of the session's lands inside
-   it. What a half frame with more bytes after it would do (the protocol fact sheets): a
-   GS-232 reads ``S`` then the session's ``M180`` as ``SM180``, an unknown command (``?>``),
-   and an Easycomm ``SA S`` then ``AZ180.0`` as ``SA`` and ``SAZ180.0``: the stop, and the
-   move, lost; a Rotor-EZ's ``;`` is one byte and cannot be cut. No leading byte is added to
-   clear the controller's line first: a GS-232 answers an empty line with ``?>`` (a reply
-   nobody owes: rule 4's reason), and a leading terminator would also carry out a session
-   frame a full buffer had cut short before it (a GS-232's ``M18`` of ``M180``: a move).
-   A frame still unfinished after FINISH_WAIT_S (the line is stuck: the session finds its
-   port lost, runtime/port.py rule 6) is said (rule 6) until that rotator's next whole frame.
+   whole while another writer was inside its own: rule 3) is finished by the express as soon as
+   the port takes bytes again (it waits for that, for up to FINISH_WAIT_S, after the first write
+   of every other rotator's frame of the same stop, a group's: one member's stuck tty holds up
+   no other's), so no frame of the session's lands inside it. What a half frame with more bytes
+   after it would do (the protocol fact sheets): a GS-232 reads ``S`` then the session's
+   ``M180`` as ``SM180``, an unknown command (``?>``), and an Easycomm ``SA S`` then ``AZ180.0``
+   as ``SA`` and ``SAZ180.0``: the stop, and the move, lost; a Rotor-EZ's ``;`` is one byte and
+   cannot be cut. No leading byte is added to clear the controller's line first: a GS-232
+   answers an empty line with ``?>`` (a reply nobody owes: rule 4's reason), and a leading
+   terminator would also carry out a session frame a full buffer had cut short before it (a
+   GS-232's ``M18`` of ``M180``: a move). A frame still unfinished after FINISH_WAIT_S (the line
+   is stuck: the session finds its port lost, runtime/port.py rule 6) is said (rule 6) until
+   that rotator's next whole frame. Such a rotator's tty (a frame of it unfinished, or not
+   begun, after the whole wait) is stuck: a later frame it refuses whole is let go at once, not
+   waited for, until it takes bytes again or a new port is handed over, or the one thread that
+   writes every rotator's frame would spend that wait again at each of its stops, with another
+   rotator's stop behind it.
 """
 
 from __future__ import annotations
@@ -770,6 +775,7 @@ class _Child:
         self._frames = {rid: bytes.fromhex(f) for rid, f in config["frames"].items()}
         self._v5 = not config["mqtt311"]
         self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
+        self._stuck: set[str] = set()  # rule 9: rotators whose tty took nothing for a whole wait
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
         self._sync_topic: str | None = config.get("sync_topic")
@@ -875,33 +881,54 @@ class _Child:
             return  # a replay (3.1.1), or a retained message being deleted (service.py rule 1)
         if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
             return
-        for rid in rids:
-            self._stop(rid)
+        owed = [(rid, *tried) for rid in rids if (tried := self._stop(rid)) is not None]
+        for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
+            self._finish(rid, now, held, done)
 
-    def _stop(self, rid: str) -> None:
+    def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | None:
+        """Rule 3: the frame's one write, at once; what a write cut short or refused leaves
+        owed (when the stop came, the port, the bytes taken) is returned for ``_finish``."""
         with self._lock:
             held, now = self._ports.get(rid), self.clock()
             if held is None or now < self._next.get(rid, now):
-                return
-            done = self._write_whole(held[1], self._frames[rid])
-            if done is None:
+                return None
+            frame = self._frames[rid]
+            try:
+                done = self.write(held[1], frame)
+            except BlockingIOError:  # refused whole: the serial-lines thread inside its write
+                done = 0
+            except OSError:
+                return None  # rule 3: nothing went; the session's own stop follows
+            if done == 0 and rid in self._stuck:
+                return None  # rule 9: its tty is stuck; the session's own stop follows
+            if done < len(frame):  # (part taken: a stuck tty moves again)
+                return now, held, done
+            self._next[rid] = now + GAP_S
+            self._stuck.discard(rid)
+        self.say(op="wrote", rotator=rid, t=now)
+        return None
+
+    def _finish(self, rid: str, now: float, held: tuple[int, int], done: int) -> None:
+        """Rule 9: the rest of a frame a write left owed, when the port takes bytes again."""
+        with self._lock:
+            if self._ports.get(rid) is not held:
+                return  # given back meanwhile (closed): nothing more goes to it, nor its copy
+            whole = self._write_whole(held[1], self._frames[rid], done)
+            if whole:
+                self._stuck.discard(rid)
+            else:  # rule 9: stuck: no more waits for it until it takes bytes again
+                self._stuck.add(rid)
+            if whole is None:
                 return  # rule 3: nothing went; the session's own stop follows
             self._next[rid] = now + GAP_S
-        if done:
+        if whole:
             self.say(op="wrote", rotator=rid, t=now)
         else:
             self.say(op="half", rotator=rid)
 
-    def _write_whole(self, fd: int, frame: bytes) -> bool | None:
-        """Rule 9: True: the frame written whole; None: nothing of it; False: half of it."""
-        try:
-            done = self.write(fd, frame)
-        except BlockingIOError:  # refused whole: the serial-lines thread inside its write (rule 3)
-            done = 0
-        except OSError:
-            return None
-        if done >= len(frame):
-            return True
+    def _write_whole(self, fd: int, frame: bytes, done: int) -> bool | None:
+        """Rule 9: ``done`` bytes of ``frame`` written; True: the rest written too; None:
+        nothing of it; False: half of it."""
         rest, end = frame[done:], self.clock() + FINISH_WAIT_S
         while rest:
             left = end - self.clock()
@@ -935,6 +962,7 @@ class _Child:
                 with self._lock:
                     old = self._ports.get(rid)
                     self._ports[rid] = (number, fds[0])
+                    self._stuck.discard(rid)  # (rule 9: a new port is waited for again)
                 if old is not None:
                     os.close(old[1])
                 self.say(op="held", rotator=rid, n=number)
