@@ -20,9 +20,11 @@ Rules:
    the same tty is inside its own write (the kernel's per-tty write lock: the stop express
    writing its stop frame, interfaces/mqtt/express.py), however much room it has; the tty says
    writable again as that write ends. So a frame the tty takes none or part of is finished as
-   soon as the tty is writable, for up to WRITE_WAIT_S; only a tty that stays unwritable that
-   long (a full buffer: the adapter is stuck) is a lost link, and no frame is left cut short
-   for the next one to land in while it can still be finished.
+   soon as the tty is writable, for up to WRITE_WAIT_S; a tty that stays unwritable that long,
+   or that holds FULL_BYTES or more still to send when it refuses (a full buffer: the adapter
+   is stuck; it says writable only under 256, seconds away; a pty cannot say, so it gets the
+   wait), is a lost link at once, and no frame is left cut short for the next one to land in
+   while it can still be finished.
 7. A PortWatch (the stop express, interfaces/mqtt/express.py) is told an opened port's descriptor on
    the thread that opened it, and that it (its descriptor) is going before it is closed, on the
    thread that closes it (``watched``, ``close_in_background``): a copy of the descriptor held
@@ -38,6 +40,7 @@ import logging
 import math
 import os
 import select
+import sys
 import termios
 import threading
 import time
@@ -60,6 +63,9 @@ class PortError(Exception):
 # adapter costs every other line this wait once per reconnect, so it stays short: the tty is
 # tried again after every wake, so this thread's own lateness under load is no refusal.
 WRITE_WAIT_S = 0.05
+# rule 6: a tty holding this many bytes is full, not taken by another writer: it says writable
+# again only under 256 queued bytes, seconds away at a rotor's baud rate (a stuck adapter)
+FULL_BYTES = 256
 
 
 # what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)
@@ -253,6 +259,15 @@ def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
     return data
 
 
+def queued(fd: int) -> int:
+    """Bytes the tty still holds to send (TIOCOUTQ; a pty always says 0), 0 if it cannot say."""
+    try:
+        answer = fcntl.ioctl(fd, termios.TIOCOUTQ, b"\0\0\0\0")
+    except OSError:
+        return 0
+    return int.from_bytes(answer, sys.byteorder, signed=True)
+
+
 def write_frame(port: serial.Serial, data: bytes) -> None:
     """A short frame written whole: one write() as a rule. A tty that takes none or part of it
     (another writer of the tty inside its write, or a full buffer) is waited for, up to
@@ -267,6 +282,8 @@ def write_frame(port: serial.Serial, data: bytes) -> None:
             pass
         if not rest:
             return
+        if deadline is None and queued(fd) >= FULL_BYTES:
+            break  # a full buffer, not another writer: it drains for seconds, if ever (rule 6)
         now = time.monotonic()
         deadline = now + WRITE_WAIT_S if deadline is None else deadline
         if now >= deadline:

@@ -191,3 +191,43 @@ def test_a_tty_whose_buffer_is_full_is_a_lost_link_and_nothing_is_left_half_writ
     finally:
         port.close()
         os.close(master)
+
+
+def test_a_tty_that_says_its_buffer_is_full_is_a_lost_link_without_the_wait(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Port rule 6: a refused write on a tty that holds FULL_BYTES or more to send is a stuck
+    adapter (it would say writable only under 256 bytes, seconds away): a lost link at once,
+    not a wait that holds up every other rotator's line. (A pty always says 0 queued; the
+    count a USB adapter gives is played here, and the wait made endless to show it is not
+    taken.)"""
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    os.close(slave)
+    port = open_port(path, REGISTRY["rotorez"])
+    monkeypatch.setattr(port_module, "WRITE_WAIT_S", 3600.0)
+    monkeypatch.setattr(port_module, "queued", lambda fd: port_module.FULL_BYTES)
+    raised: list[BaseException] = []
+
+    def write_to_the_full_tty() -> None:
+        fd = port.fileno()
+        while True:  # fill it: nobody reads the master
+            try:
+                if os.write(fd, b"AI1;" * 64) == 0:
+                    break
+            except BlockingIOError:
+                break
+        try:
+            write_frame(port, b";")
+        except serial.SerialException as exc:
+            raised.append(exc)
+
+    writer = threading.Thread(target=write_to_the_full_tty, daemon=True)
+    try:
+        writer.start()
+        writer.join(slow(10))
+        assert not writer.is_alive(), "the write waited for a tty that said it was full"
+        assert [str(e) for e in raised] == ["the port takes no more bytes (adapter stuck?)"]
+    finally:
+        port.close()
+        os.close(master)
