@@ -22,9 +22,9 @@ Rules:
    writable again as that write ends. So a frame the tty takes none or part of is finished as
    soon as the tty is writable, for up to WRITE_WAIT_S; a tty that stays unwritable that long,
    or that holds FULL_BYTES or more still to send when it refuses (a full buffer: the adapter
-   is stuck; it says writable only under 256, seconds away; a pty cannot say, so it gets the
-   wait), is a lost link at once, and no frame is left cut short for the next one to land in
-   while it can still be finished.
+   is stuck; it says writable only under 256, most of a second away or more at a rotor's baud
+   rate), is a lost link at once, and no frame is left cut short for the next one to land in
+   while it can still be finished. A rotor's frames never queue that many.
 7. A PortWatch (the stop express, interfaces/mqtt/express.py) is told an opened port's descriptor on
    the thread that opened it, and that it (its descriptor) is going before it is closed, on the
    thread that closes it (``watched``, ``close_in_background``): a copy of the descriptor held
@@ -64,8 +64,8 @@ class PortError(Exception):
 # tried again after every wake, so this thread's own lateness under load is no refusal.
 WRITE_WAIT_S = 0.05
 # rule 6: a tty holding this many bytes is full, not taken by another writer: it says writable
-# again only under 256 queued bytes, seconds away at a rotor's baud rate (a stuck adapter)
-FULL_BYTES = 256
+# again only under 256 queued bytes, 768 bytes away (1.6 s at 4800 baud: a stuck adapter)
+FULL_BYTES = 1024
 
 
 # what opens a port: open_port, or a test's stand-in (path, spec, baud or the model's)
@@ -260,7 +260,7 @@ def read_available(fd: int, readable: bool, path: str | None = None) -> bytes:
 
 
 def queued(fd: int) -> int:
-    """Bytes the tty still holds to send (TIOCOUTQ; a pty always says 0), 0 if it cannot say."""
+    """Bytes the tty still holds to send (TIOCOUTQ), 0 if it cannot say (not a tty)."""
     try:
         answer = fcntl.ioctl(fd, termios.TIOCOUTQ, b"\0\0\0\0")
     except OSError:

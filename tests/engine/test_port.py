@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from typing import cast
 
 import pytest
 import serial
@@ -114,12 +115,19 @@ def test_a_watch_that_fails_costs_the_port_nothing(tty: str) -> None:
     assert not port.is_open
 
 
+# as the stop express writes: short writes on a non-blocking descriptor, never a flood (a
+# blocking writer would sleep inside its write, the tty taken, whenever the reader is late; a
+# flood would fill the tty: the full-buffer test's case, not this one's)
 OTHER_WRITER = """
-import os, sys
-fd = os.open(sys.argv[1], os.O_WRONLY | os.O_NOCTTY)
+import os, sys, time
+fd = os.open(sys.argv[1], os.O_WRONLY | os.O_NOCTTY | os.O_NONBLOCK)
 os.write(1, b"ready\\n")
 while True:
-    os.write(fd, b"S\\r" * 50)  # inside its write a little longer
+    try:
+        os.write(fd, b"S\\r" * 10)  # inside its write a little longer
+    except BlockingIOError:
+        pass
+    time.sleep(0.0001)
 """
 
 
@@ -133,6 +141,9 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
     writer never pauses, unlike the express, which writes one frame a stop: how long the tty
     may be taken from the bridge here is a deadline, scaled.)"""
     monkeypatch.setattr(port_module, "WRITE_WAIT_S", slow(port_module.WRITE_WAIT_S))
+    # the other writer here pours bytes without a pause, so the tty may hold many while the
+    # reader waits for a core: that is the test below's (a full buffer), not this one's
+    monkeypatch.setattr(port_module, "FULL_BYTES", 1 << 30)
     master, slave = os.openpty()
     path = os.ttyname(slave)
     os.close(slave)
@@ -154,7 +165,7 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
     other = subprocess.Popen([sys.executable, "-c", OTHER_WRITER, path], stdout=subprocess.PIPE)
     try:
         assert other.stdout is not None and other.stdout.readline() == b"ready\n"
-        frames = 1000
+        frames = 2000
         for _ in range(frames):
             write_frame(port, b"M123\r")  # raised "the port takes no more bytes" before
             time.sleep(0.0002)  # frames spread over the other writer's, not one burst
@@ -170,27 +181,39 @@ def test_a_frame_written_while_another_writer_has_the_tty_goes_whole(
         reader.join(slow(10))
 
 
-def test_a_tty_whose_buffer_is_full_is_a_lost_link_and_nothing_is_left_half_written() -> None:
-    """A stuck adapter (its output never drains: here a pty nobody reads) fills the tty; a
-    frame it cannot take is a lost link ("the port takes no more bytes"), after the short
-    bounded wait, not a wait for ever that would hold up every other rotator's line."""
-    master, slave = os.openpty()
-    path = os.ttyname(slave)
-    os.close(slave)
-    port = open_port(path, REGISTRY["rotorez"])
-    try:
-        fd = port.fileno()
-        while True:  # fill it: nobody reads the master
+class _FullLine:
+    """A port whose line never drains: a non-blocking pipe filled to the brim (a pty's fill
+    is not final: the kernel's worker moves its bytes on later, making room again)."""
+
+    def __init__(self) -> None:
+        self.r, self.w = os.pipe()
+        os.set_blocking(self.w, False)
+        while True:
             try:
-                if os.write(fd, b"AI1;" * 64) == 0:
-                    break
+                os.write(self.w, b"AI1;" * 1024)
             except BlockingIOError:
                 break
+        with pytest.raises(BlockingIOError):
+            os.write(self.w, b";")  # not even one byte more
+
+    def fileno(self) -> int:
+        return self.w
+
+    def close(self) -> None:
+        os.close(self.r)
+        os.close(self.w)
+
+
+def test_a_line_that_never_drains_is_a_lost_link() -> None:
+    """A stuck adapter (its output never drains) cannot take a frame: after the short bounded
+    wait it is a lost link ("the port takes no more bytes"), not a wait for ever that would
+    hold up every other rotator's line."""
+    line = _FullLine()
+    try:
         with pytest.raises(serial.SerialException, match="takes no more bytes"):
-            write_frame(port, b";")
+            write_frame(cast(serial.Serial, line), b";")
     finally:
-        port.close()
-        os.close(master)
+        line.close()
 
 
 def test_a_tty_that_says_its_buffer_is_full_is_a_lost_link_without_the_wait(
@@ -198,36 +221,26 @@ def test_a_tty_that_says_its_buffer_is_full_is_a_lost_link_without_the_wait(
 ) -> None:
     """Port rule 6: a refused write on a tty that holds FULL_BYTES or more to send is a stuck
     adapter (it would say writable only under 256 bytes, seconds away): a lost link at once,
-    not a wait that holds up every other rotator's line. (A pty always says 0 queued; the
-    count a USB adapter gives is played here, and the wait made endless to show it is not
-    taken.)"""
-    master, slave = os.openpty()
-    path = os.ttyname(slave)
-    os.close(slave)
-    port = open_port(path, REGISTRY["rotorez"])
+    not a wait that holds up every other rotator's line. (The count a stuck USB adapter
+    gives is played here on a pipe, and the wait made endless to show it is not taken.)"""
+    line = _FullLine()
     monkeypatch.setattr(port_module, "WRITE_WAIT_S", 3600.0)
     monkeypatch.setattr(port_module, "queued", lambda fd: port_module.FULL_BYTES)
     raised: list[BaseException] = []
 
-    def write_to_the_full_tty() -> None:
-        fd = port.fileno()
-        while True:  # fill it: nobody reads the master
-            try:
-                if os.write(fd, b"AI1;" * 64) == 0:
-                    break
-            except BlockingIOError:
-                break
+    def write_to_the_full_line() -> None:
         try:
-            write_frame(port, b";")
+            write_frame(cast(serial.Serial, line), b";")
         except serial.SerialException as exc:
             raised.append(exc)
 
-    writer = threading.Thread(target=write_to_the_full_tty, daemon=True)
+    writer = threading.Thread(target=write_to_the_full_line, daemon=True)
     try:
         writer.start()
         writer.join(slow(10))
         assert not writer.is_alive(), "the write waited for a tty that said it was full"
         assert [str(e) for e in raised] == ["the port takes no more bytes (adapter stuck?)"]
     finally:
-        port.close()
-        os.close(master)
+        os.close(line.r)  # the waiting write (old code) wakes to a broken pipe and ends
+        writer.join(slow(10))
+        os.close(line.w)
