@@ -370,6 +370,30 @@ def test_a_write_the_tty_refuses_whole_is_made_when_it_takes_bytes_again(
         rig.mine.close()
 
 
+def _stuck_a(
+    monkeypatch: pytest.MonkeyPatch, rig: ChildRig, a: Port
+) -> tuple[list[float], list[bool]]:
+    """``a``'s tty takes nothing while ``full[0]`` (a stuck adapter, its buffer full) and
+    nothing drains it: the express's waits pass in virtual time (``now[0]``)."""
+    now, full = [100.0], [True]
+
+    def waited(fd: int, timeout_s: float | None) -> bool:  # nothing drains a's tty
+        now[0] += timeout_s or 0.0
+        return False
+
+    monkeypatch.setattr(express_module, "writable", waited)
+    rig.child.clock = lambda: now[0]
+    stuck, write = os.fstat(a.w).st_ino, rig.child.write  # (the express holds a copy)
+
+    def full_for_a(fd: int, data: bytes) -> int:
+        if full[0] and os.fstat(fd).st_ino == stuck:
+            raise BlockingIOError
+        return write(fd, data)
+
+    rig.child.write = full_for_a
+    return now, full
+
+
 def test_a_members_stuck_tty_holds_up_no_other_members_frame_of_a_group_stop(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -377,24 +401,9 @@ def test_a_members_stuck_tty_holds_up_no_other_members_frame_of_a_group_stop(
     nothing (a stuck adapter: its buffer full) waited out that member's whole wait, in virtual
     time here, before it wrote the second member's stop, which the express is for."""
     a, b = Port(), Port()
-    now = [100.0]
-
-    def waited(fd: int, timeout_s: float | None) -> bool:  # nothing drains a's tty
-        now[0] += timeout_s or 0.0
-        return False
-
-    monkeypatch.setattr(express_module, "writable", waited)
     rig = ChildRig(mqtt311=False)
     try:
-        rig.child.clock = lambda: now[0]
-        stuck, write = os.fstat(a.w).st_ino, rig.child.write  # (the express holds a copy)
-
-        def full_for_a(fd: int, data: bytes) -> int:
-            if os.fstat(fd).st_ino == stuck:
-                raise BlockingIOError
-            return write(fd, data)
-
-        rig.child.write = full_for_a
+        _stuck_a(monkeypatch, rig, a)
         rig.hand("a", 1, a)
         rig.hand("b", 2, b)
         rig.stop("rotor/stack/stop")
@@ -412,24 +421,9 @@ def test_a_tty_found_stuck_is_waited_for_no_more_until_it_takes_a_frame(
     rotator's stop that came behind one waited too (in virtual time here). Once found stuck,
     a frame it refuses whole is let go at once, until it takes bytes again (or a new port)."""
     a, b = Port(), Port()
-    now = [100.0]
-
-    def waited(fd: int, timeout_s: float | None) -> bool:
-        now[0] += timeout_s or 0.0
-        return False
-
-    monkeypatch.setattr(express_module, "writable", waited)
     rig = ChildRig(mqtt311=False)
     try:
-        rig.child.clock = lambda: now[0]
-        stuck, write, full = os.fstat(a.w).st_ino, rig.child.write, [True]
-
-        def full_for_a(fd: int, data: bytes) -> int:
-            if full[0] and os.fstat(fd).st_ino == stuck:
-                raise BlockingIOError
-            return write(fd, data)
-
-        rig.child.write = full_for_a
+        now, full = _stuck_a(monkeypatch, rig, a)
         rig.hand("a", 1, a)
         rig.hand("b", 2, b)
         rig.stop("rotor/a/stop")  # found stuck: waited for once
