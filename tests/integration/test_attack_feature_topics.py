@@ -92,7 +92,7 @@ def test_a_stop_wins_over_a_controller_flooding_junk_and_half_replies(rig: Rig) 
     def flood() -> None:
         junk = (b"\xe0" * 64, b";1", b";12", b"AI1;\xff", b"\x00" * 32, b";3")
         i = 0
-        while not stop_flood.wait(0.005):
+        while not stop_flood.wait(0.005):  # not a deadline: the flood's pace
             noisy.inject(junk[i % len(junk)])
             i += 1
 
