@@ -30,10 +30,13 @@ class DemoProcess:
         terminal: bool = False,
         screen: bool = False,
         env: dict[str, str] | None = None,
+        group: bool = False,
     ) -> None:
         """Start it with TMPDIR=`tmpdir` (so what it leaves behind can be seen) and, when
         `terminal`, a pseudo-terminal as stdin (it reads typed lines only from a terminal); when
-        `screen`, as stdout too (``screen_text``: every character it wrote there)."""
+        `screen`, as stdout too (``screen_text``: every character it wrote there); when
+        `group`, in a process group of its own (a signal to it reaches its children too, as a
+        terminal's Ctrl-C does)."""
         tmpdir.mkdir(parents=True, exist_ok=True)
         environ = {k: v for k, v in os.environ.items() if not k.startswith("ROTOR_BRIDGE_")}
         environ.update(env or {}, TMPDIR=str(tmpdir))
@@ -53,6 +56,7 @@ class DemoProcess:
             stdout=stdin if screen else subprocess.PIPE,
             stderr=stdin if screen else subprocess.STDOUT,
             env=environ,
+            process_group=0 if group else None,
         )
         if self._master is not None:
             self.tty = stdin  # the terminal's own side, kept open: its settings can be read

@@ -6,6 +6,7 @@ ends."""
 from __future__ import annotations
 
 import json
+import os
 import signal
 import socket
 import termios
@@ -179,6 +180,29 @@ def test_the_demo_prompt_turns_by_preset_locator_path_nudge_and_park(tmp_path: P
         if probe is not None:
             probe.close()
         proc.close()
+
+
+def test_a_terminals_ctrl_c_ends_the_private_broker_too_and_the_demo_says_so(
+    tmp_path: Path,
+) -> None:
+    """A terminal's Ctrl-C reaches the demo's whole process group, its private mosquitto too:
+    the demo then said it "removed its 0 retained messages" (it could reach no broker); it says
+    the broker no longer answers, and ends cleanly."""
+    port = free_port()
+    tmpdir = tmp_path / "tmp"
+    proc = DemoProcess(["--mqtt-port", str(port)], tmpdir, group=True)
+    try:
+        base = proc.base_topic()
+        probe = Probe(port, f"{base}/#")
+        probe.wait_value(f"{base}/availability", "online", timeout_s=20)
+        probe.close()
+        os.killpg(proc.proc.pid, signal.SIGINT)
+        assert proc.wait(slow(20)) == 0, proc.output
+        assert "the broker no longer answers, so its retained messages were not" in proc.output
+        assert "removed its 0 retained messages" not in proc.output
+    finally:
+        proc.close()
+    assert not answers("127.0.0.1", port)
 
 
 def test_ctrl_c_stops_the_demo_and_its_private_broker(tmp_path: Path) -> None:

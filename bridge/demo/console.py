@@ -259,10 +259,11 @@ class Console:
         with self._lock:
             return self._retained.get(topic)
 
-    def remove_retained(self, timeout_s: float = 3.0) -> int:
-        """Clear every retained message seen on the demo's topics; how many there were."""
+    def remove_retained(self, timeout_s: float = 3.0) -> int | None:
+        """Clear every retained message seen on the demo's topics; how many there were (None:
+        the broker no longer answers, as a private one a Ctrl-C ended with the demo)."""
         if not self.sync(timeout_s):  # the bridge's last "offline" included
-            return 0
+            return None
         with self._lock:
             topics = sorted(self._retained)
         infos = [self._client.publish(topic, b"", qos=1, retain=True) for topic in topics]
@@ -275,7 +276,12 @@ class Console:
         try:
             if remove_retained:
                 n = self.remove_retained()
-                self.screen.log(f"rotor-bridge demo: removed its {n} retained messages")
+                self.screen.log(
+                    f"rotor-bridge demo: removed its {n} retained messages"
+                    if n is not None
+                    else "rotor-bridge demo: the broker no longer answers, so its retained "
+                    "messages were not removed (a private broker, ended with the demo, keeps none)"
+                )
         finally:
             self._client.disconnect()
             self._client.loop_stop()
