@@ -22,7 +22,8 @@ sitecustomize imports this module). Written to the file as JSON when the bridge 
 
 ``python -m benchmarks.stop_trace TRACE SAMPLES [MS]``: each stop over MS (9) against its publish,
 how long its line was still busy after the publish with bytes the bridge wrote before it (the
-line's floor, benchmarks/line.py rule 7), and, where the benchmark wrote ``TRACE.lines.json``
+line's floor, benchmarks/line.py rule 7), when the broker delivered it (benchmarks/delivery.py),
+and, where the benchmark wrote ``TRACE.lines.json``
 (stop_under_load's focused mode), what the stop's line carried from 50 ms before the publish to
 its frame: the relay's reads of the bridge's bytes and deliveries to the controller, and the
 controller's frames.
@@ -393,6 +394,10 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                     print(
                         f"      the line busy {ahead_ms:.1f} ms after the publish with {ahead!r} "
                         f"(written before it): the bridge's part {lat * 1e3 - ahead_ms:.1f} ms"
+                    )
+                if len(taker) > 4 and taker[4] is not None:  # the broker's delivery
+                    print(
+                        f"      the broker delivered it {taker[4] * 1e3:.1f} ms after the publish"
                     )
                 if (rid, t0) in shown:
                     print("\n".join(_line(shown[rid, t0])))
