@@ -42,6 +42,10 @@ Rules:
    round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
    11) or that look found one (there may be another): not one question to every worker after
    each one served.
+9. The wake-ups a round owes other threads (the MQTT network thread's, for the statuses it
+   was handed) are given once, when the round ends (core/handoff.py): one wake-up for the
+   statuses of 16 rotators, not 16. A stop's frame is not among them: it is written to its
+   port as the worker is served.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from typing import Any, Protocol
 
+from bridge.core import handoff
 from bridge.session import mailbox
 from bridge.session.config import WorkerConfig
 
@@ -198,6 +203,10 @@ class Lines:
         due = [w for w, fds, until in wanted if now >= until or not ready.isdisjoint(fds)]  # rule 6
         due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
         left = list(self._workers)  # not served yet this round: any of them may get a stop
+        with handoff.batch():  # rule 9
+            self._serve_round(due, left, ready)
+
+    def _serve_round(self, due: list[Worker], left: list[Worker], ready: set[int]) -> None:
         look, seen = True, 0
         while due:
             # rule 5: a stop that came while this round served others goes next

@@ -18,6 +18,7 @@ from typing import Any
 import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
+from bridge.core import handoff
 from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
@@ -363,3 +364,28 @@ def test_loop_stop_ends_while_a_stalled_broker_takes_nothing(broker: Mosquitto) 
     finally:
         broker.resume()
         stopper.join()
+
+
+def test_messages_queued_in_a_round_wake_the_thread_once_when_the_round_ends(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    """Rule 6 with core/handoff.py: the statuses the serial-lines thread hands over in one
+    round wake the network thread once, when the round ends, and then all arrive in order."""
+    with connected(broker, "net-round") as c:
+        woken: list[str] = []
+        wake = c._waker.wake
+
+        def counted() -> None:
+            woken.append(threading.current_thread().name)
+            wake()
+
+        c._waker.wake = counted  # type: ignore[method-assign]
+        mark = probe.mark()
+        with handoff.batch():
+            for i in range(16):  # a round of 16 rotators' statuses
+                c.publish("net/round", str(i).encode(), qos=0)
+            assert woken == []  # not yet: the round goes on
+        assert woken == [threading.current_thread().name]  # once, as it ended
+        for i in range(16):
+            probe.wait(lambda m, i=i: m.topic == "net/round" and m.text == str(i), start=mark)
+        assert [m.text for m in probe.on("net/round")] == [str(i) for i in range(16)]

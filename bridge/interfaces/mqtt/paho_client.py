@@ -36,8 +36,11 @@ Rules:
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
    call on the publishing thread, a wake-up of paho's thread for each message); ours is woken
    through paho's ``on_socket_register_write``, which paho calls once until the queue has been
-   written, so a reading's messages cost one wake-up between them. It waits with poll, not
-   select (which refuses a descriptor above 1023, as a bridge with many clients open has).
+   written, so a reading's messages cost one wake-up between them; a message queued inside a
+   round of the serial-lines thread wakes it once, when the round ends (core/handoff.py), so
+   the statuses of every rotator a round served cost one wake-up between them. It waits with
+   poll, not select (which refuses a descriptor above 1023, as a bridge with many clients open
+   has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
    the message left the socket, building a reason code and properties each time (about as much
    CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
@@ -66,6 +69,7 @@ from typing import Any
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
+from bridge.core import handoff
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -205,8 +209,11 @@ class Client(paho.Client):
         return MQTTErrorCode.MQTT_ERR_SUCCESS
 
     def _wake(self, *_args: object) -> None:
-        """paho's on_socket_register_write: something is queued to write (any thread)."""
-        self._waker.wake()
+        """paho's on_socket_register_write: something is queued to write (any thread; inside a
+        round of the serial-lines thread, once at its end: rule 6)."""
+        waker = self._waker
+        if not handoff.defer(waker, waker.wake):
+            waker.wake()
 
     def _serve(self) -> None:
         """The thread (a new ``loop_start`` may follow its end, as with paho's: from the moment
