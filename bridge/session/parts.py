@@ -35,11 +35,13 @@ Rules:
 7. Whatever ends tracking and following ends a part's own motion too, through its ``end``
    (a stop, a lock ON, a release that clears, the link lost, a user's target, a track or
    follow start, a feature's command that moves, its own too, before its part is handed
-   it, a storm that begins): a part a command turned on never turns the rotor after a later
-   stop or lock, nor over the user's later word. A command that moves reaches no part while
-   the session would refuse a user's target (locked, offline, a storm). And no part's step
-   target goes to a locked rotor, nor in a storm but the wind's own park: the session drops
-   it, whatever the part says.
+   it, a storm that begins), and so does the lock's release: a part a command turned on never
+   turns the rotor after a later stop or lock, nor over the user's later word, nor once the
+   lock it was turned on under is released (a command that does not move the rotor is taken
+   while locked, and may have turned on a part that moves). A command that moves reaches no
+   part while the session would refuse a user's target (locked, offline, a storm). And no
+   part's step target goes to a locked rotor, nor in a storm but the wind's own park: the
+   session drops it, whatever the part says.
 """
 
 from __future__ import annotations

@@ -222,8 +222,11 @@ class RotatorSession:
             self.wind.halted()  # wind.py rule 3: the park stops, and is not tried again
         if batch.control_set:
             self.view.control = batch.control
+        unlocked = batch.lock is False and (self.locked or batch.lock_on)
         if batch.lock is not None:
             self.locked = batch.lock
+        if unlocked:  # parts.py rule 7: nothing turned on while locked turns it once unlocked
+            self._end_parts("lock released", now)
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
             self._end("lock", now)
             self._drop_pending(None)

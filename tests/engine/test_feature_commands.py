@@ -492,3 +492,44 @@ def test_one_put_with_the_storms_reading_reaches_no_part(
         assert refused.command == "sweep on"
     finally:
         bench.close()
+
+
+def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """parts.py rule 7: a command that says it does not move the rotor is taken while locked;
+    if it turned on a part that moves, releasing the lock ends that part: the release is not
+    a word to move, and the command came under the lock."""
+    quiet = Feature(
+        "sweep",
+        "docs/architecture.md",
+        "turns the rotor while it is on, switched on by a command that says it does not move",
+        commands=(
+            CommandTopic(
+                "sweep",
+                "sweep",
+                lambda p, by: FeatureCommand("sweep", "on", None, moves=False, origin=by),
+            ),
+        ),
+        part=SWEEP,
+    )
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, quiet))
+    bench = Bench(tmp_path)
+    try:
+        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+        bench.v._take()
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.v._take()
+        bench.rest()
+        assert _sweep(bench.v.session).on  # taken: it does not move the rotor by itself
+        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+        bench.v._take()
+        bench.rest()
+        assert bench.sets() == []
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+        assert _sweep(bench.v.session).ended[-1] == "lock released"
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.v._take()
+        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
+    finally:
+        bench.close()
