@@ -374,6 +374,20 @@ SWEEP_FEATURE = Feature(
     part=SWEEP,
 )
 
+QUIET_SWEEP = Feature(
+    "sweep",
+    "docs/architecture.md",
+    "turns the rotor while it is on, switched on by a command that says it does not move",
+    commands=(
+        CommandTopic(
+            "sweep",
+            "sweep",
+            lambda p, by: FeatureCommand("sweep", "on", None, moves=False, origin=by),
+        ),
+    ),
+    part=SWEEP,
+)
+
 
 @pytest.fixture
 def sweeping(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Bench]:
@@ -500,20 +514,7 @@ def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(
     """parts.py rule 7: a command that says it does not move the rotor is taken while locked;
     if it turned on a part that moves, releasing the lock ends that part: the release is not
     a word to move, and the command came under the lock."""
-    quiet = Feature(
-        "sweep",
-        "docs/architecture.md",
-        "turns the rotor while it is on, switched on by a command that says it does not move",
-        commands=(
-            CommandTopic(
-                "sweep",
-                "sweep",
-                lambda p, by: FeatureCommand("sweep", "on", None, moves=False, origin=by),
-            ),
-        ),
-        part=SWEEP,
-    )
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, quiet))
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
     bench = Bench(tmp_path)
     try:
         bench.rot.submit(Lock(True, origin=WHO), "lock ON")
@@ -531,5 +532,34 @@ def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(
         bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
         bench.v._take()
         bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
+    finally:
+        bench.close()
+
+
+@pytest.mark.parametrize("locked_before", [True, False], ids=["locked before", "ON in the batch"])
+def test_a_part_turned_on_under_the_lock_in_the_unlocks_own_batch_does_not_turn_the_rotor(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, locked_before: bool
+) -> None:
+    """mailbox.py rule 12: the command and the lock OFF land in one batch (the lines thread
+    busy): the command came under the lock, so the release still ends what it turned on; a
+    command put after the release in the same batch is the later word and stands."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
+    bench = Bench(tmp_path)
+    try:
+        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+        if locked_before:
+            bench.v._take()
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+        bench.v._take()  # one batch
+        bench.rest()
+        assert bench.sets() == []
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+        assert _sweep(bench.v.session).ended[-1] == "lock released"
+        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.v._take()  # one batch, the command after the release
+        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on after")
     finally:
         bench.close()
