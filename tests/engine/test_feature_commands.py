@@ -536,30 +536,80 @@ def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(
         bench.close()
 
 
-@pytest.mark.parametrize("locked_before", [True, False], ids=["locked before", "ON in the batch"])
-def test_a_part_turned_on_under_the_lock_in_the_unlocks_own_batch_does_not_turn_the_rotor(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, locked_before: bool
+def test_a_part_turned_on_under_the_lock_with_the_release_in_the_same_batch_stays_still(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """mailbox.py rule 12: the command and the lock OFF land in one batch (the lines thread
-    busy): the command came under the lock, so the release still ends what it turned on; a
-    command put after the release in the same batch is the later word and stands."""
+    """parts.py rule 7: a command given under the lock, taken with the lock OFF that followed
+    it (the lines thread was busy with other rotors between the two words), is still a word
+    given under the lock: the part it turned on does not turn the rotor once unlocked."""
     monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
     bench = Bench(tmp_path)
     try:
         bench.rot.submit(Lock(True, origin=WHO), "lock ON")
-        if locked_before:
-            bench.v._take()
+        bench.v._take()
+        bench.rest()
         bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
-        bench.v._take()  # one batch
+        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")  # one batch with the command
+        bench.v._take()
         bench.rest()
         assert bench.sets() == []
         assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-        assert _sweep(bench.v.session).ended[-1] == "lock released"
+    finally:
+        bench.close()
+
+
+def test_a_part_turned_on_between_a_lock_on_and_off_of_one_batch_stays_still(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same, with the lock ON in that batch too: lock ON, the command, lock OFF."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
+    bench = Bench(tmp_path)
+    try:
+        bench.rest()
         bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+        bench.v._take()
+        bench.rest()
+        assert bench.sets() == []
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+    finally:
+        bench.close()
+
+
+def test_a_command_after_the_release_in_the_same_batch_is_taken(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The user's word after the lock OFF is a word given unlocked: it turns the rotor."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
+    bench = Bench(tmp_path)
+    try:
+        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+        bench.v._take()
+        bench.rest()
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
         bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
         bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.v._take()  # one batch, the command after the release
-        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on after")
+        bench.v._take()
+        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
+    finally:
+        bench.close()
+
+
+def test_a_stop_taken_with_a_command_put_before_it_ends_the_part_it_turned_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A STOP always wins: a command that says it does not move, put just before the stop and
+    taken in one batch with it, turns on no part that turns the rotor after the stop."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
+    bench = Bench(tmp_path)
+    try:
+        bench.rest()
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.rot.submit(Stop(Source.MQTT, WHO), "stop")
+        bench.v._take()
+        bench.rest()
+        assert bench.sets() == []
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
     finally:
         bench.close()
