@@ -613,3 +613,27 @@ def test_a_stop_taken_with_a_command_put_before_it_ends_the_part_it_turned_on(
         assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
     finally:
         bench.close()
+
+
+def test_a_part_turned_on_by_a_command_a_clearing_release_came_after_stays_still(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A stop from the stop lane holds the rotator until the main connection catches up; that
+    connection lost, the release clears what was put before it (mailbox.py rule 6: it may be an
+    older word, delivered late). A command that says it does not move, put before that
+    release and taken with it, turns on no part that turns the rotor (parts.py rule 7)."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET))
+    bench = Bench(tmp_path)
+    try:
+        bench.rest()
+        bench.rot.submit(Stop(Source.MQTT, WHO), "stop", hold=1)
+        bench.v._take()
+        bench.rest()
+        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
+        bench.rot.release(1, clear=True)
+        bench.v._take()
+        bench.rest()
+        assert bench.sets() == []
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+    finally:
+        bench.close()
