@@ -389,3 +389,53 @@ def test_messages_queued_in_a_round_wake_the_thread_once_when_the_round_ends(
         for i in range(16):
             probe.wait(lambda m, i=i: m.topic == "net/round" and m.text == str(i), start=mark)
         assert [m.text for m in probe.on("net/round")] == [str(i) for i in range(16)]
+
+
+class LongTick:
+    """select.poll for the network thread, its 1 s wait (rule 2's tick) made a long one: what
+    goes out then went out because the thread was woken, not because a second had passed."""
+
+    def __init__(self) -> None:
+        self._poll = _real_poll()
+
+    def register(self, fd: int, mask: int = select.POLLIN | select.POLLPRI) -> None:
+        self._poll.register(fd, mask)
+
+    def unregister(self, fd: int) -> None:
+        self._poll.unregister(fd)
+
+    def poll(self, timeout: float | None = None) -> list[tuple[int, int]]:
+        return self._poll.poll(600_000 if timeout == 1000 else timeout)
+
+
+_real_poll = select.poll
+
+
+def test_another_threads_message_is_not_held_back_by_a_round_under_way(
+    broker: Mosquitto, probe: Probe, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rule 6 with core/handoff.py: the serial-lines thread's statuses wait for its round to
+    end; a message another thread publishes meanwhile (an error event from a front end's
+    thread, the stop lane's marker) must not wait with them: paho asks for one wake-up per
+    queue, and the wake-up it asked the lines thread for is not given until the round ends."""
+    monkeypatch.setattr(select, "poll", LongTick)
+    with connected(broker, "net-other") as c:
+        published, release = threading.Event(), threading.Event()
+
+        def round_under_way() -> None:  # a round of the lines thread, still serving others
+            with handoff.batch():
+                c.publish("net/status", b"s", qos=0)
+                published.set()
+                release.wait(slow(30))
+
+        lines = threading.Thread(target=round_under_way, name="serial-lines")
+        mark = probe.mark()
+        lines.start()
+        try:
+            assert published.wait(slow(10))
+            c.publish("net/error", b"refused", qos=1)  # a front end's thread
+            probe.wait(lambda m: m.topic == "net/error", start=mark)
+        finally:
+            release.set()
+            lines.join()
+        probe.wait(lambda m: m.topic == "net/status", start=mark)
