@@ -38,7 +38,9 @@ Rules:
    through paho's ``on_socket_register_write``, which paho calls once until the queue has been
    written, so a reading's messages cost one wake-up between them; a message queued inside a
    round of the serial-lines thread wakes it once, when the round ends (core/handoff.py), so
-   the statuses of every rotator a round served cost one wake-up between them. It waits with
+   the statuses of every rotator a round served cost one wake-up between them; paho is then
+   told that no wake-up was asked for, so that a message another thread queues meanwhile (an
+   error event, the stop lane's marker) wakes it at once, not with the round. It waits with
    poll, not select (which refuses a descriptor above 1023, as a bridge with many clients open
    has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
@@ -212,7 +214,9 @@ class Client(paho.Client):
         """paho's on_socket_register_write: something is queued to write (any thread; inside a
         round of the serial-lines thread, once at its end: rule 6)."""
         waker = self._waker
-        if not handoff.defer(waker, waker.wake):
+        if handoff.defer(waker, waker.wake):
+            self._registered_write = False  # paho asks again: another thread's wakes at once
+        else:
             waker.wake()
 
     def _serve(self) -> None:
