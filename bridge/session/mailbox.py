@@ -57,7 +57,13 @@ Rules:
     list in the order put. One that moves is a motion command: it is put with its halt count
     (rule 10), replaces a target put before it, is replaced by a track or follow start put
     after it (the session applies those before it), and a stop, a lock ON or a clearing
-    release drops it as it drops a target. One that does not move is dropped by nothing.
+    release drops it as it drops a target. One that does not move is dropped by nothing; but
+    a stop, a lock ON or OFF and a clearing release put after it in the same batch leave a
+    mark behind it in that list (``PartsEnd``), where the session ends the parts' motion again
+    (session/parts.py rule 7): a part it turned on never turns the rotor after that stop, nor
+    once the lock it was given under is released, nor on a word the clearing dropped, though
+    the two came in one batch (the lines thread busy); one put after the mark is the later
+    word and stands.
 """
 
 from __future__ import annotations
@@ -70,6 +76,14 @@ from dataclasses import dataclass, field
 from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, combine
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
+
+
+@dataclass(frozen=True)
+class PartsEnd:
+    """Rule 12: where, among the feature commands, a stop (``stop``), a lock ON (``lock``),
+    a lock OFF (``unlock``) or a clearing release (``clear``) was put."""
+
+    what: str
 
 
 @dataclass
@@ -93,7 +107,8 @@ class Batch:
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
-    feature_commands: list[FeatureCommand] = field(default_factory=list)  # rule 12, in order
+    # rule 12, in the order put, with where a stop, lock or clearing came among them
+    feature_commands: list[FeatureCommand | PartsEnd] = field(default_factory=list)
 
     control: Control | None = None  # the control lease as the judge has it now...
     control_set: bool = False  # ...when it changed (runtime/lease.py)
@@ -115,7 +130,13 @@ class Batch:
 
     def drop_moving(self) -> None:
         """Rule 12: a stop, a lock ON or a clearing release drops the features' motion."""
-        self.feature_commands = [c for c in self.feature_commands if not c.moves]
+        kept = [c for c in self.feature_commands if isinstance(c, PartsEnd) or not c.moves]
+        self.feature_commands = kept
+
+    def mark(self, what: str) -> None:
+        """Rule 12: a stop, lock or clearing came after the feature commands put so far."""
+        if self.feature_commands and self.feature_commands[-1] != PartsEnd(what):
+            self.feature_commands.append(PartsEnd(what))
 
 
 class _Halts:
@@ -174,6 +195,7 @@ class Mailbox:
                 self._batch.follow = None  # and following (rule 9)
                 if self._batch.feature_commands:  # and a feature's motion (rule 12)
                     self._batch.drop_moving()
+                    self._batch.mark("stop")
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
             elif isinstance(command, Target):
@@ -194,6 +216,8 @@ class Mailbox:
     def put_lock(self, locked: bool, *, hold: int | None = None, wake: bool = True) -> None:
         with self._lock:
             self._batch.lock = locked
+            if not locked and self._batch.feature_commands:  # rule 12
+                self._batch.mark("unlock")
             if locked:
                 self._epoch += 1  # rule 10
                 self._batch.lock_on = True  # rule 7
@@ -202,6 +226,7 @@ class Mailbox:
                 self._batch.follow = None
                 if self._batch.feature_commands:  # rule 12
                     self._batch.drop_moving()
+                    self._batch.mark("lock")
                 self._hold(hold)
                 _Halts.count = next(_Halts.numbers)  # rule 11: once the batch holds it
         if wake:  # rule 5
@@ -217,7 +242,9 @@ class Mailbox:
                 batch.target = None
                 batch.track = None
                 batch.follow = None
-                batch.drop_moving()  # rule 12
+                if batch.feature_commands:  # rule 12
+                    batch.drop_moving()
+                    batch.mark("clear")
                 batch.hold = None  # ended with the rest: a hold put after it is newer
         self._wake_once()
 

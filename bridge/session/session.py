@@ -76,8 +76,10 @@ Rules:
    to its part by its name (parts.py rule 5), after the batch's stop, lock and fence and
    before its target; one that moves ends tracking, following and every part's own motion
    first, as a target does, and is refused while a target would be. Whatever ends tracking
-   ends a part's own motion too (``Part.end``, parts.py rule 7: a storm that begins too), and
-   no part's step gets a target through while the rotator is locked, nor in a storm but the
+   ends a part's own motion too (``Part.end``, parts.py rule 7: a storm that begins too, and
+   the lock's release), and again after the feature commands put before a stop, a lock ON
+   or OFF or a clearing release of the same batch (where mailbox.py rule 12 marks it); no
+   part's step gets a target through while the rotator is locked, nor in a storm but the
    wind's own park.
    What a part shows in the status is asked of it by its ``Part`` alone (parts.py rule 6).
 18. The status is built again only when something it shows may have changed (the values it is
@@ -114,7 +116,7 @@ from bridge.session.controller import Controller, Drop, Ends, Fed, Retry
 from bridge.session.feature_commands import Done, FeatureCommands
 from bridge.session.health import Health
 from bridge.session.link import Link
-from bridge.session.mailbox import Batch
+from bridge.session.mailbox import Batch, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.stops import CLEARED, Fence
@@ -240,7 +242,7 @@ class RotatorSession:
             self.targets.clear()
             self._taken(batch.stop.source.value, batch.stop.origin)
             ctl.stop(now, merge=True)
-        self._fence(batch, now)
+        cleared = self._fence(batch, now)
         if batch.health_reset:
             self._guarded("health", lambda: self.health.reset(), now)
         for opt in batch.options:
@@ -253,8 +255,17 @@ class RotatorSession:
             if batch.follow.on:
                 self._end_parts("follow command", now)
             self._apply(self.features.follow(batch.follow, self._refused(), now))
+        ends = {  # parts.py rule 7 where the mailbox marks them (mailbox.py rule 12)
+            "stop": "stop",
+            "lock": "lock",
+            "unlock": "lock released" if unlocked else None,
+            "clear": "a stop or lock came first" if cleared else None,
+        }
         for command in batch.feature_commands:  # rule 17, in the order they were put
-            self._feature_command(command, now)
+            if not isinstance(command, PartsEnd):
+                self._feature_command(command, now)
+            elif (why := ends[command.what]) is not None:
+                self._end_parts(why, now)
         if batch.target is not None:
             what = describe_command(batch.target)
             self._end(f"{batch.target.source.value} target", now)  # never combined
@@ -323,11 +334,13 @@ class RotatorSession:
             return "rotator offline"
         return self.wind.refusal()  # wind.py rule 1
 
-    def _fence(self, batch: Batch, now: float) -> None:
-        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited."""
-        if self.fence.apply(batch):
-            self._drop_pending(CLEARED)
-            self._end("a stop or lock came first; send the {} command again", now)
+    def _fence(self, batch: Batch, now: float) -> bool:
+        """Rule 13 (stops.Fence); a hold that ends with clearing drops what waited (True)."""
+        if not self.fence.apply(batch):
+            return False
+        self._drop_pending(CLEARED)
+        self._end("a stop or lock came first; send the {} command again", now)
+        return True
 
     def _end(self, why: str, now: float) -> None:
         """Tracking and following end (feature_commands.py), and every part's motion

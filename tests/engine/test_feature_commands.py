@@ -622,7 +622,7 @@ def test_a_part_turned_on_by_a_command_a_clearing_release_came_after_stays_still
     connection lost, the release clears what was put before it (mailbox.py rule 6: it may be an
     older word, delivered late). A command that says it does not move, put before that
     release and taken with it, turns on no part that turns the rotor (parts.py rule 7)."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET))
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
     bench = Bench(tmp_path)
     try:
         bench.rest()
