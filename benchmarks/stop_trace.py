@@ -389,12 +389,16 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                 if taker:  # the benchmark's own thread: its publish returned, it woke up
                     sent, seen = ((t - t0) * 1e3 for t in taker[:2])
                     print(f"      publish returned {sent:.1f}, the taker woke at {seen:.1f}")
-                if len(taker) > 2 and taker[2] > 0:  # the line's floor (line.py rule 7)
-                    ahead_ms, ahead = taker[2] * 1e3, taker[3]
+                ahead_ms = taker[2] * 1e3 if len(taker) > 2 else 0.0
+                broker_ms = taker[4] * 1e3 if len(taker) > 4 and taker[4] is not None else 0.0
+                if ahead_ms > 0:  # the line's floor (line.py rule 7)
                     print(
-                        f"      the line busy {ahead_ms:.1f} ms after the publish with {ahead!r} "
-                        f"(written before it): the bridge's part {lat * 1e3 - ahead_ms:.1f} ms"
+                        f"      the line busy {ahead_ms:.1f} ms after the publish with "
+                        f"{taker[3]!r} (written before it)"
                     )
+                if ahead_ms > 0 or broker_ms > 0:  # the larger floor (stop_under_load.py)
+                    floor_ms = max(ahead_ms, broker_ms)
+                    print(f"      the bridge's part {lat * 1e3 - floor_ms:.1f} ms")
                 if len(taker) > 4 and taker[4] is not None:  # the broker's delivery
                     print(
                         f"      the broker delivered it {taker[4] * 1e3:.1f} ms after the publish"

@@ -74,8 +74,11 @@ cannot start on the line before the broker delivered the STOP, nor before the li
 the earlier bytes, and each wait runs while the other does. So a stop's floor is max(wire_ahead,
 broker), not their sum, and the bridge's part is latency - max(wire_ahead, broker): everything
 from that moment on (the bridge's own steps, its pty's hop, the stop byte's own 2.1 ms on the
-line). Both floors are lower bounds of what the stop really had to wait (the bridge's
-connections get the STOP after the probe), so the bridge's part is never understated. A stop
+line). The bridge's connections get the STOP after the probe, so the broker's floor never
+counts the broker's time with the bridge's connections as the broker's; but it does count
+mosquitto waiting for a core, which the bridge's own busy threads may hold (the backlog's
+reader uses about half a core): on a 2-core host that share of the broker's time is the
+bridge's load too, and the bridge's part can understate it by that much. A stop
 whose delivery the probe did not see (its connection ended: it never reconnects, which would put
 it last) keeps the line's floor alone and is counted (``broker_missed``), never dropped. Each
 row gives the raw p50/p99/max first (what the promise judges: publish -> ``;``), the broker's

@@ -205,7 +205,7 @@ class Client(paho.Client):
             return MQTTErrorCode.MQTT_ERR_INVAL
         self._halt_t = time.monotonic()
         self._halt.set()
-        self._wake()
+        self._waker.wake()  # at once, even inside a round of the serial-lines thread
         if threading.current_thread() is not net:
             net.join()
         return MQTTErrorCode.MQTT_ERR_SUCCESS
