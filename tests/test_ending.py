@@ -13,10 +13,12 @@ import signal
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 from bridge.core.ending import Ending
 from tests.support import slow, wait_until
 
+ROOT = Path(__file__).resolve().parent.parent
 WATCHDOG = "the watchdog (nothing else ended the wait)"
 
 
@@ -128,3 +130,15 @@ def test_off_the_main_thread_no_handler_is_set() -> None:
     thread.join()
     assert seen == [before]
 
+
+def test_no_signal_handler_in_bridge_but_the_endings() -> None:
+    """A handler of its own (one that sets an Event, logs, takes any lock) could wait for ever
+    on a lock its own thread held when the signal came; ignoring a signal is no handler."""
+    found = [
+        f"{path.relative_to(ROOT)}:{n}"
+        for path in sorted((ROOT / "bridge").rglob("*.py"))
+        if path != ROOT / "bridge" / "core" / "ending.py"
+        for n, line in enumerate(path.read_text().splitlines(), 1)
+        if "signal.signal(" in line and "signal.SIG_IGN" not in line
+    ]
+    assert not found, f"a signal handler of its own, not core/ending.py's: {found}"
