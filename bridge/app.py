@@ -34,6 +34,7 @@ from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
+from bridge.core.ending import Ending
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.gs232 import EMULATIONS
@@ -631,16 +632,28 @@ class App:
 
 
 def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
-    """Run until SIGTERM/SIGINT (or ``stop_event``); exit code 0 on a clean stop."""
-    done = stop_event or threading.Event()
+    """Run until SIGTERM/SIGINT (or ``stop_event``); exit code 0 on a clean stop.
 
-    def _signal(signum: int, _frame: object) -> None:
-        log.info("%s received, shutting down", signal.Signals(signum).name)
-        done.set()
+    The signals end the wait through core/ending.py, whose handlers take no lock: one that set
+    an Event could land while this thread held that Event's own lock, and wait for ever."""
+    ending = Ending()
+    # a caller's stop_event (a test's) is set from another thread: off the main thread, where no
+    # signal is handled, the wait is on it; on the main thread, on the signals
+    on_main = threading.current_thread() is threading.main_thread()
+    wait = ending.wait if on_main or stop_event is None else stop_event.wait
+    try:
+        with ending.on_signals(signal.SIGTERM, signal.SIGINT):  # a second one: rule 3 there
+            return _serve(settings, wait, ending, stop_event)
+    finally:
+        ending.close()
 
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _signal)
-        signal.signal(signal.SIGINT, _signal)
+
+def _serve(
+    settings: Settings,
+    wait: Callable[[float], bool],
+    ending: Ending,
+    stop_event: threading.Event | None,
+) -> int:
     try:
         app = App(settings)
     except OSError as exc:  # not foreseen, but a start that cannot work all the same
@@ -650,8 +663,12 @@ def run(settings: Settings, stop_event: threading.Event | None = None) -> int:
     gc.collect()
     gc.freeze()
     try:
-        while not done.wait(1.0) and not app.failed.is_set():
-            pass
+        # app.failed and (on the main thread) stop_event are looked at once a second
+        while not wait(1.0) and not app.failed.is_set():
+            if stop_event is not None and stop_event.is_set():
+                break
+        if ending.reason is not None:
+            log.info("%s received, shutting down", ending.reason)
     finally:
         app.stop()
         gc.unfreeze()  # a caller that runs the bridge again (the tests) keeps no garbage

@@ -38,7 +38,6 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +47,7 @@ from pydantic_settings import BaseSettings, PydanticBaseSettingsSource
 from bridge import emulators
 from bridge.app import App
 from bridge.core import geo
+from bridge.core.ending import Ending
 from bridge.demo import sky as demo_sky
 from bridge.demo.console import Console
 from bridge.demo.mosquitto import BrokerError, Mosquitto, answers
@@ -230,35 +230,6 @@ def emulator_options(model: str, speed_deg_s: float) -> dict[str, Any]:
     return {k: speed_deg_s for k in ("az_speed_deg_s", "el_speed_deg_s") if k in params}
 
 
-class _Done(threading.Event):
-    """The demo's end, and what ended it first (said as it stops: a demo that ends on its own
-    is otherwise a mystery)."""
-
-    reason = ""
-
-    def end(self, reason: str) -> None:
-        if not self.is_set():
-            self.reason = reason
-        self.set()
-
-
-def _on_signals(handler: Callable[[str], None]) -> Callable[[], None]:
-    """Route SIGINT/SIGTERM/SIGHUP to `handler` (with the signal's name); returns what puts the
-    old handlers back."""
-    if threading.current_thread() is not threading.main_thread():
-        return lambda: None
-    previous = {
-        sig: signal.signal(sig, lambda signum, _frame: handler(signal.Signals(signum).name))
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-    }
-
-    def restore() -> None:
-        for sig, old in previous.items():
-            signal.signal(sig, old)
-
-    return restore
-
-
 def run(args: argparse.Namespace) -> int:
     models = [m.strip() for m in args.models.split(",") if m.strip()]
     unknown = [m for m in models if m not in emulators.EMULATORS]
@@ -269,10 +240,16 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    done = _Done()
-    restore_signals = _on_signals(done.end)  # ^C during start-up: start, then clean up at once
+    # the demo's end, and what ended it first (said as it stops: a demo that ends on its own is
+    # otherwise a mystery); its handlers take no lock (core/ending.py)
+    done = Ending()
     try:
-        with contextlib.ExitStack() as stack:  # undone in reverse on every way out (rule 3)
+        # ^C during start-up: start, then clean up at once; a second ^C while cleaning up
+        # changes nothing (core/ending.py rule 3)
+        with (
+            done.on_signals(signal.SIGINT, signal.SIGTERM, signal.SIGHUP),
+            contextlib.ExitStack() as stack,  # undone in reverse on every way out (rule 3)
+        ):
             workdir = Path(tempfile.mkdtemp(prefix="rotor-bridge-demo-"))
             stack.callback(shutil.rmtree, workdir, ignore_errors=True)
             return _run(args, models, workdir, stack, done)
@@ -280,7 +257,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"rotor-bridge demo: could not start: {exc}", file=sys.stderr)
         return 1
     finally:
-        restore_signals()
+        done.close()
 
 
 def _run(
@@ -288,7 +265,7 @@ def _run(
     models: list[str],
     workdir: Path,
     stack: contextlib.ExitStack,
-    done: _Done,
+    done: Ending,
 ) -> int:
     instance = instance_name()
     try:
@@ -366,9 +343,8 @@ def _run(
     screen.start()  # on a terminal: from here one status line, log lines above it
     if sys.stdin.isatty():
         threading.Thread(target=_read_stdin, args=(screen, console, done), daemon=True).start()
-    while not done.wait(0.2):
-        if deadline is not None and time.monotonic() >= deadline:
-            done.end("--duration-s is over")
+    if not done.wait(None if deadline is None else max(0.0, deadline - time.monotonic())):
+        done.end("--duration-s is over")
     screen.log(f"rotor-bridge demo: stopping ({done.reason})")
     return 0
 
@@ -407,7 +383,7 @@ def _print_banner(
     print("\n".join(lines), flush=True)
 
 
-def _read_stdin(screen: Screen, console: Console, done: _Done) -> None:
+def _read_stdin(screen: Screen, console: Console, done: Ending) -> None:
     quit_typed = False
 
     def handle(line: str) -> bool:

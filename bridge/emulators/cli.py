@@ -7,7 +7,8 @@ subcommand with add_arguments() and run(); `python -m bridge.emulators MODEL` ru
 Rules:
 1. stdout carries exactly the device path, then the link if one was asked for, one per line,
    flushed at once, so a script can read them; everything else goes to stderr.
-2. SIGINT and SIGTERM end it cleanly (link removed, pty closed) with exit status 0.
+2. SIGINT and SIGTERM end it cleanly (link removed, pty closed) with exit status 0, also when a
+   second one comes while it ends.
 """
 
 from __future__ import annotations
@@ -15,9 +16,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
-import threading
 from collections.abc import Sequence
-from types import FrameType
 from typing import Any
 
 from bridge.emulators import EMULATORS, LoggedFrame, start
@@ -137,32 +136,33 @@ def _print_frame(frame: LoggedFrame) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
+    # rule 2: no handler, the signals taken by sigwait (a handler that set an Event could land
+    # inside that Event's wait on this thread, holding its lock, and wait on it for ever);
+    # blocked before the emulator's thread starts, so that it blocks them too
+    signals = {signal.SIGINT, signal.SIGTERM}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, signals)
     try:
-        port = start(
-            args.model,
-            link=args.link,
-            on_frame=_print_frame if args.log_frames else None,
-            **_controller_options(args),
-        )
-    except (ValueError, OSError) as exc:
-        print(f"emulate: {exc}", file=sys.stderr)
-        return 2
-    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        print(port.path, flush=True)
-        if port.link is not None:
-            print(port.link, flush=True)
-        while not stop.wait(3600.0):
-            pass
+        try:
+            port = start(
+                args.model,
+                link=args.link,
+                on_frame=_print_frame if args.log_frames else None,
+                **_controller_options(args),
+            )
+        except (ValueError, OSError) as exc:
+            print(f"emulate: {exc}", file=sys.stderr)
+            return 2
+        try:
+            print(port.path, flush=True)
+            if port.link is not None:
+                print(port.link, flush=True)
+            signal.sigwait(signals)
+        finally:
+            port.close()
+        for _ in signal.sigpending() & signals:  # a second one meanwhile ends nothing more
+            signal.sigwait(signals)
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-        port.close()
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
     return 0
 
 

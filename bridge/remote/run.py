@@ -39,12 +39,11 @@ from __future__ import annotations
 import logging
 import secrets
 import signal
-import threading
 import time
 from dataclasses import dataclass, field
-from types import FrameType
 from typing import Protocol
 
+from bridge.core.ending import Ending
 from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.heartbeat import SILENT_S
@@ -92,7 +91,7 @@ class Remote:
     link: RemoteLink | None = None
     console: WebConsole | None = None  # rule 6
     feed: ConsoleFeed | None = None
-    stopping: threading.Event = field(default_factory=threading.Event)  # rule 1: SIGTERM
+    stopping: Ending = field(default_factory=Ending)  # rule 1: SIGTERM
     _stops: set[str] = field(default_factory=set)  # the rotators' stop topics (_last_word)
     _errors: dict[str, str] = field(default_factory=dict)  # error topic -> rotator id (rule 7)
     _locks: set[str] = field(default_factory=set)
@@ -372,18 +371,17 @@ def run(settings: RemoteSettings) -> int:
     """Serve until SIGINT or SIGTERM; StartError when it cannot start."""
     remote = Remote(settings)
     stopping = remote.stopping  # the start's wait for the station ends with it too (rule 1)
-
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        stopping.set()
-
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
-    for line in remote.start():
-        print(line, flush=True)
     try:
-        while not stopping.wait(1.0):  # a bounded wait: signals are handled between waits
-            pass
+        # the handlers take no lock (core/ending.py): one that set an Event could land inside
+        # that Event's wait on this thread, holding its lock, and wait for ever
+        with stopping.on_signals(signal.SIGINT, signal.SIGTERM):
+            for line in remote.start():
+                print(line, flush=True)
+            try:
+                stopping.wait()
+            finally:
+                remote.stop()
+                log.info("stopped")  # the last line of its log, as the bridge's
     finally:
-        remote.stop()
-        log.info("stopped")  # the last line of its log, as the bridge's
+        stopping.close()
     return 0
