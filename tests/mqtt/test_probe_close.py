@@ -15,14 +15,19 @@ import pytest
 
 from tests.support import Mosquitto, Probe
 from tests.support.mqtt import end_paho
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 
 def loop_stop_slowed(monkeypatch: pytest.MonkeyPatch, probe: Probe) -> None:
-    """paho's ``loop_stop`` takes the CPU back only once its thread has ended (a busy machine)."""
+    """paho's ``loop_stop`` takes the CPU back only once its thread has ended (a busy machine).
+    paho's thread is held in its ``on_disconnect`` until ``loop_stop`` has read it: on a quiet
+    machine the thread could otherwise end before ``loop_stop`` began, and there is no race."""
     real: Callable[[], threading.Thread] = threading.current_thread
+    read = threading.Event()  # loop_stop has read paho's thread (it asks for ours next)
+    probe.client.on_disconnect = lambda *_args: read.wait(slow(10))
 
     def current_thread() -> threading.Thread:
+        read.set()
         wait_until(lambda: getattr(probe.client, "_thread", None) is None, 10, "paho's end")
         return real()
 
