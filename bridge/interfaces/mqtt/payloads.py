@@ -397,23 +397,22 @@ def status_json(
             tail.append(f',"{block.key}":{block.render(value)}')
         else:
             doc[block.key] = block.render(value)
-    doc.update(
-        state=status.state.value,
-        moving=status.moving,
-        connected=status.connected,
-        available=status.available,
-        locked=status.locked,
-        version=status.version,
-        options={k: v for k, v in sorted(status.options.items())},
-        last_error=status.last_error,
-        last_command_source=status.last_command_source,
-        last_operator=status.last_operator,
-        control=None
-        if status.control is None
-        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
-        estimated=status.estimated,
-        time=_iso(time_unix),
+    control = status.control
+    doc["state"] = status.state.value
+    doc["moving"] = status.moving
+    doc["connected"] = status.connected
+    doc["available"] = status.available
+    doc["locked"] = status.locked
+    doc["version"] = status.version
+    doc["options"] = dict(sorted(status.options.items()))
+    doc["last_error"] = status.last_error
+    doc["last_command_source"] = status.last_command_source
+    doc["last_operator"] = status.last_operator
+    doc["control"] = (
+        None if control is None else {"holder": control.operator, "until": _iso(control.until_unix)}
     )
+    doc["estimated"] = status.estimated
+    doc["time"] = _iso(time_unix)
     text = _COMPACT.encode(doc)
     if not tail:
         return text
