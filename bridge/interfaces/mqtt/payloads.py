@@ -419,5 +419,24 @@ def status_json(
     return f"{text[:-1]}{''.join(tail)}}}"
 
 
+#: the last whole second ``_iso`` wrote, and its text up to the seconds (a tuple: replaced whole)
+_second: tuple[int, str] = (-1, "")
+
+
 def _iso(time_unix: float) -> str:
-    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
+    """``datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")``, the same
+    text: microseconds rounded half to even, as datetime rounds a timestamp, then cut to
+    milliseconds. The date and the time of day are made once per second (every status says
+    the time: most statuses of a second share them)."""
+    global _second
+    if not 0 <= time_unix < math.inf:  # (before 1970, or no number: datetime's own answer)
+        return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
+    fraction, whole = math.modf(time_unix)
+    us, second = round(fraction * 1e6), int(whole)
+    if us >= 1_000_000:
+        us -= 1_000_000
+        second += 1
+    known = _second
+    if known[0] != second:
+        known = _second = (second, datetime.fromtimestamp(second, UTC).isoformat()[:-6])
+    return f"{known[1]}.{us // 1000:03d}+00:00"
