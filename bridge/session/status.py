@@ -169,6 +169,9 @@ def _parked(rig: WorkerConfig, seen: Seen, state: MotionState) -> bool:
 
 def worth_emitting(new: RotatorStatus, old: RotatorStatus) -> bool:
     """Rule 5: the controller's clock alone is no change."""
+    bearing = new.bearing_deg
+    if bearing is not old.bearing_deg and bearing != old.bearing_deg:
+        return True  # (a turning rotor's every reading: no need to compare the other 30 fields)
     if new.controller_time == old.controller_time:
         return new != old
     return replace(new, controller_time=None) != replace(old, controller_time=None)

@@ -5,9 +5,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 from bridge.core.model import MotionState as S
+from bridge.core.model import RotatorStatus
 from bridge.protocols import REGISTRY
 from bridge.session import motion as mo
-from bridge.session.status import publishable_bearing
+from bridge.session.status import publishable_bearing, worth_emitting
 
 CFG = mo.MotionConfig(
     REGISTRY["rotorez"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5,
@@ -337,3 +338,16 @@ def test_a_refusal_of_a_new_bearing_mid_turn_keeps_the_rotor_moving_without_a_ta
     m = mo.commanded(m, CFG, 200, 10.6)  # a new bearing while it turns
     m, events = mo.refused(m, CFG, 10.62)
     assert events == [mo.Event.REFUSED] and m.state is S.MOVING and m.target_deg is None
+
+
+def test_a_status_is_worth_emitting_when_anything_but_the_controllers_clock_changed() -> None:
+    """status.py rule 5, the bearing compared first (a turning rotor's every reading)."""
+    old = RotatorStatus("r", state=S.MOVING, bearing_deg=100.0, controller_time="12:00:00")
+    assert worth_emitting(replace(old, bearing_deg=101.0), old)
+    assert worth_emitting(replace(old, bearing_deg=101.0, controller_time="12:00:01"), old)
+    assert worth_emitting(replace(old, bearing_deg=None), old)
+    assert worth_emitting(replace(old, state=S.BRAKING), old)  # the same bearing, a new state
+    assert worth_emitting(replace(old, state=S.BRAKING, controller_time="12:00:01"), old)
+    assert not worth_emitting(replace(old), old)
+    assert not worth_emitting(replace(old, bearing_deg=float("100")), old)  # equal, not the same
+    assert not worth_emitting(replace(old, controller_time="12:00:01"), old)

@@ -1,12 +1,13 @@
 from __future__ import annotations
 
 import json
+from datetime import UTC, datetime
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.core.model import MotionState, RotatorStatus
+from bridge.core.model import Control, MotionState, RotatorStatus
 from bridge.interfaces.mqtt import payloads as pl
 
 
@@ -90,6 +91,48 @@ def test_numbers_are_bare() -> None:
         "12.25",
         "360",
     ]
+
+
+def _datetime_says(time_unix: float) -> str:
+    """What R/status's times always were: datetime's own text, to the millisecond."""
+    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
+
+
+# a second's end, where datetime rounds the microseconds up into the next second (or not)
+EDGES = [
+    0.0,
+    0.9999995,
+    0.9999994999,
+    1_700_000_000.9999995,
+    1_700_000_000.0005,
+    1_700_000_000.9995,
+]
+
+
+@given(
+    st.one_of(
+        st.sampled_from(EDGES),
+        st.floats(min_value=0, max_value=4_102_444_800),
+        st.integers(0, 4_102_444_800).map(lambda s: s + 0.9999995),
+        st.tuples(st.integers(1_600_000_000, 1_900_000_000), st.integers(0, 999_999)).map(
+            lambda su: su[0] + (su[1] + 0.5) / 1e6  # half a microsecond: rounded to even
+        ),
+    )
+)
+def test_status_times_are_datetimes_text(time_unix: float) -> None:
+    """R/status's time, a lease's end and an estimated move's end read as datetime writes them,
+    rounding and all, whichever second came before (the text of a second is made once)."""
+    status = RotatorStatus(
+        "tower",
+        control=Control("DL1ABC", time_unix + 1800.0),
+        expected_end_unix=time_unix + 0.25,
+    )
+    for before in (time_unix - 1.0, time_unix):  # another second's text made last, then its own
+        pl.status_json(status, before, has_elevation=False)
+        doc = json.loads(pl.status_json(status, time_unix, has_elevation=False))
+        assert doc["time"] == _datetime_says(time_unix)
+        assert doc["control"]["until"] == _datetime_says(time_unix + 1800.0)
+        assert doc["expected_end"] == _datetime_says(time_unix + 0.25)
 
 
 def test_status_json_has_every_field() -> None:

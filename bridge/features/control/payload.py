@@ -55,10 +55,13 @@ def parse_release(payload: bytes) -> str | None:
     return valid_operator(obj.get("operator")) if isinstance(obj, dict) else None
 
 
+_FREE = json.dumps({"holder": None, "until": None}, separators=(",", ":"))  # (every status's)
+
+
 def control_json(control: Control | None) -> str:
     """Rule 3: ``R/control`` (retained)."""
     if control is None:
-        return json.dumps({"holder": None, "until": None}, separators=(",", ":"))
+        return _FREE
     doc = {"holder": control.operator, "until": control_time(control)}
     return json.dumps(doc, separators=(",", ":"))
 

@@ -397,28 +397,46 @@ def status_json(
             tail.append(f',"{block.key}":{block.render(value)}')
         else:
             doc[block.key] = block.render(value)
-    doc.update(
-        state=status.state.value,
-        moving=status.moving,
-        connected=status.connected,
-        available=status.available,
-        locked=status.locked,
-        version=status.version,
-        options={k: v for k, v in sorted(status.options.items())},
-        last_error=status.last_error,
-        last_command_source=status.last_command_source,
-        last_operator=status.last_operator,
-        control=None
-        if status.control is None
-        else {"holder": status.control.operator, "until": _iso(status.control.until_unix)},
-        estimated=status.estimated,
-        time=_iso(time_unix),
+    control = status.control
+    doc["state"] = status.state.value
+    doc["moving"] = status.moving
+    doc["connected"] = status.connected
+    doc["available"] = status.available
+    doc["locked"] = status.locked
+    doc["version"] = status.version
+    doc["options"] = dict(sorted(status.options.items()))
+    doc["last_error"] = status.last_error
+    doc["last_command_source"] = status.last_command_source
+    doc["last_operator"] = status.last_operator
+    doc["control"] = (
+        None if control is None else {"holder": control.operator, "until": _iso(control.until_unix)}
     )
+    doc["estimated"] = status.estimated
+    doc["time"] = _iso(time_unix)
     text = _COMPACT.encode(doc)
     if not tail:
         return text
     return f"{text[:-1]}{''.join(tail)}}}"
 
 
+#: the last whole second ``_iso`` wrote, and its text up to the seconds (a tuple: replaced whole)
+_second: tuple[int, str] = (-1, "")
+
+
 def _iso(time_unix: float) -> str:
-    return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
+    """``datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")``, the same
+    text: microseconds rounded half to even, as datetime rounds a timestamp, then cut to
+    milliseconds. The date and the time of day are made once per second (every status says
+    the time: most statuses of a second share them)."""
+    global _second
+    if not 0 <= time_unix < math.inf:  # (before 1970, or no number: datetime's own answer)
+        return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
+    fraction, whole = math.modf(time_unix)
+    us, second = round(fraction * 1e6), int(whole)
+    if us >= 1_000_000:
+        us -= 1_000_000
+        second += 1
+    known = _second
+    if known[0] != second:
+        known = _second = (second, datetime.fromtimestamp(second, UTC).isoformat()[:-6])
+    return f"{known[1]}.{us // 1000:03d}+00:00"

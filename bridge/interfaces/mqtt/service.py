@@ -67,6 +67,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Mapping
+from typing import Any, NamedTuple
 
 from bridge.core.errors import Refused
 from bridge.core.model import (
@@ -88,7 +89,7 @@ from bridge.core.model import (
     setting_text,
     valid_operator,
 )
-from bridge.feature import CommandTopic, registered
+from bridge.feature import CommandTopic, StateTopic, registered
 from bridge.interfaces.mqtt import payloads as pl
 from bridge.interfaces.mqtt.call_payload import Called
 from bridge.interfaces.mqtt.groups import Group, fan_out, group_available, refusals_json
@@ -154,6 +155,7 @@ class MqttService:
         self._word = self._halts.word
         self._by_call: CallAimer | None = None  # R/target {"call": ...}: the DX cluster's
         self._states = [state for f in topics.features for state in f.states]
+        self._out: dict[str, _Outbound] = {}  # each attached rotator's status topics
 
     def retain_is_live(self, v5: bool) -> None:
         """The main connection's MQTT version, before any message of a connection (``auto``
@@ -169,6 +171,7 @@ class MqttService:
         """``console``: what a console far from the station draws, in ``R/info`` too."""
         self._rotators[rotator.id] = rotator
         t = self.topics.rotator(rotator.id)
+        self._out[rotator.id] = _Outbound.of(t, rotator.spec, self._states)
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
         info = pl.info_json(
@@ -251,8 +254,7 @@ class MqttService:
         rot = self._rotators.get(rotator_id)
         if rot is None:
             return  # emitted before attach(): the first real status follows
-        spec = rot.spec
-        t = self.topics.rotator(rotator_id)
+        t = self._out[rotator_id]  # (the topics made once: a status's are the same every time)
         handed, publish = self._handed, self._publisher.publish_retained
 
         def pub(topic: str, payload: str) -> None:  # rule 3
@@ -268,14 +270,15 @@ class MqttService:
         pub(t.availability, "online" if status.available else "offline")
         if status.version:
             pub(t.version, status.version)
-        for name in spec.options:  # ON/OFF, a number, a choice's name (model.setting_text)
-            if name in status.options:
-                pub(t.option_state(name), setting_text(status.options[name]))
+        options = status.options
+        for name, topic in t.options:  # ON/OFF, a number, a choice's name (model.setting_text)
+            if name in options:
+                pub(topic, setting_text(options[name]))
         pub(t.lock_state, pl.switch(status.locked))
-        self._publish_states(rot, t, status, pub, after_status=False)
+        self._publish_states(rot, t.before, status, pub)
         shows_raw = rot.pointing.shows_raw
-        pub(t.status, pl.status_json(status, self._wall(), spec.has_elevation, shows_raw))
-        self._publish_states(rot, t, status, pub, after_status=True)  # (R/control, as ever)
+        pub(t.status, pl.status_json(status, self._wall(), t.has_elevation, shows_raw))
+        self._publish_states(rot, t.after, status, pub)  # (R/control, as ever)
         self._latest[rotator_id] = status
         for group in self._groups.values():
             if rotator_id in group.member_ids:
@@ -286,23 +289,18 @@ class MqttService:
     def _publish_states(
         self,
         rot: RotatorPort,
-        t: RotatorTopics,
+        states: tuple[tuple[StateTopic[Any], str], ...],
         status: RotatorStatus,
         pub: Callable[[str, str], None],
-        *,
-        after_status: bool,
     ) -> None:
         """The registry's state topics (bridge/feature.py ``StateTopic``) before R/status, or
-        after it."""
-        for state in self._states:
-            if state.after_status is not after_status:
-                continue
+        after it (``_Outbound``: each with its topic)."""
+        for state, topic in states:
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
             value = state.value(status)
             if value is None:
                 continue
-            topic = t.feature(state.suffix)
             if state.new_only:  # a new one after each move only (rotor health)
                 if value is self._values.get(topic):
                     continue
@@ -580,6 +578,39 @@ class MqttService:
             self._by_call(rot, command.call, command.long_path, what, by)
         elif command is not None:
             rot.submit(command, what)
+
+
+class _Outbound(NamedTuple):
+    """A rotator's status topics (topics.py), made once when it is attached: every status
+    publishes to the same strings, in this order."""
+
+    bearing: str
+    elevation: str
+    state: str
+    availability: str
+    version: str
+    options: tuple[tuple[str, str], ...]  # (a setting's name, R/option/<name>/state)
+    lock_state: str
+    status: str
+    before: tuple[tuple[StateTopic[Any], str], ...]  # the registry's state topics, before R/status
+    after: tuple[tuple[StateTopic[Any], str], ...]  # and after it
+    has_elevation: bool
+
+    @classmethod
+    def of(cls, t: RotatorTopics, spec: ModelSpec, states: list[StateTopic[Any]]) -> _Outbound:
+        return cls(
+            t.bearing,
+            t.elevation,
+            t.state,
+            t.availability,
+            t.version,
+            tuple((name, t.option_state(name)) for name in spec.options),
+            t.lock_state,
+            t.status,
+            tuple((s, t.feature(s.suffix)) for s in states if not s.after_status),
+            tuple((s, t.feature(s.suffix)) for s in states if s.after_status),
+            spec.has_elevation,
+        )
 
 
 def parse_command(
