@@ -55,10 +55,12 @@ def test_a_hang_up_counts_as_ready_as_select_had_it() -> None:
 
 
 def test_no_wait_in_bridge_calls_select() -> None:
-    """fdwait.py rule 1."""
+    """fdwait.py rule 1; core/polling.py's poller for a system without poll() (Windows, the
+    remote: its select() has no such limit) is the one exception."""
     found = [
         f"{path.relative_to(ROOT)}:{n}"
         for path in sorted((ROOT / "bridge").rglob("*.py"))
+        if path != ROOT / "bridge" / "core" / "polling.py"
         for n, line in enumerate(path.read_text().splitlines(), 1)
         if "select.select(" in line and not line.lstrip().startswith("#")
     ]

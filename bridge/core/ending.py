@@ -32,13 +32,14 @@ from __future__ import annotations
 
 import contextlib
 import math
-import select
 import signal
 import socket
 import threading
 import time
 from collections.abc import Iterator
 from types import FrameType
+
+from bridge.core.polling import POLLIN, new_poller
 
 __all__ = ["Ending"]
 
@@ -50,8 +51,8 @@ class Ending:
         self._reader, self._writer = socket.socketpair()
         self._reader.setblocking(False)
         self._writer.setblocking(False)  # set_wakeup_fd asks for it; a full socket is awake
-        self._poll = select.poll()  # not select(): a descriptor above 1023 is fine too
-        self._poll.register(self._reader, select.POLLIN)
+        self._poll = new_poller()  # poll(): a descriptor above 1023 is fine too (polling.py)
+        self._poll.register(self._reader, POLLIN)
         self._ended = False
         self.reason: str | None = None  # rule 1: the first
 

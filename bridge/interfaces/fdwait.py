@@ -19,17 +19,18 @@ Rules:
 from __future__ import annotations
 
 import math
-import select
 from collections.abc import Sequence
+
+from bridge.core.polling import POLLIN, POLLOUT, POLLPRI, new_poller
 
 __all__ = ["readable", "writable"]
 
-_IN = select.POLLIN | select.POLLPRI
-_OUT = select.POLLOUT
+_IN = POLLIN | POLLPRI
+_OUT = POLLOUT
 
 
 def _wait(fds: Sequence[int], mask: int, timeout_s: float | None) -> list[int]:
-    poller = select.poll()
+    poller = new_poller()  # poll(); on Windows (the remote) one made of select()
     for fd in fds:
         if fd >= 0:
             poller.register(fd, mask)

@@ -1,7 +1,8 @@
 """The remote is meant for the operator's own computer, Windows included: it must not need a
 module only a POSIX system has (fcntl, termios, pty: the engine's serial code and the pty
-server). Proven here by running ``rotor-bridge remote`` in a Python that refuses to import
-them, against a real broker: it gets as far as asking the broker for the station."""
+server), nor ``select.poll`` (Windows' select module has ``select()`` alone). Proven here by
+running ``rotor-bridge remote`` in a Python that refuses to import them and has no poll, against
+a real broker: it gets as far as asking the broker for the station."""
 
 from __future__ import annotations
 
@@ -15,9 +16,12 @@ from tests.support.waiting import slow
 POSIX_ONLY = ("fcntl", "termios", "pty", "tty", "resource", "grp", "pwd")
 
 RUN = f"""
+import select
 import sys
 for name in {POSIX_ONLY!r}:
     sys.modules[name] = None  # import fails, as on Windows
+for name in [n for n in dir(select) if n.startswith(("poll", "POLL", "epoll", "EPOLL"))]:
+    delattr(select, name)  # Windows' select has select() alone
 from bridge.cli import main
 try:
     main(["remote", "-c", sys.argv[1]])

@@ -60,7 +60,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import select
 import socket
 import ssl
 import threading
@@ -72,6 +71,7 @@ import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
 from bridge.core import handoff
+from bridge.core.polling import POLLERR, POLLHUP, POLLIN, POLLNVAL, POLLOUT, POLLPRI, new_poller
 from bridge.settings import MqttSettings
 
 log = logging.getLogger(__name__)
@@ -79,8 +79,8 @@ log = logging.getLogger(__name__)
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
-POLL_READ = select.POLLIN | select.POLLPRI  # rule 6: what wakes the network thread to read
-READ_EVENTS = POLL_READ | select.POLLERR | select.POLLHUP  # ... and what it then reads
+POLL_READ = POLLIN | POLLPRI  # rule 6: what wakes the network thread to read
+READ_EVENTS = POLL_READ | POLLERR | POLLHUP  # ... and what it then reads
 
 
 def acknowledge_now(sock: object) -> None:
@@ -232,8 +232,8 @@ class Client(paho.Client):
     def _reconnecting(self) -> None:
         """paho's reconnect loop (``loop_forever``'s) around ``_round``."""
         first, lost = True, False
-        poller, polled = select.poll(), -1  # the socket's descriptor in the poller, -1: none
-        poller.register(self._waker.fileno(), select.POLLIN)
+        poller, polled = new_poller(), -1  # the socket's descriptor in the poller, -1: none
+        poller.register(self._waker.fileno(), POLLIN)
         while True:
             sock = self.socket()
             if self._halt.is_set() and (sock is None or lost or not self.want_write()):
@@ -281,13 +281,13 @@ class Client(paho.Client):
         ready = pending() if pending is not None else 0
         try:
             fd = sock.fileno()
-            poller.register(fd, POLL_READ | select.POLLOUT if self.want_write() else POLL_READ)
+            poller.register(fd, POLL_READ | POLLOUT if self.want_write() else POLL_READ)
             events = poller.poll(0 if ready else 1000)
         except (OSError, TypeError, ValueError):  # closed under us: reconnect
             return False
         readable = False
         for got, mask in events:
-            if mask & select.POLLNVAL:
+            if mask & POLLNVAL:
                 return False
             if got == fd:
                 readable = bool(mask & READ_EVENTS)  # an error or a hang-up too: read, it says
