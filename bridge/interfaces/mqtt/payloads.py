@@ -419,8 +419,10 @@ def status_json(
     return f"{text[:-1]}{''.join(tail)}}}"
 
 
-#: the last whole second ``_iso`` wrote, and its text up to the seconds (a tuple: replaced whole)
-_second: tuple[int, str] = (-1, "")
+#: the whole seconds ``_iso`` wrote lately, and their text up to the seconds: a status with a
+#: lease's end (or a move's) writes two seconds each time, and both stay known
+_seconds: dict[int, str] = {}
+_SECONDS_KEPT = 8
 
 
 def _iso(time_unix: float) -> str:
@@ -428,7 +430,6 @@ def _iso(time_unix: float) -> str:
     text: microseconds rounded half to even, as datetime rounds a timestamp, then cut to
     milliseconds. The date and the time of day are made once per second (every status says
     the time: most statuses of a second share them)."""
-    global _second
     if not 0 <= time_unix < math.inf:  # (before 1970, or no number: datetime's own answer)
         return datetime.fromtimestamp(time_unix, UTC).isoformat(timespec="milliseconds")
     fraction, whole = math.modf(time_unix)
@@ -436,7 +437,9 @@ def _iso(time_unix: float) -> str:
     if us >= 1_000_000:
         us -= 1_000_000
         second += 1
-    known = _second
-    if known[0] != second:
-        known = _second = (second, datetime.fromtimestamp(second, UTC).isoformat()[:-6])
-    return f"{known[1]}.{us // 1000:03d}+00:00"
+    text = _seconds.get(second)
+    if text is None:  # (threads that miss at once each write the same text: no harm)
+        if len(_seconds) >= _SECONDS_KEPT:
+            _seconds.clear()
+        text = _seconds[second] = datetime.fromtimestamp(second, UTC).isoformat()[:-6]
+    return f"{text}.{us // 1000:03d}+00:00"
