@@ -389,6 +389,24 @@ QUIET_SWEEP = Feature(
 )
 
 
+QUIET_ON = FeatureCommand("sweep", "on", None, moves=False, origin=WHO)
+
+
+@pytest.fixture
+def quiet(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Bench]:
+    """A bench whose sweep part is turned on by a command that says it does not move."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
+    made = Bench(tmp_path)
+    yield made
+    made.close()
+
+
+def assert_still(bench: Bench) -> None:
+    """No target went out and the rotor stands where it started."""
+    assert bench.sets() == []
+    assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+
+
 @pytest.fixture
 def sweeping(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Bench]:
     monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, SWEEP_FEATURE))
@@ -508,132 +526,95 @@ def test_one_put_with_the_storms_reading_reaches_no_part(
         bench.close()
 
 
-def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_part_turned_on_while_locked_does_not_turn_the_rotor_once_unlocked(quiet: Bench) -> None:
     """parts.py rule 7: a command that says it does not move the rotor is taken while locked;
     if it turned on a part that moves, releasing the lock ends that part: the release is not
     a word to move, and the command came under the lock."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
-        bench.v._take()
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.v._take()
-        bench.rest()
-        assert _sweep(bench.v.session).on  # taken: it does not move the rotor by itself
-        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
-        bench.v._take()
-        bench.rest()
-        assert bench.sets() == []
-        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-        assert _sweep(bench.v.session).ended[-1] == "lock released"
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.v._take()
-        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.v._take()
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.v._take()
+    bench.rest()
+    assert _sweep(bench.v.session).on  # taken: it does not move the rotor by itself
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    bench.v._take()
+    bench.rest()
+    assert_still(bench)
+    assert _sweep(bench.v.session).ended[-1] == "lock released"
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.v._take()
+    bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
 
 
 def test_a_part_turned_on_under_the_lock_with_the_release_in_the_same_batch_stays_still(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    quiet: Bench,
 ) -> None:
     """parts.py rule 7: a command given under the lock, taken with the lock OFF that followed
     it (the lines thread was busy with other rotors between the two words), is still a word
     given under the lock: the part it turned on does not turn the rotor once unlocked."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
-        bench.v._take()
-        bench.rest()
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")  # one batch with the command
-        bench.v._take()
-        bench.rest()
-        assert bench.sets() == []
-        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.v._take()
+    bench.rest()
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")  # one batch with the command
+    bench.v._take()
+    bench.rest()
+    assert_still(bench)
 
 
-def test_a_part_turned_on_between_a_lock_on_and_off_of_one_batch_stays_still(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_part_turned_on_between_a_lock_on_and_off_of_one_batch_stays_still(quiet: Bench) -> None:
     """The same, with the lock ON in that batch too: lock ON, the command, lock OFF."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rest()
-        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
-        bench.v._take()
-        bench.rest()
-        assert bench.sets() == []
-        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rest()
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    bench.v._take()
+    bench.rest()
+    assert_still(bench)
 
 
-def test_a_command_after_the_release_in_the_same_batch_is_taken(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_command_after_the_release_in_the_same_batch_is_taken(quiet: Bench) -> None:
     """The user's word after the lock OFF is a word given unlocked: it turns the rotor."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rot.submit(Lock(True, origin=WHO), "lock ON")
-        bench.v._take()
-        bench.rest()
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.v._take()
-        bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rot.submit(Lock(True, origin=WHO), "lock ON")
+    bench.v._take()
+    bench.rest()
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.rot.submit(Lock(False, origin=WHO), "lock OFF")
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.v._take()
+    bench.v.run_until(lambda h: abs(h.truth().az_deg - START_AZ) > 5, 10, "turned on again")
 
 
-def test_a_stop_taken_with_a_command_put_before_it_ends_the_part_it_turned_on(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_stop_taken_with_a_command_put_before_it_ends_the_part_it_turned_on(quiet: Bench) -> None:
     """A STOP always wins: a command that says it does not move, put just before the stop and
     taken in one batch with it, turns on no part that turns the rotor after the stop."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rest()
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.submit(Stop(Source.MQTT, WHO), "stop")
-        bench.v._take()
-        bench.rest()
-        assert bench.sets() == []
-        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rest()
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.rot.submit(Stop(Source.MQTT, WHO), "stop")
+    bench.v._take()
+    bench.rest()
+    assert_still(bench)
 
 
 def test_a_part_turned_on_by_a_command_a_clearing_release_came_after_stays_still(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    quiet: Bench,
 ) -> None:
     """A stop from the stop lane holds the rotator until the main connection catches up; that
     connection lost, the release clears what was put before it (mailbox.py rule 6: it may be an
     older word, delivered late). A command that says it does not move, put before that
     release and taken with it, turns on no part that turns the rotor (parts.py rule 7)."""
-    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, QUIET_SWEEP))
-    bench = Bench(tmp_path)
-    try:
-        bench.rest()
-        bench.rot.submit(Stop(Source.MQTT, WHO), "stop", hold=1)
-        bench.v._take()
-        bench.rest()
-        bench.rot.submit(FeatureCommand("sweep", "on", None, moves=False, origin=WHO), "sweep")
-        bench.rot.release(1, clear=True)
-        bench.v._take()
-        bench.rest()
-        assert bench.sets() == []
-        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
-    finally:
-        bench.close()
+    bench = quiet
+    bench.rest()
+    bench.rot.submit(Stop(Source.MQTT, WHO), "stop", hold=1)
+    bench.v._take()
+    bench.rest()
+    bench.rot.submit(QUIET_ON, "sweep")
+    bench.rot.release(1, clear=True)
+    bench.v._take()
+    bench.rest()
+    assert_still(bench)

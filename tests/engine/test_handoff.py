@@ -8,13 +8,13 @@ import math
 import threading
 from collections.abc import Callable
 from types import SimpleNamespace
-from typing import Any
 
 import pytest
 
 from bridge.core import handoff
 from bridge.runtime.lines import Lines
 from tests.support.waiting import slow
+from tests.support.workers import StandInWorker
 
 
 def test_outside_a_round_nothing_is_owed() -> None:
@@ -77,7 +77,7 @@ def test_another_threads_wake_up_is_not_owed_to_this_threads_round() -> None:
     assert calls == ["a"]
 
 
-class RoundWorker:
+class RoundWorker(StandInWorker):
     """A worker of lines.py's protocol that is due once (at once) and whose serve runs ``job``."""
 
     def __init__(self, name: str, job: Callable[[], None], go: threading.Event) -> None:
@@ -85,15 +85,6 @@ class RoundWorker:
         self.job = job
         self.go = go  # both on the lines before either is due: one round serves both
         self.served = threading.Event()
-
-    def begin(self, now: float, wake: Callable[[], None]) -> None:
-        pass
-
-    def end(self, now: float) -> None:
-        pass
-
-    def wait_closed(self, timeout_s: float) -> bool:
-        return True
 
     def has_commands(self, ready: set[int]) -> bool:
         return False
@@ -105,9 +96,6 @@ class RoundWorker:
         if self.served.is_set():
             return [], math.inf
         return [], 0.0 if self.go.is_set() else now + 0.01
-
-    def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
-        step(now, *args)
 
     def serve(self, now: float, ready: set[int]) -> None:
         self.job()

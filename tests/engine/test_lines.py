@@ -33,6 +33,7 @@ from bridge.settings import RotatorSettings
 from tests.support import wait_until
 from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
 from tests.support.waiting import slow
+from tests.support.workers import StandInWorker
 
 Opener = Callable[[str, ModelSpec, int], serial.Serial]
 
@@ -180,7 +181,7 @@ def test_a_rotator_is_started_once(emu: EmulatedPort) -> None:
         rot.start()
 
 
-class Timed:
+class Timed(StandInWorker):
     """A stand-in worker: its serve() takes ``takes_s`` of the clock and notes the time it got."""
 
     def __init__(
@@ -204,18 +205,6 @@ class Timed:
         self.clock[0] += self.takes_s
         if len(self.given) >= 3:
             self.served.set()
-
-    def guarded(self, fn: Callable[..., object], *args: object) -> None:
-        fn(*args)
-
-    def begin(self, now: float, wake: Callable[[], None]) -> None:
-        pass
-
-    def end(self, now: float) -> None:
-        pass
-
-    def wait_closed(self, timeout_s: float) -> bool:
-        return True
 
 
 def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
