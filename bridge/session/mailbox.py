@@ -72,10 +72,13 @@ import itertools
 import os
 import threading
 from dataclasses import dataclass, field
+from typing import Literal
 
 from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, combine
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
+
+Halt = Literal["stop", "lock", "unlock", "clear"]  # what a PartsEnd marks (rule 12)
 
 
 @dataclass(frozen=True)
@@ -83,7 +86,7 @@ class PartsEnd:
     """Rule 12: where, among the feature commands, a stop (``stop``), a lock ON (``lock``),
     a lock OFF (``unlock``) or a clearing release (``clear``) was put."""
 
-    what: str
+    what: Halt
 
 
 @dataclass
@@ -133,7 +136,7 @@ class Batch:
         kept = [c for c in self.feature_commands if isinstance(c, PartsEnd) or not c.moves]
         self.feature_commands = kept
 
-    def mark(self, what: str) -> None:
+    def mark(self, what: Halt) -> None:
         """Rule 12: a stop, lock or clearing came after the feature commands put so far."""
         if self.feature_commands and self.feature_commands[-1] != PartsEnd(what):
             self.feature_commands.append(PartsEnd(what))

@@ -116,7 +116,7 @@ from bridge.session.controller import Controller, Drop, Ends, Fed, Retry
 from bridge.session.feature_commands import Done, FeatureCommands
 from bridge.session.health import Health
 from bridge.session.link import Link
-from bridge.session.mailbox import Batch, PartsEnd
+from bridge.session.mailbox import Batch, Halt, PartsEnd
 from bridge.session.motion import Motion
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.stops import CLEARED, Fence
@@ -255,7 +255,7 @@ class RotatorSession:
             if batch.follow.on:
                 self._end_parts("follow command", now)
             self._apply(self.features.follow(batch.follow, self._refused(), now))
-        ends = {  # parts.py rule 7 where the mailbox marks them (mailbox.py rule 12)
+        ends: dict[Halt, str | None] = {  # parts.py rule 7 where the mailbox marks them
             "stop": "stop",
             "lock": "lock",
             "unlock": "lock released" if unlocked else None,
