@@ -7,7 +7,8 @@ Rules:
    looked at and the likely cause (a wrong base_topic or rotator id, the bridge not running).
    A refused login or a failed TLS handshake ends the start at once, in one line that says
    which (interfaces/mqtt/remote.py rule 5).
-   SIGINT or SIGTERM meanwhile (``stopping``) ends the wait at once, as a start error.
+   SIGINT or SIGTERM meanwhile (``stopping``) ends the wait within STOP_LOOK_S, as a start
+   error.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several, also when ``B/info``
@@ -31,7 +32,9 @@ Rules:
    command went, and the operator reads here why nothing turned.
 8. The endpoints are served once the station's heartbeat was heard (a move sent at once would
    be refused until then: remote/rotator.py rule 1), or after heartbeat.py's SILENT_S without
-   one, said in the log: a station whose bridge is away still starts the remote.
+   one, said in the log: a station whose bridge is away still starts the remote. The wait is
+   said when it begins; SIGINT or SIGTERM meanwhile ends it within STOP_LOOK_S, as a start
+   error (rule 1).
 """
 
 from __future__ import annotations
@@ -59,6 +62,9 @@ from bridge.settings import ConfigError
 
 log = logging.getLogger(__name__)
 
+# rules 1 and 8: how soon a wait at start sees SIGINT or SIGTERM (the station's messages wake it
+# at once; a signal's handler may not touch the view's lock, so the wait looks this often)
+STOP_LOOK_S = 0.25
 ONE_ROTATOR_GRACE_S = 0.5  # rule 2: B/X/info may come just after B/info in one burst
 
 
@@ -147,7 +153,11 @@ class Remote:
         """Rule 8: the station's first heartbeat, for at most SILENT_S; no error without it."""
         deadline = time.monotonic() + SILENT_S
         beat = self.station.bridge_heartbeat
-        while not self.view.live_within(beat, SILENT_S) and not self.stopping.is_set():
+        if not self.view.live_within(beat, SILENT_S):
+            log.info("waiting up to %g s for the station's heartbeat on %s", SILENT_S, beat)
+        while not self.view.live_within(beat, SILENT_S):
+            if self.stopping.is_set():
+                raise StartError("stopped before the station's heartbeat was heard")
             left = deadline - time.monotonic()
             if left <= 0:
                 log.warning(
@@ -156,7 +166,7 @@ class Remote:
                     beat,
                 )
                 return
-            self.view.wait(left)
+            self.view.wait(min(left, STOP_LOOK_S))
 
     def _endpoints(self, ep: Endpoint, rot: RemoteRotator) -> list[str]:
         """The endpoint's servers added (not yet listening); what each is, for rule 3."""
@@ -254,7 +264,7 @@ class Remote:
                 raise StartError("stopped before the station's rotators were found")
             if now >= deadline or (self.link is not None and self.link.fatal):
                 raise StartError(self._missing(ep, own))
-            view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S))
+            view.wait(min(deadline - now, ONE_ROTATOR_GRACE_S, STOP_LOOK_S))
 
     def _rotator(self, ep: Endpoint, topics: RotatorTopics) -> RemoteRotator:
         raw = self.view.get(topics.info) or b""

@@ -11,6 +11,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
@@ -422,6 +423,42 @@ def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
         _, err = proc.communicate(timeout=min(slow(30), 100))
         assert proc.returncode == 2
         assert "stopped before the station's rotators were found" in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_sigterm_while_waiting_for_the_stations_heartbeat_ends_the_remote_as_a_start_error(
+    broker: Any, probe: Any, tmp_path: Path
+) -> None:
+    """The station described its rotator but its bridge is not heard: the remote waits up to
+    SILENT_S for a heartbeat. SIGTERM (or Ctrl-C) then was seen only when that wait was over,
+    and the remote went on to bind and announce its endpoints before it stopped. It says the
+    wait when it begins, ends it, exits 2 and says why, and announces nothing."""
+    probe.publish("rotor/info", INFO, retain=True)
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\n[mqtt]\nport = {broker.port}\n'
+        f"[[endpoints]]\nrotctld_port = {free_port()}\n"
+    )
+    argv = [sys.executable, "-m", "bridge", "remote", "-c", str(conf)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    err: list[str] = []
+    assert proc.stderr is not None
+    reader = threading.Thread(target=lambda: err.extend(proc.stderr or ()), daemon=True)
+    reader.start()
+    try:
+        wait_until(
+            lambda: any("waiting up to" in line and "heartbeat" in line for line in err),
+            slow(20),
+            "the remote waiting for the station's heartbeat",
+        )
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(slow(30)) == 2
+        reader.join(slow(10))
+        assert proc.stdout is not None and proc.stdout.read() == ""  # no endpoint announced
+        assert any("stopped before the station's heartbeat was heard" in line for line in err)
     finally:
         if proc.poll() is None:
             proc.kill()
