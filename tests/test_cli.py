@@ -32,13 +32,14 @@ def test_run_without_a_configuration_says_how_to_give_one() -> None:
 
 def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_options() -> None:
     """What a start of ``run`` imports is start-up CPU (benchmarks/exchange_cpu.py): not the
-    emulators, the demo, or the DX cluster's code without ``[dxcluster]``."""
+    emulators, the demo, check-config's report, or the DX cluster's code without ``[dxcluster]``."""
     code = (
         "import sys\n"
         "from bridge.cli import build_parser\n"
         "args = build_parser(sys.argv[1:]).parse_args(sys.argv[1:])\n"
         "import bridge.app\n"
-        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.interfaces.dxcluster')\n"
+        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.interfaces.dxcluster',"
+        " 'bridge.settings.report')\n"
         "print(sorted(m for m in sys.modules if m.startswith(lazy)))"
     )
     run = subprocess.run(
