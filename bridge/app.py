@@ -37,9 +37,7 @@ from typing import TYPE_CHECKING, Any
 from bridge.core.ending import Ending
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
-from bridge.interfaces.gs232 import EMULATIONS
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
-from bridge.interfaces.loggers import LoggerEndpoints
 from bridge.interfaces.mqtt.claim import Claim, Instance
 from bridge.interfaces.mqtt.client import MqttClient
 from bridge.interfaces.mqtt.connection import MQTT311_LOSES
@@ -49,12 +47,6 @@ from bridge.interfaces.mqtt.lane import StopLane
 from bridge.interfaces.mqtt.payloads import ConsoleFacts
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import DiscoveryTopics, Topics
-from bridge.interfaces.ptylines import PtyLineServer
-from bridge.interfaces.rotctld import RotctldServer
-from bridge.interfaces.tcplines import LineServer
-from bridge.interfaces.web.files import installation_secret
-from bridge.interfaces.web.view import RotatorFacts
-from bridge.interfaces.wsjtx import WsjtxListener
 from bridge.protocols.axes import Axis
 from bridge.runtime.audit import AuditTrail
 from bridge.runtime.lines import Lines
@@ -66,12 +58,18 @@ from bridge.runtime.worker import WorkerConfig
 from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
 from bridge.session.motion import MotionConfig
 from bridge.settings import ConfigError, GroupSettings, RotatorSettings, Settings
+from bridge.settings.rotator import EMULATION_KEYS
 from bridge.sky import Sky
 from bridge.sky.catalog import TleCatalog
 from bridge.sky.worker import SkyWorker
 
 if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it is on
+    from bridge.interfaces.loggers import LoggerEndpoints
+    from bridge.interfaces.ptylines import PtyLineServer
+    from bridge.interfaces.rotctld import RotctldServer
+    from bridge.interfaces.tcplines import LineServer
     from bridge.interfaces.web.server import WebConsole
+    from bridge.interfaces.wsjtx import WsjtxListener
 
 __all__ = ["App", "NotYet", "run", "worker_config"]
 
@@ -268,6 +266,7 @@ class App:
         self.web: WebConsole | None = None  # the operator console ([web])
         if settings.web.enabled:
             # aiohttp: a tenth of a start-up's CPU
+            from bridge.interfaces.web.files import installation_secret
             from bridge.interfaces.web.server import WebConsole
 
             password = settings.web.password
@@ -316,21 +315,40 @@ class App:
                 ),
             )
             if self.web is not None:
+                from bridge.interfaces.web.view import RotatorFacts
+
                 self.web.attach(rot, RotatorFacts(r.beamwidth_deg, r.nudge_step_deg))
             self.rotators.append(rot)
             self._by_id[r.id] = rot
+            # each front end's code is imported only when a rotator asks for it: what a start
+            # imports is most of its CPU (benchmarks/exchange_cpu.py, tests/test_cli.py)
             if r.rotctld_port is not None:
+                from bridge.interfaces.rotctld import RotctldServer
+
                 server = RotctldServer(
                     rot, r.rotctld_port, r.rotctld_bind, idle_timeout_s=r.rotctld_idle_timeout_s
                 )
                 self.rotctld.append(server)
-            for emulation in EMULATIONS.values():
-                self.emulations += emulation.offered(rot, r)
+            if any(
+                getattr(r, f"{key}_{where}") is not None
+                for key in EMULATION_KEYS
+                for where in ("port", "pty")
+            ):
+                from bridge.interfaces.gs232 import EMULATIONS
+
+                for emulation in EMULATIONS.values():
+                    self.emulations += emulation.offered(rot, r)
         # turned together from G/target and G/stop (interfaces/mqtt/groups.py)
         for g in settings.groups:
             self.mqtt.attach_group(group_of(g))
-        self.loggers = LoggerEndpoints()  # the loggers' UDP ports, one thread for all
+        self.loggers: LoggerEndpoints | None = None  # the loggers' UDP ports, one thread for all
         for r, rot in zip(settings.rotators, self.rotators, strict=True):
+            if r.pst_udp_port is None and r.n1mm_rotor_name is None:
+                continue
+            if self.loggers is None:
+                from bridge.interfaces.loggers import LoggerEndpoints
+
+                self.loggers = LoggerEndpoints()
             if r.pst_udp_port is not None:
                 self.loggers.add_pst(rot, r.pst_udp_port, r.pst_udp_bind)
             if r.n1mm_rotor_name is not None:
@@ -344,8 +362,12 @@ class App:
                 )
         # what WSJT-X says goes to every rotator (interfaces/wsjtx/server.py)
         wsjtx = settings.wsjtx
-        self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
-        self.wsjtx.rotators += self.rotators if wsjtx.enabled else []
+        self.wsjtx: WsjtxListener | None = None
+        if wsjtx.enabled:
+            from bridge.interfaces.wsjtx import WsjtxListener
+
+            self.wsjtx = WsjtxListener(wsjtx.port, wsjtx.bind, wsjtx.multicast_group)
+            self.wsjtx.rotators += self.rotators
         self.services: dict[str, FeatureService] = {}  # the station's features (the DX cluster)
         for feature in FEATURES:  # each imported only when its settings turn it on
             if feature.serves(settings):
@@ -570,15 +592,14 @@ class App:
                 server.listen()
             if self.loggers:
                 self.loggers.listen()
-            if self.settings.wsjtx.enabled:
+            if self.wsjtx is not None:
                 self.wsjtx.listen()
             if self.web is not None:
                 self.web.listen()
         except OSError as exc:
             for server in self._text_ports():
                 server.stop()
-            self.loggers.stop()
-            self.wsjtx.stop()
+            self._stop_udp()
             if exc.errno == errno.EADDRNOTAVAIL:  # an interface not up yet at boot
                 raise NotYet(exc.strerror or str(exc)) from None
             raise ConfigError(exc.strerror or str(exc)) from None
@@ -595,7 +616,7 @@ class App:
                 server.start()
             if self.loggers:
                 self.loggers.start()
-            if self.settings.wsjtx.enabled:
+            if self.wsjtx is not None:
                 self.wsjtx.start()
             for service in self.services.values():
                 service.start()
@@ -608,6 +629,13 @@ class App:
         started, stopped alike."""
         return [*self.rotctld, *self.emulations]
 
+    def _stop_udp(self) -> None:
+        """The loggers' and WSJT-X's UDP ports, those there are, stopped."""
+        if self.loggers is not None:
+            self.loggers.stop()
+        if self.wsjtx is not None:
+            self.wsjtx.stop()
+
     def stop(self) -> None:
         self._stopped.set()
         self.client.shutting_down()
@@ -615,8 +643,7 @@ class App:
             self.discovery.stop()
         for server in self._text_ports():
             server.stop()
-        self.loggers.stop()
-        self.wsjtx.stop()
+        self._stop_udp()
         for service in self.services.values():
             service.stop()
         if self.web is not None:
@@ -659,8 +686,9 @@ def _serve(
     except OSError as exc:  # not foreseen, but a start that cannot work all the same
         raise ConfigError(f"cannot start: {exc}") from None
     app.start()
-    # rule 12: a full collection no longer walks the start-up's 70,000 objects (30-80 ms)
-    gc.collect()
+    # rule 12: a full collection no longer walks the start-up's 70,000 objects (30-80 ms). No
+    # collection first: it walked them all once more (15 ms of the start's CPU) to free what a
+    # start leaves as garbage, some 30 KB (Home Assistant's entities, with no finalizer), kept
     gc.freeze()
     try:
         # app.failed and (on the main thread) stop_event are looked at once a second

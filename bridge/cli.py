@@ -11,7 +11,6 @@ import sys
 
 from bridge import __version__
 from bridge.settings import ConfigError, Settings, load_settings
-from bridge.settings.report import check_state_file, config_warnings, masked, summary
 
 EXIT_CONFIG = 2
 
@@ -53,6 +52,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_check_config(args: argparse.Namespace) -> int:
     """A summary, the warnings, every value with --full, and the line that says it is good
     (settings/report.py); a file that is not good is one message on stderr and exit 2."""
+    from bridge.settings.report import check_state_file, config_warnings, masked, summary
+
     settings = _load(args)
     try:
         check_state_file(settings)  # as the start tries it (settings/report.py rule 5)

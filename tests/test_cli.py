@@ -3,6 +3,7 @@ from __future__ import annotations
 import argparse
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -31,13 +32,14 @@ def test_run_without_a_configuration_says_how_to_give_one() -> None:
 
 def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_options() -> None:
     """What a start of ``run`` imports is start-up CPU (benchmarks/exchange_cpu.py): not the
-    emulators, the demo, or the DX cluster's code without ``[dxcluster]``."""
+    emulators, the demo, check-config's report, or the DX cluster's code without ``[dxcluster]``."""
     code = (
         "import sys\n"
         "from bridge.cli import build_parser\n"
         "args = build_parser(sys.argv[1:]).parse_args(sys.argv[1:])\n"
         "import bridge.app\n"
-        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.interfaces.dxcluster')\n"
+        "lazy = ('bridge.emulators', 'bridge.demo', 'bridge.interfaces.dxcluster',"
+        " 'bridge.settings.report')\n"
         "print(sorted(m for m in sys.modules if m.startswith(lazy)))"
     )
     run = subprocess.run(
@@ -50,6 +52,55 @@ def test_run_loads_neither_the_emulators_nor_the_demo_and_demo_still_has_its_opt
     assert run.stdout.strip() == "[]"
     assert "--models" in run_cli("demo", "--help").stdout
     assert "--link" in run_cli("emulate", "--help").stdout
+
+
+#: the front ends a rotator asks for with its own keys, and their code
+FRONT_ENDS = (
+    "bridge.interfaces.gs232",
+    "bridge.interfaces.loggers",
+    "bridge.interfaces.ptylines",
+    "bridge.interfaces.rotctld",
+    "bridge.interfaces.tcplines",
+    "bridge.interfaces.web",
+    "bridge.interfaces.wsjtx",
+)
+
+
+def built_app(tmp_path: Path, sections: str, rotator: str) -> list[str]:
+    """The bridge built (not started) from a configuration in a fresh interpreter: what it then
+    says of its front ends, and the front ends' modules it imported."""
+    code = f"""
+import sys
+from bridge.app import App
+from bridge.settings import settings_from
+tmp = {str(tmp_path)!r}
+rotator = {{"id": "a", "model": "rotorez", "port": tmp + "/tty", {rotator}}}
+settings = settings_from({{
+    "state_file": tmp + "/state.json", "mqtt": {{"host": "127.0.0.1", "port": 1}},
+    {sections} "rotators": [rotator]}}, {{}})
+app = App(settings)
+print(len(app.rotctld), len(app.emulations), bool(app.loggers), app.wsjtx is not None)
+print(sorted({{m.rsplit(".", 1)[0] if m.count(".") > 2 else m
+    for m in sys.modules if m.startswith({FRONT_ENDS!r})}}))
+"""
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=bridge_env()
+    )
+    return run.stdout.splitlines()
+
+
+def test_a_rotator_brings_in_only_the_front_ends_it_asks_for(tmp_path: Path) -> None:
+    """Each front end's code (rotctld, GS-232/Easycomm/DCU-1, the loggers' UDP ports, WSJT-X,
+    the console) is a part of the CPU a start takes (benchmarks/exchange_cpu.py): a rotator with
+    none of their keys imports none of them; one with all of them gets each."""
+    assert built_app(tmp_path, "", "") == ["0 0 False False", "[]"]
+    asked = (
+        '"rotctld_port": 45001, "gs232_port": 45002, "dcu1_pty": tmp + "/dcu1", '
+        '"pst_udp_port": 45003'
+    )
+    said, modules = built_app(tmp_path, '"wsjtx": {"enabled": True},', asked)
+    assert said == "1 2 True True"
+    assert modules == str(sorted(set(FRONT_ENDS) - {"bridge.interfaces.web"}))
 
 
 def subcommands() -> dict[str, argparse.ArgumentParser]:

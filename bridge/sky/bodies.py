@@ -13,14 +13,13 @@ Rules:
    ``R/tracking`` saying "off" or "sun" must mean that.
 4. What cannot be computed raises SkyError, whose ``reason`` is what a user reads when tracking
    ends for it ("satellite orbit decayed", "date beyond the ephemeris (2053)").
+5. sgp4 is imported when a TLE is first checked, not with the module, as the astronomy is
+   (positions.py rule 6): a start without satellites never needs it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-from sgp4.api import SGP4_ERRORS, Satrec
-from sgp4.io import compute_checksum
 
 KINDS = ("sun", "moon", "satellite")
 RESERVED = ("off", "sun", "moon")  # what R/track and R/tracking mean by these (rule 3)
@@ -75,6 +74,9 @@ class Body:
 
 def _tle_problem(line1: str, line2: str) -> tuple[int, str] | None:
     """(which line, what is wrong) with a TLE, or None when sgp4 can use it (rule 1)."""
+    from sgp4.api import SGP4_ERRORS, Satrec  # rule 5
+    from sgp4.io import compute_checksum
+
     for number, line in ((1, line1), (2, line2)):
         if len(line) != 69:
             return number, f"has {len(line)} characters, a TLE line has 69"

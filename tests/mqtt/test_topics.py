@@ -65,3 +65,42 @@ def test_discovery_config_topics_round_trip_and_stay_under_their_prefix() -> Non
         "ha/sensor/node/bearing/config/x",
     ):
         assert d.parse_config(other) is None, other
+
+
+def routed_one_by_one(
+    t: Topics, roots: dict[str, str], topic: str
+) -> tuple[str, str, str | None] | None:
+    """What route answers, worked out from the rotators' topics one at a time, in their order:
+    a core command, then a registered feature's command, then an option."""
+    for rid in roots:
+        r = t.rotator(rid)
+        for kind in ("target", "target_elevation", "stop", "lock", "preset", "park", "nudge"):
+            if topic == getattr(r, kind):
+                return rid, kind, None
+        for feature in t.features:
+            for command in feature.commands:
+                if topic == r.feature(command.suffix):
+                    return rid, command.kind, None
+        prefix = r.option("")
+        if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
+            return rid, "option", topic[len(prefix) :]
+    return None
+
+
+def test_route_answers_for_the_first_rotator_whose_topic_it_is_whatever_the_roots() -> None:
+    """One table built once answers as the rotators' topics looked at one by one: with one
+    rotator on the base topic, with 16, and with roots one inside another."""
+    layouts = [
+        {"tower": "rotor"},
+        {f"r{i}": f"rotor/r{i}" for i in range(16)},
+        {"a": "rotor/a", "ab": "rotor/a/b", "opt": "rotor/a/option", "base": "rotor"},
+    ]
+    for roots in layouts:
+        t = Topics("rotor", roots)
+        suffixes = {"target", "target/elevation", "stop", "lock", "preset", "park", "nudge"}
+        suffixes |= {c.suffix for f in t.features for c in f.commands}
+        suffixes |= {"option/jam", "option/jam/state", "option/", "bearing", "status", "b/target"}
+        topics = {f"{root}/{s}" for root in roots.values() for s in suffixes}
+        topics |= {"rotor", "rotor/", "other/target", "homeassistant/sensor/x/bearing/config"}
+        for topic in sorted(topics):
+            assert t.route(topic) == routed_one_by_one(t, roots, topic), topic

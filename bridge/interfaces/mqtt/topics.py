@@ -200,6 +200,12 @@ class Topics:
         _check_suffixes(self.features)
         self._rotators = {rid: RotatorTopics(root) for rid, root in roots.items()}
         self._groups = {gid: GroupTopics(root) for gid, root in (groups or {}).items()}
+        # route's table, each rotator's topics built once: every message on the main connection
+        # and the stop lane is routed, the bridge's own discovery configs coming back included
+        self._routes = tuple(
+            (rid, _core_commands(t), t.root + "/", t.root + "/option/")
+            for rid, t in self._rotators.items()
+        )
 
     @property
     def bridge_state(self) -> str:
@@ -298,27 +304,26 @@ class Topics:
         return subs
 
     def route(self, topic: str) -> tuple[str, str, str | None] | None:
-        """Map an inbound topic to (rotator id, command, argument), or None if it is not ours."""
-        for rid, t in self._rotators.items():
-            if topic == t.target:
-                return rid, "target", None
-            if topic == t.target_elevation:
-                return rid, "target_elevation", None
-            if topic == t.stop:
-                return rid, "stop", None
-            if topic == t.lock:
-                return rid, "lock", None
-            for kind in ("preset", "park", "nudge"):
-                if topic == getattr(t, kind):
-                    return rid, kind, None
-            if topic.startswith(t.root + "/"):  # a registered feature's command
-                named = self._commands.get(topic[len(t.root) + 1 :])
+        """Map an inbound topic to (rotator id, command, argument), or None if it is not ours:
+        the first rotator, in their order, whose core command, registered feature's command or
+        option it is."""
+        for rid, core, under, options in self._routes:
+            kind = core.get(topic)
+            if kind is not None:
+                return rid, kind, None
+            if topic.startswith(under):
+                named = self._commands.get(topic[len(under) :])  # a registered feature's command
                 if named is not None:
                     return rid, named, None
-            prefix = f"{t.root}/option/"
-            if topic.startswith(prefix) and "/" not in topic[len(prefix) :]:
-                return rid, "option", topic[len(prefix) :]
+                if topic.startswith(options) and "/" not in topic[len(options) :]:
+                    return rid, "option", topic[len(options) :]
         return None
+
+
+def _core_commands(t: RotatorTopics) -> dict[str, str]:
+    """A rotator's core command topics (but its options), each with its command's name."""
+    kinds = ("target", "target_elevation", "stop", "lock", "preset", "park", "nudge")
+    return {getattr(t, kind): kind for kind in kinds}
 
 
 def _check_suffixes(features: Sequence[Feature]) -> None:
