@@ -1,0 +1,118 @@
+"""Which of the bridge's threads give way when the host has more runnable threads than cores:
+the kernel's scheduling priority (a nice value) of each front-end thread.
+
+A stop is carried by a few threads and one process (the stop's path): the main thread, the
+serial-lines thread and the short-lived threads it starts to open and close ports, the stop
+lane's paho thread, the stop express's reader and the express process it starts. Everything
+else that reads what others send, or computes, is front-end work: the main connection's paho
+thread (every message parsed), the TCP and pty line servers, the loggers' and WSJT-X's UDP
+threads, the DX cluster's, the console's event loop, the sky worker, the state and audit
+writers, the TLE file watcher. On a 2-core host those keep cores busy (a backlog of targets, a
+flood of clients), and a stop's thread or process that wakes then waits in the kernel's run
+queue behind them. Lowered, they take a core only when the stop's path (and the broker, and the
+kernel's pty worker, which carry a stop too) leaves one.
+
+Rules:
+1. ``lower()`` lowers the calling thread to FRONT_NICE below the process's own priority
+   (``os.setpriority`` on the thread's own id: on Linux a nice value is a thread's), never
+   raises a thread's priority (one already lower keeps its own), and is idempotent. A
+   front-end thread is started on ``lowered(run)``, which calls it first thing (``run`` itself
+   stays callable on another thread without lowering it); ``lower(native_id)`` lowers another
+   thread of the process (the main connection's, rule 3).
+2. A thread starts with the nice value of the thread that starts it (a process too), and an
+   unprivileged process can never raise it back. So no thread or process of the stop's path is
+   ever started by a lowered thread: they are started by the main thread or by each other, and
+   a lowered thread starts only front-end work (its clients, its executor, its timers).
+3. The one exception by construction: the main connection's paho thread starts the stop lane
+   and the stop express (app.py, once the broker took the bridge). It runs at the process's
+   priority until both are started, and is lowered from then on, by the code that started them
+   (before that it has done the first look, no backlog). What it starts after that (a look's
+   timer, a hand-off) is front-end work and runs lowered.
+4. Only the service lowers (``enable``, called by app.py before it starts anything): the
+   remote (bridge/remote) runs the same rotctld server and console, and there they carry the
+   operator's stop, beside nothing busier of its own; they keep its priority.
+5. Where the system has no per-thread priority (``os.setpriority`` or
+   ``threading.get_native_id`` missing: Windows) or refuses it (a sandbox), nothing changes
+   and it is said once, at debug level.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import threading
+from collections.abc import Callable
+
+__all__ = ["FRONT_NICE", "enable", "lower", "lowered", "nice_of"]
+
+log = logging.getLogger(__name__)
+
+FRONT_NICE = 10  # rule 1: how far below the process's priority front-end work runs
+MAX_NICE = 19  # the lowest priority there is
+
+_setpriority = getattr(os, "setpriority", None)
+_getpriority = getattr(os, "getpriority", None)
+_PRIO_PROCESS: int | None = getattr(os, "PRIO_PROCESS", None)
+_said = False  # rule 5: once
+_enabled = False  # rule 4
+
+
+def _nice(native_id: int) -> int | None:
+    if _getpriority is None or _PRIO_PROCESS is None:
+        return None
+    try:
+        return int(_getpriority(_PRIO_PROCESS, native_id))
+    except OSError:
+        return None
+
+
+# rule 1: the process's own priority, as the thread that imports this (the main thread) has it
+_BASE = _nice(threading.get_native_id()) if hasattr(threading, "get_native_id") else None
+
+
+def nice_of(native_id: int) -> int | None:
+    """A thread's nice value (None where the system has none: rule 5)."""
+    return _nice(native_id)
+
+
+def enable() -> None:
+    """Rule 4: ``lower`` lowers from now on, in this process (the service's)."""
+    global _enabled
+    _enabled = True
+
+
+def lower(native_id: int | None = None) -> None:
+    """Rule 1: the calling thread (or ``native_id``, a thread of this process) at FRONT_NICE
+    below the process; never raised, never raises."""
+    if not _enabled:
+        return
+    if _setpriority is None or _PRIO_PROCESS is None or _BASE is None:
+        _say("this system has no per-thread priority")
+        return
+    tid = threading.get_native_id() if native_id is None else native_id
+    target = min(MAX_NICE, _BASE + FRONT_NICE)
+    now = _nice(tid)
+    if now is not None and now >= target:
+        return  # already as low (rule 1: never raised)
+    try:
+        _setpriority(_PRIO_PROCESS, tid, target)
+    except OSError as exc:
+        _say(f"cannot lower a thread's priority: {exc}")
+
+
+def lowered(run: Callable[[], None]) -> Callable[[], None]:
+    """Rule 1 as a thread's target: ``run`` on a thread lowered first (the thread's code stays
+    callable on any other thread, a test's, without lowering that one)."""
+
+    def _lowered() -> None:
+        lower()
+        run()
+
+    return _lowered
+
+
+def _say(why: str) -> None:
+    global _said
+    if not _said:
+        _said = True
+        log.debug("front-end threads run at the process's priority: %s", why)
