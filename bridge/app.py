@@ -421,6 +421,9 @@ class App:
             on_release=lambda rid, n: self._by_id[rid].express_release(n),
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
+        # core/priority.py rule 4: the front ends give way only where no stop needs this
+        # process's interpreter lock, every rotator's first stop frame being the express's
+        self._lower_front_ends = len(frames) == len(settings.rotators) > 0
         return express
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
@@ -567,7 +570,8 @@ class App:
 
     def start(self) -> None:
         """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
-        priority.enable()  # the front ends give way to the stop's path (core/priority.py)
+        if self._lower_front_ends:  # the front ends give way to the stop's path (rule 4 there)
+            priority.enable()
         # the sky worker computes in Python for up to a second; a thread waking for a stop waits
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)

@@ -28,9 +28,16 @@ Rules:
    priority until both are started, and is lowered from then on, by the code that started them
    (before that it has done the first look, no backlog). What it starts after that (a look's
    timer, a hand-off) is front-end work and runs lowered.
-4. Only the service lowers (``enable``, called by app.py before it starts anything): the
-   remote (bridge/remote) runs the same rotctld server and console, and there they carry the
-   operator's stop, beside nothing busier of its own; they keep its priority.
+4. Only the service lowers (``enable``, called by app.py before it starts anything), and only
+   when the stop express (interfaces/mqtt/express.py, a process of its own) writes the first
+   stop frame of every one of its rotators. A stop carried inside the bridge (a SPID's, a
+   SatEL's, an RC2800's, a rotator of two boxes, all with the express off) needs this
+   process's interpreter lock on the stop lane's thread and the serial-lines thread; a lowered
+   thread that holds that lock is the first the kernel preempts for another program, and the
+   stop would wait for it to be scheduled again (a priority inversion, measured when an earlier
+   tree lowered its front ends without the express). The remote (bridge/remote) runs the same
+   rotctld server and console, and there they carry the operator's stop, beside nothing
+   busier of its own; it never lowers.
 5. Where the system has no per-thread priority (``os.setpriority`` or
    ``threading.get_native_id`` missing: Windows) or refuses it (a sandbox), nothing changes
    and it is said once, at debug level.

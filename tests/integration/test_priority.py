@@ -51,6 +51,7 @@ def named(prefix: str) -> list[threading.Thread]:
 @pytest.fixture(autouse=True)
 def _express_on(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(Rig, "express", True)
+    monkeypatch.setattr(priority, "_enabled", False)  # as a new process has it (rule 4)
 
 
 def _front_ends(rig: Rig) -> tuple[int, socket.socket]:
@@ -170,3 +171,22 @@ def test_only_a_process_that_enabled_it_lowers_its_front_ends(
 
 def own_nice() -> int:
     return nice(threading.get_native_id())
+
+
+def test_a_bridge_whose_stops_the_express_does_not_all_carry_lowers_nothing(rig: Rig) -> None:
+    """core/priority.py rule 4: a SPID's stop is carried inside the bridge (the stop lane, the
+    serial-lines thread), under the interpreter lock a lowered front end may hold while the
+    kernel runs another program: with such a rotator nothing is lowered."""
+    rotctld = free_port()
+    rig.add("tower", rotctld_port=rotctld)
+    rig.add("dish", model="rot2prog")
+    app = rig.start()
+    rig.ready("tower")
+    rig.ready("dish")
+    base = own_nice()
+    with socket.create_connection(("127.0.0.1", rotctld), timeout=slow(10)) as c:
+        c.sendall(b"p\n")
+        assert c.recv(64)
+        threads = [app.client._client.network_thread, *named("rotctld-tower")]
+        assert len(threads) >= 3  # the main connection, the listener, the client's thread
+        assert {nice(tid_of(t)) for t in threads} == {base}
