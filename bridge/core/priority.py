@@ -38,7 +38,13 @@ Rules:
    tree lowered its front ends without the express). The remote (bridge/remote) runs the same
    rotctld server and console, and there they carry the operator's stop, beside nothing
    busier of its own; it never lowers.
-5. Where the system has no per-thread priority (``os.setpriority`` or
+5. The stop express's process raises itself (``raise_express``, first thing, before it starts
+   a thread: they inherit it) EXPRESS_RAISE steps above the priority it was started with,
+   where the system lets it: as root, with CAP_SYS_NICE, or under a nice limit that allows it
+   (the systemd unit's ``LimitNICE``). A process of its own, it holds no lock any thread of the
+   bridge waits for, so raising it makes nothing wait behind it but other programs; where it
+   may not, it keeps the priority it has, said once at debug level.
+6. Where the system has no per-thread priority (``os.setpriority`` or
    ``threading.get_native_id`` missing: Windows) or refuses it (a sandbox), nothing changes
    and it is said once, at debug level.
 """
@@ -50,17 +56,19 @@ import os
 import threading
 from collections.abc import Callable
 
-__all__ = ["FRONT_NICE", "enable", "lower", "lowered", "nice_of"]
+__all__ = ["EXPRESS_RAISE", "FRONT_NICE", "enable", "lower", "lowered", "nice_of", "raise_express"]
 
 log = logging.getLogger(__name__)
 
 FRONT_NICE = 10  # rule 1: how far below the process's priority front-end work runs
+EXPRESS_RAISE = 10  # rule 5: how far above its starter's priority the stop express runs
+MIN_NICE = -20  # the highest priority there is
 MAX_NICE = 19  # the lowest priority there is
 
 _setpriority = getattr(os, "setpriority", None)
 _getpriority = getattr(os, "getpriority", None)
 _PRIO_PROCESS: int | None = getattr(os, "PRIO_PROCESS", None)
-_said = False  # rule 5: once
+_said = False  # rule 6: once
 _enabled = False  # rule 4
 
 
@@ -78,7 +86,7 @@ _BASE = _nice(threading.get_native_id()) if hasattr(threading, "get_native_id") 
 
 
 def nice_of(native_id: int) -> int | None:
-    """A thread's nice value (None where the system has none: rule 5)."""
+    """A thread's nice value (None where the system has none: rule 6)."""
     return _nice(native_id)
 
 
@@ -123,3 +131,19 @@ def _say(why: str) -> None:
     if not _said:
         _said = True
         log.debug("front-end threads run at the process's priority: %s", why)
+
+
+def raise_express() -> int | None:
+    """Rule 5: this process (the stop express, before any thread of its own) EXPRESS_RAISE
+    above the priority it started with, where the system allows it; its nice value after."""
+    if _setpriority is None or _PRIO_PROCESS is None or not hasattr(threading, "get_native_id"):
+        return None
+    tid = threading.get_native_id()
+    now = _nice(tid)
+    if now is None:
+        return None
+    try:
+        _setpriority(_PRIO_PROCESS, tid, max(MIN_NICE, now - EXPRESS_RAISE))
+    except OSError as exc:  # EACCES/EPERM: no privilege, or above the nice limit
+        log.debug("the stop express runs at its starter's priority: %s", exc)
+    return _nice(tid)
