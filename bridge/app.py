@@ -34,7 +34,6 @@ from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from bridge.core import priority
 from bridge.core.ending import Ending
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
@@ -443,9 +442,6 @@ class App:
             on_release=lambda rid, n: self._by_id[rid].express_release(n),
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
-        # core/priority.py rule 4: the front ends give way only where no stop needs this
-        # process's interpreter lock, every rotator's first stop frame being the express's
-        self._lower_front_ends = len(frames) == len(settings.rotators) > 0
         return express
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
@@ -560,10 +556,6 @@ class App:
                 self.lane.use_mqtt311()
             self.lane.start()
             self.express.start(mqtt311=not self.client.v5)
-        # core/priority.py rule 3: the stop lane's and the express's threads were started by
-        # this one at the process's priority; from now on it gives way to them (it parses
-        # every message the main connection reads, a backlog of targets included)
-        self.client.lower_priority()
         stepped_down = self.settings.mqtt.protocol == "auto" and not self.client.v5
         if stepped_down != (STEPPED_DOWN in self.client.problems):
             # said while it lasts (interfaces/mqtt/connection.py rule 1); not on paho's thread,
@@ -592,8 +584,6 @@ class App:
 
     def start(self) -> None:
         """ConfigError, before anything runs or is published, if a rotctld port cannot be had."""
-        if self._lower_front_ends:  # the front ends give way to the stop's path (rule 4 there)
-            priority.enable()
         # the sky worker computes in Python for up to a second; a thread waking for a stop waits
         # for the interpreter lock up to this long, each time it takes it (5 ms by default)
         sys.setswitchinterval(GIL_SWITCH_S)
@@ -620,8 +610,7 @@ class App:
         for rot in self.rotators:
             rot.start()  # the lines thread publishes its status, the first one included
         if self.settings.tracking.tle_file is not None and self.discovery is not None:
-            watch = priority.lowered(self._watch_catalog)  # no stop waits for it
-            threading.Thread(target=watch, name="tle-file", daemon=True).start()
+            threading.Thread(target=self._watch_catalog, name="tle-file", daemon=True).start()
         try:
             for server in self._text_ports():
                 server.start()

@@ -10,8 +10,6 @@ Rules:
 4. ``queue`` puts a job in line without starting the thread, for a caller under a lock of its
    own (starting a thread waits until it runs, milliseconds on a busy machine); it calls
    ``wake`` once it has let go, and rule 3 holds again from then on.
-5. With ``lower``, each thread lowers its own priority as it starts (core/priority.py rule 1):
-   work no stop waits for (the sky worker's, the state file's writer).
 """
 
 from __future__ import annotations
@@ -21,15 +19,12 @@ import queue
 import threading
 from collections.abc import Callable
 
-from bridge.core import priority
-
 log = logging.getLogger(__name__)
 
 
 class OnDemandThread:
-    def __init__(self, name: str, idle_s: float = 30.0, *, lower: bool = False) -> None:
+    def __init__(self, name: str, idle_s: float = 30.0) -> None:
         self._name = name
-        self._lower = lower  # rule 5
         self._idle_s = idle_s
         self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
         self._lock = threading.Lock()
@@ -47,8 +42,7 @@ class OnDemandThread:
         """Rule 4: a thread for the jobs in line, if none runs (nothing in line: none)."""
         with self._lock:
             if self._thread is None and not self._jobs.empty():
-                run = priority.lowered(self._run) if self._lower else self._run  # rule 5
-                self._thread = threading.Thread(target=run, name=self._name, daemon=True)
+                self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
                 self._thread.start()
 
     def _run(self) -> None:

@@ -69,7 +69,6 @@ import tty
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge.core import priority
 from bridge.core.ratelimit import Budget
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.tcplines import RATE_BYTES_S, READ_BYTES, REPLY_COST
@@ -195,10 +194,8 @@ class PtyLineServer:
         """Link (OSError as ``listen``) and serve in a thread."""
         self.listen()
         self._wake_r, self._wake_w = os.pipe()
-        self._thread = threading.Thread(  # front-end work (core/priority.py)
-            target=priority.lowered(self._serve),
-            name=f"{self._key}-pty-{self.rotator_id}",
-            daemon=True,
+        self._thread = threading.Thread(
+            target=self._serve, name=f"{self._key}-pty-{self.rotator_id}", daemon=True
         )
         self._thread.start()
         log.info("%s for %s on %s (%s)", self.label, self.rotator_id, self.path, self.slave_name)

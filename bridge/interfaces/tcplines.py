@@ -71,7 +71,6 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
-from bridge.core import priority
 from bridge.core.ratelimit import Budget, TokenBucket
 
 log = logging.getLogger(__name__)
@@ -310,10 +309,8 @@ class LineServer:
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = False
         self._ended.clear()
-        self._accept_thread = threading.Thread(  # front-end work, its clients too: they inherit
-            target=priority.lowered(self._accept_loop),  # its priority (core/priority.py)
-            name=f"{self._key}-{self.rotator_id}",
-            daemon=True,
+        self._accept_thread = threading.Thread(
+            target=self._accept_loop, name=f"{self._key}-{self.rotator_id}", daemon=True
         )
         self._accept_thread.start()
         log.info("%s for %s listening on %s:%d", self.label, self.rotator_id, *self.address)

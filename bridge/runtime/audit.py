@@ -39,7 +39,6 @@ from functools import partial
 from pathlib import Path
 from typing import Protocol
 
-from bridge.core import priority
 from bridge.core.model import AuditEvent, ErrorKind
 
 log = logging.getLogger(__name__)
@@ -82,10 +81,7 @@ class AuditFile:
         self.write_failures = 0  # rule 3: writes that failed (each ends its batch)
         self._unsaid = 0  # rule 3: lines lost to failed writes, not said in a line yet
         self._os_write = os_write  # (tests give a disk that fails their way)
-        # no stop waits for it (core/priority.py)
-        self._thread = threading.Thread(
-            target=priority.lowered(self._run), name="audit", daemon=True
-        )
+        self._thread = threading.Thread(target=self._run, name="audit", daemon=True)
 
     def start(self) -> None:
         self._thread.start()

@@ -24,9 +24,7 @@ Rules:
    option set from an MQTT callback must not hold that connection (and a stop behind it) for
    an fsync, tens of milliseconds on an SD card. ``flush`` waits for what was asked so far.
    ``queue`` is ``later`` for a rotator's owner step (kept.py rule 5): the save is in line, in
-   the order of the decisions, before the step lets go; ``wake`` then starts the writer. The
-   writer runs below the process's priority (core/priority.py): nothing waits for it but
-   ``flush``, and only it takes the store's lock once the bridge runs.
+   the order of the decisions, before the step lets go; ``wake`` then starts the writer.
 6. The control lease is kept as ``lease``: ``{"operator": ..., "until": <unix seconds>}``. One
    that is malformed is ignored (the lease is free: it only coordinates, and locks nothing).
 """
@@ -90,7 +88,7 @@ class StateStore:
     def __init__(self, path: Path | None) -> None:
         self._path = path
         self._lock = threading.Lock()
-        self._writer = OnDemandThread("state", lower=True)  # rule 5
+        self._writer = OnDemandThread("state")  # rule 5
         self._data: dict[str, dict[str, object]] = {}
         self.corrupt = False
         self.problems: dict[str, str] = {}  # rotator id -> what was wrong with its entry

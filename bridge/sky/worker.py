@@ -19,8 +19,7 @@ Rules:
    ephemeris (2053)") or, for a look-up, the refusal. A bug is logged and answered as a failure.
 3. One thread, started with the first question and ending after IDLE_EXIT_S with nothing to do;
    questions are answered in the order asked, each callback called on this thread (it must only
-   queue, as worker.py's does). It runs below the process's priority (core/priority.py): no
-   stop waits for it.
+   queue, as worker.py's does).
 """
 
 from __future__ import annotations
@@ -105,7 +104,7 @@ class SkyWorker:
 
     def __init__(self, compute: Callable[[Question], Answer] = answer) -> None:
         self._compute = compute
-        self._thread = OnDemandThread("sky", IDLE_EXIT_S, lower=True)  # core/priority.py
+        self._thread = OnDemandThread("sky", IDLE_EXIT_S)
         self._kept: OrderedDict[PositionsQuestion, Answer] = OrderedDict()
 
     def ask(self, question: Question, deliver: Deliver) -> None:

@@ -48,7 +48,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from bridge.core import priority
 from bridge.core.errors import Refused
 from bridge.core.model import Origin, Source, Toward
 from bridge.core.ratelimit import Budget
@@ -131,8 +130,7 @@ class DxCluster:
     def start(self) -> None:
         self._publish()  # an empty list at first: no stale spots from a run before
         for target, name in ((self._run, "dxcluster"), (self._aim_loop, "dxcluster-aim")):
-            # front-end work (core/priority.py)
-            thread = threading.Thread(target=priority.lowered(target), name=name, daemon=True)
+            thread = threading.Thread(target=target, name=name, daemon=True)
             thread.start()
             self._threads.append(thread)
         log.info("DX cluster: connecting to %s:%d as %s", self.host, self.port, self.login)

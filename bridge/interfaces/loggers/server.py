@@ -48,7 +48,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from bridge.core import priority
 from bridge.core.ratelimit import SourceBudgets
 from bridge.interfaces.fdwait import readable
 from bridge.interfaces.loggers.commands import (
@@ -179,10 +178,7 @@ class LoggerEndpoints:
                 )
             log.info("logger UDP port %s (%s) listening", where, _kind(endpoint))
         self._wake_r, self._wake_w = os.pipe()
-        # front-end work (core/priority.py)
-        self._thread = threading.Thread(
-            target=priority.lowered(self._loop), name="loggers", daemon=True
-        )
+        self._thread = threading.Thread(target=self._loop, name="loggers", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:

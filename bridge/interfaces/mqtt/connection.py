@@ -84,7 +84,6 @@ from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
 from paho.mqtt.subscribeoptions import SubscribeOptions
 
-from bridge.core import priority
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.paho_client import accepts_mqtt311, new_client
 from bridge.settings import MqttSettings
@@ -381,13 +380,6 @@ class Connection:
     def protocol(self) -> str:
         """The MQTT version this connection speaks now (rule 1): "MQTT 5" or "MQTT 3.1.1"."""
         return "MQTT 5" if self._v5 else "MQTT 3.1.1"
-
-    def lower_priority(self) -> None:
-        """This connection's paho thread below the process's priority from now on
-        (core/priority.py rule 3: the main connection's, once the stop's path is started)."""
-        thread = self._client.network_thread
-        if thread is not None and thread.native_id is not None:
-            priority.lower(thread.native_id)
 
     def use_mqtt311(self) -> None:
         """MQTT 3.1.1 from the next connection on (rule 1; the stop lane follows the main

@@ -137,7 +137,6 @@ from typing import Any
 
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.core import priority
 from bridge.core.afterlock import later
 from bridge.interfaces.fdwait import writable
 from bridge.interfaces.mqtt.connection import STABLE_S, Connection, Ending, takeover_message
@@ -1001,7 +1000,6 @@ def main(argv: list[str]) -> int:
         level=config.get("log_level", logging.INFO),
         format="stop express: %(levelname)s %(message)s",
     )
-    priority.raise_express()  # core/priority.py rule 5: before any thread, which inherits it
     child = _Child(sock, config)
     child.link._connect()
     try:

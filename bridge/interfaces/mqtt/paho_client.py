@@ -198,11 +198,6 @@ class Client(paho.Client):
         self._net.start()
         return MQTTErrorCode.MQTT_ERR_SUCCESS
 
-    @property
-    def network_thread(self) -> threading.Thread | None:
-        """Rule 6's thread, while it runs."""
-        return self._net
-
     def loop_stop(self) -> MQTTErrorCode:
         """Ends the network thread once the queue is written, and joins it (not from it)."""
         net = self._net

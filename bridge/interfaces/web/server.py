@@ -52,7 +52,6 @@ from collections.abc import Awaitable, Callable
 from aiohttp import web
 
 from bridge import __version__
-from bridge.core import priority
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import ErrorEvent, Origin, RotatorStatus, Source
 from bridge.interfaces.web import auth, view
@@ -152,9 +151,7 @@ class WebConsole:
         loop runs on that thread from the start: the caller's thread may have a loop of its own
         running (a script, a test driving a browser)."""
         loop = self._loop = asyncio.new_event_loop()
-        # front-end work, its executors too: they inherit its priority (core/priority.py)
-        run = priority.lowered(loop.run_forever)
-        self._thread = threading.Thread(target=run, name="web", daemon=True)
+        self._thread = threading.Thread(target=loop.run_forever, name="web", daemon=True)
         self._thread.start()
         try:
             asyncio.run_coroutine_threadsafe(self._start(), loop).result(timeout=30.0)

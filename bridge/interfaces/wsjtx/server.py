@@ -43,7 +43,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from bridge.core import priority
 from bridge.core.ratelimit import SourceBudgets
 from bridge.interfaces.wsjtx.messages import Malformed, Status, decode
 from bridge.session.follow import Heard
@@ -153,10 +152,7 @@ class WsjtxListener:
         group = f" (multicast group {self.multicast_group})" if self.multicast_group else ""
         log.info("WSJT-X UDP port %s:%d listening%s", host, port, group)
         self._wake_r, self._wake_w = os.pipe()
-        # front-end work (core/priority.py)
-        self._thread = threading.Thread(
-            target=priority.lowered(self._loop), name="wsjtx", daemon=True
-        )
+        self._thread = threading.Thread(target=self._loop, name="wsjtx", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 3.0) -> None:
