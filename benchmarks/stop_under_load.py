@@ -35,7 +35,8 @@ of its own every 5 ms, benchmarks/ptyhop.py), and the focused mode below shows i
 off: the stop's frame written by the bridge's process alone), to compare in turns.
 ``STOP_ONLY=trackings`` takes the control and the trackings only (no other load, no pairs; with
 ``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns;
-``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table).
+``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table);
+``STOP_ONLY=rotctld`` (``gs232``, ``easycomm``) the control and that port's 16 TCP clients.
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
@@ -1357,13 +1358,13 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
     focused = {
         "trackings": lambda lo: tracking_phase(lo, TRACKING_LOAD, n),
         "backlog": lambda lo: backlog_phase(lo, BACKLOG_LOAD, n),
+        **{proto: (lambda lo, proto=proto: tcp_phase(lo, proto, n)) for proto in TCP_LABELS},
     }
     if ONLY is not None and ONLY not in focused:
         raise BenchError(f"STOP_ONLY={ONLY!r}: one of {', '.join(focused)}")
     with Scope(scope.workdir / "loaded") as inner:
         lo = start_loaded(inner, rng)
         ABORT.wait(2.0)  # past the start-up
-        tcp = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS}
         phases.append(simple_phase(lo, CONTROL, n, None, None))
         if ONLY is not None:
             phases.append(focused[ONLY](lo))
@@ -1371,10 +1372,8 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
         phases.append(backlog_phase(lo, BACKLOG_LOAD, n))
         if trace is not None:
             return _traced(result, lo, phases, n, trace)
-        for proto, label in (("rotctld", "rotctld"), ("gs232", "GS-232"), ("easycomm", "Easycomm")):
-            args = {**tcp, "port": lo.ports[proto], "proto": proto}
-            label = f"{label}: 16 TCP clients"
-            phases.append(loader_phase(lo, label, n, "tcp", args, tcp=[lo.ports[proto]]))
+        for proto in TCP_LABELS:
+            phases.append(tcp_phase(lo, proto, n))
         udp = {"pst": lo.ports["pst"], "n1mm": lo.ports["n1mm"], "wsjtx": lo.ports["wsjtx"]}
         label = "PST + N1MM + WSJT-X UDP floods"
         args = {**udp, "rate": UDP_RATE}
@@ -1395,6 +1394,16 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
     report_loads(result, phases, missed, lo.hop, lo.probe)
     report_pairs(result, pairs(scope, n_pairs, rng), n_pairs)
     return result
+
+
+TCP_LABELS = {"rotctld": "rotctld", "gs232": "GS-232", "easycomm": "Easycomm"}
+
+
+def tcp_phase(lo: Loaded, proto: str, n: int) -> PhaseResult:
+    """16 TCP clients on m0's port of ``proto`` (module docstring)."""
+    args = {"clients": TCP_CLIENTS, "queries": TCP_QUERY_CLIENTS, "port": lo.ports[proto]}
+    label = f"{TCP_LABELS[proto]}: 16 TCP clients"
+    return loader_phase(lo, label, n, "tcp", {**args, "proto": proto}, tcp=[lo.ports[proto]])
 
 
 def _traced(
