@@ -111,6 +111,17 @@ Rules:
    waited for, until it takes bytes again or a new port is handed over, or the one thread that
    writes every rotator's frame would spend that wait again at each of its stops, with another
    rotator's stop behind it.
+10. Ahead of busy programs: the express raises its own process EXPRESS_RAISE nice steps above
+   the priority it was started with, first thing (its threads inherit it), where the system
+   lets it: as root, with CAP_SYS_NICE, or under a nice limit that allows it (the systemd
+   unit's ``LimitNICE=-10``); elsewhere it runs at the bridge's priority, said at debug. On a
+   host whose cores a broker, a backlog's reader or another program keep busy, its frame then
+   waits for no one of them. It holds no lock a thread of the bridge waits for, so no stop
+   carried in the bridge waits behind it for that; what it does is bounded by what it reads
+   (rule 3: a frame per stop or lock ON, per rotator). The bridge's own threads keep its
+   priority: a stop read by any of them (rotctld's, a logger's, the console's) is carried
+   under the interpreter lock, and a lowered thread holding that lock while the kernel runs
+   another program would keep such a stop waiting (docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -147,6 +158,7 @@ from bridge.settings import MqttSettings
 log = logging.getLogger(__name__)
 
 START_WAIT_S = 10.0  # rule 6: said when the express is not up by then
+EXPRESS_RAISE = 10  # rule 10: nice steps above the bridge, where the system allows it
 DROP_WAIT_S = 1.0  # rule 5
 STOP_WAIT_S = 2.0  # rule 7
 GAP_S = 0.1  # rule 3: one stop frame a rotator in this long, at most
@@ -988,6 +1000,17 @@ def _switch_on(payload: bytes) -> bool:
         return False
 
 
+def _raise_priority() -> None:
+    """Rule 10: this process EXPRESS_RAISE above the priority it started with, where allowed."""
+    if not hasattr(os, "setpriority"):  # Windows: never the service's express
+        return
+    try:
+        now = os.getpriority(os.PRIO_PROCESS, 0)
+        os.setpriority(os.PRIO_PROCESS, 0, max(-20, now - EXPRESS_RAISE))
+    except OSError as exc:  # EACCES/EPERM: no privilege, or above the nice limit
+        log.debug("runs at the bridge's priority: %s", exc)
+
+
 def main(argv: list[str]) -> int:
     sock = socket.socket(fileno=int(argv[1]))
     data = sock.recv(_PACKET)
@@ -1000,6 +1023,7 @@ def main(argv: list[str]) -> int:
         level=config.get("log_level", logging.INFO),
         format="stop express: %(levelname)s %(message)s",
     )
+    _raise_priority()  # rule 10: before any thread, which inherits it
     child = _Child(sock, config)
     child.link._connect()
     try:
