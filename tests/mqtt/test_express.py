@@ -370,6 +370,39 @@ def test_a_write_the_tty_refuses_whole_is_made_when_it_takes_bytes_again(
         rig.mine.close()
 
 
+def test_a_write_the_tty_refuses_whole_is_tried_again_after_a_pause_not_in_a_spin(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The express runs ahead of the bridge's threads (rule 10): the writer inside its own write
+    of the tty may be one of them, and a retry without a pause could keep it off the only core
+    it has, so the express lets go of the core before each try again."""
+    port, events, write = Port(), [], os.write
+
+    def refused_thrice(fd: int, data: bytes) -> int:
+        events.append("write")
+        if events.count("write") <= 3:
+            raise BlockingIOError
+        return write(fd, data)
+
+    def pause(seconds: float) -> None:
+        events.append("pause")
+        assert 0 < seconds <= 0.001
+
+    monkeypatch.setattr(express_module.os, "write", refused_thrice)
+    monkeypatch.setattr(express_module.time, "sleep", pause)
+    rig = ChildRig(mqtt311=False)
+    try:
+        rig.hand("b", 1, port)
+        rig.stop("rotor/b/stop")
+        assert port.written() == b"S\r"
+        assert rig.word()["op"] == "wrote"
+        # the first refusal hands the frame to the wait for the tty (rule 9), each later one
+        # pauses before the next try
+        assert events == ["write", "write", "pause", "write", "pause", "write"]
+    finally:
+        rig.mine.close()
+
+
 def _stuck_a(
     monkeypatch: pytest.MonkeyPatch, rig: ChildRig, a: Port
 ) -> tuple[list[float], list[bool]]:

@@ -169,6 +169,7 @@ RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this lo
 LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
 TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
 FINISH_WAIT_S = 0.5  # rule 9: the rest of a frame a write cut short, written within this
+REFUSED_RETRY_S = 0.0002  # rule 9: the pause before a write refused whole is tried again
 _PACKET = 65536
 
 
@@ -950,6 +951,10 @@ class _Child:
                 writable(fd, left)
                 rest = rest[self.write(fd, rest) :]
             except BlockingIOError:
+                # refused whole with room in the buffer: another writer is inside its own write
+                # (microseconds); raised above it (rule 10), a spin here could keep it off the
+                # only core it has, so the retry waits a little (a pace, no decision)
+                time.sleep(REFUSED_RETRY_S)
                 continue
             except (OSError, ValueError):
                 return False if len(rest) < len(frame) else None
