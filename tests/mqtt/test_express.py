@@ -7,6 +7,7 @@ tests/integration/test_stop_express.py."""
 from __future__ import annotations
 
 import json
+import logging
 import os
 import socket
 import sys
@@ -891,6 +892,37 @@ def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
         wait_until(lambda: any("ended" in p for p in problems.on()), 10, "the hung one killed")
         told.join(slow(10))
         assert not told.is_alive()
+    finally:
+        e.stop()
+
+
+def test_a_hung_express_found_by_a_flood_of_stops_is_killed_and_said_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A flood of stops finds a hung express's socket full, each of them until it has died: it
+    was killed and said once per stop (32-95 identical ERROR lines in a flood of 40,000)."""
+    problems, holds = Problems(), Holds()
+    e = Express(
+        SETTINGS,
+        topics=TOPICS,
+        frames={"a": b";"},
+        on_problem=problems,
+        command=[sys.executable, "-c", UP_THEN_HUNG],
+        on_hold=holds.hold,
+        on_release=holds.release,
+    )
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        sock, child = e._sock, e._child
+        assert sock is not None and child is not None
+        _fill(sock)
+        with caplog.at_level(logging.ERROR, logger=express_module.__name__):
+            for _ in range(20):
+                e.hold("a")  # what halts.py does for each MQTT stop
+            wait_until(lambda: child.poll() is not None, 10, "the hung one killed")
+        kills = [r for r in caplog.records if "killed" in r.getMessage()]
+        assert [r.getMessage() for r in kills] == ["stop express does not read its socket: killed"]
     finally:
         e.stop()
 

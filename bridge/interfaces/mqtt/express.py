@@ -238,6 +238,7 @@ class Express:
         self._dropped: dict[int, threading.Event] = {}
         self._sock: socket.socket | None = None
         self._child: subprocess.Popen[bytes] | None = None
+        self._killed: subprocess.Popen[bytes] | None = None  # the child _kill killed
         self._started = False
         self._stopping = False
         self._wake = threading.Event()  # stop(): no restart, no wait for one
@@ -593,11 +594,15 @@ class Express:
         self.held_changed.set()
 
     def _kill(self, why: str) -> None:
+        """Once per child: every stop of a flood that finds its socket full until it has died
+        comes here, and the log says it once."""
         with self._lock:
             child = self._child
+            if child is None or child is self._killed:
+                return
+            self._killed = child
         log.error("stop express %s: killed", why)
-        if child is not None:
-            child.kill()  # its copies of the ports close with it; _run says it ended
+        child.kill()  # its copies of the ports close with it; _run says it ended
 
     def _ended(self, why: str) -> None:
         """Rule 6: said until the next child is up."""
