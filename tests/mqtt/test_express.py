@@ -361,6 +361,12 @@ def test_a_write_the_tty_refuses_whole_is_made_when_it_takes_bytes_again(
         return write(fd, data)
 
     monkeypatch.setattr(express_module.os, "write", refused_first)
+    b_stopped_whole(port)
+
+
+def b_stopped_whole(port: Port) -> None:
+    """A stop of rotator b through an express that holds ``port``: its whole frame written on
+    the port, and said."""
     rig = ChildRig(mqtt311=False)
     try:
         rig.hand("b", 1, port)
@@ -391,17 +397,10 @@ def test_a_write_the_tty_refuses_whole_is_tried_again_after_a_pause_not_in_a_spi
 
     monkeypatch.setattr(express_module.os, "write", refused_thrice)
     monkeypatch.setattr(express_module.time, "sleep", pause)
-    rig = ChildRig(mqtt311=False)
-    try:
-        rig.hand("b", 1, port)
-        rig.stop("rotor/b/stop")
-        assert port.written() == b"S\r"
-        assert rig.word()["op"] == "wrote"
-        # the first refusal hands the frame to the wait for the tty (rule 9), each later one
-        # pauses before the next try
-        assert events == ["write", "write", "pause", "write", "pause", "write"]
-    finally:
-        rig.mine.close()
+    b_stopped_whole(port)
+    # the first refusal hands the frame to the wait for the tty (rule 9), each later one pauses
+    # before the next try
+    assert events == ["write", "write", "pause", "write", "pause", "write"]
 
 
 def _stuck_a(
@@ -512,13 +511,22 @@ class Problems:
         return [t for t, on in self.said.items() if on]
 
 
-def express(command: list[str], problems: Problems) -> Express:
+def express(
+    command: list[str],
+    problems: Problems,
+    holds: Holds | None = None,
+    frames: dict[str, bytes] | None = None,
+) -> Express:
+    """An express of ``command`` for rotator a (``frames``: others too), its holds told to
+    ``holds`` when given (rule 8)."""
     return Express(
         SETTINGS,
         topics=TOPICS,
-        frames={"a": b";"},
+        frames=frames or {"a": b";"},
         on_problem=problems,
         command=command,
+        on_hold=holds.hold if holds else None,
+        on_release=holds.release if holds else None,
     )
 
 
@@ -721,14 +729,8 @@ class Holds:
 
 def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> None:
     problems, holds = Problems(), Holds()
-    e = Express(
-        SETTINGS,
-        topics=TOPICS,
-        frames={"a": b";", "b": b"S\r"},
-        on_problem=problems,
-        command=[sys.executable, "-c", ANSWERS_LATE],
-        on_hold=holds.hold,
-        on_release=holds.release,
+    e = express(
+        [sys.executable, "-c", ANSWERS_LATE], problems, holds, frames={"a": b";", "b": b"S\r"}
     )
     e.hold("a")  # no express running: nothing of one can write, no hold
     assert holds.log == []
@@ -754,15 +756,7 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
 
 def test_a_long_hold_is_said_and_the_word_asked_for_again(monkeypatch: pytest.MonkeyPatch) -> None:
     problems, holds = Problems(), Holds()
-    e = Express(
-        SETTINGS,
-        topics=TOPICS,
-        frames={"a": b";"},
-        on_problem=problems,
-        command=[sys.executable, "-c", ANSWERS_LATE],
-        on_hold=holds.hold,
-        on_release=holds.release,
-    )
+    e = express([sys.executable, "-c", ANSWERS_LATE], problems, holds)
     now = [1000.0]
     e.clock = lambda: now[0]
     e.start(mqtt311=False)
@@ -861,15 +855,7 @@ def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
     waits under the express's lock, which every MQTT stop takes (its hold, rule 8) before it
     is put in; the express is killed, and the stop goes on."""
     problems, holds = Problems(), Holds()
-    e = Express(
-        SETTINGS,
-        topics=TOPICS,
-        frames={"a": b";"},
-        on_problem=problems,
-        command=[sys.executable, "-c", UP_THEN_HUNG],
-        on_hold=holds.hold,
-        on_release=holds.release,
-    )
+    e = express([sys.executable, "-c", UP_THEN_HUNG], problems, holds)
     port = Port()
     if what == "closing":
         e.opened("a", port.w)
@@ -902,15 +888,7 @@ def test_a_hung_express_found_by_a_flood_of_stops_is_killed_and_said_once(
     """A flood of stops finds a hung express's socket full, each of them until it has died: it
     was killed and said once per stop (32-95 identical ERROR lines in a flood of 40,000)."""
     problems, holds = Problems(), Holds()
-    e = Express(
-        SETTINGS,
-        topics=TOPICS,
-        frames={"a": b";"},
-        on_problem=problems,
-        command=[sys.executable, "-c", UP_THEN_HUNG],
-        on_hold=holds.hold,
-        on_release=holds.release,
-    )
+    e = express([sys.executable, "-c", UP_THEN_HUNG], problems, holds)
     e.start(mqtt311=False)
     try:
         wait_until(e.up.is_set, 10, "up")
@@ -939,15 +917,7 @@ def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
     """Its words coming faster than once a second (a stop flood, each frame said) must not
     keep the reader from looking at the holds: a long one is said and its word asked again."""
     problems, holds = Problems(), Holds()
-    e = Express(
-        SETTINGS,
-        topics=TOPICS,
-        frames={"a": b";"},
-        on_problem=problems,
-        command=[sys.executable, "-c", CHATTY],
-        on_hold=holds.hold,
-        on_release=holds.release,
-    )
+    e = express([sys.executable, "-c", CHATTY], problems, holds)
     now = [1000.0]
     e.clock = lambda: now[0]
     e.start(mqtt311=False)
