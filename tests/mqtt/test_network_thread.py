@@ -175,6 +175,41 @@ def test_loop_stop_after_disconnect_writes_the_disconnect_first(
     assert threads == {"paho-mqtt-client-net-leave"}
 
 
+def test_loop_stop_joins_a_thread_already_ending_by_itself_after_disconnect(
+    broker: Mosquitto,
+) -> None:
+    """After ``disconnect`` the thread may end by itself before ``loop_stop`` is called: held
+    in its last step (closing its wake-up) until ``loop_stop`` joins it, it must still be
+    waited for (a fresh-clone run once found it alive after ``loop_stop`` had returned)."""
+    with connected(broker, "net-ending") as c:
+        net = c._net
+        assert net is not None
+        waker = c._waker
+        closing, joined = threading.Event(), threading.Event()
+        close, join = waker.close, net.join
+
+        def held_close() -> None:
+            closing.set()
+            joined.wait(slow(10))  # until loop_stop joins it (the test's end otherwise)
+            close()
+
+        def noted_join(timeout: float | None = None) -> None:
+            joined.set()
+            join(timeout)
+
+        waker.close = held_close  # type: ignore[method-assign]
+        net.join = noted_join  # type: ignore[method-assign]
+        try:
+            c.disconnect()
+            assert closing.wait(slow(10)), "the thread did not end after disconnect"
+            assert c._net is None  # ending by itself: loop_stop finds no thread to halt
+            c.loop_stop()
+            assert joined.is_set()
+            assert not net.is_alive()
+        finally:
+            joined.set()
+
+
 def test_the_waker_wakes_a_select_once_drained_stays_quiet_and_is_void_once_closed() -> None:
     waker = Waker()
     try:

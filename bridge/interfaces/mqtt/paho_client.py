@@ -30,7 +30,8 @@ Rules:
    thread: every read, write, reconnect and callback happens on that one thread (a TLS
    socket is never used by two threads), and paho's reconnect loop is kept: the same back-off
    (``reconnect_delay_set``; reset by an accepted connection), ``on_connect_fail`` called
-   inside the failure, no reconnect after ``disconnect``. A callback that raises (paho hands
+   inside the failure, no reconnect after ``disconnect``; ``loop_stop`` joins the thread also
+   when it was already ending by itself after a ``disconnect``. A callback that raises (paho hands
    its exception up the loop, which ended paho's thread) is logged and the connection made
    again: the thread goes on (connection.py rule 5). What changes is the wake-up: paho's
    own loop is woken by a byte on its socket pair for every packet a publish queues (a system
@@ -150,6 +151,7 @@ class Client(paho.Client):
     name = "mqtt"  # the network thread's name: paho-mqtt-client-<name> (rule 6)
     _connect_t: float | None = None  # rule 5: when the CONNECT now unanswered went out
     _net: threading.Thread | None = None  # rule 6
+    _last_net: threading.Thread | None = None  # ... the last one started, until joined
     _leaving = False  # rule 6: ``disconnect`` was called: no reconnect
     _delays: tuple[float, float] = (1.0, 120.0)  # rule 6: paho's reconnect back-off, min, max
     _delay_s: float | None = None  # ... the last wait, None after an accepted connection
@@ -195,13 +197,17 @@ class Client(paho.Client):
         self._net = threading.Thread(
             target=self._serve, name=f"paho-mqtt-client-{self.name}", daemon=True
         )
+        self._last_net = self._net
         self._net.start()
         return MQTTErrorCode.MQTT_ERR_SUCCESS
 
     def loop_stop(self) -> MQTTErrorCode:
         """Ends the network thread once the queue is written, and joins it (not from it)."""
         net = self._net
-        if net is None:
+        if net is None:  # ended, or ending by itself after ``disconnect``: its end, then
+            last = self._last_net
+            if last is not None and last is not threading.current_thread():
+                last.join()
             return MQTTErrorCode.MQTT_ERR_INVAL
         self._halt_t = time.monotonic()
         self._halt.set()
