@@ -7,12 +7,15 @@ import importlib.util
 import json
 import logging
 import os
+import signal
 import sys
 
 from bridge import __version__
+from bridge.core.ending import Ending
 from bridge.settings import ConfigError, Settings, load_settings
 
 EXIT_CONFIG = 2
+STOPPED_EARLY = "stopped before it started"  # Ctrl-C before a command's own handling (main)
 
 
 def _setup_logging(level: str) -> None:
@@ -105,19 +108,26 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_remote(args: argparse.Namespace) -> int:
-    from bridge.remote.run import run
-    from bridge.remote.settings import load_remote_settings
+    """Ctrl-C or SIGTERM from its first step on ends the start as a start error (remote/run.py
+    rule 1): its modules are loaded, its file read, with the signals already its own."""
+    stopping = Ending()
+    try:
+        with stopping.on_signals(signal.SIGINT, signal.SIGTERM):
+            from bridge.remote.run import run
+            from bridge.remote.settings import load_remote_settings
 
-    try:
-        settings = load_remote_settings(args.config)
-    except ConfigError as exc:
-        raise _fail(exc) from None
-    _setup_logging(args.log_level or "INFO")
-    try:
-        return run(settings)
-    except (ConfigError, OSError) as exc:  # no such rotator, no broker, a port taken
-        print(f"rotor-bridge remote: {exc}", file=sys.stderr)
-        raise SystemExit(EXIT_CONFIG) from None
+            try:
+                settings = load_remote_settings(args.config)
+            except ConfigError as exc:
+                raise _fail(exc) from None
+            _setup_logging(args.log_level or "INFO")
+            try:
+                return run(settings, stopping)
+            except (ConfigError, OSError) as exc:  # no such rotator, no broker, a port taken
+                print(f"rotor-bridge remote: {exc}", file=sys.stderr)
+                raise SystemExit(EXIT_CONFIG) from None
+    finally:
+        stopping.close()
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -214,8 +224,18 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """A Ctrl-C before the remote has the signals (cmd_remote) is one line and exit code 2, as
+    one during its start; the other commands' own handling is theirs, from their first step."""
     argv = sys.argv[1:] if argv is None else argv
-    args = build_parser(argv).parse_args(argv)
+    who = "rotor-bridge"
+    try:
+        args = build_parser(argv).parse_args(argv)
+        if args.func is cmd_remote:
+            who = "rotor-bridge remote"
+            return int(cmd_remote(args))
+    except KeyboardInterrupt:
+        print(f"{who}: {STOPPED_EARLY}", file=sys.stderr)
+        return EXIT_CONFIG
     return int(args.func(args) or 0)
 
 

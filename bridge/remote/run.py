@@ -8,7 +8,8 @@ Rules:
    A refused login or a failed TLS handshake ends the start at once, in one line that says
    which (interfaces/mqtt/remote.py rule 5).
    SIGINT or SIGTERM meanwhile (``stopping``) ends the wait within STOP_LOOK_S, as a start
-   error.
+   error; one before it connects (cli.py holds the signals from the command's first step, its
+   modules still loading) ends the start before it does, as a start error too.
 2. A rotator named ``X`` is found at ``B/X`` (a station with several rotators) or, when the
    station has one rotator and publishes under ``B`` itself, there; an endpoint without a
    rotator takes ``B``, and is told the ids when the station has several, also when ``B/info``
@@ -377,14 +378,19 @@ class Remote:
         )
 
 
-def run(settings: RemoteSettings) -> int:
-    """Serve until SIGINT or SIGTERM; StartError when it cannot start."""
-    remote = Remote(settings)
+def run(settings: RemoteSettings, stopping: Ending | None = None) -> int:
+    """Serve until SIGINT or SIGTERM; StartError when it cannot start. ``stopping``: the
+    caller's, already ended by a signal that came while it loaded this (cli.py), and closed
+    by the caller."""
+    own = stopping is None
+    remote = Remote(settings) if stopping is None else Remote(settings, stopping=stopping)
     stopping = remote.stopping  # the start's wait for the station ends with it too (rule 1)
     try:
         # the handlers take no lock (core/ending.py): one that set an Event could land inside
         # that Event's wait on this thread, holding its lock, and wait for ever
         with stopping.on_signals(signal.SIGINT, signal.SIGTERM):
+            if stopping.is_set():  # (rule 1)
+                raise StartError("stopped before it connected to the station's broker")
             for line in remote.start():
                 print(line, flush=True)
             try:
@@ -393,5 +399,6 @@ def run(settings: RemoteSettings) -> int:
                 remote.stop()
                 log.info("stopped")  # the last line of its log, as the bridge's
     finally:
-        stopping.close()
+        if own:
+            stopping.close()
     return 0

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import signal
 import socket
 import sys
 import threading
@@ -23,9 +24,11 @@ from bridge.interfaces.mqtt.express import (
     DROP_WAIT_S,
     FINISH_WAIT_S,
     GAP_S,
+    READ_WAIT_S,
     Express,
     Sync,
     _Child,
+    _Outbox,
     express_client_id,
 )
 from bridge.protocols import REGISTRY
@@ -727,6 +730,13 @@ class Holds:
         self.log.append(("release", rid, n))
 
 
+def _read_by_the_child(e: Express) -> None:
+    """Every request sent read: the next is sent, not answered by one it has not read yet."""
+    sock = e._sock
+    assert sock is not None
+    wait_until(lambda: not express_module._unread(sock.sock), 10, "its requests read")
+
+
 def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> None:
     problems, holds = Problems(), Holds()
     e = express(
@@ -738,8 +748,10 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
     try:
         wait_until(e.up.is_set, 10, "up")
         e.hold("a")
+        _read_by_the_child(e)
         e.hold("b")  # answers word 1: a's hold waits for it, b's for 2
         wait_until(lambda: ("release", "a", 1) in holds.log, 10, "a's hold ended")
+        _read_by_the_child(e)
         e.hold("a")  # answers 2: b's hold ends; a's waits for 3
         wait_until(lambda: ("release", "b", 2) in holds.log, 10, "b's hold ended")
         assert [h for h in holds.log if h[0] == "release"] == [
@@ -763,6 +775,7 @@ def test_a_long_hold_is_said_and_the_word_asked_for_again(monkeypatch: pytest.Mo
     try:
         wait_until(e.up.is_set, 10, "up")
         e.hold("a")
+        _read_by_the_child(e)  # (read: no hung express)
         now[0] += 10.0  # the answer does not come: said, and asked for again
         wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
         wait_until(lambda: ("release", "a", 1) in holds.log, 10, "the word asked for again")
@@ -864,7 +877,7 @@ def test_a_port_told_to_a_hung_express_never_holds_up_a_stop(what: str) -> None:
         wait_until(e.up.is_set, 10, "up")
         sock = e._sock
         assert sock is not None
-        _fill(sock)
+        _fill(sock.sock)
         told = threading.Thread(target=getattr(e, what), args=("a", port.w), daemon=True)
         told.start()
         stopped = threading.Event()
@@ -894,7 +907,7 @@ def test_a_hung_express_found_by_a_flood_of_stops_is_killed_and_said_once(
         wait_until(e.up.is_set, 10, "up")
         sock, child = e._sock, e._child
         assert sock is not None and child is not None
-        _fill(sock)
+        _fill(sock.sock)
         with caplog.at_level(logging.ERROR, logger=express_module.__name__):
             for _ in range(20):
                 e.hold("a")  # what halts.py does for each MQTT stop
@@ -905,11 +918,122 @@ def test_a_hung_express_found_by_a_flood_of_stops_is_killed_and_said_once(
         e.stop()
 
 
+READS_WHEN_TOLD = (  # up, then reads nothing until SIGUSR1; then answers each request it reads
+    "import json, signal, socket, sys\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    "signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGUSR1])\n"
+    's.send(b\'{"op": "up"}\')\n'
+    "signal.sigwait([signal.SIGUSR1])\n"
+    "while True:\n"
+    "    word = s.recv(65536)\n"
+    "    if not word:\n"
+    "        break\n"
+    "    word = json.loads(word)\n"
+    "    s.send(json.dumps({'op': 'synced', 'n': word['n']}).encode())\n"
+)
+
+
+def test_a_flood_of_stops_never_fills_the_socket_of_an_express_that_reads_it_late(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A flood of stops (40,000 in the attack pass) carried out on both connections asked the
+    express for a sync word each: a few hundred fill its socket, and an express whose reader
+    waited a few dozen milliseconds for its core was killed as hung. A request it has not
+    read yet answers for every stop after it: one is sent, and its answer ends every hold."""
+    problems, holds = Problems(), Holds()
+    e = express([sys.executable, "-c", READS_WHEN_TOLD], problems, holds)
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        child = e._child
+        assert child is not None
+        with caplog.at_level(logging.ERROR, logger=express_module.__name__):
+            for _ in range(2000):
+                e.hold("a")  # what halts.py does for each MQTT stop
+            assert not [r for r in caplog.records if "killed" in r.getMessage()]
+            os.kill(child.pid, signal.SIGUSR1)  # it reads now: one request, answered
+            wait_until(lambda: ("release", "a", 2000) in holds.log, 10, "every hold ended")
+        assert child.poll() is None and e.starts == 1
+        assert not [r for r in caplog.records if "killed" in r.getMessage()]
+        assert [h for h in holds.log if h[0] == "release"] == [("release", "a", 2000)]
+    finally:
+        e.stop()
+
+
+def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Requests it has not read stand for the later ones, so a hung express's socket no longer
+    fills: a word of the bridge's it leaves unread READ_WAIT_S is the hang; it is killed, and
+    its hold ends with it."""
+    problems, holds = Problems(), Holds()
+    e = express([sys.executable, "-c", UP_THEN_HUNG], problems, holds)
+    now = [1000.0]
+    e.clock = lambda: now[0]
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        child = e._child
+        assert child is not None
+        with caplog.at_level(logging.ERROR, logger=express_module.__name__):
+            e.hold("a")
+            now[0] += READ_WAIT_S  # (the reader looks once a second)
+            wait_until(lambda: child.poll() is not None, 10, "the hung one killed")
+            wait_until(lambda: ("release", "a", 1) in holds.log, 10, "its hold ended with it")
+        kills = [r.getMessage() for r in caplog.records if "killed" in r.getMessage()]
+        assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
+    finally:
+        e.stop()
+
+
+def test_a_request_not_read_yet_answers_only_for_stops_after_the_highest_one_sent() -> None:
+    """_Outbox: a request left out is answered by the last one sent, not read yet; never by
+    one numbered below another sent before it (two threads carry stops out, in either order:
+    the express may have answered the higher one with a word published before this stop)."""
+    mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+    box = _Outbox(mine, lambda: 0.0)
+
+    def read() -> list[object]:
+        theirs.setblocking(False)
+        got: list[object] = []
+        try:
+            while True:
+                word = json.loads(theirs.recv(65536))
+                got.append(word.get("n", word["op"]))
+        except BlockingIOError:
+            return got
+
+    try:
+        box.ask(1, False)
+        box.ask(2, False)  # 1 not read yet: it answers for 2
+        box.ask(3, False)
+        assert read() == [1]
+        assert box.answer(1) == 3
+        box.ask(5, False)
+        assert read() == [5]
+        box.ask(4, False)  # the other thread's, late: sent, but stands for no later one
+        box.ask(6, False)
+        assert read() == [4, 6]
+        assert box.answer(5) == 5  # (nothing left out)
+        box.send({"op": "drop"})  # the last word is no request: 7 goes
+        box.ask(7, False)
+        box.ask(8, True)  # asked again (rule 8's resend): it goes
+        assert read() == ["drop", 7, 8]
+    finally:
+        mine.close()
+        theirs.close()
+
+
 CHATTY = (  # up, then a word every 50 ms (a frame written for each stop of a flood), no answer
     "import socket, sys, time; s = socket.socket(fileno=int(sys.argv[-1])); s.recv(65536); "
-    """s.send(b'{"op": "up"}')\n"""
+    """s.send(b'{"op": "up"}'); s.setblocking(False)\n"""
     "while True:\n"
-    """    s.send(b'{"op": "wrote", "rotator": "a", "t": 0}'); time.sleep(0.05)"""
+    """    s.send(b'{"op": "wrote", "rotator": "a", "t": 0}'); time.sleep(0.05)\n"""
+    "    try:\n"
+    "        s.recv(65536)\n"  # (it reads the bridge's requests: no hung express)
+    "    except BlockingIOError:\n"
+    "        pass"
 )
 
 
@@ -924,6 +1048,7 @@ def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
     try:
         wait_until(e.up.is_set, 10, "up")
         e.hold("a")
+        _read_by_the_child(e)  # (read: no hung express)
         now[0] += 10.0  # the answer does not come: said all the same
         wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
     finally:

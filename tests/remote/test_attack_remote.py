@@ -429,6 +429,80 @@ def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
             proc.wait()
 
 
+# Ctrl-C at a point of the start: a real SIGINT raised in the remote's own process as a module
+# named is about to be loaded ("import:M") or as a function named is called ("call:M.f")
+INTERRUPTED_AT = r"""
+import importlib, importlib.abc, runpy, signal, sys
+where, conf = sys.argv[1], sys.argv[2]
+kind, _, name = where.partition(":")
+
+def interrupt():
+    signal.raise_signal(signal.SIGINT)
+
+if kind == "import":
+    class Hook(importlib.abc.MetaPathFinder):
+        def find_spec(self, fullname, path, target=None):
+            if fullname == name:
+                sys.meta_path.remove(self)
+                interrupt()
+            return None
+    sys.meta_path.insert(0, Hook())
+else:
+    where_, _, attr = name.rpartition(".")
+    try:
+        owner = importlib.import_module(where_)
+    except ModuleNotFoundError:
+        module, _, cls = where_.rpartition(".")
+        owner = getattr(importlib.import_module(module), cls)
+    original = getattr(owner, attr)
+    def hooked(*args, **kwargs):
+        interrupt()
+        return original(*args, **kwargs)
+    setattr(owner, attr, hooked)
+sys.argv = ["bridge", "remote", "-c", conf]
+runpy.run_module("bridge", run_name="__main__", alter_sys=True)  # python -m bridge remote -c
+"""
+
+
+@pytest.mark.parametrize(
+    ("where", "said"),
+    [
+        ("import:bridge.cli", "rotor-bridge: stopped before it started"),
+        ("import:bridge.settings", "rotor-bridge: stopped before it started"),
+        ("call:argparse.ArgumentParser.parse_args", "rotor-bridge: stopped before it started"),
+        ("import:bridge.remote.run", "stopped before it connected to the station's broker"),
+        ("import:paho.mqtt.client", "stopped before it connected to the station's broker"),
+        (
+            "call:bridge.remote.settings.load_remote_settings",
+            "stopped before it connected to the station's broker",
+        ),
+        (
+            "call:bridge.interfaces.mqtt.remote.RemoteLink.start",
+            "stopped before the station's rotators were found",
+        ),
+    ],
+)
+def test_ctrl_c_at_any_point_of_the_start_is_one_line_and_exit_code_2(
+    tmp_path: Path, where: str, said: str
+) -> None:
+    """Ctrl-C in the remote's first few tenths of a second (its modules loading, its file read,
+    its connection made) printed a Python traceback and died of the signal; only the waits for
+    the station ended it as a start error. Every point of the start does now."""
+    conf = tmp_path / "remote.toml"
+    conf.write_text(
+        f'operator = "{OPERATOR}"\ninfo_wait_s = 120\n[mqtt]\nport = {free_port()}\n'
+        f"[[endpoints]]\nrotctld_port = {free_port()}\n"
+    )
+    argv = [sys.executable, "-c", INTERRUPTED_AT, where, str(conf)]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(60))
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.splitlines()
+    assert lines and said in lines[-1], done.stderr
+    assert [line for line in lines if "stopped before" in line] == [lines[-1]]
+    assert done.stdout == ""  # no endpoint announced
+
+
 def test_sigterm_while_waiting_for_the_stations_heartbeat_ends_the_remote_as_a_start_error(
     broker: Any, probe: Any, tmp_path: Path
 ) -> None:

@@ -89,8 +89,14 @@ Rules:
    it from writing, never holds a target. A connection that ends, an express that dies or is
    not running, answer every request (nothing of it can write any more); no clock ends a
    hold. A word the broker dropped is asked for again (``again``) every RESEND_S while a hold
-   waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A socket the
-   express does not read (its buffer full) is a hung express: killed, which ends the holds.
+   waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A stop's
+   request is not sent while the last word sent is a request the express has not read yet
+   (``_Outbox``: it reads that one after the bridge read this stop, so its answer answers
+   both): a flood of stops, carried out on both connections, leaves one request unread at
+   most, not one a stop (a few hundred filled the socket while the express's reader waited
+   for its core, and a healthy express was killed as hung). A socket the express does not
+   read (its buffer full, or a word of the bridge's left unread READ_WAIT_S once it has said
+   a word) is a hung express: killed, which ends the holds.
    No send to it ever waits for room (a request, a port handed over or given back): the lock
    they are sent under is the one every MQTT stop's hold takes before the stop is put in.
 9. A frame is never left half-written. A write that took part of the frame (or none, refused
@@ -127,6 +133,7 @@ Rules:
 from __future__ import annotations
 
 import array
+import fcntl
 import hashlib
 import json
 import logging
@@ -137,6 +144,7 @@ import signal
 import socket
 import subprocess
 import sys
+import termios
 import threading
 import time
 from collections import deque
@@ -168,6 +176,7 @@ RESTART_STABLE_S = 60.0  # ... back to the first once one ran this long
 RESEND_S = 2.0  # rule 8: a sync word asked for again while a hold waits this long
 LONG_HOLD_S = 5.0  # rule 8: a hold this long is said
 TICK_S = 1.0  # rule 1: the reader looks at the start and the holds this often
+READ_WAIT_S = 2.0  # rule 8: a word of the bridge's left unread this long: a hung express
 FINISH_WAIT_S = 0.5  # rule 9: the rest of a frame a write cut short, written within this
 REFUSED_RETRY_S = 0.0002  # rule 9: the pause before a write refused whole is tried again
 _PACKET = 65536
@@ -196,7 +205,72 @@ def _send(
         sock.send(data, flags)
 
 
+def _unread(sock: socket.socket) -> bool:
+    """Whether the other end has not yet read every word this end sent (SIOCOUTQ: a datagram
+    sent counts until its reader takes it); False where it cannot say."""
+    try:
+        answer = fcntl.ioctl(sock.fileno(), termios.TIOCOUTQ, b"\0\0\0\0")
+    except (OSError, ValueError):
+        return False
+    return int.from_bytes(answer, sys.byteorder, signed=True) > 0
+
+
 # -- the bridge's side ---------------------------------------------------------------------------
+class _Outbox:
+    """Rule 8: every word to one child, sent under one lock, so the request a stop would send
+    is left out while the last word sent is a request the child has not read yet (that one is
+    read after this stop was, and its answer answers this stop's too): however fast stops
+    come, the socket holds one request unread at most. None of it waits for room.
+
+    Only a request numbered above every one sent before it stands for later ones: the child
+    answers the newest number it has read (Sync), so an answer that reaches m then proves it
+    read m. (Two threads carry stops out, and their requests may go in either order.)"""
+
+    def __init__(self, sock: socket.socket, clock: Callable[[], float]) -> None:
+        self.sock = sock
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._last: int | None = None  # the last word sent, when it was sync request n
+        self._top = 0  # the highest request sent
+        self._sent_at = clock()  # when the last word was sent
+        self._cover: tuple[int, int] | None = None  # (m, n): the answer to m answers n too
+
+    def send(self, word: dict[str, Any], fds: list[int] | None = None) -> None:
+        """Raises BlockingIOError when the socket is full, OSError when the child is gone."""
+        with self._lock:
+            _send(self.sock, word, fds, socket.MSG_DONTWAIT)
+            self._last, self._sent_at = None, self._clock()
+
+    def ask(self, n: int, again: bool) -> None:
+        """Request ``n`` (its stop already read by the bridge), or left out; as ``send``."""
+        with self._lock:
+            m = self._last
+            if not again and m is not None and _unread(self.sock):
+                # FIFO: the last word sent is one not read yet; the child reads m after this
+                # stop was read, and answers m with a word it publishes after that (Sync)
+                a, b = self._cover or (m, n)
+                self._cover = (max(a, m), max(b, m, n))  # (merged: a later answer, never less)
+                return
+            _send(self.sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
+            self._last = n if n > self._top else None
+            self._top, self._sent_at = max(self._top, n), self._clock()
+
+    def answer(self, n: int) -> int:
+        """The child answered request ``n``: the newest request that answers."""
+        with self._lock:
+            cover = self._cover
+            if cover is None or n < cover[0]:
+                return n
+            self._cover = None
+            return max(n, cover[1])
+
+    def unread_for(self) -> float:
+        """How long the last word sent has been waiting unread (0: every word read): the
+        child has read nothing for that long."""
+        with self._lock:
+            return self._clock() - self._sent_at if _unread(self.sock) else 0.0
+
+
 class Express:
     """The child process, seen from the bridge: its ports (rule 5), its start and restarts,
     its problems (rule 6), its holds (rule 8)."""
@@ -236,7 +310,7 @@ class Express:
         self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd), while open
         self._number = 0
         self._dropped: dict[int, threading.Event] = {}
-        self._sock: socket.socket | None = None
+        self._sock: _Outbox | None = None
         self._child: subprocess.Popen[bytes] | None = None
         self._killed: subprocess.Popen[bytes] | None = None  # the child _kill killed
         self._started = False
@@ -286,7 +360,7 @@ class Express:
         self._wake.set()
         if sock is not None:
             try:
-                sock.shutdown(socket.SHUT_RDWR)
+                sock.sock.shutdown(socket.SHUT_RDWR)
             except OSError:
                 pass
         if child is not None:
@@ -313,20 +387,25 @@ class Express:
         later(partial(self._ask, n))  # a system call: once the last word's lock is let go
 
     def _ask(self, n: int, again: bool = False) -> None:
-        """Rule 8: sync word ``n`` asked for; a socket the express does not read is a hang."""
+        """Rule 8: sync word ``n`` asked for (or answered with one not read yet); a socket the
+        express does not read is a hang."""
         with self._lock:
             sock = self._sock
         if sock is None:
             return  # gone: its end answered every hold
         try:
-            _send(sock, {"op": "sync", "n": n, "again": again}, flags=socket.MSG_DONTWAIT)
+            sock.ask(n, again)
         except BlockingIOError:
             self._kill("does not read its socket")
         except OSError:
             pass  # gone: its end answers every hold
 
     def _answered(self, n: int) -> None:
-        """Rule 8: the holds up to sync word ``n`` end."""
+        """Rule 8: the holds up to sync word ``n`` end (and those it answers, _Outbox)."""
+        with self._lock:
+            sock = self._sock
+        if sock is not None:  # (its lock apart: a send under it must not hold up a hold)
+            n = sock.answer(n)
         with self._lock:
             done = [rid for rid, m in self._holds.items() if m <= n]
             for rid in done:
@@ -357,6 +436,12 @@ class Express:
         """On the reader's thread, once a second while the child starts or a hold waits."""
         if not up and time.monotonic() - self._started_at >= START_WAIT_S:
             self._problem(late, True)
+        with self._lock:
+            sock = self._sock
+        unread_s = sock.unread_for() if sock is not None else 0.0
+        starting = not self._heard.is_set() and time.monotonic() - self._started_at < START_WAIT_S
+        if unread_s >= READ_WAIT_S and not starting:  # rule 8 (importing Python is no hang)
+            self._kill(f"does not read its socket (a word unread for {unread_s:.1f} s)")
         now = self.clock()
         with self._lock:
             oldest = min(self._held_since.values(), default=None)
@@ -390,8 +475,8 @@ class Express:
             dropped = self._dropped[number] = threading.Event()
             try:
                 word = {"op": "drop", "rotator": rotator_id, "n": number}
-                _send(self._sock, word, flags=socket.MSG_DONTWAIT)  # (rule 8: no wait under
-                sent = True  # the lock every MQTT stop takes)
+                self._sock.send(word)  # (rule 8: no wait under the lock every MQTT stop takes)
+                sent = True
             except BlockingIOError:
                 sent = False
             except OSError:
@@ -418,7 +503,7 @@ class Express:
         assert self._sock is not None
         word = {"op": "port", "rotator": rotator_id, "n": number}
         try:
-            _send(self._sock, word, [fd], socket.MSG_DONTWAIT)
+            self._sock.send(word, [fd])
         except BlockingIOError:
             return False
         except OSError as exc:
@@ -489,11 +574,11 @@ class Express:
                 child.kill()
                 child.wait()
                 return None
+            self._sock = _Outbox(mine, lambda: self.clock())
             try:
-                _send(mine, config, flags=socket.MSG_DONTWAIT)
+                self._sock.send(config)
             except OSError:
                 pass  # it died at once: read below as an end of file
-            self._sock = mine
             self.ended.clear()
             hung = not all(self._hand(rid, n, fd) for rid, (n, fd) in self._ports.items())
         if hung:
