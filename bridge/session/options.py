@@ -86,9 +86,11 @@ class Options:
     ) -> list[tuple[str, SettingValue]]:
         """The settings to write now (rule 1), by name: AT_REST ones when ``idle`` and ``free``
         (no target waits and the line is free), ANYTIME ones when ``line_free``."""
-        line_free = free if line_free is None else line_free
         if idle and self.values and now - self._sent_t >= OPTIONS_REFRESH_S:
             self._due |= self._resent()
+        if not self._due:
+            return []  # (the step of almost every reading)
+        line_free = free if line_free is None else line_free
         due = sorted(
             n
             for n in self._due

@@ -351,3 +351,23 @@ def test_a_status_is_worth_emitting_when_anything_but_the_controllers_clock_chan
     assert not worth_emitting(replace(old), old)
     assert not worth_emitting(replace(old, bearing_deg=float("100")), old)  # equal, not the same
     assert not worth_emitting(replace(old, controller_time="12:00:01"), old)
+
+
+def test_a_reading_keeps_every_field_it_does_not_change() -> None:
+    """A reading makes its new motion without ``replace`` (it runs at every poll): what it
+    does not change is kept, field by field, as ``replace`` keeps it."""
+    fields = [f for f in mo.Motion.__dataclass_fields__ if f != "state"]
+    m = replace(ready(), **{f: 1000.0 + i for i, f in enumerate(fields)})
+    m = replace(m, state=S.MOVING, anchor_deg=100.0, position_deg=100.0, target_deg=None)
+    moved, _ = mo.reading(m, CFG, 150.0, 2000.0)
+    expected = replace(
+        m,
+        changed_t=2000.0,
+        position_deg=150.0,
+        el_position_deg=None,
+        anchor_deg=150.0,
+        el_anchor_deg=None,
+        last_move_t=2000.0,
+        still_since_t=None,
+    )
+    assert moved == mo.tick(expected, CFG, 2000.0)[0]
