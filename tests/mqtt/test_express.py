@@ -14,6 +14,7 @@ import socket
 import sys
 import threading
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 from paho.mqtt.packettypes import PacketTypes
@@ -983,6 +984,55 @@ def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
             wait_until(lambda: ("release", "a", 1) in holds.log, 10, "its hold ended with it")
         kills = [r.getMessage() for r in caplog.records if "killed" in r.getMessage()]
         assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
+    finally:
+        e.stop()
+
+
+SLOW_START = (  # a host loading Python slowly: reads nothing until SIGUSR1, then is up
+    "import signal, socket, sys, time\n"
+    "signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGUSR1])\n"
+    "signal.sigwait([signal.SIGUSR1])\n"
+    "s = socket.socket(fileno=int(sys.argv[-1]))\n"
+    "s.recv(65536)\n"
+    's.send(b\'{"op": "up"}\')\n'
+    "time.sleep(600)\n"
+)
+
+
+def test_an_express_slow_to_start_is_said_late_never_killed(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Rule 6: a start, however long (a Raspberry Pi loading Python from a cold SD card), is said
+    late and waited for; the unread word that is a hang (rule 8) is one left by an express that
+    has said a word. A kill there restarted it, and killed it again, for ever."""
+    monkeypatch.setattr(express_module, "START_WAIT_S", 0.0)  # late at once
+    problems = Problems()
+    e = express([sys.executable, "-c", SLOW_START], problems)
+    now = [1000.0]
+    e.clock = lambda: now[0]
+    ticks = threading.Semaphore(0)
+    tick = e._tick
+
+    def counted(*args: Any) -> None:
+        tick(*args)
+        ticks.release()
+
+    e._tick = counted  # type: ignore[method-assign]
+    e.start(mqtt311=False)
+    try:
+        wait_until(lambda: e._sock is not None and e._child is not None, 10, "started")
+        child = e._child
+        assert child is not None
+        with caplog.at_level(logging.ERROR, logger=express_module.__name__):
+            now[0] += 10 * READ_WAIT_S  # its config word unread for that long
+            for _ in range(2):  # the reader looked at it twice since
+                assert ticks.acquire(timeout=slow(10)), "the reader did not look"
+            assert child.poll() is None and e.starts == 1
+            assert problems.on()  # said late (rule 6)
+            os.kill(child.pid, signal.SIGUSR1)  # loaded now
+            wait_until(e.up.is_set, 10, "up")
+        assert e.starts == 1 and child.poll() is None
+        assert not [r for r in caplog.records if "killed" in r.getMessage()]
     finally:
         e.stop()
 

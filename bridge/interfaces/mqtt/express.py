@@ -92,11 +92,13 @@ Rules:
    waits, and a hold longer than LONG_HOLD_S is said while it lasts, and holds. A stop's
    request is not sent while the last word sent is a request the express has not read yet
    (``_Outbox``: it reads that one after the bridge read this stop, so its answer answers
-   both): a flood of stops, carried out on both connections, leaves one request unread at
-   most, not one a stop (a few hundred filled the socket while the express's reader waited
-   for its core, and a healthy express was killed as hung). A socket the express does not
+   both): a flood of stops, carried out on both connections, leaves a request or two unread
+   (a resend, or two sent out of order), not one a stop (a few hundred filled the socket
+   while the express's reader waited for its core, and a healthy express was killed as
+   hung). A socket the express does not
    read (its buffer full, or a word of the bridge's left unread READ_WAIT_S once it has said
-   a word) is a hung express: killed, which ends the holds.
+   a word; a start is rule 6's, said late and never killed) is a hung express: killed, and
+   its end (waited for: nothing of it can write any more) ends the holds, not the clock.
    No send to it ever waits for room (a request, a port handed over or given back): the lock
    they are sent under is the one every MQTT stop's hold takes before the stop is put in.
 9. A frame is never left half-written. A write that took part of the frame (or none, refused
@@ -439,8 +441,8 @@ class Express:
         with self._lock:
             sock = self._sock
         unread_s = sock.unread_for() if sock is not None else 0.0
-        starting = not self._heard.is_set() and time.monotonic() - self._started_at < START_WAIT_S
-        if unread_s >= READ_WAIT_S and not starting:  # rule 8 (importing Python is no hang)
+        if unread_s >= READ_WAIT_S and self._heard.is_set():  # rule 8 (a start is rule 6's:
+            # however long, said as late, never killed: importing Python on a slow host is no hang)
             self._kill(f"does not read its socket (a word unread for {unread_s:.1f} s)")
         now = self.clock()
         with self._lock:
