@@ -430,10 +430,12 @@ def test_sigterm_while_waiting_for_an_absent_station_ends_the_remote_at_once(
 
 
 # Ctrl-C at a point of the start: a real SIGINT raised in the remote's own process as a module
-# named is about to be loaded ("import:M") or as a function named is called ("call:M.f")
+# named is about to be loaded ("import:M") or as a function named is called ("call:M.f"), in
+# `python -m bridge remote -c` ("module") or the installed `rotor-bridge remote -c` ("script":
+# what the console script's wrapper runs)
 INTERRUPTED_AT = r"""
 import importlib, importlib.abc, runpy, signal, sys
-where, conf = sys.argv[1], sys.argv[2]
+where, conf, how = sys.argv[1], sys.argv[2], sys.argv[3]
 kind, _, name = where.partition(":")
 
 def interrupt():
@@ -460,10 +462,15 @@ else:
         return original(*args, **kwargs)
     setattr(owner, attr, hooked)
 sys.argv = ["bridge", "remote", "-c", conf]
-runpy.run_module("bridge", run_name="__main__", alter_sys=True)  # python -m bridge remote -c
+if how == "module":
+    runpy.run_module("bridge", run_name="__main__", alter_sys=True)  # python -m bridge remote -c
+else:
+    from importlib.metadata import entry_points  # what the installed wrapper loads and runs
+    sys.exit(entry_points(group="console_scripts")["rotor-bridge"].load()())
 """
 
 
+@pytest.mark.parametrize("how", ["module", "script"])
 @pytest.mark.parametrize(
     ("where", "said"),
     [
@@ -483,7 +490,7 @@ runpy.run_module("bridge", run_name="__main__", alter_sys=True)  # python -m bri
     ],
 )
 def test_ctrl_c_at_any_point_of_the_start_is_one_line_and_exit_code_2(
-    tmp_path: Path, where: str, said: str
+    tmp_path: Path, where: str, said: str, how: str
 ) -> None:
     """Ctrl-C in the remote's first few tenths of a second (its modules loading, its file read,
     its connection made) printed a Python traceback and died of the signal; only the waits for
@@ -493,7 +500,7 @@ def test_ctrl_c_at_any_point_of_the_start_is_one_line_and_exit_code_2(
         f'operator = "{OPERATOR}"\ninfo_wait_s = 120\n[mqtt]\nport = {free_port()}\n'
         f"[[endpoints]]\nrotctld_port = {free_port()}\n"
     )
-    argv = [sys.executable, "-c", INTERRUPTED_AT, where, str(conf)]
+    argv = [sys.executable, "-c", INTERRUPTED_AT, where, str(conf), how]
     done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(60))
     assert "Traceback" not in done.stderr
     assert done.returncode == 2, done.stderr
