@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.delivery import DeliveryProbe
-from benchmarks.line import PacedRelay, wire_ahead
+from benchmarks.line import PacedRelay, stamp_late, wire_ahead
 from benchmarks.stop_under_load import GOAL_MS, Sample, floor_split, query_after, row_verdict
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
@@ -229,6 +229,50 @@ def test_the_relay_keeps_its_reads_on_the_publish_clock(tmp_path: Path) -> None:
         ahead = relay.ahead_of(t_read + 1e-6)  # a publish right after that read
         assert ahead.data == data and ahead.s == pytest.approx(due - t_read - 1e-6)
         assert relay.read_between(before, after) == QUERY
+    finally:
+        relay.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_a_frame_stamped_late_says_how_late_against_its_bytes_due_time() -> None:
+    """The instrument's own wait (benchmarks/line.py rule 8): the stop byte due at 10.0 and
+    stamped at 10.004 was stamped 4 ms late, whatever came before it on the line; the byte
+    handed on after the stamp is not the frame's."""
+    handed = [
+        (9.0, tuple(9.0 + i * BYTE_S for i in range(4)), QUERY),  # an earlier query's ';'
+        (10.0001, (10.0, 10.0 + BYTE_S), b";;"),  # the stop and a second ';' in one chunk
+        (10.005, (10.005,), b";"),  # handed on after the stamp
+    ]
+    assert stamp_late(handed, 10.004, b";") == pytest.approx(0.004)
+    assert stamp_late(handed, 9.5, b";") == pytest.approx(9.5 - (9.0 + 3 * BYTE_S))
+    assert stamp_late(handed, 8.0, b";") is None
+
+
+def test_the_relay_keeps_each_handed_bytes_due_time(tmp_path: Path) -> None:
+    """A byte the client writes is handed to the controller with its due time on the line (its
+    read plus one byte's time on an idle line): the stamp of the frame it ends is judged
+    against that, not against when the relay got round to handing it on."""
+    master, slave = os.openpty()
+    stamps: list[float] = []
+    relay = PacedRelay(
+        os.ttyname(slave),
+        tmp_path / "line",
+        4800,
+        deliver=lambda _d: stamps.append(time.monotonic()),
+    )
+    try:
+        fd = os.open(tmp_path / "line", os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(fd, b";")
+            wait_until(lambda: bool(stamps), 5, "the relay handed the byte on")
+        finally:
+            os.close(fd)
+        ((t_read, due, _data),) = relay.received
+        assert due == pytest.approx(t_read + BYTE_S)
+        ((t_out, dues, data),) = relay.handed
+        assert data == b";" and dues == (due,) and due <= t_out <= stamps[0]
+        assert relay.stamp_late(stamps[0], b";") == pytest.approx(stamps[0] - due)
     finally:
         relay.close()
         os.close(master)
