@@ -380,9 +380,11 @@ BYTE_S = 10 / 4800  # a byte on the measured lines (Rotor-EZ, 4800 baud)
 def _split(by: dict[str, list[Any]], row: list[Any], window: dict[str, Any] | None) -> str:
     """One stop's time cut at its steps, in ms: the publish -> the broker's delivery (the
     probe's kernel stamp) -> the bridge's first write of ``;`` (the express's or the lines
-    thread's) -> the line's relay read it (the pty's kernel worker, and the relay thread's own
-    wake-up) -> the byte's due time on the line (its 2.1 ms, and any bytes ahead) -> the
-    controller stamped the frame (the instrument's own wait: line.py rule 8)."""
+    thread's; beside it, when the broker's copy to the bridge's stop lane reached the lane's
+    socket, from the same moment: the broker's own order of sends) -> the line's relay read it
+    (the pty's kernel worker, and the relay thread's own wake-up) -> the byte's due time on the
+    line (its 2.1 ms, and any bytes ahead) -> the controller stamped the frame (the
+    instrument's own wait: line.py rule 8)."""
     rid, t0, lat, *taker = row
     t1 = t0 + lat
     broker = taker[4] if len(taker) > 4 and taker[4] is not None else None
@@ -394,8 +396,11 @@ def _split(by: dict[str, list[Any]], row: list[Any], window: dict[str, Any] | No
         f"{rid} {lat * 1e3:5.1f}",
         "deliver " + ("--" if broker is None else f"{broker * 1e3:4.1f}"),
     ]
+    since = broker if broker is not None else 0.0
+    lane = _first(by["lane"], t0, t1 + 0.1, lambda e: f"/{rid}/" in e[3])
+    if lane is not None and len(lane) > 9 and lane[9]:  # the broker's send to the bridge's lane
+        cells.append(f"(lane's socket {(lane[9] - t0 - since) * 1e3:+.1f})")
     if wrote is not None:
-        since = broker if broker is not None else 0.0
         cells.append(f"bridge ({who}) {(wrote - t0 - since) * 1e3:4.1f}")
     read = None
     if window is not None and wrote is not None:

@@ -38,15 +38,19 @@ off: the stop's frame written by the bridge's process alone), to compare in turn
 ``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table);
 ``STOP_ONLY=rotctld`` (``gs232``, ``easycomm``) the control and that port's 16 TCP clients.
 The instrument does not wait behind the loads it creates (benchmarks/harness.py rule 6): where
-the system allows it, the threads that carry and stamp the stop frame (each line's relay and
-each controller's emulator, the backlog's ``b`` and ``d`` too) and the stops' publisher's
-network thread run in the real-time class, as a controller's microcontroller and UART would;
-at nice -10 (rule 5), in traced backlog runs, a relay waited 14 ms in the run queue with the
-stop byte due, and another 14.5 ms off it (for the interpreter lock). Every stop keeps ``stamp_late``, how long after the line delivered its
-byte the controller stamped the frame (benchmarks/line.py rule 8): the instrument's own wait,
-inside the latency, in its own column. ``STOP_INSTRUMENT_RT=0`` leaves those threads at nice
--10, to compare; the latency counts the same either way. The broker, the bridge and its
-express, the kernel's pty worker and the loads keep their priorities.
+the system allows it, every thread of this process (the controllers' emulators and paced lines
+that carry and stamp the stop frame, the stops' publisher, the probes, the taker that may hold
+the interpreter lock they wait for) runs in the real-time class, as a controller's
+microcontroller and UART would; at nice -10 (rule 5), in traced backlog runs, a relay waited
+14 ms in the run queue with the stop byte due, and another 14.5 ms off it (for the interpreter
+lock: our other threads, which may hold it, waited for a core up to 7.6 ms). Every stop keeps
+``stamp_late``, how long after the line delivered its byte the controller stamped the frame
+(benchmarks/line.py rule 8): the instrument's own wait, inside the latency, in its own column;
+a relay late to read the bridge's byte moves that byte's due time, so such a wait is in the
+bridge's part instead (with STOP_TRACE, ``pty hop`` in the analysis's split).
+``STOP_INSTRUMENT_RT=0`` leaves those threads at nice -10, to compare; the latency counts the
+same either way. The broker, the bridge and its express, the kernel's pty worker and the loads
+keep their priorities.
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
@@ -876,10 +880,8 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         n1mm_udp_port=ports["n1mm"],
     )
     b_frames, d_frames = FrameLog(), FrameLog()
-    b_emu, b_relay, b_path = open_line(
-        scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=DIRECT
-    )
-    d_emu, d_relay, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=DIRECT)
+    b_emu, _r, b_path = open_line(scope, "rotorez", b_frames, EMU_B, name="tty-b", direct=DIRECT)
+    _d_emu, _r, d_path = open_line(scope, "rotorez", d_frames, EMU, name="tty-d", direct=DIRECT)
     settings.append({"id": "b", "model": "rotorez", "port": str(b_path), **BRIDGE_B})
     settings.append({"id": "d", "model": "rotorez", "port": str(d_path), **BRIDGE})
     host = EmuHost(scope, "md01", TRACKERS)
@@ -911,12 +913,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     scope.callback(sender.close)
     loads_client = Mqtt(broker_port, [], name="sul-loads")
     scope.callback(loads_client.close)
-    rt = INSTRUMENT_RT and instrument_first(
-        [sender.client._thread.native_id]  # noqa: SLF001 (paho's network thread)
-        + [t for emu, _f, relay in lines.values() for t in _threads(emu, relay)]
-        + _threads(b_emu, b_relay)
-        + _threads(d_emu, d_relay)
-    )
+    rt = INSTRUMENT_RT and instrument_first()  # every thread of ours is up (harness rule 6)
     try:
         recorder.wait_all([f"rotor/{s['id']}/availability" for s in settings], "online", 90)
         recorder.wait_all([f"rotor/m{i}/state" for i in range(MEASURED)], "idle", 60)
@@ -949,11 +946,6 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         probe,
         rt,
     )
-
-
-def _threads(emu: Any, relay: PacedRelay | None) -> list[int | None]:
-    """A controller's emulator thread and its line's relay thread (harness.py rule 6)."""
-    return [emu._thread.native_id, None if relay is None else relay.thread_id]  # noqa: SLF001
 
 
 @dataclass
@@ -1337,6 +1329,8 @@ def pairs(scope: Scope, n: int, rng: random.Random) -> dict[str, Any]:
                 return {"error": f"the engine of commit {OLD_COMMIT} did not run: {exc}"}
             raise
         mixed = [r for pair in zip(*rotors, strict=True) for r in pair]
+        if INSTRUMENT_RT:
+            instrument_first()  # the pairs' emulators, lines and clients too (harness rule 6)
 
         def check() -> None:
             for b in bridges.values():

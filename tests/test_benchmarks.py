@@ -5,13 +5,18 @@ broker's floor and the bridge's part (benchmarks/stop_under_load.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import subprocess
+import sys
+import threading
 import time
 from pathlib import Path
 
 import pytest
 
 from benchmarks.delivery import DeliveryProbe
+from benchmarks.harness import instrument_first
 from benchmarks.line import PacedRelay, stamp_late, wire_ahead
 from benchmarks.stop_under_load import GOAL_MS, Sample, floor_split, query_after, row_verdict
 from tests.support.mosquitto import Mosquitto
@@ -277,3 +282,37 @@ def test_the_relay_keeps_each_handed_bytes_due_time(tmp_path: Path) -> None:
         relay.close()
         os.close(master)
         os.close(slave)
+
+
+def test_the_instrument_runs_first_and_nothing_it_starts_later_inherits_it() -> None:
+    """benchmarks/harness.py rule 6: every thread of the benchmark's process at that moment
+    in the real-time class (a controller never waits for a core behind the loads), a thread or
+    process started afterwards at the usual class (a load, a broker, a bridge it spawns)."""
+    if os.geteuid() != 0:
+        pytest.skip("the real-time class needs root")
+    before = threading.Event()
+    waiting = threading.Thread(target=before.wait, daemon=True)
+    waiting.start()
+    try:
+        assert instrument_first()
+        assert os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO
+        assert os.sched_getscheduler(waiting.native_id or 0) & ~os.SCHED_RESET_ON_FORK == (
+            os.SCHED_FIFO
+        )
+        policy: list[int] = []
+        later = threading.Thread(target=lambda: policy.append(os.sched_getscheduler(0)))
+        later.start()
+        later.join()
+        assert policy == [os.SCHED_OTHER]
+        child = subprocess.run(
+            [sys.executable, "-c", "import os; print(os.sched_getscheduler(0))"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        assert int(child.stdout) == os.SCHED_OTHER
+    finally:
+        before.set()
+        for tid in os.listdir("/proc/self/task"):  # this test process back as it was
+            with contextlib.suppress(OSError):
+                os.sched_setscheduler(int(tid), os.SCHED_OTHER, os.sched_param(0))
