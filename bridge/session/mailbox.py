@@ -21,14 +21,7 @@ Rules:
    the lock: a ``put`` after that writes a byte again; one before it is in the batch taken.
    A put in a rotator's owner step (runtime/kept.py rule 5) passes ``wake=False`` and the step
    calls ``wake_once`` when it has let go: no system call while the owner's lock is held (the
-   write gives the GIL away, and a lock ON waiting for the step would wait for it too). A
-   target put inside a thread's round of hand-offs (core/handoff.py: the MQTT connection's
-   reading of what the socket holds, the serial-lines thread's round) owes its wake-up to the
-   round's end: a backlog of targets read in one round costs one wake-up and one lines-thread
-   round, not one per target (they cost the reading thread a system call and the lines thread
-   a round each: about 40 % of the bridge's CPU while it read a 60,000-target backlog). That
-   only delays the take, as a lines thread busy with other ports would; a stop, a lock, a
-   release or a hold wakes at once (rule 4), and takes the owed targets with it.
+   write gives the GIL away, and a lock ON waiting for the step would wait for it too).
 6. A hold (interfaces/mqtt/lastword.py rule 2) comes with the stop or lock ON that starts it, in one
    put; a release ends the holds up to its marker. A release that clears (the connection that
    would have caught up was lost) ends every hold and drops a target or track put before it;
@@ -81,7 +74,6 @@ import threading
 from dataclasses import dataclass, field
 from typing import Literal
 
-from bridge.core import handoff
 from bridge.core.model import Control, FeatureCommand, SetOption, Stop, Target, combine
 from bridge.session.follow import Follow, Heard
 from bridge.session.tracking import Track
@@ -216,8 +208,8 @@ class Mailbox:
             else:
                 self._option_order.pop(command.name, None)
                 self._option_order[command.name] = command
-        if wake and not (isinstance(command, Target) and handoff.defer(self, self._wake_once)):
-            self._wake_once()  # rule 5: a target inside a round is woken for at its end
+        if wake:
+            self._wake_once()
         return True
 
     def _stale(self, epoch: int | None) -> bool:

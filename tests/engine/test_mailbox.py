@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import select
 
-from bridge.core import handoff
 from bridge.core.model import SetOption, Stop, Target
 from bridge.session.mailbox import Mailbox
 from tests.support.waiting import slow
@@ -52,35 +51,6 @@ def test_put_wakes_a_selecting_worker_and_take_clears_the_wakeup() -> None:
     assert select.select([mb], [], [], slow(1))[0] == [mb]
     mb.take()
     assert select.select([mb], [], [], 0)[0] == []
-
-
-def test_targets_read_in_one_round_wake_the_worker_once_at_its_end() -> None:
-    """Rule 5: a backlog's targets read in one round (the MQTT connection's reading, core/
-    handoff.py) cost the worker one wake-up, when the round ends, and it then takes the newest."""
-    mb = Mailbox()
-    with handoff.batch():
-        for az in range(100):
-            mb.put(Target(float(az)))
-        assert select.select([mb], [], [], 0)[0] == []  # nothing woken yet
-    assert select.select([mb], [], [], slow(1))[0] == [mb]
-    assert mb.take().target == Target(99.0)
-    assert select.select([mb], [], [], 0)[0] == []  # one byte for the whole round
-
-
-def test_a_stop_inside_a_round_wakes_the_worker_at_once_and_takes_the_targets_with_it() -> None:
-    """Rule 5: only targets wait for the round's end; a stop read in the middle of a backlog
-    wakes the worker at once, and the targets before it go with it (it drops them)."""
-    mb = Mailbox()
-    with handoff.batch():
-        mb.put(Target(10.0))
-        mb.put(Stop())
-        assert select.select([mb], [], [], slow(1))[0] == [mb]
-        batch = mb.take()
-        assert batch.stop == Stop() and batch.target is None
-        mb.put(Target(20.0))  # after the stop, in the same round: woken for at its end
-        assert select.select([mb], [], [], 0)[0] == []
-    assert select.select([mb], [], [], slow(1))[0] == [mb]
-    assert mb.take().target == Target(20.0)
 
 
 class _PutOnRelease:

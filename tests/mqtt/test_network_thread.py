@@ -8,13 +8,9 @@ the DISCONNECT (the broker then drops the last will) before the thread ends."""
 
 from __future__ import annotations
 
-import array
 import contextlib
-import fcntl
-import math
 import select
 import socket
-import termios
 import threading
 from collections.abc import Iterator
 from typing import Any
@@ -23,7 +19,7 @@ import pytest
 from paho.mqtt.enums import CallbackAPIVersion
 
 from bridge.core import handoff
-from bridge.interfaces.mqtt.paho_client import READ_BATCH, Client, Waker, new_client
+from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
 from tests.support.waiting import slow
@@ -478,48 +474,3 @@ def test_another_threads_message_is_not_held_back_by_a_round_under_way(
             release.set()
             lines.join()
         probe.wait(lambda m: m.topic == "net/status", start=mark)
-
-
-def test_a_backlog_in_the_socket_is_read_many_a_round_and_its_hand_offs_wait_for_the_round(
-    broker: Mosquitto, probe: Probe, threads: set[str]
-) -> None:
-    """Rule 6: messages already in the socket are read READ_BATCH a round (one round each cost
-    a poll, a keepalive look and a quick-ack), all in order, and a wake-up a message owes (a
-    target's, session/mailbox.py rule 5) is given once, when the round ends."""
-    with connected(broker, "net-batch") as c:
-        events: list[str] = []
-        first, held, subscribed = threading.Event(), threading.Event(), threading.Event()
-
-        def on_message(_c: Any, _u: Any, msg: Any) -> None:
-            if msg.payload == b"0":  # the thread held here while the rest fills the socket
-                first.set()
-                held.wait(slow(10))
-            owed = handoff.defer("worker", lambda: events.append("woken"))
-            events.append(f"{msg.payload.decode()}{'' if owed else ' at once'}")
-
-        c.on_message = on_message
-        c.on_subscribe = lambda *_a: subscribed.set()
-        c.subscribe("net/batch", qos=0)
-        assert subscribed.wait(slow(10))
-        c.tick = lambda: events.append("tick")
-        n = 200
-        for i in range(n):
-            probe.publish("net/batch", str(i).encode())
-        assert first.wait(slow(10))
-        sock = c.socket()
-        assert isinstance(sock, socket.socket)
-
-        def waiting() -> int:  # bytes in the socket, not read yet
-            got = array.array("i", [0])
-            fcntl.ioctl(sock.fileno(), termios.FIONREAD, got)
-            return got[0]
-
-        wait_until(lambda: waiting() >= (n - 1) * 15, slow(10), "the rest in the socket")
-        held.set()
-        wait_until(lambda: f"{n - 1}" in events or f"{n - 1} at once" in events, slow(10))
-        read = [e for e in events if e not in ("tick", "woken")]
-        assert read == [str(i) for i in range(n)]  # in order, each in a round
-        after = events[events.index("0") :]
-        rounds = math.ceil((n - 1) / READ_BATCH) + 1
-        assert after.count("tick") <= rounds  # not a round each
-        assert 1 <= after.count("woken") <= rounds  # once a round, not once a message

@@ -57,7 +57,7 @@ Rules (numbered as the bridge's MQTT rules; client.py keeps the index of all of 
    keeps breaking the same way earns the same back-off; the error says "most likely".) The
    default client id is unique per installation (MqttSettings.effective_client_id): only an
    explicit one, or a copied state file on a host of the same name, can collide.
-9. Whatever the broker sends is acknowledged at once, in TCP: after every round of reads, the
+9. Whatever the broker sends is acknowledged at once, in TCP: after every read paho makes, the
    socket gets TCP_QUICKACK (Linux; elsewhere nothing changes). A broker with Nagle on
    (mosquitto's default, set_tcp_nodelay false) holds a second small packet until the first is
    acknowledged, and Linux delays the acknowledgement of a packet we do not answer (a PUBACK for

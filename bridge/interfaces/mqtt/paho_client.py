@@ -43,10 +43,7 @@ Rules:
    told that no wake-up was asked for, so that a message another thread queues meanwhile (an
    error event, the stop lane's marker) wakes it at once, not with the round. It waits with
    poll, not select (which refuses a descriptor above 1023, as a bridge with many clients open
-   has). A round reads what the socket already holds, READ_BATCH packets at most, not one (a
-   backlog cost a poll, a keepalive look and a quick-ack per message), inside a round of
-   hand-offs (core/handoff.py): the targets it puts wake the serial-lines thread once, when
-   the reading ends (session/mailbox.py rule 5); a stop wakes it at once.
+   has).
 7. On that thread, a QoS 0 PUBLISH written calls no ``on_publish``: paho calls it to say that
    the message left the socket, building a reason code and properties each time (about as much
    CPU as the rest of the publish), while both connections use ``on_publish`` for QoS 1
@@ -83,7 +80,6 @@ log = logging.getLogger(__name__)
 TCP_QUICKACK: int | None = getattr(socket, "TCP_QUICKACK", None)  # rule 9; Linux only
 CONNACK_TIMEOUT_S = 10.0  # rule 5
 STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
-READ_BATCH = 64  # rule 6: packets read in one round at most (then a write, a keepalive look)
 POLL_READ = POLLIN | POLLPRI  # rule 6: what wakes the network thread to read
 READ_EVENTS = POLL_READ | POLLERR | POLLHUP  # ... and what it then reads
 
@@ -364,20 +360,7 @@ class Client(paho.Client):
         self._clean_session = True
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        """Rule 6: what the socket holds, READ_BATCH packets at most, as one round of
-        hand-offs; then rule 9's acknowledgement."""
-        with handoff.batch():
-            rc = super().loop_read(max_packets)
-            for _ in range(READ_BATCH - 1):
-                if rc != MQTTErrorCode.MQTT_ERR_SUCCESS or self._sock is None:
-                    break
-                rc = self._packet_read()
-                if rc == MQTTErrorCode.MQTT_ERR_AGAIN:  # nothing more there yet
-                    rc = MQTTErrorCode.MQTT_ERR_SUCCESS
-                    break
-                if rc > 0:
-                    rc = self._loop_rc_handle(rc)
-                    break
+        rc = super().loop_read(max_packets)
         acknowledge_now(self.socket())
         return rc
 
