@@ -25,6 +25,18 @@ Rules:
    do not wait for a core behind the bridge, the broker or a load, and it stamps the frames the
    latency ends at. Every process it spawns starts at the machine's usual priority again, but
    for one that also stands for hardware (the emulator host: ``spawn(..., hardware=True)``).
+6. ``instrument_first()`` (as root) puts every thread this process has at that moment in the
+   real-time class (SCHED_FIFO, priority INSTRUMENT_RT): the controllers' emulators and paced
+   lines that carry and stamp a measured frame, the publisher's network thread, the probes, and
+   every thread that may hold the interpreter lock one of those waits for. A controller's
+   microcontroller and UART never wait for a core; a nice value only weighs a thread against
+   the others, and under a load a nice -10 thread still waited for one for milliseconds behind
+   nice-0 ones (and so did every thread of this process waiting for the lock it held). Only
+   threads that sleep until a byte, a message or a deadline run here (one that spun would hold
+   a core; the kernel keeps 5 % of each second for the others). Nothing started later inherits
+   it (SCHED_RESET_ON_FORK): a process spawned then starts at the usual priority (rule 5's
+   hardware at HARDWARE_NICE again), a thread started then at nice 0; call it again once a new
+   instrument is up.
 """
 
 from __future__ import annotations
@@ -81,7 +93,35 @@ def hardware_first() -> bool:
     return True
 
 
+INSTRUMENT_RT = 1  # rule 6: the lowest real-time priority, above every ordinary thread
+_INSTRUMENT_RAISED = False  # rule 6 done: a hardware child takes HARDWARE_NICE again
+
+
+def instrument_first() -> bool:
+    """Rule 6 for every thread of this process; False where that is not allowed (not root, no
+    real-time class here): they keep their priority then."""
+    tids = (
+        [int(t) for t in os.listdir("/proc/self/task")] if os.path.isdir("/proc/self/task") else []
+    )
+    try:
+        policy = os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
+        for tid in tids:
+            with contextlib.suppress(ProcessLookupError):  # a thread that ended meanwhile
+                os.sched_setscheduler(tid, policy, os.sched_param(INSTRUMENT_RT))
+    except (OSError, AttributeError):
+        for tid in tids:  # all or none: a figure taken with some raised compares with neither
+            with contextlib.suppress(OSError, AttributeError):
+                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        return False
+    global _INSTRUMENT_RAISED  # noqa: PLW0603 (read by the children's preexec)
+    _INSTRUMENT_RAISED = bool(tids)
+    return _INSTRUMENT_RAISED
+
+
 def _die_with_parent() -> None:  # runs in the child between fork and exec
+    if _INSTRUMENT_RAISED and os.getpriority(os.PRIO_PROCESS, 0) > HARDWARE_NICE:  # rule 6
+        with contextlib.suppress(OSError):  # reset it to nice 0: rule 5's again
+            os.setpriority(os.PRIO_PROCESS, 0, HARDWARE_NICE)
     try:
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
     except OSError:

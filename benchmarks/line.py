@@ -33,6 +33,12 @@ Rules:
    handed to a UART are not recalled). The due times are the line's, not our deliveries (a
    late delivery is the relay's error, rule 4, and is not taken for the line's floor).
    ``read_between(t0, t1)``: the bytes read from ``t0`` to ``t1`` (what came after a publish).
+8. ``stamp_late(t, byte)``: how long after the line delivered ``byte`` (its due time) the
+   controller stamped a frame ending in it at ``t``: the instrument's own wait (the relay's and
+   the emulator's threads waiting for a core or the interpreter lock; a real controller stamps
+   nothing and waits for nothing), kept beside every latency so that a figure taken with the
+   instrument raised (harness.py rule 6) and one without compare. From the last RECEIVED chunks
+   handed on (``handed``: ``(t handed, due of each byte, bytes)``, always kept).
 """
 
 from __future__ import annotations
@@ -67,6 +73,13 @@ def thread_sched() -> tuple[int, int]:
         return 0, 0
 
 
+def name_thread(tid: int | None, name: str) -> None:
+    """A thread of this process named for the kernel too (its ``comm``, 15 bytes), so that
+    per-thread scheduling read from outside (/proc, perf) names the instrument's threads."""
+    with contextlib.suppress(OSError):
+        Path(f"/proc/self/task/{tid}/comm").write_text(name[:15])
+
+
 @dataclass(frozen=True)
 class Ahead:
     """What a line still carried at a moment of bytes it had read before it (rule 7)."""
@@ -87,6 +100,20 @@ def wire_ahead(received: Iterable[tuple[float, float, bytes]], t: float) -> Ahea
             busy_until = max(busy_until, due_last)
             data += chunk
     return Ahead(busy_until - t, bytes(data))
+
+
+def stamp_late(
+    handed: Iterable[tuple[float, tuple[float, ...], bytes]], t: float, byte: bytes
+) -> float | None:
+    """From a line's chunks handed on ``(t handed, due of each byte, bytes)`` (rule 8): ``t``
+    (a frame's stamp) less the due time of ``byte`` in the last chunk handed on by ``t`` that
+    holds it (its first such byte: the frame ended there); None if none did. A relay hands a
+    chunk on only once the controller took the one before (rule 5), so that chunk is the
+    frame's."""
+    for t_out, dues, data in reversed(tuple(handed)):
+        if t_out <= t and byte in data:
+            return max(0.0, t - dues[data.index(byte)])
+    return None
 
 
 class PacedRelay:
@@ -112,6 +139,7 @@ class PacedRelay:
         termios.tcflush(self._device, termios.TCIFLUSH)  # "a client opened the port"
         self._queue: deque[tuple[float, bytes]] = deque()
         self.received: deque[tuple[float, float, bytes]] = deque(maxlen=RECEIVED)
+        self.handed: deque[tuple[float, tuple[float, ...], bytes]] = deque(maxlen=RECEIVED)
         self._received_lock = threading.Lock()
         self._line_free_s = 0.0
         self.lateness_s: list[float] = []
@@ -126,6 +154,11 @@ class PacedRelay:
         self._thread = threading.Thread(target=self._run, daemon=True, name=f"line-{link.name}")
         self._thread.start()
 
+    @property
+    def thread_id(self) -> int | None:
+        """The relay thread's native id (its kernel thread)."""
+        return self._thread.native_id
+
     def _run(self) -> None:
         fds = [self._master, self._device, self._wake_r]
         while not self._stop:
@@ -134,8 +167,13 @@ class PacedRelay:
                 self.lateness_s.append(now - self._queue[0][0])
                 first_due = self._queue[0][0]
                 out = bytearray()
+                dues: list[float] = []
                 while self._queue and self._queue[0][0] <= now:
-                    out += self._queue.popleft()[1]
+                    due, byte = self._queue.popleft()
+                    out += byte
+                    dues.append(due)
+                with self._received_lock:
+                    self.handed.append((time.monotonic(), tuple(dues), bytes(out)))
                 if self.timeline is not None:
                     event = ("out", time.monotonic(), bytes(out), first_due, *thread_sched())
                     self.timeline.append(event)
@@ -184,6 +222,12 @@ class PacedRelay:
         """The bytes read from the client from ``t0`` to ``t1`` (time.monotonic)."""
         with self._received_lock:
             return b"".join(data for t, _, data in self.received if t0 <= t <= t1)
+
+    def stamp_late(self, t: float, byte: bytes) -> float | None:
+        """Rule 8, from what this line handed on."""
+        with self._received_lock:
+            handed = tuple(self.handed)
+        return stamp_late(handed, t, byte)
 
     def _hand_over(self, data: bytes) -> bool:
         """The bytes due to the controller: to ``deliver`` (rule 5), else through its pty."""

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.harness import PYTHON, BenchError, Mqtt, Scope, start_broker
-from benchmarks.line import ByteCounter, FrameLog, PacedRelay
+from benchmarks.line import ByteCounter, FrameLog, PacedRelay, name_thread
 from bridge import emulators
 from bridge.emulators import EmulatedPort
 from bridge.protocols import REGISTRY
@@ -64,12 +64,14 @@ def open_line(
     emu_link = scope.workdir / f"{name}-emulator"
     emu = emulators.start(model, link=str(emu_link), on_frame=frames, **(emu_opts or {}))
     scope.callback(emu.close)
+    name_thread(emu._thread.native_id, f"emu-{name}")  # noqa: SLF001
     if not paced:
         return emu, None, emu_link
     link = scope.workdir / name
     deliver = partial(emu.inject, to="device") if direct else None
     relay = PacedRelay(emu.path, link, baud_of(model, emu_opts), timeline=timeline, deliver=deliver)
     scope.callback(relay.close)
+    name_thread(relay.thread_id, f"line-{name}")
     return emu, relay, link
 
 

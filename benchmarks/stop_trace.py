@@ -26,7 +26,9 @@ line's floor, benchmarks/line.py rule 7), when the broker delivered it (benchmar
 and, where the benchmark wrote ``TRACE.lines.json``
 (stop_under_load's focused mode), what the stop's line carried from 50 ms before the publish to
 its frame: the relay's reads of the bridge's bytes and deliveries to the controller, and the
-controller's frames.
+controller's frames. Then each load's SLOWEST stops cut step by step (``_split``): the broker's
+delivery, the bridge's first write of the stop frame after it, the pty's hop to the line, the
+byte on the line, and how late the controller stamped it (the instrument's own wait).
 """
 
 from __future__ import annotations
@@ -371,6 +373,52 @@ def _line(window: dict[str, Any]) -> list[str]:
     return [f"      {(t - t0) * 1e3:7.1f} {text}" for t, text in rows]
 
 
+SLOWEST = 5  # the stops split step by step (_split), of each load
+BYTE_S = 10 / 4800  # a byte on the measured lines (Rotor-EZ, 4800 baud)
+
+
+def _split(by: dict[str, list[Any]], row: list[Any], window: dict[str, Any] | None) -> str:
+    """One stop's time cut at its steps, in ms: the publish -> the broker's delivery (the
+    probe's kernel stamp) -> the bridge's first write of ``;`` (the express's or the lines
+    thread's; beside it, when the broker's copy to the bridge's stop lane reached the lane's
+    socket, from the same moment: the broker's own order of sends) -> the line's relay read it
+    (the pty's kernel worker, and the relay thread's own wake-up) -> the byte's due time on the
+    line (its 2.1 ms, and any bytes ahead) -> the controller stamped the frame (the
+    instrument's own wait: line.py rule 8)."""
+    rid, t0, lat, *taker = row
+    t1 = t0 + lat
+    broker = taker[4] if len(taker) > 4 and taker[4] is not None else None
+    x = _first(by["xwrite"], t0, t1, lambda e: e[2] == rid)
+    w = _first(by["write"], t0, t1, lambda e: e[2].endswith(f"tty-{rid}"))
+    wrote = min((e[1] for e in (x, w) if e is not None), default=None)
+    who = "--" if wrote is None else ("express" if x is not None and x[1] == wrote else "lines")
+    cells = [
+        f"{rid} {lat * 1e3:5.1f}",
+        "deliver " + ("--" if broker is None else f"{broker * 1e3:4.1f}"),
+    ]
+    since = broker if broker is not None else 0.0
+    lane = _first(by["lane"], t0, t1 + 0.1, lambda e: f"/{rid}/" in e[3])
+    if lane is not None and len(lane) > 9 and lane[9]:  # the broker's send to the bridge's lane
+        cells.append(f"(lane's socket {(lane[9] - t0 - since) * 1e3:+.1f})")
+    if wrote is not None:
+        cells.append(f"bridge ({who}) {(wrote - t0 - since) * 1e3:4.1f}")
+    read = None
+    if window is not None and wrote is not None:
+        read = next(
+            (e for e in window["relay"] if e[0] == "in" and e[1] >= wrote - 0.0005 and ";" in e[2]),
+            None,
+        )
+    if read is not None and wrote is not None:
+        data, due_last = read[2], read[3]
+        due = due_last - (len(data) - 1 - data.index(";")) * BYTE_S
+        cells.append(f"pty hop {(read[1] - wrote) * 1e3:4.1f}")
+        cells.append(f"line {(due - read[1]) * 1e3:4.1f}")
+        cells.append(f"stamp {(t1 - due) * 1e3:4.1f}")
+    elif len(taker) > 5 and taker[5] is not None:
+        cells.append(f"stamp {taker[5] * 1e3:4.1f}")
+    return " | ".join(cells)
+
+
 def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
     trace = json.loads(Path(trace_path).read_text())["events"]
     samples = json.loads(Path(samples_path).read_text())
@@ -409,6 +457,12 @@ def analyse(trace_path: str, samples_path: str, over_ms: float) -> None:
                     if hop is not None:
                         hops.append(hop)
         print("  " + _firsts(by, rows))
+        print(
+            f"  the {SLOWEST} slowest, ms from step to step (_split): the publish -> deliver -> "
+            "the bridge wrote ';' -> pty hop -> line (due) -> the controller's stamp"
+        )
+        for row in sorted(rows, key=lambda r: -r[2])[:SLOWEST]:
+            print("    " + _split(by, row, shown.get((row[0], row[1]))))
         if hops:
             one, two = (sorted(h[i] for h in hops) for i in (0, 1))
             print(

@@ -37,6 +37,20 @@ off: the stop's frame written by the bridge's process alone), to compare in turn
 ``STOP_TRACE`` too): a few minutes, to compare one load's tail in runs taken in turns;
 ``STOP_ONLY=backlog`` the control and the backlog (its rounds, the round alone and its table);
 ``STOP_ONLY=rotctld`` (``gs232``, ``easycomm``) the control and that port's 16 TCP clients.
+The instrument does not wait behind the loads it creates (benchmarks/harness.py rule 6): where
+the system allows it, every thread of this process (the controllers' emulators and paced lines
+that carry and stamp the stop frame, the stops' publisher, the probes, the taker that may hold
+the interpreter lock they wait for) runs in the real-time class, as a controller's
+microcontroller and UART would; at nice -10 (rule 5), in traced backlog runs, a relay waited
+14 ms in the run queue with the stop byte due, and another 14.5 ms off it (for the interpreter
+lock: our other threads, which may hold it, waited for a core up to 7.6 ms). Every stop keeps
+``stamp_late``, how long after the line delivered its byte the controller stamped the frame
+(benchmarks/line.py rule 8): the instrument's own wait, inside the latency, in its own column;
+a relay late to read the bridge's byte moves that byte's due time, so such a wait is in the
+bridge's part instead (with STOP_TRACE, ``pty hop`` in the analysis's split).
+``STOP_INSTRUMENT_RT=0`` leaves those threads at nice -10, to compare; the latency counts the
+same either way. The broker, the bridge and its express, the kernel's pty worker and the loads
+keep their priorities.
 ``BRIDGE_NICE=5`` lowers every thread of the loaded bridge's process to that nice value once its
 stop express is up (the express keeps nice 0): whether the host's other work (the broker, the
 pty's kernel worker, the express) then waits less behind the bridge's busy threads.
@@ -168,6 +182,7 @@ from benchmarks.harness import (
     Scope,
     check_abort,
     hardware_first,
+    instrument_first,
     start_bridge,
     start_broker,
 )
@@ -200,6 +215,7 @@ PAGES, POSTERS = 10, 8
 TRACKERS = 8
 TIMELINE_EVENTS = 200_000  # per measured line, in the focused mode (a few minutes of polls)
 TRACE_OVER_MS, TRACE_BEFORE_S = 9.0, 0.05  # the focused mode's line windows
+TRACE_SLOWEST = 5  # and the slowest stops of each load, whatever their time
 # the line hands its bytes to the controller directly (line.py rule 5); STOP_VIA_PTY=1 sends
 # them through the controller's pty as before, to see what that hop adds on this machine
 DIRECT = not os.environ.get("STOP_VIA_PTY")
@@ -209,6 +225,8 @@ BRIDGE_NICE = int(os.environ.get("BRIDGE_NICE") or 0)
 EXPRESS_OFF = {"stop_express": False} if os.environ.get("STOP_EXPRESS") == "0" else None
 # the focused mode of one load (module docstring): the control and that load alone
 ONLY = os.environ.get("STOP_ONLY")
+# the instrument's threads in the real-time class (module docstring; harness.py rule 6)
+INSTRUMENT_RT = os.environ.get("STOP_INSTRUMENT_RT") != "0"
 TRACK_GAP_S = 0.6  # between two rounds of 8 starts: one event at a time
 STATION = (52.52, 13.29)
 OLD_COMMIT = "9104bbc"
@@ -640,6 +658,9 @@ class Sample:
     # the broker handed the STOP to its first subscriber this long after the publish (the
     # delivery probe's kernel stamp); None: no probe, or it missed this stop
     broker_s: float | None = None
+    # the controller stamped the stop frame this long after the line delivered its byte: the
+    # instrument's own wait (line.py rule 8), inside latency_s; None: no paced line
+    stamp_late_s: float | None = None
 
     @property
     def floor_s(self) -> float:
@@ -733,6 +754,7 @@ class StopTaker:
         line = r.line
         ahead = line.ahead_of(t0) if line is not None else None
         delivered = None if self.probe is None else self.probe.delivered(topic, payload.encode())
+        late = None if line is None else line.stamp_late(float(frame.time_s), STOP_FRAME)
         return Sample(
             r.rid,
             r.engine,
@@ -744,6 +766,7 @@ class StopTaker:
             b"" if ahead is None else ahead.data,
             b"" if line is None else line.read_between(t0, float(frame.time_s)),
             None if delivered is None else delivered - t0,
+            late,
         )
 
     def step(self, before: Callable[[], None] | None = None) -> Sample | None:
@@ -806,6 +829,7 @@ class Loaded:
     timelines: dict[str, deque[tuple[Any, ...]]]  # the measured lines' relays (STOP_TRACE only)
     hop: PtyHop  # the host's own pty hop, beside the stops (benchmarks/ptyhop.py)
     probe: DeliveryProbe  # the broker's delivery of each STOP (benchmarks/delivery.py)
+    instrument_rt: bool = False  # the instrument's threads in the real-time class (docstring)
 
 
 def _tle(path: Path) -> list[str]:
@@ -889,6 +913,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
     scope.callback(sender.close)
     loads_client = Mqtt(broker_port, [], name="sul-loads")
     scope.callback(loads_client.close)
+    rt = INSTRUMENT_RT and instrument_first()  # every thread of ours is up (harness rule 6)
     try:
         recorder.wait_all([f"rotor/{s['id']}/availability" for s in settings], "online", 90)
         recorder.wait_all([f"rotor/m{i}/state" for i in range(MEASURED)], "idle", 60)
@@ -919,6 +944,7 @@ def start_loaded(scope: Scope, rng: random.Random) -> Loaded:
         timelines,
         hop,
         probe,
+        rt,
     )
 
 
@@ -1303,6 +1329,8 @@ def pairs(scope: Scope, n: int, rng: random.Random) -> dict[str, Any]:
                 return {"error": f"the engine of commit {OLD_COMMIT} did not run: {exc}"}
             raise
         mixed = [r for pair in zip(*rotors, strict=True) for r in pair]
+        if INSTRUMENT_RT:
+            instrument_first()  # the pairs' emulators, lines and clients too (harness rule 6)
 
         def check() -> None:
             for b in bridges.values():
@@ -1364,6 +1392,7 @@ def _run(scope: Scope, quick: bool, result: ItemResult) -> ItemResult:
         raise BenchError(f"STOP_ONLY={ONLY!r}: one of {', '.join(focused)}")
     with Scope(scope.workdir / "loaded") as inner:
         lo = start_loaded(inner, rng)
+        result.data["instrument_rt"] = lo.instrument_rt
         ABORT.wait(2.0)  # past the start-up
         phases.append(simple_phase(lo, CONTROL, n, None, None))
         if ONLY is not None:
@@ -1440,6 +1469,7 @@ def _focused_end(
                     s.wire_ahead_s,
                     _text(s.ahead),
                     s.broker_s,
+                    s.stamp_late_s,
                 )
                 for s in p.samples
             ]
@@ -1452,15 +1482,18 @@ def _focused_end(
 
 
 def _line_windows(lo: Loaded, phases: list[PhaseResult]) -> dict[str, Any]:
-    """For each stop over TRACE_OVER_MS, what its line carried from TRACE_BEFORE_S before the
-    publish to just after its stop frame: the relay's reads and deliveries (line.py rule 6)
-    and the frames the controller logged (benchmarks/stop_trace.py prints them)."""
+    """For each stop over TRACE_OVER_MS and the TRACE_SLOWEST of each load, what its line
+    carried from TRACE_BEFORE_S before the publish to just after its stop frame: the relay's
+    reads and deliveries (line.py rule 6) and the frames the controller logged
+    (benchmarks/stop_trace.py prints them)."""
     out: dict[str, Any] = {}
     frames = {r.rid: r.frames for r in lo.taker.rotors}
     for p in phases:
         rows = []
+        slowest = sorted(p.samples, key=lambda s: -s.latency_s)[:TRACE_SLOWEST]
         for s in p.samples:
-            if s.latency_s * 1000 <= TRACE_OVER_MS or s.rid not in lo.timelines:
+            over = s.latency_s * 1000 > TRACE_OVER_MS or s in slowest
+            if not over or s.rid not in lo.timelines:
                 continue
             lo_t, hi_t = s.t - TRACE_BEFORE_S, s.t + s.latency_s + 0.005
             relay = [
@@ -1636,6 +1669,7 @@ def report_loads(
             "bridge CPU %",
             "load avg",
             "pty hop p99/max ms",
+            "stamp late p99/max ms",
         ],
     )
     for p in phases:
@@ -1647,7 +1681,9 @@ def report_loads(
         broker = _broker_cell(f, len(p.samples))
         row = [p.name, len(p.samples), f.p50_ms, f.p99_ms, f.max_ms, broker]
         row += [f"{f.behind} ({f.queries})", f.bridge_p99_ms]
-        table.add(*row, met, p.cpu_pct, p.loadavg, said)
+        late = sorted(s.stamp_late_s * 1000 for s in p.samples if s.stamp_late_s is not None)
+        late_cell = f"{percentile(late, 99):.1f} / {late[-1]:.1f}" if late else "--"
+        table.add(*row, met, p.cpu_pct, p.loadavg, said, late_cell)
         result.data[p.name] = {
             "host_pty_hop_ms": None if hops is None else [round(v, 2) for v in hops],
             "latencies_ms": [round(v, 3) for v in _ms(p.samples)],
@@ -1659,6 +1695,10 @@ def report_loads(
             "line_after_publish": [_text(s.after) for s in p.samples],
             "floor_by": [s.floor_by for s in p.samples],
             "bridge_part_ms": [round(s.bridge_s * 1000, 3) for s in p.samples],
+            "stamp_late_ms": [
+                None if s.stamp_late_s is None else round(s.stamp_late_s * 1000, 3)
+                for s in p.samples
+            ],
             "p99_ms": round(f.p99_ms, 3),
             "broker_p99_ms": None if math.isnan(f.broker_p99_ms) else round(f.broker_p99_ms, 3),
             "broker_missed": f.broker_missed,
@@ -1709,6 +1749,19 @@ def report_loads(
         "hardware and the operator's machine would)"
         if result.data.get("controllers_first")
         else "the controllers shared one priority with the bridge and the loads (not root)"
+    )
+    rt = result.data.get("instrument_rt")
+    table.notes.append(
+        "stamp late: how long after the line delivered the stop byte the controller stamped "
+        "its frame (the instrument's own wait for a core or the interpreter lock, inside every "
+        "latency: benchmarks/line.py rule 8); "
+        + (
+            "the lines' relays, the controllers' emulators and the publisher's network thread "
+            "ran in the real-time class (benchmarks/harness.py rule 6; STOP_INSTRUMENT_RT=0: not)"
+            if rt
+            else "the instrument's threads at their ordinary priority (STOP_INSTRUMENT_RT=0, or "
+            "not allowed here)"
+        )
     )
     table.notes.append(
         "pty hop: a byte through a pty on this machine, written every 5 ms by a probe of its "

@@ -5,14 +5,19 @@ broker's floor and the bridge's part (benchmarks/stop_under_load.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import subprocess
+import sys
+import threading
 import time
 from pathlib import Path
 
 import pytest
 
 from benchmarks.delivery import DeliveryProbe
-from benchmarks.line import PacedRelay, wire_ahead
+from benchmarks.harness import instrument_first
+from benchmarks.line import PacedRelay, stamp_late, wire_ahead
 from benchmarks.stop_under_load import GOAL_MS, Sample, floor_split, query_after, row_verdict
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
@@ -233,3 +238,81 @@ def test_the_relay_keeps_its_reads_on_the_publish_clock(tmp_path: Path) -> None:
         relay.close()
         os.close(master)
         os.close(slave)
+
+
+def test_a_frame_stamped_late_says_how_late_against_its_bytes_due_time() -> None:
+    """The instrument's own wait (benchmarks/line.py rule 8): the stop byte due at 10.0 and
+    stamped at 10.004 was stamped 4 ms late, whatever came before it on the line; the byte
+    handed on after the stamp is not the frame's."""
+    handed = [
+        (9.0, tuple(9.0 + i * BYTE_S for i in range(4)), QUERY),  # an earlier query's ';'
+        (10.0001, (10.0, 10.0 + BYTE_S), b";;"),  # the stop and a second ';' in one chunk
+        (10.005, (10.005,), b";"),  # handed on after the stamp
+    ]
+    assert stamp_late(handed, 10.004, b";") == pytest.approx(0.004)
+    assert stamp_late(handed, 9.5, b";") == pytest.approx(9.5 - (9.0 + 3 * BYTE_S))
+    assert stamp_late(handed, 8.0, b";") is None
+
+
+def test_the_relay_keeps_each_handed_bytes_due_time(tmp_path: Path) -> None:
+    """A byte the client writes is handed to the controller with its due time on the line (its
+    read plus one byte's time on an idle line): the stamp of the frame it ends is judged
+    against that, not against when the relay got round to handing it on."""
+    master, slave = os.openpty()
+    stamps: list[float] = []
+    relay = PacedRelay(
+        os.ttyname(slave),
+        tmp_path / "line",
+        4800,
+        deliver=lambda _d: stamps.append(time.monotonic()),
+    )
+    try:
+        fd = os.open(tmp_path / "line", os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(fd, b";")
+            wait_until(lambda: bool(stamps), 5, "the relay handed the byte on")
+        finally:
+            os.close(fd)
+        ((t_read, due, _data),) = relay.received
+        assert due == pytest.approx(t_read + BYTE_S)
+        ((t_out, dues, data),) = relay.handed
+        assert data == b";" and dues == (due,) and due <= t_out <= stamps[0]
+        assert relay.stamp_late(stamps[0], b";") == pytest.approx(stamps[0] - due)
+    finally:
+        relay.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_the_instrument_runs_first_and_nothing_it_starts_later_inherits_it() -> None:
+    """benchmarks/harness.py rule 6: every thread of the benchmark's process at that moment
+    in the real-time class (a controller never waits for a core behind the loads), a thread or
+    process started afterwards at the usual class (a load, a broker, a bridge it spawns)."""
+    if os.geteuid() != 0:
+        pytest.skip("the real-time class needs root")
+    before = threading.Event()
+    waiting = threading.Thread(target=before.wait, daemon=True)
+    waiting.start()
+    try:
+        assert instrument_first()
+        assert os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO
+        assert os.sched_getscheduler(waiting.native_id or 0) & ~os.SCHED_RESET_ON_FORK == (
+            os.SCHED_FIFO
+        )
+        policy: list[int] = []
+        later = threading.Thread(target=lambda: policy.append(os.sched_getscheduler(0)))
+        later.start()
+        later.join()
+        assert policy == [os.SCHED_OTHER]
+        child = subprocess.run(
+            [sys.executable, "-c", "import os; print(os.sched_getscheduler(0))"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        assert int(child.stdout) == os.SCHED_OTHER
+    finally:
+        before.set()
+        for tid in os.listdir("/proc/self/task"):  # this test process back as it was
+            with contextlib.suppress(OSError):
+                os.sched_setscheduler(int(tid), os.SCHED_OTHER, os.sched_param(0))
