@@ -224,19 +224,19 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """A Ctrl-C before the remote has the signals (cmd_remote) is one line and exit code 2, as
-    one during its start; the other commands' own handling is theirs, from their first step."""
+    """A Ctrl-C before a command has the signals (the bridge's, the remote's, the demo's and
+    the emulators' take them once loaded; the remote's from its first step, cmd_remote) is one
+    line and exit code 2, not a traceback: loading the bridge takes a few tenths of a second."""
     argv = sys.argv[1:] if argv is None else argv
     who = "rotor-bridge"
     try:
         args = build_parser(argv).parse_args(argv)
         if args.func is cmd_remote:
             who = "rotor-bridge remote"
-            return int(cmd_remote(args))
+        return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print(f"{who}: {STOPPED_EARLY}", file=sys.stderr)
         return EXIT_CONFIG
-    return int(args.func(args) or 0)
 
 
 if __name__ == "__main__":

@@ -461,7 +461,7 @@ else:
         interrupt()
         return original(*args, **kwargs)
     setattr(owner, attr, hooked)
-sys.argv = ["bridge", "remote", "-c", conf]
+sys.argv = ["bridge", *(sys.argv[4:] or ["remote", "-c", conf])]
 if how == "module":
     runpy.run_module("bridge", run_name="__main__", alter_sys=True)  # python -m bridge remote -c
 else:
@@ -508,6 +508,25 @@ def test_ctrl_c_at_any_point_of_the_start_is_one_line_and_exit_code_2(
     assert lines and said in lines[-1], done.stderr
     assert [line for line in lines if "stopped before" in line] == [lines[-1]]
     assert done.stdout == ""  # no endpoint announced
+
+
+@pytest.mark.parametrize("how", ["module", "script"])
+@pytest.mark.parametrize("where", ["import:bridge.app", "call:bridge.settings.load_settings"])
+def test_ctrl_c_while_the_bridge_loads_is_one_line_and_exit_code_2(
+    tmp_path: Path, where: str, how: str
+) -> None:
+    """`rotor-bridge run` takes a few tenths of a second to load before the bridge has the
+    signals (app.py): a Ctrl-C then printed a Python traceback and died of the signal."""
+    conf = tmp_path / "bridge.toml"
+    conf.write_text(
+        f'[mqtt]\nport = {free_port()}\n[[rotators]]\nid = "tower"\nmodel = "rotorez"\n'
+        'port = "/dev/null-no-such-port"\n'
+    )
+    argv = [sys.executable, "-c", INTERRUPTED_AT, where, str(conf), how, "run", "-c", str(conf)]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=slow(60))
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines()[-1] == "rotor-bridge: stopped before it started"
 
 
 def test_sigterm_while_waiting_for_the_stations_heartbeat_ends_the_remote_as_a_start_error(
