@@ -6,6 +6,7 @@ tests/integration/test_stop_express.py."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
@@ -534,6 +535,22 @@ def express(
     )
 
 
+@contextlib.contextmanager
+def up_on_a_fake_clock(
+    command: list[str], problems: Problems, holds: Holds, now: list[float]
+) -> Iterator[Express]:
+    """An express of ``command`` started and up, its holds' clock ``now[0]`` (rule 8's ticks
+    read it), stopped at the end."""
+    e = express(command, problems, holds)
+    e.clock = lambda: now[0]
+    e.start(mqtt311=False)
+    try:
+        wait_until(e.up.is_set, 10, "up")
+        yield e
+    finally:
+        e.stop()
+
+
 def test_an_express_that_cannot_start_is_said() -> None:
     problems = Problems()
     e = express(["/nonexistent/python"], problems)
@@ -768,21 +785,14 @@ def test_a_hold_ends_with_the_answer_to_its_own_word_or_with_the_express() -> No
 
 
 def test_a_long_hold_is_said_and_the_word_asked_for_again(monkeypatch: pytest.MonkeyPatch) -> None:
-    problems, holds = Problems(), Holds()
-    e = express([sys.executable, "-c", ANSWERS_LATE], problems, holds)
-    now = [1000.0]
-    e.clock = lambda: now[0]
-    e.start(mqtt311=False)
-    try:
-        wait_until(e.up.is_set, 10, "up")
+    problems, holds, now = Problems(), Holds(), [1000.0]
+    with up_on_a_fake_clock([sys.executable, "-c", ANSWERS_LATE], problems, holds, now) as e:
         e.hold("a")
         _read_by_the_child(e)  # (read: no hung express)
         now[0] += 10.0  # the answer does not come: said, and asked for again
         wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
         wait_until(lambda: ("release", "a", 1) in holds.log, 10, "the word asked for again")
         wait_until(lambda: not problems.on(), 10, "unsaid once it ended")
-    finally:
-        e.stop()
 
 
 UP_AND_HOLDING = (
@@ -968,13 +978,8 @@ def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
     """Requests it has not read stand for the later ones, so a hung express's socket no longer
     fills: a word of the bridge's it leaves unread READ_WAIT_S is the hang; it is killed, and
     its hold ends with it."""
-    problems, holds = Problems(), Holds()
-    e = express([sys.executable, "-c", UP_THEN_HUNG], problems, holds)
-    now = [1000.0]
-    e.clock = lambda: now[0]
-    e.start(mqtt311=False)
-    try:
-        wait_until(e.up.is_set, 10, "up")
+    problems, holds, now = Problems(), Holds(), [1000.0]
+    with up_on_a_fake_clock([sys.executable, "-c", UP_THEN_HUNG], problems, holds, now) as e:
         child = e._child
         assert child is not None
         with caplog.at_level(logging.ERROR, logger=express_module.__name__):
@@ -984,8 +989,6 @@ def test_an_express_that_leaves_one_request_unread_is_killed_as_hung(
             wait_until(lambda: ("release", "a", 1) in holds.log, 10, "its hold ended with it")
         kills = [r.getMessage() for r in caplog.records if "killed" in r.getMessage()]
         assert kills == ["stop express does not read its socket (a word unread for 2.0 s): killed"]
-    finally:
-        e.stop()
 
 
 SLOW_START = (  # a host loading Python slowly: reads nothing until SIGUSR1, then is up
@@ -1090,19 +1093,12 @@ CHATTY = (  # up, then a word every 50 ms (a frame written for each stop of a fl
 def test_a_long_hold_is_said_while_the_express_keeps_talking() -> None:
     """Its words coming faster than once a second (a stop flood, each frame said) must not
     keep the reader from looking at the holds: a long one is said and its word asked again."""
-    problems, holds = Problems(), Holds()
-    e = express([sys.executable, "-c", CHATTY], problems, holds)
-    now = [1000.0]
-    e.clock = lambda: now[0]
-    e.start(mqtt311=False)
-    try:
-        wait_until(e.up.is_set, 10, "up")
+    problems, holds, now = Problems(), Holds(), [1000.0]
+    with up_on_a_fake_clock([sys.executable, "-c", CHATTY], problems, holds, now) as e:
         e.hold("a")
         _read_by_the_child(e)  # (read: no hung express)
         now[0] += 10.0  # the answer does not come: said all the same
         wait_until(lambda: any("not yet answered" in p for p in problems.on()), 10, "said")
-    finally:
-        e.stop()
 
 
 def test_an_express_whose_socket_has_a_high_descriptor_number_is_read() -> None:
