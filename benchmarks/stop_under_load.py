@@ -65,9 +65,14 @@ rest and the ``;`` into one junk frame and lose the stop. A stop right behind a 
 with 60 stops the p99 is the largest. So each stop's ``wire_ahead`` is kept: how long after its
 publish the paced line was still busy with bytes it had read from the bridge before the
 publish (the line's due times, on this process's CLOCK_MONOTONIC like the publish stamp:
-benchmarks/line.py rule 7), and what those bytes were. Bytes the bridge wrote after the publish,
-or that reached the line after it (the bridge's pty hop), count as the bridge's (the bytes read
-from the publish to the stop frame are kept too: ``line_after_publish``). Polling less often while
+benchmarks/line.py rule 7), and what those bytes were; and the same at the moment the broker
+handed the STOP over (below): ``handed_ahead``, the line busy after the hand-over with bytes it
+had read before it. Until then the bridge cannot know of the stop, so a query it writes in
+between (its poll grid came round while the broker still passed the STOP on) is the line's
+floor too; bytes the bridge wrote after the hand-over, or that reached the line after it (the
+bridge's pty hop), count as the bridge's (the bytes read from the publish and from the
+hand-over to the stop frame are kept too: ``line_after_publish``, ``line_after_hand_over``).
+Polling less often while
 turning would only make such a stop rarer, at the cost of a staler bearing, so the bridge keeps
 its 0.2 s. Here few stops meet a query: the poll that saw a panel turn was timed on the idle
 grid (0.5 s; bridge/session/link.py rule 8), so the first moving poll comes 0.25 s or more after
@@ -84,12 +89,12 @@ thread's own waits do not count), subscribed to the measured rotors' exact stop 
 the bridge started, so served before the bridge's connections: its time is the earliest
 delivery, never later than the bridge's. Each measured STOP's payload is ``STOP <n>``, its own
 (any payload on ``R/stop`` is a stop: bridge/interfaces/mqtt/service.py rule 2), which matches a
-delivery to its stop. The two waits both start at the publish and can overlap: the stop's frame
-cannot start on the line before the broker delivered the STOP, nor before the line is free of
-the earlier bytes, and each wait runs while the other does. So a stop's floor is max(wire_ahead,
-broker), not their sum, and the bridge's part is latency - max(wire_ahead, broker): everything
-from that moment on (the bridge's own steps, its pty's hop, the stop byte's own 2.1 ms on the
-line). The bridge's connections get the STOP after the probe, so the broker's floor never
+delivery to its stop. The stop's frame cannot start on the line before the broker handed the
+STOP over, nor before the line is free of what the bridge wrote until then: its floor is
+broker + handed_ahead (wire_ahead when the probe missed it), and the bridge's part is the
+latency less that floor: everything from that moment on (the bridge's own steps, its pty's
+hop, the stop byte's own 2.1 ms on the line). The bridge's connections get the STOP after the
+probe, so the broker's floor never
 counts the broker's time with the bridge's connections as the broker's; but it does count
 mosquitto waiting for a core, which the bridge's own busy threads may hold (the backlog's
 reader uses about half a core): on a 2-core host that share of the broker's time is the
@@ -661,20 +666,36 @@ class Sample:
     # the controller stamped the stop frame this long after the line delivered its byte: the
     # instrument's own wait (line.py rule 8), inside latency_s; None: no paced line
     stamp_late_s: float | None = None
+    # the line busy this long after the broker's hand-over with bytes it read before it, and
+    # those bytes' reads (the docstring's floor; 0.0 and b"" when the probe missed the stop)
+    handed_ahead_s: float = 0.0
+    handed_ahead: bytes = b""
+    after_hand_over: bytes = b""  # what the line read from the hand-over to the stop frame
 
     @property
     def floor_s(self) -> float:
-        """What the stop waited for that was not the bridge's (the docstring): the line busy
-        with earlier bytes and the broker not yet delivering both start at the publish and
-        overlap, so the larger of the two; a stop the probe missed keeps the line's alone."""
-        return max(self.wire_ahead_s, self.broker_s or 0.0)
+        """What the stop waited for that was not the bridge's (the docstring): the broker not
+        yet handing it over, then the line still busy with bytes the bridge wrote before it
+        could know of the stop; a stop the probe missed keeps the line's wait at the publish."""
+        if self.broker_s is None:
+            return self.wire_ahead_s
+        return max(self.wire_ahead_s, self.broker_s + self.handed_ahead_s)
 
     @property
     def floor_by(self) -> str:
-        """Whose wait the floor is: "broker", "line", or "" (neither held it up)."""
-        if self.broker_s is not None and self.broker_s > 0 and self.broker_s >= self.wire_ahead_s:
-            return "broker"
-        return "line" if self.wire_ahead_s > 0 else ""
+        """Whose wait ended last, the floor's: "line" (still busy with the bridge's earlier
+        bytes after the hand-over), "broker", or "" (neither held it up)."""
+        if self.broker_s is None:
+            return "line" if self.wire_ahead_s > 0 else ""
+        if self.handed_ahead_s > 0:
+            return "line"
+        return "broker" if self.broker_s > 0 else ""
+
+    @property
+    def bytes_ahead(self) -> bytes:
+        """The bridge's bytes the stop found on the line where its floor is judged: at the
+        broker's hand-over, or at the publish when the probe missed it."""
+        return self.ahead if self.broker_s is None else self.handed_ahead
 
     @property
     def bridge_s(self) -> float:
@@ -755,6 +776,7 @@ class StopTaker:
         ahead = line.ahead_of(t0) if line is not None else None
         delivered = None if self.probe is None else self.probe.delivered(topic, payload.encode())
         late = None if line is None else line.stamp_late(float(frame.time_s), STOP_FRAME)
+        handed = None if line is None or delivered is None else line.ahead_of(delivered)
         return Sample(
             r.rid,
             r.engine,
@@ -767,6 +789,11 @@ class StopTaker:
             b"" if line is None else line.read_between(t0, float(frame.time_s)),
             None if delivered is None else delivered - t0,
             late,
+            0.0 if handed is None else handed.s,
+            b"" if handed is None else handed.data,
+            b""
+            if line is None or delivered is None
+            else line.read_between(delivered, float(frame.time_s)),
         )
 
     def step(self, before: Callable[[], None] | None = None) -> Sample | None:
@@ -981,7 +1008,7 @@ def _measure(
         f"max {f.max_ms:.1f} ms, the broker's delivery p99 {f.broker_p99_ms:.1f} ms "
         f"({f.broker_missed} missed), {f.behind} behind bytes on the line ({f.queries} "
         f"queries), the bridge's part p99 {f.bridge_p99_ms:.1f} ms, {query_after(samples)} "
-        f"behind a query written after the publish; bridge CPU {cpu:.0f} %, load {la:.1f}; "
+        f"behind a query written after the hand-over; bridge CPU {cpu:.0f} %, load {la:.1f}; "
         f"{wall:.0f} s",
         file=sys.stderr,
         flush=True,
@@ -1555,7 +1582,7 @@ def _mostly(s: Sample) -> str:
 def floor_split(samples: list[Sample]) -> FloorSplit:
     ms = sorted(_ms(samples))
     broker = [s.broker_s * 1000.0 for s in samples if s.broker_s is not None]
-    behind = [s for s in samples if s.wire_ahead_s > 0]
+    behind = [s for s in samples if s.bytes_ahead]
     over = [s for s in samples if s.latency_s * 1000.0 > GOAL_MS]
     by_broker = [s.floor_s * 1000.0 for s in over if _mostly(s) == "broker"]
     by_line = [s.floor_s * 1000.0 for s in over if _mostly(s) == "line"]
@@ -1567,7 +1594,7 @@ def floor_split(samples: list[Sample]) -> FloorSplit:
         broker_missed=len(samples) - len(broker),
         bridge_p99_ms=percentile([s.bridge_s * 1000.0 for s in samples], 99),
         behind=len(behind),
-        queries=sum(behind_query(s.ahead) for s in behind),
+        queries=sum(behind_query(s.bytes_ahead) for s in behind),
         over=len(over),
         over_broker=len(by_broker),
         over_line=len(by_line),
@@ -1629,15 +1656,19 @@ def row_verdict(name: str, samples: list[Sample]) -> Verdict:
         f"{name}: stop p99 <= {GOAL_MS:g} ms beyond the line's and the broker's floor",
         f"{head}; max {f.max_ms:.1f} ms; {broker}; {f.behind} stop(s) behind bytes already on "
         f"the line, {f.queries} of them a poll query; {query_after(samples)} behind a query "
-        "written after the publish (the bridge's part)",
+        "written after the broker handed the STOP over (the bridge's part)",
         met,
     )
 
 
 def query_after(samples: list[Sample]) -> int:
-    """How many stops had a poll query the bridge wrote after the publish go out before them
-    (the bridge's part: it could have held the query back)."""
-    return sum(s.after.startswith(POLL_QUERY) for s in samples)
+    """How many stops had a poll query the bridge wrote after the broker handed the STOP over
+    (after the publish when the probe missed it) go out before them: the bridge's part, as it
+    had the stop by then."""
+    return sum(
+        (s.after if s.broker_s is None else s.after_hand_over).startswith(POLL_QUERY)
+        for s in samples
+    )
 
 
 def _broker_cell(f: FloorSplit, n: int) -> str:
@@ -1693,6 +1724,9 @@ def report_loads(
             "wire_ahead_ms": [round(s.wire_ahead_s * 1000, 3) for s in p.samples],
             "wire_ahead_bytes": [_text(s.ahead) for s in p.samples],
             "line_after_publish": [_text(s.after) for s in p.samples],
+            "handed_ahead_ms": [round(s.handed_ahead_s * 1000, 3) for s in p.samples],
+            "handed_ahead_bytes": [_text(s.handed_ahead) for s in p.samples],
+            "line_after_hand_over": [_text(s.after_hand_over) for s in p.samples],
             "floor_by": [s.floor_by for s in p.samples],
             "bridge_part_ms": [round(s.bridge_s * 1000, 3) for s in p.samples],
             "stamp_late_ms": [
@@ -1723,12 +1757,13 @@ def report_loads(
         "p50/p99/max ms: the raw figures, publish -> ';'; broker p99: from the publish to the "
         "broker's delivery of the STOP to a subscriber of this benchmark's, served before the "
         "bridge's connections (the kernel's receive stamp: benchmarks/delivery.py); behind "
-        "bytes: the stops whose line was still sending, at the publish, bytes the bridge had "
-        "written before it (queries: all of them a poll query AI1;, 8.3 ms at 4800 baud); "
-        "bridge's p99: p99 of each stop's latency less the larger of the two waits (both start "
-        "at the publish: the stop reaches the line neither before the broker delivered it nor "
-        f"before the line is free), judged against {GOAL_MS:g} ms; a query the bridge wrote "
-        "after the publish is the bridge's part (results.json: line_after_publish)"
+        "bytes: the stops whose line was still sending, when the broker handed the STOP over, "
+        "bytes the bridge had written before it (at the publish for a stop the probe missed; "
+        "queries: all of them a poll query AI1;, 8.3 ms at 4800 baud); bridge's p99: p99 of "
+        "each stop's latency less its floor (the stop reaches the line neither before the "
+        "broker handed it over nor before the line is free of what the bridge wrote until "
+        f"then), judged against {GOAL_MS:g} ms; a query the bridge wrote after the hand-over "
+        "is the bridge's part (results.json: line_after_hand_over)"
     )
     if probe is not None:
         missed_by_probe = sum(s.broker_s is None for p in phases for s in p.samples)

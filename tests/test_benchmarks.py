@@ -75,6 +75,8 @@ def test_reads_queued_behind_each_other_are_ahead_together() -> None:
 def stop(
     latency_ms: float, ahead_ms: float = 0.0, ahead: bytes = b"", broker_ms: float | None = None
 ) -> Sample:
+    """A stop whose line held ``ahead`` (written before the publish) ``ahead_ms`` after it."""
+    left_ms = max(0.0, ahead_ms - (broker_ms or 0.0))  # what of it outlasted the hand-over
     return Sample(
         "m0",
         "now",
@@ -83,6 +85,8 @@ def stop(
         wire_ahead_s=ahead_ms / 1e3,
         ahead=ahead,
         broker_s=None if broker_ms is None else broker_ms / 1e3,
+        handed_ahead_s=left_ms / 1e3,
+        handed_ahead=ahead if left_ms > 0 else b"",
     )
 
 
@@ -109,6 +113,41 @@ def test_a_query_written_after_the_publish_stays_the_bridges_part() -> None:
     assert query_after([late, first]) == 1
     f = floor_split([late, first])
     assert (f.bridge_p99_ms, f.behind, f.queries) == (pytest.approx(10.4), 0, 0)
+
+
+def test_a_query_written_before_the_broker_handed_the_stop_over_is_the_floor() -> None:
+    """The broker handed the STOP over 4.0 ms after the publish; the bridge wrote a poll query
+    1.0 ms after the publish, not knowing of the stop, and the line was busy with it 5.3 ms
+    after the hand-over: the floor is 4.0 + 5.3 ms, and the query is not counted as written
+    after the hand-over. A query written after the hand-over is the bridge's own."""
+    before = Sample(
+        "m0",
+        "now",
+        0.0116,
+        0.0,
+        after=QUERY + b";",
+        broker_s=0.004,
+        handed_ahead_s=0.0053,
+        handed_ahead=QUERY,
+        after_hand_over=b";",
+    )
+    assert before.floor_s * 1e3 == pytest.approx(9.3)
+    assert before.bridge_s * 1e3 == pytest.approx(2.3)
+    assert before.floor_by == "line"
+    after = Sample(
+        "m0",
+        "now",
+        0.0126,
+        0.0,
+        after=QUERY + b";",
+        broker_s=0.001,
+        after_hand_over=QUERY + b";",
+    )
+    assert after.bridge_s * 1e3 == pytest.approx(11.6)
+    assert query_after([before, after]) == 1
+    f = floor_split([before, after])
+    assert (f.behind, f.queries) == (1, 1)
+    assert f.bridge_p99_ms == pytest.approx(11.6, abs=0.05)
 
 
 def test_the_broker_and_the_line_overlap_so_the_floor_is_the_larger() -> None:
