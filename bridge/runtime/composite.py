@@ -13,7 +13,8 @@ worker for the rotator, serving both boxes' workers.
 
 Rules:
 1. A stop, a lock word, a hold and its release, options, notes, the lease, the wind, WSJT-X's
-   news and track and follow commands go to both sessions, in one batch each, in the same
+   news and track and follow commands go to both sessions, in one batch each (a feature's own
+   command goes to one: rule 6), in the same
    serve: one STOP writes a stop frame on both lines before either status goes to the
    listeners, and each session keeps its own stop rules (a stop owed to an unplugged box is
    its first frame on replug).
@@ -28,6 +29,13 @@ Rules:
    first one ended.
 5. Each box's worker is guarded on its own: a bug in serving one closes and reopens that line
    only, and the other line goes on.
+6. A feature's own command (core/model.py ``FeatureCommand``, session/parts.py rule 5) is one
+   word to the rotator: it goes to the azimuth box's session alone, whose status (the
+   feature's block in it) is the rotator's, and its part acts once. Given to both, its part
+   acted twice (its state, its errors on R/error) and aimed the elevation box at an azimuth
+   it never turns. What it proposes is that box's to carry: a target with an elevation is
+   refused there on R/error (the box turns no elevation) and neither box turns, never the
+   elevation box alone.
 """
 
 from __future__ import annotations
@@ -59,14 +67,16 @@ AXES = (Axis.AZIMUTH, Axis.ELEVATION)
 
 
 def split(batch: Batch) -> dict[Axis, Batch]:
-    """Rules 1 and 2: the batch each box's session gets."""
+    """Rules 1, 2 and 6: the batch each box's session gets."""
     target = batch.target
     az = el = None
     if target is not None and target.az_deg is not None:
         az = replace(target, el_deg=None)
     if target is not None and target.el_deg is not None:
         el = replace(target, az_deg=None, true_az_deg=None)
-    return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: replace(batch, target=el)}
+    # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
+    alone = replace(batch, target=el, feature_commands=[])
+    return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: alone}
 
 
 def merge(

@@ -30,8 +30,10 @@ Rules:
    ``command``, or a name no part has, is a refusal too.
 6. ``status`` gives what the part shows in ``R/status`` (a JSON-able value, None: nothing),
    read at every status the session builds and compared with the last: the part hands a new
-   value when it changes (never one it changes afterwards). The status keeps it by the part's
-   name (``RotatorStatus.features``), where the feature's StatusBlock reads it.
+   value when it changes (never one it changes afterwards). One that raises shows nothing and
+   is reported once per kind of failure (session.py rule 19), not at every status. The
+   status keeps it by the part's name (``RotatorStatus.features``), where the feature's
+   StatusBlock reads it.
 7. Whatever ends tracking and following ends a part's own motion too, through its ``end``
    (a stop, a lock ON, a release that clears, the link lost, a user's target, a track or
    follow start, a feature's command that moves, its own too, before its part is handed

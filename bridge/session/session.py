@@ -85,6 +85,10 @@ Rules:
 18. The status is built again only when something it shows may have changed (the values it is
    built from, compared as one tuple; a slew's estimate and a DCU-1's estimated move read the
    time, and are built at every step): a poll that changed nothing builds no status.
+19. A part's ``status`` is asked at every status built (several a second while the rotor
+   turns): one that raises shows nothing in that status, the rest of which goes out, and is
+   reported, logged and reset as rule 14 says once per kind of failure (its exception's type,
+   as runtime/listeners.py does for a listener), not at every status.
 """
 
 from __future__ import annotations
@@ -172,6 +176,7 @@ class RotatorSession:
         self._wakeup = 0.0
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
         self._status_key: tuple[object, ...] | None = None  # rule 18
+        self._status_failed: dict[str, set[type[BaseException]]] = {}  # rule 19
 
     @property
     def name(self) -> str:
@@ -521,18 +526,23 @@ class RotatorSession:
             self.targets.put(proposal.target, now)
 
     def _guarded(self, name: str, run: Callable[[], T], now: float) -> T | None:
-        """Rule 14: a part that raises is reset (its own reset, the ``Part`` handed in under
-        ``name``: one not handed in has none) and reported; nothing else stops."""
+        """Rule 14: a part that raises is reset and reported (``_failed``); nothing else
+        stops."""
         try:
             return run()
         except Exception:
-            log.exception("%s: %s failed", self.name, name)
-            part = self._parts_named.get(name)
-            if part is not None:
-                part.reset(self, now)
-            self._seen_motion.pop(name, None)  # a new part has seen nothing yet
-            self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
+            self._failed(name, now)
             return None
+
+    def _failed(self, name: str, now: float) -> None:
+        """Rule 14, in the handler of what part ``name`` raised: logged with it, reset (its own
+        reset, the ``Part`` handed in under ``name``: one not handed in has none), reported."""
+        log.exception("%s: %s failed", self.name, name)
+        part = self._parts_named.get(name)
+        if part is not None:
+            part.reset(self, now)
+        self._seen_motion.pop(name, None)  # a new part has seen nothing yet
+        self._error(ErrorKind.INTERNAL, f"{name} failed (a bug, see the log): {name} reset")
 
     def _try_target(self, link: Link, now: float) -> None:
         ctl, pending = self.controller, self.targets.pending
@@ -615,10 +625,17 @@ class RotatorSession:
 
     def _shown(self, now: float) -> dict[str, object]:
         """parts.py rule 6: what each part shows in the status, by its name (one that raises
-        is reset and shows nothing: rule 14)."""
+        shows nothing; rule 14 once per kind of failure: rule 19)."""
         shown: dict[str, object] = {}
         for name, status in self._showing:
-            value = self._guarded(name, partial(status, self), now)
+            try:
+                value = status(self)
+            except Exception as exc:
+                failed = self._status_failed.setdefault(name, set())
+                if type(exc) not in failed:  # rule 19: said (and reset) once per kind
+                    failed.add(type(exc))
+                    self._failed(name, now)
+                continue
             if value is not None:
                 shown[name] = value
         return shown

@@ -7,7 +7,10 @@ Rules:
    cancels any frame still waiting in the outbox. One that comes within the brake window (at
    least STOP_MERGE_MIN_S) of another, with no target sent and no reading showing the rotor
    turning since, is merged into it: nothing more goes on the wire (a flood of stops to an idle
-   Rotor-EZ had it answer each with its banner, crowding out the readings).
+   Rotor-EZ had it answer each with its banner, crowding out the readings). That holds for a
+   rotor the first stop stopped while it turned, until a reading shows it turning still (each
+   banner of two clients' bursts queued the readings for seconds: the controller taken for
+   silent, the next target dropped); a controller silent while it turns is never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so. Lock ON always sends a
    stop, whatever the bridge believes the rotor is doing.
@@ -65,8 +68,12 @@ class Stops:
         """Rule 1: a stop now adds nothing on the wire."""
         if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
             return False  # a target went out after the last stop: this stop is needed
+        if m.state is MotionState.MOVING and not cfg.spec.reports_while_moving:
+            return False  # no reading can show it turning (a SatEL's slew): always sent
         window = max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
-        turning = m.state is MotionState.MOVING
+        # a reading since that stop showing the rotor turning; the state alone says MOVING
+        # until a reading shows it still, and the first of a flood stopped a turning rotor
+        turning = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
         return not turning and now - m.stop_sent_t < window
 
     @staticmethod

@@ -5,8 +5,26 @@ against the test's own solar formula (tests/support/sky.py)."""
 
 from __future__ import annotations
 
-from bridge.core.model import MotionState, Source, Target
+from collections.abc import Iterator
+
+import pytest
+
+import bridge.feature
+from bridge.core.errors import Refused
+from bridge.core.model import (
+    ErrorKind,
+    FeatureCommand,
+    MotionState,
+    Source,
+    Target,
+    describe_command,
+)
+from bridge.feature import Feature
+from bridge.features import FEATURES
 from bridge.protocols.axes import Axis
+from bridge.session.actions import Report
+from bridge.session.parts import Part, Proposal, Wake
+from bridge.session.session import RotatorSession
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual_composite import VirtualComposite
@@ -152,3 +170,86 @@ def test_a_glitched_reading_of_the_elevation_box_never_becomes_its_azimuth() -> 
         assert sent and all(w.startswith(b"W100 ") for w in sent), sent
         assert v.el.truth().az_deg == 100.0  # its own azimuth never turned
         assert abs(v.el.truth().el_deg - 30.0) <= 1.0
+
+
+# -- a feature's own command (session/parts.py rule 5) -----------------------------------------
+AIMED: list[tuple[str, float]] = []  # (the command's name, its value) per call of the part
+
+
+def _aim(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | None:
+    """``aim`` turns the azimuth, ``aim2`` both axes (to 30° up), ``label`` moves nothing."""
+    assert isinstance(cmd.value, float)
+    AIMED.append((cmd.name, cmd.value))
+    if cmd.name == "label":
+        return None
+    el = 30.0 if cmd.name == "aim2" else None
+    try:  # judged as a part judges its own (parts.py rule 2)
+        target = s.cfg.aim.judge(Target(cmd.value, el), s.status.raw_bearing_deg)
+    except Refused as exc:
+        return Proposal(error=Report(ErrorKind.REFUSED, exc.message, describe_command(cmd)))
+    return Proposal(target=target)
+
+
+AIM_PART = Part[RotatorSession](
+    "aimer",
+    Wake.STEP,
+    True,
+    lambda s: False,
+    lambda s, scene: None,
+    lambda s, now: None,
+    command=_aim,
+)
+AIMER = Feature("aimer", "docs/architecture.md", "aims on its own command", part=AIM_PART)
+
+
+@pytest.fixture
+def aimer(monkeypatch: pytest.MonkeyPatch) -> Iterator[VirtualComposite]:
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, AIMER))
+    AIMED.clear()
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(2.0)
+        yield v
+
+
+def errors(v: VirtualComposite, kind: str | None = None) -> list[Report]:
+    """Every error event either box handed out (each goes to the rotator's R/error)."""
+    return [*v.az.errors(kind), *v.el.errors(kind)]
+
+
+def _command(v: VirtualComposite, name: str, value: float, moves: bool = True) -> float:
+    t = v.now
+    v.mailbox.put_feature(FeatureCommand("aimer", name, value, moves=moves))
+    v._take()
+    return t
+
+
+def test_a_features_command_acts_once_and_turns_the_azimuth_box_alone(
+    aimer: VirtualComposite,
+) -> None:
+    """One command to the rotator is one call of its part, in the box whose status (the
+    feature's block in it) is the rotator's; the elevation box is sent nothing for it."""
+    v = aimer
+    t = _command(v, "aim", 200.0)
+    v.run_until(lambda h: abs(h.az.truth().az_deg - 200.0) <= 1.0, 60, "the azimuth at 200")
+    v.run_for(5.0)
+    assert AIMED == [("aim", 200.0)]
+    assert v.el.sent(since=t) == [] or all(w.startswith(b"C2") for w in v.el.sent(since=t))
+    assert v.el.truth().el_deg == 0.0 and errors(v) == []
+    _command(v, "label", 1.0, moves=False)
+    assert AIMED == [("aim", 200.0), ("label", 1.0)]
+
+
+def test_a_features_command_that_aims_both_axes_is_refused_once_and_moves_nothing(
+    aimer: VirtualComposite,
+) -> None:
+    """Its part runs in the azimuth box, which cannot carry an elevation: refused on the error
+    topic, said once, and neither box turns (not the elevation alone)."""
+    v = aimer
+    t = _command(v, "aim2", 200.0)
+    v.run_for(20.0)
+    assert AIMED == [("aim2", 200.0)]
+    refused = errors(v, "refused")
+    assert len(refused) == 1 and refused[0].command == "aimer aim2 200", refused
+    assert v.az.frames("move", since=t) == [] and v.el.frames("move", since=t) == []
+    assert (v.az.truth().az_deg, v.el.truth().el_deg) == (0.0, 0.0)

@@ -128,7 +128,12 @@ def test_a_second_stop_in_the_brake_window_adds_nothing_unless_a_target_went_out
     assert stops.merges(stopped, cfg, 11.0)
     assert not stops.merges(stopped, cfg, 10.0 + max(cfg.brake_delay_s, 1.0))
     assert not stops.merges(replace(stopped, target_deg=200.0), cfg, 11.0)
-    assert not stops.merges(replace(stopped, state=MotionState.MOVING), cfg, 11.0)
+    # a stop of a turning rotor: merged until a reading shows it turning since (stops.py
+    # rule 1), never on a controller silent while it turns
+    turning = replace(stopped, state=MotionState.MOVING, last_move_t=9.9)
+    assert stops.merges(turning, cfg, 11.0)
+    assert not stops.merges(replace(turning, last_move_t=10.5), cfg, 11.0)
+    assert not stops.merges(turning, rig("satel").motion, 11.0)
 
 
 def test_a_stop_that_did_not_take_is_sent_again_and_the_last_try_says_so() -> None:

@@ -129,3 +129,53 @@ def test_the_app_hands_the_registered_features_parts_in_the_steps_order() -> Non
     assert [p.name for p in parts if not p.deciding] == ["health"]
     assert len({p.name for p in parts}) == len(parts)  # each reset and named as its own
     assert worker_config(SETTINGS).parts == parts
+
+
+def test_a_parts_status_that_keeps_raising_is_reported_once_per_kind_and_the_status_goes_out(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """session/parts.py rule 6: its status is asked at every status the session builds, several
+    a second while the rotor turns. One that raises at each is a bug said once per kind of
+    failure (as a listener's, runtime/listeners.py), on R/error and in the log, and the rest of
+    the status still goes out (the rotor's bearing, the other parts' blocks)."""
+    asked: list[float] = []
+    kinds = [KeyError("label"), KeyError("label"), ValueError("aimed")]
+
+    def status(s: RotatorSession) -> object:
+        asked.append(s.status.bearing_deg or 0.0)
+        raise kinds[min(len(asked), len(kinds)) - 1 if len(asked) < 40 else 0]
+
+    resets: list[float] = []
+    shows = Part[RotatorSession](
+        "shows",
+        Wake.STEP,
+        False,
+        lambda s: False,
+        lambda s, scene: None,
+        lambda s, now: resets.append(now),
+        status=status,
+    )
+    fine = Part[RotatorSession](
+        "fine",
+        Wake.STEP,
+        False,
+        lambda s: False,
+        lambda s, scene: None,
+        lambda s, now: None,
+        status=lambda s: {"ok": True},
+    )
+    v = rig("rotorez", cfg=replace(worker_config(SETTINGS), parts=(shows, fine)))
+    v.run_until(lambda h: h.status.available, 10, "the first reading")
+    t = v.now
+    v.target(200)
+    v.run_until_state(MotionState.IDLE, 60)
+    assert len(asked) > 40  # asked at every status while it turned
+    assert [e.message for e in v.errors("internal")] == [
+        "shows failed (a bug, see the log): shows reset",  # KeyError
+        "shows failed (a bug, see the log): shows reset",  # ValueError, once too
+    ]
+    assert len([r for r in caplog.records if r.exc_info is not None]) == 2
+    assert len(resets) == 2
+    moving = [s for s in v.published(since=t) if s.state is MotionState.MOVING]
+    assert moving and all(s.features == {"fine": {"ok": True}} for s in moving)
+    assert v.status.bearing_deg == pytest.approx(200.0, abs=v.cfg.deadband_deg)

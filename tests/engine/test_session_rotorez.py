@@ -494,6 +494,31 @@ def test_a_flood_of_stops_to_an_idle_rotor_is_one_per_brake_window_and_loses_not
     assert_never_disobeyed(v)
 
 
+def test_a_flood_of_stops_right_after_a_turning_rotor_stopped_costs_the_next_target_nothing(
+    rig: Rig,
+) -> None:
+    """Two MQTT clients' bursts of STOPs at a turning Rotor-EZ: the first stops it, and no
+    reading came since to show it still turning, yet each of the others went on the line (the
+    rotor was still taken as moving). The stopped Rotor-EZ answered each with its 18-byte
+    banner, four seconds of them; its readings queued behind, the bridge took it for silent
+    and dropped the target published after the bursts ("controller not answering"). Now the
+    stops merge into the first, and that target goes once the brake is off."""
+    v = ready(rig)
+    v.target(300)
+    v.run_until_state(MOVING, 10)
+    v.run_for(1.0)
+    start, errors_before = v.now, len(v.events)
+    for _ in range(150):  # within 0.3 s
+        v.stop()
+        v.run_for(0.002)
+    stops = [f for f in v.frames(since=start) if f.data == b";"]
+    assert 1 <= len(stops) <= 2, len(stops)  # a reading in flight may show it turning still
+    v.target(100)
+    v.run_until(at(v, 100), 60, "at 100 after the bursts")
+    assert [e for _t, e in v.events[errors_before:]] == []  # no silence, no drop, no error
+    assert_never_disobeyed(v)
+
+
 def test_a_stop_while_turning_is_never_merged(rig: Rig) -> None:
     v = ready(rig)
     v.stop()  # a stop on record: the next one is inside its window
