@@ -230,10 +230,18 @@ def reading(
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
-    """``replace(m, **changes)``, less its checks (a third of the time, at every reading that
-    changed something): every field of Motion is one of its ``__init__``'s, and it has no
-    slots, so its ``__dict__`` is all of them."""
-    return Motion(**{**m.__dict__, **changes})
+    """``replace(m, **changes)``, less its checks and its frozen ``__init__`` (an
+    ``object.__setattr__`` per field, 20 of them), at every reading that changed something:
+    Motion has no slots, no ``__post_init__`` and every field is one of its ``__init__``'s,
+    so its ``__dict__`` is all of them, in their order (tests/engine/test_motion.py)."""
+    new = _new(Motion)
+    fields = new.__dict__
+    fields.update(m.__dict__)
+    fields.update(changes)
+    return new
+
+
+_new = object.__new__
 
 
 def commanded(
