@@ -424,12 +424,15 @@ class Controller:
             why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
             self.notes.append(Report(ErrorKind.PROTOCOL, why))
 
-    def wakeups(self, now: float) -> list[float]:
-        """When the line or the motion machine needs the session next."""
-        times: list[float] = []
-        if self.link is not None:
-            times += self.link.wakeups()
-            if self.link.slew is not None:
-                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
+    def wakeup(self, now: float, latest: float) -> float:
+        """When the line or the motion machine needs the session next, ``latest`` at the
+        latest."""
+        link = self.link
+        if link is not None:
+            for t in link.wakeups():
+                if t < latest:
+                    latest = t
+            if link.slew is not None:  # refresh the estimate
+                latest = min(latest, now + self.cfg.moving_poll_interval_s)
         deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
-        return times if deadline is None else [*times, deadline]
+        return latest if deadline is None or deadline >= latest else deadline
