@@ -294,7 +294,11 @@ class Controller:
             log.info("%s: controller answering", self.name)
         cfg = self.cfg
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
-        self._motion_events(events, now)
+        # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the
+        # step's tick at this time has nothing to do
+        self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
+        if events:
+            self._motion_events(events, now)
         moving = self.motion.state is MotionState.MOVING
         self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
         if reply.el_deg is not None:

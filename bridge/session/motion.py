@@ -45,9 +45,10 @@ Rules:
    controller.py). A new bearing refused while the rotor still turns to the one before: the
    target is dropped and the rotor stays ``moving`` (stops.py then stops it).
 9. Every time ``tick`` compares the clock with is one ``next_deadline`` looks at: a motion
-   that ``tick`` left as it was at ``t0`` (one it made, or one a reading, a stop or a target
-   made since at ``t0``) stays as it is at every time before ``next_deadline(m, cfg, t0)``,
-   so the controller does not tick it before then (controller.py ``tick``).
+   that ``tick`` left as it was at ``t0`` (one it made, ``reading``'s, which ends with
+   ``tick``, or one a stop or a target made since at ``t0``) stays as it is at every time
+   before ``next_deadline(m, cfg, t0)``, so the controller does not tick it before then
+   (controller.py ``tick``).
 """
 
 from __future__ import annotations

@@ -466,7 +466,11 @@ class RotatorSession:
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
-        proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
+        try:  # (_guarded's, without a closure: the measuring parts run at every reading)
+            proposal = part.step(self, scene)
+        except Exception:
+            self._failed(part.name, now)
+            return
         if proposal is not None and proposal.target is not None and self._still(proposal.target):
             proposal = replace(proposal, target=None)  # parts.py rule 7
         if proposal is not None:
