@@ -436,3 +436,49 @@ def test_lines_started_and_stopped_leave_no_descriptor_and_a_late_wake_up_does_n
     finally:
         os.close(reused_r)
         os.close(reused_w)
+
+
+def test_a_line_is_woken_by_what_it_waits_on_now_and_not_by_what_it_waited_on_before() -> None:
+    """Rule 10: the poller is kept and only told what changed. A line that waited on one
+    descriptor and now waits on another (a reply held, then read) is woken by the new one and
+    not by the old one, left readable; a line that leaves wakes the loop no more."""
+    served: list[set[int]] = []
+    woke = threading.Event()
+    a_r, a_w = os.pipe()
+    b_r, b_w = os.pipe()
+
+    class Switching(Timed):
+        def wants(self, now: float) -> tuple[list[int], float]:
+            return ([a_r] if not served else [b_r]), now + 3600.0
+
+        def has_commands(self, ready: set[int]) -> bool:
+            return False
+
+        def serve(self, now: float, ready: set[int]) -> None:
+            served.append(ready & {a_r, b_r})  # (the loop's own wake pipe aside)
+            if b_r in ready:
+                os.read(b_r, 1)  # what it waits on now is read, as a port's bytes are
+            woke.set()
+
+    line = Switching([0.0], 0.0, threading.Event(), [])
+    lines = Lines()
+    lines.add(line)  # type: ignore[arg-type]
+    try:
+        os.write(a_w, b"x")  # what it waits on first: it is served
+        assert woke.wait(slow(5))
+        woke.clear()
+        assert served == [{a_r}]
+        # a_r stays readable: were it still watched, every round would serve the line
+        os.write(b_w, b"y")
+        assert woke.wait(slow(5))
+        woke.clear()
+        assert served == [{a_r}, {b_r}]
+        os.write(b_w, b"z")  # and again: the new one still wakes it
+        assert woke.wait(slow(5))
+        assert served[2] == {b_r}
+        assert lines.remove(line)  # type: ignore[arg-type]
+        assert line not in lines._watching and b_r not in lines._polled
+    finally:
+        lines.remove(line)  # type: ignore[arg-type]
+        for fd in (a_r, a_w, b_r, b_w):
+            os.close(fd)
