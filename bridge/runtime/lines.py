@@ -36,8 +36,12 @@ Rules:
    called: with 16 rotators polled on one grid, most rounds concern a few of them.
 7. Times that come within GATHER_S after the first one are met with it, at most GATHER_S
    late: the replies of one poll round come whole over a few milliseconds (each controller
-   and adapter takes its own time), and are read in one wake-up, not one each. A descriptor
-   that becomes ready (a stop in a mailbox) still ends the wait at once.
+   and adapter takes its own time), and are read in one wake-up, not one each. A worker also
+   says how late its time may be met (``wants``' third value; its own time for all but a
+   reply held in its port, worker.py rule 2): the wait ends at the last time that comes by
+   the earliest of those plus GATHER_S, so a reply that came partly is read in the wake-up
+   that takes the others' readings, not in one of its own. A descriptor that becomes ready
+   (a stop in a mailbox) still ends the wait at once.
 8. Rule 5's look for a stop among the workers not served yet is made before the first of a
    round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
    11) or that look found one (there may be another): not one question to every worker after
@@ -60,7 +64,7 @@ import os
 import select
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from collections.abc import Set as AbstractSet
 from typing import Any, Protocol
 
@@ -86,9 +90,26 @@ class Worker(Protocol):
     def wait_closed(self, timeout_s: float) -> bool: ...
     def has_commands(self, ready: set[int]) -> bool: ...
     def urgent(self) -> frozenset[int]: ...
-    def wants(self, now: float) -> tuple[list[int], float]: ...
+    def wants(self, now: float) -> tuple[list[int], float, float]: ...
     def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None: ...
     def serve(self, now: float, ready: set[int]) -> None: ...
+
+
+def wake_at(wanted: Sequence[tuple[list[int], float, float]]) -> float:
+    """Rule 7: when a round's wait ends, from what each worker ``wants`` (descriptors, the time
+    to be woken at, how late that may be met); math.inf: only a descriptor ends it."""
+    deadline = latest = math.inf
+    for _, until, by in wanted:
+        if until < deadline:
+            deadline = until
+        if by < latest:
+            latest = by
+    if deadline != math.inf:  # the times that come soon after it come with it
+        gathered = max(deadline, latest) + GATHER_S
+        for _, until, _ in wanted:
+            if deadline < until <= gathered:
+                deadline = until
+    return deadline
 
 
 class Lines:
@@ -195,17 +216,10 @@ class Lines:
         workers = self._workers
         wanted = [worker.wants(now) for worker in workers]  # pure arithmetic: nothing to guard
         watching = self._watching
-        deadline = math.inf
-        for worker, (fds, until) in zip(workers, wanted, strict=True):
+        for worker, (fds, _, _) in zip(workers, wanted, strict=True):
             if watching.get(worker) != fds:  # rule 10: registered only when it changes
                 self._watch(worker, fds)
-            if until < deadline:
-                deadline = until
-        if deadline != math.inf:  # rule 7: the times that come soon after it come with it
-            gathered = deadline + GATHER_S
-            for _, until in wanted:
-                if deadline < until <= gathered:
-                    deadline = until
+        deadline = wake_at(wanted)
         wait_ms = None if deadline == math.inf else max(0, math.ceil((deadline - now) * 1000))
         ready = {fd for fd, _ in self._poller.poll(wait_ms)}
         if ready and self._wake_r in ready:
@@ -218,12 +232,12 @@ class Lines:
         if ready:  # rule 6
             due = [
                 w
-                for w, (fds, until) in zip(workers, wanted, strict=True)
+                for w, (fds, until, _) in zip(workers, wanted, strict=True)
                 if now >= until or not ready.isdisjoint(fds)
             ]
             due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
         else:
-            due = [w for w, (_, until) in zip(workers, wanted, strict=True) if now >= until]
+            due = [w for w, (_, until, _) in zip(workers, wanted, strict=True) if now >= until]
         if due:
             with handoff.batch():  # rule 9
                 self._serve_round(due, list(workers), ready)
