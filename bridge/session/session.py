@@ -330,6 +330,11 @@ class RotatorSession:
         link = self.controller.link
         return link.hold_reads_until() if link is not None else 0.0
 
+    def hold_reads_latest(self) -> float:
+        """How late the end of that hold may be met (link.py rule 7)."""
+        link = self.controller.link
+        return link.hold_reads_latest() if link is not None else 0.0
+
     # -- commands, applied ----------------------------------------------------------------------
     def _refused(self) -> str | None:
         """Why a target or a track command cannot be taken now, if it cannot."""
