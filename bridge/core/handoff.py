@@ -19,10 +19,9 @@ Rules:
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import threading
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable
 
 __all__ = ["batch", "defer"]
 
@@ -30,23 +29,36 @@ log = logging.getLogger(__name__)
 _local = threading.local()
 
 
-@contextlib.contextmanager
-def batch() -> Iterator[None]:
-    """Rule 2: the calling thread's wake-ups owed until this ends, then given once each."""
-    if getattr(_local, "owed", None) is not None:  # rule 3
-        yield
-        return
-    owed: dict[Hashable, Callable[[], None]] = {}
-    _local.owed = owed
-    try:
-        yield
-    finally:
+class _Round:
+    """Rule 2: one ``batch()``; a plain context manager, not a generator's (a round is entered
+    at every wake-up of the serial-lines thread)."""
+
+    __slots__ = ("_outer",)
+
+    def __init__(self) -> None:
+        self._outer = False
+
+    def __enter__(self) -> None:
+        if getattr(_local, "owed", None) is not None:  # rule 3
+            return
+        self._outer = True
+        _local.owed = {}
+
+    def __exit__(self, *exc: object) -> None:
+        if not self._outer:
+            return
+        owed: dict[Hashable, Callable[[], None]] = _local.owed
         _local.owed = None
         for wake in owed.values():
             try:
                 wake()
             except Exception:
                 log.exception("a wake-up owed at the end of a round failed")
+
+
+def batch() -> _Round:
+    """Rule 2: the calling thread's wake-ups owed until this ends, then given once each."""
+    return _Round()
 
 
 def defer(key: Hashable, wake: Callable[[], None]) -> bool:

@@ -150,7 +150,10 @@ class RotorEzCodec:
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
-        self._buf += data
+        buf = self._buf
+        buf += data
+        if 0 < len(buf) < 4 and buf[0] == 0x3B:  # a reply under way (byte by byte, mostly):
+            return []  # what the loop below does with it (nothing to say until it is whole)
         out: list[Reply] = []
         junk = bytearray()
         buf = self._buf

@@ -238,13 +238,14 @@ class CompositeWorker:
     def urgent(self) -> frozenset[int]:
         return self._urgent if self._mailbox.urgent else frozenset()
 
-    def wants(self, now: float) -> tuple[list[int], float]:
-        fds, until = [self._box], math.inf
+    def wants(self, now: float) -> tuple[list[int], float, float]:
+        fds, until, latest = [self._box], math.inf, math.inf
         for box in self.boxes.values():
-            more, when = box.wants(now)
+            more, when, by = box.wants(now)
             fds += more
             until = min(until, when)
-        return fds, until
+            latest = min(latest, by)
+        return fds, until, latest
 
     def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:
         """``step`` (begin, end, serve): each box is guarded on its own inside it (rule 5)."""
@@ -259,7 +260,7 @@ class CompositeWorker:
             if batch:
                 self._hand(split(batch), now)  # rule 1: both boxes in this one serve
         for box in self.boxes.values():
-            fds, until = box.wants(now)
+            fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):
                 box.guarded(box.serve, now, ready)
         ends = self.composition.ends()  # rule 4

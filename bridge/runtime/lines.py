@@ -36,8 +36,12 @@ Rules:
    called: with 16 rotators polled on one grid, most rounds concern a few of them.
 7. Times that come within GATHER_S after the first one are met with it, at most GATHER_S
    late: the replies of one poll round come whole over a few milliseconds (each controller
-   and adapter takes its own time), and are read in one wake-up, not one each. A descriptor
-   that becomes ready (a stop in a mailbox) still ends the wait at once.
+   and adapter takes its own time), and are read in one wake-up, not one each. A worker also
+   says how late its time may be met (``wants``' third value; its own time for all but a
+   reply held in its port, worker.py rule 2): the wait ends at the last time that comes by
+   the earliest of those plus GATHER_S, so a reply that came partly is read in the wake-up
+   that takes the others' readings, not in one of its own. A descriptor that becomes ready
+   (a stop in a mailbox) still ends the wait at once.
 8. Rule 5's look for a stop among the workers not served yet is made before the first of a
    round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
    11) or that look found one (there may be another): not one question to every worker after
@@ -46,6 +50,10 @@ Rules:
    was handed) are given once, when the round ends (core/handoff.py): one wake-up for the
    statuses of 16 rotators, not 16. A stop's frame is not among them: it is written to its
    port as the worker is served.
+10. The thread keeps one poller for its life: a worker's descriptors are registered when
+   what it waits on changes (a reply held or read, a port opened or lost, the worker joining
+   or leaving), not all of them anew at every wake-up; the poller waits on exactly the
+   descriptors the workers asked for this round, each once however many ask for it.
 """
 
 from __future__ import annotations
@@ -56,7 +64,7 @@ import os
 import select
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from collections.abc import Set as AbstractSet
 from typing import Any, Protocol
 
@@ -82,9 +90,26 @@ class Worker(Protocol):
     def wait_closed(self, timeout_s: float) -> bool: ...
     def has_commands(self, ready: set[int]) -> bool: ...
     def urgent(self) -> frozenset[int]: ...
-    def wants(self, now: float) -> tuple[list[int], float]: ...
+    def wants(self, now: float) -> tuple[list[int], float, float]: ...
     def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None: ...
     def serve(self, now: float, ready: set[int]) -> None: ...
+
+
+def wake_at(wanted: Sequence[tuple[list[int], float, float]]) -> float:
+    """Rule 7: when a round's wait ends, from what each worker ``wants`` (descriptors, the time
+    to be woken at, how late that may be met); math.inf: only a descriptor ends it."""
+    deadline = latest = math.inf
+    for _, until, by in wanted:
+        if until < deadline:
+            deadline = until
+        if by < latest:
+            latest = by
+    if deadline != math.inf:  # the times that come soon after it come with it
+        gathered = max(deadline, latest) + GATHER_S
+        for _, until, _ in wanted:
+            if deadline < until <= gathered:
+                deadline = until
+    return deadline
 
 
 class Lines:
@@ -96,6 +121,9 @@ class Lines:
         self._leaving: dict[Worker, threading.Event] = {}
         self._thread: threading.Thread | None = None
         self._wake_r = self._wake_w = -1  # the wake pipe, open while the thread runs (rule 4)
+        self._poller = select.poll()  # rule 10: the thread's, made afresh when it starts
+        self._polled: dict[int, int] = {}  # descriptor -> how many workers wait on it
+        self._watching: dict[Worker, list[int]] = {}  # what each waits on, as registered
 
     # -- any thread (rule 4) --------------------------------------------------------------------
     def add(self, worker: Worker) -> None:
@@ -148,6 +176,10 @@ class Lines:
 
     # -- the thread -----------------------------------------------------------------------------
     def _run(self) -> None:
+        self._poller = select.poll()  # rule 10: this thread's, with this thread's wake pipe
+        self._poller.register(self._wake_r, select.POLLIN)
+        self._polled.clear()
+        self._watching.clear()
         while self._membership():
             try:
                 self._round()
@@ -163,6 +195,8 @@ class Lines:
             self._workers.extend(joining)
             for worker in leaving:
                 self._workers.remove(worker)
+                self._watch(worker, [])  # rule 10
+                del self._watching[worker]
         for worker in joining:
             worker.guarded(worker.begin, self._clock(), self._wake)
         for worker, done in leaving.items():
@@ -179,32 +213,53 @@ class Lines:
 
     def _round(self) -> None:
         now = self._clock()
-        poller = select.poll()
-        poller.register(self._wake_r, select.POLLIN)
-        deadline = math.inf
-        wanted: list[tuple[Worker, list[int], float]] = []
-        for worker in self._workers:
-            fds, until = worker.wants(now)  # pure arithmetic on the session: nothing to guard
-            for fd in fds:
-                poller.register(fd, _READY)
-            deadline = min(deadline, until)
-            wanted.append((worker, fds, until))
-        if deadline != math.inf:  # rule 7: the times that come soon after it come with it
-            deadline = max(u for _, _, u in wanted if u <= deadline + GATHER_S)
+        workers = self._workers
+        wanted = [worker.wants(now) for worker in workers]  # pure arithmetic: nothing to guard
+        watching = self._watching
+        for worker, (fds, _, _) in zip(workers, wanted, strict=True):
+            if watching.get(worker) != fds:  # rule 10: registered only when it changes
+                self._watch(worker, fds)
+        deadline = wake_at(wanted)
         wait_ms = None if deadline == math.inf else max(0, math.ceil((deadline - now) * 1000))
-        ready = {fd for fd, _ in poller.poll(wait_ms)}
-        if self._wake_r in ready:
+        ready = {fd for fd, _ in self._poller.poll(wait_ms)}
+        if ready and self._wake_r in ready:
             try:
                 while os.read(self._wake_r, 4096):
                     pass
             except BlockingIOError:
                 pass
         now = self._clock()
-        due = [w for w, fds, until in wanted if now >= until or not ready.isdisjoint(fds)]  # rule 6
-        due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
-        left = list(self._workers)  # not served yet this round: any of them may get a stop
-        with handoff.batch():  # rule 9
-            self._serve_round(due, left, ready)
+        if ready:  # rule 6
+            due = [
+                w
+                for w, (fds, until, _) in zip(workers, wanted, strict=True)
+                if now >= until or not ready.isdisjoint(fds)
+            ]
+            due.sort(key=lambda w: not w.has_commands(ready))  # rule 5
+        else:
+            due = [w for w, (_, until, _) in zip(workers, wanted, strict=True) if now >= until]
+        if due:
+            with handoff.batch():  # rule 9
+                self._serve_round(due, list(workers), ready)
+
+    def _watch(self, worker: Worker, fds: list[int]) -> None:
+        """Rule 10: the poller waits on ``fds`` for ``worker`` from now on, instead of what it
+        waited on for it before."""
+        polled, poller = self._polled, self._poller
+        before = self._watching.pop(worker, [])
+        for fd in before:
+            if polled[fd] == 1:
+                del polled[fd]
+                poller.unregister(fd)
+            else:
+                polled[fd] -= 1
+        for fd in fds:
+            if fd in polled:
+                polled[fd] += 1
+            else:
+                polled[fd] = 1
+                poller.register(fd, _READY)
+        self._watching[worker] = list(fds)  # a copy: the worker may change its own
 
     def _serve_round(self, due: list[Worker], left: list[Worker], ready: set[int]) -> None:
         look, seen = True, 0
@@ -225,4 +280,4 @@ class Lines:
             left.remove(worker)
             # the clock read for each: a slow step (a burst of statuses to the listeners) must
             # not hand the next a stale time, or a query it writes looks overdue at once
-            worker.guarded(worker.serve, self._clock(), ready | urgent)
+            worker.guarded(worker.serve, self._clock(), ready | urgent if urgent else ready)

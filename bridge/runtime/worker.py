@@ -13,7 +13,8 @@ Rules:
    one. Commands are still taken while the port is closed (they are refused with a reason).
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
-   and when that hold ends the port is read without waiting to be told it is readable.
+   and when that hold ends the port is read without waiting to be told it is readable (up to
+   one quiet time late when other lines are served then: link.py rule 7, lines.py rule 7).
 3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and one
    that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
    display problem never closes or reopens the line to the controller.
@@ -108,7 +109,7 @@ class Worker:
         self._wake: Callable[[], None] = lambda: None
         self._reopen_at = 0.0
         self._held = False
-        self._wanted: tuple[list[int], float] | None = None  # rule 6
+        self._wanted: tuple[list[int], float, float] | None = None  # rule 6
         self._urgent = frozenset({self._box})
         self._failures: set[type[BaseException]] = set()
 
@@ -150,21 +151,24 @@ class Worker:
         nothing: read without the mailbox's lock, a hint for the order of a round."""
         return self._urgent if self._mailbox.urgent else _NOTHING
 
-    def wants(self, now: float) -> tuple[list[int], float]:
-        """The descriptors to wait on and the time to be woken at the latest (rule 6)."""
+    def wants(self, now: float) -> tuple[list[int], float, float]:
+        """The descriptors to wait on, the time to be woken at and how late that time may be
+        met (lines.py rule 7): no later than it, but for a held reply's (rule 2)."""
         if self._wanted is not None:
             return self._wanted
         if self._port is None:
             if self._opening is None:
-                return [self._box], self._reopen_at
-            return [self._box], math.inf if self._opening.result is None else now  # it is there
+                return [self._box], self._reopen_at, self._reopen_at
+            until = math.inf if self._opening.result is None else now  # it is there
+            return [self._box], until, until
         session = self.session
         until, hold = session.next_wakeup(), session.hold_reads_until()
         self._held = now < hold
         if self._held:  # rule 2
-            self._wanted = [self._box], min(until, hold)
+            latest = min(until, session.hold_reads_latest())
+            self._wanted = [self._box], min(until, hold), latest
         else:
-            self._wanted = [self._box, self._fd], until
+            self._wanted = [self._box, self._fd], until, until
         return self._wanted
 
     def guarded(self, step: Callable[..., None], now: float, *args: Any) -> None:

@@ -33,6 +33,7 @@ Rules:
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, replace
 from enum import Enum
 from typing import cast
@@ -108,6 +109,13 @@ class Controller:
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
+        # the motion (and its configuration) whose next deadline ``wakeup`` found, and that
+        # deadline: ``tick`` changes nothing before it (motion.py rule 9)
+        self._deadline: tuple[mo.Motion | None, mo.MotionConfig | None, float] = (
+            None,
+            None,
+            -math.inf,
+        )
 
     @property
     def name(self) -> str:
@@ -222,7 +230,8 @@ class Controller:
         link = self.link
         if link is None:
             return Fed.NOTHING
-        log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        if log.isEnabledFor(logging.DEBUG):  # (one call, not two, at every read)
+            log.debug("%s: <- %r", self.cfg.rotator_id, data)
         link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
         if not replies:
@@ -285,7 +294,11 @@ class Controller:
             log.info("%s: controller answering", self.name)
         cfg = self.cfg
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
-        self._motion_events(events, now)
+        # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the
+        # step's tick at this time has nothing to do
+        self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
+        if events:
+            self._motion_events(events, now)
         moving = self.motion.state is MotionState.MOVING
         self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
         if reply.el_deg is not None:
@@ -329,11 +342,17 @@ class Controller:
             self._junk(*junk, now)
 
     def tick(self, now: float) -> None:
-        """The motion machine's clock (rule 4: not during a slew), and an enable owed."""
+        """The motion machine's clock (rule 4: not during a slew), and an enable owed. Not
+        before the motion's next deadline (``wakeup`` keeps it): until then its clock
+        changes nothing (motion.py rule 9)."""
         link = self.link
-        if link is None or link.slew is None:
+        seen, cfg, deadline = self._deadline
+        if (link is None or link.slew is None) and (
+            self.motion is not seen or self.cfg.motion is not cfg or now >= deadline
+        ):
             self.motion, events = mo.tick(self.motion, self.cfg.motion, now)
-            self._motion_events(events, now)
+            if events:
+                self._motion_events(events, now)
         if link is None or not self.answering:
             return
         if self.options.enable_due and link.slew is None and link.free() and not link.stop_due:
@@ -348,11 +367,12 @@ class Controller:
         link = self.link
         if link is None or not self.answering:
             return
+        idle = mo.at_rest(self.motion)
+        if not self.options.owes(idle, now):
+            return  # (the step of nearly every reading: the line not looked at)
         free = link.free()
         line_free = free and link.slew is None and not link.stop_due
-        taken = self.options.take(
-            mo.at_rest(self.motion), not target_waits and free, now, line_free=line_free
-        )
+        taken = self.options.take(idle, not target_waits and free, now, line_free=line_free)
         for name, value in taken:
             setting = self.cfg.spec.setting(name)
             try:
@@ -424,12 +444,17 @@ class Controller:
             why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
             self.notes.append(Report(ErrorKind.PROTOCOL, why))
 
-    def wakeups(self, now: float) -> list[float]:
-        """When the line or the motion machine needs the session next."""
-        times: list[float] = []
-        if self.link is not None:
-            times += self.link.wakeups()
-            if self.link.slew is not None:
-                times.append(now + self.cfg.moving_poll_interval_s)  # refresh the estimate
-        deadline = mo.next_deadline(self.motion, self.cfg.motion, now)
-        return times if deadline is None else [*times, deadline]
+    def wakeup(self, now: float, latest: float) -> float:
+        """When the line or the motion machine needs the session next, ``latest`` at the
+        latest."""
+        link = self.link
+        if link is not None:
+            for t in link.wakeups():
+                if t < latest:
+                    latest = t
+            if link.slew is not None:  # refresh the estimate
+                latest = min(latest, now + self.cfg.moving_poll_interval_s)
+        m, cfg = self.motion, self.cfg.motion
+        deadline = mo.next_deadline(m, cfg, now)
+        self._deadline = m, cfg, math.inf if deadline is None else deadline  # (tick's)
+        return latest if deadline is None or deadline >= latest else deadline

@@ -26,7 +26,9 @@ Rules:
    the worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
    watched meanwhile. If part of the reply is still missing then (a controller that takes its
    time), the hold starts again for the time the missing bytes take: a late reply costs a
-   wake-up per chunk, not per byte, and is read at most one byte time after its last byte.
+   wake-up per chunk, not per byte. The hold's end may be met up to one quiet time of rule 9
+   late (``hold_reads_latest``): a reply that came partly is then read in the wake-up that
+   takes the readings of the replies that came whole (lines.py rule 7), not in one of its own.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -120,6 +122,12 @@ class Link:
     def hold_reads_until(self) -> float:
         """Rule 7: bytes arriving before this time can wait in the port."""
         return self._hold_until if self._reply_deadline is not None else 0.0
+
+    def hold_reads_latest(self) -> float:
+        """Rule 7: the latest the held bytes are read, one quiet time after the hold ends."""
+        if self._reply_deadline is None or not self._hold_until:
+            return 0.0
+        return self._hold_until + self._settle_s
 
     def got_bytes(self, count: int, now: float) -> None:
         """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""

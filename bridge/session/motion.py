@@ -44,6 +44,11 @@ Rules:
    any command written after the target (a setting, a query: the controller asks,
    controller.py). A new bearing refused while the rotor still turns to the one before: the
    target is dropped and the rotor stays ``moving`` (stops.py then stops it).
+9. Every time ``tick`` compares the clock with is one ``next_deadline`` looks at: a motion
+   that ``tick`` left as it was at ``t0`` (one it made, ``reading``'s, which ends with
+   ``tick``, or one a stop or a target made since at ``t0``) stays as it is at every time
+   before ``next_deadline(m, cfg, t0)``, so the controller does not tick it before then
+   (controller.py ``tick``).
 """
 
 from __future__ import annotations
@@ -230,10 +235,18 @@ def reading(
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
-    """``replace(m, **changes)``, less its checks (a third of the time, at every reading that
-    changed something): every field of Motion is one of its ``__init__``'s, and it has no
-    slots, so its ``__dict__`` is all of them."""
-    return Motion(**{**m.__dict__, **changes})
+    """``replace(m, **changes)``, less its checks and its frozen ``__init__`` (an
+    ``object.__setattr__`` per field, 20 of them), at every reading that changed something:
+    Motion has no slots, no ``__post_init__`` and every field is one of its ``__init__``'s,
+    so its ``__dict__`` is all of them, in their order (tests/engine/test_motion.py)."""
+    new = _new(Motion)
+    fields = new.__dict__
+    fields.update(m.__dict__)
+    fields.update(changes)
+    return new
+
+
+_new = object.__new__
 
 
 def commanded(
@@ -310,8 +323,7 @@ def tick(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Event]]
     if m.state is MotionState.OFFLINE:
         return m, events
     if m.state is MotionState.MOVING:
-        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
-        still = now >= ref + cfg.settle_s
+        still = now >= _moved_ref(m) + cfg.settle_s
         if m.target_deg is not None:
             err = target_error(m, cfg)
             if still and err is not None and err <= cfg.tolerance_deg:
@@ -409,23 +421,48 @@ def plan_target(m: Motion, cfg: MotionConfig, now: float) -> Plan:
 
 
 def next_deadline(m: Motion, cfg: MotionConfig, now: float) -> float | None:
-    """The next time after ``now`` that ``tick`` or ``plan_target`` could change its answer."""
-    times: list[float] = []
-    if m.state is MotionState.MOVING:
-        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
-        times.append(ref + cfg.settle_s)
+    """The next time after ``now`` that ``tick`` or ``plan_target`` could change its answer
+    (the soonest kept as it goes, no list: this runs at every step of every rotator)."""
+    soonest: float | None = None
+    state = m.state
+    if state is MotionState.MOVING:
+        t = _moved_ref(m) + cfg.settle_s
+        if t > now:
+            soonest = t
         if m.progress_t is not None:
-            times.append(m.progress_t + cfg.stall_timeout_s)
+            t = m.progress_t + cfg.stall_timeout_s
+            if t > now and (soonest is None or t < soonest):
+                soonest = t
         if m.stop_sent_t is not None:
-            times.append(m.stop_sent_t + cfg.stop_resend_s)
-    if m.state in (MotionState.BRAKING, MotionState.STALLED) and m.still_since_t is not None:
-        times.append(m.still_since_t + cfg.brake_delay_s)
-    if m.idle_not_before_t is not None:
-        times.append(m.idle_not_before_t)
-    if not cfg.can_report_position:
-        if m.busy_until_t is not None:
-            times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
-        if m.stop_sent_t is not None:
-            times.append(m.stop_sent_t + cfg.brake_delay_s)
-    future = [t for t in times if t > now]
-    return min(future) if future else None
+            t = m.stop_sent_t + cfg.stop_resend_s
+            if t > now and (soonest is None or t < soonest):
+                soonest = t
+    elif (state is MotionState.BRAKING or state is MotionState.STALLED) and (
+        m.still_since_t is not None
+    ):
+        t = m.still_since_t + cfg.brake_delay_s
+        if t > now and (soonest is None or t < soonest):
+            soonest = t
+    t_idle = m.idle_not_before_t
+    if t_idle is not None and t_idle > now and (soonest is None or t_idle < soonest):
+        soonest = t_idle
+    if not cfg.spec.can_report_position:
+        busy, stop = m.busy_until_t, m.stop_sent_t
+        for t_or_none in (
+            busy,
+            None if busy is None else busy + cfg.brake_delay_s,
+            None if stop is None else stop + cfg.brake_delay_s,
+        ):
+            if t_or_none is not None and t_or_none > now:
+                if soonest is None or t_or_none < soonest:
+                    soonest = t_or_none
+    return soonest
+
+
+def _moved_ref(m: Motion) -> float:
+    """Rule 2: the later of the last movement, the last command and the last stop."""
+    ref = -1e18
+    for t in (m.last_move_t, m.target_t, m.stop_sent_t):
+        if t is not None and t > ref:
+            ref = t
+    return ref

@@ -48,6 +48,7 @@ class Options:
         self._sent_t = 0.0
         self._written_t: dict[str, float] = {}  # rule 4: when each was last written
         self.revision = 0  # one more for every value set: the status shows them (session.py)
+        self._factor: float | None = None  # rule 3: speed_factor's, until in_effect changes
 
     def _resent(self) -> set[str]:
         """The values the controller forgets, and those not sent since the start (rule 1)."""
@@ -58,6 +59,7 @@ class Options:
         """Rule 3: what will be sent again is not in effect until it is."""
         for name in self._resent():
             self.in_effect.pop(name, None)
+        self._factor = None
 
     def connected(self, answering: bool) -> None:
         """A (re)connect: all are owed once the controller answers."""
@@ -105,13 +107,24 @@ class Options:
         self._written_t.update((n, now) for n in due)
         taken = [(name, self.values[name]) for name in due]
         self.in_effect.update(taken)
+        self._factor = None
         return taken
 
     def speed_factor(self) -> float:
-        """Rule 3: 1.0 when nothing in effect changes the rotor's speed."""
-        factors = [
-            self.declared[n].speed_factor(v)
-            for n, v in self.in_effect.items()
-            if n in self.declared
-        ]
-        return math.prod(factors)
+        """Rule 3: 1.0 when nothing in effect changes the rotor's speed (made again only once
+        ``in_effect`` changed: rotor health asks at every reading)."""
+        factor = self._factor
+        if factor is None:
+            factor = self._factor = math.prod(
+                self.declared[n].speed_factor(v)
+                for n, v in self.in_effect.items()
+                if n in self.declared
+            )
+        return factor
+
+    def owes(self, idle: bool, now: float) -> bool:
+        """Whether ``take`` may give anything now (the question it asks first: the step asks
+        it before it looks at the line)."""
+        return bool(self._due) or (
+            idle and bool(self.values) and now - self._sent_t >= OPTIONS_REFRESH_S
+        )

@@ -94,7 +94,6 @@ Rules:
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
@@ -134,6 +133,7 @@ log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+_SHOWN = len(st.Features._fields)  # rule 18: the status key ends with what the parts show
 
 
 class RotatorSession:
@@ -330,6 +330,11 @@ class RotatorSession:
         link = self.controller.link
         return link.hold_reads_until() if link is not None else 0.0
 
+    def hold_reads_latest(self) -> float:
+        """How late the end of that hold may be met (link.py rule 7)."""
+        link = self.controller.link
+        return link.hold_reads_latest() if link is not None else 0.0
+
     # -- commands, applied ----------------------------------------------------------------------
     def _refused(self) -> str | None:
         """Why a target or a track command cannot be taken now, if it cannot."""
@@ -428,8 +433,9 @@ class RotatorSession:
             self._heed(now)
         self._parts(self._measuring, now)  # what they measure is in the status
         self._emit_status(now)
-        if ctl.link is not None:
-            self._actions.extend(Write(frame) for frame in ctl.link.output())
+        frames = ctl.link.output() if ctl.link is not None else None
+        if frames:
+            self._actions += [Write(frame) for frame in frames]
         self._ask_sky()
         self._wakeup = self._next_wakeup(now)
         actions, self._actions = self._actions, []
@@ -437,7 +443,8 @@ class RotatorSession:
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
         """Rule 17: each part that is on and that something woke, in the order handed in."""
-        self._storm(now)
+        if self.wind.storm != self._storm_seen:  # (its look, without a call when the
+            self._storm(now)  # storm is as it was: twice at every step)
         for part in parts:
             if not part.on(self):
                 continue
@@ -447,7 +454,8 @@ class RotatorSession:
                     continue
                 self._seen_motion[part.name] = motion
             self._part(part, now)
-            self._storm(now)
+            if self.wind.storm != self._storm_seen:
+                self._storm(now)
 
     def _storm(self, now: float) -> None:
         """parts.py rule 7: a storm that began ends every part's own motion, as it ends
@@ -463,7 +471,11 @@ class RotatorSession:
         slewing = link is not None and link.slew is not None
         parked, offset_s = self.status.parked, self.wall_offset_s
         scene = Scene(now, motion, pending, self.locked, parked, slewing, offset_s)
-        proposal = self._guarded(part.name, lambda: part.step(self, scene), now)
+        try:  # (_guarded's, without a closure: the measuring parts run at every reading)
+            proposal = part.step(self, scene)
+        except Exception:
+            self._failed(part.name, now)
+            return
         if proposal is not None and proposal.target is not None and self._still(proposal.target):
             proposal = replace(proposal, target=None)  # parts.py rule 7
         if proposal is not None:
@@ -579,19 +591,8 @@ class RotatorSession:
             self.health,
         )
         link, view = ctl.link, self.view
-        wind_info = wind.info if wind.on else None
         slew = link.slew if link is not None else None
-        timed = slew is not None  # a slew's estimate (status rule 2)
-        shown = st.Features(
-            tracker.info,
-            tracker.ended,
-            follower.info,
-            follower.ended,
-            wind_info,
-            health.report,
-            self._shown(now) if self._showing else None,  # parts.py rule 6
-        )
-        key: tuple[object, ...] = (
+        key: tuple[object, ...] = (  # one flat tuple: this runs at every step
             ctl.cfg,
             ctl.motion,
             link,
@@ -610,11 +611,20 @@ class RotatorSession:
             view.park_raw,
             view.last_operator,
             view.control,
-            shown,
+            # what the parts show (st.Features, in its order: the last _SHOWN of the key)
+            tracker.info,
+            tracker.ended,
+            follower.info,
+            follower.ended,
+            wind.info if wind.on else None,
+            health.report,
+            self._shown(now) if self._showing else None,  # parts.py rule 6
         )
-        if key == self._status_key and not timed and ctl.cfg.spec.can_report_position:
-            return  # (a DCU-1's estimated move reads the time: status rule 3)
+        if key == self._status_key and slew is None and ctl.cfg.spec.can_report_position:
+            return  # (a slew's estimate and a DCU-1's estimated move read the time: status
+            # rules 2 and 3)
         self._status_key = key
+        shown = st.Features._make(key[-_SHOWN:])
         seen = ctl.seen(
             self.status, self.view, self.targets.pending, self.locked, self.wall_offset_s, shown
         )
@@ -641,8 +651,8 @@ class RotatorSession:
         return shown
 
     def _next_wakeup(self, now: float) -> float:
-        wakeup = min(now + IDLE_WAKEUP_S, min(self.controller.wakeups(now), default=math.inf))
-        stream = self.targets.stream_deadline(now)
+        wakeup = self.controller.wakeup(now, now + IDLE_WAKEUP_S)
+        stream = self.targets.stream_deadline(now) if self.targets.pending is not None else None
         if stream is not None and stream < wakeup:
             wakeup = stream
         for part in self._waking:

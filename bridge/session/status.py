@@ -14,6 +14,10 @@ Rules:
    within tolerance of the park position it was last sent to.
 5. A status is emitted when something a user would notice changed. The controller's own clock
    (SatEL) ticks every second: it rides along in the next status but never causes one.
+6. ``current`` gives every field of ``RotatorStatus`` a value, and makes it as the dataclass's
+   own ``__init__`` would, without its ``object.__setattr__`` for each of the 30 fields (a
+   frozen dataclass's: most of the cost of a status, made at every reading that moves the
+   bearing). tests/engine/test_status.py holds it to the dataclass.
 """
 
 from __future__ import annotations
@@ -124,11 +128,26 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
     aim = rig.aim
     raw = bearing if spec.can_report_position else None
     pending = seen.pending
-    return RotatorStatus(  # every field: cheaper than dataclasses.replace over them all
+    status = _new(RotatorStatus)  # rule 6 (its fields in their order)
+    status.__dict__.update(
         rotator_id=seen.previous.rotator_id,
         state=state,
         bearing_deg=None if raw is None else aim.true_of(raw),
+        elevation_deg=elevation if spec.has_elevation else None,
+        target_az_deg=None if target[0] is None else aim.true_of(target[0]),
+        target_el_deg=target[1] if spec.has_elevation else None,
+        connected=seen.connected,
+        available=answering,
+        locked=seen.locked,
+        version=seen.version,
+        options=dict(seen.options),
+        last_error=view.last_error,
+        last_command_source=view.last_source,
+        estimated=estimated,
+        controller_time=seen.controller_time,
+        expected_end_unix=expected_end,
         raw_bearing_deg=raw,
+        raw_target_az_deg=target[0],
         overlap=aim.overlap(raw),
         target_info=pending.info if pending is not None else view.target_info,
         parked=_parked(rig, seen, state),
@@ -138,24 +157,14 @@ def current(rig: WorkerConfig, seen: Seen, now: float) -> RotatorStatus:
         following_ended=seen.features.following_ended,
         wind=seen.features.wind,
         health=seen.features.health,
-        elevation_deg=elevation if spec.has_elevation else None,
-        estimated=estimated,
-        expected_end_unix=expected_end,
-        controller_time=seen.controller_time,
-        target_az_deg=None if target[0] is None else aim.true_of(target[0]),
-        raw_target_az_deg=target[0],
-        target_el_deg=target[1] if spec.has_elevation else None,
-        connected=seen.connected,
-        available=answering,
-        locked=seen.locked,
-        version=seen.version,
-        options=dict(seen.options),
-        last_error=view.last_error,
-        last_command_source=view.last_source,
         last_operator=view.last_operator,
         control=view.control,
         features=dict(seen.features.parts) if seen.features.parts else {},
     )
+    return status
+
+
+_new = object.__new__  # rule 6
 
 
 def _parked(rig: WorkerConfig, seen: Seen, state: MotionState) -> bool:

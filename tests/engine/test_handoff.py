@@ -92,10 +92,11 @@ class RoundWorker(StandInWorker):
     def urgent(self) -> frozenset[int]:
         return frozenset()
 
-    def wants(self, now: float) -> tuple[list[int], float]:
+    def wants(self, now: float) -> tuple[list[int], float, float]:
         if self.served.is_set():
-            return [], math.inf
-        return [], 0.0 if self.go.is_set() else now + 0.01
+            return [], math.inf, math.inf
+        due = 0.0 if self.go.is_set() else now + 0.01
+        return [], due, due
 
     def serve(self, now: float, ready: set[int]) -> None:
         self.job()

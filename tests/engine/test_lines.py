@@ -8,7 +8,9 @@ still reach its controller at once.
 from __future__ import annotations
 
 import logging
+import math
 import os
+import select
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -24,10 +26,11 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorEvent, Stop, Target
 from bridge.emulators.pty import EmulatedPort
 from bridge.protocols.base import ModelSpec
-from bridge.runtime.lines import Lines
+from bridge.runtime.lines import GATHER_S, Lines, wake_at
 from bridge.runtime.port import open_port
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
+from bridge.runtime.worker import Worker
 from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
@@ -190,8 +193,8 @@ class Timed(StandInWorker):
         self.clock, self.takes_s, self.served, self.log = clock, takes_s, served, log
         self.given: list[float] = []
 
-    def wants(self, now: float) -> tuple[list[int], float]:
-        return [], now  # always due: the round runs at once
+    def wants(self, now: float) -> tuple[list[int], float, float]:
+        return [], now, now  # always due: the round runs at once
 
     def has_commands(self, ready: set[int]) -> bool:
         return self.takes_s > 0  # the slow one first
@@ -289,8 +292,8 @@ def test_a_round_serves_only_the_lines_with_something_to_do() -> None:
     log: list[tuple[Timed, float]] = []
 
     class Waiting(Timed):
-        def wants(self, now: float) -> tuple[list[int], float]:
-            return [], now + 3600.0  # nothing to do for an hour
+        def wants(self, now: float) -> tuple[list[int], float, float]:
+            return [], now + 3600.0, now + 3600.0  # nothing to do for an hour
 
     busy, waiting = Timed(clock, 0.0, done, log), Waiting(clock, 0.0, threading.Event(), log)
     lines.add(waiting)  # type: ignore[arg-type]
@@ -314,8 +317,9 @@ def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
             super().__init__([0.0], 0.0, done, log)
             self.due_s = due_s
 
-        def wants(self, now: float) -> tuple[list[int], float]:
-            return [], self.due_s if not self.given else now + 3600.0
+        def wants(self, now: float) -> tuple[list[int], float, float]:
+            due = self.due_s if not self.given else now + 3600.0
+            return [], due, due
 
         def serve(self, now: float, ready: set[int]) -> None:
             self.given.append(now)
@@ -333,6 +337,38 @@ def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
         for w in (first, second):
             lines.remove(w)  # type: ignore[arg-type]
     assert first.given[0] >= second.due_s and second.given[0] >= second.due_s
+
+
+QUIET_S = 3 * 10 / 4800  # link.py rule 9's quiet time at 4800 baud: how late a held reply may be
+
+
+def _at(until: float, latest: float | None = None) -> tuple[list[int], float, float]:
+    return [], until, until if latest is None else latest
+
+
+def test_a_reply_that_came_partly_is_read_in_the_wake_up_that_takes_the_others_readings() -> None:
+    """Rule 7 (link.py rule 7): of 16 rotors polled together, one whose reply came partly
+    was read 2 ms later in a wake-up of its own, and its reading taken in another: one or two
+    wake-ups more per poll round. A held reply's end may be met up to a quiet time late, so it
+    is read with the lines due then; alone, or with nothing due soon enough, it is not held."""
+    held = _at(10.0, 10.0 + QUIET_S)  # a reply held in its port until 10.0
+    assert wake_at([held]) == 10.0  # alone: read at its time, not later
+    assert wake_at([held, _at(10.004)]) == 10.004  # read with the readings taken at 10.004
+    late = 10.0 + QUIET_S + GATHER_S + 0.001
+    assert wake_at([held, _at(late)]) == 10.0  # no later than a quiet time (and the gathering)
+    assert wake_at([_at(10.004), held]) == 10.004  # in whatever order the lines come
+    assert wake_at([_at(10.0), _at(9.9, 9.9 + QUIET_S)]) == 9.9  # nothing else is held back
+
+
+def test_times_are_gathered_as_before_and_nothing_is_met_early() -> None:
+    """Rules 3 and 7: a line's time is never met early, one due soon after another is met with
+    it, one due later is not; no time at all: only a descriptor ends the wait."""
+    assert wake_at([]) == math.inf
+    assert wake_at([_at(math.inf)]) == math.inf
+    assert wake_at([_at(5.0)]) == 5.0
+    assert wake_at([_at(5.0), _at(5.0 + GATHER_S / 2)]) == 5.0 + GATHER_S / 2
+    assert wake_at([_at(5.0), _at(5.0 + 2 * GATHER_S)]) == 5.0
+    assert wake_at([_at(5.0 + 2 * GATHER_S), _at(5.0)]) == 5.0
 
 
 def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None:
@@ -393,8 +429,8 @@ def test_lines_started_and_stopped_leave_no_descriptor_and_a_late_wake_up_does_n
     wakes: list[Callable[[], None]] = []
 
     class Idle(Timed):
-        def wants(self, now: float) -> tuple[list[int], float]:
-            return [], now + 3600.0
+        def wants(self, now: float) -> tuple[list[int], float, float]:
+            return [], now + 3600.0, now + 3600.0
 
         def begin(self, now: float, wake: Callable[[], None]) -> None:
             wakes.append(wake)
@@ -436,3 +472,93 @@ def test_lines_started_and_stopped_leave_no_descriptor_and_a_late_wake_up_does_n
     finally:
         os.close(reused_r)
         os.close(reused_w)
+
+
+def test_a_line_is_woken_by_what_it_waits_on_now_and_not_by_what_it_waited_on_before() -> None:
+    """Rule 10: the poller is kept and only told what changed. A line that waited on one
+    descriptor and now waits on another (a reply held, then read) is woken by the new one and
+    not by the old one, left readable; a line that leaves wakes the loop no more."""
+    served: list[set[int]] = []
+    woke = threading.Event()
+    a_r, a_w = os.pipe()
+    b_r, b_w = os.pipe()
+
+    class Switching(Timed):
+        def wants(self, now: float) -> tuple[list[int], float, float]:
+            return ([a_r] if not served else [b_r]), now + 3600.0, now + 3600.0
+
+        def has_commands(self, ready: set[int]) -> bool:
+            return False
+
+        def serve(self, now: float, ready: set[int]) -> None:
+            served.append(ready & {a_r, b_r})  # (the loop's own wake pipe aside)
+            if b_r in ready:
+                os.read(b_r, 1)  # what it waits on now is read, as a port's bytes are
+            woke.set()
+
+    line = Switching([0.0], 0.0, threading.Event(), [])
+    lines = Lines()
+    lines.add(line)  # type: ignore[arg-type]
+    try:
+        os.write(a_w, b"x")  # what it waits on first: it is served
+        assert woke.wait(slow(5))
+        woke.clear()
+        assert served == [{a_r}]
+        # a_r stays readable: were it still watched, every round would serve the line
+        os.write(b_w, b"y")
+        assert woke.wait(slow(5))
+        woke.clear()
+        assert served == [{a_r}, {b_r}]
+        os.write(b_w, b"z")  # and again: the new one still wakes it
+        assert woke.wait(slow(5))
+        assert served[2] == {b_r}
+        assert lines.remove(line)  # type: ignore[arg-type]
+        assert line not in lines._watching and b_r not in lines._polled
+    finally:
+        lines.remove(line)  # type: ignore[arg-type]
+        for fd in (a_r, a_w, b_r, b_w):
+            os.close(fd)
+
+
+def test_a_worker_says_its_held_reply_may_be_read_up_to_a_quiet_time_late(tmp_path: Path) -> None:
+    """worker.py rule 2 with lines.py rule 7: the worker tells the loop, after it polled, that
+    it waits on its mailbox alone until the reply can be whole, and that the read may come up
+    to a quiet time (three byte times at 4800 baud) later; nothing else of it is ever late."""
+    master, slave = os.openpty()
+    settings = RotatorSettings.model_validate(
+        {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
+    )
+    box = Mailbox()
+    worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
+    try:
+        now = 100.0
+        worker.guarded(worker.begin, now, lambda: None)
+        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
+        opening = worker._opening
+        assert opening is not None
+        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
+        fds, until, latest = worker.wants(now)
+        assert until == latest == now  # the port is there: at once, never later
+        written = b""
+        for _ in range(10):  # opened, then polled
+            worker.guarded(worker.serve, now, set())
+            if _readable(master):
+                written += os.read(master, 64)
+            if b"AI1;" in written:
+                break
+        assert written.endswith(b"AI1;")
+        fds, until, latest = worker.wants(now)
+        byte_s = 10 / 4800
+        assert fds == [box.fileno()]  # the reply is held in the port (rule 2)
+        assert until == worker.session.hold_reads_until() > now
+        assert latest == pytest.approx(until + 3 * byte_s)
+    finally:
+        worker.guarded(worker.end, now)
+        assert worker.wait_closed(slow(5))
+        os.close(master)
+        os.close(slave)
+        box.close()
+
+
+def _readable(fd: int) -> bool:
+    return bool(select.select([fd], [], [], 0)[0])

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 from bridge.core.model import MotionState as S
 from bridge.core.model import RotatorStatus
 from bridge.protocols import REGISTRY
@@ -371,3 +374,110 @@ def test_a_reading_keeps_every_field_it_does_not_change() -> None:
         still_since_t=None,
     )
     assert moved == mo.tick(expected, CFG, 2000.0)[0]
+
+
+def _deadline_as_written(m: mo.Motion, cfg: mo.MotionConfig, now: float) -> float | None:
+    """next_deadline as its rules say it, every time in a list, the soonest in the future."""
+    times: list[float] = []
+    if m.state is S.MOVING:
+        ref = max(t for t in (m.last_move_t, m.target_t, m.stop_sent_t, -1e18) if t is not None)
+        times.append(ref + cfg.settle_s)
+        if m.progress_t is not None:
+            times.append(m.progress_t + cfg.stall_timeout_s)
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.stop_resend_s)
+    if m.state in (S.BRAKING, S.STALLED) and m.still_since_t is not None:
+        times.append(m.still_since_t + cfg.brake_delay_s)
+    if m.idle_not_before_t is not None:
+        times.append(m.idle_not_before_t)
+    if not cfg.can_report_position:
+        if m.busy_until_t is not None:
+            times += [m.busy_until_t, m.busy_until_t + cfg.brake_delay_s]
+        if m.stop_sent_t is not None:
+            times.append(m.stop_sent_t + cfg.brake_delay_s)
+    future = [t for t in times if t > now]
+    return min(future) if future else None
+
+
+_TIMES = st.one_of(st.none(), st.sampled_from([0.0, 1.0, 2.5, 4.0, 7.0, 9.0, 12.0]))
+
+
+@settings(max_examples=500)
+@given(
+    st.sampled_from(list(S)),
+    *([_TIMES] * 7),
+    st.sampled_from([0.0, 3.0, 6.0, 10.0, 20.0]),
+    st.booleans(),
+)
+def test_the_next_deadline_is_the_soonest_time_ahead_of_every_rule(
+    state: S,
+    last_move_t: float | None,
+    target_t: float | None,
+    stop_sent_t: float | None,
+    progress_t: float | None,
+    still_since_t: float | None,
+    idle_not_before_t: float | None,
+    busy_until_t: float | None,
+    now: float,
+    feedback: bool,
+) -> None:
+    """next_deadline, made without lists (it runs at every step), says what its rules say."""
+    m = mo.Motion(
+        state=state,
+        last_move_t=last_move_t,
+        target_t=target_t,
+        stop_sent_t=stop_sent_t,
+        progress_t=progress_t,
+        still_since_t=still_since_t,
+        idle_not_before_t=idle_not_before_t,
+        busy_until_t=busy_until_t,
+    )
+    cfg = CFG if feedback else DCU
+    assert mo.next_deadline(m, cfg, now) == _deadline_as_written(m, cfg, now)
+
+
+@settings(max_examples=300)
+@given(
+    st.sampled_from([S.MOVING, S.BRAKING, S.IDLE, S.STALLED, S.UNKNOWN]),
+    *([_TIMES] * 7),
+    st.sampled_from([None, 95.0, 101.0, 200.0]),
+    st.sampled_from([0.0, 3.0, 6.0, 10.0]),
+    st.booleans(),
+)
+def test_a_motion_tick_left_as_it_was_stays_so_until_its_next_deadline(
+    state: S,
+    last_move_t: float | None,
+    target_t: float | None,
+    stop_sent_t: float | None,
+    progress_t: float | None,
+    still_since_t: float | None,
+    idle_not_before_t: float | None,
+    busy_until_t: float | None,
+    target_deg: float | None,
+    t0: float,
+    feedback: bool,
+) -> None:
+    """motion.py rule 9 (the controller ticks no motion before its next deadline): a motion
+    ``tick`` left at ``t0``, or one a stop or a target made from it at ``t0``, is what
+    ``tick`` makes of it at any time before ``next_deadline``."""
+    cfg = CFG if feedback else DCU
+    m = mo.Motion(
+        state=state,
+        position_deg=100.0,
+        anchor_deg=100.0,
+        last_move_t=last_move_t,
+        target_t=target_t,
+        stop_sent_t=stop_sent_t,
+        progress_t=progress_t,
+        still_since_t=still_since_t,
+        idle_not_before_t=idle_not_before_t,
+        busy_until_t=busy_until_t,
+        target_deg=target_deg,
+    )
+    left, _ = mo.tick(m, cfg, t0)
+    for made in (left, mo.stop_sent(left, cfg, t0), mo.commanded(left, cfg, 150.0, t0)):
+        assert mo.tick(made, cfg, t0) == (made, [])
+        deadline = mo.next_deadline(made, cfg, t0)
+        end = t0 + 30.0 if deadline is None else deadline
+        for t in (t0 + (end - t0) * f for f in (0.25, 0.5, 0.999)):
+            assert mo.tick(made, cfg, t) == (made, []), (made, t)

@@ -4,6 +4,7 @@ a retained message never carries out."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from bridge.core.model import AxisHealth, RotatorHealth, RotatorStatus
@@ -79,3 +80,16 @@ def test_an_empty_reset_is_refused_not_taken() -> None:
     svc.on_message("rotor/health/reset", b"", retain=False)
     assert rot.calls and rot.calls[0][0] == "refused" and "empty" in str(rot.calls[0][1])
     assert ("reset_health",) not in rot.calls
+
+
+def test_each_report_s_text_is_its_own_whatever_was_rendered_before() -> None:
+    """The text is kept by the report (the same object from status to status): a new report,
+    equal or not, many of them (more than are kept), each says itself in R/health and
+    R/status."""
+    svc, pub, _ = service({"tower": "rotorez"})
+    for moves in [*range(100), 5, 5]:
+        report = dataclasses.replace(HEALTH, moves=moves)
+        for bearing in (10.0, 11.0):
+            svc.publish_status("tower", RotatorStatus("tower", bearing_deg=bearing, health=report))
+        assert json.loads(pub.retained["rotor/health"])["moves"] == moves
+        assert json.loads(pub.retained["rotor/status"])["health"] == health_doc(report)

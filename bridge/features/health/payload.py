@@ -12,7 +12,6 @@ Rules:
 
 from __future__ import annotations
 
-import functools
 import json
 
 from bridge.core.model import AxisHealth, RotatorHealth
@@ -67,10 +66,22 @@ def _el_health(el: AxisHealth) -> dict[str, object]:
     }
 
 
-@functools.lru_cache(maxsize=16)
 def health_json(health: RotatorHealth) -> str:
-    """A report is new only after a move: rendered once, not at every status."""
-    return _COMPACT.encode(health_doc(health))
+    """A report is new only after a move: rendered once, not at every status. Kept by the
+    report itself (the same object in every status until the next move), so no status hashes
+    the whole report to find its text."""
+    kept = _rendered.get(id(health))
+    if kept is not None and kept[0] is health:
+        return kept[1]
+    text = _COMPACT.encode(health_doc(health))
+    if len(_rendered) >= _RENDERED_KEPT:
+        _rendered.clear()
+    _rendered[id(health)] = (health, text)  # (the report kept: its id is not another's)
+    return text
+
+
+_rendered: dict[int, tuple[RotatorHealth, str]] = {}
+_RENDERED_KEPT = 64  # reports whose text is kept (a few per rotator)
 
 
 def _rounded(value: float | None, digits: int) -> float | None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
@@ -31,6 +32,33 @@ _SPLIT = re.compile(r"[\s,;]+")
 _NUMBER = re.compile(r"^[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?$")
 #: json.dumps(doc, separators=(",", ":")), the encoder made once (dumps makes one each call)
 _COMPACT = json.JSONEncoder(separators=(",", ":"))
+
+
+def _status_encoder() -> Callable[[object], str]:
+    """``_COMPACT.encode`` for R/status's document, which is made at every reading: the C
+    encoder ``encode`` makes anew at every call (json.encoder's own ``c_make_encoder``, as
+    ``iterencode`` makes it), made once; no check for circles (a document made of a status
+    has none: a circle would be a RecursionError). Where Python has no C encoder, the
+    encoder's own ``encode``."""
+    make = getattr(json.encoder, "c_make_encoder", None)
+    if make is None:
+        return _COMPACT.encode
+    c = _COMPACT
+    encode = make(
+        None,
+        c.default,
+        json.encoder.encode_basestring_ascii,
+        None,
+        c.key_separator,
+        c.item_separator,
+        c.sort_keys,
+        c.skipkeys,
+        c.allow_nan,
+    )
+    return lambda doc: "".join(encode(doc, 0))
+
+
+_STATUS_ENCODE = _status_encoder()
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 
@@ -413,7 +441,7 @@ def status_json(
     )
     doc["estimated"] = status.estimated
     doc["time"] = _iso(time_unix)
-    text = _COMPACT.encode(doc)
+    text = _STATUS_ENCODE(doc)
     if not tail:
         return text
     return f"{text[:-1]}{''.join(tail)}}}"

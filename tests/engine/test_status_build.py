@@ -1,0 +1,50 @@
+"""status.py rule 6 and motion.py's ``_with``: the status and the motion a reading makes,
+built without their frozen dataclasses' ``__init__``, are the values that ``__init__`` builds:
+every field, in the dataclass's order, equal, and still frozen."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from bridge.core.model import RotatorStatus
+from bridge.session import motion as mo
+from tests.engine.virtual import VirtualRotator
+
+
+def test_the_status_of_a_turning_rotor_is_the_dataclass_s_own() -> None:
+    v = VirtualRotator("rotorez", emulator={"speed_deg_s": 4.0})
+    v.run_for(3.0)
+    v.manual_rotate(90.0)
+    v.run_for(2.0)
+    status = v.session.status
+    assert status.moving and status.bearing_deg is not None
+    names = [f.name for f in dataclasses.fields(RotatorStatus)]
+    assert list(vars(status)) == names
+    built = RotatorStatus(**{n: getattr(status, n) for n in names})
+    assert status == built and hash(repr(status)) == hash(repr(built))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        status.bearing_deg = 1.0  # type: ignore[misc]
+
+
+def test_a_reading_s_motion_is_the_dataclass_s_own() -> None:
+    cfg = mo.MotionConfig(spec=VirtualRotator("rotorez").session.cfg.spec)
+    m, _ = mo.reading(mo.Motion(), cfg, 10.0, 0.0)
+    m2, _ = mo.reading(m, cfg, 20.0, 0.2)  # moved: a new motion from the reading's changes
+    assert m2 is not m and m2.state is mo.MotionState.MOVING
+    names = [f.name for f in dataclasses.fields(mo.Motion)]
+    assert list(vars(m2)) == names
+    assert m2 == dataclasses.replace(
+        m,
+        position_deg=20.0,
+        anchor_deg=20.0,
+        changed_t=0.2,
+        last_move_t=0.2,
+        still_since_t=None,
+        state=mo.MotionState.MOVING,
+        el_position_deg=None,
+        el_anchor_deg=None,
+    )
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        m2.position_deg = 1.0  # type: ignore[misc]
