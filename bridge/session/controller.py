@@ -322,6 +322,9 @@ class Controller:
         link = self.link
         if link is None:
             return
+        if self.stops.repeat_due(self.motion, now):  # stops.py rule 1: before anything else
+            log.debug("%s: a stop repeated right after the last one, written now", self.name)
+            self.stop(now)
         self._settled(link, now)
         if link.reply_overdue(now):
             todo = overdue(self.cfg, link.slew, link.reply_timeout_s, now)
@@ -455,6 +458,9 @@ class Controller:
             if link.slew is not None:  # refresh the estimate
                 latest = min(latest, now + self.cfg.moving_poll_interval_s)
         m, cfg = self.motion, self.cfg.motion
+        repeat = self.stops.repeat_at(m)  # stops.py rule 1: a stop repeat owed (line_work's)
+        if repeat is not None and now < repeat < latest and link is not None:
+            latest = repeat
         deadline = mo.next_deadline(m, cfg, now)
         self._deadline = m, cfg, math.inf if deadline is None else deadline  # (tick's)
         return latest if deadline is None or deadline >= latest else deadline

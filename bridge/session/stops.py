@@ -7,13 +7,19 @@ Rules:
    cancels any frame still waiting in the outbox. One that comes within the brake window (at
    least STOP_MERGE_MIN_S) of another, with no target sent and no reading showing the rotor
    turning since, is merged into it: nothing more goes on the wire (a flood of stops to an idle
-   Rotor-EZ had it answer each with its banner, crowding out the readings). That holds for a
-   rotor the first stop stopped while it turned, until a reading shows it turning still (each
-   banner of two clients' bursts queued the readings for seconds: the controller taken for
-   silent, the next target dropped); a controller silent while it turns is never merged then.
+   Rotor-EZ had it answer each with its banner, crowding out the readings). A rotor the last
+   stop found turning, no reading since saying whether it took, is another matter: that frame
+   may have been lost on the line. There a stop merges only within STOP_REPEAT_GAP_S of the
+   last one (two clients' bursts of STOPs had put over a hundred ``;`` on the wire, each
+   answered with a banner once the first had stopped the rotor, queueing the readings for
+   seconds: the controller taken for silent, the next target dropped), and one merged so is
+   owed: it is sent when that gap ends, unless a reading has shown the rotor still by then
+   (rule 2). So a flood puts at most one stop frame on the wire in each gap, and a repeat is
+   never more than the gap late. A controller silent while it turns is never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
-   again, and after STOP_TRIES_BEFORE_ERROR tries an error says so. Lock ON always sends a
-   stop, whatever the bridge believes the rotor is doing.
+   again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
+   is written when its gap ends, before anything else of that step, and is no try). Lock ON
+   always sends a stop, whatever the bridge believes the rotor is doing.
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
@@ -42,6 +48,7 @@ log = logging.getLogger(__name__)
 
 STOP_TRIES_BEFORE_ERROR = 3
 STOP_MERGE_MIN_S = 1.0  # rule 1: stops merge within the brake window, or at least this long
+STOP_REPEAT_GAP_S = 0.1  # rule 1: a repeat this soon to a rotor maybe still turning is owed
 STOP_UNSURE_S = 1.0  # rule 3: a stop written this recently when the port failed is sent again
 CLEARED = (
     "a stop or lock from the stop lane came before it, and the MQTT connection that would have "
@@ -63,18 +70,40 @@ class Stops:
         self.owed = False  # rule 3: a stop came while the port was closed
         self._tries = 0
         self._at_rest = False  # rule 4: turned away, a stop when it is still
+        self._repeat_owed: float | None = None  # rule 1: the stop a merged repeat is owed to
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
-        """Rule 1: a stop now adds nothing on the wire."""
+        """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
+        have taken is owed: ``check``)."""
         if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
             return False  # a target went out after the last stop: this stop is needed
-        if m.state is MotionState.MOVING and not cfg.spec.reports_while_moving:
+        moving = m.state is MotionState.MOVING  # (until a reading shows it still)
+        if moving and not cfg.spec.reports_while_moving:
             return False  # no reading can show it turning (a SatEL's slew): always sent
-        window = max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
-        # a reading since that stop showing the rotor turning; the state alone says MOVING
-        # until a reading shows it still, and the first of a flood stopped a turning rotor
-        turning = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
-        return not turning and now - m.stop_sent_t < window
+        if m.last_move_t is not None and m.last_move_t > m.stop_sent_t:
+            return False  # a reading since that stop showed the rotor turning
+        if moving:  # that stop's frame may have been lost: only a repeat right after it merges
+            if now - m.stop_sent_t >= STOP_REPEAT_GAP_S:
+                return False
+            self._repeat_owed = m.stop_sent_t
+            return True
+        return now - m.stop_sent_t < max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
+
+    def repeat_at(self, m: mo.Motion) -> float | None:
+        """Rule 1: when the repeat owed to the last stop goes out (None: none is owed)."""
+        if self._repeat_owed is None or self._repeat_owed != m.stop_sent_t:
+            return None  # none merged, or a newer stop went out since
+        if m.state is not MotionState.MOVING or m.target_deg is not None:
+            return None  # a reading showed the rotor still, or a target went out since
+        return self._repeat_owed + STOP_REPEAT_GAP_S
+
+    def repeat_due(self, m: mo.Motion, now: float) -> bool:
+        """Rule 1: the repeat owed is to be written now (and is then owed no more)."""
+        at = self.repeat_at(m)
+        if at is None or now < at:
+            return False
+        self._repeat_owed = None
+        return True
 
     @staticmethod
     def unsure(stop_due: bool, m: mo.Motion, now: float) -> bool:

@@ -20,7 +20,7 @@ from bridge.session.mailbox import Batch
 from bridge.session.options import OPTIONS_REFRESH_S, Options
 from bridge.session.parts import NOTHING, Scene
 from bridge.session.slew import Slew
-from bridge.session.stops import STOP_TRIES_BEFORE_ERROR, Fence, Stops
+from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_TRIES_BEFORE_ERROR, Fence, Stops
 from bridge.session.targets import Go, Targets, decide
 from bridge.session.tracking import Tracker
 from bridge.settings import RotatorSettings
@@ -128,12 +128,37 @@ def test_a_second_stop_in_the_brake_window_adds_nothing_unless_a_target_went_out
     assert stops.merges(stopped, cfg, 11.0)
     assert not stops.merges(stopped, cfg, 10.0 + max(cfg.brake_delay_s, 1.0))
     assert not stops.merges(replace(stopped, target_deg=200.0), cfg, 11.0)
-    # a stop of a turning rotor: merged until a reading shows it turning since (stops.py
-    # rule 1), never on a controller silent while it turns
+    # a stop of a rotor that may still turn (its last stop's frame may have been lost):
+    # merged only within STOP_REPEAT_GAP_S of that stop, and then owed at the gap's end
+    # (stops.py rule 1); never once a reading showed it turning since, never on a controller
+    # silent while it turns
     turning = replace(stopped, state=MotionState.MOVING, last_move_t=9.9)
-    assert stops.merges(turning, cfg, 11.0)
-    assert not stops.merges(replace(turning, last_move_t=10.5), cfg, 11.0)
-    assert not stops.merges(turning, rig("satel").motion, 11.0)
+    assert not stops.merges(turning, cfg, 10.001 + STOP_REPEAT_GAP_S)
+    assert stops.repeat_at(turning) is None
+    assert stops.merges(turning, cfg, 10.05)
+    assert stops.repeat_at(turning) == pytest.approx(10.0 + STOP_REPEAT_GAP_S)
+    assert not stops.merges(replace(turning, last_move_t=10.02), cfg, 10.05)
+    assert not stops.merges(turning, rig("satel").motion, 10.05)
+
+
+def test_a_repeat_merged_into_a_stop_goes_out_when_its_gap_ends_unless_the_rotor_stopped() -> None:
+    """A lost stop frame, then the operator's second STOP 50 ms later: merged, and sent at
+    the gap's end (no try counted), not stop_resend_s later; a reading that showed the rotor
+    still in between, or a newer stop sent meanwhile, leaves nothing owed."""
+    cfg = rig().motion
+    turning = replace(IDLE_AT_90, state=MotionState.MOVING, stop_sent_t=10.0, last_move_t=9.9)
+    stops = Stops()
+    assert stops.merges(turning, cfg, 10.05)
+    assert not stops.repeat_due(turning, 10.09)  # not yet: the gap
+    assert stops.repeat_due(turning, 10.001 + STOP_REPEAT_GAP_S)
+    assert not stops.repeat_due(turning, 10.2)  # once
+    assert stops.check(turning, cfg, 10.2, False) == (False, None)  # and no try counted
+    stops = Stops()
+    assert stops.merges(turning, cfg, 10.05)
+    still = replace(turning, state=MotionState.BRAKING)  # a reading: it took
+    assert stops.repeat_at(still) is None and not stops.repeat_due(still, 10.2)
+    assert stops.repeat_at(replace(turning, stop_sent_t=10.08)) is None  # a newer stop went
+    assert stops.repeat_at(replace(turning, target_deg=200.0)) is None  # a target went
 
 
 def test_a_stop_that_did_not_take_is_sent_again_and_the_last_try_says_so() -> None:
