@@ -35,7 +35,8 @@ Rules:
    acted twice (its state, its errors on R/error) and aimed the elevation box at an azimuth
    it never turns. What it proposes is that box's to carry: a target with an elevation is
    refused there on R/error (the box turns no elevation) and neither box turns, never the
-   elevation box alone.
+   elevation box alone; a halt (the azimuth box asked to stop as its part took the command)
+   is the elevation box's too, a stop in the same serve.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
-from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source
+from bridge.core.model import ErrorEvent, FeatureCommand, MotionState, RotatorStatus, Source, Stop
 from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.worker import Worker
@@ -77,6 +78,15 @@ def split(batch: Batch) -> dict[Axis, Batch]:
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
     alone = replace(batch, target=el, feature_commands=[])
     return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: alone}
+
+
+def with_halt(az: Batch | None, el: Batch, halted: bool) -> Batch:
+    """Rule 6: the elevation box's batch, with a stop when the azimuth box's session was
+    asked to stop (``halted``) as it took a feature's own command of ``az``."""
+    said = [] if az is None else [c for c in az.feature_commands if isinstance(c, FeatureCommand)]
+    if not said or not halted or el.stop is not None:
+        return el
+    return replace(el, stop=Stop(source=said[0].source, origin=said[0].origin))
 
 
 def merge(
@@ -271,7 +281,11 @@ class CompositeWorker:
         """Each box's session decides on its batch; then the frames go out on both lines
         (a stop on each) before any status or event is handed to the listeners (rule 1)."""
         decided: dict[Axis, list[Action]] = {}
-        for axis, batch in batches.items():
+        az = self.boxes[Axis.AZIMUTH].session.controller
+        asked = az.stops_asked
+        for axis, batch in batches.items():  # (the azimuth box's first)
+            if axis is Axis.ELEVATION:  # rule 6
+                batch = with_halt(batches.get(Axis.AZIMUTH), batch, az.stops_asked != asked)
             session = self.boxes[axis].session
             self.boxes[axis].guarded(
                 lambda t, s=session, b=batch, a=axis: decided.__setitem__(a, s.commands(b, t)),

@@ -177,11 +177,14 @@ AIMED: list[tuple[str, float]] = []  # (the command's name, its value) per call 
 
 
 def _aim(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | None:
-    """``aim`` turns the azimuth, ``aim2`` both axes (to 30° up), ``label`` moves nothing."""
+    """``aim`` turns the azimuth, ``aim2`` both axes (to 30° up), ``label`` moves nothing,
+    ``halt`` stops the turn under way."""
     assert isinstance(cmd.value, float)
     AIMED.append((cmd.name, cmd.value))
     if cmd.name == "label":
         return None
+    if cmd.name == "halt":  # as following's halt: the turn under way stops
+        return Proposal(halt=True)
     el = 30.0 if cmd.name == "aim2" else None
     try:  # judged as a part judges its own (parts.py rule 2)
         target = s.cfg.aim.judge(Target(cmd.value, el), s.status.raw_bearing_deg)
@@ -253,3 +256,19 @@ def test_a_features_command_that_aims_both_axes_is_refused_once_and_moves_nothin
     assert len(refused) == 1 and refused[0].command == "aimer aim2 200", refused
     assert v.az.frames("move", since=t) == [] and v.el.frames("move", since=t) == []
     assert (v.az.truth().az_deg, v.el.truth().el_deg) == (0.0, 0.0)
+
+
+def test_a_features_halt_stops_both_boxes(aimer: VirtualComposite) -> None:
+    """Both boxes turn; the feature's own command halts: its part runs in the azimuth box, and
+    the elevation box is stopped too, in the same serve, not left to turn to its target."""
+    v = aimer
+    v.aim(Target(300.0, 80.0))
+    v.run_until(lambda h: h.el.truth().is_moving and h.az.truth().is_moving, 20, "both turn")
+    v.run_for(1.0)
+    t = _command(v, "halt", 0.0)
+    assert AIMED == [("halt", 0.0)]
+    v.run_for(0.5)
+    assert v.az.frames("stop", since=t) and v.el.frames("stop", since=t)
+    v.run_for(5.0)
+    assert not v.az.truth().is_moving and not v.el.truth().is_moving
+    assert v.el.truth().el_deg < 60.0  # stopped on its way, not at its target

@@ -19,7 +19,7 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, split
+from bridge.runtime.composite import Composition, split, with_halt
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -114,7 +114,11 @@ class VirtualComposite:
             self._hand(split(batch))
 
     def _hand(self, batches: dict[Axis, Batch]) -> None:
-        for axis, batch in batches.items():
+        az = self.boxes[Axis.AZIMUTH].session.controller
+        asked = az.stops_asked
+        for axis, batch in batches.items():  # as CompositeWorker._hand: the azimuth box first
+            if axis is Axis.ELEVATION:  # composite.py rule 6
+                batch = with_halt(batches.get(Axis.AZIMUTH), batch, az.stops_asked != asked)
             box = self.boxes[axis]
             box._do(box.session.commands(batch, box.now))
         self._absorb()
