@@ -17,7 +17,7 @@ Rules:
 6. ``current`` gives every field of ``RotatorStatus`` a value, and makes it as the dataclass's
    own ``__init__`` would, without its ``object.__setattr__`` for each of the 30 fields (a
    frozen dataclass's: most of the cost of a status, made at every reading that moves the
-   bearing). tests/engine/test_status.py holds it to the dataclass.
+   bearing). tests/engine/test_status_build.py holds it to the dataclass.
 """
 
 from __future__ import annotations
