@@ -35,8 +35,8 @@ Rules:
    acted twice (its state, its errors on R/error) and aimed the elevation box at an azimuth
    it never turns. What it proposes is that box's to carry: a target with an elevation is
    refused there on R/error (the box turns no elevation) and neither box turns, never the
-   elevation box alone; a halt (the azimuth box asked to stop as its part took the command)
-   is the elevation box's too, a stop in the same serve.
+   elevation box alone. A halt a part proposes in the azimuth box (as it takes the command,
+   or in any later step) is the elevation box's too: a stop in the same serve (``Halts``).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
-from bridge.core.model import ErrorEvent, FeatureCommand, MotionState, RotatorStatus, Source, Stop
+from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source, Stop
 from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.worker import Worker
@@ -78,15 +78,6 @@ def split(batch: Batch) -> dict[Axis, Batch]:
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
     alone = replace(batch, target=el, feature_commands=[])
     return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: alone}
-
-
-def with_halt(az: Batch | None, el: Batch, halted: bool) -> Batch:
-    """Rule 6: the elevation box's batch, with a stop when the azimuth box's session was
-    asked to stop (``halted``) as it took a feature's own command of ``az``."""
-    said = [] if az is None else [c for c in az.feature_commands if isinstance(c, FeatureCommand)]
-    if not said or not halted or el.stop is not None:
-        return el
-    return replace(el, stop=Stop(source=said[0].source, origin=said[0].origin))
 
 
 def merge(
@@ -175,6 +166,20 @@ class Composition:
         return out
 
 
+class Halts:
+    """Rule 6, sans-IO: a stop for the elevation box once for each halt a part proposed in
+    the azimuth box's session (its ``part_halts``), in the serve it happened in."""
+
+    def __init__(self) -> None:
+        self._seen = 0
+
+    def follow(self, halts: int) -> Batch | None:
+        if halts == self._seen:
+            return None
+        self._seen = halts
+        return Batch(stop=Stop())
+
+
 class CompositeWorker:
     """The serial-lines thread's worker for a composite rotator (lines.py): the rotator's
     mailbox, and the two boxes' workers, each with its port, back-off and session."""
@@ -200,6 +205,7 @@ class CompositeWorker:
         self._urgent = frozenset({self._box})
         self._on_status = on_status
         self.composition = Composition(cfg.rotator_id)
+        self._halted = Halts()  # rule 6
         self.boxes: dict[Axis, Worker] = {}
         self._own = [Mailbox(), Mailbox()]  # each box's own: only sky answers wake them
         for axis, box, own in zip(AXES, axes, self._own, strict=True):
@@ -276,16 +282,15 @@ class CompositeWorker:
         ends = self.composition.ends()  # rule 4
         if ends:
             self._hand(ends, now)
+        halt = self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts)  # rule 6
+        if halt is not None:
+            self._hand({Axis.ELEVATION: halt}, now)
 
     def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
         """Each box's session decides on its batch; then the frames go out on both lines
         (a stop on each) before any status or event is handed to the listeners (rule 1)."""
         decided: dict[Axis, list[Action]] = {}
-        az = self.boxes[Axis.AZIMUTH].session.controller
-        asked = az.stops_asked
-        for axis, batch in batches.items():  # (the azimuth box's first)
-            if axis is Axis.ELEVATION:  # rule 6
-                batch = with_halt(batches.get(Axis.AZIMUTH), batch, az.stops_asked != asked)
+        for axis, batch in batches.items():
             session = self.boxes[axis].session
             self.boxes[axis].guarded(
                 lambda t, s=session, b=batch, a=axis: decided.__setitem__(a, s.commands(b, t)),

@@ -101,7 +101,6 @@ class Controller:
         self.options = Options(options, cfg.spec.settings)
         self.target_last = False  # the last command written was a target (motion.py rule 8)
         self.stops = Stops()
-        self.stops_asked = 0  # every stop asked of this controller (a composite's halt: rule 6)
         self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
         self.version: str | None = None
         self.controller_time: str | None = None  # its own clock (SatEL)
@@ -198,7 +197,6 @@ class Controller:
     def stop(self, now: float, merge: bool = False) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
         is closed, as the first frame it gets (stops.py rule 3)."""
-        self.stops_asked += 1
         if self.link is None:
             self.stops.owed = True
         elif not merge or not self.stops.merges(self.motion, self.cfg.motion, now):

@@ -177,6 +177,7 @@ class RotatorSession:
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
         self._status_key: tuple[object, ...] | None = None  # rule 18
         self._status_failed: dict[str, set[type[BaseException]]] = {}  # rule 19
+        self.part_halts = 0  # the halts parts proposed (runtime/composite.py rule 6 reads it)
 
     @property
     def name(self) -> str:
@@ -534,6 +535,7 @@ class RotatorSession:
         if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
             self.targets.clear_from(Source.WSJTX)
             self.controller.stop(now)
+            self.part_halts += 1  # (a composite's other box: runtime/composite.py rule 6)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 

@@ -23,7 +23,7 @@ from bridge.feature import Feature
 from bridge.features import FEATURES
 from bridge.protocols.axes import Axis
 from bridge.session.actions import Report
-from bridge.session.parts import Part, Proposal, Wake
+from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.session import RotatorSession
 from bridge.sky import Body, Sky
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
@@ -272,3 +272,82 @@ def test_a_features_halt_stops_both_boxes(aimer: VirtualComposite) -> None:
     v.run_for(5.0)
     assert not v.az.truth().is_moving and not v.el.truth().is_moving
     assert v.el.truth().el_deg < 60.0  # stopped on its way, not at its target
+
+
+def test_a_features_command_beside_a_target_stops_no_box_it_did_not_halt(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An azimuth target (a turning Rotor-EZ stops first, then turns anew) and a feature's
+    command that halts nothing, in one batch: the elevation box turns on to its target, with
+    no stop (one stop asked of the azimuth box is no halt of the feature's)."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, AIMER))
+    AIMED.clear()
+    el_fast = {Axis.ELEVATION: FAST[Axis.ELEVATION]}
+    with VirtualComposite("rotorez", "gs232b", emulators=el_fast) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(2.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda h: h.el.truth().is_moving and h.az.truth().is_moving, 20, "both turn")
+        v.run_for(1.0)
+        t = v.now
+        v.mailbox.put(v.cfg.aim.judge(Target(200.0, None), v.status.raw_bearing_deg))
+        v.mailbox.put_feature(FeatureCommand("aimer", "label", 1.0, moves=False))
+        v._take()
+        v.run_until(lambda h: abs(h.el.truth().el_deg - 80.0) <= 1.0, 60, "the elevation at 80")
+        assert v.el.frames("stop", since=t) == []
+        assert AIMED == [("label", 1.0)]
+
+
+ARMED: dict[int, float] = {}  # a halter's session -> when it halts
+
+
+def _arm(s: RotatorSession, cmd: FeatureCommand, now: float) -> Proposal | None:
+    ARMED[id(s)] = now + 1.0
+    return None
+
+
+def _halt_when_due(s: RotatorSession, scene: Scene) -> Proposal | None:
+    at = ARMED.get(id(s))
+    if at is None or scene.now < at:
+        return None
+    del ARMED[id(s)]
+    return Proposal(halt=True)
+
+
+HALTER = Feature(
+    "halter",
+    "docs/architecture.md",
+    "halts a second after its command",
+    part=Part[RotatorSession](
+        "halter",
+        Wake.STEP,
+        True,
+        lambda s: id(s) in ARMED,
+        _halt_when_due,
+        lambda s, now: None,
+        wakeup=lambda s, now: ARMED.get(id(s)),
+        command=_arm,
+    ),
+)
+
+
+def test_a_halt_a_features_part_proposes_later_stops_the_elevation_box_too(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The part runs in the azimuth box alone (rule 6) and halts a second after its command,
+    in a step of its own: the elevation box is stopped in that serve, not left to turn on."""
+    monkeypatch.setattr(bridge.feature, "_loaded", (*FEATURES, HALTER))
+    ARMED.clear()
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.run_for(2.0)
+        v.aim(Target(300.0, 80.0))
+        v.run_until(lambda h: h.el.truth().is_moving and h.az.truth().is_moving, 20, "both turn")
+        t = v.now
+        v.mailbox.put_feature(FeatureCommand("halter", "arm", 0.0, moves=False))
+        v._take()
+        v.run_for(3.0)
+        az, el = v.az.frames("stop", since=t), v.el.frames("stop", since=t)
+        assert az and el and abs(el[0].time_s - az[0].time_s) < 0.05
+        v.run_for(5.0)
+        assert not v.el.truth().is_moving and v.el.truth().el_deg < 60.0

@@ -19,7 +19,7 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, split, with_halt
+from bridge.runtime.composite import Composition, Halts, split
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -50,6 +50,7 @@ class VirtualComposite:
         boxes = axis_configs(rotator, sky)
         assert boxes is not None
         self.composition = Composition("v")
+        self._halted = Halts()  # composite.py rule 6, as CompositeWorker
         self.mailbox = Mailbox()
         self.statuses: list[tuple[float, RotatorStatus]] = []
         self.boxes: dict[Axis, VirtualRotator] = {}
@@ -114,11 +115,7 @@ class VirtualComposite:
             self._hand(split(batch))
 
     def _hand(self, batches: dict[Axis, Batch]) -> None:
-        az = self.boxes[Axis.AZIMUTH].session.controller
-        asked = az.stops_asked
-        for axis, batch in batches.items():  # as CompositeWorker._hand: the azimuth box first
-            if axis is Axis.ELEVATION:  # composite.py rule 6
-                batch = with_halt(batches.get(Axis.AZIMUTH), batch, az.stops_asked != asked)
+        for axis, batch in batches.items():
             box = self.boxes[axis]
             box._do(box.session.commands(batch, box.now))
         self._absorb()
@@ -134,6 +131,9 @@ class VirtualComposite:
         ends = self.composition.ends()
         if ends:
             self._hand(ends)
+        halt = self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts)  # rule 6
+        if halt is not None:
+            self._hand({Axis.ELEVATION: halt})
 
     # -- time (rule 1) ----------------------------------------------------------------------------
     def run_for(self, seconds: float) -> None:
