@@ -181,6 +181,7 @@ class Controller:
             log.info("%s: sending the stop that came while the port was closed", self.name)
             link.write_stop(now)
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+            self.stops.sent(now)
         for frame in link.codec.encode_connect(wall_s):
             link.write(frame, now)
 
@@ -213,6 +214,7 @@ class Controller:
             self._reading(link, reply, now)
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+            self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
 
     def check_stop(self, now: float, target_going: bool) -> None:
         """stops.py rule 2: a stop that did not take is sent again."""

@@ -14,8 +14,12 @@ Rules:
    answered with a banner once the first had stopped the rotor, queueing the readings for
    seconds: the controller taken for silent, the next target dropped), and one merged so is
    owed: it is sent when that gap ends, unless a reading has shown the rotor still by then
-   (rule 2). So a flood puts at most one stop frame on the wire in each gap, and a repeat is
-   never more than the gap late. A controller silent while it turns is never merged then.
+   (rule 2). One such repeat is written after a stop, not more: later ones merge into it
+   until a reading shows the rotor turning (a stop written restarts the motion machine's
+   settle clock, so a stream of them would keep the rotor taken for moving and every one
+   written). So a repeat after a lost stop frame is never more than the gap late, and a flood
+   puts two stop frames on the wire, then one a brake window once the rotor is seen still. A
+   controller silent while it turns is never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
@@ -71,6 +75,8 @@ class Stops:
         self._tries = 0
         self._at_rest = False  # rule 4: turned away, a stop when it is still
         self._repeat_owed: float | None = None  # rule 1: the stop a merged repeat is owed to
+        self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
+        self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -82,8 +88,11 @@ class Stops:
             return False  # no reading can show it turning (a SatEL's slew): always sent
         if m.last_move_t is not None and m.last_move_t > m.stop_sent_t:
             return False  # a reading since that stop showed the rotor turning
-        if moving:  # that stop's frame may have been lost: only a repeat right after it merges
+        if moving:  # that stop's frame may have been lost: one repeat, within the gap owed
+            if self._repeat_sent == m.stop_sent_t:
+                return True  # the last stop was that repeat: no more until a reading
             if now - m.stop_sent_t >= STOP_REPEAT_GAP_S:
+                self._writing_repeat = True
                 return False
             self._repeat_owed = m.stop_sent_t
             return True
@@ -103,7 +112,13 @@ class Stops:
         if at is None or now < at:
             return False
         self._repeat_owed = None
+        self._writing_repeat = True
         return True
+
+    def sent(self, at: float) -> None:
+        """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
+        self._repeat_sent = at if self._writing_repeat else None
+        self._writing_repeat = False
 
     @staticmethod
     def unsure(stop_due: bool, m: mo.Motion, now: float) -> bool:

@@ -159,6 +159,17 @@ def test_a_repeat_merged_into_a_stop_goes_out_when_its_gap_ends_unless_the_rotor
     assert stops.repeat_at(still) is None and not stops.repeat_due(still, 10.2)
     assert stops.repeat_at(replace(turning, stop_sent_t=10.08)) is None  # a newer stop went
     assert stops.repeat_at(replace(turning, target_deg=200.0)) is None  # a target went
+    # one repeat a stop: once it went, later stops merge until a reading shows the rotor turn
+    stops = Stops()
+    assert stops.merges(turning, cfg, 10.05) and stops.repeat_due(turning, 10.1)
+    stops.sent(10.1)
+    repeated = replace(turning, stop_sent_t=10.1)
+    assert stops.merges(repeated, cfg, 10.5) and stops.merges(repeated, cfg, 11.5)
+    assert stops.repeat_at(repeated) is None  # nothing owed for those
+    assert not stops.merges(replace(repeated, last_move_t=10.4), cfg, 10.5)  # it turns: sent
+    stops.sent(10.5)  # a stop anew (not the repeat): one repeat may follow it again
+    anew = replace(turning, stop_sent_t=10.5)
+    assert not stops.merges(anew, cfg, 10.7)
 
 
 def test_a_stop_that_did_not_take_is_sent_again_and_the_last_try_says_so() -> None:
