@@ -35,8 +35,10 @@ Rules:
    acted twice (its state, its errors on R/error) and aimed the elevation box at an azimuth
    it never turns. What it proposes is that box's to carry: a target with an elevation is
    refused there on R/error (the box turns no elevation) and neither box turns, never the
-   elevation box alone. A halt a part proposes in the azimuth box (as it takes the command,
-   or in any later step) is the elevation box's too: a stop in the same serve (``Halts``).
+   elevation box alone. A halt that part proposes in the azimuth box (as it takes the
+   command, or in any later step) is the elevation box's too, in the same serve (``Halts``):
+   the turn under way stopped, nothing ended, as the part's halt does in its own box.
+   Tracking's and following's parts run in both boxes (rule 4) and halt each on their own.
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ from dataclasses import replace
 from functools import partial
 from typing import Any
 
-from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source, Stop
+from bridge.core.model import ErrorEvent, MotionState, RotatorStatus, Source
 from bridge.protocols.axes import Axis
 from bridge.runtime.port import PortOpener, open_port
 from bridge.runtime.worker import Worker
@@ -167,17 +169,17 @@ class Composition:
 
 
 class Halts:
-    """Rule 6, sans-IO: a stop for the elevation box once for each halt a part proposed in
-    the azimuth box's session (its ``part_halts``), in the serve it happened in."""
+    """Rule 6, sans-IO: whether the elevation box is to halt, once for each new halt a part
+    of a feature's own commands proposed in the azimuth box's session (its ``part_halts``)."""
 
     def __init__(self) -> None:
         self._seen = 0
 
-    def follow(self, halts: int) -> Batch | None:
+    def follow(self, halts: int) -> bool:
         if halts == self._seen:
-            return None
+            return False
         self._seen = halts
-        return Batch(stop=Stop())
+        return True
 
 
 class CompositeWorker:
@@ -282,9 +284,9 @@ class CompositeWorker:
         ends = self.composition.ends()  # rule 4
         if ends:
             self._hand(ends, now)
-        halt = self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts)  # rule 6
-        if halt is not None:
-            self._hand({Axis.ELEVATION: halt}, now)
+        if self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts):  # rule 6
+            el = self.boxes[Axis.ELEVATION]
+            el.guarded(lambda t: el.carry_out(t, el.session.halt(t)), now)
 
     def _hand(self, batches: dict[Axis, Batch], now: float) -> None:
         """Each box's session decides on its batch; then the frames go out on both lines

@@ -177,7 +177,9 @@ class RotatorSession:
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
         self._status_key: tuple[object, ...] | None = None  # rule 18
         self._status_failed: dict[str, set[type[BaseException]]] = {}  # rule 19
-        self.part_halts = 0  # the halts parts proposed (runtime/composite.py rule 6 reads it)
+        # the halts proposed by parts that take their feature's own commands: on a rotator of
+        # two boxes those run in the azimuth box alone (runtime/composite.py rule 6 reads it)
+        self.part_halts = 0
 
     @property
     def name(self) -> str:
@@ -321,6 +323,13 @@ class RotatorSession:
         return True
 
     def tick(self, now: float) -> list[Action]:
+        return self._step(now)
+
+    def halt(self, now: float) -> list[Action]:
+        """A halt a part proposed in the other box of this rotator (runtime/composite.py rule
+        6): as that part's halt here, the turn under way stopped and nothing ended."""
+        self.targets.clear_from(Source.WSJTX)
+        self.controller.stop(now)
         return self._step(now)
 
     def next_wakeup(self) -> float:
@@ -480,7 +489,7 @@ class RotatorSession:
         if proposal is not None and proposal.target is not None and self._still(proposal.target):
             proposal = replace(proposal, target=None)  # parts.py rule 7
         if proposal is not None:
-            self._propose(proposal, now)
+            self._propose(proposal, now, part.command is not None)
 
     def _feature_command(self, command: FeatureCommand, now: float) -> None:
         """parts.py rule 5: a feature's own command to its part; what it proposes, applied."""
@@ -507,7 +516,7 @@ class RotatorSession:
             if refused is not None:
                 self._error(ErrorKind.REFUSED, refused, command=what)
                 proposal = replace(proposal, target=None)
-        self._propose(proposal, now)
+        self._propose(proposal, now, True)
 
     def _still(self, target: Target) -> bool:
         """parts.py rule 7: no part's step target goes to a locked rotor, nor in a storm but
@@ -523,8 +532,9 @@ class RotatorSession:
             return exc.message
         return None
 
-    def _propose(self, proposal: Proposal, now: float) -> None:
-        """A part's proposal, applied in this order (parts.py rule 1)."""
+    def _propose(self, proposal: Proposal, now: float, commanded: bool) -> None:
+        """A part's proposal, applied in this order (parts.py rule 1); ``commanded``: the part
+        takes its feature's own commands (on a rotator of two boxes it runs in one alone)."""
         if proposal.busy:
             self._activity(now)  # (tracking.py rule 7)
         if proposal.error is not None:
@@ -535,7 +545,7 @@ class RotatorSession:
         if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
             self.targets.clear_from(Source.WSJTX)
             self.controller.stop(now)
-            self.part_halts += 1  # (a composite's other box: runtime/composite.py rule 6)
+            self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
 

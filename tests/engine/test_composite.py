@@ -9,6 +9,7 @@ from collections.abc import Iterator
 
 import pytest
 
+import bridge.app as app
 import bridge.feature
 from bridge.core.errors import Refused
 from bridge.core.model import (
@@ -23,9 +24,12 @@ from bridge.feature import Feature
 from bridge.features import FEATURES
 from bridge.protocols.axes import Axis
 from bridge.session.actions import Report
+from bridge.session.follow import Follow, Heard
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.session import RotatorSession
 from bridge.sky import Body, Sky
+from tests.engine import virtual_composite
+from tests.engine.test_follow import STATION
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual_composite import VirtualComposite
 from tests.support.sky import sun_altaz
@@ -351,3 +355,33 @@ def test_a_halt_a_features_part_proposes_later_stops_the_elevation_box_too(
         assert az and el and abs(el[0].time_s - az[0].time_s) < 0.05
         v.run_for(5.0)
         assert not v.el.truth().is_moving and v.el.truth().el_deg < 60.0
+
+
+def test_a_transmission_during_a_following_turn_holds_following_in_both_boxes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Following runs in both boxes and halts each on its own when a transmission begins
+    (follow.py rule 3): that halt is no feature command's, so the elevation box is handed no
+    stop of the azimuth box's, and following is held, not ended, in both (rule 6)."""
+    worker, axes = app.worker_config, app.axis_configs
+    monkeypatch.setattr(
+        virtual_composite, "worker_config", lambda r, sky=None, follow=None: worker(r, sky, STATION)
+    )
+    monkeypatch.setattr(
+        virtual_composite, "axis_configs", lambda r, sky=None, follow=None: axes(r, sky, STATION)
+    )
+    with VirtualComposite("rot2prog", "gs232b") as v:
+        v.run_until(online, 20, "both boxes answer")
+        v.run_for(2.0)
+        v.mailbox.put_follow(Follow(True, False))
+        v._take()
+        v.mailbox.put_heard(Heard("JA1ABC", "PM95", False))
+        v._take()
+        v.run_for(1.5)
+        assert v.az.truth().is_moving
+        v.mailbox.put_heard(Heard("JA1ABC", "PM95", True))  # a transmission begins
+        v._take()
+        v.run_for(3.0)
+        assert not v.az.truth().is_moving
+        assert v.az.status.following is not None and v.el.status.following is not None
+        assert v.status.following is not None

@@ -131,9 +131,10 @@ class VirtualComposite:
         ends = self.composition.ends()
         if ends:
             self._hand(ends)
-        halt = self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts)  # rule 6
-        if halt is not None:
-            self._hand({Axis.ELEVATION: halt})
+        if self._halted.follow(self.boxes[Axis.AZIMUTH].session.part_halts):  # rule 6
+            el = self.boxes[Axis.ELEVATION]
+            el._do(el.session.halt(el.now))
+            self._absorb()
 
     # -- time (rule 1) ----------------------------------------------------------------------------
     def run_for(self, seconds: float) -> None:
