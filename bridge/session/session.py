@@ -328,9 +328,13 @@ class RotatorSession:
     def halt(self, now: float) -> list[Action]:
         """A halt a part proposed in the other box of this rotator (runtime/composite.py rule
         6): as that part's halt here, the turn under way stopped and nothing ended."""
+        self._halt(now)
+        return self._step(now)
+
+    def _halt(self, now: float) -> None:
+        """A part's halt: the turn under way stopped, a WSJT-X target waiting dropped."""
         self.targets.clear_from(Source.WSJTX)
         self.controller.stop(now)
-        return self._step(now)
 
     def next_wakeup(self) -> float:
         return self._wakeup
@@ -543,8 +547,7 @@ class RotatorSession:
             self.features.end(proposal.ended)  # (tracking may have ended itself)
             self.targets.clear_from(Source.TRACKING)
         if proposal.halt:  # following: a transmission began during its turn (follow.py rule 3)
-            self.targets.clear_from(Source.WSJTX)
-            self.controller.stop(now)
+            self._halt(now)
             self.part_halts += commanded  # (a composite's other box: runtime/composite.py rule 6)
         if proposal.target is not None:
             self.targets.put(proposal.target, now)
