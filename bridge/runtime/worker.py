@@ -228,10 +228,9 @@ class Worker:
         readable = self._fd in ready
         if readable or (self._held and now >= session.hold_reads_until()):
             data = read_available(self._fd, readable, self.cfg.port)
-            if data:
-                actions = session.bytes_received(data, now)
-                acted = acted or bool(actions)
-                self._do(actions)
+            actions = session.bytes_received(data, now)  # (b"": none yet at a hold's end)
+            acted = acted or bool(actions)
+            self._do(actions)
         if not acted and now >= session.next_wakeup():
             self._do(session.tick(now))
 

@@ -62,9 +62,10 @@ def test_a_polls_reply_is_held_until_it_can_be_whole_then_for_what_is_missing() 
     link = Link(spec.codec_factory(), spec, 0.0, 4800)
     link.poll(10.0, 1.0)
     assert b"".join(link.output()) == b"AI1;"
-    assert link.hold_reads_until() == pytest.approx(10.0 + 9 * byte_s)  # + a byte to turn round
-    # its end may be met one quiet time (rule 9: three byte times) late, with other lines
-    assert link.hold_reads_latest() == pytest.approx(10.0 + 9 * byte_s + 3 * byte_s)
+    # + a byte to turn round, + the quiet time after it (rule 9: three byte times)
+    assert link.hold_reads_until() == pytest.approx(10.0 + 9 * byte_s + 3 * byte_s)
+    # its end may be met one quiet time late, with other lines
+    assert link.hold_reads_latest() == pytest.approx(10.0 + 9 * byte_s + 6 * byte_s)
     link.got_bytes(2, 10.03)  # a slow controller: half of the reply so far
     assert link.hold_reads_until() == pytest.approx(10.03 + 2 * byte_s)
     assert link.hold_reads_latest() == pytest.approx(10.03 + 2 * byte_s + 3 * byte_s)
