@@ -14,7 +14,8 @@ Rules:
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
    and when that hold ends the port is read without waiting to be told it is readable (up to
-   one quiet time late when other lines are served then: link.py rule 7, lines.py rule 7).
+   one quiet time late when other lines are served then: link.py rule 7, lines.py rule 7);
+   that it had nothing yet is said too (link.py rule 9: the reply then keeps its quiet time).
 3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and one
    that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
    display problem never closes or reopens the line to the controller.
