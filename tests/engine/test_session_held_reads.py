@@ -279,3 +279,25 @@ def test_a_stop_waiting_for_a_half_duplex_reply_in_the_port_reads_it_without_the
     assert v.received[-1][0] == v.writes[-1].t  # with the read of the reply
     v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 30, "stopped")
     assert v.truth().az_deg < 149
+
+
+@pytest.mark.parametrize("reads_held", [False, True])
+def test_a_reply_that_ends_just_before_its_deadline_is_taken_and_nothing_spins(
+    rig: Rig, reads_held: bool
+) -> None:
+    """A Rotor-EZ that answers 230 ms after a poll, its reply whole a few ms before the 250 ms
+    reply deadline: the reading's quiet time runs past the deadline, the reply is not overdue
+    meanwhile (link.py rule 9), and the session does not ask to be woken at that deadline
+    again and again until the quiet time is over (before: the loop spun on it, virtual.py
+    rule 4). Every reading is taken."""
+    v = rig(
+        "rotorez",
+        emulator={"start_az_deg": 42.0, "processing_delay_s": 0.230},
+        reads_held=reads_held,
+    )
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.run_for(10)
+    assert v.spins == [] and v.errors(since=t) == []
+    assert v.status.available
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1)
