@@ -25,13 +25,15 @@ Rules:
    and reads them in one go (``hold_reads_until``) once the whole reply can have arrived at the
    line rate, plus one byte time for the controller to turn round, plus rule 9's quiet time (so
    that read can take its reading: rule 9); a stop waiting for the reply (rule 3) ends the hold
-   without the quiet time. Only the mailbox (a stop) is watched meanwhile. If part of the reply
-   is still missing then (a controller that takes its time, an adapter that hands bytes on
-   late), the hold starts again for the time the missing bytes take: a late reply costs a
-   wake-up per chunk, not per byte; if none of it came, the port is watched. A hold's end may
-   be met up to one quiet time late (``hold_reads_latest``; on time while a stop waits): the
-   replies of a poll round, written one after another, are read in one wake-up, and a reply
-   that came partly is read in a wake-up other lines need anyway (lines.py rule 7).
+   without the quiet time, and so does the reply's deadline coming first (rule 1: a line too
+   slow for its model's reply timeout). Only the mailbox (a stop) is watched meanwhile. If
+   part of the reply is still missing then (a controller that takes its time, an adapter that
+   hands bytes on late), the hold starts again for the time the missing bytes take: a late
+   reply costs a wake-up per chunk, not per byte; if none of it came, the port is watched. A
+   hold's end may be met up to one quiet time late (``hold_reads_latest``; on time while a
+   stop waits): the replies of a poll round, written one after another, are read in one
+   wake-up, and a reply that came partly is read in a wake-up other lines need anyway
+   (lines.py rule 7).
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -377,7 +379,9 @@ class Link:
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
         self._hold_bytes = self.spec.reply_bytes
         self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
-        self._quiet_by = self._hold_until + self._settle_s  # rule 9
+        quiet_by, deadline = self._hold_until + self._settle_s, self._reply_deadline
+        # rule 9 (rule 1: read before the reply's deadline, on a line too slow for that as before)
+        self._quiet_by = quiet_by if deadline is not None and quiet_by < deadline else 0.0
         return True
 
     def silent_for(self, now: float) -> float:

@@ -301,3 +301,16 @@ def test_a_reply_that_ends_just_before_its_deadline_is_taken_and_nothing_spins(
     assert v.spins == [] and v.errors(since=t) == []
     assert v.status.available
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1)
+
+
+@pytest.mark.parametrize("model", ["rot2prog", "rt21"])
+def test_a_line_too_slow_for_the_quiet_time_before_the_reply_deadline_is_read_as_before(
+    rig: Rig, model: str
+) -> None:
+    """At 110 baud the reply and its quiet time are not over by the model's reply deadline
+    (link.py rule 7): the reply is read as soon as it can be whole, as before, and held for
+    its quiet time, not given up at the deadline with the bytes still in the port."""
+    v = rig(model, settings={"baud": 110}, emulator={"baud": 110}, reads_held=True)
+    v.run_for(30)
+    assert v.state is IDLE and v.status.available
+    assert v.errors() == []
