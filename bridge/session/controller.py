@@ -394,6 +394,16 @@ class Controller:
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
         return until - ONLY_POLL_MARGIN_S
 
+    def poll_wakeup(self, now: float, latest: float) -> float:
+        """``wakeup`` after a poll step (session.py rule 20), ``only_poll_until`` having held:
+        no slew and no stop repeat owed, and the motion the one whose next deadline ``wakeup``
+        kept (motion.py rule 9: the same until then), so only the line's times are new."""
+        for t in self.link.wakeups() if self.link is not None else ():
+            if t < latest:
+                latest = t
+        deadline = self._deadline[2]
+        return deadline if deadline < latest else latest
+
     def send_options(self, now: float, target_waits: bool) -> None:
         """options.py rule 1: each setting by its declaration's encoder (the codec's)."""
         link = self.link

@@ -93,7 +93,7 @@ Rules:
    and asks for the next wake-up: no line work, motion clock, stop check, parts, options or
    status, when every one of them would change nothing. Whether so is judged at the end of
    each whole step, as a time before which it holds if nothing but time passes
-   (``_only_poll_until``): nothing handed out, no target waiting, a status built, the storm
+   (``_only_poll_until``): no target waiting, a status built, the storm
    as last seen, every deciding part off, every measuring part off or woken by the motion
    alone and that motion seen, no part that shows a status block, and the controller's own
    part (controller.py ``only_poll_until``: no stop due, owed or to check, nothing on the
@@ -343,16 +343,20 @@ class RotatorSession:
             return self._poll_step(now)
         return self._step(now)
 
-    def _only_poll_until(self, now: float) -> float:
-        """Rule 20, at the end of a step: until when a tick would do nothing but the poll
-        (-inf: not even now)."""
-        if self._actions or self.targets.pending is not None or self._showing:
-            return -math.inf
-        if self._status_key is None or self.wind.storm != self._storm_seen:
-            return -math.inf
+    def _deciding_off(self) -> bool:
+        """Whether every deciding part is off."""
         for part in self._deciding:
             if part.on(self):
-                return -math.inf
+                return False
+        return True
+
+    def _only_poll_until(self, now: float) -> float:
+        """Rule 20, at the end of a step whose deciding parts are all off: until when a tick
+        would do nothing but the poll (-inf: not even now)."""
+        if self.targets.pending is not None or self._showing or self._status_key is None:
+            return -math.inf
+        if self.wind.storm != self._storm_seen:
+            return -math.inf
         motion = self.controller.motion
         for part in self._measuring:
             if part.on(self) and (
@@ -370,7 +374,8 @@ class RotatorSession:
         link = ctl.link
         assert link is not None
         actions: list[Action] = [Write(frame) for frame in link.output()]
-        self._wakeup = self._next_wakeup(now, self._waking_measuring)
+        wakeup = ctl.poll_wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
+        self._wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
         return actions
 
     def halt(self, now: float) -> list[Action]:
@@ -499,9 +504,10 @@ class RotatorSession:
         if frames:
             self._actions += [Write(frame) for frame in frames]
         self._ask_sky()
-        self._wakeup = self._next_wakeup(now, self._waking)
+        off = self._deciding_off()  # (a part that is off is asked for no wake-up: rule 17)
+        self._wakeup = self._next_wakeup(now, self._waking_measuring if off else self._waking)
         actions, self._actions = self._actions, []
-        self._poll_until = self._only_poll_until(now)  # rule 20
+        self._poll_until = self._only_poll_until(now) if off else -math.inf  # rule 20
         return actions
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
@@ -716,11 +722,17 @@ class RotatorSession:
 
     def _next_wakeup(self, now: float, waking: tuple[Part[RotatorSession], ...]) -> float:
         """The soonest of the controller's, the stream's and ``waking``'s (the parts with a
-        wake-up: all of them, or those rule 20 did not find off)."""
+        wake-up: all of them, or those a step did not find off)."""
         wakeup = self.controller.wakeup(now, now + IDLE_WAKEUP_S)
         stream = self.targets.stream_deadline(now) if self.targets.pending is not None else None
         if stream is not None and stream < wakeup:
             wakeup = stream
+        return self._parts_wakeup(now, wakeup, waking)
+
+    def _parts_wakeup(
+        self, now: float, wakeup: float, waking: tuple[Part[RotatorSession], ...]
+    ) -> float:
+        """``wakeup``, or sooner if a part of ``waking`` that is on asks for it."""
         for part in waking:
             if part.on(self) and part.wakeup is not None:
                 t = part.wakeup(self, now)
