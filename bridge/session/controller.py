@@ -58,6 +58,8 @@ from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
 
+ONLY_POLL_MARGIN_S = 1e-3  # only_poll_until's: the whole step a little early (rounding)
+
 
 @dataclass(frozen=True)
 class Ends:
@@ -368,6 +370,41 @@ class Controller:
                 link.write(enable, now)
                 self.target_last = False
             self.options.enable_due = False
+
+    def only_poll_until(self, now: float) -> float:
+        """Until when a step has nothing of the controller's to do but its poll, if nothing
+        but time passes from ``now``, the end of a step (session.py rule 20; -inf: not even
+        now): ``line_work``, ``tick``, ``check_stop`` and ``send_options`` change nothing,
+        and the poll finds the controller answering. Only when: the link is up and answering
+        on a line that reports positions, no slew, no stop due or owed a repeat (none sent
+        since the rotor came to rest: ``check_stop`` has nothing to check), nothing owed on
+        the line but its next poll (no reply, no reading held, no frame waiting, no junk:
+        ``wakeups`` names the poll alone), no enable and no note owed; then until the
+        motion's next deadline (``wakeup`` just kept it), silence's timeout (the poll's
+        check) or options owed, whichever comes first, ONLY_POLL_MARGIN_S early."""
+        link, m = self.link, self.motion
+        if link is None or not self.answering or self.notes or m.stop_sent_t is not None:
+            return -math.inf
+        if link.slew is not None or link.stop_due or link.reply_owed or self.options.enable_due:
+            return -math.inf
+        seen, cfg, deadline = self._deadline
+        if m is not seen or self.cfg.motion is not cfg or now >= deadline:
+            return -math.inf
+        if not self.cfg.spec.can_report_position or len(link.wakeups()) != 1:
+            return -math.inf
+        silent_at = now + self.cfg.silence_timeout_s - link.silent_for(now)
+        until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
+        return until - ONLY_POLL_MARGIN_S
+
+    def poll_wakeup(self, now: float, latest: float) -> float:
+        """``wakeup`` after a poll step (session.py rule 20), ``only_poll_until`` having held:
+        no slew and no stop repeat owed, and the motion the one whose next deadline ``wakeup``
+        kept (motion.py rule 9: the same until then), so only the line's times are new."""
+        for t in self.link.wakeups() if self.link is not None else ():
+            if t < latest:
+                latest = t
+        deadline = self._deadline[2]
+        return deadline if deadline < latest else latest
 
     def send_options(self, now: float, target_waits: bool) -> None:
         """options.py rule 1: each setting by its declaration's encoder (the codec's)."""

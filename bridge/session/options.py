@@ -122,6 +122,13 @@ class Options:
             )
         return factor
 
+    def owed_from(self, idle: bool) -> float:
+        """From when ``owes(idle, t)`` holds while nothing else changes: -inf (now), inf
+        (never), or the refresh's time (rule 1)."""
+        if self._due:
+            return -math.inf
+        return self._sent_t + OPTIONS_REFRESH_S if idle and self.values else math.inf
+
     def owes(self, idle: bool, now: float) -> bool:
         """Whether ``take`` may give anything now (the question it asks first: the step asks
         it before it looks at the line)."""

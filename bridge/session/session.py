@@ -89,11 +89,24 @@ Rules:
    turns): one that raises shows nothing in that status, the rest of which goes out, and is
    reported, logged and reset as rule 14 says once per kind of failure (its exception's type,
    as runtime/listeners.py does for a listener), not at every status.
+20. A ``tick`` with nothing due but the poll (the query of every exchange) runs the poll alone
+   and asks for the next wake-up: no line work, motion clock, stop check, parts, options or
+   status, when every one of them would change nothing. Whether so is judged at the end of
+   each whole step, as a time before which it holds if nothing but time passes
+   (``_only_poll_until``): no target waiting, a status built, the storm
+   as last seen, every deciding part off, every measuring part off or woken by the motion
+   alone and that motion seen, no part that shows a status block, and the controller's own
+   part (controller.py ``only_poll_until``: no stop due, owed or to check, nothing on the
+   line but the poll, no note, until the motion's next deadline, silence's timeout or an
+   option owed). Any input but a tick (bytes too) and the poll step itself end it: the next
+   tick runs the whole step. Nothing the status is built from changes in the poll step
+   (rule 18: the poll changes only the link's own state).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
@@ -166,6 +179,7 @@ class RotatorSession:
         self._deciding = tuple(p for p in parts if p.deciding)
         self._measuring = tuple(p for p in parts if not p.deciding)
         self._waking = tuple(p for p in parts if p.wakeup is not None)
+        self._waking_measuring = tuple(p for p in self._waking if not p.deciding)  # rule 20
         self._ending = tuple(p for p in parts if p.end is not None)
         self._storm_seen = self.wind.storm  # parts.py rule 7: a storm kept was seen
         self._parts_named = {p.name: p for p in parts}
@@ -176,6 +190,7 @@ class RotatorSession:
         self._wakeup = 0.0
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
         self._status_key: tuple[object, ...] | None = None  # rule 18
+        self._poll_until = -math.inf  # rule 20: a tick before it runs the poll alone
         self._status_failed: dict[str, set[type[BaseException]]] = {}  # rule 19
         # the halts proposed by parts that take their feature's own commands: on a rotator of
         # two boxes those run in the azimuth box alone (runtime/composite.py rule 6 reads it)
@@ -285,6 +300,7 @@ class RotatorSession:
         return self._step(now)
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
+        self._poll_until = -math.inf  # rule 20: the next tick runs the whole step
         ctl = self.controller
         was_answering = ctl.answering
         fed = ctl.feed(data, now)
@@ -323,7 +339,44 @@ class RotatorSession:
         return True
 
     def tick(self, now: float) -> list[Action]:
+        if now < self._poll_until:  # rule 20
+            return self._poll_step(now)
         return self._step(now)
+
+    def _deciding_off(self) -> bool:
+        """Whether every deciding part is off."""
+        for part in self._deciding:
+            if part.on(self):
+                return False
+        return True
+
+    def _only_poll_until(self, now: float) -> float:
+        """Rule 20, at the end of a step whose deciding parts are all off: until when a tick
+        would do nothing but the poll (-inf: not even now)."""
+        if self.targets.pending is not None or self._showing or self._status_key is None:
+            return -math.inf
+        if self.wind.storm != self._storm_seen:
+            return -math.inf
+        motion = self.controller.motion
+        for part in self._measuring:
+            if part.on(self) and (
+                part.wakes is not Wake.MOTION or self._seen_motion.get(part.name) is not motion
+            ):
+                return -math.inf
+        return self.controller.only_poll_until(now)
+
+    def _poll_step(self, now: float) -> list[Action]:
+        """Rule 20: the step when only the poll is due: the poll, its frame, the next wake-up
+        (the deciding parts are off and ask for none). The next tick runs the whole step."""
+        self._poll_until = -math.inf
+        ctl = self.controller
+        ctl.poll(now, False)
+        link = ctl.link
+        assert link is not None
+        actions: list[Action] = [Write(frame) for frame in link.output()]
+        wakeup = ctl.poll_wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
+        self._wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
+        return actions
 
     def halt(self, now: float) -> list[Action]:
         """A halt a part proposed in the other box of this rotator (runtime/composite.py rule
@@ -451,8 +504,10 @@ class RotatorSession:
         if frames:
             self._actions += [Write(frame) for frame in frames]
         self._ask_sky()
-        self._wakeup = self._next_wakeup(now)
+        off = self._deciding_off()  # (a part that is off is asked for no wake-up: rule 17)
+        self._wakeup = self._next_wakeup(now, self._waking_measuring if off else self._waking)
         actions, self._actions = self._actions, []
+        self._poll_until = self._only_poll_until(now) if off else -math.inf  # rule 20
         return actions
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
@@ -665,12 +720,20 @@ class RotatorSession:
                 shown[name] = value
         return shown
 
-    def _next_wakeup(self, now: float) -> float:
+    def _next_wakeup(self, now: float, waking: tuple[Part[RotatorSession], ...]) -> float:
+        """The soonest of the controller's, the stream's and ``waking``'s (the parts with a
+        wake-up: all of them, or those a step did not find off)."""
         wakeup = self.controller.wakeup(now, now + IDLE_WAKEUP_S)
         stream = self.targets.stream_deadline(now) if self.targets.pending is not None else None
         if stream is not None and stream < wakeup:
             wakeup = stream
-        for part in self._waking:
+        return self._parts_wakeup(now, wakeup, waking)
+
+    def _parts_wakeup(
+        self, now: float, wakeup: float, waking: tuple[Part[RotatorSession], ...]
+    ) -> float:
+        """``wakeup``, or sooner if a part of ``waking`` that is on asks for it."""
+        for part in waking:
             if part.on(self) and part.wakeup is not None:
                 t = part.wakeup(self, now)
                 if t is not None and t < wakeup:
