@@ -92,9 +92,6 @@ class AzimuthOnly:
     def awaiting_reply(self) -> bool:
         return self._inner.awaiting_reply()
 
-    def keeps_bytes(self) -> bool:
-        return self._inner.keeps_bytes()
-
     def harmless(self, junk: bytes) -> bool:
         return self._inner.harmless(junk)
 

@@ -100,11 +100,6 @@ class Codec(Protocol):
 
     def feed(self, data: bytes) -> list[Reply]: ...
     def awaiting_reply(self) -> bool: ...
-    def keeps_bytes(self) -> bool:
-        """Whether ``feed`` keeps bytes of a frame not whole yet (or lines of a report under
-        way), waiting for the rest: the bytes read so far do not end where a reply does."""
-        ...
-
     def harmless(self, junk: bytes) -> bool:
         """Is this non-reply text something a healthy controller emits (a banner, a log line)?"""
         ...
@@ -225,14 +220,9 @@ def _read_bool(name: str, value: SettingValue) -> bool:
 class Plain:
     """What most codecs send nothing for: no version query, no options, no motion switch,
     nothing at connect (RT-21, GS-232, Easycomm, SPID, RC2800, Prosistel). The codec names its
-    controller in ``BOX``; a codec that has one of them writes its own. Each keeps what it has
-    of a frame under way in ``_buf`` (``keeps_bytes``)."""
+    controller in ``BOX``; a codec that has one of them writes its own."""
 
     BOX: ClassVar[str]
-    _buf: bytearray
-
-    def keeps_bytes(self) -> bool:
-        return bool(self._buf)
 
     def encode_version(self) -> bytes | None:
         return None

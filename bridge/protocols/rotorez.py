@@ -116,9 +116,6 @@ class RotorEzCodec:
     def awaiting_reply(self) -> bool:
         return bool(self._queries_open)
 
-    def keeps_bytes(self) -> bool:
-        return bool(self._buf)
-
     def harmless(self, junk: bytes) -> bool:
         known = _KNOWN_JUNK.sub(b"", junk) == b""
         return known or (bool(junk) and self._banner_so_far.endswith(junk))  # rule 5

@@ -133,9 +133,6 @@ class SatelCodec:
         self._owed.clear()
         self._block = None
 
-    def keeps_bytes(self) -> bool:
-        return bool(self._buf) or self._block is not None  # a report's lines so far
-
     def harmless(self, junk: bytes) -> bool:
         return junk.strip(b"\r\n ") == b""
 

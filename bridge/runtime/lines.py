@@ -39,10 +39,9 @@ Rules:
    and adapter takes its own time), and are read in one wake-up, not one each. A worker also
    says how late its time may be met (``wants``' third value; its own time for all but a
    reply held in its port, worker.py rule 2): the wait ends at the last time that comes by
-   the earliest of those plus GATHER_S, so the replies of a poll round (written one after
-   another) are read in one wake-up, and a reply that came partly is read again in a wake-up
-   other lines need, not in one of its own. A descriptor that becomes ready (a stop in a
-   mailbox) still ends the wait at once.
+   the earliest of those plus GATHER_S, so a reply that came partly is read in the wake-up
+   that takes the others' readings, not in one of its own. A descriptor that becomes ready
+   (a stop in a mailbox) still ends the wait at once.
 8. Rule 5's look for a stop among the workers not served yet is made before the first of a
    round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
    11) or that look found one (there may be another): not one question to every worker after

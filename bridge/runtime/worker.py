@@ -14,8 +14,7 @@ Rules:
 2. Everything the port has is read in one go and handed to the session as one chunk; while the
    session says a reply cannot be complete yet (link.py rule 7) only the mailbox is watched,
    and when that hold ends the port is read without waiting to be told it is readable (up to
-   one quiet time late when other lines are served then: link.py rule 7, lines.py rule 7);
-   that it had nothing yet is said too (link.py rule 9: the reply then keeps its quiet time).
+   one quiet time late when other lines are served then: link.py rule 7, lines.py rule 7).
 3. Listeners (MQTT, rotctld, Home Assistant) are called from the lines thread only, and one
    that raises is logged once per kind of failure and otherwise ignored (listeners.py): a
    display problem never closes or reopens the line to the controller.
@@ -229,9 +228,10 @@ class Worker:
         readable = self._fd in ready
         if readable or (self._held and now >= session.hold_reads_until()):
             data = read_available(self._fd, readable, self.cfg.port)
-            actions = session.bytes_received(data, now)  # (b"": none yet at a hold's end)
-            acted = acted or bool(actions)
-            self._do(actions)
+            if data:
+                actions = session.bytes_received(data, now)
+                acted = acted or bool(actions)
+                self._do(actions)
         if not acted and now >= session.next_wakeup():
             self._do(session.tick(now))
 

@@ -234,11 +234,9 @@ class Controller:
         link = self.link
         if link is None:
             return Fed.NOTHING
-        link.got_bytes(len(data), now)
-        if not data:  # a read at the end of a hold found nothing (link.py rule 9)
-            return Fed.NOTHING
         if log.isEnabledFor(logging.DEBUG):  # (one call, not two, at every read)
             log.debug("%s: <- %r", self.cfg.rotator_id, data)
+        link.got_bytes(len(data), now)
         replies = link.codec.feed(data)
         if not replies:
             return Fed.NOTHING

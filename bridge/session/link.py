@@ -21,47 +21,33 @@ Rules:
 5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
-7. Bytes of a poll's reply are not worth a wake-up each: the worker leaves them in the port
-   and reads them in one go (``hold_reads_until``) once the whole reply can have arrived at the
-   line rate, plus one byte time for the controller to turn round, plus rule 9's quiet time (so
-   that read can take its reading: rule 9); a stop waiting for the reply (rule 3) ends the hold
-   without the quiet time, and so does the reply's deadline coming first (rule 1: a line too
-   slow for its model's reply timeout). Only the mailbox (a stop) is watched meanwhile. If
-   part of the reply is still missing then (a controller that takes its time, an adapter that
-   hands bytes on late), the hold starts again for the time the missing bytes take: a late
-   reply costs a wake-up per chunk, not per byte; if none of it came, the port is watched. A
-   hold's end may be met up to one quiet time late (``hold_reads_latest``; on time while a
-   stop waits): the replies of a poll round, written one after another, are read in one
-   wake-up, and a reply that came partly is read in a wake-up other lines need anyway
-   (lines.py rule 7).
+7. Bytes of a poll's reply are not worth a wake-up each: until the whole reply can have arrived
+   at the line rate, plus one byte time for the controller to turn round (``hold_reads_until``),
+   the worker leaves them in the port and reads them in one go. Only the mailbox (a stop) is
+   watched meanwhile. If part of the reply is still missing then (a controller that takes its
+   time), the hold starts again for the time the missing bytes take: a late reply costs a
+   wake-up per chunk, not per byte. The hold's end may be met up to one quiet time of rule 9
+   late (``hold_reads_latest``): a reply that came partly is then read in the wake-up that
+   takes the readings of the replies that came whole (lines.py rule 7), not in one of its own.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
    (lines.py rule 1). A poll asked for at once (a new target) is off the grid; the next one is
    back on it, never less than half an interval later.
-9. One exchange, one reading: a reading is taken only once the line has been quiet after it
-   (``settled``). A poll's reply found whole by the read at the end of rule 7's first hold,
-   with nothing after it in that read (no byte of another frame begun: the codec keeps none)
-   and nothing more owed, is taken in that read: the line was quiet from the reply's end until
-   the read, SETTLE_BYTES byte times (SETTLE_MIN_S at least) or more for a controller that
-   turns round within a byte time; a slower one's reply, ending after the reply could first be
-   whole, was watched for less, down to nothing if it ended as the hold did (a second reply or
-   noise that has begun by the read is still caught). Any other reading (a reply read in parts
-   or found later, one read early for a stop, an answer to anything but a poll) is held until
-   the line has been quiet for SETTLE_BYTES byte times (SETTLE_MIN_S at least); bytes that go
-   on arriving hold it longer, up to a whole reply's bytes more (a frame that starts in the
-   quiet time is judged whole). Bytes in that time or in the same read that no healthy exchange
-   has (a second reply, asked for or not, line noise; not the controller's own chatter, which
-   its codec calls harmless) spoil it: the exchange is not trusted, the reading is dropped and
-   the controller asked again (a glitch ``;359`` just before the real ``;180`` is neither
-   published nor taken as a move). A reply owed is not overdue while its reading is held (nor
-   does its deadline wake the session meanwhile). The quiet time is no reply still coming: a
-   stop goes out at once (rule 3 does not hold it back once the reply is whole), and a stop
-   ends the held exchange there, before it is written (``end_held``): its reading is taken if
-   the reply is whole and no byte came after it, and dropped otherwise (bytes still coming may
-   be the second reply that spoils it; the controller is asked again). What comes after the
-   stop belongs to the stop's own exchange (its reply is a reading of its own, never a second
-   reply that spoils the held one).
+9. One exchange, one reading: a reading is held until the line has been quiet for SETTLE_BYTES
+   byte times (SETTLE_MIN_S at least) and only then taken (``settled``); bytes that go on
+   arriving hold it longer, up to a whole reply's bytes more (a frame that starts in the quiet
+   time is judged whole). Bytes in that time that no healthy exchange has (a second reply,
+   asked for or not, line noise; not the controller's own chatter, which its codec calls
+   harmless) spoil it: the exchange is not trusted, the reading is dropped and the controller
+   asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
+   as a move). A reply owed is not overdue while its reading is held. The quiet time is no
+   reply still coming: a stop goes out at once (rule 3 does not hold it back once the reply is
+   whole), and a stop ends the held exchange there, before it is written (``end_held``): its
+   reading is taken if the reply is whole and no byte came after it, and dropped otherwise
+   (bytes still coming may be the second reply that spoils it; the controller is asked again).
+   What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
+   own, never a second reply that spoils the held one).
 10. A controller that needs time between commands to its two axes (``spec.axis_gap_s``,
    RC2800; a frame's axis by its first bytes, ``spec.axis_prefixes``) gets it: a command's or
    a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
@@ -99,8 +85,6 @@ class Link:
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
         self._hold_bytes = 0  # of the polled reply, not read yet (rule 7)
-        self._quiet_by = 0.0  # rule 9: a poll's reply not read yet is first read from here on
-        self._read_quiet = False  # rule 9: the last read was that first read, at its time
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -137,24 +121,16 @@ class Link:
 
     def hold_reads_until(self) -> float:
         """Rule 7: bytes arriving before this time can wait in the port."""
-        if self._reply_deadline is None:
-            return 0.0
-        if self._quiet_by and not self._stop_due:  # rule 9: a poll's reply, its quiet time too
-            return self._quiet_by
-        return self._hold_until
+        return self._hold_until if self._reply_deadline is not None else 0.0
 
     def hold_reads_latest(self) -> float:
-        """Rule 7: the latest the held bytes are read, one quiet time after the hold ends (at
-        its end while a stop waits for the reply)."""
-        until = self.hold_reads_until()
-        return until if not until or self._stop_due else until + self._settle_s
+        """Rule 7: the latest the held bytes are read, one quiet time after the hold ends."""
+        if self._reply_deadline is None or not self._hold_until:
+            return 0.0
+        return self._hold_until + self._settle_s
 
     def got_bytes(self, count: int, now: float) -> None:
         """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
-        quiet_by, self._quiet_by = self._quiet_by, 0.0  # rule 9: only its first read
-        self._read_quiet = bool(quiet_by) and now >= quiet_by and self._reply_deadline is not None
-        if not count:  # nothing yet at the hold's end: the port is watched from now on
-            return
         self._hold_bytes = max(0, self._hold_bytes - count)
         self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
         if self._held is not None:  # rule 9: the line is not quiet yet
@@ -174,7 +150,6 @@ class Link:
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
-            self._quiet_by = 0.0
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -294,17 +269,13 @@ class Link:
         return not held and self._reply_deadline is not None and now >= self._reply_deadline
 
     def hold_reading(self, reply: PositionReply, now: float) -> bool:
-        """Rule 9: a reading, taken once the line stays quiet after it (at once when it is a
-        poll's reply first read after its quiet time, and the read ends where it does); False
-        when another is held (two readings in one exchange: neither is, the held one is
-        dropped)."""
+        """Rule 9: a reading, taken once the line stays quiet after it; False when another is
+        held (two readings in one exchange: neither is, the held one is dropped)."""
         if self._held is not None:
             self._held = None
             return False
         self._held = reply
-        codec = self.codec
-        quiet = self._read_quiet and not codec.keeps_bytes() and not codec.awaiting_reply()
-        self._held_until = now if quiet else now + self._settle_s
+        self._held_until = now + self._settle_s
         self._held_cap = self._held_until + self.spec.reply_bytes * self._byte_s
         self._held_after = False
         return True
@@ -379,9 +350,6 @@ class Link:
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
         self._hold_bytes = self.spec.reply_bytes
         self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
-        quiet_by, deadline = self._hold_until + self._settle_s, self._reply_deadline
-        # rule 9 (rule 1: read before the reply's deadline, on a line too slow for that as before)
-        self._quiet_by = quiet_by if deadline is not None and quiet_by < deadline else 0.0
         return True
 
     def silent_for(self, now: float) -> float:
@@ -411,9 +379,5 @@ class Link:
         if self._held is not None:
             times.append(self._held_until)
         if self.spec.can_report_position:
-            deadline = self._reply_deadline
-            if deadline is None:
-                times.append(max(self._next_poll, self._paced_from()))
-            elif self._held is None:  # rule 9: not overdue while its reading is held
-                times.append(deadline)
+            times.append(self._reply_deadline or max(self._next_poll, self._paced_from()))
         return times

@@ -560,56 +560,5 @@ def test_a_worker_says_its_held_reply_may_be_read_up_to_a_quiet_time_late(tmp_pa
         box.close()
 
 
-def test_a_reply_found_only_after_an_empty_read_at_the_holds_end_keeps_its_quiet_time(
-    tmp_path: Path,
-) -> None:
-    """worker.py rule 2 with link.py rule 9: the port had nothing when the hold ended (an
-    adapter that hands bytes on late), and the worker says so; the reply that then comes whole
-    in one chunk is read as it comes and its reading published only after the quiet time that
-    follows it, not at once as a reply found whole at the hold's end would be."""
-    master, slave = os.openpty()
-    settings = RotatorSettings.model_validate(
-        {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
-    )
-    box, statuses = Mailbox(), []
-    worker = Worker(worker_config(settings), box, statuses.append, lambda e: None)
-    try:
-        now = 100.0
-        worker.guarded(worker.begin, now, lambda: None)
-        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
-        opening = worker._opening
-        assert opening is not None
-        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
-        written = b""
-        for _ in range(10):  # opened, then polled
-            worker.wants(now)
-            worker.guarded(worker.serve, now, set())
-            if _readable(master):
-                written += os.read(master, 64)
-            if b"AI1;" in written:
-                break
-        assert written.endswith(b"AI1;")
-        fds, end, _latest = worker.wants(now)
-        assert worker._fd not in fds  # the reply is held in the port
-        worker.guarded(worker.serve, end, set())  # the hold's end: nothing there yet
-        fds, _until, _latest = worker.wants(end)
-        assert worker._fd in fds  # watched from now on
-        os.write(master, b";123")
-        wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
-        read_t = end + 0.016
-        worker.guarded(worker.serve, read_t, {worker._fd})
-        assert [s for s in statuses if s.bearing_deg == 123.0] == []  # held, not taken
-        _fds, until, _latest = worker.wants(read_t)
-        assert until == pytest.approx(read_t + 3 * 10 / 4800)  # the quiet time after it
-        worker.guarded(worker.serve, until, set())
-        assert statuses[-1].bearing_deg == 123.0
-    finally:
-        worker.guarded(worker.end, now)
-        assert worker.wait_closed(slow(5))
-        os.close(master)
-        os.close(slave)
-        box.close()
-
-
 def _readable(fd: int) -> bool:
     return bool(select.select([fd], [], [], 0)[0])

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from bridge.emulators.spid_models import position_reply
-from bridge.protocols.base import JunkReply, PositionReply
+from bridge.protocols.base import PositionReply
 from bridge.protocols.rc2800 import MODELS as RC2800
 from bridge.protocols.rotorez import MODELS as ROTOREZ
 from bridge.protocols.satel import MODELS
@@ -62,92 +62,15 @@ def test_a_polls_reply_is_held_until_it_can_be_whole_then_for_what_is_missing() 
     link = Link(spec.codec_factory(), spec, 0.0, 4800)
     link.poll(10.0, 1.0)
     assert b"".join(link.output()) == b"AI1;"
-    # + a byte to turn round, + the quiet time after it (rule 9: three byte times)
-    assert link.hold_reads_until() == pytest.approx(10.0 + 9 * byte_s + 3 * byte_s)
-    # its end may be met one quiet time late, with other lines
-    assert link.hold_reads_latest() == pytest.approx(10.0 + 9 * byte_s + 6 * byte_s)
+    assert link.hold_reads_until() == pytest.approx(10.0 + 9 * byte_s)  # + a byte to turn round
+    # its end may be met one quiet time (rule 9: three byte times) late, with other lines
+    assert link.hold_reads_latest() == pytest.approx(10.0 + 9 * byte_s + 3 * byte_s)
     link.got_bytes(2, 10.03)  # a slow controller: half of the reply so far
     assert link.hold_reads_until() == pytest.approx(10.03 + 2 * byte_s)
     assert link.hold_reads_latest() == pytest.approx(10.03 + 2 * byte_s + 3 * byte_s)
     link.got_bytes(2, 10.04)
     assert link.hold_reads_until() == 0.0  # whole: nothing held any more
     assert link.hold_reads_latest() == 0.0
-
-
-def _polled(spec_name: str = "rotorez") -> tuple[Link, float]:
-    """A Rotor-EZ link that has just polled at 10.0, and when its first hold ends (rule 7)."""
-    spec = ROTOREZ[spec_name]
-    link = Link(spec.codec_factory(), spec, 0.0, 4800)
-    link.poll(10.0, 1.0)
-    assert link.output() == [b"AI1;"]
-    return link, link.hold_reads_until()
-
-
-def _read(link: Link, data: bytes, now: float) -> list[PositionReply]:
-    """What the controller does with a read (controller.feed): the readings it holds."""
-    link.got_bytes(len(data), now)
-    readings = []
-    for reply in link.codec.feed(data):
-        if isinstance(reply, PositionReply):
-            readings.append(reply)
-            link.hold_reading(reply, now)
-        elif isinstance(reply, JunkReply):
-            link.spoils(reply)
-    return readings
-
-
-def test_a_polls_reply_found_whole_by_the_read_at_the_holds_end_is_taken_in_that_read() -> None:
-    """Rule 9: the read at the end of the first hold comes after the quiet time; a reply found
-    whole there with nothing after it is settled at once. A frame begun after it in that read,
-    a reply read in two parts, or one that came only after an empty read at the hold's end,
-    is held for the quiet time from its read."""
-    quiet_s = 3 * 10 / 4800
-    link, end = _polled()
-    (reading,) = _read(link, b";123", end)
-    assert link.settled(end) is reading  # taken in the read that found it
-
-    link, end = _polled()
-    (reading,) = _read(link, b";123;3", end)  # a second frame begun after it
-    assert link.settled(end) is None  # held: that frame is judged whole
-    _read(link, b"59", end + 0.002)
-    assert link.settled(end + 1.0) is None  # the second reply spoils it
-
-    link, end = _polled()
-    assert _read(link, b";1", end) == []  # in part
-    (reading,) = _read(link, b"23", end + 0.004)
-    assert link.settled(end + 0.004) is None
-    assert link.settled(end + 0.004 + quiet_s) is reading
-
-    link, end = _polled()
-    assert _read(link, b"", end) == []  # nothing yet at the hold's end: the port is watched
-    assert link.hold_reads_until() < end
-    (reading,) = _read(link, b";123", end + 0.016)  # whole, in one chunk, later
-    assert link.settled(end + 0.016) is None
-    assert link.settled(end + 0.016 + quiet_s) is reading
-
-
-@pytest.mark.parametrize("model", ["rot2prog", "md01"])
-def test_a_stop_waiting_for_a_polls_reply_ends_the_hold_without_the_quiet_time(model: str) -> None:
-    """Rules 3, 7 and 9 on a half-duplex SPID: a stop due while the reply is on its way waits
-    for it, and the port is read as soon as the reply can be whole, on time (no quiet time,
-    no lateness): that read holds the reading, the stop ends its exchange and goes out."""
-    spec = SPID[model]
-    byte_s = 10 / spec.baud
-    quiet_s = max(0.005, 3 * byte_s)
-    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
-    link.poll(10.0, 1.0)
-    (query,) = link.output()
-    whole = 10.0 + (len(query) + spec.reply_bytes + 1) * byte_s
-    assert link.hold_reads_until() == pytest.approx(whole + quiet_s)
-    link.want_stop()
-    assert not link.flush_stop(10.01)  # half duplex: the reply first
-    assert link.hold_reads_until() == link.hold_reads_latest() == pytest.approx(whole)
-    reply = position_reply(spec, 123.0, 45.0, 2)
-    link.got_bytes(len(reply), whole)
-    (reading,) = link.codec.feed(reply)
-    assert isinstance(reading, PositionReply) and link.hold_reading(reading, whole)
-    assert link.settled(whole) is None  # read early: held
-    assert link.end_held(whole) is reading and link.flush_stop(whole)
 
 
 # -- rule 8: polls on a grid ----------------------------------------------------------------------

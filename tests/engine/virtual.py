@@ -30,11 +30,6 @@ Rules:
    (``skywork.answer``, or ``answer_sky`` if a test replaces it), handed back ``sky_delay_s``
    of virtual time later (0: at the same instant, as an input of its own), as the real worker
    hands it to the session. Every question asked is kept in ``asked``.
-6. With ``reads_held`` the port keeps what the device sent while the session holds its reads
-   (``hold_reads_until``, link.py rule 7) and the port is read when the hold ends, what it has
-   in one chunk (nothing, if nothing came), as the real worker reads it (worker.py rule 2; met
-   on time: one line, nothing to gather); outside a hold, bytes are read as they arrive. Without
-   ``reads_held`` every byte is handed over as it arrives.
 """
 
 from __future__ import annotations
@@ -101,12 +96,8 @@ class VirtualRotator:
         sky_delay_s: float = 0.0,
         follow: FollowConfig | None = None,
         cfg: WorkerConfig | None = None,  # one box of a composite rotator (virtual_composite.py)
-        reads_held: bool = False,  # rule 6
     ) -> None:
         self.now = start_s
-        self.reads_held = reads_held
-        self._port = bytearray()  # rule 6: what the device sent that the host has not read
-        self._holding = False  # rule 6: the session held its reads when last served
         self.wall_epoch_s = wall_epoch_s  # the wall clock at virtual time 0
         rotator = RotatorSettings.model_validate(
             {"id": "v", "model": model, "port": "/dev/ttyVIRTUAL", **(settings or {})}
@@ -228,18 +219,15 @@ class VirtualRotator:
         batch = self.mailbox.take()
         if batch:
             self._do(self.session.commands(batch, self.now))
-            self._hold()
 
     # -- the link -------------------------------------------------------------------------------
     def link_up(self) -> None:
         self.connected = True
         self._do(self.session.link_up(self.now, self.wall_epoch_s + self.now))
-        self._hold()
 
     def link_down(self, reason: str | None = "virtual port unplugged") -> None:
         self.connected = False
         self._tx.clear()  # whatever was still on its way is lost with the adapter
-        self._port.clear()
         self._do(self.session.link_down(reason, self.now))
 
     # -- faults (rule 3) ------------------------------------------------------------------------
@@ -328,8 +316,6 @@ class VirtualRotator:
         if line_t is not None:
             times.append(line_t)
         times += [due for due, _gen, _answer in self._answers]
-        if self._holding:  # rule 6
-            times.append(self.session.hold_reads_until())
         return max(self.now, min(times))
 
     def _step(self, until: float) -> None:
@@ -343,8 +329,6 @@ class VirtualRotator:
         if line_t is not None:
             times.append(line_t)
         times += [due for due, _gen, _answer in self._answers]
-        if self._holding:  # rule 6
-            times.append(self.session.hold_reads_until())
         t = max(self.now, min(times))
         if t > self.now:
             self._steps_at_now = self._spin_run = 0
@@ -375,30 +359,14 @@ class VirtualRotator:
             _due, generation, answer = self._answers.pop(0)
             self._do(self.session.sky_answer(generation, answer, t))
             acted = True
-        read = bool(out)
-        if self.reads_held and self.connected:  # rule 6
-            self._port += out
-            out = b""
-            read = t >= self.session.hold_reads_until() if self._holding else bool(self._port)
-            if read:
-                out, self._port = bytes(self._port), bytearray()
         if self.connected:
-            if read:
-                if out:
-                    self.received.append((t, out))
+            if out:
+                self.received.append((t, out))
                 actions = self.session.bytes_received(out, t)
                 acted = acted or bool(actions)
                 self._do(actions)
             if not acted and t >= self.session.next_wakeup():
                 self._do(self.session.tick(t))
-        self._hold()
-
-    def _hold(self) -> None:
-        """Rule 6: whether the port is read only when the hold ends, as the worker asks after
-        each time it served the session (worker.py rule 6)."""
-        self._holding = (
-            self.reads_held and self.connected and self.now < self.session.hold_reads_until()
-        )
 
     def _do(self, actions: Iterable[Action]) -> None:
         for action in actions:
