@@ -41,13 +41,14 @@ Rules:
    asked for or not, line noise; not the controller's own chatter, which its codec calls
    harmless) spoil it: the exchange is not trusted, the reading is dropped and the controller
    asked again (a glitch ``;359`` just before the real ``;180`` is neither published nor taken
-   as a move). A reply owed is not overdue while its reading is held. The quiet time is no
-   reply still coming: a stop goes out at once (rule 3 does not hold it back once the reply is
-   whole), and a stop ends the held exchange there, before it is written (``end_held``): its
-   reading is taken if the reply is whole and no byte came after it, and dropped otherwise
-   (bytes still coming may be the second reply that spoils it; the controller is asked again).
-   What comes after the stop belongs to the stop's own exchange (its reply is a reading of its
-   own, never a second reply that spoils the held one).
+   as a move). A reply owed is not overdue while its reading is held (nor does its deadline
+   wake the session meanwhile). The quiet time is no reply still coming: a stop goes out at
+   once (rule 3 does not hold it back once the reply is whole), and a stop ends the held
+   exchange there, before it is written (``end_held``): its reading is taken if the reply is
+   whole and no byte came after it, and dropped otherwise (bytes still coming may be the
+   second reply that spoils it; the controller is asked again). What comes after the stop
+   belongs to the stop's own exchange (its reply is a reading of its own, never a second reply
+   that spoils the held one).
 10. A controller that needs time between commands to its two axes (``spec.axis_gap_s``,
    RC2800; a frame's axis by its first bytes, ``spec.axis_prefixes``) gets it: a command's or
    a poll's frames (a list from the codec) go that far apart, and no frame goes sooner after
@@ -379,5 +380,9 @@ class Link:
         if self._held is not None:
             times.append(self._held_until)
         if self.spec.can_report_position:
-            times.append(self._reply_deadline or max(self._next_poll, self._paced_from()))
+            deadline = self._reply_deadline
+            if deadline is None:
+                times.append(max(self._next_poll, self._paced_from()))
+            elif self._held is None:  # rule 9: not overdue while its reading is held
+                times.append(deadline)
         return times

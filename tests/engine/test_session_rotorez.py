@@ -613,3 +613,18 @@ def test_a_glitch_before_the_real_reply_is_no_reading_and_the_controller_is_aske
     asked = [s.t for s in v.writes if s.data == QUERY and s.t > glitched[0]]
     assert asked[0] - glitched[0] < 0.1  # asked again at once, not at the next idle poll
     assert v.state is IDLE and v.status.bearing_deg == 180.0
+
+
+def test_a_reply_that_ends_just_before_its_deadline_is_taken_and_nothing_spins(rig: Rig) -> None:
+    """A Rotor-EZ that answers 230 ms after a poll, its reply whole a few ms before the 250 ms
+    reply deadline: the reading's quiet time runs past the deadline, the reply is not overdue
+    meanwhile (link.py rule 9), and the session does not ask to be woken at that deadline
+    again and again until the quiet time is over (virtual.py rule 4: the loop would spin).
+    Every reading is taken."""
+    v = rig("rotorez", emulator={"start_az_deg": 42.0, "processing_delay_s": 0.230})
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.run_for(10)
+    assert v.spins == [] and v.errors(since=t) == []
+    assert v.status.available
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1)
