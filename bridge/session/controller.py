@@ -375,13 +375,16 @@ class Controller:
         now): ``line_work``, ``tick``, ``check_stop`` and ``send_options`` change nothing,
         and the poll finds the controller answering. Only when: the link is up and answering
         on a line that reports positions, no slew, no stop due or owed a repeat (none sent
-        since the rotor came to rest: ``check_stop`` has nothing to check), nothing owed on
+        since the rotor came to rest and no count of stops left to start again: ``check_stop``
+        has nothing to do), nothing owed on
         the line but its next poll (no reply, no reading held, no frame waiting, no junk:
         ``wakeups`` names the poll alone), no enable and no note owed; then until the
         motion's next deadline (``wakeup`` just kept it), silence's timeout (the poll's
         check) or options owed, whichever comes first, ONLY_POLL_MARGIN_S early."""
         link, m = self.link, self.motion
         if link is None or not self.answering or self.notes or m.stop_sent_t is not None:
+            return -math.inf
+        if self.stops.counting:  # check_stop has its count of stops to start again
             return -math.inf
         if link.slew is not None or link.stop_due or link.reply_owed or self.options.enable_due:
             return -math.inf

@@ -20,8 +20,8 @@ command did); the session applies it. None of them imports this module. ``_step`
 one order after every input: the line's own work (an overdue reply, a due stop), the motion
 machine's clock, the stop check, the parts handed in that decide (the registered features':
 tracking, following, the wind, auto-park), the pending target, options, the poll, the parts
-that measure (health), the status. Stops and the lock come before all of it, in ``commands``,
-in a fixed written order.
+that measure (health), the status (a tick with nothing due but the poll runs the poll alone:
+rule 20). Stops and the lock come before all of it, in ``commands``, in a fixed written order.
 
 Rules:
 1.-3. The controller's state (answering, options owed, motion to re-enable), whether it is
@@ -93,14 +93,15 @@ Rules:
    and asks for the next wake-up: no line work, motion clock, stop check, parts, options or
    status, when every one of them would change nothing. Whether so is judged at the end of
    each whole step, as a time before which it holds if nothing but time passes
-   (``_only_poll_until``): no target waiting, a status built, the storm
-   as last seen, every deciding part off, every measuring part off or woken by the motion
-   alone and that motion seen, no part that shows a status block, and the controller's own
-   part (controller.py ``only_poll_until``: no stop due, owed or to check, nothing on the
-   line but the poll, no note, until the motion's next deadline, silence's timeout or an
-   option owed). Any input but a tick (bytes too) and the poll step itself end it: the next
-   tick runs the whole step. Nothing the status is built from changes in the poll step
-   (rule 18: the poll changes only the link's own state).
+   (``_only_poll_until``): no target waiting, a status built, the storm as last seen, every
+   deciding part off, every measuring part off or woken by the motion alone and that motion
+   seen, no part that shows a status block, and the controller's own part (controller.py
+   ``only_poll_until``: no stop due, owed or to check, no count of stops to start again,
+   nothing on the line but the poll, no note, until the motion's next deadline, silence's
+   timeout or an option owed). Bytes read and the poll step itself end it; every other input
+   runs the whole step, which judges it anew; so the tick after a poll step, or after bytes
+   that ran no step, runs the whole step. Nothing the status is built from changes in the poll
+   step (rule 18: the poll changes only the link's own state).
 """
 
 from __future__ import annotations

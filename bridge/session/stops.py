@@ -130,6 +130,12 @@ class Stops:
         sent = m.stop_sent_t
         return stop_due or (sent is not None and now - sent < STOP_UNSURE_S)
 
+    @property
+    def counting(self) -> bool:
+        """Rule 2: a series of stops to a rotor still turning is being counted (``check``
+        starts the count again once no stop is out: it has something to do then)."""
+        return self._tries != 0
+
     def check(
         self, m: mo.Motion, cfg: mo.MotionConfig, now: float, target_going: bool
     ) -> tuple[bool, Report | None]:

@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 
 from bridge.app import worker_config
 from bridge.core.model import MotionState
+from bridge.emulators.rotorez_models import Outcome
 from bridge.feature import session_parts
 from bridge.session.parts import Part, Scene, Wake
 from bridge.session.session import Action, RotatorSession
@@ -275,3 +276,32 @@ def test_a_measuring_part_reset_after_a_bug_is_run_again_by_the_next_step(rig: R
     v.run_for(10)
     assert hits
     assert len(v.errors("internal")) >= 10
+
+
+def test_a_new_series_of_lost_stops_is_counted_from_one_after_a_target_went_out(rig: Rig) -> None:
+    """stops.py rule 2: ``check_stop`` starts its count of stops again once none is out (a
+    target went out); a poll step skips it, so none runs while a count is left to start again.
+    An RT-21 (it takes a new target while turning) that never gets a stop: three stops, the
+    error; a new target goes out at once; a STOP in the next poll exchange, lost too, has its
+    own error after its own three (before: the count went on from 3 and none came)."""
+    v = rig("rt21")
+    checked = check_poll_steps(v)
+    v.run_until_state(MotionState.IDLE, 30)
+    stop = v.session.controller.link.codec.encode_stop()
+    v.target(300.0)
+    v.run_for(3.0)
+    for frame in stop if isinstance(stop, list) else [stop]:
+        v.drop_writes(frame, 50)  # a runaway: no stop reaches the controller
+    v.stop()
+    v.run_for(7.0)
+    assert len(v.errors("stop")) == 1
+    v.target(100.0)
+    polls = len(v.frames(Outcome.QUERY))
+    v.run_until(lambda h: len(h.frames(Outcome.QUERY)) > polls, 2.0, "the next poll")
+    v.stop()  # in that poll's exchange
+    t = v.now
+    v.run_for(9.0)
+    assert [e.message for e in v.errors("stop", since=t)] == [
+        "rotor still turning after 3 stop commands; stop it at the controller"
+    ]
+    assert checked  # poll steps ran, each as the whole step would have
