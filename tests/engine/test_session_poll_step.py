@@ -305,3 +305,45 @@ def test_a_new_series_of_lost_stops_is_counted_from_one_after_a_target_went_out(
         "rotor still turning after 3 stop commands; stop it at the controller"
     ]
     assert checked  # poll steps ran, each as the whole step would have
+
+
+@pytest.mark.parametrize(
+    ("model", "option"),
+    [
+        ("rotorez", ("unstick", True)),
+        ("gs232b", ("speed", "2")),
+        ("rt21", None),
+        ("rot2prog", None),
+        ("rc2800", None),
+        ("satel", None),
+    ],
+)
+def test_the_poll_step_does_what_the_whole_step_would_through_faults_and_refreshes(
+    rig: Rig, model: str, option: tuple[str, Any] | None
+) -> None:
+    """What the generated scenarios leave out, each poll step against the whole step on a copy:
+    an option set at rest and two refreshes of it (options.py rule 1), a controller deaf for
+    2 s while turning, a jammed rotor (its stall), garbled polls, the brake lever."""
+    v = rig(model)
+    checked = check_poll_steps(v)
+    v.run_until_state(MotionState.IDLE, 30)
+    if option is not None:
+        v.option(*option)
+    v.run_for(130.0)
+    v.target(200.0)
+    v.run_for(1.5)
+    v.set_deaf(True)
+    v.run_for(2.0)
+    v.set_deaf(False)
+    v.run_for(5.0)
+    v.jam()
+    v.run_for(20.0)
+    v.unjam()
+    v.target(100.0)
+    v.run_for(1.0)
+    asked = copy.deepcopy(v.session.controller.link.codec).encode_query()  # (the live one's
+    v.garble_writes(asked[0] if isinstance(asked, list) else asked, b"zz", 2)  # state kept)
+    v.run_for(30.0)
+    v.press_brake()
+    v.run_for(5.0)
+    assert checked
