@@ -29,6 +29,7 @@ from bridge.feature import session_parts
 from bridge.session.parts import Part, Scene, Wake
 from bridge.session.session import Action, RotatorSession
 from bridge.settings import RotatorSettings
+from tests.engine.test_session_quiet_hold import count_steps
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -216,14 +217,7 @@ def test_a_turning_rotor_ez_writes_its_polls_in_poll_steps_and_takes_each_readin
     v.run_for(1)
     t0 = v.now
     hits = check_poll_steps(v)
-    whole: list[float] = []
-    step = v.session._step
-
-    def counted(now: float) -> list[Action]:
-        whole.append(now)
-        return step(now)
-
-    v.session._step = counted  # type: ignore[method-assign]
+    whole = count_steps(v)
     v.run_for(10)
     polls = [w.t for w in v.writes if w.data == b"AI1;" and w.t >= t0]
     assert len(polls) >= 45
