@@ -21,8 +21,10 @@ Not sent: ``P36``/``P45`` (the box's range) is the controller's own setting; ``R
 until stopped) have no place in a bridge that sends bearings.
 
 Rules:
-1. Replies are lines ended by CR or LF; blank lines (the CR answering ``M W S``, K3NG's blank
-   lines after ``W``, the LF of a CR LF) are the controller's chatter, never a reading.
+1. Replies are lines ended by CR or LF; the LF right after a line's CR ends that line with it
+   (a CR LF is one end, not a blank line after it: no junk, nothing for the engine to wait out
+   at every reading); blank lines (the CR answering ``M W S``, K3NG's blank lines after ``W``)
+   are the controller's chatter, never a reading.
 2. Only a line of this model's reply form (A or B, three digits a value) is a bearing, only
    while a query is open, and only with values in range (azimuth 0..450, elevation 0..180;
    K3NG's form of an elevation 1 to 3 degrees below 0, ``EL=00-1``, reads as 0: the horizon).
@@ -94,6 +96,7 @@ class Gs232Codec(OneQuery):
         self.elevation = elevation
         self._own, self._other = (_A_FORM, _B_FORM) if variant == "a" else (_B_FORM, _A_FORM)
         self._buf = bytearray()
+        self._after_cr = False  # rule 1: the last line ended with a CR (its LF may follow)
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
 
@@ -125,6 +128,11 @@ class Gs232Codec(OneQuery):
         self._buf += data
         out: list[Reply] = []
         while True:
+            if self._after_cr and self._buf:  # rule 1: a CR LF's LF, in this read or the next
+                self._after_cr = False
+                if self._buf[0] == 0x0A:
+                    del self._buf[0]
+                    continue
             refused = self._buf.find(REFUSED)
             ends = [i for i in (self._buf.find(b"\r"), self._buf.find(b"\n")) if i != -1]
             end = min(ends) if ends else -1
@@ -142,6 +150,7 @@ class Gs232Codec(OneQuery):
                 return out
             line = bytes(self._buf[: end + 1])
             del self._buf[: end + 1]
+            self._after_cr = line[-1] == 0x0D
             self._line(line, out)
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:

@@ -74,8 +74,28 @@ def test_replies_of_both_forms(
     codec = asked(variant, elevation)
     replies = feed(codec, reply, how)
     assert positions(replies) == [want]
-    assert all(j.reason is JunkReason.CHATTER for j in junk(replies))  # the LF, if any
+    assert junk(replies) == []  # a CR LF's LF ends the line with its CR (rule 1)
     assert not codec.awaiting_reply()
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_a_lf_ends_its_line_with_the_cr_before_it_and_is_no_blank_line_of_its_own(
+    how: str,
+) -> None:
+    """Rule 1: the LF of a CR LF, in the read of its CR or in the next one, is no junk (no
+    blank line the engine waits out after every reading); a LF that follows anything but a
+    line's CR, and a CR that is a line of its own, are blank lines: chatter."""
+    codec = asked("b", True)
+    replies = feed(codec, b"AZ=123  EL=045\r", how) + feed(codec, b"\n", how)
+    assert positions(replies) == [(123.0, 45.0)] and junk(replies) == []
+    codec.encode_query()
+    replies = feed(codec, b"\nAZ=124  EL=045\n\n", how)
+    assert positions(replies) == [(124.0, 45.0)]
+    assert [(j.data, j.reason) for j in junk(replies)] == [(b"\n", JunkReason.CHATTER)] * 2
+    codec.encode_query()
+    replies = feed(codec, b"AZ=125  EL=045\r\r\n", how)
+    assert positions(replies) == [(125.0, 45.0)]
+    assert [(j.data, j.reason) for j in junk(replies)] == [(b"\r", JunkReason.CHATTER)]
 
 
 @pytest.mark.parametrize("how", HOW)
