@@ -59,6 +59,35 @@ def test_a_turning_rotor_ez_costs_two_steps_per_reading_and_each_is_published_af
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=2)
 
 
+def test_a_turning_gs232b_takes_each_reading_in_one_step_at_the_end_of_its_cr_lf_quiet_time(
+    rig: Rig,
+) -> None:
+    """A GS-232B ends its replies with CR LF: the CR completes the reading, the LF a byte later
+    holds it a little longer (link.py rule 9) and completes nothing (gs232.py rule 1). One
+    whole step per reading, at the end of the quiet time after the LF: no step for the LF, none
+    at the quiet time's old end, none to wait out the LF as junk (before: three per reading).
+    Every reading is published then."""
+    v = rig("gs232b")
+    v.run_until_state(IDLE, 30)
+    v.target(300.0)
+    v.run_until_state(MOVING, 10)
+    v.run_for(1)
+    t0 = v.now
+    steps = count_steps(v)
+    v.run_for(10)
+    query = b"C2\r"
+    polls = [w.t for w in v.writes if w.data == query and w.t >= t0]
+    assert len(polls) >= 45
+    assert len(steps) <= len(polls) + 1  # (a poll written just before the end, unread)
+    settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * 10 / v.cfg.baud)
+    lfs = [t for t, data in v.received if data.endswith(b"\n")]
+    published = [t for t, s in v.statuses if t >= t0]
+    assert len(published) >= len(polls) - 1
+    for t in published:  # each at a reply's LF plus the quiet time
+        assert any(t == pytest.approx(lf + settle_s) for lf in lfs), t
+    assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=2)
+
+
 def test_a_stop_waiting_for_a_half_duplex_reply_goes_out_the_instant_the_reply_is_whole(
     rig: Rig,
 ) -> None:
