@@ -311,7 +311,7 @@ class RotatorSession:
         fed = ctl.feed(data, now)
         if fed is Fed.NOTHING:
             if self._before_hold is not None and ctl.link is not None:  # rule 16
-                self._wakeup = min(self._before_hold, *ctl.link.wakeups())
+                self._wakeup = min([self._before_hold, *ctl.link.wakeups()])
             return []  # rule 9
         if fed is Fed.HELD and self._quiet_hold(now):
             return []  # rule 16

@@ -6,13 +6,18 @@ comes later for it: a stop already waiting goes out the instant the reply is who
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import pytest
 
+from bridge.app import worker_config
 from bridge.core.model import MotionState
 from bridge.emulators.spid_models import K_STATUS
+from bridge.feature import session_parts
 from bridge.session.link import SETTLE_BYTES, SETTLE_MIN_S
-from bridge.session.session import Action
+from bridge.session.parts import Part, Scene, Wake
+from bridge.session.session import Action, RotatorSession
+from bridge.settings import RotatorSettings
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -116,3 +121,55 @@ def test_a_stop_waiting_for_a_half_duplex_reply_goes_out_the_instant_the_reply_i
     assert stop_t == v.received[-1][0]  # with the reply's last byte
     v.run_until(lambda h: h.state is IDLE and not h.truth().is_moving, 30, "stopped")
     assert v.truth().az_deg < 149
+
+
+class Alarm:
+    """A deciding part's own state: a time it wants a step at, and when it had one."""
+
+    def __init__(self, s: RotatorSession) -> None:
+        self.t: float | None = None
+        self.fired: list[float] = []
+
+
+def _ring(s: RotatorSession, scene: Scene) -> None:
+    alarm: Alarm = s.own["alarm"]
+    if alarm.t is not None and scene.now >= alarm.t:
+        alarm.fired.append(scene.now)
+        alarm.t = None
+
+
+ALARM = Part[RotatorSession](
+    "alarm",
+    Wake.STEP,
+    True,
+    lambda s: True,
+    _ring,
+    lambda s, now: None,
+    wakeup=lambda s, now: s.own["alarm"].t,
+    state=Alarm,
+)
+
+
+def test_a_deadline_inside_a_quiet_time_held_longer_is_still_met(rig: Rig) -> None:
+    """Rule 16: bytes that complete nothing hold a reading longer, and the wake-up moves with
+    its quiet time, but never past the step's own: a part's deadline that falls inside the
+    longer quiet time still gets its step then (hand-fed replies at chosen times, a GS-232B's
+    reply and its LF)."""
+    settings = RotatorSettings(id="v", model="gs232b", port="/dev/ttyVIRTUAL")
+    cfg = replace(worker_config(settings), parts=(*session_parts(), ALARM))
+    v = rig("gs232b", cfg=cfg)
+    v.run_until_state(IDLE, 30)
+    v.run_for(2.0)
+    v.set_silent(True)  # the replies are hand-fed below
+    n = len(v.writes)
+    v.run_until(lambda h: any(w.data == b"C2\r" for w in h.writes[n:]), 10, "a poll")
+    s, polled = v.session, v.now
+    due = polled + 0.050
+    s.own["alarm"].t = due
+    assert s.tick(polled) == []  # a whole step (a deciding part is on): its wake-up is then
+    assert s.next_wakeup() == due
+    assert s.bytes_received(b"AZ=100  EL=000\r", due - 0.003) == []  # held (rule 16)
+    assert s.bytes_received(b"\n", due - 0.002) == []  # completes nothing, holds it longer
+    assert s.next_wakeup() <= due  # not the longer quiet time's end
+    s.tick(due)
+    assert s.own["alarm"].fired == [due]
