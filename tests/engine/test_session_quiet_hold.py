@@ -37,6 +37,23 @@ def count_steps(v: VirtualRotator) -> list[float]:
     return steps
 
 
+def turning(
+    v: VirtualRotator, turn: Callable[[], None], query: bytes
+) -> tuple[float, list[float], list[float]]:
+    """The rotor turned by ``turn`` from rest and polled at the moving rate for 10 s: when that
+    began, the times of every session step and of every poll written since."""
+    v.run_until_state(IDLE, 30)
+    turn()
+    v.run_until_state(MOVING, 10)
+    v.run_for(1)
+    t0 = v.now
+    steps = count_steps(v)
+    v.run_for(10)
+    polls = [w.t for w in v.writes if w.data == query and w.t >= t0]
+    assert len(polls) >= 45
+    return t0, steps, polls
+
+
 def test_a_turning_rotor_ez_costs_two_steps_per_reading_and_each_is_published_after_its_quiet_time(
     rig: Rig,
 ) -> None:
@@ -45,15 +62,7 @@ def test_a_turning_rotor_ez_costs_two_steps_per_reading_and_each_is_published_af
     the byte that completes the reply runs none. Every reading is still published, at the end
     of its quiet time (its last byte plus SETTLE_BYTES byte times), as before."""
     v = rig("rotorez", emulator={"speed_deg_s": 4.0})
-    v.run_until_state(IDLE, 30)
-    v.manual_rotate(350.0)
-    v.run_until_state(MOVING, 10)
-    v.run_for(1)
-    t0 = v.now
-    steps = count_steps(v)
-    v.run_for(10)
-    polls = [w.t for w in v.writes if w.data == b"AI1;" and w.t >= t0]
-    assert len(polls) >= 45
+    t0, steps, polls = turning(v, lambda: v.manual_rotate(350.0), b"AI1;")
     assert len(steps) <= 2 * len(polls) + 1  # (a poll written just before the end, unread)
     settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * 10 / v.cfg.baud)
     published = [t for t, s in v.statuses if t >= t0]
@@ -73,16 +82,7 @@ def test_a_turning_gs232b_takes_each_reading_in_one_step_at_the_end_of_its_cr_lf
     at the quiet time's old end, none to wait out the LF as junk (before: three per reading).
     Every reading is published then."""
     v = rig("gs232b")
-    v.run_until_state(IDLE, 30)
-    v.target(300.0)
-    v.run_until_state(MOVING, 10)
-    v.run_for(1)
-    t0 = v.now
-    steps = count_steps(v)
-    v.run_for(10)
-    query = b"C2\r"
-    polls = [w.t for w in v.writes if w.data == query and w.t >= t0]
-    assert len(polls) >= 45
+    t0, steps, polls = turning(v, lambda: v.target(300.0), b"C2\r")
     assert len(steps) <= len(polls) + 1  # (a poll written just before the end, unread)
     settle_s = max(SETTLE_MIN_S, SETTLE_BYTES * 10 / v.cfg.baud)
     lfs = [t for t, data in v.received if data.endswith(b"\n")]
