@@ -376,11 +376,11 @@ class Controller:
         and the poll finds the controller answering. Only when: the link is up and answering
         on a line that reports positions, no slew, no stop due or owed a repeat (none sent
         since the rotor came to rest and no count of stops left to start again: ``check_stop``
-        has nothing to do), nothing owed on
-        the line but its next poll (no reply, no reading held, no frame waiting, no junk:
-        ``wakeups`` names the poll alone), no enable and no note owed; then until the
-        motion's next deadline (``wakeup`` just kept it), silence's timeout (the poll's
-        check) or options owed, whichever comes first, ONLY_POLL_MARGIN_S early."""
+        has nothing to do), nothing owed on the line but its next poll (no reply, no reading
+        held, no frame waiting, no junk: ``wakeups`` names the poll alone), no enable and no
+        note owed; then until the motion's next deadline (``wakeup`` just kept it), silence's
+        timeout (the poll's check) or options owed, whichever comes first, ONLY_POLL_MARGIN_S
+        early."""
         link, m = self.link, self.motion
         if link is None or not self.answering or self.notes or m.stop_sent_t is not None:
             return -math.inf
@@ -396,16 +396,6 @@ class Controller:
         silent_at = now + self.cfg.silence_timeout_s - link.silent_for(now)
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
         return until - ONLY_POLL_MARGIN_S
-
-    def poll_wakeup(self, now: float, latest: float) -> float:
-        """``wakeup`` after a poll step (session.py rule 20), ``only_poll_until`` having held:
-        no slew and no stop repeat owed, and the motion the one whose next deadline ``wakeup``
-        kept (motion.py rule 9: the same until then), so only the line's times are new."""
-        for t in self.link.wakeups() if self.link is not None else ():
-            if t < latest:
-                latest = t
-        deadline = self._deadline[2]
-        return deadline if deadline < latest else latest
 
     def send_options(self, now: float, target_waits: bool) -> None:
         """options.py rule 1: each setting by its declaration's encoder (the codec's)."""

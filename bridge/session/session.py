@@ -64,8 +64,8 @@ Rules:
    soon as the reply is whole: that step writes it), no target waiting, nothing noted, and
    ``next_wakeup`` not yet come (what is due by then runs as before). Bytes after it that
    complete nothing (a CR LF's LF, noise still arriving) hold it longer (link.py rule 9), and
-   the wake-up moves with the quiet time: the step's own wake-up, kept when the reading was
-   held, or the link's, whichever comes first; no step runs at the quiet time's old end.
+   the wake-up moves with the quiet time: the last step's own wake-up or the link's,
+   whichever comes first; no step runs at the quiet time's old end.
 17. The step runs the parts it is handed (``WorkerConfig.parts``: the registered features'
    ``Part``, parts.py rule 4, from the app; a session made without them takes the registry's,
    bridge/feature.py ``session_parts``), in their order, which is the registry's
@@ -192,7 +192,7 @@ class RotatorSession:
         self.own: dict[str, object] = {p.name: p.state(self) for p in parts if p.state}
         self._actions: list[Action] = []
         self._wakeup = 0.0
-        self._before_hold: float | None = None  # rule 16: the step's wake-up while a reading waits
+        self._step_wakeup = 0.0  # rule 16: the last step's own wake-up
         self._seen_motion: dict[str, Motion] = {}  # rule 17: what each MOTION part has seen
         self._status_key: tuple[object, ...] | None = None  # rule 18
         self._poll_until = -math.inf  # rule 20: a tick before it runs the poll alone
@@ -310,8 +310,8 @@ class RotatorSession:
         was_answering = ctl.answering
         fed = ctl.feed(data, now)
         if fed is Fed.NOTHING:
-            if self._before_hold is not None and ctl.link is not None:  # rule 16
-                self._wakeup = min([self._before_hold, *ctl.link.wakeups()])
+            if ctl.link is not None:  # rule 16: a held reading's quiet time may be longer
+                self._wakeup = min([self._step_wakeup, *ctl.link.wakeups()])
             return []  # rule 9
         if fed is Fed.HELD and self._quiet_hold(now):
             return []  # rule 16
@@ -342,9 +342,7 @@ class RotatorSession:
             return False
         if now >= self._wakeup or self.targets.pending is not None:
             return False
-        if self._before_hold is None:  # the step's own, valid until the next step
-            self._before_hold = self._wakeup
-        self._wakeup = min(self._wakeup, *link.wakeups())
+        self._wakeup = min([self._step_wakeup, *link.wakeups()])
         return True
 
     def tick(self, now: float) -> list[Action]:
@@ -383,9 +381,8 @@ class RotatorSession:
         link = ctl.link
         assert link is not None
         actions: list[Action] = [Write(frame) for frame in link.output()]
-        wakeup = ctl.poll_wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
-        self._wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
-        self._before_hold = None  # rule 16
+        wakeup = ctl.wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
+        self._wakeup = self._step_wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
         return actions
 
     def halt(self, now: float) -> list[Action]:
@@ -515,8 +512,8 @@ class RotatorSession:
             self._actions += [Write(frame) for frame in frames]
         self._ask_sky()
         off = self._deciding_off()  # (a part that is off is asked for no wake-up: rule 17)
-        self._wakeup = self._next_wakeup(now, self._waking_measuring if off else self._waking)
-        self._before_hold = None  # rule 16: a wake-up of a step's own again
+        waking = self._waking_measuring if off else self._waking
+        self._wakeup = self._step_wakeup = self._next_wakeup(now, waking)
         actions, self._actions = self._actions, []
         self._poll_until = self._only_poll_until(now) if off else -math.inf  # rule 20
         return actions
