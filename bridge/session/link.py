@@ -42,8 +42,9 @@ Rules:
    that is always 16 ms late is learned in a few replies. Each reading whose reply was whole
    at the hold's end lowers it by LATE_EASE of itself, so that a controller that got quicker
    holds the replies longer for a while, not for ever. It is at most LATE_MAX_S. The reading
-   is still taken only after the quiet time of rule 9 from the read, and a stop never waits
-   for a hold (only the port does).
+   is still taken only after the quiet time of rule 9 from the read. A stop due ends the
+   hold: the port is read at once and watched, so a stop that waits for the reply on a
+   half-duplex line (rule 3) goes the moment the reply is whole, not at the hold's end.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -142,12 +143,15 @@ class Link:
         return self._stop_due
 
     def hold_reads_until(self) -> float:
-        """Rule 7: bytes arriving before this time can wait in the port."""
-        return self._hold_until if self._reply_deadline is not None else 0.0
+        """Rule 7: bytes arriving before this time can wait in the port (none while a stop
+        is due)."""
+        if self._reply_deadline is None or self._stop_due:
+            return 0.0
+        return self._hold_until
 
     def hold_reads_latest(self) -> float:
         """Rule 7: the latest the held bytes are read, one quiet time after the hold ends."""
-        if self._reply_deadline is None or not self._hold_until:
+        if self._reply_deadline is None or self._stop_due or not self._hold_until:
             return 0.0
         return self._hold_until + self._settle_s
 

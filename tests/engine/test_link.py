@@ -167,6 +167,27 @@ def test_a_one_off_late_reply_holds_the_next_a_quiet_time_longer_at_most_then_le
     assert link.late_s == LATE_MAX_S
 
 
+@pytest.mark.parametrize("model", ["rot2prog", "md01"])
+def test_a_stop_due_ends_the_hold_so_it_goes_as_soon_as_the_reply_is_whole(model: str) -> None:
+    """Rules 3 and 7: a SPID takes no frame while it replies, so a stop waits for the reply;
+    but not for the hold's end (its lateness learned included): the port is read at once."""
+    spec = SPID[model]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.late_s = 0.02
+    link.poll(10.0, 1.0)
+    assert len(link.output()) == 1
+    assert link.hold_reads_until() > 10.0 and link.hold_reads_latest() > 10.0
+    link.want_stop()
+    assert not link.flush_stop(10.001)  # the reply is owed
+    assert link.hold_reads_until() == 0.0 and link.hold_reads_latest() == 0.0
+    reply = position_reply(spec, 123.0, 45.0, 2)
+    t = 10.0 + spec.exchange_time_s()  # whole: read as it came
+    link.got_bytes(len(reply), t)
+    (reading,) = link.codec.feed(reply)
+    assert isinstance(reading, PositionReply) and link.hold_reading(reading, t)
+    assert link.flush_stop(t)
+
+
 def test_a_short_reply_whole_at_the_holds_end_teaches_no_lateness() -> None:
     """Rule 7: an RT-21 sends a bearing under 100 degrees without a leading zero (``45.0;``,
     a byte short of the ``123.4;`` its hold counts on): whole at the hold's end, it makes the
