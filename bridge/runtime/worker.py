@@ -232,6 +232,8 @@ class Worker:
                 actions = session.bytes_received(data, now)
                 acted = acted or bool(actions)
                 self._do(actions)
+            elif not readable:  # the reply is late (link.py rule 7)
+                session.nothing_read(now)
         if not acted and now >= session.next_wakeup():
             self._do(session.tick(now))
 

@@ -29,6 +29,22 @@ Rules:
    wake-up per chunk, not per byte. The hold's end may be met up to one quiet time of rule 9
    late (``hold_reads_latest``): a reply that came partly is then read in the wake-up that
    takes the readings of the replies that came whole (lines.py rule 7), not in one of its own.
+   The hold also waits out how late this controller's replies have been whole (``late_s``:
+   a turn-round longer than a byte time, a USB adapter that delivers in chunks), so that a
+   controller that is always a little late has each reply read once, not once in part and
+   again for the rest (and its reading taken in a wake-up of its own, after the others'). A
+   reading whose reply took more than one read raises it to when that reply was whole at the
+   earliest it can have been (the read that completed it, or, if that read came at the end of
+   a hold, the bytes still missing at the read before, at the line rate with one of them on
+   its way, whichever is sooner), plus a byte time, but by one quiet time of rule 9 at most
+   per reply: a one-off late reply (a busy machine) leaves the next hold's end within the
+   time a round of other lines' reads is gathered with (lines.py rule 7), and an adapter
+   that is always 16 ms late is learned in a few replies. Each reading whose reply was whole
+   at the hold's end lowers it by LATE_EASE of itself, so that a controller that got quicker
+   holds the replies longer for a while, not for ever. It is at most LATE_MAX_S. The reading
+   is still taken only after the quiet time of rule 9 from the read. A stop due ends the
+   hold: the port is read at once and watched, so a stop that waits for the reply on a
+   half-duplex line (rule 3) goes the moment the reply is whole, not at the hold's end.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -70,6 +86,8 @@ from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 JUNK_QUIET_S = 0.05
 SETTLE_BYTES = 3  # rule 9: the next byte of a reply sent back to back comes after one
 SETTLE_MIN_S = 0.005  # rule 9: at a high baud rate, a little longer than three byte times
+LATE_MAX_S = 0.05  # rule 7: a USB adapter's latency timer (16 ms by default), and more
+LATE_EASE = 1 / 256  # rule 7: of the learned lateness, given back per reply whole in time
 _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle Rotor-EZ) fits
 
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
@@ -86,6 +104,10 @@ class Link:
         self.reply_timeout_s = spec.reply_timeout_s + slower_s
         self._hold_until = 0.0
         self._hold_bytes = 0  # of the polled reply, not read yet (rule 7)
+        self._hold_base = 0.0  # rule 7: when the polled reply can be whole at the line rate
+        self._hold_reads = 0  # rule 7: reads of the polled reply so far
+        self._late_seen = 0.0  # rule 7: when it can be whole at the earliest, by the last read
+        self.late_s = 0.0  # rule 7: how late this controller's replies have been whole
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
@@ -121,18 +143,31 @@ class Link:
         return self._stop_due
 
     def hold_reads_until(self) -> float:
-        """Rule 7: bytes arriving before this time can wait in the port."""
-        return self._hold_until if self._reply_deadline is not None else 0.0
+        """Rule 7: bytes arriving before this time can wait in the port (none while a stop
+        is due)."""
+        if self._reply_deadline is None or self._stop_due:
+            return 0.0
+        return self._hold_until
 
     def hold_reads_latest(self) -> float:
         """Rule 7: the latest the held bytes are read, one quiet time after the hold ends."""
-        if self._reply_deadline is None or not self._hold_until:
+        if self._reply_deadline is None or self._stop_due or not self._hold_until:
             return 0.0
         return self._hold_until + self._settle_s
 
     def got_bytes(self, count: int, now: float) -> None:
-        """``count`` bytes were read: hold again for what the polled reply still lacks (rule 7)."""
-        self._hold_bytes = max(0, self._hold_bytes - count)
+        """``count`` bytes were read (none: the port had nothing at the hold's end): hold again
+        for what the polled reply still lacks, and note how late it is (rule 7)."""
+        if self._hold_bytes:
+            self._hold_reads += 1
+            missing = max(0, self._hold_bytes - count)
+            if not count:  # the port is watched: the read that completes it is as it comes
+                self._late_seen = math.inf
+            elif missing:  # whole no sooner than the rest at the line rate (one on its way)
+                self._late_seen = now + (missing - 1) * self._byte_s
+            self._hold_bytes = missing if count else self._hold_bytes
+        if not count:
+            return  # (the port is watched for the reply from now on)
         self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
         if self._held is not None:  # rule 9: the line is not quiet yet
             self._held_after = True
@@ -151,6 +186,7 @@ class Link:
         if self._reply_deadline is None and self.codec.awaiting_reply():
             self._reply_deadline = now + self.reply_timeout_s
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
+            self._hold_reads = 0
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -275,11 +311,22 @@ class Link:
         if self._held is not None:
             self._held = None
             return False
+        self._learn_late(now)
         self._held = reply
         self._held_until = now + self._settle_s
         self._held_cap = self._held_until + self.spec.reply_bytes * self._byte_s
         self._held_after = False
         return True
+
+    def _learn_late(self, now: float) -> None:
+        """Rule 7: how late the polled reply whose reading this is was whole."""
+        reads, self._hold_reads = self._hold_reads, 0
+        if reads == 1:  # whole at the hold's end: maybe held longer than it needed
+            self.late_s -= self.late_s * LATE_EASE
+        elif reads > 1:
+            whole = min(now, self._late_seen) + self._byte_s
+            late = min(whole - self._hold_base, self.late_s + self._settle_s, LATE_MAX_S)
+            self.late_s = max(self.late_s, late)
 
     def spoils(self, junk: JunkReply) -> bool:
         """Rule 9: whether ``junk`` came in the same exchange as a held reading and spoils it
@@ -349,8 +396,9 @@ class Link:
         if isinstance(asked, list):
             self._queue(asked[1:], now + self._gap_s, now, poll=True)
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
-        self._hold_bytes = self.spec.reply_bytes
-        self._hold_until = now + (len(query) + self._hold_bytes + 1) * self._byte_s
+        self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
+        self._hold_base = now + (len(query) + self._hold_bytes + 1) * self._byte_s
+        self._hold_until = self._hold_base + self.late_s
         return True
 
     def silent_for(self, now: float) -> float:

@@ -320,6 +320,13 @@ class RotatorSession:
         self._heed(now)
         return self._step(now)
 
+    def nothing_read(self, now: float) -> None:
+        """The port had nothing when the hold on a poll's reply ended: the reply is late
+        (link.py rule 7 learns by how much). Nothing else changes: no step."""
+        link = self.controller.link
+        if link is not None:
+            link.got_bytes(0, now)
+
     def sky_answer(self, generation: int, answer: Answer, now: float) -> list[Action]:
         """The sky worker's answer to an ``Ask`` of ``generation`` (tracking.py rule 8)."""
         if generation == self.tracker.generation:

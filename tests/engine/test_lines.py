@@ -562,3 +562,56 @@ def test_a_worker_says_its_held_reply_may_be_read_up_to_a_quiet_time_late(tmp_pa
 
 def _readable(fd: int) -> bool:
     return bool(select.select([fd], [], [], 0)[0])
+
+
+def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_time() -> None:
+    """worker.py rule 2 with link.py rule 7: a USB adapter that hands a Rotor-EZ's reply over
+    3 ms after the hold on it ended. The worker reads the port at the hold's end, finds
+    nothing, says so to the session and watches the port; the reply is read as it comes, and
+    the hold on the next poll's reply lasts those 3 ms (and a byte time) longer: read once."""
+    master, slave = os.openpty()
+    settings = RotatorSettings.model_validate(
+        {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
+    )
+    box = Mailbox()
+    worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
+    byte_s = 10 / 4800
+
+    def polled(now: float) -> float:
+        """Serve at ``now`` until the poll is written; how long its reply is held."""
+        written = b""
+        for _ in range(10):
+            worker.guarded(worker.serve, now, set())
+            while _readable(master):
+                written += os.read(master, 64)
+            if written.endswith(b"AI1;"):
+                return worker.wants(now)[1] - now
+        raise AssertionError(f"no poll: {written!r}")
+
+    try:
+        now = 100.0
+        worker.guarded(worker.begin, now, lambda: None)
+        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
+        opening = worker._opening
+        assert opening is not None
+        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
+        hold_s = polled(now)
+        now += hold_s
+        worker.guarded(worker.serve, now, set())  # the hold's end: nothing in the port
+        fds, _, _ = worker.wants(now)
+        assert len(fds) == 2  # the mailbox and the port: watched for the reply now
+        now += 0.003
+        os.write(master, b";123")
+        wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
+        worker.guarded(worker.serve, now, {worker._fd})
+        now += 0.05
+        worker.guarded(worker.serve, now, set())  # its quiet time over: the reading taken
+        assert worker.status.bearing_deg == 123
+        now = worker.wants(now)[1]  # the next poll
+        assert polled(now) == pytest.approx(hold_s + 0.003 + byte_s)
+    finally:
+        worker.guarded(worker.end, now)
+        assert worker.wait_closed(slow(5))
+        os.close(master)
+        os.close(slave)
+        box.close()

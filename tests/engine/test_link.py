@@ -9,9 +9,10 @@ from bridge.emulators.spid_models import position_reply
 from bridge.protocols.base import PositionReply
 from bridge.protocols.rc2800 import MODELS as RC2800
 from bridge.protocols.rotorez import MODELS as ROTOREZ
+from bridge.protocols.rt21 import MODELS as RT21
 from bridge.protocols.satel import MODELS
 from bridge.protocols.spid import MODELS as SPID
-from bridge.session.link import Link
+from bridge.session.link import LATE_EASE, LATE_MAX_S, Link
 from bridge.session.slew import SLEW_MARGIN_S, SLEW_TIME_FACTOR, Slew
 
 
@@ -71,6 +72,138 @@ def test_a_polls_reply_is_held_until_it_can_be_whole_then_for_what_is_missing() 
     link.got_bytes(2, 10.04)
     assert link.hold_reads_until() == 0.0  # whole: nothing held any more
     assert link.hold_reads_latest() == 0.0
+
+
+BYTE_S = 10 / 4800  # a byte at the Rotor-EZ's 4800 baud, 8N1
+
+
+def exchange(link: Link, t: float, arrivals: list[tuple[float, bytes]]) -> list[float]:
+    """One poll at ``t`` (on a grid of 0.5 s) of a Rotor-EZ link whose reply arrives in the
+    port as ``arrivals`` (when, bytes), read as worker.py reads it: at each hold's end, and when
+    the hold has ended with the reply not whole, as the next bytes arrive. The reading is taken
+    after its quiet time. The times of the reads (a read that found nothing included)."""
+    link.poll(t, 0.5)
+    assert link.output() == [b"AI1;"]
+    reads: list[float] = []
+    pending = sorted(arrivals)
+    while True:
+        hold = link.hold_reads_until()
+        at = hold if hold > (reads[-1] if reads else t) else pending[0][0]
+        data = b"".join(chunk for when, chunk in pending if when <= at)
+        pending = [(when, chunk) for when, chunk in pending if when > at]
+        reads.append(at)
+        link.got_bytes(len(data), at)
+        replies = link.codec.feed(data)
+        if replies:
+            (reply,) = replies
+            assert isinstance(reply, PositionReply) and link.hold_reading(reply, at)
+            assert link.settled(at + 0.01) is reply
+            link.got_reading(at + 0.01)
+            return reads
+
+
+def streamed(start: float, reply: bytes = b";123") -> list[tuple[float, bytes]]:
+    """``reply`` as a UART sends it from ``start``: a byte each byte time."""
+    return [(start + (i + 1) * BYTE_S, reply[i : i + 1]) for i in range(len(reply))]
+
+
+def test_a_controller_that_is_always_late_has_each_reply_read_once_from_its_second_on() -> None:
+    """Rule 7: a Rotor-EZ that turns round in 3 ms, not the one byte time (2.08 ms) the hold
+    allows: its first reply is read twice (in part at the hold's end, then the rest), and from
+    then on the hold waits for it: one read per reply, at most a byte time after it is whole
+    (the latency a reading pays for it)."""
+    spec = ROTOREZ["rotorez"]
+    link = Link(spec.codec_factory(), spec, 0.0, 4800)
+    for n in range(20):
+        t = 10.0 + 0.5 * n
+        sent = t + 4 * BYTE_S + 0.003  # the query on the line, then the turn-round
+        arrivals = streamed(sent)
+        reads = exchange(link, t, arrivals)
+        whole = arrivals[-1][0]
+        if n == 0:
+            assert len(reads) == 2 and reads[0] < whole <= reads[1]
+        else:
+            assert reads == [pytest.approx(reads[0])] and whole <= reads[0] <= whole + BYTE_S
+
+
+def test_a_late_reply_delivered_in_one_chunk_is_waited_for_from_the_third_poll_on() -> None:
+    """Rule 7: a USB adapter that hands the whole reply over 12 ms after it is on the line
+    (its latency timer): the first hold ends with nothing there, the port is watched and the
+    reply read as it comes. Each reply raises the hold by a quiet time (three byte times) at
+    most: the second hold ends with nothing there too, and from the third on the hold lasts
+    until the reply has come."""
+    spec = ROTOREZ["rotorez"]
+    link = Link(spec.codec_factory(), spec, 0.0, 4800)
+    for n in range(6):
+        t = 10.0 + 0.5 * n
+        delivered = t + 9 * BYTE_S + 0.012
+        reads = exchange(link, t, [(delivered, b";123")])
+        if n < 2:
+            assert reads == [pytest.approx(t + (9 + 3 * n) * BYTE_S), delivered]
+        else:
+            assert len(reads) == 1 and delivered <= reads[0] <= delivered + BYTE_S
+
+
+def test_a_one_off_late_reply_holds_the_next_a_quiet_time_longer_at_most_then_less() -> None:
+    """Rule 7: a reply a whole second late (a controller busy, a busy machine) holds the next
+    replies a quiet time longer at most (so they are still read with other lines'), and a
+    controller on time again has its hold come back down by LATE_EASE of the learned
+    lateness per reply. However late the replies, the hold is at most LATE_MAX_S longer."""
+    spec = ROTOREZ["rotorez"]
+    link = Link(spec.codec_factory(), spec, 0.0, 4800)
+    exchange(link, 10.0, [(11.0, b";123")])
+    assert link.late_s == pytest.approx(3 * BYTE_S)
+    holds = []
+    for n in range(1, 601):
+        t = 12.0 + 0.5 * n
+        exchange(link, t, streamed(t + 5 * BYTE_S))  # on time: whole at 9 byte times
+        holds.append(link.late_s)
+    assert holds[0] == pytest.approx(3 * BYTE_S * (1 - LATE_EASE))
+    assert holds[-1] == pytest.approx(3 * BYTE_S * (1 - LATE_EASE) ** 600)
+    assert holds[-1] < 3 * BYTE_S / 9
+    for n in range(40):
+        t = 400.0 + 0.5 * n
+        exchange(link, t, [(t + 0.4, b";123")])
+    assert link.late_s == LATE_MAX_S
+
+
+@pytest.mark.parametrize("model", ["rot2prog", "md01"])
+def test_a_stop_due_ends_the_hold_so_it_goes_as_soon_as_the_reply_is_whole(model: str) -> None:
+    """Rules 3 and 7: a SPID takes no frame while it replies, so a stop waits for the reply;
+    but not for the hold's end (its lateness learned included): the port is read at once."""
+    spec = SPID[model]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.late_s = 0.02
+    link.poll(10.0, 1.0)
+    assert len(link.output()) == 1
+    assert link.hold_reads_until() > 10.0 and link.hold_reads_latest() > 10.0
+    link.want_stop()
+    assert not link.flush_stop(10.001)  # the reply is owed
+    assert link.hold_reads_until() == 0.0 and link.hold_reads_latest() == 0.0
+    reply = position_reply(spec, 123.0, 45.0, 2)
+    t = 10.0 + spec.exchange_time_s()  # whole: read as it came
+    link.got_bytes(len(reply), t)
+    (reading,) = link.codec.feed(reply)
+    assert isinstance(reading, PositionReply) and link.hold_reading(reading, t)
+    assert link.flush_stop(t)
+
+
+def test_a_short_reply_whole_at_the_holds_end_teaches_no_lateness() -> None:
+    """Rule 7: an RT-21 sends a bearing under 100 degrees without a leading zero (``45.0;``,
+    a byte short of the ``123.4;`` its hold counts on): whole at the hold's end, it makes the
+    next hold no longer."""
+    spec = RT21["rt21"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    for n in range(3):
+        link.poll(10.0 + n, 1.0)
+        assert link.output()
+        at = link.hold_reads_until()
+        link.got_bytes(5, at)
+        (reply,) = link.codec.feed(b"45.0;")
+        assert isinstance(reply, PositionReply) and link.hold_reading(reply, at)
+        assert link.settled(at + 1.0) is reply
+        link.got_reading(at + 1.0)
+        assert link.late_s == 0.0
 
 
 # -- rule 8: polls on a grid ----------------------------------------------------------------------
