@@ -397,6 +397,7 @@ class Link:
             self._queue(asked[1:], now + self._gap_s, now, poll=True)
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
         self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
+        self._late_seen = math.inf  # (the last poll's bound is not this one's)
         self._hold_base = now + (len(query) + self._hold_bytes + 1) * self._byte_s
         self._hold_until = self._hold_base + self.late_s
         return True
