@@ -410,6 +410,49 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
 
+def test_a_look_that_found_no_stop_holds_across_rounds_until_one_is_put() -> None:
+    """Rule 8: rounds after a look that found no stop ask no worker again while none is put;
+    a stop put at the end of one round (its last worker served) still goes first in the next."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+    asked: list[int] = []  # the urgent() calls, by round
+    put: list[int] = []  # where in the log the stop came
+
+    class Counted(Urgent):
+        def urgent(self) -> set[int]:
+            asked[-1] += 1
+            return super().urgent()
+
+    class Last(Counted):
+        def serve(self, now: float, ready: set[int]) -> None:
+            super().serve(now, ready)
+            asked.append(0)  # the last of each round: what follows is the next round's
+            if len(log) >= 4 * 3 and not put:
+                workers[1].box.put(Stop(), wake=False)  # between rounds, for the second
+                put.append(len(log))
+            if put and len(log) >= put[0] + 3:
+                done.set()
+
+    asked.append(0)
+    workers: list[Urgent] = [Counted(clock, 0.0, threading.Event(), log) for _ in range(2)]
+    workers.append(Last(clock, 0.0, threading.Event(), log))
+    for w in workers:
+        lines.add(w)  # type: ignore[arg-type]
+    try:
+        assert done.wait(slow(5))
+    finally:
+        for w in workers:
+            lines.remove(w)  # type: ignore[arg-type]
+    k = put[0]
+    assert [w for w, _ in log[k : k + 3]] == [workers[1], workers[0], workers[2]]
+    rounds = len(log) // 3  # every round serves the three (always due)
+    assert rounds >= 5
+    before = asked[1 : k // 3]  # the rounds after the first, before the stop
+    assert before and all(n == 0 for n in before)  # (each used to ask all three)
+
+
 def _pipes() -> set[int]:
     """This process's open pipe descriptors (the lines' wake pipe is one pair of them)."""
     found = set()
