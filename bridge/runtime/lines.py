@@ -42,17 +42,20 @@ Rules:
    the earliest of those plus GATHER_S, so a reply that came partly is read in the wake-up
    that takes the others' readings, not in one of its own. A descriptor that becomes ready
    (a stop in a mailbox) still ends the wait at once.
-8. Rule 5's look for a stop among the workers not served yet is made before the first of a
-   round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
-   11) or that look found one (there may be another): not one question to every worker after
-   each one served.
+8. Rule 5's look for a stop among the workers not served yet is made before a worker is
+   served only when a stop or lock ON was put since the last look (mailbox.py rule 11), that
+   look found one (there may be another) or workers joined since (one may have come with a
+   stop): not one question to every worker after each one served, nor at every round. A look
+   that found none stays true until a stop or lock ON is put (taking one never makes another),
+   across rounds as within one.
 9. The wake-ups a round owes other threads (the MQTT network thread's, for the statuses it
    was handed) are given once, when the round ends (core/handoff.py): one wake-up for the
    statuses of 16 rotators, not 16. A stop's frame is not among them: it is written to its
    port as the worker is served.
 10. The thread keeps one poller for its life: a worker's descriptors are registered when
    what it waits on changes (a reply held or read, a port opened or lost, the worker joining
-   or leaving), not all of them anew at every wake-up; the poller waits on exactly the
+   or leaving), not all of them anew at every wake-up, and then only the descriptors that
+   changed (a held reply's port leaves, the mailbox stays); the poller waits on exactly the
    descriptors the workers asked for this round, each once however many ask for it.
 """
 
@@ -124,6 +127,7 @@ class Lines:
         self._poller = select.poll()  # rule 10: the thread's, made afresh when it starts
         self._polled: dict[int, int] = {}  # descriptor -> how many workers wait on it
         self._watching: dict[Worker, list[int]] = {}  # what each waits on, as registered
+        self._looked: int | None = None  # rule 8: mailbox.halts() at a look that found none
 
     # -- any thread (rule 4) --------------------------------------------------------------------
     def add(self, worker: Worker) -> None:
@@ -193,6 +197,8 @@ class Lines:
             joining, self._joining = self._joining, []
             leaving, self._leaving = self._leaving, {}
             self._workers.extend(joining)
+            if joining:
+                self._looked = None  # rule 8: one may have come with a stop
             for worker in leaving:
                 self._workers.remove(worker)
                 self._watch(worker, [])  # rule 10
@@ -240,44 +246,51 @@ class Lines:
             due = [w for w, (_, until, _) in zip(workers, wanted, strict=True) if now >= until]
         if due:
             with handoff.batch():  # rule 9
-                self._serve_round(due, list(workers), ready)
+                self._serve_round(due, ready)
 
     def _watch(self, worker: Worker, fds: list[int]) -> None:
         """Rule 10: the poller waits on ``fds`` for ``worker`` from now on, instead of what it
-        waited on for it before."""
+        waited on for it before; only what changed is told to the poller."""
         polled, poller = self._polled, self._poller
-        before = self._watching.pop(worker, [])
+        before = self._watching.get(worker, ())
+        now = list(dict.fromkeys(fds))  # each once (a copy: the worker may change its own)
         for fd in before:
+            if fd in now:
+                continue
             if polled[fd] == 1:
                 del polled[fd]
                 poller.unregister(fd)
             else:
                 polled[fd] -= 1
-        for fd in fds:
+        for fd in now:
+            if fd in before:
+                continue
             if fd in polled:
                 polled[fd] += 1
             else:
                 polled[fd] = 1
                 poller.register(fd, _READY)
-        self._watching[worker] = list(fds)  # a copy: the worker may change its own
+        self._watching[worker] = now
 
-    def _serve_round(self, due: list[Worker], left: list[Worker], ready: set[int]) -> None:
-        look, seen = True, 0
+    def _serve_round(self, due: list[Worker], ready: set[int]) -> None:
+        workers, served = self._workers, set()
         while due:
             # rule 5: a stop that came while this round served others goes next
             worker, urgent = due[0], _NOTHING
             halts = mailbox.halts()
-            if look or halts != seen:  # (rule 8: none put since a look that found none)
-                seen = halts
-                for other in left:
-                    urgent = other.urgent()
-                    if urgent:
-                        worker = other
-                        break
-                look = bool(urgent)  # one found: there may be another
-            if worker in due:
+            if halts != self._looked:  # (rule 8: none put since a look that found none)
+                for other in workers:
+                    if other not in served:
+                        urgent = other.urgent()
+                        if urgent:
+                            worker = other
+                            break
+                self._looked = None if urgent else halts  # one found: there may be another
+            if worker is due[0]:
+                del due[0]
+            elif worker in due:
                 due.remove(worker)
-            left.remove(worker)
+            served.add(worker)
             # the clock read for each: a slow step (a burst of statuses to the listeners) must
             # not hand the next a stale time, or a query it writes looks overdue at once
             worker.guarded(worker.serve, self._clock(), ready | urgent if urgent else ready)

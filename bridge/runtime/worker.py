@@ -30,7 +30,9 @@ Rules:
 6. What a worker with an open port waits for (``wants``) changes only when it is served: the
    session is touched by nothing else, and what other threads bring (commands, sky answers)
    comes through the mailbox, whose descriptor is always watched. So it is worked out once
-   after each step and kept until the next; a port being opened is asked about every time.
+   after each step and kept until the next (but for the end of a held reply's hold, which
+   ``serve`` asks the session again after the mailbox's commands: a stop ends it, link.py
+   rule 7); a port being opened is asked about every time.
 """
 
 from __future__ import annotations
@@ -198,8 +200,30 @@ class Worker:
                 attempt = partial(self._open, self.cfg.port, self.cfg.spec, self.cfg.baud)
                 self._opening = PendingOpen(attempt, self._wake)
             return
+        session, acted = self.session, False
         try:
-            self._serve(ready, now)
+            session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking
+            if self._box in ready:
+                batch = self._mailbox.take()
+                if batch:
+                    self._do(session.commands(batch, now))
+                    acted = True
+                acted = self._take_answers(now) or acted
+            readable = self._fd in ready
+            # rule 2: asked again, not as wants saw it: a stop just taken ends the hold
+            if readable or (self._held and now >= session.hold_reads_until()):
+                data = read_available(self._fd, readable, self.cfg.port)
+                if data:
+                    actions = session.bytes_received(data, now)
+                    if actions:
+                        acted = True
+                        self._do(actions)
+                elif not readable:  # the reply is late (link.py rule 7)
+                    session.nothing_read(now)
+            if not acted and now >= session.next_wakeup():
+                actions = session.tick(now)
+                if actions:
+                    self._do(actions)
         except (serial.SerialException, OSError) as exc:
             self._lost(f"serial link to {self.cfg.port} lost: {exc}", ErrorKind.SERIAL, now)
 
@@ -215,27 +239,6 @@ class Worker:
     @property
     def status(self) -> RotatorStatus:
         return self.session.status
-
-    def _serve(self, ready: set[int], now: float) -> None:
-        session, acted = self.session, False
-        session.set_wall(now, self._wall())  # a clock set late (NTP after boot) moves tracking
-        if self._box in ready:
-            batch = self._mailbox.take()
-            if batch:
-                self._do(session.commands(batch, now))
-                acted = True
-            acted = self._take_answers(now) or acted
-        readable = self._fd in ready
-        if readable or (self._held and now >= session.hold_reads_until()):
-            data = read_available(self._fd, readable, self.cfg.port)
-            if data:
-                actions = session.bytes_received(data, now)
-                acted = acted or bool(actions)
-                self._do(actions)
-            elif not readable:  # the reply is late (link.py rule 7)
-                session.nothing_read(now)
-        if not acted and now >= session.next_wakeup():
-            self._do(session.tick(now))
 
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None

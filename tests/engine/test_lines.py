@@ -25,6 +25,7 @@ from bridge.app import worker_config
 from bridge.core.errors import Refused
 from bridge.core.model import ErrorEvent, Stop, Target
 from bridge.emulators.pty import EmulatedPort
+from bridge.emulators.spid_models import position_reply
 from bridge.protocols.base import ModelSpec
 from bridge.runtime.lines import GATHER_S, Lines, wake_at
 from bridge.runtime.port import open_port
@@ -34,7 +35,7 @@ from bridge.runtime.worker import Worker
 from bridge.session.mailbox import Mailbox
 from bridge.settings import RotatorSettings
 from tests.support import wait_until
-from tests.support.rig import FAST_BRIDGE, FAST_ROTOR
+from tests.support.rig import FAST_BRIDGE, FAST_ROTOR, FAST_SPID_BRIDGE
 from tests.support.waiting import slow
 from tests.support.workers import StandInWorker
 
@@ -410,6 +411,49 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
 
+def test_a_look_that_found_no_stop_holds_across_rounds_until_one_is_put() -> None:
+    """Rule 8: rounds after a look that found no stop ask no worker again while none is put;
+    a stop put at the end of one round (its last worker served) still goes first in the next."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+    asked: list[int] = []  # the urgent() calls, by round
+    put: list[int] = []  # where in the log the stop came
+
+    class Counted(Urgent):
+        def urgent(self) -> set[int]:
+            asked[-1] += 1
+            return super().urgent()
+
+    class Last(Counted):
+        def serve(self, now: float, ready: set[int]) -> None:
+            super().serve(now, ready)
+            asked.append(0)  # the last of each round: what follows is the next round's
+            if len(log) >= 4 * 3 and not put:
+                workers[1].box.put(Stop(), wake=False)  # between rounds, for the second
+                put.append(len(log))
+            if put and len(log) >= put[0] + 3:
+                done.set()
+
+    asked.append(0)
+    workers: list[Urgent] = [Counted(clock, 0.0, threading.Event(), log) for _ in range(2)]
+    workers.append(Last(clock, 0.0, threading.Event(), log))
+    for w in workers:
+        lines.add(w)  # type: ignore[arg-type]
+    try:
+        assert done.wait(slow(5))
+    finally:
+        for w in workers:
+            lines.remove(w)  # type: ignore[arg-type]
+    k = put[0]
+    assert [w for w, _ in log[k : k + 3]] == [workers[1], workers[0], workers[2]]
+    rounds = len(log) // 3  # every round serves the three (always due)
+    assert rounds >= 5
+    before = asked[1 : k // 3]  # the rounds after the first, before the stop
+    assert before and all(n == 0 for n in before)  # (each used to ask all three)
+
+
 def _pipes() -> set[int]:
     """This process's open pipe descriptors (the lines' wake pipe is one pair of them)."""
     found = set()
@@ -609,6 +653,54 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
         assert worker.status.bearing_deg == 123
         now = worker.wants(now)[1]  # the next poll
         assert polled(now) == pytest.approx(hold_s + 0.003 + byte_s)
+    finally:
+        worker.guarded(worker.end, now)
+        assert worker.wait_closed(slow(5))
+        os.close(master)
+        os.close(slave)
+        box.close()
+
+
+def test_a_stop_taken_during_a_hold_is_written_as_soon_as_the_reply_in_the_port_is_whole() -> None:
+    """worker.py rules 2 and 6 with link.py rules 3 and 7: a Rot2Prog takes no frame while it
+    replies, so a stop waits for the reply; the reply has come whole into the port before the
+    hold on it ends (here at once). A stop put then is written in the serve that takes it: the
+    worker asks the session about the hold again after the commands, reads the port and the
+    stop goes, not at the hold's end."""
+    master, slave = os.openpty()
+    settings = RotatorSettings.model_validate(
+        {"id": "az", "model": "rot2prog", "port": os.ttyname(slave), **FAST_SPID_BRIDGE}
+    )
+    spec = worker_config(settings).spec
+    box = Mailbox()
+    worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
+    query, stop = b"\x57" + bytes(10) + b"\x1f\x20", b"\x57" + bytes(10) + b"\x0f\x20"
+    try:
+        now = 100.0
+        worker.guarded(worker.begin, now, lambda: None)
+        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
+        opening = worker._opening
+        assert opening is not None
+        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
+        written = b""
+        for _ in range(10):  # opened, then polled
+            worker.guarded(worker.serve, now, set())
+            while _readable(master):
+                written += os.read(master, 64)
+            if written.endswith(query):
+                break
+        assert written.endswith(query)
+        fds, hold, _ = worker.wants(now)
+        assert fds == [box.fileno()] and hold > now + 0.1  # 25 bytes at 600 baud held
+        os.write(master, position_reply(spec, 123.0, 45.0, 2))
+        wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
+        box.put(Stop(), wake=True)
+        now += 0.01
+        worker.guarded(worker.serve, now, {box.fileno()})
+        sent = b""
+        while _readable(master):
+            sent += os.read(master, 64)
+        assert sent == stop
     finally:
         worker.guarded(worker.end, now)
         assert worker.wait_closed(slow(5))
