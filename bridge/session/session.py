@@ -95,13 +95,14 @@ Rules:
 20. A ``tick`` with nothing due but the poll (the query of every exchange) runs the poll alone
    and asks for the next wake-up: no line work, motion clock, stop check, parts, options or
    status, when every one of them would change nothing. Whether so is judged at the end of
-   each whole step, as a time before which it holds if nothing but time passes
-   (``_only_poll_until``): no target waiting, a status built, the storm as last seen, every
-   deciding part off, every measuring part off or woken by the motion alone and that motion
-   seen, no part that shows a status block, and the controller's own part (controller.py
-   ``only_poll_until``: no stop due, owed or to check, no count of stops to start again,
-   nothing on the line but the poll, no note, until the motion's next deadline, silence's
-   timeout or an option owed). Bytes read and the poll step itself end it; every other input
+   each whole step, as a time before which it holds if nothing but time passes, with the
+   step's wake-up (``_next_wakeup``): no target waiting, a status built, the storm as last
+   seen, every deciding part off, every measuring part off or woken by the motion alone and
+   that motion seen, no part that shows a status block (``_poll_alone``), and the
+   controller's own part (controller.py ``wakeups``, with the same look at the line as its
+   wake-up: no stop due, owed or to check, no count of stops to start again, nothing on the
+   line but the poll, no note, until the motion's next deadline, silence's timeout or an
+   option owed). Bytes read and the poll step itself end it; every other input
    runs the whole step, which judges it anew; so the tick after a poll step, or after bytes
    that ran no step, runs the whole step. Nothing the status is built from changes in the poll
    step (rule 18: the poll changes only the link's own state).
@@ -361,20 +362,20 @@ class RotatorSession:
                 return False
         return True
 
-    def _only_poll_until(self, now: float) -> float:
-        """Rule 20, at the end of a step whose deciding parts are all off: until when a tick
-        would do nothing but the poll (-inf: not even now)."""
+    def _poll_alone(self) -> bool:
+        """Rule 20, at the end of a step whose deciding parts are all off: whether the
+        session's own part of it holds (the controller's own: ``Controller.wakeups``)."""
         if self.targets.pending is not None or self._showing or self._status_key is None:
-            return -math.inf
+            return False
         if self.wind.storm != self._storm_seen:
-            return -math.inf
+            return False
         motion = self.controller.motion
         for part in self._measuring:
             if part.on(self) and (
                 part.wakes is not _BY_MOTION or self._seen_motion.get(part.name) is not motion
             ):
-                return -math.inf
-        return self.controller.only_poll_until(now)
+                return False
+        return True
 
     def _poll_step(self, now: float) -> list[Action]:
         """Rule 20: the step when only the poll is due: the poll, its frame, the next wake-up
@@ -385,7 +386,7 @@ class RotatorSession:
         link = ctl.link
         assert link is not None
         actions: list[Action] = [Write(frame) for frame in link.output()]
-        wakeup = ctl.wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
+        wakeup = ctl.wakeups(now, now + IDLE_WAKEUP_S, False)[0]  # (no target waits: no stream)
         self._wakeup = self._step_wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
         return actions
 
@@ -517,9 +518,9 @@ class RotatorSession:
         self._ask_sky()
         off = self._deciding_off()  # (a part that is off is asked for no wake-up: rule 17)
         waking = self._waking_measuring if off else self._waking
-        self._wakeup = self._step_wakeup = self._next_wakeup(now, waking)
+        wakeup, self._poll_until = self._next_wakeup(now, waking, off and self._poll_alone())
+        self._wakeup = self._step_wakeup = wakeup
         actions, self._actions = self._actions, []
-        self._poll_until = self._only_poll_until(now) if off else -math.inf  # rule 20
         return actions
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
@@ -734,14 +735,18 @@ class RotatorSession:
                 shown[name] = value
         return shown
 
-    def _next_wakeup(self, now: float, waking: tuple[Part[RotatorSession], ...]) -> float:
+    def _next_wakeup(
+        self, now: float, waking: tuple[Part[RotatorSession], ...], alone: bool
+    ) -> tuple[float, float]:
         """The soonest of the controller's, the stream's and ``waking``'s (the parts with a
-        wake-up: all of them, or those a step did not find off)."""
-        wakeup = self.controller.wakeup(now, now + IDLE_WAKEUP_S)
+        wake-up: all of them, or those a step did not find off); and rule 20's time, if
+        ``alone`` (the session's part of it holds: ``_poll_alone``), -inf if not (the
+        controller's ``wakeups`` judges its own part of it with the same look at the line)."""
+        wakeup, until = self.controller.wakeups(now, now + IDLE_WAKEUP_S, alone)
         stream = self.targets.stream_deadline(now) if self.targets.pending is not None else None
         if stream is not None and stream < wakeup:
             wakeup = stream
-        return self._parts_wakeup(now, wakeup, waking)
+        return self._parts_wakeup(now, wakeup, waking), until
 
     def _parts_wakeup(
         self, now: float, wakeup: float, waking: tuple[Part[RotatorSession], ...]
