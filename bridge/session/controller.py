@@ -304,7 +304,7 @@ class Controller:
         if events:
             self._motion_events(events, now)
         moving = self.motion.state is mo.MOVING
-        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
+        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.spec.az_wraps)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
 

@@ -196,15 +196,19 @@ def reading(
         )
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # not None: the first reading returned above
-    changes: dict[str, Any] = {}  # one replace() per reading: this runs at every poll
-    if az_deg != m.position_deg or el_deg != m.el_position_deg:
-        changes.update(changed_t=now, position_deg=az_deg, el_position_deg=el_deg)
+    # one replace() per reading: this runs at every poll (its changes as literals, no update)
+    changes: dict[str, Any] = (
+        {"changed_t": now, "position_deg": az_deg, "el_position_deg": el_deg}
+        if az_deg != m.position_deg or el_deg != m.el_position_deg
+        else {}
+    )
     wraps = cfg.spec.az_wraps  # (asked twice: no property call)
     moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
     if el_deg is not None and m.el_anchor_deg is not None:
         moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
     if moved:
-        changes.update(anchor_deg=az_deg, el_anchor_deg=el_deg, last_move_t=now, still_since_t=None)
+        changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
+        changes["last_move_t"], changes["still_since_t"] = now, None
         changes["state"] = MOVING
         if m.target_deg is not None:
             changes["progress_t"] = now
