@@ -677,7 +677,7 @@ class RotatorSession:
         slew = link.slew if link is not None else None
         key: tuple[object, ...] = (  # one flat tuple: this runs at every step
             # (the bearings first: a turning rotor's every reading changes one, and the
-            # comparison ends there, before the motion's twenty fields)
+            # comparison ends there, before the motion's __eq__ compares its every field)
             ctl.az_shown.value,
             ctl.el_shown.value,
             ctl.motion,
