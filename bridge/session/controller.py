@@ -38,7 +38,7 @@ from dataclasses import dataclass, replace
 from enum import Enum
 from typing import cast
 
-from bridge.core.model import ErrorKind, MotionState, RotatorStatus, SettingValue, Target
+from bridge.core.model import ErrorKind, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import (
     JunkReason,
     JunkReply,
@@ -58,7 +58,7 @@ from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
 
-ONLY_POLL_MARGIN_S = 1e-3  # only_poll_until's: the whole step a little early (rounding)
+ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ class Controller:
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
-        # the motion (and its configuration) whose next deadline ``wakeup`` found, and that
+        # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
         self._deadline: tuple[mo.Motion | None, mo.MotionConfig | None, float] = (
             None,
@@ -137,23 +137,23 @@ class Controller:
         if pending is not None and link is not None:
             az, el = resolve(pending, self.motion, self.cfg.aim)
             wire = link.codec.wire_target(az, el) if az is not None else None
-        return st.Seen(
-            previous=previous,
-            view=view,
-            version=self.version,
-            controller_time=self.controller_time,
-            motion=self.motion,
-            connected=link is not None,
-            answering=link is not None and self.answering,
-            locked=locked,
-            options=self.options.values,
-            bearing_deg=self.az_shown.value,
-            elevation_deg=self.el_shown.value,
-            slew=link.slew if link is not None else None,
-            pending=pending,
-            pending_wire=wire,
-            wall_offset_s=wall_offset_s,
-            features=features,
+        return st.Seen(  # (by position: a third of the cost by name, at every reading)
+            previous,
+            view,
+            self.version,  # version
+            self.controller_time,  # controller_time
+            self.motion,  # motion
+            link is not None,  # connected
+            link is not None and self.answering,  # answering
+            locked,
+            self.options.values,  # options
+            self.az_shown.value,  # bearing_deg
+            self.el_shown.value,  # elevation_deg
+            link.slew if link is not None else None,  # slew
+            pending,
+            wire,  # pending_wire
+            wall_offset_s,
+            features,
         )
 
     def take_notes(self) -> list[Note]:
@@ -303,8 +303,8 @@ class Controller:
         self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
         if events:
             self._motion_events(events, now)
-        moving = self.motion.state is MotionState.MOVING
-        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.az_wraps)
+        moving = self.motion.state is mo.MOVING
+        self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.spec.az_wraps)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
 
@@ -350,7 +350,7 @@ class Controller:
 
     def tick(self, now: float) -> None:
         """The motion machine's clock (rule 4: not during a slew), and an enable owed. Not
-        before the motion's next deadline (``wakeup`` keeps it): until then its clock
+        before the motion's next deadline (``wakeups`` keeps it): until then its clock
         changes nothing (motion.py rule 9)."""
         link = self.link
         seen, cfg, deadline = self._deadline
@@ -369,7 +369,9 @@ class Controller:
                 self.target_last = False
             self.options.enable_due = False
 
-    def only_poll_until(self, now: float) -> float:
+    def _only_poll_until(
+        self, now: float, link: Link, times: list[float], deadline: float
+    ) -> float:
         """Until when a step has nothing of the controller's to do but its poll, if nothing
         but time passes from ``now``, the end of a step (session.py rule 20; -inf: not even
         now): ``line_work``, ``tick``, ``check_stop`` and ``send_options`` change nothing,
@@ -377,21 +379,18 @@ class Controller:
         on a line that reports positions, no slew, no stop due or owed a repeat (none sent
         since the rotor came to rest and no count of stops left to start again: ``check_stop``
         has nothing to do), nothing owed on the line but its next poll (no reply, no reading
-        held, no frame waiting, no junk: ``wakeups`` names the poll alone), no enable and no
-        note owed; then until the motion's next deadline (``wakeup`` just kept it), silence's
-        timeout (the poll's check) or options owed, whichever comes first, ONLY_POLL_MARGIN_S
-        early."""
-        link, m = self.link, self.motion
-        if link is None or not self.answering or self.notes or m.stop_sent_t is not None:
+        held, no frame waiting, no junk: the line's wake-ups, ``times``, name the poll alone),
+        no enable and no note owed; then until the motion's next deadline (``deadline``, that
+        ``wakeups`` just found and kept for ``tick``), silence's timeout (the poll's check) or
+        options owed, whichever comes first, ONLY_POLL_MARGIN_S early."""
+        m = self.motion
+        if not self.answering or self.notes or m.stop_sent_t is not None:
             return -math.inf
         if self.stops.counting:  # check_stop has its count of stops to start again
             return -math.inf
         if link.slew is not None or link.stop_due or link.reply_owed or self.options.enable_due:
             return -math.inf
-        seen, cfg, deadline = self._deadline
-        if m is not seen or self.cfg.motion is not cfg or now >= deadline:
-            return -math.inf
-        if not self.cfg.spec.can_report_position or len(link.wakeups()) != 1:
+        if not self.cfg.spec.can_report_position or len(times) != 1:
             return -math.inf
         silent_at = now + self.cfg.silence_timeout_s - link.silent_for(now)
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
@@ -464,7 +463,7 @@ class Controller:
         elif silent and link.last_reply_t is None and not self._silence_reported:
             self._silence_reported = True
             self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
-        busy = busy or self.motion.state is MotionState.MOVING
+        busy = busy or self.motion.state is mo.MOVING
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
@@ -479,12 +478,16 @@ class Controller:
             why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
             self.notes.append(Report(ErrorKind.PROTOCOL, why))
 
-    def wakeup(self, now: float, latest: float) -> float:
+    def wakeups(self, now: float, latest: float, alone: bool) -> tuple[float, float]:
         """When the line or the motion machine needs the session next, ``latest`` at the
-        latest."""
+        latest; and until when a step has nothing of the controller's to do but its poll
+        (``_only_poll_until``) if ``alone`` (the session's own part of rule 20 holds), -inf if
+        not: the end of a whole step asks both, and the line's wake-ups once for both."""
         link = self.link
+        times = None
         if link is not None:
-            for t in link.wakeups():
+            times = link.wakeups()
+            for t in times:
                 if t < latest:
                     latest = t
             if link.slew is not None:  # refresh the estimate
@@ -494,5 +497,9 @@ class Controller:
         if repeat is not None and now < repeat < latest and link is not None:
             latest = repeat
         deadline = mo.next_deadline(m, cfg, now)
-        self._deadline = m, cfg, math.inf if deadline is None else deadline  # (tick's)
-        return latest if deadline is None or deadline >= latest else deadline
+        kept = math.inf if deadline is None else deadline
+        self._deadline = m, cfg, kept  # (tick's)
+        wakeup = latest if deadline is None or deadline >= latest else deadline
+        if not alone or link is None or times is None:
+            return wakeup, -math.inf
+        return wakeup, self._only_poll_until(now, link, times, kept)

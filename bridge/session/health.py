@@ -138,7 +138,7 @@ class Health:
             self._stop_t = m.stop_sent_t
             if move is not None and move.stop_t is None:
                 move.stop_t = m.stop_sent_t
-        if m.state is MotionState.MOVING:
+        if m.state is mo.MOVING:
             retarget = move is not None and m.target_t is not None and m.target_t != move.target_t
             if move is not None and retarget and move.target_t is not None:
                 self._move = None

@@ -95,13 +95,14 @@ Rules:
 20. A ``tick`` with nothing due but the poll (the query of every exchange) runs the poll alone
    and asks for the next wake-up: no line work, motion clock, stop check, parts, options or
    status, when every one of them would change nothing. Whether so is judged at the end of
-   each whole step, as a time before which it holds if nothing but time passes
-   (``_only_poll_until``): no target waiting, a status built, the storm as last seen, every
-   deciding part off, every measuring part off or woken by the motion alone and that motion
-   seen, no part that shows a status block, and the controller's own part (controller.py
-   ``only_poll_until``: no stop due, owed or to check, no count of stops to start again,
-   nothing on the line but the poll, no note, until the motion's next deadline, silence's
-   timeout or an option owed). Bytes read and the poll step itself end it; every other input
+   each whole step, as a time before which it holds if nothing but time passes, with the
+   step's wake-up (``_next_wakeup``): no target waiting, a status built, the storm as last
+   seen, every deciding part off, every measuring part off or woken by the motion alone and
+   that motion seen, no part that shows a status block (``_poll_alone``), and the
+   controller's own part (controller.py ``wakeups``, with the same look at the line as its
+   wake-up: no stop due, owed or to check, no count of stops to start again, nothing on the
+   line but the poll, no note, until the motion's next deadline, silence's timeout or an
+   option owed). Bytes read and the poll step itself end it; every other input
    runs the whole step, which judges it anew; so the tick after a poll step, or after bytes
    that ran no step, runs the whole step. Nothing the status is built from changes in the poll
    step (rule 18: the poll changes only the link's own state).
@@ -150,6 +151,10 @@ log = logging.getLogger(__name__)
 
 T = TypeVar("T")
 IDLE_WAKEUP_S = 1.0  # a session with nothing due still looks at the clock this often
+# enum members the step and the reads compare with, by module names (a member looked up on its
+# enum costs some 70 ns in Python 3.11: motion.py's states)
+_BY_MOTION = Wake.MOTION
+_FED_NOTHING, _FED_HELD = Fed.NOTHING, Fed.HELD
 _SHOWN = len(st.Features._fields)  # rule 18: the status key ends with what the parts show
 
 
@@ -309,11 +314,11 @@ class RotatorSession:
         ctl = self.controller
         was_answering = ctl.answering
         fed = ctl.feed(data, now)
-        if fed is Fed.NOTHING:
+        if fed is _FED_NOTHING:
             if ctl.link is not None:  # rule 16: a held reading's quiet time may be longer
                 self._wakeup = min([self._step_wakeup, *ctl.link.wakeups()])
             return []  # rule 9
-        if fed is Fed.HELD and self._quiet_hold(now):
+        if fed is _FED_HELD and self._quiet_hold(now):
             return []  # rule 16
         if self.controller.answering and not was_answering:
             self._activity(now)
@@ -364,20 +369,20 @@ class RotatorSession:
                 return False
         return True
 
-    def _only_poll_until(self, now: float) -> float:
-        """Rule 20, at the end of a step whose deciding parts are all off: until when a tick
-        would do nothing but the poll (-inf: not even now)."""
+    def _poll_alone(self) -> bool:
+        """Rule 20, at the end of a step whose deciding parts are all off: whether the
+        session's own part of it holds (the controller's own: ``Controller.wakeups``)."""
         if self.targets.pending is not None or self._showing or self._status_key is None:
-            return -math.inf
+            return False
         if self.wind.storm != self._storm_seen:
-            return -math.inf
+            return False
         motion = self.controller.motion
         for part in self._measuring:
             if part.on(self) and (
-                part.wakes is not Wake.MOTION or self._seen_motion.get(part.name) is not motion
+                part.wakes is not _BY_MOTION or self._seen_motion.get(part.name) is not motion
             ):
-                return -math.inf
-        return self.controller.only_poll_until(now)
+                return False
+        return True
 
     def _poll_step(self, now: float) -> list[Action]:
         """Rule 20: the step when only the poll is due: the poll, its frame, the next wake-up
@@ -388,7 +393,7 @@ class RotatorSession:
         link = ctl.link
         assert link is not None
         actions: list[Action] = [Write(frame) for frame in link.output()]
-        wakeup = ctl.wakeup(now, now + IDLE_WAKEUP_S)  # (no target waits: no stream)
+        wakeup = ctl.wakeups(now, now + IDLE_WAKEUP_S, False)[0]  # (no target waits: no stream)
         self._wakeup = self._step_wakeup = self._parts_wakeup(now, wakeup, self._waking_measuring)
         return actions
 
@@ -520,9 +525,9 @@ class RotatorSession:
         self._ask_sky()
         off = self._deciding_off()  # (a part that is off is asked for no wake-up: rule 17)
         waking = self._waking_measuring if off else self._waking
-        self._wakeup = self._step_wakeup = self._next_wakeup(now, waking)
+        wakeup, self._poll_until = self._next_wakeup(now, waking, off and self._poll_alone())
+        self._wakeup = self._step_wakeup = wakeup
         actions, self._actions = self._actions, []
-        self._poll_until = self._only_poll_until(now) if off else -math.inf  # rule 20
         return actions
 
     def _parts(self, parts: tuple[Part[RotatorSession], ...], now: float) -> None:
@@ -532,7 +537,7 @@ class RotatorSession:
         for part in parts:
             if not part.on(self):
                 continue
-            if part.wakes is Wake.MOTION:  # only a motion it has not seen
+            if part.wakes is _BY_MOTION:  # only a motion it has not seen
                 motion = self.controller.motion
                 if self._seen_motion.get(part.name) is motion:
                     continue
@@ -678,16 +683,18 @@ class RotatorSession:
         link, view = ctl.link, self.view
         slew = link.slew if link is not None else None
         key: tuple[object, ...] = (  # one flat tuple: this runs at every step
-            ctl.cfg,
+            # (the bearings first: a turning rotor's every reading changes one, and the
+            # comparison ends there, before the motion's __eq__ compares its every field)
+            ctl.az_shown.value,
+            ctl.el_shown.value,
             ctl.motion,
+            ctl.cfg,
             link,
             slew,  # (its end ends the estimate)
             ctl.answering,
             ctl.version,
             ctl.controller_time,
             ctl.options.revision,
-            ctl.az_shown.value,
-            ctl.el_shown.value,
             self.targets.pending,
             self.locked,
             view.last_error,
@@ -735,14 +742,18 @@ class RotatorSession:
                 shown[name] = value
         return shown
 
-    def _next_wakeup(self, now: float, waking: tuple[Part[RotatorSession], ...]) -> float:
+    def _next_wakeup(
+        self, now: float, waking: tuple[Part[RotatorSession], ...], alone: bool
+    ) -> tuple[float, float]:
         """The soonest of the controller's, the stream's and ``waking``'s (the parts with a
-        wake-up: all of them, or those a step did not find off)."""
-        wakeup = self.controller.wakeup(now, now + IDLE_WAKEUP_S)
+        wake-up: all of them, or those a step did not find off); and rule 20's time, if
+        ``alone`` (the session's part of it holds: ``_poll_alone``), -inf if not (the
+        controller's ``wakeups`` judges its own part of it with the same look at the line)."""
+        wakeup, until = self.controller.wakeups(now, now + IDLE_WAKEUP_S, alone)
         stream = self.targets.stream_deadline(now) if self.targets.pending is not None else None
         if stream is not None and stream < wakeup:
             wakeup = stream
-        return self._parts_wakeup(now, wakeup, waking)
+        return self._parts_wakeup(now, wakeup, waking), until
 
     def _parts_wakeup(
         self, now: float, wakeup: float, waking: tuple[Part[RotatorSession], ...]

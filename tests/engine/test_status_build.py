@@ -1,6 +1,7 @@
 """status.py rule 6 and motion.py's ``_with``: the status and the motion a reading makes,
 built without their frozen dataclasses' ``__init__``, are the values that ``__init__`` builds:
-every field, in the dataclass's order, equal, and still frozen."""
+every field, in the dataclass's order, equal, and still frozen. And the ``status.Seen`` the
+controller builds by position holds each value under its own name."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 
 from bridge.core.model import RotatorStatus
 from bridge.session import motion as mo
+from bridge.session import status as st
 from tests.engine.virtual import VirtualRotator
 
 
@@ -48,3 +50,40 @@ def test_a_reading_s_motion_is_the_dataclass_s_own() -> None:
     )
     with pytest.raises(dataclasses.FrozenInstanceError):
         m2.position_deg = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize("locked", [False, True])
+@pytest.mark.parametrize("answering", [False, True])
+def test_what_the_controller_hands_the_status_is_each_value_by_its_name(
+    locked: bool, answering: bool
+) -> None:
+    """Controller.seen builds status.Seen by position (at every reading): each field is the
+    value of its name, none swapped with a neighbour of its type."""
+    v = VirtualRotator("rotorez", emulator={"speed_deg_s": 4.0})
+    v.run_for(3.0)
+    v.manual_rotate(90.0)
+    v.run_for(2.0)
+    session, ctl = v.session, v.session.controller
+    assert ctl.link is not None and ctl.link.slew is None
+    ctl.version, ctl.controller_time, ctl.answering = "version", "clock", answering
+    ctl.az_shown.value, ctl.el_shown.value = 11.0, 22.0
+    features = st.Features(tracking_ended="ended")
+    seen = ctl.seen(session.status, session.view, None, locked, 33.0, features)
+    assert seen._asdict() == {
+        "previous": session.status,
+        "view": session.view,
+        "version": "version",
+        "controller_time": "clock",
+        "motion": ctl.motion,
+        "connected": True,
+        "answering": answering,
+        "locked": locked,
+        "options": ctl.options.values,
+        "bearing_deg": 11.0,
+        "elevation_deg": 22.0,
+        "slew": None,
+        "pending": None,
+        "pending_wire": None,
+        "wall_offset_s": 33.0,
+        "features": features,
+    }
