@@ -95,7 +95,10 @@ class StateTopic(Generic[T]):
 @dataclass(frozen=True)
 class StatusBlock(Generic[T]):
     """``key`` in ``R/status``, there while ``value`` is not None. ``render`` gives the block
-    (a JSON value) or, with ``rendered``, its JSON text (made once, appended last)."""
+    (a JSON value) or, with ``rendered``, its JSON text (made once, appended last), from the
+    value alone: while ``value`` gives the same object, R/status keeps the text it made of it
+    (interfaces/mqtt/payloads.py ``StatusText``; a part's value is never changed after it was
+    handed on, session/parts.py rule 6)."""
 
     key: str
     value: Callable[[RotatorStatus], T | None]

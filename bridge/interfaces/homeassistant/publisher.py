@@ -23,7 +23,7 @@ Rules (numbered for all of homeassistant/; 1 to 3 are entities.py's):
 Lock: ``_lock`` makes a snapshot of the configs and its publishing one step: the lines thread
 (a controller's version arrived), paho's thread (Home Assistant came back) and the catalog's
 watcher (the TLE file changed) all publish, and an older snapshot published last would stay
-retained.
+retained. ``on_status`` looks at a reading's version before taking it (see there).
 """
 
 from __future__ import annotations
@@ -117,12 +117,20 @@ class DiscoveryPublisher:
 
     def on_status(self, rotator_id: str, status: RotatorStatus) -> None:
         """A controller's version came: its rotator's configs say it (only they change; all of
-        them for 16 rotators took a tenth of the start-up's CPU, once per rotator)."""
+        them for 16 rotators took a tenth of the start-up's CPU, once per rotator). A version
+        already said is seen without the lock (every reading comes here): only this method
+        changes one, on the thread of the rotator's statuses, and the dict read is whole."""
+        version = status.version
+        if not version:
+            return
+        known = self._rotators.get(rotator_id)
+        if known is None or version == known.version:
+            return
         with self._lock:
             r = self._rotators.get(rotator_id)
-            if r is None or not status.version or status.version == r.version:
+            if r is None or version == r.version:
                 return
-            r = self._rotators[rotator_id] = replace(r, version=status.version)
+            r = self._rotators[rotator_id] = replace(r, version=version)
             if self._current:  # (else every config goes out below, as at the start)
                 configs = rotator_messages(self.prefix, self._ident, self._topics, r)
                 self._current.update(configs)

@@ -227,7 +227,9 @@ class MqttClient(Connection):
                 return
             self._retained[topic] = (data, qos)
             if self.connected.is_set():
-                self._owned.sent(topic, data)
+                owned = self._owned
+                if owned.hears_own:  # rule 10 (MQTT 5 hears none of its own: nothing to note)
+                    owned.sent(topic, data)
                 self._delivery.send(topic, data, qos, retain=True)
 
     def clear_retained(self, topic: str) -> None:

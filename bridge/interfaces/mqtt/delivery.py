@@ -42,6 +42,7 @@ EVENT_BACKLOG = 50  # rule 13
 MAX_QUEUED = 4096  # rule 13: QoS 1 messages paho holds for the broker, at most
 MAX_UNACKED = 10_000  # rule 11: QoS 1 message ids remembered, at most
 FAILED_LOG_S = 60.0  # rule 13
+_SUCCESS = MQTTErrorCode.MQTT_ERR_SUCCESS  # (looked up once: every publish compares with it)
 
 
 class Delivery:
@@ -73,7 +74,7 @@ class Delivery:
     def send(self, topic: str, data: str | bytes, qos: int, *, retain: bool) -> None:
         """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
         info = self._client.publish(topic, data, qos=qos, retain=retain)
-        if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS and not (
+        if info.rc != _SUCCESS and not (
             qos and info.rc == MQTTErrorCode.MQTT_ERR_NO_CONN  # paho keeps it for the connect
         ):
             self._failed(topic, data, retain, info.rc)

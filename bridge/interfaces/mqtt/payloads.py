@@ -17,10 +17,12 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from operator import attrgetter, is_
+from typing import Any
 
 from bridge.core import geo
 from bridge.core.model import RotatorStatus, TargetInfo
-from bridge.feature import status_blocks
+from bridge.feature import StatusBlock, status_blocks
 from bridge.interfaces.mqtt.call_payload import Called, CallError, parse_called
 from bridge.pointing import Pointing
 from bridge.protocols.base import ModelSpec, Setting, SettingKind
@@ -59,6 +61,7 @@ def _status_encoder() -> Callable[[object], str]:
 
 
 _STATUS_ENCODE = _status_encoder()
+_ENCODE_TEXT = json.encoder.encode_basestring_ascii  # a JSON string, as the encoders write it
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 
@@ -399,6 +402,59 @@ def presets_json(presets: dict[str, tuple[float, float | None]]) -> str:
 def status_json(
     status: RotatorStatus, time_unix: float, has_elevation: bool, shows_raw: bool = False
 ) -> str:
+    """``R/status``, made whole: a rotator's every reading goes through its own
+    ``StatusText``, which keeps what a reading leaves as it was."""
+    return StatusText(has_elevation).render(status, time_unix, shows_raw)
+
+
+class StatusText:
+    """One rotator's ``R/status``, made at every reading: status_json's text, all but its
+    head (``bearing`` to ``target_info``) and its time kept from the last status and made
+    again only when a value it is made of is not the very object it was made of last time (a
+    status is made of the last one's values; a turning rotor's readings change its head:
+    session/status.py). The same object gives the same text (every one is immutable: frozen
+    dataclasses, text, numbers, an enum; ``options``, a new dict each time, by its keys and
+    values); equal values are not enough (``1 == 1.0 == True``, ``0.0 == -0.0``: four
+    texts). The values are held while kept, so no other object takes their ``id``; one
+    attribute holds them and the text, so another thread never reads one without the other."""
+
+    __slots__ = ("_has_elevation", "_kept")
+
+    def __init__(self, has_elevation: bool) -> None:
+        self._has_elevation = has_elevation
+        self._kept: tuple[tuple[object, ...], str, str] = ((), "", "")
+
+    def render(self, status: RotatorStatus, time_unix: float, shows_raw: bool) -> str:
+        blocks = status_blocks()
+        values = [block.value(status) for block in blocks]
+        options = status.options
+        key = (blocks, *_REST_FIELDS(status), *values, *options, *options.values())
+        kept, middle, tail = self._kept
+        if len(key) != len(kept) or not all(map(is_, key, kept)):
+            middle, tail = _status_rest(status, blocks, values)
+            self._kept = key, middle, tail
+        head = _STATUS_ENCODE(_status_head(status, self._has_elevation, shows_raw))
+        return f"{head[:-1]},{middle}{_ENCODE_TEXT(_iso(time_unix))}{tail}"
+
+
+#: what R/status is made of after its head, besides the feature blocks and the options
+_REST_FIELDS = attrgetter(
+    "parked",
+    "state",
+    "connected",
+    "available",
+    "locked",
+    "version",
+    "last_error",
+    "last_command_source",
+    "last_operator",
+    "control",
+    "estimated",
+)
+
+
+def _status_head(status: RotatorStatus, has_elevation: bool, shows_raw: bool) -> dict[str, object]:
+    """R/status up to ``parked``: what a reading changes."""
     doc: dict[str, object] = {
         "bearing": status.bearing_deg,
         "target": status.target_az_deg,
@@ -415,10 +471,19 @@ def status_json(
         doc["overlap"] = status.overlap
     if status.target_info is not None:
         doc["target_info"] = target_info(status.target_info)
-    doc["parked"] = status.parked
-    tail = []  # the blocks rendered once (rotor health's, once per move), last
-    for block in status_blocks():  # bridge/feature.py: each feature's, in the registry's order
-        value = block.value(status)
+    return doc
+
+
+def _status_rest(
+    status: RotatorStatus, blocks: tuple[StatusBlock[Any], ...], values: list[object]
+) -> tuple[str, str]:
+    """R/status after its head, around its time: its members from ``parked`` to ``estimated``
+    then ``"time":``; and after the time, the blocks rendered once (rotor health's, once per
+    move) and the closing brace. The blocks are each feature's (bridge/feature.py), in the
+    registry's order; ``values`` holds each one's value."""
+    doc: dict[str, object] = {"parked": status.parked}
+    tail = []
+    for block, value in zip(blocks, values, strict=True):
         if value is None:
             continue
         if block.rendered:
@@ -440,11 +505,7 @@ def status_json(
         None if control is None else {"holder": control.operator, "until": _iso(control.until_unix)}
     )
     doc["estimated"] = status.estimated
-    doc["time"] = _iso(time_unix)
-    text = _STATUS_ENCODE(doc)
-    if not tail:
-        return text
-    return f"{text[:-1]}{''.join(tail)}}}"
+    return f'{_STATUS_ENCODE(doc)[1:-1]},"time":', f"{''.join(tail)}}}"
 
 
 #: the whole seconds ``_iso`` wrote lately, and their text up to the seconds: a status with a

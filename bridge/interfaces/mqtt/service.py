@@ -171,7 +171,7 @@ class MqttService:
         """``console``: what a console far from the station draws, in ``R/info`` too."""
         self._rotators[rotator.id] = rotator
         t = self.topics.rotator(rotator.id)
-        self._out[rotator.id] = _Outbound.of(t, rotator.spec, self._states)
+        self._out[rotator.id] = _Outbound.of(t, rotator, self._states)
         presets = pl.presets_json(rotator.pointing.presets)  # for dashboards; empty: none
         self._publisher.publish_retained(t.presets, presets)
         info = pl.info_json(
@@ -251,50 +251,63 @@ class MqttService:
 
     # -- outbound (the lines thread) -------------------------------------------------------
     def publish_status(self, rotator_id: str, status: RotatorStatus) -> None:
-        rot = self._rotators.get(rotator_id)
-        if rot is None:
+        t = self._out.get(rotator_id)  # (the topics made once: a status's are the same every time)
+        if t is None:
             return  # emitted before attach(): the first real status follows
-        t = self._out[rotator_id]  # (the topics made once: a status's are the same every time)
-        handed, publish = self._handed, self._publisher.publish_retained
-
-        def pub(topic: str, payload: str) -> None:  # rule 3
-            if handed.get(topic) != payload:
-                handed[topic] = payload
-                publish(topic, payload)
-
+        rot = t.rotator
+        # rule 3: ``was(topic) != payload`` before ``hand`` (which asks again) spares the call
+        # for the topics a reading leaves as they were (most of them)
+        was, hand = self._handed.get, self._hand
         if status.bearing_deg is not None:
-            pub(t.bearing, pl.number(status.bearing_deg))
+            text = pl.number(status.bearing_deg)
+            if was(t.bearing) != text:
+                hand(t.bearing, text)
         if status.elevation_deg is not None:
-            pub(t.elevation, pl.number(status.elevation_deg))
-        pub(t.state, status.state.value)
-        pub(t.availability, "online" if status.available else "offline")
-        if status.version:
-            pub(t.version, status.version)
+            text = pl.number(status.elevation_deg)
+            if was(t.elevation) != text:
+                hand(t.elevation, text)
+        text = status.state._value_  # (its value, without the enum's property)
+        if was(t.state) != text:
+            hand(t.state, text)
+        text = "online" if status.available else "offline"
+        if was(t.availability) != text:
+            hand(t.availability, text)
+        if status.version and was(t.version) != status.version:
+            hand(t.version, status.version)
         options = status.options
         for name, topic in t.options:  # ON/OFF, a number, a choice's name (model.setting_text)
             if name in options:
-                pub(topic, setting_text(options[name]))
-        pub(t.lock_state, pl.switch(status.locked))
-        self._publish_states(rot, t.before, status, pub)
-        shows_raw = rot.pointing.shows_raw
-        pub(t.status, pl.status_json(status, self._wall(), t.has_elevation, shows_raw))
-        self._publish_states(rot, t.after, status, pub)  # (R/control, as ever)
+                hand(topic, setting_text(options[name]))
+        text = "ON" if status.locked else "OFF"  # (pl.switch)
+        if was(t.lock_state) != text:
+            hand(t.lock_state, text)
+        if t.before:
+            self._publish_states(rot, t.before, status)
+        hand(t.status, t.text.render(status, self._wall(), rot.pointing.shows_raw))  # (its time)
+        if t.after:
+            self._publish_states(rot, t.after, status)  # (R/control, as ever)
         self._latest[rotator_id] = status
         for group in self._groups.values():
             if rotator_id in group.member_ids:
-                self._publish_group(group, pub)
+                self._publish_group(group)
         for listener in self._status_listeners:
             listener(rotator_id, status)
+
+    def _hand(self, topic: str, payload: str) -> None:
+        """Rule 3: a status's payload handed on only if it is not the one handed on last."""
+        if self._handed.get(topic) != payload:
+            self._handed[topic] = payload
+            self._publisher.publish_retained(topic, payload)
 
     def _publish_states(
         self,
         rot: RotatorPort,
         states: tuple[tuple[StateTopic[Any], str], ...],
         status: RotatorStatus,
-        pub: Callable[[str, str], None],
     ) -> None:
         """The registry's state topics (bridge/feature.py ``StateTopic``) before R/status, or
         after it (``_Outbound``: each with its topic)."""
+        was = self._handed.get
         for state, topic in states:
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
@@ -305,7 +318,9 @@ class MqttService:
                 if value is self._values.get(topic):
                     continue
                 self._values[topic] = value
-            pub(topic, state.render(value))
+            text = state.render(value)
+            if was(topic) != text:
+                self._hand(topic, text)
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         """Rule 4: rate-limited per rotator; the next one published counts those left out."""
@@ -331,15 +346,9 @@ class MqttService:
         )
 
     # -- groups (rule 10) ---------------------------------------------------------------------
-    def _publish_group(self, group: Group, pub: Callable[[str, str], None] | None = None) -> None:
-        """``G/status`` and ``G/availability`` from the members' last statuses."""
-        if pub is None:
-
-            def pub(topic: str, payload: str) -> None:
-                if self._handed.get(topic) != payload:
-                    self._handed[topic] = payload
-                    self._publisher.publish_retained(topic, payload)
-
+    def _publish_group(self, group: Group) -> None:
+        """``G/status`` and ``G/availability`` from the members' last statuses (rule 3)."""
+        pub = self._hand
         g = self.topics.group(group.id)
         with self._group_lock:  # the newest of both threads' statuses is the last published
             statuses = {mid: self._latest.get(mid) for mid in group.member_ids}
@@ -581,9 +590,10 @@ class MqttService:
 
 
 class _Outbound(NamedTuple):
-    """A rotator's status topics (topics.py), made once when it is attached: every status
-    publishes to the same strings, in this order."""
+    """An attached rotator and its status topics (topics.py), made once when it is attached:
+    every status publishes to the same strings, in this order; ``text`` makes its R/status."""
 
+    rotator: RotatorPort
     bearing: str
     elevation: str
     state: str
@@ -594,11 +604,13 @@ class _Outbound(NamedTuple):
     status: str
     before: tuple[tuple[StateTopic[Any], str], ...]  # the registry's state topics, before R/status
     after: tuple[tuple[StateTopic[Any], str], ...]  # and after it
-    has_elevation: bool
+    text: pl.StatusText
 
     @classmethod
-    def of(cls, t: RotatorTopics, spec: ModelSpec, states: list[StateTopic[Any]]) -> _Outbound:
+    def of(cls, t: RotatorTopics, rot: RotatorPort, states: list[StateTopic[Any]]) -> _Outbound:
+        spec = rot.spec
         return cls(
+            rot,
             t.bearing,
             t.elevation,
             t.state,
@@ -609,7 +621,7 @@ class _Outbound(NamedTuple):
             t.status,
             tuple((s, t.feature(s.suffix)) for s in states if not s.after_status),
             tuple((s, t.feature(s.suffix)) for s in states if s.after_status),
-            spec.has_elevation,
+            pl.StatusText(spec.has_elevation),
         )
 
 

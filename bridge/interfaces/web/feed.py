@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 from bridge.core.model import ErrorEvent, RotatorStatus
-from bridge.interfaces.mqtt.payloads import status_json
+from bridge.interfaces.mqtt.payloads import StatusText
 
 EVENTS_KEPT = 20
 Message = tuple[str, str]  # (event name, its JSON), written out per transport (sse, websocket)
@@ -35,7 +35,7 @@ Message = tuple[str, str]  # (event name, its JSON), written out per transport (
 
 @dataclass(frozen=True)
 class Shape:
-    """How a rotator's R/status document is rendered (payloads.status_json's switches)."""
+    """How a rotator's R/status document is rendered (payloads.StatusText's switches)."""
 
     has_elevation: bool
     shows_raw: bool
@@ -69,6 +69,7 @@ class Page:
 class Feed:
     def __init__(self, shapes: dict[str, Shape]) -> None:
         self._shapes = shapes
+        self._texts: dict[str, StatusText] = {}  # rotator -> its R/status, made (rule 2)
         self._newest: dict[str, Message] = {}
         self.newest_spots: str | None = None  # rule 6: B/spots' document
         self.rendered: dict[str, float] = {}  # rotator -> the time of the status rendered last
@@ -102,7 +103,10 @@ class Feed:
 
     def status(self, rotator_id: str, status: RotatorStatus, t_wall: float) -> None:
         shape = self._shapes[rotator_id]
-        doc = status_json(status, t_wall, shape.has_elevation, shape.shows_raw)
+        text = self._texts.get(rotator_id)
+        if text is None:
+            text = self._texts[rotator_id] = StatusText(shape.has_elevation)
+        doc = text.render(status, t_wall, shape.shows_raw)
         head = f'{{"rotator":{json.dumps(rotator_id)},"t":{t_wall:.4f},"status":'
         chunk = ("status", f"{head}{doc}}}")
         self._newest[rotator_id] = chunk

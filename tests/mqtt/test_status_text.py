@@ -1,0 +1,201 @@
+"""R/status as a rotator's StatusText makes it at every reading (interfaces/mqtt/payloads.py):
+the text it keeps from one status to the next is the text a fresh ``json.dumps`` of the whole
+document gives, over long runs of statuses each made of the last one's values (as
+session/status.py makes them), where values change to equal ones of another type or sign too;
+and a reading that only turns the rotor makes the kept part no more."""
+
+from __future__ import annotations
+
+import json
+import random
+from collections.abc import Sequence
+from dataclasses import replace
+from datetime import UTC, datetime
+
+import pytest
+
+from bridge.core.model import (
+    AxisHealth,
+    Control,
+    FollowingInfo,
+    MotionState,
+    RotatorHealth,
+    RotatorStatus,
+    TargetInfo,
+    TrackingInfo,
+    WindInfo,
+)
+from bridge.feature import status_blocks
+from bridge.interfaces.mqtt import payloads as pl
+
+
+def _iso(t: float) -> str:
+    return datetime.fromtimestamp(t, UTC).isoformat(timespec="milliseconds")
+
+
+def fresh(status: RotatorStatus, time_unix: float, has_elevation: bool, shows_raw: bool) -> str:
+    """The document, whole, by json.dumps, in R/status's order (docs/mqtt.md): the blocks
+    rendered as text go last, after the time."""
+    doc: dict[str, object] = {"bearing": status.bearing_deg, "target": status.target_az_deg}
+    if has_elevation:
+        doc["elevation"] = status.elevation_deg
+        doc["target_elevation"] = status.target_el_deg
+    if status.controller_time is not None:
+        doc["controller_time"] = status.controller_time
+    if status.expected_end_unix is not None:
+        doc["expected_end"] = _iso(status.expected_end_unix)
+    if shows_raw:
+        doc["raw_bearing"] = status.raw_bearing_deg
+        doc["overlap"] = status.overlap
+    if status.target_info is not None:
+        doc["target_info"] = pl.target_info(status.target_info)
+    doc["parked"] = status.parked
+    last: dict[str, object] = {}
+    for block in status_blocks():
+        value = block.value(status)
+        if value is not None:
+            rendered = block.render(value)
+            if block.rendered:
+                last[block.key] = json.loads(str(rendered))
+            else:
+                doc[block.key] = rendered
+    control = status.control
+    doc.update(
+        state=status.state.value,
+        moving=status.moving,
+        connected=status.connected,
+        available=status.available,
+        locked=status.locked,
+        version=status.version,
+        options=dict(sorted(status.options.items())),
+        last_error=status.last_error,
+        last_command_source=status.last_command_source,
+        last_operator=status.last_operator,
+        control=None
+        if control is None
+        else {"holder": control.operator, "until": _iso(control.until_unix)},
+        estimated=status.estimated,
+        time=_iso(time_unix),
+    )
+    doc.update(last)
+    return json.dumps(doc, separators=(",", ":"))
+
+
+T0 = 1_780_000_000.0
+HEALTHS = [
+    None,
+    RotatorHealth(),
+    RotatorHealth(az=AxisHealth(speed_up_deg_s=4.0, odometer_deg=12.5), moves=3),
+    RotatorHealth(measured=False, warnings=("slow",), stall_azimuths_deg=(10.0, -0.0)),
+]
+TRACKINGS = [
+    None,
+    TrackingInfo("sun", "tracking", 120.5, 30.0, 121.0, 30.5),
+    TrackingInfo("ISS", "waiting", aos_unix=T0 + 60, los_unix=T0 + 600, pass_track=((1.0, 2.0),)),
+]
+FOLLOWINGS = [None, FollowingInfo("wsjtx"), FollowingInfo("wsjtx", "long", "K1ABC", "FN42", 291.3)]
+WINDS = [None, WindInfo(), WindInfo(55.0, True, T0 - 30, False, "storm")]
+TARGETS = [None, TargetInfo(35.7, 139.7, 9000.0, 35.0, 215.0, "short", "PM95vq")]
+#: equal to one another, each written its own way: a cache that compared values would mix them
+SAME_NUMBER: list[object] = [1, 1.0, True, 0, 0.0, -0.0, False]
+TEXTS = ["1.4S", "".join(["1.4", "S"]), "", None, 'naïve "quoted"\n']
+
+
+def _change(rng: random.Random, s: RotatorStatus) -> RotatorStatus:
+    """The next status: a reading (the bearing), and now and then anything else, each field to
+    one of a few values (the same, equal but not the same, or another)."""
+    bearing = round((s.bearing_deg or 0.0) + rng.choice([0.0, 0.8, -0.8, 1.0]), 2)
+    fields: dict[str, object] = {"bearing_deg": bearing, "raw_bearing_deg": bearing}
+    if rng.random() < 0.3:
+        name = rng.choice(
+            [
+                "state", "target_az_deg", "elevation_deg", "target_el_deg", "connected",
+                "available", "locked", "version", "options", "last_error",
+                "last_command_source", "estimated", "controller_time", "expected_end_unix",
+                "overlap", "target_info", "parked", "tracking", "tracking_ended", "following",
+                "following_ended", "wind", "health", "last_operator", "control",
+            ]
+        )  # fmt: skip
+        fields[name] = rng.choice(_choices(rng, name))
+    if rng.random() < 0.5:  # the session copies the options at every status
+        fields["options"] = dict(fields.get("options", s.options))  # type: ignore[call-overload]
+    return replace(s, **fields)  # type: ignore[arg-type]
+
+
+def _choices(rng: random.Random, name: str) -> Sequence[object]:
+    match name:
+        case "state":
+            return list(MotionState)
+        case "connected" | "available" | "locked" | "estimated" | "parked":
+            return [True, False]
+        case "target_az_deg" | "elevation_deg" | "target_el_deg":
+            return [None, 0.0, -0.0, 12.5, 90.0, 359.99]
+        case "expected_end_unix":
+            return [None, T0 + 3.0, T0 + 3.0005]
+        case "options":
+            return [
+                {},
+                {"enable": rng.choice(SAME_NUMBER)},
+                {"enable": rng.choice(SAME_NUMBER), "speed": rng.choice(SAME_NUMBER)},
+                {"speed": 50.0, "enable": True},
+                {"enable": True, "speed": 50.0},
+            ]
+        case "overlap":
+            return [None, "cw", "ccw"]
+        case "target_info":
+            return TARGETS
+        case "tracking":
+            return TRACKINGS
+        case "following":
+            return FOLLOWINGS
+        case "wind":
+            return WINDS
+        case "health":
+            return HEALTHS
+        case "control":
+            return [None, Control("alice", T0 + 600), Control("bob", T0 + 600.25)]
+        case "controller_time":
+            return [None, "12:00:00", "".join(["12:00", ":00"])]
+    return TEXTS  # version, last_error, last_command_source, *_ended, last_operator
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize(("has_elevation", "shows_raw"), [(False, False), (True, True)])
+def test_the_kept_text_is_a_fresh_json_dumps_of_every_status(
+    seed: int, has_elevation: bool, shows_raw: bool
+) -> None:
+    rng = random.Random(seed)
+    text = pl.StatusText(has_elevation)
+    status = RotatorStatus("r1", MotionState.MOVING, 10.0, connected=True, available=True)
+    for n in range(1500):
+        t = T0 + n * 0.2 + rng.choice([0.0, 0.0004, 0.9996])
+        expected = fresh(status, t, has_elevation, shows_raw)
+        assert text.render(status, t, shows_raw) == expected, n
+        assert pl.status_json(status, t, has_elevation, shows_raw) == expected
+        status = _change(rng, status)
+
+
+def test_a_reading_that_only_turns_the_rotor_makes_the_rest_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each status made as the session makes it (the options copied, the rest the last
+    status's): the rest of the document is made for the first only; a new value (even an
+    equal one: True where 1 was) makes it again."""
+    made = []
+    rest = pl._status_rest
+
+    def counted(*args: object) -> tuple[str, str]:
+        made.append(1)
+        return rest(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(pl, "_status_rest", counted)
+    text = pl.StatusText(False)
+    status = RotatorStatus("r1", MotionState.MOVING, 0.0, version="1.4S", options={"enable": 1})
+    status = replace(status, health=HEALTHS[2], control=Control("alice", T0 + 600))
+    for n in range(50):
+        status = replace(status, bearing_deg=n * 0.8, options=dict(status.options))
+        assert text.render(status, T0 + n, False) == fresh(status, T0 + n, False, False)
+    assert len(made) == 1
+    status = replace(status, options={"enable": True})
+    assert '"options":{"enable":true}' in text.render(status, T0, False)
+    assert len(made) == 2
