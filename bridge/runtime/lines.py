@@ -42,12 +42,11 @@ Rules:
    the earliest of those plus GATHER_S, so a reply that came partly is read in the wake-up
    that takes the others' readings, not in one of its own. A descriptor that becomes ready
    (a stop in a mailbox) still ends the wait at once.
-8. Rule 5's look for a stop among the workers not served yet is made before a worker is
-   served only when a stop or lock ON was put since the last look (mailbox.py rule 11), that
-   look found one (there may be another) or workers joined since (one may have come with a
-   stop): not one question to every worker after each one served, nor at every round. A look
-   that found none stays true until a stop or lock ON is put (taking one never makes another),
-   across rounds as within one.
+8. Rule 5's look for a stop among the workers not served yet is made before the first of a
+   round, and again only when a stop or lock ON was put since the last look (mailbox.py rule
+   11) or that look found one (there may be another): not one question to every worker after
+   each one served. (Not kept across rounds: a look after the first of a round skips the
+   workers served before it, one of which may have a stop put meanwhile.)
 9. The wake-ups a round owes other threads (the MQTT network thread's, for the statuses it
    was handed) are given once, when the round ends (core/handoff.py): one wake-up for the
    statuses of 16 rotators, not 16. A stop's frame is not among them: it is written to its
@@ -127,7 +126,6 @@ class Lines:
         self._poller = select.poll()  # rule 10: the thread's, made afresh when it starts
         self._polled: dict[int, int] = {}  # descriptor -> how many workers wait on it
         self._watching: dict[Worker, list[int]] = {}  # what each waits on, as registered
-        self._looked: int | None = None  # rule 8: mailbox.halts() at a look that found none
 
     # -- any thread (rule 4) --------------------------------------------------------------------
     def add(self, worker: Worker) -> None:
@@ -197,8 +195,6 @@ class Lines:
             joining, self._joining = self._joining, []
             leaving, self._leaving = self._leaving, {}
             self._workers.extend(joining)
-            if joining:
-                self._looked = None  # rule 8: one may have come with a stop
             for worker in leaving:
                 self._workers.remove(worker)
                 self._watch(worker, [])  # rule 10
@@ -274,18 +270,19 @@ class Lines:
 
     def _serve_round(self, due: list[Worker], ready: set[int]) -> None:
         workers, served = self._workers, set()
+        looked: int | None = None  # rule 8: mailbox.halts() at a look that found none
         while due:
             # rule 5: a stop that came while this round served others goes next
             worker, urgent = due[0], _NOTHING
             halts = mailbox.halts()
-            if halts != self._looked:  # (rule 8: none put since a look that found none)
+            if halts != looked:  # (rule 8: none put since a look that found none)
                 for other in workers:
                     if other not in served:
                         urgent = other.urgent()
                         if urgent:
                             worker = other
                             break
-                self._looked = None if urgent else halts  # one found: there may be another
+                looked = None if urgent else halts  # one found: there may be another
             if worker is due[0]:
                 del due[0]
             elif worker in due:

@@ -411,34 +411,29 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
 
-def test_a_look_that_found_no_stop_holds_across_rounds_until_one_is_put() -> None:
-    """Rule 8: rounds after a look that found no stop ask no worker again while none is put;
-    a stop put at the end of one round (its last worker served) still goes first in the next."""
+def test_a_stop_for_a_worker_served_earlier_in_the_round_goes_first_in_the_next() -> None:
+    """Rules 5 and 8: a stop put, while the third of four is served, for the second (served
+    before it in this round); the look for the rest of the round finds none. The next round
+    still looks before its first: the stopped one goes first, behind no other rotator."""
     clock = [100.0]
     lines = Lines(lambda: clock[0])
     done = threading.Event()
     log: list[tuple[Timed, float]] = []
-    asked: list[int] = []  # the urgent() calls, by round
     put: list[int] = []  # where in the log the stop came
 
-    class Counted(Urgent):
-        def urgent(self) -> set[int]:
-            asked[-1] += 1
-            return super().urgent()
-
-    class Last(Counted):
+    class Putter(Urgent):
         def serve(self, now: float, ready: set[int]) -> None:
+            everyone = len(lines._workers) == 4
             super().serve(now, ready)
-            asked.append(0)  # the last of each round: what follows is the next round's
-            if len(log) >= 4 * 3 and not put:
-                workers[1].box.put(Stop(), wake=False)  # between rounds, for the second
+            if everyone and not put and log[-2][0] is workers[1]:
+                workers[1].box.put(Stop(), wake=False)  # the second: served this round
                 put.append(len(log))
-            if put and len(log) >= put[0] + 3:
+            if put and len(log) >= put[0] + 8:
                 done.set()
 
-    asked.append(0)
-    workers: list[Urgent] = [Counted(clock, 0.0, threading.Event(), log) for _ in range(2)]
-    workers.append(Last(clock, 0.0, threading.Event(), log))
+    workers: list[Urgent] = [Urgent(clock, 0.0, threading.Event(), log) for _ in range(2)]
+    workers.append(Putter(clock, 0.0, threading.Event(), log))
+    workers.append(Urgent(clock, 0.0, threading.Event(), log))
     for w in workers:
         lines.add(w)  # type: ignore[arg-type]
     try:
@@ -447,11 +442,7 @@ def test_a_look_that_found_no_stop_holds_across_rounds_until_one_is_put() -> Non
         for w in workers:
             lines.remove(w)  # type: ignore[arg-type]
     k = put[0]
-    assert [w for w, _ in log[k : k + 3]] == [workers[1], workers[0], workers[2]]
-    rounds = len(log) // 3  # every round serves the three (always due)
-    assert rounds >= 5
-    before = asked[1 : k // 3]  # the rounds after the first, before the stop
-    assert before and all(n == 0 for n in before)  # (each used to ask all three)
+    assert [w for w, _ in log[k : k + 2]] == [workers[3], workers[1]]
 
 
 def _pipes() -> set[int]:
@@ -609,10 +600,10 @@ def _readable(fd: int) -> bool:
 
 
 def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_time() -> None:
-    """worker.py rule 2 with link.py rule 7: a USB adapter that hands a Rotor-EZ's reply over
-    3 ms after the hold on it ended. The worker reads the port at the hold's end, finds
-    nothing, says so to the session and watches the port; the reply is read as it comes, and
-    the hold on the next poll's reply lasts those 3 ms (and a byte time) longer: read once."""
+    """worker.py rule 2 with link.py rule 7: a USB adapter that hands a Rotor-EZ's replies
+    over 3 ms after the hold on them ended. The worker reads the port at the hold's end, finds
+    nothing, says so to the session and watches the port; the reply is read as it comes. After
+    two such replies the hold on the next lasts those 3 ms (and a byte time) longer."""
     master, slave = os.openpty()
     settings = RotatorSettings.model_validate(
         {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
@@ -621,15 +612,17 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
     worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
     byte_s = 10 / 4800
 
-    def polled(now: float) -> float:
-        """Serve at ``now`` until the poll is written; how long its reply is held."""
+    def polled(now: float) -> tuple[float, float]:
+        """Serve from ``now`` at each time the worker asks for until it writes a poll: when,
+        and how long its reply is held."""
         written = b""
         for _ in range(10):
             worker.guarded(worker.serve, now, set())
             while _readable(master):
                 written += os.read(master, 64)
             if written.endswith(b"AI1;"):
-                return worker.wants(now)[1] - now
+                return now, worker.wants(now)[1] - now
+            now = max(now, worker.wants(now)[1])
         raise AssertionError(f"no poll: {written!r}")
 
     try:
@@ -639,20 +632,24 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
         opening = worker._opening
         assert opening is not None
         wait_until(lambda: opening.result is not None, slow(5), "the port opened")
-        hold_s = polled(now)
-        now += hold_s
-        worker.guarded(worker.serve, now, set())  # the hold's end: nothing in the port
-        fds, _, _ = worker.wants(now)
-        assert len(fds) == 2  # the mailbox and the port: watched for the reply now
-        now += 0.003
-        os.write(master, b";123")
-        wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
-        worker.guarded(worker.serve, now, {worker._fd})
-        now += 0.05
-        worker.guarded(worker.serve, now, set())  # its quiet time over: the reading taken
-        assert worker.status.bearing_deg == 123
-        now = worker.wants(now)[1]  # the next poll
-        assert polled(now) == pytest.approx(hold_s + 0.003 + byte_s)
+        holds = []
+        for _ in range(3):
+            now, hold_s = polled(now)
+            holds.append(hold_s)
+            now += hold_s
+            worker.guarded(worker.serve, now, set())  # the hold's end: nothing in the port
+            fds, _, _ = worker.wants(now)
+            assert len(fds) == 2  # the mailbox and the port: watched for the reply now
+            now += 0.003
+            os.write(master, b";123")
+            wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
+            worker.guarded(worker.serve, now, {worker._fd})
+            now += 0.05
+            worker.guarded(worker.serve, now, set())  # its quiet time over: the reading taken
+            assert worker.status.bearing_deg == 123
+            now = worker.wants(now)[1]  # the next poll
+        assert holds[1] == pytest.approx(holds[0])
+        assert polled(now)[1] == pytest.approx(holds[0] + 0.003 + byte_s)
     finally:
         worker.guarded(worker.end, now)
         assert worker.wait_closed(slow(5))
