@@ -32,16 +32,19 @@ Rules:
    The hold also waits out how late this controller's replies have been whole (``late_s``:
    a turn-round longer than a byte time, a USB adapter that delivers in chunks), so that a
    controller that is always a little late has each reply read once, not once in part and
-   again for the rest (and its reading taken in a wake-up of its own, after the others'). A
-   reading whose reply took more than one read raises it to when that reply was whole at the
-   earliest it can have been (the read that completed it, or, if that read came at the end of
-   a hold, the bytes still missing at the read before, at the line rate with one of them on
-   its way, whichever is sooner), plus a byte time, but by one quiet time of rule 9 at most
-   per reply: a one-off late reply (a busy machine) leaves the next hold's end within the
-   time a round of other lines' reads is gathered with (lines.py rule 7), and an adapter
-   that is always 16 ms late is learned in a few replies. Each reading whose reply was whole
-   at the hold's end lowers it by LATE_EASE of itself, so that a controller that got quicker
-   holds the replies longer for a while, not for ever. It is at most LATE_MAX_S. The reading
+   again for the rest (and its reading taken in a wake-up of its own, after the others').
+   How late a reply that took more than one read was whole is the earliest it can have been
+   (the read that completed it, or, if that read came at the end of a hold, the bytes still
+   missing at the read before, at the line rate with one of them on its way, whichever is
+   sooner) plus a byte time. Two such replies in a row raise the hold to the less late of the
+   two, by one quiet time of rule 9 at most per reply (an adapter always 16 ms late is learned
+   in a few replies); a late reply after one whole in time raises nothing, so that a
+   controller late now and then (a busy machine) does not hold every reply for its worst.
+   Each reply whole at the hold's end lowers it by LATE_EASE of itself, so that a controller
+   that got quicker holds the replies longer for a while, not for ever. It is at most
+   LATE_MAX_S. A read that finds nothing before the hold's own end (a stop ended it) tells
+   nothing, and a poll of several frames (RC2800's two axes, the second after the axis gap)
+   neither learns nor waits: its hold counts both replies from the first frame. The reading
    is still taken only after the quiet time of rule 9 from the read. A stop due ends the
    hold: the port is read at once and watched, so a stop that waits for the reply on a
    half-duplex line (rule 3) goes the moment the reply is whole, not at the hold's end.
@@ -107,6 +110,8 @@ class Link:
         self._hold_base = 0.0  # rule 7: when the polled reply can be whole at the line rate
         self._hold_reads = 0  # rule 7: reads of the polled reply so far
         self._late_seen = 0.0  # rule 7: when it can be whole at the earliest, by the last read
+        self._last_late = 0.0  # rule 7: how late the last polled reply was (0: in time)
+        self._learns = False  # rule 7: the poll was one frame
         self.late_s = 0.0  # rule 7: how late this controller's replies have been whole
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
@@ -158,6 +163,8 @@ class Link:
     def got_bytes(self, count: int, now: float) -> None:
         """``count`` bytes were read (none: the port had nothing at the hold's end): hold again
         for what the polled reply still lacks, and note how late it is (rule 7)."""
+        if not count and now < self._hold_until:
+            return  # (a stop ended the hold: nothing is late yet)
         if self._hold_bytes:
             self._hold_reads += 1
             missing = max(0, self._hold_bytes - count)
@@ -321,12 +328,15 @@ class Link:
     def _learn_late(self, now: float) -> None:
         """Rule 7: how late the polled reply whose reading this is was whole."""
         reads, self._hold_reads = self._hold_reads, 0
+        if not self._learns:
+            return
         if reads == 1:  # whole at the hold's end: maybe held longer than it needed
             self.late_s -= self.late_s * LATE_EASE
+            self._last_late = 0.0
         elif reads > 1:
-            whole = min(now, self._late_seen) + self._byte_s
-            late = min(whole - self._hold_base, self.late_s + self._settle_s, LATE_MAX_S)
-            self.late_s = max(self.late_s, late)
+            late = min(now, self._late_seen) + self._byte_s - self._hold_base
+            both, self._last_late = min(late, self._last_late), late  # two in a row
+            self.late_s = max(self.late_s, min(both, self.late_s + self._settle_s, LATE_MAX_S))
 
     def spoils(self, junk: JunkReply) -> bool:
         """Rule 9: whether ``junk`` came in the same exchange as a held reading and spoils it
@@ -397,9 +407,9 @@ class Link:
             self._queue(asked[1:], now + self._gap_s, now, poll=True)
         self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
         self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
-        self._late_seen = math.inf  # (the last poll's bound is not this one's)
+        self._learns = not isinstance(asked, list) or len(asked) == 1
         self._hold_base = now + (len(query) + self._hold_bytes + 1) * self._byte_s
-        self._hold_until = self._hold_base + self.late_s
+        self._hold_until = self._hold_base + (self.late_s if self._learns else 0.0)
         return True
 
     def silent_for(self, now: float) -> float:

@@ -109,9 +109,9 @@ def streamed(start: float, reply: bytes = b";123") -> list[tuple[float, bytes]]:
 
 def test_a_controller_that_is_always_late_has_each_reply_read_once_from_its_second_on() -> None:
     """Rule 7: a Rotor-EZ that turns round in 3 ms, not the one byte time (2.08 ms) the hold
-    allows: its first reply is read twice (in part at the hold's end, then the rest), and from
-    then on the hold waits for it: one read per reply, at most a byte time after it is whole
-    (the latency a reading pays for it)."""
+    allows: its first two replies are read twice (in part at the hold's end, then the rest),
+    and from then on the hold waits for it: one read per reply, at most a byte time after it
+    is whole (the latency a reading pays for it)."""
     spec = ROTOREZ["rotorez"]
     link = Link(spec.codec_factory(), spec, 0.0, 4800)
     for n in range(20):
@@ -120,51 +120,84 @@ def test_a_controller_that_is_always_late_has_each_reply_read_once_from_its_seco
         arrivals = streamed(sent)
         reads = exchange(link, t, arrivals)
         whole = arrivals[-1][0]
-        if n == 0:
+        if n < 2:
             assert len(reads) == 2 and reads[0] < whole <= reads[1]
         else:
             assert reads == [pytest.approx(reads[0])] and whole <= reads[0] <= whole + BYTE_S
 
 
-def test_a_late_reply_delivered_in_one_chunk_is_waited_for_from_the_third_poll_on() -> None:
+def test_a_late_reply_delivered_in_one_chunk_is_waited_for_from_the_fourth_poll_on() -> None:
     """Rule 7: a USB adapter that hands the whole reply over 12 ms after it is on the line
-    (its latency timer): the first hold ends with nothing there, the port is watched and the
-    reply read as it comes. Each reply raises the hold by a quiet time (three byte times) at
-    most: the second hold ends with nothing there too, and from the third on the hold lasts
-    until the reply has come."""
+    (its latency timer): the hold ends with nothing there, the port is watched and the reply
+    read as it comes. The second such reply in a row raises the hold by a quiet time (three
+    byte times), the third by the rest: from the fourth poll on the hold lasts until the
+    reply has come."""
     spec = ROTOREZ["rotorez"]
     link = Link(spec.codec_factory(), spec, 0.0, 4800)
-    for n in range(6):
+    for n, waited in enumerate((0, 0, 3, None, None, None)):
         t = 10.0 + 0.5 * n
         delivered = t + 9 * BYTE_S + 0.012
         reads = exchange(link, t, [(delivered, b";123")])
-        if n < 2:
-            assert reads == [pytest.approx(t + (9 + 3 * n) * BYTE_S), delivered]
+        if waited is not None:  # nothing at the hold's end, then all of it as it came
+            assert reads == [pytest.approx(t + (9 + waited) * BYTE_S), delivered]
         else:
             assert len(reads) == 1 and delivered <= reads[0] <= delivered + BYTE_S
 
 
-def test_a_one_off_late_reply_holds_the_next_a_quiet_time_longer_at_most_then_less() -> None:
-    """Rule 7: a reply a whole second late (a controller busy, a busy machine) holds the next
-    replies a quiet time longer at most (so they are still read with other lines'), and a
-    controller on time again has its hold come back down by LATE_EASE of the learned
+def test_a_reply_late_now_and_then_holds_none_longer_two_in_a_row_a_quiet_time_at_most() -> None:
+    """Rule 7: a reply a whole second late (a controller busy, a busy machine) after replies
+    in time makes the next hold no longer; two in a row make it a quiet time longer at most;
+    a controller on time again has its hold come back down by LATE_EASE of the learned
     lateness per reply. However late the replies, the hold is at most LATE_MAX_S longer."""
     spec = ROTOREZ["rotorez"]
     link = Link(spec.codec_factory(), spec, 0.0, 4800)
-    exchange(link, 10.0, [(11.0, b";123")])
+    for n in range(199):  # one in ten a second late (the last in time)
+        t = 10.0 + 2.0 * n
+        late = n % 10 == 9
+        exchange(link, t, [(t + 1.0, b";123")] if late else streamed(t + 4 * BYTE_S))
+        assert link.late_s == 0.0
+    exchange(link, 500.0, [(501.0, b";123")])
+    exchange(link, 510.0, [(511.0, b";123")])
     assert link.late_s == pytest.approx(3 * BYTE_S)
     holds = []
     for n in range(1, 601):
-        t = 12.0 + 0.5 * n
-        exchange(link, t, streamed(t + 5 * BYTE_S))  # on time: whole at 9 byte times
+        t = 512.0 + 0.5 * n
+        exchange(link, t, streamed(t + 4 * BYTE_S))  # on time: whole at 8 byte times
         holds.append(link.late_s)
     assert holds[0] == pytest.approx(3 * BYTE_S * (1 - LATE_EASE))
     assert holds[-1] == pytest.approx(3 * BYTE_S * (1 - LATE_EASE) ** 600)
     assert holds[-1] < 3 * BYTE_S / 9
     for n in range(40):
-        t = 400.0 + 0.5 * n
+        t = 900.0 + 0.5 * n
         exchange(link, t, [(t + 0.4, b";123")])
     assert link.late_s == LATE_MAX_S
+
+
+def test_a_poll_of_two_frames_learns_no_lateness() -> None:
+    """Rule 7: an RC2800 asks its two axes in two frames, the second after the axis gap; its
+    hold counts both replies from the first, so the elevation's always comes "late". That is
+    no lateness of the box: its holds stay as long as the line rate says."""
+    spec = RC2800["rc2800"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    byte_s = 10 / spec.baud
+    for n in range(10):
+        t = 10.0 + 2.0 * n
+        link.poll(t, 2.0)
+        assert link.output() == [b"A\r"]
+        hold = link.hold_reads_until()
+        assert hold == pytest.approx(t + (2 + spec.reply_bytes + 1) * byte_s)
+        az = b"A P= 98.1 S=9 MV\r"
+        link.got_bytes(len(az), hold)
+        assert link.codec.feed(az) == []  # the elevation's is owed
+        link.flush_outbox(t + 1.0)
+        assert link.output() == [b"E\r"]
+        el = b"E=43.7 S=9 M\r"
+        link.got_bytes(len(el), t + 1.1)
+        (reading,) = link.codec.feed(el)
+        assert isinstance(reading, PositionReply) and link.hold_reading(reading, t + 1.1)
+        assert link.settled(t + 1.5) is reading
+        link.got_reading(t + 1.5)
+        assert link.late_s == 0.0
 
 
 @pytest.mark.parametrize("model", ["rot2prog", "md01"])
@@ -186,6 +219,36 @@ def test_a_stop_due_ends_the_hold_so_it_goes_as_soon_as_the_reply_is_whole(model
     (reading,) = link.codec.feed(reply)
     assert isinstance(reading, PositionReply) and link.hold_reading(reading, t)
     assert link.flush_stop(t)
+
+
+def test_a_read_of_nothing_that_a_stop_brought_forward_teaches_no_lateness() -> None:
+    """Rule 7: a stop due on a Rot2Prog ends the hold at once; the read then finds nothing
+    (the reply is on its way), which says nothing about how late the reply is. Two replies
+    in a row read that way, each whole a little after the line rate's time, teach nothing."""
+    spec = SPID["rot2prog"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    for n in range(3):
+        t = 10.0 + 5.0 * n
+        link.poll(t, 5.0)
+        assert len(link.output()) == 1
+        base = link.hold_reads_until()
+        link.want_stop()
+        assert link.hold_reads_until() == 0.0
+        link.got_bytes(0, t + 0.01)  # read at once: nothing yet
+        whole = base + 0.003
+        reply = position_reply(spec, 123.0, 45.0, 2)
+        link.got_bytes(len(reply), whole)  # read as it came (the port watched)
+        (reading,) = link.codec.feed(reply)
+        assert isinstance(reading, PositionReply) and link.hold_reading(reading, whole)
+        assert link.flush_stop(whole)
+        link.output()
+        assert link.settled(whole) is reading
+        link.got_reading(whole)
+        (answer,) = link.codec.feed(reply)  # the stop's own reply
+        assert isinstance(answer, PositionReply) and link.hold_reading(answer, whole + 0.5)
+        assert link.settled(whole + 1.0) is answer
+        link.got_reading(whole + 1.0)
+    assert link.late_s == 0.0
 
 
 def test_a_short_reply_whole_at_the_holds_end_teaches_no_lateness() -> None:
