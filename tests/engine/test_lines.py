@@ -13,7 +13,7 @@ import os
 import select
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -236,6 +236,18 @@ def test_each_line_is_served_with_the_time_it_is_served_at() -> None:
         assert q_t == s_t + 1.5  # served after the slow one's step, at the time it was then
 
 
+def served_until(lines: Lines, workers: Iterable[object], done: threading.Event) -> None:
+    """The workers served by ``lines`` until ``done`` is set (within a while), then removed."""
+    workers = list(workers)
+    for w in workers:
+        lines.add(w)  # type: ignore[arg-type]
+    try:
+        assert done.wait(slow(5))
+    finally:
+        for w in workers:
+            lines.remove(w)  # type: ignore[arg-type]
+
+
 class Urgent(Timed):
     """A stand-in whose mailbox (a real one) gets a stop while another worker is served."""
 
@@ -274,13 +286,7 @@ def test_a_stop_that_comes_during_a_round_is_served_next() -> None:
     first = Busy(clock, 0.001, threading.Event(), log)
     second = Timed(clock, 0.002, threading.Event(), log)
     workers = (first, second, stopped)
-    for w in workers:
-        lines.add(w)  # type: ignore[arg-type]
-    try:
-        assert done.wait(slow(5))
-    finally:
-        for w in workers:
-            lines.remove(w)  # type: ignore[arg-type]
+    served_until(lines, workers, done)
     k = flagged[0]  # first's turn; before rule 5 the round went on with second
     assert [w for w, _ in log[k : k + 2]] == [first, stopped]
 
@@ -330,13 +336,7 @@ def test_times_that_come_close_together_are_met_in_one_wake_up() -> None:
     start_s = time.monotonic()
     first, second = At(start_s + 0.05), At(start_s + 0.051)
     lines = Lines(time.monotonic)
-    for w in (first, second):
-        lines.add(w)  # type: ignore[arg-type]
-    try:
-        assert done.wait(slow(5))
-    finally:
-        for w in (first, second):
-            lines.remove(w)  # type: ignore[arg-type]
+    served_until(lines, (first, second), done)
     assert first.given[0] >= second.due_s and second.given[0] >= second.due_s
 
 
@@ -400,13 +400,7 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     workers: list[Urgent] = [Urgent(clock, 0.0, threading.Event(), log) for _ in range(16)]
     workers[4] = Busy(clock, 0.0, threading.Event(), log)
     workers[12] = Locked(clock, 0.0, threading.Event(), log)
-    for w in workers:
-        lines.add(w)  # type: ignore[arg-type]
-    try:
-        assert done.wait(slow(5))
-    finally:
-        for w in workers:
-            lines.remove(w)  # type: ignore[arg-type]
+    served_until(lines, workers, done)
     k = put[0]
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
@@ -434,13 +428,7 @@ def test_a_stop_for_a_worker_served_earlier_in_the_round_goes_first_in_the_next(
     workers: list[Urgent] = [Urgent(clock, 0.0, threading.Event(), log) for _ in range(2)]
     workers.append(Putter(clock, 0.0, threading.Event(), log))
     workers.append(Urgent(clock, 0.0, threading.Event(), log))
-    for w in workers:
-        lines.add(w)  # type: ignore[arg-type]
-    try:
-        assert done.wait(slow(5))
-    finally:
-        for w in workers:
-            lines.remove(w)  # type: ignore[arg-type]
+    served_until(lines, workers, done)
     k = put[0]
     assert [w for w, _ in log[k : k + 2]] == [workers[3], workers[1]]
 
