@@ -7,6 +7,7 @@ still reach its controller at once.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import os
@@ -543,44 +544,58 @@ def test_a_line_is_woken_by_what_it_waits_on_now_and_not_by_what_it_waited_on_be
             os.close(fd)
 
 
-def test_a_worker_says_its_held_reply_may_be_read_up_to_a_quiet_time_late(tmp_path: Path) -> None:
-    """worker.py rule 2 with lines.py rule 7: the worker tells the loop, after it polled, that
-    it waits on its mailbox alone until the reply can be whole, and that the read may come up
-    to a quiet time (three byte times at 4800 baud) later; nothing else of it is ever late."""
+@contextlib.contextmanager
+def worker_on_a_pty(model: str, extra: dict[str, Any]) -> Iterator[tuple[Worker, int, Mailbox]]:
+    """A rotator's worker on a pseudo-terminal, its port open at virtual time 100.0: the
+    worker, the controller's end of the pty and the mailbox. Ended and closed afterwards."""
     master, slave = os.openpty()
     settings = RotatorSettings.model_validate(
-        {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
+        {"id": "az", "model": model, "port": os.ttyname(slave), **extra}
     )
     box = Mailbox()
     worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
     try:
-        now = 100.0
-        worker.guarded(worker.begin, now, lambda: None)
-        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
+        worker.guarded(worker.begin, 100.0, lambda: None)
+        worker.guarded(worker.serve, 100.0, set())  # the port is opened on a thread of its own
         opening = worker._opening
         assert opening is not None
         wait_until(lambda: opening.result is not None, slow(5), "the port opened")
+        yield worker, master, box
+    finally:
+        worker.guarded(worker.end, 100.0)
+        assert worker.wait_closed(slow(5))
+        os.close(master)
+        os.close(slave)
+        box.close()
+
+
+def polled(worker: Worker, master: int, now: float, query: bytes) -> float:
+    """Serve from ``now`` at each time the worker asks for until it writes ``query``: when."""
+    written = b""
+    for _ in range(10):
+        worker.guarded(worker.serve, now, set())
+        while _readable(master):
+            written += os.read(master, 64)
+        if written.endswith(query):
+            return now
+        now = max(now, worker.wants(now)[1])
+    raise AssertionError(f"no poll: {written!r}")
+
+
+def test_a_worker_says_its_held_reply_may_be_read_up_to_a_quiet_time_late() -> None:
+    """worker.py rule 2 with lines.py rule 7: the worker tells the loop, after it polled, that
+    it waits on its mailbox alone until the reply can be whole, and that the read may come up
+    to a quiet time (three byte times at 4800 baud) later; nothing else of it is ever late."""
+    with worker_on_a_pty("rotorez", FAST_BRIDGE) as (worker, master, box):
+        now = 100.0
         fds, until, latest = worker.wants(now)
         assert until == latest == now  # the port is there: at once, never later
-        written = b""
-        for _ in range(10):  # opened, then polled
-            worker.guarded(worker.serve, now, set())
-            if _readable(master):
-                written += os.read(master, 64)
-            if b"AI1;" in written:
-                break
-        assert written.endswith(b"AI1;")
+        now = polled(worker, master, now, b"AI1;")
         fds, until, latest = worker.wants(now)
         byte_s = 10 / 4800
         assert fds == [box.fileno()]  # the reply is held in the port (rule 2)
         assert until == worker.session.hold_reads_until() > now
         assert latest == pytest.approx(until + 3 * byte_s)
-    finally:
-        worker.guarded(worker.end, now)
-        assert worker.wait_closed(slow(5))
-        os.close(master)
-        os.close(slave)
-        box.close()
 
 
 def _readable(fd: int) -> bool:
@@ -592,39 +607,13 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
     over 3 ms after the hold on them ended. The worker reads the port at the hold's end, finds
     nothing, says so to the session and watches the port; the reply is read as it comes. After
     two such replies the hold on the next lasts those 3 ms (and a byte time) longer."""
-    master, slave = os.openpty()
-    settings = RotatorSettings.model_validate(
-        {"id": "az", "model": "rotorez", "port": os.ttyname(slave), **FAST_BRIDGE}
-    )
-    box = Mailbox()
-    worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
     byte_s = 10 / 4800
-
-    def polled(now: float) -> tuple[float, float]:
-        """Serve from ``now`` at each time the worker asks for until it writes a poll: when,
-        and how long its reply is held."""
-        written = b""
-        for _ in range(10):
-            worker.guarded(worker.serve, now, set())
-            while _readable(master):
-                written += os.read(master, 64)
-            if written.endswith(b"AI1;"):
-                return now, worker.wants(now)[1] - now
-            now = max(now, worker.wants(now)[1])
-        raise AssertionError(f"no poll: {written!r}")
-
-    try:
-        now = 100.0
-        worker.guarded(worker.begin, now, lambda: None)
-        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
-        opening = worker._opening
-        assert opening is not None
-        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
-        holds = []
+    with worker_on_a_pty("rotorez", FAST_BRIDGE) as (worker, master, _box):
+        now, holds = 100.0, []
         for _ in range(3):
-            now, hold_s = polled(now)
-            holds.append(hold_s)
-            now += hold_s
+            now = polled(worker, master, now, b"AI1;")
+            holds.append(worker.wants(now)[1] - now)
+            now += holds[-1]
             worker.guarded(worker.serve, now, set())  # the hold's end: nothing in the port
             fds, _, _ = worker.wants(now)
             assert len(fds) == 2  # the mailbox and the port: watched for the reply now
@@ -637,13 +626,8 @@ def test_a_worker_whose_hold_ended_with_nothing_read_waits_for_the_reply_next_ti
             assert worker.status.bearing_deg == 123
             now = worker.wants(now)[1]  # the next poll
         assert holds[1] == pytest.approx(holds[0])
-        assert polled(now)[1] == pytest.approx(holds[0] + 0.003 + byte_s)
-    finally:
-        worker.guarded(worker.end, now)
-        assert worker.wait_closed(slow(5))
-        os.close(master)
-        os.close(slave)
-        box.close()
+        now = polled(worker, master, now, b"AI1;")
+        assert worker.wants(now)[1] - now == pytest.approx(holds[0] + 0.003 + byte_s)
 
 
 def test_a_stop_taken_during_a_hold_is_written_as_soon_as_the_reply_in_the_port_is_whole() -> None:
@@ -652,43 +636,16 @@ def test_a_stop_taken_during_a_hold_is_written_as_soon_as_the_reply_in_the_port_
     hold on it ends (here at once). A stop put then is written in the serve that takes it: the
     worker asks the session about the hold again after the commands, reads the port and the
     stop goes, not at the hold's end."""
-    master, slave = os.openpty()
-    settings = RotatorSettings.model_validate(
-        {"id": "az", "model": "rot2prog", "port": os.ttyname(slave), **FAST_SPID_BRIDGE}
-    )
-    spec = worker_config(settings).spec
-    box = Mailbox()
-    worker = Worker(worker_config(settings), box, lambda s: None, lambda e: None)
     query, stop = b"\x57" + bytes(10) + b"\x1f\x20", b"\x57" + bytes(10) + b"\x0f\x20"
-    try:
-        now = 100.0
-        worker.guarded(worker.begin, now, lambda: None)
-        worker.guarded(worker.serve, now, set())  # the port is opened on a thread of its own
-        opening = worker._opening
-        assert opening is not None
-        wait_until(lambda: opening.result is not None, slow(5), "the port opened")
-        written = b""
-        for _ in range(10):  # opened, then polled
-            worker.guarded(worker.serve, now, set())
-            while _readable(master):
-                written += os.read(master, 64)
-            if written.endswith(query):
-                break
-        assert written.endswith(query)
+    with worker_on_a_pty("rot2prog", FAST_SPID_BRIDGE) as (worker, master, box):
+        now = polled(worker, master, 100.0, query)
         fds, hold, _ = worker.wants(now)
         assert fds == [box.fileno()] and hold > now + 0.1  # 25 bytes at 600 baud held
-        os.write(master, position_reply(spec, 123.0, 45.0, 2))
+        os.write(master, position_reply(worker.cfg.spec, 123.0, 45.0, 2))
         wait_until(lambda: _readable(worker._fd), slow(5), "the reply in the port")
         box.put(Stop(), wake=True)
-        now += 0.01
-        worker.guarded(worker.serve, now, {box.fileno()})
+        worker.guarded(worker.serve, now + 0.01, {box.fileno()})
         sent = b""
         while _readable(master):
             sent += os.read(master, 64)
         assert sent == stop
-    finally:
-        worker.guarded(worker.end, now)
-        assert worker.wait_closed(slow(5))
-        os.close(master)
-        os.close(slave)
-        box.close()
