@@ -42,12 +42,13 @@ Rules:
    controller late now and then (a busy machine) does not hold every reply for its worst.
    Each reply whole at the hold's end lowers it by LATE_EASE of itself, so that a controller
    that got quicker holds the replies longer for a while, not for ever. It is at most
-   LATE_MAX_S. A read that finds nothing before the hold's own end (a stop ended it) tells
-   nothing, and a poll of several frames (RC2800's two axes, the second after the axis gap)
-   neither learns nor waits: its hold counts both replies from the first frame. The reading
-   is still taken only after the quiet time of rule 9 from the read. A stop due ends the
-   hold: the port is read at once and watched, so a stop that waits for the reply on a
-   half-duplex line (rule 3) goes the moment the reply is whole, not at the hold's end.
+   LATE_MAX_S. A reply whose hold a stop ended (a read that found nothing before the hold's
+   own end) teaches nothing, and a poll of several frames (RC2800's two axes, the second
+   after the axis gap) neither learns nor waits: its hold counts both replies from the first
+   frame. The reading is still taken only after the quiet time of rule 9 from the read. A
+   stop due ends the hold: the port is read at once and watched, so a stop that waits for the
+   reply on a half-duplex line (rule 3) goes the moment the reply is whole, not at the hold's
+   end.
 8. Polls keep to a grid of their interval on the monotonic clock (the next poll at the first
    multiple of the interval at least half an interval away): every rotator polling at the same
    interval polls at the same instants, so one thread serves a round of them with one wake-up
@@ -164,7 +165,8 @@ class Link:
         """``count`` bytes were read (none: the port had nothing at the hold's end): hold again
         for what the polled reply still lacks, and note how late it is (rule 7)."""
         if not count and now < self._hold_until:
-            return  # (a stop ended the hold: nothing is late yet)
+            self._learns = False  # a stop ended the hold: this reply's timing tells nothing
+            return
         if self._hold_bytes:
             self._hold_reads += 1
             missing = max(0, self._hold_bytes - count)

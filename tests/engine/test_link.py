@@ -107,7 +107,7 @@ def streamed(start: float, reply: bytes = b";123") -> list[tuple[float, bytes]]:
     return [(start + (i + 1) * BYTE_S, reply[i : i + 1]) for i in range(len(reply))]
 
 
-def test_a_controller_that_is_always_late_has_each_reply_read_once_from_its_second_on() -> None:
+def test_a_controller_that_is_always_late_has_each_reply_read_once_from_its_third_on() -> None:
     """Rule 7: a Rotor-EZ that turns round in 3 ms, not the one byte time (2.08 ms) the hold
     allows: its first two replies are read twice (in part at the hold's end, then the rest),
     and from then on the hold waits for it: one read per reply, at most a byte time after it
@@ -227,11 +227,12 @@ def test_a_read_of_nothing_that_a_stop_brought_forward_teaches_no_lateness() -> 
     in a row read that way, each whole a little after the line rate's time, teach nothing."""
     spec = SPID["rot2prog"]
     link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    link.late_s = 0.001
     for n in range(3):
         t = 10.0 + 5.0 * n
         link.poll(t, 5.0)
         assert len(link.output()) == 1
-        base = link.hold_reads_until()
+        base = link.hold_reads_until() - link.late_s
         link.want_stop()
         assert link.hold_reads_until() == 0.0
         link.got_bytes(0, t + 0.01)  # read at once: nothing yet
@@ -248,7 +249,19 @@ def test_a_read_of_nothing_that_a_stop_brought_forward_teaches_no_lateness() -> 
         assert isinstance(answer, PositionReply) and link.hold_reading(answer, whole + 0.5)
         assert link.settled(whole + 1.0) is answer
         link.got_reading(whole + 1.0)
-    assert link.late_s == 0.0
+    assert link.late_s == 0.001  # neither raised nor eased
+
+
+def test_two_late_replies_in_a_row_raise_the_hold_to_the_less_late_of_the_two() -> None:
+    """Rule 7: replies whole 4 ms and then 2 ms after the hold's end (in one chunk each, as
+    an adapter hands them over): the hold is raised to the second's lateness and a byte time,
+    not the first's."""
+    spec = ROTOREZ["rotorez"]
+    link = Link(spec.codec_factory(), spec, 0.0, 4800)
+    for n, late in enumerate((0.004, 0.002)):
+        t = 10.0 + 0.5 * n
+        exchange(link, t, [(t + 9 * BYTE_S + late, b";123")])
+    assert link.late_s == pytest.approx(0.002 + BYTE_S)
 
 
 def test_a_short_reply_whole_at_the_holds_end_teaches_no_lateness() -> None:
