@@ -406,6 +406,36 @@ def test_with_16_lines_a_lock_on_and_a_stop_put_mid_round_each_go_next() -> None
     assert [w for w, _ in log[k : k + 4]] == [workers[4], workers[12], workers[14], workers[5]]
 
 
+def test_with_no_stop_put_each_worker_is_asked_once_a_round_not_after_each_one_served() -> None:
+    """Rule 8: with four workers always due and nothing put, a round asks each of them once
+    whether a stop waits (its look before the first), not the ones left after each served."""
+    clock = [100.0]
+    lines = Lines(lambda: clock[0])
+    done = threading.Event()
+    log: list[tuple[Timed, float]] = []
+    asked: list[int] = [0]
+
+    class Counted(Urgent):
+        def urgent(self) -> set[int]:
+            asked[0] += 1
+            return super().urgent()
+
+        def serve(self, now: float, ready: set[int]) -> None:
+            super().serve(now, ready)
+            if len(lines._workers) == 4 and log[-1][0] is workers[0] and not marks:
+                marks.append((len(log), asked[0]))  # the first of a round of all four
+            elif marks and len(log) == marks[0][0] + 4 * 5:
+                marks.append((len(log), asked[0]))  # the first of the fifth round after
+                done.set()
+
+    marks: list[tuple[int, int]] = []
+    workers: list[Urgent] = [Counted(clock, 0.0, threading.Event(), log) for _ in range(4)]
+    served_until(lines, workers, done)
+    (k0, a0), (k1, a1) = marks
+    assert [w for w, _ in log[k1 - 4 : k1]] == workers[1:] + workers[:1]  # rounds in order
+    assert a1 - a0 == 4 * 5  # 4 a round (each looked at once), not 4 + 3 + 2 + 1
+
+
 def test_a_stop_for_a_worker_served_earlier_in_the_round_goes_first_in_the_next() -> None:
     """Rules 5 and 8: a stop put, while the third of four is served, for the second (served
     before it in this round); the look for the rest of the round finds none. The next round
