@@ -164,19 +164,19 @@ class Link:
     def got_bytes(self, count: int, now: float) -> None:
         """``count`` bytes were read (none: the port had nothing at the hold's end): hold again
         for what the polled reply still lacks, and note how late it is (rule 7)."""
-        if not count and now < self._hold_until:
-            self._learns = False  # a stop ended the hold: this reply's timing tells nothing
+        if not count:  # the port is watched for the reply from now on
+            if now < self._hold_until:  # a stop ended the hold: its timing tells nothing
+                self._learns = False
+            elif self._hold_bytes:  # the read that completes it comes as the bytes do
+                self._hold_reads += 1
+                self._late_seen = math.inf
             return
         if self._hold_bytes:
             self._hold_reads += 1
             missing = max(0, self._hold_bytes - count)
-            if not count:  # the port is watched: the read that completes it is as it comes
-                self._late_seen = math.inf
-            elif missing:  # whole no sooner than the rest at the line rate (one on its way)
+            if missing:  # whole no sooner than the rest at the line rate (one on its way)
                 self._late_seen = now + (missing - 1) * self._byte_s
-            self._hold_bytes = missing if count else self._hold_bytes
-        if not count:
-            return  # (the port is watched for the reply from now on)
+            self._hold_bytes = missing
         self._hold_until = now + self._hold_bytes * self._byte_s if self._hold_bytes else 0.0
         if self._held is not None:  # rule 9: the line is not quiet yet
             self._held_after = True
