@@ -347,6 +347,9 @@ class ModelSpec:
     # from these (default_idle_poll_interval_s)
     query_bytes: int = field(kw_only=True)
     reply_bytes: int = field(kw_only=True)
+    # the bytes a controller refuses a target with (GS-232's ``?>`` CR: 3), 0 if it never does:
+    # no poll goes out before such a refusal can have come (session/link.py rule 4)
+    refusal_bytes: int = 0
     # what Hamlib knows this model as (rotctld's dump_state, dump_caps and get_info)
     hamlib_model: int = field(kw_only=True)  # Hamlib's rotator model number (rotctl -m)
     hamlib_rot_type: HamlibRotType = field(kw_only=True)

@@ -234,6 +234,7 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         stop_anytime=True,  # S is answered by a CR, a blank line the codec skips (rule 1)
         query_bytes=3 if elevation else 2,  # C2\r, C\r
         reply_bytes=len(reply),
+        refusal_bytes=len(REFUSED) + 1,  # ?> CR (rule 3)
         hamlib_rot_type=HamlibRotType.AZEL if elevation else HamlibRotType.AZ,
         hamlib_info=None,  # Hamlib's gs232a backend has no get_info
         settings=(SPEED,),

@@ -17,7 +17,11 @@ Rules:
    (a controller that was silent for a whole slew was not "not answering").
 3. On a half-duplex line (``spec.full_duplex`` False) nothing is written while a reply is owed,
    except a stop on a controller that takes one at any time (``spec.stop_interrupts``).
-4. A poll is sent only when due, when nothing is owed and no stop is waiting.
+4. A poll is sent only when due, when nothing is owed and no stop is waiting, and not before
+   the controller's refusal of the target written last can have come (``spec.refusal_bytes``:
+   the target and the refusal at the line rate, a byte time to turn round, and how late its
+   replies are, rule 7): a refusal then answers the target, not a poll written after it
+   (motion.py rule 8 gives a refusal to a target only when nothing was written after it).
 5. Junk is judged once the line has been quiet for JUNK_QUIET_S, so a banner paced byte by byte
    is judged whole (by the codec: it knows what its controller emits besides replies).
 6. A stop cancels every frame still waiting for its inter-frame gap.
@@ -117,6 +121,7 @@ class Link:
         self._quiet_from_t = now  # silence counts from here when no reply came since
         self._reply_deadline: float | None = None
         self._next_poll = now
+        self._refusal_until = -math.inf  # rule 4: a target's refusal can come until then
         self._last_reply_t: float | None = None
         self._stop_due = False
         self._outbox: deque[tuple[float, bytes, bool]] = deque()  # when, frame, a poll's
@@ -268,6 +273,9 @@ class Link:
             return
         self.write(frames[0], now)
         self._queue(frames[1:], now + self._gap_s, now)
+        if self.spec.refusal_bytes:  # rule 4 (what is sent is a target: controller.py)
+            sent = sum(map(len, frames)) + self.spec.refusal_bytes + 1
+            self._refusal_until = now + sent * self._byte_s + self.late_s
 
     @property
     def _gap_s(self) -> float:
@@ -398,6 +406,8 @@ class Link:
         """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
             return False
+        if now < self._refusal_until:  # rule 4
+            return False
         if now < self._paced_from() or (self.spec.axis_gap_s and self._outbox):  # rule 10
             return False
         asked = self.codec.encode_query()
@@ -443,7 +453,7 @@ class Link:
         if self.spec.can_report_position:
             deadline = self._reply_deadline
             if deadline is None:
-                times.append(max(self._next_poll, self._paced_from()))
+                times.append(max(self._next_poll, self._paced_from(), self._refusal_until))
             elif self._held is None:  # rule 9: not overdue while its reading is held
                 times.append(deadline)
         return times

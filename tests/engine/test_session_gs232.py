@@ -142,6 +142,34 @@ def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> No
     v.run_until(settled_at(120), 60, "at 120")
 
 
+@pytest.mark.parametrize("lead_s", [0.001, 0.004, 0.008])
+def test_a_bearing_refused_just_before_a_poll_is_still_the_targets_refusal(
+    rig: Rig, lead_s: float
+) -> None:
+    """link.py rule 4: a bearing the box refuses, given a few ms before a poll is due. The
+    poll waits until the refusal can have come (``M400`` CR and ``?>`` CR at 9600 baud, a
+    byte time to turn round): the refusal answers the target, reported as such, at rest at
+    once. Before, ``C`` went out first and the ``?>`` after it was taken for junk: a protocol
+    error, then a stall 2.5 s later."""
+    v = ready(rig, "gs232b-az-450", start_az_deg=77)
+    v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
+    def polls() -> list[float]:
+        return [w.t for w in v.writes if w.data == b"C\r"]
+
+    seen = len(polls())
+    v.run_until(lambda h: len(polls()) >= seen + 2, 30, "two polls at rest")
+    last, before = polls()[-1], polls()[-2]
+    v.run_for(last + (last - before) - lead_s - v.now)  # just before the next
+    t = v.now
+    v.aim(Target(400))
+    v.run_for(5)  # a quiet period, not a deadline
+    assert [e.kind for e in v.errors(since=t)] == ["refused"]
+    assert v.state is IDLE and not v.truth().is_moving
+    writes = [w for w in v.writes if w.t >= t]
+    assert [w.data for w in writes[:2]] == [b"M400\r", b"C\r"]
+    assert writes[1].t - writes[0].t >= (5 + 3 + 1) * 10 / 9600  # M400 CR, ?> CR, a byte
+
+
 def test_a_new_bearing_refused_while_turning_stops_the_rotor(rig: Rig) -> None:
     """The box refuses a new bearing mid-turn and keeps turning to the one before, which
     nobody wants any more: the bridge reports the refusal and stops the rotor."""
