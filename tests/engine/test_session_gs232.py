@@ -153,6 +153,7 @@ def test_a_bearing_refused_just_before_a_poll_is_still_the_targets_refusal(
     error, then a stall 2.5 s later."""
     v = ready(rig, "gs232b-az-450", start_az_deg=77)
     v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
+
     def polls() -> list[float]:
         return [w.t for w in v.writes if w.data == b"C\r"]
 
