@@ -61,7 +61,6 @@ def _status_encoder() -> Callable[[object], str]:
 
 
 _STATUS_ENCODE = _status_encoder()
-_ENCODE_TEXT = json.encoder.encode_basestring_ascii  # a JSON string, as the encoders write it
 _TRUE = {"on", "1", "true"}
 _FALSE = {"off", "0", "false"}
 
@@ -434,7 +433,7 @@ class StatusText:
             middle, tail = _status_rest(status, blocks, values)
             self._kept = key, middle, tail
         head = _STATUS_ENCODE(_status_head(status, self._has_elevation, shows_raw))
-        return f"{head[:-1]},{middle}{_ENCODE_TEXT(_iso(time_unix))}{tail}"
+        return f'{head[:-1]},{middle}"{_iso(time_unix)}"{tail}'  # (a time needs no escape)
 
 
 #: what R/status is made of after its head, besides the feature blocks and the options

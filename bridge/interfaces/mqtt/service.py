@@ -254,33 +254,20 @@ class MqttService:
         t = self._out.get(rotator_id)  # (the topics made once: a status's are the same every time)
         if t is None:
             return  # emitted before attach(): the first real status follows
-        rot = t.rotator
-        # rule 3: ``was(topic) != payload`` before ``hand`` (which asks again) spares the call
-        # for the topics a reading leaves as they were (most of them)
-        was, hand = self._handed.get, self._hand
+        rot, hand = t.rotator, self._hand
         if status.bearing_deg is not None:
-            text = pl.number(status.bearing_deg)
-            if was(t.bearing) != text:
-                hand(t.bearing, text)
+            hand(t.bearing, pl.number(status.bearing_deg))
         if status.elevation_deg is not None:
-            text = pl.number(status.elevation_deg)
-            if was(t.elevation) != text:
-                hand(t.elevation, text)
-        text = status.state._value_  # (its value, without the enum's property)
-        if was(t.state) != text:
-            hand(t.state, text)
-        text = "online" if status.available else "offline"
-        if was(t.availability) != text:
-            hand(t.availability, text)
-        if status.version and was(t.version) != status.version:
+            hand(t.elevation, pl.number(status.elevation_deg))
+        hand(t.state, status.state.value)
+        hand(t.availability, "online" if status.available else "offline")
+        if status.version:
             hand(t.version, status.version)
         options = status.options
         for name, topic in t.options:  # ON/OFF, a number, a choice's name (model.setting_text)
             if name in options:
                 hand(topic, setting_text(options[name]))
-        text = "ON" if status.locked else "OFF"  # (pl.switch)
-        if was(t.lock_state) != text:
-            hand(t.lock_state, text)
+        hand(t.lock_state, pl.switch(status.locked))
         if t.before:
             self._publish_states(rot, t.before, status)
         hand(t.status, t.text.render(status, self._wall(), rot.pointing.shows_raw))  # (its time)
@@ -307,7 +294,6 @@ class MqttService:
     ) -> None:
         """The registry's state topics (bridge/feature.py ``StateTopic``) before R/status, or
         after it (``_Outbound``: each with its topic)."""
-        was = self._handed.get
         for state, topic in states:
             if state.needs is not None and not getattr(rot, state.needs):
                 continue
@@ -318,9 +304,7 @@ class MqttService:
                 if value is self._values.get(topic):
                     continue
                 self._values[topic] = value
-            text = state.render(value)
-            if was(topic) != text:
-                self._hand(topic, text)
+            self._hand(topic, state.render(value))
 
     def publish_event(self, rotator_id: str, event: ErrorEvent) -> None:
         """Rule 4: rate-limited per rotator; the next one published counts those left out."""
