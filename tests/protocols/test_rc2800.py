@@ -168,9 +168,11 @@ def test_any_stream_gives_the_same_readings_however_sliced_and_none_it_did_not_c
     whole = run("whole")
     assert run("bytewise") == whole and run("split") == whole
     stream = b"".join(data for _, data in pieces)
+    # a reading's value was on a line of its axis, in a form Hamlib reads (``A P=  98.1``,
+    # ``E=43.7``), its decimals as the box sent them (``A P=0`` from raw bytes is 0.0)
     lines = {
         (m.group(1), float(m.group(2)))
-        for m in re.finditer(rb"(?:^|[\r\n])([AE]) P=\s*(-?\d+\.\d)", stream)
+        for m in re.finditer(rb"(?:^|[\r\n])\s*([AE])(?: P)?=\s*(-?\d+(?:\.\d+)?)", stream)
     }
     for az, elev in whole:
         assert (b"A", az) in lines and 0 <= az <= 360
