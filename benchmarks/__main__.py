@@ -5,6 +5,7 @@
     python -m benchmarks latency burst        # a subset (items: see --help)
     python -m benchmarks latency --models rotorez,rot2prog
     python -m benchmarks exchange_cpu --against 9104bbc   # beside older commits' engines
+    python -m benchmarks exchange_cpu --without paho      # ... and what a part of a reading costs
     ./benchmarks/run [same arguments]         # installs mosquitto, rotctld and the venv first
 
 Every process started (brokers, bridges, rotctld, emulator hosts) is ended on the way out,
@@ -171,6 +172,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="COMMIT",
         help=f"exchange_cpu: older engines beside this one (default {exchange_cpu.AGAINST})",
     )
+    ap.add_argument(
+        "--without",
+        metavar="PART",
+        help="exchange_cpu: this tree also without these parts of a reading, comma-separated "
+        "(paho, publishing: benchmarks/without.py)",
+    )
     ap.add_argument("--json", type=Path, default=DEFAULT_JSON, help="results file")
     ap.add_argument("--keep", action="store_true", help="keep the work directory (logs, configs)")
     args = ap.parse_args(argv)
@@ -203,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
                     if key in ("latency", "freshness", "line"):
                         result = run(scope, args.quick, models)  # type: ignore[operator]
                     elif key == "exchange_cpu":
-                        result = exchange_cpu.run(scope, args.quick, args.against)
+                        result = exchange_cpu.run(scope, args.quick, args.against, args.without)
                     else:
                         result = run(scope, args.quick)  # type: ignore[operator]
             except KeyboardInterrupt:

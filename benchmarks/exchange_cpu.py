@@ -3,6 +3,7 @@ beside older ones, taking turns: by default the engine of 2026-11-26 (EXCHANGE_B
 exchange is set against it) and main when the goals were set (STARTUP_BASE, the start-up goal).
 
     python -m benchmarks exchange_cpu [--quick] [--against COMMIT[,COMMIT...]]
+                                      [--without PART[,PART...]]
 
 Set-up, for each engine: one bridge process (the service as a user runs it: defaults, Home
 Assistant discovery on) with 16 emulated Rotor-EZ controllers behind paced lines at 4800 baud
@@ -26,6 +27,9 @@ meet the same machine; each round starts its bridge afresh and measures, from /p
 
 The machine may be shared: every round carries the load average at its end; a ratio is of the
 medians over the rounds (this tree / the older engine).
+``--without``: this tree also runs, in the same turns, without a part of a reading
+(benchmarks/without.py: ``paho``, ``publishing``); what the part costs per exchange is this
+tree's median less that one's.
 """
 
 from __future__ import annotations
@@ -42,6 +46,8 @@ from benchmarks.harness import Scope, check_abort
 from benchmarks.procfs import cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
+from benchmarks.without import PARTS
+from benchmarks.without import spawner as without_spawner
 from tests.support.process import Spawn
 
 MODEL = "rotorez"
@@ -151,9 +157,18 @@ def one_round(
     }
 
 
-def run(scope: Scope, quick: bool, against: str | None = None) -> ItemResult:
-    """``against``: older commits, comma-separated (default AGAINST)."""
+def run(
+    scope: Scope, quick: bool, against: str | None = None, without: str | None = None
+) -> ItemResult:
+    """``against``: older commits, comma-separated (default AGAINST); ``without``: parts of a
+    reading (benchmarks/without.py), each run as an engine of its own beside this tree."""
     commits = [c.strip() for c in (against or AGAINST).split(",") if c.strip()]
+    parts = [p.strip() for p in (without or "").split(",") if p.strip()]
+    unknown = [p for p in parts if p not in PARTS]
+    if unknown:
+        raise ValueError(
+            f"--without: unknown part(s) {', '.join(unknown)}; choose from {', '.join(PARTS)}"
+        )
     window_s = 5.0 if quick else 10.0
     result = ItemResult("exchange_cpu", f"CPU per reading, this engine beside {', '.join(commits)}")
     engines: dict[str, Callable[[Scope], Spawn] | None] = {}
@@ -163,6 +178,8 @@ def run(scope: Scope, quick: bool, against: str | None = None) -> ItemResult:
             raise RuntimeError(f"the engine of {commit} could not be set up: {why}")
         engines[commit] = partial(engine_spawner, root=root)
     engines[NEW] = None
+    for part in parts:
+        engines[f"{NEW} without {part}"] = partial(without_spawner, parts=part)
     rounds: dict[str, list[dict[str, Any]]] = {e: [] for e in engines}
     for i in range(ROUNDS):
         for k, (engine, spawn) in enumerate(engines.items()):
@@ -217,6 +234,13 @@ def run(scope: Scope, quick: bool, against: str | None = None) -> ItemResult:
             f"(x{ratios[c]['startup_cpu_s']:.2f}; settled x{ratios[c]['settled_cpu_s']:.2f}), "
             f"idle {med[c]['idle_pct']:.2f} -> {new['idle_pct']:.2f} % of a core."
         )
+    for part in parts:
+        less = med[f"{NEW} without {part}"]["ms_per_exchange"]
+        table.notes.append(
+            f"Without {PARTS[part]}: {less:.3f} ms per exchange; the part costs "
+            f"{(new['ms_per_exchange'] - less) * 1000:.0f} us per exchange "
+            f"({(new['ms_per_exchange'] - less) / new['ms_per_exchange']:.0%} of this tree's)."
+        )
     table.notes += [
         "CPU: the bridge process, every thread (/proc schedstat); exchanges: `AI1;` frames the "
         "controllers logged. Start-up: from the process's start to all 16 `online` (discovery "
@@ -229,6 +253,7 @@ def run(scope: Scope, quick: bool, against: str | None = None) -> ItemResult:
     result.tables.append(table)
     result.data = {
         "against": commits,
+        "without": parts,
         "rounds": rounds,
         "medians": med,
         "ratios": ratios,

@@ -21,7 +21,7 @@ from benchmarks.line import PacedRelay, stamp_late, wire_ahead
 from benchmarks.stop_under_load import GOAL_MS, Sample, floor_split, query_after, row_verdict
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
-from tests.support.waiting import wait_until
+from tests.support.waiting import slow, wait_until
 
 BYTE_S = 10 / 4800  # a Rotor-EZ's line: 2.08 ms a byte
 QUERY = b"AI1;"
@@ -357,3 +357,53 @@ def test_the_instrument_runs_first_and_nothing_it_starts_later_inherits_it() -> 
         for tid in os.listdir("/proc/self/task"):  # this test process back as it was
             with contextlib.suppress(OSError):
                 os.sched_setscheduler(int(tid), os.SCHED_OTHER, os.sched_param(0))
+
+
+_WITHOUT = """
+import sys
+from benchmarks.without import install
+if sys.argv[1]:
+    install(sys.argv[1])
+import paho.mqtt.client as paho
+from paho.mqtt.enums import CallbackAPIVersion
+from bridge.core.model import MotionState, RotatorStatus
+from bridge.interfaces.mqtt.service import MqttService
+from bridge.interfaces.mqtt.topics import Topics
+from tests.mqtt.test_service import RecordingPublisher, RecordingRotator
+c = paho.Client(CallbackAPIVersion.VERSION2)  # never connected: paho answers "no connection"
+print([int(c.publish(t, b"1").rc) for t in ("rotor/bearing", "rotor/status", "rotor/state")])
+pub = RecordingPublisher()
+svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, wall=lambda: 1.75e9)
+svc.attach(RecordingRotator("tower", "rotorez"))
+pub.take()
+idle, moving = MotionState.IDLE, MotionState.MOVING
+for state, az in ((idle, 1.0), (moving, 2.0), (moving, 3.0), (moving, 4.0), (idle, 5.0)):
+    status = RotatorStatus("tower", state=state, bearing_deg=az, connected=True, available=True)
+    svc.publish_status("tower", status)
+print([p for t, p, _ in pub.take() if t == "rotor/bearing"])
+"""
+
+
+@pytest.mark.parametrize(
+    ("parts", "rcs", "bearings"),
+    [
+        ("", "[4, 4, 4]", "['1', '2', '3', '4', '5']"),  # as the bridge runs
+        ("paho", "[0, 0, 4]", "['1', '2', '3', '4', '5']"),
+        ("publishing", "[4, 4, 4]", "['1', '2', '5']"),
+        ("paho,publishing", "[0, 0, 4]", "['1', '2', '5']"),
+    ],
+)
+def test_exchange_cpus_without_takes_out_the_part_it_names_and_nothing_else(
+    parts: str, rcs: str, bearings: str
+) -> None:
+    """benchmarks/without.py: ``paho`` makes paho's publish of R/bearing and R/status (only)
+    hand back "sent" without reaching paho; ``publishing`` leaves out a moving status after a
+    moving one (the first of a turn, and the rest of the statuses, still go)."""
+    out = subprocess.run(
+        [sys.executable, "-c", _WITHOUT, parts],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=slow(60),
+    ).stdout.splitlines()
+    assert out == [rcs, bearings]
