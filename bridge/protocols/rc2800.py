@@ -20,8 +20,10 @@ The azimuth model sends only the azimuth's frames.
 Rules:
 1. Replies are lines ended by CR or LF. A position line is ``A`` or ``E``, then ``P=`` (after a
    space) or ``=``, a number, optionally the speed ``S=n`` and a one- or two-letter state; only
-   such a whole line is read. A line shaped like a command (``A``, ``E45``, ``S``) is the box's
-   echo: harmless chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported.
+   such a whole line is read. A line that grows past _MAX_LINE without its end is noise, and
+   so is the rest of it, up to its end, however the bytes came (its tail is no line of its
+   own). A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
+   chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported.
 2. A query (or a stop, whose axis selections are answered too) waits for a line of each axis it
    asked, in order; when the last has come, they are one reading (UNTRUSTED if any noise came
    in the exchange: the engine asks again). An axis's line while nothing is asked is kept; a
@@ -75,6 +77,7 @@ class Rc2800Codec(Plain):
         self.elevation = elevation
         self._axes = b"AE" if elevation else b"A"
         self._buf = bytearray()
+        self._rest = False  # rule 1: the rest of a line too long is still to come
         self._want: list[int] = []  # rule 2: the axes' lines the open exchange waits for
         self._noisy = False  # junk arrived since the exchange was opened
         self._seen: set[int] = set()  # rule 2: axes heard since the last reading
@@ -121,10 +124,15 @@ class Rc2800Codec(Plain):
         while (m := _LINES.match(self._buf)) is not None:
             line = bytes(m.group())
             del self._buf[: m.end()]
+            if self._rest:  # rule 1: the end of a line already given up as too long
+                self._rest = False
+                continue
             self._line(line, out)
-        if len(self._buf) > _MAX_LINE:
-            self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
+        if len(self._buf) > _MAX_LINE or (self._rest and self._buf):
+            if not self._rest:
+                self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
             self._buf.clear()
+            self._rest = True
         return out
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:

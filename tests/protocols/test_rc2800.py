@@ -126,6 +126,25 @@ def test_an_ill_formed_line_changes_nothing(bad: bytes) -> None:
     assert any(j.reason is JunkReason.NOISE for j in junk(out))
 
 
+@pytest.mark.parametrize("ask", [True, False])
+@pytest.mark.parametrize("cut", [0, 65, 70])
+def test_the_tail_of_a_line_too_long_is_no_reading_however_the_bytes_came(
+    cut: int, ask: bool
+) -> None:
+    """Rule 1: noise without a line end past _MAX_LINE, then a position's bytes on the same
+    line: one line, noise; read whole (cut 0) or with the noise given up first, no bearing,
+    asked or streamed by the box (rule 2: unasked lines are read too)."""
+    stream = b"x" * 70 + b"A P=  98.1 S=9 MV\r"
+    codec = Rc2800Codec(elevation=False)
+    if ask:
+        codec.encode_query()
+    replies = codec.feed(stream[:cut]) + codec.feed(stream[cut:]) if cut else codec.feed(stream)
+    assert positions(replies) == []
+    assert [j.reason for j in junk(replies)] == [JunkReason.NOISE]
+    codec.encode_query()
+    assert positions(codec.feed(b"A P=  98.2 S=9 MV\r")) == [(98.2, None)]  # the next line is
+
+
 def test_out_of_range_is_spoiled_an_error_is_reported_and_noise_spoils_the_exchange() -> None:
     codec = Rc2800Codec()
     out = feed(codec, b"A P= 361.0 S=9 MV\rE P= 181.0 S=9 MV\r")
@@ -168,12 +187,14 @@ def test_any_stream_gives_the_same_readings_however_sliced_and_none_it_did_not_c
     whole = run("whole")
     assert run("bytewise") == whole and run("split") == whole
     stream = b"".join(data for _, data in pieces)
-    # a reading's value was on a line of its axis, in a form Hamlib reads (``A P=  98.1``,
-    # ``E=43.7``), its decimals as the box sent them (``A P=0`` from raw bytes is 0.0)
-    lines = {
-        (m.group(1), float(m.group(2)))
-        for m in re.finditer(rb"(?:^|[\r\n])\s*([AE])(?: P)?=\s*(-?\d+(?:\.\d+)?)", stream)
-    }
+    # a reading's value was on a whole line of its axis (from a line end to the next), in a
+    # form rule 1 takes: ``A P=  98.1 S=9 MV``, ``E=43.7``, whole numbers too (``A P=0`` from
+    # raw bytes is 0.0; more lenient than Hamlib's parser, which wants the decimals' columns)
+    sp = rb"[ \t\f\v]"
+    line = rb"(?:^|(?<=[\r\n]))%s*([AE])(?: P)?=%s*(-?\d{1,3}(?:\.\d+)?)" % (sp, sp)
+    line += rb"(?:%s+S=\d+)?(?:%s+[A-Z]{1,2})?%s*[\r\n]" % (sp, sp, sp)
+    lines = {(m.group(1), float(m.group(2))) for m in re.finditer(line, stream)}
     for az, elev in whole:
         assert (b"A", az) in lines and 0 <= az <= 360
         assert (elev is None) is (not el) and (elev is None or (b"E", elev) in lines)
+        assert elev is None or -90 <= elev <= 180
