@@ -36,18 +36,19 @@ from __future__ import annotations
 
 import contextlib
 import os
+import subprocess
 import time
 from collections.abc import Callable
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 from benchmarks.engines import engine_at, engine_spawner
-from benchmarks.harness import Scope, check_abort
+from benchmarks.harness import REPO, Scope, check_abort, child_env
 from benchmarks.procfs import cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
 from benchmarks.without import PARTS
-from benchmarks.without import spawner as without_spawner
 from tests.support.process import Spawn
 
 MODEL = "rotorez"
@@ -103,6 +104,25 @@ def _polls_between(rig: Rig, t0: float, t1: float) -> int:
         for f in line.frames.since(0)
         if f.data == POLL and t0 <= f.time_s < t1
     )
+
+
+def without_env(parts: str) -> dict[str, str]:
+    """The environment of this checkout's bridge without ``parts`` (benchmarks/without.py): as
+    every other engine's (harness.child_env), the knock-outs' site first on the import path."""
+    env = child_env()
+    env["BENCH_WITHOUT"] = parts
+    env["PYTHONPATH"] = f"{REPO / 'benchmarks' / 'without_site'}:{env['PYTHONPATH']}"
+    return env
+
+
+def without_spawner(scope: Scope, parts: str) -> Spawn:
+    """How a Rig starts this checkout's bridge without ``parts``."""
+    env = without_env(parts)
+
+    def spawn(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
+        return scope.spawn(argv, log_name=str(log.relative_to(scope.workdir)), env=env)
+
+    return spawn
 
 
 def one_round(

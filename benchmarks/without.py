@@ -2,43 +2,29 @@
 turning rotor's reading taken out, in the same rounds, taking turns: the part's cost per exchange
 is this tree's CPU less the CPU without it (a difference of two medians on a shared machine,
 so a part of a few microseconds is inside the noise). Never for a user: the bridge it starts
-publishes less than it must.
+publishes less than it must. This module is imported by that bridge at start-up
+(without_site/sitecustomize.py, BENCH_WITHOUT): it imports nothing of the benchmarks' own.
 
-Parts (each installed in the bridge's process by without_site/sitecustomize.py, BENCH_WITHOUT):
-- ``paho``: paho's ``publish`` of every ``R/bearing`` and ``R/status`` message does nothing
-  (it hands back a message info that says sent); the bridge's own work for them (the payloads,
-  the comparison with the last, the client's lock and retained copy) is still done.
+Parts:
+- ``paho``: each status's ``R/bearing`` and ``R/status`` messages (the topics the MQTT service
+  names for it) do not reach paho's ``publish``: it hands back a message info that says sent.
+  The service's own work for them (the payloads, the comparison with the last, the client's
+  lock and retained copy) is still done; paho's packet, its queue and the network thread's
+  wake-up and write for them are not.
 - ``publishing``: the MQTT service's ``publish_status`` does nothing for a status that is
-  ``moving`` after one that was (the first of a turn is published: the benchmark waits for it).
+  ``moving`` after one that was (the first of a turn is published: the benchmark waits for
+  it): no payload, no paho, no group or listener (Home Assistant's version check) for them.
 """
 
 from __future__ import annotations
 
-import subprocess
-from pathlib import Path
+import threading
 from typing import Any
-
-from benchmarks.harness import REPO, Scope
-from tests.support import bridge_env
-from tests.support.process import Spawn
-
-SITE = REPO / "benchmarks" / "without_site"
 
 PARTS = {
     "paho": "paho's publish of R/bearing and R/status",
     "publishing": "publishing a turning rotor's statuses",
 }
-
-
-def spawner(scope: Scope, parts: str) -> Spawn:
-    """How a Rig starts this checkout's bridge without ``parts`` (names of PARTS)."""
-    env = bridge_env({"BENCH_WITHOUT": parts})
-    env["PYTHONPATH"] = f"{SITE}:{env['PYTHONPATH']}"
-
-    def spawn(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
-        return scope.spawn(argv, log_name=str(log.relative_to(scope.workdir)), env=env)
-
-    return spawn
 
 
 def install(parts: str) -> None:
@@ -52,21 +38,34 @@ def install(parts: str) -> None:
             raise SystemExit(
                 f"BENCH_WITHOUT: unknown part {part!r}; choose from {', '.join(PARTS)}"
             )
+    print(f"benchmark: this bridge runs without {parts} (BENCH_WITHOUT)", flush=True)
 
 
 def _without_paho() -> None:
     import paho.mqtt.client as paho
     from paho.mqtt.enums import MQTTErrorCode
 
-    publish = paho.Client.publish
+    from bridge.interfaces.mqtt.service import MqttService
+
+    skip = threading.local()  # the topics of the status being published on this thread
+    publish_status, publish = MqttService.publish_status, paho.Client.publish
+
+    def publishing(self: MqttService, rotator_id: str, status: Any) -> None:
+        t = self.topics.rotator(rotator_id)
+        skip.topics = (t.bearing, t.status)
+        try:
+            publish_status(self, rotator_id, status)
+        finally:
+            skip.topics = ()
 
     def publish_some(self: Any, topic: str, *args: Any, **kwargs: Any) -> Any:
-        if topic.endswith(("/bearing", "/status")):
+        if topic in getattr(skip, "topics", ()):
             info = paho.MQTTMessageInfo(0)
             info.rc = MQTTErrorCode.MQTT_ERR_SUCCESS
             return info
         return publish(self, topic, *args, **kwargs)
 
+    MqttService.publish_status = publishing  # type: ignore[method-assign]
     paho.Client.publish = publish_some  # type: ignore[method-assign]
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.delivery import DeliveryProbe
+from benchmarks.exchange_cpu import without_env
 from benchmarks.harness import instrument_first
 from benchmarks.line import PacedRelay, stamp_late, wire_ahead
 from benchmarks.stop_under_load import GOAL_MS, Sample, floor_split, query_after, row_verdict
@@ -361,8 +362,8 @@ def test_the_instrument_runs_first_and_nothing_it_starts_later_inherits_it() -> 
 
 _WITHOUT = """
 import sys
-from benchmarks.without import install
 if sys.argv[1]:
+    from benchmarks.without import install
     install(sys.argv[1])
 import paho.mqtt.client as paho
 from paho.mqtt.enums import CallbackAPIVersion
@@ -370,9 +371,15 @@ from bridge.core.model import MotionState, RotatorStatus
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
 from tests.mqtt.test_service import RecordingPublisher, RecordingRotator
-c = paho.Client(CallbackAPIVersion.VERSION2)  # never connected: paho answers "no connection"
-print([int(c.publish(t, b"1").rc) for t in ("rotor/bearing", "rotor/status", "rotor/state")])
-pub = RecordingPublisher()
+
+class ToPaho(RecordingPublisher):
+    client = paho.Client(CallbackAPIVersion.VERSION2)  # never connected: "no connection", 4
+    rcs = {}
+    def publish_retained(self, topic, payload, **kw):
+        super().publish_retained(topic, payload, **kw)
+        self.rcs[topic] = int(self.client.publish(topic, payload).rc)
+
+pub = ToPaho()
 svc = MqttService(Topics("rotor", {"tower": "rotor"}), pub, wall=lambda: 1.75e9)
 svc.attach(RecordingRotator("tower", "rotorez"))
 pub.take()
@@ -380,6 +387,7 @@ idle, moving = MotionState.IDLE, MotionState.MOVING
 for state, az in ((idle, 1.0), (moving, 2.0), (moving, 3.0), (moving, 4.0), (idle, 5.0)):
     status = RotatorStatus("tower", state=state, bearing_deg=az, connected=True, available=True)
     svc.publish_status("tower", status)
+print([pub.rcs[f"rotor/{t}"] for t in ("bearing", "status", "state", "presets")])
 print([p for t, p, _ in pub.take() if t == "rotor/bearing"])
 """
 
@@ -387,18 +395,19 @@ print([p for t, p, _ in pub.take() if t == "rotor/bearing"])
 @pytest.mark.parametrize(
     ("parts", "rcs", "bearings"),
     [
-        ("", "[4, 4, 4]", "['1', '2', '3', '4', '5']"),  # as the bridge runs
-        ("paho", "[0, 0, 4]", "['1', '2', '3', '4', '5']"),
-        ("publishing", "[4, 4, 4]", "['1', '2', '5']"),
-        ("paho,publishing", "[0, 0, 4]", "['1', '2', '5']"),
+        ("", "[4, 4, 4, 4]", "['1', '2', '3', '4', '5']"),  # as the bridge runs
+        ("paho", "[0, 0, 4, 4]", "['1', '2', '3', '4', '5']"),
+        ("publishing", "[4, 4, 4, 4]", "['1', '2', '5']"),
+        ("paho,publishing", "[0, 0, 4, 4]", "['1', '2', '5']"),
     ],
 )
 def test_exchange_cpus_without_takes_out_the_part_it_names_and_nothing_else(
     parts: str, rcs: str, bearings: str
 ) -> None:
-    """benchmarks/without.py: ``paho`` makes paho's publish of R/bearing and R/status (only)
-    hand back "sent" without reaching paho; ``publishing`` leaves out a moving status after a
-    moving one (the first of a turn, and the rest of the statuses, still go)."""
+    """benchmarks/without.py: ``paho`` keeps a status's R/bearing and R/status (only: R/state
+    and what is not a status's still reach paho, which answers "no connection") from paho's
+    publish; ``publishing`` leaves out a moving status after a moving one (the first of a turn,
+    and the rest, still go)."""
     out = subprocess.run(
         [sys.executable, "-c", _WITHOUT, parts],
         capture_output=True,
@@ -406,4 +415,19 @@ def test_exchange_cpus_without_takes_out_the_part_it_names_and_nothing_else(
         check=True,
         timeout=slow(60),
     ).stdout.splitlines()
-    assert out == [rcs, bearings]
+    assert out[-2:] == [rcs, bearings]
+
+
+def test_the_bridge_exchange_cpu_starts_without_a_part_loads_the_knock_out() -> None:
+    """The bridge's process, started as exchange_cpu starts it (``python -m bridge``, its
+    environment), installs the knock-out before anything else, and refuses an unknown one."""
+    argv = [sys.executable, "-m", "bridge", "--help"]
+    ran = subprocess.run(
+        argv, capture_output=True, text=True, env=without_env("paho"), timeout=slow(60)
+    )
+    assert ran.returncode == 0
+    assert ran.stdout.splitlines()[0] == "benchmark: this bridge runs without paho (BENCH_WITHOUT)"
+    ran = subprocess.run(
+        argv, capture_output=True, text=True, env=without_env("bogus"), timeout=slow(60)
+    )
+    assert ran.returncode != 0 and "unknown part 'bogus'" in ran.stderr
