@@ -20,9 +20,10 @@ The azimuth model sends only the azimuth's frames.
 Rules:
 1. Replies are lines ended by CR or LF. A position line is ``A`` or ``E``, then ``P=`` (after a
    space) or ``=``, a number, optionally the speed ``S=n`` and a one- or two-letter state; only
-   such a whole line is read. A line that grows past _MAX_LINE without its end is noise, and
-   so is the rest of it, up to its end, however the bytes came (its tail is no line of its
-   own). A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
+   such a whole line is read. A line longer than _MAX_LINE (its end not counted) is noise,
+   however the bytes came: given up once that much has come without its end, the rest of it,
+   up to its end, is no line of its own; an exchange it came in ends untrusted when it ends.
+   A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
    chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported.
 2. A query (or a stop, whose axis selections are answered too) waits for a line of each axis it
    asked, in order; when the last has come, they are one reading (UNTRUSTED if any noise came
@@ -126,14 +127,29 @@ class Rc2800Codec(Plain):
             del self._buf[: m.end()]
             if self._rest:  # rule 1: the end of a line already given up as too long
                 self._rest = False
-                continue
-            self._line(line, out)
+                self._too_long_ended(line, out)
+            elif len(line) > _MAX_LINE + 1:  # (its end came in the same read)
+                self._junk(line, JunkReason.NOISE, "line too long", out)
+                self._too_long_ended(b"", out)
+            else:
+                self._line(line, out)
         if len(self._buf) > _MAX_LINE or (self._rest and self._buf):
             if not self._rest:
                 self._junk(bytes(self._buf), JunkReason.NOISE, "line too long", out)
             self._buf.clear()
             self._rest = True
         return out
+
+    def _too_long_ended(self, rest: bytes, out: list[Reply]) -> None:
+        """Rule 1: a line given up as too long has ended (``rest``: what of it had not been
+        said yet). An exchange it came in has lost what that line may have carried: it ends
+        untrusted now (rule 2: the engine asks again), not at its reply's deadline."""
+        if self._want:
+            self._want = []
+            self._seen.clear()
+            out.append(JunkReply(rest, JunkReason.UNTRUSTED, "a line too long in the exchange"))
+        elif rest:
+            out.append(JunkReply(rest, JunkReason.NOISE, "the rest of a line too long"))
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
         if not raw.strip() or _ECHO.fullmatch(raw):

@@ -133,16 +133,39 @@ def test_the_tail_of_a_line_too_long_is_no_reading_however_the_bytes_came(
 ) -> None:
     """Rule 1: noise without a line end past _MAX_LINE, then a position's bytes on the same
     line: one line, noise; read whole (cut 0) or with the noise given up first, no bearing,
-    asked or streamed by the box (rule 2: unasked lines are read too)."""
+    asked or streamed by the box (rule 2: unasked lines are read too); asked, the exchange
+    ends untrusted with the line (the engine asks again), not at its deadline."""
     stream = b"x" * 70 + b"A P=  98.1 S=9 MV\r"
     codec = Rc2800Codec(elevation=False)
     if ask:
         codec.encode_query()
     replies = codec.feed(stream[:cut]) + codec.feed(stream[cut:]) if cut else codec.feed(stream)
     assert positions(replies) == []
-    assert [j.reason for j in junk(replies)] == [JunkReason.NOISE]
+    reasons = [j.reason for j in junk(replies)]
+    if ask:
+        assert reasons == [JunkReason.NOISE, JunkReason.UNTRUSTED]
+    else:  # (the line given up, then its rest, when the rest came later)
+        assert reasons == [JunkReason.NOISE] * (2 if cut else 1)
+    assert b"".join(j.data for j in junk(replies)) == stream  # each byte said once
+    assert not codec.awaiting_reply()
     codec.encode_query()
     assert positions(codec.feed(b"A P=  98.2 S=9 MV\r")) == [(98.2, None)]  # the next line is
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_a_line_is_read_up_to_64_bytes_and_one_longer_is_noise(how: str) -> None:
+    """Rule 1's bound (_MAX_LINE, 64 bytes before the line's end): a position padded to 64 is
+    read, padded to 65 it is noise, however the bytes come; so is one with blanks in front."""
+    line = b"A P=  98.1 S=9 MV"
+    for padded, read in (
+        (line.ljust(64), [(98.1, None)]),
+        (line.ljust(65), []),
+        (line.rjust(65), []),
+        (b"A P=  98.1" + b"0" * 60, []),
+    ):
+        codec = Rc2800Codec(elevation=False)
+        codec.encode_query()
+        assert positions(feed(codec, padded + b"\r", how)) == read, padded
 
 
 def test_out_of_range_is_spoiled_an_error_is_reported_and_noise_spoils_the_exchange() -> None:
@@ -168,6 +191,12 @@ _PIECES = st.one_of(
         st.sampled_from([b"MV", b"ST"]),
     ),
     st.sampled_from([b"A\r", b"E\r", b"S\r", b"A123.4\r", b"\r\n", b"A ERR=5\r", b"A P= "]),
+    st.builds(  # a run past rule 1's bound, or just inside it, ended or not
+        lambda fill, n, end: fill * n + end,
+        st.sampled_from([b"x", b" ", b"0"]),
+        st.integers(55, 90),
+        st.sampled_from([b"", b"\r", b"\n"]),
+    ),
 )
 
 
@@ -193,7 +222,11 @@ def test_any_stream_gives_the_same_readings_however_sliced_and_none_it_did_not_c
     sp = rb"[ \t\f\v]"
     line = rb"(?:^|(?<=[\r\n]))%s*([AE])(?: P)?=%s*(-?\d{1,3}(?:\.\d+)?)" % (sp, sp)
     line += rb"(?:%s+S=\d+)?(?:%s+[A-Z]{1,2})?%s*[\r\n]" % (sp, sp, sp)
-    lines = {(m.group(1), float(m.group(2))) for m in re.finditer(line, stream)}
+    lines = {
+        (m.group(1), float(m.group(2)))
+        for m in re.finditer(line, stream)
+        if len(m.group()) <= 64 + 1  # rule 1: 64 bytes and the line's end, at most
+    }
     for az, elev in whole:
         assert (b"A", az) in lines and 0 <= az <= 360
         assert (elev is None) is (not el) and (elev is None or (b"E", elev) in lines)
