@@ -22,7 +22,9 @@ Rules:
    space) or ``=``, a number, optionally the speed ``S=n`` and a one- or two-letter state; only
    such a whole line is read. A line longer than _MAX_LINE (its end not counted) is noise,
    however the bytes came: given up once that much has come without its end, the rest of it,
-   up to its end, is no line of its own; an exchange it came in ends untrusted when it ends.
+   up to its end, is noise too, no line of its own. An exchange it came in is spoiled (rule 2);
+   it ends with its answer (untrusted) or at its deadline, not with the noise: the box may
+   still be answering, and a query written then would take that answer for its own.
    A line shaped like a command (``A``, ``E45``, ``S``) is the box's echo: harmless
    chatter, never a reply. ``A ERR=n`` is the box's error: no reading, reported.
 2. A query (or a stop, whose axis selections are answered too) waits for a line of each axis it
@@ -127,10 +129,9 @@ class Rc2800Codec(Plain):
             del self._buf[: m.end()]
             if self._rest:  # rule 1: the end of a line already given up as too long
                 self._rest = False
-                self._too_long_ended(line, out)
+                self._junk(line, JunkReason.NOISE, "the rest of a line too long", out)
             elif len(line) > _MAX_LINE + 1:  # (its end came in the same read)
                 self._junk(line, JunkReason.NOISE, "line too long", out)
-                self._too_long_ended(b"", out)
             else:
                 self._line(line, out)
         if len(self._buf) > _MAX_LINE or (self._rest and self._buf):
@@ -139,17 +140,6 @@ class Rc2800Codec(Plain):
             self._buf.clear()
             self._rest = True
         return out
-
-    def _too_long_ended(self, rest: bytes, out: list[Reply]) -> None:
-        """Rule 1: a line given up as too long has ended (``rest``: what of it had not been
-        said yet). An exchange it came in has lost what that line may have carried: it ends
-        untrusted now (rule 2: the engine asks again), not at its reply's deadline."""
-        if self._want:
-            self._want = []
-            self._seen.clear()
-            out.append(JunkReply(rest, JunkReason.UNTRUSTED, "a line too long in the exchange"))
-        elif rest:
-            out.append(JunkReply(rest, JunkReason.NOISE, "the rest of a line too long"))
 
     def _line(self, raw: bytes, out: list[Reply]) -> None:
         if not raw.strip() or _ECHO.fullmatch(raw):
