@@ -48,7 +48,7 @@ from benchmarks.harness import REPO, Scope, check_abort, child_env
 from benchmarks.procfs import cpu_seconds
 from benchmarks.report import ItemResult, Table, Verdict, percentile
 from benchmarks.rig import Rig, many_rotators
-from benchmarks.without import PARTS
+from benchmarks.without import PARTS, unknown
 from tests.support.process import Spawn
 
 MODEL = "rotorez"
@@ -184,11 +184,9 @@ def run(
     reading (benchmarks/without.py), each run as an engine of its own beside this tree."""
     commits = [c.strip() for c in (against or AGAINST).split(",") if c.strip()]
     parts = [p.strip() for p in (without or "").split(",") if p.strip()]
-    unknown = [p for p in parts if p not in PARTS]
-    if unknown:
-        raise ValueError(
-            f"--without: unknown part(s) {', '.join(unknown)}; choose from {', '.join(PARTS)}"
-        )
+    why = unknown(",".join(parts)) if parts else None
+    if why is not None:
+        raise ValueError(f"--without: {why}")
     window_s = 5.0 if quick else 10.0
     result = ItemResult("exchange_cpu", f"CPU per reading, this engine beside {', '.join(commits)}")
     engines: dict[str, Callable[[Scope], Spawn] | None] = {}

@@ -27,17 +27,24 @@ PARTS = {
 }
 
 
+def unknown(parts: str) -> str | None:
+    """Why ``parts`` (comma-separated) cannot be taken out, if one is none of PARTS."""
+    bad = [part for part in parts.split(",") if part not in PARTS]
+    if not bad:
+        return None
+    return f"unknown part {', '.join(map(repr, bad))}; choose from {', '.join(PARTS)}"
+
+
 def install(parts: str) -> None:
     """In the bridge's process, at start-up (without_site/sitecustomize.py)."""
+    why = unknown(parts)
+    if why is not None:
+        raise SystemExit(f"BENCH_WITHOUT: {why}")
     for part in parts.split(","):
         if part == "paho":
             _without_paho()
-        elif part == "publishing":
-            _without_publishing()
         else:
-            raise SystemExit(
-                f"BENCH_WITHOUT: unknown part {part!r}; choose from {', '.join(PARTS)}"
-            )
+            _without_publishing()
     print(f"benchmark: this bridge runs without {parts} (BENCH_WITHOUT)", flush=True)
 
 
