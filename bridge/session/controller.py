@@ -318,7 +318,11 @@ class Controller:
             else:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
             if verdict.stop and self.link is not None:
-                self.link.write_stop(now)
+                self.link.write_stop(now)  # at once, whatever the line is doing
+                # a stop like any other from here on: checked and sent again while the rotor
+                # is still seen turning (stops.py rule 2), owed if the port fails (rule 3)
+                self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+                self.stops.sent(now)
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:

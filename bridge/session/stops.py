@@ -32,7 +32,9 @@ Rules:
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
    (stopping is always safe).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
-   is stopped once it comes to rest. Either ends tracking.
+   is stopped once it comes to rest. Either ends tracking. Such a stop (and a refusal's of a
+   new bearing mid-turn) is written whatever the line is doing, and is then a stop like any
+   other: checked (rule 2) and owed if the port fails right after it (rule 3).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what

@@ -230,3 +230,21 @@ def test_a_bare_azimuth_keeps_the_elevation(rig: Rig) -> None:
     v.target(100)  # no elevation named: the box must not be sent elevation 0
     v.run_until(settled_at(100, 30), 60, "at 100/30")
     assert moves(v) == [b"W100 030"]
+
+
+def test_a_refusals_stop_lost_on_the_line_is_sent_again(rig: Rig) -> None:
+    """stops.py rules 2 and 3 hold for the stop a refusal mid-turn asks for as for any other:
+    its frame lost on the line, the rotor still seen turning, it is written again and the
+    rotor stops far short of the bearing nobody wants any more (it was written once, and the
+    rotor turned on to 300)."""
+    v = ready(rig, "gs232b-az-450", start_az_deg=77)
+    v.device.receive(b"P36\r", v.now)  # the box set to 360 degrees; the bridge told 450
+    v.aim(Target(300))
+    v.run_until(lambda h: h.state is MOVING and h.truth().az_deg > 100, 60, "turning")
+    t = v.now
+    v.drop_writes(b"S\r")  # the refusal's stop never reaches the box
+    v.aim(Target(400))  # past 360: the box refuses it and turns on to 300
+    v.run_until(lambda h: h.errors("refused", since=t), 1, "the refusal")
+    v.run_until(lambda h: h.state is IDLE, 30, "at rest")
+    assert v.sent(since=t).count(b"S\r") == 2
+    assert 100 < v.truth().az_deg < 200 and not v.truth().is_moving

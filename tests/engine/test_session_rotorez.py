@@ -153,6 +153,26 @@ def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
     assert_never_disobeyed(v)
 
 
+def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopening(
+    rig: Rig,
+) -> None:
+    """stops.py rule 3 holds for the stop a stall writes as for any other: written moments
+    before the port failed, the controller may never have had it (the motor still driving a
+    jammed rotor), so it is the first frame the reopened port gets."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    t = v.now
+    v.link_down()
+    v.run_for(0.5)
+    v.link_up()
+    v.run_for(1)
+    assert v.sent(since=t)[:1] == [b";"]
+    assert not v.truth().is_moving
+
+
 # -- manual front-panel move (motion rule 5, targets.py rule 7) -------------------------------
 def test_a_front_panel_move_is_shown_as_moving_without_a_command(rig: Rig) -> None:
     v = ready(rig)
