@@ -9,20 +9,21 @@ Rules:
    turning since, is merged into it: nothing more goes on the wire (a flood of stops to an idle
    Rotor-EZ had it answer each with its banner, crowding out the readings). A rotor the last
    stop found turning, no reading since saying whether it took, is another matter: that frame
-   may have been lost on the line. There a stop merges only within STOP_REPEAT_GAP_S of the
-   last one (two clients' bursts of STOPs had put over a hundred ``;`` on the wire, each
-   answered with a banner once the first had stopped the rotor, queueing the readings for
-   seconds: the controller taken for silent, the next target dropped), and one merged so is
-   owed: it is sent when that gap ends, unless a reading has shown the rotor still by then
-   (rule 2). One such repeat is written after a stop, not more: later ones merge into it
-   until a reading shows the rotor turning (a stop written restarts the motion machine's
-   settle clock, so a stream of them would keep the rotor taken for moving and every one
-   written). So a repeat after a lost stop frame is never more than the gap late, and a flood
-   puts two stop frames on the wire, then one a brake window once the rotor is seen still.
-   Should the line lose that repeat too, the next stop goes once a reading shows the rotor
-   turning or the controller is found silent (meanwhile the stop express, where it runs,
-   writes its own frame for a STOP 0.1 s or more after its last). A controller that reports
-   no position while it turns (a SatEL's slew) is never merged then.
+   may have been lost on the line. So is a stalled one (rule 4): a jammed rotor turns neither
+   way, so no reading can ever say whether the stall's stop took. There a stop merges only
+   within STOP_REPEAT_GAP_S of the last one (two clients' bursts of STOPs had put over a
+   hundred ``;`` on the wire, each answered with a banner once the first had stopped the rotor,
+   queueing the readings for seconds: the controller taken for silent, the next target
+   dropped), and one merged so is owed: it is sent when that gap ends, unless a reading has
+   shown the rotor still by then (rule 2). One such repeat is written after a stop, not more:
+   later ones merge into it until a reading shows the rotor turning (a stop written restarts
+   the motion machine's settle clock, so a stream of them would keep the rotor taken for moving
+   and every one written). So a repeat after a lost stop frame is never more than the gap late,
+   and a flood puts two stop frames on the wire, then one a brake window once the rotor is seen
+   still. Should the line lose that repeat too, the next stop goes once a reading shows the
+   rotor turning or the controller is found silent (meanwhile the stop express, where it runs,
+   writes its own frame for a STOP 0.1 s or more after its last). A controller that reports no
+   position while it turns (a SatEL's slew) is never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
@@ -88,7 +89,9 @@ class Stops:
         have taken is owed: ``check``)."""
         if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
             return False  # a target went out after the last stop: this stop is needed
-        moving = m.state is MotionState.MOVING  # (until a reading shows it still)
+        # a rotor no reading has shown still since: turning, or stalled (a jam's rotor turns
+        # neither way, so no reading can show whether the stall's stop took)
+        moving = m.state is MotionState.MOVING or m.state is MotionState.STALLED
         if moving and not cfg.spec.reports_while_moving:
             return False  # no reading can show it turning (a SatEL's slew): always sent
         if m.last_move_t is not None and m.last_move_t > m.stop_sent_t:
@@ -107,8 +110,10 @@ class Stops:
         """Rule 1: when the repeat owed to the last stop goes out (None: none is owed)."""
         if self._repeat_owed is None or self._repeat_owed != m.stop_sent_t:
             return None  # none merged, or a newer stop went out since
-        if m.state is not MotionState.MOVING or m.target_deg is not None:
-            return None  # a reading showed the rotor still, or a target went out since
+        if m.target_deg is not None:
+            return None  # a target went out since
+        if m.state is not MotionState.MOVING and m.state is not MotionState.STALLED:
+            return None  # a reading showed the rotor still
         return self._repeat_owed + STOP_REPEAT_GAP_S
 
     def repeat_due(self, m: mo.Motion, now: float) -> bool:

@@ -173,6 +173,30 @@ def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopenin
     assert not v.truth().is_moving
 
 
+def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> None:
+    """No reading can show that a stall's stop took (the rotor does not turn either way): an
+    operator's STOP in the brake window after it is not merged into it, but goes out as its
+    repeat (stops.py rule 1), and the motor driving the jammed rotor stops."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.drop_writes(b";")  # the stall's stop never reaches the box
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(0.05)
+    assert v.truth().is_moving  # the motor still drives the jammed rotor
+    t = v.now
+    v.run_for(1)
+    v.stop()
+    v.run_for(1)
+    assert v.sent(since=t).count(b";") == 1
+    assert not v.truth().is_moving
+    v.stop()  # a flood after it: merged into that repeat (no reading shows the rotor turn)
+    v.stop()
+    v.run_for(1)
+    assert v.sent(since=t).count(b";") == 1
+
+
 # -- manual front-panel move (motion rule 5, targets.py rule 7) -------------------------------
 def test_a_front_panel_move_is_shown_as_moving_without_a_command(rig: Rig) -> None:
     v = ready(rig)
