@@ -319,10 +319,12 @@ class Controller:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
             if verdict.stop and self.link is not None:
                 self.link.write_stop(now)  # at once, whatever the line is doing
-                # a stop like any other from here on: checked and sent again while the rotor
-                # is still seen turning (stops.py rule 2), owed if the port fails (rule 3)
-                self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-                self.stops.sent(now)
+                if self.motion.state is mo.MOVING:  # a refusal mid-turn: this turn's stop,
+                    # sent again while the rotor is still seen turning (stops.py rule 2)
+                    self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+                    self.stops.sent(now)
+                else:  # at rest (a stall): no turn a reading could show it ended
+                    self.stops.wrote(now)  # (stops.py rule 4)
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:

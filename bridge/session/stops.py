@@ -9,21 +9,20 @@ Rules:
    turning since, is merged into it: nothing more goes on the wire (a flood of stops to an idle
    Rotor-EZ had it answer each with its banner, crowding out the readings). A rotor the last
    stop found turning, no reading since saying whether it took, is another matter: that frame
-   may have been lost on the line. So is a stalled one (rule 4): a jammed rotor turns neither
-   way, so no reading can ever say whether the stall's stop took. There a stop merges only
-   within STOP_REPEAT_GAP_S of the last one (two clients' bursts of STOPs had put over a
-   hundred ``;`` on the wire, each answered with a banner once the first had stopped the rotor,
-   queueing the readings for seconds: the controller taken for silent, the next target
-   dropped), and one merged so is owed: it is sent when that gap ends, unless a reading has
-   shown the rotor still by then (rule 2). One such repeat is written after a stop, not more:
-   later ones merge into it until a reading shows the rotor turning (a stop written restarts
-   the motion machine's settle clock, so a stream of them would keep the rotor taken for moving
-   and every one written). So a repeat after a lost stop frame is never more than the gap late,
-   and a flood puts two stop frames on the wire, then one a brake window once the rotor is seen
-   still. Should the line lose that repeat too, the next stop goes once a reading shows the
-   rotor turning or the controller is found silent (meanwhile the stop express, where it runs,
-   writes its own frame for a STOP 0.1 s or more after its last). A controller that reports no
-   position while it turns (a SatEL's slew) is never merged then.
+   may have been lost on the line. There a stop merges only within STOP_REPEAT_GAP_S of the
+   last one (two clients' bursts of STOPs had put over a hundred ``;`` on the wire, each
+   answered with a banner once the first had stopped the rotor, queueing the readings for
+   seconds: the controller taken for silent, the next target dropped), and one merged so is
+   owed: it is sent when that gap ends, unless a reading has shown the rotor still by then
+   (rule 2). One such repeat is written after a stop, not more: later ones merge into it
+   until a reading shows the rotor turning (a stop written restarts the motion machine's
+   settle clock, so a stream of them would keep the rotor taken for moving and every one
+   written). So a repeat after a lost stop frame is never more than the gap late, and a flood
+   puts two stop frames on the wire, then one a brake window once the rotor is seen still.
+   Should the line lose that repeat too, the next stop goes once a reading shows the rotor
+   turning or the controller is found silent (meanwhile the stop express, where it runs,
+   writes its own frame for a STOP 0.1 s or more after its last). A controller that reports
+   no position while it turns (a SatEL's slew) is never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
@@ -34,8 +33,13 @@ Rules:
    (stopping is always safe).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
    is stopped once it comes to rest. Either ends tracking. Such a stop (and a refusal's of a
-   new bearing mid-turn) is written whatever the line is doing, and is then a stop like any
-   other: checked (rule 2) and owed if the port fails right after it (rule 3).
+   new bearing mid-turn) is written whatever the line is doing, and is owed if the port fails
+   right after it (rule 3). A refusal's, written while the rotor turns, is that turn's stop:
+   checked (rule 2), and a stop after it merges as after any (rule 1). The others are written
+   to a rotor at rest, whose turn is over: no reading can check them (a jammed rotor turns
+   neither way), and they leave the rules as they were, so an operator's STOP after a stall
+   is written (a lost stall stop leaves the motor driving the jammed rotor), and a later move
+   by hand is not taken for one that a stop did not end.
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -83,15 +87,14 @@ class Stops:
         self._repeat_owed: float | None = None  # rule 1: the stop a merged repeat is owed to
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
+        self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
         have taken is owed: ``check``)."""
         if not cfg.can_report_position or m.stop_sent_t is None or m.target_deg is not None:
             return False  # a target went out after the last stop: this stop is needed
-        # a rotor no reading has shown still since: turning, or stalled (a jam's rotor turns
-        # neither way, so no reading can show whether the stall's stop took)
-        moving = m.state is MotionState.MOVING or m.state is MotionState.STALLED
+        moving = m.state is MotionState.MOVING  # (until a reading shows it still)
         if moving and not cfg.spec.reports_while_moving:
             return False  # no reading can show it turning (a SatEL's slew): always sent
         if m.last_move_t is not None and m.last_move_t > m.stop_sent_t:
@@ -110,10 +113,8 @@ class Stops:
         """Rule 1: when the repeat owed to the last stop goes out (None: none is owed)."""
         if self._repeat_owed is None or self._repeat_owed != m.stop_sent_t:
             return None  # none merged, or a newer stop went out since
-        if m.target_deg is not None:
-            return None  # a target went out since
-        if m.state is not MotionState.MOVING and m.state is not MotionState.STALLED:
-            return None  # a reading showed the rotor still
+        if m.state is not MotionState.MOVING or m.target_deg is not None:
+            return None  # a reading showed the rotor still, or a target went out since
         return self._repeat_owed + STOP_REPEAT_GAP_S
 
     def repeat_due(self, m: mo.Motion, now: float) -> bool:
@@ -130,11 +131,18 @@ class Stops:
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
 
-    @staticmethod
-    def unsure(stop_due: bool, m: mo.Motion, now: float) -> bool:
+    def wrote(self, at: float) -> None:
+        """Rule 4: a stop frame was written at ``at`` to a rotor at rest (a stall's): one the
+        port's failure makes unsure (rule 3), nothing else."""
+        self._rest_stop_t = at
+
+    def unsure(self, stop_due: bool, m: mo.Motion, now: float) -> bool:
         """Rule 3: a stop still waiting for the line, or written so recently (a failed write
-        closes the port too) that the controller may never have had it."""
-        sent = m.stop_sent_t
+        closes the port too) that the controller may never have had it (rule 4's to a rotor
+        at rest too, unless a target went out after it)."""
+        sent, rest = m.stop_sent_t, self._rest_stop_t
+        if rest is not None and m.target_t is None and (sent is None or rest > sent):
+            sent = rest
         return stop_due or (sent is not None and now - sent < STOP_UNSURE_S)
 
     @property

@@ -174,27 +174,43 @@ def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopenin
 
 
 def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> None:
-    """No reading can show that a stall's stop took (the rotor does not turn either way): an
-    operator's STOP in the brake window after it is not merged into it, but goes out as its
-    repeat (stops.py rule 1), and the motor driving the jammed rotor stops."""
+    """stops.py rule 4: no reading can show whether a jammed rotor's stop took. An operator's
+    STOP after a stall goes out, also within the brake window and after one the line lost
+    too; a flood of them is merged (no banner flood on the line)."""
     v = ready(rig)
     v.target(350)
     v.run_for(10)
     v.jam()
-    v.drop_writes(b";")  # the stall's stop never reaches the box
+    v.drop_writes(b";", 2)  # a noisy spell: the stall's stop and the operator's first lost
     v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
-    v.run_for(0.05)
-    assert v.truth().is_moving  # the motor still drives the jammed rotor
     t = v.now
     v.run_for(1)
     v.stop()
     v.run_for(1)
-    assert v.sent(since=t).count(b";") == 1
-    assert not v.truth().is_moving
-    v.stop()  # a flood after it: merged into that repeat (no reading shows the rotor turn)
-    v.stop()
+    assert v.sent(since=t).count(b";") == 2 and v.truth().is_moving  # the stall's, then it
+    for _ in range(3):  # pressed again, 10 s apart
+        v.run_for(10)
+        v.stop()
     v.run_for(1)
-    assert v.sent(since=t).count(b";") == 1
+    assert v.sent(since=t).count(b";") == 5
+    assert not v.truth().is_moving
+    t = v.now
+    for _ in range(50):  # a flood: merged into the last (one a brake window)
+        v.stop()
+        v.run_for(0.02)
+    assert v.sent(since=t).count(b";") == 0
+
+
+def test_a_stall_measures_no_coast(rig: Rig) -> None:
+    """health.py: a coast is what the rotor turned after the bridge stopped it; a jammed rotor
+    turns nothing after its stall's stop, and a 0 there would hide a coast that grew."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(2)
+    assert v.status.health is not None and v.status.health.az.coast_deg is None
 
 
 # -- manual front-panel move (motion rule 5, targets.py rule 7) -------------------------------

@@ -138,6 +138,25 @@ def test_turned_away_from_its_target_is_reported_and_stopped_once_at_rest(rig: R
     assert not [f for f in v.frames(Outcome.SET, since=t)]  # it was never sent back
 
 
+def test_a_move_by_hand_after_a_turned_away_rotor_was_stopped_is_left_alone(rig: Rig) -> None:
+    """stops.py rule 4: the stop a turned-away rotor gets once at rest ends nothing a later
+    move by hand could be taken for (an attack pass: recording it as a stop of a turn had the
+    bridge stop the operator's next front-panel move as "still turning after a stop")."""
+    v = ready(rig)
+    v.target(100)
+    v.run_until(lambda h: h.truth().is_moving and h.truth().az_deg > 20, 30, "turning")
+    t = v.now
+    v.manual_rotate(0.0)
+    v.run_until(lambda h: h.frames(Outcome.STOP, since=t), 120, "a stop once at rest")
+    v.run_for(20)
+    t = v.now
+    v.manual_rotate(200.0)  # the operator turns it by hand again
+    v.run_until(lambda h: h.state is MOVING, 10, "seen turning")
+    v.run_until(lambda h: not h.truth().is_moving, 300, "at rest")
+    assert v.frames(Outcome.STOP, since=t) == [] and v.errors(since=t) == []
+    assert round(v.truth().az_deg) == 200
+
+
 def _states(v: VirtualRotator) -> list[MotionState]:
     """The published states in order, each change once."""
     out: list[MotionState] = []
