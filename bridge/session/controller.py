@@ -189,9 +189,8 @@ class Controller:
 
     def disconnect(self, failed: bool, now: float) -> None:
         """The port is closed (``failed``: not on purpose)."""
-        if failed:
-            stop_due = self.link is not None and self.link.stop_due
-            self.stops.owed = self.stops.owed or self.stops.unsure(stop_due, self.motion, now)
+        stop_due = self.link is not None and self.link.stop_due
+        self.stops.port_closed(failed, stop_due, self.motion, now)
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
@@ -214,9 +213,10 @@ class Controller:
         reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
         if reply is not None:
             self._reading(link, reply, now)
+        at_rest = self.motion.state is mo.IDLE or self.motion.state is mo.BRAKING
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-            self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
+            self.stops.sent(now, at_rest)  # (stops.py rules 1 and 2)
 
     def check_stop(self, now: float, target_going: bool) -> None:
         """stops.py rule 2: a stop that did not take is sent again."""
@@ -317,14 +317,17 @@ class Controller:
                 self.notes.append(verdict.error)
             else:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
-            if verdict.stop and self.link is not None:
-                self.link.write_stop(now)  # at once, whatever the line is doing
-                if self.motion.state is mo.MOVING:  # a refusal mid-turn: this turn's stop,
-                    # sent again while the rotor is still seen turning (stops.py rule 2)
+            if not verdict.stop:
+                continue
+            if self.link is None:  # (a verdict comes from a reading or the clock of a link)
+                self.stops.owed = True
+            else:  # stops.py rule 4
+                self.link.write_stop(now)  # at once, also on a half-duplex line's reply
+                if self.motion.state is mo.MOVING:  # a refusal's: this turn's stop
                     self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
                     self.stops.sent(now)
-                else:  # at rest (a stall): no turn a reading could show it ended
-                    self.stops.wrote(now)  # (stops.py rule 4)
+                else:  # a stall's, a turned-away rotor's: to a rotor at rest
+                    self.stops.wrote_at_rest(now)
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:
@@ -449,6 +452,7 @@ class Controller:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))
         self.motion = mo.commanded(m, cfg.motion, az, now, el)
+        self.stops.target_sent()  # (stops.py rule 3: a stop owed now would stop this move)
         link.poll_by(now + cfg.moving_poll_interval_s)
 
     def poll(self, now: float, busy: bool) -> None:

@@ -26,20 +26,25 @@ Rules:
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
-   always sends a stop, whatever the bridge believes the rotor is doing.
+   always sends a stop, whatever the bridge believes the rotor is doing. A stop written to a
+   rotor the readings show at rest (idle or braking) is not checked: a move seen after it is
+   a new one (a turn by hand at the control box, minutes later), not one it failed to end.
+   One to a stalled rotor is (its motor may still be driving), and so is one written before
+   any reading of a new connection (rule 3's).
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
-   (stopping is always safe).
+   (stopping is always safe). A target written after that stop leaves none owed: a stop then
+   would stop that move.
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
-   is stopped once it comes to rest. Either ends tracking. Such a stop (and a refusal's of a
-   new bearing mid-turn) is written whatever the line is doing, and is owed if the port fails
-   right after it (rule 3). A refusal's, written while the rotor turns, is that turn's stop:
-   checked (rule 2), and a stop after it merges as after any (rule 1). The others are written
-   to a rotor at rest, whose turn is over: no reading can check them (a jammed rotor turns
-   neither way), and they leave the rules as they were, so an operator's STOP after a stall
-   is written (a lost stall stop leaves the motor driving the jammed rotor), and a later move
-   by hand is not taken for one that a stop did not end.
+   is stopped once it comes to rest; a rotor still turning to the bearing before a new one
+   the controller refused is stopped. Each ends tracking. Such a stop is written at once,
+   whatever the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does
+   not wait for a reply to end), and is owed as any (rule 3). The refusal's, written while
+   the rotor turns, is that turn's stop for rules 1 and 2. The others go to a rotor at rest,
+   and are neither merged into (an operator's STOP after a stall is written: no reading can
+   show whether a jammed rotor's stop took) nor checked (a later move by hand is left
+   alone).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -88,6 +93,7 @@ class Stops:
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
+        self._unchecked_t: float | None = None  # rule 2: the last stop, if it found it at rest
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -126,24 +132,30 @@ class Stops:
         self._writing_repeat = True
         return True
 
-    def sent(self, at: float) -> None:
-        """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
+    def sent(self, at: float, at_rest: bool = False) -> None:
+        """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew;
+        ``at_rest``: to a rotor the readings showed at rest, which rule 2 does not check)."""
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
+        self._unchecked_t = at if at_rest else None
 
-    def wrote(self, at: float) -> None:
-        """Rule 4: a stop frame was written at ``at`` to a rotor at rest (a stall's): one the
-        port's failure makes unsure (rule 3), nothing else."""
+    def wrote_at_rest(self, at: float) -> None:
+        """Rule 4: a stall's or a turned-away rotor's stop was written at ``at``: nothing for
+        rules 1 and 2, owed if the port fails right after it (rule 3)."""
         self._rest_stop_t = at
 
-    def unsure(self, stop_due: bool, m: mo.Motion, now: float) -> bool:
-        """Rule 3: a stop still waiting for the line, or written so recently (a failed write
-        closes the port too) that the controller may never have had it (rule 4's to a rotor
-        at rest too, unless a target went out after it)."""
-        sent, rest = m.stop_sent_t, self._rest_stop_t
-        if rest is not None and m.target_t is None and (sent is None or rest > sent):
-            sent = rest
-        return stop_due or (sent is not None and now - sent < STOP_UNSURE_S)
+    def target_sent(self) -> None:
+        """Rule 3: a target was written: no stop before it is owed any more."""
+        self._rest_stop_t = None
+
+    def port_closed(self, failed: bool, stop_due: bool, m: mo.Motion, now: float) -> None:
+        """Rule 3: the port closed (``failed``: not on purpose); ``stop_due``: a stop waited
+        for the line. A failed port owes a stop that waited, or one written so recently (a
+        failed write closes the port too) that the controller may never have had it."""
+        written = [t for t in (m.stop_sent_t, self._rest_stop_t) if t is not None]
+        self._rest_stop_t = None
+        if failed and (stop_due or (written and now - max(written) < STOP_UNSURE_S)):
+            self.owed = True
 
     @property
     def counting(self) -> bool:
@@ -156,7 +168,7 @@ class Stops:
     ) -> tuple[bool, Report | None]:
         """Rule 2: whether to stop again (and the error after the last try). A target about to
         go out stops the rotor by itself (motion.plan_target)."""
-        if m.stop_sent_t is None:
+        if m.stop_sent_t is None or m.stop_sent_t == self._unchecked_t:
             self._tries = 0
             return False, None
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t

@@ -15,7 +15,7 @@ import pytest
 
 from bridge.core.model import MotionState
 from bridge.emulators.rotorez_models import Outcome
-from bridge.session.stops import STOP_REPEAT_GAP_S
+from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_UNSURE_S
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -156,21 +156,76 @@ def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
 def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopening(
     rig: Rig,
 ) -> None:
-    """stops.py rule 3 holds for the stop a stall writes as for any other: written moments
-    before the port failed, the controller may never have had it (the motor still driving a
-    jammed rotor), so it is the first frame the reopened port gets."""
+    """stops.py rules 3 and 4: a stall's stop written moments before the port failed may never
+    have reached the controller (here it did not: the motor still drives the jammed rotor), so
+    it is the first frame the reopened port gets."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.drop_writes(b";")  # lost with the port
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.link_down()
+    v.run_for(0.5)
+    assert v.truth().is_moving
+    t = v.now
+    v.link_up()
+    v.run_for(1)
+    assert v.sent(since=t)[:1] == [b";"]
+    assert not v.truth().is_moving
+
+
+def test_a_stall_stop_long_before_the_port_failed_is_not_owed(rig: Rig) -> None:
+    """stops.py rule 3: a stall's stop the port outlived by STOP_UNSURE_S was had."""
     v = ready(rig)
     v.target(350)
     v.run_for(10)
     v.jam()
     v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
-    t = v.now
+    v.run_for(STOP_UNSURE_S + 0.5)
     v.link_down()
     v.run_for(0.5)
+    t = v.now
     v.link_up()
     v.run_for(1)
-    assert v.sent(since=t)[:1] == [b";"]
-    assert not v.truth().is_moving
+    assert b";" not in v.sent(since=t)
+
+
+def test_a_stop_to_a_stalled_rotor_is_sent_again_when_it_turns_after_all(rig: Rig) -> None:
+    """stops.py rule 2: a stalled rotor's motor may still be driving, so a stop to it is
+    checked: the stall's stop and the operator's both lost, the ice breaks, the rotor turns on
+    to its old target, and the stop goes out again once the readings show it turning."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.drop_writes(b";", 2)
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(1)
+    v.stop()
+    v.run_for(2)
+    t = v.now
+    v.unjam()
+    v.run_until(lambda v: not v.truth().is_moving, 120, "at rest")
+    assert v.sent(since=t).count(b";") >= 1
+    assert v.truth().az_deg < 150
+
+
+@pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
+def test_a_move_by_hand_long_after_a_stop_at_rest_is_left_alone(rig: Rig, model: str) -> None:
+    """stops.py rule 2: a STOP pressed while the rotor was at rest is not taken as unheard
+    when the rotor turns minutes later (by hand at the control box): that move goes on, no
+    stop and no error (an attack pass found it stopped, "still turning after a stop")."""
+    v = rig(model)
+    v.run_until_state(IDLE, 60)
+    v.run_for(5)
+    v.stop()
+    v.run_for(30)
+    t = v.now
+    v.manual_rotate(150.0)
+    v.run_until(lambda h: h.state is MOVING, 10, "seen turning")
+    v.run_until(lambda h: not h.truth().is_moving, 400, "at rest")
+    assert round(v.truth().az_deg) == 150 and v.errors(since=t) == []
 
 
 def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> None:

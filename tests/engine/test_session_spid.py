@@ -20,6 +20,7 @@ from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
+STOP_FRAME = b"W" + bytes(10) + bytes([K_STOP]) + b" "
 
 
 def ready(rig: Rig, ppd: int = 2) -> VirtualRotator:
@@ -155,6 +156,53 @@ def test_a_move_by_hand_after_a_turned_away_rotor_was_stopped_is_left_alone(rig:
     v.run_until(lambda h: not h.truth().is_moving, 300, "at rest")
     assert v.frames(Outcome.STOP, since=t) == [] and v.errors(since=t) == []
     assert round(v.truth().az_deg) == 200
+
+
+def test_a_turned_away_rotors_stop_the_port_failed_right_after_is_owed(rig: Rig) -> None:
+    """stops.py rules 3 and 4: the stop a turned-away rotor gets once at rest, lost as the
+    port failed, is the first frame the reopened port gets."""
+    v = ready(rig)
+    v.target(100)
+    v.run_until(lambda h: h.truth().is_moving and h.truth().az_deg > 20, 30, "turning")
+    v.drop_writes(STOP_FRAME)
+    v.manual_rotate(0.0)
+    v.run_until(lambda h: h.errors("stalled"), 60, "reported")
+    v.run_until(lambda h: any(w.lost for w in h.writes), 120, "its stop, lost once at rest")
+    v.link_down()
+    v.run_for(0.5)
+    t = v.now
+    v.link_up()
+    v.run_for(0.5)
+    assert v.sent(since=t)[:1] == [STOP_FRAME]
+    assert Outcome.STOP in [f.outcome for f in v.frames(since=t)]
+
+
+def test_a_stall_stop_before_a_new_target_is_not_owed_when_the_port_fails_twice(
+    rig: Rig,
+) -> None:
+    """stops.py rule 3: a target written after a stall's stop leaves no stop owed, also when
+    the port fails, comes back and fails again within the second (an attack pass: the second
+    failure owed the stall's stop, and it stopped the new move a degree into it)."""
+    v = ready(rig)
+    v.target(100)
+    v.run_until(lambda h: h.truth().is_moving and h.truth().az_deg > 20, 30, "turning")
+    v.jam()
+    v.run_until(lambda h: h.errors("stalled"), 60, "the stall")
+    t = v.now
+    v.unjam()
+    v.run_for(0.1)
+    v.target(200)
+    v.run_until(lambda h: h.frames(Outcome.SET, since=t), 5, "the new target at the box")
+    v.link_down()
+    v.run_for(0.05)
+    v.link_up()
+    v.run_for(0.05)
+    v.link_down()
+    v.run_for(0.5)
+    t = v.now
+    v.link_up()
+    v.run_until(lambda h: not h.truth().is_moving, 400, "at rest")
+    assert v.frames(Outcome.STOP, since=t) == [] and round(v.truth().az_deg) == 200
 
 
 def _states(v: VirtualRotator) -> list[MotionState]:
