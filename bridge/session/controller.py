@@ -213,10 +213,9 @@ class Controller:
         reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
         if reply is not None:
             self._reading(link, reply, now)
-        at_rest = self.motion.state is mo.IDLE or self.motion.state is mo.BRAKING
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-            self.stops.sent(now, at_rest)  # (stops.py rules 1 and 2)
+            self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
 
     def check_stop(self, now: float, target_going: bool) -> None:
         """stops.py rule 2: a stop that did not take is sent again."""

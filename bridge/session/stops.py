@@ -26,11 +26,11 @@ Rules:
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
-   always sends a stop, whatever the bridge believes the rotor is doing. A stop written to a
-   rotor the readings show at rest (idle or braking) is not checked: a move seen after it is
-   a new one (a turn by hand at the control box, minutes later), not one it failed to end.
-   One to a stalled rotor is (its motor may still be driving), and so is one written before
-   any reading of a new connection (rule 3's).
+   always sends a stop, whatever the bridge believes the rotor is doing. Also a stop written
+   to a rotor the bridge took for at rest is checked until the next target: that state may be
+   a guess (the first reading of a connection, readings missed for a while, a stall whose
+   motor may still be driving), and a stop lost then must not leave the rotor turning. The
+   price: a move by hand long after such a stop is stopped too.
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
@@ -93,7 +93,6 @@ class Stops:
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
-        self._unchecked_t: float | None = None  # rule 2: the last stop, if it found it at rest
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -132,12 +131,10 @@ class Stops:
         self._writing_repeat = True
         return True
 
-    def sent(self, at: float, at_rest: bool = False) -> None:
-        """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew;
-        ``at_rest``: to a rotor the readings showed at rest, which rule 2 does not check)."""
+    def sent(self, at: float) -> None:
+        """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
-        self._unchecked_t = at if at_rest else None
 
     def wrote_at_rest(self, at: float) -> None:
         """Rule 4: a stall's or a turned-away rotor's stop was written at ``at``: nothing for
@@ -168,7 +165,7 @@ class Stops:
     ) -> tuple[bool, Report | None]:
         """Rule 2: whether to stop again (and the error after the last try). A target about to
         go out stops the rotor by itself (motion.plan_target)."""
-        if m.stop_sent_t is None or m.stop_sent_t == self._unchecked_t:
+        if m.stop_sent_t is None:
             self._tries = 0
             return False, None
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
