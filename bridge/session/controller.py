@@ -318,15 +318,15 @@ class Controller:
                 log.info("%s: %s at %s", self.name, event.value, self.motion.position_deg)
             if not verdict.stop:
                 continue
-            if self.link is None:  # (a verdict comes from a reading or the clock of a link)
-                self.stops.owed = True
+            if self.link is None:  # (never: a verdict comes from a link's reading or clock;
+                self.stops.owed = True  # were it otherwise, the stop is owed, not dropped)
             else:  # stops.py rule 4
                 self.link.write_stop(now)  # at once, also on a half-duplex line's reply
                 if self.motion.state is mo.MOVING:  # a refusal's: this turn's stop
                     self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
                     self.stops.sent(now)
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
-                    self.stops.wrote_at_rest(now)
+                    self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:
@@ -394,8 +394,8 @@ class Controller:
         m = self.motion
         if not self.answering or self.notes or m.stop_sent_t is not None:
             return -math.inf
-        if self.stops.counting:  # check_stop has its count of stops to start again
-            return -math.inf
+        if self.stops.counting or self.stops.stall_watched:  # check_stop has work: its count
+            return -math.inf  # of stops to start again, or a stall's stop to check
         if link.slew is not None or link.stop_due or link.reply_owed or self.options.enable_due:
             return -math.inf
         if not self.cfg.spec.can_report_position or len(times) != 1:

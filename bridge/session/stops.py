@@ -1,6 +1,6 @@
 """The stop rules of one rotator: when a stop adds nothing, when one must be sent again, and
-what a motion verdict (a stall, a rotor turned away) asks of the line. Pure: the session asks,
-with the motion and the time, and writes what these answer.
+what a motion verdict (a stall, a rotor turned away, a refused bearing) asks of the line.
+Pure: the session asks, with the motion and the time, and writes what these answer.
 
 Rules:
 1. A stop is written at once (on a half-duplex line right after the reply in flight) and
@@ -26,11 +26,12 @@ Rules:
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
-   always sends a stop, whatever the bridge believes the rotor is doing. Also a stop written
-   to a rotor the bridge took for at rest is checked until the next target: that state may be
-   a guess (the first reading of a connection, readings missed for a while, a stall whose
-   motor may still be driving), and a stop lost then must not leave the rotor turning. The
-   price: a move by hand long after such a stop is stopped too.
+   always sends a stop, whatever the bridge believes the rotor is doing. An operator's STOP
+   (or lock ON) to a rotor the bridge took for at rest is checked too, until the next target
+   or until the move after it ended: that state may be a guess (the first reading of a
+   connection, readings missed for a while, a stall whose motor may still be driving), and a
+   stop lost then must not leave the rotor turning. The price: a move by hand long after such
+   a stop is stopped once too.
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
@@ -42,9 +43,13 @@ Rules:
    whatever the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does
    not wait for a reply to end), and is owed as any (rule 3). The refusal's, written while
    the rotor turns, is that turn's stop for rules 1 and 2. The others go to a rotor at rest,
-   and are neither merged into (an operator's STOP after a stall is written: no reading can
-   show whether a jammed rotor's stop took) nor checked (a later move by hand is left
-   alone).
+   and nothing is merged into them (an operator's STOP after a stall is written: no reading
+   can show whether a jammed rotor's stop took). A turned-away rotor's is not checked (a later
+   move by hand is left alone). A stall's is, once, until a target or the port closes: its
+   motor may have driven the jammed rotor all along, and when the rotor breaks free the
+   readings show it turning on to its old bearing; then it is stopped as any rotor still
+   turning after a stop (rule 2; the operator freeing it by hand at the control box has that
+   move stopped once).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -93,6 +98,7 @@ class Stops:
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
+        self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while checked
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -136,21 +142,29 @@ class Stops:
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
 
-    def wrote_at_rest(self, at: float) -> None:
-        """Rule 4: a stall's or a turned-away rotor's stop was written at ``at``: nothing for
-        rules 1 and 2, owed if the port fails right after it (rule 3)."""
+    def wrote_at_rest(self, at: float, stall: bool) -> None:
+        """Rule 4: a stall's (``stall``) or a turned-away rotor's stop was written at ``at``:
+        nothing to merge into, owed if the port fails right after it (rule 3), and a stall's
+        checked once (``check``)."""
         self._rest_stop_t = at
+        self._stall_stop_t = at if stall else None
 
     def target_sent(self) -> None:
-        """Rule 3: a target was written: no stop before it is owed any more."""
-        self._rest_stop_t = None
+        """Rules 3 and 4: a target was written: no stop before it is owed or checked any more."""
+        self._rest_stop_t = self._stall_stop_t = None
+
+    @property
+    def stall_watched(self) -> bool:
+        """Rule 4: a stall's stop is checked: a reading showing the rotor turning may call for
+        a stop."""
+        return self._stall_stop_t is not None
 
     def port_closed(self, failed: bool, stop_due: bool, m: mo.Motion, now: float) -> None:
         """Rule 3: the port closed (``failed``: not on purpose); ``stop_due``: a stop waited
         for the line. A failed port owes a stop that waited, or one written so recently (a
         failed write closes the port too) that the controller may never have had it."""
         written = [t for t in (m.stop_sent_t, self._rest_stop_t) if t is not None]
-        self._rest_stop_t = None
+        self._rest_stop_t = self._stall_stop_t = None
         if failed and (stop_due or (written and now - max(written) < STOP_UNSURE_S)):
             self.owed = True
 
@@ -167,7 +181,13 @@ class Stops:
         go out stops the rotor by itself (motion.plan_target)."""
         if m.stop_sent_t is None:
             self._tries = 0
-            return False, None
+            stall = self._stall_stop_t  # rule 4: a stall's stop, lost, and the rotor broke free
+            if stall is None or m.state is not MotionState.MOVING or target_going:
+                return False, None
+            if m.last_move_t is None or m.last_move_t <= stall or now < stall + cfg.stop_resend_s:
+                return False, None
+            self._stall_stop_t = None
+            return True, None
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
         late = now >= m.stop_sent_t + cfg.stop_resend_s  # as motion.next_deadline
         if m.state is not MotionState.MOVING or not moved_since or not late or target_going:

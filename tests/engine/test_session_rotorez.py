@@ -214,7 +214,8 @@ def test_a_stop_to_a_stalled_rotor_is_sent_again_when_it_turns_after_all(rig: Ri
 @pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
 def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, model: str) -> None:
     """stops.py rule 2: the first reading of a new connection takes a rotor that turned on
-    meanwhile for braking (motion.py rule 4: it may be turning); an operator's STOP then, lost
+    meanwhile for at rest (braking, or settling without a brake: motion.py rule 4, it may be
+    turning); an operator's STOP then, lost
     on the line, is sent again once the readings show it turning (an attack pass: a stop to a
     rotor taken for at rest went unchecked, and the rotor ran on to its old target)."""
     v = rig(model)
@@ -232,6 +233,25 @@ def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, mo
     v.stop()
     v.run_for(30)
     assert not v.truth().is_moving and v.truth().az_deg < 100
+
+
+def test_a_stall_stop_lost_is_sent_again_when_the_rotor_breaks_free(rig: Rig) -> None:
+    """stops.py rule 4: a stall's stop the line lost leaves the motor driving the jammed
+    rotor; when it breaks free, the readings show it turning on to its old bearing, and it is
+    stopped then (a review: it ran on to 350 with no stop and no error)."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.drop_writes(b";")
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(20)  # the ice holds a while
+    assert v.truth().is_moving
+    t = v.now
+    v.unjam()
+    v.run_until(lambda v: not v.truth().is_moving, 120, "at rest")
+    assert v.sent(since=t).count(b";") == 1
+    assert v.truth().az_deg < 150
 
 
 def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> None:
