@@ -218,7 +218,16 @@ class Controller:
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
 
     def check_stop(self, now: float, target_going: bool) -> None:
-        """stops.py rule 2: a stop that did not take is sent again."""
+        """stops.py rule 2: a stop that did not take is sent again (rule 4: a stall's too,
+        once, if the rotor broke free)."""
+        link = self.link
+        if link is not None and self.stops.broke_free(
+            self.motion, self.cfg.motion, now, target_going
+        ):
+            log.warning("%s: turning after a stall's stop; stopping it", self.name)
+            link.write_stop(now)
+            self.stops.wrote_at_rest(now, False)
+            return
         again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
         if error is not None:
             self.notes.append(error)
@@ -394,8 +403,10 @@ class Controller:
         m = self.motion
         if not self.answering or self.notes or m.stop_sent_t is not None:
             return -math.inf
-        if self.stops.counting or self.stops.stall_watched:  # check_stop has work: its count
-            return -math.inf  # of stops to start again, or a stall's stop to check
+        if self.stops.counting:  # check_stop has its count of stops to start again
+            return -math.inf
+        if self.stops.stall_watched and m.state is mo.MOVING:  # or a stall's stop to watch
+            return -math.inf
         if link.slew is not None or link.stop_due or link.reply_owed or self.options.enable_due:
             return -math.inf
         if not self.cfg.spec.can_report_position or len(times) != 1:

@@ -45,11 +45,12 @@ Rules:
    the rotor turns, is that turn's stop for rules 1 and 2. The others go to a rotor at rest,
    and nothing is merged into them (an operator's STOP after a stall is written: no reading
    can show whether a jammed rotor's stop took). A turned-away rotor's is not checked (a later
-   move by hand is left alone). A stall's is, once, until a target or the port closes: its
-   motor may have driven the jammed rotor all along, and when the rotor breaks free the
-   readings show it turning on to its old bearing; then it is stopped as any rotor still
-   turning after a stop (rule 2; the operator freeing it by hand at the control box has that
-   move stopped once).
+   move by hand is left alone). A stall's is watched, once: its motor may have driven the
+   jammed rotor all along, and when the rotor breaks free the readings show it turning on to
+   its old bearing. The first turn seen ``stop_resend_s`` or more after it, before a target,
+   another stop or the port closing, gets one more stop frame, written and noted as the
+   stall's was (unchecked: the operator freeing the rotor by hand at the control box has that
+   move stopped once, then no more).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -141,6 +142,7 @@ class Stops:
         """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
+        self._stall_stop_t = None  # rule 4: rule 2 checks this one
 
     def wrote_at_rest(self, at: float, stall: bool) -> None:
         """Rule 4: a stall's (``stall``) or a turned-away rotor's stop was written at ``at``:
@@ -155,9 +157,24 @@ class Stops:
 
     @property
     def stall_watched(self) -> bool:
-        """Rule 4: a stall's stop is checked: a reading showing the rotor turning may call for
-        a stop."""
+        """Rule 4: a stall's stop is watched (a reading showing the rotor turning may call for
+        one more)."""
         return self._stall_stop_t is not None
+
+    def broke_free(
+        self, m: mo.Motion, cfg: mo.MotionConfig, now: float, target_going: bool
+    ) -> bool:
+        """Rule 4: the rotor turns after a stall's stop (``stop_resend_s`` after it, no stop
+        nor target since): one more stop frame, once."""
+        stall = self._stall_stop_t
+        if stall is None or m.stop_sent_t is not None or m.state is not MotionState.MOVING:
+            return False
+        if target_going or m.last_move_t is None or m.last_move_t <= stall:
+            return False
+        if now < stall + cfg.stop_resend_s:
+            return False
+        self._stall_stop_t = None
+        return True
 
     def port_closed(self, failed: bool, stop_due: bool, m: mo.Motion, now: float) -> None:
         """Rule 3: the port closed (``failed``: not on purpose); ``stop_due``: a stop waited
@@ -181,13 +198,7 @@ class Stops:
         go out stops the rotor by itself (motion.plan_target)."""
         if m.stop_sent_t is None:
             self._tries = 0
-            stall = self._stall_stop_t  # rule 4: a stall's stop, lost, and the rotor broke free
-            if stall is None or m.state is not MotionState.MOVING or target_going:
-                return False, None
-            if m.last_move_t is None or m.last_move_t <= stall or now < stall + cfg.stop_resend_s:
-                return False, None
-            self._stall_stop_t = None
-            return True, None
+            return False, None
         moved_since = m.last_move_t is not None and m.last_move_t > m.stop_sent_t
         late = now >= m.stop_sent_t + cfg.stop_resend_s  # as motion.next_deadline
         if m.state is not MotionState.MOVING or not moved_since or not late or target_going:

@@ -254,6 +254,52 @@ def test_a_stall_stop_lost_is_sent_again_when_the_rotor_breaks_free(rig: Rig) ->
     assert v.truth().az_deg < 150
 
 
+def test_a_stall_stops_a_move_by_hand_once_then_no_more(rig: Rig) -> None:
+    """stops.py rule 4: the stall's stop taken (the usual case), the operator frees the rotor
+    at the control box: that move is stopped once (the bridge cannot tell it from a motor its
+    lost stop left driving), and pressed again at once it goes on: no second stop, no "still
+    turning after 3 stop commands" (an attack pass: six or seven stops and that error)."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(30)
+    v.unjam()
+    v.run_for(5)
+    t = v.now
+    v.manual_rotate(20)
+    v.run_until(lambda v: v.sent(since=t).count(b";") == 1, 30, "the watch's stop")
+    v.run_until(lambda v: not v.truth().is_moving, 10, "stopped")
+    v.run_for(0.3)
+    v.manual_rotate(20)  # pressed again
+    v.run_until(lambda v: not v.truth().is_moving, 60, "at rest")
+    assert round(v.truth().az_deg) == 20
+    assert v.sent(since=t).count(b";") == 1 and v.errors(since=t) == []
+
+
+def test_a_stop_after_a_stall_ends_its_watch(rig: Rig) -> None:
+    """stops.py rule 4: an operator's STOP after a stall takes over the stall's watch (rule 2
+    checks it, and stops the first move after it once); a move by hand ten minutes later goes
+    on (an attack pass: the watch outlived that STOP and stopped this one too)."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v.run_for(2)
+    v.stop()
+    v.run_for(3)
+    v.unjam()
+    v.run_for(60)
+    v.manual_rotate(10)
+    v.run_for(660)
+    t = v.now
+    v.manual_rotate(300)
+    v.run_until(lambda v: not v.truth().is_moving, 200, "at rest")
+    assert b";" not in v.sent(since=t) and round(v.truth().az_deg) == 300
+
+
 def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> None:
     """stops.py rule 4: no reading can show whether a jammed rotor's stop took. An operator's
     STOP after a stall goes out, also within the brake window and after one the line lost
