@@ -153,18 +153,26 @@ def test_a_jammed_rotor_is_reported_stalled_and_stopped(rig: Rig) -> None:
     assert_never_disobeyed(v)
 
 
+def stalled(rig: Rig, lost: int = 0) -> VirtualRotator:
+    """A Rotor-EZ turning to 350, jammed until its stall is reported (its stop written);
+    ``lost``: that many stop frames from then on lost on the line."""
+    v = ready(rig)
+    v.target(350)
+    v.run_for(10)
+    v.jam()
+    if lost:
+        v.drop_writes(b";", lost)
+    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    return v
+
+
 def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopening(
     rig: Rig,
 ) -> None:
     """stops.py rules 3 and 4: a stall's stop written moments before the port failed may never
     have reached the controller (here it did not: the motor still drives the jammed rotor), so
     it is the first frame the reopened port gets."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.drop_writes(b";")  # lost with the port
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig, lost=1)  # lost with the port
     v.link_down()
     v.run_for(0.5)
     assert v.truth().is_moving
@@ -177,11 +185,7 @@ def test_a_stall_stop_the_port_failed_right_after_is_the_first_frame_on_reopenin
 
 def test_a_stall_stop_long_before_the_port_failed_is_not_owed(rig: Rig) -> None:
     """stops.py rule 3: a stall's stop the port outlived by STOP_UNSURE_S was had."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig)
     v.run_for(STOP_UNSURE_S + 0.5)
     v.link_down()
     v.run_for(0.5)
@@ -195,12 +199,7 @@ def test_a_stop_to_a_stalled_rotor_is_sent_again_when_it_turns_after_all(rig: Ri
     """stops.py rule 2: a stalled rotor's motor may still be driving, so a stop to it is
     checked: the stall's stop and the operator's both lost, the ice breaks, the rotor turns on
     to its old target, and the stop goes out again once the readings show it turning."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.drop_writes(b";", 2)
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig, lost=2)
     v.run_for(1)
     v.stop()
     v.run_for(2)
@@ -239,12 +238,7 @@ def test_a_stall_stop_lost_is_sent_again_when_the_rotor_breaks_free(rig: Rig) ->
     """stops.py rule 4: a stall's stop the line lost leaves the motor driving the jammed
     rotor; when it breaks free, the readings show it turning on to its old bearing, and it is
     stopped then (a review: it ran on to 350 with no stop and no error)."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.drop_writes(b";")
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig, lost=1)
     v.run_for(20)  # the ice holds a while
     assert v.truth().is_moving
     t = v.now
@@ -259,11 +253,7 @@ def test_a_stall_stops_a_move_by_hand_once_then_no_more(rig: Rig) -> None:
     at the control box: that move is stopped once (the bridge cannot tell it from a motor its
     lost stop left driving), and pressed again at once it goes on: no second stop, no "still
     turning after 3 stop commands" (an attack pass: six or seven stops and that error)."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig)
     v.run_for(30)
     v.unjam()
     v.run_for(5)
@@ -282,11 +272,7 @@ def test_a_stop_after_a_stall_ends_its_watch(rig: Rig) -> None:
     """stops.py rule 4: an operator's STOP after a stall takes over the stall's watch (rule 2
     checks it, and stops the first move after it once); a move by hand ten minutes later goes
     on (an attack pass: the watch outlived that STOP and stopped this one too)."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig)
     v.run_for(2)
     v.stop()
     v.run_for(3)
@@ -304,12 +290,7 @@ def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> Non
     """stops.py rule 4: no reading can show whether a jammed rotor's stop took. An operator's
     STOP after a stall goes out, also within the brake window and after one the line lost
     too; a flood of them is merged (no banner flood on the line)."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.drop_writes(b";", 2)  # a noisy spell: the stall's stop and the operator's first lost
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig, lost=2)  # a noisy spell: the stall's stop and the operator's first lost
     t = v.now
     v.run_for(1)
     v.stop()
@@ -331,11 +312,7 @@ def test_a_stop_after_a_stall_stop_the_line_lost_still_goes_out(rig: Rig) -> Non
 def test_a_stall_measures_no_coast(rig: Rig) -> None:
     """health.py: a coast is what the rotor turned after the bridge stopped it; a jammed rotor
     turns nothing after its stall's stop, and a 0 there would hide a coast that grew."""
-    v = ready(rig)
-    v.target(350)
-    v.run_for(10)
-    v.jam()
-    v.run_until(lambda v: v.errors("stalled"), 30, "a stall error")
+    v = stalled(rig)
     v.run_for(2)
     assert v.status.health is not None and v.status.health.az.coast_deg is None
 
