@@ -99,7 +99,7 @@ class Stops:
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
-        self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while checked
+        self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while watched
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -147,7 +147,7 @@ class Stops:
     def wrote_at_rest(self, at: float, stall: bool) -> None:
         """Rule 4: a stall's (``stall``) or a turned-away rotor's stop was written at ``at``:
         nothing to merge into, owed if the port fails right after it (rule 3), and a stall's
-        checked once (``check``)."""
+        watched (``broke_free``)."""
         self._rest_stop_t = at
         self._stall_stop_t = at if stall else None
 
