@@ -221,9 +221,7 @@ class Controller:
         """stops.py rule 2: a stop that did not take is sent again (rule 4: a stall's too,
         once, if the rotor broke free)."""
         link = self.link
-        if link is not None and self.stops.broke_free(
-            self.motion, self.cfg.motion, now, target_going
-        ):
+        if link is not None and self.stops.broke_free(self.motion, target_going):
             log.warning("%s: turning after a stall's stop; stopping it", self.name)
             link.write_stop(now)
             self.stops.wrote_at_rest(now, False)

@@ -37,20 +37,19 @@ Rules:
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
    (stopping is always safe). A target written after that stop leaves none owed: a stop then
    would stop that move.
-4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5)
-   is stopped once it comes to rest; a rotor still turning to the bearing before a new one
-   the controller refused is stopped. Each ends tracking. Such a stop is written at once,
-   whatever the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does
-   not wait for a reply to end), and is owed as any (rule 3). The refusal's, written while
-   the rotor turns, is that turn's stop for rules 1 and 2. The others go to a rotor at rest,
-   and nothing is merged into them (an operator's STOP after a stall is written: no reading
-   can show whether a jammed rotor's stop took). A turned-away rotor's is not checked (a later
-   move by hand is left alone). A stall's is watched, once: its motor may have driven the
-   jammed rotor all along, and when the rotor breaks free the readings show it turning on to
-   its old bearing. The first turn seen ``stop_resend_s`` or more after it, before a target,
-   another stop or the port closing, gets one more stop frame, written and noted as the
-   stall's was (unchecked: the operator freeing the rotor by hand at the control box has that
-   move stopped once, then no more).
+4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
+   stopped once it comes to rest; a rotor still turning to the bearing before a new one the
+   controller refused is stopped. Each ends tracking. Such a stop is written at once, whatever
+   the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does not wait for
+   a reply to end), and is owed as any (rule 3). The refusal's, written while the rotor turns,
+   is that turn's stop for rules 1 and 2. The others go to a rotor at rest, and nothing is
+   merged into them (an operator's STOP after a stall is written: no reading can show whether a
+   jammed rotor's stop took). A turned-away rotor's is not checked (a later move by hand is
+   left alone). A stall's is watched, once: its motor may have driven the jammed rotor all
+   along, and when the rotor breaks free the readings show it turning on to its old bearing.
+   The first turn seen after it, before a target, another stop or the port closing, gets one
+   more stop frame at once, written and noted as the stall's was (unchecked: the operator
+   freeing the rotor by hand at the control box has that move stopped once, then no more).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what
@@ -161,17 +160,14 @@ class Stops:
         one more)."""
         return self._stall_stop_t is not None
 
-    def broke_free(
-        self, m: mo.Motion, cfg: mo.MotionConfig, now: float, target_going: bool
-    ) -> bool:
-        """Rule 4: the rotor turns after a stall's stop (``stop_resend_s`` after it, no stop
-        nor target since): one more stop frame, once."""
+    def broke_free(self, m: mo.Motion, target_going: bool) -> bool:
+        """Rule 4: the rotor turns after a stall's stop (no stop nor target since): one more
+        stop frame, once. (No wait: a jammed rotor does not coast, and one that broke free
+        early may be taken for stopped again before a later look, between slow idle polls.)"""
         stall = self._stall_stop_t
         if stall is None or m.stop_sent_t is not None or m.state is not MotionState.MOVING:
             return False
         if target_going or m.last_move_t is None or m.last_move_t <= stall:
-            return False
-        if now < stall + cfg.stop_resend_s:
             return False
         self._stall_stop_t = None
         return True

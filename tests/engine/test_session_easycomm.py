@@ -147,3 +147,27 @@ def test_a_satellite_pass_is_followed_within_3_degrees(model: str) -> None:
         assert worst_az <= 3.0 and worst_el <= 3.0, (worst_az, worst_el)
         assert not v.frames(Outcome.REFUSED) and not v.frames(Outcome.UNANSWERED)
     assert BERLIN  # the station the pass was computed for
+
+
+@pytest.mark.parametrize("jam_after_s", [0.0, 0.8])
+def test_a_stall_stop_lost_is_followed_by_one_when_the_rotor_breaks_free_at_once(
+    rig: Rig, jam_after_s: float
+) -> None:
+    """stops.py rule 4: the stall's stop lost on the line, the rotor breaks free as soon as
+    the stall is said; the first reading that shows it turning brings one more stop, at once
+    (an attack pass: with idle polls 5 s apart, a turn seen before ``stop_resend_s`` was let
+    go, the rotor taken for stopped again, and it ran on to its old bearing)."""
+    v = rig("easycomm2-az", settings={"idle_poll_interval_s": 5.0})
+    v.run_until_state(IDLE, 30)
+    v.target(200)
+    v.run_until(lambda h: h.truth().az_deg >= 170, 60, "near 170")
+    v.run_for(jam_after_s)
+    v.jam()
+    v.drop_writes(b"SA SE\n")
+    v.run_until(lambda h: h.errors("stalled"), 60, "the stall")
+    t = v.now
+    v.unjam()
+    v.run_for(10)
+    stops = [w.t - t for w in v.writes if w.t > t and w.data == b"SA SE\n"]
+    assert stops and stops[0] <= 1.0
+    assert v.truth().az_deg < 195 and not v.truth().is_moving
