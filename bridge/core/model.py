@@ -392,7 +392,7 @@ class ErrorKind(enum.StrEnum):
 
     REFUSED = "refused"  # a command (or payload) judged and not executed: nothing moved
     STALLED = "stalled"  # a commanded rotor made no progress: the bridge stopped it
-    STOP = "stop"  # the rotor kept turning after repeated stops
+    STOP = "stop"  # the rotor kept turning after repeated stops, or after a stall's stop
     SERIAL = "serial"  # the port, the line or the controller's answers failed
     PROTOCOL = "protocol"  # the controller sent bytes that are no valid reply
     STATE = "state"  # the lock could not be saved in the state file

@@ -222,9 +222,14 @@ class Controller:
         once, if the rotor broke free)."""
         link = self.link
         if link is not None and self.stops.broke_free(self.motion, target_going):
-            log.warning("%s: turning after a stall's stop; stopping it", self.name)
             link.write_stop(now)
             self.stops.wrote_at_rest(now, False)
+            why = (
+                f"rotor turning at {self.motion.position_deg:g}° after the stop its stall was "
+                "given (freed, turned by hand, or that stop lost on the line): stopped once "
+                "more; if it still turns, stop it at the controller"
+            )
+            self.notes.append(Report(ErrorKind.STOP, why))
             return
         again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
         if error is not None:

@@ -48,8 +48,9 @@ Rules:
    left alone). A stall's is watched, once: its motor may have driven the jammed rotor all
    along, and when the rotor breaks free the readings show it turning on to its old bearing.
    The first turn seen after it, before a target, another stop or the port closing, gets one
-   more stop frame at once, written and noted as the stall's was (unchecked: the operator
-   freeing the rotor by hand at the control box has that move stopped once, then no more).
+   more stop frame at once, written and noted as the stall's was, and a ``stop`` error says so
+   (unchecked: the operator freeing the rotor by hand at the control box has that move stopped
+   once, then no more).
 5. The last word's fence (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane comes
    with a hold; no target goes out while one is held, until a release reaches its marker. A release
    that clears (the connection that would have caught up was lost) ends every hold, and what

@@ -245,13 +245,15 @@ def test_a_stall_stop_lost_is_sent_again_when_the_rotor_breaks_free(rig: Rig) ->
     v.run_until(lambda v: not v.truth().is_moving, 120, "at rest")
     assert v.sent(since=t).count(b";") == 1
     assert v.truth().az_deg < 150
+    assert [e.kind for e in v.errors(since=t)] == ["stop"]
 
 
 def test_a_stall_stops_a_move_by_hand_once_then_no_more(rig: Rig) -> None:
     """stops.py rule 4: the stall's stop taken (the usual case), the operator frees the rotor
     at the control box: that move is stopped once (the bridge cannot tell it from a motor its
-    lost stop left driving), and pressed again at once it goes on: no second stop, no "still
-    turning after 3 stop commands" (an attack pass: six or seven stops and that error)."""
+    lost stop left driving, and says so), and pressed again at once it goes on: no second
+    stop, no "still turning after 3 stop commands" (an attack pass: six or seven stops and
+    that error)."""
     v = stalled(rig)
     v.run_for(30)
     v.unjam()
@@ -264,7 +266,9 @@ def test_a_stall_stops_a_move_by_hand_once_then_no_more(rig: Rig) -> None:
     v.manual_rotate(20)  # pressed again
     v.run_until(lambda v: not v.truth().is_moving, 60, "at rest")
     assert round(v.truth().az_deg) == 20
-    assert v.sent(since=t).count(b";") == 1 and v.errors(since=t) == []
+    assert v.sent(since=t).count(b";") == 1
+    [error] = v.errors(since=t)  # the one stop, said; no "still turning after 3 stops"
+    assert error.kind == "stop" and "after the stop its stall was given" in error.message
 
 
 def test_a_stop_after_a_stall_ends_its_watch(rig: Rig) -> None:
