@@ -476,6 +476,9 @@ class Controller:
         timeout_s = cfg.silence_timeout_s
         silent = not link.reply_owed and link.silent_for(now) >= timeout_s  # (a slew's report
         if silent and self.answering:  # takes the whole slew: a reply owed may still come)
+            if self.stops.repeat_at(self.motion) is not None:  # stops.py rule 1: owed, it goes
+                self.stops.repeat_due(self.motion, math.inf)  # now (a silent controller may
+                self.stop(now)  # still hear: its motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
             self.motion = mo.link_down(self.motion)
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"

@@ -14,15 +14,17 @@ Rules:
    answered with a banner once the first had stopped the rotor, queueing the readings for
    seconds: the controller taken for silent, the next target dropped), and one merged so is
    owed: it is sent when that gap ends, unless a reading has shown the rotor still by then
-   (rule 2). One such repeat is written after a stop, not more: later ones merge into it
-   until a reading shows the rotor turning (a stop written restarts the motion machine's
-   settle clock, so a stream of them would keep the rotor taken for moving and every one
-   written). So a repeat after a lost stop frame is never more than the gap late, and a flood
-   puts two stop frames on the wire, then one a brake window once the rotor is seen still.
-   Should the line lose that repeat too, the next stop goes once a reading shows the rotor
-   turning or the controller is found silent (meanwhile the stop express, where it runs,
-   writes its own frame for a STOP 0.1 s or more after its last). A controller that reports
-   no position while it turns (a SatEL's slew) is never merged then.
+   (rule 2), or sooner if the controller is found silent meanwhile (a controller whose replies
+   are lost may still hear; the readings that would show the rotor turning are gone). One such
+   repeat is written after a stop, not more: later ones merge into it until a reading shows the
+   rotor turning (a stop written restarts the motion machine's settle clock, so a stream of
+   them would keep the rotor taken for moving and every one written). So a repeat after a lost
+   stop frame is never more than the gap late, and a flood puts two stop frames on the wire,
+   then one a brake window once the rotor is seen still. Should the line lose that repeat too,
+   the next stop goes once a reading shows the rotor turning or the controller is found silent
+   (meanwhile the stop express, where it runs, writes its own frame for a STOP 0.1 s or more
+   after its last). A controller that reports no position while it turns (a SatEL's slew) is
+   never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON

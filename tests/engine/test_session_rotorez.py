@@ -740,6 +740,38 @@ def test_a_second_stop_after_a_lost_first_reaches_the_controller_within_the_gap(
     assert len(sent) == 2 and sent[1] <= STOP_REPEAT_GAP_S + 0.01
 
 
+def _turning_then_silent(rig: Rig) -> VirtualRotator:
+    v = ready(rig)
+    v.target(300)
+    v.run_until_state(MOVING, 20)
+    v.run_for(2.0)
+    v.set_silent(True)  # its replies lost from now on; it still hears
+    return v
+
+
+def test_a_repeat_owed_when_the_controller_is_found_silent_goes_out(rig: Rig) -> None:
+    """stops.py rule 1: the first stop frame lost, the operator's second STOP owed to the end
+    of the repeat gap, and the controller found silent inside that gap (its replies lost, not
+    its ears): the repeat goes then, and the rotor stops (it was dropped with the readings,
+    and the rotor turned on to its target)."""
+    dry = _turning_then_silent(rig)  # when silence is declared, in virtual time
+    t0 = dry.now
+    dry.run_until(lambda h: h.errors("serial"), 30, "silence declared")
+    silent_after = dry.now - t0
+    v = _turning_then_silent(rig)
+    v.drop_writes(b";")
+    v.run_for(silent_after - STOP_REPEAT_GAP_S / 2)
+    t = v.now
+    v.stop()
+    v.run_for(STOP_REPEAT_GAP_S / 5)
+    v.stop()  # owed until t + STOP_REPEAT_GAP_S
+    v.run_for(2)
+    said = [at - t for at, e in v.events if at >= t and e.kind == "serial"]
+    assert said and 0 < said[0] < STOP_REPEAT_GAP_S  # found silent inside the gap
+    assert [w.lost for w in v.writes if w.t >= t and w.data == b";"] == [True, False]
+    assert not v.truth().is_moving and v.truth().az_deg < 100
+
+
 def test_a_stop_while_turning_is_never_merged(rig: Rig) -> None:
     v = ready(rig)
     v.stop()  # a stop on record: the next one is inside its window
