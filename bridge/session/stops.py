@@ -24,9 +24,7 @@ Rules:
    the next stop goes once a reading shows the rotor turning or the controller is found silent
    (meanwhile the stop express, where it runs, writes its own frame for a STOP 0.1 s or more
    after its last). A controller that reports no position while it turns (a SatEL's slew) is
-   never merged then. A controller found silent (its replies lost; it may still hear) gets the
-   same one repeat after a stop, then one stop a brake window: no reading will show whether the
-   rotor turns.
+   never merged then.
 2. A stop is checked: if the rotor is still seen moving ``stop_resend_s`` later, it is sent
    again, and after STOP_TRIES_BEFORE_ERROR tries an error says so (a repeat owed, rule 1,
    is written when its gap ends, before anything else of that step, and is no try). Lock ON
@@ -115,26 +113,22 @@ class Stops:
             return False  # no reading can show it turning (a SatEL's slew): always sent
         if m.last_move_t is not None and m.last_move_t > m.stop_sent_t:
             return False  # a reading since that stop showed the rotor turning
-        silent = m.state is MotionState.OFFLINE  # no reading can say: turning or not
-        if moving or silent:  # that stop's frame may have been lost: one repeat, within the
-            if self._repeat_sent != m.stop_sent_t:  # gap owed
-                if now - m.stop_sent_t >= STOP_REPEAT_GAP_S:
-                    self._writing_repeat = True
-                    return False
-                self._repeat_owed = m.stop_sent_t
-                return True
-            if moving:
+        if moving:  # that stop's frame may have been lost: one repeat, within the gap owed
+            if self._repeat_sent == m.stop_sent_t:
                 return True  # the last stop was that repeat: no more until a reading
+            if now - m.stop_sent_t >= STOP_REPEAT_GAP_S:
+                self._writing_repeat = True
+                return False
+            self._repeat_owed = m.stop_sent_t
+            return True
         return now - m.stop_sent_t < max(cfg.brake_delay_s, STOP_MERGE_MIN_S)
 
     def repeat_at(self, m: mo.Motion) -> float | None:
         """Rule 1: when the repeat owed to the last stop goes out (None: none is owed)."""
         if self._repeat_owed is None or self._repeat_owed != m.stop_sent_t:
             return None  # none merged, or a newer stop went out since
-        if m.target_deg is not None:
-            return None  # a target went out since
-        if m.state is not MotionState.MOVING and m.state is not MotionState.OFFLINE:
-            return None  # a reading showed the rotor still
+        if m.state is not MotionState.MOVING or m.target_deg is not None:
+            return None  # a reading showed the rotor still, or a target went out since
         return self._repeat_owed + STOP_REPEAT_GAP_S
 
     def repeat_due(self, m: mo.Motion, now: float) -> bool:

@@ -772,38 +772,6 @@ def test_a_repeat_owed_when_the_controller_is_found_silent_goes_out(rig: Rig) ->
     assert not v.truth().is_moving and v.truth().az_deg < 100
 
 
-@pytest.mark.parametrize("model", ["rotorez", "md01"])
-def test_a_second_stop_to_a_silent_controller_goes_out_as_the_repeat(rig: Rig, model: str) -> None:
-    """stops.py rule 1: a controller found silent may still hear, and no reading will show
-    whether its rotor turns: an operator's STOP to it, lost on the line, and a second pressed
-    at once, go out as a stop and its repeat (the second was merged into the first for the
-    brake window, and the rotor turned on to its target)."""
-    v = rig(model)
-    v.run_until_state(IDLE, 60)
-    v.target(300)
-    v.run_until_state(MOVING, 20)
-    v.run_for(2.0)
-    v.set_silent(True)
-    v.run_until(lambda h: h.errors("serial"), 30, "silence declared")
-    v.run_for(0.5)
-    stop = v.cfg.spec.codec_factory().encode_stop()
-    assert isinstance(stop, bytes)
-    v.drop_writes(stop)
-    t = v.now
-    v.stop()
-    v.run_until(lambda h: any(w.data == stop for w in h.writes if w.t >= t), 5, "its frame")
-    v.run_for(0.02)
-    v.stop()
-    v.run_for(3)
-    assert [w.lost for w in v.writes if w.t >= t and w.data == stop] == [True, False]
-    assert not v.truth().is_moving
-    t = v.now
-    for _ in range(20):  # a flood, a second long: a stop and its repeat at most (once a
-        v.stop()  # brake window, at least STOP_MERGE_MIN_S), not a frame a press
-        v.run_for(0.05)
-    assert v.sent(since=t).count(stop) <= 2
-
-
 def test_a_stop_while_turning_is_never_merged(rig: Rig) -> None:
     v = ready(rig)
     v.stop()  # a stop on record: the next one is inside its window
