@@ -126,5 +126,13 @@ def test_an_easycomm_line_with_a_malformed_number_does_nothing(line: str) -> Non
     assert request_.az_deg is None and request_.el_deg is None and not request_.stop
 
 
+@pytest.mark.parametrize("line", ["SA SE AZ1x", "AZ1x SA SE", "SA SE EL--", "AZnan SA"])
+def test_a_stop_beside_a_malformed_easycomm_word_still_stops(line: str) -> None:
+    """Package rule 6: the line does nothing else (rule 3), but stops."""
+    request_ = parse_easycomm(line)
+    assert request_.invalid is not None and request_.stop
+    assert request_.az_deg is None and request_.el_deg is None and not request_.queries
+
+
 def test_an_overlong_easycomm_line_is_invalid() -> None:
     assert parse_easycomm(None).invalid == "an overlong line"

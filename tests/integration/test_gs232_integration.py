@@ -255,6 +255,19 @@ def test_every_easycomm_command_byte_for_byte(rig: Rig) -> None:
     rig.arrived("tower", 70)
 
 
+def test_an_easycomm_stop_beside_a_malformed_word_stops(rig: Rig) -> None:
+    """Package rules 3 and 6: the line does nothing else, but its stop is carried out."""
+    start(rig, start_az_deg=10)
+    port = easycomm_port(rig)
+    t = time.monotonic()
+    easycomm_ask(port, b"AZ300.0\n", b"")
+    rig.probe.wait_value("rotor/state", "moving", timeout_s=slow(20), after=t)
+    t = time.monotonic()
+    easycomm_ask(port, b"SA AZ1x\n", b"ALinvalid AZ1x\n")
+    rig.probe.wait_value("rotor/state", "idle", timeout_s=slow(20), after=t)
+    assert rig.emus["tower"].state().az_deg < 200  # stopped on its way, not arrived at 300
+
+
 def test_rotctl_reads_an_unknown_position_as_an_error(rig: Rig, rotctl_path: str) -> None:
     port = start(rig, start_az_deg=50)
     t = time.monotonic()

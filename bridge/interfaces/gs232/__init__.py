@@ -41,9 +41,10 @@ Rules:
 3. Easycomm II: a line's words are read together; ``AZ`` and ``EL`` without a number are
    questions, answered in one line in the order asked (``AZ120.0 EL0.0``), ``VE`` with
    ``VErotor-bridge``; ``AZx``/``ELy`` set (the axis left out keeps its target), ``SA``/``SE``
-   stop, ``PARK`` parks. A malformed number makes the whole line do nothing. Refusals, moves
-   it cannot do and a position it does not have are answered with an ``AL`` line; a radio's
-   words (``UP``, ``DN``, ...) are ignored.
+   stop, ``PARK`` parks. A malformed number makes the whole line do nothing but stop
+   (rule 6: ``SA AZ1x`` stops, and is answered with the alarm). Refusals, moves it cannot
+   do and a position it does not have are answered with an ``AL`` line; a radio's words
+   (``UP``, ``DN``, ...) are ignored.
 4. Readings come from the rotator's status (no serial traffic): true bearings, as rotctld's
    ``p`` answers, in 0..360, and 0 elevation on an azimuth-only rotator. A position the bridge
    does not currently have is an error, never the last value seen.

@@ -187,19 +187,21 @@ class EasycommSession(_LineSession):
     def execute(self, line: str | None, req: EasycommRequest) -> bytes:
         described = f"easycomm {line}"
         alarms: list[str] = []
-        if req.invalid is not None:
-            return f"ALinvalid {req.invalid}\n".encode("latin-1")
-        if req.stop:  # a line that stops does nothing else
+        if req.stop:  # a line that stops does nothing else, and a malformed word beside it
+            # keeps it from nothing (package rules 3 and 6)
             try:
                 self.rotator.submit(Stop(Source.EASYCOMM, self.origin), described)
             except Refused as exc:  # the remote's, its broker away (package rule 6)
                 alarms.append(f"refused {exc.code.value}")
-        elif req.park:
+        if req.invalid is not None:  # nothing else runs (package rule 3)
+            alarms.insert(0, f"invalid {req.invalid}")
+            return "".join(f"AL{alarm}\n" for alarm in alarms).encode("latin-1")
+        if req.park and not req.stop:
             try:
                 self.rotator.submit(Park(source=Source.EASYCOMM, origin=self.origin), described)
             except Refused as exc:
                 alarms.append(f"refused {exc.code.value}")
-        elif req.az_deg is not None or req.el_deg is not None:
+        elif not req.stop and (req.az_deg is not None or req.el_deg is not None):
             el = req.el_deg
             if el == 0 and not self.rotator.spec.has_elevation:
                 el = None  # Hamlib sends EL0.0 to an azimuth-only rotator

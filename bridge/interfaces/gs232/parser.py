@@ -103,7 +103,8 @@ _NUMBER = re.compile(r"[+-]?(?:\d{1,4}(?:\.\d*)?|\.\d+)")
 @dataclass(frozen=True)
 class EasycommRequest:
     """What one line asks. ``queries`` keeps the order of ``AZ``/``EL``/``VE`` as asked (the
-    reply echoes them in that order); ``invalid`` names a malformed word (nothing runs then)."""
+    reply echoes them in that order); ``invalid`` names a malformed word (nothing runs then
+    but ``stop``: a stop word beside it still stops, package rule 6)."""
 
     queries: tuple[str, ...] = ()
     az_deg: float | None = None
@@ -125,6 +126,7 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
     az: float | None = None
     el: float | None = None
     stop = park = False
+    invalid: str | None = None
     for word in line.split():
         head, value = word[:2].upper(), word[2:]
         if word.upper() in ("PARK", "RESET"):
@@ -136,7 +138,8 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
             queries.append(head)
         elif head in ("AZ", "EL"):
             if not _NUMBER.fullmatch(value):
-                return EasycommRequest(invalid=word[:16])
+                invalid = invalid or word[:16]  # (the line's stop words are still looked for)
+                continue
             if head == "AZ":
                 az = float(value)
             else:
@@ -150,6 +153,8 @@ def parse_easycomm(line: str | None) -> EasycommRequest:
         else:
             # a radio's words (UP, DN, DM, ...) and the mode words that follow them
             ignored.append(word[:16])
+    if invalid is not None:  # package rule 3: nothing runs, but a stop (rule 6)
+        return EasycommRequest(stop=stop, invalid=invalid)
     return EasycommRequest(
         tuple(queries), az, el, stop, park, tuple(unsupported), None, tuple(ignored)
     )
