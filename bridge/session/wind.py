@@ -21,7 +21,8 @@ Rules:
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept. The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
-   motion is refused all the same.
+   motion is refused all the same (a safeguard: the settings refuse such a park when they are
+   read, settings/wind.py rule 1).
 6. A reading the broker replayed (a retained one, sent again when the bridge subscribes anew:
    after a restart of the broker or of the bridge, a reconnect) is the last known wind, not a
    new reading: it may start a storm or start the hold again (the safe side), and it is the

@@ -247,12 +247,18 @@ class PointingFields(BaseModel):
         if pointing.park is not None:
             named.append(("park_az_deg", *pointing.park))
         for field, az, el in named:
-            if not math.isfinite(az) or not 0 <= az <= 360 and pointing.az_wraps:
-                raise ValueError(f"{field}: azimuth {az:g} must be a bearing 0..360")
-            try:
-                pointing.judge(Target(az, el), None)
-            except Refused as exc:
-                raise ValueError(f"{field}: {exc.message}") from None
+            check_position(pointing, field, az, el)
+
+
+def check_position(pointing: Pointing, field: str, az: float, el: float | None) -> None:
+    """A position the bridge turns to by itself (a preset, a park) judged by ``pointing`` as a
+    live target would be: one it could never reach is a ValueError naming ``field``."""
+    if not math.isfinite(az) or not 0 <= az <= 360 and pointing.az_wraps:
+        raise ValueError(f"{field}: azimuth {az:g} must be a bearing 0..360")
+    try:
+        pointing.judge(Target(az, el), None)
+    except Refused as exc:
+        raise ValueError(f"{field}: {exc.message}") from None
 
 
 def _preset(value: float | list[float]) -> tuple[float, float | None]:

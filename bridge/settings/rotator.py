@@ -34,7 +34,7 @@ from bridge.settings.bands import BandFields
 from bridge.settings.errors import unknown_model
 from bridge.settings.loggers import LoggerFields
 from bridge.settings.mqtt import check_topic
-from bridge.settings.pointing import PointingFields
+from bridge.settings.pointing import PointingFields, check_position
 from bridge.settings.wind import WindFields
 
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
@@ -460,6 +460,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
         self.check_pointing(self.pointing)
+        if self.wind_park_az_deg is not None:  # settings/wind.py rule 1 (park_az_deg's: above)
+            az, el = self.wind_park_az_deg, self.park_el_deg
+            check_position(self.pointing, "wind_park_az_deg", az, el)
         return self
 
     @property

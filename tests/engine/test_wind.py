@@ -3,6 +3,7 @@ time; then wired into the session in virtual time against an emulated controller
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import pytest
@@ -136,8 +137,27 @@ def test_m_s_thresholds_are_converted() -> None:
     assert (cfg.wind.park_above_kmh, cfg.wind.release_below_kmh) == (72.0, 36.0)
 
 
+@pytest.mark.parametrize(
+    ("settings", "field"),
+    [
+        ({"keep_out": [[80, 100]]}, "wind_park_az_deg: azimuth 90 is in the keep-out sector"),
+        ({"az_max_deg": 60}, "wind_park_az_deg: azimuth 90 outside the limits"),
+        ({"wind_park_az_deg": None, "park_az_deg": 90, "keep_out": [[80, 100]]}, "park_az_deg"),
+    ],
+)
+def test_a_storm_park_the_judge_would_refuse_is_a_settings_error(
+    settings: dict[str, Any], field: str
+) -> None:
+    """settings/wind.py rule 1: said when the settings are read, naming the field, not refused
+    in the storm with the antenna facing the wind."""
+    with pytest.raises(ValueError, match=field):
+        RotatorSettings(id="w", model="md01", port="/x", **{**WIND, **settings})
+
+
 def test_the_park_refused_by_the_judge_is_reported_and_motion_stays_refused() -> None:
-    part = park(keep_out=[[80, 100]])
+    """Rule 5, a safeguard: the settings refuse a park the judge would (above)."""
+    cfg = rig("md01", **WIND)
+    part = WindPark(replace(cfg, pointing=replace(cfg.aim, keep_out=((80.0, 100.0),))))
     part.reading(80.0, 0.0)
     proposal = part.step(scene(0.0))
     assert proposal.target is None and proposal.error is not None
