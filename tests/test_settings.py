@@ -358,6 +358,23 @@ def test_a_silence_timeout_shorter_than_the_idle_poll_is_refused(
         load_settings(write(tmp_path, text), environ={})
 
 
+@pytest.mark.parametrize("baud", [0, 96, 299, 4_000_001, 2**31, 10**30])
+def test_a_line_rate_no_controller_is_set_to_is_refused_naming_the_field(
+    tmp_path: Path, baud: int
+) -> None:
+    """Rule 2: a typo (96 for 9600) said when read, not an offline rotator (2**31 cannot be
+    opened) or polls minutes apart."""
+    text = MINIMAL + f"baud = {baud}\n"
+    with pytest.raises(ConfigError, match=r"rotators\[0\].*baud"):
+        load_settings(write(tmp_path, text), environ={})
+
+
+@pytest.mark.parametrize("baud", [300, 600, 4800, 460800, 4_000_000])
+def test_the_line_rates_controllers_are_set_to_are_taken(tmp_path: Path, baud: int) -> None:
+    settings = load_settings(write(tmp_path, MINIMAL + f"baud = {baud}\n"), environ={})
+    assert settings.rotators[0].effective_baud == baud
+
+
 @pytest.mark.parametrize(
     ("given", "used"), [(180, 180), (-180, 180), (360, 0), (270, -90), (-90, -90), (-360, 0)]
 )

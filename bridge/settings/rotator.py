@@ -9,7 +9,8 @@ Rules:
 1. Every key carries its meaning (``description``); a key whose default is the model's says so
    with ``unset`` (docs/configuration.md is generated from these, bridge/config_doc.py).
 2. Limits, poll intervals and the silence timeout are judged together against the model, so a
-   rotator that could not work is a configuration error naming the key.
+   rotator that could not work is a configuration error naming the key; so is a line rate no
+   controller is set to (BAUD_MIN..BAUD_MAX).
 3. The port is a name, never opened here: loading a configuration touches no hardware
    (check-config reports a port that does not exist as a warning).
 4. A composite rotator (protocols/axes.py) gives ``azimuth`` and ``elevation`` tables, each a
@@ -37,6 +38,11 @@ from bridge.settings.mqtt import check_topic
 from bridge.settings.pointing import PointingFields, check_position
 from bridge.settings.wind import WindFields
 
+# rule 2: the line rates a controller is set to (300: below the slowest any model takes; 4
+# Mbaud: the fastest a USB adapter does); a typo outside them (96 for 9600) is said when read,
+# not an offline rotator or polls minutes apart (defaults.py derives the polls from the rate)
+BAUD_MIN, BAUD_MAX = 300, 4_000_000
+
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_-]{0,47}$")
 # the controllers' protocols offered to programs: each has <key>_port, <key>_bind, <key>_pty
 # (gs232/'s EMULATIONS has the same keys)
@@ -63,8 +69,9 @@ class AxisSettings(BaseModel):
     )
     baud: int | None = Field(
         None,
-        gt=0,
-        description="that controller's line rate, as set on it",
+        ge=BAUD_MIN,
+        le=BAUD_MAX,
+        description="that controller's line rate, as set on it (300 to 4000000)",
         examples=[9600],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
@@ -149,8 +156,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     )
     baud: int | None = Field(
         None,
-        gt=0,
-        description="the serial line's rate, as set on the controller",
+        ge=BAUD_MIN,
+        le=BAUD_MAX,
+        description="the serial line's rate, as set on the controller (300 to 4000000)",
         examples=[9600],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
