@@ -20,7 +20,8 @@ Rules:
    included. A target in one is refused however it was named (number, preset, locator,
    rotctld). The rotor may sweep through a sector on its way; it never stops there.
 4. Limits are mechanical: checked on the raw value, after rounding on controllers that take
-   whole degrees (never rounded past a limit).
+   whole degrees or tenths (never rounded past a limit, nor into a keep-out sector: rule 3 holds
+   for what the controller is sent).
 5. A refusal raises Refused with a message naming the true and the raw value when they differ.
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
@@ -79,6 +80,7 @@ class Pointing:
     has_elevation: bool = False
     az_wraps: bool = True  # the controller's 0 and 360 are the same direction
     whole_degrees: bool = False
+    tenths: bool = False
     offset_deg: float = 0.0
     keep_out: tuple[tuple[float, float], ...] = ()
     presets: dict[str, tuple[float, float | None]] = field(default_factory=dict)
@@ -108,6 +110,7 @@ class Pointing:
             has_elevation=spec.has_elevation,
             az_wraps=spec.az_wraps,
             whole_degrees=spec.whole_degrees,
+            tenths=spec.tenths,
             offset_deg=offset_deg,
             keep_out=keep_out,
             presets=dict(presets or {}),
@@ -287,19 +290,27 @@ class Pointing:
 
     def _sent(self, value: float) -> tuple[float, float]:
         """The lowest and highest value the controller can be sent for ``value`` (rule 4): the
-        Rotor-EZ family and the SatEL round half up to whole degrees; the SPID family cuts down
-        to its resolution, learned only from its replies: one pulse per degree at the coarsest."""
-        if self.whole_degrees:
-            r = float(math.floor(value + 0.5))
-            return r, r
+        Rotor-EZ family and the SatEL round half up to whole degrees, the Easycomm family, the
+        RC2800, the RT-21 and the Combi-Track to tenths (a composite's two boxes: each way);
+        the SPID family cuts down to its resolution, learned only from its replies: one pulse
+        per degree at the coarsest."""
+        if self.whole_degrees or self.tenths:
+            sent = [float(math.floor(value + 0.5))] if self.whole_degrees else []
+            if self.tenths:  # (as the codecs write it: protocols/base.py ``tenths``)
+                sent.append(math.floor(value * 10 + 0.5) / 10)
+            return min(sent), max(sent)
         if not self.az_wraps:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
             return float(math.floor(360.0 + value)) - 360.0, value
         return value, value
 
     def _resolution(self) -> str:
         """Why ``_sent`` moved a value, for the refusal's message."""
+        if self.whole_degrees and self.tenths:
+            return "its boxes take whole degrees and tenths"
         if self.whole_degrees:
             return "it takes whole degrees"
+        if self.tenths:
+            return "it takes tenths of a degree"
         return "it may cut to whole degrees, its coarsest resolution"
 
     def _sent_within(self, value: float, lo: float, hi: float) -> bool:

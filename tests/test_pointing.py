@@ -118,6 +118,37 @@ def test_a_place_becomes_the_great_circle_bearing_from_the_station() -> None:
     assert refused(toward, None, *tokyo) is RefusalCode.UNSUPPORTED
 
 
+TENTHS = ["easycomm2", "easycomm3", "rc2800", "rt21", "prosistel-combi"]
+
+
+@pytest.mark.parametrize("model", TENTHS)
+@pytest.mark.parametrize("az", [199.94, 199.95, 199.96, 199.99, 220.01, 220.04, 220.05, 220.06])
+def test_keep_out_holds_for_what_a_controller_of_tenths_is_sent(model: str, az: float) -> None:
+    """An attack pass: 199.96 went out as 200.0 (rounded half up to tenths), the sector's edge,
+    which is inside (rule 3)."""
+    spec = REGISTRY[model]
+    aim = Pointing.of(spec, keep_out=((200, 220),))
+    el = 10.0 if spec.has_elevation else None
+    try:
+        judged = aim.judge(Target(az, el), None)
+    except Refused as exc:
+        assert exc.code is RefusalCode.KEEP_OUT and "it takes tenths of a degree" in exc.message
+        assert 199.95 <= az < 220.05  # refused only what the codec would put in the sector
+        return
+    assert judged.az_deg is not None
+    wire_az, _ = spec.codec_factory().wire_target(judged.az_deg, judged.el_deg)
+    assert not in_sector(wire_az, (200, 220)), f"{az} went out as {wire_az}"
+
+
+def test_limits_hold_for_what_a_controller_of_tenths_is_sent() -> None:
+    aim = Pointing.of(REGISTRY["rt21"], (0.0, 359.95))
+    assert aim.judge(Target(359.94), None).az_deg == 359.94  # goes out as 359.9
+    with pytest.raises(Refused) as exc:
+        aim.judge(Target(359.95), None)  # would go out as 360.0
+    assert exc.value.code is RefusalCode.LIMITS
+    assert "becomes 360 on the" in exc.value.message and "tenths" in exc.value.message
+
+
 def test_keep_out_and_limits_hold_for_what_the_controller_is_really_sent() -> None:
     """Review finding: 199.5 goes out as 200 on a Rotor-EZ (half up), 10.9 as 10 on a SPID at
     one pulse per degree (cut down): a sector's edge, which is inside."""

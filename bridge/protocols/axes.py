@@ -230,8 +230,9 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         el_max_deg=el.el_max_deg,
         nominal_el_speed_deg_s=el.nominal_el_speed_deg_s,
         reports_while_moving=az.reports_while_moving and el.reports_while_moving,
-        # the judge's limits after rounding (pointing.py): whole degrees if either box takes
-        # them, the safe side for the other
+        # the judge's limits after rounding (pointing.py): each rounding either box makes, the
+        # safe side for the other
         whole_degrees=az.whole_degrees or el.whole_degrees,
+        tenths=az.tenths or el.tenths,
         hamlib_rot_type=HamlibRotType.AZEL,
     )

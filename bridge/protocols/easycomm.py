@@ -201,6 +201,7 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=6.0,
         whole_degrees=False,
+        tenths=True,  # rule 5
         stop_anytime=True,  # SA SE is not answered
         query_bytes=len(query),
         reply_bytes=len(reply),

@@ -242,6 +242,7 @@ def _spec(name: str, display: str, family: Family, **kw: Any) -> ModelSpec:
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=3.0,
         whole_degrees=not combi,
+        tenths=combi,  # rule 5
         query_bytes=query,
         reply_bytes=reply,
         hamlib_rot_type=HamlibRotType.AZEL if combi else HamlibRotType.AZ,

@@ -207,6 +207,7 @@ def _spec(name: str, display: str, *, elevation: bool) -> ModelSpec:
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=3.0,
         whole_degrees=False,
+        tenths=True,  # rule 4
         query_bytes=4 if elevation else 2,  # A CR, E CR
         reply_bytes=2 * line if elevation else line,
         hamlib_model=1001,

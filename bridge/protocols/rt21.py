@@ -152,6 +152,7 @@ def _spec(**kw: Any) -> ModelSpec:
         noise_deg=0.5,
         nominal_speed_deg_s=6.0,  # a Hy-Gain HAM-IV or a Yaesu G-1000 at full speed
         whole_degrees=False,
+        tenths=True,  # rule 3
         query_bytes=4,  # BI1;
         reply_bytes=6,  # 123.4;
         hamlib_model=405,
