@@ -80,11 +80,20 @@ def test_another_threads_wake_up_is_not_owed_to_this_threads_round() -> None:
 class RoundWorker(StandInWorker):
     """A worker of lines.py's protocol that is due once (at once) and whose serve runs ``job``."""
 
-    def __init__(self, name: str, job: Callable[[], None], go: threading.Event) -> None:
+    def __init__(
+        self, name: str, job: Callable[[], None], go: threading.Event, last: bool = False
+    ) -> None:
         self.cfg = SimpleNamespace(rotator_id=name, port=name)
         self.job = job
-        self.go = go  # both on the lines before either is due: one round serves both
+        # both on the lines before either is due: one round serves both (the last to join
+        # sets it, on the lines thread as it joins, before that round asks what each wants;
+        # no clock: a busy machine once let the first be served alone, before the second came)
+        self.go, self.last = go, last
         self.served = threading.Event()
+
+    def begin(self, now: float, wake: Callable[[], None]) -> None:
+        if self.last:
+            self.go.set()
 
     def has_commands(self, ready: set[int]) -> bool:
         return False
@@ -95,7 +104,7 @@ class RoundWorker(StandInWorker):
     def wants(self, now: float) -> tuple[list[int], float, float]:
         if self.served.is_set():
             return [], math.inf, math.inf
-        due = 0.0 if self.go.is_set() else now + 0.01
+        due = 0.0 if self.go.is_set() else math.inf
         return [], due, due
 
     def serve(self, now: float, ready: set[int]) -> None:
@@ -123,11 +132,10 @@ def test_the_lines_round_wakes_the_network_thread_once_after_serving_every_rotat
         seen_by_second.append(list(wakes))
 
     go = threading.Event()
-    a, b = RoundWorker("a", hand_off, go), RoundWorker("b", second, go)
+    a, b = RoundWorker("a", hand_off, go), RoundWorker("b", second, go, last=True)
     lines = Lines()
     lines.add(a)
     lines.add(b)
-    go.set()
     try:
         assert given.wait(slow(10)), "the owed wake-up was never given"
         assert a.served.is_set() and b.served.is_set()
