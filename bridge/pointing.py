@@ -26,7 +26,9 @@ Rules:
 6. The other ways of naming a target become a true bearing here, before the judge: a preset,
    the park position, a place (locator or coordinates: the great-circle bearing from the
    station, short path unless the long one is asked for; core/geo.py) and a nudge (relative to the
-   target while one is being approached, turning or braking, else to the bearing).
+   target while one is being approached, turning or braking, else to the bearing; never to a
+   target a stop put before it dropped, though the status it is made from predates that stop:
+   runtime/rotator.py ``_seen``).
 7. A place without a direction from the station is refused: the station's own position (no
    bearing at all) and its antipode, where every direction is a great circle of the same
    length (a locator's centre has one: JO62qm's is AD67ql). Anything short of these has a
@@ -245,14 +247,20 @@ class Pointing:
         return self.park
 
     def nudged(
-        self, status: RotatorStatus, d_az: float, d_el: float | None
+        self, status: RotatorStatus, d_az: float, d_el: float | None, halted: bool = False
     ) -> tuple[float | None, float | None]:
+        """Rule 6's nudge from ``status``; ``halted``: a stop came after that status was made
+        (its target dropped: the nudge is from the bearing)."""
         if not d_az and not d_el:
             raise Refused(RefusalCode.INVALID, "a nudge of 0 degrees moves nothing")
         # from the target while the rotor is on its way (turning, braking before it turns, or
         # idle with a target still waiting to go out, as a rotor with no brake is while it
         # settles: a second press of a nudge button adds to the first), else from the bearing
-        going = status.state in (MotionState.MOVING, MotionState.BRAKING, MotionState.IDLE)
+        going = not halted and status.state in (
+            MotionState.MOVING,
+            MotionState.BRAKING,
+            MotionState.IDLE,
+        )
         moving = going and status.target_az_deg is not None
         az = status.target_az_deg if moving else status.bearing_deg
         if az is None:

@@ -206,6 +206,7 @@ class CompositeWorker:
         self._box = mailbox.fileno()
         self._urgent = frozenset({self._box})
         self._on_status = on_status
+        self._halts_applied = 0
         self.composition = Composition(cfg.rotator_id)
         self._halted = Halts()  # rule 6
         self.boxes: dict[Axis, Worker] = {}
@@ -227,6 +228,12 @@ class CompositeWorker:
     @property
     def status(self) -> RotatorStatus:
         return self.composition.status
+
+    @property
+    def halts_applied(self) -> int:
+        """mailbox.py rule 10, as a worker's: the merged status shows every stop and lock ON
+        up to it (set once both boxes' statuses were handed on: ``serve``)."""
+        return self._halts_applied
 
     def _seen(self, axis: Axis, status: RotatorStatus) -> None:
         merged = self.composition.seen(axis, status)
@@ -277,6 +284,7 @@ class CompositeWorker:
             batch = self._mailbox.take()
             if batch:
                 self._hand(split(batch), now)  # rule 1: both boxes in this one serve
+                self._halts_applied = batch.epoch
         for box in self.boxes.values():
             fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):

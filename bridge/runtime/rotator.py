@@ -282,12 +282,14 @@ class Rotator:
             case Park():
                 self._judged(Target(*self.pointing.parking(), src, park=True, origin=by))
             case Nudge():
-                step = self.pointing.nudged(self.status, command.d_az_deg, command.d_el_deg)
+                status, halted = self._seen()
+                step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
                 self._judged(Target(*step, src, origin=by))
             case Toward():
                 self._toward(command, command.latitude_deg, command.longitude_deg)
             case TakePath():
-                info = self.status.target_info  # the place of the current target
+                status, halted = self._seen()
+                info = None if halted else status.target_info  # the place of the current target
                 if info is None:
                     message = "no locator or coordinate target to take the other path to"
                     raise Refused(RefusalCode.INVALID, message)
@@ -298,6 +300,13 @@ class Rotator:
             case FeatureCommand():
                 self._feature(command)
         return EXECUTED
+
+    def _seen(self) -> tuple[RotatorStatus, bool]:
+        """The status a command relative to the target is made from, and whether a stop or
+        lock ON put before it is not in that status yet (mailbox.py rule 10): the target it
+        shows is then the one that halt dropped, and nothing is on its way."""
+        applied = self._worker.halts_applied  # first: the status read next is at least as new
+        return self.status, self._mailbox.epoch > applied
 
     def _toward(
         self,

@@ -240,6 +240,11 @@ class Worker:
     def status(self) -> RotatorStatus:
         return self.session.status
 
+    @property
+    def halts_applied(self) -> int:
+        """mailbox.py rule 10: the halt count the status shows every stop and lock ON up to."""
+        return self.session.halts_applied
+
     def _opened(self, result: serial.Serial | Exception, now: float) -> None:
         self._opening = None
         if isinstance(result, Exception):

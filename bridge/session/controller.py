@@ -133,16 +133,20 @@ class Controller:
         features: st.Features,
     ) -> st.Seen:
         """What the status view needs (status.py), the controller's part from here."""
-        link, wire = self.link, None
+        link, wire, motion = self.link, None, self.motion
         if pending is not None and link is not None:
-            az, el = resolve(pending, self.motion, self.cfg.aim)
+            az, el = resolve(pending, motion, self.cfg.aim)
             wire = link.codec.wire_target(az, el) if az is not None else None
+        if link is not None and link.stop_due and motion.target_deg is not None:
+            # a stop waits for a half-duplex line (link.py rule 3): the target is dropped, as
+            # once it is written (a nudge is then made from the bearing: runtime/rotator.py)
+            motion = replace(motion, target_deg=None, el_target_deg=None)
         return st.Seen(  # (by position: a third of the cost by name, at every reading)
             previous,
             view,
             self.version,  # version
             self.controller_time,  # controller_time
-            self.motion,  # motion
+            motion,  # motion
             link is not None,  # connected
             link is not None and self.answering,  # answering
             locked,

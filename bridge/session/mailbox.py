@@ -46,7 +46,11 @@ Rules:
     put returns False; the judge reports the refusal). So a motion command judged before a stop
     or lock ON never runs after it, whichever front end's thread brought which, and a lock OFF
     that follows in the same batch lets no such target through. A command put without a count
-    (tracking or following OFF, the session's own) is never dropped by it.
+    (tracking or following OFF, the session's own) is never dropped by it. A batch taken
+    carries the count (``Batch.epoch``): the session's status after applying it shows every
+    stop and lock ON up to it (session.py ``halts_applied``), so a judge that reads a larger
+    count knows the status it sees predates a halt (a nudge is then from the bearing, not from
+    the target the stop dropped: runtime/rotator.py).
 11. ``halts()``: the stops and lock ONs put in any mailbox so far, counted once the batch holds
     them. The lines thread reads it to know whether one came while it served others (lines.py
     rule 5) without asking every mailbox after every rotator it serves. Each put sets it to a
@@ -110,6 +114,8 @@ class Batch:
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
+    epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
+    # in this batch or an earlier one)
     # rule 12, in the order put, with where a stop, lock or clearing came among them
     feature_commands: list[FeatureCommand | PartsEnd] = field(default_factory=list)
 
@@ -356,6 +362,7 @@ class Mailbox:
             pass
         with self._lock:
             batch, self._batch = self._batch, Batch()
+            batch.epoch = self._epoch  # rule 10
             self._woken = False  # rule 5
             batch.options = list(self._option_order.values())
             self._option_order = {}

@@ -205,6 +205,10 @@ class RotatorSession:
         # the halts proposed by parts that take their feature's own commands: on a rotator of
         # two boxes those run in the azimuth box alone (runtime/composite.py rule 6 reads it)
         self.part_halts = 0
+        # mailbox.py rule 10: the halt count of the last batch applied; ``status`` shows every
+        # stop and lock ON up to it (set once the step built the status: a thread that reads
+        # this count and then the status sees a status at least that new)
+        self.halts_applied = 0
 
     @property
     def name(self) -> str:
@@ -307,7 +311,9 @@ class RotatorSession:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:
                 self.targets.put(batch.target, now)
-        return self._step(now)
+        actions = self._step(now)
+        self.halts_applied = batch.epoch  # (after the status: see __init__)
+        return actions
 
     def bytes_received(self, data: bytes, now: float) -> list[Action]:
         self._poll_until = -math.inf  # rule 20: the next tick runs the whole step
@@ -690,6 +696,7 @@ class RotatorSession:
             ctl.motion,
             ctl.cfg,
             link,
+            link is not None and link.stop_due,  # (a stop waiting drops the target shown)
             slew,  # (its end ends the estimate)
             ctl.answering,
             ctl.version,

@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
+import serial
 
 import bridge.app as app
 import bridge.feature
@@ -17,16 +18,21 @@ from bridge.core.model import (
     FeatureCommand,
     MotionState,
     Source,
+    Stop,
     Target,
     describe_command,
 )
 from bridge.feature import Feature
 from bridge.features import FEATURES
 from bridge.protocols.axes import Axis
+from bridge.runtime.composite import CompositeWorker
+from bridge.runtime.port import PortError
 from bridge.session.actions import Report
 from bridge.session.follow import Follow, Heard
+from bridge.session.mailbox import Mailbox
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.session import RotatorSession
+from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
 from tests.engine import virtual_composite
 from tests.engine.test_follow import STATION
@@ -385,3 +391,39 @@ def test_a_transmission_during_a_following_turn_holds_following_in_both_boxes(
         assert not v.az.truth().is_moving
         assert v.az.status.following is not None and v.el.status.following is not None
         assert v.status.following is not None
+
+
+def test_the_composite_worker_says_which_stops_its_status_shows() -> None:
+    """mailbox.py rule 10, as a single worker's session says it: once both boxes decided on a
+    batch and their statuses were handed on, its halt count is the merged status's (a nudge
+    judged before that is made from the bearing, not from the target the stop dropped)."""
+    rotator = RotatorSettings.model_validate(
+        {
+            "id": "v",
+            "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+            "elevation": {"model": "gs232b", "port": "/dev/ttyEL"},
+        }
+    )
+    axes = app.axis_configs(rotator)
+    assert axes is not None
+
+    def unplugged(path: str, spec: object, baud: int) -> serial.Serial:
+        raise PortError(f"{path}: no such port")
+
+    box = Mailbox()
+    worker = CompositeWorker(
+        app.worker_config(rotator),
+        axes,
+        box,
+        lambda s: None,
+        lambda e: None,
+        port_opener=unplugged,
+    )
+    worker.begin(0.0, lambda: None)
+    box.put(Stop())
+    box.put(Stop())
+    assert (box.epoch, worker.halts_applied) == (2, 0)
+    worker.serve(0.1, {box.fileno()})
+    assert worker.halts_applied == 2
+    assert all(b.session.controller.stops.owed for b in worker.boxes.values())  # both boxes
+    box.close()

@@ -22,10 +22,14 @@ from bridge.core.model import (
     ErrorKind,
     FollowQso,
     MotionState,
+    Nudge,
     Origin,
     Park,
     Source,
+    Stop,
+    TakePath,
     Target,
+    Toward,
     TrackBody,
 )
 from bridge.interfaces.mqtt.halts import Halts
@@ -263,3 +267,48 @@ def test_following_off_and_tracking_off_are_never_overtaken(
     assert follow is not None and not follow.on
     assert not bench.events
     assert [a.result for a in bench.audit] == ["executed"] * 4  # two stops, two OFFs
+
+
+# -- a command relative to the target, after a stop (mailbox.py rule 10's count) --------------
+MQTT = Origin(Source.MQTT)
+
+
+def stopped_on_the_way(bench: Bench, target: Target | Toward, taken: bool) -> float:
+    """Turning to ``target``, then a STOP, taken by the session (``taken``) or still in the
+    mailbox; the bearing the STOP came at."""
+    bench.rot.submit(target, "on its way")
+    bench.v._take()
+    bench.v.run_until(lambda h: h.state is MotionState.MOVING and h.truth().az_deg > 60, 30)
+    at_stop = bench.v.truth().az_deg
+    bench.rot.submit(Stop(Source.MQTT, MQTT), "stop")
+    if taken:
+        bench.v._take()  # (a half-duplex SPID: the stop waits for the reply in flight, if any)
+        assert bench.v.status.target_az_deg is None  # what the STOP dropped, shown at once
+    return at_stop
+
+
+@pytest.mark.parametrize("taken", [False, True])
+def test_a_nudge_after_a_stop_is_from_where_the_rotor_stopped(bench: Bench, taken: bool) -> None:
+    """An attack pass: a STOP and then +10, both read before the lines thread took the STOP
+    (paho's thread hands on two messages back to back): the nudge was made from the status
+    that still showed the target the STOP dropped (150), and the rotor turned on to 160."""
+    at_stop = stopped_on_the_way(bench, Target(150.0, None, Source.MQTT, origin=MQTT), taken)
+    bench.rot.submit(Nudge(10.0, source=Source.MQTT, origin=MQTT), "nudge +10")
+    bench.v._take()
+    bench.v.run_for(30)
+    end = bench.v.truth().az_deg
+    assert abs(end - (at_stop + 10)) <= 3, f"STOP at {at_stop:.1f}, then +10 ended at {end:.1f}"
+    assert not bench.v.truth().is_moving
+
+
+@pytest.mark.parametrize("taken", [False, True])
+def test_the_other_path_after_a_stop_is_refused(bench: Bench, taken: bool) -> None:
+    """The same for ``{"path": "long"}``: the place of a target a STOP dropped is no target."""
+    toward = Toward(-33.9, 18.4, source=Source.MQTT, origin=MQTT)  # Cape Town: 175, short
+    stopped_on_the_way(bench, toward, taken)
+    with pytest.raises(Refused) as exc:
+        bench.rot.submit(TakePath(True, source=Source.MQTT, origin=MQTT), "take path long")
+    assert exc.value.message == "no locator or coordinate target to take the other path to"
+    bench.v._take()
+    bench.v.run_for(30)
+    assert not bench.v.truth().is_moving and len(bench.sets()) == 1
