@@ -20,6 +20,7 @@ def test_a_claim_names_an_operator_and_minutes_or_takes_the_messages_operator() 
     ("payload", "why"),
     [
         (b"{not json", "bad JSON"),
+        (b'{"operator": "DL1ABC", "minutes": 30, "minutes": 600}', "key 'minutes' given twice"),
         (b"30", "must be a JSON object"),
         (b'["DL1ABC", 30]', "must be a JSON object"),
         (b'{"operator": "DL1ABC"}', 'needs "minutes"'),

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 from datetime import UTC, datetime
+from typing import Any
 
 import pytest
 from hypothesis import given
@@ -56,6 +57,22 @@ def test_targets_users_send(raw: bytes, want: tuple) -> None:
 def test_bad_targets_are_refused_with_a_reason(raw: bytes, why: str) -> None:
     with pytest.raises(pl.PayloadError, match=why):
         pl.parse_target(raw)
+
+
+@pytest.mark.parametrize(
+    ("parse", "raw"),
+    [
+        (pl.parse_target, b'{"azimuth": 10, "azimuth": 350}'),
+        (pl.parse_aim, b'{"azimuth": 10, "elevation": 5, "azimuth": 350}'),
+        (pl.parse_aim, b'{"latitude": 10, "longitude": 5, "latitude": 80}'),
+        (pl.parse_nudge, b'{"azimuth": 5, "azimuth": -90}'),
+    ],
+)
+def test_a_key_given_twice_is_refused_not_read_as_its_last_value(parse: Any, raw: bytes) -> None:
+    """An attack pass: json keeps the last, and {"azimuth": 10, "azimuth": 350} turned the
+    rotor to 350 (core/jsonkeys.py)."""
+    with pytest.raises(pl.PayloadError, match="bad JSON: key '(azimuth|latitude)' given twice"):
+        parse(raw)
 
 
 @given(st.binary(max_size=300))

@@ -58,6 +58,7 @@ def test_a_locator_is_checked_and_written_as_locators_are() -> None:
         (b'{"command":"preset","name":""}', "1 to 80"),
         (b'{"command":"preset","name":"a\\u0000b"}', "control characters"),
         (b'{"command":[]}', "unknown command"),
+        (b'{"command":"target","az":10,"az":350}', "key 'az' given twice"),
         (b"[" * 3000, "nested too deep"),
         (b'{"command":"target","az":' + b"9" * 400 + b"}", "finite number"),
         (b'{"command":"stop","pad":"' + b"x" * 5000 + b'"}', "at most"),

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 from datetime import UTC, datetime
 
+from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import Control, valid_operator
 from bridge.interfaces.mqtt.payloads import MAX_COMMAND_BYTES, PayloadError
 
@@ -27,12 +28,15 @@ def parse_claim(payload: bytes, operator: str | None) -> tuple[object, object]:
     """Rule 1: (operator, minutes) as sent; the message's own operator when it names none."""
     if len(payload) > MAX_COMMAND_BYTES:
         raise PayloadError(f"payload too large ({len(payload)} bytes, at most {MAX_COMMAND_BYTES})")
-    try:
-        obj = json.loads(payload.decode("utf-8"), parse_constant=lambda c: c)  # NaN: a string
+    try:  # NaN: a string; a key given twice: refused (core/jsonkeys.py)
+        text = payload.decode("utf-8")
+        obj = json.loads(text, parse_constant=lambda c: c, object_pairs_hook=unique_keys)
     except UnicodeDecodeError:
         raise PayloadError("payload is not UTF-8 text") from None
     except json.JSONDecodeError as exc:
         raise PayloadError(f"bad JSON: {exc.msg}; a claim is {EXAMPLE}") from None
+    except DuplicateKey as exc:
+        raise PayloadError(f"bad JSON: {exc}; a claim is {EXAMPLE}") from None
     if not isinstance(obj, dict):
         raise PayloadError(f"a claim must be a JSON object, e.g. {EXAMPLE}")
     unknown = set(obj) - {"operator", "minutes"}

@@ -21,6 +21,7 @@ from operator import attrgetter, is_
 from typing import Any
 
 from bridge.core import geo
+from bridge.core.jsonkeys import DuplicateKey, unique_keys
 from bridge.core.model import RotatorStatus, TargetInfo
 from bridge.feature import StatusBlock, status_blocks
 from bridge.interfaces.mqtt.call_payload import Called, CallError, parse_called
@@ -107,10 +108,12 @@ class Place:
 
 
 def _json_object(text: str, what: str) -> dict[str, object]:
-    try:
-        obj = json.loads(text, parse_constant=lambda c: c)  # NaN/Infinity stay strings
+    try:  # NaN/Infinity stay strings; a key given twice is refused (core/jsonkeys.py)
+        obj = json.loads(text, parse_constant=lambda c: c, object_pairs_hook=unique_keys)
     except json.JSONDecodeError as exc:
         raise PayloadError(f"bad JSON: {exc.msg}") from None
+    except DuplicateKey as exc:
+        raise PayloadError(f"bad JSON: {exc}") from None
     if not isinstance(obj, dict):
         raise PayloadError(f"JSON {what} must be an object")
     return obj

@@ -39,6 +39,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from bridge.core import geo
+from bridge.core.jsonkeys import unique_keys
 from bridge.core.model import (
     Command,
     GoToPreset,
@@ -150,7 +151,8 @@ def parse(body: bytes) -> WebCommand:
     if len(body) > MAX_BODY_BYTES:
         raise BadCommand(f"a command is at most {MAX_BODY_BYTES} bytes")
     try:
-        doc = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
+        text = body.decode("utf-8")  # a key given twice: refused (core/jsonkeys.py)
+        doc = json.loads(text, parse_constant=_no_constant, object_pairs_hook=unique_keys)
     except RecursionError:
         raise BadCommand("not a JSON command: nested too deep") from None
     except ValueError as exc:  # not UTF-8, not JSON, a number too long to read
