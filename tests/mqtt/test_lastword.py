@@ -12,12 +12,35 @@ def test_a_lane_halt_holds_until_its_marker_and_a_later_marker_ends_every_hold_b
     n1 = w.lane_halt("a", "stop", 0.0)
     n2 = w.lane_halt("b", "lock", 0.1)
     assert (n1, n2) == (1, 2) and w.holding
-    assert w.marker(2) == "t 2"
-    assert w.marker_back(b"t 1") == (1, ["a"])
+    assert w.marker(2).startswith("t 2 ")
+    assert w.marker_back(w.marker(1).encode()) == (1, ["a"])
     assert w.marker_back(b"other 2") == (0, [])  # not this process's
     assert w.marker_back(b"t x") == (0, [])
-    assert w.marker_back(b"t 5") == (5, ["b"])
+    assert w.marker_back(w.marker(5).encode()) == (5, ["b"])
     assert not w.holding
+
+
+def test_a_marker_nobody_but_this_process_made_is_no_marker() -> None:
+    """Rule 10, an attack pass: whoever reads the base topic learns the token (every marker
+    carries it), and "<token> 999999999" published on the fence topic ended every hold."""
+    w = LastWord(token="t")
+    n = w.lane_halt("a", "stop", 0.0)
+    assert n == 1
+    seen = w.marker(1)  # what a reader of the fence topic saw
+    other = LastWord(token="t")  # another process that happens to share the token
+    for forged in (
+        "t 999999999",
+        "t 2",
+        f"t 2 {seen.split()[2]}",  # a seal moved to another number
+        f"t 999999999 {seen.split()[2]}",
+        other.marker(5),
+        f"{seen} ",
+        "t " + "9" * 5000 + " 0",  # (int() refuses so many digits: no marker, no raise)
+    ):
+        assert w.marker_back(forged.encode()) == (0, []), forged
+        w.lane_marker_back(forged.encode())
+    assert w.holding
+    assert w.marker_back(seen.encode()) == (1, ["a"])
 
 
 def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_eats_its_echo() -> (
@@ -66,7 +89,7 @@ def test_a_lane_halt_the_main_connection_never_had_is_forgotten_at_its_marker() 
     """Rule 1: past its marker, no main copy of it is to come; the next main stop is noted."""
     w = LastWord(token="t")
     w.lane_halt("a", "stop", 0.0)  # (its main copy dropped by a broker that fell behind)
-    w.marker_back(b"t 1")
+    w.marker_back(w.marker(1).encode())
     w.main_halt("a", "stop")
     assert w.lane_halt("a", "stop", 1.1) is None
 
@@ -78,7 +101,8 @@ def test_a_new_main_connection_ends_every_hold_and_voids_the_markers_out() -> No
     assert sorted(w.main_gone()) == ["a", "b"]
     assert w.resend_due(100.0) is None  # nothing out
     n = w.lane_halt("a", "stop", 1.0)
-    assert w.marker_back(b"t 2") == (2, []) and n == 3  # an old marker ends no newer hold
+    old = w.marker(2).encode()
+    assert w.marker_back(old) == (2, []) and n == 3  # an old marker ends no newer hold
 
 
 def test_a_marker_out_too_long_is_sent_again_with_a_back_off_and_never_given_up() -> None:
@@ -87,7 +111,7 @@ def test_a_marker_out_too_long_is_sent_again_with_a_back_off_and_never_given_up(
     assert w.resend_due(RESEND_S - 0.1) is None
     n = w.resend_due(RESEND_S + 0.1)
     assert n == 2 and w.resend_due(RESEND_S + 0.2) is None
-    assert w.marker_back(b"t 2") == (2, ["a"])
+    assert w.marker_back(w.marker(2).encode()) == (2, ["a"])
     w.lane_halt("a", "stop", 10.0)
     sent, t, waits = [], 10.0, []
     while t < 10.0 + HOUR_S:  # an hour of a broker that drops every marker
@@ -139,7 +163,7 @@ def test_a_long_hold_is_known_while_it_lasts() -> None:
     assert w.long_holds(10.0 + LONG_HOLD_S) == {"a": 10.0}
     w.lane_halt("a", "stop", 12.0)  # the hold goes on: since its start
     assert w.long_holds(20.0) == {"a": 10.0}
-    w.marker_back(b"t 2")
+    w.marker_back(w.marker(2).encode())
     assert w.long_holds(20.0) == {}
 
 

@@ -72,10 +72,18 @@ but not the order between them. So:
    subscribed after the lane), a halt the main connection reads does not count as the copy of
    the lane's halts read on that connection: carried out all the same (rule 1), noting and
    ending nothing. A copy ends every hold up to its lane halt's number, as that marker would.
+10. A marker is this process's token, its number and its seal: a keyed hash of the number,
+   whose key never leaves the process. A marker is published, so whoever reads the base topic
+   learns the token and the numbers; one who may also publish on the fence topics could
+   otherwise end every hold with a number of their own (targets published before a STOP then
+   went out after it). A forged marker, or one torn or too long, is no marker; a copy of a real
+   one republished can come only after the real one, which ended the same holds already.
 """
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 import secrets
 import sys
 from collections import deque
@@ -85,6 +93,7 @@ RESEND_S = 2.0  # rule 5: the first wait for a marker, doubled for each resend .
 RESEND_MAX_S = 30.0  # ... up to this; a marker is sent again for as long as it is out
 LONG_HOLD_S = 5.0  # rule 5: a hold longer than this is reported while it lasts
 NOT_YET = sys.maxsize  # rule 9: a lane connected, not yet subscribed: nothing of it in step
+NUMBER_DIGITS = 18  # rule 10: a marker's number has at most this many (int() refuses 4,300)
 
 
 @dataclass(frozen=True)
@@ -100,6 +109,7 @@ class Copy:
 @dataclass
 class LastWord:
     token: str = field(default_factory=lambda: secrets.token_hex(4))
+    _key: bytes = field(default_factory=lambda: secrets.token_bytes(16), repr=False)  # rule 10
     _next: int = 0
     _holds: dict[str, int] = field(default_factory=dict)  # rotator -> marker it waits for
     _held_since: dict[str, float] = field(default_factory=dict)  # rule 5: for the report
@@ -139,8 +149,11 @@ class LastWord:
         return n
 
     def marker(self, n: int) -> str:
-        """The payload of marker ``n`` (either connection's)."""
-        return f"{self.token} {n}"
+        """The payload of marker ``n`` (either connection's): sealed (rule 10)."""
+        return f"{self.token} {n} {self._seal(n)}"
+
+    def _seal(self, n: int) -> str:
+        return hmac.new(self._key, str(n).encode(), hashlib.sha256).hexdigest()[:16]
 
     def lane_connected(self) -> None:
         """Rule 4: no copy of an older halt comes on the new connection; rule 9: nothing it
@@ -262,8 +275,15 @@ class LastWord:
         return bool(self._marker_sent_at)
 
     def _number(self, payload: bytes) -> int:
-        token, _, number = payload.decode("ascii", "replace").partition(" ")
-        return int(number) if token == self.token and number.isdigit() else 0
+        """A marker's number; 0 for anything else: another process's, a forged one (rule 10)."""
+        words = payload.decode("ascii", "replace").split(" ")
+        if len(words) != 3 or words[0] != self.token:
+            return 0
+        number, seal = words[1], words[2]
+        if not (number.isdigit() and len(number) <= NUMBER_DIGITS):
+            return 0
+        n = int(number)
+        return n if hmac.compare_digest(seal, self._seal(n)) else 0
 
     # -- rule 6 ----------------------------------------------------------------------------------
     def retained_halt(self, topic: str, payload: bytes, replayed: bool) -> bool:
