@@ -36,6 +36,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
+from bridge.interfaces.mqtt.halts import LOCK_OFF_OLDER
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
@@ -660,6 +661,9 @@ def test_a_lock_off_read_while_the_lanes_on_waits_for_its_copy_is_older() -> Non
     svc.on_message("rotor/lock", b"OFF", False)  # published before the ON
     svc.main_gone()
     assert [c for c in tower.calls if c[0] == "lock"] == [("lock", True, 1)]
+    # said on R/error, not only logged (an attack pass: right after the lane reconnected, an
+    # OFF published after the ON was refused so too, with only an INFO line for it)
+    assert ("refused", LOCK_OFF_OLDER, "lock OFF") in tower.calls
 
 
 def test_a_lock_off_then_on_ends_on_and_on_then_off_ends_off() -> None:

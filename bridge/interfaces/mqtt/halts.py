@@ -36,6 +36,14 @@ from bridge.interfaces.mqtt.topics import Topics
 log = logging.getLogger(__name__)
 
 TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
+# lastword.py rule 8's refusal, on R/error (the lock stays ON against the OFF: said, not only
+# logged; a lock ON the lane read right after it reconnected is waited for the same way, one
+# broker round trip, rule 9)
+LOCK_OFF_OLDER = (
+    "lock OFF not carried out: a lock ON read on the stop connection may have been published "
+    "after it, and the main connection has not caught up with that ON yet; the lock stays ON "
+    "(send lock OFF again)"
+)
 
 
 def switch_on(payload: bytes) -> bool:
@@ -326,8 +334,8 @@ class Halts:
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
         with self._lock:
-            if not self.word.main_lock_off(rot.id):
-                log.info("%s: lock OFF published before a lock ON: the ON stands", rot.id)
+            if not self.word.main_lock_off(rot.id):  # said (the lock stays ON against it)
+                rot.report_refusal(LOCK_OFF_OLDER, "lock OFF", origin=origin)
                 return
             rot.submit(Lock(False, source=Source.MQTT, origin=origin))
 

@@ -62,7 +62,8 @@ but not the order between them. So:
    again (``markers_allowed``).
 8. A lock OFF the main connection reads while a lane lock ON for that rotator still waits for
    its main copy was published before that ON: it is not carried out (the ON is the last word,
-   even if the main connection then drops before its copy comes).
+   even if the main connection then drops before its copy comes), and R/error says so
+   (halts.py: it may have been published after the ON, when rule 9 could not count the copy).
 9. The main connection's copy of a lane halt is the oldest one the lane read of that rotator and
    kind still waiting (the broker keeps one order for both connections), once the lane's
    connection is known to be in step: a halt published while the lane was not subscribed
