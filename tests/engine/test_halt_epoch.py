@@ -82,7 +82,7 @@ class Bench:
         topics = Topics("rotor", {"v": "rotor/v"})
 
         class Down:  # the main connection is down: the lane's word is the only one
-            up = False
+            up = hears = False
 
             def publish_marker(self, topic: str, payload: str) -> None:
                 raise AssertionError("no marker while the main connection is down")

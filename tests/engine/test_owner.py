@@ -77,7 +77,7 @@ class Station:
         """The MQTT stop lane while the main connection is down: its word is the only one."""
 
         class Down:
-            up = False
+            up = hears = False
 
             def publish_marker(self, topic: str, payload: str) -> None:
                 raise AssertionError("no marker while the main connection is down")

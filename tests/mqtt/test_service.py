@@ -70,7 +70,7 @@ class RecordingPublisher:
     def publish_marker(self, topic: str, payload: str) -> None:
         self.sent.append((topic, payload, False))
 
-    up = True
+    up = hears = True
 
     def publish_offline_now(self, topics: list[str]) -> None:
         self.log.append("offline " + " ".join(topics))
@@ -775,13 +775,28 @@ def test_a_lane_stop_holds_for_hours_said_while_it_lasts_until_the_main_copy() -
     assert said[-1] == (said[0][0], False)
 
 
+def test_a_lane_stop_while_the_main_connection_subscribes_holds_what_it_will_read() -> None:
+    """An attack pass: between the main connection's SUBSCRIBE and its SUBACK the lane's stop
+    held nothing (the main connection counted as down), so a target published before the
+    stop, read by the main connection after it, went out after it; and the lane carried out a
+    lock OFF the main connection was to read after targets published under the lock."""
+    svc, pub, rots = service({"tower": "rotorez"})
+    tower = rots["tower"]
+    pub.up, pub.hears = False, True  # accepted, SUBSCRIBE sent, no SUBACK yet
+    svc.on_lane_message("rotor/stop", b"", False)
+    assert tower.calls == [("submit", Stop(Source.MQTT), "stop", 1)]  # held, at marker 1
+    assert [m for m in pub.take() if m[0] == "rotor/bridge/fence"]  # which went out
+    svc.on_lane_message("rotor/lock", b"OFF", False)  # the main connection's to carry out
+    assert [c[0] for c in tower.calls] == ["submit"]
+
+
 def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> None:
     """Rule 9 on the stop lane too: while the main connection is down the lane carries out a
     lock OFF (lastword.py rule 3), but one a stalled link held up past its expiry is refused and
     reported as the main connection would; a stop or lock ON is never judged by its stamp."""
     svc, pub, rots = service({"tower": "rotorez"})
     tower = rots["tower"]
-    pub.up = False  # the main connection is down
+    pub.up = pub.hears = False  # the main connection is down
     stale = Stamp.of(NOW_UNIX - 30, 5)
     svc.on_lane_message("rotor/lock", b"OFF", False, "DL1ABC", stale)
     assert [c[0] for c in tower.calls] == ["refused"]

@@ -177,6 +177,14 @@ class MqttClient(Connection):
         still run): from now on a command published reaches this connection."""
         return self._up and self._subscribed
 
+    @property
+    def hears(self) -> bool:
+        """A connection is accepted and its command topics' SUBSCRIBE has gone (its SUBACK
+        may not have come): a command published from now on reaches this connection, after
+        whatever it will read that was published before it (the stop lane's holds wait for
+        it: halts.py)."""
+        return self._up and self._subscribing
+
     def add_subscriptions(self, topics: list[str]) -> None:
         """More topic filters (features such as discovery); before ``start()``."""
         self._subscriptions = [*self._subscriptions, *topics]

@@ -250,6 +250,7 @@ class Connection:
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
         self._subscribed = False  # ... and the SUBACK of its command topics came
+        self._subscribing = False  # ... or at least its SUBSCRIBE is on its way (``hears``)
         self._command_mid: int | None = None
         self._stopping = False  # a shutdown under way: a broker going away is no news
         self._last_refusal: str | None = None  # rule 6: each reason said once in a row
@@ -465,12 +466,13 @@ class Connection:
         self._up = True
         self._accepted_once = True
         self._guard.connected(self._clock())
-        self._subscribed = False  # until the SUBACK of the command topics
+        self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
         self._accepted()
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
         self._command_mid = self._subscribe(client, self._filters())
+        self._subscribing = True  # (after the new connection's hook: ``hears``)
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
@@ -504,7 +506,7 @@ class Connection:
         reason_code: ReasonCode,
         properties: Properties | None,
     ) -> None:
-        was, self._up, self._subscribed = self._up, False, False
+        was, self._up, self._subscribed, self._subscribing = self._up, False, False, False
         answered, self._answered = self._answered, False
         self.connected.clear()
         if not was and not answered and not self._close_steps_down():  # no CONNACK came

@@ -132,7 +132,10 @@ class Halts:
             self.word.echoes = False
 
     def _holds_possible(self) -> bool:
-        return self._publisher.up
+        """Whether the main connection will read what was published before a lane halt (and
+        its marker after it): from its SUBSCRIBE on, not only from its SUBACK (a target
+        published between the two, read after the lane's stop, went out after it)."""
+        return self._publisher.hears
 
     def carry(
         self,
@@ -285,8 +288,8 @@ class Halts:
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
             with self._lock:  # lastword.py rule 3: the only word while it is down
-                if self._publisher.up:
-                    return
+                if self._publisher.hears:  # (subscribing: it may read this OFF, after the
+                    return  # targets published before it, refused as the lock says)
                 why = late()
                 if why is None:
                     rot.submit(
