@@ -222,3 +222,17 @@ def test_markers_allowed_again_go_out_for_the_next_lane_halt() -> None:
     w.markers_allowed()
     n = w.lane_halt("a", "stop", 1.0)
     assert w.markers_out and w.marker_back(w.marker(n or 0).encode()) == (n, ["a"])
+
+
+def test_no_echo_is_noted_while_the_lanes_subscription_is_not_acknowledged() -> None:
+    """Rule 4, an attack pass: the main connection read a halt while the lane had connected
+    but the broker had not taken its subscription; neither the lane's copy nor the lane
+    marker came, the note stood, and the lane's next real stop was dropped as its echo (left
+    to the main connection, behind whatever it was reading)."""
+    w = LastWord(token="t")
+    w.lane_connected()
+    assert w.main_halt("a", "stop") == Copy()  # nothing noted, no lane marker
+    w.lane_subscribed(1.0)
+    assert w.lane_halt("a", "stop", 2.0)  # carried out at once, with a hold
+    copy = w.main_halt("b", "stop")  # in step now: noted as before
+    assert copy.lane_marker is not None and w.lane_halt("b", "stop", 3.0) is None

@@ -34,7 +34,11 @@ but not the order between them. So:
    marker; a copy of that kind for that rotator read on the lane before then is the echo and
    is dropped, and the note ends when the lane marker comes back (within the lane's own round
    trip). A note is also forgotten when the lane reconnects (an older copy cannot come on the
-   new connection). No clock decides it.
+   new connection), and none is made while the lane's subscription is not acknowledged (rule
+   9: the halt and the lane marker may both have been published before the broker took it, so
+   neither comes, and the note would stand: the lane's next real stop of that kind, taken for
+   the echo, then waited for the main connection's copy, behind whatever it is reading). A
+   late copy is then carried out (an extra stop: the safe direction). No clock decides it.
 5. A hold ends with clearing when the main connection drops (nothing older can come any more;
    a target or tracking that waited is dropped and reported: its place in line is lost) and
    when it connects again. While the main connection lives, no clock ends a hold: however
@@ -192,7 +196,7 @@ class LastWord:
                 return Copy()  # rule 9: maybe older than the lane's connection: nothing known
             waiting.popleft()
             return Copy(echo=True, upto=n, released=tuple(self._passed(n)))
-        if not self.echoes:
+        if not self.echoes or self._lane_sub == NOT_YET:  # (rule 4: nothing to note against)
             return Copy()
         self._lane_next += 1
         self._echoes.setdefault(key, deque()).append(self._lane_next)
