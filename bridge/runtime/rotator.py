@@ -234,6 +234,7 @@ class Rotator:
         *,
         hold: int | None = None,
         echo: bool = False,
+        since: int | None = None,
     ) -> None:
         """The one way a front end reaches the judge (rules in the module header): queue
         ``command`` (a value of core/model.py's ``Command`` union) or raise Refused, reported on
@@ -241,7 +242,10 @@ class Rotator:
         event's and the audit trail's). Stop and lock ON are never refused; ``hold`` (a stop or
         lock ON from the stop lane): no target goes out until ``release`` reaches that marker
         (session rule 13); ``echo``: a halt the stop lane carried out already
-        (interfaces/mqtt/halts.py), not audited twice."""
+        (interfaces/mqtt/halts.py), not audited twice; ``since``: the halt count (``halts``)
+        when the command was asked, for a front end that submits it a while later (the DX
+        cluster's look-up): a stop or lock ON put since then overtakes it, however late it is
+        judged (mailbox.py rule 10)."""
         if not isinstance(command, COMMANDS):  # a front end's bug, never a user's input
             message = f"not a command the bridge knows: {type(command).__name__}"
             self.report(ErrorKind.REFUSED, message, described)
@@ -250,21 +254,25 @@ class Rotator:
         # a lock word is audited in one wording, whichever interface said it
         what = describe_command(command) if isinstance(command, Lock) else None
         what = what or described or describe_command(command)
+        epoch = self._mailbox.epoch if since is None else since  # before the judge (rule 10)
         try:
-            result = self._carry(command, what, who, hold)
+            result = self._carry(command, what, who, hold, epoch)
         except Refused as exc:
             self.report_refusal(exc.message, what, origin=who)
             raise
         if result is not None and not echo:  # after the put (operators.py rule 3)
             self.operators.audit(who, what, result)
 
-    def _carry(self, command: Command, what: str, who: Origin, hold: int | None) -> str | None:
+    def _carry(
+        self, command: Command, what: str, who: Origin, hold: int | None, epoch: int
+    ) -> str | None:
         """The decision for each kind: the audit trail's result, None for a command it does
-        not keep (a health reset moves nothing), or Refused (reported by ``submit``)."""
+        not keep (a health reset moves nothing), or Refused (reported by ``submit``).
+        ``epoch``: the halt count read before any of it was judged (mailbox.py rule 10)."""
         src, by = command.source, command.origin
         match command:
             case Target() | Stop() | SetOption():
-                self._judged(command, hold)
+                self._judged(command, epoch, hold)
             case Lock():
                 self._lock(command.on, hold)
             case Claim():
@@ -273,33 +281,39 @@ class Rotator:
                 if self.operators.release(who) is None:
                     return f"{EXECUTED} (was free)"
             case TrackBody():
-                self._track(command, what)
+                self._track(command, what, epoch)
             case FollowQso():
-                self._start_follow(command, what)
+                self._start_follow(command, what, epoch)
             # the other ways of naming a target (pointing.py rule 6), judged like any
             case GoToPreset():
-                self._judged(Target(*self.pointing.preset(command.name), src, origin=by))
+                self._judged(Target(*self.pointing.preset(command.name), src, origin=by), epoch)
             case Park():
-                self._judged(Target(*self.pointing.parking(), src, park=True, origin=by))
+                self._judged(Target(*self.pointing.parking(), src, park=True, origin=by), epoch)
             case Nudge():
                 status, halted = self._seen()
                 step = self.pointing.nudged(status, command.d_az_deg, command.d_el_deg, halted)
-                self._judged(Target(*step, src, origin=by))
+                self._judged(Target(*step, src, origin=by), epoch)
             case Toward():
-                self._toward(command, command.latitude_deg, command.longitude_deg)
+                self._toward(command, epoch, command.latitude_deg, command.longitude_deg)
             case TakePath():
                 status, halted = self._seen()
                 info = None if halted else status.target_info  # the place of the current target
                 if info is None:
                     message = "no locator or coordinate target to take the other path to"
                     raise Refused(RefusalCode.INVALID, message)
-                self._toward(command, info.latitude_deg, info.longitude_deg, info.locator)
+                self._toward(command, epoch, info.latitude_deg, info.longitude_deg, info.locator)
             case ResetHealth():
                 self._reset_health()
                 return None
             case FeatureCommand():
-                self._feature(command)
+                self._feature(command, epoch)
         return EXECUTED
+
+    @property
+    def halts(self) -> int:
+        """The halt count now (mailbox.py rule 10): what a front end that submits a command a
+        while after it was asked reads when it is asked, and hands to ``submit`` (``since``)."""
+        return self._mailbox.epoch
 
     def _seen(self) -> tuple[RotatorStatus, bool]:
         """The status a command relative to the target is made from, and whether a stop or
@@ -311,6 +325,7 @@ class Rotator:
     def _toward(
         self,
         command: Toward | TakePath,
+        epoch: int,
         latitude_deg: float,
         longitude_deg: float,
         locator: str | None = None,
@@ -325,11 +340,11 @@ class Rotator:
             long_path=command.long_path,
             locator=locator,
         )
-        self._judged(Target(az, None, command.source, info=info, origin=command.origin))
+        self._judged(Target(az, None, command.source, info=info, origin=command.origin), epoch)
 
-    def _judged(self, command: ControllerCommand, hold: int | None = None) -> None:
-        """A target, a stop or an option: judged (``_check``) and put in the mailbox."""
-        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
+    def _judged(self, command: ControllerCommand, epoch: int, hold: int | None = None) -> None:
+        """A target, a stop or an option: judged (``_check``) and put in the mailbox (a
+        target with ``epoch``, the halt count read before it was judged: mailbox.py rule 10)."""
         judged = self._check(command)
         if isinstance(judged, SetOption):
             with self._owner:  # the session and the state file in the same order (kept.py)
@@ -354,13 +369,12 @@ class Rotator:
         """The stop express answered up to sync word ``n``: its holds up to it end."""
         self._mailbox.put_express_release(n)
 
-    def _track(self, command: TrackBody, what: str) -> None:
+    def _track(self, command: TrackBody, what: str, epoch: int) -> None:
         """Follow the sun, the moon or a satellite (by name from the TLE file, or its TLE);
         ``off`` ends it (never refused, like a stop). A name is looked up in the TLE file by
         the sky worker, not here (paho's thread): an unknown one is refused by the session, as
         an error event. Tracking started by the lease's holder goes on (its targets are the
         bridge's own, never judged by the lease)."""
-        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
         source, origin, name = command.source, command.origin, command.name
         if command.off:
             self._mailbox.put_track(Tracking(None, source, origin=origin))
@@ -380,20 +394,19 @@ class Rotator:
         """A QSO partner can be followed: the [wsjtx] listener runs and the station is known."""
         return self._follow.wsjtx and self._follow.station is not None
 
-    def _start_follow(self, command: FollowQso, what: str) -> None:
+    def _start_follow(self, command: FollowQso, what: str, epoch: int) -> None:
         """Follow the QSO partner WSJT-X names (follow.py); off ends it (never refused, like a
         stop). Judged like a track start (the lease included); what the holder started goes
         on, its targets are the bridge's own (``wsjtx``)."""
         on, origin = command.on, command.origin
-        epoch = self._mailbox.epoch if on else None  # before the judge (mailbox.py rule 10)
         if on:
             check_can_follow(self._follow)
             self._check_start(origin or Origin(command.source))
         follow = Following(on, command.long_path, command.source, what, origin)
-        if not self._mailbox.put_follow(follow, epoch=epoch):
+        if not self._mailbox.put_follow(follow, epoch=epoch if on else None):
             self._overtaken()
 
-    def _feature(self, command: FeatureCommand) -> None:
+    def _feature(self, command: FeatureCommand, epoch: int) -> None:
         """A feature's own command (the module's docstring): judged like a track start when
         it moves the rotor, like a controller setting when it does not, then put for its
         part."""
@@ -408,7 +421,6 @@ class Rotator:
                 raise Refused(RefusalCode.LEASED, leased)
             self._mailbox.put_feature(command)
             return
-        epoch = self._mailbox.epoch  # before the judge (mailbox.py rule 10)
         self._check_start(who)
         if not self._mailbox.put_feature(command, epoch=epoch):
             self._overtaken()

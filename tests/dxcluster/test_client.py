@@ -6,16 +6,16 @@ against a recording rotator: the newest spot's place, else the entity, else a re
 from __future__ import annotations
 
 import json
-import math
 import socket
 import threading
-import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 
 from bridge.core import geo
-from bridge.core.model import Origin, Source, Toward
+from bridge.core.errors import Refused
+from bridge.core.model import Origin, Source, Stop, Toward
 from bridge.interfaces.dxcluster.book import Book
 from bridge.interfaces.dxcluster.client import (
     LOGIN_WAIT_S,
@@ -25,7 +25,9 @@ from bridge.interfaces.dxcluster.client import (
 )
 from bridge.interfaces.dxcluster.cty import parse_dat
 from bridge.interfaces.dxcluster.spots import Spot
+from bridge.runtime.rotator import STALE_MESSAGE
 from tests.dxcluster.cty_sample import CTY_DAT
+from tests.engine.test_halt_epoch import START_AZ, Bench, on_a_thread
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.cluster import FakeCluster, Session
@@ -137,10 +139,11 @@ class Asked:
 
     def __init__(self) -> None:
         self.calls: list[tuple[object, ...]] = []
-        self.last_halt_s = -math.inf
+        self.halts = 0  # the halt count (runtime/rotator.py)
 
-    def submit(self, command: Toward, described: str) -> None:
+    def submit(self, command: Toward, described: str, *, since: int | None = None) -> None:
         lat, lon, long_path = command.latitude_deg, command.longitude_deg, command.long_path
+        assert since == 0  # the count when it was asked goes to the judge (rule 4)
         self.calls.append(("go", lat, lon, command.source, described, long_path, command.origin))
 
     def report_refusal(self, message: str, command: str | None, *, origin: Origin) -> None:
@@ -227,7 +230,7 @@ def test_a_stop_after_the_call_was_asked_overtakes_it(published: list[str]) -> N
     dx.book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
     rot, who = Asked(), Origin(Source.MQTT, "G4ABC")
     dx.aim(rot, "JA1ABC", False, "target JA1ABC", who)  # type: ignore[arg-type]
-    rot.last_halt_s = time.monotonic()  # the STOP, before the aim thread took the call
+    rot.halts += 1  # the STOP, before the aim thread took the call
     dx._turn(dx._aims.get_nowait())  # type: ignore[arg-type]
     assert rot.calls == [
         ("refused", "JA1ABC: a stop came after it was asked: not turned", "target JA1ABC", who)
@@ -269,3 +272,33 @@ def test_a_node_sending_faster_than_its_budget_is_read_no_faster(published: list
         dx.stop()
         cluster.close()
     assert not cluster.errors, cluster.errors
+
+
+def test_a_stop_during_the_look_up_overtakes_the_call(tmp_path: Path) -> None:
+    """Rule 4, an attack pass: the aim thread compared the last halt's time with the call's
+    before its look-up, and a STOP put during the look-up (rotctld's, on a thread of its own)
+    was overtaken: the call asked before it went to the controller after it."""
+    bench = Bench(tmp_path)
+    try:
+        book = Book(parse_dat(CTY_DAT), (52.52, 13.40))
+        book.add(Spot("JA1ABC", 14025.0, "G4ABC", "1234", "FT8 PM95vq"))
+        dx = DxCluster("127.0.0.1", 9, "G4ABC", book, lambda doc: None)
+        who = Origin(Source.MQTT, "G4ABC")
+        dx.aim(bench.rot, "JA1ABC", False, "target JA1ABC", who)
+        newest = book.newest
+
+        def looked_up(call: str) -> Spot | None:  # the aim thread is in its look-up ...
+            found = newest(call)  # ... when an operator's STOP comes on another thread
+            on_a_thread(lambda: bench.rot.submit(Stop(Source.ROTCTLD), "rotctld S"))
+            return found
+
+        book.newest = looked_up  # type: ignore[method-assign]
+        with pytest.raises(Refused):
+            dx._turn(dx._aims.get_nowait())  # type: ignore[arg-type]
+        bench.v._take()
+        bench.v.run_for(20)
+        assert bench.sets() == []  # no set frame reached the controller
+        assert bench.v.truth().az_deg == pytest.approx(START_AZ, abs=0.5)
+        assert bench.events[-1].message == STALE_MESSAGE  # said on R/error
+    finally:
+        bench.close()

@@ -25,6 +25,7 @@ from bridge.core.model import (
     Nudge,
     Origin,
     Park,
+    RotatorStatus,
     Source,
     Stop,
     TakePath,
@@ -312,3 +313,26 @@ def test_the_other_path_after_a_stop_is_refused(bench: Bench, taken: bool) -> No
     bench.v._take()
     bench.v.run_for(30)
     assert not bench.v.truth().is_moving and len(bench.sets()) == 1
+
+
+def test_a_stop_while_a_nudge_is_judged_overtakes_it(
+    bench: Bench, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A review: a STOP put (another front end's thread) after the nudge read the status and
+    before its put: the nudge was put as judged after it, and the rotor turned on to 160. The
+    halt count read before the status goes with it to the put, which drops it."""
+    stopped_on_the_way(bench, Target(150.0, None, Source.MQTT, origin=MQTT), taken=True)
+    seen = bench.rot._seen
+
+    def then_a_stop() -> tuple[RotatorStatus, bool]:
+        out = seen()
+        on_a_thread(lambda: bench.rot.submit(Stop(Source.ROTCTLD), "rotctld S"))
+        return out
+
+    monkeypatch.setattr(bench.rot, "_seen", then_a_stop)
+    with pytest.raises(Refused) as exc:
+        bench.rot.submit(Nudge(10.0, source=Source.MQTT, origin=MQTT), "nudge +10")
+    assert exc.value.message == STALE_MESSAGE
+    bench.v._take()
+    bench.v.run_for(30)
+    assert not bench.v.truth().is_moving and len(bench.sets()) == 1  # the first target's only

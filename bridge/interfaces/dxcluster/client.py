@@ -26,9 +26,11 @@ Rules:
    thread takes the newest kept spot of the call, else its cty entity, and asks the rotator
    through its one judge (a ``Toward`` command: limits, keep-out, lock, lease), with the source
    ``dxcluster`` and the asker's origin kept for the audit. An unknown call, or no station,
-   is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked (the
-   rotator's ``last_halt_s``) overtakes it: the call is refused, never turned to after the
-   stop (docs/architecture.md rule 11).
+   is a refusal on ``R/error``. A STOP or lock ON put in after the call was asked overtakes
+   it: the call is refused, never turned to after the stop (docs/architecture.md rule 11). The
+   rotator's halt count read when it was asked goes with it to the judge (``submit``'s
+   ``since``), which drops it at the put if a halt came since, however long the look-up took
+   (a clock compared before the look-up let a stop that came during it be overtaken).
 5. The node cannot starve a stop (docs/architecture.md rule 12): a read takes at most
    READ_BYTES, every line is parsed in time linear in its length (spots.py rule 5), and the
    session has a budget of RATE_BYTES_S (ratelimit.Budget; each line charged LINE_COST more):
@@ -98,7 +100,7 @@ class _Aim:
     long_path: bool
     described: str
     origin: Origin
-    asked_s: float  # rule 4: when it was asked (monotonic, as the rotator's last_halt_s)
+    halts: int  # rule 4: the rotator's halt count when it was asked
 
 
 @dataclass
@@ -298,7 +300,7 @@ class DxCluster:
     ) -> None:
         """From paho's thread: queued for the aim thread; a full queue is refused at once."""
         try:
-            aim = _Aim(rotator, call, long_path, described, origin, time.monotonic())
+            aim = _Aim(rotator, call, long_path, described, origin, rotator.halts)
             self._aims.put_nowait(aim)
         except queue.Full:
             rotator.report_refusal(
@@ -318,7 +320,7 @@ class DxCluster:
                 self._rarely(exc)
 
     def _turn(self, aim: _Aim) -> None:
-        if aim.rotator.last_halt_s >= aim.asked_s:  # rule 4
+        if aim.rotator.halts != aim.halts:  # rule 4 (no look-up for it)
             aim.rotator.report_refusal(
                 f"{aim.call}: a stop came after it was asked: not turned",
                 aim.described,
@@ -341,7 +343,7 @@ class DxCluster:
             source=Source.DXCLUSTER,
             origin=aim.origin,
         )
-        aim.rotator.submit(toward, aim.described)
+        aim.rotator.submit(toward, aim.described, since=aim.halts)  # rule 4
 
 
 def _keepalive(sock: socket.socket) -> None:

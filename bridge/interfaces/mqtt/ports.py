@@ -22,6 +22,9 @@ class RotatorPort(FrontRotator, Protocol):
     last_halt_s: float  # when a STOP or lock ON was last put in (monotonic; runtime/rotator.py)
 
     @property
+    def halts(self) -> int: ...  # the halt count now (runtime/rotator.py; mailbox.py rule 10)
+
+    @property
     def status(self) -> RotatorStatus: ...
     @property
     def can_follow(self) -> bool: ...  # [wsjtx] on and a station: R/follow (session/follow.py)
@@ -32,6 +35,7 @@ class RotatorPort(FrontRotator, Protocol):
         *,
         hold: int | None = None,
         echo: bool = False,
+        since: int | None = None,
     ) -> None: ...
     def release(self, marker: int, *, clear: bool = False) -> None: ...
 
