@@ -180,9 +180,10 @@ class MqttClient(Connection):
     @property
     def hears(self) -> bool:
         """A connection is accepted and its command topics' SUBSCRIBE has gone (its SUBACK
-        may not have come): a command published from now on reaches this connection, after
-        whatever it will read that was published before it (the stop lane's holds wait for
-        it: halts.py)."""
+        may not have come): a command published once the broker has taken that SUBSCRIBE
+        reaches this connection, after whatever it will read that was published before it;
+        a marker it publishes from now on comes back after those (the stop lane's holds wait
+        for it: halts.py)."""
         return self._up and self._subscribing
 
     def add_subscriptions(self, topics: list[str]) -> None:

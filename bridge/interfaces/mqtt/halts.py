@@ -38,11 +38,11 @@ log = logging.getLogger(__name__)
 TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
 # lastword.py rule 8's refusal, on R/error (the lock stays ON against the OFF: said, not only
 # logged; a lock ON the lane read right after it reconnected is waited for the same way, one
-# broker round trip, rule 9)
+# broker round trip, rule 9). It may be someone's lock for work on the tower: no "send again"
 LOCK_OFF_OLDER = (
-    "lock OFF not carried out: a lock ON read on the stop connection may have been published "
-    "after it, and the main connection has not caught up with that ON yet; the lock stays ON "
-    "(send lock OFF again)"
+    "lock OFF not carried out: a lock ON that may have been published after it came on the "
+    "stop connection; the lock stays ON (make sure nobody is working on the tower before "
+    "unlocking)"
 )
 
 
@@ -337,10 +337,11 @@ class Halts:
     def main_lock_off(self, rot: RotatorPort, origin: Origin | None = None) -> None:
         """A lock OFF read on the main connection (rule 8: not when older than a lane ON)."""
         with self._lock:
-            if not self.word.main_lock_off(rot.id):  # said (the lock stays ON against it)
-                rot.report_refusal(LOCK_OFF_OLDER, "lock OFF", origin=origin)
-                return
-            rot.submit(Lock(False, source=Source.MQTT, origin=origin))
+            carried = self.word.main_lock_off(rot.id)
+            if carried:
+                rot.submit(Lock(False, source=Source.MQTT, origin=origin))
+        if not carried:  # said (the lock stays ON against it), once the lock is let go: a
+            rot.report_refusal(LOCK_OFF_OLDER, "lock OFF", origin=origin)  # stop may wait
 
     def retained_deleted(self, topic: str) -> None:
         with self._lock:

@@ -280,15 +280,17 @@ class LastWord:
         return bool(self._marker_sent_at)
 
     def _number(self, payload: bytes) -> int:
-        """A marker's number; 0 for anything else: another process's, a forged one (rule 10)."""
-        words = payload.decode("ascii", "replace").split(" ")
-        if len(words) != 3 or words[0] != self.token:
+        """A marker's number; 0 for anything else: another process's, a forged one (rule 10).
+        (Compared as bytes: any byte may come, and a text comparison of the seal raises on
+        one outside ASCII.)"""
+        words = payload.split(b" ")
+        if len(words) != 3 or words[0] != self.token.encode():
             return 0
         number, seal = words[1], words[2]
         if not (number.isdigit() and len(number) <= NUMBER_DIGITS):
             return 0
         n = int(number)
-        return n if hmac.compare_digest(seal, self._seal(n)) else 0
+        return n if hmac.compare_digest(seal, self._seal(n).encode()) else 0
 
     # -- rule 6 ----------------------------------------------------------------------------------
     def retained_halt(self, topic: str, payload: bytes, replayed: bool) -> bool:
