@@ -75,6 +75,10 @@ def test_a_key_given_twice_is_refused_not_read_as_its_last_value(parse: Any, raw
         parse(raw)
 
 
+def test_a_key_given_twice_with_one_value_says_one_thing_and_is_taken() -> None:
+    assert pl.parse_target(b'{"azimuth": 10, "azimuth": 10.0}') == (10.0, None)
+
+
 @given(st.binary(max_size=300))
 def test_any_bytes_parse_or_raise_payload_error(raw: bytes) -> None:
     try:

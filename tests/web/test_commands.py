@@ -68,3 +68,8 @@ def test_bad_bodies_are_refused_by_name(body: bytes, says: str) -> None:
     with pytest.raises(BadCommand, match=None) as caught:
         parse(body)
     assert says in str(caught.value)
+
+
+def test_a_stop_with_its_command_key_twice_is_still_a_stop() -> None:
+    """A review: a key given twice is refused only with two values (core/jsonkeys.py)."""
+    assert parse(b'{"command":"stop","command":"stop"}').halts()
