@@ -47,7 +47,7 @@ from dataclasses import dataclass, field, replace
 from bridge.core import geo
 from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target, TargetInfo
-from bridge.protocols.base import ModelSpec
+from bridge.protocols.base import ModelSpec, half_up
 
 
 def norm360(deg: float) -> float:
@@ -302,10 +302,10 @@ class Pointing:
         RC2800, the RT-21 and the Combi-Track to tenths (a composite's two boxes: each way);
         the SPID family cuts down to its resolution, learned only from its replies: one pulse
         per degree at the coarsest."""
-        if self.whole_degrees or self.tenths:
-            sent = [float(math.floor(value + 0.5))] if self.whole_degrees else []
-            if self.tenths:  # (as the codecs write it: protocols/base.py ``tenths``)
-                sent.append(math.floor(value * 10 + 0.5) / 10)
+        if self.whole_degrees or self.tenths:  # (the codecs' own rounding: ``half_up``)
+            sent = [float(half_up(value, 1))] if self.whole_degrees else []
+            if self.tenths:
+                sent.append(half_up(value, 10) / 10)
             return min(sent), max(sent)
         if not self.az_wraps:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
             return float(math.floor(360.0 + value)) - 360.0, value

@@ -261,10 +261,17 @@ class OneQuery(Plain):
         out.append(JunkReply(raw, reason, why))
 
 
+def half_up(value_deg: float, per_deg: int) -> int:
+    """``value_deg`` in steps of 1/``per_deg`` degree (1: whole degrees, 10: tenths), rounded
+    half up: what a controller that takes whole degrees or tenths is sent, one formula for
+    every codec and for the judge that checks what they send (pointing.py rule 4)."""
+    return math.floor(value_deg * per_deg + 0.5)
+
+
 def tenths(value_deg: float, top_deg: float, axis: str) -> float:
     """``value_deg`` rounded half up to tenths of a degree; outside 0..``top_deg`` a ValueError
     that names the ``axis``."""
-    value = math.floor(value_deg * 10 + 0.5)
+    value = half_up(value_deg, 10)
     if not 0 <= value <= top_deg * 10:
         raise ValueError(f"{axis} {value_deg:g} outside 0..{top_deg:g}")
     return value / 10

@@ -39,7 +39,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
@@ -56,6 +55,7 @@ from bridge.protocols.base import (
     SendWhen,
     Setting,
     SettingKind,
+    half_up,
 )
 
 AZ_MAX_DEG = 450  # the widest range the commands carry (the 450-degree models)
@@ -77,7 +77,7 @@ _CHATTER = re.compile(rb"[\r\n ]*")
 
 
 def _degrees(value: float, top: int, axis: str) -> int:
-    whole = math.floor(value + 0.5)
+    whole = half_up(value, 1)
     if not 0 <= whole <= top:
         raise ValueError(f"{axis} {value:g} outside 0..{top}")
     return whole

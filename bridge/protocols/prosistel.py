@@ -53,7 +53,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -67,6 +66,7 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     RetargetPolicy,
+    half_up,
 )
 
 STX = b"\x02"
@@ -101,7 +101,7 @@ COMBI_TRACK = Family(("A", "B"), (AZ_MAX_DEG, EL_MAX_DEG), 10, 9999, range(4, 5)
 
 
 def _value(deg: float, top: int, scale: int, axis: str) -> int:
-    value = math.floor(deg * scale + 0.5)
+    value = half_up(deg, scale)
     if not 0 <= value <= top * scale:
         raise ValueError(f"{axis} {deg:g} outside 0..{top}")
     return value

@@ -33,7 +33,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Callable
 from typing import Any
@@ -51,6 +50,7 @@ from bridge.protocols.base import (
     SendWhen,
     Setting,
     VersionReply,
+    half_up,
 )
 
 OPTION_LETTERS: dict[str, tuple[bytes, bytes]] = {
@@ -83,7 +83,7 @@ _BANNER_SO_FAR = re.compile(
 
 
 def _bearing_digits(az_deg: float, *, wrap_360: bool) -> int:
-    value = math.floor(az_deg + 0.5)
+    value = half_up(az_deg, 1)
     if not 0 <= value <= 360:
         raise ValueError(f"bearing {az_deg} outside 0..360")
     if wrap_360 and value == 360:

@@ -31,7 +31,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
@@ -45,6 +44,7 @@ from bridge.protocols.base import (
     PositionReply,
     Reply,
     RetargetPolicy,
+    tenths,
 )
 
 AZ_MAX_DEG = 360.0
@@ -57,12 +57,9 @@ _PARTIAL = re.compile(rb" *\d{0,3}(?:\.\d?)?\Z")
 _CHATTER = re.compile(rb"[ ;]*")
 
 
-def tenths(az_deg: float) -> float:
+def _tenths(az_deg: float) -> float:
     """The bearing the box is sent for ``az_deg``: tenths, rounded half up (rule 3)."""
-    value = math.floor(az_deg * 10 + 0.5)
-    if not 0 <= value <= AZ_MAX_DEG * 10:
-        raise ValueError(f"azimuth {az_deg:g} outside 0..{AZ_MAX_DEG:g}")
-    return value / 10
+    return tenths(az_deg, AZ_MAX_DEG, "azimuth")
 
 
 class Rt21Codec(OneQuery):
@@ -77,10 +74,10 @@ class Rt21Codec(OneQuery):
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, None]:
-        return tenths(az_deg), None
+        return _tenths(az_deg), None
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
-        return [b"AP1%05.1f\r;" % tenths(az_deg)]
+        return [b"AP1%05.1f\r;" % _tenths(az_deg)]
 
     def encode_stop(self) -> bytes:
         return b";"

@@ -41,7 +41,6 @@ Rules:
 
 from __future__ import annotations
 
-import math
 import re
 import time
 
@@ -54,6 +53,7 @@ from bridge.protocols.base import (
     Reply,
     RetargetPolicy,
     VersionReply,
+    half_up,
 )
 
 # labels are searched anywhere in a line (noise before them is tolerated); a number must be
@@ -119,8 +119,8 @@ class SatelCodec:
         return [b"g", b"p%d %d\r\n" % (az, el)]
 
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
-        az = math.floor(az_deg + 0.5)
-        el = math.floor((el_deg or 0.0) + 0.5)
+        az = half_up(az_deg, 1)
+        el = half_up(el_deg or 0.0, 1)
         if not (0 <= az <= 360 and 0 <= el <= 90):
             raise ValueError(f"target {az_deg}/{el_deg} outside 0..360 / 0..90")
         return float(az), float(el)

@@ -468,7 +468,7 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
                 "settle_s must be at least two moving poll intervals: stillness needs two readings"
             )
         self.check_pointing(self.pointing)
-        if self.wind_park_az_deg is not None:  # settings/wind.py rule 1 (park_az_deg's: above)
+        if self.wind_topic is not None and self.wind_park_az_deg is not None:  # wind.py rule 1
             az, el = self.wind_park_az_deg, self.park_el_deg
             check_position(self.pointing, "wind_park_az_deg", az, el)
         return self

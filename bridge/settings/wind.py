@@ -6,7 +6,8 @@ Rules:
    park: ``wind_park_az_deg`` or the rotator's ``park_az_deg``. Either is judged as a live
    target would be, when the settings are read (settings/pointing.py ``check_position``): a
    storm park in a keep-out sector or past a limit would be refused in the storm, the antenna
-   left facing the wind.
+   left facing the wind. (``wind_park_az_deg`` without a ``wind_topic`` is not used, nor
+   judged: a configuration that loaded before still loads.)
 2. ``wind_release_below`` is at most ``wind_park_above`` (the same value unless given): a
    gust around one threshold must not park and release the rotor again and again, and the
    hold time (``wind_hold_min``) stands between the two anyway.

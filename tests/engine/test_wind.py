@@ -152,6 +152,9 @@ def test_a_storm_park_the_judge_would_refuse_is_a_settings_error(
     in the storm with the antenna facing the wind."""
     with pytest.raises(ValueError, match=field):
         RotatorSettings(id="w", model="md01", port="/x", **{**WIND, **settings})
+    off = {**WIND, "wind_topic": None, **settings}  # the wind park unused: not judged
+    if off.get("park_az_deg") != 90:
+        RotatorSettings(id="w", model="md01", port="/x", **off)
 
 
 def test_the_park_refused_by_the_judge_is_reported_and_motion_stays_refused() -> None:
