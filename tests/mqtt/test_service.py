@@ -36,7 +36,7 @@ from bridge.core.model import (
     Toward,
     TrackBody,
 )
-from bridge.interfaces.mqtt.halts import LOCK_OFF_OLDER
+from bridge.interfaces.mqtt.halts import LOCK_OFF_OLDER, LOCK_OFF_SUBSCRIBING
 from bridge.interfaces.mqtt.heartbeat import Stamp
 from bridge.interfaces.mqtt.service import MqttService
 from bridge.interfaces.mqtt.topics import Topics
@@ -787,7 +787,7 @@ def test_a_lane_stop_while_the_main_connection_subscribes_holds_what_it_will_rea
     assert tower.calls == [("submit", Stop(Source.MQTT), "stop", 1)]  # held, at marker 1
     assert [m for m in pub.take() if m[0] == "rotor/bridge/fence"]  # which went out
     svc.on_lane_message("rotor/lock", b"OFF", False)  # the main connection's to carry out
-    assert [c[0] for c in tower.calls] == ["submit"]
+    assert tower.calls[1:] == [("refused", LOCK_OFF_SUBSCRIBING, "lock 'OFF'")]  # if it reads it
 
 
 def test_a_stale_lock_off_on_the_lane_is_refused_while_its_stops_are_never() -> None:

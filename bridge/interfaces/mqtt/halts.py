@@ -39,6 +39,14 @@ TICK_S = 1.0  # the timer's period (markers sent again, long holds said)
 # lastword.py rule 8's refusal, on R/error (the lock stays ON against the OFF: said, not only
 # logged; a lock ON the lane read right after it reconnected is waited for the same way, one
 # broker round trip, rule 9). It may be someone's lock for work on the tower: no "send again"
+# the main connection subscribes (its SUBACK not come): it reads this OFF if the broker took
+# its SUBSCRIBE before it, after the targets published before it, which the lock refuses; the
+# lane's OFF carried out now would let them through. Not known which: said, not carried out
+LOCK_OFF_SUBSCRIBING = (
+    "lock OFF on the stop connection not carried out: the main connection was subscribing "
+    "again and may carry it out itself, after what was published before it; if the lock is "
+    "still ON, send lock OFF again"
+)
 LOCK_OFF_OLDER = (
     "lock OFF not carried out: a lock ON that may have been published after it came on the "
     "stop connection; the lock stays ON (make sure nobody is working on the tower before "
@@ -288,9 +296,10 @@ class Halts:
             if retain or not _switch_off(payload):
                 return  # the main connection refuses or reports it
             with self._lock:  # lastword.py rule 3: the only word while it is down
-                if self._publisher.hears:  # (subscribing: it may read this OFF, after the
-                    return  # targets published before it, refused as the lock says)
-                why = late()
+                up, hears = self._publisher.up, self._publisher.hears
+                if up:
+                    return
+                why = late() if not hears else LOCK_OFF_SUBSCRIBING
                 if why is None:
                     rot.submit(
                         Lock(False, source=Source.MQTT, origin=origin), pl.describe(kind, payload)
