@@ -188,6 +188,20 @@ def test_parser_runs_nothing_that_is_unfinished() -> None:
     assert parser.feed(b"+P 1") == [] and not parser.idle
 
 
+def test_a_stop_where_a_number_is_awaited_is_a_stop_too() -> None:
+    """Rule 1's departure (an attack pass): ``P 200`` left short, then ``S``: rotctld takes the
+    S as the elevation and the stop is lost. Here the P fails as rotctld's does, then stops."""
+    assert summary(parse(b"P 200\nS\n\\set_pos\n\\stop\nM 2\nS\nC S S\n")) == [
+        ("set_pos", ("200", "S"), False, "\n"),
+        ("stop", (), False, "\n"),
+        ("set_pos", ("\\stop", "\\stop"), False, "\n"),
+        ("stop", (), False, "\n"),
+        ("move", ("2", "S"), False, "\n"),
+        ("stop", (), False, "\n"),
+        ("set_conf", ("S", "S"), False, "\n"),  # words, not numbers: read as rotctld reads them
+    ]
+
+
 def test_parser_survives_junk_and_drops_an_overlong_argument() -> None:
     junk = bytes(range(256)).replace(b"q", b"").replace(b"Q", b"")
     parser = RequestParser()
@@ -322,6 +336,16 @@ def test_stop_forms(station: StationFactory) -> None:
     c.ask(b"\\stop\n", b"RPRT 0\n")
     c.ask(b"+S\n", b"stop:\nRPRT 0\n")
     c.ask(b";S\n", b"stop:;RPRT 0\n")
+
+
+def test_a_stop_after_a_command_left_short_stops(station: StationFactory) -> None:
+    st = station(start_az_deg=10)  # 290 degrees to go: over 7 s at 40 degrees a second
+    c = st.connect()
+    c.ask(b"P 300 0\n", b"RPRT 0\n")
+    st.emu.wait_for(lambda s: s.is_moving, slow(10))
+    c.ask(b"P 200\nS\n", b"RPRT -1\nRPRT 0\n")  # the short P refused, the stop carried out
+    st.emu.wait_for(lambda s: not s.is_moving, slow(10))
+    assert st.emu.state().az_deg < 290  # stopped on its way, not arrived
 
 
 def test_park_without_a_park_position_is_not_available(station: StationFactory) -> None:

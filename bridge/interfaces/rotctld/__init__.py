@@ -10,7 +10,11 @@ Rules:
    optionally prefixed by ``+`` or one punctuation character (extended replies, that character
    as separator), then whitespace-separated arguments; CR and LF are plain whitespace, so a
    command still waiting for arguments takes them from the following lines. ``#`` comments out
-   the rest of the line. ``q``/``Q`` closes the connection.
+   the rest of the line. ``q``/``Q`` closes the connection. One departure, towards the safe
+   side: a stop (``S``, ``\\stop``) read where a number is awaited (``P 200``, then ``S`` on
+   the next line) is that command's last argument, refused as rotctld refuses it, and then a
+   stop too, answered on its own: rotctld takes it as the argument alone, and the stop a
+   client typed after a command left short was lost.
 2. A command runs only once it is complete (its last argument followed by whitespace). What a
    client leaves unfinished when it disconnects is dropped: it never moves anything.
 3. Unknown commands get no reply at all (rotctld logs them on its own stderr and says nothing).

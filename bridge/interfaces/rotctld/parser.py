@@ -15,6 +15,7 @@ _PREFIXES = frozenset(string.punctuation) - {"\\", "_", "#"}
 _NAME_CHARS = frozenset(string.ascii_letters + string.digits + "_")
 _MAX_NAME = 32
 _MAX_TOKEN = 64
+_STOP_WORDS = frozenset({"S", "\\stop"})  # rule 1: a stop where a number is awaited
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,7 @@ class CommandDef:
     name: str  # long form, also the header of an extended reply
     nargs: int
     returns_values: bool  # success prints values only (no "RPRT 0") in the terse protocol
+    numbers: bool = True  # its arguments are numbers (set_conf's are words)
 
 
 COMMANDS: tuple[CommandDef, ...] = (
@@ -32,7 +34,7 @@ COMMANDS: tuple[CommandDef, ...] = (
     CommandDef("K", "park", 0, False),
     CommandDef("M", "move", 2, False),
     CommandDef("R", "reset", 1, False),
-    CommandDef("C", "set_conf", 2, False),
+    CommandDef("C", "set_conf", 2, False, numbers=False),
     CommandDef("s", "get_status", 0, True),
     CommandDef("_", "get_info", 0, True),
     CommandDef("1", "dump_caps", 0, False),
@@ -62,6 +64,7 @@ class RequestParser:
 
     def __init__(self) -> None:
         self._clear()
+        self._stop_next = False
 
     def _clear(self) -> None:
         self._state = "command"  # command | name | args | comment
@@ -84,6 +87,9 @@ class RequestParser:
             item = self._step(ch)
             if item is not None:
                 out.append(item)
+                if self._stop_next:  # rule 1: the stop word it was given, carried out too
+                    self._stop_next = False
+                    out.append(Request(_BY_NAME["stop"]))
         return out
 
     def _step(self, ch: str) -> Request | Quit | None:
@@ -150,9 +156,15 @@ class RequestParser:
                 self._state = "comment"
             return None
         if self._token:
-            self._args.append("".join(self._token))
+            token = "".join(self._token)
+            self._args.append(token)
             self._token = []
             assert self._command is not None
+            if self._command.numbers and token in _STOP_WORDS:  # rule 1
+                self._stop_next = True
+                missing = self._command.nargs - len(self._args)
+                self._args += [token] * missing  # (refused: not a number, as rotctld reads it)
+                return self._emit()
             if len(self._args) == self._command.nargs:
                 return self._emit()
         return None
