@@ -45,6 +45,19 @@ def test_a_marker_nobody_but_this_process_made_is_no_marker() -> None:
     assert w.marker_back(seen.encode()) == (1, ["a"])
 
 
+def test_a_lane_marker_copied_to_the_main_connections_topic_is_no_marker() -> None:
+    """Rule 10, an attack pass: lane markers are counted apart, and one republished on
+    B/bridge/fence ended the holds up to its number (targets from before a STOP went out)."""
+    w = LastWord(token="t")
+    copy = w.main_halt("b", "stop")  # the main connection read a halt first: a lane marker
+    assert copy.lane_marker == 1
+    w.lane_halt("a", "stop", 0.0)  # then the lane's stop for another rotator: hold 1
+    lane_marker = w.marker(1, lane=True).encode()
+    assert w.marker_back(lane_marker) == (0, []) and w.holding
+    w.lane_marker_back(w.marker(1).encode())  # nor a main marker as the lane's
+    assert w.lane_halt("b", "stop", 1.0) is None  # the note stands: the lane's copy is its echo
+
+
 def test_the_main_connections_copy_accounts_for_the_lanes_and_a_main_first_halt_eats_its_echo() -> (
     None
 ):
@@ -69,7 +82,7 @@ def test_notes_end_with_their_lane_marker_and_when_the_lane_reconnects() -> None
     assert w.lane_halt("a", "stop", 0.5) == 2
     assert w.main_halt("a", "stop") == Copy(echo=True, upto=2, released=("a",))
     n = w.main_halt("a", "stop").lane_marker  # read first on the main connection
-    w.lane_marker_back(w.marker(n or 0).encode())  # the lane has no copy of it
+    w.lane_marker_back(w.marker(n or 0, lane=True).encode())  # the lane has no copy of it
     assert w.lane_halt("a", "stop", 0.6) == 3  # a new stop, not taken for an echo
     w.lane_marker_back(b"other 99")  # not ours: nothing
     w.echoes = False  # the lane cannot read its markers: nothing noted

@@ -338,7 +338,7 @@ class Halts:
             self.carry(rot, kind, what, origin=origin, echo=copy.echo)
             self._release(copy.released, copy.upto)  # lastword.py rule 9
         if copy.lane_marker is not None:
-            marker = self.word.marker(copy.lane_marker)
+            marker = self.word.marker(copy.lane_marker, lane=True)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
         if retain:  # published retained, live (MQTT 5): carried out, and reported
             self.report_retained_halt(rot, topic, kind, what)
@@ -412,7 +412,7 @@ class Halts:
                 if copy.lane_marker is not None:
                     lane_marker = copy.lane_marker
         if lane_marker is not None:
-            marker = self.word.marker(lane_marker)
+            marker = self.word.marker(lane_marker, lane=True)
             self._publisher.publish_marker(self.topics.bridge_fence_lane, marker)
         if retain:
             self._report_retained_group_stop(group_id, topic, what)

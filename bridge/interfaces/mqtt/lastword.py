@@ -77,12 +77,14 @@ but not the order between them. So:
    subscribed after the lane), a halt the main connection reads does not count as the copy of
    the lane's halts read on that connection: carried out all the same (rule 1), noting and
    ending nothing. A copy ends every hold up to its lane halt's number, as that marker would.
-10. A marker is this process's token, its number and its seal: a keyed hash of the number,
-   whose key never leaves the process. A marker is published, so whoever reads the base topic
-   learns the token and the numbers; one who may also publish on the fence topics could
-   otherwise end every hold with a number of their own (targets published before a STOP then
-   went out after it). A forged marker, or one torn or too long, is no marker; a copy of a real
-   one republished can come only after the real one, which ended the same holds already.
+10. A marker is this process's token, its number and its seal: a keyed hash of the number
+   and of its kind (the main connection's or the lane's: counted apart, so a copy moved to
+   the other topic could otherwise pass), whose key never leaves the process. A marker is
+   published, so whoever reads the base topic learns the token and the numbers; one who may
+   also publish on the fence topics could otherwise end every hold with a number of their own
+   (targets published before a STOP then went out after it). A forged marker, or one torn or
+   too long, is no marker; a copy of a real one republished on its own topic can come only
+   after the real one, which ended the same holds already.
 """
 
 from __future__ import annotations
@@ -153,12 +155,15 @@ class LastWord:
         self._lane_waiting.setdefault(key, deque()).append((n, self._lane_sub))
         return n
 
-    def marker(self, n: int) -> str:
-        """The payload of marker ``n`` (either connection's): sealed (rule 10)."""
-        return f"{self.token} {n} {self._seal(n)}"
+    def marker(self, n: int, lane: bool = False) -> str:
+        """The payload of marker ``n`` (``lane``: a lane marker, rule 4): sealed (rule 10)."""
+        return f"{self.token} {n} {self._seal(n, lane)}"
 
-    def _seal(self, n: int) -> str:
-        return hmac.new(self._key, str(n).encode(), hashlib.sha256).hexdigest()[:16]
+    def _seal(self, n: int, lane: bool) -> str:
+        """Rule 10: the number and its kind (a lane marker's numbers are counted apart from
+        the main connection's, so one copied to the other's topic must not pass as its)."""
+        what = f"{'lane' if lane else 'main'} {n}".encode()
+        return hmac.new(self._key, what, hashlib.sha256).hexdigest()[:16]
 
     def lane_connected(self) -> None:
         """Rule 4: no copy of an older halt comes on the new connection; rule 9: nothing it
@@ -178,7 +183,7 @@ class LastWord:
 
     def lane_marker_back(self, payload: bytes) -> None:
         """Rule 4: the lane has read every copy it will get of the halts noted up to it."""
-        n = self._number(payload)
+        n = self._number(payload, lane=True)
         for echoes in self._echoes.values():
             while echoes and echoes[0] <= n:
                 echoes.popleft()
@@ -279,7 +284,7 @@ class LastWord:
     def markers_out(self) -> bool:
         return bool(self._marker_sent_at)
 
-    def _number(self, payload: bytes) -> int:
+    def _number(self, payload: bytes, lane: bool = False) -> int:
         """A marker's number; 0 for anything else: another process's, a forged one (rule 10).
         (Compared as bytes: any byte may come, and a text comparison of the seal raises on
         one outside ASCII.)"""
@@ -290,7 +295,7 @@ class LastWord:
         if not (number.isdigit() and len(number) <= NUMBER_DIGITS):
             return 0
         n = int(number)
-        return n if hmac.compare_digest(seal, self._seal(n).encode()) else 0
+        return n if hmac.compare_digest(seal, self._seal(n, lane).encode()) else 0
 
     # -- rule 6 ----------------------------------------------------------------------------------
     def retained_halt(self, topic: str, payload: bytes, replayed: bool) -> bool:
