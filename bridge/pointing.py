@@ -83,6 +83,7 @@ class Pointing:
     az_wraps: bool = True  # the controller's 0 and 360 are the same direction
     whole_degrees: bool = False
     tenths: bool = False
+    cuts_down: bool = False
     offset_deg: float = 0.0
     keep_out: tuple[tuple[float, float], ...] = ()
     presets: dict[str, tuple[float, float | None]] = field(default_factory=dict)
@@ -113,6 +114,7 @@ class Pointing:
             az_wraps=spec.az_wraps,
             whole_degrees=spec.whole_degrees,
             tenths=spec.tenths,
+            cuts_down=spec.cuts_down,
             offset_deg=offset_deg,
             keep_out=keep_out,
             presets=dict(presets or {}),
@@ -301,25 +303,31 @@ class Pointing:
         Rotor-EZ family and the SatEL round half up to whole degrees, the Easycomm family, the
         RC2800, the RT-21 and the Combi-Track to tenths (a composite's two boxes: each way);
         the SPID family cuts down to its resolution, learned only from its replies: one pulse
-        per degree at the coarsest."""
-        if self.whole_degrees or self.tenths:  # (the codecs' own rounding: ``half_up``)
-            sent = [float(half_up(value, 1))] if self.whole_degrees else []
-            if self.tenths:
-                sent.append(half_up(value, 10) / 10)
-            return min(sent), max(sent)
-        if not self.az_wraps:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
-            return float(math.floor(360.0 + value)) - 360.0, value
-        return value, value
+        per degree at the coarsest. A composite's boxes may round two ways (an attack pass: a
+        SPID's cut was lost beside an elevation box of tenths): every way either may is held."""
+        sent = [value] if not (self.whole_degrees or self.tenths) else []
+        if self.whole_degrees:  # (the codecs' own rounding: ``half_up``)
+            sent.append(float(half_up(value, 1)))
+        if self.tenths:
+            sent.append(half_up(value, 10) / 10)
+        if self.cuts_down:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
+            sent += [float(math.floor(360.0 + value)) - 360.0, value]
+        return min(sent), max(sent)
 
     def _resolution(self) -> str:
         """Why ``_sent`` moved a value, for the refusal's message."""
-        if self.whole_degrees and self.tenths:
-            return "its boxes take whole degrees and tenths"
-        if self.whole_degrees:
-            return "it takes whole degrees"
-        if self.tenths:
-            return "it takes tenths of a degree"
-        return "it may cut to whole degrees, its coarsest resolution"
+        ways = [
+            way
+            for on, way in (
+                (self.whole_degrees, "takes whole degrees"),
+                (self.tenths, "takes tenths of a degree"),
+                (self.cuts_down, "may cut to whole degrees, its coarsest resolution"),
+            )
+            if on
+        ]
+        if len(ways) > 1:
+            return f"its boxes round each their way: one {' and one '.join(ways)}"
+        return f"it {ways[0]}" if ways else "it takes the value as it is"
 
     def _sent_within(self, value: float, lo: float, hi: float) -> bool:
         low, high = self._sent(value)

@@ -10,6 +10,7 @@ from bridge.core.errors import RefusalCode, Refused
 from bridge.core.model import MotionState, RotatorStatus, Target
 from bridge.pointing import Pointing, in_sector, norm360, toward
 from bridge.protocols import REGISTRY
+from bridge.protocols.axes import composite_spec
 
 EZ, SPID = REGISTRY["rotorez"], REGISTRY["rot2prog"]
 
@@ -147,6 +148,22 @@ def test_limits_hold_for_what_a_controller_of_tenths_is_sent() -> None:
         aim.judge(Target(359.95), None)  # would go out as 360.0
     assert exc.value.code is RefusalCode.LIMITS
     assert "becomes 360 on the" in exc.value.message and "tenths" in exc.value.message
+
+
+@pytest.mark.parametrize("el_box", ["rt21", "easycomm2", "rc2800", "prosistel-combi", "gs232b"])
+def test_a_composite_holds_every_rounding_of_its_boxes(el_box: str) -> None:
+    """An attack pass: a SPID azimuth box beside an elevation box of tenths (or whole degrees)
+    was judged by the other box's rounding alone, and 10.9 (cut to 10 by the SPID, the edge of
+    a sector 350..10, which is inside) was accepted."""
+    spec = composite_spec(REGISTRY["rot1prog"], REGISTRY[el_box])  # one pulse a degree
+    assert spec.codec_factory().wire_target(10.9, 20.0)[0] == 10.0  # what the box is sent
+    aim = Pointing.of(spec, keep_out=((350, 10),))
+    with pytest.raises(Refused) as exc:
+        aim.judge(Target(10.9, 20.0), 100)
+    assert exc.value.code is RefusalCode.KEEP_OUT and "its boxes round each their way" in str(
+        exc.value.message
+    )
+    assert aim.judge(Target(11.0, 20.0), 100).az_deg == 11.0
 
 
 def test_keep_out_and_limits_hold_for_what_the_controller_is_really_sent() -> None:

@@ -234,5 +234,6 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         # safe side for the other
         whole_degrees=az.whole_degrees or el.whole_degrees,
         tenths=az.tenths or el.tenths,
+        cuts_down=az.cuts_down or el.cuts_down,
         hamlib_rot_type=HamlibRotType.AZEL,
     )

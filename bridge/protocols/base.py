@@ -346,6 +346,7 @@ class ModelSpec:
     # the controller takes whole degrees, rounded half up (False: finer, or learned at run time)
     whole_degrees: bool = False
     tenths: bool = False  # it takes tenths of a degree, rounded half up (``tenths``)
+    cuts_down: bool = False  # it cuts a value down to its resolution, learned from its replies
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)

@@ -237,6 +237,7 @@ def _spec(name: str, display: str, **kw: Any) -> ModelSpec:
         el_min_deg=-20.0,
         el_max_deg=210.0,
         az_wraps=False,
+        cuts_down=True,  # to its pulses per degree (one, at the coarsest)
         full_duplex=False,
         reply_timeout_s=frame_s + 0.3,
         noise_deg=0.0,
