@@ -471,8 +471,11 @@ class Connection:
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
         self._sub_filters.clear()  # before subscribing: the SUBACKs come after this returns
+        # ``hears`` from here (after the new connection's hook), before the SUBSCRIBE is queued:
+        # a stop-lane halt read as it goes holds, never not (a marker queued ahead of it is
+        # lost and sent again: a hold a few seconds long, the safe direction)
+        self._subscribing = True
         self._command_mid = self._subscribe(client, self._filters())
-        self._subscribing = True  # (after the new connection's hook: ``hears``)
         self._opened(client)
 
     def _on_connect_fail(self, client: paho.Client, userdata: Any) -> None:
