@@ -188,18 +188,25 @@ def test_parser_runs_nothing_that_is_unfinished() -> None:
     assert parser.feed(b"+P 1") == [] and not parser.idle
 
 
-def test_a_stop_where_a_number_is_awaited_is_a_stop_too() -> None:
-    """Rule 1's departure (an attack pass): ``P 200`` left short, then ``S``: rotctld takes the
-    S as the elevation and the stop is lost. Here the P fails as rotctld's does, then stops."""
-    assert summary(parse(b"P 200\nS\n\\set_pos\n\\stop\nM 2\nS\nC S S\n")) == [
-        ("set_pos", ("200", "S"), False, "\n"),
+@pytest.mark.parametrize("stop", ["S", "\\stop", "+S", ";S", "|S", "+\\stop", "\\stop;", "+;S"])
+def test_a_stop_where_a_number_is_awaited_is_a_stop_too(stop: str) -> None:
+    """Rule 1's departure (attack passes): ``P 200`` left short, then a stop: rotctld takes the
+    stop as the elevation and it is lost. Here it is carried out at once, and the P still
+    takes its arguments as rotctld does (refused when whole): a line runs nothing else."""
+    data = f"P 200\n{stop}\nP {stop} K\nM 2\n{stop}\nC S S\np\n".encode()
+    assert summary(parse(data)) == [
+        ("stop", (), False, "\n"),  # at once ...
+        ("set_pos", ("200", stop), False, "\n"),  # ... then the P, refused (not a number)
         ("stop", (), False, "\n"),
-        ("set_pos", ("\\stop", "\\stop"), False, "\n"),
+        ("set_pos", (stop, "K"), False, "\n"),  # the K is its argument, as rotctld reads it
         ("stop", (), False, "\n"),
-        ("move", ("2", "S"), False, "\n"),
-        ("stop", (), False, "\n"),
+        ("move", ("2", stop), False, "\n"),
         ("set_conf", ("S", "S"), False, "\n"),  # words, not numbers: read as rotctld reads them
+        ("get_pos", (), False, "\n"),
     ]
+    parser = RequestParser()
+    assert summary(parser.feed(b"P S ")) == [("stop", (), False, "\n")]  # not waiting for more
+    assert not parser.idle and summary(parser.feed(b"20\n"))[0][0] == "set_pos"
 
 
 def test_parser_survives_junk_and_drops_an_overlong_argument() -> None:
@@ -343,7 +350,7 @@ def test_a_stop_after_a_command_left_short_stops(station: StationFactory) -> Non
     c = st.connect()
     c.ask(b"P 300 0\n", b"RPRT 0\n")
     st.emu.wait_for(lambda s: s.is_moving, slow(10))
-    c.ask(b"P 200\nS\n", b"RPRT -1\nRPRT 0\n")  # the short P refused, the stop carried out
+    c.ask(b"P 200\nS\n", b"RPRT 0\nRPRT -1\n")  # the stop carried out, the short P refused
     st.emu.wait_for(lambda s: not s.is_moving, slow(10))
     assert st.emu.state().az_deg < 290  # stopped on its way, not arrived
 

@@ -11,10 +11,11 @@ Rules:
    as separator), then whitespace-separated arguments; CR and LF are plain whitespace, so a
    command still waiting for arguments takes them from the following lines. ``#`` comments out
    the rest of the line. ``q``/``Q`` closes the connection. One departure, towards the safe
-   side: a stop (``S``, ``\\stop``) read where a number is awaited (``P 200``, then ``S`` on
-   the next line) is that command's last argument, refused as rotctld refuses it, and then a
-   stop too, answered on its own: rotctld takes it as the argument alone, and the stop a
-   client typed after a command left short was lost.
+   side: an argument that would be a stop as a command (``S``, ``\\stop``, ``+S``, ``;S``, ...)
+   where a number is awaited (``P 200``, then ``S`` on the next line) is carried out as a stop
+   at once, and answered first; the command still takes it as its argument, as rotctld does,
+   and is refused when whole (so ``P S K`` stops and parks nothing). rotctld takes it as the
+   argument alone, and the stop a client typed after a command left short was lost.
 2. A command runs only once it is complete (its last argument followed by whitespace). What a
    client leaves unfinished when it disconnects is dropped: it never moves anything.
 3. Unknown commands get no reply at all (rotctld logs them on its own stderr and says nothing).

@@ -4,6 +4,7 @@ See the package docstring for the rules (1-3)."""
 from __future__ import annotations
 
 import logging
+import re
 import string
 from dataclasses import dataclass
 
@@ -15,7 +16,10 @@ _PREFIXES = frozenset(string.punctuation) - {"\\", "_", "#"}
 _NAME_CHARS = frozenset(string.ascii_letters + string.digits + "_")
 _MAX_NAME = 32
 _MAX_TOKEN = 64
-_STOP_WORDS = frozenset({"S", "\\stop"})  # rule 1: a stop where a number is awaited
+_PREFIXES_RE = "".join(re.escape(c) for c in sorted(_PREFIXES))
+# rule 1: an argument that would be a stop as a command (``S``, ``\stop``, with the prefixes a
+# command may have: ``+S``, ``;S``, ``+\stop``, ``\stop;``): no number begins so
+_STOP_ARG = re.compile(rf"\+?[{_PREFIXES_RE}]?(?:S|\\stop(?![A-Za-z0-9_]))")
 
 
 @dataclass(frozen=True)
@@ -85,11 +89,11 @@ class RequestParser:
         out: list[Request | Quit] = []
         for ch in data.decode("latin-1"):
             item = self._step(ch)
+            if self._stop_next:  # rule 1: a stop read as an argument, carried out at once
+                self._stop_next = False
+                out.append(Request(_BY_NAME["stop"]))
             if item is not None:
                 out.append(item)
-                if self._stop_next:  # rule 1: the stop word it was given, carried out too
-                    self._stop_next = False
-                    out.append(Request(_BY_NAME["stop"]))
         return out
 
     def _step(self, ch: str) -> Request | Quit | None:
@@ -160,11 +164,8 @@ class RequestParser:
             self._args.append(token)
             self._token = []
             assert self._command is not None
-            if self._command.numbers and token in _STOP_WORDS:  # rule 1
-                self._stop_next = True
-                missing = self._command.nargs - len(self._args)
-                self._args += [token] * missing  # (refused: not a number, as rotctld reads it)
-                return self._emit()
+            if self._command.numbers and _STOP_ARG.match(token):  # rule 1: a stop at once;
+                self._stop_next = True  # the command still takes its arguments as rotctld does
             if len(self._args) == self._command.nargs:
                 return self._emit()
         return None
