@@ -84,6 +84,7 @@ class Pointing:
     whole_degrees: bool = False
     tenths: bool = False
     cuts_down: bool = False
+    el_rounding: tuple[bool, bool, bool] | None = None  # a composite's elevation box's
     offset_deg: float = 0.0
     keep_out: tuple[tuple[float, float], ...] = ()
     presets: dict[str, tuple[float, float | None]] = field(default_factory=dict)
@@ -115,6 +116,7 @@ class Pointing:
             whole_degrees=spec.whole_degrees,
             tenths=spec.tenths,
             cuts_down=spec.cuts_down,
+            el_rounding=spec.el_rounding,
             offset_deg=offset_deg,
             keep_out=keep_out,
             presets=dict(presets or {}),
@@ -201,8 +203,9 @@ class Pointing:
                 raise Refused(
                     RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
                 )
-            if not self._sent_within(el, lo, hi):
-                raise Refused(RefusalCode.LIMITS, self._rounding(f"elevation {el:g}", el, lo, hi))
+            if not self._sent_within(el, lo, hi, el=True):
+                why = self._rounding(f"elevation {el:g}", el, lo, hi, el=True)
+                raise Refused(RefusalCode.LIMITS, why)
         return replace(target, az_deg=raw_az, true_az_deg=self._side_free(target.az_deg))
 
     def check_raw(self, target: Target) -> None:
@@ -225,7 +228,8 @@ class Pointing:
             el, lo, hi = target.el_deg, self.el_min_deg, self.el_max_deg
             if not self.has_elevation:
                 raise Refused(RefusalCode.UNSUPPORTED, f"{self.model_name} has no elevation axis")
-            if not math.isfinite(el) or not lo <= el <= hi or not self._sent_within(el, lo, hi):
+            sent = math.isfinite(el) and self._sent_within(el, lo, hi, el=True)
+            if not math.isfinite(el) or not lo <= el <= hi or not sent:
                 raise Refused(
                     RefusalCode.LIMITS, f"elevation {el:g} outside the limits {lo:g}..{hi:g}"
                 )
@@ -298,46 +302,49 @@ class Pointing:
             raise Refused(RefusalCode.LIMITS, self._rounding(shown, raw_deg, lo, hi))
         return raw_deg
 
-    def _sent(self, value: float) -> tuple[float, float]:
+    def _rounds(self, el: bool) -> tuple[bool, bool, bool]:
+        """(whole degrees, tenths, cut down) of the box that turns the axis (rule 4)."""
+        if el and self.el_rounding is not None:
+            return self.el_rounding
+        return self.whole_degrees, self.tenths, self.cuts_down
+
+    def _sent(self, value: float, el: bool = False) -> tuple[float, float]:
         """The lowest and highest value the controller can be sent for ``value`` (rule 4): the
         Rotor-EZ family and the SatEL round half up to whole degrees, the Easycomm family, the
-        RC2800, the RT-21 and the Combi-Track to tenths (a composite's two boxes: each way);
-        the SPID family cuts down to its resolution, learned only from its replies: one pulse
-        per degree at the coarsest. A composite's boxes may round two ways (an attack pass: a
-        SPID's cut was lost beside an elevation box of tenths): every way either may is held."""
-        sent = [value] if not (self.whole_degrees or self.tenths) else []
-        if self.whole_degrees:  # (the codecs' own rounding: ``half_up``)
-            sent.append(float(half_up(value, 1)))
-        if self.tenths:
-            sent.append(half_up(value, 10) / 10)
-        if self.cuts_down:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
-            sent += [float(math.floor(360.0 + value)) - 360.0, value]
-        return min(sent), max(sent)
+        RC2800, the RT-21 and the Combi-Track to tenths; the SPID family cuts down to its
+        resolution, learned only from its replies: one pulse per degree at the coarsest. A
+        composite's azimuth by its azimuth box, its elevation (``el``) by the other (an attack
+        pass: judged by both boxes' ways, a SPID's cut was lost beside a box of tenths, and a
+        box of tenths refused what only the other box would have rounded)."""
+        whole, tenths, cuts = self._rounds(el)
+        if whole:  # (the codecs' own rounding: ``half_up``)
+            r = float(half_up(value, 1))
+            return r, r
+        if tenths:
+            r = half_up(value, 10) / 10
+            return r, r
+        if cuts:  # the codec's cut at one pulse per degree, floor(360 + v) - 360
+            return float(math.floor(360.0 + value)) - 360.0, value
+        return value, value
 
-    def _resolution(self) -> str:
+    def _resolution(self, el: bool = False) -> str:
         """Why ``_sent`` moved a value, for the refusal's message."""
-        ways = [
-            way
-            for on, way in (
-                (self.whole_degrees, "takes whole degrees"),
-                (self.tenths, "takes tenths of a degree"),
-                (self.cuts_down, "may cut to whole degrees, its coarsest resolution"),
-            )
-            if on
-        ]
-        if len(ways) > 1:
-            return f"its boxes round each their way: one {' and one '.join(ways)}"
-        return f"it {ways[0]}" if ways else "it takes the value as it is"
+        whole, tenths, _cuts = self._rounds(el)
+        if whole:
+            return "it takes whole degrees"
+        if tenths:
+            return "it takes tenths of a degree"
+        return "it may cut to whole degrees, its coarsest resolution"
 
-    def _sent_within(self, value: float, lo: float, hi: float) -> bool:
-        low, high = self._sent(value)
+    def _sent_within(self, value: float, lo: float, hi: float, el: bool = False) -> bool:
+        low, high = self._sent(value, el)
         return lo <= low and high <= hi
 
-    def _rounding(self, shown: str, value: float, lo: float, hi: float) -> str:
-        low, high = self._sent(value)
+    def _rounding(self, shown: str, value: float, lo: float, hi: float, el: bool = False) -> str:
+        low, high = self._sent(value, el)
         sent = f"{low:g}" if low == high else f"as low as {low:g}"
         return (
-            f"{shown} becomes {sent} on the {self.model_name} ({self._resolution()}), "
+            f"{shown} becomes {sent} on the {self.model_name} ({self._resolution(el)}), "
             f"outside the limits {lo:g}..{hi:g}"
         )
 

@@ -160,10 +160,29 @@ def test_a_composite_holds_every_rounding_of_its_boxes(el_box: str) -> None:
     aim = Pointing.of(spec, keep_out=((350, 10),))
     with pytest.raises(Refused) as exc:
         aim.judge(Target(10.9, 20.0), 100)
-    assert exc.value.code is RefusalCode.KEEP_OUT and "its boxes round each their way" in str(
+    assert exc.value.code is RefusalCode.KEEP_OUT and "it may cut to whole degrees" in str(
         exc.value.message
     )
     assert aim.judge(Target(11.0, 20.0), 100).az_deg == 11.0
+
+
+def test_a_composite_judges_each_axis_by_the_box_that_turns_it() -> None:
+    """An attack pass: judged by both boxes' ways, an RT-21 azimuth box beside a SPID was
+    refused 10.5 next to a sector 350..10 (the RT-21 sends 10.5; the SPID never sees it), and
+    a GS-232B's whole degrees refused an RT-21 elevation box 20.3 with limits 20.3..90."""
+    rt21_spid = composite_spec(REGISTRY["rt21"], REGISTRY["rot1prog"])
+    aim = Pointing.of(rt21_spid, keep_out=((350, 10),))
+    assert aim.judge(Target(10.5, 20.0), 100).az_deg == 10.5
+    assert rt21_spid.codec_factory().wire_target(10.5, 20.0)[0] == 10.5
+    with pytest.raises(Refused):  # 10.04 goes out as 10.0, the sector's edge
+        aim.judge(Target(10.04, 20.0), 100)
+    gs_rt21 = composite_spec(REGISTRY["gs232b"], REGISTRY["rt21"])
+    assert (
+        Pointing.of(gs_rt21, el_limits=(20.3, 90.0)).judge(Target(100, 20.3), None).el_deg == 20.3
+    )
+    with pytest.raises(Refused) as exc:  # but 20.44 goes out as 20.4 (tenths, the RT-21's)
+        Pointing.of(gs_rt21, el_limits=(20.42, 90.0)).judge(Target(100, 20.44), None)
+    assert "becomes 20.4" in exc.value.message and "tenths" in exc.value.message
 
 
 def test_keep_out_and_limits_hold_for_what_the_controller_is_really_sent() -> None:

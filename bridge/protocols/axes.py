@@ -230,10 +230,10 @@ def _composite(az: ModelSpec, box: ModelSpec) -> ModelSpec:
         el_max_deg=el.el_max_deg,
         nominal_el_speed_deg_s=el.nominal_el_speed_deg_s,
         reports_while_moving=az.reports_while_moving and el.reports_while_moving,
-        # the judge's limits after rounding (pointing.py): each rounding either box makes, the
-        # safe side for the other
-        whole_degrees=az.whole_degrees or el.whole_degrees,
-        tenths=az.tenths or el.tenths,
-        cuts_down=az.cuts_down or el.cuts_down,
+        # the judge's limits after rounding (pointing.py rule 4): each axis by its own box
+        whole_degrees=az.whole_degrees,
+        tenths=az.tenths,
+        cuts_down=az.cuts_down,
+        el_rounding=(el.whole_degrees, el.tenths, el.cuts_down),
         hamlib_rot_type=HamlibRotType.AZEL,
     )

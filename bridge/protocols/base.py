@@ -347,6 +347,9 @@ class ModelSpec:
     whole_degrees: bool = False
     tenths: bool = False  # it takes tenths of a degree, rounded half up (``tenths``)
     cuts_down: bool = False  # it cuts a value down to its resolution, learned from its replies
+    # a composite's elevation box's (whole_degrees, tenths, cuts_down); None: as the three above,
+    # which are then the azimuth box's (pointing.py rule 4: each axis by the box that turns it)
+    el_rounding: tuple[bool, bool, bool] | None = None
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
