@@ -174,6 +174,10 @@ class RemoteConsoleRotator:
         return self.remote.last_halt_s
 
     @property
+    def halts(self) -> int:
+        return self.remote.halts
+
+    @property
     def commands_block(self) -> bool:
         # a command waits for the broker's acknowledgement (interfaces/mqtt/remote.py rule 7)
         return True
@@ -183,14 +187,16 @@ class RemoteConsoleRotator:
         return self.remote.status  # rule 3
 
     # -- commands (rule 1) ---------------------------------------------------------------------
-    def submit(self, command: Command, described: str | None = None) -> None:
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None:
         """Rule 1: the remote's rotator sends it (remote/rotator.py rule 3); rule 2: what is
         refused here is told to the pages alone."""
         try:
             if isinstance(command, TrackBody) and not command.off and not self.can_track:
                 message = "the station's rotator cannot track (its R/info says so)"  # rule 5
                 raise Refused(RefusalCode.UNSUPPORTED, message)
-            self.remote.submit(command, described)
+            self.remote.submit(command, described, since=since)
         except Refused as exc:
             self.report_refusal(exc.message, described or describe_command(command))
             raise

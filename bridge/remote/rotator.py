@@ -97,6 +97,7 @@ STATION_SILENT = (
     f"the station's bridge is not heard (no heartbeat within {SILENT_S:g} s): nothing sent"
 )
 LOCKED = "the station's safety lock is ON: nothing turns until it is switched off"
+HALTED_SINCE = "a STOP or lock ON went out after it was asked: not sent (send it again)"
 
 
 class Sender(Protocol):
@@ -186,8 +187,9 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
-        # the last stop sent (monotonic; interfaces/web/port.py rule 2)
+        # the last stop sent (monotonic; interfaces/web/port.py rule 2), and how many (rule 2a)
         self.last_halt_s = -math.inf
+        self.halts = 0
         self._clock = clock
         self._wall = wall
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -233,15 +235,19 @@ class RemoteRotator:
             return RotatorStatus(self.id, connected=self._link.up)  # rule 1: gone quiet
         return status
 
-    def submit(self, command: Command, described: str | None = None) -> None:
-        """Rules 3 to 5: the command on the station's own topic for it, or Refused."""
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None:
+        """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
+        the ``halts`` count read when it was asked (interfaces/web/port.py rule 2a): a move is
+        refused if a stop or lock ON went out since."""
         try:
-            self._send(command)
+            self._send(command, since)
         except Refused as exc:
             self.report_refusal(exc.message, described)
             raise
 
-    def _send(self, command: Command) -> None:
+    def _send(self, command: Command, since: int | None = None) -> None:
         """Rule 3: what never moves goes whatever the remote thinks of the station; rule 4:
         a place goes as the place, park as park."""
         t = self.topics
@@ -256,7 +262,7 @@ class RemoteRotator:
             case TrackBody() if command.off:
                 self.publish(t.feature(tracking.COMMAND), command.name)
             case Target() if command.az_deg is not None:
-                self.check_move()
+                self.check_move(since)
                 self.pointing.judge(command, None)  # early word; the station judges again
                 if command.park:  # the station's park position, so that it shows "parked"
                     self.publish(t.park, "park")
@@ -266,29 +272,29 @@ class RemoteRotator:
                         doc["elevation"] = command.el_deg
                     self._send_json(t.target, doc)
             case Park():  # rule 3 first: the link's word, then the station's park position
-                self.check_move()
-                self._send(Target(*self.pointing.parking(), command.source, park=True))
+                self.check_move(since)
+                self._send(Target(*self.pointing.parking(), command.source, park=True), since)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 place = place_doc(lat, lon, command.locator)
                 if command.long_path:
                     place["path"] = "long"
-                self.check_move()
+                self.check_move(since)
                 self._send_json(t.target, place)
             case TakePath():
-                self.check_move()
+                self.check_move(since)
                 self._send_json(t.target, {"path": "long" if command.long_path else "short"})
             case GoToPreset():
-                self.check_move()
+                self.check_move(since)
                 self.publish(t.preset, command.name)
             case Nudge():
                 step = {"azimuth": command.d_az_deg}
                 if command.d_el_deg is not None:
                     step["elevation"] = command.d_el_deg
-                self.check_move()
+                self.check_move(since)
                 self._send_json(t.nudge, step)
             case TrackBody() if command.tle is None:
-                self.check_move()
+                self.check_move(since)
                 self.publish(t.feature(tracking.COMMAND), command.name)
             case _:
                 raise Refused(
@@ -297,9 +303,12 @@ class RemoteRotator:
                     "targets, stops, the lock, presets, park, nudges, places and tracking",
                 )
 
-    def check_move(self) -> None:
+    def check_move(self, since: int | None = None) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);
-        rule 6: nor while the station is locked or another operator holds its control lease."""
+        rule 6: nor while the station is locked or another operator holds its control lease;
+        nor (``since``) after a stop or lock ON went out since it was asked."""
+        if since is not None and since != self.halts:
+            raise Refused(RefusalCode.STALE, HALTED_SINCE)
         away = self.away() if self._link.up else None
         if away is not None:
             raise Refused(RefusalCode.OFFLINE, away)
@@ -316,8 +325,9 @@ class RemoteRotator:
 
     def halted(self) -> None:
         """A stop or a lock ON has gone out: ``last_halt_s`` is now (interfaces/web/port.py rule
-        2)."""
+        2), and ``halts`` counts it (rule 2a)."""
         self.last_halt_s = self._clock()
+        self.halts += 1
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""

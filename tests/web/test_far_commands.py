@@ -29,6 +29,7 @@ class FarRotator:
     pointing = Pointing.of(EZ)
     can_track = False
     last_halt_s = 0.0
+    halts = 0
     commands_block = True
 
     def __init__(self, rotator_id: str = "far") -> None:
@@ -37,7 +38,10 @@ class FarRotator:
         self.waiting = threading.Event()
         self.carried: list[str] = []
 
-    def submit(self, command: Command, described: str | None = None) -> None:
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None:
+        assert since is None  # a far rotator's order is the far queue's (server.py rule 5)
         self.waiting.set()
         assert self.link.wait(slow(30)), "the test never let the command through"
         self.carried.append("stop" if isinstance(command, Stop) else f"target {command.az_deg:g}")

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import http.client
 import json
+import threading
 from collections.abc import Iterator
 from typing import Any
 
 import aiohttp
 import pytest
 
+from bridge.core.model import Source, Stop
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.web import live
 from tests.support.console import ConsoleClient, EventStream, run_async, web_section
@@ -250,3 +252,30 @@ def test_a_stop_over_the_live_feed_and_a_bad_body_are_audited_with_the_browsers_
             "web",
             "127.0.0.1",
         )
+
+
+def test_a_stop_put_between_the_consoles_look_and_its_command_refuses_the_command(
+    console: tuple[Rig, ConsoleClient], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Port.py rule 2a, an attack pass: the console looked whether a STOP had come (``Order.
+    stale``), then submitted; a STOP another front end's thread put in between was overtaken,
+    and the target went out after it. The halt count read with the look refuses it now."""
+    rig, client = console
+    assert rig.app is not None and rig.app.web is not None
+    (rot,) = rig.app.rotators
+    order = rig.app.web._order
+    look = order.stale
+
+    def then_a_stop(*args: Any) -> str | None:
+        said = look(*args)
+        stop = threading.Thread(target=lambda: rot.submit(Stop(Source.ROTCTLD), "rotctld S"))
+        stop.start()  # rotctld's thread, between the look and the command's put
+        stop.join(slow(10))
+        return said
+
+    monkeypatch.setattr(order, "stale", then_a_stop)
+    answer = client.command("hf", command="target", az=200)
+    assert answer.status == 409 and answer.doc["code"] == "stale", answer
+    monkeypatch.undo()
+    frames = [f.data for f in rig.emu.frames(*BEARING_OUTCOMES)]
+    assert frames == []  # no bearing reached the controller

@@ -299,7 +299,10 @@ def _no_constant(name: str) -> object:
     raise ValueError(f"{name} is not a number here")
 
 
-def carry_out(rot: ConsoleRotator, cmd: WebCommand, peer: str | None = None) -> None:
+def carry_out(
+    rot: ConsoleRotator, cmd: WebCommand, peer: str | None = None, since: int | None = None
+) -> None:
     """Rule 2: raises Refused (already reported) when the judge says no; ``peer``: the
-    browser's address (rule 4)."""
-    rot.submit(cmd.command_for(Origin(Source.WEB, None, peer)), cmd.described())
+    browser's address (rule 4); ``since``: the rotator's halt count read before rule 5's look
+    (port.py rule 2a)."""
+    rot.submit(cmd.command_for(Origin(Source.WEB, None, peer)), cmd.described(), since=since)

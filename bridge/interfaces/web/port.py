@@ -8,6 +8,9 @@ Rules:
 2. ``last_halt_s`` is when the rotator last carried out (or sent on) a STOP or lock ON, on the
    monotonic clock (commands.py rule 5): from any interface on the station; on the remote,
    from any of the remote's own (a STOP given at the station is not seen there).
+2a. ``halts`` counts the STOPs and lock ONs the rotator carried out (sent on): read before the
+   console judges a command stale, and handed to ``submit`` (``since``), it refuses the command
+   if one came in between, on any thread (runtime/rotator.py; the remote counts its own).
 3. ``report_refusal`` shows a refusal the console found itself (a bad body, a stale command)
    where the rotator's own refusals go.
 4. Every command carries who sent it (``origin``: ``web`` and the browser's address, the audit
@@ -19,6 +22,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
+from bridge.core.model import Command
 from bridge.front import FrontRotator
 from bridge.pointing import Pointing
 
@@ -34,6 +38,11 @@ class ConsoleRotator(FrontRotator, Protocol):
     def can_track(self) -> bool: ...
     @property
     def last_halt_s(self) -> float: ...
+    @property
+    def halts(self) -> int: ...
+    def submit(
+        self, command: Command, described: str | None = None, *, since: int | None = None
+    ) -> None: ...
     @property
     def commands_block(self) -> bool:
         """Carrying out a command may wait for a round trip far away (the remote's rotator

@@ -443,11 +443,14 @@ class WebConsole:
         halt = cmd.halts()
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
+        far = self._far.get(rot.id)
+        # rule 5's look and the halt count it goes with (port.py rule 2a): a STOP another
+        # thread puts after the look refuses the command at the judge (a far one: ``_far_move``)
+        since = None if far is not None and rot.commands_block else rot.halts
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
-        far = self._far.get(rot.id)
         busy = self._far_moves.get(rot.id, 0) >= FAR_MOVES
         if far is not None and rot.commands_block and not halt and busy:  # rule 5: a bound
             why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
@@ -465,7 +468,7 @@ class WebConsole:
                     done.add_done_callback(lambda _: self._far_moved(rot.id))
                 await asyncio.wrap_future(done)
             else:
-                carry_out(rot, cmd, request.remote)
+                carry_out(rot, cmd, request.remote, since)
         except Refused as exc:
             return _json({"error": str(exc), "code": exc.code.value}, 409)
         if halt:
