@@ -19,6 +19,7 @@ from bridge.app import worker_config
 from bridge.core.model import ErrorEvent, Lock, MotionState
 from bridge.emulators import EmulatedPort
 from bridge.interfaces.rotctld import QUIT, Request, RequestParser, RotctldServer
+from bridge.interfaces.rotctld.parser import OVERLONG
 from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.settings import RotatorSettings, Settings
@@ -209,12 +210,58 @@ def test_a_stop_where_a_number_is_awaited_is_a_stop_too(stop: str) -> None:
     assert not parser.idle and summary(parser.feed(b"20\n"))[0][0] == "set_pos"
 
 
-def test_parser_survives_junk_and_drops_an_overlong_argument() -> None:
+def test_parser_survives_junk_and_keeps_an_overlong_argument_as_one() -> None:
     junk = bytes(range(256)).replace(b"q", b"").replace(b"Q", b"")
     parser = RequestParser()
     parser.feed(junk + b"\n")  # whatever junk parses into, the stream stays usable
     parser.feed(b"\n" * 3)
-    assert summary(parser.feed(b"P " + b"9" * 500 + b" 0\np\n")) == [("get_pos", (), False, "\n")]
+    assert summary(parser.feed(b"P " + b"9" * 500 + b" 0\np\n")) == [
+        ("set_pos", (OVERLONG, "0"), False, "\n"),  # refused, as rotctld refuses it
+        ("get_pos", (), False, "\n"),
+    ]
+
+
+def test_an_overlong_argument_is_one_and_the_next_line_is_still_the_commands() -> None:
+    """An attack pass: the command was dropped with its line, and the next line, which rotctld
+    takes as the command's last argument, ran as commands of its own (a park, a set_pos)."""
+    assert summary(parse(b"P\n" + b"1" * 100 + b"\nK\n")) == [
+        ("set_pos", (OVERLONG, "K"), False, "\n")
+    ]
+    assert summary(parse(b"P\n" + b"1" * 100 + b"\nP 20 30\n")) == [
+        ("set_pos", (OVERLONG, "P"), False, "\n")  # then "20" and "30": no commands
+    ]
+    stopped = summary(parse(b"P 10\n" + b"S" * 70 + b"\n"))  # begins as a stop: stops
+    assert stopped == [("stop", (), False, "\n"), ("set_pos", ("10", OVERLONG), False, "\n")]
+
+
+@pytest.mark.parametrize("stop", [";;S", ";+S", "++;S", "ZS", "pS", "\\stop+"])
+def test_every_form_a_stop_takes_as_a_command_stops_as_an_argument(stop: str) -> None:
+    """Rule 1 (an attack pass): the argument is read as commands by a parser of its own."""
+    items = summary(parse(f"P 200\n{stop}\n".encode()))
+    assert items == [("stop", (), False, "\n"), ("set_pos", ("200", stop), False, "\n")]
+
+
+def test_a_stop_argument_is_carried_out_before_its_token_ends() -> None:
+    """Rule 1: a bare ``S`` runs at once as a command; as an argument too (an attack pass)."""
+    assert summary(RequestParser().feed(b"P 200\nS")) == [("stop", (), False, "\n")]
+
+
+def test_rotctlds_other_commands_keep_their_arguments() -> None:
+    """Rule 3 (an attack pass): the bridge knew none of these, and their arguments ran as
+    commands (``w P 20 30`` set the position; ``\\pause K`` parked)."""
+    data = b"w P 20 30\n\\pause K\nD K K K K\nL K 1 2\nV K 1\nv K\nU K 1\nx K\nB 1 2 3 4\n"
+    assert [i[0] for i in summary(parse(data))] == [
+        "send_cmd",
+        "pause",
+        "dms2dec",
+        "lonlat2loc",
+        "set_level",
+        "get_level",
+        "set_func",
+        "get_parm",
+        "qrb",
+    ]
+    assert summary(parse(b"w P 20 30\n"))[0][1] == ("P 20 30",)  # the rest of the line
 
 
 # -- get_pos ------------------------------------------------------------------------------------
@@ -353,6 +400,18 @@ def test_a_stop_after_a_command_left_short_stops(station: StationFactory) -> Non
     c.ask(b"P 200\nS\n", b"RPRT 0\nRPRT -1\n")  # the stop carried out, the short P refused
     st.emu.wait_for(lambda s: not s.is_moving, slow(10))
     assert st.emu.state().az_deg < 290  # stopped on its way, not arrived
+
+
+def test_rotctlds_other_commands_are_not_available_and_move_nothing(
+    station: StationFactory,
+) -> None:
+    st = station()
+    c = st.connect()
+    c.ask(b"w P 200 0\n", b"RPRT -11\n")
+    c.ask(b"\\pause K\n", b"RPRT -11\n")
+    c.ask(b"V SPEED 5\n", b"RPRT -11\n")  # a word beginning with S is no stop here
+    c.ask(b"p\n", b"123.00\n0.00\n")
+    assert st.bearing_frames() == []
 
 
 def test_park_without_a_park_position_is_not_available(station: StationFactory) -> None:

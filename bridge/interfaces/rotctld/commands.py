@@ -68,7 +68,7 @@ class RotctldCommands:
         self.names_side = False
 
     def execute(self, request: Request) -> bytes:
-        handler = getattr(self, "_" + request.command.name)
+        handler = getattr(self, "_" + request.command.name, self._not_available)
         try:
             code, body = handler(request)
         except Exception:
@@ -128,6 +128,11 @@ class RotctldCommands:
         return -RIG_ENAVAIL, ""
 
     def _set_conf(self, req: Request) -> tuple[int, str]:
+        return -RIG_ENAVAIL, ""
+
+    def _not_available(self, req: Request) -> tuple[int, str]:
+        """Package rule 3: a command of rotctld's the bridge does not carry out (levels,
+        functions, parameters, send_cmd, the locator and great-circle helpers, pause)."""
         return -RIG_ENAVAIL, ""
 
     def _get_status(self, req: Request) -> tuple[int, str]:

@@ -4,7 +4,6 @@ See the package docstring for the rules (1-3)."""
 from __future__ import annotations
 
 import logging
-import re
 import string
 from dataclasses import dataclass
 
@@ -16,10 +15,7 @@ _PREFIXES = frozenset(string.punctuation) - {"\\", "_", "#"}
 _NAME_CHARS = frozenset(string.ascii_letters + string.digits + "_")
 _MAX_NAME = 32
 _MAX_TOKEN = 64
-_PREFIXES_RE = "".join(re.escape(c) for c in sorted(_PREFIXES))
-# rule 1: an argument that would be a stop as a command (``S``, ``\stop``, with the prefixes a
-# command may have: ``+S``, ``;S``, ``+\stop``, ``\stop;``): no number begins so
-_STOP_ARG = re.compile(rf"\+?[{_PREFIXES_RE}]?(?:S|\\stop(?![A-Za-z0-9_]))")
+OVERLONG = "(overlong)"  # an argument too long to be one: kept as this, refused (rule 1)
 
 
 @dataclass(frozen=True)
@@ -29,6 +25,7 @@ class CommandDef:
     nargs: int
     returns_values: bool  # success prints values only (no "RPRT 0") in the terse protocol
     numbers: bool = True  # its arguments are numbers (set_conf's are words)
+    line: bool = False  # its one argument is the rest of the line (send_cmd)
 
 
 COMMANDS: tuple[CommandDef, ...] = (
@@ -43,6 +40,25 @@ COMMANDS: tuple[CommandDef, ...] = (
     CommandDef("_", "get_info", 0, True),
     CommandDef("1", "dump_caps", 0, False),
     CommandDef(None, "dump_state", 0, True),
+    # rule 3: rotctld's commands the bridge does not carry out, read as rotctld reads them (their
+    # arguments are theirs, never commands of their own) and answered "not available"
+    CommandDef("V", "set_level", 2, False, numbers=False),
+    CommandDef("v", "get_level", 1, True, numbers=False),
+    CommandDef("U", "set_func", 2, False, numbers=False),
+    CommandDef("u", "get_func", 1, True, numbers=False),
+    CommandDef("X", "set_parm", 2, False, numbers=False),
+    CommandDef("x", "get_parm", 1, True, numbers=False),
+    CommandDef("w", "send_cmd", 1, True, numbers=False, line=True),
+    CommandDef("L", "lonlat2loc", 3, True),
+    CommandDef("l", "loc2lonlat", 1, True, numbers=False),
+    CommandDef("D", "dms2dec", 4, True),
+    CommandDef("d", "dec2dms", 1, True),
+    CommandDef("E", "dmmm2dec", 3, True),
+    CommandDef("e", "dec2dmmm", 1, True),
+    CommandDef("B", "qrb", 4, True),
+    CommandDef("A", "a_sp2a_lp", 1, True),
+    CommandDef("a", "d_sp2d_lp", 1, True),
+    CommandDef(None, "pause", 1, False),
 )
 _BY_SHORT = {c.short: c for c in COMMANDS if c.short is not None}
 _BY_NAME = {c.name: c for c in COMMANDS}
@@ -69,6 +85,8 @@ class RequestParser:
     def __init__(self) -> None:
         self._clear()
         self._stop_next = False
+        self._sub: RequestParser | None = None  # rule 1: the argument, read as commands
+        self._sub_stopped = False
 
     def _clear(self) -> None:
         self._state = "command"  # command | name | args | comment
@@ -95,6 +113,16 @@ class RequestParser:
             if item is not None:
                 out.append(item)
         return out
+
+    def _stops(self, ch: str) -> bool:
+        """Rule 1: whether the argument being read, read as commands up to ``ch``, has just
+        made a stop (a parser of its own reads it: ``S``, ``+S``, ``;;S``, ``pS``, ``\\stop;``
+        all stop as commands). Once per argument, over its first _MAX_TOKEN characters."""
+        if self._sub is None or self._sub_stopped:
+            return False
+        made = self._sub.feed(ch.encode("latin-1"))
+        self._sub_stopped = any(isinstance(r, Request) and r.command.name == "stop" for r in made)
+        return self._sub_stopped
 
     def _step(self, ch: str) -> Request | Quit | None:
         if self._state == "comment":
@@ -153,20 +181,32 @@ class RequestParser:
         return None
 
     def _arg_char(self, ch: str) -> Request | None:
+        command = self._command
+        assert command is not None
+        if command.line:  # send_cmd: the rest of the line, whatever it holds (rule 3)
+            if ch not in "\r\n":
+                if len(self._token) < _MAX_TOKEN:
+                    self._token.append(ch)
+                return None
+            self._args.append("".join(self._token).strip())
+            return self._emit()
         if ch not in _WHITESPACE:
-            self._token.append(ch)
-            if len(self._token) > _MAX_TOKEN:  # nonsense, not a number: drop the line
-                self._clear()
-                self._state = "comment"
+            if not self._token and command.numbers:  # rule 1: read as commands too
+                self._sub, self._sub_stopped = RequestParser(), False
+            if len(self._token) < _MAX_TOKEN:
+                self._token.append(ch)
+                if self._stops(ch):  # a stop at once; the command still takes its
+                    self._stop_next = True  # arguments as rotctld does
+            elif self._token[-1] != OVERLONG:  # no number: kept as one argument, refused
+                self._token.append(OVERLONG)
             return None
         if self._token:
-            token = "".join(self._token)
-            self._args.append(token)
-            self._token = []
-            assert self._command is not None
-            if self._command.numbers and _STOP_ARG.match(token):  # rule 1: a stop at once;
-                self._stop_next = True  # the command still takes its arguments as rotctld does
-            if len(self._args) == self._command.nargs:
+            if self._stops(" "):  # (a name such as ``\\stop`` ends with the token)
+                self._stop_next = True
+            overlong = self._token[-1] == OVERLONG
+            self._args.append(OVERLONG if overlong else "".join(self._token))
+            self._token, self._sub = [], None
+            if len(self._args) == command.nargs:
                 return self._emit()
         return None
 
