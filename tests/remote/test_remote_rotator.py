@@ -152,6 +152,29 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
     assert console.last_halt_s == 200.0
 
 
+def test_a_move_asked_before_a_stop_that_went_out_is_not_sent() -> None:
+    """interfaces/web/port.py rule 2a on the remote: the halt count read when a move was asked
+    refuses it once a stop or lock ON went out since; a stop itself is never refused so."""
+    link = Link()
+    remote = rotator(link, FakeClock(100.0), park="[180, null]")
+    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
+    asked = console.halts
+    console.submit(Stop(Source.WEB))  # another page's STOP goes out first
+    assert console.halts == asked + 1
+    with pytest.raises(Refused) as caught:
+        console.submit(Target(200.0, None, Source.WEB), "console target 200", since=asked)
+    assert caught.value.code is RefusalCode.STALE
+    with pytest.raises(Refused):
+        remote.submit(Park(source=Source.WEB), "console park", since=asked)
+    console.submit(Stop(Source.WEB), since=asked)  # never refused
+    console.submit(Target(200.0, None, Source.WEB), "console target 200", since=console.halts)
+    assert link.sent == [
+        ("rotor/tower/stop", "stop"),
+        ("rotor/tower/stop", "stop"),
+        ("rotor/tower/target", '{"azimuth":200.0}'),
+    ]
+
+
 def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:
     """docs/remote.md: the station's target topic takes an azimuth always; Easycomm's ``EL30``
     alone cannot be said there."""
