@@ -11,12 +11,17 @@ import threading
 import time
 from collections.abc import Iterator
 
+import paho.mqtt.client as paho
 import pytest
+from paho.mqtt.packettypes import PacketTypes
+from paho.mqtt.properties import Properties
 
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from bridge.interfaces.mqtt.heartbeat import parse_beat
+from bridge.interfaces.mqtt.remote import RemoteLink
 from bridge.remote.run import Remote
 from bridge.remote.settings import RemoteSettings
+from bridge.settings import MqttSettings
 from tests.support import Probe, wait_until
 from tests.support.mosquitto import free_port
 from tests.support.remote import ask
@@ -141,3 +146,28 @@ def test_the_station_bridge_beats_its_clock_not_retained(station: Rig, probe: Pr
     )
     assert not first.retain and not second.retain
     assert parse_beat(first.payload) < parse_beat(second.payload)
+
+
+def test_halts_unacknowledged_when_the_link_dropped_go_before_those_kept_after() -> None:
+    """interfaces/mqtt/remote.py rule 6 (a full run on a busy machine found it): the stop sat
+    unacknowledged when the connection dropped; a lock ON asked while it was down was kept at
+    once; the close, handled after that, added the stop behind it, and the station got the
+    lock first. Nothing decides it by a clock: the stop was sent first, and goes first."""
+    link = RemoteLink(
+        MqttSettings(host="127.0.0.1", port=1),
+        "remote-test",
+        [],
+        lambda t, p, r: None,
+        last_word=lambda topic, payload: True,
+    )
+    props = Properties(PacketTypes.PUBLISH)
+    unacknowledged = paho.MQTTMessage(mid=7, topic=b"rotor/tower/stop")
+    unacknowledged.payload, unacknowledged.properties = b"stop", props
+    link._client.drop_out_messages = lambda: [unacknowledged]  # type: ignore[method-assign]
+    with link._send_lock:
+        link._keep("rotor/tower/lock", b"ON", props)  # asked while down: kept at once
+        link._forget_unsent()  # the close, handled after it
+    assert [(t, p) for t, p, _ in link._held] == [
+        ("rotor/tower/stop", b"stop"),
+        ("rotor/tower/lock", b"ON"),
+    ]

@@ -241,12 +241,14 @@ class RemoteLink(Connection):
 
     def _forget_unsent(self, refused_mid: int | None = None) -> None:
         """Rules 3 and 6: paho's queue of unacknowledged messages emptied, the last words among
-        them held for the next connection (caller holds _send_lock)."""
-        dropped = 0
+        them held for the next connection (caller holds _send_lock), ahead of any kept since
+        the connection went down: they were sent before those were asked (the close can be
+        handled after a halt asked meanwhile was kept)."""
+        dropped, unacknowledged = 0, []
         for m in self._client.drop_out_messages():  # paho 2.2's own, as client.py uses
             payload, props = bytes(m.payload), m.properties  # send gave it its properties
             if m.mid != refused_mid and props is not None and self._last_word(m.topic, payload):
-                self._held.append((m.topic, payload, props))
+                unacknowledged.append((m.topic, payload, props))
                 log.warning(
                     "%s: not acknowledged by the broker before the connection dropped: it may "
                     "not have reached the station; sent again on the next connection",
@@ -254,6 +256,7 @@ class RemoteLink(Connection):
                 )
             else:
                 dropped += 1
+        self._held[:0] = unacknowledged
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
