@@ -166,6 +166,7 @@ def test_halts_unacknowledged_when_the_link_dropped_go_before_those_kept_after()
     link._client.drop_out_messages = lambda: [unacknowledged]  # type: ignore[method-assign]
     with link._send_lock:
         link._keep("rotor/tower/lock", b"ON", props)  # asked while down: kept at once
+        link._keep("rotor/tower/stop", b"stop", props)  # the same stop pressed again
         link._forget_unsent()  # the close, handled after it
     assert [(t, p) for t, p, _ in link._held] == [
         ("rotor/tower/stop", b"stop"),

@@ -256,7 +256,9 @@ class RemoteLink(Connection):
                 )
             else:
                 dropped += 1
-        self._held[:0] = unacknowledged
+        again = {(topic, payload) for topic, payload, _ in unacknowledged}  # (once, however
+        kept = [h for h in self._held if (h[0], h[1]) not in again]  # often it is pressed)
+        self._held = unacknowledged + kept
         if dropped:
             log.warning(
                 "%d command(s) not acknowledged by the broker dropped, never resent", dropped
