@@ -202,7 +202,9 @@ def test_a_stop_where_a_number_is_awaited_is_a_stop_too(stop: str) -> None:
         ("set_pos", (stop, "K"), False, "\n"),  # the K is its argument, as rotctld reads it
         ("stop", (), False, "\n"),
         ("move", ("2", stop), False, "\n"),
-        ("set_conf", ("S", "S"), False, "\n"),  # words, not numbers: read as rotctld reads them
+        ("stop", (), False, "\n"),  # words: a word that is a stop and nothing else stops
+        ("stop", (), False, "\n"),
+        ("set_conf", ("S", "S"), False, "\n"),
         ("get_pos", (), False, "\n"),
     ]
     parser = RequestParser()
@@ -244,6 +246,38 @@ def test_every_form_a_stop_takes_as_a_command_stops_as_an_argument(stop: str) ->
 def test_a_stop_argument_is_carried_out_before_its_token_ends() -> None:
     """Rule 1: a bare ``S`` runs at once as a command; as an argument too (an attack pass)."""
     assert summary(RequestParser().feed(b"P 200\nS")) == [("stop", (), False, "\n")]
+
+
+def test_send_cmd_takes_its_line_as_rotctld_reads_it() -> None:
+    """Rule 3 (an attack pass): a bare ``w`` line, or one ended by CR, let the next line run
+    (a set_pos, a park); rotctld reads to LF, and again when the line had nothing on it."""
+    assert summary(parse(b"w\nP 20 30\n")) == [("send_cmd", ("P 20 30",), False, "\n")]
+    assert summary(parse(b"w abc\rK\n")) == [("send_cmd", ("abc\rK",), False, "\n")]
+    assert summary(parse(b"\\send_cmd \r\nK\n")) == [("send_cmd", ("K",), False, "\n")]
+    assert summary(parse(b"w\nS\n")) == [  # rule 1: a line that is a stop stops
+        ("stop", (), False, "\n"),
+        ("send_cmd", ("S",), False, "\n"),
+    ]
+
+
+def test_a_first_argument_asking_what_a_command_takes_is_its_last() -> None:
+    """As rotctld (an attack pass): ``V ? S`` is set_level ``?``, then a stop."""
+    assert summary(parse(b"V ? S\nP ?\nV SPEED\nS\n")) == [
+        ("set_level", ("?", ""), False, "\n"),
+        ("stop", (), False, "\n"),
+        ("set_pos", ("?", ""), False, "\n"),
+        ("stop", (), False, "\n"),  # rule 1: a stop where a word is awaited
+        ("set_level", ("SPEED", "S"), False, "\n"),
+    ]
+
+
+def test_an_argument_is_read_as_commands_one_level_deep() -> None:
+    """Rule 1 (an attack pass: nested readers made a line of P's 20 times the cost of one of
+    numbers); ``PS`` as a command is a P whose argument is S: no stop, here as in rotctld."""
+    assert summary(parse(b"P 1 " + b"P" * 64 + b"\n")) == [
+        ("set_pos", ("1", "P" * 64), False, "\n")
+    ]
+    assert summary(parse(b"P 1 PS\n")) == [("set_pos", ("1", "PS"), False, "\n")]
 
 
 def test_rotctlds_other_commands_keep_their_arguments() -> None:

@@ -13,19 +13,22 @@ Rules:
    the rest of the line. ``q``/``Q`` closes the connection. One departure, towards the safe
    side: an argument that would be a stop as a command (``S``, ``\\stop``, ``+S``, ``;S``, ...)
    where a number is awaited (``P 200``, then ``S`` on the next line) is carried out as a stop
-   at once (an argument read as commands by a parser of its own: ``pS`` and ``;;S`` stop too),
-   and answered first; the command still takes it as its argument, as rotctld does, and is
+   at once (an argument read as commands by a parser of its own, one level deep: ``pS`` and
+   ``;;S`` stop too; where a word is awaited, a word that is a stop and nothing else), and
+   answered first; the command still takes it as its argument, as rotctld does, and is
    refused when whole (so ``P S K`` stops and parks nothing): rotctld takes it as the argument
    alone, and the stop a client typed after a command left short was lost. An argument longer
    than any number is kept as one, and refused, as rotctld would (not dropped with its line:
-   the next line then ran as commands).
+   the next line then ran as commands). As rotctld, a first argument beginning with ``?``
+   (asking what the command takes) is the command's last.
 2. A command runs only once it is complete (its last argument followed by whitespace). What a
    client leaves unfinished when it disconnects is dropped: it never moves anything.
 3. Unknown commands get no reply at all (rotctld logs them on its own stderr and says nothing).
    rotctld's commands the bridge does not carry out (``V``/``v`` levels, ``U``/``u``, ``X``/``x``,
    ``w`` send_cmd, the locator and great-circle helpers, ``\\pause``) are read as rotctld reads
    them and answered "not available": their arguments are theirs (``send_cmd`` takes the rest
-   of the line), never commands of their own (``w P 20 30`` once turned the rotor).
+   of the line up to LF, the next line if it has nothing on it, as rotctld's fgets), never
+   commands of their own (``w P 20 30`` once turned the rotor).
 4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
 5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not
    currently have is an error code, never the last value seen.

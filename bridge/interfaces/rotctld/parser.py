@@ -4,6 +4,7 @@ See the package docstring for the rules (1-3)."""
 from __future__ import annotations
 
 import logging
+import re
 import string
 from dataclasses import dataclass
 
@@ -16,6 +17,10 @@ _NAME_CHARS = frozenset(string.ascii_letters + string.digits + "_")
 _MAX_NAME = 32
 _MAX_TOKEN = 64
 OVERLONG = "(overlong)"  # an argument too long to be one: kept as this, refused (rule 1)
+_PREFIXES_RE = "".join(re.escape(c) for c in sorted(_PREFIXES))
+# rule 1: a word that is a stop and nothing else, as a command would be (``S``, ``+S``, ``;S``,
+# ``\stop``, ``\stop;``): where a word is awaited (a level's name, send_cmd's line)
+_STOP_WORD = re.compile(rf"\+?[{_PREFIXES_RE}]?(?:S|\\stop[^A-Za-z0-9_]?)")
 
 
 @dataclass(frozen=True)
@@ -82,8 +87,9 @@ QUIT = Quit()
 class RequestParser:
     """Sans-IO: bytes in, complete requests out (rules 1-3)."""
 
-    def __init__(self) -> None:
+    def __init__(self, watch: bool = True) -> None:
         self._clear()
+        self._watch = watch  # rule 1 (off in the parser that reads an argument as commands)
         self._stop_next = False
         self._sub: RequestParser | None = None  # rule 1: the argument, read as commands
         self._sub_stopped = False
@@ -116,8 +122,9 @@ class RequestParser:
 
     def _stops(self, ch: str) -> bool:
         """Rule 1: whether the argument being read, read as commands up to ``ch``, has just
-        made a stop (a parser of its own reads it: ``S``, ``+S``, ``;;S``, ``pS``, ``\\stop;``
-        all stop as commands). Once per argument, over its first _MAX_TOKEN characters."""
+        made a stop (a parser of its own reads it, one level deep: ``S``, ``+S``, ``;;S``,
+        ``pS``, ``\\stop;`` all stop as commands; ``PS`` does not, its S the P's argument).
+        Once per argument, over its first _MAX_TOKEN characters."""
         if self._sub is None or self._sub_stopped:
             return False
         made = self._sub.feed(ch.encode("latin-1"))
@@ -183,16 +190,11 @@ class RequestParser:
     def _arg_char(self, ch: str) -> Request | None:
         command = self._command
         assert command is not None
-        if command.line:  # send_cmd: the rest of the line, whatever it holds (rule 3)
-            if ch not in "\r\n":
-                if len(self._token) < _MAX_TOKEN:
-                    self._token.append(ch)
-                return None
-            self._args.append("".join(self._token).strip())
-            return self._emit()
+        if command.line:
+            return self._line_char(ch)
         if ch not in _WHITESPACE:
-            if not self._token and command.numbers:  # rule 1: read as commands too
-                self._sub, self._sub_stopped = RequestParser(), False
+            if not self._token and command.numbers and self._watch:  # rule 1: as commands too
+                self._sub, self._sub_stopped = RequestParser(watch=False), False
             if len(self._token) < _MAX_TOKEN:
                 self._token.append(ch)
                 if self._stops(ch):  # a stop at once; the command still takes its
@@ -201,14 +203,36 @@ class RequestParser:
                 self._token.append(OVERLONG)
             return None
         if self._token:
+            token = "".join(self._token)
             if self._stops(" "):  # (a name such as ``\\stop`` ends with the token)
                 self._stop_next = True
+            elif self._watch and not command.numbers and _STOP_WORD.fullmatch(token):
+                self._stop_next = True  # rule 1: a word that is a stop
             overlong = self._token[-1] == OVERLONG
-            self._args.append(OVERLONG if overlong else "".join(self._token))
+            self._args.append(OVERLONG if overlong else token)
             self._token, self._sub = [], None
+            if len(self._args) == 1 and token.startswith("?"):  # rotctld reads no more after
+                self._args += [""] * (command.nargs - 1)  # a first argument asking what it takes
             if len(self._args) == command.nargs:
                 return self._emit()
         return None
+
+    def _line_char(self, ch: str) -> Request | None:
+        """send_cmd's argument (rule 3): the rest of the line up to LF, as rotctld's fgets
+        reads it (a CR is part of it); a line with nothing on it is read again, the next line
+        then the argument. Rule 1: a line that is a stop and nothing else stops at once."""
+        if ch != "\n":
+            if len(self._token) < _MAX_TOKEN:
+                self._token.append(ch)
+            return None
+        line = "".join(self._token).strip()
+        self._token = []
+        if not line:
+            return None
+        if self._watch and _STOP_WORD.fullmatch(line):
+            self._stop_next = True
+        self._args.append(line)
+        return self._emit()
 
     def _emit(self) -> Request:
         assert self._command is not None
