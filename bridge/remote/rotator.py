@@ -56,6 +56,7 @@ Rules:
 
 from __future__ import annotations
 
+import itertools
 import json
 import logging
 import math
@@ -190,6 +191,7 @@ class RemoteRotator:
         # the last stop sent (monotonic; interfaces/web/port.py rule 2), and how many (rule 2a)
         self.last_halt_s = -math.inf
         self.halts = 0
+        self._halt_numbers = itertools.count(1)  # (``next`` is one step: no count lost)
         self._clock = clock
         self._wall = wall
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -253,12 +255,12 @@ class RemoteRotator:
         t = self.topics
         match command:
             case Stop():
+                self.halted()  # (before it goes: it may wait for its PUBACK, or be kept)
                 self.publish(t.stop, "stop")
-                self.halted()
             case Lock():
-                self.publish(t.lock, "ON" if command.on else "OFF")
                 if command.on:
                     self.halted()
+                self.publish(t.lock, "ON" if command.on else "OFF")
             case TrackBody() if command.off:
                 self.publish(t.feature(tracking.COMMAND), command.name)
             case Target() if command.az_deg is not None:
@@ -324,10 +326,11 @@ class RemoteRotator:
         self.publish(topic, json.dumps(doc, separators=(",", ":")))
 
     def halted(self) -> None:
-        """A stop or a lock ON has gone out: ``last_halt_s`` is now (interfaces/web/port.py rule
-        2), and ``halts`` counts it (rule 2a)."""
+        """A stop or a lock ON goes out: ``last_halt_s`` is now (interfaces/web/port.py rule 2),
+        and ``halts`` counts it (rule 2a), before it is published (a move asked before it is
+        refused from then on, while it waits for its acknowledgement or is kept)."""
         self.last_halt_s = self._clock()
-        self.halts += 1
+        self.halts = next(self._halt_numbers)
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
