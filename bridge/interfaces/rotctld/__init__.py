@@ -27,7 +27,7 @@ Rules:
    rotctld's commands the bridge does not carry out (``V``/``v`` levels, ``U``/``u``, ``X``/``x``,
    ``w`` send_cmd, the locator and great-circle helpers, ``\\pause``) are read as rotctld reads
    them and answered "not available": their arguments are theirs (``send_cmd`` takes the rest
-   of the line up to LF, the next line if it has nothing on it, as rotctld's fgets), never
+   of the line up to LF, the next line if it has nothing at all on it, as rotctld's fgets), never
    commands of their own (``w P 20 30`` once turned the rotor).
 4. Every reply goes out in one send: Gpredict reads ``p`` with a single recv().
 5. ``p`` answers from the bridge's status (no serial traffic). A position the bridge does not

@@ -103,6 +103,7 @@ class RequestParser:
         self._command: CommandDef | None = None
         self._args: list[str] = []
         self._token: list[str] = []
+        self._reread = False  # send_cmd's empty rest of line read again (``_line_char``)
 
     @property
     def idle(self) -> bool:
@@ -219,16 +220,19 @@ class RequestParser:
 
     def _line_char(self, ch: str) -> Request | None:
         """send_cmd's argument (rule 3): the rest of the line up to LF, as rotctld's fgets
-        reads it (a CR is part of it); a line with nothing on it is read again, the next line
-        then the argument. Rule 1: a line that is a stop and nothing else stops at once."""
+        reads it (a CR or a space is part of it); a rest with nothing at all in it is read
+        again, once, the next line then the argument. Rule 1: a line that is a stop and nothing
+        else stops at once."""
         if ch != "\n":
             if len(self._token) < _MAX_TOKEN:
                 self._token.append(ch)
             return None
-        line = "".join(self._token).strip()
+        raw = "".join(self._token)
         self._token = []
-        if not line:
+        if not raw and not self._reread:
+            self._reread = True
             return None
+        line = raw.strip()
         if self._watch and _STOP_WORD.fullmatch(line):
             self._stop_next = True
         self._args.append(line)
