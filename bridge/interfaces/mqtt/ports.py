@@ -19,7 +19,6 @@ class RotatorPort(FrontRotator, Protocol):
     spec: ModelSpec
     pointing: Pointing
     can_track: bool  # a station and a controller that reports where it points
-    last_halt_s: float  # when a STOP or lock ON was last put in (monotonic; runtime/rotator.py)
 
     @property
     def halts(self) -> int: ...  # the halt count now (runtime/rotator.py; mailbox.py rule 10)
