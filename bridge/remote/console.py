@@ -47,6 +47,7 @@ from bridge.core.model import (
     ErrorKind,
     Origin,
     RotatorStatus,
+    Source,
     TrackBody,
     describe_command,
 )
@@ -176,6 +177,9 @@ class RemoteConsoleRotator:
     @property
     def halts(self) -> int:
         return self.remote.halts
+
+    def halts_besides(self, source: Source) -> int:
+        return self.remote.halts_besides(source)
 
     @property
     def commands_block(self) -> bool:

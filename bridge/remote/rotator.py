@@ -56,7 +56,6 @@ Rules:
 
 from __future__ import annotations
 
-import itertools
 import json
 import logging
 import math
@@ -75,6 +74,7 @@ from bridge.core.model import (
     Origin,
     Park,
     RotatorStatus,
+    Source,
     Stop,
     TakePath,
     Target,
@@ -188,10 +188,12 @@ class RemoteRotator:
         self._operator = operator
         self._expiry_s = expiry_s
         self._moving_max_age_s = moving_max_age_s
-        # the last stop sent (monotonic; interfaces/web/port.py rule 2), and how many (rule 2a)
+        # the last stop sent (monotonic; interfaces/web/port.py rule 2), and how many (rule 2a),
+        # of them how many each front end sent (rule 2b): counted together, under one lock
         self.last_halt_s = -math.inf
         self.halts = 0
-        self._halt_numbers = itertools.count(1)  # (``next`` is one step: no count lost)
+        self._halts_from: dict[Source, int] = {}
+        self._halts_lock = threading.Lock()
         self._clock = clock
         self._wall = wall
         self._refusals_lock = threading.Lock()  # rule 5: front ends call from their threads
@@ -255,11 +257,11 @@ class RemoteRotator:
         t = self.topics
         match command:
             case Stop():
-                self.halted()  # (before it goes: it may wait for its PUBACK, or be kept)
-                self.publish(t.stop, "stop")
+                self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
+                self.publish(t.stop, "stop")  # or be kept)
             case Lock():
                 if command.on:
-                    self.halted()
+                    self.halted(command.source)
                 self.publish(t.lock, "ON" if command.on else "OFF")
             case TrackBody() if command.off:
                 self.publish(t.feature(tracking.COMMAND), command.name)
@@ -325,12 +327,21 @@ class RemoteRotator:
     def _send_json(self, topic: str, doc: dict[str, Any]) -> None:
         self.publish(topic, json.dumps(doc, separators=(",", ":")))
 
-    def halted(self) -> None:
-        """A stop or a lock ON goes out: ``last_halt_s`` is now (interfaces/web/port.py rule 2),
-        and ``halts`` counts it (rule 2a), before it is published (a move asked before it is
-        refused from then on, while it waits for its acknowledgement or is kept)."""
-        self.last_halt_s = self._clock()
-        self.halts = next(self._halt_numbers)
+    def halted(self, source: Source) -> None:
+        """A stop or a lock ON from ``source``'s front end goes out: ``last_halt_s`` is now
+        (interfaces/web/port.py rule 2), and ``halts`` counts it (rule 2a), as the front end's
+        own count does (rule 2b), before it is published (a move asked before it is refused
+        from then on, while it waits for its acknowledgement or is kept)."""
+        with self._halts_lock:  # (two threads' halts: two numbers, and both counts agree)
+            self.last_halt_s = self._clock()
+            self.halts += 1
+            self._halts_from[source] = self._halts_from.get(source, 0) + 1
+
+    def halts_besides(self, source: Source) -> int:
+        """The stops and lock ONs sent from every front end but ``source``'s
+        (interfaces/web/port.py rule 2b)."""
+        with self._halts_lock:
+            return self.halts - self._halts_from.get(source, 0)
 
     def publish(self, topic: str, payload: str) -> None:
         """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""

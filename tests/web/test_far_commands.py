@@ -9,11 +9,15 @@ from collections.abc import Iterator
 
 import pytest
 
-from bridge.core.model import Command, Stop
+from bridge.core.model import Command, Source, Stop
+from bridge.interfaces.mqtt.topics import StationTopics
 from bridge.interfaces.web.server import FAR_MOVES, WebConsole
 from bridge.interfaces.web.view import RotatorFacts
 from bridge.pointing import Pointing
 from bridge.protocols import REGISTRY
+from bridge.remote.console import Drawn, RemoteConsoleRotator
+from bridge.remote.rotator import Info, RemoteRotator, StationView
+from tests.support.clock import FakeClock
 from tests.support.console import ConsoleClient
 from tests.support.mosquitto import free_port
 from tests.support.waiting import slow, wait_until
@@ -31,6 +35,9 @@ class FarRotator:
     last_halt_s = 0.0
     halts = 0
     commands_block = True
+
+    def halts_besides(self, source: Source) -> int:
+        return 0  # (no other front end)
 
     def __init__(self, rotator_id: str = "far") -> None:
         self.id = rotator_id
@@ -218,3 +225,103 @@ def test_moves_over_the_bound_for_one_far_rotator_are_refused_at_once_a_stop_nev
         t.join(slow(10))
     assert rot.carried == ["target 100", "stop"]
     assert answers["stop"] == 200
+
+
+class StalledLink:
+    """The remote's link to the station's broker (interfaces/mqtt/remote.py), stalled until the
+    test opens it: one send at a time, as the real link's lock keeps them, each waiting for
+    its acknowledgement; ``sent`` is what the broker took, in its order."""
+
+    up = True
+
+    def __init__(self) -> None:
+        self.open = threading.Event()
+        self.waiting = threading.Event()
+        self.sent: list[tuple[str, str]] = []
+        self._lock = threading.Lock()
+
+    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+        with self._lock:
+            self.waiting.set()
+            assert self.open.wait(slow(30)), "the test never let the link through"
+            self.sent.append((topic.rsplit("/", 1)[1], payload))
+
+
+@pytest.fixture
+def remote() -> Iterator[tuple[RemoteRotator, StalledLink, WebConsole]]:
+    """The remote's console (remote/console.py) before a station's rotator, over a stalled
+    link; its other front ends (rotctld) submit to the same ``RemoteRotator``."""
+    clock, link = FakeClock(), StalledLink()
+    station = StationTopics("rotor")
+    view = StationView(clock)  # the station there: its bridge and the rotator online, heard
+    view.put(station.bridge_state, b"online")
+    view.put(station.bridge_heartbeat, b"1700000000.000")
+    view.put(station.rotator("tower").availability, b"online")
+    info = Info.parse(
+        b'{"name":"tower","model":"rotorez","azimuth_range":[0,360],"elevation_range":null,'
+        b'"keep_out":[],"park":null,"options":[]}'
+    )
+    rot = RemoteRotator("tower", station.rotator("tower"), station, info, view, link, "DL1ABC", 5)
+    console = WebConsole(
+        "127.0.0.1",
+        free_port(),
+        password=None,
+        frame_ancestors=[],
+        station=(55.0, 13.0),
+        locator=None,
+        satellites=lambda: [],
+    )
+    console.attach(RemoteConsoleRotator(rot, Drawn(), view), RotatorFacts())  # type: ignore[arg-type]
+    console.listen()
+    try:
+        yield rot, link, console
+    finally:
+        link.open.set()
+        console.stop()
+
+
+def test_a_queued_console_move_never_goes_after_a_stop_from_the_remote_s_rotctld(
+    remote: tuple[RemoteRotator, StalledLink, WebConsole],
+) -> None:
+    """port.py rule 2b: a target waits behind the one under way; the operator's logger then
+    sends STOP through the remote's rotctld. The queued target, older than that STOP, is not
+    sent after it (it would turn the rotor the operator just stopped): refused as stale."""
+    rot, link, console = remote
+    answers: dict[str, int] = {}
+    posts = [_post(console, "tower", answers, "first", command="target", az=120)]
+    assert link.waiting.wait(slow(10)), "the first target never reached the link"
+    posts.append(_post(console, "tower", answers, "second", command="target", az=130))
+    wait_until(lambda: console._far["tower"]._work_queue.qsize() == 1, 10, "the second queued")
+    rotctld = threading.Thread(target=rot.submit, args=(Stop(Source.ROTCTLD), "rotctld S"))
+    rotctld.start()
+    wait_until(lambda: rot.halts == 1, 10, "rotctld's STOP counted")
+    link.open.set()
+    for t in [*posts, rotctld]:
+        t.join(slow(10))
+    assert link.sent == [("target", '{"azimuth":120.0}'), ("stop", "stop")]
+    assert answers == {"first": 200, "second": 409}
+
+
+def test_a_console_stop_then_its_target_both_go_far_away(
+    remote: tuple[RemoteRotator, StalledLink, WebConsole],
+) -> None:
+    """port.py rule 2b's other half: the console's own STOP, queued, is no reason to refuse the
+    target the page posted after it."""
+    rot, link, console = remote
+    answers: dict[str, int] = {}
+    posts = [_post(console, "tower", answers, "first", command="target", az=120)]
+    assert link.waiting.wait(slow(10)), "the first target never reached the link"
+    queue = console._far["tower"]._work_queue
+    posts.append(_post(console, "tower", answers, "stop", command="stop"))
+    wait_until(lambda: queue.qsize() == 1, 10, "the STOP queued")
+    posts.append(_post(console, "tower", answers, "then", command="target", az=140))
+    wait_until(lambda: queue.qsize() == 2, 10, "the target after it queued")
+    link.open.set()
+    for t in posts:
+        t.join(slow(10))
+    assert link.sent == [
+        ("target", '{"azimuth":120.0}'),
+        ("stop", "stop"),
+        ("target", '{"azimuth":140.0}'),
+    ]
+    assert answers == {"first": 200, "stop": 200, "then": 200}

@@ -11,6 +11,12 @@ Rules:
 2a. ``halts`` counts the STOPs and lock ONs the rotator carried out (sent on): read before the
    console judges a command stale, and handed to ``submit`` (``since``), it refuses the command
    if one came in between, on any thread (runtime/rotator.py; the remote counts its own).
+2b. ``halts_besides(source)`` counts those of every front end but ``source``'s: the console
+   carries out a far rotator's commands on a thread of their own, in the order they came
+   (server.py rule 5), so a page's STOP, then its target, both go; a STOP another front end
+   sent after the target was posted (the remote's rotctld) refuses the target there. The
+   station's own rotator does not tell front ends apart (its count is the mailbox's): it
+   answers ``halts``, and the console never asks it (its commands are carried out at once).
 3. ``report_refusal`` shows a refusal the console found itself (a bad body, a stale command)
    where the rotator's own refusals go.
 4. Every command carries who sent it (``origin``: ``web`` and the browser's address, the audit
@@ -22,7 +28,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.core.model import Command
+from bridge.core.model import Command, Source
 from bridge.front import FrontRotator
 from bridge.pointing import Pointing
 
@@ -40,6 +46,7 @@ class ConsoleRotator(FrontRotator, Protocol):
     def last_halt_s(self) -> float: ...
     @property
     def halts(self) -> int: ...
+    def halts_besides(self, source: Source) -> int: ...
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None: ...

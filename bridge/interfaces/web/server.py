@@ -32,9 +32,10 @@ Rules:
    is kept by the link's own send lock). A STOP or lock ON posted there waits for that
    rotator's one command under way at most: those queued before it that have not started are
    not sent (refused ``stale``: the stop came first), so it is neither overtaken nor does it
-   overtake. At most ``FAR_MOVES`` moves wait per rotator (the one under way included); one
-   more is refused at once (409, code ``busy``), never queued. A STOP or lock ON is never
-   refused so.
+   overtake. Nor is one sent after a STOP or lock ON that another front end of the rotator's
+   (the remote's rotctld) sent since it was posted (port.py rule 2b). At most ``FAR_MOVES``
+   moves wait per rotator (the one under way included); one more is refused at once (409,
+   code ``busy``), never queued. A STOP or lock ON is never refused so.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
 """
 
@@ -392,14 +393,20 @@ class WebConsole:
         self._order.halted(rot.id, cmd, time.monotonic())
 
     def _far_move(
-        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int
+        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, others: int
     ) -> None:
-        """Rule 5, on the commands' thread: not sent if a halt was posted since it came."""
+        """Rule 5, on the commands' thread: not sent if a halt was posted since it came, nor
+        if another front end's went out since (``others``: port.py rule 2b, read before the
+        look for a STOP when it came)."""
         if self._far_halts.get(rot.id, 0) != posted:
             why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
-            rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
-            raise Refused(RefusalCode.STALE, why)
-        carry_out(rot, cmd, peer)
+        elif rot.halts_besides(Source.WEB) != others:
+            why = "a STOP or lock ON from another front end went first: not sent (send it again)"
+        else:
+            carry_out(rot, cmd, peer)
+            return
+        rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
+        raise Refused(RefusalCode.STALE, why)
 
     def _far_moved(self, rotator_id: str) -> None:
         """A far move done (any thread): no longer counted against rule 5's bound."""
@@ -446,24 +453,26 @@ class WebConsole:
         far = self._far.get(rot.id)
         # rule 5's look and the halt count it goes with (port.py rule 2a): a STOP another
         # thread puts after the look refuses the command at the judge (a far one: ``_far_move``)
-        since = None if far is not None and rot.commands_block else rot.halts
+        away = far is not None and rot.commands_block
+        since = None if away else rot.halts
+        others = rot.halts_besides(Source.WEB) if away else 0  # (port.py rule 2b)
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
             return _json({"error": stale, "code": "stale"}, 409)
         busy = self._far_moves.get(rot.id, 0) >= FAR_MOVES
-        if far is not None and rot.commands_block and not halt and busy:  # rule 5: a bound
+        if away and not halt and busy:  # rule 5: a bound
             why = f"{FAR_MOVES} commands already wait for this rotator: not sent (send it later)"
             rot.report_refusal(why, cmd.described(), origin=by)
             return _json({"error": why, "code": "busy"}, 409)
         try:
-            if far is not None and rot.commands_block:  # rule 5
+            if far is not None and away:  # rule 5
                 if halt:
                     self._far_halts[rot.id] = self._far_halts.get(rot.id, 0) + 1
                     done = far.submit(carry_out, rot, cmd, request.remote)
                 else:
                     posted = self._far_halts.get(rot.id, 0)
-                    done = far.submit(self._far_move, rot, cmd, request.remote, posted)
+                    done = far.submit(self._far_move, rot, cmd, request.remote, posted, others)
                     self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
                     done.add_done_callback(lambda _: self._far_moved(rot.id))
                 await asyncio.wrap_future(done)
