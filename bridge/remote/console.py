@@ -176,10 +176,9 @@ class RemoteConsoleRotator:
 
     @property
     def halts(self) -> int:
-        return self.remote.halts
-
-    def halts_besides(self, source: Source) -> int:
-        return self.remote.halts_besides(source)
+        """interfaces/web/port.py rule 2b: the stops and lock ONs of the remote's other front
+        ends (the console's own are ordered by its queue of commands)."""
+        return self.remote.halts_besides(Source.WEB)
 
     @property
     def commands_block(self) -> bool:

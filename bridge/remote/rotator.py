@@ -105,7 +105,14 @@ class Sender(Protocol):
     @property
     def up(self) -> bool: ...
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None: ...
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None: ...
 
 
 def place_doc(latitude_deg: float, longitude_deg: float, locator: str | None) -> dict[str, Any]:
@@ -243,8 +250,10 @@ class RemoteRotator:
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None:
         """Rules 3 to 5: the command on the station's own topic for it, or Refused. ``since``:
-        the ``halts`` count read when it was asked (interfaces/web/port.py rule 2a): a move is
-        refused if a stop or lock ON went out since."""
+        the count of the stops and lock ONs of every front end but the command's own
+        (``halts_besides`` its source) read when it was asked (interfaces/web/port.py rules 2a
+        and 2b): a move is refused if one went out since, up to the moment it is handed to
+        the link, under the link's send lock (the order the broker takes them in)."""
         try:
             self._send(command, since)
         except Refused as exc:
@@ -259,47 +268,54 @@ class RemoteRotator:
             case Stop():
                 self.halted(command.source)  # (before it goes: it may wait for its PUBACK,
                 self.publish(t.stop, "stop")  # or be kept)
+                return
             case Lock():
                 if command.on:
                     self.halted(command.source)
                 self.publish(t.lock, "ON" if command.on else "OFF")
+                return
             case TrackBody() if command.off:
                 self.publish(t.feature(tracking.COMMAND), command.name)
+                return
+        # a move from here on: judged now, and ``since`` again as it is handed to the link
+        source = command.source
+        guard = None if since is None else lambda: self._not_halted_since(since, source)
+        match command:
             case Target() if command.az_deg is not None:
-                self.check_move(since)
+                self.check_move(since, source)
                 self.pointing.judge(command, None)  # early word; the station judges again
                 if command.park:  # the station's park position, so that it shows "parked"
-                    self.publish(t.park, "park")
+                    self.publish(t.park, "park", guard)
                 else:
                     doc: dict[str, float] = {"azimuth": command.az_deg}
                     if command.el_deg is not None:
                         doc["elevation"] = command.el_deg
-                    self._send_json(t.target, doc)
+                    self._send_json(t.target, doc, guard)
             case Park():  # rule 3 first: the link's word, then the station's park position
-                self.check_move(since)
-                self._send(Target(*self.pointing.parking(), command.source, park=True), since)
+                self.check_move(since, source)
+                self._send(Target(*self.pointing.parking(), source, park=True), since)
             case Toward():
                 lat, lon = command.latitude_deg, command.longitude_deg
                 place = place_doc(lat, lon, command.locator)
                 if command.long_path:
                     place["path"] = "long"
-                self.check_move(since)
-                self._send_json(t.target, place)
+                self.check_move(since, source)
+                self._send_json(t.target, place, guard)
             case TakePath():
-                self.check_move(since)
-                self._send_json(t.target, {"path": "long" if command.long_path else "short"})
+                self.check_move(since, source)
+                self._send_json(t.target, {"path": "long" if command.long_path else "short"}, guard)
             case GoToPreset():
-                self.check_move(since)
-                self.publish(t.preset, command.name)
+                self.check_move(since, source)
+                self.publish(t.preset, command.name, guard)
             case Nudge():
                 step = {"azimuth": command.d_az_deg}
                 if command.d_el_deg is not None:
                     step["elevation"] = command.d_el_deg
-                self.check_move(since)
-                self._send_json(t.nudge, step)
+                self.check_move(since, source)
+                self._send_json(t.nudge, step, guard)
             case TrackBody() if command.tle is None:
-                self.check_move(since)
-                self.publish(t.feature(tracking.COMMAND), command.name)
+                self.check_move(since, source)
+                self.publish(t.feature(tracking.COMMAND), command.name, guard)
             case _:
                 raise Refused(
                     RefusalCode.UNSUPPORTED,
@@ -307,12 +323,13 @@ class RemoteRotator:
                     "targets, stops, the lock, presets, park, nudges, places and tracking",
                 )
 
-    def check_move(self, since: int | None = None) -> None:
+    def check_move(self, since: int | None, source: Source) -> None:
         """Rule 3: no move while the station is not current (the link down: the link's word);
         rule 6: nor while the station is locked or another operator holds its control lease;
-        nor (``since``) after a stop or lock ON went out since it was asked."""
-        if since is not None and since != self.halts:
-            raise Refused(RefusalCode.STALE, HALTED_SINCE)
+        nor (``since``) after a stop or lock ON of another front end than ``source``'s went
+        out since it was asked."""
+        if since is not None:
+            self._not_halted_since(since, source)
         away = self.away() if self._link.up else None
         if away is not None:
             raise Refused(RefusalCode.OFFLINE, away)
@@ -324,8 +341,14 @@ class RemoteRotator:
             text = held.held_text(now)
             raise Refused(RefusalCode.LEASED, f"{text}: only they may turn it (control lease)")
 
-    def _send_json(self, topic: str, doc: dict[str, Any]) -> None:
-        self.publish(topic, json.dumps(doc, separators=(",", ":")))
+    def _not_halted_since(self, since: int, source: Source) -> None:
+        if self.halts_besides(source) != since:
+            raise Refused(RefusalCode.STALE, HALTED_SINCE)
+
+    def _send_json(
+        self, topic: str, doc: dict[str, Any], guard: Callable[[], None] | None = None
+    ) -> None:
+        self.publish(topic, json.dumps(doc, separators=(",", ":")), guard)
 
     def halted(self, source: Source) -> None:
         """A stop or a lock ON from ``source``'s front end goes out: ``last_halt_s`` is now
@@ -343,9 +366,11 @@ class RemoteRotator:
         with self._halts_lock:
             return self.halts - self._halts_from.get(source, 0)
 
-    def publish(self, topic: str, payload: str) -> None:
-        """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE)."""
-        self._link.send(topic, payload, self._operator, self._expiry_s)
+    def publish(self, topic: str, payload: str, guard: Callable[[], None] | None = None) -> None:
+        """A command on one of the station's topics (rule 3): sent now, or Refused(OFFLINE);
+        ``guard``, if given, is asked under the link's send lock, right before it is handed on
+        (it raises Refused for a move that may not go any more)."""
+        self._link.send(topic, payload, self._operator, self._expiry_s, guard)
 
     def report_refusal(
         self, message: str, command: str | None, *, origin: Origin | None = None

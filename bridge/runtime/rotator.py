@@ -66,7 +66,6 @@ from bridge.core.model import (
     ResetHealth,
     RotatorStatus,
     SetOption,
-    Source,
     Stop,
     TakePath,
     Target,
@@ -314,11 +313,6 @@ class Rotator:
     def halts(self) -> int:
         """The halt count now (mailbox.py rule 10): what a front end that submits a command a
         while after it was asked reads when it is asked, and hands to ``submit`` (``since``)."""
-        return self._mailbox.epoch
-
-    def halts_besides(self, source: Source) -> int:
-        """interfaces/web/port.py rule 2b: every front end's halts (the mailbox's count does
-        not tell them apart; the console never asks the station's own rotator)."""
         return self._mailbox.epoch
 
     def _seen(self) -> tuple[RotatorStatus, bool]:

@@ -12,7 +12,7 @@ import signal
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -50,9 +50,18 @@ class Link:
         self.up = True
         self.sent: list[tuple[str, str]] = []
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        if check is not None:
+            check()
         self.sent.append((topic, payload))
 
 

@@ -6,6 +6,7 @@ which statuses reach the pages."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
@@ -46,9 +47,18 @@ class Link:
         self.up = True
         self.sent: list[tuple[str, str]] = []
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        if check is not None:
+            check()
         self.sent.append((topic, payload))
 
 

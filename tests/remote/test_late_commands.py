@@ -10,6 +10,7 @@ from __future__ import annotations
 import socket
 import sys
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,9 +51,18 @@ class Link:
     up: bool = True
     sent: list[tuple[str, str]] = field(default_factory=list)
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        if check is not None:
+            check()
         self.sent.append((topic, payload))
 
 
@@ -393,3 +403,21 @@ def test_the_station_beats_from_its_connection_only_while_connected_and_not_refu
     clock.t += 10
     client._tick()
     assert len(beats) == 3
+
+
+def test_a_move_whose_check_fails_under_the_send_lock_never_reaches_paho() -> None:
+    """remote.py rule 9: the check a move is sent with is asked under the send lock, right
+    before paho is handed the command (another thread's stop holds that lock meanwhile)."""
+    link, paho = link_on(ReasonCode(PacketTypes.PUBACK, identifier=0))
+    held: list[bool] = []
+
+    def check() -> None:
+        held.append(link._send_lock.locked())
+        raise Refused(RefusalCode.STALE, "a STOP went out after it was asked")
+
+    with pytest.raises(Refused) as refused:
+        link.send("rotor/target", '{"azimuth":200}', "DL1ABC", 5, check)
+    assert refused.value.code is RefusalCode.STALE
+    assert held == [True] and paho.published == []
+    link.send("rotor/target", '{"azimuth":100}', "DL1ABC", 5, lambda: None)
+    assert [topic for topic, _ in paho.published] == ["rotor/target"]

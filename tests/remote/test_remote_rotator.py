@@ -5,6 +5,7 @@ often it says so."""
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import pytest
@@ -26,9 +27,18 @@ class Link:
     up: bool = True
     sent: list[tuple[str, str]] = field(default_factory=list)
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
         if not self.up:
             raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        if check is not None:
+            check()
         self.sent.append((topic, payload))
 
 
@@ -153,13 +163,16 @@ def test_a_stop_and_a_lock_on_are_the_last_halt() -> None:
 
 
 def test_a_move_asked_before_a_stop_that_went_out_is_not_sent() -> None:
-    """interfaces/web/port.py rule 2a on the remote: the halt count read when a move was asked
-    refuses it once a stop or lock ON went out since; a stop itself is never refused so."""
+    """interfaces/web/port.py rules 2a and 2b on the remote: the halt count read when a move was
+    asked refuses it once a stop or lock ON of another front end went out since; a stop itself
+    is never refused so, and the console's own do not count (its queue orders them)."""
     link = Link()
     remote = rotator(link, FakeClock(100.0), park="[180, null]")
     console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
     asked = console.halts
-    console.submit(Stop(Source.WEB))  # another page's STOP goes out first
+    console.submit(Stop(Source.WEB))  # the console's own
+    assert console.halts == asked
+    remote.submit(Stop(Source.ROTCTLD), "rotctld S")  # the logger's STOP goes out first
     assert console.halts == asked + 1
     with pytest.raises(Refused) as caught:
         console.submit(Target(200.0, None, Source.WEB), "console target 200", since=asked)
@@ -171,8 +184,36 @@ def test_a_move_asked_before_a_stop_that_went_out_is_not_sent() -> None:
     assert link.sent == [
         ("rotor/tower/stop", "stop"),
         ("rotor/tower/stop", "stop"),
+        ("rotor/tower/stop", "stop"),
         ("rotor/tower/target", '{"azimuth":200.0}'),
     ]
+
+
+def test_a_stop_counted_while_a_move_is_on_its_way_to_the_link_is_never_overtaken() -> None:
+    """interfaces/web/port.py rule 2b up to the hand-off (interfaces/mqtt/remote.py rule 9):
+    the logger's STOP counted after the console's move was judged, before the link took it,
+    still refuses the move, which would reach the broker after the STOP."""
+    link = Link()
+    remote = rotator(link, FakeClock(100.0))
+    console = RemoteConsoleRotator(remote, Drawn(), StationView(FakeClock()))
+    hand_on = link.send
+
+    def send(
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
+        if topic.endswith("/target"):  # the logger's STOP, between the judge and the link
+            remote.submit(Stop(Source.ROTCTLD), "rotctld S")
+        hand_on(topic, payload, operator, expiry_s, check)
+
+    link.send = send  # type: ignore[method-assign]
+    with pytest.raises(Refused) as caught:
+        console.submit(Target(200.0, None, Source.WEB), "console target 200", since=console.halts)
+    assert caught.value.code is RefusalCode.STALE
+    assert link.sent == [("rotor/tower/stop", "stop")]
 
 
 def test_an_elevation_alone_is_refused_as_remote_md_says() -> None:

@@ -5,7 +5,7 @@ page's stream and other requests go on while one waits."""
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -36,9 +36,6 @@ class FarRotator:
     halts = 0
     commands_block = True
 
-    def halts_besides(self, source: Source) -> int:
-        return 0  # (no other front end)
-
     def __init__(self, rotator_id: str = "far") -> None:
         self.id = rotator_id
         self.link = threading.Event()  # cleared: the broker does not acknowledge yet
@@ -48,7 +45,7 @@ class FarRotator:
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None:
-        assert since is None  # a far rotator's order is the far queue's (server.py rule 5)
+        assert since == (None if isinstance(command, Stop) else 0)  # (port.py rule 2b)
         self.waiting.set()
         assert self.link.wait(slow(30)), "the test never let the command through"
         self.carried.append("stop" if isinstance(command, Stop) else f"target {command.az_deg:g}")
@@ -228,9 +225,9 @@ def test_moves_over_the_bound_for_one_far_rotator_are_refused_at_once_a_stop_nev
 
 
 class StalledLink:
-    """The remote's link to the station's broker (interfaces/mqtt/remote.py), stalled until the
-    test opens it: one send at a time, as the real link's lock keeps them, each waiting for
-    its acknowledgement; ``sent`` is what the broker took, in its order."""
+    """The remote's link to the station's broker (interfaces/mqtt/remote.py), its
+    acknowledgements held until the test opens it: one command handed on at a time, as the
+    real link's lock keeps them; ``sent`` is what the broker took, in its order."""
 
     up = True
 
@@ -240,11 +237,20 @@ class StalledLink:
         self.sent: list[tuple[str, str]] = []
         self._lock = threading.Lock()
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
-        with self._lock:
-            self.waiting.set()
-            assert self.open.wait(slow(30)), "the test never let the link through"
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
+        with self._lock:  # handed to the broker, one at a time (remote.py rule 9)
+            if check is not None:
+                check()
             self.sent.append((topic.rsplit("/", 1)[1], payload))
+        self.waiting.set()  # its acknowledgement (rule 7)
+        assert self.open.wait(slow(30)), "the test never let the link through"
 
 
 @pytest.fixture

@@ -41,6 +41,11 @@ Rules:
 8. A command is stamped with its send time on the station's clock as its live heartbeats let
    the remote reckon it (heartbeat.py); without one heard, a move is refused. A halt goes
    unstamped: it never asks the reckoning, so nothing about the heartbeat can keep it back.
+9. One command is handed to paho at a time (the send lock), in the order the broker then takes
+   them: a move that may not go after a stop another thread sent meanwhile (remote/rotator.py
+   ``submit``) is asked so under that lock, right before it is handed on, so a stop that
+   counted itself before that is never overtaken, and one that counts itself after it goes
+   after it.
 """
 
 from __future__ import annotations
@@ -140,9 +145,17 @@ class RemoteLink(Connection):
         self._stopping = True
         self._disconnect()
 
-    def send(self, topic: str, payload: str, operator: str, expiry_s: int) -> None:
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
         """Rules 2, 3, 7 and 8: acknowledged by the broker, or Refused and never sent later
-        (a stop excepted: rule 6)."""
+        (a stop excepted: rule 6). ``check``, if given, is asked under the send lock right
+        before the command is handed to paho, and may raise Refused (rule 9)."""
         halt = self._last_word(topic, payload.encode())
         props = Properties(PacketTypes.PUBLISH)  # type: ignore[no-untyped-call]  # paho untyped
         props.MessageExpiryInterval = expiry_s
@@ -158,6 +171,8 @@ class RemoteLink(Connection):
                 raise Refused(RefusalCode.OFFLINE, NOT_HEARD)
             stamp = [] if sent is None else Stamp.of(sent, expiry_s).properties()
             props.UserProperty = [("operator", operator), *stamp]
+            if check is not None:
+                check()  # rule 9
             info = self._client.publish(
                 topic, payload, qos=COMMAND_QOS, retain=False, properties=props
             )

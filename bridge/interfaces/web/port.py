@@ -11,12 +11,13 @@ Rules:
 2a. ``halts`` counts the STOPs and lock ONs the rotator carried out (sent on): read before the
    console judges a command stale, and handed to ``submit`` (``since``), it refuses the command
    if one came in between, on any thread (runtime/rotator.py; the remote counts its own).
-2b. ``halts_besides(source)`` counts those of every front end but ``source``'s: the console
-   carries out a far rotator's commands on a thread of their own, in the order they came
-   (server.py rule 5), so a page's STOP, then its target, both go; a STOP another front end
-   sent after the target was posted (the remote's rotctld) refuses the target there. The
-   station's own rotator does not tell front ends apart (its count is the mailbox's): it
-   answers ``halts``, and the console never asks it (its commands are carried out at once).
+2b. On the remote, ``halts`` counts those of the remote's other front ends alone (its rotctld,
+   the loggers; remote/console.py): the console carries out a far rotator's commands on a
+   thread of their own, in the order they came (server.py rule 5), so the page's own STOP,
+   then its target, both go, while a STOP another front end sent after the target was posted
+   refuses it, up to the moment it is handed to the remote's link (remote/rotator.py
+   ``submit``). The station's own rotator counts every front end's: the console carries out
+   its commands at once, so none of its own can come in between.
 3. ``report_refusal`` shows a refusal the console found itself (a bad body, a stale command)
    where the rotator's own refusals go.
 4. Every command carries who sent it (``origin``: ``web`` and the browser's address, the audit
@@ -28,7 +29,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from bridge.core.model import Command, Source
+from bridge.core.model import Command
 from bridge.front import FrontRotator
 from bridge.pointing import Pointing
 
@@ -46,7 +47,6 @@ class ConsoleRotator(FrontRotator, Protocol):
     def last_halt_s(self) -> float: ...
     @property
     def halts(self) -> int: ...
-    def halts_besides(self, source: Source) -> int: ...
     def submit(
         self, command: Command, described: str | None = None, *, since: int | None = None
     ) -> None: ...

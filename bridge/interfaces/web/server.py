@@ -32,8 +32,8 @@ Rules:
    is kept by the link's own send lock). A STOP or lock ON posted there waits for that
    rotator's one command under way at most: those queued before it that have not started are
    not sent (refused ``stale``: the stop came first), so it is neither overtaken nor does it
-   overtake. Nor is one sent after a STOP or lock ON that another front end of the rotator's
-   (the remote's rotctld) sent since it was posted (port.py rule 2b). At most ``FAR_MOVES``
+   overtake. Nor is one sent after a STOP that another front end of the rotator's (the
+   remote's rotctld) sent since it was posted (port.py rule 2b). At most ``FAR_MOVES``
    moves wait per rotator (the one under way included); one more is refused at once (409,
    code ``busy``), never queued. A STOP or lock ON is never refused so.
 6. ``stop`` closes every page's stream first (each page sees the bridge go), then the server.
@@ -393,20 +393,15 @@ class WebConsole:
         self._order.halted(rot.id, cmd, time.monotonic())
 
     def _far_move(
-        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, others: int
+        self, rot: ConsoleRotator, cmd: WebCommand, peer: str | None, posted: int, since: int
     ) -> None:
         """Rule 5, on the commands' thread: not sent if a halt was posted since it came, nor
-        if another front end's went out since (``others``: port.py rule 2b, read before the
-        look for a STOP when it came)."""
+        (``since``, port.py rule 2b: the judge says so) if another front end's went out."""
         if self._far_halts.get(rot.id, 0) != posted:
             why = "a STOP or lock ON posted after it was sent first: not sent (send it again)"
-        elif rot.halts_besides(Source.WEB) != others:
-            why = "a STOP or lock ON from another front end went first: not sent (send it again)"
-        else:
-            carry_out(rot, cmd, peer)
-            return
-        rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
-        raise Refused(RefusalCode.STALE, why)
+            rot.report_refusal(why, cmd.described(), origin=Origin(Source.WEB, None, peer))
+            raise Refused(RefusalCode.STALE, why)
+        carry_out(rot, cmd, peer, since)
 
     def _far_moved(self, rotator_id: str) -> None:
         """A far move done (any thread): no longer counted against rule 5's bound."""
@@ -451,11 +446,10 @@ class WebConsole:
         if not halt and not self._tokens.valid(token, self._wall()):  # auth.py rule 2
             return _json({"error": "the token has expired: log in again"}, 401)
         far = self._far.get(rot.id)
-        # rule 5's look and the halt count it goes with (port.py rule 2a): a STOP another
-        # thread puts after the look refuses the command at the judge (a far one: ``_far_move``)
+        # rule 5's look and the halt count it goes with (port.py rules 2a, 2b): a STOP another
+        # thread puts after the look refuses the command at the judge
         away = far is not None and rot.commands_block
-        since = None if away else rot.halts
-        others = rot.halts_besides(Source.WEB) if away else 0  # (port.py rule 2b)
+        since = rot.halts
         stale = self._order.stale(rot.id, cmd, self._started[id(request)], rot.last_halt_s)
         if stale is not None:
             rot.report_refusal(stale, cmd.described(), origin=by)
@@ -472,7 +466,7 @@ class WebConsole:
                     done = far.submit(carry_out, rot, cmd, request.remote)
                 else:
                     posted = self._far_halts.get(rot.id, 0)
-                    done = far.submit(self._far_move, rot, cmd, request.remote, posted, others)
+                    done = far.submit(self._far_move, rot, cmd, request.remote, posted, since)
                     self._far_moves[rot.id] = self._far_moves.get(rot.id, 0) + 1
                     done.add_done_callback(lambda _: self._far_moved(rot.id))
                 await asyncio.wrap_future(done)
