@@ -24,7 +24,12 @@ Rules:
 2. Bytes that cannot begin a reply are reported as NOISE as soon as they arrive (they need not
    wait for a ``;``); once noise came within a query, the reply that follows is not trusted
    (UNTRUSTED: the engine asks again at once), and neither is one with junk in front of it.
-3. Targets are rounded half up to tenths; outside 0..360 they are refused before anything is
+3. What is left in the buffer when the next query is asked (digits a lost or flipped ``;``
+   left, a late reply's first bytes, noise that could begin a bearing) begins no reply of the
+   new exchange: the RT-21's replies have no head of their own, so ``3`` left by a glitch and
+   then ``45.6;`` read as ``345.6``. It is dropped as NOISE, and the reply of that query is not
+   trusted (asked again); spaces alone are the box's padding, dropped quietly.
+4. Targets are rounded half up to tenths; outside 0..360 they are refused before anything is
    sent. A new bearing while turning goes straight out: the box re-targets by itself, ramping
    down and holding its own brake as its settings say (the bridge keeps no brake time of it).
 """
@@ -58,7 +63,7 @@ _CHATTER = re.compile(rb"[ ;]*")
 
 
 def _tenths(az_deg: float) -> float:
-    """The bearing the box is sent for ``az_deg``: tenths, rounded half up (rule 3)."""
+    """The bearing the box is sent for ``az_deg``: tenths, rounded half up (rule 4)."""
     return tenths(az_deg, AZ_MAX_DEG, "azimuth")
 
 
@@ -71,6 +76,7 @@ class Rt21Codec(OneQuery):
         self._buf = bytearray()
         self._query_open = False
         self._noisy = False  # junk arrived since the query was opened
+        self._left = b""  # rule 3: bytes of before the query, reported at the next feed
 
     # -- encoding -------------------------------------------------------------------------
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, None]:
@@ -84,6 +90,9 @@ class Rt21Codec(OneQuery):
 
     def encode_query(self) -> bytes:
         self._open_query()
+        if self._buf.strip(b" "):  # rule 3
+            self._left, self._noisy = bytes(self._buf), True
+        self._buf.clear()
         return b"BI1;"
 
     def harmless(self, junk: bytes) -> bool:
@@ -93,6 +102,9 @@ class Rt21Codec(OneQuery):
     def feed(self, data: bytes) -> list[Reply]:
         self._buf += data
         out: list[Reply] = []
+        if self._left:  # rule 3
+            out.append(JunkReply(self._left, JunkReason.NOISE, "left before the query"))
+            self._left = b""
         while (end := self._buf.find(b";")) != -1:
             segment = bytes(self._buf[:end])
             del self._buf[: end + 1]
@@ -140,7 +152,7 @@ def _spec(**kw: Any) -> ModelSpec:
         manufacturer="Green Heron",
         codec_factory=Rt21Codec,
         baud=4800,
-        retarget=RetargetPolicy.DIRECT,  # rule 3: the box re-targets and brakes by itself
+        retarget=RetargetPolicy.DIRECT,  # rule 4: the box re-targets and brakes by itself
         az_min_deg=0.0,
         az_max_deg=AZ_MAX_DEG,
         az_wraps=True,
@@ -149,7 +161,7 @@ def _spec(**kw: Any) -> ModelSpec:
         noise_deg=0.5,
         nominal_speed_deg_s=6.0,  # a Hy-Gain HAM-IV or a Yaesu G-1000 at full speed
         whole_degrees=False,
-        tenths=True,  # rule 3
+        tenths=True,  # rule 4
         query_bytes=4,  # BI1;
         reply_bytes=6,  # 123.4;
         hamlib_model=405,

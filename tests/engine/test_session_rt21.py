@@ -84,6 +84,36 @@ def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     assert v.state is IDLE
 
 
+def test_a_digit_of_noise_between_polls_is_no_first_digit_of_the_next_reply(rig: Rig) -> None:
+    """rt21.py rule 3: ``3`` left on an idle line, then the box's ``45.6;``, read as 345.6 (a
+    reading 300 degrees off, published and taken as a move)."""
+    v = ready(rig, start_az_deg=45.6)
+    t = v.now
+    v.run_for(0.3)  # between polls
+    v._do(v.session.bytes_received(b"\xfe3", v.now))
+    v.run_for(5)
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} <= {45.6}
+    assert v.state is IDLE
+
+
+def test_a_terminator_flipped_on_the_line_spoils_no_later_reply(rig: Rig) -> None:
+    """rt21.py rule 3: one bit turns a reply's ``;`` into ``3``; that reply is lost, and the
+    ``3`` it left must not begin the next one (``35.0`` for ``5.0``)."""
+    v = ready(rig, start_az_deg=5.0, reply_padding="none")
+    t, flipped = v.now, []
+
+    def flip(data: bytes, now: float) -> bytes:
+        if not flipped and b";" in data:
+            flipped.append(now)
+            return data.replace(b";", b"3", 1)
+        return data
+
+    v.to_host = flip
+    v.run_for(8)
+    assert flipped
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} <= {5.0}
+
+
 def test_line_noise_is_reported_and_moves_nothing(rig: Rig) -> None:
     v = ready(rig, start_az_deg=77.7)
     t = v.now

@@ -161,6 +161,31 @@ def test_noise_before_a_reply_never_yields_another_bearing(
     assert positions(got) in ([], [tenths / 10])
 
 
+def test_what_is_left_before_a_query_begins_no_reply_of_it() -> None:
+    """Rule 3: a digit left by noise before the query, or by a flipped ``;`` of the query
+    before, is no first digit of this query's reply: it is noise, and the reply is asked
+    again (not trusted)."""
+    codec = Rt21Codec()
+    codec.feed(b"\xfe3")  # idle line noise; the 3 could begin a bearing
+    codec.encode_query()
+    got = codec.feed(b"45.6;")
+    assert positions(got) == []
+    assert [(j.data, j.reason) for j in got if isinstance(j, JunkReply)] == [
+        (b"3", JunkReason.NOISE),
+        (b"45.6;", JunkReason.UNTRUSTED),
+    ]
+    codec.encode_query()
+    assert positions(codec.feed(b"5.03")) == []  # "5.0;" with its ";" flipped to "3"
+    codec.expire_query()
+    codec.encode_query()
+    assert positions(codec.feed(b"5.0;")) == []  # untrusted, never 35.0
+    codec.encode_query()
+    assert positions(codec.feed(b" ")) == []  # padding of a reply cut short: no noise
+    codec.expire_query()
+    codec.encode_query()
+    assert positions(codec.feed(b" 20.0;")) == [20.0]
+
+
 def test_the_model_table() -> None:
     spec = REGISTRY["rt21"]
     assert (spec.manufacturer, spec.display_name, spec.baud) == ("Green Heron", "RT-21", 4800)
