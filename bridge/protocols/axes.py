@@ -6,9 +6,11 @@ turns its azimuth with one controller and its elevation with another. Each box k
 codec; this module wraps it so that the session driving that box sees one axis only.
 
 Rules:
-1. Any model drives the azimuth. Its elevation, if it has one, is never commanded and never
-   read: the azimuth box's spec has no elevation, its codec is sent no elevation and reports
-   none.
+1. Any model drives the azimuth. Its elevation, if it has one, is never turned and never
+   read: the azimuth box's spec has no elevation and its codec reports none. An az/el box's
+   codec still writes an elevation in every target (GS-232's ``W``, SPID's frame): it is sent
+   the elevation the box last reported for itself (as rule 2 does for an elevation box's
+   azimuth), never the horizon, which every az/el codec writes for an elevation left out.
 2. The elevation box reports where it points and is either an az/el box used for its
    elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
    Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
@@ -102,6 +104,37 @@ class AzimuthOnly:
         return self._inner.encode_connect(now_unix)
 
 
+class AzimuthOfAzEl(AzimuthOnly):
+    """Rule 1, for an az/el box: its elevation stays where the box has it."""
+
+    def __init__(self, inner: Codec) -> None:
+        super().__init__(inner)
+        self._own_el: float | None = None  # what the box last said of its elevation, taken
+        self._pending: list[tuple[PositionReply, float | None]] = []  # fed: (reply, its el)
+
+    def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
+        if self._own_el is None:  # the session sends only once the box answered (a reading)
+            raise ValueError("the azimuth box has not said where its elevation is")
+        return self._inner.encode_target(az_deg, self._own_el)
+
+    def feed(self, data: bytes) -> list[Reply]:
+        replies: list[Reply] = []
+        for r in self._inner.feed(data):
+            if isinstance(r, PositionReply):
+                own, r = r.el_deg, replace(r, el_deg=None)
+                self._pending = [*self._pending[-_PENDING:], (r, own)]
+            replies.append(r)
+        return replies
+
+    def taken(self, reply: PositionReply) -> None:
+        for i, (fed, own) in enumerate(self._pending):
+            if fed is reply:
+                if own is not None:
+                    self._own_el = own
+                del self._pending[: i + 1]
+                return
+
+
 class ElevationOnly(AzimuthOnly):
     """Rule 2: ``inner``'s elevation; its azimuth stays where the box has it."""
 
@@ -181,9 +214,10 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
     """``spec`` as the box of one axis of a composite rotator (rules 1 and 2)."""
     if axis is Axis.AZIMUTH:
         factory = spec.codec_factory
+        wrap = AzimuthOfAzEl if spec.has_elevation else AzimuthOnly
         return replace(
             spec,
-            codec_factory=lambda: AzimuthOnly(factory()),
+            codec_factory=lambda: wrap(factory()),
             has_elevation=False,
             el_min_deg=0.0,
             el_max_deg=0.0,

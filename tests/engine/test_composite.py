@@ -162,6 +162,23 @@ def test_two_rt21_boxes_make_an_az_el_rotator() -> None:
         assert v.az.frames("move", since=t) == []
 
 
+@pytest.mark.parametrize(
+    "model", ["gs232a", "gs232b", "easycomm2", "easycomm3", "prosistel-combi", "rc2800", "rot2prog"]
+)
+def test_an_az_el_box_turning_the_azimuth_keeps_its_own_elevation_where_it_is(model: str) -> None:
+    """protocols/axes.py rule 1: its codec writes an elevation in every target; it is the one
+    the box reported, never the horizon (``W200 000``: the box's elevation rotor driven to 0
+    at every azimuth move)."""
+    boxes = {Axis.AZIMUTH: {"start_el_deg": 45.0}, Axis.ELEVATION: FAST[Axis.AZIMUTH]}
+    with VirtualComposite(model, "rt21", emulators=boxes) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        assert v.status.bearing_deg is not None and abs(v.status.bearing_deg - 200.0) <= 1.0
+        assert v.az.truth().el_deg == 45.0
+        assert v.status.elevation_deg == 10.0
+
+
 def test_a_glitched_reading_of_the_elevation_box_never_becomes_its_azimuth() -> None:
     """The azimuth an az/el box used for its elevation is sent back (protocols/axes.py rule 2)
     is one the session took as a reading: a well-formed glitch just before the real reply is
