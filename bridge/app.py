@@ -169,7 +169,13 @@ def axis_configs(
         cfg = worker_config(own, sky, follow)
         pointing = r.pointing_for(spec, r.effective_az_limits, r.effective_el_limits)
         motion = replace(cfg.motion, spec=spec)
-        boxes.append(replace(cfg, spec=spec, motion=motion, pointing=pointing))
+        wind = cfg.wind
+        if axis is Axis.AZIMUTH and pointing.park is not None:
+            # the park's azimuth alone: the azimuth box turns no elevation, and judged with
+            # one (a dish's stow, park_el_deg) its park was refused: the storm's too
+            pointing = replace(pointing, park=(pointing.park[0], None))
+            wind = None if wind is None else replace(wind, park=(wind.park[0], None))
+        boxes.append(replace(cfg, spec=spec, motion=motion, pointing=pointing, wind=wind))
     return boxes[0], boxes[1]
 
 

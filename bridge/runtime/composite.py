@@ -39,6 +39,12 @@ Rules:
    command, or in any later step) is the elevation box's too, in the same serve (``Halts``):
    the turn under way stopped, nothing ended, as the part's halt does in its own box.
    Tracking's and following's parts run in both boxes (rule 4) and halt each on their own.
+7. Auto-park's quiet spell is the rotator's (session/autopark.py rule 4): a target to one axis
+   is activity in the other box's session too (``Batch.activity``), and before each box is
+   served it is told of the other's latest activity (its rotor seen turning, a hand on its
+   front panel: ``share_quiet``); each box then parks its own axis, the azimuth box the park's
+   azimuth alone (app.py ``axis_configs``, as the wind's park), together once the rotator was
+   left alone that long.
 """
 
 from __future__ import annotations
@@ -60,10 +66,11 @@ from bridge.session.actions import Action, Write
 from bridge.session.config import WorkerConfig
 from bridge.session.follow import Follow
 from bridge.session.mailbox import Batch, Mailbox
+from bridge.session.session import RotatorSession
 from bridge.session.tracking import Track
 from bridge.sky.worker import SkyWorker
 
-__all__ = ["CompositeWorker", "Composition", "merge", "split"]
+__all__ = ["CompositeWorker", "Composition", "merge", "share_quiet", "split"]
 
 log = logging.getLogger(__name__)
 AXES = (Axis.AZIMUTH, Axis.ELEVATION)
@@ -78,8 +85,17 @@ def split(batch: Batch) -> dict[Axis, Batch]:
     if target is not None and target.el_deg is not None:
         el = replace(target, az_deg=None, true_az_deg=None)
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
-    alone = replace(batch, target=el, feature_commands=[])
-    return {Axis.AZIMUTH: replace(batch, target=az), Axis.ELEVATION: alone}
+    moved = target is not None  # rule 7: the quiet spell starts again in both
+    alone = replace(batch, target=el, feature_commands=[], activity=moved)
+    return {Axis.AZIMUTH: replace(batch, target=az, activity=moved), Axis.ELEVATION: alone}
+
+
+def share_quiet(sessions: list[RotatorSession]) -> None:
+    """Rule 7: each box's auto-park told of the latest activity of either."""
+    latest = max(s.autopark.since for s in sessions)
+    for s in sessions:
+        if s.autopark.since < latest:
+            s.autopark.activity(latest)
 
 
 def merge(
@@ -288,6 +304,7 @@ class CompositeWorker:
         for box in self.boxes.values():
             fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):
+                share_quiet([b.session for b in self.boxes.values()])  # rule 7
                 box.guarded(box.serve, now, ready)
         ends = self.composition.ends()  # rule 4
         if ends:

@@ -12,6 +12,9 @@ Rules:
 3. The park is an ordinary target (source ``auto-park``): any command meanwhile replaces or
    stops it, and it counts as activity itself, so a park that cannot finish (a stall) is
    tried again only after another quiet spell.
+4. A rotator of two boxes (runtime/composite.py rule 7) has one quiet spell: each box's
+   auto-park is told of the other's activity (``since``, ``activity``), but not of its park
+   (rule 3's, kept apart), so both axes park together once the rotator was left alone.
 """
 
 from __future__ import annotations
@@ -35,13 +38,19 @@ class AutoPark:
         self._rig = rig
         self._after_s = rig.park_after_idle_s if park is not None else 0.0
         self._park = park
-        self._since = -math.inf
+        self._since = -math.inf  # rule 1: the last activity
+        self._parked_t = -math.inf  # rule 3: its own last park (rule 4: not shared)
 
     @property
     def on(self) -> bool:
         """Whether it ever parks (a park position and a quiet time configured): off, its step
         changes nothing and the session does not run it (parts.py rule 3)."""
         return self._after_s > 0.0
+
+    @property
+    def since(self) -> float:
+        """Rule 4: when the last activity was (not its own park)."""
+        return self._since
 
     def activity(self, now: float) -> None:
         """Rule 1: the quiet spell starts again."""
@@ -51,7 +60,7 @@ class AutoPark:
         """When parking is due (None: never)."""
         if self._after_s <= 0.0 or not math.isfinite(self._since):
             return None
-        return self._since + self._after_s
+        return max(self._since, self._parked_t) + self._after_s
 
     def wakeup(self, now: float) -> float | None:
         """When the session must look again: the deadline while it lies ahead. Once it has
@@ -72,7 +81,7 @@ class AutoPark:
         ready = mo.at_rest(m) and scene.pending is None  # rule 2 (no brake: motion rule 4)
         if not ready or scene.locked or scene.parked:
             return NOTHING
-        self._since = now  # rule 3
+        self._parked_t = now  # rule 3
         park = Target(self._park[0], self._park[1], Source.AUTO_PARK, park=True)
         try:
             judged = self._rig.aim.judge(park, m.position_deg)

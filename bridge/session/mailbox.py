@@ -114,6 +114,7 @@ class Batch:
     wind: float | None = None  # rule 9: the newest wind reading (km/h)
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
+    activity: bool = False  # a command to a composite's other box (runtime/composite.py rule 7)
     epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
     # in this batch or an earlier one)
     # rule 12, in the order put, with where a stop, lock or clearing came among them
@@ -134,7 +135,7 @@ class Batch:
         fence = fence or self.express_hold is not None or self.express_release is not None
         feeds = self.follow is not None or self.heard is not None
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
-        feeds = feeds or bool(self.feature_commands)
+        feeds = feeds or bool(self.feature_commands) or self.activity
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
     def drop_moving(self) -> None:

@@ -272,6 +272,8 @@ class RotatorSession:
             ctl.stop(now)  # whatever we believe: the lock is for tower work
         if batch.stop is not None or batch.target is not None or batch.lock is not None:
             self._activity(now)  # (unlocking starts a new spell)
+        elif batch.activity:  # (a target to a composite's other box)
+            self._activity(now)
         elif batch.feature_commands:
             self._activity(now)
         if batch.stop is not None:

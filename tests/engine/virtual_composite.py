@@ -19,7 +19,7 @@ from typing import Any
 from bridge.app import axis_configs, worker_config
 from bridge.core.model import RotatorStatus, Stop, Target
 from bridge.protocols.axes import Axis
-from bridge.runtime.composite import Composition, Halts, split
+from bridge.runtime.composite import Composition, Halts, share_quiet, split
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
@@ -158,5 +158,6 @@ class VirtualComposite:
     def _step(self, until: float) -> None:
         t = min(box.next_time(until) for box in self.boxes.values())
         for box in self.boxes.values():
+            share_quiet([b.session for b in self.boxes.values()])  # composite.py rule 7
             box._step(t)
         self._absorb()

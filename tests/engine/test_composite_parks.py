@@ -1,0 +1,79 @@
+"""A composite rotator's own moves (runtime/composite.py rule 7, app.py ``axis_configs``): the
+storm's park and auto-park turn both boxes, each its own axis, and auto-park's quiet spell is
+the rotator's, not a box's: an operator working one axis never has the other parked under
+them. In virtual time, an RT-21 on the azimuth and a GS-232B used for its elevation."""
+
+from __future__ import annotations
+
+from bridge.core.model import Target
+from bridge.protocols.axes import Axis
+from tests.engine.virtual_composite import VirtualComposite
+
+FAST = {
+    Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
+    Axis.ELEVATION: {"az_speed_deg_s": 6.0, "el_speed_deg_s": 2.5},
+}
+STOW = {"park_az_deg": 180, "park_el_deg": 0}  # a dish's stow: an elevation with the park
+
+
+def there(v: VirtualComposite, az: float, el: float) -> bool:
+    return abs(v.az.truth().az_deg - az) < 1.0 and abs(v.el.truth().el_deg - el) < 1.0
+
+
+def aimed(settings: dict[str, object]) -> VirtualComposite:
+    v = VirtualComposite("rt21", "gs232b", settings=settings, emulators=FAST)
+    v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+    v.aim(Target(100.0, 30.0))
+    v.run_until(lambda h: there(h, 100.0, 30.0), 60, "at 100/30")
+    return v
+
+
+def test_a_storm_parks_both_axes_of_a_stow_position() -> None:
+    """Judged by the azimuth box with the park's elevation, the storm's park was refused there
+    ("RT-21 has no elevation axis"): the dish stowed its elevation and kept facing the storm."""
+    wind = {"wind_topic": "weather/wind", "wind_park_above": 60, **STOW}
+    with aimed(wind) as v:
+        t = v.now
+        v.mailbox.put_wind(90.0)
+        v._take()
+        v.run_until(lambda h: there(h, 180.0, 0.0), 300, "both axes at the wind park")
+        assert v.status.wind is not None and v.status.wind.storm
+        assert [e.message for e in [*v.az.errors(), *v.el.errors()] if e.kind == "refused"] == []
+        assert v.az.published(since=t)[-1].last_command_source == "wind"
+
+
+def test_auto_park_parks_both_axes_together_once_the_rotator_was_left_alone() -> None:
+    with aimed({"park_after_idle_s": 120, **STOW}) as v:
+        start = v.now
+        v.run_until(lambda h: there(h, 180.0, 0.0), 400, "both axes parked")
+        assert 120 <= v.now - start <= 200
+        assert [e.message for e in [*v.az.errors(), *v.el.errors()] if e.kind == "refused"] == []
+
+
+def test_working_the_elevation_alone_never_parks_the_azimuth() -> None:
+    """An elevation tweak every 30 s (the moon climbs): each was no command to the azimuth box,
+    whose own quiet spell then parked its axis under the operator."""
+    with aimed({"park_after_idle_s": 120, "park_az_deg": 180}) as v:
+        for step in range(1, 11):
+            v.run_for(30.0)
+            v.aim(Target(None, 30.0 + step))
+        assert abs(v.az.truth().az_deg - 100.0) < 1.0
+        assert v.status.last_command_source != "auto-park"
+
+
+def test_working_the_azimuth_alone_never_parks_the_elevation() -> None:
+    with aimed({"park_after_idle_s": 120, **STOW}) as v:
+        for step in range(1, 11):
+            v.run_for(30.0)
+            v.aim(Target(100.0 + 2 * step, None))
+        assert abs(v.el.truth().el_deg - 30.0) < 1.0
+
+
+def test_a_hand_on_one_box_keeps_the_other_from_parking() -> None:
+    """autopark.py rule 1 for the rotator: the azimuth turned at its front panel, again and
+    again, is activity of the rotator; its elevation is not parked meanwhile."""
+    with aimed({"park_after_idle_s": 120, **STOW}) as v:
+        for step in range(1, 8):
+            v.run_for(30.0)
+            v.az.manual_rotate(100.0 + 10 * (step % 2))
+        assert abs(v.el.truth().el_deg - 30.0) < 1.0
