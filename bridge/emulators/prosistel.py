@@ -171,6 +171,11 @@ class Prosistel(TwoAxes):
 
     # -- front panel and faults -----------------------------------------------------------------
 
+    @property
+    def transmitting(self) -> bool:
+        """Whether bytes are still to go out (a power cycle now would cut a frame short)."""
+        return self._tx.pending() > 0
+
     def power_cycle(self, now: float) -> None:
         now = self._update(now)
         self._halt(now, "power off")
