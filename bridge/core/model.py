@@ -175,6 +175,7 @@ class WindInfo:
     calm_since_unix: float | None = None  # in a storm: below the release level since then
     silent: bool = False  # no reading for wind_silent_min: the state is kept
     refusal: str | None = None  # in a storm: why motion is refused (the judge says it too)
+    halted: bool = False  # in a storm: its park was stopped, not tried again (wind.py rule 3)
 
 
 @dataclass(frozen=True)

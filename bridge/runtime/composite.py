@@ -213,6 +213,7 @@ class CompositeWorker:
         locked: bool = False,
         health: dict[str, object] | None = None,
         storm: bool = False,
+        storm_halted: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -236,6 +237,7 @@ class CompositeWorker:
                 locked=locked,
                 health=health if axis is Axis.AZIMUTH else None,  # the azimuth's is shown
                 storm=storm,
+                storm_halted=storm_halted,
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,

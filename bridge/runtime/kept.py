@@ -15,7 +15,9 @@ Rules:
    survive a restart.
 4. A storm outlives a restart (wind.py rule 2: only readings end it): ``seen_wind`` looks at
    every status on the lines thread and hands a storm begun or ended to the writer; the next
-   start begins in the storm (parked again, motion refused) until readings end it. The wind
+   start begins in the storm (parked again, motion refused) until readings end it; a storm
+   whose park a STOP or lock ON stopped (wind.py rule 3) is kept so too, and the next start
+   does not park again (the operator's last word outlives the restart, as the lock does). The wind
    park has one owner, the session on the lines thread: it alone decides a storm, the judge
    reads the session's status, and the save is queued on that same thread in the order the
    storms came; the lines thread takes no owner's lock (docs/architecture.md rule 14).
@@ -112,16 +114,18 @@ class Kept:
         if self.locked:  # rule 6
             log.warning("%s: safety lock ON, kept from the state file", rotator_id)
         self.storm = store.storm(rotator_id)  # rule 4: as the last start left it
+        self.storm_halted = self.storm and store.storm_halted(rotator_id)
 
     def seen_wind(self, wind: WindInfo | None) -> None:
         """Rule 4 (lines thread: it only compares and hands over)."""
         storm = wind is not None and wind.storm
-        if storm != self.storm:
-            self.storm = storm
-            self._store.later(lambda: self._save_storm_now(storm))
+        halted = storm and wind is not None and wind.halted
+        if storm != self.storm or halted != self.storm_halted:
+            self.storm, self.storm_halted = storm, halted
+            self._store.later(lambda: self._save_storm_now(storm, halted))
 
-    def _save_storm_now(self, storm: bool) -> None:
-        if not self._store.set_storm(self._id, storm):
+    def _save_storm_now(self, storm: bool, halted: bool) -> None:
+        if not self._store.set_storm(self._id, storm, halted=halted):
             self._report(
                 ErrorKind.STATE,
                 f"the storm's {'start' if storm else 'end'} could not be saved: a restart "

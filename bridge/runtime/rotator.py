@@ -147,6 +147,7 @@ class Rotator:
                 locked=self._kept.locked,
                 health=store.health(self.id),
                 storm=self._kept.storm,  # kept.py rule 4
+                storm_halted=self._kept.storm_halted,
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,  # the app shares one among all rotators (skywork.py)
@@ -162,6 +163,7 @@ class Rotator:
                 locked=self._kept.locked,
                 health=store.health(self.id),
                 storm=self._kept.storm,
+                storm_halted=self._kept.storm_halted,
                 wall=wall,
                 port_opener=port_opener,
                 sky=sky,

@@ -229,14 +229,24 @@ class StateStore:
         with self._lock:
             return self._data.get(rotator_id, {}).get("storm") is True
 
-    def set_storm(self, rotator_id: str, storm: bool) -> bool:
-        """Remember a storm begun or ended; False if it could not be written."""
+    def storm_halted(self, rotator_id: str) -> bool:
+        """Whether that storm's park was stopped (a STOP or lock ON: session/wind.py rule 3)."""
+        with self._lock:
+            return self._data.get(rotator_id, {}).get("storm_halted") is True
+
+    def set_storm(self, rotator_id: str, storm: bool, *, halted: bool = False) -> bool:
+        """Remember a storm begun or ended, and whether its park was stopped; False if it
+        could not be written."""
         with self._lock:
             entry = self._data.setdefault(rotator_id, {})
             if storm:
                 entry["storm"] = True
             else:
                 entry.pop("storm", None)
+            if storm and halted:
+                entry["storm_halted"] = True
+            else:
+                entry.pop("storm_halted", None)
             return self._save()
 
     def set_locked(self, rotator_id: str, locked: bool) -> bool:

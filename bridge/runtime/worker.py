@@ -85,6 +85,7 @@ class Worker:
         locked: bool = False,
         health: dict[str, object] | None = None,
         storm: bool = False,
+        storm_halted: bool = False,
         wall: Callable[[], float] = time.time,
         port_opener: PortOpener = open_port,
         sky: SkyWorker | None = None,
@@ -94,7 +95,12 @@ class Worker:
         self._sky = sky or SkyWorker()
         self._answers: deque[tuple[int, Answer]] = deque()  # rule 5: filled by the sky thread
         self.session = RotatorSession(
-            cfg, options=options, locked=locked, health=health, storm=storm
+            cfg,
+            options=options,
+            locked=locked,
+            health=health,
+            storm=storm,
+            storm_halted=storm_halted,
         )
         self._mailbox = mailbox
         self._box = mailbox.fileno()

@@ -167,6 +167,7 @@ class RotatorSession:
         locked: bool = False,
         health: dict[str, object] | None = None,  # what the state file kept (health.py)
         storm: bool = False,  # parked for a storm when last stopped (kept.py rule 4)
+        storm_halted: bool = False,  # ... and its park stopped (wind.py rule 3)
     ) -> None:
         self.cfg = cfg
         self.locked = locked
@@ -177,7 +178,7 @@ class RotatorSession:
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower
         self.autopark = AutoPark(cfg)
-        self.wind = WindPark(cfg, storm=storm and cfg.wind is not None)
+        self.wind = WindPark(cfg, storm=storm and cfg.wind is not None, halted=storm_halted)
         self.health = Health(cfg, health)
         self.view = st.View()
         self.status = RotatorStatus(cfg.rotator_id, locked=locked, health=self.health.report)

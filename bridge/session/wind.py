@@ -17,7 +17,9 @@ Rules:
    nothing of the wind since).
 3. STOP and the lock always work (docs/architecture.md rule 11): a stop or lock ON during a
    storm stops the park under way, and the park is not tried again until the next storm;
-   motion stays refused meanwhile.
+   motion stays refused meanwhile. That holds across a restart in the storm (the status's
+   ``halted``, kept by runtime/kept.py rule 4) and a reset of this part (session.py rule 14):
+   neither undoes the operator's STOP.
 4. A wind topic silent for ``wind_silent_min`` is reported once (kind ``wind``) and shown in
    the status; the state it had is kept. The next reading clears it.
 5. The park is judged like any target (pointing.py); one the judge refuses is reported, and
@@ -46,7 +48,7 @@ log = logging.getLogger(__name__)
 class WindPark:
     """Without a wind topic (``rig.wind`` None) it never does anything."""
 
-    def __init__(self, rig: WorkerConfig, *, storm: bool = False) -> None:
+    def __init__(self, rig: WorkerConfig, *, storm: bool = False, halted: bool = False) -> None:
         self._rig, self._cfg = rig, rig.wind or WindConfig(0.0, 0.0, 0.0, (0.0, None), 0.0)
         self.on = rig.wind is not None
         self.storm = storm
@@ -56,7 +58,8 @@ class WindPark:
         self._since_t: float | None = None  # silence counts from here before any reading
         self._calm_since: float | None = None
         self._silent = False
-        self._park_owed = storm
+        self._park_owed = storm and not halted  # rule 3: a park stopped stays stopped
+        self._halted = storm and halted  # ... across a restart (kept.py rule 4) and a reset
         self._wall_offset_s = 0.0
 
     @property
@@ -70,6 +73,7 @@ class WindPark:
             calm_since_unix=None if calm is None else calm + self._wall_offset_s,
             silent=self._silent,
             refusal=self.refusal(),
+            halted=self._halted,
         )
 
     def reading(self, kmh: float, now: float, *, replayed: bool = False) -> None:
@@ -99,13 +103,19 @@ class WindPark:
         """Rule 1: a reading above the park level; rule 2: no calm since."""
         self._calm_since = None
         if not self.storm:
-            self.storm, self._park_owed = True, True
+            self.storm, self._park_owed, self._halted = True, True, False
             self._why = f"wind {kmh:.0f} km/h above {self._cfg.park_above_kmh:g}"
             log.warning("%s: %s: parking for the storm", self._rig.rotator_id, self._why)
+
+    @property
+    def park_halted(self) -> bool:
+        """Rule 3: a stop or lock ON came in this storm: its park is not tried again."""
+        return self._halted
 
     def halted(self) -> None:
         """Rule 3: a stop or lock ON; the park is not tried again in this storm."""
         self._park_owed = False
+        self._halted = self.storm
 
     def refusal(self) -> str | None:
         """Why motion is refused now (rule 1), if it is."""
@@ -141,6 +151,7 @@ class WindPark:
         calm, last = self._calm_since, self._last_t
         if self.storm and calm is not None and last is not None and last - calm >= cfg.hold_s:
             self.storm, self._calm_since, self._park_owed = False, None, False  # rule 2
+            self._halted = False
             log.info("%s: the storm is over: motion allowed again", self._rig.rotator_id)
         if not (self.storm and self._park_owed) or scene.locked:
             return NOTHING if error is None else Proposal(error=error)

@@ -10,7 +10,7 @@ import pytest
 
 from bridge.app import worker_config
 from bridge.core.model import ErrorKind, MotionState, Source, Target
-from bridge.session.parts import NOTHING
+from bridge.session.parts import NOTHING, Proposal, Scene
 from bridge.session.wind import WindPark
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
@@ -256,6 +256,32 @@ def test_a_wind_part_that_raises_keeps_the_storm(monkeypatch: pytest.MonkeyPatch
         assert v.errors("internal")  # each step, as long as the bug is there
         v.command(Target(200.0))
         assert v.errors("refused")[-1].message.endswith("parked for the storm")
+
+
+def test_a_wind_part_that_raises_after_a_stop_does_not_park_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Rule 3 through a reset (session.py rule 14): the operator's STOP of the storm's park
+    stays in effect when the wind's part is reset after a bug (the reset owed the park again,
+    and the rotor went to it)."""
+    with windy() as v:
+        wind(v, 90.0)
+        v.run_until(lambda h: h.truth().is_moving, 10, "the park starts")
+        v.stop()
+        v.run_until(lambda h: h.state is MotionState.IDLE, 30, "stopped")
+        where, real, raised = v.truth().az_deg, WindPark.step, []
+
+        def once(self: WindPark, scene: Scene) -> Proposal:
+            if not raised:
+                raised.append(True)
+                raise RuntimeError("a bug")
+            return real(self, scene)
+
+        monkeypatch.setattr(WindPark, "step", once)
+        v.run_for(60.0)
+        assert raised and v.errors("internal")
+        assert abs(v.truth().az_deg - where) <= 0.5
+        assert v.status.wind is not None and v.status.wind.storm
 
 
 def test_a_replayed_calm_never_ends_a_storm_nor_says_the_station_is_back() -> None:

@@ -186,6 +186,33 @@ def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
     assert len(rig.emu.frames("set")) == sets
 
 
+def test_a_storm_park_the_operator_stopped_is_not_done_again_by_a_restart(rig: Rig) -> None:
+    """wind.py rule 3 across a restart (kept.py rule 4): the storm's park stopped by STOP stays
+    stopped when the bridge comes back in the same storm; the storm itself goes on."""
+    start(rig)
+    rig.probe.publish(TOPIC, "25")  # 90 km/h: the park from 120 towards 90 begins
+    wait_until(lambda: rig.emu.frames("set"), 10, "the park sent")
+    rig.probe.publish("rotor/stop", "stop")
+    wait_until(
+        lambda: json.loads((rig.tmp / "state.json").read_text())["rotators"]["tower"].get(
+            "storm_halted"
+        ),
+        10,
+        "the stopped park in the state file",
+    )
+    rig.stop()
+    where, sets = rig.emu.state().az_deg, len(rig.emu.frames("set"))
+    mark, t_restart = rig.probe.mark(), time.monotonic()
+    rig.start()
+    rig.ready("tower", after=t_restart)
+    assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
+    before = rig.probe.mark()
+    rig.probe.publish("rotor/target", "200")  # judged after the steps that would have parked
+    assert "parked for the storm" in error_after(rig, before, "refused")["message"]
+    assert len(rig.emu.frames("set")) == sets
+    assert abs(rig.emu.state().az_deg - where) < 1.0
+
+
 def refused(rig: Rig, timeout_s: float) -> bool:
     """A target, and whether it was refused within ``timeout_s`` (for the wind)."""
     mark = rig.probe.mark()

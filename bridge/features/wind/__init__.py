@@ -80,7 +80,8 @@ def _inputs(pairs: Sequence[tuple[Any, Any]]) -> Input:
 
 
 def _reset(s: RotatorSession, now: float) -> None:
-    s.wind = WindPark(s.cfg, storm=s.wind.storm)  # a storm goes on: refusing is the safe side
+    # a storm goes on (refusing is the safe side); a park stopped stays stopped (wind.py rule 3)
+    s.wind = WindPark(s.cfg, storm=s.wind.storm, halted=s.wind.park_halted)
 
 
 # its session part (parts.py rule 4)
