@@ -157,6 +157,16 @@ def test_a_members_refusal_is_on_the_groups_error_and_status_and_the_other_turns
     assert status["refused"] == {"lower": "locked: unlock it first"}
 
 
+def test_when_every_member_refuses_the_groups_error_says_none_turns() -> None:
+    locked = Refused(RefusalCode.LOCKED, "locked: unlock it first")
+    svc, pub, upper, lower = group_service(refuse_lower=locked)
+    upper._refuse = Refused(RefusalCode.KEEP_OUT, "azimuth 120 is in the keep-out sector")
+    svc.on_message("rotor/stack/target", b"120", False)
+    (error,) = [json.loads(p) for t, p, _r in pub.take() if t == "rotor/stack/error"]
+    assert set(error["members"]) == {"upper", "lower"}
+    assert error["message"].endswith("; none turns")
+
+
 @pytest.mark.parametrize(
     ("payload", "retain", "why"),
     [

@@ -106,12 +106,14 @@ def fan_out(
 
 
 def refusals_json(group: Group, command: str, refused: Mapping[str, str]) -> str:
-    """The group's error event (rule 3): which members did not take the command, and why."""
+    """The group's error event (rule 3): which members did not take the command, and why;
+    whether any other did (none: nothing turns)."""
     names = ", ".join(refused)
+    others = "the others turn" if set(group.member_ids) - set(refused) else "none turns"
     doc = {
         "kind": "refused",
         "command": command,
-        "message": f"group {group.id}: not taken by {names}; the others turn",
+        "message": f"group {group.id}: not taken by {names}; {others}",
         "members": dict(refused),
     }
     return json.dumps(doc, separators=(",", ":"))
