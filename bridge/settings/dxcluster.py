@@ -6,8 +6,8 @@ Rules:
    locator. Each missing one is an error naming it.
 2. The cty file is read from disk at start-up (interfaces/dxcluster/cty.py): one that is missing or
    unreadable stops the start with one line naming it. The bridge never downloads it.
-3. ``bands`` names bands of BANDS_KHZ (empty: every spot); a name not there is an error that
-   lists the known ones.
+3. ``bands`` names bands of core/bands.py's table (empty: every spot), the one a rotator's
+   ``bands`` names: a name not there is an error that lists the known ones.
 4. Every key carries its meaning (``description``) for docs/configuration.md.
 """
 
@@ -18,33 +18,17 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from bridge.core.bands import NAMES, UnknownBand, band_of_hz, canonical
+
 DEFAULT_PORT = 7300  # DX Spider's usual telnet port (many nodes also take 23 or 8000)
 
-BANDS_KHZ: dict[str, tuple[float, float]] = {  # rule 3: the IARU amateur bands, widest region
-    "160m": (1800, 2000),
-    "80m": (3500, 4000),
-    "60m": (5250, 5450),
-    "40m": (7000, 7300),
-    "30m": (10100, 10150),
-    "20m": (14000, 14350),
-    "17m": (18068, 18168),
-    "15m": (21000, 21450),
-    "12m": (24890, 24990),
-    "10m": (28000, 29700),
-    "6m": (50000, 54000),
-    "4m": (70000, 71000),
-    "2m": (144000, 148000),
-    "70cm": (430000, 440000),
-}
 _CALL = re.compile(r"[A-Z0-9/-]{3,20}", re.ASCII)
 
 
 def band_of(freq_khz: float) -> str | None:
-    """The band a frequency is in, or None."""
-    for name, (low, high) in BANDS_KHZ.items():
-        if low <= freq_khz <= high:
-            return name
-    return None
+    """The band a spot's frequency (kHz) is in, or None: core/bands.py's table, the one a
+    rotator's ``bands``, the loggers and following read."""
+    return band_of_hz(freq_khz * 1000)
 
 
 class DxClusterSettings(BaseModel):
@@ -91,7 +75,7 @@ class DxClusterSettings(BaseModel):
     )
     bands: list[str] = Field(
         default_factory=list,
-        description="only spots on these bands (" + ", ".join(BANDS_KHZ) + "); empty: all",
+        description="only spots on these bands (" + ", ".join(NAMES) + "); empty: all",
         examples=[["20m", "15m", "10m"]],
         json_schema_extra={"unset": "every band"},
     )
@@ -109,12 +93,10 @@ class DxClusterSettings(BaseModel):
     @field_validator("bands")
     @classmethod
     def _bands(cls, v: list[str]) -> list[str]:
-        names = [b.strip().lower() for b in v]
-        unknown = [b for b in names if b not in BANDS_KHZ]
-        if unknown:
-            known = ", ".join(BANDS_KHZ)
-            raise ValueError(f"unknown band(s) {', '.join(unknown)}: known are {known}")
-        return names
+        try:
+            return [canonical(b) for b in v]
+        except UnknownBand as exc:
+            raise ValueError(str(exc)) from None
 
     @model_validator(mode="after")
     def _needed(self) -> DxClusterSettings:

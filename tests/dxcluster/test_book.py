@@ -9,6 +9,7 @@ from bridge.core import geo
 from bridge.interfaces.dxcluster.book import MAX_CALLS, Book, locator_in
 from bridge.interfaces.dxcluster.cty import parse_dat
 from bridge.interfaces.dxcluster.spots import Spot
+from bridge.settings.dxcluster import DxClusterSettings
 from tests.dxcluster.cty_sample import CTY_DAT
 from tests.integration.test_pointing_bridge import locator_centre, reference_path
 from tests.support.clock import FakeClock
@@ -87,6 +88,19 @@ def test_bands_count_and_age() -> None:
     assert b.prune()
     assert b.calls() == () and b.newest("JA1CCC") is None
     assert json.loads(b.as_json()) == {"spots": []}
+
+
+def test_the_bands_are_the_rotators_and_the_loggers_table() -> None:
+    """settings/dxcluster.py rule 3: one table of bands (core/bands.py), so a spot is on the
+    band a rotator's ``bands`` means: 23 cm and 1.25 m are bands; 70.6 MHz is no 4 m."""
+    settings = DxClusterSettings(bands=["23CM", "1.25m", "70cm", "4m"])
+    assert settings.bands == ["23cm", "1.25m", "70cm", "4m"]
+    b = book(FakeClock(), bands=tuple(settings.bands))
+    assert b.add(spot("JA1AAA", 1296200.0))
+    assert b.add(spot("JA1BBB", 222100.0))
+    assert b.add(spot("JA1CCC", 445000.0))  # Region 2's 70 cm
+    assert not b.add(spot("JA1DDD", 70600.0))  # above 4 m's widest edge (70.5 MHz)
+    assert {s["band"] for s in json.loads(b.as_json())["spots"]} == {"23cm", "1.25m", "70cm"}
 
 
 def test_the_calls_are_bounded() -> None:

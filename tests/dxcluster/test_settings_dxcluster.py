@@ -49,7 +49,7 @@ def test_off_by_default_and_read_when_on(tmp_path: Path) -> None:
         ('[dxcluster]\nenabled = true\nhost = "h"\ncty_file = "c"\n', "login: needed"),
         ('[dxcluster]\nenabled = true\nhost = "h"\nlogin = "G4ABC"\n', "cty_file: needed"),
         ('[dxcluster]\nlogin = "G4 ABC"\n', "dxcluster.login"),
-        ('[dxcluster]\nbands = ["20m", "11m"]\n', "unknown band(s) 11m"),
+        ('[dxcluster]\nbands = ["20m", "11m"]\n', "'11m' is not an amateur band"),
         ("[dxcluster]\nport = 0\n", "dxcluster.port"),
         ("[dxcluster]\nmax_spots = 500\n", "dxcluster.max_spots"),
         ("[dxcluster]\nhots = 1\n", "host"),  # a typo: the nearest key suggested
