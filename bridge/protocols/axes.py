@@ -10,7 +10,9 @@ Rules:
    read: the azimuth box's spec has no elevation and its codec reports none. An az/el box's
    codec still writes an elevation in every target (GS-232's ``W``, SPID's frame): it is sent
    the elevation the box last reported for itself (as rule 2 does for an elevation box's
-   azimuth), never the horizon, which every az/el codec writes for an elevation left out.
+   azimuth), never the horizon, which every az/el codec writes for an elevation left out;
+   within the box's own elevation range (a box parked at -0.5 reports it, and its codec
+   writes nothing below 0: sent as it was, every azimuth target raised).
 2. The elevation box reports where it points and is either an az/el box used for its
    elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
    Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
@@ -107,8 +109,9 @@ class AzimuthOnly:
 class AzimuthOfAzEl(AzimuthOnly):
     """Rule 1, for an az/el box: its elevation stays where the box has it."""
 
-    def __init__(self, inner: Codec) -> None:
+    def __init__(self, inner: Codec, el_range: tuple[float, float]) -> None:
         super().__init__(inner)
+        self._el_range = el_range  # what its codec writes
         self._own_el: float | None = None  # what the box last said of its elevation, taken
         self._pending: list[tuple[PositionReply, float | None]] = []  # fed: (reply, its el)
 
@@ -130,7 +133,8 @@ class AzimuthOfAzEl(AzimuthOnly):
         for i, (fed, own) in enumerate(self._pending):
             if fed is reply:
                 if own is not None:
-                    self._own_el = own
+                    low, high = self._el_range
+                    self._own_el = min(max(own, low), high)
                 del self._pending[: i + 1]
                 return
 
@@ -214,10 +218,12 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
     """``spec`` as the box of one axis of a composite rotator (rules 1 and 2)."""
     if axis is Axis.AZIMUTH:
         factory = spec.codec_factory
-        wrap = AzimuthOfAzEl if spec.has_elevation else AzimuthOnly
+        el_range = (spec.el_min_deg, spec.el_max_deg)
         return replace(
             spec,
-            codec_factory=lambda: wrap(factory()),
+            codec_factory=lambda: (
+                AzimuthOfAzEl(factory(), el_range) if spec.has_elevation else AzimuthOnly(factory())
+            ),
             has_elevation=False,
             el_min_deg=0.0,
             el_max_deg=0.0,

@@ -179,6 +179,30 @@ def test_an_az_el_box_turning_the_azimuth_keeps_its_own_elevation_where_it_is(mo
         assert v.status.elevation_deg == 10.0
 
 
+def test_an_az_el_box_turning_the_azimuth_whose_elevation_reads_below_zero_still_turns() -> None:
+    """protocols/axes.py rule 1: the elevation sent back is within the box's own range (an
+    Easycomm box reads -0.5 and writes nothing below 0: the target raised, and the azimuth
+    box's port was closed as for a bug, at every move)."""
+    boxes = {Axis.AZIMUTH: {}, Axis.ELEVATION: FAST[Axis.AZIMUTH]}
+    with VirtualComposite("easycomm2", "rt21", emulators=boxes) as v:
+        line = bytearray()
+
+        def below_zero(data: bytes, now: float) -> bytes:  # (the box sends byte by byte)
+            line.extend(data)
+            if not line.endswith(b"\n"):
+                return b""
+            whole = bytes(line).replace(b"EL0.0", b"EL-0.5")
+            line.clear()
+            return whole
+
+        v.az.to_host = below_zero
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        assert v.status.bearing_deg is not None and abs(v.status.bearing_deg - 200.0) <= 1.0
+        assert [w for w in v.az.sent() if b"." in w] == [b"AZ200.0 EL0.0\n"]
+
+
 def test_a_glitched_reading_of_the_elevation_box_never_becomes_its_azimuth() -> None:
     """The azimuth an az/el box used for its elevation is sent back (protocols/axes.py rule 2)
     is one the session took as a reading: a well-formed glitch just before the real reply is
