@@ -42,9 +42,11 @@ Rules:
 7. Auto-park's quiet spell is the rotator's (session/autopark.py rule 4): a target to one axis
    is activity in the other box's session too (``Batch.activity``), and before each box is
    served it is told of the other's latest activity (its rotor seen turning, a hand on its
-   front panel: ``share_quiet``); each box then parks its own axis, the azimuth box the park's
-   azimuth alone (app.py ``axis_configs``, as the wind's park), together once the rotator was
-   left alone that long.
+   front panel: ``share_quiet``), and a box that does not answer is activity at every serve
+   (the rotator is offline: no box parks its axis alone, and the spell starts again when both
+   answer, as autopark.py rule 1 has it for one controller); each box then parks its own axis,
+   the azimuth box the park's azimuth alone (app.py ``axis_configs``, as the wind's park),
+   together once the rotator was left alone that long.
 """
 
 from __future__ import annotations
@@ -90,9 +92,12 @@ def split(batch: Batch) -> dict[Axis, Batch]:
     return {Axis.AZIMUTH: replace(batch, target=az, activity=moved), Axis.ELEVATION: alone}
 
 
-def share_quiet(sessions: list[RotatorSession]) -> None:
-    """Rule 7: each box's auto-park told of the latest activity of either."""
+def share_quiet(sessions: list[RotatorSession], now: float) -> None:
+    """Rule 7: each box's auto-park told of the latest activity of either (a box that does not
+    answer: now)."""
     latest = max(s.autopark.since for s in sessions)
+    if not all(s.controller.link is not None and s.controller.answering for s in sessions):
+        latest = now
     for s in sessions:
         if s.autopark.since < latest:
             s.autopark.activity(latest)
@@ -306,7 +311,7 @@ class CompositeWorker:
         for box in self.boxes.values():
             fds, until, _ = box.wants(now)
             if now >= until or not ready.isdisjoint(fds):
-                share_quiet([b.session for b in self.boxes.values()])  # rule 7
+                share_quiet([b.session for b in self.boxes.values()], now)  # rule 7
                 box.guarded(box.serve, now, ready)
         ends = self.composition.ends()  # rule 4
         if ends:

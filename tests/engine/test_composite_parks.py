@@ -5,7 +5,7 @@ them. In virtual time, an RT-21 on the azimuth and a GS-232B used for its elevat
 
 from __future__ import annotations
 
-from bridge.core.model import Target
+from bridge.core.model import MotionState, Target
 from bridge.protocols.axes import Axis
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -77,3 +77,19 @@ def test_a_hand_on_one_box_keeps_the_other_from_parking() -> None:
             v.run_for(30.0)
             v.az.manual_rotate(100.0 + 10 * (step % 2))
         assert abs(v.el.truth().el_deg - 30.0) < 1.0
+
+
+def test_no_box_parks_its_axis_while_the_other_does_not_answer() -> None:
+    """Rule 7: the rotator is offline (targets refused); the azimuth box parked by itself all
+    the same. Once both answer, the quiet spell starts again."""
+    with aimed({"park_after_idle_s": 120, **STOW}) as v:
+        v.el.set_silent(True)  # the elevation box stops answering (unplugged, powered off)
+        v.run_until(lambda h: h.status.state is MotionState.OFFLINE, 60, "offline")
+        t = v.now
+        v.run_for(300)
+        assert v.az.frames("move", since=t) == []
+        v.el.set_silent(False)
+        v.run_until(lambda h: h.status.available, 30, "both answer again")
+        back = v.now
+        v.run_until(lambda h: there(h, 180.0, 0.0), 400, "both axes parked")
+        assert v.now - back >= 120

@@ -158,6 +158,6 @@ class VirtualComposite:
     def _step(self, until: float) -> None:
         t = min(box.next_time(until) for box in self.boxes.values())
         for box in self.boxes.values():
-            share_quiet([b.session for b in self.boxes.values()])  # composite.py rule 7
+            share_quiet([b.session for b in self.boxes.values()], t)  # composite.py rule 7
             box._step(t)
         self._absorb()
