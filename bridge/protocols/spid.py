@@ -23,6 +23,14 @@ Rules:
    lines (``<digits>: text`` CR LF) are skipped whole, never read as a position; a line ends at
    its LF or where a well-formed frame starts, so a torn line costs no reply.
 4. Only frames that answer something we sent become readings.
+5. The resolution (PH, PV) is what every target is counted in: read wrong, a target turns the
+   rotor to its end stops (20 degrees at 10 pulses per degree for 2 is 3800 pulses: azimuth
+   540). It is taken from a reply that is a reading (it answers us, no noise before it) and
+   whose PH and PV agree (the controller has one; a bit flipped in one of them breaks that).
+   The first such reply of a connection sets it; a later one that says another is not trusted
+   (asked again) unless the reply before it said the same: a controller whose resolution was
+   changed at its panel is believed on its second word, a bit flipped once never. A reading
+   outside what the controller can turn (azimuth -180..540, elevation -20..210) is spoiled.
 """
 
 from __future__ import annotations
@@ -45,6 +53,7 @@ from bridge.protocols.base import (
 START, END = 0x57, 0x20
 K_STOP, K_STATUS, K_SET = 0x0F, 0x1F, 0x2F
 RESOLUTIONS = (1, 2, 4, 10)
+AZ_RANGE, EL_RANGE = (-180.0, 540.0), (-20.0, 210.0)  # rule 5: what the controller turns
 _MAX_DEBUG_LINE = 200
 _DEBUG_LINES = re.compile(rb"(\d+:[^\n]*\n)+")
 
@@ -65,6 +74,7 @@ class SpidCodec(Plain):
         self._owed = 0  # replies still owed by the controller
         self._buf = bytearray()
         self._noisy = False  # junk (not a debug line) arrived while a reply was owed
+        self._said: int | None = None  # rule 5: the resolution the last reading said
 
     # -- encoding -------------------------------------------------------------------------
     def encode_query(self) -> bytes:
@@ -206,13 +216,14 @@ class SpidCodec(Plain):
             digits = frame[1:4]
             whole_az = 100 * digits[0] + 10 * digits[1] + digits[2] - 360
             return self._answer(frame, float(whole_az), None)
-        h, ph, v = frame[1:5], frame[5], frame[6:10]
+        h, ph, v, pv = frame[1:5], frame[5], frame[6:10], frame[10]
         az = 100 * h[0] + 10 * h[1] + h[2] + h[3] / 10 - 360
         el = 100 * v[0] + 10 * v[1] + v[2] + v[3] / 10 - 360
-        self.resolution = ph
-        return self._answer(frame, round(az, 1), round(el, 1))
+        return self._answer(frame, round(az, 1), round(el, 1), (ph, pv))
 
-    def _answer(self, frame: bytes, az: float, el: float | None) -> Reply:
+    def _answer(
+        self, frame: bytes, az: float, el: float | None, res: tuple[int, int] | None = None
+    ) -> Reply:
         if self._owed <= 0:
             return JunkReply(frame, JunkReason.UNSOLICITED, "position frame nobody asked for")
         self._owed -= 1
@@ -221,6 +232,19 @@ class SpidCodec(Plain):
             # asks again instead of publishing it)
             self._noisy = False
             return JunkReply(frame, JunkReason.UNTRUSTED)
+        if not AZ_RANGE[0] <= az <= AZ_RANGE[1] or (
+            el is not None and not EL_RANGE[0] <= el <= EL_RANGE[1]
+        ):  # rule 5
+            return JunkReply(frame, JunkReason.SPOILED, "position outside the controller's")
+        if res is not None:  # rule 5
+            ph, pv = res
+            if ph != pv:
+                return JunkReply(frame, JunkReason.UNTRUSTED, "PH and PV differ")
+            said, self._said = self._said, ph
+            if self.resolution is None or (ph != self.resolution and said == ph):
+                self.resolution = ph
+            elif ph != self.resolution:
+                return JunkReply(frame, JunkReason.UNTRUSTED, "another resolution, said once")
         return PositionReply(az, el)
 
 

@@ -227,6 +227,38 @@ def test_a_controller_without_a_brake_is_never_shown_braking(rig: Rig, model: st
     assert _states(v) == [MotionState.OFFLINE, IDLE, MOVING, IDLE]
 
 
+def test_a_resolution_byte_flipped_on_the_line_never_sends_the_rotor_to_its_end_stop(
+    rig: Rig,
+) -> None:
+    """protocols/spid.py rule 5: one reply's PH, 2 flipped to 10; the next target (20/5) went
+    out as 3800/3650 pulses, and the rotor ran to azimuth 540 and elevation 210."""
+    v = ready(rig)
+    v.run_for(3)
+    seen = {"at": -1}
+
+    def flip(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:  # (the controller sends byte by byte)
+            if seen["at"] < 0 and b == 0x57:
+                seen["at"] = 0
+            elif 0 <= seen["at"] < 12:
+                seen["at"] += 1
+                if seen["at"] == 5 and b == 2:
+                    b, seen["at"] = 10, 99
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = flip
+    v.run_until(lambda h: seen["at"] == 99, 10, "a reply's PH flipped")
+    v.run_for(0.05)
+    v.to_host = None
+    t = v.now
+    v.target(20, 5)
+    v.run_until(lambda h: h.state is IDLE and sets(h, since=t), 60, "there")
+    assert sets(v, since=t) == [(760, 730)]
+    assert (v.truth().az_deg, v.truth().el_deg) == (20.0, 5.0)
+
+
 def test_a_glitched_frame_before_the_real_reply_is_no_reading(rig: Rig) -> None:
     """link.py rule 9, the same shape as the Rotor-EZ's: a well-formed frame saying 359 deg
     just before the real reply of one status exchange. Neither is taken: no 359 published, no

@@ -139,3 +139,50 @@ def test_spid_specs() -> None:
     assert (r2.el_min_deg, r2.el_max_deg, r2.brake_delay_s) == (-20, 210, 0)
     assert REGISTRY["rot1prog"].has_elevation is False and REGISTRY["rot1prog"].baud == 1200
     assert r2.reply_timeout_s > 25 * 10 / 600
+
+
+def status_frame(az_digits: list[int], el_digits: list[int], ph: int, pv: int) -> bytes:
+    return bytes([0x57, *az_digits, ph, *el_digits, pv, 0x20])
+
+
+AT_10_5 = ([3, 7, 0, 0], [3, 6, 5, 0])  # az 10.0, el 5.0
+
+
+def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> None:
+    """Rule 5: PH 2 flipped to 10 in one reply (one bit) made the next target 3800 pulses:
+    azimuth 540, the end stop. A reply whose PH and PV differ is asked again; one that says
+    another resolution than the one known is believed only when the next says it too."""
+    c = SpidCodec("rot2prog")
+    c.encode_query()
+    assert c.feed(status_frame(*AT_10_5, 2, 2)) == [PositionReply(10.0, 5.0)]
+    for flipped in (status_frame(*AT_10_5, 10, 2), status_frame(*AT_10_5, 10, 10)):
+        c.encode_query()
+        (junk,) = c.feed(flipped)
+        assert isinstance(junk, JunkReply) and junk.reason is JunkReason.UNTRUSTED
+        c.encode_query()
+        assert c.feed(status_frame(*AT_10_5, 2, 2)) == [PositionReply(10.0, 5.0)]
+        assert c.encode_target(20.0, 5.0)[0][1:5] == b"0760"
+    c.encode_query()  # the resolution changed at the controller's panel: said twice
+    assert isinstance(c.feed(status_frame(*AT_10_5, 4, 4))[0], JunkReply)
+    c.encode_query()
+    assert c.feed(status_frame(*AT_10_5, 4, 4)) == [PositionReply(10.0, 5.0)]
+    assert c.encode_target(20.0, 5.0)[0][1:5] == b"1520"
+
+
+def test_a_frame_that_is_no_reading_teaches_no_resolution() -> None:
+    c = SpidCodec("rot2prog")
+    c.encode_query()
+    c.feed(status_frame(*AT_10_5, 2, 2))
+    c.feed(status_frame(*AT_10_5, 10, 10))  # nobody asked
+    c.encode_query()
+    c.feed(b"\x99" + status_frame(*AT_10_5, 10, 10))  # noise before it
+    c.encode_query()
+    c.feed(status_frame(*AT_10_5, 10, 10))  # the first to say 10 as a reading
+    assert c.resolution == 2
+
+
+def test_a_position_the_controller_cannot_turn_to_is_no_reading() -> None:
+    c = SpidCodec("rot2prog")
+    c.encode_query()
+    (junk,) = c.feed(status_frame([9, 9, 9, 9], [0, 0, 0, 0], 2, 2))  # az 639.9, el -360
+    assert isinstance(junk, JunkReply) and junk.reason is JunkReason.SPOILED
