@@ -23,6 +23,9 @@ Rules:
    the host (UTC, so stored ephemeris points line up), enable motion, ask for a report.
 3. Reports are read by their labels, never by fixed offsets; a report whose azimuth or elevation
    line does not parse is junk, not a reading. A report is complete at its stored-positions line.
+   Its values are three digits, zero padded, always (the controller's printf; Hamlib reads them
+   at fixed offsets): one of one or two digits lost a byte on the line (``Azimuth = 12`` for
+   123, or ``10 `` for 100 with a bit flipped) and spoils the report like any noise in a value.
    Noise before a label is tolerated, noise inside a value spoils the report; a spoiled report
    that ends a slew still ends it (UNTRUSTED: the engine asks again at once). A report whose
    first line was lost (noise inside ``Motion``) is recognised by its other lines: it is a
@@ -60,8 +63,8 @@ from bridge.protocols.base import (
 # followed by white space or the end of the line, so noise inside a number spoils the line
 _MOTION = re.compile(r"Motion\s+(ENABLED|DISABLED)\s*$", re.IGNORECASE)
 _TIME = re.compile(r"Time:\s*(\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2})\s*$")
-_AZ = re.compile(r"Azimuth\s*=\s*(\d{1,3})(?=\s|$)")
-_EL = re.compile(r"Elevation\s*=\s*(\d{1,3})\s*$")
+_AZ = re.compile(r"Azimuth\s*=\s*(\d{3})(?=\s|$)")  # rule 3: three digits, zero padded
+_EL = re.compile(r"Elevation\s*=\s*(\d{3})\s*$")
 _STORED = re.compile(r"Number of stored positions:\s*(\d+)\s*$")
 _BARE_TIME = re.compile(r"^\d{4}/\d{2}/\d{2} \d{2}:\d{2}:\d{2}$")
 _MAX_LINE = 160

@@ -229,3 +229,28 @@ def test_a_second_report_in_the_same_exchange_is_no_reading(rig: Rig) -> None:
     assert {s.bearing_deg for s in v.published(since=t)} <= {bearing}
     assert v.status.health is not None and v.status.health.moves == health.moves
     assert v.state is IDLE and v.status.bearing_deg == bearing
+
+
+def test_a_report_that_lost_a_digit_on_the_line_is_never_published(rig: Rig) -> None:
+    """protocols/satel.py rule 3: ``Azimuth = 123`` with its 3 lost read as a bearing of 12."""
+    v = rig("satel")
+    v.run_until_state(IDLE, 30)
+    v.target(123, 45)
+    v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 123, 200, "at 123")
+    v.run_for(5)
+    pattern, seen = b"Azimuth = 123", {"tail": b"", "lost": False}
+
+    def drop(data: bytes, now: float) -> bytes:
+        if seen["lost"]:
+            return data
+        seen["tail"] = (seen["tail"] + data)[-len(pattern) :]
+        if seen["tail"] == pattern:  # the 3 of 123 just came: lost on the line
+            seen["lost"] = True
+            return data[:-1]
+        return data
+
+    v.to_host = drop
+    t = v.now
+    v.run_until(lambda h: seen["lost"], 30, "a byte lost")
+    v.run_for(5)
+    assert {s.bearing_deg for s in v.published(since=t)} - {None} <= {123.0}

@@ -35,12 +35,31 @@ def test_report_is_read_by_labels(ending: bytes, how: str) -> None:
     assert all(c.harmless(r.data) for r in out if isinstance(r, JunkReply))
 
 
-def test_disabled_motion_and_other_widths_are_understood() -> None:
+def test_disabled_motion_is_understood() -> None:
     c = SatelCodec()
     c.encode_query()
-    text = REPORT.replace(b"ENABLED", b"DISABLED").replace(b"Azimuth = 123", b"Azimuth =  7")
+    text = REPORT.replace(b"ENABLED", b"DISABLED").replace(b"Azimuth = 123", b"Azimuth = 007")
     (reading,) = positions(c.feed(text))
     assert reading.motion_enabled is False and reading.az_deg == 7.0
+
+
+@pytest.mark.parametrize(
+    ("line", "text"),
+    [
+        (b"Azimuth = 123", b"Azimuth = 12"),  # its 3 lost on the line
+        (b"Azimuth = 123", b"Azimuth = 12 "),  # ... or turned into a space (one bit of 0x33)
+        (b"Azimuth = 123", b"Azimuth =  7"),
+        (b"Elevation = 045", b"Elevation = 04"),
+    ],
+)
+def test_a_value_of_fewer_than_three_digits_lost_a_byte_and_is_no_reading(
+    line: bytes, text: bytes
+) -> None:
+    """Rule 3: the controller pads every value to three digits; ``Azimuth = 12`` is 123 that
+    lost its last byte on the line (read as 12, it was published and acted on)."""
+    c = SatelCodec()
+    c.encode_query()
+    assert positions(c.feed(REPORT.replace(line, text))) == []
 
 
 @pytest.mark.parametrize(
