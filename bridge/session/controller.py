@@ -289,6 +289,13 @@ class Controller:
         link.ask_again(now)
         if link.end_slew(now):  # the slew is over; where it ended, unseen
             self.motion = mo.slew_ended(self.motion, now)
+            self._unseen()
+
+    def _unseen(self) -> None:
+        """A slew ended where no reading shows (a spoiled or lost report): the bearing is
+        unknown until the next reading (status.py rule 3's "never more than it knows"), not
+        the last one read, from before the slew, nor the slew's estimate."""
+        self.az_shown, self.el_shown = st.Hysteresis(), st.Hysteresis()
 
     def _settled(self, link: Link, now: float) -> bool:
         """Rule 5: a reading whose exchange is over is taken; True if one was."""
@@ -363,6 +370,8 @@ class Controller:
             if todo.stop:
                 self.stop(now)
             else:
+                if link.slew is not None:  # its report never came: where it ended, unseen
+                    self._unseen()
                 link.give_up_reply(now)
                 if todo.track_lost:
                     self.motion = mo.track_lost(self.motion, self.cfg.motion)

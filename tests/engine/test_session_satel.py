@@ -254,3 +254,31 @@ def test_a_report_that_lost_a_digit_on_the_line_is_never_published(rig: Rig) -> 
     v.run_until(lambda h: seen["lost"], 30, "a byte lost")
     v.run_for(5)
     assert {s.bearing_deg for s in v.published(since=t)} - {None} <= {123.0}
+
+
+def test_a_stop_whose_report_is_spoiled_shows_no_bearing_of_before_the_slew(rig: Rig) -> None:
+    """controller.py ``_unseen``: a STOP in a silent slew, its report spoiled by one byte: the
+    slew ends unseen, and the status showed the last reading from before the slew (0 degrees,
+    not estimated, while the rotor stood near 60) until the report asked again came."""
+    v = rig("satel")
+    v.run_until_state(IDLE, 30)
+    v.target(200, 40)
+    v.run_for(10)
+    t, tail, hit = v.now, {"b": b""}, {"done": False}
+
+    def garble(data: bytes, now: float) -> bytes:  # one byte of the next report: b -> x
+        out = bytearray()
+        for byte in data:
+            if not hit["done"] and tail["b"].endswith(b"Num") and byte == ord("b"):
+                byte, hit["done"] = ord("x"), True
+            tail["b"] = (tail["b"] + bytes([byte]))[-8:]
+            out.append(byte)
+        return bytes(out)
+
+    v.to_host = garble
+    v.stop()
+    v.run_until(lambda h: hit["done"], 30, "the stop's report garbled")
+    v.to_host = None
+    v.run_until(lambda h: h.state is IDLE, 30, "idle")
+    shown = [s for s in v.published(since=t) if s.bearing_deg is not None and not s.estimated]
+    assert shown and all(abs(s.bearing_deg - v.truth().az_deg) < 3 for s in shown)
