@@ -21,6 +21,9 @@ Rules:
    follows junk the board never sends (anything but the power-on byte and the banner's upper-case
    letters, digits, spaces and dots) within the same query is not trusted: it is reported as
    UNTRUSTED junk, so the engine asks again instead of publishing line noise as a bearing.
+   A frame begun before a query (``;18`` of a reply the engine gave up on) is no beginning of
+   that query's reply: it is noise, and the reply is not trusted (its rest, ``0``, made
+   ``;180``, a reading one reply timeout old taken as the new query's answer).
 2. The banner carries the firmware version; it is reported as a VersionReply whenever seen.
 3. Targets are rounded half up to whole degrees. The Idiom boards take 000..360; the DCU-1 gets
    360 as 000 (Hamlib does the same "for DCU-1 compatibility"; both are north on a Hy-Gain).
@@ -102,6 +105,7 @@ class RotorEzCodec:
         self._queries_open = 0
         self._noisy = False  # bytes the board never sends arrived since the query was opened
         self._banner_so_far = bytearray()  # rule 5: the latest junk, as long as all banner
+        self._left = b""  # rule 1: a frame begun before the query, reported at the next feed
 
     # -- encoding -------------------------------------------------------------------------
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
@@ -134,6 +138,9 @@ class RotorEzCodec:
             return None
         self._queries_open = 1
         self._noisy = False
+        if self._buf:  # rule 1: (only a frame's beginning is ever left)
+            self._left, self._noisy = bytes(self._buf), True
+            self._buf.clear()
         return b"AI1;"
 
     def expire_query(self) -> None:
@@ -152,9 +159,12 @@ class RotorEzCodec:
     def feed(self, data: bytes) -> list[Reply]:
         buf = self._buf
         buf += data
-        if 0 < len(buf) < 4 and buf[0] == 0x3B:  # a reply under way (byte by byte, mostly):
-            return []  # what the loop below does with it (nothing to say until it is whole)
         out: list[Reply] = []
+        if self._left:  # rule 1
+            out.append(JunkReply(self._left, JunkReason.NOISE, "a frame begun before the query"))
+            self._left = b""
+        if 0 < len(buf) < 4 and buf[0] == 0x3B:  # a reply under way (byte by byte, mostly):
+            return out  # what the loop below does with it (nothing to say until it is whole)
         junk = bytearray()
         buf = self._buf
         i = 0

@@ -223,3 +223,19 @@ def test_a_banner_fed_byte_by_byte_is_harmless_and_what_goes_on_otherwise_is_not
     pieces = [junk_of(codec, bytes([b])) for b in b"C2000 IDX"]
     assert not codec.harmless(pieces[-1])  # no banner goes on like that
     assert not codec.harmless(b"1.4S ")  # the end of a banner whose beginning never came
+
+
+def test_a_reply_begun_before_the_query_is_no_answer_to_it() -> None:
+    """Rule 1: ``;18`` of a reply the engine gave up on, then the next query, then its ``0``:
+    not the new query's answer (a reading one reply timeout old), and the reply that follows
+    is not trusted (asked again)."""
+    c = RotorEzCodec()
+    c.encode_query()
+    assert c.feed(b";18") == []
+    c.expire_query()
+    c.encode_query()
+    got = c.feed(b"0;123")
+    assert not [r for r in got if isinstance(r, PositionReply)]
+    assert JunkReply(b";18", JunkReason.NOISE, "a frame begun before the query") in got
+    c.encode_query()
+    assert c.feed(b";123") == [PositionReply(123.0)]
