@@ -160,9 +160,14 @@ class RotorEzCodec:
         buf = self._buf
         buf += data
         out: list[Reply] = []
-        if self._left:  # rule 1
-            out.append(JunkReply(self._left, JunkReason.NOISE, "a frame begun before the query"))
-            self._left = b""
+        if self._left:  # rule 1 (a power-on byte among it is one all the same: the options)
+            left, self._left = self._left, b""
+            frame = left.replace(bytes([POWER_ON_BYTE]), b"")
+            if len(frame) < len(left):
+                on = bytes([POWER_ON_BYTE]) * (len(left) - len(frame))
+                out.append(JunkReply(on, JunkReason.POWER_ON, "power-on byte"))
+            if frame:
+                out.append(JunkReply(frame, JunkReason.NOISE, "a frame begun before the query"))
         if 0 < len(buf) < 4 and buf[0] == 0x3B:  # a reply under way (byte by byte, mostly):
             return out  # what the loop below does with it (nothing to say until it is whole)
         junk = bytearray()

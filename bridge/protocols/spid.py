@@ -23,14 +23,15 @@ Rules:
    lines (``<digits>: text`` CR LF) are skipped whole, never read as a position; a line ends at
    its LF or where a well-formed frame starts, so a torn line costs no reply.
 4. Only frames that answer something we sent become readings.
-5. The resolution (PH, PV) is what every target is counted in: read wrong, a target turns the
-   rotor to its end stops (20 degrees at 10 pulses per degree for 2 is 3800 pulses: azimuth
-   540). It is taken from a reply that is a reading (it answers us, no noise before it) and
-   whose PH and PV agree (the controller has one; a bit flipped in one of them breaks that).
-   The first such reply of a connection sets it; a later one that says another is not trusted
-   (asked again) unless the reply before it said the same: a controller whose resolution was
-   changed at its panel is believed on its second word, a bit flipped once never. A reading
-   outside what the controller can turn (azimuth -180..540, elevation -20..210) is spoiled.
+5. The resolutions are what every target is counted in, the azimuth's in PH and the
+   elevation's in PV (Hamlib sets them apart, ``az_resolution`` and ``el_resolution``): read
+   wrong, a target turns the rotor to its end stops (20 degrees at 10 pulses per degree for 2
+   is 3800 pulses: azimuth 540). They are taken from a reply that is a reading (it answers us,
+   no noise before it). The first such reply of a connection sets them; a later one that says
+   another for either axis is not trusted (asked again) unless the reply before it said the
+   same: a controller whose resolution was changed at its panel is believed on its second
+   word, a bit flipped once never. A reading outside what the controller can turn (azimuth
+   -180..540, elevation -20..210) is spoiled.
 """
 
 from __future__ import annotations
@@ -70,11 +71,12 @@ class SpidCodec(Plain):
             raise ValueError(f"unknown SPID variant {variant!r}")
         self.variant = variant
         self._reply_len = 5 if variant == "rot1prog" else 12
-        self.resolution: int | None = None  # pulses per degree, learned from replies
+        self.resolution: int | None = None  # PH: the azimuth's pulses per degree (rule 5)
+        self.el_resolution: int | None = None  # PV: the elevation's
         self._owed = 0  # replies still owed by the controller
         self._buf = bytearray()
         self._noisy = False  # junk (not a debug line) arrived while a reply was owed
-        self._said: int | None = None  # rule 5: the resolution the last reading said
+        self._said: tuple[int, int] | None = None  # rule 5: what the last reading said
 
     # -- encoding -------------------------------------------------------------------------
     def encode_query(self) -> bytes:
@@ -98,9 +100,9 @@ class SpidCodec(Plain):
     def wire_target(self, az_deg: float, el_deg: float | None = None) -> tuple[float, float | None]:
         if self.variant == "rot1prog":
             return math.floor(360 + az_deg) - 360.0, None
-        ph = self._need_resolution()
+        ph, pv = self._need_resolution()
         az = math.floor(ph * (360 + az_deg)) / ph - 360
-        el = None if el_deg is None else math.floor(ph * (360 + el_deg)) / ph - 360
+        el = None if el_deg is None else math.floor(pv * (360 + el_deg)) / pv - 360
         return az, el
 
     def encode_target(self, az_deg: float, el_deg: float | None = None) -> list[bytes]:
@@ -110,20 +112,20 @@ class SpidCodec(Plain):
                 raise ValueError(f"azimuth {az_deg} outside the frame's range")
             body = b"%03d" % h + b"0" + bytes(6)
             return [_frame(K_SET, body)]
-        ph = self._need_resolution()
+        ph, pv = self._need_resolution()
         h = math.floor(ph * (360 + az_deg))
-        v = math.floor(ph * (360 + (el_deg or 0.0)))
+        v = math.floor(pv * (360 + (el_deg or 0.0)))
         if not (0 <= h <= 9999 and 0 <= v <= 9999):
             raise ValueError(f"target {az_deg}/{el_deg} outside the frame's range")
-        body = b"%04d" % h + bytes([ph]) + b"%04d" % v + bytes([ph])
+        body = b"%04d" % h + bytes([ph]) + b"%04d" % v + bytes([pv])
         if self.variant == "md01":
             self._owed += 1  # the MD-01 answers a set with its position
         return [_frame(K_SET, body)]
 
-    def _need_resolution(self) -> int:
-        if self.resolution is None:
+    def _need_resolution(self) -> tuple[int, int]:
+        if self.resolution is None or self.el_resolution is None:
             raise ValueError("controller resolution not known yet (no status reply)")
-        return self.resolution
+        return self.resolution, self.el_resolution
 
     # -- decoding -------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[Reply]:
@@ -237,13 +239,11 @@ class SpidCodec(Plain):
         ):  # rule 5
             return JunkReply(frame, JunkReason.SPOILED, "position outside the controller's")
         if res is not None:  # rule 5
-            ph, pv = res
-            if ph != pv:
-                return JunkReply(frame, JunkReason.UNTRUSTED, "PH and PV differ")
-            said, self._said = self._said, ph
-            if self.resolution is None or (ph != self.resolution and said == ph):
-                self.resolution = ph
-            elif ph != self.resolution:
+            said, self._said = self._said, res
+            known = (self.resolution, self.el_resolution)
+            if self.resolution is None or (res != known and said == res):
+                self.resolution, self.el_resolution = res
+            elif res != known:
                 return JunkReply(frame, JunkReason.UNTRUSTED, "another resolution, said once")
         return PositionReply(az, el)
 

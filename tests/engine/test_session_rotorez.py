@@ -827,3 +827,23 @@ def test_a_reply_that_ends_just_before_its_deadline_is_taken_and_nothing_spins(r
     assert v.spins == [] and v.errors(since=t) == []
     assert v.status.available
     assert v.status.bearing_deg == pytest.approx(v.truth().az_deg, abs=1)
+
+
+def test_options_are_applied_again_after_a_power_cycle_in_the_middle_of_a_reply(rig: Rig) -> None:
+    """protocols/rotorez.py rule 1 beside the power-on byte: the board reset while its reply
+    was half sent; the 0xE0 after the torn frame still says it forgot its options (dropped
+    with the torn frame as noise, they stayed at its jumpers for a minute)."""
+    opts = {"jam": False, "overshoot": True}
+    v = rig("rotorez", options=dict(opts))
+    v.run_until_state(MotionState.IDLE, 30)
+    v.run_for(1)
+    n = len(v.received)
+
+    def mid_reply(h: VirtualRotator) -> bool:
+        got = b"".join(d for _, d in h.received[n:])
+        return got.startswith(b";") and len(got) == 2
+
+    v.run_until(mid_reply, 10, "a reply half sent")
+    v.power_cycle()
+    v.run_for(10)
+    assert {k: v.truth().options[k] for k in opts} == opts

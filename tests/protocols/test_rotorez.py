@@ -239,3 +239,16 @@ def test_a_reply_begun_before_the_query_is_no_answer_to_it() -> None:
     assert JunkReply(b";18", JunkReason.NOISE, "a frame begun before the query") in got
     c.encode_query()
     assert c.feed(b";123") == [PositionReply(123.0)]
+
+
+def test_a_power_on_byte_after_a_frame_begun_before_the_query_is_still_one() -> None:
+    """Rule 1 beside the power-on byte: the board power-cycled while its reply was half sent
+    (``;0``, then 0xE0): the byte still says the board forgot its options."""
+    c = RotorEzCodec()
+    c.encode_query()
+    assert c.feed(b";0\xe0") == []
+    c.expire_query()
+    c.encode_query()
+    got = c.feed(b";123")
+    assert JunkReply(b"\xe0", JunkReason.POWER_ON, "power-on byte") in got
+    assert not [r for r in got if isinstance(r, PositionReply)]

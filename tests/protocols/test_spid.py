@@ -150,12 +150,13 @@ AT_10_5 = ([3, 7, 0, 0], [3, 6, 5, 0])  # az 10.0, el 5.0
 
 def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> None:
     """Rule 5: PH 2 flipped to 10 in one reply (one bit) made the next target 3800 pulses:
-    azimuth 540, the end stop. A reply whose PH and PV differ is asked again; one that says
-    another resolution than the one known is believed only when the next says it too."""
+    azimuth 540, the end stop. A reply that says another resolution for either axis than the
+    one known is believed only when the next says it too."""
     c = SpidCodec("rot2prog")
     c.encode_query()
     assert c.feed(status_frame(*AT_10_5, 2, 2)) == [PositionReply(10.0, 5.0)]
-    for flipped in (status_frame(*AT_10_5, 10, 2), status_frame(*AT_10_5, 10, 10)):
+    flips = (status_frame(*AT_10_5, 10, 2), status_frame(*AT_10_5, 2, 10))
+    for flipped in (*flips, status_frame(*AT_10_5, 10, 10)):
         c.encode_query()
         (junk,) = c.feed(flipped)
         assert isinstance(junk, JunkReply) and junk.reason is JunkReason.UNTRUSTED
@@ -167,6 +168,18 @@ def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> Non
     c.encode_query()
     assert c.feed(status_frame(*AT_10_5, 4, 4)) == [PositionReply(10.0, 5.0)]
     assert c.encode_target(20.0, 5.0)[0][1:5] == b"1520"
+
+
+def test_each_axis_is_counted_in_its_own_resolution() -> None:
+    """Rule 5: Hamlib's az_resolution and el_resolution: PH for the azimuth, PV for the
+    elevation (PV 4, PH 2: 5 degrees up is 1460 pulses, not 730, which that controller reads
+    as -177.5)."""
+    c = SpidCodec("rot2prog")
+    c.encode_query()
+    assert c.feed(status_frame(*AT_10_5, 2, 4)) == [PositionReply(10.0, 5.0)]
+    frame = c.encode_target(20.0, 5.0)[0]
+    assert (frame[1:5], frame[5], frame[6:10], frame[10]) == (b"0760", 2, b"1460", 4)
+    assert c.wire_target(20.3, 5.3) == (20.0, 5.25)
 
 
 def test_a_frame_that_is_no_reading_teaches_no_resolution() -> None:
