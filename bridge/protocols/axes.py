@@ -35,7 +35,14 @@ from __future__ import annotations
 import enum
 from dataclasses import replace
 
-from bridge.protocols.base import Codec, HamlibRotType, ModelSpec, PositionReply, Reply
+from bridge.protocols.base import (
+    Codec,
+    HamlibRotType,
+    ModelSpec,
+    PositionReply,
+    Reply,
+    TakesReadings,
+)
 
 # positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
 _PENDING = 4
@@ -113,7 +120,8 @@ class AzimuthOfAzEl(AzimuthOnly):
         super().__init__(inner)
         self._el_range = el_range  # what its codec writes
         self._own_el: float | None = None  # what the box last said of its elevation, taken
-        self._pending: list[tuple[PositionReply, float | None]] = []  # fed: (reply, its el)
+        self._pending: list[tuple[PositionReply, float | None, PositionReply]] = []  # fed:
+        # (reply, its el, the inner codec's reply)
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_el is None:  # the session sends only once the box answered (a reading)
@@ -124,18 +132,19 @@ class AzimuthOfAzEl(AzimuthOnly):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
-                own, r = r.el_deg, replace(r, el_deg=None)
-                self._pending = [*self._pending[-_PENDING:], (r, own)]
+                inner, own, r = r, r.el_deg, replace(r, el_deg=None)
+                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own) in enumerate(self._pending):
+        for i, (fed, own, inner) in enumerate(self._pending):
             if fed is reply:
                 if own is not None:
                     low, high = self._el_range
                     self._own_el = min(max(own, low), high)
                 del self._pending[: i + 1]
+                _tell_taken(self._inner, inner)
                 return
 
 
@@ -146,7 +155,8 @@ class ElevationOnly(AzimuthOnly):
         super().__init__(inner)
         self._own_az: float | None = None  # what the box last said of its azimuth, taken
         self._asked_az: float | None = None  # what the session last asked for
-        self._pending: list[tuple[PositionReply, float]] = []  # fed: (reply, its own azimuth)
+        self._pending: list[tuple[PositionReply, float, PositionReply]] = []  # fed: (reply,
+        # its own azimuth, the inner codec's reply)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         return self._inner.wire_target(az_deg, el_deg)
@@ -162,17 +172,18 @@ class ElevationOnly(AzimuthOnly):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
-                own = r.az_deg
+                inner, own = r, r.az_deg
                 r = replace(r, az_deg=own if self._asked_az is None else self._asked_az)
-                self._pending = [*self._pending[-_PENDING:], (r, own)]
+                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own) in enumerate(self._pending):
+        for i, (fed, own, inner) in enumerate(self._pending):
             if fed is reply:
                 self._own_az = own
                 del self._pending[: i + 1]
+                _tell_taken(self._inner, inner)
                 return
 
 
@@ -183,7 +194,8 @@ class OneAxisElevation(AzimuthOnly):
         super().__init__(inner)
         self._own_el: float | None = None  # what the box last said of its one axis, taken
         self._asked_az: float | None = None  # what the session last asked for
-        self._pending: list[tuple[PositionReply, float]] = []  # fed: (reply, its own bearing)
+        self._pending: list[tuple[PositionReply, float, PositionReply]] = []  # fed: (reply,
+        # its own bearing, the inner codec's reply)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         el = self._own_el if el_deg is None else el_deg
@@ -201,17 +213,25 @@ class OneAxisElevation(AzimuthOnly):
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
                 az = 0.0 if self._asked_az is None else self._asked_az
-                own, r = r.az_deg, replace(r, az_deg=az, el_deg=r.az_deg)
-                self._pending = [*self._pending[-_PENDING:], (r, own)]
+                inner, own, r = r, r.az_deg, replace(r, az_deg=az, el_deg=r.az_deg)
+                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own) in enumerate(self._pending):
+        for i, (fed, own, inner) in enumerate(self._pending):
             if fed is reply:
                 self._own_el = own
                 del self._pending[: i + 1]
+                _tell_taken(self._inner, inner)
                 return
+
+
+def _tell_taken(codec: Codec, reply: PositionReply) -> None:
+    """A wrapped codec that keeps what its controller said (SPID's resolution) is told of the
+    reading taken too, as its own reply."""
+    if isinstance(codec, TakesReadings):
+        codec.taken(reply)
 
 
 def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:

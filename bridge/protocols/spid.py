@@ -30,8 +30,10 @@ Rules:
    no noise before it). The first such reply of a connection sets them; a later one that says
    another for either axis is not trusted (asked again) unless the reply before it said the
    same: a controller whose resolution was changed at its panel is believed on its second
-   word, a bit flipped once never. A reading outside what the controller can turn (azimuth
-   -180..540, elevation -20..210) is spoiled.
+   word, a bit flipped once never; and they count from when the engine takes that reply as a
+   reading (``taken``: a well-formed glitch a second reply spoils teaches nothing). A reading
+   of an azimuth the controller cannot turn to (-180..540) is spoiled (the elevation's counter
+   of a controller with no elevation rotor may read anything).
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ from bridge.protocols.base import (
 START, END = 0x57, 0x20
 K_STOP, K_STATUS, K_SET = 0x0F, 0x1F, 0x2F
 RESOLUTIONS = (1, 2, 4, 10)
-AZ_RANGE, EL_RANGE = (-180.0, 540.0), (-20.0, 210.0)  # rule 5: what the controller turns
+AZ_RANGE = (-180.0, 540.0)  # rule 5: what the controller turns
 _MAX_DEBUG_LINE = 200
 _DEBUG_LINES = re.compile(rb"(\d+:[^\n]*\n)+")
 
@@ -77,6 +79,7 @@ class SpidCodec(Plain):
         self._buf = bytearray()
         self._noisy = False  # junk (not a debug line) arrived while a reply was owed
         self._said: tuple[int, int] | None = None  # rule 5: what the last reading said
+        self._resolutions: list[tuple[PositionReply, tuple[int, int]]] = []  # fed, not taken
 
     # -- encoding -------------------------------------------------------------------------
     def encode_query(self) -> bytes:
@@ -234,18 +237,26 @@ class SpidCodec(Plain):
             # asks again instead of publishing it)
             self._noisy = False
             return JunkReply(frame, JunkReason.UNTRUSTED)
-        if not AZ_RANGE[0] <= az <= AZ_RANGE[1] or (
-            el is not None and not EL_RANGE[0] <= el <= EL_RANGE[1]
-        ):  # rule 5
-            return JunkReply(frame, JunkReason.SPOILED, "position outside the controller's")
+        if not AZ_RANGE[0] <= az <= AZ_RANGE[1]:  # rule 5
+            return JunkReply(frame, JunkReason.SPOILED, "azimuth outside the controller's")
+        reply = PositionReply(az, el)
         if res is not None:  # rule 5
             said, self._said = self._said, res
             known = (self.resolution, self.el_resolution)
-            if self.resolution is None or (res != known and said == res):
-                self.resolution, self.el_resolution = res
-            elif res != known:
+            if self.resolution is not None and res != known and said != res:
                 return JunkReply(frame, JunkReason.UNTRUSTED, "another resolution, said once")
-        return PositionReply(az, el)
+            if res != known:  # taken with the reading (``taken``), not before
+                self._resolutions = [*self._resolutions[-3:], (reply, res)]
+        return reply
+
+    def taken(self, reply: PositionReply) -> None:
+        """Rule 5: the engine took ``reply`` as a reading (link.py rule 9: not a glitch a
+        second reply spoiled): the resolution it said counts from now."""
+        for i, (fed, res) in enumerate(self._resolutions):
+            if fed is reply:
+                self.resolution, self.el_resolution = res
+                del self._resolutions[: i + 1]
+                return
 
 
 def _spec(name: str, display: str, **kw: Any) -> ModelSpec:

@@ -7,17 +7,25 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import JunkReason, JunkReply, PositionReply
+from bridge.protocols.base import JunkReason, JunkReply, PositionReply, Reply
 from bridge.protocols.spid import SpidCodec
 from tests.support import HOW, feed
 
 REPLY_12_5_34 = bytes.fromhex("57 03 07 02 05 02 03 09 04 00 02 20")
 
 
+def taken(c: SpidCodec, replies: list[Reply]) -> list[Reply]:
+    """``replies``, each reading taken as the engine takes it (link.py rule 9, rule 5)."""
+    for r in replies:
+        if isinstance(r, PositionReply):
+            c.taken(r)
+    return replies
+
+
 def known(ph: int = 2, variant: str = "rot2prog") -> SpidCodec:
     c = SpidCodec(variant)
     c.encode_query()
-    c.feed(bytes([0x57, 3, 6, 0, 0, ph, 3, 6, 0, 0, ph, 0x20]))
+    taken(c, c.feed(bytes([0x57, 3, 6, 0, 0, ph, 3, 6, 0, 0, ph, 0x20])))
     assert c.resolution == ph
     return c
 
@@ -65,7 +73,7 @@ def test_rot1prog_frames() -> None:
 def test_reply_decodes_with_resolution(how: str) -> None:
     c = SpidCodec()
     c.encode_query()
-    assert feed(c, REPLY_12_5_34, how) == [PositionReply(12.5, 34.0)]
+    assert taken(c, feed(c, REPLY_12_5_34, how)) == [PositionReply(12.5, 34.0)]
     assert c.resolution == 2 and not c.awaiting_reply()
 
 
@@ -154,19 +162,19 @@ def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> Non
     one known is believed only when the next says it too."""
     c = SpidCodec("rot2prog")
     c.encode_query()
-    assert c.feed(status_frame(*AT_10_5, 2, 2)) == [PositionReply(10.0, 5.0)]
+    assert taken(c, c.feed(status_frame(*AT_10_5, 2, 2))) == [PositionReply(10.0, 5.0)]
     flips = (status_frame(*AT_10_5, 10, 2), status_frame(*AT_10_5, 2, 10))
     for flipped in (*flips, status_frame(*AT_10_5, 10, 10)):
         c.encode_query()
         (junk,) = c.feed(flipped)
         assert isinstance(junk, JunkReply) and junk.reason is JunkReason.UNTRUSTED
         c.encode_query()
-        assert c.feed(status_frame(*AT_10_5, 2, 2)) == [PositionReply(10.0, 5.0)]
+        assert taken(c, c.feed(status_frame(*AT_10_5, 2, 2))) == [PositionReply(10.0, 5.0)]
         assert c.encode_target(20.0, 5.0)[0][1:5] == b"0760"
     c.encode_query()  # the resolution changed at the controller's panel: said twice
-    assert isinstance(c.feed(status_frame(*AT_10_5, 4, 4))[0], JunkReply)
+    assert isinstance(taken(c, c.feed(status_frame(*AT_10_5, 4, 4)))[0], JunkReply)
     c.encode_query()
-    assert c.feed(status_frame(*AT_10_5, 4, 4)) == [PositionReply(10.0, 5.0)]
+    assert taken(c, c.feed(status_frame(*AT_10_5, 4, 4))) == [PositionReply(10.0, 5.0)]
     assert c.encode_target(20.0, 5.0)[0][1:5] == b"1520"
 
 
@@ -176,7 +184,7 @@ def test_each_axis_is_counted_in_its_own_resolution() -> None:
     as -177.5)."""
     c = SpidCodec("rot2prog")
     c.encode_query()
-    assert c.feed(status_frame(*AT_10_5, 2, 4)) == [PositionReply(10.0, 5.0)]
+    assert taken(c, c.feed(status_frame(*AT_10_5, 2, 4))) == [PositionReply(10.0, 5.0)]
     frame = c.encode_target(20.0, 5.0)[0]
     assert (frame[1:5], frame[5], frame[6:10], frame[10]) == (b"0760", 2, b"1460", 4)
     assert c.wire_target(20.3, 5.3) == (20.0, 5.25)
@@ -185,17 +193,20 @@ def test_each_axis_is_counted_in_its_own_resolution() -> None:
 def test_a_frame_that_is_no_reading_teaches_no_resolution() -> None:
     c = SpidCodec("rot2prog")
     c.encode_query()
-    c.feed(status_frame(*AT_10_5, 2, 2))
-    c.feed(status_frame(*AT_10_5, 10, 10))  # nobody asked
+    taken(c, c.feed(status_frame(*AT_10_5, 2, 2)))
+    taken(c, c.feed(status_frame(*AT_10_5, 10, 10)))  # nobody asked
     c.encode_query()
     c.feed(b"\x99" + status_frame(*AT_10_5, 10, 10))  # noise before it
     c.encode_query()
-    c.feed(status_frame(*AT_10_5, 10, 10))  # the first to say 10 as a reading
+    taken(c, c.feed(status_frame(*AT_10_5, 10, 10)))  # the first to say 10 as a reading
     assert c.resolution == 2
+    c.encode_query()
+    c.feed(status_frame(*AT_10_5, 10, 10))  # said again, but not taken (a second reply
+    assert c.resolution == 2  # spoiled the exchange: link.py rule 9)
 
 
 def test_a_position_the_controller_cannot_turn_to_is_no_reading() -> None:
     c = SpidCodec("rot2prog")
     c.encode_query()
-    (junk,) = c.feed(status_frame([9, 9, 9, 9], [0, 0, 0, 0], 2, 2))  # az 639.9, el -360
+    (junk,) = taken(c, c.feed(status_frame([9, 9, 9, 9], [0, 0, 0, 0], 2, 2)))  # az 639.9, el -360
     assert isinstance(junk, JunkReply) and junk.reason is JunkReason.SPOILED
