@@ -39,6 +39,7 @@ from bridge.protocols.base import (
     Codec,
     HamlibRotType,
     ModelSpec,
+    NotReady,
     PositionReply,
     Reply,
     TakesReadings,
@@ -125,7 +126,7 @@ class AzimuthOfAzEl(AzimuthOnly):
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_el is None:  # the session sends only once the box answered (a reading)
-            raise ValueError("the azimuth box has not said where its elevation is")
+            raise NotReady("the azimuth box has not said where its elevation is")
         return self._inner.encode_target(az_deg, self._own_el)
 
     def feed(self, data: bytes) -> list[Reply]:
@@ -163,7 +164,7 @@ class ElevationOnly(AzimuthOnly):
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_az is None:  # the session sends only once the box answered (a reading)
-            raise ValueError("the elevation box has not said where its azimuth is")
+            raise NotReady("the elevation box has not said where its azimuth is")
         frames = self._inner.encode_target(self._own_az, el_deg)
         self._asked_az = self._inner.wire_target(az_deg, el_deg)[0]
         return frames
@@ -204,7 +205,7 @@ class OneAxisElevation(AzimuthOnly):
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         el = self._own_el if el_deg is None else el_deg
         if el is None:  # the session sends only once the box answered (a reading)
-            raise ValueError("the elevation box has not said where it points")
+            raise NotReady("the elevation box has not said where it points")
         self._asked_az = az_deg
         return self._inner.encode_target(el, None)
 

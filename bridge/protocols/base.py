@@ -47,6 +47,13 @@ class VersionReply:
     version: str
 
 
+class NotReady(ValueError):
+    """A codec cannot count a target yet (``wire_target``, ``encode_target``): what it needs
+    from its controller has not been read, or not confirmed (SPID's resolution, spid.py rule
+    5; a composite's box its own other axis, axes.py). The engine asks first and sends the
+    target after the answer (session/targets.py ``decide``), never sends a guess."""
+
+
 class JunkReason(enum.StrEnum):
     """Why bytes are no reading. The engine acts on UNTRUSTED and POWER_ON; the rest it logs."""
 

@@ -31,7 +31,9 @@ Rules:
    another for either axis is not trusted (asked again) unless the reply before it said the
    same: a controller whose resolution was changed at its panel is believed on its second
    word, a bit flipped once never; and they count from when the engine takes that reply as a
-   reading (``taken``: a well-formed glitch a second reply spoils teaches nothing). A reading
+   reading (``taken``: a well-formed glitch a second reply spoils teaches nothing). A
+   connection's first resolution is confirmed so too: two readings taken that say the same
+   (until then no target is counted: ``NotReady``, and the engine asks first). A reading
    of an azimuth the controller cannot turn to (-180..540) is spoiled (the elevation's counter
    of a controller with no elevation rotor may read anything).
 """
@@ -47,6 +49,7 @@ from bridge.protocols.base import (
     JunkReason,
     JunkReply,
     ModelSpec,
+    NotReady,
     Plain,
     PositionReply,
     Reply,
@@ -80,6 +83,7 @@ class SpidCodec(Plain):
         self._noisy = False  # junk (not a debug line) arrived while a reply was owed
         self._said: tuple[int, int] | None = None  # rule 5: what the last reading said
         self._resolutions: list[tuple[PositionReply, tuple[int, int]]] = []  # fed, not taken
+        self._first: tuple[int, int] | None = None  # rule 5: the first one taken, unconfirmed
 
     # -- encoding -------------------------------------------------------------------------
     def encode_query(self) -> bytes:
@@ -127,7 +131,7 @@ class SpidCodec(Plain):
 
     def _need_resolution(self) -> tuple[int, int]:
         if self.resolution is None or self.el_resolution is None:
-            raise ValueError("controller resolution not known yet (no status reply)")
+            raise NotReady("controller resolution not confirmed yet (rule 5)")
         return self.resolution, self.el_resolution
 
     # -- decoding -------------------------------------------------------------------------
@@ -251,11 +255,15 @@ class SpidCodec(Plain):
 
     def taken(self, reply: PositionReply) -> None:
         """Rule 5: the engine took ``reply`` as a reading (link.py rule 9: not a glitch a
-        second reply spoiled): the resolution it said counts from now."""
+        second reply spoiled): the resolution it said counts from now, the connection's first
+        once a second reading taken says it too."""
         for i, (fed, res) in enumerate(self._resolutions):
             if fed is reply:
-                self.resolution, self.el_resolution = res
                 del self._resolutions[: i + 1]
+                if self.resolution is not None or self._first == res:
+                    self.resolution, self.el_resolution = res
+                else:
+                    self._first = res
                 return
 
 

@@ -42,6 +42,7 @@ from bridge.core.model import ErrorKind, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import (
     JunkReason,
     JunkReply,
+    NotReady,
     PositionReply,
     TakesReadings,
     VersionReply,
@@ -136,7 +137,10 @@ class Controller:
         link, wire, motion = self.link, None, self.motion
         if pending is not None and link is not None:
             az, el = resolve(pending, motion, self.cfg.aim)
-            wire = link.codec.wire_target(az, el) if az is not None else None
+            try:
+                wire = link.codec.wire_target(az, el) if az is not None else None
+            except NotReady:  # (protocols/base.py: it goes once the codec can count it)
+                wire = None
         if link is not None and link.stop_due and motion.target_deg is not None:
             # a stop waits for a half-duplex line (link.py rule 3): the target is dropped, as
             # once it is written (a nudge is then made from the bearing: runtime/rotator.py)

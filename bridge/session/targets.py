@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 from bridge.core.model import Source, Target, combine
 from bridge.pointing import Pointing
+from bridge.protocols.base import NotReady
 from bridge.session import motion as mo
 from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
@@ -140,7 +141,10 @@ def decide(
     az, el = resolve(pending, m, rig.aim)
     if az is None:
         return Sending(Go.WAIT)  # no reading yet to keep the other axis where it is
-    wire = link.codec.wire_target(az, el)
+    try:
+        wire = link.codec.wire_target(az, el)
+    except NotReady:  # the codec cannot count it yet (protocols/base.py): ask first
+        return Sending(Go.ASK_FIRST) if link.free() else Sending(Go.WAIT)
     if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
         return Sending(Go.DONE, wire=wire)  # already on its way there
     small = pending.source is not Source.TRACKING

@@ -259,6 +259,38 @@ def test_a_resolution_byte_flipped_on_the_line_never_sends_the_rotor_to_its_end_
     assert (v.truth().az_deg, v.truth().el_deg) == (20.0, 5.0)
 
 
+def test_the_first_reply_of_a_connection_with_a_flipped_resolution_counts_no_target(
+    rig: Rig,
+) -> None:
+    """protocols/spid.py rule 5 at connect: the first reply's PH flipped 2 to 10 set the
+    resolution on one word; a target right after went out as 3800 pulses (azimuth 540). A
+    connection's first resolution waits for a second reading that says it too."""
+    v = rig("rot2prog", emulator={"resolution_ppd": 2})
+    seen = {"at": -1}
+
+    def flip(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:  # (the first reply's PH only)
+            if seen["at"] < 0 and b == 0x57:
+                seen["at"] = 0
+            elif 0 <= seen["at"] < 12:
+                seen["at"] += 1
+                if seen["at"] == 5 and b == 2:
+                    b, seen["at"] = 10, 99
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = flip
+    v.run_until(lambda h: h.status.available, 30, "online")
+    v.to_host = None
+    t = v.now
+    v.target(20, 5)
+    v.run_until(lambda h: h.state is IDLE and sets(h, since=t), 60, "there")
+    assert seen["at"] == 99
+    assert sets(v, since=t) == [(760, 730)]
+    assert (v.truth().az_deg, v.truth().el_deg) == (20.0, 5.0)
+
+
 def test_a_glitched_frame_before_the_real_reply_is_no_reading(rig: Rig) -> None:
     """link.py rule 9, the same shape as the Rotor-EZ's: a well-formed frame saying 359 deg
     just before the real reply of one status exchange. Neither is taken: no 359 published, no

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bridge.protocols import REGISTRY
-from bridge.protocols.base import JunkReason, JunkReply, PositionReply, Reply
+from bridge.protocols.base import JunkReason, JunkReply, NotReady, PositionReply, Reply
 from bridge.protocols.spid import SpidCodec
 from tests.support import HOW, feed
 
@@ -23,9 +23,12 @@ def taken(c: SpidCodec, replies: list[Reply]) -> list[Reply]:
 
 
 def known(ph: int = 2, variant: str = "rot2prog") -> SpidCodec:
+    """A codec that took two readings saying ``ph`` (rule 5: a connection's first resolution
+    is confirmed by a second)."""
     c = SpidCodec(variant)
-    c.encode_query()
-    taken(c, c.feed(bytes([0x57, 3, 6, 0, 0, ph, 3, 6, 0, 0, ph, 0x20])))
+    for _ in range(2):
+        c.encode_query()
+        taken(c, c.feed(bytes([0x57, 3, 6, 0, 0, ph, 3, 6, 0, 0, ph, 0x20])))
     assert c.resolution == ph
     return c
 
@@ -72,8 +75,9 @@ def test_rot1prog_frames() -> None:
 @pytest.mark.parametrize("how", HOW)
 def test_reply_decodes_with_resolution(how: str) -> None:
     c = SpidCodec()
-    c.encode_query()
-    assert taken(c, feed(c, REPLY_12_5_34, how)) == [PositionReply(12.5, 34.0)]
+    for _ in range(2):  # (rule 5: the first resolution once a second reading says it too)
+        c.encode_query()
+        assert taken(c, feed(c, REPLY_12_5_34, how)) == [PositionReply(12.5, 34.0)]
     assert c.resolution == 2 and not c.awaiting_reply()
 
 
@@ -161,8 +165,9 @@ def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> Non
     azimuth 540, the end stop. A reply that says another resolution for either axis than the
     one known is believed only when the next says it too."""
     c = SpidCodec("rot2prog")
-    c.encode_query()
-    assert taken(c, c.feed(status_frame(*AT_10_5, 2, 2))) == [PositionReply(10.0, 5.0)]
+    for _ in range(2):
+        c.encode_query()
+        assert taken(c, c.feed(status_frame(*AT_10_5, 2, 2))) == [PositionReply(10.0, 5.0)]
     flips = (status_frame(*AT_10_5, 10, 2), status_frame(*AT_10_5, 2, 10))
     for flipped in (*flips, status_frame(*AT_10_5, 10, 10)):
         c.encode_query()
@@ -178,22 +183,38 @@ def test_a_resolution_flipped_once_is_never_what_targets_are_counted_in() -> Non
     assert c.encode_target(20.0, 5.0)[0][1:5] == b"1520"
 
 
+def test_a_connections_first_resolution_is_confirmed_by_a_second_reading() -> None:
+    """Rule 5 at connect: the first reading's PH flipped 2 to 10 counted every target in 10
+    (the end stops again); until two readings taken agree, no target is counted (NotReady:
+    the engine asks first)."""
+    c = SpidCodec("rot2prog")
+    for ph in (10, 2):  # the first flipped, the second right: they do not agree
+        c.encode_query()
+        assert taken(c, c.feed(status_frame(*AT_10_5, ph, ph))) == [PositionReply(10.0, 5.0)]
+        with pytest.raises(NotReady):
+            c.encode_target(20.0, 5.0)
+        with pytest.raises(NotReady):
+            c.wire_target(20.0, 5.0)
+    c.encode_query()
+    taken(c, c.feed(status_frame(*AT_10_5, 2, 2)))
+    assert c.encode_target(20.0, 5.0)[0][1:5] == b"0760"
+
+
 def test_each_axis_is_counted_in_its_own_resolution() -> None:
     """Rule 5: Hamlib's az_resolution and el_resolution: PH for the azimuth, PV for the
     elevation (PV 4, PH 2: 5 degrees up is 1460 pulses, not 730, which that controller reads
     as -177.5)."""
     c = SpidCodec("rot2prog")
-    c.encode_query()
-    assert taken(c, c.feed(status_frame(*AT_10_5, 2, 4))) == [PositionReply(10.0, 5.0)]
+    for _ in range(2):
+        c.encode_query()
+        assert taken(c, c.feed(status_frame(*AT_10_5, 2, 4))) == [PositionReply(10.0, 5.0)]
     frame = c.encode_target(20.0, 5.0)[0]
     assert (frame[1:5], frame[5], frame[6:10], frame[10]) == (b"0760", 2, b"1460", 4)
     assert c.wire_target(20.3, 5.3) == (20.0, 5.25)
 
 
 def test_a_frame_that_is_no_reading_teaches_no_resolution() -> None:
-    c = SpidCodec("rot2prog")
-    c.encode_query()
-    taken(c, c.feed(status_frame(*AT_10_5, 2, 2)))
+    c = known(2)
     taken(c, c.feed(status_frame(*AT_10_5, 10, 10)))  # nobody asked
     c.encode_query()
     c.feed(b"\x99" + status_frame(*AT_10_5, 10, 10))  # noise before it
