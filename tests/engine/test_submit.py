@@ -60,7 +60,12 @@ class Bench(EpochBench):
         return exc.value.code
 
     def rest(self) -> None:
-        self.v.run_until(lambda h: h.state is MotionState.IDLE, 120, "the rotor rests")
+        """Idle with no target waiting (one may wait for a reading: targets.py ``decide``)."""
+        self.v.run_until(
+            lambda h: h.state is MotionState.IDLE and h.session.targets.pending is None,
+            120,
+            "the rotor rests",
+        )
 
     def last_audit(self) -> tuple[str, str, str]:
         event = self.audit[-1]
