@@ -114,15 +114,36 @@ class AzimuthOnly:
         return self._inner.encode_connect(now_unix)
 
 
-class AzimuthOfAzEl(AzimuthOnly):
+class _KeepsOwn(AzimuthOnly):
+    """What a box said of its other axis counts once the engine took the reading (rules 1
+    and 2: TakesReadings); the inner codec is told of it too, as its own reply."""
+
+    def __init__(self, inner: Codec) -> None:
+        super().__init__(inner)
+        self._pending: list[tuple[PositionReply, float | None, PositionReply]] = []  # fed:
+        # (the reply handed on, what the box said of its other axis, the inner codec's reply)
+
+    def _fed(self, shown: PositionReply, own: float | None, inner: PositionReply) -> None:
+        self._pending = [*self._pending[-_PENDING:], (shown, own, inner)]
+
+    def _taken(self, reply: PositionReply) -> tuple[bool, float | None]:
+        """Whether ``reply`` is one fed here, and what it said of the other axis."""
+        for i, (fed, own, inner) in enumerate(self._pending):
+            if fed is reply:
+                del self._pending[: i + 1]
+                if isinstance(self._inner, TakesReadings):
+                    self._inner.taken(inner)
+                return True, own
+        return False, None
+
+
+class AzimuthOfAzEl(_KeepsOwn):
     """Rule 1, for an az/el box: its elevation stays where the box has it."""
 
     def __init__(self, inner: Codec, el_range: tuple[float, float]) -> None:
         super().__init__(inner)
         self._el_range = el_range  # what its codec writes
         self._own_el: float | None = None  # what the box last said of its elevation, taken
-        self._pending: list[tuple[PositionReply, float | None, PositionReply]] = []  # fed:
-        # (reply, its el, the inner codec's reply)
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_el is None:  # the session sends only once the box answered (a reading)
@@ -133,31 +154,25 @@ class AzimuthOfAzEl(AzimuthOnly):
         replies: list[Reply] = []
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
-                inner, own, r = r, r.el_deg, replace(r, el_deg=None)
-                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
+                inner, r = r, replace(r, el_deg=None)
+                self._fed(r, inner.el_deg, inner)
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own, inner) in enumerate(self._pending):
-            if fed is reply:
-                if own is not None:
-                    low, high = self._el_range
-                    self._own_el = min(max(own, low), high)
-                del self._pending[: i + 1]
-                _tell_taken(self._inner, inner)
-                return
+        found, own = self._taken(reply)
+        if found and own is not None:
+            low, high = self._el_range
+            self._own_el = min(max(own, low), high)
 
 
-class ElevationOnly(AzimuthOnly):
+class ElevationOnly(_KeepsOwn):
     """Rule 2: ``inner``'s elevation; its azimuth stays where the box has it."""
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
         self._own_az: float | None = None  # what the box last said of its azimuth, taken
         self._asked_az: float | None = None  # what the session last asked for
-        self._pending: list[tuple[PositionReply, float, PositionReply]] = []  # fed: (reply,
-        # its own azimuth, the inner codec's reply)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         return self._inner.wire_target(az_deg, el_deg)
@@ -175,28 +190,23 @@ class ElevationOnly(AzimuthOnly):
             if isinstance(r, PositionReply):
                 inner, own = r, r.az_deg
                 r = replace(r, az_deg=own if self._asked_az is None else self._asked_az)
-                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
+                self._fed(r, own, inner)
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own, inner) in enumerate(self._pending):
-            if fed is reply:
-                self._own_az = own
-                del self._pending[: i + 1]
-                _tell_taken(self._inner, inner)
-                return
+        found, own = self._taken(reply)
+        if found:
+            self._own_az = own
 
 
-class OneAxisElevation(AzimuthOnly):
+class OneAxisElevation(_KeepsOwn):
     """Rule 2: a one-axis box whose one rotor is the elevation."""
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
         self._own_el: float | None = None  # what the box last said of its one axis, taken
         self._asked_az: float | None = None  # what the session last asked for
-        self._pending: list[tuple[PositionReply, float, PositionReply]] = []  # fed: (reply,
-        # its own bearing, the inner codec's reply)
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         el = self._own_el if el_deg is None else el_deg
@@ -214,25 +224,15 @@ class OneAxisElevation(AzimuthOnly):
         for r in self._inner.feed(data):
             if isinstance(r, PositionReply):
                 az = 0.0 if self._asked_az is None else self._asked_az
-                inner, own, r = r, r.az_deg, replace(r, az_deg=az, el_deg=r.az_deg)
-                self._pending = [*self._pending[-_PENDING:], (r, own, inner)]
+                inner, r = r, replace(r, az_deg=az, el_deg=r.az_deg)
+                self._fed(r, inner.az_deg, inner)
             replies.append(r)
         return replies
 
     def taken(self, reply: PositionReply) -> None:
-        for i, (fed, own, inner) in enumerate(self._pending):
-            if fed is reply:
-                self._own_el = own
-                del self._pending[: i + 1]
-                _tell_taken(self._inner, inner)
-                return
-
-
-def _tell_taken(codec: Codec, reply: PositionReply) -> None:
-    """A wrapped codec that keeps what its controller said (SPID's resolution) is told of the
-    reading taken too, as its own reply."""
-    if isinstance(codec, TakesReadings):
-        codec.taken(reply)
+        found, own = self._taken(reply)
+        if found:
+            self._own_el = own
 
 
 def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:

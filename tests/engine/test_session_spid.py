@@ -227,6 +227,28 @@ def test_a_controller_without_a_brake_is_never_shown_braking(rig: Rig, model: st
     assert _states(v) == [MotionState.OFFLINE, IDLE, MOVING, IDLE]
 
 
+def flip_ph_once(v: VirtualRotator) -> list[bool]:
+    """The next reply's PH byte, 2, turned into 10 on the line (one bit); the list returned
+    holds True once it was (the controller sends byte by byte)."""
+    at, done = [-1], []
+
+    def flip(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:
+            if not done and at[0] < 0 and b == 0x57:
+                at[0] = 0
+            elif not done and 0 <= at[0] < 12:
+                at[0] += 1
+                if at[0] == 5 and b == 2:
+                    b = 10
+                    done.append(True)
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = flip
+    return done
+
+
 def test_a_resolution_byte_flipped_on_the_line_never_sends_the_rotor_to_its_end_stop(
     rig: Rig,
 ) -> None:
@@ -234,22 +256,8 @@ def test_a_resolution_byte_flipped_on_the_line_never_sends_the_rotor_to_its_end_
     out as 3800/3650 pulses, and the rotor ran to azimuth 540 and elevation 210."""
     v = ready(rig)
     v.run_for(3)
-    seen = {"at": -1}
-
-    def flip(data: bytes, now: float) -> bytes:
-        out = bytearray()
-        for b in data:  # (the controller sends byte by byte)
-            if seen["at"] < 0 and b == 0x57:
-                seen["at"] = 0
-            elif 0 <= seen["at"] < 12:
-                seen["at"] += 1
-                if seen["at"] == 5 and b == 2:
-                    b, seen["at"] = 10, 99
-            out.append(b)
-        return bytes(out)
-
-    v.to_host = flip
-    v.run_until(lambda h: seen["at"] == 99, 10, "a reply's PH flipped")
+    flipped = flip_ph_once(v)
+    v.run_until(lambda h: flipped, 10, "a reply's PH flipped")
     v.run_for(0.05)
     v.to_host = None
     t = v.now
@@ -266,27 +274,13 @@ def test_the_first_reply_of_a_connection_with_a_flipped_resolution_counts_no_tar
     resolution on one word; a target right after went out as 3800 pulses (azimuth 540). A
     connection's first resolution waits for a second reading that says it too."""
     v = rig("rot2prog", emulator={"resolution_ppd": 2})
-    seen = {"at": -1}
-
-    def flip(data: bytes, now: float) -> bytes:
-        out = bytearray()
-        for b in data:  # (the first reply's PH only)
-            if seen["at"] < 0 and b == 0x57:
-                seen["at"] = 0
-            elif 0 <= seen["at"] < 12:
-                seen["at"] += 1
-                if seen["at"] == 5 and b == 2:
-                    b, seen["at"] = 10, 99
-            out.append(b)
-        return bytes(out)
-
-    v.to_host = flip
+    flipped = flip_ph_once(v)  # (the first reply's)
     v.run_until(lambda h: h.status.available, 30, "online")
     v.to_host = None
     t = v.now
     v.target(20, 5)
     v.run_until(lambda h: h.state is IDLE and sets(h, since=t), 60, "there")
-    assert seen["at"] == 99
+    assert flipped
     assert sets(v, since=t) == [(760, 730)]
     assert (v.truth().az_deg, v.truth().el_deg) == (20.0, 5.0)
 

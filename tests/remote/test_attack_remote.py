@@ -12,7 +12,7 @@ import signal
 import subprocess
 import sys
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -21,7 +21,7 @@ import pytest
 from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.reasoncodes import ReasonCode
 
-from bridge.core.errors import RefusalCode, Refused
+from bridge.core.errors import Refused
 from bridge.core.model import RotatorStatus
 from bridge.interfaces.gs232.commands import EasycommSession, Gs232Session
 from bridge.interfaces.mqtt.remote import RemoteLink
@@ -34,7 +34,7 @@ from bridge.remote.settings import RemoteSettings
 from tests.support import wait_until
 from tests.support.clock import FakeClock
 from tests.support.mosquitto import free_port
-from tests.support.remote import ask
+from tests.support.remote import Link, ask
 from tests.support.rig import Rig
 from tests.support.waiting import slow
 
@@ -43,26 +43,6 @@ INFO = (
     b'{"name":"tower","model":"rotorez","azimuth_range":[0,360],"elevation_range":null,'
     b'"keep_out":[],"park":null,"options":[]}'
 )
-
-
-class Link:
-    def __init__(self) -> None:
-        self.up = True
-        self.sent: list[tuple[str, str]] = []
-
-    def send(
-        self,
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if not self.up:
-            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
-        if check is not None:
-            check()
-        self.sent.append((topic, payload))
 
 
 class Pages:

@@ -6,7 +6,6 @@ which statuses reach the pages."""
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
@@ -37,29 +36,10 @@ from bridge.remote.console import (
 )
 from bridge.remote.rotator import Info, RemoteRotator, StationView, parse_status
 from tests.support.clock import FakeClock
+from tests.support.remote import Link
 
 SPEC = REGISTRY["rotorez"]
 T = StationTopics("rotor").rotator(None)
-
-
-class Link:
-    def __init__(self) -> None:
-        self.up = True
-        self.sent: list[tuple[str, str]] = []
-
-    def send(
-        self,
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if not self.up:
-            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
-        if check is not None:
-            check()
-        self.sent.append((topic, payload))
 
 
 class Pages:

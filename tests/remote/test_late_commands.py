@@ -10,8 +10,6 @@ from __future__ import annotations
 import socket
 import sys
 import threading
-from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
@@ -39,31 +37,12 @@ from bridge.remote.rotator import Info, RemoteRotator, StationView
 from bridge.settings.mqtt import MqttSettings
 from tests.mqtt.test_service import NOW_UNIX, service
 from tests.support.clock import FakeClock
+from tests.support.remote import Link
 from tests.support.waiting import slow
 
 STATION = StationTopics("rotor")
 T = STATION.rotator(None)
 INFO = b'{"name":"tower","model":"rotorez","azimuth_range":[0,360]}'
-
-
-@dataclass
-class Link:
-    up: bool = True
-    sent: list[tuple[str, str]] = field(default_factory=list)
-
-    def send(
-        self,
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if not self.up:
-            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
-        if check is not None:
-            check()
-        self.sent.append((topic, payload))
 
 
 def remote(clock: FakeClock, link: Link) -> tuple[RemoteRotator, StationView]:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import pytest
 
@@ -20,26 +19,7 @@ from bridge.remote.console import Drawn, RemoteConsoleRotator
 from bridge.remote.rotator import REFUSAL_LOG_S, Info, RemoteRotator, StationView
 from bridge.settings import settings_from
 from tests.support.clock import FakeClock
-
-
-@dataclass
-class Link:
-    up: bool = True
-    sent: list[tuple[str, str]] = field(default_factory=list)
-
-    def send(
-        self,
-        topic: str,
-        payload: str,
-        operator: str,
-        expiry_s: int,
-        check: Callable[[], None] | None = None,
-    ) -> None:
-        if not self.up:
-            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
-        if check is not None:
-            check()
-        self.sent.append((topic, payload))
+from tests.support.remote import Link
 
 
 def info(park: str = "null") -> Info:

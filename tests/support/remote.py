@@ -6,8 +6,11 @@ import re
 import socket
 import threading
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from types import TracebackType
 
+from bridge.core.errors import RefusalCode, Refused
 from bridge.interfaces.mqtt.heartbeat import beat_payload
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
@@ -22,6 +25,30 @@ def remote_published(broker: Mosquitto, log_from: int) -> list[bytes]:
     with open(broker.log, "rb") as f:
         f.seek(log_from)
         return _RECEIVED.findall(f.read())
+
+
+@dataclass
+class Link:
+    """A stand-in for the remote's link to the station's broker (remote/rotator.py ``Sender``):
+    what it was handed, in order; down, it refuses as the real one does; a move's ``check``
+    asked as the real one asks it (interfaces/mqtt/remote.py rule 9)."""
+
+    up: bool = True
+    sent: list[tuple[str, str]] = field(default_factory=list)
+
+    def send(
+        self,
+        topic: str,
+        payload: str,
+        operator: str,
+        expiry_s: int,
+        check: Callable[[], None] | None = None,
+    ) -> None:
+        if not self.up:
+            raise Refused(RefusalCode.OFFLINE, "not connected to the station's broker")
+        if check is not None:
+            check()
+        self.sent.append((topic, payload))
 
 
 class Heartbeat:

@@ -25,6 +25,19 @@ from tests.support.waiting import slow, wait_until
 EZ = REGISTRY["rotorez"]
 
 
+def new_console() -> WebConsole:
+    """A console on a free port, no password, at a station (not listening yet)."""
+    return WebConsole(
+        "127.0.0.1",
+        free_port(),
+        password=None,
+        frame_ancestors=[],
+        station=(55.0, 13.0),
+        locator=None,
+        satellites=lambda: [],
+    )
+
+
 class FarRotator:
     """A rotator whose commands wait until the test lets them through (a stalled link)."""
 
@@ -57,15 +70,7 @@ class FarRotator:
 @pytest.fixture
 def far() -> Iterator[tuple[FarRotator, WebConsole]]:
     rot = FarRotator()
-    console = WebConsole(
-        "127.0.0.1",
-        free_port(),
-        password=None,
-        frame_ancestors=[],
-        station=(55.0, 13.0),
-        locator=None,
-        satellites=lambda: [],
-    )
+    console = new_console()
     console.attach(rot, RotatorFacts())  # type: ignore[arg-type]
     console.listen()
     try:
@@ -143,15 +148,7 @@ def test_a_stop_waits_for_the_one_command_under_way_and_the_older_queued_never_g
 @pytest.fixture
 def two() -> Iterator[tuple[FarRotator, FarRotator, WebConsole]]:
     a, b = FarRotator("a"), FarRotator("b")
-    console = WebConsole(
-        "127.0.0.1",
-        free_port(),
-        password=None,
-        frame_ancestors=[],
-        station=(55.0, 13.0),
-        locator=None,
-        satellites=lambda: [],
-    )
+    console = new_console()
     console.attach(a, RotatorFacts())  # type: ignore[arg-type]
     console.attach(b, RotatorFacts())  # type: ignore[arg-type]
     console.listen()
@@ -268,15 +265,7 @@ def remote() -> Iterator[tuple[RemoteRotator, StalledLink, WebConsole]]:
         b'"keep_out":[],"park":null,"options":[]}'
     )
     rot = RemoteRotator("tower", station.rotator("tower"), station, info, view, link, "DL1ABC", 5)
-    console = WebConsole(
-        "127.0.0.1",
-        free_port(),
-        password=None,
-        frame_ancestors=[],
-        station=(55.0, 13.0),
-        locator=None,
-        satellites=lambda: [],
-    )
+    console = new_console()
     console.attach(RemoteConsoleRotator(rot, Drawn(), view), RotatorFacts())  # type: ignore[arg-type]
     console.listen()
     try:
