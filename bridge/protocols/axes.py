@@ -12,16 +12,19 @@ Rules:
    the elevation the box last reported for itself (as rule 2 does for an elevation box's
    azimuth), never the horizon, which every az/el codec writes for an elevation left out;
    within the box's own elevation range (a box parked at -0.5 reports it, and its codec
-   writes nothing below 0: sent as it was, every azimuth target raised).
+   writes nothing below 0: sent as it was, every azimuth target raised), at the step of its
+   grid it reads (``_held``: a Rot2Prog at 0.25 degrees reads 44.25 as 44.2, which it would
+   take as 44.0, spid.py rule 6).
 2. The elevation box reports where it points and is either an az/el box used for its
    elevation, or a one-axis box made to turn an elevation rotor (ONE_AXIS_ELEVATION: Green
    Heron sells the RT-21 for either axis); a one-axis azimuth controller (a Rotor-EZ, a GS-232
    azimuth box) is no elevation box. An az/el box's azimuth is never turned: every target it
-   is sent carries the azimuth the box last reported for itself, whatever azimuth the session
-   asked for. A one-axis box is sent the elevation as its one bearing, and its bearing is read
-   as the elevation (0..180 of its range). Either reports back as its azimuth the one the
-   session last asked for (before any: an az/el box its own, a one-axis box 0), so that the
-   session's motion machine sees that axis arrive at once and judges the elevation alone.
+   is sent carries the azimuth the box last reported for itself (at its step, as in rule
+   1), whatever azimuth the session asked for. A one-axis box is sent the elevation as its
+   one bearing, and its bearing is read as the elevation (0..180 of its range). Either
+   reports back as its azimuth the one the session last asked for (before any: an az/el box
+   its own, a one-axis box 0), so that the session's motion machine sees that axis arrive at
+   once and judges the elevation alone.
    What the box said of itself counts once the engine took it as a reading (TakesReadings):
    a well-formed glitch that a second reply spoils (link.py rule 9) is never sent back.
 3. A stop is the box's own stop (on an az/el box, both its axes stop: the azimuth is still).
@@ -38,6 +41,7 @@ from dataclasses import replace
 from bridge.protocols.base import (
     Codec,
     HamlibRotType,
+    HoldsOnGrid,
     ModelSpec,
     NotReady,
     PositionReply,
@@ -66,6 +70,13 @@ def can_drive(spec: ModelSpec, axis: Axis) -> str | None:
     if axis is Axis.ELEVATION and not spec.can_report_position:
         return f"the {spec.display_name} ({spec.name}) cannot report where it points"
     return None
+
+
+def _held(inner: Codec, deg: float, axis: Axis) -> float:
+    """What to ask ``inner`` for to keep ``axis`` where it read ``deg`` (rules 1 and 2: a
+    Rot2Prog at 0.25 degrees reads 44.25 as 44.2, and 44.2 asked for is 44.0: base.py
+    HoldsOnGrid)."""
+    return inner.held(deg, axis.value) if isinstance(inner, HoldsOnGrid) else deg
 
 
 class AzimuthOnly:
@@ -148,7 +159,9 @@ class AzimuthOfAzEl(_KeepsOwn):
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_el is None:  # the session sends only once the box answered (a reading)
             raise NotReady("the azimuth box has not said where its elevation is")
-        return self._inner.encode_target(az_deg, self._own_el)
+        low, high = self._el_range
+        el = min(max(_held(self._inner, self._own_el, Axis.ELEVATION), low), high)
+        return self._inner.encode_target(az_deg, el)
 
     def feed(self, data: bytes) -> list[Reply]:
         replies: list[Reply] = []
@@ -162,8 +175,7 @@ class AzimuthOfAzEl(_KeepsOwn):
     def taken(self, reply: PositionReply) -> None:
         found, own = self._taken(reply)
         if found and own is not None:
-            low, high = self._el_range
-            self._own_el = min(max(own, low), high)
+            self._own_el = own
 
 
 class ElevationOnly(_KeepsOwn):
@@ -180,7 +192,7 @@ class ElevationOnly(_KeepsOwn):
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_az is None:  # the session sends only once the box answered (a reading)
             raise NotReady("the elevation box has not said where its azimuth is")
-        frames = self._inner.encode_target(self._own_az, el_deg)
+        frames = self._inner.encode_target(_held(self._inner, self._own_az, Axis.AZIMUTH), el_deg)
         self._asked_az = self._inner.wire_target(az_deg, el_deg)[0]
         return frames
 
@@ -213,7 +225,9 @@ class OneAxisElevation(_KeepsOwn):
         return az_deg, None if el is None else self._inner.wire_target(el, None)[0]
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
-        el = self._own_el if el_deg is None else el_deg
+        if el_deg is None and self._own_el is not None:  # (kept where it reads)
+            el_deg = _held(self._inner, self._own_el, Axis.AZIMUTH)  # (its one axis)
+        el = el_deg
         if el is None:  # the session sends only once the box answered (a reading)
             raise NotReady("the elevation box has not said where it points")
         self._asked_az = az_deg

@@ -133,6 +133,16 @@ class TakesReadings(Protocol):
     def taken(self, reply: PositionReply) -> None: ...
 
 
+@runtime_checkable
+class HoldsOnGrid(Protocol):
+    """A codec whose targets snap to a grid its readings do not show exactly (a Rot2Prog at
+    0.25 degrees reads 44.25 as 44.2, and a target 44.2 snaps down to 44.0): what to ask for
+    to keep an axis where the controller said it is (axes.py rules 1 and 2: the axis of a
+    composite's box that is never turned)."""
+
+    def held(self, deg: float, axis: str) -> float: ...
+
+
 class SettingKind(enum.StrEnum):
     BOOL = "bool"  # on or off (ON/OFF on its topic): a Home Assistant switch
     NUMBER = "number"  # a value in a range, on a step, in a unit: a Home Assistant number

@@ -36,6 +36,10 @@ Rules:
    (until then no target is counted: ``NotReady``, and the engine asks first). A reading
    of an azimuth the controller cannot turn to (-180..540) is spoiled (the elevation's counter
    of a controller with no elevation rotor may read anything).
+6. A reading is in tenths, the grid may be finer (0.25 degrees: 44.25 reads 44.2; a
+   controller that rounds would read 44.3): an axis to be kept where it reads (a composite's
+   box, axes.py rules 1 and 2) is asked for at the step nearest the reading, half a pulse
+   above it so that rule 1's floor lands on that step, not the one below (``held``).
 """
 
 from __future__ import annotations
@@ -128,6 +132,14 @@ class SpidCodec(Plain):
         if self.variant == "md01":
             self._owed += 1  # the MD-01 answers a set with its position
         return [_frame(K_SET, body)]
+
+    def held(self, deg: float, axis: str) -> float:
+        """Rule 6: what to ask for to keep ``axis`` ("azimuth" or "elevation") at the step it
+        read as ``deg``."""
+        per = self.el_resolution if axis == "elevation" else self.resolution
+        if per is None or self.variant == "rot1prog":
+            return deg  # (no target is counted without one: rule 5)
+        return (round(per * (360 + deg)) + 0.5) / per - 360
 
     def _need_resolution(self) -> tuple[int, int]:
         if self.resolution is None or self.el_resolution is None:

@@ -179,6 +179,24 @@ def test_an_az_el_box_turning_the_azimuth_keeps_its_own_elevation_where_it_is(mo
         assert v.status.elevation_deg == 10.0
 
 
+def test_a_rot2prog_at_a_quarter_degree_keeps_its_other_axis_on_its_step() -> None:
+    """protocols/axes.py rules 1 and 2 with spid.py rule 1: a Rot2Prog set to 0.25 degrees
+    reads 44.25 as 44.2, and a target snaps down to its grid: sent back as read, its elevation
+    (the azimuth box's) or its azimuth (the elevation box's) went one step down, 44.0, at the
+    first move of the other axis (a surprise move of a rotor nobody asked to turn)."""
+    boxes = {
+        Axis.AZIMUTH: {"resolution_ppd": 4, "start_el_deg": 44.25},
+        Axis.ELEVATION: {"resolution_ppd": 4, "start_az_deg": 120.75},
+    }
+    with VirtualComposite("rot2prog", "rot2prog", emulators=boxes) as v:
+        v.run_until(online, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 400, "idle")
+        assert (v.az.truth().az_deg % 360, v.el.truth().el_deg) == (200.0, 10.0)
+        assert v.az.truth().el_deg == 44.25  # the azimuth box's elevation never turned
+        assert v.el.truth().az_deg == 120.75  # the elevation box's azimuth never turned
+
+
 def test_an_az_el_box_turning_the_azimuth_whose_elevation_reads_below_zero_still_turns() -> None:
     """protocols/axes.py rule 1: the elevation sent back is within the box's own range (an
     Easycomm box reads -0.5 and writes nothing below 0: the target raised, and the azimuth

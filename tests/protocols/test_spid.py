@@ -58,6 +58,18 @@ def test_targets_snap_down_to_the_resolution_grid() -> None:
     assert known(1).wire_target(200.9, 45.5) == (200.0, 45.0)
 
 
+@pytest.mark.parametrize("ph", [1, 2, 4, 10])
+def test_an_axis_held_where_it_reads_is_asked_for_at_its_own_step(ph: int) -> None:
+    """Rule 6: every step of the grid, read in tenths rounded down (44.25 reads 44.2) or to
+    the nearest (44.3), is asked for as that step, never the one below it."""
+    c = known(ph)
+    for pulses in range(0, 5400):  # -360..180 at 10 pulses per degree: both ends of each axis
+        for tenths in (pulses * 10 // ph, round(pulses * 10 / ph)):  # (of 360 + the angle)
+            read = tenths / 10 - 360
+            frame = c.encode_target(c.held(read, "azimuth"), c.held(read, "elevation"))[0]
+            assert frame[1:5] == frame[6:10] == b"%04d" % pulses, (pulses, read)
+
+
 def test_no_set_without_a_known_resolution() -> None:
     with pytest.raises(ValueError, match="resolution"):
         SpidCodec().encode_target(10, 10)
