@@ -28,6 +28,15 @@ Rules:
    (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
+9. At rest, a reading is believed when the next says so too if it puts the rotor more than
+   ``doubt_deg`` from where it stands (either axis): the controller is asked again at once,
+   and a reading back where the rotor stood shows the first was line noise (reported as
+   junk; a reading a flipped bit made well-formed, 102 read as 281, was published and taken
+   as a move: a nudge from the bearing then turned the rotor 180 degrees). At rest only:
+   settled, no target, no stop being checked; there the bearing changes only by a hand at
+   the controller's panel, which the reading asked a moment later confirms (a move by hand
+   is seen one exchange later). A turning rotor's readings change at every poll: not
+   doubted (a target there is counted from the target, not the bearing).
 """
 
 from __future__ import annotations
@@ -60,6 +69,12 @@ from bridge.session.targets import Sending, resolve
 log = logging.getLogger(__name__)
 
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
+DOUBT_MIN_DEG = 5.0  # rule 9: a reading at rest this far (or twice the noise) is asked again
+
+
+def doubt_deg(cfg: mo.MotionConfig) -> float:
+    """Rule 9: how far from where a rotor at rest stands a reading is asked again."""
+    return max(DOUBT_MIN_DEG, 2 * cfg.noise_deg)
 
 
 @dataclass(frozen=True)
@@ -95,6 +110,20 @@ class Fed(Enum):
     REPLY = "reply"  # anything else: a reading taken or dropped, junk, a version
 
 
+def _apart(
+    reply: PositionReply, az_deg: float, el_deg: float | None, limit: float, wraps: bool
+) -> bool:
+    """Rule 9: whether ``reply`` is more than ``limit`` from ``az_deg``/``el_deg`` on either
+    axis."""
+    if mo.angle_error(reply.az_deg, az_deg, wraps) > limit:
+        return True
+    return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
+
+
+def _where(reply: PositionReply) -> str:
+    return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
+
+
 class Controller:
     def __init__(self, cfg: WorkerConfig, options: dict[str, SettingValue] | None) -> None:
         self.cfg = self.base_cfg = cfg  # rule 7
@@ -111,6 +140,7 @@ class Controller:
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
+        self._doubted: PositionReply | None = None  # rule 9: a reading at rest asked again
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -181,6 +211,7 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
+        self._doubted = None  # rule 9: a new connection's first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -306,7 +337,38 @@ class Controller:
         reply = link.settled(now)
         if reply is None:
             return False
+        if self._doubts(reply, now):
+            self._ask_again(link, now)
+            return False
         self._reading(link, reply, now)
+        return True
+
+    def _doubts(self, reply: PositionReply, now: float) -> bool:
+        """Rule 9: whether ``reply`` is asked again before it is believed."""
+        m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
+        self._doubted = None
+        if m.state is not mo.IDLE or m.idle_not_before_t is not None or m.target_deg is not None:
+            return False
+        if m.stop_sent_t is not None or m.position_deg is None:
+            return False
+        limit = doubt_deg(cfg)
+        if not _apart(reply, m.position_deg, m.el_position_deg, limit, cfg.az_wraps):
+            if doubted is not None:  # back where it stood: the one before was noise
+                log.warning(
+                    "%s: a reading at rest of %s, %g degrees from where the rotor stands, not "
+                    "said again: ignored (line noise?)",
+                    self.name,
+                    _where(doubted),
+                    mo.angle_error(doubted.az_deg, m.position_deg, cfg.az_wraps),
+                )
+                self._junk(b"%s" % _where(doubted).encode(), False, now)
+            return False
+        if doubted is not None and not _apart(
+            reply, doubted.az_deg, doubted.el_deg, limit, cfg.az_wraps
+        ):
+            return False  # said twice: the rotor is there (moved by hand, or recalibrated)
+        self._doubted = reply
+        log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         return True
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
