@@ -19,7 +19,11 @@ Rules:
    listeners, and each session keeps its own stop rules (a stop owed to an unplugged box is
    its first frame on replug).
 2. A target is split: its azimuth to the azimuth box, its elevation to the elevation box; an
-   axis it leaves out is no target for that box.
+   axis it leaves out is no target for that box, but ends there what a target ends (tracking,
+   following, a part's motion: ``Batch.ends``), as in the box it goes to: the operator's
+   bearing is the last word on the whole rotator (an attack pass: an azimuth after a track
+   command ended tracking in the azimuth box alone, and the elevation box went on tracking
+   by itself, the status saying nothing was tracked).
 3. The status is the azimuth box's, with the elevation box's elevation and elevation target:
    connected and available only when both are, offline when either is (the judge then refuses
    targets and track commands: the safe side), moving when either moves; the last error is the
@@ -88,8 +92,15 @@ def split(batch: Batch) -> dict[Axis, Batch]:
         el = replace(target, az_deg=None, true_az_deg=None)
     # rule 6: a feature's own commands (and the halts marked among them) to the azimuth box
     moved = target is not None  # rule 7: the quiet spell starts again in both
-    alone = replace(batch, target=el, feature_commands=[], activity=moved)
-    return {Axis.AZIMUTH: replace(batch, target=az, activity=moved), Axis.ELEVATION: alone}
+    # rule 2: a target leaving an axis out ends in that box what it ends in the other
+    ends = None if target is None else f"{target.source.value} target"
+    alone = replace(
+        batch, target=el, feature_commands=[], activity=moved, ends=None if el else ends
+    )
+    return {
+        Axis.AZIMUTH: replace(batch, target=az, activity=moved, ends=None if az else ends),
+        Axis.ELEVATION: alone,
+    }
 
 
 def share_quiet(sessions: list[RotatorSession], now: float) -> None:

@@ -115,6 +115,8 @@ class Batch:
     wind_replayed: float | None = None  # rule 9: ... and one the broker replayed
     health_reset: bool = False  # a new health baseline (health.py)
     activity: bool = False  # a command to a composite's other box (runtime/composite.py rule 7)
+    ends: str | None = None  # a target to a composite's other box: what it ends here too, as
+    # that target would (runtime/composite.py rule 2: tracking, following, a part's motion)
     epoch: int = 0  # rule 10: the halt count when taken (every stop and lock ON up to it is
     # in this batch or an earlier one)
     # rule 12, in the order put, with where a stop, lock or clearing came among them
@@ -135,7 +137,7 @@ class Batch:
         fence = fence or self.express_hold is not None or self.express_release is not None
         feeds = self.follow is not None or self.heard is not None
         feeds = feeds or self.wind is not None or self.wind_replayed is not None
-        feeds = feeds or bool(self.feature_commands) or self.activity
+        feeds = feeds or bool(self.feature_commands) or self.activity or self.ends is not None
         return bool(self.stop or self.target or settings or self.track or fence or feeds)
 
     def drop_moving(self) -> None:

@@ -314,6 +314,8 @@ class RotatorSession:
                 self._error(ErrorKind.REFUSED, refused, command=what)
             else:
                 self.targets.put(batch.target, now)
+        elif batch.ends is not None:  # (a target to a composite's other box: ended here too)
+            self._end(batch.ends, now)
         actions = self._step(now)
         self.halts_applied = batch.epoch  # (after the status: see __init__)
         return actions

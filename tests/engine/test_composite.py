@@ -6,6 +6,7 @@ against the test's own solar formula (tests/support/sky.py)."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 import serial
@@ -32,9 +33,13 @@ from bridge.session.follow import Follow, Heard
 from bridge.session.mailbox import Mailbox
 from bridge.session.parts import Part, Proposal, Scene, Wake
 from bridge.session.session import RotatorSession
+from bridge.session.tracking import Track
 from bridge.settings import RotatorSettings
 from bridge.sky import Body, Sky
+from bridge.sky.catalog import TleCatalog
+from bridge.sky.worker import LookupQuestion
 from tests.engine import virtual_composite
+from tests.engine.test_catalog import ISS, three_line
 from tests.engine.test_follow import STATION
 from tests.engine.test_session_tracking import SUN_EPOCH, off_deg, sun_up_somewhere
 from tests.engine.virtual_composite import VirtualComposite
@@ -145,6 +150,62 @@ def test_tracking_ends_in_both_boxes_when_one_box_is_unplugged() -> None:
         t, az = v.now, v.az.truth().az_deg
         v.run_for(600.0)
         assert v.az.truth().az_deg == az and v.az.frames("move", since=t) == []
+
+
+@pytest.mark.parametrize("aim", [Target(200.0, None), Target(None, 30.0)])
+def test_a_target_to_one_axis_after_a_track_command_ends_tracking_in_both_boxes(
+    aim: Target,
+) -> None:
+    """composite.py rule 2: "track sun" and then at once a bearing, taken in one batch (a busy
+    lines thread): the bearing is the last word on the whole rotator. An azimuth alone was no
+    target for the elevation box, which went on tracking the sun by itself (its elevation
+    rotor turned to the sun's) while the status said nothing was tracked (an attack pass)."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    with VirtualComposite(
+        "rt21", "gs232b", settings=FINE, emulators=FAST, sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH
+    ) as v:
+        v.run_until(online, 20, "both boxes answer")
+        v.aim(Target(100.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        still = Axis.ELEVATION if aim.el_deg is None else Axis.AZIMUTH
+        t, before = v.now, v.boxes[still].truth()
+        v.mailbox.put_track(Track(Body.sun()))
+        v.mailbox.put(v.cfg.aim.judge(aim, v.status.raw_bearing_deg))
+        v._take()
+        v.run_for(180.0)
+        assert v.az.status.tracking is None and v.el.status.tracking is None
+        assert v.boxes[still].frames("move", since=t) == []
+        after = v.boxes[still].truth()
+        assert (after.az_deg, after.el_deg) == (before.az_deg, before.el_deg)
+
+
+def test_an_azimuth_before_a_satellite_is_looked_up_ends_its_tracking_in_both_boxes(
+    tmp_path: Path,
+) -> None:
+    """composite.py rule 2: ``R/track ISS`` (looked up by the sky worker, tracking.py rule 8),
+    then, before the answer, an azimuth: the elevation box, given no target, started tracking
+    ISS when its answer came, and drove its elevation from 45 to 180 (the flipped waiting
+    position of a satellite below the horizon) by itself (an attack pass)."""
+    path = tmp_path / "sats.txt"
+    path.write_text(three_line(("ISS (ZARYA)", ISS)))
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    with VirtualComposite(
+        "rt21", "gs232b", settings=FINE, emulators=FAST, sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH
+    ) as v:
+        for box in v.boxes.values():
+            box.sky_delay_s = 0.5  # the look-up takes a moment (a file read)
+        v.run_until(online, 20, "both boxes answer")
+        v.aim(Target(100.0, 45.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        t = v.now
+        lookup = LookupQuestion(TleCatalog(path), "ISS (ZARYA)")
+        v.mailbox.put_track(Track(None, Source.MQTT, lookup, "track ISS"))
+        v._take()
+        v.run_for(0.1)  # the look-up is under way
+        v.aim(Target(200.0, None))
+        v.run_for(180.0)
+        assert v.az.status.tracking is None and v.el.status.tracking is None
+        assert v.el.frames("move", since=t) == [] and v.el.truth().el_deg == 45.0
 
 
 def test_two_rt21_boxes_make_an_az_el_rotator() -> None:
