@@ -36,7 +36,10 @@ Rules:
    settled, no target, no stop being checked; there the bearing changes only by a hand at
    the controller's panel, which the reading asked a moment later confirms (a move by hand
    is seen one exchange later). A turning rotor's readings change at every poll: not
-   doubted (a target there is counted from the target, not the bearing).
+   doubted (a target there is counted from the target, not the bearing). Readings that go
+   on disagreeing (a line gone bad, a failing position sensor) are asked for at the usual
+   polls, not at once, and DOUBTS_TOLD of them in a row are reported; the bearing shown is
+   the last two readings agreed on.
 """
 
 from __future__ import annotations
@@ -70,6 +73,7 @@ log = logging.getLogger(__name__)
 
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
 DOUBT_MIN_DEG = 5.0  # rule 9: a reading at rest this far (or twice the noise) is asked again
+DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -115,9 +119,19 @@ def _apart(
 ) -> bool:
     """Rule 9: whether ``reply`` is more than ``limit`` from ``az_deg``/``el_deg`` on either
     axis."""
-    if mo.angle_error(reply.az_deg, az_deg, wraps) > limit:
+    if _away(reply.az_deg, az_deg, wraps) > limit:
         return True
     return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
+
+
+def _away(a_deg: float, b_deg: float, wraps: bool) -> float:
+    """Rule 9: how far apart two azimuths are (on a circle when ``wraps``, also for a reading
+    past 360 that noise made: 450 on a 0..360 box is 90)."""
+    d = abs(a_deg - b_deg)
+    if wraps:
+        d %= 360.0
+        d = min(d, 360.0 - d)
+    return d
 
 
 def _where(reply: PositionReply) -> str:
@@ -141,6 +155,7 @@ class Controller:
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self._doubted: PositionReply | None = None  # rule 9: a reading at rest asked again
+        self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -211,7 +226,8 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._doubted = None  # rule 9: a new connection's first reading is believed
+        self._doubted, self._doubts_in_row = None, 0  # rule 9: a new connection's first
+        # reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -337,39 +353,51 @@ class Controller:
         reply = link.settled(now)
         if reply is None:
             return False
-        if self._doubts(reply, now):
-            self._ask_again(link, now)
+        doubt = self._doubts(reply, now)
+        if doubt is not False:
+            link.got_reading(now)  # (the controller answers: its value is what is doubted)
+            if doubt:  # (again at once the first time only: a line gone bad is polled as ever)
+                self._ask_again(link, now)
             return False
         self._reading(link, reply, now)
         return True
 
-    def _doubts(self, reply: PositionReply, now: float) -> bool:
-        """Rule 9: whether ``reply`` is asked again before it is believed."""
+    def _doubts(self, reply: PositionReply, now: float) -> bool | None:
+        """Rule 9: whether ``reply`` is not believed yet: True, ask again at once; None, at
+        the next poll (the readings have disagreed more than once in a row); False, taken."""
         m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
         self._doubted = None
         if m.state is not mo.IDLE or m.idle_not_before_t is not None or m.target_deg is not None:
+            self._doubts_in_row = 0
             return False
         if m.stop_sent_t is not None or m.position_deg is None:
+            self._doubts_in_row = 0
             return False
-        limit = doubt_deg(cfg)
-        if not _apart(reply, m.position_deg, m.el_position_deg, limit, cfg.az_wraps):
+        limit, wraps = doubt_deg(cfg), cfg.az_wraps
+        if not _apart(reply, m.position_deg, m.el_position_deg, limit, wraps):
             if doubted is not None:  # back where it stood: the one before was noise
-                log.warning(
-                    "%s: a reading at rest of %s, %g degrees from where the rotor stands, not "
-                    "said again: ignored (line noise?)",
-                    self.name,
-                    _where(doubted),
-                    mo.angle_error(doubted.az_deg, m.position_deg, cfg.az_wraps),
+                away = _away(doubted.az_deg, m.position_deg, wraps)
+                self._warn(
+                    f"a reading at rest of {_where(doubted)}, {away:g}° from where the rotor "
+                    "stands, was not said again: ignored (line noise?)",
+                    now,
                 )
-                self._junk(b"%s" % _where(doubted).encode(), False, now)
+            self._doubts_in_row = 0
             return False
-        if doubted is not None and not _apart(
-            reply, doubted.az_deg, doubted.el_deg, limit, cfg.az_wraps
-        ):
+        if doubted is not None and not _apart(reply, doubted.az_deg, doubted.el_deg, limit, wraps):
+            self._doubts_in_row = 0
             return False  # said twice: the rotor is there (moved by hand, or recalibrated)
         self._doubted = reply
+        self._doubts_in_row += 1
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
-        return True
+        if self._doubts_in_row == DOUBTS_TOLD:
+            self._warn(
+                f"{DOUBTS_TOLD} readings in a row at rest disagree, the last {_where(reply)}: "
+                "a noisy line or a failing position sensor; the bearing shown is the last two "
+                "readings agreed on",
+                now,
+            )
+        return True if self._doubts_in_row == 1 else None
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -578,9 +606,17 @@ class Controller:
             log.debug("%s: ignored %d harmless bytes: %r", self.name, len(data), data[:64])
             return
         log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
+        self._tell(f"controller sent {len(data)} bytes that are no valid reply; ignored", now)
+
+    def _warn(self, why: str, now: float) -> None:
+        """Rule 9: ``why`` logged, and told as rule 6 tells of junk."""
+        log.warning("%s: %s", self.name, why)
+        self._tell(why, now)
+
+    def _tell(self, why: str, now: float) -> None:
+        """Rules 6 and 9: ``why`` on R/error, at most every ``junk_report_interval_s``."""
         if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
             self._junk_reported_t = now
-            why = f"controller sent {len(data)} bytes that are no valid reply; ignored"
             self.notes.append(Report(ErrorKind.PROTOCOL, why))
 
     def wakeups(self, now: float, latest: float, alone: bool) -> tuple[float, float]:

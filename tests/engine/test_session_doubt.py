@@ -90,3 +90,29 @@ def test_a_reading_at_rest_said_twice_is_believed(rig: Rig) -> None:
     assert v.status.bearing_deg == 350.0
     assert v.errors(since=t) == []
     assert DOUBT_MIN_DEG < 200
+
+
+def test_readings_at_rest_that_go_on_disagreeing_are_reported_and_polled_as_ever(
+    rig: Rig,
+) -> None:
+    """A failing position sensor (each reading elsewhere): the bearing shown stays the last
+    two readings agreed on, the readings are reported, and the line is polled at its idle
+    rate, not at once after each."""
+    v = at_rest(rig, "gs232b")
+    rest, query = v.status.bearing_deg, b"C\r"
+    t0 = v.now
+    v.run_for(30)
+    polls_before = v.sent(since=t0).count(query)
+    digits = iter(b"2340" * 1000)  # 150 reads 250, 350, 450, 50, 250...
+
+    def failing(data: bytes, now: float) -> bytes:
+        return data.replace(b"1", bytes([next(digits)])) if b"1" in data else data
+
+    v.to_host = failing
+    t = v.now
+    v.run_for(30)
+    assert v.status.bearing_deg == rest and v.status.available
+    assert {s.state for s in v.published(since=t)} <= {MotionState.IDLE}
+    assert v.sent(since=t).count(query) <= polls_before + 1
+    told = [e.message for e in v.errors(since=t)]
+    assert any("readings in a row at rest disagree" in m for m in told), told
