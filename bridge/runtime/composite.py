@@ -30,7 +30,9 @@ Rules:
    newer of the two.
 4. Tracking and following run in both sessions (each aims its own axis); when one ends (an
    unplugged box, a stop, the horizon) the other is ended too, and the status says why the
-   first one ended.
+   first one ended. One that runs in a box while the other does not answer (begun there
+   after the judge took the command while the other box went offline, which refused it) is
+   ended at once ("rotator offline"): no axis tracks or follows alone.
 5. Each box's worker is guarded on its own: a bug in serving one closes and reopens that line
    only, and the other line goes on.
 6. A feature's own command (core/model.py ``FeatureCommand``, session/parts.py rule 5) is one
@@ -80,6 +82,7 @@ __all__ = ["CompositeWorker", "Composition", "merge", "share_quiet", "split"]
 
 log = logging.getLogger(__name__)
 AXES = (Axis.AZIMUTH, Axis.ELEVATION)
+OFFLINE = "rotator offline"  # rule 4: why tracking begun in one box alone ended there
 
 
 def split(batch: Batch) -> dict[Axis, Batch]:
@@ -169,12 +172,16 @@ class Composition:
         track = before.tracking is not None and status.tracking is None
         follow = before.following is not None and status.following is None
         if track or follow:
-            other = Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH
-            owed = self._owed.get(other, (False, False))
-            self._owed[other] = (owed[0] or track, owed[1] or follow)
+            self._owe(Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH, track, follow)
             if track and self._ended is None:
                 self._ended = status.tracking_ended
         self.boxes[axis] = status
+        for mine, theirs in ((Axis.AZIMUTH, Axis.ELEVATION), (Axis.ELEVATION, Axis.AZIMUTH)):
+            box = self.boxes[mine]  # rule 4: one that tracks while the other does not answer
+            if not self.boxes[theirs].available and (box.tracking or box.following):
+                self._owe(mine, box.tracking is not None, box.following is not None)
+                if box.tracking is not None and self._ended is None:
+                    self._ended = OFFLINE
         az, el = self.boxes[Axis.AZIMUTH], self.boxes[Axis.ELEVATION]
         merged = merge(self.rotator_id, az, el, error=self._error)
         if self._ended is not None and merged.tracking is None:
@@ -183,6 +190,11 @@ class Composition:
         self._first = False  # the first status goes out whatever it says (session.py start)
         self.status = merged
         return merged if worth else None
+
+    def _owe(self, axis: Axis, track: bool, follow: bool) -> None:
+        """Rule 4: tracking (``track``) or following to be ended in ``axis``'s box."""
+        owed = self._owed.get(axis, (False, False))
+        self._owed[axis] = (owed[0] or track, owed[1] or follow)
 
     def ends(self) -> dict[Axis, Batch]:
         """Rule 4: a batch ending tracking or following in the box that still has it."""
