@@ -101,6 +101,11 @@ _JUNK_KEEP = 4096  # a run of banners (a STOP pressed again and again on an idle
 __all__ = ["JUNK_QUIET_S", "SLEW_MARGIN_S", "SLEW_TIME_FACTOR", "Link", "Slew"]
 
 
+def _grid(now: float, interval_s: float) -> float:
+    """Rule 8: the first multiple of ``interval_s`` at least half of it after ``now``."""
+    return math.ceil((now + interval_s / 2) / interval_s) * interval_s
+
+
 class Link:
     def __init__(self, codec: Codec, spec: ModelSpec, now: float, baud: int) -> None:
         self.codec = codec
@@ -402,6 +407,12 @@ class Link:
         """The next poll no later than ``t`` (a move just began: follow it closely)."""
         self._next_poll = min(self._next_poll, t)
 
+    def poll_every(self, now: float, interval_s: float) -> None:
+        """The next poll no later than the next instant of ``interval_s``'s grid (rule 8): a
+        poll set on a slower grid (the idle one) is brought to it (a move first seen, a stop
+        written: the readings that check them come at the moving rate from now on)."""
+        self._next_poll = min(self._next_poll, _grid(now, interval_s))
+
     def poll(self, now: float, interval_s: float) -> bool:
         """Whether a query was written."""
         if self._reply_deadline is not None or self._stop_due or now < self._next_poll:
@@ -417,7 +428,7 @@ class Link:
         self.write(query, now)
         if isinstance(asked, list):
             self._queue(asked[1:], now + self._gap_s, now, poll=True)
-        self._next_poll = math.ceil((now + interval_s / 2) / interval_s) * interval_s  # rule 8
+        self._next_poll = _grid(now, interval_s)
         self._hold_bytes, self._hold_reads = self.spec.reply_bytes, 0
         self._learns = not isinstance(asked, list) or len(asked) == 1
         self._hold_base = now + (len(query) + self._hold_bytes + 1) * self._byte_s
