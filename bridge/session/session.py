@@ -40,6 +40,9 @@ Rules:
    command or any other target ends it. What it needs of the sky goes out as ``Ask`` actions
    and comes back through ``sky_answer``.
 11. A stop is never lost (stops.py rule 3): one owed is the first frame once the port is open.
+    A session that starts locked (a lock the state file kept) owes one: the lock ON may have
+    come while the port was out, and its stop was owed in the process that ended (an attack
+    pass: restarted before the adapter came back, the rotor turned on to its target, locked).
 12. ``last_error`` is the last thing refused or gone wrong since the last batch of commands
    that was taken: a command after it that is carried out clears it.
 13. The last word (interfaces/mqtt/lastword.py): a stop or lock ON from the stop lane holds the
@@ -174,6 +177,9 @@ class RotatorSession:
         self.fence = Fence()  # rule 13
         self.wall_offset_s = 0.0
         self.controller = Controller(cfg, options)
+        # rule 11: a lock kept from before (the state file) owes a stop: the lock ON that set
+        # it may have come while the port was closed, its stop owed in a process now ended
+        self.controller.stops.owed = locked
         self.targets = Targets(cfg)
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower

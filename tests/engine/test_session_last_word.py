@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState, Source, Stop, Target, TargetInfo
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.engine.virtual import VirtualRotator
@@ -174,3 +176,28 @@ def test_a_stop_waiting_for_a_half_duplex_line_is_sent_first_when_the_port_is_ba
     v.run_for(3)
     assert v.frames(since=t)[0].outcome == "stop"
     assert not v.truth().is_moving
+
+
+@pytest.mark.parametrize("model", ["rotorez", "gs232b", "easycomm2", "rot2prog", "md01"])
+def test_a_lock_kept_across_a_restart_stops_the_rotor_on_the_first_connect(model: str) -> None:
+    """Session rule 11: lock ON while the adapter was out (its stop owed), then the bridge
+    restarted before the adapter came back: the state file gave the lock back, not the stop
+    owed, and the rotor turned on to its target, shown locked (an attack pass)."""
+    with VirtualRotator(model) as v:
+        v.run_until_state(MotionState.IDLE, 90)
+        v.target(170)
+        v.run_for(5)
+        v.link_down()
+        v.run_for(0.3)
+        v.lock(True)  # tower work; the port is out: its stop is owed, in this process
+        v.run_for(1)
+        device, now = v.device, v.now
+    with VirtualRotator(model, locked=True, connect=False, start_s=now) as again:
+        again.device = device  # the same controller, still turning
+        t = again.now
+        again.link_up()
+        again.run_for(30)
+        stop = again.cfg.spec.codec_factory().encode_stop()
+        assert again.sent(since=t)[0] == (stop[0] if isinstance(stop, list) else stop)
+        assert again.status.locked and not again.truth().is_moving
+        assert again.truth().az_deg < 150
