@@ -148,6 +148,10 @@ def test_bad_file_exits_2_with_one_message(tmp_path: Path) -> None:
     assert out.returncode == 2 and "not found" in out.stderr
     out = cli("check-config", "-c", str(write(tmp_path, "[mqtt\n")))
     assert out.returncode == 2 and "not valid TOML" in out.stderr
+    deep = write(tmp_path, "a = " + "[" * 5000 + "1" + "]" * 5000 + "\n")  # past the parser's depth
+    out = cli("check-config", "-c", str(deep))
+    assert out.returncode == 2 and "nested too deep" in out.stderr
+    assert "Traceback" not in out.stderr
 
 
 # -- check-config: the values in effect, and warnings for what is legal but probably wrong ------

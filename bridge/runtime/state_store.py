@@ -106,8 +106,10 @@ class StateStore:
                 self._data = {
                     str(k): self._entry(path, str(k), v) for k, v in loaded["rotators"].items()
                 }
-            except (OSError, ValueError) as exc:
-                log.error("state file %s unreadable (%s): every rotator starts locked", path, exc)
+            except (OSError, ValueError, RecursionError) as exc:  # (nesting past the parser's
+                # depth: a few kilobytes of brackets)
+                why = "nested too deep" if isinstance(exc, RecursionError) else exc
+                log.error("state file %s unreadable (%s): every rotator starts locked", path, why)
                 self.corrupt = True
 
     def _entry(self, path: Path, rotator_id: str, entry: object) -> dict[str, object]:

@@ -33,6 +33,15 @@ def test_an_unreadable_state_file_starts_every_rotator_locked(tmp_path: Path) ->
     assert again.locked("yagi") is True  # still locked after the restart: nobody unlocked it
 
 
+def test_a_state_file_nested_too_deep_starts_every_rotator_locked(tmp_path: Path) -> None:
+    """state_store.py rule 2 for a file of nested brackets (a few kilobytes past the parser's
+    depth): the start died of a RecursionError, every 5 s under systemd (an attack pass)."""
+    path = tmp_path / "state.json"
+    path.write_text('{"rotators": {"tower": {"health": ' + "[" * 5000 + "]" * 5000 + "}}}")
+    s = StateStore(path)
+    assert s.corrupt and s.locked("tower") is True
+
+
 def test_a_lock_that_cannot_be_saved_says_so(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("")
