@@ -31,6 +31,12 @@ Rules:
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults); it
    reports a position only when both boxes can, and takes whole degrees when either does.
+5. What the box says of its axis that is never turned changes only when two readings taken
+   in a row say so (beyond KEEP_NOISE_DEG): that axis does not move, so a change is line noise
+   or a hand at the box's panel, and a glitch sent back turns that rotor (an attack pass: one
+   flipped bit read the elevation box's own azimuth 150 as 350, and the next elevation target
+   wrote ``W350 030``: its azimuth rotor turned 200 degrees). The session's readings of the
+   axis it drives are judged by its own rules (session/controller.py rule 9).
 """
 
 from __future__ import annotations
@@ -51,6 +57,15 @@ from bridge.protocols.base import (
 
 # positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
 _PENDING = 4
+KEEP_NOISE_DEG = 2.0  # rule 5: a change of the axis never turned up to this is believed at once
+
+
+def _apart(a_deg: float, b_deg: float, circle: bool) -> float:
+    d = abs(a_deg - b_deg)
+    if circle:
+        d %= 360.0
+        d = min(d, 360.0 - d)
+    return d
 
 
 class Axis(enum.StrEnum):
@@ -127,15 +142,29 @@ class AzimuthOnly:
 
 class _KeepsOwn(AzimuthOnly):
     """What a box said of its other axis counts once the engine took the reading (rules 1
-    and 2: TakesReadings); the inner codec is told of it too, as its own reply."""
+    and 2: TakesReadings), and once said twice if it changed (rule 5); the inner codec is
+    told of it too, as its own reply."""
 
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
+        self._said: float | None = None  # rule 5: a change said once
         self._pending: list[tuple[PositionReply, float | None, PositionReply]] = []  # fed:
         # (the reply handed on, what the box said of its other axis, the inner codec's reply)
 
     def _fed(self, shown: PositionReply, own: float | None, inner: PositionReply) -> None:
         self._pending = [*self._pending[-_PENDING:], (shown, own, inner)]
+
+    def _keep(self, own: float | None, said: float, circle: bool) -> float:
+        """Rule 5: what to keep of the other axis, ``own`` so far, now said to be ``said``
+        (``circle``: an azimuth, 359 and 0 one degree apart)."""
+        if own is None or _apart(own, said, circle) <= KEEP_NOISE_DEG:
+            self._said = None
+            return said
+        if self._said is not None and _apart(self._said, said, circle) <= KEEP_NOISE_DEG:
+            self._said = None
+            return said  # said twice
+        self._said = said
+        return own
 
     def _taken(self, reply: PositionReply) -> tuple[bool, float | None]:
         """Whether ``reply`` is one fed here, and what it said of the other axis."""
@@ -175,7 +204,7 @@ class AzimuthOfAzEl(_KeepsOwn):
     def taken(self, reply: PositionReply) -> None:
         found, own = self._taken(reply)
         if found and own is not None:
-            self._own_el = own
+            self._own_el = self._keep(self._own_el, own, circle=False)
 
 
 class ElevationOnly(_KeepsOwn):
@@ -208,8 +237,8 @@ class ElevationOnly(_KeepsOwn):
 
     def taken(self, reply: PositionReply) -> None:
         found, own = self._taken(reply)
-        if found:
-            self._own_az = own
+        if found and own is not None:
+            self._own_az = self._keep(self._own_az, own, circle=True)
 
 
 class OneAxisElevation(_KeepsOwn):

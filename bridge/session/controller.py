@@ -32,18 +32,23 @@ Rules:
    (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
-9. At rest, a reading is believed when the next says so too if it puts the rotor more than
-   ``doubt_deg`` from where it stands (either axis): the controller is asked again at once,
-   and a reading back where the rotor stood shows the first was line noise (reported as
-   junk; a reading a flipped bit made well-formed, 102 read as 281, was published and taken
-   as a move: a nudge from the bearing then turned the rotor 180 degrees). At rest only:
-   settled, no target, no stop being checked; there the bearing changes only by a hand at
-   the controller's panel, which the reading asked a moment later confirms (a move by hand
-   is seen one exchange later). A turning rotor's readings change at every poll: not
-   doubted (a target there is counted from the target, not the bearing). Readings that go
-   on disagreeing (a line gone bad, a failing position sensor) are asked for at the usual
-   polls, not at once, and DOUBTS_TOLD of them in a row are reported; the bearing shown is
-   the last two readings agreed on.
+9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking,
+   stalled, also after a stop) more than ``doubt_deg`` from where it stands, on either axis,
+   is believed when the next says so too: the controller is asked again at once, and a
+   reading back where the rotor stood shows the first was line noise (logged, and told on
+   R/error as junk is: rule 6). One flipped bit in an ASCII reply makes a well-formed bearing
+   (``AZ=150`` read as ``AZ=350``): it was published and taken as a move, and a nudge made
+   from that bearing turned the rotor 200 degrees. A rotor not turning changes its bearing
+   only by a hand at the controller's panel, which the reading asked a moment later confirms
+   (a move by hand is seen one exchange later; a stop that did not take is checked one
+   exchange later, within stops.py rule 2's resend time). A turning rotor's readings change at
+   every poll: not doubted (a target then counts from the target, not the bearing); nor is a
+   connection's first. A doubted reading is no reading for anything: not the motion's, not a
+   target's fresh one (targets.py rule 7: a target waits for the answer), not one a stop cuts
+   short (rule 5); but the controller answered (no silence). Readings that go on disagreeing
+   (a line gone bad, a failing position sensor) are asked for at the usual polls, not at once,
+   and told from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings
+   agreed on. (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
 """
 
 from __future__ import annotations
@@ -140,6 +145,14 @@ def _away(a_deg: float, b_deg: float, wraps: bool) -> float:
 
 def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
+
+
+class Doubt(Enum):
+    """Rule 9: what becomes of a reading."""
+
+    TAKEN = "taken"  # believed
+    ASK = "ask"  # not yet: asked again at once
+    WAIT = "wait"  # not yet: asked at the next poll (the readings go on disagreeing)
 
 
 class Controller:
@@ -271,7 +284,10 @@ class Controller:
             return
         reply = link.end_held(now)  # rule 5: the reading the stop cuts short, before the stop
         if reply is not None:
-            self._reading(link, reply, now)
+            if self._doubts(reply, now) is Doubt.TAKEN:
+                self._reading(link, reply, now)
+            else:  # rule 9 (the stop's own answer, or the poll it brings, is asked next)
+                link.heard(now)
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
@@ -359,50 +375,50 @@ class Controller:
         if reply is None:
             return False
         doubt = self._doubts(reply, now)
-        if doubt is not False:
-            link.got_reading(now)  # (the controller answers: its value is what is doubted)
-            if doubt:  # (again at once the first time only: a line gone bad is polled as ever)
+        if doubt is not Doubt.TAKEN:
+            link.heard(now)  # (the controller answers: its value is what is doubted)
+            if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
                 self._ask_again(link, now)
             return False
         self._reading(link, reply, now)
         return True
 
-    def _doubts(self, reply: PositionReply, now: float) -> bool | None:
-        """Rule 9: whether ``reply`` is not believed yet: True, ask again at once; None, at
-        the next poll (the readings have disagreed more than once in a row); False, taken."""
+    def _doubts(self, reply: PositionReply, now: float) -> Doubt:
+        """Rule 9: whether ``reply`` is believed (TAKEN), or asked again (at once: ASK; at the
+        next poll: WAIT, the readings having disagreed more than once in a row)."""
         m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
         self._doubted = None
-        if m.state is not mo.IDLE or m.idle_not_before_t is not None or m.target_deg is not None:
+        if m.state is mo.MOVING or m.target_deg is not None or m.anchor_deg is None:
+            self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
+            return Doubt.TAKEN
+        if m.position_deg is None:
             self._doubts_in_row = 0
-            return False
-        if m.stop_sent_t is not None or m.position_deg is None:
-            self._doubts_in_row = 0
-            return False
+            return Doubt.TAKEN
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
         if not _apart(reply, m.position_deg, m.el_position_deg, limit, wraps):
             if doubted is not None:  # back where it stood: the one before was noise
                 away = _away(doubted.az_deg, m.position_deg, wraps)
-                self._warn(
+                self._warn_always(
                     f"a reading at rest of {_where(doubted)}, {away:g}° from where the rotor "
                     "stands, was not said again: ignored (line noise?)",
                     now,
                 )
             self._doubts_in_row = 0
-            return False
+            return Doubt.TAKEN
         if doubted is not None and not _apart(reply, doubted.az_deg, doubted.el_deg, limit, wraps):
             self._doubts_in_row = 0
-            return False  # said twice: the rotor is there (moved by hand, or recalibrated)
+            return Doubt.TAKEN  # said twice: the rotor is there (moved by hand, recalibrated)
         self._doubted = reply
         self._doubts_in_row += 1
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
-        if self._doubts_in_row == DOUBTS_TOLD:
+        if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._warn(
-                f"{DOUBTS_TOLD} readings in a row at rest disagree, the last {_where(reply)}: "
-                "a noisy line or a failing position sensor; the bearing shown is the last two "
-                "readings agreed on",
+                f"{self._doubts_in_row} readings in a row at rest disagree, the last "
+                f"{_where(reply)}: a noisy line or a failing position sensor; the bearing shown "
+                "is the last two readings agreed on",
                 now,
             )
-        return True if self._doubts_in_row == 1 else None
+        return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -615,16 +631,23 @@ class Controller:
         log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
         self._tell(f"controller sent {len(data)} bytes that are no valid reply; ignored", now)
 
-    def _warn(self, why: str, now: float) -> None:
+    def _warn_always(self, why: str, now: float) -> None:
         """Rule 9: ``why`` logged, and told as rule 6 tells of junk."""
         log.warning("%s: %s", self.name, why)
         self._tell(why, now)
 
-    def _tell(self, why: str, now: float) -> None:
+    def _warn(self, why: str, now: float) -> None:
+        """Rule 9: ``why`` told as rule 6 tells of junk, and logged when told."""
+        if self._tell(why, now):
+            log.warning("%s: %s", self.name, why)
+
+    def _tell(self, why: str, now: float) -> bool:
         """Rules 6 and 9: ``why`` on R/error, at most every ``junk_report_interval_s``."""
-        if now - self._junk_reported_t >= self.cfg.junk_report_interval_s:
-            self._junk_reported_t = now
-            self.notes.append(Report(ErrorKind.PROTOCOL, why))
+        if now - self._junk_reported_t < self.cfg.junk_report_interval_s:
+            return False
+        self._junk_reported_t = now
+        self.notes.append(Report(ErrorKind.PROTOCOL, why))
+        return True
 
     def wakeups(self, now: float, latest: float, alone: bool) -> tuple[float, float]:
         """When the line or the motion machine needs the session next, ``latest`` at the

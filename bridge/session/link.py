@@ -128,6 +128,7 @@ class Link:
         self._next_poll = now
         self._refusal_until = -math.inf  # rule 4: a target's refusal can come until then
         self._last_reply_t: float | None = None
+        self._heard_t = -math.inf  # ``heard``: the last reply whose reading was doubted
         self._stop_due = False
         self._outbox: deque[tuple[float, bytes, bool]] = deque()  # when, frame, a poll's
         self._output: list[bytes] = []
@@ -393,6 +394,14 @@ class Link:
         self._last_reply_t = now
         self._slew = None
 
+    def heard(self, now: float) -> None:
+        """A valid position not taken as a reading (controller.py rule 9: doubted): the reply
+        is no longer owed and the controller is not silent, but nothing counts as a fresh
+        reading (targets.py rule 7 waits for one)."""
+        if not self.codec.awaiting_reply():
+            self._reply_deadline = None
+        self._heard_t = now
+
     def ask_again(self, now: float) -> None:
         """The reply was not usable: close it and poll at once."""
         self.codec.expire_query()
@@ -437,7 +446,7 @@ class Link:
 
     def silent_for(self, now: float) -> float:
         heard = self._last_reply_t if self._last_reply_t is not None else self._quiet_from_t
-        return now - max(heard, self._quiet_from_t)
+        return now - max(heard, self._quiet_from_t, self._heard_t)
 
     # -- junk ---------------------------------------------------------------------------------
     def add_junk(self, data: bytes, now: float) -> None:

@@ -1,6 +1,9 @@
-"""A reading at rest far from where the rotor stands is asked again before it is believed
-(session/controller.py rule 9): one a flipped bit made well-formed is never published, never
-taken as a move, and reported as junk; a move by hand is believed on the next reading."""
+"""A reading of a rotor not turning, far from where it stands, is asked again before it is
+believed (session/controller.py rule 9), and a composite box's axis that never turns changes
+only when said twice (protocols/axes.py rule 5): one a flipped bit made well-formed is never
+published, never taken as a move and never sent back to a controller; a move by hand is
+believed on the next reading. (The second half of the file: a cold review's reproductions of
+where the first form of the rule did not reach.)"""
 
 from __future__ import annotations
 
@@ -9,8 +12,10 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import ErrorKind, MotionState, Target
+from bridge.protocols.axes import Axis
 from bridge.session.controller import DOUBT_MIN_DEG
 from tests.engine.virtual import VirtualRotator
+from tests.engine.virtual_composite import VirtualComposite
 
 Rig = Callable[..., VirtualRotator]
 # every model whose replies carry the bearing as ASCII digits (SPID's are raw bytes)
@@ -116,3 +121,216 @@ def test_readings_at_rest_that_go_on_disagreeing_are_reported_and_polled_as_ever
     assert v.sent(since=t).count(query) <= polls_before + 1
     told = [e.message for e in v.errors(since=t)]
     assert any("readings in a row at rest disagree" in m for m in told), told
+
+
+# -- where the rule's first form did not reach (a cold review) ---------------------------------
+FAST = {
+    Axis.AZIMUTH: {"az_speed_deg_s": 6.0},
+    Axis.ELEVATION: {"az_speed_deg_s": 6.0, "el_speed_deg_s": 2.5, "start_az_deg": 150.0},
+}
+
+
+def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_never_turns_that_rotor() -> None:
+    """Rule 9's own scenario (AZ=150 read AZ=350, one flipped bit, alone in its exchange) on
+    a composite's elevation box (an az/el GS-232B used for its elevation): the session sees the
+    echo of the azimuth it asked for (axes.py rule 2), so nothing doubts the box's own azimuth;
+    the glitch is taken as what the box says of itself and sent back with the next elevation
+    target: the box's azimuth rotor, which nobody asked to turn, turns 200 degrees."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        v.run_for(10.0)
+        assert v.el.truth().az_deg == 150.0
+        flipped = flip_next_hundreds(v.el)  # the elevation box's next reply: AZ=150 -> AZ=350
+        v.run_until(lambda h: bool(flipped), 30, "the flipped reply")
+        v.run_for(0.1)  # the exchange is over, the reading taken (the next poll is 1 s away)
+        v.el.to_host = None
+        t = v.now
+        v.aim(Target(None, 30.0))  # the elevation alone
+        v.run_for(60.0)
+        sent = [w for w in v.el.sent(since=t) if w.startswith(b"W")]
+        assert v.el.truth().az_deg == 150.0, (v.el.truth(), sent)  # its azimuth never turned
+        assert sent and all(w.startswith(b"W150 ") for w in sent), sent
+
+
+def test_a_flipped_bit_in_the_azimuth_boxs_own_elevation_never_turns_that_rotor() -> None:
+    """The same on the azimuth box (an az/el GS-232B used for its azimuth, axes.py rule 1): its
+    own elevation is stripped from what the session sees, so rule 9 never looks at it; one
+    flipped bit (EL=045 read EL=145, 0x30 -> 0x31) is sent back with the next azimuth target
+    and the elevation rotor nobody asked to turn goes to 145."""
+    boxes = {Axis.AZIMUTH: {"start_el_deg": 45.0}, Axis.ELEVATION: FAST[Axis.AZIMUTH]}
+    with VirtualComposite("gs232b", "rt21", emulators=boxes) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        v.run_for(10.0)
+        line = bytearray()
+        flipped: list[float] = []
+
+        def flip(data: bytes, now: float) -> bytes:  # (the box sends byte by byte)
+            line.extend(data)
+            if not line.endswith(b"\n"):
+                return b""
+            whole = bytes(line)
+            line.clear()
+            if not flipped and b"EL=045" in whole:
+                flipped.append(now)
+                return whole.replace(b"EL=045", b"EL=145")
+            return whole
+
+        v.az.to_host = flip
+        v.run_until(lambda h: bool(flipped), 30, "the flipped reply")
+        v.run_for(0.1)
+        t = v.now
+        v.aim(Target(210.0, None))  # the azimuth alone
+        v.run_for(60.0)
+        sent = [w for w in v.az.sent(since=t) if w.startswith(b"W")]
+        assert v.az.truth().el_deg == 45.0, (v.az.truth(), sent)  # its elevation never turned
+
+
+def test_a_flipped_bit_at_rest_after_a_stop_at_rest_is_never_taken(rig: Rig) -> None:
+    """Rule 9 leaves out 'a stop being checked'; a STOP (or lock ON) to a rotor at rest keeps
+    motion.stop_sent_t until the next target (stops.py rule 2), so from an operator's STOP at
+    rest on, for as long as the rotor stays there (hours), a flipped bit is published and taken
+    as a move again: the 200-degree nudge rule 9 was written for."""
+    v = at_rest(rig, "gs232b")
+    rest = v.status.bearing_deg
+    v.stop()
+    v.run_for(120.0)  # the stop long checked: the rotor never turned
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    assert shown <= {rest}, shown
+
+
+def test_a_flipped_bit_after_the_lock_is_released_is_never_taken(rig: Rig) -> None:
+    """The same after tower work: lock ON always sends a stop (stop_sent_t set), and nothing
+    clears it at rest; after the lock is released the rotor is taken at rest, but the doubt is
+    off until the next target."""
+    v = at_rest(rig, "gs232b")
+    rest = v.status.bearing_deg
+    v.lock(True)
+    v.run_for(60.0)
+    v.lock(False)
+    v.run_for(10.0)
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    assert shown <= {rest}, shown
+
+
+def test_a_flipped_bit_in_the_brake_window_is_never_taken(rig: Rig) -> None:
+    """A Rotor-EZ's brake window after every move (brake_delay_s, the rotor standing still,
+    the stop_sent_t cleared): BRAKING is not IDLE, so rule 9 does not doubt there; a flipped
+    bit is published and taken as a move (and the brake window starts again)."""
+    v = rig("rotorez")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.aim(Target(150.0, None))
+    v.run_until(lambda h: h.state is MotionState.BRAKING, 200, "braking at 150")
+    rest = v.status.bearing_deg
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    assert v.session.controller.motion.state in (MotionState.BRAKING, MotionState.MOVING)
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    assert rest is not None and all(b is not None and abs(b - rest) < 5 for b in shown), shown
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_flipped_bit_at_rest_cut_short_by_a_stop_is_never_taken(rig: Rig, model: str) -> None:
+    """A STOP that lands in the quiet time of a held reading (link.py rule 9) takes that
+    reading through Controller.flush_stop -> _reading, around rule 9's doubt (which only
+    _settled asks): a flipped bit at rest is then published and taken as a move."""
+    v = at_rest(rig, model)
+    rest = v.status.bearing_deg
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    link = v.session.controller.link
+    assert link is not None
+    v.run_until(lambda h: link._held is not None, 1, "the reply whole, held for its quiet time")
+    v.stop()
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    assert shown <= {rest}, shown
+
+
+def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_while_it_turns_never_turns_it() -> None:
+    """The same while the elevation turns (a tracking pass sends an elevation every few
+    seconds): rule 9 doubts nothing while a rotor turns, but the box's unused azimuth never
+    turns, so any change of it is a glitch; the next elevation target carries it."""
+    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
+        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
+        v.aim(Target(200.0, 10.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
+        v.aim(Target(None, 60.0))  # 20 s of elevation travel at 2.5 degrees a second
+        v.run_for(3.0)
+        flipped = flip_next_hundreds(v.el)
+        v.run_until(lambda h: bool(flipped), 30, "the flipped reply")
+        v.run_for(0.1)
+        v.el.to_host = None
+        t = v.now
+        v.aim(Target(None, 40.0))  # a new elevation while it turns
+        v.run_for(60.0)
+        sent = [w for w in v.el.sent(since=t) if w.startswith(b"W")]
+        assert v.el.truth().az_deg == 150.0, (v.el.truth(), sent)  # its azimuth never turned
+
+
+def test_a_flipped_bit_at_rest_after_a_stall_is_never_taken(rig: Rig) -> None:
+    """After a stall the rotor stands still (STALLED, until the next target: motion.py has no
+    way out of it at rest), and rule 9 doubts only IDLE: a flipped bit minutes later is
+    published, taken as the jammed rotor breaking free (stops.py rule 4) and reported on
+    R/error as 'rotor turning at 350 after the stop its stall was given'."""
+    v = at_rest(rig, "gs232b")
+    rest = v.status.bearing_deg
+    v.jam()
+    v.aim(Target(250.0, None))
+    v.run_until(lambda h: h.state is MotionState.STALLED, 120, "stalled")
+    v.run_for(120.0)  # the rotor still, for minutes
+    assert v.state is MotionState.STALLED
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    told = [e.message for e in v.errors(since=t)]
+    assert shown <= {rest} and not any("turning" in m for m in told), (shown, told)
+
+
+def test_a_target_during_a_front_panel_move_is_not_sent_on_a_doubted_reading(rig: Rig) -> None:
+    """targets.py rule 7 (docs/controllers.md: 'a target goes out only after a fresh reading
+    has shown the rotor idle, so a front-panel move that began after the last poll is not cut
+    short'): the reading the target asks for first is the one that shows the move. When it is
+    more than 5 degrees from where the rotor stood, rule 9 doubts it; but the doubt path calls
+    link.got_reading, so that doubted reading counts as the fresh one, the motion still says
+    idle, and the target goes out in the same step, before the reading asked again: a bearing
+    written to a Rotor-EZ that is turning (it stops instead of re-targeting; the bridge never
+    sent its own stop first nor waited for the brake)."""
+    from bridge.emulators.rotorez_models import Outcome
+
+    query = b"AI1;"
+    v = rig("rotorez", settings={"idle_poll_interval_s": 2.0})
+    v.run_until_state(MotionState.IDLE, 30)
+    v.run_for(10.0)
+    n = len(v.frames(Outcome.QUERY))
+    v.run_until(lambda h: len(h.frames(Outcome.QUERY)) > n, 3, "a poll")
+    v.run_for(0.05)  # its answer
+    v.manual_rotate(100)  # begun after the last poll: the bridge still believes "idle"
+    v.run_for(1.2)  # 7 degrees at 6 degrees a second, before the next idle poll
+    assert v.state is MotionState.IDLE
+    t = v.now
+    v.target(200)
+    v.run_for(60.0)
+    frames = [(f.data, f.outcome) for f in v.frames(since=t)]
+    writes = [f for f in frames if f[0] != query]
+    stalls = [e.message for e in v.errors(since=t) if "stalled" in e.message]
+    # what the user sees: the Rotor-EZ ignored the bearing ("re-target while turning") and
+    # stopped where the hand had it, the target never reached, and a false stall reported
+    assert abs(v.truth().az_deg - 200.0) < 1.0 and not stalls, (v.truth().az_deg, stalls)
+    assert writes[:1] == [(b";", Outcome.STOP)], frames[:4]  # stopped first, as rule 7 has it
