@@ -48,7 +48,10 @@ Rules:
    short (rule 5); but the controller answered (no silence). Readings that go on disagreeing
    (a line gone bad, a failing position sensor) are asked for at the usual polls, not at once,
    and told from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings
-   agreed on. (A composite box's axis that is never turned is kept so too: axes.py rule 5.)
+   agreed on. Two readings agree within ``doubt_deg`` plus twice what the rotor turns at its
+   speed between them: a rotor turning while taken for still is believed on its second
+   reading however far apart the polls are. (A composite box's axis that is never turned is
+   kept so too: axes.py rule 5.)
 """
 
 from __future__ import annotations
@@ -171,7 +174,8 @@ class Controller:
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
-        self._doubted: PositionReply | None = None  # rule 9: a reading at rest asked again
+        self._doubted: tuple[PositionReply | None, float] = None, -math.inf  # rule 9: a
+        # reading of a rotor not turning asked again, and when it came
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
@@ -243,8 +247,8 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._doubted, self._doubts_in_row = None, 0  # rule 9: a new connection's first
-        # reading is believed
+        self._doubted, self._doubts_in_row = (None, now), 0  # rule 9: a new connection's
+        # first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -286,12 +290,21 @@ class Controller:
         if reply is not None:
             if self._doubts(reply, now) is Doubt.TAKEN:
                 self._reading(link, reply, now)
-            else:  # rule 9 (the stop's own answer, or the poll it brings, is asked next)
-                link.heard(now)
+            else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
+                link.heard(now)  # poll later, the rotor turning on disagreed again, and the
+                link.poll_now(now)  # stop the line lost was never checked)
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
             link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
+
+    def lock_released(self) -> None:
+        """stops.py rule 2: the lock's stop to a rotor at rest is checked while the lock holds;
+        its release is the operator's word that the tower work is over (a move by hand after
+        it is theirs: a review found one stopped an hour after a locked start)."""
+        m = self.motion
+        if m.stop_sent_t is not None and m.state is not mo.MOVING and m.target_deg is None:
+            self.motion = replace(m, stop_sent_t=None)
 
     def check_stop(self, now: float, target_going: bool) -> None:
         """stops.py rule 2: a stop that did not take is sent again (rule 4: a stall's too,
@@ -386,8 +399,8 @@ class Controller:
     def _doubts(self, reply: PositionReply, now: float) -> Doubt:
         """Rule 9: whether ``reply`` is believed (TAKEN), or asked again (at once: ASK; at the
         next poll: WAIT, the readings having disagreed more than once in a row)."""
-        m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
-        self._doubted = None
+        m, cfg, (doubted, doubted_t) = self.motion, self.cfg.motion, self._doubted
+        self._doubted = None, now
         if m.state is mo.MOVING or m.target_deg is not None or m.anchor_deg is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             return Doubt.TAKEN
@@ -405,10 +418,15 @@ class Controller:
                 )
             self._doubts_in_row = 0
             return Doubt.TAKEN
-        if doubted is not None and not _apart(reply, doubted.az_deg, doubted.el_deg, limit, wraps):
+        # said twice: the rotor is there (moved by hand, recalibrated); as far on as it can
+        # have turned since (a rotor turning while taken for still, read at the idle rate)
+        turned = 2 * cfg.nominal_speed_deg_s * (now - doubted_t)
+        if doubted is not None and not _apart(
+            reply, doubted.az_deg, doubted.el_deg, limit + turned, wraps
+        ):
             self._doubts_in_row = 0
-            return Doubt.TAKEN  # said twice: the rotor is there (moved by hand, recalibrated)
-        self._doubted = reply
+            return Doubt.TAKEN
+        self._doubted = reply, now
         self._doubts_in_row += 1
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)

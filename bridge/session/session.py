@@ -273,6 +273,8 @@ class RotatorSession:
             self.locked = batch.lock
         if unlocked:  # parts.py rule 7: nothing turned on while locked turns it once unlocked
             self._end_parts("lock released", now)
+            if not batch.lock_on:  # (an ON then OFF in one batch: its stop is checked)
+                ctl.lock_released()  # stops.py rule 2
         if batch.lock_on:  # mailbox.py rule 7: even when an OFF followed it in the batch
             self._end("lock", now)
             self._drop_pending(None)

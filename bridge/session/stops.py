@@ -33,7 +33,10 @@ Rules:
    or until the move after it ended: that state may be a guess (the first reading of a
    connection, readings missed for a while, a stall whose motor may still be driving), and a
    stop lost then must not leave the rotor turning. The price: a move by hand long after such
-   a stop is stopped once too.
+   a stop is stopped once too; not after the lock is released (controller.py
+   ``lock_released``: the lock's stop is checked while it holds, and its release says the
+   tower work is over; a lock kept across a restart owes its stop on the first connect,
+   session.py rule 11).
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again

@@ -334,3 +334,71 @@ def test_a_target_during_a_front_panel_move_is_not_sent_on_a_doubted_reading(rig
     # stopped where the hand had it, the target never reached, and a false stall reported
     assert abs(v.truth().az_deg - 200.0) < 1.0 and not stalls, (v.truth().az_deg, stalls)
     assert writes[:1] == [(b";", Outcome.STOP)], frames[:4]  # stopped first, as rule 7 has it
+
+
+# -- a second cold review: a stop cut short on a doubted reading, a lock at start -----------
+def test_a_lost_stop_cut_short_on_a_doubted_reading_is_sent_again(rig: Rig) -> None:
+    """controller.py rule 9: a rotor taken for at rest is being turned at its panel; the
+    idle poll's reply shows it 7 degrees away and an operator's STOP, lost on the line, cuts
+    that reading short. The doubted reading is asked again as soon as the stop is out, and the
+    next, a few degrees further on, agrees within what the rotor turns between them: the rotor
+    is seen turning and the stop is sent again (a review: asked a moving poll later, each
+    reading disagreed with the last, the rotor ran on 180 degrees shown at rest)."""
+    v = rig(
+        "gs232b",
+        settings={"moving_poll_interval_s": 1.0, "settle_s": 2.0, "idle_poll_interval_s": 2.0},
+    )
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.aim(Target(150.0, None))
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.now > 10, 200, "at 150")
+    v.run_for(10)
+    link = v.session.controller.link
+    assert link is not None
+    # just after a reading is taken: the next idle poll is ~2 s away
+    v.run_until(lambda h: link._held is not None, 5, "a reading held")
+    v.run_until(lambda h: link._held is None, 1, "taken")
+    rest = v.status.bearing_deg
+    v.manual_rotate(330.0)
+    v.run_until(lambda h: link._held is not None, 5, "the next idle poll's reading held")
+    assert abs(v.truth().az_deg - rest) > 5, v.truth()
+    t = v.now
+    v.drop_writes(b"S\r")  # the stop lost on the line
+    v.stop()
+    v.run_for(40.0)
+    stops = [w for w in v.sent(since=t) if w == b"S\r"]
+    moving_t = [x for x, s in v.statuses if x >= t and s.state is MotionState.MOVING]
+    # stops.py rule 2: the stop checked and sent again within stop_resend_s of a reading
+    # showing the rotor turning; the rotor must not run on to the panel's bearing
+    assert v.truth().az_deg < 250.0, (
+        f"the rotor ran on to {v.truth().az_deg:g} after a lost STOP; stops written {stops}; "
+        f"first shown moving at {moving_t[:1]} (STOP at {t:.1f}); "
+        f"errors={[e.message for e in v.errors(since=t)]}"
+    )
+
+
+def test_a_move_by_hand_long_after_a_locked_start_is_not_stopped(rig: Rig) -> None:
+    """stops.py rule 2 with session.py rule 11: a session that starts locked writes a stop on
+    its first connect, checked while the lock holds; released, a turn made at the panel an
+    hour later is the operator's (a review: the bridge stopped it, and again every
+    stop_resend_s)."""
+    v = rig("gs232b", locked=True)
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.lock(False)
+    v.run_for(3600.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(120.0)
+    stops = [w for w in v.sent(since=t) if w == b"S\r"]
+    told = [e.message for e in v.errors(since=t)]
+    assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg, told)
+
+
+def test_control_a_move_by_hand_long_after_an_unlocked_start_is_not_stopped(rig: Rig) -> None:
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.run_for(3600.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(120.0)
+    stops = [w for w in v.sent(since=t) if w == b"S\r"]
+    assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg)
