@@ -35,6 +35,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from bridge.core.ending import Ending
+from bridge.core.model import Source, Stop
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
@@ -446,9 +447,25 @@ class App:
             sync_topic=self.topics.bridge_fence_express,
             on_hold=lambda rid, n: self._by_id[rid].express_hold(n),
             on_release=lambda rid, n: self._by_id[rid].express_release(n),
+            on_wrote=self._express_wrote,
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express
+
+    def _express_wrote(self, rotator_id: str, t: float) -> None:
+        """interfaces/mqtt/express.py rule 11: a stop frame the express wrote at ``t`` is the
+        rotator's stop too when neither connection could have had that stop."""
+        if self.client.heard_since(t) or self.lane.heard_since(t):
+            return  # (it came, or comes, on one of them, in its order)
+        rotator = self._by_id.get(rotator_id)
+        if rotator is None:
+            return
+        log.warning(
+            "%s: a stop the stop express heard and wrote while the bridge's connections were "
+            "away: carried out here too",
+            rotator_id,
+        )
+        rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs

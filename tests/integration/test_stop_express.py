@@ -25,6 +25,7 @@ from typing import Any
 import pytest
 
 from bridge.app import App
+from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.faults.conftest import mosquitto_password_file
 from tests.support.mosquitto import Mosquitto
 from tests.support.mqtt import Probe
@@ -349,3 +350,46 @@ def test_a_client_that_takes_the_expresss_client_id_is_said(rig: Rig) -> None:
         assert said.startswith("stop express: ") and app.express.client_id in said
     finally:
         thief.close()
+
+
+def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11: after a broker restart the express is back before the bridge's two
+    connections (their back-off, here made long); a STOP published then, and nothing after
+    it, reaches the controller through the express alone. The target the bridge held for the
+    Rotor-EZ's brake window went out when the window ended, and the rotor turned (an attack
+    pass); now that stop is the bridge's too, and the held target is dropped."""
+    brake = 3.0
+    emu = rig.add(
+        "tower",
+        emu={"start_az_deg": 10, "speed_deg_s": 20.0, "brake_delay_s": brake},
+        brake_delay_s=brake,
+    )
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    rig.probe.publish("rotor/target", "300")
+    emu.wait_for(lambda s: s.is_moving and s.az_deg > 40, slow(15))
+    rig.probe.publish("rotor/target", "100")  # a Rotor-EZ is stopped first; 100 waits
+    emu.wait_for(lambda s: not s.is_moving, slow(10))
+    rotator = app.rotators[0]
+    assert rotator.status.target_az_deg == 100.0  # held for the brake window
+    stopped_at = emu.state().az_deg
+    app.client._client.reconnect_delay_set(60, 60)  # (back well after the express)
+    app.lane._client.reconnect_delay_set(60, 60)
+    app.express.up.clear()
+    broker.restart()
+    wait_until(app.express.up.is_set, 15, "the express is back")
+    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
+    stop_t = time.monotonic()
+    operator = Probe(broker.port, "")  # (a client of its own: the rig's probe reconnects)
+    try:
+        operator.publish("rotor/stop", "STOP")
+        wait_until(lambda: app.express.wrote, 10, "the express wrote the stop")
+    finally:
+        operator.close()
+    wait_until(lambda: rotator.status.target_az_deg is None, 10, "the held target dropped")
+    time.sleep(brake + 1.0)  # a quiet period past the brake window: nothing may go out
+    sent = [f.data for f in emu.frames(*BEARING_OUTCOMES) if f.time_s >= stop_t]
+    assert sent == [] and abs(emu.state().az_deg - stopped_at) < 5

@@ -250,6 +250,7 @@ class Connection:
         self._slowed = False  # reconnect_delay_set raised for a takeover (rule 7)
         self._up = False  # a connection accepted
         self._subscribed = False  # ... and the SUBACK of its command topics came
+        self._subscribed_since: float | None = None  # ... then (``heard_since``), while it lasts
         self._subscribing = False  # ... or at least its SUBSCRIBE is on its way (``hears``)
         self._command_mid: int | None = None
         self._stopping = False  # a shutdown under way: a broker going away is no news
@@ -467,6 +468,7 @@ class Connection:
         self._accepted_once = True
         self._guard.connected(self._clock())
         self._subscribed = self._subscribing = False  # until the SUBACK of the command topics
+        self._subscribed_since = None
         self._accepted()
         if self._on_new_connection is not None:  # before any message of the new connection
             self._on_new_connection()
@@ -484,6 +486,14 @@ class Connection:
         self._guard.connect_failed()
         self._failed()
 
+    def heard_since(self, t: float) -> bool:
+        """Whether this connection has had its command topics since before ``t`` (monotonic)
+        without a break: a message published at ``t`` reaches it, or has (express.py rule 10).
+        Any thread; a SUBACK moments after the broker took the subscription makes it False
+        for a message it does deliver (the safe side there: a stop carried out twice)."""
+        since = self._subscribed_since
+        return since is not None and since <= t
+
     def _on_subscribe(
         self,
         client: paho.Client,
@@ -495,6 +505,7 @@ class Connection:
         filters = self._sub_filters.pop(mid, [])
         if mid == self._command_mid:
             self._subscribed = True  # the commands reach us from now on
+            self._subscribed_since = self._clock()
             if self._on_subscribed is not None:  # (paho reads what comes next after this)
                 self._on_subscribed()
         for topic, code in zip(filters, reason_codes, strict=False):
@@ -510,6 +521,7 @@ class Connection:
         properties: Properties | None,
     ) -> None:
         was, self._up, self._subscribed, self._subscribing = self._up, False, False, False
+        self._subscribed_since = None
         answered, self._answered = self._answered, False
         self.connected.clear()
         if not was and not answered and not self._close_steps_down():  # no CONNACK came

@@ -130,6 +130,15 @@ Rules:
    priority: a stop read by any of them (rotctld's, a logger's, the console's) is carried
    under the interpreter lock, and a lowered thread holding that lock while the kernel runs
    another program would keep such a stop waiting (docs/architecture.md).
+11. A stop only the express heard is the bridge's too. Each frame it writes it says (``wrote``,
+   with the time it wrote it, the machine's monotonic clock, its own as the bridge's), and
+   when neither of the bridge's connections had its command topics without a break since
+   before then (a broker restart the express came back from first, a connection between its
+   drop and its SUBACK: clean starts, so no copy of that stop will ever come to them), the
+   rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
+   never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
+   express sent the target it held at the brake window's end). A frame for a lock ON is such
+   a stop too: the lock itself the bridge learns only from its connections.
 """
 
 from __future__ import annotations
@@ -289,11 +298,13 @@ class Express:
         sync_topic: str | None = None,
         on_hold: Callable[[str, int], None] | None = None,
         on_release: Callable[[str, int], None] | None = None,
+        on_wrote: Callable[[str, float], None] | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"); ``frames``:
         each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
-        express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended."""
+        express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
+        ``on_wrote``: a rotator's stop frame written, at that time (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
         self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames}
@@ -307,6 +318,7 @@ class Express:
         self._on_problem = on_problem
         self._on_hold = on_hold
         self._on_release = on_release
+        self._on_wrote = on_wrote
         self._command = command or [sys.executable, "-m", "bridge.interfaces.mqtt.express"]
         self._lock = threading.Lock()  # the ports, the socket, the child, the holds
         self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd), while open
@@ -641,6 +653,11 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
+                if self._on_wrote is not None:  # rule 11
+                    try:
+                        self._on_wrote(word["rotator"], float(word["t"]))
+                    except Exception:  # (a bug there must not end the express's reader)
+                        log.exception("stop express: a stop it wrote not carried out")
             elif op == "half":
                 self._problem(self._half(word["rotator"]), True)
             elif op == "problem":
