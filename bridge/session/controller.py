@@ -48,10 +48,12 @@ Rules:
    short (rule 5); but the controller answered (no silence). Readings that go on disagreeing
    (a line gone bad, a failing position sensor) are asked for at the usual polls, not at once,
    and told from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings
-   agreed on. Two readings agree within ``doubt_deg`` plus twice what the rotor turns at its
-   speed between them: a rotor turning while taken for still is believed on its second
-   reading however far apart the polls are. (A composite box's axis that is never turned is
-   kept so too: axes.py rule 5.)
+   agreed on. A reading asked again at once agrees with the doubted one within ``doubt_deg``
+   plus twice what the rotor turns at its speed between them (DOUBT_TURN_MAX_DEG at most): a
+   rotor turning while taken for still is believed on its second reading even when a stop
+   cut the first short and the second came a moving poll later; readings at the idle rate
+   agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
+   composite box's axis that is never turned is kept so too: axes.py rule 5.)
 """
 
 from __future__ import annotations
@@ -86,6 +88,7 @@ log = logging.getLogger(__name__)
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
 DOUBT_MIN_DEG = 5.0  # rule 9: a reading at rest this far (or twice the noise) is asked again
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
+DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -174,9 +177,11 @@ class Controller:
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
-        self._doubted: tuple[PositionReply | None, float] = None, -math.inf  # rule 9: a
-        # reading of a rotor not turning asked again, and when it came
+        # rule 9: a reading of a rotor not turning asked again, when it came, and whether it
+        # was asked again at once
+        self._doubted: tuple[PositionReply | None, float, bool] = None, -math.inf, False
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
+        self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -247,8 +252,8 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._doubted, self._doubts_in_row = (None, now), 0  # rule 9: a new connection's
-        # first reading is believed
+        self._doubted, self._doubts_in_row = (None, now, False), 0  # rule 9: a new
+        # connection's first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -293,6 +298,8 @@ class Controller:
             else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
                 link.heard(now)  # poll later, the rotor turning on disagreed again, and the
                 link.poll_now(now)  # stop the line lost was never checked)
+                reply, t, _ = self._doubted
+                self._doubted = reply, t, reply is not None
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
@@ -301,10 +308,23 @@ class Controller:
     def lock_released(self) -> None:
         """stops.py rule 2: the lock's stop to a rotor at rest is checked while the lock holds;
         its release is the operator's word that the tower work is over (a move by hand after
-        it is theirs: a review found one stopped an hour after a locked start)."""
+        it is theirs: a review found one stopped an hour after a locked start). The check
+        still has its chance (``_release_check``): a stop out when the lock was released is
+        let go once a reading a resend time after it shows the rotor still (a review: released
+        at once after a locked start, the stop the line lost was never checked)."""
+        self._released_stop_t = self.motion.stop_sent_t
+
+    def _release_check(self, now: float) -> None:
+        """``lock_released``'s stop let go, after a reading (the motion just updated)."""
         m = self.motion
-        if m.stop_sent_t is not None and m.state is not mo.MOVING and m.target_deg is None:
+        if m.stop_sent_t is None or m.stop_sent_t != self._released_stop_t:
+            self._released_stop_t = None  # (a newer stop, or none: rule 2 as ever)
+            return
+        if m.state is not mo.IDLE or m.idle_not_before_t is not None or m.target_deg is not None:
+            return  # (turning, braking, settling: a connection's first reading is a guess)
+        if now >= m.stop_sent_t + self.cfg.motion.stop_resend_s:
             self.motion = replace(m, stop_sent_t=None)
+            self._released_stop_t = None
 
     def check_stop(self, now: float, target_going: bool) -> None:
         """stops.py rule 2: a stop that did not take is sent again (rule 4: a stall's too,
@@ -399,8 +419,8 @@ class Controller:
     def _doubts(self, reply: PositionReply, now: float) -> Doubt:
         """Rule 9: whether ``reply`` is believed (TAKEN), or asked again (at once: ASK; at the
         next poll: WAIT, the readings having disagreed more than once in a row)."""
-        m, cfg, (doubted, doubted_t) = self.motion, self.cfg.motion, self._doubted
-        self._doubted = None, now
+        m, cfg, (doubted, doubted_t, at_once) = self.motion, self.cfg.motion, self._doubted
+        self._doubted = None, now, False
         if m.state is mo.MOVING or m.target_deg is not None or m.anchor_deg is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             return Doubt.TAKEN
@@ -420,14 +440,16 @@ class Controller:
             return Doubt.TAKEN
         # said twice: the rotor is there (moved by hand, recalibrated); as far on as it can
         # have turned since (a rotor turning while taken for still, read at the idle rate)
-        turned = 2 * cfg.nominal_speed_deg_s * (now - doubted_t)
+        turned = 0.0  # (only a reading asked at once after the doubted one: at the idle rate,
+        if at_once:  # two readings of a noisy line would agree: a review)
+            turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted_t), DOUBT_TURN_MAX_DEG)
         if doubted is not None and not _apart(
             reply, doubted.az_deg, doubted.el_deg, limit + turned, wraps
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
-        self._doubted = reply, now
         self._doubts_in_row += 1
+        self._doubted = reply, now, self._doubts_in_row == 1  # (asked again at once: ASK)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
             self._warn(
@@ -460,6 +482,8 @@ class Controller:
         self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
         if events:
             self._motion_events(events, now)
+        if self._released_stop_t is not None:
+            self._release_check(now)
         moving = self.motion.state is mo.MOVING
         self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.spec.az_wraps)
         if reply.el_deg is not None:

@@ -402,3 +402,119 @@ def test_control_a_move_by_hand_long_after_an_unlocked_start_is_not_stopped(rig:
     v.run_for(120.0)
     stops = [w for w in v.sent(since=t) if w == b"S\r"]
     assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg)
+
+
+# -- a third cold review: idle polls far apart, a lock released at once --------------------------
+def at_rest_polled(rig: Rig, idle_s: float) -> VirtualRotator:
+    v = rig("gs232b", settings={"idle_poll_interval_s": idle_s})
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.aim(Target(150.0, None))
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.now > 10, 200, "at 150")
+    v.run_for(3 * idle_s)
+    assert v.status.bearing_deg is not None and 140 <= v.status.bearing_deg < 160
+    return v
+
+
+def test_a_failing_sensor_polled_every_30_s_is_never_believed(rig: Rig) -> None:
+    """Rule 9: readings that go on disagreeing leave the bearing shown where the last two
+    readings agreed. With idle polls 30 s apart, 2 x 6 deg/s x 30 s = 360 degrees: the third
+    garbage reading "agrees" with the second whatever it says, and is taken as a move."""
+    v = at_rest_polled(rig, 30.0)
+    rest = v.status.bearing_deg
+    digits = iter(b"2340" * 1000)  # 150 reads 250, 350, 450 (junk), 50, 250 ...
+
+    def failing(data: bytes, now: float) -> bytes:
+        return data.replace(b"1", bytes([next(digits)])) if b"1" in data else data
+
+    v.to_host = failing
+    t = v.now
+    v.run_for(200.0)
+    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
+    assert v.status.bearing_deg == rest and {s for _, s in shown} <= {"idle"}, shown
+
+
+def test_two_flipped_bits_in_a_row_then_one_at_the_next_idle_poll(rig: Rig) -> None:
+    """A burst of line noise: the reading at rest (150) is read 350, the one asked again at once
+    250 (disagreeing: asked at the next idle poll, 30 s on), and that one 50. Three readings, no
+    two alike: none is believed (a review: 50 was, within what a rotor turns in 30 s)."""
+    v = at_rest_polled(rig, 30.0)
+    rest = v.status.bearing_deg
+    seq = iter([b"3", b"2", b"0"])
+    done: list[float] = []
+
+    def noisy(data: bytes, now: float) -> bytes:
+        if b"1" in data and len(done) < 3:
+            d = next(seq)
+            done.append(now)
+            return data.replace(b"1", d, 1)
+        return data
+
+    v.to_host = noisy
+    t = v.now
+    v.run_until(lambda h: len(done) == 3, 120, "three noisy readings")
+    v.run_for(5.0)
+    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
+    assert {b for b, _ in shown} <= {round(rest)}, (done, shown)
+
+
+def test_a_noise_burst_whose_third_reading_is_near_the_second_is_never_believed(
+    rig: Rig,
+) -> None:
+    """The same burst with the third reading 80 degrees from the second (150 read 350, then
+    250, then 170 at the next idle poll): within doubt_deg plus any cap of 90 degrees on the
+    turn, so "said twice" though no reading repeated another."""
+    v = at_rest_polled(rig, 30.0)
+    rest = v.status.bearing_deg
+    # each noisy reading: (digit index after "=", byte read instead)
+    seq = iter([(0, ord("3")), (0, ord("2")), (1, ord("7"))])
+    done: list[float] = []
+    pos = [-1]  # digits since the "AZ=" of the reply under way (-1: none)
+    last = [0]
+    flip: list[tuple[int, int] | None] = [None]
+
+    def noisy(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:
+            prev, last[0] = last[0], b
+            if b == ord("=") and prev == ord("Z"):
+                pos[0] = 0
+                flip[0] = next(seq, None) if len(done) < 3 else None
+                if flip[0] is not None:
+                    done.append(now)
+            elif pos[0] >= 0 and chr(b).isdigit():
+                if flip[0] is not None and flip[0][0] == pos[0]:
+                    b = flip[0][1]
+                pos[0] += 1
+            else:
+                pos[0] = -1
+            out.append(b)
+        return bytes(out)
+
+    v.to_host = noisy
+    t = v.now
+    v.run_until(lambda h: len(done) == 3, 120, "three noisy readings")
+    v.run_for(5.0)
+    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
+    assert {b for b, _ in shown} <= {round(rest)}, (done, shown)
+
+
+def test_a_locked_starts_lost_stop_is_still_checked_when_the_lock_is_released_at_once(
+    rig: Rig,
+) -> None:
+    """session.py rule 11 with stops.py rule 2: the bridge restarts locked (state file) while
+    the controller still drives the turn it had (here: driven as at its panel); the stop owed
+    on the first connect is lost on the line. The retained lock OFF comes a moment after the
+    first reading (the MQTT connection's first look). The check of that stop stays until a
+    reading a resend time after it shows the rotor still (a review: released at once, the
+    readings that then showed it turning stopped nothing, and it ran on to 330)."""
+    v = rig("gs232b", locked=True, connect=False)
+    v.manual_rotate(330.0)  # turning when the bridge starts
+    v.run_for(2.0)
+    v.drop_writes(b"S\r")  # the first connect's stop, lost on the line
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "the first reading")
+    start = v.truth().az_deg
+    v.lock(False)  # the retained lock OFF, read a moment later
+    v.run_for(120.0)
+    stops = [w for w in v.sent() if w == b"S\r"]
+    assert abs(v.truth().az_deg - 330.0) > 30, (start, v.truth(), stops)

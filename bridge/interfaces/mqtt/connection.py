@@ -505,7 +505,8 @@ class Connection:
         filters = self._sub_filters.pop(mid, [])
         if mid == self._command_mid:
             self._subscribed = True  # the commands reach us from now on
-            self._subscribed_since = self._clock()
+            if not any(code.is_failure for code in reason_codes):  # (a topic denied: perhaps
+                self._subscribed_since = self._clock()  # a stop's, express.py rule 11)
             if self._on_subscribed is not None:  # (paho reads what comes next after this)
                 self._on_subscribed()
         for topic, code in zip(filters, reason_codes, strict=False):
