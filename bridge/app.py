@@ -75,6 +75,7 @@ if TYPE_CHECKING:  # the console's server and aiohttp are imported only when it 
 __all__ = ["App", "NotYet", "run", "worker_config"]
 
 log = logging.getLogger(__name__)
+EXPRESS_HEARD_MARGIN_S = 1.0  # express.py rule 11: a subscription this recent may have missed it
 
 GIL_SWITCH_S = 0.0005
 STEPPED_DOWN = (  # on B/bridge/info while mqtt.protocol "auto" speaks MQTT 3.1.1
@@ -455,7 +456,9 @@ class App:
     def _express_wrote(self, rotator_id: str, t: float) -> None:
         """interfaces/mqtt/express.py rule 11: a stop frame the express wrote at ``t`` is the
         rotator's stop too when neither connection could have had that stop."""
-        if self.client.heard_since(t) or self.lane.heard_since(t):
+        heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read the STOP, a moment
+        # after the broker took it: a subscription the broker took in that moment missed it)
+        if self.client.heard_since(heard) or self.lane.heard_since(heard):
             return  # (it came, or comes, on one of them, in its order)
         rotator = self._by_id.get(rotator_id)
         if rotator is None:

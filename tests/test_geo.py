@@ -15,7 +15,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bridge.core.geo import LocatorError, Path, great_circle, is_locator, parse_locator
+from bridge.core.geo import (
+    LocatorError,
+    Path,
+    apart_deg,
+    great_circle,
+    is_locator,
+    parse_locator,
+)
 from tests.support.locator import to_locator
 
 CIRCUMFERENCE_KM = 2 * math.pi * 6371.0
@@ -495,3 +502,11 @@ def test_great_circle_refuses_impossible_coordinates(
 def test_the_limits_themselves_are_coordinates() -> None:
     path = great_circle(-90.0, -180.0, 90.0, 180.0)
     assert path.distance_km == pytest.approx(CIRCUMFERENCE_KM / 2)
+
+
+def test_bearings_apart_on_the_circle_and_along_the_line() -> None:
+    """core/geo.py apart_deg: 359 and 1 are 2 apart on a wrapping box, 358 on a 450-degree
+    one; a value past 360 that noise made is on the circle too (450 on a 0..360 box is 90)."""
+    assert apart_deg(359, 1, True) == 2 and apart_deg(359, 1, False) == 358
+    assert apart_deg(450, 150, True) == 60 and apart_deg(50, 450, True) == 40
+    assert apart_deg(10, 370, False) == 360

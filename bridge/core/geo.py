@@ -147,6 +147,17 @@ def _bearing(degrees: float) -> float:
     return 0.0 if value == 0.0 or value >= 360.0 else value
 
 
+def apart_deg(a_deg: float, b_deg: float, wraps: bool) -> float:
+    """How far apart two bearings are, in degrees: on a circle when ``wraps`` (0 and 360 one
+    direction), also for a value past 360 that line noise made (450 read on a 0..360 box is
+    90); else along the line (a 450-degree rotor's 10 and 370 are a whole turn apart)."""
+    d = abs(a_deg - b_deg)
+    if wraps and d > 180.0:
+        d %= 360.0
+        d = min(d, 360.0 - d)
+    return d
+
+
 def check_range(value: float, name: str, limit: float) -> None:
     """ValueError naming ``name`` unless ``value`` is finite and within -limit..limit."""
     if not math.isfinite(value) or not -limit <= value <= limit:

@@ -31,12 +31,15 @@ Rules:
 4. The composite's spec is data like any: the azimuth's range from the azimuth box, the
    elevation's from the elevation box, no options (each box keeps its own defaults); it
    reports a position only when both boxes can, and takes whole degrees when either does.
-5. What the box says of its axis that is never turned changes only when two readings taken
-   in a row say so (beyond KEEP_NOISE_DEG): that axis does not move, so a change is line noise
-   or a hand at the box's panel, and a glitch sent back turns that rotor (an attack pass: one
-   flipped bit read the elevation box's own azimuth 150 as 350, and the next elevation target
-   wrote ``W350 030``: its azimuth rotor turned 200 degrees). The session's readings of the
-   axis it drives are judged by its own rules (session/controller.py rule 9).
+5. What the box says of its axis that is never turned counts only when two readings taken
+   in a row say so, a connection's first value too (until then no target is counted: a target
+   waits one reading more after each connect), and a change beyond KEEP_NOISE_DEG likewise:
+   that axis does not move, so a change is line noise or a hand at the box's panel, and a
+   glitch sent back turns that rotor (an attack pass: one flipped bit read the elevation
+   box's own azimuth 150 as 350, and the next elevation target wrote ``W350 030``: its
+   azimuth rotor turned 200 degrees; a review: the first reading after a replug likewise).
+   The session's readings of the axis it drives are judged by its own rules
+   (session/controller.py rule 9).
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from __future__ import annotations
 import enum
 from dataclasses import replace
 
+from bridge.core.geo import apart_deg
 from bridge.protocols.base import (
     Codec,
     HamlibRotType,
@@ -58,14 +62,6 @@ from bridge.protocols.base import (
 # positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
 _PENDING = 4
 KEEP_NOISE_DEG = 2.0  # rule 5: a change of the axis never turned up to this is believed at once
-
-
-def _apart(a_deg: float, b_deg: float, circle: bool) -> float:
-    d = abs(a_deg - b_deg)
-    if circle:
-        d %= 360.0
-        d = min(d, 360.0 - d)
-    return d
 
 
 class Axis(enum.StrEnum):
@@ -154,13 +150,14 @@ class _KeepsOwn(AzimuthOnly):
     def _fed(self, shown: PositionReply, own: float | None, inner: PositionReply) -> None:
         self._pending = [*self._pending[-_PENDING:], (shown, own, inner)]
 
-    def _keep(self, own: float | None, said: float, circle: bool) -> float:
-        """Rule 5: what to keep of the other axis, ``own`` so far, now said to be ``said``
-        (``circle``: an azimuth, 359 and 0 one degree apart)."""
-        if own is None or _apart(own, said, circle) <= KEEP_NOISE_DEG:
+    def _keep(self, own: float | None, said: float, circle: bool) -> float | None:
+        """Rule 5: what to keep of the other axis, ``own`` so far (None: nothing yet, and no
+        target is counted: NotReady), now said to be ``said`` (``circle``: an azimuth, 359 and
+        0 one degree apart)."""
+        if own is not None and apart_deg(own, said, circle) <= KEEP_NOISE_DEG:
             self._said = None
             return said
-        if self._said is not None and _apart(self._said, said, circle) <= KEEP_NOISE_DEG:
+        if self._said is not None and apart_deg(self._said, said, circle) <= KEEP_NOISE_DEG:
             self._said = None
             return said  # said twice
         self._said = said
@@ -184,6 +181,11 @@ class AzimuthOfAzEl(_KeepsOwn):
         super().__init__(inner)
         self._el_range = el_range  # what its codec writes
         self._own_el: float | None = None  # what the box last said of its elevation, taken
+
+    def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        if self._own_el is None:  # rule 5: said twice first (the engine asks: targets.py)
+            raise NotReady("the azimuth box has not said where its elevation is")
+        return super().wire_target(az_deg, el_deg)
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:
         if self._own_el is None:  # the session sends only once the box answered (a reading)
@@ -216,6 +218,8 @@ class ElevationOnly(_KeepsOwn):
         self._asked_az: float | None = None  # what the session last asked for
 
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
+        if self._own_az is None:  # rule 5: said twice first (the engine asks: targets.py)
+            raise NotReady("the elevation box has not said where its azimuth is")
         return self._inner.wire_target(az_deg, el_deg)
 
     def encode_target(self, az_deg: float, el_deg: float | None) -> list[bytes]:

@@ -62,7 +62,7 @@ import logging
 import math
 from dataclasses import dataclass, replace
 from enum import Enum
-from typing import cast
+from typing import NamedTuple, cast
 
 from bridge.core.model import ErrorKind, RotatorStatus, SettingValue, Target
 from bridge.protocols.base import (
@@ -134,23 +134,24 @@ def _apart(
 ) -> bool:
     """Rule 9: whether ``reply`` is more than ``limit`` from ``az_deg``/``el_deg`` on either
     axis."""
-    if _away(reply.az_deg, az_deg, wraps) > limit:
+    if mo.angle_error(reply.az_deg, az_deg, wraps) > limit:
         return True
     return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
 
 
-def _away(a_deg: float, b_deg: float, wraps: bool) -> float:
-    """Rule 9: how far apart two azimuths are (on a circle when ``wraps``, also for a reading
-    past 360 that noise made: 450 on a 0..360 box is 90)."""
-    d = abs(a_deg - b_deg)
-    if wraps:
-        d %= 360.0
-        d = min(d, 360.0 - d)
-    return d
-
-
 def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
+
+
+class _Doubted(NamedTuple):
+    """Rule 9: the reading asked again, when it came, whether it was asked again at once."""
+
+    reply: PositionReply | None
+    t: float
+    at_once: bool
+
+
+NOT_DOUBTED = _Doubted(None, -math.inf, False)
 
 
 class Doubt(Enum):
@@ -177,11 +178,10 @@ class Controller:
         self._junk_reported_t = -1e18
         self._port_error: str | None = None
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
-        # rule 9: a reading of a rotor not turning asked again, when it came, and whether it
-        # was asked again at once
-        self._doubted: tuple[PositionReply | None, float, bool] = None, -math.inf, False
+        self._doubted = NOT_DOUBTED  # rule 9: a reading of a rotor not turning asked again
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
+        self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -252,8 +252,8 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._doubted, self._doubts_in_row = (None, now, False), 0  # rule 9: a new
-        # connection's first reading is believed
+        self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
+        # first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
         self.answering = not spec.can_report_position
         self._silence_reported = False
@@ -261,10 +261,13 @@ class Controller:
         self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
             self.stops.owed = False
+            released, self._released_owed = self._released_owed, False
             log.info("%s: sending the stop that came while the port was closed", self.name)
             link.write_stop(now)
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)
+            if released:  # (a lock released before the port opened: its stop as released)
+                self._released_stop_t = now
         for frame in link.codec.encode_connect(wall_s):
             link.write(frame, now)
 
@@ -298,12 +301,16 @@ class Controller:
             else:  # rule 9: asked again as soon as the stop is out (a review: asked a moving
                 link.heard(now)  # poll later, the rotor turning on disagreed again, and the
                 link.poll_now(now)  # stop the line lost was never checked)
-                reply, t, _ = self._doubted
-                self._doubted = reply, t, reply is not None
+                self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1)
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
             link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
+
+    def owe_stop(self) -> None:
+        """stops.py rule 3: a stop is owed: the first frame once the port is open (a lock kept
+        from before a restart: session.py rule 11)."""
+        self.stops.owed = True
 
     def lock_released(self) -> None:
         """stops.py rule 2: the lock's stop to a rotor at rest is checked while the lock holds;
@@ -313,6 +320,7 @@ class Controller:
         let go once a reading a resend time after it shows the rotor still (a review: released
         at once after a locked start, the stop the line lost was never checked)."""
         self._released_stop_t = self.motion.stop_sent_t
+        self._released_owed = self.stops.owed  # (the port out: the stop it writes on connect)
 
     def _release_check(self, now: float) -> None:
         """``lock_released``'s stop let go, after a reading (the motion just updated)."""
@@ -323,7 +331,7 @@ class Controller:
         if m.state is not mo.IDLE or m.idle_not_before_t is not None or m.target_deg is not None:
             return  # (turning, braking, settling: a connection's first reading is a guess)
         if now >= m.stop_sent_t + self.cfg.motion.stop_resend_s:
-            self.motion = replace(m, stop_sent_t=None)
+            self.motion = mo.stop_checked(m)
             self._released_stop_t = None
 
     def check_stop(self, now: float, target_going: bool) -> None:
@@ -419,44 +427,46 @@ class Controller:
     def _doubts(self, reply: PositionReply, now: float) -> Doubt:
         """Rule 9: whether ``reply`` is believed (TAKEN), or asked again (at once: ASK; at the
         next poll: WAIT, the readings having disagreed more than once in a row)."""
-        m, cfg, (doubted, doubted_t, at_once) = self.motion, self.cfg.motion, self._doubted
-        self._doubted = None, now, False
-        if m.state is mo.MOVING or m.target_deg is not None or m.anchor_deg is None:
+        m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
+        self._doubted = NOT_DOUBTED
+        stands, first = m.position_deg, m.anchor_deg is None  # (a connection's first reading)
+        if m.state is mo.MOVING or m.target_deg is not None or first or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             return Doubt.TAKEN
-        if m.position_deg is None:
-            self._doubts_in_row = 0
-            return Doubt.TAKEN
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
-        if not _apart(reply, m.position_deg, m.el_position_deg, limit, wraps):
-            if doubted is not None:  # back where it stood: the one before was noise
-                away = _away(doubted.az_deg, m.position_deg, wraps)
-                self._warn_always(
-                    f"a reading at rest of {_where(doubted)}, {away:g}° from where the rotor "
-                    "stands, was not said again: ignored (line noise?)",
+        if not _apart(reply, stands, m.el_position_deg, limit, wraps):
+            if doubted.reply is not None:  # back where it stood: the one before was noise
+                away = mo.angle_error(doubted.reply.az_deg, stands, wraps)
+                self._say(
+                    f"a reading at rest of {_where(doubted.reply)}, {away:g}° from where the "
+                    "rotor stands, was not said again: ignored (line noise?)",
                     now,
+                    logged=True,
                 )
             self._doubts_in_row = 0
             return Doubt.TAKEN
-        # said twice: the rotor is there (moved by hand, recalibrated); as far on as it can
-        # have turned since (a rotor turning while taken for still, read at the idle rate)
-        turned = 0.0  # (only a reading asked at once after the doubted one: at the idle rate,
-        if at_once:  # two readings of a noisy line would agree: a review)
-            turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted_t), DOUBT_TURN_MAX_DEG)
-        if doubted is not None and not _apart(
-            reply, doubted.az_deg, doubted.el_deg, limit + turned, wraps
+        # said twice: the rotor is there (moved by hand, recalibrated); asked again at once,
+        # as far on as it can have turned since (taken for still while it turned, a stop cut
+        # the doubted one short: its next came a moving poll later); at the idle rate, not
+        # (two readings of a noisy line half a minute apart would agree: a review)
+        turned = 0.0
+        if doubted.at_once:
+            turned = min(2 * cfg.nominal_speed_deg_s * (now - doubted.t), DOUBT_TURN_MAX_DEG)
+        if doubted.reply is not None and not _apart(
+            reply, doubted.reply.az_deg, doubted.reply.el_deg, limit + turned, wraps
         ):
             self._doubts_in_row = 0
             return Doubt.TAKEN
         self._doubts_in_row += 1
-        self._doubted = reply, now, self._doubts_in_row == 1  # (asked again at once: ASK)
+        self._doubted = _Doubted(reply, now, self._doubts_in_row == 1)  # (ASK: at once)
         log.info("%s: a reading at rest of %s; asking again", self.name, _where(reply))
         if self._doubts_in_row >= DOUBTS_TOLD:  # (every junk interval while it goes on)
-            self._warn(
+            self._say(
                 f"{self._doubts_in_row} readings in a row at rest disagree, the last "
                 f"{_where(reply)}: a noisy line or a failing position sensor; the bearing shown "
                 "is the last two readings agreed on",
                 now,
+                logged=False,
             )
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
 
@@ -532,6 +542,8 @@ class Controller:
                 if link.slew is not None:  # its report never came: where it ended, unseen
                     self._unseen()
                 link.give_up_reply(now)
+                self._doubted = self._doubted._replace(at_once=False)  # rule 9 (a review: the
+                # ask's answer lost, a reading at the next idle poll had the widened window)
                 if todo.track_lost:
                     self.motion = mo.track_lost(self.motion, self.cfg.motion)
         self.flush_stop(now)
@@ -673,14 +685,11 @@ class Controller:
         log.warning("%s: ignored %d bytes that are no reply: %r", self.name, len(data), data[:64])
         self._tell(f"controller sent {len(data)} bytes that are no valid reply; ignored", now)
 
-    def _warn_always(self, why: str, now: float) -> None:
-        """Rule 9: ``why`` logged, and told as rule 6 tells of junk."""
-        log.warning("%s: %s", self.name, why)
-        self._tell(why, now)
-
-    def _warn(self, why: str, now: float) -> None:
-        """Rule 9: ``why`` told as rule 6 tells of junk, and logged when told."""
-        if self._tell(why, now):
+    def _say(self, why: str, now: float, *, logged: bool) -> None:
+        """Rule 9: ``why`` told as rule 6 tells of junk, and logged (``logged``: every time;
+        else only when told: a reading after reading that goes on disagreeing)."""
+        told = self._tell(why, now)
+        if logged or told:
             log.warning("%s: %s", self.name, why)
 
     def _tell(self, why: str, now: float) -> bool:

@@ -57,6 +57,7 @@ import enum
 from dataclasses import dataclass, replace
 from typing import Any
 
+from bridge.core.geo import apart_deg
 from bridge.core.model import MotionState
 from bridge.protocols.base import ModelSpec, RetargetPolicy
 
@@ -133,9 +134,13 @@ class Plan(enum.StrEnum):
     WAIT = "wait"  # brake delay or a stop in progress: keep the target pending
 
 
-def angle_error(a_deg: float, b_deg: float, wraps: bool) -> float:
-    d = abs(a_deg - b_deg)
-    return min(d, 360.0 - d) if wraps and d > 180.0 else d
+angle_error = apart_deg  # (core/geo.py: a reading past 360 on a wrapping box on the circle)
+
+
+def stop_checked(m: Motion) -> Motion:
+    """stops.py rule 2: the last stop was had (a reading showed the rotor still after it):
+    nothing more to check of it (controller.py ``lock_released``)."""
+    return replace(m, stop_sent_t=None)
 
 
 # -- observations ----------------------------------------------------------------------------

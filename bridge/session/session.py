@@ -179,7 +179,8 @@ class RotatorSession:
         self.controller = Controller(cfg, options)
         # rule 11: a lock kept from before (the state file) owes a stop: the lock ON that set
         # it may have come while the port was closed, its stop owed in a process now ended
-        self.controller.stops.owed = locked
+        if locked:
+            self.controller.owe_stop()
         self.targets = Targets(cfg)
         self.features = FeatureCommands(cfg, self.targets)  # tracking and following
         self.tracker, self.follower = self.features.tracker, self.features.follower

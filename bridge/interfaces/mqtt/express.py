@@ -133,8 +133,10 @@ Rules:
 11. A stop only the express heard is the bridge's too. Each frame it writes it says (``wrote``,
    with the time it wrote it, the machine's monotonic clock, its own as the bridge's), and
    when neither of the bridge's connections had its command topics without a break since
-   before then (a broker restart the express came back from first, a connection between its
-   drop and its SUBACK: clean starts, so no copy of that stop will ever come to them), the
+   a second before then (app.py EXPRESS_HEARD_MARGIN_S: the express reads a stop a moment
+   after the broker took it; a broker restart the express came back from first, a connection
+   between its drop and its SUBACK: clean starts, so no copy of that stop will ever come to
+   them), the
    rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
    never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
    express sent the target it held at the brake window's end). A frame for a lock ON is such
