@@ -17,7 +17,7 @@ from bridge.core.errors import Refused
 from bridge.core.model import ErrorEvent, ErrorKind, MotionState, RotatorStatus, Stop, Target
 from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis, ElevationOnly
-from bridge.protocols.base import PositionReply
+from bridge.protocols.base import NotReady, PositionReply
 from bridge.runtime.composite import CompositeWorker, Composition, merge, split
 from bridge.session.actions import Write
 from bridge.session.mailbox import Batch, Mailbox
@@ -132,12 +132,22 @@ def test_the_newer_error_of_the_two_is_shown() -> None:
     assert shown is not None and shown.last_error == "el trouble"
 
 
+def said_twice(codec: ElevationOnly, line: bytes) -> None:
+    """Two readings of ``line`` taken (link.py rule 9): the box's own azimuth counts from the
+    second (protocols/axes.py rule 5)."""
+    for n in range(2):
+        codec.encode_query()
+        [reply] = codec.feed(line)
+        assert isinstance(reply, PositionReply)
+        codec.taken(reply)
+        if n == 0:
+            with pytest.raises(NotReady):  # said once: no target counted yet
+                codec.encode_target(200.0, 45.0)
+
+
 def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
     codec = ElevationOnly(REGISTRY["gs232b"].codec_factory())
-    codec.encode_query()
-    [reply] = codec.feed(b"AZ=087  EL=010\r")
-    assert isinstance(reply, PositionReply) and reply.az_deg == 87.0
-    codec.taken(reply)  # the engine took it as a reading (link.py rule 9)
+    said_twice(codec, b"AZ=087  EL=010\r")
     assert codec.encode_target(200.0, 45.0) == [b"W087 045\r"]
     codec.encode_query()
     [reply] = codec.feed(b"AZ=087  EL=020\r")  # what the session asked for, as if there
@@ -146,9 +156,7 @@ def test_the_elevation_box_is_sent_its_own_azimuth() -> None:
 
 def test_a_position_the_engine_did_not_take_is_not_sent_back() -> None:
     codec = ElevationOnly(REGISTRY["gs232b"].codec_factory())
-    codec.encode_query()
-    [reply] = codec.feed(b"AZ=087  EL=010\r")
-    codec.taken(reply)
+    said_twice(codec, b"AZ=087  EL=010\r")
     codec.encode_query()
     [glitch] = codec.feed(b"AZ=359  EL=010\r")  # dropped: a second reply spoiled it
     assert isinstance(glitch, PositionReply)
