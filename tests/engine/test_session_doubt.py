@@ -129,11 +129,10 @@ FAST = {
 
 
 def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_never_turns_that_rotor() -> None:
-    """Rule 9's own scenario (AZ=150 read AZ=350, one flipped bit, alone in its exchange) on
-    a composite's elevation box (an az/el GS-232B used for its elevation): the session sees the
-    echo of the azimuth it asked for (axes.py rule 2), so nothing doubts the box's own azimuth;
-    the glitch is taken as what the box says of itself and sent back with the next elevation
-    target: the box's azimuth rotor, which nobody asked to turn, turns 200 degrees."""
+    """axes.py rule 5: on a composite's elevation box (an az/el GS-232B used for its elevation)
+    the session sees the echo of the azimuth it asked for (axes.py rule 2), so rule 9 never
+    sees the box's own azimuth; a glitch in it (150 read 350) is never sent back with the next
+    elevation target (a review: ``W350 030``, the azimuth rotor nobody asked to turn turned)."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
         v.aim(Target(200.0, 10.0))
@@ -153,10 +152,9 @@ def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_never_turns_that_rotor(
 
 
 def test_a_flipped_bit_in_the_azimuth_boxs_own_elevation_never_turns_that_rotor() -> None:
-    """The same on the azimuth box (an az/el GS-232B used for its azimuth, axes.py rule 1): its
-    own elevation is stripped from what the session sees, so rule 9 never looks at it; one
-    flipped bit (EL=045 read EL=145, 0x30 -> 0x31) is sent back with the next azimuth target
-    and the elevation rotor nobody asked to turn goes to 145."""
+    """axes.py rule 5 on the azimuth box (an az/el GS-232B used for its azimuth, axes.py rule 1):
+    its own elevation read 145 for 45 (one flipped bit) is never sent back with the next
+    azimuth target (a review: its elevation rotor went to 145)."""
     boxes = {Axis.AZIMUTH: {"start_el_deg": 45.0}, Axis.ELEVATION: FAST[Axis.AZIMUTH]}
     with VirtualComposite("gs232b", "rt21", emulators=boxes) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
@@ -188,10 +186,8 @@ def test_a_flipped_bit_in_the_azimuth_boxs_own_elevation_never_turns_that_rotor(
 
 
 def test_a_flipped_bit_at_rest_after_a_stop_at_rest_is_never_taken(rig: Rig) -> None:
-    """Rule 9 leaves out 'a stop being checked'; a STOP (or lock ON) to a rotor at rest keeps
-    motion.stop_sent_t until the next target (stops.py rule 2), so from an operator's STOP at
-    rest on, for as long as the rotor stays there (hours), a flipped bit is published and taken
-    as a move again: the 200-degree nudge rule 9 was written for."""
+    """Rule 9 after a STOP at rest, long checked (a review: while a stop was out the doubt was
+    off, and a STOP at rest stays out until the next target: hours)."""
     v = at_rest(rig, "gs232b")
     rest = v.status.bearing_deg
     v.stop()
@@ -205,9 +201,8 @@ def test_a_flipped_bit_at_rest_after_a_stop_at_rest_is_never_taken(rig: Rig) -> 
 
 
 def test_a_flipped_bit_after_the_lock_is_released_is_never_taken(rig: Rig) -> None:
-    """The same after tower work: lock ON always sends a stop (stop_sent_t set), and nothing
-    clears it at rest; after the lock is released the rotor is taken at rest, but the doubt is
-    off until the next target."""
+    """Rule 9 after tower work: lock ON, then OFF (a review: the lock's stop kept the doubt off
+    until the next target)."""
     v = at_rest(rig, "gs232b")
     rest = v.status.bearing_deg
     v.lock(True)
@@ -223,9 +218,8 @@ def test_a_flipped_bit_after_the_lock_is_released_is_never_taken(rig: Rig) -> No
 
 
 def test_a_flipped_bit_in_the_brake_window_is_never_taken(rig: Rig) -> None:
-    """A Rotor-EZ's brake window after every move (brake_delay_s, the rotor standing still,
-    the stop_sent_t cleared): BRAKING is not IDLE, so rule 9 does not doubt there; a flipped
-    bit is published and taken as a move (and the brake window starts again)."""
+    """Rule 9 in a Rotor-EZ's brake window after a move (a review: the doubt was for IDLE only;
+    the flipped bit was published as a move and the brake window began again)."""
     v = rig("rotorez")
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
     v.aim(Target(150.0, None))
@@ -242,9 +236,9 @@ def test_a_flipped_bit_in_the_brake_window_is_never_taken(rig: Rig) -> None:
 
 @pytest.mark.parametrize("model", MODELS)
 def test_a_flipped_bit_at_rest_cut_short_by_a_stop_is_never_taken(rig: Rig, model: str) -> None:
-    """A STOP that lands in the quiet time of a held reading (link.py rule 9) takes that
-    reading through Controller.flush_stop -> _reading, around rule 9's doubt (which only
-    _settled asks): a flipped bit at rest is then published and taken as a move."""
+    """Rule 9 for the reading a STOP cuts short (link.py rule 9: taken just before the stop is
+    written, controller.py rule 5): doubted too (a review: it went around the doubt, was
+    published, and the reading after it was taken for a move after the stop)."""
     v = at_rest(rig, model)
     rest = v.status.bearing_deg
     t = v.now
@@ -260,9 +254,8 @@ def test_a_flipped_bit_at_rest_cut_short_by_a_stop_is_never_taken(rig: Rig, mode
 
 
 def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_while_it_turns_never_turns_it() -> None:
-    """The same while the elevation turns (a tracking pass sends an elevation every few
-    seconds): rule 9 doubts nothing while a rotor turns, but the box's unused azimuth never
-    turns, so any change of it is a glitch; the next elevation target carries it."""
+    """axes.py rule 5 while the elevation turns (a tracking pass sends an elevation every few
+    seconds): the box's unused azimuth never turns, so a glitch in it is never sent back."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
         v.aim(Target(200.0, 10.0))
@@ -281,10 +274,8 @@ def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_while_it_turns_never_tu
 
 
 def test_a_flipped_bit_at_rest_after_a_stall_is_never_taken(rig: Rig) -> None:
-    """After a stall the rotor stands still (STALLED, until the next target: motion.py has no
-    way out of it at rest), and rule 9 doubts only IDLE: a flipped bit minutes later is
-    published, taken as the jammed rotor breaking free (stops.py rule 4) and reported on
-    R/error as 'rotor turning at 350 after the stop its stall was given'."""
+    """Rule 9 after a stall (STALLED until the next target; a review: a flipped bit was published,
+    and the stall watch stopped the "move" with a false error)."""
     v = at_rest(rig, "gs232b")
     rest = v.status.bearing_deg
     v.jam()
@@ -302,14 +293,10 @@ def test_a_flipped_bit_at_rest_after_a_stall_is_never_taken(rig: Rig) -> None:
 
 
 def test_a_target_during_a_front_panel_move_is_not_sent_on_a_doubted_reading(rig: Rig) -> None:
-    """targets.py rule 7 (docs/controllers.md: 'a target goes out only after a fresh reading
-    has shown the rotor idle, so a front-panel move that began after the last poll is not cut
-    short'): the reading the target asks for first is the one that shows the move. When it is
-    more than 5 degrees from where the rotor stood, rule 9 doubts it; but the doubt path calls
-    link.got_reading, so that doubted reading counts as the fresh one, the motion still says
-    idle, and the target goes out in the same step, before the reading asked again: a bearing
-    written to a Rotor-EZ that is turning (it stops instead of re-targeting; the bridge never
-    sent its own stop first nor waited for the brake)."""
+    """Rule 9 with targets.py rule 7: a doubted reading is no fresh reading; a target that comes
+    while a move at the panel is being confirmed waits for the answer, and the Rotor-EZ is
+    stopped first (a review: the target went out at once into the move, was ignored, and a
+    stall was reported 10 s later)."""
     from bridge.emulators.rotorez_models import Outcome
 
     query = b"AI1;"
@@ -431,6 +418,15 @@ def test_a_failing_sensor_polled_every_30_s_is_never_believed(rig: Rig) -> None:
     assert v.status.bearing_deg == rest and {s for _, s in shown} <= {"idle"}, shown
 
 
+def never_shown_but(v: VirtualRotator, rest: float | None, done: list[float]) -> None:
+    """Three noisy readings come, and no bearing but ``rest`` is published meanwhile."""
+    t = v.now
+    v.run_until(lambda h: len(done) == 3, 120, "three noisy readings")
+    v.run_for(5.0)
+    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
+    assert {b for b, _ in shown} <= {round(rest or -1)}, (done, shown)
+
+
 def test_two_flipped_bits_in_a_row_then_one_at_the_next_idle_poll(rig: Rig) -> None:
     """A burst of line noise: the reading at rest (150) is read 350, the one asked again at once
     250 (disagreeing: asked at the next idle poll, 30 s on), and that one 50. Three readings, no
@@ -448,11 +444,7 @@ def test_two_flipped_bits_in_a_row_then_one_at_the_next_idle_poll(rig: Rig) -> N
         return data
 
     v.to_host = noisy
-    t = v.now
-    v.run_until(lambda h: len(done) == 3, 120, "three noisy readings")
-    v.run_for(5.0)
-    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
-    assert {b for b, _ in shown} <= {round(rest)}, (done, shown)
+    never_shown_but(v, rest, done)
 
 
 def test_a_noise_burst_whose_third_reading_is_near_the_second_is_never_believed(
@@ -489,11 +481,7 @@ def test_a_noise_burst_whose_third_reading_is_near_the_second_is_never_believed(
         return bytes(out)
 
     v.to_host = noisy
-    t = v.now
-    v.run_until(lambda h: len(done) == 3, 120, "three noisy readings")
-    v.run_for(5.0)
-    shown = [(round(s.bearing_deg or -1), s.state.value) for s in v.published(since=t)]
-    assert {b for b, _ in shown} <= {round(rest)}, (done, shown)
+    never_shown_but(v, rest, done)
 
 
 def test_a_locked_starts_lost_stop_is_still_checked_when_the_lock_is_released_at_once(

@@ -210,13 +210,9 @@ def test_a_stop_to_a_stalled_rotor_is_sent_again_when_it_turns_after_all(rig: Ri
     assert v.truth().az_deg < 150
 
 
-@pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
-def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, model: str) -> None:
-    """stops.py rule 2: the first reading of a new connection takes a rotor that turned on
-    meanwhile for at rest (braking, or settling without a brake: motion.py rule 4, it may be
-    turning); an operator's STOP then, lost
-    on the line, is sent again once the readings show it turning (an attack pass: a stop to a
-    rotor taken for at rest went unchecked, and the rotor ran on to its old target)."""
+def reconnected_mid_turn(rig: Rig, model: str) -> VirtualRotator:
+    """Turning to 170 when its adapter was pulled and plugged back in: the first reading of the
+    new connection takes the turning rotor for at rest (motion.py rule 4)."""
     v = rig(model)
     v.run_until_state(IDLE, 60)
     v.target(170)
@@ -224,8 +220,20 @@ def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, mo
     v.link_down()
     v.run_for(0.5)
     v.link_up()
-    v.run_until(lambda h: h.session.controller.motion.anchor_deg is not None, 5, "a reading")
-    assert v.state is not MOVING and v.truth().is_moving
+    v.run_until(lambda h: h.session.controller.motion.anchor_deg is not None, 20, "a reading")
+    assert v.truth().is_moving
+    return v
+
+
+@pytest.mark.parametrize("model", ["rotorez", "gs232b", "rot2prog"])
+def test_a_stop_lost_right_after_a_reconnect_mid_turn_is_sent_again(rig: Rig, model: str) -> None:
+    """stops.py rule 2: the first reading of a new connection takes a rotor that turned on
+    meanwhile for at rest (braking, or settling without a brake: motion.py rule 4, it may be
+    turning); an operator's STOP then, lost
+    on the line, is sent again once the readings show it turning (an attack pass: a stop to a
+    rotor taken for at rest went unchecked, and the rotor ran on to its old target)."""
+    v = reconnected_mid_turn(rig, model)
+    assert v.state is not MOVING
     v.drop_writes(v.cfg.spec.codec_factory().encode_stop())  # (a codec of its own: SPID's
     # encode_stop notes the reply it asks for)
     v.stop()

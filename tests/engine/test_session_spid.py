@@ -16,6 +16,7 @@ import pytest
 
 from bridge.core.model import MotionState
 from bridge.emulators.spid_models import K_SET, K_STATUS, K_STOP, Outcome
+from tests.engine.test_session_rotorez import reconnected_mid_turn
 from tests.engine.virtual import VirtualRotator
 
 Rig = Callable[..., VirtualRotator]
@@ -338,49 +339,24 @@ def test_a_stop_in_the_quiet_time_after_a_reply_goes_out_at_once(rig: Rig, model
     assert_half_duplex(v)
 
 
-def reconnected_mid_turn(rig: Rig, model: str) -> VirtualRotator:
-    """Turning to 170 when its adapter was pulled and plugged back in: the first reading of the
-    new connection takes the turning rotor for at rest (motion.py rule 4)."""
-    v = rig(model)
-    v.run_until_state(IDLE, 60)
-    v.target(170)
-    v.run_for(5)
-    v.link_down()
-    v.run_for(0.5)
-    v.link_up()
-    v.run_until(lambda h: h.session.controller.motion.anchor_deg is not None, 20, "a reading")
-    assert v.truth().is_moving
-    return v
-
-
 @pytest.mark.parametrize("model", ["rot2prog", "rot1prog"])
-def test_a_stop_lost_once_the_idle_poll_saw_the_turn_is_sent_again(rig: Rig, model: str) -> None:
-    """controller.py rule 3: the turn seen by an idle poll (Rot2Prog every 9.3 s) is followed
-    at the moving rate. The next reading stayed on the idle grid: the rotor was taken for
-    stopped for want of readings within its settle time, and a STOP the line lost was never
-    sent again (an attack pass: it ran on to 170, R/state flipping moving and idle)."""
-    v = reconnected_mid_turn(rig, model)
-    v.run_until_state(MOVING, 40)
-    stop = v.cfg.spec.codec_factory().encode_stop()
-    v.drop_writes(stop, 1)
-    t = v.now
-    v.stop()
-    v.run_for(60)
-    assert not v.truth().is_moving and v.truth().az_deg < 100
-    assert v.sent(since=t).count(stop) >= 2
-
-
-@pytest.mark.parametrize("model", ["rot2prog", "rot1prog"])
-def test_a_stop_lost_twice_right_after_a_reconnect_is_sent_a_third_time(
-    rig: Rig, model: str
+@pytest.mark.parametrize("lost, seen_turning", [(1, True), (2, False)])
+def test_a_stop_lost_after_a_reconnect_mid_turn_is_sent_again(
+    rig: Rig, model: str, lost: int, seen_turning: bool
 ) -> None:
-    """controller.py rule 3: after a stop written, the readings that check it come at the
-    moving rate (the repeat lost too, no third stop was ever written)."""
+    """controller.py rule 3: the turn seen by an idle poll (Rot2Prog every 9.3 s), and a stop
+    written, are followed at the moving rate. The next reading stayed on the idle grid: the
+    rotor was taken for stopped for want of readings within its settle time, and a STOP the
+    line lost (pressed once the turn was shown, or right after the first reading and lost
+    twice) was never sent again (an attack pass: it ran on to 170, R/state flipping moving and
+    idle)."""
     v = reconnected_mid_turn(rig, model)
+    if seen_turning:
+        v.run_until_state(MOVING, 40)
     stop = v.cfg.spec.codec_factory().encode_stop()
-    v.drop_writes(stop, 2)
+    v.drop_writes(stop, lost)
     t = v.now
     v.stop()
     v.run_for(60)
     assert not v.truth().is_moving and v.truth().az_deg < 100
-    assert v.sent(since=t).count(stop) >= 3
+    assert v.sent(since=t).count(stop) >= lost + 1
