@@ -56,14 +56,21 @@ def flip_next_hundreds(v: VirtualRotator) -> list[float]:
     return when
 
 
+def flip_and_wait(v: VirtualRotator) -> float:
+    """``flip_next_hundreds``, and 20 s after the flipped reply came; returns when it was armed."""
+    t = v.now
+    flipped = flip_next_hundreds(v)
+    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
+    v.run_for(20)
+    return t
+
+
 @pytest.mark.parametrize("model", MODELS)
 def test_a_flipped_bit_in_a_reading_at_rest_is_never_taken(rig: Rig, model: str) -> None:
     v = at_rest(rig, model)
     t, rest = v.now, v.status.bearing_deg
     sent = len(v.sent())
-    flipped = flip_next_hundreds(v)
-    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
-    v.run_for(20)
+    flip_and_wait(v)
     shown = {(s.bearing_deg, s.state) for s in v.published(since=t)}
     assert shown == {(rest, MotionState.IDLE)}
     assert v.status.bearing_deg == rest
@@ -192,11 +199,7 @@ def test_a_flipped_bit_at_rest_after_a_stop_at_rest_is_never_taken(rig: Rig) -> 
     rest = v.status.bearing_deg
     v.stop()
     v.run_for(120.0)  # the stop long checked: the rotor never turned
-    t = v.now
-    flipped = flip_next_hundreds(v)
-    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
-    v.run_for(20)
-    shown = {s.bearing_deg for s in v.published(since=t)}
+    shown = {s.bearing_deg for s in v.published(since=flip_and_wait(v))}
     assert shown <= {rest}, shown
 
 
@@ -209,11 +212,7 @@ def test_a_flipped_bit_after_the_lock_is_released_is_never_taken(rig: Rig) -> No
     v.run_for(60.0)
     v.lock(False)
     v.run_for(10.0)
-    t = v.now
-    flipped = flip_next_hundreds(v)
-    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
-    v.run_for(20)
-    shown = {s.bearing_deg for s in v.published(since=t)}
+    shown = {s.bearing_deg for s in v.published(since=flip_and_wait(v))}
     assert shown <= {rest}, shown
 
 
@@ -284,10 +283,7 @@ def test_a_flipped_bit_at_rest_after_a_stall_is_never_taken(rig: Rig) -> None:
     v.run_for(120.0)  # the rotor still, for minutes
     assert v.state is MotionState.STALLED
     t = v.now
-    flipped = flip_next_hundreds(v)
-    v.run_until(lambda h: bool(flipped), 60, "the flipped reply")
-    v.run_for(20)
-    shown = {s.bearing_deg for s in v.published(since=t)}
+    shown = {s.bearing_deg for s in v.published(since=flip_and_wait(v))}
     told = [e.message for e in v.errors(since=t)]
     assert shown <= {rest} and not any("turning" in m for m in told), (shown, told)
 
