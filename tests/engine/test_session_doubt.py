@@ -357,6 +357,16 @@ def test_a_lost_stop_cut_short_on_a_doubted_reading_is_sent_again(rig: Rig) -> N
     )
 
 
+def a_move_by_hand_an_hour_later_is_not_stopped(v: VirtualRotator) -> None:
+    v.run_for(3600.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(120.0)
+    stops = [w for w in v.sent(since=t) if w == b"S\r"]
+    told = [e.message for e in v.errors(since=t)]
+    assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg, told)
+
+
 def test_a_move_by_hand_long_after_a_locked_start_is_not_stopped(rig: Rig) -> None:
     """stops.py rule 2 with session.py rule 11: a session that starts locked writes a stop on
     its first connect, checked while the lock holds; released, a turn made at the panel an
@@ -365,13 +375,7 @@ def test_a_move_by_hand_long_after_a_locked_start_is_not_stopped(rig: Rig) -> No
     v = rig("gs232b", locked=True)
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
     v.lock(False)
-    v.run_for(3600.0)
-    t = v.now
-    v.manual_rotate(300.0)
-    v.run_for(120.0)
-    stops = [w for w in v.sent(since=t) if w == b"S\r"]
-    told = [e.message for e in v.errors(since=t)]
-    assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg, told)
+    a_move_by_hand_an_hour_later_is_not_stopped(v)
 
 
 def test_control_a_move_by_hand_long_after_an_unlocked_start_is_not_stopped(rig: Rig) -> None:
@@ -543,31 +547,23 @@ def test_a_glitch_whose_asked_again_reply_is_lost_then_a_glitch_30_s_later_is_ne
 
 def test_a_locked_start_released_before_the_port_opens_lets_a_later_hand_move_be(rig: Rig) -> None:
     """stops.py rule 2: the lock's stop is not checked after the lock is released, also one
-    owed when it was released (the port out) and written on connect.
-    A locked start whose adapter is out (session.py rule 11's very case), released before the
-    adapter comes back: the owed stop goes out on connect and is checked for ever; a turn made
-    at the panel an hour later is stopped."""
+    owed when it was released (session.py rule 11: a locked start, the adapter out) and
+    written on connect (a review: checked for ever, a turn at the panel an hour later was
+    stopped)."""
     v = rig("gs232b", locked=True, connect=False)
     v.run_for(5.0)
     v.lock(False)  # the operator releases the lock while the port is still out
     v.run_for(5.0)
     v.link_up()
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
-    v.run_for(3600.0)
-    t = v.now
-    v.manual_rotate(300.0)
-    v.run_for(120.0)
-    stops = [w for w in v.sent(since=t) if w == b"S\r"]
-    told = [e.message for e in v.errors(since=t)]
-    assert stops == [] and abs(v.truth().az_deg - 300.0) < 1, (stops, v.truth().az_deg, told)
+    a_move_by_hand_an_hour_later_is_not_stopped(v)
 
 
 def test_a_flipped_bit_in_the_first_reading_after_a_replug_never_turns_the_unused_axis() -> None:
-    """axes.py rule 5 keeps a composite box's never-turned axis against a glitch, but the codec
-    is new at every connect (Controller.connect: spec.codec_factory()), and its first reading's
-    other axis is believed outright (_keep: own is None). The elevation box replugged (a USB
-    blip), one flipped bit in its first reply (AZ=150 read AZ=350): the next elevation target
-    carries 350 and that box's azimuth rotor, which nobody asked to turn, turns 200 degrees."""
+    """axes.py rule 5 after a replug: the codec is new at every connect, and a box's first value
+    of its unused axis counts once said twice too (a review: one flipped bit in the elevation
+    box's first reply, AZ=350 for 150, went out with the next elevation target, and its
+    azimuth rotor, which nobody asked to turn, turned 200 degrees)."""
     from tests.engine.test_session_doubt import FAST, flip_next_hundreds
 
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
