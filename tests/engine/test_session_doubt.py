@@ -7,7 +7,8 @@ where the first form of the rule did not reach.)"""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 import pytest
 
@@ -135,17 +136,24 @@ FAST = {
 }
 
 
-def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_never_turns_that_rotor() -> None:
-    """axes.py rule 5: on a composite's elevation box (an az/el GS-232B used for its elevation)
-    the session sees the echo of the azimuth it asked for (axes.py rule 2), so rule 9 never
-    sees the box's own azimuth; a glitch in it (150 read 350) is never sent back with the next
-    elevation target (a review: ``W350 030``, the azimuth rotor nobody asked to turn turned)."""
+@contextmanager
+def composite_at_rest() -> Iterator[VirtualComposite]:
+    """An RT-21 and a GS-232B (its own azimuth at 150) at rest at 200/10."""
     with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
         v.run_until(lambda h: h.status.available, 10, "both boxes answer")
         v.aim(Target(200.0, 10.0))
         v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
         v.run_for(10.0)
         assert v.el.truth().az_deg == 150.0
+        yield v
+
+
+def test_a_flipped_bit_in_the_elevation_boxs_own_azimuth_never_turns_that_rotor() -> None:
+    """axes.py rule 5: on a composite's elevation box (an az/el GS-232B used for its elevation)
+    the session sees the echo of the azimuth it asked for (axes.py rule 2), so rule 9 never
+    sees the box's own azimuth; a glitch in it (150 read 350) is never sent back with the next
+    elevation target (a review: ``W350 030``, the azimuth rotor nobody asked to turn turned)."""
+    with composite_at_rest() as v:
         flipped = flip_next_hundreds(v.el)  # the elevation box's next reply: AZ=150 -> AZ=350
         v.run_until(lambda h: bool(flipped), 30, "the flipped reply")
         v.run_for(0.1)  # the exchange is over, the reading taken (the next poll is 1 s away)
@@ -564,14 +572,7 @@ def test_a_flipped_bit_in_the_first_reading_after_a_replug_never_turns_the_unuse
     of its unused axis counts once said twice too (a review: one flipped bit in the elevation
     box's first reply, AZ=350 for 150, went out with the next elevation target, and its
     azimuth rotor, which nobody asked to turn, turned 200 degrees)."""
-    from tests.engine.test_session_doubt import FAST, flip_next_hundreds
-
-    with VirtualComposite("rt21", "gs232b", emulators=FAST) as v:
-        v.run_until(lambda h: h.status.available, 10, "both boxes answer")
-        v.aim(Target(200.0, 10.0))
-        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > 5, 200, "idle")
-        v.run_for(10.0)
-        assert v.el.truth().az_deg == 150.0
+    with composite_at_rest() as v:
         v.el.link_down()
         v.run_for(5.0)
         flipped = flip_next_hundreds(v.el)  # the first reply after the replug: AZ=150 -> 350
