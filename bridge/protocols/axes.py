@@ -33,7 +33,9 @@ Rules:
    reports a position only when both boxes can, and takes whole degrees when either does.
 5. What the box says of its axis that is never turned counts only when two readings taken
    in a row say so, a connection's first value too (until then no target is counted: a target
-   waits one reading more after each connect), and a change beyond KEEP_NOISE_DEG likewise:
+   waits one reading more after each connect; when none of KEEP_FIRST_READINGS agree, a
+   jittering or floating input, the latest counts, or no target would ever go), and a change
+   beyond KEEP_NOISE_DEG likewise:
    that axis does not move, so a change is line noise or a hand at the box's panel, and a
    glitch sent back turns that rotor (an attack pass: one flipped bit read the elevation
    box's own azimuth 150 as 350, and the next elevation target wrote ``W350 030``: its
@@ -62,6 +64,7 @@ from bridge.protocols.base import (
 # positions fed but not yet taken or dropped (link.py rule 9): one exchange's, and a few spare
 _PENDING = 4
 KEEP_NOISE_DEG = 2.0  # rule 5: a change of the axis never turned up to this is believed at once
+KEEP_FIRST_READINGS = 3  # rule 5: a first value none of this many agree on: the latest
 
 
 class Axis(enum.StrEnum):
@@ -144,6 +147,7 @@ class _KeepsOwn(AzimuthOnly):
     def __init__(self, inner: Codec) -> None:
         super().__init__(inner)
         self._said: float | None = None  # rule 5: a change said once
+        self._unsure = 0  # rule 5: readings of a connection's first value that did not agree
         self._pending: list[tuple[PositionReply, float | None, PositionReply]] = []  # fed:
         # (the reply handed on, what the box said of its other axis, the inner codec's reply)
 
@@ -161,6 +165,10 @@ class _KeepsOwn(AzimuthOnly):
             self._said = None
             return said  # said twice
         self._said = said
+        if own is None:  # a connection's first: no two readings agreeing in KEEP_FIRST_READINGS
+            self._unsure += 1  # (a jittering or floating input): the latest, as it reads, or
+            if self._unsure >= KEEP_FIRST_READINGS:  # no target would ever go (a review: the
+                return said  # box asked without end, about 37 times a second)
         return own
 
     def _taken(self, reply: PositionReply) -> tuple[bool, float | None]:

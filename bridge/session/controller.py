@@ -50,8 +50,8 @@ Rules:
    and told from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings
    agreed on. A reading asked again at once agrees with the doubted one within ``doubt_deg``
    plus twice what the rotor turns at its speed between them (DOUBT_TURN_MAX_DEG at most): a
-   rotor turning while taken for still is believed on its second reading even when a stop
-   cut the first short and the second came a moving poll later; readings at the idle rate
+   rotor turning while taken for still is believed on its second reading, also when a stop
+   cut the first short and the second is asked once the stop is out; readings at the idle rate
    agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
    composite box's axis that is never turned is kept so too: axes.py rule 5.)
 """
@@ -285,6 +285,7 @@ class Controller:
         is closed, as the first frame it gets (stops.py rule 3)."""
         if self.link is None:
             self.stops.owed = True
+            self._released_owed = False  # (a stop owed now is checked as any: stops.py rule 2)
         elif not merge or not self.stops.merges(self.motion, self.cfg.motion, now):
             self.link.want_stop()
             self.flush_stop(now)
@@ -311,6 +312,7 @@ class Controller:
         """stops.py rule 3: a stop is owed: the first frame once the port is open (a lock kept
         from before a restart: session.py rule 11)."""
         self.stops.owed = True
+        self._released_owed = False
 
     def lock_released(self) -> None:
         """stops.py rule 2: the lock's stop to a rotor at rest is checked while the lock holds;

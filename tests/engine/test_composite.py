@@ -5,6 +5,7 @@ against the test's own solar formula (tests/support/sky.py)."""
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -566,3 +567,34 @@ def test_the_composite_worker_says_which_stops_its_status_shows() -> None:
     assert worker.halts_applied == 2
     assert all(b.session.controller.stops.owed for b in worker.boxes.values())  # both boxes
     box.close()
+
+
+@pytest.mark.parametrize("axis", [Axis.AZIMUTH, Axis.ELEVATION])
+def test_a_box_whose_unused_axis_never_reads_the_same_twice_still_turns(axis: Axis) -> None:
+    """protocols/axes.py rule 5: a box's unused axis counts once said twice after a connect,
+    or, when none of KEEP_FIRST_READINGS agree (a worn or floating pot: 100, 103, 100...),
+    as the latest reads (a review: no target ever went, and the box was asked about 37 times a
+    second)."""
+    gs232b = {"az_speed_deg_s": 6.0, "start_az_deg": 100.0, "start_el_deg": 10.0}
+    boxes = {axis: gs232b, (Axis.ELEVATION if axis is Axis.AZIMUTH else Axis.AZIMUTH): {}}
+    models = ("gs232b", "rt21") if axis is Axis.AZIMUTH else ("rt21", "gs232b")
+    with VirtualComposite(*models, emulators=boxes) as v:
+        box = v.boxes[axis]
+        device, jitter = box.device, itertools.cycle([0, 3])
+        reading = device._reading
+
+        def jittering(text: str) -> bytes:  # the unused axis's digits: 100/103 or 010/013
+            out = reading(text)
+            unused = out[:6] if axis is Axis.ELEVATION else out[-3:]
+            shaken = b"%03d" % (int(unused[-3:]) + next(jitter))
+            return out[:3] + shaken + out[6:] if axis is Axis.ELEVATION else out[:-3] + shaken
+
+        device._reading = jittering
+        v.run_until(online, 10, "both boxes answer")
+        t = v.now
+        v.aim(Target(200.0, 30.0))
+        v.run_until(lambda h: h.status.state is MotionState.IDLE and h.now > t + 5, 200, "idle")
+        bearing, elevation = v.status.bearing_deg, v.status.elevation_deg
+        assert bearing is not None and abs(bearing - 200.0) <= 1
+        assert elevation is not None and abs(elevation - 30.0) <= 1
+        assert len(box.sent(since=t)) < 400  # (polled as ever, not without end)

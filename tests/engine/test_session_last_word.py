@@ -201,3 +201,27 @@ def test_a_lock_kept_across_a_restart_stops_the_rotor_on_the_first_connect(model
         assert again.sent(since=t)[0] == (stop[0] if isinstance(stop, list) else stop)
         assert again.status.locked and not again.truth().is_moving
         assert again.truth().az_deg < 150
+
+
+@pytest.mark.parametrize("again", ["lock", "stop"])
+def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -> None:
+    """stops.py rule 2: a locked start with the adapter out, the lock released, then (the
+    adapter still out) the lock ON again or an operator's STOP: the stop owed is that one's,
+    checked while the lock holds or until the next target, not let go as the released lock's
+    (a review: a turn at the panel during the tower work went on to 300, no stop written)."""
+    with VirtualRotator("gs232b", locked=True, connect=False) as v:
+        v.run_for(5.0)
+        v.lock(False)
+        v.run_for(5.0)
+        if again == "lock":
+            v.lock(True)
+        else:
+            v.stop()
+        v.run_for(5.0)
+        v.link_up()
+        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+        v.run_for(600.0)
+        t = v.now
+        v.manual_rotate(300.0)
+        v.run_for(60.0)
+        assert b"S\r" in v.sent(since=t) and abs(v.truth().az_deg - 300.0) > 5
