@@ -33,8 +33,9 @@ Rules:
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
 9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking,
-   stalled, also after a stop) more than ``doubt_deg`` from where it stands, on either axis,
-   is believed when the next says so too: the controller is asked again at once, and a
+   stalled, also after a stop) further from where it stands than ``noise_deg`` on either axis
+   (what the motion machine would take for a move: motion.py rule 1) is believed when the
+   next says so too, within ``doubt_deg``: the controller is asked again at once, and a
    reading back where the rotor stood shows the first was line noise (logged, and told on
    R/error as junk is: rule 6). One flipped bit in an ASCII reply makes a well-formed bearing
    (``AZ=150`` read as ``AZ=350``): it was published and taken as a move, and a nudge made
@@ -86,13 +87,13 @@ from bridge.session.targets import Sending, resolve
 log = logging.getLogger(__name__)
 
 ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (rounding)
-DOUBT_MIN_DEG = 5.0  # rule 9: a reading at rest this far (or twice the noise) is asked again
+DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agree
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
-    """Rule 9: how far from where a rotor at rest stands a reading is asked again."""
+    """Rule 9: how close two readings of a rotor not turning agree."""
     return max(DOUBT_MIN_DEG, 2 * cfg.noise_deg)
 
 
@@ -431,12 +432,15 @@ class Controller:
         next poll: WAIT, the readings having disagreed more than once in a row)."""
         m, cfg, doubted = self.motion, self.cfg.motion, self._doubted
         self._doubted = NOT_DOUBTED
-        stands, first = m.position_deg, m.anchor_deg is None  # (a connection's first reading)
-        if m.state is mo.MOVING or m.target_deg is not None or first or stands is None:
+        stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
+        if m.state is mo.MOVING or m.target_deg is not None or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             return Doubt.TAKEN
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
-        if not _apart(reply, stands, m.el_position_deg, limit, wraps):
+        # no move for the motion machine (within noise_deg of where it stands): taken; a move
+        # is what is doubted, however small (a review: a flip of 2 degrees, taken, turned the
+        # motion to MOVING, and a second glitch in its settle time was published as a move)
+        if not _apart(reply, stands, m.el_anchor_deg, cfg.noise_deg, wraps):
             if doubted.reply is not None:  # back where it stood: the one before was noise
                 away = mo.angle_error(doubted.reply.az_deg, stands, wraps)
                 self._say(

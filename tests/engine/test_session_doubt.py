@@ -586,3 +586,36 @@ def test_a_flipped_bit_in_the_first_reading_after_a_replug_never_turns_the_unuse
         v.run_for(60.0)
         sent = [w for w in v.el.sent(since=t) if w.startswith(b"W")]
         assert v.el.truth().az_deg == 150.0, (v.el.truth(), sent)
+
+
+@pytest.mark.parametrize("model", ["gs232b", "easycomm2"])
+def test_a_small_glitch_then_a_big_one_are_both_asked_again(rig: Rig, model: str) -> None:
+    """Rule 9 doubts any reading the motion machine would take for a move, however small: 150
+    read 152 (one flipped bit in the units), then 350 in the next reply (one in the hundreds).
+    The first, within 5 degrees, was believed: the motion machine took the rotor for turning,
+    rule 9 doubted nothing more, and 350 was published as where it went (a last attack pass;
+    an elevation target then would have carried it to the box)."""
+    v = at_rest(rig, model)
+    rest = v.status.bearing_deg
+    assert rest == 150.0
+    line, flips = bytearray(), iter([(b"150", b"152"), (b"150", b"350")])
+    done: list[float] = []
+
+    def two_flips(data: bytes, now: float) -> bytes:  # whole replies (sent byte by byte)
+        line.extend(data)
+        if not line.endswith(b"\n"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        if len(done) < 2 and b"150" in whole:
+            done.append(now)
+            old, new = next(flips)
+            return whole.replace(old, new, 1)
+        return whole
+
+    v.to_host = two_flips
+    t = v.now
+    v.run_until(lambda h: len(done) == 2, 30, "two flipped replies")
+    v.run_for(20)
+    shown = {s.bearing_deg for s in v.published(since=t)}
+    assert shown <= {rest} and v.truth().az_deg == 150.0, shown
