@@ -1,10 +1,11 @@
-"""paho_client.py rules 6 and 7: paho's loop on a thread of the bridge's, against a real
+"""paho_client.py rules 6, 7 and 9: paho's loop on a thread of the bridge's, against a real
 mosquitto. What a publish costs is measured in benchmarks/exchange_cpu.py; here, what must hold
 for it: the messages a thread queues while the network thread is busy wake it once; every read
 and write of the socket happens on that thread (a TLS socket is never shared); a QoS 0 message
 calls no ``on_publish`` while a QoS 1 message's PUBACK still does; a broker that restarts is
 reconnected to and what is published then arrives; ``loop_stop`` after ``disconnect`` writes
-the DISCONNECT (the broker then drops the last will) before the thread ends."""
+the DISCONNECT (the broker then drops the last will) before the thread ends; a status queued
+without paho's publish is the packet paho's publish makes, and a round's go out in one send."""
 
 from __future__ import annotations
 
@@ -16,12 +17,13 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from paho.mqtt.enums import CallbackAPIVersion
+from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 
 from bridge.core import handoff
 from bridge.interfaces.mqtt.paho_client import Client, Waker, new_client
 from bridge.settings import MqttSettings
 from tests.support import Mosquitto, Probe, wait_until
+from tests.support.mqtt import retained_snapshot
 from tests.support.waiting import slow
 
 
@@ -474,3 +476,97 @@ def test_another_threads_message_is_not_held_back_by_a_round_under_way(
             release.set()
             lines.join()
         probe.wait(lambda m: m.topic == "net/status", start=mark)
+
+
+def _queued(c: Client, publish: Any, *args: Any, **kwargs: Any) -> bytes:
+    """The packet ``publish(*args, **kwargs)`` hands paho's queue (a stand-in for the socket,
+    which is all paho looks at: nothing is written)."""
+    got: list[bytes] = []
+
+    def queue(_command: int, packet: bytes | bytearray, *_rest: object) -> MQTTErrorCode:
+        got.append(bytes(packet))
+        return MQTTErrorCode.MQTT_ERR_SUCCESS
+
+    c._sock = object()  # type: ignore[assignment]
+    c._packet_queue = queue  # type: ignore[method-assign,assignment]
+    try:
+        publish(*args, **kwargs)
+    finally:
+        del c._packet_queue
+        c._sock = None
+    assert len(got) == 1
+    return got[0]
+
+
+@pytest.mark.parametrize("size", [0, 5, 127, 128, 16383, 16384, 70000])
+def test_publish_qos0_queues_the_packet_pahos_publish_does(size: int) -> None:
+    """Rule 9: the same bytes as paho's own publish, under MQTT 5 and, once the client steps
+    down to 3.1.1 (rule 3), under that: a topic part kept from the first is not reused."""
+    settings = MqttSettings(host="127.0.0.1", port=1883, client_id="net-bytes")
+    c = new_client(settings, "net-bytes")
+    payload = bytes(i % 251 for i in range(size))
+    for retain in (True, False):
+        for topic in ("rotor/r1/status", "rotor/é/bearing"):
+            theirs = _queued(c, c.publish, topic, payload, qos=0, retain=retain)
+            assert _queued(c, c.publish_qos0, topic, payload, retain) == theirs
+    c.use_mqtt311()
+    theirs = _queued(c, c.publish, "rotor/r1/status", payload, qos=0, retain=True)
+    assert _queued(c, c.publish_qos0, "rotor/r1/status", payload, True) == theirs
+
+
+def test_publish_qos0_refuses_what_pahos_publish_refuses_and_needs_a_connection() -> None:
+    settings = MqttSettings(host="127.0.0.1", port=1883, client_id="net-refuse")
+    c = new_client(settings, "net-refuse")
+    for topic in ("rotor/+/status", "rotor/#"):
+        with pytest.raises(ValueError):
+            c.publish(topic, b"x", qos=0)
+        with pytest.raises(ValueError):
+            c.publish_qos0(topic, b"x", True)
+    assert c.publish("rotor/r1/status", b"x", qos=0).rc == MQTTErrorCode.MQTT_ERR_NO_CONN
+    assert c.publish_qos0("rotor/r1/status", b"x", True) == MQTTErrorCode.MQTT_ERR_NO_CONN
+
+
+def test_a_rounds_statuses_go_out_in_one_send_in_order_with_other_messages(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    """Rule 9: what ``publish_qos0`` queued one after another is written with one send; a
+    message paho's publish queued between them keeps its place, and every one arrives."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-join")
+    c = new_client(settings, "net-join")
+    busy, release = threading.Event(), threading.Event()
+
+    def on_message(*_args: object) -> None:  # holds the network thread while we queue
+        busy.set()
+        release.wait(slow(10))
+
+    c.on_message = on_message
+    up = threading.Event()
+    c.on_connect = lambda client, *_a: client.subscribe("net/hold")
+    c.on_subscribe = lambda *_a: up.set()
+    c.connect_async("127.0.0.1", broker.port, keepalive=10)
+    c.loop_start()
+    try:
+        assert up.wait(slow(10)), "never subscribed"
+        probe.publish("net/hold", b"x", qos=0)
+        assert busy.wait(slow(10))
+        mark, sent = probe.mark(), len(ThreadSocket.sent)
+        for i in range(16):
+            c.publish_qos0(f"net/join/{i % 4}", f"a{i}".encode(), True)
+        c.publish("net/join/event", b"e", qos=1)
+        for i in range(3):
+            c.publish_qos0("net/join/0", f"b{i}".encode(), False)
+        release.set()
+        texts = [f"a{i}" for i in range(16)] + ["e"] + [f"b{i}" for i in range(3)]
+        probe.wait(lambda m: m.text == "b2", start=mark)
+        got = [m for m in probe.messages[mark:] if m.topic.startswith("net/join/")]
+        assert [m.text for m in got] == texts
+        writes = ThreadSocket.sent[sent:]
+        assert len([w for w in writes if b"a0" in w or b"a15" in w]) == 1  # one send for 16
+        assert any(b"a0" in w and b"a15" in w and b"net/join/event" not in w for w in writes)
+    finally:
+        release.set()
+        c.disconnect()
+        c.loop_stop()
+    assert threads == {"paho-mqtt-client-net-join"}
+    retained = retained_snapshot(broker.port, "net/join/#")  # (as published: 16 retained)
+    assert retained == {f"net/join/{k}": f"a{12 + k}".encode() for k in range(4)}

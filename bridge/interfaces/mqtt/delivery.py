@@ -56,6 +56,10 @@ class Delivery:
     ) -> None:
         """``report(topic, problem)``: rule 11's hand-off, called on a thread of its own."""
         self._client = client
+        # paho_client.py rule 9, where the client has it (our own connections' do)
+        self._publish_qos0: Callable[[str, bytes, bool], MQTTErrorCode] | None = getattr(
+            client, "publish_qos0", None
+        )
         self._username = username
         self._report = report
         self._clock = clock
@@ -73,6 +77,12 @@ class Delivery:
     # -- under the client's lock ----------------------------------------------------------
     def send(self, topic: str, data: str | bytes, qos: int, *, retain: bool) -> None:
         """paho's publish; a QoS 1 message's id kept to match its acknowledgement (rule 11)."""
+        fast = self._publish_qos0
+        if not qos and fast is not None and isinstance(data, bytes):
+            rc = fast(topic, data, retain)
+            if rc != _SUCCESS:
+                self._failed(topic, data, retain, rc)
+            return
         info = self._client.publish(topic, data, qos=qos, retain=retain)
         if info.rc != _SUCCESS and not (
             qos and info.rc == MQTTErrorCode.MQTT_ERR_NO_CONN  # paho keeps it for the connect
