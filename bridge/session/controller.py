@@ -11,7 +11,10 @@ Rules:
    shown (status.py rule 1).
 2. A controller that reports positions is "available" only after a valid reading, and stops
    being available after ``silence_timeout_s`` without one (tracking ends, a waiting target is
-   dropped). A DCU-1 is available while its port is open (it never answers).
+   dropped). A DCU-1 is available while its port is open (it never answers). A garbled answer
+   (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
+   without a valid reply at most: a line that gives only garbage goes offline then, with its
+   own words; one that gives nothing at all still after ``silence_timeout_s``.
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -90,6 +93,7 @@ ONLY_POLL_MARGIN_S = 1e-3  # _only_poll_until's: the whole step a little early (
 DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agree
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
+GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -393,6 +397,7 @@ class Controller:
                     if events:
                         continue  # the answer to the target, reported as such: no junk
                 link.add_junk(reply.data, now)
+                link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
                     self._ask_again(link, now)
         if self._settled(link, now):
@@ -547,9 +552,7 @@ class Controller:
             else:
                 if link.slew is not None:  # its report never came: where it ended, unseen
                     self._unseen()
-                link.give_up_reply(now)
-                self._doubted = self._doubted._replace(at_once=False)  # rule 9 (a review: the
-                # ask's answer lost, a reading at the next idle poll had the widened window)
+                self._given_up(link.give_up_reply(now))
                 if todo.track_lost:
                     self.motion = mo.track_lost(self.motion, self.cfg.motion)
         self.flush_stop(now)
@@ -557,6 +560,18 @@ class Controller:
         junk = link.quiet_junk(now)
         if junk is not None:
             self._junk(*junk, now)
+            again = link.end_garbled(now)  # link.py rule 11: a garbled reply the codec ended
+            if again is not None:
+                self._given_up(again)
+
+    def _given_up(self, again: bool) -> None:
+        """The owed reply is given up, and asked again at once if ``again`` (link.py rule 11:
+        it came garbled): a reading doubted keeps its window as asked at once then, not at
+        the next poll (rule 9: a review found the ask's answer lost, a reading at the next idle
+        poll had the widened window; an attack pass, the re-poll's answer taken as one at the
+        idle rate: readings of a rotor turned by hand disagreed, the bearing stale for 10 s)."""
+        if not again:
+            self._doubted = self._doubted._replace(at_once=False)
 
     def tick(self, now: float) -> None:
         """The motion machine's clock (rule 4: not during a slew), and an enable owed. Not
@@ -604,7 +619,11 @@ class Controller:
             return -math.inf
         if not self.cfg.spec.can_report_position or len(times) != 1:
             return -math.inf
-        silent_at = now + self.cfg.silence_timeout_s - link.silent_for(now)
+        timeout_s = self.cfg.silence_timeout_s
+        silent_at = now + min(  # rule 2
+            timeout_s - link.silent_for(now),
+            GARBLED_SILENCE_FACTOR * timeout_s - link.unread_for(now),
+        )
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
         return until - ONLY_POLL_MARGIN_S
 
@@ -664,19 +683,30 @@ class Controller:
         if link is None or not cfg.spec.can_report_position:
             return
         timeout_s = cfg.silence_timeout_s
-        silent = not link.reply_owed and link.silent_for(now) >= timeout_s  # (a slew's report
-        if silent and self.answering:  # takes the whole slew: a reply owed may still come)
+        unread_s = link.unread_for(now)
+        unread = unread_s >= GARBLED_SILENCE_FACTOR * timeout_s  # (garbage only: rule 2)
+        silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
+            link.silent_for(now) >= timeout_s or unread  # owed may still come)
+        )
+        # (never answered: no valid reply for one timeout, as ever)
+        never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
+        if silent and self.answering:
             if self.stops.repeat_at(self.motion) is not None:  # stops.py rule 1: owed, it goes
                 self.stops.repeat_due(self.motion, math.inf)  # now (a silent controller may
                 self.stop(now)  # still hear: its motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
             self.motion = mo.link_down(self.motion)
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
+            if link.silent_for(now) < timeout_s:  # rule 2: garbled answers only
+                why = (
+                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
+                    f"{GARBLED_SILENCE_FACTOR * timeout_s:g} s): a noisy line?"
+                )
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]
             self.notes.append(Ends("controller not answering"))
-        elif silent and link.last_reply_t is None and not self._silence_reported:
+        elif never and not self._silence_reported:
             self._silence_reported = True
             self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
         busy = busy or self.motion.state is mo.MOVING

@@ -491,8 +491,9 @@ def test_garbled_replies_move_no_bearing_and_are_reported_at_a_measured_rate(rig
     protocol = v.errors("protocol")
     assert len(protocol) == 2  # once per junk_report_interval_s (30 s), not once a poll
     assert protocol[0].message == "controller sent 4 bytes that are no valid reply; ignored"
-    assert [e.message for e in v.errors("serial")] == [
-        "controller on /dev/ttyVIRTUAL stopped answering (no valid reply for 3 s)"
+    assert [e.message for e in v.errors("serial")] == [  # (garbled answers: controller.py
+        "controller on /dev/ttyVIRTUAL answers only garbled replies (no valid reply for 6 s): "
+        "a noisy line?"  # rule 2, two silence timeouts)
     ]
     assert v.state is MotionState.OFFLINE
 

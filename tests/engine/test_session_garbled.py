@@ -1,0 +1,108 @@
+"""A garbled answer (session/link.py rule 11, controller.py rule 2): the controller answered, so
+it is not silent, but nothing of it is a reading; it is asked again at once, once. A line that
+gives only garbage goes offline after two silence timeouts, one that gives nothing after one.
+(An attack pass: 0.3 % of bytes flipped took a SatEL offline 10-12 times in 20 minutes.)"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from bridge.core.model import MotionState
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE = MotionState.IDLE
+
+
+def garble_lines(
+    v: VirtualRotator, label: bytes, garbled: bytes, count: int, end: bytes = b"\n"
+) -> list[float]:
+    """The next ``count`` reply lines that hold ``label`` reach the host with it as ``garbled``
+    (lines handed on whole: the device sends byte by byte); the list gets when each came."""
+    when: list[float] = []
+    line = bytearray()
+
+    def garble(data: bytes, now: float) -> bytes:
+        line.extend(data)
+        if not line.endswith(end):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        if label in whole and len(when) < count:
+            when.append(now)
+            return whole.replace(label, garbled)
+        return whole
+
+    v.to_host = garble
+    return when
+
+
+def test_a_line_that_gives_only_garbage_goes_offline_after_two_silence_timeouts(
+    rig: Rig,
+) -> None:
+    """Every answer garbled: online for two silence timeouts (3 s each here) without a valid
+    reply, then offline with words that say so, never asked back to back; a line that gives
+    nothing at all still goes offline after one silence timeout."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    last_valid = max(t for t, _ in v.received)
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    t = v.now
+    v.run_until(lambda h: not h.status.available, 30, "offline")
+    off = v.now - last_valid
+    assert 6.0 <= off < 6.0 + 1.0 + 1.0, off  # two timeouts, an idle poll and a reply time
+    [why] = v.errors("serial", since=t)
+    assert "only garbled replies" in why.message and "6 s" in why.message
+    polls = [w.t for w in v.writes if w.t >= t]
+    assert len(polls) <= 2 * (v.now - t) + 2  # an idle poll a second, one re-poll each at most
+
+    v.to_host = None  # the line heals: online again
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(5)
+    last_valid = max(t for t, _ in v.received)
+    v.set_silent(True)  # now nothing comes at all
+    t = v.now
+    v.run_until(lambda h: not h.status.available, 30, "offline")
+    off = v.now - last_valid
+    assert 3.0 <= off < 3.0 + 1.0 + 1.0, off  # one timeout (and a poll's answer owed)
+    [why] = v.errors("serial", since=t)
+    assert "stopped answering (no valid reply for 3 s)" in why.message
+
+
+def test_a_turn_by_hand_whose_reading_asked_again_is_garbled_is_followed(rig: Rig) -> None:
+    """An RC2800 at rest turned by hand: its first moving reading is asked again at once
+    (controller.py rule 9), and that answer comes garbled. It is asked again at once, and that
+    reading, as one asked at once, is believed: the turn is shown while it goes on (it was asked
+    at the idle polls instead, each reading a second on disagreeing with the one before: the
+    bearing stale for the whole turn). The rotor turns 12 deg/s, the bridge told 6: readings at
+    the idle rate never agree within 5 degrees while it turns."""
+    fast = {"az_speed_deg_s": 12.0, "el_speed_deg_s": 3.0, "start_az_deg": 100}
+    v = rig("rc2800", emulator=fast, settings={"az_speed_deg_s": 6.0})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(10)
+    assert v.status.bearing_deg == 100.0
+    v.manual_rotate(250.0)
+    moved: list[float] = []
+    line = bytearray()
+
+    def garble_the_ask(data: bytes, now: float) -> bytes:  # the azimuth line after the first
+        line.extend(data)  # that shows the turn (the one asked again)
+        if not line.endswith(b"\r"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        if whole.startswith(b"A P=") and float(whole[4:].split()[0]) > 101:
+            moved.append(now)
+            if len(moved) == 2:
+                return whole.replace(b"A P=", b"A Q=")
+        return whole
+
+    v.to_host = garble_the_ask
+    v.run_until(lambda h: len(moved) >= 2, 10, "the ask garbled")
+    t = v.now
+    v.run_for(4)
+    assert v.truth().is_moving  # still turning, and seen to
+    assert MotionState.MOVING in {s.state for s in v.published(since=t)}
+    shown = v.status.bearing_deg
+    assert shown is not None and abs(shown - v.truth().az_deg) < 12.0, (shown, v.truth())
