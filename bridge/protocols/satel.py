@@ -33,7 +33,9 @@ Rules:
 4. Every point is preceded by ``g``: a stop or a reset disables automatic motion, and a point
    sent while it is disabled is silently ignored.
 5. Each ``z`` and ``p`` owes one report; ``p``'s comes when the slew ends (how long that may
-   take depends on the rotor: the engine's business, session/link.py).
+   take depends on the rotor: the engine's business, session/link.py). A spoiled report is the
+   report a ``z`` owed all the same: that is settled, and the engine asks again (link.py rule
+   11) without waiting out the reply timeout.
 6. A report whose position can be read (even one that lost its first line) ends a slew only
    if it shows the point's position (within SLEW_END_TOLERANCE_DEG; 000 and 360 are one
    place) or a stop went out since the point. Any other report while a slew is owed was on
@@ -234,6 +236,8 @@ class SatelCodec:
             self._owed.remove("slew")
             out.append(JunkReply(raw, JunkReason.UNTRUSTED, why))
         else:
+            if "report" in self._owed:  # rule 5
+                self._owed.remove("report")
             out.append(JunkReply(raw, JunkReason.SPOILED, why))
 
     def _settle(self, kind: str) -> None:

@@ -37,6 +37,30 @@ def garble_lines(
     return when
 
 
+def test_two_garbled_satel_reports_in_a_row_keep_it_online_and_are_asked_again(
+    rig: Rig,
+) -> None:
+    """Two reports in a row garbled in their azimuth line: the first is asked again at once (a
+    ``z`` right after it), the second waits for the next poll; the SatEL never goes offline, and
+    the bearing shown is never anything but where the rotor is."""
+    v = rig("satel")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(10)
+    rest = v.status.bearing_deg
+    t = v.now
+    garbled = garble_lines(v, b"Azimuth = ", b"Azimu\xf4h = ", 2)
+    v.run_until(lambda h: len(garbled) == 2, 30, "two garbled reports")
+    v.run_for(30)
+
+    assert all(s.available for s in v.published(since=t))  # (retained availability)
+    assert v.errors("serial", since=t) == []
+    asked = [w.t for w in v.writes if w.data == b"z" and w.t > garbled[0]]
+    assert asked[0] - garbled[0] < 0.2  # asked again at once: not after the reply timeout (2 s)
+    assert garbled[1] > asked[0]  # (the second is that re-poll's answer)
+    assert [w.t for w in v.writes if garbled[1] < w.t < garbled[1] + 3] == []  # not again
+    assert {s.bearing_deg for s in v.published(since=t)} <= {rest} and v.truth().az_deg == rest
+
+
 def test_a_line_that_gives_only_garbage_goes_offline_after_two_silence_timeouts(
     rig: Rig,
 ) -> None:
