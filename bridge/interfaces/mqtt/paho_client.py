@@ -159,7 +159,7 @@ class Waker:
 
 
 class _Written:
-    """Rule 10: what paho's writer tells of a QoS 0 message written (it calls every one's
+    """Rule 9: what paho's writer tells of a QoS 0 message written (it calls every one's
     ``MQTTMessageInfo``), for the messages ``publish_qos0`` queues without one."""
 
     __slots__ = ("rc",)
@@ -201,7 +201,7 @@ class Client(paho.Client):
     _topic_parts: dict[str, tuple[int, bytes]] | None = None  # rule 9: protocol, topic part
 
     def publish_qos0(self, topic: str, payload: bytes, retain: bool) -> MQTTErrorCode:
-        """Rule 10: paho's ``publish(topic, payload, 0, retain).rc``."""
+        """Rule 9: paho's ``publish(topic, payload, 0, retain).rc``."""
         parts = self._topic_parts
         if parts is None:
             parts = self._topic_parts = {}
@@ -226,7 +226,7 @@ class Client(paho.Client):
         return self._packet_queue(paho.PUBLISH, packet, 0, 0, _WRITTEN)
 
     def _topic_part(self, topic: str) -> bytes:
-        """Rule 10: a PUBLISH's topic and (MQTT 5) its empty properties, checked as paho's
+        """Rule 9: a PUBLISH's topic and (MQTT 5) its empty properties, checked as paho's
         ``publish`` checks them."""
         if self._protocol != paho.MQTTv5 and not topic:
             raise ValueError("Invalid topic.")
