@@ -7,7 +7,8 @@ publishes less than it must. This module is imported by that bridge at start-up
 
 Parts:
 - ``paho``: each status's ``R/bearing`` and ``R/status`` messages (the topics the MQTT service
-  names for it) do not reach paho's ``publish``: it hands back a message info that says sent.
+  names for it) do not reach paho's ``publish`` nor the bridge's own (paho_client.py rule 9):
+  they hand back that it was sent.
   The service's own work for them (the payloads, the comparison with the last, the client's
   lock and retained copy) is still done; paho's packet, its queue and the network thread's
   wake-up and write for them are not.
@@ -52,10 +53,12 @@ def _without_paho() -> None:
     import paho.mqtt.client as paho
     from paho.mqtt.enums import MQTTErrorCode
 
+    from bridge.interfaces.mqtt.paho_client import Client
     from bridge.interfaces.mqtt.service import MqttService
 
     skip = threading.local()  # the topics of the status being published on this thread
     publish_status, publish = MqttService.publish_status, paho.Client.publish
+    publish_qos0 = Client.publish_qos0
 
     def publishing(self: MqttService, rotator_id: str, status: Any) -> None:
         t = self.topics.rotator(rotator_id)
@@ -72,8 +75,14 @@ def _without_paho() -> None:
             return info
         return publish(self, topic, *args, **kwargs)
 
+    def publish_some_qos0(self: Client, topic: str, payload: bytes, retain: bool) -> Any:
+        if topic in getattr(skip, "topics", ()):
+            return MQTTErrorCode.MQTT_ERR_SUCCESS
+        return publish_qos0(self, topic, payload, retain)
+
     MqttService.publish_status = publishing  # type: ignore[method-assign]
     paho.Client.publish = publish_some  # type: ignore[method-assign]
+    Client.publish_qos0 = publish_some_qos0  # type: ignore[method-assign]
 
 
 def _without_publishing() -> None:
