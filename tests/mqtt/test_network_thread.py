@@ -570,3 +570,31 @@ def test_a_rounds_statuses_go_out_in_one_send_in_order_with_other_messages(
     assert threads == {"paho-mqtt-client-net-join"}
     retained = retained_snapshot(broker.port, "net/join/#")  # (as published: 16 retained)
     assert retained == {f"net/join/{k}": f"a{12 + k}".encode() for k in range(4)}
+
+
+@pytest.mark.parametrize("size", [268_435_456, 268_435_445])
+def test_publish_qos0_refuses_a_packet_mqtt_cannot_carry_as_pahos_publish_does(size: int) -> None:
+    """Rule 9: no PUBLISH whose length MQTT cannot say goes out (the broker would drop the
+    connection, and the retained copy would be sent again at every connect)."""
+    settings = MqttSettings(host="127.0.0.1", port=1883, client_id="net-large")
+    c = new_client(settings, "net-large")
+    payload = bytes(size)
+    c._sock = object()  # type: ignore[assignment]  # (a socket is all paho looks at)
+    try:
+        with pytest.raises(ValueError) as theirs:
+            c.publish("rotor/r1/status", payload, qos=0, retain=True)
+        with pytest.raises(ValueError) as ours:
+            c.publish_qos0("rotor/r1/status", payload, True)
+        assert str(ours.value) == str(theirs.value)
+        assert not c._out_packet
+    finally:
+        c._sock = None
+
+
+def test_the_message_info_every_lean_publish_shares_keeps_saying_sent() -> None:
+    """Rule 9: paho's reconnect says every queued QoS 0 message was lost (its info's ``rc``);
+    the one stand-in all of ``publish_qos0``'s share is not changed by it."""
+    from bridge.interfaces.mqtt.paho_client import _WRITTEN
+
+    _WRITTEN.rc = MQTTErrorCode.MQTT_ERR_CONN_LOST
+    assert _WRITTEN.rc == MQTTErrorCode.MQTT_ERR_SUCCESS

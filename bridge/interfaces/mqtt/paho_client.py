@@ -63,7 +63,8 @@ Rules:
    the queue) is paho's. Such messages queued one after another are written with one send
    (a round of the serial-lines thread queues the statuses of every rotator it served: one
    send each cost the network thread about as much again). Only our own connections' QoS 0
-   messages go this way (delivery.py: the main connection's retained statuses).
+   messages go this way (delivery.py: the main connection's retained statuses); paho's own
+   debug log (``enable_logger``, which the bridge does not turn on) does not show them.
 """
 
 from __future__ import annotations
@@ -94,6 +95,7 @@ STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
 _JOIN_BYTES = 65536  # rule 9: a packet of joined messages, at most about
+_PACKET_MAX = 268_435_455  # rule 9: MQTT's largest remaining length
 _TOPICS_KEPT = 4096  # rule 9: topic parts known, at most (a bridge's own are some hundreds)
 POLL_READ = POLLIN | POLLPRI  # rule 6: what wakes the network thread to read
 READ_EVENTS = POLL_READ | POLLERR | POLLHUP  # ... and what it then reads
@@ -160,12 +162,18 @@ class Waker:
 
 class _Written:
     """Rule 9: what paho's writer tells of a QoS 0 message written (it calls every one's
-    ``MQTTMessageInfo``), for the messages ``publish_qos0`` queues without one."""
+    ``MQTTMessageInfo``), for the messages ``publish_qos0`` queues without one. One for all:
+    nothing is kept (paho's reconnect says a queued message's ``rc`` is "connection lost")."""
 
-    __slots__ = ("rc",)
+    __slots__ = ()
 
-    def __init__(self) -> None:
-        self.rc = MQTTErrorCode.MQTT_ERR_SUCCESS
+    @property
+    def rc(self) -> MQTTErrorCode:
+        return MQTTErrorCode.MQTT_ERR_SUCCESS
+
+    @rc.setter
+    def rc(self, _rc: MQTTErrorCode) -> None:
+        pass
 
     def _set_as_published(self) -> None:
         pass
@@ -212,13 +220,18 @@ class Client(paho.Client):
             if len(parts) >= _TOPICS_KEPT:
                 parts.clear()
             parts[topic] = part
+        body = part[1]
+        size = len(body) + len(payload)
+        if len(payload) > _PACKET_MAX:  # (paho's checks, in paho's order)
+            raise ValueError("Payload too large.")
         if self._sock is None:
             return MQTTErrorCode.MQTT_ERR_NO_CONN
-        body = part[1]
+        if size > _PACKET_MAX:
+            raise ValueError("Packet too large")
         packet = b"".join(
             (
                 _PUBLISH_RETAINED if retain else _PUBLISH,
-                _remaining_length(len(body) + len(payload)),
+                _remaining_length(size),
                 body,
                 payload,
             )
