@@ -35,7 +35,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from bridge.core.ending import Ending
-from bridge.core.model import Source, Stop
+from bridge.core.model import Lock, Source, Stop
 from bridge.feature import AppView, Feature, FeatureService, make_service, session_parts
 from bridge.features import FEATURES
 from bridge.interfaces.homeassistant import DiscoveryPublisher, GroupInfo, RotatorInfo
@@ -449,6 +449,7 @@ class App:
             on_hold=lambda rid, n: self._by_id[rid].express_hold(n),
             on_release=lambda rid, n: self._by_id[rid].express_release(n),
             on_wrote=self._express_wrote,
+            on_locked=self._express_locked,
         )
         self.mqtt.hold_for_express(express.hold)  # its rule 8: a late frame stops no newer move
         return express
@@ -456,11 +457,7 @@ class App:
     def _express_wrote(self, rotator_id: str, t: float) -> None:
         """interfaces/mqtt/express.py rule 11: a stop frame the express wrote at ``t`` is the
         rotator's stop too when neither connection could have had that stop."""
-        heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read the STOP, a moment
-        # after the broker took it: a subscription the broker took in that moment missed it)
-        if self.client.heard_since(heard) or self.lane.heard_since(heard):
-            return  # (it came, or comes, on one of them, in its order)
-        rotator = self._by_id.get(rotator_id)
+        rotator = self._express_only(rotator_id, t)
         if rotator is None:
             return
         log.warning(
@@ -469,6 +466,28 @@ class App:
             rotator_id,
         )
         rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")
+
+    def _express_locked(self, rotator_id: str, t: float) -> None:
+        """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` is set when
+        neither connection could have had it."""
+        rotator = self._express_only(rotator_id, t)
+        if rotator is None:
+            return
+        log.warning(
+            "%s: a lock ON the stop express heard while the bridge's connections were away: "
+            "the lock is set here too",
+            rotator_id,
+        )
+        rotator.submit(Lock(True, source=Source.MQTT), "lock ON (heard by the stop express)")
+
+    def _express_only(self, rotator_id: str, t: float) -> Rotator | None:
+        """Rule 11's test: the rotator, if neither connection could have had what the express
+        read at ``t``."""
+        heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read it, a moment after
+        # the broker took it: a subscription the broker took in that moment missed it)
+        if self.client.heard_since(heard) or self.lane.heard_since(heard):
+            return None  # (it came, or comes, on one of them, in its order)
+        return self._by_id.get(rotator_id)
 
     def _listeners(self, rotator_id: str, which: str) -> Callable[[Any], None]:
         """MQTT's listener and the console's, each contained (a failing console never costs

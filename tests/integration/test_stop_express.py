@@ -25,6 +25,8 @@ from typing import Any
 import pytest
 
 from bridge.app import App
+from bridge.core.errors import Refused
+from bridge.core.model import Source, Target
 from bridge.emulators.rotorez_models import BEARING_OUTCOMES
 from tests.faults.conftest import mosquitto_password_file
 from tests.support.mosquitto import Mosquitto
@@ -393,3 +395,35 @@ def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
     time.sleep(brake + 1.0)  # a quiet period past the brake window: nothing may go out
     sent = [f.data for f in emu.frames(*BEARING_OUTCOMES) if f.time_s >= stop_t]
     assert sent == [] and abs(emu.state().az_deg - stopped_at) < 5
+
+
+def test_a_lock_on_only_the_express_heard_is_set_and_refuses_the_next_target(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11: a lock ON published while only the express is back after a broker
+    restart (the bridge's connections start clean: no copy of it ever comes to them) stopped
+    the rotor but left it unlocked, and the next target from any front end turned it. The lock
+    is what a user turns on before climbing the tower: it is set, and the next target refused."""
+    emu = rig.add("tower", emu={"start_az_deg": 10, "speed_deg_s": 20.0})
+    app = rig.start()
+    rig.ready("tower")
+    express_ready(app)
+    rotator = app.rotators[0]
+    assert not rotator.locked
+    app.client._client.reconnect_delay_set(60, 60)  # (back well after the express)
+    app.lane._client.reconnect_delay_set(60, 60)
+    app.express.up.clear()
+    broker.restart()
+    wait_until(app.express.up.is_set, 15, "the express is back")
+    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
+    operator = Probe(broker.port, "")  # (a client of its own: the rig's probe reconnects)
+    try:
+        operator.publish("rotor/lock", "ON")  # not retained
+        wait_until(lambda: rotator.locked, 10, "the lock set")
+    finally:
+        operator.close()
+    wait_until(lambda: rotator.status.locked, 10, "the status says locked")
+    with pytest.raises(Refused):
+        rotator.submit(Target(200.0, source=Source.WEB), "target 200")  # (the console's way)
+    time.sleep(1.0)  # what a move would take to show: none
+    assert abs(emu.state().az_deg - 10) < 1 and not emu.state().is_moving

@@ -140,7 +140,10 @@ Rules:
    rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
    never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
    express sent the target it held at the brake window's end). A frame for a lock ON is such
-   a stop too: the lock itself the bridge learns only from its connections.
+   a stop too, and the lock ON itself the express says (``locked``, with the time it read it,
+   a frame written or not): one neither connection could have had, by the same test, is set
+   (``on_locked``): the lock is what a user turns on before climbing the tower, and a rotator
+   stopped but not locked took the next target from any front end.
 """
 
 from __future__ import annotations
@@ -301,12 +304,14 @@ class Express:
         on_hold: Callable[[str, int], None] | None = None,
         on_release: Callable[[str, int], None] | None = None,
         on_wrote: Callable[[str, float], None] | None = None,
+        on_locked: Callable[[str, float], None] | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"); ``frames``:
         each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
         express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
-        ``on_wrote``: a rotator's stop frame written, at that time (rule 11)."""
+        ``on_wrote``: a rotator's stop frame written, at that time; ``on_locked``: its lock ON
+        read, at that time (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
         self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames}
@@ -321,6 +326,7 @@ class Express:
         self._on_hold = on_hold
         self._on_release = on_release
         self._on_wrote = on_wrote
+        self._on_locked = on_locked
         self._command = command or [sys.executable, "-m", "bridge.interfaces.mqtt.express"]
         self._lock = threading.Lock()  # the ports, the socket, the child, the holds
         self._ports: dict[str, tuple[int, int]] = {}  # rotator id -> (number, fd), while open
@@ -660,6 +666,13 @@ class Express:
                         self._on_wrote(word["rotator"], float(word["t"]))
                     except Exception:  # (a bug there must not end the express's reader)
                         log.exception("stop express: a stop it wrote not carried out")
+            elif op == "locked":
+                log.debug("stop express: %s's lock ON read", word["rotator"])
+                if self._on_locked is not None:  # rule 11
+                    try:
+                        self._on_locked(word["rotator"], float(word["t"]))
+                    except Exception:  # (a bug there must not end the express's reader)
+                        log.exception("stop express: a lock ON it read not carried out")
             elif op == "half":
                 self._problem(self._half(word["rotator"]), True)
             elif op == "problem":
@@ -995,19 +1008,22 @@ class _Child:
         if topic == self._sync_topic:
             self._read_back(payload)
             return
-        rids = self._topics.get(topic)
+        rids, locks = self._topics.get(topic), False
         if rids is None:
             rid = self._locks.get(topic)
             if rid is None or not _switch_on(payload):
                 return
-            rids = [rid]
+            rids, locks = [rid], True
         if retain and (not self._v5 or not payload):
             return  # a replay (3.1.1), or a retained message being deleted (service.py rule 1)
         if not self.sync.writing:  # rule 8 (changed on this thread only, or to no write)
             return
+        read_t = self.clock()
         owed = [(rid, *tried) for rid in rids if (tried := self._stop(rid)) is not None]
         for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
             self._finish(rid, now, held, done)
+        if locks:  # rule 11: the lock itself, whether its frame went or not
+            self.say(op="locked", rotator=rids[0], t=read_t)
 
     def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | None:
         """Rule 3: the frame's one write, at once; what a write cut short or refused leaves
