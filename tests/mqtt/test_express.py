@@ -145,6 +145,17 @@ def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None
     now[0] += GAP_S
     rig.stop("rotor/a/stop")
     assert port.written() == b";"
+    # and said to the bridge once a gap each: a frame, a lock ON (rule 11; a word for each of
+    # a flood filled the socket, and the express's next send waited for room)
+    words = [rig.word() for _ in range(3)]
+    assert words == [
+        {"op": "wrote", "rotator": "a", "t": 100.0},
+        {"op": "locked", "rotator": "a", "t": 100.0},
+        {"op": "wrote", "rotator": "a", "t": 100.0 + GAP_S},
+    ]
+    rig.mine.setblocking(False)
+    with pytest.raises(BlockingIOError):
+        rig.mine.recv(65536)
 
 
 def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
@@ -155,6 +166,22 @@ def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
     assert port.written() == b""
     rig.stop("rotor/a/lock", b"ON")
     assert port.written() == b";"
+    # rule 11: the frame said, and the lock ON itself (the bridge sets it if it never had it)
+    assert [rig.word()["op"], rig.word()["op"]] == ["wrote", "locked"]
+
+
+def test_a_lock_on_replayed_under_311_is_not_said_to_the_bridge() -> None:
+    """Rule 11 with rule 3's replay: a 3.1.1 broker's replay of a retained lock ON is no lock
+    ON heard now (the bridge's connections get the same replay and set it themselves)."""
+    old = ChildRig(mqtt311=True)
+    port = Port()
+    old.hand("a", 1, port)
+    old.stop("rotor/a/lock", b"ON", retain=True)
+    assert port.written() == b""
+    old.mine.setblocking(False)
+    with pytest.raises(BlockingIOError):
+        old.mine.recv(65536)
+    old.mine.close()
 
 
 def test_a_rotator_whose_port_it_does_not_hold_gets_nothing(rig: ChildRig) -> None:

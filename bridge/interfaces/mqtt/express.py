@@ -912,6 +912,7 @@ class _Child:
         self._frames = {rid: bytes.fromhex(f) for rid, f in config["frames"].items()}
         self._v5 = not config["mqtt311"]
         self._next: dict[str, float] = {}  # rotator id -> when it may get a frame again (rule 3)
+        self._locked_next: dict[str, float] = {}  # ... when its lock ON is said again (rule 11)
         self._stuck: set[str] = set()  # rule 9: rotators whose tty took nothing for a whole wait
         self.clock: Callable[[], float] = time.monotonic
         self.write: Callable[[int, bytes], int] = os.write  # (the tests cut writes short)
@@ -1022,8 +1023,9 @@ class _Child:
         owed = [(rid, *tried) for rid in rids if (tried := self._stop(rid)) is not None]
         for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
             self._finish(rid, now, held, done)
-        if locks:  # rule 11: the lock itself, whether its frame went or not
-            self.say(op="locked", rotator=rids[0], t=read_t)
+        if locks and read_t >= self._locked_next.get(rids[0], read_t):  # rule 11: the lock
+            self._locked_next[rids[0]] = read_t + GAP_S  # itself, whether its frame went or not;
+            self.say(op="locked", rotator=rids[0], t=read_t)  # a flood is said once a gap
 
     def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | None:
         """Rule 3: the frame's one write, at once; what a write cut short or refused leaves
