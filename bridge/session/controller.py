@@ -560,9 +560,9 @@ class Controller:
         junk = link.quiet_junk(now)
         if junk is not None:
             self._junk(*junk, now)
-            again = link.end_garbled(now)  # link.py rule 11: a garbled reply the codec ended
-            if again is not None:
-                self._given_up(again)
+        again = link.end_garbled(now)  # link.py rule 11: a garbled reply the codec ended
+        if again is not None:
+            self._given_up(again)
 
     def _given_up(self, again: bool) -> None:
         """The owed reply is given up, and asked again at once if ``again`` (link.py rule 11:

@@ -84,10 +84,15 @@ Rules:
    its first frame goes at once, its others the gap apart.
 11. A garbled answer: bytes no healthy exchange has (rule 9's: not the controller's harmless
    chatter, nor a refusal) while a reply is owed and no slew. The controller answered (rule 2),
-   but nothing of it is a reading. Its exchange, ended without one (at its deadline, or once the
-   line is quiet for JUNK_QUIET_S if the codec awaits no more: it took the garbled reply for
-   the reply), is asked again at once, once: a garbled answer to that re-poll waits for the
-   next poll (a line gone bad is not polled back to back). Only where a stop goes at any time
+   but nothing of it is a reading. Its exchange, ended without one (at its deadline, or if the
+   codec awaits no more, it took the garbled reply for the reply, once no byte at all has been
+   read for JUNK_QUIET_S and no read is held back, rule 7: the rest of a garbled reply, good
+   lines too, is still its own), is asked again at once, once: a garbled answer to that
+   re-poll waits for the next poll (a line gone bad is not polled back to back). A review: a
+   SatEL report garbled in its second line was closed 50 ms after that line, and the re-poll
+   went onto the half-duplex line with 80 bytes still coming; its tail closed the re-poll's
+   exchange, a report from before a point ended the slew, and the next ``z`` went into the
+   slew. Only where a stop goes at any time
    (full duplex, or ``stop_interrupts``): on a half-duplex line the re-poll's reply would hold
    a stop back (rule 3). An attack pass: 0.3 % of bytes flipped garbled a SatEL's long reports
    two in a row, and it went offline 10-12 times in 20 minutes, dropping targets.
@@ -156,6 +161,7 @@ class Link:
         self._garbled_t = -math.inf  # rule 11: the last garbled answer
         self._repoll_due = False  # rule 11: the next poll asks again for a garbled answer
         self._repolled = False  # rule 11: the last poll did
+        self._read_t = -math.inf  # rule 11: the last bytes read
 
     # -- what the session reads -------------------------------------------------------------
     @property
@@ -197,6 +203,7 @@ class Link:
                 self._hold_reads += 1
                 self._late_seen = math.inf
             return
+        self._read_t = now  # rule 11
         if self._hold_bytes:
             self._hold_reads += 1
             missing = max(0, self._hold_bytes - count)
@@ -405,15 +412,24 @@ class Link:
         self._next_poll, self._repoll_due = now, True
         return True
 
-    def end_garbled(self, now: float) -> bool | None:
-        """Rule 11: with the line quiet after junk, the owed reply is over if it came garbled
-        and the codec awaits no more: closed, and whether it is asked again at once (None:
-        not over)."""
+    def _garbled_over_t(self) -> float | None:
+        """Rule 11: when the owed reply, garbled, is over if the codec awaits no more (None:
+        not such a reply): JUNK_QUIET_S after the last byte read, and not while reads are held
+        back (rule 7: the rest may be in the port)."""
         if not self._garbled or self._reply_deadline is None or self._held is not None:
             return None
         if self._slew is not None or self.codec.awaiting_reply():
             return None
         if any(poll for _t, _frame, poll in self._outbox):  # rule 10: its other axis to come
+            return None
+        return max(self._read_t + JUNK_QUIET_S, self._hold_until)
+
+    def end_garbled(self, now: float) -> bool | None:
+        """Rule 11: the owed reply is over if it came garbled, the codec awaits no more and
+        the line has been quiet long enough: closed, and whether it is asked again at once
+        (None: not over)."""
+        over = self._garbled_over_t()
+        if over is None or now < over:
             return None
         self._reply_deadline = None
         return self._ask_garbled(now)
@@ -542,4 +558,7 @@ class Link:
                 times.append(max(self._next_poll, self._paced_from(), self._refusal_until))
             elif self._held is None:  # rule 9: not overdue while its reading is held
                 times.append(deadline)
+                over = self._garbled_over_t() if self._garbled else None
+                if over is not None:  # rule 11
+                    times.append(over)
         return times

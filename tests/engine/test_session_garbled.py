@@ -5,13 +5,25 @@ gives only garbage goes offline after two silence timeouts, one that gives nothi
 
 from __future__ import annotations
 
+import os
+import select
 from collections.abc import Callable
 
 from bridge.core.model import MotionState
+from bridge.session.link import JUNK_QUIET_S
+from tests.engine.test_lines import polled, worker_on_a_pty
 from tests.engine.virtual import VirtualRotator
+from tests.support import wait_until
+from tests.support.rig import FAST_BRIDGE
+from tests.support.waiting import slow
 
 Rig = Callable[..., VirtualRotator]
 IDLE = MotionState.IDLE
+REPORT = (  # a SatEL's status report at rest (satel.py), 165 bytes
+    b"Motion ENABLED\r\nMode 0 - azimuth break at NORTH\r\nTime: 2025/06/15 15:06:51\r\n"
+    b"Azimuth = 100     Absolute = 100\r\nElevation = 000\r\n\r\n"
+    b"Number of stored positions: 00\r\n\r\n\r\n"
+)
 
 
 def garble_lines(
@@ -59,6 +71,97 @@ def test_two_garbled_satel_reports_in_a_row_keep_it_online_and_are_asked_again(
     assert garbled[1] > asked[0]  # (the second is that re-poll's answer)
     assert [w.t for w in v.writes if garbled[1] < w.t < garbled[1] + 3] == []  # not again
     assert {s.bearing_deg for s in v.published(since=t)} <= {rest} and v.truth().az_deg == rest
+
+
+def readable(fd: int) -> bool:
+    return bool(select.select([fd], [], [], 0)[0])
+
+
+def report_whole_at(v: VirtualRotator, after: float) -> float:
+    """When the first report whose bytes began after ``after`` had come whole (its last bytes:
+    the next report's come more than JUNK_QUIET_S later)."""
+    times = [t for t, _ in v.received if t > after]
+    end = times[0]
+    for t in times[1:]:
+        if t - end > JUNK_QUIET_S:
+            break
+        end = t
+    return end
+
+
+def test_a_satel_report_garbled_in_its_second_line_is_asked_again_only_once_it_is_whole(
+    rig: Rig,
+) -> None:
+    """A report garbled in its Mode line: the codec is owed no more from there (satel.py rule
+    5), and the good lines after it make no junk; the re-poll goes once no byte has come for
+    JUNK_QUIET_S (link.py rule 11), not that long after the garbled line, when ~80 bytes of the
+    report were still on the half-duplex line (a review: the ``z`` at +50 ms, the report
+    whole at +121 ms)."""
+    v = rig("satel")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(10)
+    garbled = garble_lines(v, b"Mode ", b"Mo\xe4e ", 1)
+    v.run_until(lambda h: len(garbled) == 1, 30, "a garbled report")
+    v.run_for(3)
+
+    whole = report_whole_at(v, garbled[0] - 0.1)
+    [repoll, *_] = [w.t for w in v.writes if w.t > garbled[0]]
+    assert whole + JUNK_QUIET_S <= repoll < whole + JUNK_QUIET_S + 0.01, (repoll, whole)
+
+
+def test_a_small_target_right_after_a_garbled_satel_report_is_not_ended_by_a_stale_report(
+    rig: Rig,
+) -> None:
+    """The same, and a target 4 degrees on comes while the re-poll's report is on its way: the
+    point waits for that report and the after-move report ends the slew; nothing goes into the
+    slewing SatEL (a review: the garbled report's tail closed the re-poll's exchange, answers
+    were paired one off, the re-poll's report, from before the point but within
+    SLEW_END_TOLERANCE_DEG, ended the slew and the next ``z`` went into it: corrupted)."""
+    v = rig("satel", emulator={"start_az_deg": 100, "corrupt_on_misuse": True})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(10)
+    garbled = garble_lines(v, b"Mode ", b"Mo\xe4e ", 1)
+    v.run_until(lambda h: len(garbled) == 1, 30, "a garbled report")
+    v.run_for(0.2)  # the re-poll's report under way
+    v.target(104.0, 0.0)
+    v.run_for(10)
+
+    assert v.frames("misuse: input while slewing") == []
+    assert not v.truth().corrupted and v.truth().az_deg == 104.0
+    assert v.status.bearing_deg == 104.0 and v.state is IDLE
+
+
+def test_a_garbled_satel_report_whose_rest_waits_in_the_port_is_read_before_the_repoll() -> None:
+    """worker.py rule 2 with link.py rules 7 and 11: a SatEL late with its report, garbled in
+    its Mode line; the hold's end finds its first two lines, the hold starts again for the
+    rest (116 bytes, 121 ms), which comes into the port meanwhile. The re-poll is written only
+    once the rest has been read and the line was quiet JUNK_QUIET_S after it, never during the
+    hold with the rest unread (the junk's quiet time alone ends at +50 ms)."""
+    with worker_on_a_pty("satel", FAST_BRIDGE) as (worker, master, _box):
+        now = polled(worker, master, 100.0, b"z")  # the connect's (s ? t g z)
+        os.write(master, b"SatEL\r\n" + REPORT)
+        wait_until(lambda: readable(worker._fd), slow(5), "the report in the port")
+        worker.guarded(worker.serve, now + 0.2, {worker._fd})
+        now = polled(worker, master, now + 0.3, b"z")  # a poll, its report held (rule 7)
+        assert worker.status.available
+        head, rest = REPORT.replace(b"Mode ", b"Mo\xe4e ").split(b"Time", 1)
+        os.write(master, head)
+        wait_until(lambda: readable(worker._fd), slow(5), "the first lines in the port")
+        now = worker.wants(now)[1]
+        worker.guarded(worker.serve, now, set())  # the hold's end: the first lines read
+        assert not readable(worker._fd) and worker.session.hold_reads_until() > now + 0.1
+        os.write(master, b"Time" + rest)
+        wait_until(lambda: readable(worker._fd), slow(5), "the rest in the port")
+        read_t, written = None, b""
+        while not written:
+            now = worker.wants(now)[1]
+            worker.guarded(worker.serve, now, set())
+            if read_t is None and not readable(worker._fd):
+                read_t = now
+            while readable(master):
+                written += os.read(master, 64)
+        assert written == b"z" and read_t is not None
+        assert read_t + JUNK_QUIET_S <= now < read_t + JUNK_QUIET_S + 0.01, (now, read_t)
 
 
 def test_a_line_that_gives_only_garbage_goes_offline_after_two_silence_timeouts(
