@@ -27,7 +27,8 @@ Rules:
 5. Bytes that complete no reply change nothing: the codec keeps them (``feed`` says so, and
    whether all they did was to hold a reading: session.py rule 16). A reading is taken when
    its exchange is over (link.py rule 9): one that other bytes spoil, or one the codec does not
-   trust, is no reading, and the controller is asked again at once. A stop written while a
+   trust, is no reading, and the controller is asked again at once, once (link.py rule 11:
+   the answer to that is asked for at the next poll). A stop written while a
    reading is held ends its exchange: the reading is taken just before the stop is written
    (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
@@ -380,7 +381,7 @@ class Controller:
             if isinstance(reply, PositionReply):
                 if not link.hold_reading(reply, now):  # rule 5: taken once the exchange is over
                     held = False
-                    self._ask_again(link, now)
+                    self._ask_again(link, now, once=True)
             elif isinstance(reply, VersionReply):
                 if reply.version != self.version:
                     log.info("%s: controller version %s", self.name, reply.version)
@@ -399,15 +400,16 @@ class Controller:
                 link.add_junk(reply.data, now)
                 link.garbles(reply, now)  # link.py rule 11: the controller answered, garbled
                 if link.spoils(reply) or reply.reason is JunkReason.UNTRUSTED:
-                    self._ask_again(link, now)
+                    self._ask_again(link, now, once=True)
         if self._settled(link, now):
             held = False
         return Fed.HELD if held else Fed.REPLY
 
-    def _ask_again(self, link: Link, now: float) -> None:
-        """Rule 5: the exchange gave no reading it can trust."""
+    def _ask_again(self, link: Link, now: float, *, once: bool) -> None:
+        """Rule 5: the exchange gave no reading it can trust (``once``: asked again at once if
+        its poll was no re-poll, link.py rule 11; rule 9's doubt has its own bound)."""
         log.debug("%s: reply not trusted; asking again", self.name)
-        link.ask_again(now)
+        link.ask_again(now, once)
         if link.end_slew(now):  # the slew is over; where it ended, unseen
             self.motion = mo.slew_ended(self.motion, now)
             self._unseen()
@@ -427,7 +429,7 @@ class Controller:
         if doubt is not Doubt.TAKEN:
             link.heard(now)  # (the controller answers: its value is what is doubted)
             if doubt is Doubt.ASK:  # (the first time only: a line gone bad is polled as ever)
-                self._ask_again(link, now)
+                self._ask_again(link, now, once=False)
             return False
         self._reading(link, reply, now)
         return True

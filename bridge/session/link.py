@@ -88,14 +88,16 @@ Rules:
    codec awaits no more, it took the garbled reply for the reply, once no byte at all has been
    read for JUNK_QUIET_S and no read is held back, rule 7: the rest of a garbled reply, good
    lines too, is still its own), is asked again at once, once: a garbled answer to that
-   re-poll waits for the next poll (a line gone bad is not polled back to back). A review: a
-   SatEL report garbled in its second line was closed 50 ms after that line, and the re-poll
-   went onto the half-duplex line with 80 bytes still coming; its tail closed the re-poll's
-   exchange, a report from before a point ended the slew, and the next ``z`` went into the
-   slew. Only where a stop goes at any time
-   (full duplex, or ``stop_interrupts``): on a half-duplex line the re-poll's reply would hold
-   a stop back (rule 3). An attack pass: 0.3 % of bytes flipped garbled a SatEL's long reports
-   two in a row, and it went offline 10-12 times in 20 minutes, dropping targets.
+   re-poll waits for the next poll (a line gone bad is not polled back to back). Only where a
+   stop goes at any time (full duplex, or ``stop_interrupts``): on a half-duplex line the
+   re-poll's reply would hold a stop back (rule 3). An exchange whose reading is not trusted
+   (controller.py rule 5) is asked again at once on any line, but once so too.
+   An attack pass: 0.3 % of bytes flipped garbled a SatEL's long reports two in a row, and
+   it went offline 10-12 times in 20 minutes, dropping targets. A review: a SatEL report
+   garbled in its second line was closed 50 ms after that line, the re-poll went onto the
+   half-duplex line with 80 bytes still coming, their tail closed the re-poll's exchange and
+   a report from before a point ended its slew: the next ``z`` went into the slew; one noise
+   byte before every GS-232B answer had it polled 44 times a second.
 """
 
 from __future__ import annotations
@@ -229,7 +231,7 @@ class Link:
             self._reply_deadline = now + self.reply_timeout_s
             self._hold_bytes, self._hold_until = 0, 0.0  # a poll sets its own (rule 7)
             self._hold_reads = 0
-            self._garbled = False  # rule 11: a new exchange
+            self._garbled = self._repolled = False  # rule 11: a new exchange (poll sets its own)
 
     def want_stop(self) -> None:
         """A stop is due: written as soon as the line allows (``flush_stop``). Rule 6."""
@@ -405,9 +407,15 @@ class Link:
         """Rule 11: the exchange just closed came garbled: asked again at once, if its poll
         was not such a re-poll and a stop can go at any time. True if it is."""
         garbled, self._garbled = self._garbled, False
-        if not garbled or self._repolled or self._slew is not None:
+        if not garbled or self._slew is not None:
             return False
         if not (self.spec.full_duplex or self.spec.stop_interrupts):
+            return False
+        return self._repoll(now)
+
+    def _repoll(self, now: float) -> bool:
+        """Rule 11: the next poll at once, if the exchange's poll was no re-poll; True if so."""
+        if self._repolled:
             return False
         self._next_poll, self._repoll_due = now, True
         return True
@@ -477,12 +485,16 @@ class Link:
             self._garbled = False  # rule 11: it ended with a valid reply
         self._heard_t = now
 
-    def ask_again(self, now: float) -> None:
-        """The reply was not usable: close it and poll at once."""
+    def ask_again(self, now: float, once: bool) -> None:
+        """The reply was not usable: close it and poll at once (``once``: if its poll was no
+        re-poll, else at the next poll as ever: rule 11)."""
         self.codec.expire_query()
         self._reply_deadline = None
-        self._next_poll = now
         self._garbled = False  # (asked again already)
+        if once:
+            self._repoll(now)
+        else:
+            self._next_poll = now
 
     def poll_now(self, now: float) -> None:
         """Ask at the next chance (a target waits for a fresh reading)."""

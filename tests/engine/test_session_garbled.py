@@ -233,3 +233,23 @@ def test_a_turn_by_hand_whose_reading_asked_again_is_garbled_is_followed(rig: Ri
     assert MotionState.MOVING in {s.state for s in v.published(since=t)}
     shown = v.status.bearing_deg
     assert shown is not None and abs(shown - v.truth().az_deg) < 12.0, (shown, v.truth())
+
+
+def test_a_line_whose_every_answer_has_noise_in_front_is_asked_again_once_a_poll(rig: Rig) -> None:
+    """One noise byte before every GS-232B answer: each reading is not trusted (gs232.py, an
+    UNTRUSTED reply) and asked again at once, once (link.py rule 11): an idle poll a second
+    and its re-poll, before and after it goes offline for want of a valid reply (a review: it
+    was asked again at once without end, 436 polls in 10 s)."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    rest, t = v.status.bearing_deg, v.now
+    v.to_host = lambda data, now: (b"#" + data) if data.startswith(b"A") else data
+    v.run_for(10)
+
+    polls = [w.t for w in v.writes if w.t > t]
+    assert len(polls) <= 2 * 10 + 2
+    assert polls[1] - polls[0] < 0.05  # (asked again at once)
+    [why] = v.errors("serial", since=t)
+    assert "only garbled replies" in why.message
+    assert {s.bearing_deg for s in v.published(since=t)} <= {rest, None}  # (no reading)
