@@ -10,7 +10,9 @@ import select
 from collections.abc import Callable
 
 from bridge.core.model import MotionState
-from bridge.session.link import JUNK_QUIET_S
+from bridge.protocols.base import JunkReply
+from bridge.protocols.gs232 import MODELS as GS232
+from bridge.session.link import JUNK_QUIET_S, Link
 from tests.engine.test_lines import polled, worker_on_a_pty
 from tests.engine.virtual import VirtualRotator
 from tests.support import wait_until
@@ -253,3 +255,32 @@ def test_a_line_whose_every_answer_has_noise_in_front_is_asked_again_once_a_poll
     [why] = v.errors("serial", since=t)
     assert "only garbled replies" in why.message
     assert {s.bearing_deg for s in v.published(since=t)} <= {rest, None}  # (no reading)
+
+
+def garbled_answer(link: Link, now: float) -> bool:
+    """A GS-232B's answer to the poll just written comes garbled at ``now`` (read as the
+    controller reads it, controller.py), and the exchange is given up at its deadline (the
+    codec still awaits the reply): whether it is asked again at once."""
+    [junk] = link.codec.feed(b"AZ?065  EL?000\r")
+    assert isinstance(junk, JunkReply)
+    link.got_bytes(len(junk.data), now)
+    link.add_junk(junk.data, now)
+    link.garbles(junk, now)
+    assert link.end_garbled(now + 0.5) is None and link.reply_overdue(now + 1.0)
+    return link.give_up_reply(now + 1.0)
+
+
+def test_a_target_written_before_the_repoll_leaves_the_poll_after_it_its_own_repoll() -> None:
+    """link.py rule 11: a garbled answer's re-poll is due, and a target takes the line first;
+    the poll after the target is a poll of its own: its answer, garbled too, is asked again at
+    once (a review: it was counted as the re-poll, its garbled answer left to the next poll)."""
+    spec = GS232["gs232b"]
+    link = Link(spec.codec_factory(), spec, 0.0, spec.baud)
+    assert link.poll(10.0, 1.0) and link.output() == [b"C2\r"]
+    assert garbled_answer(link, 10.02) is True  # asked again at once
+    link.send(link.codec.encode_target(100.0), 11.02)
+    assert link.output() == [b"W100 000\r"]
+    assert link.poll(11.1, 0.2) and link.output() == [b"C2\r"]
+    assert garbled_answer(link, 11.12) is True
+    assert link.poll(12.12, 0.2) and link.output() == [b"C2\r"]  # the re-poll, at once
+    assert garbled_answer(link, 12.14) is False  # (its own garbled answer: the next poll)
