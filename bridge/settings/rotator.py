@@ -234,8 +234,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         None,
         gt=0,
         le=600,
-        description="no valid reply this long: the rotator is offline. Longer than the idle "
-        "poll interval; by default 3 s, or two idle polls and a reply time where that is longer",
+        description="no reply this long: the rotator is offline (one that answers only "
+        "garbled replies after twice this, or sooner: offline before a turn could be called "
+        "stalled). Longer than the idle poll interval; by default 3 s, or two idle polls and "
+        "a reply time where that is longer",
         examples=[5],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )

@@ -199,6 +199,31 @@ def test_a_line_that_gives_only_garbage_goes_offline_after_two_silence_timeouts(
     assert "stopped answering (no valid reply for 3 s)" in why.message
 
 
+def test_a_controller_gone_to_garbage_mid_turn_goes_offline_before_a_stall_is_called(
+    rig: Rig,
+) -> None:
+    """silence_timeout_s 6 (longer than the idle poll), stall_timeout_s 10 (its default): a
+    GS-232B turning to a target whose every reply is garbled from then on goes offline with
+    words that say so before the motion machine, fed no reading, can call the turn stalled
+    (controller.py rule 2: a review found it online for 12 s, and a "stalled" error at 10 s
+    that blamed the brake, tracking ended as stalled)."""
+    v = rig("gs232b", settings={"silence_timeout_s": 6.0})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    v.target(350.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(1)
+    last_valid, t = max(t for t, _ in v.received), v.now
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    v.run_for(15)
+
+    assert v.errors("stalled", since=t) == []
+    assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
+    [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
+    assert "only garbled replies" in why.message and v.state is MotionState.OFFLINE
+    assert off - last_valid < 10.0, off - last_valid
+
+
 def test_a_turn_by_hand_whose_reading_asked_again_is_garbled_is_followed(rig: Rig) -> None:
     """An RC2800 at rest turned by hand: its first moving reading is asked again at once
     (controller.py rule 9), and that answer comes garbled. It is asked again at once, and that
