@@ -12,6 +12,7 @@ this process, says which.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import json
 import os
@@ -19,6 +20,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -354,6 +356,24 @@ def test_a_client_that_takes_the_expresss_client_id_is_said(rig: Rig) -> None:
         thief.close()
 
 
+@contextlib.contextmanager
+def express_alone(app: App, broker: Mosquitto) -> Iterator[Probe]:
+    """The broker restarted, the express back and the bridge's two connections not (their
+    back-off made long: they start clean and never get what is published now); an operator's
+    client of its own (the rig's probe reconnects) for the test to publish with."""
+    app.client._client.reconnect_delay_set(60, 60)
+    app.lane._client.reconnect_delay_set(60, 60)
+    app.express.up.clear()
+    broker.restart()
+    wait_until(app.express.up.is_set, 15, "the express is back")
+    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
+    operator = Probe(broker.port, "")
+    try:
+        yield operator
+    finally:
+        operator.close()
+
+
 def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
     rig: Rig, broker: Mosquitto
 ) -> None:
@@ -378,19 +398,10 @@ def test_a_stop_only_the_express_heard_drops_the_target_the_bridge_held(
     rotator = app.rotators[0]
     assert rotator.status.target_az_deg == 100.0  # held for the brake window
     stopped_at = emu.state().az_deg
-    app.client._client.reconnect_delay_set(60, 60)  # (back well after the express)
-    app.lane._client.reconnect_delay_set(60, 60)
-    app.express.up.clear()
-    broker.restart()
-    wait_until(app.express.up.is_set, 15, "the express is back")
-    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
     stop_t = time.monotonic()
-    operator = Probe(broker.port, "")  # (a client of its own: the rig's probe reconnects)
-    try:
+    with express_alone(app, broker) as operator:
         operator.publish("rotor/stop", "STOP")
         wait_until(lambda: app.express.wrote, 10, "the express wrote the stop")
-    finally:
-        operator.close()
     wait_until(lambda: rotator.status.target_az_deg is None, 10, "the held target dropped")
     time.sleep(brake + 1.0)  # a quiet period past the brake window: nothing may go out
     sent = [f.data for f in emu.frames(*BEARING_OUTCOMES) if f.time_s >= stop_t]
@@ -410,18 +421,9 @@ def test_a_lock_on_only_the_express_heard_is_set_and_refuses_the_next_target(
     express_ready(app)
     rotator = app.rotators[0]
     assert not rotator.locked
-    app.client._client.reconnect_delay_set(60, 60)  # (back well after the express)
-    app.lane._client.reconnect_delay_set(60, 60)
-    app.express.up.clear()
-    broker.restart()
-    wait_until(app.express.up.is_set, 15, "the express is back")
-    assert not app.client.connected.is_set() and not app.lane.connected.is_set()
-    operator = Probe(broker.port, "")  # (a client of its own: the rig's probe reconnects)
-    try:
+    with express_alone(app, broker) as operator:
         operator.publish("rotor/lock", "ON")  # not retained
         wait_until(lambda: rotator.locked, 10, "the lock set")
-    finally:
-        operator.close()
     wait_until(lambda: rotator.status.locked, 10, "the status says locked")
     with pytest.raises(Refused):
         rotator.submit(Target(200.0, source=Source.WEB), "target 200")  # (the console's way)

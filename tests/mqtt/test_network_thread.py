@@ -13,7 +13,7 @@ import contextlib
 import select
 import socket
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -84,22 +84,25 @@ def client(broker: Mosquitto, threads: set[str]) -> Iterator[Client]:
         yield c
 
 
-def test_a_burst_queued_while_the_thread_is_busy_wakes_it_once_and_arrives_in_order(
-    broker: Mosquitto, probe: Probe, threads: set[str]
-) -> None:
-    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-burst")
-    c = new_client(settings, "net-burst")
-    wakes: list[str] = []
-    wake = c._wake
+@contextlib.contextmanager
+def held(
+    broker: Mosquitto, probe: Probe, client_id: str, wake: Callable[[], None] | None = None
+) -> Iterator[tuple[Client, threading.Event]]:
+    """A connected client whose network thread a callback holds (as a slow one may) until the
+    test sets the event it is given; ``wake``, if given, is called at each of its wake-ups."""
+    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id=client_id)
+    c = new_client(settings, client_id)
+    if wake is not None:
+        waking = c._wake
 
-    def counted(*args: object) -> None:
-        wakes.append(threading.current_thread().name)
-        wake(*args)
+        def counted(*args: object) -> None:
+            wake()
+            waking(*args)
 
-    c._wake = counted  # type: ignore[method-assign]
+        c._wake = counted  # type: ignore[method-assign]
     busy, release = threading.Event(), threading.Event()
 
-    def on_message(*_args: object) -> None:  # holds the network thread, as a callback may
+    def on_message(*_args: object) -> None:  # holds the network thread
         busy.set()
         release.wait(slow(10))
 
@@ -113,6 +116,18 @@ def test_a_burst_queued_while_the_thread_is_busy_wakes_it_once_and_arrives_in_or
         assert up.wait(slow(10)), "never subscribed"
         probe.publish("net/hold", b"x", qos=0)
         assert busy.wait(slow(10))
+        yield c, release
+    finally:
+        release.set()
+        c.disconnect()
+        c.loop_stop()
+
+
+def test_a_burst_queued_while_the_thread_is_busy_wakes_it_once_and_arrives_in_order(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    wakes: list[str] = []
+    with held(broker, probe, "net-burst", lambda: wakes.append("")) as (c, release):
         mark = probe.mark()
         before = len(wakes)
         for i in range(50):  # a reading's publishes, and more
@@ -122,10 +137,6 @@ def test_a_burst_queued_while_the_thread_is_busy_wakes_it_once_and_arrives_in_or
         for i in range(50):
             probe.wait(lambda m, i=i: m.topic == "net/burst" and m.text == str(i), start=mark)
         assert [m.text for m in probe.on("net/burst")] == [str(i) for i in range(50)]
-    finally:
-        release.set()
-        c.disconnect()
-        c.loop_stop()
     assert threads == {"paho-mqtt-client-net-burst"}  # never the publishing thread
 
 
@@ -531,24 +542,7 @@ def test_a_rounds_statuses_go_out_in_one_send_in_order_with_other_messages(
 ) -> None:
     """Rule 9: what ``publish_qos0`` queued one after another is written with one send; a
     message paho's publish queued between them keeps its place, and every one arrives."""
-    settings = MqttSettings(host="127.0.0.1", port=broker.port, client_id="net-join")
-    c = new_client(settings, "net-join")
-    busy, release = threading.Event(), threading.Event()
-
-    def on_message(*_args: object) -> None:  # holds the network thread while we queue
-        busy.set()
-        release.wait(slow(10))
-
-    c.on_message = on_message
-    up = threading.Event()
-    c.on_connect = lambda client, *_a: client.subscribe("net/hold")
-    c.on_subscribe = lambda *_a: up.set()
-    c.connect_async("127.0.0.1", broker.port, keepalive=10)
-    c.loop_start()
-    try:
-        assert up.wait(slow(10)), "never subscribed"
-        probe.publish("net/hold", b"x", qos=0)
-        assert busy.wait(slow(10))
+    with held(broker, probe, "net-join") as (c, release):
         mark, sent = probe.mark(), len(ThreadSocket.sent)
         for i in range(16):
             c.publish_qos0(f"net/join/{i % 4}", f"a{i}".encode(), True)
@@ -563,10 +557,6 @@ def test_a_rounds_statuses_go_out_in_one_send_in_order_with_other_messages(
         writes = ThreadSocket.sent[sent:]
         assert len([w for w in writes if b"a0" in w or b"a15" in w]) == 1  # one send for 16
         assert any(b"a0" in w and b"a15" in w and b"net/join/event" not in w for w in writes)
-    finally:
-        release.set()
-        c.disconnect()
-        c.loop_stop()
     assert threads == {"paho-mqtt-client-net-join"}
     retained = retained_snapshot(broker.port, "net/join/#")  # (as published: 16 retained)
     assert retained == {f"net/join/{k}": f"a{12 + k}".encode() for k in range(4)}

@@ -661,18 +661,10 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
-                if self._on_wrote is not None:  # rule 11
-                    try:
-                        self._on_wrote(word["rotator"], float(word["t"]))
-                    except Exception:  # (a bug there must not end the express's reader)
-                        log.exception("stop express: a stop it wrote not carried out")
+                self._heard_alone(self._on_wrote, word, "a stop it wrote")
             elif op == "locked":
                 log.debug("stop express: %s's lock ON read", word["rotator"])
-                if self._on_locked is not None:  # rule 11
-                    try:
-                        self._on_locked(word["rotator"], float(word["t"]))
-                    except Exception:  # (a bug there must not end the express's reader)
-                        log.exception("stop express: a lock ON it read not carried out")
+                self._heard_alone(self._on_locked, word, "a lock ON it read")
             elif op == "half":
                 self._problem(self._half(word["rotator"]), True)
             elif op == "problem":
@@ -704,6 +696,19 @@ class Express:
             f"stop express: {rotator_id}'s stop frame is half-written: the port took no more "
             f"bytes for {FINISH_WAIT_S:g} s (a stuck line, an adapter gone?)"
         )
+
+    @staticmethod
+    def _heard_alone(
+        carry: Callable[[str, float], None] | None, word: dict[str, Any], what: str
+    ) -> None:
+        """Rule 11: what the express heard, handed to the bridge to carry out if only it did
+        (a bug there must not end the express's reader)."""
+        if carry is None:
+            return
+        try:
+            carry(word["rotator"], float(word["t"]))
+        except Exception:
+            log.exception("stop express: %s not carried out", what)
 
     def _held(self, rotator_id: str, held: bool) -> None:
         if held:
