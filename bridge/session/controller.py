@@ -14,11 +14,13 @@ Rules:
    dropped). A DCU-1 is available while its port is open (it never answers). A garbled answer
    (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
    without a valid reply at most, and offline before the motion machine could call a turn fed
-   no reading stalled (``stall_timeout_s``, less a moving poll and a reply time: how late the
-   check may come), never less than one timeout: a line that gives only garbage goes offline
-   then, with its own words; one that gives nothing at all still after ``silence_timeout_s``.
-   (A review: with silence_timeout_s 6, a GS-232B turning when its replies went to garbage
-   stayed online 12 s and was called stalled at 10 s, an error that blamed the brake.)
+   no reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll
+   and a reply time: how late the check may come), never less than one timeout: a line that
+   gives only garbage goes offline then, with its own words; one that gives nothing at all
+   still after ``silence_timeout_s``. (Reviews: with silence_timeout_s 6, a GS-232B turning
+   when its replies went to garbage stayed online 12 s and was called stalled at 10 s, an
+   error that blamed the brake; a slow one whose last movement was seconds before its last
+   valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -625,9 +627,9 @@ class Controller:
             return -math.inf
         if not self.cfg.spec.can_report_position or len(times) != 1:
             return -math.inf
-        silent_at = now + min(  # rule 2
-            self.cfg.silence_timeout_s - link.silent_for(now),
-            self._garbled_silence_s(link) - link.unread_for(now),
+        silent_at = min(  # rule 2
+            now + self.cfg.silence_timeout_s - link.silent_for(now),
+            self._garbled_offline_t(link, now),
         )
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
         return until - ONLY_POLL_MARGIN_S
@@ -689,8 +691,7 @@ class Controller:
             return
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
-        garbled_s = self._garbled_silence_s(link) if unread_s >= timeout_s else math.inf
-        unread = unread_s >= garbled_s  # (garbage only: rule 2)
+        unread = unread_s >= timeout_s and now >= self._garbled_offline_t(link, now)  # rule 2
         silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
             link.silent_for(now) >= timeout_s or unread  # owed may still come)
         )
@@ -706,7 +707,7 @@ class Controller:
             if link.silent_for(now) < timeout_s:  # rule 2: garbled answers only
                 why = (
                     f"controller on {cfg.port} answers only garbled replies (no valid reply for "
-                    f"{garbled_s:g} s): a noisy line?"
+                    f"{self._garbled_offline_t(link, now) - (now - unread_s):.3g} s): a noisy line?"
                 )
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
@@ -719,12 +720,21 @@ class Controller:
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
-    def _garbled_silence_s(self, link: Link) -> float:
-        """Rule 2: how long garbled answers keep the controller online without a valid reply."""
+    def _garbled_offline_t(self, link: Link, now: float) -> float:
+        """Rule 2: when garbled answers alone no longer keep the controller online: at most
+        GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
+        before the motion machine could call the turn stalled (from the last movement it saw,
+        motion.py ``progress_t``; less a moving poll and a reply time, how late the check may
+        come); never sooner than one timeout after that reply."""
         cfg = self.cfg
         timeout_s = cfg.silence_timeout_s
-        stall_s = cfg.motion.stall_timeout_s - cfg.moving_poll_interval_s - link.reply_timeout_s
-        return max(timeout_s, min(GARBLED_SILENCE_FACTOR * timeout_s, stall_s))
+        valid_t = now - link.unread_for(now)
+        until = valid_t + GARBLED_SILENCE_FACTOR * timeout_s
+        progress_t = self.motion.progress_t
+        if progress_t is not None:
+            late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
+            until = min(until, progress_t + cfg.motion.stall_timeout_s - late_s)
+        return max(valid_t + timeout_s, until)
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:
         """Rule 6."""

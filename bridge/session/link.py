@@ -92,8 +92,9 @@ Rules:
    stop goes at any time (full duplex, or ``stop_interrupts``): on a half-duplex line the
    re-poll's reply would hold a stop back (rule 3). An exchange whose reading is not trusted
    (controller.py rule 5) is asked again at once on any line, but once so too. A poll's own
-   right to a re-poll is lost only by being one: a target written before the re-poll takes
-   its place.
+   right to a re-poll is lost only by being one, and given back by a valid answer: a target
+   written before the re-poll takes its place, and a target that waits for a fresh reading
+   asks at once only while the right holds (then at the moving rate).
    An attack pass: 0.3 % of bytes flipped garbled a SatEL's long reports two in a row, and
    it went offline 10-12 times in 20 minutes, dropping targets. A review: a SatEL report
    garbled in its second line was closed 50 ms after that line, the re-poll went onto the
@@ -476,6 +477,7 @@ class Link:
         if not self.codec.awaiting_reply():
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a reading
+        self._repolled = False  # rule 11: a valid answer gives a poll its re-poll back
         self._last_reply_t = now
         self._slew = None
 
@@ -486,6 +488,7 @@ class Link:
         if not self.codec.awaiting_reply():
             self._reply_deadline = None
             self._garbled = False  # rule 11: it ended with a valid reply
+        self._repolled = False  # rule 11: a valid answer gives a poll its re-poll back
         self._heard_t = now
 
     def ask_again(self, now: float, once: bool) -> None:
@@ -499,9 +502,13 @@ class Link:
         else:
             self._next_poll = now
 
-    def poll_now(self, now: float) -> None:
-        """Ask at the next chance (a target waits for a fresh reading)."""
-        self._next_poll = now
+    def poll_now(self, now: float, interval_s: float | None = None) -> None:
+        """Ask at the next chance (a target waits for a fresh reading); with ``interval_s``,
+        after a re-poll that had no valid answer, on that interval's grid instead (rule 11)."""
+        if interval_s is not None and self._repolled:
+            self.poll_every(now, interval_s)
+        else:
+            self._next_poll = now
 
     def poll_by(self, t: float) -> None:
         """The next poll no later than ``t`` (a move just began: follow it closely)."""

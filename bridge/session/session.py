@@ -675,7 +675,8 @@ class RotatorSession:
         elif todo.go is Go.STOP_FIRST:
             ctl.stop(now)
         elif todo.go is Go.ASK_FIRST:
-            link.poll_now(now)  # ask first; the target follows the answer
+            link.poll_now(now, self.cfg.moving_poll_interval_s)  # ask first; the target
+            # follows the answer (a noisy line: at the moving rate, link.py rule 11)
         elif todo.go is Go.SEND:
             ctl.send(todo, pending, self.targets.sent(now), now)
             self._aimed(pending, todo.wire)

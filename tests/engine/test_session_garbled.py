@@ -282,6 +282,55 @@ def test_a_line_whose_every_answer_has_noise_in_front_is_asked_again_once_a_poll
     assert {s.bearing_deg for s in v.published(since=t)} <= {rest, None}  # (no reading)
 
 
+def test_a_target_that_waits_for_a_fresh_reading_on_a_noisy_line_is_asked_for_at_a_poll_rate(
+    rig: Rig,
+) -> None:
+    """One noise byte before every Rotor-EZ answer, and a target that waits for a fresh reading
+    (targets.py rule 7): it asks at once only while the poll's right to a re-poll holds, then
+    at the moving rate (link.py rule 11; a second review: 107 polls in 2 s, every step)."""
+    v = rig("rotorez")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    v.to_host = lambda data, now: (b"#" + data) if data.startswith(b";") else data
+    v.run_for(1.5)  # (the last valid reading is stale now)
+    t = v.now
+    v.target(200.0)
+    v.run_for(2)
+
+    polls = [w.t for w in v.writes if w.t > t and w.data == b"AI1;"]
+    assert 2 <= len(polls) <= 2 * 2 / 0.2 + 2, len(polls)  # a moving poll and its re-poll
+    assert not v.truth().is_moving  # (no move: no fresh reading came)
+
+
+def test_garbage_mid_turn_of_a_slow_rotor_goes_offline_before_a_stall_is_called(
+    rig: Rig,
+) -> None:
+    """A slow rotor (1 deg/s, noise_deg 5, the default silence 3 s) whose replies go to garbage
+    just before its next movement the motion machine would see: the stall counts from that
+    last movement, seconds before the last valid reply, and the controller goes offline
+    before it (controller.py rule 2; a second review: "stalled" at 5.4 s, offline at 6.2)."""
+    v = rig(
+        "gs232b",
+        emulator={"az_speed_deg_s": 1.0, "el_speed_deg_s": 1.0},
+        settings={"az_speed_deg_s": 1.0, "el_speed_deg_s": 1.0, "noise_deg": 5.0},
+    )
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    v.target(90.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 10, "moving")
+    v.run_for(2)
+    motion = lambda: v.session.controller.motion  # noqa: E731
+    v.run_until(lambda h: abs(motion().position_deg - motion().anchor_deg) >= 4.6, 10, "a step")
+    t = v.now
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    v.run_for(15)
+
+    assert v.errors("stalled", since=t) == []
+    assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
+    [why] = v.errors("serial", since=t)
+    assert "only garbled replies" in why.message and v.state is MotionState.OFFLINE
+
+
 def garbled_answer(link: Link, now: float) -> bool:
     """A GS-232B's answer to the poll just written comes garbled at ``now`` (read as the
     controller reads it, controller.py), and the exchange is given up at its deadline (the
