@@ -467,9 +467,9 @@ class App:
         )
         rotator.submit(Stop(Source.MQTT), "stop (heard by the stop express)")
 
-    def _express_locked(self, rotator_id: str, t: float) -> None:
-        """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` is set when
-        neither connection could have had it."""
+    def _express_locked(self, rotator_id: str, t: float, operator: str | None) -> None:
+        """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` (from
+        ``operator``) is set when neither connection could have had it."""
         rotator = self._express_only(rotator_id, t)
         if rotator is None:
             return
@@ -478,7 +478,8 @@ class App:
             "the lock is set here too",
             rotator_id,
         )
-        rotator.submit(Lock(True, source=Source.MQTT), "lock ON (heard by the stop express)")
+        lock = Lock(True, source=Source.MQTT, origin=self.mqtt.origin(operator))
+        rotator.submit(lock, "lock ON (heard by the stop express)")
 
     def _express_only(self, rotator_id: str, t: float) -> Rotator | None:
         """Rule 11's test: the rotator, if neither connection could have had what the express

@@ -150,7 +150,7 @@ def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None
     words = [rig.word() for _ in range(3)]
     assert words == [
         {"op": "wrote", "rotator": "a", "t": 100.0},
-        {"op": "locked", "rotator": "a", "t": 100.0},
+        {"op": "locked", "rotator": "a", "t": 100.0, "operator": None},
         {"op": "wrote", "rotator": "a", "t": 100.0 + GAP_S},
     ]
     rig.mine.setblocking(False)
@@ -160,14 +160,21 @@ def test_a_flood_of_stops_is_one_frame_a_rotator_in_a_gap(rig: ChildRig) -> None
 
 def test_a_lock_on_stops_a_lock_off_or_junk_does_not(rig: ChildRig) -> None:
     port = Port()
+    rig.child.clock = lambda: 100.0
     rig.hand("a", 1, port)
     for payload in (b"OFF", b"maybe", b"0"):
         rig.stop("rotor/a/lock", payload)
     assert port.written() == b""
     rig.stop("rotor/a/lock", b"ON")
     assert port.written() == b";"
-    # rule 11: the frame said, and the lock ON itself (the bridge sets it if it never had it)
-    assert [rig.word()["op"], rig.word()["op"]] == ["wrote", "locked"]
+    # rule 11: the frame said, and the lock ON itself, with who sent it (the bridge sets it if
+    # it never had it: its audit trail names them)
+    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "locked", "rotator": "a", "t": 100.0, "operator": None}
+    rig.child.clock = lambda: 101.0
+    rig.child.on_message("rotor/a/lock", b"ON", False, "alice", None)
+    assert rig.word()["op"] == "wrote"
+    assert rig.word() == {"op": "locked", "rotator": "a", "t": 101.0, "operator": "alice"}
 
 
 def test_a_lock_on_replayed_under_311_is_not_said_to_the_bridge() -> None:

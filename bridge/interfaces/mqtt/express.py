@@ -140,10 +140,10 @@ Rules:
    rotator is given a stop (``on_wrote``): the target it holds waiting, a track under way,
    never overtake the STOP the controller had (an attack pass: a Rotor-EZ stopped by the
    express sent the target it held at the brake window's end). A frame for a lock ON is such
-   a stop too, and the lock ON itself the express says (``locked``, with the time it read it,
-   a frame written or not): one neither connection could have had, by the same test, is set
-   (``on_locked``): the lock is what a user turns on before climbing the tower, and a rotator
-   stopped but not locked took the next target from any front end.
+   a stop too, and the lock ON itself the express says (``locked``, with the time it read it
+   and who sent it, a frame written or not): one neither connection could have had, by the
+   same test, is set (``on_locked``): the lock is what a user turns on before climbing the
+   tower, and a rotator stopped but not locked took the next target from any front end.
 """
 
 from __future__ import annotations
@@ -304,14 +304,14 @@ class Express:
         on_hold: Callable[[str, int], None] | None = None,
         on_release: Callable[[str, int], None] | None = None,
         on_wrote: Callable[[str, float], None] | None = None,
-        on_locked: Callable[[str, float], None] | None = None,
+        on_locked: Callable[[str, float, str | None], None] | None = None,
     ) -> None:
         """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"); ``frames``:
         each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
         express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
         ``on_wrote``: a rotator's stop frame written, at that time; ``on_locked``: its lock ON
-        read, at that time (rule 11)."""
+        read, at that time, from that operator (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
         self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames}
@@ -661,10 +661,16 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
-                self._heard_alone(self._on_wrote, word, "a stop it wrote")
+                self._heard_alone("a stop it wrote", self._on_wrote, word["rotator"], word["t"])
             elif op == "locked":
                 log.debug("stop express: %s's lock ON read", word["rotator"])
-                self._heard_alone(self._on_locked, word, "a lock ON it read")
+                self._heard_alone(
+                    "a lock ON it read",
+                    self._on_locked,
+                    word["rotator"],
+                    word["t"],
+                    word["operator"],
+                )
             elif op == "half":
                 self._problem(self._half(word["rotator"]), True)
             elif op == "problem":
@@ -698,15 +704,13 @@ class Express:
         )
 
     @staticmethod
-    def _heard_alone(
-        carry: Callable[[str, float], None] | None, word: dict[str, Any], what: str
-    ) -> None:
+    def _heard_alone(what: str, carry: Callable[..., None] | None, *args: Any) -> None:
         """Rule 11: what the express heard, handed to the bridge to carry out if only it did
         (a bug there must not end the express's reader)."""
         if carry is None:
             return
         try:
-            carry(word["rotator"], float(word["t"]))
+            carry(*args)
         except Exception:
             log.exception("stop express: %s not carried out", what)
 
@@ -1029,8 +1033,8 @@ class _Child:
         for rid, now, held, done in owed:  # rule 9: no member's wait before another's frame
             self._finish(rid, now, held, done)
         if locks and read_t >= self._locked_next.get(rids[0], read_t):  # rule 11: the lock
-            self._locked_next[rids[0]] = read_t + GAP_S  # itself, whether its frame went or not;
-            self.say(op="locked", rotator=rids[0], t=read_t)  # a flood is said once a gap
+            self._locked_next[rids[0]] = read_t + GAP_S  # itself, its frame gone or not, and who
+            self.say(op="locked", rotator=rids[0], t=read_t, operator=operator)  # a flood: once
 
     def _stop(self, rid: str) -> tuple[float, tuple[int, int], int] | None:
         """Rule 3: the frame's one write, at once; what a write cut short or refused leaves
