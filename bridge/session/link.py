@@ -476,8 +476,8 @@ class Link:
         """A valid position: the slew (if any) is over and the reply is no longer owed."""
         if not self.codec.awaiting_reply():
             self._reply_deadline = None
-            self._garbled = False  # rule 11: it ended with a reading
-        self._repolled = False  # rule 11: a valid answer gives a poll its re-poll back
+            self._garbled = False  # rule 11: it ended with a reading, which gives a poll its
+            self._repolled = False  # re-poll back (its last frame's: rule 10's two axes)
         self._last_reply_t = now
         self._slew = None
 
@@ -487,8 +487,8 @@ class Link:
         reading (targets.py rule 7 waits for one)."""
         if not self.codec.awaiting_reply():
             self._reply_deadline = None
-            self._garbled = False  # rule 11: it ended with a valid reply
-        self._repolled = False  # rule 11: a valid answer gives a poll its re-poll back
+            self._garbled = False  # rule 11: it ended with a valid reply, which gives a poll
+            self._repolled = False  # its re-poll back
         self._heard_t = now
 
     def ask_again(self, now: float, once: bool) -> None:

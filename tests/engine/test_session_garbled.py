@@ -358,3 +358,22 @@ def test_a_target_written_before_the_repoll_leaves_the_poll_after_it_its_own_rep
     assert garbled_answer(link, 11.12) is True
     assert link.poll(12.12, 0.2) and link.output() == [b"C2\r"]  # the re-poll, at once
     assert garbled_answer(link, 12.14) is False  # (its own garbled answer: the next poll)
+
+
+def test_an_rc2800_whose_every_elevation_answer_is_garbled_is_not_polled_back_to_back(
+    rig: Rig,
+) -> None:
+    """An RC2800's poll is two frames, an answer each (link.py rule 10): its azimuth valid,
+    its elevation always garbled. A valid answer gives a poll its re-poll back only when it
+    ends the exchange (link.py rule 11): the azimuth's, in the middle of it, does not, or
+    every re-poll would earn the next one."""
+    v = rig("rc2800", emulator={"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.run_for(5)
+    t = v.now
+    garbled = garble_lines(v, b"E P=", b"E ?=", 1000, end=b"\r")
+    v.run_for(10)
+
+    polls = [w.t for w in v.writes if w.t > t and w.data.startswith(b"A")]
+    assert len(garbled) >= 10  # (every elevation answer)
+    assert len(polls) <= 2 * 10 + 2, len(polls)  # an idle poll a second, one re-poll each
