@@ -457,7 +457,7 @@ class App:
     def _express_wrote(self, rotator_id: str, t: float) -> None:
         """interfaces/mqtt/express.py rule 11: a stop frame the express wrote at ``t`` is the
         rotator's stop too when neither connection could have had that stop."""
-        rotator = self._express_only(rotator_id, t)
+        rotator = self._heard_only_by_express(rotator_id, t)
         if rotator is None:
             return
         log.warning(
@@ -470,7 +470,7 @@ class App:
     def _express_locked(self, rotator_id: str, t: float, operator: str | None) -> None:
         """interfaces/mqtt/express.py rule 11: a lock ON the express read at ``t`` (from
         ``operator``) is set when neither connection could have had it."""
-        rotator = self._express_only(rotator_id, t)
+        rotator = self._heard_only_by_express(rotator_id, t)
         if rotator is None:
             return
         log.warning(
@@ -481,7 +481,7 @@ class App:
         lock = Lock(True, source=Source.MQTT, origin=self.mqtt.origin(operator))
         rotator.submit(lock, "lock ON (heard by the stop express)")
 
-    def _express_only(self, rotator_id: str, t: float) -> Rotator | None:
+    def _heard_only_by_express(self, rotator_id: str, t: float) -> Rotator | None:
         """Rule 11's test: the rotator, if neither connection could have had what the express
         read at ``t``."""
         heard = t - EXPRESS_HEARD_MARGIN_S  # (t is when the express read it, a moment after

@@ -17,10 +17,11 @@ Rules:
    no reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll
    and a reply time: how late the check may come), never less than one timeout: a line that
    gives only garbage goes offline then, with its own words; one that gives nothing at all
-   still after ``silence_timeout_s``. (Reviews: with silence_timeout_s 6, a GS-232B turning
-   when its replies went to garbage stayed online 12 s and was called stalled at 10 s, an
-   error that blamed the brake; a slow one whose last movement was seconds before its last
-   valid reply, at 5.4 s of the default 3.)
+   still after ``silence_timeout_s``. One that never gave a valid reply but garbled ones is
+   said to (the wrong baud rate looks so), not to give none. (Reviews: with
+   silence_timeout_s 6, a GS-232B turning when its replies went to garbage stayed online 12 s
+   and was called stalled at 10 s, an error that blamed the brake; a slow one whose last
+   movement was seconds before its last valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -691,7 +692,7 @@ class Controller:
             return
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
-        unread = unread_s >= timeout_s and now >= self._garbled_offline_t(link, now)  # rule 2
+        unread = now >= self._garbled_offline_t(link, now)  # (garbage only: rule 2)
         silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
             link.silent_for(now) >= timeout_s or unread  # owed may still come)
         )
@@ -715,7 +716,13 @@ class Controller:
             self.notes.append(Ends("controller not answering"))
         elif never and not self._silence_reported:
             self._silence_reported = True
-            self.notes.append(Report(ErrorKind.SERIAL, f"controller on {cfg.port} does not answer"))
+            why = f"controller on {cfg.port} does not answer"
+            if link.silent_for(now) < timeout_s:  # rule 2: it answers, garbled
+                why = (
+                    f"controller on {cfg.port} answers only garbled replies: the wrong baud "
+                    "rate or model, or a noisy line?"
+                )
+            self.notes.append(Report(ErrorKind.SERIAL, why))
         busy = busy or self.motion.state is mo.MOVING
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)

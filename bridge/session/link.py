@@ -96,7 +96,7 @@ Rules:
    written before the re-poll takes its place, and a target that waits for a fresh reading
    asks at once only while the right holds (then at the moving rate).
    An attack pass: 0.3 % of bytes flipped garbled a SatEL's long reports two in a row, and
-   it went offline 10-12 times in 20 minutes, dropping targets. A review: a SatEL report
+   it went offline 5-12 times in 20 minutes, dropping targets. A review: a SatEL report
    garbled in its second line was closed 50 ms after that line, the re-poll went onto the
    half-duplex line with 80 bytes still coming, their tail closed the re-poll's exchange and
    a report from before a point ended its slew: the next ``z`` went into the slew; one noise
@@ -496,7 +496,7 @@ class Link:
         re-poll, else at the next poll as ever: rule 11)."""
         self.codec.expire_query()
         self._reply_deadline = None
-        self._garbled = False  # (asked again already)
+        self._garbled = False  # (asked again, or left to the next poll)
         if once:
             self._repoll(now)
         else:

@@ -1,7 +1,7 @@
 """A garbled answer (session/link.py rule 11, controller.py rule 2): the controller answered, so
 it is not silent, but nothing of it is a reading; it is asked again at once, once. A line that
 gives only garbage goes offline after two silence timeouts, one that gives nothing after one.
-(An attack pass: 0.3 % of bytes flipped took a SatEL offline 10-12 times in 20 minutes.)"""
+(An attack pass: 0.3 % of bytes flipped took a SatEL offline 5-12 times in 20 minutes.)"""
 
 from __future__ import annotations
 
@@ -377,3 +377,22 @@ def test_an_rc2800_whose_every_elevation_answer_is_garbled_is_not_polled_back_to
     polls = [w.t for w in v.writes if w.t > t and w.data.startswith(b"A")]
     assert len(garbled) >= 10  # (every elevation answer)
     assert len(polls) <= 2 * 10 + 2, len(polls)  # an idle poll a second, one re-poll each
+
+
+def test_a_controller_that_never_gave_a_valid_reply_but_garbled_ones_is_said_to(
+    rig: Rig,
+) -> None:
+    """Every reply garbled from the first (what the wrong baud rate looks like): the complaint
+    says it answers garbled, pointing at the line's settings, not that it does not answer (a
+    cold review); one that answers nothing still does not answer."""
+    v = rig("gs232b")
+    v.to_host = lambda data, now: data.replace(b"=", b"?")
+    v.run_until(lambda h: h.errors("serial"), 30, "the complaint")
+    [why] = v.errors("serial")
+    assert "answers only garbled replies" in why.message and "baud" in why.message
+    assert not v.status.available
+
+    quiet = rig("gs232b")
+    quiet.set_silent(True)
+    quiet.run_until(lambda h: h.errors("serial"), 30, "the complaint")
+    assert "does not answer" in quiet.errors("serial")[0].message

@@ -581,10 +581,19 @@ def test_publish_qos0_refuses_a_packet_mqtt_cannot_carry_as_pahos_publish_does(s
         c._sock = None
 
 
-def test_the_message_info_every_lean_publish_shares_keeps_saying_sent() -> None:
-    """Rule 9: paho's reconnect says every queued QoS 0 message was lost (its info's ``rc``);
-    the one stand-in all of ``publish_qos0``'s share is not changed by it."""
-    from bridge.interfaces.mqtt.paho_client import _WRITTEN
-
-    _WRITTEN.rc = MQTTErrorCode.MQTT_ERR_CONN_LOST
-    assert _WRITTEN.rc == MQTTErrorCode.MQTT_ERR_SUCCESS
+def test_statuses_queued_when_the_connection_drops_do_not_stop_the_reconnect(
+    broker: Mosquitto, probe: Probe, threads: set[str]
+) -> None:
+    """Rule 9: paho's reconnect writes "connection lost" into every queued QoS 0 message's
+    info; the one all of ``publish_qos0``'s share takes it (a cold review: without that, the
+    reconnect raised, and every one after it)."""
+    with held(broker, probe, "net-lost") as (c, release):
+        for i in range(5):  # queued behind the held network thread
+            c.publish_qos0("net/lost", f"s{i}".encode(), True)
+        old = c.socket()
+        old.shutdown(socket.SHUT_RDWR)  # the connection drops with them still queued
+        release.set()
+        mark = probe.mark()
+        wait_until(lambda: c.socket() not in (None, old) and c.is_connected(), 15, "reconnected")
+        assert c.publish_qos0("net/lost", b"after", True) == MQTTErrorCode.MQTT_ERR_SUCCESS
+        probe.wait(lambda m: m.topic == "net/lost" and m.text == "after", start=mark)

@@ -36,13 +36,13 @@ Rules:
    (the serial-lines thread, writing the session's stop that instant): the frame is written as
    soon as the tty takes bytes again, within rule 9's wait. A write that takes nothing for that
    long (a full buffer) or fails (an unplugged adapter) is let go: the session's own stop
-   follows. It decides nothing else and changes no state: the session
-   still gets the stop from the lane and the main connection, holds, markers and the lock as
-   before, and writes its own stop frame (the controller gets two: ModelSpec.stop_anytime
-   says the model takes that). At most one frame a rotator in GAP_S: a flood on the stop
-   topic must not fill the port's output buffer (the session's own frames would wait behind
-   it, and a full buffer is a lost link, runtime/port.py rule 6); a second stop that soon adds
-   nothing the first did not do, and the session's still comes.
+   follows. It decides nothing else and changes no state (but for what it alone heard: rule
+   11): the session still gets the stop from the lane and the main connection, holds,
+   markers and the lock as before, and writes its own stop frame (the controller gets two:
+   ModelSpec.stop_anytime says the model takes that). At most one frame a rotator in GAP_S: a
+   flood on the stop topic must not fill the port's output buffer (the session's own frames
+   would wait behind it, and a full buffer is a lost link, runtime/port.py rule 6); a second
+   stop that soon adds nothing the first did not do, and the session's still comes.
 4. Only models whose stop frame may go at any moment (``ModelSpec.stop_anytime``) get a copy
    of their port; elsewhere (a SatEL that slews, a SPID that owes replies) the session alone
    writes, as before.
@@ -143,7 +143,9 @@ Rules:
    a stop too, and the lock ON itself the express says (``locked``, with the time it read it
    and who sent it, a frame written or not): one neither connection could have had, by the
    same test, is set (``on_locked``): the lock is what a user turns on before climbing the
-   tower, and a rotator stopped but not locked took the next target from any front end.
+   tower, and a rotator stopped but not locked took the next target from any front end. A
+   lock ON a connection heard too within the second before is set twice, and a lock OFF
+   carried out between the two is undone: the safe side, said in docs/mqtt.md.
 """
 
 from __future__ import annotations
@@ -661,10 +663,10 @@ class Express:
                 self.wrote.append((word["rotator"], word["t"]))
                 self._problem(self._half(word["rotator"]), False)
                 log.debug("stop express: %s's stop frame written", word["rotator"])
-                self._heard_alone("a stop it wrote", self._on_wrote, word["rotator"], word["t"])
+                self._carry_alone("a stop it wrote", self._on_wrote, word["rotator"], word["t"])
             elif op == "locked":
                 log.debug("stop express: %s's lock ON read", word["rotator"])
-                self._heard_alone(
+                self._carry_alone(
                     "a lock ON it read",
                     self._on_locked,
                     word["rotator"],
@@ -704,7 +706,7 @@ class Express:
         )
 
     @staticmethod
-    def _heard_alone(what: str, carry: Callable[..., None] | None, *args: Any) -> None:
+    def _carry_alone(what: str, carry: Callable[..., None] | None, *args: Any) -> None:
         """Rule 11: what the express heard, handed to the bridge to carry out if only it did
         (a bug there must not end the express's reader)."""
         if carry is None:

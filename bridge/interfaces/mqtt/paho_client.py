@@ -63,7 +63,7 @@ Rules:
    the queue) is paho's. Such messages queued one after another are written with one send
    (a round of the serial-lines thread queues the statuses of every rotator it served: one
    send each cost the network thread about as much again). Only our own connections' QoS 0
-   messages go this way (delivery.py: the main connection's retained statuses); paho's own
+   bytes go this way (delivery.py's: the main connection's retained statuses); paho's own
    debug log (``enable_logger``, which the bridge does not turn on) does not show them.
 """
 
@@ -160,10 +160,11 @@ class Waker:
                     sock.close()
 
 
-class _Written:
+class _LeanInfo:
     """Rule 9: what paho's writer tells of a QoS 0 message written (it calls every one's
-    ``MQTTMessageInfo``), for the messages ``publish_qos0`` queues without one. One for all:
-    nothing is kept (paho's reconnect says a queued message's ``rc`` is "connection lost")."""
+    ``MQTTMessageInfo``), for the messages ``publish_qos0`` queues without one. One for all,
+    keeping nothing: paho's reconnect writes "connection lost" into the ``rc`` of every QoS 0
+    message still queued (without a setter that raised, and every reconnect failed so)."""
 
     __slots__ = ()
 
@@ -179,8 +180,8 @@ class _Written:
         pass
 
 
-#: paho's queue holds an ``MQTTMessageInfo`` per message; of this one it calls what _Written has
-_WRITTEN = cast(paho.MQTTMessageInfo, _Written())
+#: paho's queue holds an ``MQTTMessageInfo`` per message; of this one it calls what _LeanInfo has
+_LEAN_INFO = cast(paho.MQTTMessageInfo, _LeanInfo())
 
 
 def _remaining_length(n: int) -> bytes:
@@ -236,7 +237,7 @@ class Client(paho.Client):
                 payload,
             )
         )
-        return self._packet_queue(paho.PUBLISH, packet, 0, 0, _WRITTEN)
+        return self._packet_queue(paho.PUBLISH, packet, 0, 0, _LEAN_INFO)
 
     def _topic_part(self, topic: str) -> bytes:
         """Rule 9: a PUBLISH's topic and (MQTT 5) its empty properties, checked as paho's
@@ -423,7 +424,7 @@ class Client(paho.Client):
         ``loop_write`` from a publishing thread when no thread serves it)."""
         if self._net is None:
             return super().loop_write()
-        self._join_written()
+        self._join_lean()
         keep = self.on_publish
         self.on_publish = None
         try:
@@ -431,17 +432,17 @@ class Client(paho.Client):
         finally:
             self.on_publish = keep
 
-    def _join_written(self) -> None:
+    def _join_lean(self) -> None:
         """Rule 9: the messages ``publish_qos0`` queued one after another at the head of the
         queue, joined into one packet (on the network thread, the queue's only taker)."""
         queue = self._out_packet
-        if len(queue) < 2 or queue[0]["info"] is not _WRITTEN or queue[0]["pos"]:
+        if len(queue) < 2 or queue[0]["info"] is not _LEAN_INFO or queue[0]["pos"]:
             return
         parts: list[bytes | bytearray] = []
         size = 0
         while queue and size < _JOIN_BYTES:
             packet = queue[0]
-            if packet["info"] is not _WRITTEN or packet["pos"]:
+            if packet["info"] is not _LEAN_INFO or packet["pos"]:
                 break
             queue.popleft()
             parts.append(packet["packet"])
@@ -454,7 +455,7 @@ class Client(paho.Client):
                 "pos": 0,
                 "to_process": size,
                 "packet": b"".join(parts),
-                "info": _WRITTEN,
+                "info": _LEAN_INFO,
             }
         )
 
