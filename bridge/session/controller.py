@@ -273,16 +273,20 @@ class Controller:
         self.options.connected(self.answering)
         self._retune()
         if self.stops.owed:  # stops.py rule 3: before anything else the controller gets
-            self.stops.owed = False
-            released, self._released_owed = self._released_owed, False
             log.info("%s: sending the stop that came while the port was closed", self.name)
-            link.write_stop(now)
-            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-            self.stops.sent(now)
-            if released:  # (a lock released before the port opened: its stop as released)
-                self._released_stop_t = now
+            self._send_owed(link, now)
         for frame in link.codec.encode_connect(wall_s):
             link.write(frame, now)
+
+    def _send_owed(self, link: Link, now: float) -> None:
+        """stops.py rule 3: the stop owed, written now."""
+        self.stops.owed = False
+        released, self._released_owed = self._released_owed, False
+        link.write_stop(now)
+        self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        self.stops.sent(now)
+        if released:  # (a lock released before the port opened: its stop as released)
+            self._released_stop_t = now
 
     def disconnect(self, failed: bool, now: float) -> None:
         """The port is closed (``failed``: not on purpose)."""
@@ -498,13 +502,19 @@ class Controller:
             self.options.enable_due = True  # rule 4
         if reply.controller_time is not None:
             self.controller_time = reply.controller_time
+        owed = False
         if not self.answering:
-            self.answering = True
+            self.answering, owed = True, self.stops.owed
             self.options.all_due()
             self._retune()
             log.info("%s: controller answering", self.name)
         cfg, before = self.cfg, self.motion.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        if owed:  # stops.py rule 3: the stop it went silent with, before anything else
+            log.info("%s: sending again the stop it went silent before confirming", self.name)
+            self._send_owed(link, now)
+        elif self.motion.state is not mo.MOVING and now > (self.stops.unseen_t or now):
+            self.stops.unseen_t = None  # (stops.py rule 3: a reading at rest after the stop)
         if self.motion.state is mo.MOVING and before is not mo.MOVING:  # rule 3: a move seen
             link.poll_every(now, cfg.moving_poll_interval_s)  # (by an idle poll) is followed
         # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the
@@ -703,6 +713,8 @@ class Controller:
                 self.stops.repeat_due(self.motion, math.inf)  # now (a silent controller may
                 self.stop(now)  # still hear: its motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
+            if self.stops.unseen_t is not None:  # stops.py rule 3: a stop no reading showed
+                self.stops.owed = True  # taking is owed when it answers again
             self.motion = mo.link_down(self.motion)
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
             if link.silent_for(now) < timeout_s:  # rule 2: garbled answers only

@@ -40,8 +40,13 @@ Rules:
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
-   (stopping is always safe). A target written after that stop leaves none owed: a stop then
-   would stop that move.
+   (stopping is always safe). So is the last stop written when the controller is found
+   silent, the port open, unless a reading since showed the rotor at rest (``unseen_t``; the
+   motion machine's own clock may take a rotor no reading shows for stopped): the first frame
+   after its first reading once it answers again (an attack pass: a noise burst ate a
+   GS-232B's STOP and the polls around it; taken for stopped for want of readings, then
+   offline, and back online the rotor ran 26 s on to the target the operator had stopped).
+   A target written after that stop leaves none owed: a stop then would stop that move.
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
    stopped once it comes to rest; a rotor still turning to the bearing before a new one the
    controller refused is stopped. Each ends tracking. Such a stop is written at once, whatever
@@ -98,6 +103,7 @@ class Verdict:
 class Stops:
     def __init__(self) -> None:
         self.owed = False  # rule 3: a stop came while the port was closed
+        self.unseen_t: float | None = None  # rule 3: the last stop, no reading at rest since
         self._tries = 0
         self._at_rest = False  # rule 4: turned away, a stop when it is still
         self._repeat_owed: float | None = None  # rule 1: the stop a merged repeat is owed to
@@ -145,6 +151,7 @@ class Stops:
 
     def sent(self, at: float) -> None:
         """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
+        self.unseen_t = at  # rule 3
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
         self._stall_stop_t = None  # rule 4: rule 2 checks this one
@@ -158,7 +165,7 @@ class Stops:
 
     def target_sent(self) -> None:
         """Rules 3 and 4: a target was written: no stop before it is owed or checked any more."""
-        self._rest_stop_t = self._stall_stop_t = None
+        self._rest_stop_t = self._stall_stop_t = self.unseen_t = None
 
     @property
     def stall_watched(self) -> bool:

@@ -225,3 +225,27 @@ def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -
         v.manual_rotate(300.0)
         v.run_for(60.0)
         assert b"S\r" in v.sent(since=t) and abs(v.truth().az_deg - 300.0) > 5
+
+
+def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_answers(
+    rig: Rig,
+) -> None:
+    """stops.py rule 3: a noise burst eats a GS-232B's STOP and the polls around it (it hears
+    no whole command and answers nothing: offline after 3 s). Back online, its readings show
+    the rotor still turning to the target the operator stopped: the stop goes again, the first
+    frame after the first reading (an attack pass: the rotor ran 26 s on to the cancelled
+    target)."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
+    v.run_for(2)
+    v.set_deaf(True)  # the burst: nothing the host writes arrives whole
+    v.run_for(0.5)
+    v.stop()
+    v.run_for(4)
+    assert not v.status.available
+    v.set_deaf(False)  # healed
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(5)
+    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
