@@ -323,6 +323,8 @@ class Controller:
         if link.flush_stop(now):
             self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
             self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
+            if not self.cfg.spec.can_report_position:
+                self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
             link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
 
     def owe_stop(self) -> None:
@@ -556,9 +558,9 @@ class Controller:
         link = self.link
         if link is None:
             return
-        if self.stops.repeat_due(self.motion, now):  # stops.py rule 1: before anything else
+        if self.stops.repeat_due(self.motion, now) or self.stops.blind_due(now):  # stops.py
             log.debug("%s: a stop repeated right after the last one, written now", self.name)
-            self.stop(now)
+            self.stop(now)  # rules 1 and 6: before anything else
         self._settled(link, now)
         if link.reply_overdue(now):
             todo = overdue(self.cfg, link.slew, link.reply_timeout_s, now)
@@ -796,6 +798,9 @@ class Controller:
         repeat = self.stops.repeat_at(m)  # stops.py rule 1: a stop repeat owed (line_work's)
         if repeat is not None and now < repeat < latest and link is not None:
             latest = repeat
+        blind = self.stops.blind_at  # stops.py rule 6
+        if blind is not None and blind < latest and link is not None:
+            latest = max(now, blind)
         deadline = mo.next_deadline(m, cfg, now)
         kept = math.inf if deadline is None else deadline
         self._deadline = m, cfg, kept  # (tick's)

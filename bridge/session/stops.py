@@ -67,6 +67,10 @@ Rules:
    waited meanwhile is dropped: its place in line was lost (mailbox.py rule 6). The stop
    express's hold (interfaces/mqtt/express.py rule 8) is a second one, with numbers of its own: a
    target waits while either is held; its release never clears (what waited is newer than the stop).
+6. A controller that reports no position (a DCU-1) gets every stop twice, STOP_REPEAT_GAP_S
+   apart: no reading can show one lost, and stopping is always safe (an attack pass: one bit
+   flipped in a lock ON's ``AS1;`` and the rotor turned on 27 s). A target written in between
+   leaves the second unwritten: it would stop that move.
 """
 
 from __future__ import annotations
@@ -111,6 +115,8 @@ class Stops:
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
         self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while watched
+        self.blind_at: float | None = None  # rule 6: when a blind controller's second stop goes
+        self._blind_second = False  # rule 6: the stop asked for now is that second one
 
     def merges(self, m: mo.Motion, cfg: mo.MotionConfig, now: float) -> bool:
         """Rule 1: a stop now adds nothing on the wire (one merged into a stop that may not
@@ -156,6 +162,19 @@ class Stops:
         self._writing_repeat = False
         self._stall_stop_t = None  # rule 4: rule 2 checks this one
 
+    def blind_sent(self, at: float) -> None:
+        """Rule 6: a blind controller's stop was written at ``at``: its second is owed, unless
+        it was that second."""
+        self.blind_at = None if self._blind_second else at + STOP_REPEAT_GAP_S
+        self._blind_second = False
+
+    def blind_due(self, now: float) -> bool:
+        """Rule 6: the second stop is to be written now (and is then owed no more)."""
+        if self.blind_at is None or now < self.blind_at:
+            return False
+        self.blind_at, self._blind_second = None, True
+        return True
+
     def wrote_at_rest(self, at: float, stall: bool) -> None:
         """Rule 4: a stall's (``stall``) or a turned-away rotor's stop was written at ``at``:
         nothing to merge into, owed if the port fails right after it (rule 3), and a stall's
@@ -165,7 +184,7 @@ class Stops:
 
     def target_sent(self) -> None:
         """Rules 3 and 4: a target was written: no stop before it is owed or checked any more."""
-        self._rest_stop_t = self._stall_stop_t = self.unseen_t = None
+        self._rest_stop_t = self._stall_stop_t = self.unseen_t = self.blind_at = None
 
     @property
     def stall_watched(self) -> bool:

@@ -82,14 +82,15 @@ def test_a_second_dcu1_target_during_the_estimate_waits_for_stop_and_brake(rig: 
     assert v.truth().is_moving and v.status.state is MOVING
     t = v.now
     v.target(100)
-    v.run_until(lambda v: len(v.frames(since=t)) == 3, 20, "stop and the new target")
+    v.run_until(lambda v: len(v.frames(since=t)) == 4, 20, "stop and the new target")
 
     assert frames(v, t) == [
         (b"AS1;", Outcome.STOP),
+        (b"AS1;", Outcome.STOP),  # (every stop twice: nothing can show one lost, stops rule 6)
         (b"AP1100;", Outcome.STORED),
         (b"AM1;", Outcome.EXECUTED),
     ]
-    stop, store, _ = v.frames(since=t)
+    _, stop, store, _ = v.frames(since=t)
     assert store.time_s - stop.time_s >= v.cfg.motion.brake_delay_s
     waiting = [s for s in v.published(since=t) if s.state is UNKNOWN]
     assert waiting and all(s.target_az_deg is None for s in waiting)  # stopped: unknown
@@ -106,11 +107,12 @@ def test_the_first_dcu1_target_after_connecting_stops_first(rig: Rig) -> None:
     v.run_for(1)
     t = v.now
     v.target(90)
-    v.run_until(lambda v: len(v.frames()) == 3, 20, "stop and target")
+    v.run_until(lambda v: len(v.frames()) == 4, 20, "stop and target")
 
     assert frames(v, t) == [
         (b"AS1;", Outcome.STOP),
+        (b"AS1;", Outcome.STOP),  # (every stop twice: nothing can show one lost, stops rule 6)
         (b"AP1090;", Outcome.STORED),
         (b"AM1;", Outcome.EXECUTED),
     ]
-    assert v.frames()[1].time_s - v.frames()[0].time_s >= v.cfg.motion.brake_delay_s
+    assert v.frames()[2].time_s - v.frames()[1].time_s >= v.cfg.motion.brake_delay_s

@@ -249,3 +249,22 @@ def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_a
     v.run_until(lambda h: h.status.available, 10, "online again")
     v.run_for(5)
     assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+
+
+def test_a_dcu1s_lock_on_whose_stop_frame_the_line_garbles_still_stops_the_rotor(
+    rig: Rig,
+) -> None:
+    """stops.py rule 6: a DCU-1 reports nothing, so nothing can show a stop lost; its lock ON's
+    one stop frame arrived with a bit flipped (``@S1;``) and the rotor turned on 27 s to its
+    target while the operator climbed the tower (an attack pass). Every stop goes twice."""
+    v = rig("dcu1")
+    v.run_until(lambda h: h.status.available, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 30, "moving")
+    v.run_for(3)
+    t = v.now
+    v.garble_writes(b"AS1;", b"@S1;")  # the lock's stop, one bit flipped on the line
+    v.lock(True)
+    v.run_for(10)
+    assert not v.truth().is_moving, v.truth()
+    assert v.sent(since=t).count(b"AS1;") == 2  # (the garbled one, and the second)
