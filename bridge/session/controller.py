@@ -195,6 +195,7 @@ class Controller:
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
+        self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -279,12 +280,15 @@ class Controller:
             link.write(frame, now)
 
     def _send_owed(self, link: Link, now: float) -> None:
-        """stops.py rule 3: the stop owed, written now."""
+        """stops.py rule 3: the stop owed, written now, as ``flush_stop`` writes one."""
         self.stops.owed = False
         released, self._released_owed = self._released_owed, False
         link.write_stop(now)
         self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
         self.stops.sent(now)
+        if not self.cfg.spec.can_report_position:
+            self.stops.blind_sent(now)  # stops.py rule 6
+        link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
         if released:  # (a lock released before the port opened: its stop as released)
             self._released_stop_t = now
 
@@ -342,6 +346,7 @@ class Controller:
         at once after a locked start, the stop the line lost was never checked)."""
         self._released_stop_t = self.motion.stop_sent_t
         self._released_owed = self.stops.owed  # (the port out: the stop it writes on connect)
+        self._released_unseen_t = self.stops.unseen_t  # (owed if found silent: rule 2 too)
 
     def _release_check(self, now: float) -> None:
         """``lock_released``'s stop let go, after a reading (the motion just updated)."""
@@ -504,9 +509,9 @@ class Controller:
             self.options.enable_due = True  # rule 4
         if reply.controller_time is not None:
             self.controller_time = reply.controller_time
-        owed = False
+        owed = first = False
         if not self.answering:
-            self.answering, owed = True, self.stops.owed
+            self.answering, owed, first = True, self.stops.owed, True
             self.options.all_due()
             self._retune()
             log.info("%s: controller answering", self.name)
@@ -515,8 +520,11 @@ class Controller:
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
             self._send_owed(link, now)
-        elif self.motion.state is not mo.MOVING and now > (self.stops.unseen_t or now):
-            self.stops.unseen_t = None  # (stops.py rule 3: a reading at rest after the stop)
+        elif (
+            not first and self.motion.state is not mo.MOVING and now > (self.stops.unseen_t or now)
+        ):
+            self.stops.unseen_t = None  # (stops.py rule 3: a reading at rest after the stop;
+            # not a connection's or an answering spell's first: its state is a guess)
         if self.motion.state is mo.MOVING and before is not mo.MOVING:  # rule 3: a move seen
             link.poll_every(now, cfg.moving_poll_interval_s)  # (by an idle poll) is followed
         # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the
@@ -715,8 +723,10 @@ class Controller:
                 self.stops.repeat_due(self.motion, math.inf)  # now (a silent controller may
                 self.stop(now)  # still hear: its motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
-            if self.stops.unseen_t is not None:  # stops.py rule 3: a stop no reading showed
-                self.stops.owed = True  # taking is owed when it answers again
+            unseen = self.stops.unseen_t
+            if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
+                self.stops.owed = True  # when it answers again, as released if it was the
+                self._released_owed = unseen == self._released_unseen_t  # released lock's
             self.motion = mo.link_down(self.motion)
             why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
             if link.silent_for(now) < timeout_s:  # rule 2: garbled answers only

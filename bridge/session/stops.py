@@ -40,12 +40,14 @@ Rules:
 3. A stop is never lost: one (or a lock ON) that comes while the port is closed or reopening,
    one still waiting for the line when the port failed, or one written less than
    STOP_UNSURE_S before it failed, is owed: the first frame written once it is open again
-   (stopping is always safe). So is the last stop written when the controller is found
-   silent, the port open, unless a reading since showed the rotor at rest (``unseen_t``; the
-   motion machine's own clock may take a rotor no reading shows for stopped): the first frame
-   after its first reading once it answers again (an attack pass: a noise burst ate a
-   GS-232B's STOP and the polls around it; taken for stopped for want of readings, then
-   offline, and back online the rotor ran 26 s on to the target the operator had stopped).
+   (stopping is always safe). So is the last stop written when the port fails or the
+   controller is found silent, unless a reading since showed the rotor at rest (``unseen_t``;
+   the motion machine's own clock may take a rotor no reading shows for stopped, and a
+   connection's first reading is a guess): found silent, the first frame after its first
+   reading once it answers again, as a released lock's if it was one (rule 2). (An attack
+   pass: a noise burst ate a GS-232B's STOP and the polls around it; taken for stopped for
+   want of readings, then offline, and back online the rotor ran 26 s on to the target the
+   operator had stopped. A review: the same with the adapter reset before the silence.)
    A target written after that stop leaves none owed: a stop then would stop that move.
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
    stopped once it comes to rest; a rotor still turning to the bearing before a new one the
@@ -206,11 +208,13 @@ class Stops:
 
     def port_closed(self, failed: bool, stop_due: bool, m: mo.Motion, now: float) -> None:
         """Rule 3: the port closed (``failed``: not on purpose); ``stop_due``: a stop waited
-        for the line. A failed port owes a stop that waited, or one written so recently (a
-        failed write closes the port too) that the controller may never have had it."""
+        for the line. A failed port owes a stop that waited, one written so recently (a
+        failed write closes the port too) that the controller may never have had it, or one
+        no reading has shown taking (``unseen_t``)."""
         written = [t for t in (m.stop_sent_t, self._rest_stop_t) if t is not None]
         self._rest_stop_t = self._stall_stop_t = None
-        if failed and (stop_due or (written and now - max(written) < STOP_UNSURE_S)):
+        recent = bool(written) and now - max(written) < STOP_UNSURE_S
+        if failed and (stop_due or recent or self.unseen_t is not None):
             self.owed = True
 
     @property

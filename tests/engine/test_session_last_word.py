@@ -268,3 +268,110 @@ def test_a_dcu1s_lock_on_whose_stop_frame_the_line_garbles_still_stops_the_rotor
     v.run_for(10)
     assert not v.truth().is_moving, v.truth()
     assert v.sent(since=t).count(b"AS1;") == 2  # (the garbled one, and the second)
+
+
+def test_a_stop_written_while_the_controller_is_offline_is_owed_when_it_answers(rig: Rig) -> None:
+    """stops.py rule 3: the controller found silent mid-turn, no stop out; the operator, seeing
+    it offline, sends STOP, written on the open port and lost. Back online, the rotor is
+    stopped, not let run on to its target (a connection's first reading is a guess)."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
+    v.run_for(2)
+    v.set_deaf(True)
+    v.run_for(4)
+    assert not v.status.available
+    v.stop()  # written, lost
+    v.run_for(0.5)
+    v.set_deaf(False)
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(5)
+    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+
+
+def test_a_stop_unseen_when_the_port_fails_before_silence_is_found_is_owed(rig: Rig) -> None:
+    """stops.py rule 3 (a review): a STOP lost on the line, then the USB adapter resets 1.5 s
+    later (past STOP_UNSURE_S, before the silence timeout). The stop no reading showed taking
+    is owed to the new connection: the rotor is stopped, not let run on to the target."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
+    v.run_for(2)
+    v.set_deaf(True)
+    v.run_for(0.2)
+    v.stop()  # lost
+    v.run_for(1.5)
+    v.link_down("USB adapter reset")
+    v.set_deaf(False)
+    v.run_for(0.5)
+    v.link_up()
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(5)
+    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+
+
+def test_the_locks_stop_resent_after_silence_is_let_go_as_released(rig: Rig) -> None:
+    """stops.py rules 2 and 3 (a review): lock ON, lock OFF, and the controller's replies lost
+    long enough for it to be found silent: its lock's stop goes again when it answers, but as
+    the released lock's, so a turn by hand long after the tower work is not stopped."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.set_silent(True)  # the controller hears, its replies are lost
+    v.lock(True)
+    v.run_for(0.5)
+    v.lock(False)
+    v.run_for(4)
+    assert not v.status.available
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.run_for(600.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(60.0)
+    assert b"S\r" not in v.sent(since=t), v.sent(since=t)
+
+
+def test_a_dcu1s_owed_stop_on_reconnect_goes_twice(rig: Rig) -> None:
+    """stops.py rule 6 (a review): the stop a DCU-1 is owed while its port is out (a lock ON
+    then) goes twice too when the port opens: one flipped bit and the rotor turned on."""
+    v = rig("dcu1")
+    v.run_until(lambda h: h.status.available, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 30, "moving")
+    v.run_for(3)
+    v.link_down()
+    v.run_for(0.3)
+    v.lock(True)  # tower work; the port is out: its stop is owed
+    v.run_for(1)
+    t = v.now
+    v.garble_writes(b"AS1;", b"@S1;")
+    v.link_up()
+    v.run_for(10)
+    assert not v.truth().is_moving, (v.truth(), v.sent(since=t))
+
+
+def test_an_owed_stop_written_at_re_answer_is_checked_at_the_moving_rate(rig: Rig) -> None:
+    """controller.py rule 3 (a review): the stop owed to a controller that answers again is
+    checked at the moving rate as any stop written is: lost again, it goes again within the
+    resend time, not an idle poll later (9.8 s on a Rot2Prog)."""
+    v = rig("rot2prog")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    stop = v.cfg.spec.codec_factory().encode_stop()
+    stop = stop[0] if isinstance(stop, list) else stop
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 10, "moving")
+    v.run_for(1)
+    v.set_deaf(True)
+    v.run_for(0.2)
+    v.stop()
+    v.run_until(lambda h: not h.status.available, 60, "offline")
+    v.drop_writes(stop)  # the owed stop, lost again
+    v.set_deaf(False)
+    t0 = v.now
+    v.run_until(lambda h: h.status.available, 60, "online again")
+    owed_t = next(w.t for w in v.writes if w.t >= t0 and w.data == stop)
+    v.run_until(lambda h: any(w.t > owed_t and w.data == stop for w in h.writes), 60, "again")
+    again_t = next(w.t for w in v.writes if w.t > owed_t and w.data == stop)
+    assert again_t - owed_t <= v.cfg.motion.stop_resend_s + 1.0, (owed_t, again_t)
