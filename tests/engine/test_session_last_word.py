@@ -227,6 +227,23 @@ def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -
         assert b"S\r" in v.sent(since=t) and abs(v.truth().az_deg - 300.0) > 5
 
 
+def turning_to_300(rig: Rig) -> VirtualRotator:
+    """A GS-232B online, turning to 300 for 2 s."""
+    v = rig("gs232b")
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.target(300.0)
+    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
+    v.run_for(2)
+    return v
+
+
+def stopped_short_of_300(v: VirtualRotator) -> None:
+    """Back online, the rotor stops: it is not let run on to the target the operator stopped."""
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_for(5)
+    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+
+
 def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_answers(
     rig: Rig,
 ) -> None:
@@ -235,20 +252,14 @@ def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_a
     the rotor still turning to the target the operator stopped: the stop goes again, the first
     frame after the first reading (an attack pass: the rotor ran 26 s on to the cancelled
     target)."""
-    v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
-    v.target(300.0)
-    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
-    v.run_for(2)
+    v = turning_to_300(rig)
     v.set_deaf(True)  # the burst: nothing the host writes arrives whole
     v.run_for(0.5)
     v.stop()
     v.run_for(4)
     assert not v.status.available
     v.set_deaf(False)  # healed
-    v.run_until(lambda h: h.status.available, 10, "online again")
-    v.run_for(5)
-    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+    stopped_short_of_300(v)
 
 
 def test_a_dcu1s_lock_on_whose_stop_frame_the_line_garbles_still_stops_the_rotor(
@@ -274,31 +285,21 @@ def test_a_stop_written_while_the_controller_is_offline_is_owed_when_it_answers(
     """stops.py rule 3: the controller found silent mid-turn, no stop out; the operator, seeing
     it offline, sends STOP, written on the open port and lost. Back online, the rotor is
     stopped, not let run on to its target (a connection's first reading is a guess)."""
-    v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
-    v.target(300.0)
-    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
-    v.run_for(2)
+    v = turning_to_300(rig)
     v.set_deaf(True)
     v.run_for(4)
     assert not v.status.available
     v.stop()  # written, lost
     v.run_for(0.5)
     v.set_deaf(False)
-    v.run_until(lambda h: h.status.available, 10, "online again")
-    v.run_for(5)
-    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+    stopped_short_of_300(v)
 
 
 def test_a_stop_unseen_when_the_port_fails_before_silence_is_found_is_owed(rig: Rig) -> None:
     """stops.py rule 3 (a review): a STOP lost on the line, then the USB adapter resets 1.5 s
     later (past STOP_UNSURE_S, before the silence timeout). The stop no reading showed taking
     is owed to the new connection: the rotor is stopped, not let run on to the target."""
-    v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
-    v.target(300.0)
-    v.run_until(lambda h: h.truth().is_moving, 5, "moving")
-    v.run_for(2)
+    v = turning_to_300(rig)
     v.set_deaf(True)
     v.run_for(0.2)
     v.stop()  # lost
@@ -307,9 +308,7 @@ def test_a_stop_unseen_when_the_port_fails_before_silence_is_found_is_owed(rig: 
     v.set_deaf(False)
     v.run_for(0.5)
     v.link_up()
-    v.run_until(lambda h: h.status.available, 10, "online again")
-    v.run_for(5)
-    assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+    stopped_short_of_300(v)
 
 
 def test_the_locks_stop_resent_after_silence_is_let_go_as_released(rig: Rig) -> None:
