@@ -712,7 +712,9 @@ class Controller:
             return
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
-        unread = now >= self._garbled_offline_t(link, now)  # (garbage only: rule 2)
+        unread = (  # (garbage only: rule 2; the cheap look first, at every step of every rotor)
+            unread_s >= timeout_s and now >= self._garbled_offline_t(link, now)
+        )
         silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
             link.silent_for(now) >= timeout_s or unread  # owed may still come)
         )
