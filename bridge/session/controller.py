@@ -290,12 +290,15 @@ class Controller:
             self.stops.blind_sent(now)  # stops.py rule 6
         link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
         if released:  # (a lock released before the port opened: its stop as released)
-            self._released_stop_t = now
+            self._released_stop_t = self._released_unseen_t = now
 
     def disconnect(self, failed: bool, now: float) -> None:
         """The port is closed (``failed``: not on purpose)."""
         stop_due = self.link is not None and self.link.stop_due
+        unseen = self.stops.unseen_t
         self.stops.port_closed(failed, stop_due, self.motion, now)
+        if self.stops.owed and unseen is not None and unseen == self._released_unseen_t:
+            self._released_owed = True  # (the released lock's: stops.py rule 2)
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
@@ -308,6 +311,7 @@ class Controller:
             self.stops.owed = True
             self._released_owed = False  # (a stop owed now is checked as any: stops.py rule 2)
         elif not merge or not self.stops.merges(self.motion, self.cfg.motion, now):
+            self._released_owed = False  # (a new stop: checked as any, stops.py rule 2)
             self.link.want_stop()
             self.flush_stop(now)
 
@@ -520,11 +524,10 @@ class Controller:
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
             self._send_owed(link, now)
-        elif (
-            not first and self.motion.state is not mo.MOVING and now > (self.stops.unseen_t or now)
-        ):
-            self.stops.unseen_t = None  # (stops.py rule 3: a reading at rest after the stop;
-            # not a connection's or an answering spell's first: its state is a guess)
+        elif not first and self.motion.state is not mo.MOVING:  # stops.py rule 3: a reading
+            unseen = self.stops.unseen_t  # at rest after the stop (not a connection's or an
+            if unseen is not None and now > unseen:  # answering spell's first: a guess)
+                self.stops.unseen_t = None
         if self.motion.state is mo.MOVING and before is not mo.MOVING:  # rule 3: a move seen
             link.poll_every(now, cfg.moving_poll_interval_s)  # (by an idle poll) is followed
         # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the

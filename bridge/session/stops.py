@@ -72,7 +72,9 @@ Rules:
 6. A controller that reports no position (a DCU-1) gets every stop twice, STOP_REPEAT_GAP_S
    apart: no reading can show one lost, and stopping is always safe (an attack pass: one bit
    flipped in a lock ON's ``AS1;`` and the rotor turned on 27 s). A target written in between
-   leaves the second unwritten: it would stop that move.
+   leaves the second unwritten: it would stop that move. The second is all the check such a
+   stop gets: none is owed to a port that fails later (rule 3's ``unseen_t``: no reading would
+   ever clear it, and a turn by hand an hour after a released lock was stopped).
 """
 
 from __future__ import annotations
@@ -169,6 +171,7 @@ class Stops:
         it was that second."""
         self.blind_at = None if self._blind_second else at + STOP_REPEAT_GAP_S
         self._blind_second = False
+        self.unseen_t = None  # (rule 3: no reading can ever show it; its second is its check)
 
     def blind_due(self, now: float) -> bool:
         """Rule 6: the second stop is to be written now (and is then owed no more)."""

@@ -219,7 +219,7 @@ def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -
             v.stop()
         v.run_for(5.0)
         v.link_up()
-        v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+        v.run_until(lambda h: h.status.available and h.state is IDLE, 60, "online")
         v.run_for(600.0)
         t = v.now
         v.manual_rotate(300.0)
@@ -230,7 +230,7 @@ def test_a_stop_owed_after_the_lock_was_released_is_checked_as_any(again: str) -
 def turning_to_300(rig: Rig) -> VirtualRotator:
     """A GS-232B online, turning to 300 for 2 s."""
     v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
     v.target(300.0)
     v.run_until(lambda h: h.truth().is_moving, 5, "moving")
     v.run_for(2)
@@ -242,6 +242,32 @@ def stopped_short_of_300(v: VirtualRotator) -> None:
     v.run_until(lambda h: h.status.available, 10, "online again")
     v.run_for(5)
     assert not v.truth().is_moving and abs(v.truth().az_deg - 300.0) > 10, v.truth()
+
+
+def locked_and_released_unheard(v: VirtualRotator) -> None:
+    """Lock ON, and OFF half a second later, while the controller's replies are lost (it hears:
+    the lock's stop takes, and no reading shows it)."""
+    v.set_silent(True)
+    v.lock(True)
+    v.run_for(0.5)
+    v.lock(False)
+
+
+def not_stopped_by_hand_later(v: VirtualRotator) -> None:
+    """Ten minutes on, the rotor turned by hand at its panel is not stopped (stops.py rule 2:
+    the lock's release says the tower work is over)."""
+    v.run_for(600.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(60.0)
+    assert b"S\r" not in v.sent(since=t), v.sent(since=t)
+
+
+def adapter_reset(v: VirtualRotator) -> None:
+    """The USB adapter resets: the port fails, and opens again a second later."""
+    v.link_down("USB adapter reset")
+    v.run_for(1)
+    v.link_up()
 
 
 def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_answers(
@@ -316,20 +342,13 @@ def test_the_locks_stop_resent_after_silence_is_let_go_as_released(rig: Rig) -> 
     long enough for it to be found silent: its lock's stop goes again when it answers, but as
     the released lock's, so a turn by hand long after the tower work is not stopped."""
     v = rig("gs232b")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
-    v.set_silent(True)  # the controller hears, its replies are lost
-    v.lock(True)
-    v.run_for(0.5)
-    v.lock(False)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    locked_and_released_unheard(v)
     v.run_for(4)
     assert not v.status.available
     v.set_silent(False)
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
-    v.run_for(600.0)
-    t = v.now
-    v.manual_rotate(300.0)
-    v.run_for(60.0)
-    assert b"S\r" not in v.sent(since=t), v.sent(since=t)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 60, "online")
+    not_stopped_by_hand_later(v)
 
 
 def test_a_dcu1s_owed_stop_on_reconnect_goes_twice(rig: Rig) -> None:
@@ -356,7 +375,7 @@ def test_an_owed_stop_written_at_re_answer_is_checked_at_the_moving_rate(rig: Ri
     checked at the moving rate as any stop written is: lost again, it goes again within the
     resend time, not an idle poll later (9.8 s on a Rot2Prog)."""
     v = rig("rot2prog")
-    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
     stop = v.cfg.spec.codec_factory().encode_stop()
     stop = stop[0] if isinstance(stop, list) else stop
     v.target(300.0)
@@ -374,3 +393,98 @@ def test_an_owed_stop_written_at_re_answer_is_checked_at_the_moving_rate(rig: Ri
     v.run_until(lambda h: any(w.t > owed_t and w.data == stop for w in h.writes), 60, "again")
     again_t = next(w.t for w in v.writes if w.t > owed_t and w.data == stop)
     assert again_t - owed_t <= v.cfg.motion.stop_resend_s + 1.0, (owed_t, again_t)
+
+
+def online(rig: Rig, model: str = "gs232b") -> VirtualRotator:
+    v = rig(model)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    return v
+
+
+def test_a_released_locks_stop_owed_to_a_port_failure_stays_released(rig: Rig) -> None:
+    """As test_the_locks_stop_resent_after_silence_is_let_go_as_released, but the USB adapter
+    resets (1.5 s after the release: past STOP_UNSURE_S) before the silence is found."""
+    v = online(rig)
+    locked_and_released_unheard(v)
+    v.run_for(1.5)
+    v.link_down("USB adapter reset")
+    v.set_silent(False)
+    v.run_for(1.0)
+    v.link_up()
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 60, "online")
+    not_stopped_by_hand_later(v)
+
+
+def test_a_released_locks_stop_stays_released_over_two_silences(rig: Rig) -> None:
+    """The released lock's stop owed to a silence goes when the controller answers; it answers
+    once and is silent again: the stop owed the second time is still the released lock's."""
+    v = online(rig)
+    locked_and_released_unheard(v)
+    v.run_until(lambda h: not h.status.available, 30, "offline")
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available, 30, "answers once")
+    v.set_silent(True)
+    v.run_until(lambda h: not h.status.available, 30, "offline again")
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 60, "online")
+    not_stopped_by_hand_later(v)
+
+
+def test_a_dcu1s_released_lock_owes_no_stop_to_a_port_reset_an_hour_later(rig: Rig) -> None:
+    """A DCU-1 gives no reading: nothing ever clears ``unseen_t``. Lock ON, lock OFF (the tower
+    work over), an hour later the operator turns the rotor at the panel and the USB adapter
+    resets: the lock's stop, long released, is written twice on the reopen and stops the turn."""
+    v = rig("dcu1", emulator={"start_az_deg": 30})
+    v.run_for(100)
+    v.lock(True)
+    v.run_for(1)
+    v.lock(False)
+    v.run_for(3600)
+    v.manual_rotate(300.0)
+    v.run_for(1)
+    t = v.now
+    adapter_reset(v)
+    v.run_for(60)
+    assert b"AS1;" not in v.sent(since=t), v.sent(since=t)
+    assert abs(v.truth().az_deg - 300.0) < 3, v.truth()
+
+
+def test_a_stop_an_hour_old_is_not_owed_to_a_port_reset_of_a_controller_that_reads(
+    rig: Rig,
+) -> None:
+    """Control: a GS-232B's stop an hour old is seen taken: the reopen owes nothing."""
+    v = online(rig)
+    v.stop()
+    v.run_for(3600)
+    t = v.now
+    adapter_reset(v)
+    v.run_for(10)
+    assert b"S\r" not in v.sent(since=t), v.sent(since=t)
+
+
+def test_a_stop_written_at_time_zero_is_cleared_by_readings_at_rest(rig: Rig) -> None:
+    """``now > (unseen_t or now)``: a stop written at 0.0 (a locked start, virtual time) is
+    falsy and never cleared; every later port failure owes it."""
+    v = rig("gs232b", locked=True)
+    v.run_for(3600)
+    assert v.session.controller.stops.unseen_t is None
+
+
+def test_a_lock_on_while_found_silent_is_checked_as_the_new_locks(rig: Rig) -> None:
+    """Lock ON, OFF, the controller's replies lost: found silent, the released lock's stop is
+    owed as released. Still offline (the port open), the operator locks again for tower work:
+    that lock's stop is written, but the owed one keeps ``_released_owed``, goes as released
+    when it answers, and is let go: a turn at the panel during the tower work runs on."""
+    v = online(rig)
+    locked_and_released_unheard(v)
+    v.run_until(lambda h: not h.status.available, 30, "offline")
+    v.lock(True)  # tower work again
+    v.run_for(1.0)
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 60, "online")
+    v.run_for(60.0)
+    t = v.now
+    v.manual_rotate(300.0)
+    v.run_for(60.0)
+    assert v.status.locked
+    assert b"S\r" in v.sent(since=t) and abs(v.truth().az_deg - 300.0) > 5, v.truth()
