@@ -280,15 +280,11 @@ class Controller:
             link.write(frame, now)
 
     def _send_owed(self, link: Link, now: float) -> None:
-        """stops.py rule 3: the stop owed, written now, as ``flush_stop`` writes one."""
+        """stops.py rule 3: the stop owed, written now."""
         self.stops.owed = False
         released, self._released_owed = self._released_owed, False
         link.write_stop(now)
-        self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-        self.stops.sent(now)
-        if not self.cfg.spec.can_report_position:
-            self.stops.blind_sent(now)  # stops.py rule 6
-        link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
+        self._stop_written(link, now)
         if released:  # (a lock released before the port opened: its stop as released)
             self._released_stop_t = self._released_unseen_t = now
 
@@ -329,11 +325,17 @@ class Controller:
                 link.poll_now(now)  # stop the line lost was never checked)
                 self._doubted = self._doubted._replace(at_once=self._doubts_in_row == 1)
         if link.flush_stop(now):
-            self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-            self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
-            if not self.cfg.spec.can_report_position:
-                self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
-            link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
+            self._stop_written(link, now)
+
+    def _stop_written(self, link: Link, now: float) -> None:
+        """A stop frame (an operator's, a repeat, one owed) was written now: the motion, the
+        stop rules and the next poll learn it alike (a review found the owed stop's own copy
+        of these lines had lost two of them)."""
+        self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
+        self.stops.sent(now)  # (stops.py rule 1: the repeat, or a stop anew)
+        if not self.cfg.spec.can_report_position:
+            self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
+        link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
 
     def owe_stop(self) -> None:
         """stops.py rule 3: a stop is owed: the first frame once the port is open (a lock kept
