@@ -95,7 +95,7 @@ STOP_WRITE_S = 5.0  # rule 6: what loop_stop gives the queue at most
 _PUBLISH_RETAINED = bytes([paho.PUBLISH | 1])  # rule 9: a QoS 0 PUBLISH's first byte
 _PUBLISH = bytes([paho.PUBLISH])
 _JOIN_BYTES = 65536  # rule 9: a packet of joined messages, at most about
-_PACKET_MAX = 268_435_455  # rule 9: MQTT's largest remaining length
+_PACKET_MAX = 268_435_455  # rule 9: MQTT's largest payload (paho's words)
 _TOPICS_KEPT = 4096  # rule 9: topic parts known, at most (a bridge's own are some hundreds)
 POLL_READ = POLLIN | POLLPRI  # rule 6: what wakes the network thread to read
 READ_EVENTS = POLL_READ | POLLERR | POLLHUP  # ... and what it then reads
@@ -184,16 +184,6 @@ class _LeanInfo:
 _LEAN_INFO = cast(paho.MQTTMessageInfo, _LeanInfo())
 
 
-def _remaining_length(n: int) -> bytes:
-    """MQTT's variable byte integer."""
-    out = bytearray()
-    while True:
-        n, digit = n >> 7, n & 0x7F
-        out.append(digit | 0x80 if n else digit)
-        if not n:
-            return bytes(out)
-
-
 class Client(paho.Client):
     """paho's client with connection.py rule 9 (every read goes through loop_read), rule 2
     (``tick``), rule 6 (``loop_start``: the network thread) and rule 9 (``publish_qos0``)."""
@@ -221,22 +211,15 @@ class Client(paho.Client):
             if len(parts) >= _TOPICS_KEPT:
                 parts.clear()
             parts[topic] = part
-        body = part[1]
-        size = len(body) + len(payload)
         if len(payload) > _PACKET_MAX:  # (paho's checks, in paho's order)
             raise ValueError("Payload too large.")
         if self._sock is None:
             return MQTTErrorCode.MQTT_ERR_NO_CONN
-        if size > _PACKET_MAX:
-            raise ValueError("Packet too large")
-        packet = b"".join(
-            (
-                _PUBLISH_RETAINED if retain else _PUBLISH,
-                _remaining_length(size),
-                body,
-                payload,
-            )
-        )
+        body = part[1]
+        packet = bytearray(_PUBLISH_RETAINED if retain else _PUBLISH)
+        self._pack_remaining_length(packet, len(body) + len(payload))  # (refuses what MQTT
+        packet += body  # cannot say: "Packet too large")
+        packet += payload
         return self._packet_queue(paho.PUBLISH, packet, 0, 0, _LEAN_INFO)
 
     def _topic_part(self, topic: str) -> bytes:
