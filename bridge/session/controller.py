@@ -526,10 +526,8 @@ class Controller:
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
             self._send_owed(link, now)
-        elif not first and self.motion.state is not mo.MOVING:  # stops.py rule 3: a reading
-            unseen = self.stops.unseen_t  # at rest after the stop (not a connection's or an
-            if unseen is not None and now > unseen:  # answering spell's first: a guess)
-                self.stops.unseen_t = None
+        elif not first:  # stops.py rule 3 (a connection's or an answering spell's first: a guess)
+            self.stops.reading(now, self.motion.state is not mo.MOVING)
         if self.motion.state is mo.MOVING and before is not mo.MOVING:  # rule 3: a move seen
             link.poll_every(now, cfg.moving_poll_interval_s)  # (by an idle poll) is followed
         # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the

@@ -33,7 +33,16 @@ Rules:
    are someone else's hand on the front panel, or a controller driving the wrong way (not one
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
-   the way round the stop may lead away first (rule 3), so there only a stall tells.
+   the way round the stop may lead away first (rule 3), so there only a stall tells, until the
+   rotor has come to its target: once a reading closing in on it was within ``tolerance_deg``,
+   or two readings in a row lay either side of it (the first outside the tolerance; a reading
+   the rotor could have turned to since the one before, at twice ``nominal_speed_deg_s``: a
+   corrupt one is no arrival), the same two readings away say it ``passed`` its target, on
+   either scale. That is most likely a controller heading elsewhere: the target never reached
+   it (the line lost the frame; a review: a STOP and the target after it eaten by one noise
+   burst, and the rotor turned on through the new bearing to the one the operator had
+   stopped). The target is dropped and the rotor stopped at once (a hand at the panel in the
+   settle time after a move reached its target looks the same: stopped once).
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -118,6 +127,7 @@ class Motion:
     el_target_deg: float | None = None
     closest_err: float | None = None  # rule 5: the least error seen since the target went out
     away_err: float | None = None  # rule 5: the last reading's error, if already turned away
+    came: bool = False  # rule 5: a reading since the target went out showed the rotor at it
 
 
 class Event(enum.StrEnum):
@@ -126,6 +136,7 @@ class Event(enum.StrEnum):
     STOPPED = "stopped"
     REFUSED = "refused"  # rule 8
     TURNED_AWAY = "turned away"
+    PASSED = "passed"  # rule 5: turned on past its target
 
 
 class Plan(enum.StrEnum):
@@ -200,7 +211,8 @@ def reading(
             idle_not_before_t=now + cfg.settle_s,
         )
         return tick(m, cfg, now)
-    anchor_deg = m.anchor_deg  # not None: the first reading returned above
+    anchor_deg, before_deg, before_t = m.anchor_deg, m.position_deg, m.changed_t  # (not None:
+    # the first reading returned above)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
     changes: dict[str, Any] = (
         {"changed_t": now, "position_deg": az_deg, "el_position_deg": el_deg}
@@ -219,13 +231,20 @@ def reading(
             changes["progress_t"] = now
     if changes:
         m = _with(m, changes)
-    if m.target_deg is not None and not wraps:
+    if m.target_deg is not None:
         err = target_error(m, cfg)
         if err is not None:
-            away = m.closest_err is not None and err > (
-                m.closest_err + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+            closest, came = m.closest_err, m.came
+            if not came and before_deg is not None and _came(m, cfg, before_deg, before_t, now):
+                m, came = replace(m, came=True), True
+            if wraps and not came:  # rule 5: the way round may lead away first
+                if closest is None or err < closest:
+                    m = replace(m, closest_err=err, away_err=None)
+                return tick(m, cfg, now)
+            away = closest is not None and err > (
+                closest + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
             )
-            if m.closest_err is None or err < m.closest_err:
+            if closest is None or err < closest:
                 m = replace(m, closest_err=err, away_err=None)
             elif not away or not moved:
                 if m.away_err is not None and not away:
@@ -241,10 +260,36 @@ def reading(
                     progress_t=None,
                     closest_err=None,
                     away_err=None,
+                    came=False,
                 )
                 m, events = tick(m, cfg, now)
-                return m, [Event.TURNED_AWAY, *events]
+                return m, [Event.PASSED if came else Event.TURNED_AWAY, *events]
     return tick(m, cfg, now)
+
+
+def _came(
+    m: Motion, cfg: MotionConfig, before_deg: float, before_t: float | None, now: float
+) -> bool:
+    """Rule 5: whether the reading just taken (``m``'s) shows the rotor come to its target
+    (closing in on it), or gone over it since the reading before (``before_deg``, taken at
+    ``before_t`` or later): one the
+    rotor could have turned to since, at twice its nominal speed (a corrupt reading is no
+    arrival: on a wrapping scale it would have a turn the way round taken for a pass)."""
+    target, az, wraps = m.target_deg, m.position_deg, cfg.spec.az_wraps
+    assert target is not None and az is not None
+    jump = apart_deg(before_deg, az, wraps)
+    dt = 0.0 if before_t is None else now - before_t
+    if jump > 2.0 * cfg.nominal_speed_deg_s * dt + cfg.tolerance_deg + cfg.noise_deg:
+        return False
+    el_err = 0.0
+    if m.el_target_deg is not None and m.el_position_deg is not None:
+        el_err = abs(m.el_position_deg - m.el_target_deg)
+    if el_err > cfg.tolerance_deg:
+        return False
+    a, b = apart_deg(before_deg, target, wraps), apart_deg(az, target, wraps)
+    if b <= cfg.tolerance_deg:
+        return b < a  # (closing in: not one that rested on it, then turned)
+    return a > cfg.tolerance_deg and jump >= a + b - 1e-9  # (over it: it lies between them)
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
@@ -292,6 +337,7 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
+        came=False,
         away_err=None,
     )
 
@@ -308,6 +354,7 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         stop_sent_t=now,
         closest_err=None,
         away_err=None,
+        came=False,
     )
 
 
@@ -321,7 +368,7 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
         if m.target_t - m.last_move_t <= cfg.settle_s:  # a new bearing refused mid-turn: the
             # rotor still turns to the one before, which nobody wants now (stops.py stops it)
             dropped = replace(m, target_deg=None, el_target_deg=None, progress_t=None)
-            return replace(dropped, closest_err=None, away_err=None), [Event.REFUSED]
+            return replace(dropped, closest_err=None, away_err=None, came=False), [Event.REFUSED]
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
 
 
@@ -387,6 +434,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         stop_sent_t=None,
         closest_err=None,
         away_err=None,
+        came=False,
     )
 
 

@@ -48,7 +48,12 @@ Rules:
    pass: a noise burst ate a GS-232B's STOP and the polls around it; taken for stopped for
    want of readings, then offline, and back online the rotor ran 26 s on to the target the
    operator had stopped. A review: the same with the adapter reset before the silence.)
-   A target written after that stop leaves none owed: a stop then would stop that move.
+   A target written after that stop leaves none owed once the second reading after it has
+   come (the first may answer a poll written before it): the controller was hearing then, and
+   a stop would stop that move. Until then a silence or a failed port still owes the stop: the
+   bridge drops the target then, so it stops no move the bridge still stands for (a review: a
+   deaf burst ate a STOP and the target after it, and the rotor ran on, back online, to the
+   bearing before both).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
    stopped once it comes to rest; a rotor still turning to the bearing before a new one the
    controller refused is stopped. Each ends tracking. Such a stop is written at once, whatever
@@ -118,6 +123,7 @@ class Stops:
         self._writing_repeat = False  # rule 1: the stop asked for now is that repeat
         self._repeat_sent: float | None = None  # rule 1: when the repeat went (the last stop)
         self._rest_stop_t: float | None = None  # rule 4: when one went to a rotor at rest
+        self._after_target = 0  # rule 3: readings still to come before a target lets go unseen_t
         self._stall_stop_t: float | None = None  # rule 4: when a stall's went, while watched
         self.blind_at: float | None = None  # rule 6: when a blind controller's second stop goes
         self._blind_second = False  # rule 6: the stop asked for now is that second one
@@ -161,7 +167,7 @@ class Stops:
 
     def sent(self, at: float) -> None:
         """A stop frame was written at ``at`` (rule 1: the repeat, or one that starts anew)."""
-        self.unseen_t = at  # rule 3
+        self.unseen_t, self._after_target = at, 0  # rule 3
         self._repeat_sent = at if self._writing_repeat else None
         self._writing_repeat = False
         self._stall_stop_t = None  # rule 4: rule 2 checks this one
@@ -171,7 +177,8 @@ class Stops:
         it was that second."""
         self.blind_at = None if self._blind_second else at + STOP_REPEAT_GAP_S
         self._blind_second = False
-        self.unseen_t = None  # (rule 3: no reading can ever show it; its second is its check)
+        self.unseen_t, self._after_target = None, 0  # (rule 3: no reading can ever show it;
+        # its second is its check)
 
     def blind_due(self, now: float) -> bool:
         """Rule 6: the second stop is to be written now (and is then owed no more)."""
@@ -188,8 +195,22 @@ class Stops:
         self._stall_stop_t = at if stall else None
 
     def target_sent(self) -> None:
-        """Rules 3 and 4: a target was written: no stop before it is owed or checked any more."""
-        self._rest_stop_t = self._stall_stop_t = self.unseen_t = self.blind_at = None
+        """Rules 3 and 4: a target was written: no stop before it is checked any more, nor owed
+        once two readings have come after it (rule 3)."""
+        self._rest_stop_t = self._stall_stop_t = self.blind_at = None
+        if self.unseen_t is not None:
+            self._after_target = 2
+
+    def reading(self, now: float, at_rest: bool) -> None:
+        """Rule 3: a reading came at ``now`` (not a connection's first, nor an answering
+        spell's: a guess), showing the rotor at rest (``at_rest``) or not: the last stop is
+        owed no more if it shows that stop taken, or if it is the second after a target."""
+        if self._after_target:
+            self._after_target -= 1
+            if not self._after_target:
+                self.unseen_t = None
+        if at_rest and self.unseen_t is not None and now > self.unseen_t:
+            self.unseen_t = None
 
     @property
     def stall_watched(self) -> bool:
@@ -264,6 +285,13 @@ class Stops:
                 "comes to rest"
             )
             return Verdict(False, Report(ErrorKind.STALLED, why), "turned by hand")
+        if event is mo.Event.PASSED:
+            why = (
+                f"rotor turned on past its target, now at {pos:g}° (the target may never have "
+                "reached the controller, or a hand at the panel): target dropped and the rotor "
+                "stopped; send the target again"
+            )
+            return Verdict(True, Report(ErrorKind.STALLED, why), "passed its target")
         if event is mo.Event.REFUSED:
             why = (
                 f"the controller refused the target (it answered with its refusal at {pos:g}°): "

@@ -281,16 +281,49 @@ def test_a_spid_turned_away_from_its_target_is_the_front_panel_and_loses_the_tar
     someone else's hand. Before, the target was held until a stall 10 s after the hand let go,
     and tracking pulled the rotor back in between."""
     m = spid_moving_to(120)
+    m, events = feed(m, [(10.5, 104), (11.0, 108), (11.5, 103), (12.0, 99)], SPID)
+    assert events == [] and m.target_deg == 120  # within tolerance + noise + margin
+    m, events = feed(m, [(12.5, 96.5)], SPID)
+    assert events == [] and m.target_deg == 120  # away once
+    m, events = feed(m, [(13.0, 94)], SPID)
+    assert events == [mo.Event.TURNED_AWAY]
+    assert m.state is S.MOVING and m.target_deg is None  # nothing is sent: the hand has it
+    m, events = feed(m, [(13.5, 92.0), (14.0, 92.0)], SPID)
+    m, events = mo.tick(m, SPID, 16.0)
+    assert events == [mo.Event.STOPPED]
+
+
+def test_a_rotor_that_turns_on_past_its_target_passed_it() -> None:
+    """Rule 5: a rotor that came to its target and turns on away from it is heading elsewhere
+    (the target frame lost on the line, the rotor still on its way to the bearing before):
+    ``passed``, on a scale that wraps as on one that does not."""
+    m = spid_moving_to(120)
     m, events = feed(m, [(10.5, 106), (11.0, 112), (11.5, 118), (12.0, 119.5)], SPID)
     assert events == [] and m.target_deg == 120  # on its way: never away
     m, events = feed(m, [(12.5, 122.5), (13.0, 125.0), (13.5, 127.5), (14.0, 131.0)], SPID)
     assert events == [] and m.target_deg == 120  # within tolerance + noise + margin, or once
     m, events = feed(m, [(14.5, 133.5)], SPID)
-    assert events == [mo.Event.TURNED_AWAY]
-    assert m.state is S.MOVING and m.target_deg is None  # nothing is sent: the hand has it
-    m, events = feed(m, [(15.0, 135.0), (15.5, 135.0)], SPID)
-    m, events = mo.tick(m, SPID, 17.0)
-    assert events == [mo.Event.STOPPED]
+    assert events == [mo.Event.PASSED] and m.target_deg is None
+    # a Rotor-EZ over north to 10: it reads 6 and 14 either side of it (never within 3)
+    m = mo.commanded(ready(az=330), CFG, 10, 10.0)
+    readings = [(10 + 0.5 * i, (330 + 8.0 * i) % 360) for i in range(1, 12)]
+    m, events = feed(m, readings[:6])
+    assert events == [] and m.target_deg == 10  # 338 .. 18: over it between 2 and 18
+    m, events = feed(m, readings[6:])
+    assert events == [mo.Event.PASSED] and m.target_deg is None, readings
+
+
+def test_a_coast_or_one_stray_reading_past_the_target_is_no_pass() -> None:
+    """Rule 5: the few degrees a rotor coasts on past its target (within the margin), or one
+    corrupt reading far past it, is no controller heading elsewhere."""
+    to_10 = [(10 + 0.5 * i, (330 + 4.0 * i) % 360) for i in range(1, 11)]  # .. 10
+    m, events = feed(mo.commanded(ready(az=330), CFG, 10, 10.0), [*to_10, (15.5, 14.0)])
+    m, more = feed(m, [(16.0, 17.5), (16.5, 17.5), (17.0, 17.5)])
+    assert mo.Event.PASSED not in events + more and m.target_deg == 10
+    m, events = feed(mo.commanded(ready(az=330), CFG, 10, 10.0), [*to_10, (15.5, 60.0)])
+    m, more = feed(m, [(16.0, 10.5), (16.5, 10.5), (17.0, 10.5)])
+    m, last = mo.tick(m, CFG, 30.0)
+    assert mo.Event.PASSED not in events + more + last and mo.Event.ARRIVED in more + last
 
 
 def test_one_stray_reading_an_overshoot_or_a_reversal_is_no_hand() -> None:
@@ -316,6 +349,17 @@ def test_on_a_wrapping_scale_a_way_that_leads_away_first_is_not_a_hand() -> None
     readings = [(10 + i * 0.5, 170 - 6.0 * i) for i in range(1, 20)]
     m, events = feed(m, readings)
     assert events == [] and m.target_deg == 190 and m.state is S.MOVING
+
+
+def test_one_corrupt_reading_at_the_target_is_no_arrival_on_the_way_round() -> None:
+    """Rule 5: a Rotor-EZ at 170 sent to 190 the way round through north; one corrupt reading
+    of 189 (or 200: over 190 from 165) is no pass, and the turn goes on."""
+    for stray in (189.0, 200.0):
+        m = mo.commanded(ready(az=170), CFG, 190, 10.0)
+        readings = [(10 + i * 0.5, 170 - 3.0 * i) for i in range(1, 20)]
+        readings[1] = (readings[1][0], stray)
+        m, events = feed(m, readings)
+        assert events == [] and m.target_deg == 190 and m.state is S.MOVING, stray
 
 
 def test_a_refusal_drops_the_target_that_has_not_moved_the_rotor() -> None:

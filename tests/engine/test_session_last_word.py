@@ -288,6 +288,64 @@ def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_a
     stopped_short_of_300(v)
 
 
+def test_a_stop_and_the_target_after_it_both_lost_before_a_silence_still_stop_the_rotor(
+    rig: Rig,
+) -> None:
+    """stops.py rule 3 (a review's case, the last note's): a deaf burst eats the operator's STOP
+    and the target sent after it. The target went out, so no stop was owed; the bridge drops
+    the target at the silence, and back online the rotor ran on to the bearing before both.
+    A target no reading came after leaves the stop before it owed."""
+    v = turning_to_300(rig)
+    v.set_deaf(True)
+    v.run_for(0.3)
+    v.stop()  # lost
+    v.run_for(0.3)
+    v.target(100.0)  # lost too
+    v.run_for(4)
+    assert not v.status.available
+    v.set_deaf(False)
+    stopped_short_of_300(v)
+
+
+def test_a_stop_and_the_target_after_it_lost_in_a_short_burst_do_not_leave_the_old_move(
+    rig: Rig,
+) -> None:
+    """motion.py rule 5: the same two frames lost in a burst too short to be found silent. The
+    rotor, still on its way to 300, passes the new bearing and turns on: it is stopped there,
+    not let run 180 degrees on to the bearing the operator stopped, and the error says so."""
+    v = turning_to_300(rig)
+    v.set_deaf(True)
+    v.run_for(0.3)
+    v.stop()  # lost
+    v.run_for(0.3)
+    v.target(100.0)  # lost too
+    v.run_for(1.0)
+    v.set_deaf(False)
+    v.run_until(lambda h: h.truth().az_deg > 100.0, 60, "past 100")
+    v.run_for(10)
+    assert not v.truth().is_moving and v.truth().az_deg < 130.0, v.truth()
+    assert any("past its target" in e.message for e in v.errors()), v.errors()
+
+
+def test_a_target_heard_after_a_stop_clears_the_stop_owed(rig: Rig) -> None:
+    """stops.py rule 3: a reading after the target shows the controller hearing again; the
+    stop before that target is owed no more, and a later silence does not stop the new move."""
+    v = turning_to_300(rig)
+    v.stop()
+    v.run_for(0.3)
+    v.target(100.0)
+    v.run_until(lambda h: h.truth().is_moving, 10, "turning to 100")
+    v.run_for(1)
+    v.set_silent(True)  # it hears, its replies are lost: found silent
+    v.run_until(lambda h: not h.status.available, 10, "offline")
+    t = v.now
+    v.set_silent(False)
+    v.run_until(lambda h: h.status.available, 10, "online again")
+    v.run_until(lambda h: not h.truth().is_moving, 120, "at rest")
+    assert abs(v.truth().az_deg - 100.0) < 4, v.truth()
+    assert b"S\r" not in v.sent(since=t)
+
+
 def test_a_dcu1s_lock_on_whose_stop_frame_the_line_garbles_still_stops_the_rotor(
     rig: Rig,
 ) -> None:
