@@ -427,15 +427,17 @@ class App:
         topics: dict[str, tuple[str, str]] = {}
         frames: dict[str, bytes] = {}
         for r in settings.rotators:
+            if not settings.mqtt.stop_express:
+                break
+            t = self.topics.rotator(r.id)
+            topics[t.lock] = (r.id, "lock")  # every rotator's lock ON, said (its rule 11)
             # (a rotator of two boxes has two ports: its stops take the stop lane)
             # (nor does a stop of several frames: an RC2800's, paced by the session)
-            if settings.mqtt.stop_express and r.spec.stop_anytime and not r.axes:
+            if r.spec.stop_anytime and not r.axes:
                 stop = r.spec.codec_factory().encode_stop()
-                if not isinstance(stop, bytes):
-                    continue
-                t = self.topics.rotator(r.id)
-                topics[t.stop], topics[t.lock] = (r.id, "stop"), (r.id, "lock")
-                frames[r.id] = stop
+                if isinstance(stop, bytes):
+                    topics[t.stop] = (r.id, "stop")
+                    frames[r.id] = stop
         groups = {  # a group's stop: each member's frame (interfaces/mqtt/groups.py)
             self.topics.group(g.id).stop: tuple(g.rotators) for g in settings.groups
         }

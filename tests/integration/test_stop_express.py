@@ -429,3 +429,28 @@ def test_a_lock_on_only_the_express_heard_is_set_and_refuses_the_next_target(
         rotator.submit(Target(200.0, source=Source.WEB), "target 200")  # (the console's way)
     time.sleep(1.0)  # what a move would take to show: none
     assert abs(emu.state().az_deg - 10) < 1 and not emu.state().is_moving
+
+
+def test_a_lock_on_only_the_express_heard_is_set_for_a_rotator_it_writes_no_frame_for(
+    rig: Rig, broker: Mosquitto
+) -> None:
+    """express.py rule 11: the relay read only the locks of the rotators it writes a stop frame
+    for; a SPID beside a Rotor-EZ, locked while only the express was back after a broker
+    restart, stayed unlocked and took the next target. It is set now, and that target refused."""
+    rig.add("tower")
+    spid = rig.add("mast", "rot2prog")
+    app = rig.start()
+    rig.ready("tower")
+    rig.ready("mast")
+    express_ready(app)
+    assert "mast" not in app.express.held  # (no frame of its own: a SPID's stop is no byte)
+    mast = next(r for r in app.rotators if r.id == "mast")
+    with express_alone(app, broker) as operator:
+        operator.publish("rotor/mast/lock", "ON")  # not retained
+        wait_until(lambda: mast.locked, 10, "the lock set")
+    wait_until(lambda: mast.status.locked, 10, "the status says locked")
+    az = spid.state().az_deg
+    with pytest.raises(Refused):
+        mast.submit(Target(200.0, source=Source.WEB), "target 200")
+    time.sleep(1.0)  # what a move would take to show: none
+    assert abs(spid.state().az_deg - az) < 1 and not spid.state().is_moving

@@ -143,7 +143,10 @@ Rules:
    a stop too, and the lock ON itself the express says (``locked``, with the time it read it
    and who sent it, a frame written or not): one neither connection could have had, by the
    same test, is set (``on_locked``): the lock is what a user turns on before climbing the
-   tower, and a rotator stopped but not locked took the next target from any front end. A
+   tower, and a rotator stopped but not locked took the next target from any front end. The
+   express reads every rotator's lock topic for this, also of those it writes no frame for (a
+   SPID, a SatEL, an RC2800, a rotator of two boxes: each locked as the others; a bridge with
+   none it writes for runs no express, and has no such relay). A
    lock ON a connection heard too within the second before is set twice, and a lock OFF
    carried out between the two is undone: the safe side, said in docs/mqtt.md.
 """
@@ -308,7 +311,8 @@ class Express:
         on_wrote: Callable[[str, float], None] | None = None,
         on_locked: Callable[[str, float, str | None], None] | None = None,
     ) -> None:
-        """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"); ``frames``:
+        """``topics``: each stop and lock topic -> (rotator id, "stop" or "lock"): the stops of
+        the rotators in ``frames``, the locks of any (rule 11 says each); ``frames``:
         each rotator of a model with ``stop_anytime`` -> its stop frame (rule 4); ``groups``:
         each group's stop topic -> its members; ``sync_topic``: rule 8's (without it the
         express never writes); ``on_hold``, ``on_release``: a rotator's hold put, ended;
@@ -316,7 +320,7 @@ class Express:
         read, at that time, from that operator (rule 11)."""
         self._settings = settings
         self.client_id = express_client_id(settings)
-        self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames}
+        self._topics = {t: rk for t, rk in topics.items() if rk[0] in frames or rk[1] == "lock"}
         self._groups = {
             t: members
             for t, all_members in (groups or {}).items()
