@@ -557,10 +557,10 @@ class Controller:
                 self.stops.owed = True  # were it otherwise, the stop is owed, not dropped)
             else:  # stops.py rule 4
                 self.link.write_stop(now)  # at once, also on a half-duplex line's reply
-                if self.motion.state is mo.MOVING:  # a refusal's: this turn's stop
+                if self.motion.state is mo.MOVING and event is not mo.Event.PASSED:
                     self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-                    self.stops.sent(now)
-                else:  # a stall's, a turned-away rotor's: to a rotor at rest
+                    self.stops.sent(now)  # (a refusal's: this turn's stop)
+                else:  # a stall's, a turned-away rotor's (at rest), a pass's (once, unchecked)
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
 
     # -- the line's own work, run by the session's step ------------------------------------------
@@ -739,6 +739,8 @@ class Controller:
                     f"controller on {cfg.port} answers only garbled replies (no valid reply for "
                     f"{self._garbled_offline_t(link, now) - (now - unread_s):.3g} s): a noisy line?"
                 )
+            if unseen is not None:  # (said: the stop may cut short a move that was heard)
+                why += "; the last stop, no reading showed taking, goes again when it answers"
             # the drop before tracking's end: a target of tracking's own is reported dropped
             # too (Ends would drop it silently first)
             self.notes += [Report(ErrorKind.SERIAL, why), Drop("controller not answering")]

@@ -34,15 +34,18 @@ Rules:
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
    the way round the stop may lead away first (rule 3), so there only a stall tells, until the
-   rotor has come to its target: once a reading closing in on it was within ``tolerance_deg``,
-   or two readings in a row lay either side of it (the first outside the tolerance; a reading
-   the rotor could have turned to since the one before, at twice ``nominal_speed_deg_s``: a
-   corrupt one is no arrival), the same two readings away say it ``passed`` its target, on
-   either scale. That is most likely a controller heading elsewhere: the target never reached
-   it (the line lost the frame; a review: a STOP and the target after it eaten by one noise
-   burst, and the rotor turned on through the new bearing to the one the operator had
-   stopped). The target is dropped and the rotor stopped at once (a hand at the panel in the
-   settle time after a move reached its target looks the same: stopped once).
+   rotor has come to its target: once a movement (rule 1) on either axis closed in on that
+   axis's target to within ``tolerance_deg``, or went over it from outside the tolerance (a
+   reading the rotor can have turned to since the reading before, at twice its nominal speed,
+   counted from the later of the last reading that changed and the target: a corrupt one is
+   no arrival), the same two readings away say it ``passed`` its target, on either scale.
+   That is most likely a controller heading elsewhere: the target never reached it (the line
+   lost the frame; a review: a STOP and the target after it eaten by one noise burst, and the
+   rotor turned on through the new bearing to the one the operator had stopped). The target
+   is dropped and the rotor stopped at once, once (stops.py rule 4: a hand at the panel in
+   the settle time after a move reached its target looks the same). A target behind the
+   rotor is never come to: that turn runs on until a stall tells (a protocol limit: no
+   controller of these says which target it heads for).
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -63,6 +66,7 @@ Rules:
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -211,8 +215,8 @@ def reading(
             idle_not_before_t=now + cfg.settle_s,
         )
         return tick(m, cfg, now)
-    anchor_deg, before_deg, before_t = m.anchor_deg, m.position_deg, m.changed_t  # (not None:
-    # the first reading returned above)
+    anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
+    before = m  # (rule 5 compares this reading with the one before and the last movement)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
     changes: dict[str, Any] = (
         {"changed_t": now, "position_deg": az_deg, "el_position_deg": el_deg}
@@ -235,7 +239,7 @@ def reading(
         err = target_error(m, cfg)
         if err is not None:
             closest, came = m.closest_err, m.came
-            if not came and before_deg is not None and _came(m, cfg, before_deg, before_t, now):
+            if not came and moved and _came(before, m, cfg, now):
                 m, came = replace(m, came=True), True
             if wraps and not came:  # rule 5: the way round may lead away first
                 if closest is None or err < closest:
@@ -267,29 +271,34 @@ def reading(
     return tick(m, cfg, now)
 
 
-def _came(
-    m: Motion, cfg: MotionConfig, before_deg: float, before_t: float | None, now: float
-) -> bool:
-    """Rule 5: whether the reading just taken (``m``'s) shows the rotor come to its target
-    (closing in on it), or gone over it since the reading before (``before_deg``, taken at
-    ``before_t`` or later): one the
-    rotor could have turned to since, at twice its nominal speed (a corrupt reading is no
-    arrival: on a wrapping scale it would have a turn the way round taken for a pass)."""
-    target, az, wraps = m.target_deg, m.position_deg, cfg.spec.az_wraps
-    assert target is not None and az is not None
-    jump = apart_deg(before_deg, az, wraps)
-    dt = 0.0 if before_t is None else now - before_t
-    if jump > 2.0 * cfg.nominal_speed_deg_s * dt + cfg.tolerance_deg + cfg.noise_deg:
-        return False
-    el_err = 0.0
-    if m.el_target_deg is not None and m.el_position_deg is not None:
-        el_err = abs(m.el_position_deg - m.el_target_deg)
-    if el_err > cfg.tolerance_deg:
-        return False
-    a, b = apart_deg(before_deg, target, wraps), apart_deg(az, target, wraps)
-    if b <= cfg.tolerance_deg:
-        return b < a  # (closing in: not one that rested on it, then turned)
-    return a > cfg.tolerance_deg and jump >= a + b - 1e-9  # (over it: it lies between them)
+def _came(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> bool:
+    """Rule 5: whether the reading just taken, a movement (``m``'s, ``before`` the motion as
+    it was), shows the rotor come to its target on either axis: closing in on it within the
+    tolerance, or gone over it since the last movement, from outside the tolerance. Only a
+    reading the rotor can have turned to since the reading before, at twice its nominal speed
+    (a corrupt one is no arrival: on a wrapping scale a turn the way round would be taken for
+    a pass); the time since is the later of the last reading that changed and the target."""
+    t0 = max(before.changed_t or -math.inf, before.target_t or -math.inf)
+    dt = now - t0 if t0 > -math.inf else 0.0
+    spec, tol, noise = cfg.spec, cfg.tolerance_deg, cfg.noise_deg
+    reach = 2.0 * dt * max(cfg.nominal_speed_deg_s, spec.nominal_el_speed_deg_s) + tol + noise
+    axes = (
+        (before.anchor_deg, before.position_deg, m.position_deg, m.target_deg, spec.az_wraps),
+        (before.el_anchor_deg, before.el_position_deg, m.el_position_deg, m.el_target_deg, False),
+    )
+    for anchor, last, pos, target, wraps in axes:
+        if anchor is None or last is None or pos is None or target is None:
+            continue
+        if apart_deg(last, pos, wraps) > reach:
+            return False  # (on either axis: the reading is corrupt)
+        if apart_deg(anchor, pos, wraps) <= noise:
+            continue  # not this axis's movement (rule 1)
+        a, b = apart_deg(anchor, target, wraps), apart_deg(pos, target, wraps)
+        if b <= tol and b < a:
+            return True
+        if a > tol and b > tol and apart_deg(anchor, pos, wraps) >= a + b - 1e-9:
+            return True  # (the target lies between them)
+    return False
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:

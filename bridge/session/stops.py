@@ -49,14 +49,19 @@ Rules:
    want of readings, then offline, and back online the rotor ran 26 s on to the target the
    operator had stopped. A review: the same with the adapter reset before the silence.)
    A target written after that stop leaves none owed once the second reading after it has
-   come (the first may answer a poll written before it): the controller was hearing then, and
-   a stop would stop that move. Until then a silence or a failed port still owes the stop: the
-   bridge drops the target then, so it stops no move the bridge still stands for (a review: a
-   deaf burst ate a STOP and the target after it, and the rotor ran on, back online, to the
-   bearing before both).
+   come (the first may answer a poll written before it): the controller hears again, the best
+   sign a reading gives that it had the target (none says which target it heads for: a burst
+   that ate both and ended before a silence leaves the rotor on its way to the bearing before,
+   motion.py rule 5 stops it where it passes the new one), and a stop would stop that move.
+   Until then a silence or a failed port still owes the stop, and the error says so: the
+   bridge drops the target then, so the stop cuts short no move the bridge still stands for,
+   a heard one included (the safe side; a review: a deaf burst ate a STOP and the target
+   after it, and the rotor ran on, back online, to the bearing before both).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
-   stopped once it comes to rest; a rotor still turning to the bearing before a new one the
-   controller refused is stopped. Each ends tracking. Such a stop is written at once, whatever
+   stopped once it comes to rest, one that turned on past it at once (once, unchecked as the
+   turned-away rotor's: a hand at the panel is stopped once, not fought); a rotor still
+   turning to the bearing before a new one the controller refused is stopped. Each ends
+   tracking. Such a stop is written at once, whatever
    the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does not wait for
    a reply to end), and is owed as any (rule 3). The refusal's, written while the rotor turns,
    is that turn's stop for rules 1 and 2. The others go to a rotor at rest, and nothing is
