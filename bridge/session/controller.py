@@ -196,6 +196,7 @@ class Controller:
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
+        self._passing = False  # stops.py rule 4: the stops checked now are a pass's
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -303,6 +304,7 @@ class Controller:
     def stop(self, now: float, merge: bool = False) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
         is closed, as the first frame it gets (stops.py rule 3)."""
+        self._passing = False  # (a stop anew: checked as any, stops.py rule 4)
         if self.link is None:
             self.stops.owed = True
             self._released_owed = False  # (a stop owed now is checked as any: stops.py rule 2)
@@ -385,7 +387,12 @@ class Controller:
             self.notes.append(error)
         if again:
             log.warning("%s: still turning after a stop; stopping again", self.name)
+            passing = self._passing
             self.stop(now)
+            if passing and error is not None:  # stops.py rule 4: a pass's, the last try
+                self.motion = mo.stop_checked(self.motion)  # (a hand has it: left alone)
+            else:
+                self._passing = passing  # (the same series)
 
     # -- what comes in ---------------------------------------------------------------------------
     def feed(self, data: bytes, now: float) -> Fed:
@@ -557,10 +564,11 @@ class Controller:
                 self.stops.owed = True  # were it otherwise, the stop is owed, not dropped)
             else:  # stops.py rule 4
                 self.link.write_stop(now)  # at once, also on a half-duplex line's reply
-                if self.motion.state is mo.MOVING and event is not mo.Event.PASSED:
+                if self.motion.state is mo.MOVING:  # a refusal's, a pass's: this turn's stop
                     self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
-                    self.stops.sent(now)  # (a refusal's: this turn's stop)
-                else:  # a stall's, a turned-away rotor's (at rest), a pass's (once, unchecked)
+                    self.stops.sent(now)
+                    self._passing = event is mo.Event.PASSED
+                else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
 
     # -- the line's own work, run by the session's step ------------------------------------------

@@ -34,18 +34,21 @@ Rules:
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
    the way round the stop may lead away first (rule 3), so there only a stall tells, until the
-   rotor has come to its target: once a movement (rule 1) on either axis closed in on that
-   axis's target to within ``tolerance_deg``, or went over it from outside the tolerance (a
-   reading the rotor can have turned to since the reading before, at twice its nominal speed,
-   counted from the later of the last reading that changed and the target: a corrupt one is
-   no arrival), the same two readings away say it ``passed`` its target, on either scale.
+   rotor has come to its target: on either axis, each judged on its own, once a movement
+   (rule 1) on it closed in on its target to within ``tolerance_deg``, or went over it from
+   outside the tolerance, the same two readings away on that axis say the rotor ``passed``
+   its target, on either scale (a reading the rotor cannot have turned to since the one
+   before, at three times its nominal speed plus the margin, counted from the later of the
+   last reading that changed and the target, is corrupt: no arrival, and no reading away).
    That is most likely a controller heading elsewhere: the target never reached it (the line
    lost the frame; a review: a STOP and the target after it eaten by one noise burst, and the
    rotor turned on through the new bearing to the one the operator had stopped). The target
-   is dropped and the rotor stopped at once, once (stops.py rule 4: a hand at the panel in
-   the settle time after a move reached its target looks the same). A target behind the
-   rotor is never come to: that turn runs on until a stall tells (a protocol limit: no
-   controller of these says which target it heads for).
+   is dropped and the rotor stopped at once (stops.py rule 4: a hand at the panel in the
+   settle time after a move reached its target looks the same). An axis that came stays
+   judged while the other still turns (an elevation that arrives first does not make an
+   azimuth going the long way round its stop a pass). A target behind the rotor is never
+   come to: that turn runs on until a stall tells (a protocol limit: no controller of these
+   says which target it heads for).
 6. Without position feedback (DCU-1) the state is ``unknown``; a commanded move is assumed to
    last the travel time at the nominal speed (the whole range when the start is unknown).
 7. ``plan_target`` is the one place that decides whether a target may go to the controller now.
@@ -131,7 +134,10 @@ class Motion:
     el_target_deg: float | None = None
     closest_err: float | None = None  # rule 5: the least error seen since the target went out
     away_err: float | None = None  # rule 5: the last reading's error, if already turned away
-    came: bool = False  # rule 5: a reading since the target went out showed the rotor at it
+    # rule 5, each axis: since a reading showed it come to its target, its closest error
+    # since and the error of a first reading away (None: not come to it)
+    az_pass: tuple[float, float | None] | None = None
+    el_pass: tuple[float, float | None] | None = None
 
 
 class Event(enum.StrEnum):
@@ -236,19 +242,17 @@ def reading(
     if changes:
         m = _with(m, changes)
     if m.target_deg is not None:
+        m, passed = _passing(before, m, cfg, now)
+        if passed:  # rule 5
+            m, events = tick(_dropped(m), cfg, now)
+            return m, [Event.PASSED, *events]
+    if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
         if err is not None:
-            closest, came = m.closest_err, m.came
-            if not came and moved and _came(before, m, cfg, now):
-                m, came = replace(m, came=True), True
-            if wraps and not came:  # rule 5: the way round may lead away first
-                if closest is None or err < closest:
-                    m = replace(m, closest_err=err, away_err=None)
-                return tick(m, cfg, now)
-            away = closest is not None and err > (
-                closest + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+            away = m.closest_err is not None and err > (
+                m.closest_err + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
             )
-            if closest is None or err < closest:
+            if m.closest_err is None or err < m.closest_err:
                 m = replace(m, closest_err=err, away_err=None)
             elif not away or not moved:
                 if m.away_err is not None and not away:
@@ -256,49 +260,78 @@ def reading(
             elif m.away_err is None or err <= m.away_err:
                 m = replace(m, away_err=err)  # the first reading away: one more must follow
             else:
-                m = replace(
-                    m,
-                    target_deg=None,
-                    el_target_deg=None,
-                    target_t=None,
-                    progress_t=None,
-                    closest_err=None,
-                    away_err=None,
-                    came=False,
-                )
-                m, events = tick(m, cfg, now)
-                return m, [Event.PASSED if came else Event.TURNED_AWAY, *events]
+                m, events = tick(_dropped(m), cfg, now)
+                return m, [Event.TURNED_AWAY, *events]
     return tick(m, cfg, now)
 
 
-def _came(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> bool:
-    """Rule 5: whether the reading just taken, a movement (``m``'s, ``before`` the motion as
-    it was), shows the rotor come to its target on either axis: closing in on it within the
-    tolerance, or gone over it since the last movement, from outside the tolerance. Only a
-    reading the rotor can have turned to since the reading before, at twice its nominal speed
-    (a corrupt one is no arrival: on a wrapping scale a turn the way round would be taken for
-    a pass); the time since is the later of the last reading that changed and the target."""
+def _dropped(m: Motion) -> Motion:
+    """Rule 5: the target dropped, the rotor still turning (someone else's move now)."""
+    return replace(
+        m,
+        target_deg=None,
+        el_target_deg=None,
+        target_t=None,
+        progress_t=None,
+        closest_err=None,
+        away_err=None,
+        az_pass=None,
+        el_pass=None,
+    )
+
+
+def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, bool]:
+    """Rule 5, each axis on its own: whether the reading just taken (``m``'s; ``before``, the
+    motion as it was) shows the rotor come to that axis's target, and whether an axis that
+    came has turned on past it (two readings in a row further than its closest since, by
+    more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG, each a movement)."""
+    tol, noise = cfg.tolerance_deg, cfg.noise_deg
+    far = tol + noise + AWAY_MARGIN_DEG
     t0 = max(before.changed_t or -math.inf, before.target_t or -math.inf)
     dt = now - t0 if t0 > -math.inf else 0.0
-    spec, tol, noise = cfg.spec, cfg.tolerance_deg, cfg.noise_deg
-    reach = 2.0 * dt * max(cfg.nominal_speed_deg_s, spec.nominal_el_speed_deg_s) + tol + noise
+    speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
+    reach = 3.0 * speed * dt + far  # (what a reading can have turned since the one before)
+    wraps = cfg.spec.az_wraps
     axes = (
-        (before.anchor_deg, before.position_deg, m.position_deg, m.target_deg, spec.az_wraps),
-        (before.el_anchor_deg, before.el_position_deg, m.el_position_deg, m.el_target_deg, False),
+        (before.anchor_deg, before.position_deg, m.position_deg, m.target_deg, wraps, m.az_pass),
+        (
+            before.el_anchor_deg,
+            before.el_position_deg,
+            m.el_position_deg,
+            m.el_target_deg,
+            False,
+            m.el_pass,
+        ),
     )
-    for anchor, last, pos, target, wraps in axes:
+    watched: list[tuple[float, float | None] | None] = []
+    for anchor, last, pos, target, wrap, watch in axes:
         if anchor is None or last is None or pos is None or target is None:
+            watched.append(watch)
             continue
-        if apart_deg(last, pos, wraps) > reach:
-            return False  # (on either axis: the reading is corrupt)
-        if apart_deg(anchor, pos, wraps) <= noise:
-            continue  # not this axis's movement (rule 1)
-        a, b = apart_deg(anchor, target, wraps), apart_deg(pos, target, wraps)
-        if b <= tol and b < a:
-            return True
-        if a > tol and b > tol and apart_deg(anchor, pos, wraps) >= a + b - 1e-9:
-            return True  # (the target lies between them)
-    return False
+        if apart_deg(last, pos, wrap) > reach:  # a corrupt reading: nothing to judge by
+            return m, False
+        moved = apart_deg(anchor, pos, wrap) > noise  # (this axis's movement: rule 1)
+        a, err = apart_deg(anchor, target, wrap), apart_deg(pos, target, wrap)
+        if watch is None:
+            came = moved and (
+                (err <= tol and err < a)  # closing in on it
+                or (a > tol and err > tol and apart_deg(anchor, pos, wrap) >= a + err - 1e-9)
+            )  # (or gone over it: it lies between the last movement and this one)
+            watched.append((err, None) if came else None)
+            continue
+        closest, away = watch
+        if err < closest:
+            watched.append((err, None))
+        elif err <= closest + far or not moved:
+            watched.append((closest, None) if err <= closest + far else watch)
+        elif away is None or err <= away:
+            watched.append((closest, err))  # the first reading away: one more must follow
+        else:
+            return m, True
+    az_pass, el_pass = watched
+    if az_pass != m.az_pass or el_pass != m.el_pass:
+        m = replace(m, az_pass=az_pass, el_pass=el_pass)
+    return m, False
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
@@ -346,7 +379,8 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
-        came=False,
+        az_pass=None,
+        el_pass=None,
         away_err=None,
     )
 
@@ -363,7 +397,8 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         stop_sent_t=now,
         closest_err=None,
         away_err=None,
-        came=False,
+        az_pass=None,
+        el_pass=None,
     )
 
 
@@ -377,7 +412,8 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
         if m.target_t - m.last_move_t <= cfg.settle_s:  # a new bearing refused mid-turn: the
             # rotor still turns to the one before, which nobody wants now (stops.py stops it)
             dropped = replace(m, target_deg=None, el_target_deg=None, progress_t=None)
-            return replace(dropped, closest_err=None, away_err=None, came=False), [Event.REFUSED]
+            dropped = replace(dropped, az_pass=None, el_pass=None)
+            return replace(dropped, closest_err=None, away_err=None), [Event.REFUSED]
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
 
 
@@ -443,7 +479,8 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         stop_sent_t=None,
         closest_err=None,
         away_err=None,
-        came=False,
+        az_pass=None,
+        el_pass=None,
     )
 
 

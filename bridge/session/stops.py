@@ -58,15 +58,19 @@ Rules:
    a heard one included (the safe side; a review: a deaf burst ate a STOP and the target
    after it, and the rotor ran on, back online, to the bearing before both).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
-   stopped once it comes to rest, one that turned on past it at once (once, unchecked as the
-   turned-away rotor's: a hand at the panel is stopped once, not fought); a rotor still
-   turning to the bearing before a new one the controller refused is stopped. Each ends
-   tracking. Such a stop is written at once, whatever
-   the line is doing (link.py ``write_stop``: a motor driving a jammed rotor does not wait for
-   a reply to end), and is owed as any (rule 3). The refusal's, written while the rotor turns,
-   is that turn's stop for rules 1 and 2. The others go to a rotor at rest, and nothing is
-   merged into them (an operator's STOP after a stall is written: no reading can show whether a
-   jammed rotor's stop took). A turned-away rotor's is not checked (a later move by hand is
+   stopped once it comes to rest; one that turned on past it, and a rotor still turning to
+   the bearing before a new one the controller refused, are stopped at once. Each ends
+   tracking. Such a stop is written at once, whatever the line is doing (link.py
+   ``write_stop``: a motor driving a jammed rotor does not wait for a reply to end), and is
+   owed as any (rule 3). The pass's and the refusal's, written while the rotor turns, are
+   that turn's stop for rules 1, 2 and 3: checked and owed as an operator's (a pass comes of
+   a line that lost a frame), but for the end: the pass's is sent again
+   STOP_TRIES_BEFORE_ERROR times at most, and with the error the rotor is left alone (a hand
+   at the panel in the settle time after an arrival looks like a pass: stopped four times at
+   most, not fought on); a stop anew meanwhile is checked as any. The others go to a rotor
+   at rest, and nothing is merged into them (an operator's STOP after a stall is written: no
+   reading can show whether a jammed rotor's stop took). A turned-away rotor's is not
+   checked (a later move by hand is
    left alone). A stall's is watched, once: its motor may have driven the jammed rotor all
    along, and when the rotor breaks free the readings show it turning on to its old bearing.
    The first turn seen after it, before a target, another stop or the port closing, gets one
