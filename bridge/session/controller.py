@@ -281,7 +281,8 @@ class Controller:
             link.write(frame, now)
 
     def _send_owed(self, link: Link, now: float) -> None:
-        """stops.py rule 3: the stop owed, written now."""
+        """stops.py rule 3: the stop owed, written now (checked as any: rule 4)."""
+        self._passing = False
         self.stops.owed = False
         released, self._released_owed = self._released_owed, False
         link.write_stop(now)
@@ -382,6 +383,8 @@ class Controller:
             )
             self.notes.append(Report(ErrorKind.STOP, why))
             return
+        if self.motion.stop_sent_t is None:
+            self._passing = False  # (no stop checked: none is a pass's)
         again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
         if error is not None:
             self.notes.append(error)
@@ -390,7 +393,8 @@ class Controller:
             passing = self._passing
             self.stop(now)
             if passing and error is not None:  # stops.py rule 4: a pass's, the last try
-                self.motion = mo.stop_checked(self.motion)  # (a hand has it: left alone)
+                self.motion = mo.stop_checked(self.motion)  # (a hand has it: left alone,
+                self.stops.let_go()  # and owed to no silence nor port failure after)
             else:
                 self._passing = passing  # (the same series)
 
@@ -570,6 +574,7 @@ class Controller:
                     self._passing = event is mo.Event.PASSED
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
+                    self._passing = False
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:

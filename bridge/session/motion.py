@@ -39,7 +39,9 @@ Rules:
    outside the tolerance, the same two readings away on that axis say the rotor ``passed``
    its target, on either scale (a reading the rotor cannot have turned to since the one
    before, at three times its nominal speed plus the margin, counted from the later of the
-   last reading that changed and the target, is corrupt: no arrival, and no reading away).
+   last reading that changed and the target, is corrupt: no arrival, and no reading away;
+   and an arrival is none if the next movement on that axis turns back the way it came: a
+   corrupt reading close to the last, or a hand turning the rotor back).
    That is most likely a controller heading elsewhere: the target never reached it (the line
    lost the frame; a review: a STOP and the target after it eaten by one noise burst, and the
    rotor turned on through the new bearing to the one the operator had stopped). The target
@@ -113,6 +115,12 @@ class MotionConfig:
         return self.spec.retarget is RetargetPolicy.DIRECT
 
 
+#: rule 5, one axis's watch once it came to its target: its closest error since, the error
+#: of a first reading away (or None), and the way it was turning when it came (1 or -1) until
+#: a movement after it turned on that way (0: sure)
+Watch = tuple[float, float | None, int]
+
+
 @dataclass(frozen=True)
 class Motion:
     state: MotionState = MotionState.OFFLINE
@@ -136,8 +144,8 @@ class Motion:
     away_err: float | None = None  # rule 5: the last reading's error, if already turned away
     # rule 5, each axis: since a reading showed it come to its target, its closest error
     # since and the error of a first reading away (None: not come to it)
-    az_pass: tuple[float, float | None] | None = None
-    el_pass: tuple[float, float | None] | None = None
+    az_pass: Watch | None = None
+    el_pass: Watch | None = None
 
 
 class Event(enum.StrEnum):
@@ -303,29 +311,36 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
             m.el_pass,
         ),
     )
-    watched: list[tuple[float, float | None] | None] = []
+    watched: list[Watch | None] = []
     for anchor, last, pos, target, wrap, watch in axes:
         if anchor is None or last is None or pos is None or target is None:
             watched.append(watch)
             continue
         if apart_deg(last, pos, wrap) > reach:  # a corrupt reading: nothing to judge by
             return m, False
-        moved = apart_deg(anchor, pos, wrap) > noise  # (this axis's movement: rule 1)
+        step = pos - anchor  # (this axis's movement since the last: rule 1, signed)
+        if wrap:
+            step = (step + 180.0) % 360.0 - 180.0
+        moved = abs(step) > noise
+        heading = 1 if step > 0 else -1
+        if watch is not None and watch[2] and moved and heading != watch[2]:
+            watch = None  # it came, then turned back: that reading was none to judge by
         a, err = apart_deg(anchor, target, wrap), apart_deg(pos, target, wrap)
         if watch is None:
             came = moved and (
                 (err <= tol and err < a)  # closing in on it
-                or (a > tol and err > tol and apart_deg(anchor, pos, wrap) >= a + err - 1e-9)
+                or (a > tol and err > tol and abs(step) >= a + err - 1e-9)
             )  # (or gone over it: it lies between the last movement and this one)
-            watched.append((err, None) if came else None)
+            watched.append((err, None, heading) if came else None)
             continue
-        closest, away = watch
+        closest, away, pending = watch[0], watch[1], watch[2] if not moved else 0
         if err < closest:
-            watched.append((err, None))
-        elif err <= closest + far or not moved:
-            watched.append((closest, None) if err <= closest + far else watch)
+            watched.append((err, None, pending))
+        elif pending or err <= closest + far or not moved:
+            keep = pending or err <= closest + far
+            watched.append((closest, None, pending) if keep else watch)
         elif away is None or err <= away:
-            watched.append((closest, err))  # the first reading away: one more must follow
+            watched.append((closest, err, 0))  # the first reading away: one more must follow
         else:
             return m, True
     az_pass, el_pass = watched

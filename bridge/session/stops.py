@@ -67,7 +67,8 @@ Rules:
    a line that lost a frame), but for the end: the pass's is sent again
    STOP_TRIES_BEFORE_ERROR times at most, and with the error the rotor is left alone (a hand
    at the panel in the settle time after an arrival looks like a pass: stopped four times at
-   most, not fought on); a stop anew meanwhile is checked as any. The others go to a rotor
+   most, not fought on, and owed to no silence after); a stop anew meanwhile, or one owed
+   before the last try, is checked as any. The others go to a rotor
    at rest, and nothing is merged into them (an operator's STOP after a stall is written: no
    reading can show whether a jammed rotor's stop took). A turned-away rotor's is not
    checked (a later move by hand is
@@ -202,6 +203,10 @@ class Stops:
         watched (``broke_free``)."""
         self._rest_stop_t = at
         self._stall_stop_t = at if stall else None
+
+    def let_go(self) -> None:
+        """Rule 4: the pass's stops are given up (the error said so): none of them is owed."""
+        self.unseen_t, self._after_target = None, 0
 
     def target_sent(self) -> None:
         """Rules 3 and 4: a target was written: no stop before it is checked any more, nor owed

@@ -278,3 +278,93 @@ def test_a_rotor_faster_than_its_nominal_speed_is_caught_passing(
     v.run_until(lambda h: h.truth().az_deg > 100.0, 60, "past 100")
     v.run_for(60)
     assert v.truth().az_deg < 130.0 and passed(v), v.truth()
+
+
+def flip_once(old: bytes, new: bytes) -> Callable[[bytes, float], bytes]:
+    """The controller's bytes, the first reply ending in ``old`` given ``new``'s last byte."""
+    st = {"on": True, "tail": b""}
+
+    def flip(data: bytes, now: float) -> bytes:
+        out = bytearray()
+        for b in data:
+            st["tail"] = (st["tail"] + bytes([b]))[-len(old) :]
+            if st["on"] and st["tail"] == old:
+                b, st["on"] = new[-1], False
+            out.append(b)
+        return bytes(out)
+
+    return flip
+
+
+@pytest.mark.parametrize(
+    ("model", "old", "new"),
+    [("rotorcard", b";350", b";358"), ("gs232b-az", b"AZ=351", b"AZ=359")],
+)
+def test_one_flipped_bit_at_the_start_of_a_move_across_the_stop_is_no_pass(
+    rig: Rig, model: str, old: bytes, new: bytes
+) -> None:
+    """From 356 to 1, the long way down: one reading flipped to within the tolerance of 1,
+    close enough to the last to be believed, looked like an arrival, and the true readings
+    going on down like a pass (a third review). A movement after an arrival that turns back
+    the other way says the arrival was none."""
+    v = online(rig(model, emulator={"start_az_deg": 356.0}))
+    v.run_for(3)
+    v.to_host = flip_once(old, new)
+    v.target(1.0)
+    v.run_for(20)
+    assert not passed(v) and v.truth().is_moving, (v.truth(), v.errors())
+
+
+def test_a_hand_left_alone_after_the_passs_last_stop_is_not_fought_after_a_silence(
+    rig: Rig,
+) -> None:
+    """The pass's stops given up, the hand at the panel has the rotor: a short silence then
+    owes none of them (a third review: the last one, owed and checked as any, went 13 times
+    in 25 s)."""
+    v = online(rig("gs232b-az"))
+    v.target(100.0)
+    v.run_until(lambda h: not h.truth().is_moving and h.truth().az_deg == 100.0, 60, "at 100")
+    v.run_for(0.4)  # in the settle time
+    v.manual_rotate(359.0)
+
+    def hold(seconds: float) -> None:
+        end = v.now + seconds
+        while v.now < end:
+            v.run_for(0.05)
+            if not v.truth().is_moving and v.truth().az_deg < 359.0:
+                v.manual_rotate(359.0)  # still held
+
+    hold(15)
+    assert any("stop it at the controller" in e.message for e in v.errors())
+    v.set_silent(True)
+    v.run_until(lambda h: not h.status.available, 10, "offline")
+    v.set_silent(False)
+    t = v.now
+    hold(25)
+    assert v.sent(since=t).count(b"S\r") <= 1, v.sent(since=t)
+
+
+@pytest.mark.parametrize("pass_first", [False, True])
+def test_a_stalls_stop_owed_after_a_pass_is_checked_as_any(rig: Rig, pass_first: bool) -> None:
+    """The pass's give-up is the pass's alone: a stall's stop later owed to a port failure is
+    checked to the end, and the rotor, breaking free, does not run on to its old bearing (a
+    third review: the stale mark of a pass gave that stop up after three tries)."""
+    v = online(rig("gs232b-az"))
+    if pass_first:
+        v.target(300.0)
+        v.run_until(lambda h: h.truth().az_deg > 40, 60, "past 40")
+        lost_stop_and_target(v, lambda: v.target(100.0))
+        v.run_until(passed, 60, "the pass")
+        v.run_for(30)  # at rest: the pass's stop took
+    v.target(250.0)
+    v.run_until(lambda h: h.truth().az_deg > 150, 60, "past 150")
+    v.jam()
+    v.drop_writes(b"S\r", 5)  # the stall's, the owed one, three checks
+    v.run_until(lambda h: any("stalled" in e.message for e in h.errors()), 30, "stall")
+    v.link_down("adapter reset")
+    v.run_for(0.5)
+    v.link_up()
+    v.run_for(2)
+    v.unjam()  # breaks free, and would turn on to 250
+    v.run_for(40)
+    assert v.truth().az_deg < 200.0, v.truth()
