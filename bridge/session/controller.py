@@ -197,6 +197,7 @@ class Controller:
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
         self._passing = False  # stops.py rule 4: the stops checked now are a pass's
+        self._pass_ends = False  # ... and the stop due now its last try: given up once written
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -282,7 +283,7 @@ class Controller:
 
     def _send_owed(self, link: Link, now: float) -> None:
         """stops.py rule 3: the stop owed, written now (checked as any: rule 4)."""
-        self._passing = False
+        self._passing = self._pass_ends = False
         self.stops.owed = False
         released, self._released_owed = self._released_owed, False
         link.write_stop(now)
@@ -300,12 +301,14 @@ class Controller:
         self.link = None
         self.answering = False
         self.motion = mo.link_down(self.motion)
+        self._pass_ends = False  # (a last try not written: owed, checked as any)
 
     # -- stops ---------------------------------------------------------------------------------
-    def stop(self, now: float, merge: bool = False) -> None:
+    def stop(self, now: float, merge: bool = False, ends_pass: bool = False) -> None:
         """A stop now (``merge``: unless it adds nothing, stops.py rule 1), or, while the port
-        is closed, as the first frame it gets (stops.py rule 3)."""
-        self._passing = False  # (a stop anew: checked as any, stops.py rule 4)
+        is closed, as the first frame it gets (stops.py rule 3); ``ends_pass``: a pass's last
+        try (stops.py rule 4)."""
+        self._passing, self._pass_ends = False, ends_pass  # (else a stop anew: checked as any)
         if self.link is None:
             self.stops.owed = True
             self._released_owed = False  # (a stop owed now is checked as any: stops.py rule 2)
@@ -339,6 +342,10 @@ class Controller:
         if not self.cfg.spec.can_report_position:
             self.stops.blind_sent(now)  # stops.py rule 6: nothing can check it
         link.poll_every(now, self.cfg.moving_poll_interval_s)  # rule 3: it is checked
+        if self._pass_ends:  # stops.py rule 4: a pass's last try, written (on a half-duplex
+            self._pass_ends = False  # line maybe after the check that asked for it): given up
+            self.motion = mo.stop_checked(self.motion)  # (a hand has it: left alone, and
+            self.stops.let_go()  # owed to no silence nor port failure after)
 
     def owe_stop(self) -> None:
         """stops.py rule 3: a stop is owed: the first frame once the port is open (a lock kept
@@ -391,12 +398,9 @@ class Controller:
         if again:
             log.warning("%s: still turning after a stop; stopping again", self.name)
             passing = self._passing
-            self.stop(now)
-            if passing and error is not None:  # stops.py rule 4: a pass's, the last try
-                self.motion = mo.stop_checked(self.motion)  # (a hand has it: left alone,
-                self.stops.let_go()  # and owed to no silence nor port failure after)
-            else:
-                self._passing = passing  # (the same series)
+            last = passing and error is not None  # stops.py rule 4: a pass's last try
+            self.stop(now, ends_pass=last)
+            self._passing = passing and not last  # (the same series)
 
     # -- what comes in ---------------------------------------------------------------------------
     def feed(self, data: bytes, now: float) -> Fed:
@@ -537,8 +541,8 @@ class Controller:
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
             self._send_owed(link, now)
-        elif not first:  # stops.py rule 3 (a connection's or an answering spell's first: a guess)
-            self.stops.reading(now, self.motion.state is not mo.MOVING)
+        elif not first and self.stops.unseen_t is not None:  # stops.py rule 3 (a connection's
+            self.stops.reading(now, self.motion.state is not mo.MOVING)  # first is a guess)
         if self.motion.state is mo.MOVING and before is not mo.MOVING:  # rule 3: a move seen
             link.poll_every(now, cfg.moving_poll_interval_s)  # (by an idle poll) is followed
         # a reading's motion is one its clock leaves as it is now (motion.py rule 9): the

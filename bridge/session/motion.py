@@ -7,7 +7,9 @@ not close: cancelled from the front panel or a hardware failure") and its brake-
 
 Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
-   movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
+   movement was seen) on either axis, each axis with its own (an elevation creeping on while the
+   azimuth turns moves from where it last moved). Analog jitter of a still rotor stays inside
+   that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
    last command, so a rotor that has not started yet is not "still").
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
@@ -34,14 +36,17 @@ Rules:
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
    the way round the stop may lead away first (rule 3), so there only a stall tells, until the
-   rotor has come to its target: on either axis, each judged on its own, once a movement
-   (rule 1) on it closed in on its target to within ``tolerance_deg``, or went over it from
-   outside the tolerance, the same two readings away on that axis say the rotor ``passed``
-   its target, on either scale (a reading the rotor cannot have turned to since the one
-   before, at three times its nominal speed plus the margin, counted from the later of the
-   last reading that changed and the target, is corrupt: no arrival, and no reading away;
-   and an arrival is none if the next movement on that axis turns back the way it came: a
-   corrupt reading close to the last, or a hand turning the rotor back).
+   rotor has come to its target. On either axis, each judged on its own: once a movement
+   (rule 1) on it closed in on its target to within ``tolerance_deg``, or went over it (the
+   target between that axis's last movement and this one), and the next movement on it went
+   on the same way (one that turns back says the arrival was none: a corrupt reading close
+   to the last, or a hand turning the rotor back), two movements away on that axis, the
+   second further than the first, both more than ``tolerance_deg + noise_deg`` +
+   AWAY_MARGIN_DEG further than the closest it came, say the rotor ``passed`` its target, on
+   either scale. A reading further from the one before than three times the larger of the
+   two nominal speeds (``nominal_speed_deg_s``, the model's elevation's) over the time since
+   the later of the last reading that changed and the target, plus that sum, is corrupt: no
+   arrival, and no reading away.
    That is most likely a controller heading elsewhere: the target never reached it (the line
    lost the frame; a review: a STOP and the target after it eaten by one noise burst, and the
    rotor turned on through the new bearing to the one the operator had stopped). The target
@@ -238,11 +243,13 @@ def reading(
         else {}
     )
     wraps = cfg.spec.az_wraps  # (asked twice: no property call)
-    moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
-    if el_deg is not None and m.el_anchor_deg is not None:
-        moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
-    if moved:
-        changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
+    moved = az_moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
+    el_anchor = m.el_anchor_deg
+    if el_deg is not None and el_anchor is not None and abs(el_deg - el_anchor) > cfg.noise_deg:
+        moved, el_anchor = True, el_deg
+    if moved:  # (each axis's anchor where that axis last moved: a slow axis creeps on)
+        changes["anchor_deg"] = az_deg if az_moved else anchor_deg
+        changes["el_anchor_deg"] = el_deg if el_deg is None or el_anchor is None else el_anchor
         changes["last_move_t"], changes["still_since_t"] = now, None
         changes["state"] = MOVING
         if m.target_deg is not None:
@@ -329,16 +336,17 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
         if watch is None:
             came = moved and (
                 (err <= tol and err < a)  # closing in on it
-                or (a > tol and err > tol and abs(step) >= a + err - 1e-9)
+                or (a > 0.0 and err > 0.0 and abs(step) >= a + err - 1e-9)
             )  # (or gone over it: it lies between the last movement and this one)
             watched.append((err, None, heading) if came else None)
             continue
         closest, away, pending = watch[0], watch[1], watch[2] if not moved else 0
         if err < closest:
             watched.append((err, None, pending))
-        elif pending or err <= closest + far or not moved:
-            keep = pending or err <= closest + far
-            watched.append((closest, None, pending) if keep else watch)
+        elif err <= closest + far:
+            watched.append((closest, None, pending))
+        elif not moved:  # (then pending is the watch's: a reading away counts once it moves)
+            watched.append(watch)
         elif away is None or err <= away:
             watched.append((closest, err, 0))  # the first reading away: one more must follow
         else:

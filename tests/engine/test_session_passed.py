@@ -9,7 +9,9 @@ from collections.abc import Callable
 import pytest
 
 from bridge.core.model import MotionState, Target
+from bridge.protocols import REGISTRY
 from bridge.protocols.axes import Axis
+from bridge.session import motion as mo
 from tests.engine.test_session_tracking import a_pass_that, fly
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
@@ -368,3 +370,86 @@ def test_a_stalls_stop_owed_after_a_pass_is_checked_as_any(rig: Rig, pass_first:
     v.unjam()  # breaks free, and would turn on to 250
     v.run_for(40)
     assert v.truth().az_deg < 200.0, v.truth()
+
+
+def test_a_hand_after_an_arrival_on_a_half_duplex_spid_is_stopped_four_times_at_most(
+    rig: Rig,
+) -> None:
+    """On a SPID the check's stop waits for the reply in flight: the pass's give-up ran before
+    its last try was written, and that frame started a series checked as any: the hand at
+    the panel was fought every resend time, 14 stops in 40 s (a fourth review). The give-up
+    is now the written last try's."""
+    v = online(rig("rot2prog"))
+    stop = v.cfg.spec.codec_factory().encode_stop()
+    v.target(100.0)
+    v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 100) < 0.6, 120)
+    v.run_for(0.4)  # in the settle time
+    t = v.now
+    v.manual_rotate(250.0)  # the operator holds the panel button
+    end = v.now + 40
+    while v.now < end:
+        v.run_for(0.05)
+        if not v.truth().is_moving and v.truth().az_deg < 250.0:
+            v.manual_rotate(250.0)  # still held
+    said = [e.message for e in v.errors()]
+    assert any("stop it at the controller" in m for m in said), said
+    assert v.sent(since=t).count(stop) <= 4, v.sent(since=t).count(stop)
+
+
+def test_an_elevation_only_move_lost_with_the_stop_is_stopped_where_it_passes(rig: Rig) -> None:
+    """Each axis moves from where it last moved (motion.py rule 1): a GS-232B's elevation
+    creeping 1 degree a poll while the azimuth turns never counted as moving (the azimuth
+    moved the one anchor first), so it never came to its target, and a STOP and an
+    elevation-only target lost together let the rotor run on to 60 (a fourth review)."""
+    v = online(rig("gs232b"))
+    v.target(300.0, 60.0)
+    v.run_until(lambda h: h.truth().el_deg > 8, 60, "el past 8")
+    lost_stop_and_target(v, lambda: v.target(None, 20.0))
+    v.run_for(40)
+    t = v.truth()
+    assert not t.is_moving and t.el_deg < 30.0 and t.az_deg < 120.0, (t, v.errors())
+
+
+def test_the_elevation_is_judged_on_its_own_while_the_azimuth_turns() -> None:
+    """motion.py rules 1 and 5 in pure form: the same elevation readings pass their target
+    whether the azimuth is still or turning a degree a reading."""
+    g = mo.MotionConfig(REGISTRY["gs232b"], noise_deg=1.0)
+
+    def events(az_step: float) -> list[mo.Event]:
+        m = mo.link_up(mo.Motion(), g, 0.0)
+        m, _ = mo.reading(m, g, 100.0, 0.0, 10.0)
+        m, _ = mo.tick(m, g, 10.0)
+        m = mo.commanded(m, g, 90.0, 10.0, 20.0)
+        out: list[mo.Event] = []
+        for i in range(1, 61):
+            m, ev = mo.reading(m, g, 100.0 + az_step * i, 10.0 + 0.2 * i, 10.0 + i // 2)
+            out += ev
+        return out
+
+    assert mo.Event.PASSED in events(0.0)
+    assert mo.Event.PASSED in events(1.0)
+
+
+def test_a_target_within_the_tolerance_of_the_last_movement_is_come_to_when_gone_over() -> None:
+    """A target 1 degree ahead of the last movement, the next reading 2.4 degrees on: gone
+    over it, though neither reading was further than the tolerance from it (a fourth review:
+    never come to, and a rotor turning on to the bearing before was never stopped)."""
+    m = mo.commanded(_still_at(99.0), _EZ, 100.0, 10.0)
+    readings = [(10.0 + 0.2 * i, 99.0 + 2.4 * i) for i in range(1, 12)]
+    events: list[mo.Event] = []
+    for t, az in readings:
+        m, ev = mo.reading(m, _EZ, az, t)
+        events += ev
+    assert mo.Event.PASSED in events, events
+
+
+_EZ = mo.MotionConfig(
+    REGISTRY["rotorez"], tolerance_deg=3, stall_timeout_s=8, brake_delay_s=5, settle_s=1.5
+)
+
+
+def _still_at(az: float) -> mo.Motion:
+    m = mo.link_up(mo.Motion(), _EZ, 0.0)
+    m, _ = mo.reading(m, _EZ, az, 0.0)
+    m, _ = mo.tick(m, _EZ, _EZ.brake_delay_s + 1.0)
+    return m
