@@ -288,6 +288,17 @@ def test_a_stop_lost_just_before_the_controller_went_silent_goes_again_when_it_a
     stopped_short_of_300(v)
 
 
+def stop_and_target_lost(v: VirtualRotator, deaf_for_s: float) -> None:
+    """A deaf burst eats the operator's STOP and the target to 100 sent after it; it goes on
+    ``deaf_for_s`` after the target (the line still deaf at the end)."""
+    v.set_deaf(True)
+    v.run_for(0.3)
+    v.stop()  # lost
+    v.run_for(0.3)
+    v.target(100.0)  # lost too
+    v.run_for(deaf_for_s)
+
+
 def test_a_stop_and_the_target_after_it_both_lost_before_a_silence_still_stop_the_rotor(
     rig: Rig,
 ) -> None:
@@ -296,12 +307,7 @@ def test_a_stop_and_the_target_after_it_both_lost_before_a_silence_still_stop_th
     the target at the silence, and back online the rotor ran on to the bearing before both.
     A target no reading came after leaves the stop before it owed."""
     v = turning_to_300(rig)
-    v.set_deaf(True)
-    v.run_for(0.3)
-    v.stop()  # lost
-    v.run_for(0.3)
-    v.target(100.0)  # lost too
-    v.run_for(4)
+    stop_and_target_lost(v, 4)
     assert not v.status.available
     v.set_deaf(False)
     stopped_short_of_300(v)
@@ -314,12 +320,7 @@ def test_a_stop_and_the_target_after_it_lost_in_a_short_burst_do_not_leave_the_o
     rotor, still on its way to 300, passes the new bearing and turns on: it is stopped there,
     not let run 180 degrees on to the bearing the operator stopped, and the error says so."""
     v = turning_to_300(rig)
-    v.set_deaf(True)
-    v.run_for(0.3)
-    v.stop()  # lost
-    v.run_for(0.3)
-    v.target(100.0)  # lost too
-    v.run_for(1.0)
+    stop_and_target_lost(v, 1.0)
     v.set_deaf(False)
     v.run_until(lambda h: h.truth().az_deg > 100.0, 60, "past 100")
     v.run_for(10)

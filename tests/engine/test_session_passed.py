@@ -29,6 +29,28 @@ def passed(v: VirtualRotator) -> bool:
     return any("past its target" in e.message for e in v.errors())
 
 
+def hand_at_the_panel(v: VirtualRotator, at: float, to: float, seconds: float) -> float:
+    """Sent to ``at`` and arrived; in the settle time after, an operator holds the panel
+    button for ``seconds``, turning the rotor on to ``to`` (pressed again whenever a stop
+    took). When the hand came."""
+    v.target(at)
+    v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - at) < 0.6, 120)
+    v.run_for(0.4)  # in the settle time
+    t = v.now
+    hold(v, to, seconds)
+    return t
+
+
+def hold(v: VirtualRotator, to: float, seconds: float) -> None:
+    """The panel button held for ``seconds``, the rotor turning on to ``to``."""
+    v.manual_rotate(to)
+    end = v.now + seconds
+    while v.now < end:
+        v.run_for(0.05)
+        if not v.truth().is_moving and v.truth().az_deg < to:
+            v.manual_rotate(to)  # still held
+
+
 def test_a_flicker_of_one_count_is_no_arrival_before_a_move_across_the_stop(rig: Rig) -> None:
     """A GS-232 at 357 sent to 1 goes the long way down; the reply to the poll written just
     before the target flickered to 358, closer to 1 but within the noise: no movement, so no
@@ -103,16 +125,7 @@ def test_a_hand_at_the_panel_right_after_an_arrival_is_stopped_four_times_at_mos
     in the settle time after an arrival looks the same: the pass's stop and three more at
     most, then told to stop it at the controller, and left alone after that."""
     v = online(rig("gs232b-az"))
-    v.target(100.0)
-    v.run_until(lambda h: not h.truth().is_moving and h.truth().az_deg == 100.0, 60, "at 100")
-    v.run_for(0.4)  # in the settle time
-    t = v.now
-    v.manual_rotate(250.0)  # the operator holds the panel button
-    end = v.now + 30
-    while v.now < end:
-        v.run_for(0.05)
-        if not v.truth().is_moving and v.truth().az_deg < 250.0:
-            v.manual_rotate(250.0)  # still held
+    t = hand_at_the_panel(v, 100.0, 250.0, 30)
     stops = v.sent(since=t).count(b"S\r")
     said = [e.message for e in v.errors()]
     assert stops <= 4 and any("stop it at the controller" in m for m in said), (stops, said)
@@ -227,16 +240,22 @@ def test_a_satellite_pass_across_the_north_is_tracked_to_its_end(
         assert not passed(v), v.errors()
 
 
-def test_the_passs_stop_lost_on_the_line_goes_again(rig: Rig) -> None:
-    """The pass's stop is checked as an operator's: lost too, it goes again while the rotor
-    is seen turning, and the rotor is not let run on to the bearing before (a second review)."""
-    v = online(rig("gs232b-az"))
+def passed_and_its_stop_lost(v: VirtualRotator) -> None:
+    """Turning to 300, a STOP and the target to 100 lost; the rotor passes 100 and the pass's
+    stop is lost too."""
     v.target(300.0)
     v.run_until(lambda h: h.truth().az_deg > 40, 60, "past 40")
     lost_stop_and_target(v, lambda: v.target(100.0))
     v.run_until(lambda h: h.truth().az_deg > 95.0, 60, "near 100")
     v.drop_writes(b"S\r", 1)
     v.run_until(lambda h: passed(h), 10, "the pass seen")
+
+
+def test_the_passs_stop_lost_on_the_line_goes_again(rig: Rig) -> None:
+    """The pass's stop is checked as an operator's: lost too, it goes again while the rotor
+    is seen turning, and the rotor is not let run on to the bearing before (a second review)."""
+    v = online(rig("gs232b-az"))
+    passed_and_its_stop_lost(v)
     v.run_for(60)
     assert v.truth().az_deg < 130.0 and not v.truth().is_moving, v.truth()
 
@@ -246,12 +265,7 @@ def test_the_passs_stop_lost_before_a_silence_is_owed(rig: Rig) -> None:
     controller found silent; back online the stop goes first (the rotor turned on while the
     line was deaf, not to the bearing before)."""
     v = online(rig("gs232b-az"))
-    v.target(300.0)
-    v.run_until(lambda h: h.truth().az_deg > 40, 60, "past 40")
-    lost_stop_and_target(v, lambda: v.target(100.0))
-    v.run_until(lambda h: h.truth().az_deg > 95.0, 60, "near 100")
-    v.drop_writes(b"S\r", 1)
-    v.run_until(lambda h: passed(h), 10, "the pass seen")
+    passed_and_its_stop_lost(v)
     v.set_deaf(True)
     v.run_until(lambda h: not h.status.available, 10, "offline")
     v.set_deaf(False)
@@ -324,25 +338,13 @@ def test_a_hand_left_alone_after_the_passs_last_stop_is_not_fought_after_a_silen
     owes none of them (a third review: the last one, owed and checked as any, went 13 times
     in 25 s)."""
     v = online(rig("gs232b-az"))
-    v.target(100.0)
-    v.run_until(lambda h: not h.truth().is_moving and h.truth().az_deg == 100.0, 60, "at 100")
-    v.run_for(0.4)  # in the settle time
-    v.manual_rotate(359.0)
-
-    def hold(seconds: float) -> None:
-        end = v.now + seconds
-        while v.now < end:
-            v.run_for(0.05)
-            if not v.truth().is_moving and v.truth().az_deg < 359.0:
-                v.manual_rotate(359.0)  # still held
-
-    hold(15)
+    hand_at_the_panel(v, 100.0, 359.0, 15)
     assert any("stop it at the controller" in e.message for e in v.errors())
     v.set_silent(True)
     v.run_until(lambda h: not h.status.available, 10, "offline")
     v.set_silent(False)
     t = v.now
-    hold(25)
+    hold(v, 359.0, 25)
     assert v.sent(since=t).count(b"S\r") <= 1, v.sent(since=t)
 
 
@@ -381,16 +383,7 @@ def test_a_hand_after_an_arrival_on_a_half_duplex_spid_is_stopped_four_times_at_
     is now the written last try's."""
     v = online(rig("rot2prog"))
     stop = v.cfg.spec.codec_factory().encode_stop()
-    v.target(100.0)
-    v.run_until(lambda h: not h.truth().is_moving and abs(h.truth().az_deg - 100) < 0.6, 120)
-    v.run_for(0.4)  # in the settle time
-    t = v.now
-    v.manual_rotate(250.0)  # the operator holds the panel button
-    end = v.now + 40
-    while v.now < end:
-        v.run_for(0.05)
-        if not v.truth().is_moving and v.truth().az_deg < 250.0:
-            v.manual_rotate(250.0)  # still held
+    t = hand_at_the_panel(v, 100.0, 250.0, 40)
     said = [e.message for e in v.errors()]
     assert any("stop it at the controller" in m for m in said), said
     assert v.sent(since=t).count(stop) <= 4, v.sent(since=t).count(stop)
