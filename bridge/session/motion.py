@@ -7,9 +7,7 @@ not close: cancelled from the front panel or a hardware failure") and its brake-
 
 Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
-   movement was seen) on either axis, each axis with its own (an elevation creeping on while the
-   azimuth turns moves from where it last moved). Analog jitter of a still rotor stays inside
-   that band and moves nothing.
+   movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
    last command, so a rotor that has not started yet is not "still").
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
@@ -36,9 +34,12 @@ Rules:
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
    the way round the stop may lead away first (rule 3), so there only a stall tells, until the
-   rotor has come to its target. On either axis, each judged on its own: once a movement
-   (rule 1) on it closed in on its target to within ``tolerance_deg``, or went over it (the
-   target between that axis's last movement and this one), and the next movement on it went
+   rotor has come to its target. On either axis, each judged on its own: once a movement on
+   it (more than ``noise_deg`` from where that axis last moved since the target went out: rule
+   1's anchor moves with either axis) closed in on its target to within ``tolerance_deg``, or
+   went over it (the target between that axis's last movement and this one), or the axis was
+   within ``noise_deg`` of it when the target went out (the axis an elevation-only move leaves
+   where it is), and the next movement on it went
    on the same way (one that turns back says the arrival was none: a corrupt reading close
    to the last, or a hand turning the rotor back), two movements away on that axis, the
    second further than the first, both more than ``tolerance_deg + noise_deg`` +
@@ -151,6 +152,10 @@ class Motion:
     # since and the error of a first reading away (None: not come to it)
     az_pass: Watch | None = None
     el_pass: Watch | None = None
+    # rule 5, each axis: where it last moved (more than noise_deg from its own last movement)
+    # since the target went out: the shared anchor of rule 1 moves with either axis
+    az_from_deg: float | None = None
+    el_from_deg: float | None = None
 
 
 class Event(enum.StrEnum):
@@ -235,7 +240,7 @@ def reading(
         )
         return tick(m, cfg, now)
     anchor_deg = m.anchor_deg  # (not None: the first reading returned above)
-    before = m  # (rule 5 compares this reading with the one before and the last movement)
+    before = m  # (rule 5 compares this reading with the one before)
     # one replace() per reading: this runs at every poll (its changes as literals, no update)
     changes: dict[str, Any] = (
         {"changed_t": now, "position_deg": az_deg, "el_position_deg": el_deg}
@@ -243,13 +248,11 @@ def reading(
         else {}
     )
     wraps = cfg.spec.az_wraps  # (asked twice: no property call)
-    moved = az_moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
-    el_anchor = m.el_anchor_deg
-    if el_deg is not None and el_anchor is not None and abs(el_deg - el_anchor) > cfg.noise_deg:
-        moved, el_anchor = True, el_deg
-    if moved:  # (each axis's anchor where that axis last moved: a slow axis creeps on)
-        changes["anchor_deg"] = az_deg if az_moved else anchor_deg
-        changes["el_anchor_deg"] = el_deg if el_deg is None or el_anchor is None else el_anchor
+    moved = angle_error(az_deg, anchor_deg, wraps) > cfg.noise_deg
+    if el_deg is not None and m.el_anchor_deg is not None:
+        moved = moved or abs(el_deg - m.el_anchor_deg) > cfg.noise_deg
+    if moved:
+        changes["anchor_deg"], changes["el_anchor_deg"] = az_deg, el_deg
         changes["last_move_t"], changes["still_since_t"] = now, None
         changes["state"] = MOVING
         if m.target_deg is not None:
@@ -308,9 +311,9 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
     reach = 3.0 * speed * dt + far  # (what a reading can have turned since the one before)
     wraps = cfg.spec.az_wraps
     axes = (
-        (before.anchor_deg, before.position_deg, m.position_deg, m.target_deg, wraps, m.az_pass),
+        (m.az_from_deg, before.position_deg, m.position_deg, m.target_deg, wraps, m.az_pass),
         (
-            before.el_anchor_deg,
+            m.el_from_deg,
             before.el_position_deg,
             m.el_position_deg,
             m.el_target_deg,
@@ -319,17 +322,22 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
         ),
     )
     watched: list[Watch | None] = []
+    froms: list[float | None] = []
     for anchor, last, pos, target, wrap, watch in axes:
-        if anchor is None or last is None or pos is None or target is None:
+        if last is None or pos is None or target is None:
             watched.append(watch)
+            froms.append(anchor)
             continue
+        if anchor is None:
+            anchor = last  # (the target went out with no reading of this axis)
         if apart_deg(last, pos, wrap) > reach:  # a corrupt reading: nothing to judge by
             return m, False
-        step = pos - anchor  # (this axis's movement since the last: rule 1, signed)
+        step = pos - anchor  # (since this axis last moved, signed)
         if wrap:
             step = (step + 180.0) % 360.0 - 180.0
         moved = abs(step) > noise
         heading = 1 if step > 0 else -1
+        froms.append(pos if moved else anchor)
         if watch is not None and watch[2] and moved and heading != watch[2]:
             watch = None  # it came, then turned back: that reading was none to judge by
         a, err = apart_deg(anchor, target, wrap), apart_deg(pos, target, wrap)
@@ -352,8 +360,9 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
         else:
             return m, True
     az_pass, el_pass = watched
-    if az_pass != m.az_pass or el_pass != m.el_pass:
-        m = replace(m, az_pass=az_pass, el_pass=el_pass)
+    az_from, el_from = froms
+    if (az_pass, el_pass, az_from, el_from) != (m.az_pass, m.el_pass, m.az_from_deg, m.el_from_deg):
+        m = replace(m, az_pass=az_pass, el_pass=el_pass, az_from_deg=az_from, el_from_deg=el_from)
     return m, False
 
 
@@ -402,10 +411,21 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
-        az_pass=None,
-        el_pass=None,
+        az_pass=_there(m.position_deg, target_deg, cfg, cfg.spec.az_wraps),
+        el_pass=_there(m.el_position_deg, el_target_deg, cfg, False),
+        az_from_deg=m.position_deg,
+        el_from_deg=m.el_position_deg,
         away_err=None,
     )
+
+
+def _there(pos: float | None, target: float | None, cfg: MotionConfig, wraps: bool) -> Watch | None:
+    """Rule 5: an axis already at its target when it goes out (within ``noise_deg``: the axis a
+    target leaves as it is, an elevation-only move's azimuth) has come to it."""
+    if pos is None or target is None:
+        return None
+    err = apart_deg(pos, target, wraps)
+    return (err, None, 0) if err <= cfg.noise_deg else None
 
 
 def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:

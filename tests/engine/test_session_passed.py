@@ -4,6 +4,7 @@ What a user notices: whether the rotor turns on, is stopped, and what the error 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 
 import pytest
@@ -446,3 +447,53 @@ def _still_at(az: float) -> mo.Motion:
     m, _ = mo.reading(m, _EZ, az, 0.0)
     m, _ = mo.tick(m, _EZ, _EZ.brake_delay_s + 1.0)
     return m
+
+
+def flicker_el(v: VirtualRotator, steps: list[int]) -> None:
+    """The GS-232B's elevation reading off by ``steps`` counts in turn (a pot's flicker)."""
+    real = v.device._reading  # type: ignore[attr-defined]
+    it = itertools.cycle(steps)
+
+    def reading(text: str) -> bytes:
+        out: bytes = real(text)
+        if text == "C2":
+            az, el = out.split(b"EL=")
+            out = az + b"EL=%03d" % (int(el) + next(it))
+        return out
+
+    v.device._reading = reading  # type: ignore[attr-defined]
+
+
+def test_an_elevation_that_stopped_first_flickering_one_count_at_rest_is_no_doubt(
+    rig: Rig,
+) -> None:
+    """The pass keeps each axis's last movement of its own; rule 1's anchor stays one for
+    both axes (a fifth review: an anchor per axis left the elevation's where it last moved,
+    a count short of where it came to rest, and a one-count flicker there was doubted and
+    said on R/error)."""
+    v = online(rig("gs232b"))
+    v.target(120.0, 21.0)
+    v.run_until(lambda h: not h.truth().is_moving and h.state is IDLE, 60, "at rest")
+    v.run_for(3)
+    t = v.now
+    flicker_el(v, [0, 1])
+    v.run_for(30)
+    assert not v.errors(since=t), [e.message for e in v.errors(since=t)]
+    assert all(s.state is IDLE for s in v.published(since=t))
+
+
+@pytest.mark.parametrize("k", range(12))
+def test_a_stop_and_an_elevation_target_below_lost_together_are_caught_on_the_azimuth(
+    rig: Rig, k: int
+) -> None:
+    """An elevation-only target leaves the azimuth where it is: the azimuth has come to its
+    target when it goes out, and turning on to 300 with the lost STOP's move is a pass (a
+    fifth review: caught by luck in 4 start times of 12)."""
+    v = online(rig("gs232b"))
+    v.target(300.0, 60.0)
+    v.run_until(lambda h: h.truth().el_deg > 30, 60, "el past 30")
+    v.run_for(0.05 * k)
+    lost_stop_and_target(v, lambda: v.target(None, 20.0))
+    v.run_for(60)
+    t = v.truth()
+    assert t.az_deg < 120.0 and passed(v), (t, [e.message for e in v.errors()])
