@@ -38,8 +38,8 @@ Rules:
    it (more than ``noise_deg`` from where that axis last moved since the target went out: rule
    1's anchor moves with either axis) closed in on its target to within ``tolerance_deg``, or
    went over it (the target between that axis's last movement and this one), or the axis was
-   within ``noise_deg`` of it when the target went out (the axis an elevation-only move leaves
-   where it is), and the next movement on it went
+   within ``noise_deg`` of it along the scale when the target went out (the axis an
+   elevation-only move leaves where it is), and the next movement on it went
    on the same way (one that turns back says the arrival was none: a corrupt reading close
    to the last, or a hand turning the rotor back), two movements away on that axis, the
    second further than the first, both more than ``tolerance_deg + noise_deg`` +
@@ -411,20 +411,22 @@ def commanded(
         stop_sent_t=None,
         still_since_t=None,
         closest_err=None,
-        az_pass=_there(m.position_deg, target_deg, cfg, cfg.spec.az_wraps),
-        el_pass=_there(m.el_position_deg, el_target_deg, cfg, False),
+        az_pass=_there(m.position_deg, target_deg, cfg),
+        el_pass=_there(m.el_position_deg, el_target_deg, cfg),
         az_from_deg=m.position_deg,
         el_from_deg=m.el_position_deg,
         away_err=None,
     )
 
 
-def _there(pos: float | None, target: float | None, cfg: MotionConfig, wraps: bool) -> Watch | None:
+def _there(pos: float | None, target: float | None, cfg: MotionConfig) -> Watch | None:
     """Rule 5: an axis already at its target when it goes out (within ``noise_deg``: the axis a
-    target leaves as it is, an elevation-only move's azimuth) has come to it."""
+    target leaves as it is, an elevation-only move's azimuth) has come to it. Measured along
+    the scale, not round the circle: 359 sent 0 may go the long way round a stop at north (a
+    review: that turn was stopped as a pass)."""
     if pos is None or target is None:
         return None
-    err = apart_deg(pos, target, wraps)
+    err = abs(pos - target)
     return (err, None, 0) if err <= cfg.noise_deg else None
 
 

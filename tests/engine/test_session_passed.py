@@ -497,3 +497,23 @@ def test_a_stop_and_an_elevation_target_below_lost_together_are_caught_on_the_az
     v.run_for(60)
     t = v.truth()
     assert t.az_deg < 120.0 and passed(v), (t, [e.message for e in v.errors()])
+
+
+@pytest.mark.parametrize(("start", "settings"), [(300.0, {}), (359.2, {"tolerance_deg": 0.5})])
+def test_north_sent_at_359_goes_the_long_way_unstopped(
+    rig: Rig, start: float, settings: dict[str, object]
+) -> None:
+    """A GS-232 (its stop at north) reading 359, sent 0: 1 degree round the circle, the whole
+    scale along it, the way it goes. An axis is at its target when the target goes out only
+    along the scale (a sixth review: the long way was stopped as a pass, turning up to 359
+    and at rest with a tolerance below the noise)."""
+    v = online(rig("gs232b-az", emulator={"start_az_deg": start}, settings=settings))
+    if start < 359.0:
+        v.target(359.0)
+        v.run_until(lambda h: (h.session.controller.motion.position_deg or 0) >= 358.5, 60, "359")
+    else:
+        v.run_for(3)
+    v.target(0.0)
+    v.run_for(120)
+    t = v.truth()
+    assert not passed(v) and (t.az_deg < 2.0 or t.az_deg > 358.0), (t, v.errors())
