@@ -426,9 +426,7 @@ class App:
         frame at any moment (its rule 4); none with ``mqtt.stop_express`` off."""
         topics: dict[str, tuple[str, str]] = {}
         frames: dict[str, bytes] = {}
-        for r in settings.rotators:
-            if not settings.mqtt.stop_express:
-                break
+        for r in settings.rotators if settings.mqtt.stop_express else ():
             t = self.topics.rotator(r.id)
             topics[t.lock] = (r.id, "lock")  # every rotator's lock ON, said (its rule 11)
             # (a rotator of two boxes has two ports: its stops take the stop lane)

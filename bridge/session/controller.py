@@ -390,8 +390,6 @@ class Controller:
             )
             self.notes.append(Report(ErrorKind.STOP, why))
             return
-        if self.motion.stop_sent_t is None:
-            self._passing = False  # (no stop checked: none is a pass's)
         again, error = self.stops.check(self.motion, self.cfg.motion, now, target_going)
         if error is not None:
             self.notes.append(error)
@@ -578,7 +576,6 @@ class Controller:
                     self._passing = event is mo.Event.PASSED
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
-                    self._passing = False
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:

@@ -456,9 +456,17 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
     if m.last_move_t is not None and m.target_t is not None:
         if m.target_t - m.last_move_t <= cfg.settle_s:  # a new bearing refused mid-turn: the
             # rotor still turns to the one before, which nobody wants now (stops.py stops it)
-            dropped = replace(m, target_deg=None, el_target_deg=None, progress_t=None)
-            dropped = replace(dropped, az_pass=None, el_pass=None)
-            return replace(dropped, closest_err=None, away_err=None), [Event.REFUSED]
+            dropped = replace(
+                m,
+                target_deg=None,
+                el_target_deg=None,
+                progress_t=None,
+                closest_err=None,
+                away_err=None,
+                az_pass=None,
+                el_pass=None,
+            )
+            return dropped, [Event.REFUSED]
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
 
 

@@ -82,17 +82,7 @@ def test_one_flipped_bit_after_an_idle_spell_is_no_arrival(rig: Rig) -> None:
     v.target(350.0)
     v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 350.0, 60, "at 350")
     v.run_for(20)
-    st = {"on": True, "tail": b""}
-
-    def flip(data: bytes, now: float) -> bytes:  # the first "AZ=3.." -> "AZ=1.."
-        out = bytearray()
-        for b in data:
-            st["tail"] = (st["tail"] + bytes([b]))[-4:]
-            out.append(ord("1") if st["on"] and st["tail"] == b"AZ=3" else b)
-            st["on"] = st["on"] and st["tail"] != b"AZ=3"
-        return bytes(out)
-
-    v.to_host = flip
+    v.to_host = flip_once(b"AZ=3", b"AZ=1")  # the first "AZ=3.." -> "AZ=1.."
     v.target(10.0)
     v.run_for(15)
     assert not passed(v) and v.truth().is_moving, (v.truth(), v.errors())
