@@ -138,9 +138,6 @@ class AzimuthOnly:
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return self._inner.encode_connect(now_unix)
 
-    def encode_rest(self, az_deg: float) -> bytes | None:
-        return self._inner.encode_rest(az_deg)
-
 
 class _KeepsOwn(AzimuthOnly):
     """What a box said of its other axis counts once the engine took the reading (rules 1

@@ -119,13 +119,6 @@ class Codec(Protocol):
         """Frames to send right after the port opens (identify, version, clock, enable)."""
         ...
 
-    def encode_rest(self, az_deg: float) -> bytes | None:
-        """The frame that makes ``az_deg`` (raw) the bearing the controller keeps to turn to,
-        without turning it, where one flipped bit can make a poll the command to go there
-        (a Rotor-EZ's ``AI1;`` read as ``AM1;``); None where no poll can (the engine keeps
-        that bearing where the rotor rests: controller.py rule 10)."""
-        ...
-
     def wire_target(self, az_deg: float, el_deg: float | None) -> tuple[float, float | None]:
         """The position the controller will actually be sent (after its rounding)."""
         ...
@@ -259,9 +252,6 @@ class Plain:
 
     def encode_connect(self, now_unix: float) -> list[bytes]:
         return []
-
-    def encode_rest(self, az_deg: float) -> bytes | None:
-        return None
 
 
 class OneQuery(Plain):

@@ -9,7 +9,6 @@ Frames we send:
   ``AP1xxx\\r``        set target and execute (Rotor-EZ, RotorCard)
   ``AP1xxx;`` ``AM1;`` set target, then execute: the only form a DCU-1 takes
   ``AI1;``             ask the bearing; answer ``;xxx`` (4 bytes, no terminator)
-  ``AP1xxx;``          keep xxx as the bearing to turn to, no move: where the rotor rests (rule 6)
   ``;``                stop (Rotor-EZ, RotorCard); ``AS1;`` on a DCU-1
   ``E e J j O o S s``  options on/off (Rotor-EZ only), write-only
   ``V``                version; the reply text is undocumented, we look for ``V<digits>``
@@ -33,13 +32,6 @@ Rules:
    (``harmless``), also when the banner comes torn across reads, whatever the cuts: each piece
    that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
    reaches an idle board twice when the stop express writes one too: interfaces/mqtt/express.py.)
-6. ``AI1;`` with one bit flipped (``I`` 0x49, ``M`` 0x4D) is ``AM1;``: turn to the bearing kept
-   from the last ``AP1``. After a stop, a stall, or a move by hand that bearing is elsewhere,
-   and a poll garbled on the line turned the rotor on to it (a probe: stopped at 60 on the way
-   to 300, the rotor went on to 300, and nothing said why). ``encode_rest`` gives the frame
-   that keeps the bearing where the rotor rests (``AP1xxx;``, no ``AM1;``), which the engine
-   writes once the rotor is at rest away from it (session/controller.py rule 10). The DCU-1
-   is never polled: none.
 """
 
 from __future__ import annotations
@@ -140,10 +132,6 @@ class RotorEzCodec:
 
     def encode_stop(self) -> bytes:
         return b"AS1;" if self._dcu1 else b";"
-
-    def encode_rest(self, az_deg: float) -> bytes | None:
-        """Rule 6."""
-        return None if self._dcu1 else b"AP1%03d;" % _bearing_digits(az_deg, wrap_360=False)
 
     def encode_query(self) -> bytes | None:
         if self._dcu1:

@@ -96,9 +96,6 @@ class SatelCodec:
     def encode_enable(self) -> bytes:
         return b"g"
 
-    def encode_rest(self, az_deg: float) -> None:
-        return None
-
     def encode_connect(self, now_unix: float) -> list[bytes]:
         clock = time.strftime("%Y/%m/%d %H:%M:%S", time.gmtime(now_unix)).encode()
         self._owed += ["ident", "report"]

@@ -66,15 +66,6 @@ Rules:
    cut the first short and the second is asked once the stop is out; readings at the idle rate
    agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
    composite box's axis that is never turned is kept so too: axes.py rule 5.)
-10. Where one flipped bit can make a poll the command to turn to the bearing the controller
-   keeps (a Rotor-EZ: protocols/rotorez.py rule 6), that bearing is kept where the rotor
-   rests: once the rotor is at rest (motion.py ``at_rest``: after its brake delay, which a
-   Rotor-EZ spends deaf to bearings), further than ``noise_deg`` from the last bearing written
-   (a target's, or this frame's; unknown after a connect), no target out or waiting and the
-   line free, the codec's ``encode_rest`` frame for where it stands is written, locked or not
-   (it moves nothing), in the step that took a reading (a Rotor-EZ stops a move on a bearing
-   frame: one by hand that began since the last reading would be). A garbled poll then turns
-   the rotor no further than the noise.
 """
 
 from __future__ import annotations
@@ -207,9 +198,6 @@ class Controller:
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
         self._passing = False  # stops.py rule 4: the stops checked now are a pass's
         self._pass_ends = False  # ... and the stop due now its last try: given up once written
-        self._kept_az: float | None = None  # rule 10: the bearing last written (None: unknown)
-        self._keeps = False  # rule 10: the link's codec has a frame for it
-        self._read_t = -math.inf  # rule 10: when the last reading was taken
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -280,7 +268,6 @@ class Controller:
         self.link = link = Link(spec.codec_factory(), spec, now, self.cfg.baud)
         # (a runtime Protocol check costs tens of microseconds: once per link, not per reading)
         self._takes_readings = isinstance(link.codec, TakesReadings)
-        self._kept_az, self._keeps = None, link.codec.encode_rest(0.0) is not None  # rule 10
         self._doubted, self._doubts_in_row = NOT_DOUBTED, 0  # rule 9: a new connection's
         # first reading is believed
         self.motion = mo.link_up(self.motion, self.cfg.motion, now)
@@ -535,7 +522,6 @@ class Controller:
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
-        self._read_t = now  # (rule 10)
         if self._takes_readings:  # rule 8
             cast(TakesReadings, link.codec).taken(reply)
         if reply.motion_enabled is False:
@@ -712,31 +698,6 @@ class Controller:
         if taken:
             self._retune()
 
-    def _rest_owed(self, m: mo.Motion) -> bool:
-        """Rule 10: the rotor rests away from the bearing the controller keeps."""
-        pos, kept = m.position_deg, self._kept_az
-        if pos is None or m.target_deg is not None or not mo.at_rest(m):
-            return False
-        return kept is None or abs(pos - kept) > self.cfg.motion.noise_deg
-
-    def keep_rest(self, now: float, target_waits: bool) -> None:
-        """Rule 10: the bearing the controller keeps, made where the rotor rests."""
-        link, m = self.link, self.motion
-        if not self._keeps or self._read_t != now or link is None or target_waits:
-            return  # (written in the step that took a reading: a hand at the panel that
-        if not self._rest_owed(m):  # began since the last is not stopped by the frame)
-            return
-        if not link.free() or link.stop_due:
-            return
-        assert m.position_deg is not None  # (_rest_owed)
-        frame = link.codec.encode_rest(m.position_deg)
-        if frame is None:
-            return
-        log.debug("%s: the bearing kept made %g (where the rotor rests)", self.name, m.position_deg)
-        link.write(frame, now)
-        self._kept_az = m.position_deg
-        self.target_last = False  # a refusal now may be this frame's
-
     def _retune(self) -> None:
         """Rule 7: the speeds the settings in effect give the rotor."""
         factor, base = self.options.speed_factor(), self.base_cfg
@@ -754,7 +715,6 @@ class Controller:
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
         self.target_last = True
         az, el = todo.wire
-        self._kept_az = az  # rule 10
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -534,7 +534,6 @@ class RotatorSession:
             if self.targets.pending is not None:
                 self._try_target(ctl.link, now)
             ctl.send_options(now, self.targets.pending is not None)
-            ctl.keep_rest(now, self.targets.pending is not None)  # (controller.py rule 10)
         ctl.poll(now, self.targets.pending is not None)  # commands go ahead of the next poll
         if ctl.notes:
             self._heed(now)

@@ -9,7 +9,6 @@ emulator's ground truth), the statuses published and the error events.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 
 import pytest
@@ -22,35 +21,20 @@ from tests.engine.virtual import VirtualRotator
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
 QUERY = b"AI1;"
-KEPT = re.compile(rb"AP1\d{3};")  # the bearing kept where the rotor rests (controller.py rule 10)
 # what the Rotor-EZ does with a bearing while it turns (stops and drops it) or brakes (drops it)
 DISOBEYED = (Outcome.IGNORED_RETARGET, Outcome.IGNORED_BRAKE_DELAY)
 
 
 def ready(rig: Rig, **kw: object) -> VirtualRotator:
-    """Connected, read, through the brake window assumed at start-up (idle), and the bearing
-    the board keeps made where the rotor rests."""
+    """Connected, read, and through the brake window assumed at start-up: idle."""
     v = rig("rotorez", **kw)
     v.run_until_state(IDLE, 30)
-    v.run_until(lambda h: h.frames(Outcome.STORED) != [], 5, "the bearing kept")
     return v
 
 
-def kept(frame: bytes) -> bool:
-    return KEPT.fullmatch(frame) is not None
-
-
 def commands(v: VirtualRotator, since: float) -> list[tuple[bytes, str]]:
-    """What the controller understood since ``since``, polls and the bearings kept at rest
-    (controller.py rule 10) left out."""
-    return [
-        (f.data, f.outcome) for f in v.frames(since=since) if f.data != QUERY and not kept(f.data)
-    ]
-
-
-def turns(v: VirtualRotator, since: float) -> list[bytes]:
-    """The bearings the controller was told to turn to since ``since``."""
-    return [f.data for f in v.frames(since=since) if f.data.startswith(b"AP1") and not kept(f.data)]
+    """What the controller understood since ``since``, polls left out."""
+    return [(f.data, f.outcome) for f in v.frames(since=since) if f.data != QUERY]
 
 
 def at(v: VirtualRotator, az_deg: float) -> Callable[[VirtualRotator], bool]:
@@ -402,62 +386,6 @@ def test_a_target_after_a_quiet_spell_waits_for_a_fresh_reading(rig: Rig) -> Non
     assert frames[1].time_s - t < v.cfg.moving_poll_interval_s  # one exchange, not a poll cycle
 
 
-# -- the bearing kept where the rotor rests (controller.py rule 10, rotorez.py rule 6) --------
-def marks(v: VirtualRotator, since: float) -> list[bytes]:
-    return [f.data for f in v.frames(Outcome.STORED, since=since)]
-
-
-@pytest.mark.parametrize("how", ["stop", "lock"])
-def test_a_poll_garbled_into_execute_after_a_stop_does_not_turn_the_rotor_on(
-    rig: Rig, how: str
-) -> None:
-    v = ready(rig)
-    v.target(300)
-    v.run_for(10)
-    t = v.now
-    v.stop() if how == "stop" else v.lock(True)
-    v.run_until(lambda h: h.frames(Outcome.STORED, since=t) != [], 20, "the bearing kept")
-    rest = v.truth().az_deg
-    assert rest < 100 and marks(v, t) == [b"AP1%03d;" % round(rest)]
-    assert not v.truth().in_brake_delay  # (it would have been ignored in the brake delay)
-
-    v.garble_writes(QUERY, b"AM1;")  # I (0x49) read as M (0x4D): "turn to the bearing kept"
-    v.run_for(30)
-
-    assert [f.outcome for f in v.frames(since=t) if f.data == b"AM1;"] == [Outcome.EXECUTED]
-    assert abs(v.truth().az_deg - rest) <= v.cfg.motion.noise_deg  # not on to 300
-    assert all(s.state is not MOVING for s in v.published(since=t + 10))
-    assert_never_disobeyed(v)
-
-
-def test_a_move_by_hand_moves_the_bearing_kept_with_it(rig: Rig) -> None:
-    v = ready(rig)
-    v.target(100)
-    v.run_until(at(v, 100), 60, "at 100")
-    t = v.now
-    v.manual_rotate(200)
-    v.run_until(lambda h: h.frames(Outcome.STORED, since=t) != [], 90, "the bearing kept")
-    assert marks(v, t) == [b"AP1200;"]
-
-    v.garble_writes(QUERY, b"AM1;")
-    v.run_for(30)
-
-    assert abs(v.truth().az_deg - 200) <= v.cfg.motion.noise_deg  # not back to 100
-    assert_never_disobeyed(v)
-
-
-def test_the_bearing_kept_is_written_once_and_not_after_a_move_that_arrived(rig: Rig) -> None:
-    v = ready(rig)
-    assert marks(v, 0) == [b"AP1000;"]  # after the connect: what the board keeps is unknown
-    v.run_for(120)  # idle polls, the pot's jitter
-    assert marks(v, 0) == [b"AP1000;"]
-    t = v.now
-    v.target(100)
-    v.run_until(at(v, 100), 60, "at 100")
-    v.run_for(60)
-    assert marks(v, t) == []  # the target's own bearing is the one kept
-
-
 # -- arrival with analog jitter (motion rule 1, status rule 1) --------------------------------
 def test_a_jittering_reading_arrives_goes_idle_and_the_bearing_does_not_flap(rig: Rig) -> None:
     v = ready(rig, emulator={"jitter_deg": 2})
@@ -631,7 +559,7 @@ def test_lock_on_stops_even_an_idle_rotor_and_refuses_targets_lock_off_allows(ri
 
     [refused] = v.errors("refused")
     assert refused.message == "rotator is locked" and refused.command == "target az 100"
-    assert [f for f, _ in commands(v, t)] == [b";"]
+    assert [f.data for f in v.frames(since=t) if f.data != QUERY] == [b";"]
 
     v.lock(False)
     v.run_for(0.5)
@@ -653,8 +581,9 @@ def test_lock_on_stops_a_turning_rotor_and_drops_the_target_waiting_for_the_brak
     v.run_for(30)
 
     assert not v.truth().is_moving
-    assert [f for f, _ in commands(v, t - 1)] == [b";", b";"]
-    assert turns(v, t) == [] and v.status.target_az_deg is None
+    assert [f.data for f in v.frames(since=t - 1) if f.data != QUERY] == [b";", b";"]
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
+    assert v.status.target_az_deg is None
 
 
 def test_a_stop_drops_the_target_waiting_for_the_brake(rig: Rig) -> None:
@@ -667,7 +596,7 @@ def test_a_stop_drops_the_target_waiting_for_the_brake(rig: Rig) -> None:
     v.stop()
     v.run_for(30)
 
-    assert turns(v, t) == []
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
     assert v.state is IDLE and v.status.target_az_deg is None and v.errors() == []
 
 
@@ -693,7 +622,7 @@ def test_a_link_lost_drops_the_waiting_target_and_a_new_link_starts_afresh(rig: 
     v.run_until_state(IDLE, 30)
     v.run_for(1)
 
-    assert turns(v, t) == []
+    assert not any(f.data.startswith(b"AP1") for f in v.frames(since=t))
     assert v.truth().options["endpoint"] is True
     v.target(50)
     v.run_until(at(v, 50), 60, "at 50 after the reconnect")
