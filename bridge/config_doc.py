@@ -230,10 +230,16 @@ def _model_table() -> str:
     ]
     for name, spec in REGISTRY.items():
         values = model_defaults(spec)
-        cells = ["-" if values[k] is None else f"{values[k]:g}" for k in keys]
+        cells = [_cell(values[k]) for k in keys]
         controller = f"{spec.manufacturer} {spec.display_name}"
         lines.append(f"| `{name}` | {controller} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _cell(value: float | int | str | None) -> str:
+    if value is None:
+        return "-"
+    return value if isinstance(value, str) else f"{value:g}"
 
 
 def _shown() -> str:

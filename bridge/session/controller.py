@@ -66,6 +66,24 @@ Rules:
    cut the first short and the second is asked once the stop is out; readings at the idle rate
    agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
    composite box's axis that is never turned is kept so too: axes.py rule 5.)
+10. A turn nobody asked for: a rotor seen turning from rest (idle or braking) with no target
+   out is stopped, once a reading puts it more than UNASKED_MOVE_DEG from where it rested on
+   either axis (never a pot's jitter, which the doubt of rule 9 lets through when two readings
+   agree), as an operator's STOP (checked, merged into one under way), and a ``stop`` error
+   says why, where
+   - ``stop_unasked`` (the user's ``unasked_moves``; Easycomm by default, whose poll is one
+     flipped bit from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an
+     attack soak ran a rotor to its end stop that way): every such turn, a hand at the panel's
+     too;
+   - the controller keeps the bearing of its last target, and one flipped bit makes a poll
+     the command to turn to it (``keeps_bearing``: a Rotor-EZ's ``AI1;`` read as ``AM1;``, a
+     probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said why):
+     the first such turn since the last target written, if the rotor rested further than
+     ``tolerance_deg + noise_deg`` from that target (stopped short of it: a STOP or a lock
+     mid-turn, a pass). That first turn ends the guard, stopped or not: a hand at the panel
+     after a STOP is stopped once, then followed; a poll garbled after a move by hand is not
+     caught (writing the rest bearing to the board, ``AP1xxx;``, was tried and taken back: a
+     review found it cut a hand at the panel short and turned a rotor at 360 a full circle).
 """
 
 from __future__ import annotations
@@ -102,6 +120,8 @@ DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agre
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
+_AT_REST = (mo.IDLE, mo.BRAKING)  # rule 10: a turn from these is a new one
+UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -198,6 +218,9 @@ class Controller:
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
         self._passing = False  # stops.py rule 4: the stops checked now are a pass's
         self._pass_ends = False  # ... and the stop due now its last try: given up once written
+        self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
+        self._sent_az: float | None = None  # rule 10: the last target's azimuth written
+        self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -534,8 +557,11 @@ class Controller:
             self.options.all_due()
             self._retune()
             log.info("%s: controller answering", self.name)
-        cfg, before = self.cfg, self.motion.state
+        cfg, was = self.cfg, self.motion
+        before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
+        if cfg.stop_unasked or self._guarded or self._rested is not None:  # rule 10
+            self._unasked(was, now)
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
             self._send_owed(link, now)
@@ -554,6 +580,54 @@ class Controller:
         self.az_shown.feed(reply.az_deg, moving, cfg.deadband_deg, cfg.motion.spec.az_wraps)
         if reply.el_deg is not None:
             self.el_shown.feed(reply.el_deg, moving, cfg.deadband_deg, False)
+
+    def _unasked(self, was: mo.Motion, now: float) -> None:
+        """Rule 10: ``was`` the motion before this reading."""
+        m = self.motion
+        if m.state is not mo.MOVING or m.target_deg is not None or m.el_target_deg is not None:
+            self._rested = None
+            return
+        cfg = self.cfg.motion
+        if was.state is not mo.MOVING and was.position_deg is not None:  # a turn begins
+            self._rested = None
+            if was.state in _AT_REST and (  # (one after a stall: stops.py rule 4's watch)
+                self.cfg.stop_unasked or self._short_of_target(was.position_deg, cfg)
+            ):
+                self._rested = (was.position_deg, was.el_position_deg)
+            self._guarded = False  # (the first turn ends the guard, stopped or not)
+        rested = self._rested
+        if rested is None or m.position_deg is None:
+            return
+        away = mo.angle_error(m.position_deg, rested[0], cfg.az_wraps)
+        if rested[1] is not None and m.el_position_deg is not None:
+            away = max(away, abs(m.el_position_deg - rested[1]))
+        if away <= UNASKED_MOVE_DEG:
+            return
+        self._rested = None
+        if self.cfg.stop_unasked:
+            why = "a poll a noisy line made a command, or a hand at the panel"
+            then = 'set unasked_moves = "follow" to let such turns be'
+        else:
+            why = (
+                f"the controller keeps the bearing {self._sent_az:g}° it was stopped short of, "
+                "and a poll a noisy line garbled turns it there; or a hand at the panel"
+            )
+            then = "turn it again at the panel to go on"
+        message = (
+            f"the rotor turned with no command from the bridge, from {rested[0]:g}° to "
+            f"{m.position_deg:g}° ({why}): stopped; {then}"
+        )
+        log.warning("%s: %s", self.name, message)
+        self.notes.append(Report(ErrorKind.STOP, message))
+        self.stop(now, merge=True)
+
+    def _short_of_target(self, rest_deg: float, cfg: mo.MotionConfig) -> bool:
+        """Rule 10: the guard is on and the rotor rested short of the last target written."""
+        if not self._guarded or self._sent_az is None:
+            return False
+        return mo.angle_error(rest_deg, self._sent_az, cfg.az_wraps) > (
+            cfg.tolerance_deg + cfg.noise_deg
+        )
 
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
         for event in events:
@@ -715,6 +789,7 @@ class Controller:
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
         self.target_last = True
         az, el = todo.wire
+        self._sent_az, self._guarded = az, self.cfg.spec.keeps_bearing  # rule 10
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -34,7 +34,7 @@ def silence_timeout_s(spec: ModelSpec, idle_poll_s: float) -> float:
     return max(DEFAULT_SILENCE_TIMEOUT_S, math.ceil(two_polls * 10 - 1e-9) / 10)
 
 
-def model_defaults(spec: ModelSpec) -> dict[str, float | int | None]:
+def model_defaults(spec: ModelSpec) -> dict[str, float | int | str | None]:
     """Every key whose default is the model's, as a rotator of ``spec`` left at its defaults
     uses it (None: the model has no such axis)."""
     idle_s = idle_poll_interval_s(spec, None)
@@ -52,4 +52,5 @@ def model_defaults(spec: ModelSpec) -> dict[str, float | int | None]:
         "az_max_deg": spec.az_max_deg,
         "el_min_deg": spec.el_min_deg if el else None,
         "el_max_deg": spec.el_max_deg if el else None,
+        "unasked_moves": "stop" if spec.stops_unasked_moves else "follow",
     }

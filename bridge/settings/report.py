@@ -61,6 +61,7 @@ def masked(settings: Settings) -> dict[str, Any]:
         r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
         r["silence_timeout_s"] = rs.effective_silence_timeout_s
         r["noise_deg"] = rs.effective_noise_deg
+        r["unasked_moves"] = "stop" if rs.stops_unasked_moves else "follow"
         r["track_step_deg"] = rs.effective_track_step_deg
         az_speed, el_speed = rs.effective_speeds_deg_s
         r["az_speed_deg_s"] = az_speed

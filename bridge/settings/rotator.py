@@ -230,6 +230,16 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         examples=[2.0],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
+    unasked_moves: Literal["follow", "stop"] | None = Field(
+        None,
+        description="a turn the bridge did not ask for (a hand at the controller's panel, or a "
+        "poll a noisy line made a command): follow it, or stop it once it is 5 degrees from "
+        "where the rotor rested and say so on R/error. By default stop on Easycomm, whose "
+        "polls are one flipped bit from a jog (set follow if you turn it at its panel), "
+        "follow on the others",
+        examples=["follow"],
+        json_schema_extra={"unset": MODEL_DEFAULT},
+    )
     silence_timeout_s: float | None = Field(
         None,
         gt=0,
@@ -520,6 +530,12 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     @property
     def effective_noise_deg(self) -> float:
         return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
+
+    @property
+    def stops_unasked_moves(self) -> bool:
+        if self.unasked_moves is None:
+            return self.spec.stops_unasked_moves
+        return self.unasked_moves == "stop"
 
     @property
     def effective_track_step_deg(self) -> float:

@@ -23,8 +23,9 @@ MODELS = ["rotorez", "rotorcard", "gs232b", "gs232a", "easycomm2", "rt21", "pros
 
 
 def at_rest(rig: Rig, model: str) -> VirtualRotator:
-    """At rest at 150 (settled), polled at its idle rate."""
-    v = rig(model)
+    """At rest at 150 (settled), polled at its idle rate; a turn by hand followed (an Easycomm
+    would stop it: controller.py rule 10)."""
+    v = rig(model, settings={"unasked_moves": "follow"})
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
     v.aim(Target(150.0, None))
     v.run_until(lambda h: h.state is MotionState.IDLE and h.now > 10, 200, "at 150")

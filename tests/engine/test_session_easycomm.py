@@ -171,3 +171,49 @@ def test_a_stall_stop_lost_is_followed_by_one_when_the_rotor_breaks_free_at_once
     stops = [w.t - t for w in v.writes if w.t > t and w.data == b"SA SE\n"]
     assert stops and stops[0] <= 1.0
     assert v.truth().az_deg < 195 and not v.truth().is_moving
+
+
+# -- a turn nobody asked for (controller.py rule 11) ------------------------------------------
+def unasked(v: VirtualRotator) -> list[str]:
+    return [e.message for e in v.errors("stop") if "no command from the bridge" in e.message]
+
+
+@pytest.mark.parametrize(
+    "garbled",
+    [b"AZ ML\n", b"AZ0 EL\n"],  # E (0x45) read as M (0x4D): a jog; the space (0x20) as 0 (0x30)
+    ids=["jog", "move"],
+)
+def test_a_poll_a_flipped_bit_made_a_command_is_stopped_within_five_degrees(
+    rig: Rig, garbled: bytes
+) -> None:
+    v = ready(rig, start_az_deg=200, start_el_deg=20)
+    t = v.now
+    v.garble_writes(b"AZ EL\n", garbled)
+    v.run_until(lambda h: unasked(h) != [], 10, "the turn seen and stopped")
+    v.run_for(10)
+
+    truth = v.truth()
+    assert not truth.is_moving and 192 < truth.az_deg < 200 and truth.el_deg == 20
+    assert v.state is IDLE and v.sent(since=t).count(b"SA SE\n") == 1
+    [said] = unasked(v)
+    assert said.startswith("the rotor turned with no command from the bridge, from 200° to ")
+
+
+def test_a_hand_at_the_panel_is_followed_where_the_user_says_so(rig: Rig) -> None:
+    v = rig(
+        "easycomm2", emulator={**FAST, "start_az_deg": 200}, settings={"unasked_moves": "follow"}
+    )
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.manual_rotate(250)
+    v.run_until(settled_at(250, 0), 30, "at 250")
+    assert v.errors() == [] and b"SA SE\n" not in v.sent(since=t)
+
+
+def test_by_default_a_hand_at_the_panel_is_stopped_and_told_how_to_let_it_be(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=200, start_el_deg=20)
+    v.manual_rotate(250)
+    v.run_until(lambda h: unasked(h) != [], 10, "the turn seen and stopped")
+    v.run_for(5)
+    assert not v.truth().is_moving and v.truth().az_deg < 210
+    assert 'unasked_moves = "follow"' in unasked(v)[0]

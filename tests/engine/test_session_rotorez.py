@@ -856,3 +856,57 @@ def test_options_are_applied_again_after_a_power_cycle_in_the_middle_of_a_reply(
     v.power_cycle()
     v.run_for(10)
     assert {k: v.truth().options[k] for k in opts} == opts
+
+
+# -- a turn nobody asked for, after a stop short of the target (controller.py rule 10) ------
+def unasked(v: VirtualRotator) -> list[str]:
+    return [e.message for e in v.errors("stop") if "no command from the bridge" in e.message]
+
+
+def stopped_short_of_300(rig: Rig, how: str) -> VirtualRotator:
+    """Sent to 300, stopped (or locked) on the way, at rest after its brake delay."""
+    v = ready(rig)
+    v.target(300)
+    v.run_for(10)
+    v.stop() if how == "stop" else v.lock(True)
+    v.run_until(lambda h: h.state is IDLE and not h.truth().in_brake_delay, 20, "at rest")
+    return v
+
+
+@pytest.mark.parametrize("how", ["stop", "lock"])
+def test_a_poll_garbled_into_execute_after_a_stop_does_not_turn_the_rotor_on(
+    rig: Rig, how: str
+) -> None:
+    v = stopped_short_of_300(rig, how)
+    rest, t = v.truth().az_deg, v.now
+    v.garble_writes(QUERY, b"AM1;")  # I (0x49) read as M (0x4D): "turn to the bearing kept"
+    v.run_until(lambda h: unasked(h) != [], 20, "the turn seen and stopped")
+    v.run_for(15)
+
+    assert [f.outcome for f in v.frames(since=t) if f.data == b"AM1;"] == [Outcome.EXECUTED]
+    assert not v.truth().is_moving and rest < v.truth().az_deg < rest + 10  # not on to 300
+    [said] = unasked(v)
+    assert "keeps the bearing 300°" in said and said.endswith("turn it again at the panel to go on")
+    assert [f for f, _ in commands(v, t)] == [b"AM1;", b";"]
+    assert_never_disobeyed(v)
+
+
+def test_a_hand_at_the_panel_after_a_stop_is_stopped_once_then_followed(rig: Rig) -> None:
+    v = stopped_short_of_300(rig, "stop")
+    v.manual_rotate(200)
+    v.run_until(lambda h: unasked(h) != [], 20, "the turn seen and stopped")
+    v.run_until(lambda h: h.state is IDLE and not h.truth().in_brake_delay, 20, "at rest")
+    v.manual_rotate(200)  # again
+    v.run_until(at(v, 200), 60, "at 200")
+    assert len(unasked(v)) == 1
+
+
+def test_a_hand_at_the_panel_after_an_arrival_is_followed(rig: Rig) -> None:
+    v = ready(rig)
+    v.target(100)
+    v.run_until(at(v, 100), 60, "at 100")
+    v.run_for(10)
+    t = v.now
+    v.manual_rotate(200)
+    v.run_until(at(v, 200), 60, "at 200")
+    assert v.errors() == [] and commands(v, t) == []
