@@ -247,3 +247,27 @@ def test_a_box_unplugged_as_a_stop_is_written_is_a_lost_link_and_owes_that_stop(
     el._port = back  # type: ignore[assignment]
     el._do(el.session.link_up(5.0, 1e9))
     assert back.drain().startswith(b"S\r")  # the stop it was owed, first
+
+
+def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() -> None:
+    """controller.py rule 10: an Easycomm elevation box beside an RT-21 stops such turns, the
+    RT-21 follows them, and check-config says so per box."""
+    from bridge.settings.report import masked
+
+    doc = {
+        "rotators": [
+            {
+                "id": "sky",
+                "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+                "elevation": {"model": "easycomm2", "port": "/dev/ttyEL"},
+            }
+        ]
+    }
+    s = settings_from(doc, environ={})
+    boxes = axis_configs(s.rotators[0])
+    assert boxes is not None and [b.stop_unasked for b in boxes] == [False, True]
+    shown = masked(s)["rotators"][0]["unasked_moves"]
+    assert shown == "azimuth box: follow, elevation box: stop"
+    doc["rotators"][0]["unasked_moves"] = "follow"
+    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
+    assert boxes is not None and [b.stop_unasked for b in boxes] == [False, False]

@@ -194,7 +194,7 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
     )
     assert used.az_speed_deg_s == r["az_speed_deg_s"]
     assert r["unasked_moves"] == ("stop" if used.stop_unasked else "follow")
-    assert used.stop_unasked is model.startswith("easycomm")  # (controller.py rule 11)
+    assert used.stop_unasked is model.startswith("easycomm")  # (controller.py rule 10)
     assert used.tracking.step_deg == r["track_step_deg"] == r["tolerance_deg"]  # the default
     if spec.has_elevation:
         assert used.el_speed_deg_s == r["el_speed_deg_s"]

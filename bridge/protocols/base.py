@@ -368,7 +368,7 @@ class ModelSpec:
     # which are then the azimuth box's (pointing.py rule 4: each axis by the box that turns it)
     el_rounding: tuple[bool, bool, bool] | None = None
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
-    # a turn nobody asked for is stopped by default (session/controller.py rule 11): a poll one
+    # a turn nobody asked for is stopped by default (session/controller.py rule 10): a poll one
     # flipped bit makes a command that turns the rotor (Easycomm)
     stops_unasked_moves: bool = False
     # it keeps its last target's bearing, and one flipped bit makes a poll the command to turn

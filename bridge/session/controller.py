@@ -66,24 +66,28 @@ Rules:
    cut the first short and the second is asked once the stop is out; readings at the idle rate
    agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
    composite box's axis that is never turned is kept so too: axes.py rule 5.)
-10. A turn nobody asked for: a rotor seen turning from rest (idle or braking) with no target
-   out is stopped, once a reading puts it more than UNASKED_MOVE_DEG from where it rested on
-   either axis (never a pot's jitter, which the doubt of rule 9 lets through when two readings
-   agree), as an operator's STOP (checked, merged into one under way), and a ``stop`` error
-   says why, where
-   - ``stop_unasked`` (the user's ``unasked_moves``; Easycomm by default, whose poll is one
-     flipped bit from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an
-     attack soak ran a rotor to its end stop that way): every such turn, a hand at the panel's
-     too;
-   - the controller keeps the bearing of its last target, and one flipped bit makes a poll
-     the command to turn to it (``keeps_bearing``: a Rotor-EZ's ``AI1;`` read as ``AM1;``, a
-     probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said why):
-     the first such turn since the last target written, if the rotor rested further than
-     ``tolerance_deg + noise_deg`` from that target (stopped short of it: a STOP or a lock
-     mid-turn, a pass). That first turn ends the guard, stopped or not: a hand at the panel
-     after a STOP is stopped once, then followed; a poll garbled after a move by hand is not
-     caught (writing the rest bearing to the board, ``AP1xxx;``, was tried and taken back: a
-     review found it cut a hand at the panel short and turned a rotor at 360 a full circle).
+10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``: not from a
+   connection's first reading, which cannot tell a turn under way from a new one, a review: a
+   reconnect mid-turn stopped the user's own move) with no target out is stopped, once a reading
+   puts it more than UNASKED_MOVE_DEG from where it rested on either axis (never a pot's jitter,
+   which the doubt of rule 9 lets through when two readings agree), by a stop checked as an
+   operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
+   button is let be), and a ``stop`` error says why (in true bearings), where
+   - ``stop_unasked`` (the user's ``unasked_moves``; Easycomm by default, whose poll is one flipped
+     bit from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an attack soak ran a
+     rotor to its end stop that way): every such turn, a hand at the panel's too; a poll such a
+     garbling leaves answered in part is given up at its timeout, and the next comes at the moving
+     rate (a review: with polls 10 s apart at rest, a jog ran 60°);
+   - the controller keeps the bearing of its last target, and one flipped bit makes a poll the
+     command to turn to it (``keeps_bearing``: a Rotor-EZ's ``AI1;`` read as ``AM1;``, a probe:
+     stopped at 60 on the way to 300, the rotor went on to 300, nothing said why): the first such
+     turn since the last target written, if the rotor rested further than ``tolerance_deg +
+     noise_deg`` from that target (stopped short of it: a STOP or a lock mid-turn, a pass). That
+     first turn ends the guard, stopped or not, and so does the lock's release (a move by hand after
+     it is the operator's: ``lock_released``): a hand at the panel after a STOP is stopped once,
+     then followed; a poll garbled after a move by hand is not caught (writing the rest bearing to
+     the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand at the panel
+     short and turned a rotor at 360 a full circle).
 """
 
 from __future__ import annotations
@@ -120,7 +124,6 @@ DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agre
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
-_AT_REST = (mo.IDLE, mo.BRAKING)  # rule 10: a turn from these is a new one
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 
 
@@ -216,7 +219,7 @@ class Controller:
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
-        self._passing = False  # stops.py rule 4: the stops checked now are a pass's
+        self._passing = False  # stops.py rule 4: the stops checked now are a pass's (or rule 10's)
         self._pass_ends = False  # ... and the stop due now its last try: given up once written
         self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
@@ -385,6 +388,7 @@ class Controller:
         at once after a locked start, the stop the line lost was never checked)."""
         self._released_stop_t = self.motion.stop_sent_t
         self._released_owed = self.stops.owed  # (the port out: the stop it writes on connect)
+        self._guarded = False  # (rule 10's guard too)
         self._released_unseen_t = self.stops.unseen_t  # (owed if found silent: rule 2 too)
 
     def _release_check(self, now: float) -> None:
@@ -590,8 +594,9 @@ class Controller:
         cfg = self.cfg.motion
         if was.state is not mo.MOVING and was.position_deg is not None:  # a turn begins
             self._rested = None
-            if was.state in _AT_REST and (  # (one after a stall: stops.py rule 4's watch)
-                self.cfg.stop_unasked or self._short_of_target(was.position_deg, cfg)
+            if mo.at_rest(was) and (  # (from a settled rest: not a connection's first reading,
+                self.cfg.stop_unasked  # a guess; not after a stall: stops.py rule 4's watch)
+                or self._short_of_target(was.position_deg, cfg)
             ):
                 self._rested = (was.position_deg, was.el_position_deg)
             self._guarded = False  # (the first turn ends the guard, stopped or not)
@@ -604,22 +609,24 @@ class Controller:
         if away <= UNASKED_MOVE_DEG:
             return
         self._rested = None
-        if self.cfg.stop_unasked:
+        true = self.cfg.aim.true_of  # (the bearings the user sees, not the controller's)
+        if self.cfg.stop_unasked or self._sent_az is None:
             why = "a poll a noisy line made a command, or a hand at the panel"
             then = 'set unasked_moves = "follow" to let such turns be'
         else:
             why = (
-                f"the controller keeps the bearing {self._sent_az:g}° it was stopped short of, "
-                "and a poll a noisy line garbled turns it there; or a hand at the panel"
+                f"the controller keeps the bearing {true(self._sent_az):g}° it was stopped "
+                "short of, and a poll a noisy line garbled turns it there; or a hand at the panel"
             )
             then = "turn it again at the panel to go on"
         message = (
-            f"the rotor turned with no command from the bridge, from {rested[0]:g}° to "
-            f"{m.position_deg:g}° ({why}): stopped; {then}"
+            f"the rotor turned with no command from the bridge, from {true(rested[0]):g}° to "
+            f"{true(m.position_deg):g}° ({why}): stopped; {then}"
         )
         log.warning("%s: %s", self.name, message)
         self.notes.append(Report(ErrorKind.STOP, message))
-        self.stop(now, merge=True)
+        self.stop(now)
+        self._passing = True  # (its series bounded as a pass's: a held button is let be)
 
     def _short_of_target(self, rest_deg: float, cfg: mo.MotionConfig) -> bool:
         """Rule 10: the guard is on and the rotor rested short of the last target written."""
@@ -673,6 +680,8 @@ class Controller:
                 if link.slew is not None:  # its report never came: where it ended, unseen
                     self._unseen()
                 self._given_up(link.give_up_reply(now))
+                if self.cfg.stop_unasked:  # rule 10: a poll answered in part may have been
+                    link.poll_every(now, self.cfg.moving_poll_interval_s)  # made a command
                 if todo.track_lost:
                     self.motion = mo.track_lost(self.motion, self.cfg.motion)
         self.flush_stop(now)

@@ -61,7 +61,7 @@ def masked(settings: Settings) -> dict[str, Any]:
         r["idle_poll_interval_s"] = rs.effective_idle_poll_interval_s
         r["silence_timeout_s"] = rs.effective_silence_timeout_s
         r["noise_deg"] = rs.effective_noise_deg
-        r["unasked_moves"] = "stop" if rs.stops_unasked_moves else "follow"
+        r["unasked_moves"] = _unasked_moves(rs)
         r["track_step_deg"] = rs.effective_track_step_deg
         az_speed, el_speed = rs.effective_speeds_deg_s
         r["az_speed_deg_s"] = az_speed
@@ -273,3 +273,14 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
             )
         first = f"{name}: {'; '.join(boxes)}"
     return [first, "  " + "; ".join(on)]
+
+
+def _unasked_moves(rs: RotatorSettings) -> str:
+    """What each box does with a turn nobody asked for (a composite's by its own model)."""
+    if not rs.axes:
+        return "stop" if rs.stops_unasked_moves else "follow"
+    said = [
+        f"{axis.value} box: {'stop' if rs.axis_settings(axis).stops_unasked_moves else 'follow'}"
+        for axis in Axis
+    ]
+    return ", ".join(said)

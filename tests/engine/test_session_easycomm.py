@@ -173,7 +173,7 @@ def test_a_stall_stop_lost_is_followed_by_one_when_the_rotor_breaks_free_at_once
     assert v.truth().az_deg < 195 and not v.truth().is_moving
 
 
-# -- a turn nobody asked for (controller.py rule 11) ------------------------------------------
+# -- a turn nobody asked for (controller.py rule 10) ------------------------------------------
 def unasked(v: VirtualRotator) -> list[str]:
     return [e.message for e in v.errors("stop") if "no command from the bridge" in e.message]
 
@@ -186,7 +186,7 @@ def unasked(v: VirtualRotator) -> list[str]:
 def test_a_poll_a_flipped_bit_made_a_command_is_stopped_within_five_degrees(
     rig: Rig, garbled: bytes
 ) -> None:
-    v = ready(rig, start_az_deg=200, start_el_deg=20)
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
     t = v.now
     v.garble_writes(b"AZ EL\n", garbled)
     v.run_until(lambda h: unasked(h) != [], 10, "the turn seen and stopped")
@@ -210,10 +210,58 @@ def test_a_hand_at_the_panel_is_followed_where_the_user_says_so(rig: Rig) -> Non
     assert v.errors() == [] and b"SA SE\n" not in v.sent(since=t)
 
 
+def settled(v: VirtualRotator) -> VirtualRotator:
+    """Past the settle time after the connection's first reading (a turn seen from that one
+    may have been under way: not judged, controller.py rule 10)."""
+    v.run_for(v.cfg.motion.settle_s + 0.5)
+    return v
+
+
 def test_by_default_a_hand_at_the_panel_is_stopped_and_told_how_to_let_it_be(rig: Rig) -> None:
-    v = ready(rig, start_az_deg=200, start_el_deg=20)
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
     v.manual_rotate(250)
     v.run_until(lambda h: unasked(h) != [], 10, "the turn seen and stopped")
     v.run_for(5)
     assert not v.truth().is_moving and v.truth().az_deg < 210
     assert 'unasked_moves = "follow"' in unasked(v)[0]
+
+
+def test_a_move_under_way_across_a_reconnect_is_not_taken_for_one_nobody_asked_for(
+    rig: Rig,
+) -> None:
+    """A review: the connection's first reading mid-turn made the next a turn from rest."""
+    v = ready(rig, start_az_deg=10, start_el_deg=5)
+    v.target(200, 5)
+    v.run_for(6)
+    v.link_down("serial link to /dev/ttyVIRTUAL lost: unplugged")
+    v.run_for(0.5)
+    v.link_up()
+    v.run_until(settled_at(200, 5), 90, "at 200/5")
+    assert unasked(v) == []
+
+
+def test_a_button_held_at_the_panel_is_stopped_four_times_at_most(rig: Rig) -> None:
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    t = v.now
+    for _ in range(80):  # held for 40 s: the controller turns on after each stop
+        v.manual_rotate(300)
+        v.run_for(0.5)
+    stops = [w for w in v.writes if w.t > t and w.data == b"SA SE\n"]
+    assert 1 <= len(stops) <= 4 and len(unasked(v)) == 1
+    assert any("stop it at the controller" in e.message for e in v.errors("stop"))
+
+
+def test_with_slow_polls_at_rest_a_jog_is_still_stopped_within_a_few_degrees(rig: Rig) -> None:
+    """A review: the garbled poll is answered in part, and the next came an idle poll later
+    (10 s: the jog ran 60 degrees)."""
+    v = rig(
+        "easycomm2",
+        emulator={**FAST, "start_az_deg": 200, "start_el_deg": 20},
+        settings={"idle_poll_interval_s": 10.0},
+    )
+    v.run_until_state(IDLE, 60)
+    v.run_for(3)
+    v.garble_writes(b"AZ EL\n", b"AZ ML\n")
+    v.run_until(lambda h: unasked(h) != [], 60, "the turn seen and stopped")
+    v.run_for(10)
+    assert not v.truth().is_moving and v.truth().az_deg > 190

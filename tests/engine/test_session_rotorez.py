@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pytest
 
-from bridge.core.model import MotionState
+from bridge.core.model import MotionState, Target
 from bridge.emulators.rotorez_models import Outcome
 from bridge.session.stops import STOP_REPEAT_GAP_S, STOP_UNSURE_S
 from tests.engine.virtual import VirtualRotator
@@ -910,3 +910,39 @@ def test_a_hand_at_the_panel_after_an_arrival_is_followed(rig: Rig) -> None:
     v.manual_rotate(200)
     v.run_until(at(v, 200), 60, "at 200")
     assert v.errors() == [] and commands(v, t) == []
+
+
+def test_the_turn_nobody_asked_for_is_told_in_true_bearings(rig: Rig) -> None:
+    v = ready(rig, settings={"az_offset_deg": 30})
+    v.aim(Target(300.0, None))  # the controller is sent 270
+    v.run_for(10)
+    v.stop()
+    v.run_until(lambda h: h.state is IDLE and not h.truth().in_brake_delay, 20, "at rest")
+    rest = v.status.bearing_deg
+    assert rest is not None and 80 < rest < 100
+    v.garble_writes(QUERY, b"AM1;")
+    v.run_until(lambda h: unasked(h) != [], 20, "the turn seen and stopped")
+    [said] = unasked(v)
+    assert f"from {rest:g}° to " in said and "keeps the bearing 300°" in said
+
+
+def test_a_hand_at_the_panel_after_the_lock_is_released_is_followed(rig: Rig) -> None:
+    v = stopped_short_of_300(rig, "lock")
+    v.lock(False)
+    v.run_for(5)
+    v.manual_rotate(200)
+    v.run_until(at(v, 200), 60, "at 200")
+    assert unasked(v) == []
+
+
+def test_a_move_under_way_across_a_reconnect_is_not_stopped_as_one_nobody_asked_for(
+    rig: Rig,
+) -> None:
+    v = ready(rig)
+    v.target(300)
+    v.run_for(6)
+    v.link_down("serial link to /dev/ttyVIRTUAL lost: unplugged")
+    v.run_for(0.5)
+    v.link_up()
+    v.run_until(at(v, 300), 90, "at 300")
+    assert unasked(v) == []
