@@ -226,7 +226,7 @@ def _spec(name: str, display: str, variant: str, *, elevation: bool, **kw: Any) 
         az_wraps=True,
         # K3NG's OPTION_DELAY_C_CMD_OUTPUT answers C and C2 400 ms late (for Ham Radio Deluxe)
         reply_timeout_s=1.0,
-        noise_deg=1.0,  # a potentiometer read by an ADC, whole degrees
+        noise_deg=2.0,  # a potentiometer read by an ADC, whole degrees
         # a Yaesu G-1000DXC or the G-5500's azimuth at full speed; the G-5500's elevation
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=2.5,

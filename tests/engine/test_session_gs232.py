@@ -248,3 +248,24 @@ def test_a_refusals_stop_lost_on_the_line_is_sent_again(rig: Rig) -> None:
     v.run_until(lambda h: h.state is IDLE, 30, "at rest")
     assert v.sent(since=t).count(b"S\r") == 2
     assert 100 < v.truth().az_deg < 200 and not v.truth().is_moving
+
+
+def test_a_pot_flickering_a_count_either_way_does_not_keep_a_stopped_rotor_turning(
+    rig: Rig,
+) -> None:
+    """An ADC reading a pot flickers a count up and down: with noise_deg 1 the elevation's 11
+    then 9 was two degrees of movement (a review: after a STOP, 16 stop frames, "still turning
+    after 3 stop commands", and the state left at moving)."""
+    from tests.engine.test_session_passed import flicker_el
+
+    v = rig("gs232b", emulator={"start_el_deg": 10})
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
+    flicker_el(v, [0, 1, 0, -1])
+    v.target(300.0, 10.0)
+    v.run_for(3)
+    t = v.now
+    v.stop()
+    v.run_for(30)
+
+    assert v.sent(since=t).count(b"S\r") == 1 and v.errors() == []
+    assert v.state is MotionState.IDLE and not v.truth().is_moving
