@@ -116,7 +116,7 @@ def worker_config(
         moving_poll_interval_s=r.moving_poll_interval_s,
         deadband_deg=r.deadband_deg,
         silence_timeout_s=r.effective_silence_timeout_s,
-        stop_unasked=r.stops_unasked_moves,
+        unasked_moves=r.effective_unasked_moves,
         az_speed_deg_s=az_speed,
         el_speed_deg_s=el_speed,
         pointing=r.pointing,

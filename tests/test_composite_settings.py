@@ -265,9 +265,9 @@ def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() ->
     }
     s = settings_from(doc, environ={})
     boxes = axis_configs(s.rotators[0])
-    assert boxes is not None and [b.stop_unasked for b in boxes] == [False, True]
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "stop"]
     shown = masked(s)["rotators"][0]["unasked_moves"]
     assert shown == "azimuth box: follow, elevation box: stop"
     doc["rotators"][0]["unasked_moves"] = "follow"
     boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
-    assert boxes is not None and [b.stop_unasked for b in boxes] == [False, False]
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "follow"]

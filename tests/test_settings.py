@@ -193,8 +193,12 @@ def test_check_config_shows_the_model_defaults_in_effect(tmp_path: Path, model: 
         r["silence_timeout_s"],
     )
     assert used.az_speed_deg_s == r["az_speed_deg_s"]
-    assert r["unasked_moves"] == ("stop" if used.stop_unasked else "follow")
-    assert used.stop_unasked is model.startswith("easycomm")  # (controller.py rule 10)
+    assert r["unasked_moves"] == used.unasked_moves == spec.unasked_moves
+    easycomm_azel = model.startswith("easycomm") and spec.has_elevation
+    rotorez = model in ("rotorez", "rotorcard")
+    assert used.unasked_moves == (  # (controller.py rule 10)
+        "stop" if easycomm_azel else "after-stop" if rotorez else "follow"
+    )
     assert used.tracking.step_deg == r["track_step_deg"] == r["tolerance_deg"]  # the default
     if spec.has_elevation:
         assert used.el_speed_deg_s == r["el_speed_deg_s"]

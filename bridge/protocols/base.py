@@ -368,12 +368,11 @@ class ModelSpec:
     # which are then the azimuth box's (pointing.py rule 4: each axis by the box that turns it)
     el_rounding: tuple[bool, bool, bool] | None = None
     noise_deg: float = 0.0  # analog jitter of a still rotor's readings
-    # a turn nobody asked for is stopped by default (session/controller.py rule 10): a poll one
-    # flipped bit makes a command that turns the rotor (Easycomm)
-    stops_unasked_moves: bool = False
-    # it keeps its last target's bearing, and one flipped bit makes a poll the command to turn
-    # to it (a Rotor-EZ's AI1; read as AM1;): session/controller.py rule 10
-    keeps_bearing: bool = False
+    # what becomes of a turn nobody asked for by default (session/controller.py rule 10):
+    # "follow"; "stop" where a poll one flipped bit makes a command that turns the rotor
+    # (Easycomm's EL, ML); "after-stop" where it makes one that turns it to its last target's
+    # bearing (a Rotor-EZ's AI1; read as AM1;)
+    unasked_moves: str = "follow"
     # typical speeds, until the user sets the real ones (az_speed_deg_s, el_speed_deg_s): travel
     # estimates without feedback (DCU-1), a silent slew's estimate and bound (SatEL)
     nominal_speed_deg_s: float = 6.0

@@ -198,7 +198,8 @@ def _spec(name: str, display: str, version: int, *, elevation: bool, separate: b
         az_wraps=True,
         reply_timeout_s=0.4,  # Hamlib waits 200 ms; an Arduino's loop may be busy stepping
         noise_deg=0.1,  # encoders or steps counted, read in tenths
-        stops_unasked_moves=True,  # EL of a poll is one bit from ML, the space of AZ EL from 0
+        # a poll's EL is one bit from ML (a jog), the space of AZ EL from 0; AZ alone from none
+        unasked_moves="stop" if elevation else "follow",
         nominal_speed_deg_s=6.0,
         nominal_el_speed_deg_s=6.0,
         whole_degrees=False,

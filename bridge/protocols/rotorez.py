@@ -33,7 +33,7 @@ Rules:
    that lies within a banner, or the beginning of one, as far as the junk so far goes. (A stop
    reaches an idle board twice when the stop express writes one too: interfaces/mqtt/express.py.)
 6. ``AI1;`` with one bit flipped (``I`` 0x49, ``M`` 0x4D) is ``AM1;``: turn to the bearing kept
-   from the last ``AP1``. The spec says so (``keeps_bearing``): the engine stops the first turn
+   from the last ``AP1``. The spec says so (``unasked_moves``): the engine stops the first turn
    nobody asked for after the rotor was left short of its target (session/controller.py
    rule 10). The DCU-1 is never polled.
 """
@@ -279,7 +279,7 @@ MODELS: dict[str, ModelSpec] = {
         codec_factory=RotorEzCodec,
         settings=OPTION_SETTINGS,
         brake_delay_s=5.0,
-        keeps_bearing=True,  # AI1; one bit from AM1; (rule 6)
+        unasked_moves="after-stop",  # AI1; one bit from AM1; (rule 6)
         stop_anytime=True,  # ';' at any time; a second one is answered by the banner (harmless)
         hamlib_model=401,
         hamlib_info="Rotor-EZ",
@@ -290,7 +290,7 @@ MODELS: dict[str, ModelSpec] = {
         "Idiom Press",
         codec_factory=lambda: RotorEzCodec(options=False),
         brake_delay_s=0.0,
-        keeps_bearing=True,  # AI1; one bit from AM1; (rule 6)
+        unasked_moves="after-stop",  # AI1; one bit from AM1; (rule 6)
         stop_anytime=True,
         hamlib_model=402,
         hamlib_info="RotorCard",

@@ -69,7 +69,7 @@ class WorkerConfig:
     moving_poll_interval_s: float = 0.2
     deadband_deg: float = 2.0
     silence_timeout_s: float = 3.0
-    stop_unasked: bool = False  # controller.py rule 10
+    unasked_moves: str = "follow"  # controller.py rule 10: "follow", "stop" or "after-stop"
     reconnect_min_s: float = 0.5
     reconnect_max_s: float = 10.0
     junk_report_interval_s: float = 30.0

@@ -73,21 +73,23 @@ Rules:
    which the doubt of rule 9 lets through when two readings agree), by a stop checked as an
    operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
    button is let be), and a ``stop`` error says why (in true bearings), where
-   - ``stop_unasked`` (the user's ``unasked_moves``; Easycomm by default, whose poll is one flipped
-     bit from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an attack soak ran a
-     rotor to its end stop that way): every such turn, a hand at the panel's too; a poll such a
-     garbling leaves answered in part is given up at its timeout, and the next comes at the moving
-     rate (a review: with polls 10 s apart at rest, a jog ran 60°);
-   - the controller keeps the bearing of its last target, and one flipped bit makes a poll the
-     command to turn to it (``keeps_bearing``: a Rotor-EZ's ``AI1;`` read as ``AM1;``, a probe:
-     stopped at 60 on the way to 300, the rotor went on to 300, nothing said why): the first such
-     turn since the last target written, if the rotor rested further than ``tolerance_deg +
-     noise_deg`` from that target (stopped short of it: a STOP or a lock mid-turn, a pass). That
-     first turn ends the guard, stopped or not, and so does the lock's release (a move by hand after
-     it is the operator's: ``lock_released``): a hand at the panel after a STOP is stopped once,
-     then followed; a poll garbled after a move by hand is not caught (writing the rest bearing to
-     the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand at the panel
-     short and turned a rotor at 360 a full circle).
+   - ``unasked_moves`` is "stop" (an Easycomm az/el box's default, whose poll is one flipped bit
+     from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an attack soak ran a
+     rotor to its end stop that way): every such turn, a hand at the panel's too;
+   - it is "after-stop" (the Rotor-EZ's and RotorCard's: the controller keeps the bearing of its
+     last target, and one flipped bit makes a poll the command to turn to it, ``AI1;`` read as
+     ``AM1;``, a probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said
+     why): the first such turn since the last target written, if the rotor rested further than
+     ``tolerance_deg + noise_deg`` from that target (stopped short of it: a STOP or a lock mid-turn,
+     a pass). That first turn ends the guard, stopped or not, and so does the lock's release (a move
+     by hand after it is the operator's: ``lock_released``): a hand at the panel after a STOP is
+     stopped once, then followed; a poll garbled after a move by hand is not caught (writing the
+     rest bearing to the board, ``AP1xxx;``, was tried and taken back: a review found it cut a hand
+     at the panel short and turned a rotor at 360 a full circle).
+   While such a turn would be stopped, a poll left unanswered or answered in part at rest (what
+   a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
+   polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
+   lock's, an operator's) stays checked as any: the lock's is not let go after four.
 """
 
 from __future__ import annotations
@@ -224,6 +226,7 @@ class Controller:
         self._rested: tuple[float, float | None] | None = None  # rule 10: where it rested
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
+        self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -564,7 +567,7 @@ class Controller:
         cfg, was = self.cfg, self.motion
         before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
-        if cfg.stop_unasked or self._guarded or self._rested is not None:  # rule 10
+        if cfg.unasked_moves == "stop" or self._guarded or self._rested is not None:  # rule 10
             self._unasked(was, now)
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
@@ -595,7 +598,7 @@ class Controller:
         if was.state is not mo.MOVING and was.position_deg is not None:  # a turn begins
             self._rested = None
             if mo.at_rest(was) and (  # (from a settled rest: not a connection's first reading,
-                self.cfg.stop_unasked  # a guess; not after a stall: stops.py rule 4's watch)
+                self.cfg.unasked_moves == "stop"  # a guess; not after a stall: stops.py rule 4)
                 or self._short_of_target(was.position_deg, cfg)
             ):
                 self._rested = (was.position_deg, was.el_position_deg)
@@ -610,7 +613,7 @@ class Controller:
             return
         self._rested = None
         true = self.cfg.aim.true_of  # (the bearings the user sees, not the controller's)
-        if self.cfg.stop_unasked or self._sent_az is None:
+        if self.cfg.unasked_moves == "stop" or self._sent_az is None:
             why = "a poll a noisy line made a command, or a hand at the panel"
             then = 'set unasked_moves = "follow" to let such turns be'
         else:
@@ -625,8 +628,13 @@ class Controller:
         )
         log.warning("%s: %s", self.name, message)
         self.notes.append(Report(ErrorKind.STOP, message))
+        anew = m.stop_sent_t is None  # (a stop out, the lock's, an operator's: checked as any)
         self.stop(now)
-        self._passing = True  # (its series bounded as a pass's: a held button is let be)
+        self._passing = anew  # (a series of its own bounded as a pass's: a held button is let be)
+
+    def _watching(self) -> bool:
+        """Rule 10: a turn nobody asked for would be stopped now."""
+        return self.cfg.unasked_moves == "stop" or self._guarded
 
     def _short_of_target(self, rest_deg: float, cfg: mo.MotionConfig) -> bool:
         """Rule 10: the guard is on and the rotor rested short of the last target written."""
@@ -680,8 +688,9 @@ class Controller:
                 if link.slew is not None:  # its report never came: where it ended, unseen
                     self._unseen()
                 self._given_up(link.give_up_reply(now))
-                if self.cfg.stop_unasked:  # rule 10: a poll answered in part may have been
-                    link.poll_every(now, self.cfg.moving_poll_interval_s)  # made a command
+                if self._watching() and mo.at_rest(self.motion):  # rule 10: a poll left
+                    self._watch_until = now + self.cfg.motion.settle_s  # unanswered may have
+                    link.poll_every(now, self.cfg.moving_poll_interval_s)  # been a command
                 if todo.track_lost:
                     self.motion = mo.track_lost(self.motion, self.cfg.motion)
         self.flush_stop(now)
@@ -798,7 +807,7 @@ class Controller:
         link.send(link.codec.encode_target(todo.az_deg, todo.el_deg), now)
         self.target_last = True
         az, el = todo.wire
-        self._sent_az, self._guarded = az, self.cfg.spec.keeps_bearing  # rule 10
+        self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))
@@ -852,7 +861,7 @@ class Controller:
                     "rate or model, or a noisy line?"
                 )
             self.notes.append(Report(ErrorKind.SERIAL, why))
-        busy = busy or self.motion.state is mo.MOVING
+        busy = busy or self.motion.state is mo.MOVING or now < self._watch_until
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 

@@ -52,5 +52,5 @@ def model_defaults(spec: ModelSpec) -> dict[str, float | int | str | None]:
         "az_max_deg": spec.az_max_deg,
         "el_min_deg": spec.el_min_deg if el else None,
         "el_max_deg": spec.el_max_deg if el else None,
-        "unasked_moves": "stop" if spec.stops_unasked_moves else "follow",
+        "unasked_moves": spec.unasked_moves,
     }

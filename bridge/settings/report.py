@@ -278,9 +278,6 @@ def _rotator(settings: Settings, r: RotatorSettings) -> list[str]:
 def _unasked_moves(rs: RotatorSettings) -> str:
     """What each box does with a turn nobody asked for (a composite's by its own model)."""
     if not rs.axes:
-        return "stop" if rs.stops_unasked_moves else "follow"
-    said = [
-        f"{axis.value} box: {'stop' if rs.axis_settings(axis).stops_unasked_moves else 'follow'}"
-        for axis in Axis
-    ]
+        return rs.effective_unasked_moves
+    said = [f"{axis.value} box: {rs.axis_settings(axis).effective_unasked_moves}" for axis in Axis]
     return ", ".join(said)

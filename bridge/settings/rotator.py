@@ -230,13 +230,15 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         examples=[2.0],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
-    unasked_moves: Literal["follow", "stop"] | None = Field(
+    unasked_moves: Literal["follow", "stop", "after-stop"] | None = Field(
         None,
         description="a turn the bridge did not ask for (a hand at the controller's panel, or a "
-        "poll a noisy line made a command): follow it, or stop it once it is 5 degrees from "
-        "where the rotor rested and say so on R/error. By default stop on Easycomm, whose "
-        "polls are one flipped bit from a jog (set follow if you turn it at its panel), "
-        "follow on the others",
+        "poll a noisy line made a command): follow it; stop it once it is 5 degrees from where "
+        "the rotor rested and say so on R/error; or after-stop: only the first after a STOP, a "
+        "lock or a pass left the rotor short of its target. By default stop on an Easycomm "
+        "az/el box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
+        "panel), after-stop on the Rotor-EZ and RotorCard, whose poll is one from 'turn to the "
+        "last target', follow on the others",
         examples=["follow"],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
@@ -532,10 +534,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         return self.spec.noise_deg if self.noise_deg is None else self.noise_deg
 
     @property
-    def stops_unasked_moves(self) -> bool:
-        if self.unasked_moves is None:
-            return self.spec.stops_unasked_moves
-        return self.unasked_moves == "stop"
+    def effective_unasked_moves(self) -> str:
+        return self.spec.unasked_moves if self.unasked_moves is None else self.unasked_moves
 
     @property
     def effective_track_step_deg(self) -> float:

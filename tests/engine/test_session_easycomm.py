@@ -265,3 +265,37 @@ def test_with_slow_polls_at_rest_a_jog_is_still_stopped_within_a_few_degrees(rig
     v.run_until(lambda h: unasked(h) != [], 60, "the turn seen and stopped")
     v.run_for(10)
     assert not v.truth().is_moving and v.truth().az_deg > 190
+
+
+def test_a_button_held_while_locked_is_fought_as_long_as_the_lock_holds(rig: Rig) -> None:
+    """A review: the turn's bounded series let the lock's own stop go after four."""
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    v.lock(True)
+    v.run_for(5)
+    t = v.now
+    for _ in range(80):  # held for 40 s
+        v.manual_rotate(300)
+        v.run_for(0.5)
+    assert len([w for w in v.writes if w.t > t and w.data == b"SA SE\n"]) > 10
+
+
+def test_an_operators_stop_lost_before_the_turn_is_judged_is_still_sent_until_it_takes(
+    rig: Rig,
+) -> None:
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    v.garble_writes(b"AZ EL\n", b"AZ ML\n")
+    v.run_until(lambda h: h.state is MOVING, 10, "the jog seen")
+    v.drop_writes(b"SA SE\n", count=6)
+    v.stop()
+    v.run_for(40)
+    assert not v.truth().is_moving and v.truth().az_deg > 100
+
+
+@pytest.mark.parametrize("model", ["easycomm2-az", "easycomm3-az"])
+def test_an_azimuth_box_whose_poll_no_flipped_bit_makes_a_move_follows_a_hand(
+    rig: Rig, model: str
+) -> None:
+    v = settled(ready(rig, model, start_az_deg=200))
+    v.manual_rotate(250)
+    v.run_until(lambda h: h.state is IDLE and abs(h.truth().az_deg - 250) < 0.1, 30, "at 250")
+    assert v.errors() == []
