@@ -250,8 +250,10 @@ def test_a_box_unplugged_as_a_stop_is_written_is_a_lost_link_and_owes_that_stop(
 
 
 def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() -> None:
-    """controller.py rule 10: an Easycomm elevation box beside an RT-21 stops such turns, the
-    RT-21 follows them, and check-config says so per box."""
+    """controller.py rule 10: an Easycomm az/el box that turns only the elevation follows such
+    turns (no flipped bit of its poll turns an elevation; a review: its own azimuth channel,
+    jogged, turns nothing, and a hand at the elevation panel was stopped); beside it an Easycomm
+    azimuth box stops them; check-config says so per box."""
     from bridge.settings.report import masked
 
     doc = {
@@ -265,9 +267,14 @@ def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() ->
     }
     s = settings_from(doc, environ={})
     boxes = axis_configs(s.rotators[0])
-    assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "stop"]
-    shown = masked(s)["rotators"][0]["unasked_moves"]
-    assert shown == "azimuth box: follow, elevation box: stop"
-    doc["rotators"][0]["unasked_moves"] = "follow"
-    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
     assert boxes is not None and [b.unasked_moves for b in boxes] == ["follow", "follow"]
+    shown = masked(s)["rotators"][0]["unasked_moves"]
+    assert shown == "azimuth box: follow, elevation box: follow"
+    doc["rotators"][0]["azimuth"] = {"model": "easycomm2", "port": "/dev/ttyAZ"}
+    s = settings_from(doc, environ={})
+    boxes = axis_configs(s.rotators[0])
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "follow"]
+    assert masked(s)["rotators"][0]["unasked_moves"] == "azimuth box: stop, elevation box: follow"
+    doc["rotators"][0]["unasked_moves"] = "stop"
+    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
+    assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "stop"]

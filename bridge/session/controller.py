@@ -74,8 +74,9 @@ Rules:
    operator's but sent again three times at most, as a pass's (stops.py rule 4: a hand holding a
    button is let be), and a ``stop`` error says why (in true bearings), where
    - ``unasked_moves`` is "stop" (an Easycomm az/el box's default, whose poll is one flipped bit
-     from a jog, ``EL`` read as ``ML``, or a move, ``AZ EL`` as ``AZ0 EL``: an attack soak ran a
-     rotor to its end stop that way): every such turn, a hand at the panel's too;
+     from a jog, ``EL`` read as ``ML``, and its space from a ``0``, ``AZ0EL``, which a lenient
+     parser reads as a move to 0: an attack soak ran a rotor to its end stop that way): every
+     such turn, a hand at the panel's too;
    - it is "after-stop" (the Rotor-EZ's and RotorCard's: the controller keeps the bearing of its
      last target, and one flipped bit makes a poll the command to turn to it, ``AI1;`` read as
      ``AM1;``, a probe: stopped at 60 on the way to 300, the rotor went on to 300, nothing said
@@ -127,6 +128,11 @@ DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
+
+
+def _at(az_deg: float, el_deg: float | None) -> str:
+    """Rule 10's words for where a rotor is (az/el where it has an elevation)."""
+    return f"{az_deg:g}°" if el_deg is None else f"{az_deg:g}°/{el_deg:g}°"
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -622,9 +628,10 @@ class Controller:
                 "short of, and a poll a noisy line garbled turns it there; or a hand at the panel"
             )
             then = "turn it again at the panel to go on"
+        came, now_at = _at(true(rested[0]), rested[1]), _at(true(m.position_deg), m.el_position_deg)
         message = (
-            f"the rotor turned with no command from the bridge, from {true(rested[0]):g}° to "
-            f"{true(m.position_deg):g}° ({why}): stopped; {then}"
+            f"the rotor turned with no command from the bridge, from {came} to {now_at} ({why}): "
+            f"stopped; {then}"
         )
         log.warning("%s: %s", self.name, message)
         self.notes.append(Report(ErrorKind.STOP, message))
@@ -796,8 +803,17 @@ class Controller:
         if factor == 1.0:
             self.cfg = base
             return
-        motion = replace(base.motion, nominal_speed_deg_s=base.motion.nominal_speed_deg_s * factor)
         az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
+        spec, was = base.spec, base.motion
+        step = 1.0 if spec.whole_degrees else 0.1
+        slowest = min(az, el) if spec.has_elevation else az
+        motion = replace(
+            was,
+            nominal_speed_deg_s=was.nominal_speed_deg_s * factor,
+            settle_s=mo.settle_for(  # motion.py rule 2: slower, longer (never below the base's)
+                was.settle_s, was.noise_deg, step, slowest, base.moving_poll_interval_s
+            ),
+        )
         self.cfg = replace(base, motion=motion, az_speed_deg_s=az, el_speed_deg_s=el)
 
     def send(self, todo: Sending, target: Target, attempt: int, now: float) -> None:

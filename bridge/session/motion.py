@@ -9,7 +9,10 @@ Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
    movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
-   last command, so a rotor that has not started yet is not "still").
+   last command, so a rotor that has not started yet is not "still"), never shorter than a
+   rotor turning at its slowest axis's speed takes to go a step of its readings beyond
+   ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at its slowest
+   speed, 1.5 degrees a second, called arrived at 128.9 on its way to 130).
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its
@@ -174,6 +177,16 @@ class Plan(enum.StrEnum):
 
 
 angle_error = apart_deg  # (core/geo.py: a reading past 360 on a wrapping box on the circle)
+
+
+def settle_for(
+    settle_s: float, noise_deg: float, step_deg: float, slowest_deg_s: float, poll_s: float
+) -> float:
+    """Rule 2: the settle time a rotor whose readings move in ``step_deg`` steps needs at
+    ``slowest_deg_s`` (its slower axis), at least ``settle_s``."""
+    if slowest_deg_s <= 0:
+        return settle_s
+    return max(settle_s, (noise_deg + step_deg) / slowest_deg_s + poll_s)
 
 
 def stop_checked(m: Motion) -> Motion:

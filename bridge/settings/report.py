@@ -279,5 +279,5 @@ def _unasked_moves(rs: RotatorSettings) -> str:
     """What each box does with a turn nobody asked for (a composite's by its own model)."""
     if not rs.axes:
         return rs.effective_unasked_moves
-    said = [f"{axis.value} box: {rs.axis_settings(axis).effective_unasked_moves}" for axis in Axis]
+    said = [f"{axis.value} box: {rs.unasked_moves_of(axis)}" for axis in Axis]
     return ", ".join(said)

@@ -211,7 +211,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         1.5,
         gt=0,
         le=60,
-        description="steady this long means stopped; at least two moving poll intervals",
+        description="steady this long means stopped; at least two moving poll intervals (the "
+        "bridge waits longer where the rotor's slower axis takes longer to move noise_deg and "
+        "a step of its readings: a GS-232 at a slow speed)",
         examples=[2.0],
     )
     deadband_deg: float = Field(
@@ -536,6 +538,14 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
     @property
     def effective_unasked_moves(self) -> str:
         return self.spec.unasked_moves if self.unasked_moves is None else self.unasked_moves
+
+    def unasked_moves_of(self, axis: Axis) -> str:
+        """A composite box's: the user's, else the azimuth box's model's, and follow for the
+        elevation box (no flipped bit of a poll turns an elevation, and that box's own
+        azimuth channel turns nothing: session/controller.py rule 10)."""
+        if self.unasked_moves is not None or axis is Axis.ELEVATION:
+            return self.unasked_moves or "follow"
+        return self.axis_settings(axis).effective_unasked_moves
 
     @property
     def effective_track_step_deg(self) -> float:

@@ -269,3 +269,35 @@ def test_a_pot_flickering_a_count_either_way_does_not_keep_a_stopped_rotor_turni
 
     assert v.sent(since=t).count(b"S\r") == 1 and v.errors() == []
     assert v.state is MotionState.IDLE and not v.truth().is_moving
+
+
+def slowed(rig: Rig, speed: str) -> VirtualRotator:
+    v = rig("gs232b", emulator={"start_az_deg": 100, "start_el_deg": 10})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.option("speed", speed)
+    v.run_for(5)
+    return v
+
+
+@pytest.mark.parametrize(
+    ("speed", "target"), [("1", (130.0, 10.0)), ("3", (100.0, 30.0))], ids=["az-X1", "el-X3"]
+)
+def test_a_gs232_at_a_slow_speed_is_not_called_at_rest_while_it_still_turns(
+    rig: Rig, speed: str, target: tuple[float, float]
+) -> None:
+    """motion.py rule 2 (a review): at X1 the azimuth turns 1.5 degrees a second, and three
+    whole degrees (noise_deg and a count) took longer than the settle time: called arrived at
+    128.9 on the way to 130 (at X3 the elevation, at 27.4 on the way to 30)."""
+    v = slowed(rig, speed)
+    v.target(*target)
+    v.run_until(lambda h: h.state is IDLE, 60, "idle")
+    assert not v.truth().is_moving
+
+
+def test_a_hand_at_the_panel_of_a_slowed_gs232_is_one_move(rig: Rig) -> None:
+    v = slowed(rig, "1")
+    t = v.now
+    v.manual_rotate(130)
+    v.run_for(30)
+    states = [s.state for s in v.published(since=t)]
+    assert sum(1 for a, b in zip(states, states[1:], strict=False) if a is not b) <= 2
