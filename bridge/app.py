@@ -57,7 +57,7 @@ from bridge.runtime.rotator import Rotator
 from bridge.runtime.state_store import StateStore
 from bridge.runtime.worker import WorkerConfig
 from bridge.session.config import FollowConfig, HealthConfig, TrackConfig, WindConfig
-from bridge.session.motion import MotionConfig, settle_for
+from bridge.session.motion import MotionConfig
 from bridge.settings import ConfigError, GroupSettings, RotatorSettings, Settings
 from bridge.settings.rotator import EMULATION_KEYS
 from bridge.sky import Sky
@@ -104,13 +104,7 @@ def worker_config(
             tolerance_deg=r.tolerance_deg,
             stall_timeout_s=r.stall_timeout_s,
             brake_delay_s=r.effective_brake_delay_s,
-            settle_s=settle_for(
-                r.settle_s,
-                r.effective_noise_deg,
-                1.0 if spec.whole_degrees else 0.1,
-                min(az_speed, el_speed) if spec.has_elevation else az_speed,
-                r.moving_poll_interval_s,
-            ),
+            settle_s=r.settle_s,
             noise_deg=r.effective_noise_deg,
             az_span_deg=az_max - az_min,
             nominal_speed_deg_s=az_speed,

@@ -130,9 +130,17 @@ GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online t
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 
 
-def _at(az_deg: float, el_deg: float | None) -> str:
-    """Rule 10's words for where a rotor is (az/el where it has an elevation)."""
-    return f"{az_deg:g}°" if el_deg is None else f"{az_deg:g}°/{el_deg:g}°"
+def _turned(
+    rested: tuple[float, float | None], az_deg: float, el_deg: float | None, noise_deg: float
+) -> str:
+    """Rule 10's words for a turn: the azimuth's, the elevation's alone where the azimuth
+    stayed (a composite's elevation box: its own azimuth is none of the antenna's), or both."""
+    az0, el0 = rested
+    if el0 is None or el_deg is None:
+        return f"from {az0:g}° to {az_deg:g}°"
+    if mo.angle_error(az_deg, az0, True) <= noise_deg:
+        return f"its elevation from {el0:g}° to {el_deg:g}°"
+    return f"from {az0:g}°/{el0:g}° to {az_deg:g}°/{el_deg:g}°"
 
 
 def doubt_deg(cfg: mo.MotionConfig) -> float:
@@ -628,10 +636,11 @@ class Controller:
                 "short of, and a poll a noisy line garbled turns it there; or a hand at the panel"
             )
             then = "turn it again at the panel to go on"
-        came, now_at = _at(true(rested[0]), rested[1]), _at(true(m.position_deg), m.el_position_deg)
+        turned = _turned(
+            (true(rested[0]), rested[1]), true(m.position_deg), m.el_position_deg, cfg.noise_deg
+        )
         message = (
-            f"the rotor turned with no command from the bridge, from {came} to {now_at} ({why}): "
-            f"stopped; {then}"
+            f"the rotor turned with no command from the bridge, {turned} ({why}): stopped; {then}"
         )
         log.warning("%s: %s", self.name, message)
         self.notes.append(Report(ErrorKind.STOP, message))

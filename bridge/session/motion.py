@@ -9,10 +9,12 @@ Rules:
 1. Movement is a reading more than ``noise_deg`` away from the anchor (the reading where the last
    movement was seen). Analog jitter of a still rotor stays inside that band and moves nothing.
 2. Still = no movement for ``settle_s`` (counted from the later of the last movement and the
-   last command, so a rotor that has not started yet is not "still"), never shorter than a
-   rotor turning at its slowest axis's speed takes to go a step of its readings beyond
-   ``noise_deg``, plus a moving poll (``settle_for``: a review found a GS-232 at its slowest
-   speed, 1.5 degrees a second, called arrived at 128.9 on its way to 130).
+   last command, so a rotor that has not started yet is not "still"). While a setting slows
+   the rotor (controller.py rule 7: a GS-232 at X1), never shorter than it takes at its slower
+   axis's speed to go a step of its readings beyond ``noise_deg``, plus a moving poll
+   (``settle_for``: a review found a GS-232 at X1, 1.5 degrees a second, called arrived at
+   128.9 on its way to 130). Speeds the user configures are the user's to pair with
+   ``settle_s``.
 3. Still and within ``tolerance_deg`` of the target: arrived. Off target with no movement for
    ``stall_timeout_s``: stalled (and the target is dropped). Still with no target: stopped.
    (Movement, not a shrinking error, is progress: a rotor that must go the long way round its

@@ -211,9 +211,9 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         1.5,
         gt=0,
         le=60,
-        description="steady this long means stopped; at least two moving poll intervals (the "
-        "bridge waits longer where the rotor's slower axis takes longer to move noise_deg and "
-        "a step of its readings: a GS-232 at a slow speed)",
+        description="steady this long means stopped; at least two moving poll intervals (longer "
+        "while a speed setting slows the rotor: a GS-232 at X1 to X3). Raise it for a rotor "
+        "slower than noise_deg and a step of its readings in this time",
         examples=[2.0],
     )
     deadband_deg: float = Field(

@@ -15,8 +15,10 @@ import pytest
 
 from bridge.core.model import MotionState
 from bridge.emulators.easycomm import EasycommController, Outcome
+from bridge.protocols.axes import Axis
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
+from tests.engine.virtual_composite import VirtualComposite
 
 Rig = Callable[..., VirtualRotator]
 IDLE, MOVING = MotionState.IDLE, MotionState.MOVING
@@ -307,4 +309,25 @@ def test_an_elevation_turn_nobody_asked_for_is_told_with_its_elevation(rig: Rig)
     v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
     v.device.manual_rotate(200, v.now, el_deg=60)  # type: ignore[call-arg]
     v.run_until(lambda h: unasked(h) != [], 20, "the turn seen and stopped")
-    assert "from 200°/20° to 200°/2" in unasked(v)[0]
+    assert "turned with no command from the bridge, its elevation from 20° to 2" in unasked(v)[0]
+
+
+def test_a_composites_elevation_box_tells_a_turn_by_its_elevation_alone() -> None:
+    """A review: the box's own azimuth channel (87 here) is none of the antenna's (210)."""
+    with VirtualComposite(
+        "rotorez",
+        "easycomm2",
+        settings={"unasked_moves": "stop", "az_offset_deg": 10},
+        emulators={
+            Axis.ELEVATION: {"start_az_deg": 77, "start_el_deg": 20},
+            Axis.AZIMUTH: {"start_az_deg": 200},
+        },
+    ) as v:
+        v.run_until(
+            lambda h: h.status.available and h.el.state is IDLE and h.az.state is IDLE, 30, "on"
+        )
+        v.run_for(10)
+        v.el.device.manual_rotate(77, v.now, el_deg=60)  # type: ignore[call-arg]
+        v.run_until(lambda h: unasked(h.el) != [], 30, "told")
+        [said] = unasked(v.el)
+        assert "turned with no command from the bridge, its elevation from 20° to 2" in said

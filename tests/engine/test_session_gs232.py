@@ -14,6 +14,7 @@ import pytest
 
 from bridge.core.model import MotionState, SetOption, Target
 from bridge.emulators.gs232 import Outcome
+from tests.engine.test_session_passed import flicker_el
 from tests.engine.test_session_tracking import BERLIN, a_pass_that, fly
 from tests.engine.virtual import VirtualRotator, moves, settled_at
 
@@ -256,8 +257,6 @@ def test_a_pot_flickering_a_count_either_way_does_not_keep_a_stopped_rotor_turni
     """An ADC reading a pot flickers a count up and down: with noise_deg 1 the elevation's 11
     then 9 was two degrees of movement (a review: after a STOP, 16 stop frames, "still turning
     after 3 stop commands", and the state left at moving)."""
-    from tests.engine.test_session_passed import flicker_el
-
     v = rig("gs232b", emulator={"start_el_deg": 10})
     v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 30, "online")
     flicker_el(v, [0, 1, 0, -1])
