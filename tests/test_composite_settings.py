@@ -20,6 +20,7 @@ from bridge.protocols.axes import Axis, ElevationOnly
 from bridge.protocols.base import NotReady, PositionReply
 from bridge.runtime.composite import CompositeWorker, Composition, merge, split
 from bridge.session.actions import Write
+from bridge.session.controller import Controller
 from bridge.session.mailbox import Batch, Mailbox
 from bridge.settings import ConfigError, settings_from
 from tests.support import ROOT, cli
@@ -278,3 +279,29 @@ def test_each_box_stops_or_follows_a_turn_nobody_asked_for_by_its_own_model() ->
     doc["rotators"][0]["unasked_moves"] = "stop"
     boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
     assert boxes is not None and [b.unasked_moves for b in boxes] == ["stop", "stop"]
+
+
+@pytest.mark.parametrize(("speed", "settle_s"), [("1", 5.0), ("3", 1.8), ("4", 1.5)])
+def test_a_slowed_elevation_box_settles_by_its_own_speed_not_the_azimuths(
+    speed: str, settle_s: float
+) -> None:
+    """motion.py rule 2 (a review): a GS-232 turning a composite's elevation beside an RT-21,
+    the azimuth configured slow (0.5 degrees a second): at X3 it waited 8.2 s, where its own
+    1.875 degrees a second need 1.8."""
+    doc = {
+        "rotators": [
+            {
+                "id": "sky",
+                "azimuth": {"model": "rt21", "port": "/dev/ttyAZ"},
+                "elevation": {"model": "gs232b", "port": "/dev/ttyEL"},
+                "az_speed_deg_s": 0.5,
+            }
+        ]
+    }
+    boxes = axis_configs(settings_from(doc, environ={}).rotators[0])
+    assert boxes is not None
+    box = Controller(boxes[1], {"speed": speed})
+    box.options.all_due()  # (the box answers: what is set is owed)
+    assert box.options.take(True, True, 0.0) == [("speed", speed)]  # written: in effect
+    box._retune()  # (what the step does after writing a setting: controller.py rule 7)
+    assert box.cfg.motion.settle_s == pytest.approx(settle_s)

@@ -306,11 +306,12 @@ def axis_spec(spec: ModelSpec, axis: Axis) -> ModelSpec:
         )
     inner = spec.codec_factory
     if spec.has_elevation:
-        return replace(spec, codec_factory=lambda: ElevationOnly(inner()))
+        return replace(spec, codec_factory=lambda: ElevationOnly(inner()), turns_azimuth=False)
     return replace(  # a one-axis box turning the elevation
         spec,
         codec_factory=lambda: OneAxisElevation(inner()),
         has_elevation=True,
+        turns_azimuth=False,
         el_min_deg=max(0.0, spec.az_min_deg),
         el_max_deg=min(ONE_AXIS_EL_MAX_DEG, spec.az_max_deg),
         nominal_el_speed_deg_s=spec.nominal_speed_deg_s,

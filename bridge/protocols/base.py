@@ -334,6 +334,7 @@ class ModelSpec:
     stopbits: int = 1
     can_report_position: bool = True
     has_elevation: bool = False
+    turns_azimuth: bool = True  # False: a composite's elevation box (axes.py rule 2)
     has_version: bool = False
     settings: tuple[Setting, ...] = ()  # the controller's own settings, as data (rule 6)
     brake_delay_s: float = 0.0

@@ -40,7 +40,9 @@ Rules:
    (the motion machine sees the reading, then the stop), or dropped if bytes came after it.
 6. Junk that is no reply is logged; a user is told at most every ``junk_report_interval_s``.
 7. ``cfg`` is the rotator's configuration with its speeds as the settings in effect make them
-   (options.py rule 3: a GS-232 at X2 turns at half its speed); ``base_cfg`` as configured.
+   (options.py rule 3: a GS-232 at X2 turns at half its speed), and the settle time they need
+   (motion.py rule 2: from the slower axis it turns, a composite's elevation box's own);
+   ``base_cfg`` as configured.
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
 9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking,
@@ -131,14 +133,14 @@ UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far f
 
 
 def _turned(
-    rested: tuple[float, float | None], az_deg: float, el_deg: float | None, noise_deg: float
+    rested: tuple[float, float | None], az_deg: float, el_deg: float | None, az_stayed: bool
 ) -> str:
     """Rule 10's words for a turn: the azimuth's, the elevation's alone where the azimuth
     stayed (a composite's elevation box: its own azimuth is none of the antenna's), or both."""
     az0, el0 = rested
     if el0 is None or el_deg is None:
         return f"from {az0:g}° to {az_deg:g}°"
-    if mo.angle_error(az_deg, az0, True) <= noise_deg:
+    if az_stayed:
         return f"its elevation from {el0:g}° to {el_deg:g}°"
     return f"from {az0:g}°/{el0:g}° to {az_deg:g}°/{el_deg:g}°"
 
@@ -636,8 +638,9 @@ class Controller:
                 "short of, and a poll a noisy line garbled turns it there; or a hand at the panel"
             )
             then = "turn it again at the panel to go on"
+        stayed = mo.angle_error(m.position_deg, rested[0], cfg.az_wraps) <= cfg.noise_deg
         turned = _turned(
-            (true(rested[0]), rested[1]), true(m.position_deg), m.el_position_deg, cfg.noise_deg
+            (true(rested[0]), rested[1]), true(m.position_deg), m.el_position_deg, stayed
         )
         message = (
             f"the rotor turned with no command from the bridge, {turned} ({why}): stopped; {then}"
@@ -815,7 +818,7 @@ class Controller:
         az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
         spec, was = base.spec, base.motion
         step = 1.0 if spec.whole_degrees else 0.1
-        slowest = min(az, el) if spec.has_elevation else az
+        slowest = (min(az, el) if spec.turns_azimuth else el) if spec.has_elevation else az
         motion = replace(
             was,
             nominal_speed_deg_s=was.nominal_speed_deg_s * factor,

@@ -211,9 +211,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         1.5,
         gt=0,
         le=60,
-        description="steady this long means stopped; at least two moving poll intervals (longer "
-        "while a speed setting slows the rotor: a GS-232 at X1 to X3). Raise it for a rotor "
-        "slower than noise_deg and a step of its readings in this time",
+        description="steady this long means stopped; at least two moving poll intervals (the "
+        "bridge waits longer while a speed setting slows the rotor so much that noise_deg and "
+        "a step of its readings take longer: a GS-232 at X1). Raise it for a rotor that slow "
+        "at its configured speed",
         examples=[2.0],
     )
     deadband_deg: float = Field(
@@ -239,8 +240,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         "the rotor rested and say so on R/error; or after-stop: only the first after a STOP, a "
         "lock or a pass left the rotor short of its target. By default stop on an Easycomm "
         "az/el box, whose poll is one flipped bit from a jog (set follow if you turn it at its "
-        "panel), after-stop on the Rotor-EZ and RotorCard, whose poll is one from 'turn to the "
-        "last target', follow on the others",
+        "panel; a composite's elevation box follows), after-stop on the Rotor-EZ and "
+        "RotorCard, whose poll is one from 'turn to the last target', follow on the others",
         examples=["follow"],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )
