@@ -583,7 +583,7 @@ class Controller:
         cfg, was = self.cfg, self.motion
         before = was.state
         self.motion, events = mo.reading(self.motion, cfg.motion, reply.az_deg, now, reply.el_deg)
-        if cfg.unasked_moves == "stop" or self._guarded or self._rested is not None:  # rule 10
+        if self._watching() or self._rested is not None:  # rule 10
             self._unasked(was, now)
         if owed:  # stops.py rule 3: the stop it went silent with, before anything else
             log.info("%s: sending again the stop it went silent before confirming", self.name)
@@ -622,7 +622,8 @@ class Controller:
         rested = self._rested
         if rested is None or m.position_deg is None:
             return
-        away = mo.angle_error(m.position_deg, rested[0], cfg.az_wraps)
+        az_away = mo.angle_error(m.position_deg, rested[0], cfg.az_wraps)
+        away = az_away
         if rested[1] is not None and m.el_position_deg is not None:
             away = max(away, abs(m.el_position_deg - rested[1]))
         if away <= UNASKED_MOVE_DEG:
@@ -638,7 +639,7 @@ class Controller:
                 "short of, and a poll a noisy line garbled turns it there; or a hand at the panel"
             )
             then = "turn it again at the panel to go on"
-        stayed = mo.angle_error(m.position_deg, rested[0], cfg.az_wraps) <= cfg.noise_deg
+        stayed = az_away <= cfg.noise_deg
         turned = _turned(
             (true(rested[0]), rested[1]), true(m.position_deg), m.el_position_deg, stayed
         )
