@@ -173,13 +173,18 @@ def test_a_storm_outlives_a_restart_of_the_bridge(rig: Rig) -> None:
         "the storm in the state file",
     )
     rig.stop()
+    parks = len(rig.emu.frames("set"))
     mark, t_restart = rig.probe.mark(), time.monotonic()
     rig.start()
     rig.ready("tower", after=t_restart)
     assert wind_of(rig, lambda w: w.get("storm"), mark)["storm"] is True
+    # the storm's park is owed again after the restart (a hand may have turned the rotor while
+    # the bridge was down): it is written once, to the same park, whenever the first step takes it
+    wait_until(lambda: len(rig.emu.frames("set")) == parks + 1, 10, "the park written again")
     rig.probe.publish(TOPIC, "14")  # 50 km/h: neither a storm nor a calm
     wind_of(rig, lambda w: 45 < (w.get("speed_kmh") or 0) < 55, mark)
     sets = len(rig.emu.frames("set"))
+    assert sets == parks + 1 and rig.emu.frames("set")[-1].data == rig.emu.frames("set")[0].data
     before = rig.probe.mark()
     rig.probe.publish("rotor/target", "200")
     assert "parked for the storm" in error_after(rig, before, "refused")["message"]
