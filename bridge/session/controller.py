@@ -130,6 +130,7 @@ DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
+_PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK)  # stops.py rule 4: a bounded stop series
 
 
 def _turned(
@@ -682,7 +683,7 @@ class Controller:
                 if self.motion.state is mo.MOVING:  # a refusal's, a pass's: this turn's stop
                     self.motion = mo.stop_sent(self.motion, self.cfg.motion, now)
                     self.stops.sent(now)
-                    self._passing = event is mo.Event.PASSED
+                    self._passing = event in _PASSING
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
 

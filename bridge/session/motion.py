@@ -38,8 +38,15 @@ Rules:
    are someone else's hand on the front panel, or a controller driving the wrong way (not one
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
-   the way round the stop may lead away first (rule 3), so there only a stall tells, until the
-   rotor has come to its target. On either axis, each judged on its own: once a movement on
+   the way round the stop may lead away first (rule 3), so going away tells nothing by itself.
+   Turning back does: once the azimuth's movements in a row have closed in on the target by
+   more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG in all (it heads for it: a coast
+   on towards a new target behind the rotor is shorter), two movements away in a row, the
+   second further than the first, both that far beyond the closest it came, are a turn back:
+   ``turned back``, the target dropped and the rotor stopped at once, as a pass is (a poll
+   garbled into a jog, Easycomm's ``ML``, ran the other way to the end stop; a hand at the
+   panel). A movement away before it heads for the target starts the count again. On either
+   axis, each judged on its own: once a movement on
    it (more than ``noise_deg`` from where that axis last moved since the target went out: rule
    1's anchor moves with either axis) closed in on its target to within ``tolerance_deg``, or
    went over it (the target between that axis's last movement and this one), or the axis was
@@ -130,6 +137,10 @@ class MotionConfig:
 #: of a first reading away (or None), and the way it was turning when it came (1 or -1) until
 #: a movement after it turned on that way (0: sure)
 Watch = tuple[float, float | None, int]
+#: rule 5, a wrapping azimuth's watch on its way to the target: how far its movements in a row
+#: closed in on it, its closest error since the first of them, and the error of a first
+#: movement back (or None)
+Back = tuple[float, float, float | None]
 
 
 @dataclass(frozen=True)
@@ -157,6 +168,7 @@ class Motion:
     # since and the error of a first reading away (None: not come to it)
     az_pass: Watch | None = None
     el_pass: Watch | None = None
+    az_back: Back | None = None  # rule 5: a wrapping azimuth on its way, until it came
     # rule 5, each axis: where it last moved (more than noise_deg from its own last movement)
     # since the target went out: the shared anchor of rule 1 moves with either axis
     az_from_deg: float | None = None
@@ -170,6 +182,7 @@ class Event(enum.StrEnum):
     REFUSED = "refused"  # rule 8
     TURNED_AWAY = "turned away"
     PASSED = "passed"  # rule 5: turned on past its target
+    TURNED_BACK = "turned back"  # rule 5: a wrapping azimuth turned back on its way
 
 
 class Plan(enum.StrEnum):
@@ -276,9 +289,9 @@ def reading(
         m = _with(m, changes)
     if m.target_deg is not None:
         m, passed = _passing(before, m, cfg, now)
-        if passed:  # rule 5
+        if passed is not None:  # rule 5
             m, events = tick(_dropped(m), cfg, now)
-            return m, [Event.PASSED, *events]
+            return m, [passed, *events]
     if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
         if err is not None:
@@ -310,14 +323,18 @@ def _dropped(m: Motion) -> Motion:
         away_err=None,
         az_pass=None,
         el_pass=None,
+        az_back=None,
     )
 
 
-def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, bool]:
+def _passing(
+    before: Motion, m: Motion, cfg: MotionConfig, now: float
+) -> tuple[Motion, Event | None]:
     """Rule 5, each axis on its own: whether the reading just taken (``m``'s; ``before``, the
     motion as it was) shows the rotor come to that axis's target, and whether an axis that
     came has turned on past it (two readings in a row further than its closest since, by
-    more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG, each a movement)."""
+    more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG, each a movement: PASSED), or a
+    wrapping azimuth that headed for it has turned back on its way (``_back``: TURNED_BACK)."""
     tol, noise = cfg.tolerance_deg, cfg.noise_deg
     far = tol + noise + AWAY_MARGIN_DEG
     t0 = max(before.changed_t or -math.inf, before.target_t or -math.inf)
@@ -338,6 +355,7 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
     )
     watched: list[Watch | None] = []
     froms: list[float | None] = []
+    back = m.az_back
     for anchor, last, pos, target, wrap, watch in axes:
         if last is None or pos is None or target is None:
             watched.append(watch)
@@ -346,7 +364,7 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
         if anchor is None:
             anchor = last  # (the target went out with no reading of this axis)
         if apart_deg(last, pos, wrap) > reach:  # a corrupt reading: nothing to judge by
-            return m, False
+            return m, None
         step = pos - anchor  # (since this axis last moved, signed)
         if wrap:
             step = (step + 180.0) % 360.0 - 180.0
@@ -362,6 +380,10 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
                 or (a > 0.0 and err > 0.0 and abs(step) >= a + err - 1e-9)
             )  # (or gone over it: it lies between the last movement and this one)
             watched.append((err, None, heading) if came else None)
+            if wrap:  # (only the azimuth wraps)
+                back = None if came else _back(back, moved, a, err, far)
+                if back is not None and back[2] is not None and err > back[2]:
+                    return m, Event.TURNED_BACK
             continue
         closest, away, pending = watch[0], watch[1], watch[2] if not moved else 0
         if err < closest:
@@ -373,12 +395,48 @@ def _passing(before: Motion, m: Motion, cfg: MotionConfig, now: float) -> tuple[
         elif away is None or err <= away:
             watched.append((closest, err, 0))  # the first reading away: one more must follow
         else:
-            return m, True
+            return m, Event.PASSED
+        if wrap:
+            back = None  # (it came: the watch above judges it)
     az_pass, el_pass = watched
     az_from, el_from = froms
-    if (az_pass, el_pass, az_from, el_from) != (m.az_pass, m.el_pass, m.az_from_deg, m.el_from_deg):
-        m = replace(m, az_pass=az_pass, el_pass=el_pass, az_from_deg=az_from, el_from_deg=el_from)
-    return m, False
+    if (az_pass, el_pass, az_from, el_from, back) != (
+        m.az_pass,
+        m.el_pass,
+        m.az_from_deg,
+        m.el_from_deg,
+        m.az_back,
+    ):
+        m = replace(
+            m,
+            az_pass=az_pass,
+            el_pass=el_pass,
+            az_from_deg=az_from,
+            el_from_deg=el_from,
+            az_back=back,
+        )
+    return m, None
+
+
+def _back(back: Back | None, moved: bool, a: float, err: float, far: float) -> Back | None:
+    """Rule 5, a wrapping azimuth on its way to its target (``a``: its error where it last
+    moved, ``err``: now; ``moved``: more than ``noise_deg`` since). Once movements in a row
+    have closed in on the target by more than ``far`` in all, it heads for it (a way round a
+    stop that leads away first heads for it later, or never: nothing to judge by; a rotor
+    sent a new target behind it coasts on a little first, less than that); then a movement
+    away by more than ``far`` beyond the closest it came is a first one back, and a second
+    further still is the turn back (the caller's). A movement away before it heads for the
+    target starts the count again."""
+    if not moved or err == a:
+        return back
+    closed, closest, away = back if back is not None else (0.0, a, None)
+    if err < a:  # closing in
+        return (closed + a - err, min(closest, err) if closed else err, None)
+    if closed <= far:
+        return None  # (not heading for it yet)
+    if err <= closest + far:
+        return (closed, closest, None)
+    return (closed, closest, err if away is None or err <= away else away)
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
@@ -431,6 +489,7 @@ def commanded(
         az_from_deg=m.position_deg,
         el_from_deg=m.el_position_deg,
         away_err=None,
+        az_back=None,
     )
 
 
@@ -459,6 +518,7 @@ def stop_sent(m: Motion, cfg: MotionConfig, now: float) -> Motion:
         away_err=None,
         az_pass=None,
         el_pass=None,
+        az_back=None,
     )
 
 
@@ -480,6 +540,7 @@ def refused(m: Motion, cfg: MotionConfig, now: float) -> tuple[Motion, list[Even
                 away_err=None,
                 az_pass=None,
                 el_pass=None,
+                az_back=None,
             )
             return dropped, [Event.REFUSED]
     return _at_rest(m, cfg, now, BRAKING), [Event.REFUSED]
@@ -549,6 +610,7 @@ def _at_rest(m: Motion, cfg: MotionConfig, now: float, state: MotionState) -> Mo
         away_err=None,
         az_pass=None,
         el_pass=None,
+        az_back=None,
     )
 
 

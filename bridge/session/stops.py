@@ -58,8 +58,9 @@ Rules:
    a heard one included (the safe side; a review: a deaf burst ate a STOP and the target
    after it, and the rotor ran on, back online, to the bearing before both).
 4. A stall stops the rotor at once; a rotor turned away from its target (motion.py rule 5) is
-   stopped once it comes to rest; one that turned on past it, and a rotor still turning to
-   the bearing before a new one the controller refused, are stopped at once. Each ends
+   stopped once it comes to rest; one that turned on past it or turned back on its way, and a
+   rotor still turning to the bearing before a new one the controller refused, are stopped
+   at once. Each ends
    tracking. Such a stop is written at once, whatever the line is doing (link.py
    ``write_stop``: a motor driving a jammed rotor does not wait for a reply to end), and is
    owed as any (rule 3). The pass's and the refusal's, written while the rotor turns, are
@@ -306,6 +307,13 @@ class Stops:
                 "stopped; send the target again"
             )
             return Verdict(True, Report(ErrorKind.STALLED, why), "passed its target")
+        if event is mo.Event.TURNED_BACK:  # (stopped as a pass is: at once, a bounded series)
+            why = (
+                f"rotor turned back on its way to its target, now at {pos:g}° (a command "
+                "garbled on the line, or a hand at the panel): target dropped and the rotor "
+                "stopped; send the target again"
+            )
+            return Verdict(True, Report(ErrorKind.STALLED, why), "turned back")
         if event is mo.Event.REFUSED:
             why = (
                 f"the controller refused the target (it answered with its refusal at {pos:g}°): "

@@ -351,6 +351,39 @@ def test_on_a_wrapping_scale_a_way_that_leads_away_first_is_not_a_hand() -> None
     assert events == [] and m.target_deg == 190 and m.state is S.MOVING
 
 
+def test_on_a_wrapping_scale_a_turn_back_on_the_way_is_no_turn_it_was_sent() -> None:
+    """Rule 5: a Rotor-EZ on its way from 200 to 300 that turns back at 240 (a poll garbled into
+    a jog, a hand at the panel) is heading elsewhere: ``turned back``, some 15 degrees back
+    (tolerance, noise and margin beyond the closest it came, twice)."""
+    m = mo.commanded(ready(az=200), CFG, 300, 10.0)
+    on = [(10 + 0.5 * i, 200 + 3.0 * i) for i in range(1, 14)]  # .. 239
+    m, events = feed(m, on)
+    assert events == [] and m.target_deg == 300
+    back = [(16.5 + 0.5 * i, 239 - 3.0 * i) for i in range(1, 8)]  # 236 .. 218
+    m, events = feed(m, back[:3])  # 236, 233, 230: within the margin of the closest, 239
+    assert events == [] and m.target_deg == 300
+    m, events = feed(m, back[3:5])  # 227 (the first back), 224
+    assert events == [mo.Event.TURNED_BACK] and m.target_deg is None and m.state is S.MOVING
+    # one stray reading back (within what a reading can have turned), then on its way: no turn
+    m = mo.commanded(ready(az=200), CFG, 300, 10.0)
+    m, events = feed(m, [*on, (17.0, 226.0), (17.5, 242.0), (18.0, 245.0)])
+    assert events == [] and m.target_deg == 300
+
+
+def test_a_coast_towards_a_new_target_then_the_long_way_round_is_no_turn_back() -> None:
+    """Rule 5: a rotor turning up through 350 is sent 10, and its controller goes round the long
+    way (its stop at north): it coasts on 8 degrees towards 10 first, then turns back. Closing
+    in by no more than tolerance, noise and margin says nothing of where it heads."""
+    m = mo.commanded(ready(az=340), CFG, 30, 10.0)
+    m, _ = feed(m, [(10.5, 343.0), (11.0, 346.0), (11.5, 349.0)])
+    m = mo.commanded(m, CFG, 10, 11.5)
+    coast = [(12.0, 353.0), (12.5, 357.0)]
+    way = [(12.5 + 0.5 * i, 357 - 3.0 * i) for i in range(1, 116)]  # .. 12 the long way
+    m, events = feed(m, [*coast, *way])
+    assert mo.Event.TURNED_BACK not in events and mo.Event.PASSED not in events
+    assert m.target_deg == 10 and m.position_deg == 12.0
+
+
 def test_one_corrupt_reading_at_the_target_is_no_arrival_on_the_way_round() -> None:
     """Rule 5: a Rotor-EZ at 170 sent to 190 the way round through north; one corrupt reading
     of 189 (or 200: over 190 from 165) is no pass, and the turn goes on."""

@@ -331,3 +331,48 @@ def test_a_composites_elevation_box_tells_a_turn_by_its_elevation_alone() -> Non
         v.run_until(lambda h: unasked(h.el) != [], 30, "told")
         [said] = unasked(v.el)
         assert "turned with no command from the bridge, its elevation from 20° to 2" in said
+
+
+def test_a_poll_garbled_into_a_jog_back_mid_turn_is_stopped_within_twenty_degrees(
+    rig: Rig,
+) -> None:
+    """motion.py rule 5 on a wrapping scale: the turn to 300 became a jog left (``AZ ML``) at
+    about 240; the rotor turned back, where it ran on to the end stop at 0 before."""
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    v.target(300, 20)
+    v.run_until(lambda h: h.truth().az_deg > 240, 30, "on its way")
+    t = v.now
+    turned = v.truth().az_deg
+    v.garble_writes(b"AZ EL\n", b"AZ ML\n")
+    v.run_until(lambda h: h.errors("stalled", since=t) != [], 20, "the turn back told")
+    v.run_for(10)
+    truth = v.truth()
+    assert not truth.is_moving and turned - 20 < truth.az_deg < turned + 5
+    [said] = v.errors("stalled", since=t)
+    assert "turned back" in said.message and "send the target again" in said.message
+    assert v.state is IDLE and v.status.target_az_deg is None
+
+
+def test_a_poll_garbled_into_a_jog_on_past_the_target_is_stopped_past_it(rig: Rig) -> None:
+    """motion.py rule 5's pass: the turn to 100 became a jog left, the way it was going."""
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    v.target(100, 20)
+    v.run_until(lambda h: h.truth().az_deg < 160, 30, "on its way")
+    t = v.now
+    v.garble_writes(b"AZ EL\n", b"AZ ML\n")
+    v.run_until(lambda h: h.errors("stalled", since=t) != [], 40, "the pass told")
+    v.run_for(10)
+    truth = v.truth()
+    assert not truth.is_moving and 80 < truth.az_deg < 100
+
+
+def test_a_new_target_behind_a_turning_rotor_is_no_turn_back(rig: Rig) -> None:
+    """The rotor turning towards 300 is sent 150: it coasts on a little, then turns back to the
+    new target, which is what it was asked for."""
+    v = settled(ready(rig, start_az_deg=200, start_el_deg=20))
+    v.target(300, 20)
+    v.run_until(lambda h: h.truth().az_deg > 240, 30, "on its way")
+    t = v.now
+    v.target(150, 20)
+    v.run_until(settled_at(150, 20), 60, "at 150")
+    assert v.errors(since=t) == []
