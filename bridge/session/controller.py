@@ -93,6 +93,18 @@ Rules:
    a garbled one gets) is followed by polls at the moving rate for ``settle_s`` (a review: with
    polls 10 s apart at rest, a jog ran 60°). A stop already out when such a turn is seen (the
    lock's, an operator's) stays checked as any: the lock's is not let go after four.
+11. A target gets one try more where the controller takes a new bearing at any time
+   (``RetargetPolicy.DIRECT``: the same bearing again changes nothing of a turn under way) and
+   reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
+   moving poll after it went out shows the rotor not moved since (no movement beyond
+   ``noise_deg``: the frame lost or garbled on the line; an Easycomm box ignores a bearing it
+   cannot read), and if the controller refuses it before it moved the rotor (motion.py rule 8:
+   a flipped bit made a frame it refuses). It goes again as the pending target, try 2 (the
+   session's ``Retry``: unless a newer target waits), with a warning in the log and no error;
+   a second refusal is reported, and a turn that does not start then is a stall as ever
+   (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-EZ,
+   RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
+   the controller's rule (docs/architecture.md rule 7).
 """
 
 from __future__ import annotations
@@ -244,6 +256,8 @@ class Controller:
         self._sent_az: float | None = None  # rule 10: the last target's azimuth written
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
+        self._retry: Target | None = None  # rule 11: the target sent once, until it moved
+        self._retry_at = math.inf  # rule 11: sent again at a reading from then on
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -355,6 +369,7 @@ class Controller:
         is closed, as the first frame it gets (stops.py rule 3); ``ends_pass``: a pass's last
         try (stops.py rule 4)."""
         self._passing, self._pass_ends = False, ends_pass  # (else a stop anew: checked as any)
+        self._retry = None  # rule 11: a stop ends the target's tries
         if self.link is None:
             self.stops.owed = True
             self._released_owed = False  # (a stop owed now is checked as any: stops.py rule 2)
@@ -598,6 +613,8 @@ class Controller:
         self._deadline = self.motion, cfg.motion, math.nextafter(now, math.inf)
         if events:
             self._motion_events(events, now)
+        if self._retry is not None:  # rule 11
+            self._retry_check(link, now)
         if self._released_stop_t is not None:
             self._release_check(now)
         moving = self.motion.state is mo.MOVING
@@ -665,8 +682,30 @@ class Controller:
             cfg.tolerance_deg + cfg.noise_deg
         )
 
+    def _retry_check(self, link: Link, now: float) -> None:
+        """Rule 11, at a reading: the target sent once is sent again if this reading, from
+        ``_retry_at`` on, shows the rotor not moved since it went out; the tries end once it
+        moved, came, or was dropped."""
+        m, target = self.motion, self._retry
+        assert target is not None
+        if m.target_deg is None or m.state is not mo.MOVING or m.stop_sent_t is not None:
+            self._retry = None
+        elif m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
+            self._retry = None
+        elif now >= self._retry_at and link.free() and not link.stop_due:
+            self._retry = None
+            log.warning(
+                "%s: the rotor did not move after its target went out (lost or garbled on "
+                "the line?): sending it again",
+                self.name,
+            )
+            self.motion = mo.retried(m)  # (else the session finds it on its way there)
+            self.notes.append(Retry(target, 2))
+
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
         for event in events:
+            if event is mo.Event.REFUSED and self._refused_once():
+                continue
             verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
             if verdict.ends_tracking is not None:
                 self.notes.append(Ends(verdict.ends_tracking))
@@ -686,6 +725,20 @@ class Controller:
                     self._passing = event in _PASSING
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
+
+    def _refused_once(self) -> bool:
+        """Rule 11: the controller refused the target sent once, which had not moved the rotor
+        (motion.py rule 8, at rest): sent again, no error yet (a frame a flipped bit made
+        one the controller refuses); True if so. A second refusal is reported."""
+        target, self._retry = self._retry, None
+        if target is None or self.motion.state is mo.MOVING:
+            return False
+        log.warning(
+            "%s: the controller refused the target (garbled on the line?): sending it again",
+            self.name,
+        )
+        self.notes.append(Retry(target, 2))
+        return True
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:
@@ -838,6 +891,12 @@ class Controller:
         self.target_last = True
         az, el = todo.wire
         self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
+        self._retry = None  # rule 11: one try more, where the controller takes one at any time
+        if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
+            mc = cfg.motion
+            self._retry = target
+            self._retry_at = now + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
+            self._retry_at += cfg.moving_poll_interval_s
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -311,6 +311,12 @@ def reading(
     return tick(m, cfg, now)
 
 
+def retried(m: Motion) -> Motion:
+    """The target dropped, the rotor as it is: it goes again as a new one (controller.py rule
+    11), so the stall clock counts from that try."""
+    return _dropped(m)
+
+
 def _dropped(m: Motion) -> Motion:
     """Rule 5: the target dropped, the rotor still turning (someone else's move now)."""
     return replace(

@@ -376,3 +376,49 @@ def test_a_new_target_behind_a_turning_rotor_is_no_turn_back(rig: Rig) -> None:
     v.target(150, 20)
     v.run_until(settled_at(150, 20), 60, "at 150")
     assert v.errors(since=t) == []
+
+
+# -- a target that did not take is sent once more (controller.py rule 11) ---------------------
+@pytest.mark.parametrize("fault", ["lost", "garbled"])
+def test_a_target_the_line_lost_is_sent_once_more_and_the_rotor_goes(rig: Rig, fault: str) -> None:
+    """The frame lost, or garbled into one the box ignores (``AZ`` read as ``AJ``): no
+    movement a reading shows, so the same bearing goes again, and the rotor turns to it with
+    no error (before: a stall error 10 s later that blamed the brake)."""
+    v = settled(ready(rig, start_az_deg=100, start_el_deg=10))
+    t = v.now
+    if fault == "lost":
+        v.drop_writes(b"AZ200.0 EL10.0\n")
+    else:
+        v.garble_writes(b"AZ200.0 EL10.0\n", b"AJ200.0 EL10.0\n")
+    v.target(200, 10)
+    v.run_until(settled_at(200, 10), 60, "at 200")
+    targets = [w for w in v.writes if w.t >= t and w.data == b"AZ200.0 EL10.0\n"]
+    assert len(targets) == 2 and v.errors(since=t) == []
+    settle = v.cfg.motion.settle_s
+    assert settle < targets[1].t - targets[0].t < settle + 1.5
+
+
+def test_a_rotor_jammed_from_the_start_is_still_a_stall_after_one_try_more(rig: Rig) -> None:
+    v = settled(ready(rig, start_az_deg=100, start_el_deg=10))
+    v.jam()
+    t = v.now
+    v.target(200, 10)
+    v.run_until(lambda h: h.errors("stalled", since=t), 30, "the stall")
+    took = v.now - t
+    stall = v.cfg.motion.stall_timeout_s
+    assert stall < took < stall + v.cfg.motion.settle_s + 1.5  # from the try that went
+    assert v.sent(since=t).count(b"AZ200.0 EL10.0\n") == 2
+    v.run_for(15)
+    assert v.sent(since=t).count(b"AZ200.0 EL10.0\n") == 2 and len(v.errors(since=t)) == 1
+
+
+def test_a_stop_before_the_try_more_ends_it(rig: Rig) -> None:
+    v = settled(ready(rig, start_az_deg=100, start_el_deg=10))
+    t = v.now
+    v.drop_writes(b"AZ200.0 EL10.0\n")
+    v.target(200, 10)
+    v.run_for(0.5)
+    v.stop()
+    v.run_for(15)
+    assert v.sent(since=t).count(b"AZ200.0 EL10.0\n") == 1
+    assert v.truth().az_deg == 100 and v.errors(since=t) == []

@@ -169,8 +169,11 @@ def test_a_bearing_refused_just_before_a_poll_is_still_the_targets_refusal(
     assert [e.kind for e in v.errors(since=t)] == ["refused"]
     assert v.state is IDLE and not v.truth().is_moving
     writes = [w for w in v.writes if w.t >= t]
-    assert [w.data for w in writes[:2]] == [b"M400\r", b"C\r"]
-    assert writes[1].t - writes[0].t >= (5 + 3 + 1) * 10 / 9600  # M400 CR, ?> CR, a byte
+    # refused, sent again once (controller.py rule 11: a flipped bit makes such a frame),
+    # refused again: reported; nothing between a bearing and its refusal
+    assert [w.data for w in writes[:3]] == [b"M400\r", b"M400\r", b"C\r"]
+    assert writes[1].t - writes[0].t >= (5 + 3) * 10 / 9600  # once its refusal came
+    assert writes[2].t - writes[1].t >= (5 + 3 + 1) * 10 / 9600  # M400 CR, ?> CR, a byte
 
 
 def test_a_new_bearing_refused_while_turning_stops_the_rotor(rig: Rig) -> None:
@@ -302,3 +305,16 @@ def test_a_hand_at_the_panel_of_a_slowed_gs232_is_one_move(rig: Rig) -> None:
     states = [s.state for s in v.published(since=t)]
     assert [k for k, _ in itertools.groupby(states)] == [MOVING, IDLE]
     assert abs(v.truth().az_deg - 130) < 1 and not v.truth().is_moving
+
+
+def test_a_bearing_garbled_into_one_the_box_refuses_is_sent_once_more(rig: Rig) -> None:
+    """controller.py rule 11: one flipped bit (``2`` 0x32 read as ``:`` 0x3A) made ``M200`` a
+    frame the box answers with its refusal; the bearing goes again and is taken, and nothing
+    is reported (before: "the controller refused the target", and it was dropped)."""
+    v = ready(rig, "gs232b-az", start_az_deg=77)
+    t = v.now
+    v.garble_writes(b"M200\r", b"M:00\r")
+    v.aim(Target(200))
+    v.run_until(settled_at(200), 90, "at 200")
+    assert v.errors(since=t) == []
+    assert [f.data for f in v.frames(since=t) if f.data.startswith(b"M")] == [b"M:00", b"M200"]

@@ -111,16 +111,29 @@ def test_a_glitched_reply_before_the_real_one_is_no_reading(rig: Rig) -> None:
     assert v.state is IDLE
 
 
-def test_a_bearing_the_box_refuses_is_reported_and_nothing_moves(rig: Rig) -> None:
+def test_a_bearing_the_box_refuses_is_sent_once_more_then_a_stall_and_nothing_moves(
+    rig: Rig,
+) -> None:
+    """A bearing the box cannot take (a flipped bit made 150 450) moves nothing: the same bearing
+    goes once more (controller.py rule 11), and refused again it is a stall."""
     v = ready(rig, start_az_deg=77)
     t = v.now
-    v.garble_writes(b"\x02AG150\r", b"\x02AG450\r")  # a bearing the box cannot take
+    v.garble_writes(b"\x02AG150\r", b"\x02AG450\r", count=2)  # a bearing the box cannot take
     v.target(150)
     v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
     assert [e.kind for e in v.errors(since=t)] == ["protocol", "stalled"]
-    assert v.frames(Outcome.REFUSED)[-1].data == b"\x02AG450\r"
+    assert [f.data for f in v.frames(Outcome.REFUSED)] == [b"\x02AG450\r"] * 2
     assert v.truth().az_deg == 77 and not v.truth().is_moving
     assert {s.bearing_deg for s in v.published(since=t)} - {None} == {77.0}
+
+
+def test_a_bearing_the_box_refused_once_goes_on_the_try_more(rig: Rig) -> None:
+    v = ready(rig, start_az_deg=77)
+    t = v.now
+    v.garble_writes(b"\x02AG150\r", b"\x02AG450\r")
+    v.target(150)
+    v.run_until(lambda h: h.state is IDLE and v.truth().az_deg == 150, 60, "at 150")
+    assert [e.kind for e in v.errors(since=t)] == ["protocol"]  # the refusal, as junk
 
 
 def test_a_satellite_pass_is_followed_by_the_combi_track_within_3_degrees() -> None:

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from bridge.core.model import MotionState
 from bridge.emulators.rt21 import Outcome
 from bridge.sky import Body, Sky
@@ -126,11 +128,19 @@ def test_line_noise_is_reported_and_moves_nothing(rig: Rig) -> None:
     v.run_until(settled_at(80), 30, "at 80 once the line is clean")
 
 
-def test_a_heading_the_box_drops_is_reported_as_a_stall_and_nothing_moves(rig: Rig) -> None:
+@pytest.mark.parametrize("lost", [1, 2])
+def test_a_heading_the_box_drops_is_sent_once_more_then_a_stall(rig: Rig, lost: int) -> None:
+    """The CR that runs a heading lost on the line: the box only stores it, and nothing moves.
+    The same heading goes once more (controller.py rule 11) and the rotor turns; lost again,
+    it is a stall, and nothing moved."""
     v = ready(rig, start_az_deg=77)
     t = v.now
-    v.garble_writes(b"AP1150.0\r;", b"AP1150.0;")  # the CR that runs it lost: only stored
+    v.garble_writes(b"AP1150.0\r;", b"AP1150.0;", count=lost)  # only stored
     v.target(150)
+    if lost == 1:
+        v.run_until(lambda h: h.state is IDLE and h.truth().az_deg == 150, 60, "at 150")
+        assert v.errors(since=t) == []
+        return
     v.run_until(lambda h: h.errors("stalled", since=t), 60, "the stall")
     assert "stalled at 77" in v.errors("stalled", since=t)[0].message
     assert v.truth().az_deg == 77 and not v.truth().is_moving
