@@ -99,8 +99,10 @@ Rules:
    moving poll after it went out shows the rotor not moved since (no movement beyond
    ``noise_deg``: the frame lost or garbled on the line; an Easycomm box ignores a bearing it
    cannot read), and if the controller refuses it before it moved the rotor (motion.py rule 8:
-   a flipped bit made a frame it refuses). It goes again as the pending target, try 2 (the
-   session's ``Retry``: unless a newer target waits), with a warning in the log and no error;
+   a flipped bit made a frame it refuses). It goes again, try 2, if the bridge still stands
+   for it (``Again``: targets.py rule 8, no newer target, stop or end of its feature since),
+   with a warning in the log and no error; the time is judged at the reading by the settings
+   then in effect (rule 7: a speed set in the same batch as the target slows it);
    a second refusal is reported, and a turn that does not start then is a stall as ever
    (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-EZ,
    RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
@@ -185,7 +187,15 @@ class Retry:
     attempt: int
 
 
-Note = Report | Ends | Drop | Retry
+@dataclass(frozen=True)
+class Again:
+    """Rule 11: ``target``, the one sent last, goes once more if the bridge still stands for it
+    (targets.py ``again``)."""
+
+    target: Target
+
+
+Note = Report | Ends | Drop | Retry | Again
 
 
 class Fed(Enum):
@@ -211,11 +221,13 @@ def _where(reply: PositionReply) -> str:
 
 
 class _Doubted(NamedTuple):
-    """Rule 9: the reading asked again, when it came, whether it was asked again at once."""
+    """Rule 9: the reading asked again, when it came, whether it was asked again at once, and
+    whether the rotor was turning (its next reading is taken)."""
 
     reply: PositionReply | None
     t: float
     at_once: bool
+    turning: bool = False
 
 
 NOT_DOUBTED = _Doubted(None, -math.inf, False)
@@ -257,7 +269,7 @@ class Controller:
         self._guarded = False  # rule 10: the first turn nobody asked for since it is judged
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until it moved
-        self._retry_at = math.inf  # rule 11: sent again at a reading from then on
+        self._retry_t = math.inf  # rule 11: when it was sent
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -541,7 +553,9 @@ class Controller:
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
-            return Doubt.TAKEN
+            if stands is None or m.position_deg is None:
+                return Doubt.TAKEN
+            return self._doubts_turning(reply, doubted, now)
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
         # no move for the motion machine (within noise_deg of where it stands): taken; a move
         # is what is doubted, however small (a review: a flip of 2 degrees, taken, turned the
@@ -581,6 +595,32 @@ class Controller:
                 logged=False,
             )
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
+
+    def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
+        """Rule 9 while the rotor turns (or a target is out): a reading further from the one
+        before than it can have turned since (motion.py ``reach_deg``) is asked again at once;
+        the reading after it is taken, and if it is back within reach the doubted one is told
+        as line noise."""
+        m, cfg = self.motion, self.cfg.motion
+        pos = m.position_deg
+        assert pos is not None
+        reach = mo.reach_deg(m, cfg, now)
+        near = not _apart(reply, pos, m.el_position_deg, reach, cfg.az_wraps)
+        if doubted.turning and doubted.reply is not None:
+            if near:
+                self._say(
+                    f"a reading of {_where(doubted.reply)} while the rotor turned, further from "
+                    f"the one before ({_where(reply)} now) than it can have turned, was not "
+                    "said again: ignored (line noise?)",
+                    now,
+                    logged=True,
+                )
+            return Doubt.TAKEN
+        if near:
+            return Doubt.TAKEN
+        self._doubted = _Doubted(reply, now, True, turning=True)
+        log.info("%s: a reading while turning of %s; asking again", self.name, _where(reply))
+        return Doubt.ASK
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -686,27 +726,25 @@ class Controller:
         """Rule 11, at a reading: the target sent once is sent again if this reading, from
         ``_retry_at`` on, shows the rotor not moved since it went out; the tries end once it
         moved, came, or was dropped."""
-        m, target = self.motion, self._retry
+        m, target, cfg = self.motion, self._retry, self.cfg
         assert target is not None
+        mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
+        due = self._retry_t + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
         if m.target_deg is None or m.state is not mo.MOVING or m.stop_sent_t is not None:
             self._retry = None
         elif m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
             self._retry = None
-        elif now >= self._retry_at and link.free() and not link.stop_due:
+        elif now >= due + cfg.moving_poll_interval_s and link.free() and not link.stop_due:
             self._retry = None
-            log.warning(
-                "%s: the rotor did not move after its target went out (lost or garbled on "
-                "the line?): sending it again",
-                self.name,
-            )
-            self.motion = mo.retried(m)  # (else the session finds it on its way there)
-            self.notes.append(Retry(target, 2))
+            self.notes.append(Again(target))
 
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
         for event in events:
             if event is mo.Event.REFUSED and self._refused_once():
                 continue
-            verdict = self.stops.verdict(event, self.motion, self.cfg.motion)
+            pos = self.motion.position_deg
+            shown = None if pos is None else self.cfg.aim.true_of(pos)  # (the user's bearing)
+            verdict = self.stops.verdict(event, self.motion, self.cfg.motion, shown)
             if verdict.ends_tracking is not None:
                 self.notes.append(Ends(verdict.ends_tracking))
             if verdict.error is not None:
@@ -733,11 +771,7 @@ class Controller:
         target, self._retry = self._retry, None
         if target is None or self.motion.state is mo.MOVING:
             return False
-        log.warning(
-            "%s: the controller refused the target (garbled on the line?): sending it again",
-            self.name,
-        )
-        self.notes.append(Retry(target, 2))
+        self.notes.append(Again(target))
         return True
 
     # -- the line's own work, run by the session's step ------------------------------------------
@@ -893,10 +927,7 @@ class Controller:
         self._sent_az, self._guarded = az, self.cfg.unasked_moves == "after-stop"  # rule 10
         self._retry = None  # rule 11: one try more, where the controller takes one at any time
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
-            mc = cfg.motion
-            self._retry = target
-            self._retry_at = now + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
-            self._retry_at += cfg.moving_poll_interval_s
+            self._retry, self._retry_t = target, now
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -39,14 +39,17 @@ Rules:
    stray reading, an overshoot or the coasting of a reversal): ``turned away``, the target is
    dropped; the session reports it and stops the rotor once it is at rest. On a wrapping scale
    the way round the stop may lead away first (rule 3), so going away tells nothing by itself.
-   Turning back does: once the azimuth's movements in a row have closed in on the target by
-   more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG in all (it heads for it: a coast
-   on towards a new target behind the rotor is shorter), two movements away in a row, the
-   second further than the first, both that far beyond the closest it came, are a turn back:
-   ``turned back``, the target dropped and the rotor stopped at once, as a pass is (a poll
-   garbled into a jog, Easycomm's ``ML``, ran the other way to the end stop; a hand at the
-   panel). A movement away before it heads for the target starts the count again. On either
-   axis, each judged on its own: once a movement on
+   Turning back does: once two movements of the azimuth in a row have closed in on the
+   target (it heads for it; one corrupt reading closes in once, and the true one after it goes
+   away again: an attack pass, a tens digit flipped stopped a long way round), two movements
+   away in a row, the second further than the first, both more than ``tolerance_deg +
+   noise_deg`` + AWAY_MARGIN_DEG beyond the closest it came, are a turn back: ``turned back``,
+   the target dropped and the rotor stopped at once, as a pass is (a poll garbled into a jog,
+   Easycomm's ``ML``, ran the other way to the end stop; a hand at the panel). A movement away
+   before it heads for the target starts the count again. A target sent while the rotor turns
+   is watched so only after ``settle_s`` (``back_from_t``): until then a reply on its way and
+   the coast show the way it was going (an attack pass: an RC2800 at 12 degrees a second sent
+   across its stop mid-turn). On either axis, each judged on its own: once a movement on
    it (more than ``noise_deg`` from where that axis last moved since the target went out: rule
    1's anchor moves with either axis) closed in on its target to within ``tolerance_deg``, or
    went over it (the target between that axis's last movement and this one), or the axis was
@@ -137,10 +140,10 @@ class MotionConfig:
 #: of a first reading away (or None), and the way it was turning when it came (1 or -1) until
 #: a movement after it turned on that way (0: sure)
 Watch = tuple[float, float | None, int]
-#: rule 5, a wrapping azimuth's watch on its way to the target: how far its movements in a row
-#: closed in on it, its closest error since the first of them, and the error of a first
-#: movement back (or None)
-Back = tuple[float, float, float | None]
+#: rule 5, a wrapping azimuth's watch on its way to the target: its movements in a row that
+#: closed in on it (two at most: two, it heads for it), its closest error since the first of
+#: them, and the error of a first movement back (or None)
+Back = tuple[int, float, float | None]
 
 
 @dataclass(frozen=True)
@@ -169,6 +172,7 @@ class Motion:
     az_pass: Watch | None = None
     el_pass: Watch | None = None
     az_back: Back | None = None  # rule 5: a wrapping azimuth on its way, until it came
+    back_from_t: float | None = None  # rule 5: its watch starts then (a target mid-turn)
     # rule 5, each axis: where it last moved (more than noise_deg from its own last movement)
     # since the target went out: the shared anchor of rule 1 moves with either axis
     az_from_deg: float | None = None
@@ -311,12 +315,6 @@ def reading(
     return tick(m, cfg, now)
 
 
-def retried(m: Motion) -> Motion:
-    """The target dropped, the rotor as it is: it goes again as a new one (controller.py rule
-    11), so the stall clock counts from that try."""
-    return _dropped(m)
-
-
 def _dropped(m: Motion) -> Motion:
     """Rule 5: the target dropped, the rotor still turning (someone else's move now)."""
     return replace(
@@ -343,10 +341,7 @@ def _passing(
     wrapping azimuth that headed for it has turned back on its way (``_back``: TURNED_BACK)."""
     tol, noise = cfg.tolerance_deg, cfg.noise_deg
     far = tol + noise + AWAY_MARGIN_DEG
-    t0 = max(before.changed_t or -math.inf, before.target_t or -math.inf)
-    dt = now - t0 if t0 > -math.inf else 0.0
-    speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
-    reach = 3.0 * speed * dt + far  # (what a reading can have turned since the one before)
+    reach = reach_deg(before, cfg, now)
     wraps = cfg.spec.az_wraps
     axes = (
         (m.az_from_deg, before.position_deg, m.position_deg, m.target_deg, wraps, m.az_pass),
@@ -386,7 +381,7 @@ def _passing(
                 or (a > 0.0 and err > 0.0 and abs(step) >= a + err - 1e-9)
             )  # (or gone over it: it lies between the last movement and this one)
             watched.append((err, None, heading) if came else None)
-            if wrap:  # (only the azimuth wraps)
+            if wrap and (m.back_from_t is None or now >= m.back_from_t):  # (only the azimuth)
                 back = None if came else _back(back, moved, a, err, far)
                 if back is not None and back[2] is not None and err > back[2]:
                     return m, Event.TURNED_BACK
@@ -424,25 +419,35 @@ def _passing(
     return m, None
 
 
+def reach_deg(m: Motion, cfg: MotionConfig, now: float) -> float:
+    """Rule 5: how far a reading at ``now`` can be from ``m``'s last on either axis: three
+    times the larger of the two nominal speeds over the time since the later of the last
+    reading that changed and the target, plus ``tolerance_deg + noise_deg`` +
+    AWAY_MARGIN_DEG; one further is corrupt (controller.py rule 9 asks again for it)."""
+    t0 = max(m.changed_t or -math.inf, m.target_t or -math.inf)
+    dt = now - t0 if t0 > -math.inf else 0.0
+    speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
+    return 3.0 * speed * dt + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+
+
 def _back(back: Back | None, moved: bool, a: float, err: float, far: float) -> Back | None:
     """Rule 5, a wrapping azimuth on its way to its target (``a``: its error where it last
-    moved, ``err``: now; ``moved``: more than ``noise_deg`` since). Once movements in a row
-    have closed in on the target by more than ``far`` in all, it heads for it (a way round a
-    stop that leads away first heads for it later, or never: nothing to judge by; a rotor
-    sent a new target behind it coasts on a little first, less than that); then a movement
-    away by more than ``far`` beyond the closest it came is a first one back, and a second
-    further still is the turn back (the caller's). A movement away before it heads for the
-    target starts the count again."""
+    moved, ``err``: now; ``moved``: more than ``noise_deg`` since). Two movements in a row
+    that close in on the target say it heads for it (a way round a stop that leads away first
+    heads for it later, or never: nothing to judge by; one corrupt reading closes in once, and
+    the true one after it goes away again); then a movement away by more than ``far`` beyond
+    the closest it came is a first one back, and a second further still is the turn back (the
+    caller's). A movement away before it heads for the target starts the count again."""
     if not moved or err == a:
         return back
-    closed, closest, away = back if back is not None else (0.0, a, None)
+    closings, closest, away = back if back is not None else (0, a, None)
     if err < a:  # closing in
-        return (closed + a - err, min(closest, err) if closed else err, None)
-    if closed <= far:
+        return (min(closings + 1, 2), min(closest, err) if closings else err, None)
+    if closings < 2:
         return None  # (not heading for it yet)
     if err <= closest + far:
-        return (closed, closest, None)
-    return (closed, closest, err if away is None or err <= away else away)
+        return (closings, closest, None)
+    return (closings, closest, err if away is None or err <= away else away)
 
 
 def _with(m: Motion, changes: dict[str, Any]) -> Motion:
@@ -496,6 +501,9 @@ def commanded(
         el_from_deg=m.el_position_deg,
         away_err=None,
         az_back=None,
+        # rule 5: sent while it turns, the readings of the settle time may be of the way it
+        # was going (a reply on its way, a coast): the watch starts after them
+        back_from_t=now + cfg.settle_s if m.state is MOVING else None,
     )
 
 

@@ -136,7 +136,7 @@ from bridge.session import status as st
 from bridge.session.actions import Action, Ask, Publish, Report, Write
 from bridge.session.autopark import AutoPark
 from bridge.session.config import WorkerConfig
-from bridge.session.controller import Controller, Drop, Ends, Fed, Retry
+from bridge.session.controller import Again, Controller, Drop, Ends, Fed, Retry
 from bridge.session.feature_commands import Done, FeatureCommands
 from bridge.session.health import Health
 from bridge.session.link import Link
@@ -506,6 +506,13 @@ class RotatorSession:
                 self._drop_pending(note.why)
             elif isinstance(note, Retry):
                 self.targets.put_back(note.target, note.attempt, now)
+            elif isinstance(note, Again):  # controller.py rule 11
+                if self.targets.again(note.target, now):
+                    log.warning(
+                        "%s: the target did not move the rotor, or was refused before it did "
+                        "(lost or garbled on the line?): sending it once more",
+                        self.name,
+                    )
 
     # -- the features' state the commands, the sky and the status reach by name (rule 17) -------
     def _activity(self, now: float) -> None:

@@ -283,9 +283,13 @@ class Stops:
             )
         return True, error
 
-    def verdict(self, event: mo.Event, m: mo.Motion, cfg: mo.MotionConfig) -> Verdict:
-        """Rule 4: what ``event`` (just reported by the motion machine, now at ``m``) asks."""
-        pos = m.position_deg
+    def verdict(
+        self, event: mo.Event, m: mo.Motion, cfg: mo.MotionConfig, shown: float | None = None
+    ) -> Verdict:
+        """Rule 4: what ``event`` (just reported by the motion machine, now at ``m``) asks;
+        ``shown``: the bearing the user sees there (pointing.py: ``m``'s is the controller's
+        own), in the error's words."""
+        pos = m.position_deg if shown is None else shown
         if event is mo.Event.STALLED:
             why = (
                 f"rotor stalled at {pos:g}° (no progress for {cfg.stall_timeout_s:g} s): brake "

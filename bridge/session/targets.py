@@ -22,6 +22,13 @@ Rules:
 7. A target for a controller that stops on re-target (Rotor-EZ) goes out only after a reading
    younger than one moving poll interval has shown the rotor idle: a front-panel move that
    began after the last poll must not be cut short. Otherwise the controller is asked first.
+8. The target sent last goes once more when the controller asks it (controller.py rule 11:
+   it did not move the rotor, or was refused before it did) only while the bridge still
+   stands for it: no newer target, no stop, lock or link down since (``clear``), and the
+   feature that sent it not ended (``clear_from``: an attack pass, tracking's first bearing
+   lost, then tracking turned off, and the try more turned the rotor to the sun). It is the
+   same target, the same bearing (an axis it leaves out resolved as at its first try), and
+   rule 5 does not take it for one on its way.
 """
 
 from __future__ import annotations
@@ -52,6 +59,8 @@ class Targets:
         self._stream_t = 0.0
         self._last_sent_t = -1e18
         self._attempt = 1
+        self._standing: Target | None = None  # rule 8: the target sent last, while it stands
+        self.again_now = False  # rule 8: the waiting target is that one, once more
 
     def put(self, target: Target, now: float) -> None:
         recent = now - self._last_sent_t < BURST_QUIET_S
@@ -59,6 +68,7 @@ class Targets:
             self._stream_t = now
         self._replaced = self.pending is not None or recent
         self.pending, self._pending_t, self._attempt = combine(target, self.pending), now, 1
+        self._standing, self.again_now = None, False  # rule 8: a newer one
 
     def put_back(self, target: Target, attempt: int, now: float) -> None:
         """Rule 3: send ``target`` again (unless a newer one waits already)."""
@@ -69,19 +79,32 @@ class Targets:
     def clear(self) -> Target | None:
         """Drop the waiting target (a stop, the lock, the link down); the one dropped."""
         dropped, self.pending = self.pending, None
+        self._standing, self.again_now = None, False  # rule 8
         return dropped
 
     def clear_from(self, source: Source) -> None:
         """Drop the waiting target if ``source`` put it (a feature that has ended: a target of
-        its own must not go out after it)."""
+        its own must not go out after it, nor go once more: rule 8)."""
         if self.pending is not None and self.pending.source is source:
             self.clear()
+        if self._standing is not None and self._standing.source is source:
+            self._standing = None
 
     def sent(self, now: float) -> int:
         """The waiting target went to the controller; which try it was."""
         attempt = self._attempt
+        self._standing, self.again_now = self.pending, False  # rule 8
         self.pending, self._attempt, self._last_sent_t = None, 1, now
         return attempt
+
+    def again(self, target: Target, now: float) -> bool:
+        """Rule 8: ``target`` waits once more, try 2, if it is the one sent last and the bridge
+        still stands for it; True if so."""
+        if target is not self._standing or self.pending is not None:
+            return False
+        self.pending, self._pending_t, self._stream_t = target, now, now
+        self._replaced, self._attempt, self.again_now = False, 2, True
+        return True
 
     def stream_wait(self, now: float) -> bool:
         if not self._replaced:
@@ -146,7 +169,8 @@ def decide(
     except NotReady:  # the codec cannot count it yet (protocols/base.py): ask first
         return Sending(Go.ASK_FIRST) if link.free() else Sending(Go.WAIT)
     if m.target_deg is not None and (m.target_deg, m.el_target_deg) == wire:
-        return Sending(Go.DONE, wire=wire)  # already on its way there
+        if not targets.again_now:  # (rule 8: that one once more is what it is for)
+            return Sending(Go.DONE, wire=wire)  # already on its way there
     small = pending.source is not Source.TRACKING
     if small and rig.spec.can_report_position and mo.within_tolerance(m, rig.motion, wire):
         log.info("%s: already within tolerance of %s", rig.rotator_id, wire)

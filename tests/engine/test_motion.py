@@ -370,10 +370,25 @@ def test_on_a_wrapping_scale_a_turn_back_on_the_way_is_no_turn_it_was_sent() -> 
     assert events == [] and m.target_deg == 300
 
 
+def test_one_reading_ten_degrees_closer_on_the_way_round_is_no_turn_back() -> None:
+    """An attack pass: a box that reads tenths (``noise_deg`` 0.1) on its way up the long way
+    to 350; one reading 10 degrees low (113.2 read 103.2) closed in once, the true ones after
+    it went away: no turn back."""
+    cfg = mo.MotionConfig(REGISTRY["easycomm2"], noise_deg=0.1)
+    m = mo.link_up(mo.Motion(), cfg, 0.0)
+    m, _ = mo.reading(m, cfg, 100.0, 0.0)
+    m, _ = mo.tick(m, cfg, 10.0)
+    m = mo.commanded(m, cfg, 350.0, 10.0)
+    az = [100 + 1.2 * i for i in range(1, 20)]
+    az[10] -= 10.0
+    m, events = feed(m, [(10.0 + 0.2 * (i + 1), round(a, 1)) for i, a in enumerate(az)], cfg)
+    assert events == [] and m.target_deg == 350
+
+
 def test_a_coast_towards_a_new_target_then_the_long_way_round_is_no_turn_back() -> None:
     """Rule 5: a rotor turning up through 350 is sent 10, and its controller goes round the long
-    way (its stop at north): it coasts on 8 degrees towards 10 first, then turns back. Closing
-    in by no more than tolerance, noise and margin says nothing of where it heads."""
+    way (its stop at north): it coasts on 8 degrees towards 10 first, then turns back. A
+    target sent mid-turn is watched only after the settle time: the coast is no heading."""
     m = mo.commanded(ready(az=340), CFG, 30, 10.0)
     m, _ = feed(m, [(10.5, 343.0), (11.0, 346.0), (11.5, 349.0)])
     m = mo.commanded(m, CFG, 10, 11.5)

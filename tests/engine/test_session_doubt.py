@@ -93,6 +93,25 @@ def test_a_move_by_hand_at_rest_is_believed_on_the_reading_after(rig: Rig, model
     assert v.errors(since=t) == []
 
 
+@pytest.mark.parametrize("model", [m for m in MODELS if m != "satel"])  # (silent as it slews)
+def test_a_flipped_bit_in_a_reading_while_turning_is_never_published(rig: Rig, model: str) -> None:
+    """Rule 9 while the rotor turns: a reading further from the one before than the rotor can
+    have turned since (motion.py ``reach_deg``) is asked again at once; the reading after it,
+    back on the way, shows it was line noise (before: 33x published for one poll on the way
+    from 150 to 100, and a dashboard's history drew the spike)."""
+    v = at_rest(rig, model)
+    t = v.now
+    v.aim(Target(100.0, None))
+    v.run_until(lambda h: h.state is MotionState.MOVING and h.truth().az_deg < 140, 60, "turning")
+    flipped = flip_next_hundreds(v)  # 13x reads 33x
+    v.run_until(lambda h: bool(flipped), 10, "the flipped reply")
+    v.run_until(lambda h: h.state is MotionState.IDLE, 60, "at rest")
+    shown = [s.bearing_deg for s in v.published(since=t) if s.bearing_deg is not None]
+    assert max(shown) <= 155 and abs(v.status.bearing_deg - 100.0) <= 3.0
+    assert [e.kind for e in v.errors(since=t)] == [ErrorKind.PROTOCOL]  # junk, once
+    assert "while the rotor turned" in v.errors(since=t)[0].message
+
+
 def test_a_reading_at_rest_said_twice_is_believed(rig: Rig) -> None:
     """A controller recalibrated at its panel (every reading from now on 200 degrees more)
     says its new bearing twice: believed on the second, no junk reported."""

@@ -1,0 +1,117 @@
+"""A target's try more (controller.py rule 11, targets.py rule 8) only while the bridge still
+stands for it, with the bearing of its first try, and never while a slowed rotor turns: an
+attack pass's cases, each a test (the try more's own cases are in test_session_easycomm.py,
+test_session_gs232.py, test_session_rt21.py and test_session_prosistel.py)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from bridge.core.model import MotionState, SetOption, Target
+from bridge.session.config import FollowConfig
+from bridge.sky import Body, Sky
+from tests.engine.test_session_tracking import SUN_EPOCH, sun_up_somewhere
+from tests.engine.virtual import VirtualRotator
+
+Rig = Callable[..., VirtualRotator]
+IDLE = MotionState.IDLE
+FAST = {"az_speed_deg_s": 6.0, "el_speed_deg_s": 3.0}
+
+
+def _bearing_frame(data: bytes) -> bool:
+    return data.startswith(b"AZ") and data[2:3].isdigit()  # not the poll "AZ EL"
+
+
+def _lose_first_bearing(v: VirtualRotator) -> list[bytes]:
+    lost: list[bytes] = []
+
+    def drop(data: bytes, now: float) -> bytes:
+        if _bearing_frame(data) and not lost:
+            lost.append(data)
+            return b""
+        return data
+
+    v.to_device = drop
+    return lost
+
+
+def test_a_lost_tracking_target_is_not_sent_after_tracking_was_turned_off(rig: Rig) -> None:
+    """Tracking's first bearing is lost on the line; the user turns tracking off 0.5 s later
+    (no stop: the rotor never moved). The try more came after and turned the rotor to the sun
+    with tracking off; the end of tracking ends its target's try more too."""
+    lat, lon = sun_up_somewhere(SUN_EPOCH)
+    v = rig("easycomm2", sky=Sky(lat, lon), wall_epoch_s=SUN_EPOCH, emulator=FAST)
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    lost = _lose_first_bearing(v)
+    v.track(Body.sun())
+    v.run_until(lambda h: lost, 10, "tracking's first bearing, lost")
+    v.run_for(0.5)
+    t = v.now
+    v.track(None)
+    assert v.status.tracking is None
+    v.run_for(20)
+    assert [w.data for w in v.writes if w.t >= t and _bearing_frame(w.data)] == []
+    assert (v.truth().az_deg, v.truth().el_deg) == (0.0, 0.0)
+
+
+def test_a_lost_follow_target_is_not_sent_after_following_was_turned_off() -> None:
+    with VirtualRotator(
+        "md01",
+        settings={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        emulator={"az_speed_deg_s": 10.0, "el_speed_deg_s": 5.0},
+        follow=FollowConfig((52.52, 13.29), wsjtx=True),
+    ) as v:
+        v.run_until(lambda h: h.status.available, 10, "answers")
+        v.run_for(3)
+        v.set_deaf(True)  # WSJT-X's bearing lost on the line
+        v.follow(True)
+        v.heard("JA1ABC", "PM95")
+        v.run_for(0.05)
+        v.set_deaf(False)
+        v.run_for(0.5)
+        t = v.now
+        v.follow(False)
+        assert v.status.following is None
+        v.run_for(20)
+        assert v.frames("set", since=t) == []
+        assert v.truth().az_deg == 0.0
+
+
+def test_the_try_more_sends_the_bearing_the_first_try_sent(rig: Rig) -> None:
+    """200/10 is lost; an elevation-only 60 follows and keeps the azimuth target (resolve():
+    AZ200.0 EL60.0), and is lost too (one noise burst). The try more sent AZ100.0 EL60.0
+    (the azimuth resolved again after the motion's target was dropped for it), and the 200
+    asked for was gone without an error; now it sends what the first try sent."""
+    v = rig("easycomm2", emulator={**FAST, "start_az_deg": 100, "start_el_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.drop_writes(b"AZ200.0 EL10.0\n")
+    v.target(200, 10)
+    v.run_for(0.5)
+    v.drop_writes(b"AZ200.0 EL60.0\n")
+    v.target(None, 60)
+    v.run_for(30)
+    bearings = [w.data for w in v.writes if w.t >= t and _bearing_frame(w.data)]
+    assert bearings[:2] == [b"AZ200.0 EL10.0\n", b"AZ200.0 EL60.0\n"]
+    assert b"AZ100.0 EL60.0\n" not in bearings  # a try more repeats the first try
+    assert v.truth().az_deg == 200.0 or v.errors(since=t) != []  # not silently short
+
+
+def test_no_try_more_while_a_slowed_rotor_turns(rig: Rig, caplog: pytest.LogCaptureFixture) -> None:
+    """A target and speed X1 in one batch (the target goes first, the setting right after).
+    The try more's time was fixed when the target went, from the settle time before the speed
+    (1.5 s; 5 s at X1): at 2.2 s the elevation turned 1.4 degrees, not yet past ``noise_deg``,
+    and the target went again mid-turn. Its time is judged at the reading, by the settings
+    then in effect."""
+    v = rig("gs232b", emulator={"start_az_deg": 100, "start_el_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.command(Target(100, 20), SetOption("speed", "1"))
+    v.run_for(30)
+    assert v.sent(since=t).count(b"W100 020\r") == 1
+    assert "did not move" not in caplog.text
