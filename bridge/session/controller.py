@@ -56,8 +56,12 @@ Rules:
    only by a hand at the controller's panel, which the reading asked a moment later confirms
    (a move by hand is seen one exchange later; a stop that did not take is checked one
    exchange later, within stops.py rule 2's resend time). A turning rotor's readings change at
-   every poll: not doubted (a target then counts from the target, not the bearing); nor is a
-   connection's first. A doubted reading is no reading for anything: not the motion's, not a
+   every poll: one is doubted only if it is further from the last that changed than the rotor
+   can have turned since (motion.py ``reach_deg``: three times its nominal speed, and the
+   tolerance, noise and margin of a pass), and believed when the next is within reach of that
+   last one or of it (``_doubts_turning``; a flipped digit mid-turn was published for one
+   poll on seven models); a silent controller's report after its slew is not doubted, nor is
+   a connection's first. A doubted reading is no reading for anything: not the motion's, not a
    target's fresh one (targets.py rule 7: a target waits for the answer), not one a stop cuts
    short (rule 5); but the controller answered (no silence). Readings that go on disagreeing
    (a line gone bad, a failing position sensor) are asked for at the usual polls, not at once,
@@ -98,12 +102,14 @@ Rules:
    reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
    moving poll after it went out shows the rotor not moved since (no movement beyond
    ``noise_deg``: the frame lost or garbled on the line; an Easycomm box ignores a bearing it
-   cannot read), and if the controller refuses it before it moved the rotor (motion.py rule 8:
-   a flipped bit made a frame it refuses). It goes again, try 2, if the bridge still stands
-   for it (``Again``: targets.py rule 8, no newer target, stop or end of its feature since),
-   with a warning in the log and no error; the time is judged at the reading by the settings
-   then in effect (rule 7: a speed set in the same batch as the target slows it);
-   a second refusal is reported, and a turn that does not start then is a stall as ever
+   cannot read), or if the controller refuses it before it moved the rotor (motion.py rule 8:
+   a flipped bit made a frame it refuses). It goes again, try 2, with the raw bearing its
+   first try resolved (an axis it left out included), if the bridge still stands for it
+   (``Again``: targets.py rule 8, no newer target, stop or end of its feature since; if not,
+   a refusal is reported as ever), with a warning in the log (a refusal some codecs read as
+   junk is still told as junk); the time is judged at the reading by the settings then in
+   effect (rule 7: a speed set in the same batch as the target slows it); a second refusal
+   is reported, and a turn that does not start then is a stall as ever
    (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-EZ,
    RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
    the controller's rule (docs/architecture.md rule 7).
@@ -133,7 +139,7 @@ from bridge.session.config import WorkerConfig
 from bridge.session.link import Link
 from bridge.session.options import Options
 from bridge.session.slew import Slew, overdue, travel_s
-from bridge.session.stops import Stops
+from bridge.session.stops import Stops, Verdict
 from bridge.session.targets import Sending, resolve
 
 log = logging.getLogger(__name__)
@@ -189,10 +195,15 @@ class Retry:
 
 @dataclass(frozen=True)
 class Again:
-    """Rule 11: ``target``, the one sent last, goes once more if the bridge still stands for it
-    (targets.py ``again``)."""
+    """Rule 11: ``target``, the one sent last, goes once more as its first try resolved it
+    (``az_deg``, ``el_deg``: raw) if the bridge still stands for it (targets.py ``again``);
+    if not, ``refused`` (its refusal's error) is reported and ``ends`` ends tracking."""
 
     target: Target
+    az_deg: float
+    el_deg: float | None
+    refused: Report | None = None
+    ends: str | None = None
 
 
 Note = Report | Ends | Drop | Retry | Again
@@ -270,6 +281,7 @@ class Controller:
         self._watch_until = -math.inf  # rule 10: polled at the moving rate until then
         self._retry: Target | None = None  # rule 11: the target sent once, until it moved
         self._retry_t = math.inf  # rule 11: when it was sent
+        self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -458,7 +470,7 @@ class Controller:
             link.write_stop(now)
             self.stops.wrote_at_rest(now, False)
             why = (
-                f"rotor turning at {self.motion.position_deg:g}° after the stop its stall was "
+                f"rotor turning at {self._shown_az():g}° after the stop its stall was "
                 "given (freed, turned by hand, or that stop lost on the line): stopped once "
                 "more; if it still turns, stop it at the controller"
             )
@@ -552,10 +564,10 @@ class Controller:
         self._doubted = NOT_DOUBTED
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
-            self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
-            if stands is None or m.position_deg is None:
-                return Doubt.TAKEN
-            return self._doubts_turning(reply, doubted, now)
+            if stands is not None and m.changed_t is not None and cfg.spec.reports_while_moving:
+                return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
+            self._doubts_in_row = 0  # (a connection's first, a silent controller's report)
+            return Doubt.TAKEN
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
         # no move for the motion machine (within noise_deg of where it stands): taken; a move
         # is what is doubted, however small (a review: a flip of 2 degrees, taken, turned the
@@ -597,30 +609,49 @@ class Controller:
         return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
-        """Rule 9 while the rotor turns (or a target is out): a reading further from the one
-        before than it can have turned since (motion.py ``reach_deg``) is asked again at once;
-        the reading after it is taken, and if it is back within reach the doubted one is told
-        as line noise."""
+        """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
+        after its slew): a reading further from the last that changed than the rotor can have
+        turned since (motion.py ``reach_deg``, from that reading's time) is asked again at
+        once. The next is taken if it is within reach of that last reading (the doubted one is
+        told as line noise) or of the doubted one (said twice: the rotor is there); one that
+        agrees with neither is doubted in its turn, asked at the next poll, and told from the
+        DOUBTS_TOLD-th in a row (an attack pass: a noise burst over a reply and the reply
+        asked again at once, 13x read 33x then 17x, published 177)."""
         m, cfg = self.motion, self.cfg.motion
-        pos = m.position_deg
-        assert pos is not None
-        reach = mo.reach_deg(m, cfg, now)
-        near = not _apart(reply, pos, m.el_position_deg, reach, cfg.az_wraps)
-        if doubted.turning and doubted.reply is not None:
-            if near:
+        pos, since = m.position_deg, m.changed_t
+        assert pos is not None and since is not None
+        wraps, el = cfg.az_wraps, m.el_position_deg
+        prior = doubted.reply if doubted.turning else None
+        far = cfg.tolerance_deg + cfg.noise_deg + mo.AWAY_MARGIN_DEG  # (reach's least: cheap)
+        if not _apart(reply, pos, el, far, wraps) or not _apart(
+            reply, pos, el, mo.reach_deg(m, cfg, now, since), wraps
+        ):
+            if prior is not None:
                 self._say(
-                    f"a reading of {_where(doubted.reply)} while the rotor turned, further from "
-                    f"the one before ({_where(reply)} now) than it can have turned, was not "
-                    "said again: ignored (line noise?)",
+                    f"a reading of {_where(prior)} while the rotor turned, further from the one "
+                    f"before than it can have turned, was not said again ({_where(reply)} "
+                    "now): ignored (line noise?)",
                     now,
                     logged=True,
                 )
+            self._doubts_in_row = 0
             return Doubt.TAKEN
-        if near:
-            return Doubt.TAKEN
-        self._doubted = _Doubted(reply, now, True, turning=True)
+        if prior is not None and not _apart(
+            reply, prior.az_deg, prior.el_deg, mo.reach_deg(m, cfg, now, doubted.t), wraps
+        ):
+            self._doubts_in_row = 0
+            return Doubt.TAKEN  # said twice: the rotor is there
+        self._doubts_in_row += 1
+        self._doubted = _Doubted(reply, now, self._doubts_in_row == 1, turning=True)
         log.info("%s: a reading while turning of %s; asking again", self.name, _where(reply))
-        return Doubt.ASK
+        if self._doubts_in_row >= DOUBTS_TOLD:
+            self._say(
+                f"{self._doubts_in_row} readings in a row while the rotor turned disagree, the "
+                f"last {_where(reply)}: a noisy line or a failing position sensor",
+                now,
+                logged=False,
+            )
+        return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
@@ -724,27 +755,25 @@ class Controller:
 
     def _retry_check(self, link: Link, now: float) -> None:
         """Rule 11, at a reading: the target sent once is sent again if this reading, from
-        ``_retry_at`` on, shows the rotor not moved since it went out; the tries end once it
+        its time on, shows the rotor not moved since it went out; the tries end once it
         moved, came, or was dropped."""
         m, target, cfg = self.motion, self._retry, self.cfg
         assert target is not None
         mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
         due = self._retry_t + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
-        if m.target_deg is None or m.state is not mo.MOVING or m.stop_sent_t is not None:
+        if m.target_deg is None or m.state is not mo.MOVING:  # (a stop drops the target)
             self._retry = None
         elif m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
             self._retry = None
         elif now >= due + cfg.moving_poll_interval_s and link.free() and not link.stop_due:
             self._retry = None
-            self.notes.append(Again(target))
+            self.notes.append(Again(target, *self._retry_raw))
 
     def _motion_events(self, events: list[mo.Event], now: float) -> None:
         for event in events:
-            if event is mo.Event.REFUSED and self._refused_once():
+            verdict = self.stops.verdict(event, self.motion, self.cfg.motion, self._shown_az())
+            if event is mo.Event.REFUSED and self._refused_once(verdict):
                 continue
-            pos = self.motion.position_deg
-            shown = None if pos is None else self.cfg.aim.true_of(pos)  # (the user's bearing)
-            verdict = self.stops.verdict(event, self.motion, self.cfg.motion, shown)
             if verdict.ends_tracking is not None:
                 self.notes.append(Ends(verdict.ends_tracking))
             if verdict.error is not None:
@@ -764,15 +793,21 @@ class Controller:
                 else:  # a stall's, a turned-away rotor's: to a rotor at rest
                     self.stops.wrote_at_rest(now, event is mo.Event.STALLED)
 
-    def _refused_once(self) -> bool:
+    def _refused_once(self, verdict: Verdict) -> bool:
         """Rule 11: the controller refused the target sent once, which had not moved the rotor
-        (motion.py rule 8, at rest): sent again, no error yet (a frame a flipped bit made
-        one the controller refuses); True if so. A second refusal is reported."""
+        (motion.py rule 8, at rest): sent again, its refusal (``verdict``) reported only if the
+        bridge no longer stands for it (a frame a flipped bit made one the controller
+        refuses); True if so. A second refusal is reported."""
         target, self._retry = self._retry, None
-        if target is None or self.motion.state is mo.MOVING:
+        if target is None or self.motion.state is mo.MOVING or verdict.stop:
             return False
-        self.notes.append(Again(target))
+        self.notes.append(Again(target, *self._retry_raw, verdict.error, verdict.ends_tracking))
         return True
+
+    def _shown_az(self) -> float | None:
+        """The bearing the user sees where the motion machine has the rotor (pointing.py)."""
+        pos = self.motion.position_deg
+        return None if pos is None else self.cfg.aim.true_of(pos)
 
     # -- the line's own work, run by the session's step ------------------------------------------
     def line_work(self, now: float) -> None:
@@ -928,6 +963,7 @@ class Controller:
         self._retry = None  # rule 11: one try more, where the controller takes one at any time
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now
+            self._retry_raw = todo.az_deg, todo.el_deg
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

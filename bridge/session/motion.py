@@ -47,11 +47,13 @@ Rules:
    the target dropped and the rotor stopped at once, as a pass is (a poll garbled into a jog,
    Easycomm's ``ML``, ran the other way to the end stop; a hand at the panel). A movement away
    before it heads for the target starts the count again. A target sent while the rotor turns
-   is watched so only after ``settle_s`` (``back_from_t``): until then a reply on its way and
-   the coast show the way it was going (an attack pass: an RC2800 at 12 degrees a second sent
-   across its stop mid-turn). On either axis, each judged on its own: once a movement on
-   it (more than ``noise_deg`` from where that axis last moved since the target went out: rule
-   1's anchor moves with either axis) closed in on its target to within ``tolerance_deg``, or
+   is watched so only after twice ``settle_s`` (``back_from_t``): until then a reply on its
+   way and the coast show the way it was going (an attack pass: an RC2800 at 12 degrees a
+   second sent across its stop mid-turn; a review: a rotor that ramps down over 3 s; one that
+   coasts longer needs a longer ``settle_s``). On either axis, each judged on its own: once a
+   movement on it (more than ``noise_deg`` from where that axis last moved since the target
+   went out: rule 1's anchor moves with either axis) closed in on its target to within
+   ``tolerance_deg``, or
    went over it (the target between that axis's last movement and this one), or the axis was
    within ``noise_deg`` of it along the scale when the target went out (the axis an
    elevation-only move leaves where it is), and the next movement on it went
@@ -419,12 +421,13 @@ def _passing(
     return m, None
 
 
-def reach_deg(m: Motion, cfg: MotionConfig, now: float) -> float:
+def reach_deg(m: Motion, cfg: MotionConfig, now: float, since_t: float | None = None) -> float:
     """Rule 5: how far a reading at ``now`` can be from ``m``'s last on either axis: three
     times the larger of the two nominal speeds over the time since the later of the last
-    reading that changed and the target, plus ``tolerance_deg + noise_deg`` +
-    AWAY_MARGIN_DEG; one further is corrupt (controller.py rule 9 asks again for it)."""
-    t0 = max(m.changed_t or -math.inf, m.target_t or -math.inf)
+    reading that changed and the target (``since_t`` if given: controller.py rule 9 measures
+    from the reading it compares with), plus ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG;
+    one further is corrupt."""
+    t0 = max(m.changed_t or -math.inf, m.target_t or -math.inf) if since_t is None else since_t
     dt = now - t0 if t0 > -math.inf else 0.0
     speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
     return 3.0 * speed * dt + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
@@ -501,9 +504,9 @@ def commanded(
         el_from_deg=m.el_position_deg,
         away_err=None,
         az_back=None,
-        # rule 5: sent while it turns, the readings of the settle time may be of the way it
-        # was going (a reply on its way, a coast): the watch starts after them
-        back_from_t=now + cfg.settle_s if m.state is MOVING else None,
+        # rule 5: sent while it turns, the readings of twice the settle time may be of the way
+        # it was going (a reply on its way, a coast): the watch starts after them
+        back_from_t=now + 2 * cfg.settle_s if m.state is MOVING else None,
     )
 
 

@@ -507,12 +507,17 @@ class RotatorSession:
             elif isinstance(note, Retry):
                 self.targets.put_back(note.target, note.attempt, now)
             elif isinstance(note, Again):  # controller.py rule 11
-                if self.targets.again(note.target, now):
+                if self.targets.again(note.target, note.az_deg, note.el_deg, now):
                     log.warning(
                         "%s: the target did not move the rotor, or was refused before it did "
                         "(lost or garbled on the line?): sending it once more",
                         self.name,
                     )
+                    continue
+                if note.refused is not None:  # (its refusal, as it would have been told)
+                    self._error(note.refused.kind, note.refused.message, note.refused.command)
+                if note.ends is not None:
+                    self._end(note.ends, now)
 
     # -- the features' state the commands, the sky and the status reach by name (rule 17) -------
     def _activity(self, now: float) -> None:
@@ -678,7 +683,7 @@ class RotatorSession:
         assert pending is not None
         todo = decide(self.cfg, link, ctl.motion, self.targets, self.fence.held, now)
         if todo.go is Go.DONE:
-            self._aimed(self.targets.clear(), todo.wire)
+            self._aimed(self.targets.done(), todo.wire)
         elif todo.go is Go.STOP_FIRST:
             ctl.stop(now)
         elif todo.go is Go.ASK_FIRST:

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import enum
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from bridge.core.model import Source, Target, combine
 from bridge.pointing import Pointing
@@ -68,7 +68,7 @@ class Targets:
             self._stream_t = now
         self._replaced = self.pending is not None or recent
         self.pending, self._pending_t, self._attempt = combine(target, self.pending), now, 1
-        self._standing, self.again_now = None, False  # rule 8: a newer one
+        self.again_now = False  # rule 8: a newer one waits (sent, it stands instead: ``sent``)
 
     def put_back(self, target: Target, attempt: int, now: float) -> None:
         """Rule 3: send ``target`` again (unless a newer one waits already)."""
@@ -97,12 +97,21 @@ class Targets:
         self.pending, self._attempt, self._last_sent_t = None, 1, now
         return attempt
 
-    def again(self, target: Target, now: float) -> bool:
-        """Rule 8: ``target`` waits once more, try 2, if it is the one sent last and the bridge
-        still stands for it; True if so."""
+    def done(self) -> Target | None:
+        """Rule 5: the waiting target is the one on its way (said again): dropped, and the
+        one sent last still stands (rule 8: its try more, a review: a lost target said again
+        by a logger lost it); the one dropped."""
+        dropped, self.pending, self.again_now = self.pending, None, False
+        return dropped
+
+    def again(self, target: Target, az_deg: float, el_deg: float | None, now: float) -> bool:
+        """Rule 8: ``target`` waits once more, try 2, as its first try resolved it (``az_deg``,
+        ``el_deg``: raw), if it is the one sent last and the bridge still stands for it; True
+        if so."""
         if target is not self._standing or self.pending is not None:
             return False
-        self.pending, self._pending_t, self._stream_t = target, now, now
+        again = replace(target, az_deg=az_deg, el_deg=el_deg, true_az_deg=None)
+        self.pending, self._pending_t, self._stream_t = again, now, now
         self._replaced, self._attempt, self.again_now = False, 2, True
         return True
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -368,6 +369,30 @@ def test_on_a_wrapping_scale_a_turn_back_on_the_way_is_no_turn_it_was_sent() -> 
     m = mo.commanded(ready(az=200), CFG, 300, 10.0)
     m, events = feed(m, [*on, (17.0, 226.0), (17.5, 242.0), (18.0, 245.0)])
     assert events == [] and m.target_deg == 300
+
+
+@pytest.mark.parametrize("ramp", [(2.5, 2.0, 1.5, 1.0), (2.7, 2.4, 2.1, 1.8, 1.5, 1.2)])
+def test_a_ramp_down_towards_a_new_target_across_the_stop_is_no_turn_back(
+    ramp: tuple[float, ...],
+) -> None:
+    """A review: a rotor turning up through 270 at 6 degrees a second is sent 20 (its controller
+    goes the long way down, its stop at north); it ramps down over 2 or 3 s, closing in on 20
+    round the circle, then turns down as asked. The watch of a target sent mid-turn starts
+    after twice the settle time."""
+    cfg = mo.MotionConfig(REGISTRY["rt21"], tolerance_deg=3, settle_s=1.5, noise_deg=2)
+    m = mo.link_up(mo.Motion(), cfg, 0.0)
+    m, _ = mo.reading(m, cfg, 240.0, 0.0)
+    m, _ = mo.tick(m, cfg, 5.0)
+    m = mo.commanded(m, cfg, 300, 10.0)
+    m, _ = feed(m, [(10.0 + 0.5 * i, 240 + 3.0 * i) for i in range(1, 11)], cfg)
+    m = mo.commanded(m, cfg, 20, 15.0)
+    coast, az, t = [], 270.0, 15.0
+    for step in ramp:
+        t, az = t + 0.5, az + step
+        coast.append((t, az))
+    way = [(t + 0.5 * i, az - 3.0 * i) for i in range(1, 40)]  # then the long way down
+    m, events = feed(m, [*coast, *way], cfg)
+    assert mo.Event.TURNED_BACK not in events and m.target_deg == 20
 
 
 def test_one_reading_ten_degrees_closer_on_the_way_round_is_no_turn_back() -> None:

@@ -7,6 +7,7 @@ where the first form of the rule did not reach.)"""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
@@ -14,6 +15,7 @@ import pytest
 
 from bridge.core.model import ErrorKind, MotionState, Target
 from bridge.protocols.axes import Axis
+from bridge.session import controller as C
 from tests.engine.virtual import VirtualRotator
 from tests.engine.virtual_composite import VirtualComposite
 
@@ -639,3 +641,99 @@ def test_a_small_glitch_then_a_big_one_are_both_asked_again(rig: Rig, model: str
     v.run_for(20)
     shown = {s.bearing_deg for s in v.published(since=t)}
     assert shown <= {rest} and v.truth().az_deg == 150.0, shown
+
+
+# -- while turning: an attack pass's cases -------------------------------------------------
+def asked_again(monkeypatch: pytest.MonkeyPatch) -> list[tuple[float, float]]:
+    """Every reading _doubts_turning did not take at once: (time, azimuth)."""
+    seen: list[tuple[float, float]] = []
+    orig = C.Controller._doubts_turning
+
+    def spy(self, reply, doubted, now):  # type: ignore[no-untyped-def]
+        verdict = orig(self, reply, doubted, now)
+        if verdict is not C.Doubt.TAKEN:
+            seen.append((round(now, 3), reply.az_deg))
+        return verdict
+
+    monkeypatch.setattr(C.Controller, "_doubts_turning", spy)
+    return seen
+
+
+def test_a_true_reading_after_a_bearing_sent_mid_turn_is_not_doubted(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An attack pass: an RC2800 at 12 deg/s polled every 1 s while turning, sent a new bearing
+    0.1 s before a poll. The reach counted from the target (10.3 degrees) though the reading it
+    was compared with was a whole poll (12 degrees) old: the true reading was asked again, and
+    the answer told on R/error as line noise. It counts from that reading's time."""
+    doubted = asked_again(monkeypatch)
+    v = rig(
+        "rc2800",
+        settings={
+            "moving_poll_interval_s": 1.0,
+            "settle_s": 2.0,
+            "idle_poll_interval_s": 1.0,
+            "unasked_moves": "follow",
+        },
+        emulator={"az_speed_deg_s": 12.0},
+    )
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.run_for(10)
+    v.target(100.0)
+    v.run_for(2.0)
+    poll = math.ceil((v.now + 0.5) / 1.0) * 1.0  # (link.py: polls on the interval's grid)
+    v.run_for(poll - 0.1 - v.now)
+    t = v.now
+    v.target(300.0)  # a new bearing while it turns (a direct-retarget box takes it at once)
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.now > t + 5, 120, "arrived")
+    told = [e.message for e in v.errors(since=t)]
+    assert (doubted, told) == ([], []), (doubted, told)
+
+
+def test_a_slew_report_of_a_satel_faster_than_configured_is_not_blanked(rig: Rig) -> None:
+    """An attack pass: a SatEL (8 deg/s) configured at 2 deg/s; the report after a 180-degree
+    slew was beyond the reach, asked again, the bearing published blank meanwhile and the answer
+    told as line noise. A silent controller's report after its slew is not doubted."""
+    v = rig(
+        "satel", settings={"az_speed_deg_s": 2.0, "el_speed_deg_s": 1.0, "unasked_moves": "follow"}
+    )
+    v.run_until(lambda h: h.status.available and h.state is MotionState.IDLE, 60, "online")
+    v.run_for(5)
+    t = v.now
+    v.target(180.0, 10.0)
+    v.run_until(lambda h: h.state is MotionState.IDLE and h.now > t + 5, 400, "arrived")
+    assert v.truth().az_deg == 180.0
+    blank = [round(x, 3) for x, s in v.statuses if x > t and s.bearing_deg is None]
+    assert blank == [], blank
+    assert v.errors(since=t) == [], [e.message for e in v.errors(since=t)]
+
+
+def test_a_reply_asked_again_that_agrees_with_nothing_is_not_published(rig: Rig) -> None:
+    """An attack pass: a burst of line noise over a reply and the reply asked again at once (20
+    ms later on a GS-232B): 13x read 33x (doubted), then 13x read 17x (one bit). The second
+    agrees with neither the reading before nor the doubted one, and was published; it is
+    doubted in its turn."""
+    v = at_rest(rig, "gs232b")
+    v.aim(Target(100.0, None))
+    v.run_until(lambda h: h.state is MotionState.MOVING and h.truth().az_deg < 138, 60, "turning")
+    line, done = bytearray(), []
+
+    def burst(data: bytes, now: float) -> bytes:  # whole replies (sent byte by byte)
+        line.extend(data)
+        if not line.endswith(b"\n"):
+            return b""
+        whole = bytes(line)
+        line.clear()
+        if len(done) < 2 and b"AZ=13" in whole:
+            done.append(now)
+            return whole.replace(b"AZ=13", b"AZ=33" if len(done) == 1 else b"AZ=17", 1)
+        return whole
+
+    v.to_host = burst
+    t = v.now
+    v.run_until(lambda h: len(done) == 2, 10, "two noisy replies")
+    v.to_host = None
+    v.run_until(lambda h: h.state is MotionState.IDLE, 60, "at rest")
+    shown = [s.bearing_deg for s in v.published(since=t) if s.bearing_deg is not None]
+    assert done[1] - done[0] < 0.1, done  # (the second: the reply asked again at once)
+    assert max(shown) <= 140, shown

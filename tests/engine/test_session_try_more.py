@@ -115,3 +115,56 @@ def test_no_try_more_while_a_slowed_rotor_turns(rig: Rig, caplog: pytest.LogCapt
     v.run_for(30)
     assert v.sent(since=t).count(b"W100 020\r") == 1
     assert "did not move" not in caplog.text
+
+
+def test_a_lost_target_said_again_by_the_user_still_gets_its_try_more(rig: Rig) -> None:
+    """A review: a logger that repeats its bearing (rotctld's ``P`` every second, a user pressing
+    again) said the lost target again before its try more was due: the repeat, one on its way,
+    made the bridge forget the target it stood for, and it ended as a stall."""
+    v = rig("easycomm2", emulator={**FAST, "start_az_deg": 100, "start_el_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.drop_writes(b"AZ200.0 EL10.0\n")
+    v.target(200, 10)
+    v.run_for(1.0)
+    v.target(200, 10)
+    v.run_until(lambda h: h.truth().az_deg == 200 and h.state is IDLE, 60, "at 200")
+    assert v.errors(since=t) == []
+
+
+def test_a_refusal_the_bridge_no_longer_stands_behind_is_still_told(rig: Rig) -> None:
+    """A review: ``M200`` garbled into ``M:00`` (refused), and the same bearing said again while
+    the refusal was on its way: the refusal was swallowed for a try more that never went, and
+    nothing was said. Now the try more goes (or, if the bridge no longer stands for the
+    target, the refusal is told as ever)."""
+    v = rig("gs232b-az", emulator={"start_az_deg": 77})
+    v.run_until_state(IDLE, 30)
+    t = v.now
+    v.garble_writes(b"M200\r", b"M:00\r")
+    v.aim(Target(200))
+    v.run_until(lambda h: any(w.data == b"M200\r" for w in h.writes if w.t >= t), 5, "sent")
+    v.aim(Target(200))
+    v.run_for(30)
+    assert v.truth().az_deg == 200 and v.errors(since=t) == []
+
+
+def test_a_refused_try_more_keeps_the_axis_its_first_try_resolved(rig: Rig) -> None:
+    """A review: ``W200 010`` lost, then an elevation-only 60 (resolved ``W200 060``, the
+    azimuth target still out) garbled into a frame the box refuses. The refusal drops the
+    motion's target, and the try more resolved the azimuth from where the rotor stood:
+    ``W100 060``, the 200 asked for gone with no error. The try sends the raw values of the
+    first."""
+    v = rig("gs232b", emulator={"start_az_deg": 100, "start_el_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.drop_writes(b"W200 010\r")
+    v.target(200, 10)
+    v.run_for(0.5)
+    v.garble_writes(b"W200 060\r", b"W2:0 060\r")
+    v.target(None, 60)
+    v.run_for(60)
+    sent = [w.data for w in v.writes if w.t >= t and w.data.startswith(b"W")]
+    assert b"W100 060\r" not in sent and sent.count(b"W200 060\r") == 2
+    assert (v.truth().az_deg, v.truth().el_deg) == (200, 60) and v.errors(since=t) == []
