@@ -45,33 +45,33 @@ Rules:
    ``base_cfg`` as configured.
 8. A codec that keeps what its controller said of itself (protocols/base.TakesReadings: a
    composite's elevation box) is told each reading taken, and only those (rule 5).
-9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking,
-   stalled, also after a stop) further from where it stands than ``noise_deg`` on either axis
-   (what the motion machine would take for a move: motion.py rule 1) is believed when the
-   next says so too, within ``doubt_deg``: the controller is asked again at once, and a
-   reading back where the rotor stood shows the first was line noise (logged, and told on
-   R/error as junk is: rule 6). One flipped bit in an ASCII reply makes a well-formed bearing
-   (``AZ=150`` read as ``AZ=350``): it was published and taken as a move, and a nudge made
-   from that bearing turned the rotor 200 degrees. A rotor not turning changes its bearing
-   only by a hand at the controller's panel, which the reading asked a moment later confirms
-   (a move by hand is seen one exchange later; a stop that did not take is checked one
-   exchange later, within stops.py rule 2's resend time). A turning rotor's readings change at
-   every poll: one is doubted only if it is further from the last that changed than the rotor
-   can have turned since (motion.py ``reach_deg``: three times its nominal speed, and the
-   tolerance, noise and margin of a pass), and believed when the next is within reach of that
-   last one or of it (``_doubts_turning``; a flipped digit mid-turn was published for one
-   poll on seven models); a silent controller's report after its slew is not doubted, nor is
-   a connection's first. A doubted reading is no reading for anything: not the motion's, not a
-   target's fresh one (targets.py rule 7: a target waits for the answer), not one a stop cuts
-   short (rule 5); but the controller answered (no silence). Readings that go on disagreeing
-   (a line gone bad, a failing position sensor) are asked for at the usual polls, not at once,
-   and told from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings
-   agreed on. A reading asked again at once agrees with the doubted one within ``doubt_deg``
-   plus twice what the rotor turns at its speed between them (DOUBT_TURN_MAX_DEG at most): a
-   rotor turning while taken for still is believed on its second reading, also when a stop
-   cut the first short and the second is asked once the stop is out; readings at the idle rate
-   agree within ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A
-   composite box's axis that is never turned is kept so too: axes.py rule 5.)
+9. A reading that puts a rotor not turning (no move seen, no target out: idle, braking, stalled,
+   also after a stop) further from where it stands than ``noise_deg`` on either axis (what the
+   motion machine would take for a move: motion.py rule 1) is believed when the next says so
+   too, within ``doubt_deg``: the controller is asked again at once, and a reading back where
+   the rotor stood shows the first was line noise (logged, and told on R/error as junk is: rule
+   6). One flipped bit in an ASCII reply makes a well-formed bearing (``AZ=150`` read as
+   ``AZ=350``): it was published and taken as a move, and a nudge made from that bearing turned
+   the rotor 200 degrees. A rotor not turning changes its bearing only by a hand at the
+   controller's panel, which the reading asked a moment later confirms (a move by hand is seen
+   one exchange later; a stop that did not take is checked one exchange later, within stops.py
+   rule 2's resend time). A turning rotor's readings change at every poll: one is doubted only
+   if it is further from the last that changed than the rotor can have turned since (motion.py
+   ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
+   once: the reading asked for then is taken, and one not back within reach ends the doubt for
+   that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
+   models); a silent controller's report after its slew is not doubted, nor is a connection's
+   first. A doubted reading is no reading for anything: not the motion's, not a target's fresh
+   one (targets.py rule 7: a target waits for the answer), not one a stop cuts short (rule 5);
+   but the controller answered (no silence). Readings at rest that go on disagreeing (a line
+   gone bad, a failing position sensor) are asked for at the usual polls, not at once, and told
+   from the DOUBTS_TOLD-th in a row on; the bearing shown is the last two readings agreed on. A
+   reading asked again at once agrees with the doubted one within ``doubt_deg`` plus twice what
+   the rotor turns at its speed between them (DOUBT_TURN_MAX_DEG at most): a rotor turning while
+   taken for still is believed on its second reading, also when a stop cut the first short and
+   the second is asked once the stop is out; readings at the idle rate agree within
+   ``doubt_deg`` alone (polls half a minute apart would let any two agree). (A composite box's
+   axis that is never turned is kept so too: axes.py rule 5.)
 10. A turn nobody asked for: a rotor seen turning from a settled rest (``at_rest``: not from a
    connection's first reading, which cannot tell a turn under way from a new one, a review: a
    reconnect mid-turn stopped the user's own move) with no target out is stopped, once a reading
@@ -270,6 +270,7 @@ class Controller:
         self._takes_readings = False  # rule 8: the link's codec does (set on connect)
         self._doubted = NOT_DOUBTED  # rule 9: a reading of a rotor not turning asked again
         self._doubts_in_row = 0  # rule 9: readings at rest doubted since one was believed
+        self._turn_trusted = False  # rule 9: a turning rotor's readings not doubted till rest
         self._released_stop_t: float | None = None  # ``lock_released``: the stop let go
         self._released_owed = False  # ... one owed when the lock was released (rule 3)
         self._released_unseen_t: float | None = None  # ... its stop no reading showed taking
@@ -564,10 +565,11 @@ class Controller:
         self._doubted = NOT_DOUBTED
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
+            self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
             if stands is not None and m.changed_t is not None and cfg.spec.reports_while_moving:
                 return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
-            self._doubts_in_row = 0  # (a connection's first, a silent controller's report)
             return Doubt.TAKEN
+        self._turn_trusted = False  # (at rest: _doubts_turning's next turn is doubted anew)
         limit, wraps = doubt_deg(cfg), cfg.az_wraps
         # no move for the motion machine (within noise_deg of where it stands): taken; a move
         # is what is doubted, however small (a review: a flip of 2 degrees, taken, turned the
@@ -612,21 +614,24 @@ class Controller:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
         after its slew): a reading further from the last that changed than the rotor can have
         turned since (motion.py ``reach_deg``, from that reading's time) is asked again at
-        once. The next is taken if it is within reach of that last reading (the doubted one is
-        told as line noise) or of the doubted one (said twice: the rotor is there); one that
-        agrees with neither is doubted in its turn, asked at the next poll, and told from the
-        DOUBTS_TOLD-th in a row (an attack pass: a noise burst over a reply and the reply
-        asked again at once, 13x read 33x then 17x, published 177)."""
+        once, once. The next is taken: if it is within reach of that last reading, the doubted
+        one is told as line noise; if not, the rotor turns faster than its nominal speed (or
+        the line garbled twice in a row), and no reading is doubted again until it rests (an
+        integration test: a SPID turning ten times its nominal speed had every reading doubted
+        in turn, none taken, and was called stalled and stopped)."""
+        if self._turn_trusted:
+            return Doubt.TAKEN
         m, cfg = self.motion, self.cfg.motion
         pos, since = m.position_deg, m.changed_t
         assert pos is not None and since is not None
         wraps, el = cfg.az_wraps, m.el_position_deg
-        prior = doubted.reply if doubted.turning else None
         far = cfg.tolerance_deg + cfg.noise_deg + mo.AWAY_MARGIN_DEG  # (reach's least: cheap)
-        if not _apart(reply, pos, el, far, wraps) or not _apart(
+        near = not _apart(reply, pos, el, far, wraps) or not _apart(
             reply, pos, el, mo.reach_deg(m, cfg, now, since), wraps
-        ):
-            if prior is not None:
+        )
+        prior = doubted.reply if doubted.turning else None
+        if prior is not None:
+            if near:
                 self._say(
                     f"a reading of {_where(prior)} while the rotor turned, further from the one "
                     f"before than it can have turned, was not said again ({_where(reply)} "
@@ -634,24 +639,14 @@ class Controller:
                     now,
                     logged=True,
                 )
-            self._doubts_in_row = 0
+            else:
+                self._turn_trusted = True
             return Doubt.TAKEN
-        if prior is not None and not _apart(
-            reply, prior.az_deg, prior.el_deg, mo.reach_deg(m, cfg, now, doubted.t), wraps
-        ):
-            self._doubts_in_row = 0
-            return Doubt.TAKEN  # said twice: the rotor is there
-        self._doubts_in_row += 1
-        self._doubted = _Doubted(reply, now, self._doubts_in_row == 1, turning=True)
+        if near:
+            return Doubt.TAKEN
+        self._doubted = _Doubted(reply, now, True, turning=True)
         log.info("%s: a reading while turning of %s; asking again", self.name, _where(reply))
-        if self._doubts_in_row >= DOUBTS_TOLD:
-            self._say(
-                f"{self._doubts_in_row} readings in a row while the rotor turned disagree, the "
-                f"last {_where(reply)}: a noisy line or a failing position sensor",
-                now,
-                logged=False,
-            )
-        return Doubt.ASK if self._doubts_in_row == 1 else Doubt.WAIT
+        return Doubt.ASK
 
     def _reading(self, link: Link, reply: PositionReply, now: float) -> None:
         link.got_reading(now)
