@@ -56,7 +56,7 @@ Rules:
    controller's panel, which the reading asked a moment later confirms (a move by hand is seen
    one exchange later; a stop that did not take is checked one exchange later, within stops.py
    rule 2's resend time). A turning rotor's readings change at every poll: one is doubted only
-   if it is further from the last that changed than the rotor can have turned since (motion.py
+   if it is further from the last taken than the rotor can have turned since (motion.py
    ``reach_deg``: three times its nominal speed, and the tolerance, noise and margin of a pass),
    once: the reading asked for then is taken, and one not back within reach ends the doubt for
    that turn (``_doubts_turning``; a flipped digit mid-turn was published for one poll on seven
@@ -566,7 +566,7 @@ class Controller:
         stands = m.anchor_deg  # (where the motion machine last saw it move: None at first)
         if m.state is mo.MOVING or m.target_deg is not None or stands is None:
             self._doubts_in_row = 0  # (turning, a target out, or a connection's first)
-            if stands is not None and m.changed_t is not None and cfg.spec.reports_while_moving:
+            if stands is not None and cfg.spec.reports_while_moving:
                 return self._doubts_turning(reply, doubted, now)  # (not a slew's report)
             return Doubt.TAKEN
         self._turn_trusted = False  # (at rest: _doubts_turning's next turn is doubted anew)
@@ -612,7 +612,7 @@ class Controller:
 
     def _doubts_turning(self, reply: PositionReply, doubted: _Doubted, now: float) -> Doubt:
         """Rule 9 while the rotor turns (or a target is out; not a silent controller's report
-        after its slew): a reading further from the last that changed than the rotor can have
+        after its slew): a reading further from the last taken than the rotor can have
         turned since (motion.py ``reach_deg``, from that reading's time) is asked again at
         once, once. The next is taken: if it is within reach of that last reading, the doubted
         one is told as line noise; if not, the rotor turns faster than its nominal speed (or
@@ -621,9 +621,13 @@ class Controller:
         in turn, none taken, and was called stalled and stopped)."""
         if self._turn_trusted:
             return Doubt.TAKEN
-        m, cfg = self.motion, self.cfg.motion
-        pos, since = m.position_deg, m.changed_t
-        assert pos is not None and since is not None
+        m, cfg, link = self.motion, self.cfg.motion, self.link
+        pos = m.position_deg  # (the last reading taken: one that changed nothing left it)
+        since = link.last_reply_t if link is not None else None  # (that reading's time: an
+        if pos is None or since is None:  # attack pass, from the last that changed, a rotor
+            return Doubt.TAKEN  # standing with a target out let any reading through)
+        if m.target_t is not None and m.back_from_t is None:  # a target sent at rest: it
+            since = max(since, m.target_t)  # stood there until then (idle polls are slow)
         wraps, el = cfg.az_wraps, m.el_position_deg
         far = cfg.tolerance_deg + cfg.noise_deg + mo.AWAY_MARGIN_DEG  # (reach's least: cheap)
         near = not _apart(reply, pos, el, far, wraps) or not _apart(
