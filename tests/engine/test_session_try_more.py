@@ -37,6 +37,14 @@ def _lose_first_bearing(v: VirtualRotator) -> list[bytes]:
     return lost
 
 
+def resting(rig: Rig, model: str, **emulator: float) -> VirtualRotator:
+    """At rest at 100/10 a few seconds after it came online."""
+    v = rig(model, emulator={**emulator, "start_az_deg": 100, "start_el_deg": 10})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    return v
+
+
 def test_a_lost_tracking_target_is_not_sent_after_tracking_was_turned_off(rig: Rig) -> None:
     """Tracking's first bearing is lost on the line; the user turns tracking off 0.5 s later
     (no stop: the rotor never moved). The try more came after and turned the rotor to the sun
@@ -85,9 +93,7 @@ def test_the_try_more_sends_the_bearing_the_first_try_sent(rig: Rig) -> None:
     AZ200.0 EL60.0), and is lost too (one noise burst). The try more sent AZ100.0 EL60.0
     (the azimuth resolved again after the motion's target was dropped for it), and the 200
     asked for was gone without an error; now it sends what the first try sent."""
-    v = rig("easycomm2", emulator={**FAST, "start_az_deg": 100, "start_el_deg": 10})
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "easycomm2", **FAST)
     t = v.now
     v.drop_writes(b"AZ200.0 EL10.0\n")
     v.target(200, 10)
@@ -107,9 +113,7 @@ def test_no_try_more_while_a_slowed_rotor_turns(rig: Rig, caplog: pytest.LogCapt
     (1.5 s; 5 s at X1): at 2.2 s the elevation turned 1.4 degrees, not yet past ``noise_deg``,
     and the target went again mid-turn. Its time is judged at the reading, by the settings
     then in effect."""
-    v = rig("gs232b", emulator={"start_az_deg": 100, "start_el_deg": 10})
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "gs232b")
     t = v.now
     v.command(Target(100, 20), SetOption("speed", "1"))
     v.run_for(30)
@@ -121,9 +125,7 @@ def test_a_lost_target_said_again_by_the_user_still_gets_its_try_more(rig: Rig) 
     """A review: a logger that repeats its bearing (rotctld's ``P`` every second, a user pressing
     again) said the lost target again before its try more was due: the repeat, one on its way,
     made the bridge forget the target it stood for, and it ended as a stall."""
-    v = rig("easycomm2", emulator={**FAST, "start_az_deg": 100, "start_el_deg": 10})
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "easycomm2", **FAST)
     t = v.now
     v.drop_writes(b"AZ200.0 EL10.0\n")
     v.target(200, 10)
@@ -155,9 +157,7 @@ def test_a_refused_try_more_keeps_the_axis_its_first_try_resolved(rig: Rig) -> N
     motion's target, and the try more resolved the azimuth from where the rotor stood:
     ``W100 060``, the 200 asked for gone with no error. The try sends the raw values of the
     first."""
-    v = rig("gs232b", emulator={"start_az_deg": 100, "start_el_deg": 10})
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "gs232b")
     t = v.now
     v.drop_writes(b"W200 010\r")
     v.target(200, 10)

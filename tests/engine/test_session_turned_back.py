@@ -44,13 +44,20 @@ def flip_once(v: VirtualRotator, seen: bytes, instead: bytes) -> list[float]:
     return when
 
 
-def test_a_target_sent_again_after_a_turn_back_arrives(rig: Rig) -> None:
-    v = resting(rig, 200)
+def jogged_back(v: VirtualRotator, past: float) -> float:
+    """Sent 300, a poll garbled into a jog once the rotor is past ``past``; until the turn back
+    is told. Returns when the poll was garbled."""
     v.target(300, 20)
-    v.run_until(lambda h: h.truth().az_deg > 240, 30, "on its way")
+    v.run_until(lambda h: h.truth().az_deg > past, 30, "on its way")
     t = v.now
     v.garble_writes(*JOG)
     v.run_until(lambda h: h.errors("stalled", since=t) != [], 20, "the turn back told")
+    return t
+
+
+def test_a_target_sent_again_after_a_turn_back_arrives(rig: Rig) -> None:
+    v = resting(rig, 200)
+    jogged_back(v, 240)
     v.run_for(10)
     t = v.now
     v.target(300, 20)
@@ -62,11 +69,7 @@ def test_a_jog_in_the_first_degrees_of_a_turn_is_stopped(rig: Rig) -> None:
     """An attack pass: 4 degrees into the turn (two movements that closed in) a jog ran the rotor
     back to its end stop, the first form of the rule waiting for 10 degrees of closing in."""
     v = resting(rig, 200)
-    v.target(300, 20)
-    v.run_until(lambda h: h.truth().az_deg > 204, 30, "on its way")
-    t = v.now
-    v.garble_writes(*JOG)
-    v.run_until(lambda h: h.errors("stalled", since=t) != [], 20, "the turn back told")
+    jogged_back(v, 204)
     v.run_for(5)
     assert not v.truth().is_moving and v.truth().az_deg > 185
 
