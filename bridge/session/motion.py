@@ -53,11 +53,10 @@ Rules:
    coasts longer needs a longer ``settle_s``). On either axis, each judged on its own: once a
    movement on it (more than ``noise_deg`` from where that axis last moved since the target
    went out: rule 1's anchor moves with either axis) closed in on its target to within
-   ``tolerance_deg``, or
-   went over it (the target between that axis's last movement and this one), or the axis was
-   within ``noise_deg`` of it along the scale when the target went out (the axis an
-   elevation-only move leaves where it is), and the next movement on it went
-   on the same way (one that turns back says the arrival was none: a corrupt reading close
+   ``tolerance_deg``, or went over it (the target between that axis's last movement and this
+   one), or the axis was within ``noise_deg`` of it along the scale when the target went out
+   (the axis an elevation-only move leaves where it is), and the next movement on it went on
+   the same way (one that turns back says the arrival was none: a corrupt reading close
    to the last, or a hand turning the rotor back), two movements away on that axis, the
    second further than the first, both more than ``tolerance_deg + noise_deg`` +
    AWAY_MARGIN_DEG further than the closest it came, say the rotor ``passed`` its target, on
