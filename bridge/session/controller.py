@@ -100,19 +100,19 @@ Rules:
 11. A target gets one try more where the controller takes a new bearing at any time
    (``RetargetPolicy.DIRECT``: the same bearing again changes nothing of a turn under way) and
    reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
-   moving poll after it went out shows the rotor not moved since (no movement beyond
-   ``noise_deg``: the frame lost or garbled on the line; an Easycomm box ignores a bearing it
-   cannot read), or if the controller refuses it before it moved the rotor (motion.py rule 8:
-   a flipped bit made a frame it refuses). It goes again, try 2, with the raw bearing its
-   first try resolved (an axis it left out included), if the bridge still stands for it
-   (``Again``: targets.py rule 8, no newer target, stop or end of its feature since; if not,
-   a refusal is reported as ever), with a warning in the log (a refusal some codecs read as
-   junk is still told as junk); the time is judged at the reading by the settings then in
-   effect (rule 7: a speed set in the same batch as the target slows it); a second refusal
-   is reported, and a turn that does not start then is a stall as ever
-   (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the Rotor-EZ,
-   RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it, against
-   the controller's rule (docs/architecture.md rule 7).
+   moving poll after it went out shows an axis that had to turn (further than ``tolerance_deg``)
+   not moved since (not beyond ``noise_deg``: the frame lost or garbled on the line, one of an
+   RC2800's two; an Easycomm box ignores a bearing it cannot read), or if the controller refuses
+   it before it moved the rotor (motion.py rule 8: a flipped bit made a frame it refuses). It
+   goes again, try 2, with the raw bearing its first try resolved (an axis it left out
+   included), if the bridge still stands for it (``Again``: targets.py rule 8, no newer target,
+   stop or end of its feature since; if not, a refusal is reported as ever), with a warning in
+   the log (a refusal some codecs read as junk is still told as junk); the time is judged at the
+   reading by the settings then in effect (rule 7: a speed set in the same batch as the target
+   slows it); a second refusal is reported, and a turn that does not start then is a stall as
+   ever (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the
+   Rotor-EZ, RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it,
+   against the controller's rule (docs/architecture.md rule 7).
 """
 
 from __future__ import annotations
@@ -227,6 +227,34 @@ def _apart(
     return reply.el_deg is not None and el_deg is not None and abs(reply.el_deg - el_deg) > limit
 
 
+def _to_turn(
+    m: mo.Motion, cfg: mo.MotionConfig, az: float, el: float | None
+) -> tuple[float | None, float | None]:
+    """Rule 11: where each axis stands that has to turn to ``az``/``el`` (further than
+    ``tolerance_deg``), None for one that has not, or is not known."""
+    az_from = m.position_deg
+    if az_from is not None and mo.angle_error(az_from, az, cfg.az_wraps) <= cfg.tolerance_deg:
+        az_from = None
+    el_from = m.el_position_deg if el is not None else None
+    if el_from is not None and el is not None and abs(el_from - el) <= cfg.tolerance_deg:
+        el_from = None
+    return az_from, el_from
+
+
+def _each_moved(
+    start: tuple[float | None, float | None], m: mo.Motion, cfg: mo.MotionConfig
+) -> bool:
+    """Rule 11: whether each axis that had to turn (``_to_turn``) is now more than ``noise_deg``
+    from where it stood."""
+    az_from, el_from = start
+    az, el = m.position_deg, m.el_position_deg
+    if az_from is not None and (
+        az is None or mo.angle_error(az, az_from, cfg.az_wraps) <= cfg.noise_deg
+    ):
+        return False
+    return el_from is None or (el is not None and abs(el - el_from) > cfg.noise_deg)
+
+
 def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
 
@@ -283,6 +311,7 @@ class Controller:
         self._retry: Target | None = None  # rule 11: the target sent once, until it moved
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
+        self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -754,15 +783,17 @@ class Controller:
 
     def _retry_check(self, link: Link, now: float) -> None:
         """Rule 11, at a reading: the target sent once is sent again if this reading, from
-        its time on, shows the rotor not moved since it went out; the tries end once it
-        moved, came, or was dropped."""
+        its time on, shows an axis that had to turn not moved since it went out (an attack
+        pass: the elevation frame of an RC2800's two lost, the azimuth came, and the stall
+        told blamed the brake); the tries end once each has moved, or the target came or was
+        dropped."""
         m, target, cfg = self.motion, self._retry, self.cfg
         assert target is not None
         mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
         due = self._retry_t + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
         if m.target_deg is None or m.state is not mo.MOVING:  # (a stop drops the target)
             self._retry = None
-        elif m.last_move_t is not None and m.target_t is not None and m.last_move_t > m.target_t:
+        elif _each_moved(self._retry_from, m, mc):
             self._retry = None
         elif now >= due + cfg.moving_poll_interval_s and link.free() and not link.stop_due:
             self._retry = None
@@ -963,6 +994,7 @@ class Controller:
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now
             self._retry_raw = todo.az_deg, todo.el_deg
+            self._retry_from = _to_turn(m, cfg.motion, az, el)
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

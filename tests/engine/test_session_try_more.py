@@ -168,3 +168,19 @@ def test_a_refused_try_more_keeps_the_axis_its_first_try_resolved(rig: Rig) -> N
     sent = [w.data for w in v.writes if w.t >= t and w.data.startswith(b"W")]
     assert b"W100 060\r" not in sent and sent.count(b"W200 060\r") == 2
     assert (v.truth().az_deg, v.truth().el_deg) == (200, 60) and v.errors(since=t) == []
+
+
+def test_an_elevation_frame_lost_while_the_azimuth_went_is_tried_again(rig: Rig) -> None:
+    """An attack pass: an RC2800's target is two frames, ``A180.0`` then ``E70.0``. The E frame
+    lost, the azimuth came, and the try more, judged on both axes together, did not go: 'rotor
+    stalled at 180°: brake paddle pressed or rotor stuck', the elevation left at 48. Each axis
+    that has to turn is judged on its own: the target goes once more, and both come."""
+    v = rig("rc2800", emulator={"start_az_deg": 108, "start_el_deg": 48})
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.drop_writes(b"E70.0\r")
+    v.target(180, 70)
+    v.run_for(60)
+    assert v.sent(since=t).count(b"E70.0\r") == 2 and v.errors(since=t) == []
+    assert (v.truth().az_deg, v.truth().el_deg) == (180.0, 70.0)
