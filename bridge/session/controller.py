@@ -100,8 +100,9 @@ Rules:
 11. A target gets one try more where the controller takes a new bearing at any time
    (``RetargetPolicy.DIRECT``: the same bearing again changes nothing of a turn under way) and
    reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
-   moving poll after it went out shows an axis that had to turn (further than ``tolerance_deg``)
-   not moved since (not beyond ``noise_deg``: the frame lost or garbled on the line, one of an
+   moving poll after it went out (longer for a slow axis: ``noise_deg`` and a reading's step at
+   its speed) shows an axis that had to turn (further than ``tolerance_deg + noise_deg``) not
+   moved since (not beyond ``noise_deg``: the frame lost or garbled on the line, one of an
    RC2800's two; an Easycomm box ignores a bearing it cannot read), or if the controller refuses
    it before it moved the rotor (motion.py rule 8: a flipped bit made a frame it refuses). It
    goes again, try 2, with the raw bearing its first try resolved (an axis it left out
@@ -228,15 +229,19 @@ def _apart(
 
 
 def _to_turn(
-    m: mo.Motion, cfg: mo.MotionConfig, az: float, el: float | None
+    m: mo.Motion, cfg: WorkerConfig, az: float, el: float | None
 ) -> tuple[float | None, float | None]:
     """Rule 11: where each axis stands that has to turn to ``az``/``el`` (further than
-    ``tolerance_deg``), None for one that has not, or is not known."""
-    az_from = m.position_deg
-    if az_from is not None and mo.angle_error(az_from, az, cfg.az_wraps) <= cfg.tolerance_deg:
+    ``tolerance_deg + noise_deg``: a turn no longer than the noise band never shows as a
+    movement, an attack pass), None for one that has not, is not known, or is not this box's
+    (a composite's elevation box turns no azimuth)."""
+    mc, spec = cfg.motion, cfg.spec
+    far = mc.tolerance_deg + mc.noise_deg
+    az_from = m.position_deg if spec.turns_azimuth else None
+    if az_from is not None and mo.angle_error(az_from, az, mc.az_wraps) <= far:
         az_from = None
-    el_from = m.el_position_deg if el is not None else None
-    if el_from is not None and el is not None and abs(el_from - el) <= cfg.tolerance_deg:
+    el_from = m.el_position_deg if el is not None and spec.has_elevation else None
+    if el_from is not None and el is not None and abs(el_from - el) <= far:
         el_from = None
     return az_from, el_from
 
@@ -790,12 +795,18 @@ class Controller:
         m, target, cfg = self.motion, self._retry, self.cfg
         assert target is not None
         mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
-        due = self._retry_t + mc.settle_s + mc.brake_delay_s + mo.BRAKE_GUARD_S
+        wait = mc.settle_s + mc.brake_delay_s
+        step = 1.0 if cfg.spec.whole_degrees else 0.1  # (a reading's step: rule 7's)
+        speeds = cfg.az_speed_deg_s, cfg.el_speed_deg_s
+        for start, speed in zip(self._retry_from, speeds, strict=True):
+            if start is not None and speed > 0:  # (a slow axis: noise and a step at its speed)
+                wait = max(wait, (mc.noise_deg + step) / speed)
+        due = self._retry_t + wait + mo.BRAKE_GUARD_S + cfg.moving_poll_interval_s
         if m.target_deg is None or m.state is not mo.MOVING:  # (a stop drops the target)
             self._retry = None
         elif _each_moved(self._retry_from, m, mc):
             self._retry = None
-        elif now >= due + cfg.moving_poll_interval_s and link.free() and not link.stop_due:
+        elif now >= due and link.free() and not link.stop_due:
             self._retry = None
             self.notes.append(Again(target, *self._retry_raw))
 
@@ -994,7 +1005,7 @@ class Controller:
         if attempt == 1 and cfg.motion.direct_retarget and cfg.spec.reports_while_moving:
             self._retry, self._retry_t = target, now
             self._retry_raw = todo.az_deg, todo.el_deg
-            self._retry_from = _to_turn(m, cfg.motion, az, el)
+            self._retry_from = _to_turn(m, cfg, az, el)
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

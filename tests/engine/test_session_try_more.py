@@ -184,3 +184,46 @@ def test_an_elevation_frame_lost_while_the_azimuth_went_is_tried_again(rig: Rig)
     v.run_for(60)
     assert v.sent(since=t).count(b"E70.0\r") == 2 and v.errors(since=t) == []
     assert (v.truth().az_deg, v.truth().el_deg) == (180.0, 70.0)
+
+
+def test_an_elevation_turn_within_noise_deg_is_no_lost_target(
+    rig: Rig, caplog: pytest.LogCaptureFixture
+) -> None:
+    """An attack pass: ``tolerance_deg`` 1 on a GS-232 (``noise_deg`` 2), 100/10 to 200/12. The
+    elevation had to turn (2 > 1) and did, all of it, yet 2 is no movement beyond the noise:
+    the target went again mid-turn with the warning. An axis has to turn when it is further
+    than tolerance and noise from its target."""
+    v = rig(
+        "gs232b",
+        settings={"tolerance_deg": 1.0},
+        emulator={"start_az_deg": 100, "start_el_deg": 10},
+    )
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.target(200, 12)
+    v.run_for(40)
+    assert v.sent(since=t).count(b"W200 012\r") == 1
+    assert "once more" not in caplog.text
+
+
+@pytest.mark.parametrize("el_speed", [0.8, 1.0])
+def test_a_slow_elevation_is_no_lost_target(
+    rig: Rig, caplog: pytest.LogCaptureFixture, el_speed: float
+) -> None:
+    """An attack pass: a GS-232 whose elevation turns 1 deg/s (``el_speed_deg_s`` says so),
+    100/10 to 200/30. Its whole-degree reading needs 3 s to show more than ``noise_deg``; the
+    check came at about 2 s and the target went twice. The check waits for each axis that has
+    to turn to move noise and a step at its speed."""
+    v = rig(
+        "gs232b",
+        settings={"el_speed_deg_s": el_speed},
+        emulator={"start_az_deg": 100, "start_el_deg": 10, "el_speed_deg_s": el_speed},
+    )
+    v.run_until_state(IDLE, 30)
+    v.run_for(3)
+    t = v.now
+    v.target(200, 30)
+    v.run_for(80)
+    assert v.sent(since=t).count(b"W200 030\r") == 1
+    assert "once more" not in caplog.text
