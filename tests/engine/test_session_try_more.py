@@ -37,9 +37,12 @@ def _lose_first_bearing(v: VirtualRotator) -> list[bytes]:
     return lost
 
 
-def resting(rig: Rig, model: str, **emulator: float) -> VirtualRotator:
+def resting(
+    rig: Rig, model: str, settings: dict[str, float] | None = None, **emulator: float
+) -> VirtualRotator:
     """At rest at 100/10 a few seconds after it came online."""
-    v = rig(model, emulator={**emulator, "start_az_deg": 100, "start_el_deg": 10})
+    start = {"start_az_deg": 100, "start_el_deg": 10}
+    v = rig(model, emulator={**emulator, **start}, settings=settings or {})
     v.run_until_state(IDLE, 30)
     v.run_for(3)
     return v
@@ -193,13 +196,7 @@ def test_an_elevation_turn_within_noise_deg_is_no_lost_target(
     elevation had to turn (2 > 1) and did, all of it, yet 2 is no movement beyond the noise:
     the target went again mid-turn with the warning. An axis has to turn when it is further
     than tolerance and noise from its target."""
-    v = rig(
-        "gs232b",
-        settings={"tolerance_deg": 1.0},
-        emulator={"start_az_deg": 100, "start_el_deg": 10},
-    )
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "gs232b", {"tolerance_deg": 1.0})
     t = v.now
     v.target(200, 12)
     v.run_for(40)
@@ -215,13 +212,7 @@ def test_a_slow_elevation_is_no_lost_target(
     100/10 to 200/30. Its whole-degree reading needs 3 s to show more than ``noise_deg``; the
     check came at about 2 s and the target went twice. The check waits for each axis that has
     to turn to move noise and a step at its speed."""
-    v = rig(
-        "gs232b",
-        settings={"el_speed_deg_s": el_speed},
-        emulator={"start_az_deg": 100, "start_el_deg": 10, "el_speed_deg_s": el_speed},
-    )
-    v.run_until_state(IDLE, 30)
-    v.run_for(3)
+    v = resting(rig, "gs232b", {"el_speed_deg_s": el_speed}, el_speed_deg_s=el_speed)
     t = v.now
     v.target(200, 30)
     v.run_for(80)
