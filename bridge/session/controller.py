@@ -101,19 +101,20 @@ Rules:
    (``RetargetPolicy.DIRECT``: the same bearing again changes nothing of a turn under way) and
    reports while it turns: if a reading ``settle_s`` + ``brake_delay_s`` + BRAKE_GUARD_S and a
    moving poll after it went out (longer for a slow axis: ``noise_deg`` and a reading's step at
-   its speed) shows an axis that had to turn (further than ``tolerance_deg + noise_deg``) not
-   moved since (not beyond ``noise_deg``: the frame lost or garbled on the line, one of an
-   RC2800's two; an Easycomm box ignores a bearing it cannot read), or if the controller refuses
-   it before it moved the rotor (motion.py rule 8: a flipped bit made a frame it refuses). It
-   goes again, try 2, with the raw bearing its first try resolved (an axis it left out
-   included), if the bridge still stands for it (``Again``: targets.py rule 8, no newer target,
-   stop or end of its feature since; if not, a refusal is reported as ever), with a warning in
-   the log (a refusal some codecs read as junk is still told as junk); the time is judged at the
-   reading by the settings then in effect (rule 7: a speed set in the same batch as the target
-   slows it); a second refusal is reported, and a turn that does not start then is a stall as
-   ever (``stall_timeout_s`` from the try that went). A stop ends the tries. Not on the
-   Rotor-EZ, RotorCard or DCU-1: a bearing while their motor runs (a jammed rotor's) stops it,
-   against the controller's rule (docs/architecture.md rule 7).
+   its speed) shows an axis that had to turn (further than ``tolerance_deg``, and by at least
+   ``noise_deg`` and a reading's step) not moved since (not beyond ``noise_deg``: the frame lost
+   or garbled on the line, one of an RC2800's two; an Easycomm box ignores a bearing it cannot
+   read), or if the controller refuses it before it moved the rotor (motion.py rule 8: a flipped
+   bit made a frame it refuses). It goes again, try 2, with the raw bearing its first try
+   resolved (an axis it left out included), if the bridge still stands for it (``Again``:
+   targets.py rule 8, no newer target, stop or end of its feature since; if not, a refusal is
+   reported as ever), with a warning in the log (a refusal some codecs read as junk is still
+   told as junk); the time is judged at the reading by the settings then in effect (rule 7: a
+   speed set in the same batch as the target slows it); a second refusal is reported, and a turn
+   that does not start then is a stall as ever (``stall_timeout_s`` from the try that went). A
+   stop ends the tries. Not on the Rotor-EZ, RotorCard or DCU-1: a bearing while their motor
+   runs (a jammed rotor's) stops it, against the controller's rule (docs/architecture.md rule
+   7).
 """
 
 from __future__ import annotations
@@ -232,16 +233,21 @@ def _to_turn(
     m: mo.Motion, cfg: WorkerConfig, az: float, el: float | None
 ) -> tuple[float | None, float | None]:
     """Rule 11: where each axis stands that has to turn to ``az``/``el`` (further than
-    ``tolerance_deg + noise_deg``: a turn no longer than the noise band never shows as a
-    movement, an attack pass), None for one that has not, is not known, or is not this box's
-    (a composite's elevation box turns no azimuth)."""
+    ``tolerance_deg``, and at least ``noise_deg`` and a reading's step, so that its turn shows
+    as a movement: attack passes, a 2-degree turn with tolerance 1 never did, and a 5-degree
+    one lost at the defaults was left out at tolerance plus noise), None for one that has
+    not, is not known, or is not this box's (a composite's elevation box turns no azimuth)."""
     mc, spec = cfg.motion, cfg.spec
-    far = mc.tolerance_deg + mc.noise_deg
+    step = 1.0 if spec.whole_degrees else 0.1
+
+    def turns(err: float) -> bool:
+        return err > mc.tolerance_deg and err >= mc.noise_deg + step
+
     az_from = m.position_deg if spec.turns_azimuth else None
-    if az_from is not None and mo.angle_error(az_from, az, mc.az_wraps) <= far:
+    if az_from is not None and not turns(mo.angle_error(az_from, az, mc.az_wraps)):
         az_from = None
     el_from = m.el_position_deg if el is not None and spec.has_elevation else None
-    if el_from is not None and el is not None and abs(el_from - el) <= far:
+    if el_from is not None and el is not None and not turns(abs(el_from - el)):
         el_from = None
     return az_from, el_from
 

@@ -218,3 +218,34 @@ def test_a_slow_elevation_is_no_lost_target(
     v.run_for(80)
     assert v.sent(since=t).count(b"W200 030\r") == 1
     assert "once more" not in caplog.text
+
+
+@pytest.mark.parametrize(
+    ("settings", "target", "frame"),
+    [({}, (105, 10), b"W105 010\r"), ({"tolerance_deg": 1.0}, (100, 13), b"W100 013\r")],
+    ids=["az-5-at-the-defaults", "el-3-at-tolerance-1"],
+)
+def test_a_small_turn_the_line_lost_still_gets_its_try_more(
+    rig: Rig, settings: dict[str, float], target: tuple[float, float], frame: bytes
+) -> None:
+    """An attack pass: judging only an axis further than tolerance and noise from its target
+    left out a 5-degree turn at the defaults (a GS-232, noise 2, whole degrees) and a 3-degree
+    one at tolerance 1: lost, each ended as a stall that blamed the brake. An axis whose turn
+    shows as a movement (at least noise and a reading's step) is judged."""
+    v = resting(rig, "gs232b", settings)
+    t = v.now
+    v.drop_writes(frame)
+    v.target(*target)
+    v.run_for(60)
+    assert v.sent(since=t).count(frame) == 2 and v.errors(since=t) == []
+    assert (v.truth().az_deg, v.truth().el_deg) == target
+
+
+def test_an_elevation_only_target_the_line_lost_gets_its_try_more(rig: Rig) -> None:
+    v = resting(rig, "gs232b")
+    t = v.now
+    v.drop_writes(b"W100 030\r")
+    v.target(None, 30)
+    v.run_for(60)
+    assert v.sent(since=t).count(b"W100 030\r") == 2 and v.errors(since=t) == []
+    assert v.truth().el_deg == 30
