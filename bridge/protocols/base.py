@@ -399,6 +399,12 @@ class ModelSpec:
     def setting(self, name: str) -> Setting | None:
         return next((s for s in self.settings if s.name == name), None)
 
+    @property
+    def reading_step_deg(self) -> float:
+        """The step its readings move in, as the bridge counts it: a whole degree where it
+        takes whole degrees, else a tenth (the settle time and the try more allow for it)."""
+        return 1.0 if self.whole_degrees else 0.1
+
     def speeds_deg_s(
         self, az_deg_s: float | None = None, el_deg_s: float | None = None
     ) -> tuple[float, float]:

@@ -238,7 +238,7 @@ def _to_turn(
     one lost at the defaults was left out at tolerance plus noise), None for one that has
     not, is not known, or is not this box's (a composite's elevation box turns no azimuth)."""
     mc, spec = cfg.motion, cfg.spec
-    step = 1.0 if spec.whole_degrees else 0.1
+    step = spec.reading_step_deg
 
     def turns(err: float) -> bool:
         return err > mc.tolerance_deg and err >= mc.noise_deg + step
@@ -669,7 +669,7 @@ class Controller:
         if m.target_t is not None and m.back_from_t is None:  # a target sent at rest: it
             since = max(since, m.target_t)  # stood there until then (idle polls are slow)
         wraps, el = cfg.az_wraps, m.el_position_deg
-        far = cfg.tolerance_deg + cfg.noise_deg + mo.AWAY_MARGIN_DEG  # (reach's least: cheap)
+        far = cfg.away_deg  # (reach's least: the cheap look first)
         near = not _apart(reply, pos, el, far, wraps) or not _apart(
             reply, pos, el, mo.reach_deg(m, cfg, now, since), wraps
         )
@@ -802,7 +802,7 @@ class Controller:
         assert target is not None
         mc = cfg.motion  # (as the settings in effect now make it: rule 7, a speed set since)
         wait = mc.settle_s + mc.brake_delay_s
-        step = 1.0 if cfg.spec.whole_degrees else 0.1  # (a reading's step: rule 7's)
+        step = cfg.spec.reading_step_deg
         speeds = cfg.az_speed_deg_s, cfg.el_speed_deg_s
         for start, speed in zip(self._retry_from, speeds, strict=True):
             if start is not None and speed > 0:  # (a slow axis: noise and a step at its speed)
@@ -988,7 +988,7 @@ class Controller:
             return
         az, el = base.az_speed_deg_s * factor, base.el_speed_deg_s * factor
         spec, was = base.spec, base.motion
-        step = 1.0 if spec.whole_degrees else 0.1
+        step = spec.reading_step_deg
         slowest = (min(az, el) if spec.turns_azimuth else el) if spec.has_elevation else az
         motion = replace(
             was,

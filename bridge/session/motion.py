@@ -132,6 +132,12 @@ class MotionConfig:
         return self.spec.az_wraps
 
     @property
+    def away_deg(self) -> float:
+        """Rule 5: how far beyond the closest it came a reading is "away" (tolerance, noise and
+        AWAY_MARGIN_DEG): a turn away, a pass, a turn back; a reading's least reach."""
+        return self.tolerance_deg + self.noise_deg + AWAY_MARGIN_DEG
+
+    @property
     def direct_retarget(self) -> bool:
         """The controller takes a new target while turning (SPID)."""
         return self.spec.retarget is RetargetPolicy.DIRECT
@@ -300,9 +306,7 @@ def reading(
     if m.target_deg is not None and not wraps:
         err = target_error(m, cfg)
         if err is not None:
-            away = m.closest_err is not None and err > (
-                m.closest_err + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
-            )
+            away = m.closest_err is not None and err > m.closest_err + cfg.away_deg
             if m.closest_err is None or err < m.closest_err:
                 m = replace(m, closest_err=err, away_err=None)
             elif not away or not moved:
@@ -340,8 +344,7 @@ def _passing(
     came has turned on past it (two readings in a row further than its closest since, by
     more than ``tolerance_deg + noise_deg`` + AWAY_MARGIN_DEG, each a movement: PASSED), or a
     wrapping azimuth that headed for it has turned back on its way (``_back``: TURNED_BACK)."""
-    tol, noise = cfg.tolerance_deg, cfg.noise_deg
-    far = tol + noise + AWAY_MARGIN_DEG
+    tol, noise, far = cfg.tolerance_deg, cfg.noise_deg, cfg.away_deg
     reach = reach_deg(before, cfg, now)
     wraps = cfg.spec.az_wraps
     axes = (
@@ -429,7 +432,7 @@ def reach_deg(m: Motion, cfg: MotionConfig, now: float, since_t: float | None = 
     t0 = max(m.changed_t or -math.inf, m.target_t or -math.inf) if since_t is None else since_t
     dt = now - t0 if t0 > -math.inf else 0.0
     speed = max(cfg.nominal_speed_deg_s, cfg.spec.nominal_el_speed_deg_s)
-    return 3.0 * speed * dt + cfg.tolerance_deg + cfg.noise_deg + AWAY_MARGIN_DEG
+    return 3.0 * speed * dt + cfg.away_deg
 
 
 def _back(back: Back | None, moved: bool, a: float, err: float, far: float) -> Back | None:
