@@ -17,8 +17,14 @@ Rules:
    no reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll
    and a reply time: how late the check may come), never less than one timeout: a line that
    gives only garbage goes offline then, with its own words; one that gives nothing at all
-   still after ``silence_timeout_s``. One that never gave a valid reply but garbled ones is
-   said to (the wrong baud rate looks so), not to give none. (Reviews: with
+   still after ``silence_timeout_s``. While a target is out, either is offline before the turn
+   could be called stalled however long ``silence_timeout_s`` is, but never sooner than
+   TURN_SILENCE_SHARE of ``stall_timeout_s`` after its last valid reply (its last byte, for
+   one that gives nothing), and the error says the rotor may still be turning: a stall needs
+   readings that show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s
+   of silence: one that went silent mid-turn was called stalled at 10 s, an error that blamed
+   the brake, and rotor health counted a stall). One that never gave a valid reply but garbled
+   ones is said to (the wrong baud rate looks so), not to give none. (Reviews: with
    silence_timeout_s 6, a GS-232B turning when its replies went to garbage stayed online 12 s
    and was called stalled at 10 s, an error that blamed the brake; a slow one whose last
    movement was seconds before its last valid reply, at 5.4 s of the default 3.)
@@ -151,6 +157,7 @@ DOUBT_MIN_DEG = 5.0  # rule 9: two readings this close (or twice the noise) agre
 DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
+TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 _PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK)  # stops.py rule 4: a bounded stop series
 
@@ -947,10 +954,7 @@ class Controller:
             return -math.inf
         if not self.cfg.spec.can_report_position or len(times) != 1:
             return -math.inf
-        silent_at = min(  # rule 2
-            now + self.cfg.silence_timeout_s - link.silent_for(now),
-            self._garbled_offline_t(link, now),
-        )
+        silent_at = min(self._silent_offline_t(link, now), self._garbled_offline_t(link, now))
         until = min(deadline, silent_at, self.options.owed_from(mo.at_rest(m)))
         return until - ONLY_POLL_MARGIN_S
 
@@ -1026,12 +1030,14 @@ class Controller:
             return
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
-        unread = (  # (garbage only: rule 2; the cheap look first, at every step of every rotor)
-            unread_s >= timeout_s and now >= self._garbled_offline_t(link, now)
+        least_s = self._least_silence_s  # (the cheap looks first, at every step of every rotor)
+        unread = (  # (garbage only: rule 2)
+            unread_s >= least_s and now >= self._garbled_offline_t(link, now)
         )
+        silent_s = link.silent_for(now)
         silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
-            link.silent_for(now) >= timeout_s or unread  # owed may still come)
-        )
+            (silent_s >= least_s and now >= self._silent_offline_t(link, now)) or unread
+        )  # (owed may still come)
         # (never answered: no valid reply for one timeout, as ever)
         never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
         if silent and self.answering:
@@ -1043,13 +1049,18 @@ class Controller:
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
                 self.stops.owed = True  # when it answers again, as released if it was the
                 self._released_owed = unseen == self._released_unseen_t  # released lock's
-            self.motion = mo.link_down(self.motion)
-            why = f"controller on {cfg.port} stopped answering (no valid reply for {timeout_s:g} s)"
-            if link.silent_for(now) < timeout_s:  # rule 2: garbled answers only
-                why = (
+            m = self.motion
+            turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
+            quiet_s = min(unread_s, timeout_s)  # (less, mid-turn)
+            why = f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:.3g} s)"
+            if silent_s < least_s or now < self._silent_offline_t(link, now):
+                why = (  # rule 2: garbled answers only
                     f"controller on {cfg.port} answers only garbled replies (no valid reply for "
                     f"{self._garbled_offline_t(link, now) - (now - unread_s):.3g} s): a noisy line?"
                 )
+            self.motion = mo.link_down(self.motion)
+            if turning:  # (rule 2: a turn not seen to its end, not a stall)
+                why += " while the rotor turned to its target: it may still be turning"
             if unseen is not None:  # (said: the stop may cut short a move that was heard)
                 why += "; the last stop, no reading showed taking, goes again when it answers"
             # the drop before tracking's end: a target of tracking's own is reported dropped
@@ -1069,6 +1080,35 @@ class Controller:
         if link.poll(now, cfg.moving_poll_interval_s if busy else cfg.idle_poll_interval_s):
             self.target_last = False  # a refusal now may be the query's (motion.py rule 8)
 
+    @property
+    def _least_silence_s(self) -> float:
+        """Rule 2: the least silence, or the least time without a valid reply, that can make
+        the controller offline (the cheap look before ``_silent_offline_t`` and
+        ``_garbled_offline_t``)."""
+        cfg = self.cfg
+        return min(cfg.silence_timeout_s, cfg.motion.stall_timeout_s * TURN_SILENCE_SHARE)
+
+    def _silent_offline_t(self, link: Link, now: float) -> float:
+        """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
+        after its last byte, or sooner while a target is out (``_turn_offline_t``)."""
+        heard_t = now - link.silent_for(now)
+        return min(heard_t + self.cfg.silence_timeout_s, self._turn_offline_t(link, heard_t))
+
+    def _turn_offline_t(self, link: Link, heard_t: float) -> float:
+        """Rule 2: while a target is out, when a line that gives no valid reply since
+        ``heard_t`` is offline however long ``silence_timeout_s`` is: before the motion machine
+        could call the turn stalled (from the last movement it saw, motion.py ``progress_t``;
+        less a moving poll and a reply time, how late the check may come), but never sooner
+        than TURN_SILENCE_SHARE of ``stall_timeout_s`` after ``heard_t``; inf with no target
+        out."""
+        progress_t = self.motion.progress_t
+        if progress_t is None:
+            return math.inf
+        cfg = self.cfg
+        stall_s = cfg.motion.stall_timeout_s
+        late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
+        return max(progress_t + stall_s - late_s, heard_t + stall_s * TURN_SILENCE_SHARE)
+
     def _garbled_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when garbled answers alone no longer keep the controller online: at most
         GARBLED_SILENCE_FACTOR timeouts after the last valid reply, and, while a target is out,
@@ -1083,7 +1123,7 @@ class Controller:
         if progress_t is not None:
             late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
             until = min(until, progress_t + cfg.motion.stall_timeout_s - late_s)
-        return max(valid_t + timeout_s, until)
+        return min(max(valid_t + timeout_s, until), self._turn_offline_t(link, valid_t))
 
     def _junk(self, data: bytes, harmless: bool, now: float) -> None:
         """Rule 6."""

@@ -250,9 +250,10 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         gt=0,
         le=600,
         description="no reply this long: the rotator is offline (one that answers only "
-        "garbled replies after twice this, or sooner: offline before a turn could be called "
-        "stalled). Longer than the idle poll interval; by default 3 s, or two idle polls and "
-        "a reply time where that is longer",
+        "garbled replies after twice this; while it turns to a target, either sooner: offline "
+        "before the turn could be called stalled, but after half stall_timeout_s at least). "
+        "Longer than the idle poll interval; by default 3 s, or two idle polls and a reply "
+        "time where that is longer",
         examples=[5],
         json_schema_extra={"unset": MODEL_DEFAULT},
     )

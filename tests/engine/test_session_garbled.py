@@ -396,3 +396,89 @@ def test_a_controller_that_never_gave_a_valid_reply_but_garbled_ones_is_said_to(
     quiet.set_silent(True)
     quiet.run_until(lambda h: h.errors("serial"), 30, "the complaint")
     assert "does not answer" in quiet.errors("serial")[0].message
+
+
+def test_a_rot2prog_gone_silent_mid_turn_goes_offline_before_a_stall_is_called(
+    rig: Rig,
+) -> None:
+    """A Rot2Prog at its 600 baud (idle-polled every 9.3 s: silence_timeout_s 19.4 by default)
+    that goes silent while it turns to a target: offline, with words that say the rotor may
+    still be turning, before the motion machine, fed no reading, could call the turn stalled
+    (controller.py rule 2: it was called "stalled" at 10 s, an error that blamed the brake,
+    and rotor health counted a stall)."""
+    v = rig("rot2prog")
+    assert v.cfg.silence_timeout_s > v.cfg.motion.stall_timeout_s  # (the case: its defaults)
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(200.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(2)
+    t = v.now
+    v.set_silent(True)
+    v.run_for(25)
+
+    assert v.errors("stalled", since=t) == []
+    assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
+    [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
+    assert "stopped answering" in why.message and "may still be turning" in why.message
+    assert 5.0 <= off - t < 10.0, off - t  # half the stall timeout at least, and before it
+    assert v.state is MotionState.OFFLINE
+    assert {s.health.stalls for s in v.published() if s.health is not None} == {0}  # (1 was)
+
+
+def test_a_line_gone_to_garbage_mid_turn_goes_offline_before_a_stall_with_a_long_timeout(
+    rig: Rig,
+) -> None:
+    """silence_timeout_s 20, twice stall_timeout_s: a GS-232B whose every reply is garbled
+    from mid-turn on goes offline with words that say so before the turn could be called
+    stalled (controller.py rule 2: one timeout at least after the last valid reply came
+    after the stall)."""
+    v = rig("gs232b", settings={"silence_timeout_s": 20.0})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(350.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(1)
+    t = v.now
+    v.to_host = lambda data, now: data.replace(b"=", b"?")  # every reply garbled from now on
+    v.run_for(25)
+
+    assert v.errors("stalled", since=t) == []
+    assert MotionState.STALLED not in {s.state for s in v.published(since=t)}
+    [(off, why)] = [(at, e) for at, e in v.events if at >= t and e.kind == "serial"]
+    assert "only garbled replies" in why.message and "may still be turning" in why.message
+    assert off - t < 10.0, off - t
+
+
+def test_a_rot2prog_silent_a_few_seconds_mid_turn_stays_online_and_arrives(rig: Rig) -> None:
+    """Silence mid-turn shorter than half the stall timeout is no offline (controller.py rule
+    2's least mid-turn silence): the turn goes on, and arrives with no error."""
+    v = rig("rot2prog")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    t = v.now
+    v.target(40.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.set_silent(True)
+    v.run_for(4)
+    v.set_silent(False)
+    v.run_until(lambda h: h.state is IDLE, 60, "arrived")
+
+    assert v.errors("serial", since=t) == [] and v.errors("stalled", since=t) == []
+    assert {s.available for s in v.published(since=t)} == {True}
+    assert abs(v.status.bearing_deg - 40.0) <= 3.0
+
+
+def test_a_jammed_rot2prog_that_answers_is_still_called_stalled(rig: Rig) -> None:
+    """Readings that show no progress are a stall as ever, however long silence_timeout_s is
+    (controller.py rule 2 cuts the silence short mid-turn only for a line with no reading)."""
+    v = rig("rot2prog")
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    v.target(200.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(2)
+    t = v.now
+    v.jam()
+    v.run_for(20)
+
+    [stall] = v.errors("stalled", since=t)
+    assert "no progress for 10 s" in stall.message
+    assert v.errors("serial", since=t) == []
+    assert v.status.available
