@@ -111,7 +111,13 @@ Rules:
    ``noise_deg`` and a reading's step) not moved since (not beyond ``noise_deg``: the frame lost
    or garbled on the line, one of an RC2800's two; an Easycomm box ignores a bearing it cannot
    read), or if the controller refuses it before it moved the rotor (motion.py rule 8: a flipped
-   bit made a frame it refuses). It goes again, try 2, with the raw bearing its first try
+   bit made a frame it refuses). One sent mid-turn (the rotor moves whether its frame came or
+   not) is judged by where the rotor rests instead: at a reading at that time or later that
+   shows it come to rest (no movement for ``settle_s``) where the turn before it was going
+   (within ``tolerance_deg`` + ``noise_deg`` on each axis that turn named), the frame was lost
+   (a probe: turning to 100, sent 200 at 60, lost: it rested at 100, and a "stalled" error
+   16 s later blamed the brake; and a rotor that jammed mid-turn, not moved since, was sent
+   its new target twice). It goes again, try 2, with the raw bearing its first try
    resolved (an axis it left out included), if the bridge still stands for it (``Again``:
    targets.py rule 8, no newer target, stop or end of its feature since; if not, a refusal is
    reported as ever), with a warning in the log (a refusal some codecs read as junk is still
@@ -273,6 +279,21 @@ def _each_moved(
     return el_from is None or (el is not None and abs(el - el_from) > cfg.noise_deg)
 
 
+def _rests_at(
+    before: tuple[float, float | None], m: mo.Motion, cfg: mo.MotionConfig, now: float
+) -> bool:
+    """Rule 11: whether the rotor, sent a target mid-turn, has come to rest (no movement for
+    ``settle_s``) where the turn before it was going (within ``tolerance_deg`` + ``noise_deg``
+    on each axis it named): the new target's frame was lost or garbled on the line."""
+    az, el = m.position_deg, m.el_position_deg
+    if az is None or m.progress_t is None or now < m.progress_t + cfg.settle_s:
+        return False
+    near = cfg.tolerance_deg + cfg.noise_deg
+    if mo.angle_error(az, before[0], cfg.az_wraps) > near:
+        return False
+    return before[1] is None or el is None or abs(el - before[1]) <= near
+
+
 def _where(reply: PositionReply) -> str:
     return f"{reply.az_deg:g}" if reply.el_deg is None else f"{reply.az_deg:g}/{reply.el_deg:g}"
 
@@ -330,6 +351,7 @@ class Controller:
         self._retry_t = math.inf  # rule 11: when it was sent
         self._retry_raw: tuple[float, float | None] = (0.0, None)  # ... as it was resolved
         self._retry_from: tuple[float | None, float | None] = (None, None)  # ... axes to turn
+        self._retry_before: tuple[float, float | None] | None = None  # ... the turn it ended
         self.notes: list[Note] = []  # for the session, in order (``take_notes``)
         # the motion (and its configuration) whose next deadline ``wakeups`` found, and that
         # deadline: ``tick`` changes nothing before it (motion.py rule 9)
@@ -817,6 +839,11 @@ class Controller:
         due = self._retry_t + wait + mo.BRAKE_GUARD_S + cfg.moving_poll_interval_s
         if m.target_deg is None or m.state is not mo.MOVING:  # (a stop drops the target)
             self._retry = None
+        elif self._retry_before is not None:  # sent mid-turn: its movement tells nothing
+            if now >= due and _rests_at(self._retry_before, m, mc, now) and link.free():
+                if not link.stop_due:
+                    self._retry = None
+                    self.notes.append(Again(target, *self._retry_raw))
         elif _each_moved(self._retry_from, m, mc):
             self._retry = None
         elif now >= due and link.free() and not link.stop_due:
@@ -1016,6 +1043,9 @@ class Controller:
             self._retry, self._retry_t = target, now
             self._retry_raw = todo.az_deg, todo.el_deg
             self._retry_from = _to_turn(m, cfg, az, el)
+            turning = m.state is mo.MOVING and m.stop_sent_t is None
+            before = m.target_deg if turning else None
+            self._retry_before = None if before is None else (before, m.el_target_deg)
         if not cfg.spec.reports_while_moving:
             slew = Slew(now, m.position_deg, m.el_position_deg, az, el, target.source, 0, attempt)
             link.begin_slew(slew, travel_s(cfg, slew))

@@ -249,3 +249,78 @@ def test_an_elevation_only_target_the_line_lost_gets_its_try_more(rig: Rig) -> N
     v.run_for(60)
     assert v.sent(since=t).count(b"W100 030\r") == 2 and v.errors(since=t) == []
     assert v.truth().el_deg == 30
+
+
+def _lose_next_new_frame(v: VirtualRotator) -> list[bytes]:
+    """The next frame the session writes that it did not write in the last 5 s (a target's:
+    the polls repeat) is lost on the line; the list gets it."""
+    lost: list[bytes] = []
+    recent = {w.data for w in v.writes if w.t >= v.now - 5.0}
+
+    def drop(data: bytes, now: float) -> bytes:
+        if not lost and data not in recent:
+            lost.append(data)
+            return b""
+        return data
+
+    v.to_device = drop
+    return lost
+
+
+def _turning_to(rig: Rig, model: str, az: float, at: float) -> VirtualRotator:
+    """Turning from 0 to ``az``, at ``at`` now."""
+    speeds = FAST if model not in ("prosistel", "rt21") else {"az_speed_deg_s": 6.0}
+    v = rig(model, emulator=speeds, settings=speeds)
+    v.run_until_state(IDLE, 30)
+    v.target(az)
+    v.run_until(lambda h: (h.status.bearing_deg or 0.0) >= at, 60, f"at {at}")
+    return v
+
+
+@pytest.mark.parametrize("model", ["gs232b", "easycomm2", "prosistel", "rt21", "md01"])
+def test_a_target_sent_mid_turn_the_line_lost_goes_again_where_the_turn_before_ended(
+    rig: Rig, model: str
+) -> None:
+    """Turning to 100, sent 200 at 60, its frame lost: the rotor came to rest at 100, and
+    16 s later a "stalled" error blamed the brake. Now, once it rests where the turn before
+    was going, the target goes again, and it comes with no error (controller.py rule 11)."""
+    v = _turning_to(rig, model, 100.0, 60.0)
+    t = v.now
+    lost = _lose_next_new_frame(v)
+    v.target(200.0)
+    v.run_until(lambda h: lost, 5, "the new target's frame, lost")
+    v.run_until(lambda h: h.state is IDLE, 60, "at rest")
+
+    assert abs(v.status.bearing_deg - 200.0) <= 3.0, v.status
+    assert v.errors(since=t) == []
+    assert [w.data for w in v.writes if w.t >= t].count(lost[0]) == 2  # the try, and the lost
+
+
+@pytest.mark.parametrize("model", ["gs232b", "easycomm2"])
+def test_a_target_sent_mid_turn_that_came_goes_once(rig: Rig, model: str) -> None:
+    """The same turn with nothing lost: one frame for the new target, no try more."""
+    v = _turning_to(rig, model, 100.0, 60.0)
+    t = v.now
+    before = {w.data for w in v.writes}
+    v.target(200.0)
+    v.run_until(lambda h: h.state is IDLE, 60, "at rest")
+
+    assert abs(v.status.bearing_deg - 200.0) <= 3.0
+    assert len([w for w in v.writes if w.t >= t and w.data not in before]) == 1
+    assert v.errors(since=t) == []
+
+
+def test_a_rotor_stuck_short_of_the_turn_before_is_no_lost_target(rig: Rig) -> None:
+    """A target sent mid-turn to a rotor that jammed short of where it was going: it rests
+    elsewhere than where the turn before would have ended, so nothing goes again; the stall
+    is told, as ever."""
+    v = _turning_to(rig, "gs232b", 100.0, 60.0)
+    v.jam()
+    t = v.now
+    before = {w.data for w in v.writes}
+    v.target(200.0)
+    v.run_for(20)
+
+    [frame] = {w.data for w in v.writes if w.t >= t and w.data not in before} - {b"S\r"}
+    assert [w.data for w in v.writes if w.t >= t].count(frame) == 1
+    assert [e.kind for e in v.errors(since=t)] == ["stalled"]
