@@ -1060,14 +1060,13 @@ class Controller:
             return
         timeout_s = cfg.silence_timeout_s
         unread_s = link.unread_for(now)
-        least_s = self._least_silence_s  # (the cheap looks first, at every step of every rotor)
-        unread = (  # (garbage only: rule 2)
-            unread_s >= least_s and now >= self._garbled_offline_t(link, now)
-        )
-        silent_s = link.silent_for(now)
-        silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a reply
-            (silent_s >= least_s and now >= self._silent_offline_t(link, now)) or unread
-        )  # (owed may still come)
+        silent = by_silence = False
+        if unread_s >= self._least_silence_s:  # (the cheap look first, at every step of every
+            by_silence = now >= self._silent_offline_t(link, now)  # rotor: rule 2)
+            unread = now >= self._garbled_offline_t(link, now)  # (garbage only)
+            silent = not link.reply_owed and (  # (a slew's report takes the whole slew: a
+                by_silence or unread  # reply owed may still come)
+            )
         # (never answered: no valid reply for one timeout, as ever)
         never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
         if silent and self.answering:
@@ -1083,7 +1082,7 @@ class Controller:
             turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
             quiet_s = min(unread_s, timeout_s)  # (less, mid-turn)
             why = f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:.3g} s)"
-            if silent_s < least_s or now < self._silent_offline_t(link, now):
+            if not by_silence:
                 why = (  # rule 2: garbled answers only
                     f"controller on {cfg.port} answers only garbled replies (no valid reply for "
                     f"{self._garbled_offline_t(link, now) - (now - unread_s):.3g} s): a noisy line?"
