@@ -13,21 +13,23 @@ Rules:
    being available after ``silence_timeout_s`` without one (tracking ends, a waiting target is
    dropped). A DCU-1 is available while its port is open (it never answers). A garbled answer
    (link.py rule 11) counts as answering, but for GARBLED_SILENCE_FACTOR silence timeouts
-   without a valid reply at most, and offline before the motion machine could call a turn fed
-   no reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll
-   and a reply time: how late the check may come), never less than one timeout: a line that
-   gives only garbage goes offline then, with its own words; one that gives nothing at all
-   still after ``silence_timeout_s``. While a target is out, either is offline before the turn
-   could be called stalled however long ``silence_timeout_s`` is, but never sooner than
-   TURN_SILENCE_SHARE of ``stall_timeout_s`` after its last valid reply (its last byte, for
-   one that gives nothing), and the error says the rotor may still be turning: a stall needs
-   readings that show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s
-   of silence: one that went silent mid-turn was called stalled at 10 s, an error that blamed
-   the brake, and rotor health counted a stall). One that never gave a valid reply but garbled
-   ones is said to (the wrong baud rate looks so), not to give none. (Reviews: with
-   silence_timeout_s 6, a GS-232B turning when its replies went to garbage stayed online 12 s
-   and was called stalled at 10 s, an error that blamed the brake; a slow one whose last
-   movement was seconds before its last valid reply, at 5.4 s of the default 3.)
+   without a valid reply at most, and offline before the motion machine could call a turn fed no
+   reading stalled (``stall_timeout_s`` from the last movement it saw, less a moving poll and a
+   reply time: how late the check may come), never less than one timeout: a line that gives only
+   garbage goes offline then, with its own words; one that gives nothing at all still after
+   ``silence_timeout_s``. While a target is out, either is offline before the turn could be
+   called stalled however long ``silence_timeout_s`` is, where that leaves it TURN_SILENCE_SHARE
+   of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least, without a valid reply (without a
+   byte, for one that gives nothing: lost replies are ridden out), and the error says the rotor
+   may still be turning (a move it heard goes on, stops.py rule 3): a stall needs readings that
+   show none (a Rot2Prog at its 600 baud, idle-polled every 9.3 s, waits 19.4 s of silence: one
+   that went silent mid-turn was called stalled at 10 s, an error that blamed the brake, and
+   rotor health counted a stall; an attack pass: at half a 3 s stall timeout, two lost replies
+   took a GS-232B offline). One that never gave a valid reply but garbled ones is said to (the
+   wrong baud rate looks so), not to give none. (Reviews: with silence_timeout_s 6, a GS-232B
+   turning when its replies went to garbage stayed online 12 s and was called stalled at 10 s,
+   an error that blamed the brake; a slow one whose last movement was seconds before its last
+   valid reply, at 5.4 s of the default 3.)
 3. Polling is idle work: slow when idle, fast while moving or while a target waits, never for a
    controller that cannot report. A query is never sent while another is open. A move first
    seen by an idle poll, and a stop written, bring the next poll to the moving rate's grid at
@@ -164,6 +166,7 @@ DOUBTS_TOLD = 3  # rule 9: this many doubted readings in a row are reported
 DOUBT_TURN_MAX_DEG = 90.0  # rule 9: what a rotor may have turned between two doubted, at most
 GARBLED_SILENCE_FACTOR = 2  # rule 2: garbled answers keep a controller online this long at most
 TURN_SILENCE_SHARE = 0.5  # rule 2: mid-turn, no valid reply for this share of stall_timeout_s
+TURN_SILENCE_LEAST_S = 3.0  # ... and this long at least (the default silence_timeout_s)
 UNASKED_MOVE_DEG = 5.0  # rule 10: a turn nobody asked for is stopped this far from its rest
 _PASSING = (mo.Event.PASSED, mo.Event.TURNED_BACK)  # stops.py rule 4: a bounded stop series
 
@@ -277,6 +280,12 @@ def _each_moved(
     ):
         return False
     return el_from is None or (el is not None and abs(el - el_from) > cfg.noise_deg)
+
+
+def _turn_least_s(cfg: mo.MotionConfig) -> float:
+    """Rule 2: the least time mid-turn without a valid reply that makes the controller
+    offline: TURN_SILENCE_SHARE of ``stall_timeout_s``, and TURN_SILENCE_LEAST_S at least."""
+    return max(cfg.stall_timeout_s * TURN_SILENCE_SHARE, TURN_SILENCE_LEAST_S)
 
 
 def _rests_at(
@@ -1070,26 +1079,31 @@ class Controller:
         # (never answered: no valid reply for one timeout, as ever)
         never = link.last_reply_t is None and not link.reply_owed and unread_s >= timeout_s
         if silent and self.answering:
-            if self.stops.repeat_at(self.motion) is not None:  # stops.py rule 1: owed, it goes
-                self.stops.repeat_due(self.motion, math.inf)  # now (a silent controller may
-                self.stop(now)  # still hear: its motion is lost with the readings just below)
+            m = self.motion
+            turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
+            if self.stops.repeat_at(m) is not None:  # stops.py rule 1: owed, it goes now
+                self.stops.repeat_due(m, math.inf)  # (a silent controller may still hear: its
+                self.stop(now)  # motion is lost with the readings just below)
             self.answering, busy = False, False  # (the waiting target is dropped)
             unseen = self.stops.unseen_t
             if unseen is not None:  # stops.py rule 3: a stop no reading showed taking is owed
                 self.stops.owed = True  # when it answers again, as released if it was the
                 self._released_owed = unseen == self._released_unseen_t  # released lock's
-            m = self.motion
-            turning = m.state is mo.MOVING and m.target_deg is not None and m.stop_sent_t is None
-            quiet_s = min(unread_s, timeout_s)  # (less, mid-turn)
-            why = f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:.3g} s)"
-            if not by_silence:
-                why = (  # rule 2: garbled answers only
-                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
-                    f"{self._garbled_offline_t(link, now) - (now - unread_s):.3g} s): a noisy line?"
+            if by_silence:
+                quiet_s = round(min(unread_s, timeout_s), 1)  # (less, mid-turn)
+                why = (
+                    f"controller on {cfg.port} stopped answering (no valid reply for {quiet_s:g} s)"
                 )
+            else:  # rule 2: garbled answers only
+                quiet_s = self._garbled_offline_t(link, now) - (now - unread_s)
+                why = (
+                    f"controller on {cfg.port} answers only garbled replies (no valid reply for "
+                    f"{quiet_s:.3g} s)"
+                )
+            if turning:  # (rule 2: a turn not seen to its end, not a stall; a move it heard
+                why += " while the rotor turned to its target (it may still be turning)"
+            why += "" if by_silence else ": a noisy line?"  # (goes on: stops.py rule 3)
             self.motion = mo.link_down(self.motion)
-            if turning:  # (rule 2: a turn not seen to its end, not a stall)
-                why += " while the rotor turned to its target: it may still be turning"
             if unseen is not None:  # (said: the stop may cut short a move that was heard)
                 why += "; the last stop, no reading showed taking, goes again when it answers"
             # the drop before tracking's end: a target of tracking's own is reported dropped
@@ -1115,7 +1129,7 @@ class Controller:
         the controller offline (the cheap look before ``_silent_offline_t`` and
         ``_garbled_offline_t``)."""
         cfg = self.cfg
-        return min(cfg.silence_timeout_s, cfg.motion.stall_timeout_s * TURN_SILENCE_SHARE)
+        return min(cfg.silence_timeout_s, _turn_least_s(cfg.motion))
 
     def _silent_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when a controller that gives nothing at all is offline: ``silence_timeout_s``
@@ -1128,15 +1142,16 @@ class Controller:
         ``heard_t`` is offline however long ``silence_timeout_s`` is: before the motion machine
         could call the turn stalled (from the last movement it saw, motion.py ``progress_t``;
         less a moving poll and a reply time, how late the check may come), but never sooner
-        than TURN_SILENCE_SHARE of ``stall_timeout_s`` after ``heard_t``; inf with no target
-        out."""
+        than ``_turn_least_s`` after ``heard_t`` (lost replies on a noisy line are ridden out:
+        an attack pass, at half a 3 s stall timeout two lost GS-232 replies went offline);
+        inf with no target out."""
         progress_t = self.motion.progress_t
         if progress_t is None:
             return math.inf
         cfg = self.cfg
-        stall_s = cfg.motion.stall_timeout_s
         late_s = cfg.moving_poll_interval_s + link.reply_timeout_s
-        return max(progress_t + stall_s - late_s, heard_t + stall_s * TURN_SILENCE_SHARE)
+        turn_t = progress_t + cfg.motion.stall_timeout_s - late_s
+        return max(turn_t, heard_t + _turn_least_s(cfg.motion))
 
     def _garbled_offline_t(self, link: Link, now: float) -> float:
         """Rule 2: when garbled answers alone no longer keep the controller online: at most

@@ -251,7 +251,8 @@ class RotatorSettings(PointingFields, LoggerFields, WindFields, BandFields):
         le=600,
         description="no reply this long: the rotator is offline (one that answers only "
         "garbled replies after twice this; while it turns to a target, either sooner: offline "
-        "before the turn could be called stalled, but after half stall_timeout_s at least). "
+        "before the turn could be called stalled, where that leaves half stall_timeout_s, and "
+        "3 s at least). "
         "Longer than the idle poll interval; by default 3 s, or two idle polls and a reply "
         "time where that is longer",
         examples=[5],

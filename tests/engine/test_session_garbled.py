@@ -482,3 +482,26 @@ def test_a_jammed_rot2prog_that_answers_is_still_called_stalled(rig: Rig) -> Non
     assert "no progress for 10 s" in stall.message
     assert v.errors("serial", since=t) == []
     assert v.status.available
+
+
+def test_replies_lost_for_a_second_mid_turn_with_a_short_stall_timeout_are_ridden_out(
+    rig: Rig,
+) -> None:
+    """stall_timeout_s 3: a GS-232B whose replies are lost for 1.3 s mid-turn (two exchanges
+    at its 1 s reply timeout) stays online and arrives (an attack pass: half the stall timeout,
+    1.5 s, took it offline 20 times in 20, and a noisy line's RC2800 38 times in 63 turns;
+    controller.py rule 2 rides out the default silence timeout, 3 s, at least)."""
+    v = rig("gs232b", settings={"stall_timeout_s": 3.0})
+    v.run_until(lambda h: h.status.available and h.state is IDLE, 30, "online")
+    t = v.now
+    v.target(200.0)
+    v.run_until(lambda h: h.state is MotionState.MOVING, 5, "moving")
+    v.run_for(1)
+    v.set_silent(True)
+    v.run_for(1.3)
+    v.set_silent(False)
+    v.run_until(lambda h: h.state is IDLE, 60, "arrived")
+
+    assert v.errors("serial", since=t) == [] and v.errors("stalled", since=t) == []
+    assert {s.available for s in v.published(since=t)} == {True}
+    assert abs(v.status.bearing_deg - 200.0) <= 3.0
